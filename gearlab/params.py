@@ -1,0 +1,69 @@
+"""Parameter schemas for plugins: name, SI unit, bounds, default and a line of doc."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from .errors import GearlabInputError
+from .units import display, to_si
+
+
+@dataclass(frozen=True)
+class Param:
+    """One plugin parameter. Values are stored in SI (*unit*); *display_unit* is for people."""
+
+    name: str
+    unit: str
+    default: float
+    low: float
+    high: float
+    doc: str
+    display_unit: str = ""
+    integer: bool = False
+
+    def describe(self) -> dict:
+        return {
+            "name": self.name,
+            "unit": self.unit,
+            "display_unit": self.display_unit or self.unit,
+            "default": self.default,
+            "low": self.low,
+            "high": self.high,
+            "integer": self.integer,
+            "doc": self.doc,
+        }
+
+    def show(self, value: float) -> str:
+        return display(value, self.unit, self.display_unit)
+
+
+def did_you_mean(name: str, known: list[str] | tuple[str, ...]) -> str:
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def resolve_params(schema: tuple[Param, ...], given: Mapping[str, object], where: str) -> dict[str, float]:
+    """Fill defaults, parse units, check names, types and the schema's static bounds."""
+    by_name = {p.name: p for p in schema}
+    for key in given:
+        if key not in by_name:
+            raise GearlabInputError(
+                f"{where}: unknown parameter '{key}'{did_you_mean(key, list(by_name))}; "
+                f"known: {', '.join(by_name) or 'none'}"
+            )
+    values: dict[str, float] = {}
+    for p in schema:
+        here = f"{where}, parameter '{p.name}'"
+        value = to_si(given[p.name], p.unit, here) if p.name in given else p.default
+        if p.integer:
+            if value != int(value):
+                raise GearlabInputError(f"{here}: expected a whole number, got {value:g}")
+            value = int(value)
+        if not (p.low <= value <= p.high):
+            raise GearlabInputError(
+                f"{here}: {p.show(value)} is outside [{p.show(p.low)}, {p.show(p.high)}]"
+            )
+        values[p.name] = value
+    return values

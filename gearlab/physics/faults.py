@@ -1,0 +1,115 @@
+"""The fault contract of the generalised formulation (thesis 2.2.5, Table 2.2).
+
+A fault plugin is a subclass of :class:`Fault` that declares its parameters and
+implements three functions:
+
+* ``apply(section, params, pair)``: return the tooth section with h_x, A_x, I_x, L(x) changed;
+* ``rfa(params, pair)``: its relative fault area, eq. 2.113;
+* ``ladder_endpoints(pair)``: the healthy and worst parameters of its 20-step intensity
+  ladder (Tables 2.5 and 2.6 are the presets for the two thesis gear pairs);
+
+and, where a parameter's limit depends on the gear pair (a crack deeper than the tooth is
+thick, a spall past the tip), ``check(params, pair)``. Nothing else in gearlab needs to
+know about a fault type.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from ..params import Param, resolve_params
+from .geometry import GearPair
+from .sections import ToothSection, healthy_section
+from .stiffness import PlacedFault
+
+LADDER_STEPS = 20
+
+
+class Fault:
+    name: ClassVar[str]
+    doc: ClassVar[str] = ""
+    params: ClassVar[tuple[Param, ...]]
+
+    # --- to implement ---------------------------------------------------------------
+    def apply(self, section: ToothSection, params: Mapping[str, float], pair: GearPair) -> ToothSection:
+        raise NotImplementedError
+
+    def ladder_endpoints(self, pair: GearPair) -> tuple[dict[str, float], dict[str, float]]:
+        raise NotImplementedError
+
+    def check(self, params: Mapping[str, float], pair: GearPair, where: str) -> None:
+        """Raise GearlabInputError when *params* are impossible on *pair* (default: nothing to check)."""
+
+    def rfa(self, params: Mapping[str, float], pair: GearPair) -> float:
+        """Relative fault area (eq. 2.113). Default: share of the tooth face plane taken by the fault."""
+        healthy = healthy_section(pair.pinion, pair.face_width)
+        removed = self.apply(healthy, params, pair).face_area_removed()
+        return float(np.clip(removed / (pair.face_width * healthy.tooth_height), 0.0, 1.0))
+
+    # --- provided ---------------------------------------------------------------------
+    def resolve(self, given: Mapping[str, object], pair: GearPair, where: str = "") -> dict[str, float]:
+        """Defaults filled, units parsed, static bounds and the pair-dependent limits checked."""
+        where = where or f"fault '{self.name}'"
+        params = resolve_params(self.params, given, where)
+        self.check(params, pair, where)
+        return params
+
+    def ladder(self, pair: GearPair, steps: int = LADDER_STEPS) -> list[dict[str, float]]:
+        """Parameters of intensity steps 1..steps: step 1 healthy, the last the worst (linear)."""
+        low, high = self.ladder_endpoints(pair)
+        out = []
+        for i in range(steps):
+            w = i / (steps - 1)
+            values = {}
+            for p in self.params:
+                v = (1 - w) * low[p.name] + w * high[p.name]
+                values[p.name] = int(round(v)) if p.integer else v
+            out.append(values)
+        return out
+
+    def at_step(self, pair: GearPair, step: int, where: str = "") -> dict[str, float]:
+        if not 1 <= step <= LADDER_STEPS:
+            raise GearlabInputError(f"{where or self.name}: intensity step must lie in 1..{LADDER_STEPS}, got {step}")
+        return self.ladder(pair)[step - 1]
+
+    def place(self, tooth: int, params: Mapping[str, float], pair: GearPair, where: str = "") -> PlacedFault:
+        where = where or f"fault {self.name}@{tooth}"
+        if isinstance(tooth, bool) or not isinstance(tooth, int) or not 1 <= tooth <= pair.Z1:
+            raise GearlabInputError(f"{where}: tooth must be a pinion tooth number in 1..{pair.Z1}, got {tooth!r}")
+        return PlacedFault(fault=self, tooth=tooth, params=dict(params))
+
+    def describe(self) -> dict:
+        return {"doc": self.doc, "params": [p.describe() for p in self.params]}
+
+
+def region(section: ToothSection, start: float, end: float) -> np.ndarray:
+    """Boolean mask of the section nodes with start <= x <= end."""
+    return (section.x >= start) & (section.x <= end)
+
+
+def scaled_ladder(pair: GearPair, table: Mapping[str, tuple[dict, dict]], reference: str) -> tuple[dict, dict]:
+    """The table row for *pair*; for other pairs the *reference* row scaled to the tooth.
+
+    Lengths along the profile and depths scale with the module, widths with the face width.
+    Keys ending in '_w' in the table rows are widths; the rest are lengths or pure numbers.
+    """
+    if pair.name in table:
+        low, high = table[pair.name]
+        return dict(low), dict(high)
+    ref = table[reference]
+    ref_pair_module, ref_face_width = _REFERENCE_SCALES[reference]
+    k_len, k_w = pair.module / ref_pair_module, pair.face_width / ref_face_width
+    return tuple(
+        {key: value * (k_w if key in _WIDTH_KEYS else k_len if key in _LENGTH_KEYS else 1.0) for key, value in row.items()}
+        for row in ref
+    )
+
+
+# Scales of the reference pairs used to carry Tables 2.5 / 2.6 to other pairs.
+_REFERENCE_SCALES = {"luo2019": (3.175e-3, 16e-3), "meng2020": (2e-3, 20e-3)}
+_WIDTH_KEYS = {"c", "w_s", "L_c"}
+_LENGTH_KEYS = {"b", "l_s", "h_s", "x_1", "u", "sigma_u", "r", "sigma_r", "q0", "q2"}

@@ -1,0 +1,276 @@
+"""Spur gear pair geometry for the potential-energy method (thesis 2.1.1, 2.1.2).
+
+Symbols follow the thesis: Z teeth, m module, alpha_0 pressure angle, R_b base radius,
+R_r root radius, alpha_2 half tooth angle on the base circle, alpha_3 / alpha_4, alpha_5 the
+angles where the tooth meets the root circle, d_1 the straight root region, theta_d and
+theta_s the double- and single-contact durations in pinion angle. SI units throughout.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ..errors import GearlabInputError
+
+
+def involute(angle: float) -> float:
+    return math.tan(angle) - angle
+
+
+@dataclass(frozen=True)
+class Gear:
+    """Derived geometry of one gear of the pair (i = 1 pinion, i = 2 driven gear)."""
+
+    Z: int
+    module: float
+    pressure_angle: float
+    addendum: float  # h_a
+    clearance: float  # c
+    hub_radius: float  # R_h
+    tool_tip_radius: float  # r_c, dimensionless (Sainsot et al. 2004)
+
+    @property
+    def R_p(self) -> float:
+        return 0.5 * self.module * self.Z
+
+    @property
+    def R_b(self) -> float:  # eq. 2.10
+        return self.R_p * math.cos(self.pressure_angle)
+
+    @property
+    def R_r(self) -> float:  # eq. 2.11
+        return self.R_p - (self.addendum + self.clearance) * self.module
+
+    @property
+    def R_a(self) -> float:
+        return self.R_p + self.addendum * self.module
+
+    @property
+    def alpha_2(self) -> float:  # eq. 2.9
+        return math.pi / (2 * self.Z) + involute(self.pressure_angle)
+
+    @property
+    def root_below_base(self) -> bool:
+        """Case 1 of the thesis (Z <= 41 for standard 20 deg gears): R_r <= R_b.
+
+        Decided on the radii themselves, so other pressure angles and tooling
+        coefficients fall into the right case.
+        """
+        return self.R_r <= self.R_b
+
+    @property
+    def alpha_3(self) -> float:  # eq. 2.12, case 1 only
+        return math.asin(self.R_b * math.sin(self.alpha_2) / self.R_r)
+
+    @property
+    def alpha_5(self) -> float:
+        """Involute parameter alpha where the profile meets the root circle (case 2).
+
+        Eq. 2.26 carries a sign error (it should read ... cos a5 + sin a5, as eq. 2.32 does);
+        with it corrected, eq. 2.28 reduces to R_b^2 (1 + (alpha_2 - alpha_5)^2) = R_r^2: the
+        radius of an involute point with roll angle alpha_2 - alpha. Its root below alpha_2
+        is the closed form below; no Newton iteration is needed (docs/physics.md).
+        """
+        return self.alpha_2 - math.sqrt((self.R_r / self.R_b) ** 2 - 1.0)
+
+    @property
+    def alpha_4(self) -> float:  # eq. 2.29 with the corrected sign
+        return math.asin(self.half_thickness(self.alpha_5) / self.R_r)
+
+    @property
+    def x_root(self) -> float:
+        """Radial position of the tooth root (x = 0) along the centreline: R_r cos alpha_3|4."""
+        return self.R_r * math.cos(self.alpha_3 if self.root_below_base else self.alpha_4)
+
+    @property
+    def d_1(self) -> float:  # eq. 2.15; no straight root region in case 2
+        return self.R_b * math.cos(self.alpha_2) - self.x_root if self.root_below_base else 0.0
+
+    @property
+    def alpha_root(self) -> float:
+        """Involute parameter at the lower end of the involute: alpha_2 (case 1) or alpha_5 (case 2)."""
+        return self.alpha_2 if self.root_below_base else self.alpha_5
+
+    @property
+    def alpha_tip(self) -> float:
+        """Involute parameter alpha at the tip circle (the most negative alpha on the tooth)."""
+        return self.alpha_2 - math.sqrt((self.R_a / self.R_b) ** 2 - 1.0)
+
+    def half_thickness(self, alpha):
+        """h_x on the involute, eq. 2.17 / 2.32 (works on floats and numpy arrays)."""
+        import numpy as np
+
+        return self.R_b * ((self.alpha_2 - alpha) * np.cos(alpha) + np.sin(alpha))
+
+    def x_of(self, alpha):
+        """Distance from the tooth root along the centreline, eq. 2.16 / 2.31."""
+        import numpy as np
+
+        return self.R_b * ((alpha - self.alpha_2) * np.sin(alpha) + np.cos(alpha)) - self.x_root
+
+    @property
+    def tooth_height(self) -> float:
+        """d_h of eq. 2.70: distance from the root to the tip along the centreline."""
+        return float(self.x_of(self.alpha_tip))
+
+    @property
+    def theta_f(self) -> float:  # eq. 2.45
+        a0, ha, rc = self.pressure_angle, self.addendum, self.tool_tip_radius
+        return (math.pi / 2 + 2 * math.tan(a0) * (ha - rc) + 2 * rc / math.cos(a0)) / self.Z
+
+    @property
+    def S_f(self) -> float:  # eq. 2.44
+        return 2 * self.R_r * self.theta_f
+
+
+@dataclass(frozen=True)
+class GearPair:
+    """A spur gear pair: pinion (1) drives gear (2). Values in SI units (m, rad, Pa)."""
+
+    Z1: int
+    Z2: int
+    module: float
+    face_width: float
+    pressure_angle: float
+    E: float
+    nu: float
+    hub_radius: float
+    addendum: float = 1.0
+    clearance: float = 0.25
+    tool_tip_radius: float = 0.2
+    name: str = ""
+    pinion: Gear = field(init=False, repr=False, compare=False)
+    gear: Gear = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self._check()
+        common = dict(
+            module=self.module,
+            pressure_angle=self.pressure_angle,
+            addendum=self.addendum,
+            clearance=self.clearance,
+            hub_radius=self.hub_radius,
+            tool_tip_radius=self.tool_tip_radius,
+        )
+        object.__setattr__(self, "pinion", Gear(Z=self.Z1, **common))
+        object.__setattr__(self, "gear", Gear(Z=self.Z2, **common))
+        self._check_mesh()
+
+    def _check(self) -> None:
+        where = f"gear pair {self.name!r}" if self.name else "gear pair"
+        for label, z in (("Z1", self.Z1), ("Z2", self.Z2)):
+            if isinstance(z, bool) or not isinstance(z, int) and not (isinstance(z, float) and z.is_integer()):
+                raise GearlabInputError(f"{where}: {label} must be a whole number of teeth, got {z!r}")
+            if int(z) < 8:
+                raise GearlabInputError(f"{where}: {label} = {int(z)} teeth is too few; expected at least 8")
+        object.__setattr__(self, "Z1", int(self.Z1))
+        object.__setattr__(self, "Z2", int(self.Z2))
+        positive = {
+            "module": self.module,
+            "face_width": self.face_width,
+            "E": self.E,
+            "hub_radius": self.hub_radius,
+            "addendum": self.addendum,
+        }
+        for label, value in positive.items():
+            if not (value > 0 and math.isfinite(value)):
+                raise GearlabInputError(f"{where}: {label} must be a positive number, got {value!r}")
+        if not (0 < self.pressure_angle < math.radians(45)):
+            raise GearlabInputError(
+                f"{where}: pressure_angle must lie between 0 and 45 deg, got {math.degrees(self.pressure_angle):g} deg"
+            )
+        if not (0 <= self.nu < 0.5):
+            raise GearlabInputError(f"{where}: Poisson's ratio nu must lie in [0, 0.5), got {self.nu!r}")
+        if not (0 <= self.clearance < 1 and 0 <= self.tool_tip_radius < self.addendum):
+            raise GearlabInputError(f"{where}: clearance must lie in [0, 1) and tool_tip_radius in [0, addendum)")
+
+    def _check_mesh(self) -> None:
+        where = f"gear pair {self.name!r}" if self.name else "gear pair"
+        for label, g in (("pinion", self.pinion), ("gear", self.gear)):
+            if not (0 < self.hub_radius < g.R_r):
+                raise GearlabInputError(
+                    f"{where}: hub_radius {self.hub_radius * 1e3:g} mm must be smaller than the {label} root radius "
+                    f"{g.R_r * 1e3:.4g} mm"
+                )
+        if self.roll_start_pinion <= 0 or self.roll_end_gear <= 0:
+            raise GearlabInputError(
+                f"{where}: the teeth interfere (contact below the base circle); use more teeth or a larger pressure angle"
+            )
+        if not (1.0 <= self.contact_ratio < 2.0):
+            raise GearlabInputError(
+                f"{where}: contact ratio {self.contact_ratio:.3f} is outside [1, 2), which the mesh model assumes"
+            )
+
+    # --- meshing (eq. 2.7, 2.8, 2.49-2.51) ----------------------------------------------
+
+    @property
+    def centre_distance(self) -> float:
+        return self.pinion.R_p + self.gear.R_p
+
+    @property
+    def roll_start_pinion(self) -> float:
+        """tan of the pinion's pressure angle where contact starts (gear tip on the line of action)."""
+        g, a = self.gear, self.centre_distance
+        alpha_a2 = math.acos(g.R_b / g.R_a)
+        r_start = math.sqrt(g.R_a**2 + a**2 - 2 * g.R_a * a * math.cos(alpha_a2 - self.pressure_angle))
+        if r_start <= self.pinion.R_b:
+            return -1.0
+        return math.sqrt((r_start / self.pinion.R_b) ** 2 - 1.0)
+
+    @property
+    def roll_tip_pinion(self) -> float:
+        return math.sqrt((self.pinion.R_a / self.pinion.R_b) ** 2 - 1.0)
+
+    @property
+    def roll_tip_gear(self) -> float:
+        return math.sqrt((self.gear.R_a / self.gear.R_b) ** 2 - 1.0)
+
+    @property
+    def roll_end_gear(self) -> float:
+        """tan of the gear's pressure angle where contact ends; must stay on its involute."""
+        lowest = 0.0 if self.gear.root_below_base else math.sqrt((self.gear.R_r / self.gear.R_b) ** 2 - 1)
+        return self.roll_tip_gear - self.Z1 / self.Z2 * self.theta_t - lowest
+
+    @property
+    def theta_t(self) -> float:
+        """Pinion rotation during one tooth pair's contact: theta_tot = 2 theta_d + theta_s (eq. 2.71)."""
+        return self.roll_tip_pinion - self.roll_start_pinion
+
+    @property
+    def theta_d(self) -> float:  # eq. 2.49, written with the corrected cos(alpha_0) inside
+        return self.theta_t - 2 * math.pi / self.Z1
+
+    @property
+    def theta_s(self) -> float:  # eq. 2.50
+        return 2 * math.pi / self.Z1 - self.theta_d
+
+    @property
+    def contact_ratio(self) -> float:
+        return self.theta_t / (2 * math.pi / self.Z1)
+
+    def alpha1_pinion(self, theta):
+        """Eq. 2.7: force angle on the pinion tooth at pinion angle theta after its contact starts."""
+        return theta - self.pinion.alpha_2 + self.roll_start_pinion
+
+    def alpha1_gear(self, theta):
+        """Eq. 2.8: force angle on the driven gear tooth, as a function of the pinion angle."""
+        return self.roll_tip_gear - self.gear.alpha_2 - self.Z1 / self.Z2 * theta
+
+    def describe(self) -> dict:
+        p, g = self.pinion, self.gear
+        return {
+            "name": self.name,
+            "Z1": self.Z1,
+            "Z2": self.Z2,
+            "module_m": self.module,
+            "face_width_m": self.face_width,
+            "pressure_angle_rad": self.pressure_angle,
+            "R_b1_m": p.R_b,
+            "R_r1_m": p.R_r,
+            "R_b2_m": g.R_b,
+            "R_r2_m": g.R_r,
+            "theta_d_rad": self.theta_d,
+            "theta_s_rad": self.theta_s,
+            "contact_ratio": self.contact_ratio,
+        }

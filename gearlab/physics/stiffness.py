@@ -1,0 +1,250 @@
+"""Potential-energy mesh stiffness engine (thesis 2.1 and the general formulation 2.88-2.94).
+
+The beam terms are integrated along the tooth centreline x on the generalised section
+(h_x, A_x, I_x, L(x)) rather than in the angle alpha: for a contact point at x = d with
+force angle alpha_1 the bending moment per unit force is cos(alpha_1)(d - x) - sin(alpha_1) h
+(eq. 2.3, 2.5, 2.6), so
+
+    1/k_b = (a^2 K_0(d) - 2 a cos(alpha_1) K_1(d) + cos^2(alpha_1) K_2(d)) / E,
+    a = cos(alpha_1) d - sin(alpha_1) h,   K_m(d) = int_0^d x^m / I_x dx,
+
+and 1/k_a, 1/k_s need only int_0^d 1/A_x dx. These cumulative integrals are built once
+per tooth section, so a whole meshing arc costs one pass over the section plus an
+interpolation per angle. In the healthy case this is exactly eq. 2.21-2.25 / 2.34-2.38
+after the change of variable x(alpha); for faulted sections it is eq. 2.88-2.93.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .geometry import Gear, GearPair
+from .sections import DEFAULT_NODES, ToothSection, healthy_section
+
+# Table 2.1 (Sainsot et al. 2004): rows L*, M*, P*, Q*; columns A_i ... F_i.
+FILLET_COEFFICIENTS = {
+    "L": (-5.574e-5, -1.9986e-3, -2.3015e-4, 4.7702e-3, 0.0271, 6.8045),
+    "M": (60.111e-5, 28.100e-3, -83.431e-4, -9.9256e-3, 0.1624, 0.9086),
+    "P": (-50.952e-5, 185.50e-3, 0.0538e-4, 53.3000e-4, 0.2895, 0.9236),
+    "Q": (-6.204e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904),
+}
+
+
+@dataclass(frozen=True)
+class StiffnessOptions:
+    """Term switches of thesis 2.2.6.2, needed to compare with literature that omits them."""
+
+    fillet: bool = True
+    root_region: bool = True
+    nodes: int = DEFAULT_NODES
+
+
+class SectionIntegrals:
+    """Cumulative integrals K_0, K_1, K_2 (of x^m / I_x) and K_A (of 1 / A_x) along a section."""
+
+    def __init__(self, section: ToothSection, start: float = 0.0):
+        x = section.x
+        with np.errstate(divide="ignore"):
+            inv_I = np.where(section.I > 0, 1.0 / np.maximum(section.I, 1e-300), np.inf)
+            inv_A = np.where(section.A > 0, 1.0 / np.maximum(section.A, 1e-300), np.inf)
+        outside = x < start - 1e-15  # the root region, when it is switched off
+        inv_I[outside] = 0.0
+        inv_A[outside] = 0.0
+        self.x = x
+        with np.errstate(invalid="ignore"):
+            self.f = np.stack([inv_I, x * inv_I, x * x * inv_I, inv_A])  # integrands, (4, n)
+        self.f[np.isnan(self.f)] = np.inf  # 0 * inf at x = 0 under a zero section
+        with np.errstate(invalid="ignore"):
+            cells = 0.5 * (self.f[:, 1:] + self.f[:, :-1]) * np.diff(x)
+        cells[~np.isfinite(cells)] = np.inf  # a zero section anywhere makes the rest infinite
+        self.F = np.concatenate([np.zeros((4, 1)), np.cumsum(cells, axis=1)], axis=1)
+
+    def at(self, d: np.ndarray) -> np.ndarray:
+        """Integrals from the root to each contact position d: array (4, len(d))."""
+        x = self.x
+        j = np.clip(np.searchsorted(x, d, side="right") - 1, 0, len(x) - 2)
+        t = d - x[j]
+        with np.errstate(invalid="ignore"):
+            slope = (self.f[:, j + 1] - self.f[:, j]) / (x[j + 1] - x[j])
+            f_d = self.f[:, j] + slope * t
+            out = self.F[:, j] + 0.5 * t * (self.f[:, j] + f_d)
+        out[~np.isfinite(out)] = np.inf
+        return out
+
+
+def contact_geometry(gear: Gear, alpha1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Contact distance d from the root (eq. 2.14 / 2.30) and contact height h (eq. 2.13)."""
+    a2 = gear.alpha_2
+    d = gear.R_b * ((alpha1 + a2) * np.sin(alpha1) + np.cos(alpha1)) - gear.x_root
+    h = gear.R_b * ((alpha1 + a2) * np.cos(alpha1) - np.sin(alpha1))
+    return d, h
+
+
+def beam_compliances(
+    gear: Gear, integrals: SectionIntegrals, alpha1: np.ndarray, E: float, nu: float
+) -> dict[str, np.ndarray]:
+    """1/k_a, 1/k_b, 1/k_s of one tooth (eq. 2.88-2.93)."""
+    d, h = contact_geometry(gear, alpha1)
+    K0, K1, K2, KA = integrals.at(d)
+    c, s = np.cos(alpha1), np.sin(alpha1)
+    a = c * d - s * h
+    with np.errstate(invalid="ignore"):
+        bending = (a * a * K0 - 2 * a * c * K1 + c * c * K2) / E
+        axial = s * s * KA / E
+        shear = 2.4 * (1 + nu) * c * c * KA / E
+    broken = ~np.isfinite(K0) | ~np.isfinite(KA)
+    for term in (bending, axial, shear):
+        term[broken] = np.inf
+    return {"axial": axial, "bending": bending, "shear": shear}
+
+
+def fillet_compliance(gear: Gear, alpha1: np.ndarray, E: float, face_width: float) -> np.ndarray:
+    """1/k_f of eq. 2.42-2.46; faults never change it (thesis 2.1.1.3, last paragraph)."""
+    d, h = contact_geometry(gear, alpha1)
+    u_over_S = (d - h * np.tan(alpha1)) / gear.S_f  # eq. 2.43, 2.44
+    hi, tf = gear.R_r / gear.hub_radius, gear.theta_f
+    L, M, P, Q = (A / tf**2 + B * hi**2 + C * hi / tf + D / tf + Ei * hi + F
+                  for A, B, C, D, Ei, F in FILLET_COEFFICIENTS.values())  # eq. 2.46
+    return np.cos(alpha1) ** 2 / (E * face_width) * (L * u_over_S**2 + M * u_over_S + P * (1 + Q * np.tan(alpha1) ** 2))
+
+
+def hertz_compliance(E: float, nu: float, contact_width: np.ndarray) -> np.ndarray:
+    """1/k_h of eq. 2.94 with the effective contact width at the contact point."""
+    with np.errstate(divide="ignore"):
+        return np.where(contact_width > 0, 4 * (1 - nu**2) / (np.pi * E * np.maximum(contact_width, 1e-300)), np.inf)
+
+
+def tooth_pair_compliances(
+    pair: GearPair,
+    phi: np.ndarray,
+    pinion: ToothSection,
+    gear: ToothSection,
+    options: StiffnessOptions = StiffnessOptions(),
+    pinion_integrals: SectionIntegrals | None = None,
+    gear_integrals: SectionIntegrals | None = None,
+) -> dict[str, np.ndarray]:
+    """Every compliance term of one tooth pair (eq. 2.47, 2.48) at pinion angles phi in [0, theta_t].
+
+    Keys: hertz, and axial/bending/shear/fillet with suffix 1 (pinion) or 2 (gear); 'total'.
+    """
+    phi = np.asarray(phi, dtype=float)
+    out: dict[str, np.ndarray] = {}
+    widths = []
+    for suffix, g, section, integrals, alpha1 in (
+        ("1", pair.pinion, pinion, pinion_integrals, pair.alpha1_pinion(phi)),
+        ("2", pair.gear, gear, gear_integrals, pair.alpha1_gear(phi)),
+    ):
+        if integrals is None:
+            integrals = SectionIntegrals(section, start=0.0 if options.root_region else section.d_1)
+        for name, value in beam_compliances(g, integrals, alpha1, pair.E, pair.nu).items():
+            out[name + suffix] = value
+        out["fillet" + suffix] = (
+            fillet_compliance(g, alpha1, pair.E, section.face_width) if options.fillet else np.zeros_like(phi)
+        )
+        d, _ = contact_geometry(g, alpha1)
+        widths.append(np.interp(d, section.x, section.L))
+    out["hertz"] = hertz_compliance(pair.E, pair.nu, np.minimum(*widths))
+    out["total"] = sum(out.values())
+    return out
+
+
+@dataclass(frozen=True)
+class PlacedFault:
+    """A fault plugin with resolved parameters (SI) sitting on pinion tooth *tooth* (1-based)."""
+
+    fault: object  # gearlab.physics.faults.Fault
+    tooth: int
+    params: dict
+
+    @property
+    def label(self) -> str:
+        return f"{self.fault.name}@{self.tooth}"
+
+
+@dataclass(frozen=True)
+class MeshStiffness:
+    """TVMS k(theta) over one pinion revolution, theta = 2 pi j / n."""
+
+    theta: np.ndarray
+    k: np.ndarray
+    pair: GearPair
+    faults: tuple[PlacedFault, ...] = ()
+
+    @property
+    def mean(self) -> float:
+        return float(self.k.mean())
+
+
+class MeshStiffnessModel:
+    """Builds TVMS for one gear pair; the healthy sections and integrals are made once."""
+
+    def __init__(self, pair: GearPair, options: StiffnessOptions = StiffnessOptions()):
+        self.pair = pair
+        self.options = options
+        self.pinion_section = healthy_section(pair.pinion, pair.face_width, options.nodes)
+        self.gear_section = healthy_section(pair.gear, pair.face_width, options.nodes)
+        self._gear_integrals = self._integrals(self.gear_section)
+        self._pinion_integrals = self._integrals(self.pinion_section)
+
+    def _integrals(self, section: ToothSection) -> SectionIntegrals:
+        return SectionIntegrals(section, start=0.0 if self.options.root_region else section.d_1)
+
+    def faulted_section(self, faults: Sequence[PlacedFault]) -> ToothSection:
+        """The pinion section with *faults* applied in order (several faults on one tooth compose)."""
+        section = self.pinion_section
+        for placed in faults:
+            section = placed.fault.apply(section, placed.params, self.pair)
+        return section
+
+    def tooth_pair_stiffness(self, phi: np.ndarray, faults: Sequence[PlacedFault] = ()) -> np.ndarray:
+        section = self.faulted_section(faults)
+        integrals = self._integrals(section) if faults else self._pinion_integrals
+        total = tooth_pair_compliances(
+            self.pair, phi, section, self.gear_section, self.options, integrals, self._gear_integrals
+        )["total"]
+        with np.errstate(divide="ignore"):
+            return np.where(np.isfinite(total), 1.0 / total, 0.0)
+
+    def mesh_stiffness(self, faults: Sequence[PlacedFault] = (), points: int = 4096) -> MeshStiffness:
+        """Superpose all Z1 tooth pairs over one revolution (eq. 2.51-2.54).
+
+        Tooth n is in mesh for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t; taking the
+        local angle modulo 2 pi wraps the last tooth's second double-contact zone onto the
+        start of the revolution (eq. 2.53, 2.54).
+        """
+        pair = self.pair
+        Z1 = pair.Z1
+        for placed in faults:
+            if not 1 <= placed.tooth <= Z1:
+                from ..errors import GearlabInputError
+
+                raise GearlabInputError(f"fault {placed.label}: tooth must lie in 1..{Z1}, got {placed.tooth}")
+        theta = 2 * np.pi * np.arange(points) / points
+        k = np.zeros(points)
+        by_tooth: dict[int, list[PlacedFault]] = {}
+        for placed in faults:
+            by_tooth.setdefault(placed.tooth, []).append(placed)
+        pitch = 2 * np.pi / Z1
+        healthy_teeth = [n for n in range(1, Z1 + 1) if n not in by_tooth]
+        # All healthy teeth share one stiffness curve: evaluate them in a single pass.
+        for teeth, tooth_faults in [(healthy_teeth, [])] + [([n], f) for n, f in by_tooth.items()]:
+            if not teeth:
+                continue
+            local = np.mod(theta[None, :] - pitch * (np.asarray(teeth)[:, None] - 1), 2 * np.pi)
+            in_mesh = local < pair.theta_t
+            contribution = np.zeros_like(local)
+            contribution[in_mesh] = self.tooth_pair_stiffness(local[in_mesh], tooth_faults)
+            k += contribution.sum(axis=0)
+        return MeshStiffness(theta=theta, k=k, pair=pair, faults=tuple(faults))
+
+
+def mesh_stiffness(
+    pair: GearPair,
+    faults: Sequence[PlacedFault] = (),
+    points: int = 4096,
+    options: StiffnessOptions = StiffnessOptions(),
+) -> MeshStiffness:
+    return MeshStiffnessModel(pair, options).mesh_stiffness(faults, points)

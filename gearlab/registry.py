@@ -1,0 +1,187 @@
+"""The plugin registry: pluggy hookspecs, entry-point loading, lookup by name.
+
+Every plugin, built-in or third-party, is a module named in the ``gearlab`` entry-point
+group that implements one or more of the hooks below, each returning plugin objects:
+
+    [project.entry-points.gearlab]
+    wear = "gearlab_wear.plugin"
+
+    # gearlab_wear/plugin.py
+    from gearlab.registry import hookimpl
+
+    @hookimpl
+    def gearlab_faults():
+        return [Wear()]
+
+A plugin that fails to import, breaks a contract or reuses a name is reported with its
+package name (``gearlab plugins`` shows it) and left out; the rest keep working.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.metadata
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import pluggy
+
+from .errors import UnknownPluginError
+from .params import Param, did_you_mean
+
+PROJECT = "gearlab"
+hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+
+class HookSpecs:
+    @hookspec
+    def gearlab_faults(self) -> list:
+        """Fault plugins (gearlab.physics.faults.Fault): change the tooth section, give an RFA and a ladder."""
+
+    @hookspec
+    def gearlab_models(self) -> list:
+        """Dynamic models: DOFs, constant M/K/C, projection vector, forces, channels, presets."""
+
+    @hookspec
+    def gearlab_adapters(self) -> list:
+        """Domain-adaptation methods: extra modules, domain loss on latent features, lambda schedule."""
+
+    @hookspec
+    def gearlab_effects(self) -> list:
+        """Unmodelled effects for the sim-to-real gap diagnosis, with bounded parameters and a level."""
+
+
+KINDS = {"fault": "gearlab_faults", "model": "gearlab_models", "adapter": "gearlab_adapters", "effect": "gearlab_effects"}
+
+# What each kind of plugin object must provide, beyond `name` and `params`.
+REQUIRED = {
+    "fault": ("apply", "ladder_endpoints", "rfa", "resolve", "ladder"),
+    "model": (),
+    "adapter": (),
+    "effect": (),
+}
+_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+@dataclass(frozen=True)
+class PluginProblem:
+    package: str
+    plugin: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"package '{self.package}', plugin '{self.plugin}': {self.message}"
+
+
+@dataclass
+class Registry:
+    plugins: dict[str, dict[str, object]] = field(default_factory=lambda: {kind: {} for kind in KINDS})
+    packages: dict[tuple[str, str], str] = field(default_factory=dict)
+    problems: list[PluginProblem] = field(default_factory=list)
+
+    def names(self, kind: str) -> list[str]:
+        return sorted(self.plugins[kind])
+
+    def get(self, kind: str, name: str, where: str = ""):
+        try:
+            return self.plugins[kind][name]
+        except KeyError:
+            known = self.names(kind)
+            prefix = f"{where}: " if where else ""
+            raise UnknownPluginError(
+                f"{prefix}unknown {kind} '{name}'{did_you_mean(name, known)}; known {kind}s: {', '.join(known) or 'none'}"
+            ) from None
+
+    def add(self, kind: str, obj, package: str, plugin: str) -> None:
+        problem = _contract_problem(kind, obj)
+        if problem:
+            self.problems.append(PluginProblem(package, plugin, problem))
+            return
+        name = obj.name
+        if name in self.plugins[kind]:
+            first = self.packages[(kind, name)]
+            self.problems.append(
+                PluginProblem(package, plugin, f"{kind} name '{name}' is already registered by package '{first}'; ignored")
+            )
+            return
+        self.plugins[kind][name] = obj
+        self.packages[(kind, name)] = package
+
+    def describe(self) -> list[dict]:
+        rows = []
+        for kind in KINDS:
+            for name in self.names(kind):
+                obj = self.plugins[kind][name]
+                info = obj.describe() if hasattr(obj, "describe") else {}
+                rows.append(
+                    {
+                        "kind": kind,
+                        "name": name,
+                        "package": self.packages[(kind, name)],
+                        "doc": info.get("doc", getattr(obj, "doc", "")),
+                        "params": info.get("params", [p.describe() for p in obj.params]),
+                    }
+                )
+        return rows
+
+
+def _contract_problem(kind: str, obj) -> str:
+    name = getattr(obj, "name", None)
+    if not isinstance(name, str) or not _NAME.match(name):
+        return f"{kind} plugin {obj!r} has no valid name (expected lower-case letters, digits and '_')"
+    params = getattr(obj, "params", None)
+    if not isinstance(params, tuple) or not all(isinstance(p, Param) for p in params):
+        return f"{kind} '{name}': params must be a tuple of gearlab.params.Param"
+    for p in params:
+        if not (p.low <= p.default <= p.high):
+            return f"{kind} '{name}': parameter '{p.name}' default {p.default!r} lies outside its bounds [{p.low}, {p.high}]"
+    missing = [attr for attr in REQUIRED[kind] if not callable(getattr(obj, attr, None))]
+    if missing:
+        return f"{kind} '{name}' lacks {', '.join(missing)}"
+    return ""
+
+
+def _package(entry_point) -> str:
+    dist = getattr(entry_point, "dist", None)
+    return dist.name if dist is not None else entry_point.value.split(".")[0]
+
+
+def load_registry(entry_points: Iterable | None = None) -> Registry:
+    """Load every plugin of the ``gearlab`` entry-point group into a fresh registry.
+
+    gearlab's own entry points load first, so a third party cannot shadow a built-in name.
+    """
+    if entry_points is None:
+        entry_points = importlib.metadata.entry_points(group=PROJECT)
+    manager = pluggy.PluginManager(PROJECT)
+    manager.add_hookspecs(HookSpecs)
+    registry = Registry()
+    ordered = sorted(entry_points, key=lambda ep: (_package(ep) != PROJECT, _package(ep), ep.name))
+    loaded = {}
+    for ep in ordered:
+        package = _package(ep)
+        try:
+            module = ep.load()
+            manager.register(module, name=f"{package}:{ep.name}")
+        except Exception as exc:  # a broken third-party plugin must not take the rest down
+            registry.problems.append(PluginProblem(package, ep.name, f"failed to load: {type(exc).__name__}: {exc}"))
+            continue
+        loaded[f"{package}:{ep.name}"] = (package, ep.name)
+    for kind, hook in KINDS.items():
+        for impl in getattr(manager.hook, hook).get_hookimpls():  # registration order
+            package, plugin = loaded[impl.plugin_name]
+            try:
+                objects = list(impl.function())
+            except Exception as exc:
+                registry.problems.append(PluginProblem(package, plugin, f"{hook}() raised {type(exc).__name__}: {exc}"))
+                continue
+            for obj in objects:
+                registry.add(kind, obj, package, plugin)
+    return registry
+
+
+@functools.cache
+def get_registry() -> Registry:
+    return load_registry()
