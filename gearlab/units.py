@@ -46,8 +46,8 @@ def _parse(text: str, unit: str, where: str) -> float:
     except Exception:
         raise GearlabInputError(f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})") from None
     target = ureg.Unit(unit) if unit else ureg.dimensionless
-    if not isinstance(quantity, pint.Quantity):
-        return float(quantity)
+    if not isinstance(quantity, pint.Quantity) or quantity.unitless:
+        return float(getattr(quantity, "magnitude", quantity))  # a bare number is already SI
     try:
         return float(quantity.to(target).magnitude)
     except pint.DimensionalityError:

@@ -66,7 +66,8 @@ class Fault:
             w = i / (steps - 1)
             values = {}
             for p in self.params:
-                v = (1 - w) * low[p.name] + w * high[p.name]
+                lo, hi = low[p.name], high[p.name]
+                v = hi if i == steps - 1 else lo + w * (hi - lo)  # exact endpoints
                 values[p.name] = int(round(v)) if p.integer else v
             out.append(values)
         return out
@@ -113,3 +114,54 @@ def scaled_ladder(pair: GearPair, table: Mapping[str, tuple[dict, dict]], refere
 _REFERENCE_SCALES = {"luo2019": (3.175e-3, 16e-3), "meng2020": (2e-3, 20e-3)}
 _WIDTH_KEYS = {"c", "w_s", "L_c"}
 _LENGTH_KEYS = {"b", "l_s", "h_s", "x_1", "u", "sigma_u", "r", "sigma_r", "q0", "q2"}
+
+
+def place_fault(registry, pair: GearPair, kind: str, tooth, step=None, params: Mapping | None = None,
+                where: str = "") -> PlacedFault:
+    """Resolve a fault by plugin name on *pair*: a ladder *step* (1..20) or explicit *params*."""
+    where = where or f"fault {kind}@{tooth}"
+    fault = registry.get("fault", kind, where)
+    if step is not None and params:
+        raise GearlabInputError(f"{where}: give either a ladder step or explicit parameters, not both")
+    if step is not None:
+        if isinstance(step, bool) or not isinstance(step, int):
+            raise GearlabInputError(f"{where}: intensity step must be a whole number in 1..{LADDER_STEPS}, got {step!r}")
+        resolved = fault.resolve(fault.at_step(pair, step, where), pair, where)
+    else:
+        resolved = fault.resolve(params or {}, pair, where)
+    return fault.place(tooth, resolved, pair, where)
+
+
+FAULT_SYNTAX = "KIND@TOOTH=STEP (ladder step 1..20, 1 = healthy) or KIND@TOOTH:NAME=VALUE,... (explicit, with units)"
+
+
+def parse_fault_option(text: str) -> tuple[str, int, int | None, dict[str, str] | None]:
+    """Parse 'crack@5=12' or 'crack@5:q0=2 mm,q2=1.5mm,nu=80 deg' into (kind, tooth, step, params)."""
+    bad = GearlabInputError(f"--fault {text!r}: expected {FAULT_SYNTAX}")
+    kind, at, rest = text.partition("@")
+    if not at or not kind.strip():
+        raise bad
+    kind = kind.strip()
+    if ":" in rest:
+        tooth_text, _, body = rest.partition(":")
+        params = {}
+        for item in filter(None, (s.strip() for s in body.split(","))):
+            name, eq, value = item.partition("=")
+            if not eq or not name.strip() or not value.strip():
+                raise bad
+            params[name.strip()] = value.strip()
+        step = None
+    elif "=" in rest:
+        tooth_text, _, step_text = rest.partition("=")
+        try:
+            step = int(step_text.strip())
+        except ValueError:
+            raise GearlabInputError(f"--fault {text!r}: STEP must be a whole number in 1..{LADDER_STEPS}") from None
+        params = None
+    else:
+        raise bad
+    try:
+        tooth = int(tooth_text.strip())
+    except ValueError:
+        raise GearlabInputError(f"--fault {text!r}: TOOTH must be a pinion tooth number") from None
+    return kind, tooth, step, params

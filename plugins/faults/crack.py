@@ -22,6 +22,17 @@ def root_half_thickness(pair) -> float:
     return float(g.half_thickness(g.alpha_root))
 
 
+def max_half_thickness(pair) -> float:
+    """Largest h_x of the healthy pinion tooth. The involute is thickest at alpha = 0
+    (h = R_b alpha_2), a few micrometres above the base circle, so a crack must reach
+    2 max(h_x), not 2 h_c, to cut the whole tooth."""
+    g = pair.pinion
+    candidates = [g.half_thickness(g.alpha_root), g.half_thickness(g.alpha_tip)]
+    if g.alpha_tip <= 0.0 <= g.alpha_root:
+        candidates.append(g.R_b * g.alpha_2)
+    return float(max(candidates))
+
+
 def mean_depth(params, face_width: float) -> float:
     """Average crack depth over the face width, the mean value of eq. 2.55 / 2.56.
 
@@ -54,13 +65,13 @@ class Crack(Fault):
                 f"{where}: q2 applies only to full-width cracks (L_c >= {pair.face_width * 1e3:g} mm); got L_c = "
                 f"{params['L_c'] * 1e3:g} mm with q2 = {params['q2'] * 1e3:g} mm"
             )
-        thickness = 2 * root_half_thickness(pair)
+        thickness = 2 * max_half_thickness(pair)
         for key in ("q0", "q2"):
             depth = params[key] * math.sin(params["nu"])
             if depth > thickness * (1 + 1e-9):
                 raise GearlabInputError(
                     f"{where}: parameter '{key}' = {params[key] * 1e3:g} mm makes the crack deeper than the tooth is "
-                    f"thick ({thickness * 1e3:.4g} mm at the root of the {pair.name or 'given'} pinion)"
+                    f"thick ({thickness * 1e3:.4g} mm for the {pair.name or 'given'} pinion)"
                 )
 
     def effective_crack_height(self, params, pair) -> float:
@@ -76,15 +87,15 @@ class Crack(Fault):
         return section.replace(h=h_eff, A=section.A * ratio, I=section.I * ratio**3)
 
     def rfa(self, params, pair):
-        """Share of the girth plane (thickness 2 h_c times width) the crack cuts: 1 = broken tooth."""
-        thickness = 2 * root_half_thickness(pair)
+        """Share of the girth plane (tooth thickness times width) the crack cuts: 1 = broken tooth."""
+        thickness = 2 * max_half_thickness(pair)
         return float(np.clip(mean_depth(params, pair.face_width) * math.sin(params["nu"]) / thickness, 0.0, 1.0))
 
     def ladder_endpoints(self, pair):
         # Tables 2.5 / 2.6: constant-width cracks (q0 = q2), nu = 90 deg, depth up to the tooth
         # thickness, i.e. a broken tooth (for meng2020 the table's 3.644 mm is this thickness;
         # for luo2019 we take the stated intent over the table's 5 mm, see docs/physics.md).
-        full = 2 * root_half_thickness(pair)
+        full = 2 * max_half_thickness(pair)
         low = {"q0": 0.0, "q2": 0.0, "L_c": pair.face_width, "nu": math.pi / 2}
         return low, {**low, "q0": full, "q2": full}
 

@@ -1,0 +1,224 @@
+"""The `gearlab` command (typer + rich).
+
+Exit codes: 0 success, 2 bad input (one clear line on stderr, no traceback), 1 internal error.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from .errors import GearlabInputError
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    help="gearlab: gear mesh stiffness, gearbox dynamics, fault classifiers and their calibration.",
+)
+console = Console(soft_wrap=True)
+err_console = Console(stderr=True, soft_wrap=True)
+
+
+@app.command()
+def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON list")] = False) -> None:
+    """List every registered plugin: kind, name, source package and parameters."""
+    from .registry import get_registry
+
+    registry = get_registry()
+    rows = registry.describe()
+    if as_json:
+        problems = [{"package": p.package, "plugin": p.plugin, "problem": p.message} for p in registry.problems]
+        typer.echo(json.dumps(rows + [{"kind": "problem", **p} for p in problems], indent=1))
+        return
+    table = Table(title="gearlab plugins")
+    for col in ("kind", "name", "package", "parameters (unit, default, bounds)"):
+        table.add_column(col)
+    for row in rows:
+        params = "\n".join(
+            f"{p['name']} [{p['display_unit'] or '-'}] = {_show(p, p['default'])}  ({_show(p, p['low'])} .. {_show(p, p['high'])})"
+            for p in row["params"]
+        )
+        table.add_row(row["kind"], row["name"], row["package"], params or "-")
+    console.print(table)
+    for problem in registry.problems:
+        console.print(f"[red]problem:[/red] {problem}")
+
+
+def _show(param: dict, value: float) -> str:
+    from .units import display
+
+    return display(value, param["unit"], param["display_unit"]).split(" ")[0]
+
+
+STIFFNESS_HELP = """Time-varying mesh stiffness of a gear-pair preset over one pinion revolution.
+
+Faults (repeat --fault for several, on the same or different teeth):
+
+  KIND@TOOTH=STEP            a step of the preset's ladder (Tables 2.5/2.6), 1 = healthy .. 20 = worst
+
+  KIND@TOOTH:NAME=VALUE,...  explicit parameters with units; the rest take their defaults,
+                             e.g. --fault "crack@3:q0=2 mm,q2=1.5 mm,nu=70 deg"
+                                  --fault "spall@5:w_s=8mm,l_s=1mm,h_s=0.5mm,x_1=4mm"
+
+`gearlab plugins` lists every fault's parameters, units, defaults and bounds.
+"""
+
+
+@app.command(help=STIFFNESS_HELP)
+def stiffness(
+    preset: Annotated[str, typer.Option(help="gear-pair preset: luo2019 (Table 2.3) or meng2020 (Table 2.4)")],
+    fault: Annotated[list[str] | None, typer.Option(help="KIND@TOOTH=STEP or KIND@TOOTH:NAME=VALUE,...")] = None,
+    points: Annotated[int, typer.Option(help="samples over one pinion revolution")] = 4096,
+    csv: Annotated[Path | None, typer.Option(help="write theta_rad,k_N_per_m to this CSV file")] = None,
+    plot: Annotated[Path | None, typer.Option(help="write a PNG of the TVMS (with the healthy TVMS)")] = None,
+    fillet: Annotated[bool, typer.Option(help="include the fillet-foundation term")] = True,
+    root_region: Annotated[bool, typer.Option(help="include the straight root region d_1")] = True,
+) -> None:
+    from .kinds.stiffness import csv_text
+    from .physics.faults import parse_fault_option, place_fault
+    from .physics.presets import gear_pair
+    from .physics.stiffness import MeshStiffnessModel, StiffnessOptions
+    from .registry import get_registry
+    from .runs import atomic_write
+
+    if not 64 <= points <= 1 << 20:
+        raise GearlabInputError(f"--points: expected 64 .. {1 << 20}, got {points}")
+    pair = gear_pair(preset)
+    registry = get_registry()
+    placed = []
+    for text in fault or []:
+        kind, tooth, step, params = parse_fault_option(text)
+        placed.append(place_fault(registry, pair, kind, tooth, step, params, where=f"--fault {text!r}"))
+    for path, suffix in ((csv, ".csv"), (plot, ".png")):
+        if path is not None and not path.parent.exists():
+            raise GearlabInputError(f"{path}: directory {path.parent} does not exist")
+    model = MeshStiffnessModel(pair, StiffnessOptions(fillet=fillet, root_region=root_region))
+    start = time.perf_counter()
+    ms = model.mesh_stiffness(placed, points)
+    elapsed = time.perf_counter() - start
+    console.print(
+        f"{pair.name}: Z1={pair.Z1}, Z2={pair.Z2}, contact ratio {pair.contact_ratio:.4f}; "
+        f"TVMS mean {ms.k.mean():.5g} N/m, min {ms.k.min():.5g}, max {ms.k.max():.5g} ({elapsed * 1e3:.1f} ms)"
+    )
+    for p in placed:
+        shown = ", ".join(prm.show(p.params[prm.name]) if prm.unit else f"{p.params[prm.name]}"
+                          for prm in p.fault.params)
+        console.print(f"  {p.label}: RFA {p.fault.rfa(p.params, pair):.4f}  ({shown})")
+    if csv is not None:
+        atomic_write(csv, csv_text(ms.theta, ms.k))
+        console.print(f"wrote {csv}")
+    if plot is not None:
+        from .plots import tvms_figure
+
+        curves = [("healthy", ms.theta, model.mesh_stiffness((), points).k)] if placed else []
+        label = " + ".join(p.label for p in placed) or "healthy"
+        tvms_figure(curves + [(label, ms.theta, ms.k)], f"TVMS of {pair.name}: {label}", plot)
+        console.print(f"wrote {plot}")
+
+
+@app.command()
+def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file")]) -> None:
+    """Check a scenario file without running it: unknown keys, types, ranges, plugin names."""
+    from .scenario import load_scenario
+
+    s = load_scenario(scenario)
+    console.print(f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}")
+
+
+def describe_spec(s) -> str:
+    spec = s.spec
+    cases = getattr(spec, "cases", None)
+    return f"{len(cases)} cases" if cases is not None else ""
+
+
+@app.command()
+def run(
+    scenario: Annotated[Path | None, typer.Argument(help="scenario TOML file")] = None,
+    out: Annotated[Path | None, typer.Option(help="base directory for the run directory (default: [output] dir)")] = None,
+    resume: Annotated[Path | None, typer.Option(help="continue the run in this run directory")] = None,
+    quick: Annotated[bool, typer.Option(help="shrink the scenario for a smoke run")] = False,
+) -> None:
+    """Run a scenario headless; prints `run directory: PATH` as its last line."""
+    from .kinds import KINDS
+    from .runs import run_scenario
+
+    if scenario is None and resume is None:
+        raise GearlabInputError("give a SCENARIO file, or --resume RUN_DIR")
+    with ProgressView() as view:
+        result = run_scenario(scenario, out=out, resume=resume, quick=quick, on_event=view.handle)
+    from .scenario import load_scenario
+
+    kind = load_scenario(result.scenario_path()).kind
+    for line in KINDS[kind].summary_lines(result):
+        console.print(line)
+    console.print(f"report: {result.path / 'report.html'}")
+    typer.echo(f"run directory: {result.path}")
+
+
+@app.command()
+def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> None:
+    """Rebuild report.html of a run directory."""
+    from .runs import RunDir, write_report
+
+    path = write_report(RunDir.open(run_dir))
+    console.print(f"wrote {path}")
+
+
+class ProgressView:
+    """Rich progress bars fed by the run engine's events (one bar per stage)."""
+
+    def __init__(self):
+        self.progress = Progress(
+            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+            console=err_console, transient=False,
+        )
+        self.tasks: dict[str, int] = {}
+
+    def __enter__(self):
+        self.progress.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        return self.progress.__exit__(*exc)
+
+    def handle(self, event) -> None:
+        if event.kind == "stage":
+            self.tasks[event.stage] = self.progress.add_task(event.message or event.stage, total=event.total or None)
+        elif event.kind == "advance" and event.stage in self.tasks:
+            self.progress.update(self.tasks[event.stage], completed=event.done, total=event.total or None)
+        elif event.kind == "log":
+            self.progress.console.print(event.message)
+
+
+def main() -> None:
+    try:
+        code = app(standalone_mode=False)
+        if isinstance(code, int) and code:
+            sys.exit(code)
+    except GearlabInputError as exc:
+        err_console.print(f"error: {exc}", markup=False, highlight=False, soft_wrap=True)
+        sys.exit(2)
+    except typer.Exit as exc:
+        sys.exit(exc.exit_code)
+    except typer.Abort:
+        err_console.print("aborted")
+        sys.exit(1)
+    except Exception as exc:  # noqa: BLE001 - the last line of defence
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            sys.exit(exc.exit_code)
+        traceback.print_exc()
+        err_console.print(f"internal error: {type(exc).__name__}: {exc}", markup=False)
+        sys.exit(1)

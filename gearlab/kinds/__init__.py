@@ -1,0 +1,7 @@
+"""Scenario kinds. Each module gives TABLES (schema), build(scenario) -> spec,
+quick(scenario) (shrink for a smoke run), run(scenario, run_dir, on_event) and
+summary_lines(run_dir) (what the CLI and the TUI show of a finished run)."""
+
+from . import stiffness
+
+KINDS = {"stiffness": stiffness}

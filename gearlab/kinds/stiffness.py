@@ -1,0 +1,231 @@
+"""Scenario kind `stiffness`: TVMS of a gear pair for fault ladders and explicit cases.
+
+The verification scenario (scenarios/stiffness_verification.toml) sweeps all four faults
+over their 20 steps on tooth 5 of the luo2019 pair: Figures 2.32 and 2.33 of the thesis.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from ..physics.faults import LADDER_STEPS, place_fault
+from ..physics.presets import PAIR_PRESETS, gear_pair
+from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions
+from ..plots import ladder_grid, rfa_curves, tvms_figure
+from ..registry import get_registry
+from ..runs import Event, RunDir
+from ..scenario import Key, Scenario, Table, in_range, location, one_of
+
+TABLES = {
+    "stiffness": Table(
+        {
+            "pair": Key(str, check=one_of(*PAIR_PRESETS), doc="gear-pair preset"),
+            "points": Key(int, 4096, in_range(64, 1 << 20), "samples over one pinion revolution"),
+            "fillet": Key(bool, True, doc="include the fillet-foundation term"),
+            "root_region": Key(bool, True, doc="include the straight root region d_1"),
+        },
+        required=True,
+    ),
+    "sweep": Table(
+        {
+            "faults": Key(list, [], doc="fault plugin names to sweep over their ladders"),
+            "tooth": Key(int, 5, in_range(1), "pinion tooth carrying the fault"),
+            "steps": Key(list, [1, LADDER_STEPS], doc="first and last ladder step, inclusive"),
+        }
+    ),
+    "cases": Table(
+        {
+            "name": Key(str, doc="case name (file name of its CSV)"),
+            "faults": Key(list, [], doc="list of {kind, tooth, step} or {kind, tooth, params}"),
+        },
+        array=True,
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    faults: tuple[PlacedFault, ...]
+    fault: str = ""  # sweep cases: the fault type and its step
+    step: int = 0
+
+
+@dataclass
+class Spec:
+    pair: object
+    options: StiffnessOptions
+    points: int
+    cases: list[Case]
+    sweep_faults: list[str]
+    tooth: int
+
+
+def build(scenario: Scenario) -> Spec:
+    t = scenario.tables
+    registry = get_registry()
+    pair = gear_pair(t["stiffness"]["pair"])
+    sweep = t["sweep"]
+    where = scenario.where("sweep", "steps")
+    steps = sweep["steps"]
+    if len(steps) != 2 or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
+        raise GearlabInputError(f"{where}: expected [first, last] whole numbers, got {steps!r}")
+    if not 1 <= steps[0] <= steps[1] <= LADDER_STEPS:
+        raise GearlabInputError(f"{where}: expected 1 <= first <= last <= {LADDER_STEPS}, got {steps!r}")
+    if not 1 <= sweep["tooth"] <= pair.Z1:
+        raise GearlabInputError(f"{scenario.where('sweep', 'tooth')}: tooth must lie in 1..{pair.Z1}, got {sweep['tooth']}")
+    cases = [Case("healthy", ())]
+    for i, name in enumerate(sweep["faults"]):
+        here = f"{scenario.where('sweep', 'faults')} item {i + 1}"
+        if not isinstance(name, str):
+            raise GearlabInputError(f"{here}: expected a fault name, got {name!r}")
+        for step in range(steps[0], steps[1] + 1):
+            placed = place_fault(registry, pair, name, sweep["tooth"], step=step, where=here)
+            cases.append(Case(f"{name}_step{step:02d}", (placed,), name, step))
+    for i, case in enumerate(t["cases"]):
+        placed = []
+        for j, f in enumerate(case["faults"]):
+            here = f"{location(scenario.path, 'cases', 'faults', i)} item {j + 1}"
+            if not isinstance(f, dict) or "kind" not in f or "tooth" not in f:
+                raise GearlabInputError(f"{here}: expected a table {{kind = ..., tooth = ..., step = ...}} or with params")
+            unknown = set(f) - {"kind", "tooth", "step", "params"}
+            if unknown:
+                raise GearlabInputError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, tooth, step, params")
+            placed.append(place_fault(registry, pair, f["kind"], f["tooth"], f.get("step"), f.get("params"), here))
+        cases.append(Case(case["name"], tuple(placed)))
+    names = [c.name for c in cases]
+    if len(set(names)) != len(names):
+        raise GearlabInputError(f"{scenario.path}: case names must be unique; repeated: {sorted({n for n in names if names.count(n) > 1})}")
+    st = t["stiffness"]
+    options = StiffnessOptions(fillet=st["fillet"], root_region=st["root_region"])
+    return Spec(pair, options, st["points"], cases, list(sweep["faults"]), sweep["tooth"])
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: three steps of each ladder (healthy, middle, worst)."""
+    spec = scenario.spec
+    spec.cases = [c for c in spec.cases if not c.fault or c.step in (1, 10, LADDER_STEPS)]
+
+
+def csv_text(theta: np.ndarray, k: np.ndarray) -> str:
+    buf = io.StringIO()
+    buf.write("theta_rad,k_N_per_m\n")
+    np.savetxt(buf, np.column_stack([theta, k]), delimiter=",", fmt="%.10g")
+    return buf.getvalue()
+
+
+def read_csv(path) -> tuple[np.ndarray, np.ndarray]:
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return data[:, 0], data[:, 1]
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    spec: Spec = scenario.spec
+    model = MeshStiffnessModel(spec.pair, spec.options)
+    done = {r["unit"] for r in run.records()}
+    total = len(spec.cases)
+    on_event(Event("stage", stage="stiffness", total=total, message=f"{total} TVMS cases on {spec.pair.name}"))
+    for i, case in enumerate(spec.cases):
+        if case.name not in done:
+            ms = model.mesh_stiffness(case.faults, spec.points)
+            run.write_text(f"cases/{case.name}.csv", csv_text(ms.theta, ms.k))
+            record = {
+                "unit": case.name,
+                "fault": case.fault,
+                "step": case.step,
+                "faults": [
+                    {"kind": p.fault.name, "tooth": p.tooth, "params": p.params, "rfa": p.fault.rfa(p.params, spec.pair)}
+                    for p in case.faults
+                ],
+                "rfa": max((p.fault.rfa(p.params, spec.pair) for p in case.faults), default=0.0),
+                "mean_N_per_m": float(ms.k.mean()),
+                "min_N_per_m": float(ms.k.min()),
+                "max_N_per_m": float(ms.k.max()),
+            }
+            run.append(record)
+            on_event(Event("record", stage="stiffness", record=record))
+        on_event(Event("advance", stage="stiffness", done=i + 1, total=total))
+    summarise(scenario, run)
+
+
+def summarise(scenario: Scenario, run: RunDir) -> None:
+    spec: Spec = scenario.spec
+    records = {r["unit"]: r for r in run.records()}
+    pair = spec.pair
+    sweep: dict[str, dict[str, dict]] = {}
+    for case in spec.cases:
+        if case.fault:
+            r = records[case.name]
+            sweep.setdefault(case.fault, {})[str(case.step)] = {
+                "mean": r["mean_N_per_m"], "min": r["min_N_per_m"], "max": r["max_N_per_m"], "rfa": r["rfa"],
+            }
+    healthy = records["healthy"]
+    summary = {
+        "kind": "stiffness",
+        "scenario": scenario.name,
+        "pair": pair.describe(),
+        "healthy": {"mean": healthy["mean_N_per_m"], "min": healthy["min_N_per_m"], "max": healthy["max_N_per_m"]},
+        "sweep": sweep,
+        "cases": {name: {k: r[k] for k in ("mean_N_per_m", "min_N_per_m", "max_N_per_m", "rfa", "faults")}
+                  for name, r in records.items()},
+    }
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", _table_md(sweep))
+    run.write_text("table.csv", _table_csv(sweep))
+
+    pitch = 360.0 / pair.Z1
+    lo = (spec.tooth - 2) * pitch
+    window = (lo, lo + 3 * pitch + np.degrees(pair.theta_d))
+    panels = {}
+    for case in spec.cases:
+        if case.fault:
+            theta, k = read_csv(run.path / "cases" / f"{case.name}.csv")
+            panels.setdefault(case.fault, []).append((case.step, theta, k))
+    if panels:
+        ladder_grid(panels, run.figures / "tvms_ladders.png", window,
+                    f"TVMS, faults on pinion tooth {spec.tooth} of {pair.name} (Figure 2.33)")
+        rfa_curves({f: ([int(s) for s in v], [v[s]["rfa"] for s in v]) for f, v in sweep.items()},
+                   run.figures / "rfa.png")
+    other = [c for c in spec.cases if not c.fault]
+    curves = [(c.name, *read_csv(run.path / "cases" / f"{c.name}.csv")) for c in other]
+    tvms_figure(curves, f"TVMS over one pinion revolution, {pair.name}", run.figures / "tvms_cases.png")
+
+
+def _table_md(sweep) -> str:
+    if not sweep:
+        return ""
+    faults = list(sweep)
+    steps = sorted({int(s) for v in sweep.values() for s in v})
+    lines = ["| step | " + " | ".join(f"{f} mean (1e8 N/m) | {f} RFA" for f in faults) + " |",
+             "|---|" + "---|---|" * len(faults)]
+    for s in steps:
+        cells = []
+        for f in faults:
+            r = sweep[f].get(str(s))
+            cells += [f"{r['mean'] / 1e8:.4f}", f"{r['rfa']:.3f}"] if r else ["", ""]
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _table_csv(sweep) -> str:
+    rows = ["fault,step,mean_N_per_m,min_N_per_m,max_N_per_m,rfa"]
+    for f, steps in sweep.items():
+        for s, r in sorted(steps.items(), key=lambda kv: int(kv[0])):
+            rows.append(f"{f},{s},{r['mean']:.10g},{r['min']:.10g},{r['max']:.10g},{r['rfa']:.6g}")
+    return "\n".join(rows) + "\n"
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    import json
+
+    summary = json.loads((run.path / "summary.json").read_text())
+    h = summary["healthy"]
+    lines = [f"healthy TVMS: mean {h['mean']:.4g} N/m, min {h['min']:.4g}, max {h['max']:.4g}"]
+    for fault, steps in summary["sweep"].items():
+        last = steps[max(steps, key=int)]
+        lines.append(f"{fault}: worst step mean {last['mean']:.4g} N/m, min {last['min']:.4g}, RFA {last['rfa']:.3f}")
+    return lines

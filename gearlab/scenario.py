@@ -1,0 +1,194 @@
+"""Scenario TOML files: schema, validation before any work, resolution of plugins by name.
+
+A scenario has a ``[scenario]`` table (name, description, kind) and the tables its kind
+declares. Each kind module (gearlab.kinds.*) gives a schema of tables and keys; every
+key is checked for type and range here, unknown keys get a "did you mean", and every
+error names the file, the table and the key. ``gearlab validate`` prints the same errors.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import GearlabInputError
+from .params import did_you_mean
+
+_REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a scenario table: its type(s), default and an optional converter/check."""
+
+    types: type | tuple[type, ...]
+    default: Any = _REQUIRED
+    check: Callable[[Any, str], Any] | None = None  # returns the converted value or raises
+    doc: str = ""
+
+    @property
+    def required(self) -> bool:
+        return self.default is _REQUIRED
+
+
+@dataclass(frozen=True)
+class Table:
+    keys: Mapping[str, Key]
+    array: bool = False  # [[table]]: an array of tables
+    required: bool = False
+    doc: str = ""
+
+
+SCENARIO_TABLE = Table(
+    {
+        "name": Key(str, doc="run name, used for runs/<name>/"),
+        "description": Key(str, ""),
+        "kind": Key(str, doc="stiffness | dataset | noise_study | transfer | gap | gap_benchmark"),
+    },
+    required=True,
+)
+OUTPUT_TABLE = Table({"dir": Key(str, "runs", doc="base directory of run directories")})
+
+
+@dataclass
+class Scenario:
+    path: Path
+    name: str
+    kind: str
+    description: str
+    tables: dict[str, Any]  # validated tables with defaults filled in
+    spec: Any = None  # the kind's parsed specification (gear pair, placed faults, ...)
+    raw: dict = field(default_factory=dict)
+
+    def where(self, table: str, key: str | None = None, index: int | None = None) -> str:
+        return location(self.path, table, key, index)
+
+
+def location(path: Path | str, table: str, key: str | None = None, index: int | None = None) -> str:
+    t = f"[[{table}]] #{index + 1}" if index is not None else f"[{table}]"
+    return f"{path}: {t}" + (f" key '{key}'" if key else "")
+
+
+def one_of(*choices: str) -> Callable[[Any, str], Any]:
+    def check(value, where):
+        if value not in choices:
+            raise GearlabInputError(f"{where}: '{value}' is not one of {', '.join(choices)}{did_you_mean(value, choices)}")
+        return value
+
+    return check
+
+
+def in_range(low: float | None = None, high: float | None = None) -> Callable[[Any, str], Any]:
+    def check(value, where):
+        if (low is not None and value < low) or (high is not None and value > high):
+            span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
+            raise GearlabInputError(f"{where}: {value!r} is outside {span}")
+        return value
+
+    return check
+
+
+def _type_name(types) -> str:
+    types = types if isinstance(types, tuple) else (types,)
+    names = {str: "a string", int: "an integer", float: "a number", bool: "true/false", list: "a list", dict: "a table"}
+    return " or ".join(names.get(t, t.__name__) for t in types)
+
+
+def _check_type(value, types, where):
+    types = types if isinstance(types, tuple) else (types,)
+    ok = isinstance(value, types) and not (isinstance(value, bool) and bool not in types)
+    if float in types and isinstance(value, int) and not isinstance(value, bool):
+        ok = True
+    if not ok:
+        raise GearlabInputError(f"{where}: expected {_type_name(types)}, got {type(value).__name__} {value!r}")
+
+
+def validate_table(path, name: str, table: Table, data: Mapping, index: int | None = None) -> dict:
+    """Check one table's keys against its schema; return the values with defaults filled."""
+    if not isinstance(data, Mapping):
+        raise GearlabInputError(f"{location(path, name, index=index)}: expected a table, got {type(data).__name__}")
+    for key in data:
+        if key not in table.keys:
+            raise GearlabInputError(
+                f"{location(path, name, key, index)}: unknown key{did_you_mean(key, list(table.keys))}; "
+                f"known keys: {', '.join(table.keys)}"
+            )
+    out = {}
+    for key, spec in table.keys.items():
+        where = location(path, name, key, index)
+        if key not in data:
+            if spec.required:
+                raise GearlabInputError(f"{where}: missing; expected {_type_name(spec.types)}. {spec.doc}".rstrip(". ") )
+            out[key] = spec.default
+            continue
+        value = data[key]
+        _check_type(value, spec.types, where)
+        out[key] = spec.check(value, where) if spec.check else value
+    return out
+
+
+def validate_tables(path, schema: Mapping[str, Table], data: Mapping) -> dict:
+    for name in data:
+        if name not in schema:
+            raise GearlabInputError(
+                f"{path}: unknown table [{name}]{did_you_mean(name, list(schema))}; known tables: {', '.join(schema)}"
+            )
+    tables = {}
+    for name, table in schema.items():
+        if name not in data:
+            if table.required:
+                raise GearlabInputError(f"{path}: missing table [{'[' if table.array else ''}{name}{']' if table.array else ''}]")
+            tables[name] = [] if table.array else validate_table(path, name, table, {})
+            continue
+        value = data[name]
+        if table.array:
+            if not isinstance(value, list):
+                raise GearlabInputError(f"{path}: '{name}' must be an array of tables [[{name}]]")
+            tables[name] = [validate_table(path, name, table, item, i) for i, item in enumerate(value)]
+        else:
+            if isinstance(value, list):
+                raise GearlabInputError(f"{path}: '{name}' must be a single table [{name}], not an array")
+            tables[name] = validate_table(path, name, table, value)
+    return tables
+
+
+def read_toml(path: Path) -> dict:
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise GearlabInputError(f"{path}: no such scenario file") from None
+    except IsADirectoryError:
+        raise GearlabInputError(f"{path}: is a directory, expected a scenario .toml file") from None
+    except UnicodeDecodeError as exc:
+        raise GearlabInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise GearlabInputError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise GearlabInputError(f"{path}: invalid TOML: {exc}") from None
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key."""
+    from .kinds import KINDS
+
+    path = Path(path)
+    data = read_toml(path)
+    head = validate_table(path, "scenario", SCENARIO_TABLE, data.get("scenario", {})) if "scenario" in data else None
+    if head is None:
+        raise GearlabInputError(f"{path}: missing table [scenario] (with name, kind and description)")
+    kind = one_of(*KINDS)(head["kind"], location(path, "scenario", "kind"))
+    module = KINDS[kind]
+    schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, **module.TABLES}
+    tables = validate_tables(path, schema, data)
+    scenario = Scenario(
+        path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data
+    )
+    if not scenario.name or "/" in scenario.name or scenario.name.startswith("."):
+        raise GearlabInputError(f"{location(path, 'scenario', 'name')}: expected a plain name usable as a folder name")
+    scenario.spec = module.build(scenario)
+    return scenario
