@@ -53,7 +53,7 @@ def healthy_section(gear: Gear, face_width: float, nodes: int = DEFAULT_NODES) -
     # x(alpha) is monotone on the involute; invert it on a dense alpha grid.
     alpha = np.linspace(gear.alpha_root, gear.alpha_tip, 16 * n_inv)
     x_dense = gear.x_of(alpha)
-    h_inv = np.interp(x_inv, x_dense[::-1], gear.half_thickness(alpha)[::-1])
+    h_inv = np.interp(x_inv, x_dense, gear.half_thickness(alpha))  # x_dense increases with it
     h_inv[0] = gear.half_thickness(gear.alpha_root)
     x = np.concatenate([x_root, x_inv])
     h = np.concatenate([np.full(n_root, gear.R_b * np.sin(gear.alpha_2)), h_inv])
