@@ -76,3 +76,30 @@ def rfa_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]]], path
     ax.grid(alpha=0.3)
     ax.legend()
     return save(fig, path)
+
+
+def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmonics: int = 6) -> Path:
+    """Steady acceleration signals and their spectra with mesh harmonics marked (Figures 2.34-2.39)."""
+    from .signals import spectrum
+
+    names = list(sim.channels)
+    fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.6 * len(names)), squeeze=False, layout="constrained")
+    t = sim.t[start:]
+    show = t < t[0] + 3.0 / sim.speed_hz  # three input-shaft revolutions
+    for row, name in zip(axes, names):
+        x = sim.channels[name][start:]
+        row[0].plot((t[show] - t[0]) * 1e3, x[show], lw=0.6)
+        row[0].set_ylabel(f"{name} (m/s²)")
+        row[0].set_xlabel("time in steady state (ms)")
+        f, amp = spectrum(x, sim.fs)
+        keep = f <= (harmonics + 0.5) * mesh_hz
+        row[1].plot(f[keep], amp[keep], lw=0.6)
+        for h in range(1, harmonics + 1):
+            row[1].axvline(h * mesh_hz, color="tab:red", lw=0.6, ls="--", alpha=0.6)
+        row[1].set_xlabel(f"frequency (Hz); dashed: mesh harmonics n × {mesh_hz:g} Hz")
+        row[1].set_ylabel("amplitude")
+        for ax in row:
+            ax.grid(alpha=0.3)
+    labels = ", ".join(f.label for f in sim.faults) or "healthy"
+    fig.suptitle(f"{sim.model} ({sim.preset}), {labels}, {sim.speed_hz:g} Hz, {sim.load_nm:g} N·m")
+    return save(fig, path)

@@ -58,7 +58,7 @@ KINDS = {"fault": "gearlab_faults", "model": "gearlab_models", "adapter": "gearl
 # What each kind of plugin object must provide, beyond `name` and `params`.
 REQUIRED = {
     "fault": ("apply", "ladder_endpoints", "rfa", "resolve", "ladder"),
-    "model": (),
+    "model": ("assemble", "resolve", "preset"),
     "adapter": (),
     "effect": (),
 }

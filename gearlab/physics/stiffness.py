@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import GearlabInputError
 from .geometry import Gear, GearPair
 from .sections import DEFAULT_NODES, ToothSection, healthy_section
 
@@ -188,6 +189,7 @@ class MeshStiffnessModel:
         self.gear_section = healthy_section(pair.gear, pair.face_width, options.nodes)
         self._gear_integrals = self._integrals(self.gear_section)
         self._pinion_integrals = self._integrals(self.pinion_section)
+        self._healthy_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def _integrals(self, section: ToothSection) -> SectionIntegrals:
         return SectionIntegrals(section, start=0.0 if self.options.root_region else section.d_1)
@@ -213,32 +215,37 @@ class MeshStiffnessModel:
 
         Tooth n is in mesh for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t; taking the
         local angle modulo 2 pi wraps the last tooth's second double-contact zone onto the
-        start of the revolution (eq. 2.53, 2.54).
+        start of the revolution (eq. 2.53, 2.54). The healthy TVMS is computed once per grid;
+        a fault only replaces its own tooth's contribution.
         """
-        pair = self.pair
-        Z1 = pair.Z1
-        for placed in faults:
-            if not 1 <= placed.tooth <= Z1:
-                from ..errors import GearlabInputError
-
-                raise GearlabInputError(f"fault {placed.label}: tooth must lie in 1..{Z1}, got {placed.tooth}")
-        theta = 2 * np.pi * np.arange(points) / points
-        k = np.zeros(points)
         by_tooth: dict[int, list[PlacedFault]] = {}
         for placed in faults:
+            if not 1 <= placed.tooth <= self.pair.Z1:
+                raise GearlabInputError(f"fault {placed.label}: tooth must lie in 1..{self.pair.Z1}, got {placed.tooth}")
             by_tooth.setdefault(placed.tooth, []).append(placed)
-        pitch = 2 * np.pi / Z1
-        healthy_teeth = [n for n in range(1, Z1 + 1) if n not in by_tooth]
-        # All healthy teeth share one stiffness curve: evaluate them in a single pass.
-        for teeth, tooth_faults in [(healthy_teeth, [])] + [([n], f) for n, f in by_tooth.items()]:
-            if not teeth:
-                continue
-            local = np.mod(theta[None, :] - pitch * (np.asarray(teeth)[:, None] - 1), 2 * np.pi)
-            in_mesh = local < pair.theta_t
-            contribution = np.zeros_like(local)
-            contribution[in_mesh] = self.tooth_pair_stiffness(local[in_mesh], tooth_faults)
-            k += contribution.sum(axis=0)
-        return MeshStiffness(theta=theta, k=k, pair=pair, faults=tuple(faults))
+        theta, healthy = self._healthy(points)
+        k = healthy.copy()
+        for tooth, tooth_faults in by_tooth.items():
+            phi, in_mesh = self._arc(theta, [tooth])
+            k[in_mesh[0]] += self.tooth_pair_stiffness(phi, tooth_faults) - self.tooth_pair_stiffness(phi)
+        return MeshStiffness(theta=theta, k=k, pair=self.pair, faults=tuple(faults))
+
+    def _arc(self, theta: np.ndarray, teeth: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """Local angles of *teeth* where they are in mesh, and the (teeth, points) in-mesh mask."""
+        pitch = 2 * np.pi / self.pair.Z1
+        local = np.mod(theta[None, :] - pitch * (np.asarray(teeth)[:, None] - 1), 2 * np.pi)
+        in_mesh = local < self.pair.theta_t
+        return local[in_mesh], in_mesh
+
+    def _healthy(self, points: int) -> tuple[np.ndarray, np.ndarray]:
+        if points not in self._healthy_cache:
+            theta = 2 * np.pi * np.arange(points) / points
+            phi, in_mesh = self._arc(theta, range(1, self.pair.Z1 + 1))
+            per_tooth = np.zeros(in_mesh.shape)
+            per_tooth[in_mesh] = self.tooth_pair_stiffness(phi)  # all healthy teeth in one pass
+            self._healthy_cache[points] = (theta, per_tooth.sum(axis=0))
+        theta, k = self._healthy_cache[points]
+        return theta, k
 
 
 def mesh_stiffness(

@@ -1,0 +1,184 @@
+"""Lumped-parameter gearbox models (thesis 2.3, 2.4.1, 2.4.2) and their plugin contract.
+
+The full model is the 10-DOF model of Luo et al. (2019b) in the DOF order of eq. 2.96:
+
+    x1, y1, theta11 (motor), theta12 (pinion), x2, y2, theta21 (gear), theta22 (load), xf, yf (casing).
+
+Smaller models drop DOFs (thesis 2.4.2): without the casing the bearings are grounded;
+without motor and load the couplings go and the torques act on the gears. The mesh is an
+inclined spring along the line of action: K = Kc + k(t) P^T P, C = Cc + mu k(t) P^T P with P
+of eq. 2.104 and mu from zeta (eq. 2.105-2.109).
+
+The input-shaft DOF (the motor, or the pinion when there is no motor) runs at a fixed
+speed (thesis 2.3: "the shaft speed and motor torque are fixed"); all rotations are
+measured relative to the nominal rigid-body rotation, so the fixed DOF is removed from the
+unknowns and the load torque is balanced through the mesh.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from ..params import Param, did_you_mean, resolve_params
+from ..physics.geometry import GearPair
+from ..physics.presets import gear_pair
+
+DOF_ORDER = ("x1", "y1", "theta11", "theta12", "x2", "y2", "theta21", "theta22", "xf", "yf")
+CHANNEL_DOFS = {
+    "pinion_x": "x1", "pinion_y": "y1", "gear_x": "x2", "gear_y": "y2", "casing_x": "xf", "casing_y": "yf",
+}
+
+# Every parameter a lumped gearbox model can take; a model declares the ones it uses.
+LUMPED_PARAMS = {
+    p.name: p
+    for p in (
+        Param("m1", "kg", 1.0, 1e-6, 1e4, "mass of the pinion block (gear, shaft, bearings)"),
+        Param("m2", "kg", 1.0, 1e-6, 1e4, "mass of the gear block"),
+        Param("mf", "kg", 10.0, 1e-6, 1e5, "mass of the gearbox casing"),
+        Param("I11", "kg*m^2", 1e-2, 1e-9, 1e3, "mass moment of inertia of the motor"),
+        Param("I12", "kg*m^2", 1e-4, 1e-9, 1e3, "mass moment of inertia of the pinion block"),
+        Param("I21", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the gear block"),
+        Param("I22", "kg*m^2", 1e-2, 1e-9, 1e3, "mass moment of inertia of the load"),
+        Param("k_b", "N/m", 1e8, 1e3, 1e12, "bearing stiffness, x and y of both shafts"),
+        Param("c_b", "N*s/m", 1e3, 0.0, 1e8, "bearing damping, x and y of both shafts"),
+        Param("k_c", "N*m/rad", 1e3, 0.0, 1e9, "coupling stiffness motor-pinion and gear-load"),
+        Param("c_c", "N*m*s/rad", 10.0, 0.0, 1e6, "coupling damping"),
+        Param("k_xf", "N/m", 2e8, 1e3, 1e12, "casing mounting stiffness, x"),
+        Param("k_yf", "N/m", 2e8, 1e3, 1e12, "casing mounting stiffness, y"),
+        Param("c_xf", "N*s/m", 2e3, 0.0, 1e8, "casing mounting damping, x"),
+        Param("c_yf", "N*s/m", 2e3, 0.0, 1e8, "casing mounting damping, y"),
+        Param("zeta", "", 0.07, 0.0, 1.0, "mesh damping ratio (eq. 2.107)"),
+    )
+}
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """Constant parts of the equations of motion of one model on one gear pair."""
+
+    dofs: tuple[str, ...]
+    M: np.ndarray
+    Kc: np.ndarray
+    Cc: np.ndarray
+    P: np.ndarray  # projection on the line of action, eq. 2.104
+    input_dof: str  # the fixed-speed, tacho DOF
+    load_dof: str  # where the load torque acts
+
+    def index(self, dof: str) -> int:
+        return self.dofs.index(dof)
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    speed_hz: float  # input-shaft (pinion) rotation frequency
+    load_nm: float  # load torque T_l at the output (eq. 2.111 gives T_m)
+
+
+class DynamicModel:
+    """A lumped gearbox model plugin: which DOFs, which parameters, which presets."""
+
+    name: ClassVar[str]
+    doc: ClassVar[str] = ""
+    dofs: ClassVar[tuple[str, ...]]
+    input_dof: ClassVar[str]
+    load_dof: ClassVar[str]
+    # preset name -> {"pair": gear-pair preset, "params": {...}, "speeds_hz": (...), "loads_nm": (...)}
+    presets: ClassVar[Mapping[str, Mapping]]
+
+    @property
+    def params(self) -> tuple[Param, ...]:
+        return tuple(LUMPED_PARAMS[name] for name in self.param_names())
+
+    def param_names(self) -> tuple[str, ...]:
+        names = ["m1", "m2", "I12", "I21", "k_b", "c_b", "zeta"]
+        if "theta11" in self.dofs:
+            names += ["I11", "I22", "k_c", "c_c"]
+        if "xf" in self.dofs:
+            names += ["mf", "k_xf", "k_yf", "c_xf", "c_yf"]
+        return tuple(names)
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        return tuple(c for c, dof in CHANNEL_DOFS.items() if dof in self.dofs)
+
+    def preset(self, name: str) -> Mapping:
+        try:
+            return self.presets[name]
+        except KeyError:
+            raise GearlabInputError(
+                f"model '{self.name}': unknown preset '{name}'{did_you_mean(name, list(self.presets))}; "
+                f"known: {', '.join(self.presets)}"
+            ) from None
+
+    def resolve(self, preset: str, overrides: Mapping | None = None, where: str = "") -> tuple[GearPair, dict]:
+        """The gear pair and the full parameter set of a preset, with optional overrides (units allowed)."""
+        p = self.preset(preset)
+        values = resolve_params(self.params, {**p["params"], **(overrides or {})}, where or f"model '{self.name}'")
+        return gear_pair(p["pair"]), values
+
+    def assemble(self, pair: GearPair, values: Mapping[str, float]) -> Assembly:
+        return lumped_assembly(self.dofs, pair, values, self.input_dof, self.load_dof)
+
+    def describe(self) -> dict:
+        return {
+            "doc": self.doc,
+            "params": [p.describe() for p in self.params],
+            "dofs": list(self.dofs),
+            "channels": list(self.channels),
+            "presets": {k: {"pair": v["pair"], "speeds_hz": list(v["speeds_hz"]), "loads_nm": list(v["loads_nm"])}
+                        for k, v in self.presets.items()},
+        }
+
+
+def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str, load_dof: str) -> Assembly:
+    """M, Kc, Cc (eq. 2.97, 2.100, 2.101) and P (eq. 2.104) of the 10-DOF model restricted to *dofs*.
+
+    A DOF left out is held at zero: springs to it become springs to ground, so leaving out
+    the casing grounds the bearings. Leaving out motor and load also needs k_c = 0, which
+    the model's parameter list ensures (no coupling parameters without motor and load).
+    """
+    n = len(DOF_ORDER)
+    idx = {d: i for i, d in enumerate(DOF_ORDER)}
+    M = np.diag([v.get("m1", 0), v.get("m1", 0), v.get("I11", 0), v.get("I12", 0),
+                 v.get("m2", 0), v.get("m2", 0), v.get("I21", 0), v.get("I22", 0), v.get("mf", 0), v.get("mf", 0)])
+    K = np.zeros((n, n))
+    C = np.zeros((n, n))
+
+    def spring(a: str, b: str | None, k: float, c: float) -> None:
+        i = idx[a]
+        K[i, i] += k
+        C[i, i] += c
+        if b is not None:
+            j = idx[b]
+            K[j, j] += k
+            C[j, j] += c
+            K[i, j] -= k
+            K[j, i] -= k
+            C[i, j] -= c
+            C[j, i] -= c
+
+    for a, casing in (("x1", "xf"), ("y1", "yf"), ("x2", "xf"), ("y2", "yf")):
+        spring(a, casing, v["k_b"], v["c_b"])
+    spring("xf", None, v.get("k_xf", 0.0), v.get("c_xf", 0.0))
+    spring("yf", None, v.get("k_yf", 0.0), v.get("c_yf", 0.0))
+    spring("theta11", "theta12", v.get("k_c", 0.0), v.get("c_c", 0.0))
+    spring("theta21", "theta22", v.get("k_c", 0.0), v.get("c_c", 0.0))
+    a0 = pair.pressure_angle
+    P = np.array([math.sin(a0), math.cos(a0), 0.0, pair.pinion.R_b,
+                  -math.sin(a0), -math.cos(a0), -pair.gear.R_b, 0.0, 0.0, 0.0])  # eq. 2.104
+    keep = [idx[d] for d in dofs]
+    sub = np.ix_(keep, keep)
+    return Assembly(tuple(dofs), M[sub], K[sub], C[sub], P[keep], input_dof, load_dof)
+
+
+def mesh_damping_ratio(values: Mapping[str, float], k_mean: float) -> float:
+    """mu = c_m / k_m with c_m = 2 zeta sqrt(k_m m1 m2 / (m1 + m2)) (eq. 2.107, 2.109)."""
+    m1, m2 = values["m1"], values["m2"]
+    c_m = 2 * values["zeta"] * math.sqrt(k_mean * m1 * m2 / (m1 + m2))
+    return c_m / k_mean

@@ -1,0 +1,19 @@
+"""The 10-DOF model of Luo et al. (2019b), thesis 2.3 and Table 2.3: Dataset A."""
+
+from gearlab.dynamics.model import DOF_ORDER, DynamicModel
+from gearlab.registry import hookimpl
+from gearlab_plugins.models.presets import LUO2019
+
+
+class TenDof(DynamicModel):
+    name = "ten_dof"
+    doc = "pinion and gear blocks (x, y, rotation), motor, load and casing (x, y); Luo et al. 2019b"
+    dofs = DOF_ORDER
+    input_dof = "theta11"
+    load_dof = "theta22"
+    presets = {"luo2019": LUO2019}
+
+
+@hookimpl
+def gearlab_models():
+    return [TenDof()]
