@@ -103,3 +103,35 @@ def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmoni
     labels = ", ".join(f.label for f in sim.faults) or "healthy"
     fig.suptitle(f"{sim.model} ({sim.preset}), {labels}, {sim.speed_hz:g} Hz, {sim.load_nm:g} N·m")
     return save(fig, path)
+
+
+def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
+    """Per class: revolutions at low, middle and top intensity, and their order spectra."""
+    from .signals import order_spectrum
+
+    names = dataset.spec.class_names
+    fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.3 * len(names)), squeeze=False, layout="constrained")
+    angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]
+    teeth = sorted(set(int(t) for t in dataset.tooth if t > 0))
+    show_tooth = tooth if tooth in teeth else (teeth[0] if teeth else 0)
+    for c, (name, row) in enumerate(zip(names, axes)):
+        mask = (dataset.label == c) & ((dataset.tooth == show_tooth) | (c == 0))
+        steps = sorted(set(int(s) for s in dataset.intensity[mask]))
+        chosen = sorted({steps[0], steps[len(steps) // 2], steps[-1]}) if steps else []
+        for step in chosen:
+            i = int(np.flatnonzero(mask & (dataset.intensity == step))[0])
+            label = "healthy" if c == 0 else f"step {step}"
+            row[0].plot(angle, dataset.X[i], lw=0.5, label=label)
+            orders, amp = order_spectrum(dataset.X[i])
+            keep = orders <= 200
+            row[1].plot(orders[keep], amp[keep], lw=0.6, label=label)
+        row[0].set_ylabel(f"{name}\n(standardised)")
+        row[0].set_xlabel(f"input-shaft angle (deg); tooth {show_tooth}" if c else "input-shaft angle (deg)")
+        row[1].set_xlabel("shaft order")
+        row[1].set_ylabel("amplitude")
+        for ax in row:
+            ax.grid(alpha=0.3)
+            if chosen:
+                ax.legend(fontsize=7, loc="upper right")
+    fig.suptitle(f"dataset {dataset.spec.name}: {dataset.spec.model} ({dataset.spec.preset}), {dataset.spec.channel}")
+    return save(fig, path)

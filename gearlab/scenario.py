@@ -42,6 +42,25 @@ class Table:
     doc: str = ""
 
 
+def one_of(*choices: str) -> Callable[[Any, str], Any]:
+    def check(value, where):
+        if value not in choices:
+            raise GearlabInputError(f"{where}: '{value}' is not one of {', '.join(choices)}{did_you_mean(value, choices)}")
+        return value
+
+    return check
+
+
+def in_range(low: float | None = None, high: float | None = None) -> Callable[[Any, str], Any]:
+    def check(value, where):
+        if (low is not None and value < low) or (high is not None and value > high):
+            span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
+            raise GearlabInputError(f"{where}: {value!r} is outside {span}")
+        return value
+
+    return check
+
+
 SCENARIO_TABLE = Table(
     {
         "name": Key(str, doc="run name, used for runs/<name>/"),
@@ -51,6 +70,15 @@ SCENARIO_TABLE = Table(
     required=True,
 )
 OUTPUT_TABLE = Table({"dir": Key(str, "runs", doc="base directory of run directories")})
+
+
+EXECUTION_TABLE = Table(
+    {
+        "executor": Key(str, "local", one_of("local", "ray"), "local process pool or a Ray cluster"),
+        "workers": Key(int, 0, in_range(0), "processes for the local executor; 0 = all cores"),
+        "device": Key(str, "auto", one_of("auto", "cpu", "cuda"), "where networks train"),
+    }
+)
 
 
 @dataclass
@@ -70,25 +98,6 @@ class Scenario:
 def location(path: Path | str, table: str, key: str | None = None, index: int | None = None) -> str:
     t = f"[[{table}]] #{index + 1}" if index is not None else f"[{table}]"
     return f"{path}: {t}" + (f" key '{key}'" if key else "")
-
-
-def one_of(*choices: str) -> Callable[[Any, str], Any]:
-    def check(value, where):
-        if value not in choices:
-            raise GearlabInputError(f"{where}: '{value}' is not one of {', '.join(choices)}{did_you_mean(value, choices)}")
-        return value
-
-    return check
-
-
-def in_range(low: float | None = None, high: float | None = None) -> Callable[[Any, str], Any]:
-    def check(value, where):
-        if (low is not None and value < low) or (high is not None and value > high):
-            span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
-            raise GearlabInputError(f"{where}: {value!r} is outside {span}")
-        return value
-
-    return check
 
 
 def _type_name(types) -> str:
@@ -183,7 +192,7 @@ def load_scenario(path: str | Path) -> Scenario:
         raise GearlabInputError(f"{path}: missing table [scenario] (with name, kind and description)")
     kind = one_of(*KINDS)(head["kind"], location(path, "scenario", "kind"))
     module = KINDS[kind]
-    schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, **module.TABLES}
+    schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, "execution": EXECUTION_TABLE, **module.TABLES}
     tables = validate_tables(path, schema, data)
     scenario = Scenario(
         path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data

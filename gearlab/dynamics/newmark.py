@@ -181,11 +181,19 @@ class Simulator:
         steps = int(round(duration * self.fs))
         t = np.arange(steps + 1) / self.fs
         phase = np.mod(2 * np.pi * speed * t, 2 * np.pi)  # nominal pinion angle: fixed input speed
-        tvms = self.stiffness.mesh_stiffness(faults, points=TVMS_POINTS)
-        k = np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
+        per_rev = self.fs / speed
+        if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
+            # A whole number of steps per revolution: the TVMS on exactly those angles, no
+            # interpolation, so a fault on tooth n sees exactly the shifted TVMS of tooth 1.
+            tvms = self.stiffness.mesh_stiffness(faults, points=round(per_rev))
+            k = tvms.k[np.arange(steps + 1) % round(per_rev)]
+        else:
+            points = self.pair.Z1 * math.ceil(TVMS_POINTS / self.pair.Z1)  # pitch-aligned grid
+            tvms = self.stiffness.mesh_stiffness(faults, points=points)
+            k = np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
         F = np.zeros(len(self.dofs))
         F[self.load_index] = -load  # T_l opposes the driven gear's rotation (eq. 2.111)
-        u = np.linalg.solve(self.Kc + k[0] * np.outer(self.P, self.P), F)  # start in static equilibrium
+        u = np.linalg.solve(self.Kc + tvms.mean * np.outer(self.P, self.P), F)  # static equilibrium at the mean stiffness
         v = np.zeros_like(u)
         a = np.zeros_like(u)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)

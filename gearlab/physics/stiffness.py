@@ -226,21 +226,28 @@ class MeshStiffnessModel:
         theta, healthy = self._healthy(points)
         k = healthy.copy()
         for tooth, tooth_faults in by_tooth.items():
-            phi, in_mesh = self._arc(theta, [tooth])
+            phi, in_mesh = self._arc(points, [tooth])
             k[in_mesh[0]] += self.tooth_pair_stiffness(phi, tooth_faults) - self.tooth_pair_stiffness(phi)
         return MeshStiffness(theta=theta, k=k, pair=self.pair, faults=tuple(faults))
 
-    def _arc(self, theta: np.ndarray, teeth: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-        """Local angles of *teeth* where they are in mesh, and the (teeth, points) in-mesh mask."""
-        pitch = 2 * np.pi / self.pair.Z1
-        local = np.mod(theta[None, :] - pitch * (np.asarray(teeth)[:, None] - 1), 2 * np.pi)
+    def _arc(self, points: int, teeth: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """Local angles of *teeth* where they are in mesh, and the (teeth, points) in-mesh mask.
+
+        The local angle of tooth n at grid point j is 2 pi ((j Z1 - (n-1) points) mod (points Z1)) / (points Z1):
+        integer arithmetic, so every tooth sees bit-identical angles at corresponding points and
+        a tooth's arc starts on the same side of a grid point for every tooth.
+        """
+        Z1 = self.pair.Z1
+        j = np.arange(points, dtype=np.int64)[None, :]
+        n = np.asarray(teeth, dtype=np.int64)[:, None]
+        local = 2 * np.pi * np.mod(j * Z1 - (n - 1) * points, points * Z1) / (points * Z1)
         in_mesh = local < self.pair.theta_t
         return local[in_mesh], in_mesh
 
     def _healthy(self, points: int) -> tuple[np.ndarray, np.ndarray]:
         if points not in self._healthy_cache:
             theta = 2 * np.pi * np.arange(points) / points
-            phi, in_mesh = self._arc(theta, range(1, self.pair.Z1 + 1))
+            phi, in_mesh = self._arc(points, range(1, self.pair.Z1 + 1))
             per_tooth = np.zeros(in_mesh.shape)
             per_tooth[in_mesh] = self.tooth_pair_stiffness(phi)  # all healthy teeth in one pass
             self._healthy_cache[points] = (theta, per_tooth.sum(axis=0))

@@ -1,0 +1,93 @@
+"""Content-addressed dataset cache: `$GEARLAB_CACHE/<key>.npz`, no pickle, atomic writes.
+
+The key hashes the canonical spec and the physics version (DatasetSpec.key). An entry is
+written to a temporary file in the cache directory and renamed into place, so a killed
+build leaves no entry; an unreadable or mismatched entry is removed and rebuilt.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import warnings
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import platformdirs
+
+from ..errors import GearlabInputError
+from ..runs import Event, atomic_write
+from .spec import Dataset, DatasetSpec, NoiseSpec
+
+ARRAYS = ("X", "label", "fault", "intensity", "tooth", "rfa", "revolution", "domain")
+
+
+def cache_dir() -> Path:
+    path = Path(os.environ.get("GEARLAB_CACHE") or platformdirs.user_cache_dir("gearlab"))
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise GearlabInputError(f"cannot create the dataset cache directory {path}: {exc.strerror}") from None
+    return path
+
+
+def entry_path(spec: DatasetSpec) -> Path:
+    return cache_dir() / f"{spec.key()}.npz"
+
+
+def save(dataset: Dataset) -> Path:
+    meta = {
+        "key": dataset.key,
+        "spec": asdict(dataset.spec),
+        "domains": list(dataset.domains),
+        "reference": list(dataset.reference),
+        "meta": dataset.meta,
+    }
+    buf = io.BytesIO()
+    np.savez(buf, meta=np.array(json.dumps(meta)), **{name: getattr(dataset, name) for name in ARRAYS})
+    path = entry_path(dataset.spec)
+    atomic_write(path, buf.getvalue())
+    return path
+
+
+def spec_from_dict(d: dict) -> DatasetSpec:
+    d = dict(d)
+    d["faults"] = tuple((name, tuple(steps)) for name, steps in d["faults"])
+    d["teeth"] = None if d["teeth"] is None else tuple(d["teeth"])
+    d["noise"] = None if d["noise"] is None else NoiseSpec(**d["noise"])
+    return DatasetSpec(**d)
+
+
+def load(spec: DatasetSpec) -> Dataset | None:
+    path = entry_path(spec)
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            if meta["key"] != spec.key():
+                raise ValueError("key mismatch")
+            arrays = {name: data[name] for name in ARRAYS}
+    except Exception as exc:  # a damaged entry is not an error for the user: rebuild it
+        warnings.warn(f"dataset cache entry {path.name} is unreadable ({exc}); rebuilding it", stacklevel=2)
+        path.unlink(missing_ok=True)
+        return None
+    return Dataset(spec=spec, domains=tuple(meta["domains"]), reference=tuple(meta["reference"]),
+                   meta=meta["meta"], **arrays)
+
+
+def load_or_build(spec: DatasetSpec, executor=None, on_event: Callable[[Event], None] = lambda e: None
+                  ) -> tuple[Dataset, bool]:
+    """The dataset of *spec* from the cache, or built and stored. Returns (dataset, was_cached)."""
+    from .builder import build_dataset
+
+    cached = load(spec)
+    if cached is not None:
+        on_event(Event("log", message=f"dataset {spec.name}: from cache ({spec.key()})"))
+        return cached, True
+    dataset = build_dataset(spec, executor, on_event)
+    save(dataset)
+    return dataset, False

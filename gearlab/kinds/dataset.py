@@ -1,0 +1,166 @@
+"""Scenario kind `dataset`: build (or load from the cache) datasets and show what is in them."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+from ..data.cache import load_or_build
+from ..data.spec import DATASET_PRESETS, DatasetSpec, NoiseSpec, dataset_preset
+from ..errors import GearlabInputError
+from ..executors import make_executor
+from ..runs import Event, RunDir
+from ..scenario import Key, Scenario, Table, in_range, location
+from ..units import to_si
+
+DATASET_TABLE = Table(
+    {
+        "preset": Key(str, doc=f"dataset preset: {', '.join(DATASET_PRESETS)}"),
+        "name": Key(str, "", doc="label (default: the preset name)"),
+        "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
+        "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
+        "channel": Key(str, "", doc="measurement channel, e.g. pinion_x, casing_x"),
+        "speed": Key((int, float, str), None, doc="input-shaft speed, e.g. '25.2 Hz'"),
+        "load": Key((int, float, str), None, doc="load torque, e.g. '7 N*m'"),
+        "faults": Key(dict, None, doc="{fault = [steps]} replacing the preset's ladders"),
+        "teeth": Key(list, None, doc="pinion teeth carrying faults (default: all)"),
+        "duplicates": Key(int, None, in_range(1)),
+        "healthy": Key(int, None, in_range(0)),
+        "revolutions": Key(int, None, in_range(1), "J noisy revolutions per sample (TSA averages them)"),
+        "noise": Key(dict, None, doc="{kind = 'laplace', snr_db = 0, seed = 0}; an empty table removes noise"),
+        "tsa": Key(bool, None),
+        "seed": Key(int, None, in_range(0)),
+        "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'"),
+    },
+    array=True,
+    required=True,
+)
+TABLES = {"datasets": DATASET_TABLE}
+
+
+def dataset_spec(entry: dict, where: str) -> DatasetSpec:
+    """A dataset preset with the entry's overrides applied (shared by the dataset, transfer and gap kinds)."""
+    spec = dataset_preset(entry["preset"], where)
+    changes = {}
+    for key in ("model", "channel"):
+        if entry[key]:
+            changes[key] = entry[key]
+    if entry["model_preset"]:
+        changes["preset"] = entry["model_preset"]
+    if entry["name"]:
+        changes["name"] = changes["domain"] = entry["name"]
+    for key, unit in (("speed", "Hz"), ("load", "N*m"), ("fs", "Hz")):
+        if entry[key] is not None:
+            value = to_si(entry[key], unit, f"{where} key '{key}'")
+            if value <= 0 and key != "load" or value < 0:
+                raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {entry[key]!r}")
+            changes[{"speed": "speed_hz", "load": "load_nm", "fs": "fs"}[key]] = value
+    if entry["faults"] is not None:
+        faults = []
+        for name, steps in entry["faults"].items():
+            if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
+                raise GearlabInputError(f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {steps!r}")
+            faults.append((name, tuple(steps)))
+        changes["faults"] = tuple(faults)
+    if entry["teeth"] is not None:
+        if not all(isinstance(t, int) and not isinstance(t, bool) for t in entry["teeth"]):
+            raise GearlabInputError(f"{where} key 'teeth': expected a list of tooth numbers, got {entry['teeth']!r}")
+        changes["teeth"] = tuple(entry["teeth"])
+    for key in ("duplicates", "healthy", "revolutions", "tsa", "seed"):
+        if entry[key] is not None:
+            changes[key] = entry[key]
+    if entry["noise"] is not None:
+        changes["noise"] = noise_spec(entry["noise"], f"{where} key 'noise'")
+    spec = spec.with_(**changes)
+    spec.check(where)
+    return spec
+
+
+def noise_spec(table: dict, where: str) -> NoiseSpec | None:
+    if not table:
+        return None
+    unknown = set(table) - {"kind", "snr_db", "seed"}
+    if unknown:
+        raise GearlabInputError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, snr_db, seed")
+    if "kind" not in table or "snr_db" not in table:
+        raise GearlabInputError(f"{where}: expected {{kind = 'gaussian'|'laplace'|'student_t', snr_db = number}}")
+    snr = table["snr_db"]
+    if isinstance(snr, bool) or not isinstance(snr, (int, float)):
+        raise GearlabInputError(f"{where}: snr_db must be a number of dB, got {snr!r}")
+    seed = table.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise GearlabInputError(f"{where}: seed must be a whole number >= 0, got {seed!r}")
+    return NoiseSpec(str(table["kind"]), float(snr), seed)
+
+
+def build(scenario: Scenario) -> list[DatasetSpec]:
+    specs = [dataset_spec(entry, location(scenario.path, "datasets", index=i))
+             for i, entry in enumerate(scenario.tables["datasets"])]
+    names = [s.name for s in specs]
+    if len(set(names)) != len(names):
+        raise GearlabInputError(f"{scenario.path}: dataset names must be unique; give each entry a 'name'")
+    return specs
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: two teeth, the top intensity of each fault, a few healthy samples, J <= 4."""
+    scenario.spec = [
+        s.with_(teeth=(1, 2), faults=tuple((f, steps[-1:]) for f, steps in s.faults), duplicates=1,
+                healthy=min(s.healthy, 4), revolutions=min(s.revolutions, 4))
+        for s in scenario.spec
+    ]
+
+
+def executor_for(scenario: Scenario):
+    ex = scenario.tables["execution"]
+    return make_executor(ex["executor"], ex["workers"] or None)
+
+
+def class_counts(dataset) -> dict[str, int]:
+    return {name: int((dataset.label == c).sum()) for c, name in enumerate(dataset.spec.class_names)}
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    executor = executor_for(scenario)
+    done = {r["unit"]: r for r in run.records()}
+    summary = {"kind": "dataset", "scenario": scenario.name, "datasets": {}}
+    for spec in scenario.spec:
+        dataset, cached = load_or_build(spec, executor, on_event)
+        record = done.get(spec.name) or {
+            "unit": spec.name, "key": spec.key(), "cached": cached, "n": len(dataset),
+            "counts": class_counts(dataset), "reference": list(dataset.reference), "meta": dataset.meta,
+        }
+        if spec.name not in done:
+            run.append(record)
+            on_event(Event("record", stage="datasets", record=record))
+        summary["datasets"][spec.name] = {**record, "spec": asdict(spec), "shape": list(dataset.X.shape)}
+        figures(dataset, run)
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", table_md(summary))
+
+
+def table_md(summary: dict) -> str:
+    names = list(summary["datasets"])
+    classes = []
+    for d in summary["datasets"].values():
+        classes += [c for c in d["counts"] if c not in classes]
+    lines = ["| class | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    for c in classes + ["total"]:
+        cells = [str(d["n"] if c == "total" else d["counts"].get(c, 0)) for d in summary["datasets"].values()]
+        lines.append(f"| {c} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def figures(dataset, run: RunDir) -> None:
+    from ..plots import dataset_signals
+
+    dataset_signals(dataset, run.figures / f"signals_{dataset.spec.name}.png")
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    summary = json.loads((run.path / "summary.json").read_text())
+    lines = [table_md(summary).rstrip()]
+    for name, d in summary["datasets"].items():
+        lines.append(f"{name}: {d['n']} samples x {d['shape'][1]}, cache key {d['key']}"
+                     + (" (from cache)" if d["cached"] else ""))
+    return lines
