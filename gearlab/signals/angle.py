@@ -1,0 +1,119 @@
+"""The continuous input-shaft angle θ(t), from whatever the record offers (thesis 2.4.3).
+
+The thesis cuts revolutions "by observing when the rotational value of the input shaft
+passes 0" (p. 2.4.3, Figure 2.25). Everything downstream therefore needs one thing: the
+continuous (unwrapped) input-shaft angle θ at every sample, in radians. It can come from
+
+* the simulator's tacho, the wrapped angle in [-π, π)           -> :func:`unwrap_tacho`;
+* a measured once-per-revolution pulse (key-phasor) voltage     -> :func:`angle_from_pulses`;
+* only a nominal constant speed                                 -> :func:`angle_from_speed`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from .checks import check_int, check_positive, check_real, check_signal, fmt_hz
+
+TWO_PI = 2.0 * np.pi
+
+# Slack for a wrapped tacho that touches both ends of its interval ([-π, π] after rounding).
+_WRAP_SLACK = 1e-6
+
+
+def unwrap_tacho(tacho: np.ndarray) -> np.ndarray:
+    """Wrapped shaft angle (rad, in [-π, π)) -> continuous angle θ (rad), np.unwrap semantics.
+
+    Any interval one turn wide is accepted ([-π, π) from the simulator, [0, 2π) from some
+    encoders): jumps larger than π between samples are taken as wraps and undone by adding
+    multiples of 2π, so θ[0] equals tacho[0] and the zero crossings of the tacho are
+    exactly the crossings of θ through 2πk. A tacho spanning more than one turn is not a
+    wrapped angle (degrees, or already continuous) and is refused rather than guessed at.
+    """
+    tacho = check_signal(tacho, "tacho")
+    span = float(tacho.max() - tacho.min())
+    if span > TWO_PI + _WRAP_SLACK:
+        raise GearlabInputError(
+            f"tacho spans {span:.4g} (from {tacho.min():.4g} to {tacho.max():.4g}), more than one turn "
+            "(2π rad): expected the wrapped shaft angle in radians, e.g. in [-π, π) "
+            "(degrees? multiply by π/180; already continuous? use it as the angle directly)"
+        )
+    return np.unwrap(tacho)
+
+
+def angle_from_speed(n: int, fs: float, speed_hz: float, phase: float = 0.0) -> np.ndarray:
+    """Constant-speed angle θ[i] = phase + 2π·f·i/fs for i = 0 … n−1 (rad).
+
+    For measured data with only a nominal speed *speed_hz* (Hz, revolutions per second)
+    known; the zero of the angle (where revolutions start) is then arbitrary and set by
+    *phase* (rad at the first sample).
+    """
+    n = check_int(n, "number of samples n", minimum=1)
+    fs = check_positive(fs, "sampling rate fs", "Hz")
+    speed_hz = check_positive(speed_hz, "shaft speed", "Hz")
+    phase = check_real(phase, "phase")
+    return phase + TWO_PI * speed_hz * (np.arange(n, dtype=np.float64) / fs)
+
+
+def angle_from_pulses(pulses: np.ndarray, fs: float) -> np.ndarray:
+    """Once-per-revolution pulse train (any voltage) -> continuous shaft angle θ per sample (rad).
+
+    Edge detection. The pulse train is thresholded at the mid-level
+    v_mid = (min + max)/2. A revolution starts at each rising edge; its sub-sample time is
+    where the straight line between the two samples that bracket v_mid reaches it,
+
+        t_j = i + (v_mid − v[i]) / (v[i+1] − v[i])      (in samples).
+
+    Noise on a slow edge can cross v_mid several times; to count each pulse once the
+    train is first debounced with a Schmitt trigger (state "high" above 75 % of the range,
+    "low" below 25 %, unchanged in between), and each low-to-high switch takes the last
+    mid-level crossing before it.
+
+    Angle. The j-th edge (j = 0, 1, …) is at θ = 2πj: the shaft is at angle zero at
+    the first pulse, and between edges the angle is linear in time (constant speed within
+    one revolution). Samples before the first and after the last edge are extrapolated
+    with the speed of the neighbouring revolution.
+
+    *fs* (Hz) is not needed for the angle itself (it is per sample); it is checked and used
+    to state speeds in messages.
+    """
+    v = check_signal(pulses, "pulse train")
+    fs = check_positive(fs, "sampling rate fs", "Hz")
+    lo, hi = float(v.min()), float(v.max())
+    if hi == lo:
+        raise GearlabInputError(
+            f"pulse train is constant ({lo:g}) and has 0 rising edges; "
+            "at least 2 once-per-revolution pulses are needed to measure the speed"
+        )
+    mid = 0.5 * (lo + hi)
+    low_thr, high_thr = lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)
+
+    # Schmitt trigger without a loop: known states where the level is unambiguous, carried
+    # forward through the hysteresis band (index of the last decided sample).
+    decided = (v > high_thr) | (v < low_thr)
+    last = np.maximum.accumulate(np.where(decided, np.arange(v.size), -1))
+    first_decided = int(np.argmax(decided))  # exists: min < low_thr < high_thr < max
+    state = v[np.where(last >= 0, last, first_decided)] > high_thr
+    switches = np.flatnonzero(~state[:-1] & state[1:]) + 1  # first "high" sample of each pulse
+
+    # Mid-level upward crossings between samples i and i+1, and the last one before each switch.
+    crossings = np.flatnonzero((v[:-1] < mid) & (v[1:] >= mid))
+    i = crossings[np.searchsorted(crossings, switches, side="right") - 1]
+    edges = i + (mid - v[i]) / (v[i + 1] - v[i])
+
+    if edges.size < 2:
+        raise GearlabInputError(
+            f"pulse train has {edges.size} rising edge(s) in {v.size} samples "
+            f"({v.size / fs:.4g} s at {fmt_hz(fs)}); at least 2 once-per-revolution pulses are needed "
+            "to measure the speed"
+        )
+
+    t = np.arange(v.size, dtype=np.float64)
+    theta_edges = TWO_PI * np.arange(edges.size, dtype=np.float64)
+    theta = np.interp(t, edges, theta_edges)  # linear in time between edges
+    # np.interp holds the end values; extrapolate with the neighbouring revolution's speed.
+    before, after = t < edges[0], t > edges[-1]
+    theta[before] = TWO_PI * (t[before] - edges[0]) / (edges[1] - edges[0])
+    theta[after] = theta_edges[-1] + TWO_PI * (t[after] - edges[-1]) / (edges[-1] - edges[-2])
+    return theta

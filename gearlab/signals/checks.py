@@ -1,0 +1,105 @@
+"""Input checks shared by the signal pipeline: one clear line for every bad input.
+
+Every function of :mod:`gearlab.signals` validates what it is given before it computes,
+so that a NaN from an unstable simulation or a wrong column in an imported file is named
+where it enters (which array, which sample) rather than surfacing later as a strange
+accuracy figure.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+from ..errors import GearlabInputError
+
+
+def as_real_array(x, name: str) -> np.ndarray:
+    """*x* as a float64 array; booleans and integers are accepted (digital tacho channels)."""
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "biuf":
+        raise GearlabInputError(f"{name} must hold real numbers, got an array of dtype {arr.dtype}")
+    return arr.astype(np.float64, copy=False)
+
+
+def check_finite(arr: np.ndarray, name: str) -> None:
+    """Raise naming the first NaN or inf of *arr* (position as sample, or row and sample)."""
+    finite = np.isfinite(arr)
+    if finite.all():
+        return
+    flat = np.flatnonzero(~finite.ravel())
+    first = int(flat[0])
+    value = arr.ravel()[first]
+    what = "NaN" if np.isnan(value) else ("inf" if value > 0 else "-inf")
+    if arr.ndim <= 1:
+        where = f"sample {first}"
+    else:
+        *lead, sample = np.unravel_index(first, arr.shape)
+        where = f"row {', '.join(str(int(i)) for i in lead)}, sample {int(sample)}"
+    more = f" ({flat.size} non-finite values in all)" if flat.size > 1 else ""
+    raise GearlabInputError(f"{name} contains {what} at {where}{more}; expected finite numbers")
+
+
+def check_signal(x, name: str = "signal") -> np.ndarray:
+    """A 1-D, non-empty, finite real array as float64 — or GearlabInputError saying what is wrong.
+
+    Used for every time series that enters the pipeline: the vibration signal, the tacho,
+    a pulse train, a continuous angle.
+    """
+    arr = as_real_array(x, name)
+    if arr.ndim != 1:
+        raise GearlabInputError(
+            f"{name} must be 1-D (one channel over time), got an array of shape {arr.shape}"
+        )
+    if arr.size == 0:
+        raise GearlabInputError(f"{name} is empty; expected at least one sample")
+    check_finite(arr, name)
+    return arr
+
+
+def check_array(x, name: str, min_ndim: int = 1) -> np.ndarray:
+    """A finite real float64 array of at least *min_ndim* dimensions and no empty axis."""
+    arr = as_real_array(x, name)
+    if arr.ndim < min_ndim:
+        raise GearlabInputError(
+            f"{name} must have at least {min_ndim} dimension(s), got an array of shape {arr.shape}"
+        )
+    if arr.size == 0:
+        raise GearlabInputError(f"{name} is empty (shape {arr.shape}); expected at least one value")
+    check_finite(arr, name)
+    return arr
+
+
+def check_positive(value, name: str, unit: str = "") -> float:
+    """A finite real number > 0 as float."""
+    v = check_real(value, name)
+    if v <= 0:
+        raise GearlabInputError(f"{name} must be positive, got {v:g}{(' ' + unit) if unit else ''}")
+    return v
+
+
+def check_real(value, name: str) -> float:
+    """A finite real number (Python or numpy scalar, not bool) as float."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise GearlabInputError(f"{name} must be a real number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise GearlabInputError(f"{name} must be finite, got {v}")
+    return v
+
+
+def check_int(value, name: str, minimum: int) -> int:
+    """An integer (Python or numpy, not bool) >= *minimum*."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise GearlabInputError(f"{name} must be an integer, got {value!r}")
+    v = int(value)
+    if v < minimum:
+        raise GearlabInputError(f"{name} must be at least {minimum}, got {v}")
+    return v
+
+
+def fmt_hz(f: float) -> str:
+    """A frequency for people: '25.2 Hz', '200 kHz'."""
+    return f"{f / 1e3:.4g} kHz" if abs(f) >= 1e3 else f"{f:.4g} Hz"
