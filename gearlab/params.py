@@ -40,7 +40,7 @@ class Param:
 
 
 def did_you_mean(name: str, known: list[str] | tuple[str, ...]) -> str:
-    close = difflib.get_close_matches(name, list(known), n=1)
+    close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.5)  # 0.5: 'q1' still finds 'q0'
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 

@@ -16,12 +16,6 @@ from gearlab.physics.faults import Fault
 from gearlab.registry import hookimpl
 
 
-def root_half_thickness(pair) -> float:
-    """h_c (eq. 2.61): half thickness where the crack starts, R_b sin(alpha_2) for Z <= 41."""
-    g = pair.pinion
-    return float(g.half_thickness(g.alpha_root))
-
-
 def max_half_thickness(pair) -> float:
     """Largest h_x of the healthy pinion tooth. The involute is thickest at alpha = 0
     (h = R_b alpha_2), a few micrometres above the base circle, so a crack must reach
@@ -75,8 +69,12 @@ class Crack(Fault):
                 )
 
     def effective_crack_height(self, params, pair) -> float:
-        """h_q,ave of eq. 2.62-2.65 (the normalisation sin(nu) applied once, eq. 2.60)."""
-        return root_half_thickness(pair) - mean_depth(params, pair.face_width) * math.sin(params["nu"])
+        """h_q,ave of eq. 2.62-2.65 (the normalisation sin(nu) applied once, eq. 2.60).
+
+        h_c is taken as the largest half thickness rather than R_b sin(alpha_2) (eq. 2.61), so a
+        crack of zero depth leaves the tooth exactly healthy (docs/physics.md, decision 10).
+        """
+        return max_half_thickness(pair) - mean_depth(params, pair.face_width) * math.sin(params["nu"])
 
     def apply(self, section, params, pair):
         h_q = self.effective_crack_height(params, pair)
