@@ -203,9 +203,17 @@ def simulate(
     console.print(f"wrote {out} (channels: {', '.join(result.channels)})")
     if plot is not None:
         from .plots import signal_and_spectrum
+        from .signals import cut_revolutions, revolution_starts, unwrap_tacho
 
-        signal_and_spectrum(result, plot, mesh_hz=result.speed_hz * sim.pair.Z1)
-        console.print(f"wrote {plot}")
+        # The plot starts at the first steady revolution (transient detected on the first channel).
+        first = next(iter(result.channels.values()))
+        try:
+            steady = cut_revolutions(first, result.fs, tacho=result.tacho).first_steady
+        except GearlabInputError:
+            steady = 0
+        start = int(np.ceil(revolution_starts(unwrap_tacho(result.tacho))[steady]))
+        signal_and_spectrum(result, plot, mesh_hz=result.speed_hz * sim.pair.Z1, start=start)
+        console.print(f"wrote {plot} (steady from t = {result.t[start]:.3f} s)")
 
 
 @app.command()

@@ -131,6 +131,13 @@ class Simulator:
         self.w = G @ self.P
         self.pw = float(self.P @ self.w)
         self._check_step(where)
+        self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Load the compiled integrator now (one step), so run() times only the simulation."""
+        n = len(self.dofs)
+        _integrate(self.GMC, np.zeros(n), self.w, self.P, self.pw, np.ones(1), self.mu, self.c, 1.0 / self.fs,
+                   self.gamma, np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(1, dtype=np.int64), np.empty((2, 1)))
 
     def natural_frequencies(self, k: float | None = None, fixed_input: bool = True) -> np.ndarray:
         """Undamped natural frequencies (Hz) at mesh stiffness k (default: the mean)."""
