@@ -135,3 +135,81 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
                 ax.legend(fontsize=7, loc="upper right")
     fig.suptitle(f"dataset {dataset.spec.name}: {dataset.spec.model} ({dataset.spec.preset}), {dataset.spec.channel}")
     return save(fig, path)
+
+
+def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> None:
+    """Figures 5.5/5.6 (accuracy vs k), 5.7 (training curves), 5.8 (confusion), 5.9 (latent maps)."""
+    figures = Path(run_path) / "figures"
+    # accuracy against k with one-standard-deviation bands
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for label, per_k in table.items():
+        xs = [k for k in ks if str(k) in per_k]
+        mean = np.array([per_k[str(k)]["mean"] for k in xs])
+        std = np.array([per_k[str(k)]["std"] for k in xs])
+        style = "-" if "(supervised" in label else "--"
+        line, = ax.plot(xs, mean, style, marker="o", ms=3, label=label)
+        ax.fill_between(xs, mean - std, mean + std, color=line.get_color(), alpha=0.15)
+    ax.set_xlabel("fault samples in the target training set (k)")
+    ax.set_ylabel("target test accuracy (%)")
+    ax.set_ylim(0, 102)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    save(fig, figures / "accuracy_vs_k.png")
+
+    # training curves of the first repetition at the middle k (Figure 5.7)
+    curved = [r for r in records if r.get("history") and r["rep"] == 0 and r["history"].get("discrepancy")]
+    if curved:
+        k_show = sorted({r["k"] for r in curved})[len({r["k"] for r in curved}) // 2]
+        shown = [r for r in curved if r["k"] == k_show]
+        fig, axes = plt.subplots(len(shown), 1, figsize=(8, 2.4 * len(shown)), squeeze=False, layout="constrained")
+        for ax, r in zip(axes[:, 0], shown):
+            h = r["history"]
+            epochs = np.arange(len(h["val_acc"]))
+            ax.plot(epochs, 100 * np.asarray(h["val_acc"]), label="source validation accuracy (%)")
+            ax2 = ax.twinx()
+            ax2.plot(epochs, h["discrepancy"], color="tab:red", lw=0.8, label="domain discrepancy")
+            ax2.plot(epochs, h["lam"], color="tab:gray", lw=0.8, ls=":", label="lambda")
+            if h["best_epoch"] >= 0:
+                ax.axvline(h["best_epoch"], color="k", ls="--", lw=0.7)
+            ax.set_title(f"{r['method']}, k = {k_show}: test accuracy {r['accuracy']:.1f} %", fontsize=9)
+            ax.set_xlabel("epoch")
+            ax.legend(fontsize=7, loc="lower left")
+            ax2.legend(fontsize=7, loc="lower right")
+        save(fig, figures / "training_curves.png")
+
+    # confusion matrices at the smallest k, summed over repetitions (Figure 5.8)
+    k0 = min(ks)
+    methods = list(table)
+    fig, axes = plt.subplots(1, len(methods), figsize=(2.6 * len(methods), 2.8), squeeze=False, layout="constrained")
+    for ax, label in zip(axes[0], methods):
+        cm = np.zeros((2, 2), dtype=int)
+        for r in records:
+            if r["method"] == label and r["k"] == k0:
+                cm += np.asarray(r["confusion"])
+        ax.imshow(cm, cmap="Blues")
+        for (a, b), v in np.ndenumerate(cm):
+            ax.text(b, a, str(v), ha="center", va="center", fontsize=9)
+        ax.set_xticks([0, 1], ["healthy", "fault"])
+        ax.set_yticks([0, 1], ["healthy", "fault"])
+        ax.set_xlabel("predicted")
+        ax.set_title(label, fontsize=7)
+    axes[0][0].set_ylabel("true")
+    save(fig, figures / "confusion_k0.png")
+
+    # latent feature maps after adaptation (Figure 5.9): a PCA of source and target training features
+    latent_files = sorted((Path(run_path) / "latent").glob("*.npz")) if (Path(run_path) / "latent").exists() else []
+    if latent_files:
+        fig, axes = plt.subplots(1, len(latent_files), figsize=(3.2 * len(latent_files), 3.2), squeeze=False,
+                                 layout="constrained")
+        for ax, f in zip(axes[0], latent_files):
+            with np.load(f, allow_pickle=False) as d:
+                zs, zt = d["source"], d["target"]
+            z = np.concatenate([zs, zt])
+            z = z - z.mean(0)
+            _, _, vt = np.linalg.svd(z, full_matrices=False)
+            p = z @ vt[:2].T
+            ax.scatter(p[: len(zs), 0], p[: len(zs), 1], s=4, alpha=0.6, label="source")
+            ax.scatter(p[len(zs):, 0], p[len(zs):, 1], s=4, alpha=0.6, label="target")
+            ax.set_title(f.stem.replace("_", " "), fontsize=7)
+            ax.legend(fontsize=6)
+        save(fig, figures / "latent_maps.png")

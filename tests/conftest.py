@@ -3,6 +3,10 @@ from pathlib import Path
 
 import pytest
 
+from gearlab.physics.presets import PAIR_PRESETS, gear_pair
+from gearlab.physics.stiffness import MeshStiffnessModel
+from gearlab.registry import get_registry
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -32,3 +36,19 @@ def write_scenario(tmp_path):
         return path
 
     return write
+
+
+@pytest.fixture(scope="session")
+def registry():
+    return get_registry()
+
+
+@pytest.fixture(scope="session")
+def pairs():
+    return {name: gear_pair(name) for name in PAIR_PRESETS}
+
+
+@pytest.fixture(scope="session")
+def models(pairs):
+    """One stiffness model per gear-pair preset (their healthy TVMS caches are shared)."""
+    return {name: MeshStiffnessModel(pair) for name, pair in pairs.items()}

@@ -15,20 +15,6 @@ PRESETS = ["luo2019", "meng2020"]
 KINDS = ["crack", "chip", "spall", "pit"]
 
 
-@pytest.fixture(scope="module")
-def registry():
-    return get_registry()
-
-
-@pytest.fixture(scope="module")
-def pairs():
-    return {name: gear_pair(name) for name in PRESETS}
-
-
-@pytest.fixture(scope="module")
-def models(pairs):
-    return {name: MeshStiffnessModel(pair) for name, pair in pairs.items()}
-
 
 def tvms(registry, pair, model, specs, points=4096):
     """specs: (kind, tooth, step) triples, all in one call."""

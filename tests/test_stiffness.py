@@ -11,20 +11,6 @@ from gearlab.registry import get_registry
 
 PRESETS = ["luo2019", "meng2020"]
 
-@pytest.fixture(scope="module")
-def registry():
-    return get_registry()
-
-
-@pytest.fixture(scope="module")
-def pairs():
-    return {name: gear_pair(name) for name in PRESETS}
-
-
-@pytest.fixture(scope="module")
-def models(pairs):
-    return {name: MeshStiffnessModel(pair) for name, pair in pairs.items()}
-
 
 @pytest.fixture(scope="module")
 def fine_models(pairs):

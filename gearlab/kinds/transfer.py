@@ -1,0 +1,213 @@
+"""Scenario kind `transfer`: the chapter-5 calibration experiments (Experiments A and B).
+
+    [source] / [target]   a dataset preset with overrides (as in [[datasets]])
+    [network]             name (fast | cnn3), dropout
+    [[methods]]           adapter, supervised, params
+    [protocol]            ks, repetitions, target_train, batch, lr, epochs, seed
+
+Output: results.jsonl (one record per repetition x k x method), summary.json with
+`table` = {method label: {k: {mean, std}}}, table.md/table.csv in the Table 5.4 layout,
+figures (Figures 5.5-5.9) and report.html.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, replace
+
+import numpy as np
+
+from ..data.cache import load_or_build
+from ..errors import GearlabInputError
+from ..learn.protocol import KS, Method, Protocol, StateStore, check, run_unit
+from ..registry import get_registry
+from ..runs import Event, RunDir
+from ..scenario import Key, Scenario, Table, in_range, location
+from .dataset import DATASET_TABLE, dataset_spec, executor_for
+
+_DATASET = Table(DATASET_TABLE.keys, required=True)
+
+TABLES = {
+    "source": _DATASET,
+    "target": _DATASET,
+    "network": Table({
+        "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),
+        "dropout": Key(float, 0.005, in_range(0.0, 0.95), "dropout rate (Table 5.3: 0.5 %)"),
+    }),
+    "methods": Table({
+        "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
+        "supervised": Key(bool, False, doc="use the target training labels"),
+        "params": Key(dict, {}, doc="adapter parameters"),
+    }, array=True, required=True),
+    "protocol": Table({
+        "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
+        "repetitions": Key(int, 5, in_range(1)),
+        "target_train": Key(int, 120, in_range(2)),
+        "batch": Key(int, 40, in_range(1)),
+        "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the calibrated methods"),
+        "prime_epochs": Key(int, 100, in_range(0)),
+        "baseline_epochs": Key(int, 200, in_range(1)),
+        "patience": Key(int, 20, in_range(1)),
+        "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
+        "max_epochs": Key(int, 800, in_range(1)),
+        "seed": Key(int, 0, in_range(0)),
+    }),
+}
+
+
+def build(scenario: Scenario) -> dict:
+    t = scenario.tables
+    registry = get_registry()
+    methods = []
+    for i, m in enumerate(t["methods"]):
+        where = location(scenario.path, "methods", "adapter", i)
+        adapter = registry.get("adapter", m["adapter"], where)
+        params = adapter.resolve(m["params"], where) if hasattr(adapter, "resolve") else dict(m["params"])
+        methods.append(Method(m["adapter"], m["supervised"], tuple(sorted(params.items()))))
+    labels = [m.label for m in methods]
+    if len(set(labels)) != len(labels):
+        raise GearlabInputError(f"{scenario.path}: [[methods]] lists the same method twice")
+    p = t["protocol"]
+    ks = p["ks"]
+    if not ks or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in ks):
+        raise GearlabInputError(f"{location(scenario.path, 'protocol', 'ks')}: expected a list of whole numbers >= 0")
+    if p["min_epochs"] > p["max_epochs"]:
+        raise GearlabInputError(f"{location(scenario.path, 'protocol', 'min_epochs')}: larger than max_epochs")
+    from ..learn.networks import NETWORKS
+
+    net = t["network"]["name"]
+    if net not in NETWORKS:
+        from ..params import did_you_mean
+
+        raise GearlabInputError(f"{location(scenario.path, 'network', 'name')}: unknown network '{net}'"
+                                f"{did_you_mean(net, list(NETWORKS))}; known: {', '.join(NETWORKS)}")
+    protocol = Protocol(
+        methods=tuple(methods), network=net, dropout=t["network"]["dropout"], ks=tuple(ks),
+        repetitions=p["repetitions"], target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
+        prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
+        min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=t["execution"]["device"],
+    )
+    return {
+        "source": dataset_spec(t["source"], location(scenario.path, "source")),
+        "target": dataset_spec(t["target"], location(scenario.path, "target")),
+        "protocol": protocol,
+    }
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: 2 repetitions, k in {0, 4}, short training."""
+    p = scenario.spec["protocol"]
+    scenario.spec["protocol"] = replace(
+        p, repetitions=min(p.repetitions, 2), ks=tuple(k for k in p.ks if k in (0, 4)) or p.ks[:1],
+        prime_epochs=min(p.prime_epochs, 30), baseline_epochs=min(p.baseline_epochs, 60),
+        min_epochs=min(p.min_epochs, 60), max_epochs=min(p.max_epochs, 90),
+    )
+
+
+def units(protocol: Protocol) -> list[tuple[int, int, Method]]:
+    return [(rep, k, m) for rep in range(protocol.repetitions) for k in protocol.ks for m in protocol.methods]
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    spec = scenario.spec
+    protocol: Protocol = spec["protocol"]
+    executor = executor_for(scenario)
+    on_event(Event("stage", stage="datasets", total=2, message="datasets"))
+    source, _ = load_or_build(spec["source"], executor, on_event)
+    on_event(Event("advance", stage="datasets", done=1, total=2))
+    target, _ = load_or_build(spec["target"], executor, on_event)
+    on_event(Event("advance", stage="datasets", done=2, total=2))
+    check(protocol, source, target, str(scenario.path))
+    done = {r["unit"] for r in run.records()}
+    todo = units(protocol)
+    states = StateStore(run.path / "states")
+    on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
+    for i, (rep, k, method) in enumerate(todo):
+        unit = f"rep{rep}/k{k}/{method.key}"
+        if unit not in done:
+            on_event(Event("log", message=f"run {unit}"))
+            record = run_unit(protocol, source, target, rep, k, method, states)
+            latent = record.pop("_latent", None)
+            if latent is not None and rep == 0:
+                save_latent(run, unit, latent)
+            run.append(record)
+            on_event(Event("record", stage="runs", record=record))
+        on_event(Event("advance", stage="runs", done=i + 1, total=len(todo)))
+    summarise(scenario, run)
+
+
+def save_latent(run: RunDir, unit: str, latent: dict) -> None:
+    import io
+
+    from ..runs import atomic_write
+
+    buf = io.BytesIO()
+    np.savez(buf, **latent)
+    atomic_write(run.path / "latent" / (unit.replace("/", "_") + ".npz"), buf.getvalue())
+
+
+def table(records: list[dict], protocol: Protocol) -> dict:
+    out: dict[str, dict[str, dict]] = {}
+    for m in protocol.methods:
+        out[m.label] = {}
+        for k in protocol.ks:
+            acc = [r["accuracy"] for r in records if r["method"] == m.label and r["k"] == k]
+            if acc:
+                out[m.label][str(k)] = {"mean": float(np.mean(acc)),
+                                        "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0, "n": len(acc)}
+    return out
+
+
+def table_md(tab: dict, ks) -> str:
+    methods = list(tab)
+    lines = ["| k (target fault samples) | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
+    for k in ks:
+        cells = []
+        for m in methods:
+            c = tab[m].get(str(k))
+            cells.append(f"{c['mean']:.2f} ± {c['std']:.1f}" if c else "")
+        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def table_csv(tab: dict, ks) -> str:
+    rows = ["method,k,mean,std,n"]
+    for m, per_k in tab.items():
+        for k in ks:
+            c = per_k.get(str(k))
+            if c:
+                rows.append(f"\"{m}\",{k},{c['mean']:.4f},{c['std']:.4f},{c['n']}")
+    return "\n".join(rows) + "\n"
+
+
+def summarise(scenario: Scenario, run: RunDir) -> None:
+    protocol: Protocol = scenario.spec["protocol"]
+    records = run.records()
+    tab = table(records, protocol)
+    summary = {
+        "kind": "transfer",
+        "scenario": scenario.name,
+        "source": asdict(scenario.spec["source"]),
+        "target": asdict(scenario.spec["target"]),
+        "protocol": {k: v for k, v in asdict(protocol).items() if k != "methods"},
+        "methods": [m.label for m in protocol.methods],
+        "table": tab,
+        "units": len(records),
+        "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
+    }
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", table_md(tab, protocol.ks))
+    run.write_text("table.csv", table_csv(tab, protocol.ks))
+    from ..plots import transfer_figures
+
+    transfer_figures(run.path, records, tab, protocol.ks)
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    summary = json.loads((run.path / "summary.json").read_text())
+    ks = summary["protocol"]["ks"]
+    lines = ["target-domain test accuracy [%], mean ± std over repetitions (Table 5.4 layout):",
+             table_md(summary["table"], ks).rstrip()]
+    if summary.get("healthy_share_of_test") is not None:
+        lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
+    return lines

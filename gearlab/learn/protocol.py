@@ -1,0 +1,250 @@
+"""The chapter-5 transfer protocol (thesis 5.4.2, Table 5.3).
+
+Binary healthy/fault detection. For each repetition r and each k in (0, 1, 2, 4, 8, 16):
+the target training set is 120 target samples, k random faults and 120 - k random healthy
+ones; the target test set is every other target sample. Methods:
+
+* uncalibrated (Adam, stop on a 10 % validation split): source_only (labelled source only,
+  trained once per repetition) and target_only (the 120 labelled target samples);
+* calibrated: primed 100 epochs on the full source training set (one priming per
+  repetition, shared by every calibrated run of it), then SGD at 0.003 on batches of 40
+  source + 40 target samples drawn from 120 of each, lambda rising by 0.05 every 25
+  epochs; unsupervised (no target labels) or supervised (target labels used).
+
+A unit of work is (repetition, k, method). Its training code receives the training arrays
+only; the target test set is used once, afterwards, to score the returned model.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..errors import GearlabInputError
+from ..registry import get_registry
+from .networks import build_network
+from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device, predict
+
+KS = (0, 1, 2, 4, 8, 16)
+
+
+@dataclass(frozen=True)
+class Method:
+    adapter: str
+    supervised: bool
+    params: tuple[tuple[str, object], ...] = ()
+
+    @property
+    def label(self) -> str:
+        extra = "".join(f", {k}={v}" for k, v in self.params)
+        return f"{self.adapter} ({'supervised' if self.supervised else 'unsupervised'}{extra})"
+
+    @property
+    def key(self) -> str:
+        extra = "".join(f"-{k}={v}" for k, v in self.params)
+        return f"{self.adapter}-{'sup' if self.supervised else 'unsup'}{extra}"
+
+
+@dataclass
+class Protocol:
+    """Everything a transfer run needs besides the data (defaults: Table 5.3)."""
+
+    methods: tuple[Method, ...]
+    network: str = "fast"
+    dropout: float = 0.005
+    ks: tuple[int, ...] = KS
+    repetitions: int = 5
+    target_train: int = 120
+    batch: int = 40
+    lr: float = 0.003
+    prime_epochs: int = 100
+    baseline_epochs: int = 200
+    patience: int = 20
+    min_epochs: int = 500
+    max_epochs: int = 800
+    val_fraction: float = 0.1
+    seed: int = 0
+    device: str = "auto"
+    extra: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Split:
+    """Indices into the source and target datasets for one (repetition, k)."""
+
+    source_train: np.ndarray
+    source_val: np.ndarray
+    target_train: np.ndarray
+    target_test: np.ndarray
+
+
+def check(protocol: Protocol, source, target, where: str) -> None:
+    if source.X.shape[1] != target.X.shape[1]:
+        raise GearlabInputError(
+            f"{where}: source and target samples have different lengths ({source.X.shape[1]} and {target.X.shape[1]})"
+        )
+    faults = int((target.fault == 1).sum())
+    healthy = int((target.fault == 0).sum())
+    if max(protocol.ks) > faults:
+        raise GearlabInputError(f"{where}: k = {max(protocol.ks)} target fault samples asked for, the target has {faults}")
+    if protocol.target_train - min(protocol.ks) > healthy:
+        raise GearlabInputError(
+            f"{where}: a target training set of {protocol.target_train} needs {protocol.target_train - min(protocol.ks)} "
+            f"healthy samples, the target has {healthy}"
+        )
+    if protocol.target_train >= len(target.X):
+        raise GearlabInputError(f"{where}: target_train = {protocol.target_train} leaves no target test samples")
+    if protocol.batch > protocol.target_train:
+        raise GearlabInputError(
+            f"{where}: batch size {protocol.batch} is larger than the target training set ({protocol.target_train})"
+        )
+    registry = get_registry()
+    for m in protocol.methods:
+        adapter = registry.get("adapter", m.adapter, where)
+        mode = "supervised" if m.supervised else "unsupervised"
+        if mode not in adapter.supervision:
+            raise GearlabInputError(f"{where}: method '{m.adapter}' has no {mode} variant (it has: "
+                                    f"{', '.join(adapter.supervision)})")
+
+
+def split(protocol: Protocol, source, target, rep: int, k: int) -> Split:
+    """Random source validation split (per repetition) and target train/test split (per k)."""
+    rng = np.random.default_rng([protocol.seed, rep])
+    order = rng.permutation(len(source.X))
+    n_val = max(1, round(protocol.val_fraction * len(order)))
+    rng_t = np.random.default_rng([protocol.seed, rep, k])
+    faults = rng_t.permutation(np.flatnonzero(target.fault == 1))[:k]
+    healthy = rng_t.permutation(np.flatnonzero(target.fault == 0))[: protocol.target_train - k]
+    train = np.sort(np.concatenate([faults, healthy]))
+    test = np.setdiff1d(np.arange(len(target.X)), train)
+    return Split(np.sort(order[n_val:]), np.sort(order[:n_val]), train, test)
+
+
+class StateStore:
+    """Per-repetition network states shared by runs (the priming, the source-only model):
+    torch state dicts in the run directory, loaded with weights_only=True."""
+
+    def __init__(self, directory: Path | None):
+        self.directory = directory
+        self.memory: dict[str, dict] = {}
+
+    def get(self, name: str, make: Callable[[], dict]) -> dict:
+        if name in self.memory:
+            return self.memory[name]
+        path = self.directory / f"{name}.pt" if self.directory else None
+        if path is not None and path.exists():
+            state = torch.load(path, weights_only=True, map_location="cpu")
+        else:
+            state = make()
+            if path is not None:
+                from ..runs import atomic_write
+
+                buf = io.BytesIO()
+                torch.save(state, buf)
+                atomic_write(path, buf.getvalue())
+        self.memory[name] = state
+        return state
+
+
+def _net(protocol: Protocol, seed: int, device):
+    torch.manual_seed(seed)
+    return build_network(protocol.network, n_classes=2, dropout=protocol.dropout).to(device)
+
+
+def _cpu_state(net) -> dict:
+    return {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
+
+
+def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Method, states: StateStore,
+             on_epoch: Callable | None = None) -> dict:
+    """Train one method for one (repetition, k) and score it on the target test set."""
+    device = pick_device(protocol.device)
+    s = split(protocol, source, target, rep, k)
+    Xs, ys = source.X[s.source_train], source.fault[s.source_train].astype(np.int64)
+    val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
+    Xt = target.X[s.target_train]
+    yt = target.fault[s.target_train].astype(np.int64)
+    model, history, extra = train_method(protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device,
+                                         on_epoch)
+    # Only now, with the model fixed, does the target test set come in.
+    X_test, y_test = target.X[s.target_test], target.fault[s.target_test].astype(np.int64)
+    pred = predict(model, X_test, device)
+    confusion = [[int(((y_test == a) & (pred == b)).sum()) for b in (0, 1)] for a in (0, 1)]
+    return {
+        "unit": f"rep{rep}/k{k}/{method.key}",
+        "rep": rep,
+        "k": k,
+        "method": method.label,
+        "adapter": method.adapter,
+        "supervised": method.supervised,
+        "accuracy": 100.0 * float((pred == y_test).mean()),
+        "healthy_share": 100.0 * float((y_test == 0).mean()),
+        "predicted_fault_share": 100.0 * float((pred == 1).mean()),
+        "confusion": confusion,
+        "n_test": int(len(y_test)),
+        "source_val_accuracy": 100.0 * accuracy(model, *val, device),
+        "history": history.as_dict() if history is not None else None,
+        **extra,
+    }
+
+
+def train_method(protocol: Protocol, method: Method, source, source_val, target, rep: int, k: int,
+                 states: StateStore, device, on_epoch=None):
+    """The model a method makes from the training arrays (no target test data here)."""
+    registry = get_registry()
+    adapter = registry.get("adapter", method.adapter)
+    params = dict(method.params)
+    rng = np.random.default_rng([protocol.seed, rep, k, 7])
+    Xs, ys = source
+    Xt, yt = target
+    seed = 1000 * protocol.seed + rep
+
+    def primed() -> dict:
+        net = _net(protocol, seed, device)
+        fit_supervised(net, Xs, ys, rng=np.random.default_rng([protocol.seed, rep, 1]), device=device,
+                       epochs=protocol.prime_epochs, batch=protocol.batch, optimizer="adam", val=None,
+                       patience=None)
+        return _cpu_state(net)
+
+    if method.adapter == "source_only":
+        def trained() -> dict:
+            net = _net(protocol, seed, device)
+            fit_supervised(net, Xs, ys, rng=np.random.default_rng([protocol.seed, rep, 2]), device=device,
+                           epochs=protocol.baseline_epochs, batch=protocol.batch, val=source_val,
+                           patience=protocol.patience)
+            return _cpu_state(net)
+
+        net = _net(protocol, seed, device)
+        net.load_state_dict(states.get(f"rep{rep}_source_only", trained))
+        return net, None, {}
+    if method.adapter == "target_only":
+        net = _net(protocol, seed + 17, device)
+        order = rng.permutation(len(Xt))
+        n_val = max(1, round(protocol.val_fraction * len(order)))
+        history = fit_supervised(net, Xt[order[n_val:]], yt[order[n_val:]], rng=rng, device=device,
+                                 epochs=protocol.baseline_epochs, batch=min(protocol.batch, len(order) - n_val),
+                                 val=(Xt[order[:n_val]], yt[order[:n_val]]), patience=protocol.patience,
+                                 on_epoch=on_epoch)
+        return net, history, {}
+    net = _net(protocol, seed, device)
+    net.load_state_dict(states.get(f"rep{rep}_primed", primed))
+    if not adapter.calibrated:  # fine-tuning: the primed network trained on the labelled target samples
+        history = fit_supervised(net, Xt, yt, rng=rng, device=device, epochs=protocol.baseline_epochs,
+                                 batch=protocol.batch, val=source_val, patience=protocol.patience,
+                                 parameters=adapter.trainable(net, params), on_epoch=on_epoch)
+        return net, history, {}
+    modules = adapter.extra_modules(net.latent_dim)
+    take = np.random.default_rng([protocol.seed, rep, k, 3]).permutation(len(Xs))[: len(Xt)]
+    history = fit_adaptation(
+        net, adapter, modules, (Xs[take], ys[take]), source_val, (Xt, yt if method.supervised else None),
+        rng=rng, device=device, batch=protocol.batch, lr=protocol.lr, min_epochs=protocol.min_epochs,
+        max_epochs=protocol.max_epochs, on_epoch=on_epoch,
+    )
+    with torch.no_grad():
+        latent = {"source": embed(net, Xs[take], device).cpu().numpy(), "target": embed(net, Xt, device).cpu().numpy()}
+    return net, history, {"latent_dim": int(net.latent_dim), "_latent": latent}

@@ -1,0 +1,230 @@
+"""Training loops: supervised (the uncalibrated baselines, priming, fine-tuning) and joint
+domain-adaptation training (the calibrated methods, thesis 5.2-5.4).
+
+Nothing here ever sees a target *test* sample: the loops receive the training arrays
+only, stop on source validation accuracy and on the domain discrepancy between the
+training sets, and return the selected model. Evaluation is a separate function the
+protocol calls afterwards (tests/test_protocol.py proves test labels cannot leak).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from torch import nn
+
+from ..errors import GearlabInputError
+
+RAMP_EPOCHS = 500  # Table 5.3: lambda rises by 0.05 every 25 epochs, reaching 1 after 500
+
+
+def pick_device(name: str = "auto") -> torch.device:
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name == "cuda" and not torch.cuda.is_available():
+        raise GearlabInputError("device 'cuda' was asked for but no CUDA device is available; use auto or cpu")
+    if name not in ("cpu", "cuda"):
+        raise GearlabInputError(f"unknown device '{name}'; expected auto, cpu or cuda")
+    return torch.device(name)
+
+
+@dataclass
+class History:
+    """Per-epoch curves (Figure 5.7) and the epoch that was kept."""
+
+    train_loss: list[float] = field(default_factory=list)
+    val_acc: list[float] = field(default_factory=list)
+    discrepancy: list[float] = field(default_factory=list)
+    lam: list[float] = field(default_factory=list)
+    best_epoch: int = -1
+    stopped_epoch: int = -1
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in ("train_loss", "val_acc", "discrepancy", "lam", "best_epoch",
+                                               "stopped_epoch")}
+
+
+def _tensor(x: np.ndarray, device) -> torch.Tensor:
+    return torch.as_tensor(np.ascontiguousarray(x), dtype=torch.float32, device=device)
+
+
+def _labels(y: np.ndarray, device) -> torch.Tensor:
+    return torch.as_tensor(np.asarray(y), dtype=torch.long, device=device)
+
+
+@torch.no_grad()
+def predict(net: nn.Module, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
+    net.eval()
+    out = [net(_tensor(X[i:i + batch], device)).argmax(1).cpu().numpy() for i in range(0, len(X), batch)]
+    return np.concatenate(out) if out else np.empty(0, dtype=np.int64)
+
+
+@torch.no_grad()
+def embed(net: nn.Module, X: np.ndarray, device, batch: int = 256) -> torch.Tensor:
+    net.eval()
+    return torch.cat([net.embed(_tensor(X[i:i + batch], device)) for i in range(0, len(X), batch)])
+
+
+def accuracy(net: nn.Module, X: np.ndarray, y: np.ndarray, device) -> float:
+    return float((predict(net, X, device) == np.asarray(y)).mean()) if len(X) else float("nan")
+
+
+def _batches(n: int, batch: int, rng: np.random.Generator) -> Iterable[np.ndarray]:
+    order = rng.permutation(n)
+    for i in range(0, n, batch):
+        yield order[i:i + batch]
+
+
+def fit_supervised(
+    net: nn.Module,
+    X: np.ndarray,
+    y: np.ndarray,
+    *,
+    rng: np.random.Generator,
+    device: torch.device,
+    epochs: int = 200,
+    batch: int = 40,
+    optimizer: str = "adam",
+    lr: float = 1e-3,
+    val: tuple[np.ndarray, np.ndarray] | None = None,
+    patience: int | None = 20,
+    parameters: Iterable[torch.nn.Parameter] | None = None,
+    on_epoch: Callable[[int, History], None] | None = None,
+) -> History:
+    """Cross-entropy training; with *val*, keep the epoch of best validation accuracy and stop
+    after *patience* epochs without improvement (Table 5.3: 'validation accuracy maximum')."""
+    if batch > len(X):
+        raise GearlabInputError(f"batch size {batch} is larger than the training set ({len(X)} samples)")
+    net.to(device)
+    params = list(parameters) if parameters is not None else list(net.parameters())
+    opt = torch.optim.Adam(params, lr=lr) if optimizer == "adam" else torch.optim.SGD(params, lr=lr)
+    loss_fn = nn.CrossEntropyLoss()
+    Xt, yt = _tensor(X, device), _labels(y, device)
+    history, best_state, best = History(), None, -math.inf
+    for epoch in range(epochs):
+        net.train()
+        total = 0.0
+        for idx in _batches(len(X), batch, rng):
+            index = torch.as_tensor(idx, device=device)
+            opt.zero_grad()
+            loss = loss_fn(net(Xt[index]), yt[index])
+            loss.backward()
+            opt.step()
+            total += float(loss) * len(idx)
+        history.train_loss.append(total / len(X))
+        if val is not None:
+            acc = accuracy(net, *val, device)
+            history.val_acc.append(acc)
+            if acc > best:
+                best, best_state, history.best_epoch = acc, copy.deepcopy(net.state_dict()), epoch
+            elif patience is not None and epoch - history.best_epoch >= patience:
+                history.stopped_epoch = epoch
+                break
+        if on_epoch:
+            on_epoch(epoch, history)
+    return _keep_best(net, history, best_state)
+
+
+def fit_adaptation(
+    net: nn.Module,
+    adapter,
+    modules: nn.ModuleDict,
+    source: tuple[np.ndarray, np.ndarray],
+    source_val: tuple[np.ndarray, np.ndarray],
+    target: tuple[np.ndarray, np.ndarray | None],
+    *,
+    rng: np.random.Generator,
+    device: torch.device,
+    batch: int = 40,
+    lr: float = 0.003,
+    min_epochs: int = 500,
+    max_epochs: int = 800,
+    window: int = 25,
+    on_epoch: Callable[[int, History], None] | None = None,
+) -> History:
+    """Joint training on a source batch and a target batch of equal size (thesis 5.4.2).
+
+    loss = CE(source) [+ CE(target) when target labels are given] + the adapter's domain loss
+    at the scheduled lambda. SGD at lr 0.003. The adapter's lambda ramp (500 epochs in Table 5.3)
+    is stretched or shrunk to end at *min_epochs* (500 by default); after it
+    training stops when the source validation accuracy falls clearly below its best or the
+    domain discrepancy (between the two *training* sets) has stopped moving. The kept model
+    is the post-ramp epoch with the best source validation accuracy, ties broken by the
+    lower discrepancy.
+    """
+    Xs, ys = source
+    Xt, yt = target
+    n = min(len(Xs), len(Xt))
+    if batch > n:
+        raise GearlabInputError(f"batch size {batch} is larger than the training sets ({n} samples)")
+    net.to(device)
+    modules.to(device)
+    opt = torch.optim.SGD(list(net.parameters()) + list(modules.parameters()), lr=lr)
+    ce = nn.CrossEntropyLoss()
+    Xs_t, ys_t, Xt_t = _tensor(Xs, device), _labels(ys, device), _tensor(Xt, device)
+    yt_t = _labels(yt, device) if yt is not None else None
+    history = History()
+    best_key, best_state = None, None
+    for epoch in range(max_epochs):
+        lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs)  # the ramp ends at min_epochs
+        net.train()
+        modules.train()
+        total = 0.0
+        for s_idx, t_idx in zip(_batches(len(Xs), batch, rng), _batches(len(Xt), batch, rng)):
+            m = min(len(s_idx), len(t_idx))
+            s = torch.as_tensor(s_idx[:m], device=device)
+            t = torch.as_tensor(t_idx[:m], device=device)
+            opt.zero_grad()
+            z = net.embed(torch.cat([Xs_t[s], Xt_t[t]]))
+            z_s, z_t = z[:m], z[m:]
+            loss = ce(net.classifier(z_s), ys_t[s])
+            if yt_t is not None:
+                loss = loss + ce(net.classifier(z_t), yt_t[t])
+            loss = loss + adapter.domain_loss(z_s, z_t, modules, lam)
+            loss.backward()
+            opt.step()
+            total += float(loss)
+        history.train_loss.append(total)
+        history.lam.append(lam)
+        history.val_acc.append(accuracy(net, *source_val, device))
+        modules.eval()
+        with torch.no_grad():
+            history.discrepancy.append(float(adapter.discrepancy(embed(net, Xs, device), embed(net, Xt, device),
+                                                                 modules)))
+        if epoch >= min_epochs - 1:
+            key = (history.val_acc[-1], -history.discrepancy[-1])
+            if best_key is None or key > best_key:
+                best_key, best_state, history.best_epoch = key, copy.deepcopy(net.state_dict()), epoch
+            if _should_stop(history, min_epochs, window):
+                history.stopped_epoch = epoch
+                break
+        if on_epoch:
+            on_epoch(epoch, history)
+    return _keep_best(net, history, best_state)
+
+
+def _keep_best(net: nn.Module, history: History, best_state: dict | None) -> History:
+    """Load the selected epoch's weights; a run that never stopped early ran to its last epoch."""
+    if best_state is not None:
+        net.load_state_dict(best_state)
+    if history.stopped_epoch < 0:
+        history.stopped_epoch = len(history.train_loss) - 1
+    return history
+
+
+def _should_stop(h: History, min_epochs: int, window: int) -> bool:
+    """After the ramp: stop on a clear drop of source validation accuracy, or when the domain
+    discrepancy's moving average over *window* epochs changes by less than 1 %."""
+    post = h.val_acc[min_epochs - 1:]
+    if len(post) >= 2 and post[-1] < max(post) - 0.05:
+        return True
+    d = h.discrepancy
+    if len(d) < min_epochs + window:
+        return False
+    recent, before = np.mean(d[-window:]), np.mean(d[-2 * window:-window])
+    return abs(recent - before) <= 0.01 * max(abs(before), 1e-12)
