@@ -133,7 +133,10 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
             ax.grid(alpha=0.3)
             if chosen:
                 ax.legend(fontsize=7, loc="upper right")
-    fig.suptitle(f"dataset {dataset.spec.name}: {dataset.spec.model} ({dataset.spec.preset}), {dataset.spec.channel}")
+    spec = dataset.spec
+    origin = (f"{spec.model} ({spec.preset}), {spec.channel}" if hasattr(spec, "model")
+              else f"measured: {Path(spec.path).name}, {spec.vibration}")
+    fig.suptitle(f"dataset {spec.name}: {origin}")
     return save(fig, path)
 
 

@@ -1,6 +1,7 @@
 """The CLI of the foundation issue: plugins, stiffness, validate, run, report; exit codes."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -108,8 +109,7 @@ def test_run_stiffness_scenario_quick_and_resume(cli, tmp_path):
     assert code == 0, err
     last = out.strip().splitlines()[-1]
     assert last.startswith("run directory: ")
-    run = tmp_path / last.split(": ", 1)[1].strip()
-    run = run if run.is_absolute() else tmp_path / run
+    run = Path(last.split(": ", 1)[1])
     summary = json.loads((run / "summary.json").read_text())
     assert set(summary["sweep"]) == {"crack", "chip", "spall", "pit"}
     assert summary["sweep"]["crack"]["20"]["rfa"] == pytest.approx(1.0)

@@ -20,7 +20,7 @@ import platformdirs
 
 from ..errors import GearlabInputError
 from ..runs import Event, atomic_write
-from .spec import Dataset, DatasetSpec, NoiseSpec
+from .spec import Dataset, DatasetSpec
 
 ARRAYS = ("X", "label", "fault", "intensity", "tooth", "rfa", "revolution", "domain")
 
@@ -53,14 +53,6 @@ def save(dataset: Dataset) -> Path:
     return path
 
 
-def spec_from_dict(d: dict) -> DatasetSpec:
-    d = dict(d)
-    d["faults"] = tuple((name, tuple(steps)) for name, steps in d["faults"])
-    d["teeth"] = None if d["teeth"] is None else tuple(d["teeth"])
-    d["noise"] = None if d["noise"] is None else NoiseSpec(**d["noise"])
-    return DatasetSpec(**d)
-
-
 def load(spec: DatasetSpec) -> Dataset | None:
     path = entry_path(spec)
     if not path.exists():
@@ -81,13 +73,18 @@ def load(spec: DatasetSpec) -> Dataset | None:
 
 def load_or_build(spec: DatasetSpec, executor=None, on_event: Callable[[Event], None] = lambda e: None
                   ) -> tuple[Dataset, bool]:
-    """The dataset of *spec* from the cache, or built and stored. Returns (dataset, was_cached)."""
+    """The dataset of *spec* from the cache, or built (simulated or imported) and stored.
+    Returns (dataset, was_cached)."""
     from .builder import build_dataset
+    from .importers import MeasuredSpec, import_measured
 
     cached = load(spec)
     if cached is not None:
         on_event(Event("log", message=f"dataset {spec.name}: from cache ({spec.key()})"))
         return cached, True
-    dataset = build_dataset(spec, executor, on_event)
+    if isinstance(spec, MeasuredSpec):
+        dataset = import_measured(spec)
+    else:
+        dataset = build_dataset(spec, executor, on_event)
     save(dataset)
     return dataset, False

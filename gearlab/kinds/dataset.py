@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict
+from pathlib import Path
 
 from ..data.cache import load_or_build
+from ..data.importers import MeasuredSpec
 from ..data.spec import DATASET_PRESETS, DatasetSpec, NoiseSpec, dataset_preset
 from ..errors import GearlabInputError
 from ..executors import make_executor
@@ -15,7 +17,13 @@ from ..units import to_si
 
 DATASET_TABLE = Table(
     {
-        "preset": Key(str, doc=f"dataset preset: {', '.join(DATASET_PRESETS)}"),
+        "preset": Key(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'file')"),
+        "file": Key(str, "", doc="measured data: a .csv, .npz, .h5, .wav or .mat file, relative to the scenario"),
+        "vibration": Key(str, "", doc="measured data: the vibration channel"),
+        "tacho": Key(str, "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed'"),
+        "labels": Key(str, "", doc="measured data: an optional label channel"),
+        "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
+        "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
         "name": Key(str, "", doc="label (default: the preset name)"),
         "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
         "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
@@ -38,8 +46,13 @@ DATASET_TABLE = Table(
 TABLES = {"datasets": DATASET_TABLE}
 
 
-def dataset_spec(entry: dict, where: str) -> DatasetSpec:
-    """A dataset preset with the entry's overrides applied (shared by the dataset, transfer and gap kinds)."""
+def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
+    """A dataset preset with the entry's overrides applied, or a measured file to import
+    (shared by the dataset, transfer and gap kinds). *base*: the scenario's folder."""
+    if bool(entry["preset"]) == bool(entry["file"]):
+        raise GearlabInputError(f"{where}: give exactly one of 'preset' (simulated) or 'file' (measured data)")
+    if entry["file"]:
+        return measured_spec(entry, where, base)
     spec = dataset_preset(entry["preset"], where)
     changes = {}
     for key in ("model", "channel"):
@@ -76,6 +89,25 @@ def dataset_spec(entry: dict, where: str) -> DatasetSpec:
     return spec
 
 
+def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
+    if not entry["vibration"]:
+        raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")
+    path = Path(entry["file"])
+    path = path if path.is_absolute() else base / path
+    speed = to_si(entry["speed"], "Hz", f"{where} key 'speed'") if entry["speed"] is not None else None
+    fs = to_si(entry["fs"], "Hz", f"{where} key 'fs'") if entry["fs"] is not None else None
+    names = entry["class_names"]
+    if not names or not all(isinstance(n, str) for n in names):
+        raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
+    spec = MeasuredSpec(
+        name=entry["name"] or path.stem, path=str(path), vibration=entry["vibration"], tacho=entry["tacho"] or None,
+        speed_hz=speed, fs=fs, labels=entry["labels"] or None, class_names=tuple(names),
+        transient=entry["transient"],
+    )
+    spec.check()
+    return spec
+
+
 def noise_spec(table: dict, where: str) -> NoiseSpec | None:
     if not table:
         return None
@@ -93,8 +125,8 @@ def noise_spec(table: dict, where: str) -> NoiseSpec | None:
     return NoiseSpec(str(table["kind"]), float(snr), seed)
 
 
-def build(scenario: Scenario) -> list[DatasetSpec]:
-    specs = [dataset_spec(entry, location(scenario.path, "datasets", index=i))
+def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
+    specs = [dataset_spec(entry, location(scenario.path, "datasets", index=i), scenario.path.parent)
              for i, entry in enumerate(scenario.tables["datasets"])]
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
@@ -106,7 +138,7 @@ def quick(scenario: Scenario) -> None:
     """Smoke run: two teeth, the top intensity of each fault, a few healthy samples, J <= 4."""
     scenario.spec = [
         s.with_(teeth=(1, 2), faults=tuple((f, steps[-1:]) for f, steps in s.faults), duplicates=1,
-                healthy=min(s.healthy, 4), revolutions=min(s.revolutions, 4))
+                healthy=min(s.healthy, 4), revolutions=min(s.revolutions, 4)) if isinstance(s, DatasetSpec) else s
         for s in scenario.spec
     ]
 

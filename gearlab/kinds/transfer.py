@@ -88,8 +88,8 @@ def build(scenario: Scenario) -> dict:
         min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=t["execution"]["device"],
     )
     return {
-        "source": dataset_spec(t["source"], location(scenario.path, "source")),
-        "target": dataset_spec(t["target"], location(scenario.path, "target")),
+        "source": dataset_spec(t["source"], location(scenario.path, "source"), scenario.path.parent),
+        "target": dataset_spec(t["target"], location(scenario.path, "target"), scenario.path.parent),
         "protocol": protocol,
     }
 
