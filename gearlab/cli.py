@@ -14,6 +14,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
@@ -48,10 +49,11 @@ def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON l
             f"{p['name']} [{p['display_unit'] or '-'}] = {_show(p, p['default'])}  ({_show(p, p['low'])} .. {_show(p, p['high'])})"
             for p in row["params"]
         )
-        table.add_row(row["kind"], row["name"], row["package"], params or "-")
+        # rich would read "[mm]" as a style tag
+        table.add_row(row["kind"], row["name"], row["package"], escape(params) or "-")
     console.print(table)
     for problem in registry.problems:
-        console.print(f"[red]problem:[/red] {problem}")
+        console.print(f"[red]problem:[/red] {escape(str(problem))}")
 
 
 def _show(param: dict, value: float) -> str:
