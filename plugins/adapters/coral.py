@@ -1,0 +1,35 @@
+"""Deep CORAL (Sun & Saenko 2016), beyond the seed: λ · CORAL between the latent features.
+
+CORAL = |C_s - C_t|²_F / (4 d²) aligns the second-order statistics of the two domains.
+Note the 1/(4 d²) factor: on cnn3's 31 872-feature latent the loss is tiny, so a larger
+``lambda_max`` may be wanted there. The discrepancy used for stopping is CORAL itself.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter, coral_loss
+from gearlab.registry import hookimpl
+
+
+class Coral(Adapter):
+    name = "coral"
+    doc = "Deep CORAL (Sun & Saenko 2016): λ·|C_s - C_t|²_F / (4d²) on the latent features."
+    params = SCHEDULE_PARAMS
+    calibrated = True
+    supervision = ("unsupervised", "supervised")
+    train_on = "joint"
+    optimizer = "sgd"
+
+    def domain_loss(self, z_s, z_t, modules, lam, params=None) -> torch.Tensor:
+        return lam * coral_loss(z_s, z_t)
+
+    def discrepancy(self, z_s, z_t, modules, params=None) -> float:
+        with torch.no_grad():
+            return float(coral_loss(z_s, z_t))
+
+
+@hookimpl
+def gearlab_adapters():
+    return [Coral()]

@@ -1,0 +1,72 @@
+"""Fine-tuning (Han et al. 2019b), beyond the seed: prime the network on the source, then
+train on the labelled target samples with only some layers unfrozen.
+
+Han et al.'s three transfer strategies, parameter ``variant``:
+
+- ``all`` (0): every layer of the primed network is trained on the target;
+- ``classifier`` (1): the feature extractor is frozen, the dense classifier is retrained;
+- ``last`` (2): only the output layer is retrained.
+
+Parameters are numbers in gearlab, so ``variant`` is stored as its code 0/1/2; scenarios
+may give the name, which :meth:`Finetune.coerce` (called by ``resolve``) translates.
+Frozen parts should be kept in ``eval()`` mode so that their batch-norm statistics stay
+those of the source.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from torch import nn
+
+from gearlab.errors import GearlabInputError
+from gearlab.learn.adapters import Adapter
+from gearlab.params import Param, did_you_mean
+from gearlab.registry import hookimpl
+
+VARIANTS = ("all", "classifier", "last")
+
+
+class Finetune(Adapter):
+    name = "finetune"
+    doc = "Fine-tuning (Han et al. 2019b): prime on the source, retrain all layers, the classifier or the last layer on the labelled target."
+    params = (
+        Param("variant", "", 0, 0, len(VARIANTS) - 1, "layers retrained on the target: 0 = all, 1 = classifier, 2 = last", integer=True),
+    )
+    calibrated = True
+    supervision = ("supervised",)
+    train_on = "target"
+    optimizer = "sgd"
+
+    def coerce(self, given: Mapping[str, object], where: str) -> dict:
+        values = dict(given)
+        variant = values.get("variant")
+        if isinstance(variant, str) and not variant.strip().lstrip("+-").isdigit():
+            key = variant.strip().lower()
+            if key not in VARIANTS:
+                raise GearlabInputError(
+                    f"{where}, parameter 'variant': unknown variant '{variant}'{did_you_mean(key, VARIANTS)}; "
+                    f"known: {', '.join(VARIANTS)}"
+                )
+            values["variant"] = VARIANTS.index(key)
+        return values
+
+    def variant(self, params: Mapping | None = None) -> str:
+        value = self.values(params)["variant"]
+        if isinstance(value, str):
+            value = self.coerce({"variant": value}, f"adapter '{self.name}'")["variant"]
+        return VARIANTS[int(value)]
+
+    def trainable(self, network: nn.Module, params: Mapping | None = None) -> list[nn.Parameter]:
+        variant = self.variant(params)
+        if variant == "all":
+            return list(network.parameters())
+        if variant == "classifier":
+            return list(network.classifier.parameters())
+        last = [m for m in network.classifier.modules() if isinstance(m, nn.Linear)][-1]
+        return list(last.parameters())
+
+
+@hookimpl
+def gearlab_adapters():
+    return [Finetune()]

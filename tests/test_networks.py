@@ -1,0 +1,206 @@
+"""Networks against thesis 3.1.3-3.1.6 (CNN3, Table 3.1) and the fast CPU default."""
+
+import math
+
+import pytest
+import torch
+from torch import nn
+
+from gearlab.errors import GearlabInputError
+from gearlab.learn.networks import DEFAULT_NETWORK, NETWORKS, Network, build_network
+
+NAMES = ["cnn3", "fast"]
+
+
+@pytest.fixture(scope="module")
+def cnn3():
+    torch.manual_seed(0)
+    return build_network("cnn3", 2)
+
+
+def test_registered_names():
+    assert set(NAMES) <= set(NETWORKS)
+    assert DEFAULT_NETWORK == "fast"
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("n_classes", [2, 5])
+def test_output_shapes(name, n_classes):
+    torch.manual_seed(0)
+    net = build_network(name, n_classes)
+    assert isinstance(net, Network)
+    x = torch.randn(3, 4096)
+    net.eval()
+    with torch.no_grad():
+        logits = net(x)
+        z = net.embed(x)
+        z_channels = net.features(x.unsqueeze(1))
+        assert torch.equal(net(x.unsqueeze(1)), logits)  # (B, L) and (B, 1, L) are the same batch
+    assert logits.shape == (3, n_classes) and logits.dtype == torch.float32
+    assert z.shape == (3, net.latent_dim)
+    assert torch.equal(z, z_channels)
+    assert torch.allclose(net.classifier(z), logits)
+
+
+def test_cnn3_latent_about_30000(cnn3):
+    assert 20_000 <= cnn3.latent_dim <= 40_000
+    assert cnn3.latent_dim == 8 * 3984
+
+
+def _blocks(features: nn.Sequential) -> list[list[nn.Module]]:
+    blocks: list[list[nn.Module]] = []
+    for layer in features:
+        if isinstance(layer, nn.Conv1d):
+            blocks.append([])
+        if blocks:
+            blocks[-1].append(layer)
+    return blocks
+
+
+def test_cnn3_block_structure(cnn3):
+    layers = list(cnn3.features.modules())
+    convs = [m for m in layers if isinstance(m, nn.Conv1d)]
+    pools = [m for m in layers if isinstance(m, nn.MaxPool1d)]
+    drops = [m for m in layers if isinstance(m, nn.Dropout)]
+    assert (len(convs), len(pools), len(drops)) == (3, 3, 2)
+    for conv in convs:  # Table 3.1: stride 1, no padding
+        assert conv.stride == (1,) and conv.padding == (0,)
+    for pool in pools:  # size 2, stride 1 (Table 3.1)
+        assert pool.kernel_size == 2 and pool.stride == 1
+    blocks = _blocks(cnn3.features)
+    assert [any(isinstance(m, nn.Dropout) for m in b) for b in blocks] == [True, False, True]
+    for block in blocks:  # conv -> ReLU -> max-pool (-> dropout)
+        assert isinstance(block[1], nn.ReLU) and isinstance(block[2], nn.MaxPool1d)
+    counts = [c.out_channels for c in convs]
+    sizes = [c.kernel_size[0] for c in convs]
+    assert counts == sorted(counts) and counts[0] < counts[-1]
+    assert sizes == sorted(sizes, reverse=True) and sizes[0] > sizes[-1]
+    assert not any(isinstance(m, nn.BatchNorm1d) for m in cnn3.modules())  # dropout, not BN (3.1.3)
+
+
+def test_cnn3_classifier_120_64(cnn3):
+    dense = [m for m in cnn3.classifier.modules() if isinstance(m, nn.Linear)]
+    assert [m.out_features for m in dense] == [120, 64, 2]
+    assert dense[0].in_features == cnn3.latent_dim
+    assert sum(isinstance(m, nn.Dropout) for m in cnn3.classifier.modules()) == 2
+    assert sum(isinstance(m, nn.ReLU) for m in cnn3.classifier.modules()) == 2
+
+
+def test_dropout_default_and_setting():
+    net = build_network("cnn3", 2)
+    assert {m.p for m in net.modules() if isinstance(m, nn.Dropout)} == {0.005}
+    net = build_network("fast", 2, dropout=0.1)
+    assert {m.p for m in net.modules() if isinstance(m, nn.Dropout)} == {0.1}
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_he_uniform_init(name):
+    torch.manual_seed(1)
+    net = build_network(name, 5)
+    layers = [m for m in net.modules() if isinstance(m, (nn.Conv1d, nn.Linear))]
+    assert layers
+    for layer in layers:
+        fan_in = layer.weight[0].numel()
+        bound = math.sqrt(6.0 / fan_in)  # TensorFlow he_uniform
+        w = layer.weight.detach()
+        assert w.abs().max() <= bound + 1e-6
+        if w.numel() >= 200:  # uniform over the whole range, not PyTorch's default (bound / sqrt(6))
+            assert w.abs().max() > 0.8 * bound
+            assert w.std() == pytest.approx(bound / math.sqrt(3.0), rel=0.2)
+        if layer.bias is not None:
+            assert torch.count_nonzero(layer.bias) == 0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_deterministic_given_seed(name):
+    x = torch.randn(4, 4096)
+
+    def run(seed):
+        torch.manual_seed(seed)
+        net = build_network(name, 2)
+        return net(x)  # training mode: dropout draws from the seeded generator too
+
+    assert torch.equal(run(3), run(3))
+    assert not torch.equal(run(3), run(4))
+    a = build_network(name, 2, seed=7).state_dict()
+    torch.manual_seed(123)
+    b = build_network(name, 2, seed=7).state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
+
+
+def _toy(length: int, n: int = 32):
+    """Two separable classes: a low and a high tone in noise."""
+    g = torch.Generator().manual_seed(0)
+    t = torch.arange(length, dtype=torch.float32)
+    y = torch.arange(n) % 2
+    freq = torch.where(y == 0, 0.01, 0.08).unsqueeze(1)
+    x = torch.sin(2 * math.pi * freq * t) + 0.3 * torch.randn(n, length, generator=g)
+    return x, y
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_adam_reduces_loss_on_toy_problem(name):
+    length = 256
+    x, y = _toy(length, n=16)
+    torch.manual_seed(0)
+    net = build_network(name, 2, length=length)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-3)
+    loss_fn = nn.CrossEntropyLoss()
+
+    def eval_loss():
+        net.eval()
+        with torch.no_grad():
+            value = float(loss_fn(net(x), y))
+        net.train()
+        return value
+
+    before = eval_loss()
+    for _ in range(10):
+        opt.zero_grad()
+        loss_fn(net(x), y).backward()
+        opt.step()
+    after = eval_loss()
+    assert after < 0.5 * before
+
+
+def test_unknown_name_lists_known():
+    with pytest.raises(GearlabInputError) as err:
+        build_network("cnn", 2)
+    message = str(err.value)
+    assert "unknown network 'cnn'" in message and "did you mean 'cnn3'" in message
+    assert "cnn3" in message and "fast" in message
+
+
+def test_bad_arguments():
+    with pytest.raises(GearlabInputError, match="n_classes"):
+        build_network("fast", 1)
+    with pytest.raises(GearlabInputError, match="dropout"):
+        build_network("fast", 2, dropout=1.5)
+    with pytest.raises(GearlabInputError, match="at least"):
+        build_network("cnn3", 2, length=50)
+    net = build_network("cnn3", 2, length=1024)
+    with pytest.raises(GearlabInputError, match="1024 samples"):
+        net(torch.randn(2, 4096))
+
+
+def test_fast_accepts_any_length():
+    net = build_network("fast", 3).eval()
+    with torch.no_grad():
+        for length in (256, 4096, 5000):
+            assert net(torch.randn(2, length)).shape == (2, 3)
+    assert net.latent_dim == 64
+
+
+def test_parameters_are_float32():
+    net = build_network("fast", 2)
+    assert all(p.dtype == torch.float32 for p in net.parameters())
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="no CUDA device")
+@pytest.mark.parametrize("name", NAMES)
+def test_cuda_forward_backward(name):
+    net = build_network(name, 2).cuda()
+    x = torch.randn(4, 4096, device="cuda")
+    loss = net(x).logsumexp(1).mean()
+    loss.backward()
+    assert all(p.grad is not None and p.grad.is_cuda for p in net.parameters())
