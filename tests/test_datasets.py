@@ -444,11 +444,7 @@ def test_unknown_dataset_preset_suggests_the_close_one():
     (dict(noise=NoiseSpec("gauss", 0.0)), r"unknown noise kind 'gauss'.*did you mean 'gaussian'"),
     (dict(channel="casing_x"), r"model 'six_dof' has no channel 'casing_x'; its channels: pinion_x, pinion_y"),
     (dict(model="six_dfo"), r"unknown model 'six_dfo'.*did you mean 'six_dof'"),
-    pytest.param(dict(preset="meng2021"), r"unknown preset 'meng2021'.*did you mean 'meng2020'",
-                 marks=pytest.mark.xfail(strict=True, reason=(
-                     "an unknown model preset is reported as \"model 'six_dof': unknown preset ...\" without "
-                     "the dataset (or scenario location) that asked for it: DynamicModel.resolve ignores *where* "
-                     "for the preset lookup"))),
+    (dict(preset="meng2021"), r"unknown preset 'meng2021'.*did you mean 'meng2020'"),
     (dict(faults=(), healthy=0), r"no samples"),
 ])
 def test_bad_specs_are_refused_before_building(changes, pattern, cache):

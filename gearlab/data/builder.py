@@ -44,7 +44,8 @@ def _simulator(model: str, preset: str, fs: float) -> Simulator:
 
 
 def operating_point(spec: DatasetSpec) -> tuple[float, float]:
-    preset = get_registry().get("model", spec.model, f"dataset '{spec.name}'").preset(spec.preset)
+    where = f"dataset '{spec.name}'"
+    preset = get_registry().get("model", spec.model, where).preset(spec.preset, where)
     speed = preset["speed_hz"] if spec.speed_hz is None else spec.speed_hz
     load = preset["load_nm"] if spec.load_nm is None else spec.load_nm
     return float(speed), float(load)
@@ -115,19 +116,7 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
     spec.check()
     executor = executor or LocalExecutor(1)
     registry = get_registry()
-    model = registry.get("model", spec.model, f"dataset '{spec.name}'")
-    pair, _ = model.resolve(spec.preset, where=f"dataset '{spec.name}'")
-    if spec.channel not in model.channels:
-        raise GearlabInputError(
-            f"dataset '{spec.name}': model '{spec.model}' has no channel '{spec.channel}'; "
-            f"its channels: {', '.join(model.channels)}"
-        )
-    teeth = tuple(range(1, pair.Z1 + 1)) if spec.teeth is None else spec.teeth
-    for n in teeth:
-        if not 1 <= n <= pair.Z1:
-            raise GearlabInputError(f"dataset '{spec.name}': tooth {n} is outside 1..{pair.Z1}")
-    for name, _ in spec.faults:
-        registry.get("fault", name, f"dataset '{spec.name}'")
+    _, pair, teeth = spec.check_model()
     speed, load = operating_point(spec)
     fs = whole_steps_rate(spec.fs, speed, pair.Z1)
 

@@ -86,6 +86,27 @@ class DatasetSpec:
         if not self.faults and not self.healthy:
             raise GearlabInputError(f"{where}: the dataset has no samples (no faults and healthy = 0)")
 
+    def check_model(self, where: str = ""):
+        """What needs the registry: the model, its preset and channel, the fault names and the
+        teeth (1..Z1 of the preset's pinion). Returns (model plugin, gear pair, teeth)."""
+        from ..registry import get_registry
+
+        where = where or f"dataset '{self.name}'"
+        registry = get_registry()
+        model = registry.get("model", self.model, where)
+        pair, _ = model.resolve(self.preset, where=where)
+        if self.channel not in model.channels:
+            raise GearlabInputError(
+                f"{where}: model '{self.model}' has no channel '{self.channel}'; its channels: {', '.join(model.channels)}"
+            )
+        teeth = tuple(range(1, pair.Z1 + 1)) if self.teeth is None else self.teeth
+        for n in teeth:
+            if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= pair.Z1:
+                raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{pair.Z1}")
+        for name, _ in self.faults:
+            registry.get("fault", name, where)
+        return model, pair, teeth
+
 
 def _ladders(steps: Mapping[str, tuple[int, ...]]) -> tuple[tuple[str, tuple[int, ...]], ...]:
     return tuple((name, tuple(steps[name])) for name in FAULTS)

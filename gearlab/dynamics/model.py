@@ -107,18 +107,22 @@ class DynamicModel:
     def channels(self) -> tuple[str, ...]:
         return tuple(c for c, dof in CHANNEL_DOFS.items() if dof in self.dofs)
 
-    def preset(self, name: str) -> Mapping:
+    def preset(self, name: str, where: str = "") -> Mapping:
+        """The preset *name*; an unknown one is an input error naming *where* it was asked for."""
         try:
             return self.presets[name]
         except KeyError:
+            context = f"model '{self.name}'"
+            if where and context not in where:
+                context = f"{where}: {context}"
             raise GearlabInputError(
-                f"model '{self.name}': unknown preset '{name}'{did_you_mean(name, list(self.presets))}; "
+                f"{context}: unknown preset '{name}'{did_you_mean(name, list(self.presets))}; "
                 f"known: {', '.join(self.presets)}"
             ) from None
 
     def resolve(self, preset: str, overrides: Mapping | None = None, where: str = "") -> tuple[GearPair, dict]:
         """The gear pair and the full parameter set of a preset, with optional overrides (units allowed)."""
-        p = self.preset(preset)
+        p = self.preset(preset, where)
         values = resolve_params(self.params, {**p["params"], **(overrides or {})}, where or f"model '{self.name}'")
         return gear_pair(p["pair"]), values
 

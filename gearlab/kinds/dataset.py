@@ -86,6 +86,7 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
         changes["noise"] = noise_spec(entry["noise"], f"{where} key 'noise'")
     spec = spec.with_(**changes)
     spec.check(where)
+    spec.check_model(where)  # model, preset, channel, faults and teeth: refused before any work
     return spec
 
 
