@@ -9,6 +9,7 @@ import json
 import sys
 import time
 import traceback
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -186,12 +187,16 @@ def simulate(
     for path in (out, plot):
         if path is not None and not path.parent.exists():
             raise GearlabInputError(f"{path}: directory {path.parent} does not exist")
-    sim = _simulator(model, preset, fs)
-    placed = []
-    for text in fault or []:
-        kind, tooth, step, params = parse_fault_option(text)
-        placed.append(place_fault(get_registry(), sim.pair, kind, tooth, step, params, where=f"--fault {text!r}"))
-    result = sim.run(placed, speed, load, duration)
+    with warnings.catch_warnings(record=True) as caught:  # held back: a refused input gets one error line
+        warnings.simplefilter("always")
+        sim = _simulator(model, preset, fs)
+        placed = []
+        for text in fault or []:
+            kind, tooth, step, params = parse_fault_option(text)
+            placed.append(place_fault(get_registry(), sim.pair, kind, tooth, step, params, where=f"--fault {text!r}"))
+        result = sim.run(placed, speed, load, duration)
+    for w in caught:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     import io
 
     buf = io.BytesIO()
@@ -277,14 +282,16 @@ class ProgressView:
         self.tasks: dict[str, int] = {}
 
     def __enter__(self):
-        self.progress.__enter__()
         return self
 
     def __exit__(self, *exc):
-        return self.progress.__exit__(*exc)
+        # Started by the first stage only: a run refused before any work prints its error line alone.
+        return self.progress.__exit__(*exc) if self.tasks else None
 
     def handle(self, event) -> None:
         if event.kind == "stage":
+            if not self.tasks:
+                self.progress.start()
             self.tasks[event.stage] = self.progress.add_task(event.message or event.stage, total=event.total or None)
         elif event.kind == "advance" and event.stage in self.tasks:
             self.progress.update(self.tasks[event.stage], completed=event.done, total=event.total or None)
@@ -292,7 +299,26 @@ class ProgressView:
             self.progress.console.print(event.message)
 
 
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line on stderr, without Python's source-line echo."""
+    err_console.print(f"warning: {message}", markup=False, highlight=False, soft_wrap=True)
+
+
+def _click_exception():
+    try:
+        from typer._click import ClickException  # typer >= 0.2x vendors click as typer._click
+    except ImportError:
+        from click import ClickException
+    return ClickException
+
+
 def main() -> None:
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning_line
+        _main()
+
+
+def _main() -> None:
     try:
         code = app(standalone_mode=False)
         if isinstance(code, int) and code:
@@ -306,10 +332,14 @@ def main() -> None:
         err_console.print("aborted")
         sys.exit(1)
     except Exception as exc:  # noqa: BLE001 - the last line of defence
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
+        if isinstance(exc, _click_exception()):  # usage: a missing or malformed option, no such command
+            message = exc.format_message()
+            if not message:  # no arguments at all: the help
+                exc.show()
+            else:
+                ctx = getattr(exc, "ctx", None)
+                where = f"{ctx.command_path}: " if ctx is not None else ""
+                err_console.print(f"error: {where}{message} (see --help)", markup=False, highlight=False)
             sys.exit(exc.exit_code)
         traceback.print_exc()
         err_console.print(f"internal error: {type(exc).__name__}: {exc}", markup=False)

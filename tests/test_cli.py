@@ -90,6 +90,24 @@ def test_stiffness_bad_input_one_line_exit_2(cli, args, message):
     assert "Traceback" not in err
 
 
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["stiffness"], "Missing option '--preset'"),
+        (["stiffness", "--preset", "luo2019", "--points", "many"], "Invalid value for '--points'"),
+        (["stiffness", "--preset", "luo2019", "--bogus"], "No such option: --bogus"),
+        (["modes"], "Missing option '--model'"),
+        (["stifness"], "No such command 'stifness'"),
+    ],
+)
+def test_usage_errors_one_line_exit_2(cli, args, message):
+    code, out, err = cli(*args)
+    assert code == 2, (out, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and message in lines[0], err
+    assert "Traceback" not in err
+
+
 def test_stiffness_bad_csv_directory(cli, tmp_path):
     code, _, err = cli("stiffness", "--preset", "luo2019", "--csv", tmp_path / "missing" / "k.csv")
     assert code == 2 and "does not exist" in err

@@ -2,6 +2,6 @@
 quick(scenario) (shrink for a smoke run), run(scenario, run_dir, on_event) and
 summary_lines(run_dir) (what the CLI and the TUI show of a finished run)."""
 
-from . import dataset, stiffness
+from . import dataset, stiffness, transfer
 
-KINDS = {"stiffness": stiffness, "dataset": dataset}
+KINDS = {"stiffness": stiffness, "dataset": dataset, "transfer": transfer}
