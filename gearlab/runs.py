@@ -17,8 +17,9 @@ import json
 import os
 import shutil
 import tempfile
+import tomllib
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import tomli_w
@@ -61,10 +62,13 @@ def atomic_write(path: Path, data: bytes | str) -> None:
         raise
 
 
+RUN_FILE = "run.json"  # how the run was started (--quick), for --resume
+
+
 @dataclass
 class RunDir:
     path: Path
-    _records: list[dict] = field(default_factory=list)
+    created: Path | None = None  # the outermost folder create() made, for discard()
 
     @property
     def results_path(self) -> Path:
@@ -75,23 +79,45 @@ class RunDir:
         return self.path / "figures"
 
     @classmethod
-    def create(cls, base: Path, scenario: Scenario) -> RunDir:
+    def create(cls, base: Path, scenario: Scenario, quick: bool = False) -> RunDir:
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
         path = Path(base) / scenario.name / stamp
+        created = next((p for p in reversed([path, *path.parents]) if not p.exists()), path)
         try:
             path.mkdir(parents=True, exist_ok=False)
             probe = path / ".write-test"
             probe.write_bytes(b"")
             probe.unlink()
         except OSError as exc:
+            cls(path, created=created).discard()
             raise GearlabInputError(f"cannot write the run directory under '{base}': {exc.strerror or exc}") from None
-        run = cls(path)
+        run = cls(path, created=created)
         atomic_write(path / "scenario.toml", tomli_w.dumps(_tomlable(scenario.tables)))
+        run.write_json(RUN_FILE, {"quick": quick})
         try:
             shutil.copyfile(scenario.path, path / "scenario.original.toml")
         except OSError:
             pass
         return run
+
+    def discard(self) -> None:
+        """Remove a run directory this process created, and the folders made for it if empty."""
+        shutil.rmtree(self.path, ignore_errors=True)
+        if self.created is None:
+            return
+        for folder in self.path.parents:
+            if not folder.is_relative_to(self.created):
+                break
+            try:
+                folder.rmdir()
+            except OSError:  # not empty: another run lives there
+                break
+
+    @property
+    def quick(self) -> bool:
+        """Whether the run was started with --quick (a resume must shrink it alike)."""
+        meta = self.path / RUN_FILE
+        return bool(json.loads(meta.read_text()).get("quick")) if meta.is_file() else False
 
     @classmethod
     def open(cls, path: Path) -> RunDir:
@@ -105,18 +131,25 @@ class RunDir:
         original = self.path / "scenario.original.toml"
         return original if original.is_file() else self.path / "scenario.toml"
 
+    def started_with(self, scenario: Scenario) -> bool:
+        """Whether *scenario* resolves to the tables this run was started with (a resume with
+        another would mix its units with those finished)."""
+        stored = tomllib.loads((self.path / "scenario.toml").read_text())
+        return stored == tomllib.loads(tomli_w.dumps(_tomlable(scenario.tables)))
+
     def records(self) -> list[dict]:
-        """Finished units. A line cut short by a kill (no newline yet) is ignored."""
+        """Finished units. A line cut short by a kill (no newline yet) is ignored, and so is a
+        damaged line, without hiding the records appended after it."""
         if not self.results_path.exists():
             return []
         out = []
         for line in self.results_path.read_text().splitlines(keepends=True):
             if not line.endswith("\n"):
-                break
+                continue
             try:
                 out.append(json.loads(line))
             except json.JSONDecodeError:
-                break
+                continue
         return out
 
     def append(self, record: dict) -> None:
@@ -163,19 +196,31 @@ def run_scenario(
 
     if resume is not None:
         run = RunDir.open(Path(resume))
+        if quick and not run.quick:
+            raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
+        quick = run.quick
         scenario = load_scenario(scenario_path or run.scenario_path())
+        if not run.started_with(scenario):
+            raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
+                                    "with; resume without SCENARIO (the run keeps a copy) or start a new run")
         run.truncate_partial()
     else:
         if scenario_path is None:
             raise GearlabInputError("no scenario given")
         scenario = load_scenario(scenario_path)
         base = Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
-        run = RunDir.create(base, scenario)
+        run = RunDir.create(base, scenario, quick)
     module = KINDS[scenario.kind]
     if quick:
         module.quick(scenario)
     on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
-    module.run(scenario, run, on_event)
+    try:
+        module.run(scenario, run, on_event)
+    except GearlabInputError:
+        # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
+        if resume is None and not run.records():
+            run.discard()
+        raise
     write_report(run)
     return run
 

@@ -18,8 +18,11 @@ from dataclasses import asdict, replace
 import numpy as np
 
 from ..data.cache import load_or_build
+from ..data.spec import POINTS, DatasetSpec
 from ..errors import GearlabInputError
-from ..learn.protocol import KS, Method, Protocol, StateStore, check, run_unit
+from ..learn.networks import NETWORKS
+from ..learn.protocol import KS, Counts, Method, Protocol, StateStore, check, check_data, run_unit
+from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
@@ -56,42 +59,65 @@ TABLES = {
 
 
 def build(scenario: Scenario) -> dict:
+    """Resolve and check everything that can be checked before any dataset is built."""
     t = scenario.tables
-    registry = get_registry()
-    methods = []
-    for i, m in enumerate(t["methods"]):
-        where = location(scenario.path, "methods", "adapter", i)
-        adapter = registry.get("adapter", m["adapter"], where)
-        params = adapter.resolve(m["params"], where) if hasattr(adapter, "resolve") else dict(m["params"])
-        methods.append(Method(m["adapter"], m["supervised"], tuple(sorted(params.items()))))
-    labels = [m.label for m in methods]
-    if len(set(labels)) != len(labels):
-        raise GearlabInputError(f"{scenario.path}: [[methods]] lists the same method twice")
+    path = scenario.path
+    methods = [method(m, location(path, "methods", index=i)) for i, m in enumerate(t["methods"])]
+    seen: dict[tuple, int] = {}
+    for i, m in enumerate(methods):
+        # the same training twice, whatever the spelling (variant = "classifier" or 1)
+        first = seen.setdefault((m.adapter, m.supervised, m.params), i)
+        if first != i:
+            raise GearlabInputError(f"{location(path, 'methods', index=i)}: {m.label} is the same method as "
+                                    f"#{first + 1}, {methods[first].label}")
     p = t["protocol"]
     ks = p["ks"]
-    if not ks or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in ks):
-        raise GearlabInputError(f"{location(scenario.path, 'protocol', 'ks')}: expected a list of whole numbers >= 0")
+    if not ks or len(set(ks)) != len(ks) or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0
+                                                    for k in ks):
+        raise GearlabInputError(f"{location(path, 'protocol', 'ks')}: expected a list of distinct whole numbers "
+                                f">= 0, got {ks!r}")
     if p["min_epochs"] > p["max_epochs"]:
-        raise GearlabInputError(f"{location(scenario.path, 'protocol', 'min_epochs')}: larger than max_epochs")
-    from ..learn.networks import NETWORKS
-
+        raise GearlabInputError(f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
+                                f"max_epochs = {p['max_epochs']}")
     net = t["network"]["name"]
     if net not in NETWORKS:
-        from ..params import did_you_mean
-
-        raise GearlabInputError(f"{location(scenario.path, 'network', 'name')}: unknown network '{net}'"
-                                f"{did_you_mean(net, list(NETWORKS))}; known: {', '.join(NETWORKS)}")
+        raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
+                                f"{did_you_mean(net, list(NETWORKS))}; known networks: {', '.join(NETWORKS)}")
     protocol = Protocol(
         methods=tuple(methods), network=net, dropout=t["network"]["dropout"], ks=tuple(ks),
         repetitions=p["repetitions"], target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
         prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
         min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=t["execution"]["device"],
     )
-    return {
-        "source": dataset_spec(t["source"], location(scenario.path, "source"), scenario.path.parent),
-        "target": dataset_spec(t["target"], location(scenario.path, "target"), scenario.path.parent),
-        "protocol": protocol,
-    }
+    check(protocol, str(path))
+    source = dataset_spec(t["source"], location(path, "source"), path.parent)
+    target = dataset_spec(t["target"], location(path, "target"), path.parent)
+    planned = planned_counts(source, location(path, "source")), planned_counts(target, location(path, "target"))
+    if None not in planned:
+        check_data(protocol, *planned, str(path))
+    return {"source": source, "target": target, "protocol": protocol}
+
+
+def method(entry: dict, where: str) -> Method:
+    """A [[methods]] entry: the adapter by name, its supervision variant and parameters."""
+    adapter = get_registry().get("adapter", entry["adapter"], f"{where} key 'adapter'")
+    mode = "supervised" if entry["supervised"] else "unsupervised"
+    if mode not in adapter.supervision:
+        raise GearlabInputError(f"{where} key 'supervised': adapter '{adapter.name}' has no {mode} variant "
+                                f"(it has: {', '.join(adapter.supervision)})")
+    params = adapter.resolve(entry["params"], f"{where} key 'params'")
+    return Method(adapter.name, entry["supervised"], tuple(sorted(params.items())),
+                  tuple(sorted(entry["params"].items())))
+
+
+def planned_counts(spec, where: str) -> Counts | None:
+    """Sample length and class sizes of a simulated dataset, known before it is built (as
+    data.builder lays it out); None for measured data, known only once imported."""
+    if not isinstance(spec, DatasetSpec):
+        return None
+    _, _, teeth = spec.check_model(where)
+    faults = sum(len(steps) for _, steps in spec.faults) * len(teeth) * spec.duplicates
+    return Counts(spec.name, POINTS, spec.healthy, faults)
 
 
 def quick(scenario: Scenario) -> None:
@@ -117,7 +143,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     on_event(Event("advance", stage="datasets", done=1, total=2))
     target, _ = load_or_build(spec["target"], executor, on_event)
     on_event(Event("advance", stage="datasets", done=2, total=2))
-    check(protocol, source, target, str(scenario.path))
+    check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
     done = {r["unit"] for r in run.records()}
     todo = units(protocol)
     states = StateStore(run.path / "states")
@@ -146,9 +172,16 @@ def save_latent(run: RunDir, unit: str, latent: dict) -> None:
     atomic_write(run.path / "latent" / (unit.replace("/", "_") + ".npz"), buf.getvalue())
 
 
+def columns(protocol: Protocol) -> list[Method]:
+    """The methods in the column order of Table 5.4: the unsupervised ones, then the supervised
+    ones, each in the scenario's order."""
+    return sorted(protocol.methods, key=lambda m: m.supervised)
+
+
 def table(records: list[dict], protocol: Protocol) -> dict:
+    """{method label: {k: {mean, std, n}}}: target test accuracy (%) over the repetitions."""
     out: dict[str, dict[str, dict]] = {}
-    for m in protocol.methods:
+    for m in columns(protocol):
         out[m.label] = {}
         for k in protocol.ks:
             acc = [r["accuracy"] for r in records if r["method"] == m.label and r["k"] == k]
@@ -158,8 +191,8 @@ def table(records: list[dict], protocol: Protocol) -> dict:
     return out
 
 
-def table_md(tab: dict, ks) -> str:
-    methods = list(tab)
+def table_md(tab: dict, ks, methods: list[str]) -> str:
+    """Table 5.4 layout: a row per k, a column per method and supervision, mean ± std."""
     lines = ["| k (target fault samples) | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
     for k in ks:
         cells = []
@@ -190,13 +223,13 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "source": asdict(scenario.spec["source"]),
         "target": asdict(scenario.spec["target"]),
         "protocol": {k: v for k, v in asdict(protocol).items() if k != "methods"},
-        "methods": [m.label for m in protocol.methods],
+        "methods": list(tab),  # the column order (JSON objects are written with sorted keys)
         "table": tab,
         "units": len(records),
         "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
     }
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(tab, protocol.ks))
+    run.write_text("table.md", table_md(tab, protocol.ks, list(tab)))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
     from ..plots import transfer_figures
 
@@ -207,7 +240,7 @@ def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
     ks = summary["protocol"]["ks"]
     lines = ["target-domain test accuracy [%], mean ± std over repetitions (Table 5.4 layout):",
-             table_md(summary["table"], ks).rstrip()]
+             table_md(summary["table"], ks, summary["methods"]).rstrip()]
     if summary.get("healthy_share_of_test") is not None:
         lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
     return lines

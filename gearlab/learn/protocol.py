@@ -31,22 +31,28 @@ from .networks import build_network
 from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device, predict
 
 KS = (0, 1, 2, 4, 8, 16)
+ADAM_LR = 1e-3  # TensorFlow's default, which the thesis's Adam runs used (Table 5.3)
 
 
 @dataclass(frozen=True)
 class Method:
+    """An adapter with its supervision and parameters. *params* are the resolved ones (every
+    parameter, defaults filled) that training uses; *shown* those the scenario set, which are
+    all that tells two methods of one adapter apart in labels and unit keys."""
+
     adapter: str
     supervised: bool
     params: tuple[tuple[str, object], ...] = ()
+    shown: tuple[tuple[str, object], ...] = ()
 
     @property
     def label(self) -> str:
-        extra = "".join(f", {k}={v}" for k, v in self.params)
+        extra = "".join(f", {k}={v}" for k, v in self.shown)
         return f"{self.adapter} ({'supervised' if self.supervised else 'unsupervised'}{extra})"
 
     @property
     def key(self) -> str:
-        extra = "".join(f"-{k}={v}" for k, v in self.params)
+        extra = "".join(f"-{k}={v}" for k, v in self.shown)
         return f"{self.adapter}-{'sup' if self.supervised else 'unsup'}{extra}"
 
 
@@ -83,40 +89,64 @@ class Split:
     target_test: np.ndarray
 
 
-def check(protocol: Protocol, source, target, where: str) -> None:
-    if source.X.shape[1] != target.X.shape[1]:
-        raise GearlabInputError(
-            f"{where}: source and target samples have different lengths ({source.X.shape[1]} and {target.X.shape[1]})"
-        )
-    faults = int((target.fault == 1).sum())
-    healthy = int((target.fault == 0).sum())
-    if max(protocol.ks) > faults:
-        raise GearlabInputError(f"{where}: k = {max(protocol.ks)} target fault samples asked for, the target has {faults}")
-    if protocol.target_train - min(protocol.ks) > healthy:
-        raise GearlabInputError(
-            f"{where}: a target training set of {protocol.target_train} needs {protocol.target_train - min(protocol.ks)} "
-            f"healthy samples, the target has {healthy}"
-        )
-    if protocol.target_train >= len(target.X):
-        raise GearlabInputError(f"{where}: target_train = {protocol.target_train} leaves no target test samples")
+@dataclass(frozen=True)
+class Counts:
+    """What the protocol asks of a dataset: its name, sample length and class sizes."""
+
+    name: str
+    length: int
+    healthy: int
+    faults: int
+
+    @classmethod
+    def of(cls, dataset) -> Counts:
+        return cls(dataset.spec.name if dataset.spec is not None else "", int(dataset.X.shape[1]),
+                   int((dataset.fault == 0).sum()), int((dataset.fault == 1).sum()))
+
+
+def _n_val(protocol: Protocol, n: int) -> int:
+    return max(1, round(protocol.val_fraction * n))
+
+
+def check(protocol: Protocol, where: str) -> None:
+    """Refuse a protocol that cannot run whatever the data (*where*: the scenario file)."""
+    if max(protocol.ks) > protocol.target_train:
+        raise GearlabInputError(f"{where}: [protocol] key 'ks': k = {max(protocol.ks)} fault samples do not fit in "
+                                f"a target training set of target_train = {protocol.target_train}")
     if protocol.batch > protocol.target_train:
-        raise GearlabInputError(
-            f"{where}: batch size {protocol.batch} is larger than the target training set ({protocol.target_train})"
-        )
-    registry = get_registry()
-    for m in protocol.methods:
-        adapter = registry.get("adapter", m.adapter, where)
-        mode = "supervised" if m.supervised else "unsupervised"
-        if mode not in adapter.supervision:
-            raise GearlabInputError(f"{where}: method '{m.adapter}' has no {mode} variant (it has: "
-                                    f"{', '.join(adapter.supervision)})")
+        raise GearlabInputError(f"{where}: [protocol] key 'batch': {protocol.batch} is larger than the target "
+                                f"training set (target_train = {protocol.target_train})")
+
+
+def check_data(protocol: Protocol, source: Counts, target: Counts, where: str) -> None:
+    """Refuse datasets the protocol cannot split or batch (checked before any training)."""
+    if source.length != target.length:
+        raise GearlabInputError(f"{where}: source '{source.name}' and target '{target.name}' samples have different "
+                                f"lengths ({source.length} and {target.length})")
+    k = max(protocol.ks)
+    if k > target.faults:
+        raise GearlabInputError(f"{where}: [protocol] key 'ks': k = {k} target fault samples asked for, the target "
+                                f"'{target.name}' has {target.faults}")
+    healthy = protocol.target_train - min(protocol.ks)
+    if healthy > target.healthy:
+        raise GearlabInputError(f"{where}: [protocol] key 'target_train': a target training set of "
+                                f"{protocol.target_train} with k = {min(protocol.ks)} needs {healthy} healthy "
+                                f"samples, the target '{target.name}' has {target.healthy}")
+    if protocol.target_train >= target.healthy + target.faults:
+        raise GearlabInputError(f"{where}: [protocol] key 'target_train': {protocol.target_train} leaves no target "
+                                f"test samples (the target '{target.name}' has {target.healthy + target.faults})")
+    n = source.healthy + source.faults
+    source_train = n - _n_val(protocol, n)
+    if protocol.batch > source_train:
+        raise GearlabInputError(f"{where}: [protocol] key 'batch': {protocol.batch} is larger than the source "
+                                f"training set ({source_train} of the {n} samples of '{source.name}')")
 
 
 def split(protocol: Protocol, source, target, rep: int, k: int) -> Split:
     """Random source validation split (per repetition) and target train/test split (per k)."""
     rng = np.random.default_rng([protocol.seed, rep])
     order = rng.permutation(len(source.X))
-    n_val = max(1, round(protocol.val_fraction * len(order)))
+    n_val = _n_val(protocol, len(order))
     rng_t = np.random.default_rng([protocol.seed, rep, k])
     faults = rng_t.permutation(np.flatnonzero(target.fault == 1))[:k]
     healthy = rng_t.permutation(np.flatnonzero(target.fault == 0))[: protocol.target_train - k]
@@ -140,7 +170,10 @@ class StateStore:
         if path is not None and path.exists():
             state = torch.load(path, weights_only=True, map_location="cpu")
         else:
-            state = make()
+            # Making a state draws from torch's global generator; fork it so that the caller
+            # continues exactly as when the state is loaded (a resumed run, a later unit).
+            with torch.random.fork_rng():
+                state = make()
             if path is not None:
                 from ..runs import atomic_write
 
@@ -211,7 +244,7 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
                        patience=None)
         return _cpu_state(net)
 
-    if method.adapter == "source_only":
+    if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
         def trained() -> dict:
             net = _net(protocol, seed, device)
             fit_supervised(net, Xs, ys, rng=np.random.default_rng([protocol.seed, rep, 2]), device=device,
@@ -222,28 +255,29 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
         net = _net(protocol, seed, device)
         net.load_state_dict(states.get(f"rep{rep}_source_only", trained))
         return net, None, {}
-    if method.adapter == "target_only":
+    if adapter.calibrated:
+        net = _net(protocol, seed, device)
+        net.load_state_dict(states.get(f"rep{rep}_primed", primed))
+    else:
         net = _net(protocol, seed + 17, device)
+    if adapter.train_on == "target":  # target_only from scratch, finetune from the primed network
+        # 10 % of the labelled target training samples decide when to stop (Table 5.3)
         order = rng.permutation(len(Xt))
-        n_val = max(1, round(protocol.val_fraction * len(order)))
+        n_val = _n_val(protocol, len(order))
+        sgd = adapter.optimizer == "sgd"
         history = fit_supervised(net, Xt[order[n_val:]], yt[order[n_val:]], rng=rng, device=device,
                                  epochs=protocol.baseline_epochs, batch=min(protocol.batch, len(order) - n_val),
+                                 optimizer=adapter.optimizer, lr=protocol.lr if sgd else ADAM_LR,
                                  val=(Xt[order[:n_val]], yt[order[:n_val]]), patience=protocol.patience,
+                                 parameters=adapter.trainable(net, params), freeze_norm=adapter.calibrated,
                                  on_epoch=on_epoch)
         return net, history, {}
-    net = _net(protocol, seed, device)
-    net.load_state_dict(states.get(f"rep{rep}_primed", primed))
-    if not adapter.calibrated:  # fine-tuning: the primed network trained on the labelled target samples
-        history = fit_supervised(net, Xt, yt, rng=rng, device=device, epochs=protocol.baseline_epochs,
-                                 batch=protocol.batch, val=source_val, patience=protocol.patience,
-                                 parameters=adapter.trainable(net, params), on_epoch=on_epoch)
-        return net, history, {}
-    modules = adapter.extra_modules(net.latent_dim)
+    modules = adapter.extra_modules(net.latent_dim, params)
     take = np.random.default_rng([protocol.seed, rep, k, 3]).permutation(len(Xs))[: len(Xt)]
     history = fit_adaptation(
         net, adapter, modules, (Xs[take], ys[take]), source_val, (Xt, yt if method.supervised else None),
         rng=rng, device=device, batch=protocol.batch, lr=protocol.lr, min_epochs=protocol.min_epochs,
-        max_epochs=protocol.max_epochs, on_epoch=on_epoch,
+        max_epochs=protocol.max_epochs, params=params, on_epoch=on_epoch,
     )
     with torch.no_grad():
         latent = {"source": embed(net, Xs[take], device).cpu().numpy(), "target": embed(net, Xt, device).cpu().numpy()}

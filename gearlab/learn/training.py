@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -74,6 +74,18 @@ def accuracy(net: nn.Module, X: np.ndarray, y: np.ndarray, device) -> float:
     return float((predict(net, X, device) == np.asarray(y)).mean()) if len(X) else float("nan")
 
 
+def train_mode(net: nn.Module, freeze_norm: bool = False) -> None:
+    """Training mode; with *freeze_norm*, batch-norm layers keep normalising with the statistics
+    they were primed with. Adapting a primed network needs this: joint source + target batches
+    would otherwise blend both domains into the running statistics that evaluation uses, and
+    the source validation accuracy that decides when to stop would swing from batch to batch."""
+    net.train()
+    if freeze_norm:
+        for layer in net.modules():
+            if isinstance(layer, nn.modules.batchnorm._BatchNorm):
+                layer.eval()
+
+
 def _batches(n: int, batch: int, rng: np.random.Generator) -> Iterable[np.ndarray]:
     order = rng.permutation(n)
     for i in range(0, n, batch):
@@ -94,9 +106,10 @@ def fit_supervised(
     val: tuple[np.ndarray, np.ndarray] | None = None,
     patience: int | None = 20,
     parameters: Iterable[torch.nn.Parameter] | None = None,
+    freeze_norm: bool = False,
     on_epoch: Callable[[int, History], None] | None = None,
 ) -> History:
-    """Cross-entropy training; with *val*, keep the epoch of best validation accuracy and stop
+    """Cross-entropy training (*freeze_norm*: see train_mode); with *val*, keep the epoch of best validation accuracy and stop
     after *patience* epochs without improvement (Table 5.3: 'validation accuracy maximum')."""
     if batch > len(X):
         raise GearlabInputError(f"batch size {batch} is larger than the training set ({len(X)} samples)")
@@ -107,7 +120,7 @@ def fit_supervised(
     Xt, yt = _tensor(X, device), _labels(y, device)
     history, best_state, best = History(), None, -math.inf
     for epoch in range(epochs):
-        net.train()
+        train_mode(net, freeze_norm)
         total = 0.0
         for idx in _batches(len(X), batch, rng):
             index = torch.as_tensor(idx, device=device)
@@ -115,7 +128,7 @@ def fit_supervised(
             loss = loss_fn(net(Xt[index]), yt[index])
             loss.backward()
             opt.step()
-            total += float(loss) * len(idx)
+            total += loss.item() * len(idx)
         history.train_loss.append(total / len(X))
         if val is not None:
             acc = accuracy(net, *val, device)
@@ -145,6 +158,7 @@ def fit_adaptation(
     min_epochs: int = 500,
     max_epochs: int = 800,
     window: int = 25,
+    params: Mapping | None = None,
     on_epoch: Callable[[int, History], None] | None = None,
 ) -> History:
     """Joint training on a source batch and a target batch of equal size (thesis 5.4.2).
@@ -171,8 +185,8 @@ def fit_adaptation(
     history = History()
     best_key, best_state = None, None
     for epoch in range(max_epochs):
-        lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs)  # the ramp ends at min_epochs
-        net.train()
+        lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs, params)  # the ramp ends at min_epochs
+        train_mode(net, freeze_norm=True)
         modules.train()
         total = 0.0
         for s_idx, t_idx in zip(_batches(len(Xs), batch, rng), _batches(len(Xt), batch, rng)):
@@ -185,17 +199,17 @@ def fit_adaptation(
             loss = ce(net.classifier(z_s), ys_t[s])
             if yt_t is not None:
                 loss = loss + ce(net.classifier(z_t), yt_t[t])
-            loss = loss + adapter.domain_loss(z_s, z_t, modules, lam)
+            loss = loss + adapter.domain_loss(z_s, z_t, modules, lam, params)
             loss.backward()
             opt.step()
-            total += float(loss)
+            total += loss.item()
         history.train_loss.append(total)
         history.lam.append(lam)
         history.val_acc.append(accuracy(net, *source_val, device))
         modules.eval()
         with torch.no_grad():
             history.discrepancy.append(float(adapter.discrepancy(embed(net, Xs, device), embed(net, Xt, device),
-                                                                 modules)))
+                                                                 modules, params)))
         if epoch >= min_epochs - 1:
             key = (history.val_acc[-1], -history.discrepancy[-1])
             if best_key is None or key > best_key:

@@ -1,0 +1,542 @@
+"""The chapter-5 transfer protocol (thesis 5.4.2) and the `transfer` kind's runs.
+
+Small synthetic datasets (short signals, the `fast` network) and a few epochs keep the unit
+tests quick; the run tests use tiny simulated datasets through a scenario file.
+"""
+
+import json
+import os
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from gearlab.data.cache import load_or_build
+from gearlab.data.spec import Dataset
+from gearlab.errors import GearlabInputError
+from gearlab.kinds import transfer
+from gearlab.learn import protocol as P
+from gearlab.learn.protocol import Counts, Protocol, StateStore, check, check_data, run_unit, split, train_method
+from gearlab.runs import RunDir, run_scenario
+from gearlab.scenario import load_scenario
+
+
+@pytest.fixture(autouse=True, scope="module")
+def one_thread():
+    # Tiny networks gain nothing from threads, and threads fighting over a busy CPU cost seconds.
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+def synthetic(faults: int, healthy: int, length: int = 256, seed: int = 0, offset: float = 0.0) -> Dataset:
+    """Healthy rows: a tone in noise; fault rows add an impulse train. Fault rows come first."""
+    rng = np.random.default_rng(seed)
+    n = faults + healthy
+    fault = (np.arange(n) < faults).astype(np.int8)
+    X = rng.normal(size=(n, length)) + np.sin(np.arange(length) / 5.0) + offset
+    X[fault == 1, ::32] += 4.0
+    zeros = np.zeros(n, dtype=np.int8)
+    return Dataset(spec=None, X=X.astype(np.float32), label=fault.copy(), fault=fault, intensity=zeros, tooth=zeros,
+                   rfa=np.zeros(n, np.float32), revolution=zeros.astype(np.int16), domain=zeros)
+
+
+SOURCE = synthetic(20, 30, seed=1)
+TARGET = synthetic(12, 28, seed=2, offset=0.5)
+
+
+def method(adapter: str, supervised: bool = False, **params):
+    return transfer.method({"adapter": adapter, "supervised": supervised, "params": params}, "test")
+
+
+METHODS = (
+    method("source_only"), method("target_only", True), method("mmd"), method("mmd", True), method("dann"),
+    method("coral", True), method("finetune", True, variant="classifier"),
+)
+
+
+def tiny(**changes) -> Protocol:
+    base = Protocol(methods=METHODS, ks=(0, 2), repetitions=2, target_train=12, batch=4, prime_epochs=2,
+                    baseline_epochs=3, patience=2, min_epochs=2, max_epochs=3, dropout=0.1, device="cpu")
+    return replace(base, **changes)
+
+
+def same_record(a: dict, b: dict) -> bool:
+    keep = lambda r: {k: v for k, v in r.items() if k != "_latent"}  # noqa: E731
+    return keep(a) == keep(b) and all(np.array_equal(a["_latent"][d], b["_latent"][d]) for d in a.get("_latent", {}))
+
+
+# ----------------------------------------------------------------------------- split
+
+
+@pytest.mark.parametrize("k", [0, 1, 2, 4, 12])
+@pytest.mark.parametrize("rep", [0, 3])
+def test_split_has_k_faults_and_disjoint_covering_target_sets(k, rep):
+    p = tiny()
+    s = split(p, SOURCE, TARGET, rep, k)
+    assert (TARGET.fault[s.target_train] == 1).sum() == k
+    assert (TARGET.fault[s.target_train] == 0).sum() == p.target_train - k
+    assert np.intersect1d(s.target_train, s.target_test).size == 0
+    assert np.array_equal(np.union1d(s.target_train, s.target_test), np.arange(len(TARGET)))
+    assert np.intersect1d(s.source_train, s.source_val).size == 0
+    assert np.array_equal(np.union1d(s.source_train, s.source_val), np.arange(len(SOURCE)))
+
+
+def test_split_is_fixed_by_seed_repetition_and_k():
+    p = tiny()
+    a, b = split(p, SOURCE, TARGET, 1, 2), split(p, SOURCE, TARGET, 1, 2)
+    assert all(np.array_equal(getattr(a, f), getattr(b, f)) for f in a.__dataclass_fields__)
+    others = [split(p, SOURCE, TARGET, 2, 2), split(p, SOURCE, TARGET, 1, 4),
+              split(replace(p, seed=5), SOURCE, TARGET, 1, 2)]
+    assert all(not np.array_equal(a.target_train, o.target_train) for o in others)
+    # the source split belongs to the repetition: every k of it is primed on the same samples
+    assert np.array_equal(a.source_train, others[1].source_train)
+    assert not np.array_equal(a.source_train, others[0].source_train)
+
+
+# ----------------------------------------------------------------------------- leak-proofness
+
+
+def scrambled_test_set(dataset: Dataset, test: np.ndarray, signals: bool) -> Dataset:
+    """The dataset with every target *test* label flipped (and, with *signals*, its rows replaced)."""
+    fault = dataset.fault.copy()
+    fault[test] = 1 - fault[test]
+    X = dataset.X.copy()
+    if signals:
+        X[test] = np.random.default_rng(99).normal(size=(len(test), X.shape[1])) * 7
+    return replace(dataset, X=X, fault=fault, label=fault.copy())
+
+
+@pytest.mark.parametrize("m", METHODS, ids=lambda m: m.key)
+def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, monkeypatch):
+    """With the split fixed, flipping the target test labels and replacing the test signals
+    changes nothing of the trained model, its training curves or the epoch kept; only the
+    score. No training function is ever handed a target test row."""
+    p, k = tiny(), 2
+    fixed = split(p, SOURCE, TARGET, 0, k)
+    monkeypatch.setattr(P, "split", lambda *args: fixed)
+    models, handed = [], []
+    train_method = P.train_method
+
+    def keep_model(*args, **kwargs):
+        model, history, extra = train_method(*args, **kwargs)
+        models.append({name: t.clone() for name, t in model.state_dict().items()})
+        return model, history, extra
+
+    def spy(fn):
+        def wrapped(*args, **kwargs):
+            handed.extend(a for a in [*args, *kwargs.values()] if isinstance(a, (np.ndarray, tuple)))
+            return fn(*args, **kwargs)
+        return wrapped
+
+    monkeypatch.setattr(P, "train_method", keep_model)
+    for name in ("fit_supervised", "fit_adaptation", "embed"):
+        monkeypatch.setattr(P, name, spy(getattr(P, name)))
+    # target rows carry their index in the first sample, to be recognised wherever they go
+    marked = replace(TARGET, X=TARGET.X.copy())
+    marked.X[:, 0] = 1000 + np.arange(len(marked))
+    runs = [run_unit(p, SOURCE, data, 0, k, m, StateStore(None)) for data in
+            (marked, scrambled_test_set(marked, fixed.target_test, signals=False),
+             scrambled_test_set(marked, fixed.target_test, signals=True))]
+
+    for model in models[1:]:
+        assert model.keys() == models[0].keys()
+        assert all(torch.equal(model[name], models[0][name]) for name in model)
+    for r in runs[1:]:
+        assert r["history"] == runs[0]["history"]
+        assert r["source_val_accuracy"] == runs[0]["source_val_accuracy"]
+        if "_latent" in r:
+            assert all(np.array_equal(r["_latent"][d], runs[0]["_latent"][d]) for d in r["_latent"])
+    # the same predictions scored against flipped labels: the test set is used, for the score only
+    assert runs[1]["accuracy"] == pytest.approx(100.0 - runs[0]["accuracy"])
+    assert runs[1]["confusion"] == [runs[0]["confusion"][1], runs[0]["confusion"][0]]
+
+    test_marks = 1000 + fixed.target_test
+    rows = [a for x in handed for a in (x if isinstance(x, tuple) else (x,))
+            if isinstance(a, np.ndarray) and a.ndim == 2]
+    assert rows, "the spies saw no training arrays"
+    assert not any(np.isin(a[:, 0], test_marks).any() for a in rows)
+    if m.adapter != "source_only":  # the spies do see the target training rows
+        assert any(np.isin(a[:, 0], 1000 + fixed.target_train).any() for a in rows)
+
+
+# ----------------------------------------------------------------------------- priming, determinism
+
+
+def test_shared_states_are_made_once_per_repetition_and_change_no_result(tmp_path):
+    p = tiny(methods=(method("source_only"), method("mmd"), method("finetune", True, variant="last")))
+    made = []
+
+    class Counting(StateStore):
+        def get(self, name, make):
+            return super().get(name, lambda: made.append(name) or make())
+
+    store = Counting(tmp_path / "states")
+    records = [run_unit(p, SOURCE, TARGET, rep, k, m, store)
+               for rep in range(p.repetitions) for k in p.ks for m in p.methods]
+    assert sorted(made) == ["rep0_primed", "rep0_source_only", "rep1_primed", "rep1_source_only"]
+    # a unit gives the same record run alone (making the priming), after others (sharing it)
+    # and in a new process (loading it from disk, as a resumed run does)
+    last = records[-1]
+    rep, k, m = p.repetitions - 1, p.ks[-1], p.methods[-1]
+    assert same_record(run_unit(p, SOURCE, TARGET, rep, k, m, StateStore(None)), last)
+    assert same_record(run_unit(p, SOURCE, TARGET, rep, k, m, StateStore(tmp_path / "states")), last)
+    first_calibrated = records[1]
+    assert same_record(run_unit(p, SOURCE, TARGET, 0, 0, p.methods[1], StateStore(tmp_path / "states")),
+                       first_calibrated)
+
+
+@pytest.mark.parametrize("variant, changed", [("all", {"features", "classifier"}), ("classifier", {"classifier"}),
+                                              ("last", {"classifier.3"})])
+def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, changed):
+    p = tiny(methods=(method("finetune", True, variant=variant),))
+    store = StateStore(None)
+    s = split(p, SOURCE, TARGET, 0, 2)
+    source = (SOURCE.X[s.source_train], SOURCE.fault[s.source_train].astype(np.int64))
+    val = (SOURCE.X[s.source_val], SOURCE.fault[s.source_val].astype(np.int64))
+    target = (TARGET.X[s.target_train], TARGET.fault[s.target_train].astype(np.int64))
+    net, _, _ = train_method(p, p.methods[0], source, val, target, 0, 2, store, torch.device("cpu"))
+    primed = store.memory["rep0_primed"]
+    moved = {name for name, value in net.state_dict().items()
+             if value.dtype.is_floating_point and not torch.equal(value, primed[name])}
+    assert moved and all(any(name.startswith(c + ".") for c in changed) for name in moved)
+    if variant == "last":
+        assert moved == {"classifier.3.weight", "classifier.3.bias"}
+
+
+def test_adapter_parameters_reach_training():
+    p = tiny(methods=(method("mmd"), method("mmd", lambda_max=0.2)))
+    default, capped = (run_unit(p, SOURCE, TARGET, 0, 0, m, StateStore(None)) for m in p.methods)
+    assert max(default["history"]["lam"]) == 1.0
+    assert max(capped["history"]["lam"]) == 0.2
+
+
+@pytest.mark.parametrize("m", [method("target_only", True), method("dann", True)], ids=lambda m: m.key)
+def test_same_seed_same_record_on_cpu(m):
+    p = tiny()
+    a, b = (run_unit(p, SOURCE, TARGET, 1, 2, m, StateStore(None)) for _ in range(2))
+    assert same_record(a, b)
+    c = run_unit(replace(p, seed=3), SOURCE, TARGET, 1, 2, m, StateStore(None))
+    assert c["history"] != a["history"]
+
+
+# ----------------------------------------------------------------------------- checks on the data
+
+
+@pytest.mark.parametrize("source, target, changes, message", [
+    (Counts("s", 256, 30, 20), Counts("t", 128, 28, 12), {}, "different lengths (256 and 128)"),
+    (Counts("s", 256, 30, 20), Counts("t", 256, 28, 1), {}, "k = 2 target fault samples asked for, the target 't' has"),
+    (Counts("s", 256, 30, 20), Counts("t", 256, 11, 12), {}, "needs 12 healthy samples, the target 't' has 11"),
+    (Counts("s", 256, 30, 20), Counts("t", 256, 12, 0), {"ks": (0,)}, "leaves no target test samples"),
+    (Counts("s", 256, 2, 2), Counts("t", 256, 28, 12), {}, "larger than the source training set (3 of the 4"),
+])
+def test_data_the_protocol_cannot_use_is_refused(source, target, changes, message):
+    with pytest.raises(GearlabInputError, match=re.escape(message)):
+        check_data(tiny(**changes), source, target, "s.toml")
+
+
+def test_protocol_that_cannot_fit_is_refused():
+    with pytest.raises(GearlabInputError, match="k = 16 fault samples do not fit"):
+        check(tiny(ks=(0, 16)), "s.toml")
+    with pytest.raises(GearlabInputError, match="'batch': 13 is larger than the target training set"):
+        check(tiny(batch=13), "s.toml")
+
+
+def test_labels_and_keys_show_only_what_the_scenario_set():
+    assert method("mmd").label == "mmd (unsupervised)"
+    assert method("finetune", True, variant="classifier").label == "finetune (supervised, variant=classifier)"
+    assert method("finetune", True, variant="classifier").key == "finetune-sup-variant=classifier"
+    assert dict(method("mmd").params)["lambda_step"] == 0.05  # training still gets every parameter
+    assert dict(method("finetune", True, variant="classifier").params) == {"variant": 1}
+
+
+# ----------------------------------------------------------------------------- runs
+
+
+def test_results_store_skips_cut_and_damaged_lines_without_hiding_later_ones(tmp_path):
+    run = RunDir(tmp_path)
+    run.append({"unit": "a"})
+    with open(run.results_path, "a") as f:
+        f.write('{"unit": "damag\n')
+    run.append({"unit": "b"})
+    with open(run.results_path, "a") as f:
+        f.write('{"unit": "c", "accu')  # killed mid-write
+    assert [r["unit"] for r in run.records()] == ["a", "b"]
+    run.truncate_partial()
+    assert run.results_path.read_text().endswith('"b"}\n')
+    run.append({"unit": "c"})
+    assert [r["unit"] for r in run.records()] == ["a", "b", "c"]
+
+
+TINY = """\
+[scenario]
+name = "tiny"
+kind = "transfer"
+
+[source]
+preset = "B-6-ch5"
+teeth = [1, 2, 3]
+faults = { crack = [13] }
+healthy = 9
+
+[target]
+preset = "B-8-ch5"
+teeth = [1, 2, 3]
+faults = { crack = [13] }
+healthy = 9
+noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
+
+[network]
+name = "fast"
+
+[[methods]]
+adapter = "source_only"
+
+[[methods]]
+adapter = "target_only"
+supervised = true
+
+[[methods]]
+adapter = "mmd"
+
+[[methods]]
+adapter = "finetune"
+supervised = true
+params = { variant = "classifier" }
+
+[protocol]
+ks = [0, 2]
+repetitions = 2
+target_train = 8
+batch = 4
+prime_epochs = 2
+baseline_epochs = 2
+patience = 2
+min_epochs = 2
+max_epochs = 3
+
+[execution]
+workers = 1
+device = "cpu"
+"""
+UNITS = [f"rep{r}/k{k}/{m}" for r in (0, 1) for k in (0, 2)
+         for m in ("source_only-unsup", "target_only-sup", "mmd-unsup", "finetune-sup-variant=classifier")]
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture
+def tiny_toml(tmp_path, cache, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    return path
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory, cache):
+    """One uninterrupted run of the tiny scenario."""
+    base = tmp_path_factory.mktemp("finished")
+    (base / "tiny.toml").write_text(TINY)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(cache))
+        return run_scenario(base / "tiny.toml", out=base / "runs").path
+
+
+def lines_of(run: Path) -> list[str]:
+    return (run / "results.jsonl").read_text().splitlines(keepends=True)
+
+
+def by_unit(run: Path) -> dict[str, dict]:
+    return {r["unit"]: r for r in map(json.loads, lines_of(run))}
+
+
+def test_planned_class_counts_are_those_built(finished, tiny_toml):
+    spec = load_scenario(tiny_toml).spec
+    for side in ("source", "target"):
+        built, cached = load_or_build(spec[side])
+        assert cached
+        assert transfer.planned_counts(spec[side], side) == Counts.of(built)
+
+
+def test_summary_table_and_report(finished, cli):
+    summary = json.loads((finished / "summary.json").read_text())
+    labels = ["source_only (unsupervised)", "mmd (unsupervised)", "target_only (supervised)",
+              "finetune (supervised, variant=classifier)"]
+    assert summary["methods"] == labels  # Table 5.4's column order: unsupervised, then supervised
+    assert set(summary["table"]) == set(labels)
+    records = by_unit(finished)
+    assert sorted(records) == sorted(UNITS)
+    for label in labels:
+        assert set(summary["table"][label]) == {"0", "2"}
+        for k, cell in summary["table"][label].items():
+            acc = [r["accuracy"] for r in records.values() if r["method"] == label and r["k"] == int(k)]
+            assert cell["mean"] == pytest.approx(np.mean(acc)) and cell["std"] == pytest.approx(np.std(acc, ddof=1))
+    md = (finished / "table.md").read_text().splitlines()
+    assert md[0] == "| k (target fault samples) | " + " | ".join(labels) + " |"
+    assert [row.split("|")[1].strip() for row in md[2:]] == ["0", "2"]
+    assert all(re.fullmatch(r"\d+\.\d\d ± \d+\.\d", c.strip()) for row in md[2:] for c in row.split("|")[2:-1])
+
+    (finished / "report.html").unlink()
+    code, _, err = cli("report", finished)
+    assert code == 0, err
+    html = (finished / "report.html").read_text()
+    assert "finetune (supervised, variant=classifier)" in html and "data:image/png;base64," in html
+
+
+def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_toml, cli, monkeypatch):
+    # Killed inside the first calibrated unit, after its priming was saved; then a record cut
+    # short mid-write, as a kill leaves it.
+    with monkeypatch.context() as mp:
+        def killed(*args, **kwargs):
+            raise KeyboardInterrupt
+        mp.setattr(P, "fit_adaptation", killed)
+        with pytest.raises(KeyboardInterrupt):
+            run_scenario(tiny_toml, out=tiny_toml.parent / "runs")
+    (run,) = (tiny_toml.parent / "runs" / "tiny").iterdir()
+    before = lines_of(run)
+    assert [json.loads(line)["unit"] for line in before] == UNITS[:2]
+    assert (run / "states" / "rep0_primed.pt").exists()
+    with open(run / "results.jsonl", "a") as f:
+        f.write(json.dumps({"unit": UNITS[2], "accuracy": 0.0})[:25])
+
+    ran = []
+    real = transfer.run_unit
+    monkeypatch.setattr(transfer, "run_unit", lambda *a, **kw: ran.append(a[3:5]) or real(*a, **kw))
+    code, out, err = cli("run", "--resume", run)
+    assert code == 0, err
+    assert out.splitlines()[-1] == f"run directory: {run}"
+    assert len(ran) == len(UNITS) - 2
+    after = lines_of(run)
+    assert after[:2] == before  # finished units untouched
+    assert all(line.endswith("\n") for line in after)
+    assert sorted(json.loads(line)["unit"] for line in after) == sorted(UNITS)  # each exactly once
+    # nothing differs from the run that was never interrupted
+    assert by_unit(run) == by_unit(finished)
+    assert json.loads((run / "summary.json").read_text())["table"] == \
+        json.loads((finished / "summary.json").read_text())["table"]
+    assert (run / "table.md").read_text() == (finished / "table.md").read_text()
+
+
+def test_last_line_of_a_run_is_the_run_directory(finished, tiny_toml, cli, monkeypatch):
+    # A finished run resumed: nothing left to train, the outputs rewritten.
+    monkeypatch.setattr(transfer, "run_unit", lambda *a, **kw: pytest.fail("a finished unit ran again"))
+    code, out, err = cli("run", tiny_toml, "--resume", finished)
+    assert code == 0, err
+    assert out.splitlines()[-1] == f"run directory: {finished}"
+    assert "| 0 |" in out
+
+
+# ----------------------------------------------------------------------------- bad input
+
+
+def edit(text: str, old: str, new: str) -> str:
+    assert old in text
+    return text.replace(old, new, 1)
+
+
+BAD = {
+    "network": (('name = "fast"', 'name = "fsat"'),
+                "[network] key 'name': unknown network 'fsat' (did you mean 'fast'?); known networks: cnn3, fast"),
+    "adapter": (('adapter = "mmd"', 'adapter = "mdd"'), "unknown adapter 'mdd' (did you mean 'mmd'?); known adapters: "),
+    "variant": (('supervised = true\nparams', 'supervised = false\nparams'),
+                "[[methods]] #4 key 'supervised': adapter 'finetune' has no unsupervised variant (it has: supervised)"),
+    "param": (('variant = "classifier"', 'varient = "classifier"'),
+              "unknown parameter 'varient' (did you mean 'variant'?)"),
+    "same method": (('adapter = "finetune"\nsupervised = true\nparams = { variant = "classifier" }', 'adapter = "mmd"'),
+                    "[[methods]] #4: mmd (unsupervised) is the same method as #3, mmd (unsupervised)"),
+    "same method spelt otherwise": (
+        ('adapter = "mmd"', 'adapter = "finetune"\nsupervised = true\nparams = { variant = 1 }'),
+        "[[methods]] #4: finetune (supervised, variant=classifier) is the same method as #3, finetune (supervised, variant=1)",
+    ),
+    "k > faults": (("ks = [0, 2]", "ks = [0, 4]"),
+                   "[protocol] key 'ks': k = 4 target fault samples asked for, the target 'B-8-ch5' has 3"),
+    "k > target_train": (("ks = [0, 2]", "ks = [0, 9]"), "k = 9 fault samples do not fit"),
+    "healthy": (("target_train = 8", "target_train = 10"), "needs 10 healthy samples, the target 'B-8-ch5' has 9"),
+    "batch > target_train": (("batch = 4", "batch = 9"),
+                             "[protocol] key 'batch': 9 is larger than the target training set (target_train = 8)"),
+    "batch > source": (("faults = { crack = [13] }\nhealthy = 9", "faults = { crack = [13] }\nhealthy = 1"),
+                       "'batch': 4 is larger than the source training set (3 of the 4 samples of 'B-6-ch5')"),
+    "protocol key": (("repetitions = 2", "repetitons = 2"),
+                     "[protocol] key 'repetitons': unknown key (did you mean 'repetitions'?)"),
+    "ks fraction": (("ks = [0, 2]", "ks = [0, 1.5]"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
+    "ks repeated": (("ks = [0, 2]", "ks = [2, 2]"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
+    "ks empty": (("ks = [0, 2]", "ks = []"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
+    "ks text": (("ks = [0, 2]", 'ks = "0, 2"'), "[protocol] key 'ks': expected a list, got str"),
+    "epochs": (("min_epochs = 2", "min_epochs = 5"), "[protocol] key 'min_epochs': 5 is larger than max_epochs = 3"),
+}
+
+
+def assert_refused(code: int, err: str, message: str, runs: Path, alone: bool = True) -> None:
+    """Exit code 2, the error as one line (the only output of a run refused before any work),
+    and no run files left."""
+    assert code == 2, err
+    lines = err.splitlines()
+    assert lines[-1].startswith("error: ") and message in lines[-1], err
+    assert not alone or len(lines) == 1, err
+    assert not runs.exists() or not any(runs.rglob("*")), "a refused run left files behind"
+
+
+@pytest.mark.parametrize("case", list(BAD))
+def test_bad_scenario_is_refused_before_any_work(case, tiny_toml, cli, monkeypatch):
+    (old, new), message = BAD[case]
+    tiny_toml.write_text(edit(TINY, old, new))
+    monkeypatch.setattr(transfer, "load_or_build", lambda *a, **kw: pytest.fail("a dataset was built"))
+    code, _, err = cli("run", tiny_toml, "--out", tiny_toml.parent / "runs")
+    assert_refused(code, err, message, tiny_toml.parent / "runs")
+    code, _, err = cli("validate", tiny_toml)
+    assert code == 2 and message in err
+
+
+def test_datasets_found_unfit_once_built_leave_no_run_behind(tiny_toml, cli, monkeypatch):
+    # Measured data are only known once imported: here a target of another sample length.
+    monkeypatch.setattr(transfer, "load_or_build", lambda spec, *a: (synthetic(3, 9, 4096 if spec.name == "B-6-ch5"
+                                                                               else 2048), True))
+    runs = tiny_toml.parent / "runs"
+    code, _, err = cli("run", tiny_toml, "--out", runs)
+    assert_refused(code, err, "samples have different lengths (4096 and 2048)", runs, alone=False)
+    # a run beside it is left alone
+    older = runs / "tiny" / "older" / "results.jsonl"
+    older.parent.mkdir(parents=True)
+    older.write_text("{}\n")
+    code, _, err = cli("run", tiny_toml, "--out", runs)
+    assert code == 2 and [p for p in runs.rglob("*") if p.is_file()] == [older]
+
+
+def test_unwritable_output_directory_is_refused(tiny_toml, cli):
+    a_file = tiny_toml.parent / "a_file"
+    a_file.write_text("")
+    for out in (a_file, a_file / "runs"):
+        code, _, err = cli("run", tiny_toml, "--out", out)
+        assert_refused(code, err, f"cannot write the run directory under '{out}'", tiny_toml.parent / "nothing")
+    assert a_file.read_text() == ""
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write to a read-only directory")
+def test_read_only_output_directory_is_refused(tiny_toml, cli):
+    locked = tiny_toml.parent / "locked"
+    locked.mkdir(mode=0o555)
+    try:
+        code, _, err = cli("run", tiny_toml, "--out", locked / "runs")
+        assert_refused(code, err, "cannot write the run directory", locked)
+    finally:
+        locked.chmod(0o755)
+
+
+def test_resume_with_another_scenario_is_refused(finished, tiny_toml, cli):
+    tiny_toml.write_text(edit(TINY, "max_epochs = 3", "max_epochs = 4"))
+    code, _, err = cli("run", tiny_toml, "--resume", finished)
+    assert code == 2 and "differs from the scenario the run in" in err
+
+
+def test_resume_keeps_the_runs_quick_setting(finished, cli):
+    assert RunDir.open(finished).quick is False
+    code, _, err = cli("run", "--resume", finished, "--quick")
+    assert code == 2 and "was started without --quick" in err
