@@ -1,0 +1,113 @@
+"""Speed of the networks and of the chapter-5 protocol, measured side by side in one run.
+
+    python benchmarks/learning.py [--units]
+
+1. One training step (forward, backward, SGD update) on a joint domain-adaptation batch of
+   40 source + 40 target rotations of 4096 samples, `fast` against `cnn3`, alternating the
+   two so that both see the same machine load. Target (issue 4): fast >= 20x faster.
+2. With --units: the wall time of the protocol's units on Experiment B's datasets (priming,
+   a baseline, one calibrated run at the full Table 5.3 schedule) and from them an estimate
+   of the whole expB.toml table (6 k x 5 repetitions x every method). Target: <= 45 min.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+import torch
+from torch import nn
+
+from gearlab.learn.networks import build_network
+
+BATCH = 80  # 40 source + 40 target (Table 5.3)
+LENGTH = 4096
+
+
+def step_time(name: str, x: torch.Tensor, y: torch.Tensor) -> float:
+    net = build_network(name, 2, seed=0)
+    opt = torch.optim.SGD(net.parameters(), lr=0.003)
+    loss_fn = nn.CrossEntropyLoss()
+
+    def step():
+        opt.zero_grad()
+        loss_fn(net(x), y).backward()
+        opt.step()
+
+    step()  # first call allocates
+    t = time.perf_counter()
+    step()
+    return time.perf_counter() - t
+
+
+def networks(rounds: int) -> None:
+    torch.manual_seed(0)
+    x = torch.randn(BATCH, LENGTH)
+    y = torch.randint(0, 2, (BATCH,))
+    times: dict[str, list[float]] = {"fast": [], "cnn3": []}
+    for _ in range(rounds):
+        for name in times:
+            times[name].append(step_time(name, x, y))
+    fast, cnn3 = (statistics.median(times[n]) for n in ("fast", "cnn3"))
+    print(f"training step, batch {BATCH} x {LENGTH}, {torch.get_num_threads()} threads (median of {rounds}):")
+    print(f"  fast {1e3 * fast:8.1f} ms")
+    print(f"  cnn3 {1e3 * cnn3:8.1f} ms")
+    print(f"  ratio cnn3 / fast: {cnn3 / fast:.1f}x   (target >= 20x)")
+
+
+def units() -> None:
+    from gearlab.data.cache import load_or_build
+    from gearlab.kinds.transfer import units as all_units
+    from gearlab.learn.protocol import Method, Protocol, StateStore, run_unit
+    from gearlab.scenario import load_scenario
+
+    scenario = load_scenario("scenarios/expB.toml")
+    spec = scenario.spec
+    source, _ = load_or_build(spec["source"])
+    target, _ = load_or_build(spec["target"])
+    full: Protocol = spec["protocol"]
+    timed = {}
+    states = StateStore(None)
+    for method in (Method("source_only", False), Method("mmd", False), Method("target_only", True),
+                   Method("finetune", True, (("variant", 0),))):
+        t = time.perf_counter()
+        run_unit(full, source, target, 0, 4, method, states)
+        timed[method.adapter] = time.perf_counter() - t
+    print("protocol units on Experiment B (k = 4, repetition 0):")
+    prime = timed["source_only"]
+    print(f"  source_only (trained once per repetition)  {prime:7.1f} s")
+    print(f"  mmd (priming + {full.min_epochs}-epoch schedule)      {timed['mmd']:7.1f} s")
+    print(f"  target_only                                {timed['target_only']:7.1f} s")
+    print(f"  finetune (primed network reused)           {timed['finetune']:7.1f} s")
+    calibrated = timed["mmd"] - prime  # priming is shared within a repetition
+    total = 0.0
+    for rep, k, m in all_units(full):
+        adapter = m.adapter
+        if adapter == "source_only":
+            total += prime if k == full.ks[0] else 0.0
+        elif adapter == "target_only":
+            total += timed["target_only"]
+        elif adapter == "finetune":
+            total += timed["finetune"]
+        else:
+            total += calibrated
+    total += prime * full.repetitions  # one priming per repetition
+    print(f"estimated full expB.toml table, one worker: {total / 60:.1f} min over {len(all_units(full))} units "
+          f"(target <= 45 min on 2 cores)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--units", action="store_true", help="also time the protocol's units on Experiment B")
+    args = parser.parse_args()
+    networks(args.rounds)
+    if args.units:
+        units()
+
+
+if __name__ == "__main__":
+    np.set_printoptions(precision=3)
+    main()
