@@ -53,8 +53,9 @@ def save(dataset: Dataset) -> Path:
     return path
 
 
-def load(spec: DatasetSpec) -> Dataset | None:
-    path = entry_path(spec)
+def load(spec: DatasetSpec, path: Path | None = None) -> Dataset | None:
+    """The cached dataset of *spec* (at *path*, by default its entry in the cache), or None."""
+    path = path or entry_path(spec)
     if not path.exists():
         return None
     try:

@@ -16,12 +16,14 @@ import json
 from dataclasses import asdict, replace
 
 import numpy as np
+import torch
 
+from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import POINTS, DatasetSpec
 from ..errors import GearlabInputError
 from ..learn.networks import NETWORKS
-from ..learn.protocol import KS, Counts, Method, Protocol, StateStore, check, check_data, run_unit
+from ..learn.protocol import KS, Counts, Method, Protocol, StateStore, check, check_data, run_unit, shared_state, unit_key
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import Event, RunDir
@@ -146,20 +148,46 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
     done = {r["unit"] for r in run.records()}
     todo = units(protocol)
-    states = StateStore(run.path / "states")
+    pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]
+    # The first unit that needs a repetition's shared state (priming, source-only model) makes
+    # it; every other unit waits for phase 2 and loads it from the run directory.
+    makers: dict[str, tuple] = {}
+    for rep, k, m in pending:
+        state = shared_state(m, rep)
+        if state is not None and not (run.path / "states" / f"{state}.pt").exists():
+            makers.setdefault(state, (rep, k, m))
+    first = list(makers.values())
+    phases = [first, [u for u in pending if u not in first]]
     on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
-    for i, (rep, k, method) in enumerate(todo):
-        unit = f"rep{rep}/k{k}/{method.key}"
-        if unit not in done:
-            on_event(Event("log", message=f"run {unit}"))
-            record = run_unit(protocol, source, target, rep, k, method, states)
-            latent = record.pop("_latent", None)
-            if latent is not None and rep == 0:
-                save_latent(run, unit, latent)
-            run.append(record)
-            on_event(Event("record", stage="runs", record=record))
-        on_event(Event("advance", stage="runs", done=i + 1, total=len(todo)))
+    finished = len(todo) - len(pending)
+    on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+    def record_done(_: int, record: dict) -> None:
+        nonlocal finished
+        latent = record.pop("_latent", None)
+        if latent is not None and record["rep"] == 0:
+            save_latent(run, record["unit"], latent)
+        run.append(record)
+        finished += 1
+        on_event(Event("record", stage="runs", record=record))
+        on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+    for phase in phases:
+        # the cache entries by path: a worker process may not share this one's environment
+        data = [(spec[d], cache.entry_path(spec[d])) for d in ("source", "target")]
+        tasks = [(protocol, *data, rep, k, m, run.path / "states") for rep, k, m in phase]
+        executor.map(train_unit, tasks, on_done=record_done)
     summarise(scenario, run)
+
+
+def train_unit(task: tuple) -> dict:
+    """One unit of work, in this process or a worker: the datasets come from the cache (they
+    were built before), shared states from the run directory. One torch thread per unit,
+    so that a result does not depend on how many workers run side by side."""
+    protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states = task
+    torch.set_num_threads(1)
+    source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
+    return run_unit(protocol, source, target, rep, k, method, StateStore(states))
 
 
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:

@@ -184,6 +184,18 @@ class StateStore:
         return state
 
 
+def unit_key(rep: int, k: int, method: Method) -> str:
+    return f"rep{rep}/k{k}/{method.key}"
+
+
+def shared_state(method: Method, rep: int) -> str | None:
+    """The name of the per-repetition state a method starts from, if any (see train_method)."""
+    adapter = get_registry().get("adapter", method.adapter)
+    if adapter.train_on == "source":
+        return f"rep{rep}_source_only"
+    return f"rep{rep}_primed" if adapter.calibrated else None
+
+
 def _net(protocol: Protocol, seed: int, device):
     torch.manual_seed(seed)
     return build_network(protocol.network, n_classes=2, dropout=protocol.dropout).to(device)
@@ -209,7 +221,7 @@ def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Metho
     pred = predict(model, X_test, device)
     confusion = [[int(((y_test == a) & (pred == b)).sum()) for b in (0, 1)] for a in (0, 1)]
     return {
-        "unit": f"rep{rep}/k{k}/{method.key}",
+        "unit": unit_key(rep, k, method),
         "rep": rep,
         "k": k,
         "method": method.label,
@@ -253,11 +265,11 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
             return _cpu_state(net)
 
         net = _net(protocol, seed, device)
-        net.load_state_dict(states.get(f"rep{rep}_source_only", trained))
+        net.load_state_dict(states.get(shared_state(method, rep), trained))
         return net, None, {}
     if adapter.calibrated:
         net = _net(protocol, seed, device)
-        net.load_state_dict(states.get(f"rep{rep}_primed", primed))
+        net.load_state_dict(states.get(shared_state(method, rep), primed))
     else:
         net = _net(protocol, seed + 17, device)
     if adapter.train_on == "target":  # target_only from scratch, finetune from the primed network

@@ -167,7 +167,8 @@ def fit_adaptation(
     at the scheduled lambda. SGD at lr 0.003. The adapter's lambda ramp (500 epochs in Table 5.3)
     is stretched or shrunk to end at *min_epochs* (500 by default); after it
     training stops when the source validation accuracy falls clearly below its best or the
-    domain discrepancy (between the two *training* sets) has stopped moving. The kept model
+    domain discrepancy (between the two *training* sets, averaged over the epoch's batches)
+    has stopped moving. The kept model
     is the post-ramp epoch with the best source validation accuracy, ties broken by the
     lower discrepancy.
     """
@@ -188,7 +189,7 @@ def fit_adaptation(
         lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs, params)  # the ramp ends at min_epochs
         train_mode(net, freeze_norm=True)
         modules.train()
-        total = 0.0
+        total, discrepancy, batches = 0.0, 0.0, 0
         for s_idx, t_idx in zip(_batches(len(Xs), batch, rng), _batches(len(Xt), batch, rng)):
             m = min(len(s_idx), len(t_idx))
             s = torch.as_tensor(s_idx[:m], device=device)
@@ -203,13 +204,14 @@ def fit_adaptation(
             loss.backward()
             opt.step()
             total += loss.item()
+            # The epoch's discrepancy is measured on the latent batches it trained on: every
+            # training sample once, with no extra pass through the network.
+            discrepancy += adapter.discrepancy(z_s.detach(), z_t.detach(), modules, params)
+            batches += 1
         history.train_loss.append(total)
         history.lam.append(lam)
         history.val_acc.append(accuracy(net, *source_val, device))
-        modules.eval()
-        with torch.no_grad():
-            history.discrepancy.append(float(adapter.discrepancy(embed(net, Xs, device), embed(net, Xt, device),
-                                                                 modules, params)))
+        history.discrepancy.append(discrepancy / batches)
         if epoch >= min_epochs - 1:
             key = (history.val_acc[-1], -history.discrepancy[-1])
             if best_key is None or key > best_key:
