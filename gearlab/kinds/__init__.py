@@ -1,7 +1,7 @@
 """Scenario kinds. Each module gives TABLES (schema), build(scenario) -> spec,
-quick(scenario) (shrink for a smoke run), run(scenario, run_dir, on_event) and
+describe(scenario) (one line of what it will do), quick(scenario) (shrink for a smoke run), run(scenario, run_dir, on_event) and
 summary_lines(run_dir) (what the CLI and the TUI show of a finished run)."""
 
-from . import dataset, stiffness, transfer
+from . import dataset, noise_study, stiffness, transfer
 
-KINDS = {"stiffness": stiffness, "dataset": dataset, "transfer": transfer}
+KINDS = {"stiffness": stiffness, "dataset": dataset, "transfer": transfer, "noise_study": noise_study}

@@ -1,0 +1,267 @@
+"""Scenario kind `noise_study`: the chapter-4 noise-robustness study (thesis 4.1-4.4).
+
+    [study]      noises: which noise types; each gives a noisy and a TSA dataset
+                 (presets A-casing_noise-<noise> and A-casing_TSA-<noise>, Table 4.1)
+    [dataset]    overrides applied to both presets alike (teeth, duplicates, healthy,
+                 revolutions, faults, noise = {snr_db, seed}, ...)
+    [network]    name (fast | cnn3), dropout
+    [protocol]   runs, test_fraction, val_fraction, batch, lr, epochs, patience, seed
+
+A unit of work is (noise type, noisy | tsa, run). Output: results.jsonl (one record per
+unit), summary.json (per noise type and variant: accuracy and fault-as-healthy rate as
+mean ± std over runs, curves per fault type against intensity and RFA, the confusion
+matrix compiled over runs), table.md/table.csv (noise type x noisy/TSA) and the figures
+of Figures 4.4-4.6.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, replace
+
+import numpy as np
+
+from ..data.cache import load_or_build
+from ..data.spec import DatasetSpec, dataset_preset
+from ..errors import GearlabInputError
+from ..learn.networks import NETWORKS
+from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
+from ..params import did_you_mean
+from ..runs import Event, RunDir
+from ..scenario import Key, Scenario, Table, in_range, location
+from ..signals import NOISE_KINDS
+from .dataset import DATASET_TABLE, dataset_spec, executor_for
+
+# What a study may change in the chapter-4 presets; the preset itself, the noise kind and
+# TSA are what the study varies.
+_OVERRIDES = ("model", "model_preset", "channel", "speed", "load", "faults", "teeth", "duplicates", "healthy",
+              "revolutions", "seed", "fs")
+
+TABLES = {
+    "study": Table({
+        "noises": Key(list, list(NOISE_KINDS), doc=f"noise types, each studied noisy and with TSA: "
+                                                   f"{', '.join(NOISE_KINDS)}"),
+    }),
+    "dataset": Table({
+        **{k: DATASET_TABLE.keys[k] for k in _OVERRIDES},
+        "noise": Key(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises"),
+    }),
+    "network": Table({
+        "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),
+        "dropout": Key(float, 0.1, in_range(0.0, 0.95), "dropout rate (thesis 4.2: 10 %)"),
+    }),
+    "protocol": Table({
+        "runs": Key(int, 5, in_range(1), "runs with different splits and initial weights"),
+        "test_fraction": Key(float, 0.333, in_range(0.01, 0.9), "share of each class held out for testing"),
+        "val_fraction": Key(float, 0.2, in_range(0.01, 0.9), "share of the training part held out for validation"),
+        "batch": Key(int, 256, in_range(1)),
+        "lr": Key(float, 1e-3, in_range(1e-9, 10.0), "Adam learning rate"),
+        "epochs": Key(int, 100, in_range(1), "most epochs per run"),
+        "patience": Key(int, 15, in_range(1), "stop after this many epochs without a better validation accuracy"),
+        "seed": Key(int, 0, in_range(0)),
+    }),
+}
+
+
+def preset_name(noise: str, variant: str) -> str:
+    return f"A-casing_{'TSA' if variant == 'tsa' else 'noise'}-{noise}"
+
+
+def class_sizes(spec: DatasetSpec, where: str) -> dict[str, int]:
+    """Samples per class from the spec alone, so the split is checked before anything is built."""
+    _, _, teeth = spec.check_model(where)
+    return {"healthy": spec.healthy, **{name: len(steps) * len(teeth) * spec.duplicates for name, steps in spec.faults}}
+
+
+def check(spec: dict, path) -> None:
+    """The split and the batch size against the class sizes (all the study's datasets share them)."""
+    where = location(path, "dataset")
+    sizes = class_sizes(next(iter(spec["datasets"].values()))["noisy"], where)
+    check_split(sizes, spec["protocol"], where)
+    check_batch(sizes, spec["protocol"], location(path, "protocol", "batch"))
+
+
+def build(scenario: Scenario) -> dict:
+    t = scenario.tables
+    noises = t["study"]["noises"]
+    where = location(scenario.path, "study", "noises")
+    if not noises:
+        raise GearlabInputError(f"{where}: expected a non-empty list of noise types ({', '.join(NOISE_KINDS)})")
+    for noise in noises:
+        if noise not in NOISE_KINDS:
+            raise GearlabInputError(f"{where}: unknown noise type {noise!r}{did_you_mean(str(noise), NOISE_KINDS)}; "
+                                    f"known: {', '.join(NOISE_KINDS)}")
+    if len(set(noises)) != len(noises):
+        raise GearlabInputError(f"{where}: lists a noise type twice")
+    net = t["network"]["name"]
+    if net not in NETWORKS:
+        raise GearlabInputError(f"{location(scenario.path, 'network', 'name')}: unknown network '{net}'"
+                                f"{did_you_mean(net, list(NETWORKS))}; known: {', '.join(NETWORKS)}")
+    p = t["protocol"]
+    protocol = NoiseProtocol(network=net, dropout=t["network"]["dropout"], device=t["execution"]["device"], **p)
+    spec = {"datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
+            "protocol": protocol}
+    check(spec, scenario.path)
+    return spec
+
+
+def _dataset(scenario: Scenario, noise: str, variant: str) -> DatasetSpec:
+    """The chapter-4 preset of (noise, variant) with the [dataset] overrides, through the same
+    path as a [[datasets]] entry."""
+    overrides = scenario.tables["dataset"]
+    where = location(scenario.path, "dataset")
+    name = preset_name(noise, variant)
+    user_noise = overrides["noise"] or {}
+    if "kind" in user_noise:
+        raise GearlabInputError(f"{where} key 'noise': the noise kind comes from [study] key 'noises'; "
+                                f"give only snr_db and seed")
+    preset_noise = dataset_preset(name).noise
+    entry = {k: key.default for k, key in DATASET_TABLE.keys.items()}
+    entry.update({k: overrides[k] for k in _OVERRIDES})
+    entry.update(preset=name, noise={"kind": noise, "snr_db": preset_noise.snr_db, "seed": preset_noise.seed,
+                                     **user_noise})
+    return dataset_spec(entry, where, scenario.path.parent)
+
+
+def describe(scenario: Scenario) -> str:
+    """One line for `gearlab validate` and the TUI: what the scenario will do."""
+    spec = scenario.spec
+    return (f"noise types {', '.join(spec['datasets'])}, noisy and TSA, network {spec['protocol'].network}: "
+            f"{len(units(spec))} training runs")
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: the first noise type, 4 teeth, every third intensity step, 2 duplicates,
+    as many healthy samples as fault samples, J <= 8, one run of a few short epochs."""
+
+    def shrink(spec: DatasetSpec) -> DatasetSpec:
+        faults = tuple((f, steps[1::3] or steps) for f, steps in spec.faults)
+        teeth = spec.teeth[:4] if spec.teeth is not None else (1, 5, 9, 13)
+        duplicates = min(spec.duplicates, 2)
+        n_faults = sum(len(steps) for _, steps in faults) * len(teeth) * duplicates
+        return spec.with_(faults=faults, teeth=teeth, duplicates=duplicates, healthy=min(spec.healthy, n_faults),
+                          revolutions=min(spec.revolutions, 8))
+
+    spec = scenario.spec
+    noise, variants = next(iter(spec["datasets"].items()))
+    p = spec["protocol"]
+    scenario.spec = {
+        "datasets": {noise: {v: shrink(s) for v, s in variants.items()}},
+        "protocol": replace(p, runs=1, epochs=min(p.epochs, 15), patience=min(p.patience, 5), batch=min(p.batch, 32)),
+    }
+    check(scenario.spec, scenario.path)
+
+
+def units(spec: dict) -> list[tuple[str, int, str]]:
+    """(noise, run, variant): a noise type's noisy and TSA runs alternate, so a cut-short study
+    still holds paired results."""
+    return [(noise, r, v) for noise in spec["datasets"] for r in range(spec["protocol"].runs) for v in VARIANTS]
+
+
+def unit_name(noise: str, run: int, variant: str) -> str:
+    return f"{noise}/{variant}/run{run}"
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    spec = scenario.spec
+    protocol: NoiseProtocol = spec["protocol"]
+    executor = executor_for(scenario)
+    done = {r["unit"] for r in run.records()}
+    todo = units(spec)
+    on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
+    loaded: dict[str, object] = {}
+    for i, (noise, r, variant) in enumerate(todo):
+        unit = unit_name(noise, r, variant)
+        if unit not in done:
+            wanted = spec["datasets"][noise][variant]
+            if wanted.name not in loaded:
+                loaded.clear()  # one noise type's datasets in memory at a time
+                for v, s in spec["datasets"][noise].items():
+                    loaded[s.name], _ = load_or_build(s, executor, on_event)
+            on_event(Event("log", message=f"run {unit}"))
+            record = {"unit": unit, "noise": noise, "variant": variant,
+                      **run_unit(protocol, loaded[wanted.name], r)}
+            run.append(record)
+            on_event(Event("log", message=f"{unit}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
+                                          f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
+                                          f"{record['train_seconds']:.0f} s)"))
+            on_event(Event("record", stage="runs", record=record))
+        on_event(Event("advance", stage="runs", done=i + 1, total=len(todo)))
+    summarise(scenario, run)
+
+
+def results(records: list[dict]) -> dict:
+    """{noise: {variant: aggregate over runs}}, plus the paired TSA - noisy accuracy gain."""
+    out: dict[str, dict] = {}
+    for noise in dict.fromkeys(r["noise"] for r in records):
+        mine = [r for r in records if r["noise"] == noise]
+        out[noise] = {v: aggregate([r for r in mine if r["variant"] == v])
+                      for v in VARIANTS if any(r["variant"] == v for r in mine)}
+        acc = {v: {r["run"]: r["accuracy"] for r in mine if r["variant"] == v} for v in VARIANTS}
+        paired = [acc["tsa"][k] - acc["noisy"][k] for k in sorted(set(acc["tsa"]) & set(acc["noisy"]))]
+        if paired:
+            out[noise]["tsa_gain"] = {"mean": float(np.mean(paired)),
+                                      "std": float(np.std(paired, ddof=1)) if len(paired) > 1 else 0.0,
+                                      "n": len(paired)}
+    return out
+
+
+def _cell(stats: dict | None, key: str) -> str:
+    c = (stats or {}).get(key) or {}
+    return f"{c['mean']:.1f} ± {c['std']:.1f}" if c.get("mean") is not None else ""
+
+
+def table_md(res: dict) -> str:
+    lines = ["| noise | noisy accuracy (%) | TSA accuracy (%) | TSA gain (points) | noisy fault-as-healthy (%) "
+             "| TSA fault-as-healthy (%) | runs |", "|---|---|---|---|---|---|---|"]
+    for noise, r in res.items():
+        gain = r.get("tsa_gain")
+        gain_text = f"{gain['mean']:+.1f} ± {gain['std']:.1f}" if gain else ""
+        runs = "/".join(str(r[v]["runs"]) for v in VARIANTS if v in r)
+        lines.append(f"| {noise} | {_cell(r.get('noisy'), 'accuracy')} | {_cell(r.get('tsa'), 'accuracy')} | "
+                     f"{gain_text} | "
+                     f"{_cell(r.get('noisy'), 'fault_as_healthy')} | {_cell(r.get('tsa'), 'fault_as_healthy')} | {runs} |")
+    return "\n".join(lines) + "\n"
+
+
+def table_csv(res: dict) -> str:
+    columns = [f"{v}_{m}_{s}" for v in VARIANTS for m in ("accuracy", "fault_as_healthy") for s in ("mean", "std")]
+    rows = ["noise," + ",".join(columns) + ",tsa_gain_mean,tsa_gain_std,runs"]
+    for noise, r in res.items():
+        cells = []
+        for v in VARIANTS:
+            for m in ("accuracy", "fault_as_healthy"):
+                c = r.get(v, {}).get(m) or {}
+                cells += [f"{c[s]:.4f}" if c.get(s) is not None else "" for s in ("mean", "std")]
+        gain = r.get("tsa_gain") or {}
+        cells += [f"{gain[s]:.4f}" if s in gain else "" for s in ("mean", "std")]
+        cells.append(str(min(r[v]["runs"] for v in VARIANTS if v in r)))
+        rows.append(f"{noise}," + ",".join(cells))
+    return "\n".join(rows) + "\n"
+
+
+def summarise(scenario: Scenario, run: RunDir) -> None:
+    spec = scenario.spec
+    records = run.records()
+    res = results(records)
+    summary = {
+        "kind": "noise_study",
+        "scenario": scenario.name,
+        "protocol": asdict(spec["protocol"]),
+        "datasets": {noise: {v: {"name": s.name, "key": s.key(), "spec": asdict(s)} for v, s in variants.items()}
+                     for noise, variants in spec["datasets"].items()},
+        "results": res,
+        "units": len(records),
+    }
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", table_md(res))
+    run.write_text("table.csv", table_csv(res))
+    from ..plots import noise_study_figures
+
+    noise_study_figures(run.figures, res)
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    summary = json.loads((run.path / "summary.json").read_text())
+    return ["test accuracy and fault-as-healthy rate [%], mean ± std over runs (thesis 4.3):",
+            table_md(summary["results"]).rstrip()]

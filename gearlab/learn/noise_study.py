@@ -1,0 +1,232 @@
+"""The chapter-4 protocol (thesis 4.2, 4.3): fault-type classification in noise, with and without TSA.
+
+Each dataset (a noisy one keeping the first of J noisy revolutions, or its TSA twin averaging
+all J) is a multi-class problem over healthy and the fault types (5 classes in Table 4.1).
+One run:
+
+* split the samples 66.7 / 33.3 into training and test, stratified by class, and hold out
+  20 % of the training part (again stratified) for validation;
+* train a network (dropout 0.1, batches of 256, Adam) and keep the epoch of best
+  *validation* accuracy, stopping when it has not improved for `patience` epochs;
+* only then score the kept model on the test part: overall accuracy, the 5 x 5 confusion
+  matrix, per fault type the accuracy at each intensity step (and its RFA), and the share of
+  fault samples predicted healthy (the anomaly-detector view of Figure 4.4's green curve).
+
+Run r draws its split and initial weights from (seed, r) alone, so the noisy and the TSA
+datasets of one noise type (same spec but for TSA, hence the same labels in the same order)
+are compared on the same split from the same initial weights: a paired comparison.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from ..errors import GearlabInputError
+from .networks import build_network
+from .training import fit_supervised, pick_device, predict
+
+VARIANTS = ("noisy", "tsa")
+
+
+@dataclass(frozen=True)
+class NoiseProtocol:
+    """Everything a chapter-4 run needs besides the data (defaults: thesis 4.2)."""
+
+    network: str = "fast"
+    dropout: float = 0.1
+    runs: int = 5
+    test_fraction: float = 0.333
+    val_fraction: float = 0.2
+    batch: int = 256
+    lr: float = 1e-3  # Adam with TensorFlow's defaults (Table 3.1)
+    epochs: int = 100
+    patience: int = 15
+    seed: int = 0
+    device: str = "auto"
+
+
+@dataclass(frozen=True)
+class Split:
+    """Indices into one dataset; the three parts are disjoint."""
+
+    train: np.ndarray
+    val: np.ndarray
+    test: np.ndarray
+
+
+def part_sizes(n: int, protocol: NoiseProtocol) -> tuple[int, int, int]:
+    """(train, validation, test) sizes of a class of *n* samples; each part gets at least one."""
+    n_test = max(1, round(n * protocol.test_fraction))
+    n_val = max(1, round((n - n_test) * protocol.val_fraction))
+    return n - n_test - n_val, n_val, n_test
+
+
+def check_split(class_sizes: dict[str, int], protocol: NoiseProtocol, where: str) -> None:
+    """Every class must reach the training, validation and test parts."""
+    if len(class_sizes) < 2:
+        raise GearlabInputError(f"{where}: a classification study needs healthy samples and at least one fault type")
+    for name, n in class_sizes.items():
+        if part_sizes(n, protocol)[0] < 1:
+            raise GearlabInputError(
+                f"{where}: class '{name}' has {n} samples; the train/validation/test split needs at least one "
+                f"in each part (give more samples, or a smaller test_fraction or val_fraction)"
+            )
+
+
+def check_batch(class_sizes: dict[str, int], protocol: NoiseProtocol, where: str) -> None:
+    n_train = sum(part_sizes(n, protocol)[0] for n in class_sizes.values())
+    if protocol.batch > n_train:
+        raise GearlabInputError(
+            f"{where}: batch size {protocol.batch} is larger than the training set ({n_train} samples); "
+            f"expected at most {n_train}"
+        )
+
+
+def split(label: np.ndarray, protocol: NoiseProtocol, run: int) -> Split:
+    """Stratified split of run *run*: test first, then validation from what is left, per class."""
+    rng = np.random.default_rng([protocol.seed, run])
+    parts: tuple[list, list, list] = ([], [], [])
+    for c in np.unique(label):
+        members = rng.permutation(np.flatnonzero(label == c))
+        n_train, n_val, _ = part_sizes(len(members), protocol)
+        parts[0].append(members[:n_train])
+        parts[1].append(members[n_train:n_train + n_val])
+        parts[2].append(members[n_train + n_val:])
+    return Split(*(np.sort(np.concatenate(p)) for p in parts))
+
+
+def train(protocol: NoiseProtocol, train_set: tuple[np.ndarray, np.ndarray], val_set: tuple[np.ndarray, np.ndarray],
+          n_classes: int, run: int, device: torch.device, on_epoch: Callable | None = None):
+    """The model of one run, made from the training and validation arrays only."""
+    X, y = train_set
+    seed = 1000 * protocol.seed + run
+    torch.manual_seed(seed)  # dropout masks
+    net = build_network(protocol.network, n_classes, protocol.dropout, length=X.shape[1], seed=seed).to(device)
+    history = fit_supervised(net, X, y, rng=np.random.default_rng([protocol.seed, run, 1]), device=device,
+                             epochs=protocol.epochs, batch=protocol.batch, optimizer="adam", lr=protocol.lr,
+                             val=val_set, patience=protocol.patience, on_epoch=on_epoch)
+    return net, history
+
+
+def scores(y: np.ndarray, pred: np.ndarray, intensity: np.ndarray, rfa: np.ndarray,
+           class_names: tuple[str, ...]) -> dict:
+    """Test metrics of one run. Class 0 is healthy; per fault type, counts at each intensity
+    step (so runs can be pooled or averaged later)."""
+    n = len(class_names)
+    confusion = np.zeros((n, n), dtype=np.int64)
+    np.add.at(confusion, (y, pred), 1)
+    fault = y > 0
+    by_step = {}
+    for c, name in enumerate(class_names[1:], start=1):
+        rows: dict[str, list] = {"steps": [], "rfa": [], "n": [], "correct": [], "as_healthy": []}
+        for step in np.unique(intensity[y == c]):
+            m = (y == c) & (intensity == step)
+            rows["steps"].append(int(step))
+            rows["rfa"].append(float(rfa[m].mean()))
+            rows["n"].append(int(m.sum()))
+            rows["correct"].append(int((pred[m] == c).sum()))
+            rows["as_healthy"].append(int((pred[m] == 0).sum()))
+        by_step[name] = rows
+    class_accuracy = {name: 100.0 * float(confusion[c, c] / confusion[c].sum()) if confusion[c].sum() else None
+                      for c, name in enumerate(class_names)}
+    return {
+        "accuracy": 100.0 * float((pred == y).mean()),
+        "fault_as_healthy": 100.0 * float((pred[fault] == 0).mean()) if fault.any() else None,
+        "healthy_as_fault": 100.0 * float((pred[~fault] != 0).mean()) if (~fault).any() else None,
+        "class_accuracy": class_accuracy,
+        "confusion": confusion.tolist(),
+        "by_step": by_step,
+    }
+
+
+def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | None = None) -> dict:
+    """Train and score run *run* on *dataset*."""
+    device = pick_device(protocol.device)
+    label = np.asarray(dataset.label, dtype=np.int64)
+    s = split(label, protocol, run)
+    start = time.perf_counter()
+    val_set = (dataset.X[s.val], label[s.val])
+    net, history = train(protocol, (dataset.X[s.train], label[s.train]), val_set,
+                         len(dataset.spec.class_names), run, device, on_epoch)
+    seconds = time.perf_counter() - start
+    # Only now, with the model fixed, does the test part come in.
+    pred = predict(net, dataset.X[s.test], device)
+    return {
+        "run": run,
+        "dataset": dataset.spec.name,
+        "key": dataset.key,
+        "classes": list(dataset.spec.class_names),
+        "n_train": int(len(s.train)),
+        "n_val": int(len(s.val)),
+        "n_test": int(len(s.test)),
+        "val_accuracy": 100.0 * history.val_acc[history.best_epoch],  # of the kept epoch
+        "device": str(device),
+        "best_epoch": history.best_epoch,
+        "stopped_epoch": history.stopped_epoch,
+        "train_seconds": seconds,
+        "history": {"train_loss": history.train_loss, "val_acc": history.val_acc},
+        **scores(label[s.test], pred, np.asarray(dataset.intensity)[s.test], np.asarray(dataset.rfa)[s.test],
+                 tuple(dataset.spec.class_names)),
+    }
+
+
+def _mean_std(values: list[float]) -> dict:
+    v = np.asarray([x for x in values if x is not None], dtype=float)
+    if not len(v):
+        return {"mean": None, "std": None, "n": 0}
+    return {"mean": float(v.mean()), "std": float(v.std(ddof=1)) if len(v) > 1 else 0.0, "n": int(len(v))}
+
+
+def _run_curves(record: dict) -> dict[str, dict[int, tuple]]:
+    """{fault type or 'all': {step: (RFA, accuracy %, predicted-healthy %)}} of one run;
+    'all' pools the fault types at each step."""
+    out, pooled = {}, {}
+    for f in record["classes"][1:]:
+        rows = record["by_step"][f]
+        out[f] = {}
+        for s, a, n, ok, h in zip(rows["steps"], rows["rfa"], rows["n"], rows["correct"], rows["as_healthy"]):
+            out[f][s] = (a, 100.0 * ok / n, 100.0 * h / n)
+            p = pooled.setdefault(s, [0, 0, 0])
+            p[0], p[1], p[2] = p[0] + n, p[1] + ok, p[2] + h
+    out["all"] = {s: (None, 100.0 * ok / n, 100.0 * h / n) for s, (n, ok, h) in pooled.items()}
+    return out
+
+
+def aggregate(records: list[dict]) -> dict:
+    """Mean ± std over the runs of one dataset (the records of one noise type and variant).
+
+    Curves (Figure 4.4) hold, per fault type and for all fault types pooled ('all', the black
+    curve), the accuracy at each intensity step and the share of those fault samples predicted
+    healthy (the green curve); each a per-run value averaged over the runs.
+    """
+    classes = records[0]["classes"]
+    runs = [_run_curves(r) for r in records]
+    curves = {}
+    for name in runs[0]:
+        steps = sorted({s for c in runs for s in c[name]})
+        values = [[c[name][s] for c in runs if s in c[name]] for s in steps]
+        acc = [_mean_std([v[1] for v in vs]) for vs in values]
+        healthy = [_mean_std([v[2] for v in vs]) for vs in values]
+        curves[name] = {
+            "steps": steps,
+            "rfa": [vs[0][0] for vs in values],
+            "accuracy_mean": [x["mean"] for x in acc],
+            "accuracy_std": [x["std"] for x in acc],
+            "as_healthy_mean": [x["mean"] for x in healthy],
+            "as_healthy_std": [x["std"] for x in healthy],
+        }
+    return {
+        "runs": len(records),
+        "accuracy": _mean_std([r["accuracy"] for r in records]),
+        "fault_as_healthy": _mean_std([r["fault_as_healthy"] for r in records]),
+        "healthy_as_fault": _mean_std([r["healthy_as_fault"] for r in records]),
+        "class_accuracy": {c: _mean_std([r["class_accuracy"][c] for r in records]) for c in classes},
+        "classes": classes,
+        "confusion": np.sum([r["confusion"] for r in records], axis=0).tolist(),  # Figure 4.6: runs compiled
+        "curves": curves,
+    }

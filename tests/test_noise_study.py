@@ -1,0 +1,351 @@
+"""The chapter-4 protocol and the `noise_study` scenario kind (thesis 4.2-4.4; SPEC sections 6, 7):
+stratified splits that keep test samples out of training and model selection, the records
+and the summary, resume, quick, and bad input.
+
+Networks train on synthetic datasets (short signals whose class shows as a bump that grows
+with the intensity step, buried in less noise for the TSA variant), so the file runs in
+seconds; the kind's dataset builder is replaced by one that makes them from the spec."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gearlab.kinds.noise_study as kind
+import gearlab.learn.noise_study as ns
+from gearlab.data.spec import Dataset, dataset_preset
+from gearlab.errors import GearlabInputError
+from gearlab.learn.noise_study import NoiseProtocol, aggregate, part_sizes, run_unit, scores, split
+from gearlab.runs import RunDir
+from gearlab.scenario import load_scenario
+
+from conftest import ROOT
+
+LENGTH = 128  # samples per synthetic revolution: the fast network accepts any length >= 64
+
+
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+
+
+def synthetic(spec) -> Dataset:
+    """A dataset laid out as the builder lays it out (healthy first, then fault x step x tooth x
+    duplicate); the fault class shows as a bump whose height grows with the step."""
+    teeth = spec.teeth or tuple(range(1, 17))
+    label, intensity, tooth = [0] * spec.healthy, [0] * spec.healthy, [0] * spec.healthy
+    for c, (_, steps) in enumerate(spec.faults, start=1):
+        for step in steps:
+            for n in teeth:
+                label += [c] * spec.duplicates
+                intensity += [step] * spec.duplicates
+                tooth += [n] * spec.duplicates
+    label, intensity = np.array(label), np.array(intensity)
+    std = 0.3 if spec.tsa else 1.0
+    rng = np.random.default_rng(len(label))
+    X = (std * rng.standard_normal((len(label), LENGTH))).astype(np.float32)
+    for i, (c, step) in enumerate(zip(label, intensity)):
+        if c:
+            X[i, 16 * c:16 * c + 12] += 3.0 * step / 20
+    n = len(label)
+    return Dataset(spec=spec, X=X, label=label.astype(np.int8), fault=(label > 0).astype(np.int8),
+                   intensity=intensity.astype(np.int8), tooth=np.array(tooth, dtype=np.int8),
+                   rfa=(intensity / 40).astype(np.float32), revolution=np.zeros(n, dtype=np.int16),
+                   domain=np.zeros(n, dtype=np.int8), domains=(spec.name,))
+
+
+def small_spec(tsa: bool = False, **changes):
+    few = dict(faults=tuple((f, (5, 10, 15, 20)) for f in ("crack", "chip", "spall", "pit")), teeth=(1, 2),
+               duplicates=3, healthy=96)
+    return dataset_preset("A-casing_TSA-gaussian" if tsa else "A-casing_noise-gaussian").with_(**{**few, **changes})
+
+
+@pytest.fixture
+def fake_builder(monkeypatch):
+    """Replace the kind's dataset loader by the synthetic one; list the datasets loaded."""
+    made = []
+
+    def load_or_build(spec, executor=None, on_event=None):
+        made.append(spec.name)
+        return synthetic(spec), False
+
+    monkeypatch.setattr(kind, "load_or_build", load_or_build)
+    return made
+
+
+FAST = NoiseProtocol(epochs=6, patience=6, batch=32, device="cpu")
+
+
+# --- the protocol --------------------------------------------------------------------------------
+
+
+def test_split_is_stratified_disjoint_and_complete():
+    label = np.repeat([0, 1, 2, 3, 4], [300, 90, 91, 92, 7])
+    protocol = NoiseProtocol()
+    s = split(label, protocol, run=0)
+    parts = [s.train, s.val, s.test]
+    assert sum(len(p) for p in parts) == len(label)
+    assert len(np.unique(np.concatenate(parts))) == len(label)
+    for c, n in zip(range(5), (300, 90, 91, 92, 7)):
+        assert [int((label[p] == c).sum()) for p in parts] == list(part_sizes(n, protocol))
+    n_train, n_val, n_test = part_sizes(1600, protocol)  # a fault class of Table 4.1
+    assert n_test == 533 and n_val == round(0.2 * (1600 - 533)) and n_train + n_val + n_test == 1600
+
+
+def test_split_depends_on_seed_and_run_only():
+    label = np.repeat([0, 1, 2], [50, 20, 20])
+    a, b = split(label, NoiseProtocol(), 0), split(label.copy(), NoiseProtocol(lr=0.1), 0)
+    assert all(np.array_equal(x, y) for x, y in zip((a.train, a.val, a.test), (b.train, b.val, b.test)))
+    assert not np.array_equal(a.test, split(label, NoiseProtocol(), 1).test)
+    assert not np.array_equal(a.test, split(label, NoiseProtocol(seed=3), 0).test)
+
+
+def test_test_samples_never_reach_training_or_model_selection(monkeypatch):
+    data = synthetic(small_spec())
+    data.X[:, 0] = np.arange(len(data.X))  # each row carries its own index
+    seen = []
+    real = ns.fit_supervised
+
+    def spy(net, X, y, *, val, **kw):
+        seen.append((X[:, 0].astype(int), val[0][:, 0].astype(int)))
+        return real(net, X, y, val=val, **kw)
+
+    monkeypatch.setattr(ns, "fit_supervised", spy)
+    record = run_unit(FAST, data, run=1)
+    test = split(np.asarray(data.label, dtype=np.int64), FAST, 1).test
+    (train_rows, val_rows), = seen
+    assert not set(test) & set(train_rows) and not set(test) & set(val_rows)
+    assert not set(train_rows) & set(val_rows)
+    assert record["n_test"] == len(test) and record["n_train"] == len(train_rows) and record["n_val"] == len(val_rows)
+
+
+def test_run_unit_record_learns_and_is_consistent():
+    data = synthetic(small_spec(tsa=True))
+    r = run_unit(FAST, data, run=0)
+    for key in ("accuracy", "fault_as_healthy", "healthy_as_fault", "class_accuracy", "confusion", "by_step",
+                "val_accuracy", "best_epoch", "stopped_epoch", "history", "classes", "key", "train_seconds"):
+        assert key in r, key
+    cm = np.array(r["confusion"])
+    assert cm.shape == (5, 5) and cm.sum() == r["n_test"]
+    assert r["accuracy"] == pytest.approx(100 * np.trace(cm) / cm.sum())
+    assert r["fault_as_healthy"] == pytest.approx(100 * cm[1:, 0].sum() / cm[1:].sum())
+    for c, name in enumerate(r["classes"][1:], start=1):
+        rows = r["by_step"][name]
+        assert rows["steps"] == [5, 10, 15, 20]
+        assert sum(rows["n"]) == cm[c].sum() and sum(rows["correct"]) == cm[c, c]
+        assert sum(rows["as_healthy"]) == cm[c, 0]
+        assert rows["rfa"] == pytest.approx([s / 40 for s in rows["steps"]])
+    assert r["accuracy"] > 70  # the synthetic TSA set is easy
+    again = run_unit(FAST, data, run=0)
+    assert again["confusion"] == r["confusion"]  # deterministic on the CPU
+
+
+def test_scores_by_hand():
+    y = np.array([0, 0, 1, 1, 1, 2, 2])
+    pred = np.array([0, 1, 1, 0, 0, 2, 0])
+    intensity = np.array([0, 0, 5, 5, 20, 5, 20])
+    s = scores(y, pred, intensity, intensity / 100.0, ("healthy", "crack", "chip"))
+    assert s["accuracy"] == pytest.approx(100 * 3 / 7)
+    assert s["fault_as_healthy"] == pytest.approx(100 * 3 / 5)
+    assert s["healthy_as_fault"] == pytest.approx(50)
+    assert s["confusion"] == [[1, 1, 0], [2, 1, 0], [1, 0, 1]]
+    assert s["by_step"]["crack"] == {"steps": [5, 20], "rfa": [0.05, 0.2], "n": [2, 1], "correct": [1, 0],
+                                     "as_healthy": [1, 1]}
+    assert s["class_accuracy"] == pytest.approx({"healthy": 50, "crack": 100 / 3, "chip": 50})
+
+
+def test_aggregate_over_runs():
+    def record(acc, correct):
+        return {"classes": ["healthy", "crack"], "accuracy": acc, "fault_as_healthy": 100 - acc,
+                "healthy_as_fault": 0.0, "class_accuracy": {"healthy": 100.0, "crack": acc},
+                "confusion": [[4, 0], [4 - correct, correct]],
+                "by_step": {"crack": {"steps": [1, 20], "rfa": [0.0, 1.0], "n": [2, 2], "correct": [0, correct],
+                                      "as_healthy": [2, 2 - correct]}}}
+
+    a = aggregate([record(50.0, 1), record(100.0, 2)])
+    assert a["runs"] == 2
+    assert a["accuracy"]["mean"] == 75.0 and a["accuracy"]["std"] == pytest.approx(np.std([50, 100], ddof=1))
+    assert a["confusion"] == [[8, 0], [5, 3]]
+    crack = a["curves"]["crack"]
+    assert crack["steps"] == [1, 20] and crack["rfa"] == [0.0, 1.0]
+    assert crack["accuracy_mean"] == [0.0, 75.0] and crack["as_healthy_mean"] == [100.0, 25.0]
+    assert a["curves"]["all"]["accuracy_mean"] == [0.0, 75.0]
+
+
+# --- the scenario kind ---------------------------------------------------------------------------
+
+TINY = """
+[scenario]
+name = "ch4_tiny"
+kind = "noise_study"
+
+[study]
+noises = {noises}
+
+[dataset]
+faults = {faults}
+teeth = [1, 2]
+duplicates = 3
+healthy = 96
+revolutions = 4
+
+[network]
+name = "{network}"
+
+[protocol]
+runs = {runs}
+batch = {batch}
+epochs = 4
+patience = 4
+
+[execution]
+device = "cpu"
+"""
+
+
+FOUR = "{ crack = [5, 10, 15, 20], chip = [5, 10, 15, 20], spall = [5, 10, 15, 20], pit = [5, 10, 15, 20] }"
+
+
+def tiny(noises='["gaussian", "student_t"]', network="fast", runs=2, batch=32, faults=FOUR) -> str:
+    return TINY.format(noises=noises, network=network, runs=runs, batch=batch, faults=faults)
+
+
+def run_dir(out: str) -> Path:
+    return Path(out.strip().splitlines()[-1].split(": ", 1)[1])
+
+
+def test_run_writes_records_summary_tables_and_figures(cli, write_scenario, tmp_path, fake_builder):
+    code, out, err = cli("run", write_scenario(tiny()), "--out", tmp_path / "runs")
+    assert code == 0, err
+    run = run_dir(out)
+    records = RunDir(run).records()
+    assert [r["unit"] for r in records] == [f"{n}/{v}/run{r}" for n in ("gaussian", "student_t") for r in (0, 1)
+                                            for v in ("noisy", "tsa")]
+    assert fake_builder == ["A-casing_noise-gaussian", "A-casing_TSA-gaussian", "A-casing_noise-student_t",
+                            "A-casing_TSA-student_t"]  # each once
+    assert {r["dataset"] for r in records} == {"A-casing_noise-gaussian", "A-casing_TSA-gaussian",
+                                               "A-casing_noise-student_t", "A-casing_TSA-student_t"}
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["kind"] == "noise_study" and summary["units"] == 8
+    assert summary["datasets"]["student_t"]["tsa"]["spec"]["noise"]["kind"] == "student_t"
+    assert summary["datasets"]["student_t"]["tsa"]["spec"]["tsa"] is True
+    assert summary["datasets"]["gaussian"]["noisy"]["spec"]["teeth"] == [1, 2]
+    for noise in ("gaussian", "student_t"):
+        res = summary["results"][noise]
+        for v in ("noisy", "tsa"):
+            assert res[v]["runs"] == 2
+            assert {"mean", "std"} <= set(res[v]["accuracy"]) and {"mean", "std"} <= set(res[v]["fault_as_healthy"])
+            assert set(res[v]["curves"]) == {"crack", "chip", "spall", "pit", "all"}
+            assert res[v]["curves"]["pit"]["steps"] == [5, 10, 15, 20]
+            assert np.array(res[v]["confusion"]).shape == (5, 5)
+        assert res["tsa_gain"]["n"] == 2
+        assert res["tsa"]["accuracy"]["mean"] > res["noisy"]["accuracy"]["mean"]  # less noise in the synthetic TSA set
+    table = (run / "table.md").read_text()
+    assert "| gaussian |" in table and "| student_t |" in table and "TSA accuracy" in table
+    csv = (run / "table.csv").read_text().splitlines()
+    assert csv[0].startswith("noise,noisy_accuracy_mean,noisy_accuracy_std") and len(csv) == 3
+    for name in ("accuracy_vs_intensity.png", "accuracy_vs_rfa.png", "confusion.png"):
+        assert (run / "figures" / name).stat().st_size > 10_000
+    assert "data:image/png;base64," in (run / "report.html").read_text()
+    assert "TSA accuracy" in out  # summary_lines
+
+
+def test_resume_skips_finished_units(cli, write_scenario, tmp_path, fake_builder, monkeypatch):
+    code, out, err = cli("run", write_scenario(tiny(noises='["laplace"]')), "--out", tmp_path / "runs")
+    assert code == 0, err
+    run = run_dir(out)
+    records = RunDir(run).records()
+    # a kill during the third unit: two records and a half-written line
+    lines = (run / "results.jsonl").read_text().splitlines(keepends=True)
+    (run / "results.jsonl").write_text("".join(lines[:2]) + '{"unit": "laplace/no')
+    trained = []
+    real = kind.run_unit
+
+    def counting(protocol, dataset, r, *args):
+        trained.append((dataset.spec.name, r))
+        return real(protocol, dataset, r, *args)
+
+    monkeypatch.setattr(kind, "run_unit", counting)
+    fake_builder.clear()
+    code, out, err = cli("run", "--resume", run)
+    assert code == 0, err
+    assert trained == [("A-casing_noise-laplace", 1), ("A-casing_TSA-laplace", 1)]
+    again = RunDir(run).records()
+    assert [r["unit"] for r in again] == [r["unit"] for r in records]
+    assert again[:2] == records[:2]
+    drop = ("train_seconds",)
+    assert [{k: v for k, v in r.items() if k not in drop} for r in again[2:]] == \
+           [{k: v for k, v in r.items() if k not in drop} for r in records[2:]]  # same seeds, same results
+    trained.clear()
+    fake_builder.clear()
+    assert cli("run", "--resume", run)[0] == 0 and trained == [] and fake_builder == []  # nothing left to do
+    assert json.loads((run / "summary.json").read_text())["results"]["laplace"]["tsa"]["runs"] == 2
+
+
+def test_quick_shrinks_the_study():
+    scenario = load_scenario(ROOT / "scenarios" / "ch4_noise.toml")
+    kind.quick(scenario)
+    assert list(scenario.spec["datasets"]) == ["gaussian"]
+    protocol = scenario.spec["protocol"]
+    assert protocol.runs == 1 and protocol.epochs <= 15
+    noisy, tsa = scenario.spec["datasets"]["gaussian"]["noisy"], scenario.spec["datasets"]["gaussian"]["tsa"]
+    assert noisy.with_(tsa=True, name=tsa.name, domain=tsa.domain) == tsa
+    sizes = kind.class_sizes(noisy, "")
+    assert sum(sizes.values()) <= 500 and sizes["healthy"] == sum(sizes.values()) // 2
+
+
+def test_shipped_scenario_is_table_4_1(cli):
+    code, out, err = cli("validate", ROOT / "scenarios" / "ch4_noise.toml")
+    assert code == 0, err
+    scenario = load_scenario(ROOT / "scenarios" / "ch4_noise.toml")
+    assert list(scenario.spec["datasets"]) == ["gaussian", "laplace", "student_t"]
+    for noise, variants in scenario.spec["datasets"].items():
+        assert variants["noisy"] == dataset_preset(f"A-casing_noise-{noise}")
+        assert variants["tsa"] == dataset_preset(f"A-casing_TSA-{noise}")
+        assert kind.class_sizes(variants["tsa"], "") == {"healthy": 6400, "crack": 1600, "chip": 1600,
+                                                          "spall": 1600, "pit": 1600}
+    p = scenario.spec["protocol"]
+    assert (p.runs, p.batch, p.dropout, p.test_fraction, p.val_fraction) == (5, 256, 0.1, 0.333, 0.2)
+
+
+@pytest.mark.parametrize(
+    "text, where, message",
+    [
+        (tiny(noises='["gaussian", "pink"]'), "[study] key 'noises'", "unknown noise type 'pink'"),
+        (tiny(noises='["gausian"]'), "[study] key 'noises'", "did you mean 'gaussian'"),
+        (tiny(noises="[]"), "[study] key 'noises'", "non-empty"),
+        (tiny(network="cnn4"), "[network] key 'name'", "did you mean 'cnn3'"),
+        (tiny(batch=4096), "[protocol] key 'batch'", "larger than the training set"),
+        (tiny().replace("epochs = 4", "epoch = 4"), "[protocol] key 'epoch'", "did you mean 'epochs'"),
+        (tiny().replace("runs = 2", "runs = 0"), "[protocol] key 'runs'", "outside"),
+        (tiny().replace("teeth = [1, 2]", "teeth = [1, 2]\nnoise = { kind = 'laplace', snr_db = 0 }"),
+         "[dataset] key 'noise'", "the noise kind comes from [study]"),
+        (tiny().replace("duplicates = 3", "duplicates = 3\npreset = 'A-casing'"), "[dataset] key 'preset'",
+         "unknown key"),
+        (tiny(faults="{ crack = [5, 10], pit = [20] }").replace("duplicates = 3", "duplicates = 1"), "[dataset]",
+         "class 'pit' has 2 samples"),
+        (tiny() + "\n[studies]\n", "", "unknown table [studies]"),
+    ],
+)
+def test_bad_input_is_one_line_naming_file_table_key(cli, write_scenario, text, where, message):
+    path = write_scenario(text)
+    code, out, err = cli("validate", path)
+    assert code == 2, out
+    assert len(err.strip().splitlines()) == 1, err
+    assert str(path) in err and where in err and message in err, err
+    with pytest.raises(GearlabInputError):
+        load_scenario(path)
+
+
+@pytest.mark.slow
+def test_quick_run_of_the_shipped_scenario_builds_real_datasets(cli, tmp_path):
+    code, out, err = cli("run", ROOT / "scenarios" / "ch4_noise.toml", "--quick", "--out", tmp_path)
+    assert code == 0, err
+    summary = json.loads((run_dir(out) / "summary.json").read_text())
+    assert set(summary["results"]["gaussian"]) >= {"noisy", "tsa", "tsa_gain"}
