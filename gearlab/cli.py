@@ -233,9 +233,9 @@ def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file")
 
 
 def describe_spec(s) -> str:
-    spec = s.spec
-    cases = getattr(spec, "cases", None)
-    return f"{len(cases)} cases" if cases is not None else ""
+    from .kinds import KINDS
+
+    return KINDS[s.kind].describe(s)
 
 
 @app.command()

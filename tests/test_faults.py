@@ -6,9 +6,7 @@ import numpy as np
 import pytest
 
 from gearlab.errors import GearlabInputError
-from gearlab.physics.presets import gear_pair
-from gearlab.physics.stiffness import MeshStiffnessModel, contact_geometry, tooth_pair_compliances
-from gearlab.registry import get_registry
+from gearlab.physics.stiffness import contact_geometry, tooth_pair_compliances
 from gearlab_plugins.faults.pit import draw_pits
 
 PRESETS = ["luo2019", "meng2020"]

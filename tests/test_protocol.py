@@ -24,13 +24,7 @@ from gearlab.runs import RunDir, run_scenario
 from gearlab.scenario import load_scenario
 
 
-@pytest.fixture(autouse=True, scope="module")
-def one_thread():
-    # Tiny networks gain nothing from threads, and threads fighting over a busy CPU cost seconds.
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 def synthetic(faults: int, healthy: int, length: int = 256, seed: int = 0, offset: float = 0.0) -> Dataset:

@@ -5,9 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from gearlab.physics.presets import gear_pair
 from gearlab.physics.stiffness import MeshStiffnessModel, StiffnessOptions, mesh_stiffness
-from gearlab.registry import get_registry
 
 PRESETS = ["luo2019", "meng2020"]
 

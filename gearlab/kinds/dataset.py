@@ -135,6 +135,11 @@ def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
     return specs
 
 
+def describe(scenario: Scenario) -> str:
+    """One line for `gearlab validate` and the TUI: what the scenario will do."""
+    return f"{len(scenario.spec)} dataset(s): " + ", ".join(s.name for s in scenario.spec)
+
+
 def quick(scenario: Scenario) -> None:
     """Smoke run: two teeth, the top intensity of each fault, a few healthy samples, J <= 4."""
     scenario.spec = [

@@ -105,6 +105,11 @@ def build(scenario: Scenario) -> Spec:
     return Spec(pair, options, st["points"], cases, list(sweep["faults"]), sweep["tooth"])
 
 
+def describe(scenario: Scenario) -> str:
+    """One line for `gearlab validate` and the TUI: what the scenario will do."""
+    return f"{len(scenario.spec.cases)} TVMS cases"
+
+
 def quick(scenario: Scenario) -> None:
     """Smoke run: three steps of each ladder (healthy, middle, worst)."""
     spec = scenario.spec

@@ -122,6 +122,14 @@ def planned_counts(spec, where: str) -> Counts | None:
     return Counts(spec.name, POINTS, spec.healthy, faults)
 
 
+def describe(scenario: Scenario) -> str:
+    """One line for `gearlab validate` and the TUI: what the scenario will do."""
+    spec = scenario.spec
+    p: Protocol = spec["protocol"]
+    return (f"{spec['source'].name} -> {spec['target'].name}, network {p.network}, {len(p.methods)} methods x "
+            f"{len(p.ks)} k x {p.repetitions} repetitions = {len(units(p))} training runs")
+
+
 def quick(scenario: Scenario) -> None:
     """Smoke run: 2 repetitions, k in {0, 4}, short training."""
     p = scenario.spec["protocol"]
