@@ -144,19 +144,21 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
     """Figures 5.5/5.6 (accuracy vs k), 5.7 (training curves), 5.8 (confusion), 5.9 (latent maps)."""
     figures = Path(run_path) / "figures"
     # accuracy against k with one-standard-deviation bands
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for label, per_k in table.items():
+    fig, ax = plt.subplots(figsize=(10, 4.5), layout="constrained")
+    colours = plt.get_cmap("tab20").colors  # one colour per method, for up to 20 methods
+    for i, (label, per_k) in enumerate(table.items()):
         xs = [k for k in ks if str(k) in per_k]
         mean = np.array([per_k[str(k)]["mean"] for k in xs])
         std = np.array([per_k[str(k)]["std"] for k in xs])
-        style = "-" if "(supervised" in label else "--"
-        line, = ax.plot(xs, mean, style, marker="o", ms=3, label=label)
+        style = "-" if "(supervised" in label else "--"  # as Figures 5.5/5.6
+        line, = ax.plot(xs, mean, style, marker="o", ms=3, label=label, color=colours[i % len(colours)])
         ax.fill_between(xs, mean - std, mean + std, color=line.get_color(), alpha=0.15)
+    ax.set_xticks(list(ks))
     ax.set_xlabel("fault samples in the target training set (k)")
     ax.set_ylabel("target test accuracy (%)")
     ax.set_ylim(0, 102)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     save(fig, figures / "accuracy_vs_k.png")
 
     # training curves of the first repetition at the middle k (Figure 5.7)
