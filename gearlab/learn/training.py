@@ -109,8 +109,9 @@ def fit_supervised(
     freeze_norm: bool = False,
     on_epoch: Callable[[int, History], None] | None = None,
 ) -> History:
-    """Cross-entropy training (*freeze_norm*: see train_mode); with *val*, keep the epoch of best validation accuracy and stop
-    after *patience* epochs without improvement (Table 5.3: 'validation accuracy maximum')."""
+    """Cross-entropy training; with *val*, keep the epoch of best validation accuracy and stop
+    after *patience* epochs without improvement (Table 5.3: 'validation accuracy maximum').
+    *freeze_norm*: see train_mode."""
     if batch > len(X):
         raise GearlabInputError(f"batch size {batch} is larger than the training set ({len(X)} samples)")
     net.to(device)
@@ -168,9 +169,8 @@ def fit_adaptation(
     is stretched or shrunk to end at *min_epochs* (500 by default); after it
     training stops when the source validation accuracy falls clearly below its best or the
     domain discrepancy (between the two *training* sets, averaged over the epoch's batches)
-    has stopped moving. The kept model
-    is the post-ramp epoch with the best source validation accuracy, ties broken by the
-    lower discrepancy.
+    has stopped moving. The kept model is the post-ramp epoch with the best source validation
+    accuracy, ties broken by the lower discrepancy.
     """
     Xs, ys = source
     Xt, yt = target
