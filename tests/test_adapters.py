@@ -1,6 +1,8 @@
 """Adapter contract and shared losses against thesis 5.1-5.3 and Table 5.3."""
 
 import importlib
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -9,14 +11,11 @@ import torch.nn.functional as F
 from torch import nn
 
 from gearlab.errors import GearlabInputError
-from gearlab.learn.adapters import (
-    SUPERVISIONS,
-    TRAIN_ON,
-    Adapter,
+from gearlab.learn.adapters import SUPERVISIONS, TRAIN_ON, Adapter, lambda_schedule
+from gearlab.learn.losses import (
     GradientReversal,
     coral_loss,
     grad_reverse,
-    lambda_schedule,
     median_distance,
     mmd2,
 )
@@ -336,3 +335,25 @@ def test_finetune_variants():
 def test_unknown_adapter_parameter():
     with pytest.raises(GearlabInputError, match="did you mean 'bandwidth_scale'"):
         adapter("mmd").resolve({"bandwith_scale": 2})
+
+
+# ----------------------------------------------------------------------------- startup
+
+
+def test_registry_loads_without_torch():
+    """Every gearlab command loads the registry, which imports every plugin module; torch
+    (seconds to import) must wait until a network or a loss is actually needed."""
+    code = (
+        "import sys; from gearlab.registry import get_registry; r = get_registry(); "
+        "assert 'torch' not in sys.modules, sorted(m for m in sys.modules if m.startswith('torch'))[:5]; "
+        "assert not r.problems, r.problems; "
+        "assert {'mmd', 'dann', 'coral', 'finetune', 'source_only', 'target_only'} <= set(r.names('adapter'))"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr
+
+
+def test_contract_module_has_no_torch():
+    code = "import sys, gearlab.learn.adapters, gearlab.learn; assert 'torch' not in sys.modules"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr

@@ -1,4 +1,4 @@
-"""The adapter contract and the losses shared by the domain-adaptation methods (thesis ch. 5).
+"""The adapter contract of the domain-adaptation methods (thesis ch. 5).
 
 An adapter plugin is an :class:`Adapter` registered through the ``gearlab`` entry-point
 group (hook ``gearlab_adapters``). The trainer asks it for
@@ -20,17 +20,23 @@ defaults) for the uncalibrated baselines and "sgd" (lr 0.003) for the calibrated
 
 Every method taking ``params`` accepts ``None`` (the schema defaults) or a mapping as
 returned by :meth:`Adapter.resolve`.
+
+This module does not import torch: the registry imports every adapter plugin on every
+``gearlab`` command, and torch alone takes seconds to import. The shared torch losses
+(MMD², CORAL, gradient reversal) live in :mod:`gearlab.learn.losses`; the base class and
+the plugins import torch inside the methods that use it, which only run while training.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping, Sequence
-
-import torch
-from torch import nn
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from gearlab.params import Param, resolve_params
+
+if TYPE_CHECKING:  # for the annotations only; see the module docstring
+    import torch
+    from torch import nn
 
 SUPERVISIONS = ("unsupervised", "supervised")
 TRAIN_ON = ("source", "target", "joint")
@@ -46,8 +52,6 @@ SCHEDULE_PARAMS = (
     Param("lambda_max", "", LAMBDA_MAX, 0.0, 10.0, "largest domain-loss weight λ (Table 5.3)"),
 )
 
-MMD_SCALES = (0.25, 0.5, 1.0, 2.0, 4.0)  # multiples of the median pairwise distance
-
 
 # ----------------------------------------------------------------------------- schedule
 
@@ -59,119 +63,6 @@ def lambda_schedule(
     if epoch < 0:
         raise ValueError(f"epoch must be >= 0, got {epoch}")
     return float(min(maximum, round(step * (int(epoch) // int(every)), 12)))
-
-
-# ----------------------------------------------------------------------------- losses
-
-
-def _flat(x: torch.Tensor) -> torch.Tensor:
-    return x.reshape(x.shape[0], -1)
-
-
-def pairwise_sq_dists(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-    """Squared Euclidean distances between the rows of *a* (M, D) and *b* (N, D): (M, N).
-
-    Written out (not ``torch.cdist``) so that the gradient stays finite at zero distance.
-    """
-    d = (a * a).sum(1, keepdim=True) + (b * b).sum(1).unsqueeze(0) - 2.0 * a @ b.T
-    return d.clamp_min(0.0)
-
-
-def _median_of(d_xx: torch.Tensor, d_yy: torch.Tensor, d_xy: torch.Tensor) -> float:
-    """Median of the pooled pairwise distances, given the squared-distance blocks; 1 if undefined."""
-    with torch.no_grad():
-        m, n = d_xx.shape[0], d_yy.shape[0]
-        iu_x = torch.triu_indices(m, m, offset=1, device=d_xx.device)
-        iu_y = torch.triu_indices(n, n, offset=1, device=d_yy.device)
-        pooled = torch.cat([d_xx[iu_x[0], iu_x[1]], d_yy[iu_y[0], iu_y[1]], d_xy.reshape(-1)])
-        if pooled.numel() == 0:
-            return 1.0
-        median = float(pooled.median().sqrt())
-    return median if median > 0.0 and math.isfinite(median) else 1.0
-
-
-def median_distance(x: torch.Tensor, y: torch.Tensor) -> float:
-    """Median pairwise distance within the pooled sample x ∪ y (the median heuristic); 1 if undefined."""
-    x, y = _flat(x).detach(), _flat(y).detach()
-    return _median_of(pairwise_sq_dists(x, x), pairwise_sq_dists(y, y), pairwise_sq_dists(x, y))
-
-
-def mmd2(
-    x: torch.Tensor,
-    y: torch.Tensor,
-    bandwidths: float | Sequence[float] | None = None,
-    scale: float = 1.0,
-) -> torch.Tensor:
-    """Biased squared MMD between samples *x* (M, D) and *y* (N, D), thesis eq. 5.9.
-
-    The kernel is Gaussian, k(a, b) = exp(-|a - b|² / (2σ²)), summed over the bandwidths σ
-    (a multi-bandwidth kernel is still characteristic). By default σ = *scale* × the median
-    pairwise distance of the pooled sample × (0.25, 0.5, 1, 2, 4); the bandwidths carry no
-    gradient. M and N may differ (eq. 5.9); with M = N this is eq. 5.10.
-    """
-    x, y = _flat(x), _flat(y)
-    if x.shape[0] == 0 or y.shape[0] == 0:
-        raise ValueError("mmd2 needs at least one sample from each domain")
-    d_xx, d_yy, d_xy = pairwise_sq_dists(x, x), pairwise_sq_dists(y, y), pairwise_sq_dists(x, y)
-    if bandwidths is None:
-        median = _median_of(d_xx, d_yy, d_xy)
-        sigmas = [scale * median * s for s in MMD_SCALES]
-    elif isinstance(bandwidths, (int, float)):
-        sigmas = [float(bandwidths)]
-    else:
-        sigmas = [float(s) for s in bandwidths]
-    if not sigmas or min(sigmas) <= 0.0:
-        raise ValueError(f"bandwidths must be positive, got {sigmas}")
-    total = x.new_zeros(())
-    for sigma in sigmas:
-        gamma = 1.0 / (2.0 * sigma * sigma)
-        total = total + torch.exp(-gamma * d_xx).mean() + torch.exp(-gamma * d_yy).mean() - 2.0 * torch.exp(-gamma * d_xy).mean()
-    return total
-
-
-def coral_loss(x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
-    """CORAL loss (Sun & Saenko 2016): |C_x - C_y|²_F / (4 d²) with unbiased covariances.
-
-    For a wide latent space (d larger than the batches, e.g. cnn3's 31 872 features) the
-    d × d covariances are never formed: the Frobenius norms are computed from the Gram
-    matrices of the centred batches, |XᵀX|² = |XXᵀ|² and tr(XᵀX YᵀY) = |XYᵀ|². Computed
-    in float64, returned in the input's dtype.
-    """
-    x, y = _flat(x), _flat(y)
-    m, n, d = x.shape[0], y.shape[0], x.shape[1]
-    if m < 2 or n < 2:
-        raise ValueError("coral_loss needs at least two samples from each domain")
-    if y.shape[1] != d:
-        raise ValueError(f"coral_loss: feature dimensions differ ({d} vs {y.shape[1]})")
-    xc = (x - x.mean(0)).double()
-    yc = (y - y.mean(0)).double()
-    if d <= max(m, n):
-        diff = xc.T @ xc / (m - 1) - yc.T @ yc / (n - 1)
-        frob2 = (diff * diff).sum()
-    else:
-        frob2 = (
-            (xc @ xc.T).pow(2).sum() / (m - 1) ** 2
-            + (yc @ yc.T).pow(2).sum() / (n - 1) ** 2
-            - 2.0 * (xc @ yc.T).pow(2).sum() / ((m - 1) * (n - 1))
-        ).clamp_min(0.0)
-    return (frob2 / (4.0 * d * d)).to(x.dtype)
-
-
-class GradientReversal(torch.autograd.Function):
-    """Identity forward; gradient multiplied by -coeff backward (Ganin & Lempitsky 2015)."""
-
-    @staticmethod
-    def forward(ctx, x: torch.Tensor, coeff: float = 1.0) -> torch.Tensor:
-        ctx.coeff = float(coeff)
-        return x.view_as(x)
-
-    @staticmethod
-    def backward(ctx, grad: torch.Tensor):
-        return -ctx.coeff * grad, None
-
-
-def grad_reverse(x: torch.Tensor, coeff: float = 1.0) -> torch.Tensor:
-    return GradientReversal.apply(x, coeff)
 
 
 # ----------------------------------------------------------------------------- contract
@@ -208,6 +99,8 @@ class Adapter:
 
     def extra_modules(self, latent_dim: int, params: Mapping | None = None) -> nn.ModuleDict:
         """Trainable modules beyond the network (optimised with it); none by default."""
+        from torch import nn
+
         return nn.ModuleDict()
 
     def domain_loss(
@@ -225,6 +118,10 @@ class Adapter:
         self, z_s: torch.Tensor, z_t: torch.Tensor, modules: nn.ModuleDict, params: Mapping | None = None
     ) -> float:
         """Domain discrepancy of two latent batches (lower is better); MMD² unless the method has its own."""
+        import torch
+
+        from gearlab.learn.losses import mmd2
+
         with torch.no_grad():
             return float(mmd2(z_s, z_t))
 
@@ -259,19 +156,12 @@ class Adapter:
 
 
 __all__ = [
-    "Adapter",
-    "GradientReversal",
     "LAMBDA_EVERY",
     "LAMBDA_MAX",
     "LAMBDA_STEP",
-    "MMD_SCALES",
     "SCHEDULE_PARAMS",
     "SUPERVISIONS",
     "TRAIN_ON",
-    "coral_loss",
-    "grad_reverse",
+    "Adapter",
     "lambda_schedule",
-    "median_distance",
-    "mmd2",
-    "pairwise_sq_dists",
 ]

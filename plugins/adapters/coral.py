@@ -7,10 +7,11 @@ Note the 1/(4 d²) factor: on cnn3's 31 872-feature latent the loss is tiny, so 
 
 from __future__ import annotations
 
-import torch
-
-from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter, coral_loss
+from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter
 from gearlab.registry import hookimpl
+
+# torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
+# module on every gearlab command, and only training needs the losses.
 
 
 class Coral(Adapter):
@@ -22,10 +23,16 @@ class Coral(Adapter):
     train_on = "joint"
     optimizer = "sgd"
 
-    def domain_loss(self, z_s, z_t, modules, lam, params=None) -> torch.Tensor:
+    def domain_loss(self, z_s, z_t, modules, lam, params=None):
+        from gearlab.learn.losses import coral_loss
+
         return lam * coral_loss(z_s, z_t)
 
     def discrepancy(self, z_s, z_t, modules, params=None) -> float:
+        import torch
+
+        from gearlab.learn.losses import coral_loss
+
         with torch.no_grad():
             return float(coral_loss(z_s, z_t))
 

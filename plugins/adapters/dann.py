@@ -17,13 +17,12 @@ domain classifier is reduced to guessing).
 
 from __future__ import annotations
 
-import torch
-import torch.nn.functional as F
-from torch import nn
-
-from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter, grad_reverse
+from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter
 from gearlab.params import Param
 from gearlab.registry import hookimpl
+
+# torch is imported inside the methods: the registry imports this module on every gearlab
+# command, and only training needs torch.
 
 
 class DANN(Adapter):
@@ -38,7 +37,9 @@ class DANN(Adapter):
     train_on = "joint"
     optimizer = "sgd"
 
-    def extra_modules(self, latent_dim, params=None) -> nn.ModuleDict:
+    def extra_modules(self, latent_dim, params=None):
+        from torch import nn
+
         hidden = int(self.values(params)["hidden"])
         domain = nn.Sequential(nn.Linear(int(latent_dim), hidden), nn.ReLU(), nn.Linear(hidden, 1))
         for layer in domain:
@@ -49,11 +50,18 @@ class DANN(Adapter):
 
     @staticmethod
     def _logits(z_s, z_t, modules, lam: float):
+        import torch
+
+        from gearlab.learn.losses import grad_reverse
+
         z = torch.cat([z_s.reshape(z_s.shape[0], -1), z_t.reshape(z_t.shape[0], -1)])
         logits = modules["domain"](grad_reverse(z, lam)).squeeze(1)
         return logits[: z_s.shape[0]], logits[z_s.shape[0] :]
 
-    def domain_loss(self, z_s, z_t, modules, lam, params=None) -> torch.Tensor:
+    def domain_loss(self, z_s, z_t, modules, lam, params=None):
+        import torch
+        import torch.nn.functional as F
+
         logit_s, logit_t = self._logits(z_s, z_t, modules, lam)
         loss_s = F.binary_cross_entropy_with_logits(logit_s, torch.zeros_like(logit_s))
         loss_t = F.binary_cross_entropy_with_logits(logit_t, torch.ones_like(logit_t))
@@ -61,6 +69,8 @@ class DANN(Adapter):
 
     def domain_accuracy(self, z_s, z_t, modules) -> float:
         """Balanced accuracy of the domain classifier (mean of the per-domain accuracies)."""
+        import torch
+
         with torch.no_grad():
             logit_s, logit_t = self._logits(z_s, z_t, modules, 1.0)
             return 0.5 * (float((logit_s < 0).float().mean()) + float((logit_t > 0).float().mean()))

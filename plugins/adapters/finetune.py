@@ -17,8 +17,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from torch import nn
-
 from gearlab.errors import GearlabInputError
 from gearlab.learn.adapters import Adapter
 from gearlab.params import Param, did_you_mean
@@ -57,7 +55,10 @@ class Finetune(Adapter):
             value = self.coerce({"variant": value}, f"adapter '{self.name}'")["variant"]
         return VARIANTS[int(value)]
 
-    def trainable(self, network: nn.Module, params: Mapping | None = None) -> list[nn.Parameter]:
+    def trainable(self, network, params: Mapping | None = None) -> list:
+        # torch here, not at the top: the registry imports this module on every command
+        from torch import nn
+
         variant = self.variant(params)
         if variant == "all":
             return list(network.parameters())

@@ -7,11 +7,12 @@ only. The discrepancy used for stopping is MMD² itself (ideal 0).
 
 from __future__ import annotations
 
-import torch
-
-from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter, mmd2
+from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter
 from gearlab.params import Param
 from gearlab.registry import hookimpl
+
+# torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
+# module on every gearlab command, and only training needs the losses.
 
 
 class MMD(Adapter):
@@ -26,11 +27,17 @@ class MMD(Adapter):
     train_on = "joint"
     optimizer = "sgd"
 
-    def domain_loss(self, z_s, z_t, modules, lam, params=None) -> torch.Tensor:
+    def domain_loss(self, z_s, z_t, modules, lam, params=None):
+        from gearlab.learn.losses import mmd2
+
         scale = float(self.values(params)["bandwidth_scale"])
         return lam * mmd2(z_s, z_t, scale=scale)
 
     def discrepancy(self, z_s, z_t, modules, params=None) -> float:
+        import torch
+
+        from gearlab.learn.losses import mmd2
+
         scale = float(self.values(params)["bandwidth_scale"])
         with torch.no_grad():
             return float(mmd2(z_s, z_t, scale=scale))

@@ -1,0 +1,1 @@
+"""gearlab-wear: uniform flank wear as a gearlab fault plugin (see gearlab_wear.wear)."""
