@@ -277,6 +277,7 @@ def test_cache_entry_is_a_plain_npz_without_pickle(cache):
 
 
 VARIATIONS = {
+    "effects": (("sensor_noise", (("kind", "gaussian"), ("snr_db", 10.0))),),
     "model": "eight_dof",
     "preset": "other",
     "channel": "pinion_x",

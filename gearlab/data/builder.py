@@ -10,6 +10,12 @@ Structure exploited (SPEC section 4):
   periodic revolution: one simulation per fault and intensity serves all Z1 teeth.
 * Noise and TSA are added per sample from the sample's own seeded generator, in chunks,
   so memory stays bounded and results do not depend on the worker count.
+
+Effects (gearlab.effects, SPEC section 9) act in order of level: the model-level ones make
+the simulator configuration, the excitation-level ones act inside each simulation, the
+signal-level ones on each sample's J revolutions before the dataset's own noise and TSA.
+When one of them breaks the tooth-shift symmetry every tooth is simulated; the steady state
+stays periodic in one revolution either way.
 """
 
 from __future__ import annotations
@@ -17,10 +23,12 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
 from ..dynamics.newmark import Simulator
+from ..effects import EffectChain, ModelConfig
 from ..errors import GearlabInputError
 from ..executors import LocalExecutor
 from ..physics.faults import place_fault
@@ -31,6 +39,7 @@ from .spec import POINTS, Dataset, DatasetSpec
 
 STEADY_RTOL = 1e-6
 CHUNK = 256  # samples per noise task
+EFFECT_STREAM = 7  # seeds the signal effects' own generators apart from the dataset noise's
 
 
 def whole_steps_rate(fs: float, speed_hz: float, Z1: int) -> float:
@@ -41,6 +50,12 @@ def whole_steps_rate(fs: float, speed_hz: float, Z1: int) -> float:
 @functools.lru_cache(maxsize=8)
 def _simulator(model: str, preset: str, fs: float) -> Simulator:
     return Simulator(get_registry().get("model", model), preset, fs)
+
+
+@functools.lru_cache(maxsize=8)
+def _configured_simulator(config: ModelConfig, fs: float) -> Simulator:
+    """The simulator of a configuration made by model-level effects (cached per worker process)."""
+    return Simulator(config.model(), config.preset, fs, overrides=config.overrides(), mesh_damping=config.mesh_damping)
 
 
 def operating_point(spec: DatasetSpec) -> tuple[float, float]:
@@ -57,17 +72,31 @@ def steady_revolution(sim: Simulator, faults, speed: float, load: float, channel
     The start-up transient is detected, not assumed: revolutions are cut at the tacho and
     the steady one is where successive revolutions stop changing (signals.steady_start).
     """
+    return steady_response(sim, faults, speed, load, channel)[0]
+
+
+def steady_response(sim: Simulator, faults, speed: float, load: float, channel: str,
+                    effects=()) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`steady_revolution` under excitation-level *effects* ((Effect, params) pairs): the
+    revolution and, when an effect moved the shaft angle, its angle from 0 to 2 pi (else None).
+
+    Excitation effects keep the shaft turning once per 1/speed (whole orders), so the
+    revolution is still whole steps long and starts at a tacho zero.
+    """
     per_rev = int(round(sim.fs / speed))
     revolutions = 8
     while True:
-        result = sim.run(faults, speed, load, duration=revolutions / speed, channels=[channel])
+        result = sim.run(faults, speed, load, duration=revolutions / speed, channels=[channel], effects=effects)
         x = result.channels[channel][: revolutions * per_rev].reshape(revolutions, per_rev)
         try:
             first = steady_start(x, rtol=STEADY_RTOL)
         except GearlabInputError:
             first = revolutions
         if first <= revolutions - 2:
-            return x[-1].copy()
+            angle = None
+            if result.angle is not None:
+                angle = result.angle[(revolutions - 1) * per_rev: revolutions * per_rev] - 2 * np.pi * (revolutions - 1)
+            return x[-1].copy(), angle
         if revolutions >= 256:
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise GearlabInputError(
@@ -77,36 +106,96 @@ def steady_revolution(sim: Simulator, faults, speed: float, load: float, channel
         revolutions *= 4
 
 
-def angle_samples(periodic: np.ndarray, points: int = POINTS) -> np.ndarray:
-    """Resample one periodic revolution (time samples from a tacho zero) to *points* angles."""
+def angle_samples(periodic: np.ndarray, points: int = POINTS, angle: np.ndarray | None = None) -> np.ndarray:
+    """Resample one periodic revolution (time samples from a tacho zero) to *points* angles.
+
+    *angle*: the shaft angle of each sample (0 .. 2 pi), when it does not advance uniformly
+    in time (a speed fluctuation); the resampling is then order tracking at the true angle.
+    """
     n = len(periodic)
-    angle = 2 * np.pi * np.arange(n + 1) / n
-    return resample_revolutions(np.append(periodic, periodic[0]), angle, points)[0]
+    if angle is None:
+        theta = 2 * np.pi * np.arange(n + 1) / n
+    else:
+        theta = np.append(np.asarray(angle, dtype=float) - angle[0], 2 * np.pi)  # angle[0] is 0 up to rounding
+    return resample_revolutions(np.append(periodic, periodic[0]), theta, points)[0]
+
+
+class SimTask(NamedTuple):
+    """One unit of simulation: a fault case (or healthy) on one tooth, rows for *teeth*."""
+
+    model: str
+    preset: str
+    fs: float
+    speed: float
+    load: float
+    channel: str
+    fault: str | None
+    step: int | None
+    teeth: tuple[int, ...]
+    effects: tuple = ()  # the dataset's effects (canonical); the model and excitation ones act here
+    tooth: int = 1  # the tooth carrying the fault; the rows of the other teeth are its shifts
 
 
 def simulate_unit(task: tuple) -> np.ndarray:
-    """Steady revolutions (len(teeth), POINTS) of one fault case on every requested tooth."""
-    model, preset, fs, speed, load, channel, fault, step, teeth = task
-    sim = _simulator(model, preset, fs)
-    faults = [] if fault is None else [place_fault(get_registry(), sim.pair, fault, 1, step=step)]
-    periodic = steady_revolution(sim, faults, speed, load, channel)
+    """Steady revolutions (len(teeth), POINTS) of one fault case on every requested tooth.
+
+    Without a symmetry-breaking effect the fault sits on *tooth* and every requested tooth
+    is an exact whole-sample rotation of that revolution (tooth-shift symmetry).
+    """
+    task = SimTask(*task)
+    if not task.effects:
+        sim = _simulator(task.model, task.preset, task.fs)
+        excitation, channel = (), task.channel
+    else:
+        chain = EffectChain.load(task.effects)
+        config = chain.model_config(ModelConfig.of(task.model, task.preset, task.channel))
+        sim = _configured_simulator(config, task.fs)
+        excitation, channel = chain.at("excitation"), config.channel
+    faults = []
+    if task.fault is not None:
+        faults = [place_fault(get_registry(), sim.pair, task.fault, task.tooth, step=task.step)]
+    periodic, angle = steady_response(sim, faults, task.speed, task.load, channel, excitation)
+    if angle is not None and tuple(task.teeth) != (task.tooth,):
+        raise RuntimeError("an excitation effect moved the shaft angle but does not declare breaks_symmetry")
     per_tooth = len(periodic) // sim.pair.Z1  # whole by construction of fs
-    return np.stack([angle_samples(np.roll(periodic, (n - 1) * per_tooth)) for n in teeth])
+    return np.stack([angle_samples(np.roll(periodic, (n - task.tooth) * per_tooth), angle=angle) for n in task.teeth])
+
+
+class RowsTask(NamedTuple):
+    """A chunk of samples: their clean revolutions and how to make the kept rows."""
+
+    clean: np.ndarray
+    seeds: list
+    noise_kind: str | None
+    snr_db: float
+    revolutions: int
+    use_tsa: bool
+    reference: tuple[float, float]
+    effects: tuple = ()  # the dataset's effects (canonical); the signal-level ones act here
+    speed_hz: float = 0.0
+    reference_rms: float = 0.0  # RMS of the clean healthy revolution
 
 
 def noisy_rows(task: tuple) -> np.ndarray:
-    """Rows for a chunk of samples: clean revolutions -> J noisy revolutions -> kept row."""
-    clean, seeds, noise_kind, snr_db, revolutions, use_tsa, reference = task
-    mean, std = reference
-    out = np.empty((len(clean), POINTS), dtype=np.float32)
-    for i, (row, seed) in enumerate(zip(clean, seeds)):
-        if noise_kind is None:
+    """Rows for a chunk of samples: clean revolutions -> J revolutions with signal effects and
+    noise -> kept row (the first revolution, or the TSA of all J)."""
+    task = RowsTask(*task)
+    mean, std = task.reference
+    signal = EffectChain.load(task.effects).at("signal") if task.effects else ()
+    chain = EffectChain(signal)
+    out = np.empty((len(task.clean), POINTS), dtype=np.float32)
+    for i, (row, seed) in enumerate(zip(task.clean, task.seeds)):
+        if task.noise_kind is None and not chain:
             kept = row
         else:
-            rng = np.random.default_rng(seed)
-            j = revolutions if use_tsa else 1  # the first of J revolutions is the same either way
-            noisy = add_noise(np.broadcast_to(row, (j, POINTS)), snr_db, noise_kind, rng)
-            kept = tsa(noisy) if use_tsa else noisy[0]
+            j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
+            record = np.broadcast_to(row, (j, POINTS))
+            if chain:  # J consecutive revolutions of one record, sampled at POINTS x speed
+                record = chain.apply_signal(record, POINTS * task.speed_hz, task.speed_hz, task.reference_rms,
+                                            [*seed, EFFECT_STREAM])
+            if task.noise_kind is not None:
+                record = add_noise(record, task.snr_db, task.noise_kind, np.random.default_rng(seed))
+            kept = tsa(record) if task.use_tsa else record[0]
         out[i] = (kept - mean) / std  # eq. 2.112 / 4.6; TSA of standardised = standardised TSA
     return out
 
@@ -120,9 +209,16 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
     speed, load = operating_point(spec)
     fs = whole_steps_rate(spec.fs, speed, pair.Z1)
 
-    # 1. unique simulations: the healthy case and each fault intensity on tooth 1
-    units = [(None, None)] + [(name, step) for name, steps in spec.faults for step in steps]
-    tasks = [(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, teeth) for f, s in units]
+    # 1. unique simulations: the healthy case and each fault intensity on tooth 1, shifted to every
+    #    tooth; on every tooth itself when an effect breaks the tooth-shift symmetry
+    chain = spec.effect_chain() if spec.effects else EffectChain()
+    cases = [(None, None)] + [(name, step) for name, steps in spec.faults for step in steps]
+    if not chain.breaks_symmetry:
+        units = [(case, 1, teeth) for case in cases]
+    else:
+        units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth]
+    tasks = [SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, spec.effects, n)
+             for (f, s), n, rows in units]
     on_event(Event("stage", stage="simulate", total=len(tasks), message=f"{spec.name}: {len(tasks)} simulations"))
     done = 0
 
@@ -133,7 +229,9 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
             on_event(Event("advance", stage=stage, done=done, total=total))
         return callback
 
-    base = dict(zip(units, executor.map(simulate_unit, tasks, advance("simulate", len(tasks)))))
+    base: dict = {}
+    for (case, _, _), rows in zip(units, executor.map(simulate_unit, tasks, advance("simulate", len(tasks)))):
+        base[case] = rows if case not in base else np.concatenate([base[case], rows])  # teeth in order
 
     # 2. the samples and their labels
     label, intensity, tooth, rfa, source = [], [], [], [], []
@@ -149,30 +247,43 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
                     source.append(((name, step), t_index))
 
     # 3. the domain's healthy reference (eq. 2.112, 4.6): the healthy revolution, noisy when the domain is
+    #    (and through the signal-level effects when there are any)
     reference_row = base[(None, None)][0]
-    if spec.noise is None:
+    reference_rms = float(np.sqrt(np.mean(reference_row**2)))
+    signal = EffectChain(chain.at("signal"))
+    noise_seed = spec.noise.seed if spec.noise else 0
+    if spec.noise is None and not signal:
         reference = Standardiser.fit(reference_row)
     else:
-        rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
-        reference = Standardiser.fit(add_noise(np.broadcast_to(reference_row, (64, POINTS)), spec.noise.snr_db,
-                                               spec.noise.kind, rng))
+        record = np.broadcast_to(reference_row, (64, POINTS))
+        if signal:
+            record = signal.apply_signal(record, POINTS * speed, speed, reference_rms,
+                                         [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM])
+        if spec.noise is not None:
+            rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
+            record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
+        reference = Standardiser.fit(record)
 
-    # 4. noise, TSA and standardisation, streamed in chunks
+    # 4. signal effects, noise, TSA and standardisation, streamed in chunks
     n = len(label)
     noise_kind = spec.noise.kind if spec.noise else None
     snr = spec.noise.snr_db if spec.noise else 0.0
-    noise_seed = spec.noise.seed if spec.noise else 0
     chunks = []
     for lo in range(0, n, CHUNK):
         idx = range(lo, min(n, lo + CHUNK))
         clean = np.stack([base[source[i][0]][source[i][1]] for i in idx])
         seeds = [[spec.seed, noise_seed, i] for i in idx]
-        chunks.append((clean, seeds, noise_kind, snr, spec.revolutions, spec.tsa, (reference.mean, reference.std)))
+        chunks.append(RowsTask(clean, seeds, noise_kind, snr, spec.revolutions, spec.tsa,
+                               (reference.mean, reference.std), spec.effects, speed, reference_rms))
     on_event(Event("stage", stage="samples", total=len(chunks), message=f"{spec.name}: {n} samples"))
     done = 0
     X = np.empty((n, POINTS), dtype=np.float32)
     for lo, rows in zip(range(0, n, CHUNK), executor.map(noisy_rows, chunks, advance("samples", len(chunks)))):
         X[lo:lo + len(rows)] = rows
+    meta = {"fs_hz": fs, "speed_hz": speed, "load_nm": load, "Z1": pair.Z1}
+    if spec.effects:  # what the model-level effects made of the source model
+        config = spec.model_config()
+        meta.update(model=config.name, channel=config.channel, simulations=len(tasks))
     return Dataset(
         spec=spec,
         X=X,
@@ -185,5 +296,5 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
         domain=np.zeros(n, dtype=np.int8),
         domains=(spec.domain or spec.name,),
         reference=(reference.mean, reference.std),
-        meta={"fs_hz": fs, "speed_hz": speed, "load_nm": load, "Z1": pair.Z1},
+        meta=meta,
     )

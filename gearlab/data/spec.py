@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 
 from .. import PHYSICS_VERSION
+from ..effects import check_effect_specs
 from ..errors import GearlabInputError
 from ..params import did_you_mean
 from ..physics.faults import LADDER_STEPS
@@ -48,11 +49,16 @@ class DatasetSpec:
     seed: int = 0
     fs: float = 200e3
     domain: str = ""
+    # Unmodelled effects (gearlab.effects, SPEC section 9): ((name, ((param, SI value), ...)), ...),
+    # each resolved and sorted by gearlab.effects.effect_spec; applied model -> excitation -> signal.
+    effects: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()
 
     def canonical(self) -> dict:
         d = asdict(self)
         d.pop("name")  # a label, not part of what the data are
         d.pop("domain")
+        if not self.effects:
+            d.pop("effects")  # so every dataset without effects keeps the key it had before effects existed
         return d
 
     def key(self) -> str:
@@ -85,10 +91,12 @@ class DatasetSpec:
             raise GearlabInputError(f"{where}: TSA needs revolutions >= 2, got {self.revolutions}")
         if not self.faults and not self.healthy:
             raise GearlabInputError(f"{where}: the dataset has no samples (no faults and healthy = 0)")
+        check_effect_specs(self.effects, f"{where}: effects")
 
     def check_model(self, where: str = ""):
-        """What needs the registry: the model, its preset and channel, the fault names and the
-        teeth (1..Z1 of the preset's pinion). Returns (model plugin, gear pair, teeth)."""
+        """What needs the registry: the model, its preset and channel, the fault names, the
+        teeth (1..Z1 of the preset's pinion) and the effects with their parameters and the
+        configuration they make. Returns (model plugin, gear pair, teeth)."""
         from ..registry import get_registry
 
         where = where or f"dataset '{self.name}'"
@@ -99,6 +107,8 @@ class DatasetSpec:
             raise GearlabInputError(
                 f"{where}: model '{self.model}' has no channel '{self.channel}'; its channels: {', '.join(model.channels)}"
             )
+        if self.effects:
+            self.model_config(where)  # effect names, parameters and what they do to the model
         teeth = tuple(range(1, pair.Z1 + 1)) if self.teeth is None else self.teeth
         for n in teeth:
             if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= pair.Z1:
@@ -106,6 +116,21 @@ class DatasetSpec:
         for name, _ in self.faults:
             registry.get("fault", name, where)
         return model, pair, teeth
+
+
+    def effect_chain(self, where: str = ""):
+        """The dataset's effects, loaded and ordered by level (gearlab.effects.EffectChain)."""
+        from ..effects import EffectChain
+
+        return EffectChain.load(self.effects, f"{where or f'dataset {self.name!r}'}: effects")
+
+    def model_config(self, where: str = ""):
+        """The simulator configuration after the model-level effects (gearlab.effects.ModelConfig)."""
+        from ..effects import ModelConfig
+
+        where = where or f"dataset '{self.name}'"
+        source = ModelConfig.of(self.model, self.preset, self.channel, where)
+        return self.effect_chain(where).model_config(source, where)
 
 
 def _ladders(steps: Mapping[str, tuple[int, ...]]) -> tuple[tuple[str, tuple[int, ...]], ...]:

@@ -181,6 +181,11 @@ def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str
     return Assembly(tuple(dofs), M[sub], K[sub], C[sub], P[keep], input_dof, load_dof)
 
 
+# How the mesh damping c(t) follows the mesh stiffness: proportional, c(t) = mu k(t) (eq. 2.108, Tian 2004,
+# the thesis's choice), or constant, c = c_m (eq. 2.107; what most authors stop at, thesis 2.3).
+MESH_DAMPING_MODELS = ("proportional", "constant")
+
+
 def mesh_damping_ratio(values: Mapping[str, float], k_mean: float) -> float:
     """mu = c_m / k_m with c_m = 2 zeta sqrt(k_m m1 m2 / (m1 + m2)) (eq. 2.107, 2.109)."""
     m1, m2 = values["m1"], values["m2"]

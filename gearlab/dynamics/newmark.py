@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..physics.stiffness import MeshStiffnessModel, PlacedFault
-from .model import CHANNEL_DOFS, DynamicModel, mesh_damping_ratio
+from .model import CHANNEL_DOFS, MESH_DAMPING_MODELS, DynamicModel, mesh_damping_ratio
 
 BETA1, BETA2 = 0.5, 2.25
 DEFAULT_FS = 200e3
@@ -84,6 +84,52 @@ def _integrate(GMC, gF, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
     return -1
 
 
+@numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
+def _integrate_forced(GMC, gF, GB, g, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
+    """:func:`_integrate` with a time-varying load F(t) = F0 + B g(t): GB = G B (n, m), g (steps, m).
+
+    Kept apart so that the unforced loop, which every effect-free dataset uses, stays as it was.
+    """
+    n = u.shape[0]
+    m = GB.shape[1]
+    mz = np.empty(2 * n)
+    y = np.empty(n)
+    for j in range(out_idx.shape[0]):
+        out[0, j] = a[out_idx[j]]
+    for step in range(k.shape[0]):
+        kk = k[step]
+        pz = 0.0
+        for i in range(n):
+            mz[i] = c[0] * u[i] + c[2] * v[i] + c[3] * a[i]
+            mz[n + i] = c[1] * u[i] + c[4] * v[i] + c[5] * a[i]
+            pz += p[i] * mz[n + i]
+        damping = mu * kk * pz
+        py = 0.0
+        for i in range(n):
+            acc = gF[i] + damping * w[i]
+            for j in range(m):
+                acc += GB[i, j] * g[step, j]
+            for j in range(2 * n):
+                acc += GMC[i, j] * mz[j]
+            y[i] = acc
+            py += p[i] * acc
+        s = kk * (1.0 + c[1] * mu)
+        corr = s * py / (1.0 + s * pw)
+        for i in range(n):
+            u_new = y[i] - corr * w[i]
+            a_new = c[0] * (u_new - u[i]) - c[2] * v[i] - c[3] * a[i]
+            v[i] += dt * ((1.0 - gamma) * a[i] + gamma * a_new)
+            u[i] = u_new
+            a[i] = a_new
+        for j in range(out_idx.shape[0]):
+            out[step + 1, j] = a[out_idx[j]]
+        if step % 2048 == 0:
+            for i in range(n):
+                if not (abs(u[i]) < 1e3):
+                    return step
+    return -1
+
+
 @dataclass
 class Simulation:
     model: str
@@ -98,6 +144,7 @@ class Simulation:
     wall_s: float
     faults: tuple[PlacedFault, ...] = ()
     state: tuple = field(default=(), repr=False)  # final (u, v, a) for continuation
+    angle: np.ndarray | None = field(default=None, repr=False)  # continuous input-shaft angle when effects moved it
 
 
 class Simulator:
@@ -105,12 +152,16 @@ class Simulator:
     faults or the operating point is prepared once (sections, healthy TVMS, K_hat_c^-1)."""
 
     def __init__(self, model: DynamicModel, preset: str, fs: float = DEFAULT_FS,
-                 overrides: Mapping | None = None, beta1: float = BETA1, beta2: float = BETA2):
+                 overrides: Mapping | None = None, beta1: float = BETA1, beta2: float = BETA2,
+                 mesh_damping: str = "proportional"):
         where = f"model '{model.name}', preset '{preset}'"
         if not (math.isfinite(fs) and fs > 0):
             raise GearlabInputError(f"{where}: sampling rate fs must be a positive number of Hz, got {fs!r}")
         if not (beta2 >= beta1 >= 0.5):
             raise GearlabInputError(f"{where}: Newmark needs beta2 >= beta1 >= 0.5 for stability, got {beta1}, {beta2}")
+        if mesh_damping not in MESH_DAMPING_MODELS:
+            raise GearlabInputError(f"{where}: mesh damping model must be one of {', '.join(MESH_DAMPING_MODELS)}, "
+                                    f"got {mesh_damping!r}")
         self.model, self.preset, self.fs = model, preset, float(fs)
         self.pair, self.values = model.resolve(preset, overrides, where)
         self.stiffness = MeshStiffnessModel(self.pair)
@@ -122,6 +173,14 @@ class Simulator:
         sub = np.ix_(free, free)
         self.M, self.Kc, self.Cc, self.P = asm.M[sub], asm.Kc[sub], asm.Cc[sub], asm.P[free]
         self.load_index = self.dofs.index(asm.load_dof)
+        self.load_dof = asm.load_dof
+        # Mesh damping c(t) = c0 + mu k(t). The thesis (eq. 2.108, Tian 2004): c0 = 0, mu = c_m / k_m.
+        # The constant model most authors use (thesis 2.3): c = c_m (eq. 2.107), a constant rank-one
+        # term that joins Cc, so the time loop is the same.
+        self.mesh_damping, self.c0 = mesh_damping, 0.0
+        if mesh_damping == "constant":
+            self.c0, self.mu = self.mu * self.k_mean, 0.0
+            self.Cc = self.Cc + self.c0 * np.outer(self.P, self.P)
         self.gamma, self.beta = beta1, beta2 / 2
         dt = 1.0 / self.fs
         b, g = self.beta, self.gamma
@@ -161,7 +220,12 @@ class Simulator:
             )
 
     def run(self, faults: Sequence[PlacedFault] = (), speed_hz: float | None = None, load_nm: float | None = None,
-            duration: float = 0.4, channels: Sequence[str] | None = None) -> Simulation:
+            duration: float = 0.4, channels: Sequence[str] | None = None, effects: Sequence = ()) -> Simulation:
+        """Integrate from the static equilibrium for *duration* seconds.
+
+        *effects*: excitation-level effects as (Effect, resolved params) pairs (gearlab.effects),
+        applied in order to the nominal excitation (fixed speed, constant load) before the loop.
+        """
         preset = self.model.preset(self.preset)
         speed = float(preset["speed_hz"] if speed_hz is None else speed_hz)
         load = float(preset["load_nm"] if load_nm is None else load_nm)
@@ -189,24 +253,39 @@ class Simulator:
         t = np.arange(steps + 1) / self.fs
         phase = np.mod(2 * np.pi * speed * t, 2 * np.pi)  # nominal pinion angle: fixed input speed
         per_rev = self.fs / speed
+        index = None
         if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
             # A whole number of steps per revolution: the TVMS on exactly those angles, no
             # interpolation, so a fault on tooth n sees exactly the shifted TVMS of tooth 1.
             tvms = self.stiffness.mesh_stiffness(faults, points=round(per_rev))
-            k = tvms.k[np.arange(steps + 1) % round(per_rev)]
+            index = np.arange(steps + 1) % round(per_rev)
+            k = tvms.k[index]
         else:
             points = self.pair.Z1 * math.ceil(TVMS_POINTS / self.pair.Z1)  # pitch-aligned grid
             tvms = self.stiffness.mesh_stiffness(faults, points=points)
             k = np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
+        k_mean = tvms.mean
+        forces, angle = [], None
+        if effects:
+            k, k_mean, forces, angle = self._excite(effects, tvms, index, t, speed, load)
+            if angle is not None:
+                phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
         F = np.zeros(len(self.dofs))
         F[self.load_index] = -load  # T_l opposes the driven gear's rotation (eq. 2.111)
-        u = np.linalg.solve(self.Kc + tvms.mean * np.outer(self.P, self.P), F)  # static equilibrium at the mean stiffness
+        u = np.linalg.solve(self.Kc + k_mean * np.outer(self.P, self.P), F)  # static equilibrium at the mean stiffness
         v = np.zeros_like(u)
         a = np.zeros_like(u)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
         out = np.empty((steps + 1, len(out_idx)))
-        failed = _integrate(self.GMC, self.G @ F, self.w, self.P, self.pw, k[1:], self.mu, self.c,
-                            1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
+        if forces:
+            B = np.stack([vector for vector, _ in forces], axis=1)
+            g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
+            GB = np.ascontiguousarray(self.G @ B)
+            failed = _integrate_forced(self.GMC, self.G @ F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, self.c,
+                                       1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
+        else:
+            failed = _integrate(self.GMC, self.G @ F, self.w, self.P, self.pw, k[1:], self.mu, self.c,
+                                1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
         if failed >= 0:
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise SimulationError(
@@ -218,5 +297,17 @@ class Simulator:
         return Simulation(
             model=self.model.name, preset=self.preset, speed_hz=speed, load_nm=load, fs=self.fs, t=t, tacho=tacho,
             tvms=k, channels={ch: out[:, j] for j, ch in enumerate(channels)}, wall_s=wall, faults=tuple(faults),
-            state=(u, v, a),
+            state=(u, v, a), angle=angle,
         )
+
+    def _excite(self, effects, tvms, index, t, speed, load):
+        """Apply excitation-level effects to the nominal excitation: (k(t), mean k, forces, moved angle or None)."""
+        from ..effects import Excitation
+
+        nominal = 2 * np.pi * speed * t
+        exc = Excitation(fs=self.fs, speed_hz=speed, load_nm=load, t=t, angle=nominal, tvms=tvms,
+                         load=np.full(t.shape, load), dofs=self.dofs, M=self.M, P=self.P, mu=self.mu, c0=self.c0,
+                         load_dof=self.load_dof, stiffness=self.stiffness, index=index)
+        for effect, params in effects:
+            exc = effect.apply_excitation(exc, params)
+        return exc.stiffness_series(), exc.tvms.mean, exc.force_terms(), (None if exc.angle is nominal else exc.angle)

@@ -1,0 +1,52 @@
+"""load_fluctuation: a shaft-synchronous ripple of the load torque.
+
+Physical mismatch. The thesis applies a constant load torque at steady state (eq. 2.110,
+2.111). Driven machines pulsate — a reciprocating compressor, a pump's vanes, a cutting
+process, a crank — and "dynamic loads" are among the industrial effects the thesis names
+(chapter 4 introduction). A load ripple modulates the mesh force and with it the amplitude
+of every mesh harmonic (sidebands at q shaft orders).
+
+Realisation. T_l(t) = T_l (1 + eps sin(q Omega t + phi)), Omega = 2 pi f, on the load DOF
+(the load inertia, or the gear in the six-DOF model); the static equilibrium and the
+mesh-load estimate stay at the mean. Whole orders q of the input shaft keep the response
+periodic in one revolution (a ripple at the output shaft's own orders, q Z1/Z2, would not
+be; it is left out).
+
+Symmetry. Locked to the shaft angle, not to the tooth pitch: breaks the tooth-shift symmetry.
+
+Bounds. eps 0 (constant load) to 1 (the torque swings between 0 and twice its mean: more
+would unload and reverse the teeth, which the linear mesh cannot model, decision 23);
+q = 1..64; phase 0..360 deg. Default 10 % once per revolution.
+"""
+
+import math
+
+import numpy as np
+
+from gearlab.effects import Effect
+from gearlab.params import Param
+from gearlab.registry import hookimpl
+
+
+class LoadFluctuation(Effect):
+    name = "load_fluctuation"
+    doc = "load torque ripple eps at whole input-shaft order q"
+    level = "excitation"
+    breaks_symmetry = True
+    params = (
+        Param("amplitude", "", 0.1, 0.0, 1.0, "relative peak load torque fluctuation eps"),
+        Param("order", "", 1, 1, 64, "fluctuation frequency in input-shaft orders q", integer=True),
+        Param("phase", "rad", 0.0, 0.0, 2 * math.pi, "phase phi at the first tacho zero", "deg"),
+    )
+
+    def apply_excitation(self, exc, params):
+        eps, q, phi = params["amplitude"], params["order"], params["phase"]
+        if eps == 0.0:
+            return exc
+        ripple = eps * exc.load_nm * np.sin(2 * math.pi * q * exc.speed_hz * exc.t + phi)
+        return exc.with_load(exc.load + ripple)
+
+
+@hookimpl
+def gearlab_effects():
+    return [LoadFluctuation()]

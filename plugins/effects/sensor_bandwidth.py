@@ -1,0 +1,58 @@
+"""sensor_bandwidth: the accelerometer's own dynamics, a low-pass with a mounted resonance.
+
+Physical mismatch. The simulation returns the acceleration of a DOF exactly; a real sensor
+reports it through its mounted resonance (a seismic mass on a stiff element, plus the
+compliance of a stud, adhesive or magnet) and the acquisition's filters. Both behave, to a
+first approximation, like a second-order system of natural frequency f_n and damping
+ratio zeta:
+
+    H(f) = 1 / (1 - r^2 + 2 j zeta r),   r = f / f_n,
+
+flat well below f_n, a peak of 1/(2 zeta) at f_n when lightly damped (a resonance), and
+-40 dB/decade above it; zeta = 0.707 is the maximally flat (Butterworth) low-pass of an
+anti-alias filter. H is applied as the steady-state response: a multiplication of the
+record's spectrum, i.e. a circular filter over the record's J revolutions, exact for the
+shaft-synchronous content (the gear vibration) and for any record that is periodic.
+
+Bounds. f_n from 100 Hz (a magnet on a painted, curved casing; a slow anti-alias filter) to
+100 kHz (above the band of the simulations: no effect); zeta from 0.01 (an undamped
+piezoelectric resonance, Q = 50) to 1 (over-damped). Default 5 kHz, 0.707: a 5 kHz
+flat low-pass, a common usable bandwidth of a magnetically mounted sensor.
+"""
+
+import numpy as np
+
+from gearlab.effects import Effect
+from gearlab.params import Param
+from gearlab.registry import hookimpl
+
+
+def frequency_response(f: np.ndarray, f_n: float, zeta: float) -> np.ndarray:
+    """H(f) of a second-order sensor: base acceleration in, reported acceleration out."""
+    r = np.asarray(f, dtype=float) / f_n
+    return 1.0 / (1.0 - r * r + 2j * zeta * r)
+
+
+class SensorBandwidth(Effect):
+    name = "sensor_bandwidth"
+    doc = "second-order sensor response: low-pass (zeta ~ 0.7) or mounted resonance (small zeta) at f_n"
+    level = "signal"
+    breaks_symmetry = False
+    params = (
+        Param("f_n", "Hz", 5e3, 100.0, 1e5, "natural (corner) frequency of the sensor and its mounting", "kHz"),
+        Param("zeta", "", 0.707, 0.01, 1.0, "damping ratio: 0.707 flat low-pass, small values a resonance peak"),
+    )
+    log_scale = frozenset({"f_n", "zeta"})
+
+    def apply_signal(self, x, params, ctx):
+        record = np.asarray(x, dtype=float)
+        flat = record.reshape(-1)
+        spectrum = np.fft.rfft(flat)
+        f = np.fft.rfftfreq(flat.size, d=1.0 / ctx.fs)
+        filtered = np.fft.irfft(spectrum * frequency_response(f, params["f_n"], params["zeta"]), n=flat.size)
+        return filtered.reshape(record.shape)
+
+
+@hookimpl
+def gearlab_effects():
+    return [SensorBandwidth()]
