@@ -1,12 +1,19 @@
-"""Where units of work run: in this process, or in a local process pool (default: all cores).
+"""Where units of work run: in this process, in a local process pool (default: all cores), or
+on a Ray cluster.
 
 An executor maps a picklable top-level function over a list of items and returns the
 results in input order, reporting each finished item to an optional callback, so the
-results never depend on the order in which workers finish.
+results never depend on the order in which workers finish. An exception raised by the
+function reaches the caller as itself (a GearlabInputError stays a GearlabInputError).
+
+Ray is optional: it is imported only when the `ray` executor is asked for.
 """
 
 from __future__ import annotations
 
+import atexit
+import logging
+import math
 import multiprocessing
 import os
 from collections.abc import Callable, Sequence
@@ -14,16 +21,44 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from .errors import GearlabInputError
 
-EXECUTORS = ("local",)
+EXECUTORS = ("local", "ray")
+
+OnDone = Callable[[int, object], None]
+
+
+def _check_workers(workers: int | None) -> None:
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise GearlabInputError(f"workers must be a whole number >= 1, got {workers!r}")
+
+
+def _check_gpu(gpu: bool | float) -> None:
+    if not (isinstance(gpu, bool) or (isinstance(gpu, (int, float)) and 0 <= gpu <= 1)):
+        raise GearlabInputError(f"gpu must be True, False or a GPU share between 0 and 1, got {gpu!r}")
+
+
+def _gpu_request(gpu: bool | float, resources: dict) -> float:
+    """The GPUs a task asks a Ray cluster for: none where the cluster has none (the task then
+    trains on a CPU). gpu=True splits the cluster's GPUs evenly over its CPUs, as each task
+    takes one CPU: the small networks here do not fill a GPU, and a whole GPU per task would
+    leave all but one CPU per GPU idle. A number asks for that share of one GPU."""
+    gpus = resources.get("GPU", 0)
+    if not gpu or not gpus:
+        return 0.0
+    if gpu is not True:
+        return float(gpu)
+    share = min(1.0, gpus / max(1.0, resources.get("CPU", 1.0)))
+    return max(0.0001, math.floor(share * 1e4) / 1e4)  # Ray takes GPU shares to 4 decimals
 
 
 class LocalExecutor:
     def __init__(self, workers: int | None = None):
-        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-            raise GearlabInputError(f"workers must be a whole number >= 1, got {workers!r}")
+        _check_workers(workers)
         self.workers = workers or os.cpu_count() or 1
 
-    def map(self, fn: Callable, items: Sequence, on_done: Callable[[int, object], None] | None = None) -> list:
+    def map(self, fn: Callable, items: Sequence, on_done: OnDone | None = None, gpu: bool | float = False) -> list:
+        """`gpu` is accepted for the executors' common interface and ignored: a local unit
+        trains on the scenario's device itself."""
+        _check_gpu(gpu)  # still checked, so that a bad value fails alike on every executor
         items = list(items)
         results: list = [None] * len(items)
         if self.workers == 1 or len(items) <= 1:
@@ -34,17 +69,170 @@ class LocalExecutor:
             return results
         # forkserver: children start from a clean process (no inherited threads from torch or BLAS).
         context = multiprocessing.get_context("forkserver" if os.name == "posix" else "spawn")
-        with ProcessPoolExecutor(max_workers=min(self.workers, len(items)), mp_context=context) as pool:
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(items)), mp_context=context)
+        try:
             futures = {pool.submit(fn, item): i for i, item in enumerate(items)}
             for future in as_completed(futures):
                 i = futures[future]
                 results[i] = future.result()
                 if on_done:
                     on_done(i, results[i])
+        except BaseException:
+            # Ctrl-C, or a unit failed: stop now instead of waiting for every queued unit.
+            # (Python 3.11 has no public way to stop running workers; 3.14 adds terminate_workers.)
+            running = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in running:
+                process.terminate()
+            raise
+        pool.shutdown()
         return results
 
 
-def make_executor(name: str = "local", workers: int | None = None) -> LocalExecutor:
-    if name != "local":
-        raise GearlabInputError(f"unknown executor '{name}'; known: {', '.join(EXECUTORS)}")
-    return LocalExecutor(workers)
+# ----------------------------------------------------------------------------- Ray
+
+RAY_MISSING = "executor 'ray' needs the optional extra: pip install 'gearlab[ray]'"
+
+# One Ray session per process: the address it was opened with (None until opened) and
+# whether this module started it (then it also shuts it down at exit).
+_session: dict = {"address": None, "started": False}
+
+
+def import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise GearlabInputError(RAY_MISSING) from None
+    return ray
+
+
+def ray_address(explicit: str | None = None, scenario: str | None = None) -> str | None:
+    """Where the Ray cluster is: the explicit address (CLI --ray-address), else RAY_ADDRESS,
+    else the scenario's [execution] address; None means: start a local Ray instance."""
+    return explicit or os.environ.get("RAY_ADDRESS") or scenario or None
+
+
+def _open_session(address: str | None, workers: int | None):
+    """Connect to the cluster at `address`, or start a local instance; once per process."""
+    ray = import_ray()
+    wanted = address or "local"
+    if ray.is_initialized():
+        if _session["address"] is None:
+            return ray  # someone (a user's script, a notebook) opened it before us: use theirs
+        if _session["address"] != wanted:
+            raise GearlabInputError(f"this process already uses the Ray cluster '{_session['address']}'; "
+                                    f"it cannot also connect to '{wanted}'")
+        return ray
+    quiet = {"logging_level": logging.ERROR, "log_to_driver": False, "include_dashboard": False}
+    if address is None:
+        # "local" always starts a fresh instance here rather than joining one found on this machine
+        ray.init(address="local", num_cpus=workers or os.cpu_count() or 1, **quiet)
+    else:
+        try:
+            ray.init(address=address, **quiet)
+        except (ConnectionError, ValueError) as exc:
+            raise GearlabInputError(f"cannot connect to the Ray cluster at '{address}': {exc}") from None
+    _session.update(address=wanted, started=True)
+    atexit.register(_close_session)
+    if address is not None:
+        try:
+            _check_cluster_runs_our_gearlab(ray, address)
+        except GearlabInputError:
+            _close_session()  # so that a corrected address can be tried in this process
+            raise
+    return ray
+
+
+def _close_session() -> None:
+    if _session["started"]:
+        import ray
+
+        ray.shutdown()
+        _session.update(address=None, started=False)
+
+
+def _gearlab_version() -> str:
+    import gearlab
+
+    return f"{gearlab.__version__} (physics {gearlab.PHYSICS_VERSION})"
+
+
+def _check_cluster_runs_our_gearlab(ray, address: str) -> None:
+    """A cluster's workers import gearlab from their own environment: refuse one that has none,
+    or another version, before any work is sent (one short task)."""
+    ours = _gearlab_version()
+    try:
+        theirs = ray.get(ray.remote(num_cpus=0)(_gearlab_version).remote())
+    except ray.exceptions.RayError as exc:  # e.g. a worker's ModuleNotFoundError: no gearlab there
+        raise GearlabInputError(f"the Ray cluster at '{address}' cannot run gearlab: {exc}; install gearlab "
+                                f"{ours} on its nodes, or submit the run as a Ray job whose runtime_env "
+                                "installs it (docs/scenarios.md)") from None
+    if theirs != ours:
+        raise GearlabInputError(f"the Ray cluster at '{address}' runs gearlab {theirs}, this driver {ours}")
+
+
+class RayExecutor:
+    """Each item is one Ray task (one CPU; with gpu=..., also a GPU share when the cluster has
+    GPUs). `workers` sizes a local instance this executor starts; a cluster's own resources
+    decide how many tasks run there at once."""
+
+    def __init__(self, address: str | None = None, workers: int | None = None):
+        _check_workers(workers)
+        import_ray()  # fail now, before any work, when Ray is not installed
+        self.address = None if address in (None, "", "local") else address
+        self.workers = workers
+
+    def map(self, fn: Callable, items: Sequence, on_done: OnDone | None = None, gpu: bool | float = False) -> list:
+        _check_gpu(gpu)
+        items = list(items)
+        if not items:
+            return []
+        ray = _open_session(self.address, self.workers)
+        task = ray.remote(_call).options(num_cpus=1, num_gpus=_gpu_request(gpu, ray.cluster_resources()))
+        refs = [task.remote(fn, item) for item in items]
+        index = {ref: i for i, ref in enumerate(refs)}
+        results: list = [None] * len(items)
+        pending = list(refs)
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                for ref in done:
+                    i = index[ref]
+                    results[i] = _get(ray, ref)
+                    if on_done:
+                        on_done(i, results[i])
+        finally:
+            # an error, a cancelled run (KeyboardInterrupt), or a failing callback: the rest is not wanted
+            for ref in pending:
+                ray.cancel(ref)
+        return results
+
+
+def _call(fn: Callable, item):
+    """The Ray task: `fn` travels as an argument, so any picklable callable works (ray.remote
+    itself takes only Python functions), as with the local process pool."""
+    return fn(item)
+
+
+def _get(ray, ref):
+    """The task's result, or its exception as the task raised it (not wrapped in a RayTaskError),
+    so the caller's error handling (GearlabInputError -> exit 2) works as with local workers."""
+    try:
+        return ray.get(ref)
+    except ray.exceptions.RayTaskError as exc:
+        cause = exc.cause
+        if isinstance(cause, Exception) and not isinstance(cause, ray.exceptions.RayError):
+            cause.add_note(f"raised in a Ray task: {exc}")  # str() holds the worker and its traceback
+            raise cause from None
+        raise
+
+
+def make_executor(name: str = "local", workers: int | None = None, address: str | None = None,
+                  scenario_address: str | None = None):
+    """The executor called `name`. For `ray`, the cluster address is `address` (CLI --ray-address),
+    else RAY_ADDRESS, else `scenario_address` ([execution] address), else a local instance."""
+    if name == "local":
+        return LocalExecutor(workers)
+    if name == "ray":
+        return RayExecutor(ray_address(address, scenario_address), workers)
+    raise GearlabInputError(f"unknown executor '{name}'; known: {', '.join(EXECUTORS)}")

@@ -113,7 +113,7 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
     import gearlab.kinds.dataset
 
     monkeypatch.setattr(gearlab.kinds.dataset, "make_executor",
-                        lambda name="local", workers=None: gearlab.executors.make_executor(name, 1))
+                        lambda name="local", workers=None, **_: gearlab.executors.make_executor(name, 1))
     code, out, err = cli("run", DATASET_B, "--quick", "--out", tmp_path / "runs")
     assert code == 0, err
     lines = out.strip().splitlines()

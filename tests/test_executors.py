@@ -1,0 +1,315 @@
+"""Executors: the map contract (input order, a callback per finished item, errors as raised)
+for the local pool and Ray, address resolution, and the same transfer records whichever
+executor runs the units.
+
+The Ray tests start one local Ray instance (2 CPUs) for the whole module and skip, saying
+why, when Ray is not installed.
+"""
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from gearlab import executors
+from gearlab.errors import GearlabInputError
+from gearlab.executors import LocalExecutor, RayExecutor, make_executor, ray_address
+
+# Only light imports at the top: local worker processes import this module to find the mapped
+# functions, and gearlab's runs and kinds pull in torch (seconds per worker).
+
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
+
+NO_RAY = "Ray is not installed (pip install 'gearlab[ray]')"
+
+
+# Top-level, so that worker processes can unpickle them.
+def square(x: int) -> int:
+    return x * x
+
+
+def first_is_slow(x: int) -> int:
+    """Item 0 finishes last: on_done sees the finishing order, the results keep the input order."""
+    if x == 0:
+        time.sleep(1.0)
+    return x * x
+
+
+def refuse_three(x: int) -> int:
+    if x == 3:
+        raise GearlabInputError("item 3 is not allowed")
+    return x
+
+
+def divide(x: int) -> float:
+    return 1 / x
+
+
+def gpu_ids(x: int) -> list:
+    import ray
+
+    return ray.get_gpu_ids()
+
+
+@pytest.fixture(scope="module")
+def ray_session():
+    """One local Ray instance for the module; closed at its end so other modules do not pay for it."""
+    ray = pytest.importorskip("ray", reason=NO_RAY)
+    # Ray workers cannot import this test module by name (it is not a package): send its functions by value.
+    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    with pytest.MonkeyPatch.context() as mp:
+        mp.delenv("RAY_ADDRESS", raising=False)
+        # The instance declares one GPU (Ray does not check that it exists), so that the GPU
+        # requests of training tasks are exercised on machines without one.
+        real_init = ray.init
+        mp.setattr(ray, "init", lambda **options: real_init(num_gpus=1, **options))
+        executors._open_session(None, 2)
+    yield ray
+    executors._close_session()
+
+
+@pytest.fixture(params=["local-1", "local-2", "ray"])
+def executor(request):
+    if request.param == "ray":
+        request.getfixturevalue("ray_session")
+        return RayExecutor(workers=2)
+    return LocalExecutor(int(request.param[-1]))
+
+
+# ----------------------------------------------------------------------------- the map contract
+
+
+def test_results_keep_the_input_order_and_every_item_is_reported_once(executor):
+    seen = []
+    results = executor.map(first_is_slow, range(5), lambda i, r: seen.append((i, r)))
+    assert results == [0, 1, 4, 9, 16]
+    assert sorted(seen) == [(i, i * i) for i in range(5)]
+    if executor.workers != 1:
+        assert seen[0][0] != 0, "on_done should hear of each item as it finishes, not in input order"
+
+
+def test_no_items_no_work(executor):
+    assert executor.map(square, [], lambda i, r: pytest.fail("nothing to report")) == []
+
+
+def test_a_gearlab_input_error_arrives_as_itself(executor):
+    with pytest.raises(GearlabInputError, match="item 3 is not allowed") as info:
+        executor.map(refuse_three, range(5))
+    assert type(info.value) is GearlabInputError  # not a Ray wrapper class
+
+
+def test_other_errors_keep_their_type(executor):
+    with pytest.raises(ZeroDivisionError):
+        executor.map(divide, [1, 0, 2])
+
+
+def test_gpu_request_changes_no_result(executor):
+    """Local executors ignore it; a Ray cluster without GPUs asks for none."""
+    assert executor.map(square, range(4), gpu=True) == [0, 1, 4, 9]
+
+
+def test_a_failing_callback_stops_the_map(executor):
+    def stop(i, r):
+        raise RuntimeError("cancelled")
+
+    with pytest.raises(RuntimeError, match="cancelled"):
+        executor.map(square, range(4), stop)
+
+
+def test_ray_tasks_that_want_a_gpu_get_a_share_of_one(ray_session):
+    """One GPU and two CPUs: each training task takes half the GPU, so two still run at once."""
+    executor = RayExecutor(workers=2)
+    assert executor.map(gpu_ids, range(2)) == [[], []]
+    assert executor.map(gpu_ids, range(2), gpu=True) == [[0], [0]]
+    assert executors._gpu_request(True, ray_session.cluster_resources()) == 0.5
+    assert executors._gpu_request(0.25, {"GPU": 4.0, "CPU": 8.0}) == 0.25
+    assert executors._gpu_request(True, {"GPU": 1.0, "CPU": 3.0}) == 0.3333
+    assert executors._gpu_request(True, {"GPU": 8.0, "CPU": 4.0}) == 1.0
+    assert executors._gpu_request(True, {"CPU": 4.0}) == 0.0  # no GPUs: CPU tasks
+
+
+@pytest.mark.parametrize("workers", [0, -1, True, 1.5, "2"])
+@pytest.mark.parametrize("name", ["local", "ray"])
+def test_bad_worker_counts_are_refused(name, workers):
+    with pytest.raises(GearlabInputError, match="workers must be a whole number >= 1"):
+        make_executor(name, workers)
+
+
+def test_unknown_executor_is_refused():
+    with pytest.raises(GearlabInputError, match="unknown executor 'dask'; known: local, ray"):
+        make_executor("dask")
+
+
+@pytest.mark.parametrize("gpu", [-1, 2, 1.5])
+def test_bad_gpu_share_is_refused(gpu):
+    with pytest.raises(GearlabInputError, match="gpu must be"):
+        make_executor("local", 1).map(square, [1], gpu=gpu)
+
+
+# ----------------------------------------------------------------------------- without Ray
+
+
+@pytest.fixture
+def no_ray(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` now raises ImportError
+
+
+def test_without_ray_the_ray_executor_says_how_to_get_it(no_ray):
+    with pytest.raises(GearlabInputError) as info:
+        make_executor("ray")
+    assert str(info.value) == "executor 'ray' needs the optional extra: pip install 'gearlab[ray]'"
+
+
+def test_without_ray_a_ray_scenario_is_refused_with_exit_code_2(no_ray, tmp_path, monkeypatch, cli):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY.replace("[execution]", '[execution]\nexecutor = "ray"'))
+    code, _, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 2
+    assert "pip install 'gearlab[ray]'" in err and "Traceback" not in err
+    assert not list((tmp_path / "runs").glob("*/*"))  # refused before any work: no run left behind
+
+
+def test_the_local_executor_never_imports_ray(no_ray):
+    assert make_executor("local", 1).map(square, [2]) == [4]
+
+
+# ----------------------------------------------------------------------------- address
+
+
+def test_address_precedence(monkeypatch):
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    assert ray_address() is None  # start a local instance
+    assert ray_address(scenario="scen:6379") == "scen:6379"
+    monkeypatch.setenv("RAY_ADDRESS", "env:6379")
+    assert ray_address(scenario="scen:6379") == "env:6379"
+    assert ray_address("cli:6379", scenario="scen:6379") == "cli:6379"
+
+
+def test_the_scenario_address_reaches_the_ray_executor(tmp_path, monkeypatch):
+    from gearlab.kinds.dataset import executor_for
+    from gearlab.scenario import load_scenario
+
+    monkeypatch.setattr(executors, "import_ray", lambda: None)  # no session is opened here
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY.replace("[execution]", '[execution]\nexecutor = "ray"\naddress = "scen:6379"'))
+    scenario = load_scenario(path)
+    assert executor_for(scenario).address == "scen:6379"
+    assert executor_for(scenario, address="cli:6379").address == "cli:6379"
+    monkeypatch.setenv("RAY_ADDRESS", "env:6379")
+    assert executor_for(scenario).address == "env:6379"
+    path.write_text(TINY.replace("[execution]", '[execution]\nexecutor = "ray"'))
+    monkeypatch.delenv("RAY_ADDRESS")
+    assert executor_for(load_scenario(path)).address is None
+
+
+def test_one_ray_session_per_process(ray_session):
+    assert executors._open_session(None, 2) is ray_session  # reused, not started again
+    with pytest.raises(GearlabInputError, match="already uses the Ray cluster 'local'"):
+        executors._open_session("elsewhere:6379", None)
+
+
+# ----------------------------------------------------------------------------- same records
+
+
+TINY = """\
+[scenario]
+name = "tiny"
+kind = "transfer"
+
+[source]
+preset = "B-6-ch5"
+teeth = [1, 2, 3]
+faults = { crack = [13] }
+healthy = 9
+
+[target]
+preset = "B-8-ch5"
+teeth = [1, 2, 3]
+faults = { crack = [13] }
+healthy = 9
+noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
+
+[network]
+name = "fast"
+
+[[methods]]
+adapter = "source_only"
+
+[[methods]]
+adapter = "target_only"
+supervised = true
+
+[[methods]]
+adapter = "mmd"
+
+[protocol]
+ks = [0, 2]
+repetitions = 1
+target_train = 8
+batch = 4
+prime_epochs = 2
+baseline_epochs = 2
+patience = 2
+min_epochs = 2
+max_epochs = 3
+
+[execution]
+workers = 1
+device = "cpu"
+"""
+
+
+def records(run: Path) -> dict[str, dict]:
+    """The run's records by unit, without the fields that measure time (they differ run to run)."""
+    out = {}
+    for line in (run / "results.jsonl").read_text().splitlines():
+        r = json.loads(line)
+        out[r["unit"]] = {k: v for k, v in r.items() if "seconds" not in k and "time" not in k}
+    return out
+
+
+def test_local_and_ray_give_the_same_records(ray_session, tmp_path, monkeypatch):
+    """One worker, two local workers and Ray: the same units, the same numbers. The Ray run builds
+    its datasets itself (its own cache), so simulation units run on Ray too."""
+    from gearlab.runs import run_scenario
+
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    runs = {}
+    for name, cache, execution in [
+        ("local-1", "cache", "workers = 1"),
+        ("local-2", "cache", "workers = 2"),
+        ("ray", "ray-cache", 'executor = "ray"\nworkers = 2'),
+    ]:
+        monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / cache))
+        path = tmp_path / f"{name}.toml"
+        path.write_text(TINY.replace("workers = 1", execution))
+        runs[name] = records(run_scenario(path, out=tmp_path / name).path)
+    assert len(runs["local-1"]) == 6
+    assert runs["local-2"] == runs["local-1"]
+    assert runs["ray"] == runs["local-1"]
+
+
+def _mark_then_sleep(task):
+    """Unit 0 fails at once; the others mark that they started, sleep, and mark that they ended."""
+    folder, i = task
+    if i == 0:
+        time.sleep(0.5)  # let unit 1 start beside it
+        raise GearlabInputError("unit 0 is bad")
+    (Path(folder) / f"started-{i}").touch()
+    time.sleep(3)
+    (Path(folder) / f"ended-{i}").touch()
+    return i
+
+
+def test_a_failed_unit_stops_the_local_pool_at_once(tmp_path):
+    """No queued unit starts after a failure (or a Ctrl-C), and the running ones are stopped."""
+    with pytest.raises(GearlabInputError, match="unit 0 is bad"):
+        LocalExecutor(2).map(_mark_then_sleep, [(tmp_path, i) for i in range(5)])
+    time.sleep(4)  # longer than a unit: an unstopped one would have ended by now
+    marks = sorted(p.name for p in tmp_path.iterdir())
+    assert "started-1" in marks and not any(m.startswith("ended") for m in marks)
+    assert len(marks) < 3  # the queued units were dropped (the worker freed by unit 0 may take one)
