@@ -1,12 +1,37 @@
 """Errors that the CLI turns into one clear line and exit code 2."""
 
+import math
+import re
+
+# Line breaks and other control characters; they reach messages inside names taken from the
+# user's files (a TOML key "a\nb", a channel name in an HDF5 file).
+_CONTROL = re.compile(r"[\x00-\x1f\x7f\x85\u2028\u2029]")
+
+
+def one_line(text: str) -> str:
+    """*text* with its control characters escaped, so that it prints as one line."""
+    return _CONTROL.sub(lambda m: ascii(m.group())[1:-1], text)
+
+
+def shown(value: object, limit: int = 60) -> str:
+    """repr() of a value from the input, cut to *limit* characters (a 4000-digit integer, a
+    long text) so that the message stays readable."""
+    if isinstance(value, int) and value.bit_length() > 100:  # repr() refuses beyond 4300 digits
+        return f"an integer of about {round(value.bit_length() * math.log10(2))} digits"
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
 
 class GearlabInputError(Exception):
     """Bad input from the user: a scenario, a CLI option, a data file, a plugin parameter.
 
     The message is one line that says what is wrong, where (file, table, key) and what
     was expected. The CLI prints it and exits with code 2; nothing is half-written.
+    Whatever the message quotes from the input, it stays on one line.
     """
+
+    def __init__(self, message: object = "", *args):
+        super().__init__(one_line(str(message)), *args)
 
 
 class UnknownPluginError(GearlabInputError):

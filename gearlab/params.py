@@ -47,6 +47,8 @@ def did_you_mean(name: str, known: list[str] | tuple[str, ...]) -> str:
 def resolve_params(schema: tuple[Param, ...], given: Mapping[str, object], where: str) -> dict[str, float]:
     """Fill defaults, parse units, check names, types and the schema's static bounds."""
     by_name = {p.name: p for p in schema}
+    if not isinstance(given, Mapping):
+        raise GearlabInputError(f"{where}: expected a table of parameters {{name = value, ...}}, got {given!r}")
     for key in given:
         if key not in by_name:
             raise GearlabInputError(

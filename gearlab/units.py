@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 
 import pint
 
-from .errors import GearlabInputError
+from .errors import GearlabInputError, shown
 
 
 @functools.cache
@@ -27,33 +28,66 @@ def to_si(value: object, unit: str, where: str) -> float:
     if isinstance(value, bool):
         raise GearlabInputError(f"{where}: expected a number or a quantity with a unit of {_describe(unit)}, got {value!r}")
     if isinstance(value, (int, float)):
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond any float (TOML integers have no size limit)
+            raise GearlabInputError(f"{where}: expected a finite number, got {shown(value)}") from None
     elif isinstance(value, str):
         number = _parse(value, unit, where)
     else:
         raise GearlabInputError(
-            f"{where}: expected a number or a quantity with a unit of {_describe(unit)}, got {type(value).__name__} {value!r}"
+            f"{where}: expected a number or a quantity with a unit of {_describe(unit)}, got {type(value).__name__} {shown(value)}"
         )
     if not math.isfinite(number):
         raise GearlabInputError(f"{where}: expected a finite number, got {value!r}")
     return number
 
 
+# What a quantity's text may hold, checked before pint evaluates it: pint computes powers
+# exactly, so "9**9**9 Hz" would never return. Units need only small powers (m^2, s**-1).
+_MAX_TEXT = 100
+_MAX_POWERS = 4  # with exponents up to 9, nested powers stay below 9**4 = 6561
+_POWER = re.compile(r"(?:\*\*|\^)\s*(?P<exponent>[-+]?\s*\d+(?:\.\d*)?)?(?P<chained>\s*(?:\*\*|\^))?")
+
+
+def _screen(text: str, unit: str, where: str) -> None:
+    if len(text) > _MAX_TEXT:
+        raise GearlabInputError(f"{where}: {text[:40]!r}... is too long for a quantity; expected e.g. '3.175 mm'")
+    if "," in text:  # pint reads "1,5 mm" as 15 mm
+        raise GearlabInputError(f"{where}: {text!r}: write the number with a decimal point and no commas, "
+                                f"e.g. '3.175 mm' ({_describe(unit)})")
+    powers = list(_POWER.finditer(text))
+    for power in powers:
+        exponent = power.group("exponent")
+        if (len(powers) > _MAX_POWERS or exponent is None or power.group("chained")
+                or abs(float(exponent.replace(" ", ""))) > 9):
+            raise GearlabInputError(f"{where}: {text!r}: a power in a quantity must be a small number, "
+                                    "as in 'm^2' or 's**-1'")
+
+
 def _parse(text: str, unit: str, where: str) -> float:
+    _screen(text, unit, where)
     ureg = _ureg()
     try:
         quantity = ureg.Quantity(text.strip().replace("µ", "u").replace("μ", "u"))
     except Exception:
         raise GearlabInputError(f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})") from None
     target = ureg.Unit(unit) if unit else ureg.dimensionless
-    if not isinstance(quantity, pint.Quantity) or quantity.unitless:
-        return float(getattr(quantity, "magnitude", quantity))  # a bare number is already SI
     try:
+        if not isinstance(quantity, pint.Quantity):
+            return float(quantity)
+        if quantity.units == ureg.dimensionless:  # a bare number is already SI ("5 %" is not bare)
+            return float(quantity.magnitude)
         return float(quantity.to(target).magnitude)
     except pint.DimensionalityError:
         raise GearlabInputError(
             f"{where}: {text!r} has the wrong dimension; expected a quantity in {_describe(unit)}"
         ) from None
+    except OverflowError:
+        raise GearlabInputError(f"{where}: expected a finite number, got {text!r}") from None
+    except (TypeError, ValueError, ArithmeticError):  # a complex magnitude, an offset unit's arithmetic, ...
+        raise GearlabInputError(f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' "
+                                f"({_describe(unit)})") from None
 
 
 def _describe(unit: str) -> str:

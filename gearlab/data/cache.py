@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import time
 import warnings
 from collections.abc import Callable
 from dataclasses import asdict
@@ -49,8 +50,24 @@ def save(dataset: Dataset) -> Path:
     buf = io.BytesIO()
     np.savez(buf, meta=np.array(json.dumps(meta)), **{name: getattr(dataset, name) for name in ARRAYS})
     path = entry_path(dataset.spec)
+    _remove_stale_temporaries(path)
     atomic_write(path, buf.getvalue())
     return path
+
+
+# A temporary file older than this was left by a writer killed before its rename (writing an
+# entry takes seconds); a younger one may belong to another process writing the same entry.
+STALE_S = 3600.0
+
+
+def _remove_stale_temporaries(path: Path) -> None:
+    now = time.time()
+    for tmp in path.parent.glob(f".{path.name}.*.tmp"):
+        try:
+            if now - tmp.stat().st_mtime > STALE_S:
+                tmp.unlink()
+        except OSError:  # removed meanwhile by another process
+            pass
 
 
 def load(spec: DatasetSpec, path: Path | None = None) -> Dataset | None:
@@ -64,6 +81,8 @@ def load(spec: DatasetSpec, path: Path | None = None) -> Dataset | None:
             if meta["key"] != spec.key():
                 raise ValueError("key mismatch")
             arrays = {name: data[name] for name in ARRAYS}
+    except FileNotFoundError:  # removed since exists() by another process: not damaged
+        return None
     except Exception as exc:  # a damaged entry is not an error for the user: rebuild it
         warnings.warn(f"dataset cache entry {path.name} is unreadable ({exc}); rebuilding it", stacklevel=2)
         path.unlink(missing_ok=True)

@@ -89,6 +89,9 @@ _TURN_SLACK = 0.01
 # Share of rising steps that marks a channel as a shaft angle rather than a pulse train
 # (a pulse train is flat most of the time, an angle rises at every sample).
 _RISING_SHARE = 0.9
+# Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
+# cannot even be unwrapped).
+_MIN_SAMPLES_PER_REV = 2
 
 
 # --- what the importer is asked -------------------------------------------------------
@@ -139,9 +142,12 @@ class MeasuredSpec:
         path = Path(self.path)
         _check_exists(path)
         digest = hashlib.sha256()
-        with path.open("rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                digest.update(block)
+        try:
+            with path.open("rb") as f:
+                for block in iter(lambda: f.read(1 << 20), b""):
+                    digest.update(block)
+        except OSError as exc:
+            raise GearlabInputError(f"{path}: cannot read ({exc.strerror or exc})") from None
         text = json.dumps(
             {"file": digest.hexdigest(), "format": path.suffix.lower(), "options": self.canonical(),
              "importer": IMPORTER_VERSION, "physics": PHYSICS_VERSION},
@@ -156,6 +162,8 @@ class MeasuredSpec:
             value = getattr(self, label)
             if not isinstance(value, str) or not value:
                 raise GearlabInputError(f"{where}: '{label}' must be a non-empty text, got {value!r}")
+        if "\0" in self.path:
+            raise GearlabInputError(f"{where}: 'path' contains a NUL character")
         if (self.tacho is None) == (self.speed_hz is None):
             got = "both" if self.tacho is not None else "neither"
             raise GearlabInputError(
@@ -208,8 +216,14 @@ def _one_line(exc: BaseException) -> str:
     return text if len(text) <= 200 else text[:197] + "..."
 
 
+def _one_line_repr(value) -> str:
+    """repr() of a value found in a file, on one short line whatever the object is."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
 def _listing(names: Iterable[str], limit: int = 12) -> str:
-    names = list(names)
+    names = [" ".join(str(n).split()) for n in names]  # names from a file: kept to one line
     if not names:
         return "none"
     shown = ", ".join(names[:limit])
@@ -217,9 +231,14 @@ def _listing(names: Iterable[str], limit: int = 12) -> str:
 
 
 def _check_exists(path: Path) -> None:
-    if not path.exists():
+    try:
+        exists, is_file = path.exists(), path.is_file()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL character in it, ...
+        raise GearlabInputError(f"{_one_line_repr(str(path))}: cannot be a measured record: "
+                                f"{getattr(exc, 'strerror', None) or exc}") from None
+    if not exists:
         raise GearlabInputError(f"{path}: no such file; expected a measured record ({_supported()})")
-    if not path.is_file():
+    if not is_file:
         raise GearlabInputError(f"{path}: is not a file; expected a measured record ({_supported()})")
 
 
@@ -252,6 +271,8 @@ def _text_array(values: np.ndarray) -> np.ndarray:
 
 def _normalise(value) -> np.ndarray:
     """A reader's raw value as an array: text unified to str; numbers and anything else as is."""
+    if hasattr(value, "toarray"):  # a MATLAB sparse matrix (scipy.sparse): its numbers, dense
+        value = value.toarray()
     arr = np.asarray(value)
     if arr.dtype.kind in "SU":
         return _text_array(arr)
@@ -520,7 +541,7 @@ def read_channels(path, names: Sequence[str]) -> tuple[dict[str, np.ndarray], fl
 
 def _rate_value(value, where: str, path: str) -> float:
     arr = np.asarray(value)
-    shown = repr(arr.item()) if arr.size == 1 else f"{arr.size} values"
+    shown = _one_line_repr(arr.item()) if arr.size == 1 else f"{arr.size} values"
     if arr.dtype.kind not in "biuf" or arr.size != 1:
         raise GearlabInputError(
             f"{path}: sampling rate field {where} must be one number in Hz, got {shown}"
@@ -753,6 +774,14 @@ def _revolution_bounds(angle: np.ndarray, fs: float, source: str, path: str) -> 
                        f"needs {per_rev:.0f} samples at {fmt_hz(fs)}: the record is too short or the tacho "
                        "never completes a revolution")
             raise GearlabInputError(f"{path}: too short for one revolution: {n} samples; {why}")
+        # Fewer samples than that cannot show a revolution, and a rate or speed off by orders
+        # of magnitude would ask revolution_starts for billions of revolution starts.
+        if per_rev < _MIN_SAMPLES_PER_REV:
+            raise GearlabInputError(
+                f"{path}: by {source}, one revolution spans {per_rev:.3g} samples at {fmt_hz(fs)} "
+                f"({turns:.3g} revolutions in {n} samples); expected at least {_MIN_SAMPLES_PER_REV} samples per "
+                "revolution: is the sampling rate or the speed right?"
+            )
     with _prefixed(f"{path}: {source}"):
         starts = revolution_starts(angle)  # also checks the angle increases (shaft turning forwards)
     if starts.size < 2:
@@ -792,7 +821,8 @@ def _class_indices(raw, spec: MeasuredSpec, n: int, path: str) -> np.ndarray:
             if v not in lookup:
                 i = int(np.flatnonzero(arr == v)[0])
                 raise GearlabInputError(
-                    f"{path}: {what} holds the unknown class '{v}'{did_you_mean(v, names)} at sample {i}; {known}"
+                    f"{path}: {what} holds the unknown class {_one_line_repr(v)}{did_you_mean(v, names)} at sample {i}; "
+                    f"{known}"
                 )
         return np.asarray([lookup[v] for v in values.tolist()], dtype=np.int64)[inverse.reshape(-1)]
     if arr.dtype.kind not in "biuf":
