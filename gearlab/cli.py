@@ -34,7 +34,7 @@ err_console = Console(stderr=True, soft_wrap=True)
 @app.command()
 def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON list")] = False) -> None:
     """List every registered plugin: kind, name, source package and parameters."""
-    from .registry import get_registry
+    from .registry import get_registry, kind_text, params_text
 
     registry = get_registry()
     rows = registry.describe()
@@ -46,21 +46,11 @@ def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON l
     for col in ("kind", "name", "package", "parameters (unit, default, bounds)"):
         table.add_column(col)
     for row in rows:
-        params = "\n".join(
-            f"{p['name']} [{p['display_unit'] or '-'}] = {_show(p, p['default'])}  ({_show(p, p['low'])} .. {_show(p, p['high'])})"
-            for p in row["params"]
-        )
         # rich would read "[mm]" as a style tag
-        table.add_row(row["kind"], row["name"], row["package"], escape(params) or "-")
+        table.add_row(kind_text(row), row["name"], row["package"], escape(params_text(row)) or "-")
     console.print(table)
     for problem in registry.problems:
         console.print(f"[red]problem:[/red] {escape(str(problem))}")
-
-
-def _show(param: dict, value: float) -> str:
-    from .units import display
-
-    return display(value, param["unit"], param["display_unit"]).split(" ")[0]
 
 
 STIFFNESS_HELP = """Time-varying mesh stiffness of a gear-pair preset over one pinion revolution.
@@ -238,28 +228,112 @@ def describe_spec(s) -> str:
     return KINDS[s.kind].describe(s)
 
 
+Out = Annotated[Path | None, typer.Option(help="base directory for the run directory (default: the scenario's output dir)")]
+Resume = Annotated[Path | None, typer.Option(help="continue the run in this run directory")]
+Quick = Annotated[bool, typer.Option(help="shrink the scenario for a smoke run")]
+Executor = Annotated[str | None, typer.Option(help="where units run: local (process pool) or ray "
+                                                   "(default: the scenario's execution table)")]
+RayAddress = Annotated[str | None, typer.Option(help="Ray cluster address (default: RAY_ADDRESS, then the "
+                                                     "scenario's; none: a local Ray instance)")]
+Device = Annotated[str | None, typer.Option(help="where networks train: auto (CUDA when present), cpu or cuda "
+                                                 "(default: the scenario's execution table)")]
+Events = Annotated[bool, typer.Option(help="progress as JSON lines on stdout (for front-ends such as the TUI)")]
+
+
 @app.command()
 def run(
     scenario: Annotated[Path | None, typer.Argument(help="scenario TOML file")] = None,
-    out: Annotated[Path | None, typer.Option(help="base directory for the run directory (default: [output] dir)")] = None,
-    resume: Annotated[Path | None, typer.Option(help="continue the run in this run directory")] = None,
-    quick: Annotated[bool, typer.Option(help="shrink the scenario for a smoke run")] = False,
+    out: Out = None,
+    resume: Resume = None,
+    quick: Quick = False,
+    executor: Executor = None,
+    ray_address: RayAddress = None,
+    device: Device = None,
+    events: Events = False,
 ) -> None:
     """Run a scenario headless; prints `run directory: PATH` as its last line."""
+    if scenario is None and resume is None:
+        raise GearlabInputError("give a SCENARIO file, or --resume RUN_DIR")
+    _run(scenario, out, resume, quick, _execution(executor, ray_address, device), events)
+
+
+def _execution(executor: str | None, ray_address: str | None, device: str | None) -> dict:
+    """The [execution] keys set on the command line, checked with the scenario's own."""
+    import os
+
+    if ray_address:
+        os.environ["RAY_ADDRESS"] = ray_address  # wins over the scenario's address, as Ray reads it too
+    given = {"executor": executor, "device": device}
+    given = {key: value for key, value in given.items() if value is not None}
+    return {"execution": given} if given else {}
+
+
+def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict,
+         events: bool) -> None:
+    """Run the engine, drawing its events as progress bars (or printing them as JSON lines)."""
     from .kinds import KINDS
     from .runs import run_scenario
 
-    if scenario is None and resume is None:
-        raise GearlabInputError("give a SCENARIO file, or --resume RUN_DIR")
+    if events:
+        result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
+                              on_event=_print_event)
+        typer.echo(f"run directory: {result.path}")
+        return
     with ProgressView() as view:
-        result = run_scenario(scenario, out=out, resume=resume, quick=quick, on_event=view.handle)
-    from .scenario import load_scenario
-
-    kind = load_scenario(result.scenario_path()).kind
+        result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
+                              on_event=view.handle)
+    kind = result.scenario().kind
     for line in KINDS[kind].summary_lines(result):
         console.print(line)
     console.print(f"report: {result.path / 'report.html'}")
     typer.echo(f"run directory: {result.path}")
+
+
+BENCHMARK = "gap_benchmark.toml"
+
+
+@app.command()
+def gap(
+    scenario: Annotated[str, typer.Argument(help="a gap scenario file (kind = \"gap\"), or 'benchmark'")],
+    trials: Annotated[int | None, typer.Option(help="benchmark: number of trials (default: the scenario's)")] = None,
+    seed: Annotated[int | None, typer.Option(help="benchmark: seed of the hidden draws (default: the scenario's)")] = None,
+    out: Out = None,
+    resume: Resume = None,
+    quick: Quick = False,
+    executor: Executor = None,
+    ray_address: RayAddress = None,
+    events: Events = False,
+) -> None:
+    """Diagnose the sim-to-real gap of a scenario, or run the blind benchmark of the diagnosis.
+
+    `gearlab gap benchmark` runs scenarios/gap_benchmark.toml (from the current folder, else
+    from the gearlab source tree) with --trials and --seed set on the command line.
+    """
+    from .scenario import load_scenario
+
+    overrides = _execution(executor, ray_address, None)
+    if scenario == "benchmark":
+        path = _benchmark_scenario()
+        given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
+        if given:
+            overrides["benchmark"] = given
+    else:
+        if trials is not None or seed is not None:
+            raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark`")
+        path = Path(scenario)
+        kind = load_scenario(path).kind
+        if kind != "gap":
+            raise GearlabInputError(f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
+                                    f"\"{kind}\" (run it with `gearlab run`)")
+    _run(None if resume else path, out, resume, quick, overrides, events)
+
+
+def _benchmark_scenario() -> Path:
+    for folder in (Path("scenarios"), Path(__file__).resolve().parents[1] / "scenarios"):
+        if (folder / BENCHMARK).is_file():
+            return folder / BENCHMARK
+    raise GearlabInputError(f"scenarios/{BENCHMARK} not found in the current folder nor in the gearlab source tree; "
+                            f"run `gearlab run` on a gap_benchmark scenario file instead")
 
 
 @app.command()
@@ -269,6 +343,20 @@ def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> 
 
     path = write_report(RunDir.open(run_dir))
     console.print(f"wrote {path}")
+
+
+@app.command()
+def tui(directory: Annotated[Path, typer.Argument(help="folder of scenario files")] = Path("scenarios")) -> None:
+    """Browse scenarios, run them and watch progress, read results and plugins in the terminal."""
+    if not directory.is_dir():
+        raise GearlabInputError(f"{directory}: no such directory of scenario files")
+    from .tui import run_tui
+
+    run_tui(directory)
+
+
+def _print_event(event) -> None:
+    print(event.to_json(), flush=True)
 
 
 class ProgressView:

@@ -60,7 +60,9 @@ REQUIRED = {
     "fault": ("apply", "ladder_endpoints", "rfa", "resolve", "ladder"),
     "model": ("assemble", "resolve", "preset"),
     "adapter": (),
-    "effect": (),
+    # and a level, a breaks_symmetry flag and the hook of its level (gearlab.effects.hook_problem);
+    # subclasses of gearlab.effects.Effect have all but the hook
+    "effect": ("resolve", "spec", "space", "check_config"),
 }
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
@@ -115,15 +117,18 @@ class Registry:
             for name in self.names(kind):
                 obj = self.plugins[kind][name]
                 info = obj.describe() if hasattr(obj, "describe") else {}
-                rows.append(
-                    {
-                        "kind": kind,
-                        "name": name,
-                        "package": self.packages[(kind, name)],
-                        "doc": info.get("doc", getattr(obj, "doc", "")),
-                        "params": info.get("params", [p.describe() for p in obj.params]),
-                    }
-                )
+                row = {
+                    "kind": kind,
+                    "name": name,
+                    "package": self.packages[(kind, name)],
+                    "doc": info.get("doc", getattr(obj, "doc", "")),
+                    "params": info.get("params", [p.describe() for p in obj.params]),
+                }
+                if kind == "effect":  # where it acts, and whether the builder may use the tooth shift
+                    row["level"] = getattr(obj, "level", "")
+                    row["breaks_symmetry"] = bool(getattr(obj, "breaks_symmetry", False))
+                    row["options"] = info.get("options", {k: list(v) for k, v in getattr(obj, "options", {}).items()})
+                rows.append(row)
         return rows
 
 
@@ -140,6 +145,10 @@ def _contract_problem(kind: str, obj) -> str:
     missing = [attr for attr in REQUIRED[kind] if not callable(getattr(obj, attr, None))]
     if missing:
         return f"{kind} '{name}' lacks {', '.join(missing)}"
+    if kind == "effect":
+        from .effects import hook_problem
+
+        return hook_problem(obj)
     return ""
 
 
@@ -185,3 +194,28 @@ def load_registry(entry_points: Iterable | None = None) -> Registry:
 @functools.cache
 def get_registry() -> Registry:
     return load_registry()
+
+
+def param_text(param: dict) -> str:
+    """One parameter of ``Registry.describe()`` as 'name [unit] = default  (low .. high)', in its display unit."""
+    from .units import display
+
+    def show(value):
+        return display(value, param["unit"], param["display_unit"]).split(" ")[0]
+
+    return (f"{param['name']} [{param['display_unit'] or '-'}] = {show(param['default'])}  "
+            f"({show(param['low'])} .. {show(param['high'])})")
+
+
+def kind_text(row: dict) -> str:
+    """The kind of a ``Registry.describe()`` row; an effect's level and symmetry with it."""
+    if row["kind"] != "effect":
+        return row["kind"]
+    return f"effect ({row['level']}{', breaks tooth-shift symmetry' if row.get('breaks_symmetry') else ''})"
+
+
+def params_text(row: dict) -> str:
+    """A row's parameters (one per line, see param_text) and its text options ('kind: a | b')."""
+    lines = [param_text(p) for p in row["params"]]
+    lines += [f"{name}: {' | '.join(choices)}" for name, choices in (row.get("options") or {}).items()]
+    return "\n".join(lines)

@@ -4,7 +4,8 @@ A run writes ``runs/<name>/<timestamp>/``: the resolved scenario, ``results.json
 record per finished unit, appended, flushed and fsynced as the unit finishes),
 ``summary.json``, tables, ``figures/`` and ``report.html``. Whole files are written to a
 temporary name and renamed, so a killed run never leaves a half-written file; the
-results store is append-only, so ``--resume`` redoes nothing that finished.
+results store is append-only, so ``--resume`` redoes nothing that finished. One process at
+a time works in a run directory: it holds an flock on ``.lock`` for the whole run.
 
 Progress goes out as :class:`Event` objects to one callback: the CLI draws rich
 progress bars from them, the TUI its widgets.
@@ -13,13 +14,14 @@ progress bars from them, the TUI its widgets.
 from __future__ import annotations
 
 import datetime as _dt
+import fcntl
 import json
 import os
 import shutil
 import tempfile
 import tomllib
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import tomli_w
@@ -30,8 +32,11 @@ from .scenario import Scenario, load_scenario
 
 @dataclass(frozen=True)
 class Event:
-    """A progress event. kind: 'stage' (a stage starts), 'advance' (units done within the
-    stage), 'record' (a unit finished; `record` holds it), 'log' (a line for people)."""
+    """A progress event. kind: 'run' (the run directory is ready; `message` is its path),
+    'stage' (a stage starts), 'advance' (units done within the stage), 'record' (a unit
+    finished; `record` holds it), 'log' (a line for people).
+
+    `gearlab run --events` writes them as JSON lines: that is how the TUI follows a run."""
 
     kind: str
     stage: str = ""
@@ -39,6 +44,14 @@ class Event:
     total: int = 0
     message: str = ""
     record: dict | None = None
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, line: str) -> Event:
+        data = json.loads(line)
+        return cls(**{k: data[k] for k in ("kind", "stage", "done", "total", "message", "record") if k in data})
 
 
 EventSink = Callable[[Event], None]
@@ -63,6 +76,25 @@ def atomic_write(path: Path, data: bytes | str) -> None:
 
 
 RUN_FILE = "run.json"  # how the run was started (--quick), for --resume
+LOCK_FILE = ".lock"  # flocked by the process running in the directory; holds its pid
+
+
+class RunLock:
+    """The run directory held by this process (see RunDir.lock); released on close or exit."""
+
+    def __init__(self, fd: int):
+        self.fd: int | None = fd
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)  # closing the only descriptor drops the flock
+            self.fd = None
+
+    def __enter__(self) -> RunLock:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
 
 
 @dataclass
@@ -82,7 +114,10 @@ class RunDir:
     def create(cls, base: Path, scenario: Scenario, quick: bool = False) -> RunDir:
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
         path = Path(base) / scenario.name / stamp
-        created = next((p for p in reversed([path, *path.parents]) if not p.exists()), path)
+        try:
+            created = next((p for p in reversed([path, *path.parents]) if not p.exists()), path)
+        except OSError as exc:  # e.g. a name too long: nothing made yet
+            raise GearlabInputError(f"cannot write the run directory under '{base}': {exc.strerror or exc}") from None
         try:
             path.mkdir(parents=True, exist_ok=False)
             probe = path / ".write-test"
@@ -92,12 +127,14 @@ class RunDir:
             cls(path, created=created).discard()
             raise GearlabInputError(f"cannot write the run directory under '{base}': {exc.strerror or exc}") from None
         run = cls(path, created=created)
-        atomic_write(path / "scenario.toml", tomli_w.dumps(_tomlable(scenario.tables)))
+        # scenario.toml last: it marks a run directory (open() looks for it), so a run killed
+        # while this runs is never resumed without its --quick setting or original scenario.
         run.write_json(RUN_FILE, {"quick": quick})
         try:
             shutil.copyfile(scenario.path, path / "scenario.original.toml")
         except OSError:
             pass
+        atomic_write(path / "scenario.toml", tomli_w.dumps(_tomlable(scenario.tables)))
         return run
 
     def discard(self) -> None:
@@ -126,16 +163,52 @@ class RunDir:
             raise GearlabInputError(f"{path}: not a gearlab run directory (no scenario.toml)")
         return cls(path)
 
+    def lock(self) -> RunLock:
+        """Hold the run directory for this process, or refuse when another process holds it.
+
+        An flock, not a marker file: the kernel drops it when the holder dies, however it
+        dies (SIGKILL included), so a killed run never blocks its --resume. The lock file
+        is left in place: removing it would let two processes lock two different files.
+        """
+        path = self.path / LOCK_FILE
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            raise GearlabInputError(f"{self.path}: cannot lock the run directory ({exc.strerror or exc})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
+            os.close(fd)
+            who = f" (pid {holder})" if holder.isdigit() else ""
+            raise GearlabInputError(f"{self.path}: another gearlab process{who} is running in this run directory; "
+                                    "wait for it to end (or stop it), then resume") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        return RunLock(fd)
+
     def scenario_path(self) -> Path:
         """The scenario file to resume from: the original text, else the resolved one."""
         original = self.path / "scenario.original.toml"
         return original if original.is_file() else self.path / "scenario.toml"
 
+    def scenario(self) -> Scenario:
+        """The scenario as this run ran it (shrunk alike when started with --quick)."""
+        from .kinds import KINDS
+
+        scenario = load_scenario(self.scenario_path())
+        if self.quick:
+            KINDS[scenario.kind].quick(scenario)
+        return scenario
+
     def started_with(self, scenario: Scenario) -> bool:
         """Whether *scenario* resolves to the tables this run was started with (a resume with
         another would mix its units with those finished)."""
+        # [execution] says where units run, not what they compute: a run may resume elsewhere
         stored = tomllib.loads((self.path / "scenario.toml").read_text())
-        return stored == tomllib.loads(tomli_w.dumps(_tomlable(scenario.tables)))
+        stored.pop("execution", None)
+        given = {table: values for table, values in scenario.tables.items() if table != "execution"}
+        return stored == tomllib.loads(tomli_w.dumps(_tomlable(given)))
 
     def records(self) -> list[dict]:
         """Finished units. A line cut short by a kill (no newline yet) is ignored, and so is a
@@ -165,6 +238,12 @@ class RunDir:
     def write_text(self, name: str, text: str) -> None:
         atomic_write(self.path / name, text)
 
+    def remove_temporaries(self) -> None:
+        """Remove the temporary files of atomic writes cut short by a kill. Only with the run
+        directory locked: then no writer of this run is alive."""
+        for tmp in self.path.rglob(".*.tmp"):
+            tmp.unlink(missing_ok=True)
+
     def truncate_partial(self) -> None:
         """Drop a trailing partial line left by a killed run, so appends stay line-aligned."""
         if not self.results_path.exists():
@@ -189,40 +268,57 @@ def run_scenario(
     out: str | Path | None = None,
     resume: str | Path | None = None,
     quick: bool = False,
+    overrides: Mapping[str, Mapping] | None = None,
     on_event: EventSink = _ignore,
 ) -> RunDir:
-    """Validate, then run a scenario into a new (or resumed) run directory."""
+    """Validate, then run a scenario into a new (or resumed) run directory. *overrides*
+    ({table: {key: value}}) replace keys of the scenario file (see load_scenario); a resumed
+    run may change only [execution] (where it runs, not what it computes)."""
     from .kinds import KINDS
 
     if resume is not None:
         run = RunDir.open(Path(resume))
-        if quick and not run.quick:
-            raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
-        quick = run.quick
-        scenario = load_scenario(scenario_path or run.scenario_path())
-        if not run.started_with(scenario):
-            raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
-                                    "with; resume without SCENARIO (the run keeps a copy) or start a new run")
-        run.truncate_partial()
     else:
         if scenario_path is None:
             raise GearlabInputError("no scenario given")
-        scenario = load_scenario(scenario_path)
+        scenario = load_scenario(scenario_path, overrides)
+        if quick:  # the shrunk scenario is checked again: refused before any folder is made
+            KINDS[scenario.kind].quick(scenario)
         base = Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
         run = RunDir.create(base, scenario, quick)
-    module = KINDS[scenario.kind]
-    if quick:
-        module.quick(scenario)
-    on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
-    try:
-        module.run(scenario, run, on_event)
-    except GearlabInputError:
-        # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
-        if resume is None and not run.records():
-            run.discard()
-        raise
-    write_report(run)
+    with run.lock():  # held until the run ends: a second process in this directory is refused
+        if resume is not None:
+            scenario = _resumed_scenario(run, scenario_path, quick, overrides)
+        on_event(Event("run", message=str(run.path)))
+        on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
+        try:
+            KINDS[scenario.kind].run(scenario, run, on_event)
+        except GearlabInputError:
+            # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
+            if resume is None and not run.records():
+                run.discard()
+            raise
+        write_report(run)
     return run
+
+
+def _resumed_scenario(run: RunDir, scenario_path: str | Path | None, quick: bool,
+                      overrides: Mapping[str, Mapping] | None = None) -> Scenario:
+    """The scenario a run was started with, shrunk alike if it was started with --quick;
+    the results store made ready for appends. Called with the run directory locked."""
+    from .kinds import KINDS
+
+    if quick and not run.quick:
+        raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
+    scenario = load_scenario(scenario_path or run.scenario_path(), overrides)
+    if not run.started_with(scenario):
+        raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
+                                "with; resume without SCENARIO (the run keeps a copy) or start a new run")
+    if run.quick:
+        KINDS[scenario.kind].quick(scenario)
+    run.truncate_partial()
+    run.remove_temporaries()
+    return scenario
 
 
 def write_report(run: RunDir) -> Path:

@@ -8,13 +8,14 @@ error names the file, the table and the key. ``gearlab validate`` prints the sam
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import GearlabInputError
+from .errors import GearlabInputError, shown
 from .params import did_you_mean
 
 _REQUIRED = object()
@@ -53,9 +54,11 @@ def one_of(*choices: str) -> Callable[[Any, str], Any]:
 
 def in_range(low: float | None = None, high: float | None = None) -> Callable[[Any, str], Any]:
     def check(value, where):
-        if (low is not None and value < low) or (high is not None and value > high):
+        # written as "not inside" so that NaN, which compares false with everything, is outside
+        if not ((low is None or value >= low) and (high is None or value <= high)) \
+                or (isinstance(value, float) and not math.isfinite(value)):
             span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
-            raise GearlabInputError(f"{where}: {value!r} is outside {span}")
+            raise GearlabInputError(f"{where}: {shown(value)} is outside {span}")
         return value
 
     return check
@@ -69,13 +72,21 @@ SCENARIO_TABLE = Table(
     },
     required=True,
 )
-OUTPUT_TABLE = Table({"dir": Key(str, "runs", doc="base directory of run directories")})
+def folder(value: str, where: str) -> str:
+    """A folder name the file system can take (Python refuses a NUL character in a path)."""
+    if not value or "\0" in value:
+        raise GearlabInputError(f"{where}: expected a folder, got {shown(value)}" + (" (a NUL character)" if value else ""))
+    return value
+
+
+OUTPUT_TABLE = Table({"dir": Key(str, "runs", folder, doc="base directory of run directories")})
 
 
 EXECUTION_TABLE = Table(
     {
         "executor": Key(str, "local", one_of("local", "ray"), "local process pool or a Ray cluster"),
-        "workers": Key(int, 0, in_range(0), "processes for the local executor; 0 = all cores"),
+        "workers": Key(int, 0, in_range(0), "processes for the local executor (CPUs of a local Ray); 0 = all cores"),
+        "address": Key(str, "", doc="Ray cluster address, below --ray-address and RAY_ADDRESS; '' = a local Ray"),
         "device": Key(str, "auto", one_of("auto", "cpu", "cuda"), "where networks train"),
     }
 )
@@ -112,7 +123,7 @@ def _check_type(value, types, where):
     if float in types and isinstance(value, int) and not isinstance(value, bool):
         ok = True
     if not ok:
-        raise GearlabInputError(f"{where}: expected {_type_name(types)}, got {type(value).__name__} {value!r}")
+        raise GearlabInputError(f"{where}: expected {_type_name(types)}, got {type(value).__name__} {shown(value)}")
 
 
 def validate_table(path, name: str, table: Table, data: Mapping, index: int | None = None) -> dict:
@@ -177,16 +188,23 @@ def read_toml(path: Path) -> dict:
         raise GearlabInputError(f"{path}: cannot read ({exc.strerror})") from None
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except ValueError as exc:  # TOMLDecodeError, or an integer of more digits than Python converts
         raise GearlabInputError(f"{path}: invalid TOML: {exc}") from None
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key."""
+def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None) -> Scenario:
+    """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key.
+
+    *overrides* ({table: {key: value}}, e.g. the CLI's --executor or --trials) replace keys of
+    the file before validation, so they are checked like the file's own values."""
     from .kinds import KINDS
 
     path = Path(path)
     data = read_toml(path)
+    for table, values in (overrides or {}).items():
+        if not isinstance(data.get(table, {}), dict):
+            raise GearlabInputError(f"{location(path, table)}: expected a table, to set {', '.join(values)} in")
+        data.setdefault(table, {}).update(values)
     head = validate_table(path, "scenario", SCENARIO_TABLE, data.get("scenario", {})) if "scenario" in data else None
     if head is None:
         raise GearlabInputError(f"{path}: missing table [scenario] (with name, kind and description)")
@@ -197,7 +215,9 @@ def load_scenario(path: str | Path) -> Scenario:
     scenario = Scenario(
         path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data
     )
-    if not scenario.name or "/" in scenario.name or scenario.name.startswith("."):
-        raise GearlabInputError(f"{location(path, 'scenario', 'name')}: expected a plain name usable as a folder name")
+    name = scenario.name
+    if not name or "/" in name or name.startswith(".") or len(name) > 100 or not name.isprintable():
+        raise GearlabInputError(f"{location(path, 'scenario', 'name')}: expected a plain name usable as a folder name "
+                                f"(printable, at most 100 characters, no '/'), got {shown(name)}")
     scenario.spec = module.build(scenario)
     return scenario

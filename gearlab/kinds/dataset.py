@@ -6,9 +6,12 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
+
 from ..data.cache import load_or_build
 from ..data.importers import MeasuredSpec
 from ..data.spec import DATASET_PRESETS, DatasetSpec, NoiseSpec, dataset_preset
+from ..effects import effects_from_tables
 from ..errors import GearlabInputError
 from ..executors import make_executor
 from ..runs import Event, RunDir
@@ -39,6 +42,8 @@ DATASET_TABLE = Table(
         "tsa": Key(bool, None),
         "seed": Key(int, None, in_range(0)),
         "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'"),
+        "effects": Key(list, None, doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
+                                       "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)"),
     },
     array=True,
     required=True,
@@ -52,6 +57,8 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     if bool(entry["preset"]) == bool(entry["file"]):
         raise GearlabInputError(f"{where}: give exactly one of 'preset' (simulated) or 'file' (measured data)")
     if entry["file"]:
+        if entry.get("effects"):
+            raise GearlabInputError(f"{where} key 'effects': effects act on simulations; a measured 'file' has none")
         return measured_spec(entry, where, base)
     spec = dataset_preset(entry["preset"], where)
     changes = {}
@@ -84,6 +91,8 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
             changes[key] = entry[key]
     if entry["noise"] is not None:
         changes["noise"] = noise_spec(entry["noise"], f"{where} key 'noise'")
+    if entry.get("effects") is not None:
+        changes["effects"] = effects_from_tables(entry["effects"], f"{where} key 'effects'")
     spec = spec.with_(**changes)
     spec.check(where)
     spec.check_model(where)  # model, preset, channel, faults and teeth: refused before any work
@@ -135,9 +144,27 @@ def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
     return specs
 
 
+def class_sizes(spec: DatasetSpec | MeasuredSpec, where: str = "") -> dict[str, int] | None:
+    """Samples per class of a simulated dataset from its spec alone (as data.builder lays it
+    out), so that protocols are checked before anything is built; None for measured data."""
+    if not isinstance(spec, DatasetSpec):
+        return None
+    _, _, teeth = spec.check_model(where)
+    return {"healthy": spec.healthy, **{name: len(steps) * len(teeth) * spec.duplicates for name, steps in spec.faults}}
+
+
+def sized(spec: DatasetSpec | MeasuredSpec) -> str:
+    """'name (N samples: H healthy, F fault)', for the one-line descriptions."""
+    sizes = class_sizes(spec)
+    if sizes is None:
+        return f"{spec.name} (measured)"
+    total = sum(sizes.values())
+    return f"{spec.name} ({total} samples: {sizes['healthy']} healthy, {total - sizes['healthy']} fault)"
+
+
 def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
-    return f"{len(scenario.spec)} dataset(s): " + ", ".join(s.name for s in scenario.spec)
+    return f"{len(scenario.spec)} dataset(s): " + ", ".join(sized(s) for s in scenario.spec)
 
 
 def quick(scenario: Scenario) -> None:
@@ -149,9 +176,26 @@ def quick(scenario: Scenario) -> None:
     ]
 
 
-def executor_for(scenario: Scenario):
+def executor_for(scenario: Scenario, address: str | None = None):
+    """The scenario's [execution] executor. For Ray, `address` (the CLI's --ray-address) wins over
+    RAY_ADDRESS, which wins over the scenario's `address`."""
     ex = scenario.tables["execution"]
-    return make_executor(ex["executor"], ex["workers"] or None)
+    return make_executor(ex["executor"], ex["workers"] or None, address=address,
+                         scenario_address=ex.get("address") or None)
+
+
+def device_of(scenario: Scenario) -> str:
+    """The scenario's [execution] device for training, checked here when units train in this
+    machine's processes (a Ray cluster's workers may have a GPU that this machine lacks)."""
+    ex = scenario.tables["execution"]
+    if ex["executor"] == "local":
+        from ..learn.training import pick_device
+
+        try:
+            pick_device(ex["device"])
+        except GearlabInputError as exc:
+            raise GearlabInputError(f"{location(scenario.path, 'execution', 'device')}: {exc}") from None
+    return ex["device"]
 
 
 def class_counts(dataset) -> dict[str, int]:
@@ -202,3 +246,36 @@ def summary_lines(run: RunDir) -> list[str]:
         lines.append(f"{name}: {d['n']} samples x {d['shape'][1]}, cache key {d['key']}"
                      + (" (from cache)" if d["cached"] else ""))
     return lines
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    return table_md({"datasets": {r["unit"]: r for r in records}})
+
+
+def charts(scenario: Scenario, run: RunDir) -> list:
+    """Per dataset (from the cache; nothing is rebuilt to draw it): a revolution of each class at
+    its top intensity, and their order spectra."""
+    from ..charts import Chart, Curve, dataset_examples
+    from ..data import cache
+    from ..signals import order_spectrum
+
+    done = {r["unit"] for r in run.records()}
+    out = []
+    for spec in scenario.spec:
+        if spec.name not in done:
+            continue
+        dataset = cache.load(spec)
+        if dataset is None:
+            out.append(Chart(f"dataset {spec.name}", "", "", (), notes=("not in the dataset cache any more",)))
+            continue
+        examples = dataset_examples(dataset, per_class=1)
+        angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]
+        out.append(Chart(f"{spec.name}: one revolution per class", "input-shaft angle (deg)", "standardised",
+                         tuple(Curve(label, angle, dataset.X[i]) for _, label, i in examples)))
+        spectra = []
+        for _, label, i in examples:
+            orders, amp = order_spectrum(dataset.X[i])
+            keep = orders <= 200
+            spectra.append(Curve(label, orders[keep], amp[keep]))
+        out.append(Chart(f"{spec.name}: order spectra", "shaft order", "amplitude", tuple(spectra)))
+    return out

@@ -21,6 +21,7 @@ from dataclasses import asdict, replace
 
 import numpy as np
 
+from ..charts import Chart, Curve
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
@@ -30,7 +31,8 @@ from ..params import did_you_mean
 from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import NOISE_KINDS
-from .dataset import DATASET_TABLE, dataset_spec, executor_for
+from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
+from .transfer import check_size
 
 # What a study may change in the chapter-4 presets; the preset itself, the noise kind and
 # TSA are what the study varies.
@@ -51,14 +53,14 @@ TABLES = {
         "dropout": Key(float, 0.1, in_range(0.0, 0.95), "dropout rate (thesis 4.2: 10 %)"),
     }),
     "protocol": Table({
-        "runs": Key(int, 5, in_range(1), "runs with different splits and initial weights"),
+        "runs": Key(int, 5, in_range(1, 1000), "runs with different splits and initial weights"),
         "test_fraction": Key(float, 0.333, in_range(0.01, 0.9), "share of each class held out for testing"),
         "val_fraction": Key(float, 0.2, in_range(0.01, 0.9), "share of the training part held out for validation"),
         "batch": Key(int, 256, in_range(1)),
         "lr": Key(float, 1e-3, in_range(1e-9, 10.0), "Adam learning rate"),
         "epochs": Key(int, 100, in_range(1), "most epochs per run"),
         "patience": Key(int, 15, in_range(1), "stop after this many epochs without a better validation accuracy"),
-        "seed": Key(int, 0, in_range(0)),
+        "seed": Key(int, 0, in_range(0, 2**32 - 1), "seeds torch as 1000 * seed + run"),
     }),
 }
 
@@ -67,16 +69,12 @@ def preset_name(noise: str, variant: str) -> str:
     return f"A-casing_{'TSA' if variant == 'tsa' else 'noise'}-{noise}"
 
 
-def class_sizes(spec: DatasetSpec, where: str) -> dict[str, int]:
-    """Samples per class from the spec alone, so the split is checked before anything is built."""
-    _, _, teeth = spec.check_model(where)
-    return {"healthy": spec.healthy, **{name: len(steps) * len(teeth) * spec.duplicates for name, steps in spec.faults}}
-
-
 def check(spec: dict, path) -> None:
     """The split and the batch size against the class sizes (all the study's datasets share them)."""
     where = location(path, "dataset")
-    sizes = class_sizes(next(iter(spec["datasets"].values()))["noisy"], where)
+    dataset = next(iter(spec["datasets"].values()))["noisy"]
+    sizes = class_sizes(dataset, where)
+    check_size(sum(sizes.values()), dataset.name, where)  # before the split's float arithmetic
     check_split(sizes, spec["protocol"], where)
     check_batch(sizes, spec["protocol"], location(path, "protocol", "batch"))
 
@@ -98,7 +96,7 @@ def build(scenario: Scenario) -> dict:
         raise GearlabInputError(f"{location(scenario.path, 'network', 'name')}: unknown network '{net}'"
                                 f"{did_you_mean(net, list(NETWORKS))}; known: {', '.join(NETWORKS)}")
     p = t["protocol"]
-    protocol = NoiseProtocol(network=net, dropout=t["network"]["dropout"], device=t["execution"]["device"], **p)
+    protocol = NoiseProtocol(network=net, dropout=t["network"]["dropout"], device=device_of(scenario), **p)
     spec = {"datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
             "protocol": protocol}
     check(spec, scenario.path)
@@ -265,3 +263,21 @@ def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
     return ["test accuracy and fault-as-healthy rate [%], mean ± std over runs (thesis 4.3):",
             table_md(summary["results"]).rstrip()]
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    return table_md(results(records))
+
+
+def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
+    """Per noise type and variant: accuracy against intensity step, all faults pooled (Figure 4.4's black curve)."""
+    out = []
+    for noise, variants in results(run.records()).items():
+        curves = []
+        for variant in VARIANTS:
+            c = variants.get(variant, {}).get("curves", {}).get("all")
+            if c:
+                curves.append(Curve(variant, c["steps"], c["accuracy_mean"], c["accuracy_std"]))
+        out.append(Chart(f"{noise} noise: fault accuracy against intensity", "intensity step", "accuracy (%)",
+                         tuple(curves)))
+    return out

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..charts import Chart, Curve
 from ..errors import GearlabInputError
 from ..physics.faults import LADDER_STEPS, place_fault
 from ..physics.presets import PAIR_PRESETS, gear_pair
@@ -95,6 +96,13 @@ def build(scenario: Scenario) -> Spec:
             unknown = set(f) - {"kind", "tooth", "step", "params"}
             if unknown:
                 raise GearlabInputError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, tooth, step, params")
+            # the types place_fault relies on (a list as 'kind' cannot even be looked up)
+            if not isinstance(f["kind"], str):
+                raise GearlabInputError(f"{here} key 'kind': expected a fault name, got {f['kind']!r}")
+            if isinstance(f["tooth"], bool) or not isinstance(f["tooth"], int):
+                raise GearlabInputError(f"{here} key 'tooth': expected a tooth number, got {f['tooth']!r}")
+            if not isinstance(f.get("params", {}), dict):
+                raise GearlabInputError(f"{here} key 'params': expected a table of parameters, got {f['params']!r}")
             placed.append(place_fault(registry, pair, f["kind"], f["tooth"], f.get("step"), f.get("params"), here))
         cases.append(Case(case["name"], tuple(placed)))
     names = [c.name for c in cases]
@@ -161,13 +169,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     spec: Spec = scenario.spec
     records = {r["unit"]: r for r in run.records()}
     pair = spec.pair
-    sweep: dict[str, dict[str, dict]] = {}
-    for case in spec.cases:
-        if case.fault:
-            r = records[case.name]
-            sweep.setdefault(case.fault, {})[str(case.step)] = {
-                "mean": r["mean_N_per_m"], "min": r["min_N_per_m"], "max": r["max_N_per_m"], "rfa": r["rfa"],
-            }
+    sweep = _sweep(spec, records)
     healthy = records["healthy"]
     summary = {
         "kind": "stiffness",
@@ -198,6 +200,18 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     other = [c for c in spec.cases if not c.fault]
     curves = [(c.name, *read_csv(run.path / "cases" / f"{c.name}.csv")) for c in other]
     tvms_figure(curves, f"TVMS over one pinion revolution, {pair.name}", run.figures / "tvms_cases.png")
+
+
+def _sweep(spec: Spec, records: dict[str, dict]) -> dict[str, dict[str, dict]]:
+    """{fault: {step: mean/min/max stiffness and RFA}} of the finished ladder cases."""
+    sweep: dict[str, dict[str, dict]] = {}
+    for case in spec.cases:
+        r = records.get(case.name)
+        if case.fault and r is not None:
+            sweep.setdefault(case.fault, {})[str(case.step)] = {
+                "mean": r["mean_N_per_m"], "min": r["min_N_per_m"], "max": r["max_N_per_m"], "rfa": r["rfa"],
+            }
+    return sweep
 
 
 def _table_md(sweep) -> str:
@@ -234,3 +248,31 @@ def summary_lines(run: RunDir) -> list[str]:
         last = steps[max(steps, key=int)]
         lines.append(f"{fault}: worst step mean {last['mean']:.4g} N/m, min {last['min']:.4g}, RFA {last['rfa']:.3f}")
     return lines
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    return _table_md(_sweep(scenario.spec, {r["unit"]: r for r in records}))
+
+
+def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
+    """TVMS over one pinion revolution: the healthy case, each fault's worst finished step and
+    the named cases; and the RFA of each ladder."""
+    spec: Spec = scenario.spec
+    done = {r["unit"]: r for r in run.records()}
+    worst = {}
+    for case in spec.cases:  # ladder order: the last finished step of each fault wins
+        if case.fault and case.name in done:
+            worst[case.fault] = case
+    shown = [c for c in spec.cases if not c.fault] + list(worst.values())
+    curves = []
+    for case in shown:
+        path = run.path / "cases" / f"{case.name}.csv"
+        if case.name in done and path.is_file():
+            theta, k = read_csv(path)
+            curves.append(Curve(case.name, np.degrees(theta), k / 1e8))
+    out = [Chart(f"TVMS of {spec.pair.name}", "pinion angle (deg)", "k (1e8 N/m)", tuple(curves))]
+    sweep = _sweep(spec, done)
+    if sweep:
+        rfa = tuple(Curve(f, [int(s) for s in steps], [v["rfa"] for v in steps.values()]) for f, steps in sweep.items())
+        out.append(Chart("relative fault area of each ladder (eq. 2.113)", "intensity step", "RFA", rfa))
+    return out

@@ -18,19 +18,33 @@ from dataclasses import asdict, replace
 import numpy as np
 import torch
 
+from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
-from ..data.spec import POINTS, DatasetSpec
-from ..errors import GearlabInputError
+from ..data.spec import POINTS
+from ..errors import GearlabInputError, shown
 from ..learn.networks import NETWORKS
 from ..learn.protocol import KS, Counts, Method, Protocol, StateStore, check, check_data, run_unit, shared_state, unit_key
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
-from .dataset import DATASET_TABLE, dataset_spec, executor_for
+from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
+# Beyond these a scenario could never run: the list of units would not fit in memory, and
+# torch takes seeds below 2**64 (1000 * seed + repetition).
+MAX_REPETITIONS = 1000
+MAX_SEED = 2**32 - 1
+# Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
+# 12 800. The dataset table bounds no size, so absurd ones are refused here, before any work.
+MAX_SAMPLES = 10**6
+
+
+def check_size(total: int, name: str, where: str) -> None:
+    if total > MAX_SAMPLES:
+        raise GearlabInputError(f"{where}: dataset '{name}' would hold {shown(total)} samples; "
+                                f"expected at most {MAX_SAMPLES} (fewer duplicates, teeth or healthy samples)")
 
 TABLES = {
     "source": _DATASET,
@@ -46,7 +60,7 @@ TABLES = {
     }, array=True, required=True),
     "protocol": Table({
         "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
-        "repetitions": Key(int, 5, in_range(1)),
+        "repetitions": Key(int, 5, in_range(1, MAX_REPETITIONS)),
         "target_train": Key(int, 120, in_range(2)),
         "batch": Key(int, 40, in_range(1)),
         "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the calibrated methods"),
@@ -55,7 +69,7 @@ TABLES = {
         "patience": Key(int, 20, in_range(1)),
         "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
         "max_epochs": Key(int, 800, in_range(1)),
-        "seed": Key(int, 0, in_range(0)),
+        "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
     }),
 }
 
@@ -74,8 +88,9 @@ def build(scenario: Scenario) -> dict:
                                     f"#{first + 1}, {methods[first].label}")
     p = t["protocol"]
     ks = p["ks"]
-    if not ks or len(set(ks)) != len(ks) or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0
-                                                    for k in ks):
+    # whole numbers checked first: set() of a list holding a list would fail
+    if not ks or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in ks) \
+            or len(set(ks)) != len(ks):
         raise GearlabInputError(f"{location(path, 'protocol', 'ks')}: expected a list of distinct whole numbers "
                                 f">= 0, got {ks!r}")
     if p["min_epochs"] > p["max_epochs"]:
@@ -89,12 +104,15 @@ def build(scenario: Scenario) -> dict:
         methods=tuple(methods), network=net, dropout=t["network"]["dropout"], ks=tuple(ks),
         repetitions=p["repetitions"], target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
         prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
-        min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=t["execution"]["device"],
+        min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=device_of(scenario),
     )
     check(protocol, str(path))
     source = dataset_spec(t["source"], location(path, "source"), path.parent)
     target = dataset_spec(t["target"], location(path, "target"), path.parent)
     planned = planned_counts(source, location(path, "source")), planned_counts(target, location(path, "target"))
+    for side, counts in zip(("source", "target"), planned):
+        if counts is not None:
+            check_size(counts.healthy + counts.faults, counts.name, location(path, side))
     if None not in planned:
         check_data(protocol, *planned, str(path))
     return {"source": source, "target": target, "protocol": protocol}
@@ -115,19 +133,18 @@ def method(entry: dict, where: str) -> Method:
 def planned_counts(spec, where: str) -> Counts | None:
     """Sample length and class sizes of a simulated dataset, known before it is built (as
     data.builder lays it out); None for measured data, known only once imported."""
-    if not isinstance(spec, DatasetSpec):
+    sizes = class_sizes(spec, where)
+    if sizes is None:
         return None
-    _, _, teeth = spec.check_model(where)
-    faults = sum(len(steps) for _, steps in spec.faults) * len(teeth) * spec.duplicates
-    return Counts(spec.name, POINTS, spec.healthy, faults)
+    return Counts(spec.name, POINTS, sizes.pop("healthy"), sum(sizes.values()))
 
 
 def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
     spec = scenario.spec
     p: Protocol = spec["protocol"]
-    return (f"{spec['source'].name} -> {spec['target'].name}, network {p.network}, {len(p.methods)} methods x "
-            f"{len(p.ks)} k x {p.repetitions} repetitions = {len(units(p))} training runs")
+    return (f"{sized(spec['source'])} -> {sized(spec['target'])}, network {p.network}, {len(p.methods)} methods x "
+            f"{len(p.ks)} k x {p.repetitions} repetitions = {len(p.methods) * len(p.ks) * p.repetitions} training runs")
 
 
 def quick(scenario: Scenario) -> None:
@@ -166,9 +183,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             makers.setdefault(state, (rep, k, m))
     first = list(makers.values())
     phases = [first, [u for u in pending if u not in first]]
+    if first:
+        on_event(Event("stage", stage="priming", total=len(first),
+                       message=f"priming: {len(first)} shared states (primed and source-only models)"))
     on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
     finished = len(todo) - len(pending)
     on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+    priming = {unit_key(*u) for u in first}
 
     def record_done(_: int, record: dict) -> None:
         nonlocal finished
@@ -177,6 +198,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             save_latent(run, record["unit"], latent)
         run.append(record)
         finished += 1
+        if record["unit"] in priming:
+            priming.discard(record["unit"])
+            on_event(Event("advance", stage="priming", done=len(first) - len(priming), total=len(first)))
+        on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %, "
+                                      f"{record['predicted_fault_share']:.0f} % predicted faulty"))
         on_event(Event("record", stage="runs", record=record))
         on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
@@ -184,7 +210,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         # the cache entries by path: a worker process may not share this one's environment
         data = [(spec[d], cache.entry_path(spec[d])) for d in ("source", "target")]
         tasks = [(protocol, *data, rep, k, m, run.path / "states") for rep, k, m in phase]
-        executor.map(train_unit, tasks, on_done=record_done)
+        # a unit asks the executor for a GPU unless the scenario trains on the CPU
+        executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
     summarise(scenario, run)
 
 
@@ -235,7 +262,8 @@ def table_md(tab: dict, ks, methods: list[str]) -> str:
         for m in methods:
             c = tab[m].get(str(k))
             cells.append(f"{c['mean']:.2f} ± {c['std']:.1f}" if c else "")
-        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+        if any(cells):  # a run still going shows the rows it has
+            lines.append(f"| {k} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -280,3 +308,23 @@ def summary_lines(run: RunDir) -> list[str]:
     if summary.get("healthy_share_of_test") is not None:
         lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
     return lines
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    """The Table 5.4 layout of the records so far (the TUI fills it as units finish)."""
+    protocol: Protocol = scenario.spec["protocol"]
+    tab = table(records, protocol)
+    return table_md(tab, protocol.ks, list(tab))
+
+
+def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
+    """Accuracy against k with a ± std band per method (Figures 5.5/5.6)."""
+    protocol: Protocol = scenario.spec["protocol"]
+    tab = table(run.records(), protocol)
+    curves = []
+    for label, per_k in tab.items():
+        ks = [k for k in protocol.ks if str(k) in per_k]
+        if ks:
+            curves.append(Curve(label, ks, [per_k[str(k)]["mean"] for k in ks], [per_k[str(k)]["std"] for k in ks]))
+    return [Chart("target test accuracy against k", "target fault samples k", "accuracy (%)", tuple(curves),
+                  xticks=list(protocol.ks))]
