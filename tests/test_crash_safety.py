@@ -26,7 +26,7 @@ import pytest
 
 from gearlab.data import cache
 from gearlab.data.spec import Dataset, DatasetSpec
-from gearlab.runs import LOCK_FILE, RunDir, run_scenario
+from gearlab.runs import LOCK_FILE, run_scenario
 from test_protocol import TINY, UNITS
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from tiny import domains
 
 from gearlab import executors
 from gearlab.errors import GearlabInputError
@@ -220,18 +221,7 @@ TINY = """\
 name = "tiny"
 kind = "transfer"
 
-[source]
-preset = "B-6-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 9
-
-[target]
-preset = "B-8-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 9
-noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
+""" + domains() + """\
 
 [network]
 name = "fast"

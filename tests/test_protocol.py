@@ -13,16 +13,25 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from tiny import domains
 
 from gearlab.data.cache import load_or_build
 from gearlab.data.spec import Dataset
 from gearlab.errors import GearlabInputError
 from gearlab.kinds import transfer
 from gearlab.learn import protocol as P
-from gearlab.learn.protocol import Counts, Protocol, StateStore, check, check_data, run_unit, split, train_method
+from gearlab.learn.protocol import (
+    Counts,
+    Protocol,
+    StateStore,
+    check,
+    check_data,
+    run_unit,
+    split,
+    train_method,
+)
 from gearlab.runs import RunDir, run_scenario
 from gearlab.scenario import load_scenario
-
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -271,18 +280,7 @@ TINY = """\
 name = "tiny"
 kind = "transfer"
 
-[source]
-preset = "B-6-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 9
-
-[target]
-preset = "B-8-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 9
-noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
+""" + domains() + """\
 
 [network]
 name = "fast"

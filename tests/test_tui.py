@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from textual.widgets import DataTable, Static, TabbedContent, Tree
+from tiny import domains
 
 from gearlab.registry import load_registry
 from gearlab.runs import RunDir
@@ -54,18 +55,7 @@ TRANSFER = """\
 name = "tiny"
 kind = "transfer"
 
-[source]
-preset = "B-6-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 9
-
-[target]
-preset = "B-8-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 9
-noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
+""" + domains() + """\
 
 [[methods]]
 adapter = "source_only"
