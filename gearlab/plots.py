@@ -107,31 +107,27 @@ def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmoni
 
 def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
     """Per class: revolutions at low, middle and top intensity, and their order spectra."""
+    from .charts import dataset_examples
     from .signals import order_spectrum
 
     names = dataset.spec.class_names
     fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.3 * len(names)), squeeze=False, layout="constrained")
     angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]
-    teeth = sorted(set(int(t) for t in dataset.tooth if t > 0))
-    show_tooth = tooth if tooth in teeth else (teeth[0] if teeth else 0)
+    examples = dataset_examples(dataset, tooth)
+    for c, label, i in examples:
+        row = axes[c]
+        row[0].plot(angle, dataset.X[i], lw=0.5, label=label)
+        orders, amp = order_spectrum(dataset.X[i])
+        keep = orders <= 200
+        row[1].plot(orders[keep], amp[keep], lw=0.6, label=label)
     for c, (name, row) in enumerate(zip(names, axes)):
-        mask = (dataset.label == c) & ((dataset.tooth == show_tooth) | (c == 0))
-        steps = sorted(set(int(s) for s in dataset.intensity[mask]))
-        chosen = sorted({steps[0], steps[len(steps) // 2], steps[-1]}) if steps else []
-        for step in chosen:
-            i = int(np.flatnonzero(mask & (dataset.intensity == step))[0])
-            label = "healthy" if c == 0 else f"step {step}"
-            row[0].plot(angle, dataset.X[i], lw=0.5, label=label)
-            orders, amp = order_spectrum(dataset.X[i])
-            keep = orders <= 200
-            row[1].plot(orders[keep], amp[keep], lw=0.6, label=label)
         row[0].set_ylabel(f"{name}\n(standardised)")
-        row[0].set_xlabel(f"input-shaft angle (deg); tooth {show_tooth}" if c else "input-shaft angle (deg)")
+        row[0].set_xlabel("input-shaft angle (deg)")
         row[1].set_xlabel("shaft order")
         row[1].set_ylabel("amplitude")
         for ax in row:
             ax.grid(alpha=0.3)
-            if chosen:
+            if any(e[0] == c for e in examples):
                 ax.legend(fontsize=7, loc="upper right")
     spec = dataset.spec
     origin = (f"{spec.model} ({spec.preset}), {spec.channel}" if hasattr(spec, "model")
@@ -316,3 +312,60 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
         ax.set_ylabel("true")
         ax.set_title(_study_title(noise, variant, stats), fontsize=8)
     save(fig, figures / "confusion.png")
+
+
+def gap_figures(figures: Path, summary: Mapping) -> None:
+    """The gap diagnosis (kind `gap`): per-view gap before/after with bootstrap intervals, the
+    effect ranking (share of the gap each candidate removes alone), accuracy before/after."""
+    figures = Path(figures)
+    views = summary["views"]
+    names = list(views)
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(9, 3.8), layout="constrained")
+    for offset, when, colour in ((-0.2, "before", "tab:red"), (0.2, "after", "tab:green")):
+        gaps = np.array([views[n][f"gap_{when}"] or 0.0 for n in names], dtype=float)
+        # asymmetric error bars from the percentile intervals, where the report has them
+        err = np.zeros((2, len(names)))
+        for i, n in enumerate(names):
+            iv = views[n].get(f"gap_{when}_interval")
+            if iv:
+                err[:, i] = max(gaps[i] - iv[0], 0.0), max(iv[1] - gaps[i], 0.0)
+        ax.bar(x + offset, gaps, 0.4, yerr=err, capsize=2, color=colour, alpha=0.8,
+               label=f"{when} (total {summary[f'gap_{when}']:.3g})")
+    ax.set_xticks(x, names, rotation=20)
+    ax.set_ylabel("gap (sum of squared effect sizes)")
+    # the gap of a broad change (noise) can be orders of magnitude above the others
+    if any((views[n]["gap_before"] or 0) > 0 for n in names):
+        ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_title("where the gap lies: per-view gap of the healthy revolutions, before and after correction")
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8)
+    save(fig, figures / "gap_per_view.png")
+
+    ranking = summary.get("ranking") or []
+    if ranking:
+        accepted = {e["name"] for e in summary.get("effects", [])}
+        fig, ax = plt.subplots(figsize=(7, 0.35 * len(ranking) + 1.2), layout="constrained")
+        labels = [r["name"] for r in ranking][::-1]
+        shares = [100 * r["share_removed"] for r in ranking][::-1]
+        ax.barh(labels, shares, color=["tab:blue" if n in accepted else "tab:gray" for n in labels])
+        ax.axvline(0, color="k", lw=0.6)
+        ax.set_xlabel("share of the gap removed when added alone (%)")
+        verdict = "unexplained" if summary.get("unexplained") else "accepted in blue"
+        ax.set_title(f"which effect: ranking of the candidates ({verdict})", fontsize=9)
+        ax.grid(alpha=0.3, axis="x")
+        save(fig, figures / "gap_effect_ranking.png")
+
+    acc = summary.get("accuracy")
+    if acc:
+        labels = list(acc)
+        fig, ax = plt.subplots(figsize=(1.6 * len(labels) + 2, 3.6), layout="constrained")
+        colours = ["tab:red" if "uncorrected" in n else "tab:green" if "corrected" in n else "tab:gray" for n in labels]
+        ax.bar(range(len(labels)), [acc[n]["mean"] for n in labels], yerr=[acc[n]["std"] for n in labels],
+               capsize=3, color=colours)
+        ax.set_xticks(range(len(labels)), labels, rotation=15, fontsize=8)
+        ax.set_ylabel("target test accuracy (%)")
+        ax.set_ylim(0, 102)
+        ax.set_title("how far: target fault detection (k = 0) before and after correcting the simulator", fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+        save(fig, figures / "gap_accuracy.png")

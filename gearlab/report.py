@@ -38,7 +38,10 @@ def build_report(run_path: Path) -> str:
     ]
     table = run_path / "table.md"
     if table.exists() and table.read_text().strip():
-        parts += ["<h2>Table</h2>", _markdown_table(table.read_text())]
+        # a kind may write several tables, separated by blank lines (the gap kind: per-view gap,
+        # effect ranking, accuracy); each is rendered on its own
+        blocks = [b for b in table.read_text().split("\n\n") if b.strip()]
+        parts += ["<h2>Table</h2>" if len(blocks) == 1 else "<h2>Tables</h2>", *map(_markdown_table, blocks)]
     figures = sorted((run_path / "figures").glob("*.png")) if (run_path / "figures").exists() else []
     if figures:
         parts.append("<h2>Figures</h2>")

@@ -19,6 +19,8 @@ import json
 import os
 import shutil
 import tempfile
+import threading
+import time
 import tomllib
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import asdict, dataclass
@@ -34,7 +36,8 @@ from .scenario import Scenario, load_scenario
 class Event:
     """A progress event. kind: 'run' (the run directory is ready; `message` is its path),
     'stage' (a stage starts), 'advance' (units done within the stage), 'record' (a unit
-    finished; `record` holds it), 'log' (a line for people).
+    finished; `record` holds it), 'unit' (a unit in progress says how far it is in `message`,
+    `stage` names it; an empty message: it ended), 'log' (a line for people).
 
     `gearlab run --events` writes them as JSON lines: that is how the TUI follows a run."""
 
@@ -262,6 +265,73 @@ def _tomlable(value):
     return value
 
 
+PROGRESS = "progress"  # the run directory's folder of units in progress
+
+
+class UnitProgress:
+    """What a unit in progress reports ('epoch 120, validation accuracy 88 %'), written to a
+    small file in the run directory's progress/ folder, from whichever process or cluster node
+    runs the unit; the engine watches the folder (ProgressWatcher) and sends 'unit' events.
+    Use as a context manager: the file goes when the unit ends."""
+
+    def __init__(self, run_path: Path, unit: str, every: float = 0.5):
+        self.path = Path(run_path) / PROGRESS / (unit.replace("/", "__") + ".txt")
+        self.every, self.last = every, -every
+
+    def __call__(self, text: str) -> None:
+        if time.monotonic() - self.last >= self.every:  # a few writes a second at most
+            atomic_write(self.path, text)
+            self.last = time.monotonic()
+
+    def __enter__(self) -> UnitProgress:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.path.unlink(missing_ok=True)
+
+
+class ProgressWatcher(threading.Thread):
+    """Turns the progress/ folder into events: Event('unit', stage=unit, message=text) when a
+    unit reports, and with an empty message when its file goes (the unit ended)."""
+
+    def __init__(self, run: RunDir, on_event: EventSink, every: float = 0.5):
+        super().__init__(daemon=True)
+        self.folder, self.on_event, self.every = run.path / PROGRESS, on_event, every
+        self.stopped = threading.Event()
+        shutil.rmtree(self.folder, ignore_errors=True)  # left by a killed run
+
+    def run(self) -> None:
+        shown: dict[str, str] = {}
+        while not self.stopped.wait(self.every):
+            now = {}
+            for path in self.folder.glob("*.txt") if self.folder.is_dir() else ():
+                try:
+                    now[path.stem.replace("__", "/")] = path.read_text()
+                except OSError:  # it went between the listing and the read
+                    continue
+            for unit, text in now.items():
+                if shown.get(unit) != text:
+                    self.on_event(Event("unit", stage=unit, message=text))
+            for unit in shown.keys() - now.keys():
+                self.on_event(Event("unit", stage=unit))
+            shown = now
+
+    def stop(self) -> None:
+        self.stopped.set()
+        self.join()
+
+
+def _serialised(on_event: EventSink) -> EventSink:
+    """The sink, safe to call from the engine and the progress watcher alike."""
+    lock = threading.Lock()
+
+    def sink(event: Event) -> None:
+        with lock:
+            on_event(event)
+
+    return sink
+
+
 def run_scenario(
     scenario_path: str | Path | None = None,
     *,
@@ -276,6 +346,7 @@ def run_scenario(
     run may change only [execution] (where it runs, not what it computes)."""
     from .kinds import KINDS
 
+    on_event = _serialised(on_event)
     if resume is not None:
         run = RunDir.open(Path(resume))
     else:
@@ -291,6 +362,8 @@ def run_scenario(
             scenario = _resumed_scenario(run, scenario_path, quick, overrides)
         on_event(Event("run", message=str(run.path)))
         on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
+        watcher = ProgressWatcher(run, on_event)
+        watcher.start()
         try:
             KINDS[scenario.kind].run(scenario, run, on_event)
         except GearlabInputError:
@@ -298,6 +371,8 @@ def run_scenario(
             if resume is None and not run.records():
                 run.discard()
             raise
+        finally:
+            watcher.stop()
         write_report(run)
     return run
 

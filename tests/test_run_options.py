@@ -70,3 +70,57 @@ def test_gap_benchmark_checks_its_overrides(cli, tmp_path, monkeypatch):
     code, _, err = cli("gap", "benchmark", "--trials", "0", "--out", tmp_path / "runs")
     refused(code, err, "gap_benchmark.toml", "[benchmark] key 'trials'")
     assert not (tmp_path / "runs").exists()
+
+
+def test_units_in_progress_become_unit_events(tmp_path):
+    """A unit reports through a file in the run directory (so any worker process or cluster node
+    can); the engine's watcher turns it into 'unit' events, and an empty one when it ends."""
+    import time
+
+    from gearlab.runs import ProgressWatcher, RunDir, UnitProgress
+
+    events = []
+    watcher = ProgressWatcher(RunDir(tmp_path), events.append, every=0.05)
+    watcher.start()
+    with UnitProgress(tmp_path, "rep0/k4/mmd-unsup", every=0.0) as progress:
+        progress("epoch 1")
+        time.sleep(0.3)
+        progress("epoch 2")
+        time.sleep(0.3)
+    time.sleep(0.3)
+    watcher.stop()
+    seen = [(e.kind, e.stage, e.message) for e in events]
+    assert seen == [("unit", "rep0/k4/mmd-unsup", "epoch 1"), ("unit", "rep0/k4/mmd-unsup", "epoch 2"),
+                    ("unit", "rep0/k4/mmd-unsup", "")]
+    assert not list((tmp_path / "progress").iterdir())
+
+
+def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch):
+    from tiny import domains
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "t.toml"
+    path.write_text('[scenario]\nname = "t"\nkind = "transfer"\n\n' + domains() + """
+[[methods]]
+adapter = "mmd"
+
+[protocol]
+ks = [0]
+repetitions = 1
+target_train = 8
+batch = 4
+prime_epochs = 2
+patience = 400
+min_epochs = 400
+max_epochs = 400
+
+[execution]
+workers = 1
+device = "cpu"
+""")
+    code, out, err = cli("run", path, "--events", "--out", tmp_path / "runs")
+    assert code == 0, err
+    units = [json.loads(line) for line in out.splitlines() if line.startswith("{") and '"unit"' in line]
+    reports = [e for e in units if e["kind"] == "unit"]
+    assert any(e["message"].startswith("epoch ") for e in reports), reports
+    assert reports[-1]["message"] == ""  # it ended

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, replace
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -27,7 +28,7 @@ from ..learn.networks import NETWORKS
 from ..learn.protocol import KS, Counts, Method, Protocol, StateStore, check, check_data, run_unit, shared_state, unit_key
 from ..params import did_you_mean
 from ..registry import get_registry
-from ..runs import Event, RunDir
+from ..runs import Event, RunDir, UnitProgress
 from ..scenario import Key, Scenario, Table, in_range, location
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
 
@@ -222,7 +223,13 @@ def train_unit(task: tuple) -> dict:
     protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states = task
     torch.set_num_threads(1)
     source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
-    return run_unit(protocol, source, target, rep, k, method, StateStore(states))
+    # states/ lies in the run directory, beside the progress/ folder the engine watches
+    with UnitProgress(Path(states).parent, unit_key(rep, k, method)) as progress:
+        def report(epoch: int, history) -> None:
+            acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
+            progress(f"epoch {epoch + 1}{acc}")
+
+        return run_unit(protocol, source, target, rep, k, method, StateStore(states), on_epoch=report)
 
 
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:

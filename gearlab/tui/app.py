@@ -37,7 +37,7 @@ class GearlabApp(App):
     CSS = """
     #browser { width: 26; border-right: solid $primary-darken-2; }
     #views { width: 1fr; }
-    #scenario-status, #run-status, #results-status { padding: 0 1; }
+    #scenario-status, #run-status, #results-status, #units { padding: 0 1; }
     #toml { padding: 0 1; }
     #log { height: 1fr; min-height: 4; border-top: solid $primary-darken-2; }
     #results-lines { padding: 0 1; height: auto; }
@@ -69,6 +69,7 @@ class GearlabApp(App):
         self.run_scenario: Scenario | None = None  # the scenario of the run in progress, as it runs
         self.run_path: Path | None = None
         self.records: list[dict] = []
+        self.running: dict[str, str] = {}  # units in progress: how far each is
         self.charts: list = []
         self.chart_index = 0
 
@@ -84,6 +85,7 @@ class GearlabApp(App):
                 with TabPane("Progress", id="run"):
                     yield Static("no run yet: select a scenario and press r (or k for a quick run)", id="run-status")
                     yield Stages(id="stages")
+                    yield Static("", id="units")
                     yield ResultTable(id="live")
                     yield RichLog(id="log", wrap=True, markup=False)
                 with TabPane("Results", id="results"):
@@ -226,6 +228,8 @@ class GearlabApp(App):
             self.notify(str(exc), severity="error")
             return
         self.query_one("#stages", Stages).reset()
+        self.running = {}
+        self.query_one("#units", Static).update("")
         self.query_one("#log", RichLog).clear()
         self.query_one("#run-status", Static).update(
             f"{'resuming' if resume else 'running'} {self.run_scenario.name} ({self.run_scenario.kind}); c cancels")
@@ -265,6 +269,13 @@ class GearlabApp(App):
             stages.start(event.stage, event.message, event.total)
         elif event.kind == "advance":
             stages.advance(event.stage, event.done, event.total)
+        elif event.kind == "unit":  # a unit in progress says how far it is; empty: it ended
+            if event.message:
+                self.running[event.stage] = event.message
+            else:
+                self.running.pop(event.stage, None)
+            self.query_one("#units", Static).update(
+                Text("\n".join(f"▸ {unit}: {text}" for unit, text in sorted(self.running.items())), style="dim"))
         elif event.kind == "record" and event.record is not None:
             self.records.append(event.record)
             self.refresh_live()
@@ -277,6 +288,8 @@ class GearlabApp(App):
             self.query_one("#live", ResultTable).show_markdown(kind.records_table(self.run_scenario, self.records))
 
     def finish(self, code: int, stderr: str) -> None:
+        self.running = {}
+        self.query_one("#units", Static).update("")
         log = self.query_one("#log", RichLog)
         status = self.query_one("#run-status", Static)
         where = f" in {self.run_path}" if self.run_path else ""

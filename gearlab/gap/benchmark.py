@@ -1,0 +1,434 @@
+"""The blind benchmark of the gap diagnosis (SPEC section 9, item 4; docs/gap_benchmark.md).
+
+Each trial hides a configuration — one effect, two effects, no effect (the null), or one
+effect that is kept out of the candidate list (out of library) — with parameters drawn in
+the range where the effect is visible at all, simulates the target through the dataset
+builder, WRITES it to disk as a measured record, and diagnoses it from the file alone:
+
+    draw_trials(...)  ─► Trial (hidden: effects and parameters; public: candidate list)
+    write_target(trial, source, folder)
+        ─► folder/target.npz      the measured record: vibration, tacho, label, fs — nothing else
+        ─► folder/answers.json    the generator's choices, read back only to score
+    diagnose_file(path, source, candidates, settings)          <- never sees the Trial
+        ─► MeasuredSpec ─► import_measured ─► healthy_rows ─► gearlab.gap.diagnose.diagnose
+    score_trial(answers, result)  ─► one record (top-1, top-3, parameter error, shrink, ...)
+
+The separation is structural: :func:`diagnose_file` takes only the path, the source spec
+(the simulator configuration, without the hidden effects), the candidate names and the
+search settings, and :func:`trial_task` hands it nothing else (tests/test_gap_benchmark.py
+inspects the pickled arguments). Every function here is top-level and every argument a
+plain value, so trials run in parallel through any gearlab executor.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..data.spec import DatasetSpec, NoiseSpec
+from ..errors import GearlabInputError
+from ..runs import atomic_write
+
+# --- the trial mix ----------------------------------------------------------------------------
+
+# Fixed proportions of the four trial kinds (docs/gap_benchmark.md): in 40 trials 20 single
+# effects, 6 pairs, 6 nulls and 8 out-of-library effects — at least 4 of each kind the
+# acceptance criteria are stated on.
+MIX = (("single", 0.50), ("pair", 0.15), ("null", 0.15), ("withheld", 0.20))
+KINDS = tuple(k for k, _ in MIX)
+
+# The measured record's channel names: the file convention of the benchmark, public to both sides.
+VIBRATION, TACHO, LABEL = "acc", "tacho", "condition"
+
+# Base sensor noise of every simulation, source and target alike, unless the source says
+# otherwise: a real accelerometer is never noise-free, and a noise-free source makes every
+# healthy revolution identical (zero spread), so any difference at all reads as infinitely
+# significant. 30 dB (signal 1000x the noise power) is a good measurement; independent
+# realisations in source and target (different seeds).
+BASE_NOISE = NoiseSpec("gaussian", 30.0, 0)
+
+# Parameter ranges the generator draws from, per effect: {param: (low, high, scale)} with scale
+# "log" (log-uniform), "lin" (uniform), "int" (whole numbers, uniform) or "circ" (an angle,
+# uniform over the turn); a list of ranges means one of them at random (to stay away from a
+# neutral value such as a factor of 1). Parameters not named keep the effect's default and are
+# not scored; options are drawn uniformly. Why these ranges: plausible values that are clearly
+# visible against the base noise with 40-80 healthy revolutions on Dataset B (measured with
+# gap_report; docs/gap_benchmark.md has the table). Effects not listed (third-party plugins)
+# draw every parameter over its declared bounds.
+RANGES: dict[str, dict[str, object]] = {
+    "casing_path": {"mf": (5.0, 50.0, "log"), "k_xf": (5e7, 1e9, "log"), "k_yf": (5e7, 1e9, "log")},
+    "drive_inertias": {"I11": (1e-3, 2e-2, "log"), "I22": (1e-3, 2e-2, "log"), "k_c": (3e3, 1e5, "log")},
+    "bearing_stiffness": {"k_factor": [(0.3, 0.75, "log"), (1.4, 3.0, "log")]},
+    "mesh_damping": {"zeta": [(0.02, 0.05, "lin"), (0.1, 0.2, "lin")]},
+    "speed_fluctuation": {"amplitude": (0.002, 0.03, "log"), "order": (1, 4, "int"), "phase": (0.0, 2 * math.pi, "circ")},
+    "load_fluctuation": {"amplitude": (0.05, 0.3, "log"), "order": (1, 4, "int"), "phase": (0.0, 2 * math.pi, "circ")},
+    # weak on six_dof (E6: ~3e-4 of the mesh lines at 20 um): only the top of its bounds shows
+    "shaft_eccentricity": {"e": (150e-6, 200e-6, "lin"), "phase": (0.0, 2 * math.pi, "circ")},
+    "tooth_friction": {"mu_f": (0.02, 0.15, "lin")},
+    "fillet_correction": {"lam": (0.1, 0.6, "lin")},
+    "sensor_noise": {"snr_db": (-5.0, 20.0, "lin")},
+    "sensor_bandwidth": {"f_n": (3e3, 3e4, "log"), "zeta": (0.05, 0.7, "log")},
+    "interference_tone": {"frequency": (10.0, 2000.0, "log"), "ratio": (0.05, 0.5, "log")},
+}
+
+MIN_TARGET_REVOLUTIONS = 10  # gearlab.gap.stats.MIN_REVOLUTIONS: fewer and no statistic means much
+
+
+def trial_counts(n: int) -> dict[str, int]:
+    """Trials per kind for *n* trials: MIX by largest remainder; from 4 trials on, every kind at least once."""
+    raw = {k: p * n for k, p in MIX}
+    counts = {k: int(math.floor(v)) for k, v in raw.items()}
+    order = sorted(KINDS, key=lambda k: (-(raw[k] - counts[k]), KINDS.index(k)))
+    for k in order[: n - sum(counts.values())]:
+        counts[k] += 1
+    if n >= len(KINDS):
+        for k in KINDS:
+            if counts[k] == 0:
+                counts[max(counts, key=counts.get)] -= 1
+                counts[k] = 1
+    return counts
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One trial. *hidden* and *withheld* are the generator's secret; *candidates* is public."""
+
+    index: int
+    kind: str  # single | pair | null | withheld
+    hidden: tuple  # canonical effect specs ((name, ((param, value), ...)), ...), level-ordered
+    withheld: str | None  # the effect kept out of the candidate list (kind "withheld")
+    candidates: tuple[str, ...]
+    seed: int  # the target's noise and signal-effect seed
+
+
+def _draw_value(rng: np.random.Generator, rule) -> float:
+    if isinstance(rule, list):
+        rule = rule[int(rng.integers(len(rule)))]
+    low, high, scale = rule
+    if scale == "log":
+        return float(math.exp(rng.uniform(math.log(low), math.log(high))))
+    if scale == "int":
+        return int(rng.integers(int(low), int(high) + 1))
+    return float(rng.uniform(low, high))
+
+
+def draw_params(effect, rng: np.random.Generator) -> dict:
+    """Hidden parameters of *effect*: RANGES where it has an entry, else its declared bounds."""
+    rules = RANGES.get(effect.name)
+    out: dict = {}
+    if rules is None:
+        for p in effect.params:
+            scale = "int" if p.integer else ("log" if p.name in effect.log_scale and p.low > 0 else "lin")
+            out[p.name] = _draw_value(rng, (p.low, p.high, scale))
+    else:
+        for name, rule in rules.items():
+            out[name] = _draw_value(rng, rule)
+    for name, choices in effect.options.items():
+        out[name] = choices[int(rng.integers(len(choices)))]
+    return out
+
+
+def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, registry=None) -> list[Trial]:
+    """*n* trials, a function of (n, seed, library, source) only. Single and withheld effects go
+    round the library in a seeded order, so every effect is hidden about equally often."""
+    from ..effects import EffectChain
+    from ..registry import get_registry
+
+    registry = registry or get_registry()
+    library = tuple(library)
+    if n < 1:
+        raise GearlabInputError(f"benchmark: trials must be >= 1, got {n}")
+    if len(library) < 2:
+        raise GearlabInputError(f"benchmark: the library needs at least 2 effects (pairs, withheld), got {len(library)}")
+    rng = np.random.default_rng([seed, 0])
+    kinds = [k for k, c in trial_counts(n).items() for _ in range(c)]
+    kinds = [kinds[i] for i in rng.permutation(n)]
+    singles = [library[i] for i in rng.permutation(len(library))]
+    withheld = [library[i] for i in rng.permutation(len(library))]
+    used = {"single": 0, "withheld": 0}
+    trials = []
+    for index, kind in enumerate(kinds):
+        r = np.random.default_rng([seed, 1, index])
+        for _attempt in range(20):  # a drawn combination the model cannot take is drawn again
+            if kind == "null":
+                names: tuple[str, ...] = ()
+            elif kind == "pair":
+                names = tuple(library[i] for i in r.choice(len(library), 2, replace=False))
+            else:
+                cycle = singles if kind == "single" else withheld
+                names = (cycle[(used[kind] + _attempt) % len(cycle)],)
+            specs = tuple(registry.get("effect", name).spec(draw_params(registry.get("effect", name), r))
+                          for name in names)
+            try:
+                hidden = EffectChain.load(specs).specs()  # level order, as the builder applies them
+                source.with_(effects=hidden).check_model("benchmark target")
+                break
+            except GearlabInputError:
+                continue
+        else:  # pragma: no cover - every built-in effect acts on the default source
+            raise GearlabInputError(f"benchmark: could not draw a {kind} configuration that acts on {source.name}")
+        if kind in used:
+            used[kind] += 1
+        out = names[0] if kind == "withheld" else None
+        candidates = tuple(e for e in library if e != out)
+        trials.append(Trial(index, kind, hidden, out, candidates, int(r.integers(1, 2**31 - 1))))
+    return trials
+
+
+# --- generating the target (knows the answer) --------------------------------------------------
+
+
+def target_spec(trial: Trial, source: DatasetSpec, revolutions: int) -> DatasetSpec:
+    """The hidden configuration: the source with the hidden effects and its own noise realisation."""
+    noise = source.noise if source.noise is None else NoiseSpec(source.noise.kind, source.noise.snr_db, trial.seed)
+    return source.with_(name="target", domain="target", healthy=revolutions, faults=(), effects=source.effects
+                        + trial.hidden, seed=trial.seed, noise=noise)
+
+
+def record_of(rows: np.ndarray) -> dict[str, np.ndarray]:
+    """Revolutions (n, P) in physical units -> a measured record, as an acquisition would store it:
+    the vibration one revolution after another at fs = P x speed (the angle-domain revolutions
+    taken as uniform in time, E3), a wrapped shaft-angle tacho that starts a revolution every P
+    samples, a whole-record condition label and the rate. An eighth of a revolution more closes
+    the last one whatever the rounding of the unwrapped angle (the importer keeps complete
+    revolutions only, and drops the incomplete tail)."""
+    n, points = rows.shape
+    vib = np.concatenate([rows.reshape(-1), rows[0, : points // 8]])
+    i = np.arange(vib.size)
+    tacho = 2 * np.pi * ((i % points) / points)  # exactly 0 where a revolution starts
+    return {VIBRATION: vib, TACHO: tacho, LABEL: np.array("healthy")}
+
+
+def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: int, executor=None) -> Path:
+    """Simulate the trial's target, write it as folder/target.npz and the answers as folder/answers.json."""
+    from ..data.builder import build_dataset, operating_point
+    from ..gap.views import healthy_rows
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    spec = target_spec(trial, source, revolutions)
+    dataset = build_dataset(spec, executor)
+    rows = healthy_rows(dataset)
+    speed, _ = operating_point(spec)
+    record = record_of(rows)
+    record["fs"] = np.array(rows.shape[1] * speed)
+    import io
+
+    buf = io.BytesIO()
+    np.savez(buf, **record)
+    path = folder / "target.npz"
+    atomic_write(path, buf.getvalue())
+    answers = {"index": trial.index, "kind": trial.kind, "withheld": trial.withheld,
+               "hidden": [[name, dict(params)] for name, params in trial.hidden], "seed": trial.seed,
+               "candidates": list(trial.candidates)}
+    atomic_write(folder / "answers.json", json.dumps(answers, indent=1, sort_keys=True))
+    return path
+
+
+def read_answers(folder: Path) -> dict:
+    return json.loads((Path(folder) / "answers.json").read_text())
+
+
+# --- the diagnosis (knows only the file) ---------------------------------------------------------
+
+
+def import_target(path: Path) -> np.ndarray:
+    """The healthy revolutions of a written target, in physical units, through the importer."""
+    from ..data.importers import MeasuredSpec, import_measured
+    from ..gap.views import healthy_rows
+
+    # transient 'none': the record is steady from its first sample (a simulated steady state)
+    spec = MeasuredSpec(name="target", path=str(path), vibration=VIBRATION, tacho=TACHO, labels=LABEL,
+                        transient="none")
+    return healthy_rows(import_measured(spec))
+
+
+def _diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Mapping, candidates: tuple[str, ...]) -> dict:
+    """gearlab.gap.diagnose.diagnose with the search settings (a plain dict, picklable); imported here
+    so that the benchmark loads without it. Serial inside a trial: trials are what runs in parallel."""
+    from . import diagnose as d
+
+    return d.diagnose(source, target_X, d.Settings(candidates=tuple(candidates), **dict(settings)), executor=None)
+
+
+def diagnose_file(path: str | Path, source: DatasetSpec, candidates: Sequence[str], settings: Mapping) -> dict:
+    """Diagnose a target from its file alone: the whole of what the diagnosis is given."""
+    return _diagnose(source, import_target(Path(path)), dict(settings), tuple(candidates))
+
+
+# --- scoring ---------------------------------------------------------------------------------------
+
+
+def param_error(effect, name: str, true: float, fitted: float) -> float:
+    """Error of one fitted parameter: |ln(fit/true)| for a log-scale one (the relative error when
+    small), the wrapped angle difference / π for a phase (0 exact, 1 opposite), the error relative
+    to the true value otherwise (to the bounds' width when the true value is 0)."""
+    p = next((q for q in effect.params if q.name == name), None)
+    if p is not None and name in effect.log_scale and true > 0 and fitted > 0:
+        return abs(math.log(fitted / true))
+    if p is not None and p.unit == "rad" and math.isclose(p.high - p.low, 2 * math.pi):
+        diff = (fitted - true) % (2 * math.pi)
+        return min(diff, 2 * math.pi - diff) / math.pi
+    scale = abs(true) if true != 0 else (p.high - p.low if p is not None else 1.0)
+    return abs(fitted - true) / scale
+
+
+def scored_params(name: str, true: Mapping) -> list[str]:
+    """The parameters the generator drew (scored), numeric ones only."""
+    rules = RANGES.get(name)
+    keys = list(rules) if rules is not None else list(true)
+    return [k for k in keys if k in true and isinstance(true[k], (int, float)) and not isinstance(true[k], bool)]
+
+
+def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
+    """One trial's record from the generator's answers and the diagnosis's result (contract of
+    gearlab.gap.diagnose.diagnose). top1/top3/shrink apply to single and pair trials, null_correct
+    to null trials, out_of_library_unexplained to withheld ones (None elsewhere)."""
+    from ..registry import get_registry
+
+    registry = registry or get_registry()
+    kind = answers["kind"]
+    hidden = {name: params for name, params in answers["hidden"]}
+    accepted = [e["name"] for e in result.get("effects", [])]
+    fitted = {e["name"]: e.get("params", {}) for e in result.get("effects", [])}
+    ranking = [e["name"] for e in result.get("ranking", [])]
+    before, after = float(result.get("gap_before", float("nan"))), float(result.get("gap_after", float("nan")))
+    shrink = 1.0 - after / before if before > 0 and math.isfinite(after) else None
+    record = {
+        "kind": kind, "hidden": [[n, p] for n, p in answers["hidden"]], "withheld": answers.get("withheld"),
+        "accepted": accepted, "ranking": ranking[:5], "gap_before": before, "gap_after": after,
+        "significant_before": bool(result.get("significant_before")),
+        "significant_after": bool(result.get("significant_after")),
+        "unexplained": bool(result.get("unexplained")), "shrink": shrink,
+        "top1": None, "top3": None, "identified": [], "param_error": {}, "param_error_median": None,
+        "option_correct": {}, "null_correct": None, "out_of_library_unexplained": None,
+        "wrong_names": [n for n in accepted if n not in hidden],
+    }
+    if kind in ("single", "pair"):
+        record["top1"] = bool(accepted) and accepted[0] in hidden
+        record["top3"] = any(n in hidden for n in ranking[:3])
+        errors = []
+        for name in hidden:
+            if name not in fitted:
+                continue
+            record["identified"].append(name)
+            effect = registry.get("effect", name)
+            per = {}
+            for key in scored_params(name, hidden[name]):
+                if isinstance(fitted[name].get(key), (int, float)):
+                    per[key] = param_error(effect, key, float(hidden[name][key]), float(fitted[name][key]))
+            record["param_error"][name] = per
+            errors += list(per.values())
+            record["option_correct"][name] = {k: fitted[name].get(k) == hidden[name][k] for k in effect.options
+                                              if k in hidden[name]}
+        record["param_error_median"] = float(np.median(errors)) if errors else None
+    elif kind == "null":
+        # correct: no significant gap, hence nothing named
+        record["null_correct"] = not record["significant_before"] and not accepted
+    else:
+        record["out_of_library_unexplained"] = record["unexplained"]
+    return record
+
+
+# --- one trial, as an executor task ------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TrialTask:
+    trial: Trial
+    source: DatasetSpec
+    settings: dict  # gearlab.gap.diagnose.Settings fields except candidates
+    folder: str
+    revolutions: int
+
+
+def trial_task(task: TrialTask) -> dict:
+    """Generate + write + diagnose (from the file) + score one trial. The generator's choices reach
+    the diagnosis only through the written file; scoring reads them back from answers.json after."""
+    folder = Path(task.folder)
+    started = time.perf_counter()
+    path = write_target(task.trial, task.source, folder, task.revolutions)
+    generated = time.perf_counter()
+    candidates = task.trial.candidates
+    result = diagnose_file(path, task.source, candidates, task.settings)
+    diagnosed = time.perf_counter()
+    atomic_write(folder / "diagnosis.json", json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
+    record = score_trial(read_answers(folder), result)
+    record.update(unit=unit_key(task.trial.index), index=task.trial.index, candidates=len(candidates),
+                  seconds=round(diagnosed - started, 3), generate_seconds=round(generated - started, 3))
+    return record
+
+
+def unit_key(index: int) -> str:
+    return f"trial {index:03d}"
+
+
+def _jsonable(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, tuple):
+        return list(value)
+    raise TypeError(f"not JSON-serialisable: {type(value).__name__}")
+
+
+# --- summary -------------------------------------------------------------------------------------------
+
+
+def _rate(values) -> float | None:
+    values = [bool(v) for v in values if v is not None]
+    return float(np.mean(values)) if values else None
+
+
+def _median(values) -> float | None:
+    values = [float(v) for v in values if v is not None and math.isfinite(float(v))]
+    return float(np.median(values)) if values else None
+
+
+# Acceptance targets (issue 6): top-1, median shrink when identified, null, out of library.
+TARGETS = {"top1": 0.85, "median_shrink": 0.70, "null_correct": 0.90, "out_of_library_unexplained": 0.80}
+
+
+def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
+    """The benchmark's numbers over finished trials (fields of summary.json)."""
+    effect_trials = [r for r in records if r["kind"] in ("single", "pair")]
+    identified = [r for r in effect_trials if r["top1"]]
+    per_effect = {}
+    for name in library:
+        mine = [r for r in effect_trials if any(h[0] == name for h in r["hidden"])]
+        held = [r for r in records if r["kind"] == "withheld" and r["withheld"] == name]
+        errors = [v for r in mine for v in r["param_error"].get(name, {}).values()]
+        per_effect[name] = {
+            "trials": len(mine), "top1": _rate(r["top1"] for r in mine), "top3": _rate(r["top3"] for r in mine),
+            "identified": sum(name in r["identified"] for r in mine),
+            "median_shrink": _median(r["shrink"] for r in mine if r["top1"]),
+            "median_param_error": _median(errors),
+            "withheld": len(held), "unexplained_when_withheld": _rate(r["unexplained"] for r in held),
+            "named_wrongly": sum(name in r["wrong_names"] for r in records),
+        }
+    summary = {
+        "trials": len(records),
+        "by_kind": {k: sum(r["kind"] == k for r in records) for k in KINDS},
+        "top1": _rate(r["top1"] for r in effect_trials),
+        "top3": _rate(r["top3"] for r in effect_trials),
+        "top1_single": _rate(r["top1"] for r in effect_trials if r["kind"] == "single"),
+        "top1_pair": _rate(r["top1"] for r in effect_trials if r["kind"] == "pair"),
+        "median_shrink": _median(r["shrink"] for r in identified),
+        "median_param_error": _median(r["param_error_median"] for r in effect_trials),
+        "null_correct": _rate(r["null_correct"] for r in records if r["kind"] == "null"),
+        "out_of_library_unexplained": _rate(r["out_of_library_unexplained"] for r in records
+                                            if r["kind"] == "withheld"),
+        "wrong_names_when_withheld": _rate(bool(r["wrong_names"]) for r in records if r["kind"] == "withheld"),
+        "per_effect": per_effect,
+        "seconds_per_trial": _median(r.get("seconds") for r in records),
+    }
+    summary["targets"] = TARGETS
+    summary["met"] = {k: (summary[k] is not None and summary[k] >= v) for k, v in TARGETS.items()}
+    return summary

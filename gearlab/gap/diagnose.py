@@ -1,0 +1,829 @@
+"""Which unmodelled effect makes the source simulator into the target (SPEC section 9, item 2).
+
+Given a simulator configuration (the *source*, a simulated DatasetSpec) and the target's
+healthy revolutions in physical units (``target_X``, nothing else about the target), the
+diagnosis adds each registered effect to the source, fits its parameters to the target by
+a bounded, budgeted search, and scores it by the share of the gap it removes. A greedy
+loop adds further effects while the gap stays significant. See docs/gap.md.
+
+Design, in the order the work happens:
+
+1. **Before.** ``gap_report`` of the plain source against the target (full bootstrap and
+   permutations). No significant gap: nothing to explain, no search (the null case).
+2. **Round r** (r = 1 .. max_effects): one executor task per remaining candidate
+   (:func:`fit_effect`, a picklable top-level function). A task fits the candidate on top
+   of the effects accepted so far:
+
+   * the score is the gap total (sum over views of bias-corrected squared effect sizes,
+     gearlab.gap.stats) between the corrected source's healthy revolutions and target_X,
+     without bootstrap or tests: a few milliseconds beyond the simulation;
+   * *common random numbers*: every evaluation of a fit simulates the source with the
+     same noise seeds, so the score is a deterministic function of the parameters that a
+     local search can follow (noise does not move the optimum from call to call);
+   * the search: a Latin-hypercube design over the effect's space (unit cube; log scale
+     where the effect says so; text options as one more coordinate, cut into equal parts),
+     with the effect's defaults as the first point (they are typical real values, E11),
+     then bounded Nelder-Mead from the best design point with what the budget leaves, then
+     the other option choices tried at the refined point;
+   * budget = source simulations per fit. Signal-level effects need no new simulation:
+     they transform the clean source revolution, which is simulated once per process and
+     reused, so their fits get ``SIGNAL_EVALS`` times as many (cheap) evaluations; this
+     matters for needle-like parameters such as a tone's frequency;
+   * parameter intervals, profile-style: the noise of the best score is the standard
+     deviation of its bootstrap replicates (rows resampled); the interval of a parameter
+     brackets every evaluated point whose score lies within that noise of the best,
+     extended to the nearest evaluated value outside it on each side (or the bound).
+     It is an outer bracket from the points the search happened to visit, not a
+     coverage-calibrated confidence interval.
+
+   The best candidate of the round is accepted when it removes at least ``MIN_SHARE`` of
+   the gap left at that round *and* a paired bootstrap (the same resampled rows for the
+   current and the candidate comparison) puts the removed gap above 0 with 95 %
+   confidence. After an acceptance the corrected source is checked against the target
+   on *fresh* rows (another noise seed, so the fitted parameters are not judged on the
+   rows they were fitted to): no longer significant ends the loop.
+3. **After.** ``gap_report`` of the corrected source (fresh rows) against the target.
+   ``unexplained`` = the gap before is significant and the corrected gap still is (or
+   nothing was accepted): the ranked names are then what helped most, not a verdict.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import numbers
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..data.builder import (CHUNK, EFFECT_STREAM, RowsTask, SimTask, noisy_rows, operating_point,
+                            simulate_unit, whole_steps_rate)
+from ..data.spec import POINTS, DatasetSpec
+from ..effects import LEVELS, EffectChain
+from ..errors import GearlabInputError
+from ..executors import LocalExecutor
+from ..registry import get_registry
+from ..runs import Event
+from ..signals import Standardiser, add_noise
+from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, view_gaps
+from .views import (BandPlan, gear_ratio, order_views_of_power, power_of_spectrum, residual_view_of_spectrum,
+                    waveform_view)
+
+MIN_SHARE = 0.2  # an accepted effect removes at least this share of the gap left at its round
+SIGNAL_EVALS = 4  # evaluations per budget unit for signal-level effects (they need no new simulation)
+DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling design, the rest refines
+NOISE_REPLICATES = 64  # bootstrap replicates for the score noise behind the parameter intervals
+ACCEPT_REPLICATES = 200  # paired bootstrap replicates for the acceptance test
+ACCEPT_CONFIDENCE = 0.95
+NUISANCE = "sensor_noise"  # fitted jointly with every other candidate while it is not yet accepted
+NUISANCE_SIGNAL_EVALS = 4  # SIGNAL_EVALS for signal-level candidates that carry the nuisance
+NUISANCE_WIDE, NUISANCE_LOCAL, NUISANCE_STEP = 8, 4, 6.0  # Brent iterations (first / later points), dB
+
+
+@dataclass(frozen=True)
+class Settings:
+    candidates: tuple[str, ...] = ()  # effect names to try; () = every registered effect
+    budget: int = 16  # source simulations per effect fit (the search budget)
+    max_effects: int = 3  # greedy rounds
+    healthy: int = 40  # source healthy revolutions simulated per evaluation
+    bootstrap: int = 200  # for the before/after reports (searches use a cheap score)
+    permutations: int = 500
+    alpha: float = 0.05
+    seed: int = 0
+
+
+# --- input checks ---------------------------------------------------------------------------------
+
+def _whole(value, name: str, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
+        raise GearlabInputError(f"gap diagnosis: settings '{name}' must be a whole number >= {low}, got {value!r}")
+    return int(value)
+
+
+def check_settings(settings: Settings) -> tuple[str, ...]:
+    """Every setting checked; returns the candidate effect names (all registered ones for ())."""
+    if not isinstance(settings, Settings):
+        raise GearlabInputError(f"gap diagnosis: expected gearlab.gap.diagnose.Settings, got {type(settings).__name__}")
+    _whole(settings.budget, "budget", 1)
+    _whole(settings.max_effects, "max_effects", 1)
+    _whole(settings.healthy, "healthy", MIN_REVOLUTIONS)
+    _whole(settings.bootstrap, "bootstrap", 0)
+    _whole(settings.permutations, "permutations", 1)
+    _whole(settings.seed, "seed", 0)
+    alpha = settings.alpha
+    if isinstance(alpha, bool) or not isinstance(alpha, numbers.Real) or not 0.0 < alpha < 1.0:
+        raise GearlabInputError(f"gap diagnosis: settings 'alpha' must lie strictly between 0 and 1, got {alpha!r}")
+    registry = get_registry()
+    if isinstance(settings.candidates, str) or not isinstance(settings.candidates, (tuple, list)):
+        raise GearlabInputError(f"gap diagnosis: settings 'candidates' must be a list of effect names, "
+                                f"got {settings.candidates!r}")
+    names = tuple(settings.candidates) or tuple(registry.names("effect"))
+    for i, name in enumerate(names, start=1):
+        if not isinstance(name, str):
+            raise GearlabInputError(f"gap diagnosis: candidate #{i} must be an effect name, got {name!r}")
+        registry.get("effect", name, f"gap diagnosis: candidate #{i}")  # unknown: "did you mean", known list
+    if len(set(names)) != len(names):
+        raise GearlabInputError(f"gap diagnosis: candidates repeat a name: {', '.join(names)}")
+    return names
+
+
+def check_target(target_X) -> np.ndarray:
+    """target_X as float64 (n, POINTS): 2-D, finite, at least MIN_REVOLUTIONS rows."""
+    try:
+        X = np.asarray(target_X, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise GearlabInputError("gap diagnosis: target_X must be a numeric array (n, 4096) of healthy "
+                                "revolutions") from None
+    if X.ndim != 2:
+        raise GearlabInputError(f"gap diagnosis: target_X must be 2-D (revolutions x {POINTS} points), "
+                                f"got shape {X.shape}")
+    if X.shape[1] != POINTS:
+        raise GearlabInputError(f"gap diagnosis: target revolutions have {X.shape[1]} samples, the source's "
+                                f"{POINTS}; resample the target to {POINTS} points per revolution")
+    if len(X) < MIN_REVOLUTIONS:
+        raise GearlabInputError(f"gap diagnosis: too few healthy target revolutions: {len(X)}; expected at "
+                                f"least {MIN_REVOLUTIONS}")
+    if not np.all(np.isfinite(X)):
+        raise GearlabInputError("gap diagnosis: target_X contains NaN or infinite values")
+    return X
+
+
+def _check_source(source: DatasetSpec):
+    if not isinstance(source, DatasetSpec):
+        raise GearlabInputError(f"gap diagnosis: the source must be a simulated DatasetSpec, "
+                                f"got {type(source).__name__}")
+    where = f"gap diagnosis: source '{source.name}'"
+    source.with_(faults=(), healthy=max(source.healthy, 1)).check(where)
+    _, pair, _ = source.check_model(where)
+    return pair
+
+
+# --- simulating the source's healthy revolutions (through the builder's own steps) ---------------
+
+def _by_level(effects) -> tuple:
+    """Canonical effects in the order they act (model, excitation, signal; stable within a level),
+    the order a scenario list is stored in, so the corrected source shares its cache key."""
+    registry = get_registry()
+    return tuple(sorted(effects, key=lambda e: LEVELS.index(registry.get("effect", e[0]).level)))
+
+
+@functools.lru_cache(maxsize=64)
+def _clean_revolution(model: str, preset: str, fs: float, speed: float, load: float, channel: str,
+                      effects: tuple) -> np.ndarray:
+    """The steady healthy revolution (POINTS,) under the model- and excitation-level *effects*.
+
+    Cached per process: a signal-level candidate only transforms this revolution, so its
+    whole fit costs one simulation. It is the builder's own simulation unit for the healthy
+    case on tooth 1, the row build_dataset uses for its healthy samples and reference.
+    """
+    task = SimTask(model, preset, fs, speed, load, channel, None, None, (1,), effects, 1)
+    return simulate_unit(tuple(task))[0]
+
+
+def _reference(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float) -> tuple[float, float]:
+    """The domain's healthy reference (mean, std), as build_dataset's step 3 makes it: the clean
+    revolution, or 64 revolutions of it through the signal effects and the dataset's noise.
+
+    This mirrors the builder (it has no function of its own for this step, see the report);
+    it matters because the rows are stored standardised in float32, and a noise-free target
+    compared with a noise-free source sees the rounding of that round trip in its emptiest
+    bands: only the same round trip makes "the same simulator" give the same rows.
+    """
+    chain = EffectChain.load(spec.effects) if spec.effects else EffectChain()
+    signal = EffectChain(chain.at("signal"))
+    noise_seed = spec.noise.seed if spec.noise else 0
+    if spec.noise is None and not signal:
+        reference = Standardiser.fit(clean)
+    else:
+        record = np.broadcast_to(clean, (64, POINTS))
+        if signal:
+            record = signal.apply_signal(record, POINTS * speed, speed, reference_rms,
+                                         [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM])
+        if spec.noise is not None:
+            rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
+            record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
+        reference = Standardiser.fit(record)
+    return reference.mean, reference.std
+
+
+def source_rows(spec: DatasetSpec) -> np.ndarray:
+    """The healthy rows of *spec* in physical units, (spec.healthy, POINTS) float64: exactly
+    ``healthy_rows(build_dataset(spec.with_(faults=())))``, without the cache or the fault
+    simulations.
+
+    The builder's steps are reused, not copied: its simulation unit for the healthy case
+    (model and excitation effects; cached here per process, so a signal-level candidate
+    costs no simulation) and its row task (signal effects, the dataset's noise and TSA, with
+    the same per-sample seeds [seed, noise seed, i] and the float32 standardisation), then
+    the standardisation undone as healthy_rows does.
+    """
+    registry = get_registry()
+    _, pair, _ = spec.check_model()
+    speed, load = operating_point(spec)
+    fs = whole_steps_rate(spec.fs, speed, pair.Z1)
+    physics = tuple(e for e in spec.effects if registry.get("effect", e[0]).level != "signal")
+    clean = _clean_revolution(spec.model, spec.preset, fs, speed, load, spec.channel, physics)
+    reference_rms = float(np.sqrt(np.mean(clean**2)))
+    mean, std = _reference(spec, clean, speed, reference_rms)
+    noise_seed = spec.noise.seed if spec.noise else 0
+    kind = spec.noise.kind if spec.noise else None
+    snr = spec.noise.snr_db if spec.noise else 0.0
+    out = np.empty((spec.healthy, POINTS), dtype=np.float32)
+    for lo in range(0, spec.healthy, CHUNK):
+        idx = range(lo, min(spec.healthy, lo + CHUNK))
+        task = RowsTask(np.broadcast_to(clean, (len(idx), POINTS)), [[spec.seed, noise_seed, i] for i in idx],
+                        kind, snr, spec.revolutions, spec.tsa, (mean, std), spec.effects, speed, reference_rms)
+        out[lo:lo + len(idx)] = noisy_rows(tuple(task))
+    return out.astype(np.float64) * std + mean
+
+
+# --- the cheap score ---------------------------------------------------------------------------------
+
+class Scorer:
+    """The search's score of a source set against the fixed target_X, and the report's gap total.
+
+    **The search score** (:meth:`score`) is the mismatch of the per-feature means on the
+    *target's* scale: Σ_f [(μ_t − μ_s)² − v_s/n_s − v_t/n_t] / s_t², s_t the target's own
+    spread (floored as the report floors). The report's effect size divides by the spread
+    pooled over both sets, so an effect that only adds noise to the source (sensor_noise,
+    interference_tone) inflated it and shrank every effect size without matching anything:
+    noise-like candidates won for the wrong reason. Here the scale is the target's, which no
+    candidate can change, so adding noise lowers the score only where the target really is
+    noisy (its noise-floor, residual and kurtosis features). The subtracted terms remove the
+    sampling bias of (μ_t − μ_s)², so the score of a right model is ≈ 0 whatever its noise.
+
+    **Cheap**: the target's order bands, waveform statistics and rfft are computed once; a
+    source set costs one rfft (its order power and, by linearity, its TSA and both residuals'
+    spectra), two inverse FFTs for the residual sectors and the band sums (np.add.reduceat).
+
+    :meth:`report_gap` is the report's gap total (gap_report, pooled spread) on the same
+    features, for the before/after numbers and tests.
+    """
+
+    def __init__(self, target_X: np.ndarray, pair):
+        self.target = np.asarray(target_X, dtype=np.float64)
+        self.pair = gear_ratio(pair)
+        self.z1 = self.pair[0]
+        self.points = self.target.shape[1]
+        self.plan = BandPlan.make(self.points, self.pair)
+        self.target_fft = np.fft.rfft(self.target, axis=1)
+        self.target_power = np.mean(self.target * self.target, axis=1)
+        order = order_views_of_power(power_of_spectrum(self.target_fft, self.points), self.plan)
+        self.target_order = np.concatenate([v.features for v in order], axis=1)
+        self.target_wave = waveform_view(self.target).features
+        self.sizes = [v.size for v in order] + [self.z1, self.target_wave.shape[1]]
+
+    def features(self, source_X: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        """(source features, target features, view sizes): gap_report's views without the
+        latent one; the target's TSA residual is taken against the source's average."""
+        X = np.asarray(source_X, dtype=np.float64)
+        n, P = X.shape
+        F = np.fft.rfft(X, axis=1)
+        order = order_views_of_power(power_of_spectrum(F, P), self.plan)
+        tsa = F.mean(axis=0)  # the rfft of the source's synchronous average (linearity)
+        own = residual_view_of_spectrum((F - tsa) * (n / (n - 1)), P, self.z1, np.mean(X * X, axis=1))
+        target_res = residual_view_of_spectrum(self.target_fft - tsa, P, self.z1, self.target_power)
+        Fs = np.concatenate([v.features for v in order] + [own.features, waveform_view(X).features], axis=1)
+        Ft = np.concatenate([self.target_order, target_res.features, self.target_wave], axis=1)
+        return Fs, Ft, list(self.sizes)
+
+    @staticmethod
+    def _scale(Ft: np.ndarray, ms: np.ndarray) -> np.ndarray:
+        mt = Ft.mean(axis=0)
+        return np.maximum(Ft.std(axis=0, ddof=1), SD_FLOOR * np.maximum(1.0, np.maximum(np.abs(ms), np.abs(mt))))
+
+    @staticmethod
+    def mismatch(Fs: np.ndarray, Ft: np.ndarray) -> float:
+        ms, mt = Fs.mean(axis=0), Ft.mean(axis=0)
+        vs, vt = Fs.var(axis=0, ddof=1), Ft.var(axis=0, ddof=1)
+        scale2 = Scorer._scale(Ft, ms) ** 2
+        return float(np.sum(((mt - ms) ** 2 - vs / len(Fs) - vt / len(Ft)) / scale2))
+
+    def score(self, source_X: np.ndarray) -> float:
+        Fs, Ft, _ = self.features(source_X)
+        return self.mismatch(Fs, Ft)
+
+    def replicates(self, source_X: np.ndarray, replicates: int, seed) -> np.ndarray:
+        """Bootstrap replicates of :meth:`score` (rows of both sets resampled as multinomial
+        counts, the scale held at the full target's): the same *seed* resamples the same row
+        indices, so two sources' replicates are paired."""
+        Fs, Ft, _ = self.features(source_X)
+        mt = Ft.mean(axis=0)
+        scale = self._scale(Ft, Fs.mean(axis=0))
+        rng = np.random.default_rng(seed)
+
+        def moments(rows):
+            z = (rows - mt) / scale
+            k = len(z)
+            counts = rng.multinomial(k, np.full(k, 1.0 / k), size=replicates).astype(np.float64)
+            mean = counts @ z / k
+            var = np.maximum(counts @ (z * z) / k - mean * mean, 0.0) * (k / (k - 1))
+            return mean, var
+
+        a, va = moments(Fs)
+        b, vb = moments(Ft)
+        # A replicate's squared difference carries the sampling noise twice (data and resampling).
+        return np.sum((b - a) ** 2 - 2.0 * (va / len(Fs) + vb / len(Ft)), axis=1)
+
+    def report_gap(self, source_X: np.ndarray) -> float:
+        """gap_report's total (bias-corrected squared effect sizes on the pooled spread)."""
+        Fs, Ft, sizes = self.features(source_X)
+        return float(view_gaps(effect_sizes(Fs, Ft)["d"], sizes, len(Fs), len(Ft)).sum())
+
+
+# --- the search space of one effect ------------------------------------------------------------------
+
+class Space:
+    """An effect's space() as a unit cube: one coordinate per number (linear or log between
+    its bounds, rounded for integers) and one per text option (cut into equal parts)."""
+
+    def __init__(self, effect):
+        entries = effect.space()
+        self.numbers = [e for e in entries if "choices" not in e]
+        self.options = [e for e in entries if "choices" in e]
+        self.defaults = {e["name"]: e["default"] for e in entries}
+
+    @property
+    def dims(self) -> int:
+        return len(self.numbers)
+
+    def value(self, entry: dict, u: float) -> float:
+        lo, hi, u = entry["low"], entry["high"], min(max(float(u), 0.0), 1.0)
+        if entry["log"]:
+            x = math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo)))
+        else:
+            x = lo + u * (hi - lo)
+        x = min(max(x, lo), hi)  # exp/log rounding must not step outside the bounds
+        return int(round(x)) if entry["integer"] else x
+
+    def unit(self, entry: dict, x: float) -> float:
+        lo, hi = entry["low"], entry["high"]
+        if hi == lo:
+            return 0.0
+        if entry["log"]:
+            return (math.log(x) - math.log(lo)) / (math.log(hi) - math.log(lo))
+        return (x - lo) / (hi - lo)
+
+    def params(self, u, choice: tuple[str, ...]) -> dict:
+        out = {e["name"]: self.value(e, ui) for e, ui in zip(self.numbers, u)}
+        out.update({e["name"]: c for e, c in zip(self.options, choice)})
+        return out
+
+    def default_point(self) -> tuple[np.ndarray, tuple[str, ...]]:
+        u = np.array([self.unit(e, e["default"]) for e in self.numbers])
+        return u, tuple(e["default"] for e in self.options)
+
+    def point_of(self, params: dict) -> tuple[np.ndarray, tuple[str, ...]]:
+        u = np.array([self.unit(e, params[e["name"]]) for e in self.numbers])
+        return u, tuple(params[e["name"]] for e in self.options)
+
+    def choices_at(self, v: np.ndarray) -> tuple[str, ...]:
+        return tuple(e["choices"][min(int(x * len(e["choices"])), len(e["choices"]) - 1)]
+                     for e, x in zip(self.options, v))
+
+    def all_choices(self) -> list[tuple[str, ...]]:
+        combos: list[tuple[str, ...]] = [()]
+        for e in self.options:
+            combos = [c + (x,) for c in combos for x in e["choices"]]
+        return combos
+
+
+class _OutOfBudget(Exception):
+    pass
+
+
+def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: int, seed: int,
+                start: dict | None = None) -> list[dict]:
+    """Minimise *objective* over *space* with at most *evaluations* calls; every evaluated point.
+
+    *start*: parameters to start from instead of the defaults; with it there is no design,
+    only the local refinement (re-fitting an accepted effect next to a new one)."""
+    from scipy.optimize import minimize
+    from scipy.stats import qmc
+
+    seen: dict = {}
+    history: list[dict] = []
+
+    def evaluate(u, choice) -> float:
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        params = space.params(u, choice)
+        key = tuple(sorted((k, float(v) if not isinstance(v, str) else v) for k, v in params.items()))
+        if key in seen:  # integers and clipping map different u to one point: it costs nothing twice
+            return seen[key]
+        if len(history) >= evaluations:
+            raise _OutOfBudget
+        value = objective(params)
+        seen[key] = value
+        history.append({"u": u.copy(), "choice": choice, "params": params, "score": value})
+        return value
+
+    def best() -> dict:
+        return min(history, key=lambda h: h["score"])
+
+    rng = np.random.default_rng(seed)
+    try:
+        u0, c0 = space.default_point() if start is None else space.point_of(start)
+        evaluate(u0, c0)
+        width = space.dims + len(space.options)
+        n_design = 0 if start is not None else max(1, math.ceil(DESIGN_SHARE * evaluations)) - 1
+        if width and n_design > 0:
+            design = qmc.LatinHypercube(d=width, seed=rng).random(n_design)
+            for row in design:
+                evaluate(row[:space.dims], space.choices_at(row[space.dims:]))
+        if space.dims:
+            start = best()
+            # Nelder-Mead from the best design point; its first simplex spans about one design
+            # cell per coordinate (the scale on which the design has looked), pointing inwards.
+            step = 0.5 / max(2, n_design + 1) ** (1.0 / space.dims)
+            x0 = start["u"]
+            simplex = [x0]
+            for i in range(space.dims):
+                x = x0.copy()
+                x[i] = x[i] + step if x[i] + step <= 1.0 else x[i] - step
+                simplex.append(x)
+            left = evaluations - len(history) - (len(space.all_choices()) - 1)
+            if left > 0:
+                try:
+                    minimize(lambda u: evaluate(u, start["choice"]), x0, method="Nelder-Mead",
+                             bounds=[(0.0, 1.0)] * space.dims,
+                             options={"maxfev": left, "initial_simplex": np.array(simplex),
+                                      "xatol": 1e-4, "fatol": 0.0})
+                except _OutOfBudget:
+                    pass
+        # The other option choices at the refined point: the design only sampled them coarsely.
+        top = best()
+        for choice in space.all_choices():
+            evaluate(top["u"], choice)
+    except _OutOfBudget:
+        pass
+    return history
+
+
+def _intervals(space: Space, history: list[dict], best: dict, noise: float) -> dict:
+    """Per numeric parameter: the bracket of every evaluated value within *noise* of the best
+    score, out to the nearest evaluated value outside it on each side (or the bound)."""
+    out = {}
+    threshold = best["score"] + noise
+    for e in space.numbers:
+        name = e["name"]
+        inside = [h["params"][name] for h in history if h["score"] <= threshold]
+        outside = [h["params"][name] for h in history if h["score"] > threshold]
+        lo_in, hi_in = min(inside), max(inside)
+        below = [x for x in outside if x < lo_in]
+        above = [x for x in outside if x > hi_in]
+        out[name] = [float(max(below)) if below else float(e["low"]), float(min(above)) if above else float(e["high"])]
+    return out
+
+
+# --- one fit: the executor's unit of work ------------------------------------------------------------
+
+def fit_effect(task: tuple) -> dict:
+    """Fit effect *name* on top of the *accepted* effects: task = (source spec, effect name,
+    accepted effects (canonical), target_X, settings, seed). The source spec is already the
+    search spec (healthy only, the search's noise seed). Returns the best parameters, their
+    score (the gap total), the intervals, and how many evaluations and seconds it took."""
+    source, name, accepted, target_X, settings, seed, *rest = task
+    nuisance = bool(rest and rest[0])  # fit sensor noise jointly at every point (see _NoiseNuisance)
+    started = time.perf_counter()
+    registry = get_registry()
+    effect = registry.get("effect", name)
+    space = Space(effect)
+    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source))
+    errors: list[str] = []
+
+    def spec_of(params: dict, extra: tuple = ()) -> DatasetSpec:
+        return source.with_(effects=_by_level(source.effects + tuple(accepted) + (effect.spec(params),) + extra))
+
+    noise = _NoiseNuisance(lambda params, extra: scorer.score(source_rows(spec_of(params, extra)))) \
+        if nuisance else None
+
+    def objective(params: dict) -> float:
+        try:
+            if noise is not None:
+                return noise.fit(params)
+            return scorer.score(source_rows(spec_of(params)))
+        except GearlabInputError as exc:  # parameters the effect cannot take here (a tone above Nyquist)
+            errors.append(str(exc))
+            return math.inf
+
+    evaluations = settings.budget * ((NUISANCE_SIGNAL_EVALS if nuisance else SIGNAL_EVALS)
+                                     if effect.level == "signal" else 1)
+    with warnings.catch_warnings():
+        # Searched parameters stray where the simulator warns (too few steps per period of a
+        # stiff mounting's natural frequency); one line per point would bury the progress.
+        warnings.simplefilter("ignore", UserWarning)
+        history = _fit_search(space, objective, evaluations, seed)
+        if name == NUISANCE:
+            # The noise alone gets the same wide Brent search that the other candidates' noise
+            # nuisance gets, so that "beats the noise alone" compares like with like.
+            wide = _NoiseNuisance(lambda _, extra: scorer.score(source_rows(source.with_(
+                effects=_by_level(source.effects + tuple(accepted) + extra)))))
+            try:
+                value = wide.fit({})
+                history.append({"u": None, "choice": None, "params": dict(wide.at[()]), "score": value})
+            except GearlabInputError as exc:
+                errors.append(str(exc))
+    best = min(history, key=lambda h: h["score"])
+    result = {"name": name, "level": effect.level, "score": best["score"], "evaluations": len(history),
+              "params": _plain(best["params"]), "intervals": {}, "seconds": 0.0}
+    extra: tuple = ()
+    if noise is not None and math.isfinite(best["score"]):
+        fitted_noise = noise.at[_key(best["params"])]
+        extra = (get_registry().get("effect", NUISANCE).spec(fitted_noise),)
+        result["nuisance"] = {"name": NUISANCE, "params": _plain(fitted_noise),
+                              "evaluations": noise.evaluations}
+    if accepted and math.isfinite(best["score"]):
+        # Backfitting: the effects accepted earlier were fitted without this one (a noise level
+        # fitted on the wrong model is off), so each is refined once more next to it, from its
+        # fitted values. Signal-level ones cost no simulation (the clean revolution is cached).
+        refit, score = list(accepted), best["score"]
+        new = effect.spec(best["params"])
+        for i, (other, params) in enumerate(accepted):
+            other_space = Space(registry.get("effect", other))
+
+            def objective_i(p, i=i, other=other):
+                trial = refit[:i] + [registry.get("effect", other).spec(p)] + refit[i + 1:]
+                try:
+                    return scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(trial)
+                                                                                    + (new,) + extra))))
+                except GearlabInputError:
+                    return math.inf
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                h = _fit_search(other_space, objective_i, max(2, evaluations // 2), seed + i + 1, start=dict(params))
+            top = min(h, key=lambda x: x["score"])
+            result["evaluations"] += len(h)
+            if top["score"] < score:
+                score, refit[i] = top["score"], registry.get("effect", other).spec(top["params"])
+        result["score"], result["accepted"] = score, [[n, [list(kv) for kv in p]] for n, p in refit]
+    if math.isfinite(best["score"]):
+        # The score's own noise: bootstrap replicates of the best point's gap total.
+        reps = scorer.replicates(source_rows(spec_of(best["params"], extra)), NOISE_REPLICATES, [seed, 2])
+        result["noise"] = float(np.std(reps))
+        result["intervals"] = _intervals(space, history, best, result["noise"])
+    else:
+        result["error"] = errors[-1] if errors else "no evaluation succeeded"
+    result["seconds"] = time.perf_counter() - started
+    return result
+
+
+def _key(params: dict) -> tuple:
+    return tuple(sorted((k, v if isinstance(v, str) else float(v)) for k, v in params.items()))
+
+
+class _NoiseNuisance:
+    """Sensor noise fitted at every point of another effect's search (a nuisance parameter).
+
+    With a noisy target, a structural candidate judged without noise loses to a noise-like one
+    whatever it explains; fitted with the noise that the target needs next to it, it is judged on
+    what it adds. The noise is a signal-level effect (no new simulation). The first point gets a
+    wide search (every kind, bounded Brent over the whole SNR range); later points a local one
+    (the best kind so far within ±NUISANCE_STEP dB, then the other kinds at that SNR)."""
+
+    def __init__(self, score: Callable[[dict, tuple], float]):
+        self.effect = get_registry().get("effect", NUISANCE)
+        space = {e["name"]: e for e in self.effect.space()}
+        self.low, self.high = space["snr_db"]["low"], space["snr_db"]["high"]
+        self.kinds = list(space["kind"]["choices"])
+        self.score = score
+        self.best: tuple[float, dict] | None = None  # best (score, noise) over all points
+        self.at: dict = {}  # point -> its fitted noise
+        self.evaluations = 0
+
+    def _value(self, params: dict, noise: dict) -> float:
+        self.evaluations += 1
+        return self.score(params, (self.effect.spec(noise),))
+
+    def fit(self, params: dict) -> float:
+        from scipy.optimize import minimize_scalar
+
+        found: tuple[float, dict] = (math.inf, {})
+
+        def brent(kind, lo, hi, iterations):
+            nonlocal found
+            res = minimize_scalar(lambda s: self._value(params, {"snr_db": float(s), "kind": kind}),
+                                  bounds=(lo, hi), method="bounded", options={"maxiter": iterations, "xatol": 0.2})
+            if res.fun < found[0]:
+                found = (float(res.fun), {"snr_db": float(res.x), "kind": kind})
+
+        if self.best is None:
+            for kind in self.kinds:
+                brent(kind, self.low, self.high, NUISANCE_WIDE)
+        else:
+            s0, k0 = self.best[1]["snr_db"], self.best[1]["kind"]
+            brent(k0, max(self.low, s0 - NUISANCE_STEP), min(self.high, s0 + NUISANCE_STEP), NUISANCE_LOCAL)
+            snr = found[1]["snr_db"]
+            for kind in self.kinds:
+                if kind != k0:
+                    value = self._value(params, {"snr_db": snr, "kind": kind})
+                    if value < found[0]:
+                        found = (value, {"snr_db": snr, "kind": kind})
+        self.at[_key(params)] = found[1]
+        if self.best is None or found[0] < self.best[0]:
+            self.best = found
+        return found[0]
+
+
+def _plain(params: dict) -> dict:
+    return {k: (v if isinstance(v, str) else int(v) if isinstance(v, numbers.Integral) else float(v))
+            for k, v in params.items()}
+
+
+# --- the diagnosis -----------------------------------------------------------------------------------
+
+def _paired_removal(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarray, seed: int) -> dict:
+    """The gap the candidate removes from the current source, with a paired bootstrap: both
+    comparisons resample the same source row indices (common random numbers make row i the
+    same noise draw in both) and the same target rows."""
+    now, new = scorer.score(current_X), scorer.score(candidate_X)
+    rc = scorer.replicates(current_X, ACCEPT_REPLICATES, [seed, 3])
+    rn = scorer.replicates(candidate_X, ACCEPT_REPLICATES, [seed, 3])
+    removed = rc - rn
+    tail = 100.0 * (1.0 - ACCEPT_CONFIDENCE)
+    return {"gap_now": now, "gap_new": new, "removed": now - new,
+            "removed_low": float(np.percentile(removed, tail)),  # one-sided: removed > 0 with 95 %
+            "removed_interval": [float(x) for x in np.percentile(removed, [2.5, 97.5])]}
+
+
+def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None = None) -> dict:
+    return gap_report(source_X, target_X, pair, seed=settings.seed,
+                      bootstrap=settings.bootstrap if bootstrap is None else bootstrap,
+                      permutations=settings.permutations, alpha=settings.alpha)
+
+
+def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, executor=None,
+             on_event: Callable[[Event], None] = lambda e: None) -> dict:
+    """Where the gap between the *source* simulator and the target's healthy revolutions lies,
+    which effects (fitted) close it, and how far: a JSON-serialisable dict (module docstring).
+
+    *target_X*: the target's healthy revolutions in physical units, (n, 4096); nothing else
+    about the target reaches the diagnosis. *executor*: fits the candidates of a round in
+    parallel (gearlab.executors; default: in this process).
+    """
+    started = time.perf_counter()
+    candidates = check_settings(settings)
+    target = check_target(target_X)
+    pair = _check_source(source)
+    for i, effect in enumerate(source.effects, start=1):  # the source's own effects must load too
+        get_registry().get("effect", effect[0], f"gap diagnosis: source '{source.name}' effect #{i}")
+    executor = executor or LocalExecutor(1)
+    # Two noise seeds: one for the search (common random numbers), one for the reports, so the
+    # fitted parameters are judged on rows they were not fitted to.
+    search_seed, report_seed = (int(s) for s in np.random.SeedSequence([settings.seed, 9]).generate_state(2))
+    base = source.with_(faults=(), healthy=settings.healthy, teeth=None, duplicates=1)
+    search, fresh = base.with_(seed=search_seed), base.with_(seed=report_seed)
+    scorer = Scorer(target, pair)
+
+    on_event(Event("stage", stage="gap before", total=1, message=f"gap: {source.name} against the target"))
+    before = _report(source_rows(fresh), target, pair, settings)
+    on_event(Event("advance", stage="gap before", done=1, total=1))
+    result = {"before": before, "gap_before": float(before["total"]["gap"]),
+              "significant_before": bool(before["significant"]), "effects": [], "ranking": [], "rounds": [],
+              "settings": {**asdict(settings), "candidates": list(candidates)}, "notes": []}
+    if np.all(target == target[0]):
+        # Measured data always scatter; identical rows come from a noise-free simulation, whose
+        # TSA residual is rounding: two equal noise-free sets still differ there (docs/gap_stats.md).
+        result["notes"].append("the target revolutions are all identical (noise-free): effect sizes rest on "
+                               "numerical floors and rounding; add the sensor noise a real target has")
+
+    accepted: list[dict] = []
+    fitted: tuple = ()
+    significant = bool(before["significant"])
+    gap0 = scorer.score(source_rows(search))  # the search's own baseline (same rows as the fits)
+    if not significant:
+        on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}); nothing to explain"))
+    for r in range(1, settings.max_effects + 1):
+        if not significant:
+            break
+        remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
+        if not remaining:
+            break
+        current = source_rows(search.with_(effects=_by_level(search.effects + fitted)))
+        gap_now = scorer.score(current)
+        # The noise nuisance: while sensor noise is a candidate not yet accepted, every other
+        # candidate is fitted with it (a noisy target would otherwise always elect noise first,
+        # fitted to the wrong model, and judge the structural effects next to the wrong noise).
+        nuisance = NUISANCE in remaining
+        tasks = [(search, name, fitted, target, settings, settings.seed + 1000 * r, nuisance and name != NUISANCE)
+                 for name in remaining]
+        on_event(Event("stage", stage=f"gap round {r}", total=len(tasks),
+                       message=f"gap: round {r}, fitting {len(tasks)} effects"))
+        done = 0
+
+        def advance(i, res, r=r, total=len(tasks)):
+            nonlocal done
+            done += 1
+            on_event(Event("advance", stage=f"gap round {r}", done=done, total=total))
+
+        fits = executor.map(fit_effect, tasks, advance)
+        fits.sort(key=lambda f: f["score"])
+        for f in fits:
+            f["share_removed"] = min(1.0, max(0.0, 1.0 - f["score"] / gap0)) if gap0 > 0 else 0.0
+            f["share_of_remaining"] = min(1.0, max(0.0, 1.0 - f["score"] / gap_now)) if gap_now > 0 else 0.0
+        round_info = {"round": r, "gap": gap_now,
+                      "fits": [{k: f.get(k) for k in ("name", "score", "share_removed", "share_of_remaining",
+                                                      "params", "evaluations", "seconds", "error")} for f in fits]}
+        result["rounds"].append(round_info)
+        if r == 1:
+            result["ranking"] = [{"name": f["name"], "share_removed": f["share_removed"], "params": f["params"]}
+                                 for f in fits]
+        top = fits[0]
+        if not math.isfinite(top["score"]):
+            break
+        alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
+        if top.get("nuisance") and alone_fit is not None:
+            # A candidate fitted with noise beside it must beat the noise alone by its own share
+            # (paired): extra parameters next to the right noise always fit a little better.
+            def rows_of(f, extra=()):
+                effects = _as_tuple(f["accepted"]) if f.get("accepted") else fitted
+                own = get_registry().get("effect", f["name"]).spec(f["params"])
+                return source_rows(search.with_(effects=_by_level(search.effects + effects + (own,) + extra)))
+
+            joint = rows_of(top, (get_registry().get("effect", NUISANCE).spec(top["nuisance"]["params"]),))
+            beyond = _paired_removal(scorer, rows_of(alone_fit), joint, settings.seed + r + 700)
+            beyond_share = beyond["removed"] / beyond["gap_now"] if beyond["gap_now"] > 0 else 0.0
+            round_info.update(beyond_noise=beyond_share, beyond_noise_low=beyond["removed_low"])
+            if not (beyond_share >= MIN_SHARE and beyond["removed_low"] > 0.0):
+                top = alone_fit
+        spec = get_registry().get("effect", top["name"]).spec(top["params"])
+        refit = _as_tuple(top["accepted"]) if top.get("accepted") else fitted
+        noise = (get_registry().get("effect", NUISANCE).spec(top["nuisance"]["params"]),) if top.get("nuisance") else ()
+        candidate_rows = source_rows(search.with_(effects=_by_level(search.effects + refit + (spec,) + noise)))
+        paired = _paired_removal(scorer, current, candidate_rows, settings.seed + r)
+        noise_paired = None
+        if noise:
+            # The candidate was fitted with noise beside it: the noise is named too only when it
+            # removes its own share of what the candidate alone leaves (paired, as above).
+            alone = source_rows(search.with_(effects=_by_level(search.effects + refit + (spec,))))
+            noise_paired = _paired_removal(scorer, alone, candidate_rows, settings.seed + r + 500)
+            noise_share = noise_paired["removed"] / noise_paired["gap_now"] if noise_paired["gap_now"] > 0 else 0.0
+            if not (noise_share >= MIN_SHARE and noise_paired["removed_low"] > 0.0):
+                noise, noise_paired = (), None
+                paired = _paired_removal(scorer, current, alone, settings.seed + r)
+        share = paired["removed"] / gap_now if gap_now > 0 else 0.0
+        ok = share >= MIN_SHARE and paired["removed_low"] > 0.0
+        round_info.update(best=top["name"], share_of_remaining=share, removed_low=paired["removed_low"],
+                          accepted=ok)
+        on_event(Event("log", message=f"gap: round {r}: {top['name']} removes {100 * share:.1f} % of the gap left "
+                                      f"({'accepted' if ok else 'not accepted'})"))
+        if not ok:
+            break
+        fitted = refit + (spec,) + noise
+        for entry, (_, params) in zip(accepted, refit):  # the earlier effects, re-fitted next to this one
+            entry["params"] = _plain(dict(params))
+        own = paired["removed"]
+        if noise_paired:
+            # Shared out as a Shapley value over the two orders: the candidate first (what it
+            # removes alone) and the noise first (what it removes beyond the round's noise-alone fit).
+            noise_alone = next((f["score"] for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
+            first = paired["gap_now"] - noise_paired["gap_now"]
+            second = (noise_alone - paired["gap_new"]) if noise_alone is not None else first
+            own = min(max(0.0, 0.5 * (first + second)), paired["removed"])
+            noise_paired = {**noise_paired, "removed": paired["removed"] - own}
+        accepted.append({"name": top["name"], "share_removed": own / gap0 if gap0 > 0 else 0.0,
+                         "share_of_remaining": share, "params": top["params"], "intervals": top["intervals"],
+                         "round": r, "removed_interval": paired["removed_interval"]})
+        if noise_paired:
+            # Its share: what it removes beyond the candidate alone (the candidate keeps the rest).
+            accepted.append({"name": NUISANCE, "share_removed": noise_paired["removed"] / gap0 if gap0 > 0 else 0.0,
+                             "share_of_remaining": noise_paired["removed"] / gap_now if gap_now > 0 else 0.0,
+                             "params": top["nuisance"]["params"], "intervals": {}, "round": r,
+                             "removed_interval": noise_paired["removed_interval"], "nuisance_of": top["name"]})
+            round_info["nuisance"] = top["nuisance"]
+        check = _report(source_rows(fresh.with_(effects=_by_level(fresh.effects + fitted))), target, pair,
+                        settings, bootstrap=0)
+        round_info["p_value_after"] = check["p_value"]
+        significant = bool(check["significant"])
+
+    corrected = _by_level(base.effects + fitted)
+    on_event(Event("stage", stage="gap after", total=1, message="gap: the corrected source against the target"))
+    after = _report(source_rows(fresh.with_(effects=corrected)), target, pair, settings) if fitted else before
+    on_event(Event("advance", stage="gap after", done=1, total=1))
+    result.update(
+        after=after, gap_after=float(after["total"]["gap"]), significant_after=bool(after["significant"]),
+        effects=accepted,
+        unexplained=bool(before["significant"] and (not accepted or after["significant"])),
+        corrected_effects=[[name, [[k, v] for k, v in params]] for name, params in fitted],
+        seconds=time.perf_counter() - started,
+    )
+    return result
+
+
+def _as_tuple(effects) -> tuple:
+    """corrected_effects (lists, as JSON keeps them) back to the canonical tuple form."""
+    return tuple((str(name), tuple((str(k), v) for k, v in params)) for name, params in effects)
+
+
+def corrected_source(source: DatasetSpec, result: dict) -> DatasetSpec:
+    """The source with the fitted effects added: what to simulate instead of the plain source."""
+    added = _as_tuple(result.get("corrected_effects", ()))
+    if not added:
+        return source
+    registry = get_registry()
+    # Through the registry once more: the canonical (resolved, sorted) form of each effect.
+    added = tuple(registry.get("effect", name).spec(dict(params)) for name, params in added)
+    return source.with_(effects=_by_level(source.effects + added))

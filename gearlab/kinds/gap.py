@@ -1,0 +1,573 @@
+"""Scenario kind `gap`: the sim-to-real gap diagnosis (SPEC section 9, docs/gap.md "Diagnosis").
+
+    [source]      the simulator configuration: a simulated dataset entry (as in [[datasets]])
+    [target]      the data to explain: a simulated entry (possibly with effects, which the
+                  diagnosis never sees) or a measured file through the importer
+    [diagnosis]   candidates, budget, max_effects, healthy, bootstrap, permutations, alpha, seed
+    [accuracy]    enabled, methods (DA baselines), repetitions and training settings (k = 0)
+    [network]     name (fast | cnn3), dropout
+
+Units of work (one record each in results.jsonl, so --resume redoes none of them):
+``diagnosis`` (where / which / how far, gearlab.gap.diagnose.diagnose on the target's healthy
+revolutions alone), then per repetition the downstream accuracy: a source-only model trained
+on the uncorrected source, one trained on the corrected source (the fitted effects added),
+and each DA method on the uncorrected source, all scored on the target test set.
+
+Output: summary.json (effects, gap before/after, per-view gaps, two-sample statistics,
+ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures and report.html.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, replace
+
+import numpy as np
+
+from ..charts import Chart, Curve
+from ..data import cache
+from ..data.cache import load_or_build
+from ..data.spec import POINTS, DatasetSpec
+from ..errors import GearlabInputError
+from ..learn.networks import NETWORKS
+from ..learn.protocol import Counts, Method, Protocol, check, check_data, shared_state
+from ..params import did_you_mean
+from ..registry import get_registry
+from ..runs import Event, RunDir
+from ..scenario import Key, Scenario, Table, in_range, location
+from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
+from .transfer import MAX_SEED, method as transfer_method, train_unit
+
+_DATASET = Table(DATASET_TABLE.keys, required=True)
+# The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
+MIN_HEALTHY = 10
+# Mesh sidebands the order bands resolve beside each mesh harmonic (gearlab.gap.views.BandPlan):
+# a revolution must be sampled finely enough for the first mesh order plus these.
+SIDEBANDS = 3
+UNCORRECTED, CORRECTED = "uncorrected", "corrected"
+
+
+def _alpha(value, where):
+    # an open interval: alpha = 0 would never call a gap significant, alpha = 1 always
+    if not 0.0 < value < 1.0 or not math.isfinite(value):
+        raise GearlabInputError(f"{where}: expected a significance level between 0 and 1 (exclusive), got {value!r}")
+    return float(value)
+
+
+TABLES = {
+    "source": _DATASET,
+    "target": _DATASET,
+    "diagnosis": Table({
+        "candidates": Key(list, [], doc="effect names to try (gearlab plugins lists them); [] = every registered effect"),
+        "budget": Key(int, 16, in_range(1, 10_000), "source simulations per effect fit (the search budget)"),
+        "max_effects": Key(int, 3, in_range(1, 20), "greedy rounds: most effects added to the source"),
+        "healthy": Key(int, 40, in_range(MIN_HEALTHY, 100_000), "source healthy revolutions simulated per evaluation"),
+        "bootstrap": Key(int, 200, in_range(0, 100_000), "bootstrap replicates of the before/after reports"),
+        "permutations": Key(int, 500, in_range(1, 1_000_000), "MMD permutations of the before/after reports"),
+        "alpha": Key(float, 0.05, _alpha, "significance level of the two-sample test"),
+        "seed": Key(int, 0, in_range(0, MAX_SEED)),
+    }),
+    "accuracy": Table({
+        "enabled": Key(bool, True, doc="train source-only models on the uncorrected and corrected source "
+                                       "(needs target labels)"),
+        "methods": Key(list, ["mmd", "dann"], doc="unsupervised DA baselines shown beside (adapter names)"),
+        "repetitions": Key(int, 3, in_range(1, 1000)),
+        "target_train": Key(int, 120, in_range(2), "unlabelled target samples the DA methods see (k = 0)"),
+        "batch": Key(int, 40, in_range(1)),
+        "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the DA methods"),
+        "prime_epochs": Key(int, 100, in_range(0)),
+        "baseline_epochs": Key(int, 200, in_range(1)),
+        "patience": Key(int, 20, in_range(1)),
+        "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
+        "max_epochs": Key(int, 800, in_range(1)),
+        "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
+    }),
+    "network": Table({
+        "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),
+        "dropout": Key(float, 0.005, in_range(0.0, 0.95), "dropout rate (Table 5.3: 0.5 %)"),
+    }),
+}
+
+
+# --- build: every check before any work ---------------------------------------------------------
+
+
+def build(scenario: Scenario) -> dict:
+    t = scenario.tables
+    path = scenario.path
+    source = dataset_spec(t["source"], location(path, "source"), path.parent)
+    if not isinstance(source, DatasetSpec):
+        raise GearlabInputError(f"{location(path, 'source', 'file')}: the source is a simulator configuration; "
+                                "give a 'preset' (measured data can only be the [target])")
+    target = dataset_spec(t["target"], location(path, "target"), path.parent)
+    _, pair, _ = source.check_model(location(path, "source"))
+    check_sampling(source, pair.Z1, location(path, "source"))
+    if isinstance(target, DatasetSpec):
+        _, target_pair, _ = target.check_model(location(path, "target"))
+        if (target_pair.Z1, target_pair.Z2) != (pair.Z1, pair.Z2):
+            raise GearlabInputError(f"{location(path, 'target', 'preset')}: the target's gear pair has "
+                                    f"{target_pair.Z1}/{target_pair.Z2} teeth, the source's {pair.Z1}/{pair.Z2}; "
+                                    "effects never change the gear pair")
+        check_sampling(target, pair.Z1, location(path, "target"))
+        healthy = class_sizes(target)["healthy"]
+        check_healthy(healthy, location(path, "target", "healthy"))
+    d = t["diagnosis"]
+    settings = {"candidates": candidates(d["candidates"], location(path, "diagnosis", "candidates")),
+                **{k: d[k] for k in ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha", "seed")}}
+    net = t["network"]["name"]
+    if net not in NETWORKS:
+        raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
+                                f"{did_you_mean(net, list(NETWORKS))}; known networks: {', '.join(NETWORKS)}")
+    a = t["accuracy"]
+    methods = da_methods(a["methods"], location(path, "accuracy", "methods"))
+    protocol = Protocol(
+        methods=(Method("source_only", False), *methods), network=net, dropout=t["network"]["dropout"], ks=(0,),
+        repetitions=a["repetitions"], target_train=a["target_train"], batch=a["batch"], lr=a["lr"],
+        prime_epochs=a["prime_epochs"], baseline_epochs=a["baseline_epochs"], patience=a["patience"],
+        min_epochs=a["min_epochs"], max_epochs=a["max_epochs"], seed=a["seed"], device=device_of(scenario),
+    )
+    if a["enabled"]:
+        if protocol.min_epochs > protocol.max_epochs:
+            raise GearlabInputError(f"{location(path, 'accuracy', 'min_epochs')}: {protocol.min_epochs} is larger "
+                                    f"than max_epochs = {protocol.max_epochs}")
+        check(protocol, str(path))
+        planned = planned_counts(source), planned_counts(target)
+        # a simulated target without faults has nothing to detect: the accuracy is skipped (run)
+        if None not in planned and planned[1].faults:
+            check_data(protocol, *planned, f"{path}: [accuracy]")
+    return {"source": source, "target": target, "settings": settings, "protocol": protocol,
+            "accuracy": bool(a["enabled"])}
+
+
+def check_healthy(count: int, where: str) -> None:
+    if count == 0:
+        raise GearlabInputError(f"{where}: the target has no healthy data; the gap is measured on healthy "
+                                f"revolutions (expected at least {MIN_HEALTHY})")
+    if count < MIN_HEALTHY:
+        raise GearlabInputError(f"{where}: too few healthy target revolutions for the gap statistics: {count}; "
+                                f"expected at least {MIN_HEALTHY}")
+
+
+def check_sampling(spec: DatasetSpec, z1: int, where: str) -> None:
+    """The simulation rate must resolve the first mesh order and its sidebands in time: fs / speed
+    samples per revolution, of which the highest order is half."""
+    from ..data.builder import operating_point
+
+    speed, _ = operating_point(spec)
+    check_points(spec.fs / speed, z1, f"{where} key 'fs'", f"fs = {spec.fs:g} Hz at {speed:g} Hz")
+
+
+def check_points(points: float, z1: int, where: str, what: str) -> None:
+    need = 2 * (z1 + SIDEBANDS) + 1
+    if points < need:
+        raise GearlabInputError(f"{where}: sampling rate too low for the mesh harmonics: {what} gives "
+                                f"{points:.4g} samples per revolution, fewer than {need} needed to resolve mesh "
+                                f"order {z1} (a {z1}-tooth pinion) and its {SIDEBANDS} sidebands")
+
+
+def candidates(names, where: str) -> tuple[str, ...]:
+    """Effect names, each registered (with a "did you mean"), none twice; [] = all."""
+    registry = get_registry()
+    known = registry.names("effect")
+    out: list[str] = []
+    for i, name in enumerate(names):
+        if not isinstance(name, str):
+            raise GearlabInputError(f"{where}: entry {i + 1} must be an effect name, got {type(name).__name__}")
+        registry.get("effect", name, f"{where} entry {i + 1}")  # unknown: did you mean, the known list
+        if name in out:
+            raise GearlabInputError(f"{where}: '{name}' is listed twice")
+        out.append(name)
+    if not known:
+        raise GearlabInputError(f"{where}: no effect plugins are registered (gearlab plugins lists them)")
+    return tuple(out)
+
+
+def da_methods(names, where: str) -> tuple[Method, ...]:
+    """The unsupervised DA baselines: with k = 0 the target has no labels to supervise with."""
+    out: list[Method] = []
+    for i, name in enumerate(names):
+        if not isinstance(name, str):
+            raise GearlabInputError(f"{where}: entry {i + 1} must be an adapter name, got {type(name).__name__}")
+        if name == "source_only":
+            raise GearlabInputError(f"{where}: source_only is always trained (on the uncorrected and the "
+                                    "corrected source); list DA methods only")
+        m = transfer_method({"adapter": name, "supervised": False, "params": {}}, f"{where} entry {i + 1}")
+        if get_registry().get("adapter", m.adapter).train_on != "joint":
+            raise GearlabInputError(f"{where} entry {i + 1}: '{name}' is not a domain-adaptation method "
+                                    "(it trains on the source or target alone)")
+        if m in out:
+            raise GearlabInputError(f"{where}: '{name}' is listed twice")
+        out.append(m)
+    return tuple(out)
+
+
+def planned_counts(spec) -> Counts | None:
+    sizes = class_sizes(spec)
+    if sizes is None:
+        return None
+    return Counts(spec.name, POINTS, sizes.pop("healthy"), sum(sizes.values()))
+
+
+def describe(scenario: Scenario) -> str:
+    spec = scenario.spec
+    s = spec["settings"]
+    n = len(s["candidates"]) or len(get_registry().names("effect"))
+    line = (f"gap of {sized(spec['source'])} -> {sized(spec['target'])}: {n} candidate effects x budget "
+            f"{s['budget']}, up to {s['max_effects']} greedy rounds, {s['healthy']} source healthy revolutions "
+            "per evaluation")
+    if spec["accuracy"]:
+        p: Protocol = spec["protocol"]
+        line += (f"; accuracy: {len(p.methods) + 1} models x {p.repetitions} repetitions "
+                 f"(source_only uncorrected and corrected, {', '.join(m.adapter for m in p.methods[1:]) or 'no DA'})")
+    return line
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: small search budgets, fewer revolutions and resamples, one short repetition."""
+    spec = scenario.spec
+    s = spec["settings"]
+    spec["settings"] = {**s, "budget": min(s["budget"], 4), "max_effects": min(s["max_effects"], 2),
+                        "healthy": min(s["healthy"], 20), "bootstrap": min(s["bootstrap"], 50),
+                        "permutations": min(s["permutations"], 200)}
+    p: Protocol = spec["protocol"]
+    spec["protocol"] = replace(p, repetitions=1, prime_epochs=min(p.prime_epochs, 30),
+                               baseline_epochs=min(p.baseline_epochs, 60), min_epochs=min(p.min_epochs, 60),
+                               max_epochs=min(p.max_epochs, 90))
+
+
+# --- run -------------------------------------------------------------------------------------------
+
+
+def target_rows(dataset, z1: int, where: str) -> tuple[np.ndarray, str]:
+    """The target's healthy revolutions in physical units, checked; and a note on what was used.
+    An unlabelled measured record is taken as healthy throughout (the importer standardises it
+    against all its revolutions alike)."""
+    from ..gap.views import healthy_rows
+
+    note = ""
+    labels = np.asarray(dataset.label)
+    if len(labels) and np.all(labels == -1):
+        mean, std = dataset.reference
+        rows = np.asarray(dataset.X, dtype=np.float64) * std + mean
+        note = "the target is unlabelled: all its revolutions are taken as healthy"
+    else:
+        rows = healthy_rows(dataset) if (labels == 0).any() else np.empty((0, dataset.X.shape[1]))
+    check_healthy(len(rows), where)
+    meta = dataset.meta or {}
+    if meta.get("source") == "measured":
+        fs, speed = float(meta["fs_hz"]), float(meta["speed_hz"])
+        check_points(fs / speed, z1, where, f"the record's {fs:g} Hz at {speed:.4g} Hz shaft speed")
+    return rows, note
+
+
+def unit_name(rep: int, variant: str, m: Method) -> str:
+    return f"rep{rep}/{variant}/{m.key}"
+
+
+def accuracy_units(protocol: Protocol) -> list[tuple[int, str, Method]]:
+    """Per repetition: source_only on both sources, each DA method on the uncorrected one."""
+    source_only, *das = protocol.methods
+    out = []
+    for rep in range(protocol.repetitions):
+        out += [(rep, UNCORRECTED, source_only), (rep, CORRECTED, source_only)]
+        out += [(rep, UNCORRECTED, m) for m in das]
+    return out
+
+
+def label_of(variant: str, m: Method) -> str:
+    return f"source_only ({variant})" if m.adapter == "source_only" else m.label
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    from ..gap.diagnose import Settings, corrected_source, diagnose
+    from ..gap.views import gear_pair_of
+
+    spec = scenario.spec
+    executor = executor_for(scenario)
+    done = {r["unit"]: r for r in run.records()}
+    source_spec: DatasetSpec = spec["source"]
+    z1 = gear_pair_of(source_spec).Z1
+
+    on_event(Event("stage", stage="datasets", total=1, message="target data"))
+    target, _ = load_or_build(spec["target"], executor, on_event)
+    target_X, note = target_rows(target, z1, location(scenario.path, "target"))
+    on_event(Event("advance", stage="datasets", done=1, total=1))
+    if note:
+        on_event(Event("log", message=note))
+
+    if "diagnosis" not in done:
+        on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
+        # Only the source configuration and the target's healthy rows go in: nothing of how the
+        # target was made (its spec, effects, labels) reaches the diagnosis.
+        result = diagnose(source_spec, target_X, Settings(**spec["settings"]), executor=executor, on_event=on_event)
+        record = {"unit": "diagnosis", "result": result, "note": note}
+        run.append(record)
+        done["diagnosis"] = record
+        on_event(Event("record", stage="diagnosis", record=_brief(record)))
+        on_event(Event("advance", stage="diagnosis", done=1, total=1))
+    result = done["diagnosis"]["result"]
+    on_event(Event("log", message=diagnosis_line(result)))
+
+    notes = [note] if note else []
+    if spec["accuracy"]:
+        if not (np.asarray(target.fault) == 1).any():
+            notes.append("accuracy skipped: the target has no labelled fault samples")
+            on_event(Event("log", message=notes[-1]))
+        else:
+            corrected = corrected_source(source_spec, result)
+            if corrected != source_spec:  # a label only (not in the cache key): tells the two apart in logs
+                corrected = corrected.with_(name=f"{source_spec.name}-corrected", domain=f"{source_spec.name}-corrected")
+            accuracy(scenario, run, corrected, executor, on_event, done)
+    summarise(scenario, run, notes)
+
+
+def _brief(record: dict) -> dict:
+    """The diagnosis record without the per-feature arrays (events stay small)."""
+    r = record["result"]
+    return {"unit": "diagnosis", "gap_before": r["gap_before"], "gap_after": r["gap_after"],
+            "unexplained": r["unexplained"], "effects": [e["name"] for e in r["effects"]]}
+
+
+def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, on_event, done: dict) -> None:
+    spec = scenario.spec
+    protocol: Protocol = spec["protocol"]
+    sources = {UNCORRECTED: spec["source"], CORRECTED: corrected}
+    todo = accuracy_units(protocol)
+    pending = [u for u in todo if unit_name(*u) not in done]
+    on_event(Event("stage", stage="accuracy", total=len(todo),
+                   message=f"downstream accuracy: {len(todo)} training runs"))
+    if pending:
+        on_event(Event("stage", stage="sources", total=2, message="source datasets (uncorrected, corrected)"))
+        built = {}
+        for i, (variant, s) in enumerate(sources.items()):
+            built[variant], _ = load_or_build(s, executor, on_event)
+            on_event(Event("advance", stage="sources", done=i + 1, total=2))
+        target, _ = load_or_build(spec["target"], executor, on_event)
+        for variant in sources:
+            check_data(protocol, Counts.of(built[variant]), Counts.of(target), f"{scenario.path}: [accuracy]")
+    # Each source has its own states (its source-only model, its primed network): the unit that
+    # needs one first makes it, the others wait for the second phase and load it.
+    makers: dict[tuple, tuple] = {}
+    for rep, variant, m in pending:
+        state = shared_state(m, rep)
+        if state is not None and not (run.path / "states" / variant / f"{state}.pt").exists():
+            makers.setdefault((variant, state), (rep, variant, m))
+    first = list(makers.values())
+    phases = [first, [u for u in pending if u not in first]]
+    finished = len(todo) - len(pending)
+    on_event(Event("advance", stage="accuracy", done=finished, total=len(todo)))
+
+    for phase in phases:
+        if not phase:
+            continue
+        target_data = (spec["target"], cache.entry_path(spec["target"]))
+        tasks = [(protocol, (sources[variant], cache.entry_path(sources[variant])), target_data, rep, 0, m,
+                  run.path / "states" / variant) for rep, variant, m in phase]
+
+        def record_done(i: int, record: dict, phase=phase) -> None:
+            nonlocal finished
+            rep, variant, m = phase[i]
+            record.pop("_latent", None)
+            record.update(unit=unit_name(rep, variant, m), variant=variant, method=label_of(variant, m))
+            run.append(record)
+            finished += 1
+            on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %"))
+            on_event(Event("record", stage="accuracy", record=record))
+            on_event(Event("advance", stage="accuracy", done=finished, total=len(todo)))
+
+        executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+
+
+def diagnosis_line(result: dict) -> str:
+    before, after = result["gap_before"], result["gap_after"]
+    names = ", ".join(f"{e['name']} ({100 * e['share_removed']:.0f} %)" for e in result["effects"]) or "none"
+    verdict = "unexplained" if result["unexplained"] else "explained"
+    return (f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}")
+
+
+def shrink_text(before: float, after: float) -> str:
+    if before <= 0:
+        return "n/a"
+    share = 100 * (1 - after / before)
+    return f"{share:.2f} %" if 99 <= share < 100 else f"{share:.0f} %"  # 99.99 % is not 100 %
+
+
+# --- summary, tables, charts -----------------------------------------------------------------------
+
+
+def view_rows(result: dict) -> dict[str, dict]:
+    """Per view: gap and share before and after, with their bootstrap intervals."""
+    before, after = result["before"]["views"], result["after"]["views"]
+    out = {}
+    for name, b in before.items():
+        a = after.get(name, {})
+        out[name] = {"gap_before": b["gap"], "gap_after": a.get("gap"), "share_before": b.get("share"),
+                     "share_after": a.get("share"), "gap_before_interval": b.get("gap_interval"),
+                     "gap_after_interval": a.get("gap_interval"), "share_before_interval": b.get("share_interval"),
+                     "share_after_interval": a.get("share_interval")}
+    return out
+
+
+def accuracy_table(records: list[dict], protocol: Protocol) -> dict[str, dict]:
+    """{label: {mean, std, n}}: target test accuracy (%) over repetitions, in the column order
+    source_only (uncorrected), source_only (corrected), then the DA methods."""
+    source_only, *das = protocol.methods
+    out = {}
+    for variant, m in [(UNCORRECTED, source_only), (CORRECTED, source_only), *((UNCORRECTED, d) for d in das)]:
+        label = label_of(variant, m)
+        acc = [r["accuracy"] for r in records if r.get("variant") == variant and r.get("method") == label]
+        if acc:
+            out[label] = {"mean": float(np.mean(acc)), "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0,
+                          "n": len(acc)}
+    return out
+
+
+def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
+    spec = scenario.spec
+    records = run.records()
+    result = next(r["result"] for r in records if r["unit"] == "diagnosis")
+    acc = accuracy_table(records, spec["protocol"])
+    summary = {
+        "kind": "gap",
+        "scenario": scenario.name,
+        "source": asdict(spec["source"]),
+        "target": asdict(spec["target"]),
+        "effects": [{"name": e["name"], "share_removed": e["share_removed"], "params": e["params"],
+                     "intervals": e.get("intervals", {}), "round": e.get("round")} for e in result["effects"]],
+        "gap_before": result["gap_before"],
+        "gap_after": result["gap_after"],
+        "shrink": 1 - result["gap_after"] / result["gap_before"] if result["gap_before"] > 0 else None,
+        "unexplained": result["unexplained"],
+        "significant_before": result["significant_before"],
+        "significant_after": result["significant_after"],
+        "auc_before": result["before"]["auc"],
+        "auc_after": result["after"]["auc"],
+        "p_before": result["before"]["p_value"],
+        "p_after": result["after"]["p_value"],
+        "mmd2_before": result["before"]["mmd2"],
+        "mmd2_after": result["after"]["mmd2"],
+        "views": view_rows(result),
+        "ranking": result["ranking"],
+        "corrected_effects": result["corrected_effects"],
+        "settings": result.get("settings", spec["settings"]),
+        "notes": notes + list(result["before"].get("notes", [])),
+    }
+    if acc:
+        summary["accuracy"] = acc
+        summary["accuracy_order"] = list(acc)  # the column order (JSON objects are written with sorted keys)
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", tables_md(summary))
+    from ..plots import gap_figures
+
+    gap_figures(run.figures, summary)
+
+
+def _interval(iv) -> str:
+    return f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else ""
+
+
+def _pct(x) -> str:
+    return f"{100 * x:.1f} %" if x is not None else ""
+
+
+def views_md(views: dict) -> str:
+    lines = ["| view | gap before | share before | gap after | share after |", "|---|---|---|---|---|"]
+    for name, v in views.items():
+        after = "" if v["gap_after"] is None else f"{v['gap_after']:.4g}{_interval(v['gap_after_interval'])}"
+        share_iv = v["share_before_interval"]
+        share_before = _pct(v["share_before"]) + (f" [{100 * share_iv[0]:.0f}, {100 * share_iv[1]:.0f}]"
+                                                  if share_iv else "")
+        lines.append(f"| {name} | {v['gap_before']:.4g}{_interval(v['gap_before_interval'])} | {share_before} | "
+                     f"{after} | {_pct(v['share_after'])} |")
+    return "\n".join(lines) + "\n"
+
+
+def _params(params: dict) -> str:
+    return ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in params.items())
+
+
+def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
+    chosen = {e["name"]: e for e in accepted}
+    lines = ["| effect | share of the gap removed (round 1) | fitted parameters | accepted |", "|---|---|---|---|"]
+    for r in ranking:
+        e = chosen.get(r["name"])
+        mark = f"round {e.get('round')}, {_pct(e['share_removed'])}" if e else ""
+        lines.append(f"| {r['name']} | {_pct(r['share_removed'])} | {_params(r.get('params', {}))} | {mark} |")
+    return "\n".join(lines) + "\n"
+
+
+def accuracy_md(acc: dict, order: list[str] | None = None) -> str:
+    lines = ["| model (k = 0) | target test accuracy (%) | repetitions |", "|---|---|---|"]
+    lines += [f"| {label} | {acc[label]['mean']:.2f} ± {acc[label]['std']:.1f} | {acc[label]['n']} |"
+              for label in (order or list(acc))]
+    return "\n".join(lines) + "\n"
+
+
+def tables_md(summary: dict) -> str:
+    """Three tables separated by blank lines: per-view gap, effect ranking, accuracy."""
+    parts = [views_md(summary["views"]), ranking_md(summary["ranking"], summary["effects"])]
+    if summary.get("accuracy"):
+        parts.append(accuracy_md(summary["accuracy"]))
+    return "\n".join(parts)
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    s = json.loads((run.path / "summary.json").read_text())
+    names = ", ".join(f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'])})" for e in s["effects"])
+    lines = [
+        f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
+        f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "
+        f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
+        f"effects: {names or 'none'}" + ("; UNEXPLAINED: no candidate closes the gap" if s["unexplained"] else ""),
+        "per-view gap:", views_md(s["views"]).rstrip(),
+    ]
+    if s.get("accuracy"):
+        lines += ["target fault-detection accuracy (k = 0):",
+                  accuracy_md(s["accuracy"], s.get("accuracy_order")).rstrip()]
+    lines += [f"note: {n}" for n in s.get("notes", [])]
+    return lines
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    """What is known so far: the diagnosis once it has finished, the accuracy as units finish."""
+    parts = []
+    diag = next((r for r in records if r.get("unit") == "diagnosis"), None)
+    if diag is not None:
+        result = diag["result"]
+        parts += [views_md(view_rows(result)), ranking_md(result["ranking"], result["effects"])]
+    acc = accuracy_table(records, scenario.spec["protocol"])
+    if acc:
+        parts.append(accuracy_md(acc))
+    return "\n".join(parts) if parts else "| diagnosis |\n|---|\n| running |\n"
+
+
+def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
+    records = run.records()
+    diag = next((r for r in records if r.get("unit") == "diagnosis"), None)
+    out = []
+    if diag is None:
+        out.append(Chart("per-view gap before/after", "", "", (), notes=("the diagnosis has not finished",)))
+    else:
+        rows = view_rows(diag["result"])
+        names = list(rows)
+        x = list(range(1, len(names) + 1))
+        out.append(Chart(
+            "per-view gap before/after", "view: " + ", ".join(f"{i} {n}" for i, n in zip(x, names)), "gap",
+            (Curve("before", x, [rows[n]["gap_before"] for n in names]),
+             Curve("after", x, [rows[n]["gap_after"] or 0.0 for n in names])), xticks=x))
+        ranking = diag["result"]["ranking"]
+        if ranking:
+            xr = list(range(1, len(ranking) + 1))
+            out.append(Chart("effect ranking: share of the gap removed",
+                             "effect: " + ", ".join(f"{i} {r['name']}" for i, r in zip(xr, ranking)),
+                             "share removed (%)",
+                             (Curve("round 1", xr, [100 * r["share_removed"] for r in ranking]),), xticks=xr))
+    acc = accuracy_table(records, scenario.spec["protocol"])
+    if acc:
+        labels = list(acc)
+        xa = list(range(1, len(labels) + 1))
+        out.append(Chart("target test accuracy (k = 0)", "model: " + ", ".join(f"{i} {n}" for i, n in zip(xa, labels)),
+                         "accuracy (%)", (Curve("mean ± std", xa, [acc[n]["mean"] for n in labels],
+                                                [acc[n]["std"] for n in labels]),), xticks=xa))
+    return out

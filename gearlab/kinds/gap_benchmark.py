@@ -1,0 +1,255 @@
+"""Scenario kind `gap_benchmark`: the blind benchmark of the gap diagnosis (`gearlab gap benchmark`).
+
+    [benchmark]   trials, seed, library (effect names; [] = every registered effect),
+                  target_revolutions (healthy revolutions written per target)
+    [source]      the simulator configuration, a dataset preset with overrides as in [[datasets]]
+                  (default B-6-ch5; only its healthy revolutions are used; without a `noise` table
+                  it gets the base sensor noise, Gaussian 30 dB, in source and target alike)
+    [search]      the diagnosis's settings: budget, max_effects, healthy, bootstrap, permutations, alpha
+
+One unit = one trial (gearlab.gap.benchmark.trial_task): draw -> simulate -> write target.npz ->
+diagnose from the file -> score. Output: results.jsonl (one record per trial), targets/trial_NNN/
+(target.npz, answers.json, diagnosis.json), summary.json (trials, top1, top3, median_shrink,
+median_param_error, null_correct, out_of_library_unexplained, per_effect, ...), table.md, a figure
+and report.html. docs/gap_benchmark.md explains the mix, the ranges and the scoring.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, replace
+
+import numpy as np
+
+from ..charts import Chart, Curve
+from ..errors import GearlabInputError
+from ..gap import benchmark as bench
+from ..registry import get_registry
+from ..runs import Event, RunDir
+from ..scenario import Key, Scenario, Table, in_range, location
+from .dataset import DATASET_TABLE, dataset_spec, executor_for
+
+MAX_TRIALS = 10000
+MAX_SEED = 2**32 - 1
+
+_SOURCE_KEYS = {k: v for k, v in DATASET_TABLE.keys.items() if k not in ("file", "vibration", "tacho", "labels",
+                                                                         "class_names", "transient")}
+_SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
+
+TABLES = {
+    "benchmark": Table({
+        "trials": Key(int, 40, in_range(1, MAX_TRIALS), "number of trials (>= 40 for the acceptance numbers)"),
+        "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds the trials' draws and the diagnosis"),
+        "library": Key(list, [], doc="candidate effects (registered names); [] = every registered effect"),
+        "target_revolutions": Key(int, 80, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000),
+                                  "healthy revolutions in each written target"),
+    }),
+    "source": Table(_SOURCE_KEYS),
+    "search": Table({
+        "budget": Key(int, 16, in_range(1, 10000), "source simulations per effect fit"),
+        "max_effects": Key(int, 3, in_range(1, 12), "greedy rounds"),
+        "healthy": Key(int, 40, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000),
+                       "source healthy revolutions simulated per evaluation"),
+        "bootstrap": Key(int, 200, in_range(1, 100000)),
+        "permutations": Key(int, 500, in_range(1, 1000000)),
+        "alpha": Key(float, 0.05, in_range(1e-6, 0.5)),
+    }),
+}
+
+
+def build(scenario: Scenario) -> dict:
+    """Everything checked before any simulation: the library's names, the source, the trial draw."""
+    t = scenario.tables
+    path = scenario.path
+    registry = get_registry()
+    b = t["benchmark"]
+    where = location(path, "benchmark", "library")
+    library = b["library"] or registry.names("effect")
+    if not all(isinstance(n, str) for n in library):
+        raise GearlabInputError(f"{where}: expected a list of effect names, got {library!r}")
+    for name in library:
+        registry.get("effect", name, where)  # unknown names: "did you mean" and the known list
+    if len(set(library)) != len(library):
+        raise GearlabInputError(f"{where}: names an effect twice")
+    if len(library) < 2:
+        raise GearlabInputError(f"{where}: needs at least 2 effects (pairs and withheld trials), got {len(library)}")
+    entry = {**{k: v.default for k, v in DATASET_TABLE.keys.items()}, **t["source"]}
+    source = dataset_spec(entry, location(path, "source"), path.parent)
+    noise = source.noise if "noise" in scenario.raw.get("source", {}) else bench.BASE_NOISE
+    source = source.with_(faults=(), healthy=t["search"]["healthy"], noise=noise)
+    source.check(location(path, "source"))
+    library = tuple(library)
+    trials = bench.draw_trials(b["trials"], b["seed"], library, source)
+    settings = {**t["search"], "seed": b["seed"]}
+    return {"source": source, "library": library, "trials": trials, "settings": settings,
+            "revolutions": b["target_revolutions"]}
+
+
+def describe(scenario: Scenario) -> str:
+    spec = scenario.spec
+    counts = bench.trial_counts(len(spec["trials"]))
+    mix = ", ".join(f"{c} {k}" for k, c in counts.items())
+    return (f"{len(spec['trials'])} blind trials ({mix}) on {spec['source'].name} ({spec['source'].model}), "
+            f"{len(spec['library'])} candidate effects, budget {spec['settings']['budget']} per fit")
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: 4 trials (one of each kind), small searches and statistics: a few minutes on 2 cores."""
+    spec = scenario.spec
+    n = min(len(spec["trials"]), 4)
+    spec["trials"] = bench.draw_trials(n, spec["settings"]["seed"], spec["library"], spec["source"])
+    s = spec["settings"]
+    spec["settings"] = {**s, "budget": min(s["budget"], 4), "max_effects": min(s["max_effects"], 2),
+                        "healthy": min(s["healthy"], 20), "bootstrap": min(s["bootstrap"], 50),
+                        "permutations": min(s["permutations"], 100)}
+    spec["source"] = replace(spec["source"], healthy=spec["settings"]["healthy"])
+    spec["revolutions"] = min(spec["revolutions"], 40)
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    started = time.perf_counter()
+    spec = scenario.spec
+    executor = executor_for(scenario)
+    trials = spec["trials"]
+    done = {r["unit"] for r in run.records()}
+    pending = [t for t in trials if bench.unit_key(t.index) not in done]
+    total = len(trials)
+    finished = total - len(pending)
+    on_event(Event("stage", stage="trials", total=total, message=f"{total} blind trials"))
+    on_event(Event("advance", stage="trials", done=finished, total=total))
+
+    def record_done(_: int, record: dict) -> None:
+        nonlocal finished
+        run.append(record)
+        finished += 1
+        on_event(Event("log", message=f"{record['unit']} ({record['kind']}): {_verdict(record)}"))
+        on_event(Event("record", stage="trials", record=record))
+        on_event(Event("advance", stage="trials", done=finished, total=total))
+
+    tasks = [bench.TrialTask(t, spec["source"], spec["settings"], str(run.path / "targets" / f"trial_{t.index:03d}"),
+                             spec["revolutions"]) for t in pending]
+    executor.map(bench.trial_task, tasks, on_done=record_done)
+    summarise(scenario, run, elapsed=time.perf_counter() - started)
+
+
+def _verdict(r: dict) -> str:
+    if r["kind"] == "null":
+        return "no significant gap (correct)" if r["null_correct"] else f"named {r['accepted'] or 'a gap'} (wrong)"
+    if r["kind"] == "withheld":
+        return (f"withheld {r['withheld']}: " + ("unexplained (correct)" if r["unexplained"] else
+                                                 f"named {r['accepted']} (wrong)"))
+    hidden = "+".join(h[0] for h in r["hidden"])
+    shrink = f", gap shrinks {100 * r['shrink']:.0f} %" if r["shrink"] is not None else ""
+    return f"hidden {hidden}, named {r['accepted'] or 'nothing'}: top-1 {'hit' if r['top1'] else 'miss'}{shrink}"
+
+
+def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> None:
+    spec = scenario.spec
+    records = sorted(run.records(), key=lambda r: r["index"])
+    summary = {"kind": "gap_benchmark", "scenario": scenario.name, "source": asdict(spec["source"]),
+               "library": list(spec["library"]), "settings": spec["settings"], "mix": dict(bench.MIX),
+               "target_revolutions": spec["revolutions"], **bench.summarise(records, spec["library"])}
+    summary["trial_seconds"] = float(sum(r.get("seconds", 0.0) for r in records))  # summed over trials (all workers)
+    summary["elapsed_seconds"] = elapsed  # wall time of this session of the run (a resumed run: since resuming)
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", table_md(summary))
+    figures(run, summary, records)
+
+
+def _pct(v) -> str:
+    return "" if v is None else f"{100 * v:.0f} %"
+
+
+def _num(v, fmt=".2f") -> str:
+    return "" if v is None else format(v, fmt)
+
+
+def table_md(summary: dict) -> str:
+    """Per effect: trials it was hidden in, top-1/top-3, shrink, parameter error, withheld behaviour;
+    then the overall line."""
+    lines = ["| effect | trials | top-1 | top-3 | median shrink | median param error | withheld | unexplained "
+             "when withheld | named wrongly |", "|---|" + "---|" * 8]
+    for name, e in summary["per_effect"].items():
+        lines.append(f"| {name} | {e['trials']} | {_pct(e['top1'])} | {_pct(e['top3'])} | {_pct(e['median_shrink'])} "
+                     f"| {_num(e['median_param_error'])} | {e['withheld']} | {_pct(e['unexplained_when_withheld'])} "
+                     f"| {e['named_wrongly']} |")
+    lines.append(f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'][k] for k in ('single', 'pair'))} "
+                 f"| {_pct(summary['top1'])} | {_pct(summary['top3'])} | {_pct(summary['median_shrink'])} | "
+                 f"{_num(summary['median_param_error'])} | {summary['by_kind']['withheld']} | "
+                 f"{_pct(summary['out_of_library_unexplained'])} | |")
+    return "\n".join(lines) + "\n"
+
+
+def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
+    """Per-effect identification and the gap before/after of every trial (PNG for report.html)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(summary["per_effect"])
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    x = np.arange(len(names))
+    for offset, key, label in ((-0.2, "top1", "top-1"), (0.2, "top3", "top-3")):
+        axes[0].bar(x + offset, [100 * (summary["per_effect"][n][key] or 0) for n in names], 0.4, label=label)
+    axes[0].set_xticks(x, names, rotation=60, ha="right", fontsize=8)
+    axes[0].set_ylabel("identified (%)")
+    axes[0].set_title("identification per hidden effect")
+    axes[0].legend()
+    colours = {"single": "C0", "pair": "C1", "null": "C2", "withheld": "C3"}
+    for kind, colour in colours.items():
+        mine = [r for r in records if r["kind"] == kind and r["gap_before"] > 0 and r["gap_after"] == r["gap_after"]]
+        axes[1].scatter([r["gap_before"] for r in mine], [max(r["gap_after"], 1e-3) for r in mine], c=colour,
+                        label=kind, s=18)
+    axes[1].set_xscale("log")
+    axes[1].set_yscale("log")
+    lims = axes[1].get_xlim()
+    axes[1].plot(lims, lims, "k:", lw=0.8)
+    axes[1].set_xlabel("gap before")
+    axes[1].set_ylabel("gap after (corrected source)")
+    axes[1].set_title("gap before / after, per trial")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    run.figures.mkdir(parents=True, exist_ok=True)
+    fig.savefig(run.figures / "gap_benchmark.png", dpi=90)
+    plt.close(fig)
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    s = json.loads((run.path / "summary.json").read_text())
+    met = s["met"]
+    mark = {True: "ok", False: "below target"}
+    return [
+        table_md(s).rstrip(),
+        f"{s['trials']} trials ({', '.join(f'{c} {k}' for k, c in s['by_kind'].items())})",
+        f"top-1 {_pct(s['top1'])} ({mark[met['top1']]}, target 85 %), top-3 {_pct(s['top3'])}",
+        f"median gap shrink when identified {_pct(s['median_shrink'])} ({mark[met['median_shrink']]}, target 70 %); "
+        f"median parameter error {_num(s['median_param_error'])}",
+        f"null: no significant gap {_pct(s['null_correct'])} ({mark[met['null_correct']]}, target 90 %)",
+        f"out of library: unexplained {_pct(s['out_of_library_unexplained'])} "
+        f"({mark[met['out_of_library_unexplained']]}, target 80 %)",
+    ]
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    """The per-effect table of the trials finished so far (the TUI fills it as trials finish)."""
+    return table_md(bench.summarise(sorted(records, key=lambda r: r["index"]), scenario.spec["library"]))
+
+
+def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
+    """Gap before and after, trial by trial; top-1 per effect (x = the effect's place in the library)."""
+    records = sorted(run.records(), key=lambda r: r["index"])
+    if not records:
+        return [Chart("gap benchmark", "", "", (), notes=("no trial finished yet",))]
+    idx = [r["index"] for r in records]
+    gap = Chart("gap before / after per trial (log10)", "trial", "log10 gap", (
+        Curve("before", idx, [float(np.log10(max(r["gap_before"], 1e-6))) for r in records]),
+        Curve("after", idx, [float(np.log10(max(r["gap_after"], 1e-6))) for r in records]),
+    ))
+    summary = bench.summarise(records, scenario.spec["library"])
+    names = list(summary["per_effect"])
+    per = Chart("top-1 per hidden effect", "effect", "top-1 (%)", (
+        Curve("top-1", list(range(len(names))), [100 * (summary["per_effect"][n]["top1"] or 0) for n in names]),
+    ), xticks=list(range(len(names))), notes=tuple(f"{i}: {n}" for i, n in enumerate(names)))
+    return [gap, per]

@@ -1,0 +1,305 @@
+"""The blind benchmark of the gap diagnosis (gearlab/gap/benchmark.py, kind `gap_benchmark`;
+docs/gap_benchmark.md): the diagnosis never receives the generator's choices, trials are
+drawn seeded in the documented mix, a written target round-trips through the importer, the
+scoring on hand-made results, a tiny run through `gearlab run`, and bad input.
+
+Everything but the last test replaces the diagnosis by a stand-in (it takes minutes); the
+stand-in sees exactly what the real one would."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import math
+import pickle
+import struct
+
+import numpy as np
+import pytest
+
+from gearlab.data.builder import build_dataset
+from gearlab.data.spec import dataset_preset
+from gearlab.gap import benchmark as bench
+from gearlab.gap.views import healthy_rows
+from gearlab.registry import get_registry
+
+LIBRARY = tuple(get_registry().names("effect"))
+SOURCE = dataset_preset("B-6-ch5").with_(faults=(), healthy=12, noise=bench.BASE_NOISE)
+SETTINGS = {"budget": 1, "max_effects": 1, "healthy": 12, "bootstrap": 5, "permutations": 10, "alpha": 0.05,
+            "seed": 0}
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+
+
+def fake_result(names=(), gap_before=10.0, gap_after=1.0, significant=True, unexplained=False, params=None):
+    """A result in the contract of gearlab.gap.diagnose.diagnose (the fields the benchmark reads)."""
+    params = params or {}
+    effects = [{"name": n, "share_removed": 0.5, "params": params.get(n, {}), "intervals": {}, "round": i + 1}
+               for i, n in enumerate(names)]
+    return {"before": {}, "after": {}, "gap_before": gap_before, "gap_after": gap_after,
+            "significant_before": significant, "significant_after": False, "effects": effects,
+            "ranking": [{"name": n, "share_removed": 0.5, "params": {}} for n in names], "unexplained": unexplained,
+            "corrected_effects": [], "settings": {}}
+
+
+class Spy:
+    """Stands in for the diagnosis: keeps what it was given, names nothing."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __call__(self, source, target_X, settings, candidates):
+        self.calls.append((source, np.array(target_X), dict(settings), tuple(candidates)))
+        return fake_result(significant=False, unexplained=True)
+
+
+def trial_of(kind: str):
+    return next(t for t in bench.draw_trials(40, 0, LIBRARY, SOURCE) if t.kind == kind)
+
+
+# --- no leak -----------------------------------------------------------------------------------
+
+
+def float_bytes(value: float) -> list[bytes]:
+    return [struct.pack(">d", value), struct.pack("<d", value), struct.pack("<f", value), repr(value).encode()]
+
+
+@pytest.mark.parametrize("kind", ["single", "pair", "withheld"])
+def test_the_diagnosis_never_receives_the_generators_choices(kind, tmp_path, monkeypatch):
+    spy = Spy()
+    monkeypatch.setattr(bench, "_diagnose", spy)
+    trial = trial_of(kind)
+    folder = tmp_path / "trial"
+    record = bench.trial_task(bench.TrialTask(trial, SOURCE, SETTINGS, str(folder), 12))
+    assert record["kind"] == kind and len(spy.calls) == 1
+    source, X, settings, candidates = spy.calls[0]
+
+    # 1. the diagnosing entry point takes the file, the source, the candidate names and the settings: no more
+    assert list(inspect.signature(bench.diagnose_file).parameters) == ["path", "source", "candidates", "settings"]
+    # 2. the source is the simulator configuration without the hidden effects; the settings are the scenario's
+    assert source == SOURCE and source.effects == () and settings == SETTINGS
+    # 3. the candidate list is the library, less the withheld effect (by design: that is the out-of-library case)
+    assert candidates == tuple(e for e in LIBRARY if e != trial.withheld)
+    # 4. the target reaches it only as the revolutions the importer reads from the written file ...
+    np.testing.assert_array_equal(X, bench.import_target(folder / "target.npz"))
+    with np.load(folder / "target.npz") as f:
+        assert sorted(f.files) == sorted([bench.VIBRATION, bench.TACHO, bench.LABEL, "fs"])
+    # ... and no hidden parameter value appears anywhere in what it received
+    payload = pickle.dumps((source, settings, candidates)) + X.tobytes()
+    hidden_values = [v for _, params in trial.hidden for _, v in params if isinstance(v, float) and v != 0.0]
+    defaults = {p.default for e in LIBRARY for p in get_registry().get("effect", e).params}
+    drawn = [v for v in hidden_values if v not in defaults]  # a default is no secret (nor drawn)
+    assert drawn
+    for v in drawn:
+        assert not any(b in payload for b in float_bytes(v)), v
+    # 5. the answers are written apart, and read back only to score
+    answers = json.loads((folder / "answers.json").read_text())
+    assert [h[0] for h in answers["hidden"]] == [name for name, _ in trial.hidden]
+    assert record["hidden"] == answers["hidden"]
+
+
+def test_the_trial_task_hands_the_diagnosis_only_public_values():
+    """Every field of the task reaching diagnose_file is public: the task holds the Trial (it
+    writes the target), but trial_task passes on only trial.candidates from it."""
+    source = inspect.getsource(bench.trial_task)
+    call = [line for line in source.splitlines() if "diagnose_file(" in line]
+    assert call == ["    result = diagnose_file(path, task.source, candidates, task.settings)"]
+    assert "candidates = task.trial.candidates" in source
+
+
+# --- drawing ----------------------------------------------------------------------------------------
+
+
+def test_trials_are_seeded_and_follow_the_documented_mix():
+    a = bench.draw_trials(40, 3, LIBRARY, SOURCE)
+    assert a == bench.draw_trials(40, 3, LIBRARY, SOURCE)
+    assert a != bench.draw_trials(40, 4, LIBRARY, SOURCE)
+    counts = {k: sum(t.kind == k for t in a) for k in bench.KINDS}
+    assert counts == {"single": 20, "pair": 6, "null": 6, "withheld": 8} == bench.trial_counts(40)
+    assert bench.trial_counts(4) == {"single": 1, "pair": 1, "null": 1, "withheld": 1}
+    for n in (1, 2, 3, 7, 41, 100):
+        assert sum(bench.trial_counts(n).values()) == n
+    assert all(bench.trial_counts(n)[k] >= 4 for n in range(40, 60) for k in ("null", "withheld"))
+    singles = [t.hidden[0][0] for t in a if t.kind == "single"]
+    assert set(singles) == set(LIBRARY)  # round the library: every effect hidden alone at least once
+    registry = get_registry()
+    for t in a:
+        names = [n for n, _ in t.hidden]
+        assert len(names) == {"single": 1, "pair": 2, "null": 0, "withheld": 1}[t.kind]
+        assert len(set(names)) == len(names)
+        if t.kind == "withheld":
+            assert t.withheld == names[0] and t.withheld not in t.candidates and len(t.candidates) == len(LIBRARY) - 1
+        else:
+            assert t.withheld is None and t.candidates == LIBRARY
+        for name, params in t.hidden:
+            registry.get("effect", name).resolve(dict(params))  # inside the bounds
+            for key, rule in bench.RANGES[name].items():
+                value = dict(params)[key]
+                rules = rule if isinstance(rule, list) else [rule]
+                assert any(lo <= value <= hi for lo, hi, _ in rules), (name, key, value)
+
+
+# --- the written target ---------------------------------------------------------------------------
+
+
+def test_a_written_target_round_trips_through_the_importer(tmp_path):
+    trial = trial_of("single")
+    path = bench.write_target(trial, SOURCE, tmp_path, 12)
+    direct = healthy_rows(build_dataset(bench.target_spec(trial, SOURCE, 12)))
+    imported = bench.import_target(path)
+    assert imported.shape == direct.shape == (12, 4096)
+    np.testing.assert_allclose(imported, direct, rtol=0, atol=2e-6 * np.abs(direct).max())
+    # the target is its own noise realisation, not the source's
+    assert bench.target_spec(trial, SOURCE, 12).noise.seed != SOURCE.noise.seed
+
+
+# --- scoring -----------------------------------------------------------------------------------------
+
+
+def answers(kind, hidden=(), withheld=None):
+    return {"kind": kind, "hidden": [[n, p] for n, p in hidden], "withheld": withheld}
+
+
+def test_scoring_a_single_hit_and_its_parameter_error():
+    hidden = [("sensor_bandwidth", {"f_n": 1e4, "zeta": 0.1}), ]
+    r = bench.score_trial(answers("single", hidden), fake_result(
+        ["sensor_bandwidth"], 10.0, 2.0, params={"sensor_bandwidth": {"f_n": 2e4, "zeta": 0.1}}))
+    assert r["top1"] and r["top3"] and r["identified"] == ["sensor_bandwidth"]
+    assert r["shrink"] == pytest.approx(0.8)
+    assert r["param_error"]["sensor_bandwidth"] == {"f_n": pytest.approx(math.log(2)), "zeta": 0.0}  # log scale
+    assert r["param_error_median"] == pytest.approx(math.log(2) / 2)
+    assert r["wrong_names"] == []
+
+
+def test_scoring_misses_pairs_phases_and_options():
+    miss = bench.score_trial(answers("single", [("tooth_friction", {"mu_f": 0.1})]),
+                             fake_result(["mesh_damping", "tooth_friction"]))
+    assert not miss["top1"] and miss["top3"] and miss["wrong_names"] == ["mesh_damping"]
+    assert miss["param_error"]["tooth_friction"] == {}  # accepted in round 2 without parameters: nothing to score
+    pair = bench.score_trial(
+        answers("pair", [("speed_fluctuation", {"amplitude": 0.01, "order": 2, "phase": 0.1}),
+                         ("sensor_noise", {"snr_db": 10.0, "kind": "laplace"})]),
+        fake_result(["sensor_noise", "speed_fluctuation"], params={
+            "sensor_noise": {"snr_db": 12.0, "kind": "gaussian"},
+            "speed_fluctuation": {"amplitude": 0.01, "order": 2, "phase": 2 * math.pi - 0.1}}))
+    assert pair["top1"] and set(pair["identified"]) == {"sensor_noise", "speed_fluctuation"}
+    assert pair["param_error"]["sensor_noise"]["snr_db"] == pytest.approx(0.2)  # linear: relative to the true value
+    assert pair["param_error"]["speed_fluctuation"]["phase"] == pytest.approx(0.2 / math.pi)  # wrapped
+    assert pair["param_error"]["speed_fluctuation"]["order"] == 0.0
+    assert pair["option_correct"]["sensor_noise"] == {"kind": False}
+
+
+def test_scoring_null_and_out_of_library():
+    ok = bench.score_trial(answers("null"), fake_result(significant=False, gap_before=0.5, gap_after=0.5))
+    assert ok["null_correct"] is True and ok["top1"] is None
+    assert bench.score_trial(answers("null"), fake_result(["sensor_noise"]))["null_correct"] is False
+    held = answers("withheld", [("casing_path", {"mf": 10.0})], "casing_path")
+    assert bench.score_trial(held, fake_result(unexplained=True))["out_of_library_unexplained"] is True
+    wrong = bench.score_trial(held, fake_result(["drive_inertias"], unexplained=False))
+    assert wrong["out_of_library_unexplained"] is False and wrong["wrong_names"] == ["drive_inertias"]
+
+
+def test_summary_over_hand_made_records():
+    recs = [
+        bench.score_trial(answers("single", [("tooth_friction", {"mu_f": 0.1})]),
+                          fake_result(["tooth_friction"], 10, 1, params={"tooth_friction": {"mu_f": 0.12}})),
+        bench.score_trial(answers("single", [("tooth_friction", {"mu_f": 0.1})]), fake_result(["mesh_damping"], 10, 5)),
+        bench.score_trial(answers("null"), fake_result(significant=False)),
+        bench.score_trial(answers("withheld", [("mesh_damping", {"zeta": 0.1})], "mesh_damping"),
+                          fake_result(unexplained=True)),
+    ]
+    s = bench.summarise(recs, ["tooth_friction", "mesh_damping"])
+    assert s["trials"] == 4 and s["top1"] == 0.5 and s["median_shrink"] == pytest.approx(0.9)
+    assert s["null_correct"] == 1.0 and s["out_of_library_unexplained"] == 1.0
+    assert s["per_effect"]["tooth_friction"]["trials"] == 2 and s["per_effect"]["tooth_friction"]["top1"] == 0.5
+    assert s["per_effect"]["tooth_friction"]["median_param_error"] == pytest.approx(0.2)
+    assert s["per_effect"]["mesh_damping"]["withheld"] == 1 and s["per_effect"]["mesh_damping"]["named_wrongly"] == 1
+    assert s["met"] == {"top1": False, "median_shrink": True, "null_correct": True, "out_of_library_unexplained": True}
+
+
+# --- the scenario kind --------------------------------------------------------------------------------
+
+TINY = """
+[scenario]
+name = "tiny"
+kind = "gap_benchmark"
+description = "tiny"
+
+[execution]
+workers = 1
+
+[benchmark]
+trials = {trials}
+seed = 1
+library = {library}
+target_revolutions = 12
+
+[search]
+budget = 1
+max_effects = 1
+healthy = 12
+bootstrap = 5
+permutations = 10
+"""
+
+
+def tiny(trials=3, library='["sensor_noise", "interference_tone", "tooth_friction"]', extra=""):
+    return TINY.format(trials=trials, library=library) + extra
+
+
+def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, monkeypatch):
+    def stand_in(source, target_X, settings, candidates):  # names the first candidate when the target is noisy
+        return fake_result([candidates[0]], 10.0, 2.0, params={candidates[0]: {"snr_db": 5.0}})
+
+    monkeypatch.setattr(bench, "_diagnose", stand_in)
+    path = write_scenario(tiny(4))
+    code, out, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 0, err
+    run_dir = next((tmp_path / "runs" / "tiny").iterdir())
+    summary = json.loads((run_dir / "summary.json").read_text())
+    for key in ("trials", "top1", "top3", "median_shrink", "null_correct", "out_of_library_unexplained",
+                "per_effect", "median_param_error"):
+        assert key in summary
+    assert summary["trials"] == 4 and summary["by_kind"] == {"single": 1, "pair": 1, "null": 1, "withheld": 1}
+    assert (run_dir / "report.html").exists() and (run_dir / "figures" / "gap_benchmark.png").exists()
+    assert len((run_dir / "results.jsonl").read_text().splitlines()) == 4
+    assert sorted(p.name for p in (run_dir / "targets" / "trial_000").iterdir()) == \
+        ["answers.json", "diagnosis.json", "target.npz"]
+    assert "top-1" in out
+    # resume: nothing left to do, nothing recomputed
+    monkeypatch.setattr(bench, "_diagnose", lambda *a: pytest.fail("a finished trial was diagnosed again"))
+    code, out, err = cli("run", "--resume", run_dir)
+    assert code == 0, err
+
+
+@pytest.mark.parametrize("text,where", [
+    (tiny(0), "[benchmark] key 'trials'"),
+    (tiny(library='["sensor_noize", "tooth_friction"]'), "[benchmark] key 'library'"),
+    (tiny(library='["tooth_friction"]'), "[benchmark] key 'library'"),
+    (tiny(library='["tooth_friction", "tooth_friction"]'), "[benchmark] key 'library'"),
+    (tiny().replace("target_revolutions = 12", "target_revolutions = 3"), "[benchmark] key 'target_revolutions'"),
+    (tiny(extra='\n[source]\nfile = "x.npz"\n'), "[source] key 'file'"),
+    (tiny(extra='\n[source]\npreset = "B-7"\n'), "[source]"),
+    (tiny(extra='\n[source]\neffects = [{name = "sensor_noise", snr_db = 900}]\n'), "[source] key 'effects'"),
+    (tiny().replace("budget = 1", "budget = 0"), "[search] key 'budget'"),
+])
+def test_bad_input_exits_2_naming_file_table_key(cli, write_scenario, text, where):
+    path = write_scenario(text)
+    code, out, err = cli("validate", path)
+    assert code == 2
+    assert str(path) in err and where in err
+    assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_quick_benchmark_with_the_real_diagnosis(cli, tmp_path):
+    """The shipped scenario, --quick: 4 trials through the real diagnosis (a few minutes on 2 cores)."""
+    from conftest import ROOT
+
+    code, out, err = cli("run", ROOT / "scenarios" / "gap_benchmark.toml", "--quick", "--out", tmp_path / "runs")
+    assert code == 0, err
+    summary = json.loads(next((tmp_path / "runs" / "gap_benchmark").iterdir()).joinpath("summary.json").read_text())
+    assert summary["trials"] == 4

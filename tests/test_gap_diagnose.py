@@ -1,0 +1,185 @@
+"""The gap diagnosis (gearlab/gap/diagnose.py): which effect, with which parameters, turns the
+source simulator into the target — checked on targets whose effect we know.
+
+Kept fast: few healthy revolutions, small budgets, short candidate lists, fits in this process.
+"""
+
+import inspect
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from gearlab.data.builder import build_dataset
+from gearlab.data.spec import NoiseSpec, dataset_preset
+from gearlab.effects import effect_spec
+from gearlab.errors import GearlabInputError
+from gearlab.executors import LocalExecutor
+from gearlab.gap.diagnose import Scorer, Settings, corrected_source, diagnose, source_rows
+from gearlab.gap.stats import gap_report
+from gearlab.gap.views import healthy_rows
+
+B6 = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
+FAST = dict(healthy=16, bootstrap=20, permutations=99, budget=4, seed=0)
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings on odd parameters
+        yield
+
+
+def target_rows(spec):
+    """What the diagnosis may see of a target: its healthy revolutions in physical units."""
+    return healthy_rows(build_dataset(spec))
+
+
+def names(result):
+    return [e["name"] for e in result["effects"]]
+
+
+# --- the pieces ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("effects, noise", [
+    ((), None),
+    ((), NoiseSpec("laplace", 5.0, 2)),
+    ((effect_spec("sensor_noise", kind="laplace", snr_db=5),), None),
+    ((effect_spec("drive_inertias"), effect_spec("interference_tone", frequency=333.0, ratio=0.3)), None),
+])
+def test_source_rows_are_the_builders_healthy_rows_bit_for_bit(effects, noise):
+    spec = B6.with_(healthy=12, effects=effects, noise=noise, seed=5)
+    assert np.array_equal(source_rows(spec), target_rows(spec))
+
+
+def test_the_search_score_is_the_reports_gap_total():
+    source = source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=10),)))
+    target = source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=3),), seed=4))
+    want = gap_report(source, target, (25, 30), bootstrap=0, permutations=10)["total"]["gap"]
+    assert Scorer(target, (25, 30)).report_gap(source) == pytest.approx(want, rel=1e-9)
+
+
+def test_the_search_score_cannot_be_lowered_by_noise_the_target_lacks():
+    # The search score is on the target's scale: adding noise to the source inflates no
+    # spread, so against a quiet target more noise only makes the score worse.
+    target = source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=30),), seed=4))
+    scorer = Scorer(target, (25, 30))
+    scores = [scorer.score(source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=snr),))))
+              for snr in (30, 10, 0)]
+    assert abs(scores[0]) < 0.05 * scores[1] and scores[0] < scores[1] < scores[2]
+
+
+def test_diagnose_gets_only_the_target_rows():
+    # The diagnosis must not be able to learn the target's making: no spec, no dataset.
+    assert list(inspect.signature(diagnose).parameters) == ["source", "target_X", "settings", "executor", "on_event"]
+
+
+# --- identification -------------------------------------------------------------------------------
+
+def test_sensor_noise_is_named_with_its_snr():
+    target = target_rows(B6.with_(effects=(effect_spec("sensor_noise", kind="laplace", snr_db=5),), seed=11))
+    settings = Settings(candidates=("sensor_noise", "interference_tone", "mesh_damping"), max_effects=2, **FAST)
+    result = diagnose(B6, target, settings)
+    assert result["significant_before"]
+    assert names(result)[0] == "sensor_noise"
+    fit = result["effects"][0]
+    assert abs(fit["params"]["snr_db"] - 5.0) < 1.5
+    lo, hi = fit["intervals"]["snr_db"]
+    assert lo <= fit["params"]["snr_db"] <= hi
+    assert result["ranking"][0]["name"] == "sensor_noise" and len(result["ranking"]) == 3
+    assert result["gap_after"] < 0.01 * result["gap_before"]
+    assert not result["unexplained"]
+    json.dumps(result)  # JSON-serialisable as it stands
+
+
+def test_interference_tone_is_named():
+    target = target_rows(B6.with_(effects=(effect_spec("interference_tone", frequency=1234.0, ratio=0.3),), seed=3))
+    settings = Settings(candidates=("sensor_noise", "interference_tone", "tooth_friction"), max_effects=1, **FAST)
+    result = diagnose(B6, target, settings)
+    assert names(result) == ["interference_tone"]
+    assert result["ranking"][0]["name"] == "interference_tone"
+
+
+def test_same_simulator_other_noise_seed_has_no_gap_and_no_effects():
+    source = B6.with_(effects=(effect_spec("sensor_noise", kind="gaussian", snr_db=10),))
+    target = target_rows(source.with_(seed=99))
+    result = diagnose(source, target, Settings(candidates=("sensor_noise", "tooth_friction"), **FAST))
+    assert not result["significant_before"]
+    assert result["effects"] == [] and result["corrected_effects"] == []
+    assert result["unexplained"] is False
+    assert corrected_source(source, result) == source
+
+
+def test_drive_inertias_turn_six_dof_into_eight_dof():
+    # Both sides carry the same sensor noise (other seeds): the only difference is the drive.
+    # (Noise-free, identical sets still show a rounding-level TSA residual in gap_report.)
+    noise = (effect_spec("sensor_noise", kind="gaussian", snr_db=20),)
+    source = B6.with_(effects=noise)
+    target = target_rows(dataset_preset("B-8-ch5").with_(faults=(), healthy=16, effects=noise, seed=21))
+    settings = Settings(candidates=("drive_inertias", "bearing_stiffness", "fillet_correction"), max_effects=1, **FAST)
+    result = diagnose(source, target, settings)
+    assert result["significant_before"]
+    assert names(result) == ["drive_inertias"]
+    assert not result["significant_after"] and not result["unexplained"]
+    fixed = corrected_source(source, result)
+    assert [name for name, _ in fixed.effects] == ["drive_inertias", "sensor_noise"]  # in the order they act
+    assert fixed.model_config().name == "eight_dof"
+
+
+def test_an_effect_outside_the_candidates_is_unexplained():
+    noise = (effect_spec("sensor_noise", kind="gaussian", snr_db=20),)
+    source = B6.with_(effects=noise)
+    tone = effect_spec("interference_tone", frequency=1234.0, ratio=1.0)
+    target = target_rows(B6.with_(effects=noise + (tone,), seed=8))
+    result = diagnose(source, target, Settings(candidates=("tooth_friction", "fillet_correction"), **FAST))
+    assert result["significant_before"]
+    assert result["unexplained"] is True
+    assert result["significant_after"] or result["effects"] == []
+
+
+# --- bad input ------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def some_target():
+    return source_rows(B6.with_(healthy=12, effects=(effect_spec("sensor_noise", snr_db=10),)))
+
+
+@pytest.mark.parametrize("settings, match", [
+    (Settings(candidates=("sensor_nose",)), "sensor_noise"),  # did you mean
+    (Settings(budget=0), "budget"),
+    (Settings(healthy=5), "healthy"),
+    (Settings(alpha=1.5), "alpha"),
+    (Settings(max_effects=0), "max_effects"),
+    (Settings(candidates=("sensor_noise", "sensor_noise")), "repeat"),
+])
+def test_bad_settings_are_refused(settings, match, some_target):
+    with pytest.raises(GearlabInputError, match=match):
+        diagnose(B6, some_target, settings)
+
+
+@pytest.mark.parametrize("cut, match", [
+    (lambda X: X[:5], "too few healthy target revolutions: 5"),
+    (lambda X: X[:, :2048], "2048 samples"),
+    (lambda X: X[0], "2-D"),
+    (lambda X: np.where(X > 0, np.nan, X), "NaN"),
+])
+def test_bad_targets_are_refused(cut, match, some_target):
+    with pytest.raises(GearlabInputError, match=match):
+        diagnose(B6, cut(some_target), Settings(**FAST))
+
+
+def test_a_bad_source_is_refused(some_target):
+    with pytest.raises(GearlabInputError, match="channel"):
+        diagnose(B6.with_(channel="nowhere"), some_target, Settings(**FAST))
+
+
+# --- in parallel ------------------------------------------------------------------------------------
+
+@pytest.mark.slow
+def test_parallel_fits_give_the_serial_result():
+    target = target_rows(B6.with_(effects=(effect_spec("sensor_noise", kind="laplace", snr_db=5),), seed=11))
+    settings = Settings(candidates=("sensor_noise", "interference_tone", "mesh_damping"), max_effects=1, **FAST)
+    serial = diagnose(B6, target, settings)
+    parallel = diagnose(B6, target, settings, executor=LocalExecutor(2))
+    assert serial["effects"] == parallel["effects"] and serial["ranking"] == parallel["ranking"]

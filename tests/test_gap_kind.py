@@ -1,0 +1,337 @@
+"""The `gap` scenario kind: validation, a tiny run end to end, summary fields, resume, live
+tables and charts on a partial run, and bad input refused before any work.
+
+Most tests replace gearlab.gap.diagnose by a stand-in that follows the shared contract: they
+test the kind's plumbing (records, resume, summary, tables, figures, accuracy units), not the
+search. One test runs the real diagnosis on a tiny scenario when the module exists."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gearlab.gap.stats import gap_report
+from gearlab.kinds import KINDS, gap
+from gearlab.runs import RunDir, run_scenario
+from gearlab.scenario import load_scenario
+
+TINY = """\
+[scenario]
+name = "tinygap"
+kind = "gap"
+
+[source]
+preset = "B-6-ch5"
+teeth = [1, 2, 3]
+faults = { crack = [13] }
+healthy = 12
+
+[target]
+preset = "B-8-ch5"
+teeth = [1, 2, 3]
+faults = { crack = [13] }
+healthy = 12
+noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
+
+[diagnosis]
+candidates = ["sensor_noise", "drive_inertias"]
+budget = 2
+max_effects = 1
+healthy = 10
+bootstrap = 10
+permutations = 20
+seed = 0
+
+[accuracy]
+methods = ["mmd"]
+repetitions = 1
+target_train = 8
+batch = 4
+prime_epochs = 2
+baseline_epochs = 2
+patience = 2
+min_epochs = 2
+max_epochs = 3
+
+[execution]
+workers = 1
+device = "cpu"
+"""
+
+ACCURACY_UNITS = ["rep0/uncorrected/source_only-unsup", "rep0/corrected/source_only-unsup", "rep0/uncorrected/mmd-unsup"]
+
+
+# --- a stand-in for gearlab.gap.diagnose (the shared contract) ------------------------------------
+
+
+def fake_module(calls: list) -> types.ModuleType:
+    """diagnose() returning a contract-shaped result from real gap reports; it records what it
+    was given, so that a test can check that nothing of the target but its rows goes in."""
+    from dataclasses import dataclass
+
+    mod = types.ModuleType("gearlab.gap.diagnose")
+
+    @dataclass(frozen=True)
+    class Settings:
+        candidates: tuple = ()
+        budget: int = 16
+        max_effects: int = 3
+        healthy: int = 40
+        bootstrap: int = 200
+        permutations: int = 500
+        alpha: float = 0.05
+        seed: int = 0
+
+    def diagnose(source, target_X, settings, executor=None, on_event=lambda e: None):
+        calls.append({"source": source, "target_X": target_X, "settings": settings})
+        rng = np.random.default_rng(0)
+        scale = target_X.std()
+        shifted = target_X[::-1] + 3 * scale  # a large gap before
+        close = target_X[::-1] + 0.01 * scale * rng.standard_normal(target_X.shape)
+        kw = dict(pair=(25, 30), bootstrap=settings.bootstrap, permutations=settings.permutations,
+                  alpha=settings.alpha, seed=settings.seed)
+        before, after = gap_report(shifted, target_X, **kw), gap_report(close, target_X, **kw)
+        params = {"kind": "laplace", "snr_db": 0.5}
+        return {"before": before, "after": after, "gap_before": before["total"]["gap"],
+                "gap_after": after["total"]["gap"], "significant_before": before["significant"],
+                "significant_after": after["significant"],
+                "effects": [{"name": "sensor_noise", "share_removed": 0.9, "params": params,
+                             "intervals": {"snr_db": [0.0, 1.0]}, "round": 1}],
+                "ranking": [{"name": "sensor_noise", "share_removed": 0.9, "params": params},
+                            {"name": "drive_inertias", "share_removed": 0.1, "params": {"I11": 0.004}}],
+                "unexplained": False, "corrected_effects": [["sensor_noise", [["kind", "laplace"], ["snr_db", 0.5]]]],
+                "settings": {"budget": settings.budget}}
+
+    def corrected_source(source, result):
+        effects = tuple((name, tuple(tuple(p) for p in params)) for name, params in result["corrected_effects"])
+        return source.with_(effects=source.effects + effects)
+
+    mod.Settings, mod.diagnose, mod.corrected_source = Settings, diagnose, corrected_source
+    return mod
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    log: list = []
+    monkeypatch.setitem(sys.modules, "gearlab.gap.diagnose", fake_module(log))
+    return log
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture
+def tiny(tmp_path, cache, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
+    path = tmp_path / "tinygap.toml"
+    path.write_text(TINY)
+    return path
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory, cache):
+    """One uninterrupted run of the tiny scenario with the stand-in diagnosis."""
+    base = tmp_path_factory.mktemp("finished")
+    (base / "tinygap.toml").write_text(TINY)
+    log: list = []
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(cache))
+        mp.setitem(sys.modules, "gearlab.gap.diagnose", fake_module(log))
+        run = run_scenario(base / "tinygap.toml", out=base / "runs").path
+    return run, log
+
+
+def records(run: Path) -> dict[str, dict]:
+    return {r["unit"]: r for r in map(json.loads, (run / "results.jsonl").read_text().splitlines())}
+
+
+# --- validation ------------------------------------------------------------------------------------
+
+
+def test_registered_and_validates(tiny, cli):
+    assert KINDS["gap"] is gap
+    code, out, err = cli("validate", tiny)
+    assert code == 0, err
+    assert "kind gap" in out and "2 candidate effects" in out
+
+
+def test_shipped_gap_scenarios_validate(cli):
+    root = Path(__file__).resolve().parents[1] / "scenarios"
+    for name in ("gap_expA.toml", "gap_expB.toml"):
+        code, out, err = cli("validate", root / name)
+        assert code == 0, err
+        s = load_scenario(root / name)
+        assert s.spec["settings"]["candidates"] == ()  # every registered effect
+
+
+def test_quick_shrinks(tiny):
+    s = load_scenario(tiny.parent / "tinygap.toml")
+    s.spec["settings"]["budget"] = 16
+    gap.quick(s)
+    assert s.spec["settings"]["budget"] == 4 and s.spec["protocol"].repetitions == 1
+
+
+# --- a run -----------------------------------------------------------------------------------------
+
+
+def test_run_summary_fields(finished):
+    run, log = finished
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["kind"] == "gap" and summary["scenario"] == "tinygap"
+    for key in ("gap_before", "gap_after", "auc_before", "auc_after", "p_before", "p_after"):
+        assert isinstance(summary[key], float), key
+    for key in ("unexplained", "significant_before", "significant_after"):
+        assert isinstance(summary[key], bool), key
+    assert summary["effects"][0]["name"] == "sensor_noise"
+    assert set(summary["effects"][0]) >= {"name", "share_removed", "params"}
+    assert [r["name"] for r in summary["ranking"]] == ["sensor_noise", "drive_inertias"]
+    assert set(summary["views"]) >= {"shaft", "mesh", "sidebands", "noise_floor", "waveform"}
+    for v in summary["views"].values():
+        assert isinstance(v["gap_before"], float) and isinstance(v["gap_after"], float)
+    assert set(summary["accuracy"]) == {"source_only (uncorrected)", "source_only (corrected)", "mmd (unsupervised)"}
+    for cell in summary["accuracy"].values():
+        assert 0 <= cell["mean"] <= 100 and cell["n"] == 1
+    assert summary["source"]["model"] == "six_dof" and summary["target"]["model"] == "eight_dof"
+    assert sorted(records(run)) == sorted(["diagnosis", *ACCURACY_UNITS])
+    # the corrected source really is another dataset: the fitted effect was added to it
+    corrected = records(run)["rep0/corrected/source_only-unsup"]
+    assert corrected["variant"] == "corrected"
+    # outputs: three tables, the figures, the report with every figure inlined
+    table = (run / "table.md").read_text()
+    assert table.count("| view |") == 1 and "| effect |" in table and "source_only (corrected)" in table
+    figures = {p.name for p in (run / "figures").glob("*.png")}
+    assert figures == {"gap_per_view.png", "gap_effect_ranking.png", "gap_accuracy.png"}
+    html = (run / "report.html").read_text()
+    assert html.count("<table>") == 3 and html.count("<img") == 3
+
+
+def test_diagnosis_sees_only_the_target_rows(finished):
+    _, log = finished
+    (call,) = log
+    assert isinstance(call["target_X"], np.ndarray) and call["target_X"].shape == (12, 4096)
+    assert call["source"].model == "six_dof" and not call["source"].effects and call["source"].noise is None
+    assert call["settings"].candidates == ("sensor_noise", "drive_inertias") and call["settings"].budget == 2
+
+
+def test_summary_lines(finished):
+    run, _ = finished
+    lines = gap.summary_lines(RunDir.open(run))
+    assert lines[0].startswith("gap before") and any("sensor_noise" in line for line in lines)
+
+
+def test_resume_skips_finished_units(finished, tiny, cli, calls):
+    run, _ = finished
+    # a run killed after the diagnosis and one accuracy unit
+    partial = tiny.parent / "partial"
+    partial.mkdir()
+    for name in ("scenario.toml", "scenario.original.toml", "run.json"):
+        (partial / name).write_bytes((run / name).read_bytes())
+    lines = (run / "results.jsonl").read_text().splitlines(keepends=True)
+    kept = [line for line in lines if json.loads(line)["unit"] in ("diagnosis", ACCURACY_UNITS[0])]
+    (partial / "results.jsonl").write_text("".join(kept))
+    code, out, err = cli("run", "--resume", partial)
+    assert code == 0, err
+    assert calls == []  # the diagnosis was not run again
+    units = [json.loads(line)["unit"] for line in (partial / "results.jsonl").read_text().splitlines()]
+    assert sorted(units) == sorted(["diagnosis", *ACCURACY_UNITS])  # each unit once
+    assert (partial / "summary.json").exists()
+
+
+def test_partial_run_tables_and_charts(finished, tiny):
+    run, _ = finished
+    scenario = load_scenario(tiny)
+    partial = tiny.parent / "p2"
+    partial.mkdir()
+    (partial / "scenario.toml").write_bytes((run / "scenario.toml").read_bytes())
+    rd = RunDir.open(partial)
+    # nothing finished yet
+    assert "running" in gap.records_table(scenario, [])
+    (chart,) = gap.charts(scenario, rd)
+    assert chart.notes and not chart.curves
+    # the diagnosis finished, no accuracy yet
+    lines = (run / "results.jsonl").read_text().splitlines(keepends=True)
+    (partial / "results.jsonl").write_text(lines[0])
+    table = gap.records_table(scenario, rd.records())
+    assert "| view |" in table and "| effect |" in table and "accuracy" not in table
+    charts = gap.charts(scenario, rd)
+    assert [c.title for c in charts] == ["per-view gap before/after", "effect ranking: share of the gap removed"]
+    assert all(len(c.curves[0].x) == len(c.curves[0].y) > 0 for c in charts)
+    # one accuracy unit
+    (partial / "results.jsonl").write_text("".join(lines[:2]))
+    assert "target test accuracy" in gap.records_table(scenario, rd.records())
+    assert len(gap.charts(scenario, rd)) == 3
+
+
+# --- bad input: one line naming file, table and key, exit code 2, no run directory -------------------
+
+
+@pytest.mark.parametrize("old, new, where", [
+    ('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_nois"]', "[diagnosis] key 'candidates'"),
+    ('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_noise", 3]',
+     "[diagnosis] key 'candidates'"),
+    ("healthy = 12\nnoise", "healthy = 0\nnoise", "[target] key 'healthy'"),
+    ("healthy = 12\nnoise", "healthy = 5\nnoise", "[target] key 'healthy'"),
+    ("budget = 2", "budget = 0", "[diagnosis] key 'budget'"),
+    ("healthy = 10\nbootstrap", "healthy = 3\nbootstrap", "[diagnosis] key 'healthy'"),
+    ("seed = 0\n", "seed = 0\nalpha = 1.0\n", "[diagnosis] key 'alpha'"),
+    ('methods = ["mmd"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
+    ('methods = ["mmd"]', 'methods = ["finetune"]', "[accuracy] key 'methods'"),
+    ('noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+     'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }\nfs = "2 kHz"', "[target] key 'fs'"),
+    ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),
+    ('healthy = 12\nnoise', 'healthy = 12\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
+])
+def test_bad_input_refused(tiny, cli, old, new, where):
+    text = TINY.replace(old, new, 1)
+    assert text != TINY
+    tiny.write_text(text)
+    out_dir = tiny.parent / "runs"
+    code, _, err = cli("run", tiny, "--out", out_dir)
+    assert code == 2, err
+    message = err.strip()
+    assert "\n" not in message and str(tiny) in message and where in message, message
+    assert not out_dir.exists()
+
+
+def test_measured_target_with_too_few_revolutions_leaves_no_run(tiny, cli, calls):
+    """A measured target is only checked once imported: the run is refused and its directory removed."""
+    fs, speed, points = 20_000.0, 40.0, 500
+    n = points * 6  # six revolutions: fewer than the 10 the statistics need
+    t = np.arange(n) / fs
+    np.savez(tiny.parent / "rec.npz", acc=np.sin(2 * np.pi * 25 * speed * t), fs=np.array(fs))
+    tiny.write_text(TINY.replace('preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+                                 'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+                                 'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"'))
+    out_dir = tiny.parent / "runs"
+    code, _, err = cli("run", tiny, "--out", out_dir)
+    assert code == 2, err
+    assert "[target]" in err and "too few healthy target revolutions" in err and str(tiny) in err
+    assert not out_dir.exists() and calls == []
+
+
+# --- the real diagnosis ----------------------------------------------------------------------------
+
+
+def test_real_diagnosis_tiny(tiny, cli):
+    """End to end with gearlab.gap.diagnose itself (G1's), without the accuracy."""
+    try:
+        importlib.import_module("gearlab.gap.diagnose")
+    except ImportError:
+        pytest.skip("gearlab.gap.diagnose does not exist yet")
+    tiny.write_text(TINY.replace('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_noise"]')
+                    .replace("[accuracy]\n", "[accuracy]\nenabled = false\n"))
+    code, out, err = cli("run", tiny, "--out", tiny.parent / "runs")
+    assert code == 0, err
+    run = Path(out.strip().splitlines()[-1].split("run directory: ")[1])
+    summary = json.loads((run / "summary.json").read_text())
+    assert "accuracy" not in summary
+    assert summary["gap_before"] >= 0 and isinstance(summary["unexplained"], bool)
+    assert [r["name"] for r in summary["ranking"]] == ["sensor_noise"]
