@@ -220,6 +220,20 @@ def test_run_fills_the_table_then_opens_the_results(folder):
     drive(GearlabApp(folder), script)
 
 
+def test_quick_run_key_runs_the_shrunk_scenario(folder):
+    async def script(pilot):
+        app = pilot.app
+        await select(pilot, "stiff.toml")
+        await pilot.press("k")
+        await until(pilot, lambda: app.process is not None)
+        await until(pilot, lambda: app.process is None)
+        # --quick keeps steps 1, 10 and 20 of each ladder: 3 crack + 3 chip cases and the healthy one
+        assert "finished: 7 unit(s)" in text_of(app, "#run-status")
+        assert [r[0] for r in rows(app.query_one("#live", DataTable))] == ["1", "10", "20"]
+
+    drive(GearlabApp(folder), script)
+
+
 @pytest.fixture
 def transfer_folder(folder, tmp_path):
     (folder / "tiny.toml").write_text(TRANSFER.replace("{runs}", str(tmp_path / "runs")))

@@ -127,8 +127,9 @@ def noise_spec(table: dict, where: str) -> NoiseSpec | None:
     if "kind" not in table or "snr_db" not in table:
         raise GearlabInputError(f"{where}: expected {{kind = 'gaussian'|'laplace'|'student_t', snr_db = number}}")
     snr = table["snr_db"]
-    if isinstance(snr, bool) or not isinstance(snr, (int, float)):
-        raise GearlabInputError(f"{where}: snr_db must be a number of dB, got {snr!r}")
+    # abs() < 1e300 also refuses nan, inf and integers too large for a float
+    if isinstance(snr, bool) or not isinstance(snr, (int, float)) or not abs(snr) < 1e300:
+        raise GearlabInputError(f"{where}: snr_db must be a finite number of dB, got {str(snr)[:40]}")
     seed = table.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise GearlabInputError(f"{where}: seed must be a whole number >= 0, got {seed!r}")
