@@ -200,6 +200,23 @@ def noisy_rows(task: tuple) -> np.ndarray:
     return out
 
 
+def healthy_reference(spec: DatasetSpec, healthy: np.ndarray, speed: float, reference_rms: float) -> Standardiser:
+    """The domain's healthy reference (eq. 2.112, 4.6): the clean healthy revolution, or 64
+    revolutions of it through the signal-level effects and the dataset's noise when it has them."""
+    signal = EffectChain(EffectChain.load(spec.effects).at("signal")) if spec.effects else EffectChain()
+    noise_seed = spec.noise.seed if spec.noise else 0
+    if spec.noise is None and not signal:
+        return Standardiser.fit(healthy)
+    record = np.broadcast_to(healthy, (64, POINTS))
+    if signal:
+        record = signal.apply_signal(record, POINTS * speed, speed, reference_rms,
+                                     [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM])
+    if spec.noise is not None:
+        rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
+        record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
+    return Standardiser.fit(record)
+
+
 def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
                   on_event: Callable[[Event], None] = lambda e: None) -> Dataset:
     spec.check()
@@ -246,23 +263,11 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
                     label.append(c), intensity.append(step), tooth.append(n), rfa.append(area)
                     source.append(((name, step), t_index))
 
-    # 3. the domain's healthy reference (eq. 2.112, 4.6): the healthy revolution, noisy when the domain is
-    #    (and through the signal-level effects when there are any)
+    # 3. the domain's healthy reference (eq. 2.112, 4.6)
     reference_row = base[(None, None)][0]
     reference_rms = float(np.sqrt(np.mean(reference_row**2)))
-    signal = EffectChain(chain.at("signal"))
     noise_seed = spec.noise.seed if spec.noise else 0
-    if spec.noise is None and not signal:
-        reference = Standardiser.fit(reference_row)
-    else:
-        record = np.broadcast_to(reference_row, (64, POINTS))
-        if signal:
-            record = signal.apply_signal(record, POINTS * speed, speed, reference_rms,
-                                         [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM])
-        if spec.noise is not None:
-            rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
-            record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
-        reference = Standardiser.fit(record)
+    reference = healthy_reference(spec, reference_row, speed, reference_rms)
 
     # 4. signal effects, noise, TSA and standardisation, streamed in chunks
     n = len(label)

@@ -59,15 +59,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..data.builder import (CHUNK, EFFECT_STREAM, RowsTask, SimTask, noisy_rows, operating_point,
+from ..data.builder import (CHUNK, RowsTask, SimTask, healthy_reference, noisy_rows, operating_point,
                             simulate_unit, whole_steps_rate)
 from ..data.spec import POINTS, DatasetSpec
-from ..effects import LEVELS, EffectChain
+from ..effects import LEVELS
 from ..errors import GearlabInputError
 from ..executors import LocalExecutor
 from ..registry import get_registry
 from ..runs import Event
-from ..signals import Standardiser, add_noise
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, view_gaps
 from .views import (BandPlan, gear_ratio, order_views_of_power, power_of_spectrum, residual_view_of_spectrum,
                     waveform_view)
@@ -184,28 +183,10 @@ def _clean_revolution(model: str, preset: str, fs: float, speed: float, load: fl
 
 
 def _reference(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float) -> tuple[float, float]:
-    """The domain's healthy reference (mean, std), as build_dataset's step 3 makes it: the clean
-    revolution, or 64 revolutions of it through the signal effects and the dataset's noise.
-
-    This mirrors the builder (it has no function of its own for this step, see the report);
-    it matters because the rows are stored standardised in float32, and a noise-free target
-    compared with a noise-free source sees the rounding of that round trip in its emptiest
-    bands: only the same round trip makes "the same simulator" give the same rows.
-    """
-    chain = EffectChain.load(spec.effects) if spec.effects else EffectChain()
-    signal = EffectChain(chain.at("signal"))
-    noise_seed = spec.noise.seed if spec.noise else 0
-    if spec.noise is None and not signal:
-        reference = Standardiser.fit(clean)
-    else:
-        record = np.broadcast_to(clean, (64, POINTS))
-        if signal:
-            record = signal.apply_signal(record, POINTS * speed, speed, reference_rms,
-                                         [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM])
-        if spec.noise is not None:
-            rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
-            record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
-        reference = Standardiser.fit(record)
+    """The domain's healthy reference (mean, std), made as build_dataset makes it: the rows are
+    stored standardised in float32, and only the same round trip makes "the same simulator" give
+    the same rows (a noise-free target against a noise-free source sees its rounding)."""
+    reference = healthy_reference(spec, clean, speed, reference_rms)
     return reference.mean, reference.std
 
 
