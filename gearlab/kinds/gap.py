@@ -37,7 +37,7 @@ from ..registry import get_registry
 from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
-from .transfer import MAX_SEED, method as transfer_method, train_unit
+from .transfer import MAX_SEED, TRAINING, method as transfer_method, train_unit
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
@@ -73,15 +73,7 @@ TABLES = {
                                        "(needs target labels)"),
         "methods": Key(list, ["mmd", "dann"], doc="unsupervised DA baselines shown beside (adapter names)"),
         "repetitions": Key(int, 3, in_range(1, 1000)),
-        "target_train": Key(int, 120, in_range(2), "unlabelled target samples the DA methods see (k = 0)"),
-        "batch": Key(int, 40, in_range(1)),
-        "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the DA methods"),
-        "prime_epochs": Key(int, 100, in_range(0)),
-        "baseline_epochs": Key(int, 200, in_range(1)),
-        "patience": Key(int, 20, in_range(1)),
-        "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
-        "max_epochs": Key(int, 800, in_range(1)),
-        "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
+        **TRAINING,
     }),
     "network": Table({
         "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),

@@ -47,6 +47,19 @@ def check_size(total: int, name: str, where: str) -> None:
         raise GearlabInputError(f"{where}: dataset '{name}' would hold {shown(total)} samples; "
                                 f"expected at most {MAX_SAMPLES} (fewer duplicates, teeth or healthy samples)")
 
+# Table 5.3's training settings: the keys of every kind that trains the chapter-5 way
+TRAINING = {
+    "target_train": Key(int, 120, in_range(2), "samples in the target training set"),
+    "batch": Key(int, 40, in_range(1)),
+    "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the calibrated methods"),
+    "prime_epochs": Key(int, 100, in_range(0)),
+    "baseline_epochs": Key(int, 200, in_range(1)),
+    "patience": Key(int, 20, in_range(1)),
+    "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
+    "max_epochs": Key(int, 800, in_range(1)),
+    "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
+}
+
 TABLES = {
     "source": _DATASET,
     "target": _DATASET,
@@ -62,15 +75,7 @@ TABLES = {
     "protocol": Table({
         "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
         "repetitions": Key(int, 5, in_range(1, MAX_REPETITIONS)),
-        "target_train": Key(int, 120, in_range(2)),
-        "batch": Key(int, 40, in_range(1)),
-        "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the calibrated methods"),
-        "prime_epochs": Key(int, 100, in_range(0)),
-        "baseline_epochs": Key(int, 200, in_range(1)),
-        "patience": Key(int, 20, in_range(1)),
-        "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
-        "max_epochs": Key(int, 800, in_range(1)),
-        "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
+        **TRAINING,
     }),
 }
 
