@@ -401,6 +401,11 @@ def _click_exception():
 
 
 def main() -> None:
+    import signal
+
+    # SIGTERM (kill, a TUI's cancel) unwinds like Ctrl-C, so that the process pool stops its
+    # workers instead of leaving them computing as orphans; finished units are already stored.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     with warnings.catch_warnings():
         warnings.showwarning = _warning_line
         _main()

@@ -227,7 +227,7 @@ SCENARIO = '[scenario]\nname = "d"\nkind = "dataset"\n\n[[datasets]]\n'
     ('preset = "B-6-ch4"\n', "unknown dataset preset 'B-6-ch4' (did you mean 'B-6-ch5'?)"),
     ('preset = "B-6-ch5"\nhealty = 3\n', "key 'healty': unknown key (did you mean 'healthy'?)"),
     ('preset = "B-6-ch5"\nnoise = { kind = "laplace" }\n', "key 'noise': expected {kind ="),
-    ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = "loud" }\n', "snr_db must be a number of dB"),
+    ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = "loud" }\n', "snr_db must be a finite number of dB"),
     ('preset = "B-6-ch5"\nnoise = { kind = "gaussain", snr_db = 0 }\n',
      "unknown noise kind 'gaussain' (did you mean 'gaussian'?)"),
     ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = 0, colour = "pink" }\n', "unknown key(s) colour"),

@@ -124,3 +124,51 @@ device = "cpu"
     reports = [e for e in units if e["kind"] == "unit"]
     assert any(e["message"].startswith("epoch ") for e in reports), reports
     assert reports[-1]["message"] == ""  # it ended
+
+
+def test_a_terminated_run_leaves_no_worker_behind(tmp_path):
+    """kill (SIGTERM) of `gearlab run` stops its worker processes too: none is left computing."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from tiny import domains
+
+    path = tmp_path / "t.toml"
+    path.write_text('[scenario]\nname = "t"\nkind = "transfer"\n\n' + domains() + """
+[[methods]]
+adapter = "mmd"
+
+[protocol]
+ks = [0, 2]
+repetitions = 2
+target_train = 8
+batch = 4
+prime_epochs = 2
+patience = 100000
+min_epochs = 100000
+max_epochs = 100000
+
+[execution]
+workers = 2
+device = "cpu"
+""")
+    env = {**os.environ, "GEARLAB_CACHE": str(tmp_path / "cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "gearlab", "run", str(path), "--events", "--out",
+                             str(tmp_path / "runs")], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            env=env, start_new_session=True, text=True)
+    for line in proc.stdout:  # wait until units train in the workers
+        if '"kind": "unit"' in line:
+            break
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=60) == 128 + signal.SIGTERM
+    for _ in range(100):  # the workers go within moments
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.1)
+    os.killpg(proc.pid, signal.SIGKILL)
+    raise AssertionError("worker processes outlived the terminated run")
