@@ -478,3 +478,83 @@ def test_truncated_files_fail_cleanly(files, fmt, tmp_path):
             # A CSV cut at a line end is a valid shorter record; nothing else may import.
             assert fmt == "csv", f"{fmt} cut at {cut} of {size} bytes imported {len(ds)} revolutions"
             assert 0 < len(ds) <= COMPLETE
+
+
+# --- found by fuzzing (tests/test_fuzz.py) -------------------------------------------------
+
+
+def hang_guard(seconds=60):
+    """An import that loops forever inside a C library cannot be interrupted: end the test
+    process with a stack dump rather than hang the run."""
+    import faulthandler
+
+    faulthandler.dump_traceback_later(seconds, exit=True)
+    return faulthandler.cancel_dump_traceback_later
+
+
+def test_matlab_element_of_a_type_scipy_does_not_know_is_refused_not_a_crash(files, tmp_path):
+    """The complex flag set on a real variable: scipy's reader takes the next variable's tag for
+    the imaginary part and indexes its dtype table with it (a segmentation fault). The file's
+    layout is checked before scipy reads it."""
+    path, options, _ = files["mat5"]
+    data = bytearray(path.read_bytes())
+    assert data[144] == 6  # the first variable's class: double
+    data[145] |= 0x08  # its array flags: complex
+    bad = tmp_path / "complex.mat"
+    bad.write_bytes(bytes(data))
+    fails(spec_for(bad, **options), f"cannot read {bad} as MATLAB", "runs past the end of the variable")
+
+
+def test_matlab_variables_of_every_kind_pass_the_layout_check(rec, tmp_path):
+    """What MATLAB files hold besides the channels (cells, structs, sparse and complex matrices,
+    text, empty and integer arrays), compressed or not, and v4 files: the channels import."""
+    import scipy.sparse
+
+    extras = {
+        "cells": np.array([np.arange(3), "text", np.array([[1, 2]])], dtype=object),
+        "nested": {"a": np.arange(4), "b": "x", "c": {"d": np.eye(2)}},
+        "sparse": scipy.sparse.csc_matrix(np.eye(5) * (1 + 2j)), "complex": np.arange(6) * (1 - 1j),
+        "text": "hello", "texts": np.array(["ab", "cd"]), "empty": np.zeros((0, 3)), "nothing": "",
+        "ints": np.arange(10, dtype=np.int64), "flags": np.array([True, False]), "single": np.float32(3.5),
+        "fs": scipy.sparse.csc_matrix([[FS]]),  # a rate stored sparse is still one number
+    }
+    for compress in (False, True):
+        path = tmp_path / f"r{compress}.mat"
+        scipy.io.savemat(path, {"acc": rec.acc[None], "tacho": rec.tacho[None], **extras}, do_compression=compress)
+        ds = import_measured(spec_for(path, vibration="acc", tacho="tacho"))
+        assert len(ds) == COMPLETE and ds.meta["fs_hz"] == FS
+        fails(spec_for(path, vibration="nested", speed_hz=25), "vibration channel 'nested' is not numeric")
+    path = tmp_path / "v4.mat"
+    scipy.io.savemat(path, {"acc": rec.acc[None], "tacho": rec.tacho[None], "fs": np.array([[FS]])}, format="4")
+    assert len(import_measured(spec_for(path, vibration="acc", tacho="tacho"))) == COMPLETE
+
+
+def test_damaged_hdf5_groups_do_not_hang_the_import(files, tmp_path):
+    """72 bytes of the root group's header repeated: h5py's visititems loops forever on it.
+    The importer walks the file itself, each object once."""
+    path, options, _ = files["h5"]
+    data = path.read_bytes()
+    bad = tmp_path / "repeated.h5"
+    bad.write_bytes(data[:71] + data[71:143] + data[71:])
+    cancel = hang_guard()
+    try:
+        fails(spec_for(bad, **options), f"cannot read {bad} as HDF5")
+    finally:
+        cancel()
+
+
+def test_rate_or_speed_giving_less_than_two_samples_per_revolution(rec, tmp_path):
+    """A rate in kHz written as Hz: billions of revolutions in the record, which cutting would
+    try to allocate."""
+    path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "fs": 1e-3})
+    fails(spec_for(path, vibration="acc", speed_hz=25), "one revolution spans 4e-05 samples",
+          "expected at least 2 samples per revolution")
+
+
+def test_what_the_file_says_stays_on_one_line(rec, tmp_path):
+    path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "tacho": rec.tacho, "fs": FS,
+                                          "label": np.where(rec.index, "fa\nult", "healthy")})
+    message = fails(spec_for(path, vibration="acc", tacho="tacho", labels="label"), "unknown class 'fa\\nult'")
+    assert "\n" not in message
+    fails(spec_for(tmp_path / ("x" * 300 + ".npz"), vibration="acc", speed_hz=25), "File name too long")
+    fails(spec_for(tmp_path / "a\0b.npz", vibration="acc", speed_hz=25), "'path' contains a NUL character")
