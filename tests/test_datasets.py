@@ -455,3 +455,11 @@ def test_bad_specs_are_refused_before_building(changes, pattern, cache):
     assert "\n" not in str(info.value)
     assert f"dataset '{spec.name}'" in str(info.value)
     assert not list(cache.glob("*.npz"))
+
+
+def test_a_dataset_beyond_memory_is_refused_before_any_work(cli, tmp_path):
+    path = tmp_path / "huge.toml"
+    path.write_text('[scenario]\nname = "huge"\nkind = "dataset"\n\n[[datasets]]\npreset = "B-6"\nhealthy = 1000000000000\n')
+    code, _, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 2 and "[[datasets]] #1: dataset 'B-6' would hold" in err and "at most 1000000" in err
+    assert not (tmp_path / "runs").exists()

@@ -12,7 +12,7 @@ from ..data.cache import load_or_build
 from ..data.importers import MeasuredSpec
 from ..data.spec import DATASET_PRESETS, DatasetSpec, NoiseSpec, dataset_preset
 from ..effects import effects_from_tables
-from ..errors import GearlabInputError
+from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
@@ -40,7 +40,7 @@ DATASET_TABLE = Table(
         "revolutions": Key(int, None, in_range(1), "J noisy revolutions per sample (TSA averages them)"),
         "noise": Key(dict, None, doc="{kind = 'laplace', snr_db = 0, seed = 0}; an empty table removes noise"),
         "tsa": Key(bool, None),
-        "seed": Key(int, None, in_range(0)),
+        "seed": Key(int, None, in_range(0, 2**32 - 1)),
         "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'"),
         "effects": Key(list, None, doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
                                        "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)"),
@@ -49,6 +49,11 @@ DATASET_TABLE = Table(
     required=True,
 )
 TABLES = {"datasets": DATASET_TABLE}
+
+
+# Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
+# 12 800. The table's keys bound no product, so absurd sizes are refused before any work.
+MAX_SAMPLES = 10**6
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
@@ -96,6 +101,10 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     spec = spec.with_(**changes)
     spec.check(where)
     spec.check_model(where)  # model, preset, channel, faults and teeth: refused before any work
+    total = sum(class_sizes(spec, where).values())
+    if total > MAX_SAMPLES:
+        raise GearlabInputError(f"{where}: dataset '{spec.name}' would hold {shown(total)} samples; expected at most "
+                                f"{MAX_SAMPLES} (fewer duplicates, teeth or healthy samples)")
     return spec
 
 

@@ -32,7 +32,6 @@ from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import NOISE_KINDS
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
-from .transfer import check_size
 
 # What a study may change in the chapter-4 presets; the preset itself, the noise kind and
 # TSA are what the study varies.
@@ -74,7 +73,6 @@ def check(spec: dict, path) -> None:
     where = location(path, "dataset")
     dataset = next(iter(spec["datasets"].values()))["noisy"]
     sizes = class_sizes(dataset, where)
-    check_size(sum(sizes.values()), dataset.name, where)  # before the split's float arithmetic
     check_split(sizes, spec["protocol"], where)
     check_batch(sizes, spec["protocol"], location(path, "protocol", "batch"))
 
