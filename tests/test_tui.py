@@ -367,3 +367,11 @@ def test_snapshot_invalid_scenario(snap_compare, folder):
 
 def test_snapshot_plugins_view(snap_compare, repo_scenarios):
     assert snap_compare(GearlabApp(repo_scenarios), press=["p"])
+
+
+def test_several_markdown_tables_are_read_apart():
+    from gearlab.tui.widgets import markdown_tables
+
+    text = "| a | b |\n|---|---|\n| 1 | 2 |\n\n| effect | share | params |\n|---|---|---|\n| x | 10 % | p = 1 |\n"
+    assert markdown_tables(text) == [[["a", "b"], ["1", "2"]], [["effect", "share", "params"], ["x", "10 %", "p = 1"]]]
+    assert markdown_tables("") == []

@@ -13,24 +13,40 @@ from ..charts import Chart
 COLORS = ("blue+", "red+", "green+", "magenta+", "cyan+", "yellow+", "orange", "white", "blue", "red", "green")
 
 
-def markdown_rows(text: str) -> tuple[list[str], list[list[str]]]:
-    """(header, rows) of a markdown pipe table, as the kinds write table.md."""
-    rows = [[c.strip() for c in line.strip().strip("|").split("|")] for line in text.strip().splitlines() if line.strip()]
-    rows = [r for r in rows if not all(set(c) <= set("-:") for c in r)]
-    return (rows[0], rows[1:]) if rows else ([], [])
+def markdown_tables(text: str) -> list[list[list[str]]]:
+    """The markdown pipe tables of *text* (as the kinds write table.md; blank lines part
+    them), each a list of rows of cells, the header first."""
+    tables, rows = [], []
+    for line in text.strip().splitlines() + [""]:
+        if line.strip():
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if not all(set(c) <= set("-:") for c in cells):  # not the |---| rule
+                rows.append(cells)
+        elif rows:
+            tables.append(rows)
+            rows = []
+    return tables
 
 
 class ResultTable(DataTable):
-    """A kind's results table (markdown), redrawn whole as records arrive."""
+    """A kind's results tables (markdown), redrawn whole as records arrive: the first table's
+    header heads the columns, a later table's header is a bold row."""
 
     DEFAULT_CSS = "ResultTable { height: auto; max-height: 10; }"
 
     def show_markdown(self, text: str) -> None:
-        header, rows = markdown_rows(text)
+        tables = markdown_tables(text)
         self.clear(columns=True)
-        if header:
-            self.add_columns(*header)
-            self.add_rows([[Text(c) for c in row] for row in rows])  # cells are data, not markup
+        if not tables:
+            return
+        width = max(len(row) for table in tables for row in table)
+        self.add_columns(*(tables[0][0] + [""] * (width - len(tables[0][0]))))
+        for i, table in enumerate(tables):
+            if i:
+                self.add_row(*([""] * width))
+                self.add_row(*(Text(c, style="bold") for c in table[0] + [""] * (width - len(table[0]))))
+            for row in table[1:]:  # cells are data, not markup
+                self.add_row(*(Text(c) for c in row + [""] * (width - len(row))))
 
 
 class ChartView(Static):
