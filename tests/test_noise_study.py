@@ -16,6 +16,7 @@ import pytest
 
 import gearlab.kinds.noise_study as kind
 import gearlab.learn.noise_study as ns
+from gearlab.data.cache import save
 from gearlab.data.spec import Dataset, dataset_preset
 from gearlab.errors import GearlabInputError
 from gearlab.learn.noise_study import NoiseProtocol, aggregate, part_sizes, run_unit, scores, split
@@ -73,7 +74,9 @@ def fake_builder(monkeypatch):
 
     def load_or_build(spec, executor=None, on_event=None):
         made.append(spec.name)
-        return synthetic(spec), False
+        dataset = synthetic(spec)
+        save(dataset)  # the training units load their datasets from the cache
+        return dataset, False
 
     monkeypatch.setattr(kind, "load_or_build", load_or_build)
     return made
@@ -206,6 +209,7 @@ patience = 4
 
 [execution]
 device = "cpu"
+workers = 1
 """
 
 
@@ -267,9 +271,9 @@ def test_resume_skips_finished_units(cli, write_scenario, tmp_path, fake_builder
     trained = []
     real = kind.run_unit
 
-    def counting(protocol, dataset, r, *args):
+    def counting(protocol, dataset, r, *args, **kwargs):
         trained.append((dataset.spec.name, r))
-        return real(protocol, dataset, r, *args)
+        return real(protocol, dataset, r, *args, **kwargs)
 
     monkeypatch.setattr(kind, "run_unit", counting)
     fake_builder.clear()

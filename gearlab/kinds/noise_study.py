@@ -20,15 +20,17 @@ import json
 from dataclasses import asdict, replace
 
 import numpy as np
+import torch
 
 from ..charts import Chart, Curve
+from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
 from ..learn.networks import NETWORKS
 from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
 from ..params import did_you_mean
-from ..runs import Event, RunDir
+from ..runs import Event, RunDir, UnitProgress
 from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import NOISE_KINDS
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
@@ -164,26 +166,45 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     executor = executor_for(scenario)
     done = {r["unit"] for r in run.records()}
     todo = units(spec)
+    pending = [(noise, r, v) for noise, r, v in todo if unit_name(noise, r, v) not in done]
+    for noise in dict.fromkeys(noise for noise, _, _ in pending):  # built (or found) once, before training
+        for s in spec["datasets"][noise].values():
+            load_or_build(s, executor, on_event)
     on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
-    loaded: dict[str, object] = {}
-    for i, (noise, r, variant) in enumerate(todo):
-        unit = unit_name(noise, r, variant)
-        if unit not in done:
-            wanted = spec["datasets"][noise][variant]
-            if wanted.name not in loaded:
-                loaded.clear()  # one noise type's datasets in memory at a time
-                for v, s in spec["datasets"][noise].items():
-                    loaded[s.name], _ = load_or_build(s, executor, on_event)
-            on_event(Event("log", message=f"run {unit}"))
-            record = {"unit": unit, "noise": noise, "variant": variant,
-                      **run_unit(protocol, loaded[wanted.name], r)}
-            run.append(record)
-            on_event(Event("log", message=f"{unit}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
-                                          f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
-                                          f"{record['train_seconds']:.0f} s)"))
-            on_event(Event("record", stage="runs", record=record))
-        on_event(Event("advance", stage="runs", done=i + 1, total=len(todo)))
+    finished = len(todo) - len(pending)
+    on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+    def record_done(_: int, record: dict) -> None:
+        nonlocal finished
+        run.append(record)
+        finished += 1
+        on_event(Event("log", message=f"{record['unit']}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
+                                      f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
+                                      f"{record['train_seconds']:.0f} s)"))
+        on_event(Event("record", stage="runs", record=record))
+        on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+    # the datasets by cache entry path: a worker process may not share this one's environment
+    tasks = []
+    for noise, r, variant in pending:
+        dataset = spec["datasets"][noise][variant]
+        tasks.append((protocol, dataset, cache.entry_path(dataset), noise, r, variant, run.path))
+    executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
     summarise(scenario, run)
+
+
+def train_unit(task: tuple) -> dict:
+    """One training run, in this process or a worker, on one torch thread (as the transfer
+    kind's units: a result does not depend on how many run side by side)."""
+    protocol, dataset_spec_, path, noise, r, variant, run_path = task
+    torch.set_num_threads(1)
+    unit = unit_name(noise, r, variant)
+    with UnitProgress(run_path, unit) as progress:
+        def report(epoch: int, history) -> None:
+            progress(f"epoch {epoch + 1}, validation accuracy {100 * history.val_acc[-1]:.1f} %")
+
+        result = run_unit(protocol, cache.load(dataset_spec_, path), r, on_epoch=report)
+    return {"unit": unit, "noise": noise, "variant": variant, **result}
 
 
 def results(records: list[dict]) -> dict:
