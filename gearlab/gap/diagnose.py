@@ -67,7 +67,7 @@ from ..errors import GearlabInputError
 from ..executors import LocalExecutor
 from ..registry import get_registry
 from ..runs import Event
-from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, view_gaps
+from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .views import (BandPlan, gear_ratio, order_views_of_power, power_of_spectrum, residual_view_of_spectrum,
                     waveform_view)
 
@@ -295,17 +295,8 @@ class Scorer:
         mt = Ft.mean(axis=0)
         scale = self._scale(Ft, Fs.mean(axis=0))
         rng = np.random.default_rng(seed)
-
-        def moments(rows):
-            z = (rows - mt) / scale
-            k = len(z)
-            counts = rng.multinomial(k, np.full(k, 1.0 / k), size=replicates).astype(np.float64)
-            mean = counts @ z / k
-            var = np.maximum(counts @ (z * z) / k - mean * mean, 0.0) * (k / (k - 1))
-            return mean, var
-
-        a, va = moments(Fs)
-        b, vb = moments(Ft)
+        a, va = resampled_moments(Fs, mt, scale, replicates, rng)
+        b, vb = resampled_moments(Ft, mt, scale, replicates, rng)
         # A replicate's squared difference carries the sampling noise twice (data and resampling).
         return np.sum((b - a) ** 2 - 2.0 * (va / len(Fs) + vb / len(Ft)), axis=1)
 

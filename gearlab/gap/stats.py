@@ -153,30 +153,30 @@ def view_gaps(d: np.ndarray, sizes: list[int], n_source: int, n_target: int) -> 
     return np.maximum((d * d - c) @ _membership(sizes), 0.0)
 
 
+def resampled_moments(rows: np.ndarray, centre: np.ndarray, scale: np.ndarray, replicates: int,
+                      rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Bootstrap replicates (replicates, features) of the mean and variance of *rows* centred on
+    *centre* and divided by *scale*. Each replicate is a vector of counts (how often each row is
+    drawn, multinomial), so all replicates are two matrix products; centring and scaling first
+    keeps the moments from losing precision to large offsets (dB levels, m/s²)."""
+    z = (rows - centre) / scale
+    n = len(z)
+    counts = rng.multinomial(n, np.full(n, 1.0 / n), size=replicates).astype(np.float64)
+    mean = counts @ z / n
+    var = np.maximum(counts @ (z * z) / n - mean * mean, 0.0) * (n / (n - 1))
+    return mean, var
+
+
 def bootstrap_gaps(source: np.ndarray, target: np.ndarray, sizes: list[int], replicates: int,
                    rng: np.random.Generator) -> np.ndarray:
-    """(replicates, views) bootstrap replicates of the view gaps, rows of each set resampled.
-
-    Each replicate is a vector of counts (how often each row is drawn, multinomial), so the
-    resampled means and second moments of all features for all replicates are two matrix
-    products per set. The features are first centred on the source mean and scaled by their
-    spread, so those moments do not lose precision to large offsets (dB levels, m/s²).
-    """
+    """(replicates, views) bootstrap replicates of the view gaps, rows of each set resampled
+    (see resampled_moments); features centred on the source mean and scaled by their spread."""
     ns, nt = len(source), len(target)
     base = effect_sizes(source, target)
     centre, scale = base["source_mean"], base["spread"]
     floor = _floor(base["source_mean"], base["target_mean"]) / scale
-
-    def moments(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        z = (rows - centre) / scale
-        n = len(z)
-        counts = rng.multinomial(n, np.full(n, 1.0 / n), size=replicates).astype(np.float64)
-        mean = counts @ z / n
-        var = np.maximum(counts @ (z * z) / n - mean * mean, 0.0) * (n / (n - 1))
-        return mean, var
-
-    ms, vs = moments(source)
-    mt, vt = moments(target)
+    ms, vs = resampled_moments(source, centre, scale, replicates, rng)
+    mt, vt = resampled_moments(target, centre, scale, replicates, rng)
     d = (mt - ms) / np.maximum(np.sqrt((vs + vt) / 2.0), floor)
     # A replicate's d² is inflated by the sampling noise c twice (the data's and the
     # resampling's); removing one more c centres the replicates on the estimate.
