@@ -16,6 +16,7 @@ import logging
 import math
 import multiprocessing
 import os
+import weakref
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -50,10 +51,46 @@ def _gpu_request(gpu: bool | float, resources: dict) -> float:
     return max(0.0001, math.floor(share * 1e4) / 1e4)  # Ray takes GPU shares to 4 decimals
 
 
-class LocalExecutor:
+class Executor:
+    """What every executor has: ``map`` (below, per executor) and ``close``, also as a ``with`` block."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Release what the executor holds between maps (nothing by default)."""
+
+
+class LocalExecutor(Executor):
+    """A process pool on this machine (default: one worker per core).
+
+    The pool is started on the first map that needs it and kept for the next ones: a worker
+    pays its start-up (imports, numba's compiled loops, per-process caches such as the gap
+    search's clean revolutions) once per run, not once per map. `close()` — or leaving a
+    `with` block — stops it; a failed unit or Ctrl-C stops it at once.
+    """
+
     def __init__(self, workers: int | None = None):
         _check_workers(workers)
         self.workers = workers or os.cpu_count() or 1
+        self._pool: ProcessPoolExecutor | None = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def _stop(self) -> None:
+        """Stop the pool without waiting for its queued or running units."""
+        # (Python 3.11 has no public way to stop running workers; 3.14 adds terminate_workers.)
+        running = list((getattr(self._pool, "_processes", None) or {}).values())
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        for process in running:
+            process.terminate()
+        self._pool = None
 
     def map(self, fn: Callable, items: Sequence, on_done: OnDone | None = None, gpu: bool | float = False) -> list:
         """`gpu` is accepted for the executors' common interface and ignored: a local unit
@@ -67,25 +104,22 @@ class LocalExecutor:
                 if on_done:
                     on_done(i, results[i])
             return results
-        # forkserver: children start from a clean process (no inherited threads from torch or BLAS).
-        context = multiprocessing.get_context("forkserver" if os.name == "posix" else "spawn")
-        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(items)), mp_context=context)
+        if self._pool is None:
+            # forkserver: children start from a clean process (no inherited threads from torch or
+            # BLAS). Workers are started as units are submitted, never more than there are units.
+            context = multiprocessing.get_context("forkserver" if os.name == "posix" else "spawn")
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
+            weakref.finalize(self, self._pool.shutdown)  # an executor dropped without close()
         try:
-            futures = {pool.submit(fn, item): i for i, item in enumerate(items)}
+            futures = {self._pool.submit(fn, item): i for i, item in enumerate(items)}
             for future in as_completed(futures):
                 i = futures[future]
                 results[i] = future.result()
                 if on_done:
                     on_done(i, results[i])
         except BaseException:
-            # Ctrl-C, or a unit failed: stop now instead of waiting for every queued unit.
-            # (Python 3.11 has no public way to stop running workers; 3.14 adds terminate_workers.)
-            running = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for process in running:
-                process.terminate()
+            self._stop()  # Ctrl-C, or a unit failed: stop now instead of waiting for every queued unit
             raise
-        pool.shutdown()
         return results
 
 
@@ -171,10 +205,11 @@ def _check_cluster_runs_our_gearlab(ray, address: str) -> None:
         raise GearlabInputError(f"the Ray cluster at '{address}' runs gearlab {theirs}, this driver {ours}")
 
 
-class RayExecutor:
+class RayExecutor(Executor):
     """Each item is one Ray task (one CPU; with gpu=..., also a GPU share when the cluster has
     GPUs). `workers` sizes a local instance this executor starts; a cluster's own resources
-    decide how many tasks run there at once."""
+    decide how many tasks run there at once. The Ray session stays open for the process (the
+    next run in it reuses the workers) and is closed at exit."""
 
     def __init__(self, address: str | None = None, workers: int | None = None):
         _check_workers(workers)

@@ -303,3 +303,28 @@ def test_a_failed_unit_stops_the_local_pool_at_once(tmp_path):
     marks = sorted(p.name for p in tmp_path.iterdir())
     assert "started-1" in marks and not any(m.startswith("ended") for m in marks)
     assert len(marks) < 3  # the queued units were dropped (the worker freed by unit 0 may take one)
+
+
+def worker_pid(x: int) -> int:
+    import os
+
+    time.sleep(0.2)  # long enough that both workers take a share
+    return os.getpid()
+
+
+def test_the_local_pool_is_kept_across_maps_and_closed_at_the_end():
+    """A run maps several times (datasets, then training): the workers started for the first map
+    serve the next ones (their imports and compiled loops are paid once), and leaving the
+    ``with`` block stops them. A failed map replaces the pool for the next one."""
+    with LocalExecutor(2) as executor:
+        first = set(executor.map(worker_pid, range(4)))
+        processes = list(executor._pool._processes.values())
+        second = set(executor.map(worker_pid, range(4)))
+        workers = {p.pid for p in processes}
+        assert first | second <= workers and len(workers) <= 2
+        assert {p.pid for p in executor._pool._processes.values()} == workers
+        with pytest.raises(ZeroDivisionError):
+            executor.map(divide, [1, 0, 2])
+        assert set(executor.map(worker_pid, range(4))).isdisjoint(workers)
+    assert executor._pool is None
+    assert not any(p.is_alive() for p in processes)

@@ -213,22 +213,22 @@ def class_counts(dataset) -> dict[str, int]:
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
-    executor = executor_for(scenario)
-    done = {r["unit"]: r for r in run.records()}
-    summary = {"kind": "dataset", "scenario": scenario.name, "datasets": {}}
-    for spec in scenario.spec:
-        dataset, cached = load_or_build(spec, executor, on_event)
-        record = done.get(spec.name) or {
-            "unit": spec.name, "key": spec.key(), "cached": cached, "n": len(dataset),
-            "counts": class_counts(dataset), "reference": list(dataset.reference), "meta": dataset.meta,
-        }
-        if spec.name not in done:
-            run.append(record)
-            on_event(Event("record", stage="datasets", record=record))
-        summary["datasets"][spec.name] = {**record, "spec": asdict(spec), "shape": list(dataset.X.shape)}
-        figures(dataset, run)
-    run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(summary))
+    with executor_for(scenario) as executor:
+        done = {r["unit"]: r for r in run.records()}
+        summary = {"kind": "dataset", "scenario": scenario.name, "datasets": {}}
+        for spec in scenario.spec:
+            dataset, cached = load_or_build(spec, executor, on_event)
+            record = done.get(spec.name) or {
+                "unit": spec.name, "key": spec.key(), "cached": cached, "n": len(dataset),
+                "counts": class_counts(dataset), "reference": list(dataset.reference), "meta": dataset.meta,
+            }
+            if spec.name not in done:
+                run.append(record)
+                on_event(Event("record", stage="datasets", record=record))
+            summary["datasets"][spec.name] = {**record, "spec": asdict(spec), "shape": list(dataset.X.shape)}
+            figures(dataset, run)
+        run.write_json("summary.json", summary)
+        run.write_text("table.md", table_md(summary))
 
 
 def table_md(summary: dict) -> str:

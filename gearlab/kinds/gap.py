@@ -276,42 +276,42 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     from ..gap.views import gear_pair_of
 
     spec = scenario.spec
-    executor = executor_for(scenario)
-    done = {r["unit"]: r for r in run.records()}
-    source_spec: DatasetSpec = spec["source"]
-    z1 = gear_pair_of(source_spec).Z1
+    with executor_for(scenario) as executor:
+        done = {r["unit"]: r for r in run.records()}
+        source_spec: DatasetSpec = spec["source"]
+        z1 = gear_pair_of(source_spec).Z1
 
-    on_event(Event("stage", stage="datasets", total=1, message="target data"))
-    target, _ = load_or_build(spec["target"], executor, on_event)
-    target_X, note = target_rows(target, z1, location(scenario.path, "target"))
-    on_event(Event("advance", stage="datasets", done=1, total=1))
-    if note:
-        on_event(Event("log", message=note))
+        on_event(Event("stage", stage="datasets", total=1, message="target data"))
+        target, _ = load_or_build(spec["target"], executor, on_event)
+        target_X, note = target_rows(target, z1, location(scenario.path, "target"))
+        on_event(Event("advance", stage="datasets", done=1, total=1))
+        if note:
+            on_event(Event("log", message=note))
 
-    if "diagnosis" not in done:
-        on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
-        # Only the source configuration and the target's healthy rows go in: nothing of how the
-        # target was made (its spec, effects, labels) reaches the diagnosis.
-        result = diagnose(source_spec, target_X, Settings(**spec["settings"]), executor=executor, on_event=on_event)
-        record = {"unit": "diagnosis", "result": result, "note": note}
-        run.append(record)
-        done["diagnosis"] = record
-        on_event(Event("record", stage="diagnosis", record=_brief(record)))
-        on_event(Event("advance", stage="diagnosis", done=1, total=1))
-    result = done["diagnosis"]["result"]
-    on_event(Event("log", message=diagnosis_line(result)))
+        if "diagnosis" not in done:
+            on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
+            # Only the source configuration and the target's healthy rows go in: nothing of how the
+            # target was made (its spec, effects, labels) reaches the diagnosis.
+            result = diagnose(source_spec, target_X, Settings(**spec["settings"]), executor=executor, on_event=on_event)
+            record = {"unit": "diagnosis", "result": result, "note": note}
+            run.append(record)
+            done["diagnosis"] = record
+            on_event(Event("record", stage="diagnosis", record=_brief(record)))
+            on_event(Event("advance", stage="diagnosis", done=1, total=1))
+        result = done["diagnosis"]["result"]
+        on_event(Event("log", message=diagnosis_line(result)))
 
-    notes = [note] if note else []
-    if spec["accuracy"]:
-        if not (np.asarray(target.fault) == 1).any():
-            notes.append("accuracy skipped: the target has no labelled fault samples")
-            on_event(Event("log", message=notes[-1]))
-        else:
-            corrected = corrected_source(source_spec, result)
-            if corrected != source_spec:  # a label only (not in the cache key): tells the two apart in logs
-                corrected = corrected.with_(name=f"{source_spec.name}-corrected", domain=f"{source_spec.name}-corrected")
-            accuracy(scenario, run, corrected, executor, on_event, done)
-    summarise(scenario, run, notes)
+        notes = [note] if note else []
+        if spec["accuracy"]:
+            if not (np.asarray(target.fault) == 1).any():
+                notes.append("accuracy skipped: the target has no labelled fault samples")
+                on_event(Event("log", message=notes[-1]))
+            else:
+                corrected = corrected_source(source_spec, result)
+                if corrected != source_spec:  # a label only (not in the cache key): tells the two apart in logs
+                    corrected = corrected.with_(name=f"{source_spec.name}-corrected", domain=f"{source_spec.name}-corrected")
+                accuracy(scenario, run, corrected, executor, on_event, done)
+        summarise(scenario, run, notes)
 
 
 def _brief(record: dict) -> dict:

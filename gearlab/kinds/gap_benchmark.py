@@ -110,27 +110,27 @@ def quick(scenario: Scenario) -> None:
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     started = time.perf_counter()
     spec = scenario.spec
-    executor = executor_for(scenario)
-    trials = spec["trials"]
-    done = {r["unit"] for r in run.records()}
-    pending = [t for t in trials if bench.unit_key(t.index) not in done]
-    total = len(trials)
-    finished = total - len(pending)
-    on_event(Event("stage", stage="trials", total=total, message=f"{total} blind trials"))
-    on_event(Event("advance", stage="trials", done=finished, total=total))
-
-    def record_done(_: int, record: dict) -> None:
-        nonlocal finished
-        run.append(record)
-        finished += 1
-        on_event(Event("log", message=f"{record['unit']} ({record['kind']}): {_verdict(record)}"))
-        on_event(Event("record", stage="trials", record=record))
+    with executor_for(scenario) as executor:
+        trials = spec["trials"]
+        done = {r["unit"] for r in run.records()}
+        pending = [t for t in trials if bench.unit_key(t.index) not in done]
+        total = len(trials)
+        finished = total - len(pending)
+        on_event(Event("stage", stage="trials", total=total, message=f"{total} blind trials"))
         on_event(Event("advance", stage="trials", done=finished, total=total))
 
-    tasks = [bench.TrialTask(t, spec["source"], spec["settings"], str(run.path / "targets" / f"trial_{t.index:03d}"),
-                             spec["revolutions"]) for t in pending]
-    executor.map(bench.trial_task, tasks, on_done=record_done)
-    summarise(scenario, run, elapsed=time.perf_counter() - started)
+        def record_done(_: int, record: dict) -> None:
+            nonlocal finished
+            run.append(record)
+            finished += 1
+            on_event(Event("log", message=f"{record['unit']} ({record['kind']}): {_verdict(record)}"))
+            on_event(Event("record", stage="trials", record=record))
+            on_event(Event("advance", stage="trials", done=finished, total=total))
+
+        tasks = [bench.TrialTask(t, spec["source"], spec["settings"], str(run.path / "targets" / f"trial_{t.index:03d}"),
+                                 spec["revolutions"]) for t in pending]
+        executor.map(bench.trial_task, tasks, on_done=record_done)
+        summarise(scenario, run, elapsed=time.perf_counter() - started)
 
 
 def _verdict(r: dict) -> str:

@@ -163,34 +163,34 @@ def unit_name(noise: str, run: int, variant: str) -> str:
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol: NoiseProtocol = spec["protocol"]
-    executor = executor_for(scenario)
-    done = {r["unit"] for r in run.records()}
-    todo = units(spec)
-    pending = [(noise, r, v) for noise, r, v in todo if unit_name(noise, r, v) not in done]
-    for noise in dict.fromkeys(noise for noise, _, _ in pending):  # built (or found) once, before training
-        for s in spec["datasets"][noise].values():
-            load_or_build(s, executor, on_event)
-    on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
-    finished = len(todo) - len(pending)
-    on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
-
-    def record_done(_: int, record: dict) -> None:
-        nonlocal finished
-        run.append(record)
-        finished += 1
-        on_event(Event("log", message=f"{record['unit']}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
-                                      f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
-                                      f"{record['train_seconds']:.0f} s)"))
-        on_event(Event("record", stage="runs", record=record))
+    with executor_for(scenario) as executor:
+        done = {r["unit"] for r in run.records()}
+        todo = units(spec)
+        pending = [(noise, r, v) for noise, r, v in todo if unit_name(noise, r, v) not in done]
+        for noise in dict.fromkeys(noise for noise, _, _ in pending):  # built (or found) once, before training
+            for s in spec["datasets"][noise].values():
+                load_or_build(s, executor, on_event)
+        on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
+        finished = len(todo) - len(pending)
         on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
-    # the datasets by cache entry path: a worker process may not share this one's environment
-    tasks = []
-    for noise, r, variant in pending:
-        dataset = spec["datasets"][noise][variant]
-        tasks.append((protocol, dataset, cache.entry_path(dataset), noise, r, variant, run.path))
-    executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
-    summarise(scenario, run)
+        def record_done(_: int, record: dict) -> None:
+            nonlocal finished
+            run.append(record)
+            finished += 1
+            on_event(Event("log", message=f"{record['unit']}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
+                                          f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
+                                          f"{record['train_seconds']:.0f} s)"))
+            on_event(Event("record", stage="runs", record=record))
+            on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+        # the datasets by cache entry path: a worker process may not share this one's environment
+        tasks = []
+        for noise, r, variant in pending:
+            dataset = spec["datasets"][noise][variant]
+            tasks.append((protocol, dataset, cache.entry_path(dataset), noise, r, variant, run.path))
+        executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+        summarise(scenario, run)
 
 
 def train_unit(task: tuple) -> dict:

@@ -158,55 +158,55 @@ def units(protocol: Protocol) -> list[tuple[int, int, Method]]:
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol: Protocol = spec["protocol"]
-    executor = executor_for(scenario)
-    on_event(Event("stage", stage="datasets", total=2, message="datasets"))
-    source, _ = load_or_build(spec["source"], executor, on_event)
-    on_event(Event("advance", stage="datasets", done=1, total=2))
-    target, _ = load_or_build(spec["target"], executor, on_event)
-    on_event(Event("advance", stage="datasets", done=2, total=2))
-    check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
-    done = {r["unit"] for r in run.records()}
-    todo = units(protocol)
-    pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]
-    # The first unit that needs a repetition's shared state (priming, source-only model) makes
-    # it; every other unit waits for phase 2 and loads it from the run directory.
-    makers: dict[str, tuple] = {}
-    for rep, k, m in pending:
-        state = shared_state(m, rep)
-        if state is not None and not (run.path / "states" / f"{state}.pt").exists():
-            makers.setdefault(state, (rep, k, m))
-    first = list(makers.values())
-    phases = [first, [u for u in pending if u not in first]]
-    if first:
-        on_event(Event("stage", stage="priming", total=len(first),
-                       message=f"priming: {len(first)} shared states (primed and source-only models)"))
-    on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
-    finished = len(todo) - len(pending)
-    on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
-    priming = {unit_key(*u) for u in first}
-
-    def record_done(_: int, record: dict) -> None:
-        nonlocal finished
-        latent = record.pop("_latent", None)
-        if latent is not None and record["rep"] == 0:
-            save_latent(run, record["unit"], latent)
-        run.append(record)
-        finished += 1
-        if record["unit"] in priming:
-            priming.discard(record["unit"])
-            on_event(Event("advance", stage="priming", done=len(first) - len(priming), total=len(first)))
-        on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %, "
-                                      f"{record['predicted_fault_share']:.0f} % predicted faulty"))
-        on_event(Event("record", stage="runs", record=record))
+    with executor_for(scenario) as executor:
+        on_event(Event("stage", stage="datasets", total=2, message="datasets"))
+        source, _ = load_or_build(spec["source"], executor, on_event)
+        on_event(Event("advance", stage="datasets", done=1, total=2))
+        target, _ = load_or_build(spec["target"], executor, on_event)
+        on_event(Event("advance", stage="datasets", done=2, total=2))
+        check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
+        done = {r["unit"] for r in run.records()}
+        todo = units(protocol)
+        pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]
+        # The first unit that needs a repetition's shared state (priming, source-only model) makes
+        # it; every other unit waits for phase 2 and loads it from the run directory.
+        makers: dict[str, tuple] = {}
+        for rep, k, m in pending:
+            state = shared_state(m, rep)
+            if state is not None and not (run.path / "states" / f"{state}.pt").exists():
+                makers.setdefault(state, (rep, k, m))
+        first = list(makers.values())
+        phases = [first, [u for u in pending if u not in first]]
+        if first:
+            on_event(Event("stage", stage="priming", total=len(first),
+                           message=f"priming: {len(first)} shared states (primed and source-only models)"))
+        on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
+        finished = len(todo) - len(pending)
         on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+        priming = {unit_key(*u) for u in first}
 
-    for phase in phases:
-        # the cache entries by path: a worker process may not share this one's environment
-        data = [(spec[d], cache.entry_path(spec[d])) for d in ("source", "target")]
-        tasks = [(protocol, *data, rep, k, m, run.path / "states") for rep, k, m in phase]
-        # a unit asks the executor for a GPU unless the scenario trains on the CPU
-        executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
-    summarise(scenario, run)
+        def record_done(_: int, record: dict) -> None:
+            nonlocal finished
+            latent = record.pop("_latent", None)
+            if latent is not None and record["rep"] == 0:
+                save_latent(run, record["unit"], latent)
+            run.append(record)
+            finished += 1
+            if record["unit"] in priming:
+                priming.discard(record["unit"])
+                on_event(Event("advance", stage="priming", done=len(first) - len(priming), total=len(first)))
+            on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %, "
+                                          f"{record['predicted_fault_share']:.0f} % predicted faulty"))
+            on_event(Event("record", stage="runs", record=record))
+            on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+        for phase in phases:
+            # the cache entries by path: a worker process may not share this one's environment
+            data = [(spec[d], cache.entry_path(spec[d])) for d in ("source", "target")]
+            tasks = [(protocol, *data, rep, k, m, run.path / "states") for rep, k, m in phase]
+            # a unit asks the executor for a GPU unless the scenario trains on the CPU
+            executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+        summarise(scenario, run)
 
 
 def train_unit(task: tuple) -> dict:
