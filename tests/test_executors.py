@@ -6,13 +6,12 @@ The Ray tests start one local Ray instance (2 CPUs) for the whole module and ski
 why, when Ray is not installed.
 """
 
-import json
 import sys
 import time
 from pathlib import Path
 
 import pytest
-from tiny import domains
+from tiny import records, transfer
 
 from gearlab import executors
 from gearlab.errors import GearlabInputError
@@ -216,16 +215,7 @@ def test_one_ray_session_per_process(ray_session):
 # ----------------------------------------------------------------------------- same records
 
 
-TINY = """\
-[scenario]
-name = "tiny"
-kind = "transfer"
-
-""" + domains() + """\
-
-[network]
-name = "fast"
-
+TINY = transfer("""\
 [[methods]]
 adapter = "source_only"
 
@@ -235,31 +225,7 @@ supervised = true
 
 [[methods]]
 adapter = "mmd"
-
-[protocol]
-ks = [0, 2]
-repetitions = 1
-target_train = 8
-batch = 4
-prime_epochs = 2
-baseline_epochs = 2
-patience = 2
-min_epochs = 2
-max_epochs = 3
-
-[execution]
-workers = 1
-device = "cpu"
-"""
-
-
-def records(run: Path) -> dict[str, dict]:
-    """The run's records by unit, without the fields that measure time (they differ run to run)."""
-    out = {}
-    for line in (run / "results.jsonl").read_text().splitlines():
-        r = json.loads(line)
-        out[r["unit"]] = {k: v for k, v in r.items() if "seconds" not in k and "time" not in k}
-    return out
+""")
 
 
 def test_local_and_ray_give_the_same_records(ray_session, tmp_path, monkeypatch):

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tiny import EXECUTION, domains, schedule
 
 from gearlab.gap.stats import gap_report
 from gearlab.kinds import KINDS, gap
@@ -26,19 +27,7 @@ TINY = """\
 name = "tinygap"
 kind = "gap"
 
-[source]
-preset = "B-6-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 12
-
-[target]
-preset = "B-8-ch5"
-teeth = [1, 2, 3]
-faults = { crack = [13] }
-healthy = 12
-noise = { kind = "laplace", snr_db = 0.0, seed = 1 }
-
+""" + domains(healthy=12) + """
 [diagnosis]
 candidates = ["sensor_noise", "drive_inertias"]
 budget = 2
@@ -51,18 +40,7 @@ seed = 0
 [accuracy]
 methods = ["mmd"]
 repetitions = 1
-target_train = 8
-batch = 4
-prime_epochs = 2
-baseline_epochs = 2
-patience = 2
-min_epochs = 2
-max_epochs = 3
-
-[execution]
-workers = 1
-device = "cpu"
-"""
+""" + schedule() + "\n" + EXECUTION
 
 ACCURACY_UNITS = ["rep0/uncorrected/source_only-unsup", "rep0/corrected/source_only-unsup", "rep0/uncorrected/mmd-unsup"]
 

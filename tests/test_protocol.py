@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from tiny import domains
+from tiny import transfer as tiny_scenario
 
 from gearlab.data.cache import load_or_build
 from gearlab.data.spec import Dataset
@@ -275,16 +275,7 @@ def test_results_store_skips_cut_and_damaged_lines_without_hiding_later_ones(tmp
     assert [r["unit"] for r in run.records()] == ["a", "b", "c"]
 
 
-TINY = """\
-[scenario]
-name = "tiny"
-kind = "transfer"
-
-""" + domains() + """\
-
-[network]
-name = "fast"
-
+TINY = tiny_scenario("""\
 [[methods]]
 adapter = "source_only"
 
@@ -299,22 +290,7 @@ adapter = "mmd"
 adapter = "finetune"
 supervised = true
 params = { variant = "classifier" }
-
-[protocol]
-ks = [0, 2]
-repetitions = 2
-target_train = 8
-batch = 4
-prime_epochs = 2
-baseline_epochs = 2
-patience = 2
-min_epochs = 2
-max_epochs = 3
-
-[execution]
-workers = 1
-device = "cpu"
-"""
+""", repetitions=2)
 UNITS = [f"rep{r}/k{k}/{m}" for r in (0, 1) for k in (0, 2)
          for m in ("source_only-unsup", "target_only-sup", "mmd-unsup", "finetune-sup-variant=classifier")]
 

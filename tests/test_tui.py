@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from textual.widgets import DataTable, Static, TabbedContent, Tree
-from tiny import domains
+from tiny import transfer
 
 from gearlab.registry import load_registry
 from gearlab.runs import RunDir
@@ -50,37 +50,13 @@ pair = "luo2019"
 pionts = 512
 """
 
-TRANSFER = """\
-[scenario]
-name = "tiny"
-kind = "transfer"
-
-""" + domains() + """\
-
+TRANSFER = transfer("""\
 [[methods]]
 adapter = "source_only"
 
 [[methods]]
 adapter = "mmd"
-
-[protocol]
-ks = [0, 2]
-repetitions = 3
-target_train = 8
-batch = 4
-prime_epochs = 2
-baseline_epochs = 2
-patience = 2
-min_epochs = 2
-max_epochs = 40
-
-[execution]
-workers = 1
-device = "cpu"
-
-[output]
-dir = "{runs}"
-"""
+""", repetitions=3, max_epochs=40) + '[output]\ndir = "{runs}"\n'
 
 
 @pytest.fixture
