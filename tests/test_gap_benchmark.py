@@ -218,6 +218,18 @@ def test_summary_over_hand_made_records():
     assert s["per_effect"]["tooth_friction"]["median_param_error"] == pytest.approx(0.2)
     assert s["per_effect"]["mesh_damping"]["withheld"] == 1 and s["per_effect"]["mesh_damping"]["named_wrongly"] == 1
     assert s["met"] == {"top1": False, "median_shrink": True, "null_correct": True, "out_of_library_unexplained": True}
+    assert s["explained_when_identified"] == 1.0 and s["extra_names_when_identified"] == 0.0
+
+
+def test_saying_unexplained_or_naming_extras_when_right_is_counted_against_the_diagnosis():
+    friction = answers("single", [("tooth_friction", {"mu_f": 0.1})])
+    recs = [bench.score_trial(friction, fake_result(["tooth_friction"], unexplained=True)),
+            bench.score_trial(friction, fake_result(["tooth_friction", "sensor_noise"])),
+            bench.score_trial(friction, fake_result(["tooth_friction"])),
+            bench.score_trial(friction, fake_result(["mesh_damping"], unexplained=True))]  # a miss: not counted
+    s = bench.summarise(recs, ["tooth_friction", "mesh_damping", "sensor_noise"])
+    assert s["explained_when_identified"] == pytest.approx(2 / 3)
+    assert s["extra_names_when_identified"] == pytest.approx(1 / 3)
 
 
 # --- the scenario kind --------------------------------------------------------------------------------

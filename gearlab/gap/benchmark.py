@@ -426,6 +426,10 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         "out_of_library_unexplained": _rate(r["out_of_library_unexplained"] for r in records
                                             if r["kind"] == "withheld"),
         "wrong_names_when_withheld": _rate(bool(r["wrong_names"]) for r in records if r["kind"] == "withheld"),
+        # The other side of the two out-of-library numbers: a diagnosis that always said
+        # "unexplained" would pass on withheld trials; here it must not say so when it named right.
+        "explained_when_identified": _rate(not r["unexplained"] for r in identified),
+        "extra_names_when_identified": _rate(bool(r["wrong_names"]) for r in identified),
         "per_effect": per_effect,
         "seconds_per_trial": _median(r.get("seconds") for r in records),
     }

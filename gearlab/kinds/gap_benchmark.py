@@ -229,6 +229,8 @@ def summary_lines(run: RunDir) -> list[str]:
         f"null: no significant gap {_pct(s['null_correct'])} ({mark[met['null_correct']]}, target 90 %)",
         f"out of library: unexplained {_pct(s['out_of_library_unexplained'])} "
         f"({mark[met['out_of_library_unexplained']]}, target 80 %)",
+        f"when the right effect was named first: explained {_pct(s.get('explained_when_identified'))}, "
+        f"further effects the target lacks named too {_pct(s.get('extra_names_when_identified'))}",
     ]
 
 
