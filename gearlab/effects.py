@@ -365,6 +365,14 @@ class Effect:
     def check_config(self, params: Mapping, config: ModelConfig, where: str) -> None:
         """Raise GearlabInputError when the effect cannot act on *config* (default: it always can)."""
 
+    # --- optional: where a diagnosis should look ---
+    def guesses(self, target_X: np.ndarray, speed_hz: float) -> list[dict]:
+        """Parameter values read off a target's healthy revolutions (physical units, (n, 4096),
+        fs = 4096 x speed_hz), which a diagnosis tries right after the defaults; parameters a
+        guess leaves out keep their defaults (default: no guesses). For needle-like parameters
+        that a budgeted search over the bounds would miss, such as a tone's frequency."""
+        return []
+
     # --- provided ---
     def resolve(self, given: Mapping[str, object], where: str = "") -> dict:
         """Defaults filled, units parsed, bounds and choices checked: {param: SI value or choice}."""

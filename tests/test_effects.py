@@ -32,7 +32,7 @@ from gearlab.data.builder import (
     steady_revolution,
     whole_steps_rate,
 )
-from gearlab.data.spec import DATASET_PRESETS, POINTS, dataset_preset
+from gearlab.data.spec import DATASET_PRESETS, POINTS, NoiseSpec, dataset_preset
 from gearlab.effects import (
     HOOKS,
     Effect,
@@ -429,6 +429,22 @@ def test_interference_tone_adds_a_non_synchronous_line_at_its_frequency(healthy_
     with pytest.raises(GearlabInputError, match="above the Nyquist frequency"):
         effect.apply_signal(record, {"frequency": 9e4, "ratio": 0.5}, context())
 
+
+
+@pytest.mark.parametrize("frequency, ratio, noise", [(1234.0, 0.3, None), (333.0, 0.1, ("laplace", 0.0))])
+def test_the_tone_is_read_off_a_target_for_the_diagnosis_to_start_from(frequency, ratio, noise):
+    """The diagnosis's needle: a budgeted search over 1 Hz - 20 kHz misses a tone's line, so the
+    effect reads its frequency and level off the target's revolutions (also under 0 dB noise)."""
+    tone = (effect_spec("interference_tone", frequency=frequency, ratio=ratio),)
+    spec = dataset_preset("B-6-ch5").with_(faults=(), healthy=16, effects=tone, seed=3)
+    if noise:
+        spec = spec.with_(noise=NoiseSpec(noise[0], noise[1], 7))
+    ds = build_dataset(spec)
+    revolutions = ds.X.astype(float) * ds.reference[1] + ds.reference[0]
+    (guess,) = REG.get("effect", "interference_tone").guesses(revolutions, 40.0)
+    assert guess["frequency"] == pytest.approx(frequency, rel=0.01)
+    assert guess["ratio"] == pytest.approx(ratio, rel=0.4)
+    assert REG.get("effect", "tooth_friction").guesses(revolutions, 40.0) == []  # the default: none
 
 def test_tsa_averages_the_non_synchronous_tone_away_in_a_dataset():
     tone = (effect_spec("interference_tone", frequency="33.3 Hz", ratio=1.0),)

@@ -199,3 +199,18 @@ def test_no_extra_effect_is_credited_with_a_better_refit_of_the_first():
     second = result["rounds"][1]
     assert second["baseline"] is not None and second["accepted"] is False
     assert abs(result["effects"][0]["params"]["mu_f"] - 0.1) < 0.02
+
+
+def test_a_close_fit_that_still_tests_significant_closes_the_gap():
+    """On a quiet target (30 dB) the two-sample test flags a fillet factor 3 % off (p = 0.01,
+    AUC 1.0); the gap left is under 1 % of the gap before, so the right effect closes it."""
+    source = B6.with_(noise=NoiseSpec("gaussian", 30.0, 0))
+    hidden = effect_spec("fillet_correction", lam=0.3)
+    target = target_rows(B6.with_(healthy=40, effects=(hidden,), noise=NoiseSpec("gaussian", 30.0, 7), seed=3))
+    result = diagnose(source, target, Settings(candidates=("fillet_correction",), max_effects=1,
+                                               **{**FAST, "budget": 12}))
+    assert names(result) == ["fillet_correction"]
+    assert abs(result["effects"][0]["params"]["lam"] - 0.3) < 0.03
+    assert result["significant_after"] and result["shrink"] >= 0.99
+    assert result["shrink"] == pytest.approx(1 - result["gap_after"] / result["gap_before"])
+    assert not result["unexplained"]

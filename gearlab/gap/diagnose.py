@@ -44,14 +44,18 @@ Design, in the order the work happens:
    (noise, a filter, a tone) partly absorbs.
 
    The best candidate of the round is accepted when it removes at least ``MIN_SHARE`` of
-   the gap left at that round (after the baseline) *and* a paired bootstrap (the same resampled rows for the
-   current and the candidate comparison) puts the removed gap above 0 with 95 %
-   confidence. After an acceptance the corrected source is checked against the target
-   on *fresh* rows (another noise seed, so the fitted parameters are not judged on the
-   rows they were fitted to): no longer significant ends the loop.
+   the gap left at that round (after the baseline) *and* a paired bootstrap (the same
+   resampled rows for the current and the candidate comparison) puts the removed gap above
+   0 with 95 % confidence. Both are judged on *fresh* rows (another noise seed), not on the
+   rows the parameters were fitted to: there a fit also gains what it learned of their
+   noise, which is of the order of a small remaining gap. After an acceptance the
+   corrected source is checked against the target on the fresh rows: no longer
+   significant ends the loop.
 3. **After.** ``gap_report`` of the corrected source (fresh rows) against the target.
-   ``unexplained`` = the gap before is significant and the corrected gap still is (or
-   nothing was accepted): the ranked names are then what helped most, not a verdict.
+   ``unexplained`` = the gap before is significant, and nothing was accepted or the
+   corrected source does not close it: a significant gap is left *and* more than
+   ``1 - EXPLAINED_SHRINK`` of the gap before. The ranked names are then what helped
+   most, not a verdict.
 """
 
 from __future__ import annotations
@@ -61,7 +65,7 @@ import math
 import numbers
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -79,6 +83,11 @@ from .views import (BandPlan, gear_ratio, order_views_of_power, power_of_spectru
                     waveform_view)
 
 MIN_SHARE = 0.2  # an accepted effect removes at least this share of the gap left at its round
+# The corrected source "closes" the gap when no significant gap is left, or when at most this
+# share is left: with quiet targets (30 dB) and 40-80 revolutions the test flags parameter errors
+# far below any practical weight (a bearing stiffness 0.4 % off: p = 0.002, AUC 1.0), while an
+# effect standing in for one outside the library left 9-75 % in the benchmark (docs/gap.md).
+EXPLAINED_SHRINK = 0.99
 SIGNAL_EVALS = 4  # evaluations per budget unit for signal-level effects (they need no new simulation)
 DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling design, the rest refines
 NOISE_REPLICATES = 64  # bootstrap replicates for the score noise behind the parameter intervals
@@ -375,11 +384,13 @@ class _OutOfBudget(Exception):
 
 
 def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: int, seed: int,
-                start: dict | None = None) -> list[dict]:
+                start: dict | None = None, guesses: Sequence[dict] = ()) -> list[dict]:
     """Minimise *objective* over *space* with at most *evaluations* calls; every evaluated point.
 
     *start*: parameters to start from instead of the defaults; with it there is no design,
-    only the local refinement (re-fitting an accepted effect next to a new one)."""
+    only the local refinement (re-fitting an accepted effect next to a new one). *guesses*:
+    points tried right after the defaults (the effect's reading of the target; the design
+    gets fewer points)."""
     from scipy.optimize import minimize
     from scipy.stats import qmc
 
@@ -406,8 +417,10 @@ def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: i
     try:
         u0, c0 = space.default_point() if start is None else space.point_of(start)
         evaluate(u0, c0)
+        for guess in guesses:
+            evaluate(*space.point_of({**space.defaults, **guess}))
         width = space.dims + len(space.options)
-        n_design = 0 if start is not None else max(1, math.ceil(DESIGN_SHARE * evaluations)) - 1
+        n_design = 0 if start is not None else max(1, math.ceil(DESIGN_SHARE * evaluations)) - 1 - len(guesses)
         if width and n_design > 0:
             design = qmc.LatinHypercube(d=width, seed=rng).random(n_design)
             for row in design:
@@ -439,6 +452,18 @@ def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: i
     except _OutOfBudget:
         pass
     return history
+
+
+def _inside(space: Space, guess: dict) -> bool:
+    """A guess that names known parameters, within their bounds (a plugin's guess is not trusted blindly)."""
+    entries = {e["name"]: e for e in space.numbers + space.options}
+    for name, value in guess.items():
+        e = entries.get(name)
+        if e is None or ("choices" in e and value not in e["choices"]):
+            return False
+        if "choices" not in e and not (isinstance(value, numbers.Real) and e["low"] <= value <= e["high"]):
+            return False
+    return True
 
 
 def _intervals(space: Space, history: list[dict], best: dict, noise: float) -> dict:
@@ -496,7 +521,8 @@ def fit_effect(task: tuple) -> dict:
         # Searched parameters stray where the simulator warns (too few steps per period of a
         # stiff mounting's natural frequency); one line per point would bury the progress.
         warnings.simplefilter("ignore", UserWarning)
-        history = _fit_search(space, objective, evaluations, seed)
+        guesses = [g for g in effect.guesses(scorer.target, operating_point(source)[0]) if _inside(space, g)]
+        history = _fit_search(space, objective, evaluations, seed, guesses=guesses)
         if name == NUISANCE:
             # The noise alone gets the same wide Brent search that the other candidates' noise
             # nuisance gets, so that "beats the noise alone" compares like with like.
@@ -682,8 +708,13 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     search, fresh = base.with_(seed=search_seed), base.with_(seed=report_seed)
     scorer = Scorer(target, pair)
 
+    def judged(effects: tuple) -> np.ndarray:
+        """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""
+        return source_rows(fresh.with_(effects=_by_level(fresh.effects + effects)))
+
     on_event(Event("stage", stage="gap before", total=1, message=f"gap: {source.name} against the target"))
-    before = _report(source_rows(fresh), target, pair, settings)
+    plain = judged(())
+    before = _report(plain, target, pair, settings)
     on_event(Event("advance", stage="gap before", done=1, total=1))
     result = {"before": before, "gap_before": float(before["total"]["gap"]),
               "significant_before": bool(before["significant"]), "effects": [], "ranking": [], "rounds": [],
@@ -698,6 +729,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     fitted: tuple = ()
     significant = bool(before["significant"])
     gap0 = scorer.score(source_rows(search))  # the search's own baseline (same rows as the fits)
+    judged0 = scorer.score(plain)  # the same on the judging rows
     if not significant:
         on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}); nothing to explain"))
     for r in range(1, settings.max_effects + 1):
@@ -706,8 +738,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
         if not remaining:
             break
-        current = source_rows(search.with_(effects=_by_level(search.effects + fitted)))
-        gap_now = scorer.score(current)
+        gap_now = scorer.score(source_rows(search.with_(effects=_by_level(search.effects + fitted))))
         # The noise nuisance: while sensor noise is a candidate not yet accepted, every other
         # candidate is fitted with it (a noisy target would otherwise always elect noise first,
         # fitted to the wrong model, and judge the structural effects next to the wrong noise).
@@ -732,7 +763,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         if baseline is not None and baseline["score"] < gap_now:
             # The accepted effects re-fitted alone: the gap a candidate must reduce further.
             fitted = _as_tuple(baseline["accepted"])
-            current, gap_now = source_rows(search.with_(effects=_by_level(search.effects + fitted))), baseline["score"]
+            gap_now = baseline["score"]
             for entry, (_, params) in zip(accepted, fitted):
                 entry["params"] = _plain(dict(params))
         fits.sort(key=lambda f: f["score"])
@@ -750,14 +781,14 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         if not math.isfinite(top["score"]):
             break
         alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
+
+        def rows_of(f, extra=()):
+            effects = _as_tuple(f["accepted"]) if f.get("accepted") else fitted
+            return judged(effects + (get_registry().get("effect", f["name"]).spec(f["params"]),) + extra)
+
         if top.get("nuisance") and alone_fit is not None:
             # A candidate fitted with noise beside it must beat the noise alone by its own share
             # (paired): extra parameters next to the right noise always fit a little better.
-            def rows_of(f, extra=()):
-                effects = _as_tuple(f["accepted"]) if f.get("accepted") else fitted
-                own = get_registry().get("effect", f["name"]).spec(f["params"])
-                return source_rows(search.with_(effects=_by_level(search.effects + effects + (own,) + extra)))
-
             joint = rows_of(top, (get_registry().get("effect", NUISANCE).spec(top["nuisance"]["params"]),))
             beyond = _paired_removal(scorer, rows_of(alone_fit), joint, settings.seed + r + 700)
             beyond_share = beyond["removed"] / beyond["gap_now"] if beyond["gap_now"] > 0 else 0.0
@@ -767,19 +798,22 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         spec = get_registry().get("effect", top["name"]).spec(top["params"])
         refit = _as_tuple(top["accepted"]) if top.get("accepted") else fitted
         noise = (get_registry().get("effect", NUISANCE).spec(top["nuisance"]["params"]),) if top.get("nuisance") else ()
-        candidate_rows = source_rows(search.with_(effects=_by_level(search.effects + refit + (spec,) + noise)))
-        paired = _paired_removal(scorer, current, candidate_rows, settings.seed + r)
+        # Judged on fresh rows: a fit's gain on the rows it was fitted to includes what it learned
+        # of their noise, and a small remaining gap is of that order (extras were accepted so).
+        current_judged = judged(fitted)
+        candidate_rows = judged(refit + (spec,) + noise)
+        paired = _paired_removal(scorer, current_judged, candidate_rows, settings.seed + r)
         noise_paired = None
         if noise:
             # The candidate was fitted with noise beside it: the noise is named too only when it
             # removes its own share of what the candidate alone leaves (paired, as above).
-            alone = source_rows(search.with_(effects=_by_level(search.effects + refit + (spec,))))
+            alone = judged(refit + (spec,))
             noise_paired = _paired_removal(scorer, alone, candidate_rows, settings.seed + r + 500)
             noise_share = noise_paired["removed"] / noise_paired["gap_now"] if noise_paired["gap_now"] > 0 else 0.0
             if not (noise_share >= MIN_SHARE and noise_paired["removed_low"] > 0.0):
                 noise, noise_paired = (), None
-                paired = _paired_removal(scorer, current, alone, settings.seed + r)
-        share = paired["removed"] / gap_now if gap_now > 0 else 0.0
+                paired = _paired_removal(scorer, current_judged, alone, settings.seed + r)
+        share = paired["removed"] / paired["gap_now"] if paired["gap_now"] > 0 else 0.0
         ok = share >= MIN_SHARE and paired["removed_low"] > 0.0
         round_info.update(best=top["name"], share_of_remaining=share, removed_low=paired["removed_low"],
                           accepted=ok)
@@ -794,34 +828,35 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         if noise_paired:
             # Shared out as a Shapley value over the two orders: the candidate first (what it
             # removes alone) and the noise first (what it removes beyond the round's noise-alone fit).
-            noise_alone = next((f["score"] for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
+            noise_alone = scorer.score(rows_of(alone_fit)) if alone_fit is not None else None
             first = paired["gap_now"] - noise_paired["gap_now"]
             second = (noise_alone - paired["gap_new"]) if noise_alone is not None else first
             own = min(max(0.0, 0.5 * (first + second)), paired["removed"])
             noise_paired = {**noise_paired, "removed": paired["removed"] - own}
-        accepted.append({"name": top["name"], "share_removed": own / gap0 if gap0 > 0 else 0.0,
+        accepted.append({"name": top["name"], "share_removed": own / judged0 if judged0 > 0 else 0.0,
                          "share_of_remaining": share, "params": top["params"], "intervals": top["intervals"],
                          "round": r, "removed_interval": paired["removed_interval"]})
         if noise_paired:
             # Its share: what it removes beyond the candidate alone (the candidate keeps the rest).
-            accepted.append({"name": NUISANCE, "share_removed": noise_paired["removed"] / gap0 if gap0 > 0 else 0.0,
-                             "share_of_remaining": noise_paired["removed"] / gap_now if gap_now > 0 else 0.0,
+            accepted.append({"name": NUISANCE, "share_removed": noise_paired["removed"] / judged0 if judged0 > 0 else 0.0,
+                             "share_of_remaining": noise_paired["removed"] / paired["gap_now"]
+                             if paired["gap_now"] > 0 else 0.0,
                              "params": top["nuisance"]["params"], "intervals": {}, "round": r,
                              "removed_interval": noise_paired["removed_interval"], "nuisance_of": top["name"]})
             round_info["nuisance"] = top["nuisance"]
-        check = _report(source_rows(fresh.with_(effects=_by_level(fresh.effects + fitted))), target, pair,
-                        settings, bootstrap=0)
+        check = _report(judged(fitted), target, pair, settings, bootstrap=0)
         round_info["p_value_after"] = check["p_value"]
         significant = bool(check["significant"])
 
-    corrected = _by_level(base.effects + fitted)
     on_event(Event("stage", stage="gap after", total=1, message="gap: the corrected source against the target"))
-    after = _report(source_rows(fresh.with_(effects=corrected)), target, pair, settings) if fitted else before
+    after = _report(judged(fitted), target, pair, settings) if fitted else before
     on_event(Event("advance", stage="gap after", done=1, total=1))
+    gap_before, gap_after = float(before["total"]["gap"]), float(after["total"]["gap"])
+    shrink = 1.0 - gap_after / gap_before if gap_before > 0 else 0.0
+    closed = not after["significant"] or shrink >= EXPLAINED_SHRINK
     result.update(
-        after=after, gap_after=float(after["total"]["gap"]), significant_after=bool(after["significant"]),
-        effects=accepted,
-        unexplained=bool(before["significant"] and (not accepted or after["significant"])),
+        after=after, gap_after=gap_after, significant_after=bool(after["significant"]), shrink=shrink,
+        effects=accepted, unexplained=bool(before["significant"] and (not accepted or not closed)),
         corrected_effects=[[name, [[k, v] for k, v in params]] for name, params in fitted],
         seconds=time.perf_counter() - started,
     )

@@ -51,6 +51,31 @@ class InterferenceTone(Effect):
         amplitude = np.sqrt(2.0) * params["ratio"] * ctx.reference_rms
         return record + amplitude * np.sin(2 * np.pi * f * t)
 
+    def guesses(self, target_X, speed_hz):
+        """The strongest line of the target that is not shaft-synchronous: the TSA (mean
+        revolution) removed, the mean power spectrum of the residual revolutions, zero-padded
+        8 times (a Hann window: its peak lies within a few percent of a bin of the line); the
+        ratio from the line's power against the rest of the signal (which holds the target's
+        noise too: under heavy noise the ratio comes out low, and the search refines it)."""
+        X = np.asarray(target_X, dtype=float)
+        residual = X - X.mean(axis=0)
+        n, pad = X.shape[1], 8
+        window = np.hanning(n)
+        power = np.mean(np.abs(np.fft.rfft(residual * window, n=pad * n, axis=1)) ** 2, axis=0)
+        f = np.fft.rfftfreq(pad * n, d=1.0 / (n * speed_hz))
+        keep = (f >= self.params[0].low) & (f <= min(self.params[0].high, 0.45 * n * speed_hz))
+        if not keep.any():
+            return []
+        peak = float(f[keep][np.argmax(power[keep])])
+        # The line's own power: least squares of each residual revolution on sin/cos at the peak.
+        t = np.arange(n) / (n * speed_hz)
+        basis = np.stack([np.sin(2 * np.pi * peak * t), np.cos(2 * np.pi * peak * t)], axis=1)
+        coef, *_ = np.linalg.lstsq(basis, residual.T, rcond=None)
+        tone = float(np.mean(np.sum((basis @ coef) ** 2, axis=0)) / n)
+        rest = max(float(np.mean(X**2)) - tone, 1e-300)
+        ratio = min(float(np.sqrt(tone / rest)), self.params[1].high)
+        return [{"frequency": peak, "ratio": ratio}]
+
 
 @hookimpl
 def gearlab_effects():
