@@ -782,7 +782,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
             break
         alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
 
-        def rows_of(f, extra=()):
+        def rows_of(f, extra=(), fitted=fitted):  # the round's accepted effects, as they stand now
             effects = _as_tuple(f["accepted"]) if f.get("accepted") else fitted
             return judged(effects + (get_registry().get("effect", f["name"]).spec(f["params"]),) + extra)
 
