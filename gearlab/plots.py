@@ -206,6 +206,9 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
             with np.load(f, allow_pickle=False) as d:
                 zs, zt = d["source"], d["target"]
             z = np.concatenate([zs, zt])
+            if not np.all(np.isfinite(z)):  # a diverged unit: say so rather than fail the whole report
+                ax.set_title(f"{f.stem.replace('_', ' ')}\n(non-finite features: training diverged)", fontsize=7)
+                continue
             z = z - z.mean(0)
             _, _, vt = np.linalg.svd(z, full_matrices=False)
             p = z @ vt[:2].T

@@ -515,3 +515,23 @@ def test_resume_keeps_the_runs_quick_setting(finished, cli):
     assert RunDir.open(finished).quick is False
     code, _, err = cli("run", "--resume", finished, "--quick")
     assert code == 2 and "was started without --quick" in err
+
+
+def test_no_training_step_moves_the_weights_further_than_the_clipped_gradient_allows():
+    """A DANN unit of the full Experiment A run went from a loss of 1 to 5e20 and NaN (its
+    network then called everything healthy). Every step is now bounded: the weights move by at
+    most lr x MAX_GRAD_NORM. Plain SGD at lr 30 moved them by 3e10 in one epoch of 4 steps."""
+    from gearlab.learn.networks import build_network
+    from gearlab.learn.training import MAX_GRAD_NORM, fit_supervised
+
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((32, 512)).astype(np.float32)
+    y = np.arange(32) % 2
+    torch.manual_seed(0)
+    net = build_network("fast", 2, length=512)
+    start = [p.detach().clone() for p in net.parameters()]
+    history = fit_supervised(net, X, y, rng=rng, device=torch.device("cpu"), epochs=1, batch=8,
+                             optimizer="sgd", lr=30.0, patience=None)
+    moved = float(torch.sqrt(sum(((p.detach() - q) ** 2).sum() for p, q in zip(net.parameters(), start))))
+    assert moved <= 4 * 30.0 * MAX_GRAD_NORM * (1 + 1e-5)
+    assert np.all(np.isfinite(history.train_loss))
