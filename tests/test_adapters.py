@@ -23,8 +23,9 @@ from gearlab.learn.networks import build_network
 from gearlab.registry import Registry
 
 # The entry points are registered in pyproject.toml separately; import the modules directly.
-PLUGINS = ["source_only", "target_only", "mmd", "dann", "coral", "finetune"]
-CALIBRATED = {"source_only": False, "target_only": False, "mmd": True, "dann": True, "coral": True, "finetune": True}
+PLUGINS = ["source_only", "target_only", "mmd", "dann", "coral", "finetune", "matched_filter"]
+CALIBRATED = {"source_only": False, "target_only": False, "mmd": True, "dann": True, "coral": True, "finetune": True,
+              "matched_filter": False}
 DA = ["mmd", "dann", "coral"]
 
 
@@ -275,6 +276,10 @@ def test_supervision_and_training_regimes():
         assert set(adapter(name).supervision) == set(SUPERVISIONS) and adapter(name).train_on == "joint"
         assert adapter(name).optimizer == "sgd"
     assert adapter("finetune").supervision == ("supervised",) and adapter("finetune").train_on == "target"
+    assert set(adapter("matched_filter").supervision) == set(SUPERVISIONS)
+    assert adapter("matched_filter").train_on == "detector"
+    with pytest.raises(NotImplementedError):
+        adapter("mmd").detector(None, None)
 
 
 @pytest.mark.parametrize("name", ["source_only", "target_only", "finetune"])

@@ -58,7 +58,8 @@ def method(adapter: str, supervised: bool = False, **params):
 
 METHODS = (
     method("source_only"), method("target_only", True), method("mmd"), method("mmd", True), method("dann"),
-    method("coral", True), method("finetune", True, variant="classifier"),
+    method("coral", True), method("finetune", True, variant="classifier"), method("matched_filter"),
+    method("matched_filter", True),
 )
 
 
@@ -139,6 +140,8 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, monk
     monkeypatch.setattr(P, "train_method", keep_model)
     for name in ("fit_supervised", "fit_adaptation", "embed"):
         monkeypatch.setattr(P, name, spy(getattr(P, name)))
+    detector = P.get_registry().get("adapter", "matched_filter")
+    monkeypatch.setattr(detector, "detector", spy(detector.detector))
     # target rows carry their index in the first sample, to be recognised wherever they go
     marked = replace(TARGET, X=TARGET.X.copy())
     marked.X[:, 0] = 1000 + np.arange(len(marked))

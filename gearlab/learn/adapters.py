@@ -15,7 +15,8 @@ group (hook ``gearlab_adapters``). The trainer asks it for
 
 ``calibrated`` adapters are primed on the full source set and then adapted (thesis 5.4.2);
 ``train_on`` says which data the (post-priming) training step sees: "source", "target" or
-"joint" (40 source + 40 target samples a batch); ``optimizer`` is "adam" (TensorFlow
+"joint" (40 source + 40 target samples a batch); "detector" methods train no network and
+build their model from the training arrays in ``detector(source, target, params)``; ``optimizer`` is "adam" (TensorFlow
 defaults) for the uncalibrated baselines and "sgd" (lr 0.003) for the calibrated methods.
 
 Every method taking ``params`` accepts ``None`` (the schema defaults) or a mapping as
@@ -39,7 +40,7 @@ if TYPE_CHECKING:  # for the annotations only; see the module docstring
     from torch import nn
 
 SUPERVISIONS = ("unsupervised", "supervised")
-TRAIN_ON = ("source", "target", "joint")
+TRAIN_ON = ("source", "target", "joint", "detector")
 
 # Table 5.3: λ starts at 0 and grows by 0.05 every 25 epochs up to 1.
 LAMBDA_STEP = 0.05
@@ -138,6 +139,12 @@ class Adapter:
     def trainable(self, network: nn.Module, params: Mapping | None = None) -> list[nn.Parameter]:
         """The network parameters this method's training step updates; all of them by default."""
         return list(network.parameters())
+
+    def detector(self, source, target, params: Mapping | None = None) -> nn.Module:
+        """The model of a ``train_on = "detector"`` method, from the training arrays *source*
+        = (X, y) and *target* = (X, y, or None when unsupervised); its logits are scored as a
+        network's."""
+        raise NotImplementedError(f"adapter '{self.name}' trains a network (train_on = {self.train_on!r})")
 
     # ---- description
 

@@ -256,6 +256,8 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
                        patience=None)
         return _cpu_state(net)
 
+    if adapter.train_on == "detector":  # no network: a model built from the training arrays
+        return adapter.detector(source, (Xt, yt if method.supervised else None), params).to(device), None, {}
     if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
         def trained() -> dict:
             net = _net(protocol, seed, device)

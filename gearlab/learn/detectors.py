@@ -1,0 +1,97 @@
+"""A fault detector built from the simulator's fault shapes (beyond the thesis).
+
+The chapter-5 target is a single noisy revolution ``x``; a fault adds a short response
+``a·t`` of known shape ``t`` (the simulator's) and unknown size ``a`` to the domain's
+healthy revolution ``h``. For white noise of unknown level, the generalised likelihood-ratio
+test of "fault of shape ``t``" against "healthy" compares the cosine between the residual
+``r = x - h`` and ``t`` with a threshold (Kay, *Fundamentals of Statistical Signal
+Processing II*, 9.4 and 7.6); with many possible shapes (fault type, intensity, tooth) the
+statistic is the largest cosine over them:
+
+    score(x) = max_j |<r, t_j>| / ||r||,      ||t_j|| = 1
+
+* ``h`` is the target's healthy reference: the sample median of its healthy history
+  (thesis 5.4.2: the target's training data is that history);
+* the templates ``t_j`` are the source's fault revolutions minus the source's healthy
+  reference, normalised; the sign is left free, since a change of path (pinion to casing,
+  six to eight DOF) may turn a response over;
+* the threshold lets a share ``false_alarm`` of healthy revolutions through: the
+  ``1 - false_alarm`` quantile of a Gumbel law (the law of a maximum of many noisy
+  correlations) fitted to the healthy history's own scores by their quartiles. Quartiles,
+  not the upper tail, because an unlabelled history may hold a few fault revolutions (k of
+  the 120), whose scores an empirical upper quantile would follow.
+
+The detector is an :class:`torch.nn.Module` whose logits are ``[0, score - threshold]``,
+so the protocol scores it like any trained network. It needs revolutions on the same
+angular grid in both domains (what the datasets are: one revolution, starting at the
+same pinion angle); see docs/learning.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from torch import nn
+
+from gearlab.errors import GearlabInputError
+
+
+class TemplateDetector(nn.Module):
+    def __init__(self, reference: np.ndarray, templates: np.ndarray, threshold: float):
+        super().__init__()
+        self.register_buffer("reference", torch.as_tensor(reference, dtype=torch.float32))
+        self.register_buffer("templates", torch.as_tensor(templates, dtype=torch.float32))
+        self.register_buffer("threshold", torch.tensor(float(threshold)))
+        self.latent_dim = len(templates)
+
+    def embed(self, x: torch.Tensor) -> torch.Tensor:
+        """The cosines between each revolution's residual and every template, ``(B, n_templates)``."""
+        r = x.reshape(len(x), -1) - self.reference
+        return (r @ self.templates.T) / r.norm(dim=1, keepdim=True).clamp_min(1e-12)
+
+    def score(self, x: torch.Tensor) -> torch.Tensor:
+        return self.embed(x).abs().amax(dim=1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        s = self.score(x) - self.threshold
+        return torch.stack([torch.zeros_like(s), s], dim=1)
+
+
+def gumbel_quantile(scores: np.ndarray, p: float) -> float:
+    """The *p* quantile of the Gumbel law (of maxima) whose quartiles are those of *scores*:
+    F(s) = exp(-exp(-(s - mu) / beta)), so the q quantile is mu - beta ln(-ln q)."""
+    q1, q3 = np.quantile(scores, [0.25, 0.75])
+    beta = (q3 - q1) / (np.log(np.log(4.0)) - np.log(np.log(4.0 / 3.0)))
+    mu = q1 + beta * np.log(np.log(4.0))
+    return float(mu - beta * np.log(-np.log(p)))
+
+
+def _unit_rows(R: np.ndarray) -> np.ndarray:
+    return R / np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-12)
+
+
+def template_detector(Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None,
+                      false_alarm: float) -> TemplateDetector:
+    """The detector of the source's fault shapes, referenced and thresholded on the target's
+    healthy history. *yt* None: every target training revolution is taken as healthy (the
+    unsupervised case); with labels, the healthy ones are the history and the target's own
+    fault revolutions are templates too."""
+    Xs, Xt = np.asarray(Xs, dtype=np.float64), np.asarray(Xt, dtype=np.float64)
+    ys = np.asarray(ys)
+    if not (ys == 0).any() or not (ys == 1).any():
+        raise GearlabInputError("matched_filter: the source training set needs healthy and fault revolutions")
+    healthy_t = np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0
+    if healthy_t.sum() < 2:
+        raise GearlabInputError("matched_filter: the target training set needs at least 2 healthy revolutions")
+    if Xs.shape[1] != Xt.shape[1]:
+        raise GearlabInputError(f"matched_filter: source revolutions have {Xs.shape[1]} samples, target "
+                                f"revolutions {Xt.shape[1]}")
+    reference = np.median(Xt[healthy_t], axis=0)
+    shapes = [Xs[ys == 1] - np.median(Xs[ys == 0], axis=0)]
+    if yt is not None:
+        shapes.append(Xt[~healthy_t] - reference)
+    detector = TemplateDetector(reference, _unit_rows(np.concatenate(shapes)), threshold=0.0)
+    with torch.no_grad():
+        history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
+    detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
+    return detector
