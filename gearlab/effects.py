@@ -344,6 +344,9 @@ class Effect:
     doc: ClassVar[str] = ""
     level: ClassVar[str]
     breaks_symmetry: ClassVar[bool] = False
+    # True for a zero-mean random addition (measurement noise): it leaves the simulation's
+    # expected response as it is, so the fault shapes a detector matches are taken without it
+    noise: ClassVar[bool] = False
     params: ClassVar[tuple[Param, ...]] = ()
     options: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     log_scale: ClassVar[frozenset[str]] = frozenset()

@@ -38,11 +38,13 @@ permutations = 20
 seed = 0
 
 [accuracy]
-methods = ["mmd"]
+methods = ["mmd", "matched_filter"]
 repetitions = 1
 """ + schedule() + "\n" + EXECUTION
 
-ACCURACY_UNITS = ["rep0/uncorrected/source_only-unsup", "rep0/corrected/source_only-unsup", "rep0/uncorrected/mmd-unsup"]
+ACCURACY_UNITS = ["rep0/uncorrected/source_only-unsup", "rep0/corrected/source_only-unsup",
+                  "rep0/uncorrected/matched_filter-unsup", "rep0/corrected/matched_filter-unsup",
+                  "rep0/uncorrected/mmd-unsup"]
 
 
 # --- a stand-in for gearlab.gap.diagnose (the shared contract) ------------------------------------
@@ -174,7 +176,9 @@ def test_run_summary_fields(finished):
     assert set(summary["views"]) >= {"shaft", "mesh", "sidebands", "noise_floor", "waveform"}
     for v in summary["views"].values():
         assert isinstance(v["gap_before"], float) and isinstance(v["gap_after"], float)
-    assert set(summary["accuracy"]) == {"source_only (uncorrected)", "source_only (corrected)", "mmd (unsupervised)"}
+    assert summary["accuracy_order"] == ["source_only (uncorrected)", "source_only (corrected)",
+                                         "matched_filter (uncorrected)", "matched_filter (corrected)",
+                                         "mmd (unsupervised)"]
     for cell in summary["accuracy"].values():
         assert 0 <= cell["mean"] <= 100 and cell["n"] == 1
     assert summary["source"]["model"] == "six_dof" and summary["target"]["model"] == "eight_dof"
@@ -182,6 +186,10 @@ def test_run_summary_fields(finished):
     # the corrected source really is another dataset: the fitted effect was added to it
     corrected = records(run)["rep0/corrected/source_only-unsup"]
     assert corrected["variant"] == "corrected"
+    # a detector matches the expected response: the fitted noise is left out of its fault shapes,
+    # which here leaves the uncorrected source's
+    detectors = [records(run)[f"rep0/{v}/matched_filter-unsup"] for v in ("uncorrected", "corrected")]
+    assert detectors[0]["accuracy"] == detectors[1]["accuracy"] and detectors[0]["confusion"] == detectors[1]["confusion"]
     # outputs: three tables, the figures, the report with every figure inlined
     table = (run / "table.md").read_text()
     assert table.count("| view |") == 1 and "| effect |" in table and "source_only (corrected)" in table
@@ -260,8 +268,8 @@ def test_partial_run_tables_and_charts(finished, tiny):
     ("budget = 2", "budget = 0", "[diagnosis] key 'budget'"),
     ("healthy = 10\nbootstrap", "healthy = 3\nbootstrap", "[diagnosis] key 'healthy'"),
     ("seed = 0\n", "seed = 0\nalpha = 1.0\n", "[diagnosis] key 'alpha'"),
-    ('methods = ["mmd"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
-    ('methods = ["mmd"]', 'methods = ["finetune"]', "[accuracy] key 'methods'"),
+    ('methods = ["mmd", "matched_filter"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
+    ('methods = ["mmd", "matched_filter"]', 'methods = ["finetune"]', "[accuracy] key 'methods'"),
     ('noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
      'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }\nfs = "2 kHz"', "[target] key 'fs'"),
     ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),

@@ -4,14 +4,15 @@
     [target]      the data to explain: a simulated entry (possibly with effects, which the
                   diagnosis never sees) or a measured file through the importer
     [diagnosis]   candidates, budget, max_effects, healthy, bootstrap, permutations, alpha, seed
-    [accuracy]    enabled, methods (DA baselines), repetitions and training settings (k = 0)
+    [accuracy]    enabled, methods (DA baselines, detectors), repetitions and training settings (k = 0)
     [network]     name (fast | cnn3), dropout
 
 Units of work (one record each in results.jsonl, so --resume redoes none of them):
 ``diagnosis`` (where / which / how far, gearlab.gap.diagnose.diagnose on the target's healthy
 revolutions alone), then per repetition the downstream accuracy: a source-only model trained
 on the uncorrected source, one trained on the corrected source (the fitted effects added),
-and each DA method on the uncorrected source, all scored on the target test set.
+each detector (matched_filter) with the fault shapes of either source, and each DA method on
+the uncorrected source, all scored on the target test set.
 
 Output: summary.json (effects, gap before/after, per-view gaps, two-sample statistics,
 ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures and report.html.
@@ -71,7 +72,8 @@ TABLES = {
     "accuracy": Table({
         "enabled": Key(bool, True, doc="train source-only models on the uncorrected and corrected source "
                                        "(needs target labels)"),
-        "methods": Key(list, ["mmd", "dann"], doc="unsupervised DA baselines shown beside (adapter names)"),
+        "methods": Key(list, ["mmd", "dann"], doc="shown beside (adapter names): unsupervised DA baselines, on "
+                                                    "the uncorrected source; detectors, on both sources"),
         "repetitions": Key(int, 3, in_range(1, 1000)),
         **TRAINING,
     }),
@@ -176,7 +178,8 @@ def candidates(names, where: str) -> tuple[str, ...]:
 
 
 def da_methods(names, where: str) -> tuple[Method, ...]:
-    """The unsupervised DA baselines: with k = 0 the target has no labels to supervise with."""
+    """The unsupervised methods beside source_only (k = 0: the target has no labels to supervise
+    with): DA baselines and detectors."""
     out: list[Method] = []
     for i, name in enumerate(names):
         if not isinstance(name, str):
@@ -185,9 +188,9 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
             raise GearlabInputError(f"{where}: source_only is always trained (on the uncorrected and the "
                                     "corrected source); list DA methods only")
         m = transfer_method({"adapter": name, "supervised": False, "params": {}}, f"{where} entry {i + 1}")
-        if get_registry().get("adapter", m.adapter).train_on != "joint":
-            raise GearlabInputError(f"{where} entry {i + 1}: '{name}' is not a domain-adaptation method "
-                                    "(it trains on the source or target alone)")
+        if get_registry().get("adapter", m.adapter).train_on not in ("joint", "detector"):
+            raise GearlabInputError(f"{where} entry {i + 1}: '{name}' is neither a domain-adaptation method nor "
+                                    "a detector (it trains on the source or target alone)")
         if m in out:
             raise GearlabInputError(f"{where}: '{name}' is listed twice")
         out.append(m)
@@ -210,8 +213,8 @@ def describe(scenario: Scenario) -> str:
             "per evaluation")
     if spec["accuracy"]:
         p: Protocol = spec["protocol"]
-        line += (f"; accuracy: {len(p.methods) + 1} models x {p.repetitions} repetitions "
-                 f"(source_only uncorrected and corrected, {', '.join(m.adapter for m in p.methods[1:]) or 'no DA'})")
+        columns = [label_of(variant, m) for variant, m in accuracy_columns(p)]
+        line += f"; accuracy: {len(columns)} models x {p.repetitions} repetitions ({', '.join(columns)})"
     return line
 
 
@@ -257,18 +260,34 @@ def unit_name(rep: int, variant: str, m: Method) -> str:
     return f"rep{rep}/{variant}/{m.key}"
 
 
+def on_both_sources(m: Method) -> bool:
+    """Methods that learn from the simulation alone (source_only, the detectors' fault shapes)
+    are scored with the uncorrected and the corrected source; DA methods with the uncorrected one."""
+    return get_registry().get("adapter", m.adapter).train_on in ("source", "detector")
+
+
+def accuracy_columns(protocol: Protocol) -> list[tuple[str, Method]]:
+    """(source variant, method) in the accuracy table's column order."""
+    both = [m for m in protocol.methods if on_both_sources(m)]
+    return ([(variant, m) for m in both for variant in (UNCORRECTED, CORRECTED)]
+            + [(UNCORRECTED, m) for m in protocol.methods if m not in both])
+
+
 def accuracy_units(protocol: Protocol) -> list[tuple[int, str, Method]]:
-    """Per repetition: source_only on both sources, each DA method on the uncorrected one."""
-    source_only, *das = protocol.methods
-    out = []
-    for rep in range(protocol.repetitions):
-        out += [(rep, UNCORRECTED, source_only), (rep, CORRECTED, source_only)]
-        out += [(rep, UNCORRECTED, m) for m in das]
-    return out
+    return [(rep, variant, m) for rep in range(protocol.repetitions) for variant, m in accuracy_columns(protocol)]
 
 
 def label_of(variant: str, m: Method) -> str:
-    return f"source_only ({variant})" if m.adapter == "source_only" else m.label
+    return f"{m.adapter} ({variant})" if on_both_sources(m) else m.label
+
+
+def noise_free(spec: DatasetSpec) -> DatasetSpec:
+    """*spec* without its noise effects: the expected response, whose fault shapes a detector
+    matches (a template under 0 dB noise would be mostly noise)."""
+    registry = get_registry()
+    kept = tuple(e for e in spec.effects if not registry.get("effect", e[0]).noise)
+    return spec if kept == spec.effects else spec.with_(effects=kept, name=f"{spec.name}-noise-free",
+                                                        domain=f"{spec.name}-noise-free")
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
@@ -325,19 +344,24 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
     spec = scenario.spec
     protocol: Protocol = spec["protocol"]
     sources = {UNCORRECTED: spec["source"], CORRECTED: corrected}
+
+    def source_of(variant: str, m: Method) -> DatasetSpec:
+        detector = get_registry().get("adapter", m.adapter).train_on == "detector"
+        return noise_free(sources[variant]) if detector else sources[variant]
+
     todo = accuracy_units(protocol)
     pending = [u for u in todo if unit_name(*u) not in done]
     on_event(Event("stage", stage="accuracy", total=len(todo),
                    message=f"downstream accuracy: {len(todo)} training runs"))
     if pending:
-        on_event(Event("stage", stage="sources", total=2, message="source datasets (uncorrected, corrected)"))
-        built = {}
-        for i, (variant, s) in enumerate(sources.items()):
-            built[variant], _ = load_or_build(s, executor, on_event)
-            on_event(Event("advance", stage="sources", done=i + 1, total=2))
+        needed = list(dict.fromkeys(source_of(variant, m) for _, variant, m in pending))
+        on_event(Event("stage", stage="sources", total=len(needed),
+                       message=f"source datasets ({', '.join(s.name for s in needed)})"))
         target, _ = load_or_build(spec["target"], executor, on_event)
-        for variant in sources:
-            check_data(protocol, Counts.of(built[variant]), Counts.of(target), f"{scenario.path}: [accuracy]")
+        for i, s in enumerate(needed):
+            built, _ = load_or_build(s, executor, on_event)
+            check_data(protocol, Counts.of(built), Counts.of(target), f"{scenario.path}: [accuracy]")
+            on_event(Event("advance", stage="sources", done=i + 1, total=len(needed)))
     # Each source has its own states (its source-only model, its primed network): the unit that
     # needs one first makes it, the others wait for the second phase and load it.
     makers: dict[tuple, tuple] = {}
@@ -354,7 +378,7 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
         if not phase:
             continue
         target_data = (spec["target"], cache.entry_path(spec["target"]))
-        tasks = [(protocol, (sources[variant], cache.entry_path(sources[variant])), target_data, rep, 0, m,
+        tasks = [(protocol, (source_of(variant, m), cache.entry_path(source_of(variant, m))), target_data, rep, 0, m,
                   run.path / "states" / variant) for rep, variant, m in phase]
 
         def record_done(i: int, record: dict, phase=phase) -> None:
@@ -403,10 +427,9 @@ def view_rows(result: dict) -> dict[str, dict]:
 
 def accuracy_table(records: list[dict], protocol: Protocol) -> dict[str, dict]:
     """{label: {mean, std, n}}: target test accuracy (%) over repetitions, in the column order
-    source_only (uncorrected), source_only (corrected), then the DA methods."""
-    source_only, *das = protocol.methods
+    of accuracy_columns."""
     out = {}
-    for variant, m in [(UNCORRECTED, source_only), (CORRECTED, source_only), *((UNCORRECTED, d) for d in das)]:
+    for variant, m in accuracy_columns(protocol):
         label = label_of(variant, m)
         acc = [r["accuracy"] for r in records if r.get("variant") == variant and r.get("method") == label]
         if acc:
