@@ -121,3 +121,11 @@ def test_experiment_b_at_k_0_without_target_labels():
     y = target.fault[s.target_test]
     assert (p == y).mean() > 0.8
     assert (p[y == 0] == 0).mean() > 0.95  # healthy revolutions are not called faulty
+
+
+@pytest.mark.parametrize("value", [0.0, 0.7, -0.1])
+def test_a_false_alarm_rate_that_means_nothing_is_refused(value):
+    from gearlab.registry import get_registry
+
+    with pytest.raises(GearlabInputError, match=r"false_alarm.*outside"):
+        get_registry().get("adapter", "matched_filter").resolve({"false_alarm": value})

@@ -22,7 +22,7 @@ class MatchedFilter(Adapter):
     doc = ("Physics-template detector: largest cosine between a revolution's residual from the target's healthy "
            "reference and the simulated fault responses, thresholded on the healthy history (no network).")
     params = (
-        Param("false_alarm", "", 0.01, 0.0, 0.5, "share of the target's healthy history allowed above the threshold"),
+        Param("false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"),
     )
     calibrated = False
     supervision = ("unsupervised", "supervised")
