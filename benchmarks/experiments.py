@@ -1,12 +1,13 @@
 """Full reproductions end to end: wall time and peak memory, side by side in one run.
 
-    python benchmarks/experiments.py [--scenario expA expB] [--quick] [--ch4-memory]
+    python benchmarks/experiments.py [--scenario expA expB] [--quick] [--ch4-memory] [--keep DIR]
 
 1. Each transfer scenario (default: scenarios/expA.toml and scenarios/expB.toml) is run as
    `gearlab run` in a child process with an empty dataset cache (datasets cold, every method,
    every repetition), timed, and its process tree's resident memory sampled every 0.2 s.
    Issue 4's target for Experiment B: <= 45 min on 2 cores. The tables are checked to be
-   complete (every method x k cell holds 5 repetitions).
+   complete (every method x k cell holds 5 repetitions) and printed; --keep DIR keeps the
+   run directories (report, results) under DIR.
 2. With --ch4-memory: the six chapter-4 datasets (Table 4.1 sizes: 12 800 revolutions each,
    noisy and TSA over J = 60, three noise types) are built cold the same way; their peak
    memory is compared with the data they hold and with CEILING.
@@ -90,21 +91,25 @@ def complete(run_dir: Path) -> str:
     return f"{len(cells)} cells, complete" if not short else f"{len(short)} of {len(cells)} cells incomplete"
 
 
-def transfer(names: list[str], quick: bool, tmp: Path) -> None:
-    rows = []
+def transfer(names: list[str], quick: bool, tmp: Path, keep: Path | None) -> None:
+    rows, tables = [], []
     for name in names:
         env = {**os.environ, "GEARLAB_CACHE": str(tmp / f"cache-{name}")}  # datasets cold
-        args = ["run", str(ROOT / "scenarios" / f"{name}.toml"), "--out", str(tmp / "runs")] + (["--quick"] if quick else [])
+        out = keep or tmp / "runs"
+        args = ["run", str(ROOT / "scenarios" / f"{name}.toml"), "--out", str(out)] + (["--quick"] if quick else [])
         seconds, peak, code = measured(gearlab(*args), env)
-        runs = sorted((tmp / "runs" / name).iterdir()) if (tmp / "runs" / name).exists() else []
+        runs = sorted((out / name).iterdir()) if (out / name).exists() else []
         state = complete(runs[-1]) if code == 0 and runs else f"FAILED (exit {code})"
         rows.append((name, seconds, peak, state))
+        if code == 0 and runs:
+            tables.append(f"\n{name} ({runs[-1]}):\n{(runs[-1] / 'table.md').read_text()}")
     first = rows[0][1]
     print(f"\ntransfer scenarios{' (--quick)' if quick else ''}, datasets cold, {os.cpu_count()} cores:")
     print(f"  {'scenario':10s} {'wall':>10s} {'/ first':>8s} {'/ 45 min':>9s} {'peak RSS':>10s}  table")
     for name, seconds, peak, state in rows:
         print(f"  {name:10s} {seconds / 60:8.1f} min {seconds / first:7.2f}x {seconds / 2700:8.2f}x "
               f"{peak / GIB:7.2f} GiB  {state}")
+    print("".join(tables), end="")
 
 
 def ch4_memory(tmp: Path) -> None:
@@ -131,10 +136,11 @@ def main() -> None:
     parser.add_argument("--scenario", nargs="*", default=["expA", "expB"], help="transfer scenarios in scenarios/")
     parser.add_argument("--quick", action="store_true", help="run them with --quick (a smoke run of this script)")
     parser.add_argument("--ch4-memory", action="store_true", help="also build the chapter-4 datasets cold")
+    parser.add_argument("--keep", type=Path, help="keep the transfer runs' directories under this folder")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="gearlab-experiments-") as tmp:
         if args.scenario:
-            transfer(args.scenario, args.quick, Path(tmp))
+            transfer(args.scenario, args.quick, Path(tmp), args.keep)
         if args.ch4_memory:
             ch4_memory(Path(tmp))
 
