@@ -72,7 +72,7 @@ TABLES = {
     "accuracy": Table({
         "enabled": Key(bool, True, doc="train source-only models on the uncorrected and corrected source "
                                        "(needs target labels)"),
-        "methods": Key(list, ["mmd", "dann"], doc="shown beside (adapter names): unsupervised DA baselines, on "
+        "methods": Key(list, ["mmd", "dann", "matched_filter"], doc="shown beside (adapter names): unsupervised DA baselines, on "
                                                     "the uncorrected source; detectors, on both sources"),
         "repetitions": Key(int, 3, in_range(1, 1000)),
         **TRAINING,
