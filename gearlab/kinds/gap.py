@@ -378,8 +378,8 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
         if not phase:
             continue
         target_data = (spec["target"], cache.entry_path(spec["target"]))
-        tasks = [(protocol, (source_of(variant, m), cache.entry_path(source_of(variant, m))), target_data, rep, 0, m,
-                  run.path / "states" / variant) for rep, variant, m in phase]
+        tasks = [(protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.path / "states" / variant)
+                 for rep, variant, m in phase for s in [source_of(variant, m)]]
 
         def record_done(i: int, record: dict, phase=phase) -> None:
             nonlocal finished

@@ -16,8 +16,9 @@ group (hook ``gearlab_adapters``). The trainer asks it for
 ``calibrated`` adapters are primed on the full source set and then adapted (thesis 5.4.2);
 ``train_on`` says which data the (post-priming) training step sees: "source", "target" or
 "joint" (40 source + 40 target samples a batch); "detector" methods train no network and
-build their model from the training arrays in ``detector(source, target, params)``; ``optimizer`` is "adam" (TensorFlow
-defaults) for the uncalibrated baselines and "sgd" (lr 0.003) for the calibrated methods.
+build their model from the training arrays in ``detector(source, target, params)``;
+``optimizer`` is "adam" (TensorFlow defaults) for the uncalibrated baselines and "sgd"
+(lr 0.003) for the calibrated methods.
 
 Every method taking ``params`` accepts ``None`` (the schema defaults) or a mapping as
 returned by :meth:`Adapter.resolve`.

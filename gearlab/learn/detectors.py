@@ -5,8 +5,8 @@ The chapter-5 target is a single noisy revolution ``x``; a fault adds a short re
 healthy revolution ``h``. For white noise of unknown level, the generalised likelihood-ratio
 test of "fault of shape ``t``" against "healthy" compares the cosine between the residual
 ``r = x - h`` and ``t`` with a threshold (Kay, *Fundamentals of Statistical Signal
-Processing*, vol. II, chapters 7 and 9); with many possible shapes (fault type, intensity, tooth) the
-statistic is the largest cosine over them:
+Processing*, vol. II, chapters 7 and 9); with many possible shapes (fault type, intensity,
+tooth) the statistic is the largest cosine over them:
 
     score(x) = max_j |<r, t_j>| / ||r||,      ||t_j|| = 1
 
