@@ -1,0 +1,52 @@
+"""Small synthetic records in the PHM 2009 text format (tests only): a zip of one
+whitespace-separated text with columns accelerometer (V), second accelerometer (V), tacho (V)."""
+
+import io
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+FS = 8192.0  # Hz
+SPEED = 16.0  # Hz: 512 samples per revolution
+PULSES = 10  # tacho marks per revolution
+TEETH = 32
+SENSITIVITY = 0.01 / 9.80665  # 10 mV/g in V per m/s²
+
+
+def signals(revolutions: int = 40, chip: float = 0.0, seed: int = 0, phase: float = 0.0,
+            speed: float = SPEED, noise: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """(vibration in m/s², tacho in V): a mesh tone at order TEETH, noise, and with *chip* > 0
+    a short impulse once per revolution (the chipped tooth); *phase*: the shaft angle (rad)
+    at the first sample, so a record may start anywhere."""
+    rng = np.random.default_rng(seed)
+    n = int(revolutions * FS / speed)
+    theta = phase + 2 * np.pi * speed * np.arange(n) / FS
+    vib = np.sin(TEETH * theta) + 0.3 * np.sin(2 * TEETH * theta + 0.4) + 0.2 * np.sin(theta)
+    if chip:
+        # a decaying ring each time the chipped tooth (at 1 rad) meshes
+        since = np.mod(theta - 1.0, 2 * np.pi) / (2 * np.pi * speed)  # seconds since the tooth met
+        vib += chip * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+    vib += noise * rng.standard_normal(n)
+    tacho = np.where(np.mod(theta * PULSES / (2 * np.pi), 1.0) < 0.3, 5.0, 0.05)
+    return vib, tacho
+
+
+def text(vib: np.ndarray, tacho: np.ndarray, header: str | None = None) -> bytes:
+    volts = vib * SENSITIVITY
+    table = np.column_stack([volts, 0.5 * volts, tacho])
+    buf = io.StringIO()
+    if header:
+        buf.write(header + "\n")
+    np.savetxt(buf, table, fmt="%.7e", delimiter="  ")
+    return buf.getvalue().encode()
+
+
+def write_zip(path: Path, data: bytes, member: str = "record.txt") -> Path:
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        z.writestr(member, data)
+    return path
+
+
+def record(path: Path, **kw) -> Path:
+    return write_zip(Path(path), text(*signals(**kw)))
