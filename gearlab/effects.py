@@ -210,6 +210,7 @@ class Excitation:
     stiffness: MeshStiffnessModel = field(repr=False)  # per-tooth-pair stiffness, for effects that need it
     forces: tuple[Force, ...] = ()
     index: np.ndarray | None = field(default=None, repr=False)  # table index per step while θ is nominal
+    rigid: Mapping[str, float] | None = None  # rigid-body rotation per input radian of a multi-stage model
 
     @property
     def pair(self) -> GearPair:
@@ -259,6 +260,8 @@ class Excitation:
     def rigid_rotation(self) -> np.ndarray:
         """Rotation of each free DOF per radian of the input shaft in the rigid-body mode: 1 on the input
         side, R_b1/R_b2 = Z1/Z2 on the output side (so P r = 0, eq. 2.104)."""
+        if self.rigid is not None:
+            return self.vector(self.rigid)
         ratio = self.pair.pinion.R_b / self.pair.gear.R_b
         return self.vector({"theta11": 1.0, "theta12": 1.0, "theta21": ratio, "theta22": ratio})
 

@@ -222,15 +222,16 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
     spec.check()
     executor = executor or LocalExecutor(1)
     registry = get_registry()
-    _, pair, teeth = spec.check_model()
+    model, pair, teeth = spec.check_model()
     speed, load = operating_point(spec)
     fs = whole_steps_rate(spec.fs, speed, pair.Z1)
 
     # 1. unique simulations: the healthy case and each fault intensity on tooth 1, shifted to every
-    #    tooth; on every tooth itself when an effect breaks the tooth-shift symmetry
+    #    tooth; on every tooth itself when an effect or the model (a second mesh of another pitch)
+    #    breaks the tooth-shift symmetry
     chain = spec.effect_chain() if spec.effects else EffectChain()
     cases = [(None, None)] + [(name, step) for name, steps in spec.faults for step in steps]
-    if not chain.breaks_symmetry:
+    if not chain.breaks_symmetry and not getattr(model, "breaks_symmetry", False):
         units = [(case, 1, teeth) for case in cases]
     else:
         units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth]

@@ -174,8 +174,21 @@ def _presets() -> dict[str, DatasetSpec]:
     for name, healthy in (("A-pinion", 240), ("A-casing", 240), ("B-6", 375), ("B-8", 375)):
         out[f"{name}-ch5"] = out[name].with_(name=f"{name}-ch5", domain=f"{name}-ch5", faults=_ladders(CH5_STEPS),
                                              healthy=healthy)
+    # The PHM 2009 spur rig (docs/real_data.md): the two-stage model, sensor on the casing, at the
+    # records' nominal speeds and their sampling rate (66 666.67 Hz, rounded up to whole steps per
+    # tooth pitch), so a simulated revolution has the bandwidth of a measured one after order tracking.
+    # Healthy, and a chip on a 32T tooth (Tian 2004's ladder on this pair: depth b = 1.07 mm, half
+    # a module; steps 12-20 take its width across the face from 58 % to all of it).
+    for speed in (30, 40):
+        name = f"phm09-{speed}"
+        out[name] = DatasetSpec(name=name, model="two_stage", preset="phm09", channel="casing_x",
+                                speed_hz=float(speed), load_nm=20.0, faults=(("chip", PHM09_CHIP_STEPS),),
+                                healthy=160, fs=PHM09_FS, domain=name)
     return out
 
+
+PHM09_FS = 66666.67  # Hz, the records' sampling rate (data README)
+PHM09_CHIP_STEPS = (12, 14, 16, 18, 20)
 
 DATASET_PRESETS: dict[str, DatasetSpec] = _presets()
 

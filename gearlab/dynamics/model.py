@@ -32,6 +32,7 @@ from ..physics.presets import gear_pair
 DOF_ORDER = ("x1", "y1", "theta11", "theta12", "x2", "y2", "theta21", "theta22", "xf", "yf")
 CHANNEL_DOFS = {
     "pinion_x": "x1", "pinion_y": "y1", "gear_x": "x2", "gear_y": "y2", "casing_x": "xf", "casing_y": "yf",
+    "output_x": "x3", "output_y": "y3",  # the output block of a two-stage model (plugins/models/two_stage.py)
 }
 
 # Every parameter a lumped gearbox model can take; a model declares the ones it uses.
@@ -45,6 +46,8 @@ LUMPED_PARAMS = {
         Param("I12", "kg*m^2", 1e-4, 1e-9, 1e3, "mass moment of inertia of the pinion block"),
         Param("I21", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the gear block"),
         Param("I22", "kg*m^2", 1e-2, 1e-9, 1e3, "mass moment of inertia of the load"),
+        Param("m3", "kg", 1.0, 1e-6, 1e4, "mass of the output block of a two-stage model"),
+        Param("I31", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the output gear block"),
         Param("k_b", "N/m", 1e8, 1e3, 1e12, "bearing stiffness, x and y of both shafts"),
         Param("c_b", "N*s/m", 1e3, 0.0, 1e8, "bearing damping, x and y of both shafts"),
         Param("k_c", "N*m/rad", 1e3, 0.0, 1e9, "coupling stiffness motor-pinion and gear-load"),
@@ -59,6 +62,20 @@ LUMPED_PARAMS = {
 
 
 @dataclass(frozen=True)
+class Mesh:
+    """A further gear mesh of a multi-stage model, beside the first pair's (Assembly.P).
+
+    Its stiffness k(t) comes from the same potential-energy engine on its own gear pair; its
+    pinion turns at *ratio* times the input-shaft speed; its damping follows eq. 2.107 with
+    the masses of the two blocks it joins (*masses*: their parameter names)."""
+
+    pair: GearPair
+    P: np.ndarray  # projection on its line of action over the assembly's DOFs
+    ratio: float
+    masses: tuple[str, str]
+
+
+@dataclass(frozen=True)
 class Assembly:
     """Constant parts of the equations of motion of one model on one gear pair."""
 
@@ -69,6 +86,9 @@ class Assembly:
     P: np.ndarray  # projection on the line of action, eq. 2.104
     input_dof: str  # the fixed-speed, tacho DOF
     load_dof: str  # where the load torque acts
+    meshes: tuple[Mesh, ...] = ()  # further meshes (multi-stage models); () for the thesis's models
+    # rotation of each DOF per radian of the input shaft in the rigid-body mode; None: the one-pair rule
+    rigid: Mapping[str, float] | None = None
 
     def index(self, dof: str) -> int:
         return self.dofs.index(dof)
@@ -186,8 +206,9 @@ def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str
 MESH_DAMPING_MODELS = ("proportional", "constant")
 
 
-def mesh_damping_ratio(values: Mapping[str, float], k_mean: float) -> float:
-    """mu = c_m / k_m with c_m = 2 zeta sqrt(k_m m1 m2 / (m1 + m2)) (eq. 2.107, 2.109)."""
-    m1, m2 = values["m1"], values["m2"]
+def mesh_damping_ratio(values: Mapping[str, float], k_mean: float, masses: tuple[str, str] = ("m1", "m2")) -> float:
+    """mu = c_m / k_m with c_m = 2 zeta sqrt(k_m m1 m2 / (m1 + m2)) (eq. 2.107, 2.109); *masses*
+    names the two blocks the mesh joins (a second stage joins m2 and m3)."""
+    m1, m2 = values[masses[0]], values[masses[1]]
     c_m = 2 * values["zeta"] * math.sqrt(k_mean * m1 * m2 / (m1 + m2))
     return c_m / k_mean

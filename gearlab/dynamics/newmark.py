@@ -130,6 +130,80 @@ def _integrate_forced(GMC, gF, GB, g, w, p, pw, k, mu, c, dt, gamma, u, v, a, ou
     return -1
 
 
+@numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
+def _integrate_meshes(GMC, gF, GB, g, W, Pm, PW, k, mu, c, dt, gamma, u, v, a, out_idx, out):
+    """:func:`_integrate_forced` for m meshes (a multi-stage gearbox): K_hat(t) = K_hat_c + sum_i s_i(t) P_i^T P_i,
+    a rank-m update solved each step by the Woodbury identity with an m x m system,
+
+        u = y - W z,   (I + S PW) z = S (Pm y),   S = diag(k_i (1 + a1 mu_i)),
+
+    W = G Pm^T (n, m), PW = Pm G Pm^T (m, m). With m = 1 this is the Sherman-Morrison step of
+    :func:`_integrate` exactly. k: (steps, m) mesh stiffnesses; mu: (m,) proportional damping ratios.
+    """
+    n = u.shape[0]
+    m = Pm.shape[0]
+    f = GB.shape[1]
+    mz = np.empty(2 * n)
+    y = np.empty(n)
+    d = np.empty(m)
+    A = np.empty((m, m))
+    z = np.empty(m)
+    for j in range(out_idx.shape[0]):
+        out[0, j] = a[out_idx[j]]
+    for step in range(k.shape[0]):
+        for i in range(n):
+            mz[i] = c[0] * u[i] + c[2] * v[i] + c[3] * a[i]
+            mz[n + i] = c[1] * u[i] + c[4] * v[i] + c[5] * a[i]
+        for q in range(m):  # mesh damping mu_i k_i(t) P_i^T P_i acting on the Newmark velocity terms
+            pz = 0.0
+            for i in range(n):
+                pz += Pm[q, i] * mz[n + i]
+            d[q] = mu[q] * k[step, q] * pz
+        for i in range(n):
+            acc = gF[i]
+            for q in range(m):
+                acc += d[q] * W[i, q]
+            for j in range(f):
+                acc += GB[i, j] * g[step, j]
+            for j in range(2 * n):
+                acc += GMC[i, j] * mz[j]
+            y[i] = acc
+        for q in range(m):  # the m x m system (I + S PW) z = S Pm y
+            sq = k[step, q] * (1.0 + c[1] * mu[q])
+            py = 0.0
+            for i in range(n):
+                py += Pm[q, i] * y[i]
+            z[q] = sq * py
+            for r in range(m):
+                A[q, r] = sq * PW[q, r] + (1.0 if q == r else 0.0)
+        for col in range(m):  # Gaussian elimination; I + S PW is well conditioned (S >= 0, PW SPD)
+            for row in range(col + 1, m):
+                factor = A[row, col] / A[col, col]
+                for r in range(col, m):
+                    A[row, r] -= factor * A[col, r]
+                z[row] -= factor * z[col]
+        for q in range(m - 1, -1, -1):
+            acc = z[q]
+            for r in range(q + 1, m):
+                acc -= A[q, r] * z[r]
+            z[q] = acc / A[q, q]
+        for i in range(n):
+            u_new = y[i]
+            for q in range(m):
+                u_new -= W[i, q] * z[q]
+            a_new = c[0] * (u_new - u[i]) - c[2] * v[i] - c[3] * a[i]
+            v[i] += dt * ((1.0 - gamma) * a[i] + gamma * a_new)
+            u[i] = u_new
+            a[i] = a_new
+        for j in range(out_idx.shape[0]):
+            out[step + 1, j] = a[out_idx[j]]
+        if step % 2048 == 0:
+            for i in range(n):
+                if not (abs(u[i]) < 1e3):
+                    return step
+    return -1
+
+
 @dataclass
 class Simulation:
     model: str
@@ -174,6 +248,13 @@ class Simulator:
         self.M, self.Kc, self.Cc, self.P = asm.M[sub], asm.Kc[sub], asm.Cc[sub], asm.P[free]
         self.load_index = self.dofs.index(asm.load_dof)
         self.load_dof = asm.load_dof
+        self.rigid = asm.rigid
+        # Further meshes of a multi-stage model (Assembly.meshes): each its own TVMS, mean and damping ratio.
+        self.meshes = tuple(asm.meshes)
+        self.mesh_models = tuple(MeshStiffnessModel(m.pair) for m in self.meshes)
+        self.mesh_means = tuple(sm.mesh_stiffness(points=TVMS_POINTS).mean for sm in self.mesh_models)
+        self.mesh_mu = [mesh_damping_ratio(self.values, km, m.masses) for km, m in zip(self.mesh_means, self.meshes)]
+        self.mesh_P = tuple(m.P[free] for m in self.meshes)
         # Mesh damping c(t) = c0 + mu k(t). The thesis (eq. 2.108, Tian 2004): c0 = 0, mu = c_m / k_m.
         # The constant model most authors use (thesis 2.3): c = c_m (eq. 2.107), a constant rank-one
         # term that joins Cc, so the time loop is the same.
@@ -181,6 +262,9 @@ class Simulator:
         if mesh_damping == "constant":
             self.c0, self.mu = self.mu * self.k_mean, 0.0
             self.Cc = self.Cc + self.c0 * np.outer(self.P, self.P)
+            for i, (P, km) in enumerate(zip(self.mesh_P, self.mesh_means)):
+                self.Cc = self.Cc + self.mesh_mu[i] * km * np.outer(P, P)
+                self.mesh_mu[i] = 0.0
         self.gamma, self.beta = beta1, beta2 / 2
         dt = 1.0 / self.fs
         b, g = self.beta, self.gamma
@@ -189,6 +273,10 @@ class Simulator:
         self.G, self.GMC = G, np.ascontiguousarray(np.hstack([G @ self.M, G @ self.Cc]))
         self.w = G @ self.P
         self.pw = float(self.P @ self.w)
+        if self.meshes:  # the rank-m update of _integrate_meshes: all meshes, the first pair's first
+            self.Pm = np.ascontiguousarray(np.vstack([self.P, *self.mesh_P]))
+            self.Wm = np.ascontiguousarray(G @ self.Pm.T)
+            self.PW = np.ascontiguousarray(self.Pm @ self.Wm)
         self._check_step(where)
         self._warm_up()
 
@@ -197,15 +285,22 @@ class Simulator:
         n = len(self.dofs)
         _integrate(self.GMC, np.zeros(n), self.w, self.P, self.pw, np.ones(1), self.mu, self.c, 1.0 / self.fs,
                    self.gamma, np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(1, dtype=np.int64), np.empty((2, 1)))
+        if self.meshes:
+            m = len(self.Pm)
+            _integrate_meshes(self.GMC, np.zeros(n), np.zeros((n, 0)), np.zeros((1, 0)), self.Wm, self.Pm, self.PW,
+                              np.ones((1, m)), np.zeros(m), self.c, 1.0 / self.fs, self.gamma, np.zeros(n),
+                              np.zeros(n), np.zeros(n), np.zeros(1, dtype=np.int64), np.empty((2, 1)))
 
     def natural_frequencies(self, k: float | None = None, fixed_input: bool = True) -> np.ndarray:
         """Undamped natural frequencies (Hz) at mesh stiffness k (default: the mean)."""
         k = self.k_mean if k is None else k
         if fixed_input:
             M, K = self.M, self.Kc + k * np.outer(self.P, self.P)
+            K = K + sum((km * np.outer(P, P) for km, P in zip(self.mesh_means, self.mesh_P)), np.zeros_like(K))
         else:
             asm = self.model.assemble(self.pair, self.values)
             M, K = asm.M, asm.Kc + k * np.outer(asm.P, asm.P)
+            K = K + sum((km * np.outer(m.P, m.P) for km, m in zip(self.mesh_means, asm.meshes)), np.zeros_like(K))
         from scipy.linalg import eigh
 
         lam = eigh(K, M, eigvals_only=True)
@@ -272,12 +367,30 @@ class Simulator:
                 phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
         F = np.zeros(len(self.dofs))
         F[self.load_index] = -load  # T_l opposes the driven gear's rotation (eq. 2.111)
-        u = np.linalg.solve(self.Kc + k_mean * np.outer(self.P, self.P), F)  # static equilibrium at the mean stiffness
+        K_mean = self.Kc + k_mean * np.outer(self.P, self.P)
+        for km, P in zip(self.mesh_means, self.mesh_P):
+            K_mean = K_mean + km * np.outer(P, P)
+        u = np.linalg.solve(K_mean, F)  # static equilibrium at the mean stiffness
         v = np.zeros_like(u)
         a = np.zeros_like(u)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
         out = np.empty((steps + 1, len(out_idx)))
-        if forces:
+        if self.meshes:
+            # further meshes: k_i at their pinions' angles, ratio_i x the input angle
+            shaft = 2 * np.pi * speed * t if angle is None else angle
+            k_all = np.column_stack([k] + [self._mesh_series(i, shaft, per_rev if angle is None else None)
+                                           for i in range(len(self.meshes))])
+            n = len(self.dofs)
+            GB, g = np.zeros((n, 0)), np.zeros((steps, 0))
+            if forces:
+                B = np.stack([vector for vector, _ in forces], axis=1)
+                g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
+                GB = np.ascontiguousarray(self.G @ B)
+            mu = np.array([self.mu, *self.mesh_mu])
+            failed = _integrate_meshes(self.GMC, self.G @ F, GB, g, self.Wm, self.Pm, self.PW,
+                                       np.ascontiguousarray(k_all[1:]), mu, self.c, 1.0 / self.fs, self.gamma,
+                                       u, v, a, out_idx, out)
+        elif forces:
             B = np.stack([vector for vector, _ in forces], axis=1)
             g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
             GB = np.ascontiguousarray(self.G @ B)
@@ -300,6 +413,21 @@ class Simulator:
             state=(u, v, a), angle=angle,
         )
 
+    def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None) -> np.ndarray:
+        """k(t) of further mesh *i* with the input shaft at angle *shaft*: its pinion turns at ratio x the
+        input. Exact table entries when its pinion's revolution is a whole number of steps (nominal
+        speed), else interpolated on a pitch-aligned grid."""
+        mesh, model = self.meshes[i], self.mesh_models[i]
+        if per_rev is not None:
+            steps_per_turn = per_rev / mesh.ratio
+            if abs(steps_per_turn - round(steps_per_turn)) < 1e-9 * steps_per_turn:
+                table = model.mesh_stiffness(points=round(steps_per_turn)).k
+                return table[np.arange(len(shaft)) % round(steps_per_turn)]
+        points = mesh.pair.Z1 * math.ceil(TVMS_POINTS / mesh.pair.Z1)
+        table = model.mesh_stiffness(points=points)
+        return np.interp(np.mod(mesh.ratio * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi),
+                         np.append(table.k, table.k[0]))
+
     def _excite(self, effects, tvms, index, t, speed, load):
         """Apply excitation-level effects to the nominal excitation: (k(t), mean k, forces, moved angle or None)."""
         from ..effects import Excitation
@@ -307,7 +435,7 @@ class Simulator:
         nominal = 2 * np.pi * speed * t
         exc = Excitation(fs=self.fs, speed_hz=speed, load_nm=load, t=t, angle=nominal, tvms=tvms,
                          load=np.full(t.shape, load), dofs=self.dofs, M=self.M, P=self.P, mu=self.mu, c0=self.c0,
-                         load_dof=self.load_dof, stiffness=self.stiffness, index=index)
+                         load_dof=self.load_dof, stiffness=self.stiffness, index=index, rigid=self.rigid)
         for effect, params in effects:
             exc = effect.apply_excitation(exc, params)
         return exc.stiffness_series(), exc.tvms.mean, exc.force_terms(), (None if exc.angle is nominal else exc.angle)
