@@ -12,6 +12,9 @@ scenario, for detectors that know more and more of the answer:
                                  shapes and the best threshold (an upper bound of the method)
 * ``matched_filter``             the shipped adapter: the source's shapes, threshold from the
                                  unlabelled healthy history (what a user gets)
+* ``Bayes``                      the likelihood ratio of the target's own shapes in its own
+                                 noise law (gearlab.learn.bounds), the best threshold: no
+                                 detector of these data can do better
 
     python benchmarks/detection_bounds.py [--scenario expB expA]
 """
@@ -26,6 +29,7 @@ import torch
 from scipy.ndimage import uniform_filter1d
 
 from gearlab.data.cache import load_or_build
+from gearlab.learn.bounds import bayes_scores, best_accuracy, detection_at
 from gearlab.learn.detectors import template_detector
 from gearlab.learn.networks import build_network
 from gearlab.learn.protocol import split
@@ -33,10 +37,6 @@ from gearlab.learn.training import fit_supervised, predict
 from gearlab.scenario import load_scenario
 
 SCENARIOS = Path(__file__).parents[1] / "scenarios"
-
-
-def best_threshold_accuracy(score: np.ndarray, y: np.ndarray) -> float:
-    return max(((score > t) == y).mean() for t in np.unique(score))
 
 
 def bounds(name: str) -> dict[str, float]:
@@ -64,18 +64,22 @@ def bounds(name: str) -> dict[str, float]:
         100 * (predict(net, target.X[scored], torch.device("cpu")) == target.fault[scored]).mean()
 
     energy = uniform_filter1d(residual**2, 128, axis=1, mode="wrap").max(axis=1)
-    out["energy, told threshold"] = 100 * best_threshold_accuracy(energy, y)
+    out["energy, told threshold"] = best_accuracy(energy, y)
 
     X_test = torch.as_tensor(target.X[test])
     told = template_detector(clean.X, clean.fault, history, None, false_alarm=0.01)
     with torch.no_grad():
-        out["target shapes, told threshold"] = 100 * best_threshold_accuracy(told.score(X_test).numpy(), y)
+        out["target shapes, told threshold"] = best_accuracy(told.score(X_test).numpy(), y)
 
     detector = template_detector(source.X[s.source_train], source.fault[s.source_train], history, None,
                                  false_alarm=0.01)
     with torch.no_grad():
         called = detector(X_test).argmax(1).numpy()
     out["matched_filter (source shapes, history threshold)"] = 100 * (called == y).mean()
+    kind = scenario.spec["target"].noise.kind
+    bayes = bayes_scores(target.X[test], history, clean, kind)
+    out[f"Bayes ({kind} likelihood ratio, target shapes), told threshold"] = best_accuracy(bayes, y)
+    out["Bayes: faults found at 1 % false alarms"] = detection_at(bayes, y, 0.01)
     out["healthy share of the test set"] = 100 * (y == 0).mean()
     return out
 

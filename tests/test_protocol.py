@@ -20,6 +20,7 @@ from gearlab.data.spec import Dataset
 from gearlab.errors import GearlabInputError
 from gearlab.kinds import transfer
 from gearlab.learn import protocol as P
+from gearlab.learn.calibration import THESIS, Calibration
 from gearlab.learn.protocol import (
     Counts,
     Protocol,
@@ -115,12 +116,17 @@ def scrambled_test_set(dataset: Dataset, test: np.ndarray, signals: bool) -> Dat
     return replace(dataset, X=X, fault=fault, label=fault.copy())
 
 
+RECIPE = Calibration(residual=True, source_noise="auto", alignment="healthy", threshold="history")
+
+
+@pytest.mark.parametrize("calibration", [THESIS, RECIPE], ids=["thesis", "recipe"])
 @pytest.mark.parametrize("m", METHODS, ids=lambda m: m.key)
-def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, monkeypatch):
+def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, calibration, monkeypatch):
     """With the split fixed, flipping the target test labels and replacing the test signals
     changes nothing of the trained model, its training curves or the epoch kept; only the
-    score. No training function is ever handed a target test row."""
-    p, k = tiny(), 2
+    score. No training function is ever handed a target test row: not the networks' training,
+    nor the calibration's references, noise level and history threshold (gearlab's recipe)."""
+    p, k = tiny(calibration=calibration), 2
     fixed = split(p, SOURCE, TARGET, 0, k)
     monkeypatch.setattr(P, "split", lambda *args: fixed)
     models, handed = [], []
@@ -138,7 +144,7 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, monk
         return wrapped
 
     monkeypatch.setattr(P, "train_method", keep_model)
-    for name in ("fit_supervised", "fit_adaptation", "embed"):
+    for name in ("fit_supervised", "fit_adaptation", "embed", "prepare", "calibrate"):
         monkeypatch.setattr(P, name, spy(getattr(P, name)))
     detector = P.get_registry().get("adapter", "matched_filter")
     monkeypatch.setattr(detector, "detector", spy(detector.detector))
@@ -194,6 +200,25 @@ def test_shared_states_are_made_once_per_repetition_and_change_no_result(tmp_pat
     first_calibrated = records[1]
     assert same_record(run_unit(p, SOURCE, TARGET, 0, 0, p.methods[1], StateStore(tmp_path / "states")),
                        first_calibrated)
+
+
+def test_the_recipe_primes_once_per_repetition_and_k(tmp_path):
+    """The recipe's priming carries the target history's noise level and reference, which
+    change with the target training set, so it is made per (repetition, k) and shared by
+    every calibrated method of it."""
+    p = tiny(methods=(method("mmd"), method("dann"), method("finetune", True, variant="last")), calibration=RECIPE)
+    made = []
+
+    class Counting(StateStore):
+        def get(self, name, make):
+            return super().get(name, lambda: made.append(name) or make())
+
+    store = Counting(tmp_path / "states")
+    for rep in range(p.repetitions):
+        for k in p.ks:
+            for m in p.methods:
+                run_unit(p, SOURCE, TARGET, rep, k, m, store)
+    assert sorted(made) == ["rep0_k0_primed", "rep0_k2_primed", "rep1_k0_primed", "rep1_k2_primed"]
 
 
 @pytest.mark.parametrize("variant, changed", [("all", {"features", "classifier"}), ("classifier", {"classifier"}),
@@ -356,8 +381,12 @@ def test_summary_table_and_report(finished, cli):
         for k, cell in summary["table"][label].items():
             acc = [r["accuracy"] for r in records.values() if r["method"] == label and r["k"] == int(k)]
             assert cell["mean"] == pytest.approx(np.mean(acc)) and cell["std"] == pytest.approx(np.std(acc, ddof=1))
+    # the reference column: the Bayes detector on the same test sets (the tiny target is noisy)
+    bound = summary["bound"]
+    assert bound["noise"] == "laplace" and set(bound["accuracy"]) == {"0", "2"}
+    assert all(50.0 <= c["mean"] <= 100.0 and c["n"] == 2 for c in bound["accuracy"].values())
     md = (finished / "table.md").read_text().splitlines()
-    assert md[0] == "| k (target fault samples) | " + " | ".join(labels) + " |"
+    assert md[0] == "| k (target fault samples) | " + " | ".join([*labels, transfer.BOUND]) + " |"
     assert [row.split("|")[1].strip() for row in md[2:]] == ["0", "2"]
     assert all(re.fullmatch(r"\d+\.\d\d ± \d+\.\d", c.strip()) for row in md[2:] for c in row.split("|")[2:-1])
 
@@ -381,7 +410,7 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
     before = lines_of(run)
     kept = [json.loads(line)["unit"] for line in before]
     assert kept and set(kept) < set(UNITS)
-    assert (run / "states" / "rep0_primed.pt").exists()
+    assert (run / "states" / "rep0_k0_primed.pt").exists()  # gearlab's recipe primes per (repetition, k)
     with open(run / "results.jsonl", "a") as f:
         f.write(json.dumps({"unit": next(u for u in UNITS if u not in kept), "accuracy": 0.0})[:25])
 

@@ -22,14 +22,28 @@ import torch
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
-from ..data.spec import POINTS
+from ..data.spec import POINTS, DatasetSpec
 from ..errors import GearlabInputError
-from ..learn.networks import NETWORKS
-from ..learn.protocol import KS, Counts, Method, Protocol, StateStore, check, check_data, run_unit, shared_state, unit_key
+from ..learn.bounds import bayes_scores, best_accuracy, detection_at
+from ..learn.calibration import ALIGNMENTS, SOURCE_NOISE, THRESHOLDS, Calibration
+from ..learn.networks import DEFAULT_NETWORK, NETWORKS
+from ..learn.protocol import (
+    KS,
+    Counts,
+    Method,
+    Protocol,
+    StateStore,
+    check,
+    check_data,
+    run_unit,
+    shared_state,
+    split,
+    unit_key,
+)
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import Event, RunDir, UnitProgress
-from ..scenario import Key, Scenario, Table, in_range, location
+from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
@@ -43,19 +57,30 @@ TRAINING = {
     "target_train": Key(int, 120, in_range(2), "samples in the target training set"),
     "batch": Key(int, 40, in_range(1)),
     "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the calibrated methods"),
-    "prime_epochs": Key(int, 100, in_range(0)),
-    "baseline_epochs": Key(int, 200, in_range(1)),
-    "patience": Key(int, 20, in_range(1)),
-    "min_epochs": Key(int, 500, in_range(1), "end of the lambda ramp"),
-    "max_epochs": Key(int, 800, in_range(1)),
+    "prime_epochs": Key(int, 100, in_range(0, MAX_EPOCHS)),
+    "baseline_epochs": Key(int, 200, in_range(1, MAX_EPOCHS)),
+    "patience": Key(int, 20, in_range(1, MAX_EPOCHS)),
+    "min_epochs": Key(int, 500, in_range(1, MAX_EPOCHS), "end of the lambda ramp"),
+    "max_epochs": Key(int, 800, in_range(1, MAX_EPOCHS)),
     "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
+}
+
+# How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
+# gearlab's recipe, the thesis's is residual = false, source_noise = "off", alignment =
+# "marginal", threshold = "argmax" (scenarios/expA_thesis.toml, expB_thesis.toml).
+CALIBRATION = {
+    "residual": Key(bool, True, doc="input = revolution minus its domain's healthy reference"),
+    "source_noise": Key(str, "auto", doc=f"fresh sensor noise on source batches: {' | '.join(SOURCE_NOISE)}"),
+    "alignment": Key(str, "healthy", doc=f"what the domain loss aligns: {' | '.join(ALIGNMENTS)}"),
+    "threshold": Key(str, "history", doc=f"fault call: {' | '.join(THRESHOLDS)}"),
+    "false_alarm": Key(float, 0.01, in_range(1e-6, 0.5), "share of the history above a 'history' threshold"),
 }
 
 TABLES = {
     "source": _DATASET,
     "target": _DATASET,
     "network": Table({
-        "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),
+        "name": Key(str, DEFAULT_NETWORK, doc="network: burst (default), fast, or cnn3 (the seed's CNN3)"),
         "dropout": Key(float, 0.005, in_range(0.0, 0.95), "dropout rate (Table 5.3: 0.5 %)"),
     }),
     "methods": Table({
@@ -67,6 +92,7 @@ TABLES = {
         "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
         "repetitions": Key(int, 5, in_range(1, MAX_REPETITIONS)),
         **TRAINING,
+        **CALIBRATION,
     }),
 }
 
@@ -90,19 +116,15 @@ def build(scenario: Scenario) -> dict:
             or len(set(ks)) != len(ks):
         raise GearlabInputError(f"{location(path, 'protocol', 'ks')}: expected a list of distinct whole numbers "
                                 f">= 0, got {ks!r}")
-    if p["min_epochs"] > p["max_epochs"]:
-        raise GearlabInputError(f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
-                                f"max_epochs = {p['max_epochs']}")
-    net = t["network"]["name"]
-    if net not in NETWORKS:
-        raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
-                                f"{did_you_mean(net, list(NETWORKS))}; known networks: {', '.join(NETWORKS)}")
+    net = check_training(t, path)
     protocol = Protocol(
         methods=tuple(methods), network=net, dropout=t["network"]["dropout"], ks=tuple(ks),
         repetitions=p["repetitions"], target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
         prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
         min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=device_of(scenario),
+        calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
     )
+    protocol.calibration.check(str(path))
     check(protocol, str(path))
     source = dataset_spec(t["source"], location(path, "source"), path.parent)
     target = dataset_spec(t["target"], location(path, "target"), path.parent)
@@ -110,6 +132,20 @@ def build(scenario: Scenario) -> dict:
     if None not in planned:
         check_data(protocol, *planned, str(path))
     return {"source": source, "target": target, "protocol": protocol}
+
+
+def check_training(t: dict, path) -> str:
+    """The [protocol] epochs and the [network] name of a kind that trains the chapter-5 way
+    (transfer, detection); returns the network name."""
+    p = t["protocol"]
+    if p["min_epochs"] > p["max_epochs"]:
+        raise GearlabInputError(f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
+                                f"max_epochs = {p['max_epochs']}")
+    net = t["network"]["name"]
+    if net not in NETWORKS:
+        raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
+                                f"{did_you_mean(net, list(NETWORKS))}; known networks: {', '.join(NETWORKS)}")
+    return net
 
 
 def method(entry: dict, where: str) -> Method:
@@ -165,6 +201,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         target, _ = load_or_build(spec["target"], executor, on_event)
         on_event(Event("advance", stage="datasets", done=2, total=2))
         check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
+        bound = bayes_bound(spec["target"], source, target, protocol, executor, on_event)
+        if bound is not None:
+            run.write_json("bound.json", bound)
         done = {r["unit"] for r in run.records()}
         todo = units(protocol)
         pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]
@@ -172,7 +211,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         # it; every other unit waits for phase 2 and loads it from the run directory.
         makers: dict[str, tuple] = {}
         for rep, k, m in pending:
-            state = shared_state(m, rep)
+            state = shared_state(m, rep, k, protocol)
             if state is not None and not (run.path / "states" / f"{state}.pt").exists():
                 makers.setdefault(state, (rep, k, m))
         first = list(makers.values())
@@ -223,6 +262,37 @@ def train_unit(task: tuple) -> dict:
             progress(f"epoch {epoch + 1}{acc}")
 
         return run_unit(protocol, source, target, rep, k, method, StateStore(states), on_epoch=report)
+
+
+BOUND = "Bayes bound (target's own shapes and noise law, best threshold)"
+
+
+def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None
+                ) -> dict | None:
+    """The reference column of the table: the accuracy (%) of the Bayes detector
+    (gearlab.learn.bounds) on each (repetition, k)'s target test set, with the best threshold,
+    and the faults it finds at 1 % false alarms. None unless the target is simulated with noise
+    (the detector needs its noise-free twin); it knows the test labels, so it is a bound, not a
+    method."""
+    if not isinstance(target_spec, DatasetSpec) or target_spec.noise is None:
+        return None
+    on_event(Event("log", message="the Bayes bound: the target's noise-free twin and its likelihood ratios"))
+    clean, _ = load_or_build(target_spec.with_(noise=None), executor, on_event)
+    healthy = target.X[target.fault == 0]
+    scores = bayes_scores(target.X, healthy, clean, target_spec.noise.kind)
+    cells: dict[str, dict[str, dict]] = {"accuracy": {}, "detection_at_1pct": {}}
+    for k in protocol.ks:
+        acc, det = [], []
+        for rep in range(protocol.repetitions):
+            test = split(protocol, source, target, rep, k).target_test
+            y = target.fault[test]
+            acc.append(best_accuracy(scores[test], y))
+            det.append(detection_at(scores[test], y, 0.01))
+        for name, values in (("accuracy", acc), ("detection_at_1pct", det)):
+            cells[name][str(k)] = {"mean": float(np.mean(values)),
+                                   "std": float(np.std(values, ddof=1)) if len(values) > 1 else 0.0,
+                                   "n": len(values)}
+    return {"label": BOUND, "noise": target_spec.noise.kind, **cells}
 
 
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:
@@ -292,6 +362,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "units": len(records),
         "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
     }
+    bound_path = run.path / "bound.json"
+    if bound_path.exists():
+        summary["bound"] = json.loads(bound_path.read_text())
+        tab = {**tab, BOUND: summary["bound"]["accuracy"]}  # the reference column of table.md/csv
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(tab, protocol.ks, list(tab)))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
@@ -303,8 +377,11 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
 def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
     ks = summary["protocol"]["ks"]
+    tab, methods = summary["table"], summary["methods"]
+    if "bound" in summary:
+        tab, methods = {**tab, BOUND: summary["bound"]["accuracy"]}, [*methods, BOUND]
     lines = ["target-domain test accuracy [%], mean ± std over repetitions (Table 5.4 layout):",
-             table_md(summary["table"], ks, summary["methods"]).rstrip()]
+             table_md(tab, ks, methods).rstrip()]
     if summary.get("healthy_share_of_test") is not None:
         lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
     return lines

@@ -21,6 +21,13 @@ tooth) the statistic is the largest cosine over them:
   not the upper tail, because an unlabelled history may hold a few fault revolutions (k of
   the 120), whose scores an empirical upper quantile would follow.
 
+In impulsive noise (Laplace, Student-t) the correlation is no longer the likelihood-ratio
+statistic: the locally optimal detector passes the residual through the noise's score
+function first, for Laplace noise a hard limiter (Kay, vol. II, ch. 10). With ``clip`` set,
+each residual sample is limited softly, ``c·σ·tanh(r / (c·σ))`` with σ the revolution's robust
+noise scale (1.4826·MAD), before the cosine; gearlab.learn.bounds gives the exact likelihood
+ratio this approximates when the shapes are known.
+
 The detector is an :class:`torch.nn.Module` whose logits are ``[0, score - threshold]``,
 so the protocol scores it like any trained network. It needs revolutions on the same
 angular grid in both domains (what the datasets are: one revolution, starting at the
@@ -35,18 +42,28 @@ from torch import nn
 
 from gearlab.errors import GearlabInputError
 
+from .history import gumbel_quantile, noise_law
+
+
+LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
+
 
 class TemplateDetector(nn.Module):
-    def __init__(self, reference: np.ndarray, templates: np.ndarray, threshold: float):
+    def __init__(self, reference: np.ndarray, templates: np.ndarray, threshold: float, clip: float = 0.0):
         super().__init__()
         self.register_buffer("reference", torch.as_tensor(reference, dtype=torch.float32))
         self.register_buffer("templates", torch.as_tensor(templates, dtype=torch.float32))
         self.register_buffer("threshold", torch.tensor(float(threshold)))
+        self.register_buffer("clip", torch.tensor(float(clip)))
         self.latent_dim = len(templates)
 
     def embed(self, x: torch.Tensor) -> torch.Tensor:
-        """The cosines between each revolution's residual and every template, ``(B, n_templates)``."""
+        """The cosines between each revolution's (limited) residual and every template, ``(B, n_templates)``."""
         r = x.reshape(len(x), -1) - self.reference
+        if self.clip > 0:
+            scale = 1.4826 * (r - r.median(dim=1, keepdim=True).values).abs().median(dim=1, keepdim=True).values
+            c = self.clip * scale.clamp_min(1e-12)
+            r = c * torch.tanh(r / c)
         return (r @ self.templates.T) / r.norm(dim=1, keepdim=True).clamp_min(1e-12)
 
     def score(self, x: torch.Tensor) -> torch.Tensor:
@@ -57,25 +74,17 @@ class TemplateDetector(nn.Module):
         return torch.stack([torch.zeros_like(s), s], dim=1)
 
 
-def gumbel_quantile(scores: np.ndarray, p: float) -> float:
-    """The *p* quantile of the Gumbel law (of maxima) whose quartiles are those of *scores*:
-    F(s) = exp(-exp(-(s - mu) / beta)), so the q quantile is mu - beta ln(-ln q)."""
-    q1, q3 = np.quantile(scores, [0.25, 0.75])
-    beta = (q3 - q1) / (np.log(np.log(4.0)) - np.log(np.log(4.0 / 3.0)))
-    mu = q1 + beta * np.log(np.log(4.0))
-    return float(mu - beta * np.log(-np.log(p)))
-
-
 def _unit_rows(R: np.ndarray) -> np.ndarray:
     return R / np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-12)
 
 
 def template_detector(Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None,
-                      false_alarm: float) -> TemplateDetector:
+                      false_alarm: float, limiter: str = "off") -> TemplateDetector:
     """The detector of the source's fault shapes, referenced and thresholded on the target's
     healthy history. *yt* None: every target training revolution is taken as healthy (the
     unsupervised case); with labels, the healthy ones are the history and the target's own
-    fault revolutions are templates too."""
+    fault revolutions are templates too. *limiter* ``on``/``off``, or ``auto``: on when the
+    history's residuals follow an impulsive law (gearlab.learn.calibration.noise_law)."""
     Xs, Xt = np.asarray(Xs, dtype=np.float64), np.asarray(Xt, dtype=np.float64)
     ys = np.asarray(ys)
     if not (ys == 0).any() or not (ys == 1).any():
@@ -90,7 +99,10 @@ def template_detector(Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.nda
     shapes = [Xs[ys == 1] - np.median(Xs[ys == 0], axis=0)]
     if yt is not None:
         shapes.append(Xt[~healthy_t] - reference)
-    detector = TemplateDetector(reference, _unit_rows(np.concatenate(shapes)), threshold=0.0)
+    if limiter == "auto":
+        limiter = "off" if noise_law(Xt[healthy_t] - reference) == "gaussian" else "on"
+    clip = LIMIT if limiter == "on" else 0.0
+    detector = TemplateDetector(reference, _unit_rows(np.concatenate(shapes)), threshold=0.0, clip=clip)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
     detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))

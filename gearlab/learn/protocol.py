@@ -27,7 +27,8 @@ import torch
 
 from ..errors import GearlabInputError
 from ..registry import get_registry
-from .networks import build_network
+from .calibration import THESIS, Calibration, calibrate, prepare
+from .networks import DEFAULT_NETWORK, build_network
 from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device, predict
 
 KS = (0, 1, 2, 4, 8, 16)
@@ -61,7 +62,7 @@ class Protocol:
     """Everything a transfer run needs besides the data (defaults: Table 5.3)."""
 
     methods: tuple[Method, ...]
-    network: str = "fast"
+    network: str = DEFAULT_NETWORK
     dropout: float = 0.005
     ks: tuple[int, ...] = KS
     repetitions: int = 5
@@ -76,6 +77,7 @@ class Protocol:
     val_fraction: float = 0.1
     seed: int = 0
     device: str = "auto"
+    calibration: Calibration = THESIS
     extra: dict = field(default_factory=dict)
 
 
@@ -188,12 +190,15 @@ def unit_key(rep: int, k: int, method: Method) -> str:
     return f"rep{rep}/k{k}/{method.key}"
 
 
-def shared_state(method: Method, rep: int) -> str | None:
-    """The name of the per-repetition state a method starts from, if any (see train_method)."""
+def shared_state(method: Method, rep: int, k: int, protocol: Protocol) -> str | None:
+    """The name of the shared state a method starts from, if any (see train_method): per
+    repetition, or per repetition and k when the priming depends on the target history."""
     adapter = get_registry().get("adapter", method.adapter)
     if adapter.train_on == "source":
         return f"rep{rep}_source_only"
-    return f"rep{rep}_primed" if adapter.calibrated else None
+    if not adapter.calibrated:
+        return None
+    return f"rep{rep}_k{k}_primed" if protocol.calibration.uses_target else f"rep{rep}_primed"
 
 
 def _net(protocol: Protocol, seed: int, device):
@@ -218,8 +223,10 @@ def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Metho
                                          on_epoch)
     # Only now, with the model fixed, does the target test set come in.
     X_test, y_test = target.X[s.target_test], target.fault[s.target_test].astype(np.int64)
-    pred = predict(model, X_test, device)
+    score = fault_score(model, X_test, device)
+    pred = (score > 0).astype(np.int64)
     confusion = [[int(((y_test == a) & (pred == b)).sum()) for b in (0, 1)] for a in (0, 1)]
+    val_acc = extra.pop("source_val_accuracy", None)
     return {
         "unit": unit_key(rep, k, method),
         "rep": rep,
@@ -232,10 +239,37 @@ def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Metho
         "predicted_fault_share": 100.0 * float((pred == 1).mean()),
         "confusion": confusion,
         "n_test": int(len(y_test)),
-        "source_val_accuracy": 100.0 * accuracy(model, *val, device),
+        "source_val_accuracy": 100.0 * accuracy(model, *val, device) if val_acc is None else val_acc,
         "history": history.as_dict() if history is not None else None,
+        **detection_rates(score, y_test, target.label[s.target_test]),
         **extra,
     }
+
+
+@torch.no_grad()
+def fault_score(model, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
+    """logit(fault) - logit(healthy) of each revolution: > 0 is a fault call (the arg-max)."""
+    model.eval()
+    out = []
+    for i in range(0, len(X), batch):
+        logits = model(torch.as_tensor(np.ascontiguousarray(X[i:i + batch]), dtype=torch.float32, device=device))
+        out.append((logits[:, 1] - logits[:, 0]).cpu().numpy())
+    return np.concatenate(out) if out else np.empty(0)
+
+
+def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, false_alarm: float = 0.01) -> dict:
+    """Measures that do not hinge on the test set's healthy share: the balanced accuracy (%) of
+    the method's own calls, and the share (%) of faults, per fault class, found at the threshold
+    that lets *false_alarm* of the test set's healthy revolutions through (an evaluation with
+    the test labels, after the model is fixed; the method never sees it)."""
+    called = score > 0
+    healthy, faulty = y == 0, y == 1
+    balanced = 50.0 * (float((~called[healthy]).mean()) + float(called[faulty].mean()))
+    threshold = np.quantile(score[healthy], 1.0 - false_alarm)
+    per_class = {str(int(c)): 100.0 * float((score[label == c] > threshold).mean())
+                 for c in np.unique(label[faulty])}
+    return {"balanced_accuracy": balanced, "detection_at_1pct": 100.0 * float((score[faulty] > threshold).mean()),
+            "detection_at_1pct_by_class": per_class}
 
 
 def train_method(protocol: Protocol, method: Method, source, source_val, target, rep: int, k: int,
@@ -248,12 +282,17 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
     Xs, ys = source
     Xt, yt = target
     seed = 1000 * protocol.seed + rep
+    # The calibration of a calibrated method (gearlab.learn.calibration; the thesis's recipe
+    # changes nothing): references and noise from the target training set taken as history
+    # whatever the supervision, so that one priming serves every method of (rep, k).
+    inputs = prepare(protocol.calibration, Xs, ys, Xt, None) if adapter.calibrated else None
+    augment = inputs.augment if inputs is not None and inputs.noise_law else None
 
     def primed() -> dict:
         net = _net(protocol, seed, device)
-        fit_supervised(net, Xs, ys, rng=np.random.default_rng([protocol.seed, rep, 1]), device=device,
-                       epochs=protocol.prime_epochs, batch=protocol.batch, optimizer="adam", val=None,
-                       patience=None)
+        fit_supervised(net, inputs.source(Xs), ys, rng=np.random.default_rng([protocol.seed, rep, 1]),
+                       device=device, epochs=protocol.prime_epochs, batch=protocol.batch, optimizer="adam",
+                       val=None, patience=None, augment=augment)
         return _cpu_state(net)
 
     if adapter.train_on == "detector":  # no network: a model built from the training arrays
@@ -267,32 +306,53 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
             return _cpu_state(net)
 
         net = _net(protocol, seed, device)
-        net.load_state_dict(states.get(shared_state(method, rep), trained))
+        net.load_state_dict(states.get(shared_state(method, rep, k, protocol), trained))
         return net, None, {}
     if adapter.calibrated:
         net = _net(protocol, seed, device)
-        net.load_state_dict(states.get(shared_state(method, rep), primed))
+        net.load_state_dict(states.get(shared_state(method, rep, k, protocol), primed))
+        Xt_in = inputs.target(Xt)
+        Xv, yv = source_val
+        Xv = inputs.source(Xv)
+        if augment is not None:  # the source validation set carries the target's noise too, drawn once
+            Xv = augment(torch.as_tensor(Xv), torch.Generator().manual_seed(seed)).numpy()
+        source_val = (Xv, yv)
     else:
         net = _net(protocol, seed + 17, device)
+        Xt_in = Xt
     if adapter.train_on == "target":  # target_only from scratch, finetune from the primed network
         # 10 % of the labelled target training samples decide when to stop (Table 5.3)
         order = rng.permutation(len(Xt))
         n_val = _n_val(protocol, len(order))
         sgd = adapter.optimizer == "sgd"
-        history = fit_supervised(net, Xt[order[n_val:]], yt[order[n_val:]], rng=rng, device=device,
+        history = fit_supervised(net, Xt_in[order[n_val:]], yt[order[n_val:]], rng=rng, device=device,
                                  epochs=protocol.baseline_epochs, batch=min(protocol.batch, len(order) - n_val),
                                  optimizer=adapter.optimizer, lr=protocol.lr if sgd else ADAM_LR,
-                                 val=(Xt[order[:n_val]], yt[order[:n_val]]), patience=protocol.patience,
+                                 val=(Xt_in[order[:n_val]], yt[order[:n_val]]), patience=protocol.patience,
                                  parameters=adapter.trainable(net, params), freeze_norm=adapter.calibrated,
                                  on_epoch=on_epoch)
-        return net, history, {}
+        extra = {"source_val_accuracy": 100.0 * accuracy(net, *source_val, device)} if adapter.calibrated else {}
+        return _calibrated(net, inputs, Xt, yt, source_val, device), history, extra
     modules = adapter.extra_modules(net.latent_dim, params)
     take = np.random.default_rng([protocol.seed, rep, k, 3]).permutation(len(Xs))[: len(Xt)]
+    Xs_in = inputs.source(Xs[take])
     history = fit_adaptation(
-        net, adapter, modules, (Xs[take], ys[take]), source_val, (Xt, yt if method.supervised else None),
+        net, adapter, modules, (Xs_in, ys[take]), source_val, (Xt_in, yt if method.supervised else None),
         rng=rng, device=device, batch=protocol.batch, lr=protocol.lr, min_epochs=protocol.min_epochs,
-        max_epochs=protocol.max_epochs, params=params, on_epoch=on_epoch,
+        max_epochs=protocol.max_epochs, params=params, augment=augment, alignment=protocol.calibration.alignment,
+        on_epoch=on_epoch,
     )
     with torch.no_grad():
-        latent = {"source": embed(net, Xs[take], device).cpu().numpy(), "target": embed(net, Xt, device).cpu().numpy()}
-    return net, history, {"latent_dim": int(net.latent_dim), "_latent": latent}
+        latent = {"source": embed(net, Xs_in, device).cpu().numpy(), "target": embed(net, Xt_in, device).cpu().numpy()}
+    model = _calibrated(net, inputs, Xt, yt if method.supervised else None, source_val, device)
+    return model, history, {"latent_dim": int(net.latent_dim), "_latent": latent,
+                            "source_val_accuracy": 100.0 * accuracy(net, *source_val, device)}
+
+
+def _calibrated(net, inputs, Xt, yt, source_val, device):
+    """A calibrated method's model: the network as the thesis uses it, or behind the target's
+    reference and the history threshold when the protocol asks for them."""
+    settings = inputs.settings if inputs is not None else THESIS
+    if settings.residual or settings.threshold != "argmax":
+        return calibrate(net, inputs, Xt, yt, device)
+    return net

@@ -108,11 +108,13 @@ def fit_supervised(
     patience: int | None = 20,
     parameters: Iterable[torch.nn.Parameter] | None = None,
     freeze_norm: bool = False,
+    augment: Callable | None = None,
     on_epoch: Callable[[int, History], None] | None = None,
 ) -> History:
     """Cross-entropy training; with *val*, keep the epoch of best validation accuracy and stop
     after *patience* epochs without improvement (Table 5.3: 'validation accuracy maximum').
-    *freeze_norm*: see train_mode."""
+    *freeze_norm*: see train_mode. *augment(batch, generator)*: applied to every training
+    batch (fresh sensor noise, gearlab.learn.calibration), never to the validation set."""
     if batch > len(X):
         raise GearlabInputError(f"batch size {batch} is larger than the training set ({len(X)} samples)")
     net.to(device)
@@ -120,14 +122,16 @@ def fit_supervised(
     opt = torch.optim.Adam(params, lr=lr) if optimizer == "adam" else torch.optim.SGD(params, lr=lr)
     loss_fn = nn.CrossEntropyLoss()
     Xt, yt = _tensor(X, device), _labels(y, device)
+    generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
     history, best_state, best = History(), None, -math.inf
     for epoch in range(epochs):
         train_mode(net, freeze_norm)
         total = 0.0
         for idx in _batches(len(X), batch, rng):
             index = torch.as_tensor(idx, device=device)
+            xb = augment(Xt[index], generator) if augment else Xt[index]
             opt.zero_grad()
-            loss = loss_fn(net(Xt[index]), yt[index])
+            loss = loss_fn(net(xb), yt[index])
             _step(opt, params, loss)
             total += loss.item() * len(idx)
         history.train_loss.append(total / len(X))
@@ -160,6 +164,8 @@ def fit_adaptation(
     max_epochs: int = 800,
     window: int = 25,
     params: Mapping | None = None,
+    augment: Callable | None = None,
+    alignment: str = "marginal",
     on_epoch: Callable[[int, History], None] | None = None,
 ) -> History:
     """Joint training on a source batch and a target batch of equal size (thesis 5.4.2).
@@ -171,6 +177,12 @@ def fit_adaptation(
     domain discrepancy (between the two *training* sets, averaged over the epoch's batches)
     has stopped moving. The kept model is the post-ramp epoch with the best source validation
     accuracy, ties broken by the lower discrepancy.
+
+    *augment(batch, generator)* is applied to every source batch. *alignment* ``marginal``
+    (thesis) feeds the adapter all source and all target features of a batch; ``healthy``
+    only the source's healthy ones against the target's (unsupervised: the whole history;
+    supervised: its healthy ones, and the two domains' faults against each other as well),
+    see gearlab.learn.calibration.
     """
     Xs, ys = source
     Xt, yt = target
@@ -185,6 +197,7 @@ def fit_adaptation(
     Xs_t, ys_t, Xt_t = _tensor(Xs, device), _labels(ys, device), _tensor(Xt, device)
     yt_t = _labels(yt, device) if yt is not None else None
     history = History()
+    generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
     best_key, best_state = None, None
     for epoch in range(max_epochs):
         lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs, params)  # the ramp ends at min_epochs
@@ -195,18 +208,21 @@ def fit_adaptation(
             m = min(len(s_idx), len(t_idx))
             s = torch.as_tensor(s_idx[:m], device=device)
             t = torch.as_tensor(t_idx[:m], device=device)
+            xs = augment(Xs_t[s], generator) if augment else Xs_t[s]
             opt.zero_grad()
-            z = net.embed(torch.cat([Xs_t[s], Xt_t[t]]))
+            z = net.embed(torch.cat([xs, Xt_t[t]]))
             z_s, z_t = z[:m], z[m:]
             loss = ce(net.classifier(z_s), ys_t[s])
             if yt_t is not None:
                 loss = loss + ce(net.classifier(z_t), yt_t[t])
-            loss = loss + adapter.domain_loss(z_s, z_t, modules, lam, params)
+            pairs = _aligned(z_s, z_t, ys_t[s], yt_t[t] if yt_t is not None else None, alignment)
+            for a, b in pairs:
+                loss = loss + adapter.domain_loss(a, b, modules, lam, params)
             _step(opt, weights, loss)
             total += loss.item()
             # The epoch's discrepancy is measured on the latent batches it trained on: every
             # training sample once, with no extra pass through the network.
-            discrepancy += adapter.discrepancy(z_s.detach(), z_t.detach(), modules, params)
+            discrepancy += sum(adapter.discrepancy(a.detach(), b.detach(), modules, params) for a, b in pairs)
             batches += 1
         history.train_loss.append(total)
         history.lam.append(lam)
@@ -222,6 +238,23 @@ def fit_adaptation(
         if on_epoch:
             on_epoch(epoch, history)
     return _keep_best(net, history, best_state)
+
+
+def _generator(rng: np.random.Generator) -> torch.Generator:
+    """A torch generator drawn from *rng*, for augmentation noise (reproducible per unit)."""
+    return torch.Generator().manual_seed(int(rng.integers(2**62)))
+
+
+def _aligned(z_s: torch.Tensor, z_t: torch.Tensor, y_s: torch.Tensor, y_t: torch.Tensor | None,
+             alignment: str) -> list[tuple[torch.Tensor, torch.Tensor]]:
+    """The (source, target) latent batches the domain loss compares (see fit_adaptation); a
+    class with fewer than 2 samples on either side is left out of that batch."""
+    if alignment == "marginal":
+        return [(z_s, z_t)]
+    pairs = [(z_s[y_s == 0], z_t if y_t is None else z_t[y_t == 0])]
+    if y_t is not None:
+        pairs.append((z_s[y_s == 1], z_t[y_t == 1]))
+    return [(a, b) for a, b in pairs if len(a) >= 2 and len(b) >= 2]
 
 
 def _step(opt: torch.optim.Optimizer, params: list, loss: torch.Tensor) -> None:

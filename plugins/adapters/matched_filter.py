@@ -6,13 +6,22 @@ target's healthy reference lines up with a simulated fault response better than 
 healthy history's revolutions do (``gearlab.learn.detectors``). Unsupervised, the 120
 target training revolutions are taken as the healthy history (the thesis's assumption at
 k = 0); supervised, the labelled healthy ones are, and the labelled faults add their shapes.
+
+``limiter`` (0 off by default, 1 on, 2 auto; scenarios may give the names): a soft limiter on the
+residual before the correlation, the locally optimal statistic in impulsive noise; ``auto``
+turns it on when the history's noise law is not Gaussian (gearlab.learn.history.noise_law).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+from gearlab.errors import GearlabInputError
 from gearlab.learn.adapters import Adapter
-from gearlab.params import Param
+from gearlab.params import Param, did_you_mean
 from gearlab.registry import hookimpl
+
+LIMITERS = ("off", "on", "auto")
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.adapters.
 
@@ -23,16 +32,31 @@ class MatchedFilter(Adapter):
            "reference and the simulated fault responses, thresholded on the healthy history (no network).")
     params = (
         Param("false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"),
+        Param("limiter", "", 0, 0, 2, "soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in "
+              "impulsive noise)", integer=True),
     )
     calibrated = False
     supervision = ("unsupervised", "supervised")
     train_on = "detector"
 
+    def coerce(self, given: Mapping[str, object], where: str) -> dict:
+        values = dict(given)
+        limiter = values.get("limiter")
+        if isinstance(limiter, str) and not limiter.strip().lstrip("+-").isdigit():
+            key = limiter.strip().lower()
+            if key not in LIMITERS:
+                raise GearlabInputError(f"{where}, parameter 'limiter': unknown value '{limiter}'"
+                                        f"{did_you_mean(key, LIMITERS)}; known: {', '.join(LIMITERS)}")
+            values["limiter"] = LIMITERS.index(key)
+        return values
+
     def detector(self, source, target, params=None):
         from gearlab.learn.detectors import template_detector
 
         (Xs, ys), (Xt, yt) = source, target
-        return template_detector(Xs, ys, Xt, yt, false_alarm=float(self.values(params)["false_alarm"]))
+        values = self.values(params)
+        return template_detector(Xs, ys, Xt, yt, false_alarm=float(values["false_alarm"]),
+                                 limiter=LIMITERS[int(values["limiter"])])
 
 
 @hookimpl

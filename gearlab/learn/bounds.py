@@ -1,0 +1,101 @@
+"""How well can a noisy simulated target be told apart at all? The Bayes detector.
+
+A chapter-5 target revolution is ``x = h + a + n``: the domain's healthy revolution ``h``,
+for a faulty one the fault's response ``a`` (one of the target's own noise-free fault
+shapes ``t_1..t_J``), and sensor noise ``n`` drawn independently at every sample from the
+dataset's noise law (thesis 4.1.1: Gaussian, Laplace, or Student-t with ν = 2) at a scale
+set per revolution (eq. 4.3-4.5). Knowing ``h``, the shapes and the law, the most powerful
+test of "fault" against "healthy" (Neyman-Pearson) thresholds the likelihood ratio, here a
+mixture over the shapes with equal prior weights:
+
+    Λ(x) = (1/J) Σ_j  Π_n p(r_n - t_j,n) / p(r_n),        r = x - h
+
+    log p(n) = -|n| / b                      Laplace, scale b
+             = -n² / (2σ²)                   Gaussian
+             = -(ν + 1)/2 · ln(1 + n²/(ν s²))  Student-t, ν = 2, scale s
+
+(constants cancel). The scale of each revolution is estimated from its own residual by its
+median absolute value, which the few samples a fault touches barely move: b = med|r| / ln 2,
+σ = med|r| / 0.6745, s = med|r| / √(2/3) (the medians of |n| for unit scale).
+
+No detector of these data can do better at any false-alarm rate, so the accuracy of Λ with
+the best threshold is an upper bound for every method gearlab trains or builds (it uses the
+target's own shapes and the test labels, which no method may). It needs the target's
+noise-free twin (the same dataset without noise), so it exists for simulated targets only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+
+from ..errors import GearlabInputError
+from .history import NOISE_LAWS
+# median of |n| for unit scale: Laplace ln 2, Gaussian 0.6745, Student-t(2) sqrt(2/3)
+_MEDIAN_ABS = {"laplace": math.log(2.0), "gaussian": 0.6744897501960817, "student_t": math.sqrt(2.0 / 3.0)}
+_NU = 2.0  # Student-t degrees of freedom of the thesis's noise (4.1.1)
+
+
+def _log_density(n: torch.Tensor, scale: torch.Tensor, kind: str) -> torch.Tensor:
+    """log p(n) up to a constant, elementwise, for noise of *kind* at *scale* (broadcast)."""
+    if kind == "laplace":
+        return -n.abs() / scale
+    if kind == "gaussian":
+        return -0.5 * (n / scale) ** 2
+    return -0.5 * (_NU + 1.0) * torch.log1p((n / scale) ** 2 / _NU)
+
+
+def likelihood_ratio(X: np.ndarray, healthy: np.ndarray, shapes: np.ndarray, kind: str,
+                     chunk: int = 16) -> np.ndarray:
+    """log Λ of each row of *X* (revolutions) given the healthy revolution *healthy*, the fault
+    *shapes* (J rows, responses added to *healthy*) and the noise *kind*."""
+    if kind not in NOISE_LAWS:
+        raise GearlabInputError(f"unknown noise kind '{kind}'; known: {', '.join(NOISE_LAWS)}")
+    X = torch.as_tensor(np.asarray(X, dtype=np.float64))
+    T = torch.as_tensor(np.asarray(shapes, dtype=np.float64))
+    R = X - torch.as_tensor(np.asarray(healthy, dtype=np.float64))
+    scale = (R.abs().median(dim=1).values / _MEDIAN_ABS[kind]).clamp_min(1e-12)
+    out = []
+    for i in range(0, len(R), chunk):
+        r, s = R[i:i + chunk, None, :], scale[i:i + chunk, None, None]
+        llr = (_log_density(r - T[None], s, kind) - _log_density(r, s, kind)).sum(-1)  # (rows, J)
+        out.append(torch.logsumexp(llr, dim=1) - math.log(len(T)))
+    return torch.cat(out).numpy()
+
+
+def gain(noisy_healthy: np.ndarray, clean_healthy: np.ndarray) -> float:
+    """The factor that maps the clean twin's standardised signal onto the noisy dataset's
+    (each dataset is standardised by its own healthy statistics, eq. 4.6): the least-squares
+    fit of the noisy healthy reference by the clean one."""
+    c = np.asarray(clean_healthy, dtype=np.float64)
+    return float(np.dot(np.asarray(noisy_healthy, dtype=np.float64), c) / np.dot(c, c))
+
+
+def bayes_scores(X: np.ndarray, history: np.ndarray, clean, kind: str) -> np.ndarray:
+    """log Λ of the revolutions *X* of a noisy target whose noise-free twin is the Dataset
+    *clean*; *history* (noisy healthy revolutions) fixes the scale between the two."""
+    clean_healthy = np.median(clean.X[clean.fault == 0], axis=0)
+    g = gain(np.median(history, axis=0), clean_healthy)
+    shapes = g * (clean.X[clean.fault != 0] - clean_healthy)
+    return likelihood_ratio(X, g * clean_healthy, shapes, kind)
+
+
+def best_accuracy(score: np.ndarray, y: np.ndarray) -> float:
+    """Accuracy (%) of the best threshold on *score* (higher = fault) for labels *y* (1 = fault)."""
+    score, y = np.asarray(score), np.asarray(y)
+    order = np.argsort(-score, kind="stable")
+    s, yy = score[order], y[order]
+    # calling the top i revolutions faulty: correct = faults among them + healthy below them
+    tp = np.concatenate([[0], np.cumsum(yy == 1)])
+    tn_below = (yy == 0).sum() - np.concatenate([[0], np.cumsum(yy == 0)])
+    cut = np.concatenate([[True], s[1:] != s[:-1], [True]])  # thresholds between distinct scores
+    return float(100.0 * ((tp + tn_below)[cut]).max() / len(y))
+
+
+def detection_at(score: np.ndarray, y: np.ndarray, false_alarm: float) -> float:
+    """Share (%) of faults scoring above the (1 - *false_alarm*) quantile of the healthy scores."""
+    score, y = np.asarray(score), np.asarray(y)
+    threshold = np.quantile(score[y == 0], 1.0 - false_alarm)
+    return float(100.0 * (score[y == 1] > threshold).mean())

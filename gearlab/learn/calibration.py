@@ -1,0 +1,191 @@
+"""What a calibrated network is given besides the thesis's recipe (beyond the thesis).
+
+The thesis primes a network on the noise-free source and aligns the two domains' latent
+features as a whole. On gearlab's data that fails for three measured reasons
+(docs/learning.md, section 5): the noise-free source teaches the network that anything
+noisy is a fault; at k = 0 the target history is all healthy while the source is half
+faulty, so aligning the whole distributions pulls healthy target revolutions onto source
+faults (label shift); and the network's arg-max calls faults at a rate nobody chose. Four
+settings, each a named option of ``[protocol]`` with the thesis's choice still available:
+
+``residual``      input = revolution minus its domain's healthy reference: the median of
+                  the source's healthy training revolutions, and of the target's history
+                  (the target training revolutions; supervised, the labelled healthy ones).
+                  The source's residuals are scaled by the ratio of the two references' RMS,
+                  so a fault of the same relative size has the same size in both domains.
+``source_noise``  fresh simulated sensor noise on every source batch, at the level of the
+                  target history's residuals (the median over revolutions of their RMS) —
+                  the thesis's corrected simulator (its sensor noise) used for training.
+                  ``auto`` takes the noise law from the history's kurtosis (Gaussian 3,
+                  Laplace 6, Student-t with ν = 2 far above); or name the law; or ``off``.
+``alignment``     ``marginal`` (thesis: all source against all target features) or
+                  ``healthy``: the domain loss aligns the target history with the source's
+                  *healthy* revolutions only (supervised: class by class), which is what the
+                  history is at k = 0 (label shift, Zhang et al. 2013).
+``threshold``     ``argmax`` (thesis) or ``history``: the network's fault score (logit
+                  difference) thresholded at the ``1 - false_alarm`` quantile of a Gumbel law
+                  fitted to the history's scores by their quartiles (as ``matched_filter``), so
+                  the few unlabelled faults of a history at k > 0 do not drag it up.
+
+Everything here is computed from the training arrays: the target *test* revolutions never
+reach it (tests/test_protocol.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from torch import nn
+
+from ..errors import GearlabInputError
+from .history import NOISE_LAWS, gumbel_quantile, noise_law
+
+SOURCE_NOISE = ("off", "auto", *NOISE_LAWS)
+ALIGNMENTS = ("marginal", "healthy")
+THRESHOLDS = ("argmax", "history")
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The four settings above; the defaults are the thesis's recipe."""
+
+    residual: bool = False
+    source_noise: str = "off"
+    alignment: str = "marginal"
+    threshold: str = "argmax"
+    false_alarm: float = 0.01
+
+    def check(self, where: str) -> None:
+        for key, value, known in (("source_noise", self.source_noise, SOURCE_NOISE),
+                                  ("alignment", self.alignment, ALIGNMENTS),
+                                  ("threshold", self.threshold, THRESHOLDS)):
+            if value not in known:
+                raise GearlabInputError(f"{where}: [protocol] key '{key}': unknown value '{value}'; "
+                                        f"expected one of {', '.join(known)}")
+        if not 0.0 < self.false_alarm < 0.5:
+            raise GearlabInputError(f"{where}: [protocol] key 'false_alarm': expected a share in (0, 0.5), "
+                                    f"got {self.false_alarm!r}")
+
+    @property
+    def uses_target(self) -> bool:
+        """Whether priming depends on the target history (then it is made per repetition and k)."""
+        return self.residual or self.source_noise != "off"
+
+
+THESIS = Calibration()
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x, dtype=np.float64))))
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """The calibration of one unit, fixed from its training arrays."""
+
+    settings: Calibration
+    source_reference: np.ndarray | None
+    target_reference: np.ndarray | None
+    gain: float  # target signal scale over source signal scale
+    noise_law: str | None
+    noise_rms: float  # of the noise added to source inputs, in the units the network sees
+
+    def source(self, X: np.ndarray) -> np.ndarray:
+        X = np.asarray(X, dtype=np.float32)
+        if self.source_reference is None:
+            return X
+        return (self.gain * (X - self.source_reference)).astype(np.float32)
+
+    def target(self, X: np.ndarray) -> np.ndarray:
+        X = np.asarray(X, dtype=np.float32)
+        return X if self.target_reference is None else (X - self.target_reference).astype(np.float32)
+
+    def augment(self, x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
+        """A source batch with fresh noise of the target's law and level (each row scaled to
+        exactly that RMS, as eq. 4.4 scales the thesis's noise)."""
+        if self.noise_law is None:
+            return x
+        n = draw_noise(self.noise_law, tuple(x.shape), generator).to(x.device, x.dtype)
+        n = n * (self.noise_rms / n.pow(2).mean(dim=-1, keepdim=True).sqrt().clamp_min(1e-12))
+        return x + n
+
+
+def draw_noise(law: str, shape: tuple[int, ...], generator: torch.Generator) -> torch.Tensor:
+    """Standard noise of *law* (thesis 4.1.1) from *generator*, by inversion."""
+    if law == "gaussian":
+        return torch.randn(shape, generator=generator)
+    u = torch.rand(shape, generator=generator).clamp(1e-7, 1.0 - 1e-7)
+    if law == "laplace":
+        v = u - 0.5
+        return -torch.sign(v) * torch.log1p(-2.0 * v.abs())
+    z = torch.randn(shape, generator=generator)  # Student-t, ν = 2: z / sqrt(χ²₂ / 2), χ²₂ = -2 ln u
+    return z / torch.sqrt(-torch.log(u))
+
+
+def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray,
+            yt: np.ndarray | None) -> Inputs:
+    """The unit's references, gain and noise from the source training set and the target
+    training set (*yt* None: unsupervised, every target training revolution is history)."""
+    ys = np.asarray(ys)
+    history = np.asarray(Xt, dtype=np.float64)[np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0]
+    if len(history) < 2:
+        raise GearlabInputError("calibration: the target training set needs at least 2 healthy revolutions")
+    if not (ys == 0).any():
+        raise GearlabInputError("calibration: the source training set has no healthy revolutions")
+    h_s = np.median(np.asarray(Xs, dtype=np.float64)[ys == 0], axis=0)
+    h_t = np.median(history, axis=0)
+    gain = _rms(h_t) / max(_rms(h_s), 1e-12)
+    residuals = history - h_t
+    law, level = None, 0.0
+    if settings.source_noise != "off":
+        law = noise_law(residuals) if settings.source_noise == "auto" else settings.source_noise
+        # the median over revolutions: a few unlabelled faults in the history do not raise it
+        level = float(np.median(np.sqrt(np.mean(residuals**2, axis=1))))
+        if not settings.residual:
+            level /= gain  # raw source revolutions keep the source's own scale
+    refs = (h_s.astype(np.float32), h_t.astype(np.float32)) if settings.residual else (None, None)
+    return Inputs(settings, *refs, gain=gain if settings.residual else 1.0, noise_law=law, noise_rms=level)
+
+
+class Calibrated(nn.Module):
+    """A trained network behind the target's reference and the threshold on its fault score:
+    logits ``[0, score(x - reference) - threshold]`` with score = logit(fault) - logit(healthy),
+    so the protocol scores it like any network (arg-max). ``embed`` gives the network's latent."""
+
+    def __init__(self, network: nn.Module, reference: np.ndarray | None, threshold: float = 0.0):
+        super().__init__()
+        self.network = network
+        self.latent_dim = network.latent_dim
+        ref = torch.as_tensor(reference if reference is not None else np.zeros(0, np.float32))
+        self.register_buffer("reference", ref.float())
+        self.register_buffer("threshold", torch.tensor(float(threshold)))
+
+    def _input(self, x: torch.Tensor) -> torch.Tensor:
+        return x - self.reference if self.reference.numel() else x
+
+    def embed(self, x: torch.Tensor) -> torch.Tensor:
+        return self.network.embed(self._input(x))
+
+    def score(self, x: torch.Tensor) -> torch.Tensor:
+        logits = self.network(self._input(x))
+        return logits[:, 1] - logits[:, 0]
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        s = self.score(x) - self.threshold
+        return torch.stack([torch.zeros_like(s), s], dim=1)
+
+
+@torch.no_grad()
+def calibrate(network: nn.Module, inputs: Inputs, Xt: np.ndarray, yt: np.ndarray | None, device) -> Calibrated:
+    """The unit's model: *network* behind the target reference, thresholded as the settings ask
+    (``history``: on the scores of the history revolutions, see the module docstring)."""
+    model = Calibrated(network, inputs.target_reference).to(device)
+    if inputs.settings.threshold == "history":
+        history = np.asarray(Xt, dtype=np.float32)[np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0]
+        model.eval()
+        scores = torch.cat([model.score(torch.as_tensor(history[i:i + 256], device=device))
+                            for i in range(0, len(history), 256)]).cpu().numpy()
+        model.threshold.fill_(gumbel_quantile(scores, 1.0 - inputs.settings.false_alarm))
+    return model

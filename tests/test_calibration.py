@@ -1,0 +1,205 @@
+"""The Bayes bound (gearlab.learn.bounds), the calibration of calibrated methods
+(gearlab.learn.calibration) and the `burst` network: behaviour and numbers on small
+synthetic revolutions with known bursts in known noise."""
+
+import numpy as np
+import pytest
+import torch
+
+from gearlab.errors import GearlabInputError
+from gearlab.learn.bounds import best_accuracy, detection_at, gain, likelihood_ratio
+from gearlab.learn.calibration import (
+    THESIS,
+    Calibrated,
+    Calibration,
+    calibrate,
+    draw_noise,
+    noise_law,
+    prepare,
+)
+from gearlab.learn.networks import build_network
+from gearlab.learn.training import _aligned
+
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
+
+L = 512
+
+
+def burst_shape(position: int, length: int = L, width: int = 24, cycles: float = 4.0) -> np.ndarray:
+    """A decaying tone burst starting at *position* (a fault's response)."""
+    t = np.arange(width)
+    s = np.zeros(length)
+    s[position:position + width] = np.exp(-t / (width / 3)) * np.sin(2 * np.pi * cycles * t / width)
+    return s
+
+
+def revolutions(n: int, faults: int, amplitude: float, law: str, seed: int, healthy_level: float = 1.0):
+    """*n* revolutions (the first *faults* with a burst of *amplitude* at a random position) of
+    a tone plus noise of *law* at unit scale (not rescaled row by row: that would make the
+    residual's energy a give-away)."""
+    rng = np.random.default_rng(seed)
+    h = healthy_level * np.sin(2 * np.pi * 8 * np.arange(L) / L)
+    gen = torch.Generator().manual_seed(seed)
+    noise = draw_noise(law, (n, L), gen).double().numpy()
+    X = h + noise
+    positions = rng.integers(0, L - 30, faults)
+    for i, p in enumerate(positions):
+        X[i] += amplitude * burst_shape(p)
+    y = (np.arange(n) < faults).astype(np.int64)
+    return X.astype(np.float32), y, h, positions
+
+
+# ----------------------------------------------------------------------------- bounds
+
+
+def test_best_accuracy_and_detection_rate_by_hand():
+    score = np.array([0.1, 0.2, 0.9, 0.3, 0.8, 0.7])
+    y = np.array([0, 0, 1, 0, 1, 0])
+    # threshold between 0.3 and 0.7 calls 0.7 wrongly: 5/6; between 0.7 and 0.8: all right
+    assert best_accuracy(score, y) == pytest.approx(100.0)
+    assert best_accuracy(np.array([0.5, 0.5, 0.5]), np.array([0, 1, 1])) == pytest.approx(100 * 2 / 3)
+    assert detection_at(score, y, 0.01) == pytest.approx(100.0 * np.mean(score[y == 1] > np.quantile(score[y == 0], 0.99)))
+
+
+AMPLITUDE = 3.0
+
+
+@pytest.mark.parametrize("law", ["laplace", "gaussian", "student_t"])
+def test_likelihood_ratio_beats_energy_and_knows_its_noise_law(law):
+    """The likelihood ratio with the true shapes finds weak bursts better than the residual's
+    energy, and the right noise law does at least as well as the wrong one."""
+    X, y, h, pos = revolutions(400, 200, amplitude=AMPLITUDE, law=law, seed=3)
+    shapes = np.stack([burst_shape(p) * AMPLITUDE for p in range(0, L - 30)])
+    right = best_accuracy(likelihood_ratio(X, h, shapes, law), y)
+    energy = best_accuracy(((X - h) ** 2).sum(1), y)
+    assert right > energy + 5
+    wrong = "gaussian" if law != "gaussian" else "laplace"
+    assert right >= best_accuracy(likelihood_ratio(X, h, shapes, wrong), y) - 1.0
+
+
+def test_likelihood_ratio_refuses_an_unknown_law_and_gain_recovers_a_scale():
+    with pytest.raises(GearlabInputError, match="unknown noise kind 'cauchy'"):
+        likelihood_ratio(np.zeros((2, 8)), np.zeros(8), np.ones((1, 8)), "cauchy")
+    c = np.sin(np.arange(64) / 3.0)
+    assert gain(0.7 * c, c) == pytest.approx(0.7)
+
+
+# ----------------------------------------------------------------------------- calibration
+
+
+@pytest.mark.parametrize("law", ["gaussian", "laplace", "student_t"])
+def test_noise_law_is_read_off_the_history(law):
+    X, _, h, _ = revolutions(60, 0, 0.0, law, seed=4)
+    assert noise_law(X - np.median(X, axis=0)) == law
+
+
+def test_draw_noise_has_the_laws_kurtosis():
+    gen = torch.Generator().manual_seed(0)
+    from scipy.stats import kurtosis
+
+    assert kurtosis(draw_noise("gaussian", (200_000,), gen).numpy(), fisher=False) == pytest.approx(3.0, abs=0.1)
+    assert kurtosis(draw_noise("laplace", (200_000,), gen).numpy(), fisher=False) == pytest.approx(6.0, abs=0.4)
+
+
+def test_prepare_takes_references_gain_and_noise_level_from_the_training_arrays():
+    Xs, ys, h_s, _ = revolutions(80, 40, 3.0, "gaussian", seed=5, healthy_level=2.0)
+    Xs = (Xs - np.random.default_rng(0).normal(size=Xs.shape) * 0.0).astype(np.float32)
+    Xt, _, h_t, _ = revolutions(60, 0, 0.0, "laplace", seed=6, healthy_level=1.0)
+    inputs = prepare(Calibration(residual=True, source_noise="auto"), Xs, ys, Xt, None)
+    assert inputs.noise_law == "laplace"
+    assert inputs.noise_rms == pytest.approx(np.sqrt(2.0), rel=0.05)  # Laplace noise of unit scale
+    # RMS of the references: source tone 2 (+ its noise averaged down), target 1
+    assert inputs.gain == pytest.approx(0.5, rel=0.1)
+    assert np.allclose(inputs.target(Xt), Xt - inputs.target_reference)
+    assert np.allclose(inputs.source(Xs), inputs.gain * (Xs - inputs.source_reference), atol=1e-5)
+    x = torch.zeros(4, L)
+    noisy = inputs.augment(x, torch.Generator().manual_seed(1))
+    assert noisy.pow(2).mean(1).sqrt().numpy() == pytest.approx(np.full(4, inputs.noise_rms), rel=1e-4)
+    # the thesis's recipe changes nothing
+    thesis = prepare(THESIS, Xs, ys, Xt, None)
+    assert thesis.noise_law is None and np.array_equal(thesis.source(Xs), Xs) and np.array_equal(thesis.target(Xt), Xt)
+
+
+def test_a_few_unlabelled_faults_in_the_history_do_not_move_the_noise_level():
+    Xt, yt, _, _ = revolutions(120, 16, 8.0, "laplace", seed=7)
+    clean, _, _, _ = revolutions(120, 0, 0.0, "laplace", seed=7)
+    a = prepare(Calibration(source_noise="laplace"), clean, np.r_[np.zeros(60), np.ones(60)], Xt, None)
+    b = prepare(Calibration(source_noise="laplace"), clean, np.r_[np.zeros(60), np.ones(60)], clean, None)
+    assert a.noise_rms == pytest.approx(b.noise_rms, rel=0.03)
+
+
+def test_history_threshold_lets_the_asked_share_of_healthy_revolutions_through():
+    """A fixed score (the residual's largest |value|) thresholded on a healthy history calls
+    about 1 % of fresh healthy revolutions faulty, and the reference is subtracted."""
+
+    class MaxAbs(torch.nn.Module):
+        latent_dim = 1
+
+        def embed(self, x):
+            return x.abs().amax(1, keepdim=True)
+
+        def forward(self, x):
+            s = self.embed(x)[:, 0]
+            return torch.stack([torch.zeros_like(s), s], 1)
+
+    history, _, h, _ = revolutions(400, 0, 0.0, "laplace", seed=8, healthy_level=5.0)
+    fresh, _, _, _ = revolutions(4000, 0, 0.0, "laplace", seed=9, healthy_level=5.0)
+    inputs = prepare(Calibration(residual=True, threshold="history", false_alarm=0.01),
+                     history, np.r_[np.zeros(200), np.ones(200)], history, None)
+    model = calibrate(MaxAbs(), inputs, history, None, "cpu")
+    called = model(torch.as_tensor(fresh)).argmax(1).numpy()
+    assert 0.002 < called.mean() < 0.03
+    assert isinstance(model, Calibrated) and model.reference.numel() == L
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(source_noise="pink"), "source_noise"), (dict(alignment="joint"), "alignment"),
+    (dict(threshold="max"), "threshold"), (dict(false_alarm=0.7), "false_alarm"),
+])
+def test_calibration_settings_are_checked(bad, match):
+    with pytest.raises(GearlabInputError, match=match):
+        Calibration(**bad).check("s.toml")
+
+
+def test_healthy_alignment_compares_the_source_healthy_with_the_history():
+    z_s, z_t = torch.arange(12.0).reshape(6, 2), torch.arange(100.0, 108.0).reshape(4, 2)
+    y_s = torch.tensor([0, 1, 0, 1, 0, 1])
+    assert len(_aligned(z_s, z_t, y_s, None, "marginal")) == 1
+    (a, b), = _aligned(z_s, z_t, y_s, None, "healthy")
+    assert torch.equal(a, z_s[[0, 2, 4]]) and torch.equal(b, z_t)
+    y_t = torch.tensor([0, 0, 1, 1])
+    pairs = _aligned(z_s, z_t, y_s, y_t, "healthy")  # supervised: class by class
+    assert [len(a) for a, _ in pairs] == [3, 3] and torch.equal(pairs[1][1], z_t[2:])
+
+
+# ----------------------------------------------------------------------------- burst network
+
+
+def test_burst_network_is_gain_free_and_takes_any_length():
+    net = build_network("burst", 2, seed=0).eval()
+    x = torch.randn(3, 1000)
+    with torch.no_grad():
+        assert torch.allclose(net(x), net(37.0 * x), atol=1e-4)
+        assert net(torch.randn(2, 4096)).shape == (2, 2)
+    assert net.latent_dim == 32
+    with pytest.raises(GearlabInputError, match="at least"):
+        build_network("burst", 2, length=10)
+
+
+def test_burst_network_finds_a_burst_anywhere_in_the_revolution():
+    """Trained on bursts in the first half of the revolution, it finds those in the second half
+    as well as unseen ones in the first (global max pooling over a circular bank)."""
+    from gearlab.learn.training import fit_supervised
+
+    torch.manual_seed(0)
+    X, y, h, pos = revolutions(1200, 600, amplitude=10.0, law="laplace", seed=10)
+    R = X - h.astype(np.float32)
+    early = np.flatnonzero(pos < L // 2)
+    train = np.r_[early[: len(early) // 2], np.arange(600, 800)]
+    net = build_network("burst", 2, seed=0)
+    fit_supervised(net, R[train], y[train], rng=np.random.default_rng(0), device="cpu", epochs=25, batch=40)
+    with torch.no_grad():
+        called = net.eval()(torch.as_tensor(R)).argmax(1).numpy()
+    seen_half, other_half = called[early[len(early) // 2:]].mean(), called[np.flatnonzero(pos >= L // 2)].mean()
+    assert seen_half > 0.75 and other_half > seen_half - 0.05
+    assert called[800:].mean() < 0.15  # healthy revolutions it never saw
