@@ -274,14 +274,26 @@ def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bo
     from .kinds import KINDS
     from .runs import run_scenario
 
-    if events:
-        result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
-                              on_event=_print_event)
-        typer.echo(f"run directory: {result.path}")
-        return
-    with ProgressView() as view:
-        result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
-                              on_event=view.handle)
+    started: list[str] = []  # the run directory, once made: what Ctrl-C tells to resume
+
+    def remembered(sink):
+        def handle(event) -> None:
+            if event.kind == "run":
+                started.append(event.message)
+            sink(event)
+        return handle
+
+    try:
+        if events:
+            result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
+                                  on_event=remembered(_print_event))
+            typer.echo(f"run directory: {result.path}")
+            return
+        with ProgressView() as view:
+            result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
+                                  on_event=remembered(view.handle))
+    except KeyboardInterrupt:
+        raise Interrupted(started[-1] if started else None) from None
     kind = result.scenario().kind
     for line in KINDS[kind].summary_lines(result):
         console.print(line)
@@ -304,6 +316,14 @@ def gap(
     ray_address: RayAddress = None,
     events: Events = False,
 ) -> None:
+class Interrupted(Exception):
+    """Ctrl-C during a run; run_path: its run directory (None when none was made yet)."""
+
+    def __init__(self, run_path: str | None):
+        super().__init__(run_path)
+        self.run_path = run_path
+
+
     """Diagnose the sim-to-real gap of a scenario, or run the blind benchmark of the diagnosis.
 
     `gearlab gap benchmark` runs scenarios/gap_benchmark.toml (from the current folder, else
@@ -434,6 +454,21 @@ def _main() -> None:
                 where = f"{ctx.command_path}: " if ctx is not None else ""
                 err_console.print(f"error: {where}{message} (see --help)", markup=False, highlight=False)
             sys.exit(exc.exit_code)
-        traceback.print_exc()
-        err_console.print(f"internal error: {type(exc).__name__}: {exc}", markup=False)
-        sys.exit(1)
+        _internal_error(exc)
+
+
+def _internal_error(exc: BaseException) -> None:
+    traceback.print_exc()
+    err_console.print(f"internal error: {type(exc).__name__}: {exc}", markup=False)
+    sys.exit(1)
+    except Interrupted as exc:  # finished units are stored: the run goes on where it stopped
+        err_console.print(f"interrupted; resume with: gearlab run --resume {exc.run_path}" if exc.run_path
+                          else "interrupted; no run directory was made yet", markup=False, highlight=False)
+        sys.exit(130)
+    except OSError as exc:  # a full disk, a read-only place, outside a run (a report, --csv)
+        from .runs import cannot_write, write_problem
+
+        if write_problem(exc) is None:
+            _internal_error(exc)
+        err_console.print(f"error: {cannot_write(exc)}", markup=False, highlight=False, soft_wrap=True)
+        sys.exit(2)

@@ -22,6 +22,22 @@ def shown(value: object, limit: int = 60) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
+def clipped(text: str, limit: int = 200) -> str:
+    """*text* (a library's message, which may quote the input) cut to *limit* characters."""
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+MESSAGE_MAX = 600  # characters of an error line; a longer one quotes too much of the input
+
+
+def _short(text: str) -> str:
+    """*text*, its middle cut out when it is too long: the start says where, the end what was
+    expected, the middle is mostly a value quoted from the input."""
+    if len(text) <= MESSAGE_MAX:
+        return text
+    return f"{text[:MESSAGE_MAX * 2 // 3]} ... {text[-MESSAGE_MAX // 3:]}"
+
+
 class GearlabInputError(Exception):
     """Bad input from the user: a scenario, a CLI option, a data file, a plugin parameter.
 
@@ -31,7 +47,7 @@ class GearlabInputError(Exception):
     """
 
     def __init__(self, message: object = "", *args):
-        super().__init__(one_line(str(message)), *args)
+        super().__init__(_short(one_line(str(message))), *args)
 
 
 class UnknownPluginError(GearlabInputError):

@@ -14,7 +14,9 @@ progress bars from them, the TUI its widgets.
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import fcntl
+import hashlib
 import json
 import os
 import shutil
@@ -28,7 +30,7 @@ from pathlib import Path
 
 import tomli_w
 
-from .errors import GearlabInputError
+from .errors import GearlabInputError, shown
 from .scenario import Scenario, load_scenario
 
 
@@ -64,18 +66,70 @@ def _ignore(_: Event) -> None:
     pass
 
 
+def current_umask() -> int:
+    """The process's umask, read without changing it where Linux tells it (/proc)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)  # elsewhere: set and restore at once
+    os.umask(mask)
+    return mask
+
+
 def atomic_write(path: Path, data: bytes | str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
+        os.fchmod(fd, 0o666 & ~current_umask())  # mkstemp makes 0600; a report is for others to read too
         with os.fdopen(fd, "wb") as f:
             f.write(data.encode() if isinstance(data, str) else data)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename is None:  # a full disk: name the file in the message
+            exc.filename = str(path)
         raise
+
+
+def inside(root: Path, *parts: str) -> Path:
+    """*root*/*parts*, when that is provably inside *root*: refused when a part is absolute,
+    climbs out with '..', holds a NUL, or leads out through a symbolic link. Every file a
+    run writes is named through this (RunDir.file), so no name taken from a scenario or a
+    measured file can place one elsewhere."""
+    path = Path(root).joinpath(*parts)
+    try:
+        real_root, real = Path(root).resolve(), path.resolve()
+        ok = real != real_root and real.is_relative_to(real_root)
+    except (OSError, ValueError):  # a NUL character, a loop of links
+        ok = False
+    if not ok:
+        raise GearlabInputError(f"{shown(str(path), 200)}: refused: not a file inside {root}")
+    return path
+
+
+# errno -> what the user is told (and can fix) when a file cannot be written
+_WRITE_PROBLEMS = {errno.ENOSPC: "no space left on the device", errno.EDQUOT: "disk quota exceeded",
+                   errno.EROFS: "read-only file system", errno.EACCES: "permission denied",
+                   errno.EPERM: "operation not permitted", errno.EFBIG: "file too large"}
+
+
+def write_problem(exc: OSError) -> str | None:
+    """What keeps a file from being written (a full disk, a read-only place), or None when
+    *exc* is not such a problem of the user's file system."""
+    return _WRITE_PROBLEMS.get(exc.errno)
+
+
+def cannot_write(exc: OSError, where: Path | str = "") -> GearlabInputError:
+    """One line naming the path and the problem, for an OSError of writing (under *where*)."""
+    problem = write_problem(exc) or exc.strerror or type(exc).__name__
+    path = exc.filename or where
+    return GearlabInputError(f"{path}: cannot write: {problem}" if path else f"cannot write: {problem}")
 
 
 RUN_FILE = "run.json"  # how the run was started (--quick), for --resume
@@ -113,51 +167,62 @@ class RunDir:
     def figures(self) -> Path:
         return self.path / "figures"
 
+    def file(self, *parts: str) -> Path:
+        """The path of a file of this run, refused unless it lies inside the run directory."""
+        return inside(self.path, *parts)
+
     @classmethod
     def create(cls, base: Path, scenario: Scenario, quick: bool = False) -> RunDir:
+        """A new run directory <base>/<name>/<timestamp>[-N]; on failure (a full disk, a
+        read-only place) nothing of it is left and one line says why."""
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
-        path = Path(base) / scenario.name / stamp
+        parent = inside(base, scenario.name)
         try:
-            created = next((p for p in reversed([path, *path.parents]) if not p.exists()), path)
+            created = next((p for p in reversed([parent, *parent.parents]) if not p.exists()), None)
         except OSError as exc:  # e.g. a name too long: nothing made yet
             raise GearlabInputError(f"cannot write the run directory under '{base}': {exc.strerror or exc}") from None
+        run = None
         try:
-            path.mkdir(parents=True, exist_ok=False)
-            probe = path / ".write-test"
-            probe.write_bytes(b"")
-            probe.unlink()
+            parent.mkdir(parents=True, exist_ok=True)
+            run = cls(_fresh_folder(parent, stamp), created=created)
+            # scenario.toml last: it marks a run directory (open() looks for it), so a run killed
+            # while this runs is never resumed without its --quick setting or original scenario.
+            run.write_json(RUN_FILE, {"quick": quick, "base": str(scenario.base.resolve()) if scenario.base else None,
+                                      "inputs": input_digests(scenario)})
+            try:
+                original = scenario.path.read_bytes()
+            except OSError:  # gone meanwhile: the resolved scenario.toml suffices
+                original = None
+            if original is not None:
+                run.write_text("scenario.original.toml", original)
+            run.write_text("scenario.toml", tomli_w.dumps(_tomlable(scenario.tables)))
         except OSError as exc:
-            cls(path, created=created).discard()
-            raise GearlabInputError(f"cannot write the run directory under '{base}': {exc.strerror or exc}") from None
-        run = cls(path, created=created)
-        # scenario.toml last: it marks a run directory (open() looks for it), so a run killed
-        # while this runs is never resumed without its --quick setting or original scenario.
-        run.write_json(RUN_FILE, {"quick": quick})
-        try:
-            shutil.copyfile(scenario.path, path / "scenario.original.toml")
-        except OSError:
-            pass
-        atomic_write(path / "scenario.toml", tomli_w.dumps(_tomlable(scenario.tables)))
+            if run is not None:
+                run.discard()
+            elif created is not None:
+                _remove_empty(parent, created)
+            problem = write_problem(exc) or exc.strerror or type(exc).__name__
+            raise GearlabInputError(f"cannot write the run directory under '{base}': {problem}"
+                                    + (f" ({exc.filename})" if exc.filename else "")) from None
         return run
 
     def discard(self) -> None:
         """Remove a run directory this process created, and the folders made for it if empty."""
         shutil.rmtree(self.path, ignore_errors=True)
-        if self.created is None:
-            return
-        for folder in self.path.parents:
-            if not folder.is_relative_to(self.created):
-                break
-            try:
-                folder.rmdir()
-            except OSError:  # not empty: another run lives there
-                break
+        if self.created is not None:
+            _remove_empty(self.path.parent, self.created)
 
     @property
     def quick(self) -> bool:
         """Whether the run was started with --quick (a resume must shrink it alike)."""
         meta = self.path / RUN_FILE
         return bool(json.loads(meta.read_text()).get("quick")) if meta.is_file() else False
+
+    def base(self) -> Path | None:
+        """The folder of the scenario file the run was started from (relative paths in it)."""
+        meta = self.path / RUN_FILE
+        base = json.loads(meta.read_text()).get("base") if meta.is_file() else None
+        return Path(base) if base else None
 
     @classmethod
     def open(cls, path: Path) -> RunDir:
@@ -199,7 +264,7 @@ class RunDir:
         """The scenario as this run ran it (shrunk alike when started with --quick)."""
         from .kinds import KINDS
 
-        scenario = load_scenario(self.scenario_path())
+        scenario = load_scenario(self.scenario_path(), base=self.base())
         if self.quick:
             KINDS[scenario.kind].quick(scenario)
         return scenario
@@ -230,16 +295,20 @@ class RunDir:
 
     def append(self, record: dict) -> None:
         line = json.dumps(record, sort_keys=True) + "\n"
-        with open(self.results_path, "a") as f:
-            f.write(line)
-            f.flush()
-            os.fsync(f.fileno())
+        try:
+            with open(self.results_path, "a") as f:
+                f.write(line)
+                f.flush()
+                os.fsync(f.fileno())
+        except OSError as exc:  # a full disk: a partial line is dropped on --resume (truncate_partial)
+            exc.filename = exc.filename or str(self.results_path)
+            raise
 
     def write_json(self, name: str, obj) -> None:
-        atomic_write(self.path / name, json.dumps(obj, indent=2, sort_keys=True) + "\n")
+        atomic_write(self.file(name), json.dumps(obj, indent=2, sort_keys=True) + "\n")
 
-    def write_text(self, name: str, text: str) -> None:
-        atomic_write(self.path / name, text)
+    def write_text(self, name: str, text: str | bytes) -> None:
+        atomic_write(self.file(name), text)
 
     def remove_temporaries(self) -> None:
         """Remove the temporary files of atomic writes cut short by a kill. Only with the run
@@ -255,6 +324,79 @@ class RunDir:
         cut = data.rfind(b"\n") + 1
         if cut != len(data):
             atomic_write(self.results_path, data[:cut])
+
+
+def _fresh_folder(parent: Path, stamp: str) -> Path:
+    """A folder made now under *parent*: <stamp>, or <stamp>-2, -3, ... when another run (of
+    another process started in the same microsecond) holds the name; never one that exists."""
+    for n in range(1, 1000):
+        path = parent / (stamp if n == 1 else f"{stamp}-{n}")
+        try:
+            path.mkdir()
+            return path
+        except FileExistsError:
+            continue
+    raise GearlabInputError(f"{parent}: cannot find a free name for a run directory ({stamp}-999 taken)")
+
+
+def _remove_empty(folder: Path, created: Path) -> None:
+    """Remove *folder* and its parents up to *created* (the outermost folder this process
+    made) while they are empty; a folder holding anything (another run) stays."""
+    for folder in (folder, *folder.parents):
+        if not folder.is_relative_to(created):
+            break
+        try:
+            folder.rmdir()
+        except OSError:  # not empty: another run lives there
+            break
+
+
+def input_paths(scenario: Scenario) -> list[Path]:
+    """The measured files a scenario reads: every 'file' (and each of 'files') of its tables,
+    resolved against the scenario's folder."""
+    base = Path(scenario.base or scenario.path.parent)
+    found: list[Path] = []
+
+    def walk(node) -> None:
+        if isinstance(node, dict):
+            for key, value in node.items():
+                names = [value] if key == "file" else value if key == "files" and isinstance(value, list) else []
+                found.extend((base / name).resolve() for name in names if isinstance(name, str) and name)
+                walk(value)
+        elif isinstance(node, list):
+            for item in node:
+                walk(item)
+
+    walk(scenario.tables)
+    return list(dict.fromkeys(found))
+
+
+def _digest(path: Path) -> str | None:
+    try:
+        with open(path, "rb") as f:
+            return hashlib.file_digest(f, "sha256").hexdigest()
+    except OSError:
+        return None
+
+
+def input_digests(scenario: Scenario) -> dict[str, str | None]:
+    """{absolute path: sha256 of its content} of the measured files a run reads, stored in
+    run.json so that a resume against a changed file is refused (its finished units were
+    computed from the old content)."""
+    return {str(path): _digest(path) for path in input_paths(scenario)}
+
+
+def check_inputs(run: RunDir) -> None:
+    """Refuse to resume *run* when a measured file it read has changed or gone since it started."""
+    meta = run.path / RUN_FILE
+    stored = json.loads(meta.read_text()).get("inputs") if meta.is_file() else None
+    for path, digest in (stored or {}).items():
+        now = _digest(Path(path))
+        if now != digest:
+            change = "is gone" if now is None else "has changed"
+            raise GearlabInputError(f"{path}: {change} since the run in {run.path} started (sha256 "
+                                    f"{(digest or '?')[:12]}...); its finished units were computed from the file "
+                                    "as it was: restore it, or start a new run")
 
 
 def _tomlable(value):
@@ -275,7 +417,7 @@ class UnitProgress:
     Use as a context manager: the file goes when the unit ends."""
 
     def __init__(self, run_path: Path, unit: str, every: float = 0.5):
-        self.path = Path(run_path) / PROGRESS / (unit.replace("/", "__") + ".txt")
+        self.path = inside(run_path, PROGRESS, unit.replace("/", "__") + ".txt")
         self.every, self.last = every, -every
 
     def __call__(self, text: str) -> None:
@@ -355,9 +497,14 @@ def run_scenario(
         scenario = load_scenario(scenario_path, overrides)
         if quick:  # the shrunk scenario is checked again: refused before any folder is made
             KINDS[scenario.kind].quick(scenario)
-        base = Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
-        run = RunDir.create(base, scenario, quick)
-    with run.lock():  # held until the run ends: a second process in this directory is refused
+        run = RunDir.create(output_base(scenario, out), scenario, quick)
+    try:
+        lock = run.lock()
+    except GearlabInputError:
+        if resume is None:  # a new run that cannot even be locked (a full disk): leave none
+            run.discard()
+        raise
+    with lock:  # held until the run ends: a second process in this directory is refused
         if resume is not None:
             scenario = _resumed_scenario(run, scenario_path, quick, overrides)
         on_event(Event("run", message=str(run.path)))
@@ -366,15 +513,33 @@ def run_scenario(
         watcher.start()
         try:
             KINDS[scenario.kind].run(scenario, run, on_event)
+            write_report(run)
         except GearlabInputError:
             # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
             if resume is None and not run.records():
                 run.discard()
             raise
+        except OSError as exc:
+            if write_problem(exc) is None:
+                raise
+            # A full disk, a read-only place: finished units are stored line by line, so a run
+            # that has any is kept for --resume; one that has none is removed.
+            kept = resume is not None or bool(run.records())
+            if not kept:
+                run.discard()
+            then = (f"; the run is kept: once fixed, resume with: gearlab run --resume {run.path}" if kept
+                    else "; no run directory is left")
+            raise GearlabInputError(f"{cannot_write(exc, run.path)}{then}") from None
         finally:
             watcher.stop()
-        write_report(run)
     return run
+
+
+def output_base(scenario: Scenario, out: str | Path | None = None) -> Path:
+    """The folder that holds a scenario's runs (<base>/<name>/<timestamp>/): --out, else its
+    [output] dir; a relative one is taken from the current folder. The TUI looks up past runs
+    with this, so it finds them where `gearlab run` puts them."""
+    return Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
 
 
 def _resumed_scenario(run: RunDir, scenario_path: str | Path | None, quick: bool,
@@ -385,10 +550,12 @@ def _resumed_scenario(run: RunDir, scenario_path: str | Path | None, quick: bool
 
     if quick and not run.quick:
         raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
-    scenario = load_scenario(scenario_path or run.scenario_path(), overrides)
+    scenario = load_scenario(scenario_path or run.scenario_path(), overrides,
+                             base=None if scenario_path else run.base())
     if not run.started_with(scenario):
         raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
                                 "with; resume without SCENARIO (the run keeps a copy) or start a new run")
+    check_inputs(run)
     if run.quick:
         KINDS[scenario.kind].quick(scenario)
     run.truncate_partial()

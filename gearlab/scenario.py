@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import GearlabInputError, shown
+from .errors import GearlabInputError, clipped, shown
 from .params import did_you_mean
 
 _REQUIRED = object()
@@ -46,9 +46,11 @@ class Table:
 def one_of(*choices: str) -> Callable[[Any, str], Any]:
     def check(value, where):
         if value not in choices:
-            raise GearlabInputError(f"{where}: '{value}' is not one of {', '.join(choices)}{did_you_mean(value, choices)}")
+            raise GearlabInputError(f"{where}: {shown(value)} is not one of {', '.join(choices)}"
+                                    f"{did_you_mean(value, choices) if len(value) <= 100 else ''}")
         return value
 
+    check.choices = choices  # what a front-end may offer (the TUI's run form)
     return check
 
 
@@ -64,9 +66,31 @@ def in_range(low: float | None = None, high: float | None = None) -> Callable[[A
     return check
 
 
+# Most epochs any training key may ask for (the thesis trains for at most 800): beyond it a
+# value is a mistake that would hold a run for years.
+MAX_EPOCHS = 100_000
+
+
+# The characters of a name that becomes part of a file or folder name (a scenario's, a
+# dataset's, a stiffness case's): letters and digits of any script, spaces and these marks.
+# No separator can occur, and a name may not start with '.', so it is never '..' nor hidden.
+NAME_MARKS = " _-.+(),@="
+NAME_MAX = 100
+
+
+def plain_name(value: str, where: str) -> str:
+    """A name that may become one component of a path in a run directory (see NAME_MARKS)."""
+    if not (value and len(value) <= NAME_MAX and value[0] not in " ." and value[-1] != " "
+            and all(c.isalnum() or c in NAME_MARKS for c in value)):
+        raise GearlabInputError(f"{where}: expected a plain name usable as a file name (letters, digits, spaces and "
+                                f"'{NAME_MARKS.strip()}', not starting with '.' or a space, at most {NAME_MAX} "
+                                f"characters), got {shown(value)}")
+    return value
+
+
 SCENARIO_TABLE = Table(
     {
-        "name": Key(str, doc="run name, used for runs/<name>/"),
+        "name": Key(str, check=plain_name, doc="run name, used for runs/<name>/"),
         "description": Key(str, ""),
         "kind": Key(str, doc="stiffness | dataset | noise_study | transfer | gap | gap_benchmark"),
     },
@@ -101,6 +125,9 @@ class Scenario:
     tables: dict[str, Any]  # validated tables with defaults filled in
     spec: Any = None  # the kind's parsed specification (gear pair, placed faults, ...)
     raw: dict = field(default_factory=dict)
+    # the folder relative file paths resolve against: the scenario file's, also when a run
+    # directory's copy of it is loaded (RunDir.scenario, --resume)
+    base: Path | None = None
 
     def where(self, table: str, key: str | None = None, index: int | None = None) -> str:
         return location(self.path, table, key, index)
@@ -175,11 +202,26 @@ def validate_tables(path, schema: Mapping[str, Table], data: Mapping) -> dict:
     return tables
 
 
+def _nearby(path: Path) -> str:
+    """' (did you mean 'scenarios/quick.toml'?)' for a mistyped file name: the scenario file
+    of the folder it names whose name is closest (compared without the .toml)."""
+    import difflib
+
+    try:
+        files = {p.stem: p for p in path.parent.glob("*.toml")} if path.parent.is_dir() else {}
+    except OSError:
+        return ""
+    stem = path.stem if path.suffix == ".toml" else path.name
+    close = difflib.get_close_matches(stem, list(files), n=1, cutoff=0.5) or \
+        [s for s in files if s.lower() == stem.lower()]
+    return f" (did you mean '{files[close[0]]}'?)" if close else ""
+
+
 def read_toml(path: Path) -> dict:
     try:
         text = path.read_bytes().decode("utf-8")
     except FileNotFoundError:
-        raise GearlabInputError(f"{path}: no such scenario file") from None
+        raise GearlabInputError(f"{path}: no such scenario file{_nearby(path)}") from None
     except IsADirectoryError:
         raise GearlabInputError(f"{path}: is a directory, expected a scenario .toml file") from None
     except UnicodeDecodeError as exc:
@@ -189,10 +231,16 @@ def read_toml(path: Path) -> dict:
     try:
         return tomllib.loads(text)
     except ValueError as exc:  # TOMLDecodeError, or an integer of more digits than Python converts
-        raise GearlabInputError(f"{path}: invalid TOML: {exc}") from None
+        raise GearlabInputError(f"{path}: invalid TOML: {clipped(str(exc))}") from None
+    except RecursionError:  # arrays or inline tables nested hundreds deep
+        raise GearlabInputError(f"{path}: invalid TOML: nested too deeply (arrays or tables inside one another "
+                                "hundreds of levels deep)") from None
+    except MemoryError:
+        raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None
 
 
-def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None) -> Scenario:
+def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None,
+                  base: str | Path | None = None) -> Scenario:
     """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key.
 
     *overrides* ({table: {key: value}}, e.g. the CLI's --executor or --trials) replace keys of
@@ -213,11 +261,8 @@ def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] |
     schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, "execution": EXECUTION_TABLE, **module.TABLES}
     tables = validate_tables(path, schema, data)
     scenario = Scenario(
-        path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data
+        path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data,
+        base=Path(base) if base is not None else path.parent,
     )
-    name = scenario.name
-    if not name or "/" in name or name.startswith(".") or len(name) > 100 or not name.isprintable():
-        raise GearlabInputError(f"{location(path, 'scenario', 'name')}: expected a plain name usable as a folder name "
-                                f"(printable, at most 100 characters, no '/'), got {shown(name)}")
     scenario.spec = module.build(scenario)
     return scenario

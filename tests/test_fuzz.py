@@ -548,3 +548,78 @@ def test_run_refused_at_work_leaves_no_run_directory(cli_dir, case):
     last = err.strip().splitlines()[-1]  # after the progress lines of the work begun
     assert code == 2 and last.startswith("error: ") and fact in last, err
     assert not out.exists() or not any(out.rglob("*"))
+
+
+# ============================================================================= hostile scenarios (issue 16)
+
+# What a hostile (or careless) user puts into a name that may become a path component.
+PATH_TEXTS = ["../../../../../../tmp/gearlab-escape", "..", ".", "/", "/tmp/gearlab-abs", "a/b", "a\\..\\b", "~",
+              "../x", "x/..", ".hidden", " ", "x\u0000y", "con", "..\u2215x", "%2e%2e%2fx", "a\nb", "é" * 120,
+              "x" * 5000]
+HUGE = [10 ** 30, -(10 ** 30), 2 ** 64, 1e300, -1e300, float("inf"), float("nan"), 10 ** 400]
+
+
+def name_spots(doc: dict) -> list[tuple[dict, str]]:
+    """The tables whose 'name' (or a 'file') may reach a path: [scenario], every [[datasets]],
+    [[cases]], [source] and [target]."""
+    spots: list[tuple[dict, str]] = [(doc["scenario"], "name")]
+    for table in ("datasets", "cases"):
+        spots += [(entry, "name") for entry in doc.get(table, []) if isinstance(entry, dict)]
+    for table in ("source", "target"):
+        if isinstance(doc.get(table), dict):
+            spots += [(doc[table], "name"), (doc[table], "file")]
+    return spots
+
+
+@st.composite
+def hostile_scenarios(draw) -> bytes:
+    """A shipped (or the measured) scenario with a path in a name-like field, a huge value,
+    or a value nested hundreds deep; as TOML text (tomli_w itself recurses too deep for the last)."""
+    rnd = random.Random(draw(st.integers(0, 2**64)))
+    doc = copy.deepcopy(REAL[rnd.choice(["measured.toml", "measured.toml", "cases.toml", "quick.toml",
+                                         "dataset_B.toml", "study.toml"])])
+    op = rnd.choice(["path", "path", "huge", "deep"])
+    if op == "path":
+        for _ in range(rnd.randint(1, 2)):
+            table, key = rnd.choice(name_spots(doc))
+            table[key] = draw(st.sampled_from(PATH_TEXTS))
+        return toml_bytes(doc)
+    parent, key = rnd.choice([(c, k) for c, k in places(doc) if not isinstance(c[k], (dict, list))])
+    if op == "huge":
+        parent[key] = draw(st.sampled_from(HUGE))
+        return toml_bytes(doc)
+    parent[key] = "DEEP"
+    depth = draw(st.sampled_from([200, 500, 2000]))
+    return toml_bytes(doc).replace(b'"DEEP"', b"[" * depth + b"]" * depth, 1)
+
+
+@fuzz(40)
+@given(data=hostile_scenarios())
+def test_hostile_scenarios_write_nothing_outside_out(cli_dir, data):
+    """Exit code 2 with one error line (or a run that works), and nothing written outside --out:
+    the listing of the folder that holds the scenario and --out is the same before and after,
+    but for --out."""
+    parent = cli_dir / "hostile"
+    shutil.rmtree(parent, ignore_errors=True)
+    parent.mkdir()
+    (parent / "rec.npz").write_bytes((cli_dir / "rec.npz").read_bytes())
+    path = parent / "s.toml"
+    path.write_bytes(data)
+    try:
+        valid = load_scenario(path)
+    except GearlabInputError:
+        valid = None
+    if valid is not None and not (valid.kind == "dataset" and all(d["file"] for d in valid.tables["datasets"])):
+        return  # a valid scenario would run for real; only a measured dataset is quick enough
+    out = parent / "out"
+    before = {p for p in parent.rglob("*")}
+    outside = sorted(p for p in Path("/tmp").glob("gearlab-*") if not p.name.startswith("gearlab-cache-"))
+    with no_hang():
+        code, err = run_cli("run", path, "--out", out)
+    assert code in (0, 2), err
+    if code == 2:
+        assert err.splitlines()[-1].startswith("error: ") and "Traceback" not in err, err
+        assert len(err.splitlines()[-1]) < 700, err
+    after = {p for p in parent.rglob("*") if p != out and not p.is_relative_to(out)}
+    assert after == before, f"written outside --out: {sorted(after - before)}"
+    assert sorted(p for p in Path("/tmp").glob("gearlab-*") if not p.name.startswith("gearlab-cache-")) == outside

@@ -24,11 +24,20 @@ Formats (by extension) and where the sampling rate comes from:
     .mat          MATLAB v5 variables (scipy), or v7.3 (an HDF5 file, read with h5py); rate
                   from a variable 'fs' or 'Fs'
 
+Zipped whitespace-separated text with a multi-pulse tacho and a sensor sensitivity (the PHM 2009
+gearbox records) is read by :mod:`gearlab.data.textzip`, for the measured [target] of the
+detection kind (docs/real_data.md).
+
 Names 'fs' (any case) and 't'/'time' are looked up the same way in every keyed format; when
 the file carries a rate and one is given too (MeasuredSpec.fs) they must agree.
 
 Every bad file raises :class:`GearlabInputError` with one line that names the file, the
 channel and what was expected; nothing is returned half-built.
+
+Sizes are checked before anything is read: the file, and every channel as its file declares
+it (an HDF5 dataset never written, an NPZ member that inflates), may hold at most
+GEARLAB_MAX_RECORD_MB megabytes (default MAX_RECORD_MB), so that a file claiming more than
+memory holds is refused in one line instead of exhausting it.
 """
 
 from __future__ import annotations
@@ -37,6 +46,7 @@ import csv
 import hashlib
 import json
 import math
+import os
 import re
 import struct
 import warnings
@@ -94,6 +104,30 @@ _RISING_SHARE = 0.9
 # Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
 # cannot even be unwrapped).
 _MIN_SAMPLES_PER_REV = 2
+
+
+# Most megabytes a measured file, and each channel as stored (decoded), may hold; the import
+# takes several times that in memory. GEARLAB_MAX_RECORD_MB overrides it (docs/scenarios.md).
+MAX_RECORD_MB = 1024
+
+
+def max_record_bytes() -> int:
+    text = os.environ.get("GEARLAB_MAX_RECORD_MB", "")
+    try:
+        mb = float(text) if text else MAX_RECORD_MB
+    except ValueError:
+        raise GearlabInputError(f"GEARLAB_MAX_RECORD_MB: expected a number of megabytes, got {text[:40]!r}") from None
+    if not mb > 0 or not math.isfinite(mb):
+        raise GearlabInputError(f"GEARLAB_MAX_RECORD_MB: expected a positive number of megabytes, got {text[:40]!r}")
+    return int(mb * 2**20)
+
+
+def check_size(path, what: str, nbytes: int) -> None:
+    """Refuse *what* of *path* when it would take more than the record size limit."""
+    limit = max_record_bytes()
+    if nbytes > limit:
+        raise GearlabInputError(f"{path}: {what} would take {nbytes / 2**20:,.0f} MB, more than the limit of "
+                                f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
 
 
 # --- what the importer is asked -------------------------------------------------------
@@ -351,6 +385,10 @@ def _read_csv(path: Path, names: Sequence[str]) -> _Contents:
             )
     if len(rows) < 2:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
+    if not any(_column([row[j].strip() for row in rows[1:2]]).dtype.kind == "f" for j in range(len(header))):
+        # not a measured record (a system file reached through a link?): nothing of it is quoted
+        raise GearlabInputError(f"{path}: its first data row (line {lines[1][0]}) holds no number; expected a header "
+                                "row of column names, then rows of numbers")
     index = {h: j for j, h in enumerate(header)}
 
     def get(name: str):
@@ -372,7 +410,22 @@ def _read_npz(path: Path, names: Sequence[str]) -> _Contents:
     if not zipfile.is_zipfile(path):
         raise ValueError("not a zip archive (an .npz file is a zip of named .npy arrays)")
     with np.load(path, allow_pickle=False) as data:  # read inside: members load lazily
-        return _keyed(data.files, lambda n: data[n], names)
+        def get(name: str):
+            check_size(path, f"array '{name}'", _npz_member_bytes(data.zip, f"{name}.npy"))
+            return data[name]
+
+        return _keyed(data.files, get, names)
+
+
+def _npz_member_bytes(archive: zipfile.ZipFile, member: str) -> int:
+    """What an NPZ member takes once read: its .npy header's shape times its item size (what
+    numpy allocates), or its declared inflated size if that is larger."""
+    info = archive.getinfo(member)
+    with archive.open(member) as f:
+        version = np.lib.format.read_magic(f)
+        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, _, dtype = read_header(f, max_header_size=10_000)
+    return max(math.prod(shape) * dtype.itemsize, info.file_size)
 
 
 def _h5py():
@@ -398,6 +451,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> _Conte
     h5py = _h5py()
 
     def read(ds):
+        # declared, not stored: a dataset never written takes no room in the file
+        check_size(path, f"dataset '{ds.name}'", (ds.size or 0) * max(ds.dtype.itemsize, 8))
         if h5py.check_string_dtype(ds.dtype) is not None:
             return _normalise(ds.asstr()[()])
         value = np.asarray(ds[()])
@@ -489,7 +544,11 @@ def _read_wav(path: Path, names: Sequence[str]) -> _Contents:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        rate, data = wavfile.read(path)
+        try:
+            rate, data = wavfile.read(path)
+        except ZeroDivisionError:  # scipy divides by the header's bytes per frame
+            raise ValueError("its header declares 0 channels or 0 bytes per sample; expected at least one "
+                             "channel of samples") from None
     for w in caught:
         # scipy reads what is there of a truncated file and only warns: refuse, never half a record.
         if "EOF" in str(w.message):
@@ -502,6 +561,8 @@ def _read_wav(path: Path, names: Sequence[str]) -> _Contents:
         data = (data.astype(np.float64) - half) / half
     elif data.dtype.kind == "i":  # 24-bit PCM arrives left-justified in int32
         data = data.astype(np.float64) / 2.0 ** (8 * data.dtype.itemsize - 1)
+    if data.ndim != 2 or data.shape[1] == 0:
+        raise ValueError("it holds no channel; expected at least one")
     channels = [str(i) for i in range(data.shape[1])]
     found = {n: data[:, int(n)] for n in dict.fromkeys(names) if n in channels}
     return _Contents(found, channels, rates=[("the WAV header", np.asarray(rate))])
@@ -647,6 +708,17 @@ class _Mat5Layout:
         return name
 
 
+def _inflate(data, at: int) -> bytes:
+    """A compressed MATLAB variable, refused once it inflates beyond the record size limit."""
+    limit = max_record_bytes()
+    inflater = zlib.decompressobj()
+    out = inflater.decompress(data, limit + 1)
+    if len(out) > limit:
+        raise ValueError(f"the compressed variable at byte {at} inflates to more than the limit of "
+                         f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
+    return out
+
+
 def _mat5_variables(data: bytes, read) -> list[str]:
     """Names of the variables of a MATLAB v5 file, after checking their layout: every
     variable's header, and in full those for which read(name) is true."""
@@ -664,7 +736,7 @@ def _mat5_variables(data: bytes, read) -> list[str]:
         if size == 0 or pos > len(data):
             raise ValueError(f"a variable of {size} bytes at byte {start - 8} of {len(data)}")
         if kind == _MI_COMPRESSED:
-            inner = memoryview(zlib.decompress(data[start:pos]))
+            inner = memoryview(_inflate(data[start:pos], start - 8))
             kind, body, _ = layout.element(inner, 0, len(inner))
         else:
             body = data[start:pos]
@@ -686,10 +758,13 @@ def _read(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tu
         raise GearlabInputError(
             f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {_supported()}"
         )
+    check_size(path, "the file", path.stat().st_size)
     try:
         contents = _READERS[fmt](path, names)
     except GearlabInputError:
         raise
+    except MemoryError:
+        raise GearlabInputError(f"cannot read {path} as {fmt}: not enough memory for what it declares") from None
     except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file
         raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
     for name in names:
@@ -843,6 +918,8 @@ def _series(raw, name: str, role: str, path: str) -> np.ndarray:
         raise GearlabInputError(
             f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers"
         )
+    if arr.dtype.kind == "b" and role == "vibration":  # a tacho's pulses may be true/false; a vibration not
+        raise GearlabInputError(f"{path}: {what} holds true/false values; expected a vibration signal of numbers")
     if arr.ndim > 1 and sum(s > 1 for s in arr.shape) <= 1:
         arr = arr.reshape(-1)  # a 1×N or N×1 matrix is one channel
     if arr.ndim == 0:
@@ -1067,6 +1144,16 @@ def _steady_start(revs: np.ndarray, labels: np.ndarray | None, spec: MeasuredSpe
 
 
 def import_measured(spec: MeasuredSpec) -> Dataset:
+    """A measured record as a Dataset (see _import_measured); running out of memory on the
+    way (a record just under the size limit on a small machine) is one clear line."""
+    try:
+        return _import_measured(spec)
+    except MemoryError:
+        raise GearlabInputError(f"{spec.path}: not enough memory to import this record; a shorter record, or a "
+                                "machine with more memory") from None
+
+
+def _import_measured(spec: MeasuredSpec) -> Dataset:
     """A measured record as a Dataset of standardised revolutions (float32, (n, spec.points)).
 
     Rows are the steady complete revolutions in record order. label/fault are the class

@@ -15,7 +15,7 @@ from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..runs import Event, RunDir
-from ..scenario import Key, Scenario, Table, in_range, location
+from ..scenario import Key, Scenario, Table, in_range, location, plain_name
 from ..units import to_si
 
 DATASET_TABLE = Table(
@@ -27,7 +27,7 @@ DATASET_TABLE = Table(
         "labels": Key(str, "", doc="measured data: an optional label channel"),
         "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
         "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
-        "name": Key(str, "", doc="label (default: the preset name)"),
+        "name": Key(str, "", lambda v, where: v and plain_name(v, where), "label (default: the preset name)"),
         "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
         "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
         "channel": Key(str, "", doc="measurement channel, e.g. pinion_x, casing_x"),
@@ -74,22 +74,19 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
         changes["preset"] = entry["model_preset"]
     if entry["name"]:
         changes["name"] = changes["domain"] = entry["name"]
-    for key, unit in (("speed", "Hz"), ("load", "N*m"), ("fs", "Hz")):
+    for key in ("speed", "load", "fs"):
         if entry[key] is not None:
-            value = to_si(entry[key], unit, f"{where} key '{key}'")
-            if value <= 0 and key != "load" or value < 0:
-                raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {entry[key]!r}")
-            changes[{"speed": "speed_hz", "load": "load_nm", "fs": "fs"}[key]] = value
+            changes[{"speed": "speed_hz", "load": "load_nm", "fs": "fs"}[key]] = quantity(entry, key, where)
     if entry["faults"] is not None:
         faults = []
         for name, steps in entry["faults"].items():
             if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
-                raise GearlabInputError(f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {steps!r}")
+                raise GearlabInputError(f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {shown(steps)}")
             faults.append((name, tuple(steps)))
         changes["faults"] = tuple(faults)
     if entry["teeth"] is not None:
         if not all(isinstance(t, int) and not isinstance(t, bool) for t in entry["teeth"]):
-            raise GearlabInputError(f"{where} key 'teeth': expected a list of tooth numbers, got {entry['teeth']!r}")
+            raise GearlabInputError(f"{where} key 'teeth': expected a list of tooth numbers, got {shown(entry['teeth'])}")
         changes["teeth"] = tuple(entry["teeth"])
     for key in ("duplicates", "healthy", "revolutions", "tsa", "seed"):
         if entry[key] is not None:
@@ -108,13 +105,30 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     return spec
 
 
+# Ranges of a dataset's quantities (unit, largest value, as said): beyond them a value is a
+# mistake (fs = 1e300 would ask for more samples per revolution than any memory holds).
+QUANTITIES = {"speed": ("Hz", 1e3, "1 kHz"), "load": ("N*m", 1e6, "1e6 N*m"), "fs": ("Hz", 1e7, "10 MHz")}
+
+
+def quantity(entry: dict, key: str, where: str) -> float:
+    """A speed, load or rate of a dataset entry in SI units, checked against its range."""
+    unit, high, said = QUANTITIES[key]
+    value = to_si(entry[key], unit, f"{where} key '{key}'")
+    if value < 0 or value == 0 and key != "load":
+        raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {shown(entry[key])}")
+    if value > high:
+        raise GearlabInputError(f"{where} key '{key}': {shown(entry[key])} is outside "
+                                f"{'[0' if key == 'load' else '(0'} {unit}, {said}]")
+    return value
+
+
 def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     if not entry["vibration"]:
         raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")
     path = Path(entry["file"])
     path = path if path.is_absolute() else base / path
-    speed = to_si(entry["speed"], "Hz", f"{where} key 'speed'") if entry["speed"] is not None else None
-    fs = to_si(entry["fs"], "Hz", f"{where} key 'fs'") if entry["fs"] is not None else None
+    speed = quantity(entry, "speed", where) if entry["speed"] is not None else None
+    fs = quantity(entry, "fs", where) if entry["fs"] is not None else None
     names = entry["class_names"]
     if not names or not all(isinstance(n, str) for n in names):
         raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
@@ -140,13 +154,13 @@ def noise_spec(table: dict, where: str) -> NoiseSpec | None:
     if isinstance(snr, bool) or not isinstance(snr, (int, float)) or not abs(snr) < 1e300:
         raise GearlabInputError(f"{where}: snr_db must be a finite number of dB, got {str(snr)[:40]}")
     seed = table.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise GearlabInputError(f"{where}: seed must be a whole number >= 0, got {seed!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= 2**32 - 1:
+        raise GearlabInputError(f"{where}: seed must be a whole number in [0, {2**32 - 1}], got {shown(seed)}")
     return NoiseSpec(str(table["kind"]), float(snr), seed)
 
 
 def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
-    specs = [dataset_spec(entry, location(scenario.path, "datasets", index=i), scenario.path.parent)
+    specs = [dataset_spec(entry, location(scenario.path, "datasets", index=i), scenario.base or scenario.path.parent)
              for i, entry in enumerate(scenario.tables["datasets"])]
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
@@ -246,7 +260,7 @@ def table_md(summary: dict) -> str:
 def figures(dataset, run: RunDir) -> None:
     from ..plots import dataset_signals
 
-    dataset_signals(dataset, run.figures / f"signals_{dataset.spec.name}.png")
+    dataset_signals(dataset, run.file("figures", f"signals_{dataset.spec.name}.png"))
 
 
 def summary_lines(run: RunDir) -> list[str]:

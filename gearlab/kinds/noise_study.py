@@ -31,7 +31,7 @@ from ..learn.networks import NETWORKS
 from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
 from ..params import did_you_mean
 from ..runs import Event, RunDir, UnitProgress
-from ..scenario import Key, Scenario, Table, in_range, location
+from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
 from ..signals import NOISE_KINDS
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
 
@@ -59,8 +59,8 @@ TABLES = {
         "val_fraction": Key(float, 0.2, in_range(0.01, 0.9), "share of the training part held out for validation"),
         "batch": Key(int, 256, in_range(1)),
         "lr": Key(float, 1e-3, in_range(1e-9, 10.0), "Adam learning rate"),
-        "epochs": Key(int, 100, in_range(1), "most epochs per run"),
-        "patience": Key(int, 15, in_range(1), "stop after this many epochs without a better validation accuracy"),
+        "epochs": Key(int, 100, in_range(1, MAX_EPOCHS), "most epochs per run"),
+        "patience": Key(int, 15, in_range(1, MAX_EPOCHS), "stop after this many epochs without a better validation accuracy"),
         "seed": Key(int, 0, in_range(0, 2**32 - 1), "seeds torch as 1000 * seed + run"),
     }),
 }

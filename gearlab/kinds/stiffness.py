@@ -19,7 +19,7 @@ from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOption
 from ..plots import ladder_grid, rfa_curves, tvms_figure
 from ..registry import get_registry
 from ..runs import Event, RunDir
-from ..scenario import Key, Scenario, Table, in_range, location, one_of
+from ..scenario import Key, Scenario, Table, in_range, location, one_of, plain_name
 
 TABLES = {
     "stiffness": Table(
@@ -40,7 +40,7 @@ TABLES = {
     ),
     "cases": Table(
         {
-            "name": Key(str, doc="case name (file name of its CSV)"),
+            "name": Key(str, check=plain_name, doc="case name (file name of its CSV)"),
             "faults": Key(list, [], doc="list of {kind, tooth, step} or {kind, tooth, params}"),
         },
         array=True,
