@@ -385,7 +385,13 @@ def test_summary_table_and_report(finished, cli):
     bound = summary["bound"]
     assert bound["noise"] == "laplace" and set(bound["accuracy"]) == {"0", "2"}
     assert all(50.0 <= c["mean"] <= 100.0 and c["n"] == 2 for c in bound["accuracy"].values())
+    assert set(summary["balanced_accuracy"]) == set(labels) and set(summary["detection_at_1pct"]) == set(labels)
+    for r in records.values():
+        healthy, faulty = r["confusion"]
+        recall = 50.0 * (healthy[0] / sum(healthy) + faulty[1] / sum(faulty))
+        assert r["balanced_accuracy"] == pytest.approx(recall)
     md = (finished / "table.md").read_text().splitlines()
+    md = md[:md.index("")]  # the accuracy table; the balanced accuracy and detection rates follow
     assert md[0] == "| k (target fault samples) | " + " | ".join([*labels, transfer.BOUND]) + " |"
     assert [row.split("|")[1].strip() for row in md[2:]] == ["0", "2"]
     assert all(re.fullmatch(r"\d+\.\d\d ± \d+\.\d", c.strip()) for row in md[2:] for c in row.split("|")[2:-1])

@@ -311,13 +311,14 @@ def columns(protocol: Protocol) -> list[Method]:
     return sorted(protocol.methods, key=lambda m: m.supervised)
 
 
-def table(records: list[dict], protocol: Protocol) -> dict:
-    """{method label: {k: {mean, std, n}}}: target test accuracy (%) over the repetitions."""
+def table(records: list[dict], protocol: Protocol, measure: str = "accuracy") -> dict:
+    """{method label: {k: {mean, std, n}}}: a measure (%) of the records over the repetitions,
+    target test accuracy by default (records written before a measure existed are left out)."""
     out: dict[str, dict[str, dict]] = {}
     for m in columns(protocol):
         out[m.label] = {}
         for k in protocol.ks:
-            acc = [r["accuracy"] for r in records if r["method"] == m.label and r["k"] == k]
+            acc = [r[measure] for r in records if r["method"] == m.label and r["k"] == k and measure in r]
             if acc:
                 out[m.label][str(k)] = {"mean": float(np.mean(acc)),
                                         "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0, "n": len(acc)}
@@ -335,6 +336,22 @@ def table_md(tab: dict, ks, methods: list[str]) -> str:
         if any(cells):  # a run still going shows the rows it has
             lines.append(f"| {k} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def measures_md(summary: dict, ks) -> str:
+    """The balanced accuracy and the faults found at 1 % false alarms, in the same layout."""
+    out = ""
+    bound = summary.get("bound")
+    for key, title in (("balanced_accuracy", "Balanced accuracy (%), the mean of the healthy and the fault "
+                                             "recall: the score on a half-healthy test set"),
+                       ("detection_at_1pct", "Faults found (%) at the threshold that lets 1 % of the test "
+                                             "set's healthy revolutions through (an evaluation with the test labels)")):
+        tab = {m: c for m, c in summary.get(key, {}).items() if c}
+        if key == "detection_at_1pct" and bound:
+            tab[BOUND] = bound["detection_at_1pct"]
+        if tab:
+            out += f"\n{title}:\n\n" + table_md(tab, ks, list(tab))
+    return out
 
 
 def table_csv(tab: dict, ks) -> str:
@@ -359,6 +376,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "protocol": {k: v for k, v in asdict(protocol).items() if k != "methods"},
         "methods": list(tab),  # the column order (JSON objects are written with sorted keys)
         "table": tab,
+        # measures that do not hinge on the test set's healthy share (gearlab.learn.protocol)
+        "balanced_accuracy": table(records, protocol, "balanced_accuracy"),
+        "detection_at_1pct": table(records, protocol, "detection_at_1pct"),
         "units": len(records),
         "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
     }
@@ -367,7 +387,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         summary["bound"] = json.loads(bound_path.read_text())
         tab = {**tab, BOUND: summary["bound"]["accuracy"]}  # the reference column of table.md/csv
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(tab, protocol.ks, list(tab)))
+    run.write_text("table.md", table_md(tab, protocol.ks, list(tab)) + measures_md(summary, protocol.ks))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
     from ..plots import transfer_figures
 

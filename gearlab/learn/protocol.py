@@ -241,7 +241,7 @@ def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Metho
         "n_test": int(len(y_test)),
         "source_val_accuracy": 100.0 * accuracy(model, *val, device) if val_acc is None else val_acc,
         "history": history.as_dict() if history is not None else None,
-        **detection_rates(score, y_test, target.label[s.target_test]),
+        **detection_rates(score, y_test, target.label[s.target_test], class_names(target)),
         **extra,
     }
 
@@ -257,7 +257,13 @@ def fault_score(model, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
     return np.concatenate(out) if out else np.empty(0)
 
 
-def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, false_alarm: float = 0.01) -> dict:
+def class_names(dataset) -> list[str] | None:
+    names = getattr(dataset.spec, "class_names", None)
+    return list(names) if names else None
+
+
+def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, names: list[str] | None = None,
+                    false_alarm: float = 0.01) -> dict:
     """Measures that do not hinge on the test set's healthy share: the balanced accuracy (%) of
     the method's own calls, and the share (%) of faults, per fault class, found at the threshold
     that lets *false_alarm* of the test set's healthy revolutions through (an evaluation with
@@ -266,8 +272,8 @@ def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, false_a
     healthy, faulty = y == 0, y == 1
     balanced = 50.0 * (float((~called[healthy]).mean()) + float(called[faulty].mean()))
     threshold = np.quantile(score[healthy], 1.0 - false_alarm)
-    per_class = {str(int(c)): 100.0 * float((score[label == c] > threshold).mean())
-                 for c in np.unique(label[faulty])}
+    per_class = {(names[int(c)] if names and int(c) < len(names) else str(int(c))):
+                 100.0 * float((score[label == c] > threshold).mean()) for c in np.unique(label[faulty])}
     return {"balanced_accuracy": balanced, "detection_at_1pct": 100.0 * float((score[faulty] > threshold).mean()),
             "detection_at_1pct_by_class": per_class}
 
