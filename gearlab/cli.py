@@ -268,6 +268,14 @@ def _execution(executor: str | None, ray_address: str | None, device: str | None
     return {"execution": given} if given else {}
 
 
+class Interrupted(Exception):
+    """Ctrl-C during a run; run_path: its run directory (None when none was made yet)."""
+
+    def __init__(self, run_path: str | None):
+        super().__init__(run_path)
+        self.run_path = run_path
+
+
 def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict,
          events: bool) -> None:
     """Run the engine, drawing its events as progress bars (or printing them as JSON lines)."""
@@ -316,14 +324,6 @@ def gap(
     ray_address: RayAddress = None,
     events: Events = False,
 ) -> None:
-class Interrupted(Exception):
-    """Ctrl-C during a run; run_path: its run directory (None when none was made yet)."""
-
-    def __init__(self, run_path: str | None):
-        super().__init__(run_path)
-        self.run_path = run_path
-
-
     """Diagnose the sim-to-real gap of a scenario, or run the blind benchmark of the diagnosis.
 
     `gearlab gap benchmark` runs scenarios/gap_benchmark.toml (from the current folder, else
@@ -444,6 +444,17 @@ def _main() -> None:
     except typer.Abort:
         err_console.print("aborted")
         sys.exit(1)
+    except Interrupted as exc:  # finished units are stored: the run goes on where it stopped
+        err_console.print(f"interrupted; resume with: gearlab run --resume {exc.run_path}" if exc.run_path
+                          else "interrupted; no run directory was made yet", markup=False, highlight=False)
+        sys.exit(130)
+    except OSError as exc:  # a full disk, a read-only place, outside a run (a report, --csv)
+        from .runs import cannot_write, write_problem
+
+        if write_problem(exc) is None:
+            _internal_error(exc)
+        err_console.print(f"error: {cannot_write(exc)}", markup=False, highlight=False, soft_wrap=True)
+        sys.exit(2)
     except Exception as exc:  # noqa: BLE001 - the last line of defence
         if isinstance(exc, _click_exception()):  # usage: a missing or malformed option, no such command
             message = exc.format_message()
@@ -461,14 +472,3 @@ def _internal_error(exc: BaseException) -> None:
     traceback.print_exc()
     err_console.print(f"internal error: {type(exc).__name__}: {exc}", markup=False)
     sys.exit(1)
-    except Interrupted as exc:  # finished units are stored: the run goes on where it stopped
-        err_console.print(f"interrupted; resume with: gearlab run --resume {exc.run_path}" if exc.run_path
-                          else "interrupted; no run directory was made yet", markup=False, highlight=False)
-        sys.exit(130)
-    except OSError as exc:  # a full disk, a read-only place, outside a run (a report, --csv)
-        from .runs import cannot_write, write_problem
-
-        if write_problem(exc) is None:
-            _internal_error(exc)
-        err_console.print(f"error: {cannot_write(exc)}", markup=False, highlight=False, soft_wrap=True)
-        sys.exit(2)
