@@ -350,6 +350,11 @@ class Effect:
     # True for a zero-mean random addition (measurement noise): it leaves the simulation's
     # expected response as it is, so the fault shapes a detector matches are taken without it
     noise: ClassVar[bool] = False
+    # True for an effect a diagnosis fits only when a scenario names it: a model-updating parameter
+    # (a quantity of the real machine that is simply not published, such as its load torque) or an
+    # artefact of one acquisition (a DC offset). "Every registered effect" (default_candidates)
+    # leaves these out, so the library a diagnosis tries by default stays the mechanisms.
+    opt_in: ClassVar[bool] = False
     params: ClassVar[tuple[Param, ...]] = ()
     options: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     log_scale: ClassVar[frozenset[str]] = frozenset()
@@ -416,6 +421,11 @@ class Effect:
     def describe(self) -> dict:
         return {"doc": self.doc, "params": [p.describe() for p in self.params], "level": self.level,
                 "breaks_symmetry": bool(self.breaks_symmetry), "options": {k: list(v) for k, v in self.options.items()}}
+
+
+def default_candidates(registry) -> list[str]:
+    """The effects a diagnosis tries when none are named: every registered one but the opt-in ones."""
+    return [name for name in registry.names("effect") if not getattr(registry.get("effect", name), "opt_in", False)]
 
 
 def hook_problem(obj) -> str:

@@ -67,6 +67,8 @@ EFFECTS = {
     "sensor_noise": ("signal", False),
     "sensor_bandwidth": ("signal", False),
     "interference_tone": ("signal", False),
+    "load_level": ("excitation", False),
+    "sensor_offset": ("signal", False),
 }
 
 # the thesis's operating points: Dataset B (Table 2.4) and Dataset A (Table 2.3)

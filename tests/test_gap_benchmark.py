@@ -21,9 +21,10 @@ from gearlab.data.builder import build_dataset
 from gearlab.data.spec import dataset_preset
 from gearlab.gap import benchmark as bench
 from gearlab.gap.views import healthy_rows
+from gearlab.effects import default_candidates
 from gearlab.registry import get_registry
 
-LIBRARY = tuple(get_registry().names("effect"))
+LIBRARY = tuple(default_candidates(get_registry()))  # the shipped library: every effect but the opt-in ones
 SOURCE = dataset_preset("B-6-ch5").with_(faults=(), healthy=12, noise=bench.BASE_NOISE)
 SETTINGS = {"budget": 1, "max_effects": 1, "healthy": 12, "bootstrap": 5, "permutations": 10, "alpha": 0.05,
             "seed": 0}

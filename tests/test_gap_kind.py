@@ -67,6 +67,8 @@ def fake_module(calls: list) -> types.ModuleType:
         permutations: int = 500
         alpha: float = 0.05
         seed: int = 0
+        reference: str = "source"
+        max_order: int = 0
 
     def diagnose(source, target_X, settings, executor=None, on_event=lambda e: None):
         calls.append({"source": source, "target_X": target_X, "settings": settings})

@@ -73,7 +73,7 @@ import numpy as np
 from ..data.builder import (CHUNK, RowsTask, SimTask, healthy_reference, noisy_rows, operating_point,
                             simulate_unit, whole_steps_rate)
 from ..data.spec import POINTS, DatasetSpec
-from ..effects import LEVELS
+from ..effects import LEVELS, default_candidates
 from ..errors import GearlabInputError
 from ..executors import LocalExecutor
 from ..registry import get_registry
@@ -108,6 +108,17 @@ class Settings:
     permutations: int = 500
     alpha: float = 0.05
     seed: int = 0
+    # What "closes the gap" is measured against (EXPLAINED_SHRINK): the plain source, or the source
+    # with the sensor noise fitted alone -- for a measured target, which always carries noise that a
+    # noise-free simulator lacks: against the plain source that noise alone makes any shrink look whole.
+    reference: str = "source"
+    # The highest shaft order the target holds (a measured record's acquisition bandwidth, below its
+    # Nyquist order): every source set is low-passed to it, so the comparison stays where the target
+    # has data (simulated revolutions, and the noise added to them, reach order POINTS / 2). 0: all.
+    max_order: int = 0
+
+
+REFERENCES = ("source", "noise")
 
 
 # --- input checks ---------------------------------------------------------------------------------
@@ -128,20 +139,26 @@ def check_settings(settings: Settings) -> tuple[str, ...]:
     _whole(settings.bootstrap, "bootstrap", 0)
     _whole(settings.permutations, "permutations", 1)
     _whole(settings.seed, "seed", 0)
+    _whole(settings.max_order, "max_order", 0)
     alpha = settings.alpha
     if isinstance(alpha, bool) or not isinstance(alpha, numbers.Real) or not 0.0 < alpha < 1.0:
         raise GearlabInputError(f"gap diagnosis: settings 'alpha' must lie strictly between 0 and 1, got {alpha!r}")
+    if settings.reference not in REFERENCES:
+        raise GearlabInputError(f"gap diagnosis: settings 'reference' must be one of {', '.join(REFERENCES)}, "
+                                f"got {settings.reference!r}")
     registry = get_registry()
     if isinstance(settings.candidates, str) or not isinstance(settings.candidates, (tuple, list)):
         raise GearlabInputError(f"gap diagnosis: settings 'candidates' must be a list of effect names, "
                                 f"got {settings.candidates!r}")
-    names = tuple(settings.candidates) or tuple(registry.names("effect"))
+    names = tuple(settings.candidates) or tuple(default_candidates(registry))
     for i, name in enumerate(names, start=1):
         if not isinstance(name, str):
             raise GearlabInputError(f"gap diagnosis: candidate #{i} must be an effect name, got {name!r}")
         registry.get("effect", name, f"gap diagnosis: candidate #{i}")  # unknown: "did you mean", known list
     if len(set(names)) != len(names):
         raise GearlabInputError(f"gap diagnosis: candidates repeat a name: {', '.join(names)}")
+    if settings.reference == "noise" and NUISANCE not in names:
+        raise GearlabInputError(f"gap diagnosis: settings reference = 'noise' needs '{NUISANCE}' among the candidates")
     return names
 
 
@@ -206,7 +223,16 @@ def _reference(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms
     return reference.mean, reference.std
 
 
-def source_rows(spec: DatasetSpec) -> np.ndarray:
+def band_limited(X: np.ndarray, max_order: int) -> np.ndarray:
+    """*X* (rows of revolutions) without the shaft orders above *max_order* (0: unchanged)."""
+    if not max_order or max_order >= X.shape[1] // 2:
+        return X
+    F = np.fft.rfft(X, axis=1)
+    F[:, max_order + 1:] = 0.0
+    return np.fft.irfft(F, n=X.shape[1], axis=1)
+
+
+def source_rows(spec: DatasetSpec, max_order: int = 0) -> np.ndarray:
     """The healthy rows of *spec* in physical units, (spec.healthy, POINTS) float64: exactly
     ``healthy_rows(build_dataset(spec.with_(faults=())))``, without the cache or the fault
     simulations.
@@ -234,7 +260,7 @@ def source_rows(spec: DatasetSpec) -> np.ndarray:
         task = RowsTask(np.broadcast_to(clean, (len(idx), POINTS)), [[spec.seed, noise_seed, i] for i in idx],
                         kind, snr, spec.revolutions, spec.tsa, (mean, std), spec.effects, speed, reference_rms)
         out[lo:lo + len(idx)] = noisy_rows(tuple(task))
-    return out.astype(np.float64) * std + mean
+    return band_limited(out.astype(np.float64) * std + mean, max_order)
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
@@ -503,14 +529,14 @@ def fit_effect(task: tuple) -> dict:
     def spec_of(params: dict, extra: tuple = ()) -> DatasetSpec:
         return source.with_(effects=_by_level(source.effects + tuple(accepted) + (effect.spec(params),) + extra))
 
-    noise = _NoiseNuisance(lambda params, extra: scorer.score(source_rows(spec_of(params, extra)))) \
+    noise = _NoiseNuisance(lambda params, extra: scorer.score(source_rows(spec_of(params, extra), settings.max_order))) \
         if nuisance else None
 
     def objective(params: dict) -> float:
         try:
             if noise is not None:
                 return noise.fit(params)
-            return scorer.score(source_rows(spec_of(params)))
+            return scorer.score(source_rows(spec_of(params), settings.max_order))
         except GearlabInputError as exc:  # parameters the effect cannot take here (a tone above Nyquist)
             errors.append(str(exc))
             return math.inf
@@ -527,7 +553,7 @@ def fit_effect(task: tuple) -> dict:
             # The noise alone gets the same wide Brent search that the other candidates' noise
             # nuisance gets, so that "beats the noise alone" compares like with like.
             wide = _NoiseNuisance(lambda _, extra: scorer.score(source_rows(source.with_(
-                effects=_by_level(source.effects + tuple(accepted) + extra)))))
+                effects=_by_level(source.effects + tuple(accepted) + extra)), settings.max_order)))
             try:
                 value = wide.fit({})
                 history.append({"u": None, "choice": None, "params": dict(wide.at[()]), "score": value})
@@ -546,12 +572,12 @@ def fit_effect(task: tuple) -> dict:
         # Backfitting: the effects accepted earlier were fitted without this one (a noise level
         # fitted on the wrong model is off), so each is refined once more next to it.
         refit, score, used = _backfit(source, accepted, (effect.spec(best["params"]),) + extra, scorer,
-                                      best["score"], max(2, evaluations // 2), seed)
+                                      best["score"], max(2, evaluations // 2), seed, settings.max_order)
         result["evaluations"] += used
         result["score"], result["accepted"] = score, [[n, [list(kv) for kv in p]] for n, p in refit]
     if math.isfinite(best["score"]):
         # The score's own noise: bootstrap replicates of the best point's gap total.
-        reps = scorer.replicates(source_rows(spec_of(best["params"], extra)), NOISE_REPLICATES, [seed, 2])
+        reps = scorer.replicates(source_rows(spec_of(best["params"], extra), settings.max_order), NOISE_REPLICATES, [seed, 2])
         result["noise"] = float(np.std(reps))
         result["intervals"] = _intervals(space, history, best, result["noise"])
     else:
@@ -561,7 +587,7 @@ def fit_effect(task: tuple) -> dict:
 
 
 def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", score: float, evaluations: int,
-             seed: int) -> tuple[list, float, int]:
+             seed: int, max_order: int = 0) -> tuple[list, float, int]:
     """Refine each accepted effect once more, from its fitted values, with the effects *beside*
     it held fixed: a local search of *evaluations* points per effect (signal-level ones cost no
     simulation: the clean revolution is cached). Returns (re-fitted effects, score, evaluations)."""
@@ -573,7 +599,8 @@ def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", sco
         def objective(p, i=i, effect=effect):
             trial = refit[:i] + [effect.spec(p)] + refit[i + 1:]
             try:
-                return scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(trial) + beside))))
+                return scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(trial) + beside)),
+                                            max_order))
             except GearlabInputError:
                 return math.inf
 
@@ -594,9 +621,9 @@ def _refit_alone(source: DatasetSpec, accepted, target_X, settings: Settings, se
     imperfect first fit leaves a residual that any flexible extra effect (noise, a filter, a
     tone) partly absorbs, and extras the target does not have were accepted."""
     scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source))
-    score = scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(accepted)))))
+    score = scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(accepted))), settings.max_order))
     refit, score, used = _backfit(source, accepted, (), scorer, score,
-                                  max(2, SIGNAL_EVALS * settings.budget // 2), seed)
+                                  max(2, SIGNAL_EVALS * settings.budget // 2), seed, settings.max_order)
     return {"name": None, "score": score, "evaluations": used, "params": {},
             "accepted": [[n, [list(kv) for kv in p]] for n, p in refit], "seconds": time.perf_counter() - started}
 
@@ -696,7 +723,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     """
     started = time.perf_counter()
     candidates = check_settings(settings)
-    target = check_target(target_X)
+    target = band_limited(check_target(target_X), settings.max_order)
     pair = _check_source(source)
     for i, effect in enumerate(source.effects, start=1):  # the source's own effects must load too
         get_registry().get("effect", effect[0], f"gap diagnosis: source '{source.name}' effect #{i}")
@@ -710,7 +737,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
 
     def judged(effects: tuple) -> np.ndarray:
         """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""
-        return source_rows(fresh.with_(effects=_by_level(fresh.effects + effects)))
+        return source_rows(fresh.with_(effects=_by_level(fresh.effects + effects)), settings.max_order)
 
     on_event(Event("stage", stage="gap before", total=1, message=f"gap: {source.name} against the target"))
     plain = judged(())
@@ -728,7 +755,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     accepted: list[dict] = []
     fitted: tuple = ()
     significant = bool(before["significant"])
-    gap0 = scorer.score(source_rows(search))  # the search's own baseline (same rows as the fits)
+    gap0 = scorer.score(source_rows(search, settings.max_order))  # the search's own baseline (same rows as the fits)
     judged0 = scorer.score(plain)  # the same on the judging rows
     if not significant:
         on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}); nothing to explain"))
@@ -738,7 +765,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
         if not remaining:
             break
-        gap_now = scorer.score(source_rows(search.with_(effects=_by_level(search.effects + fitted))))
+        gap_now = scorer.score(source_rows(search.with_(effects=_by_level(search.effects + fitted)), settings.max_order))
         # The noise nuisance: while sensor noise is a candidate not yet accepted, every other
         # candidate is fitted with it (a noisy target would otherwise always elect noise first,
         # fitted to the wrong model, and judge the structural effects next to the wrong noise).
@@ -853,7 +880,11 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     on_event(Event("advance", stage="gap after", done=1, total=1))
     gap_before, gap_after = float(before["total"]["gap"]), float(after["total"]["gap"])
     shrink = 1.0 - gap_after / gap_before if gap_before > 0 else 0.0
-    closed = not after["significant"] or shrink >= EXPLAINED_SHRINK
+    reference = _noise_reference(result, judged, target, pair, settings) if settings.reference == "noise" else None
+    if reference is not None:
+        result["reference"] = reference
+        reference["shrink"] = 1.0 - gap_after / reference["gap"] if reference["gap"] > 0 else 0.0
+    closed = not after["significant"] or (reference["shrink"] if reference else shrink) >= EXPLAINED_SHRINK
     result.update(
         after=after, gap_after=gap_after, significant_after=bool(after["significant"]), shrink=shrink,
         effects=accepted, unexplained=bool(before["significant"] and (not accepted or not closed)),
@@ -861,6 +892,20 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         seconds=time.perf_counter() - started,
     )
     return result
+
+
+def _noise_reference(result: dict, judged, target, pair, settings: Settings) -> dict | None:
+    """The gap of the source with round 1's sensor noise fitted alone (fresh rows), the reference of
+    settings.reference = 'noise'; None when no round ran (no significant gap)."""
+    if not result["rounds"]:
+        return None
+    fit = next((f for f in result["rounds"][0]["fits"] if f["name"] == NUISANCE and f["params"]), None)
+    if fit is None or not math.isfinite(fit["score"]):
+        return None
+    spec = get_registry().get("effect", NUISANCE).spec(fit["params"])
+    report = _report(judged((spec,)), target, pair, settings, bootstrap=0)
+    return {"name": NUISANCE, "params": fit["params"], "gap": float(report["total"]["gap"]),
+            "views": {name: float(v["gap"]) for name, v in report["views"].items()}}
 
 
 def _as_tuple(effects) -> tuple:

@@ -22,25 +22,44 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
+from ..data.importers import MeasuredSpec
 from ..data.spec import POINTS, DatasetSpec
+from ..effects import default_candidates
 from ..errors import GearlabInputError
 from ..learn.networks import NETWORKS
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, shared_state
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import Event, RunDir
-from ..scenario import Key, Scenario, Table, in_range, location
+from ..scenario import Key, Scenario, Table, in_range, location, one_of
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
 from .transfer import MAX_SEED, TRAINING, method as transfer_method, train_unit
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
+# The target may also be measured records in the detection kind's shape (a list of files with a
+# tacho of N pulses per revolution, docs/real_data.md); the diagnosis reads their history files.
+_TARGET = Table({
+    **DATASET_TABLE.keys,
+    "vibration": Key((int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"),
+    "tacho": Key((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)"),
+    "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "records: tacho pulses per input-shaft revolution"),
+    "sensitivity": Key((int, float, str), 1.0, doc="records: sensor sensitivity, e.g. '10 mV/g'"),
+    "files": Key(list, [], doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
+                               "the history files (healthy, one operating condition)"),
+}, required=True)
+# A record holds shaft orders up to its Nyquist order fs / (2 speed); its anti-alias filter passes
+# this share of that band (the usual 80-90 %): the comparison is limited to it (Settings.max_order).
+PASSBAND = 0.9
+# History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
+# record are two conditions; one rig at one setting drifts by well under 1 %).
+SPEED_SPREAD = 0.02
 # The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
 MIN_HEALTHY = 10
 # Mesh sidebands the order bands resolve beside each mesh harmonic (gearlab.gap.views.BandPlan):
@@ -58,9 +77,9 @@ def _alpha(value, where):
 
 TABLES = {
     "source": _DATASET,
-    "target": _DATASET,
+    "target": _TARGET,
     "diagnosis": Table({
-        "candidates": Key(list, [], doc="effect names to try (gearlab plugins lists them); [] = every registered effect"),
+        "candidates": Key(list, [], doc="effect names to try (gearlab plugins lists them); [] = every registered effect but the opt-in ones (load_level, sensor_offset)"),
         "budget": Key(int, 16, in_range(1, 10_000), "source simulations per effect fit (the search budget)"),
         "max_effects": Key(int, 3, in_range(1, 20), "greedy rounds: most effects added to the source"),
         "healthy": Key(int, 40, in_range(MIN_HEALTHY, 100_000), "source healthy revolutions simulated per evaluation"),
@@ -68,6 +87,9 @@ TABLES = {
         "permutations": Key(int, 500, in_range(1, 1_000_000), "MMD permutations of the before/after reports"),
         "alpha": Key(float, 0.05, _alpha, "significance level of the two-sample test"),
         "seed": Key(int, 0, in_range(0, MAX_SEED)),
+        "reference": Key(str, "source", one_of("source", "noise"),
+                         "what the shrink that closes the gap is measured against: the plain source, or the "
+                         "source with its sensor noise fitted alone (measured targets)"),
     }),
     "accuracy": Table({
         "enabled": Key(bool, True, doc="train source-only models on the uncorrected and corrected source "
@@ -94,7 +116,8 @@ def build(scenario: Scenario) -> dict:
     if not isinstance(source, DatasetSpec):
         raise GearlabInputError(f"{location(path, 'source', 'file')}: the source is a simulator configuration; "
                                 "give a 'preset' (measured data can only be the [target])")
-    target = dataset_spec(t["target"], location(path, "target"), path.parent)
+    # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
+    target = target_of(t["target"], location(path, "target"), getattr(scenario, "base", None) or path.parent)
     _, pair, _ = source.check_model(location(path, "source"))
     check_sampling(source, pair.Z1, location(path, "source"))
     if isinstance(target, DatasetSpec):
@@ -108,7 +131,11 @@ def build(scenario: Scenario) -> dict:
         check_healthy(healthy, location(path, "target", "healthy"))
     d = t["diagnosis"]
     settings = {"candidates": candidates(d["candidates"], location(path, "diagnosis", "candidates")),
-                **{k: d[k] for k in ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha", "seed")}}
+                **{k: d[k] for k in ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha", "seed",
+                                     "reference")}}
+    if settings["reference"] == "noise" and settings["candidates"] and "sensor_noise" not in settings["candidates"]:
+        raise GearlabInputError(f"{location(path, 'diagnosis', 'reference')}: reference = 'noise' needs "
+                                "'sensor_noise' among the candidates (the noise fitted alone is the reference)")
     net = t["network"]["name"]
     if net not in NETWORKS:
         raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
@@ -132,6 +159,86 @@ def build(scenario: Scenario) -> dict:
             check_data(protocol, *planned, f"{path}: [accuracy]")
     return {"source": source, "target": target, "settings": settings, "protocol": protocol,
             "accuracy": bool(a["enabled"])}
+
+
+@dataclass(frozen=True)
+class Records:
+    """Measured records as the gap's target: the [target] of the detection kind (files with roles);
+    the diagnosis reads the history files (healthy data of one operating condition)."""
+
+    name: str
+    target: object  # gearlab.kinds.detection.Target
+
+    @property
+    def history(self):
+        return tuple(f for f in self.target.files if f.role == "history")
+
+
+def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Records:
+    """The [target]: measured records ('files'), or a dataset entry (a preset, or one 'file')."""
+    if not entry["files"]:
+        for key in ("pulses_per_rev", "sensitivity"):
+            if entry[key] != _TARGET.keys[key].default:
+                raise GearlabInputError(f"{where} key '{key}': belongs to measured records ('files')")
+        for key in ("vibration", "tacho"):
+            if not isinstance(entry[key], str):
+                raise GearlabInputError(f"{where} key '{key}': a column index belongs to measured records "
+                                        "('files'); a 'file' names its channel")
+        return dataset_spec(entry, where, base)
+    from .detection import target_spec
+
+    for key in ("preset", "file"):
+        if entry[key]:
+            raise GearlabInputError(f"{where}: give either 'files' (measured records) or '{key}', not both")
+    for key in ("vibration", "tacho"):
+        if entry[key] == "":
+            raise GearlabInputError(f"{where} key '{key}': missing; measured records need the {key} column")
+    table = {**entry, "transient": entry["transient"], "positive": "fault"}
+    target = target_spec(table, where, base, need=("history",))
+    return Records(entry["name"] or "measured records", target)
+
+
+def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str]]:
+    """The history records' revolutions in m/s² (n, POINTS), their mean tacho speed, and notes.
+    Records of different speeds are different operating conditions: refused."""
+    from ..data.textzip import read_record
+
+    t = records.target
+    rows, speeds, notes = [], {}, []
+    files = records.history
+    on_event(Event("stage", stage="records", total=len(files), message="measured history records"))
+    for i, f in enumerate(files):
+        rec = read_record(f.resolved, vibration=t.vibration, tacho=t.tacho, pulses_per_rev=t.pulses_per_rev,
+                          sensitivity=t.sensitivity, fs=t.fs, transient=t.transient)
+        rows.append(rec.revolutions)
+        speeds[f.path] = rec.speed_hz
+        on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
+    low, high = min(speeds.values()), max(speeds.values())
+    if high > low * (1 + SPEED_SPREAD):
+        shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
+        raise GearlabInputError(f"[target] key 'files': the history records run at different speeds ({shown}); "
+                                "the gap is diagnosed for one operating condition: give one speed's records")
+    skipped = len(t.files) - len(files)
+    if skipped:
+        notes.append(f"{skipped} test file(s) of the [target] are not used: the gap is measured on the history")
+    X = np.concatenate(rows).astype(np.float64)
+    speed = float(np.average(list(speeds.values()), weights=[len(r) for r in rows]))
+    notes.append(f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
+                 f"(tacho); the source simulates that speed")
+    return X, speed, notes
+
+
+def registered(X: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, int]:
+    """*X* (revolutions) turned by the whole-sample circular shift k that best correlates their mean
+    with *reference* (one revolution, DC removed from both): (turned rows, k). A measured record's
+    revolutions start at a tacho mark whose angle to the simulation's origin (tooth 1 entering mesh)
+    is not known; the views that compare waveforms (the TSA residual against the source's average)
+    need the two in register."""
+    mean = X.mean(axis=0)
+    corr = np.fft.irfft(np.conj(np.fft.rfft(reference - reference.mean())) * np.fft.rfft(mean - mean.mean()),
+                        n=X.shape[1])
+    k = int(np.argmax(corr))
+    return np.roll(X, -k, axis=1), k
 
 
 def check_healthy(count: int, where: str) -> None:
@@ -207,7 +314,7 @@ def planned_counts(spec) -> Counts | None:
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     s = spec["settings"]
-    n = len(s["candidates"]) or len(get_registry().names("effect"))
+    n = len(s["candidates"]) or len(default_candidates(get_registry()))
     line = (f"gap of {sized(spec['source'])} -> {sized(spec['target'])}: {n} candidate effects x budget "
             f"{s['budget']}, up to {s['max_effects']} greedy rounds, {s['healthy']} source healthy revolutions "
             "per evaluation")
@@ -300,10 +407,30 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         source_spec: DatasetSpec = spec["source"]
         z1 = gear_pair_of(source_spec).Z1
 
-        on_event(Event("stage", stage="datasets", total=1, message="target data"))
-        target, _ = load_or_build(spec["target"], executor, on_event)
-        target_X, note = target_rows(target, z1, location(scenario.path, "target"))
-        on_event(Event("advance", stage="datasets", done=1, total=1))
+        records = isinstance(spec["target"], Records)
+        settings = dict(spec["settings"])
+        if records:  # measured records: the history's revolutions; the source runs at their tacho speed
+            target_X, speed, record_notes = read_history(spec["target"], on_event)
+            fs = spec["target"].target.fs
+            check_points(fs / speed, z1, location(scenario.path, "target", "fs"),
+                         f"the records' {fs:g} Hz at {speed:.4g} Hz shaft speed")
+            source_spec = source_spec.with_(speed_hz=round(speed, 3))
+            settings["max_order"] = int(PASSBAND * fs / (2 * speed))
+            record_notes.append(f"compared up to shaft order {settings['max_order']} ({PASSBAND:g} of the records' "
+                                "Nyquist order): the source is low-passed to the records' bandwidth")
+            from ..gap.diagnose import band_limited, source_rows
+
+            plain = source_spec.with_(faults=(), healthy=1, noise=None, revolutions=1, tsa=False)
+            target_X, shift = registered(band_limited(target_X, settings["max_order"]),
+                                         source_rows(plain, settings["max_order"])[0])
+            record_notes.append(f"target turned by {360 * shift / POINTS:.1f} deg into register with the simulated "
+                                "revolution (the tacho mark's angle to the simulation's origin is not known)")
+            note = "; ".join(record_notes)
+        else:
+            on_event(Event("stage", stage="datasets", total=1, message="target data"))
+            target, _ = load_or_build(spec["target"], executor, on_event)
+            target_X, note = target_rows(target, z1, location(scenario.path, "target"))
+            on_event(Event("advance", stage="datasets", done=1, total=1))
         if note:
             on_event(Event("log", message=note))
 
@@ -311,7 +438,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
             # Only the source configuration and the target's healthy rows go in: nothing of how the
             # target was made (its spec, effects, labels) reaches the diagnosis.
-            result = diagnose(source_spec, target_X, Settings(**spec["settings"]), executor=executor, on_event=on_event)
+            result = diagnose(source_spec, target_X, Settings(**settings), executor=executor, on_event=on_event)
             record = {"unit": "diagnosis", "result": result, "note": note}
             run.append(record)
             done["diagnosis"] = record
@@ -321,7 +448,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         on_event(Event("log", message=diagnosis_line(result)))
 
         notes = [note] if note else []
-        if spec["accuracy"]:
+        if spec["accuracy"] and records:
+            notes.append("accuracy skipped: measured history records carry no labelled faults (the detection "
+                         "kind scores real test files)")
+            on_event(Event("log", message=notes[-1]))
+        elif spec["accuracy"]:
             if not (np.asarray(target.fault) == 1).any():
                 notes.append("accuracy skipped: the target has no labelled fault samples")
                 on_event(Event("log", message=notes[-1]))
@@ -366,7 +497,7 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
     # needs one first makes it, the others wait for the second phase and load it.
     makers: dict[tuple, tuple] = {}
     for rep, variant, m in pending:
-        state = shared_state(m, rep)
+        state = shared_state(m, rep, 0, protocol)  # the gap kind scores k = 0 only
         if state is not None and not (run.path / "states" / variant / f"{state}.pt").exists():
             makers.setdefault((variant, state), (rep, variant, m))
     first = list(makers.values())
@@ -453,6 +584,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "gap_before": result["gap_before"],
         "gap_after": result["gap_after"],
         "shrink": 1 - result["gap_after"] / result["gap_before"] if result["gap_before"] > 0 else None,
+        "reference": result.get("reference"),  # settings reference = 'noise': the source with its noise alone
         "unexplained": result["unexplained"],
         "significant_before": result["significant_before"],
         "significant_after": result["significant_after"],
@@ -535,8 +667,12 @@ def summary_lines(run: RunDir) -> list[str]:
         f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "
         f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
         f"effects: {names or 'none'}" + ("; UNEXPLAINED: no candidate closes the gap" if s["unexplained"] else ""),
-        "per-view gap:", views_md(s["views"]).rstrip(),
     ]
+    ref = s.get("reference")
+    if ref:
+        lines.append(f"against the source with its sensor noise alone ({_params(ref['params'])}): gap {ref['gap']:.4g} "
+                     f"-> {s['gap_after']:.4g}; {shrink_text(ref['gap'], s['gap_after'])} removed beyond the noise")
+    lines += ["per-view gap:", views_md(s["views"]).rstrip()]
     if s.get("accuracy"):
         lines += ["target fault-detection accuracy (k = 0):",
                   accuracy_md(s["accuracy"], s.get("accuracy_order")).rstrip()]

@@ -23,6 +23,7 @@ from dataclasses import asdict, replace
 import numpy as np
 
 from ..charts import Chart, Curve
+from ..effects import default_candidates
 from ..errors import GearlabInputError
 from ..gap import benchmark as bench
 from ..registry import get_registry
@@ -41,7 +42,7 @@ TABLES = {
     "benchmark": Table({
         "trials": Key(int, 40, in_range(1, MAX_TRIALS), "number of trials (>= 40 for the acceptance numbers)"),
         "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds the trials' draws and the diagnosis"),
-        "library": Key(list, [], doc="candidate effects (registered names); [] = every registered effect"),
+        "library": Key(list, [], doc="candidate effects (registered names); [] = every registered effect but the opt-in ones"),
         "target_revolutions": Key(int, 80, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000),
                                   "healthy revolutions in each written target"),
     }),
@@ -65,7 +66,7 @@ def build(scenario: Scenario) -> dict:
     registry = get_registry()
     b = t["benchmark"]
     where = location(path, "benchmark", "library")
-    library = b["library"] or registry.names("effect")
+    library = b["library"] or default_candidates(registry)
     if not all(isinstance(n, str) for n in library):
         raise GearlabInputError(f"{where}: expected a list of effect names, got {library!r}")
     for name in library:

@@ -1,0 +1,41 @@
+"""sensor_offset: a constant (DC) offset on the measured acceleration.
+
+Physical mismatch. A piezoelectric accelerometer cannot measure a constant acceleration, yet a
+record may carry a constant: the sensor's bias voltage or an amplifier offset left in by a
+DC-coupled acquisition, which the sensitivity then turns into m/s² (on the PHM 2009 rig's
+input-side channel, about 0.4 V, i.e. some 40 m/s²). It is not vibration, and a simulation has
+none; the waveform statistics that include the mean (mean, RMS, crest factor) see it.
+
+Realisation. The offset is added to every sample of the record (after every other effect).
+
+Bounds. -1000 to 1000 m/s² (±10 V at 10 mV/g: the whole input range of a usual acquisition).
+Default 0; the diagnosis first tries the target's own mean (guesses). Opt-in: an artefact of
+one acquisition, tried when a scenario names it.
+"""
+
+import numpy as np
+
+from gearlab.effects import Effect
+from gearlab.params import Param
+from gearlab.registry import hookimpl
+
+
+class SensorOffset(Effect):
+    name = "sensor_offset"
+    doc = "constant (DC) offset on the measured acceleration: a sensor or amplifier bias"
+    level = "signal"
+    breaks_symmetry = False
+    opt_in = True
+    params = (Param("offset", "m/s^2", 0.0, -1000.0, 1000.0, "constant added to the acceleration"),)
+
+    def apply_signal(self, x, params, ctx):
+        return np.asarray(x, dtype=float) + params["offset"]
+
+    def guesses(self, target_X, speed_hz):
+        """The target's mean acceleration (a gear vibration has none)."""
+        return [{"offset": float(np.clip(np.mean(target_X), -1000.0, 1000.0))}]
+
+
+@hookimpl
+def gearlab_effects():
+    return [SensorOffset()]
