@@ -7,3 +7,4 @@ from . import dataset, noise_study, stiffness, transfer
 KINDS = {"stiffness": stiffness, "dataset": dataset, "transfer": transfer, "noise_study": noise_study}
 from . import gap; KINDS["gap"] = gap  # noqa: E402, E702 (one line per kind added after the first four)
 from . import gap_benchmark; KINDS["gap_benchmark"] = gap_benchmark  # noqa: E402, E702
+from . import detection; KINDS["detection"] = detection  # noqa: E402, E702

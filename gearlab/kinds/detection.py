@@ -1,0 +1,615 @@
+"""Scenario kind `detection`: a fault found in measured records without a single real fault label.
+
+The source is a simulator with healthy and faulty revolutions; the target is a list of
+measured text records, each with a *role*: ``history`` (the unlabelled healthy past a method
+may learn from and fix its threshold on) or ``test`` (scored only). Every method is trained
+and thresholded from the source and the history alone; the test records come in only once
+the method's model and threshold are fixed, and their labels only when the figures are made.
+
+    [source]              a dataset preset with overrides (as in [[datasets]]), healthy + faults
+    [target]              vibration, tacho, pulses_per_rev, sensitivity, fs, positive, files = [
+                            { path, role = "history" | "test", label, condition (optional) }, ...]
+    [[methods]]           adapters (as in a transfer scenario); none listed: every registered
+                          adapter that can learn without target labels
+    [classical]           indicators (fm4, na4) of the input-shaft TSA, mesh_orders, shaft_orders, sidebands
+    [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold)
+    [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
+
+Records are grouped by operating *condition*: the file's ``condition`` when given, else its
+tacho speed to the nearest hertz. Each condition has its own history: standardisation
+(eq. 2.112), the alignment of records that start at different tacho marks, the methods'
+calibration and thresholds. A condition with test records but no history is refused.
+
+Units scored: every revolution (``revolution``) and the TSA of consecutive blocks of
+``b`` revolutions (``record<b>``). The threshold of a method and unit is the
+``1 - false_alarm`` quantile of a Gumbel law fitted by its quartiles to the method's scores
+of the history's units of that kind (record-level history units: TSAs of sliding windows).
+
+Output: results.jsonl (one record per condition x method: the history and test scores),
+scores.csv (file, unit, index, method, score, decision), summary.json, table.md/table.csv
+(AUC, detection and false-alarm rates per condition, unit and method) and report.html.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..data.cache import load_or_build
+from ..data.spec import DatasetSpec
+from ..data.textzip import align_to, parse_sensitivity, read_record
+from ..errors import GearlabInputError, shown
+from ..learn.calibration import Calibration
+from ..learn.detectors import gumbel_quantile
+from ..learn.protocol import Method, Protocol, StateStore, shared_state
+from ..params import did_you_mean
+from ..registry import get_registry
+from ..runs import Event, RunDir, UnitProgress
+from ..scenario import Key, Scenario, Table, in_range, location
+from ..signals import Standardiser
+from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
+from ..units import to_si
+from .dataset import class_sizes, dataset_spec, device_of, executor_for, sized
+from .transfer import CALIBRATION, TABLES as TRANSFER_TABLES, TRAINING, check_training, method as transfer_method
+
+ROLES = ("history", "test")
+SOURCE_SPEEDS = ("records", "source")
+INPUTS = ("difference", "revolution")
+FILE_KEYS = ("path", "role", "label", "condition")
+# Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
+HISTORY_STRIDES = 10
+
+TABLES = {
+    "source": TRANSFER_TABLES["source"],
+    "target": Table({
+        "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
+        "tacho": Key((int, str), doc="tacho column: 0-based index or header name"),
+        "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "tacho pulses per input-shaft revolution"),
+        "sensitivity": Key((int, float, str), 1.0, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"),
+        "fs": Key((int, float, str), doc="sampling rate, e.g. '66666.67 Hz' (text files carry none)"),
+        "transient": Key(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution"),
+        "positive": Key(str, "fault", doc="the label of records with the fault to detect; every other is negative"),
+        "files": Key(list, doc="[{path, role = 'history' | 'test', label, condition (optional)}, ...]"),
+    }, required=True),
+    "network": TRANSFER_TABLES["network"],
+    "methods": Table(TRANSFER_TABLES["methods"].keys, array=True),
+    "classical": Table({
+        "indicators": Key(list, list(INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"),
+        "mesh_orders": Key(list, [], doc="mesh orders of the TSA's shaft (default: the source pinion's teeth)"),
+        "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
+        "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
+    }),
+    "detection": Table({
+        "blocks": Key(list, [10, 30], doc="revolutions per record-level TSA unit"),
+        "false_alarm": Key(float, 0.01, in_range(1e-6, 0.5), "share of healthy history units above the threshold"),
+        "input": Key(str, "difference", doc="what the learned methods see: 'difference' (revolution or TSA less its "
+                                            "shaft and mesh orders, as FM4's) or 'revolution' (as it is)"),
+        "source_speed": Key(str, "records", doc="'records': the source simulated at each condition's history speed "
+                                                "(to 1 Hz); 'source': at the [source]'s own speed"),
+    }),
+    "protocol": Table({**TRAINING, **CALIBRATION}),
+}
+
+
+@dataclass(frozen=True)
+class TargetFile:
+    path: str  # as written in the scenario (scores.csv's 'file')
+    resolved: str
+    role: str
+    label: str
+    condition: str  # "" until known (the tacho speed)
+
+
+@dataclass(frozen=True)
+class Target:
+    vibration: int | str
+    tacho: int | str
+    pulses_per_rev: int
+    sensitivity: float  # V per m/s²
+    fs: float
+    transient: str
+    positive: str
+    files: tuple[TargetFile, ...]
+
+
+# --- building the scenario ---------------------------------------------------------------
+
+
+def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
+    """The [target] 'files' list: each {path, role, label, condition?}, paths relative to *base*;
+    every role in *need* must be present (the gap kind needs the history alone)."""
+    if not files:
+        raise GearlabInputError(f"{where}: expected a list of files, each {{ path, role = 'history' | 'test', "
+                                "label }")
+    out = []
+    for i, f in enumerate(files):
+        at = f"{where} entry {i + 1}"
+        if not isinstance(f, dict):
+            raise GearlabInputError(f"{at}: expected a table {{ path, role, label }}, got {shown(f)}")
+        for key in f:
+            if key not in FILE_KEYS:
+                raise GearlabInputError(f"{at}: unknown key '{key}'{did_you_mean(key, FILE_KEYS)}; known keys: "
+                                        f"{', '.join(FILE_KEYS)}")
+        for key in ("path", "role", "label"):
+            if not isinstance(f.get(key), str) or not f[key]:
+                raise GearlabInputError(f"{at}: '{key}' must be a non-empty text")
+        if f["role"] not in ROLES:
+            raise GearlabInputError(f"{at}: role '{f['role']}'{did_you_mean(f['role'], ROLES)} is not one of "
+                                    f"{', '.join(ROLES)}")
+        condition = f.get("condition", "")
+        if not isinstance(condition, str):
+            raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
+        path = Path(f["path"])
+        resolved = path if path.is_absolute() else base / path
+        if not resolved.is_file():
+            raise GearlabInputError(f"{at}: {resolved}: no such file; expected a measured record (.zip of one "
+                                    "text file, or the text)")
+        out.append(TargetFile(f["path"], str(resolved), f["role"], f["label"], condition))
+    seen = {}
+    for i, f in enumerate(out):
+        if seen.setdefault(f.resolved, i) != i:
+            raise GearlabInputError(f"{where} entry {i + 1}: {f.path} is listed twice (entry {seen[f.resolved] + 1})")
+    for role in need:
+        if not any(f.role == role for f in out):
+            raise GearlabInputError(f"{where}: no file has role = '{role}'; expected at least "
+                                    + " and ".join(f"one {r}" for r in need) + " file")
+    return tuple(out)
+
+
+def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
+    if t["fs"] is None:
+        raise GearlabInputError(f"{where} key 'fs': missing; text records carry no sampling rate (e.g. "
+                                "fs = '66666.67 Hz')")
+    fs = to_si(t["fs"], "Hz", f"{where} key 'fs'")
+    if not fs > 0:
+        raise GearlabInputError(f"{where} key 'fs': expected a positive sampling rate, got {shown(t['fs'])}")
+    if t["transient"] not in ("none", "stats"):
+        raise GearlabInputError(f"{where} key 'transient': expected 'none' or 'stats', got {shown(t['transient'])}")
+    for key in ("vibration", "tacho"):
+        if isinstance(t[key], int) and t[key] < 0:
+            raise GearlabInputError(f"{where} key '{key}': a column index is 0 or more, got {t[key]}")
+    if t["vibration"] == t["tacho"]:
+        raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
+    files = target_files(t["files"], f"{where} key 'files'", base, need)
+    return Target(t["vibration"], t["tacho"], t["pulses_per_rev"],
+                  parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'"), fs, t["transient"],
+                  t["positive"], files)
+
+
+def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
+    """The [[methods]]; none listed: every registered adapter that learns without target labels
+    (source-trained, domain-adaptation and detector methods), in the registry's order."""
+    registry = get_registry()
+    if not entries:
+        entries = [{"adapter": name, "supervised": False, "params": {}} for name in registry.names("adapter")
+                   if registry.get("adapter", name).train_on != "target"
+                   and "unsupervised" in registry.get("adapter", name).supervision]
+    out = []
+    for i, entry in enumerate(entries):
+        at = location(where, "methods", index=i)
+        m = transfer_method(entry, at)
+        if m.supervised:
+            raise GearlabInputError(f"{at} key 'supervised': the measured target has no labels a method may use")
+        if registry.get("adapter", m.adapter).train_on == "target":
+            raise GearlabInputError(f"{at} key 'adapter': '{m.adapter}' trains on labelled target data; the "
+                                    "measured history has none")
+        if m in out:
+            raise GearlabInputError(f"{at}: {m.label} is listed twice")
+        out.append(m)
+    return tuple(out)
+
+
+def build(scenario: Scenario) -> dict:
+    t = scenario.tables
+    path = scenario.path
+    source = dataset_spec(t["source"], location(path, "source"), scenario.base)
+    if not isinstance(source, DatasetSpec):
+        raise GearlabInputError(f"{location(path, 'source', 'file')}: the source is a simulator configuration; "
+                                "give a 'preset' (measured data are the [target])")
+    sizes = class_sizes(source, location(path, "source"))
+    if not sizes["healthy"] or sum(sizes.values()) == sizes["healthy"]:
+        raise GearlabInputError(f"{location(path, 'source')}: the source needs healthy and faulty revolutions "
+                                f"(has {sizes})")
+    _, pair, _ = source.check_model(location(path, "source"))
+    target = target_spec(t["target"], location(path, "target"), scenario.base)
+    c = t["classical"]
+    for name in c["indicators"]:
+        if name not in INDICATORS:
+            raise GearlabInputError(f"{location(path, 'classical', 'indicators')}: unknown indicator "
+                                    f"{shown(name)}{did_you_mean(str(name), INDICATORS)}; known: {', '.join(INDICATORS)}")
+    orders = c["mesh_orders"] or [pair.Z1]
+    if not all(isinstance(o, int) and not isinstance(o, bool) and 1 <= o <= 1000 for o in orders):
+        raise GearlabInputError(f"{location(path, 'classical', 'mesh_orders')}: expected whole orders 1 … 1000, "
+                                f"got {shown(orders)}")
+    blocks = t["detection"]["blocks"]
+    if not all(isinstance(b, int) and not isinstance(b, bool) and 2 <= b <= 10_000 for b in blocks) \
+            or len(set(blocks)) != len(blocks):
+        raise GearlabInputError(f"{location(path, 'detection', 'blocks')}: expected distinct whole numbers of "
+                                f"revolutions >= 2, got {shown(blocks)}")
+    net = check_training(t, path)
+    p = t["protocol"]
+    protocol = Protocol(
+        methods=methods_of(t["methods"], str(path)), network=net, dropout=t["network"]["dropout"], ks=(0,),
+        repetitions=1, target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
+        prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
+        min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=device_of(scenario),
+        calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
+    )
+    protocol.calibration.check(str(path))
+    if p["batch"] > p["target_train"]:
+        raise GearlabInputError(f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than target_train "
+                                f"= {p['target_train']}")
+    if t["detection"]["source_speed"] not in SOURCE_SPEEDS:
+        raise GearlabInputError(f"{location(path, 'detection', 'source_speed')}: expected one of "
+                                f"{', '.join(SOURCE_SPEEDS)}, got {shown(t['detection']['source_speed'])}")
+    if t["detection"]["input"] not in INPUTS:
+        raise GearlabInputError(f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got "
+                                f"{shown(t['detection']['input'])}")
+    return {"source": source, "target": target, "protocol": protocol, "source_speed": t["detection"]["source_speed"],
+            "input": t["detection"]["input"],
+            "classical": {"indicators": tuple(c["indicators"]), "mesh_orders": tuple(orders),
+                          "shaft_orders": c["shaft_orders"], "sidebands": c["sidebands"]},
+            "blocks": tuple(blocks), "false_alarm": t["detection"]["false_alarm"]}
+
+
+def describe(scenario: Scenario) -> str:
+    spec = scenario.spec
+    files = spec["target"].files
+    n_hist = sum(f.role == "history" for f in files)
+    names = [m.adapter for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
+    return (f"{sized(spec['source'])} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
+            f"test); methods: {', '.join(names)}; units: revolution, "
+            + ", ".join(f"record{b}" for b in spec["blocks"]))
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: short training."""
+    p = scenario.spec["protocol"]
+    scenario.spec["protocol"] = replace(p, prime_epochs=min(p.prime_epochs, 20), baseline_epochs=min(p.baseline_epochs, 30),
+                                        min_epochs=min(p.min_epochs, 30), max_epochs=min(p.max_epochs, 40))
+
+
+# --- the records -------------------------------------------------------------------------
+
+
+def condition_of(f: TargetFile, speed_hz: float) -> str:
+    return f.condition or f"{speed_hz:.0f} Hz"
+
+
+def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.ndarray:
+    """TSAs of *block* consecutive revolutions: non-overlapping blocks (stride = block), or sliding
+    windows moved by *stride* revolutions."""
+    stride = stride or block
+    starts = range(0, revs.shape[0] - block + 1, stride)
+    if not len(starts):
+        return np.empty((0, revs.shape[1]), dtype=revs.dtype)
+    return np.stack([revs[s:s + block].mean(axis=0) for s in starts]).astype(revs.dtype)
+
+
+def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
+    """{unit name: rows} of one record."""
+    out = {"revolution": revs}
+    for b in blocks:
+        out[f"record{b}"] = tsa_units(revs, b, max(1, b // HISTORY_STRIDES) if history else None)
+    return out
+
+
+def read_target(target: Target, blocks, on_event) -> dict[str, dict]:
+    """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
+    read, standardised against its condition's history and aligned to its first history record.
+    Only the records' signals are used here (no label)."""
+    conditions: dict[str, dict] = {}
+    on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
+    for i, f in enumerate(target.files):
+        rec = read_record(f.resolved, vibration=target.vibration, tacho=target.tacho,
+                          pulses_per_rev=target.pulses_per_rev, sensitivity=target.sensitivity, fs=target.fs,
+                          transient=target.transient)
+        cond = conditions.setdefault(condition_of(f, rec.speed_hz), {"history": [], "test": [], "speeds": {}})
+        cond[f.role].append((f, rec.revolutions))
+        cond["speeds"][f.path] = rec.speed_hz
+        on_event(Event("advance", stage="records", done=i + 1, total=len(target.files)))
+    for name, cond in conditions.items():
+        if not cond["history"]:
+            files = ", ".join(f.path for f, _ in cond["test"])
+            raise GearlabInputError(f"[target] key 'files': condition '{name}' ({files}) has no history record; "
+                                    "each condition needs its own healthy history (give 'condition' to group files)")
+        standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
+        reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
+        cond["shifts"] = {}
+        for role in ROLES:
+            aligned = []
+            for f, revs in cond[role]:
+                shift, revs = align_to(reference, standardiser.apply(revs), target.pulses_per_rev)
+                cond["shifts"][f.path] = shift
+                aligned.append((f, revs))
+            cond[role] = aligned
+        cond["history_units"] = {u: np.concatenate([unit_sets(r, blocks, True)[u] for _, r in cond["history"]])
+                                 for u in unit_sets(cond["history"][0][1][:1], blocks, True)}
+        cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
+    return conditions
+
+
+# --- the units of work -------------------------------------------------------------------
+
+
+def _to_lists(scores: dict) -> dict:
+    return {k: (_to_lists(v) if isinstance(v, dict) else [float(s) for s in v]) for k, v in scores.items()}
+
+
+def train_unit(task: tuple) -> dict:
+    """One method at one condition, in this process or a worker: trained on the source and the
+    history's training revolutions, then its scores of the history units (for the threshold)
+    and, only now, of the test units."""
+    import torch
+
+    from ..learn.protocol import fault_score, train_method
+    from ..learn.training import pick_device
+
+    protocol, method, condition, (Xs, ys, Xv, yv), train, history_units, test_units, states, false_alarm = task
+    torch.set_num_threads(1)
+    device = pick_device(protocol.device)
+    with UnitProgress(Path(states).parents[1], f"{condition}/{method.key}") as progress:
+        def report(epoch: int, history) -> None:
+            progress(f"epoch {epoch + 1}")
+
+        model, history, _ = train_method(protocol, method, (Xs, ys), (Xv, yv),
+                                             (train, np.zeros(len(train), dtype=np.int64)), 0, 0,
+                                             StateStore(Path(states)), device, report)
+    # the model is fixed: the history's units fix the thresholds, then the test units are scored
+    hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
+    thresholds = decide(hist, false_alarm)
+    test = {path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()}
+    return {"unit": f"{condition}/{method.key}", "condition": condition, "method": method_name(method),
+            "adapter": method.adapter, "history_scores": _to_lists(hist), "thresholds": thresholds,
+            "test_scores": _to_lists(test), "history": history.as_dict() if history is not None else None}
+
+
+def decide(history_scores: dict, false_alarm: float) -> dict[str, float]:
+    """{unit: threshold}: the 1 - false_alarm quantile of the Gumbel law fitted by its quartiles
+    to the history units' scores (gearlab.learn.detectors.gumbel_quantile)."""
+    return {u: gumbel_quantile(np.asarray(s, dtype=np.float64), 1.0 - false_alarm) for u, s in history_scores.items()}
+
+
+def method_name(m: Method) -> str:
+    return m.adapter + "".join(f", {k}={v}" for k, v in m.shown)
+
+
+def classical_record(name: str, condition: str, cond: dict, classical: dict, false_alarm: float) -> dict:
+    """A classical indicator's scores: computed on the TSA units, its NA4 reference from the history."""
+    orders, shaft = classical["mesh_orders"], classical["shaft_orders"]
+    # NA4's denominator: the mean residual variance of the history's units of the same kind
+    variance = {u: na4_reference(X, orders, shaft) for u, X in cond["history_units"].items()} if name == "na4" else {}
+
+    def score(X: np.ndarray, u: str) -> np.ndarray:
+        if name == "fm4":
+            return fm4(X, orders, shaft, classical["sidebands"])
+        return na4(X, orders, variance[u], shaft)
+
+    hist = {u: score(X, u) for u, X in cond["history_units"].items()}
+    thresholds = decide(hist, false_alarm)  # fixed before any test unit is scored
+    test = {p: {u: score(X, u) for u, X in units.items()} for p, units in cond["test_units"].items()}
+    return {"unit": f"{condition}/{name}", "condition": condition, "method": name, "adapter": None,
+            "history_scores": _to_lists(hist), "thresholds": thresholds, "test_scores": _to_lists(test)}
+
+
+def learned_input(spec: dict):
+    """What the learned methods see of a revolution or TSA (source and target alike): as it is,
+    or its difference signal (shaft orders, mesh harmonics and their sidebands removed, as for
+    FM4), which leaves what one tooth adds and drops what every tooth and each build share."""
+    if spec["input"] == "revolution":
+        return lambda X: X
+    c = spec["classical"]
+    return lambda X: difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32)
+
+
+def source_for(source: DatasetSpec, cond: dict, how: str) -> DatasetSpec:
+    """The source simulated at the condition's speed (the median of its history records' tacho
+    speeds, to 1 Hz), or as given."""
+    if how == "source":
+        return source
+    speed = float(round(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])))
+    return source.with_(speed_hz=speed, name=f"{source.name}@{speed:g}Hz", domain=f"{source.name}@{speed:g}Hz")
+
+
+def history_training_rows(cond: dict, protocol: Protocol, condition: str) -> np.ndarray:
+    """The history revolutions a network trains on: target_train of them at random (seeded)."""
+    revs = np.concatenate([r for _, r in cond["history"]])
+    rng = np.random.default_rng([protocol.seed, sum(map(ord, condition))])
+    take = rng.permutation(len(revs))[: protocol.target_train]
+    return revs[np.sort(take)]
+
+
+def source_split(source, protocol: Protocol):
+    rng = np.random.default_rng([protocol.seed, 0])
+    order = rng.permutation(len(source.X))
+    n_val = max(1, round(protocol.val_fraction * len(order)))
+    tr, va = np.sort(order[n_val:]), np.sort(order[:n_val])
+    y = source.fault.astype(np.int64)
+    return source.X[tr], y[tr], source.X[va], y[va]
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    spec = scenario.spec
+    protocol: Protocol = spec["protocol"]
+    with executor_for(scenario) as executor:
+        conditions = read_target(spec["target"], spec["blocks"], on_event)
+        specs = {c: source_for(spec["source"], cond, spec["source_speed"]) for c, cond in conditions.items()}
+        for c, cond in conditions.items():
+            cond["source"] = specs[c].name
+        built = list(dict.fromkeys(specs.values()))
+        on_event(Event("stage", stage="datasets", total=len(built), message="source datasets"))
+        sources = {}
+        for i, s in enumerate(built):
+            sources[s], _ = load_or_build(s, executor, on_event)
+            on_event(Event("advance", stage="datasets", done=i + 1, total=len(built)))
+            if len(sources[s].X) - max(1, round(protocol.val_fraction * len(sources[s].X))) < protocol.batch:
+                raise GearlabInputError(f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
+                                        f"the source training set of '{s.name}'")
+        done = {r["unit"] for r in run.records()}
+        for name, cond in conditions.items():
+            for indicator in spec["classical"]["indicators"]:
+                if f"{name}/{indicator}" not in done:
+                    run.append(classical_record(indicator, name, cond, spec["classical"], spec["false_alarm"]))
+        shown_to = learned_input(spec)
+        splits = {c: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[c]], protocol))
+                  for c in conditions}
+        todo = [(name, m) for name in conditions for m in protocol.methods]
+        pending = [(c, m) for c, m in todo if f"{c}/{m.key}" not in done]
+        folders = {c: f"condition{i}" for i, c in enumerate(conditions)}
+        makers: dict[tuple, tuple] = {}
+        for c, m in pending:
+            state = shared_state(m, 0, 0, protocol)
+            if state is not None and not (run.path / "states" / folders[c] / f"{state}.pt").exists():
+                makers.setdefault((c, state), (c, m))
+        first = list(makers.values())
+        phases = [first, [u for u in pending if u not in first]]
+        on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} trainings"))
+        finished = len(todo) - len(pending)
+
+        def record_done(_: int, record: dict) -> None:
+            nonlocal finished
+            run.append(record)
+            finished += 1
+            on_event(Event("log", message=f"{record['unit']} trained"))
+            on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+        for phase in phases:
+            tasks = []
+            for c, m in phase:
+                cond = conditions[c]
+                states = run.path / "states" / folders[c]
+                states.mkdir(parents=True, exist_ok=True)
+                tasks.append((protocol, m, c, splits[c], shown_to(history_training_rows(cond, protocol, c)),
+                              {u: shown_to(X) for u, X in cond["history_units"].items()},
+                              {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
+                              states, spec["false_alarm"]))
+            executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+        run.write_json("conditions.json", {
+            c: {"history": [f.path for f, _ in v["history"]], "test": [f.path for f, _ in v["test"]],
+                "speeds_hz": v["speeds"], "start_marks": v["shifts"], "source": v["source"]}
+            for c, v in conditions.items()})
+        summarise(scenario, run)
+
+
+# --- figures -----------------------------------------------------------------------------
+
+
+def auc(negatives: np.ndarray, positives: np.ndarray) -> float | None:
+    """ROC AUC = P(score of a positive > score of a negative), ties counted half (Mann-Whitney)."""
+    if not len(negatives) or not len(positives):
+        return None
+    n, p = np.asarray(negatives)[:, None], np.asarray(positives)[None, :]
+    return float(np.mean((p > n) + 0.5 * (p == n)))
+
+
+def summarise(scenario: Scenario, run: RunDir) -> None:
+    spec = scenario.spec
+    target: Target = spec["target"]
+    labels = {f.path: f.label for f in target.files}
+    records = run.records()
+    thresholds = {r["unit"]: r["thresholds"] for r in records}
+    # scores.csv: every test unit's score and decision
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["file", "unit", "index", "method", "score", "decision"])
+    for r in records:
+        for path, units in r["test_scores"].items():
+            for u, scores in units.items():
+                thr = thresholds[r["unit"]][u]
+                for i, s in enumerate(scores):
+                    w.writerow([path, u, i, r["method"], repr(float(s)), int(s > thr)])
+    run.write_text("scores.csv", buf.getvalue())
+    # the labels come in only here, to score what was decided
+    rows = []
+    for r in records:
+        for u in r["history_scores"]:
+            thr = thresholds[r["unit"]][u]
+            neg = np.concatenate([r["test_scores"][p][u] for p in r["test_scores"] if labels[p] != target.positive]
+                                 or [np.empty(0)])
+            pos = np.concatenate([r["test_scores"][p][u] for p in r["test_scores"] if labels[p] == target.positive]
+                                 or [np.empty(0)])
+            by_label = {}
+            for p, units in r["test_scores"].items():
+                by_label.setdefault(labels[p], []).extend(units[u])
+            rows.append({
+                "condition": r["condition"], "unit": u, "method": r["method"], "auc": auc(neg, pos),
+                "detection": 100.0 * float(np.mean(pos > thr)) if len(pos) else None,
+                "false_alarm": 100.0 * float(np.mean(neg > thr)) if len(neg) else None,
+                "n_positive": int(len(pos)), "n_negative": int(len(neg)), "threshold": thr,
+                "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
+            })
+    order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
+    methods = [method_name(m) for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
+    rows.sort(key=lambda r: (order[r["condition"]], methods.index(r["method"]) if r["method"] in methods
+                             else len(methods), r["unit"] != "revolution", r["unit"]))
+    summary = {
+        "kind": "detection", "scenario": scenario.name, "source": asdict(spec["source"]),
+        "target": {**asdict(target), "files": [asdict(f) for f in target.files]},
+        "protocol": {k: v for k, v in asdict(spec["protocol"]).items() if k != "methods"},
+        "methods": list(dict.fromkeys(r["method"] for r in records)),
+        "false_alarm_asked": spec["false_alarm"], "rows": rows,
+    }
+    if (run.path / "conditions.json").exists():
+        summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", table_md(rows))
+    run.write_text("table.csv", table_csv(rows))
+
+
+def _cell(x, fmt="{:.2f}") -> str:
+    return "–" if x is None else fmt.format(x)
+
+
+def table_md(rows: list[dict]) -> str:
+    """One table per condition: a row per method; AUC, detection and false alarms (% of the
+    test's positive and negative units called at the history's threshold) per unit."""
+    units = list(dict.fromkeys(r["unit"] for r in rows))
+    out = []
+    for c in dict.fromkeys(r["condition"] for r in rows):
+        cells = {(r["method"], r["unit"]): r for r in rows if r["condition"] == c}
+        first = next(r for r in rows if r["condition"] == c)
+        out.append(f"| {c}: method | " + " | ".join(f"{u} AUC | det % | FA %" for u in units) + " |")
+        out.append("|---|" + "---|---|---|" * len(units))
+        for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c):
+            parts = []
+            for u in units:
+                r = cells.get((m, u))
+                parts.append("| | " if r is None else f"{_cell(r['auc'], '{:.3f}')} | {_cell(r['detection'], '{:.0f}')} | "
+                             f"{_cell(r['false_alarm'], '{:.0f}')}")
+            out.append(f"| {m} | " + " | ".join(parts) + " |")
+        out.append(f"| units (pos / neg) | " + " | ".join(
+            f"{cells[(first['method'], u)]['n_positive']} / {cells[(first['method'], u)]['n_negative']} | |"
+            if (first["method"], u) in cells else "| |" for u in units) + " |")
+        out.append("")
+    return "\n".join(out)
+
+
+def table_csv(rows: list[dict]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["condition", "unit", "method", "auc", "detection", "false_alarm", "n_positive", "n_negative",
+                "threshold"])
+    for r in rows:
+        w.writerow([r["condition"], r["unit"], r["method"], *(("" if r[k] is None else f"{r[k]:.4f}")
+                                                              for k in ("auc", "detection", "false_alarm")),
+                    r["n_positive"], r["n_negative"], f"{r['threshold']:.6g}"])
+    return buf.getvalue()
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    summary = json.loads((run.path / "summary.json").read_text())
+    return [f"ROC AUC, detection and false alarms at the history's threshold ({100 * summary['false_alarm_asked']:g} % "
+            "false alarms asked):", table_md(summary["rows"]).rstrip()]
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    return "| unit | method |\n|---|---|\n" + "".join(f"| {r['condition']} | {r['method']} |\n" for r in records)
+
+
+def charts(scenario: Scenario, run: RunDir) -> list:
+    return []

@@ -1,0 +1,185 @@
+"""Scenario kind `detection`: simulated source, measured target files with roles; scores.csv;
+the test files' labels (and signals) never reach training, thresholds or model selection."""
+
+import csv
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from textrecords import FS, PULSES, record
+from tiny import EXECUTION, schedule
+
+PHM09 = Path(__file__).resolve().parents[2] / "shared" / "data" / "phm09"
+
+# (file, role, label, chip size): two healthy history records, a healthy and two chipped test records
+FILES = [("h1", "history", "healthy", 0.0), ("h2", "history", "healthy", 0.0), ("h3", "test", "healthy", 0.0),
+         ("f1", "test", "fault", 4.0), ("f2", "test", "fault", 4.0)]
+
+
+def scenario(folder: Path, files=FILES, methods=("source_only", "mmd", "matched_filter"), extra: str = "") -> Path:
+    """A tiny detection scenario in *folder*/scenarios, its records in *folder*/data (relative paths)."""
+    (folder / "data").mkdir(exist_ok=True)
+    (folder / "scenarios").mkdir(exist_ok=True)
+    entries = []
+    for i, (name, role, label, chip) in enumerate(files):
+        path = folder / "data" / f"{name}.zip"
+        if not path.exists():
+            record(path, revolutions=40, chip=chip, seed=i, phase=0.7 * i)
+        entries.append(f'  {{ path = "../data/{name}.zip", role = "{role}", label = "{label}" }},')
+    methods_text = "".join(f'[[methods]]\nadapter = "{m}"\n\n' for m in methods)
+    text = (f'[scenario]\nname = "det"\nkind = "detection"\n\n'
+            '[source]\npreset = "B-6-ch5"\nteeth = [1, 2, 3]\nfaults = { chip = [20] }\nhealthy = 9\n\n'
+            f'[target]\nvibration = 0\ntacho = "2"\npulses_per_rev = {PULSES}\nsensitivity = "10 mV/g"\n'
+            f'fs = "{FS} Hz"\nfiles = [\n' + "\n".join(entries) + "\n]\n\n"
+            '[classical]\nmesh_orders = [32]\n\n[detection]\nblocks = [5, 10]\n\n'
+            f'[network]\nname = "fast"\n\n{methods_text}[protocol]\n{schedule(2)}\n{EXECUTION}\n{extra}')
+    path = folder / "scenarios" / "det.toml"
+    path.write_text(text)
+    return path
+
+
+def run(cli, path: Path, out: Path) -> Path:
+    code, stdout, err = cli("run", path, "--out", out)
+    assert code == 0, err
+    return Path(stdout.strip().splitlines()[-1].split(": ", 1)[1])
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+
+
+def scores(run_dir: Path) -> list[dict]:
+    with (run_dir / "scores.csv").open() as f:
+        return list(csv.DictReader(f))
+
+
+def test_scores_csv_has_a_row_per_test_unit_and_method(cli, tmp_path, cache):
+    out = run(cli, scenario(tmp_path), tmp_path / "runs")
+    rows = scores(out)
+    assert list(rows[0]) == ["file", "unit", "index", "method", "score", "decision"]
+    assert {r["file"] for r in rows} == {"../data/h3.zip", "../data/f1.zip", "../data/f2.zip"}  # as written
+    assert {r["method"] for r in rows} == {"source_only", "mmd", "matched_filter", "fm4", "na4"}
+    assert {r["unit"] for r in rows} == {"revolution", "record5", "record10"}
+    per = {}
+    for r in rows:
+        per.setdefault((r["file"], r["unit"], r["method"]), []).append(int(r["index"]))
+    revs = len(per[("../data/f1.zip", "revolution", "fm4")])
+    assert 38 <= revs <= 40
+    for (_, unit, _), idx in per.items():
+        n = {"revolution": revs, "record5": revs // 5, "record10": revs // 10}[unit]
+        assert idx == list(range(n))
+    assert {r["decision"] for r in rows} <= {"0", "1"}
+    summary = json.loads((out / "summary.json").read_text())
+    by = {(r["unit"], r["method"]): r for r in summary["rows"]}
+    # the synthetic chip rings once a revolution: FM4 of the TSA finds every chipped record
+    assert by[("record10", "fm4")]["auc"] == 1.0 and by[("record10", "fm4")]["detection"] == 100.0
+    assert by[("record10", "fm4")]["false_alarm"] == 0.0
+    assert (out / "table.md").read_text().count("record10 AUC | det % | FA %") == 1
+    assert "fm4" in (out / "report.html").read_text()
+
+
+def flipped(files, signals: bool = False):
+    """The test files' labels swapped (and, with *signals*, other recordings under the same names)."""
+    out = []
+    for name, role, label, chip in files:
+        if role == "test":
+            label = {"healthy": "fault", "fault": "healthy"}[label]
+            if signals:
+                chip = 4.0 - chip
+        out.append((name, role, label, chip))
+    return out
+
+
+def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_path, cache, monkeypatch):
+    """Flipping the test files' labels changes no score and no decision, only the figures; other
+    test recordings change no history score, so no threshold and no trained model either."""
+    import gearlab.learn.protocol as P
+
+    seen = []
+    train_method = P.train_method
+
+    def spy(protocol, method, source, source_val, target, *args, **kwargs):
+        seen.append(np.array(target[0], copy=True))
+        return train_method(protocol, method, source, source_val, target, *args, **kwargs)
+
+    monkeypatch.setattr(P, "train_method", spy)
+    runs = []
+    for i, files in enumerate((FILES, flipped(FILES), flipped(FILES, signals=True))):
+        folder = tmp_path / f"case{i}"
+        folder.mkdir()
+        runs.append(run(cli, scenario(folder, files), tmp_path / "runs"))
+    records = [{r["unit"]: r for r in map(json.loads, (d / "results.jsonl").read_text().splitlines())} for d in runs]
+    first = scores(runs[0])
+    for key in ("file", "unit", "index", "method", "score", "decision"):
+        assert [r[key] for r in scores(runs[1])] == [r[key] for r in first]
+    for rec in records[1:]:
+        assert rec.keys() == records[0].keys()
+        for unit, r in rec.items():
+            assert r["history_scores"] == records[0][unit]["history_scores"]
+            assert r.get("history") == records[0][unit].get("history")
+    a, b = (json.loads((d / "summary.json").read_text()) for d in runs[:2])
+    for ra, rb in zip(a["rows"], b["rows"]):
+        assert ra["threshold"] == rb["threshold"]
+        if ra["auc"] is not None:
+            assert rb["auc"] == pytest.approx(1.0 - ra["auc"])
+    # what training was handed: history revolutions only, the same in every run
+    assert seen and all(np.array_equal(x, seen[i % (len(seen) // 3)]) for i, x in enumerate(seen))
+
+
+def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp_path, cache, monkeypatch):
+    path = scenario(tmp_path, methods=("matched_filter",))
+    monkeypatch.chdir(tmp_path / "data")  # anywhere but the scenario's folder
+    out = run(cli, path, tmp_path / "runs")
+    from gearlab.runs import RunDir
+
+    assert RunDir.open(out).scenario().spec["target"].files[0].path == "../data/h1.zip"
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda t: t.replace('role = "history"', 'role = "histroy"', 1), "role 'histroy' .*did you mean 'history'"),
+    (lambda t: t.replace('label = "healthy" },', 'label = "healthy", lable = "x" },', 1), "unknown key 'lable'"),
+    (lambda t: t.replace("../data/h1.zip", "../data/nope.zip"), "nope.zip: no such file"),
+    (lambda t: t.replace('fs = ', 'fz = '), "key 'fz': unknown key .*did you mean 'fs'"),
+    (lambda t: t.replace('"10 mV/g"', '"10 mV"'), "key 'sensitivity'.*wrong dimension"),
+    (lambda t: t.replace('adapter = "mmd"', 'adapter = "target_only"'), "no unsupervised variant"),
+    (lambda t: t.replace('adapter = "mmd"', 'adapter = "mmd"\nsupervised = true'), "no labels a method may use"),
+    (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
+])
+def test_bad_target_is_refused_before_any_work(cli, tmp_path, change, message):
+    path = scenario(tmp_path)
+    path.write_text(change(path.read_text()))
+    code, _, err = cli("validate", path)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert re.search(message, err), err
+
+
+def test_a_condition_without_history_is_refused_and_leaves_no_run(cli, tmp_path, cache):
+    path = scenario(tmp_path, methods=("matched_filter",))
+    # the test records at another speed form a condition of their own, with no history
+    path.write_text(path.read_text().replace('label = "fault" },', 'label = "fault", condition = "other" },'))
+    code, _, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 2 and "condition 'other'" in err and "no history record" in err
+    assert not list((tmp_path / "runs").rglob("scores.csv"))
+
+
+def test_without_methods_every_label_free_adapter_runs(tmp_path):
+    from gearlab.registry import get_registry
+    from gearlab.scenario import load_scenario
+
+    path = scenario(tmp_path, methods=())
+    spec = load_scenario(path).spec
+    registry = get_registry()
+    expected = {n for n in registry.names("adapter") if registry.get("adapter", n).train_on != "target"}
+    assert {m.adapter for m in spec["protocol"].methods} == expected
+    assert {"source_only", "mmd", "dann", "coral", "matched_filter"} <= expected
+
+
+@pytest.mark.skipif(not PHM09.is_dir(), reason="the PHM 2009 records (../shared/data/phm09) are not here")
+def test_shipped_phm09_scenario_validates(cli):
+    code, out, err = cli("validate", Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml")
+    assert code == 0, err
+    assert "24 measured records (8 history, 16 test)" in out
