@@ -469,3 +469,24 @@ def test_ctrl_c_says_how_to_resume(tmp_path, record_file, cache_env, monkeypatch
     run = next((tmp_path / "runs" / "m").iterdir())
     assert code == 130 and last_line(err) == f"interrupted; resume with: gearlab run --resume {run}"
     assert "Traceback" not in err and (run / "scenario.toml").is_file()
+
+
+def test_a_transfer_runs_copy_finds_its_relative_target_file(tmp_path, record_file, monkeypatch):
+    """`gearlab run --resume` of a transfer (and gap) run loads the run's copy of the scenario:
+    its measured target, given relative to the scenario file, must resolve as it did."""
+    import tomli_w
+    import tomllib
+
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "rec.npz").write_bytes(record_file.read_bytes())
+    doc = tomllib.loads((ROOT / "scenarios" / "quick.toml").read_text())
+    doc["target"] = {"file": "../data/rec.npz", "vibration": "acc", "tacho": "tacho", "labels": "label",
+                     "name": "rig"}
+    (tmp_path / "sc").mkdir()
+    (tmp_path / "sc" / "t.toml").write_text(tomli_w.dumps(doc))
+    monkeypatch.chdir(tmp_path / "sc")
+    run = RunDir.create(tmp_path / "runs", load_scenario("t.toml"))
+    monkeypatch.chdir(tmp_path)
+    target = run.scenario().spec["target"]
+    assert Path(target.path).resolve() == (data / "rec.npz").resolve()

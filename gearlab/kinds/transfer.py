@@ -126,8 +126,9 @@ def build(scenario: Scenario) -> dict:
     )
     protocol.calibration.check(str(path))
     check(protocol, str(path))
-    source = dataset_spec(t["source"], location(path, "source"), path.parent)
-    target = dataset_spec(t["target"], location(path, "target"), path.parent)
+    base = scenario.base or path.parent  # a run's copy of the scenario keeps its folder (--resume)
+    source = dataset_spec(t["source"], location(path, "source"), base)
+    target = dataset_spec(t["target"], location(path, "target"), base)
     planned = planned_counts(source, location(path, "source")), planned_counts(target, location(path, "target"))
     if None not in planned:
         check_data(protocol, *planned, str(path))
