@@ -7,13 +7,12 @@ mount small tmpfs file systems and run only as root (they are skipped otherwise)
 
 from __future__ import annotations
 
-import contextlib
 import io
 import json
 import os
 import struct
 import subprocess
-import sys
+import tomllib
 import warnings
 import zipfile
 from pathlib import Path
@@ -22,6 +21,7 @@ import h5py
 import numpy as np
 import pytest
 import scipy.io
+import tomli_w
 
 import gearlab.kinds.dataset as dataset_kind
 import gearlab.runs as runs
@@ -30,30 +30,13 @@ from gearlab.data.importers import MeasuredSpec, import_measured
 from gearlab.errors import GearlabInputError
 from gearlab.runs import RunDir, atomic_write, inside
 from gearlab.scenario import load_scenario
+from test_fuzz import run_cli
 from test_importers import make_record, write_npz
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 # ----------------------------------------------------------------------------- helpers
-
-
-def run_cli(*args) -> tuple[int, str]:
-    """`gearlab ARGS` in this process: (exit code, stderr)."""
-    from gearlab.cli import main
-
-    err = io.StringIO()
-    argv = sys.argv
-    sys.argv = ["gearlab", *map(str, args)]
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            main()
-        code = 0
-    except SystemExit as exc:
-        code = exc.code or 0
-    finally:
-        sys.argv = argv
-    return code, err.getvalue()
 
 
 def last_line(err: str) -> str:
@@ -400,8 +383,6 @@ def test_running_out_of_memory_while_importing_is_one_line(record_file, monkeypa
 def test_long_values_are_shortened_in_errors(tmp_path, table, key):
     doc = {"scenario": {"name": "n", "kind": "dataset"}, "datasets": [{"preset": "A-pinion"}]}
     doc.setdefault(table, {})[key] = "x" * 5000
-    import tomli_w
-
     path = tmp_path / "long.toml"
     path.write_text(tomli_w.dumps(doc))
     with pytest.raises(GearlabInputError) as info:
@@ -429,9 +410,6 @@ def test_errors_never_quote_a_system_file_reached_through_a_link(tmp_path, cache
     (("source", "speed"), "1 MHz", "key 'speed': '1 MHz' is outside (0 Hz, 1 kHz]"),
 ])
 def test_absurd_values_are_refused_with_the_range(tmp_path, where, value, fact):
-    import tomli_w
-    import tomllib
-
     doc = tomllib.loads((ROOT / "scenarios" / "quick.toml").read_text())
     node = doc
     for key in where[:-1]:
@@ -474,9 +452,6 @@ def test_ctrl_c_says_how_to_resume(tmp_path, record_file, cache_env, monkeypatch
 def test_a_transfer_runs_copy_finds_its_relative_target_file(tmp_path, record_file, monkeypatch):
     """`gearlab run --resume` of a transfer (and gap) run loads the run's copy of the scenario:
     its measured target, given relative to the scenario file, must resolve as it did."""
-    import tomli_w
-    import tomllib
-
     data = tmp_path / "data"
     data.mkdir()
     (data / "rec.npz").write_bytes(record_file.read_bytes())
