@@ -85,12 +85,16 @@ def heavy(tmp_path_factory):
     return [rig_record(base / f"rig_{i}.zip", 2 * LOAD, seed=i).name for i in range(2)], base
 
 
-def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch):
+def diagnosed(heavy, tmp_path, monkeypatch, candidates: str) -> dict:
+    """summary.json of the gap kind on the heavy records' history with these candidates."""
     names, base = heavy
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    path = scenario(base, [(n, "history") for n in names], '"load_level", "sensor_noise"')
-    run = run_scenario(path, out=tmp_path / "runs").path
-    s = json.loads((run / "summary.json").read_text())
+    run = run_scenario(scenario(base, [(n, "history") for n in names], candidates), out=tmp_path / "runs").path
+    return json.loads((run / "summary.json").read_text())
+
+
+def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch):
+    s = diagnosed(heavy, tmp_path, monkeypatch, '"load_level", "sensor_noise"')
     names_found = [e["name"] for e in s["effects"]]
     assert "load_level" in names_found
     factor = next(e for e in s["effects"] if e["name"] == "load_level")["params"]["factor"]
@@ -103,12 +107,7 @@ def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch)
 
 def test_a_wrong_mechanism_leaves_the_gap_unexplained(heavy, tmp_path, monkeypatch):
     """Only an effect that cannot scale the gear vibration is offered: the gap beyond the noise stays."""
-    names, base = heavy
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    path = scenario(base, [(n, "history") for n in names], '"sensor_offset", "sensor_noise"')
-    run = run_scenario(path, out=tmp_path / "runs").path
-    s = json.loads((run / "summary.json").read_text())
-    assert s["unexplained"]
+    assert diagnosed(heavy, tmp_path, monkeypatch, '"sensor_offset", "sensor_noise"')["unexplained"]
 
 
 def test_records_of_two_speeds_are_refused(heavy, tmp_path, monkeypatch):

@@ -160,6 +160,19 @@ class DynamicModel:
         }
 
 
+def add_spring(K: np.ndarray, C: np.ndarray, i: int, j: int | None, k: float, c: float) -> None:
+    """A spring k and damper c between DOFs i and j (eq. 2.100, 2.101), or from i to ground (j None)."""
+    K[i, i] += k
+    C[i, i] += c
+    if j is not None:
+        K[j, j] += k
+        C[j, j] += c
+        K[i, j] -= k
+        K[j, i] -= k
+        C[i, j] -= c
+        C[j, i] -= c
+
+
 def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str, load_dof: str) -> Assembly:
     """M, Kc, Cc (eq. 2.97, 2.100, 2.101) and P (eq. 2.104) of the 10-DOF model restricted to *dofs*.
 
@@ -175,17 +188,7 @@ def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str
     C = np.zeros((n, n))
 
     def spring(a: str, b: str | None, k: float, c: float) -> None:
-        i = idx[a]
-        K[i, i] += k
-        C[i, i] += c
-        if b is not None:
-            j = idx[b]
-            K[j, j] += k
-            C[j, j] += c
-            K[i, j] -= k
-            K[j, i] -= k
-            C[i, j] -= c
-            C[j, i] -= c
+        add_spring(K, C, idx[a], None if b is None else idx[b], k, c)
 
     for a, casing in (("x1", "xf"), ("y1", "yf"), ("x2", "xf"), ("y2", "yf")):
         spring(a, casing, v["k_b"], v["c_b"])

@@ -41,6 +41,25 @@ class SimulationError(GearlabInputError):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})  # NaN checks stay valid
+def _advance(u, v, a, u_new, c, dt, gamma, out, out_idx, step):
+    """The Newmark update to the solved displacement *u_new* (GN22, beta1 = gamma), the step's
+    output row, and every 2048 steps the divergence check: True when the response diverged."""
+    n = u.shape[0]
+    for i in range(n):
+        a_new = c[0] * (u_new[i] - u[i]) - c[2] * v[i] - c[3] * a[i]
+        v[i] += dt * ((1.0 - gamma) * a[i] + gamma * a_new)
+        u[i] = u_new[i]
+        a[i] = a_new
+    for j in range(out_idx.shape[0]):
+        out[step + 1, j] = a[out_idx[j]]
+    if step % 2048 == 0:
+        for i in range(n):
+            if not (abs(u[i]) < 1e3):  # also catches NaN
+                return True
+    return False
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})  # NaN checks stay valid
 def _integrate(GMC, gF, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
     """Advance len(k) steps from (u, v, a); out[0] is the start, out[i] the state after step i.
 
@@ -70,17 +89,9 @@ def _integrate(GMC, gF, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
         s = kk * (1.0 + c[1] * mu)
         corr = s * py / (1.0 + s * pw)
         for i in range(n):
-            u_new = y[i] - corr * w[i]
-            a_new = c[0] * (u_new - u[i]) - c[2] * v[i] - c[3] * a[i]
-            v[i] += dt * ((1.0 - gamma) * a[i] + gamma * a_new)
-            u[i] = u_new
-            a[i] = a_new
-        for j in range(out_idx.shape[0]):
-            out[step + 1, j] = a[out_idx[j]]
-        if step % 2048 == 0:
-            for i in range(n):
-                if not (abs(u[i]) < 1e3):  # also catches NaN
-                    return step
+            y[i] -= corr * w[i]  # u at the new step
+        if _advance(u, v, a, y, c, dt, gamma, out, out_idx, step):
+            return step
     return -1
 
 
@@ -116,17 +127,9 @@ def _integrate_forced(GMC, gF, GB, g, w, p, pw, k, mu, c, dt, gamma, u, v, a, ou
         s = kk * (1.0 + c[1] * mu)
         corr = s * py / (1.0 + s * pw)
         for i in range(n):
-            u_new = y[i] - corr * w[i]
-            a_new = c[0] * (u_new - u[i]) - c[2] * v[i] - c[3] * a[i]
-            v[i] += dt * ((1.0 - gamma) * a[i] + gamma * a_new)
-            u[i] = u_new
-            a[i] = a_new
-        for j in range(out_idx.shape[0]):
-            out[step + 1, j] = a[out_idx[j]]
-        if step % 2048 == 0:
-            for i in range(n):
-                if not (abs(u[i]) < 1e3):
-                    return step
+            y[i] -= corr * w[i]  # u at the new step
+        if _advance(u, v, a, y, c, dt, gamma, out, out_idx, step):
+            return step
     return -1
 
 
@@ -188,19 +191,10 @@ def _integrate_meshes(GMC, gF, GB, g, W, Pm, PW, k, mu, c, dt, gamma, u, v, a, o
                 acc -= A[q, r] * z[r]
             z[q] = acc / A[q, q]
         for i in range(n):
-            u_new = y[i]
             for q in range(m):
-                u_new -= W[i, q] * z[q]
-            a_new = c[0] * (u_new - u[i]) - c[2] * v[i] - c[3] * a[i]
-            v[i] += dt * ((1.0 - gamma) * a[i] + gamma * a_new)
-            u[i] = u_new
-            a[i] = a_new
-        for j in range(out_idx.shape[0]):
-            out[step + 1, j] = a[out_idx[j]]
-        if step % 2048 == 0:
-            for i in range(n):
-                if not (abs(u[i]) < 1e3):
-                    return step
+                y[i] -= W[i, q] * z[q]  # u at the new step
+        if _advance(u, v, a, y, c, dt, gamma, out, out_idx, step):
+            return step
     return -1
 
 

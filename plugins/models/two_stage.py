@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from gearlab.dynamics.model import Assembly, DynamicModel, Mesh
+from gearlab.dynamics.model import Assembly, DynamicModel, Mesh, add_spring
 from gearlab.physics.presets import gear_pair
 from gearlab.registry import hookimpl
 
@@ -94,17 +94,7 @@ def two_stage_assembly(pair, pair2, v) -> Assembly:
     K, C = np.zeros((n, n)), np.zeros((n, n))
 
     def spring(a, b, k, c):
-        i = idx[a]
-        K[i, i] += k
-        C[i, i] += c
-        if b is not None:
-            j = idx[b]
-            K[j, j] += k
-            C[j, j] += c
-            K[i, j] -= k
-            K[j, i] -= k
-            C[i, j] -= c
-            C[j, i] -= c
+        add_spring(K, C, idx[a], None if b is None else idx[b], k, c)
 
     for block in ("1", "2", "3"):
         spring("x" + block, "xf", v["k_b"], v["c_b"])
