@@ -546,6 +546,7 @@ def shrink_text(before: float, after: float) -> str:
 def view_rows(result: dict) -> dict[str, dict]:
     """Per view: gap and share before and after, with their bootstrap intervals."""
     before, after = result["before"]["views"], result["after"]["views"]
+    noise = (result.get("reference") or {}).get("views", {})  # reference = 'noise': the source with noise alone
     out = {}
     for name, b in before.items():
         a = after.get(name, {})
@@ -553,6 +554,8 @@ def view_rows(result: dict) -> dict[str, dict]:
                      "share_after": a.get("share"), "gap_before_interval": b.get("gap_interval"),
                      "gap_after_interval": a.get("gap_interval"), "share_before_interval": b.get("share_interval"),
                      "share_after_interval": a.get("share_interval")}
+        if name in noise:
+            out[name]["gap_noise"] = noise[name]
     return out
 
 
@@ -619,14 +622,17 @@ def _pct(x) -> str:
 
 
 def views_md(views: dict) -> str:
-    lines = ["| view | gap before | share before | gap after | share after |", "|---|---|---|---|---|"]
+    noise = any("gap_noise" in v for v in views.values())  # a column for the noise-alone reference
+    lines = ["| view | gap before | share before | " + ("gap with noise alone | " if noise else "")
+             + "gap after | share after |", "|---|---|---|---|---|" + ("---|" if noise else "")]
     for name, v in views.items():
         after = "" if v["gap_after"] is None else f"{v['gap_after']:.4g}{_interval(v['gap_after_interval'])}"
         share_iv = v["share_before_interval"]
         share_before = _pct(v["share_before"]) + (f" [{100 * share_iv[0]:.0f}, {100 * share_iv[1]:.0f}]"
                                                   if share_iv else "")
+        middle = (f"{v['gap_noise']:.4g} | " if v.get("gap_noise") is not None else " | ") if noise else ""
         lines.append(f"| {name} | {v['gap_before']:.4g}{_interval(v['gap_before_interval'])} | {share_before} | "
-                     f"{after} | {_pct(v['share_after'])} |")
+                     f"{middle}{after} | {_pct(v['share_after'])} |")
     return "\n".join(lines) + "\n"
 
 
