@@ -27,8 +27,11 @@ class Chart:
     xlabel: str
     ylabel: str
     curves: tuple[Curve, ...]
-    xticks: Sequence[float] | None = None  # categorical axes (k, intensity step)
+    xticks: Sequence[float] | None = None  # numbered axes shown tick by tick (k, intensity step)
     notes: tuple[str, ...] = field(default=())  # what could not be drawn, and why
+    # Named categories (views, effects, methods): the curves' y are bars, one per category in
+    # this order (their x are ignored); a front-end labels the bars with these names.
+    categories: Sequence[str] | None = None
 
 
 def dataset_examples(dataset, tooth: int = 5, per_class: int = 3) -> list[tuple[int, str, int]]:

@@ -31,9 +31,32 @@ console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 
 
+def _version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            typer.echo(f"gearlab {version('gearlab')}")
+        except PackageNotFoundError:  # a source tree that was never installed
+            typer.echo("gearlab (not installed: no version)")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                                   help="print gearlab's version and exit")] = False) -> None:
+    """gearlab: gear mesh stiffness, gearbox dynamics, fault classifiers and their calibration.
+
+    Example: gearlab run scenarios/quick.toml --quick
+    """
+
+
 @app.command()
 def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON list")] = False) -> None:
-    """List every registered plugin: kind, name, source package and parameters."""
+    """List every registered plugin: kind, name, source package and parameters.
+
+    Example: gearlab plugins --json
+    """
     from .registry import get_registry, kind_text, params_text
 
     registry = get_registry()
@@ -64,6 +87,8 @@ Faults (repeat --fault for several, on the same or different teeth):
                                   --fault "spall@5:w_s=8mm,l_s=1mm,h_s=0.5mm,x_1=4mm"
 
 `gearlab plugins` lists every fault's parameters, units, defaults and bounds.
+
+Example: gearlab stiffness --preset luo2019 --fault crack@1=10 --plot tvms.png
 """
 
 
@@ -137,9 +162,9 @@ def modes(
 ) -> None:
     """Undamped natural frequencies (Hz) of a model at its mean mesh stiffness.
 
-    `frequencies_hz` are those of the free model (every DOF, so a rigid-body 0 Hz mode when
-    the shafts are free); `fixed_input_hz` those of the model as simulated, with the input
-    shaft held at its fixed speed.
+    `frequencies_hz` are those of the free model (every DOF, so a rigid-body 0 Hz mode when the shafts are free); `fixed_input_hz` those of the model as simulated, with the input shaft held at its fixed speed.
+
+    Example: gearlab modes --model ten_dof
     """
     sim = _simulator(model, preset)
     free = sim.natural_frequencies(fixed_input=False)
@@ -165,7 +190,10 @@ def simulate(
     fs: Annotated[float, typer.Option(help="integration and sampling rate, Hz")] = 200e3,
     plot: Annotated[Path | None, typer.Option(help="PNG of the steady signal and its spectrum")] = None,
 ) -> None:
-    """Simulate a gearbox model (Newmark, fixed input speed) and save its signals."""
+    """Simulate a gearbox model (Newmark, fixed input speed) and save its signals.
+
+    Example: gearlab simulate --model six_dof --fault crack@1=20 --out sim.npz --plot sim.png
+    """
     import numpy as np
 
     from .physics.faults import parse_fault_option, place_fault
@@ -215,7 +243,10 @@ def simulate(
 
 @app.command()
 def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file")]) -> None:
-    """Check a scenario file without running it: unknown keys, types, ranges, plugin names."""
+    """Check a scenario file without running it: unknown keys, types, ranges, plugin names.
+
+    Example: gearlab validate scenarios/expB.toml
+    """
     from .scenario import load_scenario
 
     s = load_scenario(scenario)
@@ -251,7 +282,12 @@ def run(
     device: Device = None,
     events: Events = False,
 ) -> None:
-    """Run a scenario headless; prints `run directory: PATH` as its last line."""
+    """Run a scenario headless; prints `run directory: PATH` as its last line.
+
+    Progress goes to stderr: bars on a terminal, one log line per step otherwise.
+
+    Example: gearlab run scenarios/quick.toml --quick (then: gearlab run --resume RUN_DIR)
+    """
     if scenario is None and resume is None:
         raise GearlabInputError("give a SCENARIO file, or --resume RUN_DIR")
     _run(scenario, out, resume, quick, _execution(executor, ray_address, device), events)
@@ -326,23 +362,33 @@ def gap(
 ) -> None:
     """Diagnose the sim-to-real gap of a scenario, or run the blind benchmark of the diagnosis.
 
-    `gearlab gap benchmark` runs scenarios/gap_benchmark.toml (from the current folder, else
-    from the gearlab source tree) with --trials and --seed set on the command line.
+    `gearlab gap benchmark` runs scenarios/gap_benchmark.toml (from the current folder, else from the gearlab source tree) with --trials and --seed set on the command line; so does `gearlab gap FILE` for a gap_benchmark scenario file.
+
+    Example: gearlab gap scenarios/gap_expB.toml --quick; gearlab gap benchmark --trials 4
     """
     from .scenario import load_scenario
 
     overrides = _execution(executor, ray_address, None)
+    given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
     if scenario == "benchmark":
         path = _benchmark_scenario()
-        given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
         if given:
             overrides["benchmark"] = given
     else:
-        if trials is not None or seed is not None:
-            raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark`")
         path = Path(scenario)
+        if not path.exists() and "/" not in scenario and not scenario.endswith(".toml"):
+            from .params import did_you_mean
+
+            hint = did_you_mean(scenario, ["benchmark"])
+            if hint:
+                raise GearlabInputError(f"gap: '{scenario}' is neither a scenario file nor 'benchmark'{hint}")
         kind = load_scenario(path).kind
-        if kind != "gap":
+        if kind == "gap_benchmark":  # a benchmark file of one's own takes --trials and --seed too
+            if given:
+                overrides["benchmark"] = given
+        elif given:
+            raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark` (or a gap_benchmark file)")
+        elif kind != "gap":
             raise GearlabInputError(f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
                                     f"\"{kind}\" (run it with `gearlab run`)")
     _run(None if resume else path, out, resume, quick, overrides, events)
@@ -358,7 +404,10 @@ def _benchmark_scenario() -> Path:
 
 @app.command()
 def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> None:
-    """Rebuild report.html of a run directory."""
+    """Rebuild report.html of a run directory.
+
+    Example: gearlab report runs/quick/20260101-120000-000000
+    """
     from .runs import RunDir, write_report
 
     path = write_report(RunDir.open(run_dir))
@@ -366,13 +415,44 @@ def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> 
 
 
 @app.command()
+def compare(
+    run_dirs: Annotated[list[Path], typer.Argument(help="two or more run directories of one kind")],
+    html: Annotated[Path | None, typer.Option(help="also write a self-contained comparison page (HTML) here")] = None,
+) -> None:
+    """Compare runs of one kind: their tables side by side, their charts overlaid.
+
+    Example: gearlab compare runs/expB/RUN_1 runs/expB/RUN_2 --html expB.html
+    """
+    import tempfile
+
+    from .compare import compare_html, compare_lines, compare_markdown, load_runs
+    from .runs import atomic_write
+
+    runs = load_runs(run_dirs)
+    if html is not None and not html.parent.is_dir():
+        raise GearlabInputError(f"--html {html}: directory {html.parent} does not exist")
+    for line in compare_lines(runs):
+        console.print(line, markup=False, highlight=False)
+    console.print(compare_markdown(runs).rstrip(), markup=False, highlight=False)
+    if html is not None:
+        with tempfile.TemporaryDirectory() as figures:  # the PNGs are inlined, then go
+            atomic_write(html, compare_html(runs, Path(figures)))
+        console.print(f"wrote {html}", markup=False, highlight=False)
+
+
+@app.command()
 def tui(directory: Annotated[Path, typer.Argument(help="folder of scenario files")] = Path("scenarios")) -> None:
-    """Browse scenarios, run them and watch progress, read results and plugins in the terminal."""
+    """Browse scenarios, run them and watch progress, read and compare results, list plugins.
+
+    Example: gearlab tui scenarios (then ? lists the keys)
+    """
     if not directory.is_dir():
         raise GearlabInputError(f"{directory}: no such directory of scenario files")
     from .tui import run_tui
 
-    run_tui(directory)
+    code = run_tui(directory)
+    if code:  # the app ended on an internal error (Textual printed it): not a success
+        raise typer.Exit(1)
 
 
 def _print_event(event) -> None:
@@ -387,16 +467,20 @@ class ProgressView:
             TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
             console=err_console, transient=False,
         )
-        self.tasks: dict[str, int] = {}
+        self.tasks: dict[str, int] = {}  # stage -> rich task id (terminal) or last step told (log lines)
+        self.labels: dict[str, str] = {}
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         # Started by the first stage only: a run refused before any work prints its error line alone.
-        return self.progress.__exit__(*exc) if self.tasks else None
+        return self.progress.__exit__(*exc) if self.tasks and err_console.is_terminal else None
 
     def handle(self, event) -> None:
+        if not err_console.is_terminal:  # a log file or a pipe: lines that keep their labels
+            self._line(event)
+            return
         if event.kind == "stage":
             if not self.tasks:
                 self.progress.start()
@@ -405,6 +489,24 @@ class ProgressView:
             self.progress.update(self.tasks[event.stage], completed=event.done, total=event.total or None)
         elif event.kind == "log":
             self.progress.console.print(event.message)
+
+
+    def _line(self, event) -> None:
+        """One line per stage start, per tenth of a stage (at most) and per log message."""
+        if event.kind == "stage":
+            self.tasks[event.stage] = 0
+            self.labels[event.stage] = event.message or event.stage
+            err_console.print(f"{self.labels[event.stage]}: started ({event.total or '?'} steps)",
+                              markup=False, highlight=False)
+        elif event.kind == "advance" and event.stage in self.tasks:
+            step = max(1, (event.total or 10) // 10)
+            last = self.tasks[event.stage]
+            if event.done > last and (event.done >= last + step or (event.total and event.done >= event.total)):
+                self.tasks[event.stage] = event.done
+                err_console.print(f"{self.labels[event.stage]}: {event.done}/{event.total or '?'}",
+                                  markup=False, highlight=False)
+        elif event.kind == "log":
+            err_console.print(event.message, markup=False, highlight=False)
 
 
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:

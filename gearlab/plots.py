@@ -70,8 +70,8 @@ def rfa_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]]], path
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for name, (steps, rfa) in curves.items():
         ax.plot(steps, rfa, marker="o", ms=3, label=name)
-    ax.set_xlabel("intensity step")
-    ax.set_ylabel("relative fault area")
+    ax.set_xlabel("intensity step (1 = healthy)")
+    ax.set_ylabel("relative fault area (fraction of the tooth)")
     ax.set_ylim(-0.02, 1.05)
     ax.grid(alpha=0.3)
     ax.legend()
@@ -97,7 +97,7 @@ def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmoni
         for h in range(1, harmonics + 1):
             row[1].axvline(h * mesh_hz, color="tab:red", lw=0.6, ls="--", alpha=0.6)
         row[1].set_xlabel(f"frequency (Hz); dashed: mesh harmonics n × {mesh_hz:g} Hz")
-        row[1].set_ylabel("amplitude")
+        row[1].set_ylabel("amplitude (m/s²)")
         for ax in row:
             ax.grid(alpha=0.3)
     labels = ", ".join(f.label for f in sim.faults) or "healthy"
@@ -121,10 +121,10 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
         keep = orders <= 200
         row[1].plot(orders[keep], amp[keep], lw=0.6, label=label)
     for c, (name, row) in enumerate(zip(names, axes)):
-        row[0].set_ylabel(f"{name}\n(standardised)")
+        row[0].set_ylabel(f"{name}\n(standardised, 1)")
         row[0].set_xlabel("input-shaft angle (deg)")
-        row[1].set_xlabel("shaft order")
-        row[1].set_ylabel("amplitude")
+        row[1].set_xlabel("shaft order (per revolution)")
+        row[1].set_ylabel("amplitude (standardised, 1)")
         for ax in row:
             ax.grid(alpha=0.3)
             if any(e[0] == c for e in examples):
@@ -174,6 +174,8 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
                 ax.axvline(h["best_epoch"], color="k", ls="--", lw=0.7)
             ax.set_title(f"{r['method']}, k = {k_show}: test accuracy {r['accuracy']:.1f} %", fontsize=9)
             ax.set_xlabel("epoch")
+            ax.set_ylabel("accuracy (%)")
+            ax2.set_ylabel("discrepancy, λ (1)")
             ax.legend(fontsize=7, loc="lower left")
             ax2.legend(fontsize=7, loc="lower right")
         save(fig, figures / "training_curves.png")
@@ -192,9 +194,10 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
             ax.text(b, a, str(v), ha="center", va="center", fontsize=9)
         ax.set_xticks([0, 1], ["healthy", "fault"])
         ax.set_yticks([0, 1], ["healthy", "fault"])
-        ax.set_xlabel("predicted")
+        ax.set_xlabel("predicted (count)")
         ax.set_title(label, fontsize=7)
     axes[0][0].set_ylabel("true")
+    fig.suptitle(f"k = {k0}: counts summed over the repetitions", fontsize=9)
     save(fig, figures / "confusion_k0.png")
 
     # latent feature maps after adaptation (Figure 5.9): a PCA of source and target training features
@@ -212,11 +215,63 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
             z = z - z.mean(0)
             _, _, vt = np.linalg.svd(z, full_matrices=False)
             p = z @ vt[:2].T
-            ax.scatter(p[: len(zs), 0], p[: len(zs), 1], s=4, alpha=0.6, label="source")
-            ax.scatter(p[len(zs):, 0], p[len(zs):, 1], s=4, alpha=0.6, label="target")
+            # colour: domain; marker: class, where the unit stored the labels (healthy o, fault x)
+            labels = _latent_labels(f)
+            for (lo, hi), domain, colour in (((0, len(zs)), "source", "tab:blue"), ((len(zs), len(z)), "target",
+                                                                                     "tab:orange")):
+                cls = labels[0 if domain == "source" else 1]
+                if cls is None:
+                    ax.scatter(p[lo:hi, 0], p[lo:hi, 1], s=4, alpha=0.6, color=colour, label=domain)
+                    continue
+                for c, marker, name in ((0, "o", "healthy"), (1, "x", "fault")):
+                    keep = np.flatnonzero(np.asarray(cls) == c) + lo
+                    ax.scatter(p[keep, 0], p[keep, 1], s=6, alpha=0.6, color=colour, marker=marker,
+                               label=f"{domain} {name}")
             ax.set_title(f.stem.replace("_", " "), fontsize=7)
+            ax.set_xlabel("PC 1 (1)", fontsize=7)
+            ax.set_ylabel("PC 2 (1)", fontsize=7)
             ax.legend(fontsize=6)
         save(fig, figures / "latent_maps.png")
+
+
+def _latent_labels(path: Path) -> list:
+    """The class labels (0 healthy, 1 fault) stored beside a latent map, or None per domain."""
+    with np.load(path, allow_pickle=False) as d:
+        return [d["source_label"] if "source_label" in d else None, d["target_label"] if "target_label" in d else None]
+
+
+def chart_figure(chart, path: Path) -> Path:
+    """A gearlab.charts.Chart as a PNG (the comparison page draws the TUI's charts so):
+    lines with ± bands, or horizontal bars for named categories."""
+    curves = [c for c in chart.curves if len(c.y)]
+    if chart.categories is not None:
+        names = list(chart.categories)
+        fig, ax = plt.subplots(figsize=(8, 0.45 * len(names) * max(len(curves), 1) + 1.5), layout="constrained")
+        height = 0.8 / max(len(curves), 1)
+        y = np.arange(len(names))
+        for i, curve in enumerate(curves):
+            ax.barh(y + i * height, [float(v) for v in curve.y], height, label=curve.label,
+                    xerr=None if curve.err is None else [float(v) for v in curve.err])
+        ax.set_yticks(y + height * (len(curves) - 1) / 2, names)
+        ax.invert_yaxis()
+        ax.set_xlabel(chart.ylabel)
+        ax.grid(alpha=0.3, axis="x")
+    else:
+        fig, ax = plt.subplots(figsize=(9, 4.2), layout="constrained")
+        for curve in curves:
+            x, yv = np.asarray(curve.x, dtype=float), np.asarray(curve.y, dtype=float)
+            line, = ax.plot(x, yv, marker="o", ms=3, label=curve.label)
+            if curve.err is not None:
+                err = np.asarray(curve.err, dtype=float)
+                ax.fill_between(x, yv - err, yv + err, color=line.get_color(), alpha=0.15)
+        if chart.xticks is not None:
+            ax.set_xticks(list(chart.xticks))
+        ax.set_xlabel(chart.xlabel)
+        ax.set_ylabel(chart.ylabel)
+        ax.grid(alpha=0.3)
+    ax.set_title(chart.title, fontsize=9)
+    ax.legend(fontsize=7)
+    return save(fig, path)
 
 
 # Figure 4.4's colours: crack red, chip blue, spall yellow, pit purple; all faults black, as-healthy green.
@@ -336,7 +391,7 @@ def gap_figures(figures: Path, summary: Mapping) -> None:
         ax.bar(x + offset, gaps, 0.4, yerr=err, capsize=2, color=colour, alpha=0.8,
                label=f"{when} (total {summary[f'gap_{when}']:.3g})")
     ax.set_xticks(x, names, rotation=20)
-    ax.set_ylabel("gap (sum of squared effect sizes)")
+    ax.set_ylabel("gap (sum of squared effect sizes, 1)")
     # the gap of a broad change (noise) can be orders of magnitude above the others
     if any((views[n]["gap_before"] or 0) > 0 for n in names):
         ax.set_yscale("symlog", linthresh=1.0)

@@ -1,4 +1,6 @@
-"""One self-contained report.html per run: tables and figures inlined, nothing to fetch."""
+"""One self-contained report.html per run: the verdict, tables and figures inlined, nothing
+to fetch. Figures are numbered and captioned, with the thesis figure each one repeats; the
+resolved scenario and summary.json are folded away (<details>)."""
 
 from __future__ import annotations
 
@@ -7,8 +9,17 @@ import html
 import json
 from pathlib import Path
 
+STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
+         "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
+         "th{background:#eee}tr.reference td{color:#555;font-style:italic;background:#f7f7ff}"
+         "img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}pre{background:#f6f6f6;padding:1em;overflow:auto}"
+         "figure{margin:1.5em 0}figcaption{font-size:0.92em;color:#333}"
+         "#verdict{background:#f3f8f3;border-left:4px solid #4a4;padding:0.3em 1em}"
+         "details{margin:1em 0}summary{cursor:pointer;font-weight:bold}")
 
-def _markdown_table(text: str) -> str:
+
+def markdown_table(text: str) -> str:
+    """A markdown pipe table as HTML; rows whose first cell names the thesis are reference rows."""
     rows = [r.strip().strip("|").split("|") for r in text.strip().splitlines() if r.strip()]
     rows = [r for r in rows if not all(set(c.strip()) <= set("-:") for c in r)]
     if not rows:
@@ -16,12 +27,75 @@ def _markdown_table(text: str) -> str:
     head, body = rows[0], rows[1:]
     out = ["<table><thead><tr>", *(f"<th>{html.escape(c.strip())}</th>" for c in head), "</tr></thead><tbody>"]
     for r in body:
-        out += ["<tr>", *(f"<td>{html.escape(c.strip())}</td>" for c in r), "</tr>"]
+        reference = " class='reference'" if "thesis" in r[0] else ""
+        out += [f"<tr{reference}>", *(f"<td>{html.escape(c.strip())}</td>" for c in r), "</tr>"]
     out.append("</tbody></table>")
     return "".join(out)
 
 
+_markdown_table = markdown_table  # the name other modules used before
+
+
+def caption(stem: str, summary: dict) -> tuple[str, str]:
+    """(thesis figure it repeats or '', what the figure shows) for a figure file of a run."""
+    from .verdict import experiment
+
+    protocol = summary.get("protocol") or {}
+    reps = protocol.get("repetitions") or protocol.get("runs")
+    over = f" over {reps} repetitions" if reps else ""
+    ks = protocol.get("ks") or [0]
+    if stem == "accuracy_vs_k":
+        found = experiment(summary) if summary.get("kind") == "transfer" else None
+        return (found[2] if found else "Figures 5.5/5.6",
+                f"Target test accuracy (%) against the number of target fault samples k in the training set: "
+                f"mean{over}, band ± one standard deviation; solid lines supervised, dashed unsupervised.")
+    if stem == "training_curves":
+        return ("Figure 5.7", "Training curves of the first repetition at the middle k: source validation accuracy "
+                "(%, left axis), domain discrepancy and λ (dimensionless, right axis) against epoch; the dashed "
+                "line marks the epoch kept.")
+    if stem == "confusion_k0":
+        return ("Figure 5.8", f"Confusion matrices at k = {min(ks)}, summed{over} (counts of target test samples; "
+                "rows: true class, columns: predicted class).")
+    if stem == "latent_maps":
+        return ("Figure 5.9", "Latent features of the first repetition after adaptation: source and target "
+                "training samples projected on their first two principal components (PCA, dimensionless); "
+                "colour: domain, marker: class (o healthy, x fault).")
+    if stem == "accuracy_vs_intensity":
+        return ("Figure 4.4", "Test accuracy (%) per fault type against the intensity step (1-20), all faults "
+                "(black) and faults predicted healthy (green, dashed); mean ± std over runs; noisy left, TSA right.")
+    if stem == "accuracy_vs_rfa":
+        return ("Figure 4.5", "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); "
+                "mean ± std over runs.")
+    if stem == "confusion":
+        return ("Figure 4.6", "Confusion matrices compiled over all runs (counts; shading: share of the true class).")
+    if stem == "tvms_ladders":
+        return ("Figure 2.33", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step "
+                "of each fault ladder; colour: intensity step.")
+    if stem == "rfa":
+        return ("Figure 2.32", "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.")
+    if stem == "tvms_cases":
+        return ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases.")
+    if stem.startswith("signals_"):
+        return ("Figures 2.34-2.39", f"Dataset {stem[len('signals_'):]}: a revolution per class at low, middle and "
+                "top intensity (standardised acceleration against input-shaft angle, deg) and its order "
+                "spectrum (amplitude against shaft order).")
+    if stem == "gap_per_view":
+        return ("", "Where the gap lies: per-view gap (sum of squared effect sizes, dimensionless) of the healthy "
+                "revolutions before and after correcting the simulator, with bootstrap intervals.")
+    if stem == "gap_effect_ranking":
+        return ("", "Which effect: share of the gap (%) each candidate removes when added to the simulator alone; "
+                "accepted effects in blue.")
+    if stem == "gap_accuracy":
+        return ("", "How far: target test accuracy (%) at k = 0 of models trained on the uncorrected and the "
+                "corrected simulator; mean ± std over repetitions.")
+    if stem == "gap_benchmark":
+        return ("", "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.")
+    return ("", stem.replace("_", " ") + ".")
+
+
 def build_report(run_path: Path) -> str:
+    from .verdict import verdict_lines, verdict_table
+
     run_path = Path(run_path)
     summary_file = run_path / "summary.json"
     summary = json.loads(summary_file.read_text()) if summary_file.exists() else {}
@@ -29,30 +103,41 @@ def build_report(run_path: Path) -> str:
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'>",
         f"<title>{html.escape(title)}</title>",
-        "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-        "th{background:#eee}img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}pre{background:#f6f6f6;padding:1em}"
-        "</style></head><body>",
+        f"<style>{STYLE}</style></head><body>",
         f"<h1>{html.escape(title)}</h1>",
         f"<p>Run directory: <code>{html.escape(str(run_path))}</code></p>",
     ]
+    said = verdict_lines(run_path) if summary else []
+    if said:
+        parts += ["<section id='verdict'><h2>Verdict</h2>", *(f"<p>{html.escape(s)}</p>" for s in said), "</section>"]
     table = run_path / "table.md"
-    if table.exists() and table.read_text().strip():
-        # a kind may write several tables, separated by blank lines (the gap kind: per-view gap,
-        # effect ranking, accuracy); each is rendered on its own
-        blocks = [b for b in table.read_text().split("\n\n") if b.strip()]
-        parts += ["<h2>Table</h2>" if len(blocks) == 1 else "<h2>Tables</h2>", *map(_markdown_table, blocks)]
+    text = (verdict_table(run_path) if summary else None) or (table.read_text() if table.exists() else "")
+    # a kind may write several tables, separated by blank lines (the gap kind: per-view gap,
+    # effect ranking, accuracy); each is rendered on its own, numbered
+    blocks = [b for b in text.split("\n\n") if b.strip()]
+    for i, block in enumerate(blocks, start=1):
+        head = f"Table {i}"
+        if summary.get("kind") == "transfer" and i == 1:
+            head += (". Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4"
+                     + ("; reference rows in italics: the thesis's values" if "(thesis" in block else ""))
+        parts += [f"<h2>{html.escape(head)}</h2>", markdown_table(block)]
     figures = sorted((run_path / "figures").glob("*.png")) if (run_path / "figures").exists() else []
     if figures:
         parts.append("<h2>Figures</h2>")
-    for fig in figures:
+    for i, fig in enumerate(figures, start=1):
         data = base64.b64encode(fig.read_bytes()).decode()
-        parts += [f"<h3>{html.escape(fig.stem)}</h3>", f"<img alt='{html.escape(fig.stem)}' src='data:image/png;base64,{data}'>"]
+        thesis, text = caption(fig.stem, summary)
+        label = f"Figure {i}" + (f" (as thesis {thesis})" if thesis else "")
+        parts.append(f"<figure id='{html.escape(fig.stem)}'><img alt='{html.escape(label)}' "
+                     f"src='data:image/png;base64,{data}'><figcaption><b>{html.escape(label)}.</b> "
+                     f"{html.escape(text)}</figcaption></figure>")
     scenario = run_path / "scenario.toml"
     if scenario.exists():
-        parts += ["<h2>Resolved scenario</h2>", f"<pre>{html.escape(scenario.read_text())}</pre>"]
+        parts += ["<details><summary>Resolved scenario (scenario.toml)</summary>",
+                  f"<pre>{html.escape(scenario.read_text())}</pre></details>"]
     if summary:
         brief = {k: v for k, v in summary.items() if k not in ("cases",)}
-        parts += ["<h2>Summary</h2>", f"<pre>{html.escape(json.dumps(brief, indent=1)[:20000])}</pre>"]
+        parts += ["<details><summary>summary.json</summary>",
+                  f"<pre>{html.escape(json.dumps(brief, indent=1)[:20000])}</pre></details>"]
     parts.append("</body></html>")
     return "\n".join(parts)

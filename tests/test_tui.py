@@ -13,12 +13,14 @@ from pathlib import Path
 
 import pytest
 from textual.widgets import DataTable, Static, TabbedContent, Tree
+from test_detection import scenario as detection_scenario
 from tiny import transfer
 
 from gearlab.registry import load_registry
 from gearlab.runs import RunDir
 from gearlab.tui import GearlabApp
-from gearlab.tui.catalog import error_line
+from gearlab.tui.catalog import error_line, run_entry
+from gearlab.tui.widgets import stage_id
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -72,6 +74,9 @@ def folder(tmp_path, monkeypatch):
     return sc
 
 
+SIZES = [(160, 45), (80, 24)]  # the sizes the issue tried; every pilot test of a fixed bug runs at both
+
+
 def drive(app: GearlabApp, script, size=(100, 30)):
     """Run *script(pilot)* against *app* in a test harness."""
 
@@ -86,6 +91,7 @@ def drive(app: GearlabApp, script, size=(100, 30)):
 async def until(pilot, condition, limit: float = 120.0) -> None:
     start = time.monotonic()
     while not condition():
+        assert pilot.app._exception is None, f"the TUI crashed: {pilot.app._exception!r}"
         assert time.monotonic() - start < limit, "the TUI did not get there in time"
         await pilot.pause(0.1)
 
@@ -351,3 +357,362 @@ def test_several_markdown_tables_are_read_apart():
     text = "| a | b |\n|---|---|\n| 1 | 2 |\n\n| effect | share | params |\n|---|---|---|\n| x | 10 % | p = 1 |\n"
     assert markdown_tables(text) == [[["a", "b"], ["1", "2"]], [["effect", "share", "params"], ["x", "10 %", "p = 1"]]]
     assert markdown_tables("") == []
+
+
+# ----------------------------------------------------------------------------- every kind, to the end
+
+KINDS_DIR = Path(__file__).resolve().parent / "tui_scenarios"
+
+
+@pytest.fixture(scope="module")
+def kinds_cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("kinds_cache")
+
+
+@pytest.fixture
+def kinds_folder(tmp_path, monkeypatch, kinds_cache):
+    """Tiny scenarios of every kind shipped (stiffness, dataset, noise_study, transfer, gap,
+    gap_benchmark): each runs for a few seconds with the real engine."""
+    monkeypatch.setenv("GEARLAB_CACHE", str(kinds_cache))
+    monkeypatch.chdir(tmp_path)
+    folder = tmp_path / "scenarios"
+    shutil.copytree(KINDS_DIR, folder)
+    (folder / "stiff.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
+    (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", "runs").replace('repetitions = 3', 'repetitions = 1'))
+    detection_scenario(tmp_path, methods=("source_only", "matched_filter"))  # scenarios/det.toml, records in data/
+    return folder
+
+
+async def run_to_the_end(pilot, name: str, key: str = "r") -> None:
+    app = pilot.app
+    await select(pilot, name)
+    await pilot.press(key)
+    assert text_of(app, "#run-status").startswith("running")
+    # the status says 'running' until the child ends (a child that fails at once ends between polls)
+    await until(pilot, lambda: app.process is None and not text_of(app, "#run-status").startswith("running"), 300)
+    status = text_of(app, "#run-status")
+    assert status.startswith("finished"), f"{name}: {status}\n{app.query_one('#log').lines}"
+    assert app.return_code is None  # the app is still up: no widget crashed on the run's events
+    assert "finished" in text_of(app, "#results-status")
+
+
+# Each kind once (a few seconds each), both sizes between them; the gap kind, whose stage names
+# have spaces (it crashed the TUI), at both.
+EVERY_KIND = [("tgap.toml", SIZES[0]), ("tgap.toml", SIZES[1]), ("tbench.toml", SIZES[0]), ("tnoise.toml", SIZES[1]),
+              ("tdata.toml", SIZES[0]), ("stiff.toml", SIZES[1]), ("transfer.toml", SIZES[0]), ("det.toml", SIZES[1])]
+
+
+@pytest.mark.parametrize("name,size", EVERY_KIND)
+def test_every_scenario_kind_runs_from_the_tui_to_the_end(kinds_folder, name, size):
+    async def script(pilot):
+        app = pilot.app
+        await run_to_the_end(pilot, name)
+        if name == "tgap.toml":  # stage names with spaces ('gap before') got bars of their own
+            assert app.query(f"#bar-{stage_id('gap before')}") and app.query(f"#bar-{stage_id('gap after')}")
+        assert app.query_one("#views", TabbedContent).active == "results"
+
+    drive(GearlabApp(Path("scenarios")), script, size)
+
+
+def test_the_tiny_scenarios_cover_every_kind(kinds_folder):
+    from gearlab.kinds import KINDS
+    from gearlab.scenario import load_scenario
+
+    kinds = {load_scenario(kinds_folder / name).kind for name, _ in EVERY_KIND}
+    assert kinds == set(KINDS)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("size", SIZES[1:])
+def test_every_shipped_scenario_runs_from_the_tui(tmp_path, monkeypatch, size):
+    """The shipped files themselves: quick runs of each kind (several minutes, datasets cold)."""
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    shutil.copytree(REPO / "scenarios", tmp_path / "scenarios")
+
+    async def script(pilot):
+        for name in ("gap_expB.toml", "gap_benchmark.toml", "ch4_noise.toml", "dataset_B.toml",
+                     "stiffness_verification.toml", "quick.toml"):
+            await run_to_the_end(pilot, name, key="k")
+
+    drive(GearlabApp(Path("scenarios")), script, size)
+
+
+def test_stage_ids_are_valid_and_distinct_whatever_the_name():
+    from textual.widgets import Label
+
+    names = ["gap before", "gap-before", "gap_before", "gap round 2", "trial 3/40", "ü", "#x.y", "runs", "9"]
+    ids = [stage_id(n) for n in names]
+    assert len(set(ids)) == len(ids)
+    for i in ids:
+        Label(id=f"bar-{i}")  # Textual refuses an invalid id
+
+
+def test_an_internal_error_of_the_app_exits_1(cli, folder, monkeypatch):
+    from textual.app import App
+
+    def broken(self):
+        raise RuntimeError("a bug in the TUI")
+
+    monkeypatch.setattr(GearlabApp, "on_mount", broken)
+    monkeypatch.setattr(GearlabApp, "run", lambda self: App.run(self, headless=True))
+    code, _, _ = cli("tui", folder)
+    assert code == 1
+
+
+# ----------------------------------------------------------------------------- selection by identity
+
+
+@pytest.fixture
+def two_with_runs(folder, tmp_path):
+    """stiff.toml with two past runs, and a second valid scenario, other.toml, after it."""
+    (folder / "other.toml").write_text(STIFFNESS.replace('name = "stiff"', 'name = "other"')
+                                       .replace("{runs}", str(tmp_path / "runs")))
+    for stamp in ("20260101-000000-000000", "20260102-000000-000000"):
+        run = tmp_path / "runs" / "stiff" / stamp
+        run.mkdir(parents=True)
+        shutil.copy(folder / "stiff.toml", run / "scenario.toml")
+    return folder
+
+
+def node_named(app, name: str):
+    return next(n for n in app.query_one("#browser", Tree).root.children if str(n.label).endswith(name))
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_with_runs, size):
+    async def script(pilot):
+        app = pilot.app
+        tree = app.query_one("#browser", Tree)
+        stiff = node_named(app, "stiff.toml")
+        stiff.expand()
+        await pilot.pause()
+        await select(pilot, "other.toml")  # below the two runs of the unfolded stiff.toml
+        await pilot.press("f5")
+        await pilot.pause()
+        assert tree.cursor_node.data.path.name == "other.toml"
+        assert node_named(app, "stiff.toml").is_expanded  # unfolded stays unfolded
+        await pilot.press("r")
+        await until(pilot, lambda: app.process is not None, 30)
+        assert app.run_scenario.name == "other"
+        await until(pilot, lambda: app.process is None)
+        # the run's end rescans: still on other.toml, and r runs other again
+        assert tree.cursor_node.data.path.name == "other.toml"
+
+    drive(GearlabApp(two_with_runs), script, size)
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_u_resumes_only_the_highlighted_run(two_with_runs, tmp_path, size):
+    async def script(pilot):
+        app = pilot.app
+        tree = app.query_one("#browser", Tree)
+        stiff = node_named(app, "stiff.toml")
+        stiff.expand()
+        await pilot.pause()
+        tree.move_cursor(stiff.children[1])
+        await pilot.press("enter")  # opens the older unfinished run
+        await pilot.pause()
+        assert app.opened.path.name == "20260101-000000-000000"
+        await select(pilot, "other.toml")  # the cursor moves away: u must not resume what was opened
+        await pilot.press("u")
+        await pilot.pause()
+        assert app.process is None
+        await pilot.press("f5")
+        await pilot.pause()
+        tree.move_cursor(node_named(app, "stiff.toml").children[0])
+        await pilot.pause()
+        await pilot.press("u")
+        await until(pilot, lambda: app.process is not None, 30)
+        assert app.run_path.name == "20260102-000000-000000"
+        await until(pilot, lambda: app.process is None)
+
+    drive(GearlabApp(two_with_runs), script, size)
+
+
+# ----------------------------------------------------------------------------- where the runs are
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_runs_are_found_where_gearlab_run_puts_them_whatever_the_folder(tmp_path, monkeypatch, cli, size):
+    """`gearlab tui /elsewhere/scenarios` started in a project folder: a scenario's relative
+    [output] dir is taken from that folder, as `gearlab run` there takes it, for the runs the
+    TUI starts and for those it lists."""
+    scenarios = tmp_path / "elsewhere" / "scenarios"
+    scenarios.mkdir(parents=True)
+    (scenarios / "stiff.toml").write_text(STIFFNESS.replace("{runs}", "my_runs"))
+    project = tmp_path / "project"
+    project.mkdir()
+    monkeypatch.chdir(project)
+    code, out, err = cli("run", scenarios / "stiff.toml", "--quick")
+    assert code == 0, err
+    (by_cli,) = (project / "my_runs" / "stiff").iterdir()
+
+    async def script(pilot):
+        app = pilot.app
+        node = node_named(app, "stiff.toml")
+        assert [c.data.path for c in node.children] == [by_cli]
+        await select(pilot, "stiff.toml")
+        assert str(project / "my_runs" / "stiff") in text_of(app, "#scenario-status")
+        await pilot.press("k")
+        await until(pilot, lambda: app.process is not None, 30)
+        await until(pilot, lambda: app.process is None)
+        assert app.run_path.parent == project / "my_runs" / "stiff"
+        assert len(node_named(app, "stiff.toml").children) == 2
+
+    drive(GearlabApp(scenarios), script, size)
+
+
+# ----------------------------------------------------------------------------- 80 x 24
+
+
+def test_at_80x24_the_footer_the_sidebar_and_the_tables_fit(repo_scenarios):
+    from textual.widgets import Footer
+
+    async def script(pilot):
+        app = pilot.app
+        footer = app.query_one(Footer)
+        keys = {str(k.description): k.region for k in footer.query("FooterKey")}
+        assert "Quit" in keys and keys["Quit"].right <= 80
+        tree = app.query_one("#browser", Tree)
+        longest = max(len(str(n.label)) for n in tree.root.children)
+        assert tree.content_region.width >= longest + tree.guide_depth  # no name is cut
+        await pilot.press("b")  # the sidebar folds away and comes back
+        await pilot.pause()
+        assert not tree.display
+        await pilot.press("escape")
+        await pilot.pause()
+        assert tree.display
+        await pilot.press("p")
+        await pilot.pause()
+        table = app.query_one("#plugin-table", DataTable)
+        kind = next(iter(table.columns.values()))
+        assert kind.width >= len("effect (excitation, breaks tooth-shift symmetry)")
+
+    drive(GearlabApp(repo_scenarios), script, (80, 24))
+
+
+# ----------------------------------------------------------------------------- charts, verdict, extras
+
+
+@pytest.fixture(scope="module")
+def finished_runs(tmp_path_factory):
+    """Two finished runs of the tiny transfer scenario and one of the tiny gap scenario."""
+    from gearlab.runs import run_scenario
+
+    base = tmp_path_factory.mktemp("finished_tui")
+    folder = base / "scenarios"
+    shutil.copytree(KINDS_DIR, folder)
+    (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", str(base / "runs"))
+                                          .replace("repetitions = 3", "repetitions = 2"))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
+        transfers = [run_scenario(folder / "transfer.toml").path for _ in range(2)]
+        gap_run = run_scenario(folder / "tgap.toml", out=base / "runs").path
+    return folder, transfers, gap_run
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_categorical_charts_are_labelled_bars_and_say_which_of_how_many(finished_runs, size):
+    folder, _, gap_run = finished_runs
+
+    async def script(pilot):
+        app = pilot.app
+        app.show_results(run_entry(gap_run))
+        await pilot.pause()
+        chart = app.query_one("#chart")
+        assert app.charts[0].categories is not None and "mesh" in app.charts[0].categories
+        drawn = str(chart.render())
+        assert f"chart 1/{len(app.charts)}" in drawn and "mesh" in drawn and "tsa_residual"[:8] in drawn
+        await pilot.press("n")
+        assert "chart 2/" in str(chart.render())
+        assert text_of(app, "#verdict").startswith("The simulator and the target")
+
+    drive(GearlabApp(folder), script, size)
+
+
+def test_results_open_with_the_verdict_and_o_opens_the_report(finished_runs, monkeypatch):
+    folder, (run, _), _ = finished_runs
+    opened = []
+    monkeypatch.setattr("webbrowser.open", lambda url: opened.append(url) or True)
+
+    async def script(pilot):
+        app = pilot.app
+        app.show_results(run_entry(run))
+        await pilot.pause()
+        verdict = text_of(app, "#verdict")
+        assert " is best at " in verdict and "points ahead of" in verdict
+        await pilot.press("o")
+        assert opened == [(run / "report.html").resolve().as_uri()]
+
+    drive(GearlabApp(folder), script)
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_two_marked_runs_are_compared_and_escape_closes_the_comparison(finished_runs, size):
+    folder, (a, b), _ = finished_runs
+
+    async def script(pilot):
+        app = pilot.app
+        node = node_named(app, "transfer.toml")
+        node.expand()
+        await pilot.pause()
+        tree = app.query_one("#browser", Tree)
+        for child in node.children:
+            tree.move_cursor(child)
+            await pilot.pause()
+            await pilot.press("m")
+        assert sorted(app.marked) == sorted([a, b])
+        await pilot.press("C")
+        await pilot.pause()
+        assert app.comparing and "comparison" in text_of(app, "#results-status")
+        head = [str(c.label) for c in app.query_one("#results-table", DataTable).columns.values()]
+        assert head[:4] == ["method", "k", "A", "B"]
+        assert all(" (runs A, B)" in c.title for c in app.charts)
+        assert {cv.label.split(":")[0] for cv in app.charts[0].curves} == {"A", "B"}
+        await pilot.press("escape")
+        await pilot.pause()
+        assert not app.comparing
+
+    drive(GearlabApp(folder), script, size)
+
+
+def test_keys_panel_form_palette_and_notification(kinds_folder):
+    from gearlab.tui.screens import KeysScreen, RunOptionsScreen
+
+    async def script(pilot):
+        app = pilot.app
+        await pilot.press("question_mark")
+        await pilot.pause()
+        assert isinstance(app.screen, KeysScreen)
+        keys = rows(app.screen.query_one(DataTable))
+        assert ["C", "Compare the marked runs"] in keys and ["f", "Run with options…"] in keys
+        await pilot.press("escape")
+        await pilot.pause()
+        assert not isinstance(app.screen, KeysScreen)
+        titles = [c.title for c in app.get_system_commands(app.screen)]
+        assert {"Run stiff.toml", "Quick run stiff.toml", "Validate stiff.toml"} <= set(titles)
+        # the form: quick and an executor, then Run
+        await select(pilot, "tbench.toml")
+        await pilot.press("f")
+        await pilot.pause()
+        assert isinstance(app.screen, RunOptionsScreen)
+        app.screen.query_one("#quick").value = True
+        app.screen.query_one("#executor").value = "local"
+        app.screen.query_one("#trials").value = "1"
+        app.screen.query_one("#seed").value = "5"
+        args = []
+        app.follow = lambda a: args.append(a)  # what would run, without running it
+        app.screen.query_one("#go").press()
+        await pilot.pause()
+        (given,) = args
+        assert given[:2] == ["gap", str(Path("scenarios") / "tbench.toml")]
+        assert given[given.index("--trials") + 1] == "1" and given[given.index("--seed") + 1] == "5"
+        assert "--quick" in given and given[given.index("--executor") + 1] == "local"
+        assert given[given.index("--out") + 1] == str(Path.cwd() / "runs")
+        del app.follow
+        # a run's end is notified
+        await run_to_the_end(pilot, "stiff.toml")
+        assert any("finished" in n.message for n in app._notifications)
+
+    drive(GearlabApp(Path("scenarios")), script)

@@ -708,23 +708,20 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     else:
         rows = view_rows(diag["result"])
         names = list(rows)
-        x = list(range(1, len(names) + 1))
+        x = list(range(len(names)))
         out.append(Chart(
-            "per-view gap before/after", "view: " + ", ".join(f"{i} {n}" for i, n in zip(x, names)), "gap",
+            "per-view gap before/after", "view", "gap (sum of squared effect sizes, 1)",
             (Curve("before", x, [rows[n]["gap_before"] for n in names]),
-             Curve("after", x, [rows[n]["gap_after"] or 0.0 for n in names])), xticks=x))
+             Curve("after", x, [rows[n]["gap_after"] or 0.0 for n in names])), categories=names))
         ranking = diag["result"]["ranking"]
         if ranking:
-            xr = list(range(1, len(ranking) + 1))
-            out.append(Chart("effect ranking: share of the gap removed",
-                             "effect: " + ", ".join(f"{i} {r['name']}" for i, r in zip(xr, ranking)),
-                             "share removed (%)",
-                             (Curve("round 1", xr, [100 * r["share_removed"] for r in ranking]),), xticks=xr))
+            out.append(Chart("effect ranking: share of the gap removed", "effect", "share removed (%)",
+                             (Curve("round 1", list(range(len(ranking))), [100 * r["share_removed"] for r in ranking]),),
+                             categories=[r["name"] for r in ranking]))
     acc = accuracy_table(records, scenario.spec["protocol"])
     if acc:
         labels = list(acc)
-        xa = list(range(1, len(labels) + 1))
-        out.append(Chart("target test accuracy (k = 0)", "model: " + ", ".join(f"{i} {n}" for i, n in zip(xa, labels)),
-                         "accuracy (%)", (Curve("mean ± std", xa, [acc[n]["mean"] for n in labels],
-                                                [acc[n]["std"] for n in labels]),), xticks=xa))
+        out.append(Chart("target test accuracy (k = 0)", "model", "accuracy (%)",
+                         (Curve("mean", list(range(len(labels))), [acc[n]["mean"] for n in labels],
+                                [acc[n]["std"] for n in labels]),), categories=labels))
     return out

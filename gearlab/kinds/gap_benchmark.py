@@ -254,5 +254,5 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     names = list(summary["per_effect"])
     per = Chart("top-1 per hidden effect", "effect", "top-1 (%)", (
         Curve("top-1", list(range(len(names))), [100 * (summary["per_effect"][n]["top1"] or 0) for n in names]),
-    ), xticks=list(range(len(names))), notes=tuple(f"{i}: {n}" for i, n in enumerate(names)))
+    ), categories=names)
     return [gap, per]

@@ -1,9 +1,12 @@
-"""`gearlab tui [DIR]`: browse scenarios, run one and watch it, read results, list plugins.
+"""`gearlab tui [DIR]`: browse scenarios, run one and watch it, read results, compare runs, list plugins.
 
 A run is the CLI's own `gearlab run SCENARIO --events` in a child process: the TUI reads its
 progress events (JSON lines, gearlab.runs.Event) and draws them, so the TUI and the CLI share
 one run engine and one event stream. Cancelling stops the child's whole process group; the
 units it finished are already in the run directory, and `u` resumes the run.
+
+Every action works on what the tree highlights (found again by path after each rescan), so
+that a key never acts on another scenario or run than the one the user sees.
 """
 
 from __future__ import annotations
@@ -13,57 +16,79 @@ import json
 import os
 import signal
 import sys
+import webbrowser
+from collections.abc import Iterable
 from pathlib import Path
 
 from rich.markup import escape
 from rich.syntax import Syntax
 from rich.text import Text
 from textual import work
-from textual.app import App, ComposeResult
+from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
+from textual.screen import Screen
 from textual.widgets import DataTable, Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
 from ..errors import GearlabInputError
 from ..kinds import KINDS
 from ..runs import Event, RunDir
-from ..scenario import Scenario
-from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, scan
+from ..scenario import Scenario, load_scenario
+from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, scan
+from .screens import KeysScreen, RunOptions, RunOptionsScreen
 from .widgets import ChartView, ResultTable, Stages
+
+# Below this many columns the sidebar folds away while a run or results are on show.
+NARROW = 100
 
 
 class GearlabApp(App):
     TITLE = "gearlab"
     CSS = """
-    #browser { width: 26; border-right: solid $primary-darken-2; }
+    #browser { width: 34; max-width: 42%; border-right: solid $primary-darken-2; }
+    #browser.folded { display: none; }
     #views { width: 1fr; }
     #scenario-status, #run-status, #results-status, #units { padding: 0 1; }
     #toml { padding: 0 1; }
     #log { height: 1fr; min-height: 4; border-top: solid $primary-darken-2; }
+    #verdict { padding: 0 1; margin-bottom: 1; height: auto; }
     #results-lines { padding: 0 1; height: auto; }
     #plugin-table { height: 1fr; }
     #problems { height: auto; padding: 0 1; color: $error; }
     """
+    # The footer shows the first few (q first, so that it is never cut off at 80 columns);
+    # `?` lists them all.
     BINDINGS = [
+        Binding("q", "quit", "Quit"),
+        Binding("question_mark", "keys", "Keys", key_display="?"),
         Binding("r", "run(False)", "Run"),
-        Binding("k", "run(True)", "Quick run"),
+        Binding("k", "run(True)", "Quick"),
         Binding("c", "cancel", "Cancel"),
         Binding("u", "resume", "Resume"),
-        Binding("n", "next_chart", "Next chart"),
-        Binding("1", "show('scenario')", "Scenario", show=False),
-        Binding("2", "show('run')", "Progress", show=False),
-        Binding("3", "show('results')", "Results", show=False),
-        Binding("p", "show('plugins')", "Plugins"),
-        Binding("f5", "rescan", "Rescan"),
-        Binding("q", "quit", "Quit"),
+        Binding("o", "open_report", "Report"),
+        Binding("f", "run_with_options", "Run with options…", show=False),
+        Binding("m", "mark", "Mark a run for comparison", show=False),
+        Binding("C", "compare", "Compare the marked runs", show=False),
+        Binding("n", "next_chart", "Next chart", show=False),
+        Binding("b", "toggle_sidebar", "Fold or show the sidebar", show=False),
+        Binding("1", "show('scenario')", "Scenario tab", show=False),
+        Binding("2", "show('run')", "Progress tab", show=False),
+        Binding("3", "show('results')", "Results tab", show=False),
+        Binding("p", "show('plugins')", "Plugins tab", show=False),
+        Binding("f5", "rescan", "Rescan the folder", show=False),
+        Binding("escape", "close", "Close the comparison, show the sidebar", show=False),
     ]
 
     def __init__(self, directory: Path | str = "scenarios"):
         super().__init__()
         self.directory = Path(directory)
+        # Runs start in this folder, and a scenario's relative [output] dir is taken from it,
+        # as `gearlab run` started here would (catalog.runs_base).
+        self.cwd = Path.cwd()
         self.entries: list[ScenarioEntry] = []
-        self.selected: ScenarioEntry | None = None  # the scenario on show
         self.opened: RunEntry | None = None  # the run whose results are on show
+        self.marked: list[Path] = []  # runs marked for comparison, in marking order
+        self.comparing: list[Path] = []  # the runs of the comparison on show
         self.process: asyncio.subprocess.Process | None = None
         self.cancelled = False
         self.run_scenario: Scenario | None = None  # the scenario of the run in progress, as it runs
@@ -91,6 +116,7 @@ class GearlabApp(App):
                 with TabPane("Results", id="results"):
                     with VerticalScroll():
                         yield Static("select a run in the tree (under its scenario)", id="results-status")
+                        yield Static("", id="verdict")
                         yield ResultTable(id="results-table")
                         yield ChartView(id="chart")
                         yield Static("", id="results-lines")
@@ -100,15 +126,34 @@ class GearlabApp(App):
         yield Footer()
 
     def on_mount(self) -> None:
+        self.tree.guide_depth = 2  # the narrowest guides Textual draws: room for the file names
         self.rescan()
         self.fill_plugins()
 
     # ------------------------------------------------------------------ browser
+    @property
+    def tree(self) -> Tree:
+        return self.query_one("#browser", Tree)
+
+    def highlighted(self) -> ScenarioEntry | RunEntry | None:
+        """What the tree's cursor is on: a scenario, one of its runs, or nothing."""
+        node = self.tree.cursor_node
+        return node.data if node is not None and isinstance(node.data, (ScenarioEntry, RunEntry)) else None
+
+    def scenario_of(self, item: ScenarioEntry | RunEntry | None) -> ScenarioEntry | None:
+        if isinstance(item, RunEntry):
+            return next((e for e in self.entries if any(r.path == item.path for r in e.runs)), None)
+        return item
+
     def action_rescan(self) -> None:
         self.rescan()
 
     def rescan(self) -> None:
-        tree = self.query_one("#browser", Tree)
+        """Read the folder again; the cursor stays on the same file or run (by path), and the
+        scenarios that were unfolded stay unfolded."""
+        tree = self.tree
+        keep = getattr(self.highlighted(), "path", None)
+        unfolded = {n.data.path for n in tree.root.children if isinstance(n.data, ScenarioEntry) and n.is_expanded}
         tree.clear()
         tree.root.set_label(str(self.directory))
         tree.root.expand()
@@ -116,25 +161,47 @@ class GearlabApp(App):
             tree.root.add_leaf(Text(f"no such directory: {self.directory}", style="red"))
             self.entries = []
             return
-        self.entries = scan(self.directory)
+        self.entries = scan(self.directory, self.cwd)
         if not self.entries:
             tree.root.add_leaf(Text("no scenario files (*.toml) here", style="dim"))
+        target = None
         for entry in self.entries:
             name = str(entry.path.relative_to(self.directory))
             label = Text.assemble(("✓ " if entry.ok else "✗ ", "green" if entry.ok else "red"), name)
             node = tree.root.add(label, data=entry, expand=False, allow_expand=bool(entry.runs))
+            target = node if entry.path == keep else target
             for run in entry.runs:
-                node.add_leaf(self._run_label(run), data=run)
-        if self.selected is not None:  # keep showing the same file after a rescan
-            self.selected = next((e for e in self.entries if e.path == self.selected.path), None)
-            self.show_scenario(self.selected)
+                leaf = node.add_leaf(self._run_label(run), data=run)
+                if run.path == keep:
+                    target, unfolded = leaf, unfolded | {entry.path}
+            if entry.path in unfolded and entry.runs:
+                node.expand()
+        line = self._line_of(target) if target is not None else 0
+        tree.cursor_line = line if line is not None else 0
 
-    @staticmethod
-    def _run_label(run: RunEntry) -> Text:
+    def _line_of(self, target) -> int | None:
+        """The tree line a node is drawn on (the root is line 0; folded children have none)."""
+        line = 0
+
+        def walk(node) -> int | None:
+            nonlocal line
+            for child in node.children:
+                line += 1
+                if child is target:
+                    return line
+                if child.is_expanded:
+                    found = walk(child)
+                    if found is not None:
+                        return found
+            return None
+
+        return walk(self.tree.root)
+
+    def _run_label(self, run: RunEntry) -> Text:
         name = run.path.name  # YYYYmmdd-HHMMSS-ffffff: shown as mm-dd HH:MM:SS
         when = f"{name[4:6]}-{name[6:8]} {name[9:11]}:{name[11:13]}:{name[13:15]}" if len(name) >= 15 else name
-        return Text.assemble(("● " if run.finished else "◐ ", "green" if run.finished else "yellow"),
-                             when, ("" if run.finished else f" {run.units} units", "dim"))
+        mark = ("▣ ", "cyan") if run.path in self.marked else ("● ", "green") if run.finished else ("◐ ", "yellow")
+        return Text.assemble(mark, when, ("" if run.finished else f" {run.units} units", "dim"))
 
     def on_tree_node_highlighted(self, event: Tree.NodeHighlighted) -> None:
         self._open(event.node.data, switch=False)  # moving through the tree only fills the views
@@ -146,10 +213,9 @@ class GearlabApp(App):
         if not self.query("#views"):  # a highlight queued while the app closes: the views are gone
             return
         if isinstance(data, ScenarioEntry):
-            self.selected = data
             self.show_scenario(data, switch)
         elif isinstance(data, RunEntry):
-            self.selected = next((e for e in self.entries if data in e.runs), self.selected)
+            self.show_scenario(self.scenario_of(data))
             self.show_results(data, switch)
 
     # ------------------------------------------------------------------ scenario view
@@ -168,7 +234,9 @@ class GearlabApp(App):
             s = entry.scenario
             runs = f"{len(entry.runs)} past run(s)" if entry.runs else "no past runs"
             status.update(Text.assemble(("✓ valid", "bold green"), f"  {s.name} ({s.kind}): {s.description}\n",
-                                        KINDS[s.kind].describe(s), f"\n{runs}; r run, k quick run"))
+                                        KINDS[s.kind].describe(s),
+                                        f"\n{runs} in {runs_base(s, self.cwd) / s.name}; r run, k quick run, "
+                                        "f run with options"))
             marked = set()
         else:
             status.update(Text.assemble(("✗ invalid  ", "bold red"), entry.error))
@@ -176,24 +244,56 @@ class GearlabApp(App):
             marked = {line} if line else set()
         toml.update(Syntax(text, "toml", line_numbers=True, highlight_lines=marked, word_wrap=True))
         if switch:
-            self.query_one("#views", TabbedContent).active = "scenario"
+            self.switch_to("scenario")
 
     # ------------------------------------------------------------------ runs
     def action_run(self, quick: bool) -> None:
-        entry = self.selected
+        entry = self._runnable()
+        if entry is not None:
+            self.start(self._run_args(entry, RunOptions(quick=quick)), entry.path, resume=None)
+
+    def action_run_with_options(self) -> None:
+        entry = self._runnable()
+        if entry is None:
+            return
+
+        def chosen(options: RunOptions | None) -> None:
+            if options is not None:
+                self.start(self._run_args(entry, options), entry.path, resume=None)
+
+        self.push_screen(RunOptionsScreen(entry.scenario), chosen)
+
+    def _runnable(self) -> ScenarioEntry | None:
+        """The highlighted scenario (or the scenario of the highlighted run), when it can run."""
+        entry = self.scenario_of(self.highlighted())
         if self.process is not None:
             self.notify("a run is in progress; c cancels it", severity="warning")
         elif entry is None or not entry.ok:
-            self.notify("select a valid scenario first", severity="warning")
+            self.notify("highlight a valid scenario in the tree first", severity="warning")
         else:
-            self.start(["run", str(entry.path)] + (["--quick"] if quick else []), entry.path, resume=None)
+            return entry
+        return None
+
+    def _run_args(self, entry: ScenarioEntry, options: RunOptions) -> list[str]:
+        """The command line of a run: `gearlab run FILE` (`gearlab gap FILE` for a benchmark
+        given trials or seed), into the folder where the tree looks for its runs."""
+        args = ["run", str(entry.path)]
+        if options.trials is not None or options.seed is not None:
+            args = ["gap", str(entry.path)]
+            args += ["--trials", str(options.trials)] if options.trials is not None else []
+            args += ["--seed", str(options.seed)] if options.seed is not None else []
+        args += ["--out", str(runs_base(entry.scenario, self.cwd))]
+        args += ["--quick"] if options.quick else []
+        args += ["--executor", options.executor] if options.executor else []
+        args += ["--device", options.device] if options.device else []
+        return args
 
     def action_resume(self) -> None:
-        run = self.opened
+        run = self.highlighted()
         if self.process is not None:
             self.notify("a run is in progress; c cancels it", severity="warning")
-        elif run is None or run.finished:
-            self.notify("select an unfinished run in the tree to resume it", severity="warning")
+        elif not isinstance(run, RunEntry) or run.finished:
+            self.notify("highlight an unfinished run in the tree to resume it", severity="warning")
         else:
             self.start(["run", "--resume", str(run.path)], None, resume=run.path)
 
@@ -219,8 +319,6 @@ class GearlabApp(App):
                 self.run_scenario = run.scenario()
                 self.records = run.records()
             else:
-                from ..scenario import load_scenario
-
                 self.run_scenario = load_scenario(scenario_path)
                 if "--quick" in args:
                     KINDS[self.run_scenario.kind].quick(self.run_scenario)
@@ -234,7 +332,7 @@ class GearlabApp(App):
         self.query_one("#run-status", Static).update(
             f"{'resuming' if resume else 'running'} {self.run_scenario.name} ({self.run_scenario.kind}); c cancels")
         self.refresh_live()
-        self.query_one("#views", TabbedContent).active = "run"
+        self.switch_to("run")
         self.follow(args)
 
     @work(exclusive=True, group="run")
@@ -243,7 +341,7 @@ class GearlabApp(App):
         log = self.query_one("#log", RichLog)
         self.process = await asyncio.create_subprocess_exec(
             sys.executable, "-m", "gearlab", *args, "--events",
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE, cwd=self.cwd,
             start_new_session=True,  # its own process group, so that cancel reaches its workers
             limit=1 << 26,  # a record line carries training curves
         )
@@ -283,9 +381,23 @@ class GearlabApp(App):
             self.query_one("#log", RichLog).write(event.message)
 
     def refresh_live(self) -> None:
-        if self.run_scenario is not None:
-            kind = KINDS[self.run_scenario.kind]
-            self.query_one("#live", ResultTable).show_markdown(kind.records_table(self.run_scenario, self.records))
+        if self.run_scenario is None:
+            return
+        kind = KINDS[self.run_scenario.kind]
+        live = self.query_one("#live", ResultTable)
+        try:
+            live.show_markdown(kind.records_table(self.run_scenario, self.records))
+            return
+        except (KeyError, TypeError, ValueError):
+            pass
+        # An event may carry a shortened record (the gap kind's diagnosis leaves its arrays out):
+        # the run directory holds them whole, appended before the event was sent.
+        try:
+            if self.run_path is not None:
+                self.records = RunDir(self.run_path).records()
+            live.show_markdown(kind.records_table(self.run_scenario, self.records))
+        except Exception as exc:  # noqa: BLE001 - a table that cannot be drawn must not take the run view down
+            self.query_one("#log", RichLog).write(f"(the live table cannot be drawn: {type(exc).__name__}: {exc})")
 
     def finish(self, code: int, stderr: str) -> None:
         self.running = {}
@@ -293,54 +405,188 @@ class GearlabApp(App):
         log = self.query_one("#log", RichLog)
         status = self.query_one("#run-status", Static)
         where = f" in {self.run_path}" if self.run_path else ""
+        name = self.run_scenario.name if self.run_scenario else "the run"
         if self.cancelled:
             status.update(f"cancelled: {len(self.records)} finished unit(s) kept{where}; select the run, u resumes it")
+            self.notify(f"{name}: cancelled, {len(self.records)} finished unit(s) kept", severity="warning")
         elif code == 0:
             status.update(Text(f"finished: {len(self.records)} unit(s){where}", style="green"))
+            self.notify(f"{name}: finished, {len(self.records)} unit(s); o opens its report", title="run finished")
         else:
             last = stderr.splitlines()[-1] if stderr else f"exit code {code}"
             status.update(Text(f"failed (exit {code}): {last}", style="red"))
             log.write(stderr)
+            self.notify(f"{name}: failed (exit {code}): {last}", severity="error", title="run failed")
         self.rescan()
         if self.run_path is not None and (self.run_path / "scenario.toml").is_file():
             self.show_results(run_entry(self.run_path), switch=code == 0 and not self.cancelled)
 
     # ------------------------------------------------------------------ results
     def show_results(self, run: RunEntry, switch: bool = True) -> None:
-        self.opened = run
+        from ..verdict import verdict_lines, verdict_table
+
+        self.opened, self.comparing = run, []
         status = self.query_one("#results-status", Static)
         table = self.query_one("#results-table", ResultTable)
         lines = self.query_one("#results-lines", Static)
+        verdict = self.query_one("#verdict", Static)
         try:
             rundir = RunDir.open(run.path)
             scenario = rundir.scenario()
             kind = KINDS[scenario.kind]
-            table.show_markdown(kind.records_table(scenario, rundir.records()))
+            records = rundir.records()
+            table.show_markdown(verdict_table(rundir) or kind.records_table(scenario, records))
             self.charts = kind.charts(scenario, rundir)
             summary = kind.summary_lines(rundir) if run.finished else []
+            said = verdict_lines(rundir) if run.finished else []
         except (GearlabInputError, OSError, ValueError, KeyError) as exc:
             status.update(Text(f"{run.path}: cannot show this run: {exc}", style="red"))
             table.clear(columns=True)
+            verdict.update("")
+            lines.update("")
             self.charts = []
             self.query_one("#chart", ChartView).show(None)
             return
         state = "finished" if run.finished else f"not finished ({run.units} units kept; u resumes it)"
         status.update(Text.assemble((f"{scenario.name} ", "bold"), f"({scenario.kind}), {run.path.name}: {state}"))
+        verdict.update(Text(" ".join(said)))
         # the table is above; summary_lines repeats it as markdown, so keep only the other lines
         lines.update(escape("\n".join(line for line in summary if not line.lstrip().startswith("|"))))
         self.chart_index = 0
         self.show_chart()
         if switch:
-            self.query_one("#views", TabbedContent).active = "results"
+            self.switch_to("results")
 
     def show_chart(self) -> None:
         chart = self.charts[self.chart_index] if self.charts else None
-        self.query_one("#chart", ChartView).show(chart)
+        place = f"chart {self.chart_index + 1}/{len(self.charts)}" + (", n next" if len(self.charts) > 1 else "")
+        self.query_one("#chart", ChartView).show(chart, place)
 
     def action_next_chart(self) -> None:
         if self.charts:
             self.chart_index = (self.chart_index + 1) % len(self.charts)
             self.show_chart()
+
+    def action_open_report(self) -> None:
+        """Open report.html of the highlighted run (else the run on show) in the web browser."""
+        run = self.highlighted()
+        run = run if isinstance(run, RunEntry) else self.opened
+        report = run.path / "report.html" if run is not None else None
+        if report is None or not report.is_file():
+            self.notify("highlight a finished run (its report.html) first", severity="warning")
+            return
+        if not webbrowser.open(report.resolve().as_uri()):
+            self.notify(f"no web browser found; the report is {report}", severity="warning")
+        else:
+            self.notify(f"opened {report}")
+
+    # ------------------------------------------------------------------ comparison
+    def action_mark(self) -> None:
+        run = self.highlighted()
+        if not isinstance(run, RunEntry):
+            self.notify("highlight a run in the tree to mark it for comparison", severity="warning")
+            return
+        if run.path in self.marked:
+            self.marked.remove(run.path)
+        else:
+            self.marked.append(run.path)
+        self.tree.cursor_node.set_label(self._run_label(run))
+        self.notify(f"{len(self.marked)} run(s) marked" + ("; C compares them" if len(self.marked) > 1 else ""))
+
+    def action_compare(self, paths: Iterable[Path] | None = None) -> None:
+        from ..compare import compare_charts, compare_lines, compare_markdown, load_runs
+
+        paths = list(paths if paths is not None else self.marked)
+        if len(paths) < 2:
+            self.notify("mark two or more runs with m (in the tree), then C compares them", severity="warning")
+            return
+        try:
+            runs = load_runs(paths)
+        except GearlabInputError as exc:
+            self.notify(str(exc), severity="error")
+            return
+        self.comparing = paths
+        self.query_one("#results-status", Static).update(
+            Text.assemble(("comparison ", "bold"), f"of {len(runs)} {runs[0].kind} runs; escape closes it"))
+        self.query_one("#verdict", Static).update(Text("\n".join(compare_lines(runs))))
+        self.query_one("#results-table", ResultTable).show_markdown(compare_markdown(runs))
+        self.query_one("#results-lines", Static).update("")
+        self.charts, self.chart_index = compare_charts(runs), 0
+        self.show_chart()
+        self.switch_to("results")
+
+    def action_close(self) -> None:
+        """Escape: close the comparison (back to the run on show), then unfold the sidebar."""
+        if self.comparing:
+            self.comparing = []
+            if self.opened is not None:
+                self.show_results(self.opened, switch=False)
+            else:
+                self.query_one("#results-status", Static).update("select a run in the tree (under its scenario)")
+        elif self.tree.has_class("folded"):
+            self.action_toggle_sidebar()
+
+    # ------------------------------------------------------------------ panels
+    def switch_to(self, tab: str) -> None:
+        self.query_one("#views", TabbedContent).active = tab
+        # a narrow terminal gives the run and its results the whole width
+        if self.size.width < NARROW and tab in ("run", "results"):
+            self.tree.add_class("folded")
+        elif tab == "scenario":
+            self.tree.remove_class("folded")
+
+    def action_toggle_sidebar(self) -> None:
+        self.tree.toggle_class("folded")
+        if not self.tree.has_class("folded"):
+            self.tree.focus()
+
+    def action_keys(self) -> None:
+        self.push_screen(KeysScreen(self.BINDINGS))
+
+    def get_system_commands(self, screen: Screen) -> Iterable[SystemCommand]:
+        """Command-palette entries (ctrl+p): run, open a run, compare, validate."""
+        yield from super().get_system_commands(screen)
+        for entry in self.entries:
+            name = str(entry.path.relative_to(self.directory))
+            if entry.ok:
+                yield SystemCommand(f"Run {name}", "run this scenario", lambda e=entry: self._palette_run(e, False))
+                yield SystemCommand(f"Quick run {name}", "run it shrunk (--quick)",
+                                    lambda e=entry: self._palette_run(e, True))
+            yield SystemCommand(f"Validate {name}", "check the file without running it",
+                                lambda e=entry: self._validate(e))
+            for run in entry.runs:
+                yield SystemCommand(f"Open run {name} {run.path.name}", "show its results",
+                                    lambda r=run: self._palette_open(r))
+        if len(self.marked) > 1:
+            yield SystemCommand(f"Compare the {len(self.marked)} marked runs", "tables side by side, curves overlaid",
+                                self.action_compare)
+
+    def _palette_run(self, entry: ScenarioEntry, quick: bool) -> None:
+        self._move_to(entry.path)
+        self.action_run(quick)
+
+    def _palette_open(self, run: RunEntry) -> None:
+        self._move_to(run.path)
+        self.show_results(run)
+
+    def _move_to(self, path: Path) -> None:
+        for node in self.tree.root.children:
+            if getattr(node.data, "path", None) == path:
+                self.tree.cursor_line = self._line_of(node)
+                return
+            if any(r.path == path for r in getattr(node.data, "runs", [])):
+                node.expand()
+                self.tree.cursor_line = self._line_of(next(c for c in node.children if c.data.path == path))
+                return
+
+    def _validate(self, entry: ScenarioEntry) -> None:
+        try:
+            s = load_scenario(entry.path)
+        except GearlabInputError as exc:
+            self.notify(str(exc), severity="error", title="invalid")
+        else:
+            self.notify(f"OK: {s.name} ({s.kind}); {KINDS[s.kind].describe(s)}", title="valid")
+        self.rescan()
 
     # ------------------------------------------------------------------ plugins
     def fill_plugins(self) -> None:
@@ -348,15 +594,22 @@ class GearlabApp(App):
 
         registry = get_registry()
         table = self.query_one("#plugin-table", DataTable)
-        table.add_columns("kind", "name", "package", "parameters")
-        for row in registry.describe():
+        rows = registry.describe()
+        # the kind column as wide as its widest entry, so that "effect (excitation, ...)" is read
+        # whole; the parameters wrap in what is left (the table scrolls sideways below 80 columns)
+        kinds = [kind_text(row) for row in rows]
+        table.add_column("kind", width=max(map(len, kinds), default=4))
+        table.add_column("name", width=max((len(row["name"]) for row in rows), default=4))
+        table.add_column("package", width=max((len(row["package"]) for row in rows), default=7))
+        table.add_column("parameters", width=48)
+        for kind, row in zip(kinds, rows):
             # Text, not str: a DataTable reads "[mm]" in a string as markup
-            table.add_row(kind_text(row), row["name"], row["package"], Text(params_text(row) or "-"), height=None)
+            table.add_row(Text(kind), row["name"], row["package"], Text(params_text(row) or "-"), height=None)
         problems = [f"problem: {p}" for p in registry.problems]
         self.query_one("#problems", Static).update(Text("\n".join(problems)))
 
     def action_show(self, tab: str) -> None:
-        self.query_one("#views", TabbedContent).active = tab
+        self.switch_to(tab)
 
     async def action_quit(self) -> None:
         if self.process is not None:  # leave no orphan run behind; its finished units stay
@@ -364,5 +617,8 @@ class GearlabApp(App):
         self.exit()
 
 
-def run_tui(directory: Path | str = "scenarios") -> None:
-    GearlabApp(directory).run()
+def run_tui(directory: Path | str = "scenarios") -> int:
+    """Run the app; its exit code (1 when it ended on an internal error)."""
+    app = GearlabApp(directory)
+    app.run()
+    return app.return_code or 0

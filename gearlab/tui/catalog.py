@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import GearlabInputError
-from ..runs import RunDir
+from ..runs import RunDir, output_base
 from ..scenario import Scenario, load_scenario
 
 
@@ -33,8 +33,9 @@ class RunEntry:
     finished: bool  # the run ended and wrote its summary (else cancelled, killed or running)
 
 
-def scan(directory: Path) -> list[ScenarioEntry]:
-    """Every *.toml under *directory*, validated, with the runs found under its output dir."""
+def scan(directory: Path, cwd: Path) -> list[ScenarioEntry]:
+    """Every *.toml under *directory*, validated, with the runs found under its output dir
+    (a relative one taken from *cwd*, the folder the TUI starts its runs in)."""
     entries = []
     for path in sorted(Path(directory).rglob("*.toml")):
         entry = ScenarioEntry(path)
@@ -45,14 +46,20 @@ def scan(directory: Path) -> list[ScenarioEntry]:
         except Exception as exc:  # noqa: BLE001 - a browser must list every file, whatever is wrong with it
             entry.error = f"{path}: cannot be read: {type(exc).__name__}: {exc}"
         if entry.scenario is not None:
-            entry.runs = runs_of(entry.scenario)
+            entry.runs = runs_of(entry.scenario, cwd)
         entries.append(entry)
     return entries
 
 
-def runs_of(scenario: Scenario) -> list[RunEntry]:
-    """Run directories of *scenario* (runs/<name>/<timestamp>/), newest first."""
-    base = Path(scenario.tables["output"]["dir"]) / scenario.name
+def runs_base(scenario: Scenario, cwd: Path) -> Path:
+    """The absolute folder `gearlab run` started in *cwd* puts *scenario*'s runs in (the
+    TUI passes it as --out, so that its runs land exactly where it looks for them)."""
+    return Path(cwd) / output_base(scenario)
+
+
+def runs_of(scenario: Scenario, cwd: Path) -> list[RunEntry]:
+    """Run directories of *scenario* (<output dir>/<name>/<timestamp>/), newest first."""
+    base = runs_base(scenario, cwd) / scenario.name
     if not base.is_dir():
         return []
     out = []

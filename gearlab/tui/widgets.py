@@ -57,21 +57,36 @@ class ChartView(Static):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.chart: Chart | None = None
+        self.place = ""
 
-    def show(self, chart: Chart | None) -> None:
-        self.chart = chart
+    def show(self, chart: Chart | None, place: str = "") -> None:
+        """Draw *chart*; *place* ("chart 2/3") heads it, so a user knows there are more."""
+        self.chart, self.place = chart, place
         self.refresh(layout=True)
 
     def render(self):
         chart = self.chart
         if chart is None:
             return Text("no chart", style="dim")
-        curves = [c for c in chart.curves if len(c.x)]  # plotext cannot draw an empty series
+        head = f"{self.place}: {chart.title}" if self.place else chart.title
+        curves = [c for c in chart.curves if len(c.y)]  # plotext cannot draw an empty series
         if not curves:
-            return Text(f"{chart.title}: " + ("; ".join(chart.notes) or "nothing to draw yet"), style="dim")
+            return Text(f"{head}: " + ("; ".join(chart.notes) or "nothing to draw yet"), style="dim")
         plotext.clf()
         plotext.plotsize(max(self.size.width, 20), max(self.size.height, 8))
         plotext.theme("pro")
+        if chart.categories is not None:
+            self._bars(chart, curves)
+        else:
+            self._lines(chart, curves)
+        plotext.title(head)
+        try:
+            return Text.from_ansi(plotext.build())
+        except Exception as exc:  # noqa: BLE001 - a chart that cannot be drawn must not take the TUI down
+            return Text(f"{head}: cannot draw it at this size ({type(exc).__name__})", style="dim")
+
+    @staticmethod
+    def _lines(chart: Chart, curves) -> None:
         for i, curve in enumerate(curves):
             x, y = [float(v) for v in curve.x], [float(v) for v in curve.y]
             color = COLORS[i % len(COLORS)]
@@ -80,13 +95,28 @@ class ChartView(Static):
                 plotext.error(x, y, yerr=[float(v) for v in curve.err], color=color)
         if chart.xticks is not None:
             plotext.xticks(list(chart.xticks))
-        plotext.title(chart.title)
         plotext.xlabel(chart.xlabel)
         plotext.ylabel(chart.ylabel)
-        try:
-            return Text.from_ansi(plotext.build())
-        except Exception as exc:  # noqa: BLE001 - a chart that cannot be drawn must not take the TUI down
-            return Text(f"{chart.title}: cannot draw it at this size ({type(exc).__name__})", style="dim")
+
+    @staticmethod
+    def _bars(chart: Chart, curves) -> None:
+        """Named categories as horizontal bars, the names on the left (they can be long:
+        'uncorrected source_only'); several curves side by side per category."""
+        names = [str(n) for n in chart.categories]
+        values = [[float(v) for v in c.y] for c in curves]
+        if len(values) == 1:
+            plotext.bar(names, values[0], orientation="horizontal", color=COLORS[0], width=0.6)
+        else:
+            plotext.multiple_bar(names, values, labels=[c.label for c in curves], orientation="horizontal",
+                                 color=[COLORS[i % len(COLORS)] for i in range(len(values))])
+        plotext.xlabel(chart.ylabel)  # horizontal bars: the values run along x
+
+
+def stage_id(stage: str) -> str:
+    """A widget id for a stage name: any name ('gap before', 'gap round 2', 'trial 3/40')
+    maps to letters, digits, '-' and '_' only, and two names never share an id (the hex
+    code of every other character is spelled out)."""
+    return "".join(c if c.isascii() and (c.isalnum() or c == "_") else f"-{ord(c):x}-" for c in stage)
 
 
 class Stages(Vertical):
@@ -106,10 +136,11 @@ class Stages(Vertical):
     def start(self, stage: str, message: str, total: int) -> None:
         bar = self._bar(stage)
         if bar is None:
-            self.mount(Label(message or stage, id=f"label-{stage}"), ProgressBar(total=total or None, id=f"bar-{stage}",
-                                                                           show_eta=False))
+            key = stage_id(stage)
+            self.mount(Label(message or stage, id=f"label-{key}"),
+                       ProgressBar(total=total or None, id=f"bar-{key}", show_eta=False))
         else:
-            self.query_one(f"#label-{stage}", Label).update(message or stage)
+            self.query_one(f"#label-{stage_id(stage)}", Label).update(message or stage)
             bar.update(total=total or None, progress=0)
 
     def advance(self, stage: str, done: int, total: int) -> None:
@@ -118,5 +149,5 @@ class Stages(Vertical):
             bar.update(total=total or None, progress=done)
 
     def _bar(self, stage: str) -> ProgressBar | None:
-        found = self.query(f"#bar-{stage}")
+        found = self.query(f"#bar-{stage_id(stage)}")
         return found.first(ProgressBar) if found else None

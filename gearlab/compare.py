@@ -1,0 +1,169 @@
+"""Runs side by side: `gearlab compare RUN_DIR RUN_DIR... [--html FILE]` and the TUI's comparison.
+
+Runs of one kind are compared: a transfer comparison puts each run's accuracy beside the
+others' for every method and k (with the difference to the first run) and overlays their
+accuracy-against-k curves; any other kind shows each run's tables one under the other and
+overlays the charts that the kind draws for each run (same title, curves named by run).
+Runs are lettered A, B, C ... in the order given.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import string
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from .charts import Chart, Curve
+from .errors import GearlabInputError
+from .runs import RunDir
+from .scenario import Scenario
+from .verdict import load_summary, verdict_lines
+
+
+@dataclass
+class Compared:
+    letter: str
+    run: RunDir
+    scenario: Scenario
+    summary: dict
+
+    @property
+    def kind(self) -> str:
+        return self.scenario.kind
+
+    @property
+    def title(self) -> str:
+        quick = ", quick" if self.run.quick else ""
+        state = "" if self.summary else ", unfinished"
+        return f"{self.letter}: {self.scenario.name} {self.run.path.name}{quick}{state} ({self.run.path})"
+
+
+def load_runs(paths) -> list[Compared]:
+    """The run directories, checked: two or more, each a run directory, all of one kind."""
+    paths = [Path(p) for p in paths]
+    if len(paths) < 2:
+        raise GearlabInputError(f"compare: expected two or more run directories, got {len(paths)}")
+    if len(paths) > len(string.ascii_uppercase):
+        raise GearlabInputError(f"compare: at most {len(string.ascii_uppercase)} runs, got {len(paths)}")
+    runs = []
+    for letter, path in zip(string.ascii_uppercase, paths):
+        run = RunDir.open(path)
+        runs.append(Compared(letter, run, run.scenario(), load_summary(path)))
+    kinds = {r.kind for r in runs}
+    if len(kinds) > 1:
+        shown = ", ".join(f"{r.run.path} is {r.kind}" for r in runs)
+        raise GearlabInputError(f"compare: expected runs of one kind, got {shown}")
+    return runs
+
+
+def _transfer_cells(c: Compared) -> dict[str, dict[str, dict]]:
+    from .kinds.transfer import table
+
+    return table(c.run.records(), c.scenario.spec["protocol"])
+
+
+def compare_markdown(runs: list[Compared]) -> str:
+    """Transfer: a row per method and k, a column per run (mean ± std) and, for each run after
+    the first, its difference to A in points. Other kinds: each run's table, lettered."""
+    if runs[0].kind == "transfer":
+        cells = [_transfer_cells(c) for c in runs]
+        methods = list(dict.fromkeys(m for tab in cells for m in tab))
+        ks = list(dict.fromkeys(k for c in runs for k in c.scenario.spec["protocol"].ks))
+        head = ["method", "k"] + [c.letter for c in runs] + [f"{c.letter} − A" for c in runs[1:]]
+        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for m in methods:
+            for k in ks:
+                got = [tab.get(m, {}).get(str(k)) for tab in cells]
+                if not any(got):
+                    continue
+                shown = [f"{g['mean']:.2f} ± {g['std']:.1f}" if g else "" for g in got]
+                delta = [f"{g['mean'] - got[0]['mean']:+.2f}" if g and got[0] else "" for g in got[1:]]
+                lines.append(f"| {m} | {k} | " + " | ".join(shown + delta) + " |")
+        return "\n".join(lines) + "\n"
+    from .kinds import KINDS
+
+    parts = []
+    for c in runs:
+        text = KINDS[c.kind].records_table(c.scenario, c.run.records()).strip()
+        if not text:
+            continue
+        blocks = []
+        for block in text.split("\n\n"):  # a kind may write several tables; each gets the letter
+            rows = block.strip().splitlines()
+            first = rows[0].split("|")
+            first[1] = f" {c.letter}: {first[1].strip()} "
+            blocks.append("\n".join(["|".join(first)] + rows[1:]))
+        parts.append("\n\n".join(blocks))
+    return "\n\n".join(parts) + "\n"
+
+
+def compare_charts(runs: list[Compared]) -> list[Chart]:
+    """Each chart the kind draws for the first run, with the same chart of every other run
+    overlaid (curves named 'A: label'); bar charts join their categories."""
+    from .kinds import KINDS
+
+    per_run = [KINDS[c.kind].charts(c.scenario, c.run) for c in runs]
+    titles = list(dict.fromkeys(ch.title for charts in per_run for ch in charts))
+    out = []
+    for title in titles:
+        found = [(c, next((ch for ch in charts if ch.title == title), None)) for c, charts in zip(runs, per_run)]
+        found = [(c, ch) for c, ch in found if ch is not None and ch.curves]
+        if not found:
+            continue
+        first = found[0][1]
+        if first.categories is not None:
+            categories = list(dict.fromkeys(n for _, ch in found for n in (ch.categories or ())))
+            curves = []
+            for c, ch in found:
+                for curve in ch.curves:
+                    by_name = dict(zip(ch.categories or (), curve.y))
+                    curves.append(Curve(f"{c.letter}: {curve.label}", list(range(len(categories))),
+                                        [float(by_name.get(n, 0.0)) for n in categories]))
+            out.append(replace(first, title=f"{title} (runs {', '.join(c.letter for c, _ in found)})",
+                               curves=tuple(curves), categories=categories))
+        else:
+            curves = tuple(replace(curve, label=f"{c.letter}: {curve.label}") for c, ch in found for curve in ch.curves)
+            ticks = sorted({float(t) for _, ch in found for t in (ch.xticks or ())}) or None
+            out.append(replace(first, title=f"{title} (runs {', '.join(c.letter for c, _ in found)})",
+                               curves=curves, xticks=ticks))
+    return out
+
+
+def compare_lines(runs: list[Compared]) -> list[str]:
+    """Which run is which, then each finished run's verdict."""
+    lines = [c.title for c in runs]
+    for c in runs:
+        said = verdict_lines(c.run) if c.summary else []
+        if said:
+            lines.append(f"{c.letter}: " + " ".join(said))
+    return lines
+
+
+def compare_html(runs: list[Compared], figures: Path) -> str:
+    """A self-contained page: the runs, the table side by side, the overlaid charts (PNG,
+    inlined) and each run's verdict. *figures*: a folder for the PNGs while they are drawn."""
+    from .plots import chart_figure
+    from .report import STYLE, markdown_table
+
+    lines = compare_lines(runs)
+    title = f"gearlab comparison: {len(runs)} {runs[0].kind} runs"
+    parts = ["<!doctype html><html><head><meta charset='utf-8'>", f"<title>{html.escape(title)}</title>",
+             f"<style>{STYLE}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
+             "<ul>", *(f"<li>{html.escape(t)}</li>" for t in lines[:len(runs)]), "</ul>"]
+    verdicts = lines[len(runs):]
+    if verdicts:
+        parts += ["<section id='verdict'><h2>Verdicts</h2>", *(f"<p>{html.escape(v)}</p>" for v in verdicts),
+                  "</section>"]
+    blocks = [b for b in compare_markdown(runs).split("\n\n") if b.strip()]
+    parts += [f"<h2>Table 1. {'Target test accuracy (%) of each run, mean ± std over repetitions' if runs[0].kind == 'transfer' else 'The runs’ tables'}</h2>",
+              *map(markdown_table, blocks)]
+    for i, chart in enumerate(compare_charts(runs), start=1):
+        png = chart_figure(chart, Path(figures) / f"compare_{i}.png")
+        data = base64.b64encode(png.read_bytes()).decode()
+        caption = f"Figure {i}. {chart.title}: the runs overlaid ({chart.ylabel} against {chart.xlabel or 'category'})."
+        parts.append(f"<figure><img alt='{html.escape(chart.title)}' src='data:image/png;base64,{data}'>"
+                     f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+    parts.append("</body></html>")
+    return "\n".join(parts)
