@@ -332,7 +332,7 @@ def repo_scenarios(tmp_path, monkeypatch):
     return Path("scenarios")
 
 
-@pytest.mark.parametrize("size", [(80, 24), (100, 30)])
+@pytest.mark.parametrize("size", SIZES)
 def test_snapshot_scenario_view(snap_compare, repo_scenarios, size):
     async def before(pilot):
         await select(pilot, "quick.toml")
@@ -340,15 +340,41 @@ def test_snapshot_scenario_view(snap_compare, repo_scenarios, size):
     assert snap_compare(GearlabApp(repo_scenarios), run_before=before, terminal_size=size)
 
 
-def test_snapshot_invalid_scenario(snap_compare, folder):
+@pytest.mark.parametrize("size", SIZES)
+def test_snapshot_invalid_scenario(snap_compare, folder, size):
     async def before(pilot):
         await select(pilot, "bad.toml")
 
-    assert snap_compare(GearlabApp(Path("scenarios")), run_before=before)
+    assert snap_compare(GearlabApp(Path("scenarios")), run_before=before, terminal_size=size)
 
 
-def test_snapshot_plugins_view(snap_compare, repo_scenarios):
-    assert snap_compare(GearlabApp(repo_scenarios), press=["p"])
+@pytest.mark.parametrize("size", SIZES)
+def test_snapshot_plugins_view(snap_compare, repo_scenarios, size):
+    assert snap_compare(GearlabApp(repo_scenarios), press=["p"], terminal_size=size)
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_snapshot_keys_panel(snap_compare, repo_scenarios, size):
+    assert snap_compare(GearlabApp(repo_scenarios), press=["question_mark"], terminal_size=size)
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_snapshot_results_of_a_stiffness_run(snap_compare, folder, tmp_path, size):
+    from gearlab.runs import run_scenario
+
+    run = run_scenario(folder / "stiff.toml", quick=True).path
+    fixed = run.parent / "20260101-000000-000000"  # the timestamp is on screen: a fixed one
+    run.rename(fixed)
+
+    async def before(pilot):
+        node = node_named(pilot.app, "stiff.toml")
+        node.expand()
+        await pilot.pause()
+        pilot.app.query_one("#browser", Tree).move_cursor(node.children[0])
+        await pilot.press("enter")
+        await pilot.pause()
+
+    assert snap_compare(GearlabApp(Path("scenarios")), run_before=before, terminal_size=size)
 
 
 def test_several_markdown_tables_are_read_apart():

@@ -60,12 +60,12 @@ class GearlabApp(App):
     # `?` lists them all.
     BINDINGS = [
         Binding("q", "quit", "Quit"),
-        Binding("question_mark", "keys", "Keys", key_display="?"),
-        Binding("r", "run(False)", "Run"),
-        Binding("k", "run(True)", "Quick"),
-        Binding("c", "cancel", "Cancel"),
-        Binding("u", "resume", "Resume"),
-        Binding("o", "open_report", "Report"),
+        Binding("question_mark", "keys", "Keys", key_display="?", tooltip="This list of keys"),
+        Binding("r", "run(False)", "Run", tooltip="Run the highlighted scenario"),
+        Binding("k", "run(True)", "Quick", tooltip="Quick run (--quick: shrunk for a smoke run)"),
+        Binding("c", "cancel", "Cancel", tooltip="Cancel the run in progress (its finished units stay)"),
+        Binding("u", "resume", "Resume", tooltip="Resume the highlighted unfinished run"),
+        Binding("o", "open_report", "Report", tooltip="Open the run's report.html in the web browser"),
         Binding("f", "run_with_options", "Run with options…", show=False),
         Binding("m", "mark", "Mark a run for comparison", show=False),
         Binding("C", "compare", "Compare the marked runs", show=False),
@@ -176,8 +176,9 @@ class GearlabApp(App):
                     target, unfolded = leaf, unfolded | {entry.path}
             if entry.path in unfolded and entry.runs:
                 node.expand()
-        line = self._line_of(target) if target is not None else 0
-        tree.cursor_line = line if line is not None else 0
+        line = self._line_of(target) if target is not None else None
+        # nothing kept (the first scan, or the file went): the first scenario, not the folder
+        tree.cursor_line = line if line is not None else (1 if self.entries else 0)
 
     def _line_of(self, target) -> int | None:
         """The tree line a node is drawn on (the root is line 0; folded children have none)."""
@@ -450,6 +451,7 @@ class GearlabApp(App):
         state = "finished" if run.finished else f"not finished ({run.units} units kept; u resumes it)"
         status.update(Text.assemble((f"{scenario.name} ", "bold"), f"({scenario.kind}), {run.path.name}: {state}"))
         verdict.update(Text(" ".join(said)))
+        verdict.display = bool(said)
         # the table is above; summary_lines repeats it as markdown, so keep only the other lines
         lines.update(escape("\n".join(line for line in summary if not line.lstrip().startswith("|"))))
         self.chart_index = 0
@@ -509,6 +511,7 @@ class GearlabApp(App):
         self.query_one("#results-status", Static).update(
             Text.assemble(("comparison ", "bold"), f"of {len(runs)} {runs[0].kind} runs; escape closes it"))
         self.query_one("#verdict", Static).update(Text("\n".join(compare_lines(runs))))
+        self.query_one("#verdict", Static).display = True
         self.query_one("#results-table", ResultTable).show_markdown(compare_markdown(runs))
         self.query_one("#results-lines", Static).update("")
         self.charts, self.chart_index = compare_charts(runs), 0

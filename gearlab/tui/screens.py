@@ -51,7 +51,7 @@ class KeysScreen(ModalScreen):
         table = self.query_one("#keys", DataTable)
         table.add_columns("key", "what it does")
         for b in self.bindings:
-            table.add_row(Text(b.key_display or b.key.replace("question_mark", "?")), b.description)
+            table.add_row(Text(b.key_display or b.key), b.tooltip or b.description)
         table.add_row("↑ ↓ enter", "move in the tree; enter opens a scenario or a run")
 
 
