@@ -203,3 +203,32 @@ def test_burst_network_finds_a_burst_anywhere_in_the_revolution():
     seen_half, other_half = called[early[len(early) // 2:]].mean(), called[np.flatnonzero(pos >= L // 2)].mean()
     assert seen_half > 0.75 and other_half > seen_half - 0.05
     assert called[800:].mean() < 0.15  # healthy revolutions it never saw
+
+
+# ----------------------------------------------------------------------------- matched_filter's limiter
+
+
+def test_matched_filter_limiter_by_name_and_its_effect_in_impulsive_noise():
+    from gearlab.learn.detectors import template_detector
+    from gearlab.registry import get_registry
+
+    adapter = get_registry().get("adapter", "matched_filter")
+    assert adapter.resolve({"limiter": "auto"})["limiter"] == 2
+    with pytest.raises(GearlabInputError, match="parameter 'limiter': unknown value 'of'.*did you mean 'off'"):
+        adapter.resolve({"limiter": "of"})
+    # the same shapes in both domains, Student-t noise: the limiter finds more bursts (62.9
+    # against 79.6 % with the best threshold; in Laplace noise it helps bursts weaker than the
+    # noise, as in chapter 5, and costs strong ones: docs/learning.md)
+    amplitude = 5.0
+    X, y, h, pos = revolutions(600, 300, amplitude=amplitude, law="student_t", seed=11)
+    bursts = np.stack([h + amplitude * burst_shape(p) for p in range(0, L - 30)])  # a noise-free source
+    source = np.concatenate([bursts, np.tile(h, (len(bursts), 1))]).astype(np.float32)
+    ys = np.r_[np.ones(len(bursts)), np.zeros(len(bursts))]
+    history = X[300:420]
+    test = np.r_[np.arange(0, 300), np.arange(420, 600)]
+    scores = {}
+    for limiter in ("off", "on"):
+        d = template_detector(source, ys, history, None, false_alarm=0.01, limiter=limiter)
+        with torch.no_grad():
+            scores[limiter] = d.score(torch.as_tensor(X[test])).numpy()
+    assert best_accuracy(scores["on"], y[test]) > best_accuracy(scores["off"], y[test]) + 10

@@ -34,7 +34,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
-from gearlab.params import Param, resolve_params
+from gearlab.errors import GearlabInputError
+from gearlab.params import Param, did_you_mean, resolve_params
 
 if TYPE_CHECKING:  # for the annotations only; see the module docstring
     import torch
@@ -83,9 +84,20 @@ class Adapter:
 
     # ---- parameters
 
+    choices: dict[str, tuple[str, ...]] = {}  # parameter -> names of its codes 0, 1, ... (scenarios may give either)
+
     def coerce(self, given: Mapping[str, object], where: str) -> dict:
-        """Turn scenario values that are not numbers (e.g. names of choices) into numbers."""
-        return dict(given)
+        """Turn scenario values that are not numbers (the names of ``choices``) into their codes."""
+        values = dict(given)
+        for key, names in self.choices.items():
+            value = values.get(key)
+            if isinstance(value, str) and not value.strip().lstrip("+-").isdigit():
+                name = value.strip().lower()
+                if name not in names:
+                    raise GearlabInputError(f"{where}, parameter '{key}': unknown value '{value}'"
+                                            f"{did_you_mean(name, names)}; known: {', '.join(names)}")
+                values[key] = names.index(name)
+        return values
 
     def resolve(self, given: Mapping[str, object] | None = None, where: str = "") -> dict:
         """Defaults filled, units parsed, names and bounds checked (GearlabInputError otherwise)."""

@@ -17,9 +17,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from gearlab.errors import GearlabInputError
 from gearlab.learn.adapters import Adapter
-from gearlab.params import Param, did_you_mean
+from gearlab.params import Param
 from gearlab.registry import hookimpl
 
 VARIANTS = ("all", "classifier", "last")
@@ -35,19 +34,7 @@ class Finetune(Adapter):
     supervision = ("supervised",)
     train_on = "target"
     optimizer = "sgd"
-
-    def coerce(self, given: Mapping[str, object], where: str) -> dict:
-        values = dict(given)
-        variant = values.get("variant")
-        if isinstance(variant, str) and not variant.strip().lstrip("+-").isdigit():
-            key = variant.strip().lower()
-            if key not in VARIANTS:
-                raise GearlabInputError(
-                    f"{where}, parameter 'variant': unknown variant '{variant}'{did_you_mean(key, VARIANTS)}; "
-                    f"known: {', '.join(VARIANTS)}"
-                )
-            values["variant"] = VARIANTS.index(key)
-        return values
+    choices = {"variant": VARIANTS}
 
     def variant(self, params: Mapping | None = None) -> str:
         value = self.values(params)["variant"]

@@ -14,11 +14,8 @@ turns it on when the history's noise law is not Gaussian (gearlab.learn.history.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
-from gearlab.errors import GearlabInputError
 from gearlab.learn.adapters import Adapter
-from gearlab.params import Param, did_you_mean
+from gearlab.params import Param
 from gearlab.registry import hookimpl
 
 LIMITERS = ("off", "on", "auto")
@@ -38,17 +35,7 @@ class MatchedFilter(Adapter):
     calibrated = False
     supervision = ("unsupervised", "supervised")
     train_on = "detector"
-
-    def coerce(self, given: Mapping[str, object], where: str) -> dict:
-        values = dict(given)
-        limiter = values.get("limiter")
-        if isinstance(limiter, str) and not limiter.strip().lstrip("+-").isdigit():
-            key = limiter.strip().lower()
-            if key not in LIMITERS:
-                raise GearlabInputError(f"{where}, parameter 'limiter': unknown value '{limiter}'"
-                                        f"{did_you_mean(key, LIMITERS)}; known: {', '.join(LIMITERS)}")
-            values["limiter"] = LIMITERS.index(key)
-        return values
+    choices = {"limiter": LIMITERS}
 
     def detector(self, source, target, params=None):
         from gearlab.learn.detectors import template_detector
