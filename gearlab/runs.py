@@ -352,8 +352,8 @@ def _remove_empty(folder: Path, created: Path) -> None:
 
 
 def input_paths(scenario: Scenario) -> list[Path]:
-    """The measured files a scenario reads: every 'file' (and each of 'files') of its tables,
-    resolved against the scenario's folder."""
+    """The measured files a scenario reads: every 'file' of its tables and each of 'files'
+    (a name, or a table with its 'path'), resolved against the scenario's folder."""
     base = Path(scenario.base or scenario.path.parent)
     found: list[Path] = []
 
@@ -361,6 +361,7 @@ def input_paths(scenario: Scenario) -> list[Path]:
         if isinstance(node, dict):
             for key, value in node.items():
                 names = [value] if key == "file" else value if key == "files" and isinstance(value, list) else []
+                names = [n.get("path") if isinstance(n, dict) else n for n in names]
                 found.extend((base / name).resolve() for name in names if isinstance(name, str) and name)
                 walk(value)
         elif isinstance(node, list):

@@ -465,3 +465,14 @@ def test_a_transfer_runs_copy_finds_its_relative_target_file(tmp_path, record_fi
     monkeypatch.chdir(tmp_path)
     target = run.scenario().spec["target"]
     assert Path(target.path).resolve() == (data / "rec.npz").resolve()
+
+
+def test_records_listed_in_files_tables_are_recorded_for_resume():
+    """The detection kind's target lists its records as files = [{path = ..., role = ...}]."""
+    from gearlab.runs import input_paths
+
+    scenario = ROOT / "scenarios" / "phm09_chip.toml"
+    if not scenario.is_file() or not Path("/work/shared/data/phm09").is_dir():
+        pytest.skip("the PHM 2009 records (/work/shared/data/phm09) are not here")
+    paths = input_paths(load_scenario(scenario))
+    assert len(paths) == 24 and all(p.is_absolute() and p.is_file() for p in paths)
