@@ -36,6 +36,36 @@ def markdown_table(text: str) -> str:
 _markdown_table = markdown_table  # the name other modules used before
 
 
+# figure file stem -> (the thesis figure it repeats, what it shows); the captions that depend
+# on the run (k, repetitions, experiment, dataset) are made in caption()
+CAPTIONS = {
+    "training_curves": ("Figure 5.7", "Training curves of the first repetition at the middle k: source validation "
+                        "accuracy (%, left axis), domain discrepancy and λ (dimensionless, right axis) against epoch; "
+                        "the dashed line marks the epoch kept."),
+    "latent_maps": ("Figure 5.9", "Latent features of the first repetition after adaptation: source and target "
+                    "training samples projected on their first two principal components (PCA, dimensionless); "
+                    "colour: domain, marker: class (o healthy, x fault) where the run stored the labels."),
+    "accuracy_vs_intensity": ("Figure 4.4", "Test accuracy (%) per fault type against the intensity step (1-20), all "
+                              "faults (black) and faults predicted healthy (green, dashed); mean ± std over runs; "
+                              "noisy left, TSA right."),
+    "accuracy_vs_rfa": ("Figure 4.5", "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); "
+                        "mean ± std over runs."),
+    "confusion": ("Figure 4.6", "Confusion matrices compiled over all runs (counts; shading: share of the true class)."),
+    "tvms_ladders": ("Figure 2.33", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step "
+                     "of each fault ladder; colour: intensity step."),
+    "rfa": ("Figure 2.32", "Relative fault area (fraction of the healthy tooth) against intensity step per fault type."),
+    "tvms_cases": ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases."),
+    "gap_per_view": ("", "Where the gap lies: per-view gap (sum of squared effect sizes, dimensionless) of the healthy "
+                     "revolutions before and after correcting the simulator, with bootstrap intervals."),
+    "gap_effect_ranking": ("", "Which effect: share of the gap (%) each candidate removes when added to the "
+                           "simulator alone; accepted effects in blue."),
+    "gap_accuracy": ("", "How far: target test accuracy (%) at k = 0 of models trained on the uncorrected and the "
+                     "corrected simulator; mean ± std over repetitions."),
+    "gap_benchmark": ("", "The blind benchmark: gap before and after per trial, and how often each hidden effect is "
+                      "named first."),
+}
+
+
 def caption(stem: str, summary: dict) -> tuple[str, str]:
     """(thesis figure it repeats or '', what the figure shows) for a figure file of a run."""
     from .verdict import experiment
@@ -43,54 +73,19 @@ def caption(stem: str, summary: dict) -> tuple[str, str]:
     protocol = summary.get("protocol") or {}
     reps = protocol.get("repetitions") or protocol.get("runs")
     over = f" over {reps} repetitions" if reps else ""
-    ks = protocol.get("ks") or [0]
     if stem == "accuracy_vs_k":
         found = experiment(summary) if summary.get("kind") == "transfer" else None
         return (found[2] if found else "Figures 5.5/5.6",
                 f"Target test accuracy (%) against the number of target fault samples k in the training set: "
                 f"mean{over}, band ± one standard deviation; solid lines supervised, dashed unsupervised.")
-    if stem == "training_curves":
-        return ("Figure 5.7", "Training curves of the first repetition at the middle k: source validation accuracy "
-                "(%, left axis), domain discrepancy and λ (dimensionless, right axis) against epoch; the dashed "
-                "line marks the epoch kept.")
     if stem == "confusion_k0":
-        return ("Figure 5.8", f"Confusion matrices at k = {min(ks)}, summed{over} (counts of target test samples; "
-                "rows: true class, columns: predicted class).")
-    if stem == "latent_maps":
-        return ("Figure 5.9", "Latent features of the first repetition after adaptation: source and target "
-                "training samples projected on their first two principal components (PCA, dimensionless); "
-                "colour: domain, marker: class (o healthy, x fault).")
-    if stem == "accuracy_vs_intensity":
-        return ("Figure 4.4", "Test accuracy (%) per fault type against the intensity step (1-20), all faults "
-                "(black) and faults predicted healthy (green, dashed); mean ± std over runs; noisy left, TSA right.")
-    if stem == "accuracy_vs_rfa":
-        return ("Figure 4.5", "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); "
-                "mean ± std over runs.")
-    if stem == "confusion":
-        return ("Figure 4.6", "Confusion matrices compiled over all runs (counts; shading: share of the true class).")
-    if stem == "tvms_ladders":
-        return ("Figure 2.33", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step "
-                "of each fault ladder; colour: intensity step.")
-    if stem == "rfa":
-        return ("Figure 2.32", "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.")
-    if stem == "tvms_cases":
-        return ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases.")
+        return ("Figure 5.8", f"Confusion matrices at k = {min(protocol.get('ks') or [0])}, summed{over} (counts of "
+                "target test samples; rows: true class, columns: predicted class).")
     if stem.startswith("signals_"):
         return ("Figures 2.34-2.39", f"Dataset {stem[len('signals_'):]}: a revolution per class at low, middle and "
                 "top intensity (standardised acceleration against input-shaft angle, deg) and its order "
                 "spectrum (amplitude against shaft order).")
-    if stem == "gap_per_view":
-        return ("", "Where the gap lies: per-view gap (sum of squared effect sizes, dimensionless) of the healthy "
-                "revolutions before and after correcting the simulator, with bootstrap intervals.")
-    if stem == "gap_effect_ranking":
-        return ("", "Which effect: share of the gap (%) each candidate removes when added to the simulator alone; "
-                "accepted effects in blue.")
-    if stem == "gap_accuracy":
-        return ("", "How far: target test accuracy (%) at k = 0 of models trained on the uncorrected and the "
-                "corrected simulator; mean ± std over repetitions.")
-    if stem == "gap_benchmark":
-        return ("", "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.")
-    return ("", stem.replace("_", " ") + ".")
+    return CAPTIONS.get(stem, ("", stem.replace("_", " ") + "."))
 
 
 def build_report(run_path: Path) -> str:

@@ -265,7 +265,8 @@ def gap_lines(summary: Mapping) -> list[str]:
     if effects:
         named = ", ".join(f"{e['name']} ({_params(e.get('params', {}))}; credited with {_pct(e['share_removed'])})"
                           for e in effects)
-        verdict = "UNEXPLAINED: they do not close it" if summary.get("unexplained") else "they close it"
+        verdict = ("UNEXPLAINED: the gap is not closed" if summary.get("unexplained")
+                   else "the gap is explained")
         lines.append(f"Named effects: {named}; {after_text}; {verdict}.")
     else:
         ranking = summary.get("ranking") or []

@@ -505,14 +505,20 @@ def node_named(app, name: str):
     return next(n for n in app.query_one("#browser", Tree).root.children if str(n.label).endswith(name))
 
 
+async def unfold(pilot, name: str):
+    """The tree node of scenario file *name*, unfolded (its runs shown)."""
+    node = node_named(pilot.app, name)
+    node.expand()
+    await pilot.pause()
+    return node
+
+
 @pytest.mark.parametrize("size", SIZES)
 def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_with_runs, size):
     async def script(pilot):
         app = pilot.app
         tree = app.query_one("#browser", Tree)
-        stiff = node_named(app, "stiff.toml")
-        stiff.expand()
-        await pilot.pause()
+        await unfold(pilot, "stiff.toml")
         await select(pilot, "other.toml")  # below the two runs of the unfolded stiff.toml
         await pilot.press("f5")
         await pilot.pause()
@@ -533,9 +539,7 @@ def test_u_resumes_only_the_highlighted_run(two_with_runs, tmp_path, size):
     async def script(pilot):
         app = pilot.app
         tree = app.query_one("#browser", Tree)
-        stiff = node_named(app, "stiff.toml")
-        stiff.expand()
-        await pilot.pause()
+        stiff = await unfold(pilot, "stiff.toml")
         tree.move_cursor(stiff.children[1])
         await pilot.press("enter")  # opens the older unfinished run
         await pilot.pause()
