@@ -78,7 +78,11 @@ def test_scores_csv_has_a_row_per_test_unit_and_method(cli, tmp_path, cache):
     # the synthetic chip rings once a revolution: FM4 of the TSA finds every chipped record
     assert by[("record10", "fm4")]["auc"] == 1.0 and by[("record10", "fm4")]["detection"] == 100.0
     assert by[("record10", "fm4")]["false_alarm"] == 0.0
-    assert (out / "table.md").read_text().count("record10 AUC | det % | FA %") == 1
+    table = (out / "table.md").read_text()
+    assert table.count("record10 AUC | det % | FA %") == 1
+    # how often each test label is called at the longest TSA: the healthy record never, the chipped ones always
+    assert by[("record10", "fm4")]["called_by_label"] == {"healthy": 0.0, "fault": 100.0}
+    assert "| record10: condition | method |" in table and "called % 'healthy'" in table
     assert "fm4" in (out / "report.html").read_text()
 
 

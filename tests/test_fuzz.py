@@ -72,8 +72,24 @@ def refused_or_fine(action) -> object:
 # ============================================================================= scenarios
 
 
+def measured_files_absolute(doc: dict) -> dict | None:
+    """A shipped scenario with its [target] files (relative to scenarios/) made absolute, so it
+    validates from any folder; None when those records are not here (../shared is optional)."""
+    files = doc.get("target", {}).get("files")
+    if not isinstance(files, list):
+        return doc
+    for f in files:
+        path = Path(f["path"])
+        f["path"] = str(path if path.is_absolute() else (ROOT / "scenarios" / path).resolve())
+        if not Path(f["path"]).is_file():
+            return None
+    return doc
+
+
 def real_scenarios() -> dict[str, dict]:
-    out = {p.name: tomllib.loads(p.read_text()) for p in sorted((ROOT / "scenarios").glob("*.toml"))}
+    out = {p.name: measured_files_absolute(tomllib.loads(p.read_text()))
+           for p in sorted((ROOT / "scenarios").glob("*.toml"))}
+    out = {name: doc for name, doc in out.items() if doc is not None}
     # what the shipped scenarios do not show: measured data, a study's overrides, explicit faults
     out["measured.toml"] = {
         "scenario": {"name": "measured", "kind": "dataset"},

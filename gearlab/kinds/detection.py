@@ -557,7 +557,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     if (run.path / "conditions.json").exists():
         summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(rows))
+    run.write_text("table.md", table_md(rows) + "\n" + labels_md(rows))
     run.write_text("table.csv", table_csv(rows))
 
 
@@ -589,6 +589,23 @@ def table_md(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
+def labels_md(rows: list[dict]) -> str:
+    """Called units (%) per test label at the history's threshold, for the longest TSA: is other
+    damage (a negative label) taken for the fault?"""
+    units = [u for u in dict.fromkeys(r["unit"] for r in rows) if u != "revolution"]
+    if not units:
+        return ""
+    unit = max(units, key=lambda u: int(u.removeprefix("record")))
+    picked = [r for r in rows if r["unit"] == unit]
+    labels = list(dict.fromkeys(k for r in picked for k in r["called_by_label"]))
+    out = [f"| {unit}: condition | method | " + " | ".join(f"called % '{k}'" for k in labels) + " |",
+           "|---|---|" + "---|" * len(labels)]
+    for r in picked:
+        out.append(f"| {r['condition']} | {r['method']} | "
+                   + " | ".join(_cell(r["called_by_label"].get(k), "{:.0f}") for k in labels) + " |")
+    return "\n".join(out) + "\n"
+
+
 def table_csv(rows: list[dict]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -604,7 +621,7 @@ def table_csv(rows: list[dict]) -> str:
 def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
     return [f"ROC AUC, detection and false alarms at the history's threshold ({100 * summary['false_alarm_asked']:g} % "
-            "false alarms asked):", table_md(summary["rows"]).rstrip()]
+            "false alarms asked):", table_md(summary["rows"]).rstrip(), labels_md(summary["rows"]).rstrip()]
 
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:
