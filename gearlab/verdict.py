@@ -190,6 +190,12 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
                      "is the share of that class, not a detection.")
     else:
         lines.append("No method collapsed to one class.")
+    bound = (summary.get("bound") or {}).get("accuracy") or {}
+    told = [(r["k"], bound[str(r["k"])]["mean"] - r["mean"]) for r in rows if str(r["k"]) in bound]
+    if told:
+        lines.append(f"The Bayes bound (a detector told the target's own fault shapes and noise law, best threshold) "
+                     f"is {_span([bound[str(k)]['mean'] for k, _ in told], 2)} %: the best method stays "
+                     f"{_span([gap for _, gap in told])} points below it.")
     found = experiment(summary)
     if found is not None:
         lines.append(thesis_line(table, ks, found))
@@ -221,9 +227,11 @@ def thesis_line(table: Mapping, ks: Sequence, found: tuple) -> str:
 def transfer_table(summary: Mapping) -> str:
     """The Table 5.4 layout of a transfer run, with the thesis's row under each k for
     Experiments A and B (blank where the thesis has no such method)."""
-    from .kinds.transfer import table_md
+    from .kinds.transfer import BOUND, table_md
 
     table, ks, methods = summary["table"], summary["protocol"]["ks"], summary["methods"]
+    if summary.get("bound"):  # the reference column of table.md (gearlab.kinds.transfer)
+        table, methods = {**table, BOUND: summary["bound"]["accuracy"]}, [*methods, BOUND]
     text = table_md(table, ks, methods)
     found = experiment(summary)
     if found is None:
@@ -324,9 +332,9 @@ def verdict_lines(run) -> list[str]:
 
 
 def verdict_table(run) -> str | None:
-    """The results table with its reference rows (transfer runs of Experiments A/B); None
-    when the kind's own table says it all."""
+    """A finished transfer run's table with its reference column (the Bayes bound) and, for
+    Experiments A/B, the thesis's rows; None for other kinds (their own table says it all)."""
     summary = load_summary(Path(getattr(run, "path", run)))
-    if summary.get("kind") == "transfer" and experiment(summary) is not None:
+    if summary.get("kind") == "transfer" and summary.get("table"):
         return transfer_table(summary)
     return None
