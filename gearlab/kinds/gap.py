@@ -193,15 +193,16 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     for key in ("vibration", "tacho"):
         if entry[key] == "":
             raise GearlabInputError(f"{where} key '{key}': missing; measured records need the {key} column")
-    table = {**entry, "transient": entry["transient"], "positive": "fault"}
-    target = target_spec(table, where, base, need=("history",))
+    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",))
     return Records(entry["name"] or "measured records", target)
 
 
 def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str]]:
     """The history records' revolutions in m/s² (n, POINTS), their mean tacho speed, and notes.
-    Records of different speeds are different operating conditions: refused."""
-    from ..data.textzip import read_record
+    Records of different speeds are different operating conditions: refused. Each record starts at
+    one of the tacho's N marks: every record is turned by m/N of a turn into register with the first
+    (textzip.align_to, as the detection kind does), so the set has one synchronous average."""
+    from ..data.textzip import align_to, read_record
 
     t = records.target
     rows, speeds, notes = [], {}, []
@@ -210,7 +211,10 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     for i, f in enumerate(files):
         rec = read_record(f.resolved, vibration=t.vibration, tacho=t.tacho, pulses_per_rev=t.pulses_per_rev,
                           sensitivity=t.sensitivity, fs=t.fs, transient=t.transient)
-        rows.append(rec.revolutions)
+        revs = rec.revolutions
+        if rows:
+            _, revs = align_to(rows[0].mean(axis=0), revs, t.pulses_per_rev)
+        rows.append(revs)
         speeds[f.path] = rec.speed_hz
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     low, high = min(speeds.values()), max(speeds.values())
