@@ -27,6 +27,7 @@ from ..errors import GearlabInputError
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
 from ..learn.calibration import ALIGNMENTS, SOURCE_NOISE, THRESHOLDS, Calibration
 from ..learn.networks import DEFAULT_NETWORK, NETWORKS
+from ..learn.training import pick_device
 from ..learn.protocol import (
     KS,
     Counts,
@@ -381,6 +382,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "balanced_accuracy": table(records, protocol, "balanced_accuracy"),
         "detection_at_1pct": table(records, protocol, "detection_at_1pct"),
         "units": len(records),
+        "device": str(pick_device(protocol.device)),  # where the units trained (cuda when present, by default)
         "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
     }
     bound_path = run.path / "bound.json"
@@ -405,6 +407,8 @@ def summary_lines(run: RunDir) -> list[str]:
              table_md(tab, ks, methods).rstrip()]
     if summary.get("healthy_share_of_test") is not None:
         lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
+    if summary.get("device"):
+        lines.append(f"trained on: {summary['device']}")
     return lines
 
 
