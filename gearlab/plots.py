@@ -182,7 +182,7 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
 
     # confusion matrices at the smallest k, summed over repetitions (Figure 5.8)
     k0 = min(ks)
-    methods = list(table)
+    methods = [m for m in table if any(r["method"] == m for r in records)]  # not a reference column (the bound)
     fig, axes = plt.subplots(1, len(methods), figsize=(2.6 * len(methods), 2.8), squeeze=False, layout="constrained")
     for ax, label in zip(axes[0], methods):
         cm = np.zeros((2, 2), dtype=int)

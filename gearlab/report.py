@@ -66,6 +66,12 @@ CAPTIONS = {
 }
 
 
+# figures in the order the thesis numbers them (then any other, by name)
+ORDER = ["rfa", "tvms_ladders", "tvms_cases", "accuracy_vs_intensity", "accuracy_vs_rfa", "confusion",
+         "accuracy_vs_k", "training_curves", "confusion_k0", "latent_maps",
+         "gap_per_view", "gap_effect_ranking", "gap_accuracy", "gap_benchmark"]
+
+
 def caption(stem: str, summary: dict) -> tuple[str, str]:
     """(thesis figure it repeats or '', what the figure shows) for a figure file of a run."""
     from .verdict import experiment
@@ -117,6 +123,7 @@ def build_report(run_path: Path) -> str:
                      + ("; reference rows in italics: the thesis's values" if "(thesis" in block else ""))
         parts += [f"<h2>{html.escape(head)}</h2>", markdown_table(block)]
     figures = sorted((run_path / "figures").glob("*.png")) if (run_path / "figures").exists() else []
+    figures.sort(key=lambda f: ORDER.index(f.stem) if f.stem in ORDER else len(ORDER))  # the thesis's order
     if figures:
         parts.append("<h2>Figures</h2>")
     for i, fig in enumerate(figures, start=1):

@@ -354,8 +354,8 @@ def test_snapshot_plugins_view(snap_compare, repo_scenarios, size):
 
 
 @pytest.mark.parametrize("size", SIZES)
-def test_snapshot_keys_panel(snap_compare, repo_scenarios, size):
-    assert snap_compare(GearlabApp(repo_scenarios), press=["question_mark"], terminal_size=size)
+def test_snapshot_keys_panel(snap_compare, folder, size):
+    assert snap_compare(GearlabApp(Path("scenarios")), press=["question_mark"], terminal_size=size)
 
 
 @pytest.mark.parametrize("size", SIZES)

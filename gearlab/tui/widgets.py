@@ -40,7 +40,16 @@ class ResultTable(DataTable):
         if not tables:
             return
         width = max(len(row) for table in tables for row in table)
-        self.add_columns(*(tables[0][0] + [""] * (width - len(tables[0][0]))))
+        head = tables[0][0] + [""] * (width - len(tables[0][0]))
+        # a long name with a qualifier ('mmd (unsupervised)', 'Bayes bound (target's own ...)')
+        # heads its column on two lines: the columns stay as wide as their numbers need
+        split = [h.split(" (", 1) if " (" in h and len(h) > 14 else [h] for h in head]
+        self.header_height = 2 if any(len(parts) > 1 for parts in split) else 1
+        for parts in split:
+            label = Text(parts[0] + ("\n(" + parts[1] if len(parts) > 1 else ""))
+            self.add_column(label, width=max(min(max(len(line) for line in label.plain.splitlines()), 24),
+                                             max((len(row[i]) for t in tables for row in t[1:]
+                                                  for i in [len(self.columns)] if i < len(row)), default=1)))
         for i, table in enumerate(tables):
             if i:
                 self.add_row(*([""] * width))
