@@ -267,3 +267,15 @@ def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
                         "--window-size=1200,2000", f"--user-data-dir={tmp_path / kind}", report.as_uri()],
                        capture_output=True, timeout=120)
         assert shot.stat().st_size > 10_000, kind
+
+
+def test_the_bayes_bound_is_set_beside_the_best_method():
+    table = {"a": {"0": cell(80.0), "4": cell(84.0)}, "b": {"0": cell(70.0), "4": cell(71.0)}}
+    summary = {"table": table, "methods": ["a", "b"], "protocol": {"ks": [0, 4]},
+               "bound": {"accuracy": {"0": cell(92.0, 0.0), "4": cell(93.0, 0.5)}}}
+    lines = transfer_lines(summary, [])
+    assert lines[-1] == ("The Bayes bound (a detector told the target's own fault shapes and noise law, best "
+                         "threshold) is 92.00-93.00 %: the best method stays 9.0-12.0 points below it.")
+    md = transfer_table(summary).splitlines()
+    assert md[0].endswith("| Bayes bound (target's own shapes and noise law, best threshold) |")
+    assert md[2] == "| 0 | 80.00 ± 1.0 | 70.00 ± 1.0 | 92.00 ± 0.0 |"
