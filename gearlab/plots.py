@@ -258,9 +258,16 @@ def chart_figure(chart, path: Path) -> Path:
         ax.grid(alpha=0.3, axis="x")
     else:
         fig, ax = plt.subplots(figsize=(9, 4.2), layout="constrained")
+        # overlaid runs ('A: mmd', 'B: mmd'): one colour per series, one line style per run
+        names = list(dict.fromkeys(c.label.split(": ", 1)[-1] for c in curves))
+        runs = list(dict.fromkeys(c.label.split(": ", 1)[0] for c in curves if ": " in c.label))
+        colours = plt.get_cmap("tab10").colors
         for curve in curves:
             x, yv = np.asarray(curve.x, dtype=float), np.asarray(curve.y, dtype=float)
-            line, = ax.plot(x, yv, marker="o", ms=3, label=curve.label)
+            run, _, name = curve.label.rpartition(": ")
+            style = ("-", "--", ":", "-.")[runs.index(run) % 4] if run in runs else "-"
+            line, = ax.plot(x, yv, style, marker="o", ms=3, label=curve.label,
+                            color=colours[names.index(name) % len(colours)])
             if curve.err is not None:
                 err = np.asarray(curve.err, dtype=float)
                 ax.fill_between(x, yv - err, yv + err, color=line.get_color(), alpha=0.15)
