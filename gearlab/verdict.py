@@ -305,14 +305,21 @@ def _alone_versus_credited(summary: Mapping) -> list[str]:
     for e in effects:
         if e["name"] not in alone or alone[e["name"]] - e["share_removed"] < 0.2:
             continue
-        partners = [f["name"] for f in effects if f is not e and (f.get("nuisance_of") == e["name"]
-                                                                   or f.get("round", 0) <= e.get("round", 0))]
-        why = (f"{', '.join(partners)}, accepted beside it, explain the same part of the gap and take it in the "
-               "split (a Shapley share)" if partners else
-               "the credited share is measured on fresh revolutions against the gap before any effect, the "
-               "ranking's on the revolutions it was fitted to")
-        out.append(f"{e['name']} removes {_pct(alone[e['name']])} of the gap alone (ranking) but is credited with "
-                   f"{_pct(e['share_removed'])}: {why}.")
+        noise = [f["name"] for f in effects if f.get("nuisance_of") == e["name"]]
+        earlier = [f["name"] for f in effects if f is not e and not f.get("nuisance_of")
+                   and f.get("round", 0) < e.get("round", 0)]
+        said = f"{e['name']} removes {_pct(alone[e['name']])} of the gap in the ranking"
+        if noise:
+            why = (f"{said} (fitted there with {' and '.join(noise)} beside it) but is credited with "
+                   f"{_pct(e['share_removed'])}: {' and '.join(noise)} alone explains that part of the gap, and "
+                   "the credited shares split what they remove together (a Shapley value)")
+        elif earlier:
+            why = (f"{said} (added alone) but is credited with {_pct(e['share_removed'])}: {', '.join(earlier)}, accepted in an "
+                   "earlier round, already explain that part of the gap")
+        else:
+            why = (f"{said} (added alone) but is credited with {_pct(e['share_removed'])}: the credited share is measured on fresh "
+                   "revolutions, the ranking's on those it was fitted to")
+        out.append(why + ".")
     return out
 
 

@@ -129,8 +129,9 @@ def test_gap_verdict_names_the_effects_and_explains_alone_versus_credited():
     assert lines[1] == ("Named effects: drive_inertias (J = 2; credited with 0.0 %), sensor_noise (snr_db = 10; "
                         "credited with 99.0 %); gap 1000 -> 10, 99.0 % removed; no longer significant (p = 0.4); "
                         "the gap is explained.")
-    assert lines[2].startswith("drive_inertias removes 100.0 % of the gap alone (ranking) but is credited with 0.0 %: "
-                               "sensor_noise, accepted beside it, explain")
+    assert lines[2] == ("drive_inertias removes 100.0 % of the gap in the ranking (fitted there with "
+                        "sensor_noise beside it) but is credited with 0.0 %: sensor_noise alone explains that part of "
+                        "the gap, and the credited shares split what they remove together (a Shapley value).")
     assert lines[3] == "Target fault detection at k = 0, uncorrected -> corrected simulator: source_only 50.0 -> 70.0 %."
 
 
