@@ -305,7 +305,9 @@ def _alone_versus_credited(summary: Mapping) -> list[str]:
     for e in effects:
         if e["name"] not in alone or alone[e["name"]] - e["share_removed"] < 0.2:
             continue
-        noise = [f["name"] for f in effects if f.get("nuisance_of") == e["name"]]
+        # a round accepts one candidate and, at most, the sensor noise fitted beside it
+        noise = [f["name"] for f in effects if f is not e and (f.get("nuisance_of") == e["name"]
+                                                               or f.get("round", -1) == e.get("round"))]
         earlier = [f["name"] for f in effects if f is not e and not f.get("nuisance_of")
                    and f.get("round", 0) < e.get("round", 0)]
         said = f"{e['name']} removes {_pct(alone[e['name']])} of the gap in the ranking"
