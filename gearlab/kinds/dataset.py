@@ -122,6 +122,16 @@ def quantity(entry: dict, key: str, where: str) -> float:
     return value
 
 
+def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
+    """A [source] entry that must be a simulation (the gap and detection kinds: measured data
+    can only be their [target])."""
+    spec = dataset_spec(entry, where, base)
+    if not isinstance(spec, DatasetSpec):
+        raise GearlabInputError(f"{where} key 'file': the source is a simulator configuration; give a 'preset' "
+                                "(measured data can only be the [target])")
+    return spec
+
+
 def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     if not entry["vibration"]:
         raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")

@@ -54,7 +54,7 @@ from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import Standardiser
 from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
 from ..units import to_si
-from .dataset import class_sizes, dataset_spec, device_of, executor_for, sized
+from .dataset import class_sizes, device_of, executor_for, simulated_spec, sized
 from .transfer import CALIBRATION, TABLES as TRANSFER_TABLES, TRAINING, check_training, method as transfer_method
 
 ROLES = ("history", "test")
@@ -207,10 +207,7 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
 def build(scenario: Scenario) -> dict:
     t = scenario.tables
     path = scenario.path
-    source = dataset_spec(t["source"], location(path, "source"), scenario.base)
-    if not isinstance(source, DatasetSpec):
-        raise GearlabInputError(f"{location(path, 'source', 'file')}: the source is a simulator configuration; "
-                                "give a 'preset' (measured data are the [target])")
+    source = simulated_spec(t["source"], location(path, "source"), scenario.base)
     sizes = class_sizes(source, location(path, "source"))
     if not sizes["healthy"] or sum(sizes.values()) == sizes["healthy"]:
         raise GearlabInputError(f"{location(path, 'source')}: the source needs healthy and faulty revolutions "
