@@ -746,3 +746,11 @@ def test_keys_panel_form_palette_and_notification(kinds_folder):
         assert any("finished" in n.message for n in app._notifications)
 
     drive(GearlabApp(Path("scenarios")), script)
+
+
+def test_results_lines_leave_out_the_tables_and_their_headings():
+    from gearlab.tui.app import other_lines
+
+    summary = ["gap before 10 -> after 1", "per-view gap:", "| view | gap |\n|---|---|\n| mesh | 1 |",
+               "accuracy:", "| model | acc |", "note: something"]
+    assert other_lines(summary) == ["gap before 10 -> after 1", "note: something"]

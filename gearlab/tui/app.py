@@ -452,8 +452,7 @@ class GearlabApp(App):
         status.update(Text.assemble((f"{scenario.name} ", "bold"), f"({scenario.kind}), {run.path.name}: {state}"))
         verdict.update(Text(" ".join(said)))
         verdict.display = bool(said)
-        # the table is above; summary_lines repeats it as markdown, so keep only the other lines
-        lines.update(escape("\n".join(line for line in summary if not line.lstrip().startswith("|"))))
+        lines.update(escape("\n".join(other_lines(summary))))
         self.chart_index = 0
         self.show_chart()
         if switch:
@@ -618,6 +617,15 @@ class GearlabApp(App):
         if self.process is not None:  # leave no orphan run behind; its finished units stay
             self.action_cancel()
         self.exit()
+
+
+def other_lines(summary: list[str]) -> list[str]:
+    """A kind's summary lines without its tables (the results table shows them) and without
+    the headings of those tables ('per-view gap:'), which would head nothing."""
+    rows = [line.splitlines() for line in summary]
+    flat = [line for block in rows for line in block]
+    return [line for i, line in enumerate(flat) if not line.lstrip().startswith("|")
+            and not (line.rstrip().endswith(":") and i + 1 < len(flat) and flat[i + 1].lstrip().startswith("|"))]
 
 
 def run_tui(directory: Path | str = "scenarios") -> int:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import plotext
 from rich.text import Text
 from textual.app import ComposeResult
@@ -113,12 +115,20 @@ class ChartView(Static):
         'uncorrected source_only'); several curves side by side per category."""
         names = [str(n) for n in chart.categories]
         values = [[float(v) for v in c.y] for c in curves]
+        label = chart.ylabel
+        positive = [v for row in values for v in row if v > 0]
+        if positive and min(v for row in values for v in row) >= 0 and max(positive) > 1e3 * min(positive):
+            # values over many decades (a noise gap beside a mesh gap): bars of their logarithm,
+            # or all but the largest would be invisible
+            floor = min(positive) / 10
+            values = [[math.log10(max(v, floor)) - math.log10(floor) for v in row] for row in values]
+            label = f"log10({chart.ylabel}) above {floor:.3g}"
         if len(values) == 1:
             plotext.bar(names, values[0], orientation="horizontal", color=COLORS[0], width=0.6)
         else:
             plotext.multiple_bar(names, values, labels=[c.label for c in curves], orientation="horizontal",
                                  color=[COLORS[i % len(COLORS)] for i in range(len(values))])
-        plotext.xlabel(chart.ylabel)  # horizontal bars: the values run along x
+        plotext.xlabel(label)  # horizontal bars: the values run along x
 
 
 def stage_id(stage: str) -> str:
