@@ -152,7 +152,7 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
     (lambda t: t.replace('adapter = "mmd"', 'adapter = "target_only"'), "no unsupervised variant"),
     (lambda t: t.replace('adapter = "mmd"', 'adapter = "mmd"\nsupervised = true'), "no labels a method may use"),
     (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
-    (lambda t: t.replace('preset = "B-6-ch5"', 'file = "../data/h1.zip"\nvibration = "0"'),
+    (lambda t: t.replace('preset = "B-6-ch5"', 'file = "../data/h1.zip"\nvibration = "0"\nspeed = 16.0'),
      r"\[source\] key 'file': the source is a simulator configuration"),
 ])
 def test_bad_target_is_refused_before_any_work(cli, tmp_path, change, message):
