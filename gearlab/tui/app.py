@@ -532,7 +532,7 @@ class GearlabApp(App):
     def switch_to(self, tab: str) -> None:
         self.query_one("#views", TabbedContent).active = tab
         # a narrow terminal gives the run and its results the whole width
-        if self.size.width < NARROW and tab in ("run", "results"):
+        if self.size.width < NARROW and tab in ("run", "results", "plugins"):
             self.tree.add_class("folded")
         elif tab == "scenario":
             self.tree.remove_class("folded")
@@ -597,13 +597,14 @@ class GearlabApp(App):
         registry = get_registry()
         table = self.query_one("#plugin-table", DataTable)
         rows = registry.describe()
-        # the kind column as wide as its widest entry, so that "effect (excitation, ...)" is read
-        # whole; the parameters wrap in what is left (the table scrolls sideways below 80 columns)
+        # fixed widths, the cells wrapped in them (rows as high as they need): the long kinds
+        # ("effect (excitation, breaks tooth-shift symmetry)") and the parameters are read
+        # whole, and kind, name and package fit beside the folded sidebar at 80 columns
         kinds = [kind_text(row) for row in rows]
-        table.add_column("kind", width=max(map(len, kinds), default=4))
+        table.add_column("kind", width=max(16, *(len(w) for k in kinds for w in k.split())))
         table.add_column("name", width=max((len(row["name"]) for row in rows), default=4))
         table.add_column("package", width=max((len(row["package"]) for row in rows), default=7))
-        table.add_column("parameters", width=48)
+        table.add_column("parameters", width=40)
         for kind, row in zip(kinds, rows):
             # Text, not str: a DataTable reads "[mm]" in a string as markup
             table.add_row(Text(kind), row["name"], row["package"], Text(params_text(row) or "-"), height=None)
