@@ -168,7 +168,16 @@ def test_a_condition_without_history_is_refused_and_leaves_no_run(cli, tmp_path,
     # the test records at another speed form a condition of their own, with no history
     path.write_text(path.read_text().replace('label = "fault" },', 'label = "fault", condition = "other" },'))
     code, _, err = cli("run", path, "--out", tmp_path / "runs")
-    assert code == 2 and "condition 'other'" in err and "no history record" in err
+    assert code == 2 and "condition 'other'" in err and "no history record" in err and str(path) in err
+    assert not list((tmp_path / "runs").rglob("scores.csv"))
+
+
+def test_blocks_longer_than_the_history_are_refused_and_leave_no_run(cli, tmp_path, cache):
+    path = scenario(tmp_path, methods=("matched_filter",))
+    path.write_text(path.read_text().replace("blocks = [5, 10]", "blocks = [5, 45]"))
+    code, _, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 2 and "gives 0 'record45' units" in err and "shorter [detection] blocks" in err
+    assert str(path) in err
     assert not list((tmp_path / "runs").rglob("scores.csv"))
 
 

@@ -63,6 +63,8 @@ INPUTS = ("difference", "revolution")
 FILE_KEYS = ("path", "role", "label", "condition")
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
 HISTORY_STRIDES = 10
+# Fewest history units of a kind that a threshold may be fitted to (by their quartiles).
+MIN_HISTORY_UNITS = 8
 
 TABLES = {
     "source": TRANSFER_TABLES["source"],
@@ -296,7 +298,7 @@ def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
     return out
 
 
-def read_target(target: Target, blocks, on_event) -> dict[str, dict]:
+def read_target(target: Target, blocks, on_event, where: str = "[target] key 'files'") -> dict[str, dict]:
     """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
     read, standardised against its condition's history and aligned to its first history record.
     Only the records' signals are used here (no label)."""
@@ -313,7 +315,7 @@ def read_target(target: Target, blocks, on_event) -> dict[str, dict]:
     for name, cond in conditions.items():
         if not cond["history"]:
             files = ", ".join(f.path for f, _ in cond["test"])
-            raise GearlabInputError(f"[target] key 'files': condition '{name}' ({files}) has no history record; "
+            raise GearlabInputError(f"{where}: condition '{name}' ({files}) has no history record; "
                                     "each condition needs its own healthy history (give 'condition' to group files)")
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
@@ -327,6 +329,12 @@ def read_target(target: Target, blocks, on_event) -> dict[str, dict]:
             cond[role] = aligned
         cond["history_units"] = {u: np.concatenate([unit_sets(r, blocks, True)[u] for _, r in cond["history"]])
                                  for u in unit_sets(cond["history"][0][1][:1], blocks, True)}
+        for u, X in cond["history_units"].items():
+            if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
+                longest = max(len(r) for _, r in cond["history"])
+                raise GearlabInputError(f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
+                                        f"(its longest record has {longest} revolutions); expected at least "
+                                        f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks")
         cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
     return conditions
 
@@ -355,8 +363,8 @@ def train_unit(task: tuple) -> dict:
             progress(f"epoch {epoch + 1}")
 
         model, history, _ = train_method(protocol, method, (Xs, ys), (Xv, yv),
-                                             (train, np.zeros(len(train), dtype=np.int64)), 0, 0,
-                                             StateStore(Path(states)), device, report)
+                                         (train, np.zeros(len(train), dtype=np.int64)), 0, 0,
+                                         StateStore(Path(states)), device, report)
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
     thresholds = decide(hist, false_alarm)
@@ -434,7 +442,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol: Protocol = spec["protocol"]
     with executor_for(scenario) as executor:
-        conditions = read_target(spec["target"], spec["blocks"], on_event)
+        conditions = read_target(spec["target"], spec["blocks"], on_event, f"{scenario.path}: [target] key 'files'")
         specs = {c: source_for(spec["source"], cond, spec["source_speed"]) for c, cond in conditions.items()}
         for c, cond in conditions.items():
             cond["source"] = specs[c].name
