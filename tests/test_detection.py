@@ -181,6 +181,18 @@ def test_blocks_longer_than_the_history_are_refused_and_leave_no_run(cli, tmp_pa
     assert not list((tmp_path / "runs").rglob("scores.csv"))
 
 
+def test_records_without_condition_join_the_history_of_nearest_speed():
+    from gearlab.kinds.detection import TargetFile, conditions_of
+
+    files = [TargetFile(p, p, role, "x", cond) for p, role, cond in [
+        ("h30", "history", ""), ("h30b", "history", ""), ("h40", "history", ""), ("t29", "test", ""),
+        ("t41", "test", ""), ("t50", "test", ""), ("named", "test", "high load")]]
+    speeds = {"h30": 29.9, "h30b": 29.4, "h40": 39.8, "t29": 29.44, "t41": 40.5, "t50": 49.7, "named": 29.9}
+    got = conditions_of(files, speeds)
+    assert got == {"h30": "30 Hz", "h30b": "30 Hz", "t29": "30 Hz", "h40": "40 Hz", "t41": "40 Hz",
+                   "t50": "50 Hz", "named": "high load"}
+
+
 def test_without_methods_every_label_free_adapter_runs(tmp_path):
     from gearlab.registry import get_registry
     from gearlab.scenario import load_scenario

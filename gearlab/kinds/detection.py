@@ -15,8 +15,8 @@ the method's model and threshold are fixed, and their labels only when the figur
     [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold)
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
 
-Records are grouped by operating *condition*: the file's ``condition`` when given, else its
-tacho speed to the nearest hertz. Each condition has its own history: standardisation
+Records are grouped by operating *condition*: the file's ``condition`` when given, else by
+tacho speed (``conditions_of``: within 5 %, a test record with the history of nearest speed). Each condition has its own history: standardisation
 (eq. 2.112), the alignment of records that start at different tacho marks, the methods'
 calibration and thresholds. A condition with test records but no history is refused.
 
@@ -65,6 +65,8 @@ FILE_KEYS = ("path", "role", "label", "condition")
 HISTORY_STRIDES = 10
 # Fewest history units of a kind that a threshold may be fitted to (by their quartiles).
 MIN_HISTORY_UNITS = 8
+# Records without a 'condition' whose tacho speeds lie within this fraction share a history.
+SPEED_GROUP = 0.05
 
 TABLES = {
     "source": TRANSFER_TABLES["source"],
@@ -276,8 +278,28 @@ def quick(scenario: Scenario) -> None:
 # --- the records -------------------------------------------------------------------------
 
 
-def condition_of(f: TargetFile, speed_hz: float) -> str:
-    return f.condition or f"{speed_hz:.0f} Hz"
+def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str, str]:
+    """{file path: condition}: the file's own 'condition', else its speed group. History records
+    without one are grouped by tacho speed (a group spans SPEED_GROUP of its slowest record's
+    speed; named by its median to 1 Hz); a test record joins the group of nearest speed, or one
+    of its own (which has no history) when none lies within SPEED_GROUP of it."""
+    out = {f.path: f.condition for f in files if f.condition}
+    groups: list[list[float]] = []
+    for v in sorted(speeds[f.path] for f in files if not f.condition and f.role == "history"):
+        if groups and v <= groups[-1][0] * (1 + SPEED_GROUP):
+            groups[-1].append(v)
+        else:
+            groups.append([v])
+    centres = [float(np.median(g)) for g in groups]
+    for f in files:
+        if f.condition:
+            continue
+        v = speeds[f.path]
+        near = min(range(len(centres)), key=lambda i: abs(centres[i] - v)) if centres else None
+        if near is not None and abs(centres[near] - v) <= SPEED_GROUP * centres[near]:
+            v = centres[near]
+        out[f.path] = f"{v:.0f} Hz"
+    return out
 
 
 def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.ndarray:
@@ -304,14 +326,18 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
     Only the records' signals are used here (no label)."""
     conditions: dict[str, dict] = {}
     on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
+    records = {}
     for i, f in enumerate(target.files):
-        rec = read_record(f.resolved, vibration=target.vibration, tacho=target.tacho,
-                          pulses_per_rev=target.pulses_per_rev, sensitivity=target.sensitivity, fs=target.fs,
-                          transient=target.transient)
-        cond = conditions.setdefault(condition_of(f, rec.speed_hz), {"history": [], "test": [], "speeds": {}})
-        cond[f.role].append((f, rec.revolutions))
-        cond["speeds"][f.path] = rec.speed_hz
+        records[f.path] = read_record(f.resolved, vibration=target.vibration, tacho=target.tacho,
+                                      pulses_per_rev=target.pulses_per_rev, sensitivity=target.sensitivity,
+                                      fs=target.fs, transient=target.transient)
         on_event(Event("advance", stage="records", done=i + 1, total=len(target.files)))
+    speeds = {p: r.speed_hz for p, r in records.items()}
+    named = conditions_of(list(target.files), speeds)
+    for f in target.files:
+        cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}})
+        cond[f.role].append((f, records[f.path].revolutions))
+        cond["speeds"][f.path] = speeds[f.path]
     for name, cond in conditions.items():
         if not cond["history"]:
             files = ", ".join(f.path for f, _ in cond["test"])
