@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from gearlab.data.builder import steady_revolution, whole_steps_rate
+from gearlab.data.builder import build_dataset, steady_revolution, whole_steps_rate
 from gearlab.data.spec import PHM09_FS, dataset_preset
 from gearlab.dynamics.newmark import Simulator, _integrate, _integrate_meshes
 from gearlab.physics.faults import place_fault
@@ -133,3 +133,12 @@ def test_rig_dataset_presets():
         model, pair, teeth = spec.check_model()
         assert (model.name, pair.Z1, pair.Z2, spec.channel, spec.speed_hz) == ("two_stage", 32, 96, "casing_x", speed)
         assert len(teeth) == 32 and spec.faults[0][0] == "chip"
+
+
+@pytest.mark.parametrize("speed", [35.0, 45.0, 50.0])
+def test_the_rig_builds_at_the_other_speeds_of_the_records(speed):
+    """The PHM 2009 rig ran at 30-50 Hz; at 35 Hz a revolution is 1920 steps, where 2 pi n / n
+    once rounded below a whole turn and the resampling found no complete revolution."""
+    spec = dataset_preset("phm09-30").with_(speed_hz=speed, teeth=(1,), faults=(("chip", (20,)),), healthy=1)
+    data = build_dataset(spec)
+    assert data.X.shape == (2, 4096) and np.isfinite(data.X).all()

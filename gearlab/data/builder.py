@@ -115,6 +115,7 @@ def angle_samples(periodic: np.ndarray, points: int = POINTS, angle: np.ndarray 
     n = len(periodic)
     if angle is None:
         theta = 2 * np.pi * np.arange(n + 1) / n
+        theta[-1] = 2 * np.pi  # exactly one turn: 2 pi n / n rounds below 2 pi for some n (1920)
     else:
         theta = np.append(np.asarray(angle, dtype=float) - angle[0], 2 * np.pi)  # angle[0] is 0 up to rounding
     return resample_revolutions(np.append(periodic, periodic[0]), theta, points)[0]
