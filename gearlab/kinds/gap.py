@@ -39,7 +39,7 @@ from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import Event, RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of
-from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
+from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, simulated_spec, sized
 from .transfer import MAX_SEED, TRAINING, method as transfer_method, train_unit
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
@@ -112,12 +112,9 @@ TABLES = {
 def build(scenario: Scenario) -> dict:
     t = scenario.tables
     path = scenario.path
-    source = dataset_spec(t["source"], location(path, "source"), path.parent)
-    if not isinstance(source, DatasetSpec):
-        raise GearlabInputError(f"{location(path, 'source', 'file')}: the source is a simulator configuration; "
-                                "give a 'preset' (measured data can only be the [target])")
     # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
-    target = target_of(t["target"], location(path, "target"), getattr(scenario, "base", None) or path.parent)
+    source = simulated_spec(t["source"], location(path, "source"), scenario.base)
+    target = target_of(t["target"], location(path, "target"), scenario.base)
     _, pair, _ = source.check_model(location(path, "source"))
     check_sampling(source, pair.Z1, location(path, "source"))
     if isinstance(target, DatasetSpec):
