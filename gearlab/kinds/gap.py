@@ -113,8 +113,9 @@ def build(scenario: Scenario) -> dict:
     t = scenario.tables
     path = scenario.path
     # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
-    source = simulated_spec(t["source"], location(path, "source"), scenario.base)
-    target = target_of(t["target"], location(path, "target"), scenario.base)
+    base = scenario.base or path.parent
+    source = simulated_spec(t["source"], location(path, "source"), base)
+    target = target_of(t["target"], location(path, "target"), base)
     _, pair, _ = source.check_model(location(path, "source"))
     check_sampling(source, pair.Z1, location(path, "source"))
     if isinstance(target, DatasetSpec):
