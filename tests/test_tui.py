@@ -594,7 +594,7 @@ def test_runs_are_found_where_gearlab_run_puts_them_whatever_the_folder(tmp_path
         node = node_named(app, "stiff.toml")
         assert [c.data.path for c in node.children] == [by_cli]
         await select(pilot, "stiff.toml")
-        assert str(project / "my_runs" / "stiff") in text_of(app, "#scenario-status")
+        assert f"1 past run(s) in {Path('my_runs') / 'stiff'};" in text_of(app, "#scenario-status")
         await pilot.press("k")
         await until(pilot, lambda: app.process is not None, 30)
         await until(pilot, lambda: app.process is None)

@@ -236,7 +236,7 @@ class GearlabApp(App):
             runs = f"{len(entry.runs)} past run(s)" if entry.runs else "no past runs"
             status.update(Text.assemble(("✓ valid", "bold green"), f"  {s.name} ({s.kind}): {s.description}\n",
                                         KINDS[s.kind].describe(s),
-                                        f"\n{runs} in {runs_base(s, self.cwd) / s.name}; r run, k quick run, "
+                                        f"\n{runs} in {self._shown(runs_base(s, self.cwd) / s.name)}; r run, k quick run, "
                                         "f run with options"))
             marked = set()
         else:
@@ -246,6 +246,10 @@ class GearlabApp(App):
         toml.update(Syntax(text, "toml", line_numbers=True, highlight_lines=marked, word_wrap=True))
         if switch:
             self.switch_to("scenario")
+
+    def _shown(self, path: Path) -> Path:
+        """A path as short as it is clear: relative to the folder the TUI started in when inside it."""
+        return path.relative_to(self.cwd) if path.is_relative_to(self.cwd) else path
 
     # ------------------------------------------------------------------ runs
     def action_run(self, quick: bool) -> None:
