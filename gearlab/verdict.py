@@ -59,25 +59,32 @@ THESIS = {
 }
 
 
-def experiment(summary: Mapping) -> tuple[str, str, str, dict] | None:
-    """The thesis experiment a transfer run repeats: its domains are the chapter-5 presets,
-    complete (the thesis's faults, teeth and sizes), and the target carries Laplace noise at
-    0 dB as in thesis 5.4.1; else None (a reference row would compare unlike things)."""
+# the fields that make a dataset what it is (its name and domain label are free to change)
+_DATASET_FIELDS = ("model", "preset", "channel", "speed_hz", "load_nm", "faults", "teeth", "duplicates", "healthy",
+                   "revolutions", "tsa", "fs", "effects")
+
+
+def preset_of(side: Mapping) -> str | None:
+    """The chapter-5 dataset preset a summary's [source] or [target] is, complete and unchanged
+    but for its name and noise; None for anything else (a reduced or measured dataset)."""
     from .data.spec import DATASET_PRESETS
 
+    for name, preset in DATASET_PRESETS.items():
+        if name.endswith("-ch5") and all(_plain(getattr(preset, key)) == _plain(side.get(key))
+                                         for key in _DATASET_FIELDS):
+            return name
+    return None
+
+
+def experiment(summary: Mapping) -> tuple[str, str, str, dict] | None:
+    """The thesis experiment a transfer run repeats: its domains are the chapter-5 presets,
+    complete (the thesis's faults, teeth and sizes), the source clean and the target with
+    Laplace noise at 0 dB as in thesis 5.4.1; else None (a reference row would compare
+    unlike things)."""
     source, target = summary.get("source") or {}, summary.get("target") or {}
-    found = THESIS.get((source.get("domain"), target.get("domain")))
-    if found is None:
-        return None
-    for side in (source, target):
-        preset = DATASET_PRESETS.get(side.get("domain"))
-        if preset is None:
-            return None
-        for key in ("faults", "teeth", "healthy", "model", "channel", "duplicates", "revolutions"):
-            if _plain(getattr(preset, key)) != _plain(side.get(key)):
-                return None
+    found = THESIS.get((preset_of(source), preset_of(target)))
     noise = target.get("noise") or {}
-    if source.get("noise") or noise.get("kind") != "laplace" or float(noise.get("snr_db", 1.0)) != 0.0:
+    if found is None or source.get("noise") or noise.get("kind") != "laplace" or float(noise.get("snr_db", 1)) != 0.0:
         return None
     return found
 

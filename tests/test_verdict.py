@@ -27,15 +27,14 @@ def cell(mean, std=1.0, n=3):
 
 
 def summary_b(table, ks=(0, 1)):
-    """A transfer summary on Experiment B's complete domains (as expB.toml)."""
-    source, target = DATASET_PRESETS["B-6-ch5"], DATASET_PRESETS["B-8-ch5"]
-    side = lambda spec, noise: {"domain": spec.domain, "faults": [[f, list(s)] for f, s in spec.faults],  # noqa: E731
-                                "teeth": spec.teeth, "healthy": spec.healthy, "model": spec.model,
-                                "channel": spec.channel, "duplicates": spec.duplicates,
-                                "revolutions": spec.revolutions, "noise": noise}
-    return {"kind": "transfer", "scenario": "expB", "methods": list(table), "table": table,
-            "protocol": {"ks": list(ks), "repetitions": 3},
-            "source": side(source, None), "target": side(target, {"kind": "laplace", "snr_db": 0.0, "seed": 1})}
+    """A transfer summary on Experiment B's complete domains, the target renamed (as expB.toml)."""
+    from dataclasses import asdict
+
+    source = asdict(DATASET_PRESETS["B-6-ch5"])
+    target = asdict(DATASET_PRESETS["B-8-ch5"].with_(name="B-8-ch5-laplace", domain="B-8-ch5-laplace"))
+    target["noise"] = {"kind": "laplace", "snr_db": 0.0, "seed": 1}
+    return json.loads(json.dumps({"kind": "transfer", "scenario": "expB", "methods": list(table), "table": table,
+                                  "protocol": {"ks": list(ks), "repetitions": 3}, "source": source, "target": target}))
 
 
 # ----------------------------------------------------------------------------- transfer verdict
@@ -92,8 +91,22 @@ def test_experiment_b_gets_the_thesis_table_5_5_as_reference_rows():
            "with 82.88 %" in line
     # a reduced dataset is not the thesis's experiment: no reference
     reduced = summary_b(table)
-    reduced["target"]["teeth"] = [1, 2, 3]
+    reduced["target"]["healthy"] = 9
     assert experiment(reduced) is None and "thesis" not in transfer_table(reduced)
+
+
+@pytest.mark.parametrize("name,table", [("expA", "Table 5.4"), ("expA_thesis", "Table 5.4"), ("expB", "Table 5.5"),
+                                        ("expB_thesis", "Table 5.5"), ("quick", "Table 5.5")])
+def test_the_shipped_chapter_5_scenarios_get_their_thesis_table(name, table):
+    from dataclasses import asdict
+
+    from gearlab.scenario import load_scenario
+
+    spec = load_scenario(HERE.parent / "scenarios" / f"{name}.toml").spec
+    summary = json.loads(json.dumps({side: asdict(spec[side]) for side in ("source", "target")}))
+    assert experiment(summary)[1] == table
+    summary["target"]["teeth"] = [1, 2]  # reduced: not the thesis's experiment
+    assert experiment(summary) is None
 
 
 def test_the_thesis_values_are_those_of_its_text():
