@@ -502,8 +502,8 @@ def test_an_internal_error_of_the_app_exits_1(cli, folder, monkeypatch):
 
 @pytest.fixture
 def two_with_runs(folder, tmp_path):
-    """stiff.toml with two past runs, and a second valid scenario, other.toml, after it."""
-    (folder / "other.toml").write_text(STIFFNESS.replace('name = "stiff"', 'name = "other"')
+    """stiff.toml with two past runs, and a second valid scenario, tail.toml, after it."""
+    (folder / "tail.toml").write_text(STIFFNESS.replace('name = "stiff"', 'name = "other"')
                                        .replace("{runs}", str(tmp_path / "runs")))
     for stamp in ("20260101-000000-000000", "20260102-000000-000000"):
         run = tmp_path / "runs" / "stiff" / stamp
@@ -530,17 +530,17 @@ def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_
         app = pilot.app
         tree = app.query_one("#browser", Tree)
         await unfold(pilot, "stiff.toml")
-        await select(pilot, "other.toml")  # below the two runs of the unfolded stiff.toml
+        await select(pilot, "tail.toml")  # below the two runs of the unfolded stiff.toml
         await pilot.press("f5")
         await pilot.pause()
-        assert tree.cursor_node.data.path.name == "other.toml"
+        assert tree.cursor_node.data.path.name == "tail.toml"
         assert node_named(app, "stiff.toml").is_expanded  # unfolded stays unfolded
         await pilot.press("r")
         await until(pilot, lambda: app.process is not None, 30)
         assert app.run_scenario.name == "other"
         await until(pilot, lambda: app.process is None)
-        # the run's end rescans: still on other.toml, and r runs other again
-        assert tree.cursor_node.data.path.name == "other.toml"
+        # the run's end rescans: still on tail.toml, and r runs other again
+        assert tree.cursor_node.data.path.name == "tail.toml"
 
     drive(GearlabApp(two_with_runs), script, size)
 
@@ -555,7 +555,7 @@ def test_u_resumes_only_the_highlighted_run(two_with_runs, tmp_path, size):
         await pilot.press("enter")  # opens the older unfinished run
         await pilot.pause()
         assert app.opened.path.name == "20260101-000000-000000"
-        await select(pilot, "other.toml")  # the cursor moves away: u must not resume what was opened
+        await select(pilot, "tail.toml")  # the cursor moves away: u must not resume what was opened
         await pilot.press("u")
         await pilot.pause()
         assert app.process is None
