@@ -120,6 +120,17 @@ def test_prepare_takes_references_gain_and_noise_level_from_the_training_arrays(
     assert thesis.noise_law is None and np.array_equal(thesis.source(Xs), Xs) and np.array_equal(thesis.target(Xt), Xt)
 
 
+def test_a_reference_of_zero_leaves_the_gain_at_one():
+    """Inputs whose synchronous signal is already removed (a difference signal) have a zero
+    healthy reference; the gain must not become the ratio of two round-off levels."""
+    Xt, _, _, _ = revolutions(60, 0, 0.0, "laplace", seed=13, healthy_level=0.0)
+    Xs, ys, _, _ = revolutions(80, 40, 3.0, "gaussian", seed=14, healthy_level=0.0)
+    Xs -= np.median(Xs[ys == 0], axis=0)  # exactly zero reference
+    Xs[ys == 0] = 0.0
+    inputs = prepare(Calibration(residual=True, source_noise="auto"), Xs, ys, Xt, None)
+    assert inputs.gain == 1.0 and np.isfinite(inputs.source(Xs)).all()
+
+
 def test_a_few_unlabelled_faults_in_the_history_do_not_move_the_noise_level():
     Xt, yt, _, _ = revolutions(120, 16, 8.0, "laplace", seed=7)
     clean, _, _, _ = revolutions(120, 0, 0.0, "laplace", seed=7)

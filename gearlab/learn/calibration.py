@@ -134,9 +134,14 @@ def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarra
         raise GearlabInputError("calibration: the target training set needs at least 2 healthy revolutions")
     if not (ys == 0).any():
         raise GearlabInputError("calibration: the source training set has no healthy revolutions")
-    h_s = np.median(np.asarray(Xs, dtype=np.float64)[ys == 0], axis=0)
+    healthy_s = np.asarray(Xs, dtype=np.float64)[ys == 0]
+    h_s = np.median(healthy_s, axis=0)
     h_t = np.median(history, axis=0)
-    gain = _rms(h_t) / max(_rms(h_s), 1e-12)
+    # The references' RMS measure the two domains' signal levels; a reference that is (almost)
+    # zero (an input that already removes the synchronous signal, e.g. a TSA difference signal)
+    # measures nothing, and the gain is left at 1 rather than blown up by the ratio.
+    measurable = _rms(h_s) > 1e-3 * _rms(healthy_s) and _rms(h_t) > 1e-3 * _rms(history)
+    gain = _rms(h_t) / _rms(h_s) if measurable else 1.0
     residuals = history - h_t
     law, level = None, 0.0
     if settings.source_noise != "off":

@@ -349,7 +349,8 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
         on_epoch=on_epoch,
     )
     with torch.no_grad():
-        latent = {"source": embed(net, Xs_in, device).cpu().numpy(), "target": embed(net, Xt_in, device).cpu().numpy()}
+        latent = {"source": embed(net, Xs_in, device).cpu().numpy(), "target": embed(net, Xt_in, device).cpu().numpy(),
+                  "source_label": ys[take], "target_label": yt}  # the maps mark the classes too
     model = _calibrated(net, inputs, Xt, yt if method.supervised else None, source_val, device)
     return model, history, {"latent_dim": int(net.latent_dim), "_latent": latent,
                             "source_val_accuracy": 100.0 * accuracy(net, *source_val, device)}
