@@ -27,6 +27,7 @@ import torch
 
 from ..errors import GearlabInputError
 from ..registry import get_registry
+from .bounds import detection_at
 from .calibration import THESIS, Calibration, calibrate, prepare
 from .networks import DEFAULT_NETWORK, build_network
 from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device, predict
@@ -262,19 +263,20 @@ def class_names(dataset) -> list[str] | None:
     return list(names) if names else None
 
 
-def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, names: list[str] | None = None,
-                    false_alarm: float = 0.01) -> dict:
+def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, names: list[str] | None = None) -> dict:
     """Measures that do not hinge on the test set's healthy share: the balanced accuracy (%) of
     the method's own calls, and the share (%) of faults, per fault class, found at the threshold
-    that lets *false_alarm* of the test set's healthy revolutions through (an evaluation with
-    the test labels, after the model is fixed; the method never sees it)."""
+    that lets 1 % of the test set's healthy revolutions through (an evaluation with the test
+    labels, after the model is fixed; the method never sees it)."""
     called = score > 0
     healthy, faulty = y == 0, y == 1
     balanced = 50.0 * (float((~called[healthy]).mean()) + float(called[faulty].mean()))
-    threshold = np.quantile(score[healthy], 1.0 - false_alarm)
-    per_class = {(names[int(c)] if names and int(c) < len(names) else str(int(c))):
-                 100.0 * float((score[label == c] > threshold).mean()) for c in np.unique(label[faulty])}
-    return {"balanced_accuracy": balanced, "detection_at_1pct": 100.0 * float((score[faulty] > threshold).mean()),
+    per_class = {}
+    for c in np.unique(label[faulty]):
+        name = names[int(c)] if names and int(c) < len(names) else str(int(c))
+        keep = healthy | (label == c)
+        per_class[name] = detection_at(score[keep], y[keep], 0.01)
+    return {"balanced_accuracy": balanced, "detection_at_1pct": detection_at(score, y, 0.01),
             "detection_at_1pct_by_class": per_class}
 
 
