@@ -8,6 +8,7 @@ stand-in sees exactly what the real one would."""
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import json
 import math
@@ -52,8 +53,8 @@ class Spy:
     def __init__(self):
         self.calls = []
 
-    def __call__(self, source, target_X, settings, candidates):
-        self.calls.append((source, np.array(target_X), dict(settings), tuple(candidates)))
+    def __call__(self, source, target_X, settings, candidates, chain=None, max_order=0):
+        self.calls.append((source, np.array(target_X), dict(settings), tuple(candidates), chain, max_order))
         return fake_result(significant=False, unexplained=True)
 
 
@@ -76,7 +77,7 @@ def test_the_diagnosis_never_receives_the_generators_choices(kind, tmp_path, mon
     folder = tmp_path / "trial"
     record = bench.trial_task(bench.TrialTask(trial, SOURCE, SETTINGS, str(folder), 12))
     assert record["kind"] == kind and len(spy.calls) == 1
-    source, X, settings, candidates = spy.calls[0]
+    source, X, settings, candidates, chain, max_order = spy.calls[0]
 
     # 1. the diagnosing entry point takes the file, the source, the candidate names and the settings: no more
     assert list(inspect.signature(bench.diagnose_file).parameters) == ["path", "source", "candidates", "settings"]
@@ -85,11 +86,16 @@ def test_the_diagnosis_never_receives_the_generators_choices(kind, tmp_path, mon
     # 3. the candidate list is the library, less the withheld effect (by design: that is the out-of-library case)
     assert candidates == tuple(e for e in LIBRARY if e != trial.withheld)
     # 4. the target reaches it only as the revolutions the importer reads from the written file ...
-    np.testing.assert_array_equal(X, bench.import_target(folder / "target.npz"))
-    with np.load(folder / "target.npz") as f:
-        assert sorted(f.files) == sorted([bench.VIBRATION, bench.TACHO, bench.LABEL, "fs"])
+    # (with its measurement chain: rate, tacho speed, start fractions, step -- read off the same file)
+    path = next(folder.glob("target.*"))
+    rows, read_chain, read_order = bench.import_target(path)
+    np.testing.assert_array_equal(X, rows)
+    assert chain == read_chain and max_order == read_order
+    if path.suffix == ".npz":
+        with np.load(path) as f:
+            assert sorted(f.files) == sorted([bench.VIBRATION, bench.TACHO, bench.LABEL, "fs"])
     # ... and no hidden parameter value appears anywhere in what it received
-    payload = pickle.dumps((source, settings, candidates)) + X.tobytes()
+    payload = pickle.dumps((source, settings, candidates, chain, max_order)) + X.tobytes()
     hidden_values = [v for _, params in trial.hidden for _, v in params if isinstance(v, float) and v != 0.0]
     defaults = {p.default for e in LIBRARY for p in get_registry().get("effect", e).params}
     drawn = [v for v in hidden_values if v not in defaults]  # a default is no secret (nor drawn)
@@ -147,14 +153,57 @@ def test_trials_are_seeded_and_follow_the_documented_mix():
 
 
 def test_a_written_target_round_trips_through_the_importer(tmp_path):
-    trial = trial_of("single")
+    trial = dataclasses.replace(trial_of("single"), acquisition=None)  # the angle-domain record
     path = bench.write_target(trial, SOURCE, tmp_path, 12)
     direct = healthy_rows(build_dataset(bench.target_spec(trial, SOURCE, 12)))
-    imported = bench.import_target(path)
+    imported, chain, _ = bench.import_target(path)
+    assert chain is None
     assert imported.shape == direct.shape == (12, 4096)
     np.testing.assert_allclose(imported, direct, rtol=0, atol=2e-6 * np.abs(direct).max())
     # the target is its own noise realisation, not the source's
     assert bench.target_spec(trial, SOURCE, 12).noise.seed != SOURCE.noise.seed
+
+
+@pytest.mark.parametrize("fmt", bench.FORMATS)
+def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
+    """Pipeline parity (issue 15): a target with no effect, written at a rate where revolutions start
+    between samples, with its tacho 7-200 degrees off the simulation's zero and (int16) quantised,
+    imported -- against the source made through the same chain -- shows no significant gap, while
+    the source without the chain shows a large one."""
+    from gearlab.gap.diagnose import Rows, band_limited
+    from gearlab.gap.stats import gap_report
+
+    acquisition = bench.Acquisition({"npz": 0.43, "npz-int16": 0.33, "wav": 0.61}[fmt],
+                                    math.radians({"npz": 7.0, "npz-int16": 90.0, "wav": 200.0}[fmt]), fmt)
+    trial = bench.Trial(0, "null", (), None, tuple(LIBRARY), 11, acquisition)
+    path = bench.write_target(trial, SOURCE, tmp_path, 60)
+    rows, chain, max_order = bench.import_target(path)
+    assert len(rows) >= 58 and 0 < max_order < 2048
+    assert len(set(chain.fractions)) > 10  # revolutions start between samples
+    assert (chain.step > 0) == (fmt != "npz")  # integer formats are quantised, at a known step
+    target = band_limited(rows, max_order)
+    search = SOURCE.with_(healthy=40, seed=123)
+    pair = search.check_model()[1]
+    matched = gap_report(Rows(max_order, dataclasses.replace(chain, reference=target.mean(axis=0)))(search), target,
+                         pair, seed=0, bootstrap=0, permutations=200)
+    plain = gap_report(Rows(max_order)(search), target, pair, seed=0, bootstrap=0, permutations=200)
+    assert not matched["significant"], matched["p_value"]
+    assert plain["significant"] and plain["total"]["gap"] > 100 * matched["total"]["gap"]
+
+
+def test_the_tacho_offset_is_found_between_pitch_aliases():
+    """A healthy gear's revolution nearly repeats every tooth pitch: the offset must be the true
+    one, not a pitch away (the mesh orders alone cannot tell them apart)."""
+    from gearlab.data.chain import fit_offset
+    from gearlab.gap.diagnose import source_rows
+
+    clean = source_rows(SOURCE.with_(healthy=1, noise=None))[0]
+    z1 = SOURCE.check_model()[1].Z1
+    for degrees in (7.0, 123.4, 301.0):
+        psi = math.radians(degrees)
+        m = np.arange(2049)
+        turned = np.fft.irfft(np.fft.rfft(clean) * np.exp(2j * np.pi * m * psi / (2 * np.pi)), n=4096)
+        assert math.degrees(fit_offset(clean, turned, z1)) == pytest.approx(degrees, abs=0.01)
 
 
 # --- scoring -----------------------------------------------------------------------------------------
@@ -264,7 +313,7 @@ def tiny(trials=3, library='["sensor_noise", "interference_tone", "tooth_frictio
 
 
 def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, monkeypatch):
-    def stand_in(source, target_X, settings, candidates):  # names the first candidate when the target is noisy
+    def stand_in(source, target_X, settings, candidates, chain=None, max_order=0):  # names the first candidate when the target is noisy
         return fake_result([candidates[0]], 10.0, 2.0, params={candidates[0]: {"snr_db": 5.0}})
 
     monkeypatch.setattr(bench, "_diagnose", stand_in)
@@ -279,8 +328,9 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     assert summary["trials"] == 4 and summary["by_kind"] == {"single": 1, "pair": 1, "null": 1, "withheld": 1}
     assert (run_dir / "report.html").exists() and (run_dir / "figures" / "gap_benchmark.png").exists()
     assert len((run_dir / "results.jsonl").read_text().splitlines()) == 4
-    assert sorted(p.name for p in (run_dir / "targets" / "trial_000").iterdir()) == \
-        ["answers.json", "diagnosis.json", "target.npz"]
+    names = sorted(p.name for p in (run_dir / "targets" / "trial_000").iterdir())
+    assert names[:3] == ["answers.json", "calibration.json", "diagnosis.json"] and len(names) == 4
+    assert names[3] in ("target.npz", "target.wav")
     assert "top-1" in out
     # resume: nothing left to do, nothing recomputed
     monkeypatch.setattr(bench, "_diagnose", lambda *a: pytest.fail("a finished trial was diagnosed again"))

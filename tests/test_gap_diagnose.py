@@ -72,7 +72,8 @@ def test_the_search_score_cannot_be_lowered_by_noise_the_target_lacks():
 
 def test_diagnose_gets_only_the_target_rows():
     # The diagnosis must not be able to learn the target's making: no spec, no dataset.
-    assert list(inspect.signature(diagnose).parameters) == ["source", "target_X", "settings", "executor", "on_event"]
+    assert list(inspect.signature(diagnose).parameters) == ["source", "target_X", "settings", "executor", "on_event",
+                                                            "chain"]
 
 
 # --- identification -------------------------------------------------------------------------------

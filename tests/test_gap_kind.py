@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 from tiny import EXECUTION, domains, schedule
 
+from gearlab.engine import load_scenario, run_scenario
 from gearlab.gap.stats import gap_report
-from gearlab.kinds import KINDS, gap
-from gearlab.runs import RunDir, run_scenario
-from gearlab.scenario import load_scenario
+from gearlab.kinds import SCENARIO_KINDS, gap
+from gearlab.runs import RunDir
 
 TINY = """\
 [scenario]
@@ -70,7 +70,7 @@ def fake_module(calls: list) -> types.ModuleType:
         reference: str = "source"
         max_order: int = 0
 
-    def diagnose(source, target_X, settings, executor=None, on_event=lambda e: None):
+    def diagnose(source, target_X, settings, executor=None, on_event=lambda e: None, chain=None):
         calls.append({"source": source, "target_X": target_X, "settings": settings})
         rng = np.random.default_rng(0)
         scale = target_X.std()
@@ -139,7 +139,7 @@ def records(run: Path) -> dict[str, dict]:
 
 
 def test_registered_and_validates(tiny, cli):
-    assert KINDS["gap"] is gap
+    assert SCENARIO_KINDS["gap"] is gap
     code, out, err = cli("validate", tiny)
     assert code == 0, err
     assert "kind gap" in out and "2 candidate effects" in out

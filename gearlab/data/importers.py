@@ -74,6 +74,7 @@ from ..signals import (
     unwrap_tacho,
 )
 from ..signals.checks import check_int, check_positive, fmt_hz
+from .chain import FRACTIONS_KEPT
 from .spec import Dataset
 
 __all__ = ["FORMATS", "MeasuredSpec", "import_measured", "read_channels"]
@@ -151,6 +152,12 @@ class MeasuredSpec:
     points:      samples per revolution in the angle domain
     transient:   "stats" drops a start-up transient (steady_start_stats), "none" keeps all
     rtol:        tolerance of the transient detection (default that of steady_start_stats)
+    sensitivity: the sensor's output per m/s² in the record's (volt) units, SI: V/(m/s²) ("10 mV/g"
+                 in a scenario); None: not given
+    gain:        volts per file unit: per count for integer arrays, at full scale for integer WAV
+                 (read as ±1); None: not given (1). The vibration in m/s² is file value × gain /
+                 sensitivity; with neither given the record's units are unknown and its values are
+                 taken as m/s² (meta "units" says so, and the gap kind warns)
     """
 
     name: str
@@ -165,13 +172,28 @@ class MeasuredSpec:
     points: int = POINTS
     transient: str = "stats"
     rtol: float | None = None
+    sensitivity: float | None = None
+    gain: float | None = None
 
     def canonical(self) -> dict:
-        """The options that shape the data: not the name (a label) nor where the file lies."""
+        """The options that shape the data: not the name (a label) nor where the file lies (nor the
+        units when not given: records imported before they existed keep their cache keys)."""
         d = asdict(self)
         d.pop("name")
         d.pop("path")
+        for key in ("sensitivity", "gain"):
+            if d[key] is None:
+                d.pop(key)
         return d
+
+    @property
+    def scale(self) -> float:
+        """m/s² per file unit: gain / sensitivity (1 for what is not given)."""
+        return (1.0 if self.gain is None else self.gain) / (1.0 if self.sensitivity is None else self.sensitivity)
+
+    @property
+    def units_known(self) -> bool:
+        return self.sensitivity is not None or self.gain is not None
 
     def key(self) -> str:
         """Cache key: sha256 over the file's bytes, its format and the options (24 hex chars)."""
@@ -218,6 +240,10 @@ class MeasuredSpec:
                 check_positive(self.fs, "sampling rate fs", "Hz")
             if self.rtol is not None:
                 check_positive(self.rtol, "rtol (transient detection)")
+            if self.sensitivity is not None:
+                check_positive(self.sensitivity, "sensitivity (V per m/s²)", "V/(m/s²)")
+            if self.gain is not None:
+                check_positive(self.gain, "gain (V per file unit)", "V")
             check_int(self.points, "points per revolution", minimum=2)
         names = self.class_names
         if (isinstance(names, str) or not isinstance(names, Sequence) or not names
@@ -297,6 +323,8 @@ class _Contents:
     available: list[str]
     rates: list[tuple[str, object]] = field(default_factory=list)
     times: list[tuple[str, object]] = field(default_factory=list)
+    # the value step of channels a reader has already turned from integers to floats (WAV PCM)
+    steps: dict[str, float] = field(default_factory=dict)
 
 
 def _text_array(values: np.ndarray) -> np.ndarray:
@@ -556,16 +584,19 @@ def _read_wav(path: Path, names: Sequence[str]) -> _Contents:
     data = np.asarray(data)
     if data.ndim == 1:
         data = data[:, None]
+    step = 0.0
     if data.dtype.kind == "u":  # 8-bit PCM is unsigned around 128
         half = 2.0 ** (8 * data.dtype.itemsize - 1)
-        data = (data.astype(np.float64) - half) / half
+        data, step = (data.astype(np.float64) - half) / half, 1.0 / half
     elif data.dtype.kind == "i":  # 24-bit PCM arrives left-justified in int32
-        data = data.astype(np.float64) / 2.0 ** (8 * data.dtype.itemsize - 1)
+        step = 1.0 / 2.0 ** (8 * data.dtype.itemsize - 1)
+        data = data.astype(np.float64) * step
     if data.ndim != 2 or data.shape[1] == 0:
         raise ValueError("it holds no channel; expected at least one")
     channels = [str(i) for i in range(data.shape[1])]
     found = {n: data[:, int(n)] for n in dict.fromkeys(names) if n in channels}
-    return _Contents(found, channels, rates=[("the WAV header", np.asarray(rate))])
+    steps = {n: step for n in found} if step else {}
+    return _Contents(found, channels, rates=[("the WAV header", np.asarray(rate))], steps=steps)
 
 
 def _is_mat73(path: Path) -> bool:
@@ -1143,6 +1174,17 @@ def _steady_start(revs: np.ndarray, labels: np.ndarray | None, spec: MeasuredSpe
     return start, "stats"
 
 
+def units_note(spec: MeasuredSpec, fmt: str, integer: bool) -> str:
+    """What the record's values were taken as: m/s² through the sensitivity and gain, or -- neither
+    given -- "unknown" (one line; the gap kind warns with it)."""
+    if spec.units_known:
+        return (f"m/s² = value x gain {1.0 if spec.gain is None else spec.gain:g} V / sensitivity "
+                f"{1.0 if spec.sensitivity is None else spec.sensitivity:g} V/(m/s²)")
+    what = ("integer counts (full-scale fractions for WAV)" if integer else "numbers")
+    return (f"unknown: the {fmt} record holds {what} with no sensitivity or gain given; its values are taken "
+            "as m/s² (set sensitivity = '10 mV/g' and, for integer data, gain = volts per count)")
+
+
 def import_measured(spec: MeasuredSpec) -> Dataset:
     """A measured record as a Dataset (see _import_measured); running out of memory on the
     way (a record just under the size limit on a small machine) is one clear line."""
@@ -1171,7 +1213,10 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
             roles.setdefault(name, role)
     contents, fmt = _read(path, list(roles), roles)
 
-    vib = _series(contents.found[spec.vibration], spec.vibration, "vibration", path)
+    raw = np.asarray(contents.found[spec.vibration])
+    # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
+    step = contents.steps.get(spec.vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
+    vib = _series(raw, spec.vibration, "vibration", path) * spec.scale
     n = vib.size
     fs, fs_source = _sampling_rate(contents, spec.fs, n, path)
     tacho = None
@@ -1195,6 +1240,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
         raise RuntimeError(f"importer bug: {revs.shape[0]} revolutions cut, {starts.size - 1} bounded")
     start, transient = _steady_start(revs, labels, spec, path)
     revs = revs[start:]
+    fractions = starts[start:-1][:FRACTIONS_KEPT] % 1.0  # where the kept revolutions start between samples
     count = revs.shape[0]
 
     if labels is None:
@@ -1247,5 +1293,9 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
             "transient": transient,
             "reference": reference,
             "healthy_revolutions": int(healthy.sum()),
+            # the measurement chain (gearlab.data.chain): what a simulation goes through to compare
+            "start_fractions": [round(float(f), 4) for f in fractions],
+            "quantum": float(step * spec.scale),
+            "units": units_note(spec, fmt, step > 0),
         },
     )

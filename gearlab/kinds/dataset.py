@@ -13,8 +13,9 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DATASET_PRESETS, DatasetSpec, NoiseSpec, dataset_preset
 from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
+from ..events import Event
 from ..executors import make_executor
-from ..runs import Event, RunDir
+from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, plain_name
 from ..units import to_si
 
@@ -27,6 +28,10 @@ DATASET_TABLE = Table(
         "labels": Key(str, "", doc="measured data: an optional label channel"),
         "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
         "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
+        "sensitivity": Key((int, float, str), None, doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
+                                                        "V per m/s²); without it or 'gain' the units are unknown"),
+        "gain": Key((int, float, str), None, doc="measured data: volts per file unit, e.g. '0.3 mV' per count of "
+                                                 "an integer record (WAV: at full scale)"),
         "name": Key(str, "", lambda v, where: v and plain_name(v, where), "label (default: the preset name)"),
         "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
         "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
@@ -145,10 +150,26 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     spec = MeasuredSpec(
         name=entry["name"] or path.stem, path=str(path), vibration=entry["vibration"], tacho=entry["tacho"] or None,
         speed_hz=speed, fs=fs, labels=entry["labels"] or None, class_names=tuple(names),
-        transient=entry["transient"],
+        transient=entry["transient"], **units_of(entry, where),
     )
     spec.check()
     return spec
+
+
+def units_of(entry: dict, where: str) -> dict:
+    """sensitivity (V per m/s²) and gain (V per file unit) of a measured 'file' entry, as given."""
+    from ..data.textzip import parse_sensitivity
+
+    out = {}
+    if entry.get("sensitivity") is not None:
+        out["sensitivity"] = parse_sensitivity(entry["sensitivity"], f"{where} key 'sensitivity'")
+    if entry.get("gain") is not None:
+        gain = to_si(entry["gain"], "V", f"{where} key 'gain'")
+        if not gain > 0:
+            raise GearlabInputError(f"{where} key 'gain': expected a positive voltage per file unit such as "
+                                    f"'0.3 mV', got {shown(entry['gain'])}")
+        out["gain"] = gain
+    return out
 
 
 def noise_spec(table: dict, where: str) -> NoiseSpec | None:
