@@ -29,12 +29,12 @@ import torch
 from scipy.ndimage import uniform_filter1d
 
 from gearlab.data.cache import load_or_build
+from gearlab.engine import load_scenario
 from gearlab.learn.bounds import bayes_scores, best_accuracy, detection_at
 from gearlab.learn.detectors import template_detector
 from gearlab.learn.networks import build_network
 from gearlab.learn.protocol import split
 from gearlab.learn.training import fit_supervised, predict
-from gearlab.scenario import load_scenario
 
 SCENARIOS = Path(__file__).parents[1] / "scenarios"
 

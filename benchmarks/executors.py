@@ -67,17 +67,16 @@ def records(run: Path) -> dict[str, dict]:
 
 def scenario_runs(path: Path, workers: int, quick: bool) -> None:
     from gearlab.data.cache import load_or_build
+    from gearlab.engine import load_scenario, run_scenario
     from gearlab.executors import LocalExecutor
-    from gearlab.kinds import KINDS
-    from gearlab.runs import run_scenario
-    from gearlab.scenario import load_scenario
+    from gearlab.kinds import SCENARIO_KINDS
 
     tmp = Path(tempfile.mkdtemp(prefix="gearlab-bench-"))
     os.environ["GEARLAB_CACHE"] = str(tmp / "cache")
     os.environ.pop("RAY_ADDRESS", None)
     scenario = load_scenario(path)
     if quick:
-        KINDS[scenario.kind].quick(scenario)
+        SCENARIO_KINDS[scenario.kind].quick(scenario)
     t = time.perf_counter()
     for side in ("source", "target"):
         load_or_build(scenario.spec[side], LocalExecutor(workers))

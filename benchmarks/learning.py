@@ -61,9 +61,9 @@ def networks(rounds: int) -> None:
 
 def units() -> None:
     from gearlab.data.cache import load_or_build
+    from gearlab.engine import load_scenario
     from gearlab.kinds.transfer import units as all_units
     from gearlab.learn.protocol import Method, Protocol, StateStore, run_unit
-    from gearlab.scenario import load_scenario
 
     scenario = load_scenario("scenarios/expB.toml")
     spec = scenario.spec

@@ -23,10 +23,10 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from pem_reference import tooth_pair_stiffness  # noqa: E402
 
+from gearlab.engine import run_scenario  # noqa: E402
 from gearlab.physics.presets import gear_pair  # noqa: E402
 from gearlab.physics.stiffness import MeshStiffnessModel  # noqa: E402
 from gearlab.registry import get_registry  # noqa: E402
-from gearlab.runs import run_scenario  # noqa: E402
 
 
 def best_of(fn, repeat=5):

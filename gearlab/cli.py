@@ -102,12 +102,12 @@ def stiffness(
     fillet: Annotated[bool, typer.Option(help="include the fillet-foundation term")] = True,
     root_region: Annotated[bool, typer.Option(help="include the straight root region d_1")] = True,
 ) -> None:
+    from .files import atomic_write
     from .kinds.stiffness import csv_text
     from .physics.faults import parse_fault_option, place_fault
     from .physics.presets import gear_pair
     from .physics.stiffness import MeshStiffnessModel, StiffnessOptions
     from .registry import get_registry
-    from .runs import atomic_write
 
     if not 64 <= points <= 1 << 20:
         raise GearlabInputError(f"--points: expected 64 .. {1 << 20}, got {points}")
@@ -196,9 +196,9 @@ def simulate(
     """
     import numpy as np
 
+    from .files import atomic_write
     from .physics.faults import parse_fault_option, place_fault
     from .registry import get_registry
-    from .runs import atomic_write
 
     if out.suffix != ".npz":
         raise GearlabInputError(f"--out {out}: expected a .npz file name")
@@ -247,16 +247,16 @@ def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file")
 
     Example: gearlab validate scenarios/expB.toml
     """
-    from .scenario import load_scenario
+    from .engine import load_scenario
 
     s = load_scenario(scenario)
     console.print(f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}")
 
 
 def describe_spec(s) -> str:
-    from .kinds import KINDS
+    from .kinds import SCENARIO_KINDS
 
-    return KINDS[s.kind].describe(s)
+    return SCENARIO_KINDS[s.kind].describe(s)
 
 
 Out = Annotated[Path | None, typer.Option(help="base directory for the run directory (default: the scenario's output dir)")]
@@ -315,8 +315,8 @@ class Interrupted(Exception):
 def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict,
          events: bool) -> None:
     """Run the engine, drawing its events as progress bars (or printing them as JSON lines)."""
-    from .kinds import KINDS
-    from .runs import run_scenario
+    from .engine import run_scenario, scenario_of
+    from .kinds import SCENARIO_KINDS
 
     started: list[str] = []  # the run directory, once made: what Ctrl-C tells to resume
 
@@ -338,8 +338,8 @@ def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bo
                                   on_event=remembered(view.handle))
     except KeyboardInterrupt:
         raise Interrupted(started[-1] if started else None) from None
-    kind = result.scenario().kind
-    for line in KINDS[kind].summary_lines(result):
+    kind = scenario_of(result).kind
+    for line in SCENARIO_KINDS[kind].summary_lines(result):
         console.print(line)
     console.print(f"report: {result.path / 'report.html'}")
     typer.echo(f"run directory: {result.path}")
@@ -366,7 +366,7 @@ def gap(
 
     Example: gearlab gap scenarios/gap_expB.toml --quick; gearlab gap benchmark --trials 4
     """
-    from .scenario import load_scenario
+    from .engine import load_scenario
 
     overrides = _execution(executor, ray_address, None)
     given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
@@ -408,7 +408,8 @@ def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> 
 
     Example: gearlab report runs/quick/20260101-120000-000000
     """
-    from .runs import RunDir, write_report
+    from .engine import write_report
+    from .runs import RunDir
 
     path = write_report(RunDir.open(run_dir))
     console.print(f"wrote {path}")
@@ -426,7 +427,7 @@ def compare(
     import tempfile
 
     from .compare import compare_html, compare_lines, compare_markdown, load_runs
-    from .runs import atomic_write
+    from .files import atomic_write
 
     runs = load_runs(run_dirs)
     if html is not None and not html.parent.is_dir():
@@ -551,7 +552,7 @@ def _main() -> None:
                           else "interrupted; no run directory was made yet", markup=False, highlight=False)
         sys.exit(130)
     except OSError as exc:  # a full disk, a read-only place, outside a run (a report, --csv)
-        from .runs import cannot_write, write_problem
+        from .files import cannot_write, write_problem
 
         if write_problem(exc) is None:
             _internal_error(exc)

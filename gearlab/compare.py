@@ -16,7 +16,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .charts import Chart, Curve
+from .engine import scenario_of
 from .errors import GearlabInputError
+from .kinds import SCENARIO_KINDS
+from .kinds.transfer import table
+from .report import STYLE, markdown_table
 from .runs import RunDir
 from .scenario import Scenario
 from .verdict import load_summary, verdict_lines
@@ -50,7 +54,7 @@ def load_runs(paths) -> list[Compared]:
     runs = []
     for letter, path in zip(string.ascii_uppercase, paths):
         run = RunDir.open(path)
-        runs.append(Compared(letter, run, run.scenario(), load_summary(path)))
+        runs.append(Compared(letter, run, scenario_of(run), load_summary(path)))
     kinds = {r.kind for r in runs}
     if len(kinds) > 1:
         shown = ", ".join(f"{r.run.path} is {r.kind}" for r in runs)
@@ -59,8 +63,6 @@ def load_runs(paths) -> list[Compared]:
 
 
 def _transfer_cells(c: Compared) -> dict[str, dict[str, dict]]:
-    from .kinds.transfer import table
-
     return table(c.run.records(), c.scenario.spec["protocol"])
 
 
@@ -82,11 +84,9 @@ def compare_markdown(runs: list[Compared]) -> str:
                 delta = [f"{g['mean'] - got[0]['mean']:+.2f}" if g and got[0] else "" for g in got[1:]]
                 lines.append(f"| {m} | {k} | " + " | ".join(shown + delta) + " |")
         return "\n".join(lines) + "\n"
-    from .kinds import KINDS
-
     parts = []
     for c in runs:
-        text = KINDS[c.kind].records_table(c.scenario, c.run.records()).strip()
+        text = SCENARIO_KINDS[c.kind].records_table(c.scenario, c.run.records()).strip()
         if not text:
             continue
         blocks = []
@@ -102,9 +102,7 @@ def compare_markdown(runs: list[Compared]) -> str:
 def compare_charts(runs: list[Compared]) -> list[Chart]:
     """Each chart the kind draws for the first run, with the same chart of every other run
     overlaid (curves named 'A: label'); bar charts join their categories."""
-    from .kinds import KINDS
-
-    per_run = [KINDS[c.kind].charts(c.scenario, c.run) for c in runs]
+    per_run = [SCENARIO_KINDS[c.kind].charts(c.scenario, c.run) for c in runs]
     titles = list(dict.fromkeys(ch.title for charts in per_run for ch in charts))
     out = []
     for title in titles:
@@ -145,8 +143,6 @@ def compare_html(runs: list[Compared], figures: Path) -> str:
     """A self-contained page: the runs, the table side by side, the overlaid charts (PNG,
     inlined) and each run's verdict. *figures*: a folder for the PNGs while they are drawn."""
     from .plots import chart_figure
-    from .report import STYLE, markdown_table
-
     lines = compare_lines(runs)
     title = f"gearlab comparison: {len(runs)} {runs[0].kind} runs"
     parts = ["<!doctype html><html><head><meta charset='utf-8'>", f"<title>{html.escape(title)}</title>",

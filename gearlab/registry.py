@@ -7,7 +7,7 @@ group that implements one or more of the hooks below, each returning plugin obje
     wear = "gearlab_wear.plugin"
 
     # gearlab_wear/plugin.py
-    from gearlab.registry import hookimpl
+    from gearlab.api import hookimpl
 
     @hookimpl
     def gearlab_faults():
@@ -27,8 +27,10 @@ from dataclasses import dataclass, field
 
 import pluggy
 
+from .effect_contract import hook_problem
 from .errors import UnknownPluginError
 from .params import Param, did_you_mean
+from .units import display
 
 PROJECT = "gearlab"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -60,8 +62,8 @@ REQUIRED = {
     "fault": ("apply", "ladder_endpoints", "rfa", "resolve", "ladder"),
     "model": ("assemble", "resolve", "preset"),
     "adapter": (),
-    # and a level, a breaks_symmetry flag and the hook of its level (gearlab.effects.hook_problem);
-    # subclasses of gearlab.effects.Effect have all but the hook
+    # and a level, a breaks_symmetry flag and the hook of its level (gearlab.effect_contract.hook_problem);
+    # subclasses of gearlab.effect_contract.Effect have all but the hook
     "effect": ("resolve", "spec", "space", "check_config"),
 }
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
@@ -146,8 +148,6 @@ def _contract_problem(kind: str, obj) -> str:
     if missing:
         return f"{kind} '{name}' lacks {', '.join(missing)}"
     if kind == "effect":
-        from .effects import hook_problem
-
         return hook_problem(obj)
     return ""
 
@@ -198,8 +198,6 @@ def get_registry() -> Registry:
 
 def param_text(param: dict) -> str:
     """One parameter of ``Registry.describe()`` as 'name [unit] = default  (low .. high)', in its display unit."""
-    from .units import display
-
     def show(value):
         return display(value, param["unit"], param["display_unit"]).split(" ")[0]
 

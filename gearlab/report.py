@@ -9,6 +9,8 @@ import html
 import json
 from pathlib import Path
 
+from .verdict import experiment, verdict_lines, verdict_table
+
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
          "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
          "th{background:#eee}tr.reference td{color:#555;font-style:italic;background:#f7f7ff}"
@@ -74,8 +76,6 @@ ORDER = ["rfa", "tvms_ladders", "tvms_cases", "accuracy_vs_intensity", "accuracy
 
 def caption(stem: str, summary: dict) -> tuple[str, str]:
     """(thesis figure it repeats or '', what the figure shows) for a figure file of a run."""
-    from .verdict import experiment
-
     protocol = summary.get("protocol") or {}
     reps = protocol.get("repetitions") or protocol.get("runs")
     over = f" over {reps} repetitions" if reps else ""
@@ -95,8 +95,6 @@ def caption(stem: str, summary: dict) -> tuple[str, str]:
 
 
 def build_report(run_path: Path) -> str:
-    from .verdict import verdict_lines, verdict_table
-
     run_path = Path(run_path)
     summary_file = run_path / "summary.json"
     summary = json.loads(summary_file.read_text()) if summary_file.exists() else {}

@@ -1,4 +1,4 @@
-"""Run directories and the run engine shared by the CLI and the TUI.
+"""Run directories: the folder a run writes, its lock, its results store.
 
 A run writes ``runs/<name>/<timestamp>/``: the resolved scenario, ``results.jsonl`` (one
 record per finished unit, appended, flushed and fsynced as the unit finishes),
@@ -7,130 +7,27 @@ temporary name and renamed, so a killed run never leaves a half-written file; th
 results store is append-only, so ``--resume`` redoes nothing that finished. One process at
 a time works in a run directory: it holds an flock on ``.lock`` for the whole run.
 
-Progress goes out as :class:`Event` objects to one callback: the CLI draws rich
-progress bars from them, the TUI its widgets.
+The scenario kinds write into a RunDir; the engine that creates, resumes and reports a run
+(gearlab.engine) sits above the kinds.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import errno
 import fcntl
 import hashlib
 import json
 import os
 import shutil
-import tempfile
-import threading
-import time
 import tomllib
-from collections.abc import Callable, Iterable, Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import tomli_w
 
-from .errors import GearlabInputError, shown
-from .scenario import Scenario, load_scenario
-
-
-@dataclass(frozen=True)
-class Event:
-    """A progress event. kind: 'run' (the run directory is ready; `message` is its path),
-    'stage' (a stage starts), 'advance' (units done within the stage), 'record' (a unit
-    finished; `record` holds it), 'unit' (a unit in progress says how far it is in `message`,
-    `stage` names it; an empty message: it ended), 'log' (a line for people).
-
-    `gearlab run --events` writes them as JSON lines: that is how the TUI follows a run."""
-
-    kind: str
-    stage: str = ""
-    done: int = 0
-    total: int = 0
-    message: str = ""
-    record: dict | None = None
-
-    def to_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True)
-
-    @classmethod
-    def from_json(cls, line: str) -> Event:
-        data = json.loads(line)
-        return cls(**{k: data[k] for k in ("kind", "stage", "done", "total", "message", "record") if k in data})
-
-
-EventSink = Callable[[Event], None]
-
-
-def _ignore(_: Event) -> None:
-    pass
-
-
-def current_umask() -> int:
-    """The process's umask, read without changing it where Linux tells it (/proc)."""
-    try:
-        with open("/proc/self/status") as f:
-            for line in f:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError):
-        pass
-    mask = os.umask(0o022)  # elsewhere: set and restore at once
-    os.umask(mask)
-    return mask
-
-
-def atomic_write(path: Path, data: bytes | str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        os.fchmod(fd, 0o666 & ~current_umask())  # mkstemp makes 0600; a report is for others to read too
-        with os.fdopen(fd, "wb") as f:
-            f.write(data.encode() if isinstance(data, str) else data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException as exc:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(exc, OSError) and exc.filename is None:  # a full disk: name the file in the message
-            exc.filename = str(path)
-        raise
-
-
-def inside(root: Path, *parts: str) -> Path:
-    """*root*/*parts*, when that is provably inside *root*: refused when a part is absolute,
-    climbs out with '..', holds a NUL, or leads out through a symbolic link. Every file a
-    run writes is named through this (RunDir.file), so no name taken from a scenario or a
-    measured file can place one elsewhere."""
-    path = Path(root).joinpath(*parts)
-    try:
-        real_root, real = Path(root).resolve(), path.resolve()
-        ok = real != real_root and real.is_relative_to(real_root)
-    except (OSError, ValueError):  # a NUL character, a loop of links
-        ok = False
-    if not ok:
-        raise GearlabInputError(f"{shown(str(path), 200)}: refused: not a file inside {root}")
-    return path
-
-
-# errno -> what the user is told (and can fix) when a file cannot be written
-_WRITE_PROBLEMS = {errno.ENOSPC: "no space left on the device", errno.EDQUOT: "disk quota exceeded",
-                   errno.EROFS: "read-only file system", errno.EACCES: "permission denied",
-                   errno.EPERM: "operation not permitted", errno.EFBIG: "file too large"}
-
-
-def write_problem(exc: OSError) -> str | None:
-    """What keeps a file from being written (a full disk, a read-only place), or None when
-    *exc* is not such a problem of the user's file system."""
-    return _WRITE_PROBLEMS.get(exc.errno)
-
-
-def cannot_write(exc: OSError, where: Path | str = "") -> GearlabInputError:
-    """One line naming the path and the problem, for an OSError of writing (under *where*)."""
-    problem = write_problem(exc) or exc.strerror or type(exc).__name__
-    path = exc.filename or where
-    return GearlabInputError(f"{path}: cannot write: {problem}" if path else f"cannot write: {problem}")
-
+from .errors import GearlabInputError
+from .files import atomic_write, inside, write_problem
+from .scenario import Scenario
 
 RUN_FILE = "run.json"  # how the run was started (--quick), for --resume
 LOCK_FILE = ".lock"  # flocked by the process running in the directory; holds its pid
@@ -259,15 +156,6 @@ class RunDir:
         """The scenario file to resume from: the original text, else the resolved one."""
         original = self.path / "scenario.original.toml"
         return original if original.is_file() else self.path / "scenario.toml"
-
-    def scenario(self) -> Scenario:
-        """The scenario as this run ran it (shrunk alike when started with --quick)."""
-        from .kinds import KINDS
-
-        scenario = load_scenario(self.scenario_path(), base=self.base())
-        if self.quick:
-            KINDS[scenario.kind].quick(scenario)
-        return scenario
 
     def started_with(self, scenario: Scenario) -> bool:
         """Whether *scenario* resolves to the tables this run was started with (a resume with
@@ -406,171 +294,3 @@ def _tomlable(value):
     if isinstance(value, (list, tuple)):
         return [_tomlable(v) for v in value]
     return value
-
-
-PROGRESS = "progress"  # the run directory's folder of units in progress
-
-
-class UnitProgress:
-    """What a unit in progress reports ('epoch 120, validation accuracy 88 %'), written to a
-    small file in the run directory's progress/ folder, from whichever process or cluster node
-    runs the unit; the engine watches the folder (ProgressWatcher) and sends 'unit' events.
-    Use as a context manager: the file goes when the unit ends."""
-
-    def __init__(self, run_path: Path, unit: str, every: float = 0.5):
-        self.path = inside(run_path, PROGRESS, unit.replace("/", "__") + ".txt")
-        self.every, self.last = every, -every
-
-    def __call__(self, text: str) -> None:
-        if time.monotonic() - self.last >= self.every:  # a few writes a second at most
-            atomic_write(self.path, text)
-            self.last = time.monotonic()
-
-    def __enter__(self) -> UnitProgress:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.path.unlink(missing_ok=True)
-
-
-class ProgressWatcher(threading.Thread):
-    """Turns the progress/ folder into events: Event('unit', stage=unit, message=text) when a
-    unit reports, and with an empty message when its file goes (the unit ended)."""
-
-    def __init__(self, run: RunDir, on_event: EventSink, every: float = 0.5):
-        super().__init__(daemon=True)
-        self.folder, self.on_event, self.every = run.path / PROGRESS, on_event, every
-        self.stopped = threading.Event()
-        shutil.rmtree(self.folder, ignore_errors=True)  # left by a killed run
-
-    def run(self) -> None:
-        shown: dict[str, str] = {}
-        while not self.stopped.wait(self.every):
-            now = {}
-            for path in self.folder.glob("*.txt") if self.folder.is_dir() else ():
-                try:
-                    now[path.stem.replace("__", "/")] = path.read_text()
-                except OSError:  # it went between the listing and the read
-                    continue
-            for unit, text in now.items():
-                if shown.get(unit) != text:
-                    self.on_event(Event("unit", stage=unit, message=text))
-            for unit in shown.keys() - now.keys():
-                self.on_event(Event("unit", stage=unit))
-            shown = now
-
-    def stop(self) -> None:
-        self.stopped.set()
-        self.join()
-
-
-def _serialised(on_event: EventSink) -> EventSink:
-    """The sink, safe to call from the engine and the progress watcher alike."""
-    lock = threading.Lock()
-
-    def sink(event: Event) -> None:
-        with lock:
-            on_event(event)
-
-    return sink
-
-
-def run_scenario(
-    scenario_path: str | Path | None = None,
-    *,
-    out: str | Path | None = None,
-    resume: str | Path | None = None,
-    quick: bool = False,
-    overrides: Mapping[str, Mapping] | None = None,
-    on_event: EventSink = _ignore,
-) -> RunDir:
-    """Validate, then run a scenario into a new (or resumed) run directory. *overrides*
-    ({table: {key: value}}) replace keys of the scenario file (see load_scenario); a resumed
-    run may change only [execution] (where it runs, not what it computes)."""
-    from .kinds import KINDS
-
-    on_event = _serialised(on_event)
-    if resume is not None:
-        run = RunDir.open(Path(resume))
-    else:
-        if scenario_path is None:
-            raise GearlabInputError("no scenario given")
-        scenario = load_scenario(scenario_path, overrides)
-        if quick:  # the shrunk scenario is checked again: refused before any folder is made
-            KINDS[scenario.kind].quick(scenario)
-        run = RunDir.create(output_base(scenario, out), scenario, quick)
-    try:
-        lock = run.lock()
-    except GearlabInputError:
-        if resume is None:  # a new run that cannot even be locked (a full disk): leave none
-            run.discard()
-        raise
-    with lock:  # held until the run ends: a second process in this directory is refused
-        if resume is not None:
-            scenario = _resumed_scenario(run, scenario_path, quick, overrides)
-        on_event(Event("run", message=str(run.path)))
-        on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
-        watcher = ProgressWatcher(run, on_event)
-        watcher.start()
-        try:
-            KINDS[scenario.kind].run(scenario, run, on_event)
-            write_report(run)
-        except GearlabInputError:
-            # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
-            if resume is None and not run.records():
-                run.discard()
-            raise
-        except OSError as exc:
-            if write_problem(exc) is None:
-                raise
-            # A full disk, a read-only place: finished units are stored line by line, so a run
-            # that has any is kept for --resume; one that has none is removed.
-            kept = resume is not None or bool(run.records())
-            if not kept:
-                run.discard()
-            then = (f"; the run is kept: once fixed, resume with: gearlab run --resume {run.path}" if kept
-                    else "; no run directory is left")
-            raise GearlabInputError(f"{cannot_write(exc, run.path)}{then}") from None
-        finally:
-            watcher.stop()
-    return run
-
-
-def output_base(scenario: Scenario, out: str | Path | None = None) -> Path:
-    """The folder that holds a scenario's runs (<base>/<name>/<timestamp>/): --out, else its
-    [output] dir; a relative one is taken from the current folder. The TUI looks up past runs
-    with this, so it finds them where `gearlab run` puts them."""
-    return Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
-
-
-def _resumed_scenario(run: RunDir, scenario_path: str | Path | None, quick: bool,
-                      overrides: Mapping[str, Mapping] | None = None) -> Scenario:
-    """The scenario a run was started with, shrunk alike if it was started with --quick;
-    the results store made ready for appends. Called with the run directory locked."""
-    from .kinds import KINDS
-
-    if quick and not run.quick:
-        raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
-    scenario = load_scenario(scenario_path or run.scenario_path(), overrides,
-                             base=None if scenario_path else run.base())
-    if not run.started_with(scenario):
-        raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
-                                "with; resume without SCENARIO (the run keeps a copy) or start a new run")
-    check_inputs(run)
-    if run.quick:
-        KINDS[scenario.kind].quick(scenario)
-    run.truncate_partial()
-    run.remove_temporaries()
-    return scenario
-
-
-def write_report(run: RunDir) -> Path:
-    from .report import build_report
-
-    html = build_report(run.path)
-    run.write_text("report.html", html)
-    return run.path / "report.html"
-
-
-def finished_keys(records: Iterable[dict]) -> set[str]:
-    return {r["unit"] for r in records if "unit" in r}

@@ -237,32 +237,3 @@ def read_toml(path: Path) -> dict:
                                 "hundreds of levels deep)") from None
     except MemoryError:
         raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None
-
-
-def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None,
-                  base: str | Path | None = None) -> Scenario:
-    """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key.
-
-    *overrides* ({table: {key: value}}, e.g. the CLI's --executor or --trials) replace keys of
-    the file before validation, so they are checked like the file's own values."""
-    from .kinds import KINDS
-
-    path = Path(path)
-    data = read_toml(path)
-    for table, values in (overrides or {}).items():
-        if not isinstance(data.get(table, {}), dict):
-            raise GearlabInputError(f"{location(path, table)}: expected a table, to set {', '.join(values)} in")
-        data.setdefault(table, {}).update(values)
-    head = validate_table(path, "scenario", SCENARIO_TABLE, data.get("scenario", {})) if "scenario" in data else None
-    if head is None:
-        raise GearlabInputError(f"{path}: missing table [scenario] (with name, kind and description)")
-    kind = one_of(*KINDS)(head["kind"], location(path, "scenario", "kind"))
-    module = KINDS[kind]
-    schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, "execution": EXECUTION_TABLE, **module.TABLES}
-    tables = validate_tables(path, schema, data)
-    scenario = Scenario(
-        path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data,
-        base=Path(base) if base is not None else path.parent,
-    )
-    scenario.spec = module.build(scenario)
-    return scenario

@@ -19,6 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .data.spec import DATASET_PRESETS
+from .kinds.transfer import BOUND, table_md
+from .runs import RunDir
+
 # The thesis's Tables 5.4 (Experiment A) and 5.5 (Experiment B): target test accuracy (%),
 # mean ± std over repetitions, per k, in gearlab's method labels. Facts quoted from the
 # thesis, shown beside gearlab's numbers; nothing is computed from them.
@@ -67,8 +71,6 @@ _DATASET_FIELDS = ("model", "preset", "channel", "speed_hz", "load_nm", "faults"
 def preset_of(side: Mapping) -> str | None:
     """The chapter-5 dataset preset a summary's [source] or [target] is, complete and unchanged
     but for its name and noise; None for anything else (a reduced or measured dataset)."""
-    from .data.spec import DATASET_PRESETS
-
     for name, preset in DATASET_PRESETS.items():
         if name.endswith("-ch5") and all(_plain(getattr(preset, key)) == _plain(side.get(key))
                                          for key in _DATASET_FIELDS):
@@ -102,8 +104,6 @@ def load_summary(run_path: Path) -> dict:
 
 
 def _records(run_path: Path) -> list[dict]:
-    from .runs import RunDir
-
     return RunDir(Path(run_path)).records()
 
 
@@ -234,8 +234,6 @@ def thesis_line(table: Mapping, ks: Sequence, found: tuple) -> str:
 def transfer_table(summary: Mapping) -> str:
     """The Table 5.4 layout of a transfer run, with the thesis's row under each k for
     Experiments A and B (blank where the thesis has no such method)."""
-    from .kinds.transfer import BOUND, table_md
-
     table, ks, methods = summary["table"], summary["protocol"]["ks"], summary["methods"]
     if summary.get("bound"):  # the reference column of table.md (gearlab.kinds.transfer)
         table, methods = {**table, BOUND: summary["bound"]["accuracy"]}, [*methods, BOUND]

@@ -23,11 +23,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_protocol import TINY, UNITS
 
 from gearlab.data import cache
 from gearlab.data.spec import Dataset, DatasetSpec
-from gearlab.runs import LOCK_FILE, run_scenario
-from test_protocol import TINY, UNITS
+from gearlab.engine import run_scenario
+from gearlab.runs import LOCK_FILE
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import gearlab.data.builder as builder
-import gearlab.runs
+import gearlab.files
 from gearlab.data.builder import build_dataset
 from gearlab.data.cache import ARRAYS, entry_path, load, load_or_build, save
 from gearlab.data.spec import (
@@ -395,11 +395,11 @@ class _OsKilledAt:
 @pytest.mark.parametrize("where", ["fsync", "replace"])
 def test_write_killed_midway_leaves_no_entry_and_no_partial_file(cache, monkeypatch, where):
     spec = small()
-    monkeypatch.setattr(gearlab.runs, "os", _OsKilledAt(where))
+    monkeypatch.setattr(gearlab.files, "os", _OsKilledAt(where))
     with pytest.raises(KeyboardInterrupt):
         load_or_build(spec, LocalExecutor(1))
     assert list(cache.iterdir()) == []  # neither the entry nor its temporary file
-    monkeypatch.setattr(gearlab.runs, "os", os)
+    monkeypatch.setattr(gearlab.files, "os", os)
     assert load(spec) is None
     assert load_or_build(spec, LocalExecutor(1))[1] is False
 

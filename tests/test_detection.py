@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from textrecords import FS, PULSES, record
 from tiny import EXECUTION, schedule
 
@@ -138,9 +137,10 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
     path = scenario(tmp_path, methods=("matched_filter",))
     monkeypatch.chdir(tmp_path / "data")  # anywhere but the scenario's folder
     out = run(cli, path, tmp_path / "runs")
+    from gearlab.engine import scenario_of
     from gearlab.runs import RunDir
 
-    assert RunDir.open(out).scenario().spec["target"].files[0].path == "../data/h1.zip"
+    assert scenario_of(RunDir.open(out)).spec["target"].files[0].path == "../data/h1.zip"
 
 
 @pytest.mark.parametrize("change, message", [
@@ -194,8 +194,8 @@ def test_records_without_condition_join_the_history_of_nearest_speed():
 
 
 def test_without_methods_every_label_free_adapter_runs(tmp_path):
+    from gearlab.engine import load_scenario
     from gearlab.registry import get_registry
-    from gearlab.scenario import load_scenario
 
     path = scenario(tmp_path, methods=())
     spec = load_scenario(path).spec

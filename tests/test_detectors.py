@@ -108,8 +108,8 @@ def test_experiment_b_at_k_0_without_target_labels():
     """Experiment B (B-6 clean -> B-8, Laplace 0 dB): the six-DOF model's fault shapes find the
     eight-DOF model's faults under the noise, where the trained networks stay near 60 %."""
     from gearlab.data.cache import load_or_build
+    from gearlab.engine import load_scenario
     from gearlab.learn.protocol import split
-    from gearlab.scenario import load_scenario
 
     scenario = load_scenario(Path(__file__).parents[1] / "scenarios" / "expB.toml")
     source, _ = load_or_build(scenario.spec["source"])

@@ -33,16 +33,9 @@ from gearlab.data.builder import (
     whole_steps_rate,
 )
 from gearlab.data.spec import DATASET_PRESETS, POINTS, NoiseSpec, dataset_preset
-from gearlab.effects import (
-    HOOKS,
-    Effect,
-    EffectChain,
-    Excitation,
-    ModelConfig,
-    SignalContext,
-    effect_spec,
-    effects_from_tables,
-)
+from gearlab.dynamics.excitation import Excitation
+from gearlab.effect_contract import HOOKS, Effect, SignalContext
+from gearlab.effects import EffectChain, config_of, effect_spec, effects_from_tables, model_of
 from gearlab.errors import GearlabInputError, UnknownPluginError
 from gearlab.params import Param
 from gearlab.physics.faults import place_fault
@@ -91,7 +84,7 @@ def configured(effects=(), op=B, **changes):
     """(simulator, configuration, chain) of *op* (with *changes*) under *effects* (canonical specs)."""
     op = {**op, **changes}
     chain = EffectChain.load(tuple(effects))
-    config = chain.model_config(ModelConfig.of(op["model"], op["preset"], op["channel"]))
+    config = chain.model_config(config_of(op["model"], op["preset"], op["channel"]))
     return _configured_simulator(config, fs_of(op)), config, chain
 
 
@@ -211,7 +204,7 @@ def test_third_party_effect_loads_and_contract_breaches_are_reported():
 
 def test_drive_inertias_on_six_dof_is_the_eight_dof_model_of_dataset_b():
     sim, config, _ = configured([effect_spec("drive_inertias")])
-    assert config.name == "eight_dof" and sim.model is REG.get("model", "eight_dof")
+    assert model_of(config).name == "eight_dof" and sim.model is REG.get("model", "eight_dof")
     assert (config.input_dof, config.load_dof) == ("theta11", "theta22")  # the motor turns at fixed speed
     eight = _simulator("eight_dof", "meng2020", fs_of(B))
     for faults in ((), (("crack", 5, 20),)):
@@ -221,7 +214,7 @@ def test_drive_inertias_on_six_dof_is_the_eight_dof_model_of_dataset_b():
         assert angle is None and np.array_equal(got, want)
     # on a model that has them, it only sets their values
     _, ten, _ = configured([effect_spec("drive_inertias", I11="0.01 kg*m^2")], A)
-    assert ten.name == "ten_dof" and ten.params["I11"] == 0.01 and ten.params["I22"] == 0.0045
+    assert model_of(ten).name == "ten_dof" and ten.params["I11"] == 0.01 and ten.params["I22"] == 0.0045
 
 
 def test_casing_path_moves_the_pinion_sensor_to_the_casing():
@@ -231,7 +224,7 @@ def test_casing_path_moves_the_pinion_sensor_to_the_casing():
     assert np.array_equal(got, want)
     # on the six-DOF model it adds the casing (bearings no longer grounded) and the sensor follows
     _, config, _ = configured([effect_spec("casing_path")])
-    assert config.name == "six_dof+xf+yf" and config.channel == "casing_y" and config.params["mf"] == 18.509
+    assert model_of(config).name == "six_dof+xf+yf" and config.channel == "casing_y" and config.params["mf"] == 18.509
     casing, _ = revolution([effect_spec("casing_path")])
     pinion, _ = revolution()
     assert rms(casing) < 0.2 * rms(pinion)  # the path hides the gear vibration (Figure 2.28)

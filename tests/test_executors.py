@@ -189,8 +189,8 @@ def test_address_precedence(monkeypatch):
 
 
 def test_the_scenario_address_reaches_the_ray_executor(tmp_path, monkeypatch):
+    from gearlab.engine import load_scenario
     from gearlab.kinds.dataset import executor_for
-    from gearlab.scenario import load_scenario
 
     monkeypatch.setattr(executors, "import_ray", lambda: None)  # no session is opened here
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
@@ -231,7 +231,7 @@ adapter = "mmd"
 def test_local_and_ray_give_the_same_records(ray_session, tmp_path, monkeypatch):
     """One worker, two local workers and Ray: the same units, the same numbers. The Ray run builds
     its datasets itself (its own cache), so simulation units run on Ray too."""
-    from gearlab.runs import run_scenario
+    from gearlab.engine import run_scenario
 
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     runs = {}

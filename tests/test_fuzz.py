@@ -27,13 +27,14 @@ import scipy.io
 import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_importers import make_record, write_formats, write_mat73
 
 from gearlab.data.importers import MeasuredSpec, import_measured
+from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
-from gearlab.kinds import KINDS
+from gearlab.kinds import SCENARIO_KINDS
 from gearlab.registry import get_registry
-from gearlab.scenario import EXECUTION_TABLE, OUTPUT_TABLE, SCENARIO_TABLE, load_scenario
-from test_importers import make_record, write_formats, write_mat73
+from gearlab.scenario import EXECUTION_TABLE, OUTPUT_TABLE, SCENARIO_TABLE
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = int(os.environ.get("GEARLAB_FUZZ_EXAMPLES", "0"))
@@ -133,9 +134,9 @@ PARAMS = sorted({p.name for plugins in get_registry().plugins.values() for plugi
                  for p in getattr(plugin, "params", ())})
 QUANTITIES = ["speed", "load", "fs", "snr_db", *PARAMS]
 KEYS = sorted({*SCENARIO_TABLE.keys, *OUTPUT_TABLE.keys, *EXECUTION_TABLE.keys, *QUANTITIES,
-               *(key for module in KINDS.values() for table in module.TABLES.values() for key in table.keys),
+               *(key for module in SCENARIO_KINDS.values() for table in module.TABLES.values() for key in table.keys),
                "kind", "tooth", "step", "params", "seed"})
-TABLES = sorted({"scenario", "output", "execution", *(name for m in KINDS.values() for name in m.TABLES)})
+TABLES = sorted({"scenario", "output", "execution", *(name for m in SCENARIO_KINDS.values() for name in m.TABLES)})
 
 scalars = st.one_of(
     st.sampled_from(NUMBERS), st.integers(), st.floats(), st.booleans(),
@@ -212,7 +213,7 @@ def random_scenarios(draw) -> dict:
     """A document of the right shape with random contents: [scenario] of some kind, then
     tables (and arrays of tables) named as real ones, holding schema keys with any values."""
     doc: dict = {"scenario": draw(st.dictionaries(st.sampled_from(["name", "kind", "description"]) | keys,
-                                                  st.sampled_from(sorted(KINDS)) | scalars, max_size=4))}
+                                                  st.sampled_from(sorted(SCENARIO_KINDS)) | scalars, max_size=4))}
     for name in draw(st.lists(st.sampled_from(TABLES) | st.text(max_size=6), max_size=5)):
         table = st.dictionaries(keys, values, max_size=6)
         doc[name] = draw(st.lists(table, max_size=3) if draw(st.booleans()) else table)
@@ -238,7 +239,7 @@ def validate(path: Path):
     """What `gearlab validate` does, in this process: load and resolve, describe."""
     def action():
         scenario = load_scenario(path)
-        return KINDS[scenario.kind].describe(scenario)
+        return SCENARIO_KINDS[scenario.kind].describe(scenario)
 
     return refused_or_fine(action)
 

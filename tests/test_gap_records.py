@@ -11,13 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from textrecords import SENSITIVITY, write_zip
 
 from gearlab.data.builder import _simulator, steady_revolution, whole_steps_rate
 from gearlab.data.spec import PHM09_FS
+from gearlab.engine import load_scenario, run_scenario
 from gearlab.errors import GearlabInputError
-from gearlab.runs import run_scenario
-from gearlab.scenario import load_scenario
-from textrecords import SENSITIVITY, write_zip
 
 SPEED, LOAD = 30.0, 20.0
 PULSES = 10

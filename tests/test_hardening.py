@@ -22,16 +22,17 @@ import numpy as np
 import pytest
 import scipy.io
 import tomli_w
+from test_fuzz import run_cli
+from test_importers import make_record, write_npz
 
 import gearlab.kinds.dataset as dataset_kind
 import gearlab.runs as runs
 from gearlab.data import cache
 from gearlab.data.importers import MeasuredSpec, import_measured
+from gearlab.engine import load_scenario, scenario_of
 from gearlab.errors import GearlabInputError
-from gearlab.runs import RunDir, atomic_write, inside
-from gearlab.scenario import load_scenario
-from test_fuzz import run_cli
-from test_importers import make_record, write_npz
+from gearlab.files import atomic_write, inside
+from gearlab.runs import RunDir
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -463,7 +464,7 @@ def test_a_transfer_runs_copy_finds_its_relative_target_file(tmp_path, record_fi
     monkeypatch.chdir(tmp_path / "sc")
     run = RunDir.create(tmp_path / "runs", load_scenario("t.toml"))
     monkeypatch.chdir(tmp_path)
-    target = run.scenario().spec["target"]
+    target = scenario_of(run).spec["target"]
     assert Path(target.path).resolve() == (data / "rec.npz").resolve()
 
 

@@ -13,17 +13,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 import gearlab.kinds.noise_study as kind
 import gearlab.learn.noise_study as ns
 from gearlab.data.cache import save
 from gearlab.data.spec import Dataset, dataset_preset
+from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.learn.noise_study import NoiseProtocol, aggregate, part_sizes, run_unit, scores, split
 from gearlab.runs import RunDir
-from gearlab.scenario import load_scenario
-
-from conftest import ROOT
 
 LENGTH = 128  # samples per synthetic revolution: the fast network accepts any length >= 64
 

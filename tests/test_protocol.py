@@ -17,6 +17,7 @@ from tiny import transfer as tiny_scenario
 
 from gearlab.data.cache import load_or_build
 from gearlab.data.spec import Dataset
+from gearlab.engine import load_scenario, run_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.kinds import transfer
 from gearlab.learn import protocol as P
@@ -31,8 +32,7 @@ from gearlab.learn.protocol import (
     split,
     train_method,
 )
-from gearlab.runs import RunDir, run_scenario
-from gearlab.scenario import load_scenario
+from gearlab.runs import RunDir
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 

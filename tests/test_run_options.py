@@ -77,7 +77,9 @@ def test_units_in_progress_become_unit_events(tmp_path):
     can); the engine's watcher turns it into 'unit' events, and an empty one when it ends."""
     import time
 
-    from gearlab.runs import ProgressWatcher, RunDir, UnitProgress
+    from gearlab.engine import ProgressWatcher
+    from gearlab.events import UnitProgress
+    from gearlab.runs import RunDir
 
     events = []
     watcher = ProgressWatcher(RunDir(tmp_path), events.append, every=0.05)

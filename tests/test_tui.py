@@ -12,8 +12,8 @@ import time
 from pathlib import Path
 
 import pytest
-from textual.widgets import DataTable, Static, TabbedContent, Tree
 from test_detection import scenario as detection_scenario
+from textual.widgets import DataTable, Static, TabbedContent, Tree
 from tiny import transfer
 
 from gearlab.registry import load_registry
@@ -371,7 +371,7 @@ def test_snapshot_keys_panel(snap_compare, folder, size):
 
 @pytest.mark.parametrize("size", SIZES)
 def test_snapshot_results_of_a_stiffness_run(snap_compare, folder, tmp_path, size):
-    from gearlab.runs import run_scenario
+    from gearlab.engine import run_scenario
 
     run = run_scenario(folder / "stiff.toml", quick=True).path
     fixed = run.parent / "20260101-000000-000000"  # the timestamp is on screen: a fixed one
@@ -452,11 +452,11 @@ def test_every_scenario_kind_runs_from_the_tui_to_the_end(kinds_folder, name, si
 
 
 def test_the_tiny_scenarios_cover_every_kind(kinds_folder):
-    from gearlab.kinds import KINDS
-    from gearlab.scenario import load_scenario
+    from gearlab.engine import load_scenario
+    from gearlab.kinds import SCENARIO_KINDS
 
     kinds = {load_scenario(kinds_folder / name).kind for name, _ in EVERY_KIND}
-    assert kinds == set(KINDS)
+    assert kinds == set(SCENARIO_KINDS)
 
 
 @pytest.mark.slow
@@ -642,7 +642,7 @@ def test_at_80x24_the_footer_the_sidebar_and_the_tables_fit(repo_scenarios):
 @pytest.fixture(scope="module")
 def finished_runs(tmp_path_factory):
     """Two finished runs of the tiny transfer scenario and one of the tiny gap scenario."""
-    from gearlab.runs import run_scenario
+    from gearlab.engine import run_scenario
 
     base = tmp_path_factory.mktemp("finished_tui")
     folder = base / "scenarios"

@@ -14,8 +14,8 @@ import pytest
 from tiny import transfer
 
 from gearlab.data.spec import DATASET_PRESETS
+from gearlab.engine import run_scenario
 from gearlab.report import build_report, caption
-from gearlab.runs import run_scenario
 from gearlab.verdict import THESIS, best_per_k, collapsed, experiment, gap_lines, transfer_lines, transfer_table
 
 HERE = Path(__file__).resolve().parent
@@ -100,7 +100,7 @@ def test_experiment_b_gets_the_thesis_table_5_5_as_reference_rows():
 def test_the_shipped_chapter_5_scenarios_get_their_thesis_table(name, table):
     from dataclasses import asdict
 
-    from gearlab.scenario import load_scenario
+    from gearlab.engine import load_scenario
 
     spec = load_scenario(HERE.parent / "scenarios" / f"{name}.toml").spec
     summary = json.loads(json.dumps({side: asdict(spec[side]) for side in ("source", "target")}))

@@ -27,13 +27,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..dynamics.config import ModelConfig
 from ..dynamics.newmark import Simulator
-from ..effects import EffectChain, ModelConfig
+from ..effects import EffectChain, config_of, model_of
 from ..errors import GearlabInputError
+from ..events import Event
 from ..executors import LocalExecutor
 from ..physics.faults import place_fault
 from ..registry import get_registry
-from ..runs import Event
 from ..signals import Standardiser, add_noise, resample_revolutions, steady_start, tsa
 from .spec import POINTS, Dataset, DatasetSpec
 
@@ -55,7 +56,8 @@ def _simulator(model: str, preset: str, fs: float) -> Simulator:
 @functools.lru_cache(maxsize=8)
 def _configured_simulator(config: ModelConfig, fs: float) -> Simulator:
     """The simulator of a configuration made by model-level effects (cached per worker process)."""
-    return Simulator(config.model(), config.preset, fs, overrides=config.overrides(), mesh_damping=config.mesh_damping)
+    model = model_of(config)
+    return Simulator(model, config.preset, fs, overrides=config.overrides(model), mesh_damping=config.mesh_damping)
 
 
 def operating_point(spec: DatasetSpec) -> tuple[float, float]:
@@ -149,7 +151,7 @@ def simulate_unit(task: tuple) -> np.ndarray:
         excitation, channel = (), task.channel
     else:
         chain = EffectChain.load(task.effects)
-        config = chain.model_config(ModelConfig.of(task.model, task.preset, task.channel))
+        config = chain.model_config(config_of(task.model, task.preset, task.channel))
         sim = _configured_simulator(config, task.fs)
         excitation, channel = chain.at("excitation"), config.channel
     faults = []
@@ -290,7 +292,7 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
     meta = {"fs_hz": fs, "speed_hz": speed, "load_nm": load, "Z1": pair.Z1}
     if spec.effects:  # what the model-level effects made of the source model
         config = spec.model_config()
-        meta.update(model=config.name, channel=config.channel, simulations=len(tasks))
+        meta.update(model=model_of(config).name, channel=config.channel, simulations=len(tasks))
     return Dataset(
         spec=spec,
         X=X,

@@ -29,7 +29,8 @@ import numpy as np
 import platformdirs
 
 from ..errors import GearlabInputError, clipped
-from ..runs import Event, atomic_write, write_problem
+from ..events import Event
+from ..files import atomic_write, write_problem
 from .spec import Dataset, DatasetSpec
 
 ARRAYS = ("X", "label", "fault", "intensity", "tooth", "rfa", "revolution", "domain")

@@ -14,10 +14,11 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 
 from .. import PHYSICS_VERSION
-from ..effects import check_effect_specs
+from ..effects import EffectChain, check_effect_specs, config_of
 from ..errors import GearlabInputError
 from ..params import did_you_mean
 from ..physics.faults import LADDER_STEPS
+from ..registry import get_registry
 from ..signals import NOISE_KINDS
 
 POINTS = 4096  # samples per revolution (thesis 2.4)
@@ -97,8 +98,6 @@ class DatasetSpec:
         """What needs the registry: the model, its preset and channel, the fault names, the
         teeth (1..Z1 of the preset's pinion) and the effects with their parameters and the
         configuration they make. Returns (model plugin, gear pair, teeth)."""
-        from ..registry import get_registry
-
         where = where or f"dataset '{self.name}'"
         registry = get_registry()
         model = registry.get("model", self.model, where)
@@ -120,16 +119,12 @@ class DatasetSpec:
 
     def effect_chain(self, where: str = ""):
         """The dataset's effects, loaded and ordered by level (gearlab.effects.EffectChain)."""
-        from ..effects import EffectChain
-
         return EffectChain.load(self.effects, f"{where or f'dataset {self.name!r}'}: effects")
 
     def model_config(self, where: str = ""):
-        """The simulator configuration after the model-level effects (gearlab.effects.ModelConfig)."""
-        from ..effects import ModelConfig
-
+        """The simulator configuration after the model-level effects (gearlab.dynamics.config.ModelConfig)."""
         where = where or f"dataset '{self.name}'"
-        source = ModelConfig.of(self.model, self.preset, self.channel, where)
+        source = config_of(self.model, self.preset, self.channel, where)
         return self.effect_chain(where).model_config(source, where)
 
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..physics.stiffness import MeshStiffnessModel, PlacedFault
+from .excitation import Excitation
 from .model import CHANNEL_DOFS, MESH_DAMPING_MODELS, DynamicModel, mesh_damping_ratio
 
 BETA1, BETA2 = 0.5, 2.25
@@ -312,7 +313,7 @@ class Simulator:
             duration: float = 0.4, channels: Sequence[str] | None = None, effects: Sequence = ()) -> Simulation:
         """Integrate from the static equilibrium for *duration* seconds.
 
-        *effects*: excitation-level effects as (Effect, resolved params) pairs (gearlab.effects),
+        *effects*: excitation-level effects as (Effect, resolved params) pairs (gearlab.effects.EffectChain.at),
         applied in order to the nominal excitation (fixed speed, constant load) before the loop.
         """
         preset = self.model.preset(self.preset)
@@ -424,8 +425,6 @@ class Simulator:
 
     def _excite(self, effects, tvms, index, t, speed, load):
         """Apply excitation-level effects to the nominal excitation: (k(t), mean k, forces, moved angle or None)."""
-        from ..effects import Excitation
-
         nominal = 2 * np.pi * speed * t
         exc = Excitation(fs=self.fs, speed_hz=speed, load_nm=load, t=t, angle=nominal, tvms=tvms,
                          load=np.full(t.shape, load), dofs=self.dofs, M=self.M, P=self.P, mu=self.mu, c0=self.c0,

@@ -44,18 +44,21 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..data.textzip import align_to, parse_sensitivity, read_record
 from ..errors import GearlabInputError, shown
+from ..events import Event, UnitProgress
 from ..learn.calibration import Calibration
 from ..learn.detectors import gumbel_quantile
 from ..learn.protocol import Method, Protocol, StateStore, shared_state
 from ..params import did_you_mean
 from ..registry import get_registry
-from ..runs import Event, RunDir, UnitProgress
+from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import Standardiser
 from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
 from ..units import to_si
 from .dataset import class_sizes, device_of, executor_for, simulated_spec, sized
-from .transfer import CALIBRATION, TABLES as TRANSFER_TABLES, TRAINING, check_training, method as transfer_method
+from .transfer import CALIBRATION, TRAINING, check_training
+from .transfer import TABLES as TRANSFER_TABLES
+from .transfer import method as transfer_method
 
 ROLES = ("history", "test")
 SOURCE_SPEEDS = ("records", "source")

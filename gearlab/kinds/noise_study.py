@@ -27,10 +27,11 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
+from ..events import Event, UnitProgress
 from ..learn.networks import NETWORKS
 from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
 from ..params import did_you_mean
-from ..runs import Event, RunDir, UnitProgress
+from ..runs import RunDir
 from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
 from ..signals import NOISE_KINDS
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for

@@ -13,12 +13,13 @@ import numpy as np
 
 from ..charts import Chart, Curve
 from ..errors import GearlabInputError
+from ..events import Event
 from ..physics.faults import LADDER_STEPS, place_fault
 from ..physics.presets import PAIR_PRESETS, gear_pair
 from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions
 from ..plots import ladder_grid, rfa_curves, tvms_figure
 from ..registry import get_registry
-from ..runs import Event, RunDir
+from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of, plain_name
 
 TABLES = {

@@ -24,10 +24,10 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import POINTS, DatasetSpec
 from ..errors import GearlabInputError
+from ..events import Event, UnitProgress
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
 from ..learn.calibration import ALIGNMENTS, SOURCE_NOISE, THRESHOLDS, Calibration
 from ..learn.networks import DEFAULT_NETWORK, NETWORKS
-from ..learn.training import pick_device
 from ..learn.protocol import (
     KS,
     Counts,
@@ -41,9 +41,10 @@ from ..learn.protocol import (
     split,
     unit_key,
 )
+from ..learn.training import pick_device
 from ..params import did_you_mean
 from ..registry import get_registry
-from ..runs import Event, RunDir, UnitProgress
+from ..runs import RunDir
 from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
 from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
 
@@ -300,7 +301,7 @@ def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, 
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:
     import io
 
-    from ..runs import atomic_write
+    from ..files import atomic_write
 
     buf = io.BytesIO()
     np.savez(buf, **latent)

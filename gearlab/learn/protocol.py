@@ -178,7 +178,7 @@ class StateStore:
             with torch.random.fork_rng():
                 state = make()
             if path is not None:
-                from ..runs import atomic_write
+                from ..files import atomic_write
 
                 buf = io.BytesIO()
                 torch.save(state, buf)

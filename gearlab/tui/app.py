@@ -1,7 +1,7 @@
 """`gearlab tui [DIR]`: browse scenarios, run one and watch it, read results, compare runs, list plugins.
 
 A run is the CLI's own `gearlab run SCENARIO --events` in a child process: the TUI reads its
-progress events (JSON lines, gearlab.runs.Event) and draws them, so the TUI and the CLI share
+progress events (JSON lines, gearlab.events.Event) and draws them, so the TUI and the CLI share
 one run engine and one event stream. Cancelling stops the child's whole process group; the
 units it finished are already in the run directory, and `u` resumes the run.
 
@@ -30,10 +30,12 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import DataTable, Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
+from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
-from ..kinds import KINDS
-from ..runs import Event, RunDir
-from ..scenario import Scenario, load_scenario
+from ..events import Event
+from ..kinds import SCENARIO_KINDS
+from ..runs import RunDir
+from ..scenario import Scenario
 from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, scan
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
 from .widgets import ChartView, ResultTable, Stages
@@ -235,7 +237,7 @@ class GearlabApp(App):
             s = entry.scenario
             runs = f"{len(entry.runs)} past run(s)" if entry.runs else "no past runs"
             status.update(Text.assemble(("✓ valid", "bold green"), f"  {s.name} ({s.kind}): {s.description}\n",
-                                        KINDS[s.kind].describe(s),
+                                        SCENARIO_KINDS[s.kind].describe(s),
                                         f"\n{runs} in {self._shown(runs_base(s, self.cwd) / s.name)}; r run, k quick run, "
                                         "f run with options"))
             marked = set()
@@ -321,12 +323,12 @@ class GearlabApp(App):
         try:
             if resume is not None:
                 run = RunDir.open(resume)
-                self.run_scenario = run.scenario()
+                self.run_scenario = scenario_of(run)
                 self.records = run.records()
             else:
                 self.run_scenario = load_scenario(scenario_path)
                 if "--quick" in args:
-                    KINDS[self.run_scenario.kind].quick(self.run_scenario)
+                    SCENARIO_KINDS[self.run_scenario.kind].quick(self.run_scenario)
         except GearlabInputError as exc:
             self.notify(str(exc), severity="error")
             return
@@ -388,7 +390,7 @@ class GearlabApp(App):
     def refresh_live(self) -> None:
         if self.run_scenario is None:
             return
-        kind = KINDS[self.run_scenario.kind]
+        kind = SCENARIO_KINDS[self.run_scenario.kind]
         live = self.query_one("#live", ResultTable)
         try:
             live.show_markdown(kind.records_table(self.run_scenario, self.records))
@@ -437,8 +439,8 @@ class GearlabApp(App):
         verdict = self.query_one("#verdict", Static)
         try:
             rundir = RunDir.open(run.path)
-            scenario = rundir.scenario()
-            kind = KINDS[scenario.kind]
+            scenario = scenario_of(rundir)
+            kind = SCENARIO_KINDS[scenario.kind]
             records = rundir.records()
             table.show_markdown(verdict_table(rundir) or kind.records_table(scenario, records))
             self.charts = kind.charts(scenario, rundir)
@@ -591,7 +593,7 @@ class GearlabApp(App):
         except GearlabInputError as exc:
             self.notify(str(exc), severity="error", title="invalid")
         else:
-            self.notify(f"OK: {s.name} ({s.kind}); {KINDS[s.kind].describe(s)}", title="valid")
+            self.notify(f"OK: {s.name} ({s.kind}); {SCENARIO_KINDS[s.kind].describe(s)}", title="valid")
         self.rescan()
 
     # ------------------------------------------------------------------ plugins

@@ -9,9 +9,10 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..engine import load_scenario, output_base
 from ..errors import GearlabInputError
-from ..runs import RunDir, output_base
-from ..scenario import Scenario, load_scenario
+from ..runs import RunDir
+from ..scenario import Scenario
 
 
 @dataclass

@@ -7,8 +7,7 @@ Note the 1/(4 d²) factor: on cnn3's 31 872-feature latent the loss is tiny, so 
 
 from __future__ import annotations
 
-from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter
-from gearlab.registry import hookimpl
+from gearlab.api import SCHEDULE_PARAMS, Adapter, hookimpl
 
 # torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
 # module on every gearlab command, and only training needs the losses.
@@ -24,14 +23,14 @@ class Coral(Adapter):
     optimizer = "sgd"
 
     def domain_loss(self, z_s, z_t, modules, lam, params=None):
-        from gearlab.learn.losses import coral_loss
+        from gearlab.api import coral_loss
 
         return lam * coral_loss(z_s, z_t)
 
     def discrepancy(self, z_s, z_t, modules, params=None) -> float:
         import torch
 
-        from gearlab.learn.losses import coral_loss
+        from gearlab.api import coral_loss
 
         with torch.no_grad():
             return float(coral_loss(z_s, z_t))

@@ -17,9 +17,7 @@ domain classifier is reduced to guessing).
 
 from __future__ import annotations
 
-from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import SCHEDULE_PARAMS, Adapter, Param, hookimpl
 
 # torch is imported inside the methods: the registry imports this module on every gearlab
 # command, and only training needs torch.
@@ -52,7 +50,7 @@ class DANN(Adapter):
     def _logits(z_s, z_t, modules, lam: float):
         import torch
 
-        from gearlab.learn.losses import grad_reverse
+        from gearlab.api import grad_reverse
 
         z = torch.cat([z_s.reshape(z_s.shape[0], -1), z_t.reshape(z_t.shape[0], -1)])
         logits = modules["domain"](grad_reverse(z, lam)).squeeze(1)

@@ -17,9 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from gearlab.learn.adapters import Adapter
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Adapter, Param, hookimpl
 
 VARIANTS = ("all", "classifier", "last")
 

@@ -14,9 +14,7 @@ turns it on when the history's noise law is not Gaussian (gearlab.learn.history.
 
 from __future__ import annotations
 
-from gearlab.learn.adapters import Adapter
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Adapter, Param, hookimpl
 
 LIMITERS = ("off", "on", "auto")
 
@@ -38,7 +36,7 @@ class MatchedFilter(Adapter):
     choices = {"limiter": LIMITERS}
 
     def detector(self, source, target, params=None):
-        from gearlab.learn.detectors import template_detector
+        from gearlab.api import template_detector
 
         (Xs, ys), (Xt, yt) = source, target
         values = self.values(params)

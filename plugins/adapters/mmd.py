@@ -7,9 +7,7 @@ only. The discrepancy used for stopping is MMD² itself (ideal 0).
 
 from __future__ import annotations
 
-from gearlab.learn.adapters import SCHEDULE_PARAMS, Adapter
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import SCHEDULE_PARAMS, Adapter, Param, hookimpl
 
 # torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
 # module on every gearlab command, and only training needs the losses.
@@ -28,7 +26,7 @@ class MMD(Adapter):
     optimizer = "sgd"
 
     def domain_loss(self, z_s, z_t, modules, lam, params=None):
-        from gearlab.learn.losses import mmd2
+        from gearlab.api import mmd2
 
         scale = float(self.values(params)["bandwidth_scale"])
         return lam * mmd2(z_s, z_t, scale=scale)
@@ -36,7 +34,7 @@ class MMD(Adapter):
     def discrepancy(self, z_s, z_t, modules, params=None) -> float:
         import torch
 
-        from gearlab.learn.losses import mmd2
+        from gearlab.api import mmd2
 
         scale = float(self.values(params)["bandwidth_scale"])
         with torch.no_grad():

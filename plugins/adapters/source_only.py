@@ -6,8 +6,7 @@ measures what the physics model alone is worth.
 
 from __future__ import annotations
 
-from gearlab.learn.adapters import Adapter
-from gearlab.registry import hookimpl
+from gearlab.api import Adapter, hookimpl
 
 
 class SourceOnly(Adapter):

@@ -4,8 +4,7 @@ samples only, never shown source data — the purely data-driven (and optimistic
 
 from __future__ import annotations
 
-from gearlab.learn.adapters import Adapter
-from gearlab.registry import hookimpl
+from gearlab.api import Adapter, hookimpl
 
 
 class TargetOnly(Adapter):

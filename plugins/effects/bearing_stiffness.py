@@ -16,9 +16,7 @@ clearance and housing compliance. Defaults: k_factor 0.5 (real supports are usua
 than the bearing alone, the housing being in series), c_factor 1.
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class BearingStiffness(Effect):

@@ -19,9 +19,7 @@ cover to a heavy industrial housing; Table 2.3: 18.5 kg); mounting stiffness 1e5
 Defaults: Table 2.3 (Luo et al. 2019b).
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class CasingPath(Effect):

@@ -20,9 +20,7 @@ inside. Coupling stiffness 1 to 1e8 N*m/rad: from a soft elastomer coupling (Tab
 Defaults: Table 2.4 (Chaari et al. 2012, Mohammed et al. 2015).
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class DriveInertias(Effect):

@@ -22,10 +22,7 @@ Bounds. lambda from 0 (the thesis's model) to 1 (the neighbour's load doubles th
 deflection: the upper limit of equal load sharing on a shared foundation). Default 0.25.
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.physics.stiffness import fillet_compliance
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, fillet_compliance, hookimpl
 
 
 class FilletCorrection(Effect):

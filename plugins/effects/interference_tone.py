@@ -22,10 +22,7 @@ ratio of 0.5.
 
 import numpy as np
 
-from gearlab.effects import Effect
-from gearlab.errors import GearlabInputError
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, GearlabInputError, Param, hookimpl
 
 
 class InterferenceTone(Effect):

@@ -16,9 +16,7 @@ rating, for the PHM 2009 rig 20 N*m at the output), so the true one lies within 
 either way; a wider range only costs the search its budget. Default 1 (the preset's torque).
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class LoadLevel(Effect):

@@ -17,9 +17,7 @@ Bounds. zeta from 0 (undamped mesh) to 0.3 (heavily damped; literature values li
 model differs from the thesis's source models.
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class MeshDamping(Effect):

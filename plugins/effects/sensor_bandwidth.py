@@ -22,9 +22,7 @@ flat low-pass, a common usable bandwidth of a magnetically mounted sensor.
 
 import numpy as np
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 def frequency_response(f: np.ndarray, f_n: float, zeta: float) -> np.ndarray:

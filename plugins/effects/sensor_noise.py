@@ -13,10 +13,7 @@ chapter 4) to 80 dB (noise 1e-4 of the signal: a laboratory sensor, practically 
 Default 10 dB: a usable industrial measurement, milder than the thesis's 0 dB.
 """
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
-from gearlab.signals import NOISE_KINDS, add_noise
+from gearlab.api import NOISE_KINDS, Effect, Param, add_noise, hookimpl
 
 
 class SensorNoise(Effect):

@@ -15,9 +15,7 @@ one acquisition, tried when a scenario names it.
 
 import numpy as np
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class SensorOffset(Effect):

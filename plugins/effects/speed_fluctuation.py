@@ -32,9 +32,7 @@ import math
 
 import numpy as np
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 class SpeedFluctuation(Effect):

@@ -31,9 +31,7 @@ import math
 
 import numpy as np
 
-from gearlab.effects import Effect
-from gearlab.params import Param
-from gearlab.registry import hookimpl
+from gearlab.api import Effect, Param, hookimpl
 
 
 def friction_pattern(exc, mu_f: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

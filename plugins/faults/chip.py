@@ -7,10 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import Param
-from gearlab.physics.faults import Fault, scaled_ladder
-from gearlab.registry import hookimpl
+from gearlab.api import Fault, GearlabInputError, Param, hookimpl, scaled_ladder
 
 # Tables 2.5 / 2.6: chip depth b fixed, width c growing to the full face width.
 LADDERS = {

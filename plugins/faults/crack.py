@@ -10,10 +10,7 @@ import math
 
 import numpy as np
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import Param
-from gearlab.physics.faults import Fault
-from gearlab.registry import hookimpl
+from gearlab.api import Fault, GearlabInputError, Param, hookimpl
 
 
 def max_half_thickness(pair) -> float:

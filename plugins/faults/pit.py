@@ -11,10 +11,7 @@ import math
 
 import numpy as np
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import Param
-from gearlab.physics.faults import Fault, scaled_ladder
-from gearlab.registry import hookimpl
+from gearlab.api import Fault, GearlabInputError, Param, hookimpl, scaled_ladder
 
 _PIT_SHAPE = {"r": 80e-6, "sigma_r": 0.0, "theta": math.radians(30), "sigma_theta": 0.0, "n_total": 2000, "seed": 0}
 # Tables 2.5 / 2.6: pit shape and pitting line fixed, the number of pits growing to 2000.

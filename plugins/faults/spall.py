@@ -4,11 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import Param
-from gearlab.physics.faults import Fault, region, scaled_ladder
-from gearlab.physics.sections import healthy_section
-from gearlab.registry import hookimpl
+from gearlab.api import Fault, GearlabInputError, Param, healthy_section, hookimpl, region, scaled_ladder
 
 # Tables 2.5 / 2.6: length, depth and start fixed, width growing.
 LADDERS = {

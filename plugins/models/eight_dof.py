@@ -1,7 +1,6 @@
 """The eight-DOF model of thesis 2.4.2: the 10-DOF model without the casing (Dataset B-8)."""
 
-from gearlab.dynamics.model import DOF_ORDER, DynamicModel
-from gearlab.registry import hookimpl
+from gearlab.api import DOF_ORDER, DynamicModel, hookimpl
 from gearlab_plugins.models.presets import MENG2020, only
 
 

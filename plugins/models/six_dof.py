@@ -4,8 +4,7 @@ No motor and no load: the pinion turns at the fixed input speed and the load tor
 on the driven gear directly.
 """
 
-from gearlab.dynamics.model import DynamicModel
-from gearlab.registry import hookimpl
+from gearlab.api import DynamicModel, hookimpl
 from gearlab_plugins.models.presets import MENG2020, only
 
 

@@ -1,7 +1,6 @@
 """The 10-DOF model of Luo et al. (2019b), thesis 2.3 and Table 2.3: Dataset A."""
 
-from gearlab.dynamics.model import DOF_ORDER, DynamicModel
-from gearlab.registry import hookimpl
+from gearlab.api import DOF_ORDER, DynamicModel, hookimpl
 from gearlab_plugins.models.presets import LUO2019
 
 

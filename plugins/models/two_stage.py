@@ -31,9 +31,7 @@ import math
 
 import numpy as np
 
-from gearlab.dynamics.model import Assembly, DynamicModel, Mesh, add_spring
-from gearlab.physics.presets import gear_pair
-from gearlab.registry import hookimpl
+from gearlab.api import Assembly, DynamicModel, Mesh, add_spring, gear_pair, hookimpl
 
 DOFS = ("x1", "y1", "theta11", "theta12", "x2", "y2", "theta21", "x3", "y3", "theta31", "theta22", "xf", "yf")
 

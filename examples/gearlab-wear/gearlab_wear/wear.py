@@ -30,11 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import Param
-from gearlab.physics.faults import Fault, region
-from gearlab.physics.sections import healthy_section
-from gearlab.registry import hookimpl
+from gearlab.api import Fault, GearlabInputError, Param, healthy_section, hookimpl, region
 
 # Default band: the upper flank, inside the active profile of both thesis pairs (contact
 # starts at 0.34 d_h on the luo2019 pinion, 0.28 d_h on meng2020) and up to the tip.

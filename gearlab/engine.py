@@ -1,0 +1,201 @@
+"""The run engine shared by the CLI and the TUI: load and check a scenario, create or resume
+its run directory, run its kind, write the report.
+
+It sits above the scenario kinds (it looks a kind up by name in SCENARIO_KINDS) and above the
+report; nothing below imports it. Progress goes out as gearlab.events.Event objects to one
+callback: the CLI draws rich progress bars from them, the TUI its widgets.
+"""
+
+from __future__ import annotations
+
+import shutil
+import threading
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from .errors import GearlabInputError
+from .events import PROGRESS, Event, EventSink, ignore_events
+from .files import cannot_write, write_problem
+from .kinds import SCENARIO_KINDS
+from .report import build_report
+from .runs import RunDir, check_inputs
+from .scenario import (
+    EXECUTION_TABLE,
+    OUTPUT_TABLE,
+    SCENARIO_TABLE,
+    Scenario,
+    location,
+    one_of,
+    read_toml,
+    validate_table,
+    validate_tables,
+)
+
+
+class ProgressWatcher(threading.Thread):
+    """Turns the progress/ folder into events: Event('unit', stage=unit, message=text) when a
+    unit reports, and with an empty message when its file goes (the unit ended)."""
+
+    def __init__(self, run: RunDir, on_event: EventSink, every: float = 0.5):
+        super().__init__(daemon=True)
+        self.folder, self.on_event, self.every = run.path / PROGRESS, on_event, every
+        self.stopped = threading.Event()
+        shutil.rmtree(self.folder, ignore_errors=True)  # left by a killed run
+
+    def run(self) -> None:
+        shown: dict[str, str] = {}
+        while not self.stopped.wait(self.every):
+            now = {}
+            for path in self.folder.glob("*.txt") if self.folder.is_dir() else ():
+                try:
+                    now[path.stem.replace("__", "/")] = path.read_text()
+                except OSError:  # it went between the listing and the read
+                    continue
+            for unit, text in now.items():
+                if shown.get(unit) != text:
+                    self.on_event(Event("unit", stage=unit, message=text))
+            for unit in shown.keys() - now.keys():
+                self.on_event(Event("unit", stage=unit))
+            shown = now
+
+    def stop(self) -> None:
+        self.stopped.set()
+        self.join()
+
+
+def _serialised(on_event: EventSink) -> EventSink:
+    """The sink, safe to call from the engine and the progress watcher alike."""
+    lock = threading.Lock()
+
+    def sink(event: Event) -> None:
+        with lock:
+            on_event(event)
+
+    return sink
+
+
+def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None,
+                  base: str | Path | None = None) -> Scenario:
+    """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key.
+
+    *overrides* ({table: {key: value}}, e.g. the CLI's --executor or --trials) replace keys of
+    the file before validation, so they are checked like the file's own values."""
+    path = Path(path)
+    data = read_toml(path)
+    for table, values in (overrides or {}).items():
+        if not isinstance(data.get(table, {}), dict):
+            raise GearlabInputError(f"{location(path, table)}: expected a table, to set {', '.join(values)} in")
+        data.setdefault(table, {}).update(values)
+    head = validate_table(path, "scenario", SCENARIO_TABLE, data.get("scenario", {})) if "scenario" in data else None
+    if head is None:
+        raise GearlabInputError(f"{path}: missing table [scenario] (with name, kind and description)")
+    kind = one_of(*SCENARIO_KINDS)(head["kind"], location(path, "scenario", "kind"))
+    module = SCENARIO_KINDS[kind]
+    schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, "execution": EXECUTION_TABLE, **module.TABLES}
+    tables = validate_tables(path, schema, data)
+    scenario = Scenario(
+        path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data,
+        base=Path(base) if base is not None else path.parent,
+    )
+    scenario.spec = module.build(scenario)
+    return scenario
+
+
+def scenario_of(run: RunDir) -> Scenario:
+    """The scenario as *run* ran it (shrunk alike when started with --quick)."""
+    scenario = load_scenario(run.scenario_path(), base=run.base())
+    if run.quick:
+        SCENARIO_KINDS[scenario.kind].quick(scenario)
+    return scenario
+
+
+def run_scenario(
+    scenario_path: str | Path | None = None,
+    *,
+    out: str | Path | None = None,
+    resume: str | Path | None = None,
+    quick: bool = False,
+    overrides: Mapping[str, Mapping] | None = None,
+    on_event: EventSink = ignore_events,
+) -> RunDir:
+    """Validate, then run a scenario into a new (or resumed) run directory. *overrides*
+    ({table: {key: value}}) replace keys of the scenario file (see load_scenario); a resumed
+    run may change only [execution] (where it runs, not what it computes)."""
+    on_event = _serialised(on_event)
+    if resume is not None:
+        run = RunDir.open(Path(resume))
+    else:
+        if scenario_path is None:
+            raise GearlabInputError("no scenario given")
+        scenario = load_scenario(scenario_path, overrides)
+        if quick:  # the shrunk scenario is checked again: refused before any folder is made
+            SCENARIO_KINDS[scenario.kind].quick(scenario)
+        run = RunDir.create(output_base(scenario, out), scenario, quick)
+    try:
+        lock = run.lock()
+    except GearlabInputError:
+        if resume is None:  # a new run that cannot even be locked (a full disk): leave none
+            run.discard()
+        raise
+    with lock:  # held until the run ends: a second process in this directory is refused
+        if resume is not None:
+            scenario = _resumed_scenario(run, scenario_path, quick, overrides)
+        on_event(Event("run", message=str(run.path)))
+        on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
+        watcher = ProgressWatcher(run, on_event)
+        watcher.start()
+        try:
+            SCENARIO_KINDS[scenario.kind].run(scenario, run, on_event)
+            write_report(run)
+        except GearlabInputError:
+            # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
+            if resume is None and not run.records():
+                run.discard()
+            raise
+        except OSError as exc:
+            if write_problem(exc) is None:
+                raise
+            # A full disk, a read-only place: finished units are stored line by line, so a run
+            # that has any is kept for --resume; one that has none is removed.
+            kept = resume is not None or bool(run.records())
+            if not kept:
+                run.discard()
+            then = (f"; the run is kept: once fixed, resume with: gearlab run --resume {run.path}" if kept
+                    else "; no run directory is left")
+            raise GearlabInputError(f"{cannot_write(exc, run.path)}{then}") from None
+        finally:
+            watcher.stop()
+    return run
+
+
+def output_base(scenario: Scenario, out: str | Path | None = None) -> Path:
+    """The folder that holds a scenario's runs (<base>/<name>/<timestamp>/): --out, else its
+    [output] dir; a relative one is taken from the current folder. The TUI looks up past runs
+    with this, so it finds them where `gearlab run` puts them."""
+    return Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
+
+
+def _resumed_scenario(run: RunDir, scenario_path: str | Path | None, quick: bool,
+                      overrides: Mapping[str, Mapping] | None = None) -> Scenario:
+    """The scenario a run was started with, shrunk alike if it was started with --quick;
+    the results store made ready for appends. Called with the run directory locked."""
+    if quick and not run.quick:
+        raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
+    scenario = load_scenario(scenario_path or run.scenario_path(), overrides,
+                             base=None if scenario_path else run.base())
+    if not run.started_with(scenario):
+        raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
+                                "with; resume without SCENARIO (the run keeps a copy) or start a new run")
+    check_inputs(run)
+    if run.quick:
+        SCENARIO_KINDS[scenario.kind].quick(scenario)
+    run.truncate_partial()
+    run.remove_temporaries()
+    return scenario
+
+
+def write_report(run: RunDir) -> Path:
+    html = build_report(run.path)
+    run.write_text("report.html", html)
+    return run.path / "report.html"

@@ -1,0 +1,82 @@
+"""Writing files safely: whole files by atomic rename, names kept inside a folder, one-line
+messages for a file system that refuses a write.
+
+The bottom of gearlab's run infrastructure (see docs/architecture.md): imported by the data
+cache, the gap diagnosis, the learners and the run directory alike, so it imports nothing of
+gearlab but the errors.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import tempfile
+from pathlib import Path
+
+from .errors import GearlabInputError, shown
+
+
+def current_umask() -> int:
+    """The process's umask, read without changing it where Linux tells it (/proc)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)  # elsewhere: set and restore at once
+    os.umask(mask)
+    return mask
+
+
+def atomic_write(path: Path, data: bytes | str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        os.fchmod(fd, 0o666 & ~current_umask())  # mkstemp makes 0600; a report is for others to read too
+        with os.fdopen(fd, "wb") as f:
+            f.write(data.encode() if isinstance(data, str) else data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException as exc:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename is None:  # a full disk: name the file in the message
+            exc.filename = str(path)
+        raise
+
+
+def inside(root: Path, *parts: str) -> Path:
+    """*root*/*parts*, when that is provably inside *root*: refused when a part is absolute,
+    climbs out with '..', holds a NUL, or leads out through a symbolic link. Every file a
+    run writes is named through this (RunDir.file), so no name taken from a scenario or a
+    measured file can place one elsewhere."""
+    path = Path(root).joinpath(*parts)
+    try:
+        real_root, real = Path(root).resolve(), path.resolve()
+        ok = real != real_root and real.is_relative_to(real_root)
+    except (OSError, ValueError):  # a NUL character, a loop of links
+        ok = False
+    if not ok:
+        raise GearlabInputError(f"{shown(str(path), 200)}: refused: not a file inside {root}")
+    return path
+
+
+# errno -> what the user is told (and can fix) when a file cannot be written
+_WRITE_PROBLEMS = {errno.ENOSPC: "no space left on the device", errno.EDQUOT: "disk quota exceeded",
+                   errno.EROFS: "read-only file system", errno.EACCES: "permission denied",
+                   errno.EPERM: "operation not permitted", errno.EFBIG: "file too large"}
+
+
+def write_problem(exc: OSError) -> str | None:
+    """What keeps a file from being written (a full disk, a read-only place), or None when
+    *exc* is not such a problem of the user's file system."""
+    return _WRITE_PROBLEMS.get(exc.errno)
+
+
+def cannot_write(exc: OSError, where: Path | str = "") -> GearlabInputError:
+    """One line naming the path and the problem, for an OSError of writing (under *where*)."""
+    problem = write_problem(exc) or exc.strerror or type(exc).__name__
+    path = exc.filename or where
+    return GearlabInputError(f"{path}: cannot write: {problem}" if path else f"cannot write: {problem}")

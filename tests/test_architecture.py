@@ -1,0 +1,153 @@
+"""The layering of gearlab, written down and enforced (docs/architecture.md).
+
+Every module of the gearlab package is parsed (not imported); every ``import`` of a gearlab
+module counts, at module level and inside functions alike (an import inside a function is
+still a dependency: it only runs later). A module may import from its own layer and the
+layers below it, never from a layer above, and the import graph has no cycle. Imports under
+``if TYPE_CHECKING:`` are left out: they never run.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "gearlab"
+
+# Bottom to top. A module belongs to the first entry that names it or a package holding it.
+LAYERS: list[tuple[str, tuple[str, ...]]] = [
+    ("base", ("gearlab", "gearlab.errors", "gearlab.units", "gearlab.params", "gearlab.files", "gearlab.events",
+              "gearlab.charts", "gearlab.executors")),
+    ("physics and signals", ("gearlab.physics", "gearlab.signals")),
+    ("dynamics", ("gearlab.dynamics",)),
+    ("effect contract", ("gearlab.effect_contract",)),
+    ("plugin registry", ("gearlab.registry",)),
+    ("effect chain and learning", ("gearlab.effects", "gearlab.learn")),
+    ("datasets", ("gearlab.data",)),
+    ("gap diagnosis", ("gearlab.gap",)),
+    ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
+    ("scenario kinds", ("gearlab.kinds",)),
+    ("verdict and report", ("gearlab.verdict", "gearlab.report")),
+    ("run engine", ("gearlab.engine",)),
+    ("front-ends and the plugin API", ("gearlab.compare", "gearlab.tui", "gearlab.cli", "gearlab.__main__",
+                                       "gearlab.api")),
+]
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def layer_of(module: str) -> int:
+    best = None
+    for index, (_, names) in enumerate(LAYERS):
+        for name in names:
+            if module == name or module.startswith(name + "."):
+                if best is None or len(name) > best[1]:
+                    best = (index, len(name))
+    if best is None:
+        raise AssertionError(f"{module} is in no layer of tests/test_architecture.py: add it to LAYERS")
+    return best[0]
+
+
+def _type_checking_nodes(tree: ast.AST) -> set[int]:
+    """ids of the import nodes under `if TYPE_CHECKING:` (never executed)."""
+    skipped = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for child in node.body:
+                skipped.update(id(n) for n in ast.walk(child))
+    return skipped
+
+
+def imports_of(module: str) -> list[tuple[str, int, bool]]:
+    """(imported gearlab module, line, at module level) for every import in *module*."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    skipped = _type_checking_nodes(tree)
+    top = {id(n) for n in tree.body}
+    found = []
+    for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
+        targets = []
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                source = ".".join(base + ([node.module] if node.module else []))
+            else:
+                source = node.module or ""
+            # `from pkg import sub` imports the submodule pkg.sub
+            targets = [f"{source}.{a.name}" if f"{source}.{a.name}" in MODULES else source for a in node.names]
+        for target in targets:
+            while target and target not in MODULES and "." in target:  # `import gearlab.x.y` of a name
+                target = target.rpartition(".")[0]
+            if target in MODULES and target != module:
+                found.append((target, node.lineno, id(node) in top))
+    return found
+
+
+GRAPH = {module: imports_of(module) for module in MODULES}
+
+
+def test_every_module_has_a_layer():
+    for module in MODULES:
+        layer_of(module)
+
+
+def test_no_module_imports_from_a_layer_above_its_own():
+    upward = [f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {m} ({LAYERS[layer_of(m)][0]}) imports {t} "
+              f"({LAYERS[layer_of(t)][0]})"
+              for m, edges in GRAPH.items() for t, line, _ in edges if layer_of(t) > layer_of(m)]
+    assert not upward, "upward imports:\n" + "\n".join(upward)
+
+
+def test_the_import_graph_has_no_cycle():
+    edges = {m: sorted({t for t, _, _ in e}) for m, e in GRAPH.items()}
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(m: str) -> list[str] | None:
+        state[m] = 1
+        path.append(m)
+        for t in edges[m]:
+            if state.get(t) == 1:
+                return path[path.index(t):] + [t]
+            if t not in state and (cycle := visit(t)):
+                return cycle
+        path.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(edges):
+        if m not in state and (cycle := visit(m)):
+            pytest.fail("import cycle: " + " -> ".join(cycle))
+
+
+def test_the_check_sees_function_level_imports_and_an_upward_one(tmp_path):
+    # the test itself: a function-level import is an edge, and the layers order them
+    assert ("gearlab.plots", True) not in {(t, top) for t, _, top in GRAPH["gearlab.kinds.transfer"]}
+    assert any(t == "gearlab.plots" and not top for t, _, top in GRAPH["gearlab.kinds.transfer"])
+    assert layer_of("gearlab.dynamics.newmark") < layer_of("gearlab.effects") < layer_of("gearlab.engine")
+    assert layer_of("gearlab.kinds.gap") == layer_of("gearlab.kinds")
+
+
+def test_plugins_import_gearlab_only_through_the_public_api():
+    root = PACKAGE.parent
+    private = []
+    for path in sorted([*(root / "plugins").rglob("*.py"), *(root / "examples").rglob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
+            private += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names
+                        if (n == "gearlab" or n.startswith("gearlab.")) and n != "gearlab.api"]
+    assert not private, "plugins must import from gearlab.api only:\n" + "\n".join(private)
