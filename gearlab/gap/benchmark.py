@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -79,6 +79,34 @@ RANGES: dict[str, dict[str, object]] = {
 
 MIN_TARGET_REVOLUTIONS = 10  # gearlab.gap.stats.MIN_REVOLUTIONS: fewer and no statistic means much
 
+# How a target is acquired and written (issue 15): a real record is sampled at its own rate, so its
+# revolutions start between samples; its tacho mark sits anywhere on the shaft; it may store
+# integers. Every trial draws: the samples per revolution as a share of the simulation's 4096
+# (RATE_SHARES, uniform), the tacho's zero off the simulation's (uniform over the turn) and a
+# FORMAT: float64 npz, int16 npz (counts, with a gain) or int16 PCM wav (full-scale fractions).
+RATE_SHARES = (0.3, 0.7)
+FORMATS = ("npz", "npz-int16", "wav")
+# An integer record's full scale: this many times the record's largest value (an acquisition's
+# headroom); int16 then rounds to 1/32767 of it.
+HEADROOM = 4.0
+# The written sensitivity (V per m/s²) and, for integers, gain (V per count / at full scale): the
+# calibration sheet beside the record (calibration.json), public to both sides.
+SENSITIVITY = 0.01 / 9.80665  # 10 mV/g
+
+
+@dataclass(frozen=True)
+class Acquisition:
+    """How a trial's target record is written: rate share, tacho offset (rad), format."""
+
+    rate_share: float
+    offset: float
+    format: str
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator) -> Acquisition:
+        return cls(float(rng.uniform(*RATE_SHARES)), float(rng.uniform(0.0, 2 * math.pi)),
+                   FORMATS[int(rng.integers(len(FORMATS)))])
+
 
 def trial_counts(n: int) -> dict[str, int]:
     """Trials per kind for *n* trials: MIX by largest remainder; from 4 trials on, every kind at least once."""
@@ -105,6 +133,7 @@ class Trial:
     withheld: str | None  # the effect kept out of the candidate list (kind "withheld")
     candidates: tuple[str, ...]
     seed: int  # the target's noise and signal-effect seed
+    acquisition: Acquisition | None = None  # None: the angle-domain record (fs = 4096 x speed, exact starts)
 
 
 def _draw_value(rng: np.random.Generator, rule) -> float:
@@ -177,7 +206,9 @@ def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, 
             used[kind] += 1
         out = names[0] if kind == "withheld" else None
         candidates = tuple(e for e in library if e != out)
-        trials.append(Trial(index, kind, hidden, out, candidates, int(r.integers(1, 2**31 - 1))))
+        trial_seed = int(r.integers(1, 2**31 - 1))
+        acquisition = Acquisition.draw(np.random.default_rng([seed, 2, index]))
+        trials.append(Trial(index, kind, hidden, out, candidates, trial_seed, acquisition))
     return trials
 
 
@@ -205,28 +236,108 @@ def record_of(rows: np.ndarray) -> dict[str, np.ndarray]:
     return {VIBRATION: vib, TACHO: tacho, LABEL: np.array("healthy")}
 
 
+def acquired_record(rows: np.ndarray, speed: float, acquisition: Acquisition,
+                    noise: Callable[[np.ndarray, float], np.ndarray]) -> tuple[dict, float]:
+    """Noise-free revolutions (n, P) in m/s², one after another, as an acquisition records them:
+    read at acquisition.rate_share x P samples per revolution (a multiple of 1/n: revolutions start
+    between samples) by Fourier resampling of the n-turn record (an ideal anti-alias filter below the
+    new Nyquist), turned so that the tacho's zero sits at acquisition.offset of the simulation's
+    revolution, noise added in time by *noise(x, fs)*. Returns (channels in m/s², fs). The tacho
+    is a once-per-revolution pulse whose rising edge is a two-sample ramp through the true start
+    (so the importer's edge interpolation finds it between samples)."""
+    n, P = rows.shape
+    total = int(round(acquisition.rate_share * P * n))
+    per_rev = total / n
+    fs = per_rev * speed
+    F = np.fft.rfft(rows.reshape(-1))
+    m = np.arange(F.size)
+    F = F * np.exp(2j * np.pi * m * (acquisition.offset / (2 * np.pi)) / n)  # x(θ + offset)
+    keep = (total + 1) // 2  # bins strictly below the new Nyquist
+    G = np.zeros(total // 2 + 1, dtype=complex)
+    G[:keep] = F[:keep] * (total / (n * P))
+    vib = noise(np.fft.irfft(G, n=total), fs)
+    d = (np.arange(total) / per_rev) % 1.0 * per_rev  # samples since the last revolution start
+    d = np.where(d < per_rev / 2, d, d - per_rev)
+    tacho = np.clip(0.5 + d / 2.0, 0.0, 1.0) * (d > -1.0)
+    return {VIBRATION: vib, TACHO: tacho, LABEL: np.array("healthy")}, fs
+
+
+def stored(record: dict, fs: float, fmt: str) -> tuple[bytes, str, dict]:
+    """(file bytes, file name, calibration) of a record in m/s² in *fmt* (FORMATS): the vibration in
+    volts through SENSITIVITY; int16 formats rounded to 1/32767 of HEADROOM x its largest value,
+    their gain (V per count, or at full scale for WAV) in the calibration."""
+    import io
+
+    volts = record[VIBRATION] * SENSITIVITY
+    calibration = {"sensitivity": SENSITIVITY}
+    buf = io.BytesIO()
+    if fmt == "npz":
+        np.savez(buf, **{**record, VIBRATION: volts, "fs": np.array(fs)})
+        return buf.getvalue(), "target.npz", calibration
+    full = HEADROOM * float(np.max(np.abs(volts)))
+    counts = np.round(volts / full * 32767).astype(np.int16)
+    if fmt == "npz-int16":
+        np.savez(buf, **{**record, VIBRATION: counts, "fs": np.array(fs)})
+        return buf.getvalue(), "target.npz", {**calibration, "gain": full / 32767}
+    from scipy.io import wavfile
+
+    # WAV has no room for the rate's fraction or a label: the rate is rounded to whole Hz, which
+    # the tacho's own speed measure makes harmless; the record is taken as healthy (unlabelled).
+    pulses = np.round(record[TACHO] * 16000).astype(np.int16)
+    wavfile.write(buf, int(round(fs)), np.stack([counts, pulses], axis=1))
+    return buf.getvalue(), "target.wav", {**calibration, "gain": full * 32768 / 32767}
+
+
 def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: int, executor=None) -> Path:
-    """Simulate the trial's target, write it as folder/target.npz and the answers as folder/answers.json."""
-    from ..data.builder import build_dataset, operating_point
+    """Simulate the trial's target, write it as folder/target.<ext> (with folder/calibration.json)
+    and the answers as folder/answers.json."""
+    from ..data.builder import EFFECT_STREAM, build_dataset, operating_point
+    from ..effects import EffectChain
     from ..gap.views import healthy_rows
+    from ..signals import add_noise
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     spec = target_spec(trial, source, revolutions)
-    dataset = build_dataset(spec, executor)
-    rows = healthy_rows(dataset)
     speed, _ = operating_point(spec)
-    record = record_of(rows)
-    record["fs"] = np.array(rows.shape[1] * speed)
-    import io
+    acq = trial.acquisition
+    if acq is None:
+        dataset = build_dataset(spec, executor)
+        rows = healthy_rows(dataset)
+        record = record_of(rows)
+        record["fs"] = np.array(rows.shape[1] * speed)
+        import io
 
-    buf = io.BytesIO()
-    np.savez(buf, **record)
-    path = folder / "target.npz"
-    atomic_write(path, buf.getvalue())
+        buf = io.BytesIO()
+        np.savez(buf, **record)
+        data, name, calibration = buf.getvalue(), "target.npz", None
+    else:
+        # The deterministic target (every effect but noise), then the noise in time at the record's rate.
+        chain = EffectChain.load(spec.effects)
+        noisy = EffectChain(tuple(item for item in chain.at("signal") if item[0].noise))
+        quiet = tuple(e for e in spec.effects if not any(e[0] == item[0].name for item in noisy.items))
+        rows = healthy_rows(build_dataset(spec.with_(noise=None, effects=quiet), executor))
+        rms = float(np.sqrt(np.mean(rows**2)))
+
+        def noise(x: np.ndarray, fs: float) -> np.ndarray:
+            x = x[None, :]
+            if noisy:
+                x = noisy.apply_signal(x, fs, speed, rms, [trial.seed, EFFECT_STREAM])
+            if spec.noise is not None:
+                x = add_noise(x, spec.noise.snr_db, spec.noise.kind, np.random.default_rng([trial.seed, 5]))
+            return x[0]
+
+        record, fs = acquired_record(rows, speed, acq, noise)
+        data, name, calibration = stored(record, fs, acq.format)
+    path = folder / name
+    atomic_write(path, data)
+    if calibration is not None:
+        atomic_write(folder / "calibration.json", json.dumps(calibration, indent=1, sort_keys=True))
     answers = {"index": trial.index, "kind": trial.kind, "withheld": trial.withheld,
                "hidden": [[name, dict(params)] for name, params in trial.hidden], "seed": trial.seed,
-               "candidates": list(trial.candidates)}
+               "candidates": list(trial.candidates),
+               "acquisition": None if acq is None else {"rate_share": acq.rate_share,
+                                                        "offset_deg": math.degrees(acq.offset), "format": acq.format}}
     atomic_write(folder / "answers.json", json.dumps(answers, indent=1, sort_keys=True))
     return path
 
@@ -238,28 +349,44 @@ def read_answers(folder: Path) -> dict:
 # --- the diagnosis (knows only the file) ---------------------------------------------------------
 
 
-def import_target(path: Path) -> np.ndarray:
-    """The healthy revolutions of a written target, in physical units, through the importer."""
+def import_target(path: Path):
+    """The healthy revolutions of a written target, in physical units, through the importer, and
+    its measurement chain (None for the angle-domain record, which has none to match)."""
     from ..data.importers import MeasuredSpec, import_measured
     from ..gap.views import healthy_rows
+    from ..data.chain import PASSBAND, chain_of
 
+    path = Path(path)
+    calibration = path.parent / "calibration.json"
+    units = json.loads(calibration.read_text()) if calibration.exists() else {}
+    wav = path.suffix == ".wav"
     # transient 'none': the record is steady from its first sample (a simulated steady state)
-    spec = MeasuredSpec(name="target", path=str(path), vibration=VIBRATION, tacho=TACHO, labels=LABEL,
-                        transient="none")
-    return healthy_rows(import_measured(spec))
+    spec = MeasuredSpec(name="target", path=str(path), vibration="0" if wav else VIBRATION,
+                        tacho="1" if wav else TACHO, labels=None if wav else LABEL, transient="none", **units)
+    dataset = import_measured(spec)
+    rows = healthy_rows(dataset) if not wav else np.asarray(dataset.X, np.float64) * dataset.reference[1] \
+        + dataset.reference[0]
+    if not units:
+        return rows, None, 0
+    chain = chain_of(dataset.meta)
+    return rows, chain, int(PASSBAND * chain.nyquist_order)
 
 
-def _diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Mapping, candidates: tuple[str, ...]) -> dict:
+def _diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Mapping, candidates: tuple[str, ...],
+              chain=None, max_order: int = 0) -> dict:
     """gearlab.gap.diagnose.diagnose with the search settings (a plain dict, picklable); imported here
     so that the benchmark loads without it. Serial inside a trial: trials are what runs in parallel."""
     from . import diagnose as d
 
-    return d.diagnose(source, target_X, d.Settings(candidates=tuple(candidates), **dict(settings)), executor=None)
+    settings = {**dict(settings), "max_order": max_order} if max_order else dict(settings)
+    return d.diagnose(source, target_X, d.Settings(candidates=tuple(candidates), **settings), executor=None,
+                      chain=chain)
 
 
 def diagnose_file(path: str | Path, source: DatasetSpec, candidates: Sequence[str], settings: Mapping) -> dict:
     """Diagnose a target from its file alone: the whole of what the diagnosis is given."""
-    return _diagnose(source, import_target(Path(path)), dict(settings), tuple(candidates))
+    rows, chain, max_order = import_target(Path(path))
+    return _diagnose(source, rows, dict(settings), tuple(candidates), chain, max_order)
 
 
 # --- scoring ---------------------------------------------------------------------------------------

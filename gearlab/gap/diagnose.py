@@ -66,18 +66,20 @@ import numbers
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..data.builder import (CHUNK, RowsTask, SimTask, healthy_reference, noisy_rows, operating_point,
-                            simulate_unit, whole_steps_rate)
+from ..data.builder import (CHUNK, EFFECT_STREAM, RowsTask, SimTask, healthy_reference, noisy_rows,
+                            operating_point, simulate_unit, whole_steps_rate)
+from ..data.chain import Chain, fit_offset, measure
 from ..data.spec import POINTS, DatasetSpec
-from ..effects import LEVELS, default_candidates
+from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
 from ..executors import LocalExecutor
 from ..registry import get_registry
 from ..events import Event
+from ..signals import add_noise
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .views import (BandPlan, gear_ratio, order_views_of_power, power_of_spectrum, residual_view_of_spectrum,
                     waveform_view)
@@ -232,7 +234,7 @@ def band_limited(X: np.ndarray, max_order: int) -> np.ndarray:
     return np.fft.irfft(F, n=X.shape[1], axis=1)
 
 
-def source_rows(spec: DatasetSpec, max_order: int = 0) -> np.ndarray:
+def source_rows(spec: DatasetSpec, max_order: int = 0, chain: Chain | None = None) -> np.ndarray:
     """The healthy rows of *spec* in physical units, (spec.healthy, POINTS) float64: exactly
     ``healthy_rows(build_dataset(spec.with_(faults=())))``, without the cache or the fault
     simulations.
@@ -242,6 +244,10 @@ def source_rows(spec: DatasetSpec, max_order: int = 0) -> np.ndarray:
     costs no simulation) and its row task (signal effects, the dataset's noise and TSA, with
     the same per-sample seeds [seed, noise seed, i] and the float32 standardisation), then
     the standardisation undone as healthy_rows does.
+
+    *chain*: a measured target's acquisition (gearlab.data.chain): the rows are then made as the
+    target's were -- one revolution each, read at the record's rate and start fractions, noise
+    effects in time before the order tracking, rounded to its step -- by :func:`measured_rows`.
     """
     registry = get_registry()
     _, pair, _ = spec.check_model()
@@ -250,6 +256,8 @@ def source_rows(spec: DatasetSpec, max_order: int = 0) -> np.ndarray:
     physics = tuple(e for e in spec.effects if registry.get("effect", e[0]).level != "signal")
     clean = _clean_revolution(spec.model, spec.preset, fs, speed, load, spec.channel, physics)
     reference_rms = float(np.sqrt(np.mean(clean**2)))
+    if chain is not None:
+        return band_limited(measured_rows(spec, clean, speed, reference_rms, chain, pair.Z1), max_order)
     mean, std = _reference(spec, clean, speed, reference_rms)
     noise_seed = spec.noise.seed if spec.noise else 0
     kind = spec.noise.kind if spec.noise else None
@@ -261,6 +269,51 @@ def source_rows(spec: DatasetSpec, max_order: int = 0) -> np.ndarray:
                         kind, snr, spec.revolutions, spec.tsa, (mean, std), spec.effects, speed, reference_rms)
         out[lo:lo + len(idx)] = noisy_rows(tuple(task))
     return band_limited(out.astype(np.float64) * std + mean, max_order)
+
+
+def measured_rows(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float, chain: Chain,
+                  teeth: int = 1) -> np.ndarray:
+    """The healthy rows of *spec* through a measured target's chain (gearlab.data.chain.measure):
+    each row one revolution; the non-noise signal effects act in the angle domain on row i's
+    record (the builder's seeds [seed, noise seed, i]), the noise effects and the dataset's noise
+    in time at the record's rate, where a sensor's noise is white. The tacho offset is the
+    chain's, or fitted to the target's synchronous average for this very set (a free rotation:
+    it follows whatever the effects do to the waveform's phase)."""
+    effects = EffectChain.load(spec.effects).at("signal") if spec.effects else ()
+    shaping = EffectChain(tuple(item for item in effects if not item[0].noise))
+    noisy = EffectChain(tuple(item for item in effects if item[0].noise))
+    noise_seed = spec.noise.seed if spec.noise else 0
+    seeds = [[spec.seed, noise_seed, i] for i in range(spec.healthy)]
+    D = np.empty((spec.healthy, POINTS))
+    for i, seed in enumerate(seeds):
+        row = clean[None, :]
+        if shaping:
+            row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
+        D[i] = row[0]
+    offset = chain.offset
+    if offset is None:
+        offset = fit_offset(D.mean(axis=0), chain.reference, teeth) if chain.reference is not None else 0.0
+
+    def noise(i: int, x: np.ndarray) -> np.ndarray:
+        if noisy:
+            x = noisy.apply_signal(x, chain.fs, speed, reference_rms, [*seeds[i], EFFECT_STREAM])
+        if spec.noise is not None:
+            x = add_noise(x, spec.noise.snr_db, spec.noise.kind, np.random.default_rng(seeds[i]))
+        return x
+
+    return measure(D, chain, noise if (noisy or spec.noise is not None) else None, offset)
+
+
+@dataclass(frozen=True)
+class Rows:
+    """How the source's rows are made for one target (picklable, handed to every fit): the band it
+    is compared in (max_order) and, for a measured target, its acquisition chain."""
+
+    max_order: int = 0
+    chain: Chain | None = None
+
+    def __call__(self, spec: DatasetSpec) -> np.ndarray:
+        return source_rows(spec, self.max_order, self.chain)
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
@@ -512,14 +565,14 @@ def _intervals(space: Space, history: list[dict], best: dict, noise: float) -> d
 
 def fit_effect(task: tuple) -> dict:
     """Fit effect *name* on top of the *accepted* effects: task = (source spec, effect name,
-    accepted effects (canonical), target_X, settings, seed). The source spec is already the
+    accepted effects (canonical), target_X, settings, seed, nuisance, rows (a :class:`Rows`)). The source spec is already the
     search spec (healthy only, the search's noise seed). Returns the best parameters, their
     score (the gap total), the intervals, and how many evaluations and seconds it took."""
-    source, name, accepted, target_X, settings, seed, *rest = task
-    nuisance = bool(rest and rest[0])  # fit sensor noise jointly at every point (see _NoiseNuisance)
+    source, name, accepted, target_X, settings, seed, nuisance, rows = task
+    nuisance = bool(nuisance)  # fit sensor noise jointly at every point (see _NoiseNuisance)
     started = time.perf_counter()
     if name is None:
-        return _refit_alone(source, accepted, target_X, settings, seed, started)
+        return _refit_alone(source, accepted, target_X, settings, seed, started, rows)
     registry = get_registry()
     effect = registry.get("effect", name)
     space = Space(effect)
@@ -529,14 +582,14 @@ def fit_effect(task: tuple) -> dict:
     def spec_of(params: dict, extra: tuple = ()) -> DatasetSpec:
         return source.with_(effects=_by_level(source.effects + tuple(accepted) + (effect.spec(params),) + extra))
 
-    noise = _NoiseNuisance(lambda params, extra: scorer.score(source_rows(spec_of(params, extra), settings.max_order))) \
+    noise = _NoiseNuisance(lambda params, extra: scorer.score(rows(spec_of(params, extra)))) \
         if nuisance else None
 
     def objective(params: dict) -> float:
         try:
             if noise is not None:
                 return noise.fit(params)
-            return scorer.score(source_rows(spec_of(params), settings.max_order))
+            return scorer.score(rows(spec_of(params)))
         except GearlabInputError as exc:  # parameters the effect cannot take here (a tone above Nyquist)
             errors.append(str(exc))
             return math.inf
@@ -552,8 +605,8 @@ def fit_effect(task: tuple) -> dict:
         if name == NUISANCE:
             # The noise alone gets the same wide Brent search that the other candidates' noise
             # nuisance gets, so that "beats the noise alone" compares like with like.
-            wide = _NoiseNuisance(lambda _, extra: scorer.score(source_rows(source.with_(
-                effects=_by_level(source.effects + tuple(accepted) + extra)), settings.max_order)))
+            wide = _NoiseNuisance(lambda _, extra: scorer.score(rows(source.with_(
+                effects=_by_level(source.effects + tuple(accepted) + extra)))))
             try:
                 value = wide.fit({})
                 history.append({"u": None, "choice": None, "params": dict(wide.at[()]), "score": value})
@@ -572,12 +625,12 @@ def fit_effect(task: tuple) -> dict:
         # Backfitting: the effects accepted earlier were fitted without this one (a noise level
         # fitted on the wrong model is off), so each is refined once more next to it.
         refit, score, used = _backfit(source, accepted, (effect.spec(best["params"]),) + extra, scorer,
-                                      best["score"], max(2, evaluations // 2), seed, settings.max_order)
+                                      best["score"], max(2, evaluations // 2), seed, rows)
         result["evaluations"] += used
         result["score"], result["accepted"] = score, [[n, [list(kv) for kv in p]] for n, p in refit]
     if math.isfinite(best["score"]):
         # The score's own noise: bootstrap replicates of the best point's gap total.
-        reps = scorer.replicates(source_rows(spec_of(best["params"], extra), settings.max_order), NOISE_REPLICATES, [seed, 2])
+        reps = scorer.replicates(rows(spec_of(best["params"], extra)), NOISE_REPLICATES, [seed, 2])
         result["noise"] = float(np.std(reps))
         result["intervals"] = _intervals(space, history, best, result["noise"])
     else:
@@ -587,7 +640,7 @@ def fit_effect(task: tuple) -> dict:
 
 
 def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", score: float, evaluations: int,
-             seed: int, max_order: int = 0) -> tuple[list, float, int]:
+             seed: int, rows: Rows) -> tuple[list, float, int]:
     """Refine each accepted effect once more, from its fitted values, with the effects *beside*
     it held fixed: a local search of *evaluations* points per effect (signal-level ones cost no
     simulation: the clean revolution is cached). Returns (re-fitted effects, score, evaluations)."""
@@ -599,8 +652,7 @@ def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", sco
         def objective(p, i=i, effect=effect):
             trial = refit[:i] + [effect.spec(p)] + refit[i + 1:]
             try:
-                return scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(trial) + beside)),
-                                            max_order))
+                return scorer.score(rows(source.with_(effects=_by_level(source.effects + tuple(trial) + beside))))
             except GearlabInputError:
                 return math.inf
 
@@ -614,16 +666,17 @@ def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", sco
     return refit, score, used
 
 
-def _refit_alone(source: DatasetSpec, accepted, target_X, settings: Settings, seed: int, started: float) -> dict:
+def _refit_alone(source: DatasetSpec, accepted, target_X, settings: Settings, seed: int, started: float,
+                 rows: Rows) -> dict:
     """A later round's baseline (the task with no candidate): the accepted effects re-fitted
     alone, with at least the local search that any candidate's backfitting gives them. Without
     it a candidate would be credited with the better fit of the effects before it — an
     imperfect first fit leaves a residual that any flexible extra effect (noise, a filter, a
     tone) partly absorbs, and extras the target does not have were accepted."""
     scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source))
-    score = scorer.score(source_rows(source.with_(effects=_by_level(source.effects + tuple(accepted))), settings.max_order))
+    score = scorer.score(rows(source.with_(effects=_by_level(source.effects + tuple(accepted)))))
     refit, score, used = _backfit(source, accepted, (), scorer, score,
-                                  max(2, SIGNAL_EVALS * settings.budget // 2), seed, settings.max_order)
+                                  max(2, SIGNAL_EVALS * settings.budget // 2), seed, rows)
     return {"name": None, "score": score, "evaluations": used, "params": {},
             "accepted": [[n, [list(kv) for kv in p]] for n, p in refit], "seconds": time.perf_counter() - started}
 
@@ -713,17 +766,22 @@ def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None 
 
 
 def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, executor=None,
-             on_event: Callable[[Event], None] = lambda e: None) -> dict:
+             on_event: Callable[[Event], None] = lambda e: None, chain: Chain | None = None) -> dict:
     """Where the gap between the *source* simulator and the target's healthy revolutions lies,
     which effects (fitted) close it, and how far: a JSON-serialisable dict (module docstring).
 
     *target_X*: the target's healthy revolutions in physical units, (n, 4096); nothing else
     about the target reaches the diagnosis. *executor*: fits the candidates of a round in
-    parallel (gearlab.executors; default: in this process).
+    parallel (gearlab.executors; default: in this process). *chain*: a measured target's acquisition
+    (gearlab.data.chain.Chain): every source set is made through it (pipeline parity), its tacho
+    offset fitted to the target's synchronous average unless the chain fixes it.
     """
     started = time.perf_counter()
     candidates = check_settings(settings)
     target = band_limited(check_target(target_X), settings.max_order)
+    if chain is not None and chain.offset is None:
+        chain = replace(chain, reference=target.mean(axis=0))
+    rows = Rows(settings.max_order, chain)
     pair = _check_source(source)
     for i, effect in enumerate(source.effects, start=1):  # the source's own effects must load too
         get_registry().get("effect", effect[0], f"gap diagnosis: source '{source.name}' effect #{i}")
@@ -737,7 +795,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
 
     def judged(effects: tuple) -> np.ndarray:
         """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""
-        return source_rows(fresh.with_(effects=_by_level(fresh.effects + effects)), settings.max_order)
+        return rows(fresh.with_(effects=_by_level(fresh.effects + effects)))
 
     on_event(Event("stage", stage="gap before", total=1, message=f"gap: {source.name} against the target"))
     plain = judged(())
@@ -746,6 +804,8 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     result = {"before": before, "gap_before": float(before["total"]["gap"]),
               "significant_before": bool(before["significant"]), "effects": [], "ranking": [], "rounds": [],
               "settings": {**asdict(settings), "candidates": list(candidates)}, "notes": []}
+    if chain is not None:
+        result["chain"] = chain_record(chain, fresh.with_(healthy=1), pair.Z1)
     if np.all(target == target[0]):
         # Measured data always scatter; identical rows come from a noise-free simulation, whose
         # TSA residual is rounding: two equal noise-free sets still differ there (docs/gap_stats.md).
@@ -755,7 +815,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     accepted: list[dict] = []
     fitted: tuple = ()
     significant = bool(before["significant"])
-    gap0 = scorer.score(source_rows(search, settings.max_order))  # the search's own baseline (same rows as the fits)
+    gap0 = scorer.score(rows(search))  # the search's own baseline (same rows as the fits)
     judged0 = scorer.score(plain)  # the same on the judging rows
     if not significant:
         on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}); nothing to explain"))
@@ -765,15 +825,15 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
         if not remaining:
             break
-        gap_now = scorer.score(source_rows(search.with_(effects=_by_level(search.effects + fitted)), settings.max_order))
+        gap_now = scorer.score(rows(search.with_(effects=_by_level(search.effects + fitted))))
         # The noise nuisance: while sensor noise is a candidate not yet accepted, every other
         # candidate is fitted with it (a noisy target would otherwise always elect noise first,
         # fitted to the wrong model, and judge the structural effects next to the wrong noise).
         nuisance = NUISANCE in remaining
-        tasks = [(search, name, fitted, target, settings, settings.seed + 1000 * r, nuisance and name != NUISANCE)
-                 for name in remaining]
+        tasks = [(search, name, fitted, target, settings, settings.seed + 1000 * r, nuisance and name != NUISANCE,
+                  rows) for name in remaining]
         if fitted:
-            tasks.append((search, None, fitted, target, settings, settings.seed + 1000 * r))  # the baseline
+            tasks.append((search, None, fitted, target, settings, settings.seed + 1000 * r, False, rows))  # baseline
         on_event(Event("stage", stage=f"gap round {r}", total=len(tasks),
                        message=f"gap: round {r}, fitting {len(remaining)} effects"
                                + (" and re-fitting the accepted ones alone" if fitted else "")))
@@ -892,6 +952,24 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         seconds=time.perf_counter() - started,
     )
     return result
+
+
+def chain_record(chain: Chain, spec: DatasetSpec, z1: int) -> dict:
+    """What the report says of a measured target's chain: rate, speed, step, start fractions and
+    the tacho offset fitted against the plain source (degrees; and in tooth pitches, since a
+    healthy gear's revolution repeats every 360/Z1 degrees)."""
+    offset = chain.offset
+    if offset is None and chain.reference is not None:
+        speed, _ = operating_point(spec)
+        physics = tuple(e for e in spec.effects if get_registry().get("effect", e[0]).level != "signal")
+        clean = _clean_revolution(spec.model, spec.preset, whole_steps_rate(spec.fs, speed, z1), speed,
+                                  operating_point(spec)[1], spec.channel, physics)
+        offset = fit_offset(clean, chain.reference, z1)
+    fr = np.asarray(chain.fractions) if chain.fractions else np.empty(0)
+    return {"fs_hz": chain.fs, "speed_hz": chain.speed, "samples_per_rev": chain.samples_per_rev,
+            "step": chain.step, "offset_deg": None if offset is None else float(np.degrees(offset)),
+            "offset_fitted": chain.offset is None, "start_fractions": int(fr.size),
+            "fractional_starts": bool(fr.size and np.any(np.abs(fr - np.round(fr)) > 1e-3))}
 
 
 def _noise_reference(result: dict, judged, target, pair, settings: Settings) -> dict | None:

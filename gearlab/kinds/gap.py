@@ -29,6 +29,7 @@ import numpy as np
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
+from ..data.chain import PASSBAND, Chain, chain_of
 from ..data.importers import MeasuredSpec
 from ..data.spec import POINTS, DatasetSpec
 from ..effects import default_candidates
@@ -51,13 +52,11 @@ _TARGET = Table({
     "vibration": Key((int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"),
     "tacho": Key((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)"),
     "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "records: tacho pulses per input-shaft revolution"),
-    "sensitivity": Key((int, float, str), 1.0, doc="records: sensor sensitivity, e.g. '10 mV/g'"),
+    "sensitivity": Key((int, float, str), None, doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V "
+                                                    "per m/s²); without it (or 'gain') the units are unknown"),
     "files": Key(list, [], doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
                                "the history files (healthy, one operating condition)"),
 }, required=True)
-# A record holds shaft orders up to its Nyquist order fs / (2 speed); its anti-alias filter passes
-# this share of that band (the usual 80-90 %): the comparison is limited to it (Settings.max_order).
-PASSBAND = 0.9
 # History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
 # record are two conditions; one rig at one setting drifts by well under 1 %).
 SPEED_SPREAD = 0.02
@@ -167,6 +166,7 @@ class Records:
 
     name: str
     target: object  # gearlab.kinds.detection.Target
+    units_known: bool = True  # a sensitivity was given (else the values are taken as m/s², with a warning)
 
     @property
     def history(self):
@@ -176,7 +176,7 @@ class Records:
 def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Records:
     """The [target]: measured records ('files'), or a dataset entry (a preset, or one 'file')."""
     if not entry["files"]:
-        for key in ("pulses_per_rev", "sensitivity"):
+        for key in ("pulses_per_rev",):
             if entry[key] != _TARGET.keys[key].default:
                 raise GearlabInputError(f"{where} key '{key}': belongs to measured records ('files')")
         for key in ("vibration", "tacho"):
@@ -192,8 +192,11 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     for key in ("vibration", "tacho"):
         if entry[key] == "":
             raise GearlabInputError(f"{where} key '{key}': missing; measured records need the {key} column")
-    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",))
-    return Records(entry["name"] or "measured records", target)
+    if entry["gain"] is not None:
+        raise GearlabInputError(f"{where} key 'gain': text records hold volts; give their 'sensitivity'")
+    sensitivity = 1.0 if entry["sensitivity"] is None else entry["sensitivity"]
+    target = target_spec({**entry, "sensitivity": sensitivity, "positive": "fault"}, where, base, need=("history",))
+    return Records(entry["name"] or "measured records", target, entry["sensitivity"] is not None)
 
 
 def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str]]:
@@ -229,19 +232,6 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     notes.append(f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
                  f"(tacho); the source simulates that speed")
     return X, speed, notes
-
-
-def registered(X: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, int]:
-    """*X* (revolutions) turned by the whole-sample circular shift k that best correlates their mean
-    with *reference* (one revolution, DC removed from both): (turned rows, k). A measured record's
-    revolutions start at a tacho mark whose angle to the simulation's origin (tooth 1 entering mesh)
-    is not known; the views that compare waveforms (the TSA residual against the source's average)
-    need the two in register."""
-    mean = X.mean(axis=0)
-    corr = np.fft.irfft(np.conj(np.fft.rfft(reference - reference.mean())) * np.fft.rfft(mean - mean.mean()),
-                        n=X.shape[1])
-    k = int(np.argmax(corr))
-    return np.roll(X, -k, axis=1), k
 
 
 def check_healthy(count: int, where: str) -> None:
@@ -347,7 +337,7 @@ def quick(scenario: Scenario) -> None:
 def target_rows(dataset, z1: int, where: str) -> tuple[np.ndarray, str]:
     """The target's healthy revolutions in physical units, checked; and a note on what was used.
     An unlabelled measured record is taken as healthy throughout (the importer standardises it
-    against all its revolutions alike)."""
+    against all its revolutions alike); one whose units are unknown gets a warning."""
     from ..gap.views import healthy_rows
 
     note = ""
@@ -363,6 +353,8 @@ def target_rows(dataset, z1: int, where: str) -> tuple[np.ndarray, str]:
     if meta.get("source") == "measured":
         fs, speed = float(meta["fs_hz"]), float(meta["speed_hz"])
         check_points(fs / speed, z1, where, f"the record's {fs:g} Hz at {speed:.4g} Hz shaft speed")
+        if str(meta.get("units", "")).startswith("unknown"):
+            note = "; ".join(filter(None, [note, f"WARNING: units {meta['units']}"]))
     return rows, note
 
 
@@ -421,18 +413,19 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             settings["max_order"] = int(PASSBAND * fs / (2 * speed))
             record_notes.append(f"compared up to shaft order {settings['max_order']} ({PASSBAND:g} of the records' "
                                 "Nyquist order): the source is low-passed to the records' bandwidth")
-            from ..gap.diagnose import band_limited, source_rows
-
-            plain = source_spec.with_(faults=(), healthy=1, noise=None, revolutions=1, tsa=False)
-            target_X, shift = registered(band_limited(target_X, settings["max_order"]),
-                                         source_rows(plain, settings["max_order"])[0])
-            record_notes.append(f"target turned by {360 * shift / POINTS:.1f} deg into register with the simulated "
-                                "revolution (the tacho mark's angle to the simulation's origin is not known)")
+            if not spec["target"].units_known:
+                record_notes.append("WARNING: units unknown: no sensitivity given; the records' values are taken "
+                                    "as m/s² (set sensitivity = '10 mV/g')")
+            chain = Chain(fs=fs, speed=speed)  # text records: start fractions not kept (drawn uniformly)
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))
             target, _ = load_or_build(spec["target"], executor, on_event)
             target_X, note = target_rows(target, z1, location(scenario.path, "target"))
+            chain = None
+            if (target.meta or {}).get("source") == "measured":
+                chain = chain_of(target.meta)
+                settings["max_order"] = int(PASSBAND * chain.nyquist_order)
             on_event(Event("advance", stage="datasets", done=1, total=1))
         if note:
             on_event(Event("log", message=note))
@@ -441,7 +434,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
             # Only the source configuration and the target's healthy rows go in: nothing of how the
             # target was made (its spec, effects, labels) reaches the diagnosis.
-            result = diagnose(source_spec, target_X, Settings(**settings), executor=executor, on_event=on_event)
+            result = diagnose(source_spec, target_X, Settings(**settings), executor=executor, on_event=on_event,
+                              chain=chain)
             record = {"unit": "diagnosis", "result": result, "note": note}
             run.append(record)
             done["diagnosis"] = record

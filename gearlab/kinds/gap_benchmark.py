@@ -35,7 +35,7 @@ from .dataset import DATASET_TABLE, dataset_spec, executor_for
 MAX_TRIALS = 10000
 MAX_SEED = 2**32 - 1
 
-_SOURCE_KEYS = {k: v for k, v in DATASET_TABLE.keys.items() if k not in ("file", "vibration", "tacho", "labels",
+_SOURCE_KEYS = {k: v for k, v in DATASET_TABLE.keys.items() if k not in ("file", "vibration", "tacho", "labels", "sensitivity", "gain",
                                                                          "class_names", "transient")}
 _SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
