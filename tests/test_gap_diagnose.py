@@ -16,7 +16,7 @@ from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec
 from gearlab.errors import GearlabInputError
 from gearlab.executors import LocalExecutor
-from gearlab.gap.diagnose import Scorer, Settings, corrected_source, diagnose, source_rows
+from gearlab.gap.diagnose import SMALL_AUC, Scorer, Settings, corrected_source, diagnose, source_rows, verdict_of
 from gearlab.gap.stats import gap_report
 from gearlab.gap.views import healthy_rows
 
@@ -202,9 +202,11 @@ def test_no_extra_effect_is_credited_with_a_better_refit_of_the_first():
     assert abs(result["effects"][0]["params"]["mu_f"] - 0.1) < 0.02
 
 
-def test_a_close_fit_that_still_tests_significant_closes_the_gap():
+def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_share():
     """On a quiet target (30 dB) the two-sample test flags a fillet factor 3 % off (p = 0.01,
-    AUC 1.0); the gap left is under 1 % of the gap before, so the right effect closes it."""
+    AUC 1.0); the gap left is under 1 % of the gap before. The verdict reads the test and its
+    effect size (issue 15): not "explained" while the sets are told apart perfectly, but partly
+    explained, with the share removed."""
     source = B6.with_(noise=NoiseSpec("gaussian", 30.0, 0))
     hidden = effect_spec("fillet_correction", lam=0.3)
     target = target_rows(B6.with_(healthy=40, effects=(hidden,), noise=NoiseSpec("gaussian", 30.0, 7), seed=3))
@@ -214,4 +216,20 @@ def test_a_close_fit_that_still_tests_significant_closes_the_gap():
     assert abs(result["effects"][0]["params"]["lam"] - 0.3) < 0.03
     assert result["significant_after"] and result["shrink"] >= 0.99
     assert result["shrink"] == pytest.approx(1 - result["gap_after"] / result["gap_before"])
-    assert not result["unexplained"]
+    if result["after"]["auc"] > SMALL_AUC:
+        assert result["verdict"] == "partly explained" and result["unexplained"]
+        assert result["explained_share"] == pytest.approx(result["shrink"])
+    else:
+        assert result["verdict"] == "explained" and not result["unexplained"]
+
+
+@pytest.mark.parametrize("case, verdict", [
+    ((False, False, False, 0.5, 0.0), "no significant gap"),
+    ((True, False, True, 1.0, 0.3), "unexplained"),
+    ((True, True, False, 0.9, 0.4), "explained"),  # the test no longer tells them apart
+    ((True, True, True, 0.6, 0.995), "explained"),  # told apart, but by a small effect, < 1 % left
+    ((True, True, True, 1.0, 0.995), "partly explained"),  # the 1 % rule alone no longer explains
+    ((True, True, True, 0.6, 0.7), "partly explained"),
+])
+def test_the_verdict_reads_the_test_and_the_effect_size(case, verdict):
+    assert verdict_of(*case) == verdict

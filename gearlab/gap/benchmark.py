@@ -433,6 +433,8 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
         "significant_before": bool(result.get("significant_before")),
         "significant_after": bool(result.get("significant_after")),
         "unexplained": bool(result.get("unexplained")), "shrink": shrink,
+        "verdict": result.get("verdict"), "explained_share": result.get("explained_share"),
+        "acquisition": answers.get("acquisition"),
         "top1": None, "top3": None, "identified": [], "param_error": {}, "param_error_median": None,
         "option_correct": {}, "null_correct": None, "out_of_library_unexplained": None,
         "wrong_names": [n for n in accepted if n not in hidden],
@@ -459,7 +461,9 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
         # correct: no significant gap, hence nothing named
         record["null_correct"] = not record["significant_before"] and not accepted
     else:
-        record["out_of_library_unexplained"] = record["unexplained"]
+        # "unexplained" with no library effect accepted (issue 15): a partly explained verdict names
+        # effects that stand in for the missing one
+        record["out_of_library_unexplained"] = record["unexplained"] and not accepted
     return record
 
 
@@ -556,6 +560,15 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         # The other side of the two out-of-library numbers: a diagnosis that always said
         # "unexplained" would pass on withheld trials; here it must not say so when it named right.
         "explained_when_identified": _rate(not r["unexplained"] for r in identified),
+        # explained, or partly explained with most of the gap (the share the verdict states)
+        "explained_or_partly_when_identified": _rate(
+            r.get("verdict") == "explained" or (r.get("verdict") == "partly explained"
+                                                and (r.get("explained_share") or 0.0) >= 0.5) for r in identified),
+        "null_correct_by_format": {f: _rate(r["null_correct"] for r in records if r["kind"] == "null"
+                                            and (r.get("acquisition") or {}).get("format", "angle") == f)
+                                   for f in ("angle",) + FORMATS
+                                   if any((r.get("acquisition") or {}).get("format", "angle") == f
+                                          for r in records if r["kind"] == "null")},
         "extra_names_when_identified": _rate(bool(r["wrong_names"]) for r in identified),
         "per_effect": per_effect,
         "seconds_per_trial": _median(r.get("seconds") for r in records),

@@ -90,6 +90,11 @@ MIN_SHARE = 0.2  # an accepted effect removes at least this share of the gap lef
 # far below any practical weight (a bearing stiffness 0.4 % off: p = 0.002, AUC 1.0), while an
 # effect standing in for one outside the library left 9-75 % in the benchmark (docs/gap.md).
 EXPLAINED_SHRINK = 0.99
+# The effect size beside the test: a corrected source whose two-sample classifier AUC is at most
+# this tells the sets apart no better than a coin with a slight bias (Cohen's d about 0.4 for two
+# normal classes), however small the p-value that many quiet revolutions give it.
+SMALL_AUC = 0.65
+VERDICTS = ("no significant gap", "explained", "partly explained", "unexplained")
 SIGNAL_EVALS = 4  # evaluations per budget unit for signal-level effects (they need no new simulation)
 DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling design, the rest refines
 NOISE_REPLICATES = 64  # bootstrap replicates for the score noise behind the parameter intervals
@@ -944,14 +949,36 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     if reference is not None:
         result["reference"] = reference
         reference["shrink"] = 1.0 - gap_after / reference["gap"] if reference["gap"] > 0 else 0.0
-    closed = not after["significant"] or (reference["shrink"] if reference else shrink) >= EXPLAINED_SHRINK
+    share = reference["shrink"] if reference else shrink
+    verdict = verdict_of(bool(before["significant"]), bool(accepted), bool(after["significant"]),
+                         float(after["auc"]), share)
     result.update(
         after=after, gap_after=gap_after, significant_after=bool(after["significant"]), shrink=shrink,
-        effects=accepted, unexplained=bool(before["significant"] and (not accepted or not closed)),
+        effects=accepted, unexplained=verdict in ("partly explained", "unexplained"), verdict=verdict,
+        explained_share=max(0.0, min(1.0, share)) if verdict != "no significant gap" else None,
         corrected_effects=[[name, [[k, v] for k, v in params]] for name, params in fitted],
         seconds=time.perf_counter() - started,
     )
     return result
+
+
+def verdict_of(significant_before: bool, accepted: bool, significant_after: bool, auc_after: float,
+               share: float) -> str:
+    """The diagnosis's verdict (VERDICTS), read from the two-sample test and an effect size:
+
+    * no significant gap before: nothing to explain;
+    * explained: the corrected source is not told apart from the target (test), or only by a small
+      effect (AUC <= SMALL_AUC) with at most 1 - EXPLAINED_SHRINK of the gap left;
+    * partly explained: effects were accepted (each removed a significant share of what was left,
+      paired bootstrap) but a significant gap remains; explained_share says how much went;
+    * unexplained: no library effect removes a significant share."""
+    if not significant_before:
+        return "no significant gap"
+    if not accepted:
+        return "unexplained"
+    if not significant_after or (auc_after <= SMALL_AUC and share >= EXPLAINED_SHRINK):
+        return "explained"
+    return "partly explained"
 
 
 def chain_record(chain: Chain, spec: DatasetSpec, z1: int) -> dict:

@@ -526,8 +526,17 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
 def diagnosis_line(result: dict) -> str:
     before, after = result["gap_before"], result["gap_after"]
     names = ", ".join(f"{e['name']} ({100 * e['share_removed']:.0f} %)" for e in result["effects"]) or "none"
-    verdict = "unexplained" if result["unexplained"] else "explained"
+    verdict = verdict_text(result)
     return (f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}")
+
+
+def verdict_text(result: dict) -> str:
+    """The verdict, with the explained share when partly explained (results before the verdicts
+    existed: read from 'unexplained')."""
+    verdict = result.get("verdict") or ("unexplained" if result["unexplained"] else "explained")
+    if verdict == "partly explained" and result.get("explained_share") is not None:
+        return f"partly explained ({100 * result['explained_share']:.0f} % of the gap)"
+    return verdict
 
 
 def shrink_text(before: float, after: float) -> str:
@@ -586,6 +595,9 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "shrink": 1 - result["gap_after"] / result["gap_before"] if result["gap_before"] > 0 else None,
         "reference": result.get("reference"),  # settings reference = 'noise': the source with its noise alone
         "unexplained": result["unexplained"],
+        "verdict": verdict_text(result),
+        "explained_share": result.get("explained_share"),
+        "chain": result.get("chain"),
         "significant_before": result["significant_before"],
         "significant_after": result["significant_after"],
         "auc_before": result["before"]["auc"],
@@ -669,7 +681,7 @@ def summary_lines(run: RunDir) -> list[str]:
         f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
         f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "
         f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
-        f"effects: {names or 'none'}" + ("; UNEXPLAINED: no candidate closes the gap" if s["unexplained"] else ""),
+        f"effects: {names or 'none'}; verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}",
     ]
     ref = s.get("reference")
     if ref:
