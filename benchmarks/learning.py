@@ -4,7 +4,7 @@
 
 1. One training step (forward, backward, SGD update) on a joint domain-adaptation batch of
    40 source + 40 target rotations of 4096 samples, `fast` against `cnn3`, alternating the
-   two so that both see the same machine load. Target (issue 4): fast >= 20x faster.
+   two so that both see the same machine load. Target: fast >= 20x faster.
 2. With --units: the wall time of the protocol's units on Experiment B's datasets (priming,
    a baseline, one calibrated run at the full Table 5.3 schedule) and from them an estimate
    of the whole expB.toml table (6 k x 5 repetitions x every method). Target: <= 45 min.

@@ -5,7 +5,7 @@
 Prints the time of a healthy and a single-fault TVMS (4096 points), a 2000-pit TVMS, the
 whole 82-case verification scenario, and the ratio against the reference style of
 published PEM code (scipy quad per contact angle, tests/pem_reference.py) on the same
-angles in the same run. Targets (issue 2): <= 50 ms, <= 200 ms, <= 10 s.
+angles in the same run. Targets: <= 50 ms, <= 200 ms, <= 10 s.
 """
 
 from __future__ import annotations

@@ -8,7 +8,8 @@ modules can move without breaking plugins (docs/plugins.md, docs/architecture.md
     def gearlab_effects():
         return [MyEffect()]
 
-The torch-based helpers (``mmd2``, ``coral_loss``, ``grad_reverse``, ``template_detector``)
+The torch-based helpers (``mmd2``, ``coral_loss``, ``grad_reverse``, ``median_distance``,
+``template_detector``)
 are resolved on first use (PEP 562 ``__getattr__``): importing this module, as the registry
 does for every command, never pays torch's import time. Import them inside the method that
 trains, e.g. ``from gearlab.api import mmd2``.
@@ -37,6 +38,7 @@ _LAZY = {
     "mmd2": "gearlab.learn.losses",
     "coral_loss": "gearlab.learn.losses",
     "grad_reverse": "gearlab.learn.losses",
+    "median_distance": "gearlab.learn.losses",
     "template_detector": "gearlab.learn.detectors",
 }
 

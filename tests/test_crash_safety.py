@@ -1,4 +1,4 @@
-"""Crash safety of runs (SPEC 7 and 10): one process per run directory, and runs killed at
+"""Crash safety of runs (docs/scenarios.md, runs and --resume): one process per run directory, and runs killed at
 random moments resume with nothing lost, nothing repeated and the same numbers.
 
 The runs are real `gearlab run` processes, killed with SIGKILL on their whole process group

@@ -1,5 +1,5 @@
 """Dataset specs, presets, the builder and the content-addressed cache (thesis 2.4.3, 4.1,
-5.4.1; SPEC section 5): Tables 4.1, 5.1 and 5.2, labels, noise at an SNR, TSA, determinism,
+5.4.1; docs/physics.md, datasets): Tables 4.1, 5.1 and 5.2, labels, noise at an SNR, TSA, determinism,
 cache keys and crash safety, bad specs.
 
 Every test builds into its own cache directory (GEARLAB_CACHE = tmp_path)."""

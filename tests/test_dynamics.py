@@ -1,4 +1,4 @@
-"""Lumped gearbox dynamics (thesis 2.3, 2.4.1, 2.4.2; SPEC section 4): assembly, modes,
+"""Lumped gearbox dynamics (thesis 2.3, 2.4.1, 2.4.2; docs/physics.md): assembly, modes,
 the thesis' claims about the simulated signals, and the engineering requirements on the
 Newmark integrator (rank-one update, divergence, step checks, bad input).
 
@@ -396,7 +396,7 @@ def test_crack_response_grows_with_intensity(name, speed, load, channel):
     assert peaks[-1] > 5 * np.abs(healthy).max()  # a broken tooth: "massive amplitudes" (2.4.4)
 
 
-# --- tooth-shift symmetry against direct simulation (SPEC section 4) ---------------------
+# --- tooth-shift symmetry against direct simulation (docs/physics.md, Builder) ---------------------
 
 
 @pytest.mark.parametrize("name", list(MODELS))

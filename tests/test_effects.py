@@ -1,4 +1,4 @@
-"""Unmodelled effects (gearlab.effects, plugins/effects; SPEC sections 2, 4, 5 and 9): the plugin
+"""Unmodelled effects (gearlab.effects, plugins/effects; docs/gap.md, docs/plugins.md): the plugin
 contract, each built-in effect's signature on a short simulation or signal, zero strength,
 the tooth-shift symmetry, datasets and scenarios with effects, and bad input.
 
@@ -328,7 +328,7 @@ def test_load_fluctuation_modulates_the_mesh_amplitude_linearly():
     assert np.array_equal(revolution([effect_spec("load_fluctuation", amplitude=0.0)])[0], base)
 
 
-# --- the tooth-shift symmetry (SPEC section 4) --------------------------------------------------
+# --- the tooth-shift symmetry (docs/physics.md, Builder) --------------------------------------------------
 
 
 @pytest.mark.parametrize("name", [n for n, (level, _) in EFFECTS.items() if level != "signal"])

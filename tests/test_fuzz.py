@@ -1,4 +1,4 @@
-"""Fuzzing (SPEC 10): the scenario loader and the measured-data importers take any input and
+"""Fuzzing (the quality bar: any input is refused in one line): the scenario loader and the measured-data importers take any input and
 answer with a result or a one-line GearlabInputError: never another exception, never a hang,
 and a rejected run leaves nothing behind.
 
@@ -567,7 +567,7 @@ def test_run_refused_at_work_leaves_no_run_directory(cli_dir, case):
     assert not out.exists() or not any(out.rglob("*"))
 
 
-# ============================================================================= hostile scenarios (issue 16)
+# ============================================================================= hostile scenarios (hardening)
 
 # What a hostile (or careless) user puts into a name that may become a path component.
 PATH_TEXTS = ["../../../../../../tmp/gearlab-escape", "..", ".", "/", "/tmp/gearlab-abs", "a/b", "a\\..\\b", "~",

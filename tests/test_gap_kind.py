@@ -3,11 +3,10 @@ tables and charts on a partial run, and bad input refused before any work.
 
 Most tests replace gearlab.gap.diagnose by a stand-in that follows the shared contract: they
 test the kind's plumbing (records, resume, summary, tables, figures, accuracy units), not the
-search. One test runs the real diagnosis on a tiny scenario when the module exists."""
+search. One test runs the real diagnosis on a tiny scenario."""
 
 from __future__ import annotations
 
-import importlib
 import json
 import sys
 import types
@@ -309,11 +308,7 @@ def test_measured_target_with_too_few_revolutions_leaves_no_run(tiny, cli, calls
 
 
 def test_real_diagnosis_tiny(tiny, cli):
-    """End to end with gearlab.gap.diagnose itself (G1's), without the accuracy."""
-    try:
-        importlib.import_module("gearlab.gap.diagnose")
-    except ImportError:
-        pytest.skip("gearlab.gap.diagnose does not exist yet")
+    """End to end with gearlab.gap.diagnose itself, without the accuracy."""
     tiny.write_text(TINY.replace('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_noise"]')
                     .replace("[accuracy]\n", "[accuracy]\nenabled = false\n"))
     code, out, err = cli("run", tiny, "--out", tiny.parent / "runs")

@@ -1,4 +1,4 @@
-"""Hardening (issue 16): no file written outside the run directory, one line and exit code 2
+"""Hardening: no file written outside the run directory, one line and exit code 2
 for hostile input, full disks and read-only caches handled, tampered cache entries rebuilt.
 
 Each test names the hostile or careless use it stands for. The disk-full and read-only tests
@@ -115,7 +115,7 @@ def test_plain_names_are_taken(tmp_path, record_file, name):
 
 
 def test_traversing_dataset_name_writes_nothing_outside(tmp_path, record_file, cache_env):
-    """The reproduction of issue 16: the run wrote figures/signals_<name>.png outside its run directory."""
+    """The reproduction of a reported escape: the run wrote figures/signals_<name>.png outside its run directory."""
     victim = tmp_path / "victim"
     victim.mkdir()
     depth = len((tmp_path / "out").parts) + 4

@@ -1,4 +1,4 @@
-"""The chapter-4 protocol and the `noise_study` scenario kind (thesis 4.2-4.4; SPEC sections 6, 7):
+"""The chapter-4 protocol and the `noise_study` scenario kind (thesis 4.2-4.4; docs/learning.md):
 stratified splits that keep test samples out of training and model selection, the records
 and the summary, resume, quick, and bad input.
 

@@ -1,6 +1,6 @@
 """Build a dataset from its spec: simulate the unique cases, then cut, shift, add noise, average.
 
-Structure exploited (SPEC section 4):
+Structure exploited (docs/physics.md, Builder):
 
 * Steady state is periodic in the input-shaft revolution (fixed speed, faults on the
   pinion only), so one steady revolution per simulation is the whole clean signal.
@@ -11,7 +11,7 @@ Structure exploited (SPEC section 4):
 * Noise and TSA are added per sample from the sample's own seeded generator, in chunks,
   so memory stays bounded and results do not depend on the worker count.
 
-Effects (gearlab.effects, SPEC section 9) act in order of level: the model-level ones make
+Effects (gearlab.effects; docs/gap.md) act in order of level: the model-level ones make
 the simulator configuration, the excitation-level ones act inside each simulation, the
 signal-level ones on each sample's J revolutions before the dataset's own noise and TSA.
 When one of them breaks the tooth-shift symmetry every tooth is simulated; the steady state

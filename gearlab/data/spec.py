@@ -50,7 +50,7 @@ class DatasetSpec:
     seed: int = 0
     fs: float = 200e3
     domain: str = ""
-    # Unmodelled effects (gearlab.effects, SPEC section 9): ((name, ((param, SI value), ...)), ...),
+    # Unmodelled effects (gearlab.effects; the gap diagnosis, docs/gap.md): ((name, ((param, SI value), ...)), ...),
     # each resolved and sorted by gearlab.effects.effect_spec; applied model -> excitation -> signal.
     effects: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()
 

@@ -94,12 +94,6 @@ class Assembly:
         return self.dofs.index(dof)
 
 
-@dataclass(frozen=True)
-class OperatingPoint:
-    speed_hz: float  # input-shaft (pinion) rotation frequency
-    load_nm: float  # load torque T_l at the output (eq. 2.111 gives T_m)
-
-
 class DynamicModel:
     """A lumped gearbox model plugin: which DOFs, which parameters, which presets."""
 

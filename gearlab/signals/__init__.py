@@ -1,4 +1,4 @@
-"""Signal pipeline (thesis 2.4.3, 3.2, 4.1; SPEC section 4): from a record to dataset samples.
+"""Signal pipeline (thesis 2.4.3, 3.2, 4.1; docs/physics.md): from a record to dataset samples.
 
     record (signal, tacho | pulses | speed) ─► continuous shaft angle θ        angle.py
         ─► complete revolutions, resampled to 4096 angles                     pipeline.py
