@@ -233,3 +233,19 @@ def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_s
 ])
 def test_the_verdict_reads_the_test_and_the_effect_size(case, verdict):
     assert verdict_of(*case) == verdict
+
+
+def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():
+    """Per parameter, the diagnosis says whether the data determine it: an interval of a tenth of the
+    range (on the search's scale: log for a frequency) is determined, one over most of it is not."""
+    from gearlab.gap.diagnose import DETERMINED_WIDTH, Space, determined
+    from gearlab.registry import get_registry
+
+    space = Space(get_registry().get("effect", "sensor_bandwidth"))
+    f_n = next(e for e in space.numbers if e["name"] == "f_n")
+    lo, hi = f_n["low"], f_n["high"]  # 0.1-100 kHz, searched on a log scale
+    narrow = [lo * (hi / lo) ** 0.40, lo * (hi / lo) ** 0.50]
+    marks = determined(space, {"f_n": narrow, "zeta": [0.01, 1.0]})
+    assert marks["f_n"]["determined"] and marks["f_n"]["width"] == pytest.approx(0.1)
+    assert not marks["zeta"]["determined"] and marks["zeta"]["width"] == pytest.approx(1.0)
+    assert marks["zeta"]["width"] > DETERMINED_WIDTH >= marks["f_n"]["width"]

@@ -424,6 +424,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
     hidden = {name: params for name, params in answers["hidden"]}
     accepted = [e["name"] for e in result.get("effects", [])]
     fitted = {e["name"]: e.get("params", {}) for e in result.get("effects", [])}
+    marks = {e["name"]: e.get("determined", {}) for e in result.get("effects", [])}
     ranking = [e["name"] for e in result.get("ranking", [])]
     before, after = float(result.get("gap_before", float("nan"))), float(result.get("gap_after", float("nan")))
     shrink = 1.0 - after / before if before > 0 and math.isfinite(after) else None
@@ -436,13 +437,14 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
         "verdict": result.get("verdict"), "explained_share": result.get("explained_share"),
         "acquisition": answers.get("acquisition"),
         "top1": None, "top3": None, "identified": [], "param_error": {}, "param_error_median": None,
+        "param_determined": {}, "param_error_median_determined": None,
         "option_correct": {}, "null_correct": None, "out_of_library_unexplained": None,
         "wrong_names": [n for n in accepted if n not in hidden],
     }
     if kind in ("single", "pair"):
         record["top1"] = bool(accepted) and accepted[0] in hidden
         record["top3"] = any(n in hidden for n in ranking[:3])
-        errors = []
+        errors, sure = [], []
         for name in hidden:
             if name not in fitted:
                 continue
@@ -454,9 +456,13 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
                     per[key] = param_error(effect, key, float(hidden[name][key]), float(fitted[name][key]))
             record["param_error"][name] = per
             errors += list(per.values())
+            # the diagnosis's own word on each parameter: determined by the data, or not identifiable
+            record["param_determined"][name] = {k: bool(marks[name].get(k, {}).get("determined", True)) for k in per}
+            sure += [v for k, v in per.items() if record["param_determined"][name][k]]
             record["option_correct"][name] = {k: fitted[name].get(k) == hidden[name][k] for k in effect.options
                                               if k in hidden[name]}
         record["param_error_median"] = float(np.median(errors)) if errors else None
+        record["param_error_median_determined"] = float(np.median(sure)) if sure else None
     elif kind == "null":
         # correct: no significant gap, hence nothing named
         record["null_correct"] = not record["significant_before"] and not accepted
@@ -536,11 +542,15 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         mine = [r for r in effect_trials if any(h[0] == name for h in r["hidden"])]
         held = [r for r in records if r["kind"] == "withheld" and r["withheld"] == name]
         errors = [v for r in mine for v in r["param_error"].get(name, {}).values()]
+        sure = [v for r in mine for k, v in r["param_error"].get(name, {}).items()
+                if r.get("param_determined", {}).get(name, {}).get(k, True)]
         per_effect[name] = {
             "trials": len(mine), "top1": _rate(r["top1"] for r in mine), "top3": _rate(r["top3"] for r in mine),
             "identified": sum(name in r["identified"] for r in mine),
             "median_shrink": _median(r["shrink"] for r in mine if r["top1"]),
             "median_param_error": _median(errors),
+            "median_param_error_determined": _median(sure),
+            "not_identifiable": sum(not d for r in mine for d in r.get("param_determined", {}).get(name, {}).values()),
             "withheld": len(held), "unexplained_when_withheld": _rate(r["unexplained"] for r in held),
             "named_wrongly": sum(name in r["wrong_names"] for r in records),
         }
@@ -553,6 +563,10 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         "top1_pair": _rate(r["top1"] for r in effect_trials if r["kind"] == "pair"),
         "median_shrink": _median(r["shrink"] for r in identified),
         "median_param_error": _median(r["param_error_median"] for r in effect_trials),
+        # over the parameters the diagnosis called determined (issue 15: the goal is on identifiable ones)
+        "median_param_error_determined": _median(v for r in effect_trials for name, per in r["param_error"].items()
+                                                 for k, v in per.items()
+                                                 if r.get("param_determined", {}).get(name, {}).get(k, True)),
         "null_correct": _rate(r["null_correct"] for r in records if r["kind"] == "null"),
         "out_of_library_unexplained": _rate(r["out_of_library_unexplained"] for r in records
                                             if r["kind"] == "withheld"),

@@ -95,6 +95,8 @@ EXPLAINED_SHRINK = 0.99
 # normal classes), however small the p-value that many quiet revolutions give it.
 SMALL_AUC = 0.65
 VERDICTS = ("no significant gap", "explained", "partly explained", "unexplained")
+# A parameter is "determined" when its interval spans at most this share of its searched range.
+DETERMINED_WIDTH = 0.25
 SIGNAL_EVALS = 4  # evaluations per budget unit for signal-level effects (they need no new simulation)
 DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling design, the rest refines
 NOISE_REPLICATES = 64  # bootstrap replicates for the score noise behind the parameter intervals
@@ -566,6 +568,19 @@ def _intervals(space: Space, history: list[dict], best: dict, noise: float) -> d
     return out
 
 
+def determined(space: Space, intervals: dict) -> dict:
+    """Per numeric parameter: whether the data determine it -- its interval spans at most
+    DETERMINED_WIDTH of the searched range (on the search's own scale: log where the effect says
+    so). A wider one is "not identifiable" from these revolutions: an honest answer, and its
+    fitted value should not be read as a measurement."""
+    out = {}
+    for e in space.numbers:
+        lo, hi = intervals.get(e["name"], (e["low"], e["high"]))
+        width = abs(space.unit(e, hi) - space.unit(e, lo)) if e["high"] > e["low"] else 0.0
+        out[e["name"]] = {"width": float(width), "determined": bool(width <= DETERMINED_WIDTH)}
+    return out
+
+
 # --- one fit: the executor's unit of work ------------------------------------------------------------
 
 def fit_effect(task: tuple) -> dict:
@@ -638,6 +653,7 @@ def fit_effect(task: tuple) -> dict:
         reps = scorer.replicates(rows(spec_of(best["params"], extra)), NOISE_REPLICATES, [seed, 2])
         result["noise"] = float(np.std(reps))
         result["intervals"] = _intervals(space, history, best, result["noise"])
+        result["determined"] = determined(space, result["intervals"])
     else:
         result["error"] = errors[-1] if errors else "no evaluation succeeded"
     result["seconds"] = time.perf_counter() - started
@@ -927,6 +943,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
             noise_paired = {**noise_paired, "removed": paired["removed"] - own}
         accepted.append({"name": top["name"], "share_removed": own / judged0 if judged0 > 0 else 0.0,
                          "share_of_remaining": share, "params": top["params"], "intervals": top["intervals"],
+                         "determined": top.get("determined", {}),
                          "round": r, "removed_interval": paired["removed_interval"]})
         if noise_paired:
             # Its share: what it removes beyond the candidate alone (the candidate keeps the rest).

@@ -589,7 +589,8 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "source": asdict(spec["source"]),
         "target": asdict(spec["target"]),
         "effects": [{"name": e["name"], "share_removed": e["share_removed"], "params": e["params"],
-                     "intervals": e.get("intervals", {}), "round": e.get("round")} for e in result["effects"]],
+                     "intervals": e.get("intervals", {}), "determined": e.get("determined", {}),
+                     "round": e.get("round")} for e in result["effects"]],
         "gap_before": result["gap_before"],
         "gap_after": result["gap_after"],
         "shrink": 1 - result["gap_after"] / result["gap_before"] if result["gap_before"] > 0 else None,
@@ -645,8 +646,13 @@ def views_md(views: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _params(params: dict) -> str:
-    return ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in params.items())
+def _params(params: dict, determined: dict | None = None) -> str:
+    """k = v, ...; a parameter the data do not determine (its interval spans most of its range) is
+    marked "not identifiable"."""
+    def mark(k):
+        return " (not identifiable)" if determined and k in determined and not determined[k]["determined"] else ""
+
+    return ", ".join((f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}") + mark(k) for k, v in params.items())
 
 
 def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
@@ -676,7 +682,8 @@ def tables_md(summary: dict) -> str:
 
 def summary_lines(run: RunDir) -> list[str]:
     s = json.loads((run.path / "summary.json").read_text())
-    names = ", ".join(f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'])})" for e in s["effects"])
+    names = ", ".join(f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'], e.get('determined'))})"
+                      for e in s["effects"])
     lines = [
         f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
         f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "

@@ -170,16 +170,21 @@ def _num(v, fmt=".2f") -> str:
 def table_md(summary: dict) -> str:
     """Per effect: trials it was hidden in, top-1/top-3, shrink, parameter error, withheld behaviour;
     then the overall line."""
-    lines = ["| effect | trials | top-1 | top-3 | median shrink | median param error | withheld | unexplained "
-             "when withheld | named wrongly |", "|---|" + "---|" * 8]
+    lines = ["| effect | trials | top-1 | top-3 | median shrink | median param error | ... on determined ones "
+             "| not identifiable | withheld | unexplained when withheld | named wrongly |", "|---|" + "---|" * 10]
     for name, e in summary["per_effect"].items():
         lines.append(f"| {name} | {e['trials']} | {_pct(e['top1'])} | {_pct(e['top3'])} | {_pct(e['median_shrink'])} "
-                     f"| {_num(e['median_param_error'])} | {e['withheld']} | {_pct(e['unexplained_when_withheld'])} "
+                     f"| {_num(e['median_param_error'])} | {_num(e.get('median_param_error_determined'))} "
+                     f"| {e.get('not_identifiable', '')} | {e['withheld']} | {_pct(e['unexplained_when_withheld'])} "
                      f"| {e['named_wrongly']} |")
     lines.append(f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'][k] for k in ('single', 'pair'))} "
                  f"| {_pct(summary['top1'])} | {_pct(summary['top3'])} | {_pct(summary['median_shrink'])} | "
-                 f"{_num(summary['median_param_error'])} | {summary['by_kind']['withheld']} | "
-                 f"{_pct(summary['out_of_library_unexplained'])} | |")
+                 f"{_num(summary['median_param_error'])} | {_num(summary.get('median_param_error_determined'))} | "
+                 f"| {summary['by_kind']['withheld']} | {_pct(summary['out_of_library_unexplained'])} | |")
+    lines += ["", f"null trials with no significant gap: {_pct(summary['null_correct'])} (by format: "
+              + ", ".join(f"{k} {_pct(v)}" for k, v in (summary.get("null_correct_by_format") or {}).items()) + "); "
+              f"right effect first and explained (or partly, with >= 50 % of the gap): "
+              f"{_pct(summary.get('explained_or_partly_when_identified'))}"]
     return "\n".join(lines) + "\n"
 
 
