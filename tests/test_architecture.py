@@ -151,3 +151,22 @@ def test_plugins_import_gearlab_only_through_the_public_api():
             private += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names
                         if (n == "gearlab" or n.startswith("gearlab.")) and n != "gearlab.api"]
     assert not private, "plugins must import from gearlab.api only:\n" + "\n".join(private)
+
+
+def test_every_scenario_kind_fulfils_the_kind_contract():
+    import inspect
+    import types
+
+    from gearlab.kinds import SCENARIO_KINDS
+    from gearlab.kinds.contract import ScenarioKind
+
+    wanted = [name for name in ScenarioKind.__dict__ if not name.startswith("_")] + ["TABLES"]
+    for name, module in SCENARIO_KINDS.items():
+        assert isinstance(module, ScenarioKind), name
+        for attr in wanted:
+            if callable(getattr(ScenarioKind, attr, None)):
+                want = list(inspect.signature(getattr(ScenarioKind, attr)).parameters)[1:]  # without self
+                assert len(inspect.signature(getattr(module, attr)).parameters) == len(want), (name, attr)
+    lacking = types.ModuleType("lacking")
+    lacking.TABLES, lacking.build = {}, lambda scenario: None
+    assert not isinstance(lacking, ScenarioKind)  # the check sees a missing function

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import ROOT
+
 from gearlab.data.spec import dataset_preset
 
 DATASET_B = ROOT / "scenarios" / "dataset_B.toml"
@@ -110,9 +110,9 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
     # One worker: a process pool costs ~3 s to start per dataset on 2 cores, more than the quick
     # builds themselves; the pool path is covered by test_datasets (LocalExecutor(2) determinism).
     import gearlab.executors
-    import gearlab.kinds.dataset
+    import gearlab.kinds.common
 
-    monkeypatch.setattr(gearlab.kinds.dataset, "make_executor",
+    monkeypatch.setattr(gearlab.kinds.common, "make_executor",
                         lambda name="local", workers=None, **_: gearlab.executors.make_executor(name, 1))
     code, out, err = cli("run", DATASET_B, "--quick", "--out", tmp_path / "runs")
     assert code == 0, err

@@ -190,7 +190,7 @@ def test_address_precedence(monkeypatch):
 
 def test_the_scenario_address_reaches_the_ray_executor(tmp_path, monkeypatch):
     from gearlab.engine import load_scenario
-    from gearlab.kinds.dataset import executor_for
+    from gearlab.kinds.common import executor_for
 
     monkeypatch.setattr(executors, "import_ray", lambda: None)  # no session is opened here
     monkeypatch.delenv("RAY_ADDRESS", raising=False)

@@ -20,6 +20,7 @@ from gearlab.data.spec import Dataset
 from gearlab.engine import load_scenario, run_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.kinds import transfer
+from gearlab.kinds.common import planned_counts
 from gearlab.learn import protocol as P
 from gearlab.learn.calibration import THESIS, Calibration
 from gearlab.learn.protocol import (
@@ -365,7 +366,7 @@ def test_planned_class_counts_are_those_built(finished, tiny_toml):
     for side in ("source", "target"):
         built, cached = load_or_build(spec[side])
         assert cached
-        assert transfer.planned_counts(spec[side], side) == Counts.of(built)
+        assert planned_counts(spec[side], side) == Counts.of(built)
 
 
 def test_summary_table_and_report(finished, cli):

@@ -4,190 +4,22 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict
-from pathlib import Path
 
 import numpy as np
 
+from ..charts import Chart, Curve, dataset_examples
+from ..data import cache
 from ..data.cache import load_or_build
 from ..data.importers import MeasuredSpec
-from ..data.spec import DATASET_PRESETS, DatasetSpec, NoiseSpec, dataset_preset
-from ..effects import effects_from_tables
-from ..errors import GearlabInputError, shown
+from ..data.spec import DatasetSpec
+from ..errors import GearlabInputError
 from ..events import Event
-from ..executors import make_executor
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, location, plain_name
-from ..units import to_si
+from ..scenario import Scenario, location
+from ..signals import order_spectrum
+from .common import DATASET_TABLE, dataset_spec, executor_for, sized
 
-DATASET_TABLE = Table(
-    {
-        "preset": Key(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'file')"),
-        "file": Key(str, "", doc="measured data: a .csv, .npz, .h5, .wav or .mat file, relative to the scenario"),
-        "vibration": Key(str, "", doc="measured data: the vibration channel"),
-        "tacho": Key(str, "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed'"),
-        "labels": Key(str, "", doc="measured data: an optional label channel"),
-        "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
-        "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
-        "sensitivity": Key((int, float, str), None, doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
-                                                        "V per m/s²); without it or 'gain' the units are unknown"),
-        "gain": Key((int, float, str), None, doc="measured data: volts per file unit, e.g. '0.3 mV' per count of "
-                                                 "an integer record (WAV: at full scale)"),
-        "name": Key(str, "", lambda v, where: v and plain_name(v, where), "label (default: the preset name)"),
-        "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
-        "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
-        "channel": Key(str, "", doc="measurement channel, e.g. pinion_x, casing_x"),
-        "speed": Key((int, float, str), None, doc="input-shaft speed, e.g. '25.2 Hz'"),
-        "load": Key((int, float, str), None, doc="load torque, e.g. '7 N*m'"),
-        "faults": Key(dict, None, doc="{fault = [steps]} replacing the preset's ladders"),
-        "teeth": Key(list, None, doc="pinion teeth carrying faults (default: all)"),
-        "duplicates": Key(int, None, in_range(1)),
-        "healthy": Key(int, None, in_range(0)),
-        "revolutions": Key(int, None, in_range(1), "J noisy revolutions per sample (TSA averages them)"),
-        "noise": Key(dict, None, doc="{kind = 'laplace', snr_db = 0, seed = 0}; an empty table removes noise"),
-        "tsa": Key(bool, None),
-        "seed": Key(int, None, in_range(0, 2**32 - 1)),
-        "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'"),
-        "effects": Key(list, None, doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
-                                       "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)"),
-    },
-    array=True,
-    required=True,
-)
 TABLES = {"datasets": DATASET_TABLE}
-
-
-# Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
-# 12 800. The table's keys bound no product, so absurd sizes are refused before any work.
-MAX_SAMPLES = 10**6
-
-
-def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
-    """A dataset preset with the entry's overrides applied, or a measured file to import
-    (shared by the dataset, transfer and gap kinds). *base*: the scenario's folder."""
-    if bool(entry["preset"]) == bool(entry["file"]):
-        raise GearlabInputError(f"{where}: give exactly one of 'preset' (simulated) or 'file' (measured data)")
-    if entry["file"]:
-        if entry.get("effects"):
-            raise GearlabInputError(f"{where} key 'effects': effects act on simulations; a measured 'file' has none")
-        return measured_spec(entry, where, base)
-    spec = dataset_preset(entry["preset"], where)
-    changes = {}
-    for key in ("model", "channel"):
-        if entry[key]:
-            changes[key] = entry[key]
-    if entry["model_preset"]:
-        changes["preset"] = entry["model_preset"]
-    if entry["name"]:
-        changes["name"] = changes["domain"] = entry["name"]
-    for key in ("speed", "load", "fs"):
-        if entry[key] is not None:
-            changes[{"speed": "speed_hz", "load": "load_nm", "fs": "fs"}[key]] = quantity(entry, key, where)
-    if entry["faults"] is not None:
-        faults = []
-        for name, steps in entry["faults"].items():
-            if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
-                raise GearlabInputError(f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {shown(steps)}")
-            faults.append((name, tuple(steps)))
-        changes["faults"] = tuple(faults)
-    if entry["teeth"] is not None:
-        if not all(isinstance(t, int) and not isinstance(t, bool) for t in entry["teeth"]):
-            raise GearlabInputError(f"{where} key 'teeth': expected a list of tooth numbers, got {shown(entry['teeth'])}")
-        changes["teeth"] = tuple(entry["teeth"])
-    for key in ("duplicates", "healthy", "revolutions", "tsa", "seed"):
-        if entry[key] is not None:
-            changes[key] = entry[key]
-    if entry["noise"] is not None:
-        changes["noise"] = noise_spec(entry["noise"], f"{where} key 'noise'")
-    if entry.get("effects") is not None:
-        changes["effects"] = effects_from_tables(entry["effects"], f"{where} key 'effects'")
-    spec = spec.with_(**changes)
-    spec.check(where)
-    spec.check_model(where)  # model, preset, channel, faults and teeth: refused before any work
-    total = sum(class_sizes(spec, where).values())
-    if total > MAX_SAMPLES:
-        raise GearlabInputError(f"{where}: dataset '{spec.name}' would hold {shown(total)} samples; expected at most "
-                                f"{MAX_SAMPLES} (fewer duplicates, teeth or healthy samples)")
-    return spec
-
-
-# Ranges of a dataset's quantities (unit, largest value, as said): beyond them a value is a
-# mistake (fs = 1e300 would ask for more samples per revolution than any memory holds).
-QUANTITIES = {"speed": ("Hz", 1e3, "1 kHz"), "load": ("N*m", 1e6, "1e6 N*m"), "fs": ("Hz", 1e7, "10 MHz")}
-
-
-def quantity(entry: dict, key: str, where: str) -> float:
-    """A speed, load or rate of a dataset entry in SI units, checked against its range."""
-    unit, high, said = QUANTITIES[key]
-    value = to_si(entry[key], unit, f"{where} key '{key}'")
-    if value < 0 or value == 0 and key != "load":
-        raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {shown(entry[key])}")
-    if value > high:
-        raise GearlabInputError(f"{where} key '{key}': {shown(entry[key])} is outside "
-                                f"{'[0' if key == 'load' else '(0'} {unit}, {said}]")
-    return value
-
-
-def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
-    """A [source] entry that must be a simulation (the gap and detection kinds: measured data
-    can only be their [target])."""
-    spec = dataset_spec(entry, where, base)
-    if not isinstance(spec, DatasetSpec):
-        raise GearlabInputError(f"{where} key 'file': the source is a simulator configuration; give a 'preset' "
-                                "(measured data can only be the [target])")
-    return spec
-
-
-def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
-    if not entry["vibration"]:
-        raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")
-    path = Path(entry["file"])
-    path = path if path.is_absolute() else base / path
-    speed = quantity(entry, "speed", where) if entry["speed"] is not None else None
-    fs = quantity(entry, "fs", where) if entry["fs"] is not None else None
-    names = entry["class_names"]
-    if not names or not all(isinstance(n, str) for n in names):
-        raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
-    spec = MeasuredSpec(
-        name=entry["name"] or path.stem, path=str(path), vibration=entry["vibration"], tacho=entry["tacho"] or None,
-        speed_hz=speed, fs=fs, labels=entry["labels"] or None, class_names=tuple(names),
-        transient=entry["transient"], **units_of(entry, where),
-    )
-    spec.check()
-    return spec
-
-
-def units_of(entry: dict, where: str) -> dict:
-    """sensitivity (V per m/s²) and gain (V per file unit) of a measured 'file' entry, as given."""
-    from ..data.textzip import parse_sensitivity
-
-    out = {}
-    if entry.get("sensitivity") is not None:
-        out["sensitivity"] = parse_sensitivity(entry["sensitivity"], f"{where} key 'sensitivity'")
-    if entry.get("gain") is not None:
-        gain = to_si(entry["gain"], "V", f"{where} key 'gain'")
-        if not gain > 0:
-            raise GearlabInputError(f"{where} key 'gain': expected a positive voltage per file unit such as "
-                                    f"'0.3 mV', got {shown(entry['gain'])}")
-        out["gain"] = gain
-    return out
-
-
-def noise_spec(table: dict, where: str) -> NoiseSpec | None:
-    if not table:
-        return None
-    unknown = set(table) - {"kind", "snr_db", "seed"}
-    if unknown:
-        raise GearlabInputError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, snr_db, seed")
-    if "kind" not in table or "snr_db" not in table:
-        raise GearlabInputError(f"{where}: expected {{kind = 'gaussian'|'laplace'|'student_t', snr_db = number}}")
-    snr = table["snr_db"]
-    # abs() < 1e300 also refuses nan, inf and integers too large for a float
-    if isinstance(snr, bool) or not isinstance(snr, (int, float)) or not abs(snr) < 1e300:
-        raise GearlabInputError(f"{where}: snr_db must be a finite number of dB, got {str(snr)[:40]}")
-    seed = table.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= 2**32 - 1:
-        raise GearlabInputError(f"{where}: seed must be a whole number in [0, {2**32 - 1}], got {shown(seed)}")
-    return NoiseSpec(str(table["kind"]), float(snr), seed)
 
 
 def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
@@ -197,24 +29,6 @@ def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
     if len(set(names)) != len(names):
         raise GearlabInputError(f"{scenario.path}: dataset names must be unique; give each entry a 'name'")
     return specs
-
-
-def class_sizes(spec: DatasetSpec | MeasuredSpec, where: str = "") -> dict[str, int] | None:
-    """Samples per class of a simulated dataset from its spec alone (as data.builder lays it
-    out), so that protocols are checked before anything is built; None for measured data."""
-    if not isinstance(spec, DatasetSpec):
-        return None
-    _, _, teeth = spec.check_model(where)
-    return {"healthy": spec.healthy, **{name: len(steps) * len(teeth) * spec.duplicates for name, steps in spec.faults}}
-
-
-def sized(spec: DatasetSpec | MeasuredSpec) -> str:
-    """'name (N samples: H healthy, F fault)', for the one-line descriptions."""
-    sizes = class_sizes(spec)
-    if sizes is None:
-        return f"{spec.name} (measured)"
-    total = sum(sizes.values())
-    return f"{spec.name} ({total} samples: {sizes['healthy']} healthy, {total - sizes['healthy']} fault)"
 
 
 def describe(scenario: Scenario) -> str:
@@ -229,28 +43,6 @@ def quick(scenario: Scenario) -> None:
                 healthy=min(s.healthy, 4), revolutions=min(s.revolutions, 4)) if isinstance(s, DatasetSpec) else s
         for s in scenario.spec
     ]
-
-
-def executor_for(scenario: Scenario, address: str | None = None):
-    """The scenario's [execution] executor. For Ray, `address` (the CLI's --ray-address) wins over
-    RAY_ADDRESS, which wins over the scenario's `address`."""
-    ex = scenario.tables["execution"]
-    return make_executor(ex["executor"], ex["workers"] or None, address=address,
-                         scenario_address=ex.get("address") or None)
-
-
-def device_of(scenario: Scenario) -> str:
-    """The scenario's [execution] device for training, checked here when units train in this
-    machine's processes (a Ray cluster's workers may have a GPU that this machine lacks)."""
-    ex = scenario.tables["execution"]
-    if ex["executor"] == "local":
-        from ..learn.training import pick_device
-
-        try:
-            pick_device(ex["device"])
-        except GearlabInputError as exc:
-            raise GearlabInputError(f"{location(scenario.path, 'execution', 'device')}: {exc}") from None
-    return ex["device"]
 
 
 def class_counts(dataset) -> dict[str, int]:
@@ -289,7 +81,7 @@ def table_md(summary: dict) -> str:
 
 
 def figures(dataset, run: RunDir) -> None:
-    from ..plots import dataset_signals
+    from ..plots import dataset_signals  # start-up time: matplotlib only when a run draws
 
     dataset_signals(dataset, run.file("figures", f"signals_{dataset.spec.name}.png"))
 
@@ -310,10 +102,6 @@ def records_table(scenario: Scenario, records: list[dict]) -> str:
 def charts(scenario: Scenario, run: RunDir) -> list:
     """Per dataset (from the cache; nothing is rebuilt to draw it): a revolution of each class at
     its top intensity, and their order spectra."""
-    from ..charts import Chart, Curve, dataset_examples
-    from ..data import cache
-    from ..signals import order_spectrum
-
     done = {r["unit"] for r in run.records()}
     out = []
     for spec in scenario.spec:

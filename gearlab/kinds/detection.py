@@ -35,7 +35,7 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +48,7 @@ from ..events import Event, UnitProgress
 from ..learn.calibration import Calibration
 from ..learn.detectors import gumbel_quantile
 from ..learn.protocol import Method, Protocol, StateStore, shared_state
+from ..learn.schedule import two_phases
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
@@ -55,7 +56,7 @@ from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import Standardiser
 from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
 from ..units import to_si
-from .dataset import class_sizes, device_of, executor_for, simulated_spec, sized
+from .common import class_sizes, device_of, executor_for, shrunk, simulated_spec, sized
 from .transfer import CALIBRATION, TRAINING, check_training
 from .transfer import TABLES as TRANSFER_TABLES
 from .transfer import method as transfer_method
@@ -274,8 +275,7 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: short training."""
     p = scenario.spec["protocol"]
-    scenario.spec["protocol"] = replace(p, prime_epochs=min(p.prime_epochs, 20), baseline_epochs=min(p.baseline_epochs, 30),
-                                        min_epochs=min(p.min_epochs, 30), max_epochs=min(p.max_epochs, 40))
+    scenario.spec["protocol"] = shrunk(p, prime_epochs=20, baseline_epochs=30, min_epochs=30, max_epochs=40)
 
 
 # --- the records -------------------------------------------------------------------------
@@ -495,13 +495,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         todo = [(name, m) for name in conditions for m in protocol.methods]
         pending = [(c, m) for c, m in todo if f"{c}/{m.key}" not in done]
         folders = {c: f"condition{i}" for i, c in enumerate(conditions)}
-        makers: dict[tuple, tuple] = {}
-        for c, m in pending:
+        def state_file(unit: tuple) -> Path | None:
+            c, m = unit
             state = shared_state(m, 0, 0, protocol)
-            if state is not None and not (run.path / "states" / folders[c] / f"{state}.pt").exists():
-                makers.setdefault((c, state), (c, m))
-        first = list(makers.values())
-        phases = [first, [u for u in pending if u not in first]]
+            return None if state is None else run.path / "states" / folders[c] / f"{state}.pt"
+
+        phases = two_phases(pending, state_file)
         on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} trainings"))
         finished = len(todo) - len(pending)
 
@@ -616,7 +615,7 @@ def table_md(rows: list[dict]) -> str:
                 parts.append("| | " if r is None else f"{_cell(r['auc'], '{:.3f}')} | {_cell(r['detection'], '{:.0f}')} | "
                              f"{_cell(r['false_alarm'], '{:.0f}')}")
             out.append(f"| {m} | " + " | ".join(parts) + " |")
-        out.append(f"| units (pos / neg) | " + " | ".join(
+        out.append("| units (pos / neg) | " + " | ".join(
             f"{cells[(first['method'], u)]['n_positive']} / {cells[(first['method'], u)]['n_negative']} | |"
             if (first["method"], u) in cells else "| |" for u in units) + " |")
         out.append("")

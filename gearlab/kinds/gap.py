@@ -31,17 +31,19 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.chain import PASSBAND, Chain, chain_of
 from ..data.importers import MeasuredSpec
-from ..data.spec import POINTS, DatasetSpec
+from ..data.spec import DatasetSpec
 from ..effects import default_candidates
 from ..errors import GearlabInputError
 from ..learn.networks import NETWORKS
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, shared_state
+from ..learn.schedule import two_phases
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..events import Event
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of
-from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, simulated_spec, sized
+from .common import (QUICK_TRAINING, DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for,
+                     planned_counts, shrunk, simulated_spec, sized)
 from .transfer import MAX_SEED, TRAINING, method as transfer_method, train_unit
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
@@ -297,13 +299,6 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
     return tuple(out)
 
 
-def planned_counts(spec) -> Counts | None:
-    sizes = class_sizes(spec)
-    if sizes is None:
-        return None
-    return Counts(spec.name, POINTS, sizes.pop("healthy"), sum(sizes.values()))
-
-
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     s = spec["settings"]
@@ -326,9 +321,7 @@ def quick(scenario: Scenario) -> None:
                         "healthy": min(s["healthy"], 20), "bootstrap": min(s["bootstrap"], 50),
                         "permutations": min(s["permutations"], 200)}
     p: Protocol = spec["protocol"]
-    spec["protocol"] = replace(p, repetitions=1, prime_epochs=min(p.prime_epochs, 30),
-                               baseline_epochs=min(p.baseline_epochs, 60), min_epochs=min(p.min_epochs, 60),
-                               max_epochs=min(p.max_epochs, 90))
+    spec["protocol"] = replace(shrunk(p, **QUICK_TRAINING), repetitions=1)
 
 
 # --- run -------------------------------------------------------------------------------------------
@@ -492,13 +485,12 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
             on_event(Event("advance", stage="sources", done=i + 1, total=len(needed)))
     # Each source has its own states (its source-only model, its primed network): the unit that
     # needs one first makes it, the others wait for the second phase and load it.
-    makers: dict[tuple, tuple] = {}
-    for rep, variant, m in pending:
+    def state_file(unit: tuple):
+        rep, variant, m = unit
         state = shared_state(m, rep, 0, protocol)  # the gap kind scores k = 0 only
-        if state is not None and not (run.path / "states" / variant / f"{state}.pt").exists():
-            makers.setdefault((variant, state), (rep, variant, m))
-    first = list(makers.values())
-    phases = [first, [u for u in pending if u not in first]]
+        return None if state is None else run.path / "states" / variant / f"{state}.pt"
+
+    phases = two_phases(pending, state_file)
     finished = len(todo) - len(pending)
     on_event(Event("advance", stage="accuracy", done=finished, total=len(todo)))
 

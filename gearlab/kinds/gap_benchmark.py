@@ -30,7 +30,7 @@ from ..registry import get_registry
 from ..events import Event
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
-from .dataset import DATASET_TABLE, dataset_spec, executor_for
+from .common import DATASET_TABLE, dataset_spec, executor_for
 
 MAX_TRIALS = 10000
 MAX_SEED = 2**32 - 1

@@ -34,7 +34,7 @@ from ..params import did_you_mean
 from ..runs import RunDir
 from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
 from ..signals import NOISE_KINDS
-from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
+from .common import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
 
 # What a study may change in the chapter-4 presets; the preset itself, the noise kind and
 # TSA are what the study varies.

@@ -22,7 +22,7 @@ import torch
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
-from ..data.spec import POINTS, DatasetSpec
+from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
@@ -41,12 +41,13 @@ from ..learn.protocol import (
     split,
     unit_key,
 )
+from ..learn.schedule import two_phases
 from ..learn.training import pick_device
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
-from .dataset import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, sized
+from .common import DATASET_TABLE, QUICK_TRAINING, dataset_spec, device_of, executor_for, planned_counts, shrunk, sized
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # Beyond these a scenario could never run: the list of units would not fit in memory, and
@@ -163,15 +164,6 @@ def method(entry: dict, where: str) -> Method:
                   tuple(sorted(entry["params"].items())))
 
 
-def planned_counts(spec, where: str) -> Counts | None:
-    """Sample length and class sizes of a simulated dataset, known before it is built (as
-    data.builder lays it out); None for measured data, known only once imported."""
-    sizes = class_sizes(spec, where)
-    if sizes is None:
-        return None
-    return Counts(spec.name, POINTS, sizes.pop("healthy"), sum(sizes.values()))
-
-
 def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
     spec = scenario.spec
@@ -183,11 +175,8 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: 2 repetitions, k in {0, 4}, short training."""
     p = scenario.spec["protocol"]
-    scenario.spec["protocol"] = replace(
-        p, repetitions=min(p.repetitions, 2), ks=tuple(k for k in p.ks if k in (0, 4)) or p.ks[:1],
-        prime_epochs=min(p.prime_epochs, 30), baseline_epochs=min(p.baseline_epochs, 60),
-        min_epochs=min(p.min_epochs, 60), max_epochs=min(p.max_epochs, 90),
-    )
+    p = shrunk(p, repetitions=2, **QUICK_TRAINING)
+    scenario.spec["protocol"] = replace(p, ks=tuple(k for k in p.ks if k in (0, 4)) or p.ks[:1])
 
 
 def units(protocol: Protocol) -> list[tuple[int, int, Method]]:
@@ -212,13 +201,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]
         # The first unit that needs a repetition's shared state (priming, source-only model) makes
         # it; every other unit waits for phase 2 and loads it from the run directory.
-        makers: dict[str, tuple] = {}
-        for rep, k, m in pending:
+        def state_file(unit: tuple) -> Path | None:
+            rep, k, m = unit
             state = shared_state(m, rep, k, protocol)
-            if state is not None and not (run.path / "states" / f"{state}.pt").exists():
-                makers.setdefault(state, (rep, k, m))
-        first = list(makers.values())
-        phases = [first, [u for u in pending if u not in first]]
+            return None if state is None else run.path / "states" / f"{state}.pt"
+
+        phases = two_phases(pending, state_file)
+        first = phases[0]
         if first:
             on_event(Event("stage", stage="priming", total=len(first),
                            message=f"priming: {len(first)} shared states (primed and source-only models)"))

@@ -1,0 +1,48 @@
+"""The contract of a scenario kind: what the engine, the CLI, the TUI and the comparison call.
+
+A kind is a module of gearlab.kinds registered by name in ``SCENARIO_KINDS`` (the
+``kind = "..."`` of a scenario's [scenario] table). Everything outside the kind reaches it
+through the names below and nothing else; ``tests/test_architecture.py`` checks that every
+registered kind provides them. (The registry's *plugin* kinds — fault, model, adapter,
+effect — are another thing: gearlab.registry.KINDS.)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Protocol, runtime_checkable
+
+from ..charts import Chart
+from ..events import EventSink
+from ..runs import RunDir
+from ..scenario import Scenario, Table
+
+
+@runtime_checkable
+class ScenarioKind(Protocol):
+    # The kind's tables beyond [scenario], [output] and [execution]: checked key by key before
+    # any work (gearlab.engine.load_scenario).
+    TABLES: Mapping[str, Table]
+
+    def build(self, scenario: Scenario) -> Any:
+        """The scenario's resolved spec (becomes scenario.spec); GearlabInputError naming file,
+        table and key for anything the tables alone could not refuse."""
+
+    def describe(self, scenario: Scenario) -> str:
+        """One line of what the scenario will do (`gearlab validate`, the TUI's scenario view)."""
+
+    def quick(self, scenario: Scenario) -> None:
+        """Shrink scenario.spec in place for a smoke run (--quick; a resume shrinks alike)."""
+
+    def run(self, scenario: Scenario, run: RunDir, on_event: EventSink) -> None:
+        """Do the work into *run*: append one record per finished unit (skipping those already
+        in run.records(), so --resume redoes nothing), write summary.json and the tables."""
+
+    def summary_lines(self, run: RunDir) -> list[str]:
+        """What the CLI prints and the TUI shows of a finished run."""
+
+    def records_table(self, scenario: Scenario, records: list[dict]) -> str:
+        """A Markdown table of the records so far (a live or partial run; `gearlab compare`)."""
+
+    def charts(self, scenario: Scenario, run: RunDir) -> list[Chart]:
+        """The run's charts as data (the TUI draws them in the terminal; compare overlays them)."""
