@@ -315,11 +315,48 @@ class Simulator:
 
         *effects*: excitation-level effects as (Effect, resolved params) pairs (gearlab.effects.EffectChain.at),
         applied in order to the nominal excitation (fixed speed, constant load) before the loop.
+
+        The stages: check the operating point, the mesh stiffness k(t) along the nominal shaft
+        angle, the excitation effects, the static equilibrium, the Newmark loop, the result.
         """
+        where = f"model '{self.model.name}', preset '{self.preset}'"
+        speed, load, channels = self._operating_point(speed_hz, load_nm, duration, channels, where)
+        start = time.perf_counter()
+        steps = int(round(duration * self.fs))
+        t = np.arange(steps + 1) / self.fs
+        phase = np.mod(2 * np.pi * speed * t, 2 * np.pi)  # nominal pinion angle: fixed input speed
+        per_rev = self.fs / speed
+        tvms, index, k = self._nominal_stiffness(faults, phase, per_rev, steps)
+        k_mean = tvms.mean
+        forces, angle = [], None
+        if effects:
+            k, k_mean, forces, angle = self._excite(effects, tvms, index, t, speed, load)
+            if angle is not None:
+                phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
+        F, (u, v, a) = self._equilibrium(load, k_mean)
+        out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
+        out = np.empty((steps + 1, len(out_idx)))
+        failed = self._newmark(k, forces, angle, t, speed, per_rev, F, (u, v, a), out_idx, out)
+        if failed >= 0:
+            labels = ", ".join(f.label for f in faults) or "healthy"
+            raise SimulationError(
+                f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
+                f"(NaN or overflow) near t = {failed / self.fs:.4g} s; check the model parameters and the time step"
+            )
+        tacho = np.where(phase >= np.pi, phase - 2 * np.pi, phase)
+        wall = time.perf_counter() - start
+        return Simulation(
+            model=self.model.name, preset=self.preset, speed_hz=speed, load_nm=load, fs=self.fs, t=t, tacho=tacho,
+            tvms=k, channels={ch: out[:, j] for j, ch in enumerate(channels)}, wall_s=wall, faults=tuple(faults),
+            state=(u, v, a), angle=angle,
+        )
+
+    def _operating_point(self, speed_hz: float | None, load_nm: float | None, duration: float,
+                         channels: Sequence[str] | None, where: str) -> tuple[float, float, list[str]]:
+        """Speed and load (the preset's unless given) and the channels, checked: one line each."""
         preset = self.model.preset(self.preset)
         speed = float(preset["speed_hz"] if speed_hz is None else speed_hz)
         load = float(preset["load_nm"] if load_nm is None else load_nm)
-        where = f"model '{self.model.name}', preset '{self.preset}'"
         if not (math.isfinite(speed) and speed > 0):
             raise GearlabInputError(f"{where}: speed must be a positive number of Hz, got {speed!r}")
         if not (math.isfinite(load) and load >= 0):
@@ -338,38 +375,37 @@ class Simulator:
                 raise GearlabInputError(
                     f"{where}: model has no channel '{ch}'; its channels: {', '.join(self.model.channels)}"
                 )
-        start = time.perf_counter()
-        steps = int(round(duration * self.fs))
-        t = np.arange(steps + 1) / self.fs
-        phase = np.mod(2 * np.pi * speed * t, 2 * np.pi)  # nominal pinion angle: fixed input speed
-        per_rev = self.fs / speed
-        index = None
+        return speed, load, channels
+
+    def _nominal_stiffness(self, faults: Sequence[PlacedFault], phase: np.ndarray, per_rev: float, steps: int):
+        """The TVMS over one revolution (faults included) and k(t) at the nominal angle *phase*:
+        (table, table index per step or None, k(t))."""
         if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
             # A whole number of steps per revolution: the TVMS on exactly those angles, no
             # interpolation, so a fault on tooth n sees exactly the shifted TVMS of tooth 1.
             tvms = self.stiffness.mesh_stiffness(faults, points=round(per_rev))
             index = np.arange(steps + 1) % round(per_rev)
-            k = tvms.k[index]
-        else:
-            points = self.pair.Z1 * math.ceil(TVMS_POINTS / self.pair.Z1)  # pitch-aligned grid
-            tvms = self.stiffness.mesh_stiffness(faults, points=points)
-            k = np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
-        k_mean = tvms.mean
-        forces, angle = [], None
-        if effects:
-            k, k_mean, forces, angle = self._excite(effects, tvms, index, t, speed, load)
-            if angle is not None:
-                phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
+            return tvms, index, tvms.k[index]
+        points = self.pair.Z1 * math.ceil(TVMS_POINTS / self.pair.Z1)  # pitch-aligned grid
+        tvms = self.stiffness.mesh_stiffness(faults, points=points)
+        return tvms, None, np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
+
+    def _equilibrium(self, load: float, k_mean: float) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """The load vector F and the start (u, v, a): the static equilibrium at the mean stiffness, at rest."""
         F = np.zeros(len(self.dofs))
         F[self.load_index] = -load  # T_l opposes the driven gear's rotation (eq. 2.111)
         K_mean = self.Kc + k_mean * np.outer(self.P, self.P)
         for km, P in zip(self.mesh_means, self.mesh_P):
             K_mean = K_mean + km * np.outer(P, P)
-        u = np.linalg.solve(K_mean, F)  # static equilibrium at the mean stiffness
-        v = np.zeros_like(u)
-        a = np.zeros_like(u)
-        out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
-        out = np.empty((steps + 1, len(out_idx)))
+        u = np.linalg.solve(K_mean, F)
+        return F, (u, np.zeros_like(u), np.zeros_like(u))
+
+    def _newmark(self, k: np.ndarray, forces: list, angle: np.ndarray | None, t: np.ndarray, speed: float,
+                 per_rev: float, F: np.ndarray, start: tuple, out_idx: np.ndarray, out: np.ndarray) -> int:
+        """The time loop (one of three compiled integrators: one mesh, one mesh with extra forces,
+        several meshes); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1."""
+        u, v, a = start
+        steps = len(t) - 1
         if self.meshes:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
             shaft = 2 * np.pi * speed * t if angle is None else angle
@@ -378,35 +414,23 @@ class Simulator:
             n = len(self.dofs)
             GB, g = np.zeros((n, 0)), np.zeros((steps, 0))
             if forces:
-                B = np.stack([vector for vector, _ in forces], axis=1)
-                g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
-                GB = np.ascontiguousarray(self.G @ B)
+                GB, g = self._forcing(forces)
             mu = np.array([self.mu, *self.mesh_mu])
-            failed = _integrate_meshes(self.GMC, self.G @ F, GB, g, self.Wm, self.Pm, self.PW,
-                                       np.ascontiguousarray(k_all[1:]), mu, self.c, 1.0 / self.fs, self.gamma,
-                                       u, v, a, out_idx, out)
-        elif forces:
-            B = np.stack([vector for vector, _ in forces], axis=1)
-            g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
-            GB = np.ascontiguousarray(self.G @ B)
-            failed = _integrate_forced(self.GMC, self.G @ F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, self.c,
-                                       1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
-        else:
-            failed = _integrate(self.GMC, self.G @ F, self.w, self.P, self.pw, k[1:], self.mu, self.c,
-                                1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
-        if failed >= 0:
-            labels = ", ".join(f.label for f in faults) or "healthy"
-            raise SimulationError(
-                f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
-                f"(NaN or overflow) near t = {failed / self.fs:.4g} s; check the model parameters and the time step"
-            )
-        tacho = np.where(phase >= np.pi, phase - 2 * np.pi, phase)
-        wall = time.perf_counter() - start
-        return Simulation(
-            model=self.model.name, preset=self.preset, speed_hz=speed, load_nm=load, fs=self.fs, t=t, tacho=tacho,
-            tvms=k, channels={ch: out[:, j] for j, ch in enumerate(channels)}, wall_s=wall, faults=tuple(faults),
-            state=(u, v, a), angle=angle,
-        )
+            return _integrate_meshes(self.GMC, self.G @ F, GB, g, self.Wm, self.Pm, self.PW,
+                                     np.ascontiguousarray(k_all[1:]), mu, self.c, 1.0 / self.fs, self.gamma,
+                                     u, v, a, out_idx, out)
+        if forces:
+            GB, g = self._forcing(forces)
+            return _integrate_forced(self.GMC, self.G @ F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, self.c,
+                                     1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
+        return _integrate(self.GMC, self.G @ F, self.w, self.P, self.pw, k[1:], self.mu, self.c,
+                          1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
+
+    def _forcing(self, forces: list) -> tuple[np.ndarray, np.ndarray]:
+        """G B (the force vectors through K_hat_c^-1) and the force series g from the second step on."""
+        B = np.stack([vector for vector, _ in forces], axis=1)
+        g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
+        return np.ascontiguousarray(self.G @ B), g
 
     def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None) -> np.ndarray:
         """k(t) of further mesh *i* with the input shaft at angle *shaft*: its pinion turns at ratio x the
