@@ -5,7 +5,8 @@ tacho channel, or at a known nominal speed, in whatever file the acquisition sys
 writes. :func:`import_measured` reads such a record and sends it through the functions
 of :mod:`gearlab.signals` that also turn simulated records into samples:
 
-    file ─► named channels + sampling rate          read_channels (one small reader per format)
+    file ─► named channels + sampling rate          read_channels (one small reader per format:
+                                                    gearlab.data.readers)
          ─► numeric, finite, equal lengths          check_signal
          ─► continuous input-shaft angle            unwrap_tacho | angle_from_pulses | angle_from_speed
          ─► complete revolutions at 4096 angles     cut_revolutions
@@ -42,19 +43,12 @@ memory holds is refused in one line instead of exhausting it.
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import json
 import math
-import os
-import re
-import struct
-import warnings
-import zipfile
-import zlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +69,8 @@ from ..signals import (
 )
 from ..signals.checks import check_int, check_positive, fmt_hz
 from .chain import FRACTIONS_KEPT
+from .readers import READERS, Contents, check_size
+from .readers.base import _listing, _one_line, _one_line_repr
 from .spec import Dataset
 
 __all__ = ["FORMATS", "MeasuredSpec", "import_measured", "read_channels"]
@@ -89,8 +85,6 @@ IMPORT_TRANSIENTS = ("stats", "none")
 # Bumped whenever the importer's output for the same file and options changes (cache keys).
 IMPORTER_VERSION = "1"
 
-_RATE_NAMES = ("fs",)  # compared lower-case: fs, Fs, FS
-_TIME_NAMES = ("t", "time")
 # A time column is uniform when every step, and every sample's distance from the straight
 # line through its ends, stays within this fraction of a sampling period: rounding of written
 # times (to the microsecond at 50 kHz: 5 %) stays below it, a dropped sample does not.
@@ -105,30 +99,6 @@ _RISING_SHARE = 0.9
 # Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
 # cannot even be unwrapped).
 _MIN_SAMPLES_PER_REV = 2
-
-
-# Most megabytes a measured file, and each channel as stored (decoded), may hold; the import
-# takes several times that in memory. GEARLAB_MAX_RECORD_MB overrides it (docs/scenarios.md).
-MAX_RECORD_MB = 1024
-
-
-def max_record_bytes() -> int:
-    text = os.environ.get("GEARLAB_MAX_RECORD_MB", "")
-    try:
-        mb = float(text) if text else MAX_RECORD_MB
-    except ValueError:
-        raise GearlabInputError(f"GEARLAB_MAX_RECORD_MB: expected a number of megabytes, got {text[:40]!r}") from None
-    if not mb > 0 or not math.isfinite(mb):
-        raise GearlabInputError(f"GEARLAB_MAX_RECORD_MB: expected a positive number of megabytes, got {text[:40]!r}")
-    return int(mb * 2**20)
-
-
-def check_size(path, what: str, nbytes: int) -> None:
-    """Refuse *what* of *path* when it would take more than the record size limit."""
-    limit = max_record_bytes()
-    if nbytes > limit:
-        raise GearlabInputError(f"{path}: {what} would take {nbytes / 2**20:,.0f} MB, more than the limit of "
-                                f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
 
 
 # --- what the importer is asked -------------------------------------------------------
@@ -272,26 +242,6 @@ def _prefixed(prefix: str):
         raise GearlabInputError(f"{prefix}: {exc}") from None
 
 
-def _one_line(exc: BaseException) -> str:
-    """A library exception as one short line (its text, or its type when it has none)."""
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= 200 else text[:197] + "..."
-
-
-def _one_line_repr(value) -> str:
-    """repr() of a value found in a file, on one short line whatever the object is."""
-    text = " ".join(repr(value).split())
-    return text if len(text) <= 80 else text[:77] + "..."
-
-
-def _listing(names: Iterable[str], limit: int = 12) -> str:
-    names = [" ".join(str(n).split()) for n in names]  # names from a file: kept to one line
-    if not names:
-        return "none"
-    shown = ", ".join(names[:limit])
-    return shown if len(names) <= limit else f"{shown}, … ({len(names)} in all)"
-
-
 def _check_exists(path: Path) -> None:
     try:
         exists, is_file = path.exists(), path.is_file()
@@ -308,479 +258,12 @@ def _supported() -> str:
     return ", ".join(FORMATS)
 
 
-# --- readers -----------------------------------------------------------------------------
+# --- reading a file (the readers themselves: gearlab.data.readers) ---------------------------
 
 
-@dataclass
-class _Contents:
-    """What a reader found: the asked-for channels, every channel's name, the rate fields.
 
-    rates: (where, value) of every sampling-rate field that applies (Hz, one number);
-    times: (where, value) of every time vector that applies (s, one per sample).
-    """
 
-    found: dict[str, np.ndarray]
-    available: list[str]
-    rates: list[tuple[str, object]] = field(default_factory=list)
-    times: list[tuple[str, object]] = field(default_factory=list)
-    # the value step of channels a reader has already turned from integers to floats (WAV PCM)
-    steps: dict[str, float] = field(default_factory=dict)
-
-
-def _text_array(values: np.ndarray) -> np.ndarray:
-    """Text of any storage (bytes, object arrays of str, padded MATLAB char rows) as stripped str."""
-    flat = [v.decode("utf-8", "replace") if isinstance(v, bytes) else v for v in values.ravel().tolist()]
-    return np.char.strip(np.asarray(flat, dtype=str)).reshape(values.shape)
-
-
-def _normalise(value) -> np.ndarray:
-    """A reader's raw value as an array: text unified to str; numbers and anything else as is."""
-    if hasattr(value, "toarray"):  # a MATLAB sparse matrix (scipy.sparse): its numbers, dense
-        value = value.toarray()
-    arr = np.asarray(value)
-    if arr.dtype.kind in "SU":
-        return _text_array(arr)
-    if arr.dtype.kind == "O" and arr.size and all(isinstance(v, str | bytes) for v in arr.ravel().tolist()):
-        return _text_array(arr)  # a MATLAB cell array of text, an HDF5 variable-length string
-    return arr
-
-
-def _keyed(available: Iterable[str], get, names: Sequence[str]) -> _Contents:
-    """Contents of a format whose channels are looked up by name (CSV, NPZ, MATLAB v5).
-
-    The sampling rate fields are the entries named fs (any case) and the time vectors the
-    entries named t or time, wherever the format keeps its names.
-    """
-    available = list(available)
-    present = set(available)
-    contents = _Contents({n: _normalise(get(n)) for n in dict.fromkeys(names) if n in present}, available)
-    for n in available:
-        if n.lower() in _RATE_NAMES:
-            contents.rates.append((f"'{n}'", _normalise(get(n))))
-        elif n.lower() in _TIME_NAMES:
-            contents.times.append((f"time '{n}'", _normalise(get(n))))
-    return contents
-
-
-def _scalar(text: str):
-    """A comment's value: a number when it reads as one, else the text."""
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
-def _column(values: list[str]) -> np.ndarray:
-    """A CSV column as float64 when every field is a number, else as text (checked later)."""
-    try:
-        return np.asarray(values, dtype=np.float64)
-    except ValueError:
-        return np.asarray(values, dtype=str)
-
-
-_COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
-
-
-def _read_csv(path: Path, names: Sequence[str]) -> _Contents:
-    """Header row of names, numeric columns, '#' comments ('# fs = 51200' gives a field 'fs')."""
-    text = path.read_text(encoding="utf-8-sig")  # a BOM from spreadsheet exports is dropped
-    fields: dict[str, object] = {}
-    lines: list[tuple[int, str]] = []
-    for number, line in enumerate(text.splitlines(), start=1):
-        stripped = line.strip()
-        if not stripped:
-            continue
-        if stripped.startswith("#"):
-            match = _COMMENT_FIELD.match(stripped)
-            if match:
-                fields[match.group(1)] = _scalar(match.group(2))
-            continue
-        lines.append((number, line))
-    if not lines:
-        raise GearlabInputError(f"{path}: no header row; expected a first line of column names, then numbers")
-    header_line = lines[0][1]
-    delimiter = next((d for d in (",", ";", "\t") if d in header_line), ",")
-    rows = list(csv.reader((line for _, line in lines), delimiter=delimiter))
-    header = [h.strip() for h in rows[0]]
-    if len(set(header)) != len(header):
-        twice = next(h for h in header if header.count(h) > 1)
-        raise GearlabInputError(f"{path}: column '{twice}' appears twice in the header; expected distinct names")
-    for (number, _), row in zip(lines[1:], rows[1:]):
-        if len(row) != len(header):
-            raise GearlabInputError(
-                f"{path}: line {number} has {len(row)} fields but the header has {len(header)}; "
-                "expected one value per column (a truncated or ragged file?)"
-            )
-    if len(rows) < 2:
-        raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
-    if not any(_column([row[j].strip() for row in rows[1:2]]).dtype.kind == "f" for j in range(len(header))):
-        # not a measured record (a system file reached through a link?): nothing of it is quoted
-        raise GearlabInputError(f"{path}: its first data row (line {lines[1][0]}) holds no number; expected a header "
-                                "row of column names, then rows of numbers")
-    index = {h: j for j, h in enumerate(header)}
-
-    def get(name: str):
-        if name in index:
-            j = index[name]
-            return _column([row[j].strip() for row in rows[1:]])
-        return fields[name]
-
-    return _keyed([*header, *fields], get, names)
-
-
-def _read_npz(path: Path, names: Sequence[str]) -> _Contents:
-    """Arrays by name; never unpickles (allow_pickle=False refuses object arrays)."""
-    # np.load guesses from the first bytes (.npy, zip, else pickle); say what the file is instead.
-    with path.open("rb") as f:
-        magic = f.read(6)
-    if magic == b"\x93NUMPY":
-        raise ValueError("it holds a single array (.npy), not an archive of named arrays")
-    if not zipfile.is_zipfile(path):
-        raise ValueError("not a zip archive (an .npz file is a zip of named .npy arrays)")
-    with np.load(path, allow_pickle=False) as data:  # read inside: members load lazily
-        def get(name: str):
-            check_size(path, f"array '{name}'", _npz_member_bytes(data.zip, f"{name}.npy"))
-            return data[name]
-
-        return _keyed(data.files, get, names)
-
-
-def _npz_member_bytes(archive: zipfile.ZipFile, member: str) -> int:
-    """What an NPZ member takes once read: its .npy header's shape times its item size (what
-    numpy allocates), or its declared inflated size if that is larger."""
-    info = archive.getinfo(member)
-    with archive.open(member) as f:
-        version = np.lib.format.read_magic(f)
-        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-        shape, _, dtype = read_header(f, max_header_size=10_000)
-    return max(math.prod(shape) * dtype.itemsize, info.file_size)
-
-
-def _h5py():
-    try:
-        import h5py
-    except ImportError:  # pragma: no cover - h5py is a dependency
-        raise GearlabInputError("reading HDF5 and MATLAB v7.3 files needs h5py: pip install h5py") from None
-    return h5py
-
-
-def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> _Contents:
-    """Datasets by path ("group/acc").
-
-    Rate fields are scoped like variables: for each channel, the nearest level that has
-    any wins — an 'fs' attribute on the channel itself, else an 'fs' attribute or an
-    'fs'/'t' dataset in its group, else in the group above, up to the file's root. So a
-    file-wide rate can be overridden per group, and groups recorded at different rates
-    can share one file. The fields found for the different channels must agree.
-
-    matlab: the file is a MATLAB v7.3 MAT-file, whose variables are HDF5 datasets stored
-    transposed, with text as uint16 character codes and internals under '#refs#'.
-    """
-    h5py = _h5py()
-
-    def read(ds):
-        # declared, not stored: a dataset never written takes no room in the file
-        check_size(path, f"dataset '{ds.name}'", (ds.size or 0) * max(ds.dtype.itemsize, 8))
-        if h5py.check_string_dtype(ds.dtype) is not None:
-            return _normalise(ds.asstr()[()])
-        value = np.asarray(ds[()])
-        if matlab:
-            cls = ds.attrs.get("MATLAB_class", b"")
-            cls = cls.decode() if isinstance(cls, bytes) else str(cls)
-            value = value.T  # back to MATLAB's (rows, columns)
-            if cls == "char" and value.dtype.kind in "iu":
-                rows = np.atleast_2d(value)
-                return _normalise(["".join(map(chr, row)) for row in rows.tolist()])
-            value = np.squeeze(value)  # as loadmat(squeeze_me=True) gives v5 variables
-        return _normalise(value)
-
-    def level_fields(node, is_group: bool) -> tuple[list, list]:
-        """(rates, times) defined at one node: its 'fs' attributes, and for a group its
-        'fs' and 't'/'time' datasets."""
-        rates = [(f"attribute '{key}' of '{node.name}'", _normalise(value))
-                 for key, value in node.attrs.items() if key.lower() in _RATE_NAMES]
-        times = []
-        if is_group:
-            for key in node:
-                child = node.get(key)
-                if isinstance(child, h5py.Dataset) and key.lower() in _RATE_NAMES:
-                    rates.append((f"dataset '{child.name}'", read(child)))
-                elif isinstance(child, h5py.Dataset) and key.lower() in _TIME_NAMES:
-                    times.append((f"time dataset '{child.name}'", read(child)))
-        return rates, times
-
-    with h5py.File(path, "r") as f:
-        contents = _Contents({}, _hdf5_datasets(h5py, f))
-        seen: set[str] = set()
-        for name in dict.fromkeys(names):
-            try:
-                obj = f[name.strip("/")]
-            except (KeyError, ValueError, TypeError):
-                continue  # not there: reported with the list of datasets
-            if not isinstance(obj, h5py.Dataset):
-                continue  # a group is not a channel
-            contents.found[name] = read(obj)
-            node, is_group = obj, False
-            while True:  # from the channel up to the root; the nearest definition wins
-                rates, times = level_fields(node, is_group)
-                if rates or times or node.name == "/":
-                    break
-                node, is_group = node.parent, True
-            for kind, fields in ((contents.rates, rates), (contents.times, times)):
-                for where, value in fields:
-                    if where not in seen:  # channels of one group share its fields
-                        seen.add(where)
-                        kind.append((where, value))
-        return contents
-
-
-_HDF5_MAX_OBJECTS = 100_000
-
-
-def _hdf5_datasets(h5py, f) -> list[str]:
-    """Paths of the datasets in the file, depth first in name order (MATLAB's '#refs#' and
-    the like left out). Each object is visited once, through hard links only: h5py's
-    visititems loops forever in some damaged files, and an external link would open
-    another file."""
-    found: list[str] = []
-    seen = {f.id}
-    stack = [("", f)]
-    while stack:
-        prefix, group = stack.pop()
-        children = []
-        for key in group:
-            if not isinstance(group.get(key, getlink=True), h5py.HardLink):
-                continue
-            obj = group[key]
-            if obj.id in seen:
-                continue
-            seen.add(obj.id)
-            if len(seen) > _HDF5_MAX_OBJECTS:
-                raise ValueError(f"more than {_HDF5_MAX_OBJECTS} objects (a damaged file?)")
-            name = f"{prefix}{key}"
-            if isinstance(obj, h5py.Group):
-                children.append((f"{name}/", obj))
-            elif isinstance(obj, h5py.Dataset) and not name.startswith("#"):
-                found.append(name)
-        stack.extend(reversed(children))
-    return found
-
-
-def _read_wav(path: Path, names: Sequence[str]) -> _Contents:
-    """Channels "0", "1", … of a WAV file; integer PCM scaled to [-1, 1), float kept as is."""
-    from scipy.io import wavfile
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            rate, data = wavfile.read(path)
-        except ZeroDivisionError:  # scipy divides by the header's bytes per frame
-            raise ValueError("its header declares 0 channels or 0 bytes per sample; expected at least one "
-                             "channel of samples") from None
-    for w in caught:
-        # scipy reads what is there of a truncated file and only warns: refuse, never half a record.
-        if "EOF" in str(w.message):
-            raise ValueError(str(w.message))
-    data = np.asarray(data)
-    if data.ndim == 1:
-        data = data[:, None]
-    step = 0.0
-    if data.dtype.kind == "u":  # 8-bit PCM is unsigned around 128
-        half = 2.0 ** (8 * data.dtype.itemsize - 1)
-        data, step = (data.astype(np.float64) - half) / half, 1.0 / half
-    elif data.dtype.kind == "i":  # 24-bit PCM arrives left-justified in int32
-        step = 1.0 / 2.0 ** (8 * data.dtype.itemsize - 1)
-        data = data.astype(np.float64) * step
-    if data.ndim != 2 or data.shape[1] == 0:
-        raise ValueError("it holds no channel; expected at least one")
-    channels = [str(i) for i in range(data.shape[1])]
-    found = {n: data[:, int(n)] for n in dict.fromkeys(names) if n in channels}
-    steps = {n: step for n in found} if step else {}
-    return _Contents(found, channels, rates=[("the WAV header", np.asarray(rate))], steps=steps)
-
-
-def _is_mat73(path: Path) -> bool:
-    """MATLAB v7.3 files carry version 0x0200 in their 128-byte header (and are HDF5)."""
-    with path.open("rb") as f:
-        header = f.read(128)
-    return len(header) == 128 and header[124:126] in (b"\x00\x02", b"\x02\x00")
-
-
-def _read_mat(path: Path, names: Sequence[str]) -> _Contents:
-    """MATLAB variables by name: v4/v5 through scipy, v7.3 (HDF5) through h5py.
-
-    A v5 file's layout is checked first (_mat5_variables), and scipy reads only the
-    variables asked for and the rate fields, never the others (objects, function handles).
-    """
-    if _is_mat73(path):
-        return _read_hdf5(path, names, matlab=True)
-    from scipy.io import loadmat
-
-    with path.open("rb") as f:
-        v4 = 0 in f.read(4)  # how scipy tells v4 files from v5 ones
-    if v4:  # scipy's v4 reader is plain Python over numpy: nothing to check first
-        variables = loadmat(path, squeeze_me=True, chars_as_strings=True)
-        available = [k for k in variables if not k.startswith("__")]  # __header__, __version__, …
-    else:
-        def wanted(name: str) -> bool:  # the channels asked for and the rate fields (see _keyed)
-            return name in names or name.lower() in _RATE_NAMES + _TIME_NAMES
-
-        every = _mat5_variables(path.read_bytes(), wanted)
-        available = list(dict.fromkeys(n for n in every if n and not n.startswith("__")))
-        # squeeze_me: a 1×N row or N×1 column becomes a vector, a 1×1 a scalar.
-        variables = loadmat(path, squeeze_me=True, chars_as_strings=True,
-                            variable_names=[n for n in available if wanted(n)])
-    return _keyed(available, lambda n: variables[n], names)
-
-
-# --- MATLAB v5 layout ----------------------------------------------------------------------
-# scipy's v5 reader trusts the element types it finds, and scipy documents it as not
-# hardened for untrusted files: a data element of a type it has no dtype for makes it index
-# past its table of dtypes and crash the process (one flipped bit in a variable's array flags
-# does it). So the elements are walked here first, as the reader will take them; a file that
-# does not follow the layout is refused before scipy sees it.
-
-_MI_INT8, _MI_INT32, _MI_UINT32, _MI_MATRIX, _MI_COMPRESSED, _MI_UTF8 = 1, 5, 6, 14, 15, 16
-_MI_DATA = frozenset({1, 2, 3, 4, 5, 6, 7, 9, 12, 13, 16, 17, 18})  # the types scipy has a dtype for
-_MI_TEXT = frozenset({_MI_INT8, _MI_UTF8})  # names, class names, field names
-_MX_CELL, _MX_STRUCT, _MX_OBJECT, _MX_CHAR, _MX_SPARSE, _MX_OPAQUE = 1, 2, 3, 4, 5, 17
-_MX_NUMERIC = range(6, 16)  # double, single, int8 … uint64
-_MAT_MAX_DEPTH = 32  # cells in cells, structs in structs
-
-
-class _Mat5Layout:
-    """Walks MATLAB v5 elements: tag (type, size) then data padded to 8 bytes, or a small data
-    element (size and type in one word, up to 4 bytes of data in the next)."""
-
-    def __init__(self, order: str):
-        self.order = order
-
-    def element(self, buf: memoryview, pos: int, end: int) -> tuple[int, memoryview, int]:
-        """(type, data, position after it) of the element at *pos*; it must end by *end*."""
-        if pos + 8 > end:
-            raise ValueError(f"an element at byte {pos} runs past the end of the variable")
-        first, size = struct.unpack_from(self.order + "II", buf, pos)
-        if first >> 16:
-            if first >> 16 > 4:
-                raise ValueError(f"a small data element of {first >> 16} bytes at byte {pos}")
-            return first & 0xFFFF, buf[pos + 4:pos + 4 + (first >> 16)], pos + 8
-        start = pos + 8
-        if start + size > end:
-            raise ValueError(f"an element of {size} bytes at byte {pos} runs past the end of the variable")
-        return first, buf[start:start + size], min(end, start + (size + 7) // 8 * 8)
-
-    def data(self, buf: memoryview, pos: int, end: int, types: frozenset = _MI_DATA) -> int:
-        kind, _, pos = self.element(buf, pos, end)
-        if kind not in types:
-            raise ValueError(f"a data element of type {kind}, which MATLAB does not use there")
-        return pos
-
-    def matrix(self, buf: memoryview, pos: int, end: int, depth: int) -> int:
-        """A matrix element inside a cell or struct; the position after it."""
-        kind, body, after = self.element(buf, pos, end)
-        if kind != _MI_MATRIX:
-            raise ValueError(f"a cell or field of element type {kind}, expected a matrix")
-        if body:  # an empty matrix has no body at all
-            self.body(body, depth, lambda name: True)
-        return after
-
-    def body(self, body: memoryview, depth: int, read) -> str:
-        """Check a matrix: array flags, dimensions, name and, when read(name), its contents.
-        Returns the name."""
-        if depth > _MAT_MAX_DEPTH:
-            raise ValueError(f"cells or structs nested more than {_MAT_MAX_DEPTH} deep")
-        end = len(body)
-        kind, flags, pos = self.element(body, 0, end)
-        if kind != _MI_UINT32 or len(flags) != 8:
-            raise ValueError("a matrix without its array flags")
-        word = struct.unpack_from(self.order + "I", flags)[0]
-        mclass, is_complex = word & 0xFF, bool(word >> 11 & 1)
-        count = 0
-        if mclass != _MX_OPAQUE:  # objects of classdef classes carry no dimensions
-            kind, dims, pos = self.element(body, pos, end)
-            if kind not in (_MI_INT32, _MI_UINT32) or len(dims) % 4 or not 2 <= len(dims) // 4 <= 32:
-                raise ValueError("a matrix without valid dimensions")
-            sizes = struct.unpack(self.order + f"{len(dims) // 4}i", dims)
-            if min(sizes) < 0:
-                raise ValueError(f"a matrix of negative size {sizes}")
-            count = math.prod(sizes)
-        kind, raw, pos = self.element(body, pos, end)
-        if kind not in _MI_TEXT:
-            raise ValueError("a matrix without a valid name")
-        name = bytes(raw).decode("latin1")
-        if not read(name):
-            return name  # scipy reads no more of a variable it is not asked for
-        if mclass in _MX_NUMERIC:
-            for _ in range(2 if is_complex else 1):  # real part, imaginary part
-                pos = self.data(body, pos, end)
-        elif mclass == _MX_CHAR:
-            pos = self.data(body, pos, end)
-        elif mclass == _MX_SPARSE:
-            for _ in range(4 if is_complex else 3):  # row indices, column starts, values (real, imaginary)
-                pos = self.data(body, pos, end)
-        elif mclass == _MX_CELL:
-            for _ in range(count):  # each cell takes 8 bytes at least: the walk ends with the data
-                pos = self.matrix(body, pos, end, depth + 1)
-        elif mclass in (_MX_STRUCT, _MX_OBJECT):
-            if mclass == _MX_OBJECT:
-                pos = self.data(body, pos, end, _MI_TEXT)  # the class name
-            kind, length, pos = self.element(body, pos, end)
-            if kind not in (_MI_INT32, _MI_UINT32) or len(length) != 4:
-                raise ValueError("a struct without the length of its field names")
-            length = struct.unpack(self.order + "i", length)[0]
-            kind, fields, pos = self.element(body, pos, end)
-            if kind not in _MI_TEXT or length <= 0:
-                raise ValueError("a struct without valid field names")
-            for _ in range(count * (len(fields) // length)):
-                pos = self.matrix(body, pos, end, depth + 1)
-        else:  # function handles, classdef objects, Java objects: no measured data
-            raise ValueError(f"variable '{name}' is a MATLAB {('function handle' if mclass == 16 else 'object')}, "
-                             "not numbers or text")
-        return name
-
-
-def _inflate(data, at: int) -> bytes:
-    """A compressed MATLAB variable, refused once it inflates beyond the record size limit."""
-    limit = max_record_bytes()
-    inflater = zlib.decompressobj()
-    out = inflater.decompress(data, limit + 1)
-    if len(out) > limit:
-        raise ValueError(f"the compressed variable at byte {at} inflates to more than the limit of "
-                         f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
-    return out
-
-
-def _mat5_variables(data: bytes, read) -> list[str]:
-    """Names of the variables of a MATLAB v5 file, after checking their layout: every
-    variable's header, and in full those for which read(name) is true."""
-    if len(data) < 128 or data[126:128] not in (b"IM", b"MI"):
-        raise ValueError("no MATLAB 5 header (128 bytes ending in 'IM' or 'MI')")
-    layout = _Mat5Layout("<" if data[126:128] == b"IM" else ">")
-    data = memoryview(data)  # slices without copies of the arrays
-    names = []
-    pos = 128
-    while pos < len(data):
-        if pos + 8 > len(data):
-            raise ValueError(f"{len(data) - pos} stray bytes at the end")
-        kind, size = struct.unpack_from(layout.order + "II", data, pos)
-        start, pos = pos + 8, pos + 8 + size  # variables follow each other unpadded
-        if size == 0 or pos > len(data):
-            raise ValueError(f"a variable of {size} bytes at byte {start - 8} of {len(data)}")
-        if kind == _MI_COMPRESSED:
-            inner = memoryview(_inflate(data[start:pos], start - 8))
-            kind, body, _ = layout.element(inner, 0, len(inner))
-        else:
-            body = data[start:pos]
-        if kind != _MI_MATRIX:
-            raise ValueError(f"a variable of element type {kind}, expected a matrix")
-        names.append(layout.body(body, 0, read))
-    return names
-
-
-_READERS = {"CSV": _read_csv, "NPZ": _read_npz, "HDF5": _read_hdf5, "WAV": _read_wav, "MATLAB": _read_mat}
-
-
-def _read(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[_Contents, str]:
+def _read(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
     """Read *names* from *path*: (contents, format name). Every failure is one clear line."""
     path = Path(path)
     _check_exists(path)
@@ -791,7 +274,7 @@ def _read(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tu
         )
     check_size(path, "the file", path.stat().st_size)
     try:
-        contents = _READERS[fmt](path, names)
+        contents = READERS[fmt](path, names)
     except GearlabInputError:
         raise
     except MemoryError:
@@ -882,7 +365,7 @@ def _rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float,
     return (t.size - 1) / span, 2.0 * float(deviation[worst]) / span
 
 
-def _file_rate(contents: _Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
+def _file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
     """(fs, relative tolerance, where) from the file's rate fields, or None when it has none.
 
     An explicit 'fs' field comes first; all fields the file has must agree with each other.
@@ -903,7 +386,7 @@ def _file_rate(contents: _Contents, n: int | None, path: str) -> tuple[float, fl
     return found[0]
 
 
-def _sampling_rate(contents: _Contents, given: float | None, n: int, path: str) -> tuple[float, str]:
+def _sampling_rate(contents: Contents, given: float | None, n: int, path: str) -> tuple[float, str]:
     """The rate to use and where it came from: the file's, checked against a given one."""
     from_file = _file_rate(contents, n, path)
     if from_file is None:

@@ -1,0 +1,127 @@
+"""What every reader of a measured file shares: the record size limit, the found-contents record
+and the small helpers that turn a file's values into arrays and its keys into channels."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...errors import GearlabInputError
+
+_RATE_NAMES = ("fs",)  # compared lower-case: fs, Fs, FS
+_TIME_NAMES = ("t", "time")
+
+
+# Most megabytes a measured file, and each channel as stored (decoded), may hold; the import
+# takes several times that in memory. GEARLAB_MAX_RECORD_MB overrides it (docs/scenarios.md).
+MAX_RECORD_MB = 1024
+
+
+def max_record_bytes() -> int:
+    text = os.environ.get("GEARLAB_MAX_RECORD_MB", "")
+    try:
+        mb = float(text) if text else MAX_RECORD_MB
+    except ValueError:
+        raise GearlabInputError(f"GEARLAB_MAX_RECORD_MB: expected a number of megabytes, got {text[:40]!r}") from None
+    if not mb > 0 or not math.isfinite(mb):
+        raise GearlabInputError(f"GEARLAB_MAX_RECORD_MB: expected a positive number of megabytes, got {text[:40]!r}")
+    return int(mb * 2**20)
+
+
+def check_size(path, what: str, nbytes: int) -> None:
+    """Refuse *what* of *path* when it would take more than the record size limit."""
+    limit = max_record_bytes()
+    if nbytes > limit:
+        raise GearlabInputError(f"{path}: {what} would take {nbytes / 2**20:,.0f} MB, more than the limit of "
+                                f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
+
+
+@dataclass
+class Contents:
+    """What a reader found: the asked-for channels, every channel's name, the rate fields.
+
+    rates: (where, value) of every sampling-rate field that applies (Hz, one number);
+    times: (where, value) of every time vector that applies (s, one per sample).
+    """
+
+    found: dict[str, np.ndarray]
+    available: list[str]
+    rates: list[tuple[str, object]] = field(default_factory=list)
+    times: list[tuple[str, object]] = field(default_factory=list)
+    # the value step of channels a reader has already turned from integers to floats (WAV PCM)
+    steps: dict[str, float] = field(default_factory=dict)
+
+
+def _text_array(values: np.ndarray) -> np.ndarray:
+    """Text of any storage (bytes, object arrays of str, padded MATLAB char rows) as stripped str."""
+    flat = [v.decode("utf-8", "replace") if isinstance(v, bytes) else v for v in values.ravel().tolist()]
+    return np.char.strip(np.asarray(flat, dtype=str)).reshape(values.shape)
+
+
+def _normalise(value) -> np.ndarray:
+    """A reader's raw value as an array: text unified to str; numbers and anything else as is."""
+    if hasattr(value, "toarray"):  # a MATLAB sparse matrix (scipy.sparse): its numbers, dense
+        value = value.toarray()
+    arr = np.asarray(value)
+    if arr.dtype.kind in "SU":
+        return _text_array(arr)
+    if arr.dtype.kind == "O" and arr.size and all(isinstance(v, str | bytes) for v in arr.ravel().tolist()):
+        return _text_array(arr)  # a MATLAB cell array of text, an HDF5 variable-length string
+    return arr
+
+
+def _keyed(available: Iterable[str], get, names: Sequence[str]) -> Contents:
+    """Contents of a format whose channels are looked up by name (CSV, NPZ, MATLAB v5).
+
+    The sampling rate fields are the entries named fs (any case) and the time vectors the
+    entries named t or time, wherever the format keeps its names.
+    """
+    available = list(available)
+    present = set(available)
+    contents = Contents({n: _normalise(get(n)) for n in dict.fromkeys(names) if n in present}, available)
+    for n in available:
+        if n.lower() in _RATE_NAMES:
+            contents.rates.append((f"'{n}'", _normalise(get(n))))
+        elif n.lower() in _TIME_NAMES:
+            contents.times.append((f"time '{n}'", _normalise(get(n))))
+    return contents
+
+
+def _scalar(text: str):
+    """A comment's value: a number when it reads as one, else the text."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _column(values: list[str]) -> np.ndarray:
+    """A CSV column as float64 when every field is a number, else as text (checked later)."""
+    try:
+        return np.asarray(values, dtype=np.float64)
+    except ValueError:
+        return np.asarray(values, dtype=str)
+
+
+def _one_line(exc: BaseException) -> str:
+    """A library exception as one short line (its text, or its type when it has none)."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def _one_line_repr(value) -> str:
+    """repr() of a value found in a file, on one short line whatever the object is."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _listing(names: Iterable[str], limit: int = 12) -> str:
+    names = [" ".join(str(n).split()) for n in names]  # names from a file: kept to one line
+    if not names:
+        return "none"
+    shown = ", ".join(names[:limit])
+    return shown if len(names) <= limit else f"{shown}, … ({len(names)} in all)"

@@ -1,0 +1,122 @@
+"""HDF5: datasets by path ("group/acc"); the rate from an 'fs' attribute on the channel or the nearest
+group above that has one, or an 'fs'/'t' dataset there."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import GearlabInputError
+from .base import _RATE_NAMES, _TIME_NAMES, Contents, _normalise, check_size
+
+
+def _h5py():
+    try:
+        import h5py
+    except ImportError:  # pragma: no cover - h5py is a dependency
+        raise GearlabInputError("reading HDF5 and MATLAB v7.3 files needs h5py: pip install h5py") from None
+    return h5py
+
+
+def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Contents:
+    """Datasets by path ("group/acc").
+
+    Rate fields are scoped like variables: for each channel, the nearest level that has
+    any wins — an 'fs' attribute on the channel itself, else an 'fs' attribute or an
+    'fs'/'t' dataset in its group, else in the group above, up to the file's root. So a
+    file-wide rate can be overridden per group, and groups recorded at different rates
+    can share one file. The fields found for the different channels must agree.
+
+    matlab: the file is a MATLAB v7.3 MAT-file, whose variables are HDF5 datasets stored
+    transposed, with text as uint16 character codes and internals under '#refs#'.
+    """
+    h5py = _h5py()
+
+    def read(ds):
+        # declared, not stored: a dataset never written takes no room in the file
+        check_size(path, f"dataset '{ds.name}'", (ds.size or 0) * max(ds.dtype.itemsize, 8))
+        if h5py.check_string_dtype(ds.dtype) is not None:
+            return _normalise(ds.asstr()[()])
+        value = np.asarray(ds[()])
+        if matlab:
+            cls = ds.attrs.get("MATLAB_class", b"")
+            cls = cls.decode() if isinstance(cls, bytes) else str(cls)
+            value = value.T  # back to MATLAB's (rows, columns)
+            if cls == "char" and value.dtype.kind in "iu":
+                rows = np.atleast_2d(value)
+                return _normalise(["".join(map(chr, row)) for row in rows.tolist()])
+            value = np.squeeze(value)  # as loadmat(squeeze_me=True) gives v5 variables
+        return _normalise(value)
+
+    def level_fields(node, is_group: bool) -> tuple[list, list]:
+        """(rates, times) defined at one node: its 'fs' attributes, and for a group its
+        'fs' and 't'/'time' datasets."""
+        rates = [(f"attribute '{key}' of '{node.name}'", _normalise(value))
+                 for key, value in node.attrs.items() if key.lower() in _RATE_NAMES]
+        times = []
+        if is_group:
+            for key in node:
+                child = node.get(key)
+                if isinstance(child, h5py.Dataset) and key.lower() in _RATE_NAMES:
+                    rates.append((f"dataset '{child.name}'", read(child)))
+                elif isinstance(child, h5py.Dataset) and key.lower() in _TIME_NAMES:
+                    times.append((f"time dataset '{child.name}'", read(child)))
+        return rates, times
+
+    with h5py.File(path, "r") as f:
+        contents = Contents({}, _hdf5_datasets(h5py, f))
+        seen: set[str] = set()
+        for name in dict.fromkeys(names):
+            try:
+                obj = f[name.strip("/")]
+            except (KeyError, ValueError, TypeError):
+                continue  # not there: reported with the list of datasets
+            if not isinstance(obj, h5py.Dataset):
+                continue  # a group is not a channel
+            contents.found[name] = read(obj)
+            node, is_group = obj, False
+            while True:  # from the channel up to the root; the nearest definition wins
+                rates, times = level_fields(node, is_group)
+                if rates or times or node.name == "/":
+                    break
+                node, is_group = node.parent, True
+            for kind, fields in ((contents.rates, rates), (contents.times, times)):
+                for where, value in fields:
+                    if where not in seen:  # channels of one group share its fields
+                        seen.add(where)
+                        kind.append((where, value))
+        return contents
+
+
+_HDF5_MAX_OBJECTS = 100_000
+
+
+def _hdf5_datasets(h5py, f) -> list[str]:
+    """Paths of the datasets in the file, depth first in name order (MATLAB's '#refs#' and
+    the like left out). Each object is visited once, through hard links only: h5py's
+    visititems loops forever in some damaged files, and an external link would open
+    another file."""
+    found: list[str] = []
+    seen = {f.id}
+    stack = [("", f)]
+    while stack:
+        prefix, group = stack.pop()
+        children = []
+        for key in group:
+            if not isinstance(group.get(key, getlink=True), h5py.HardLink):
+                continue
+            obj = group[key]
+            if obj.id in seen:
+                continue
+            seen.add(obj.id)
+            if len(seen) > _HDF5_MAX_OBJECTS:
+                raise ValueError(f"more than {_HDF5_MAX_OBJECTS} objects (a damaged file?)")
+            name = f"{prefix}{key}"
+            if isinstance(obj, h5py.Group):
+                children.append((f"{name}/", obj))
+            elif isinstance(obj, h5py.Dataset) and not name.startswith("#"):
+                found.append(name)
+        stack.extend(reversed(children))
+    return found
