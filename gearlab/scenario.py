@@ -8,6 +8,7 @@ error names the file, the table and the key. ``gearlab validate`` prints the sam
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from collections.abc import Callable, Mapping
@@ -17,6 +18,7 @@ from typing import Any
 
 from .errors import GearlabInputError, clipped, shown
 from .params import did_you_mean
+from .settings import declared, in_bounds
 
 _REQUIRED = object()
 
@@ -43,6 +45,25 @@ class Table:
     doc: str = ""
 
 
+def keys_of(cls, names: tuple[str, ...] | None = None, **defaults) -> dict[str, Key]:
+    """The scenario keys of the settings dataclass *cls* (gearlab.settings): each field's type,
+    default, bounds, choices and doc; *names* picks and orders them, *defaults* replace the
+    declared defaults (a kind with other defaults for the same table)."""
+    fields = declared(cls)
+    out = {}
+    for name in names or tuple(fields):
+        meta, default = fields[name]
+        default = defaults.get(name, default)
+        check = None
+        if meta.low is not None or meta.high is not None or meta.choices or meta.check:
+            def check(value, where, meta=meta):
+                return in_bounds(meta, value, where)
+
+            check.choices = meta.choices  # what a front-end may offer (the TUI's run form)
+        out[name] = Key(meta.types, _REQUIRED if default is dataclasses.MISSING else default, check, meta.doc)
+    return out
+
+
 def one_of(*choices: str) -> Callable[[Any, str], Any]:
     def check(value, where):
         if value not in choices:
@@ -66,9 +87,6 @@ def in_range(low: float | None = None, high: float | None = None) -> Callable[[A
     return check
 
 
-# Most epochs any training key may ask for (the thesis trains for at most 800): beyond it a
-# value is a mistake that would hold a run for years.
-MAX_EPOCHS = 100_000
 
 
 # The characters of a name that becomes part of a file or folder name (a scenario's, a

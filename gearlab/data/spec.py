@@ -19,6 +19,7 @@ from ..errors import GearlabInputError
 from ..params import did_you_mean
 from ..physics.faults import LADDER_STEPS
 from ..registry import get_registry
+from ..settings import MAX_SEED, setting
 from ..signals import NOISE_KINDS
 
 POINTS = 4096  # samples per revolution (thesis 2.4)
@@ -27,9 +28,12 @@ FAULTS = ("crack", "chip", "spall", "pit")
 
 @dataclass(frozen=True)
 class NoiseSpec:
-    kind: str  # gaussian | laplace | student_t
-    snr_db: float
-    seed: int = 0
+    """A dataset's measurement noise: a scenario's ``noise = {kind = "laplace", snr_db = 0, seed = 1}``
+    (read by gearlab.settings.from_inline; the kind is checked by DatasetSpec.check)."""
+
+    kind: str = setting(str, choices=NOISE_KINDS, doc="noise distribution (thesis 4.1)")
+    snr_db: float = setting(float, unit="dB", doc="signal-to-noise ratio: noise RMS = signal RMS x 10^(-SNR/20)")
+    seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seed of the noise draws")
 
 
 @dataclass(frozen=True)

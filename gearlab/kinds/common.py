@@ -5,7 +5,7 @@ protocol. The kind contract itself is gearlab.kinds.contract.ScenarioKind."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import asdict
 from pathlib import Path
 
 from ..data.importers import MeasuredSpec
@@ -17,6 +17,7 @@ from ..executors import make_executor
 from ..learn.protocol import Counts
 from ..learn.training import pick_device
 from ..scenario import Key, Scenario, Table, in_range, location, plain_name
+from ..settings import from_inline
 from ..units import to_si
 
 DATASET_TABLE = Table(
@@ -169,22 +170,12 @@ def units_of(entry: dict, where: str) -> dict:
     return out
 
 
-def noise_spec(table: dict, where: str) -> NoiseSpec | None:
+def noise_spec(table: dict, where: str, defaults: NoiseSpec | None = None) -> NoiseSpec | None:
+    """A scenario's noise table (None when empty: no noise), checked as NoiseSpec declares it;
+    *defaults*: the values a key left out takes (a preset's noise)."""
     if not table:
         return None
-    unknown = set(table) - {"kind", "snr_db", "seed"}
-    if unknown:
-        raise GearlabInputError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, snr_db, seed")
-    if "kind" not in table or "snr_db" not in table:
-        raise GearlabInputError(f"{where}: expected {{kind = 'gaussian'|'laplace'|'student_t', snr_db = number}}")
-    snr = table["snr_db"]
-    # abs() < 1e300 also refuses nan, inf and integers too large for a float
-    if isinstance(snr, bool) or not isinstance(snr, (int, float)) or not abs(snr) < 1e300:
-        raise GearlabInputError(f"{where}: snr_db must be a finite number of dB, got {str(snr)[:40]}")
-    seed = table.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= 2**32 - 1:
-        raise GearlabInputError(f"{where}: seed must be a whole number in [0, {2**32 - 1}], got {shown(seed)}")
-    return NoiseSpec(str(table["kind"]), float(snr), seed)
+    return from_inline(NoiseSpec, table, where, asdict(defaults) if defaults is not None else None)
 
 
 def class_sizes(spec: DatasetSpec | MeasuredSpec, where: str = "") -> dict[str, int] | None:
@@ -232,12 +223,3 @@ def device_of(scenario: Scenario) -> str:
         except GearlabInputError as exc:
             raise GearlabInputError(f"{location(scenario.path, 'execution', 'device')}: {exc}") from None
     return ex["device"]
-
-
-# --quick: the training of a smoke run (the transfer and gap kinds; detection trains shorter)
-QUICK_TRAINING = {"prime_epochs": 30, "baseline_epochs": 60, "min_epochs": 60, "max_epochs": 90}
-
-
-def shrunk(settings, **limits):
-    """A copy of the dataclass *settings* with each named field at most its limit (--quick)."""
-    return replace(settings, **{name: min(getattr(settings, name), limit) for name, limit in limits.items()})

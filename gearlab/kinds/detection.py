@@ -56,7 +56,8 @@ from ..scenario import Key, Scenario, Table, in_range, location
 from ..signals import Standardiser
 from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
 from ..units import to_si
-from .common import class_sizes, device_of, executor_for, shrunk, simulated_spec, sized
+from .common import class_sizes, device_of, executor_for, simulated_spec, sized
+from ..settings import shrunk
 from .transfer import CALIBRATION, TRAINING, check_training
 from .transfer import TABLES as TRANSFER_TABLES
 from .transfer import method as transfer_method
@@ -236,13 +237,11 @@ def build(scenario: Scenario) -> dict:
             or len(set(blocks)) != len(blocks):
         raise GearlabInputError(f"{location(path, 'detection', 'blocks')}: expected distinct whole numbers of "
                                 f"revolutions >= 2, got {shown(blocks)}")
-    net = check_training(t, path)
+    check_training(t, path)
     p = t["protocol"]
     protocol = Protocol(
-        methods=methods_of(t["methods"], str(path)), network=net, dropout=t["network"]["dropout"], ks=(0,),
-        repetitions=1, target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
-        prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
-        min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=device_of(scenario),
+        methods=methods_of(t["methods"], str(path)), network=t["network"]["name"], dropout=t["network"]["dropout"],
+        ks=(0,), repetitions=1, **{key: p[key] for key in TRAINING}, device=device_of(scenario),
         calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
     )
     protocol.calibration.check(str(path))

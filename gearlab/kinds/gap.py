@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -34,17 +34,17 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..effects import default_candidates
 from ..errors import GearlabInputError
-from ..learn.networks import NETWORKS
+from ..learn.networks import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, shared_state
 from ..learn.schedule import two_phases
-from ..params import did_you_mean
 from ..registry import get_registry
 from ..events import Event
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, location, one_of
-from .common import (QUICK_TRAINING, DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for,
-                     planned_counts, shrunk, simulated_spec, sized)
-from .transfer import MAX_SEED, TRAINING, method as transfer_method, train_unit
+from ..scenario import Key, Scenario, Table, in_range, keys_of, location, one_of
+from ..settings import MAX_SEED, shrunk
+from .common import (DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, planned_counts,
+                     simulated_spec, sized)
+from .transfer import TRAINING, method as transfer_method, train_unit
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # The target may also be measured records in the detection kind's shape (a list of files with a
@@ -101,10 +101,7 @@ TABLES = {
         "repetitions": Key(int, 3, in_range(1, 1000)),
         **TRAINING,
     }),
-    "network": Table({
-        "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),
-        "dropout": Key(float, 0.005, in_range(0.0, 0.95), "dropout rate (Table 5.3: 0.5 %)"),
-    }),
+    "network": Table(keys_of(NetworkSettings, name="fast")),
 }
 
 
@@ -137,9 +134,6 @@ def build(scenario: Scenario) -> dict:
         raise GearlabInputError(f"{location(path, 'diagnosis', 'reference')}: reference = 'noise' needs "
                                 "'sensor_noise' among the candidates (the noise fitted alone is the reference)")
     net = t["network"]["name"]
-    if net not in NETWORKS:
-        raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
-                                f"{did_you_mean(net, list(NETWORKS))}; known networks: {', '.join(NETWORKS)}")
     a = t["accuracy"]
     methods = da_methods(a["methods"], location(path, "accuracy", "methods"))
     protocol = Protocol(
@@ -321,7 +315,7 @@ def quick(scenario: Scenario) -> None:
                         "healthy": min(s["healthy"], 20), "bootstrap": min(s["bootstrap"], 50),
                         "permutations": min(s["permutations"], 200)}
     p: Protocol = spec["protocol"]
-    spec["protocol"] = replace(shrunk(p, **QUICK_TRAINING), repetitions=1)
+    spec["protocol"] = shrunk(p, repetitions=1)  # and the --quick limits declared on Protocol
 
 
 # --- run -------------------------------------------------------------------------------------------

@@ -28,13 +28,13 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
-from ..learn.networks import NETWORKS
+from ..learn.networks import NetworkSettings
 from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
 from ..params import did_you_mean
 from ..runs import RunDir
-from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
+from ..scenario import Key, Scenario, Table, keys_of, location
 from ..signals import NOISE_KINDS
-from .common import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for
+from .common import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, noise_spec
 
 # What a study may change in the chapter-4 presets; the preset itself, the noise kind and
 # TSA are what the study varies.
@@ -50,20 +50,8 @@ TABLES = {
         **{k: DATASET_TABLE.keys[k] for k in _OVERRIDES},
         "noise": Key(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises"),
     }),
-    "network": Table({
-        "name": Key(str, "fast", doc="network: fast (CPU default) or cnn3 (the seed's CNN3)"),
-        "dropout": Key(float, 0.1, in_range(0.0, 0.95), "dropout rate (thesis 4.2: 10 %)"),
-    }),
-    "protocol": Table({
-        "runs": Key(int, 5, in_range(1, 1000), "runs with different splits and initial weights"),
-        "test_fraction": Key(float, 0.333, in_range(0.01, 0.9), "share of each class held out for testing"),
-        "val_fraction": Key(float, 0.2, in_range(0.01, 0.9), "share of the training part held out for validation"),
-        "batch": Key(int, 256, in_range(1)),
-        "lr": Key(float, 1e-3, in_range(1e-9, 10.0), "Adam learning rate"),
-        "epochs": Key(int, 100, in_range(1, MAX_EPOCHS), "most epochs per run"),
-        "patience": Key(int, 15, in_range(1, MAX_EPOCHS), "stop after this many epochs without a better validation accuracy"),
-        "seed": Key(int, 0, in_range(0, 2**32 - 1), "seeds torch as 1000 * seed + run"),
-    }),
+    "network": Table(keys_of(NetworkSettings, name=NoiseProtocol.network, dropout=NoiseProtocol.dropout)),
+    "protocol": Table(keys_of(NoiseProtocol)),
 }
 
 
@@ -92,12 +80,9 @@ def build(scenario: Scenario) -> dict:
                                     f"known: {', '.join(NOISE_KINDS)}")
     if len(set(noises)) != len(noises):
         raise GearlabInputError(f"{where}: lists a noise type twice")
-    net = t["network"]["name"]
-    if net not in NETWORKS:
-        raise GearlabInputError(f"{location(scenario.path, 'network', 'name')}: unknown network '{net}'"
-                                f"{did_you_mean(net, list(NETWORKS))}; known: {', '.join(NETWORKS)}")
     p = t["protocol"]
-    protocol = NoiseProtocol(network=net, dropout=t["network"]["dropout"], device=device_of(scenario), **p)
+    protocol = NoiseProtocol(network=t["network"]["name"], dropout=t["network"]["dropout"], device=device_of(scenario),
+                             **p)
     spec = {"datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
             "protocol": protocol}
     check(spec, scenario.path)
@@ -114,12 +99,14 @@ def _dataset(scenario: Scenario, noise: str, variant: str) -> DatasetSpec:
     if "kind" in user_noise:
         raise GearlabInputError(f"{where} key 'noise': the noise kind comes from [study] key 'noises'; "
                                 f"give only snr_db and seed")
-    preset_noise = dataset_preset(name).noise
+    # the preset's noise (its kind is the study's), the snr_db and seed given changed
+    noise_of = noise_spec({"kind": noise, **user_noise}, f"{where} key 'noise'", dataset_preset(name).noise)
     entry = {k: key.default for k, key in DATASET_TABLE.keys.items()}
     entry.update({k: overrides[k] for k in _OVERRIDES})
-    entry.update(preset=name, noise={"kind": noise, "snr_db": preset_noise.snr_db, "seed": preset_noise.seed,
-                                     **user_noise})
-    return dataset_spec(entry, where, scenario.path.parent)
+    entry.update(preset=name)
+    spec = dataset_spec(entry, where, scenario.path.parent).with_(noise=noise_of)
+    spec.check(where)
+    return spec
 
 
 def describe(scenario: Scenario) -> str:

@@ -27,7 +27,7 @@ from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
 from ..learn.calibration import ALIGNMENTS, SOURCE_NOISE, THRESHOLDS, Calibration
-from ..learn.networks import DEFAULT_NETWORK, NETWORKS
+from ..learn.networks import NetworkSettings
 from ..learn.protocol import (
     KS,
     Counts,
@@ -43,30 +43,17 @@ from ..learn.protocol import (
 )
 from ..learn.schedule import two_phases
 from ..learn.training import pick_device
-from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
-from ..scenario import MAX_EPOCHS, Key, Scenario, Table, in_range, location
-from .common import DATASET_TABLE, QUICK_TRAINING, dataset_spec, device_of, executor_for, planned_counts, shrunk, sized
+from ..scenario import Key, Scenario, Table, in_range, keys_of, location
+from ..settings import shrunk
+from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
-# Beyond these a scenario could never run: the list of units would not fit in memory, and
-# torch takes seeds below 2**64 (1000 * seed + repetition).
-MAX_REPETITIONS = 1000
-MAX_SEED = 2**32 - 1
-
-# Table 5.3's training settings: the keys of every kind that trains the chapter-5 way
-TRAINING = {
-    "target_train": Key(int, 120, in_range(2), "samples in the target training set"),
-    "batch": Key(int, 40, in_range(1)),
-    "lr": Key(float, 0.003, in_range(1e-9, 10.0), "SGD learning rate of the calibrated methods"),
-    "prime_epochs": Key(int, 100, in_range(0, MAX_EPOCHS)),
-    "baseline_epochs": Key(int, 200, in_range(1, MAX_EPOCHS)),
-    "patience": Key(int, 20, in_range(1, MAX_EPOCHS)),
-    "min_epochs": Key(int, 500, in_range(1, MAX_EPOCHS), "end of the lambda ramp"),
-    "max_epochs": Key(int, 800, in_range(1, MAX_EPOCHS)),
-    "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds torch as 1000 * seed + repetition"),
-}
+# Table 5.3's training settings: the keys of every kind that trains the chapter-5 way, declared
+# on the Protocol dataclass
+TRAINING = keys_of(Protocol, ("target_train", "batch", "lr", "prime_epochs", "baseline_epochs", "patience",
+                              "min_epochs", "max_epochs", "seed"))
 
 # How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
 # gearlab's recipe, the thesis's is residual = false, source_noise = "off", alignment =
@@ -82,10 +69,7 @@ CALIBRATION = {
 TABLES = {
     "source": _DATASET,
     "target": _DATASET,
-    "network": Table({
-        "name": Key(str, DEFAULT_NETWORK, doc="network: burst (default), fast, or cnn3 (the seed's CNN3)"),
-        "dropout": Key(float, 0.005, in_range(0.0, 0.95), "dropout rate (Table 5.3: 0.5 %)"),
-    }),
+    "network": Table(keys_of(NetworkSettings)),
     "methods": Table({
         "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
         "supervised": Key(bool, False, doc="use the target training labels"),
@@ -93,7 +77,7 @@ TABLES = {
     }, array=True, required=True),
     "protocol": Table({
         "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
-        "repetitions": Key(int, 5, in_range(1, MAX_REPETITIONS)),
+        **keys_of(Protocol, ("repetitions",)),
         **TRAINING,
         **CALIBRATION,
     }),
@@ -119,12 +103,10 @@ def build(scenario: Scenario) -> dict:
             or len(set(ks)) != len(ks):
         raise GearlabInputError(f"{location(path, 'protocol', 'ks')}: expected a list of distinct whole numbers "
                                 f">= 0, got {ks!r}")
-    net = check_training(t, path)
+    check_training(t, path)
     protocol = Protocol(
-        methods=tuple(methods), network=net, dropout=t["network"]["dropout"], ks=tuple(ks),
-        repetitions=p["repetitions"], target_train=p["target_train"], batch=p["batch"], lr=p["lr"],
-        prime_epochs=p["prime_epochs"], baseline_epochs=p["baseline_epochs"], patience=p["patience"],
-        min_epochs=p["min_epochs"], max_epochs=p["max_epochs"], seed=p["seed"], device=device_of(scenario),
+        methods=tuple(methods), network=t["network"]["name"], dropout=t["network"]["dropout"], ks=tuple(ks),
+        repetitions=p["repetitions"], **{key: p[key] for key in TRAINING}, device=device_of(scenario),
         calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
     )
     protocol.calibration.check(str(path))
@@ -138,18 +120,12 @@ def build(scenario: Scenario) -> dict:
     return {"source": source, "target": target, "protocol": protocol}
 
 
-def check_training(t: dict, path) -> str:
-    """The [protocol] epochs and the [network] name of a kind that trains the chapter-5 way
-    (transfer, detection); returns the network name."""
+def check_training(t: dict, path) -> None:
+    """The [protocol] epochs of a kind that trains the chapter-5 way (transfer, detection)."""
     p = t["protocol"]
     if p["min_epochs"] > p["max_epochs"]:
         raise GearlabInputError(f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
                                 f"max_epochs = {p['max_epochs']}")
-    net = t["network"]["name"]
-    if net not in NETWORKS:
-        raise GearlabInputError(f"{location(path, 'network', 'name')}: unknown network '{net}'"
-                                f"{did_you_mean(net, list(NETWORKS))}; known networks: {', '.join(NETWORKS)}")
-    return net
 
 
 def method(entry: dict, where: str) -> Method:
@@ -175,7 +151,7 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: 2 repetitions, k in {0, 4}, short training."""
     p = scenario.spec["protocol"]
-    p = shrunk(p, repetitions=2, **QUICK_TRAINING)
+    p = shrunk(p)  # the --quick limits declared on Protocol
     scenario.spec["protocol"] = replace(p, ks=tuple(k for k in p.ks if k in (0, 4)) or p.ks[:1])
 
 

@@ -79,12 +79,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import torch
 from torch import nn
 
 from gearlab.errors import GearlabInputError
 from gearlab.params import did_you_mean
+from gearlab.settings import setting
 
 DEFAULT_NETWORK = "burst"
 DEFAULT_DROPOUT = 0.005  # Han et al. (2019a), thesis 3.1.6 and Table 5.3
@@ -305,3 +307,19 @@ def build_network(
     generator = torch.Generator().manual_seed(seed) if seed is not None else None
     (_torch_uniform if name in TORCH_INIT else _he_uniform)(network, generator)
     return network.train()
+
+
+def _network_name(name: str, where: str) -> str:
+    if name not in NETWORKS:
+        raise GearlabInputError(f"{where}: unknown network '{name}'{did_you_mean(name, list(NETWORKS))}; "
+                                f"known networks: {', '.join(NETWORKS)}")
+    return name
+
+
+@dataclass(frozen=True)
+class NetworkSettings:
+    """A scenario's [network] table (transfer, detection, gap, noise_study; a kind may give
+    other defaults, gearlab.scenario.keys_of)."""
+
+    name: str = setting(str, DEFAULT_NETWORK, check=_network_name, doc=f"network: {', '.join(NETWORKS)}")
+    dropout: float = setting(float, DEFAULT_DROPOUT, low=0.0, high=0.95, doc="dropout rate (Table 5.3: 0.5 %)")

@@ -27,6 +27,7 @@ import numpy as np
 import torch
 
 from ..errors import GearlabInputError
+from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .networks import build_network
 from .training import fit_supervised, pick_device, predict
 
@@ -37,16 +38,19 @@ VARIANTS = ("noisy", "tsa")
 class NoiseProtocol:
     """Everything a chapter-4 run needs besides the data (defaults: thesis 4.2)."""
 
-    network: str = "fast"
-    dropout: float = 0.1
-    runs: int = 5
-    test_fraction: float = 0.333
-    val_fraction: float = 0.2
-    batch: int = 256
-    lr: float = 1e-3  # Adam with TensorFlow's defaults (Table 3.1)
-    epochs: int = 100
-    patience: int = 15
-    seed: int = 0
+    network: str = "fast"  # [network] (NetworkSettings, with these defaults)
+    dropout: float = 0.1  # thesis 4.2: 10 %
+    # the [protocol] keys of a noise_study scenario (gearlab.scenario.keys_of)
+    runs: int = setting(int, 5, low=1, high=MAX_REPETITIONS, doc="runs with different splits and initial weights")
+    test_fraction: float = setting(float, 0.333, low=0.01, high=0.9, doc="share of each class held out for testing")
+    val_fraction: float = setting(float, 0.2, low=0.01, high=0.9,
+                                  doc="share of the training part held out for validation")
+    batch: int = setting(int, 256, low=1, doc="mini-batch size")
+    lr: float = setting(float, 1e-3, low=1e-9, high=10.0, doc="Adam learning rate")  # TensorFlow's default (Table 3.1)
+    epochs: int = setting(int, 100, low=1, high=MAX_EPOCHS, doc="most epochs per run")
+    patience: int = setting(int, 15, low=1, high=MAX_EPOCHS,
+                            doc="stop after this many epochs without a better validation accuracy")
+    seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds torch as 1000 * seed + run")
     device: str = "auto"
 
 

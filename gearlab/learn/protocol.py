@@ -27,10 +27,11 @@ import torch
 
 from ..errors import GearlabInputError
 from ..registry import get_registry
+from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
 from .calibration import THESIS, Calibration, calibrate, prepare
-from .networks import DEFAULT_NETWORK, build_network
-from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device, predict
+from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network
+from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device
 
 KS = (0, 1, 2, 4, 8, 16)
 ADAM_LR = 1e-3  # TensorFlow's default, which the thesis's Adam runs used (Table 5.3)
@@ -63,20 +64,25 @@ class Protocol:
     """Everything a transfer run needs besides the data (defaults: Table 5.3)."""
 
     methods: tuple[Method, ...]
-    network: str = DEFAULT_NETWORK
-    dropout: float = 0.005
+    network: str = DEFAULT_NETWORK  # [network] (NetworkSettings)
+    dropout: float = DEFAULT_DROPOUT
     ks: tuple[int, ...] = KS
-    repetitions: int = 5
-    target_train: int = 120
-    batch: int = 40
-    lr: float = 0.003
-    prime_epochs: int = 100
-    baseline_epochs: int = 200
-    patience: int = 20
-    min_epochs: int = 500
-    max_epochs: int = 800
+    # the [protocol] keys: Table 5.3's training settings (gearlab.scenario.keys_of)
+    repetitions: int = setting(int, 5, low=1, high=MAX_REPETITIONS, quick=2,
+                                  doc="repetitions, each with its own split and seed")
+    target_train: int = setting(int, 120, low=2, doc="samples in the target training set")
+    batch: int = setting(int, 40, low=1, doc="mini-batch size, per domain")
+    lr: float = setting(float, 0.003, low=1e-9, high=10.0, doc="SGD learning rate of the calibrated methods")
+    prime_epochs: int = setting(int, 100, low=0, high=MAX_EPOCHS, quick=30,
+                                doc="priming on the full source set, shared within a repetition")
+    baseline_epochs: int = setting(int, 200, low=1, high=MAX_EPOCHS, quick=60,
+                                   doc="at most, for the Adam-trained baselines and fine-tuning")
+    patience: int = setting(int, 20, low=1, high=MAX_EPOCHS,
+                            doc="stop after this many epochs without a better validation accuracy")
+    min_epochs: int = setting(int, 500, low=1, high=MAX_EPOCHS, quick=60, doc="end of the lambda ramp")
+    max_epochs: int = setting(int, 800, low=1, high=MAX_EPOCHS, quick=90, doc="most epochs of an adaptation run")
     val_fraction: float = 0.1
-    seed: int = 0
+    seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds torch as 1000 * seed + repetition")
     device: str = "auto"
     calibration: Calibration = THESIS
     extra: dict = field(default_factory=dict)

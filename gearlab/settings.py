@@ -1,0 +1,148 @@
+"""Settings declared once: a dataclass field carries its type, unit, bounds, default, --quick
+limit and doc, and everything else is derived from it — the scenario keys and their checks
+(gearlab.scenario.keys_of), the --quick shrinking (:func:`shrunk`), the checks of an inline
+table such as ``noise = {kind = "laplace", snr_db = 0}`` (:func:`from_inline`) and the
+reference tables of docs/settings.md (:func:`markdown_table`).
+
+    @dataclass(frozen=True)
+    class NoiseSpec:
+        kind: str = setting(str, choices=NOISE_KINDS, doc="noise distribution")
+        snr_db: float = setting(float, unit="dB", doc="signal-to-noise ratio")
+
+A field without a default (``setting(types, ...)`` alone) is required. Base layer: imports
+nothing of gearlab but the errors and the did-you-mean helper.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from .errors import GearlabInputError, shown
+from .params import did_you_mean
+
+# Most epochs any training key may ask for (the thesis trains for at most 800): beyond it a
+# value is a mistake that would hold a run for years.
+MAX_EPOCHS = 100_000
+# torch takes seeds below 2**64 (1000 * seed + repetition); a seed is a 32-bit word
+MAX_SEED = 2**32 - 1
+# beyond this the list of units of a protocol would not fit in memory
+MAX_REPETITIONS = 1000
+
+
+@dataclass(frozen=True)
+class Setting:
+    """What a field declares besides its name and default."""
+
+    types: type | tuple[type, ...]
+    low: float | None = None
+    high: float | None = None
+    unit: str = ""
+    doc: str = ""
+    choices: tuple[str, ...] = ()
+    quick: Any = None  # --quick: the value is at most this
+    check: Callable[[Any, str], Any] | None = None  # a check of its own: returns the value or raises
+
+
+def setting(types: type | tuple[type, ...], default: Any = dataclasses.MISSING, *, low: float | None = None,
+            high: float | None = None, unit: str = "", doc: str = "", choices: Iterable[str] = (), quick: Any = None,
+            check: Callable[[Any, str], Any] | None = None) -> Any:
+    """A dataclass field declared with everything the scenario, --quick and the docs need."""
+    meta = Setting(types, low, high, unit, doc, tuple(choices), quick, check)
+    return dataclasses.field(default=default, metadata={"setting": meta})
+
+
+def declared(cls) -> dict[str, tuple[Setting, Any]]:
+    """{field: (its Setting, its default or MISSING)} of the fields of *cls* declared with setting()."""
+    return {f.name: (f.metadata["setting"], f.default) for f in dataclasses.fields(cls) if "setting" in f.metadata}
+
+
+def in_bounds(meta: Setting, value, where: str):
+    """*value* checked against the bounds and choices of *meta* (the scenario's messages)."""
+    if meta.choices and value not in meta.choices:
+        raise GearlabInputError(f"{where}: {shown(value)} is not one of {', '.join(meta.choices)}"
+                                f"{did_you_mean(str(value), meta.choices) if len(str(value)) <= 100 else ''}")
+    if meta.low is not None or meta.high is not None:
+        low, high = meta.low, meta.high
+        # written as "not inside" so that NaN, which compares false with everything, is outside
+        if not ((low is None or value >= low) and (high is None or value <= high)) \
+                or (isinstance(value, float) and not math.isfinite(value)):
+            span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
+            raise GearlabInputError(f"{where}: {shown(value)} is outside {span}")
+    return meta.check(value, where) if meta.check else value
+
+
+def quick_limits(cls) -> dict[str, Any]:
+    """{field: its --quick limit} of *cls*."""
+    return {name: meta.quick for name, (meta, _) in declared(cls).items() if meta.quick is not None}
+
+
+def shrunk(settings, **limits):
+    """A copy of the dataclass *settings* for a smoke run (--quick): each field with a --quick
+    limit (declared, or given here, which wins) at most that limit."""
+    limits = {**quick_limits(type(settings)), **limits}
+    return dataclasses.replace(settings, **{name: min(getattr(settings, name), limit)
+                                            for name, limit in limits.items()})
+
+
+def _number(types) -> bool:
+    types = types if isinstance(types, tuple) else (types,)
+    return float in types or int in types
+
+
+def from_inline(cls, table: Mapping, where: str, defaults: Mapping | None = None):
+    """An inline TOML table (``{kind = "laplace", snr_db = 0}``) as an instance of *cls*: unknown
+    keys, missing required keys, types and bounds refused in one line naming *where*.
+    *defaults* replace the declared defaults (a preset's values)."""
+    fields = declared(cls)
+    unknown = set(table) - set(fields)
+    if unknown:
+        raise GearlabInputError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; "
+                                f"expected {', '.join(fields)}")
+    defaults = dict(defaults or {})
+    missing = [n for n, (_, d) in fields.items() if n not in table and n not in defaults and d is dataclasses.MISSING]
+    if missing:
+        shape = ", ".join(f"{n} = " + ("|".join(f"'{c}'" for c in meta.choices) if meta.choices else
+                                      "number" if _number(meta.types) else meta.types.__name__)
+                          for n, (meta, d) in fields.items() if d is dataclasses.MISSING)
+        raise GearlabInputError(f"{where}: expected {{{shape}}}")
+    values = {}
+    for name, (meta, default) in fields.items():
+        if name not in table:
+            if name in defaults:
+                values[name] = defaults[name]
+            continue
+        value = table[name]
+        if meta.types is int or meta.types == (int,):
+            if isinstance(value, bool) or not isinstance(value, int) or not (
+                    (meta.low is None or meta.low <= value) and (meta.high is None or value <= meta.high)):
+                raise GearlabInputError(f"{where}: {name} must be a whole number in [{meta.low}, {meta.high}], "
+                                        f"got {shown(value)}")
+        elif _number(meta.types):
+            # abs() < 1e300 also refuses nan, inf and integers too large for a float
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) < 1e300:
+                raise GearlabInputError(f"{where}: {name} must be a finite number of {meta.unit or 'units'}, "
+                                        f"got {str(value)[:40]}")
+            value = float(value)
+        else:
+            value = str(value)
+        values[name] = in_bounds(meta, value, f"{where}: {name}") if meta.check else value
+    return cls(**values)
+
+
+def markdown_table(cls, title: str = "") -> str:
+    """The reference table of *cls* for docs/settings.md: key, type, unit, default, bounds, --quick, doc."""
+    rows = [f"### {title}\n" if title else "", "| key | type | unit | default | bounds | --quick | meaning |",
+            "|---|---|---|---|---|---|---|"]
+    for name, (meta, default) in declared(cls).items():
+        types = meta.types if isinstance(meta.types, tuple) else (meta.types,)
+        bounds = (" \\| ".join(meta.choices) if meta.choices else
+                  f"[{meta.low if meta.low is not None else ''}, {meta.high if meta.high is not None else ''}]"
+                  if meta.low is not None or meta.high is not None else "")
+        shown_default = "required" if default is dataclasses.MISSING else repr(default)
+        rows.append(f"| `{name}` | {' or '.join(t.__name__ for t in types)} | {meta.unit} | {shown_default} | "
+                    f"{bounds} | {'' if meta.quick is None else f'≤ {meta.quick}'} | {meta.doc} |")
+    return "\n".join(r for r in rows if r) + "\n"
