@@ -78,6 +78,7 @@ from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
 from ..executors import LocalExecutor
 from ..registry import get_registry
+from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..events import Event
 from ..signals import add_noise
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
@@ -107,58 +108,71 @@ NUISANCE_SIGNAL_EVALS = 4  # SIGNAL_EVALS for signal-level candidates that carry
 NUISANCE_WIDE, NUISANCE_LOCAL, NUISANCE_STEP = 8, 4, 6.0  # Brent iterations (first / later points), dB
 
 
+REFERENCES = ("source", "noise")
+
+
+def _open_fraction(value, where: str) -> float:
+    # an open interval: alpha = 0 would never call a gap significant, alpha = 1 always
+    if not 0.0 < value < 1.0 or not math.isfinite(value):
+        raise GearlabInputError(f"{where}: expected a significance level between 0 and 1 (exclusive), got {value!r}")
+    return float(value)
+
+
 @dataclass(frozen=True)
 class Settings:
-    candidates: tuple[str, ...] = ()  # effect names to try; () = every registered effect
-    budget: int = 16  # source simulations per effect fit (the search budget)
-    max_effects: int = 3  # greedy rounds
-    healthy: int = 40  # source healthy revolutions simulated per evaluation
-    bootstrap: int = 200  # for the before/after reports (searches use a cheap score)
-    permutations: int = 500
-    alpha: float = 0.05
-    seed: int = 0
+    """The diagnosis's settings, declared once (gearlab.settings): the scenario's [diagnosis] keys,
+    their checks, the --quick limits and docs/settings.md all follow from these fields."""
+
+    candidates: tuple[str, ...] = setting(
+        (list, tuple), (), doc="effect names to try (gearlab plugins lists them); [] = every registered effect "
+                               "but the opt-in ones (load_level, sensor_offset)")
+    budget: int = setting(int, 16, low=1, high=10_000, quick=4, doc="source simulations per effect fit (the search "
+                                                                      "budget)")
+    max_effects: int = setting(int, 3, low=1, high=20, quick=2, doc="greedy rounds: most effects added to the source")
+    healthy: int = setting(int, 40, low=MIN_REVOLUTIONS, high=100_000, quick=20,
+                           doc="source healthy revolutions simulated per evaluation")
+    bootstrap: int = setting(int, 200, low=0, high=100_000, quick=50,
+                             doc="bootstrap replicates of the before/after reports (searches use a cheap score)")
+    permutations: int = setting(int, 500, low=1, high=1_000_000, quick=200,
+                                doc="MMD permutations of the before/after reports")
+    alpha: float = setting(float, 0.05, check=_open_fraction, doc="significance level of the two-sample test")
+    seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds the search's and the reports' noise")
     # What "closes the gap" is measured against (EXPLAINED_SHRINK): the plain source, or the source
     # with the sensor noise fitted alone -- for a measured target, which always carries noise that a
     # noise-free simulator lacks: against the plain source that noise alone makes any shrink look whole.
-    reference: str = "source"
+    reference: str = setting(str, "source", choices=REFERENCES,
+                             doc="what the shrink that closes the gap is measured against: the plain source, or the "
+                                 "source with its sensor noise fitted alone (measured targets)")
     # The highest shaft order the target holds (a measured record's acquisition bandwidth, below its
     # Nyquist order): every source set is low-passed to it, so the comparison stays where the target
     # has data (simulated revolutions, and the noise added to them, reach order POINTS / 2). 0: all.
+    # Not a scenario key: the gap kind reads it off the measured target.
     max_order: int = 0
-
-
-REFERENCES = ("source", "noise")
 
 
 # --- input checks ---------------------------------------------------------------------------------
 
-def _whole(value, name: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-        raise GearlabInputError(f"gap diagnosis: settings '{name}' must be a whole number >= {low}, got {value!r}")
-    return int(value)
-
-
 def check_settings(settings: Settings) -> tuple[str, ...]:
-    """Every setting checked; returns the candidate effect names (all registered ones for ())."""
+    """Every setting checked against its declaration; returns the candidate effect names (all
+    registered ones for ())."""
     if not isinstance(settings, Settings):
         raise GearlabInputError(f"gap diagnosis: expected gearlab.gap.diagnose.Settings, got {type(settings).__name__}")
-    _whole(settings.budget, "budget", 1)
-    _whole(settings.max_effects, "max_effects", 1)
-    _whole(settings.healthy, "healthy", MIN_REVOLUTIONS)
-    _whole(settings.bootstrap, "bootstrap", 0)
-    _whole(settings.permutations, "permutations", 1)
-    _whole(settings.seed, "seed", 0)
-    _whole(settings.max_order, "max_order", 0)
-    alpha = settings.alpha
-    if isinstance(alpha, bool) or not isinstance(alpha, numbers.Real) or not 0.0 < alpha < 1.0:
-        raise GearlabInputError(f"gap diagnosis: settings 'alpha' must lie strictly between 0 and 1, got {alpha!r}")
-    if settings.reference not in REFERENCES:
-        raise GearlabInputError(f"gap diagnosis: settings 'reference' must be one of {', '.join(REFERENCES)}, "
-                                f"got {settings.reference!r}")
+    for name, (meta, _) in declared(Settings).items():
+        value, where = getattr(settings, name), f"gap diagnosis: settings '{name}'"
+        if meta.types is int and (isinstance(value, bool) or not isinstance(value, numbers.Integral)):
+            raise GearlabInputError(f"{where} must be a whole number, got {value!r}")
+        if meta.types is float and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+            raise GearlabInputError(f"{where} must be a number, got {value!r}")
+        if meta.types is str and not isinstance(value, str):
+            raise GearlabInputError(f"{where} must be a text, got {value!r}")
+        if name == "candidates" and (isinstance(value, str) or not isinstance(value, (tuple, list))):
+            raise GearlabInputError(f"{where} must be a list of effect names, got {value!r}")
+        in_bounds(meta, value, where)
+    if isinstance(settings.max_order, bool) or not isinstance(settings.max_order, numbers.Integral) \
+            or settings.max_order < 0:
+        raise GearlabInputError(f"gap diagnosis: settings 'max_order' must be a whole number >= 0, "
+                                f"got {settings.max_order!r}")
     registry = get_registry()
-    if isinstance(settings.candidates, str) or not isinstance(settings.candidates, (tuple, list)):
-        raise GearlabInputError(f"gap diagnosis: settings 'candidates' must be a list of effect names, "
-                                f"got {settings.candidates!r}")
     names = tuple(settings.candidates) or tuple(default_candidates(registry))
     for i, name in enumerate(names, start=1):
         if not isinstance(name, str):
@@ -833,136 +847,189 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         result["notes"].append("the target revolutions are all identical (noise-free): effect sizes rest on "
                                "numerical floors and rounding; add the sensor noise a real target has")
 
+    run = _Run(scorer, judged, rows, search, target, pair, settings, executor, on_event,
+               gap0=scorer.score(rows(search)),  # the search's own baseline (same rows as the fits)
+               judged0=scorer.score(plain))  # the same on the judging rows
     accepted: list[dict] = []
     fitted: tuple = ()
     significant = bool(before["significant"])
-    gap0 = scorer.score(rows(search))  # the search's own baseline (same rows as the fits)
-    judged0 = scorer.score(plain)  # the same on the judging rows
     if not significant:
         on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}); nothing to explain"))
     for r in range(1, settings.max_effects + 1):
-        if not significant:
-            break
         remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
-        if not remaining:
+        if not significant or not remaining:
             break
-        gap_now = scorer.score(rows(search.with_(effects=_by_level(search.effects + fitted))))
-        # The noise nuisance: while sensor noise is a candidate not yet accepted, every other
-        # candidate is fitted with it (a noisy target would otherwise always elect noise first,
-        # fitted to the wrong model, and judge the structural effects next to the wrong noise).
-        nuisance = NUISANCE in remaining
-        tasks = [(search, name, fitted, target, settings, settings.seed + 1000 * r, nuisance and name != NUISANCE,
-                  rows) for name in remaining]
-        if fitted:
-            tasks.append((search, None, fitted, target, settings, settings.seed + 1000 * r, False, rows))  # baseline
-        on_event(Event("stage", stage=f"gap round {r}", total=len(tasks),
-                       message=f"gap: round {r}, fitting {len(remaining)} effects"
-                               + (" and re-fitting the accepted ones alone" if fitted else "")))
-        done = 0
-
-        def advance(i, res, r=r, total=len(tasks)):
-            nonlocal done
-            done += 1
-            on_event(Event("advance", stage=f"gap round {r}", done=done, total=total))
-
-        fits = executor.map(fit_effect, tasks, advance)
-        baseline = next((f for f in fits if f["name"] is None), None)
-        fits = [f for f in fits if f["name"] is not None]
-        if baseline is not None and baseline["score"] < gap_now:
-            # The accepted effects re-fitted alone: the gap a candidate must reduce further.
-            fitted = _as_tuple(baseline["accepted"])
-            gap_now = baseline["score"]
-            for entry, (_, params) in zip(accepted, fitted):
-                entry["params"] = _plain(dict(params))
-        fits.sort(key=lambda f: f["score"])
-        for f in fits:
-            f["share_removed"] = min(1.0, max(0.0, 1.0 - f["score"] / gap0)) if gap0 > 0 else 0.0
-            f["share_of_remaining"] = min(1.0, max(0.0, 1.0 - f["score"] / gap_now)) if gap_now > 0 else 0.0
-        round_info = {"round": r, "gap": gap_now, "baseline": baseline and baseline["score"],
-                      "fits": [{k: f.get(k) for k in ("name", "score", "share_removed", "share_of_remaining",
-                                                      "params", "evaluations", "seconds", "error")} for f in fits]}
+        fits, fitted, round_info = greedy_round(run, r, remaining, accepted, fitted)
         result["rounds"].append(round_info)
         if r == 1:
             result["ranking"] = [{"name": f["name"], "share_removed": f["share_removed"], "params": f["params"]}
                                  for f in fits]
-        top = fits[0]
-        if not math.isfinite(top["score"]):
+        if not math.isfinite(fits[0]["score"]):
             break
         alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
-
-        def rows_of(f, extra=(), fitted=fitted):  # the round's accepted effects, as they stand now
-            effects = _as_tuple(f["accepted"]) if f.get("accepted") else fitted
-            return judged(effects + (get_registry().get("effect", f["name"]).spec(f["params"]),) + extra)
-
-        if top.get("nuisance") and alone_fit is not None:
-            # A candidate fitted with noise beside it must beat the noise alone by its own share
-            # (paired): extra parameters next to the right noise always fit a little better.
-            joint = rows_of(top, (get_registry().get("effect", NUISANCE).spec(top["nuisance"]["params"]),))
-            beyond = _paired_removal(scorer, rows_of(alone_fit), joint, settings.seed + r + 700)
-            beyond_share = beyond["removed"] / beyond["gap_now"] if beyond["gap_now"] > 0 else 0.0
-            round_info.update(beyond_noise=beyond_share, beyond_noise_low=beyond["removed_low"])
-            if not (beyond_share >= MIN_SHARE and beyond["removed_low"] > 0.0):
-                top = alone_fit
-        spec = get_registry().get("effect", top["name"]).spec(top["params"])
-        refit = _as_tuple(top["accepted"]) if top.get("accepted") else fitted
-        noise = (get_registry().get("effect", NUISANCE).spec(top["nuisance"]["params"]),) if top.get("nuisance") else ()
-        # Judged on fresh rows: a fit's gain on the rows it was fitted to includes what it learned
-        # of their noise, and a small remaining gap is of that order (extras were accepted so).
-        current_judged = judged(fitted)
-        candidate_rows = judged(refit + (spec,) + noise)
-        paired = _paired_removal(scorer, current_judged, candidate_rows, settings.seed + r)
-        noise_paired = None
-        if noise:
-            # The candidate was fitted with noise beside it: the noise is named too only when it
-            # removes its own share of what the candidate alone leaves (paired, as above).
-            alone = judged(refit + (spec,))
-            noise_paired = _paired_removal(scorer, alone, candidate_rows, settings.seed + r + 500)
-            noise_share = noise_paired["removed"] / noise_paired["gap_now"] if noise_paired["gap_now"] > 0 else 0.0
-            if not (noise_share >= MIN_SHARE and noise_paired["removed_low"] > 0.0):
-                noise, noise_paired = (), None
-                paired = _paired_removal(scorer, current_judged, alone, settings.seed + r)
-        share = paired["removed"] / paired["gap_now"] if paired["gap_now"] > 0 else 0.0
-        ok = share >= MIN_SHARE and paired["removed_low"] > 0.0
-        round_info.update(best=top["name"], share_of_remaining=share, removed_low=paired["removed_low"],
-                          accepted=ok)
-        on_event(Event("log", message=f"gap: round {r}: {top['name']} removes {100 * share:.1f} % of the gap left "
-                                      f"({'accepted' if ok else 'not accepted'})"))
-        if not ok:
+        top = noise_arbitration(run, r, fits[0], alone_fit, fitted, round_info)
+        decision = attribution(run, r, top, alone_fit, fitted, round_info)
+        if decision is None:
             break
-        fitted = refit + (spec,) + noise
+        fitted, refit, entries = decision
         for entry, (_, params) in zip(accepted, refit):  # the earlier effects, re-fitted next to this one
             entry["params"] = _plain(dict(params))
-        own = paired["removed"]
-        if noise_paired:
-            # Shared out as a Shapley value over the two orders: the candidate first (what it
-            # removes alone) and the noise first (what it removes beyond the round's noise-alone fit).
-            noise_alone = scorer.score(rows_of(alone_fit)) if alone_fit is not None else None
-            first = paired["gap_now"] - noise_paired["gap_now"]
-            second = (noise_alone - paired["gap_new"]) if noise_alone is not None else first
-            own = min(max(0.0, 0.5 * (first + second)), paired["removed"])
-            noise_paired = {**noise_paired, "removed": paired["removed"] - own}
-        accepted.append({"name": top["name"], "share_removed": own / judged0 if judged0 > 0 else 0.0,
-                         "share_of_remaining": share, "params": top["params"], "intervals": top["intervals"],
-                         "determined": top.get("determined", {}),
-                         "round": r, "removed_interval": paired["removed_interval"]})
-        if noise_paired:
-            # Its share: what it removes beyond the candidate alone (the candidate keeps the rest).
-            accepted.append({"name": NUISANCE, "share_removed": noise_paired["removed"] / judged0 if judged0 > 0 else 0.0,
-                             "share_of_remaining": noise_paired["removed"] / paired["gap_now"]
-                             if paired["gap_now"] > 0 else 0.0,
-                             "params": top["nuisance"]["params"], "intervals": {}, "round": r,
-                             "removed_interval": noise_paired["removed_interval"], "nuisance_of": top["name"]})
-            round_info["nuisance"] = top["nuisance"]
+        accepted += entries
         check = _report(judged(fitted), target, pair, settings, bootstrap=0)
         round_info["p_value_after"] = check["p_value"]
         significant = bool(check["significant"])
+    return conclusion(run, result, before, accepted, fitted, started)
 
-    on_event(Event("stage", stage="gap after", total=1, message="gap: the corrected source against the target"))
-    after = _report(judged(fitted), target, pair, settings) if fitted else before
-    on_event(Event("advance", stage="gap after", done=1, total=1))
+
+@dataclass
+class _Run:
+    """What every stage of one diagnosis shares: the score, how rows are made (the search's and the
+    judging ones), the target, the settings, where work runs and the round-1 baselines."""
+
+    scorer: Scorer
+    judged: Callable[[tuple], np.ndarray]  # rows of the source plus effects, on the report's fresh seeds
+    rows: Rows
+    search: DatasetSpec  # the source as the fits simulate it (the search's noise seed)
+    target: np.ndarray
+    pair: object
+    settings: Settings
+    executor: object
+    on_event: Callable[[Event], None]
+    gap0: float  # the plain source's score on the search rows
+    judged0: float  # ... and on the judging rows
+
+    def spec(self, name: str, params: dict) -> tuple:
+        return get_registry().get("effect", name).spec(params)
+
+    def rows_of(self, fit: dict, fitted: tuple, extra: tuple = ()) -> np.ndarray:
+        """Judging rows of a round's fit: its re-fitted accepted effects (or *fitted*), itself, *extra*."""
+        effects = _as_tuple(fit["accepted"]) if fit.get("accepted") else fitted
+        return self.judged(effects + (self.spec(fit["name"], fit["params"]),) + extra)
+
+
+def greedy_round(run: _Run, r: int, remaining: list[str], accepted: list[dict], fitted: tuple
+                 ) -> tuple[list[dict], tuple, dict]:
+    """Stage 1 of round *r*: every remaining candidate fitted on top of the accepted effects (in
+    parallel), and -- from round 2 on -- the accepted ones re-fitted alone, the baseline a candidate
+    must improve on. Returns (fits, best first; the accepted effects as the baseline left them; the
+    round's record)."""
+    settings, on_event = run.settings, run.on_event
+    gap_now = run.scorer.score(run.rows(run.search.with_(effects=_by_level(run.search.effects + fitted))))
+    # The noise nuisance: while sensor noise is a candidate not yet accepted, every other
+    # candidate is fitted with it (a noisy target would otherwise always elect noise first,
+    # fitted to the wrong model, and judge the structural effects next to the wrong noise).
+    nuisance = NUISANCE in remaining
+    seed = settings.seed + 1000 * r
+    tasks = [(run.search, name, fitted, run.target, settings, seed, nuisance and name != NUISANCE, run.rows)
+             for name in remaining]
+    if fitted:
+        tasks.append((run.search, None, fitted, run.target, settings, seed, False, run.rows))  # the baseline
+    on_event(Event("stage", stage=f"gap round {r}", total=len(tasks),
+                   message=f"gap: round {r}, fitting {len(remaining)} effects"
+                           + (" and re-fitting the accepted ones alone" if fitted else "")))
+    done = 0
+
+    def advance(i, res):
+        nonlocal done
+        done += 1
+        on_event(Event("advance", stage=f"gap round {r}", done=done, total=len(tasks)))
+
+    fits = run.executor.map(fit_effect, tasks, advance)
+    baseline = next((f for f in fits if f["name"] is None), None)
+    fits = sorted((f for f in fits if f["name"] is not None), key=lambda f: f["score"])
+    if baseline is not None and baseline["score"] < gap_now:
+        # The accepted effects re-fitted alone: the gap a candidate must reduce further.
+        fitted = _as_tuple(baseline["accepted"])
+        gap_now = baseline["score"]
+        for entry, (_, params) in zip(accepted, fitted):
+            entry["params"] = _plain(dict(params))
+    for f in fits:
+        f["share_removed"] = min(1.0, max(0.0, 1.0 - f["score"] / run.gap0)) if run.gap0 > 0 else 0.0
+        f["share_of_remaining"] = min(1.0, max(0.0, 1.0 - f["score"] / gap_now)) if gap_now > 0 else 0.0
+    info = {"round": r, "gap": gap_now, "baseline": baseline and baseline["score"],
+            "fits": [{k: f.get(k) for k in ("name", "score", "share_removed", "share_of_remaining", "params",
+                                            "evaluations", "seconds", "error")} for f in fits]}
+    return fits, fitted, info
+
+
+def noise_arbitration(run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tuple, info: dict) -> dict:
+    """Stage 2: a candidate fitted with noise beside it must beat the noise alone by its own share
+    (paired bootstrap on fresh rows): extra parameters next to the right noise always fit a little
+    better. Returns the round's winner: *top*, or the noise alone."""
+    if not (top.get("nuisance") and alone_fit is not None):
+        return top
+    joint = run.rows_of(top, fitted, (run.spec(NUISANCE, top["nuisance"]["params"]),))
+    beyond = _paired_removal(run.scorer, run.rows_of(alone_fit, fitted), joint, run.settings.seed + r + 700)
+    share = beyond["removed"] / beyond["gap_now"] if beyond["gap_now"] > 0 else 0.0
+    info.update(beyond_noise=share, beyond_noise_low=beyond["removed_low"])
+    return top if share >= MIN_SHARE and beyond["removed_low"] > 0.0 else alone_fit
+
+
+def attribution(run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tuple, info: dict
+                ) -> tuple[tuple, tuple, list[dict]] | None:
+    """Stage 3: is the round's winner accepted, and what share of the gap is it credited with?
+    Judged on fresh rows (a fit's gain on the rows it was fitted to includes what it learned of their
+    noise, of the order of a small remaining gap). Accepted when it removes at least MIN_SHARE of
+    what is left and a paired bootstrap puts the removal above 0; its noise nuisance is named too only
+    when it removes its own share of what the candidate alone leaves, the two sharing the removed
+    gap as a Shapley value over the two orders. Returns None (not accepted) or (the new accepted
+    effects, the earlier ones as re-fitted, the result entries)."""
+    scorer, judged, seed = run.scorer, run.judged, run.settings.seed
+    spec = run.spec(top["name"], top["params"])
+    refit = _as_tuple(top["accepted"]) if top.get("accepted") else fitted
+    noise = (run.spec(NUISANCE, top["nuisance"]["params"]),) if top.get("nuisance") else ()
+    current = judged(fitted)
+    candidate_rows = judged(refit + (spec,) + noise)
+    paired = _paired_removal(scorer, current, candidate_rows, seed + r)
+    noise_paired = None
+    if noise:
+        alone = judged(refit + (spec,))
+        noise_paired = _paired_removal(scorer, alone, candidate_rows, seed + r + 500)
+        noise_share = noise_paired["removed"] / noise_paired["gap_now"] if noise_paired["gap_now"] > 0 else 0.0
+        if not (noise_share >= MIN_SHARE and noise_paired["removed_low"] > 0.0):
+            noise, noise_paired = (), None
+            paired = _paired_removal(scorer, current, alone, seed + r)
+    share = paired["removed"] / paired["gap_now"] if paired["gap_now"] > 0 else 0.0
+    ok = share >= MIN_SHARE and paired["removed_low"] > 0.0
+    info.update(best=top["name"], share_of_remaining=share, removed_low=paired["removed_low"], accepted=ok)
+    run.on_event(Event("log", message=f"gap: round {r}: {top['name']} removes {100 * share:.1f} % of the gap left "
+                                      f"({'accepted' if ok else 'not accepted'})"))
+    if not ok:
+        return None
+    own = paired["removed"]
+    if noise_paired:
+        # Shapley over the two orders: the candidate first (what it removes alone) and the noise
+        # first (what the candidate removes beyond the round's noise-alone fit).
+        noise_alone = scorer.score(run.rows_of(alone_fit, fitted)) if alone_fit is not None else None
+        first = paired["gap_now"] - noise_paired["gap_now"]
+        second = (noise_alone - paired["gap_new"]) if noise_alone is not None else first
+        own = min(max(0.0, 0.5 * (first + second)), paired["removed"])
+        noise_paired = {**noise_paired, "removed": paired["removed"] - own}
+    j0 = run.judged0
+    entries = [{"name": top["name"], "share_removed": own / j0 if j0 > 0 else 0.0, "share_of_remaining": share,
+                "params": top["params"], "intervals": top["intervals"], "determined": top.get("determined", {}),
+                "round": r, "removed_interval": paired["removed_interval"]}]
+    if noise_paired:
+        # Its share: what it removes beyond the candidate alone (the candidate keeps the rest).
+        entries.append({"name": NUISANCE, "share_removed": noise_paired["removed"] / j0 if j0 > 0 else 0.0,
+                        "share_of_remaining": noise_paired["removed"] / paired["gap_now"]
+                        if paired["gap_now"] > 0 else 0.0,
+                        "params": top["nuisance"]["params"], "intervals": {}, "round": r,
+                        "removed_interval": noise_paired["removed_interval"], "nuisance_of": top["name"]})
+        info["nuisance"] = top["nuisance"]
+    return refit + (spec,) + noise, refit, entries
+
+
+def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitted: tuple, started: float) -> dict:
+    """Stage 4: the corrected source against the target on fresh rows (full report), the shrink
+    (against the plain source or the noise-alone reference) and the verdict."""
+    run.on_event(Event("stage", stage="gap after", total=1, message="gap: the corrected source against the target"))
+    after = _report(run.judged(fitted), run.target, run.pair, run.settings) if fitted else before
+    run.on_event(Event("advance", stage="gap after", done=1, total=1))
     gap_before, gap_after = float(before["total"]["gap"]), float(after["total"]["gap"])
     shrink = 1.0 - gap_after / gap_before if gap_before > 0 else 0.0
-    reference = _noise_reference(result, judged, target, pair, settings) if settings.reference == "noise" else None
+    reference = (_noise_reference(result, run.judged, run.target, run.pair, run.settings)
+                 if run.settings.reference == "noise" else None)
     if reference is not None:
         result["reference"] = reference
         reference["shrink"] = 1.0 - gap_after / reference["gap"] if reference["gap"] > 0 else 0.0

@@ -393,7 +393,7 @@ def gap_report(source_X, target_X, pair, embed: Callable | None = None, seed: in
     else:
         notes.append(f"output-shaft orders (multiples of {ratio}) are not resolved: each row is one input "
                      "revolution, so their lines leak into the neighbouring integer orders (shaft and "
-                     "non-synchronous bands); pass consecutive=True for rows cut consecutively from one record")
+                     "non-synchronous bands)")
     for which, X in (("source", Xs), ("target", Xt)):
         if np.all(X == X[0]):
             notes.append(f"the {which} revolutions are all identical (no noise): effect sizes are measured "

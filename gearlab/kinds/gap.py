@@ -21,7 +21,6 @@ ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures a
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -40,8 +39,9 @@ from ..learn.schedule import two_phases
 from ..registry import get_registry
 from ..events import Event
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, keys_of, location, one_of
-from ..settings import MAX_SEED, shrunk
+from ..scenario import Key, Scenario, Table, in_range, keys_of, location
+from ..gap.diagnose import Settings
+from ..settings import quick_limits, shrunk
 from .common import (DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, planned_counts,
                      simulated_spec, sized)
 from .transfer import TRAINING, method as transfer_method, train_unit
@@ -70,29 +70,11 @@ SIDEBANDS = 3
 UNCORRECTED, CORRECTED = "uncorrected", "corrected"
 
 
-def _alpha(value, where):
-    # an open interval: alpha = 0 would never call a gap significant, alpha = 1 always
-    if not 0.0 < value < 1.0 or not math.isfinite(value):
-        raise GearlabInputError(f"{where}: expected a significance level between 0 and 1 (exclusive), got {value!r}")
-    return float(value)
-
-
 TABLES = {
     "source": _DATASET,
     "target": _TARGET,
-    "diagnosis": Table({
-        "candidates": Key(list, [], doc="effect names to try (gearlab plugins lists them); [] = every registered effect but the opt-in ones (load_level, sensor_offset)"),
-        "budget": Key(int, 16, in_range(1, 10_000), "source simulations per effect fit (the search budget)"),
-        "max_effects": Key(int, 3, in_range(1, 20), "greedy rounds: most effects added to the source"),
-        "healthy": Key(int, 40, in_range(MIN_HEALTHY, 100_000), "source healthy revolutions simulated per evaluation"),
-        "bootstrap": Key(int, 200, in_range(0, 100_000), "bootstrap replicates of the before/after reports"),
-        "permutations": Key(int, 500, in_range(1, 1_000_000), "MMD permutations of the before/after reports"),
-        "alpha": Key(float, 0.05, _alpha, "significance level of the two-sample test"),
-        "seed": Key(int, 0, in_range(0, MAX_SEED)),
-        "reference": Key(str, "source", one_of("source", "noise"),
-                         "what the shrink that closes the gap is measured against: the plain source, or the "
-                         "source with its sensor noise fitted alone (measured targets)"),
-    }),
+    # declared once, on gearlab.gap.diagnose.Settings: keys, checks, --quick limits and docs
+    "diagnosis": Table(keys_of(Settings)),
     "accuracy": Table({
         "enabled": Key(bool, True, doc="train source-only models on the uncorrected and corrected source "
                                        "(needs target labels)"),
@@ -128,8 +110,7 @@ def build(scenario: Scenario) -> dict:
         check_healthy(healthy, location(path, "target", "healthy"))
     d = t["diagnosis"]
     settings = {"candidates": candidates(d["candidates"], location(path, "diagnosis", "candidates")),
-                **{k: d[k] for k in ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha", "seed",
-                                     "reference")}}
+                **{k: v for k, v in d.items() if k != "candidates"}}
     if settings["reference"] == "noise" and settings["candidates"] and "sensor_noise" not in settings["candidates"]:
         raise GearlabInputError(f"{location(path, 'diagnosis', 'reference')}: reference = 'noise' needs "
                                 "'sensor_noise' among the candidates (the noise fitted alone is the reference)")
@@ -311,9 +292,7 @@ def quick(scenario: Scenario) -> None:
     """Smoke run: small search budgets, fewer revolutions and resamples, one short repetition."""
     spec = scenario.spec
     s = spec["settings"]
-    spec["settings"] = {**s, "budget": min(s["budget"], 4), "max_effects": min(s["max_effects"], 2),
-                        "healthy": min(s["healthy"], 20), "bootstrap": min(s["bootstrap"], 50),
-                        "permutations": min(s["permutations"], 200)}
+    spec["settings"] = {**s, **{k: min(s[k], limit) for k, limit in quick_limits(Settings).items()}}
     p: Protocol = spec["protocol"]
     spec["protocol"] = shrunk(p, repetitions=1)  # and the --quick limits declared on Protocol
 

@@ -29,7 +29,9 @@ from ..gap import benchmark as bench
 from ..registry import get_registry
 from ..events import Event
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, location
+from ..gap.diagnose import Settings
+from ..scenario import Key, Scenario, Table, in_range, keys_of, location
+from ..settings import quick_limits
 from .common import DATASET_TABLE, dataset_spec, executor_for
 
 MAX_TRIALS = 10000
@@ -48,15 +50,8 @@ TABLES = {
                                   "healthy revolutions in each written target"),
     }),
     "source": Table(_SOURCE_KEYS),
-    "search": Table({
-        "budget": Key(int, 16, in_range(1, 10000), "source simulations per effect fit"),
-        "max_effects": Key(int, 3, in_range(1, 12), "greedy rounds"),
-        "healthy": Key(int, 40, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000),
-                       "source healthy revolutions simulated per evaluation"),
-        "bootstrap": Key(int, 200, in_range(1, 100000)),
-        "permutations": Key(int, 500, in_range(1, 1000000)),
-        "alpha": Key(float, 0.05, in_range(1e-6, 0.5)),
-    }),
+    # the diagnosis's own settings, declared once on gearlab.gap.diagnose.Settings
+    "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
 }
 
 
@@ -102,9 +97,7 @@ def quick(scenario: Scenario) -> None:
     n = min(len(spec["trials"]), 4)
     spec["trials"] = bench.draw_trials(n, spec["settings"]["seed"], spec["library"], spec["source"])
     s = spec["settings"]
-    spec["settings"] = {**s, "budget": min(s["budget"], 4), "max_effects": min(s["max_effects"], 2),
-                        "healthy": min(s["healthy"], 20), "bootstrap": min(s["bootstrap"], 50),
-                        "permutations": min(s["permutations"], 100)}
+    spec["settings"] = {**s, **{k: min(s[k], limit) for k, limit in quick_limits(Settings).items() if k in s}}
     spec["source"] = replace(spec["source"], healthy=spec["settings"]["healthy"])
     spec["revolutions"] = min(spec["revolutions"], 40)
 
