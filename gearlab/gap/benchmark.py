@@ -74,6 +74,8 @@ RANGES: dict[str, dict[str, object]] = {
     "fillet_correction": {"lam": (0.1, 0.6, "lin")},
     "sensor_noise": {"snr_db": (-5.0, 20.0, "lin")},
     "sensor_bandwidth": {"f_n": (3e3, 3e4, "log"), "zeta": (0.05, 0.7, "log")},
+    # the anti-alias filter: corners inside every drawn record's passband (>= 22 kHz), 2 to 6 poles
+    "sensor_lowpass": {"f_c": (2e3, 1.5e4, "log"), "order": (2, 6, "int")},
     "interference_tone": {"frequency": (10.0, 2000.0, "log"), "ratio": (0.05, 0.5, "log")},
 }
 

@@ -2,5 +2,5 @@
 
 Model level: casing_path, drive_inertias, bearing_stiffness, mesh_damping.
 Excitation level: speed_fluctuation, load_fluctuation, shaft_eccentricity, tooth_friction, fillet_correction.
-Signal level: sensor_noise, sensor_bandwidth, interference_tone.
+Signal level: sensor_noise, sensor_bandwidth, sensor_lowpass, interference_tone.
 """
