@@ -21,6 +21,10 @@ from rich.table import Table
 
 from .errors import GearlabInputError
 
+# Each command imports what it needs inside its function (start-up time): `gearlab --help`,
+# `validate` and `plugins` never load torch, numba or matplotlib. None of these imports hides
+# a cycle (tests/test_architecture.py).
+
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,

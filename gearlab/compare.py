@@ -20,6 +20,7 @@ from .engine import scenario_of
 from .errors import GearlabInputError
 from .kinds import SCENARIO_KINDS
 from .kinds.transfer import table
+from .plots import chart_figure
 from .report import STYLE, markdown_table
 from .runs import RunDir
 from .scenario import Scenario
@@ -142,7 +143,6 @@ def compare_lines(runs: list[Compared]) -> list[str]:
 def compare_html(runs: list[Compared], figures: Path) -> str:
     """A self-contained page: the runs, the table side by side, the overlaid charts (PNG,
     inlined) and each run's verdict. *figures*: a folder for the PNGs while they are drawn."""
-    from .plots import chart_figure
     lines = compare_lines(runs)
     title = f"gearlab comparison: {len(runs)} {runs[0].kind} runs"
     parts = ["<!doctype html><html><head><meta charset='utf-8'>", f"<title>{html.escape(title)}</title>",

@@ -20,6 +20,7 @@ import weakref
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
+from . import PHYSICS_VERSION, __version__
 from .errors import GearlabInputError
 
 EXECUTORS = ("local", "ray")
@@ -186,9 +187,7 @@ def _close_session() -> None:
 
 
 def _gearlab_version() -> str:
-    import gearlab
-
-    return f"{gearlab.__version__} (physics {gearlab.PHYSICS_VERSION})"
+    return f"{__version__} (physics {PHYSICS_VERSION})"
 
 
 def _check_cluster_runs_our_gearlab(ray, address: str) -> None:

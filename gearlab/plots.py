@@ -7,6 +7,9 @@ from pathlib import Path
 
 import matplotlib
 
+from .charts import dataset_examples
+from .signals import order_spectrum, spectrum
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
@@ -80,8 +83,6 @@ def rfa_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]]], path
 
 def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmonics: int = 6) -> Path:
     """Steady acceleration signals and their spectra with mesh harmonics marked (Figures 2.34-2.39)."""
-    from .signals import spectrum
-
     names = list(sim.channels)
     fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.6 * len(names)), squeeze=False, layout="constrained")
     t = sim.t[start:]
@@ -107,9 +108,6 @@ def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmoni
 
 def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
     """Per class: revolutions at low, middle and top intensity, and their order spectra."""
-    from .charts import dataset_examples
-    from .signals import order_spectrum
-
     names = dataset.spec.class_names
     fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.3 * len(names)), squeeze=False, layout="constrained")
     angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]

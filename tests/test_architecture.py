@@ -133,10 +133,11 @@ def test_the_import_graph_has_no_cycle():
             pytest.fail("import cycle: " + " -> ".join(cycle))
 
 
-def test_the_check_sees_function_level_imports_and_an_upward_one(tmp_path):
+def test_the_check_sees_function_level_imports_and_orders_the_layers():
     # the test itself: a function-level import is an edge, and the layers order them
-    assert ("gearlab.plots", True) not in {(t, top) for t, _, top in GRAPH["gearlab.kinds.transfer"]}
-    assert any(t == "gearlab.plots" and not top for t, _, top in GRAPH["gearlab.kinds.transfer"])
+    # (adapters import the torch losses inside their methods: start-up time)
+    assert ("gearlab.learn.losses", True) not in {(t, top) for t, _, top in GRAPH["gearlab.learn.adapters"]}
+    assert any(t == "gearlab.learn.losses" and not top for t, _, top in GRAPH["gearlab.learn.adapters"])
     assert layer_of("gearlab.dynamics.newmark") < layer_of("gearlab.effects") < layer_of("gearlab.engine")
     assert layer_of("gearlab.kinds.gap") == layer_of("gearlab.kinds")
 

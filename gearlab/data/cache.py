@@ -31,6 +31,8 @@ import platformdirs
 from ..errors import GearlabInputError, clipped
 from ..events import Event
 from ..files import atomic_write, write_problem
+from .builder import build_dataset
+from .importers import MeasuredSpec, import_measured
 from .spec import Dataset, DatasetSpec
 
 ARRAYS = ("X", "label", "fault", "intensity", "tooth", "rfa", "revolution", "domain")
@@ -179,9 +181,6 @@ def load_or_build(spec: DatasetSpec, executor=None, on_event: Callable[[Event], 
                   ) -> tuple[Dataset, bool]:
     """The dataset of *spec* from the cache, or built (simulated or imported) and stored.
     Returns (dataset, was_cached)."""
-    from .builder import build_dataset
-    from .importers import MeasuredSpec, import_measured
-
     cached = load(spec)
     if cached is not None:
         on_event(Event("log", message=f"dataset {spec.name}: from cache ({spec.key()})"))

@@ -14,6 +14,7 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
+from ..plots import dataset_signals
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
@@ -81,8 +82,6 @@ def table_md(summary: dict) -> str:
 
 
 def figures(dataset, run: RunDir) -> None:
-    from ..plots import dataset_signals  # start-up time: matplotlib only when a run draws
-
     dataset_signals(dataset, run.file("figures", f"signals_{dataset.spec.name}.png"))
 
 

@@ -47,17 +47,18 @@ from ..errors import GearlabInputError, shown
 from ..events import Event, UnitProgress
 from ..learn.calibration import Calibration
 from ..learn.detectors import gumbel_quantile
-from ..learn.protocol import Method, Protocol, StateStore, shared_state
+from ..learn.protocol import Method, Protocol, StateStore, fault_score, shared_state, train_method
 from ..learn.schedule import two_phases
+from ..learn.training import pick_device
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
+from ..settings import shrunk
 from ..signals import Standardiser
 from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
 from ..units import to_si
 from .common import class_sizes, device_of, executor_for, simulated_spec, sized
-from ..settings import shrunk
 from .transfer import CALIBRATION, TRAINING, check_training
 from .transfer import TABLES as TRANSFER_TABLES
 from .transfer import method as transfer_method
@@ -379,9 +380,6 @@ def train_unit(task: tuple) -> dict:
     history's training revolutions, then its scores of the history units (for the threshold)
     and, only now, of the test units."""
     import torch
-
-    from ..learn.protocol import fault_score, train_method
-    from ..learn.training import pick_device
 
     protocol, method, condition, (Xs, ys, Xv, yv), train, history_units, test_units, states, false_alarm = task
     torch.set_num_threads(1)

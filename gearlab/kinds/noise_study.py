@@ -31,6 +31,7 @@ from ..events import Event, UnitProgress
 from ..learn.networks import NetworkSettings
 from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
 from ..params import did_you_mean
+from ..plots import noise_study_figures
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
 from ..signals import NOISE_KINDS
@@ -261,8 +262,6 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(res))
     run.write_text("table.csv", table_csv(res))
-    from ..plots import noise_study_figures
-
     noise_study_figures(run.figures, res)
 
 

@@ -12,6 +12,7 @@ figures (Figures 5.5-5.9) and report.html.
 
 from __future__ import annotations
 
+import io
 import json
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -25,6 +26,7 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
+from ..files import atomic_write
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
 from ..learn.calibration import ALIGNMENTS, SOURCE_NOISE, THRESHOLDS, Calibration
 from ..learn.networks import NetworkSettings
@@ -43,6 +45,7 @@ from ..learn.protocol import (
 )
 from ..learn.schedule import two_phases
 from ..learn.training import pick_device
+from ..plots import transfer_figures
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
@@ -264,10 +267,6 @@ def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, 
 
 
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:
-    import io
-
-    from ..files import atomic_write
-
     buf = io.BytesIO()
     np.savez(buf, **latent)
     atomic_write(run.path / "latent" / (unit.replace("/", "_") + ".npz"), buf.getvalue())
@@ -358,8 +357,6 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(tab, protocol.ks, list(tab)) + measures_md(summary, protocol.ks))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
-    from ..plots import transfer_figures
-
     transfer_figures(run.path, records, tab, protocol.ks)
 
 

@@ -26,6 +26,7 @@ import numpy as np
 import torch
 
 from ..errors import GearlabInputError
+from ..files import atomic_write
 from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
@@ -184,8 +185,6 @@ class StateStore:
             with torch.random.fork_rng():
                 state = make()
             if path is not None:
-                from ..files import atomic_write
-
                 buf = io.BytesIO()
                 torch.save(state, buf)
                 atomic_write(path, buf.getvalue())

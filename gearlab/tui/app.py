@@ -30,12 +30,15 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import DataTable, Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
+from .. import registry as plugins
+from ..compare import compare_charts, compare_lines, compare_markdown, load_runs
 from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
 from ..events import Event
 from ..kinds import SCENARIO_KINDS
 from ..runs import RunDir
 from ..scenario import Scenario
+from ..verdict import verdict_lines, verdict_table
 from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, scan
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
 from .widgets import ChartView, ResultTable, Stages
@@ -430,8 +433,6 @@ class GearlabApp(App):
 
     # ------------------------------------------------------------------ results
     def show_results(self, run: RunEntry, switch: bool = True) -> None:
-        from ..verdict import verdict_lines, verdict_table
-
         self.opened, self.comparing = run, []
         status = self.query_one("#results-status", Static)
         table = self.query_one("#results-table", ResultTable)
@@ -501,8 +502,6 @@ class GearlabApp(App):
         self.notify(f"{len(self.marked)} run(s) marked" + ("; C compares them" if len(self.marked) > 1 else ""))
 
     def action_compare(self, paths: Iterable[Path] | None = None) -> None:
-        from ..compare import compare_charts, compare_lines, compare_markdown, load_runs
-
         paths = list(paths if paths is not None else self.marked)
         if len(paths) < 2:
             self.notify("mark two or more runs with m (in the tree), then C compares them", severity="warning")
@@ -598,22 +597,20 @@ class GearlabApp(App):
 
     # ------------------------------------------------------------------ plugins
     def fill_plugins(self) -> None:
-        from ..registry import get_registry, kind_text, params_text
-
-        registry = get_registry()
+        registry = plugins.get_registry()  # looked up at call time: a test may give its own registry
         table = self.query_one("#plugin-table", DataTable)
         rows = registry.describe()
         # fixed widths, the cells wrapped in them (rows as high as they need): the long kinds
         # ("effect (excitation, breaks tooth-shift symmetry)") and the parameters are read
         # whole, and kind, name and package fit beside the folded sidebar at 80 columns
-        kinds = [kind_text(row) for row in rows]
+        kinds = [plugins.kind_text(row) for row in rows]
         table.add_column("kind", width=max(16, *(len(w) for k in kinds for w in k.split())))
         table.add_column("name", width=max((len(row["name"]) for row in rows), default=4))
         table.add_column("package", width=max((len(row["package"]) for row in rows), default=7))
         table.add_column("parameters", width=40)
         for kind, row in zip(kinds, rows):
             # Text, not str: a DataTable reads "[mm]" in a string as markup
-            table.add_row(Text(kind), row["name"], row["package"], Text(params_text(row) or "-"), height=None)
+            table.add_row(Text(kind), row["name"], row["package"], Text(plugins.params_text(row) or "-"), height=None)
         problems = [f"problem: {p}" for p in registry.problems]
         self.query_one("#problems", Static).update(Text("\n".join(problems)))
 
