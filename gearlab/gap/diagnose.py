@@ -837,7 +837,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     before = _report(plain, target, pair, settings)
     on_event(Event("advance", stage="gap before", done=1, total=1))
     result = {"before": before, "gap_before": float(before["total"]["gap"]),
-              "significant_before": bool(before["significant"]), "effects": [], "ranking": [], "rounds": [],
+              "significant_before": gap_seen(before), "effects": [], "ranking": [], "rounds": [],
               "settings": {**asdict(settings), "candidates": list(candidates)}, "notes": []}
     if chain is not None:
         result["chain"] = chain_record(chain, fresh.with_(healthy=1), pair.Z1)
@@ -852,9 +852,10 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
                judged0=scorer.score(plain))  # the same on the judging rows
     accepted: list[dict] = []
     fitted: tuple = ()
-    significant = bool(before["significant"])
+    significant = gap_seen(before)
     if not significant:
-        on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}); nothing to explain"))
+        on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}, AUC "
+                                      f"{before['auc']:.2f}); nothing to explain"))
     for r in range(1, settings.max_effects + 1):
         remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
         if not significant or not remaining:
@@ -877,7 +878,7 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         accepted += entries
         check = _report(judged(fitted), target, pair, settings, bootstrap=0)
         round_info["p_value_after"] = check["p_value"]
-        significant = bool(check["significant"])
+        significant = gap_seen(check)
     return conclusion(run, result, before, accepted, fitted, started)
 
 
@@ -1034,16 +1035,34 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         result["reference"] = reference
         reference["shrink"] = 1.0 - gap_after / reference["gap"] if reference["gap"] > 0 else 0.0
     share = reference["shrink"] if reference else shrink
-    verdict = verdict_of(bool(before["significant"]), bool(accepted), bool(after["significant"]),
+    verdict = verdict_of(gap_seen(before), bool(accepted), gap_seen(after),
                          float(after["auc"]), share)
     result.update(
-        after=after, gap_after=gap_after, significant_after=bool(after["significant"]), shrink=shrink,
+        after=after, gap_after=gap_after, significant_after=gap_seen(after), shrink=shrink,
         effects=accepted, unexplained=verdict in ("partly explained", "unexplained"), verdict=verdict,
         explained_share=max(0.0, min(1.0, share)) if verdict != "no significant gap" else None,
         corrected_effects=[[name, [[k, v] for k, v in params]] for name, params in fitted],
         seconds=time.perf_counter() - started,
     )
     return result
+
+
+def auc_z(report: dict) -> float:
+    """The classifier AUC of a gap report against chance, in standard errors: the Mann-Whitney
+    variance of an AUC under the null, (n_s + n_t + 1) / (12 n_s n_t)."""
+    n_s, n_t = report["n_source"], report["n_target"]
+    return (float(report["auc"]) - 0.5) / math.sqrt((n_s + n_t + 1) / (12.0 * n_s * n_t))
+
+
+def gap_seen(report: dict) -> bool:
+    """A significant gap: the MMD permutation test rejects at alpha *and* the effect size -- the
+    cross-validated classifier AUC -- lies above chance by its own one-sided test at alpha. Each
+    alone, at alpha = 0.05, calls 5 % of null targets significant (7 of 100 measured-file nulls
+    for the MMD test, at AUC 0.48-0.63); a real mismatch is seen by both (AUC 1.0 on every
+    benchmark effect)."""
+    from statistics import NormalDist
+
+    return bool(report["significant"]) and auc_z(report) > NormalDist().inv_cdf(1.0 - float(report["alpha"]))
 
 
 def verdict_of(significant_before: bool, accepted: bool, significant_after: bool, auc_after: float,
