@@ -54,14 +54,23 @@ def bounds(name: str) -> dict[str, float]:
     rng = np.random.default_rng(0)
     order = rng.permutation(test)
     n_fit, n_stop = int(0.6 * len(order)), int(0.1 * len(order))
-    fit, stop, scored = order[:n_fit], order[n_fit:n_fit + n_stop], order[n_fit + n_stop:]
+    fit, stop, scored = order[:n_fit], order[n_fit : n_fit + n_stop], order[n_fit + n_stop :]
     torch.manual_seed(0)
     net = build_network(protocol.network, n_classes=2, dropout=protocol.dropout)
-    fit_supervised(net, target.X[fit], target.fault[fit].astype(np.int64), rng=rng, device=torch.device("cpu"),
-                   epochs=100, batch=protocol.batch, val=(target.X[stop], target.fault[stop].astype(np.int64)),
-                   patience=20)
-    out["network, told the labels"] = \
+    fit_supervised(
+        net,
+        target.X[fit],
+        target.fault[fit].astype(np.int64),
+        rng=rng,
+        device=torch.device("cpu"),
+        epochs=100,
+        batch=protocol.batch,
+        val=(target.X[stop], target.fault[stop].astype(np.int64)),
+        patience=20,
+    )
+    out["network, told the labels"] = (
         100 * (predict(net, target.X[scored], torch.device("cpu")) == target.fault[scored]).mean()
+    )
 
     energy = uniform_filter1d(residual**2, 128, axis=1, mode="wrap").max(axis=1)
     out["energy, told threshold"] = best_accuracy(energy, y)
@@ -71,8 +80,9 @@ def bounds(name: str) -> dict[str, float]:
     with torch.no_grad():
         out["target shapes, told threshold"] = best_accuracy(told.score(X_test).numpy(), y)
 
-    detector = template_detector(source.X[s.source_train], source.fault[s.source_train], history, None,
-                                 false_alarm=0.01)
+    detector = template_detector(
+        source.X[s.source_train], source.fault[s.source_train], history, None, false_alarm=0.01
+    )
     with torch.no_grad():
         called = detector(X_test).argmax(1).numpy()
     out["matched_filter (source shapes, history threshold)"] = 100 * (called == y).mean()

@@ -79,17 +79,21 @@ def main() -> None:
     start = time.perf_counter()
     naive_newmark(sim, result.tvms[1:], 7.0)
     naive = time.perf_counter() - start
-    print(f"10-DOF, 0.4 s at 200 kHz, crack on tooth 5: gearlab {ours * 1e3:.1f} ms (TVMS + integration; "
-          f"target <= 20 ms), plain NumPy Newmark inverting every step {naive:.2f} s -> {naive / ours:.0f}x "
-          f"(target >= 100x)")
+    print(
+        f"10-DOF, 0.4 s at 200 kHz, crack on tooth 5: gearlab {ours * 1e3:.1f} ms (TVMS + integration; "
+        f"target <= 20 ms), plain NumPy Newmark inverting every step {naive:.2f} s -> {naive / ours:.0f}x "
+        f"(target >= 100x)"
+    )
 
     with tempfile.TemporaryDirectory() as cache:
         os.environ["GEARLAB_CACHE"] = cache
         workers = 2
         executor = LocalExecutor(workers)
         # 3. chapter-5 domains of Dataset B
-        specs = [dataset_preset("B-6-ch5"),
-                 dataset_preset("B-8-ch5").with_(name="B-8-ch5-laplace", noise=NoiseSpec("laplace", 0.0, 1))]
+        specs = [
+            dataset_preset("B-6-ch5"),
+            dataset_preset("B-8-ch5").with_(name="B-8-ch5-laplace", noise=NoiseSpec("laplace", 0.0, 1)),
+        ]
         start = time.perf_counter()
         for spec in specs:
             load_or_build(spec, executor)
@@ -99,8 +103,10 @@ def main() -> None:
             _, cached = load_or_build(spec, executor)
             assert cached
         warm = time.perf_counter() - start
-        print(f"Dataset B chapter-5 domains (675 + 675 samples): cold {cold:.1f} s (target <= 30 s), "
-              f"warm {warm * 1e3:.0f} ms (target <= 1 s) -> {cold / warm:.0f}x")
+        print(
+            f"Dataset B chapter-5 domains (675 + 675 samples): cold {cold:.1f} s (target <= 30 s), "
+            f"warm {warm * 1e3:.0f} ms (target <= 1 s) -> {cold / warm:.0f}x"
+        )
 
         # 4. chapter 4, Gaussian noise, noisy + TSA
         if not args.skip_ch4:
@@ -110,9 +116,11 @@ def main() -> None:
                 print(f"  {name}: {dataset.X.shape}, {time.perf_counter() - start:.0f} s so far", flush=True)
                 del dataset
             total = time.perf_counter() - start
-            print(f"chapter-4 Gaussian set (12 800 x 60 revolutions, noisy + TSA): cold {total:.0f} s "
-                  f"(target <= 300 s), peak memory <= {peak_memory_gib(workers):.2f} GiB (this process + {workers} x the "
-                  f"largest worker; target < 4 GiB)")
+            print(
+                f"chapter-4 Gaussian set (12 800 x 60 revolutions, noisy + TSA): cold {total:.0f} s "
+                f"(target <= 300 s), peak memory <= {peak_memory_gib(workers):.2f} GiB (this process + {workers} x the "
+                f"largest worker; target < 4 GiB)"
+            )
 
 
 if __name__ == "__main__":

@@ -80,8 +80,10 @@ def scenario_runs(path: Path, workers: int, quick: bool) -> None:
     t = time.perf_counter()
     for side in ("source", "target"):
         load_or_build(scenario.spec[side], LocalExecutor(workers))
-    print(f"\n{path.name}{' --quick' if quick else ''}: datasets built in {time.perf_counter() - t:.1f} s "
-          "(shared by all runs below)")
+    print(
+        f"\n{path.name}{' --quick' if quick else ''}: datasets built in {time.perf_counter() - t:.1f} s "
+        "(shared by all runs below)"
+    )
 
     runs = [
         ("local, 1 worker", "workers = 1"),

@@ -107,15 +107,19 @@ def transfer(names: list[str], quick: bool, tmp: Path, keep: Path | None) -> Non
     print(f"\ntransfer scenarios{' (--quick)' if quick else ''}, datasets cold, {os.cpu_count()} cores:")
     print(f"  {'scenario':10s} {'wall':>10s} {'/ first':>8s} {'/ 45 min':>9s} {'peak RSS':>10s}  table")
     for name, seconds, peak, state in rows:
-        print(f"  {name:10s} {seconds / 60:8.1f} min {seconds / first:7.2f}x {seconds / 2700:8.2f}x "
-              f"{peak / GIB:7.2f} GiB  {state}")
+        print(
+            f"  {name:10s} {seconds / 60:8.1f} min {seconds / first:7.2f}x {seconds / 2700:8.2f}x "
+            f"{peak / GIB:7.2f} GiB  {state}"
+        )
     print("".join(tables), end="")
 
 
 def ch4_memory(tmp: Path) -> None:
     scenario = tmp / "ch4_datasets.toml"
-    scenario.write_text('[scenario]\nname = "ch4_datasets"\nkind = "dataset"\n\n'
-                        + "".join(f'[[datasets]]\npreset = "{p}"\n\n' for p in CH4))
+    scenario.write_text(
+        '[scenario]\nname = "ch4_datasets"\nkind = "dataset"\n\n'
+        + "".join(f'[[datasets]]\npreset = "{p}"\n\n' for p in CH4)
+    )
     env = {**os.environ, "GEARLAB_CACHE": str(tmp / "cache-ch4")}
     seconds, peak, code = measured(gearlab("run", str(scenario), "--out", str(tmp / "runs")), env)
     if code:
@@ -125,10 +129,14 @@ def ch4_memory(tmp: Path) -> None:
     datasets = json.loads((run / "summary.json").read_text())["datasets"]
     one = max(d["shape"][0] * d["shape"][1] * 4 for d in datasets.values())  # float32 rows
     held = sum(d["shape"][0] * d["shape"][1] * 4 for d in datasets.values())
-    print(f"\nchapter-4 datasets ({len(datasets)} x {one / GIB:.2f} GiB of float32 rows, {held / GIB:.2f} GiB "
-          f"in all), built cold in {seconds / 60:.1f} min:")
-    print(f"  peak RSS {peak / GIB:.2f} GiB = {peak / one:.1f}x one dataset, {peak / held:.2f}x all of them; "
-          f"ceiling {CEILING / GIB:.0f} GiB: {'OK' if peak <= CEILING else 'EXCEEDED'} ({peak / CEILING:.2f}x)")
+    print(
+        f"\nchapter-4 datasets ({len(datasets)} x {one / GIB:.2f} GiB of float32 rows, {held / GIB:.2f} GiB "
+        f"in all), built cold in {seconds / 60:.1f} min:"
+    )
+    print(
+        f"  peak RSS {peak / GIB:.2f} GiB = {peak / one:.1f}x one dataset, {peak / held:.2f}x all of them; "
+        f"ceiling {CEILING / GIB:.0f} GiB: {'OK' if peak <= CEILING else 'EXCEEDED'} ({peak / CEILING:.2f}x)"
+    )
 
 
 def main() -> None:

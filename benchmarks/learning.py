@@ -90,7 +90,7 @@ def units() -> None:
     prime = timed["priming + mmd"] - timed["mmd"]
     calibrated = 0.5 * (timed["mmd"] + timed["dann"])
     total = 0.0
-    for rep, k, m in all_units(full):
+    for _rep, k, m in all_units(full):
         if m.adapter == "source_only":
             total += timed["source_only"] if k == full.ks[0] else 0.0  # trained once per repetition
         elif m.adapter in ("target_only", "finetune"):
@@ -98,16 +98,22 @@ def units() -> None:
         else:
             total += calibrated
     total += prime * full.repetitions  # one priming per repetition
-    print(f"estimated full expB.toml table: {total / 60:.1f} min on one worker, {total / 120:.1f} min on two "
-          f"({len(all_units(full))} units; target <= 45 min on 2 cores)")
+    print(
+        f"estimated full expB.toml table: {total / 60:.1f} min on one worker, {total / 120:.1f} min on two "
+        f"({len(all_units(full))} units; target <= 45 min on 2 cores)"
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--units", action="store_true", help="also time the protocol's units on Experiment B")
-    parser.add_argument("--threads", type=int, default=1,
-                        help="torch threads (1, as each unit of a run uses; more threads than idle cores stall)")
+    parser.add_argument(
+        "--threads",
+        type=int,
+        default=1,
+        help="torch threads (1, as each unit of a run uses; more threads than idle cores stall)",
+    )
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
     networks(args.rounds)

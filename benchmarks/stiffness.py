@@ -60,8 +60,10 @@ def main() -> None:
     phi = np.linspace(0, pair.theta_t, 200)[1:-1]
     ours, _ = best_of(lambda: model.tooth_pair_stiffness(phi), repeat=20)
     ref, _ = best_of(lambda: [tooth_pair_stiffness(pair, p) for p in phi], repeat=3)
-    print(f"one tooth pair, {len(phi)} angles: engine {ours * 1e3:.2f} ms, per-angle quad {ref * 1e3:.0f} ms "
-          f"-> ratio {ref / ours:.0f}x")
+    print(
+        f"one tooth pair, {len(phi)} angles: engine {ours * 1e3:.2f} ms, per-angle quad {ref * 1e3:.0f} ms "
+        f"-> ratio {ref / ours:.0f}x"
+    )
 
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()

@@ -43,11 +43,29 @@ _LAZY = {
 }
 
 __all__ = [
-    "DOF_ORDER", "NOISE_KINDS", "SCHEDULE_PARAMS",
-    "Adapter", "Assembly", "DynamicModel", "Effect", "Excitation", "Fault", "GearlabInputError", "Mesh",
-    "ModelConfig", "Param", "SignalContext",
-    "add_noise", "add_spring", "fillet_compliance", "gear_pair", "healthy_section", "hookimpl", "region",
-    "scaled_ladder", *_LAZY,
+    "DOF_ORDER",
+    "NOISE_KINDS",
+    "SCHEDULE_PARAMS",
+    "Adapter",
+    "Assembly",
+    "DynamicModel",
+    "Effect",
+    "Excitation",
+    "Fault",
+    "GearlabInputError",
+    "Mesh",
+    "ModelConfig",
+    "Param",
+    "SignalContext",
+    "add_noise",
+    "add_spring",
+    "fillet_compliance",
+    "gear_pair",
+    "healthy_section",
+    "hookimpl",
+    "region",
+    "scaled_ladder",
+    *_LAZY,
 ]
 
 

@@ -47,8 +47,11 @@ def _version(value: bool) -> None:
 
 
 @app.callback()
-def _options(version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
-                                                   help="print gearlab's version and exit")] = False) -> None:
+def _options(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="print gearlab's version and exit")
+    ] = False,
+) -> None:
     """gearlab: gear mesh stiffness, gearbox dynamics, fault classifiers and their calibration.
 
     Example: gearlab run scenarios/quick.toml --quick
@@ -121,7 +124,7 @@ def stiffness(
     for text in fault or []:
         kind, tooth, step, params = parse_fault_option(text)
         placed.append(place_fault(registry, pair, kind, tooth, step, params, where=f"--fault {text!r}"))
-    for path, suffix in ((csv, ".csv"), (plot, ".png")):
+    for path in (csv, plot):
         if path is not None and not path.parent.exists():
             raise GearlabInputError(f"{path}: directory {path.parent} does not exist")
     model = MeshStiffnessModel(pair, StiffnessOptions(fillet=fillet, root_region=root_region))
@@ -133,8 +136,9 @@ def stiffness(
         f"TVMS mean {ms.k.mean():.5g} N/m, min {ms.k.min():.5g}, max {ms.k.max():.5g} ({elapsed * 1e3:.1f} ms)"
     )
     for p in placed:
-        shown = ", ".join(prm.show(p.params[prm.name]) if prm.unit else f"{p.params[prm.name]}"
-                          for prm in p.fault.params)
+        shown = ", ".join(
+            prm.show(p.params[prm.name]) if prm.unit else f"{p.params[prm.name]}" for prm in p.fault.params
+        )
         console.print(f"  {p.label}: RFA {p.fault.rfa(p.params, pair):.4f}  ({shown})")
     if csv is not None:
         atomic_write(csv, csv_text(ms.theta, ms.k))
@@ -169,13 +173,22 @@ def modes(
     `frequencies_hz` are those of the free model (every DOF, so a rigid-body 0 Hz mode when the shafts are free); `fixed_input_hz` those of the model as simulated, with the input shaft held at its fixed speed.
 
     Example: gearlab modes --model ten_dof
-    """
+    """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     sim = _simulator(model, preset)
     free = sim.natural_frequencies(fixed_input=False)
     fixed = sim.natural_frequencies(fixed_input=True)
     if as_json:
-        typer.echo(json.dumps({"model": model, "preset": sim.preset, "mean_mesh_stiffness_N_per_m": sim.k_mean,
-                               "frequencies_hz": free.tolist(), "fixed_input_hz": fixed.tolist()}))
+        typer.echo(
+            json.dumps(
+                {
+                    "model": model,
+                    "preset": sim.preset,
+                    "mean_mesh_stiffness_N_per_m": sim.k_mean,
+                    "frequencies_hz": free.tolist(),
+                    "fixed_input_hz": fixed.tolist(),
+                }
+            )
+        )
         return
     console.print(f"{model} ({sim.preset}), mean mesh stiffness {sim.k_mean:.4g} N/m")
     console.print("free model (Hz):        " + ", ".join(f"{f:.1f}" for f in free))
@@ -263,15 +276,25 @@ def describe_spec(s) -> str:
     return SCENARIO_KINDS[s.kind].describe(s)
 
 
-Out = Annotated[Path | None, typer.Option(help="base directory for the run directory (default: the scenario's output dir)")]
+Out = Annotated[
+    Path | None, typer.Option(help="base directory for the run directory (default: the scenario's output dir)")
+]
 Resume = Annotated[Path | None, typer.Option(help="continue the run in this run directory")]
 Quick = Annotated[bool, typer.Option(help="shrink the scenario for a smoke run")]
-Executor = Annotated[str | None, typer.Option(help="where units run: local (process pool) or ray "
-                                                   "(default: the scenario's execution table)")]
-RayAddress = Annotated[str | None, typer.Option(help="Ray cluster address (default: RAY_ADDRESS, then the "
-                                                     "scenario's; none: a local Ray instance)")]
-Device = Annotated[str | None, typer.Option(help="where networks train: auto (CUDA when present), cpu or cuda "
-                                                 "(default: the scenario's execution table)")]
+Executor = Annotated[
+    str | None,
+    typer.Option(help="where units run: local (process pool) or ray (default: the scenario's execution table)"),
+]
+RayAddress = Annotated[
+    str | None,
+    typer.Option(help="Ray cluster address (default: RAY_ADDRESS, then the scenario's; none: a local Ray instance)"),
+]
+Device = Annotated[
+    str | None,
+    typer.Option(
+        help="where networks train: auto (CUDA when present), cpu or cuda (default: the scenario's execution table)"
+    ),
+]
 Events = Annotated[bool, typer.Option(help="progress as JSON lines on stdout (for front-ends such as the TUI)")]
 
 
@@ -316,8 +339,9 @@ class Interrupted(Exception):
         self.run_path = run_path
 
 
-def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict,
-         events: bool) -> None:
+def _run(
+    scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict, events: bool
+) -> None:
     """Run the engine, drawing its events as progress bars (or printing them as JSON lines)."""
     from .engine import run_scenario, scenario_of
     from .kinds import SCENARIO_KINDS
@@ -329,17 +353,20 @@ def _run(scenario: Path | None, out: Path | None, resume: Path | None, quick: bo
             if event.kind == "run":
                 started.append(event.message)
             sink(event)
+
         return handle
 
     try:
         if events:
-            result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
-                                  on_event=remembered(_print_event))
+            result = run_scenario(
+                scenario, out=out, resume=resume, quick=quick, overrides=overrides, on_event=remembered(_print_event)
+            )
             typer.echo(f"run directory: {result.path}")
             return
         with ProgressView() as view:
-            result = run_scenario(scenario, out=out, resume=resume, quick=quick, overrides=overrides,
-                                  on_event=remembered(view.handle))
+            result = run_scenario(
+                scenario, out=out, resume=resume, quick=quick, overrides=overrides, on_event=remembered(view.handle)
+            )
     except KeyboardInterrupt:
         raise Interrupted(started[-1] if started else None) from None
     kind = scenario_of(result).kind
@@ -356,7 +383,9 @@ BENCHMARK = "gap_benchmark.toml"
 def gap(
     scenario: Annotated[str, typer.Argument(help="a gap scenario file (kind = \"gap\"), or 'benchmark'")],
     trials: Annotated[int | None, typer.Option(help="benchmark: number of trials (default: the scenario's)")] = None,
-    seed: Annotated[int | None, typer.Option(help="benchmark: seed of the hidden draws (default: the scenario's)")] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="benchmark: seed of the hidden draws (default: the scenario's)")
+    ] = None,
     out: Out = None,
     resume: Resume = None,
     quick: Quick = False,
@@ -369,7 +398,7 @@ def gap(
     `gearlab gap benchmark` runs scenarios/gap_benchmark.toml (from the current folder, else from the gearlab source tree) with --trials and --seed set on the command line; so does `gearlab gap FILE` for a gap_benchmark scenario file.
 
     Example: gearlab gap scenarios/gap_expB.toml --quick; gearlab gap benchmark --trials 4
-    """
+    """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     from .engine import load_scenario
 
     overrides = _execution(executor, ray_address, None)
@@ -393,8 +422,10 @@ def gap(
         elif given:
             raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark` (or a gap_benchmark file)")
         elif kind != "gap":
-            raise GearlabInputError(f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
-                                    f"\"{kind}\" (run it with `gearlab run`)")
+            raise GearlabInputError(
+                f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
+                f'"{kind}" (run it with `gearlab run`)'
+            )
     _run(None if resume else path, out, resume, quick, overrides, events)
 
 
@@ -402,8 +433,10 @@ def _benchmark_scenario() -> Path:
     for folder in (Path("scenarios"), Path(__file__).resolve().parents[1] / "scenarios"):
         if (folder / BENCHMARK).is_file():
             return folder / BENCHMARK
-    raise GearlabInputError(f"scenarios/{BENCHMARK} not found in the current folder nor in the gearlab source tree; "
-                            f"run `gearlab run` on a gap_benchmark scenario file instead")
+    raise GearlabInputError(
+        f"scenarios/{BENCHMARK} not found in the current folder nor in the gearlab source tree; "
+        f"run `gearlab run` on a gap_benchmark scenario file instead"
+    )
 
 
 @app.command()
@@ -469,8 +502,12 @@ class ProgressView:
 
     def __init__(self):
         self.progress = Progress(
-            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-            console=err_console, transient=False,
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            console=err_console,
+            transient=False,
         )
         self.tasks: dict[str, int] = {}  # stage -> rich task id (terminal) or last step told (log lines)
         self.labels: dict[str, str] = {}
@@ -495,21 +532,22 @@ class ProgressView:
         elif event.kind == "log":
             self.progress.console.print(event.message)
 
-
     def _line(self, event) -> None:
         """One line per stage start, per tenth of a stage (at most) and per log message."""
         if event.kind == "stage":
             self.tasks[event.stage] = 0
             self.labels[event.stage] = event.message or event.stage
-            err_console.print(f"{self.labels[event.stage]}: started ({event.total or '?'} steps)",
-                              markup=False, highlight=False)
+            err_console.print(
+                f"{self.labels[event.stage]}: started ({event.total or '?'} steps)", markup=False, highlight=False
+            )
         elif event.kind == "advance" and event.stage in self.tasks:
             step = max(1, (event.total or 10) // 10)
             last = self.tasks[event.stage]
             if event.done > last and (event.done >= last + step or (event.total and event.done >= event.total)):
                 self.tasks[event.stage] = event.done
-                err_console.print(f"{self.labels[event.stage]}: {event.done}/{event.total or '?'}",
-                                  markup=False, highlight=False)
+                err_console.print(
+                    f"{self.labels[event.stage]}: {event.done}/{event.total or '?'}", markup=False, highlight=False
+                )
         elif event.kind == "log":
             err_console.print(event.message, markup=False, highlight=False)
 
@@ -552,8 +590,13 @@ def _main() -> None:
         err_console.print("aborted")
         sys.exit(1)
     except Interrupted as exc:  # finished units are stored: the run goes on where it stopped
-        err_console.print(f"interrupted; resume with: gearlab run --resume {exc.run_path}" if exc.run_path
-                          else "interrupted; no run directory was made yet", markup=False, highlight=False)
+        err_console.print(
+            f"interrupted; resume with: gearlab run --resume {exc.run_path}"
+            if exc.run_path
+            else "interrupted; no run directory was made yet",
+            markup=False,
+            highlight=False,
+        )
         sys.exit(130)
     except OSError as exc:  # a full disk, a read-only place, outside a run (a report, --csv)
         from .files import cannot_write, write_problem

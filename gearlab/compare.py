@@ -118,15 +118,29 @@ def compare_charts(runs: list[Compared]) -> list[Chart]:
             for c, ch in found:
                 for curve in ch.curves:
                     by_name = dict(zip(ch.categories or (), curve.y))
-                    curves.append(Curve(f"{c.letter}: {curve.label}", list(range(len(categories))),
-                                        [float(by_name.get(n, 0.0)) for n in categories]))
-            out.append(replace(first, title=f"{title} (runs {', '.join(c.letter for c, _ in found)})",
-                               curves=tuple(curves), categories=categories))
+                    curves.append(
+                        Curve(
+                            f"{c.letter}: {curve.label}",
+                            list(range(len(categories))),
+                            [float(by_name.get(n, 0.0)) for n in categories],
+                        )
+                    )
+            out.append(
+                replace(
+                    first,
+                    title=f"{title} (runs {', '.join(c.letter for c, _ in found)})",
+                    curves=tuple(curves),
+                    categories=categories,
+                )
+            )
         else:
             curves = tuple(replace(curve, label=f"{c.letter}: {curve.label}") for c, ch in found for curve in ch.curves)
             ticks = sorted({float(t) for _, ch in found for t in (ch.xticks or ())}) or None
-            out.append(replace(first, title=f"{title} (runs {', '.join(c.letter for c, _ in found)})",
-                               curves=curves, xticks=ticks))
+            out.append(
+                replace(
+                    first, title=f"{title} (runs {', '.join(c.letter for c, _ in found)})", curves=curves, xticks=ticks
+                )
+            )
     return out
 
 
@@ -145,21 +159,40 @@ def compare_html(runs: list[Compared], figures: Path) -> str:
     inlined) and each run's verdict. *figures*: a folder for the PNGs while they are drawn."""
     lines = compare_lines(runs)
     title = f"gearlab comparison: {len(runs)} {runs[0].kind} runs"
-    parts = ["<!doctype html><html><head><meta charset='utf-8'>", f"<title>{html.escape(title)}</title>",
-             f"<style>{STYLE}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
-             "<ul>", *(f"<li>{html.escape(t)}</li>" for t in lines[:len(runs)]), "</ul>"]
-    verdicts = lines[len(runs):]
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'>",
+        f"<title>{html.escape(title)}</title>",
+        f"<style>{STYLE}</style></head><body>",
+        f"<h1>{html.escape(title)}</h1>",
+        "<ul>",
+        *(f"<li>{html.escape(t)}</li>" for t in lines[: len(runs)]),
+        "</ul>",
+    ]
+    verdicts = lines[len(runs) :]
     if verdicts:
-        parts += ["<section id='verdict'><h2>Verdicts</h2>", *(f"<p>{html.escape(v)}</p>" for v in verdicts),
-                  "</section>"]
+        parts += [
+            "<section id='verdict'><h2>Verdicts</h2>",
+            *(f"<p>{html.escape(v)}</p>" for v in verdicts),
+            "</section>",
+        ]
     blocks = [b for b in compare_markdown(runs).split("\n\n") if b.strip()]
-    parts += [f"<h2>Table 1. {'Target test accuracy (%) of each run, mean ± std over repetitions' if runs[0].kind == 'transfer' else 'The runs’ tables'}</h2>",
-              *map(markdown_table, blocks)]
+    parts += [
+        "<h2>Table 1. "
+        + (
+            "Target test accuracy (%) of each run, mean ± std over repetitions"
+            if runs[0].kind == "transfer"
+            else "The runs’ tables"
+        )
+        + "</h2>",
+        *map(markdown_table, blocks),
+    ]
     for i, chart in enumerate(compare_charts(runs), start=1):
         png = chart_figure(chart, Path(figures) / f"compare_{i}.png")
         data = base64.b64encode(png.read_bytes()).decode()
         caption = f"Figure {i}. {chart.title}: the runs overlaid ({chart.ylabel} against {chart.xlabel or 'category'})."
-        parts.append(f"<figure><img alt='{html.escape(chart.title)}' src='data:image/png;base64,{data}'>"
-                     f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+        parts.append(
+            f"<figure><img alt='{html.escape(chart.title)}' src='data:image/png;base64,{data}'>"
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+        )
     parts.append("</body></html>")
     return "\n".join(parts)

@@ -29,7 +29,8 @@ Rules that keep the dataset builder simple and exact:
 * signal effects draw every random number from ``ctx.rng`` and every non-synchronous
   phase from ``ctx.t0``, so records are reproducible and differ from sample to sample;
 * ``breaks_symmetry`` is True when the effect makes the steady response to a fault on tooth n
-  differ from the tooth-1 response shifted by (n-1)/Z1 of a revolution (docs/physics.md, the builder's tooth-shift rule):
+  differ from the tooth-1 response shifted by (n-1)/Z1 of a revolution
+  (docs/physics.md, the builder's tooth-shift rule):
   anything locked to the shaft angle but not periodic in the tooth pitch. The builder then
   simulates every tooth instead of rolling one revolution.
 
@@ -160,14 +161,29 @@ class Effect:
 
     def space(self) -> list[dict]:
         """The search space: one entry per parameter (bounds, scale) and per option (choices)."""
-        out = [{"name": p.name, "unit": p.unit, "low": p.low, "high": p.high, "default": p.default,
-                "integer": p.integer, "log": p.name in self.log_scale} for p in self.params]
+        out = [
+            {
+                "name": p.name,
+                "unit": p.unit,
+                "low": p.low,
+                "high": p.high,
+                "default": p.default,
+                "integer": p.integer,
+                "log": p.name in self.log_scale,
+            }
+            for p in self.params
+        ]
         out += [{"name": k, "choices": list(v), "default": v[0]} for k, v in self.options.items()]
         return out
 
     def describe(self) -> dict:
-        return {"doc": self.doc, "params": [p.describe() for p in self.params], "level": self.level,
-                "breaks_symmetry": bool(self.breaks_symmetry), "options": {k: list(v) for k, v in self.options.items()}}
+        return {
+            "doc": self.doc,
+            "params": [p.describe() for p in self.params],
+            "level": self.level,
+            "breaks_symmetry": bool(self.breaks_symmetry),
+            "options": {k: list(v) for k, v in self.options.items()},
+        }
 
 
 def hook_problem(obj) -> str:

@@ -33,8 +33,9 @@ def config_of(model: str, preset: str, channel: str, where: str = "", registry=N
     """The configuration of a registered model on one of its presets."""
     plugin = (registry or get_registry()).get("model", model, where)
     _, values = plugin.resolve(preset, where=where)
-    return ModelConfig(model, preset, tuple(plugin.dofs), plugin.input_dof, plugin.load_dof, channel,
-                       sorted_values(values))
+    return ModelConfig(
+        model, preset, tuple(plugin.dofs), plugin.input_dof, plugin.load_dof, channel, sorted_values(values)
+    )
 
 
 def model_of(config: ModelConfig) -> DynamicModel:
@@ -42,7 +43,7 @@ def model_of(config: ModelConfig) -> DynamicModel:
     return _model_for(config.base, config.preset, config.dofs, config.input_dof, config.load_dof)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _model_for(base: str, preset: str, dofs: tuple[str, ...], input_dof: str, load_dof: str) -> DynamicModel:
     registry = get_registry()
     base_model = registry.get("model", base)
@@ -51,8 +52,14 @@ def _model_for(base: str, preset: str, dofs: tuple[str, ...], input_dof: str, lo
         if tuple(m.dofs) == dofs and (m.input_dof, m.load_dof) == (input_dof, load_dof) and preset in m.presets:
             return m
     added = [d for d in dofs if d not in base_model.dofs]
-    return DerivedModel(f"{base}+{'+'.join(added)}", dofs, input_dof, load_dof, base_model.presets,
-                        f"{base} with {', '.join(added)} added by a model-level effect")
+    return DerivedModel(
+        f"{base}+{'+'.join(added)}",
+        dofs,
+        input_dof,
+        load_dof,
+        base_model.presets,
+        f"{base} with {', '.join(added)} added by a model-level effect",
+    )
 
 
 def effect_spec(name: str, where: str = "", registry=None, **given) -> EffectSpec:
@@ -66,18 +73,19 @@ def effects_from_tables(entries, where: str, registry=None) -> tuple[EffectSpec,
     """Scenario form -> canonical: a list of tables ``{name = "...", <param> = <value>, ...}``."""
     registry = registry or get_registry()
     if not isinstance(entries, list):
-        raise GearlabInputError(f"{where}: expected a list of tables, e.g. [{{name = \"sensor_noise\", snr_db = 10}}]")
+        raise GearlabInputError(f'{where}: expected a list of tables, e.g. [{{name = "sensor_noise", snr_db = 10}}]')
     out = []
     for i, entry in enumerate(entries, start=1):
         here = f"{where} #{i}"
         if not isinstance(entry, Mapping):
             raise GearlabInputError(
-                f"{here}: expected a table {{name = \"...\", ...}}, got {type(entry).__name__} {entry!r}"
+                f'{here}: expected a table {{name = "...", ...}}, got {type(entry).__name__} {entry!r}'
             )
         name = entry.get("name")
         if not isinstance(name, str) or not name:
-            raise GearlabInputError(f"{here}: missing 'name' (the effect's registered name; known: "
-                                    f"{', '.join(registry.names('effect'))})")
+            raise GearlabInputError(
+                f"{here}: missing 'name' (the effect's registered name; known: {', '.join(registry.names('effect'))})"
+            )
         effect = registry.get("effect", name, here)
         given = {k: v for k, v in entry.items() if k != "name"}
         out.append((LEVELS.index(effect.level), effect.spec(given, f"{here} ({name})")))
@@ -91,8 +99,13 @@ def check_effect_specs(effects, where: str) -> None:
     if not isinstance(effects, tuple):
         raise GearlabInputError(f"{where}: effects must be a tuple of (name, ((param, value), ...)), got {effects!r}")
     for item in effects:
-        ok = (isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str) and isinstance(item[1], tuple)
-              and all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[0], str) for p in item[1]))
+        ok = (
+            isinstance(item, tuple)
+            and len(item) == 2
+            and isinstance(item[0], str)
+            and isinstance(item[1], tuple)
+            and all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[0], str) for p in item[1])
+        )
         if not ok:
             raise GearlabInputError(f"{where}: effect {item!r} is not (name, ((param, value), ...)); use effect_spec()")
 
@@ -135,19 +148,22 @@ class EffectChain:
             config = effect.apply_model(config, params)
         if config.channel not in config.channels:
             raise GearlabInputError(
-                f"{where or 'effects'}: the configuration after the model-level effects ({model_of(config).name}) has no "
+                f"{where or 'effects'}: the configuration after the model-level effects ({model_of(config).name}) "
+                "has no "
                 f"channel '{config.channel}'; its channels: {', '.join(config.channels)}"
             )
         return config
 
-    def apply_signal(self, record: np.ndarray, fs: float, speed_hz: float, reference_rms: float,
-                     seed: Sequence[int]) -> np.ndarray:
+    def apply_signal(
+        self, record: np.ndarray, fs: float, speed_hz: float, reference_rms: float, seed: Sequence[int]
+    ) -> np.ndarray:
         """Every signal-level effect on *record* (J, P), each with its own random stream from *seed*."""
         x = np.array(record, dtype=float)
         t0 = float(np.random.default_rng([*seed, 0]).uniform(0.0, 3600.0))  # a time in the hour of recording
         for i, (effect, params) in enumerate(self.at("signal"), start=1):
-            ctx = SignalContext(fs=fs, speed_hz=speed_hz, t0=t0, rng=np.random.default_rng([*seed, i]),
-                                reference_rms=reference_rms)
+            ctx = SignalContext(
+                fs=fs, speed_hz=speed_hz, t0=t0, rng=np.random.default_rng([*seed, i]), reference_rms=reference_rms
+            )
             x = np.asarray(effect.apply_signal(x, params, ctx), dtype=float)
         return x
 

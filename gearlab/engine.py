@@ -75,8 +75,9 @@ def _serialised(on_event: EventSink) -> EventSink:
     return sink
 
 
-def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None,
-                  base: str | Path | None = None) -> Scenario:
+def load_scenario(
+    path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None, base: str | Path | None = None
+) -> Scenario:
     """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key.
 
     *overrides* ({table: {key: value}}, e.g. the CLI's --executor or --trials) replace keys of
@@ -95,7 +96,12 @@ def load_scenario(path: str | Path, overrides: Mapping[str, Mapping[str, Any]] |
     schema = {"scenario": SCENARIO_TABLE, "output": OUTPUT_TABLE, "execution": EXECUTION_TABLE, **module.TABLES}
     tables = validate_tables(path, schema, data)
     scenario = Scenario(
-        path=path, name=head["name"], kind=kind, description=head["description"], tables=tables, raw=data,
+        path=path,
+        name=head["name"],
+        kind=kind,
+        description=head["description"],
+        tables=tables,
+        raw=data,
         base=Path(base) if base is not None else path.parent,
     )
     scenario.spec = module.build(scenario)
@@ -161,8 +167,11 @@ def run_scenario(
             kept = resume is not None or bool(run.records())
             if not kept:
                 run.discard()
-            then = (f"; the run is kept: once fixed, resume with: gearlab run --resume {run.path}" if kept
-                    else "; no run directory is left")
+            then = (
+                f"; the run is kept: once fixed, resume with: gearlab run --resume {run.path}"
+                if kept
+                else "; no run directory is left"
+            )
             raise GearlabInputError(f"{cannot_write(exc, run.path)}{then}") from None
         finally:
             watcher.stop()
@@ -176,17 +185,21 @@ def output_base(scenario: Scenario, out: str | Path | None = None) -> Path:
     return Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
 
 
-def _resumed_scenario(run: RunDir, scenario_path: str | Path | None, quick: bool,
-                      overrides: Mapping[str, Mapping] | None = None) -> Scenario:
+def _resumed_scenario(
+    run: RunDir, scenario_path: str | Path | None, quick: bool, overrides: Mapping[str, Mapping] | None = None
+) -> Scenario:
     """The scenario a run was started with, shrunk alike if it was started with --quick;
     the results store made ready for appends. Called with the run directory locked."""
     if quick and not run.quick:
         raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
-    scenario = load_scenario(scenario_path or run.scenario_path(), overrides,
-                             base=None if scenario_path else run.base())
+    scenario = load_scenario(
+        scenario_path or run.scenario_path(), overrides, base=None if scenario_path else run.base()
+    )
     if not run.started_with(scenario):
-        raise GearlabInputError(f"{scenario.path}: differs from the scenario the run in {run.path} was started "
-                                "with; resume without SCENARIO (the run keeps a copy) or start a new run")
+        raise GearlabInputError(
+            f"{scenario.path}: differs from the scenario the run in {run.path} was started "
+            "with; resume without SCENARIO (the run keeps a copy) or start a new run"
+        )
     check_inputs(run)
     if run.quick:
         SCENARIO_KINDS[scenario.kind].quick(scenario)

@@ -19,12 +19,12 @@ def shown(value: object, limit: int = 60) -> str:
     if isinstance(value, int) and value.bit_length() > 100:  # repr() refuses beyond 4300 digits
         return f"an integer of about {round(value.bit_length() * math.log10(2))} digits"
     text = repr(value)
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def clipped(text: str, limit: int = 200) -> str:
     """*text* (a library's message, which may quote the input) cut to *limit* characters."""
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 MESSAGE_MAX = 600  # characters of an error line; a longer one quotes too much of the input
@@ -35,7 +35,7 @@ def _short(text: str) -> str:
     expected, the middle is mostly a value quoted from the input."""
     if len(text) <= MESSAGE_MAX:
         return text
-    return f"{text[:MESSAGE_MAX * 2 // 3]} ... {text[-MESSAGE_MAX // 3:]}"
+    return f"{text[: MESSAGE_MAX * 2 // 3]} ... {text[-MESSAGE_MAX // 3 :]}"
 
 
 class GearlabInputError(Exception):

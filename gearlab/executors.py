@@ -155,8 +155,10 @@ def _open_session(address: str | None, workers: int | None):
         if _session["address"] is None:
             return ray  # someone (a user's script, a notebook) opened it before us: use theirs
         if _session["address"] != wanted:
-            raise GearlabInputError(f"this process already uses the Ray cluster '{_session['address']}'; "
-                                    f"it cannot also connect to '{wanted}'")
+            raise GearlabInputError(
+                f"this process already uses the Ray cluster '{_session['address']}'; "
+                f"it cannot also connect to '{wanted}'"
+            )
         return ray
     quiet = {"logging_level": logging.ERROR, "log_to_driver": False, "include_dashboard": False}
     if address is None:
@@ -197,9 +199,11 @@ def _check_cluster_runs_our_gearlab(ray, address: str) -> None:
     try:
         theirs = ray.get(ray.remote(num_cpus=0)(_gearlab_version).remote())
     except ray.exceptions.RayError as exc:  # e.g. a worker's ModuleNotFoundError: no gearlab there
-        raise GearlabInputError(f"the Ray cluster at '{address}' cannot run gearlab: {exc}; install gearlab "
-                                f"{ours} on its nodes, or submit the run as a Ray job whose runtime_env "
-                                "installs it (docs/scenarios.md)") from None
+        raise GearlabInputError(
+            f"the Ray cluster at '{address}' cannot run gearlab: {exc}; install gearlab "
+            f"{ours} on its nodes, or submit the run as a Ray job whose runtime_env "
+            "installs it (docs/scenarios.md)"
+        ) from None
     if theirs != ours:
         raise GearlabInputError(f"the Ray cluster at '{address}' runs gearlab {theirs}, this driver {ours}")
 
@@ -261,8 +265,9 @@ def _get(ray, ref):
         raise
 
 
-def make_executor(name: str = "local", workers: int | None = None, address: str | None = None,
-                  scenario_address: str | None = None):
+def make_executor(
+    name: str = "local", workers: int | None = None, address: str | None = None, scenario_address: str | None = None
+):
     """The executor called `name`. For `ray`, the cluster address is `address` (CLI --ray-address),
     else RAY_ADDRESS, else `scenario_address` ([execution] address), else a local instance."""
     if name == "local":

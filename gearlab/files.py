@@ -64,9 +64,14 @@ def inside(root: Path, *parts: str) -> Path:
 
 
 # errno -> what the user is told (and can fix) when a file cannot be written
-_WRITE_PROBLEMS = {errno.ENOSPC: "no space left on the device", errno.EDQUOT: "disk quota exceeded",
-                   errno.EROFS: "read-only file system", errno.EACCES: "permission denied",
-                   errno.EPERM: "operation not permitted", errno.EFBIG: "file too large"}
+_WRITE_PROBLEMS = {
+    errno.ENOSPC: "no space left on the device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EROFS: "read-only file system",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "operation not permitted",
+    errno.EFBIG: "file too large",
+}
 
 
 def write_problem(exc: OSError) -> str | None:

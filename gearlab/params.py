@@ -64,8 +64,6 @@ def resolve_params(schema: tuple[Param, ...], given: Mapping[str, object], where
                 raise GearlabInputError(f"{here}: expected a whole number, got {value:g}")
             value = int(value)
         if not (p.low <= value <= p.high):
-            raise GearlabInputError(
-                f"{here}: {p.show(value)} is outside [{p.show(p.low)}, {p.show(p.high)}]"
-            )
+            raise GearlabInputError(f"{here}: {p.show(value)} is outside [{p.show(p.low)}, {p.show(p.high)}]")
         values[p.name] = value
     return values

@@ -25,8 +25,12 @@ def save(fig, path: Path) -> Path:
     return path
 
 
-def tvms_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray]], title: str, path: Path,
-                window_deg: tuple[float, float] | None = None) -> Path:
+def tvms_figure(
+    curves: Sequence[tuple[str, np.ndarray, np.ndarray]],
+    title: str,
+    path: Path,
+    window_deg: tuple[float, float] | None = None,
+) -> Path:
     """TVMS against pinion angle, one line per (label, theta_rad, k) curve (Figure 2.33 style)."""
     fig, ax = plt.subplots(figsize=(9, 3.8))
     for label, theta, k in curves:
@@ -41,8 +45,12 @@ def tvms_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray]], title: str
     return save(fig, path)
 
 
-def ladder_grid(panels: Mapping[str, Sequence[tuple[int, np.ndarray, np.ndarray]]], path: Path,
-                window_deg: tuple[float, float] | None = None, title: str = "") -> Path:
+def ladder_grid(
+    panels: Mapping[str, Sequence[tuple[int, np.ndarray, np.ndarray]]],
+    path: Path,
+    window_deg: tuple[float, float] | None = None,
+    title: str = "",
+) -> Path:
     """Figure 2.33: one panel per fault type, every ladder step as a line coloured by intensity."""
     names = list(panels)
     cols = 2 if len(names) > 1 else 1
@@ -59,7 +67,7 @@ def ladder_grid(panels: Mapping[str, Sequence[tuple[int, np.ndarray, np.ndarray]
         if window_deg:
             ax.set_xlim(*window_deg)
         ax.grid(alpha=0.3)
-    for ax in list(axes.flat)[len(names):]:
+    for ax in list(axes.flat)[len(names) :]:
         ax.axis("off")
     sm = plt.cm.ScalarMappable(cmap="viridis", norm=plt.Normalize(1, 20))
     fig.colorbar(sm, ax=axes, label="intensity step", shrink=0.8)
@@ -128,8 +136,11 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
             if any(e[0] == c for e in examples):
                 ax.legend(fontsize=7, loc="upper right")
     spec = dataset.spec
-    origin = (f"{spec.model} ({spec.preset}), {spec.channel}" if hasattr(spec, "model")
-              else f"measured: {Path(spec.path).name}, {spec.vibration}")
+    origin = (
+        f"{spec.model} ({spec.preset}), {spec.channel}"
+        if hasattr(spec, "model")
+        else f"measured: {Path(spec.path).name}, {spec.vibration}"
+    )
     fig.suptitle(f"dataset {spec.name}: {origin}")
     return save(fig, path)
 
@@ -145,7 +156,7 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
         mean = np.array([per_k[str(k)]["mean"] for k in xs])
         std = np.array([per_k[str(k)]["std"] for k in xs])
         style = "-" if "(supervised" in label else "--"  # as Figures 5.5/5.6
-        line, = ax.plot(xs, mean, style, marker="o", ms=3, label=label, color=colours[i % len(colours)])
+        (line,) = ax.plot(xs, mean, style, marker="o", ms=3, label=label, color=colours[i % len(colours)])
         ax.fill_between(xs, mean - std, mean + std, color=line.get_color(), alpha=0.15)
     ax.set_xticks(list(ks))
     ax.set_xlabel("fault samples in the target training set (k)")
@@ -201,8 +212,9 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
     # latent feature maps after adaptation (Figure 5.9): a PCA of source and target training features
     latent_files = sorted((Path(run_path) / "latent").glob("*.npz")) if (Path(run_path) / "latent").exists() else []
     if latent_files:
-        fig, axes = plt.subplots(1, len(latent_files), figsize=(3.2 * len(latent_files), 3.2), squeeze=False,
-                                 layout="constrained")
+        fig, axes = plt.subplots(
+            1, len(latent_files), figsize=(3.2 * len(latent_files), 3.2), squeeze=False, layout="constrained"
+        )
         for ax, f in zip(axes[0], latent_files):
             with np.load(f, allow_pickle=False) as d:
                 zs, zt = d["source"], d["target"]
@@ -215,16 +227,19 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
             p = z @ vt[:2].T
             # colour: domain; marker: class, where the unit stored the labels (healthy o, fault x)
             labels = _latent_labels(f)
-            for (lo, hi), domain, colour in (((0, len(zs)), "source", "tab:blue"), ((len(zs), len(z)), "target",
-                                                                                     "tab:orange")):
+            for (lo, hi), domain, colour in (
+                ((0, len(zs)), "source", "tab:blue"),
+                ((len(zs), len(z)), "target", "tab:orange"),
+            ):
                 cls = labels[0 if domain == "source" else 1]
                 if cls is None:
                     ax.scatter(p[lo:hi, 0], p[lo:hi, 1], s=4, alpha=0.6, color=colour, label=domain)
                     continue
                 for c, marker, name in ((0, "o", "healthy"), (1, "x", "fault")):
                     keep = np.flatnonzero(np.asarray(cls) == c) + lo
-                    ax.scatter(p[keep, 0], p[keep, 1], s=6, alpha=0.6, color=colour, marker=marker,
-                               label=f"{domain} {name}")
+                    ax.scatter(
+                        p[keep, 0], p[keep, 1], s=6, alpha=0.6, color=colour, marker=marker, label=f"{domain} {name}"
+                    )
             ax.set_title(f.stem.replace("_", " "), fontsize=7)
             ax.set_xlabel("PC 1 (1)", fontsize=7)
             ax.set_ylabel("PC 2 (1)", fontsize=7)
@@ -248,8 +263,13 @@ def chart_figure(chart, path: Path) -> Path:
         height = 0.8 / max(len(curves), 1)
         y = np.arange(len(names))
         for i, curve in enumerate(curves):
-            ax.barh(y + i * height, [float(v) for v in curve.y], height, label=curve.label,
-                    xerr=None if curve.err is None else [float(v) for v in curve.err])
+            ax.barh(
+                y + i * height,
+                [float(v) for v in curve.y],
+                height,
+                label=curve.label,
+                xerr=None if curve.err is None else [float(v) for v in curve.err],
+            )
         ax.set_yticks(y + height * (len(curves) - 1) / 2, names)
         ax.invert_yaxis()
         ax.set_xlabel(chart.ylabel)
@@ -264,8 +284,9 @@ def chart_figure(chart, path: Path) -> Path:
             x, yv = np.asarray(curve.x, dtype=float), np.asarray(curve.y, dtype=float)
             run, _, name = curve.label.rpartition(": ")
             style = ("-", "--", ":", "-.")[runs.index(run) % 4] if run in runs else "-"
-            line, = ax.plot(x, yv, style, marker="o", ms=3, label=curve.label,
-                            color=colours[names.index(name) % len(colours)])
+            (line,) = ax.plot(
+                x, yv, style, marker="o", ms=3, label=curve.label, color=colours[names.index(name) % len(colours)]
+            )
             if curve.err is not None:
                 err = np.asarray(curve.err, dtype=float)
                 ax.fill_between(x, yv - err, yv + err, color=line.get_color(), alpha=0.15)
@@ -287,16 +308,23 @@ VARIANT_TITLES = {"noisy": "noisy", "tsa": "TSA"}
 def _band(ax, x, mean, std, **style):
     mean = np.array(mean, dtype=float)
     std = np.nan_to_num(np.array(std, dtype=float))
-    line, = ax.plot(x, mean, marker="o", ms=2.5, lw=1.1, **style)
+    (line,) = ax.plot(x, mean, marker="o", ms=2.5, lw=1.1, **style)
     ax.fill_between(x, mean - std, mean + std, color=line.get_color(), alpha=0.15, lw=0)
 
 
 def _study_grid(results: Mapping[str, Mapping[str, dict]], width: float = 5.2, height: float = 3.4):
     """One row per noise type, one column per variant (noisy left, TSA right, as in Figures 4.4-4.6)."""
     variants = [v for v in VARIANT_TITLES if any(v in r for r in results.values())]
-    fig, axes = plt.subplots(len(results), len(variants), figsize=(width * len(variants), height * len(results)),
-                             squeeze=False, layout="constrained")
-    panels = [(ax, noise, v, results[noise].get(v)) for row, noise in zip(axes, results) for ax, v in zip(row, variants)]
+    fig, axes = plt.subplots(
+        len(results),
+        len(variants),
+        figsize=(width * len(variants), height * len(results)),
+        squeeze=False,
+        layout="constrained",
+    )
+    panels = [
+        (ax, noise, v, results[noise].get(v)) for row, noise in zip(axes, results) for ax, v in zip(row, variants)
+    ]
     return fig, panels
 
 
@@ -325,8 +353,15 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
             _band(ax, c["steps"], c["accuracy_mean"], c["accuracy_std"], color=FAULT_COLOURS.get(name), label=name)
         c = stats["curves"]["all"]
         _band(ax, c["steps"], c["accuracy_mean"], c["accuracy_std"], color="black", label="all faults")
-        _band(ax, c["steps"], c["as_healthy_mean"], c["as_healthy_std"], color="tab:green", ls="--",
-              label="faults predicted healthy")
+        _band(
+            ax,
+            c["steps"],
+            c["as_healthy_mean"],
+            c["as_healthy_std"],
+            color="tab:green",
+            ls="--",
+            label="faults predicted healthy",
+        )
         ax.set_title(_study_title(noise, variant, stats), fontsize=9)
         ax.set_xlabel("fault intensity step (1 = no fault)")
         ax.set_ylabel("test samples (%)")
@@ -346,8 +381,14 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
             c = stats["curves"][name]
             rfa = 100.0 * np.asarray(c["rfa"], dtype=float)
             keep = rfa <= 50.0  # as Figure 4.5: the broken-tooth end of the crack ladder is left out
-            _band(ax, rfa[keep], np.asarray(c["accuracy_mean"], dtype=float)[keep],
-                  np.asarray(c["accuracy_std"], dtype=float)[keep], color=FAULT_COLOURS.get(name), label=name)
+            _band(
+                ax,
+                rfa[keep],
+                np.asarray(c["accuracy_mean"], dtype=float)[keep],
+                np.asarray(c["accuracy_std"], dtype=float)[keep],
+                color=FAULT_COLOURS.get(name),
+                label=name,
+            )
         ax.set_title(_study_title(noise, variant, stats), fontsize=9)
         ax.set_xlabel("relative fault area (%)")
         ax.set_ylabel("test accuracy (%)")
@@ -366,8 +407,7 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
         share = cm / np.maximum(cm.sum(axis=1, keepdims=True), 1)
         ax.imshow(share, cmap="Blues", vmin=0, vmax=1)
         for (a, b), v in np.ndenumerate(cm):
-            ax.text(b, a, str(v), ha="center", va="center", fontsize=7,
-                    color="white" if share[a, b] > 0.6 else "black")
+            ax.text(b, a, str(v), ha="center", va="center", fontsize=7, color="white" if share[a, b] > 0.6 else "black")
         ticks = range(len(stats["classes"]))
         ax.set_xticks(ticks, stats["classes"], fontsize=7, rotation=45)
         ax.set_yticks(ticks, stats["classes"], fontsize=7)
@@ -393,8 +433,16 @@ def gap_figures(figures: Path, summary: Mapping) -> None:
             iv = views[n].get(f"gap_{when}_interval")
             if iv:
                 err[:, i] = max(gaps[i] - iv[0], 0.0), max(iv[1] - gaps[i], 0.0)
-        ax.bar(x + offset, gaps, 0.4, yerr=err, capsize=2, color=colour, alpha=0.8,
-               label=f"{when} (total {summary[f'gap_{when}']:.3g})")
+        ax.bar(
+            x + offset,
+            gaps,
+            0.4,
+            yerr=err,
+            capsize=2,
+            color=colour,
+            alpha=0.8,
+            label=f"{when} (total {summary[f'gap_{when}']:.3g})",
+        )
     ax.set_xticks(x, names, rotation=20)
     ax.set_ylabel("gap (sum of squared effect sizes, 1)")
     # the gap of a broad change (noise) can be orders of magnitude above the others
@@ -424,8 +472,13 @@ def gap_figures(figures: Path, summary: Mapping) -> None:
         labels = list(acc)
         fig, ax = plt.subplots(figsize=(1.6 * len(labels) + 2, 3.6), layout="constrained")
         colours = ["tab:red" if "uncorrected" in n else "tab:green" if "corrected" in n else "tab:gray" for n in labels]
-        ax.bar(range(len(labels)), [acc[n]["mean"] for n in labels], yerr=[acc[n]["std"] for n in labels],
-               capsize=3, color=colours)
+        ax.bar(
+            range(len(labels)),
+            [acc[n]["mean"] for n in labels],
+            yerr=[acc[n]["std"] for n in labels],
+            capsize=3,
+            color=colours,
+        )
         ax.set_xticks(range(len(labels)), labels, rotation=15, fontsize=8)
         ax.set_ylabel("target test accuracy (%)")
         ax.set_ylim(0, 102)

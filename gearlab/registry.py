@@ -55,7 +55,12 @@ class HookSpecs:
         """Unmodelled effects for the sim-to-real gap diagnosis, with bounded parameters and a level."""
 
 
-KINDS = {"fault": "gearlab_faults", "model": "gearlab_models", "adapter": "gearlab_adapters", "effect": "gearlab_effects"}
+KINDS = {
+    "fault": "gearlab_faults",
+    "model": "gearlab_models",
+    "adapter": "gearlab_adapters",
+    "effect": "gearlab_effects",
+}
 
 # What each kind of plugin object must provide, beyond `name` and `params`.
 REQUIRED = {
@@ -95,7 +100,8 @@ class Registry:
             known = self.names(kind)
             prefix = f"{where}: " if where else ""
             raise UnknownPluginError(
-                f"{prefix}unknown {kind} '{name}'{did_you_mean(name, known)}; known {kind}s: {', '.join(known) or 'none'}"
+                f"{prefix}unknown {kind} '{name}'{did_you_mean(name, known)}"
+                f"; known {kind}s: {', '.join(known) or 'none'}"
             ) from None
 
     def add(self, kind: str, obj, package: str, plugin: str) -> None:
@@ -107,7 +113,9 @@ class Registry:
         if name in self.plugins[kind]:
             first = self.packages[(kind, name)]
             self.problems.append(
-                PluginProblem(package, plugin, f"{kind} name '{name}' is already registered by package '{first}'; ignored")
+                PluginProblem(
+                    package, plugin, f"{kind} name '{name}' is already registered by package '{first}'; ignored"
+                )
             )
             return
         self.plugins[kind][name] = obj
@@ -143,7 +151,10 @@ def _contract_problem(kind: str, obj) -> str:
         return f"{kind} '{name}': params must be a tuple of gearlab.params.Param"
     for p in params:
         if not (p.low <= p.default <= p.high):
-            return f"{kind} '{name}': parameter '{p.name}' default {p.default!r} lies outside its bounds [{p.low}, {p.high}]"
+            return (
+                f"{kind} '{name}': parameter '{p.name}' default {p.default!r} "
+                f"lies outside its bounds [{p.low}, {p.high}]"
+            )
     missing = [attr for attr in REQUIRED[kind] if not callable(getattr(obj, attr, None))]
     if missing:
         return f"{kind} '{name}' lacks {', '.join(missing)}"
@@ -198,11 +209,14 @@ def get_registry() -> Registry:
 
 def param_text(param: dict) -> str:
     """One parameter of ``Registry.describe()`` as 'name [unit] = default  (low .. high)', in its display unit."""
+
     def show(value):
         return display(value, param["unit"], param["display_unit"]).split(" ")[0]
 
-    return (f"{param['name']} [{param['display_unit'] or '-'}] = {show(param['default'])}  "
-            f"({show(param['low'])} .. {show(param['high'])})")
+    return (
+        f"{param['name']} [{param['display_unit'] or '-'}] = {show(param['default'])}  "
+        f"({show(param['low'])} .. {show(param['high'])})"
+    )
 
 
 def kind_text(row: dict) -> str:

@@ -11,13 +11,15 @@ from pathlib import Path
 
 from .verdict import experiment, verdict_lines, verdict_table
 
-STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-         "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-         "th{background:#eee}tr.reference td{color:#555;font-style:italic;background:#f7f7ff}"
-         "img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}pre{background:#f6f6f6;padding:1em;overflow:auto}"
-         "figure{margin:1.5em 0}figcaption{font-size:0.92em;color:#333}"
-         "#verdict{background:#f3f8f3;border-left:4px solid #4a4;padding:0.3em 1em}"
-         "details{margin:1em 0}summary{cursor:pointer;font-weight:bold}")
+STYLE = (
+    "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
+    "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
+    "th{background:#eee}tr.reference td{color:#555;font-style:italic;background:#f7f7ff}"
+    "img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}pre{background:#f6f6f6;padding:1em;overflow:auto}"
+    "figure{margin:1.5em 0}figcaption{font-size:0.92em;color:#333}"
+    "#verdict{background:#f3f8f3;border-left:4px solid #4a4;padding:0.3em 1em}"
+    "details{margin:1em 0}summary{cursor:pointer;font-weight:bold}"
+)
 
 
 def markdown_table(text: str) -> str:
@@ -41,37 +43,81 @@ _markdown_table = markdown_table  # the name other modules used before
 # figure file stem -> (the thesis figure it repeats, what it shows); the captions that depend
 # on the run (k, repetitions, experiment, dataset) are made in caption()
 CAPTIONS = {
-    "training_curves": ("Figure 5.7", "Training curves of the first repetition at the middle k: source validation "
-                        "accuracy (%, left axis), domain discrepancy and λ (dimensionless, right axis) against epoch; "
-                        "the dashed line marks the epoch kept."),
-    "latent_maps": ("Figure 5.9", "Latent features of the first repetition after adaptation: source and target "
-                    "training samples projected on their first two principal components (PCA, dimensionless); "
-                    "colour: domain, marker: class (o healthy, x fault) where the run stored the labels."),
-    "accuracy_vs_intensity": ("Figure 4.4", "Test accuracy (%) per fault type against the intensity step (1-20), all "
-                              "faults (black) and faults predicted healthy (green, dashed); mean ± std over runs; "
-                              "noisy left, TSA right."),
-    "accuracy_vs_rfa": ("Figure 4.5", "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); "
-                        "mean ± std over runs."),
-    "confusion": ("Figure 4.6", "Confusion matrices compiled over all runs (counts; shading: share of the true class)."),
-    "tvms_ladders": ("Figure 2.33", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step "
-                     "of each fault ladder; colour: intensity step."),
-    "rfa": ("Figure 2.32", "Relative fault area (fraction of the healthy tooth) against intensity step per fault type."),
+    "training_curves": (
+        "Figure 5.7",
+        "Training curves of the first repetition at the middle k: source validation "
+        "accuracy (%, left axis), domain discrepancy and λ (dimensionless, right axis) against epoch; "
+        "the dashed line marks the epoch kept.",
+    ),
+    "latent_maps": (
+        "Figure 5.9",
+        "Latent features of the first repetition after adaptation: source and target "
+        "training samples projected on their first two principal components (PCA, dimensionless); "
+        "colour: domain, marker: class (o healthy, x fault) where the run stored the labels.",
+    ),
+    "accuracy_vs_intensity": (
+        "Figure 4.4",
+        "Test accuracy (%) per fault type against the intensity step (1-20), all "
+        "faults (black) and faults predicted healthy (green, dashed); mean ± std over runs; "
+        "noisy left, TSA right.",
+    ),
+    "accuracy_vs_rfa": (
+        "Figure 4.5",
+        "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); mean ± std over runs.",
+    ),
+    "confusion": (
+        "Figure 4.6",
+        "Confusion matrices compiled over all runs (counts; shading: share of the true class).",
+    ),
+    "tvms_ladders": (
+        "Figure 2.33",
+        "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step "
+        "of each fault ladder; colour: intensity step.",
+    ),
+    "rfa": (
+        "Figure 2.32",
+        "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.",
+    ),
     "tvms_cases": ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases."),
-    "gap_per_view": ("", "Where the gap lies: per-view gap (sum of squared effect sizes, dimensionless) of the healthy "
-                     "revolutions before and after correcting the simulator, with bootstrap intervals."),
-    "gap_effect_ranking": ("", "Which effect: share of the gap (%) each candidate removes when added to the "
-                           "simulator alone; accepted effects in blue."),
-    "gap_accuracy": ("", "How far: target test accuracy (%) at k = 0 of models trained on the uncorrected and the "
-                     "corrected simulator; mean ± std over repetitions."),
-    "gap_benchmark": ("", "The blind benchmark: gap before and after per trial, and how often each hidden effect is "
-                      "named first."),
+    "gap_per_view": (
+        "",
+        "Where the gap lies: per-view gap (sum of squared effect sizes, dimensionless) of the healthy "
+        "revolutions before and after correcting the simulator, with bootstrap intervals.",
+    ),
+    "gap_effect_ranking": (
+        "",
+        "Which effect: share of the gap (%) each candidate removes when added to the "
+        "simulator alone; accepted effects in blue.",
+    ),
+    "gap_accuracy": (
+        "",
+        "How far: target test accuracy (%) at k = 0 of models trained on the uncorrected and the "
+        "corrected simulator; mean ± std over repetitions.",
+    ),
+    "gap_benchmark": (
+        "",
+        "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
+    ),
 }
 
 
 # figures in the order the thesis numbers them (then any other, by name)
-ORDER = ["rfa", "tvms_ladders", "tvms_cases", "accuracy_vs_intensity", "accuracy_vs_rfa", "confusion",
-         "accuracy_vs_k", "training_curves", "confusion_k0", "latent_maps",
-         "gap_per_view", "gap_effect_ranking", "gap_accuracy", "gap_benchmark"]
+ORDER = [
+    "rfa",
+    "tvms_ladders",
+    "tvms_cases",
+    "accuracy_vs_intensity",
+    "accuracy_vs_rfa",
+    "confusion",
+    "accuracy_vs_k",
+    "training_curves",
+    "confusion_k0",
+    "latent_maps",
+    "gap_per_view",
+    "gap_effect_ranking",
+    "gap_accuracy",
+    "gap_benchmark",
+]
 
 
 def caption(stem: str, summary: dict) -> tuple[str, str]:
@@ -81,16 +127,24 @@ def caption(stem: str, summary: dict) -> tuple[str, str]:
     over = f" over {reps} repetitions" if reps else ""
     if stem == "accuracy_vs_k":
         found = experiment(summary) if summary.get("kind") == "transfer" else None
-        return (found[2] if found else "Figures 5.5/5.6",
-                f"Target test accuracy (%) against the number of target fault samples k in the training set: "
-                f"mean{over}, band ± one standard deviation; solid lines supervised, dashed unsupervised.")
+        return (
+            found[2] if found else "Figures 5.5/5.6",
+            f"Target test accuracy (%) against the number of target fault samples k in the training set: "
+            f"mean{over}, band ± one standard deviation; solid lines supervised, dashed unsupervised.",
+        )
     if stem == "confusion_k0":
-        return ("Figure 5.8", f"Confusion matrices at k = {min(protocol.get('ks') or [0])}, summed{over} (counts of "
-                "target test samples; rows: true class, columns: predicted class).")
+        return (
+            "Figure 5.8",
+            f"Confusion matrices at k = {min(protocol.get('ks') or [0])}, summed{over} (counts of "
+            "target test samples; rows: true class, columns: predicted class).",
+        )
     if stem.startswith("signals_"):
-        return ("Figures 2.34-2.39", f"Dataset {stem[len('signals_'):]}: a revolution per class at low, middle and "
-                "top intensity (standardised acceleration against input-shaft angle, deg) and its order "
-                "spectrum (amplitude against shaft order).")
+        return (
+            "Figures 2.34-2.39",
+            f"Dataset {stem[len('signals_') :]}: a revolution per class at low, middle and "
+            "top intensity (standardised acceleration against input-shaft angle, deg) and its order "
+            "spectrum (amplitude against shaft order).",
+        )
     return CAPTIONS.get(stem, ("", stem.replace("_", " ") + "."))
 
 
@@ -117,8 +171,9 @@ def build_report(run_path: Path) -> str:
     for i, block in enumerate(blocks, start=1):
         head = f"Table {i}"
         if summary.get("kind") == "transfer" and i == 1:
-            head += (". Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4"
-                     + ("; reference rows in italics: the thesis's values" if "(thesis" in block else ""))
+            head += ". Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4" + (
+                "; reference rows in italics: the thesis's values" if "(thesis" in block else ""
+            )
         parts += [f"<h2>{html.escape(head)}</h2>", markdown_table(block)]
     figures = sorted((run_path / "figures").glob("*.png")) if (run_path / "figures").exists() else []
     figures.sort(key=lambda f: ORDER.index(f.stem) if f.stem in ORDER else len(ORDER))  # the thesis's order
@@ -128,16 +183,22 @@ def build_report(run_path: Path) -> str:
         data = base64.b64encode(fig.read_bytes()).decode()
         thesis, text = caption(fig.stem, summary)
         label = f"Figure {i}" + (f" (as thesis {thesis})" if thesis else "")
-        parts.append(f"<figure id='{html.escape(fig.stem)}'><img alt='{html.escape(label)}' "
-                     f"src='data:image/png;base64,{data}'><figcaption><b>{html.escape(label)}.</b> "
-                     f"{html.escape(text)}</figcaption></figure>")
+        parts.append(
+            f"<figure id='{html.escape(fig.stem)}'><img alt='{html.escape(label)}' "
+            f"src='data:image/png;base64,{data}'><figcaption><b>{html.escape(label)}.</b> "
+            f"{html.escape(text)}</figcaption></figure>"
+        )
     scenario = run_path / "scenario.toml"
     if scenario.exists():
-        parts += ["<details><summary>Resolved scenario (scenario.toml)</summary>",
-                  f"<pre>{html.escape(scenario.read_text())}</pre></details>"]
+        parts += [
+            "<details><summary>Resolved scenario (scenario.toml)</summary>",
+            f"<pre>{html.escape(scenario.read_text())}</pre></details>",
+        ]
     if summary:
         brief = {k: v for k, v in summary.items() if k not in ("cases",)}
-        parts += ["<details><summary>summary.json</summary>",
-                  f"<pre>{html.escape(json.dumps(brief, indent=1)[:20000])}</pre></details>"]
+        parts += [
+            "<details><summary>summary.json</summary>",
+            f"<pre>{html.escape(json.dumps(brief, indent=1)[:20000])}</pre></details>",
+        ]
     parts.append("</body></html>")
     return "\n".join(parts)

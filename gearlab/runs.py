@@ -84,8 +84,14 @@ class RunDir:
             run = cls(_fresh_folder(parent, stamp), created=created)
             # scenario.toml last: it marks a run directory (open() looks for it), so a run killed
             # while this runs is never resumed without its --quick setting or original scenario.
-            run.write_json(RUN_FILE, {"quick": quick, "base": str(scenario.base.resolve()) if scenario.base else None,
-                                      "inputs": input_digests(scenario)})
+            run.write_json(
+                RUN_FILE,
+                {
+                    "quick": quick,
+                    "base": str(scenario.base.resolve()) if scenario.base else None,
+                    "inputs": input_digests(scenario),
+                },
+            )
             try:
                 original = scenario.path.read_bytes()
             except OSError:  # gone meanwhile: the resolved scenario.toml suffices
@@ -99,8 +105,10 @@ class RunDir:
             elif created is not None:
                 _remove_empty(parent, created)
             problem = write_problem(exc) or exc.strerror or type(exc).__name__
-            raise GearlabInputError(f"cannot write the run directory under '{base}': {problem}"
-                                    + (f" ({exc.filename})" if exc.filename else "")) from None
+            raise GearlabInputError(
+                f"cannot write the run directory under '{base}': {problem}"
+                + (f" ({exc.filename})" if exc.filename else "")
+            ) from None
         return run
 
     def discard(self) -> None:
@@ -146,8 +154,10 @@ class RunDir:
             holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
             os.close(fd)
             who = f" (pid {holder})" if holder.isdigit() else ""
-            raise GearlabInputError(f"{self.path}: another gearlab process{who} is running in this run directory; "
-                                    "wait for it to end (or stop it), then resume") from None
+            raise GearlabInputError(
+                f"{self.path}: another gearlab process{who} is running in this run directory; "
+                "wait for it to end (or stop it), then resume"
+            ) from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         return RunLock(fd)
@@ -230,11 +240,11 @@ def _fresh_folder(parent: Path, stamp: str) -> Path:
 def _remove_empty(folder: Path, created: Path) -> None:
     """Remove *folder* and its parents up to *created* (the outermost folder this process
     made) while they are empty; a folder holding anything (another run) stays."""
-    for folder in (folder, *folder.parents):
-        if not folder.is_relative_to(created):
+    for here in (folder, *folder.parents):
+        if not here.is_relative_to(created):
             break
         try:
-            folder.rmdir()
+            here.rmdir()
         except OSError:  # not empty: another run lives there
             break
 
@@ -283,9 +293,11 @@ def check_inputs(run: RunDir) -> None:
         now = _digest(Path(path))
         if now != digest:
             change = "is gone" if now is None else "has changed"
-            raise GearlabInputError(f"{path}: {change} since the run in {run.path} started (sha256 "
-                                    f"{(digest or '?')[:12]}...); its finished units were computed from the file "
-                                    "as it was: restore it, or start a new run")
+            raise GearlabInputError(
+                f"{path}: {change} since the run in {run.path} started (sha256 "
+                f"{(digest or '?')[:12]}...); its finished units were computed from the file "
+                "as it was: restore it, or start a new run"
+            )
 
 
 def _tomlable(value):

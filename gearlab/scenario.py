@@ -56,6 +56,7 @@ def keys_of(cls, names: tuple[str, ...] | None = None, **defaults) -> dict[str, 
         default = defaults.get(name, default)
         check = None
         if meta.low is not None or meta.high is not None or meta.choices or meta.check:
+
             def check(value, where, meta=meta):
                 return in_bounds(meta, value, where)
 
@@ -67,8 +68,10 @@ def keys_of(cls, names: tuple[str, ...] | None = None, **defaults) -> dict[str, 
 def one_of(*choices: str) -> Callable[[Any, str], Any]:
     def check(value, where):
         if value not in choices:
-            raise GearlabInputError(f"{where}: {shown(value)} is not one of {', '.join(choices)}"
-                                    f"{did_you_mean(value, choices) if len(value) <= 100 else ''}")
+            raise GearlabInputError(
+                f"{where}: {shown(value)} is not one of {', '.join(choices)}"
+                f"{did_you_mean(value, choices) if len(value) <= 100 else ''}"
+            )
         return value
 
     check.choices = choices  # what a front-end may offer (the TUI's run form)
@@ -78,15 +81,14 @@ def one_of(*choices: str) -> Callable[[Any, str], Any]:
 def in_range(low: float | None = None, high: float | None = None) -> Callable[[Any, str], Any]:
     def check(value, where):
         # written as "not inside" so that NaN, which compares false with everything, is outside
-        if not ((low is None or value >= low) and (high is None or value <= high)) \
-                or (isinstance(value, float) and not math.isfinite(value)):
+        if not ((low is None or value >= low) and (high is None or value <= high)) or (
+            isinstance(value, float) and not math.isfinite(value)
+        ):
             span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
             raise GearlabInputError(f"{where}: {shown(value)} is outside {span}")
         return value
 
     return check
-
-
 
 
 # The characters of a name that becomes part of a file or folder name (a scenario's, a
@@ -98,11 +100,18 @@ NAME_MAX = 100
 
 def plain_name(value: str, where: str) -> str:
     """A name that may become one component of a path in a run directory (see NAME_MARKS)."""
-    if not (value and len(value) <= NAME_MAX and value[0] not in " ." and value[-1] != " "
-            and all(c.isalnum() or c in NAME_MARKS for c in value)):
-        raise GearlabInputError(f"{where}: expected a plain name usable as a file name (letters, digits, spaces and "
-                                f"'{NAME_MARKS.strip()}', not starting with '.' or a space, at most {NAME_MAX} "
-                                f"characters), got {shown(value)}")
+    if not (
+        value
+        and len(value) <= NAME_MAX
+        and value[0] not in " ."
+        and value[-1] != " "
+        and all(c.isalnum() or c in NAME_MARKS for c in value)
+    ):
+        raise GearlabInputError(
+            f"{where}: expected a plain name usable as a file name (letters, digits, spaces and "
+            f"'{NAME_MARKS.strip()}', not starting with '.' or a space, at most {NAME_MAX} "
+            f"characters), got {shown(value)}"
+        )
     return value
 
 
@@ -114,10 +123,14 @@ SCENARIO_TABLE = Table(
     },
     required=True,
 )
+
+
 def folder(value: str, where: str) -> str:
     """A folder name the file system can take (Python refuses a NUL character in a path)."""
     if not value or "\0" in value:
-        raise GearlabInputError(f"{where}: expected a folder, got {shown(value)}" + (" (a NUL character)" if value else ""))
+        raise GearlabInputError(
+            f"{where}: expected a folder, got {shown(value)}" + (" (a NUL character)" if value else "")
+        )
     return value
 
 
@@ -186,7 +199,7 @@ def validate_table(path, name: str, table: Table, data: Mapping, index: int | No
         where = location(path, name, key, index)
         if key not in data:
             if spec.required:
-                raise GearlabInputError(f"{where}: missing; expected {_type_name(spec.types)}. {spec.doc}".rstrip(". ") )
+                raise GearlabInputError(f"{where}: missing; expected {_type_name(spec.types)}. {spec.doc}".rstrip(". "))
             out[key] = spec.default
             continue
         value = data[key]
@@ -205,7 +218,9 @@ def validate_tables(path, schema: Mapping[str, Table], data: Mapping) -> dict:
     for name, table in schema.items():
         if name not in data:
             if table.required:
-                raise GearlabInputError(f"{path}: missing table [{'[' if table.array else ''}{name}{']' if table.array else ''}]")
+                raise GearlabInputError(
+                    f"{path}: missing table [{'[' if table.array else ''}{name}{']' if table.array else ''}]"
+                )
             tables[name] = [] if table.array else validate_table(path, name, table, {})
             continue
         value = data[name]
@@ -230,8 +245,9 @@ def _nearby(path: Path) -> str:
     except OSError:
         return ""
     stem = path.stem if path.suffix == ".toml" else path.name
-    close = difflib.get_close_matches(stem, list(files), n=1, cutoff=0.5) or \
-        [s for s in files if s.lower() == stem.lower()]
+    close = difflib.get_close_matches(stem, list(files), n=1, cutoff=0.5) or [
+        s for s in files if s.lower() == stem.lower()
+    ]
     return f" (did you mean '{files[close[0]]}'?)" if close else ""
 
 
@@ -251,7 +267,8 @@ def read_toml(path: Path) -> dict:
     except ValueError as exc:  # TOMLDecodeError, or an integer of more digits than Python converts
         raise GearlabInputError(f"{path}: invalid TOML: {clipped(str(exc))}") from None
     except RecursionError:  # arrays or inline tables nested hundreds deep
-        raise GearlabInputError(f"{path}: invalid TOML: nested too deeply (arrays or tables inside one another "
-                                "hundreds of levels deep)") from None
+        raise GearlabInputError(
+            f"{path}: invalid TOML: nested too deeply (arrays or tables inside one another hundreds of levels deep)"
+        ) from None
     except MemoryError:
         raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None

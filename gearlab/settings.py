@@ -47,9 +47,18 @@ class Setting:
     check: Callable[[Any, str], Any] | None = None  # a check of its own: returns the value or raises
 
 
-def setting(types: type | tuple[type, ...], default: Any = dataclasses.MISSING, *, low: float | None = None,
-            high: float | None = None, unit: str = "", doc: str = "", choices: Iterable[str] = (), quick: Any = None,
-            check: Callable[[Any, str], Any] | None = None) -> Any:
+def setting(
+    types: type | tuple[type, ...],
+    default: Any = dataclasses.MISSING,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    unit: str = "",
+    doc: str = "",
+    choices: Iterable[str] = (),
+    quick: Any = None,
+    check: Callable[[Any, str], Any] | None = None,
+) -> Any:
     """A dataclass field declared with everything the scenario, --quick and the docs need."""
     meta = Setting(types, low, high, unit, doc, tuple(choices), quick, check)
     return dataclasses.field(default=default, metadata={"setting": meta})
@@ -63,13 +72,16 @@ def declared(cls) -> dict[str, tuple[Setting, Any]]:
 def in_bounds(meta: Setting, value, where: str):
     """*value* checked against the bounds and choices of *meta* (the scenario's messages)."""
     if meta.choices and value not in meta.choices:
-        raise GearlabInputError(f"{where}: {shown(value)} is not one of {', '.join(meta.choices)}"
-                                f"{did_you_mean(str(value), meta.choices) if len(str(value)) <= 100 else ''}")
+        raise GearlabInputError(
+            f"{where}: {shown(value)} is not one of {', '.join(meta.choices)}"
+            f"{did_you_mean(str(value), meta.choices) if len(str(value)) <= 100 else ''}"
+        )
     if meta.low is not None or meta.high is not None:
         low, high = meta.low, meta.high
         # written as "not inside" so that NaN, which compares false with everything, is outside
-        if not ((low is None or value >= low) and (high is None or value <= high)) \
-                or (isinstance(value, float) and not math.isfinite(value)):
+        if not ((low is None or value >= low) and (high is None or value <= high)) or (
+            isinstance(value, float) and not math.isfinite(value)
+        ):
             span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
             raise GearlabInputError(f"{where}: {shown(value)} is outside {span}")
     return meta.check(value, where) if meta.check else value
@@ -84,8 +96,9 @@ def shrunk(settings, **limits):
     """A copy of the dataclass *settings* for a smoke run (--quick): each field with a --quick
     limit (declared, or given here, which wins) at most that limit."""
     limits = {**quick_limits(type(settings)), **limits}
-    return dataclasses.replace(settings, **{name: min(getattr(settings, name), limit)
-                                            for name, limit in limits.items()})
+    return dataclasses.replace(
+        settings, **{name: min(getattr(settings, name), limit) for name, limit in limits.items()}
+    )
 
 
 def _number(types) -> bool:
@@ -100,32 +113,45 @@ def from_inline(cls, table: Mapping, where: str, defaults: Mapping | None = None
     fields = declared(cls)
     unknown = set(table) - set(fields)
     if unknown:
-        raise GearlabInputError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; "
-                                f"expected {', '.join(fields)}")
+        raise GearlabInputError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; expected {', '.join(fields)}")
     defaults = dict(defaults or {})
     missing = [n for n, (_, d) in fields.items() if n not in table and n not in defaults and d is dataclasses.MISSING]
     if missing:
-        shape = ", ".join(f"{n} = " + ("|".join(f"'{c}'" for c in meta.choices) if meta.choices else
-                                      "number" if _number(meta.types) else meta.types.__name__)
-                          for n, (meta, d) in fields.items() if d is dataclasses.MISSING)
+        shape = ", ".join(
+            f"{n} = "
+            + (
+                "|".join(f"'{c}'" for c in meta.choices)
+                if meta.choices
+                else "number"
+                if _number(meta.types)
+                else meta.types.__name__
+            )
+            for n, (meta, d) in fields.items()
+            if d is dataclasses.MISSING
+        )
         raise GearlabInputError(f"{where}: expected {{{shape}}}")
     values = {}
-    for name, (meta, default) in fields.items():
+    for name, (meta, _) in fields.items():
         if name not in table:
             if name in defaults:
                 values[name] = defaults[name]
             continue
         value = table[name]
         if meta.types is int or meta.types == (int,):
-            if isinstance(value, bool) or not isinstance(value, int) or not (
-                    (meta.low is None or meta.low <= value) and (meta.high is None or value <= meta.high)):
-                raise GearlabInputError(f"{where}: {name} must be a whole number in [{meta.low}, {meta.high}], "
-                                        f"got {shown(value)}")
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int)
+                or not ((meta.low is None or meta.low <= value) and (meta.high is None or value <= meta.high))
+            ):
+                raise GearlabInputError(
+                    f"{where}: {name} must be a whole number in [{meta.low}, {meta.high}], got {shown(value)}"
+                )
         elif _number(meta.types):
             # abs() < 1e300 also refuses nan, inf and integers too large for a float
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) < 1e300:
-                raise GearlabInputError(f"{where}: {name} must be a finite number of {meta.unit or 'units'}, "
-                                        f"got {str(value)[:40]}")
+                raise GearlabInputError(
+                    f"{where}: {name} must be a finite number of {meta.unit or 'units'}, got {str(value)[:40]}"
+                )
             value = float(value)
         else:
             value = str(value)
@@ -135,14 +161,23 @@ def from_inline(cls, table: Mapping, where: str, defaults: Mapping | None = None
 
 def markdown_table(cls, title: str = "") -> str:
     """The reference table of *cls* for docs/settings.md: key, type, unit, default, bounds, --quick, doc."""
-    rows = [f"### {title}\n" if title else "", "| key | type | unit | default | bounds | --quick | meaning |",
-            "|---|---|---|---|---|---|---|"]
+    rows = [
+        f"### {title}\n" if title else "",
+        "| key | type | unit | default | bounds | --quick | meaning |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for name, (meta, default) in declared(cls).items():
         types = meta.types if isinstance(meta.types, tuple) else (meta.types,)
-        bounds = (" \\| ".join(meta.choices) if meta.choices else
-                  f"[{meta.low if meta.low is not None else ''}, {meta.high if meta.high is not None else ''}]"
-                  if meta.low is not None or meta.high is not None else "")
+        bounds = (
+            " \\| ".join(meta.choices)
+            if meta.choices
+            else f"[{meta.low if meta.low is not None else ''}, {meta.high if meta.high is not None else ''}]"
+            if meta.low is not None or meta.high is not None
+            else ""
+        )
         shown_default = "required" if default is dataclasses.MISSING else repr(default)
-        rows.append(f"| `{name}` | {' or '.join(t.__name__ for t in types)} | {meta.unit} | {shown_default} | "
-                    f"{bounds} | {'' if meta.quick is None else f'≤ {meta.quick}'} | {meta.doc} |")
+        rows.append(
+            f"| `{name}` | {' or '.join(t.__name__ for t in types)} | {meta.unit} | {shown_default} | "
+            f"{bounds} | {'' if meta.quick is None else f'≤ {meta.quick}'} | {meta.doc} |"
+        )
     return "\n".join(r for r in rows if r) + "\n"

@@ -26,7 +26,9 @@ def to_si(value: object, unit: str, where: str) -> float:
     *where* names the place the value came from, for the error message.
     """
     if isinstance(value, bool):
-        raise GearlabInputError(f"{where}: expected a number or a quantity with a unit of {_describe(unit)}, got {value!r}")
+        raise GearlabInputError(
+            f"{where}: expected a number or a quantity with a unit of {_describe(unit)}, got {value!r}"
+        )
     if isinstance(value, (int, float)):
         try:
             number = float(value)
@@ -36,7 +38,8 @@ def to_si(value: object, unit: str, where: str) -> float:
         number = _parse(value, unit, where)
     else:
         raise GearlabInputError(
-            f"{where}: expected a number or a quantity with a unit of {_describe(unit)}, got {type(value).__name__} {shown(value)}"
+            f"{where}: expected a number or a quantity with a unit of {_describe(unit)}"
+            f", got {type(value).__name__} {shown(value)}"
         )
     if not math.isfinite(number):
         raise GearlabInputError(f"{where}: expected a finite number, got {value!r}")
@@ -54,15 +57,22 @@ def _screen(text: str, unit: str, where: str) -> None:
     if len(text) > _MAX_TEXT:
         raise GearlabInputError(f"{where}: {text[:40]!r}... is too long for a quantity; expected e.g. '3.175 mm'")
     if "," in text:  # pint reads "1,5 mm" as 15 mm
-        raise GearlabInputError(f"{where}: {text!r}: write the number with a decimal point and no commas, "
-                                f"e.g. '3.175 mm' ({_describe(unit)})")
+        raise GearlabInputError(
+            f"{where}: {text!r}: write the number with a decimal point and no commas, "
+            f"e.g. '3.175 mm' ({_describe(unit)})"
+        )
     powers = list(_POWER.finditer(text))
     for power in powers:
         exponent = power.group("exponent")
-        if (len(powers) > _MAX_POWERS or exponent is None or power.group("chained")
-                or abs(float(exponent.replace(" ", ""))) > 9):
-            raise GearlabInputError(f"{where}: {text!r}: a power in a quantity must be a small number, "
-                                    "as in 'm^2' or 's**-1'")
+        if (
+            len(powers) > _MAX_POWERS
+            or exponent is None
+            or power.group("chained")
+            or abs(float(exponent.replace(" ", ""))) > 9
+        ):
+            raise GearlabInputError(
+                f"{where}: {text!r}: a power in a quantity must be a small number, as in 'm^2' or 's**-1'"
+            )
 
 
 def _parse(text: str, unit: str, where: str) -> float:
@@ -71,7 +81,9 @@ def _parse(text: str, unit: str, where: str) -> float:
     try:
         quantity = ureg.Quantity(text.strip().replace("µ", "u").replace("μ", "u"))
     except Exception:
-        raise GearlabInputError(f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})") from None
+        raise GearlabInputError(
+            f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})"
+        ) from None
     target = ureg.Unit(unit) if unit else ureg.dimensionless
     try:
         if not isinstance(quantity, pint.Quantity):
@@ -86,8 +98,9 @@ def _parse(text: str, unit: str, where: str) -> float:
     except OverflowError:
         raise GearlabInputError(f"{where}: expected a finite number, got {text!r}") from None
     except (TypeError, ValueError, ArithmeticError):  # a complex magnitude, an offset unit's arithmetic, ...
-        raise GearlabInputError(f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' "
-                                f"({_describe(unit)})") from None
+        raise GearlabInputError(
+            f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})"
+        ) from None
 
 
 def _describe(unit: str) -> str:

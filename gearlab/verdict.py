@@ -26,8 +26,14 @@ from .runs import RunDir
 # The thesis's Tables 5.4 (Experiment A) and 5.5 (Experiment B): target test accuracy (%),
 # mean ± std over repetitions, per k, in gearlab's method labels. Facts quoted from the
 # thesis, shown beside gearlab's numbers; nothing is computed from them.
-THESIS_COLUMNS = ("source_only (unsupervised)", "dann (unsupervised)", "mmd (unsupervised)",
-                  "target_only (supervised)", "dann (supervised)", "mmd (supervised)")
+THESIS_COLUMNS = (
+    "source_only (unsupervised)",
+    "dann (unsupervised)",
+    "mmd (unsupervised)",
+    "target_only (supervised)",
+    "dann (supervised)",
+    "mmd (supervised)",
+)
 THESIS_KS = (0, 1, 2, 4, 8, 16)
 _TABLE_5_4 = """
 51.73 0.0  74.02 12  80.92 5.0  48.28 0.0  84.14 2.7  88.51 1.6
@@ -64,16 +70,30 @@ THESIS = {
 
 
 # the fields that make a dataset what it is (its name and domain label are free to change)
-_DATASET_FIELDS = ("model", "preset", "channel", "speed_hz", "load_nm", "faults", "teeth", "duplicates", "healthy",
-                   "revolutions", "tsa", "fs", "effects")
+_DATASET_FIELDS = (
+    "model",
+    "preset",
+    "channel",
+    "speed_hz",
+    "load_nm",
+    "faults",
+    "teeth",
+    "duplicates",
+    "healthy",
+    "revolutions",
+    "tsa",
+    "fs",
+    "effects",
+)
 
 
 def preset_of(side: Mapping) -> str | None:
     """The chapter-5 dataset preset a summary's [source] or [target] is, complete and unchanged
     but for its name and noise; None for anything else (a reduced or measured dataset)."""
     for name, preset in DATASET_PRESETS.items():
-        if name.endswith("-ch5") and all(_plain(getattr(preset, key)) == _plain(side.get(key))
-                                         for key in _DATASET_FIELDS):
+        if name.endswith("-ch5") and all(
+            _plain(getattr(preset, key)) == _plain(side.get(key)) for key in _DATASET_FIELDS
+        ):
             return name
     return None
 
@@ -131,8 +151,15 @@ def best_per_k(table: Mapping[str, Mapping[str, Mapping]], ks: Sequence) -> list
             continue
         cells.sort(key=lambda c: -c[1]["mean"])
         (best, b), rest = cells[0], cells[1:]
-        row = {"k": k, "best": best, "mean": b["mean"], "std": b["std"], "second": None, "margin": None,
-               "within_std": False}
+        row = {
+            "k": k,
+            "best": best,
+            "mean": b["mean"],
+            "std": b["std"],
+            "second": None,
+            "margin": None,
+            "within_std": False,
+        }
         if rest:
             second, s = rest[0]
             margin = b["mean"] - s["mean"]
@@ -153,8 +180,11 @@ def collapsed(records: Sequence[Mapping]) -> dict[str, dict]:
     for method, rs in runs.items():
         one_class = [r for r in rs if r["predicted_fault_share"] <= 0.0 or r["predicted_fault_share"] >= 100.0]
         if one_class and 2 * len(one_class) >= len(rs):
-            out[method] = {"runs": len(one_class), "of": len(rs),
-                           "fault_share": float(np.mean([r["predicted_fault_share"] for r in one_class]))}
+            out[method] = {
+                "runs": len(one_class),
+                "of": len(rs),
+                "fault_share": float(np.mean([r["predicted_fault_share"] for r in one_class])),
+            }
     return out
 
 
@@ -166,8 +196,10 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
     lines = []
     if len(table) == 1 or rows[0]["second"] is None:
         only = rows[0]["best"]
-        lines.append(f"One method, {only}: {_span([r['mean'] for r in rows], 2)} % target test accuracy "
-                     f"at k = {_ks_text([r['k'] for r in rows])}.")
+        lines.append(
+            f"One method, {only}: {_span([r['mean'] for r in rows], 2)} % target test accuracy "
+            f"at k = {_ks_text([r['k'] for r in rows])}."
+        )
     else:
         groups: list[list[dict]] = []
         for row in rows:  # consecutive k with the same winner, told together
@@ -178,9 +210,13 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
         parts = []
         for group in groups:
             seconds = list(dict.fromkeys(r["second"] for r in group))
-            where = "every k" if len(group) == len(rows) and len(rows) > 1 else f"k = {_ks_text([r['k'] for r in group])}"
-            text = (f"{group[0]['best']} is best at {where} ({_span([r['mean'] for r in group], 2)} %), "
-                    f"{_span([r['margin'] for r in group])} points ahead of {' / '.join(seconds)}")
+            where = (
+                "every k" if len(group) == len(rows) and len(rows) > 1 else f"k = {_ks_text([r['k'] for r in group])}"
+            )
+            text = (
+                f"{group[0]['best']} is best at {where} ({_span([r['mean'] for r in group], 2)} %), "
+                f"{_span([r['margin'] for r in group])} points ahead of {' / '.join(seconds)}"
+            )
             close = [r["k"] for r in group if r["within_std"]]
             if close:
                 text += f" (within one standard deviation at k = {_ks_text(close)})"
@@ -191,18 +227,24 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
         test_fault = [100.0 - r["healthy_share"] for r in records if "healthy_share" in r]
         said = ", ".join(
             f"{m} ({'all fault' if c['fault_share'] >= 50 else 'all healthy'}: predicted-fault share "
-            f"{c['fault_share']:.0f} %, {c['runs']}/{c['of']} runs)" for m, c in gone.items())
+            f"{c['fault_share']:.0f} %, {c['runs']}/{c['of']} runs)"
+            for m, c in gone.items()
+        )
         share = f"; the target test sets are {np.mean(test_fault):.0f} % faulty" if test_fault else ""
-        lines.append(f"Collapsed to one class: {said}{share}, so {'their' if len(gone) > 1 else 'its'} accuracy "
-                     "is the share of that class, not a detection.")
+        lines.append(
+            f"Collapsed to one class: {said}{share}, so {'their' if len(gone) > 1 else 'its'} accuracy "
+            "is the share of that class, not a detection."
+        )
     else:
         lines.append("No method collapsed to one class.")
     bound = (summary.get("bound") or {}).get("accuracy") or {}
     told = [(r["k"], bound[str(r["k"])]["mean"] - r["mean"]) for r in rows if str(r["k"]) in bound]
     if told:
-        lines.append(f"The Bayes bound (a detector told the target's own fault shapes and noise law, best threshold) "
-                     f"is {_span([bound[str(k)]['mean'] for k, _ in told], 2)} %: the best method stays "
-                     f"{_span([gap for _, gap in told])} points below it.")
+        lines.append(
+            f"The Bayes bound (a detector told the target's own fault shapes and noise law, best threshold) "
+            f"is {_span([bound[str(k)]['mean'] for k, _ in told], 2)} %: the best method stays "
+            f"{_span([gap for _, gap in told])} points below it."
+        )
     found = experiment(summary)
     if found is not None:
         lines.append(thesis_line(table, ks, found))
@@ -226,8 +268,10 @@ def thesis_line(table: Mapping, ks: Sequence, found: tuple) -> str:
         text += "none of the thesis's methods is in this run"
     if ours:
         top = max(ours, key=ours.get)
-        text += (f"; at k = 0 the thesis's best is {best_thesis} with {thesis[best_thesis][0][0]:.2f} %, "
-                 f"gearlab's is {top} with {ours[top]:.2f} %")
+        text += (
+            f"; at k = 0 the thesis's best is {best_thesis} with {thesis[best_thesis][0][0]:.2f} %, "
+            f"gearlab's is {top} with {ours[top]:.2f} %"
+        )
     return text + "."
 
 
@@ -267,30 +311,48 @@ def gap_lines(summary: Mapping) -> list[str]:
         return ["The diagnosis has not finished: there is nothing to judge."]
     where = sorted(views, key=lambda v: -(views[v].get("share_before") or 0.0))
     top = [v for v in where if (views[v].get("share_before") or 0.0) >= 0.1][:3] or where[:1]
-    lines = [f"The simulator and the target {'differ significantly' if summary.get('significant_before') else 'do not differ significantly'} "
-             f"(gap {before:.4g}, p = {summary.get('p_before', float('nan')):.3g}); the gap lies mostly in "
-             + ", ".join(f"{v} ({_pct(views[v].get('share_before') or 0.0)})" for v in top) + "."]
+    differ = "differ significantly" if summary.get("significant_before") else "do not differ significantly"
+    lines = [
+        f"The simulator and the target {differ} "
+        f"(gap {before:.4g}, p = {summary.get('p_before', float('nan')):.3g}); the gap lies mostly in "
+        + ", ".join(f"{v} ({_pct(views[v].get('share_before') or 0.0)})" for v in top)
+        + "."
+    ]
     effects = summary.get("effects") or []
     shrink = summary.get("shrink", 0.0)
-    after_text = (f"gap {before:.4g} -> {after:.4g}, {_pct(shrink)} removed; "
-                  f"{'still significant' if summary.get('significant_after') else 'no longer significant'} "
-                  f"(p = {summary.get('p_after', float('nan')):.3g})")
+    after_text = (
+        f"gap {before:.4g} -> {after:.4g}, {_pct(shrink)} removed; "
+        f"{'still significant' if summary.get('significant_after') else 'no longer significant'} "
+        f"(p = {summary.get('p_after', float('nan')):.3g})"
+    )
     if effects:
-        named = ", ".join(f"{e['name']} ({_params(e.get('params', {}))}; credited with {_pct(e['share_removed'])})"
-                          for e in effects)
-        verdict = ("UNEXPLAINED: the gap is not closed" if summary.get("unexplained")
-                   else "the gap is explained")
+        named = ", ".join(
+            f"{e['name']} ({_params(e.get('params', {}))}; credited with {_pct(e['share_removed'])})" for e in effects
+        )
+        verdict = "UNEXPLAINED: the gap is not closed" if summary.get("unexplained") else "the gap is explained"
         lines.append(f"Named effects: {named}; {after_text}; {verdict}.")
     else:
         ranking = summary.get("ranking") or []
-        best = f" (the best candidate, {ranking[0]['name']}, removes {_pct(ranking[0]['share_removed'])} alone)" \
-            if ranking else ""
-        lines.append(("UNEXPLAINED: no candidate effect closes the gap" if summary.get("unexplained")
-                      else "No effect named: there is no significant gap to explain") + f"{best}.")
+        best = (
+            f" (the best candidate, {ranking[0]['name']}, removes {_pct(ranking[0]['share_removed'])} alone)"
+            if ranking
+            else ""
+        )
+        lines.append(
+            (
+                "UNEXPLAINED: no candidate effect closes the gap"
+                if summary.get("unexplained")
+                else "No effect named: there is no significant gap to explain"
+            )
+            + f"{best}."
+        )
     lines += _alone_versus_credited(summary)
     acc = summary.get("accuracy") or {}
-    pairs = [(n.replace(" (uncorrected)", ""), acc[n], acc.get(n.replace("(uncorrected)", "(corrected)")))
-             for n in acc if n.endswith("(uncorrected)")]
+    pairs = [
+        (n.replace(" (uncorrected)", ""), acc[n], acc.get(n.replace("(uncorrected)", "(corrected)")))
+        for n in acc
+        if n.endswith("(uncorrected)")
+    ]
     told = [f"{m} {u['mean']:.1f} -> {c['mean']:.1f} %" for m, u, c in pairs if c is not None]
     if told:
         lines.append("Target fault detection at k = 0, uncorrected -> corrected simulator: " + ", ".join(told) + ".")
@@ -311,21 +373,35 @@ def _alone_versus_credited(summary: Mapping) -> list[str]:
         if e["name"] not in alone or alone[e["name"]] - e["share_removed"] < 0.2:
             continue
         # a round accepts one candidate and, at most, the sensor noise fitted beside it
-        noise = [f["name"] for f in effects if f is not e and (f.get("nuisance_of") == e["name"]
-                                                               or f.get("round", -1) == e.get("round"))]
-        earlier = [f["name"] for f in effects if f is not e and not f.get("nuisance_of")
-                   and f.get("round", 0) < e.get("round", 0)]
+        noise = [
+            f["name"]
+            for f in effects
+            if f is not e and (f.get("nuisance_of") == e["name"] or f.get("round", -1) == e.get("round"))
+        ]
+        earlier = [
+            f["name"]
+            for f in effects
+            if f is not e and not f.get("nuisance_of") and f.get("round", 0) < e.get("round", 0)
+        ]
         said = f"{e['name']} removes {_pct(alone[e['name']])} of the gap in the ranking"
         if noise:
-            why = (f"{said} (fitted there with {' and '.join(noise)} beside it) but is credited with "
-                   f"{_pct(e['share_removed'])}: {' and '.join(noise)} alone explains that part of the gap, and "
-                   "the credited shares split what they remove together (a Shapley value)")
+            why = (
+                f"{said} (fitted there with {' and '.join(noise)} beside it) but is credited with "
+                f"{_pct(e['share_removed'])}: {' and '.join(noise)} alone explains that part of the gap, and "
+                "the credited shares split what they remove together (a Shapley value)"
+            )
         elif earlier:
-            why = (f"{said} (added alone) but is credited with {_pct(e['share_removed'])}: {', '.join(earlier)}, accepted in an "
-                   "earlier round, already explain that part of the gap")
+            why = (
+                f"{said} (added alone) but is credited with {_pct(e['share_removed'])}"
+                f": {', '.join(earlier)}, accepted in an "
+                "earlier round, already explain that part of the gap"
+            )
         else:
-            why = (f"{said} (added alone) but is credited with {_pct(e['share_removed'])}: the credited share is measured on fresh "
-                   "revolutions, the ranking's on those it was fitted to")
+            why = (
+                f"{said} (added alone) but is credited with {_pct(e['share_removed'])}: "
+                "the credited share is measured on fresh "
+                "revolutions, the ranking's on those it was fitted to"
+            )
         out.append(why + ".")
     return out
 

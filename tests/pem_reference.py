@@ -32,17 +32,29 @@ def tooth_compliance(g, a1: float, E: float, nu: float, L: float, fillet: bool =
 
     upper = a2 if g.root_below_base else g.alpha_5
     ka = Rb * math.sin(a1) ** 2 / E * quad(lambda a: w(a) / (2 * hx(a) * L), -a1, upper, limit=200)[0]
-    kb = Rb**3 / E * quad(
-        lambda a: (1 + math.cos(a1) * ((a2 - a) * math.sin(a) - math.cos(a))) ** 2 * w(a) / (2 / 3 * hx(a) ** 3 * L),
-        -a1, upper, limit=200)[0]
+    kb = (
+        Rb**3
+        / E
+        * quad(
+            lambda a: (1 + math.cos(a1) * ((a2 - a) * math.sin(a) - math.cos(a))) ** 2
+            * w(a)
+            / (2 / 3 * hx(a) ** 3 * L),
+            -a1,
+            upper,
+            limit=200,
+        )[0]
+    )
     ks = 2.4 * (1 + nu) * Rb * math.cos(a1) ** 2 / E * quad(lambda a: w(a) / (2 * hx(a) * L), -a1, upper, limit=200)[0]
     if g.root_below_base:  # the straight root region d_1, eq. 2.21, 2.23, 2.25
         a3 = math.asin(Rb * math.sin(a2) / Rr)
         d1 = Rb * math.cos(a2) - Rr * math.cos(a3)
         h1 = Rb * math.sin(a2)
         ka += d1 * math.sin(a1) ** 2 / (2 * E * L * h1)
-        kb += Rb**3 * ((1 - Rr / Rb * math.cos(a1) * math.cos(a3)) ** 3 - (1 - math.cos(a1) * math.cos(a2)) ** 3) / (
-            2 * E * L * math.cos(a1) * h1**3)
+        kb += (
+            Rb**3
+            * ((1 - Rr / Rb * math.cos(a1) * math.cos(a3)) ** 3 - (1 - math.cos(a1) * math.cos(a2)) ** 3)
+            / (2 * E * L * math.cos(a1) * h1**3)
+        )
         ks += 1.2 * (1 + nu) * d1 * math.cos(a1) ** 2 / (E * L * h1)
         x0 = Rr * math.cos(a3)
     else:
@@ -52,8 +64,9 @@ def tooth_compliance(g, a1: float, E: float, nu: float, L: float, fillet: bool =
         a0, ha, rc = g.pressure_angle, g.addendum, g.tool_tip_radius
         theta_f = (math.pi / 2 + 2 * math.tan(a0) * (ha - rc) + 2 * rc / math.cos(a0)) / g.Z
         hi = Rr / g.hub_radius
-        Ls, Ms, Ps, Qs = (A / theta_f**2 + B * hi**2 + C * hi / theta_f + D / theta_f + Ee * hi + F
-                          for A, B, C, D, Ee, F in SAINSOT)
+        Ls, Ms, Ps, Qs = (
+            A / theta_f**2 + B * hi**2 + C * hi / theta_f + D / theta_f + Ee * hi + F for A, B, C, D, Ee, F in SAINSOT
+        )
         d = Rb * ((a1 + a2) * math.sin(a1) + math.cos(a1)) - x0
         h = Rb * ((a1 + a2) * math.cos(a1) - math.sin(a1))
         u = (d - h * math.tan(a1)) / (2 * Rr * theta_f)
@@ -67,5 +80,8 @@ def tooth_pair_stiffness(pair, phi: float, fillet: bool = True) -> float:
     a1g = pair.roll_tip_gear - pair.gear.alpha_2 - pair.Z1 / pair.Z2 * phi  # eq. 2.8
     E, nu, L = pair.E, pair.nu, pair.face_width
     hertz = 4 * (1 - nu**2) / (math.pi * E * L)  # eq. 2.40
-    return 1.0 / (hertz + tooth_compliance(pair.pinion, a1p, E, nu, L, fillet)
-                  + tooth_compliance(pair.gear, a1g, E, nu, L, fillet))
+    return 1.0 / (
+        hertz
+        + tooth_compliance(pair.pinion, a1p, E, nu, L, fillet)
+        + tooth_compliance(pair.gear, a1g, E, nu, L, fillet)
+    )

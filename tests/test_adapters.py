@@ -24,8 +24,15 @@ from gearlab.registry import Registry
 
 # The entry points are registered in pyproject.toml separately; import the modules directly.
 PLUGINS = ["source_only", "target_only", "mmd", "dann", "coral", "finetune", "matched_filter"]
-CALIBRATED = {"source_only": False, "target_only": False, "mmd": True, "dann": True, "coral": True, "finetune": True,
-              "matched_filter": False}
+CALIBRATED = {
+    "source_only": False,
+    "target_only": False,
+    "mmd": True,
+    "dann": True,
+    "coral": True,
+    "finetune": True,
+    "matched_filter": False,
+}
 DA = ["mmd", "dann", "coral"]
 
 
@@ -53,7 +60,9 @@ def test_mmd2_zero_for_identical_samples():
 def test_mmd2_symmetric_and_nonnegative():
     x, y = sample(15, 6, seed=1), sample(25, 6, shift=0.5, seed=2)
     assert float(mmd2(x, y)) == pytest.approx(float(mmd2(y, x)), rel=1e-12)
-    assert float(mmd2(x, y, bandwidths=[0.5, 2.0])) == pytest.approx(float(mmd2(y, x, bandwidths=[0.5, 2.0])), rel=1e-12)
+    assert float(mmd2(x, y, bandwidths=[0.5, 2.0])) == pytest.approx(
+        float(mmd2(y, x, bandwidths=[0.5, 2.0])), rel=1e-12
+    )
     assert float(mmd2(x, y)) > 0.0
 
 
@@ -94,7 +103,9 @@ def test_default_bandwidths_from_median_heuristic():
     assert median_distance(x, y) == pytest.approx(median, rel=0.05)  # torch takes the lower middle value
     sigmas = [median_distance(x, y) * s for s in (0.25, 0.5, 1.0, 2.0, 4.0)]
     assert float(mmd2(x, y)) == pytest.approx(float(mmd2(x, y, bandwidths=sigmas)), rel=1e-12)
-    assert float(mmd2(x, y, scale=2.0)) == pytest.approx(float(mmd2(x, y, bandwidths=[2 * s for s in sigmas])), rel=1e-12)
+    assert float(mmd2(x, y, scale=2.0)) == pytest.approx(
+        float(mmd2(x, y, bandwidths=[2 * s for s in sigmas])), rel=1e-12
+    )
 
 
 def test_mmd2_gradient_finite_and_pulls_domains_together():
@@ -190,7 +201,10 @@ def test_dann_adversarial_game_directions():
 
     # descending the domain loss trains the domain classifier to discriminate
     opt = torch.optim.SGD(modules.parameters(), lr=0.1)
-    start_loss, start_gap = float(dann.domain_loss(z_s, z_t, modules, 1.0).detach()), dann.discrepancy(z_s, z_t, modules)
+    start_loss, start_gap = (
+        float(dann.domain_loss(z_s, z_t, modules, 1.0).detach()),
+        dann.discrepancy(z_s, z_t, modules),
+    )
     for _ in range(100):
         opt.zero_grad()
         dann.domain_loss(z_s, z_t, modules, 1.0).backward()
@@ -294,10 +308,14 @@ def test_methods_without_domain_loss(name):
 def test_mmd_and_coral_domain_losses():
     z_s, z_t = torch.randn(10, 6), torch.randn(10, 6) * 2 + 1
     mmd, coral = adapter("mmd"), adapter("coral")
-    assert float(mmd.domain_loss(z_s, z_t, nn.ModuleDict(), 0.4)) == pytest.approx(0.4 * float(mmd2(z_s, z_t)), rel=1e-6)
+    assert float(mmd.domain_loss(z_s, z_t, nn.ModuleDict(), 0.4)) == pytest.approx(
+        0.4 * float(mmd2(z_s, z_t)), rel=1e-6
+    )
     assert mmd.discrepancy(z_s, z_t, nn.ModuleDict()) == pytest.approx(float(mmd2(z_s, z_t)), rel=1e-6)
     assert float(mmd.domain_loss(z_s, z_s.clone(), nn.ModuleDict(), 1.0)) == pytest.approx(0.0, abs=1e-6)
-    assert float(coral.domain_loss(z_s, z_t, nn.ModuleDict(), 0.4)) == pytest.approx(0.4 * float(coral_loss(z_s, z_t)), rel=1e-6)
+    assert float(coral.domain_loss(z_s, z_t, nn.ModuleDict(), 0.4)) == pytest.approx(
+        0.4 * float(coral_loss(z_s, z_t)), rel=1e-6
+    )
     assert float(coral.domain_loss(z_s, z_s.clone(), nn.ModuleDict(), 1.0)) == pytest.approx(0.0, abs=1e-9)
     assert float(mmd.domain_loss(z_s, z_t, nn.ModuleDict(), 0.0)) == 0.0
 

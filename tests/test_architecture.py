@@ -18,8 +18,19 @@ PACKAGE = Path(__file__).resolve().parent.parent / "gearlab"
 
 # Bottom to top. A module belongs to the first entry that names it or a package holding it.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("base", ("gearlab", "gearlab.errors", "gearlab.units", "gearlab.params", "gearlab.files", "gearlab.events",
-              "gearlab.charts", "gearlab.executors")),
+    (
+        "base",
+        (
+            "gearlab",
+            "gearlab.errors",
+            "gearlab.units",
+            "gearlab.params",
+            "gearlab.files",
+            "gearlab.events",
+            "gearlab.charts",
+            "gearlab.executors",
+        ),
+    ),
     ("physics and signals", ("gearlab.physics", "gearlab.signals")),
     ("dynamics", ("gearlab.dynamics",)),
     ("effect contract", ("gearlab.effect_contract",)),
@@ -31,8 +42,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("scenario kinds", ("gearlab.kinds",)),
     ("verdict and report", ("gearlab.verdict", "gearlab.report")),
     ("run engine", ("gearlab.engine",)),
-    ("front-ends and the plugin API", ("gearlab.compare", "gearlab.tui", "gearlab.cli", "gearlab.__main__",
-                                       "gearlab.api")),
+    (
+        "front-ends and the plugin API",
+        ("gearlab.compare", "gearlab.tui", "gearlab.cli", "gearlab.__main__", "gearlab.api"),
+    ),
 ]
 
 
@@ -105,9 +118,13 @@ def test_every_module_has_a_layer():
 
 
 def test_no_module_imports_from_a_layer_above_its_own():
-    upward = [f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {m} ({LAYERS[layer_of(m)][0]}) imports {t} "
-              f"({LAYERS[layer_of(t)][0]})"
-              for m, edges in GRAPH.items() for t, line, _ in edges if layer_of(t) > layer_of(m)]
+    upward = [
+        f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {m} ({LAYERS[layer_of(m)][0]}) imports {t} "
+        f"({LAYERS[layer_of(t)][0]})"
+        for m, edges in GRAPH.items()
+        for t, line, _ in edges
+        if layer_of(t) > layer_of(m)
+    ]
     assert not upward, "upward imports:\n" + "\n".join(upward)
 
 
@@ -121,7 +138,7 @@ def test_the_import_graph_has_no_cycle():
         path.append(m)
         for t in edges[m]:
             if state.get(t) == 1:
-                return path[path.index(t):] + [t]
+                return path[path.index(t) :] + [t]
             if t not in state and (cycle := visit(t)):
                 return cycle
         path.pop()
@@ -147,10 +164,18 @@ def test_plugins_import_gearlab_only_through_the_public_api():
     private = []
     for path in sorted([*(root / "plugins").rglob("*.py"), *(root / "examples").rglob("*.py")]):
         for node in ast.walk(ast.parse(path.read_text())):
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
-                [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
-            private += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names
-                        if (n == "gearlab" or n.startswith("gearlab.")) and n != "gearlab.api"]
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom) and not node.level
+                else []
+            )
+            private += [
+                f"{path.relative_to(root)}:{node.lineno}: {n}"
+                for n in names
+                if (n == "gearlab" or n.startswith("gearlab.")) and n != "gearlab.api"
+            ]
     assert not private, "plugins must import from gearlab.api only:\n" + "\n".join(private)
 
 

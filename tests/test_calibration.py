@@ -29,7 +29,7 @@ def burst_shape(position: int, length: int = L, width: int = 24, cycles: float =
     """A decaying tone burst starting at *position* (a fault's response)."""
     t = np.arange(width)
     s = np.zeros(length)
-    s[position:position + width] = np.exp(-t / (width / 3)) * np.sin(2 * np.pi * cycles * t / width)
+    s[position : position + width] = np.exp(-t / (width / 3)) * np.sin(2 * np.pi * cycles * t / width)
     return s
 
 
@@ -58,7 +58,9 @@ def test_best_accuracy_and_detection_rate_by_hand():
     # threshold between 0.3 and 0.7 calls 0.7 wrongly: 5/6; between 0.7 and 0.8: all right
     assert best_accuracy(score, y) == pytest.approx(100.0)
     assert best_accuracy(np.array([0.5, 0.5, 0.5]), np.array([0, 1, 1])) == pytest.approx(100 * 2 / 3)
-    assert detection_at(score, y, 0.01) == pytest.approx(100.0 * np.mean(score[y == 1] > np.quantile(score[y == 0], 0.99)))
+    assert detection_at(score, y, 0.01) == pytest.approx(
+        100.0 * np.mean(score[y == 1] > np.quantile(score[y == 0], 0.99))
+    )
 
 
 AMPLITUDE = 3.0
@@ -155,18 +157,28 @@ def test_history_threshold_lets_the_asked_share_of_healthy_revolutions_through()
 
     history, _, h, _ = revolutions(400, 0, 0.0, "laplace", seed=8, healthy_level=5.0)
     fresh, _, _, _ = revolutions(4000, 0, 0.0, "laplace", seed=9, healthy_level=5.0)
-    inputs = prepare(Calibration(residual=True, threshold="history", false_alarm=0.01),
-                     history, np.r_[np.zeros(200), np.ones(200)], history, None)
+    inputs = prepare(
+        Calibration(residual=True, threshold="history", false_alarm=0.01),
+        history,
+        np.r_[np.zeros(200), np.ones(200)],
+        history,
+        None,
+    )
     model = calibrate(MaxAbs(), inputs, history, None, "cpu")
     called = model(torch.as_tensor(fresh)).argmax(1).numpy()
     assert 0.002 < called.mean() < 0.03
     assert isinstance(model, Calibrated) and model.reference.numel() == L
 
 
-@pytest.mark.parametrize("bad, match", [
-    (dict(source_noise="pink"), "source_noise"), (dict(alignment="joint"), "alignment"),
-    (dict(threshold="max"), "threshold"), (dict(false_alarm=0.7), "false_alarm"),
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(source_noise="pink"), "source_noise"),
+        (dict(alignment="joint"), "alignment"),
+        (dict(threshold="max"), "threshold"),
+        (dict(false_alarm=0.7), "false_alarm"),
+    ],
+)
 def test_calibration_settings_are_checked(bad, match):
     with pytest.raises(GearlabInputError, match=match):
         Calibration(**bad).check("s.toml")
@@ -176,7 +188,7 @@ def test_healthy_alignment_compares_the_source_healthy_with_the_history():
     z_s, z_t = torch.arange(12.0).reshape(6, 2), torch.arange(100.0, 108.0).reshape(4, 2)
     y_s = torch.tensor([0, 1, 0, 1, 0, 1])
     assert len(_aligned(z_s, z_t, y_s, None, "marginal")) == 1
-    (a, b), = _aligned(z_s, z_t, y_s, None, "healthy")
+    ((a, b),) = _aligned(z_s, z_t, y_s, None, "healthy")
     assert torch.equal(a, z_s[[0, 2, 4]]) and torch.equal(b, z_t)
     y_t = torch.tensor([0, 0, 1, 1])
     pairs = _aligned(z_s, z_t, y_s, y_t, "healthy")  # supervised: class by class
@@ -211,7 +223,7 @@ def test_burst_network_finds_a_burst_anywhere_in_the_revolution():
     fit_supervised(net, R[train], y[train], rng=np.random.default_rng(0), device="cpu", epochs=25, batch=40)
     with torch.no_grad():
         called = net.eval()(torch.as_tensor(R)).argmax(1).numpy()
-    seen_half, other_half = called[early[len(early) // 2:]].mean(), called[np.flatnonzero(pos >= L // 2)].mean()
+    seen_half, other_half = called[early[len(early) // 2 :]].mean(), called[np.flatnonzero(pos >= L // 2)].mean()
     assert seen_half > 0.75 and other_half > seen_half - 0.05
     assert called[800:].mean() < 0.15  # healthy revolutions it never saw
 

@@ -5,7 +5,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import ROOT
 
 
@@ -35,7 +34,9 @@ def test_plugins_table(cli):
 def test_stiffness_csv_healthy_and_faulted(cli, tmp_path, preset):
     healthy, faulted = tmp_path / "h.csv", tmp_path / "f.csv"
     assert cli("stiffness", "--preset", preset, "--csv", healthy)[0] == 0
-    code, out, err = cli("stiffness", "--preset", preset, "--fault", "crack@5=20", "--csv", faulted, "--plot", tmp_path / "f.png")
+    code, out, err = cli(
+        "stiffness", "--preset", preset, "--fault", "crack@5=20", "--csv", faulted, "--plot", tmp_path / "f.png"
+    )
     assert code == 0, err
     assert "RFA 1.0000" in out
     for path in (healthy, faulted):
@@ -52,7 +53,9 @@ def test_stiffness_explicit_parameters_with_units_match_ladder(cli, tmp_path):
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     # Step 20 of the luo2019 spall ladder is l_s = 1 mm, w_s = 15 mm, h_s = 1 mm, x_1 = 4 mm (Table 2.5).
     assert cli("stiffness", "--preset", "luo2019", "--fault", "spall@3=20", "--csv", a)[0] == 0
-    code, _, err = cli("stiffness", "--preset", "luo2019", "--fault", "spall@3:l_s=1 mm,w_s=1.5cm,h_s=1000um,x_1=0.004", "--csv", b)
+    code, _, err = cli(
+        "stiffness", "--preset", "luo2019", "--fault", "spall@3:l_s=1 mm,w_s=1.5cm,h_s=1000um,x_1=0.004", "--csv", b
+    )
     assert code == 0, err
     assert np.array_equal(np.loadtxt(a, delimiter=",", skiprows=1), np.loadtxt(b, delimiter=",", skiprows=1))
 

@@ -64,8 +64,9 @@ def start(args: list, cwd: Path, cache_dir: Path) -> subprocess.Popen:
     env = {**os.environ, "GEARLAB_CACHE": str(cache_dir)}
     log = cwd / f"out{len(list(cwd.glob('out*.txt')))}.txt"
     with open(log, "w") as f:
-        proc = subprocess.Popen([*CLI, *map(str, args)], cwd=cwd, env=env, start_new_session=True,
-                                stdout=f, stderr=subprocess.STDOUT)
+        proc = subprocess.Popen(
+            [*CLI, *map(str, args)], cwd=cwd, env=env, start_new_session=True, stdout=f, stderr=subprocess.STDOUT
+        )
     proc.log = log
     return proc
 
@@ -135,8 +136,10 @@ def kill_and_resume(tmp_path: Path, scenario: Path, cache_dir: Path, cli, kills:
                 time.sleep(0.005)
         time.sleep(seconds)
         kill(proc)
-        moments.append(f"killed {seconds:.2f} s after {units} units: {units_done(run) if run else 0} units done, "
-                       f"exit {proc.returncode}")
+        moments.append(
+            f"killed {seconds:.2f} s after {units} units: {units_done(run) if run else 0} units done, "
+            f"exit {proc.returncode}"
+        )
     assert run is not None, moments
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(cache_dir))
@@ -188,7 +191,8 @@ def stiffness_reference(tmp_path_factory):
 
 
 def test_second_process_in_a_run_directory_is_refused_and_a_killed_one_blocks_nothing(
-        tmp_path, cli, stiffness_reference):
+    tmp_path, cli, stiffness_reference
+):
     scenario = tmp_path / "stiff.toml"
     scenario.write_text(STIFFNESS)
     first = start(["run", scenario, "--out", tmp_path / "runs"], tmp_path, tmp_path / "cache")
@@ -198,8 +202,10 @@ def test_second_process_in_a_run_directory_is_refused_and_a_killed_one_blocks_no
     try:
         code, out, err = cli("run", "--resume", run)
         assert code == 2, err
-        assert err.splitlines() == [f"error: {run}: another gearlab process (pid {first.pid}) is running in this "
-                                    "run directory; wait for it to end (or stop it), then resume"]
+        assert err.splitlines() == [
+            f"error: {run}: another gearlab process (pid {first.pid}) is running in this "
+            "run directory; wait for it to end (or stop it), then resume"
+        ]
         assert holder(run) == str(first.pid)
     finally:
         kill(first)  # SIGKILL: no chance to release anything; the kernel drops the flock
@@ -248,8 +254,11 @@ def test_transfer_run_killed_three_times_equals_an_uninterrupted_one(tmp_path, c
     scenario = tmp_path / "tiny.toml"
     scenario.write_text(TINY)
     cache_dir = tmp_path / "cache"
-    kills = [(0, rng.uniform(0.0, 1.5)), (rng.randint(1, len(UNITS) - 2), rng.uniform(0.0, 0.05)),
-             (len(UNITS), rng.uniform(0.0, 1.0))]
+    kills = [
+        (0, rng.uniform(0.0, 1.5)),
+        (rng.randint(1, len(UNITS) - 2), rng.uniform(0.0, 0.05)),
+        (len(UNITS), rng.uniform(0.0, 1.0)),
+    ]
     run = kill_and_resume(tmp_path, scenario, cache_dir, cli, kills)
     assert_same_run(run, tiny_reference, UNITS)
     summary, reference = (json.loads((r / "summary.json").read_text()) for r in (run, tiny_reference))
@@ -261,8 +270,11 @@ def test_stiffness_run_killed_three_times_equals_an_uninterrupted_one(tmp_path, 
     rng = random.Random(11)
     scenario = tmp_path / "stiff.toml"
     scenario.write_text(STIFFNESS)
-    kills = [(rng.randint(1, 10), rng.uniform(0.0, 0.05)), (rng.randint(11, STIFFNESS_UNITS - 2), rng.uniform(0.0, 0.05)),
-             (STIFFNESS_UNITS, rng.uniform(0.0, 1.5))]
+    kills = [
+        (rng.randint(1, 10), rng.uniform(0.0, 0.05)),
+        (rng.randint(11, STIFFNESS_UNITS - 2), rng.uniform(0.0, 0.05)),
+        (STIFFNESS_UNITS, rng.uniform(0.0, 1.5)),
+    ]
     run = kill_and_resume(tmp_path, scenario, tmp_path / "cache", cli, kills)
     assert_same_run(run, stiffness_reference, list(by_unit(stiffness_reference)))
     assert len(by_unit(run)) == STIFFNESS_UNITS
@@ -295,9 +307,18 @@ def test_resume_removes_temporary_files_of_killed_writes(tmp_path, stiffness_ref
 def small_dataset(spec: DatasetSpec) -> Dataset:
     n = 6
     zeros = np.zeros(n, dtype=np.int8)
-    return Dataset(spec=spec, X=np.arange(n * 8, dtype=np.float32).reshape(n, 8), label=zeros, fault=zeros,
-                   intensity=zeros, tooth=zeros, rfa=np.zeros(n, np.float32), revolution=zeros.astype(np.int16),
-                   domain=zeros, domains=(spec.name,))
+    return Dataset(
+        spec=spec,
+        X=np.arange(n * 8, dtype=np.float32).reshape(n, 8),
+        label=zeros,
+        fault=zeros,
+        intensity=zeros,
+        tooth=zeros,
+        rfa=np.zeros(n, np.float32),
+        revolution=zeros.astype(np.int16),
+        domain=zeros,
+        domains=(spec.name,),
+    )
 
 
 SPEC = DatasetSpec(name="tiny", model="six_dof", preset="meng2020", channel="pinion_y", healthy=6)
@@ -330,7 +351,7 @@ def test_damaged_cache_entry_is_rebuilt_not_read(tmp_path, monkeypatch, cut):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path))
     path = cache.save(small_dataset(SPEC))
     data = path.read_bytes()
-    path.write_bytes(data[:int(len(data) * cut) if isinstance(cut, float) else cut])
+    path.write_bytes(data[: int(len(data) * cut) if isinstance(cut, float) else cut])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         assert cache.load(SPEC) is None

@@ -170,8 +170,12 @@ def test_chapter4_presets_count_table_4_1(kind, tsa):
 
 
 def test_chapter2_presets():
-    for name, model, channel in (("A-pinion", "ten_dof", "pinion_x"), ("A-casing", "ten_dof", "casing_x"),
-                                 ("B-6", "six_dof", "pinion_y"), ("B-8", "eight_dof", "pinion_y")):
+    for name, model, channel in (
+        ("A-pinion", "ten_dof", "pinion_x"),
+        ("A-casing", "ten_dof", "casing_x"),
+        ("B-6", "six_dof", "pinion_y"),
+        ("B-8", "eight_dof", "pinion_y"),
+    ):
         spec = dataset_preset(name)
         assert (spec.model, spec.channel) == (model, channel)
         assert all(steps == tuple(range(1, 21)) for _, steps in spec.faults)
@@ -225,8 +229,14 @@ def test_noise_does_not_depend_on_the_number_of_revolutions_when_not_averaging()
 
 
 def test_builds_are_deterministic_across_runs_workers_and_chunks(monkeypatch):
-    spec = small(teeth=(1, 2, 3), faults=(("crack", (20,)), ("spall", (20,))), healthy=5,
-                 noise=NoiseSpec("student_t", 0.0, 7), revolutions=4, tsa=True)
+    spec = small(
+        teeth=(1, 2, 3),
+        faults=(("crack", (20,)), ("spall", (20,))),
+        healthy=5,
+        noise=NoiseSpec("student_t", 0.0, 7),
+        revolutions=4,
+        tsa=True,
+    )
     one = build_dataset(spec, LocalExecutor(1))
     again = build_dataset(spec, LocalExecutor(1))
     monkeypatch.setattr(builder, "CHUNK", 3)  # several noise tasks, spread over two processes
@@ -386,8 +396,10 @@ class _OsKilledAt:
 
     def __getattr__(self, attr):
         if attr == self.name:
+
             def killed(*args, **kwargs):
                 raise KeyboardInterrupt
+
             return killed
         return getattr(os, attr)
 
@@ -431,23 +443,26 @@ def test_unknown_dataset_preset_suggests_the_close_one():
         dataset_preset("nope", where="here")
 
 
-@pytest.mark.parametrize("changes,pattern", [
-    (dict(faults=(("crak", (20,)),)), r"unknown fault 'crak'.*did you mean 'crack'"),
-    (dict(faults=(("crack", (0,)),)), r"fault 'crack' step 0 is outside 1\.\.20"),
-    (dict(faults=(("crack", (21,)),)), r"fault 'crack' step 21 is outside 1\.\.20"),
-    (dict(faults=(("crack", (2.5,)),)), r"step 2\.5 is outside"),
-    (dict(teeth=(1, 26)), r"tooth 26 is outside 1\.\.25"),
-    (dict(teeth=(0,)), r"tooth 0 is outside 1\.\.25"),
-    (dict(healthy=-1), r"'healthy' must be a whole number >= 0, got -1"),
-    (dict(duplicates=0), r"'duplicates' must be a whole number >= 1"),
-    (dict(revolutions=0), r"'revolutions' must be a whole number >= 1"),
-    (dict(tsa=True, revolutions=1), r"TSA needs revolutions >= 2"),
-    (dict(noise=NoiseSpec("gauss", 0.0)), r"unknown noise kind 'gauss'.*did you mean 'gaussian'"),
-    (dict(channel="casing_x"), r"model 'six_dof' has no channel 'casing_x'; its channels: pinion_x, pinion_y"),
-    (dict(model="six_dfo"), r"unknown model 'six_dfo'.*did you mean 'six_dof'"),
-    (dict(preset="meng2021"), r"unknown preset 'meng2021'.*did you mean 'meng2020'"),
-    (dict(faults=(), healthy=0), r"no samples"),
-])
+@pytest.mark.parametrize(
+    "changes,pattern",
+    [
+        (dict(faults=(("crak", (20,)),)), r"unknown fault 'crak'.*did you mean 'crack'"),
+        (dict(faults=(("crack", (0,)),)), r"fault 'crack' step 0 is outside 1\.\.20"),
+        (dict(faults=(("crack", (21,)),)), r"fault 'crack' step 21 is outside 1\.\.20"),
+        (dict(faults=(("crack", (2.5,)),)), r"step 2\.5 is outside"),
+        (dict(teeth=(1, 26)), r"tooth 26 is outside 1\.\.25"),
+        (dict(teeth=(0,)), r"tooth 0 is outside 1\.\.25"),
+        (dict(healthy=-1), r"'healthy' must be a whole number >= 0, got -1"),
+        (dict(duplicates=0), r"'duplicates' must be a whole number >= 1"),
+        (dict(revolutions=0), r"'revolutions' must be a whole number >= 1"),
+        (dict(tsa=True, revolutions=1), r"TSA needs revolutions >= 2"),
+        (dict(noise=NoiseSpec("gauss", 0.0)), r"unknown noise kind 'gauss'.*did you mean 'gaussian'"),
+        (dict(channel="casing_x"), r"model 'six_dof' has no channel 'casing_x'; its channels: pinion_x, pinion_y"),
+        (dict(model="six_dfo"), r"unknown model 'six_dfo'.*did you mean 'six_dof'"),
+        (dict(preset="meng2021"), r"unknown preset 'meng2021'.*did you mean 'meng2020'"),
+        (dict(faults=(), healthy=0), r"no samples"),
+    ],
+)
 def test_bad_specs_are_refused_before_building(changes, pattern, cache):
     spec = small(**changes)
     with pytest.raises(GearlabInputError, match=pattern) as info:
@@ -459,7 +474,9 @@ def test_bad_specs_are_refused_before_building(changes, pattern, cache):
 
 def test_a_dataset_beyond_memory_is_refused_before_any_work(cli, tmp_path):
     path = tmp_path / "huge.toml"
-    path.write_text('[scenario]\nname = "huge"\nkind = "dataset"\n\n[[datasets]]\npreset = "B-6"\nhealthy = 1000000000000\n')
+    path.write_text(
+        '[scenario]\nname = "huge"\nkind = "dataset"\n\n[[datasets]]\npreset = "B-6"\nhealthy = 1000000000000\n'
+    )
     code, _, err = cli("run", path, "--out", tmp_path / "runs")
     assert code == 2 and "[[datasets]] #1: dataset 'B-6' would hold" in err and "at most 1000000" in err
     assert not (tmp_path / "runs").exists()

@@ -14,8 +14,13 @@ from tiny import EXECUTION, schedule
 PHM09 = Path(__file__).resolve().parents[2] / "shared" / "data" / "phm09"
 
 # (file, role, label, chip size): two healthy history records, a healthy and two chipped test records
-FILES = [("h1", "history", "healthy", 0.0), ("h2", "history", "healthy", 0.0), ("h3", "test", "healthy", 0.0),
-         ("f1", "test", "fault", 4.0), ("f2", "test", "fault", 4.0)]
+FILES = [
+    ("h1", "history", "healthy", 0.0),
+    ("h2", "history", "healthy", 0.0),
+    ("h3", "test", "healthy", 0.0),
+    ("f1", "test", "fault", 4.0),
+    ("f2", "test", "fault", 4.0),
+]
 
 
 def scenario(folder: Path, files=FILES, methods=("source_only", "mmd", "matched_filter"), extra: str = "") -> Path:
@@ -29,12 +34,14 @@ def scenario(folder: Path, files=FILES, methods=("source_only", "mmd", "matched_
             record(path, revolutions=40, chip=chip, seed=i, phase=0.7 * i)
         entries.append(f'  {{ path = "../data/{name}.zip", role = "{role}", label = "{label}" }},')
     methods_text = "".join(f'[[methods]]\nadapter = "{m}"\n\n' for m in methods)
-    text = (f'[scenario]\nname = "det"\nkind = "detection"\n\n'
-            '[source]\npreset = "B-6-ch5"\nteeth = [1, 2, 3]\nfaults = { chip = [20] }\nhealthy = 9\n\n'
-            f'[target]\nvibration = 0\ntacho = "2"\npulses_per_rev = {PULSES}\nsensitivity = "10 mV/g"\n'
-            f'fs = "{FS} Hz"\nfiles = [\n' + "\n".join(entries) + "\n]\n\n"
-            '[classical]\nmesh_orders = [32]\n\n[detection]\nblocks = [5, 10]\n\n'
-            f'[network]\nname = "fast"\n\n{methods_text}[protocol]\n{schedule(2)}\n{EXECUTION}\n{extra}')
+    text = (
+        f'[scenario]\nname = "det"\nkind = "detection"\n\n'
+        '[source]\npreset = "B-6-ch5"\nteeth = [1, 2, 3]\nfaults = { chip = [20] }\nhealthy = 9\n\n'
+        f'[target]\nvibration = 0\ntacho = "2"\npulses_per_rev = {PULSES}\nsensitivity = "10 mV/g"\n'
+        f'fs = "{FS} Hz"\nfiles = [\n' + "\n".join(entries) + "\n]\n\n"
+        "[classical]\nmesh_orders = [32]\n\n[detection]\nblocks = [5, 10]\n\n"
+        f'[network]\nname = "fast"\n\n{methods_text}[protocol]\n{schedule(2)}\n{EXECUTION}\n{extra}'
+    )
     path = folder / "scenarios" / "det.toml"
     path.write_text(text)
     return path
@@ -143,18 +150,23 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
     assert scenario_of(RunDir.open(out)).spec["target"].files[0].path == "../data/h1.zip"
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda t: t.replace('role = "history"', 'role = "histroy"', 1), "role 'histroy' .*did you mean 'history'"),
-    (lambda t: t.replace('label = "healthy" },', 'label = "healthy", lable = "x" },', 1), "unknown key 'lable'"),
-    (lambda t: t.replace("../data/h1.zip", "../data/nope.zip"), "nope.zip: no such file"),
-    (lambda t: t.replace('fs = ', 'fz = '), "key 'fz': unknown key .*did you mean 'fs'"),
-    (lambda t: t.replace('"10 mV/g"', '"10 mV"'), "key 'sensitivity'.*wrong dimension"),
-    (lambda t: t.replace('adapter = "mmd"', 'adapter = "target_only"'), "no unsupervised variant"),
-    (lambda t: t.replace('adapter = "mmd"', 'adapter = "mmd"\nsupervised = true'), "no labels a method may use"),
-    (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
-    (lambda t: t.replace('preset = "B-6-ch5"', 'file = "../data/h1.zip"\nvibration = "0"\nspeed = 16.0'),
-     r"\[source\] key 'file': the source is a simulator configuration"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda t: t.replace('role = "history"', 'role = "histroy"', 1), "role 'histroy' .*did you mean 'history'"),
+        (lambda t: t.replace('label = "healthy" },', 'label = "healthy", lable = "x" },', 1), "unknown key 'lable'"),
+        (lambda t: t.replace("../data/h1.zip", "../data/nope.zip"), "nope.zip: no such file"),
+        (lambda t: t.replace("fs = ", "fz = "), "key 'fz': unknown key .*did you mean 'fs'"),
+        (lambda t: t.replace('"10 mV/g"', '"10 mV"'), "key 'sensitivity'.*wrong dimension"),
+        (lambda t: t.replace('adapter = "mmd"', 'adapter = "target_only"'), "no unsupervised variant"),
+        (lambda t: t.replace('adapter = "mmd"', 'adapter = "mmd"\nsupervised = true'), "no labels a method may use"),
+        (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
+        (
+            lambda t: t.replace('preset = "B-6-ch5"', 'file = "../data/h1.zip"\nvibration = "0"\nspeed = 16.0'),
+            r"\[source\] key 'file': the source is a simulator configuration",
+        ),
+    ],
+)
 def test_bad_target_is_refused_before_any_work(cli, tmp_path, change, message):
     path = scenario(tmp_path)
     path.write_text(change(path.read_text()))
@@ -184,13 +196,29 @@ def test_blocks_longer_than_the_history_are_refused_and_leave_no_run(cli, tmp_pa
 def test_records_without_condition_join_the_history_of_nearest_speed():
     from gearlab.kinds.detection import TargetFile, conditions_of
 
-    files = [TargetFile(p, p, role, "x", cond) for p, role, cond in [
-        ("h30", "history", ""), ("h30b", "history", ""), ("h40", "history", ""), ("t29", "test", ""),
-        ("t41", "test", ""), ("t50", "test", ""), ("named", "test", "high load")]]
+    files = [
+        TargetFile(p, p, role, "x", cond)
+        for p, role, cond in [
+            ("h30", "history", ""),
+            ("h30b", "history", ""),
+            ("h40", "history", ""),
+            ("t29", "test", ""),
+            ("t41", "test", ""),
+            ("t50", "test", ""),
+            ("named", "test", "high load"),
+        ]
+    ]
     speeds = {"h30": 29.9, "h30b": 29.4, "h40": 39.8, "t29": 29.44, "t41": 40.5, "t50": 49.7, "named": 29.9}
     got = conditions_of(files, speeds)
-    assert got == {"h30": "30 Hz", "h30b": "30 Hz", "t29": "30 Hz", "h40": "40 Hz", "t41": "40 Hz",
-                   "t50": "50 Hz", "named": "high load"}
+    assert got == {
+        "h30": "30 Hz",
+        "h30b": "30 Hz",
+        "t29": "30 Hz",
+        "h40": "40 Hz",
+        "t41": "40 Hz",
+        "t50": "50 Hz",
+        "named": "high load",
+    }
 
 
 def test_without_methods_every_label_free_adapter_runs(tmp_path):

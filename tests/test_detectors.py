@@ -21,7 +21,7 @@ HEALTHY = np.sin(2 * np.pi * TEETH * t / L) + 0.3 * np.sin(2 * np.pi * 2 * TEETH
 def burst(tooth: int, size: float) -> np.ndarray:
     x = np.zeros(L)
     start = tooth * L // TEETH
-    x[start:start + 24] = size * np.exp(-np.arange(24) / 6.0) * np.sin(np.arange(24) / 1.5)
+    x[start : start + 24] = size * np.exp(-np.arange(24) / 6.0) * np.sin(np.arange(24) / 1.5)
     return x
 
 
@@ -93,11 +93,14 @@ def test_an_overall_gain_changes_nothing():
     assert np.array_equal(predict(a, X), predict(b, X * 7.0))
 
 
-@pytest.mark.parametrize("source, target, labels, message", [
-    ((SOURCE[0][:40], SOURCE[1][:40]), SOURCE[0][:40], None, "needs healthy and fault revolutions"),
-    (SOURCE, SOURCE[0][:3], np.array([0, 1, 1]), "at least 2 healthy revolutions"),
-    (SOURCE, SOURCE[0][:10, :512], None, "source revolutions have 1024 samples, target revolutions 512"),
-])
+@pytest.mark.parametrize(
+    "source, target, labels, message",
+    [
+        ((SOURCE[0][:40], SOURCE[1][:40]), SOURCE[0][:40], None, "needs healthy and fault revolutions"),
+        (SOURCE, SOURCE[0][:3], np.array([0, 1, 1]), "at least 2 healthy revolutions"),
+        (SOURCE, SOURCE[0][:10, :512], None, "source revolutions have 1024 samples, target revolutions 512"),
+    ],
+)
 def test_training_data_it_cannot_use_is_refused(source, target, labels, message):
     with pytest.raises(GearlabInputError, match=message):
         template_detector(*source, target, labels, false_alarm=0.01)
@@ -115,8 +118,9 @@ def test_experiment_b_at_k_0_without_target_labels():
     source, _ = load_or_build(scenario.spec["source"])
     target, _ = load_or_build(scenario.spec["target"])
     s = split(scenario.spec["protocol"], source, target, rep=0, k=0)
-    detector = template_detector(source.X[s.source_train], source.fault[s.source_train], target.X[s.target_train],
-                                 None, false_alarm=0.01)
+    detector = template_detector(
+        source.X[s.source_train], source.fault[s.source_train], target.X[s.target_train], None, false_alarm=0.01
+    )
     p = predict(detector, target.X[s.target_test])
     y = target.fault[s.target_test]
     assert (p == y).mean() > 0.8

@@ -74,12 +74,42 @@ def rel(a, b) -> float:
 
 ALPHA0 = math.radians(20.0)
 # Table 2.3 (Luo et al. 2019b): module 3.175 mm, Z1 = 16, Z2 = 48.
-TABLE_2_3 = dict(module=3.175e-3, Z1=16, Z2=48, m1=1.272, m2=3.5367, mf=18.509, I11=0.016107, I12=0.0001751,
-                 I21=0.006828, I22=0.005153, k_b=8.5364e7, k_c=330.0, k_xf=1.9912e8, k_yf=2.036e8,
-                 c_b=2.134e4, c_c=23.1, c_xf=1995.56, c_yf=2005.80)
+TABLE_2_3 = dict(
+    module=3.175e-3,
+    Z1=16,
+    Z2=48,
+    m1=1.272,
+    m2=3.5367,
+    mf=18.509,
+    I11=0.016107,
+    I12=0.0001751,
+    I21=0.006828,
+    I22=0.005153,
+    k_b=8.5364e7,
+    k_c=330.0,
+    k_xf=1.9912e8,
+    k_yf=2.036e8,
+    c_b=2.134e4,
+    c_c=23.1,
+    c_xf=1995.56,
+    c_yf=2005.80,
+)
 # Table 2.4 (Meng et al. 2020 + Chaari 2012 + Mohammed 2015): module 2 mm, Z1 = 25, Z2 = 30.
-TABLE_2_4 = dict(module=2e-3, Z1=25, Z2=30, m1=0.3083, m2=0.4439, I11=0.0043, I12=0.96e-4, I21=2e-4,
-                 I22=0.0045, k_b=6.56e8, k_c=1e4, c_b=1.8e3, c_c=10.0)
+TABLE_2_4 = dict(
+    module=2e-3,
+    Z1=25,
+    Z2=30,
+    m1=0.3083,
+    m2=0.4439,
+    I11=0.0043,
+    I12=0.96e-4,
+    I21=2e-4,
+    I22=0.0045,
+    k_b=6.56e8,
+    k_c=1e4,
+    c_b=1.8e3,
+    c_c=10.0,
+)
 
 
 def thesis_matrices(t: dict, dofs: tuple[str, ...]):
@@ -107,8 +137,9 @@ def thesis_matrices(t: dict, dofs: tuple[str, ...]):
     has_motor = "theta11" in dofs
     Kc = constant(t["k_b"], t["k_c"] if has_motor else 0.0, t.get("k_xf", 0.0), t.get("k_yf", 0.0))
     Cc = constant(t["c_b"], t["c_c"] if has_motor else 0.0, t.get("c_xf", 0.0), t.get("c_yf", 0.0))
-    P = np.array([math.sin(ALPHA0), math.cos(ALPHA0), 0.0, Rb1, -math.sin(ALPHA0), -math.cos(ALPHA0), -Rb2,
-                  0.0, 0.0, 0.0])
+    P = np.array(
+        [math.sin(ALPHA0), math.cos(ALPHA0), 0.0, Rb1, -math.sin(ALPHA0), -math.cos(ALPHA0), -Rb2, 0.0, 0.0, 0.0]
+    )
     keep = [DOF_ORDER.index(d) for d in dofs]
     sub = np.ix_(keep, keep)
     return M[sub], Kc[sub], Cc[sub], P[keep]
@@ -147,8 +178,18 @@ def test_assembly_matrices_properties_and_projection(name):
     np.testing.assert_allclose(Cc, tC, rtol=1e-12, atol=0)
     np.testing.assert_allclose(P, tP, rtol=1e-12, atol=1e-15)
     # P in the DOF order of eq. 2.96: x1, y1, th11, th12, x2, y2, th21, th22, xf, yf
-    full = dict(x1=math.sin(ALPHA0), y1=math.cos(ALPHA0), theta11=0.0, theta12=pair.pinion.R_b,
-                x2=-math.sin(ALPHA0), y2=-math.cos(ALPHA0), theta21=-pair.gear.R_b, theta22=0.0, xf=0.0, yf=0.0)
+    full = dict(
+        x1=math.sin(ALPHA0),
+        y1=math.cos(ALPHA0),
+        theta11=0.0,
+        theta12=pair.pinion.R_b,
+        x2=-math.sin(ALPHA0),
+        y2=-math.cos(ALPHA0),
+        theta21=-pair.gear.R_b,
+        theta22=0.0,
+        xf=0.0,
+        yf=0.0,
+    )
     assert P.tolist() == pytest.approx([full[d] for d in asm.dofs], rel=1e-15, abs=0)
     assert asm.input_dof == ("theta12" if name == "six_dof" else "theta11")
     assert asm.load_dof == ("theta21" if name == "six_dof" else "theta22")
@@ -161,8 +202,12 @@ def test_rigid_rotation_gives_no_mesh_deflection(name):
     pair, values = m.resolve(MODELS[name]["preset"])
     asm = m.assemble(pair, values)
     u = np.zeros(len(asm.dofs))
-    for dof, angle in (("theta11", 1 / pair.pinion.R_b), ("theta12", 1 / pair.pinion.R_b),
-                       ("theta21", 1 / pair.gear.R_b), ("theta22", 1 / pair.gear.R_b)):
+    for dof, angle in (
+        ("theta11", 1 / pair.pinion.R_b),
+        ("theta12", 1 / pair.pinion.R_b),
+        ("theta21", 1 / pair.gear.R_b),
+        ("theta22", 1 / pair.gear.R_b),
+    ):
         if dof in asm.dofs:
             u[asm.index(dof)] = angle
     assert pair.pinion.R_b * u[asm.index("theta12")] == pytest.approx(pair.gear.R_b * u[asm.index("theta21")])
@@ -269,7 +314,7 @@ def test_spectral_peaks_sit_on_mesh_harmonics(name, speed, load, channel, mesh_h
     starts = revolution_starts(unwrap_tacho(res.tacho))
     first, last = starts[cut.first_steady], starts[cut.complete]
     assert first / res.fs < 0.25  # the transient dies out within the first quarter second
-    steady = x[int(round(first)):int(round(last))]  # whole steady revolutions
+    steady = x[int(round(first)) : int(round(last))]  # whole steady revolutions
     freq, amp = spectrum(steady, res.fs)
     df = freq[1]
     peaks = np.flatnonzero((amp[1:-1] > amp[:-2]) & (amp[1:-1] >= amp[2:])) + 1
@@ -430,7 +475,7 @@ def test_steady_state_is_periodic(name):
     revs = res.channels[m["channel"]][: R * per_rev].reshape(R, per_rev)
     first = steady_start(revs, rtol=STEADY_RTOL)  # detected, not assumed
     assert first <= R - 3 and first / m["speed"] < 0.2, first  # thesis Figure 2.25: ~100 ms of transient
-    for a, b in zip(revs[first:-1], revs[first + 1:]):
+    for a, b in zip(revs[first:-1], revs[first + 1 :]):
         assert rel(b, a) < 1e-6
     # before the detected start it was not yet periodic
     if first > 0:
@@ -485,8 +530,19 @@ def test_rank_one_solver_equals_plain_newmark(name):
     u0 = np.linalg.solve(sim.Kc + tvms.mean * np.outer(sim.P, sim.P), F)
     ref = plain_newmark(sim.M, sim.Kc, sim.Cc, sim.P, sim.mu, res.tvms, F, u0, sim.fs, 0.5, 1.125)
     for ch, x in res.channels.items():
-        want = ref[:, sim.dofs.index({"pinion_x": "x1", "pinion_y": "y1", "gear_x": "x2", "gear_y": "y2",
-                                      "casing_x": "xf", "casing_y": "yf"}[ch])]
+        want = ref[
+            :,
+            sim.dofs.index(
+                {
+                    "pinion_x": "x1",
+                    "pinion_y": "y1",
+                    "gear_x": "x2",
+                    "gear_y": "y2",
+                    "casing_x": "xf",
+                    "casing_y": "yf",
+                }[ch]
+            ),
+        ]
         assert np.abs(want).max() > 0
         assert np.abs(x - want).max() <= 1e-9 * np.abs(want).max(), (ch, np.abs(x - want).max() / np.abs(want).max())
 
@@ -591,29 +647,35 @@ def test_unknown_channel_lists_the_channels():
     assert "casing_x" in msg and "pinion_x, pinion_y, gear_x, gear_y" in msg and "eight_dof" in msg
 
 
-@pytest.mark.parametrize("kwargs,pattern", [
-    (dict(speed_hz=-40.0), "speed must be a positive"),
-    (dict(speed_hz=0.0), "speed must be a positive"),
-    (dict(speed_hz=float("nan")), "speed must be a positive"),
-    (dict(load_nm=-1.0), "load must be a torque >= 0"),
-    (dict(duration=0.0), "duration must be a positive"),
-    (dict(duration=-0.1), "duration must be a positive"),
-    (dict(duration=float("inf")), "duration must be a positive"),
-])
+@pytest.mark.parametrize(
+    "kwargs,pattern",
+    [
+        (dict(speed_hz=-40.0), "speed must be a positive"),
+        (dict(speed_hz=0.0), "speed must be a positive"),
+        (dict(speed_hz=float("nan")), "speed must be a positive"),
+        (dict(load_nm=-1.0), "load must be a torque >= 0"),
+        (dict(duration=0.0), "duration must be a positive"),
+        (dict(duration=-0.1), "duration must be a positive"),
+        (dict(duration=float("inf")), "duration must be a positive"),
+    ],
+)
 def test_bad_operating_point(kwargs, pattern):
     sim = Simulator(model("six_dof"), "meng2020")
     with pytest.raises(GearlabInputError, match=pattern):
         sim.run([], **{"duration": 0.01, **kwargs})
 
 
-@pytest.mark.parametrize("kwargs,pattern", [
-    (dict(beta1=0.5, beta2=0.4), "beta2 >= beta1 >= 0.5"),
-    (dict(beta1=0.4, beta2=2.25), "beta2 >= beta1 >= 0.5"),
-    (dict(fs=0.0), "fs must be a positive"),
-    (dict(fs=-200e3), "fs must be a positive"),
-    (dict(overrides={"k_b": -1.0}), "k_b"),
-    (dict(overrides={"k_bb": 1e8}), r"unknown parameter 'k_bb'.*did you mean 'k_b'"),
-])
+@pytest.mark.parametrize(
+    "kwargs,pattern",
+    [
+        (dict(beta1=0.5, beta2=0.4), "beta2 >= beta1 >= 0.5"),
+        (dict(beta1=0.4, beta2=2.25), "beta2 >= beta1 >= 0.5"),
+        (dict(fs=0.0), "fs must be a positive"),
+        (dict(fs=-200e3), "fs must be a positive"),
+        (dict(overrides={"k_b": -1.0}), "k_b"),
+        (dict(overrides={"k_bb": 1e8}), r"unknown parameter 'k_bb'.*did you mean 'k_b'"),
+    ],
+)
 def test_bad_simulator_settings(kwargs, pattern):
     with pytest.raises(GearlabInputError, match=pattern):
         Simulator(model("six_dof"), "meng2020", **kwargs)

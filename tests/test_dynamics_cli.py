@@ -59,8 +59,9 @@ def test_modes_table(cli):
 
 def test_simulate_six_dof_writes_npz_and_plot(cli, tmp_path):
     out, png = tmp_path / "f.npz", tmp_path / "f.png"
-    code, stdout, err = cli("simulate", "--model", "six_dof", "--preset", "meng2020", "--duration", "0.05",
-                            "--out", out, "--plot", png)
+    code, stdout, err = cli(
+        "simulate", "--model", "six_dof", "--preset", "meng2020", "--duration", "0.05", "--out", out, "--plot", png
+    )
     assert code == 0, err
     assert "simulation wall time" in stdout and f"wrote {out}" in stdout
     with np.load(out, allow_pickle=False) as data:
@@ -83,8 +84,21 @@ def test_simulate_six_dof_writes_npz_and_plot(cli, tmp_path):
 @pytest.mark.parametrize("name,preset,speed", [("ten_dof", "luo2019", "25.2"), ("six_dof", "meng2020", "40")])
 def test_simulate_channels_and_a_broken_tooth_drops_the_tvms(cli, tmp_path, name, preset, speed):
     out = tmp_path / "f.npz"
-    code, stdout, err = cli("simulate", "--model", name, "--preset", preset, "--duration", "0.05", "--speed", speed,
-                            "--fault", "crack@5=20", "--out", out)
+    code, stdout, err = cli(
+        "simulate",
+        "--model",
+        name,
+        "--preset",
+        preset,
+        "--duration",
+        "0.05",
+        "--speed",
+        speed,
+        "--fault",
+        "crack@5=20",
+        "--out",
+        out,
+    )
     assert code == 0, err
     assert "crack@5" in stdout
     casing = {"casing_x", "casing_y"} if name == "ten_dof" else set()
@@ -112,8 +126,11 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
     import gearlab.executors
     import gearlab.kinds.common
 
-    monkeypatch.setattr(gearlab.kinds.common, "make_executor",
-                        lambda name="local", workers=None, **_: gearlab.executors.make_executor(name, 1))
+    monkeypatch.setattr(
+        gearlab.kinds.common,
+        "make_executor",
+        lambda name="local", workers=None, **_: gearlab.executors.make_executor(name, 1),
+    )
     code, out, err = cli("run", DATASET_B, "--quick", "--out", tmp_path / "runs")
     assert code == 0, err
     lines = out.strip().splitlines()
@@ -141,8 +158,9 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
     # the keys are those of the (quick-reduced) specs; the renamed noisy B-8-ch5 is its own entry
     assert summary["datasets"]["B-8-ch5-laplace"]["spec"]["noise"] == {"kind": "laplace", "snr_db": 0.0, "seed": 1}
     assert len({d["key"] for d in summary["datasets"].values()}) == 4
-    b6 = dataset_preset("B-6").with_(teeth=(1, 2), faults=tuple((f, s[-1:]) for f, s in dataset_preset("B-6").faults),
-                                     healthy=4)
+    b6 = dataset_preset("B-6").with_(
+        teeth=(1, 2), faults=tuple((f, s[-1:]) for f, s in dataset_preset("B-6").faults), healthy=4
+    )
     assert summary["datasets"]["B-6"]["key"] == b6.key()
     report = (run / "report.html").read_text()
     assert report.lstrip().lower().startswith("<!doctype html") or "<html" in report.lower()
@@ -173,23 +191,32 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
 # --- bad input -------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("args,message", [
-    (("modes", "--model", "sixdof"), "unknown model 'sixdof' (did you mean 'six_dof'?)"),
-    (("modes", "--model", "six_dof", "--preset", "meng"), "unknown preset 'meng' (did you mean 'meng2020'?)"),
-    (("simulate", "--model", "tendof", "--out", "{tmp}/f.npz"), "unknown model 'tendof' (did you mean 'ten_dof'?)"),
-    (("simulate", "--model", "ten_dof", "--preset", "luo2091", "--out", "{tmp}/f.npz"),
-     "unknown preset 'luo2091' (did you mean 'luo2019'?)"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npy"), "expected a .npz file name"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/missing/f.npz"), "does not exist"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fs", "5000"),
-     "fs = 5000 Hz is too low for the mesh harmonics at 1000 Hz"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fault", "crak@5=20"),
-     "unknown fault 'crak' (did you mean 'crack'?)"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fault", "crack@26=20"), "1..25"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fault", "crack@5=21"), "1..20"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--duration", "0"), "duration must be a positive"),
-    (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--speed", "-40"), "speed must be a positive"),
-])
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (("modes", "--model", "sixdof"), "unknown model 'sixdof' (did you mean 'six_dof'?)"),
+        (("modes", "--model", "six_dof", "--preset", "meng"), "unknown preset 'meng' (did you mean 'meng2020'?)"),
+        (("simulate", "--model", "tendof", "--out", "{tmp}/f.npz"), "unknown model 'tendof' (did you mean 'ten_dof'?)"),
+        (
+            ("simulate", "--model", "ten_dof", "--preset", "luo2091", "--out", "{tmp}/f.npz"),
+            "unknown preset 'luo2091' (did you mean 'luo2019'?)",
+        ),
+        (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npy"), "expected a .npz file name"),
+        (("simulate", "--model", "six_dof", "--out", "{tmp}/missing/f.npz"), "does not exist"),
+        (
+            ("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fs", "5000"),
+            "fs = 5000 Hz is too low for the mesh harmonics at 1000 Hz",
+        ),
+        (
+            ("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fault", "crak@5=20"),
+            "unknown fault 'crak' (did you mean 'crack'?)",
+        ),
+        (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fault", "crack@26=20"), "1..25"),
+        (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--fault", "crack@5=21"), "1..20"),
+        (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--duration", "0"), "duration must be a positive"),
+        (("simulate", "--model", "six_dof", "--out", "{tmp}/f.npz", "--speed", "-40"), "speed must be a positive"),
+    ],
+)
 def test_bad_input_exit_2_one_line(cli, tmp_path, args, message):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
     with warnings.catch_warnings():
@@ -203,17 +230,31 @@ def test_bad_input_exit_2_one_line(cli, tmp_path, args, message):
 
 def test_fs_too_low_is_one_line_in_a_real_process(tmp_path):
     proc = subprocess.run(
-        [sys.executable, "-c", "from gearlab.cli import main; main()", "simulate", "--model", "six_dof",
-         "--out", str(tmp_path / "f.npz"), "--fs", "5000"],
-        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+        [
+            sys.executable,
+            "-c",
+            "from gearlab.cli import main; main()",
+            "simulate",
+            "--model",
+            "six_dof",
+            "--out",
+            str(tmp_path / "f.npz"),
+            "--fs",
+            "5000",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
     )
     assert proc.returncode == 2
     one_line(proc.stderr)
 
 
 def test_a_too_coarse_step_that_still_runs_is_one_warning_line(cli, tmp_path):
-    code, out, err = cli("simulate", "--model", "six_dof", "--out", tmp_path / "f.npz", "--fs", "20000",
-                         "--duration", "0.05")
+    code, out, err = cli(
+        "simulate", "--model", "six_dof", "--out", tmp_path / "f.npz", "--fs", "20000", "--duration", "0.05"
+    )
     assert code == 0, err
     line = one_line(err)
     assert line.startswith("warning: ") and "fewer than 10 steps per period" in line, line
@@ -223,20 +264,25 @@ def test_a_too_coarse_step_that_still_runs_is_one_warning_line(cli, tmp_path):
 SCENARIO = '[scenario]\nname = "d"\nkind = "dataset"\n\n[[datasets]]\n'
 
 
-@pytest.mark.parametrize("body,message", [
-    ('preset = "B-6-ch4"\n', "unknown dataset preset 'B-6-ch4' (did you mean 'B-6-ch5'?)"),
-    ('preset = "B-6-ch5"\nhealty = 3\n', "key 'healty': unknown key (did you mean 'healthy'?)"),
-    ('preset = "B-6-ch5"\nnoise = { kind = "laplace" }\n', "key 'noise': expected {kind ="),
-    ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = "loud" }\n', "snr_db must be a finite number of dB"),
-    ('preset = "B-6-ch5"\nnoise = { kind = "gaussain", snr_db = 0 }\n',
-     "unknown noise kind 'gaussain' (did you mean 'gaussian'?)"),
-    ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = 0, colour = "pink" }\n', "unknown key(s) colour"),
-    ('preset = "B-6-ch5"\nnoise = "laplace"\n', "key 'noise': expected a table"),
-    ('preset = "B-6-ch5"\nfaults = { crack = [21] }\n', "step 21 is outside 1..20"),
-    ('preset = "B-6-ch5"\nfaults = { crack = "top" }\n', "'crack' must map to a list of ladder steps"),
-    ('preset = "B-6-ch5"\ntsa = true\n', "TSA needs revolutions >= 2"),
-    ('preset = "B-6-ch5"\nspeed = "-40 Hz"\n', "key 'speed': expected a positive value"),
-])
+@pytest.mark.parametrize(
+    "body,message",
+    [
+        ('preset = "B-6-ch4"\n', "unknown dataset preset 'B-6-ch4' (did you mean 'B-6-ch5'?)"),
+        ('preset = "B-6-ch5"\nhealty = 3\n', "key 'healty': unknown key (did you mean 'healthy'?)"),
+        ('preset = "B-6-ch5"\nnoise = { kind = "laplace" }\n', "key 'noise': expected {kind ="),
+        ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = "loud" }\n', "snr_db must be a finite number of dB"),
+        (
+            'preset = "B-6-ch5"\nnoise = { kind = "gaussain", snr_db = 0 }\n',
+            "unknown noise kind 'gaussain' (did you mean 'gaussian'?)",
+        ),
+        ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = 0, colour = "pink" }\n', "unknown key(s) colour"),
+        ('preset = "B-6-ch5"\nnoise = "laplace"\n', "key 'noise': expected a table"),
+        ('preset = "B-6-ch5"\nfaults = { crack = [21] }\n', "step 21 is outside 1..20"),
+        ('preset = "B-6-ch5"\nfaults = { crack = "top" }\n', "'crack' must map to a list of ladder steps"),
+        ('preset = "B-6-ch5"\ntsa = true\n', "TSA needs revolutions >= 2"),
+        ('preset = "B-6-ch5"\nspeed = "-40 Hz"\n', "key 'speed': expected a positive value"),
+    ],
+)
 def test_bad_dataset_scenario_exit_2_one_line_no_run_dir(cli, write_scenario, tmp_path, body, message):
     path = write_scenario(SCENARIO + body)
     code, out, err = cli("run", path, "--out", tmp_path / "runs")
@@ -248,13 +294,16 @@ def test_bad_dataset_scenario_exit_2_one_line_no_run_dir(cli, write_scenario, tm
     assert code == 2 and message in err
 
 
-@pytest.mark.parametrize("body,message", [
-    ('model_preset = "meng2021"\n', "unknown preset 'meng2021' (did you mean 'meng2020'?)"),
-    ('model = "six_dfo"\n', "unknown model 'six_dfo' (did you mean 'six_dof'?)"),
-    ('faults = { crak = [20] }\n', "unknown fault 'crak' (did you mean 'crack'?)"),
-    ('teeth = [26]\n', "tooth 26 is outside 1..25"),
-    ('channel = "casing_x"\n', "has no channel 'casing_x'"),
-])
+@pytest.mark.parametrize(
+    "body,message",
+    [
+        ('model_preset = "meng2021"\n', "unknown preset 'meng2021' (did you mean 'meng2020'?)"),
+        ('model = "six_dfo"\n', "unknown model 'six_dfo' (did you mean 'six_dof'?)"),
+        ("faults = { crak = [20] }\n", "unknown fault 'crak' (did you mean 'crack'?)"),
+        ("teeth = [26]\n", "tooth 26 is outside 1..25"),
+        ('channel = "casing_x"\n', "has no channel 'casing_x'"),
+    ],
+)
 def test_model_dependent_mistakes_in_a_dataset_scenario(cli, write_scenario, tmp_path, body, message):
     path = write_scenario(SCENARIO + 'preset = "B-6-ch5"\n' + body)
     code, out, err = cli("validate", path)

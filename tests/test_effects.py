@@ -135,8 +135,15 @@ def test_all_builtin_effects_are_registered_with_level_symmetry_and_a_physical_d
 
 def test_search_space_has_bounds_scales_and_choices():
     space = {p["name"]: p for p in REG.get("effect", "drive_inertias").space()}
-    assert space["k_c"] == {"name": "k_c", "unit": "N*m/rad", "low": 1.0, "high": 1e8, "default": 1e4,
-                            "integer": False, "log": True}
+    assert space["k_c"] == {
+        "name": "k_c",
+        "unit": "N*m/rad",
+        "low": 1.0,
+        "high": 1e8,
+        "default": 1e4,
+        "integer": False,
+        "log": True,
+    }
     assert space["c_c"]["log"] is False
     noise = {p["name"]: p for p in REG.get("effect", "sensor_noise").space()}
     assert noise["kind"] == {"name": "kind", "choices": list(NOISE_KINDS), "default": "gaussian"}
@@ -272,9 +279,22 @@ def test_tooth_friction_is_dissipative_linear_and_mostly_across_the_line_of_acti
     sim, _, _ = configured()
     t = np.arange(5000) / 200e3
     tvms = sim.stiffness.mesh_stiffness(points=5000)
-    exc = Excitation(fs=200e3, speed_hz=40.0, load_nm=20.0, t=t, angle=2 * np.pi * 40.0 * t, tvms=tvms,
-                     load=np.full(5000, 20.0), dofs=sim.dofs, M=sim.M, P=sim.P, mu=sim.mu, c0=0.0,
-                     load_dof=sim.load_dof, stiffness=sim.stiffness)
+    exc = Excitation(
+        fs=200e3,
+        speed_hz=40.0,
+        load_nm=20.0,
+        t=t,
+        angle=2 * np.pi * 40.0 * t,
+        tvms=tvms,
+        load=np.full(5000, 20.0),
+        dofs=sim.dofs,
+        M=sim.M,
+        P=sim.P,
+        mu=sim.mu,
+        c0=0.0,
+        load_dof=sim.load_dof,
+        stiffness=sim.stiffness,
+    )
     force, t1, t2 = friction_pattern(exc, 0.05)
     power = t1 + t2 * sim.pair.pinion.R_b / sim.pair.gear.R_b  # on the rigid rotation, per rad/s
     assert power.max() <= 1e-9 and power.min() < -1e-3  # friction only dissipates
@@ -311,8 +331,21 @@ def test_speed_fluctuation_modulates_the_mesh_at_its_order_and_moves_the_tacho()
     assert sidebands(x, 25, q=3) > 0.05 > 1e-10 > sidebands(base, 25, q=3)
     assert sidebands(x, 25, q=3) > 100 * sidebands(x, 25, q=1)  # at its own order
     # the dataset row is resampled at the true angle (order tracking): mesh harmonics stay on their orders
-    row = simulate_unit(SimTask("six_dof", "meng2020", fs_of(B), 40.0, 20.0, "pinion_y", None, None, (1,),
-                                (effect_spec("speed_fluctuation", amplitude=0.01, order=3),), 1))[0]
+    row = simulate_unit(
+        SimTask(
+            "six_dof",
+            "meng2020",
+            fs_of(B),
+            40.0,
+            20.0,
+            "pinion_y",
+            None,
+            None,
+            (1,),
+            (effect_spec("speed_fluctuation", amplitude=0.01, order=3),),
+            1,
+        )
+    )[0]
     orders, amp = order_spectrum(row)
     assert orders[np.argmax(amp[1:]) + 1] % 25 == 0
     assert np.array_equal(revolution([effect_spec("speed_fluctuation", amplitude=0.0)])[0], base)
@@ -350,8 +383,9 @@ def test_dataset_with_a_symmetry_breaking_effect_simulates_every_tooth():
     ds = build_dataset(spec)
     assert ds.meta["simulations"] == 1 + 2  # healthy once, the crack on each tooth
     for tooth in (1, 9):
-        want = simulate_unit(SimTask("eight_dof", "meng2020", fs_of(B), 40.0, 20.0, "pinion_y", "crack", 20, (tooth,),
-                                     effects, tooth))[0]
+        want = simulate_unit(
+            SimTask("eight_dof", "meng2020", fs_of(B), 40.0, 20.0, "pinion_y", "crack", 20, (tooth,), effects, tooth)
+        )[0]
         row = ds.X[ds.tooth == tooth][0].astype(float) * ds.reference[1] + ds.reference[0]
         assert np.allclose(row, want, rtol=1e-5, atol=1e-4 * rms(want))
     symmetric = spec.with_(effects=(effect_spec("tooth_friction"),))
@@ -362,8 +396,9 @@ def test_dataset_with_a_symmetry_breaking_effect_simulates_every_tooth():
 
 
 def context(seed=0, speed=40.0, reference_rms=1.0) -> SignalContext:
-    return SignalContext(fs=POINTS * speed, speed_hz=speed, t0=123.4, rng=np.random.default_rng(seed),
-                         reference_rms=reference_rms)
+    return SignalContext(
+        fs=POINTS * speed, speed_hz=speed, t0=123.4, rng=np.random.default_rng(seed), reference_rms=reference_rms
+    )
 
 
 @pytest.fixture(scope="module")
@@ -425,7 +460,6 @@ def test_interference_tone_adds_a_non_synchronous_line_at_its_frequency(healthy_
         effect.apply_signal(record, {"frequency": 9e4, "ratio": 0.5}, context())
 
 
-
 @pytest.mark.parametrize("frequency, ratio, noise", [(1234.0, 0.3, None), (333.0, 0.1, ("laplace", 0.0))])
 def test_the_tone_is_read_off_a_target_for_the_diagnosis_to_start_from(frequency, ratio, noise):
     """The diagnosis's needle: a budgeted search over 1 Hz - 20 kHz misses a tone's line, so the
@@ -440,6 +474,7 @@ def test_the_tone_is_read_off_a_target_for_the_diagnosis_to_start_from(frequency
     assert guess["frequency"] == pytest.approx(frequency, rel=0.01)
     assert guess["ratio"] == pytest.approx(ratio, rel=0.4)
     assert REG.get("effect", "tooth_friction").guesses(revolutions, 40.0) == []  # the default: none
+
 
 def test_tsa_averages_the_non_synchronous_tone_away_in_a_dataset():
     tone = (effect_spec("interference_tone", frequency="33.3 Hz", ratio=1.0),)
@@ -474,8 +509,9 @@ def test_cache_keys_without_effects_are_unchanged_and_effects_are_part_of_the_ke
     assert spec.with_(effects=(effect_spec("sensor_noise", kind="laplace", snr_db="0"),)).key() == with_noise.key()
     assert noise == ("sensor_noise", (("kind", "laplace"), ("snr_db", 0.0)))
     # scenario lists are put in the order the effects act in: model, excitation, signal
-    listed = effects_from_tables([{"name": "sensor_noise"}, {"name": "drive_inertias"}, {"name": "tooth_friction"}],
-                                 "here")
+    listed = effects_from_tables(
+        [{"name": "sensor_noise"}, {"name": "drive_inertias"}, {"name": "tooth_friction"}], "here"
+    )
     assert [name for name, _ in listed] == ["drive_inertias", "tooth_friction", "sensor_noise"]
     within = effects_from_tables([{"name": "sensor_noise"}, {"name": "sensor_bandwidth"}], "here")
     assert [name for name, _ in within] == ["sensor_noise", "sensor_bandwidth"]  # within a level: as given
@@ -500,8 +536,10 @@ healthy = 2
 
 
 def test_dataset_scenario_with_effects_validates_and_runs(cli, write_scenario, tmp_path, cache):
-    effects = ('effects = [{name = "sensor_noise", kind = "laplace", snr_db = 0}, {name = "drive_inertias"}, '
-               '{name = "shaft_eccentricity", e = "10 um"}]')
+    effects = (
+        'effects = [{name = "sensor_noise", kind = "laplace", snr_db = 0}, {name = "drive_inertias"}, '
+        '{name = "shaft_eccentricity", e = "10 um"}]'
+    )
     path = write_scenario(SCENARIO.format(effects=effects))
     code, out, err = cli("validate", path)
     assert code == 0 and "B-6-fx" in out, err
@@ -515,20 +553,27 @@ def test_dataset_scenario_with_effects_validates_and_runs(cli, write_scenario, t
     assert (cache / f"{summary['key']}.npz").is_file()
 
 
-@pytest.mark.parametrize("effects,message", [
-    ('effects = [{name = "sensor_nose"}]', "unknown effect 'sensor_nose' (did you mean 'sensor_noise'?); known"),
-    ('effects = [{name = "sensor_noise", snr_db = 200}]', "(sensor_noise), parameter 'snr_db': 200 is outside [-20"),
-    ('effects = [{name = "shaft_eccentricity", e = "10 Hz"}]', "parameter 'e': '10 Hz' has the wrong dimension"),
-    ('effects = [{name = "shaft_eccentricity", e = "1 mm"}]', "parameter 'e': 1000 um is outside [0 um, 200 um]"),
-    ('effects = [{name = "sensor_noise", snr = 3}]', "unknown parameter 'snr' (did you mean 'snr_db'?)"),
-    ('effects = [{name = "sensor_noise", kind = "pink"}]', "'pink' is not one of gaussian, laplace, student_t"),
-    ('effects = [{snr_db = 3}]', "missing 'name'"),
-    ('effects = ["sensor_noise"]', "expected a table"),
-    ('effects = {name = "sensor_noise"}', "expected a list"),
-    ('effects = [{name = "speed_fluctuation", order = 1.5}]', "parameter 'order': expected a whole number"),
-])
-def test_bad_effects_in_a_scenario_are_one_line_naming_file_table_and_key(cli, write_scenario, tmp_path, effects,
-                                                                          message):
+@pytest.mark.parametrize(
+    "effects,message",
+    [
+        ('effects = [{name = "sensor_nose"}]', "unknown effect 'sensor_nose' (did you mean 'sensor_noise'?); known"),
+        (
+            'effects = [{name = "sensor_noise", snr_db = 200}]',
+            "(sensor_noise), parameter 'snr_db': 200 is outside [-20",
+        ),
+        ('effects = [{name = "shaft_eccentricity", e = "10 Hz"}]', "parameter 'e': '10 Hz' has the wrong dimension"),
+        ('effects = [{name = "shaft_eccentricity", e = "1 mm"}]', "parameter 'e': 1000 um is outside [0 um, 200 um]"),
+        ('effects = [{name = "sensor_noise", snr = 3}]', "unknown parameter 'snr' (did you mean 'snr_db'?)"),
+        ('effects = [{name = "sensor_noise", kind = "pink"}]', "'pink' is not one of gaussian, laplace, student_t"),
+        ("effects = [{snr_db = 3}]", "missing 'name'"),
+        ('effects = ["sensor_noise"]', "expected a table"),
+        ('effects = {name = "sensor_noise"}', "expected a list"),
+        ('effects = [{name = "speed_fluctuation", order = 1.5}]', "parameter 'order': expected a whole number"),
+    ],
+)
+def test_bad_effects_in_a_scenario_are_one_line_naming_file_table_and_key(
+    cli, write_scenario, tmp_path, effects, message
+):
     path = write_scenario(SCENARIO.format(effects=effects))
     for args in (("validate", path), ("run", path, "--out", tmp_path / "runs")):
         code, out, err = cli(*args)
@@ -541,8 +586,10 @@ def test_bad_effects_in_a_scenario_are_one_line_naming_file_table_and_key(cli, w
 
 
 def test_effects_on_a_measured_file_are_refused(cli, write_scenario, tmp_path):
-    path = write_scenario('[scenario]\nname = "m"\nkind = "dataset"\n\n[[datasets]]\nfile = "x.csv"\n'
-                          'vibration = "v"\nspeed = "40 Hz"\neffects = [{name = "sensor_noise"}]\n')
+    path = write_scenario(
+        '[scenario]\nname = "m"\nkind = "dataset"\n\n[[datasets]]\nfile = "x.csv"\n'
+        'vibration = "v"\nspeed = "40 Hz"\neffects = [{name = "sensor_noise"}]\n'
+    )
     code, _, err = cli("validate", path)
     assert code == 2 and "key 'effects': effects act on simulations" in err
 

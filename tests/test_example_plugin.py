@@ -58,9 +58,24 @@ def site(tmp_path_factory) -> Path:
     source = shutil.copytree(EXAMPLE, work / "src", ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
     target = work / "site"
     result = subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-         "--disable-pip-version-check", "--quiet", "--target", str(target), str(source)],
-        capture_output=True, text=True, timeout=300, check=False,
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            "--disable-pip-version-check",
+            "--quiet",
+            "--target",
+            str(target),
+            str(source),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
     )
     assert result.returncode == 0, result.stdout + result.stderr
     return target
@@ -153,7 +168,9 @@ def test_zero_wear_is_healthy(wear, pairs, models):
     for name in ("h", "A", "I", "L"):
         assert np.array_equal(getattr(section, name), getattr(healthy, name))
     step1 = place_fault_on(wear, pair, tooth=3, step=1)
-    assert np.array_equal(models["luo2019"].mesh_stiffness([step1], 1024).k, models["luo2019"].mesh_stiffness((), 1024).k)
+    assert np.array_equal(
+        models["luo2019"].mesh_stiffness([step1], 1024).k, models["luo2019"].mesh_stiffness((), 1024).k
+    )
     assert wear.rfa(params, pair) == 0.0
 
 
@@ -256,9 +273,13 @@ from gearlab.registry import hookimpl
 @pytest.fixture(scope="module")
 def broken_site(tmp_path_factory) -> Path:
     site = tmp_path_factory.mktemp("broken")
-    fake_distribution(site, "gearlab-needs-missing", "needs_missing",
-                      "import a_library_nobody_installed  # noqa\n")
-    fake_distribution(site, "gearlab-bad-schema", "bad_schema", FAULT_HEAD + """
+    fake_distribution(site, "gearlab-needs-missing", "needs_missing", "import a_library_nobody_installed  # noqa\n")
+    fake_distribution(
+        site,
+        "gearlab-bad-schema",
+        "bad_schema",
+        FAULT_HEAD
+        + """
 class Bump(Fault):
     name = "bump"
     params = (Param("height", "m", 2e-3, 0.0, 1e-3, "default above its upper bound", "mm"),)
@@ -273,8 +294,14 @@ class Bump(Fault):
 @hookimpl
 def gearlab_faults():
     return [Bump()]
-""")
-    fake_distribution(site, "gearlab-crack-clash", "crack_clash", FAULT_HEAD + """
+""",
+    )
+    fake_distribution(
+        site,
+        "gearlab-crack-clash",
+        "crack_clash",
+        FAULT_HEAD
+        + """
 class Impostor(Fault):
     name = "crack"
     params = ()
@@ -289,7 +316,8 @@ class Impostor(Fault):
 @hookimpl
 def gearlab_faults():
     return [Impostor()]
-""")
+""",
+    )
     return site
 
 

@@ -13,7 +13,6 @@ PRESETS = ["luo2019", "meng2020"]
 KINDS = ["crack", "chip", "spall", "pit"]
 
 
-
 def tvms(registry, pair, model, specs, points=4096):
     """specs: (kind, tooth, step) triples, all in one call."""
     placed = []
@@ -83,9 +82,7 @@ def test_crack_loss_grows_with_depth_per_explicit_parameters(registry, pairs, mo
         previous = k
 
 
-@pytest.mark.parametrize(
-    "kind", ["crack", "chip", "spall", "pit"]
-)
+@pytest.mark.parametrize("kind", ["crack", "chip", "spall", "pit"])
 @pytest.mark.parametrize("preset", PRESETS)
 def test_step_1_is_exactly_healthy(registry, pairs, models, preset, kind):
     pair, model = pairs[preset], models[preset]
@@ -191,7 +188,7 @@ def irregularity(diff: np.ndarray) -> int:
     stretches do not count; a smooth dip (spall, crack, chip) changes slope sign once or twice.
     """
     zone = np.flatnonzero(np.abs(diff) > 1e-9 * np.abs(diff).max())
-    segment = diff[zone.min():zone.max() + 1]
+    segment = diff[zone.min() : zone.max() + 1]
     slope = np.diff(segment)
     slope = slope[np.abs(slope) > 1e-3 * np.abs(slope).max()]
     return int(np.count_nonzero(np.sign(slope[1:]) != np.sign(slope[:-1])))
@@ -264,8 +261,10 @@ def test_pit_sections_are_nested(registry, pairs, models):
 @pytest.mark.parametrize("preset", PRESETS)
 def test_rfa_per_figure_2_32(registry, pairs, preset):
     pair = pairs[preset]
-    rfa = {kind: [registry.get("fault", kind).rfa(p, pair) for p in registry.get("fault", kind).ladder(pair)]
-           for kind in KINDS}
+    rfa = {
+        kind: [registry.get("fault", kind).rfa(p, pair) for p in registry.get("fault", kind).ladder(pair)]
+        for kind in KINDS
+    }
     for kind in KINDS:
         assert rfa[kind][0] == 0.0, kind
         assert np.all(np.diff(rfa[kind]) >= 0), kind

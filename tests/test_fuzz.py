@@ -1,6 +1,7 @@
-"""Fuzzing (the quality bar: any input is refused in one line): the scenario loader and the measured-data importers take any input and
-answer with a result or a one-line GearlabInputError: never another exception, never a hang,
-and a rejected run leaves nothing behind.
+"""Fuzzing (the quality bar: any input is refused in one line): the scenario loader and the
+measured-data importers take any input and answer with a result or a one-line
+GearlabInputError: never another exception, never a hang, and a rejected run leaves nothing
+behind.
 
 The examples are derandomised (the same every run, for CI). For a longer hunt set
 GEARLAB_FUZZ_EXAMPLES, e.g. `GEARLAB_FUZZ_EXAMPLES=3000 pytest tests/test_fuzz.py`.
@@ -43,8 +44,13 @@ EXAMPLES = int(os.environ.get("GEARLAB_FUZZ_EXAMPLES", "0"))
 def fuzz(examples: int):
     """Derandomised (the same examples on every run), no example database, and a deadline that
     flags a slow input without failing on a busy machine."""
-    return settings(max_examples=EXAMPLES or examples, derandomize=True, database=None,
-                    deadline=timedelta(seconds=5), suppress_health_check=[HealthCheck.too_slow])
+    return settings(
+        max_examples=EXAMPLES or examples,
+        derandomize=True,
+        database=None,
+        deadline=timedelta(seconds=5),
+        suppress_health_check=[HealthCheck.too_slow],
+    )
 
 
 @contextlib.contextmanager
@@ -88,27 +94,55 @@ def measured_files_absolute(doc: dict) -> dict | None:
 
 
 def real_scenarios() -> dict[str, dict]:
-    out = {p.name: measured_files_absolute(tomllib.loads(p.read_text()))
-           for p in sorted((ROOT / "scenarios").glob("*.toml"))}
+    out = {
+        p.name: measured_files_absolute(tomllib.loads(p.read_text()))
+        for p in sorted((ROOT / "scenarios").glob("*.toml"))
+    }
     out = {name: doc for name, doc in out.items() if doc is not None}
     # what the shipped scenarios do not show: measured data, a study's overrides, explicit faults
     out["measured.toml"] = {
         "scenario": {"name": "measured", "kind": "dataset"},
-        "datasets": [{"file": "rec.npz", "vibration": "acc", "tacho": "tacho", "labels": "label",
-                      "class_names": ["healthy", "fault"], "fs": "50 kHz", "transient": "none"}],
+        "datasets": [
+            {
+                "file": "rec.npz",
+                "vibration": "acc",
+                "tacho": "tacho",
+                "labels": "label",
+                "class_names": ["healthy", "fault"],
+                "fs": "50 kHz",
+                "transient": "none",
+            }
+        ],
     }
     out["study.toml"] = {
         "scenario": {"name": "study", "kind": "noise_study"},
         "study": {"noises": ["gaussian"]},
-        "dataset": {"teeth": [1, 2], "duplicates": 2, "healthy": 40, "revolutions": 4, "speed": "25 Hz",
-                    "faults": {"crack": [5, 10], "pit": [20]}, "noise": {"snr_db": 3, "seed": 1}},
+        "dataset": {
+            "teeth": [1, 2],
+            "duplicates": 2,
+            "healthy": 40,
+            "revolutions": 4,
+            "speed": "25 Hz",
+            "faults": {"crack": [5, 10], "pit": [20]},
+            "noise": {"snr_db": 3, "seed": 1},
+        },
         "protocol": {"runs": 2, "batch": 8, "epochs": 3},
     }
     out["cases.toml"] = {
         "scenario": {"name": "cases", "kind": "stiffness"},
         "stiffness": {"pair": "meng2020", "points": 256},
-        "cases": [{"name": "c", "faults": [{"kind": "spall", "tooth": 3,
-                                            "params": {"w_s": "8 mm", "l_s": "1 mm", "h_s": "0.5 mm", "x_1": "2 mm"}}]}],
+        "cases": [
+            {
+                "name": "c",
+                "faults": [
+                    {
+                        "kind": "spall",
+                        "tooth": 3,
+                        "params": {"w_s": "8 mm", "l_s": "1 mm", "h_s": "0.5 mm", "x_1": "2 mm"},
+                    }
+                ],
+            }
+        ],
     }
     return out
 
@@ -116,36 +150,173 @@ def real_scenarios() -> dict[str, dict]:
 REAL = real_scenarios()
 
 # Names a scenario refers to: plugin, preset, model and channel names, units, choices.
-WORDS = ["crack", "chip", "spall", "pit", "ten_dof", "eight_dof", "six_dof", "luo2019", "meng2020", "A-pinion",
-         "A-casing-ch5", "B-6-ch5", "B-8", "A-casing_noise-gaussian", "fast", "cnn3", "source_only", "target_only",
-         "mmd", "dann", "coral", "finetune", "gaussian", "laplace", "student_t", "pinion_x", "pinion_y", "casing_x",
-         "stats", "none", "local", "ray", "auto", "cpu", "cuda", "stiffness", "dataset", "transfer", "noise_study",
-         "all", "classifier", "last", "healthy", "fault", "rec.npz", "rec.csv", "x.wav", "../x.mat", "/", ".",
-         "runs", "a/b", ".hidden", "naïve ✓", "\u0000", "\n", "é" * 300]
-UNIT_TEXTS = ["3.175 mm", "20 deg", "25.2 Hz", "7 N*m", "200 kHz", "-5 Hz", "0 Hz", "1e400 Hz", "nan Hz",
-              "inf N*m", "25 kg", "furlong", "1,5 mm", "9**9**9 Hz", "2**10000 Hz", "((9**9)**9)**9 Hz",
-              "10**400 Hz", "1e308 kHz", "5 %", "pi", "", " ", "3 µm", "10 degC", "1/0 Hz", "Hz", "m/m",
-              "40 rpm", "1 Hz Hz", "(", "1 Hz)", "1 + 2 Hz", "[1, 2] Hz", "1e-320 Hz", "0x10 Hz", "1_000 Hz"]
-NUMBERS = [0, 1, -1, 2, 5, 13, 20, 21, 64, 4096, 2 ** 20 + 1, 2 ** 31, 2 ** 63, 2 ** 64 + 1, 10 ** 30, -(10 ** 30),
-           10 ** 400, 0.0, -0.0, 0.5, 1e-9, 1e-320, 0.95, 1.5, 1e308, float("inf"), float("-inf"), float("nan")]
+WORDS = [
+    "crack",
+    "chip",
+    "spall",
+    "pit",
+    "ten_dof",
+    "eight_dof",
+    "six_dof",
+    "luo2019",
+    "meng2020",
+    "A-pinion",
+    "A-casing-ch5",
+    "B-6-ch5",
+    "B-8",
+    "A-casing_noise-gaussian",
+    "fast",
+    "cnn3",
+    "source_only",
+    "target_only",
+    "mmd",
+    "dann",
+    "coral",
+    "finetune",
+    "gaussian",
+    "laplace",
+    "student_t",
+    "pinion_x",
+    "pinion_y",
+    "casing_x",
+    "stats",
+    "none",
+    "local",
+    "ray",
+    "auto",
+    "cpu",
+    "cuda",
+    "stiffness",
+    "dataset",
+    "transfer",
+    "noise_study",
+    "all",
+    "classifier",
+    "last",
+    "healthy",
+    "fault",
+    "rec.npz",
+    "rec.csv",
+    "x.wav",
+    "../x.mat",
+    "/",
+    ".",
+    "runs",
+    "a/b",
+    ".hidden",
+    "naïve ✓",
+    "\u0000",
+    "\n",
+    "é" * 300,
+]
+UNIT_TEXTS = [
+    "3.175 mm",
+    "20 deg",
+    "25.2 Hz",
+    "7 N*m",
+    "200 kHz",
+    "-5 Hz",
+    "0 Hz",
+    "1e400 Hz",
+    "nan Hz",
+    "inf N*m",
+    "25 kg",
+    "furlong",
+    "1,5 mm",
+    "9**9**9 Hz",
+    "2**10000 Hz",
+    "((9**9)**9)**9 Hz",
+    "10**400 Hz",
+    "1e308 kHz",
+    "5 %",
+    "pi",
+    "",
+    " ",
+    "3 µm",
+    "10 degC",
+    "1/0 Hz",
+    "Hz",
+    "m/m",
+    "40 rpm",
+    "1 Hz Hz",
+    "(",
+    "1 Hz)",
+    "1 + 2 Hz",
+    "[1, 2] Hz",
+    "1e-320 Hz",
+    "0x10 Hz",
+    "1_000 Hz",
+]
+NUMBERS = [
+    0,
+    1,
+    -1,
+    2,
+    5,
+    13,
+    20,
+    21,
+    64,
+    4096,
+    2**20 + 1,
+    2**31,
+    2**63,
+    2**64 + 1,
+    10**30,
+    -(10**30),
+    10**400,
+    0.0,
+    -0.0,
+    0.5,
+    1e-9,
+    1e-320,
+    0.95,
+    1.5,
+    1e308,
+    float("inf"),
+    float("-inf"),
+    float("nan"),
+]
 
 # Every plugin parameter (fault sizes, adapter settings, model constants) and every schema key.
-PARAMS = sorted({p.name for plugins in get_registry().plugins.values() for plugin in plugins.values()
-                 for p in getattr(plugin, "params", ())})
+PARAMS = sorted(
+    {
+        p.name
+        for plugins in get_registry().plugins.values()
+        for plugin in plugins.values()
+        for p in getattr(plugin, "params", ())
+    }
+)
 QUANTITIES = ["speed", "load", "fs", "snr_db", *PARAMS]
-KEYS = sorted({*SCENARIO_TABLE.keys, *OUTPUT_TABLE.keys, *EXECUTION_TABLE.keys, *QUANTITIES,
-               *(key for module in SCENARIO_KINDS.values() for table in module.TABLES.values() for key in table.keys),
-               "kind", "tooth", "step", "params", "seed"})
+KEYS = sorted(
+    {
+        *SCENARIO_TABLE.keys,
+        *OUTPUT_TABLE.keys,
+        *EXECUTION_TABLE.keys,
+        *QUANTITIES,
+        *(key for module in SCENARIO_KINDS.values() for table in module.TABLES.values() for key in table.keys),
+        "kind",
+        "tooth",
+        "step",
+        "params",
+        "seed",
+    }
+)
 TABLES = sorted({"scenario", "output", "execution", *(name for m in SCENARIO_KINDS.values() for name in m.TABLES)})
 
 scalars = st.one_of(
-    st.sampled_from(NUMBERS), st.integers(), st.floats(), st.booleans(),
-    st.sampled_from(WORDS + UNIT_TEXTS), st.text(max_size=12),
+    st.sampled_from(NUMBERS),
+    st.integers(),
+    st.floats(),
+    st.booleans(),
+    st.sampled_from(WORDS + UNIT_TEXTS),
+    st.text(max_size=12),
 )
 values = st.recursive(
     scalars,
-    lambda inner: st.one_of(st.lists(inner, max_size=4),
-                            st.dictionaries(st.sampled_from(KEYS) | st.text(max_size=8), inner, max_size=4)),
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=4), st.dictionaries(st.sampled_from(KEYS) | st.text(max_size=8), inner, max_size=4)
+    ),
     max_leaves=8,
 )
 keys = st.sampled_from(KEYS) | st.text(max_size=10)
@@ -166,7 +337,7 @@ def nudge(value):
     if isinstance(value, bool):
         return st.just(not value)
     if isinstance(value, int):
-        return st.sampled_from([-value, 0, value + 1, value * 10 ** 12, 2.5, str(value), 10 ** 400])
+        return st.sampled_from([-value, 0, value + 1, value * 10**12, 2.5, str(value), 10**400])
     if isinstance(value, float):
         return st.sampled_from([-value, 0.0, value * 1e300, float("nan"), float("inf"), 3, str(value)])
     if isinstance(value, str):
@@ -212,8 +383,15 @@ def mutated_scenarios(draw) -> dict:
 def random_scenarios(draw) -> dict:
     """A document of the right shape with random contents: [scenario] of some kind, then
     tables (and arrays of tables) named as real ones, holding schema keys with any values."""
-    doc: dict = {"scenario": draw(st.dictionaries(st.sampled_from(["name", "kind", "description"]) | keys,
-                                                  st.sampled_from(sorted(SCENARIO_KINDS)) | scalars, max_size=4))}
+    doc: dict = {
+        "scenario": draw(
+            st.dictionaries(
+                st.sampled_from(["name", "kind", "description"]) | keys,
+                st.sampled_from(sorted(SCENARIO_KINDS)) | scalars,
+                max_size=4,
+            )
+        )
+    }
     for name in draw(st.lists(st.sampled_from(TABLES) | st.text(max_size=6), max_size=5)):
         table = st.dictionaries(keys, values, max_size=6)
         doc[name] = draw(st.lists(table, max_size=3) if draw(st.booleans()) else table)
@@ -237,6 +415,7 @@ def scenario_file(tmp_path_factory):
 
 def validate(path: Path):
     """What `gearlab validate` does, in this process: load and resolve, describe."""
+
     def action():
         scenario = load_scenario(path)
         return SCENARIO_KINDS[scenario.kind].describe(scenario)
@@ -275,7 +454,7 @@ def damaged_texts(draw) -> bytes:
     if op == "cut":
         return text[:at]
     if op == "flip":
-        return text[:at] + draw(st.binary(min_size=1, max_size=4)) + text[at + 4:]
+        return text[:at] + draw(st.binary(min_size=1, max_size=4)) + text[at + 4 :]
     return text[:at] + draw(st.sampled_from([b"\n", b"=", b"[", b"]]", b'"', b"\\u0000", b"\xff", b"\x00"])) + text[at:]
 
 
@@ -290,23 +469,35 @@ def test_damaged_scenario_files_load_or_are_refused(scenario_file, data):
 FOUND = {
     "NaN learning rate": ("quick.toml", ("protocol", "lr"), float("nan"), "outside [1e-09, 10.0]"),
     "NaN dropout": ("quick.toml", ("network", "dropout"), float("nan"), "outside"),
-    "huge integer speed": ("dataset_B.toml", ("datasets", 0, "speed"), 10 ** 400, "expected a finite number"),
+    "huge integer speed": ("dataset_B.toml", ("datasets", 0, "speed"), 10**400, "expected a finite number"),
     "huge power in a unit text": ("dataset_B.toml", ("datasets", 0, "speed"), "9**9**9 Hz", "power"),
     "decimal comma": ("dataset_B.toml", ("datasets", 0, "speed"), "25,2 Hz", "decimal point"),
     "percent as a speed": ("dataset_B.toml", ("datasets", 0, "speed"), "5 %", "wrong dimension"),
-    "billions of repetitions": ("quick.toml", ("protocol", "repetitions"), 10 ** 12, "outside"),
+    "billions of repetitions": ("quick.toml", ("protocol", "repetitions"), 10**12, "outside"),
     "name with a NUL": ("quick.toml", ("scenario", "name"), "a\u0000b", "plain name"),
     "output dir with a NUL": ("quick.toml", ("output", "dir"), "runs\u0000", "NUL"),
-    "fault kind not a name": ("stiffness_verification.toml", ("cases", 0, "faults", 0, "kind"), ["crack"],
-                              "expected a fault name"),
-    "tooth not a number": ("stiffness_verification.toml", ("cases", 0, "faults", 0, "tooth"), "2",
-                           "expected a tooth number"),
-    "params not a table": ("stiffness_verification.toml", ("cases", 0, "faults", 2, "params"), [{"w_s": 1}],
-                           "expected a table of parameters"),
+    "fault kind not a name": (
+        "stiffness_verification.toml",
+        ("cases", 0, "faults", 0, "kind"),
+        ["crack"],
+        "expected a fault name",
+    ),
+    "tooth not a number": (
+        "stiffness_verification.toml",
+        ("cases", 0, "faults", 0, "tooth"),
+        "2",
+        "expected a tooth number",
+    ),
+    "params not a table": (
+        "stiffness_verification.toml",
+        ("cases", 0, "faults", 2, "params"),
+        [{"w_s": 1}],
+        "expected a table of parameters",
+    ),
     "key with a line break": ("quick.toml", ("protocol", "ks\nx"), 1, "'ks\\nx'"),
     "k that is a list": ("quick.toml", ("protocol", "ks"), [[], 4], "expected a list of distinct whole numbers"),
-    "a seed torch cannot take": ("quick.toml", ("protocol", "seed"), 2 ** 64, "outside [0, 4294967295]"),
-    "a dataset beyond memory": ("study.toml", ("dataset", "duplicates"), 10 ** 400, "expected at most 1000000"),
+    "a seed torch cannot take": ("quick.toml", ("protocol", "seed"), 2**64, "outside [0, 4294967295]"),
+    "a dataset beyond memory": ("study.toml", ("dataset", "duplicates"), 10**400, "expected at most 1000000"),
 }
 
 
@@ -326,7 +517,7 @@ def test_inputs_found_by_fuzzing_are_refused_clearly(scenario_file, case):
 
 def test_an_snr_beyond_any_float_is_refused(scenario_file):
     doc = copy.deepcopy(REAL["dataset_B.toml"])
-    doc["datasets"][3]["noise"]["snr_db"] = 10 ** 400
+    doc["datasets"][3]["noise"]["snr_db"] = 10**400
     scenario_file.write_bytes(toml_bytes(doc))
     with pytest.raises(GearlabInputError, match="snr_db"):
         load_scenario(scenario_file)
@@ -334,8 +525,9 @@ def test_an_snr_beyond_any_float_is_refused(scenario_file):
 
 def test_integer_beyond_pythons_conversion_limit_is_refused(scenario_file):
     """tomllib raises ValueError, not TOMLDecodeError, on an integer of more than 4300 digits."""
-    scenario_file.write_text('[scenario]\nname = "n"\nkind = "stiffness"\n[stiffness]\npair = "luo2019"\n'
-                             f"points = {'9' * 5000}\n")
+    scenario_file.write_text(
+        f'[scenario]\nname = "n"\nkind = "stiffness"\n[stiffness]\npair = "luo2019"\npoints = {"9" * 5000}\n'
+    )
     with pytest.raises(GearlabInputError, match="invalid TOML: Exceeds the limit"):
         load_scenario(scenario_file)
 
@@ -365,14 +557,14 @@ def damaged_bytes(draw, data: bytes) -> bytes:
         return data[:at]
     if op == "flip":
         bit = draw(st.integers(0, 7))
-        return data[:at] + bytes([data[at] ^ (1 << bit)]) + data[at + 1:]
+        return data[:at] + bytes([data[at] ^ (1 << bit)]) + data[at + 1 :]
     if op == "insert":
         return data[:at] + draw(st.binary(min_size=1, max_size=16)) + data[at:]
     if op == "overwrite":
         chunk = draw(st.binary(min_size=1, max_size=64))
-        return data[:at] + chunk + data[at + len(chunk):]
+        return data[:at] + chunk + data[at + len(chunk) :]
     length = draw(st.integers(1, 256))
-    return data[:at] + data[at:at + length] + data[at:]
+    return data[:at] + data[at : at + length] + data[at:]
 
 
 def import_file(path: Path, **options):
@@ -406,19 +598,52 @@ def channels() -> st.SearchStrategy:
     t = np.arange(N)
     theta = 0.3 + 2 * np.pi * 25 * t / 25e3
     shaped = [
-        np.sin(3 * theta), (theta + np.pi) % (2 * np.pi) - np.pi, theta, ((theta % (2 * np.pi)) < 1).astype(float) * 5,
-        np.zeros(N), np.full(N, np.nan), np.where(t == 1234, np.inf, 0.0), np.full(N, 1e308), np.full(N, 5e-324),
-        t.astype(np.int16), (t % 2).astype(bool), np.where(t < N // 2, "healthy", "fault"), np.full(N, "x\ny"),
-        t * (1 + 1j), np.zeros(0), np.array(7.0), np.array("text"), np.zeros((N, 2)), np.zeros((1, N)),
-        np.zeros(N - 1), np.zeros(N, dtype=np.float16), -theta, theta * 1e6, np.repeat([0.0, 1.0, 2.0], N // 3),
+        np.sin(3 * theta),
+        (theta + np.pi) % (2 * np.pi) - np.pi,
+        theta,
+        ((theta % (2 * np.pi)) < 1).astype(float) * 5,
+        np.zeros(N),
+        np.full(N, np.nan),
+        np.where(t == 1234, np.inf, 0.0),
+        np.full(N, 1e308),
+        np.full(N, 5e-324),
+        t.astype(np.int16),
+        (t % 2).astype(bool),
+        np.where(t < N // 2, "healthy", "fault"),
+        np.full(N, "x\ny"),
+        t * (1 + 1j),
+        np.zeros(0),
+        np.array(7.0),
+        np.array("text"),
+        np.zeros((N, 2)),
+        np.zeros((1, N)),
+        np.zeros(N - 1),
+        np.zeros(N, dtype=np.float16),
+        -theta,
+        theta * 1e6,
+        np.repeat([0.0, 1.0, 2.0], N // 3),
     ]
     return st.sampled_from(shaped)
 
 
-rates = st.sampled_from([np.array(25e3), np.array(25e3, dtype=np.float32), np.array(0.0), np.array(-1.0),
-                         np.array(np.nan), np.array(1e-300), np.array(1e300), np.array("25k"), np.array([25e3, 1.0]),
-                         np.array(True), np.array(2 ** 62), np.arange(N) / 25e3, np.arange(N)[::-1] / 25e3,
-                         np.array(25e3 + 0j)])
+rates = st.sampled_from(
+    [
+        np.array(25e3),
+        np.array(25e3, dtype=np.float32),
+        np.array(0.0),
+        np.array(-1.0),
+        np.array(np.nan),
+        np.array(1e-300),
+        np.array(1e300),
+        np.array("25k"),
+        np.array([25e3, 1.0]),
+        np.array(True),
+        np.array(2**62),
+        np.arange(N) / 25e3,
+        np.arange(N)[::-1] / 25e3,
+        np.array(25e3 + 0j),
+    ]
+)
 
 
 @st.composite
@@ -453,8 +678,9 @@ def write_record(directory: Path, fmt: str, arrays: dict) -> Path | None:
         path = directory / "r.csv"
         columns = {k: np.atleast_1d(v).ravel() for k, v in arrays.items()}
         rows = max(len(c) for c in columns.values())
-        lines = [",".join(columns)] + [",".join(str(c[i]) if i < len(c) else "" for c in columns.values())
-                                       for i in range(rows)]
+        lines = [",".join(columns)] + [
+            ",".join(str(c[i]) if i < len(c) else "" for c in columns.values()) for i in range(rows)
+        ]
         path.write_text("\n".join(lines) + "\n")
     elif fmt == "h5":
         path = directory / "r.h5"
@@ -551,8 +777,10 @@ def test_run_refused_at_work_leaves_no_run_directory(cli_dir, case):
     path = cli_dir / "refused.toml"
     if case == "measured file damaged":
         (cli_dir / "bad.npz").write_bytes(b"PK\x03\x04 not really a zip")
-        doc = {"scenario": {"name": "m", "kind": "dataset"},
-               "datasets": [{"file": "bad.npz", "vibration": "acc", "speed": 25.0}]}
+        doc = {
+            "scenario": {"name": "m", "kind": "dataset"},
+            "datasets": [{"file": "bad.npz", "vibration": "acc", "speed": 25.0}],
+        }
         args, fact = [], "cannot read"
     else:
         # valid as written (28 training samples); --quick leaves 8, fewer than a batch
@@ -570,10 +798,28 @@ def test_run_refused_at_work_leaves_no_run_directory(cli_dir, case):
 # ============================================================================= hostile scenarios (hardening)
 
 # What a hostile (or careless) user puts into a name that may become a path component.
-PATH_TEXTS = ["../../../../../../tmp/gearlab-escape", "..", ".", "/", "/tmp/gearlab-abs", "a/b", "a\\..\\b", "~",
-              "../x", "x/..", ".hidden", " ", "x\u0000y", "con", "..\u2215x", "%2e%2e%2fx", "a\nb", "é" * 120,
-              "x" * 5000]
-HUGE = [10 ** 30, -(10 ** 30), 2 ** 64, 1e300, -1e300, float("inf"), float("nan"), 10 ** 400]
+PATH_TEXTS = [
+    "../../../../../../tmp/gearlab-escape",
+    "..",
+    ".",
+    "/",
+    "/tmp/gearlab-abs",
+    "a/b",
+    "a\\..\\b",
+    "~",
+    "../x",
+    "x/..",
+    ".hidden",
+    " ",
+    "x\u0000y",
+    "con",
+    "..\u2215x",
+    "%2e%2e%2fx",
+    "a\nb",
+    "é" * 120,
+    "x" * 5000,
+]
+HUGE = [10**30, -(10**30), 2**64, 1e300, -1e300, float("inf"), float("nan"), 10**400]
 
 
 def name_spots(doc: dict) -> list[tuple[dict, str]]:
@@ -593,8 +839,9 @@ def hostile_scenarios(draw) -> bytes:
     """A shipped (or the measured) scenario with a path in a name-like field, a huge value,
     or a value nested hundreds deep; as TOML text (tomli_w itself recurses too deep for the last)."""
     rnd = random.Random(draw(st.integers(0, 2**64)))
-    doc = copy.deepcopy(REAL[rnd.choice(["measured.toml", "measured.toml", "cases.toml", "quick.toml",
-                                         "dataset_B.toml", "study.toml"])])
+    doc = copy.deepcopy(
+        REAL[rnd.choice(["measured.toml", "measured.toml", "cases.toml", "quick.toml", "dataset_B.toml", "study.toml"])]
+    )
     op = rnd.choice(["path", "path", "huge", "deep"])
     if op == "path":
         for _ in range(rnd.randint(1, 2)):

@@ -10,8 +10,12 @@ from gearlab.physics.presets import PAIR_PRESETS, gear_pair
 
 PRESETS = ["luo2019", "meng2020"]
 # Which gear of each preset has its root circle below the base circle (thesis case 1, Z <= 41).
-CASE_1 = {("luo2019", "pinion"): True, ("luo2019", "gear"): False,
-          ("meng2020", "pinion"): True, ("meng2020", "gear"): True}
+CASE_1 = {
+    ("luo2019", "pinion"): True,
+    ("luo2019", "gear"): False,
+    ("meng2020", "pinion"): True,
+    ("meng2020", "gear"): True,
+}
 
 
 @pytest.fixture(scope="module", params=PRESETS)
@@ -69,17 +73,24 @@ def test_contact_ratio_matches_the_standard_formula(pair):
     p, g, m, a0 = pair.pinion, pair.gear, pair.module, pair.pressure_angle
     a = 0.5 * m * (pair.Z1 + pair.Z2)
     eps = (math.sqrt(p.R_a**2 - p.R_b**2) + math.sqrt(g.R_a**2 - g.R_b**2) - a * math.sin(a0)) / (
-        math.pi * m * math.cos(a0))
+        math.pi * m * math.cos(a0)
+    )
     assert 1.0 < pair.contact_ratio < 2.0
     assert pair.contact_ratio == pytest.approx(eps, abs=1e-9)
 
 
 def test_theta_d_is_eq_2_49_with_cos_alpha0(pair):
     Z1, Z2, a0 = pair.Z1, pair.Z2, pair.pressure_angle
-    root = math.sqrt((Z2 + 2) ** 2 + (Z1 + Z2) ** 2
-                     - 2 * (Z2 + 2) * (Z1 + Z2) * math.cos(math.acos(Z2 * math.cos(a0) / (Z2 + 2)) - a0))
-    theta_d = (math.tan(math.acos(Z1 * math.cos(a0) / (Z1 + 2))) - 2 * math.pi / Z1
-               - math.tan(math.acos(Z1 * math.cos(a0) / root)))
+    root = math.sqrt(
+        (Z2 + 2) ** 2
+        + (Z1 + Z2) ** 2
+        - 2 * (Z2 + 2) * (Z1 + Z2) * math.cos(math.acos(Z2 * math.cos(a0) / (Z2 + 2)) - a0)
+    )
+    theta_d = (
+        math.tan(math.acos(Z1 * math.cos(a0) / (Z1 + 2)))
+        - 2 * math.pi / Z1
+        - math.tan(math.acos(Z1 * math.cos(a0) / root))
+    )
     assert pair.theta_d == pytest.approx(theta_d, abs=1e-12)
     assert pair.theta_s == pytest.approx(2 * math.pi / Z1 - theta_d, abs=1e-12)  # eq. 2.50
 
@@ -111,8 +122,9 @@ def test_alpha_5_on_the_root_circle(pressure_deg):
     module = 2e-3
     case_2 = 0
     for Z in range(42, 301):
-        g = Gear(Z=Z, module=module, pressure_angle=a0, addendum=1.0, clearance=0.25,
-                 hub_radius=5e-3, tool_tip_radius=0.2)
+        g = Gear(
+            Z=Z, module=module, pressure_angle=a0, addendum=1.0, clearance=0.25, hub_radius=5e-3, tool_tip_radius=0.2
+        )
         assert g.root_below_base is (g.R_r <= g.R_b)
         if g.root_below_base:
             continue

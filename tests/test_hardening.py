@@ -66,8 +66,10 @@ def cache_env(tmp_path, monkeypatch) -> Path:
 def measured_scenario(folder: Path, file: str, name: str = "rig", scenario: str = "m") -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{scenario}.toml"
-    path.write_text(f'[scenario]\nname = "{scenario}"\nkind = "dataset"\n\n[[datasets]]\nname = {json.dumps(name)}\n'
-                    f'file = "{file}"\nvibration = "acc"\ntacho = "tacho"\nlabels = "label"\n')
+    path.write_text(
+        f'[scenario]\nname = "{scenario}"\nkind = "dataset"\n\n[[datasets]]\nname = {json.dumps(name)}\n'
+        f'file = "{file}"\nvibration = "acc"\ntacho = "tacho"\nlabels = "label"\n'
+    )
     return path
 
 
@@ -100,8 +102,9 @@ def tmpfs(tmp_path):
 # ----------------------------------------------------------------------------- 1. path traversal
 
 
-@pytest.mark.parametrize("name", ["../../../../tmp/x", "a/b", "..", ".hidden", "a\\b", "x\x00y", " lead", "tab\there",
-                                  "/abs", "n" * 101])
+@pytest.mark.parametrize(
+    "name", ["../../../../tmp/x", "a/b", "..", ".hidden", "a\\b", "x\x00y", " lead", "tab\there", "/abs", "n" * 101]
+)
 def test_name_with_path_characters_is_refused(tmp_path, record_file, name):
     path = measured_scenario(tmp_path / "sc", str(record_file), name=name)
     with pytest.raises(GearlabInputError, match="key 'name': expected a plain name") as info:
@@ -138,8 +141,12 @@ def test_the_helper_refuses_every_way_out(tmp_path):
     with pytest.raises(GearlabInputError):
         run.write_text("../outside.txt", "x")
     with pytest.raises(GearlabInputError):
-        dataset_kind.figures(import_measured(MeasuredSpec(name="../../../../x", path=str(make_npz(tmp_path)),
-                                                          vibration="acc", speed_hz=25.0)), run)
+        dataset_kind.figures(
+            import_measured(
+                MeasuredSpec(name="../../../../x", path=str(make_npz(tmp_path)), vibration="acc", speed_hz=25.0)
+            ),
+            run,
+        )
     assert not (tmp_path / "outside.txt").exists() and not (tmp_path / "x.png").exists()
 
 
@@ -301,19 +308,25 @@ def test_tampered_cache_entry_is_rebuilt(tmp_path, record_file, cache_env, tampe
 
 def test_deeply_nested_scenario_is_one_line(tmp_path):
     path = tmp_path / "deep.toml"
-    path.write_text('[scenario]\nname = "d"\nkind = "dataset"\n[[datasets]]\npreset = "A-pinion"\n'
-                    f"teeth = {'[' * 500}{']' * 500}\n")
+    path.write_text(
+        f'[scenario]\nname = "d"\nkind = "dataset"\n[[datasets]]\npreset = "A-pinion"\nteeth = {"[" * 500}{"]" * 500}\n'
+    )
     code, err = run_cli("validate", path)
-    assert code == 2 and last_line(err) == f"error: {path}: invalid TOML: nested too deeply (arrays or tables inside " \
-                                           "one another hundreds of levels deep)"
+    assert (
+        code == 2
+        and last_line(err)
+        == f"error: {path}: invalid TOML: nested too deeply (arrays or tables inside "
+        "one another hundreds of levels deep)"
+    )
 
 
 # ----------------------------------------------------------------------------- 7. files that claim more than they hold
 
 
 def _import(path: Path, **options):
-    return import_measured(MeasuredSpec(name="rig", path=str(path), **{"vibration": "acc", "speed_hz": 25.0,
-                                                                       "fs": 25e3, **options}))
+    return import_measured(
+        MeasuredSpec(name="rig", path=str(path), **{"vibration": "acc", "speed_hz": 25.0, "fs": 25e3, **options})
+    )
 
 
 def test_hdf5_dataset_declared_beyond_the_limit_is_refused_before_reading(tmp_path):
@@ -321,8 +334,11 @@ def test_hdf5_dataset_declared_beyond_the_limit_is_refused_before_reading(tmp_pa
     with h5py.File(path, "w") as f:
         f.create_dataset("acc", shape=(400_000_000,), dtype="f8")  # never written: a tiny file
     assert path.stat().st_size < 10_000
-    with pytest.raises(GearlabInputError, match=r"dataset '/acc' would take 3,052 MB, more than the limit of 1,024 MB"
-                                                r".*GEARLAB_MAX_RECORD_MB"):
+    with pytest.raises(
+        GearlabInputError,
+        match=r"dataset '/acc' would take 3,052 MB, more than the limit of 1,024 MB"
+        r".*GEARLAB_MAX_RECORD_MB",
+    ):
         _import(path)
 
 
@@ -397,19 +413,24 @@ def test_errors_never_quote_a_system_file_reached_through_a_link(tmp_path, cache
     (tmp_path / "sc").mkdir()
     (tmp_path / "sc" / "x.csv").symlink_to(secret)
     path = tmp_path / "sc" / "s.toml"
-    path.write_text('[scenario]\nname = "s"\nkind = "dataset"\n[[datasets]]\nname = "rig"\nfile = "x.csv"\n'
-                    'vibration = "acc"\nspeed = 25.0\n')
+    path.write_text(
+        '[scenario]\nname = "s"\nkind = "dataset"\n[[datasets]]\nname = "rig"\nfile = "x.csv"\n'
+        'vibration = "acc"\nspeed = 25.0\n'
+    )
     code, err = run_cli("run", path, "--out", tmp_path / "runs")
     assert code == 2 and "holds no number" in last_line(err)
     assert "SECRETHASH" not in err and "daemon" not in err and "99999" not in err
 
 
-@pytest.mark.parametrize("where,value,fact", [
-    (("protocol", "max_epochs"), 10**20, "key 'max_epochs': 100000000000000000000 is outside [1, 100000]"),
-    (("target", "noise", "seed"), 10**30, "seed must be a whole number in [0, 4294967295]"),
-    (("source", "fs"), 1e300, "key 'fs': 1e+300 is outside (0 Hz, 10 MHz]"),
-    (("source", "speed"), "1 MHz", "key 'speed': '1 MHz' is outside (0 Hz, 1 kHz]"),
-])
+@pytest.mark.parametrize(
+    "where,value,fact",
+    [
+        (("protocol", "max_epochs"), 10**20, "key 'max_epochs': 100000000000000000000 is outside [1, 100000]"),
+        (("target", "noise", "seed"), 10**30, "seed must be a whole number in [0, 4294967295]"),
+        (("source", "fs"), 1e300, "key 'fs': 1e+300 is outside (0 Hz, 10 MHz]"),
+        (("source", "speed"), "1 MHz", "key 'speed': '1 MHz' is outside (0 Hz, 1 kHz]"),
+    ],
+)
 def test_absurd_values_are_refused_with_the_range(tmp_path, where, value, fact):
     doc = tomllib.loads((ROOT / "scenarios" / "quick.toml").read_text())
     node = doc
@@ -457,8 +478,7 @@ def test_a_transfer_runs_copy_finds_its_relative_target_file(tmp_path, record_fi
     data.mkdir()
     (data / "rec.npz").write_bytes(record_file.read_bytes())
     doc = tomllib.loads((ROOT / "scenarios" / "quick.toml").read_text())
-    doc["target"] = {"file": "../data/rec.npz", "vibration": "acc", "tacho": "tacho", "labels": "label",
-                     "name": "rig"}
+    doc["target"] = {"file": "../data/rec.npz", "vibration": "acc", "tacho": "tacho", "labels": "label", "name": "rig"}
     (tmp_path / "sc").mkdir()
     (tmp_path / "sc" / "t.toml").write_text(tomli_w.dumps(doc))
     monkeypatch.chdir(tmp_path / "sc")

@@ -7,8 +7,9 @@ from pathlib import Path
 
 def test_dataset_scenario_imports_a_measured_file(cli, tmp_path, monkeypatch):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    code, _, err = cli("simulate", "--model", "six_dof", "--preset", "meng2020", "--duration", "0.3",
-                       "--out", tmp_path / "rec.npz")
+    code, _, err = cli(
+        "simulate", "--model", "six_dof", "--preset", "meng2020", "--duration", "0.3", "--out", tmp_path / "rec.npz"
+    )
     assert code == 0, err
     scenario = tmp_path / "measured.toml"
     scenario.write_text(

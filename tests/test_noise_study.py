@@ -52,17 +52,29 @@ def synthetic(spec) -> Dataset:
     X = (std * rng.standard_normal((len(label), LENGTH))).astype(np.float32)
     for i, (c, step) in enumerate(zip(label, intensity)):
         if c:
-            X[i, 16 * c:16 * c + 12] += 3.0 * step / 20
+            X[i, 16 * c : 16 * c + 12] += 3.0 * step / 20
     n = len(label)
-    return Dataset(spec=spec, X=X, label=label.astype(np.int8), fault=(label > 0).astype(np.int8),
-                   intensity=intensity.astype(np.int8), tooth=np.array(tooth, dtype=np.int8),
-                   rfa=(intensity / 40).astype(np.float32), revolution=np.zeros(n, dtype=np.int16),
-                   domain=np.zeros(n, dtype=np.int8), domains=(spec.name,))
+    return Dataset(
+        spec=spec,
+        X=X,
+        label=label.astype(np.int8),
+        fault=(label > 0).astype(np.int8),
+        intensity=intensity.astype(np.int8),
+        tooth=np.array(tooth, dtype=np.int8),
+        rfa=(intensity / 40).astype(np.float32),
+        revolution=np.zeros(n, dtype=np.int16),
+        domain=np.zeros(n, dtype=np.int8),
+        domains=(spec.name,),
+    )
 
 
 def small_spec(tsa: bool = False, **changes):
-    few = dict(faults=tuple((f, (5, 10, 15, 20)) for f in ("crack", "chip", "spall", "pit")), teeth=(1, 2),
-               duplicates=3, healthy=96)
+    few = dict(
+        faults=tuple((f, (5, 10, 15, 20)) for f in ("crack", "chip", "spall", "pit")),
+        teeth=(1, 2),
+        duplicates=3,
+        healthy=96,
+    )
     return dataset_preset("A-casing_TSA-gaussian" if tsa else "A-casing_noise-gaussian").with_(**{**few, **changes})
 
 
@@ -121,7 +133,7 @@ def test_test_samples_never_reach_training_or_model_selection(monkeypatch):
     monkeypatch.setattr(ns, "fit_supervised", spy)
     record = run_unit(FAST, data, run=1)
     test = split(np.asarray(data.label, dtype=np.int64), FAST, 1).test
-    (train_rows, val_rows), = seen
+    ((train_rows, val_rows),) = seen
     assert not set(test) & set(train_rows) and not set(test) & set(val_rows)
     assert not set(train_rows) & set(val_rows)
     assert record["n_test"] == len(test) and record["n_train"] == len(train_rows) and record["n_val"] == len(val_rows)
@@ -130,8 +142,21 @@ def test_test_samples_never_reach_training_or_model_selection(monkeypatch):
 def test_run_unit_record_learns_and_is_consistent():
     data = synthetic(small_spec(tsa=True))
     r = run_unit(FAST, data, run=0)
-    for key in ("accuracy", "fault_as_healthy", "healthy_as_fault", "class_accuracy", "confusion", "by_step",
-                "val_accuracy", "best_epoch", "stopped_epoch", "history", "classes", "key", "train_seconds"):
+    for key in (
+        "accuracy",
+        "fault_as_healthy",
+        "healthy_as_fault",
+        "class_accuracy",
+        "confusion",
+        "by_step",
+        "val_accuracy",
+        "best_epoch",
+        "stopped_epoch",
+        "history",
+        "classes",
+        "key",
+        "train_seconds",
+    ):
         assert key in r, key
     cm = np.array(r["confusion"])
     assert cm.shape == (5, 5) and cm.sum() == r["n_test"]
@@ -157,18 +182,35 @@ def test_scores_by_hand():
     assert s["fault_as_healthy"] == pytest.approx(100 * 3 / 5)
     assert s["healthy_as_fault"] == pytest.approx(50)
     assert s["confusion"] == [[1, 1, 0], [2, 1, 0], [1, 0, 1]]
-    assert s["by_step"]["crack"] == {"steps": [5, 20], "rfa": [0.05, 0.2], "n": [2, 1], "correct": [1, 0],
-                                     "as_healthy": [1, 1]}
+    assert s["by_step"]["crack"] == {
+        "steps": [5, 20],
+        "rfa": [0.05, 0.2],
+        "n": [2, 1],
+        "correct": [1, 0],
+        "as_healthy": [1, 1],
+    }
     assert s["class_accuracy"] == pytest.approx({"healthy": 50, "crack": 100 / 3, "chip": 50})
 
 
 def test_aggregate_over_runs():
     def record(acc, correct):
-        return {"classes": ["healthy", "crack"], "accuracy": acc, "fault_as_healthy": 100 - acc,
-                "healthy_as_fault": 0.0, "class_accuracy": {"healthy": 100.0, "crack": acc},
-                "confusion": [[4, 0], [4 - correct, correct]],
-                "by_step": {"crack": {"steps": [1, 20], "rfa": [0.0, 1.0], "n": [2, 2], "correct": [0, correct],
-                                      "as_healthy": [2, 2 - correct]}}}
+        return {
+            "classes": ["healthy", "crack"],
+            "accuracy": acc,
+            "fault_as_healthy": 100 - acc,
+            "healthy_as_fault": 0.0,
+            "class_accuracy": {"healthy": 100.0, "crack": acc},
+            "confusion": [[4, 0], [4 - correct, correct]],
+            "by_step": {
+                "crack": {
+                    "steps": [1, 20],
+                    "rfa": [0.0, 1.0],
+                    "n": [2, 2],
+                    "correct": [0, correct],
+                    "as_healthy": [2, 2 - correct],
+                }
+            },
+        }
 
     a = aggregate([record(50.0, 1), record(100.0, 2)])
     assert a["runs"] == 2
@@ -228,12 +270,21 @@ def test_run_writes_records_summary_tables_and_figures(cli, write_scenario, tmp_
     assert code == 0, err
     run = run_dir(out)
     records = RunDir(run).records()
-    assert [r["unit"] for r in records] == [f"{n}/{v}/run{r}" for n in ("gaussian", "student_t") for r in (0, 1)
-                                            for v in ("noisy", "tsa")]
-    assert fake_builder == ["A-casing_noise-gaussian", "A-casing_TSA-gaussian", "A-casing_noise-student_t",
-                            "A-casing_TSA-student_t"]  # each once
-    assert {r["dataset"] for r in records} == {"A-casing_noise-gaussian", "A-casing_TSA-gaussian",
-                                               "A-casing_noise-student_t", "A-casing_TSA-student_t"}
+    assert [r["unit"] for r in records] == [
+        f"{n}/{v}/run{r}" for n in ("gaussian", "student_t") for r in (0, 1) for v in ("noisy", "tsa")
+    ]
+    assert fake_builder == [
+        "A-casing_noise-gaussian",
+        "A-casing_TSA-gaussian",
+        "A-casing_noise-student_t",
+        "A-casing_TSA-student_t",
+    ]  # each once
+    assert {r["dataset"] for r in records} == {
+        "A-casing_noise-gaussian",
+        "A-casing_TSA-gaussian",
+        "A-casing_noise-student_t",
+        "A-casing_TSA-student_t",
+    }
     summary = json.loads((run / "summary.json").read_text())
     assert summary["kind"] == "noise_study" and summary["units"] == 8
     assert summary["datasets"]["student_t"]["tsa"]["spec"]["noise"]["kind"] == "student_t"
@@ -283,8 +334,9 @@ def test_resume_skips_finished_units(cli, write_scenario, tmp_path, fake_builder
     assert [r["unit"] for r in again] == [r["unit"] for r in records]
     assert again[:2] == records[:2]
     drop = ("train_seconds",)
-    assert [{k: v for k, v in r.items() if k not in drop} for r in again[2:]] == \
-           [{k: v for k, v in r.items() if k not in drop} for r in records[2:]]  # same seeds, same results
+    assert [{k: v for k, v in r.items() if k not in drop} for r in again[2:]] == [
+        {k: v for k, v in r.items() if k not in drop} for r in records[2:]
+    ]  # same seeds, same results
     trained.clear()
     fake_builder.clear()
     assert cli("run", "--resume", run)[0] == 0 and trained == [] and fake_builder == []  # nothing left to do
@@ -311,8 +363,13 @@ def test_shipped_scenario_is_table_4_1(cli):
     for noise, variants in scenario.spec["datasets"].items():
         assert variants["noisy"] == dataset_preset(f"A-casing_noise-{noise}")
         assert variants["tsa"] == dataset_preset(f"A-casing_TSA-{noise}")
-        assert kind.class_sizes(variants["tsa"], "") == {"healthy": 6400, "crack": 1600, "chip": 1600,
-                                                          "spall": 1600, "pit": 1600}
+        assert kind.class_sizes(variants["tsa"], "") == {
+            "healthy": 6400,
+            "crack": 1600,
+            "chip": 1600,
+            "spall": 1600,
+            "pit": 1600,
+        }
     p = scenario.spec["protocol"]
     assert (p.runs, p.batch, p.dropout, p.test_fraction, p.val_fraction) == (5, 256, 0.1, 0.333, 0.2)
 
@@ -327,12 +384,21 @@ def test_shipped_scenario_is_table_4_1(cli):
         (tiny(batch=4096), "[protocol] key 'batch'", "larger than the training set"),
         (tiny().replace("epochs = 4", "epoch = 4"), "[protocol] key 'epoch'", "did you mean 'epochs'"),
         (tiny().replace("runs = 2", "runs = 0"), "[protocol] key 'runs'", "outside"),
-        (tiny().replace("teeth = [1, 2]", "teeth = [1, 2]\nnoise = { kind = 'laplace', snr_db = 0 }"),
-         "[dataset] key 'noise'", "the noise kind comes from [study]"),
-        (tiny().replace("duplicates = 3", "duplicates = 3\npreset = 'A-casing'"), "[dataset] key 'preset'",
-         "unknown key"),
-        (tiny(faults="{ crack = [5, 10], pit = [20] }").replace("duplicates = 3", "duplicates = 1"), "[dataset]",
-         "class 'pit' has 2 samples"),
+        (
+            tiny().replace("teeth = [1, 2]", "teeth = [1, 2]\nnoise = { kind = 'laplace', snr_db = 0 }"),
+            "[dataset] key 'noise'",
+            "the noise kind comes from [study]",
+        ),
+        (
+            tiny().replace("duplicates = 3", "duplicates = 3\npreset = 'A-casing'"),
+            "[dataset] key 'preset'",
+            "unknown key",
+        ),
+        (
+            tiny(faults="{ crack = [5, 10], pit = [20] }").replace("duplicates = 3", "duplicates = 1"),
+            "[dataset]",
+            "class 'pit' has 2 samples",
+        ),
         (tiny() + "\n[studies]\n", "", "unknown table [studies]"),
     ],
 )

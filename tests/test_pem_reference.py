@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from pem_reference import tooth_pair_stiffness
 
 from gearlab.physics.presets import gear_pair
 from gearlab.physics.stiffness import MeshStiffnessModel, StiffnessOptions
-from pem_reference import tooth_pair_stiffness
 
 
 @pytest.mark.parametrize("preset", ["luo2019", "meng2020"])

@@ -46,8 +46,17 @@ def synthetic(faults: int, healthy: int, length: int = 256, seed: int = 0, offse
     X = rng.normal(size=(n, length)) + np.sin(np.arange(length) / 5.0) + offset
     X[fault == 1, ::32] += 4.0
     zeros = np.zeros(n, dtype=np.int8)
-    return Dataset(spec=None, X=X.astype(np.float32), label=fault.copy(), fault=fault, intensity=zeros, tooth=zeros,
-                   rfa=np.zeros(n, np.float32), revolution=zeros.astype(np.int16), domain=zeros)
+    return Dataset(
+        spec=None,
+        X=X.astype(np.float32),
+        label=fault.copy(),
+        fault=fault,
+        intensity=zeros,
+        tooth=zeros,
+        rfa=np.zeros(n, np.float32),
+        revolution=zeros.astype(np.int16),
+        domain=zeros,
+    )
 
 
 SOURCE = synthetic(20, 30, seed=1)
@@ -59,15 +68,33 @@ def method(adapter: str, supervised: bool = False, **params):
 
 
 METHODS = (
-    method("source_only"), method("target_only", True), method("mmd"), method("mmd", True), method("dann"),
-    method("coral", True), method("finetune", True, variant="classifier"), method("matched_filter"),
+    method("source_only"),
+    method("target_only", True),
+    method("mmd"),
+    method("mmd", True),
+    method("dann"),
+    method("coral", True),
+    method("finetune", True, variant="classifier"),
+    method("matched_filter"),
     method("matched_filter", True),
 )
 
 
 def tiny(**changes) -> Protocol:
-    base = Protocol(methods=METHODS, ks=(0, 2), repetitions=2, target_train=12, batch=4, prime_epochs=2,
-                    baseline_epochs=3, patience=2, min_epochs=2, max_epochs=3, dropout=0.1, device="cpu")
+    base = Protocol(
+        methods=METHODS,
+        ks=(0, 2),
+        repetitions=2,
+        target_train=12,
+        batch=4,
+        prime_epochs=2,
+        baseline_epochs=3,
+        patience=2,
+        min_epochs=2,
+        max_epochs=3,
+        dropout=0.1,
+        device="cpu",
+    )
     return replace(base, **changes)
 
 
@@ -96,8 +123,11 @@ def test_split_is_fixed_by_seed_repetition_and_k():
     p = tiny()
     a, b = split(p, SOURCE, TARGET, 1, 2), split(p, SOURCE, TARGET, 1, 2)
     assert all(np.array_equal(getattr(a, f), getattr(b, f)) for f in a.__dataclass_fields__)
-    others = [split(p, SOURCE, TARGET, 2, 2), split(p, SOURCE, TARGET, 1, 4),
-              split(replace(p, seed=5), SOURCE, TARGET, 1, 2)]
+    others = [
+        split(p, SOURCE, TARGET, 2, 2),
+        split(p, SOURCE, TARGET, 1, 4),
+        split(replace(p, seed=5), SOURCE, TARGET, 1, 2),
+    ]
     assert all(not np.array_equal(a.target_train, o.target_train) for o in others)
     # the source split belongs to the repetition: every k of it is primed on the same samples
     assert np.array_equal(a.source_train, others[1].source_train)
@@ -142,6 +172,7 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
         def wrapped(*args, **kwargs):
             handed.extend(a for a in [*args, *kwargs.values()] if isinstance(a, (np.ndarray, tuple)))
             return fn(*args, **kwargs)
+
         return wrapped
 
     monkeypatch.setattr(P, "train_method", keep_model)
@@ -152,9 +183,14 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
     # target rows carry their index in the first sample, to be recognised wherever they go
     marked = replace(TARGET, X=TARGET.X.copy())
     marked.X[:, 0] = 1000 + np.arange(len(marked))
-    runs = [run_unit(p, SOURCE, data, 0, k, m, StateStore(None)) for data in
-            (marked, scrambled_test_set(marked, fixed.target_test, signals=False),
-             scrambled_test_set(marked, fixed.target_test, signals=True))]
+    runs = [
+        run_unit(p, SOURCE, data, 0, k, m, StateStore(None))
+        for data in (
+            marked,
+            scrambled_test_set(marked, fixed.target_test, signals=False),
+            scrambled_test_set(marked, fixed.target_test, signals=True),
+        )
+    ]
 
     for model in models[1:]:
         assert model.keys() == models[0].keys()
@@ -169,8 +205,9 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
     assert runs[1]["confusion"] == [runs[0]["confusion"][1], runs[0]["confusion"][0]]
 
     test_marks = 1000 + fixed.target_test
-    rows = [a for x in handed for a in (x if isinstance(x, tuple) else (x,))
-            if isinstance(a, np.ndarray) and a.ndim == 2]
+    rows = [
+        a for x in handed for a in (x if isinstance(x, tuple) else (x,)) if isinstance(a, np.ndarray) and a.ndim == 2
+    ]
     assert rows, "the spies saw no training arrays"
     assert not any(np.isin(a[:, 0], test_marks).any() for a in rows)
     if m.adapter != "source_only":  # the spies do see the target training rows
@@ -189,8 +226,9 @@ def test_shared_states_are_made_once_per_repetition_and_change_no_result(tmp_pat
             return super().get(name, lambda: made.append(name) or make())
 
     store = Counting(tmp_path / "states")
-    records = [run_unit(p, SOURCE, TARGET, rep, k, m, store)
-               for rep in range(p.repetitions) for k in p.ks for m in p.methods]
+    records = [
+        run_unit(p, SOURCE, TARGET, rep, k, m, store) for rep in range(p.repetitions) for k in p.ks for m in p.methods
+    ]
     assert sorted(made) == ["rep0_primed", "rep0_source_only", "rep1_primed", "rep1_source_only"]
     # a unit gives the same record run alone (making the priming), after others (sharing it)
     # and in a new process (loading it from disk, as a resumed run does)
@@ -199,8 +237,9 @@ def test_shared_states_are_made_once_per_repetition_and_change_no_result(tmp_pat
     assert same_record(run_unit(p, SOURCE, TARGET, rep, k, m, StateStore(None)), last)
     assert same_record(run_unit(p, SOURCE, TARGET, rep, k, m, StateStore(tmp_path / "states")), last)
     first_calibrated = records[1]
-    assert same_record(run_unit(p, SOURCE, TARGET, 0, 0, p.methods[1], StateStore(tmp_path / "states")),
-                       first_calibrated)
+    assert same_record(
+        run_unit(p, SOURCE, TARGET, 0, 0, p.methods[1], StateStore(tmp_path / "states")), first_calibrated
+    )
 
 
 def test_the_recipe_primes_once_per_repetition_and_k(tmp_path):
@@ -222,8 +261,10 @@ def test_the_recipe_primes_once_per_repetition_and_k(tmp_path):
     assert sorted(made) == ["rep0_k0_primed", "rep0_k2_primed", "rep1_k0_primed", "rep1_k2_primed"]
 
 
-@pytest.mark.parametrize("variant, changed", [("all", {"features", "classifier"}), ("classifier", {"classifier"}),
-                                              ("last", {"classifier.3"})])
+@pytest.mark.parametrize(
+    "variant, changed",
+    [("all", {"features", "classifier"}), ("classifier", {"classifier"}), ("last", {"classifier.3"})],
+)
 def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, changed):
     p = tiny(methods=(method("finetune", True, variant=variant),))
     store = StateStore(None)
@@ -233,8 +274,11 @@ def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, c
     target = (TARGET.X[s.target_train], TARGET.fault[s.target_train].astype(np.int64))
     net, _, _ = train_method(p, p.methods[0], source, val, target, 0, 2, store, torch.device("cpu"))
     primed = store.memory["rep0_primed"]
-    moved = {name for name, value in net.state_dict().items()
-             if value.dtype.is_floating_point and not torch.equal(value, primed[name])}
+    moved = {
+        name
+        for name, value in net.state_dict().items()
+        if value.dtype.is_floating_point and not torch.equal(value, primed[name])
+    }
     assert moved and all(any(name.startswith(c + ".") for c in changed) for name in moved)
     if variant == "last":
         assert moved == {"classifier.3.weight", "classifier.3.bias"}
@@ -259,13 +303,21 @@ def test_same_seed_same_record_on_cpu(m):
 # ----------------------------------------------------------------------------- checks on the data
 
 
-@pytest.mark.parametrize("source, target, changes, message", [
-    (Counts("s", 256, 30, 20), Counts("t", 128, 28, 12), {}, "different lengths (256 and 128)"),
-    (Counts("s", 256, 30, 20), Counts("t", 256, 28, 1), {}, "k = 2 target fault samples asked for, the target 't' has"),
-    (Counts("s", 256, 30, 20), Counts("t", 256, 11, 12), {}, "needs 12 healthy samples, the target 't' has 11"),
-    (Counts("s", 256, 30, 20), Counts("t", 256, 12, 0), {"ks": (0,)}, "leaves no target test samples"),
-    (Counts("s", 256, 2, 2), Counts("t", 256, 28, 12), {}, "larger than the source training set (3 of the 4"),
-])
+@pytest.mark.parametrize(
+    "source, target, changes, message",
+    [
+        (Counts("s", 256, 30, 20), Counts("t", 128, 28, 12), {}, "different lengths (256 and 128)"),
+        (
+            Counts("s", 256, 30, 20),
+            Counts("t", 256, 28, 1),
+            {},
+            "k = 2 target fault samples asked for, the target 't' has",
+        ),
+        (Counts("s", 256, 30, 20), Counts("t", 256, 11, 12), {}, "needs 12 healthy samples, the target 't' has 11"),
+        (Counts("s", 256, 30, 20), Counts("t", 256, 12, 0), {"ks": (0,)}, "leaves no target test samples"),
+        (Counts("s", 256, 2, 2), Counts("t", 256, 28, 12), {}, "larger than the source training set (3 of the 4"),
+    ],
+)
 def test_data_the_protocol_cannot_use_is_refused(source, target, changes, message):
     with pytest.raises(GearlabInputError, match=re.escape(message)):
         check_data(tiny(**changes), source, target, "s.toml")
@@ -304,7 +356,8 @@ def test_results_store_skips_cut_and_damaged_lines_without_hiding_later_ones(tmp
     assert [r["unit"] for r in run.records()] == ["a", "b", "c"]
 
 
-TINY = tiny_scenario("""\
+TINY = tiny_scenario(
+    """\
 [[methods]]
 adapter = "source_only"
 
@@ -319,9 +372,15 @@ adapter = "mmd"
 adapter = "finetune"
 supervised = true
 params = { variant = "classifier" }
-""", repetitions=2)
-UNITS = [f"rep{r}/k{k}/{m}" for r in (0, 1) for k in (0, 2)
-         for m in ("source_only-unsup", "target_only-sup", "mmd-unsup", "finetune-sup-variant=classifier")]
+""",
+    repetitions=2,
+)
+UNITS = [
+    f"rep{r}/k{k}/{m}"
+    for r in (0, 1)
+    for k in (0, 2)
+    for m in ("source_only-unsup", "target_only-sup", "mmd-unsup", "finetune-sup-variant=classifier")
+]
 
 
 @pytest.fixture(scope="module")
@@ -371,8 +430,12 @@ def test_planned_class_counts_are_those_built(finished, tiny_toml):
 
 def test_summary_table_and_report(finished, cli):
     summary = json.loads((finished / "summary.json").read_text())
-    labels = ["source_only (unsupervised)", "mmd (unsupervised)", "target_only (supervised)",
-              "finetune (supervised, variant=classifier)"]
+    labels = [
+        "source_only (unsupervised)",
+        "mmd (unsupervised)",
+        "target_only (supervised)",
+        "finetune (supervised, variant=classifier)",
+    ]
     assert summary["methods"] == labels  # Table 5.4's column order: unsupervised, then supervised
     assert set(summary["table"]) == set(labels)
     records = by_unit(finished)
@@ -392,7 +455,7 @@ def test_summary_table_and_report(finished, cli):
         recall = 50.0 * (healthy[0] / sum(healthy) + faulty[1] / sum(faulty))
         assert r["balanced_accuracy"] == pytest.approx(recall)
     md = (finished / "table.md").read_text().splitlines()
-    md = md[:md.index("")]  # the accuracy table; the balanced accuracy and detection rates follow
+    md = md[: md.index("")]  # the accuracy table; the balanced accuracy and detection rates follow
     assert md[0] == "| k (target fault samples) | " + " | ".join([*labels, transfer.BOUND]) + " |"
     assert [row.split("|")[1].strip() for row in md[2:]] == ["0", "2"]
     assert all(re.fullmatch(r"\d+\.\d\d ± \d+\.\d", c.strip()) for row in md[2:] for c in row.split("|")[2:-1])
@@ -408,8 +471,10 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
     # Killed inside the first calibrated unit, after its priming was saved; then a record cut
     # short mid-write, as a kill leaves it.
     with monkeypatch.context() as mp:
+
         def killed(*args, **kwargs):
             raise KeyboardInterrupt
+
         mp.setattr(P, "fit_adaptation", killed)
         with pytest.raises(KeyboardInterrupt):
             run_scenario(tiny_toml, out=tiny_toml.parent / "runs")
@@ -429,13 +494,15 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
     assert out.splitlines()[-1] == f"run directory: {run}"
     assert len(ran) == len(UNITS) - len(kept)
     after = lines_of(run)
-    assert after[:len(before)] == before  # finished units untouched
+    assert after[: len(before)] == before  # finished units untouched
     assert all(line.endswith("\n") for line in after)
     assert sorted(json.loads(line)["unit"] for line in after) == sorted(UNITS)  # each exactly once
     # nothing differs from the run that was never interrupted
     assert by_unit(run) == by_unit(finished)
-    assert json.loads((run / "summary.json").read_text())["table"] == \
-        json.loads((finished / "summary.json").read_text())["table"]
+    assert (
+        json.loads((run / "summary.json").read_text())["table"]
+        == json.loads((finished / "summary.json").read_text())["table"]
+    )
     assert (run / "table.md").read_text() == (finished / "table.md").read_text()
 
 
@@ -457,29 +524,49 @@ def edit(text: str, old: str, new: str) -> str:
 
 
 BAD = {
-    "network": (('name = "fast"', 'name = "fsat"'),
-                "[network] key 'name': unknown network 'fsat' (did you mean 'fast'?); known networks: cnn3, fast"),
-    "adapter": (('adapter = "mmd"', 'adapter = "mdd"'), "unknown adapter 'mdd' (did you mean 'mmd'?); known adapters: "),
-    "variant": (('supervised = true\nparams', 'supervised = false\nparams'),
-                "[[methods]] #4 key 'supervised': adapter 'finetune' has no unsupervised variant (it has: supervised)"),
-    "param": (('variant = "classifier"', 'varient = "classifier"'),
-              "unknown parameter 'varient' (did you mean 'variant'?)"),
-    "same method": (('adapter = "finetune"\nsupervised = true\nparams = { variant = "classifier" }', 'adapter = "mmd"'),
-                    "[[methods]] #4: mmd (unsupervised) is the same method as #3, mmd (unsupervised)"),
+    "network": (
+        ('name = "fast"', 'name = "fsat"'),
+        "[network] key 'name': unknown network 'fsat' (did you mean 'fast'?); known networks: cnn3, fast",
+    ),
+    "adapter": (
+        ('adapter = "mmd"', 'adapter = "mdd"'),
+        "unknown adapter 'mdd' (did you mean 'mmd'?); known adapters: ",
+    ),
+    "variant": (
+        ("supervised = true\nparams", "supervised = false\nparams"),
+        "[[methods]] #4 key 'supervised': adapter 'finetune' has no unsupervised variant (it has: supervised)",
+    ),
+    "param": (
+        ('variant = "classifier"', 'varient = "classifier"'),
+        "unknown parameter 'varient' (did you mean 'variant'?)",
+    ),
+    "same method": (
+        ('adapter = "finetune"\nsupervised = true\nparams = { variant = "classifier" }', 'adapter = "mmd"'),
+        "[[methods]] #4: mmd (unsupervised) is the same method as #3, mmd (unsupervised)",
+    ),
     "same method spelt otherwise": (
         ('adapter = "mmd"', 'adapter = "finetune"\nsupervised = true\nparams = { variant = 1 }'),
-        "[[methods]] #4: finetune (supervised, variant=classifier) is the same method as #3, finetune (supervised, variant=1)",
+        "[[methods]] #4: finetune (supervised, variant=classifier)"
+        " is the same method as #3, finetune (supervised, variant=1)",
     ),
-    "k > faults": (("ks = [0, 2]", "ks = [0, 4]"),
-                   "[protocol] key 'ks': k = 4 target fault samples asked for, the target 'B-8-ch5' has 3"),
+    "k > faults": (
+        ("ks = [0, 2]", "ks = [0, 4]"),
+        "[protocol] key 'ks': k = 4 target fault samples asked for, the target 'B-8-ch5' has 3",
+    ),
     "k > target_train": (("ks = [0, 2]", "ks = [0, 9]"), "k = 9 fault samples do not fit"),
     "healthy": (("target_train = 8", "target_train = 10"), "needs 10 healthy samples, the target 'B-8-ch5' has 9"),
-    "batch > target_train": (("batch = 4", "batch = 9"),
-                             "[protocol] key 'batch': 9 is larger than the target training set (target_train = 8)"),
-    "batch > source": (("faults = { crack = [13] }\nhealthy = 9", "faults = { crack = [13] }\nhealthy = 1"),
-                       "'batch': 4 is larger than the source training set (3 of the 4 samples of 'B-6-ch5')"),
-    "protocol key": (("repetitions = 2", "repetitons = 2"),
-                     "[protocol] key 'repetitons': unknown key (did you mean 'repetitions'?)"),
+    "batch > target_train": (
+        ("batch = 4", "batch = 9"),
+        "[protocol] key 'batch': 9 is larger than the target training set (target_train = 8)",
+    ),
+    "batch > source": (
+        ("faults = { crack = [13] }\nhealthy = 9", "faults = { crack = [13] }\nhealthy = 1"),
+        "'batch': 4 is larger than the source training set (3 of the 4 samples of 'B-6-ch5')",
+    ),
+    "protocol key": (
+        ("repetitions = 2", "repetitons = 2"),
+        "[protocol] key 'repetitons': unknown key (did you mean 'repetitions'?)",
+    ),
     "ks fraction": (("ks = [0, 2]", "ks = [0, 1.5]"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
     "ks repeated": (("ks = [0, 2]", "ks = [2, 2]"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
     "ks empty": (("ks = [0, 2]", "ks = []"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
@@ -511,8 +598,9 @@ def test_bad_scenario_is_refused_before_any_work(case, tiny_toml, cli, monkeypat
 
 def test_datasets_found_unfit_once_built_leave_no_run_behind(tiny_toml, cli, monkeypatch):
     # Measured data are only known once imported: here a target of another sample length.
-    monkeypatch.setattr(transfer, "load_or_build", lambda spec, *a: (synthetic(3, 9, 4096 if spec.name == "B-6-ch5"
-                                                                               else 2048), True))
+    monkeypatch.setattr(
+        transfer, "load_or_build", lambda spec, *a: (synthetic(3, 9, 4096 if spec.name == "B-6-ch5" else 2048), True)
+    )
     runs = tiny_toml.parent / "runs"
     code, _, err = cli("run", tiny_toml, "--out", runs)
     assert_refused(code, err, "samples have different lengths (4096 and 2048)", runs, alone=False)
@@ -569,8 +657,9 @@ def test_no_training_step_moves_the_weights_further_than_the_clipped_gradient_al
     torch.manual_seed(0)
     net = build_network("fast", 2, length=512)
     start = [p.detach().clone() for p in net.parameters()]
-    history = fit_supervised(net, X, y, rng=rng, device=torch.device("cpu"), epochs=1, batch=8,
-                             optimizer="sgd", lr=30.0, patience=None)
+    history = fit_supervised(
+        net, X, y, rng=rng, device=torch.device("cpu"), epochs=1, batch=8, optimizer="sgd", lr=30.0, patience=None
+    )
     moved = float(torch.sqrt(sum(((p.detach() - q) ** 2).sum() for p, q in zip(net.parameters(), start))))
     assert moved <= 4 * 30.0 * MAX_GRAD_NORM * (1 + 1e-5)
     assert np.all(np.isfinite(history.train_loss))

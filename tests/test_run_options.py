@@ -92,8 +92,11 @@ def test_units_in_progress_become_unit_events(tmp_path):
     time.sleep(0.3)
     watcher.stop()
     seen = [(e.kind, e.stage, e.message) for e in events]
-    assert seen == [("unit", "rep0/k4/mmd-unsup", "epoch 1"), ("unit", "rep0/k4/mmd-unsup", "epoch 2"),
-                    ("unit", "rep0/k4/mmd-unsup", "")]
+    assert seen == [
+        ("unit", "rep0/k4/mmd-unsup", "epoch 1"),
+        ("unit", "rep0/k4/mmd-unsup", "epoch 2"),
+        ("unit", "rep0/k4/mmd-unsup", ""),
+    ]
     assert not list((tmp_path / "progress").iterdir())
 
 
@@ -102,7 +105,10 @@ def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch):
 
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     path = tmp_path / "t.toml"
-    path.write_text('[scenario]\nname = "t"\nkind = "transfer"\n\n' + domains() + """
+    path.write_text(
+        '[scenario]\nname = "t"\nkind = "transfer"\n\n'
+        + domains()
+        + """
 [[methods]]
 adapter = "mmd"
 
@@ -119,7 +125,8 @@ max_epochs = 400
 [execution]
 workers = 1
 device = "cpu"
-""")
+"""
+    )
     code, out, err = cli("run", path, "--events", "--out", tmp_path / "runs")
     assert code == 0, err
     units = [json.loads(line) for line in out.splitlines() if line.startswith("{") and '"unit"' in line]
@@ -139,7 +146,10 @@ def test_a_terminated_run_leaves_no_worker_behind(tmp_path):
     from tiny import domains
 
     path = tmp_path / "t.toml"
-    path.write_text('[scenario]\nname = "t"\nkind = "transfer"\n\n' + domains() + """
+    path.write_text(
+        '[scenario]\nname = "t"\nkind = "transfer"\n\n'
+        + domains()
+        + """
 [[methods]]
 adapter = "mmd"
 
@@ -156,11 +166,17 @@ max_epochs = 100000
 [execution]
 workers = 2
 device = "cpu"
-""")
+"""
+    )
     env = {**os.environ, "GEARLAB_CACHE": str(tmp_path / "cache")}
-    proc = subprocess.Popen([sys.executable, "-m", "gearlab", "run", str(path), "--events", "--out",
-                             str(tmp_path / "runs")], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            env=env, start_new_session=True, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gearlab", "run", str(path), "--events", "--out", str(tmp_path / "runs")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        env=env,
+        start_new_session=True,
+        text=True,
+    )
     for line in proc.stdout:  # wait until units train in the workers
         if '"kind": "unit"' in line:
             break

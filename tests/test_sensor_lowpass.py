@@ -21,7 +21,7 @@ def test_the_response_is_scipys_analog_butterworth(order):
     b, a = butter(order, 2 * np.pi * 5e3, analog=True)
     _, h = freqs(b, a, worN=2 * np.pi * f)
     np.testing.assert_allclose(response(order, 5e3, f), h, rtol=1e-10, atol=1e-14)
-    assert abs(response(order, 5e3, np.array([5e3]))[0]) == pytest.approx(2 ** -0.5)  # -3 dB at the corner
+    assert abs(response(order, 5e3, np.array([5e3]))[0]) == pytest.approx(2**-0.5)  # -3 dB at the corner
 
 
 def test_a_tone_above_the_corner_falls_by_20n_db_per_decade():

@@ -25,22 +25,36 @@ DOC = Path(__file__).resolve().parent.parent / "docs" / "settings.md"
 
 # (title, dataclass, which scenario tables it declares)
 TABLES = [
-    ("[network]", NetworkSettings, "transfer, detection, gap and noise_study scenarios (gap and noise_study: "
-                                   "default name = \"fast\"; noise_study: default dropout = 0.1)"),
-    ("[protocol] (chapter-5 training)", Protocol, "transfer and detection [protocol], gap [accuracy]: the training "
-                                                  "keys (repetitions: transfer only; gap's [accuracy] defaults to 3)"),
+    (
+        "[network]",
+        NetworkSettings,
+        "transfer, detection, gap and noise_study scenarios (gap and noise_study: "
+        'default name = "fast"; noise_study: default dropout = 0.1)',
+    ),
+    (
+        "[protocol] (chapter-5 training)",
+        Protocol,
+        "transfer and detection [protocol], gap [accuracy]: the training "
+        "keys (repetitions: transfer only; gap's [accuracy] defaults to 3)",
+    ),
     ("[protocol] (chapter-4 noise study)", NoiseProtocol, "noise_study [protocol]"),
-    ("noise = {...}", NoiseSpec, "a dataset's inline noise table ([source], [target], [[datasets]]; noise_study "
-                                 "[dataset]: snr_db and seed only, the kind comes from [study])"),
+    (
+        "noise = {...}",
+        NoiseSpec,
+        "a dataset's inline noise table ([source], [target], [[datasets]]; noise_study "
+        "[dataset]: snr_db and seed only, the kind comes from [study])",
+    ),
 ]
 
 
 def reference() -> str:
-    parts = ["# Settings reference\n",
-             "Generated from the settings dataclasses (their field metadata: `gearlab.settings.setting`) by\n"
-             "`python tests/test_settings.py`; `tests/test_settings.py` fails when this page and the\n"
-             "declarations differ. The scenario key checks and the `--quick` limits come from the same\n"
-             "declarations. How a scenario uses each table: docs/scenarios.md.\n"]
+    parts = [
+        "# Settings reference\n",
+        "Generated from the settings dataclasses (their field metadata: `gearlab.settings.setting`) by\n"
+        "`python tests/test_settings.py`; `tests/test_settings.py` fails when this page and the\n"
+        "declarations differ. The scenario key checks and the `--quick` limits come from the same\n"
+        "declarations. How a scenario uses each table: docs/scenarios.md.\n",
+    ]
     for title, cls, where in TABLES:
         parts.append(f"## {title}\n\n`{cls.__module__}.{cls.__name__}`: {where}.\n\n{markdown_table(cls)}")
     return "\n".join(parts)
@@ -66,7 +80,9 @@ def test_bounds_and_checks_come_from_the_declaration(tmp_path):
     with pytest.raises(GearlabInputError, match=r"s.toml: \[protocol\] key 'max_epochs': 0 is outside \[1, 100000\]"):
         validate_table(tmp_path / "s.toml", "protocol", table, {"max_epochs": 0})
     network = type(table)(keys_of(NetworkSettings))
-    with pytest.raises(GearlabInputError, match=r"\[network\] key 'name': unknown network 'fsat' \(did you mean 'fast'"):
+    with pytest.raises(
+        GearlabInputError, match=r"\[network\] key 'name': unknown network 'fsat' \(did you mean 'fast'"
+    ):
         validate_table(tmp_path / "s.toml", "network", network, {"name": "fsat"})
 
 
@@ -83,7 +99,9 @@ def test_an_inline_table_is_read_as_declared():
     assert from_inline(NoiseSpec, {"snr_db": 3}, "w", {"kind": "gaussian", "seed": 7}) == NoiseSpec("gaussian", 3.0, 7)
     with pytest.raises(GearlabInputError, match=r"w: unknown key\(s\) sed; expected kind, snr_db, seed"):
         from_inline(NoiseSpec, {"kind": "laplace", "snr_db": 0, "sed": 1}, "w")
-    with pytest.raises(GearlabInputError, match=r"w: expected \{kind = 'gaussian'\|'laplace'\|'student_t', snr_db = number\}"):
+    with pytest.raises(
+        GearlabInputError, match=r"w: expected \{kind = 'gaussian'\|'laplace'\|'student_t', snr_db = number\}"
+    ):
         from_inline(NoiseSpec, {"kind": "laplace"}, "w")
     assert [f.name for f in dataclasses.fields(NoiseSpec)] == list(declared(NoiseSpec))
 

@@ -242,10 +242,7 @@ def test_every_row_gets_exactly_the_requested_noise_rms(kind, snr_db):
 
 def test_student_t_is_far_more_impulsive_than_gaussian():
     x = np.tile(np.sin(grid()), (20, 1))
-    excess = {
-        kind: kurtosis((add_noise(x, 0.0, kind, np.random.default_rng(0)) - x).ravel())
-        for kind in NOISE_KINDS
-    }
+    excess = {kind: kurtosis((add_noise(x, 0.0, kind, np.random.default_rng(0)) - x).ravel()) for kind in NOISE_KINDS}
     assert abs(excess["gaussian"]) < 0.2
     assert 2.0 < excess["laplace"] < 4.5
     assert excess["student_t"] > 10 * max(excess["laplace"], 1.0)
@@ -312,8 +309,12 @@ def test_nan_in_the_signal_is_located():
 
 @pytest.mark.parametrize(
     "bad, fact",
-    [(np.zeros((2, 3)), "must be 1-D"), (np.array([]), "empty"), (np.array([1.0, np.inf]), "inf at sample 1"),
-     (np.array(["a"]), "real numbers")],
+    [
+        (np.zeros((2, 3)), "must be 1-D"),
+        (np.array([]), "empty"),
+        (np.array([1.0, np.inf]), "inf at sample 1"),
+        (np.array(["a"]), "real numbers"),
+    ],
 )
 def test_check_signal_rejects(bad, fact):
     with pytest.raises(GearlabInputError, match=fact):
@@ -322,7 +323,9 @@ def test_check_signal_rejects(bad, fact):
 
 def test_too_short_for_one_revolution():
     x = np.ones(1200)
-    with pytest.raises(GearlabInputError, match=r"1200 samples, fewer than one revolution \(7937 at 25.2 Hz and 200 kHz\)"):
+    with pytest.raises(
+        GearlabInputError, match=r"1200 samples, fewer than one revolution \(7937 at 25.2 Hz and 200 kHz\)"
+    ):
         cut_revolutions(x, FS, speed_hz=SPEED)
     with pytest.raises(GearlabInputError, match="not one complete revolution"):
         resample_revolutions(x, angle_from_speed(1200, FS, SPEED))

@@ -28,8 +28,9 @@ CASES = ["healthy", ("crack", 12), ("spall", 15)]
 
 @pytest.mark.parametrize("preset", PRESETS)
 @pytest.mark.parametrize("case", CASES, ids=lambda c: c if isinstance(c, str) else f"{c[0]}{c[1]}")
-def test_refining_the_section_nodes_changes_the_mean_by_less_than_0_1_percent(registry, pairs, models, fine_models,
-                                                                              preset, case):
+def test_refining_the_section_nodes_changes_the_mean_by_less_than_0_1_percent(
+    registry, pairs, models, fine_models, preset, case
+):
     pair = pairs[preset]
     faults = _faults(registry, pair, case)
     coarse = models[preset].mesh_stiffness(faults, points=4096).mean

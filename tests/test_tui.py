@@ -52,13 +52,20 @@ pair = "luo2019"
 pionts = 512
 """
 
-TRANSFER = transfer("""\
+TRANSFER = (
+    transfer(
+        """\
 [[methods]]
 adapter = "source_only"
 
 [[methods]]
 adapter = "mmd"
-""", repetitions=3, max_epochs=40) + '[output]\ndir = "{runs}"\n'
+""",
+        repetitions=3,
+        max_epochs=40,
+    )
+    + '[output]\ndir = "{runs}"\n'
+)
 
 
 @pytest.fixture
@@ -265,9 +272,21 @@ def test_a_damaged_or_cancelled_run_directory_opens_without_a_crash(folder, tmp_
     cut = runs / "20260101-000000-000000"
     cut.mkdir(parents=True)
     shutil.copy(folder / "stiff.toml", cut / "scenario.toml")
-    (cut / "results.jsonl").write_text(json.dumps({"unit": "healthy", "fault": None, "step": 0, "faults": [],
-                                                   "rfa": 0.0, "mean_N_per_m": 1.9e8, "min_N_per_m": 1.2e8,
-                                                   "max_N_per_m": 2.3e8}) + '\n{"unit": "crack_st')
+    (cut / "results.jsonl").write_text(
+        json.dumps(
+            {
+                "unit": "healthy",
+                "fault": None,
+                "step": 0,
+                "faults": [],
+                "rfa": 0.0,
+                "mean_N_per_m": 1.9e8,
+                "min_N_per_m": 1.2e8,
+                "max_N_per_m": 2.3e8,
+            }
+        )
+        + '\n{"unit": "crack_st'
+    )
     broken = runs / "20260101-000000-000001"
     broken.mkdir()
     (broken / "scenario.toml").write_text("not = [valid")
@@ -415,7 +434,9 @@ def kinds_folder(tmp_path, monkeypatch, kinds_cache):
     folder = tmp_path / "scenarios"
     shutil.copytree(KINDS_DIR, folder)
     (folder / "stiff.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
-    (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", "runs").replace('repetitions = 3', 'repetitions = 1'))
+    (folder / "transfer.toml").write_text(
+        TRANSFER.replace("{runs}", "runs").replace("repetitions = 3", "repetitions = 1")
+    )
     detection_scenario(tmp_path, methods=("source_only", "matched_filter"))  # scenarios/det.toml, records in data/
     return folder
 
@@ -435,8 +456,16 @@ async def run_to_the_end(pilot, name: str, key: str = "r") -> None:
 
 # Each kind once (a few seconds each), both sizes between them; the gap kind, whose stage names
 # have spaces (it crashed the TUI), at both.
-EVERY_KIND = [("tgap.toml", SIZES[0]), ("tgap.toml", SIZES[1]), ("tbench.toml", SIZES[0]), ("tnoise.toml", SIZES[1]),
-              ("tdata.toml", SIZES[0]), ("stiff.toml", SIZES[1]), ("transfer.toml", SIZES[0]), ("det.toml", SIZES[1])]
+EVERY_KIND = [
+    ("tgap.toml", SIZES[0]),
+    ("tgap.toml", SIZES[1]),
+    ("tbench.toml", SIZES[0]),
+    ("tnoise.toml", SIZES[1]),
+    ("tdata.toml", SIZES[0]),
+    ("stiff.toml", SIZES[1]),
+    ("transfer.toml", SIZES[0]),
+    ("det.toml", SIZES[1]),
+]
 
 
 @pytest.mark.parametrize("name,size", EVERY_KIND)
@@ -468,8 +497,14 @@ def test_every_shipped_scenario_runs_from_the_tui(tmp_path, monkeypatch, size):
     shutil.copytree(REPO / "scenarios", tmp_path / "scenarios")
 
     async def script(pilot):
-        for name in ("gap_expB.toml", "gap_benchmark.toml", "ch4_noise.toml", "dataset_B.toml",
-                     "stiffness_verification.toml", "quick.toml"):
+        for name in (
+            "gap_expB.toml",
+            "gap_benchmark.toml",
+            "ch4_noise.toml",
+            "dataset_B.toml",
+            "stiffness_verification.toml",
+            "quick.toml",
+        ):
             await run_to_the_end(pilot, name, key="k")
 
     drive(GearlabApp(Path("scenarios")), script, size)
@@ -503,8 +538,9 @@ def test_an_internal_error_of_the_app_exits_1(cli, folder, monkeypatch):
 @pytest.fixture
 def two_with_runs(folder, tmp_path):
     """stiff.toml with two past runs, and a second valid scenario, tail.toml, after it."""
-    (folder / "tail.toml").write_text(STIFFNESS.replace('name = "stiff"', 'name = "other"')
-                                       .replace("{runs}", str(tmp_path / "runs")))
+    (folder / "tail.toml").write_text(
+        STIFFNESS.replace('name = "stiff"', 'name = "other"').replace("{runs}", str(tmp_path / "runs"))
+    )
     for stamp in ("20260101-000000-000000", "20260102-000000-000000"):
         run = tmp_path / "runs" / "stiff" / stamp
         run.mkdir(parents=True)
@@ -647,8 +683,9 @@ def finished_runs(tmp_path_factory):
     base = tmp_path_factory.mktemp("finished_tui")
     folder = base / "scenarios"
     shutil.copytree(KINDS_DIR, folder)
-    (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", str(base / "runs"))
-                                          .replace("repetitions = 3", "repetitions = 2"))
+    (folder / "transfer.toml").write_text(
+        TRANSFER.replace("{runs}", str(base / "runs")).replace("repetitions = 3", "repetitions = 2")
+    )
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(base / "cache"))
         transfers = [run_scenario(folder / "transfer.toml").path for _ in range(2)]
@@ -765,6 +802,12 @@ def test_keys_panel_form_palette_and_notification(kinds_folder):
 def test_results_lines_leave_out_the_tables_and_their_headings():
     from gearlab.tui.app import other_lines
 
-    summary = ["gap before 10 -> after 1", "per-view gap:", "| view | gap |\n|---|---|\n| mesh | 1 |",
-               "accuracy:", "| model | acc |", "note: something"]
+    summary = [
+        "gap before 10 -> after 1",
+        "per-view gap:",
+        "| view | gap |\n|---|---|\n| mesh | 1 |",
+        "accuracy:",
+        "| model | acc |",
+        "note: something",
+    ]
     assert other_lines(summary) == ["gap before 10 -> after 1", "note: something"]

@@ -15,7 +15,7 @@ from tiny import transfer
 
 from gearlab.data.spec import DATASET_PRESETS
 from gearlab.engine import run_scenario
-from gearlab.report import build_report, caption
+from gearlab.report import caption
 from gearlab.verdict import THESIS, best_per_k, collapsed, experiment, gap_lines, transfer_lines, transfer_table
 
 HERE = Path(__file__).resolve().parent
@@ -33,52 +33,81 @@ def summary_b(table, ks=(0, 1)):
     source = asdict(DATASET_PRESETS["B-6-ch5"])
     target = asdict(DATASET_PRESETS["B-8-ch5"].with_(name="B-8-ch5-laplace", domain="B-8-ch5-laplace"))
     target["noise"] = {"kind": "laplace", "snr_db": 0.0, "seed": 1}
-    return json.loads(json.dumps({"kind": "transfer", "scenario": "expB", "methods": list(table), "table": table,
-                                  "protocol": {"ks": list(ks), "repetitions": 3}, "source": source, "target": target}))
+    return json.loads(
+        json.dumps(
+            {
+                "kind": "transfer",
+                "scenario": "expB",
+                "methods": list(table),
+                "table": table,
+                "protocol": {"ks": list(ks), "repetitions": 3},
+                "source": source,
+                "target": target,
+            }
+        )
+    )
 
 
 # ----------------------------------------------------------------------------- transfer verdict
 
 
 def test_best_method_per_k_with_its_margin_and_the_runner_up():
-    table = {"a (unsupervised)": {"0": cell(60.0, 2.0), "1": cell(70.0)},
-             "b (supervised)": {"0": cell(55.0, 1.0), "1": cell(75.0, 10.0)}}
+    table = {
+        "a (unsupervised)": {"0": cell(60.0, 2.0), "1": cell(70.0)},
+        "b (supervised)": {"0": cell(55.0, 1.0), "1": cell(75.0, 10.0)},
+    }
     rows = best_per_k(table, [0, 1])
-    assert [(r["k"], r["best"], r["second"], r["margin"], r["within_std"]) for r in rows] == \
-        [(0, "a (unsupervised)", "b (supervised)", 5.0, False), (1, "b (supervised)", "a (unsupervised)", 5.0, True)]
+    assert [(r["k"], r["best"], r["second"], r["margin"], r["within_std"]) for r in rows] == [
+        (0, "a (unsupervised)", "b (supervised)", 5.0, False),
+        (1, "b (supervised)", "a (unsupervised)", 5.0, True),
+    ]
     lines = transfer_lines({"table": table, "protocol": {"ks": [0, 1]}}, [])
-    assert lines[0] == ("a (unsupervised) is best at k = 0 (60.00 %), 5.0 points ahead of b (supervised); "
-                        "b (supervised) is best at k = 1 (75.00 %), 5.0 points ahead of a (unsupervised) "
-                        "(within one standard deviation at k = 1).")
+    assert lines[0] == (
+        "a (unsupervised) is best at k = 0 (60.00 %), 5.0 points ahead of b (supervised); "
+        "b (supervised) is best at k = 1 (75.00 %), 5.0 points ahead of a (unsupervised) "
+        "(within one standard deviation at k = 1)."
+    )
     assert lines[1] == "No method collapsed to one class."
 
 
 def test_a_method_that_wins_everywhere_is_said_once_and_any_name_works():
-    table = {"my_plugin (unsupervised, alpha=2)": {"0": cell(90.0), "4": cell(92.0)},
-             "x": {"0": cell(50.0), "4": cell(80.0)}}
+    table = {
+        "my_plugin (unsupervised, alpha=2)": {"0": cell(90.0), "4": cell(92.0)},
+        "x": {"0": cell(50.0), "4": cell(80.0)},
+    }
     line = transfer_lines({"table": table, "protocol": {"ks": [0, 4]}}, [])[0]
     assert line == "my_plugin (unsupervised, alpha=2) is best at every k (90.00-92.00 %), 12.0-40.0 points ahead of x."
 
 
 def test_collapsed_methods_with_their_predicted_fault_share():
-    records = ([{"method": "s", "predicted_fault_share": 100.0, "healthy_share": 46.0}] * 3
-               + [{"method": "t", "predicted_fault_share": 0.0, "healthy_share": 46.0},
-                  {"method": "t", "predicted_fault_share": 30.0, "healthy_share": 46.0},
-                  {"method": "t", "predicted_fault_share": 31.0, "healthy_share": 46.0}]
-               + [{"method": "u", "predicted_fault_share": 0.0, "healthy_share": 46.0}] * 2)
-    assert collapsed(records) == {"s": {"runs": 3, "of": 3, "fault_share": 100.0},
-                                  "u": {"runs": 2, "of": 2, "fault_share": 0.0}}
+    records = (
+        [{"method": "s", "predicted_fault_share": 100.0, "healthy_share": 46.0}] * 3
+        + [
+            {"method": "t", "predicted_fault_share": 0.0, "healthy_share": 46.0},
+            {"method": "t", "predicted_fault_share": 30.0, "healthy_share": 46.0},
+            {"method": "t", "predicted_fault_share": 31.0, "healthy_share": 46.0},
+        ]
+        + [{"method": "u", "predicted_fault_share": 0.0, "healthy_share": 46.0}] * 2
+    )
+    assert collapsed(records) == {
+        "s": {"runs": 3, "of": 3, "fault_share": 100.0},
+        "u": {"runs": 2, "of": 2, "fault_share": 0.0},
+    }
     table = {"s": {"0": cell(54.0, 0.0)}, "t": {"0": cell(60.0)}, "u": {"0": cell(46.0, 0.0)}}
     line = transfer_lines({"table": table, "protocol": {"ks": [0]}}, records)[1]
-    assert line == ("Collapsed to one class: s (all fault: predicted-fault share 100 %, 3/3 runs), u (all healthy: "
-                    "predicted-fault share 0 %, 2/2 runs); the target test sets are 54 % faulty, so their accuracy "
-                    "is the share of that class, not a detection.")
+    assert line == (
+        "Collapsed to one class: s (all fault: predicted-fault share 100 %, 3/3 runs), u (all healthy: "
+        "predicted-fault share 0 %, 2/2 runs); the target test sets are 54 % faulty, so their accuracy "
+        "is the share of that class, not a detection."
+    )
 
 
 def test_experiment_b_gets_the_thesis_table_5_5_as_reference_rows():
-    table = {"source_only (unsupervised)": {"0": cell(54.05, 0.0), "1": cell(53.87, 0.0)},
-             "mmd (unsupervised)": {"0": cell(60.07, 3.2), "1": cell(59.89, 2.0)},
-             "matched_filter (unsupervised)": {"0": cell(82.88, 0.9), "1": cell(82.27, 0.5)}}
+    table = {
+        "source_only (unsupervised)": {"0": cell(54.05, 0.0), "1": cell(53.87, 0.0)},
+        "mmd (unsupervised)": {"0": cell(60.07, 3.2), "1": cell(59.89, 2.0)},
+        "matched_filter (unsupervised)": {"0": cell(82.88, 0.9), "1": cell(82.27, 0.5)},
+    }
     summary = summary_b(table)
     assert experiment(summary)[1] == "Table 5.5"
     md = transfer_table(summary).splitlines()
@@ -87,16 +116,26 @@ def test_experiment_b_gets_the_thesis_table_5_5_as_reference_rows():
     line = transfer_lines(summary, [])[-1]
     # mmd: (60.07 - 91.26 + 59.89 - 92.44) / 2 = -31.87; source_only: (54.05 + 53.87) / 2 - 46.67 = +7.29
     assert "source_only (unsupervised) +7.3, mmd (unsupervised) -31.9 points on average over k" in line
-    assert "the thesis's best is mmd (unsupervised) with 91.26 %, gearlab's is matched_filter (unsupervised) " \
-           "with 82.88 %" in line
+    assert (
+        "the thesis's best is mmd (unsupervised) with 91.26 %, gearlab's is matched_filter (unsupervised) "
+        "with 82.88 %" in line
+    )
     # a reduced dataset is not the thesis's experiment: no reference
     reduced = summary_b(table)
     reduced["target"]["healthy"] = 9
     assert experiment(reduced) is None and "thesis" not in transfer_table(reduced)
 
 
-@pytest.mark.parametrize("name,table", [("expA", "Table 5.4"), ("expA_thesis", "Table 5.4"), ("expB", "Table 5.5"),
-                                        ("expB_thesis", "Table 5.5"), ("quick", "Table 5.5")])
+@pytest.mark.parametrize(
+    "name,table",
+    [
+        ("expA", "Table 5.4"),
+        ("expA_thesis", "Table 5.4"),
+        ("expB", "Table 5.5"),
+        ("expB_thesis", "Table 5.5"),
+        ("quick", "Table 5.5"),
+    ],
+)
 def test_the_shipped_chapter_5_scenarios_get_their_thesis_table(name, table):
     from dataclasses import asdict
 
@@ -114,9 +153,9 @@ def test_the_thesis_values_are_those_of_its_text():
     if not text.is_file():
         pytest.skip("the seed thesis text is not on this machine")
     lines = text.read_text().splitlines()
-    for (_, name, _, values) in THESIS.values():
+    for _, name, _, values in THESIS.values():
         start = next(i for i, line in enumerate(lines) if line.startswith(f"{name}. Results"))
-        rows = [line for line in lines[start:start + 12] if re.match(r"^\d+\t", line)]
+        rows = [line for line in lines[start : start + 12] if re.match(r"^\d+\t", line)]
         for row in rows:
             k, *cells = row.split("\t")
             ours = [f"{values[m][int(k)][0]:.2f} ± {values[m][int(k)][1]:.1f}" for m in values]
@@ -128,24 +167,47 @@ def test_the_thesis_values_are_those_of_its_text():
 
 
 def test_gap_verdict_names_the_effects_and_explains_alone_versus_credited():
-    summary = {"gap_before": 1000.0, "gap_after": 10.0, "p_before": 0.002, "p_after": 0.4, "shrink": 0.99,
-               "significant_before": True, "significant_after": False, "unexplained": False,
-               "views": {"mesh": {"share_before": 0.7}, "shaft": {"share_before": 0.25}, "waveform": {"share_before": 0.05}},
-               "ranking": [{"name": "drive_inertias", "share_removed": 1.0}, {"name": "sensor_noise", "share_removed": 0.4}],
-               "effects": [{"name": "drive_inertias", "share_removed": 0.0, "round": 1, "params": {"J": 2.0}},
-                           {"name": "sensor_noise", "share_removed": 0.99, "round": 1, "nuisance_of": "drive_inertias",
-                            "params": {"snr_db": 10.0}}],
-               "accuracy": {"source_only (uncorrected)": {"mean": 50.0}, "source_only (corrected)": {"mean": 70.0}}}
+    summary = {
+        "gap_before": 1000.0,
+        "gap_after": 10.0,
+        "p_before": 0.002,
+        "p_after": 0.4,
+        "shrink": 0.99,
+        "significant_before": True,
+        "significant_after": False,
+        "unexplained": False,
+        "views": {"mesh": {"share_before": 0.7}, "shaft": {"share_before": 0.25}, "waveform": {"share_before": 0.05}},
+        "ranking": [{"name": "drive_inertias", "share_removed": 1.0}, {"name": "sensor_noise", "share_removed": 0.4}],
+        "effects": [
+            {"name": "drive_inertias", "share_removed": 0.0, "round": 1, "params": {"J": 2.0}},
+            {
+                "name": "sensor_noise",
+                "share_removed": 0.99,
+                "round": 1,
+                "nuisance_of": "drive_inertias",
+                "params": {"snr_db": 10.0},
+            },
+        ],
+        "accuracy": {"source_only (uncorrected)": {"mean": 50.0}, "source_only (corrected)": {"mean": 70.0}},
+    }
     lines = gap_lines(summary)
-    assert lines[0] == ("The simulator and the target differ significantly (gap 1000, p = 0.002); the gap lies mostly "
-                        "in mesh (70.0 %), shaft (25.0 %).")
-    assert lines[1] == ("Named effects: drive_inertias (J = 2; credited with 0.0 %), sensor_noise (snr_db = 10; "
-                        "credited with 99.0 %); gap 1000 -> 10, 99.0 % removed; no longer significant (p = 0.4); "
-                        "the gap is explained.")
-    assert lines[2] == ("drive_inertias removes 100.0 % of the gap in the ranking (fitted there with "
-                        "sensor_noise beside it) but is credited with 0.0 %: sensor_noise alone explains that part of "
-                        "the gap, and the credited shares split what they remove together (a Shapley value).")
-    assert lines[3] == "Target fault detection at k = 0, uncorrected -> corrected simulator: source_only 50.0 -> 70.0 %."
+    assert lines[0] == (
+        "The simulator and the target differ significantly (gap 1000, p = 0.002); the gap lies mostly "
+        "in mesh (70.0 %), shaft (25.0 %)."
+    )
+    assert lines[1] == (
+        "Named effects: drive_inertias (J = 2; credited with 0.0 %), sensor_noise (snr_db = 10; "
+        "credited with 99.0 %); gap 1000 -> 10, 99.0 % removed; no longer significant (p = 0.4); "
+        "the gap is explained."
+    )
+    assert lines[2] == (
+        "drive_inertias removes 100.0 % of the gap in the ranking (fitted there with "
+        "sensor_noise beside it) but is credited with 0.0 %: sensor_noise alone explains that part of "
+        "the gap, and the credited shares split what they remove together (a Shapley value)."
+    )
+    assert (
+        lines[3] == "Target fault detection at k = 0, uncorrected -> corrected simulator: source_only 50.0 -> 70.0 %."
+    )
 
 
 # ----------------------------------------------------------------------------- real runs: report, compare
@@ -167,7 +229,7 @@ def test_the_report_opens_with_the_verdict_numbers_its_figures_and_folds_the_jso
     html = (runs["transfer"][0] / "report.html").read_text()
     verdict = html.index("<section id='verdict'>")
     assert verdict < html.index("<table>") < html.index("<figure")
-    assert " is best at " in html[verdict:html.index("</section>")]
+    assert " is best at " in html[verdict : html.index("</section>")]
     figures = re.findall(r"<figcaption><b>(Figure \d+[^<]*)\.</b>", html)
     assert figures[0] == "Figure 1 (as thesis Figures 5.5/5.6)" and len(figures) == html.count("<img")
     assert "Figure 5.8" in html and "summed over 2 repetitions" in html
@@ -178,9 +240,23 @@ def test_the_report_opens_with_the_verdict_numbers_its_figures_and_folds_the_jso
 
 
 def test_every_figure_a_kind_writes_has_a_caption():
-    stems = ["accuracy_vs_k", "training_curves", "confusion_k0", "latent_maps", "accuracy_vs_intensity",
-             "accuracy_vs_rfa", "confusion", "tvms_ladders", "rfa", "tvms_cases", "signals_B-6", "gap_per_view",
-             "gap_effect_ranking", "gap_accuracy", "gap_benchmark"]
+    stems = [
+        "accuracy_vs_k",
+        "training_curves",
+        "confusion_k0",
+        "latent_maps",
+        "accuracy_vs_intensity",
+        "accuracy_vs_rfa",
+        "confusion",
+        "tvms_ladders",
+        "rfa",
+        "tvms_cases",
+        "signals_B-6",
+        "gap_per_view",
+        "gap_effect_ranking",
+        "gap_accuracy",
+        "gap_benchmark",
+    ]
     for stem in stems:
         _, text = caption(stem, {})
         assert text != stem.replace("_", " ") + "." and "(" in text or stem == "gap_benchmark"
@@ -213,8 +289,12 @@ def test_compare_of_gap_runs_overlays_their_bars(runs, cli):
 
     both = load_runs([runs["gap"], runs["gap"]])
     charts = compare_charts(both)
-    assert charts[0].categories is not None and [c.label for c in charts[0].curves] == \
-        ["A: before", "A: after", "B: before", "B: after"]
+    assert charts[0].categories is not None and [c.label for c in charts[0].curves] == [
+        "A: before",
+        "A: after",
+        "B: before",
+        "B: after",
+    ]
     assert "| A: view |" in compare_markdown(both) and "| B: view |" in compare_markdown(both)
 
 
@@ -231,8 +311,11 @@ def test_did_you_mean_for_a_mistyped_scenario_file_and_gap_benchmrk(cli, tmp_pat
     code, _, err = cli("validate", tmp_path / "quik.toml")
     assert code == 2 and f"did you mean '{tmp_path / 'quick.toml'}'?" in err
     code, _, err = cli("gap", "benchmrk")
-    assert code == 2 and err.strip() == "error: gap: 'benchmrk' is neither a scenario file nor 'benchmark' " \
-                                        "(did you mean 'benchmark'?)"
+    assert (
+        code == 2
+        and err.strip()
+        == "error: gap: 'benchmrk' is neither a scenario file nor 'benchmark' (did you mean 'benchmark'?)"
+    )
 
 
 def test_progress_is_log_lines_when_stderr_is_not_a_terminal(cli, tmp_path, monkeypatch):
@@ -268,28 +351,57 @@ def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
         report = run / "report.html"
         html = report.read_text()
         assert not re.search(r"""(src|href)=['"]?(https?:)?//""", html), kind
-        done = subprocess.run([chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom",
-                               "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>",
-                               f"--user-data-dir={tmp_path / kind}", report.as_uri()],
-                              capture_output=True, text=True, timeout=120)
+        done = subprocess.run(
+            [
+                chromium(),
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--dump-dom",
+                "--proxy-server=127.0.0.1:9",
+                "--proxy-bypass-list=<-loopback>",
+                f"--user-data-dir={tmp_path / kind}",
+                report.as_uri(),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         dom = done.stdout
         assert "<figcaption>" in dom and dom.count("<img") == html.count("<img"), kind
         if kind in ("transfer", "gap"):
-            assert "<section id=\"verdict\">" in dom, kind
+            assert '<section id="verdict">' in dom, kind
         shot = tmp_path / f"{kind}.png"
-        subprocess.run([chromium(), "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
-                        "--window-size=1200,2000", f"--user-data-dir={tmp_path / kind}", report.as_uri()],
-                       capture_output=True, timeout=120)
+        subprocess.run(
+            [
+                chromium(),
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                f"--screenshot={shot}",
+                "--window-size=1200,2000",
+                f"--user-data-dir={tmp_path / kind}",
+                report.as_uri(),
+            ],
+            capture_output=True,
+            timeout=120,
+        )
         assert shot.stat().st_size > 10_000, kind
 
 
 def test_the_bayes_bound_is_set_beside_the_best_method():
     table = {"a": {"0": cell(80.0), "4": cell(84.0)}, "b": {"0": cell(70.0), "4": cell(71.0)}}
-    summary = {"table": table, "methods": ["a", "b"], "protocol": {"ks": [0, 4]},
-               "bound": {"accuracy": {"0": cell(92.0, 0.0), "4": cell(93.0, 0.5)}}}
+    summary = {
+        "table": table,
+        "methods": ["a", "b"],
+        "protocol": {"ks": [0, 4]},
+        "bound": {"accuracy": {"0": cell(92.0, 0.0), "4": cell(93.0, 0.5)}},
+    }
     lines = transfer_lines(summary, [])
-    assert lines[-1] == ("The Bayes bound (a detector told the target's own fault shapes and noise law, best "
-                         "threshold) is 92.00-93.00 %: the best method stays 9.0-12.0 points below it.")
+    assert lines[-1] == (
+        "The Bayes bound (a detector told the target's own fault shapes and noise law, best "
+        "threshold) is 92.00-93.00 %: the best method stays 9.0-12.0 points below it."
+    )
     md = transfer_table(summary).splitlines()
     assert md[0].endswith("| Bayes bound (target's own shapes and noise law, best threshold) |")
     assert md[2] == "| 0 | 80.00 ± 1.0 | 70.00 ± 1.0 | 92.00 ± 0.0 |"

@@ -14,8 +14,14 @@ TEETH = 32
 SENSITIVITY = 0.01 / 9.80665  # 10 mV/g in V per m/s²
 
 
-def signals(revolutions: int = 40, chip: float = 0.0, seed: int = 0, phase: float = 0.0,
-            speed: float = SPEED, noise: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+def signals(
+    revolutions: int = 40,
+    chip: float = 0.0,
+    seed: int = 0,
+    phase: float = 0.0,
+    speed: float = SPEED,
+    noise: float = 0.3,
+) -> tuple[np.ndarray, np.ndarray]:
     """(vibration in m/s², tacho in V): a mesh tone at order TEETH, noise, and with *chip* > 0
     a short impulse once per revolution (the chipped tooth); *phase*: the shaft angle (rad)
     at the first sample, so a record may start anywhere."""

@@ -48,8 +48,10 @@ def schedule(max_epochs: int = 3) -> str:
 
 def transfer(methods: str, repetitions: int = 1, max_epochs: int = 3) -> str:
     """A tiny transfer scenario (k in {0, 2}, one worker, CPU); *methods* are its [[methods]] tables."""
-    return (f'[scenario]\nname = "tiny"\nkind = "transfer"\n\n{domains()}\n[network]\nname = "fast"\n\n{methods}\n'
-            f"[protocol]\nks = [0, 2]\nrepetitions = {repetitions}\n{schedule(max_epochs)}\n{EXECUTION}")
+    return (
+        f'[scenario]\nname = "tiny"\nkind = "transfer"\n\n{domains()}\n[network]\nname = "fast"\n\n{methods}\n'
+        f"[protocol]\nks = [0, 2]\nrepetitions = {repetitions}\n{schedule(max_epochs)}\n{EXECUTION}"
+    )
 
 
 def records(run: Path) -> dict[str, dict]:

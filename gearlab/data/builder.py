@@ -77,8 +77,9 @@ def steady_revolution(sim: Simulator, faults, speed: float, load: float, channel
     return steady_response(sim, faults, speed, load, channel)[0]
 
 
-def steady_response(sim: Simulator, faults, speed: float, load: float, channel: str,
-                    effects=()) -> tuple[np.ndarray, np.ndarray | None]:
+def steady_response(
+    sim: Simulator, faults, speed: float, load: float, channel: str, effects=()
+) -> tuple[np.ndarray, np.ndarray | None]:
     """:func:`steady_revolution` under excitation-level *effects* ((Effect, params) pairs): the
     revolution and, when an effect moved the shaft angle, its angle from 0 to 2 pi (else None).
 
@@ -97,7 +98,9 @@ def steady_response(sim: Simulator, faults, speed: float, load: float, channel: 
         if first <= revolutions - 2:
             angle = None
             if result.angle is not None:
-                angle = result.angle[(revolutions - 1) * per_rev: revolutions * per_rev] - 2 * np.pi * (revolutions - 1)
+                angle = result.angle[(revolutions - 1) * per_rev : revolutions * per_rev] - 2 * np.pi * (
+                    revolutions - 1
+                )
             return x[-1].copy(), angle
         if revolutions >= 256:
             labels = ", ".join(f.label for f in faults) or "healthy"
@@ -194,8 +197,9 @@ def noisy_rows(task: tuple) -> np.ndarray:
             j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
             record = np.broadcast_to(row, (j, POINTS))
             if chain:  # J consecutive revolutions of one record, sampled at POINTS x speed
-                record = chain.apply_signal(record, POINTS * task.speed_hz, task.speed_hz, task.reference_rms,
-                                            [*seed, EFFECT_STREAM])
+                record = chain.apply_signal(
+                    record, POINTS * task.speed_hz, task.speed_hz, task.reference_rms, [*seed, EFFECT_STREAM]
+                )
             if task.noise_kind is not None:
                 record = add_noise(record, task.snr_db, task.noise_kind, np.random.default_rng(seed))
             kept = tsa(record) if task.use_tsa else record[0]
@@ -212,16 +216,18 @@ def healthy_reference(spec: DatasetSpec, healthy: np.ndarray, speed: float, refe
         return Standardiser.fit(healthy)
     record = np.broadcast_to(healthy, (64, POINTS))
     if signal:
-        record = signal.apply_signal(record, POINTS * speed, speed, reference_rms,
-                                     [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM])
+        record = signal.apply_signal(
+            record, POINTS * speed, speed, reference_rms, [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM]
+        )
     if spec.noise is not None:
         rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
         record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
     return Standardiser.fit(record)
 
 
-def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
-                  on_event: Callable[[Event], None] = lambda e: None) -> Dataset:
+def build_dataset(
+    spec: DatasetSpec, executor: LocalExecutor | None = None, on_event: Callable[[Event], None] = lambda e: None
+) -> Dataset:
     spec.check()
     executor = executor or LocalExecutor(1)
     registry = get_registry()
@@ -238,8 +244,10 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
         units = [(case, 1, teeth) for case in cases]
     else:
         units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth]
-    tasks = [SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, spec.effects, n)
-             for (f, s), n, rows in units]
+    tasks = [
+        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, spec.effects, n)
+        for (f, s), n, rows in units
+    ]
     on_event(Event("stage", stage="simulate", total=len(tasks), message=f"{spec.name}: {len(tasks)} simulations"))
     done = 0
 
@@ -248,6 +256,7 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
             nonlocal done
             done += 1
             on_event(Event("advance", stage=stage, done=done, total=total))
+
         return callback
 
     base: dict = {}
@@ -256,7 +265,7 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
 
     # 2. the samples and their labels
     label, intensity, tooth, rfa, source = [], [], [], [], []
-    for i in range(spec.healthy):
+    for _ in range(spec.healthy):
         label.append(0), intensity.append(0), tooth.append(0), rfa.append(0.0), source.append(((None, None), 0))
     for c, (name, steps) in enumerate(spec.faults, start=1):
         fault = registry.get("fault", name)
@@ -282,13 +291,25 @@ def build_dataset(spec: DatasetSpec, executor: LocalExecutor | None = None,
         idx = range(lo, min(n, lo + CHUNK))
         clean = np.stack([base[source[i][0]][source[i][1]] for i in idx])
         seeds = [[spec.seed, noise_seed, i] for i in idx]
-        chunks.append(RowsTask(clean, seeds, noise_kind, snr, spec.revolutions, spec.tsa,
-                               (reference.mean, reference.std), spec.effects, speed, reference_rms))
+        chunks.append(
+            RowsTask(
+                clean,
+                seeds,
+                noise_kind,
+                snr,
+                spec.revolutions,
+                spec.tsa,
+                (reference.mean, reference.std),
+                spec.effects,
+                speed,
+                reference_rms,
+            )
+        )
     on_event(Event("stage", stage="samples", total=len(chunks), message=f"{spec.name}: {n} samples"))
     done = 0
     X = np.empty((n, POINTS), dtype=np.float32)
     for lo, rows in zip(range(0, n, CHUNK), executor.map(noisy_rows, chunks, advance("samples", len(chunks)))):
-        X[lo:lo + len(rows)] = rows
+        X[lo : lo + len(rows)] = rows
     meta = {"fs_hz": fs, "speed_hz": speed, "load_nm": load, "Z1": pair.Z1}
     if spec.effects:  # what the model-level effects made of the source model
         config = spec.model_config()

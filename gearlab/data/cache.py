@@ -61,13 +61,17 @@ def _fallback(path: Path, exc: OSError) -> Path:
         try:
             folder = Path(tempfile.mkdtemp(prefix="gearlab-cache-"))
         except OSError as exc2:
-            raise GearlabInputError(f"{path}: cannot write the dataset cache ({write_problem(exc) or exc.strerror}), "
-                                    f"nor a temporary folder ({write_problem(exc2) or exc2.strerror})") from None
+            raise GearlabInputError(
+                f"{path}: cannot write the dataset cache ({write_problem(exc) or exc.strerror}), "
+                f"nor a temporary folder ({write_problem(exc2) or exc2.strerror})"
+            ) from None
         atexit.register(shutil.rmtree, folder, True)
         _FALLBACK.append(folder)
-        warnings.warn(f"dataset cache {path} cannot be written ({write_problem(exc)}); this run keeps its datasets "
-                      f"in {folder}, removed when it ends (set GEARLAB_CACHE to a writable folder to keep them)",
-                      stacklevel=3)
+        warnings.warn(
+            f"dataset cache {path} cannot be written ({write_problem(exc)}); this run keeps its datasets "
+            f"in {folder}, removed when it ends (set GEARLAB_CACHE to a writable folder to keep them)",
+            stacklevel=3,
+        )
     return _FALLBACK[0]
 
 
@@ -148,15 +152,18 @@ def load(spec: DatasetSpec, path: Path | None = None) -> Dataset | None:
     except FileNotFoundError:  # removed since exists() by another process: not damaged
         return None
     except Exception as exc:  # a damaged entry is not an error for the user: rebuild it
-        warnings.warn(f"dataset cache entry {path.name} is unreadable or altered ({clipped(str(exc))}); rebuilding it",
-                      stacklevel=2)
+        warnings.warn(
+            f"dataset cache entry {path.name} is unreadable or altered ({clipped(str(exc))}); rebuilding it",
+            stacklevel=2,
+        )
         try:
             path.unlink(missing_ok=True)
         except OSError:  # a read-only cache: the rebuilt entry goes to the fallback folder
             pass
         return None
-    return Dataset(spec=spec, domains=tuple(meta["domains"]), reference=tuple(meta["reference"]),
-                   meta=meta["meta"], **arrays)
+    return Dataset(
+        spec=spec, domains=tuple(meta["domains"]), reference=tuple(meta["reference"]), meta=meta["meta"], **arrays
+    )
 
 
 def _check_entry(meta: dict, arrays: dict[str, np.ndarray]) -> None:
@@ -168,8 +175,10 @@ def _check_entry(meta: dict, arrays: dict[str, np.ndarray]) -> None:
     layout = _layout(arrays)
     for name in ARRAYS:
         if recorded.get(name) != layout[name]:
-            raise ValueError(f"array {name} is {layout[name]['dtype']} {tuple(layout[name]['shape'])}, "
-                             f"written as {recorded.get(name)}")
+            raise ValueError(
+                f"array {name} is {layout[name]['dtype']} {tuple(layout[name]['shape'])}, "
+                f"written as {recorded.get(name)}"
+            )
     rows = {layout[name]["shape"][0] if layout[name]["shape"] else None for name in ARRAYS}
     if len(rows) != 1:
         raise ValueError("its arrays do not hold one row per sample each")
@@ -177,8 +186,9 @@ def _check_entry(meta: dict, arrays: dict[str, np.ndarray]) -> None:
         raise ValueError("its content does not match the sha256 recorded when it was written")
 
 
-def load_or_build(spec: DatasetSpec, executor=None, on_event: Callable[[Event], None] = lambda e: None
-                  ) -> tuple[Dataset, bool]:
+def load_or_build(
+    spec: DatasetSpec, executor=None, on_event: Callable[[Event], None] = lambda e: None
+) -> tuple[Dataset, bool]:
     """The dataset of *spec* from the cache, or built (simulated or imported) and stored.
     Returns (dataset, was_cached)."""
     cached = load(spec)

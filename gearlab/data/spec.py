@@ -83,8 +83,11 @@ class DatasetSpec:
             for s in steps:
                 if isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= LADDER_STEPS:
                     raise GearlabInputError(f"{where}: fault '{name}' step {s!r} is outside 1..{LADDER_STEPS}")
-        for label, value, low in (("duplicates", self.duplicates, 1), ("healthy", self.healthy, 0),
-                                  ("revolutions", self.revolutions, 1)):
+        for label, value, low in (
+            ("duplicates", self.duplicates, 1),
+            ("healthy", self.healthy, 0),
+            ("revolutions", self.revolutions, 1),
+        ):
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise GearlabInputError(f"{where}: '{label}' must be a whole number >= {low}, got {value!r}")
         if self.noise is not None and self.noise.kind not in NOISE_KINDS:
@@ -108,7 +111,8 @@ class DatasetSpec:
         pair, _ = model.resolve(self.preset, where=where)
         if self.channel not in model.channels:
             raise GearlabInputError(
-                f"{where}: model '{self.model}' has no channel '{self.channel}'; its channels: {', '.join(model.channels)}"
+                f"{where}: model '{self.model}' has no channel '{self.channel}'; "
+                f"its channels: {', '.join(model.channels)}"
             )
         if self.effects:
             self.model_config(where)  # effect names, parameters and what they do to the model
@@ -119,7 +123,6 @@ class DatasetSpec:
         for name, _ in self.faults:
             registry.get("fault", name, where)
         return model, pair, teeth
-
 
     def effect_chain(self, where: str = ""):
         """The dataset's effects, loaded and ordered by level (gearlab.effects.EffectChain)."""
@@ -171,8 +174,9 @@ def _presets() -> dict[str, DatasetSpec]:
     # Chapter 5 (Tables 5.1, 5.2): one sample per fault, intensity and tooth; a healthy sample per
     # fault sample plus a quarter more (240 = 192 + 48, 375 = 300 + 75).
     for name, healthy in (("A-pinion", 240), ("A-casing", 240), ("B-6", 375), ("B-8", 375)):
-        out[f"{name}-ch5"] = out[name].with_(name=f"{name}-ch5", domain=f"{name}-ch5", faults=_ladders(CH5_STEPS),
-                                             healthy=healthy)
+        out[f"{name}-ch5"] = out[name].with_(
+            name=f"{name}-ch5", domain=f"{name}-ch5", faults=_ladders(CH5_STEPS), healthy=healthy
+        )
     # The PHM 2009 spur rig (docs/real_data.md): the two-stage model, sensor on the casing, at the
     # records' nominal speeds and their sampling rate (66 666.67 Hz, rounded up to whole steps per
     # tooth pitch), so a simulated revolution has the bandwidth of a measured one after order tracking.
@@ -180,9 +184,18 @@ def _presets() -> dict[str, DatasetSpec]:
     # a module; steps 12-20 take its width across the face from 58 % to all of it).
     for speed in (30, 40):
         name = f"phm09-{speed}"
-        out[name] = DatasetSpec(name=name, model="two_stage", preset="phm09", channel="casing_x",
-                                speed_hz=float(speed), load_nm=20.0, faults=(("chip", PHM09_CHIP_STEPS),),
-                                healthy=160, fs=PHM09_FS, domain=name)
+        out[name] = DatasetSpec(
+            name=name,
+            model="two_stage",
+            preset="phm09",
+            channel="casing_x",
+            speed_hz=float(speed),
+            load_nm=20.0,
+            faults=(("chip", PHM09_CHIP_STEPS),),
+            healthy=160,
+            fs=PHM09_FS,
+            domain=name,
+        )
     return out
 
 
@@ -208,14 +221,14 @@ class Dataset:
     """float32 samples (n, 4096) and per-sample labels, with the spec that made them."""
 
     spec: DatasetSpec
-    X: "object"  # np.ndarray (n, POINTS) float32
-    label: "object"  # class index into spec.class_names (0 = healthy)
-    fault: "object"  # 1 = a fault class, 0 = healthy
-    intensity: "object"  # ladder step (0 for healthy samples)
-    tooth: "object"  # pinion tooth (0 for healthy samples)
-    rfa: "object"
-    revolution: "object"  # which noisy revolution was kept (-1 for a TSA sample)
-    domain: "object"  # index into domains
+    X: object  # np.ndarray (n, POINTS) float32
+    label: object  # class index into spec.class_names (0 = healthy)
+    fault: object  # 1 = a fault class, 0 = healthy
+    intensity: object  # ladder step (0 for healthy samples)
+    tooth: object  # pinion tooth (0 for healthy samples)
+    rfa: object
+    revolution: object  # which noisy revolution was kept (-1 for a TSA sample)
+    domain: object  # index into domains
     domains: tuple[str, ...] = ()
     reference: tuple[float, float] = (0.0, 1.0)  # mean and std of the healthy reference (eq. 2.112)
     meta: dict = field(default_factory=dict)

@@ -37,8 +37,9 @@ class ModelConfig:
 
     def __post_init__(self):
         if self.mesh_damping not in MESH_DAMPING_MODELS:
-            raise GearlabInputError(f"mesh damping model must be one of {', '.join(MESH_DAMPING_MODELS)}, "
-                                    f"got {self.mesh_damping!r}")
+            raise GearlabInputError(
+                f"mesh damping model must be one of {', '.join(MESH_DAMPING_MODELS)}, got {self.mesh_damping!r}"
+            )
 
     @property
     def params(self) -> dict[str, float]:
@@ -60,8 +61,9 @@ class ModelConfig:
         if unknown:
             raise ValueError(f"unknown DOF(s) {unknown}; the DOFs are {DOF_ORDER}")
         dofs = tuple(d for d in DOF_ORDER if d in self.dofs or d in added)
-        return dataclasses.replace(self, dofs=dofs, input_dof=input_dof or self.input_dof,
-                                   load_dof=load_dof or self.load_dof)
+        return dataclasses.replace(
+            self, dofs=dofs, input_dof=input_dof or self.input_dof, load_dof=load_dof or self.load_dof
+        )
 
     def replace(self, **changes) -> ModelConfig:
         return dataclasses.replace(self, **changes)

@@ -64,8 +64,9 @@ class Excitation:
         return dataclasses.replace(self, angle=np.asarray(angle, dtype=float), index=None)
 
     def with_tvms(self, k: np.ndarray) -> Excitation:
-        table = MeshStiffness(theta=self.tvms.theta, k=np.asarray(k, dtype=float), pair=self.tvms.pair,
-                              faults=self.tvms.faults)
+        table = MeshStiffness(
+            theta=self.tvms.theta, k=np.asarray(k, dtype=float), pair=self.tvms.pair, faults=self.tvms.faults
+        )
         return dataclasses.replace(self, tvms=table)
 
     def with_load(self, load: np.ndarray) -> Excitation:

@@ -31,8 +31,14 @@ from ..physics.presets import gear_pair
 
 DOF_ORDER = ("x1", "y1", "theta11", "theta12", "x2", "y2", "theta21", "theta22", "xf", "yf")
 CHANNEL_DOFS = {
-    "pinion_x": "x1", "pinion_y": "y1", "gear_x": "x2", "gear_y": "y2", "casing_x": "xf", "casing_y": "yf",
-    "output_x": "x3", "output_y": "y3",  # the output block of a two-stage model (plugins/models/two_stage.py)
+    "pinion_x": "x1",
+    "pinion_y": "y1",
+    "gear_x": "x2",
+    "gear_y": "y2",
+    "casing_x": "xf",
+    "casing_y": "yf",
+    "output_x": "x3",
+    "output_y": "y3",  # the output block of a two-stage model (plugins/models/two_stage.py)
 }
 
 # Every parameter a lumped gearbox model can take; a model declares the ones it uses.
@@ -149,8 +155,10 @@ class DynamicModel:
             "params": [p.describe() for p in self.params],
             "dofs": list(self.dofs),
             "channels": list(self.channels),
-            "presets": {k: {"pair": v["pair"], "speeds_hz": list(v["speeds_hz"]), "loads_nm": list(v["loads_nm"])}
-                        for k, v in self.presets.items()},
+            "presets": {
+                k: {"pair": v["pair"], "speeds_hz": list(v["speeds_hz"]), "loads_nm": list(v["loads_nm"])}
+                for k, v in self.presets.items()
+            },
         }
 
 
@@ -176,8 +184,20 @@ def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str
     """
     n = len(DOF_ORDER)
     idx = {d: i for i, d in enumerate(DOF_ORDER)}
-    M = np.diag([v.get("m1", 0), v.get("m1", 0), v.get("I11", 0), v.get("I12", 0),
-                 v.get("m2", 0), v.get("m2", 0), v.get("I21", 0), v.get("I22", 0), v.get("mf", 0), v.get("mf", 0)])
+    M = np.diag(
+        [
+            v.get("m1", 0),
+            v.get("m1", 0),
+            v.get("I11", 0),
+            v.get("I12", 0),
+            v.get("m2", 0),
+            v.get("m2", 0),
+            v.get("I21", 0),
+            v.get("I22", 0),
+            v.get("mf", 0),
+            v.get("mf", 0),
+        ]
+    )
     K = np.zeros((n, n))
     C = np.zeros((n, n))
 
@@ -191,8 +211,9 @@ def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str
     spring("theta11", "theta12", v.get("k_c", 0.0), v.get("c_c", 0.0))
     spring("theta21", "theta22", v.get("k_c", 0.0), v.get("c_c", 0.0))
     a0 = pair.pressure_angle
-    P = np.array([math.sin(a0), math.cos(a0), 0.0, pair.pinion.R_b,
-                  -math.sin(a0), -math.cos(a0), -pair.gear.R_b, 0.0, 0.0, 0.0])  # eq. 2.104
+    P = np.array(
+        [math.sin(a0), math.cos(a0), 0.0, pair.pinion.R_b, -math.sin(a0), -math.cos(a0), -pair.gear.R_b, 0.0, 0.0, 0.0]
+    )  # eq. 2.104
     keep = [idx[d] for d in dofs]
     sub = np.ix_(keep, keep)
     return Assembly(tuple(dofs), M[sub], K[sub], C[sub], P[keep], input_dof, load_dof)

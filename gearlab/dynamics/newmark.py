@@ -220,17 +220,25 @@ class Simulator:
     """One model on one preset at one sampling rate: everything that does not depend on the
     faults or the operating point is prepared once (sections, healthy TVMS, K_hat_c^-1)."""
 
-    def __init__(self, model: DynamicModel, preset: str, fs: float = DEFAULT_FS,
-                 overrides: Mapping | None = None, beta1: float = BETA1, beta2: float = BETA2,
-                 mesh_damping: str = "proportional"):
+    def __init__(
+        self,
+        model: DynamicModel,
+        preset: str,
+        fs: float = DEFAULT_FS,
+        overrides: Mapping | None = None,
+        beta1: float = BETA1,
+        beta2: float = BETA2,
+        mesh_damping: str = "proportional",
+    ):
         where = f"model '{model.name}', preset '{preset}'"
         if not (math.isfinite(fs) and fs > 0):
             raise GearlabInputError(f"{where}: sampling rate fs must be a positive number of Hz, got {fs!r}")
         if not (beta2 >= beta1 >= 0.5):
             raise GearlabInputError(f"{where}: Newmark needs beta2 >= beta1 >= 0.5 for stability, got {beta1}, {beta2}")
         if mesh_damping not in MESH_DAMPING_MODELS:
-            raise GearlabInputError(f"{where}: mesh damping model must be one of {', '.join(MESH_DAMPING_MODELS)}, "
-                                    f"got {mesh_damping!r}")
+            raise GearlabInputError(
+                f"{where}: mesh damping model must be one of {', '.join(MESH_DAMPING_MODELS)}, got {mesh_damping!r}"
+            )
         self.model, self.preset, self.fs = model, preset, float(fs)
         self.pair, self.values = model.resolve(preset, overrides, where)
         self.stiffness = MeshStiffnessModel(self.pair)
@@ -263,7 +271,9 @@ class Simulator:
         self.gamma, self.beta = beta1, beta2 / 2
         dt = 1.0 / self.fs
         b, g = self.beta, self.gamma
-        self.c = np.array([1 / (b * dt * dt), g / (b * dt), 1 / (b * dt), 1 / (2 * b) - 1, g / b - 1, dt / 2 * (g / b - 2)])
+        self.c = np.array(
+            [1 / (b * dt * dt), g / (b * dt), 1 / (b * dt), 1 / (2 * b) - 1, g / b - 1, dt / 2 * (g / b - 2)]
+        )
         G = np.linalg.inv(self.Kc + self.c[0] * self.M + self.c[1] * self.Cc)  # once, outside the loop
         self.G, self.GMC = G, np.ascontiguousarray(np.hstack([G @ self.M, G @ self.Cc]))
         self.w = G @ self.P
@@ -278,13 +288,44 @@ class Simulator:
     def _warm_up(self) -> None:
         """Load the compiled integrator now (one step), so run() times only the simulation."""
         n = len(self.dofs)
-        _integrate(self.GMC, np.zeros(n), self.w, self.P, self.pw, np.ones(1), self.mu, self.c, 1.0 / self.fs,
-                   self.gamma, np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(1, dtype=np.int64), np.empty((2, 1)))
+        _integrate(
+            self.GMC,
+            np.zeros(n),
+            self.w,
+            self.P,
+            self.pw,
+            np.ones(1),
+            self.mu,
+            self.c,
+            1.0 / self.fs,
+            self.gamma,
+            np.zeros(n),
+            np.zeros(n),
+            np.zeros(n),
+            np.zeros(1, dtype=np.int64),
+            np.empty((2, 1)),
+        )
         if self.meshes:
             m = len(self.Pm)
-            _integrate_meshes(self.GMC, np.zeros(n), np.zeros((n, 0)), np.zeros((1, 0)), self.Wm, self.Pm, self.PW,
-                              np.ones((1, m)), np.zeros(m), self.c, 1.0 / self.fs, self.gamma, np.zeros(n),
-                              np.zeros(n), np.zeros(n), np.zeros(1, dtype=np.int64), np.empty((2, 1)))
+            _integrate_meshes(
+                self.GMC,
+                np.zeros(n),
+                np.zeros((n, 0)),
+                np.zeros((1, 0)),
+                self.Wm,
+                self.Pm,
+                self.PW,
+                np.ones((1, m)),
+                np.zeros(m),
+                self.c,
+                1.0 / self.fs,
+                self.gamma,
+                np.zeros(n),
+                np.zeros(n),
+                np.zeros(n),
+                np.zeros(1, dtype=np.int64),
+                np.empty((2, 1)),
+            )
 
     def natural_frequencies(self, k: float | None = None, fixed_input: bool = True) -> np.ndarray:
         """Undamped natural frequencies (Hz) at mesh stiffness k (default: the mean)."""
@@ -306,11 +347,19 @@ class Simulator:
         if self.fs < 10 * top:
             warnings.warn(
                 f"{where}: fs = {self.fs:g} Hz gives fewer than 10 steps per period of the highest natural "
-                f"frequency ({top:.0f} Hz); results will be inaccurate", stacklevel=3,
+                f"frequency ({top:.0f} Hz); results will be inaccurate",
+                stacklevel=3,
             )
 
-    def run(self, faults: Sequence[PlacedFault] = (), speed_hz: float | None = None, load_nm: float | None = None,
-            duration: float = 0.4, channels: Sequence[str] | None = None, effects: Sequence = ()) -> Simulation:
+    def run(
+        self,
+        faults: Sequence[PlacedFault] = (),
+        speed_hz: float | None = None,
+        load_nm: float | None = None,
+        duration: float = 0.4,
+        channels: Sequence[str] | None = None,
+        effects: Sequence = (),
+    ) -> Simulation:
         """Integrate from the static equilibrium for *duration* seconds.
 
         *effects*: excitation-level effects as (Effect, resolved params) pairs (gearlab.effects.EffectChain.at),
@@ -346,13 +395,24 @@ class Simulator:
         tacho = np.where(phase >= np.pi, phase - 2 * np.pi, phase)
         wall = time.perf_counter() - start
         return Simulation(
-            model=self.model.name, preset=self.preset, speed_hz=speed, load_nm=load, fs=self.fs, t=t, tacho=tacho,
-            tvms=k, channels={ch: out[:, j] for j, ch in enumerate(channels)}, wall_s=wall, faults=tuple(faults),
-            state=(u, v, a), angle=angle,
+            model=self.model.name,
+            preset=self.preset,
+            speed_hz=speed,
+            load_nm=load,
+            fs=self.fs,
+            t=t,
+            tacho=tacho,
+            tvms=k,
+            channels={ch: out[:, j] for j, ch in enumerate(channels)},
+            wall_s=wall,
+            faults=tuple(faults),
+            state=(u, v, a),
+            angle=angle,
         )
 
-    def _operating_point(self, speed_hz: float | None, load_nm: float | None, duration: float,
-                         channels: Sequence[str] | None, where: str) -> tuple[float, float, list[str]]:
+    def _operating_point(
+        self, speed_hz: float | None, load_nm: float | None, duration: float, channels: Sequence[str] | None, where: str
+    ) -> tuple[float, float, list[str]]:
         """Speed and load (the preset's unless given) and the channels, checked: one line each."""
         preset = self.model.preset(self.preset)
         speed = float(preset["speed_hz"] if speed_hz is None else speed_hz)
@@ -400,8 +460,19 @@ class Simulator:
         u = np.linalg.solve(K_mean, F)
         return F, (u, np.zeros_like(u), np.zeros_like(u))
 
-    def _newmark(self, k: np.ndarray, forces: list, angle: np.ndarray | None, t: np.ndarray, speed: float,
-                 per_rev: float, F: np.ndarray, start: tuple, out_idx: np.ndarray, out: np.ndarray) -> int:
+    def _newmark(
+        self,
+        k: np.ndarray,
+        forces: list,
+        angle: np.ndarray | None,
+        t: np.ndarray,
+        speed: float,
+        per_rev: float,
+        F: np.ndarray,
+        start: tuple,
+        out_idx: np.ndarray,
+        out: np.ndarray,
+    ) -> int:
         """The time loop (one of three compiled integrators: one mesh, one mesh with extra forces,
         several meshes); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1."""
         u, v, a = start
@@ -409,22 +480,71 @@ class Simulator:
         if self.meshes:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
             shaft = 2 * np.pi * speed * t if angle is None else angle
-            k_all = np.column_stack([k] + [self._mesh_series(i, shaft, per_rev if angle is None else None)
-                                           for i in range(len(self.meshes))])
+            k_all = np.column_stack(
+                [k] + [self._mesh_series(i, shaft, per_rev if angle is None else None) for i in range(len(self.meshes))]
+            )
             n = len(self.dofs)
             GB, g = np.zeros((n, 0)), np.zeros((steps, 0))
             if forces:
                 GB, g = self._forcing(forces)
             mu = np.array([self.mu, *self.mesh_mu])
-            return _integrate_meshes(self.GMC, self.G @ F, GB, g, self.Wm, self.Pm, self.PW,
-                                     np.ascontiguousarray(k_all[1:]), mu, self.c, 1.0 / self.fs, self.gamma,
-                                     u, v, a, out_idx, out)
+            return _integrate_meshes(
+                self.GMC,
+                self.G @ F,
+                GB,
+                g,
+                self.Wm,
+                self.Pm,
+                self.PW,
+                np.ascontiguousarray(k_all[1:]),
+                mu,
+                self.c,
+                1.0 / self.fs,
+                self.gamma,
+                u,
+                v,
+                a,
+                out_idx,
+                out,
+            )
         if forces:
             GB, g = self._forcing(forces)
-            return _integrate_forced(self.GMC, self.G @ F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, self.c,
-                                     1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
-        return _integrate(self.GMC, self.G @ F, self.w, self.P, self.pw, k[1:], self.mu, self.c,
-                          1.0 / self.fs, self.gamma, u, v, a, out_idx, out)
+            return _integrate_forced(
+                self.GMC,
+                self.G @ F,
+                GB,
+                g,
+                self.w,
+                self.P,
+                self.pw,
+                k[1:],
+                self.mu,
+                self.c,
+                1.0 / self.fs,
+                self.gamma,
+                u,
+                v,
+                a,
+                out_idx,
+                out,
+            )
+        return _integrate(
+            self.GMC,
+            self.G @ F,
+            self.w,
+            self.P,
+            self.pw,
+            k[1:],
+            self.mu,
+            self.c,
+            1.0 / self.fs,
+            self.gamma,
+            u,
+            v,
+            a,
+            out_idx,
+            out,
+        )
 
     def _forcing(self, forces: list) -> tuple[np.ndarray, np.ndarray]:
         """G B (the force vectors through K_hat_c^-1) and the force series g from the second step on."""
@@ -444,15 +564,31 @@ class Simulator:
                 return table[np.arange(len(shaft)) % round(steps_per_turn)]
         points = mesh.pair.Z1 * math.ceil(TVMS_POINTS / mesh.pair.Z1)
         table = model.mesh_stiffness(points=points)
-        return np.interp(np.mod(mesh.ratio * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi),
-                         np.append(table.k, table.k[0]))
+        return np.interp(
+            np.mod(mesh.ratio * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi), np.append(table.k, table.k[0])
+        )
 
     def _excite(self, effects, tvms, index, t, speed, load):
         """Apply excitation-level effects to the nominal excitation: (k(t), mean k, forces, moved angle or None)."""
         nominal = 2 * np.pi * speed * t
-        exc = Excitation(fs=self.fs, speed_hz=speed, load_nm=load, t=t, angle=nominal, tvms=tvms,
-                         load=np.full(t.shape, load), dofs=self.dofs, M=self.M, P=self.P, mu=self.mu, c0=self.c0,
-                         load_dof=self.load_dof, stiffness=self.stiffness, index=index, rigid=self.rigid)
+        exc = Excitation(
+            fs=self.fs,
+            speed_hz=speed,
+            load_nm=load,
+            t=t,
+            angle=nominal,
+            tvms=tvms,
+            load=np.full(t.shape, load),
+            dofs=self.dofs,
+            M=self.M,
+            P=self.P,
+            mu=self.mu,
+            c0=self.c0,
+            load_dof=self.load_dof,
+            stiffness=self.stiffness,
+            index=index,
+            rigid=self.rigid,
+        )
         for effect, params in effects:
             exc = effect.apply_excitation(exc, params)
         return exc.stiffness_series(), exc.tvms.mean, exc.force_terms(), (None if exc.angle is nominal else exc.angle)

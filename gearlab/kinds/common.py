@@ -29,10 +29,17 @@ DATASET_TABLE = Table(
         "labels": Key(str, "", doc="measured data: an optional label channel"),
         "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
         "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
-        "sensitivity": Key((int, float, str), None, doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
-                                                        "V per m/s²); without it or 'gain' the units are unknown"),
-        "gain": Key((int, float, str), None, doc="measured data: volts per file unit, e.g. '0.3 mV' per count of "
-                                                 "an integer record (WAV: at full scale)"),
+        "sensitivity": Key(
+            (int, float, str),
+            None,
+            doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
+            "V per m/s²); without it or 'gain' the units are unknown",
+        ),
+        "gain": Key(
+            (int, float, str),
+            None,
+            doc="measured data: volts per file unit, e.g. '0.3 mV' per count of an integer record (WAV: at full scale)",
+        ),
         "name": Key(str, "", lambda v, where: v and plain_name(v, where), "label (default: the preset name)"),
         "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
         "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
@@ -48,8 +55,12 @@ DATASET_TABLE = Table(
         "tsa": Key(bool, None),
         "seed": Key(int, None, in_range(0, 2**32 - 1)),
         "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'"),
-        "effects": Key(list, None, doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
-                                       "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)"),
+        "effects": Key(
+            list,
+            None,
+            doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
+            "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)",
+        ),
     },
     array=True,
     required=True,
@@ -86,12 +97,16 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
         faults = []
         for name, steps in entry["faults"].items():
             if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
-                raise GearlabInputError(f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {shown(steps)}")
+                raise GearlabInputError(
+                    f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {shown(steps)}"
+                )
             faults.append((name, tuple(steps)))
         changes["faults"] = tuple(faults)
     if entry["teeth"] is not None:
         if not all(isinstance(t, int) and not isinstance(t, bool) for t in entry["teeth"]):
-            raise GearlabInputError(f"{where} key 'teeth': expected a list of tooth numbers, got {shown(entry['teeth'])}")
+            raise GearlabInputError(
+                f"{where} key 'teeth': expected a list of tooth numbers, got {shown(entry['teeth'])}"
+            )
         changes["teeth"] = tuple(entry["teeth"])
     for key in ("duplicates", "healthy", "revolutions", "tsa", "seed"):
         if entry[key] is not None:
@@ -105,8 +120,10 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     spec.check_model(where)  # model, preset, channel, faults and teeth: refused before any work
     total = sum(class_sizes(spec, where).values())
     if total > MAX_SAMPLES:
-        raise GearlabInputError(f"{where}: dataset '{spec.name}' would hold {shown(total)} samples; expected at most "
-                                f"{MAX_SAMPLES} (fewer duplicates, teeth or healthy samples)")
+        raise GearlabInputError(
+            f"{where}: dataset '{spec.name}' would hold {shown(total)} samples; expected at most "
+            f"{MAX_SAMPLES} (fewer duplicates, teeth or healthy samples)"
+        )
     return spec
 
 
@@ -122,8 +139,9 @@ def quantity(entry: dict, key: str, where: str) -> float:
     if value < 0 or value == 0 and key != "load":
         raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {shown(entry[key])}")
     if value > high:
-        raise GearlabInputError(f"{where} key '{key}': {shown(entry[key])} is outside "
-                                f"{'[0' if key == 'load' else '(0'} {unit}, {said}]")
+        raise GearlabInputError(
+            f"{where} key '{key}': {shown(entry[key])} is outside {'[0' if key == 'load' else '(0'} {unit}, {said}]"
+        )
     return value
 
 
@@ -132,8 +150,10 @@ def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
     can only be their [target])."""
     spec = dataset_spec(entry, where, base)
     if not isinstance(spec, DatasetSpec):
-        raise GearlabInputError(f"{where} key 'file': the source is a simulator configuration; give a 'preset' "
-                                "(measured data can only be the [target])")
+        raise GearlabInputError(
+            f"{where} key 'file': the source is a simulator configuration; give a 'preset' "
+            "(measured data can only be the [target])"
+        )
     return spec
 
 
@@ -148,9 +168,16 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     if not names or not all(isinstance(n, str) for n in names):
         raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
     spec = MeasuredSpec(
-        name=entry["name"] or path.stem, path=str(path), vibration=entry["vibration"], tacho=entry["tacho"] or None,
-        speed_hz=speed, fs=fs, labels=entry["labels"] or None, class_names=tuple(names),
-        transient=entry["transient"], **units_of(entry, where),
+        name=entry["name"] or path.stem,
+        path=str(path),
+        vibration=entry["vibration"],
+        tacho=entry["tacho"] or None,
+        speed_hz=speed,
+        fs=fs,
+        labels=entry["labels"] or None,
+        class_names=tuple(names),
+        transient=entry["transient"],
+        **units_of(entry, where),
     )
     spec.check()
     return spec
@@ -164,8 +191,10 @@ def units_of(entry: dict, where: str) -> dict:
     if entry.get("gain") is not None:
         gain = to_si(entry["gain"], "V", f"{where} key 'gain'")
         if not gain > 0:
-            raise GearlabInputError(f"{where} key 'gain': expected a positive voltage per file unit such as "
-                                    f"'0.3 mV', got {shown(entry['gain'])}")
+            raise GearlabInputError(
+                f"{where} key 'gain': expected a positive voltage per file unit such as "
+                f"'0.3 mV', got {shown(entry['gain'])}"
+            )
         out["gain"] = gain
     return out
 
@@ -209,8 +238,9 @@ def executor_for(scenario: Scenario, address: str | None = None):
     """The scenario's [execution] executor. For Ray, `address` (the CLI's --ray-address) wins over
     RAY_ADDRESS, which wins over the scenario's `address`."""
     ex = scenario.tables["execution"]
-    return make_executor(ex["executor"], ex["workers"] or None, address=address,
-                         scenario_address=ex.get("address") or None)
+    return make_executor(
+        ex["executor"], ex["workers"] or None, address=address, scenario_address=ex.get("address") or None
+    )
 
 
 def device_of(scenario: Scenario) -> str:

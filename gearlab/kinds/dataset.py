@@ -24,8 +24,10 @@ TABLES = {"datasets": DATASET_TABLE}
 
 
 def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
-    specs = [dataset_spec(entry, location(scenario.path, "datasets", index=i), scenario.base or scenario.path.parent)
-             for i, entry in enumerate(scenario.tables["datasets"])]
+    specs = [
+        dataset_spec(entry, location(scenario.path, "datasets", index=i), scenario.base or scenario.path.parent)
+        for i, entry in enumerate(scenario.tables["datasets"])
+    ]
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
         raise GearlabInputError(f"{scenario.path}: dataset names must be unique; give each entry a 'name'")
@@ -40,8 +42,15 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: two teeth, the top intensity of each fault, a few healthy samples, J <= 4."""
     scenario.spec = [
-        s.with_(teeth=(1, 2), faults=tuple((f, steps[-1:]) for f, steps in s.faults), duplicates=1,
-                healthy=min(s.healthy, 4), revolutions=min(s.revolutions, 4)) if isinstance(s, DatasetSpec) else s
+        s.with_(
+            teeth=(1, 2),
+            faults=tuple((f, steps[-1:]) for f, steps in s.faults),
+            duplicates=1,
+            healthy=min(s.healthy, 4),
+            revolutions=min(s.revolutions, 4),
+        )
+        if isinstance(s, DatasetSpec)
+        else s
         for s in scenario.spec
     ]
 
@@ -57,8 +66,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         for spec in scenario.spec:
             dataset, cached = load_or_build(spec, executor, on_event)
             record = done.get(spec.name) or {
-                "unit": spec.name, "key": spec.key(), "cached": cached, "n": len(dataset),
-                "counts": class_counts(dataset), "reference": list(dataset.reference), "meta": dataset.meta,
+                "unit": spec.name,
+                "key": spec.key(),
+                "cached": cached,
+                "n": len(dataset),
+                "counts": class_counts(dataset),
+                "reference": list(dataset.reference),
+                "meta": dataset.meta,
             }
             if spec.name not in done:
                 run.append(record)
@@ -89,8 +103,10 @@ def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
     lines = [table_md(summary).rstrip()]
     for name, d in summary["datasets"].items():
-        lines.append(f"{name}: {d['n']} samples x {d['shape'][1]}, cache key {d['key']}"
-                     + (" (from cache)" if d["cached"] else ""))
+        lines.append(
+            f"{name}: {d['n']} samples x {d['shape'][1]}, cache key {d['key']}"
+            + (" (from cache)" if d["cached"] else "")
+        )
     return lines
 
 
@@ -112,8 +128,14 @@ def charts(scenario: Scenario, run: RunDir) -> list:
             continue
         examples = dataset_examples(dataset, per_class=1)
         angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]
-        out.append(Chart(f"{spec.name}: one revolution per class", "input-shaft angle (deg)", "standardised",
-                         tuple(Curve(label, angle, dataset.X[i]) for _, label, i in examples)))
+        out.append(
+            Chart(
+                f"{spec.name}: one revolution per class",
+                "input-shaft angle (deg)",
+                "standardised",
+                tuple(Curve(label, angle, dataset.X[i]) for _, label, i in examples),
+            )
+        )
         spectra = []
         for _, label, i in examples:
             orders, amp = order_spectrum(dataset.X[i])

@@ -16,7 +16,8 @@ the method's model and threshold are fixed, and their labels only when the figur
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
 
 Records are grouped by operating *condition*: the file's ``condition`` when given, else by
-tacho speed (``conditions_of``: within 5 %, a test record with the history of nearest speed). Each condition has its own history: standardisation
+tacho speed (``conditions_of``: within 5 %, a test record with the history of nearest speed).
+Each condition has its own history: standardisation
 (eq. 2.112), the alignment of records that start at different tacho marks, the methods'
 calibration and thresholds. A condition with test records but no history is refused.
 
@@ -76,32 +77,47 @@ SPEED_GROUP = 0.05
 
 TABLES = {
     "source": TRANSFER_TABLES["source"],
-    "target": Table({
-        "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
-        "tacho": Key((int, str), doc="tacho column: 0-based index or header name"),
-        "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "tacho pulses per input-shaft revolution"),
-        "sensitivity": Key((int, float, str), 1.0, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"),
-        "fs": Key((int, float, str), doc="sampling rate, e.g. '66666.67 Hz' (text files carry none)"),
-        "transient": Key(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution"),
-        "positive": Key(str, "fault", doc="the label of records with the fault to detect; every other is negative"),
-        "files": Key(list, doc="[{path, role = 'history' | 'test', label, condition (optional)}, ...]"),
-    }, required=True),
+    "target": Table(
+        {
+            "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
+            "tacho": Key((int, str), doc="tacho column: 0-based index or header name"),
+            "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "tacho pulses per input-shaft revolution"),
+            "sensitivity": Key((int, float, str), 1.0, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"),
+            "fs": Key((int, float, str), doc="sampling rate, e.g. '66666.67 Hz' (text files carry none)"),
+            "transient": Key(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution"),
+            "positive": Key(str, "fault", doc="the label of records with the fault to detect; every other is negative"),
+            "files": Key(list, doc="[{path, role = 'history' | 'test', label, condition (optional)}, ...]"),
+        },
+        required=True,
+    ),
     "network": TRANSFER_TABLES["network"],
     "methods": Table(TRANSFER_TABLES["methods"].keys, array=True),
-    "classical": Table({
-        "indicators": Key(list, list(INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"),
-        "mesh_orders": Key(list, [], doc="mesh orders of the TSA's shaft (default: the source pinion's teeth)"),
-        "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
-        "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
-    }),
-    "detection": Table({
-        "blocks": Key(list, [10, 30], doc="revolutions per record-level TSA unit"),
-        "false_alarm": Key(float, 0.01, in_range(1e-6, 0.5), "share of healthy history units above the threshold"),
-        "input": Key(str, "difference", doc="what the learned methods see: 'difference' (revolution or TSA less its "
-                                            "shaft and mesh orders, as FM4's) or 'revolution' (as it is)"),
-        "source_speed": Key(str, "records", doc="'records': the source simulated at each condition's history speed "
-                                                "(to 1 Hz); 'source': at the [source]'s own speed"),
-    }),
+    "classical": Table(
+        {
+            "indicators": Key(list, list(INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"),
+            "mesh_orders": Key(list, [], doc="mesh orders of the TSA's shaft (default: the source pinion's teeth)"),
+            "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
+            "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
+        }
+    ),
+    "detection": Table(
+        {
+            "blocks": Key(list, [10, 30], doc="revolutions per record-level TSA unit"),
+            "false_alarm": Key(float, 0.01, in_range(1e-6, 0.5), "share of healthy history units above the threshold"),
+            "input": Key(
+                str,
+                "difference",
+                doc="what the learned methods see: 'difference' (revolution or TSA less its "
+                "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
+            ),
+            "source_speed": Key(
+                str,
+                "records",
+                doc="'records': the source simulated at each condition's history speed "
+                "(to 1 Hz); 'source': at the [source]'s own speed",
+            ),
+        }
+    ),
     "protocol": Table({**TRAINING, **CALIBRATION}),
 }
 
@@ -134,8 +150,7 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
     """The [target] 'files' list: each {path, role, label, condition?}, paths relative to *base*;
     every role in *need* must be present (the gap kind needs the history alone)."""
     if not files:
-        raise GearlabInputError(f"{where}: expected a list of files, each {{ path, role = 'history' | 'test', "
-                                "label }")
+        raise GearlabInputError(f"{where}: expected a list of files, each {{ path, role = 'history' | 'test', label }}")
     out = []
     for i, f in enumerate(files):
         at = f"{where} entry {i + 1}"
@@ -143,22 +158,25 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
             raise GearlabInputError(f"{at}: expected a table {{ path, role, label }}, got {shown(f)}")
         for key in f:
             if key not in FILE_KEYS:
-                raise GearlabInputError(f"{at}: unknown key '{key}'{did_you_mean(key, FILE_KEYS)}; known keys: "
-                                        f"{', '.join(FILE_KEYS)}")
+                raise GearlabInputError(
+                    f"{at}: unknown key '{key}'{did_you_mean(key, FILE_KEYS)}; known keys: {', '.join(FILE_KEYS)}"
+                )
         for key in ("path", "role", "label"):
             if not isinstance(f.get(key), str) or not f[key]:
                 raise GearlabInputError(f"{at}: '{key}' must be a non-empty text")
         if f["role"] not in ROLES:
-            raise GearlabInputError(f"{at}: role '{f['role']}'{did_you_mean(f['role'], ROLES)} is not one of "
-                                    f"{', '.join(ROLES)}")
+            raise GearlabInputError(
+                f"{at}: role '{f['role']}'{did_you_mean(f['role'], ROLES)} is not one of {', '.join(ROLES)}"
+            )
         condition = f.get("condition", "")
         if not isinstance(condition, str):
             raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
         path = Path(f["path"])
         resolved = path if path.is_absolute() else base / path
         if not resolved.is_file():
-            raise GearlabInputError(f"{at}: {resolved}: no such file; expected a measured record (.zip of one "
-                                    "text file, or the text)")
+            raise GearlabInputError(
+                f"{at}: {resolved}: no such file; expected a measured record (.zip of one text file, or the text)"
+            )
         out.append(TargetFile(f["path"], str(resolved), f["role"], f["label"], condition))
     seen = {}
     for i, f in enumerate(out):
@@ -166,15 +184,19 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
             raise GearlabInputError(f"{where} entry {i + 1}: {f.path} is listed twice (entry {seen[f.resolved] + 1})")
     for role in need:
         if not any(f.role == role for f in out):
-            raise GearlabInputError(f"{where}: no file has role = '{role}'; expected at least "
-                                    + " and ".join(f"one {r}" for r in need) + " file")
+            raise GearlabInputError(
+                f"{where}: no file has role = '{role}'; expected at least "
+                + " and ".join(f"one {r}" for r in need)
+                + " file"
+            )
     return tuple(out)
 
 
 def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
     if t["fs"] is None:
-        raise GearlabInputError(f"{where} key 'fs': missing; text records carry no sampling rate (e.g. "
-                                "fs = '66666.67 Hz')")
+        raise GearlabInputError(
+            f"{where} key 'fs': missing; text records carry no sampling rate (e.g. fs = '66666.67 Hz')"
+        )
     fs = to_si(t["fs"], "Hz", f"{where} key 'fs'")
     if not fs > 0:
         raise GearlabInputError(f"{where} key 'fs': expected a positive sampling rate, got {shown(t['fs'])}")
@@ -186,9 +208,16 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
     if t["vibration"] == t["tacho"]:
         raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
     files = target_files(t["files"], f"{where} key 'files'", base, need)
-    return Target(t["vibration"], t["tacho"], t["pulses_per_rev"],
-                  parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'"), fs, t["transient"],
-                  t["positive"], files)
+    return Target(
+        t["vibration"],
+        t["tacho"],
+        t["pulses_per_rev"],
+        parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'"),
+        fs,
+        t["transient"],
+        t["positive"],
+        files,
+    )
 
 
 def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
@@ -196,9 +225,12 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
     (source-trained, domain-adaptation and detector methods), in the registry's order."""
     registry = get_registry()
     if not entries:
-        entries = [{"adapter": name, "supervised": False, "params": {}} for name in registry.names("adapter")
-                   if registry.get("adapter", name).train_on != "target"
-                   and "unsupervised" in registry.get("adapter", name).supervision]
+        entries = [
+            {"adapter": name, "supervised": False, "params": {}}
+            for name in registry.names("adapter")
+            if registry.get("adapter", name).train_on != "target"
+            and "unsupervised" in registry.get("adapter", name).supervision
+        ]
     out = []
     for i, entry in enumerate(entries):
         at = location(where, "methods", index=i)
@@ -206,8 +238,9 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
         if m.supervised:
             raise GearlabInputError(f"{at} key 'supervised': the measured target has no labels a method may use")
         if registry.get("adapter", m.adapter).train_on == "target":
-            raise GearlabInputError(f"{at} key 'adapter': '{m.adapter}' trains on labelled target data; the "
-                                    "measured history has none")
+            raise GearlabInputError(
+                f"{at} key 'adapter': '{m.adapter}' trains on labelled target data; the measured history has none"
+            )
         if m in out:
             raise GearlabInputError(f"{at}: {m.label} is listed twice")
         out.append(m)
@@ -220,46 +253,73 @@ def build(scenario: Scenario) -> dict:
     source = simulated_spec(t["source"], location(path, "source"), scenario.base)
     sizes = class_sizes(source, location(path, "source"))
     if not sizes["healthy"] or sum(sizes.values()) == sizes["healthy"]:
-        raise GearlabInputError(f"{location(path, 'source')}: the source needs healthy and faulty revolutions "
-                                f"(has {sizes})")
+        raise GearlabInputError(
+            f"{location(path, 'source')}: the source needs healthy and faulty revolutions (has {sizes})"
+        )
     _, pair, _ = source.check_model(location(path, "source"))
     target = target_spec(t["target"], location(path, "target"), scenario.base)
     c = t["classical"]
     for name in c["indicators"]:
         if name not in INDICATORS:
-            raise GearlabInputError(f"{location(path, 'classical', 'indicators')}: unknown indicator "
-                                    f"{shown(name)}{did_you_mean(str(name), INDICATORS)}; known: {', '.join(INDICATORS)}")
+            raise GearlabInputError(
+                f"{location(path, 'classical', 'indicators')}: unknown indicator "
+                f"{shown(name)}{did_you_mean(str(name), INDICATORS)}; known: {', '.join(INDICATORS)}"
+            )
     orders = c["mesh_orders"] or [pair.Z1]
     if not all(isinstance(o, int) and not isinstance(o, bool) and 1 <= o <= 1000 for o in orders):
-        raise GearlabInputError(f"{location(path, 'classical', 'mesh_orders')}: expected whole orders 1 … 1000, "
-                                f"got {shown(orders)}")
+        raise GearlabInputError(
+            f"{location(path, 'classical', 'mesh_orders')}: expected whole orders 1 … 1000, got {shown(orders)}"
+        )
     blocks = t["detection"]["blocks"]
-    if not all(isinstance(b, int) and not isinstance(b, bool) and 2 <= b <= 10_000 for b in blocks) \
-            or len(set(blocks)) != len(blocks):
-        raise GearlabInputError(f"{location(path, 'detection', 'blocks')}: expected distinct whole numbers of "
-                                f"revolutions >= 2, got {shown(blocks)}")
+    if not all(isinstance(b, int) and not isinstance(b, bool) and 2 <= b <= 10_000 for b in blocks) or len(
+        set(blocks)
+    ) != len(blocks):
+        raise GearlabInputError(
+            f"{location(path, 'detection', 'blocks')}: expected distinct whole numbers of "
+            f"revolutions >= 2, got {shown(blocks)}"
+        )
     check_training(t, path)
     p = t["protocol"]
     protocol = Protocol(
-        methods=methods_of(t["methods"], str(path)), network=t["network"]["name"], dropout=t["network"]["dropout"],
-        ks=(0,), repetitions=1, **{key: p[key] for key in TRAINING}, device=device_of(scenario),
+        methods=methods_of(t["methods"], str(path)),
+        network=t["network"]["name"],
+        dropout=t["network"]["dropout"],
+        ks=(0,),
+        repetitions=1,
+        **{key: p[key] for key in TRAINING},
+        device=device_of(scenario),
         calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
     )
     protocol.calibration.check(str(path))
     if p["batch"] > p["target_train"]:
-        raise GearlabInputError(f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than target_train "
-                                f"= {p['target_train']}")
+        raise GearlabInputError(
+            f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than target_train = {p['target_train']}"
+        )
     if t["detection"]["source_speed"] not in SOURCE_SPEEDS:
-        raise GearlabInputError(f"{location(path, 'detection', 'source_speed')}: expected one of "
-                                f"{', '.join(SOURCE_SPEEDS)}, got {shown(t['detection']['source_speed'])}")
+        raise GearlabInputError(
+            f"{location(path, 'detection', 'source_speed')}: expected one of "
+            f"{', '.join(SOURCE_SPEEDS)}, got {shown(t['detection']['source_speed'])}"
+        )
     if t["detection"]["input"] not in INPUTS:
-        raise GearlabInputError(f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got "
-                                f"{shown(t['detection']['input'])}")
-    return {"source": source, "target": target, "protocol": protocol, "source_speed": t["detection"]["source_speed"],
-            "input": t["detection"]["input"],
-            "classical": {"indicators": tuple(c["indicators"]), "mesh_orders": tuple(orders),
-                          "shaft_orders": c["shaft_orders"], "sidebands": c["sidebands"]},
-            "blocks": tuple(blocks), "false_alarm": t["detection"]["false_alarm"]}
+        raise GearlabInputError(
+            f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got "
+            f"{shown(t['detection']['input'])}"
+        )
+    return {
+        "source": source,
+        "target": target,
+        "protocol": protocol,
+        "source_speed": t["detection"]["source_speed"],
+        "input": t["detection"]["input"],
+        "classical": {
+            "indicators": tuple(c["indicators"]),
+            "mesh_orders": tuple(orders),
+            "shaft_orders": c["shaft_orders"],
+            "sidebands": c["sidebands"],
+        },
+        "blocks": tuple(blocks),
+        "false_alarm": t["detection"]["false_alarm"],
+    }
 
 
 def describe(scenario: Scenario) -> str:
@@ -267,9 +327,10 @@ def describe(scenario: Scenario) -> str:
     files = spec["target"].files
     n_hist = sum(f.role == "history" for f in files)
     names = [m.adapter for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
-    return (f"{sized(spec['source'])} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
-            f"test); methods: {', '.join(names)}; units: revolution, "
-            + ", ".join(f"record{b}" for b in spec["blocks"]))
+    return (
+        f"{sized(spec['source'])} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
+        f"test); methods: {', '.join(names)}; units: revolution, " + ", ".join(f"record{b}" for b in spec["blocks"])
+    )
 
 
 def quick(scenario: Scenario) -> None:
@@ -312,7 +373,7 @@ def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.nda
     starts = range(0, revs.shape[0] - block + 1, stride)
     if not len(starts):
         return np.empty((0, revs.shape[1]), dtype=revs.dtype)
-    return np.stack([revs[s:s + block].mean(axis=0) for s in starts]).astype(revs.dtype)
+    return np.stack([revs[s : s + block].mean(axis=0) for s in starts]).astype(revs.dtype)
 
 
 def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
@@ -331,9 +392,15 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
     on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
     records = {}
     for i, f in enumerate(target.files):
-        records[f.path] = read_record(f.resolved, vibration=target.vibration, tacho=target.tacho,
-                                      pulses_per_rev=target.pulses_per_rev, sensitivity=target.sensitivity,
-                                      fs=target.fs, transient=target.transient)
+        records[f.path] = read_record(
+            f.resolved,
+            vibration=target.vibration,
+            tacho=target.tacho,
+            pulses_per_rev=target.pulses_per_rev,
+            sensitivity=target.sensitivity,
+            fs=target.fs,
+            transient=target.transient,
+        )
         on_event(Event("advance", stage="records", done=i + 1, total=len(target.files)))
     speeds = {p: r.speed_hz for p, r in records.items()}
     named = conditions_of(list(target.files), speeds)
@@ -344,8 +411,10 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
     for name, cond in conditions.items():
         if not cond["history"]:
             files = ", ".join(f.path for f, _ in cond["test"])
-            raise GearlabInputError(f"{where}: condition '{name}' ({files}) has no history record; "
-                                    "each condition needs its own healthy history (give 'condition' to group files)")
+            raise GearlabInputError(
+                f"{where}: condition '{name}' ({files}) has no history record; "
+                "each condition needs its own healthy history (give 'condition' to group files)"
+            )
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["shifts"] = {}
@@ -356,14 +425,18 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
                 cond["shifts"][f.path] = shift
                 aligned.append((f, revs))
             cond[role] = aligned
-        cond["history_units"] = {u: np.concatenate([unit_sets(r, blocks, True)[u] for _, r in cond["history"]])
-                                 for u in unit_sets(cond["history"][0][1][:1], blocks, True)}
+        cond["history_units"] = {
+            u: np.concatenate([unit_sets(r, blocks, True)[u] for _, r in cond["history"]])
+            for u in unit_sets(cond["history"][0][1][:1], blocks, True)
+        }
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
                 longest = max(len(r) for _, r in cond["history"])
-                raise GearlabInputError(f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
-                                        f"(its longest record has {longest} revolutions); expected at least "
-                                        f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks")
+                raise GearlabInputError(
+                    f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
+                    f"(its longest record has {longest} revolutions); expected at least "
+                    f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
+                )
         cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
     return conditions
 
@@ -385,19 +458,36 @@ def train_unit(task: tuple) -> dict:
     torch.set_num_threads(1)
     device = pick_device(protocol.device)
     with UnitProgress(Path(states).parents[1], f"{condition}/{method.key}") as progress:
+
         def report(epoch: int, history) -> None:
             progress(f"epoch {epoch + 1}")
 
-        model, history, _ = train_method(protocol, method, (Xs, ys), (Xv, yv),
-                                         (train, np.zeros(len(train), dtype=np.int64)), 0, 0,
-                                         StateStore(Path(states)), device, report)
+        model, history, _ = train_method(
+            protocol,
+            method,
+            (Xs, ys),
+            (Xv, yv),
+            (train, np.zeros(len(train), dtype=np.int64)),
+            0,
+            0,
+            StateStore(Path(states)),
+            device,
+            report,
+        )
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
     thresholds = decide(hist, false_alarm)
     test = {path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()}
-    return {"unit": f"{condition}/{method.key}", "condition": condition, "method": method_name(method),
-            "adapter": method.adapter, "history_scores": _to_lists(hist), "thresholds": thresholds,
-            "test_scores": _to_lists(test), "history": history.as_dict() if history is not None else None}
+    return {
+        "unit": f"{condition}/{method.key}",
+        "condition": condition,
+        "method": method_name(method),
+        "adapter": method.adapter,
+        "history_scores": _to_lists(hist),
+        "thresholds": thresholds,
+        "test_scores": _to_lists(test),
+        "history": history.as_dict() if history is not None else None,
+    }
 
 
 def decide(history_scores: dict, false_alarm: float) -> dict[str, float]:
@@ -424,8 +514,15 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, fal
     hist = {u: score(X, u) for u, X in cond["history_units"].items()}
     thresholds = decide(hist, false_alarm)  # fixed before any test unit is scored
     test = {p: {u: score(X, u) for u, X in units.items()} for p, units in cond["test_units"].items()}
-    return {"unit": f"{condition}/{name}", "condition": condition, "method": name, "adapter": None,
-            "history_scores": _to_lists(hist), "thresholds": thresholds, "test_scores": _to_lists(test)}
+    return {
+        "unit": f"{condition}/{name}",
+        "condition": condition,
+        "method": name,
+        "adapter": None,
+        "history_scores": _to_lists(hist),
+        "thresholds": thresholds,
+        "test_scores": _to_lists(test),
+    }
 
 
 def learned_input(spec: dict):
@@ -479,19 +576,24 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             sources[s], _ = load_or_build(s, executor, on_event)
             on_event(Event("advance", stage="datasets", done=i + 1, total=len(built)))
             if len(sources[s].X) - max(1, round(protocol.val_fraction * len(sources[s].X))) < protocol.batch:
-                raise GearlabInputError(f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
-                                        f"the source training set of '{s.name}'")
+                raise GearlabInputError(
+                    f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
+                    f"the source training set of '{s.name}'"
+                )
         done = {r["unit"] for r in run.records()}
         for name, cond in conditions.items():
             for indicator in spec["classical"]["indicators"]:
                 if f"{name}/{indicator}" not in done:
                     run.append(classical_record(indicator, name, cond, spec["classical"], spec["false_alarm"]))
         shown_to = learned_input(spec)
-        splits = {c: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[c]], protocol))
-                  for c in conditions}
+        splits = {
+            c: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[c]], protocol))
+            for c in conditions
+        }
         todo = [(name, m) for name in conditions for m in protocol.methods]
         pending = [(c, m) for c, m in todo if f"{c}/{m.key}" not in done]
         folders = {c: f"condition{i}" for i, c in enumerate(conditions)}
+
         def state_file(unit: tuple) -> Path | None:
             c, m = unit
             state = shared_state(m, 0, 0, protocol)
@@ -514,15 +616,33 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 cond = conditions[c]
                 states = run.path / "states" / folders[c]
                 states.mkdir(parents=True, exist_ok=True)
-                tasks.append((protocol, m, c, splits[c], shown_to(history_training_rows(cond, protocol, c)),
-                              {u: shown_to(X) for u, X in cond["history_units"].items()},
-                              {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
-                              states, spec["false_alarm"]))
+                tasks.append(
+                    (
+                        protocol,
+                        m,
+                        c,
+                        splits[c],
+                        shown_to(history_training_rows(cond, protocol, c)),
+                        {u: shown_to(X) for u, X in cond["history_units"].items()},
+                        {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
+                        states,
+                        spec["false_alarm"],
+                    )
+                )
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
-        run.write_json("conditions.json", {
-            c: {"history": [f.path for f, _ in v["history"]], "test": [f.path for f, _ in v["test"]],
-                "speeds_hz": v["speeds"], "start_marks": v["shifts"], "source": v["source"]}
-            for c, v in conditions.items()})
+        run.write_json(
+            "conditions.json",
+            {
+                c: {
+                    "history": [f.path for f, _ in v["history"]],
+                    "test": [f.path for f, _ in v["test"]],
+                    "speeds_hz": v["speeds"],
+                    "start_marks": v["shifts"],
+                    "source": v["source"],
+                }
+                for c, v in conditions.items()
+            },
+        )
         summarise(scenario, run)
 
 
@@ -559,30 +679,48 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     for r in records:
         for u in r["history_scores"]:
             thr = thresholds[r["unit"]][u]
-            neg = np.concatenate([r["test_scores"][p][u] for p in r["test_scores"] if labels[p] != target.positive]
-                                 or [np.empty(0)])
-            pos = np.concatenate([r["test_scores"][p][u] for p in r["test_scores"] if labels[p] == target.positive]
-                                 or [np.empty(0)])
+            neg = np.concatenate(
+                [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] != target.positive] or [np.empty(0)]
+            )
+            pos = np.concatenate(
+                [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] == target.positive] or [np.empty(0)]
+            )
             by_label = {}
             for p, units in r["test_scores"].items():
                 by_label.setdefault(labels[p], []).extend(units[u])
-            rows.append({
-                "condition": r["condition"], "unit": u, "method": r["method"], "auc": auc(neg, pos),
-                "detection": 100.0 * float(np.mean(pos > thr)) if len(pos) else None,
-                "false_alarm": 100.0 * float(np.mean(neg > thr)) if len(neg) else None,
-                "n_positive": int(len(pos)), "n_negative": int(len(neg)), "threshold": thr,
-                "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
-            })
+            rows.append(
+                {
+                    "condition": r["condition"],
+                    "unit": u,
+                    "method": r["method"],
+                    "auc": auc(neg, pos),
+                    "detection": 100.0 * float(np.mean(pos > thr)) if len(pos) else None,
+                    "false_alarm": 100.0 * float(np.mean(neg > thr)) if len(neg) else None,
+                    "n_positive": int(len(pos)),
+                    "n_negative": int(len(neg)),
+                    "threshold": thr,
+                    "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
+                }
+            )
     order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
     methods = [method_name(m) for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
-    rows.sort(key=lambda r: (order[r["condition"]], methods.index(r["method"]) if r["method"] in methods
-                             else len(methods), r["unit"] != "revolution", r["unit"]))
+    rows.sort(
+        key=lambda r: (
+            order[r["condition"]],
+            methods.index(r["method"]) if r["method"] in methods else len(methods),
+            r["unit"] != "revolution",
+            r["unit"],
+        )
+    )
     summary = {
-        "kind": "detection", "scenario": scenario.name, "source": asdict(spec["source"]),
+        "kind": "detection",
+        "scenario": scenario.name,
+        "source": asdict(spec["source"]),
         "target": {**asdict(target), "files": [asdict(f) for f in target.files]},
         "protocol": {k: v for k, v in asdict(spec["protocol"]).items() if k != "methods"},
         "methods": list(dict.fromkeys(r["method"] for r in records)),
-        "false_alarm_asked": spec["false_alarm"], "rows": rows,
+        "false_alarm_asked": spec["false_alarm"],
+        "rows": rows,
     }
     if (run.path / "conditions.json").exists():
         summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
@@ -609,12 +747,23 @@ def table_md(rows: list[dict]) -> str:
             parts = []
             for u in units:
                 r = cells.get((m, u))
-                parts.append("| | " if r is None else f"{_cell(r['auc'], '{:.3f}')} | {_cell(r['detection'], '{:.0f}')} | "
-                             f"{_cell(r['false_alarm'], '{:.0f}')}")
+                parts.append(
+                    "| | "
+                    if r is None
+                    else f"{_cell(r['auc'], '{:.3f}')} | {_cell(r['detection'], '{:.0f}')} | "
+                    f"{_cell(r['false_alarm'], '{:.0f}')}"
+                )
             out.append(f"| {m} | " + " | ".join(parts) + " |")
-        out.append("| units (pos / neg) | " + " | ".join(
-            f"{cells[(first['method'], u)]['n_positive']} / {cells[(first['method'], u)]['n_negative']} | |"
-            if (first["method"], u) in cells else "| |" for u in units) + " |")
+        out.append(
+            "| units (pos / neg) | "
+            + " | ".join(
+                f"{cells[(first['method'], u)]['n_positive']} / {cells[(first['method'], u)]['n_negative']} | |"
+                if (first["method"], u) in cells
+                else "| |"
+                for u in units
+            )
+            + " |"
+        )
         out.append("")
     return "\n".join(out)
 
@@ -628,30 +777,48 @@ def labels_md(rows: list[dict]) -> str:
     unit = max(units, key=lambda u: int(u.removeprefix("record")))
     picked = [r for r in rows if r["unit"] == unit]
     labels = list(dict.fromkeys(k for r in picked for k in r["called_by_label"]))
-    out = [f"| {unit}: condition | method | " + " | ".join(f"called % '{k}'" for k in labels) + " |",
-           "|---|---|" + "---|" * len(labels)]
+    out = [
+        f"| {unit}: condition | method | " + " | ".join(f"called % '{k}'" for k in labels) + " |",
+        "|---|---|" + "---|" * len(labels),
+    ]
     for r in picked:
-        out.append(f"| {r['condition']} | {r['method']} | "
-                   + " | ".join(_cell(r["called_by_label"].get(k), "{:.0f}") for k in labels) + " |")
+        out.append(
+            f"| {r['condition']} | {r['method']} | "
+            + " | ".join(_cell(r["called_by_label"].get(k), "{:.0f}") for k in labels)
+            + " |"
+        )
     return "\n".join(out) + "\n"
 
 
 def table_csv(rows: list[dict]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["condition", "unit", "method", "auc", "detection", "false_alarm", "n_positive", "n_negative",
-                "threshold"])
+    w.writerow(
+        ["condition", "unit", "method", "auc", "detection", "false_alarm", "n_positive", "n_negative", "threshold"]
+    )
     for r in rows:
-        w.writerow([r["condition"], r["unit"], r["method"], *(("" if r[k] is None else f"{r[k]:.4f}")
-                                                              for k in ("auc", "detection", "false_alarm")),
-                    r["n_positive"], r["n_negative"], f"{r['threshold']:.6g}"])
+        w.writerow(
+            [
+                r["condition"],
+                r["unit"],
+                r["method"],
+                *(("" if r[k] is None else f"{r[k]:.4f}") for k in ("auc", "detection", "false_alarm")),
+                r["n_positive"],
+                r["n_negative"],
+                f"{r['threshold']:.6g}",
+            ]
+        )
     return buf.getvalue()
 
 
 def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
-    return [f"ROC AUC, detection and false alarms at the history's threshold ({100 * summary['false_alarm_asked']:g} % "
-            "false alarms asked):", table_md(summary["rows"]).rstrip(), labels_md(summary["rows"]).rstrip()]
+    return [
+        f"ROC AUC, detection and false alarms at the history's threshold ({100 * summary['false_alarm_asked']:g} % "
+        "false alarms asked):",
+        table_md(summary["rows"]).rstrip(),
+        labels_md(summary["rows"]).rstrip(),
+    ]
 
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:

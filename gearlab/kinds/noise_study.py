@@ -39,18 +39,35 @@ from .common import DATASET_TABLE, class_sizes, dataset_spec, device_of, executo
 
 # What a study may change in the chapter-4 presets; the preset itself, the noise kind and
 # TSA are what the study varies.
-_OVERRIDES = ("model", "model_preset", "channel", "speed", "load", "faults", "teeth", "duplicates", "healthy",
-              "revolutions", "seed", "fs")
+_OVERRIDES = (
+    "model",
+    "model_preset",
+    "channel",
+    "speed",
+    "load",
+    "faults",
+    "teeth",
+    "duplicates",
+    "healthy",
+    "revolutions",
+    "seed",
+    "fs",
+)
 
 TABLES = {
-    "study": Table({
-        "noises": Key(list, list(NOISE_KINDS), doc=f"noise types, each studied noisy and with TSA: "
-                                                   f"{', '.join(NOISE_KINDS)}"),
-    }),
-    "dataset": Table({
-        **{k: DATASET_TABLE.keys[k] for k in _OVERRIDES},
-        "noise": Key(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises"),
-    }),
+    "study": Table(
+        {
+            "noises": Key(
+                list, list(NOISE_KINDS), doc=f"noise types, each studied noisy and with TSA: {', '.join(NOISE_KINDS)}"
+            ),
+        }
+    ),
+    "dataset": Table(
+        {
+            **{k: DATASET_TABLE.keys[k] for k in _OVERRIDES},
+            "noise": Key(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises"),
+        }
+    ),
     "network": Table(keys_of(NetworkSettings, name=NoiseProtocol.network, dropout=NoiseProtocol.dropout)),
     "protocol": Table(keys_of(NoiseProtocol)),
 }
@@ -77,15 +94,20 @@ def build(scenario: Scenario) -> dict:
         raise GearlabInputError(f"{where}: expected a non-empty list of noise types ({', '.join(NOISE_KINDS)})")
     for noise in noises:
         if noise not in NOISE_KINDS:
-            raise GearlabInputError(f"{where}: unknown noise type {noise!r}{did_you_mean(str(noise), NOISE_KINDS)}; "
-                                    f"known: {', '.join(NOISE_KINDS)}")
+            raise GearlabInputError(
+                f"{where}: unknown noise type {noise!r}{did_you_mean(str(noise), NOISE_KINDS)}; "
+                f"known: {', '.join(NOISE_KINDS)}"
+            )
     if len(set(noises)) != len(noises):
         raise GearlabInputError(f"{where}: lists a noise type twice")
     p = t["protocol"]
-    protocol = NoiseProtocol(network=t["network"]["name"], dropout=t["network"]["dropout"], device=device_of(scenario),
-                             **p)
-    spec = {"datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
-            "protocol": protocol}
+    protocol = NoiseProtocol(
+        network=t["network"]["name"], dropout=t["network"]["dropout"], device=device_of(scenario), **p
+    )
+    spec = {
+        "datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
+        "protocol": protocol,
+    }
     check(spec, scenario.path)
     return spec
 
@@ -98,8 +120,9 @@ def _dataset(scenario: Scenario, noise: str, variant: str) -> DatasetSpec:
     name = preset_name(noise, variant)
     user_noise = overrides["noise"] or {}
     if "kind" in user_noise:
-        raise GearlabInputError(f"{where} key 'noise': the noise kind comes from [study] key 'noises'; "
-                                f"give only snr_db and seed")
+        raise GearlabInputError(
+            f"{where} key 'noise': the noise kind comes from [study] key 'noises'; give only snr_db and seed"
+        )
     # the preset's noise (its kind is the study's), the snr_db and seed given changed
     noise_of = noise_spec({"kind": noise, **user_noise}, f"{where} key 'noise'", dataset_preset(name).noise)
     entry = {k: key.default for k, key in DATASET_TABLE.keys.items()}
@@ -113,8 +136,10 @@ def _dataset(scenario: Scenario, noise: str, variant: str) -> DatasetSpec:
 def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
     spec = scenario.spec
-    return (f"noise types {', '.join(spec['datasets'])}, noisy and TSA, network {spec['protocol'].network}: "
-            f"{len(units(spec))} training runs")
+    return (
+        f"noise types {', '.join(spec['datasets'])}, noisy and TSA, network {spec['protocol'].network}: "
+        f"{len(units(spec))} training runs"
+    )
 
 
 def quick(scenario: Scenario) -> None:
@@ -126,8 +151,13 @@ def quick(scenario: Scenario) -> None:
         teeth = spec.teeth[:4] if spec.teeth is not None else (1, 5, 9, 13)
         duplicates = min(spec.duplicates, 2)
         n_faults = sum(len(steps) for _, steps in faults) * len(teeth) * duplicates
-        return spec.with_(faults=faults, teeth=teeth, duplicates=duplicates, healthy=min(spec.healthy, n_faults),
-                          revolutions=min(spec.revolutions, 8))
+        return spec.with_(
+            faults=faults,
+            teeth=teeth,
+            duplicates=duplicates,
+            healthy=min(spec.healthy, n_faults),
+            revolutions=min(spec.revolutions, 8),
+        )
 
     spec = scenario.spec
     noise, variants = next(iter(spec["datasets"].items()))
@@ -167,9 +197,14 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             nonlocal finished
             run.append(record)
             finished += 1
-            on_event(Event("log", message=f"{record['unit']}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
-                                          f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
-                                          f"{record['train_seconds']:.0f} s)"))
+            on_event(
+                Event(
+                    "log",
+                    message=f"{record['unit']}: test accuracy {record['accuracy']:.1f} %, fault-as-healthy "
+                    f"{record['fault_as_healthy']:.1f} % (epoch {record['best_epoch']}, "
+                    f"{record['train_seconds']:.0f} s)",
+                )
+            )
             on_event(Event("record", stage="runs", record=record))
             on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
@@ -189,6 +224,7 @@ def train_unit(task: tuple) -> dict:
     torch.set_num_threads(1)
     unit = unit_name(noise, r, variant)
     with UnitProgress(run_path, unit) as progress:
+
         def report(epoch: int, history) -> None:
             progress(f"epoch {epoch + 1}, validation accuracy {100 * history.val_acc[-1]:.1f} %")
 
@@ -201,14 +237,19 @@ def results(records: list[dict]) -> dict:
     out: dict[str, dict] = {}
     for noise in dict.fromkeys(r["noise"] for r in records):
         mine = [r for r in records if r["noise"] == noise]
-        out[noise] = {v: aggregate([r for r in mine if r["variant"] == v])
-                      for v in VARIANTS if any(r["variant"] == v for r in mine)}
+        out[noise] = {
+            v: aggregate([r for r in mine if r["variant"] == v])
+            for v in VARIANTS
+            if any(r["variant"] == v for r in mine)
+        }
         acc = {v: {r["run"]: r["accuracy"] for r in mine if r["variant"] == v} for v in VARIANTS}
         paired = [acc["tsa"][k] - acc["noisy"][k] for k in sorted(set(acc["tsa"]) & set(acc["noisy"]))]
         if paired:
-            out[noise]["tsa_gain"] = {"mean": float(np.mean(paired)),
-                                      "std": float(np.std(paired, ddof=1)) if len(paired) > 1 else 0.0,
-                                      "n": len(paired)}
+            out[noise]["tsa_gain"] = {
+                "mean": float(np.mean(paired)),
+                "std": float(np.std(paired, ddof=1)) if len(paired) > 1 else 0.0,
+                "n": len(paired),
+            }
     return out
 
 
@@ -218,15 +259,20 @@ def _cell(stats: dict | None, key: str) -> str:
 
 
 def table_md(res: dict) -> str:
-    lines = ["| noise | noisy accuracy (%) | TSA accuracy (%) | TSA gain (points) | noisy fault-as-healthy (%) "
-             "| TSA fault-as-healthy (%) | runs |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| noise | noisy accuracy (%) | TSA accuracy (%) | TSA gain (points) | noisy fault-as-healthy (%) "
+        "| TSA fault-as-healthy (%) | runs |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for noise, r in res.items():
         gain = r.get("tsa_gain")
         gain_text = f"{gain['mean']:+.1f} ± {gain['std']:.1f}" if gain else ""
         runs = "/".join(str(r[v]["runs"]) for v in VARIANTS if v in r)
-        lines.append(f"| {noise} | {_cell(r.get('noisy'), 'accuracy')} | {_cell(r.get('tsa'), 'accuracy')} | "
-                     f"{gain_text} | "
-                     f"{_cell(r.get('noisy'), 'fault_as_healthy')} | {_cell(r.get('tsa'), 'fault_as_healthy')} | {runs} |")
+        lines.append(
+            f"| {noise} | {_cell(r.get('noisy'), 'accuracy')} | {_cell(r.get('tsa'), 'accuracy')} | "
+            f"{gain_text} | "
+            f"{_cell(r.get('noisy'), 'fault_as_healthy')} | {_cell(r.get('tsa'), 'fault_as_healthy')} | {runs} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -254,8 +300,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "kind": "noise_study",
         "scenario": scenario.name,
         "protocol": asdict(spec["protocol"]),
-        "datasets": {noise: {v: {"name": s.name, "key": s.key(), "spec": asdict(s)} for v, s in variants.items()}
-                     for noise, variants in spec["datasets"].items()},
+        "datasets": {
+            noise: {v: {"name": s.name, "key": s.key(), "spec": asdict(s)} for v, s in variants.items()}
+            for noise, variants in spec["datasets"].items()
+        },
         "results": res,
         "units": len(records),
     }
@@ -267,8 +315,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
 
 def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
-    return ["test accuracy and fault-as-healthy rate [%], mean ± std over runs (thesis 4.3):",
-            table_md(summary["results"]).rstrip()]
+    return [
+        "test accuracy and fault-as-healthy rate [%], mean ± std over runs (thesis 4.3):",
+        table_md(summary["results"]).rstrip(),
+    ]
 
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:
@@ -284,6 +334,7 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
             c = variants.get(variant, {}).get("curves", {}).get("all")
             if c:
                 curves.append(Curve(variant, c["steps"], c["accuracy_mean"], c["accuracy_std"]))
-        out.append(Chart(f"{noise} noise: fault accuracy against intensity", "intensity step", "accuracy (%)",
-                         tuple(curves)))
+        out.append(
+            Chart(f"{noise} noise: fault accuracy against intensity", "intensity step", "accuracy (%)", tuple(curves))
+        )
     return out

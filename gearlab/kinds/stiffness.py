@@ -79,7 +79,9 @@ def build(scenario: Scenario) -> Spec:
     if not 1 <= steps[0] <= steps[1] <= LADDER_STEPS:
         raise GearlabInputError(f"{where}: expected 1 <= first <= last <= {LADDER_STEPS}, got {steps!r}")
     if not 1 <= sweep["tooth"] <= pair.Z1:
-        raise GearlabInputError(f"{scenario.where('sweep', 'tooth')}: tooth must lie in 1..{pair.Z1}, got {sweep['tooth']}")
+        raise GearlabInputError(
+            f"{scenario.where('sweep', 'tooth')}: tooth must lie in 1..{pair.Z1}, got {sweep['tooth']}"
+        )
     cases = [Case("healthy", ())]
     for i, name in enumerate(sweep["faults"]):
         here = f"{scenario.where('sweep', 'faults')} item {i + 1}"
@@ -93,10 +95,14 @@ def build(scenario: Scenario) -> Spec:
         for j, f in enumerate(case["faults"]):
             here = f"{location(scenario.path, 'cases', 'faults', i)} item {j + 1}"
             if not isinstance(f, dict) or "kind" not in f or "tooth" not in f:
-                raise GearlabInputError(f"{here}: expected a table {{kind = ..., tooth = ..., step = ...}} or with params")
+                raise GearlabInputError(
+                    f"{here}: expected a table {{kind = ..., tooth = ..., step = ...}} or with params"
+                )
             unknown = set(f) - {"kind", "tooth", "step", "params"}
             if unknown:
-                raise GearlabInputError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, tooth, step, params")
+                raise GearlabInputError(
+                    f"{here}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, tooth, step, params"
+                )
             # the types place_fault relies on (a list as 'kind' cannot even be looked up)
             if not isinstance(f["kind"], str):
                 raise GearlabInputError(f"{here} key 'kind': expected a fault name, got {f['kind']!r}")
@@ -108,7 +114,9 @@ def build(scenario: Scenario) -> Spec:
         cases.append(Case(case["name"], tuple(placed)))
     names = [c.name for c in cases]
     if len(set(names)) != len(names):
-        raise GearlabInputError(f"{scenario.path}: case names must be unique; repeated: {sorted({n for n in names if names.count(n) > 1})}")
+        raise GearlabInputError(
+            f"{scenario.path}: case names must be unique; repeated: {sorted({n for n in names if names.count(n) > 1})}"
+        )
     st = t["stiffness"]
     options = StiffnessOptions(fillet=st["fillet"], root_region=st["root_region"])
     return Spec(pair, options, st["points"], cases, list(sweep["faults"]), sweep["tooth"])
@@ -152,7 +160,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 "fault": case.fault,
                 "step": case.step,
                 "faults": [
-                    {"kind": p.fault.name, "tooth": p.tooth, "params": p.params, "rfa": p.fault.rfa(p.params, spec.pair)}
+                    {
+                        "kind": p.fault.name,
+                        "tooth": p.tooth,
+                        "params": p.params,
+                        "rfa": p.fault.rfa(p.params, spec.pair),
+                    }
                     for p in case.faults
                 ],
                 "rfa": max((p.fault.rfa(p.params, spec.pair) for p in case.faults), default=0.0),
@@ -178,8 +191,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "pair": pair.describe(),
         "healthy": {"mean": healthy["mean_N_per_m"], "min": healthy["min_N_per_m"], "max": healthy["max_N_per_m"]},
         "sweep": sweep,
-        "cases": {name: {k: r[k] for k in ("mean_N_per_m", "min_N_per_m", "max_N_per_m", "rfa", "faults")}
-                  for name, r in records.items()},
+        "cases": {
+            name: {k: r[k] for k in ("mean_N_per_m", "min_N_per_m", "max_N_per_m", "rfa", "faults")}
+            for name, r in records.items()
+        },
     }
     run.write_json("summary.json", summary)
     run.write_text("table.md", _table_md(sweep))
@@ -194,10 +209,15 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             theta, k = read_csv(run.path / "cases" / f"{case.name}.csv")
             panels.setdefault(case.fault, []).append((case.step, theta, k))
     if panels:
-        ladder_grid(panels, run.figures / "tvms_ladders.png", window,
-                    f"TVMS, faults on pinion tooth {spec.tooth} of {pair.name} (Figure 2.33)")
-        rfa_curves({f: ([int(s) for s in v], [v[s]["rfa"] for s in v]) for f, v in sweep.items()},
-                   run.figures / "rfa.png")
+        ladder_grid(
+            panels,
+            run.figures / "tvms_ladders.png",
+            window,
+            f"TVMS, faults on pinion tooth {spec.tooth} of {pair.name} (Figure 2.33)",
+        )
+        rfa_curves(
+            {f: ([int(s) for s in v], [v[s]["rfa"] for s in v]) for f, v in sweep.items()}, run.figures / "rfa.png"
+        )
     other = [c for c in spec.cases if not c.fault]
     curves = [(c.name, *read_csv(run.path / "cases" / f"{c.name}.csv")) for c in other]
     tvms_figure(curves, f"TVMS over one pinion revolution, {pair.name}", run.figures / "tvms_cases.png")
@@ -210,7 +230,10 @@ def _sweep(spec: Spec, records: dict[str, dict]) -> dict[str, dict[str, dict]]:
         r = records.get(case.name)
         if case.fault and r is not None:
             sweep.setdefault(case.fault, {})[str(case.step)] = {
-                "mean": r["mean_N_per_m"], "min": r["min_N_per_m"], "max": r["max_N_per_m"], "rfa": r["rfa"],
+                "mean": r["mean_N_per_m"],
+                "min": r["min_N_per_m"],
+                "max": r["max_N_per_m"],
+                "rfa": r["rfa"],
             }
     return sweep
 
@@ -220,8 +243,10 @@ def _table_md(sweep) -> str:
         return ""
     faults = list(sweep)
     steps = sorted({int(s) for v in sweep.values() for s in v})
-    lines = ["| step | " + " | ".join(f"{f} mean (1e8 N/m) | {f} RFA" for f in faults) + " |",
-             "|---|" + "---|---|" * len(faults)]
+    lines = [
+        "| step | " + " | ".join(f"{f} mean (1e8 N/m) | {f} RFA" for f in faults) + " |",
+        "|---|" + "---|---|" * len(faults),
+    ]
     for s in steps:
         cells = []
         for f in faults:

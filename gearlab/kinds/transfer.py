@@ -55,8 +55,10 @@ from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planne
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # Table 5.3's training settings: the keys of every kind that trains the chapter-5 way, declared
 # on the Protocol dataclass
-TRAINING = keys_of(Protocol, ("target_train", "batch", "lr", "prime_epochs", "baseline_epochs", "patience",
-                              "min_epochs", "max_epochs", "seed"))
+TRAINING = keys_of(
+    Protocol,
+    ("target_train", "batch", "lr", "prime_epochs", "baseline_epochs", "patience", "min_epochs", "max_epochs", "seed"),
+)
 
 # How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
 # gearlab's recipe, the thesis's is residual = false, source_noise = "off", alignment =
@@ -73,17 +75,23 @@ TABLES = {
     "source": _DATASET,
     "target": _DATASET,
     "network": Table(keys_of(NetworkSettings)),
-    "methods": Table({
-        "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
-        "supervised": Key(bool, False, doc="use the target training labels"),
-        "params": Key(dict, {}, doc="adapter parameters"),
-    }, array=True, required=True),
-    "protocol": Table({
-        "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
-        **keys_of(Protocol, ("repetitions",)),
-        **TRAINING,
-        **CALIBRATION,
-    }),
+    "methods": Table(
+        {
+            "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
+            "supervised": Key(bool, False, doc="use the target training labels"),
+            "params": Key(dict, {}, doc="adapter parameters"),
+        },
+        array=True,
+        required=True,
+    ),
+    "protocol": Table(
+        {
+            "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
+            **keys_of(Protocol, ("repetitions",)),
+            **TRAINING,
+            **CALIBRATION,
+        }
+    ),
 }
 
 
@@ -97,19 +105,30 @@ def build(scenario: Scenario) -> dict:
         # the same training twice, whatever the spelling (variant = "classifier" or 1)
         first = seen.setdefault((m.adapter, m.supervised, m.params), i)
         if first != i:
-            raise GearlabInputError(f"{location(path, 'methods', index=i)}: {m.label} is the same method as "
-                                    f"#{first + 1}, {methods[first].label}")
+            raise GearlabInputError(
+                f"{location(path, 'methods', index=i)}: {m.label} is the same method as "
+                f"#{first + 1}, {methods[first].label}"
+            )
     p = t["protocol"]
     ks = p["ks"]
     # whole numbers checked first: set() of a list holding a list would fail
-    if not ks or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in ks) \
-            or len(set(ks)) != len(ks):
-        raise GearlabInputError(f"{location(path, 'protocol', 'ks')}: expected a list of distinct whole numbers "
-                                f">= 0, got {ks!r}")
+    if (
+        not ks
+        or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in ks)
+        or len(set(ks)) != len(ks)
+    ):
+        raise GearlabInputError(
+            f"{location(path, 'protocol', 'ks')}: expected a list of distinct whole numbers >= 0, got {ks!r}"
+        )
     check_training(t, path)
     protocol = Protocol(
-        methods=tuple(methods), network=t["network"]["name"], dropout=t["network"]["dropout"], ks=tuple(ks),
-        repetitions=p["repetitions"], **{key: p[key] for key in TRAINING}, device=device_of(scenario),
+        methods=tuple(methods),
+        network=t["network"]["name"],
+        dropout=t["network"]["dropout"],
+        ks=tuple(ks),
+        repetitions=p["repetitions"],
+        **{key: p[key] for key in TRAINING},
+        device=device_of(scenario),
         calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
     )
     protocol.calibration.check(str(path))
@@ -127,8 +146,10 @@ def check_training(t: dict, path) -> None:
     """The [protocol] epochs of a kind that trains the chapter-5 way (transfer, detection)."""
     p = t["protocol"]
     if p["min_epochs"] > p["max_epochs"]:
-        raise GearlabInputError(f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
-                                f"max_epochs = {p['max_epochs']}")
+        raise GearlabInputError(
+            f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
+            f"max_epochs = {p['max_epochs']}"
+        )
 
 
 def method(entry: dict, where: str) -> Method:
@@ -136,19 +157,24 @@ def method(entry: dict, where: str) -> Method:
     adapter = get_registry().get("adapter", entry["adapter"], f"{where} key 'adapter'")
     mode = "supervised" if entry["supervised"] else "unsupervised"
     if mode not in adapter.supervision:
-        raise GearlabInputError(f"{where} key 'supervised': adapter '{adapter.name}' has no {mode} variant "
-                                f"(it has: {', '.join(adapter.supervision)})")
+        raise GearlabInputError(
+            f"{where} key 'supervised': adapter '{adapter.name}' has no {mode} variant "
+            f"(it has: {', '.join(adapter.supervision)})"
+        )
     params = adapter.resolve(entry["params"], f"{where} key 'params'")
-    return Method(adapter.name, entry["supervised"], tuple(sorted(params.items())),
-                  tuple(sorted(entry["params"].items())))
+    return Method(
+        adapter.name, entry["supervised"], tuple(sorted(params.items())), tuple(sorted(entry["params"].items()))
+    )
 
 
 def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
     spec = scenario.spec
     p: Protocol = spec["protocol"]
-    return (f"{sized(spec['source'])} -> {sized(spec['target'])}, network {p.network}, {len(p.methods)} methods x "
-            f"{len(p.ks)} k x {p.repetitions} repetitions = {len(p.methods) * len(p.ks) * p.repetitions} training runs")
+    return (
+        f"{sized(spec['source'])} -> {sized(spec['target'])}, network {p.network}, {len(p.methods)} methods x "
+        f"{len(p.ks)} k x {p.repetitions} repetitions = {len(p.methods) * len(p.ks) * p.repetitions} training runs"
+    )
 
 
 def quick(scenario: Scenario) -> None:
@@ -178,6 +204,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         done = {r["unit"] for r in run.records()}
         todo = units(protocol)
         pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]
+
         # The first unit that needs a repetition's shared state (priming, source-only model) makes
         # it; every other unit waits for phase 2 and loads it from the run directory.
         def state_file(unit: tuple) -> Path | None:
@@ -188,8 +215,14 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         phases = two_phases(pending, state_file)
         first = phases[0]
         if first:
-            on_event(Event("stage", stage="priming", total=len(first),
-                           message=f"priming: {len(first)} shared states (primed and source-only models)"))
+            on_event(
+                Event(
+                    "stage",
+                    stage="priming",
+                    total=len(first),
+                    message=f"priming: {len(first)} shared states (primed and source-only models)",
+                )
+            )
         on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
         finished = len(todo) - len(pending)
         on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
@@ -205,8 +238,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if record["unit"] in priming:
                 priming.discard(record["unit"])
                 on_event(Event("advance", stage="priming", done=len(first) - len(priming), total=len(first)))
-            on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %, "
-                                          f"{record['predicted_fault_share']:.0f} % predicted faulty"))
+            on_event(
+                Event(
+                    "log",
+                    message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %, "
+                    f"{record['predicted_fault_share']:.0f} % predicted faulty",
+                )
+            )
             on_event(Event("record", stage="runs", record=record))
             on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
@@ -228,6 +266,7 @@ def train_unit(task: tuple) -> dict:
     source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
     # states/ lies in the run directory, beside the progress/ folder the engine watches
     with UnitProgress(Path(states).parent, unit_key(rep, k, method)) as progress:
+
         def report(epoch: int, history) -> None:
             acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
             progress(f"epoch {epoch + 1}{acc}")
@@ -238,8 +277,7 @@ def train_unit(task: tuple) -> dict:
 BOUND = "Bayes bound (target's own shapes and noise law, best threshold)"
 
 
-def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None
-                ) -> dict | None:
+def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None) -> dict | None:
     """The reference column of the table: the accuracy (%) of the Bayes detector
     (gearlab.learn.bounds) on each (repetition, k)'s target test set, with the best threshold,
     and the faults it finds at 1 % false alarms. None unless the target is simulated with noise
@@ -260,9 +298,11 @@ def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, 
             acc.append(best_accuracy(scores[test], y))
             det.append(detection_at(scores[test], y, 0.01))
         for name, values in (("accuracy", acc), ("detection_at_1pct", det)):
-            cells[name][str(k)] = {"mean": float(np.mean(values)),
-                                   "std": float(np.std(values, ddof=1)) if len(values) > 1 else 0.0,
-                                   "n": len(values)}
+            cells[name][str(k)] = {
+                "mean": float(np.mean(values)),
+                "std": float(np.std(values, ddof=1)) if len(values) > 1 else 0.0,
+                "n": len(values),
+            }
     return {"label": BOUND, "noise": target_spec.noise.kind, **cells}
 
 
@@ -287,8 +327,11 @@ def table(records: list[dict], protocol: Protocol, measure: str = "accuracy") ->
         for k in protocol.ks:
             acc = [r[measure] for r in records if r["method"] == m.label and r["k"] == k and measure in r]
             if acc:
-                out[m.label][str(k)] = {"mean": float(np.mean(acc)),
-                                        "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0, "n": len(acc)}
+                out[m.label][str(k)] = {
+                    "mean": float(np.mean(acc)),
+                    "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0,
+                    "n": len(acc),
+                }
     return out
 
 
@@ -309,10 +352,17 @@ def measures_md(summary: dict, ks) -> str:
     """The balanced accuracy and the faults found at 1 % false alarms, in the same layout."""
     out = ""
     bound = summary.get("bound")
-    for key, title in (("balanced_accuracy", "Balanced accuracy (%), the mean of the healthy and the fault "
-                                             "recall: the score on a half-healthy test set"),
-                       ("detection_at_1pct", "Faults found (%) at the threshold that lets 1 % of the test "
-                                             "set's healthy revolutions through (an evaluation with the test labels)")):
+    for key, title in (
+        (
+            "balanced_accuracy",
+            "Balanced accuracy (%), the mean of the healthy and the fault recall: the score on a half-healthy test set",
+        ),
+        (
+            "detection_at_1pct",
+            "Faults found (%) at the threshold that lets 1 % of the test "
+            "set's healthy revolutions through (an evaluation with the test labels)",
+        ),
+    ):
         tab = {m: c for m, c in summary.get(key, {}).items() if c}
         if key == "detection_at_1pct" and bound:
             tab[BOUND] = bound["detection_at_1pct"]
@@ -327,7 +377,7 @@ def table_csv(tab: dict, ks) -> str:
         for k in ks:
             c = per_k.get(str(k))
             if c:
-                rows.append(f"\"{m}\",{k},{c['mean']:.4f},{c['std']:.4f},{c['n']}")
+                rows.append(f'"{m}",{k},{c["mean"]:.4f},{c["std"]:.4f},{c["n"]}')
     return "\n".join(rows) + "\n"
 
 
@@ -366,8 +416,10 @@ def summary_lines(run: RunDir) -> list[str]:
     tab, methods = summary["table"], summary["methods"]
     if "bound" in summary:
         tab, methods = {**tab, BOUND: summary["bound"]["accuracy"]}, [*methods, BOUND]
-    lines = ["target-domain test accuracy [%], mean ± std over repetitions (Table 5.4 layout):",
-             table_md(tab, ks, methods).rstrip()]
+    lines = [
+        "target-domain test accuracy [%], mean ± std over repetitions (Table 5.4 layout):",
+        table_md(tab, ks, methods).rstrip(),
+    ]
     if summary.get("healthy_share_of_test") is not None:
         lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
     if summary.get("device"):
@@ -391,5 +443,12 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
         ks = [k for k in protocol.ks if str(k) in per_k]
         if ks:
             curves.append(Curve(label, ks, [per_k[str(k)]["mean"] for k in ks], [per_k[str(k)]["std"] for k in ks]))
-    return [Chart("target test accuracy against k", "target fault samples k", "accuracy (%)", tuple(curves),
-                  xticks=list(protocol.ks))]
+    return [
+        Chart(
+            "target test accuracy against k",
+            "target fault samples k",
+            "accuracy (%)",
+            tuple(curves),
+            xticks=list(protocol.ks),
+        )
+    ]

@@ -44,7 +44,6 @@ from gearlab.errors import GearlabInputError
 
 from .history import gumbel_quantile, noise_law
 
-
 LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
 
 
@@ -78,8 +77,9 @@ def _unit_rows(R: np.ndarray) -> np.ndarray:
     return R / np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-12)
 
 
-def template_detector(Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None,
-                      false_alarm: float, limiter: str = "off") -> TemplateDetector:
+def template_detector(
+    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float, limiter: str = "off"
+) -> TemplateDetector:
     """The detector of the source's fault shapes, referenced and thresholded on the target's
     healthy history. *yt* None: every target training revolution is taken as healthy (the
     unsupervised case); with labels, the healthy ones are the history and the target's own
@@ -93,8 +93,9 @@ def template_detector(Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.nda
     if healthy_t.sum() < 2:
         raise GearlabInputError("matched_filter: the target training set needs at least 2 healthy revolutions")
     if Xs.shape[1] != Xt.shape[1]:
-        raise GearlabInputError(f"matched_filter: source revolutions have {Xs.shape[1]} samples, target "
-                                f"revolutions {Xt.shape[1]}")
+        raise GearlabInputError(
+            f"matched_filter: source revolutions have {Xs.shape[1]} samples, target revolutions {Xt.shape[1]}"
+        )
     reference = np.median(Xt[healthy_t], axis=0)
     shapes = [Xs[ys == 1] - np.median(Xs[ys == 0], axis=0)]
     if yt is not None:

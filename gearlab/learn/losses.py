@@ -77,7 +77,12 @@ def mmd2(
     total = x.new_zeros(())
     for sigma in sigmas:
         gamma = 1.0 / (2.0 * sigma * sigma)
-        total = total + torch.exp(-gamma * d_xx).mean() + torch.exp(-gamma * d_yy).mean() - 2.0 * torch.exp(-gamma * d_xy).mean()
+        total = (
+            total
+            + torch.exp(-gamma * d_xx).mean()
+            + torch.exp(-gamma * d_yy).mean()
+            - 2.0 * torch.exp(-gamma * d_xy).mean()
+        )
     return total
 
 

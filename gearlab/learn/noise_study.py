@@ -43,13 +43,15 @@ class NoiseProtocol:
     # the [protocol] keys of a noise_study scenario (gearlab.scenario.keys_of)
     runs: int = setting(int, 5, low=1, high=MAX_REPETITIONS, doc="runs with different splits and initial weights")
     test_fraction: float = setting(float, 0.333, low=0.01, high=0.9, doc="share of each class held out for testing")
-    val_fraction: float = setting(float, 0.2, low=0.01, high=0.9,
-                                  doc="share of the training part held out for validation")
+    val_fraction: float = setting(
+        float, 0.2, low=0.01, high=0.9, doc="share of the training part held out for validation"
+    )
     batch: int = setting(int, 256, low=1, doc="mini-batch size")
     lr: float = setting(float, 1e-3, low=1e-9, high=10.0, doc="Adam learning rate")  # TensorFlow's default (Table 3.1)
     epochs: int = setting(int, 100, low=1, high=MAX_EPOCHS, doc="most epochs per run")
-    patience: int = setting(int, 15, low=1, high=MAX_EPOCHS,
-                            doc="stop after this many epochs without a better validation accuracy")
+    patience: int = setting(
+        int, 15, low=1, high=MAX_EPOCHS, doc="stop after this many epochs without a better validation accuracy"
+    )
     seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds torch as 1000 * seed + run")
     device: str = "auto"
 
@@ -99,26 +101,45 @@ def split(label: np.ndarray, protocol: NoiseProtocol, run: int) -> Split:
         members = rng.permutation(np.flatnonzero(label == c))
         n_train, n_val, _ = part_sizes(len(members), protocol)
         parts[0].append(members[:n_train])
-        parts[1].append(members[n_train:n_train + n_val])
-        parts[2].append(members[n_train + n_val:])
+        parts[1].append(members[n_train : n_train + n_val])
+        parts[2].append(members[n_train + n_val :])
     return Split(*(np.sort(np.concatenate(p)) for p in parts))
 
 
-def train(protocol: NoiseProtocol, train_set: tuple[np.ndarray, np.ndarray], val_set: tuple[np.ndarray, np.ndarray],
-          n_classes: int, run: int, device: torch.device, on_epoch: Callable | None = None):
+def train(
+    protocol: NoiseProtocol,
+    train_set: tuple[np.ndarray, np.ndarray],
+    val_set: tuple[np.ndarray, np.ndarray],
+    n_classes: int,
+    run: int,
+    device: torch.device,
+    on_epoch: Callable | None = None,
+):
     """The model of one run, made from the training and validation arrays only."""
     X, y = train_set
     seed = 1000 * protocol.seed + run
     torch.manual_seed(seed)  # dropout masks
     net = build_network(protocol.network, n_classes, protocol.dropout, length=X.shape[1], seed=seed).to(device)
-    history = fit_supervised(net, X, y, rng=np.random.default_rng([protocol.seed, run, 1]), device=device,
-                             epochs=protocol.epochs, batch=protocol.batch, optimizer="adam", lr=protocol.lr,
-                             val=val_set, patience=protocol.patience, on_epoch=on_epoch)
+    history = fit_supervised(
+        net,
+        X,
+        y,
+        rng=np.random.default_rng([protocol.seed, run, 1]),
+        device=device,
+        epochs=protocol.epochs,
+        batch=protocol.batch,
+        optimizer="adam",
+        lr=protocol.lr,
+        val=val_set,
+        patience=protocol.patience,
+        on_epoch=on_epoch,
+    )
     return net, history
 
 
-def scores(y: np.ndarray, pred: np.ndarray, intensity: np.ndarray, rfa: np.ndarray,
-           class_names: tuple[str, ...]) -> dict:
+def scores(
+    y: np.ndarray, pred: np.ndarray, intensity: np.ndarray, rfa: np.ndarray, class_names: tuple[str, ...]
+) -> dict:
     """Test metrics of one run. Class 0 is healthy; per fault type, counts at each intensity
     step (so runs can be pooled or averaged later)."""
     n = len(class_names)
@@ -136,8 +157,10 @@ def scores(y: np.ndarray, pred: np.ndarray, intensity: np.ndarray, rfa: np.ndarr
             rows["correct"].append(int((pred[m] == c).sum()))
             rows["as_healthy"].append(int((pred[m] == 0).sum()))
         by_step[name] = rows
-    class_accuracy = {name: 100.0 * float(confusion[c, c] / confusion[c].sum()) if confusion[c].sum() else None
-                      for c, name in enumerate(class_names)}
+    class_accuracy = {
+        name: 100.0 * float(confusion[c, c] / confusion[c].sum()) if confusion[c].sum() else None
+        for c, name in enumerate(class_names)
+    }
     return {
         "accuracy": 100.0 * float((pred == y).mean()),
         "fault_as_healthy": 100.0 * float((pred[fault] == 0).mean()) if fault.any() else None,
@@ -155,8 +178,9 @@ def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | No
     s = split(label, protocol, run)
     start = time.perf_counter()
     val_set = (dataset.X[s.val], label[s.val])
-    net, history = train(protocol, (dataset.X[s.train], label[s.train]), val_set,
-                         len(dataset.spec.class_names), run, device, on_epoch)
+    net, history = train(
+        protocol, (dataset.X[s.train], label[s.train]), val_set, len(dataset.spec.class_names), run, device, on_epoch
+    )
     seconds = time.perf_counter() - start
     # Only now, with the model fixed, does the test part come in.
     pred = predict(net, dataset.X[s.test], device)
@@ -174,8 +198,13 @@ def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | No
         "stopped_epoch": history.stopped_epoch,
         "train_seconds": seconds,
         "history": {"train_loss": history.train_loss, "val_acc": history.val_acc},
-        **scores(label[s.test], pred, np.asarray(dataset.intensity)[s.test], np.asarray(dataset.rfa)[s.test],
-                 tuple(dataset.spec.class_names)),
+        **scores(
+            label[s.test],
+            pred,
+            np.asarray(dataset.intensity)[s.test],
+            np.asarray(dataset.rfa)[s.test],
+            tuple(dataset.spec.class_names),
+        ),
     }
 
 

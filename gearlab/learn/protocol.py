@@ -69,17 +69,21 @@ class Protocol:
     dropout: float = DEFAULT_DROPOUT
     ks: tuple[int, ...] = KS
     # the [protocol] keys: Table 5.3's training settings (gearlab.scenario.keys_of)
-    repetitions: int = setting(int, 5, low=1, high=MAX_REPETITIONS, quick=2,
-                                  doc="repetitions, each with its own split and seed")
+    repetitions: int = setting(
+        int, 5, low=1, high=MAX_REPETITIONS, quick=2, doc="repetitions, each with its own split and seed"
+    )
     target_train: int = setting(int, 120, low=2, doc="samples in the target training set")
     batch: int = setting(int, 40, low=1, doc="mini-batch size, per domain")
     lr: float = setting(float, 0.003, low=1e-9, high=10.0, doc="SGD learning rate of the calibrated methods")
-    prime_epochs: int = setting(int, 100, low=0, high=MAX_EPOCHS, quick=30,
-                                doc="priming on the full source set, shared within a repetition")
-    baseline_epochs: int = setting(int, 200, low=1, high=MAX_EPOCHS, quick=60,
-                                   doc="at most, for the Adam-trained baselines and fine-tuning")
-    patience: int = setting(int, 20, low=1, high=MAX_EPOCHS,
-                            doc="stop after this many epochs without a better validation accuracy")
+    prime_epochs: int = setting(
+        int, 100, low=0, high=MAX_EPOCHS, quick=30, doc="priming on the full source set, shared within a repetition"
+    )
+    baseline_epochs: int = setting(
+        int, 200, low=1, high=MAX_EPOCHS, quick=60, doc="at most, for the Adam-trained baselines and fine-tuning"
+    )
+    patience: int = setting(
+        int, 20, low=1, high=MAX_EPOCHS, doc="stop after this many epochs without a better validation accuracy"
+    )
     min_epochs: int = setting(int, 500, low=1, high=MAX_EPOCHS, quick=60, doc="end of the lambda ramp")
     max_epochs: int = setting(int, 800, low=1, high=MAX_EPOCHS, quick=90, doc="most epochs of an adaptation run")
     val_fraction: float = 0.1
@@ -110,8 +114,12 @@ class Counts:
 
     @classmethod
     def of(cls, dataset) -> Counts:
-        return cls(dataset.spec.name if dataset.spec is not None else "", int(dataset.X.shape[1]),
-                   int((dataset.fault == 0).sum()), int((dataset.fault == 1).sum()))
+        return cls(
+            dataset.spec.name if dataset.spec is not None else "",
+            int(dataset.X.shape[1]),
+            int((dataset.fault == 0).sum()),
+            int((dataset.fault == 1).sum()),
+        )
 
 
 def _n_val(protocol: Protocol, n: int) -> int:
@@ -121,35 +129,49 @@ def _n_val(protocol: Protocol, n: int) -> int:
 def check(protocol: Protocol, where: str) -> None:
     """Refuse a protocol that cannot run whatever the data (*where*: the scenario file)."""
     if max(protocol.ks) > protocol.target_train:
-        raise GearlabInputError(f"{where}: [protocol] key 'ks': k = {max(protocol.ks)} fault samples do not fit in "
-                                f"a target training set of target_train = {protocol.target_train}")
+        raise GearlabInputError(
+            f"{where}: [protocol] key 'ks': k = {max(protocol.ks)} fault samples do not fit in "
+            f"a target training set of target_train = {protocol.target_train}"
+        )
     if protocol.batch > protocol.target_train:
-        raise GearlabInputError(f"{where}: [protocol] key 'batch': {protocol.batch} is larger than the target "
-                                f"training set (target_train = {protocol.target_train})")
+        raise GearlabInputError(
+            f"{where}: [protocol] key 'batch': {protocol.batch} is larger than the target "
+            f"training set (target_train = {protocol.target_train})"
+        )
 
 
 def check_data(protocol: Protocol, source: Counts, target: Counts, where: str) -> None:
     """Refuse datasets the protocol cannot split or batch (checked before any training)."""
     if source.length != target.length:
-        raise GearlabInputError(f"{where}: source '{source.name}' and target '{target.name}' samples have different "
-                                f"lengths ({source.length} and {target.length})")
+        raise GearlabInputError(
+            f"{where}: source '{source.name}' and target '{target.name}' samples have different "
+            f"lengths ({source.length} and {target.length})"
+        )
     k = max(protocol.ks)
     if k > target.faults:
-        raise GearlabInputError(f"{where}: [protocol] key 'ks': k = {k} target fault samples asked for, the target "
-                                f"'{target.name}' has {target.faults}")
+        raise GearlabInputError(
+            f"{where}: [protocol] key 'ks': k = {k} target fault samples asked for, the target "
+            f"'{target.name}' has {target.faults}"
+        )
     healthy = protocol.target_train - min(protocol.ks)
     if healthy > target.healthy:
-        raise GearlabInputError(f"{where}: [protocol] key 'target_train': a target training set of "
-                                f"{protocol.target_train} with k = {min(protocol.ks)} needs {healthy} healthy "
-                                f"samples, the target '{target.name}' has {target.healthy}")
+        raise GearlabInputError(
+            f"{where}: [protocol] key 'target_train': a target training set of "
+            f"{protocol.target_train} with k = {min(protocol.ks)} needs {healthy} healthy "
+            f"samples, the target '{target.name}' has {target.healthy}"
+        )
     if protocol.target_train >= target.healthy + target.faults:
-        raise GearlabInputError(f"{where}: [protocol] key 'target_train': {protocol.target_train} leaves no target "
-                                f"test samples (the target '{target.name}' has {target.healthy + target.faults})")
+        raise GearlabInputError(
+            f"{where}: [protocol] key 'target_train': {protocol.target_train} leaves no target "
+            f"test samples (the target '{target.name}' has {target.healthy + target.faults})"
+        )
     n = source.healthy + source.faults
     source_train = n - _n_val(protocol, n)
     if protocol.batch > source_train:
-        raise GearlabInputError(f"{where}: [protocol] key 'batch': {protocol.batch} is larger than the source "
-                                f"training set ({source_train} of the {n} samples of '{source.name}')")
+        raise GearlabInputError(
+            f"{where}: [protocol] key 'batch': {protocol.batch} is larger than the source "
+            f"training set ({source_train} of the {n} samples of '{source.name}')"
+        )
 
 
 def split(protocol: Protocol, source, target, rep: int, k: int) -> Split:
@@ -216,8 +238,16 @@ def _cpu_state(net) -> dict:
     return {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
 
 
-def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Method, states: StateStore,
-             on_epoch: Callable | None = None) -> dict:
+def run_unit(
+    protocol: Protocol,
+    source,
+    target,
+    rep: int,
+    k: int,
+    method: Method,
+    states: StateStore,
+    on_epoch: Callable | None = None,
+) -> dict:
     """Train one method for one (repetition, k) and score it on the target test set."""
     device = pick_device(protocol.device)
     s = split(protocol, source, target, rep, k)
@@ -225,8 +255,7 @@ def run_unit(protocol: Protocol, source, target, rep: int, k: int, method: Metho
     val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
     Xt = target.X[s.target_train]
     yt = target.fault[s.target_train].astype(np.int64)
-    model, history, extra = train_method(protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device,
-                                         on_epoch)
+    model, history, extra = train_method(protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch)
     # Only now, with the model fixed, does the target test set come in.
     X_test, y_test = target.X[s.target_test], target.fault[s.target_test].astype(np.int64)
     score = fault_score(model, X_test, device)
@@ -258,7 +287,7 @@ def fault_score(model, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
     model.eval()
     out = []
     for i in range(0, len(X), batch):
-        logits = model(torch.as_tensor(np.ascontiguousarray(X[i:i + batch]), dtype=torch.float32, device=device))
+        logits = model(torch.as_tensor(np.ascontiguousarray(X[i : i + batch]), dtype=torch.float32, device=device))
         out.append((logits[:, 1] - logits[:, 0]).cpu().numpy())
     return np.concatenate(out) if out else np.empty(0)
 
@@ -281,12 +310,25 @@ def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, names: 
         name = names[int(c)] if names and int(c) < len(names) else str(int(c))
         keep = healthy | (label == c)
         per_class[name] = detection_at(score[keep], y[keep], 0.01)
-    return {"balanced_accuracy": balanced, "detection_at_1pct": detection_at(score, y, 0.01),
-            "detection_at_1pct_by_class": per_class}
+    return {
+        "balanced_accuracy": balanced,
+        "detection_at_1pct": detection_at(score, y, 0.01),
+        "detection_at_1pct_by_class": per_class,
+    }
 
 
-def train_method(protocol: Protocol, method: Method, source, source_val, target, rep: int, k: int,
-                 states: StateStore, device, on_epoch=None):
+def train_method(
+    protocol: Protocol,
+    method: Method,
+    source,
+    source_val,
+    target,
+    rep: int,
+    k: int,
+    states: StateStore,
+    device,
+    on_epoch=None,
+):
     """The model a method makes from the training arrays (no target test data here)."""
     registry = get_registry()
     adapter = registry.get("adapter", method.adapter)
@@ -303,19 +345,38 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
 
     def primed() -> dict:
         net = _net(protocol, seed, device)
-        fit_supervised(net, inputs.source(Xs), ys, rng=np.random.default_rng([protocol.seed, rep, 1]),
-                       device=device, epochs=protocol.prime_epochs, batch=protocol.batch, optimizer="adam",
-                       val=None, patience=None, augment=augment)
+        fit_supervised(
+            net,
+            inputs.source(Xs),
+            ys,
+            rng=np.random.default_rng([protocol.seed, rep, 1]),
+            device=device,
+            epochs=protocol.prime_epochs,
+            batch=protocol.batch,
+            optimizer="adam",
+            val=None,
+            patience=None,
+            augment=augment,
+        )
         return _cpu_state(net)
 
     if adapter.train_on == "detector":  # no network: a model built from the training arrays
         return adapter.detector(source, (Xt, yt if method.supervised else None), params).to(device), None, {}
     if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
+
         def trained() -> dict:
             net = _net(protocol, seed, device)
-            fit_supervised(net, Xs, ys, rng=np.random.default_rng([protocol.seed, rep, 2]), device=device,
-                           epochs=protocol.baseline_epochs, batch=protocol.batch, val=source_val,
-                           patience=protocol.patience)
+            fit_supervised(
+                net,
+                Xs,
+                ys,
+                rng=np.random.default_rng([protocol.seed, rep, 2]),
+                device=device,
+                epochs=protocol.baseline_epochs,
+                batch=protocol.batch,
+                val=source_val,
+                patience=protocol.patience,
+            )
             return _cpu_state(net)
 
         net = _net(protocol, seed, device)
@@ -338,29 +399,62 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
         order = rng.permutation(len(Xt))
         n_val = _n_val(protocol, len(order))
         sgd = adapter.optimizer == "sgd"
-        history = fit_supervised(net, Xt_in[order[n_val:]], yt[order[n_val:]], rng=rng, device=device,
-                                 epochs=protocol.baseline_epochs, batch=min(protocol.batch, len(order) - n_val),
-                                 optimizer=adapter.optimizer, lr=protocol.lr if sgd else ADAM_LR,
-                                 val=(Xt_in[order[:n_val]], yt[order[:n_val]]), patience=protocol.patience,
-                                 parameters=adapter.trainable(net, params), freeze_norm=adapter.calibrated,
-                                 on_epoch=on_epoch)
+        history = fit_supervised(
+            net,
+            Xt_in[order[n_val:]],
+            yt[order[n_val:]],
+            rng=rng,
+            device=device,
+            epochs=protocol.baseline_epochs,
+            batch=min(protocol.batch, len(order) - n_val),
+            optimizer=adapter.optimizer,
+            lr=protocol.lr if sgd else ADAM_LR,
+            val=(Xt_in[order[:n_val]], yt[order[:n_val]]),
+            patience=protocol.patience,
+            parameters=adapter.trainable(net, params),
+            freeze_norm=adapter.calibrated,
+            on_epoch=on_epoch,
+        )
         extra = {"source_val_accuracy": 100.0 * accuracy(net, *source_val, device)} if adapter.calibrated else {}
         return _calibrated(net, inputs, Xt, yt, source_val, device), history, extra
     modules = adapter.extra_modules(net.latent_dim, params)
     take = np.random.default_rng([protocol.seed, rep, k, 3]).permutation(len(Xs))[: len(Xt)]
     Xs_in = inputs.source(Xs[take])
     history = fit_adaptation(
-        net, adapter, modules, (Xs_in, ys[take]), source_val, (Xt_in, yt if method.supervised else None),
-        rng=rng, device=device, batch=protocol.batch, lr=protocol.lr, min_epochs=protocol.min_epochs,
-        max_epochs=protocol.max_epochs, params=params, augment=augment, alignment=protocol.calibration.alignment,
+        net,
+        adapter,
+        modules,
+        (Xs_in, ys[take]),
+        source_val,
+        (Xt_in, yt if method.supervised else None),
+        rng=rng,
+        device=device,
+        batch=protocol.batch,
+        lr=protocol.lr,
+        min_epochs=protocol.min_epochs,
+        max_epochs=protocol.max_epochs,
+        params=params,
+        augment=augment,
+        alignment=protocol.calibration.alignment,
         on_epoch=on_epoch,
     )
     with torch.no_grad():
-        latent = {"source": embed(net, Xs_in, device).cpu().numpy(), "target": embed(net, Xt_in, device).cpu().numpy(),
-                  "source_label": ys[take], "target_label": yt}  # the maps mark the classes too
+        latent = {
+            "source": embed(net, Xs_in, device).cpu().numpy(),
+            "target": embed(net, Xt_in, device).cpu().numpy(),
+            "source_label": ys[take],
+            "target_label": yt,
+        }  # the maps mark the classes too
     model = _calibrated(net, inputs, Xt, yt if method.supervised else None, source_val, device)
-    return model, history, {"latent_dim": int(net.latent_dim), "_latent": latent,
-                            "source_val_accuracy": 100.0 * accuracy(net, *source_val, device)}
+    return (
+        model,
+        history,
+        {
+            "latent_dim": int(net.latent_dim),
+            "_latent": latent,
+            "source_val_accuracy": 100.0 * accuracy(net, *source_val, device),
+        },
+    )
 
 
 def _calibrated(net, inputs, Xt, yt, source_val, device):

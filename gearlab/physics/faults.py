@@ -105,7 +105,10 @@ def scaled_ladder(pair: GearPair, table: Mapping[str, tuple[dict, dict]], refere
     ref_pair_module, ref_face_width = _REFERENCE_SCALES[reference]
     k_len, k_w = pair.module / ref_pair_module, pair.face_width / ref_face_width
     return tuple(
-        {key: value * (k_w if key in _WIDTH_KEYS else k_len if key in _LENGTH_KEYS else 1.0) for key, value in row.items()}
+        {
+            key: value * (k_w if key in _WIDTH_KEYS else k_len if key in _LENGTH_KEYS else 1.0)
+            for key, value in row.items()
+        }
         for row in ref
     )
 
@@ -116,8 +119,9 @@ _WIDTH_KEYS = {"c", "w_s", "L_c"}
 _LENGTH_KEYS = {"b", "l_s", "h_s", "x_1", "u", "sigma_u", "r", "sigma_r", "q0", "q2"}
 
 
-def place_fault(registry, pair: GearPair, kind: str, tooth, step=None, params: Mapping | None = None,
-                where: str = "") -> PlacedFault:
+def place_fault(
+    registry, pair: GearPair, kind: str, tooth, step=None, params: Mapping | None = None, where: str = ""
+) -> PlacedFault:
     """Resolve a fault by plugin name on *pair*: a ladder *step* (1..20) or explicit *params*."""
     where = where or f"fault {kind}@{tooth}"
     fault = registry.get("fault", kind, where)
@@ -125,7 +129,9 @@ def place_fault(registry, pair: GearPair, kind: str, tooth, step=None, params: M
         raise GearlabInputError(f"{where}: give either a ladder step or explicit parameters, not both")
     if step is not None:
         if isinstance(step, bool) or not isinstance(step, int):
-            raise GearlabInputError(f"{where}: intensity step must be a whole number in 1..{LADDER_STEPS}, got {step!r}")
+            raise GearlabInputError(
+                f"{where}: intensity step must be a whole number in 1..{LADDER_STEPS}, got {step!r}"
+            )
         resolved = fault.resolve(fault.at_step(pair, step, where), pair, where)
     else:
         resolved = fault.resolve(params or {}, pair, where)

@@ -107,8 +107,9 @@ def fillet_compliance(gear: Gear, alpha1: np.ndarray, E: float, face_width: floa
     d, h = contact_geometry(gear, alpha1)
     u_over_S = (d - h * np.tan(alpha1)) / gear.S_f  # eq. 2.43, 2.44
     hi, tf = gear.R_r / gear.hub_radius, gear.theta_f
-    L, M, P, Q = (A / tf**2 + B * hi**2 + C * hi / tf + D / tf + Ei * hi + F
-                  for A, B, C, D, Ei, F in FILLET_COEFFICIENTS.values())  # eq. 2.46
+    L, M, P, Q = (
+        A / tf**2 + B * hi**2 + C * hi / tf + D / tf + Ei * hi + F for A, B, C, D, Ei, F in FILLET_COEFFICIENTS.values()
+    )  # eq. 2.46
     return np.cos(alpha1) ** 2 / (E * face_width) * (L * u_over_S**2 + M * u_over_S + P * (1 + Q * np.tan(alpha1) ** 2))
 
 
@@ -221,7 +222,9 @@ class MeshStiffnessModel:
         by_tooth: dict[int, list[PlacedFault]] = {}
         for placed in faults:
             if not 1 <= placed.tooth <= self.pair.Z1:
-                raise GearlabInputError(f"fault {placed.label}: tooth must lie in 1..{self.pair.Z1}, got {placed.tooth}")
+                raise GearlabInputError(
+                    f"fault {placed.label}: tooth must lie in 1..{self.pair.Z1}, got {placed.tooth}"
+                )
             by_tooth.setdefault(placed.tooth, []).append(placed)
         theta, healthy = self._healthy(points)
         k = healthy.copy()

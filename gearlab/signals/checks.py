@@ -50,9 +50,7 @@ def check_signal(x, name: str = "signal") -> np.ndarray:
     """
     arr = as_real_array(x, name)
     if arr.ndim != 1:
-        raise GearlabInputError(
-            f"{name} must be 1-D (one channel over time), got an array of shape {arr.shape}"
-        )
+        raise GearlabInputError(f"{name} must be 1-D (one channel over time), got an array of shape {arr.shape}")
     if arr.size == 0:
         raise GearlabInputError(f"{name} is empty; expected at least one sample")
     check_finite(arr, name)
@@ -63,9 +61,7 @@ def check_array(x, name: str, min_ndim: int = 1) -> np.ndarray:
     """A finite real float64 array of at least *min_ndim* dimensions and no empty axis."""
     arr = as_real_array(x, name)
     if arr.ndim < min_ndim:
-        raise GearlabInputError(
-            f"{name} must have at least {min_ndim} dimension(s), got an array of shape {arr.shape}"
-        )
+        raise GearlabInputError(f"{name} must have at least {min_ndim} dimension(s), got an array of shape {arr.shape}")
     if arr.size == 0:
         raise GearlabInputError(f"{name} is empty (shape {arr.shape}); expected at least one value")
     check_finite(arr, name)

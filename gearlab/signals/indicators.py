@@ -28,10 +28,10 @@ def _masked(x: np.ndarray, mesh_orders, shaft_orders: int, sidebands: int) -> np
     X = np.fft.rfft(np.asarray(x, dtype=np.float64), axis=-1)
     top = X.shape[-1] - 1
     remove = np.zeros(X.shape[-1], dtype=bool)
-    remove[0:shaft_orders + 1] = True  # the mean and the low shaft orders
+    remove[0 : shaft_orders + 1] = True  # the mean and the low shaft orders
     for z in mesh_orders:
         for centre in range(z, top + 1, z):
-            remove[max(0, centre - sidebands):min(top, centre + sidebands) + 1] = True
+            remove[max(0, centre - sidebands) : min(top, centre + sidebands) + 1] = True
     X[..., remove] = 0.0
     return np.fft.irfft(X, n=x.shape[-1], axis=-1)
 

@@ -290,13 +290,10 @@ def cut_revolutions(
     given = [name for name, v in (("tacho", tacho), ("pulses", pulses), ("speed_hz", speed_hz)) if v is not None]
     if len(given) != 1:
         raise GearlabInputError(
-            f"give exactly one of tacho, pulses or speed_hz to know the shaft angle, got "
-            f"{', '.join(given) or 'none'}"
+            f"give exactly one of tacho, pulses or speed_hz to know the shaft angle, got {', '.join(given) or 'none'}"
         )
     if transient not in TRANSIENT_METHODS:
-        raise GearlabInputError(
-            f"unknown transient detection '{transient}'; known: {', '.join(TRANSIENT_METHODS)}"
-        )
+        raise GearlabInputError(f"unknown transient detection '{transient}'; known: {', '.join(TRANSIENT_METHODS)}")
     if speed_hz is not None:
         angle = angle_from_speed(x.size, fs, speed_hz, phase)
     else:

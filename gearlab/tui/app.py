@@ -239,10 +239,15 @@ class GearlabApp(App):
         if entry.ok:
             s = entry.scenario
             runs = f"{len(entry.runs)} past run(s)" if entry.runs else "no past runs"
-            status.update(Text.assemble(("✓ valid", "bold green"), f"  {s.name} ({s.kind}): {s.description}\n",
-                                        SCENARIO_KINDS[s.kind].describe(s),
-                                        f"\n{runs} in {self._shown(runs_base(s, self.cwd) / s.name)}; r run, k quick run, "
-                                        "f run with options"))
+            status.update(
+                Text.assemble(
+                    ("✓ valid", "bold green"),
+                    f"  {s.name} ({s.kind}): {s.description}\n",
+                    SCENARIO_KINDS[s.kind].describe(s),
+                    f"\n{runs} in {self._shown(runs_base(s, self.cwd) / s.name)}; r run, k quick run, "
+                    "f run with options",
+                )
+            )
             marked = set()
         else:
             status.update(Text.assemble(("✗ invalid  ", "bold red"), entry.error))
@@ -340,7 +345,8 @@ class GearlabApp(App):
         self.query_one("#units", Static).update("")
         self.query_one("#log", RichLog).clear()
         self.query_one("#run-status", Static).update(
-            f"{'resuming' if resume else 'running'} {self.run_scenario.name} ({self.run_scenario.kind}); c cancels")
+            f"{'resuming' if resume else 'running'} {self.run_scenario.name} ({self.run_scenario.kind}); c cancels"
+        )
         self.refresh_live()
         self.switch_to("run")
         self.follow(args)
@@ -350,8 +356,14 @@ class GearlabApp(App):
         """Run `gearlab ... --events` in a child process and draw its events until it ends."""
         log = self.query_one("#log", RichLog)
         self.process = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", "gearlab", *args, "--events",
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE, cwd=self.cwd,
+            sys.executable,
+            "-m",
+            "gearlab",
+            *args,
+            "--events",
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+            cwd=self.cwd,
             start_new_session=True,  # its own process group, so that cancel reaches its workers
             limit=1 << 26,  # a record line carries training curves
         )
@@ -383,7 +395,8 @@ class GearlabApp(App):
             else:
                 self.running.pop(event.stage, None)
             self.query_one("#units", Static).update(
-                Text("\n".join(f"▸ {unit}: {text}" for unit, text in sorted(self.running.items())), style="dim"))
+                Text("\n".join(f"▸ {unit}: {text}" for unit, text in sorted(self.running.items())), style="dim")
+            )
         elif event.kind == "record" and event.record is not None:
             self.records.append(event.record)
             self.refresh_live()
@@ -513,7 +526,8 @@ class GearlabApp(App):
             return
         self.comparing = paths
         self.query_one("#results-status", Static).update(
-            Text.assemble(("comparison ", "bold"), f"of {len(runs)} {runs[0].kind} runs; escape closes it"))
+            Text.assemble(("comparison ", "bold"), f"of {len(runs)} {runs[0].kind} runs; escape closes it")
+        )
         self.query_one("#verdict", Static).update(Text("\n".join(compare_lines(runs))))
         self.query_one("#verdict", Static).display = True
         self.query_one("#results-table", ResultTable).show_markdown(compare_markdown(runs))
@@ -557,16 +571,22 @@ class GearlabApp(App):
             name = str(entry.path.relative_to(self.directory))
             if entry.ok:
                 yield SystemCommand(f"Run {name}", "run this scenario", lambda e=entry: self._palette_run(e, False))
-                yield SystemCommand(f"Quick run {name}", "run it shrunk (--quick)",
-                                    lambda e=entry: self._palette_run(e, True))
-            yield SystemCommand(f"Validate {name}", "check the file without running it",
-                                lambda e=entry: self._validate(e))
+                yield SystemCommand(
+                    f"Quick run {name}", "run it shrunk (--quick)", lambda e=entry: self._palette_run(e, True)
+                )
+            yield SystemCommand(
+                f"Validate {name}", "check the file without running it", lambda e=entry: self._validate(e)
+            )
             for run in entry.runs:
-                yield SystemCommand(f"Open run {name} {run.path.name}", "show its results",
-                                    lambda r=run: self._palette_open(r))
+                yield SystemCommand(
+                    f"Open run {name} {run.path.name}", "show its results", lambda r=run: self._palette_open(r)
+                )
         if len(self.marked) > 1:
-            yield SystemCommand(f"Compare the {len(self.marked)} marked runs", "tables side by side, curves overlaid",
-                                self.action_compare)
+            yield SystemCommand(
+                f"Compare the {len(self.marked)} marked runs",
+                "tables side by side, curves overlaid",
+                self.action_compare,
+            )
 
     def _palette_run(self, entry: ScenarioEntry, quick: bool) -> None:
         self._move_to(entry.path)
@@ -628,8 +648,12 @@ def other_lines(summary: list[str]) -> list[str]:
     the headings of those tables ('per-view gap:'), which would head nothing."""
     rows = [line.splitlines() for line in summary]
     flat = [line for block in rows for line in block]
-    return [line for i, line in enumerate(flat) if not line.lstrip().startswith("|")
-            and not (line.rstrip().endswith(":") and i + 1 < len(flat) and flat[i + 1].lstrip().startswith("|"))]
+    return [
+        line
+        for i, line in enumerate(flat)
+        if not line.lstrip().startswith("|")
+        and not (line.rstrip().endswith(":") and i + 1 < len(flat) and flat[i + 1].lstrip().startswith("|"))
+    ]
 
 
 def run_tui(directory: Path | str = "scenarios") -> int:

@@ -103,4 +103,3 @@ def error_line(toml_text: str, error: str) -> int | None:
             if re.match(rf"^\s*{re.escape(key)}\s*=", lines[i]):
                 return i + 1
     return start + 1
-

@@ -131,5 +131,10 @@ class RunOptionsScreen(ModalScreen[RunOptions | None]):
                 raise ValueError(f"{name}: expected a whole number >= {low}, got {value}")
             return value
 
-        return RunOptions(quick=self.query_one("#quick", Checkbox).value, executor=chosen("executor"),
-                          device=chosen("device"), trials=number("trials", 1), seed=number("seed", 0))
+        return RunOptions(
+            quick=self.query_one("#quick", Checkbox).value,
+            executor=chosen("executor"),
+            device=chosen("device"),
+            trials=number("trials", 1),
+            seed=number("seed", 0),
+        )

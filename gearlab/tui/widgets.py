@@ -49,9 +49,16 @@ class ResultTable(DataTable):
         self.header_height = 2 if any(len(parts) > 1 for parts in split) else 1
         for parts in split:
             label = Text(parts[0] + ("\n(" + parts[1] if len(parts) > 1 else ""))
-            self.add_column(label, width=max(min(max(len(line) for line in label.plain.splitlines()), 24),
-                                             max((len(row[i]) for t in tables for row in t[1:]
-                                                  for i in [len(self.columns)] if i < len(row)), default=1)))
+            self.add_column(
+                label,
+                width=max(
+                    min(max(len(line) for line in label.plain.splitlines()), 24),
+                    max(
+                        (len(row[i]) for t in tables for row in t[1:] for i in [len(self.columns)] if i < len(row)),
+                        default=1,
+                    ),
+                ),
+            )
         for i, table in enumerate(tables):
             if i:
                 self.add_row(*([""] * width))
@@ -126,8 +133,13 @@ class ChartView(Static):
         if len(values) == 1:
             plotext.bar(names, values[0], orientation="horizontal", color=COLORS[0], width=0.6)
         else:
-            plotext.multiple_bar(names, values, labels=[c.label for c in curves], orientation="horizontal",
-                                 color=[COLORS[i % len(COLORS)] for i in range(len(values))])
+            plotext.multiple_bar(
+                names,
+                values,
+                labels=[c.label for c in curves],
+                orientation="horizontal",
+                color=[COLORS[i % len(COLORS)] for i in range(len(values))],
+            )
         plotext.xlabel(label)  # horizontal bars: the values run along x
 
 
@@ -156,8 +168,10 @@ class Stages(Vertical):
         bar = self._bar(stage)
         if bar is None:
             key = stage_id(stage)
-            self.mount(Label(message or stage, id=f"label-{key}"),
-                       ProgressBar(total=total or None, id=f"bar-{key}", show_eta=False))
+            self.mount(
+                Label(message or stage, id=f"label-{key}"),
+                ProgressBar(total=total or None, id=f"bar-{key}", show_eta=False),
+            )
         else:
             self.query_one(f"#label-{stage_id(stage)}", Label).update(message or stage)
             bar.update(total=total or None, progress=0)

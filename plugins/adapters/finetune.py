@@ -24,9 +24,20 @@ VARIANTS = ("all", "classifier", "last")
 
 class Finetune(Adapter):
     name = "finetune"
-    doc = "Fine-tuning (Han et al. 2019b): prime on the source, retrain all layers, the classifier or the last layer on the labelled target."
+    doc = (
+        "Fine-tuning (Han et al. 2019b): prime on the source, retrain all layers, the classifier or the last layer "
+        "on the labelled target."
+    )
     params = (
-        Param("variant", "", 0, 0, len(VARIANTS) - 1, "layers retrained on the target: 0 = all, 1 = classifier, 2 = last", integer=True),
+        Param(
+            "variant",
+            "",
+            0,
+            0,
+            len(VARIANTS) - 1,
+            "layers retrained on the target: 0 = all, 1 = classifier, 2 = last",
+            integer=True,
+        ),
     )
     calibrated = True
     supervision = ("supervised",)

@@ -23,12 +23,21 @@ LIMITERS = ("off", "on", "auto")
 
 class MatchedFilter(Adapter):
     name = "matched_filter"
-    doc = ("Physics-template detector: largest cosine between a revolution's residual from the target's healthy "
-           "reference and the simulated fault responses, thresholded on the healthy history (no network).")
+    doc = (
+        "Physics-template detector: largest cosine between a revolution's residual from the target's healthy "
+        "reference and the simulated fault responses, thresholded on the healthy history (no network)."
+    )
     params = (
         Param("false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"),
-        Param("limiter", "", 0, 0, 2, "soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in "
-              "impulsive noise)", integer=True),
+        Param(
+            "limiter",
+            "",
+            0,
+            0,
+            2,
+            "soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in impulsive noise)",
+            integer=True,
+        ),
     )
     calibrated = False
     supervision = ("unsupervised", "supervised")
@@ -40,8 +49,9 @@ class MatchedFilter(Adapter):
 
         (Xs, ys), (Xt, yt) = source, target
         values = self.values(params)
-        return template_detector(Xs, ys, Xt, yt, false_alarm=float(values["false_alarm"]),
-                                 limiter=LIMITERS[int(values["limiter"])])
+        return template_detector(
+            Xs, ys, Xt, yt, false_alarm=float(values["false_alarm"]), limiter=LIMITERS[int(values["limiter"])]
+        )
 
 
 @hookimpl

@@ -39,9 +39,11 @@ class DriveInertias(Effect):
     def apply_model(self, config, params):
         added = [d for d in ("theta11", "theta22") if not config.has(d)]
         if added:
-            config = config.with_dofs(*added,
-                                      input_dof="theta11" if "theta11" in added else None,
-                                      load_dof="theta22" if "theta22" in added else None)
+            config = config.with_dofs(
+                *added,
+                input_dof="theta11" if "theta11" in added else None,
+                load_dof="theta22" if "theta22" in added else None,
+            )
         return config.with_values(I11=params["I11"], I22=params["I22"], k_c=params["k_c"], c_c=params["c_c"])
 
 

@@ -64,9 +64,11 @@ class ToothFriction(Effect):
             scale = x.load / x.load_nm  # the load share follows a load ripple
             a0 = x.pair.pressure_angle
             across = x.vector({"x1": math.cos(a0), "y1": -math.sin(a0), "x2": -math.cos(a0), "y2": math.sin(a0)})
-            return [(across, scale * x.at_angle(force)),
-                    (x.vector({"theta12": 1.0}), scale * x.at_angle(torque1)),
-                    (x.vector({"theta21": 1.0}), scale * x.at_angle(torque2))]
+            return [
+                (across, scale * x.at_angle(force)),
+                (x.vector({"theta12": 1.0}), scale * x.at_angle(torque1)),
+                (x.vector({"theta21": 1.0}), scale * x.at_angle(torque2)),
+            ]
 
         return exc.add_force(forces)
 

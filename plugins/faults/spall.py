@@ -39,7 +39,8 @@ class Spall(Fault):
             )
         if params["w_s"] > pair.face_width:
             raise GearlabInputError(
-                f"{where}: spall width w_s = {params['w_s'] * 1e3:g} mm exceeds the face width {pair.face_width * 1e3:g} mm"
+                f"{where}: spall width w_s = {params['w_s'] * 1e3:g} mm "
+                f"exceeds the face width {pair.face_width * 1e3:g} mm"
             )
         section = healthy_section(pair.pinion, pair.face_width)
         on = region(section, params["x_1"], end)

@@ -46,10 +46,23 @@ PHM09 = {
     "pair": "phm09_stage1",
     "pair2": "phm09_stage2",
     "params": {
-        "m1": 0.89, "m2": 6.07, "m3": 3.54,
-        "I11": 0.0043, "I12": 2.6e-4, "I21": 0.0223, "I31": 0.0101, "I22": 0.0045,
-        "k_b": 1e8, "c_b": 2e3, "k_c": 1e4, "c_c": 10.0,
-        "mf": 10.0, "k_xf": 2e8, "k_yf": 2e8, "c_xf": 2e3, "c_yf": 2e3,
+        "m1": 0.89,
+        "m2": 6.07,
+        "m3": 3.54,
+        "I11": 0.0043,
+        "I12": 2.6e-4,
+        "I21": 0.0223,
+        "I31": 0.0101,
+        "I22": 0.0045,
+        "k_b": 1e8,
+        "c_b": 2e3,
+        "k_c": 1e4,
+        "c_c": 10.0,
+        "mf": 10.0,
+        "k_xf": 2e8,
+        "k_yf": 2e8,
+        "c_xf": 2e3,
+        "c_yf": 2e3,
         "zeta": 0.07,
     },
     "speeds_hz": (30.0, 40.0),
@@ -63,8 +76,10 @@ PHM09 = {
 
 class TwoStage(DynamicModel):
     name = "two_stage"
-    doc = ("two-stage spur gearbox (32/96 then 48/80 on a shared idler): the 10-DOF model with a second mesh "
-           "and an output block; sensor on the casing; PHM 2009 rig")
+    doc = (
+        "two-stage spur gearbox (32/96 then 48/80 on a shared idler): the 10-DOF model with a second mesh "
+        "and an output block; sensor on the casing; PHM 2009 rig"
+    )
     dofs = DOFS
     input_dof = "theta11"
     load_dof = "theta22"
@@ -72,8 +87,26 @@ class TwoStage(DynamicModel):
     breaks_symmetry = True
 
     def param_names(self):
-        return ("m1", "m2", "m3", "I12", "I21", "I31", "k_b", "c_b", "zeta", "I11", "I22", "k_c", "c_c",
-                "mf", "k_xf", "k_yf", "c_xf", "c_yf")
+        return (
+            "m1",
+            "m2",
+            "m3",
+            "I12",
+            "I21",
+            "I31",
+            "k_b",
+            "c_b",
+            "zeta",
+            "I11",
+            "I22",
+            "k_c",
+            "c_c",
+            "mf",
+            "k_xf",
+            "k_yf",
+            "c_xf",
+            "c_yf",
+        )
 
     def second_pair(self, pair):
         """The stage-2 pair of the preset whose stage 1 is *pair*."""
@@ -87,8 +120,23 @@ def two_stage_assembly(pair, pair2, v) -> Assembly:
     """M, Kc, Cc (eq. 2.97, 2.100, 2.101 extended), stage 1's P (eq. 2.104) and stage 2's mesh."""
     idx = {d: i for i, d in enumerate(DOFS)}
     n = len(DOFS)
-    M = np.diag([v["m1"], v["m1"], v["I11"], v["I12"], v["m2"], v["m2"], v["I21"], v["m3"], v["m3"], v["I31"],
-                 v["I22"], v["mf"], v["mf"]])
+    M = np.diag(
+        [
+            v["m1"],
+            v["m1"],
+            v["I11"],
+            v["I12"],
+            v["m2"],
+            v["m2"],
+            v["I21"],
+            v["m3"],
+            v["m3"],
+            v["I31"],
+            v["I22"],
+            v["mf"],
+            v["mf"],
+        ]
+    )
     K, C = np.zeros((n, n)), np.zeros((n, n))
 
     def spring(a, b, k, c):
@@ -103,19 +151,39 @@ def two_stage_assembly(pair, pair2, v) -> Assembly:
     spring("theta31", "theta22", v["k_c"], v["c_c"])
     s1, c1 = math.sin(pair.pressure_angle), math.cos(pair.pressure_angle)
     P = np.zeros(n)
-    for dof, value in (("x1", s1), ("y1", c1), ("theta12", pair.pinion.R_b), ("x2", -s1), ("y2", -c1),
-                       ("theta21", -pair.gear.R_b)):
+    for dof, value in (
+        ("x1", s1),
+        ("y1", c1),
+        ("theta12", pair.pinion.R_b),
+        ("x2", -s1),
+        ("y2", -c1),
+        ("theta21", -pair.gear.R_b),
+    ):
         P[idx[dof]] = value  # eq. 2.104
     s2, c2 = math.sin(pair2.pressure_angle), math.cos(pair2.pressure_angle)
     P2 = np.zeros(n)
-    for dof, value in (("x2", s2), ("y2", -c2), ("theta21", pair2.pinion.R_b), ("x3", -s2), ("y3", c2),
-                       ("theta31", -pair2.gear.R_b)):
+    for dof, value in (
+        ("x2", s2),
+        ("y2", -c2),
+        ("theta21", pair2.pinion.R_b),
+        ("x3", -s2),
+        ("y3", c2),
+        ("theta31", -pair2.gear.R_b),
+    ):
         P2[idx[dof]] = value
     r1 = pair.pinion.R_b / pair.gear.R_b  # idler turns per input turn (1/3)
     r2 = r1 * pair2.pinion.R_b / pair2.gear.R_b  # output turns per input turn (1/5)
-    return Assembly(DOFS, M, K, C, P, "theta11", "theta22",
-                    meshes=(Mesh(pair2, P2, r1, ("m2", "m3")),),
-                    rigid={"theta11": 1.0, "theta12": 1.0, "theta21": r1, "theta31": r2, "theta22": r2})
+    return Assembly(
+        DOFS,
+        M,
+        K,
+        C,
+        P,
+        "theta11",
+        "theta22",
+        meshes=(Mesh(pair2, P2, r1, ("m2", "m3")),),
+        rigid={"theta11": 1.0, "theta12": 1.0, "theta21": r1, "theta31": r2, "theta22": r2},
+    )
 
 
 @hookimpl

@@ -51,7 +51,9 @@ class Wear(Fault):
     doc = "Uniform wear of depth `depth` on the loaded flank over a band of the tooth height (fractions from the root)."
     params = (
         Param("depth", "m", 0.0, 0.0, 0.05, "wear depth, normal to the loaded flank", "mm"),
-        Param("band_start", "", BAND[0], 0.0, 1.0, "start of the worn band, fraction of the tooth height from the root"),
+        Param(
+            "band_start", "", BAND[0], 0.0, 1.0, "start of the worn band, fraction of the tooth height from the root"
+        ),
         Param("band_end", "", BAND[1], 0.0, 1.0, "end of the worn band, fraction of the tooth height from the root"),
     )
 
