@@ -14,6 +14,7 @@ import pytest
 
 from gearlab.data.spec import NoiseSpec
 from gearlab.errors import GearlabInputError
+from gearlab.gap.diagnose import Settings
 from gearlab.kinds import SCENARIO_KINDS
 from gearlab.learn.networks import NetworkSettings
 from gearlab.learn.noise_study import NoiseProtocol
@@ -38,6 +39,7 @@ TABLES = [
         "keys (repetitions: transfer only; gap's [accuracy] defaults to 3)",
     ),
     ("[protocol] (chapter-4 noise study)", NoiseProtocol, "noise_study [protocol]"),
+    ("[diagnosis]", Settings, "gap [diagnosis]; the gap benchmark's [search] takes the same fields"),
     (
         "noise = {...}",
         NoiseSpec,
