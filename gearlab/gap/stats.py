@@ -394,6 +394,7 @@ def gap_report(source_X, target_X, pair, embed: Callable | None = None, seed: in
         notes.append(f"output-shaft orders (multiples of {ratio}) are not resolved: each row is one input "
                      "revolution, so their lines leak into the neighbouring integer orders (shaft and "
                      "non-synchronous bands)")
+    report["constant_sets"] = [which for which, X in (("source", Xs), ("target", Xt)) if np.all(X == X[0])]
     for which, X in (("source", Xs), ("target", Xt)):
         if np.all(X == X[0]):
             notes.append(f"the {which} revolutions are all identical (no noise): effect sizes are measured "
