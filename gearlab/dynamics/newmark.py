@@ -475,8 +475,10 @@ class Simulator:
     ) -> int:
         """The time loop (one of three compiled integrators: one mesh, one mesh with extra forces,
         several meshes); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1."""
-        u, v, a = start
         steps = len(t) - 1
+        G_F = self.G @ F
+        # the arguments every integrator ends with: Newmark constants, step, state (updated in place), output
+        tail = (self.c, 1.0 / self.fs, self.gamma, *start, out_idx, out)
         if self.meshes:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
             shaft = 2 * np.pi * speed * t if angle is None else angle
@@ -488,63 +490,12 @@ class Simulator:
             if forces:
                 GB, g = self._forcing(forces)
             mu = np.array([self.mu, *self.mesh_mu])
-            return _integrate_meshes(
-                self.GMC,
-                self.G @ F,
-                GB,
-                g,
-                self.Wm,
-                self.Pm,
-                self.PW,
-                np.ascontiguousarray(k_all[1:]),
-                mu,
-                self.c,
-                1.0 / self.fs,
-                self.gamma,
-                u,
-                v,
-                a,
-                out_idx,
-                out,
-            )
+            k_meshes = np.ascontiguousarray(k_all[1:])
+            return _integrate_meshes(self.GMC, G_F, GB, g, self.Wm, self.Pm, self.PW, k_meshes, mu, *tail)
         if forces:
             GB, g = self._forcing(forces)
-            return _integrate_forced(
-                self.GMC,
-                self.G @ F,
-                GB,
-                g,
-                self.w,
-                self.P,
-                self.pw,
-                k[1:],
-                self.mu,
-                self.c,
-                1.0 / self.fs,
-                self.gamma,
-                u,
-                v,
-                a,
-                out_idx,
-                out,
-            )
-        return _integrate(
-            self.GMC,
-            self.G @ F,
-            self.w,
-            self.P,
-            self.pw,
-            k[1:],
-            self.mu,
-            self.c,
-            1.0 / self.fs,
-            self.gamma,
-            u,
-            v,
-            a,
-            out_idx,
-            out,
-        )
+            return _integrate_forced(self.GMC, G_F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, *tail)
+        return _integrate(self.GMC, G_F, self.w, self.P, self.pw, k[1:], self.mu, *tail)
 
     def _forcing(self, forces: list) -> tuple[np.ndarray, np.ndarray]:
         """G B (the force vectors through K_hat_c^-1) and the force series g from the second step on."""
