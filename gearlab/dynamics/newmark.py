@@ -288,23 +288,21 @@ class Simulator:
     def _warm_up(self) -> None:
         """Load the compiled integrator now (one step), so run() times only the simulation."""
         n = len(self.dofs)
-        _integrate(
-            self.GMC,
-            np.zeros(n),
-            self.w,
-            self.P,
-            self.pw,
-            np.ones(1),
-            self.mu,
-            self.c,
-            1.0 / self.fs,
-            self.gamma,
-            np.zeros(n),
-            np.zeros(n),
-            np.zeros(n),
-            np.zeros(1, dtype=np.int64),
-            np.empty((2, 1)),
-        )
+
+        def tail():  # constants, step, a fresh zero state, one output channel
+            zeros = np.zeros(n)
+            return (
+                self.c,
+                1.0 / self.fs,
+                self.gamma,
+                zeros,
+                zeros.copy(),
+                zeros.copy(),
+                np.zeros(1, dtype=np.int64),
+                np.empty((2, 1)),
+            )
+
+        _integrate(self.GMC, np.zeros(n), self.w, self.P, self.pw, np.ones(1), self.mu, *tail())
         if self.meshes:
             m = len(self.Pm)
             _integrate_meshes(
@@ -317,14 +315,7 @@ class Simulator:
                 self.PW,
                 np.ones((1, m)),
                 np.zeros(m),
-                self.c,
-                1.0 / self.fs,
-                self.gamma,
-                np.zeros(n),
-                np.zeros(n),
-                np.zeros(n),
-                np.zeros(1, dtype=np.int64),
-                np.empty((2, 1)),
+                *tail(),
             )
 
     def natural_frequencies(self, k: float | None = None, fixed_input: bool = True) -> np.ndarray:
