@@ -70,7 +70,7 @@ def fake_module(calls: list) -> types.ModuleType:
         max_order: int = 0
 
     def diagnose(source, target_X, settings, executor=None, on_event=lambda e: None, chain=None):
-        calls.append({"source": source, "target_X": target_X, "settings": settings})
+        calls.append({"source": source, "target_X": target_X, "settings": settings, "chain": chain})
         rng = np.random.default_rng(0)
         scale = target_X.std()
         shifted = target_X[::-1] + 3 * scale  # a large gap before
@@ -302,6 +302,31 @@ def test_measured_target_with_too_few_revolutions_leaves_no_run(tiny, cli, calls
     assert code == 2, err
     assert "[target]" in err and "too few healthy target revolutions" in err and str(tiny) in err
     assert not out_dir.exists() and calls == []
+
+
+@pytest.mark.parametrize("units, warned", [("", True), ('sensitivity = "10 mV/g"\ngain = "0.2 mV"\n', False)])
+def test_a_measured_target_goes_with_its_chain_and_its_units(tiny, cli, calls, units, warned):
+    """A measured file's acquisition (rate, speed, start fractions, int16 step) reaches the diagnosis
+    with its rows; without sensitivity or gain the run warns in one line that the units are unknown."""
+    fs, speed = 20_003.0, 40.0  # 500.075 samples per revolution: revolutions start between samples
+    n = int(fs / speed * 30)
+    t = np.arange(n) / fs
+    counts = np.round(3000 * np.sin(2 * np.pi * 25 * speed * t)).astype(np.int16)
+    np.savez(tiny.parent / "rec.npz", acc=counts, fs=np.array(fs))
+    tiny.write_text(TINY.replace('preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+                                 'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+                                 'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"\n' + units)
+                    .replace("[accuracy]\n", "[accuracy]\nenabled = false\n"))
+    code, out, err = cli("run", tiny, "--out", tiny.parent / "runs")
+    assert code == 0, err
+    chain = calls[0]["chain"]
+    assert chain.fs == fs and chain.speed == pytest.approx(speed) and len(set(chain.fractions)) > 5
+    scale = 2e-4 / (0.01 / 9.80665) if not warned else 1.0
+    assert chain.step == pytest.approx(scale)
+    assert calls[0]["settings"].max_order == int(0.9 * fs / speed / 2)
+    run = Path(out.strip().splitlines()[-1].split("run directory: ")[1])
+    note = records(run)["diagnosis"]["note"]
+    assert ("WARNING: units unknown" in note) == warned
 
 
 # --- the real diagnosis ----------------------------------------------------------------------------

@@ -558,3 +558,50 @@ def test_what_the_file_says_stays_on_one_line(rec, tmp_path):
     assert "\n" not in message
     fails(spec_for(tmp_path / ("x" * 300 + ".npz"), vibration="acc", speed_hz=25), "File name too long")
     fails(spec_for(tmp_path / "a\0b.npz", vibration="acc", speed_hz=25), "'path' contains a NUL character")
+
+
+# --- units: sensitivity and gain -----------------------------------------------------------------------
+
+
+def test_integer_records_are_scaled_by_gain_and_sensitivity_and_keep_their_step(tmp_path, rec):
+    """Counts (an int16 array) x gain (V per count) / sensitivity (V per m/s²) are m/s²; one count
+    times that scale is the record's quantisation step; with neither given the units are unknown."""
+    volts_per_count, sensitivity = 2e-4, 0.01 / 9.80665  # 10 mV/g
+    counts = np.round(rec.acc * sensitivity / volts_per_count).astype(np.int16)
+    path = write_npz(tmp_path / "counts.npz", {"acc": counts, "tacho": rec.tacho, "fs": FS})
+    known = import_measured(spec_for(path, vibration="acc", tacho="tacho", sensitivity=sensitivity,
+                                     gain=volts_per_count))
+    raw = import_measured(spec_for(path, vibration="acc", tacho="tacho"))
+    scale = volts_per_count / sensitivity
+    assert known.meta["quantum"] == pytest.approx(scale) and raw.meta["quantum"] == 1.0
+    assert known.meta["units"].startswith("m/s²") and raw.meta["units"].startswith("unknown")
+    # the same revolutions, in m/s² against counts
+    np.testing.assert_allclose(known.reference[0], raw.reference[0] * scale, rtol=1e-9)
+    np.testing.assert_allclose(known.reference[1], raw.reference[1] * scale, rtol=1e-9)
+    assert np.abs(known.reference[1] - np.std(rec.acc)).max() < 0.05 * np.std(rec.acc)
+
+
+def test_a_wav_int16_record_is_scaled_from_full_scale_by_its_gain(files, rec):
+    path, options, _ = files["wav-int16"]
+    full_scale_volts = 5.0
+    ds = import_measured(spec_for(path, sensitivity=0.1, gain=full_scale_volts, **options))
+    assert ds.meta["quantum"] == pytest.approx(full_scale_volts / 0.1 / 32768)
+    plain = import_measured(spec_for(path, **options))
+    assert plain.meta["quantum"] == pytest.approx(1 / 32768) and plain.meta["units"].startswith("unknown")
+    np.testing.assert_allclose(ds.reference[1], plain.reference[1] * full_scale_volts / 0.1, rtol=1e-9)
+
+
+def test_revolution_start_fractions_are_recorded(files):
+    path, options, _ = files["npz"]
+    fractions = import_measured(spec_for(path, **options)).meta["start_fractions"]
+    assert len(fractions) == COMPLETE
+    # 2000 samples per revolution: every revolution starts at the same point between two samples,
+    # where θ = 2πk falls: sample (2πk - PHI0) / (2π SPEED / FS)
+    expected = ((TWO_PI - PHI0) / (TWO_PI * SPEED / FS)) % 1.0
+    assert fractions == pytest.approx([expected] * COMPLETE, abs=1e-4) and 0.1 < expected < 0.9
+
+
+@pytest.mark.parametrize("key, value, fact", [("sensitivity", 0.0, "sensitivity"), ("gain", -1.0, "gain")])
+def test_units_must_be_positive(files, key, value, fact):
+    path, options, _ = files["npz"]
+    fails(spec_for(path, **options, **{key: value}), fact)
