@@ -166,7 +166,7 @@ def test_a_written_target_round_trips_through_the_importer(tmp_path):
 
 @pytest.mark.parametrize("fmt", bench.FORMATS)
 def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
-    """Pipeline parity (issue 15): a target with no effect, written at a rate where revolutions start
+    """Pipeline parity: a target with no effect, written at a rate where revolutions start
     between samples, with its tacho 7-200 degrees off the simulation's zero and (int16) quantised,
     imported -- against the source made through the same chain -- shows no significant gap, while
     the source without the chain shows a large one."""

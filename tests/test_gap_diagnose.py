@@ -205,7 +205,7 @@ def test_no_extra_effect_is_credited_with_a_better_refit_of_the_first():
 def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_share():
     """On a quiet target (30 dB) the two-sample test flags a fillet factor 3 % off (p = 0.01,
     AUC 1.0); the gap left is under 1 % of the gap before. The verdict reads the test and its
-    effect size (issue 15): not "explained" while the sets are told apart perfectly, but partly
+    effect size: not "explained" while the sets are told apart perfectly, but partly
     explained, with the share removed."""
     source = B6.with_(noise=NoiseSpec("gaussian", 30.0, 0))
     hidden = effect_spec("fillet_correction", lam=0.3)

@@ -1,4 +1,4 @@
-"""Gap statistics (SPEC section 9.1 and 9.3; gearlab/gap): the views, the per-view gap and its
+"""Gap statistics (docs/gap_stats.md; gearlab/gap): the views, the per-view gap and its
 shares, the two-sample tests, the input checks.
 
 Synthetic revolutions are a spur-gear signature in the angle domain (4096 points per

@@ -1,4 +1,4 @@
-"""Import of measured vibration (gearlab.data.importers, SPEC section 5, last bullet).
+"""Import of measured vibration (gearlab.data.importers; docs/real_data.md).
 
 A synthetic "measured" record with a known analytic waveform is written in every supported
 format; importing it must give the revolutions computed directly from the waveform, the

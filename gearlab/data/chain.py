@@ -7,7 +7,7 @@ gearlab's importer then order-tracks it (linear interpolation against the tacho 
 gearlab.signals.resample_revolutions) to 4096 points per revolution. Revolutions start
 between samples (any real record), so every revolution is interpolated at its own
 fractional offset; the interpolation low-passes what the record holds, noise included
-(0.6-2.5 dB at high orders, issue 15). A simulated source whose noise is added after the
+(0.6-2.5 dB at high orders). A simulated source whose noise is added after the
 resampling can never match that, and the gap diagnosis then reports a gap no effect can
 close. :func:`measure` sends simulated revolutions through the same chain:
 

@@ -1,4 +1,4 @@
-"""Measured vibration as a gearlab Dataset, through the same pipeline as simulated data (SPEC 5).
+"""Measured vibration as a gearlab Dataset, through the same pipeline as simulated data (docs/real_data.md).
 
 A real user's target domain is measured: a vibration channel recorded together with a
 tacho channel, or at a known nominal speed, in whatever file the acquisition system

@@ -1,4 +1,4 @@
-"""Sim-to-real gap diagnosis (SPEC section 9): where source and target healthy data differ, and how far.
+"""Sim-to-real gap diagnosis (docs/gap.md): where source and target healthy data differ, and how far.
 
 ``views``: feature views of angle-domain revolutions (order bands, TSA residual per sector,
 waveform statistics, network latent features); ``stats``: per-view discrepancies, their

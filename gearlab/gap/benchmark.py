@@ -1,4 +1,4 @@
-"""The blind benchmark of the gap diagnosis (SPEC section 9, item 4; docs/gap_benchmark.md).
+"""The blind benchmark of the gap diagnosis (docs/gap_benchmark.md).
 
 Each trial hides a configuration — one effect, two effects, no effect (the null), or one
 effect that is kept out of the candidate list (out of library) — with parameters drawn in
@@ -81,7 +81,7 @@ RANGES: dict[str, dict[str, object]] = {
 
 MIN_TARGET_REVOLUTIONS = 10  # gearlab.gap.stats.MIN_REVOLUTIONS: fewer and no statistic means much
 
-# How a target is acquired and written (issue 15): a real record is sampled at its own rate, so its
+# How a target is acquired and written (pipeline parity with measured records): a real record is sampled at its own rate, so its
 # revolutions start between samples; its tacho mark sits anywhere on the shaft; it may store
 # integers. Every trial draws: the samples per revolution as a share of the simulation's 4096
 # (RATE_SHARES, uniform), the tacho's zero off the simulation's (uniform over the turn) and a
@@ -469,7 +469,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
         # correct: no significant gap, hence nothing named
         record["null_correct"] = not record["significant_before"] and not accepted
     else:
-        # "unexplained" with no library effect accepted (issue 15): a partly explained verdict names
+        # "unexplained" with no library effect accepted: a partly explained verdict names
         # effects that stand in for the missing one
         record["out_of_library_unexplained"] = record["unexplained"] and not accepted
     return record
@@ -531,7 +531,7 @@ def _median(values) -> float | None:
     return float(np.median(values)) if values else None
 
 
-# Acceptance targets (issue 6): top-1, median shrink when identified, null, out of library.
+# Acceptance targets (docs/gap_benchmark.md): top-1, median shrink when identified, null, out of library.
 TARGETS = {"top1": 0.85, "median_shrink": 0.70, "null_correct": 0.90, "out_of_library_unexplained": 0.80}
 
 
@@ -565,7 +565,7 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         "top1_pair": _rate(r["top1"] for r in effect_trials if r["kind"] == "pair"),
         "median_shrink": _median(r["shrink"] for r in identified),
         "median_param_error": _median(r["param_error_median"] for r in effect_trials),
-        # over the parameters the diagnosis called determined (issue 15: the goal is on identifiable ones)
+        # over the parameters the diagnosis called determined (the goal is on identifiable ones)
         "median_param_error_determined": _median(v for r in effect_trials for name, per in r["param_error"].items()
                                                  for k, v in per.items()
                                                  if r.get("param_determined", {}).get(name, {}).get(k, True)),

@@ -1,4 +1,4 @@
-"""Which unmodelled effect makes the source simulator into the target (SPEC section 9, item 2).
+"""Which unmodelled effect makes the source simulator into the target (docs/gap.md).
 
 Given a simulator configuration (the *source*, a simulated DatasetSpec) and the target's
 healthy revolutions in physical units (``target_X``, nothing else about the target), the

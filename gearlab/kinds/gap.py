@@ -1,4 +1,4 @@
-"""Scenario kind `gap`: the sim-to-real gap diagnosis (SPEC section 9, docs/gap.md "Diagnosis").
+"""Scenario kind `gap`: the sim-to-real gap diagnosis (docs/gap.md, "Diagnosis").
 
     [source]      the simulator configuration: a simulated dataset entry (as in [[datasets]])
     [target]      the data to explain: a simulated entry (possibly with effects, which the
