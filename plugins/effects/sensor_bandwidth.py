@@ -31,6 +31,15 @@ def frequency_response(f: np.ndarray, f_n: float, zeta: float) -> np.ndarray:
     return 1.0 / (1.0 - r * r + 2j * zeta * r)
 
 
+def steady_state(x, fs: float, response) -> np.ndarray:
+    """The record *x* (J, P) through the filter *response(f)* as its steady-state response: its
+    spectrum (the J revolutions as one record) multiplied by H(f) (shared with sensor_lowpass)."""
+    record = np.asarray(x, dtype=float)
+    flat = record.reshape(-1)
+    f = np.fft.rfftfreq(flat.size, d=1.0 / fs)
+    return np.fft.irfft(np.fft.rfft(flat) * response(f), n=flat.size).reshape(record.shape)
+
+
 class SensorBandwidth(Effect):
     name = "sensor_bandwidth"
     doc = "second-order sensor response: low-pass (zeta ~ 0.7) or mounted resonance (small zeta) at f_n"
@@ -43,12 +52,7 @@ class SensorBandwidth(Effect):
     log_scale = frozenset({"f_n", "zeta"})
 
     def apply_signal(self, x, params, ctx):
-        record = np.asarray(x, dtype=float)
-        flat = record.reshape(-1)
-        spectrum = np.fft.rfft(flat)
-        f = np.fft.rfftfreq(flat.size, d=1.0 / ctx.fs)
-        filtered = np.fft.irfft(spectrum * frequency_response(f, params["f_n"], params["zeta"]), n=flat.size)
-        return filtered.reshape(record.shape)
+        return steady_state(x, ctx.fs, lambda f: frequency_response(f, params["f_n"], params["zeta"]))
 
 
 @hookimpl

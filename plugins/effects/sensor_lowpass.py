@@ -21,6 +21,7 @@ n from 1 to 8 poles (what acquisition front ends use). Default 5 kHz, 4 poles.
 import numpy as np
 
 from gearlab.api import Effect, Param, hookimpl
+from gearlab_plugins.effects.sensor_bandwidth import steady_state
 
 
 def frequency_response(f: np.ndarray, f_c: float, order: int) -> np.ndarray:
@@ -43,11 +44,7 @@ class SensorLowpass(Effect):
     log_scale = frozenset({"f_c"})
 
     def apply_signal(self, x, params, ctx):
-        record = np.asarray(x, dtype=float)
-        flat = record.reshape(-1)
-        f = np.fft.rfftfreq(flat.size, d=1.0 / ctx.fs)
-        H = frequency_response(f, params["f_c"], params["order"])
-        return np.fft.irfft(np.fft.rfft(flat) * H, n=flat.size).reshape(record.shape)
+        return steady_state(x, ctx.fs, lambda f: frequency_response(f, params["f_c"], params["order"]))
 
 
 @hookimpl
