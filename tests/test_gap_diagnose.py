@@ -249,3 +249,13 @@ def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():
     assert marks["f_n"]["determined"] and marks["f_n"]["width"] == pytest.approx(0.1)
     assert not marks["zeta"]["determined"] and marks["zeta"]["width"] == pytest.approx(1.0)
     assert marks["zeta"]["width"] > DETERMINED_WIDTH >= marks["f_n"]["width"]
+
+
+def test_a_small_search_says_it_may_miss_needle_like_parameters():
+    """--quick's budget of 4 can miss a sharp resonance the default search finds: the result says so."""
+    source = B6.with_(effects=(effect_spec("sensor_noise", kind="gaussian", snr_db=20),))
+    target = target_rows(source.with_(seed=99))
+    quick = diagnose(source, target, Settings(candidates=("sensor_noise",), **{**FAST, "budget": 4}))
+    assert any("may be missed" in n for n in quick["notes"])
+    full = diagnose(source, target, Settings(candidates=("sensor_noise",), **{**FAST, "budget": 16}))
+    assert not any("may be missed" in n for n in full["notes"])

@@ -841,6 +841,13 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
               "settings": {**asdict(settings), "candidates": list(candidates)}, "notes": []}
     if chain is not None:
         result["chain"] = chain_record(chain, fresh.with_(healthy=1), pair.Z1)
+    default_budget = Settings().budget
+    if settings.budget < default_budget:
+        # --quick (budget 4) fits a sharp resonance's f_n or a tone's frequency on too few points:
+        # it may miss what the default search finds; say so rather than let "unexplained" stand.
+        result["notes"].append(f"search budget {settings.budget} below the default {default_budget}: needle-like "
+                               "parameters (a sharp resonance's frequency, a tone's) may be missed; an 'unexplained' "
+                               "or 'partly explained' verdict is final only with the default search")
     if np.all(target == target[0]):
         # Measured data always scatter; identical rows come from a noise-free simulation, whose
         # TSA residual is rounding: two equal noise-free sets still differ there (docs/gap_stats.md).

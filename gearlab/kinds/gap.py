@@ -576,7 +576,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
         "settings": result.get("settings", spec["settings"]),
-        "notes": notes + list(result["before"].get("notes", [])),
+        "notes": notes + list(result.get("notes", [])) + list(result["before"].get("notes", [])),
     }
     if acc:
         summary["accuracy"] = acc

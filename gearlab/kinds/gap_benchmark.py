@@ -132,11 +132,13 @@ def _verdict(r: dict) -> str:
     if r["kind"] == "null":
         return "no significant gap (correct)" if r["null_correct"] else f"named {r['accepted'] or 'a gap'} (wrong)"
     if r["kind"] == "withheld":
-        return (f"withheld {r['withheld']}: " + ("unexplained (correct)" if r["unexplained"] else
-                                                 f"named {r['accepted']} (wrong)"))
+        return (f"withheld {r['withheld']}: " + ("unexplained (correct)" if r["out_of_library_unexplained"] else
+                                                 f"{r.get('verdict') or 'explained'}, named {r['accepted']} (wrong)"))
     hidden = "+".join(h[0] for h in r["hidden"])
     shrink = f", gap shrinks {100 * r['shrink']:.0f} %" if r["shrink"] is not None else ""
-    return f"hidden {hidden}, named {r['accepted'] or 'nothing'}: top-1 {'hit' if r['top1'] else 'miss'}{shrink}"
+    verdict = f", {r['verdict']}" if r.get("verdict") else ""
+    return (f"hidden {hidden}, named {r['accepted'] or 'nothing'}: top-1 {'hit' if r['top1'] else 'miss'}{shrink}"
+            f"{verdict}")
 
 
 def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> None:
