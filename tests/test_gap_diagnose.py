@@ -259,3 +259,17 @@ def test_a_small_search_says_it_may_miss_needle_like_parameters():
     assert any("may be missed" in n for n in quick["notes"])
     full = diagnose(source, target, Settings(candidates=("sensor_noise",), **{**FAST, "budget": 16}))
     assert not any("may be missed" in n for n in full["notes"])
+
+
+def test_consecutive_rows_add_the_output_shaft_orders_to_the_reports():
+    """'consecutive' (auto: true for a measured target, which has a chain) resolves the output-shaft
+    orders in the before/after reports; off, they are not reported."""
+    source = B6.with_(effects=(effect_spec("sensor_noise", kind="gaussian", snr_db=20),))
+    target = target_rows(source.with_(seed=99, healthy=60))
+    base = dict(FAST, healthy=60)
+    off = diagnose(source, target, Settings(candidates=("sensor_noise",), **base))
+    on = diagnose(source, target, Settings(candidates=("sensor_noise",), consecutive=True, **base))
+    assert off["settings"]["consecutive"] is False and "output_shaft" not in off["before"]
+    assert on["settings"]["consecutive"] is True and on["before"]["output_shaft"]["blocks"] == [10, 10]
+    with pytest.raises(GearlabInputError, match="consecutive"):
+        diagnose(source, target, Settings(candidates=("sensor_noise",), consecutive="maybe", **base))

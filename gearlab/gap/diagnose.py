@@ -118,6 +118,12 @@ def _open_fraction(value, where: str) -> float:
     return float(value)
 
 
+def _consecutive(value, where: str):
+    if value not in (True, False, "auto") or isinstance(value, (int, float)) and not isinstance(value, bool):
+        raise GearlabInputError(f"{where}: expected true, false or 'auto', got {value!r}")
+    return value
+
+
 @dataclass(frozen=True)
 class Settings:
     """The diagnosis's settings, declared once (gearlab.settings): the scenario's [diagnosis] keys,
@@ -143,6 +149,10 @@ class Settings:
     reference: str = setting(str, "source", choices=REFERENCES,
                              doc="what the shrink that closes the gap is measured against: the plain source, or the "
                                  "source with its sensor noise fitted alone (measured targets)")
+    consecutive: bool | str = setting(
+        (bool, str), "auto", check=_consecutive,
+        doc="the target's rows are consecutive revolutions of one record: the before/after reports then resolve "
+            "the output-shaft orders too (outside the shares); 'auto' = true for a measured target")
     # The highest shaft order the target holds (a measured record's acquisition bandwidth, below its
     # Nyquist order): every source set is low-passed to it, so the comparison stays where the target
     # has data (simulated revolutions, and the noise added to them, reach order POINTS / 2). 0: all.
@@ -795,9 +805,14 @@ def _paired_removal(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarr
 
 
 def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None = None) -> dict:
+    """A gap report; the full ones (before, after) resolve the output-shaft orders when the target's
+    rows are consecutive (settings.consecutive, resolved by diagnose). The source's rows stand in as
+    consecutive: a one-revolution-periodic simulation's revolutions differ only by their noise."""
+    full = bootstrap is None
     return gap_report(source_X, target_X, pair, seed=settings.seed,
-                      bootstrap=settings.bootstrap if bootstrap is None else bootstrap,
-                      permutations=settings.permutations, alpha=settings.alpha)
+                      bootstrap=settings.bootstrap if full else bootstrap,
+                      permutations=settings.permutations, alpha=settings.alpha,
+                      consecutive=full and settings.consecutive is True)
 
 
 def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, executor=None,
@@ -817,6 +832,8 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     if chain is not None and chain.offset is None:
         chain = replace(chain, reference=target.mean(axis=0))
     rows = Rows(settings.max_order, chain)
+    if settings.consecutive == "auto":  # a measured record's rows are its consecutive revolutions
+        settings = replace(settings, consecutive=chain is not None)
     pair = _check_source(source)
     for i, effect in enumerate(source.effects, start=1):  # the source's own effects must load too
         get_registry().get("effect", effect[0], f"gap diagnosis: source '{source.name}' effect #{i}")

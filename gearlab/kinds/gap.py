@@ -573,6 +573,10 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "mmd2_before": result["before"]["mmd2"],
         "mmd2_after": result["after"]["mmd2"],
         "views": view_rows(result),
+        # consecutive rows: the output-shaft orders (blocks of Z2/gcd revolutions), outside the shares
+        "output_shaft": {k: ({"gap": v["gap"], "gap_interval": v.get("gap_interval"), "blocks": v.get("blocks")}
+                             if v else None) for k, v in (("before", result["before"].get("output_shaft")),
+                                                          ("after", result["after"].get("output_shaft")))},
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
         "settings": result.get("settings", spec["settings"]),
@@ -659,6 +663,11 @@ def summary_lines(run: RunDir) -> list[str]:
     if ref:
         lines.append(f"against the source with its sensor noise alone ({_params(ref['params'])}): gap {ref['gap']:.4g} "
                      f"-> {s['gap_after']:.4g}; {shrink_text(ref['gap'], s['gap_after'])} removed beyond the noise")
+    shaft = s.get("output_shaft") or {}
+    if shaft.get("before"):
+        after = shaft.get("after") or {}
+        lines.append(f"output-shaft orders (consecutive revolutions): gap {shaft['before']['gap']:.4g} -> "
+                     f"{after.get('gap', float('nan')):.4g}")
     lines += ["per-view gap:", views_md(s["views"]).rstrip()]
     if s.get("accuracy"):
         lines += ["target fault-detection accuracy (k = 0):",
