@@ -67,6 +67,7 @@ def fake_module(calls: list) -> types.ModuleType:
         alpha: float = 0.05
         seed: int = 0
         reference: str = "source"
+        consecutive: object = "auto"
         max_order: int = 0
 
     def diagnose(source, target_X, settings, executor=None, on_event=lambda e: None, chain=None):
