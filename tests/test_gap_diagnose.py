@@ -13,7 +13,7 @@ import pytest
 
 from gearlab.data.builder import build_dataset
 from gearlab.data.spec import NoiseSpec, dataset_preset
-from gearlab.effects import effect_spec
+from gearlab.effects import effect_spec, model_of
 from gearlab.errors import GearlabInputError
 from gearlab.executors import LocalExecutor
 from gearlab.gap.diagnose import SMALL_AUC, Scorer, Settings, corrected_source, diagnose, source_rows, verdict_of
@@ -125,7 +125,7 @@ def test_drive_inertias_turn_six_dof_into_eight_dof():
     assert not result["significant_after"] and not result["unexplained"]
     fixed = corrected_source(source, result)
     assert [name for name, _ in fixed.effects] == ["drive_inertias", "sensor_noise"]  # in the order they act
-    assert fixed.model_config().name == "eight_dof"
+    assert model_of(fixed.model_config()).name == "eight_dof"
 
 
 def test_an_effect_outside_the_candidates_is_unexplained():
