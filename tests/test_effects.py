@@ -59,6 +59,7 @@ EFFECTS = {
     "fillet_correction": ("excitation", False),
     "sensor_noise": ("signal", False),
     "sensor_bandwidth": ("signal", False),
+    "sensor_lowpass": ("signal", False),
     "interference_tone": ("signal", False),
     "load_level": ("excitation", False),
     "sensor_offset": ("signal", False),
