@@ -230,6 +230,7 @@ def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_s
     ((True, True, True, 0.6, 0.995), "explained"),  # told apart, but by a small effect, < 1 % left
     ((True, True, True, 1.0, 0.995), "partly explained"),  # the 1 % rule alone no longer explains
     ((True, True, True, 0.6, 0.7), "partly explained"),
+    ((True, True, True, 0.9, 0.045), "unexplained"),  # a stand-in removing 4.5 % names nothing
 ])
 def test_the_verdict_reads_the_test_and_the_effect_size(case, verdict):
     assert verdict_of(*case) == verdict
