@@ -119,6 +119,19 @@ def test_split_has_k_faults_and_disjoint_covering_target_sets(k, rep):
     assert np.array_equal(np.union1d(s.source_train, s.source_val), np.arange(len(SOURCE)))
 
 
+def test_splits_are_nested_across_k_and_the_history_core_is_in_every_training_set():
+    p = tiny(ks=(0, 1, 2, 4))
+    splits = [split(p, SOURCE, TARGET, 1, k) for k in p.ks]
+    for small, large in zip(splits, splits[1:]):
+        grown = np.setdiff1d(large.target_train, small.target_train)
+        assert (TARGET.fault[grown] == 1).all()  # k grows by faults, healthy ones make room
+        assert np.isin(np.setdiff1d(small.target_train, large.target_train), np.flatnonzero(TARGET.fault == 0)).all()
+    core = splits[0].history_core
+    assert len(core) == p.target_train - max(p.ks) and (TARGET.fault[core] == 0).all()
+    assert all(np.isin(core, s.target_train).all() and not np.isin(core, s.target_test).any() for s in splits)
+    assert all(np.array_equal(core, s.history_core) for s in splits)
+
+
 def test_split_is_fixed_by_seed_repetition_and_k():
     p = tiny()
     a, b = split(p, SOURCE, TARGET, 1, 2), split(p, SOURCE, TARGET, 1, 2)
@@ -242,23 +255,30 @@ def test_shared_states_are_made_once_per_repetition_and_change_no_result(tmp_pat
     )
 
 
-def test_the_recipe_primes_once_per_repetition_and_k(tmp_path):
-    """The recipe's priming carries the target history's noise level and reference, which
-    change with the target training set, so it is made per (repetition, k) and shared by
-    every calibrated method of it."""
+def test_the_recipe_primes_once_per_repetition_from_the_history_core(tmp_path, monkeypatch):
+    """The recipe's priming carries the target history's noise level and reference; it reads
+    them off the history core (the healthy samples every k's training set shares), so one
+    priming serves every k and every calibrated method of the repetition, and it never sees
+    a row that some k tests on."""
     p = tiny(methods=(method("mmd"), method("dann"), method("finetune", True, variant="last")), calibration=RECIPE)
-    made = []
+    made, primed_on = [], []
 
     class Counting(StateStore):
         def get(self, name, make):
             return super().get(name, lambda: made.append(name) or make())
 
+    real = P.prepare
+    monkeypatch.setattr(P, "prepare", lambda c, Xs, ys, Xt, yt: primed_on.append(Xt) or real(c, Xs, ys, Xt, yt))
     store = Counting(tmp_path / "states")
     for rep in range(p.repetitions):
         for k in p.ks:
             for m in p.methods:
                 run_unit(p, SOURCE, TARGET, rep, k, m, store)
-    assert sorted(made) == ["rep0_k0_primed", "rep0_k2_primed", "rep1_k0_primed", "rep1_k2_primed"]
+    assert sorted(made) == ["rep0_primed", "rep1_primed"]
+    tested = [TARGET.X[split(p, SOURCE, TARGET, 0, k).target_test] for k in p.ks]
+    core = TARGET.X[split(p, SOURCE, TARGET, 0, 0).history_core]
+    assert any(np.array_equal(X, core) for X in primed_on)
+    assert not any((row == X).all(1).any() for X in tested for row in core)
 
 
 @pytest.mark.parametrize(
@@ -482,7 +502,7 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
     before = lines_of(run)
     kept = [json.loads(line)["unit"] for line in before]
     assert kept and set(kept) < set(UNITS)
-    assert (run / "states" / "rep0_k0_primed.pt").exists()  # gearlab's recipe primes per (repetition, k)
+    assert (run / "states" / "rep0_primed.pt").exists()  # one priming per repetition, saved before the unit died
     with open(run / "results.jsonl", "a") as f:
         f.write(json.dumps({"unit": next(u for u in UNITS if u not in kept), "accuracy": 0.0})[:25])
 

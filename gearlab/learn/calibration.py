@@ -68,11 +68,6 @@ class Calibration:
             raise GearlabInputError(f"{where}: [protocol] key 'false_alarm': expected a share in (0, 0.5), "
                                     f"got {self.false_alarm!r}")
 
-    @property
-    def uses_target(self) -> bool:
-        """Whether priming depends on the target history (then it is made per repetition and k)."""
-        return self.residual or self.source_noise != "off"
-
 
 THESIS = Calibration()
 

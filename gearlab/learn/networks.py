@@ -81,6 +81,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 from torch import nn
 
@@ -236,10 +237,21 @@ class RobustLimiter(nn.Module):
         self.clip = float(clip)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        centred = x - x.median(dim=-1, keepdim=True).values
-        scale = 1.4826 * centred.abs().median(dim=-1, keepdim=True).values
+        centred = x - lower_median(x)
+        scale = 1.4826 * lower_median(centred.abs())
         z = centred / scale.clamp_min(1e-12)
         return self.clip * torch.tanh(z / self.clip)
+
+
+def lower_median(x: torch.Tensor) -> torch.Tensor:
+    """``x.median(dim=-1, keepdim=True).values`` (the lower of the two middle values), by a
+    partial sort on the CPU: numpy's introselect is about 5 times faster than torch's median
+    there, which made the limiter a third of a training step. No gradient flows through it
+    (the network's input needs none), so a tensor that needs one takes torch's path."""
+    if x.device.type != "cpu" or x.requires_grad:
+        return x.median(dim=-1, keepdim=True).values
+    middle = (x.shape[-1] - 1) // 2
+    return torch.from_numpy(np.partition(x.numpy(), middle, axis=-1)[..., middle:middle + 1])
 
 
 class GlobalMaxAbs(nn.Module):

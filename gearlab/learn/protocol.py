@@ -2,7 +2,10 @@
 
 Binary healthy/fault detection. For each repetition r and each k in (0, 1, 2, 4, 8, 16):
 the target training set is 120 target samples, k random faults and 120 - k random healthy
-ones; the target test set is every other target sample. Methods:
+ones; the target test set is every other target sample. The draws are nested across k (one
+order of faults and one of healthy samples per repetition, k taken from the front of each):
+the k columns are paired comparisons, and the healthy samples every k shares (the *history
+core*) can calibrate one priming per repetition. Methods:
 
 * uncalibrated (Adam, stop on a 10 % validation split): source_only (labelled source only,
   trained once per repetition) and target_only (the 120 labelled target samples);
@@ -35,6 +38,7 @@ from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network
 from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device
 
 KS = (0, 1, 2, 4, 8, 16)
+TARGET_DRAW = 1  # seeds the repetition's target orders apart from its source split
 ADAM_LR = 1e-3  # TensorFlow's default, which the thesis's Adam runs used (Table 5.3)
 
 
@@ -101,6 +105,7 @@ class Split:
     source_val: np.ndarray
     target_train: np.ndarray
     target_test: np.ndarray
+    history_core: np.ndarray  # target training rows of every k of the repetition (all healthy)
 
 
 @dataclass(frozen=True)
@@ -175,16 +180,20 @@ def check_data(protocol: Protocol, source: Counts, target: Counts, where: str) -
 
 
 def split(protocol: Protocol, source, target, rep: int, k: int) -> Split:
-    """Random source validation split (per repetition) and target train/test split (per k)."""
+    """Random source validation split and target orders (per repetition); the target training
+    set takes the first k faults and the first target_train - k healthy samples of the orders.
+    The history core is the first target_train - max(ks) healthy ones: in every k's training
+    set, in no k's test set."""
     rng = np.random.default_rng([protocol.seed, rep])
     order = rng.permutation(len(source.X))
     n_val = _n_val(protocol, len(order))
-    rng_t = np.random.default_rng([protocol.seed, rep, k])
-    faults = rng_t.permutation(np.flatnonzero(target.fault == 1))[:k]
-    healthy = rng_t.permutation(np.flatnonzero(target.fault == 0))[: protocol.target_train - k]
-    train = np.sort(np.concatenate([faults, healthy]))
+    rng_t = np.random.default_rng([protocol.seed, rep, TARGET_DRAW])
+    faults = rng_t.permutation(np.flatnonzero(target.fault == 1))
+    healthy = rng_t.permutation(np.flatnonzero(target.fault == 0))
+    train = np.sort(np.concatenate([faults[:k], healthy[: protocol.target_train - k]]))
     test = np.setdiff1d(np.arange(len(target.X)), train)
-    return Split(np.sort(order[n_val:]), np.sort(order[:n_val]), train, test)
+    core = np.sort(healthy[: protocol.target_train - max(*protocol.ks, k)])
+    return Split(np.sort(order[n_val:]), np.sort(order[:n_val]), train, test, core)
 
 
 class StateStore:
@@ -219,14 +228,13 @@ def unit_key(rep: int, k: int, method: Method) -> str:
 
 
 def shared_state(method: Method, rep: int, k: int, protocol: Protocol) -> str | None:
-    """The name of the shared state a method starts from, if any (see train_method): per
-    repetition, or per repetition and k when the priming depends on the target history."""
+    """The name of the shared state a method starts from, if any (see train_method): one per
+    repetition (a priming that depends on the target history reads the history core, which
+    every k shares)."""
     adapter = get_registry().get("adapter", method.adapter)
     if adapter.train_on == "source":
         return f"rep{rep}_source_only"
-    if not adapter.calibrated:
-        return None
-    return f"rep{rep}_k{k}_primed" if protocol.calibration.uses_target else f"rep{rep}_primed"
+    return f"rep{rep}_primed" if adapter.calibrated else None
 
 
 def _net(protocol: Protocol, seed: int, device):
@@ -255,7 +263,8 @@ def run_unit(
     val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
     Xt = target.X[s.target_train]
     yt = target.fault[s.target_train].astype(np.int64)
-    model, history, extra = train_method(protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch)
+    model, history, extra = train_method(protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device,
+                                         on_epoch, core=target.X[s.history_core])
     # Only now, with the model fixed, does the target test set come in.
     X_test, y_test = target.X[s.target_test], target.fault[s.target_test].astype(np.int64)
     score = fault_score(model, X_test, device)
@@ -317,19 +326,10 @@ def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, names: 
     }
 
 
-def train_method(
-    protocol: Protocol,
-    method: Method,
-    source,
-    source_val,
-    target,
-    rep: int,
-    k: int,
-    states: StateStore,
-    device,
-    on_epoch=None,
-):
-    """The model a method makes from the training arrays (no target test data here)."""
+def train_method(protocol: Protocol, method: Method, source, source_val, target, rep: int, k: int,
+                 states: StateStore, device, on_epoch=None, core: np.ndarray | None = None):
+    """The model a method makes from the training arrays (no target test data here). *core*:
+    the target training rows the repetition's priming is calibrated on (default: all of them)."""
     registry = get_registry()
     adapter = registry.get("adapter", method.adapter)
     params = dict(method.params)
@@ -339,25 +339,17 @@ def train_method(
     seed = 1000 * protocol.seed + rep
     # The calibration of a calibrated method (gearlab.learn.calibration; the thesis's recipe
     # changes nothing): references and noise from the target training set taken as history
-    # whatever the supervision, so that one priming serves every method of (rep, k).
+    # whatever the supervision; the priming's from the history core, so that one priming
+    # serves every method and every k of the repetition.
     inputs = prepare(protocol.calibration, Xs, ys, Xt, None) if adapter.calibrated else None
     augment = inputs.augment if inputs is not None and inputs.noise_law else None
 
     def primed() -> dict:
+        start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
         net = _net(protocol, seed, device)
-        fit_supervised(
-            net,
-            inputs.source(Xs),
-            ys,
-            rng=np.random.default_rng([protocol.seed, rep, 1]),
-            device=device,
-            epochs=protocol.prime_epochs,
-            batch=protocol.batch,
-            optimizer="adam",
-            val=None,
-            patience=None,
-            augment=augment,
-        )
+        fit_supervised(net, start.source(Xs), ys, rng=np.random.default_rng([protocol.seed, rep, 1]),
+                       device=device, epochs=protocol.prime_epochs, batch=protocol.batch, optimizer="adam",
+                       val=None, patience=None, augment=start.augment if start.noise_law else None)
         return _cpu_state(net)
 
     if adapter.train_on == "detector":  # no network: a model built from the training arrays
