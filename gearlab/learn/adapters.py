@@ -51,7 +51,15 @@ LAMBDA_MAX = 1.0
 
 SCHEDULE_PARAMS = (
     Param("lambda_step", "", LAMBDA_STEP, 0.0, 1.0, "increase of the domain-loss weight λ at each step (Table 5.3)"),
-    Param("lambda_every", "", LAMBDA_EVERY, 1, 10_000, "epochs of joint training between λ steps (Table 5.3)", integer=True),
+    Param(
+        "lambda_every",
+        "",
+        LAMBDA_EVERY,
+        1,
+        10_000,
+        "epochs of joint training between λ steps (Table 5.3)",
+        integer=True,
+    ),
     Param("lambda_max", "", LAMBDA_MAX, 0.0, 10.0, "largest domain-loss weight λ (Table 5.3)"),
 )
 
@@ -94,8 +102,10 @@ class Adapter:
             if isinstance(value, str) and not value.strip().lstrip("+-").isdigit():
                 name = value.strip().lower()
                 if name not in names:
-                    raise GearlabInputError(f"{where}, parameter '{key}': unknown value '{value}'"
-                                            f"{did_you_mean(name, names)}; known: {', '.join(names)}")
+                    raise GearlabInputError(
+                        f"{where}, parameter '{key}': unknown value '{value}'"
+                        f"{did_you_mean(name, names)}; known: {', '.join(names)}"
+                    )
                 values[key] = names.index(name)
         return values
 

@@ -33,6 +33,7 @@ import torch
 
 from ..errors import GearlabInputError
 from .history import NOISE_LAWS
+
 # median of |n| for unit scale: Laplace ln 2, Gaussian 0.6745, Student-t(2) sqrt(2/3)
 _MEDIAN_ABS = {"laplace": math.log(2.0), "gaussian": 0.6744897501960817, "student_t": math.sqrt(2.0 / 3.0)}
 _NU = 2.0  # Student-t degrees of freedom of the thesis's noise (4.1.1)
@@ -47,8 +48,7 @@ def _log_density(n: torch.Tensor, scale: torch.Tensor, kind: str) -> torch.Tenso
     return -0.5 * (_NU + 1.0) * torch.log1p((n / scale) ** 2 / _NU)
 
 
-def likelihood_ratio(X: np.ndarray, healthy: np.ndarray, shapes: np.ndarray, kind: str,
-                     chunk: int = 16) -> np.ndarray:
+def likelihood_ratio(X: np.ndarray, healthy: np.ndarray, shapes: np.ndarray, kind: str, chunk: int = 16) -> np.ndarray:
     """log Λ of each row of *X* (revolutions) given the healthy revolution *healthy*, the fault
     *shapes* (J rows, responses added to *healthy*) and the noise *kind*."""
     if kind not in NOISE_LAWS:
@@ -59,7 +59,7 @@ def likelihood_ratio(X: np.ndarray, healthy: np.ndarray, shapes: np.ndarray, kin
     scale = (R.abs().median(dim=1).values / _MEDIAN_ABS[kind]).clamp_min(1e-12)
     out = []
     for i in range(0, len(R), chunk):
-        r, s = R[i:i + chunk, None, :], scale[i:i + chunk, None, None]
+        r, s = R[i : i + chunk, None, :], scale[i : i + chunk, None, None]
         llr = (_log_density(r - T[None], s, kind) - _log_density(r, s, kind)).sum(-1)  # (rows, J)
         out.append(torch.logsumexp(llr, dim=1) - math.log(len(T)))
     return torch.cat(out).numpy()

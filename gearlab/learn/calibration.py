@@ -58,15 +58,19 @@ class Calibration:
     false_alarm: float = 0.01
 
     def check(self, where: str) -> None:
-        for key, value, known in (("source_noise", self.source_noise, SOURCE_NOISE),
-                                  ("alignment", self.alignment, ALIGNMENTS),
-                                  ("threshold", self.threshold, THRESHOLDS)):
+        for key, value, known in (
+            ("source_noise", self.source_noise, SOURCE_NOISE),
+            ("alignment", self.alignment, ALIGNMENTS),
+            ("threshold", self.threshold, THRESHOLDS),
+        ):
             if value not in known:
-                raise GearlabInputError(f"{where}: [protocol] key '{key}': unknown value '{value}'; "
-                                        f"expected one of {', '.join(known)}")
+                raise GearlabInputError(
+                    f"{where}: [protocol] key '{key}': unknown value '{value}'; expected one of {', '.join(known)}"
+                )
         if not 0.0 < self.false_alarm < 0.5:
-            raise GearlabInputError(f"{where}: [protocol] key 'false_alarm': expected a share in (0, 0.5), "
-                                    f"got {self.false_alarm!r}")
+            raise GearlabInputError(
+                f"{where}: [protocol] key 'false_alarm': expected a share in (0, 0.5), got {self.false_alarm!r}"
+            )
 
 
 THESIS = Calibration()
@@ -119,8 +123,7 @@ def draw_noise(law: str, shape: tuple[int, ...], generator: torch.Generator) -> 
     return z / torch.sqrt(-torch.log(u))
 
 
-def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray,
-            yt: np.ndarray | None) -> Inputs:
+def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None) -> Inputs:
     """The unit's references, gain and noise from the source training set and the target
     training set (*yt* None: unsupervised, every target training revolution is history)."""
     ys = np.asarray(ys)
@@ -185,7 +188,12 @@ def calibrate(network: nn.Module, inputs: Inputs, Xt: np.ndarray, yt: np.ndarray
     if inputs.settings.threshold == "history":
         history = np.asarray(Xt, dtype=np.float32)[np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0]
         model.eval()
-        scores = torch.cat([model.score(torch.as_tensor(history[i:i + 256], device=device))
-                            for i in range(0, len(history), 256)]).cpu().numpy()
+        scores = (
+            torch.cat(
+                [model.score(torch.as_tensor(history[i : i + 256], device=device)) for i in range(0, len(history), 256)]
+            )
+            .cpu()
+            .numpy()
+        )
         model.threshold.fill_(gumbel_quantile(scores, 1.0 - inputs.settings.false_alarm))
     return model

@@ -176,7 +176,8 @@ CNN3_BLOCKS = ((4, 64, True), (8, 32, False), (8, 16, True))  # (kernels, kernel
 
 
 def cnn3(n_classes: int, dropout: float, length: int) -> Network:
-    """CNN3 of the thesis (Han et al. 2019a): three conv–max-pool(–dropout) blocks, ~30 000 latent features, dense 120 -> 64."""
+    """CNN3 of the thesis (Han et al. 2019a): three conv–max-pool(–dropout) blocks,
+    ~30 000 latent features, dense 120 -> 64."""
     layers: list[nn.Module] = [AsChannels()]
     channels = 1
     for kernels, size, with_dropout in CNN3_BLOCKS:
@@ -203,12 +204,17 @@ def cnn3(n_classes: int, dropout: float, length: int) -> Network:
 
 
 def fast(n_classes: int, dropout: float, length: int) -> Network:
-    """CPU default: wide strided first kernel (16 x 64, stride 16), two small strided convolutions, global average pooling to 64 features."""
+    """The thesis recipe's CPU network: wide strided first kernel (16 x 64, stride 16), two small
+    strided convolutions, global average pooling to 64 features."""
     if length < 64:
         raise GearlabInputError(f"network 'fast': signals must have at least 64 samples, got {length}")
 
     def block(c_in: int, c_out: int, size: int, stride: int, padding: int) -> list[nn.Module]:
-        return [nn.Conv1d(c_in, c_out, size, stride=stride, padding=padding, bias=False), nn.BatchNorm1d(c_out), nn.ReLU()]
+        return [
+            nn.Conv1d(c_in, c_out, size, stride=stride, padding=padding, bias=False),
+            nn.BatchNorm1d(c_out),
+            nn.ReLU(),
+        ]
 
     features = nn.Sequential(
         AsChannels(),
@@ -246,12 +252,12 @@ class RobustLimiter(nn.Module):
 def lower_median(x: torch.Tensor) -> torch.Tensor:
     """``x.median(dim=-1, keepdim=True).values`` (the lower of the two middle values), by a
     partial sort on the CPU: numpy's introselect is about 5 times faster than torch's median
-    there, which made the limiter a third of a training step. No gradient flows through it
+    there, which made the limiter a sixth to a third of a training step. No gradient flows through it
     (the network's input needs none), so a tensor that needs one takes torch's path."""
     if x.device.type != "cpu" or x.requires_grad:
         return x.median(dim=-1, keepdim=True).values
     middle = (x.shape[-1] - 1) // 2
-    return torch.from_numpy(np.partition(x.numpy(), middle, axis=-1)[..., middle:middle + 1])
+    return torch.from_numpy(np.partition(x.numpy(), middle, axis=-1)[..., middle : middle + 1])
 
 
 class GlobalMaxAbs(nn.Module):
@@ -281,8 +287,15 @@ def burst(n_classes: int, dropout: float, length: int) -> Network:
         AsChannels(),
         RobustLimiter(BURST_CLIP),
         nn.AvgPool1d(BURST_DECIMATE),
-        nn.Conv1d(1, BURST_FILTERS, BURST_KERNEL, stride=BURST_STRIDE, padding=BURST_KERNEL // 2,
-                  padding_mode="circular", bias=False),
+        nn.Conv1d(
+            1,
+            BURST_FILTERS,
+            BURST_KERNEL,
+            stride=BURST_STRIDE,
+            padding=BURST_KERNEL // 2,
+            padding_mode="circular",
+            bias=False,
+        ),
         nn.BatchNorm1d(BURST_FILTERS),
         GlobalMaxAbs(),
     )
@@ -308,7 +321,9 @@ def build_network(
     """
     if name not in NETWORKS:
         known = sorted(NETWORKS)
-        raise GearlabInputError(f"unknown network '{name}'{did_you_mean(name, known)}; known networks: {', '.join(known)}")
+        raise GearlabInputError(
+            f"unknown network '{name}'{did_you_mean(name, known)}; known networks: {', '.join(known)}"
+        )
     if isinstance(n_classes, bool) or int(n_classes) != n_classes or n_classes < 2:
         raise GearlabInputError(f"network '{name}': n_classes must be a whole number >= 2, got {n_classes!r}")
     if not 0.0 <= dropout < 1.0:
@@ -323,8 +338,10 @@ def build_network(
 
 def _network_name(name: str, where: str) -> str:
     if name not in NETWORKS:
-        raise GearlabInputError(f"{where}: unknown network '{name}'{did_you_mean(name, list(NETWORKS))}; "
-                                f"known networks: {', '.join(NETWORKS)}")
+        raise GearlabInputError(
+            f"{where}: unknown network '{name}'{did_you_mean(name, list(NETWORKS))}; "
+            f"known networks: {', '.join(NETWORKS)}"
+        )
     return name
 
 

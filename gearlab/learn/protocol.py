@@ -263,8 +263,9 @@ def run_unit(
     val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
     Xt = target.X[s.target_train]
     yt = target.fault[s.target_train].astype(np.int64)
-    model, history, extra = train_method(protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device,
-                                         on_epoch, core=target.X[s.history_core])
+    model, history, extra = train_method(
+        protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch, core=target.X[s.history_core]
+    )
     # Only now, with the model fixed, does the target test set come in.
     X_test, y_test = target.X[s.target_test], target.fault[s.target_test].astype(np.int64)
     score = fault_score(model, X_test, device)
@@ -326,8 +327,19 @@ def detection_rates(score: np.ndarray, y: np.ndarray, label: np.ndarray, names: 
     }
 
 
-def train_method(protocol: Protocol, method: Method, source, source_val, target, rep: int, k: int,
-                 states: StateStore, device, on_epoch=None, core: np.ndarray | None = None):
+def train_method(
+    protocol: Protocol,
+    method: Method,
+    source,
+    source_val,
+    target,
+    rep: int,
+    k: int,
+    states: StateStore,
+    device,
+    on_epoch=None,
+    core: np.ndarray | None = None,
+):
     """The model a method makes from the training arrays (no target test data here). *core*:
     the target training rows the repetition's priming is calibrated on (default: all of them)."""
     registry = get_registry()
@@ -347,9 +359,19 @@ def train_method(protocol: Protocol, method: Method, source, source_val, target,
     def primed() -> dict:
         start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
         net = _net(protocol, seed, device)
-        fit_supervised(net, start.source(Xs), ys, rng=np.random.default_rng([protocol.seed, rep, 1]),
-                       device=device, epochs=protocol.prime_epochs, batch=protocol.batch, optimizer="adam",
-                       val=None, patience=None, augment=start.augment if start.noise_law else None)
+        fit_supervised(
+            net,
+            start.source(Xs),
+            ys,
+            rng=np.random.default_rng([protocol.seed, rep, 1]),
+            device=device,
+            epochs=protocol.prime_epochs,
+            batch=protocol.batch,
+            optimizer="adam",
+            val=None,
+            patience=None,
+            augment=start.augment if start.noise_law else None,
+        )
         return _cpu_state(net)
 
     if adapter.train_on == "detector":  # no network: a model built from the training arrays

@@ -46,8 +46,9 @@ class History:
     stopped_epoch: int = -1
 
     def as_dict(self) -> dict:
-        return {k: getattr(self, k) for k in ("train_loss", "val_acc", "discrepancy", "lam", "best_epoch",
-                                               "stopped_epoch")}
+        return {
+            k: getattr(self, k) for k in ("train_loss", "val_acc", "discrepancy", "lam", "best_epoch", "stopped_epoch")
+        }
 
 
 def _tensor(x: np.ndarray, device) -> torch.Tensor:
@@ -61,14 +62,14 @@ def _labels(y: np.ndarray, device) -> torch.Tensor:
 @torch.no_grad()
 def predict(net: nn.Module, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
     net.eval()
-    out = [net(_tensor(X[i:i + batch], device)).argmax(1).cpu().numpy() for i in range(0, len(X), batch)]
+    out = [net(_tensor(X[i : i + batch], device)).argmax(1).cpu().numpy() for i in range(0, len(X), batch)]
     return np.concatenate(out) if out else np.empty(0, dtype=np.int64)
 
 
 @torch.no_grad()
 def embed(net: nn.Module, X: np.ndarray, device, batch: int = 256) -> torch.Tensor:
     net.eval()
-    return torch.cat([net.embed(_tensor(X[i:i + batch], device)) for i in range(0, len(X), batch)])
+    return torch.cat([net.embed(_tensor(X[i : i + batch], device)) for i in range(0, len(X), batch)])
 
 
 def accuracy(net: nn.Module, X: np.ndarray, y: np.ndarray, device) -> float:
@@ -90,7 +91,7 @@ def train_mode(net: nn.Module, freeze_norm: bool = False) -> None:
 def _batches(n: int, batch: int, rng: np.random.Generator) -> Iterable[np.ndarray]:
     order = rng.permutation(n)
     for i in range(0, n, batch):
-        yield order[i:i + batch]
+        yield order[i : i + batch]
 
 
 def fit_supervised(
@@ -245,8 +246,9 @@ def _generator(rng: np.random.Generator) -> torch.Generator:
     return torch.Generator().manual_seed(int(rng.integers(2**62)))
 
 
-def _aligned(z_s: torch.Tensor, z_t: torch.Tensor, y_s: torch.Tensor, y_t: torch.Tensor | None,
-             alignment: str) -> list[tuple[torch.Tensor, torch.Tensor]]:
+def _aligned(
+    z_s: torch.Tensor, z_t: torch.Tensor, y_s: torch.Tensor, y_t: torch.Tensor | None, alignment: str
+) -> list[tuple[torch.Tensor, torch.Tensor]]:
     """The (source, target) latent batches the domain loss compares (see fit_adaptation); a
     class with fewer than 2 samples on either side is left out of that batch."""
     if alignment == "marginal":
@@ -280,11 +282,11 @@ def _keep_best(net: nn.Module, history: History, best_state: dict | None) -> His
 def _should_stop(h: History, min_epochs: int, window: int) -> bool:
     """After the ramp: stop on a clear drop of source validation accuracy, or when the domain
     discrepancy's moving average over *window* epochs changes by less than 1 %."""
-    post = h.val_acc[min_epochs - 1:]
+    post = h.val_acc[min_epochs - 1 :]
     if len(post) >= 2 and post[-1] < max(post) - 0.05:
         return True
     d = h.discrepancy
     if len(d) < min_epochs + window:
         return False
-    recent, before = np.mean(d[-window:]), np.mean(d[-2 * window:-window])
+    recent, before = np.mean(d[-window:]), np.mean(d[-2 * window : -window])
     return abs(recent - before) <= 0.01 * max(abs(before), 1e-12)
