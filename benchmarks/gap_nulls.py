@@ -34,8 +34,15 @@ def main() -> None:
     folder = args.folder or Path(tempfile.mkdtemp(prefix="gap_nulls_"))
     source = dataset_preset("B-6-ch5").with_(healthy=40)
     source = source.with_(noise=bench.BASE_NOISE) if source.noise is None else source
-    settings = {"budget": 1, "max_effects": 1, "healthy": 40, "bootstrap": 200, "permutations": 500, "alpha": 0.05,
-                "seed": args.seed}
+    settings = {
+        "budget": 1,
+        "max_effects": 1,
+        "healthy": 40,
+        "bootstrap": 200,
+        "permutations": 500,
+        "alpha": 0.05,
+        "seed": args.seed,
+    }
     records = []
     for i in range(args.trials):
         acquisition = bench.Acquisition.draw(np.random.default_rng([args.seed, 2, i]))
@@ -44,11 +51,18 @@ def main() -> None:
         started = time.perf_counter()
         path = bench.write_target(trial, source, folder / f"s{args.seed}_{i:03d}", 80)
         result = bench.diagnose_file(path, source, ("sensor_noise",), settings)
-        record = {"i": i, "format": acquisition.format, "rate_share": round(acquisition.rate_share, 3),
-                  "offset_deg": round(float(np.degrees(acquisition.offset)), 2),
-                  "offset_fit_deg": round(result["chain"]["offset_deg"], 2), "p": result["before"]["p_value"],
-                  "auc": round(result["before"]["auc"], 3), "significant": result["significant_before"],
-                  "verdict": result["verdict"], "seconds": round(time.perf_counter() - started, 1)}
+        record = {
+            "i": i,
+            "format": acquisition.format,
+            "rate_share": round(acquisition.rate_share, 3),
+            "offset_deg": round(float(np.degrees(acquisition.offset)), 2),
+            "offset_fit_deg": round(result["chain"]["offset_deg"], 2),
+            "p": result["before"]["p_value"],
+            "auc": round(result["before"]["auc"], 3),
+            "significant": result["significant_before"],
+            "verdict": result["verdict"],
+            "seconds": round(time.perf_counter() - started, 1),
+        }
         records.append(record)
         print(json.dumps(record), flush=True)
     print(f"no significant gap: {sum(not r['significant'] for r in records)} / {len(records)}")

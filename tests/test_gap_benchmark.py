@@ -20,15 +20,14 @@ import pytest
 
 from gearlab.data.builder import build_dataset
 from gearlab.data.spec import dataset_preset
+from gearlab.effects import default_candidates
 from gearlab.gap import benchmark as bench
 from gearlab.gap.views import healthy_rows
-from gearlab.effects import default_candidates
 from gearlab.registry import get_registry
 
 LIBRARY = tuple(default_candidates(get_registry()))  # the shipped library: every effect but the opt-in ones
 SOURCE = dataset_preset("B-6-ch5").with_(faults=(), healthy=12, noise=bench.BASE_NOISE)
-SETTINGS = {"budget": 1, "max_effects": 1, "healthy": 12, "bootstrap": 5, "permutations": 10, "alpha": 0.05,
-            "seed": 0}
+SETTINGS = {"budget": 1, "max_effects": 1, "healthy": 12, "bootstrap": 5, "permutations": 10, "alpha": 0.05, "seed": 0}
 
 
 @pytest.fixture(autouse=True)
@@ -39,12 +38,23 @@ def cache(tmp_path, monkeypatch):
 def fake_result(names=(), gap_before=10.0, gap_after=1.0, significant=True, unexplained=False, params=None):
     """A result in the contract of gearlab.gap.diagnose.diagnose (the fields the benchmark reads)."""
     params = params or {}
-    effects = [{"name": n, "share_removed": 0.5, "params": params.get(n, {}), "intervals": {}, "round": i + 1}
-               for i, n in enumerate(names)]
-    return {"before": {}, "after": {}, "gap_before": gap_before, "gap_after": gap_after,
-            "significant_before": significant, "significant_after": False, "effects": effects,
-            "ranking": [{"name": n, "share_removed": 0.5, "params": {}} for n in names], "unexplained": unexplained,
-            "corrected_effects": [], "settings": {}}
+    effects = [
+        {"name": n, "share_removed": 0.5, "params": params.get(n, {}), "intervals": {}, "round": i + 1}
+        for i, n in enumerate(names)
+    ]
+    return {
+        "before": {},
+        "after": {},
+        "gap_before": gap_before,
+        "gap_after": gap_after,
+        "significant_before": significant,
+        "significant_after": False,
+        "effects": effects,
+        "ranking": [{"name": n, "share_removed": 0.5, "params": {}} for n in names],
+        "unexplained": unexplained,
+        "corrected_effects": [],
+        "settings": {},
+    }
 
 
 class Spy:
@@ -173,8 +183,11 @@ def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
     from gearlab.gap.diagnose import Rows, band_limited
     from gearlab.gap.stats import gap_report
 
-    acquisition = bench.Acquisition({"npz": 0.43, "npz-int16": 0.33, "wav": 0.61}[fmt],
-                                    math.radians({"npz": 7.0, "npz-int16": 90.0, "wav": 200.0}[fmt]), fmt)
+    acquisition = bench.Acquisition(
+        {"npz": 0.43, "npz-int16": 0.33, "wav": 0.61}[fmt],
+        math.radians({"npz": 7.0, "npz-int16": 90.0, "wav": 200.0}[fmt]),
+        fmt,
+    )
     trial = bench.Trial(0, "null", (), None, tuple(LIBRARY), 11, acquisition)
     path = bench.write_target(trial, SOURCE, tmp_path, 60)
     rows, chain, max_order = bench.import_target(path)
@@ -184,8 +197,14 @@ def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
     target = band_limited(rows, max_order)
     search = SOURCE.with_(healthy=40, seed=123)
     pair = search.check_model()[1]
-    matched = gap_report(Rows(max_order, dataclasses.replace(chain, reference=target.mean(axis=0)))(search), target,
-                         pair, seed=0, bootstrap=0, permutations=200)
+    matched = gap_report(
+        Rows(max_order, dataclasses.replace(chain, reference=target.mean(axis=0)))(search),
+        target,
+        pair,
+        seed=0,
+        bootstrap=0,
+        permutations=200,
+    )
     plain = gap_report(Rows(max_order)(search), target, pair, seed=0, bootstrap=0, permutations=200)
     assert not matched["significant"], matched["p_value"]
     assert plain["significant"] and plain["total"]["gap"] > 100 * matched["total"]["gap"]
@@ -214,9 +233,13 @@ def answers(kind, hidden=(), withheld=None):
 
 
 def test_scoring_a_single_hit_and_its_parameter_error():
-    hidden = [("sensor_bandwidth", {"f_n": 1e4, "zeta": 0.1}), ]
-    r = bench.score_trial(answers("single", hidden), fake_result(
-        ["sensor_bandwidth"], 10.0, 2.0, params={"sensor_bandwidth": {"f_n": 2e4, "zeta": 0.1}}))
+    hidden = [
+        ("sensor_bandwidth", {"f_n": 1e4, "zeta": 0.1}),
+    ]
+    r = bench.score_trial(
+        answers("single", hidden),
+        fake_result(["sensor_bandwidth"], 10.0, 2.0, params={"sensor_bandwidth": {"f_n": 2e4, "zeta": 0.1}}),
+    )
     assert r["top1"] and r["top3"] and r["identified"] == ["sensor_bandwidth"]
     assert r["shrink"] == pytest.approx(0.8)
     assert r["param_error"]["sensor_bandwidth"] == {"f_n": pytest.approx(math.log(2)), "zeta": 0.0}  # log scale
@@ -225,16 +248,27 @@ def test_scoring_a_single_hit_and_its_parameter_error():
 
 
 def test_scoring_misses_pairs_phases_and_options():
-    miss = bench.score_trial(answers("single", [("tooth_friction", {"mu_f": 0.1})]),
-                             fake_result(["mesh_damping", "tooth_friction"]))
+    miss = bench.score_trial(
+        answers("single", [("tooth_friction", {"mu_f": 0.1})]), fake_result(["mesh_damping", "tooth_friction"])
+    )
     assert not miss["top1"] and miss["top3"] and miss["wrong_names"] == ["mesh_damping"]
     assert miss["param_error"]["tooth_friction"] == {}  # accepted in round 2 without parameters: nothing to score
     pair = bench.score_trial(
-        answers("pair", [("speed_fluctuation", {"amplitude": 0.01, "order": 2, "phase": 0.1}),
-                         ("sensor_noise", {"snr_db": 10.0, "kind": "laplace"})]),
-        fake_result(["sensor_noise", "speed_fluctuation"], params={
-            "sensor_noise": {"snr_db": 12.0, "kind": "gaussian"},
-            "speed_fluctuation": {"amplitude": 0.01, "order": 2, "phase": 2 * math.pi - 0.1}}))
+        answers(
+            "pair",
+            [
+                ("speed_fluctuation", {"amplitude": 0.01, "order": 2, "phase": 0.1}),
+                ("sensor_noise", {"snr_db": 10.0, "kind": "laplace"}),
+            ],
+        ),
+        fake_result(
+            ["sensor_noise", "speed_fluctuation"],
+            params={
+                "sensor_noise": {"snr_db": 12.0, "kind": "gaussian"},
+                "speed_fluctuation": {"amplitude": 0.01, "order": 2, "phase": 2 * math.pi - 0.1},
+            },
+        ),
+    )
     assert pair["top1"] and set(pair["identified"]) == {"sensor_noise", "speed_fluctuation"}
     assert pair["param_error"]["sensor_noise"]["snr_db"] == pytest.approx(0.2)  # linear: relative to the true value
     assert pair["param_error"]["speed_fluctuation"]["phase"] == pytest.approx(0.2 / math.pi)  # wrapped
@@ -254,12 +288,15 @@ def test_scoring_null_and_out_of_library():
 
 def test_summary_over_hand_made_records():
     recs = [
-        bench.score_trial(answers("single", [("tooth_friction", {"mu_f": 0.1})]),
-                          fake_result(["tooth_friction"], 10, 1, params={"tooth_friction": {"mu_f": 0.12}})),
+        bench.score_trial(
+            answers("single", [("tooth_friction", {"mu_f": 0.1})]),
+            fake_result(["tooth_friction"], 10, 1, params={"tooth_friction": {"mu_f": 0.12}}),
+        ),
         bench.score_trial(answers("single", [("tooth_friction", {"mu_f": 0.1})]), fake_result(["mesh_damping"], 10, 5)),
         bench.score_trial(answers("null"), fake_result(significant=False)),
-        bench.score_trial(answers("withheld", [("mesh_damping", {"zeta": 0.1})], "mesh_damping"),
-                          fake_result(unexplained=True)),
+        bench.score_trial(
+            answers("withheld", [("mesh_damping", {"zeta": 0.1})], "mesh_damping"), fake_result(unexplained=True)
+        ),
     ]
     s = bench.summarise(recs, ["tooth_friction", "mesh_damping"])
     assert s["trials"] == 4 and s["top1"] == 0.5 and s["median_shrink"] == pytest.approx(0.9)
@@ -273,10 +310,12 @@ def test_summary_over_hand_made_records():
 
 def test_saying_unexplained_or_naming_extras_when_right_is_counted_against_the_diagnosis():
     friction = answers("single", [("tooth_friction", {"mu_f": 0.1})])
-    recs = [bench.score_trial(friction, fake_result(["tooth_friction"], unexplained=True)),
-            bench.score_trial(friction, fake_result(["tooth_friction", "sensor_noise"])),
-            bench.score_trial(friction, fake_result(["tooth_friction"])),
-            bench.score_trial(friction, fake_result(["mesh_damping"], unexplained=True))]  # a miss: not counted
+    recs = [
+        bench.score_trial(friction, fake_result(["tooth_friction"], unexplained=True)),
+        bench.score_trial(friction, fake_result(["tooth_friction", "sensor_noise"])),
+        bench.score_trial(friction, fake_result(["tooth_friction"])),
+        bench.score_trial(friction, fake_result(["mesh_damping"], unexplained=True)),
+    ]  # a miss: not counted
     s = bench.summarise(recs, ["tooth_friction", "mesh_damping", "sensor_noise"])
     assert s["explained_when_identified"] == pytest.approx(2 / 3)
     assert s["extra_names_when_identified"] == pytest.approx(1 / 3)
@@ -313,7 +352,9 @@ def tiny(trials=3, library='["sensor_noise", "interference_tone", "tooth_frictio
 
 
 def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, monkeypatch):
-    def stand_in(source, target_X, settings, candidates, chain=None, max_order=0):  # names the first candidate when the target is noisy
+    def stand_in(
+        source, target_X, settings, candidates, chain=None, max_order=0
+    ):  # names the first candidate when the target is noisy
         return fake_result([candidates[0]], 10.0, 2.0, params={candidates[0]: {"snr_db": 5.0}})
 
     monkeypatch.setattr(bench, "_diagnose", stand_in)
@@ -322,8 +363,16 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     assert code == 0, err
     run_dir = next((tmp_path / "runs" / "tiny").iterdir())
     summary = json.loads((run_dir / "summary.json").read_text())
-    for key in ("trials", "top1", "top3", "median_shrink", "null_correct", "out_of_library_unexplained",
-                "per_effect", "median_param_error"):
+    for key in (
+        "trials",
+        "top1",
+        "top3",
+        "median_shrink",
+        "null_correct",
+        "out_of_library_unexplained",
+        "per_effect",
+        "median_param_error",
+    ):
         assert key in summary
     assert summary["trials"] == 4 and summary["by_kind"] == {"single": 1, "pair": 1, "null": 1, "withheld": 1}
     assert (run_dir / "report.html").exists() and (run_dir / "figures" / "gap_benchmark.png").exists()
@@ -338,17 +387,20 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     assert code == 0, err
 
 
-@pytest.mark.parametrize("text,where", [
-    (tiny(0), "[benchmark] key 'trials'"),
-    (tiny(library='["sensor_noize", "tooth_friction"]'), "[benchmark] key 'library'"),
-    (tiny(library='["tooth_friction"]'), "[benchmark] key 'library'"),
-    (tiny(library='["tooth_friction", "tooth_friction"]'), "[benchmark] key 'library'"),
-    (tiny().replace("target_revolutions = 12", "target_revolutions = 3"), "[benchmark] key 'target_revolutions'"),
-    (tiny(extra='\n[source]\nfile = "x.npz"\n'), "[source] key 'file'"),
-    (tiny(extra='\n[source]\npreset = "B-7"\n'), "[source]"),
-    (tiny(extra='\n[source]\neffects = [{name = "sensor_noise", snr_db = 900}]\n'), "[source] key 'effects'"),
-    (tiny().replace("budget = 1", "budget = 0"), "[search] key 'budget'"),
-])
+@pytest.mark.parametrize(
+    "text,where",
+    [
+        (tiny(0), "[benchmark] key 'trials'"),
+        (tiny(library='["sensor_noize", "tooth_friction"]'), "[benchmark] key 'library'"),
+        (tiny(library='["tooth_friction"]'), "[benchmark] key 'library'"),
+        (tiny(library='["tooth_friction", "tooth_friction"]'), "[benchmark] key 'library'"),
+        (tiny().replace("target_revolutions = 12", "target_revolutions = 3"), "[benchmark] key 'target_revolutions'"),
+        (tiny(extra='\n[source]\nfile = "x.npz"\n'), "[source] key 'file'"),
+        (tiny(extra='\n[source]\npreset = "B-7"\n'), "[source]"),
+        (tiny(extra='\n[source]\neffects = [{name = "sensor_noise", snr_db = 900}]\n'), "[source] key 'effects'"),
+        (tiny().replace("budget = 1", "budget = 0"), "[search] key 'budget'"),
+    ],
+)
 def test_bad_input_exits_2_naming_file_table_key(cli, write_scenario, text, where):
     path = write_scenario(text)
     code, out, err = cli("validate", path)

@@ -42,12 +42,16 @@ def names(result):
 
 # --- the pieces ---------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("effects, noise", [
-    ((), None),
-    ((), NoiseSpec("laplace", 5.0, 2)),
-    ((effect_spec("sensor_noise", kind="laplace", snr_db=5),), None),
-    ((effect_spec("drive_inertias"), effect_spec("interference_tone", frequency=333.0, ratio=0.3)), None),
-])
+
+@pytest.mark.parametrize(
+    "effects, noise",
+    [
+        ((), None),
+        ((), NoiseSpec("laplace", 5.0, 2)),
+        ((effect_spec("sensor_noise", kind="laplace", snr_db=5),), None),
+        ((effect_spec("drive_inertias"), effect_spec("interference_tone", frequency=333.0, ratio=0.3)), None),
+    ],
+)
 def test_source_rows_are_the_builders_healthy_rows_bit_for_bit(effects, noise):
     spec = B6.with_(healthy=12, effects=effects, noise=noise, seed=5)
     assert np.array_equal(source_rows(spec), target_rows(spec))
@@ -65,18 +69,26 @@ def test_the_search_score_cannot_be_lowered_by_noise_the_target_lacks():
     # spread, so against a quiet target more noise only makes the score worse.
     target = source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=30),), seed=4))
     scorer = Scorer(target, (25, 30))
-    scores = [scorer.score(source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=snr),))))
-              for snr in (30, 10, 0)]
+    scores = [
+        scorer.score(source_rows(B6.with_(effects=(effect_spec("sensor_noise", snr_db=snr),)))) for snr in (30, 10, 0)
+    ]
     assert abs(scores[0]) < 0.05 * scores[1] and scores[0] < scores[1] < scores[2]
 
 
 def test_diagnose_gets_only_the_target_rows():
     # The diagnosis must not be able to learn the target's making: no spec, no dataset.
-    assert list(inspect.signature(diagnose).parameters) == ["source", "target_X", "settings", "executor", "on_event",
-                                                            "chain"]
+    assert list(inspect.signature(diagnose).parameters) == [
+        "source",
+        "target_X",
+        "settings",
+        "executor",
+        "on_event",
+        "chain",
+    ]
 
 
 # --- identification -------------------------------------------------------------------------------
+
 
 def test_sensor_noise_is_named_with_its_snr():
     target = target_rows(B6.with_(effects=(effect_spec("sensor_noise", kind="laplace", snr_db=5),), seed=11))
@@ -141,30 +153,37 @@ def test_an_effect_outside_the_candidates_is_unexplained():
 
 # --- bad input ------------------------------------------------------------------------------------
 
+
 @pytest.fixture(scope="module")
 def some_target():
     return source_rows(B6.with_(healthy=12, effects=(effect_spec("sensor_noise", snr_db=10),)))
 
 
-@pytest.mark.parametrize("settings, match", [
-    (Settings(candidates=("sensor_nose",)), "sensor_noise"),  # did you mean
-    (Settings(budget=0), "budget"),
-    (Settings(healthy=5), "healthy"),
-    (Settings(alpha=1.5), "alpha"),
-    (Settings(max_effects=0), "max_effects"),
-    (Settings(candidates=("sensor_noise", "sensor_noise")), "repeat"),
-])
+@pytest.mark.parametrize(
+    "settings, match",
+    [
+        (Settings(candidates=("sensor_nose",)), "sensor_noise"),  # did you mean
+        (Settings(budget=0), "budget"),
+        (Settings(healthy=5), "healthy"),
+        (Settings(alpha=1.5), "alpha"),
+        (Settings(max_effects=0), "max_effects"),
+        (Settings(candidates=("sensor_noise", "sensor_noise")), "repeat"),
+    ],
+)
 def test_bad_settings_are_refused(settings, match, some_target):
     with pytest.raises(GearlabInputError, match=match):
         diagnose(B6, some_target, settings)
 
 
-@pytest.mark.parametrize("cut, match", [
-    (lambda X: X[:5], "too few healthy target revolutions: 5"),
-    (lambda X: X[:, :2048], "2048 samples"),
-    (lambda X: X[0], "2-D"),
-    (lambda X: np.where(X > 0, np.nan, X), "NaN"),
-])
+@pytest.mark.parametrize(
+    "cut, match",
+    [
+        (lambda X: X[:5], "too few healthy target revolutions: 5"),
+        (lambda X: X[:, :2048], "2048 samples"),
+        (lambda X: X[0], "2-D"),
+        (lambda X: np.where(X > 0, np.nan, X), "NaN"),
+    ],
+)
 def test_bad_targets_are_refused(cut, match, some_target):
     with pytest.raises(GearlabInputError, match=match):
         diagnose(B6, cut(some_target), Settings(**FAST))
@@ -176,6 +195,7 @@ def test_a_bad_source_is_refused(some_target):
 
 
 # --- in parallel ------------------------------------------------------------------------------------
+
 
 @pytest.mark.slow
 def test_parallel_fits_give_the_serial_result():
@@ -210,8 +230,9 @@ def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_s
     source = B6.with_(noise=NoiseSpec("gaussian", 30.0, 0))
     hidden = effect_spec("fillet_correction", lam=0.3)
     target = target_rows(B6.with_(healthy=40, effects=(hidden,), noise=NoiseSpec("gaussian", 30.0, 7), seed=3))
-    result = diagnose(source, target, Settings(candidates=("fillet_correction",), max_effects=1,
-                                               **{**FAST, "budget": 12}))
+    result = diagnose(
+        source, target, Settings(candidates=("fillet_correction",), max_effects=1, **{**FAST, "budget": 12})
+    )
     assert names(result) == ["fillet_correction"]
     assert abs(result["effects"][0]["params"]["lam"] - 0.3) < 0.03
     assert result["significant_after"] and result["shrink"] >= 0.99
@@ -223,15 +244,18 @@ def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_s
         assert result["verdict"] == "explained" and not result["unexplained"]
 
 
-@pytest.mark.parametrize("case, verdict", [
-    ((False, False, False, 0.5, 0.0), "no significant gap"),
-    ((True, False, True, 1.0, 0.3), "unexplained"),
-    ((True, True, False, 0.9, 0.4), "explained"),  # the test no longer tells them apart
-    ((True, True, True, 0.6, 0.995), "explained"),  # told apart, but by a small effect, < 1 % left
-    ((True, True, True, 1.0, 0.995), "partly explained"),  # the 1 % rule alone no longer explains
-    ((True, True, True, 0.6, 0.7), "partly explained"),
-    ((True, True, True, 0.9, 0.045), "unexplained"),  # a stand-in removing 4.5 % names nothing
-])
+@pytest.mark.parametrize(
+    "case, verdict",
+    [
+        ((False, False, False, 0.5, 0.0), "no significant gap"),
+        ((True, False, True, 1.0, 0.3), "unexplained"),
+        ((True, True, False, 0.9, 0.4), "explained"),  # the test no longer tells them apart
+        ((True, True, True, 0.6, 0.995), "explained"),  # told apart, but by a small effect, < 1 % left
+        ((True, True, True, 1.0, 0.995), "partly explained"),  # the 1 % rule alone no longer explains
+        ((True, True, True, 0.6, 0.7), "partly explained"),
+        ((True, True, True, 0.9, 0.045), "unexplained"),  # a stand-in removing 4.5 % names nothing
+    ],
+)
 def test_the_verdict_reads_the_test_and_the_effect_size(case, verdict):
     assert verdict_of(*case) == verdict
 

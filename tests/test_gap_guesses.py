@@ -15,8 +15,11 @@ def test_a_sub_order_tone_is_placed_from_consecutive_revolutions():
     tone = get_registry().get("effect", "interference_tone")
     t = np.arange(ROWS * N) / (N * SPEED)
     rng = np.random.default_rng(0)
-    x = (np.sin(2 * np.pi * 25 * SPEED * t) + 0.3 * np.sin(2 * np.pi * 37.3 * t + 1.0)
-         + 0.1 * rng.standard_normal(t.size)).reshape(ROWS, N)
+    x = (
+        np.sin(2 * np.pi * 25 * SPEED * t)
+        + 0.3 * np.sin(2 * np.pi * 37.3 * t + 1.0)
+        + 0.1 * rng.standard_normal(t.size)
+    ).reshape(ROWS, N)
     frequencies = [g["frequency"] for g in tone.guesses(x, SPEED)]
     assert min(abs(f - 37.3) for f in frequencies) < 0.2
     assert abs(frequencies[0] - 37.3) > 1.0  # the one-revolution guess alone could not place it

@@ -21,12 +21,15 @@ from gearlab.gap.stats import gap_report
 from gearlab.kinds import SCENARIO_KINDS, gap
 from gearlab.runs import RunDir
 
-TINY = """\
+TINY = (
+    """\
 [scenario]
 name = "tinygap"
 kind = "gap"
 
-""" + domains(healthy=12) + """
+"""
+    + domains(healthy=12)
+    + """
 [diagnosis]
 candidates = ["sensor_noise", "drive_inertias"]
 budget = 2
@@ -39,11 +42,19 @@ seed = 0
 [accuracy]
 methods = ["mmd", "matched_filter"]
 repetitions = 1
-""" + schedule() + "\n" + EXECUTION
+"""
+    + schedule()
+    + "\n"
+    + EXECUTION
+)
 
-ACCURACY_UNITS = ["rep0/uncorrected/source_only-unsup", "rep0/corrected/source_only-unsup",
-                  "rep0/uncorrected/matched_filter-unsup", "rep0/corrected/matched_filter-unsup",
-                  "rep0/uncorrected/mmd-unsup"]
+ACCURACY_UNITS = [
+    "rep0/uncorrected/source_only-unsup",
+    "rep0/corrected/source_only-unsup",
+    "rep0/uncorrected/matched_filter-unsup",
+    "rep0/corrected/matched_filter-unsup",
+    "rep0/uncorrected/mmd-unsup",
+]
 
 
 # --- a stand-in for gearlab.gap.diagnose (the shared contract) ------------------------------------
@@ -76,19 +87,39 @@ def fake_module(calls: list) -> types.ModuleType:
         scale = target_X.std()
         shifted = target_X[::-1] + 3 * scale  # a large gap before
         close = target_X[::-1] + 0.01 * scale * rng.standard_normal(target_X.shape)
-        kw = dict(pair=(25, 30), bootstrap=settings.bootstrap, permutations=settings.permutations,
-                  alpha=settings.alpha, seed=settings.seed)
+        kw = dict(
+            pair=(25, 30),
+            bootstrap=settings.bootstrap,
+            permutations=settings.permutations,
+            alpha=settings.alpha,
+            seed=settings.seed,
+        )
         before, after = gap_report(shifted, target_X, **kw), gap_report(close, target_X, **kw)
         params = {"kind": "laplace", "snr_db": 0.5}
-        return {"before": before, "after": after, "gap_before": before["total"]["gap"],
-                "gap_after": after["total"]["gap"], "significant_before": before["significant"],
-                "significant_after": after["significant"],
-                "effects": [{"name": "sensor_noise", "share_removed": 0.9, "params": params,
-                             "intervals": {"snr_db": [0.0, 1.0]}, "round": 1}],
-                "ranking": [{"name": "sensor_noise", "share_removed": 0.9, "params": params},
-                            {"name": "drive_inertias", "share_removed": 0.1, "params": {"I11": 0.004}}],
-                "unexplained": False, "corrected_effects": [["sensor_noise", [["kind", "laplace"], ["snr_db", 0.5]]]],
-                "settings": {"budget": settings.budget}}
+        return {
+            "before": before,
+            "after": after,
+            "gap_before": before["total"]["gap"],
+            "gap_after": after["total"]["gap"],
+            "significant_before": before["significant"],
+            "significant_after": after["significant"],
+            "effects": [
+                {
+                    "name": "sensor_noise",
+                    "share_removed": 0.9,
+                    "params": params,
+                    "intervals": {"snr_db": [0.0, 1.0]},
+                    "round": 1,
+                }
+            ],
+            "ranking": [
+                {"name": "sensor_noise", "share_removed": 0.9, "params": params},
+                {"name": "drive_inertias", "share_removed": 0.1, "params": {"I11": 0.004}},
+            ],
+            "unexplained": False,
+            "corrected_effects": [["sensor_noise", [["kind", "laplace"], ["snr_db", 0.5]]]],
+            "settings": {"budget": settings.budget},
+        }
 
     def corrected_source(source, result):
         effects = tuple((name, tuple(tuple(p) for p in params)) for name, params in result["corrected_effects"])
@@ -178,9 +209,13 @@ def test_run_summary_fields(finished):
     assert set(summary["views"]) >= {"shaft", "mesh", "sidebands", "noise_floor", "waveform"}
     for v in summary["views"].values():
         assert isinstance(v["gap_before"], float) and isinstance(v["gap_after"], float)
-    assert summary["accuracy_order"] == ["source_only (uncorrected)", "source_only (corrected)",
-                                         "matched_filter (uncorrected)", "matched_filter (corrected)",
-                                         "mmd (unsupervised)"]
+    assert summary["accuracy_order"] == [
+        "source_only (uncorrected)",
+        "source_only (corrected)",
+        "matched_filter (uncorrected)",
+        "matched_filter (corrected)",
+        "mmd (unsupervised)",
+    ]
     for cell in summary["accuracy"].values():
         assert 0 <= cell["mean"] <= 100 and cell["n"] == 1
     assert summary["source"]["model"] == "six_dof" and summary["target"]["model"] == "eight_dof"
@@ -191,7 +226,9 @@ def test_run_summary_fields(finished):
     # a detector matches the expected response: the fitted noise is left out of its fault shapes,
     # which here leaves the uncorrected source's
     detectors = [records(run)[f"rep0/{v}/matched_filter-unsup"] for v in ("uncorrected", "corrected")]
-    assert detectors[0]["accuracy"] == detectors[1]["accuracy"] and detectors[0]["confusion"] == detectors[1]["confusion"]
+    assert (
+        detectors[0]["accuracy"] == detectors[1]["accuracy"] and detectors[0]["confusion"] == detectors[1]["confusion"]
+    )
     # outputs: three tables, the figures, the report with every figure inlined
     table = (run / "table.md").read_text()
     assert table.count("| view |") == 1 and "| effect |" in table and "source_only (corrected)" in table
@@ -261,22 +298,35 @@ def test_partial_run_tables_and_charts(finished, tiny):
 # --- bad input: one line naming file, table and key, exit code 2, no run directory -------------------
 
 
-@pytest.mark.parametrize("old, new, where", [
-    ('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_nois"]', "[diagnosis] key 'candidates'"),
-    ('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_noise", 3]',
-     "[diagnosis] key 'candidates'"),
-    ("healthy = 12\nnoise", "healthy = 0\nnoise", "[target] key 'healthy'"),
-    ("healthy = 12\nnoise", "healthy = 5\nnoise", "[target] key 'healthy'"),
-    ("budget = 2", "budget = 0", "[diagnosis] key 'budget'"),
-    ("healthy = 10\nbootstrap", "healthy = 3\nbootstrap", "[diagnosis] key 'healthy'"),
-    ("seed = 0\n", "seed = 0\nalpha = 1.0\n", "[diagnosis] key 'alpha'"),
-    ('methods = ["mmd", "matched_filter"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
-    ('methods = ["mmd", "matched_filter"]', 'methods = ["finetune"]', "[accuracy] key 'methods'"),
-    ('noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
-     'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }\nfs = "2 kHz"', "[target] key 'fs'"),
-    ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),
-    ('healthy = 12\nnoise', 'healthy = 12\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
-])
+@pytest.mark.parametrize(
+    "old, new, where",
+    [
+        (
+            'candidates = ["sensor_noise", "drive_inertias"]',
+            'candidates = ["sensor_nois"]',
+            "[diagnosis] key 'candidates'",
+        ),
+        (
+            'candidates = ["sensor_noise", "drive_inertias"]',
+            'candidates = ["sensor_noise", 3]',
+            "[diagnosis] key 'candidates'",
+        ),
+        ("healthy = 12\nnoise", "healthy = 0\nnoise", "[target] key 'healthy'"),
+        ("healthy = 12\nnoise", "healthy = 5\nnoise", "[target] key 'healthy'"),
+        ("budget = 2", "budget = 0", "[diagnosis] key 'budget'"),
+        ("healthy = 10\nbootstrap", "healthy = 3\nbootstrap", "[diagnosis] key 'healthy'"),
+        ("seed = 0\n", "seed = 0\nalpha = 1.0\n", "[diagnosis] key 'alpha'"),
+        ('methods = ["mmd", "matched_filter"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
+        ('methods = ["mmd", "matched_filter"]', 'methods = ["finetune"]', "[accuracy] key 'methods'"),
+        (
+            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }\nfs = "2 kHz"',
+            "[target] key 'fs'",
+        ),
+        ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),
+        ("healthy = 12\nnoise", 'healthy = 12\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
+    ],
+)
 def test_bad_input_refused(tiny, cli, old, new, where):
     text = TINY.replace(old, new, 1)
     assert text != TINY
@@ -295,9 +345,13 @@ def test_measured_target_with_too_few_revolutions_leaves_no_run(tiny, cli, calls
     n = points * 6  # six revolutions: fewer than the 10 the statistics need
     t = np.arange(n) / fs
     np.savez(tiny.parent / "rec.npz", acc=np.sin(2 * np.pi * 25 * speed * t), fs=np.array(fs))
-    tiny.write_text(TINY.replace('preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
-                                 'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
-                                 'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"'))
+    tiny.write_text(
+        TINY.replace(
+            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"',
+        )
+    )
     out_dir = tiny.parent / "runs"
     code, _, err = cli("run", tiny, "--out", out_dir)
     assert code == 2, err
@@ -314,10 +368,13 @@ def test_a_measured_target_goes_with_its_chain_and_its_units(tiny, cli, calls, u
     t = np.arange(n) / fs
     counts = np.round(3000 * np.sin(2 * np.pi * 25 * speed * t)).astype(np.int16)
     np.savez(tiny.parent / "rec.npz", acc=counts, fs=np.array(fs))
-    tiny.write_text(TINY.replace('preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
-                                 'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
-                                 'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"\n' + units)
-                    .replace("[accuracy]\n", "[accuracy]\nenabled = false\n"))
+    tiny.write_text(
+        TINY.replace(
+            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"\n' + units,
+        ).replace("[accuracy]\n", "[accuracy]\nenabled = false\n")
+    )
     code, out, err = cli("run", tiny, "--out", tiny.parent / "runs")
     assert code == 0, err
     chain = calls[0]["chain"]
@@ -335,8 +392,11 @@ def test_a_measured_target_goes_with_its_chain_and_its_units(tiny, cli, calls, u
 
 def test_real_diagnosis_tiny(tiny, cli):
     """End to end with gearlab.gap.diagnose itself, without the accuracy."""
-    tiny.write_text(TINY.replace('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_noise"]')
-                    .replace("[accuracy]\n", "[accuracy]\nenabled = false\n"))
+    tiny.write_text(
+        TINY.replace('candidates = ["sensor_noise", "drive_inertias"]', 'candidates = ["sensor_noise"]').replace(
+            "[accuracy]\n", "[accuracy]\nenabled = false\n"
+        )
+    )
     code, out, err = cli("run", tiny, "--out", tiny.parent / "runs")
     assert code == 0, err
     run = Path(out.strip().splitlines()[-1].split("run directory: ")[1])

@@ -123,9 +123,12 @@ def test_records_of_two_speeds_are_refused(heavy, tmp_path, monkeypatch):
         run_scenario(path, out=tmp_path / "runs")
 
 
-@pytest.mark.parametrize("extra, message", [
-    ('preset = "phm09-30"\n', "either 'files'"),
-])
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        ('preset = "phm09-30"\n', "either 'files'"),
+    ],
+)
 def test_bad_record_targets(heavy, extra, message):
     names, base = heavy
     path = scenario(base, [(names[0], "history")], '"sensor_noise"')

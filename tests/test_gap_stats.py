@@ -67,8 +67,10 @@ def largest_view(report: dict) -> str:
 
 # --- views ------------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("points, pair", [(4096, (25, 30)), (4096, (16, 48)), (1024, (25, 30)), (70, (25, 30)),
-                                          (4095, (16, 48))])
+
+@pytest.mark.parametrize(
+    "points, pair", [(4096, (25, 30)), (4096, (16, 48)), (1024, (25, 30)), (70, (25, 30)), (4095, (16, 48))]
+)
 def test_order_bands_cover_every_order_once(points, pair):
     # The five order views partition orders 1..P/2: each order in exactly one band, so the
     # band powers add up to the row's mean square less its DC.
@@ -129,6 +131,7 @@ def test_waveform_statistics_of_known_signals():
 
 # --- no gap -----------------------------------------------------------------------------------------
 
+
 def test_identical_distributions_show_no_gap():
     report = gap_report(revolutions(40, 1), revolutions(40, 2), (Z1, Z2), seed=0)
     assert abs(report["auc"] - 0.5) < 0.15
@@ -157,6 +160,7 @@ def test_false_positive_rate_is_near_alpha():
 
 
 # --- one effect at a time: where the gap lands ---------------------------------------------------
+
 
 def test_non_synchronous_tone_lands_in_the_non_synchronous_view():
     tone = 0.03  # -27 dB below the signal: small, not locked to the shaft (order 37.5, random phase)
@@ -202,8 +206,9 @@ def test_shaft_order_modulation_shows_in_the_sidebands():
     assert report["significant"] and largest_view(report) == "sidebands"
     side = report["views"]["sidebands"]
     assert side["share"] > 0.6
-    assert [t["feature"] for t in side["top"][:4]] == [f"mesh {k}x ±1 (orders {25 * k - 1}, {25 * k + 1})"
-                                                      for k in (1, 2, 3, 4)]
+    assert [t["feature"] for t in side["top"][:4]] == [
+        f"mesh {k}x ±1 (orders {25 * k - 1}, {25 * k + 1})" for k in (1, 2, 3, 4)
+    ]
     # Sideband pair power 2·(0.025)²/2 over the noise in two orders (4σ²/P); the noise-only
     # band's mean in dB is 1.17 dB below its level (log of a chi-square with 4 degrees of freedom).
     expected = 10 * np.log10((0.025**2 + 4 * NOISE**2 / P) / (4 * NOISE**2 / P)) + 1.17
@@ -279,6 +284,7 @@ def test_noise_free_source_stays_finite_and_is_flagged():
 
 # --- latent features ------------------------------------------------------------------------------
 
+
 def test_latent_view_from_a_network_and_from_a_wide_layer():
     from gearlab.learn.networks import build_network
 
@@ -295,6 +301,7 @@ def test_latent_view_from_a_network_and_from_a_wide_layer():
 
 # --- real simulated data (Dataset B, tiny) ----------------------------------------------------------
 
+
 @pytest.fixture(scope="module")
 def dataset_b(tmp_path_factory):
     import os
@@ -302,9 +309,11 @@ def dataset_b(tmp_path_factory):
     before = os.environ.get("GEARLAB_CACHE")
     os.environ["GEARLAB_CACHE"] = str(tmp_path_factory.mktemp("cache"))
     try:
+
         def healthy(name: str, noise_seed: int):
-            spec = dataset_preset(name).with_(faults=(), teeth=(1,), healthy=40,
-                                              noise=NoiseSpec("gaussian", 10.0, noise_seed))
+            spec = dataset_preset(name).with_(
+                faults=(), teeth=(1,), healthy=40, noise=NoiseSpec("gaussian", 10.0, noise_seed)
+            )
             return load_or_build(spec)[0]
 
         yield {"B-6": healthy("B-6-ch5", 1), "B-6 other noise": healthy("B-6-ch5", 2), "B-8": healthy("B-8-ch5", 1)}
@@ -335,6 +344,7 @@ def test_dataset_b_six_dof_with_another_noise_seed_is_no_gap(dataset_b):
 
 
 # --- bad inputs ---------------------------------------------------------------------------------------
+
 
 def _message(excinfo) -> str:
     text = str(excinfo.value)
@@ -376,19 +386,27 @@ def test_too_few_points_per_revolution_for_the_mesh_harmonics():
     assert "at least 58 points per revolution" in text
 
 
-@pytest.mark.parametrize("bad, expected", [
-    ({"source_X": np.full((20, P), np.nan)}, "contains NaN"),
-    ({"source_X": np.zeros(P)}, "must be 2-D"),
-    ({"pair": (25,)}, "gear pair must be"),
-    ({"pair": (2, 30)}, "Z1 must be a whole number of teeth >= 3"),
-    ({"pair": "nope"}, "unknown gear-pair preset 'nope'"),
-    ({"bootstrap": -1}, "bootstrap must be a whole number >= 0"),
-    ({"alpha": 1.5}, "alpha must lie strictly between 0 and 1"),
-    ({"embed": lambda X: np.ones((3, 2))}, "embed(source rows) must return an (n, d) array for 20 rows"),
-])
+@pytest.mark.parametrize(
+    "bad, expected",
+    [
+        ({"source_X": np.full((20, P), np.nan)}, "contains NaN"),
+        ({"source_X": np.zeros(P)}, "must be 2-D"),
+        ({"pair": (25,)}, "gear pair must be"),
+        ({"pair": (2, 30)}, "Z1 must be a whole number of teeth >= 3"),
+        ({"pair": "nope"}, "unknown gear-pair preset 'nope'"),
+        ({"bootstrap": -1}, "bootstrap must be a whole number >= 0"),
+        ({"alpha": 1.5}, "alpha must lie strictly between 0 and 1"),
+        ({"embed": lambda X: np.ones((3, 2))}, "embed(source rows) must return an (n, d) array for 20 rows"),
+    ],
+)
 def test_bad_inputs_get_one_clear_line(bad, expected):
-    args = {"source_X": revolutions(20, 1), "target_X": revolutions(20, 2), "pair": (Z1, Z2), "bootstrap": 0,
-            "permutations": 20}
+    args = {
+        "source_X": revolutions(20, 1),
+        "target_X": revolutions(20, 2),
+        "pair": (Z1, Z2),
+        "bootstrap": 0,
+        "permutations": 20,
+    }
     with pytest.raises(GearlabInputError) as e:
         gap_report(**{**args, **bad})
     assert expected in _message(e)

@@ -129,10 +129,16 @@ def write_formats(directory: Path, rec: Record) -> dict[str, tuple[Path, dict, f
     """Every format: (file, MeasuredSpec options, tolerance on the standardised revolutions)."""
     d = directory
     out = {}
-    out["csv"] = (write_csv(d / "rec.csv", {"t": rec.t, "acc": rec.acc, "tacho": rec.tacho, "label": rec.label}),
-                  dict(vibration="acc", tacho="tacho", labels="label"), 1e-2)
-    out["npz"] = (write_npz(d / "rec.npz", {"acc": rec.acc, "tacho": rec.tacho, "label": rec.label, "fs": FS}),
-                  dict(vibration="acc", tacho="tacho", labels="label"), 1e-2)
+    out["csv"] = (
+        write_csv(d / "rec.csv", {"t": rec.t, "acc": rec.acc, "tacho": rec.tacho, "label": rec.label}),
+        dict(vibration="acc", tacho="tacho", labels="label"),
+        1e-2,
+    )
+    out["npz"] = (
+        write_npz(d / "rec.npz", {"acc": rec.acc, "tacho": rec.tacho, "label": rec.label, "fs": FS}),
+        dict(vibration="acc", tacho="tacho", labels="label"),
+        1e-2,
+    )
     with h5py.File(d / "rec.h5", "w") as f:  # nested, rate as an attribute of the group
         g = f.create_group("rig")
         g.attrs["fs"] = FS
@@ -146,8 +152,9 @@ def write_formats(directory: Path, rec: Record) -> dict[str, tuple[Path, dict, f
     scipy.io.wavfile.write(d / "rec16.wav", int(FS), np.round(pcm).astype(np.int16))
     out["wav-int16"] = (d / "rec16.wav", dict(vibration="0", tacho="1"), 1.5e-2)  # 16-bit quantisation
     # MATLAB variables are rows (1×N); 'fs' last so that any truncation loses something needed.
-    scipy.io.savemat(d / "rec5.mat", {"acc": rec.acc[None], "tacho": rec.tacho[None], "label": rec.index[None],
-                                      "Fs": FS})
+    scipy.io.savemat(
+        d / "rec5.mat", {"acc": rec.acc[None], "tacho": rec.tacho[None], "label": rec.index[None], "Fs": FS}
+    )
     out["mat5"] = (d / "rec5.mat", dict(vibration="acc", tacho="tacho", labels="label"), 1e-2)
     write_mat73(d / "rec73.mat", {"acc": rec.acc, "tacho": rec.tacho, "label": rec.index, "fs": FS})
     out["mat73"] = (d / "rec73.mat", dict(vibration="acc", tacho="tacho", labels="label"), 1e-2)
@@ -221,8 +228,10 @@ def test_read_channels_gives_arrays_and_the_files_rate(files, rec, fmt):
 
 def test_tacho_kind_is_detected(files, rec, tmp_path):
     wrapped_0_2pi = np.mod(rec.theta, TWO_PI)  # an encoder's [0, 2π)
-    path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "pulses": rec.pulses, "angle": wrapped_0_2pi,
-                                          "continuous": rec.theta, "fs": FS})
+    path = write_npz(
+        tmp_path / "r.npz",
+        {"acc": rec.acc, "pulses": rec.pulses, "angle": wrapped_0_2pi, "continuous": rec.theta, "fs": FS},
+    )
     reference = import_measured(spec_for(files["npz"][0], vibration="acc", tacho="tacho")).X
     for tacho, kind in (("pulses", "pulses"), ("angle", "angle"), ("continuous", "angle")):
         ds = import_measured(spec_for(path, vibration="acc", tacho=tacho))
@@ -245,8 +254,9 @@ def test_nominal_speed_without_tacho(rec, tmp_path):
 
 def test_whole_record_label_and_the_given_rate(rec, tmp_path):
     path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "tacho": rec.tacho, "cond": np.array("crack")})
-    ds = import_measured(spec_for(path, vibration="acc", tacho="tacho", labels="cond", fs=FS,
-                                  class_names=("crack", "healthy")))  # class 0 is the reference
+    ds = import_measured(
+        spec_for(path, vibration="acc", tacho="tacho", labels="cond", fs=FS, class_names=("crack", "healthy"))
+    )  # class 0 is the reference
     assert set(ds.label) == {0} and set(ds.fault) == {0} and ds.meta["fs_source"] == "given"
     mat = tmp_path / "r.mat"
     write_mat73(mat, {"acc": rec.acc, "tacho": rec.tacho, "cond": "healthy", "Fs": FS})
@@ -311,8 +321,9 @@ def test_file_missing_and_unknown_extension(tmp_path):
     fails(spec_for(tmp_path / "r.txt", vibration="acc", speed_hz=25), "unknown file type '.txt'", ".csv", ".mat")
 
 
-@pytest.mark.parametrize("suffix,fmt", [(".npz", "NPZ"), (".h5", "HDF5"), (".wav", "WAV"), (".mat", "MATLAB"),
-                                        (".csv", "CSV")])
+@pytest.mark.parametrize(
+    "suffix,fmt", [(".npz", "NPZ"), (".h5", "HDF5"), (".wav", "WAV"), (".mat", "MATLAB"), (".csv", "CSV")]
+)
 def test_corrupt_file(tmp_path, suffix, fmt):
     path = tmp_path / f"bad{suffix}"
     path.write_bytes(b"\xff\xfe garbage \x00\x81" * 40)
@@ -321,21 +332,32 @@ def test_corrupt_file(tmp_path, suffix, fmt):
 
 def test_missing_channel_lists_what_exists(files):
     path, _, _ = files["npz"]
-    fails(spec_for(path, vibration="acc1", speed_hz=25), "no vibration channel 'acc1'", "(did you mean 'acc'?)",
-          "the file has: acc, tacho, label, fs")
-    fails(spec_for(files["h5"][0], vibration="rig/acc", tacho="rig/tach"), "no tacho channel 'rig/tach'",
-          "did you mean 'rig/tacho'")
+    fails(
+        spec_for(path, vibration="acc1", speed_hz=25),
+        "no vibration channel 'acc1'",
+        "(did you mean 'acc'?)",
+        "the file has: acc, tacho, label, fs",
+    )
+    fails(
+        spec_for(files["h5"][0], vibration="rig/acc", tacho="rig/tach"),
+        "no tacho channel 'rig/tach'",
+        "did you mean 'rig/tacho'",
+    )
     fails(spec_for(files["wav-int16"][0], vibration="2", speed_hz=25), "no vibration channel '2'", "the file has: 0, 1")
 
 
 def test_non_numeric_channels(rec, tmp_path, files):
-    fails(spec_for(files["csv"][0], vibration="label", speed_hz=25),
-          "vibration channel 'label' is not numeric: 'healthy' at sample 0")
+    fails(
+        spec_for(files["csv"][0], vibration="label", speed_hz=25),
+        "vibration channel 'label' is not numeric: 'healthy' at sample 0",
+    )
     acc = np.char.mod("%.9g", rec.acc)
     acc[5] = ""
     path = write_csv(tmp_path / "e.csv", {"t": rec.t, "acc": acc})
-    fails(spec_for(path, vibration="acc", speed_hz=25),
-          "vibration channel 'acc' is not numeric: an empty field at sample 5")
+    fails(
+        spec_for(path, vibration="acc", speed_hz=25),
+        "vibration channel 'acc' is not numeric: an empty field at sample 5",
+    )
     path = write_npz(tmp_path / "two.npz", {"acc": np.stack([rec.acc, rec.acc], 1), "fs": FS})
     fails(spec_for(path, vibration="acc", speed_hz=25), "vibration channel 'acc' has shape (40000, 2)")
 
@@ -345,25 +367,33 @@ def test_nan_and_inf_are_located(rec, tmp_path):
     acc[1234] = np.nan
     tacho[77] = np.inf
     path = write_npz(tmp_path / "r.npz", {"acc": acc, "tacho": rec.tacho, "fs": FS})
-    fails(spec_for(path, vibration="acc", tacho="tacho"), "r.npz",
-          "vibration channel 'acc' contains NaN at sample 1234")
+    fails(
+        spec_for(path, vibration="acc", tacho="tacho"), "r.npz", "vibration channel 'acc' contains NaN at sample 1234"
+    )
     path = write_npz(tmp_path / "s.npz", {"acc": rec.acc, "tacho": tacho, "fs": FS})
     fails(spec_for(path, vibration="acc", tacho="tacho"), "tacho channel 'tacho' contains inf at sample 77")
 
 
 def test_channels_of_different_lengths(rec, tmp_path):
     path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "tacho": rec.tacho[:-10], "label": rec.label[:5], "fs": FS})
-    fails(spec_for(path, vibration="acc", tacho="tacho"),
-          "tacho channel 'tacho' has 39990 samples but vibration channel 'acc' has 40000")
+    fails(
+        spec_for(path, vibration="acc", tacho="tacho"),
+        "tacho channel 'tacho' has 39990 samples but vibration channel 'acc' has 40000",
+    )
     fails(spec_for(path, vibration="acc", speed_hz=25, labels="label"), "labels channel 'label' has 5 samples")
 
 
 def test_sampling_rate_errors(rec, tmp_path, files):
     path = write_npz(tmp_path / "none.npz", {"acc": rec.acc})
-    fails(spec_for(path, vibration="acc", speed_hz=25),
-          "no sampling rate: the file has no 'fs'/time and none was given (--fs / fs = ...)")
-    fails(spec_for(files["wav-float32"][0], vibration="0", tacho="1", fs=48000.0),
-          "fs = 48000 Hz, disagrees with the WAV header", "50000 Hz")
+    fails(
+        spec_for(path, vibration="acc", speed_hz=25),
+        "no sampling rate: the file has no 'fs'/time and none was given (--fs / fs = ...)",
+    )
+    fails(
+        spec_for(files["wav-float32"][0], vibration="0", tacho="1", fs=48000.0),
+        "fs = 48000 Hz, disagrees with the WAV header",
+        "50000 Hz",
+    )
     path = write_npz(tmp_path / "neg.npz", {"acc": rec.acc, "fs": -5.0})
     fails(spec_for(path, vibration="acc", speed_hz=25), "sampling rate 'fs' must be positive, got -5 Hz")
     fails(spec_for(files["npz"][0], vibration="acc", speed_hz=25, fs=0.0), "sampling rate fs must be positive")
@@ -374,8 +404,11 @@ def test_sampling_rate_errors(rec, tmp_path, files):
     fails(spec_for(path, vibration="acc", speed_hz=25), "sampling rates in the file disagree", "48 kHz")
     gap = np.delete(np.arange(N + 1) / FS, 20_000)  # one sample missing
     path = write_csv(tmp_path / "gap.csv", {"t": gap, "acc": rec.acc})
-    fails(spec_for(path, vibration="acc", speed_hz=25), "time 't' is not uniformly sampled",
-          "between samples 19999 and 20000")
+    fails(
+        spec_for(path, vibration="acc", speed_hz=25),
+        "time 't' is not uniformly sampled",
+        "between samples 19999 and 20000",
+    )
 
 
 def test_hdf5_rate_belongs_to_the_channel(rec, tmp_path):
@@ -391,14 +424,20 @@ def test_hdf5_rate_belongs_to_the_channel(rec, tmp_path):
     assert len(ds) == COMPLETE and ds.meta["fs_source"] == "attribute 'fs' of '/fast/acc'"
     with h5py.File(path, "a") as f:
         f["fast/tacho"].attrs["fs"] = 48000.0
-    fails(spec_for(path, vibration="fast/acc", tacho="fast/tacho"), "sampling rates in the file disagree",
-          "attribute 'fs' of '/fast/tacho' gives 48 kHz")
+    fails(
+        spec_for(path, vibration="fast/acc", tacho="fast/tacho"),
+        "sampling rates in the file disagree",
+        "attribute 'fs' of '/fast/tacho' gives 48 kHz",
+    )
 
 
 def test_too_short_for_one_revolution(rec, tmp_path):
     path = write_npz(tmp_path / "r.npz", {"acc": rec.acc[:1500], "tacho": rec.tacho[:1500], "fs": FS})
-    fails(spec_for(path, vibration="acc", speed_hz=25), "too short for one revolution: 1500 samples",
-          "needs 2000 samples at 50 kHz")
+    fails(
+        spec_for(path, vibration="acc", speed_hz=25),
+        "too short for one revolution: 1500 samples",
+        "needs 2000 samples at 50 kHz",
+    )
     fails(spec_for(path, vibration="acc", tacho="tacho"), "too short for one revolution", "needs 2000 samples")
     # Longer than a revolution, but 1.2 turns starting at 0.3 rad hold no complete one.
     path = write_npz(tmp_path / "s.npz", {"acc": rec.acc[:2400], "tacho": rec.tacho[:2400], "fs": FS})
@@ -417,8 +456,16 @@ def test_tacho_and_speed_options(files):
 
 def test_tacho_that_never_completes_a_revolution(rec, tmp_path):
     one_pulse = np.where((rec.theta > 2 * TWO_PI) & (rec.theta < 2 * TWO_PI + 1), 5.0, 0.0)
-    path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "one": one_pulse, "stuck": np.full(N, 0.7),
-                                          "degrees": np.degrees(np.mod(rec.theta, TWO_PI)), "fs": FS})
+    path = write_npz(
+        tmp_path / "r.npz",
+        {
+            "acc": rec.acc,
+            "one": one_pulse,
+            "stuck": np.full(N, 0.7),
+            "degrees": np.degrees(np.mod(rec.theta, TWO_PI)),
+            "fs": FS,
+        },
+    )
     fails(spec_for(path, vibration="acc", tacho="one"), "tacho 'one' never completes a revolution", "1 rising edge")
     fails(spec_for(path, vibration="acc", tacho="stuck"), "tacho 'stuck' never completes a revolution")
     fails(spec_for(path, vibration="acc", tacho="degrees", tacho_kind="angle"), "more than one turn")
@@ -428,11 +475,24 @@ def test_label_errors(rec, tmp_path):
     names = rec.label.copy()
     names[30_000] = "craks"
     shifted = np.roll(rec.label, 500)  # changes 500 samples into a revolution
-    path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "tacho": rec.tacho, "typo": names, "index": rec.index * 3,
-                                          "faulty": np.array("fault"), "shifted": shifted, "fs": FS})
+    path = write_npz(
+        tmp_path / "r.npz",
+        {
+            "acc": rec.acc,
+            "tacho": rec.tacho,
+            "typo": names,
+            "index": rec.index * 3,
+            "faulty": np.array("fault"),
+            "shifted": shifted,
+            "fs": FS,
+        },
+    )
     base = dict(vibration="acc", tacho="tacho")
-    fails(spec_for(path, labels="typo", class_names=("healthy", "fault", "crack"), **base),
-          "unknown class 'craks' (did you mean 'crack'?) at sample 30000", "healthy, fault, crack")
+    fails(
+        spec_for(path, labels="typo", class_names=("healthy", "fault", "crack"), **base),
+        "unknown class 'craks' (did you mean 'crack'?) at sample 30000",
+        "healthy, fault, crack",
+    )
     fails(spec_for(path, labels="index", **base), "holds 3 at sample", "not a class index 0 … 1")
     fails(spec_for(path, labels="faulty", **base), "no healthy data to standardise against")
     fails(spec_for(path, labels="shifted", **base), "changes within revolution", "'healthy'", "'fault'")
@@ -513,9 +573,15 @@ def test_matlab_variables_of_every_kind_pass_the_layout_check(rec, tmp_path):
     extras = {
         "cells": np.array([np.arange(3), "text", np.array([[1, 2]])], dtype=object),
         "nested": {"a": np.arange(4), "b": "x", "c": {"d": np.eye(2)}},
-        "sparse": scipy.sparse.csc_matrix(np.eye(5) * (1 + 2j)), "complex": np.arange(6) * (1 - 1j),
-        "text": "hello", "texts": np.array(["ab", "cd"]), "empty": np.zeros((0, 3)), "nothing": "",
-        "ints": np.arange(10, dtype=np.int64), "flags": np.array([True, False]), "single": np.float32(3.5),
+        "sparse": scipy.sparse.csc_matrix(np.eye(5) * (1 + 2j)),
+        "complex": np.arange(6) * (1 - 1j),
+        "text": "hello",
+        "texts": np.array(["ab", "cd"]),
+        "empty": np.zeros((0, 3)),
+        "nothing": "",
+        "ints": np.arange(10, dtype=np.int64),
+        "flags": np.array([True, False]),
+        "single": np.float32(3.5),
         "fs": scipy.sparse.csc_matrix([[FS]]),  # a rate stored sparse is still one number
     }
     for compress in (False, True):
@@ -547,13 +613,18 @@ def test_rate_or_speed_giving_less_than_two_samples_per_revolution(rec, tmp_path
     """A rate in kHz written as Hz: billions of revolutions in the record, which cutting would
     try to allocate."""
     path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "fs": 1e-3})
-    fails(spec_for(path, vibration="acc", speed_hz=25), "one revolution spans 4e-05 samples",
-          "expected at least 2 samples per revolution")
+    fails(
+        spec_for(path, vibration="acc", speed_hz=25),
+        "one revolution spans 4e-05 samples",
+        "expected at least 2 samples per revolution",
+    )
 
 
 def test_what_the_file_says_stays_on_one_line(rec, tmp_path):
-    path = write_npz(tmp_path / "r.npz", {"acc": rec.acc, "tacho": rec.tacho, "fs": FS,
-                                          "label": np.where(rec.index, "fa\nult", "healthy")})
+    path = write_npz(
+        tmp_path / "r.npz",
+        {"acc": rec.acc, "tacho": rec.tacho, "fs": FS, "label": np.where(rec.index, "fa\nult", "healthy")},
+    )
     message = fails(spec_for(path, vibration="acc", tacho="tacho", labels="label"), "unknown class 'fa\\nult'")
     assert "\n" not in message
     fails(spec_for(tmp_path / ("x" * 300 + ".npz"), vibration="acc", speed_hz=25), "File name too long")
@@ -569,8 +640,9 @@ def test_integer_records_are_scaled_by_gain_and_sensitivity_and_keep_their_step(
     volts_per_count, sensitivity = 2e-4, 0.01 / 9.80665  # 10 mV/g
     counts = np.round(rec.acc * sensitivity / volts_per_count).astype(np.int16)
     path = write_npz(tmp_path / "counts.npz", {"acc": counts, "tacho": rec.tacho, "fs": FS})
-    known = import_measured(spec_for(path, vibration="acc", tacho="tacho", sensitivity=sensitivity,
-                                     gain=volts_per_count))
+    known = import_measured(
+        spec_for(path, vibration="acc", tacho="tacho", sensitivity=sensitivity, gain=volts_per_count)
+    )
     raw = import_measured(spec_for(path, vibration="acc", tacho="tacho"))
     scale = volts_per_count / sensitivity
     assert known.meta["quantum"] == pytest.approx(scale) and raw.meta["quantum"] == 1.0

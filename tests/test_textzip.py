@@ -7,25 +7,38 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from textrecords import FS, PULSES, SENSITIVITY, SPEED, record, signals, text, write_zip
 
 from gearlab.data import textzip
 from gearlab.data.textzip import align_to, parse_sensitivity, read_columns, read_record
 from gearlab.errors import GearlabInputError
-from textrecords import FS, PULSES, SENSITIVITY, SPEED, record, signals, text, write_zip
 
 PHM09 = Path(__file__).resolve().parents[2] / "shared" / "data" / "phm09"
 
 
-@pytest.mark.parametrize("given, expected", [
-    ("10 mV/g", 0.01 / 9.80665), ("0.01 V/g", 0.01 / 9.80665), ("1.02 mV/(m/s^2)", 1.02e-3), (0.5, 0.5),
-    ("100 mV / g", 0.1 / 9.80665),
-])
+@pytest.mark.parametrize(
+    "given, expected",
+    [
+        ("10 mV/g", 0.01 / 9.80665),
+        ("0.01 V/g", 0.01 / 9.80665),
+        ("1.02 mV/(m/s^2)", 1.02e-3),
+        (0.5, 0.5),
+        ("100 mV / g", 0.1 / 9.80665),
+    ],
+)
 def test_sensitivity_reads_g_as_standard_gravity(given, expected):
     assert parse_sensitivity(given, "here") == pytest.approx(expected, rel=1e-12)
 
 
-@pytest.mark.parametrize("bad, message", [("10 mV", "wrong dimension.*10 mV/g"), ("10 mV/kg", "wrong dimension"), (-1.0, "positive"),
-                                          ("ten", "cannot read")])
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        ("10 mV", "wrong dimension.*10 mV/g"),
+        ("10 mV/kg", "wrong dimension"),
+        (-1.0, "positive"),
+        ("ten", "cannot read"),
+    ],
+)
 def test_bad_sensitivity_is_refused_with_where(bad, message):
     with pytest.raises(GearlabInputError, match=f"here.*{message}"):
         parse_sensitivity(bad, "here")
@@ -74,11 +87,14 @@ def test_streaming_needs_about_the_kept_columns_not_the_text(tmp_path):
     assert peak < 3 * kept + 12 * textzip.CHUNK_BYTES
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"1 2 3\n4 5\n", "line 2 has 2 fields, expected 3"),
-    (b"1 2 3\n4 x 6\n", "line 2 column 1: 'x' is not a number"),
-    (b"# only a comment\n", "no rows of numbers"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"1 2 3\n4 5\n", "line 2 has 2 fields, expected 3"),
+        (b"1 2 3\n4 x 6\n", "line 2 column 1: 'x' is not a number"),
+        (b"# only a comment\n", "no rows of numbers"),
+    ],
+)
 def test_bad_text_names_the_line(tmp_path, content, message):
     path = write_zip(tmp_path / "bad.zip", content)
     with pytest.raises(GearlabInputError, match=f"bad.zip: member 'record.txt': {message}"):
@@ -118,11 +134,23 @@ def test_record_cut_with_a_ten_pulse_tacho(tmp_path):
 
 
 def test_records_starting_at_different_marks_are_aligned(tmp_path):
-    a = read_record(record(tmp_path / "a.zip", noise=0.05, chip=3.0, seed=1), vibration=0, tacho=2,
-                    pulses_per_rev=PULSES, sensitivity=SENSITIVITY, fs=FS)
+    a = read_record(
+        record(tmp_path / "a.zip", noise=0.05, chip=3.0, seed=1),
+        vibration=0,
+        tacho=2,
+        pulses_per_rev=PULSES,
+        sensitivity=SENSITIVITY,
+        fs=FS,
+    )
     # the same machine, the record starting 3 marks (3/10 of a turn) later
-    b = read_record(record(tmp_path / "b.zip", noise=0.05, chip=3.0, seed=2, phase=2 * np.pi * 0.3), vibration=0,
-                    tacho=2, pulses_per_rev=PULSES, sensitivity=SENSITIVITY, fs=FS)
+    b = read_record(
+        record(tmp_path / "b.zip", noise=0.05, chip=3.0, seed=2, phase=2 * np.pi * 0.3),
+        vibration=0,
+        tacho=2,
+        pulses_per_rev=PULSES,
+        sensitivity=SENSITIVITY,
+        fs=FS,
+    )
     ref = a.revolutions.mean(axis=0)
     before = np.corrcoef(ref, b.revolutions.mean(axis=0))[0, 1]
     shift, aligned = align_to(ref, b.revolutions, PULSES)
@@ -133,8 +161,14 @@ def test_records_starting_at_different_marks_are_aligned(tmp_path):
 
 @pytest.mark.skipif(not PHM09.is_dir(), reason="the PHM 2009 records (../shared/data/phm09) are not here")
 def test_real_phm09_record():
-    rec = read_record(PHM09 / "spur2_30hz_High_1.zip", vibration=0, tacho=2, pulses_per_rev=10,
-                      sensitivity=parse_sensitivity("10 mV/g", "test"), fs=66666.67)
+    rec = read_record(
+        PHM09 / "spur2_30hz_High_1.zip",
+        vibration=0,
+        tacho=2,
+        pulses_per_rev=10,
+        sensitivity=parse_sensitivity("10 mV/g", "test"),
+        fs=66666.67,
+    )
     assert rec.speed_hz == pytest.approx(29.9, abs=0.1)
     assert 115 <= rec.revolutions.shape[0] <= 120
     rms = float(np.sqrt(np.mean(rec.revolutions**2)))

@@ -71,9 +71,12 @@ class Chain:
 def chain_of(meta: dict) -> Chain:
     """A measured file's chain from the importer's meta (gearlab.data.importers): its rate, tacho
     speed, the kept revolutions' start fractions and its quantisation step."""
-    return Chain(fs=float(meta["fs_hz"]), speed=float(meta["speed_hz"]),
-                 fractions=tuple(float(f) for f in meta.get("start_fractions", ())),
-                 step=float(meta.get("quantum", 0.0)))
+    return Chain(
+        fs=float(meta["fs_hz"]),
+        speed=float(meta["speed_hz"]),
+        fractions=tuple(float(f) for f in meta.get("start_fractions", ())),
+        step=float(meta.get("quantum", 0.0)),
+    )
 
 
 def fit_offset(deterministic: np.ndarray, reference: np.ndarray, teeth: int = 1) -> float:
@@ -99,8 +102,9 @@ def fit_offset(deterministic: np.ndarray, reference: np.ndarray, teeth: int = 1)
         return float(np.real(np.sum(cross * np.exp(2j * np.pi * m * s))))
 
     k = int(np.argmax(np.fft.irfft(cross / weight, n=P)))
-    res = minimize_scalar(lambda s: -corr(s), bounds=((k - 1) / P, (k + 1) / P), method="bounded",
-                          options={"xatol": 1e-7})
+    res = minimize_scalar(
+        lambda s: -corr(s), bounds=((k - 1) / P, (k + 1) / P), method="bounded", options={"xatol": 1e-7}
+    )
     s0 = float(res.x)
     best = max((s0 + j / teeth for j in range(max(1, teeth))), key=corr)
     return float((TWO_PI * best) % TWO_PI)
@@ -119,8 +123,7 @@ def read_at(row: np.ndarray, max_order: int, u0: float, step: float, count: int)
     return np.real(czt(F, m=count, w=np.exp(2j * np.pi * step), a=np.exp(-2j * np.pi * u0)))
 
 
-def measure(deterministic: np.ndarray, chain: Chain, noise, offset: float = 0.0,
-            first: int = 0) -> np.ndarray:
+def measure(deterministic: np.ndarray, chain: Chain, noise, offset: float = 0.0, first: int = 0) -> np.ndarray:
     """Rows *deterministic* (n, P) -- angle-domain revolutions in the simulation's frame -- as the
     target's acquisition and importer would deliver them (module docstring). *noise(i, x)* adds
     row i's noise to its time-domain samples x (1, L) at the record's rate (None: no noise).

@@ -177,8 +177,13 @@ class MeasuredSpec:
         except OSError as exc:
             raise GearlabInputError(f"{path}: cannot read ({exc.strerror or exc})") from None
         text = json.dumps(
-            {"file": digest.hexdigest(), "format": path.suffix.lower(), "options": self.canonical(),
-             "importer": IMPORTER_VERSION, "physics": PHYSICS_VERSION},
+            {
+                "file": digest.hexdigest(),
+                "format": path.suffix.lower(),
+                "options": self.canonical(),
+                "importer": IMPORTER_VERSION,
+                "physics": PHYSICS_VERSION,
+            },
             sort_keys=True,
         )
         return hashlib.sha256(text.encode()).hexdigest()[:24]
@@ -216,8 +221,13 @@ class MeasuredSpec:
                 check_positive(self.gain, "gain (V per file unit)", "V")
             check_int(self.points, "points per revolution", minimum=2)
         names = self.class_names
-        if (isinstance(names, str) or not isinstance(names, Sequence) or not names
-                or not all(isinstance(c, str) and c for c in names) or len(set(names)) != len(names)):
+        if (
+            isinstance(names, str)
+            or not isinstance(names, Sequence)
+            or not names
+            or not all(isinstance(c, str) and c for c in names)
+            or len(set(names)) != len(names)
+        ):
             raise GearlabInputError(
                 f"{where}: class_names must be distinct non-empty names, healthy first, got {names!r}"
             )
@@ -246,8 +256,9 @@ def _check_exists(path: Path) -> None:
     try:
         exists, is_file = path.exists(), path.is_file()
     except (OSError, ValueError) as exc:  # a name too long, a NUL character in it, ...
-        raise GearlabInputError(f"{_one_line_repr(str(path))}: cannot be a measured record: "
-                                f"{getattr(exc, 'strerror', None) or exc}") from None
+        raise GearlabInputError(
+            f"{_one_line_repr(str(path))}: cannot be a measured record: {getattr(exc, 'strerror', None) or exc}"
+        ) from None
     if not exists:
         raise GearlabInputError(f"{path}: no such file; expected a measured record ({_supported()})")
     if not is_file:
@@ -259,8 +270,6 @@ def _supported() -> str:
 
 
 # --- reading a file (the readers themselves: gearlab.data.readers) ---------------------------
-
-
 
 
 def _read(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
@@ -311,9 +320,7 @@ def _rate_value(value, where: str, path: str) -> float:
     arr = np.asarray(value)
     shown = _one_line_repr(arr.item()) if arr.size == 1 else f"{arr.size} values"
     if arr.dtype.kind not in "biuf" or arr.size != 1:
-        raise GearlabInputError(
-            f"{path}: sampling rate field {where} must be one number in Hz, got {shown}"
-        )
+        raise GearlabInputError(f"{path}: sampling rate field {where} must be one number in Hz, got {shown}")
     fs = float(arr.item())
     if not math.isfinite(fs) or fs <= 0:
         raise GearlabInputError(f"{path}: sampling rate {where} must be positive, got {fs:g} Hz")
@@ -429,9 +436,7 @@ def _series(raw, name: str, role: str, path: str) -> np.ndarray:
         shown = "an empty field" if v == "" else repr(v)
         raise GearlabInputError(f"{path}: {what} is not numeric: {shown} at sample {i}; expected numbers")
     if arr.dtype.kind not in "biuf":
-        raise GearlabInputError(
-            f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers"
-        )
+        raise GearlabInputError(f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers")
     if arr.dtype.kind == "b" and role == "vibration":  # a tacho's pulses may be true/false; a vibration not
         raise GearlabInputError(f"{path}: {what} holds true/false values; expected a vibration signal of numbers")
     if arr.ndim > 1 and sum(s > 1 for s in arr.shape) <= 1:
@@ -439,9 +444,7 @@ def _series(raw, name: str, role: str, path: str) -> np.ndarray:
     if arr.ndim == 0:
         raise GearlabInputError(f"{path}: {what} holds a single value; expected a time series, one value per sample")
     if arr.ndim > 1:
-        raise GearlabInputError(
-            f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)"
-        )
+        raise GearlabInputError(f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)")
     with _prefixed(path):
         return check_signal(arr, what)
 
@@ -463,7 +466,7 @@ def _wrap(x: np.ndarray) -> np.ndarray:
 
 
 def _tacho_kind(tacho: np.ndarray) -> str:
-    """"angle" or "pulses" for a tacho channel (tacho_kind = "auto").
+    """ "angle" or "pulses" for a tacho channel (tacho_kind = "auto").
 
     A shaft angle rises at (nearly) every sample: steadily (continuous angle), or with
     wraps of about −2π between steady rises when it is wrapped, in which case it spans one
@@ -501,8 +504,9 @@ def _angle_tacho(tacho: np.ndarray) -> np.ndarray:
     )
 
 
-def _shaft_angle(spec: MeasuredSpec, tacho: np.ndarray | None, fs: float, n: int, path: str
-                 ) -> tuple[dict, np.ndarray, str]:
+def _shaft_angle(
+    spec: MeasuredSpec, tacho: np.ndarray | None, fs: float, n: int, path: str
+) -> tuple[dict, np.ndarray, str]:
     """(cut_revolutions' angle argument, the continuous angle it computes from it, a description).
 
     The angle is computed here with the very functions cut_revolutions applies to the
@@ -510,8 +514,11 @@ def _shaft_angle(spec: MeasuredSpec, tacho: np.ndarray | None, fs: float, n: int
     the revolutions it cuts.
     """
     if tacho is None:
-        return ({"speed_hz": float(spec.speed_hz)}, angle_from_speed(n, fs, spec.speed_hz),
-                f"nominal speed {fmt_hz(spec.speed_hz)}")
+        return (
+            {"speed_hz": float(spec.speed_hz)},
+            angle_from_speed(n, fs, spec.speed_hz),
+            f"nominal speed {fmt_hz(spec.speed_hz)}",
+        )
     kind = _tacho_kind(tacho) if spec.tacho_kind == "auto" else spec.tacho_kind
     detected = ", detected" if spec.tacho_kind == "auto" else ""
     if kind == "angle":
@@ -519,10 +526,15 @@ def _shaft_angle(spec: MeasuredSpec, tacho: np.ndarray | None, fs: float, n: int
             wrapped = _angle_tacho(tacho)
             return {"tacho": wrapped}, unwrap_tacho(wrapped), f"tacho '{spec.tacho}' (shaft angle{detected})"
     # angle_from_pulses fails only for want of edges: a tacho that never completes a revolution.
-    with _prefixed(f"{path}: tacho '{spec.tacho}' never completes a revolution "
-                   f"(read as a once-per-revolution pulse train{detected})"):
-        return ({"pulses": tacho}, angle_from_pulses(tacho, fs),
-                f"tacho '{spec.tacho}' (once-per-revolution pulses{detected})")
+    with _prefixed(
+        f"{path}: tacho '{spec.tacho}' never completes a revolution "
+        f"(read as a once-per-revolution pulse train{detected})"
+    ):
+        return (
+            {"pulses": tacho},
+            angle_from_pulses(tacho, fs),
+            f"tacho '{spec.tacho}' (once-per-revolution pulses{detected})",
+        )
 
 
 def _revolution_bounds(angle: np.ndarray, fs: float, source: str, path: str) -> np.ndarray:
@@ -540,9 +552,11 @@ def _revolution_bounds(angle: np.ndarray, fs: float, source: str, path: str) -> 
             if source.startswith("nominal"):
                 why = f"one revolution at the {source} needs {per_rev:.0f} samples at {fmt_hz(fs)}"
             else:
-                why = (f"by {source}, the shaft turns {turns:.3g} revolutions at {fmt_hz(speed)}; one revolution "
-                       f"needs {per_rev:.0f} samples at {fmt_hz(fs)}: the record is too short or the tacho "
-                       "never completes a revolution")
+                why = (
+                    f"by {source}, the shaft turns {turns:.3g} revolutions at {fmt_hz(speed)}; one revolution "
+                    f"needs {per_rev:.0f} samples at {fmt_hz(fs)}: the record is too short or the tacho "
+                    "never completes a revolution"
+                )
             raise GearlabInputError(f"{path}: too short for one revolution: {n} samples; {why}")
         # Fewer samples than that cannot show a revolution, and a rate or speed off by orders
         # of magnitude would ask revolution_starts for billions of revolution starts.
@@ -591,14 +605,13 @@ def _class_indices(raw, spec: MeasuredSpec, n: int, path: str) -> np.ndarray:
             if v not in lookup:
                 i = int(np.flatnonzero(arr == v)[0])
                 raise GearlabInputError(
-                    f"{path}: {what} holds the unknown class {_one_line_repr(v)}{did_you_mean(v, names)} at sample {i}; "
+                    f"{path}: {what} holds the unknown class {_one_line_repr(v)}{did_you_mean(v, names)} "
+                    f"at sample {i}; "
                     f"{known}"
                 )
         return np.asarray([lookup[v] for v in values.tolist()], dtype=np.int64)[inverse.reshape(-1)]
     if arr.dtype.kind not in "biuf":
-        raise GearlabInputError(
-            f"{path}: {what} is stored as {arr.dtype}; expected class names or class indices"
-        )
+        raise GearlabInputError(f"{path}: {what} is stored as {arr.dtype}; expected class names or class indices")
     with _prefixed(path):
         values = check_signal(arr, what)
     bad = np.flatnonzero((values != np.round(values)) | (values < 0) | (values >= len(names)))
@@ -661,11 +674,15 @@ def units_note(spec: MeasuredSpec, fmt: str, integer: bool) -> str:
     """What the record's values were taken as: m/s² through the sensitivity and gain, or -- neither
     given -- "unknown" (one line; the gap kind warns with it)."""
     if spec.units_known:
-        return (f"m/s² = value x gain {1.0 if spec.gain is None else spec.gain:g} V / sensitivity "
-                f"{1.0 if spec.sensitivity is None else spec.sensitivity:g} V/(m/s²)")
-    what = ("integer counts (full-scale fractions for WAV)" if integer else "numbers")
-    return (f"unknown: the {fmt} record holds {what} with no sensitivity or gain given; its values are taken "
-            "as m/s² (set sensitivity = '10 mV/g' and, for integer data, gain = volts per count)")
+        return (
+            f"m/s² = value x gain {1.0 if spec.gain is None else spec.gain:g} V / sensitivity "
+            f"{1.0 if spec.sensitivity is None else spec.sensitivity:g} V/(m/s²)"
+        )
+    what = "integer counts (full-scale fractions for WAV)" if integer else "numbers"
+    return (
+        f"unknown: the {fmt} record holds {what} with no sensitivity or gain given; its values are taken "
+        "as m/s² (set sensitivity = '10 mV/g' and, for integer data, gain = volts per count)"
+    )
 
 
 def import_measured(spec: MeasuredSpec) -> Dataset:
@@ -674,8 +691,9 @@ def import_measured(spec: MeasuredSpec) -> Dataset:
     try:
         return _import_measured(spec)
     except MemoryError:
-        raise GearlabInputError(f"{spec.path}: not enough memory to import this record; a shorter record, or a "
-                                "machine with more memory") from None
+        raise GearlabInputError(
+            f"{spec.path}: not enough memory to import this record; a shorter record, or a machine with more memory"
+        ) from None
 
 
 def _import_measured(spec: MeasuredSpec) -> Dataset:

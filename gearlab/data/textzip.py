@@ -87,17 +87,21 @@ def _open_text(path: Path):
             members = [i for i in z.infolist() if not i.is_dir() and not i.filename.startswith("__MACOSX/")]
             if len(members) != 1:
                 names = ", ".join(shown(i.filename, 40) for i in members[:5]) or "none"
-                raise GearlabInputError(f"{path}: expected a zip archive of exactly one text file, found "
-                                        f"{len(members)} ({names})")
+                raise GearlabInputError(
+                    f"{path}: expected a zip archive of exactly one text file, found {len(members)} ({names})"
+                )
             info = members[0]
             if info.file_size > MAX_TEXT_BYTES:
-                raise GearlabInputError(f"{path}: member {shown(info.filename)} holds {info.file_size} bytes of "
-                                        f"text; expected at most {MAX_TEXT_BYTES}")
+                raise GearlabInputError(
+                    f"{path}: member {shown(info.filename)} holds {info.file_size} bytes of "
+                    f"text; expected at most {MAX_TEXT_BYTES}"
+                )
             with z.open(info) as f:
                 yield f, f"{path}: member {shown(info.filename)}"
     except FileNotFoundError:
-        raise GearlabInputError(f"{path}: no such file; expected a measured record (.zip of one text file, or "
-                                "the text)") from None
+        raise GearlabInputError(
+            f"{path}: no such file; expected a measured record (.zip of one text file, or the text)"
+        ) from None
     except IsADirectoryError:
         raise GearlabInputError(f"{path}: is a directory; expected a measured record") from None
     except zipfile.BadZipFile as exc:
@@ -125,8 +129,10 @@ def _resolve(columns, header: list[str] | None, width: int, where: str) -> list[
             c = int(c)
         if isinstance(c, int):
             if not 0 <= c < width:
-                raise GearlabInputError(f"{where}: column {c} does not exist; the file has {width} columns "
-                                        f"(0-based indices 0 … {width - 1})")
+                raise GearlabInputError(
+                    f"{where}: column {c} does not exist; the file has {width} columns "
+                    f"(0-based indices 0 … {width - 1})"
+                )
             out.append(c)
         elif header is not None and c in header:
             out.append(header.index(c))
@@ -144,8 +150,9 @@ def _bad_line(block: bytes, first_line: int, width: int, where: str) -> GearlabI
             continue
         number = first_line + offset
         if len(tokens) != width:
-            return GearlabInputError(f"{where}: line {number} has {len(tokens)} fields, expected {width} (as the "
-                                     "first data line)")
+            return GearlabInputError(
+                f"{where}: line {number} has {len(tokens)} fields, expected {width} (as the first data line)"
+            )
         for i, t in enumerate(tokens):
             if not _is_number(t):
                 text = t.decode("utf-8", "replace")
@@ -177,8 +184,10 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                 if cut == 0:  # one line longer than a block: read on
                     rest = block
                     if len(rest) > 64 * CHUNK_BYTES:
-                        raise GearlabInputError(f"{where}: line {line_no} is longer than {64 * CHUNK_BYTES} bytes; "
-                                                "expected rows of a few numbers")
+                        raise GearlabInputError(
+                            f"{where}: line {line_no} is longer than {64 * CHUNK_BYTES} bytes; "
+                            "expected rows of a few numbers"
+                        )
                     continue
                 block, rest = block[:cut], block[cut:]
             elif not block:
@@ -188,7 +197,7 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
             lines_here = block.count(b"\n") + (0 if block.endswith(b"\n") else 1)
             if b"#" in block or b"\r" in block or not width:
                 kept = []
-                for offset, line in enumerate(block.split(b"\n")):
+                for line in block.split(b"\n"):
                     tokens = line.split()
                     if not tokens or tokens[0].startswith(b"#"):
                         continue
@@ -216,8 +225,9 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
             if not data:
                 break
     if not parts:
-        raise GearlabInputError(f"{where}: no rows of numbers; expected one row per sample, columns separated "
-                                "by blanks")
+        raise GearlabInputError(
+            f"{where}: no rows of numbers; expected one row per sample, columns separated by blanks"
+        )
     table = np.concatenate(parts) if len(parts) > 1 else parts[0]
     return {c: table[:, i] for i, c in enumerate(columns)}, header, width
 
@@ -238,8 +248,17 @@ class TextRecord:
     transient_revolutions: int
 
 
-def read_record(path, *, vibration, tacho, pulses_per_rev: int, sensitivity: float, fs: float,
-                points: int = POINTS, transient: str = "none") -> TextRecord:
+def read_record(
+    path,
+    *,
+    vibration,
+    tacho,
+    pulses_per_rev: int,
+    sensitivity: float,
+    fs: float,
+    points: int = POINTS,
+    transient: str = "none",
+) -> TextRecord:
     """Read a record (``read_columns``), convert the vibration to m/s², find the shaft angle
     from the tacho's N = *pulses_per_rev* marks per revolution and cut the complete
     revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
@@ -252,9 +271,11 @@ def read_record(path, *, vibration, tacho, pulses_per_rev: int, sensitivity: flo
         raise GearlabInputError(f"{where}: {exc}") from None
     turns = (angle[-1] - angle[0]) / TWO_PI
     if turns < 2:
-        raise GearlabInputError(f"{where}: the {pulses_per_rev}-pulses-per-revolution tacho shows {turns:.3g} "
-                                f"revolutions in {vib.size} samples at {fmt_hz(fs)}; expected at least 2 (is "
-                                "pulses_per_rev right?)")
+        raise GearlabInputError(
+            f"{where}: the {pulses_per_rev}-pulses-per-revolution tacho shows {turns:.3g} "
+            f"revolutions in {vib.size} samples at {fmt_hz(fs)}; expected at least 2 (is "
+            "pulses_per_rev right?)"
+        )
     # the wrapped angle in [-π, π): cut_revolutions unwraps it and starts revolutions at its 2πk crossings
     wrapped = (angle + np.pi) % TWO_PI - np.pi
     try:

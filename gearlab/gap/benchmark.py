@@ -66,7 +66,11 @@ RANGES: dict[str, dict[str, object]] = {
     "drive_inertias": {"I11": (1e-3, 2e-2, "log"), "I22": (1e-3, 2e-2, "log"), "k_c": (3e3, 1e5, "log")},
     "bearing_stiffness": {"k_factor": [(0.3, 0.75, "log"), (1.4, 3.0, "log")]},
     "mesh_damping": {"zeta": [(0.02, 0.05, "lin"), (0.1, 0.2, "lin")]},
-    "speed_fluctuation": {"amplitude": (0.002, 0.03, "log"), "order": (1, 4, "int"), "phase": (0.0, 2 * math.pi, "circ")},
+    "speed_fluctuation": {
+        "amplitude": (0.002, 0.03, "log"),
+        "order": (1, 4, "int"),
+        "phase": (0.0, 2 * math.pi, "circ"),
+    },
     "load_fluctuation": {"amplitude": (0.05, 0.3, "log"), "order": (1, 4, "int"), "phase": (0.0, 2 * math.pi, "circ")},
     # weak on six_dof (E6: ~3e-4 of the mesh lines at 20 um): only the top of its bounds shows
     "shaft_eccentricity": {"e": (150e-6, 200e-6, "lin"), "phase": (0.0, 2 * math.pi, "circ")},
@@ -81,9 +85,10 @@ RANGES: dict[str, dict[str, object]] = {
 
 MIN_TARGET_REVOLUTIONS = 10  # gearlab.gap.stats.MIN_REVOLUTIONS: fewer and no statistic means much
 
-# How a target is acquired and written (pipeline parity with measured records): a real record is sampled at its own rate, so its
-# revolutions start between samples; its tacho mark sits anywhere on the shaft; it may store
-# integers. Every trial draws: the samples per revolution as a share of the simulation's 4096
+# How a target is acquired and written (pipeline parity with measured records): a real record is
+# sampled at its own rate, so its revolutions start between samples; its tacho mark sits anywhere
+# on the shaft; it may store integers. Every trial draws: the samples per revolution as a share
+# of the simulation's 4096
 # (RATE_SHARES, uniform), the tacho's zero off the simulation's (uniform over the turn) and a
 # FORMAT: float64 npz, int16 npz (counts, with a gain) or int16 PCM wav (full-scale fractions).
 RATE_SHARES = (0.3, 0.7)
@@ -106,8 +111,11 @@ class Acquisition:
 
     @classmethod
     def draw(cls, rng: np.random.Generator) -> Acquisition:
-        return cls(float(rng.uniform(*RATE_SHARES)), float(rng.uniform(0.0, 2 * math.pi)),
-                   FORMATS[int(rng.integers(len(FORMATS)))])
+        return cls(
+            float(rng.uniform(*RATE_SHARES)),
+            float(rng.uniform(0.0, 2 * math.pi)),
+            FORMATS[int(rng.integers(len(FORMATS)))],
+        )
 
 
 def trial_counts(n: int) -> dict[str, int]:
@@ -176,7 +184,9 @@ def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, 
     if n < 1:
         raise GearlabInputError(f"benchmark: trials must be >= 1, got {n}")
     if len(library) < 2:
-        raise GearlabInputError(f"benchmark: the library needs at least 2 effects (pairs, withheld), got {len(library)}")
+        raise GearlabInputError(
+            f"benchmark: the library needs at least 2 effects (pairs, withheld), got {len(library)}"
+        )
     rng = np.random.default_rng([seed, 0])
     kinds = [k for k, c in trial_counts(n).items() for _ in range(c)]
     kinds = [kinds[i] for i in rng.permutation(n)]
@@ -194,8 +204,9 @@ def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, 
             else:
                 cycle = singles if kind == "single" else withheld
                 names = (cycle[(used[kind] + _attempt) % len(cycle)],)
-            specs = tuple(registry.get("effect", name).spec(draw_params(registry.get("effect", name), r))
-                          for name in names)
+            specs = tuple(
+                registry.get("effect", name).spec(draw_params(registry.get("effect", name), r)) for name in names
+            )
             try:
                 hidden = EffectChain.load(specs).specs()  # level order, as the builder applies them
                 source.with_(effects=hidden).check_model("benchmark target")
@@ -220,8 +231,15 @@ def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, 
 def target_spec(trial: Trial, source: DatasetSpec, revolutions: int) -> DatasetSpec:
     """The hidden configuration: the source with the hidden effects and its own noise realisation."""
     noise = source.noise if source.noise is None else NoiseSpec(source.noise.kind, source.noise.snr_db, trial.seed)
-    return source.with_(name="target", domain="target", healthy=revolutions, faults=(), effects=source.effects
-                        + trial.hidden, seed=trial.seed, noise=noise)
+    return source.with_(
+        name="target",
+        domain="target",
+        healthy=revolutions,
+        faults=(),
+        effects=source.effects + trial.hidden,
+        seed=trial.seed,
+        noise=noise,
+    )
 
 
 def record_of(rows: np.ndarray) -> dict[str, np.ndarray]:
@@ -238,8 +256,9 @@ def record_of(rows: np.ndarray) -> dict[str, np.ndarray]:
     return {VIBRATION: vib, TACHO: tacho, LABEL: np.array("healthy")}
 
 
-def acquired_record(rows: np.ndarray, speed: float, acquisition: Acquisition,
-                    noise: Callable[[np.ndarray, float], np.ndarray]) -> tuple[dict, float]:
+def acquired_record(
+    rows: np.ndarray, speed: float, acquisition: Acquisition, noise: Callable[[np.ndarray, float], np.ndarray]
+) -> tuple[dict, float]:
     """Noise-free revolutions (n, P) in m/s², one after another, as an acquisition records them:
     read at acquisition.rate_share x P samples per revolution (a multiple of 1/n: revolutions start
     between samples) by Fourier resampling of the n-turn record (an ideal anti-alias filter below the
@@ -335,11 +354,17 @@ def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: i
     atomic_write(path, data)
     if calibration is not None:
         atomic_write(folder / "calibration.json", json.dumps(calibration, indent=1, sort_keys=True))
-    answers = {"index": trial.index, "kind": trial.kind, "withheld": trial.withheld,
-               "hidden": [[name, dict(params)] for name, params in trial.hidden], "seed": trial.seed,
-               "candidates": list(trial.candidates),
-               "acquisition": None if acq is None else {"rate_share": acq.rate_share,
-                                                        "offset_deg": math.degrees(acq.offset), "format": acq.format}}
+    answers = {
+        "index": trial.index,
+        "kind": trial.kind,
+        "withheld": trial.withheld,
+        "hidden": [[name, dict(params)] for name, params in trial.hidden],
+        "seed": trial.seed,
+        "candidates": list(trial.candidates),
+        "acquisition": None
+        if acq is None
+        else {"rate_share": acq.rate_share, "offset_deg": math.degrees(acq.offset), "format": acq.format},
+    }
     atomic_write(folder / "answers.json", json.dumps(answers, indent=1, sort_keys=True))
     return path
 
@@ -354,35 +379,52 @@ def read_answers(folder: Path) -> dict:
 def import_target(path: Path):
     """The healthy revolutions of a written target, in physical units, through the importer, and
     its measurement chain (None for the angle-domain record, which has none to match)."""
+    from ..data.chain import PASSBAND, chain_of
     from ..data.importers import MeasuredSpec, import_measured
     from ..gap.views import healthy_rows
-    from ..data.chain import PASSBAND, chain_of
 
     path = Path(path)
     calibration = path.parent / "calibration.json"
     units = json.loads(calibration.read_text()) if calibration.exists() else {}
     wav = path.suffix == ".wav"
     # transient 'none': the record is steady from its first sample (a simulated steady state)
-    spec = MeasuredSpec(name="target", path=str(path), vibration="0" if wav else VIBRATION,
-                        tacho="1" if wav else TACHO, labels=None if wav else LABEL, transient="none", **units)
+    spec = MeasuredSpec(
+        name="target",
+        path=str(path),
+        vibration="0" if wav else VIBRATION,
+        tacho="1" if wav else TACHO,
+        labels=None if wav else LABEL,
+        transient="none",
+        **units,
+    )
     dataset = import_measured(spec)
-    rows = healthy_rows(dataset) if not wav else np.asarray(dataset.X, np.float64) * dataset.reference[1] \
-        + dataset.reference[0]
+    rows = (
+        healthy_rows(dataset)
+        if not wav
+        else np.asarray(dataset.X, np.float64) * dataset.reference[1] + dataset.reference[0]
+    )
     if not units:
         return rows, None, 0
     chain = chain_of(dataset.meta)
     return rows, chain, int(PASSBAND * chain.nyquist_order)
 
 
-def _diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Mapping, candidates: tuple[str, ...],
-              chain=None, max_order: int = 0) -> dict:
+def _diagnose(
+    source: DatasetSpec,
+    target_X: np.ndarray,
+    settings: Mapping,
+    candidates: tuple[str, ...],
+    chain=None,
+    max_order: int = 0,
+) -> dict:
     """gearlab.gap.diagnose.diagnose with the search settings (a plain dict, picklable); imported here
     so that the benchmark loads without it. Serial inside a trial: trials are what runs in parallel."""
     from . import diagnose as d
 
     settings = {**dict(settings), "max_order": max_order} if max_order else dict(settings)
-    return d.diagnose(source, target_X, d.Settings(candidates=tuple(candidates), **settings), executor=None,
-                      chain=chain)
+    return d.diagnose(
+        source, target_X, d.Settings(candidates=tuple(candidates), **settings), executor=None, chain=chain
+    )
 
 
 def diagnose_file(path: str | Path, source: DatasetSpec, candidates: Sequence[str], settings: Mapping) -> dict:
@@ -431,16 +473,30 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
     before, after = float(result.get("gap_before", float("nan"))), float(result.get("gap_after", float("nan")))
     shrink = 1.0 - after / before if before > 0 and math.isfinite(after) else None
     record = {
-        "kind": kind, "hidden": [[n, p] for n, p in answers["hidden"]], "withheld": answers.get("withheld"),
-        "accepted": accepted, "ranking": ranking[:5], "gap_before": before, "gap_after": after,
+        "kind": kind,
+        "hidden": [[n, p] for n, p in answers["hidden"]],
+        "withheld": answers.get("withheld"),
+        "accepted": accepted,
+        "ranking": ranking[:5],
+        "gap_before": before,
+        "gap_after": after,
         "significant_before": bool(result.get("significant_before")),
         "significant_after": bool(result.get("significant_after")),
-        "unexplained": bool(result.get("unexplained")), "shrink": shrink,
-        "verdict": result.get("verdict"), "explained_share": result.get("explained_share"),
+        "unexplained": bool(result.get("unexplained")),
+        "shrink": shrink,
+        "verdict": result.get("verdict"),
+        "explained_share": result.get("explained_share"),
         "acquisition": answers.get("acquisition"),
-        "top1": None, "top3": None, "identified": [], "param_error": {}, "param_error_median": None,
-        "param_determined": {}, "param_error_median_determined": None,
-        "option_correct": {}, "null_correct": None, "out_of_library_unexplained": None,
+        "top1": None,
+        "top3": None,
+        "identified": [],
+        "param_error": {},
+        "param_error_median": None,
+        "param_determined": {},
+        "param_error_median_determined": None,
+        "option_correct": {},
+        "null_correct": None,
+        "out_of_library_unexplained": None,
         "wrong_names": [n for n in accepted if n not in hidden],
     }
     if kind in ("single", "pair"):
@@ -461,8 +517,9 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
             # the diagnosis's own word on each parameter: determined by the data, or not identifiable
             record["param_determined"][name] = {k: bool(marks[name].get(k, {}).get("determined", True)) for k in per}
             sure += [v for k, v in per.items() if record["param_determined"][name][k]]
-            record["option_correct"][name] = {k: fitted[name].get(k) == hidden[name][k] for k in effect.options
-                                              if k in hidden[name]}
+            record["option_correct"][name] = {
+                k: fitted[name].get(k) == hidden[name][k] for k in effect.options if k in hidden[name]
+            }
         record["param_error_median"] = float(np.median(errors)) if errors else None
         record["param_error_median_determined"] = float(np.median(sure)) if sure else None
     elif kind == "null":
@@ -499,8 +556,13 @@ def trial_task(task: TrialTask) -> dict:
     diagnosed = time.perf_counter()
     atomic_write(folder / "diagnosis.json", json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
     record = score_trial(read_answers(folder), result)
-    record.update(unit=unit_key(task.trial.index), index=task.trial.index, candidates=len(candidates),
-                  seconds=round(diagnosed - started, 3), generate_seconds=round(generated - started, 3))
+    record.update(
+        unit=unit_key(task.trial.index),
+        index=task.trial.index,
+        candidates=len(candidates),
+        seconds=round(diagnosed - started, 3),
+        generate_seconds=round(generated - started, 3),
+    )
     return record
 
 
@@ -544,16 +606,23 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         mine = [r for r in effect_trials if any(h[0] == name for h in r["hidden"])]
         held = [r for r in records if r["kind"] == "withheld" and r["withheld"] == name]
         errors = [v for r in mine for v in r["param_error"].get(name, {}).values()]
-        sure = [v for r in mine for k, v in r["param_error"].get(name, {}).items()
-                if r.get("param_determined", {}).get(name, {}).get(k, True)]
+        sure = [
+            v
+            for r in mine
+            for k, v in r["param_error"].get(name, {}).items()
+            if r.get("param_determined", {}).get(name, {}).get(k, True)
+        ]
         per_effect[name] = {
-            "trials": len(mine), "top1": _rate(r["top1"] for r in mine), "top3": _rate(r["top3"] for r in mine),
+            "trials": len(mine),
+            "top1": _rate(r["top1"] for r in mine),
+            "top3": _rate(r["top3"] for r in mine),
             "identified": sum(name in r["identified"] for r in mine),
             "median_shrink": _median(r["shrink"] for r in mine if r["top1"]),
             "median_param_error": _median(errors),
             "median_param_error_determined": _median(sure),
             "not_identifiable": sum(not d for r in mine for d in r.get("param_determined", {}).get(name, {}).values()),
-            "withheld": len(held), "unexplained_when_withheld": _rate(r["unexplained"] for r in held),
+            "withheld": len(held),
+            "unexplained_when_withheld": _rate(r["unexplained"] for r in held),
             "named_wrongly": sum(name in r["wrong_names"] for r in records),
         }
     summary = {
@@ -566,25 +635,36 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         "median_shrink": _median(r["shrink"] for r in identified),
         "median_param_error": _median(r["param_error_median"] for r in effect_trials),
         # over the parameters the diagnosis called determined (the goal is on identifiable ones)
-        "median_param_error_determined": _median(v for r in effect_trials for name, per in r["param_error"].items()
-                                                 for k, v in per.items()
-                                                 if r.get("param_determined", {}).get(name, {}).get(k, True)),
+        "median_param_error_determined": _median(
+            v
+            for r in effect_trials
+            for name, per in r["param_error"].items()
+            for k, v in per.items()
+            if r.get("param_determined", {}).get(name, {}).get(k, True)
+        ),
         "null_correct": _rate(r["null_correct"] for r in records if r["kind"] == "null"),
-        "out_of_library_unexplained": _rate(r["out_of_library_unexplained"] for r in records
-                                            if r["kind"] == "withheld"),
+        "out_of_library_unexplained": _rate(
+            r["out_of_library_unexplained"] for r in records if r["kind"] == "withheld"
+        ),
         "wrong_names_when_withheld": _rate(bool(r["wrong_names"]) for r in records if r["kind"] == "withheld"),
         # The other side of the two out-of-library numbers: a diagnosis that always said
         # "unexplained" would pass on withheld trials; here it must not say so when it named right.
         "explained_when_identified": _rate(not r["unexplained"] for r in identified),
         # explained, or partly explained with most of the gap (the share the verdict states)
         "explained_or_partly_when_identified": _rate(
-            r.get("verdict") == "explained" or (r.get("verdict") == "partly explained"
-                                                and (r.get("explained_share") or 0.0) >= 0.5) for r in identified),
-        "null_correct_by_format": {f: _rate(r["null_correct"] for r in records if r["kind"] == "null"
-                                            and (r.get("acquisition") or {}).get("format", "angle") == f)
-                                   for f in ("angle",) + FORMATS
-                                   if any((r.get("acquisition") or {}).get("format", "angle") == f
-                                          for r in records if r["kind"] == "null")},
+            r.get("verdict") == "explained"
+            or (r.get("verdict") == "partly explained" and (r.get("explained_share") or 0.0) >= 0.5)
+            for r in identified
+        ),
+        "null_correct_by_format": {
+            f: _rate(
+                r["null_correct"]
+                for r in records
+                if r["kind"] == "null" and (r.get("acquisition") or {}).get("format", "angle") == f
+            )
+            for f in ("angle",) + FORMATS
+            if any((r.get("acquisition") or {}).get("format", "angle") == f for r in records if r["kind"] == "null")
+        },
         "extra_names_when_identified": _rate(bool(r["wrong_names"]) for r in identified),
         "per_effect": per_effect,
         "seconds_per_trial": _median(r.get("seconds") for r in records),

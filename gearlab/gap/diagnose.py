@@ -70,20 +70,35 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..data.builder import (CHUNK, EFFECT_STREAM, RowsTask, SimTask, healthy_reference, noisy_rows,
-                            operating_point, simulate_unit, whole_steps_rate)
+from ..data.builder import (
+    CHUNK,
+    EFFECT_STREAM,
+    RowsTask,
+    SimTask,
+    healthy_reference,
+    noisy_rows,
+    operating_point,
+    simulate_unit,
+    whole_steps_rate,
+)
 from ..data.chain import Chain, fit_offset, measure
 from ..data.spec import POINTS, DatasetSpec
 from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
+from ..events import Event
 from ..executors import LocalExecutor
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
-from ..events import Event
 from ..signals import add_noise
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
-from .views import (BandPlan, gear_ratio, order_views_of_power, power_of_spectrum, residual_view_of_spectrum,
-                    waveform_view)
+from .views import (
+    BandPlan,
+    gear_ratio,
+    order_views_of_power,
+    power_of_spectrum,
+    residual_view_of_spectrum,
+    waveform_view,
+)
 
 MIN_SHARE = 0.2  # an accepted effect removes at least this share of the gap left at its round
 # The corrected source "closes" the gap when no significant gap is left, or when at most this
@@ -130,29 +145,48 @@ class Settings:
     their checks, the --quick limits and docs/settings.md all follow from these fields."""
 
     candidates: tuple[str, ...] = setting(
-        (list, tuple), (), doc="effect names to try (gearlab plugins lists them); [] = every registered effect "
-                               "but the opt-in ones (load_level, sensor_offset)")
-    budget: int = setting(int, 16, low=1, high=10_000, quick=4, doc="source simulations per effect fit (the search "
-                                                                      "budget)")
+        (list, tuple),
+        (),
+        doc="effect names to try (gearlab plugins lists them); [] = every registered effect "
+        "but the opt-in ones (load_level, sensor_offset)",
+    )
+    budget: int = setting(
+        int, 16, low=1, high=10_000, quick=4, doc="source simulations per effect fit (the search budget)"
+    )
     max_effects: int = setting(int, 3, low=1, high=20, quick=2, doc="greedy rounds: most effects added to the source")
-    healthy: int = setting(int, 40, low=MIN_REVOLUTIONS, high=100_000, quick=20,
-                           doc="source healthy revolutions simulated per evaluation")
-    bootstrap: int = setting(int, 200, low=0, high=100_000, quick=50,
-                             doc="bootstrap replicates of the before/after reports (searches use a cheap score)")
-    permutations: int = setting(int, 500, low=1, high=1_000_000, quick=200,
-                                doc="MMD permutations of the before/after reports")
+    healthy: int = setting(
+        int, 40, low=MIN_REVOLUTIONS, high=100_000, quick=20, doc="source healthy revolutions simulated per evaluation"
+    )
+    bootstrap: int = setting(
+        int,
+        200,
+        low=0,
+        high=100_000,
+        quick=50,
+        doc="bootstrap replicates of the before/after reports (searches use a cheap score)",
+    )
+    permutations: int = setting(
+        int, 500, low=1, high=1_000_000, quick=200, doc="MMD permutations of the before/after reports"
+    )
     alpha: float = setting(float, 0.05, check=_open_fraction, doc="significance level of the two-sample test")
     seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds the search's and the reports' noise")
     # What "closes the gap" is measured against (EXPLAINED_SHRINK): the plain source, or the source
     # with the sensor noise fitted alone -- for a measured target, which always carries noise that a
     # noise-free simulator lacks: against the plain source that noise alone makes any shrink look whole.
-    reference: str = setting(str, "source", choices=REFERENCES,
-                             doc="what the shrink that closes the gap is measured against: the plain source, or the "
-                                 "source with its sensor noise fitted alone (measured targets)")
+    reference: str = setting(
+        str,
+        "source",
+        choices=REFERENCES,
+        doc="what the shrink that closes the gap is measured against: the plain source, or the "
+        "source with its sensor noise fitted alone (measured targets)",
+    )
     consecutive: bool | str = setting(
-        (bool, str), "auto", check=_consecutive,
+        (bool, str),
+        "auto",
+        check=_consecutive,
         doc="the target's rows are consecutive revolutions of one record: the before/after reports then resolve "
-            "the output-shaft orders too (outside the shares); 'auto' = true for a measured target")
+        "the output-shaft orders too (outside the shares); 'auto' = true for a measured target",
+    )
     # The highest shaft order the target holds (a measured record's acquisition bandwidth, below its
     # Nyquist order): every source set is low-passed to it, so the comparison stays where the target
     # has data (simulated revolutions, and the noise added to them, reach order POINTS / 2). 0: all.
@@ -161,6 +195,7 @@ class Settings:
 
 
 # --- input checks ---------------------------------------------------------------------------------
+
 
 def check_settings(settings: Settings) -> tuple[str, ...]:
     """Every setting checked against its declaration; returns the candidate effect names (all
@@ -178,10 +213,14 @@ def check_settings(settings: Settings) -> tuple[str, ...]:
         if name == "candidates" and (isinstance(value, str) or not isinstance(value, (tuple, list))):
             raise GearlabInputError(f"{where} must be a list of effect names, got {value!r}")
         in_bounds(meta, value, where)
-    if isinstance(settings.max_order, bool) or not isinstance(settings.max_order, numbers.Integral) \
-            or settings.max_order < 0:
-        raise GearlabInputError(f"gap diagnosis: settings 'max_order' must be a whole number >= 0, "
-                                f"got {settings.max_order!r}")
+    if (
+        isinstance(settings.max_order, bool)
+        or not isinstance(settings.max_order, numbers.Integral)
+        or settings.max_order < 0
+    ):
+        raise GearlabInputError(
+            f"gap diagnosis: settings 'max_order' must be a whole number >= 0, got {settings.max_order!r}"
+        )
     registry = get_registry()
     names = tuple(settings.candidates) or tuple(default_candidates(registry))
     for i, name in enumerate(names, start=1):
@@ -200,17 +239,22 @@ def check_target(target_X) -> np.ndarray:
     try:
         X = np.asarray(target_X, dtype=np.float64)
     except (TypeError, ValueError):
-        raise GearlabInputError("gap diagnosis: target_X must be a numeric array (n, 4096) of healthy "
-                                "revolutions") from None
+        raise GearlabInputError(
+            "gap diagnosis: target_X must be a numeric array (n, 4096) of healthy revolutions"
+        ) from None
     if X.ndim != 2:
-        raise GearlabInputError(f"gap diagnosis: target_X must be 2-D (revolutions x {POINTS} points), "
-                                f"got shape {X.shape}")
+        raise GearlabInputError(
+            f"gap diagnosis: target_X must be 2-D (revolutions x {POINTS} points), got shape {X.shape}"
+        )
     if X.shape[1] != POINTS:
-        raise GearlabInputError(f"gap diagnosis: target revolutions have {X.shape[1]} samples, the source's "
-                                f"{POINTS}; resample the target to {POINTS} points per revolution")
+        raise GearlabInputError(
+            f"gap diagnosis: target revolutions have {X.shape[1]} samples, the source's "
+            f"{POINTS}; resample the target to {POINTS} points per revolution"
+        )
     if len(X) < MIN_REVOLUTIONS:
-        raise GearlabInputError(f"gap diagnosis: too few healthy target revolutions: {len(X)}; expected at "
-                                f"least {MIN_REVOLUTIONS}")
+        raise GearlabInputError(
+            f"gap diagnosis: too few healthy target revolutions: {len(X)}; expected at least {MIN_REVOLUTIONS}"
+        )
     if not np.all(np.isfinite(X)):
         raise GearlabInputError("gap diagnosis: target_X contains NaN or infinite values")
     return X
@@ -218,8 +262,9 @@ def check_target(target_X) -> np.ndarray:
 
 def _check_source(source: DatasetSpec):
     if not isinstance(source, DatasetSpec):
-        raise GearlabInputError(f"gap diagnosis: the source must be a simulated DatasetSpec, "
-                                f"got {type(source).__name__}")
+        raise GearlabInputError(
+            f"gap diagnosis: the source must be a simulated DatasetSpec, got {type(source).__name__}"
+        )
     where = f"gap diagnosis: source '{source.name}'"
     source.with_(faults=(), healthy=max(source.healthy, 1)).check(where)
     _, pair, _ = source.check_model(where)
@@ -227,6 +272,7 @@ def _check_source(source: DatasetSpec):
 
 
 # --- simulating the source's healthy revolutions (through the builder's own steps) ---------------
+
 
 def _by_level(effects) -> tuple:
     """Canonical effects in the order they act (model, excitation, signal; stable within a level),
@@ -236,8 +282,9 @@ def _by_level(effects) -> tuple:
 
 
 @functools.lru_cache(maxsize=64)
-def _clean_revolution(model: str, preset: str, fs: float, speed: float, load: float, channel: str,
-                      effects: tuple) -> np.ndarray:
+def _clean_revolution(
+    model: str, preset: str, fs: float, speed: float, load: float, channel: str, effects: tuple
+) -> np.ndarray:
     """The steady healthy revolution (POINTS,) under the model- and excitation-level *effects*.
 
     Cached per process: a signal-level candidate only transforms this revolution, so its
@@ -261,7 +308,7 @@ def band_limited(X: np.ndarray, max_order: int) -> np.ndarray:
     if not max_order or max_order >= X.shape[1] // 2:
         return X
     F = np.fft.rfft(X, axis=1)
-    F[:, max_order + 1:] = 0.0
+    F[:, max_order + 1 :] = 0.0
     return np.fft.irfft(F, n=X.shape[1], axis=1)
 
 
@@ -296,14 +343,25 @@ def source_rows(spec: DatasetSpec, max_order: int = 0, chain: Chain | None = Non
     out = np.empty((spec.healthy, POINTS), dtype=np.float32)
     for lo in range(0, spec.healthy, CHUNK):
         idx = range(lo, min(spec.healthy, lo + CHUNK))
-        task = RowsTask(np.broadcast_to(clean, (len(idx), POINTS)), [[spec.seed, noise_seed, i] for i in idx],
-                        kind, snr, spec.revolutions, spec.tsa, (mean, std), spec.effects, speed, reference_rms)
-        out[lo:lo + len(idx)] = noisy_rows(tuple(task))
+        task = RowsTask(
+            np.broadcast_to(clean, (len(idx), POINTS)),
+            [[spec.seed, noise_seed, i] for i in idx],
+            kind,
+            snr,
+            spec.revolutions,
+            spec.tsa,
+            (mean, std),
+            spec.effects,
+            speed,
+            reference_rms,
+        )
+        out[lo : lo + len(idx)] = noisy_rows(tuple(task))
     return band_limited(out.astype(np.float64) * std + mean, max_order)
 
 
-def measured_rows(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float, chain: Chain,
-                  teeth: int = 1) -> np.ndarray:
+def measured_rows(
+    spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float, chain: Chain, teeth: int = 1
+) -> np.ndarray:
     """The healthy rows of *spec* through a measured target's chain (gearlab.data.chain.measure):
     each row one revolution; the non-noise signal effects act in the angle domain on row i's
     record (the builder's seeds [seed, noise seed, i]), the noise effects and the dataset's noise
@@ -348,6 +406,7 @@ class Rows:
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
+
 
 class Scorer:
     """The search's score of a source set against the fixed target_X, and the report's gap total.
@@ -434,6 +493,7 @@ class Scorer:
 
 # --- the search space of one effect ------------------------------------------------------------------
 
+
 class Space:
     """An effect's space() as a unit cube: one coordinate per number (linear or log between
     its bounds, rounded for integers) and one per text option (cut into equal parts)."""
@@ -479,8 +539,9 @@ class Space:
         return u, tuple(params[e["name"]] for e in self.options)
 
     def choices_at(self, v: np.ndarray) -> tuple[str, ...]:
-        return tuple(e["choices"][min(int(x * len(e["choices"])), len(e["choices"]) - 1)]
-                     for e, x in zip(self.options, v))
+        return tuple(
+            e["choices"][min(int(x * len(e["choices"])), len(e["choices"]) - 1)] for e, x in zip(self.options, v)
+        )
 
     def all_choices(self) -> list[tuple[str, ...]]:
         combos: list[tuple[str, ...]] = [()]
@@ -493,8 +554,14 @@ class _OutOfBudget(Exception):
     pass
 
 
-def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: int, seed: int,
-                start: dict | None = None, guesses: Sequence[dict] = ()) -> list[dict]:
+def _fit_search(
+    space: Space,
+    objective: Callable[[dict], float],
+    evaluations: int,
+    seed: int,
+    start: dict | None = None,
+    guesses: Sequence[dict] = (),
+) -> list[dict]:
     """Minimise *objective* over *space* with at most *evaluations* calls; every evaluated point.
 
     *start*: parameters to start from instead of the defaults; with it there is no design,
@@ -534,7 +601,7 @@ def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: i
         if width and n_design > 0:
             design = qmc.LatinHypercube(d=width, seed=rng).random(n_design)
             for row in design:
-                evaluate(row[:space.dims], space.choices_at(row[space.dims:]))
+                evaluate(row[: space.dims], space.choices_at(row[space.dims :]))
         if space.dims:
             start = best()
             # Nelder-Mead from the best design point; its first simplex spans about one design
@@ -549,10 +616,13 @@ def _fit_search(space: Space, objective: Callable[[dict], float], evaluations: i
             left = evaluations - len(history) - (len(space.all_choices()) - 1)
             if left > 0:
                 try:
-                    minimize(lambda u: evaluate(u, start["choice"]), x0, method="Nelder-Mead",
-                             bounds=[(0.0, 1.0)] * space.dims,
-                             options={"maxfev": left, "initial_simplex": np.array(simplex),
-                                      "xatol": 1e-4, "fatol": 0.0})
+                    minimize(
+                        lambda u: evaluate(u, start["choice"]),
+                        x0,
+                        method="Nelder-Mead",
+                        bounds=[(0.0, 1.0)] * space.dims,
+                        options={"maxfev": left, "initial_simplex": np.array(simplex), "xatol": 1e-4, "fatol": 0.0},
+                    )
                 except _OutOfBudget:
                     pass
         # The other option choices at the refined point: the design only sampled them coarsely.
@@ -607,11 +677,12 @@ def determined(space: Space, intervals: dict) -> dict:
 
 # --- one fit: the executor's unit of work ------------------------------------------------------------
 
+
 def fit_effect(task: tuple) -> dict:
     """Fit effect *name* on top of the *accepted* effects: task = (source spec, effect name,
-    accepted effects (canonical), target_X, settings, seed, nuisance, rows (a :class:`Rows`)). The source spec is already the
-    search spec (healthy only, the search's noise seed). Returns the best parameters, their
-    score (the gap total), the intervals, and how many evaluations and seconds it took."""
+    accepted effects (canonical), target_X, settings, seed, nuisance, rows (a :class:`Rows`)).
+    The source spec is already the search spec (healthy only, the search's noise seed). Returns
+    the best parameters, their score (the gap total), the intervals, and how many evaluations and seconds it took."""
     source, name, accepted, target_X, settings, seed, nuisance, rows = task
     nuisance = bool(nuisance)  # fit sensor noise jointly at every point (see _NoiseNuisance)
     started = time.perf_counter()
@@ -626,8 +697,7 @@ def fit_effect(task: tuple) -> dict:
     def spec_of(params: dict, extra: tuple = ()) -> DatasetSpec:
         return source.with_(effects=_by_level(source.effects + tuple(accepted) + (effect.spec(params),) + extra))
 
-    noise = _NoiseNuisance(lambda params, extra: scorer.score(rows(spec_of(params, extra)))) \
-        if nuisance else None
+    noise = _NoiseNuisance(lambda params, extra: scorer.score(rows(spec_of(params, extra)))) if nuisance else None
 
     def objective(params: dict) -> float:
         try:
@@ -638,8 +708,9 @@ def fit_effect(task: tuple) -> dict:
             errors.append(str(exc))
             return math.inf
 
-    evaluations = settings.budget * ((NUISANCE_SIGNAL_EVALS if nuisance else SIGNAL_EVALS)
-                                     if effect.level == "signal" else 1)
+    evaluations = settings.budget * (
+        (NUISANCE_SIGNAL_EVALS if nuisance else SIGNAL_EVALS) if effect.level == "signal" else 1
+    )
     with warnings.catch_warnings():
         # Searched parameters stray where the simulator warns (too few steps per period of a
         # stiff mounting's natural frequency); one line per point would bury the progress.
@@ -649,27 +720,44 @@ def fit_effect(task: tuple) -> dict:
         if name == NUISANCE:
             # The noise alone gets the same wide Brent search that the other candidates' noise
             # nuisance gets, so that "beats the noise alone" compares like with like.
-            wide = _NoiseNuisance(lambda _, extra: scorer.score(rows(source.with_(
-                effects=_by_level(source.effects + tuple(accepted) + extra)))))
+            wide = _NoiseNuisance(
+                lambda _, extra: scorer.score(
+                    rows(source.with_(effects=_by_level(source.effects + tuple(accepted) + extra)))
+                )
+            )
             try:
                 value = wide.fit({})
                 history.append({"u": None, "choice": None, "params": dict(wide.at[()]), "score": value})
             except GearlabInputError as exc:
                 errors.append(str(exc))
     best = min(history, key=lambda h: h["score"])
-    result = {"name": name, "level": effect.level, "score": best["score"], "evaluations": len(history),
-              "params": _plain(best["params"]), "intervals": {}, "seconds": 0.0}
+    result = {
+        "name": name,
+        "level": effect.level,
+        "score": best["score"],
+        "evaluations": len(history),
+        "params": _plain(best["params"]),
+        "intervals": {},
+        "seconds": 0.0,
+    }
     extra: tuple = ()
     if noise is not None and math.isfinite(best["score"]):
         fitted_noise = noise.at[_key(best["params"])]
         extra = (get_registry().get("effect", NUISANCE).spec(fitted_noise),)
-        result["nuisance"] = {"name": NUISANCE, "params": _plain(fitted_noise),
-                              "evaluations": noise.evaluations}
+        result["nuisance"] = {"name": NUISANCE, "params": _plain(fitted_noise), "evaluations": noise.evaluations}
     if accepted and math.isfinite(best["score"]):
         # Backfitting: the effects accepted earlier were fitted without this one (a noise level
         # fitted on the wrong model is off), so each is refined once more next to it.
-        refit, score, used = _backfit(source, accepted, (effect.spec(best["params"]),) + extra, scorer,
-                                      best["score"], max(2, evaluations // 2), seed, rows)
+        refit, score, used = _backfit(
+            source,
+            accepted,
+            (effect.spec(best["params"]),) + extra,
+            scorer,
+            best["score"],
+            max(2, evaluations // 2),
+            seed,
+            rows,
+        )
         result["evaluations"] += used
         result["score"], result["accepted"] = score, [[n, [list(kv) for kv in p]] for n, p in refit]
     if math.isfinite(best["score"]):
@@ -684,8 +772,16 @@ def fit_effect(task: tuple) -> dict:
     return result
 
 
-def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", score: float, evaluations: int,
-             seed: int, rows: Rows) -> tuple[list, float, int]:
+def _backfit(
+    source: DatasetSpec,
+    accepted,
+    beside: tuple,
+    scorer: Scorer,
+    score: float,
+    evaluations: int,
+    seed: int,
+    rows: Rows,
+) -> tuple[list, float, int]:
     """Refine each accepted effect once more, from its fitted values, with the effects *beside*
     it held fixed: a local search of *evaluations* points per effect (signal-level ones cost no
     simulation: the clean revolution is cached). Returns (re-fitted effects, score, evaluations)."""
@@ -695,7 +791,7 @@ def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", sco
         effect = registry.get("effect", other)
 
         def objective(p, i=i, effect=effect):
-            trial = refit[:i] + [effect.spec(p)] + refit[i + 1:]
+            trial = refit[:i] + [effect.spec(p)] + refit[i + 1 :]
             try:
                 return scorer.score(rows(source.with_(effects=_by_level(source.effects + tuple(trial) + beside))))
             except GearlabInputError:
@@ -711,8 +807,9 @@ def _backfit(source: DatasetSpec, accepted, beside: tuple, scorer: "Scorer", sco
     return refit, score, used
 
 
-def _refit_alone(source: DatasetSpec, accepted, target_X, settings: Settings, seed: int, started: float,
-                 rows: Rows) -> dict:
+def _refit_alone(
+    source: DatasetSpec, accepted, target_X, settings: Settings, seed: int, started: float, rows: Rows
+) -> dict:
     """A later round's baseline (the task with no candidate): the accepted effects re-fitted
     alone, with at least the local search that any candidate's backfitting gives them. Without
     it a candidate would be credited with the better fit of the effects before it — an
@@ -720,10 +817,17 @@ def _refit_alone(source: DatasetSpec, accepted, target_X, settings: Settings, se
     tone) partly absorbs, and extras the target does not have were accepted."""
     scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source))
     score = scorer.score(rows(source.with_(effects=_by_level(source.effects + tuple(accepted)))))
-    refit, score, used = _backfit(source, accepted, (), scorer, score,
-                                  max(2, SIGNAL_EVALS * settings.budget // 2), seed, rows)
-    return {"name": None, "score": score, "evaluations": used, "params": {},
-            "accepted": [[n, [list(kv) for kv in p]] for n, p in refit], "seconds": time.perf_counter() - started}
+    refit, score, used = _backfit(
+        source, accepted, (), scorer, score, max(2, SIGNAL_EVALS * settings.budget // 2), seed, rows
+    )
+    return {
+        "name": None,
+        "score": score,
+        "evaluations": used,
+        "params": {},
+        "accepted": [[n, [list(kv) for kv in p]] for n, p in refit],
+        "seconds": time.perf_counter() - started,
+    }
 
 
 def _key(params: dict) -> tuple:
@@ -760,8 +864,12 @@ class _NoiseNuisance:
 
         def brent(kind, lo, hi, iterations):
             nonlocal found
-            res = minimize_scalar(lambda s: self._value(params, {"snr_db": float(s), "kind": kind}),
-                                  bounds=(lo, hi), method="bounded", options={"maxiter": iterations, "xatol": 0.2})
+            res = minimize_scalar(
+                lambda s: self._value(params, {"snr_db": float(s), "kind": kind}),
+                bounds=(lo, hi),
+                method="bounded",
+                options={"maxiter": iterations, "xatol": 0.2},
+            )
             if res.fun < found[0]:
                 found = (float(res.fun), {"snr_db": float(res.x), "kind": kind})
 
@@ -784,11 +892,14 @@ class _NoiseNuisance:
 
 
 def _plain(params: dict) -> dict:
-    return {k: (v if isinstance(v, str) else int(v) if isinstance(v, numbers.Integral) else float(v))
-            for k, v in params.items()}
+    return {
+        k: (v if isinstance(v, str) else int(v) if isinstance(v, numbers.Integral) else float(v))
+        for k, v in params.items()
+    }
 
 
 # --- the diagnosis -----------------------------------------------------------------------------------
+
 
 def _paired_removal(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarray, seed: int) -> dict:
     """The gap the candidate removes from the current source, with a paired bootstrap: both
@@ -799,9 +910,13 @@ def _paired_removal(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarr
     rn = scorer.replicates(candidate_X, ACCEPT_REPLICATES, [seed, 3])
     removed = rc - rn
     tail = 100.0 * (1.0 - ACCEPT_CONFIDENCE)
-    return {"gap_now": now, "gap_new": new, "removed": now - new,
-            "removed_low": float(np.percentile(removed, tail)),  # one-sided: removed > 0 with 95 %
-            "removed_interval": [float(x) for x in np.percentile(removed, [2.5, 97.5])]}
+    return {
+        "gap_now": now,
+        "gap_new": new,
+        "removed": now - new,
+        "removed_low": float(np.percentile(removed, tail)),  # one-sided: removed > 0 with 95 %
+        "removed_interval": [float(x) for x in np.percentile(removed, [2.5, 97.5])],
+    }
 
 
 def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None = None) -> dict:
@@ -809,14 +924,26 @@ def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None 
     rows are consecutive (settings.consecutive, resolved by diagnose). The source's rows stand in as
     consecutive: a one-revolution-periodic simulation's revolutions differ only by their noise."""
     full = bootstrap is None
-    return gap_report(source_X, target_X, pair, seed=settings.seed,
-                      bootstrap=settings.bootstrap if full else bootstrap,
-                      permutations=settings.permutations, alpha=settings.alpha,
-                      consecutive=full and settings.consecutive is True)
+    return gap_report(
+        source_X,
+        target_X,
+        pair,
+        seed=settings.seed,
+        bootstrap=settings.bootstrap if full else bootstrap,
+        permutations=settings.permutations,
+        alpha=settings.alpha,
+        consecutive=full and settings.consecutive is True,
+    )
 
 
-def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, executor=None,
-             on_event: Callable[[Event], None] = lambda e: None, chain: Chain | None = None) -> dict:
+def diagnose(
+    source: DatasetSpec,
+    target_X: np.ndarray,
+    settings: Settings,
+    executor=None,
+    on_event: Callable[[Event], None] = lambda e: None,
+    chain: Chain | None = None,
+) -> dict:
     """Where the gap between the *source* simulator and the target's healthy revolutions lies,
     which effects (fitted) close it, and how far: a JSON-serialisable dict (module docstring).
 
@@ -853,33 +980,59 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
     plain = judged(())
     before = _report(plain, target, pair, settings)
     on_event(Event("advance", stage="gap before", done=1, total=1))
-    result = {"before": before, "gap_before": float(before["total"]["gap"]),
-              "significant_before": gap_seen(before), "effects": [], "ranking": [], "rounds": [],
-              "settings": {**asdict(settings), "candidates": list(candidates)}, "notes": []}
+    result = {
+        "before": before,
+        "gap_before": float(before["total"]["gap"]),
+        "significant_before": gap_seen(before),
+        "effects": [],
+        "ranking": [],
+        "rounds": [],
+        "settings": {**asdict(settings), "candidates": list(candidates)},
+        "notes": [],
+    }
     if chain is not None:
         result["chain"] = chain_record(chain, fresh.with_(healthy=1), pair.Z1)
     default_budget = Settings().budget
     if settings.budget < default_budget:
         # --quick (budget 4) fits a sharp resonance's f_n or a tone's frequency on too few points:
         # it may miss what the default search finds; say so rather than let "unexplained" stand.
-        result["notes"].append(f"search budget {settings.budget} below the default {default_budget}: needle-like "
-                               "parameters (a sharp resonance's frequency, a tone's) may be missed; an 'unexplained' "
-                               "or 'partly explained' verdict is final only with the default search")
+        result["notes"].append(
+            f"search budget {settings.budget} below the default {default_budget}: needle-like "
+            "parameters (a sharp resonance's frequency, a tone's) may be missed; an 'unexplained' "
+            "or 'partly explained' verdict is final only with the default search"
+        )
     if np.all(target == target[0]):
         # Measured data always scatter; identical rows come from a noise-free simulation, whose
         # TSA residual is rounding: two equal noise-free sets still differ there (docs/gap_stats.md).
-        result["notes"].append("the target revolutions are all identical (noise-free): effect sizes rest on "
-                               "numerical floors and rounding; add the sensor noise a real target has")
+        result["notes"].append(
+            "the target revolutions are all identical (noise-free): effect sizes rest on "
+            "numerical floors and rounding; add the sensor noise a real target has"
+        )
 
-    run = _Run(scorer, judged, rows, search, target, pair, settings, executor, on_event,
-               gap0=scorer.score(rows(search)),  # the search's own baseline (same rows as the fits)
-               judged0=scorer.score(plain))  # the same on the judging rows
+    run = _Run(
+        scorer,
+        judged,
+        rows,
+        search,
+        target,
+        pair,
+        settings,
+        executor,
+        on_event,
+        gap0=scorer.score(rows(search)),  # the search's own baseline (same rows as the fits)
+        judged0=scorer.score(plain),
+    )  # the same on the judging rows
     accepted: list[dict] = []
     fitted: tuple = ()
     significant = gap_seen(before)
     if not significant:
-        on_event(Event("log", message=f"gap: no significant gap (p = {before['p_value']:.3g}, AUC "
-                                      f"{before['auc']:.2f}); nothing to explain"))
+        on_event(
+            Event(
+                "log",
+                message=f"gap: no significant gap (p = {before['p_value']:.3g}, AUC "
+                f"{before['auc']:.2f}); nothing to explain",
+            )
+        )
     for r in range(1, settings.max_effects + 1):
         remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
         if not significant or not remaining:
@@ -887,8 +1040,9 @@ def diagnose(source: DatasetSpec, target_X: np.ndarray, settings: Settings, exec
         fits, fitted, round_info = greedy_round(run, r, remaining, accepted, fitted)
         result["rounds"].append(round_info)
         if r == 1:
-            result["ranking"] = [{"name": f["name"], "share_removed": f["share_removed"], "params": f["params"]}
-                                 for f in fits]
+            result["ranking"] = [
+                {"name": f["name"], "share_removed": f["share_removed"], "params": f["params"]} for f in fits
+            ]
         if not math.isfinite(fits[0]["score"]):
             break
         alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
@@ -932,8 +1086,9 @@ class _Run:
         return self.judged(effects + (self.spec(fit["name"], fit["params"]),) + extra)
 
 
-def greedy_round(run: _Run, r: int, remaining: list[str], accepted: list[dict], fitted: tuple
-                 ) -> tuple[list[dict], tuple, dict]:
+def greedy_round(
+    run: _Run, r: int, remaining: list[str], accepted: list[dict], fitted: tuple
+) -> tuple[list[dict], tuple, dict]:
     """Stage 1 of round *r*: every remaining candidate fitted on top of the accepted effects (in
     parallel), and -- from round 2 on -- the accepted ones re-fitted alone, the baseline a candidate
     must improve on. Returns (fits, best first; the accepted effects as the baseline left them; the
@@ -945,13 +1100,21 @@ def greedy_round(run: _Run, r: int, remaining: list[str], accepted: list[dict], 
     # fitted to the wrong model, and judge the structural effects next to the wrong noise).
     nuisance = NUISANCE in remaining
     seed = settings.seed + 1000 * r
-    tasks = [(run.search, name, fitted, run.target, settings, seed, nuisance and name != NUISANCE, run.rows)
-             for name in remaining]
+    tasks = [
+        (run.search, name, fitted, run.target, settings, seed, nuisance and name != NUISANCE, run.rows)
+        for name in remaining
+    ]
     if fitted:
         tasks.append((run.search, None, fitted, run.target, settings, seed, False, run.rows))  # the baseline
-    on_event(Event("stage", stage=f"gap round {r}", total=len(tasks),
-                   message=f"gap: round {r}, fitting {len(remaining)} effects"
-                           + (" and re-fitting the accepted ones alone" if fitted else "")))
+    on_event(
+        Event(
+            "stage",
+            stage=f"gap round {r}",
+            total=len(tasks),
+            message=f"gap: round {r}, fitting {len(remaining)} effects"
+            + (" and re-fitting the accepted ones alone" if fitted else ""),
+        )
+    )
     done = 0
 
     def advance(i, res):
@@ -971,9 +1134,27 @@ def greedy_round(run: _Run, r: int, remaining: list[str], accepted: list[dict], 
     for f in fits:
         f["share_removed"] = min(1.0, max(0.0, 1.0 - f["score"] / run.gap0)) if run.gap0 > 0 else 0.0
         f["share_of_remaining"] = min(1.0, max(0.0, 1.0 - f["score"] / gap_now)) if gap_now > 0 else 0.0
-    info = {"round": r, "gap": gap_now, "baseline": baseline and baseline["score"],
-            "fits": [{k: f.get(k) for k in ("name", "score", "share_removed", "share_of_remaining", "params",
-                                            "evaluations", "seconds", "error")} for f in fits]}
+    info = {
+        "round": r,
+        "gap": gap_now,
+        "baseline": baseline and baseline["score"],
+        "fits": [
+            {
+                k: f.get(k)
+                for k in (
+                    "name",
+                    "score",
+                    "share_removed",
+                    "share_of_remaining",
+                    "params",
+                    "evaluations",
+                    "seconds",
+                    "error",
+                )
+            }
+            for f in fits
+        ],
+    }
     return fits, fitted, info
 
 
@@ -990,8 +1171,9 @@ def noise_arbitration(run: _Run, r: int, top: dict, alone_fit: dict | None, fitt
     return top if share >= MIN_SHARE and beyond["removed_low"] > 0.0 else alone_fit
 
 
-def attribution(run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tuple, info: dict
-                ) -> tuple[tuple, tuple, list[dict]] | None:
+def attribution(
+    run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tuple, info: dict
+) -> tuple[tuple, tuple, list[dict]] | None:
     """Stage 3: is the round's winner accepted, and what share of the gap is it credited with?
     Judged on fresh rows (a fit's gain on the rows it was fitted to includes what it learned of their
     noise, of the order of a small remaining gap). Accepted when it removes at least MIN_SHARE of
@@ -1017,8 +1199,13 @@ def attribution(run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tu
     share = paired["removed"] / paired["gap_now"] if paired["gap_now"] > 0 else 0.0
     ok = share >= MIN_SHARE and paired["removed_low"] > 0.0
     info.update(best=top["name"], share_of_remaining=share, removed_low=paired["removed_low"], accepted=ok)
-    run.on_event(Event("log", message=f"gap: round {r}: {top['name']} removes {100 * share:.1f} % of the gap left "
-                                      f"({'accepted' if ok else 'not accepted'})"))
+    run.on_event(
+        Event(
+            "log",
+            message=f"gap: round {r}: {top['name']} removes {100 * share:.1f} % of the gap left "
+            f"({'accepted' if ok else 'not accepted'})",
+        )
+    )
     if not ok:
         return None
     own = paired["removed"]
@@ -1031,16 +1218,32 @@ def attribution(run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tu
         own = min(max(0.0, 0.5 * (first + second)), paired["removed"])
         noise_paired = {**noise_paired, "removed": paired["removed"] - own}
     j0 = run.judged0
-    entries = [{"name": top["name"], "share_removed": own / j0 if j0 > 0 else 0.0, "share_of_remaining": share,
-                "params": top["params"], "intervals": top["intervals"], "determined": top.get("determined", {}),
-                "round": r, "removed_interval": paired["removed_interval"]}]
+    entries = [
+        {
+            "name": top["name"],
+            "share_removed": own / j0 if j0 > 0 else 0.0,
+            "share_of_remaining": share,
+            "params": top["params"],
+            "intervals": top["intervals"],
+            "determined": top.get("determined", {}),
+            "round": r,
+            "removed_interval": paired["removed_interval"],
+        }
+    ]
     if noise_paired:
         # Its share: what it removes beyond the candidate alone (the candidate keeps the rest).
-        entries.append({"name": NUISANCE, "share_removed": noise_paired["removed"] / j0 if j0 > 0 else 0.0,
-                        "share_of_remaining": noise_paired["removed"] / paired["gap_now"]
-                        if paired["gap_now"] > 0 else 0.0,
-                        "params": top["nuisance"]["params"], "intervals": {}, "round": r,
-                        "removed_interval": noise_paired["removed_interval"], "nuisance_of": top["name"]})
+        entries.append(
+            {
+                "name": NUISANCE,
+                "share_removed": noise_paired["removed"] / j0 if j0 > 0 else 0.0,
+                "share_of_remaining": noise_paired["removed"] / paired["gap_now"] if paired["gap_now"] > 0 else 0.0,
+                "params": top["nuisance"]["params"],
+                "intervals": {},
+                "round": r,
+                "removed_interval": noise_paired["removed_interval"],
+                "nuisance_of": top["name"],
+            }
+        )
         info["nuisance"] = top["nuisance"]
     return refit + (spec,) + noise, refit, entries
 
@@ -1056,8 +1259,11 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
     ``dropped_effects``."""
     run.on_event(Event("stage", stage="gap after", total=1, message="gap: the corrected source against the target"))
     gap_before = float(before["total"]["gap"])
-    reference = (_noise_reference(result, run.judged, run.target, run.pair, run.settings)
-                 if run.settings.reference == "noise" else None)
+    reference = (
+        _noise_reference(result, run.judged, run.target, run.pair, run.settings)
+        if run.settings.reference == "noise"
+        else None
+    )
 
     def judge(fitted: tuple) -> tuple[dict, float, float]:
         after = _report(run.judged(fitted), run.target, run.pair, run.settings) if fitted else before
@@ -1079,8 +1285,13 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         result["reference"] = reference
     verdict = verdict_of(gap_seen(before), bool(accepted), gap_seen(after), float(after["auc"]), share)
     result.update(
-        after=after, gap_after=float(after["total"]["gap"]), significant_after=gap_seen(after), shrink=shrink,
-        effects=accepted, unexplained=verdict in ("partly explained", "unexplained"), verdict=verdict,
+        after=after,
+        gap_after=float(after["total"]["gap"]),
+        significant_after=gap_seen(after),
+        shrink=shrink,
+        effects=accepted,
+        unexplained=verdict in ("partly explained", "unexplained"),
+        verdict=verdict,
         explained_share=max(0.0, min(1.0, share)) if verdict != "no significant gap" else None,
         corrected_effects=[[name, [[k, v] for k, v in params]] for name, params in fitted],
         seconds=time.perf_counter() - started,
@@ -1109,8 +1320,9 @@ def gap_seen(report: dict) -> bool:
     return bool(report["significant"]) and auc_z(report) > NormalDist().inv_cdf(1.0 - float(report["alpha"]))
 
 
-def verdict_of(significant_before: bool, accepted: bool, significant_after: bool, auc_after: float,
-               share: float) -> str:
+def verdict_of(
+    significant_before: bool, accepted: bool, significant_after: bool, auc_after: float, share: float
+) -> str:
     """The diagnosis's verdict (VERDICTS), read from the two-sample test and an effect size:
 
     * no significant gap before: nothing to explain;
@@ -1137,14 +1349,27 @@ def chain_record(chain: Chain, spec: DatasetSpec, z1: int) -> dict:
     if offset is None and chain.reference is not None:
         speed, _ = operating_point(spec)
         physics = tuple(e for e in spec.effects if get_registry().get("effect", e[0]).level != "signal")
-        clean = _clean_revolution(spec.model, spec.preset, whole_steps_rate(spec.fs, speed, z1), speed,
-                                  operating_point(spec)[1], spec.channel, physics)
+        clean = _clean_revolution(
+            spec.model,
+            spec.preset,
+            whole_steps_rate(spec.fs, speed, z1),
+            speed,
+            operating_point(spec)[1],
+            spec.channel,
+            physics,
+        )
         offset = fit_offset(clean, chain.reference, z1)
     fr = np.asarray(chain.fractions) if chain.fractions else np.empty(0)
-    return {"fs_hz": chain.fs, "speed_hz": chain.speed, "samples_per_rev": chain.samples_per_rev,
-            "step": chain.step, "offset_deg": None if offset is None else float(np.degrees(offset)),
-            "offset_fitted": chain.offset is None, "start_fractions": int(fr.size),
-            "fractional_starts": bool(fr.size and np.any(np.abs(fr - np.round(fr)) > 1e-3))}
+    return {
+        "fs_hz": chain.fs,
+        "speed_hz": chain.speed,
+        "samples_per_rev": chain.samples_per_rev,
+        "step": chain.step,
+        "offset_deg": None if offset is None else float(np.degrees(offset)),
+        "offset_fitted": chain.offset is None,
+        "start_fractions": int(fr.size),
+        "fractional_starts": bool(fr.size and np.any(np.abs(fr - np.round(fr)) > 1e-3)),
+    }
 
 
 def _noise_reference(result: dict, judged, target, pair, settings: Settings) -> dict | None:
@@ -1157,8 +1382,12 @@ def _noise_reference(result: dict, judged, target, pair, settings: Settings) -> 
         return None
     spec = get_registry().get("effect", NUISANCE).spec(fit["params"])
     report = _report(judged((spec,)), target, pair, settings, bootstrap=0)
-    return {"name": NUISANCE, "params": fit["params"], "gap": float(report["total"]["gap"]),
-            "views": {name: float(v["gap"]) for name, v in report["views"].items()}}
+    return {
+        "name": NUISANCE,
+        "params": fit["params"],
+        "gap": float(report["total"]["gap"]),
+        "views": {name: float(v["gap"]) for name, v in report["views"].items()},
+    }
 
 
 def _as_tuple(effects) -> tuple:

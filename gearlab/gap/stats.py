@@ -82,6 +82,7 @@ SD_FLOOR = 1e-6  # relative: spreads below 1e-6 of a feature's magnitude count a
 
 # --- input checks --------------------------------------------------------------------------------
 
+
 def _check_set(X, which: str) -> np.ndarray:
     arr = np.asarray(X)
     if arr.size == 0:  # e.g. (0, P): a dataset's healthy selection came back empty
@@ -120,14 +121,21 @@ def _check_fraction(value, name: str) -> float:
 
 # --- per-feature effect sizes and per-view gaps ------------------------------------------------
 
+
 def effect_sizes(source: np.ndarray, target: np.ndarray) -> dict[str, np.ndarray]:
     """Per feature (columns): both means, both standard deviations (ddof 1), the pooled,
     floored spread and the signed effect size d = (μ_t − μ_s) / spread."""
     ms, mt = source.mean(axis=0), target.mean(axis=0)
     ss, st = source.std(axis=0, ddof=1), target.std(axis=0, ddof=1)
     spread = np.maximum(np.sqrt((ss**2 + st**2) / 2.0), _floor(ms, mt))
-    return {"source_mean": ms, "target_mean": mt, "source_sd": ss, "target_sd": st,
-            "spread": spread, "d": (mt - ms) / spread}
+    return {
+        "source_mean": ms,
+        "target_mean": mt,
+        "source_sd": ss,
+        "target_sd": st,
+        "spread": spread,
+        "d": (mt - ms) / spread,
+    }
 
 
 def _floor(ms: np.ndarray, mt: np.ndarray) -> np.ndarray:
@@ -141,7 +149,7 @@ def _membership(sizes: list[int]) -> np.ndarray:
     member = np.zeros((sum(sizes), len(sizes)))
     start = 0
     for v, size in enumerate(sizes):
-        member[start:start + size, v] = 1.0
+        member[start : start + size, v] = 1.0
         start += size
     return member
 
@@ -153,8 +161,9 @@ def view_gaps(d: np.ndarray, sizes: list[int], n_source: int, n_target: int) -> 
     return np.maximum((d * d - c) @ _membership(sizes), 0.0)
 
 
-def resampled_moments(rows: np.ndarray, centre: np.ndarray, scale: np.ndarray, replicates: int,
-                      rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def resampled_moments(
+    rows: np.ndarray, centre: np.ndarray, scale: np.ndarray, replicates: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
     """Bootstrap replicates (replicates, features) of the mean and variance of *rows* centred on
     *centre* and divided by *scale*. Each replicate is a vector of counts (how often each row is
     drawn, multinomial), so all replicates are two matrix products; centring and scaling first
@@ -167,8 +176,9 @@ def resampled_moments(rows: np.ndarray, centre: np.ndarray, scale: np.ndarray, r
     return mean, var
 
 
-def bootstrap_gaps(source: np.ndarray, target: np.ndarray, sizes: list[int], replicates: int,
-                   rng: np.random.Generator) -> np.ndarray:
+def bootstrap_gaps(
+    source: np.ndarray, target: np.ndarray, sizes: list[int], replicates: int, rng: np.random.Generator
+) -> np.ndarray:
     """(replicates, views) bootstrap replicates of the view gaps, rows of each set resampled
     (see resampled_moments); features centred on the source mean and scaled by their spread."""
     ns, nt = len(source), len(target)
@@ -185,6 +195,7 @@ def bootstrap_gaps(source: np.ndarray, target: np.ndarray, sizes: list[int], rep
 
 
 # --- two-sample tests ---------------------------------------------------------------------------------
+
 
 def _pooled_standardised(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Both sets stacked, each feature scaled by its mean and spread over all rows (label-free)."""
@@ -230,8 +241,7 @@ def classifier_auc(source: np.ndarray, target: np.ndarray, seed: int = 0, folds:
     return float(roc_auc_score(y, scores))
 
 
-def mmd_test(source: np.ndarray, target: np.ndarray, permutations: int = 1000,
-             seed: int = 0) -> dict[str, float]:
+def mmd_test(source: np.ndarray, target: np.ndarray, permutations: int = 1000, seed: int = 0) -> dict[str, float]:
     """Unbiased MMD² with a Gaussian kernel (median heuristic) and its permutation p-value.
 
     With K the kernel matrix of all rows (zero diagonal: the unbiased estimate leaves out
@@ -266,6 +276,7 @@ def mmd_test(source: np.ndarray, target: np.ndarray, permutations: int = 1000,
 
 # --- the report -------------------------------------------------------------------------------------
 
+
 def _interval(samples: np.ndarray, confidence: float) -> list[float] | None:
     samples = samples[np.isfinite(samples)]
     if samples.size == 0:
@@ -280,20 +291,23 @@ def _feature_rows(views: list[str], names: list[str], stats: dict, index) -> lis
     rows = []
     for i in index:
         sd = stats["source_sd"][i]
-        rows.append({
-            "view": views[i],
-            "feature": names[i],
-            "source_mean": float(stats["source_mean"][i]),
-            "target_mean": float(stats["target_mean"][i]),
-            "delta": float(stats["target_mean"][i] - stats["source_mean"][i]),
-            "effect": float(stats["d"][i]),
-            "sd_ratio": float(stats["target_sd"][i] / sd) if sd > 0 else None,  # None: no source spread
-        })
+        rows.append(
+            {
+                "view": views[i],
+                "feature": names[i],
+                "source_mean": float(stats["source_mean"][i]),
+                "target_mean": float(stats["target_mean"][i]),
+                "delta": float(stats["target_mean"][i] - stats["source_mean"][i]),
+                "effect": float(stats["d"][i]),
+                "sd_ratio": float(stats["target_sd"][i] / sd) if sd > 0 else None,  # None: no source spread
+            }
+        )
     return rows
 
 
-def compare_views(source: list[View], target: list[View], bootstrap: int = 200, seed: int = 0,
-                  confidence: float = 0.95, top: int = 5) -> dict:
+def compare_views(
+    source: list[View], target: list[View], bootstrap: int = 200, seed: int = 0, confidence: float = 0.95, top: int = 5
+) -> dict:
     """Per-view gap, RMS effect, share and bootstrap intervals, and the total, for matching
     lists of views of the source and target rows (see the module docstring)."""
     sizes = [v.size for v in source]
@@ -330,15 +344,28 @@ def compare_views(source: list[View], target: list[View], bootstrap: int = 200, 
         start += view.size
     return {
         "views": views,
-        "total": {"gap": total, "interval": _interval(rep_total, confidence) if bootstrap else None,
-                  "features": int(sum(sizes))},
-        "top_features": _feature_rows(owner, names, stats, np.argsort(-np.abs(stats["d"]))[:2 * top]),
+        "total": {
+            "gap": total,
+            "interval": _interval(rep_total, confidence) if bootstrap else None,
+            "features": int(sum(sizes)),
+        },
+        "top_features": _feature_rows(owner, names, stats, np.argsort(-np.abs(stats["d"]))[: 2 * top]),
     }
 
 
-def gap_report(source_X, target_X, pair, embed: Callable | None = None, seed: int = 0,
-               bootstrap: int = 200, permutations: int = 1000, alpha: float = 0.05,
-               confidence: float = 0.95, top: int = 5, consecutive: bool = False) -> dict:
+def gap_report(
+    source_X,
+    target_X,
+    pair,
+    embed: Callable | None = None,
+    seed: int = 0,
+    bootstrap: int = 200,
+    permutations: int = 1000,
+    alpha: float = 0.05,
+    confidence: float = 0.95,
+    top: int = 5,
+    consecutive: bool = False,
+) -> dict:
     """Where source and target healthy revolutions differ, and how strongly: a JSON-serialisable dict.
 
     *source_X*, *target_X*: healthy revolutions (n, P), one input-shaft revolution per row,
@@ -382,8 +409,14 @@ def gap_report(source_X, target_X, pair, embed: Callable | None = None, seed: in
     Ft = np.concatenate([v.features for v in target_views], axis=1)
     report["auc"] = classifier_auc(Fs, Ft, seed)
     report.update(mmd_test(Fs, Ft, permutations, seed))
-    report.update(alpha=alpha, significant=bool(report["p_value"] < alpha), bootstrap=bootstrap,
-                  permutations=permutations, confidence=confidence, seed=seed)
+    report.update(
+        alpha=alpha,
+        significant=bool(report["p_value"] < alpha),
+        bootstrap=bootstrap,
+        permutations=permutations,
+        confidence=confidence,
+        seed=seed,
+    )
     if permutations < math.ceil(1.0 / alpha) - 1:
         notes.append(f"{permutations} permutations cannot give p < {alpha}; use at least {math.ceil(1 / alpha) - 1}")
 
@@ -391,15 +424,19 @@ def gap_report(source_X, target_X, pair, embed: Callable | None = None, seed: in
     if consecutive:
         report["output_shaft"] = _output_shaft(Xs, Xt, (z1, z2), plan, bootstrap, seed, confidence, top, notes)
     else:
-        notes.append(f"output-shaft orders (multiples of {ratio}) are not resolved: each row is one input "
-                     "revolution, so their lines leak into the neighbouring integer orders (shaft and "
-                     "non-synchronous bands)")
+        notes.append(
+            f"output-shaft orders (multiples of {ratio}) are not resolved: each row is one input "
+            "revolution, so their lines leak into the neighbouring integer orders (shaft and "
+            "non-synchronous bands)"
+        )
     report["constant_sets"] = [which for which, X in (("source", Xs), ("target", Xt)) if np.all(X == X[0])]
     for which, X in (("source", Xs), ("target", Xt)):
         if np.all(X == X[0]):
-            notes.append(f"the {which} revolutions are all identical (no noise): effect sizes are measured "
-                         "against the other set's spread or a numerical floor; add the sensor noise the other "
-                         "set has for meaningful sizes")
+            notes.append(
+                f"the {which} revolutions are all identical (no noise): effect sizes are measured "
+                "against the other set's spread or a numerical floor; add the sensor noise the other "
+                "set has for meaningful sizes"
+            )
     if not report["significant"]:
         notes.append(f"no significant gap (p = {report['p_value']:.3g} >= {alpha}): the shares describe sampling noise")
     report["notes"] = notes
@@ -411,8 +448,10 @@ def _output_shaft(Xs, Xt, pair, plan, bootstrap, seed, confidence, top, notes) -
     per_block = z2 // math.gcd(z1, z2)
     blocks = min(len(Xs), len(Xt)) // per_block
     if blocks < MIN_REVOLUTIONS:
-        notes.append(f"output-shaft orders need {MIN_REVOLUTIONS} blocks of {per_block} consecutive revolutions "
-                     f"per set ({MIN_REVOLUTIONS * per_block} revolutions); got {blocks} blocks")
+        notes.append(
+            f"output-shaft orders need {MIN_REVOLUTIONS} blocks of {per_block} consecutive revolutions "
+            f"per set ({MIN_REVOLUTIONS * per_block} revolutions); got {blocks} blocks"
+        )
         return None
     vs, vt = output_shaft_view(Xs, pair, plan), output_shaft_view(Xt, pair, plan)
     out = compare_views([vs], [vt], bootstrap, seed, confidence, top)

@@ -85,6 +85,7 @@ def _db(power: np.ndarray) -> np.ndarray:
 
 # --- inputs ----------------------------------------------------------------------------------
 
+
 def gear_ratio(pair) -> tuple[int, int]:
     """(Z1, Z2) of a gear pair given as a GearPair (anything with ``Z1`` and ``Z2``), a
     ``(Z1, Z2)`` pair of whole numbers, or the name of a gear-pair preset ("meng2020")."""
@@ -138,6 +139,7 @@ def gear_pair_of(spec):
 
 # --- order bands -------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class BandPlan:
     """Which shaft orders make up which order band, for P points per revolution and Z1/Z2 teeth.
@@ -157,8 +159,15 @@ class BandPlan:
     floor_bands: int
 
     @classmethod
-    def make(cls, points: int, pair, shaft_orders: int = 3, sidebands: int = 3,
-             floor_fraction: float = 0.75, floor_bands: int = 4) -> BandPlan:
+    def make(
+        cls,
+        points: int,
+        pair,
+        shaft_orders: int = 3,
+        sidebands: int = 3,
+        floor_fraction: float = 0.75,
+        floor_bands: int = 4,
+    ) -> BandPlan:
         z1, z2 = gear_ratio(pair)
         for label, value in (("shaft_orders", shaft_orders), ("sidebands", sidebands), ("floor_bands", floor_bands)):
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
@@ -190,8 +199,11 @@ class BandPlan:
         z, m, k_max = self.z1, self.sidebands, self.harmonics
         shaft = [(f"shaft {s}x (order {s})", np.array([s])) for s in range(1, self.shaft_orders + 1)]
         mesh = [(f"mesh {k}x (order {k * z})", np.array([k * z])) for k in range(1, k_max + 1)]
-        side = [(f"mesh {k}x ±{j} (orders {k * z - j}, {k * z + j})", np.array([k * z - j, k * z + j]))
-                for k in range(1, k_max + 1) for j in range(1, m + 1)]
+        side = [
+            (f"mesh {k}x ±{j} (orders {k * z - j}, {k * z + j})", np.array([k * z - j, k * z + j]))
+            for k in range(1, k_max + 1)
+            for j in range(1, m + 1)
+        ]
         # What lies between: below the first lower sideband, between consecutive harmonics'
         # sidebands, and above the last resolved harmonic up to the noise floor.
         between = []
@@ -200,10 +212,12 @@ class BandPlan:
         for i, (lo, hi) in enumerate(zip(edges, ends)):
             if lo > hi:
                 continue
-            where = ("below mesh 1x" if i == 0 else f"mesh {i}x-{i + 1}x" if i < k_max else f"above mesh {k_max}x")
+            where = "below mesh 1x" if i == 0 else f"mesh {i}x-{i + 1}x" if i < k_max else f"above mesh {k_max}x"
             between.append((f"orders {lo}-{hi} ({where})", np.arange(lo, hi + 1)))
-        floor = [(f"orders {part[0]}-{part[-1]}", part)
-                 for part in np.array_split(np.arange(self.floor_start, self.nyquist + 1), self.floor_bands)]
+        floor = [
+            (f"orders {part[0]}-{part[-1]}", part)
+            for part in np.array_split(np.arange(self.floor_start, self.nyquist + 1), self.floor_bands)
+        ]
         return {"shaft": shaft, "mesh": mesh, "sidebands": side, "non_synchronous": between, "noise_floor": floor}
 
     def describe(self) -> dict:
@@ -234,7 +248,7 @@ def order_power(X: np.ndarray) -> np.ndarray:
 def power_of_spectrum(spectrum: np.ndarray, P: int) -> np.ndarray:
     """:func:`order_power` from the rows' rfft (n, P//2 + 1): 2|F|²/P² per line, |F|²/P² at DC
     and (P even) at the Nyquist line."""
-    power = (spectrum.real ** 2 + spectrum.imag ** 2) * (2.0 / (P * P))
+    power = (spectrum.real**2 + spectrum.imag**2) * (2.0 / (P * P))
     power[:, 0] *= 0.5
     if P % 2 == 0:
         power[:, -1] *= 0.5
@@ -269,9 +283,15 @@ def order_views_of_power(power: np.ndarray, plan: BandPlan) -> list[View]:
     layout = _LAYOUTS.get(plan)
     if layout is None:
         layout = _LAYOUTS.setdefault(plan, _band_layout(plan))
-    return [View(view, _db(np.add.reduceat(power[:, orders], starts, axis=1)) if len(names)
-                 else np.empty((len(power), 0)), names, "dB")
-            for view, names, orders, starts in layout]
+    return [
+        View(
+            view,
+            _db(np.add.reduceat(power[:, orders], starts, axis=1)) if len(names) else np.empty((len(power), 0)),
+            names,
+            "dB",
+        )
+        for view, names, orders, starts in layout
+    ]
 
 
 def output_shaft_view(X, pair, plan: BandPlan | None = None, multiples: int = 3) -> View:
@@ -310,11 +330,14 @@ def output_shaft_view(X, pair, plan: BandPlan | None = None, multiples: int = 3)
             names.append(f"mesh ± output {j}x ({len(mesh)} harmonics)")
             columns.append(power[:, mesh - line].sum(axis=1) + power[:, mesh + line].sum(axis=1))
     if not columns:
-        raise GearlabInputError(f"gear ratio {z1}/{z2}: the first {multiples} output-shaft orders are all whole input orders")
+        raise GearlabInputError(
+            f"gear ratio {z1}/{z2}: the first {multiples} output-shaft orders are all whole input orders"
+        )
     return View("output_shaft", _db(np.stack(columns, axis=1)), tuple(names), "dB")
 
 
 # --- TSA residual --------------------------------------------------------------------------------
+
 
 def tsa_residual_view(X, pair, reference=None, sectors: int | None = None) -> View:
     """Residual energy (dB) per angular sector after the synchronous average and the mesh harmonics.
@@ -346,8 +369,9 @@ def tsa_residual_view(X, pair, reference=None, sectors: int | None = None) -> Vi
     return residual_view_of_spectrum(np.fft.rfft(residual, axis=1), P, z1, np.mean(X * X, axis=1), sectors)
 
 
-def residual_view_of_spectrum(spectrum: np.ndarray, P: int, z1: int, row_power: np.ndarray,
-                              sectors: int | None = None) -> View:
+def residual_view_of_spectrum(
+    spectrum: np.ndarray, P: int, z1: int, row_power: np.ndarray, sectors: int | None = None
+) -> View:
     """The TSA residual view from the residual's rfft (n, P//2 + 1) (overwritten: DC and mesh
     harmonics are zeroed) and each row's mean square *row_power* (n,).
 
@@ -396,6 +420,7 @@ def waveform_view(X) -> View:
 
 # --- network latent features --------------------------------------------------------------------
 
+
 def embed_rows(X: np.ndarray, embed: Callable, name: str = "rows") -> np.ndarray:
     """``embed(X)`` checked: a finite (n, d) array with d >= 1."""
     Z = np.asarray(embed(X), dtype=np.float64)
@@ -438,7 +463,9 @@ def latent_views(source_X: np.ndarray, target_X: np.ndarray, embed: Callable, **
     """The latent views of both sets, on one basis fitted to both (LatentBasis.fit)."""
     zs, zt = embed_rows(source_X, embed, "source rows"), embed_rows(target_X, embed, "target rows")
     if zs.shape[1] != zt.shape[1]:
-        raise GearlabInputError(f"embed gave {zs.shape[1]} latent features for the source, {zt.shape[1]} for the target")
+        raise GearlabInputError(
+            f"embed gave {zs.shape[1]} latent features for the source, {zt.shape[1]} for the target"
+        )
     basis = LatentBasis.fit(zs, zt, **basis_options)
     return basis.project(zs), basis.project(zt)
 
@@ -455,8 +482,10 @@ def network_embed(network, batch_size: int = 256) -> Callable[[np.ndarray], np.n
         network.eval()
         try:
             with torch.no_grad():
-                parts = [network.embed(torch.as_tensor(X[i:i + batch_size], dtype=torch.float32, device=device))
-                         for i in range(0, len(X), batch_size)]
+                parts = [
+                    network.embed(torch.as_tensor(X[i : i + batch_size], dtype=torch.float32, device=device))
+                    for i in range(0, len(X), batch_size)
+                ]
         finally:
             network.train(was_training)
         return torch.cat(parts).reshape(len(X), -1).cpu().numpy().astype(np.float64)

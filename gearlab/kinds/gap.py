@@ -33,32 +33,52 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..effects import default_candidates
 from ..errors import GearlabInputError
+from ..events import Event
+from ..gap.diagnose import Settings
 from ..learn.networks import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, shared_state
 from ..learn.schedule import two_phases
 from ..registry import get_registry
-from ..events import Event
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
-from ..gap.diagnose import Settings
 from ..settings import quick_limits, shrunk
-from .common import (DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, planned_counts,
-                     simulated_spec, sized)
-from .transfer import TRAINING, method as transfer_method, train_unit
+from .common import (
+    DATASET_TABLE,
+    class_sizes,
+    dataset_spec,
+    device_of,
+    executor_for,
+    planned_counts,
+    simulated_spec,
+    sized,
+)
+from .transfer import TRAINING, train_unit
+from .transfer import method as transfer_method
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # The target may also be measured records in the detection kind's shape (a list of files with a
 # tacho of N pulses per revolution, docs/real_data.md); the diagnosis reads their history files.
-_TARGET = Table({
-    **DATASET_TABLE.keys,
-    "vibration": Key((int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"),
-    "tacho": Key((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)"),
-    "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "records: tacho pulses per input-shaft revolution"),
-    "sensitivity": Key((int, float, str), None, doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V "
-                                                    "per m/s²); without it (or 'gain') the units are unknown"),
-    "files": Key(list, [], doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
-                               "the history files (healthy, one operating condition)"),
-}, required=True)
+_TARGET = Table(
+    {
+        **DATASET_TABLE.keys,
+        "vibration": Key((int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"),
+        "tacho": Key((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)"),
+        "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "records: tacho pulses per input-shaft revolution"),
+        "sensitivity": Key(
+            (int, float, str),
+            None,
+            doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V "
+            "per m/s²); without it (or 'gain') the units are unknown",
+        ),
+        "files": Key(
+            list,
+            [],
+            doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
+            "the history files (healthy, one operating condition)",
+        ),
+    },
+    required=True,
+)
 # History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
 # record are two conditions; one rig at one setting drifts by well under 1 %).
 SPEED_SPREAD = 0.02
@@ -75,14 +95,21 @@ TABLES = {
     "target": _TARGET,
     # declared once, on gearlab.gap.diagnose.Settings: keys, checks, --quick limits and docs
     "diagnosis": Table(keys_of(Settings)),
-    "accuracy": Table({
-        "enabled": Key(bool, True, doc="train source-only models on the uncorrected and corrected source "
-                                       "(needs target labels)"),
-        "methods": Key(list, ["mmd", "dann", "matched_filter"], doc="shown beside (adapter names): unsupervised DA baselines, on "
-                                                    "the uncorrected source; detectors, on both sources"),
-        "repetitions": Key(int, 3, in_range(1, 1000)),
-        **TRAINING,
-    }),
+    "accuracy": Table(
+        {
+            "enabled": Key(
+                bool, True, doc="train source-only models on the uncorrected and corrected source (needs target labels)"
+            ),
+            "methods": Key(
+                list,
+                ["mmd", "dann", "matched_filter"],
+                doc="shown beside (adapter names): unsupervised DA baselines, on "
+                "the uncorrected source; detectors, on both sources",
+            ),
+            "repetitions": Key(int, 3, in_range(1, 1000)),
+            **TRAINING,
+        }
+    ),
     "network": Table(keys_of(NetworkSettings, name="fast")),
 }
 
@@ -102,38 +129,62 @@ def build(scenario: Scenario) -> dict:
     if isinstance(target, DatasetSpec):
         _, target_pair, _ = target.check_model(location(path, "target"))
         if (target_pair.Z1, target_pair.Z2) != (pair.Z1, pair.Z2):
-            raise GearlabInputError(f"{location(path, 'target', 'preset')}: the target's gear pair has "
-                                    f"{target_pair.Z1}/{target_pair.Z2} teeth, the source's {pair.Z1}/{pair.Z2}; "
-                                    "effects never change the gear pair")
+            raise GearlabInputError(
+                f"{location(path, 'target', 'preset')}: the target's gear pair has "
+                f"{target_pair.Z1}/{target_pair.Z2} teeth, the source's {pair.Z1}/{pair.Z2}; "
+                "effects never change the gear pair"
+            )
         check_sampling(target, pair.Z1, location(path, "target"))
         healthy = class_sizes(target)["healthy"]
         check_healthy(healthy, location(path, "target", "healthy"))
     d = t["diagnosis"]
-    settings = {"candidates": candidates(d["candidates"], location(path, "diagnosis", "candidates")),
-                **{k: v for k, v in d.items() if k != "candidates"}}
+    settings = {
+        "candidates": candidates(d["candidates"], location(path, "diagnosis", "candidates")),
+        **{k: v for k, v in d.items() if k != "candidates"},
+    }
     if settings["reference"] == "noise" and settings["candidates"] and "sensor_noise" not in settings["candidates"]:
-        raise GearlabInputError(f"{location(path, 'diagnosis', 'reference')}: reference = 'noise' needs "
-                                "'sensor_noise' among the candidates (the noise fitted alone is the reference)")
+        raise GearlabInputError(
+            f"{location(path, 'diagnosis', 'reference')}: reference = 'noise' needs "
+            "'sensor_noise' among the candidates (the noise fitted alone is the reference)"
+        )
     net = t["network"]["name"]
     a = t["accuracy"]
     methods = da_methods(a["methods"], location(path, "accuracy", "methods"))
     protocol = Protocol(
-        methods=(Method("source_only", False), *methods), network=net, dropout=t["network"]["dropout"], ks=(0,),
-        repetitions=a["repetitions"], target_train=a["target_train"], batch=a["batch"], lr=a["lr"],
-        prime_epochs=a["prime_epochs"], baseline_epochs=a["baseline_epochs"], patience=a["patience"],
-        min_epochs=a["min_epochs"], max_epochs=a["max_epochs"], seed=a["seed"], device=device_of(scenario),
+        methods=(Method("source_only", False), *methods),
+        network=net,
+        dropout=t["network"]["dropout"],
+        ks=(0,),
+        repetitions=a["repetitions"],
+        target_train=a["target_train"],
+        batch=a["batch"],
+        lr=a["lr"],
+        prime_epochs=a["prime_epochs"],
+        baseline_epochs=a["baseline_epochs"],
+        patience=a["patience"],
+        min_epochs=a["min_epochs"],
+        max_epochs=a["max_epochs"],
+        seed=a["seed"],
+        device=device_of(scenario),
     )
     if a["enabled"]:
         if protocol.min_epochs > protocol.max_epochs:
-            raise GearlabInputError(f"{location(path, 'accuracy', 'min_epochs')}: {protocol.min_epochs} is larger "
-                                    f"than max_epochs = {protocol.max_epochs}")
+            raise GearlabInputError(
+                f"{location(path, 'accuracy', 'min_epochs')}: {protocol.min_epochs} is larger "
+                f"than max_epochs = {protocol.max_epochs}"
+            )
         check(protocol, str(path))
         planned = planned_counts(source), planned_counts(target)
         # a simulated target without faults has nothing to detect: the accuracy is skipped (run)
         if None not in planned and planned[1].faults:
             check_data(protocol, *planned, f"{path}: [accuracy]")
-    return {"source": source, "target": target, "settings": settings, "protocol": protocol,
-            "accuracy": bool(a["enabled"])}
+    return {
+        "source": source,
+        "target": target,
+        "settings": settings,
+        "protocol": protocol,
+        "accuracy": bool(a["enabled"]),
+    }
 
 
 @dataclass(frozen=True)
@@ -158,8 +209,10 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
                 raise GearlabInputError(f"{where} key '{key}': belongs to measured records ('files')")
         for key in ("vibration", "tacho"):
             if not isinstance(entry[key], str):
-                raise GearlabInputError(f"{where} key '{key}': a column index belongs to measured records "
-                                        "('files'); a 'file' names its channel")
+                raise GearlabInputError(
+                    f"{where} key '{key}': a column index belongs to measured records "
+                    "('files'); a 'file' names its channel"
+                )
         return dataset_spec(entry, where, base)
     from .detection import target_spec
 
@@ -188,8 +241,15 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     files = records.history
     on_event(Event("stage", stage="records", total=len(files), message="measured history records"))
     for i, f in enumerate(files):
-        rec = read_record(f.resolved, vibration=t.vibration, tacho=t.tacho, pulses_per_rev=t.pulses_per_rev,
-                          sensitivity=t.sensitivity, fs=t.fs, transient=t.transient)
+        rec = read_record(
+            f.resolved,
+            vibration=t.vibration,
+            tacho=t.tacho,
+            pulses_per_rev=t.pulses_per_rev,
+            sensitivity=t.sensitivity,
+            fs=t.fs,
+            transient=t.transient,
+        )
         revs = rec.revolutions
         if rows:
             _, revs = align_to(rows[0].mean(axis=0), revs, t.pulses_per_rev)
@@ -199,25 +259,33 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     low, high = min(speeds.values()), max(speeds.values())
     if high > low * (1 + SPEED_SPREAD):
         shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
-        raise GearlabInputError(f"[target] key 'files': the history records run at different speeds ({shown}); "
-                                "the gap is diagnosed for one operating condition: give one speed's records")
+        raise GearlabInputError(
+            f"[target] key 'files': the history records run at different speeds ({shown}); "
+            "the gap is diagnosed for one operating condition: give one speed's records"
+        )
     skipped = len(t.files) - len(files)
     if skipped:
         notes.append(f"{skipped} test file(s) of the [target] are not used: the gap is measured on the history")
     X = np.concatenate(rows).astype(np.float64)
     speed = float(np.average(list(speeds.values()), weights=[len(r) for r in rows]))
-    notes.append(f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
-                 f"(tacho); the source simulates that speed")
+    notes.append(
+        f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
+        f"(tacho); the source simulates that speed"
+    )
     return X, speed, notes
 
 
 def check_healthy(count: int, where: str) -> None:
     if count == 0:
-        raise GearlabInputError(f"{where}: the target has no healthy data; the gap is measured on healthy "
-                                f"revolutions (expected at least {MIN_HEALTHY})")
+        raise GearlabInputError(
+            f"{where}: the target has no healthy data; the gap is measured on healthy "
+            f"revolutions (expected at least {MIN_HEALTHY})"
+        )
     if count < MIN_HEALTHY:
-        raise GearlabInputError(f"{where}: too few healthy target revolutions for the gap statistics: {count}; "
-                                f"expected at least {MIN_HEALTHY}")
+        raise GearlabInputError(
+            f"{where}: too few healthy target revolutions for the gap statistics: {count}; "
+            f"expected at least {MIN_HEALTHY}"
+        )
 
 
 def check_sampling(spec: DatasetSpec, z1: int, where: str) -> None:
@@ -232,9 +300,11 @@ def check_sampling(spec: DatasetSpec, z1: int, where: str) -> None:
 def check_points(points: float, z1: int, where: str, what: str) -> None:
     need = 2 * (z1 + SIDEBANDS) + 1
     if points < need:
-        raise GearlabInputError(f"{where}: sampling rate too low for the mesh harmonics: {what} gives "
-                                f"{points:.4g} samples per revolution, fewer than {need} needed to resolve mesh "
-                                f"order {z1} (a {z1}-tooth pinion) and its {SIDEBANDS} sidebands")
+        raise GearlabInputError(
+            f"{where}: sampling rate too low for the mesh harmonics: {what} gives "
+            f"{points:.4g} samples per revolution, fewer than {need} needed to resolve mesh "
+            f"order {z1} (a {z1}-tooth pinion) and its {SIDEBANDS} sidebands"
+        )
 
 
 def candidates(names, where: str) -> tuple[str, ...]:
@@ -262,12 +332,16 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
         if not isinstance(name, str):
             raise GearlabInputError(f"{where}: entry {i + 1} must be an adapter name, got {type(name).__name__}")
         if name == "source_only":
-            raise GearlabInputError(f"{where}: source_only is always trained (on the uncorrected and the "
-                                    "corrected source); list DA methods only")
+            raise GearlabInputError(
+                f"{where}: source_only is always trained (on the uncorrected and the "
+                "corrected source); list DA methods only"
+            )
         m = transfer_method({"adapter": name, "supervised": False, "params": {}}, f"{where} entry {i + 1}")
         if get_registry().get("adapter", m.adapter).train_on not in ("joint", "detector"):
-            raise GearlabInputError(f"{where} entry {i + 1}: '{name}' is neither a domain-adaptation method nor "
-                                    "a detector (it trains on the source or target alone)")
+            raise GearlabInputError(
+                f"{where} entry {i + 1}: '{name}' is neither a domain-adaptation method nor "
+                "a detector (it trains on the source or target alone)"
+            )
         if m in out:
             raise GearlabInputError(f"{where}: '{name}' is listed twice")
         out.append(m)
@@ -278,9 +352,11 @@ def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     s = spec["settings"]
     n = len(s["candidates"]) or len(default_candidates(get_registry()))
-    line = (f"gap of {sized(spec['source'])} -> {sized(spec['target'])}: {n} candidate effects x budget "
-            f"{s['budget']}, up to {s['max_effects']} greedy rounds, {s['healthy']} source healthy revolutions "
-            "per evaluation")
+    line = (
+        f"gap of {sized(spec['source'])} -> {sized(spec['target'])}: {n} candidate effects x budget "
+        f"{s['budget']}, up to {s['max_effects']} greedy rounds, {s['healthy']} source healthy revolutions "
+        "per evaluation"
+    )
     if spec["accuracy"]:
         p: Protocol = spec["protocol"]
         columns = [label_of(variant, m) for variant, m in accuracy_columns(p)]
@@ -337,8 +413,9 @@ def on_both_sources(m: Method) -> bool:
 def accuracy_columns(protocol: Protocol) -> list[tuple[str, Method]]:
     """(source variant, method) in the accuracy table's column order."""
     both = [m for m in protocol.methods if on_both_sources(m)]
-    return ([(variant, m) for m in both for variant in (UNCORRECTED, CORRECTED)]
-            + [(UNCORRECTED, m) for m in protocol.methods if m not in both])
+    return [(variant, m) for m in both for variant in (UNCORRECTED, CORRECTED)] + [
+        (UNCORRECTED, m) for m in protocol.methods if m not in both
+    ]
 
 
 def accuracy_units(protocol: Protocol) -> list[tuple[int, str, Method]]:
@@ -354,8 +431,11 @@ def noise_free(spec: DatasetSpec) -> DatasetSpec:
     matches (a template under 0 dB noise would be mostly noise)."""
     registry = get_registry()
     kept = tuple(e for e in spec.effects if not registry.get("effect", e[0]).noise)
-    return spec if kept == spec.effects else spec.with_(effects=kept, name=f"{spec.name}-noise-free",
-                                                        domain=f"{spec.name}-noise-free")
+    return (
+        spec
+        if kept == spec.effects
+        else spec.with_(effects=kept, name=f"{spec.name}-noise-free", domain=f"{spec.name}-noise-free")
+    )
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
@@ -373,15 +453,23 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         if records:  # measured records: the history's revolutions; the source runs at their tacho speed
             target_X, speed, record_notes = read_history(spec["target"], on_event)
             fs = spec["target"].target.fs
-            check_points(fs / speed, z1, location(scenario.path, "target", "fs"),
-                         f"the records' {fs:g} Hz at {speed:.4g} Hz shaft speed")
+            check_points(
+                fs / speed,
+                z1,
+                location(scenario.path, "target", "fs"),
+                f"the records' {fs:g} Hz at {speed:.4g} Hz shaft speed",
+            )
             source_spec = source_spec.with_(speed_hz=round(speed, 3))
             settings["max_order"] = int(PASSBAND * fs / (2 * speed))
-            record_notes.append(f"compared up to shaft order {settings['max_order']} ({PASSBAND:g} of the records' "
-                                "Nyquist order): the source is low-passed to the records' bandwidth")
+            record_notes.append(
+                f"compared up to shaft order {settings['max_order']} ({PASSBAND:g} of the records' "
+                "Nyquist order): the source is low-passed to the records' bandwidth"
+            )
             if not spec["target"].units_known:
-                record_notes.append("WARNING: units unknown: no sensitivity given; the records' values are taken "
-                                    "as m/s² (set sensitivity = '10 mV/g')")
+                record_notes.append(
+                    "WARNING: units unknown: no sensitivity given; the records' values are taken "
+                    "as m/s² (set sensitivity = '10 mV/g')"
+                )
             chain = Chain(fs=fs, speed=speed)  # text records: start fractions not kept (drawn uniformly)
             note = "; ".join(record_notes)
         else:
@@ -400,8 +488,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
             # Only the source configuration and the target's healthy rows go in: nothing of how the
             # target was made (its spec, effects, labels) reaches the diagnosis.
-            result = diagnose(source_spec, target_X, Settings(**settings), executor=executor, on_event=on_event,
-                              chain=chain)
+            result = diagnose(
+                source_spec, target_X, Settings(**settings), executor=executor, on_event=on_event, chain=chain
+            )
             record = {"unit": "diagnosis", "result": result, "note": note}
             run.append(record)
             done["diagnosis"] = record
@@ -412,8 +501,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         notes = [note] if note else []
         if spec["accuracy"] and records:
-            notes.append("accuracy skipped: measured history records carry no labelled faults (the detection "
-                         "kind scores real test files)")
+            notes.append(
+                "accuracy skipped: measured history records carry no labelled faults (the detection "
+                "kind scores real test files)"
+            )
             on_event(Event("log", message=notes[-1]))
         elif spec["accuracy"]:
             if not (np.asarray(target.fault) == 1).any():
@@ -422,7 +513,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             else:
                 corrected = corrected_source(source_spec, result)
                 if corrected != source_spec:  # a label only (not in the cache key): tells the two apart in logs
-                    corrected = corrected.with_(name=f"{source_spec.name}-corrected", domain=f"{source_spec.name}-corrected")
+                    corrected = corrected.with_(
+                        name=f"{source_spec.name}-corrected", domain=f"{source_spec.name}-corrected"
+                    )
                 accuracy(scenario, run, corrected, executor, on_event, done)
         summarise(scenario, run, notes)
 
@@ -430,8 +523,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 def _brief(record: dict) -> dict:
     """The diagnosis record without the per-feature arrays (events stay small)."""
     r = record["result"]
-    return {"unit": "diagnosis", "gap_before": r["gap_before"], "gap_after": r["gap_after"],
-            "unexplained": r["unexplained"], "effects": [e["name"] for e in r["effects"]]}
+    return {
+        "unit": "diagnosis",
+        "gap_before": r["gap_before"],
+        "gap_after": r["gap_after"],
+        "unexplained": r["unexplained"],
+        "effects": [e["name"] for e in r["effects"]],
+    }
 
 
 def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, on_event, done: dict) -> None:
@@ -445,17 +543,25 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
 
     todo = accuracy_units(protocol)
     pending = [u for u in todo if unit_name(*u) not in done]
-    on_event(Event("stage", stage="accuracy", total=len(todo),
-                   message=f"downstream accuracy: {len(todo)} training runs"))
+    on_event(
+        Event("stage", stage="accuracy", total=len(todo), message=f"downstream accuracy: {len(todo)} training runs")
+    )
     if pending:
         needed = list(dict.fromkeys(source_of(variant, m) for _, variant, m in pending))
-        on_event(Event("stage", stage="sources", total=len(needed),
-                       message=f"source datasets ({', '.join(s.name for s in needed)})"))
+        on_event(
+            Event(
+                "stage",
+                stage="sources",
+                total=len(needed),
+                message=f"source datasets ({', '.join(s.name for s in needed)})",
+            )
+        )
         target, _ = load_or_build(spec["target"], executor, on_event)
         for i, s in enumerate(needed):
             built, _ = load_or_build(s, executor, on_event)
             check_data(protocol, Counts.of(built), Counts.of(target), f"{scenario.path}: [accuracy]")
             on_event(Event("advance", stage="sources", done=i + 1, total=len(needed)))
+
     # Each source has its own states (its source-only model, its primed network): the unit that
     # needs one first makes it, the others wait for the second phase and load it.
     def state_file(unit: tuple):
@@ -471,8 +577,11 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
         if not phase:
             continue
         target_data = (spec["target"], cache.entry_path(spec["target"]))
-        tasks = [(protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.path / "states" / variant)
-                 for rep, variant, m in phase for s in [source_of(variant, m)]]
+        tasks = [
+            (protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.path / "states" / variant)
+            for rep, variant, m in phase
+            for s in [source_of(variant, m)]
+        ]
 
         def record_done(i: int, record: dict, phase=phase) -> None:
             nonlocal finished
@@ -492,7 +601,7 @@ def diagnosis_line(result: dict) -> str:
     before, after = result["gap_before"], result["gap_after"]
     names = ", ".join(f"{e['name']} ({100 * e['share_removed']:.0f} %)" for e in result["effects"]) or "none"
     verdict = verdict_text(result)
-    return (f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}")
+    return f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}"
 
 
 def verdict_text(result: dict) -> str:
@@ -521,10 +630,16 @@ def view_rows(result: dict) -> dict[str, dict]:
     out = {}
     for name, b in before.items():
         a = after.get(name, {})
-        out[name] = {"gap_before": b["gap"], "gap_after": a.get("gap"), "share_before": b.get("share"),
-                     "share_after": a.get("share"), "gap_before_interval": b.get("gap_interval"),
-                     "gap_after_interval": a.get("gap_interval"), "share_before_interval": b.get("share_interval"),
-                     "share_after_interval": a.get("share_interval")}
+        out[name] = {
+            "gap_before": b["gap"],
+            "gap_after": a.get("gap"),
+            "share_before": b.get("share"),
+            "share_after": a.get("share"),
+            "gap_before_interval": b.get("gap_interval"),
+            "gap_after_interval": a.get("gap_interval"),
+            "share_before_interval": b.get("share_interval"),
+            "share_after_interval": a.get("share_interval"),
+        }
         if name in noise:
             out[name]["gap_noise"] = noise[name]
     return out
@@ -538,8 +653,11 @@ def accuracy_table(records: list[dict], protocol: Protocol) -> dict[str, dict]:
         label = label_of(variant, m)
         acc = [r["accuracy"] for r in records if r.get("variant") == variant and r.get("method") == label]
         if acc:
-            out[label] = {"mean": float(np.mean(acc)), "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0,
-                          "n": len(acc)}
+            out[label] = {
+                "mean": float(np.mean(acc)),
+                "std": float(np.std(acc, ddof=1)) if len(acc) > 1 else 0.0,
+                "n": len(acc),
+            }
     return out
 
 
@@ -553,9 +671,17 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "scenario": scenario.name,
         "source": asdict(spec["source"]),
         "target": asdict(spec["target"]),
-        "effects": [{"name": e["name"], "share_removed": e["share_removed"], "params": e["params"],
-                     "intervals": e.get("intervals", {}), "determined": e.get("determined", {}),
-                     "round": e.get("round")} for e in result["effects"]],
+        "effects": [
+            {
+                "name": e["name"],
+                "share_removed": e["share_removed"],
+                "params": e["params"],
+                "intervals": e.get("intervals", {}),
+                "determined": e.get("determined", {}),
+                "round": e.get("round"),
+            }
+            for e in result["effects"]
+        ],
         "gap_before": result["gap_before"],
         "gap_after": result["gap_after"],
         "shrink": 1 - result["gap_after"] / result["gap_before"] if result["gap_before"] > 0 else None,
@@ -574,9 +700,13 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "mmd2_after": result["after"]["mmd2"],
         "views": view_rows(result),
         # consecutive rows: the output-shaft orders (blocks of Z2/gcd revolutions), outside the shares
-        "output_shaft": {k: ({"gap": v["gap"], "gap_interval": v.get("gap_interval"), "blocks": v.get("blocks")}
-                             if v else None) for k, v in (("before", result["before"].get("output_shaft")),
-                                                          ("after", result["after"].get("output_shaft")))},
+        "output_shaft": {
+            k: ({"gap": v["gap"], "gap_interval": v.get("gap_interval"), "blocks": v.get("blocks")} if v else None)
+            for k, v in (
+                ("before", result["before"].get("output_shaft")),
+                ("after", result["after"].get("output_shaft")),
+            )
+        },
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
         "settings": result.get("settings", spec["settings"]),
@@ -602,22 +732,30 @@ def _pct(x) -> str:
 
 def views_md(views: dict) -> str:
     noise = any("gap_noise" in v for v in views.values())  # a column for the noise-alone reference
-    lines = ["| view | gap before | share before | " + ("gap with noise alone | " if noise else "")
-             + "gap after | share after |", "|---|---|---|---|---|" + ("---|" if noise else "")]
+    lines = [
+        "| view | gap before | share before | "
+        + ("gap with noise alone | " if noise else "")
+        + "gap after | share after |",
+        "|---|---|---|---|---|" + ("---|" if noise else ""),
+    ]
     for name, v in views.items():
         after = "" if v["gap_after"] is None else f"{v['gap_after']:.4g}{_interval(v['gap_after_interval'])}"
         share_iv = v["share_before_interval"]
-        share_before = _pct(v["share_before"]) + (f" [{100 * share_iv[0]:.0f}, {100 * share_iv[1]:.0f}]"
-                                                  if share_iv else "")
+        share_before = _pct(v["share_before"]) + (
+            f" [{100 * share_iv[0]:.0f}, {100 * share_iv[1]:.0f}]" if share_iv else ""
+        )
         middle = (f"{v['gap_noise']:.4g} | " if v.get("gap_noise") is not None else " | ") if noise else ""
-        lines.append(f"| {name} | {v['gap_before']:.4g}{_interval(v['gap_before_interval'])} | {share_before} | "
-                     f"{middle}{after} | {_pct(v['share_after'])} |")
+        lines.append(
+            f"| {name} | {v['gap_before']:.4g}{_interval(v['gap_before_interval'])} | {share_before} | "
+            f"{middle}{after} | {_pct(v['share_after'])} |"
+        )
     return "\n".join(lines) + "\n"
 
 
 def _params(params: dict, determined: dict | None = None) -> str:
     """k = v, ...; a parameter the data do not determine (its interval spans most of its range) is
     marked "not identifiable"."""
+
     def mark(k):
         return " (not identifiable)" if determined and k in determined and not determined[k]["determined"] else ""
 
@@ -636,8 +774,10 @@ def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
 
 def accuracy_md(acc: dict, order: list[str] | None = None) -> str:
     lines = ["| model (k = 0) | target test accuracy (%) | repetitions |", "|---|---|---|"]
-    lines += [f"| {label} | {acc[label]['mean']:.2f} ± {acc[label]['std']:.1f} | {acc[label]['n']} |"
-              for label in (order or list(acc))]
+    lines += [
+        f"| {label} | {acc[label]['mean']:.2f} ± {acc[label]['std']:.1f} | {acc[label]['n']} |"
+        for label in (order or list(acc))
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -651,27 +791,35 @@ def tables_md(summary: dict) -> str:
 
 def summary_lines(run: RunDir) -> list[str]:
     s = json.loads((run.path / "summary.json").read_text())
-    names = ", ".join(f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'], e.get('determined'))})"
-                      for e in s["effects"])
+    names = ", ".join(
+        f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'], e.get('determined'))})" for e in s["effects"]
+    )
     lines = [
         f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
         f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "
         f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
-        f"effects: {names or 'none'}; verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}",
+        f"effects: {names or 'none'}; "
+        f"verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}",
     ]
     ref = s.get("reference")
     if ref:
-        lines.append(f"against the source with its sensor noise alone ({_params(ref['params'])}): gap {ref['gap']:.4g} "
-                     f"-> {s['gap_after']:.4g}; {shrink_text(ref['gap'], s['gap_after'])} removed beyond the noise")
+        lines.append(
+            f"against the source with its sensor noise alone ({_params(ref['params'])}): gap {ref['gap']:.4g} "
+            f"-> {s['gap_after']:.4g}; {shrink_text(ref['gap'], s['gap_after'])} removed beyond the noise"
+        )
     shaft = s.get("output_shaft") or {}
     if shaft.get("before"):
         after = shaft.get("after") or {}
-        lines.append(f"output-shaft orders (consecutive revolutions): gap {shaft['before']['gap']:.4g} -> "
-                     f"{after.get('gap', float('nan')):.4g}")
+        lines.append(
+            f"output-shaft orders (consecutive revolutions): gap {shaft['before']['gap']:.4g} -> "
+            f"{after.get('gap', float('nan')):.4g}"
+        )
     lines += ["per-view gap:", views_md(s["views"]).rstrip()]
     if s.get("accuracy"):
-        lines += ["target fault-detection accuracy (k = 0):",
-                  accuracy_md(s["accuracy"], s.get("accuracy_order")).rstrip()]
+        lines += [
+            "target fault-detection accuracy (k = 0):",
+            accuracy_md(s["accuracy"], s.get("accuracy_order")).rstrip(),
+        ]
     lines += [f"note: {n}" for n in s.get("notes", [])]
     return lines
 
@@ -699,19 +847,46 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
         rows = view_rows(diag["result"])
         names = list(rows)
         x = list(range(len(names)))
-        out.append(Chart(
-            "per-view gap before/after", "view", "gap (sum of squared effect sizes, 1)",
-            (Curve("before", x, [rows[n]["gap_before"] for n in names]),
-             Curve("after", x, [rows[n]["gap_after"] or 0.0 for n in names])), categories=names))
+        out.append(
+            Chart(
+                "per-view gap before/after",
+                "view",
+                "gap (sum of squared effect sizes, 1)",
+                (
+                    Curve("before", x, [rows[n]["gap_before"] for n in names]),
+                    Curve("after", x, [rows[n]["gap_after"] or 0.0 for n in names]),
+                ),
+                categories=names,
+            )
+        )
         ranking = diag["result"]["ranking"]
         if ranking:
-            out.append(Chart("effect ranking: share of the gap removed", "effect", "share removed (%)",
-                             (Curve("round 1", list(range(len(ranking))), [100 * r["share_removed"] for r in ranking]),),
-                             categories=[r["name"] for r in ranking]))
+            out.append(
+                Chart(
+                    "effect ranking: share of the gap removed",
+                    "effect",
+                    "share removed (%)",
+                    (Curve("round 1", list(range(len(ranking))), [100 * r["share_removed"] for r in ranking]),),
+                    categories=[r["name"] for r in ranking],
+                )
+            )
     acc = accuracy_table(records, scenario.spec["protocol"])
     if acc:
         labels = list(acc)
-        out.append(Chart("target test accuracy (k = 0)", "model", "accuracy (%)",
-                         (Curve("mean", list(range(len(labels))), [acc[n]["mean"] for n in labels],
-                                [acc[n]["std"] for n in labels]),), categories=labels))
+        out.append(
+            Chart(
+                "target test accuracy (k = 0)",
+                "model",
+                "accuracy (%)",
+                (
+                    Curve(
+                        "mean",
+                        list(range(len(labels))),
+                        [acc[n]["mean"] for n in labels],
+                        [acc[n]["std"] for n in labels],
+                    ),
+                ),
+                categories=labels,
+            )
+        )
     return out

@@ -25,11 +25,11 @@ import numpy as np
 from ..charts import Chart, Curve
 from ..effects import default_candidates
 from ..errors import GearlabInputError
-from ..gap import benchmark as bench
-from ..registry import get_registry
 from ..events import Event
-from ..runs import RunDir
+from ..gap import benchmark as bench
 from ..gap.diagnose import Settings
+from ..registry import get_registry
+from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
 from ..settings import quick_limits
 from .common import DATASET_TABLE, dataset_spec, executor_for
@@ -37,18 +37,26 @@ from .common import DATASET_TABLE, dataset_spec, executor_for
 MAX_TRIALS = 10000
 MAX_SEED = 2**32 - 1
 
-_SOURCE_KEYS = {k: v for k, v in DATASET_TABLE.keys.items() if k not in ("file", "vibration", "tacho", "labels", "sensitivity", "gain",
-                                                                         "class_names", "transient")}
+_SOURCE_KEYS = {
+    k: v
+    for k, v in DATASET_TABLE.keys.items()
+    if k not in ("file", "vibration", "tacho", "labels", "sensitivity", "gain", "class_names", "transient")
+}
 _SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
 TABLES = {
-    "benchmark": Table({
-        "trials": Key(int, 40, in_range(1, MAX_TRIALS), "number of trials (>= 40 for the acceptance numbers)"),
-        "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds the trials' draws and the diagnosis"),
-        "library": Key(list, [], doc="candidate effects (registered names); [] = every registered effect but the opt-in ones"),
-        "target_revolutions": Key(int, 80, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000),
-                                  "healthy revolutions in each written target"),
-    }),
+    "benchmark": Table(
+        {
+            "trials": Key(int, 40, in_range(1, MAX_TRIALS), "number of trials (>= 40 for the acceptance numbers)"),
+            "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds the trials' draws and the diagnosis"),
+            "library": Key(
+                list, [], doc="candidate effects (registered names); [] = every registered effect but the opt-in ones"
+            ),
+            "target_revolutions": Key(
+                int, 80, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000), "healthy revolutions in each written target"
+            ),
+        }
+    ),
     "source": Table(_SOURCE_KEYS),
     # the diagnosis's own settings, declared once on gearlab.gap.diagnose.Settings
     "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
@@ -79,16 +87,23 @@ def build(scenario: Scenario) -> dict:
     library = tuple(library)
     trials = bench.draw_trials(b["trials"], b["seed"], library, source)
     settings = {**t["search"], "seed": b["seed"]}
-    return {"source": source, "library": library, "trials": trials, "settings": settings,
-            "revolutions": b["target_revolutions"]}
+    return {
+        "source": source,
+        "library": library,
+        "trials": trials,
+        "settings": settings,
+        "revolutions": b["target_revolutions"],
+    }
 
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     counts = bench.trial_counts(len(spec["trials"]))
     mix = ", ".join(f"{c} {k}" for k, c in counts.items())
-    return (f"{len(spec['trials'])} blind trials ({mix}) on {spec['source'].name} ({spec['source'].model}), "
-            f"{len(spec['library'])} candidate effects, budget {spec['settings']['budget']} per fit")
+    return (
+        f"{len(spec['trials'])} blind trials ({mix}) on {spec['source'].name} ({spec['source'].model}), "
+        f"{len(spec['library'])} candidate effects, budget {spec['settings']['budget']} per fit"
+    )
 
 
 def quick(scenario: Scenario) -> None:
@@ -122,8 +137,16 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("record", stage="trials", record=record))
             on_event(Event("advance", stage="trials", done=finished, total=total))
 
-        tasks = [bench.TrialTask(t, spec["source"], spec["settings"], str(run.path / "targets" / f"trial_{t.index:03d}"),
-                                 spec["revolutions"]) for t in pending]
+        tasks = [
+            bench.TrialTask(
+                t,
+                spec["source"],
+                spec["settings"],
+                str(run.path / "targets" / f"trial_{t.index:03d}"),
+                spec["revolutions"],
+            )
+            for t in pending
+        ]
         executor.map(bench.trial_task, tasks, on_done=record_done)
         summarise(scenario, run, elapsed=time.perf_counter() - started)
 
@@ -132,21 +155,32 @@ def _verdict(r: dict) -> str:
     if r["kind"] == "null":
         return "no significant gap (correct)" if r["null_correct"] else f"named {r['accepted'] or 'a gap'} (wrong)"
     if r["kind"] == "withheld":
-        return (f"withheld {r['withheld']}: " + ("unexplained (correct)" if r["out_of_library_unexplained"] else
-                                                 f"{r.get('verdict') or 'explained'}, named {r['accepted']} (wrong)"))
+        return f"withheld {r['withheld']}: " + (
+            "unexplained (correct)"
+            if r["out_of_library_unexplained"]
+            else f"{r.get('verdict') or 'explained'}, named {r['accepted']} (wrong)"
+        )
     hidden = "+".join(h[0] for h in r["hidden"])
     shrink = f", gap shrinks {100 * r['shrink']:.0f} %" if r["shrink"] is not None else ""
     verdict = f", {r['verdict']}" if r.get("verdict") else ""
-    return (f"hidden {hidden}, named {r['accepted'] or 'nothing'}: top-1 {'hit' if r['top1'] else 'miss'}{shrink}"
-            f"{verdict}")
+    return (
+        f"hidden {hidden}, named {r['accepted'] or 'nothing'}: top-1 {'hit' if r['top1'] else 'miss'}{shrink}{verdict}"
+    )
 
 
 def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> None:
     spec = scenario.spec
     records = sorted(run.records(), key=lambda r: r["index"])
-    summary = {"kind": "gap_benchmark", "scenario": scenario.name, "source": asdict(spec["source"]),
-               "library": list(spec["library"]), "settings": spec["settings"], "mix": dict(bench.MIX),
-               "target_revolutions": spec["revolutions"], **bench.summarise(records, spec["library"])}
+    summary = {
+        "kind": "gap_benchmark",
+        "scenario": scenario.name,
+        "source": asdict(spec["source"]),
+        "library": list(spec["library"]),
+        "settings": spec["settings"],
+        "mix": dict(bench.MIX),
+        "target_revolutions": spec["revolutions"],
+        **bench.summarise(records, spec["library"]),
+    }
     summary["trial_seconds"] = float(sum(r.get("seconds", 0.0) for r in records))  # summed over trials (all workers)
     summary["elapsed_seconds"] = elapsed  # wall time of this session of the run (a resumed run: since resuming)
     run.write_json("summary.json", summary)
@@ -165,21 +199,32 @@ def _num(v, fmt=".2f") -> str:
 def table_md(summary: dict) -> str:
     """Per effect: trials it was hidden in, top-1/top-3, shrink, parameter error, withheld behaviour;
     then the overall line."""
-    lines = ["| effect | trials | top-1 | top-3 | median shrink | median param error | ... on determined ones "
-             "| not identifiable | withheld | unexplained when withheld | named wrongly |", "|---|" + "---|" * 10]
+    lines = [
+        "| effect | trials | top-1 | top-3 | median shrink | median param error | ... on determined ones "
+        "| not identifiable | withheld | unexplained when withheld | named wrongly |",
+        "|---|" + "---|" * 10,
+    ]
     for name, e in summary["per_effect"].items():
-        lines.append(f"| {name} | {e['trials']} | {_pct(e['top1'])} | {_pct(e['top3'])} | {_pct(e['median_shrink'])} "
-                     f"| {_num(e['median_param_error'])} | {_num(e.get('median_param_error_determined'))} "
-                     f"| {e.get('not_identifiable', '')} | {e['withheld']} | {_pct(e['unexplained_when_withheld'])} "
-                     f"| {e['named_wrongly']} |")
-    lines.append(f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'][k] for k in ('single', 'pair'))} "
-                 f"| {_pct(summary['top1'])} | {_pct(summary['top3'])} | {_pct(summary['median_shrink'])} | "
-                 f"{_num(summary['median_param_error'])} | {_num(summary.get('median_param_error_determined'))} | "
-                 f"| {summary['by_kind']['withheld']} | {_pct(summary['out_of_library_unexplained'])} | |")
-    lines += ["", f"null trials with no significant gap: {_pct(summary['null_correct'])} (by format: "
-              + ", ".join(f"{k} {_pct(v)}" for k, v in (summary.get("null_correct_by_format") or {}).items()) + "); "
-              f"right effect first and explained (or partly, with >= 50 % of the gap): "
-              f"{_pct(summary.get('explained_or_partly_when_identified'))}"]
+        lines.append(
+            f"| {name} | {e['trials']} | {_pct(e['top1'])} | {_pct(e['top3'])} | {_pct(e['median_shrink'])} "
+            f"| {_num(e['median_param_error'])} | {_num(e.get('median_param_error_determined'))} "
+            f"| {e.get('not_identifiable', '')} | {e['withheld']} | {_pct(e['unexplained_when_withheld'])} "
+            f"| {e['named_wrongly']} |"
+        )
+    lines.append(
+        f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'][k] for k in ('single', 'pair'))} "
+        f"| {_pct(summary['top1'])} | {_pct(summary['top3'])} | {_pct(summary['median_shrink'])} | "
+        f"{_num(summary['median_param_error'])} | {_num(summary.get('median_param_error_determined'))} | "
+        f"| {summary['by_kind']['withheld']} | {_pct(summary['out_of_library_unexplained'])} | |"
+    )
+    lines += [
+        "",
+        f"null trials with no significant gap: {_pct(summary['null_correct'])} (by format: "
+        + ", ".join(f"{k} {_pct(v)}" for k, v in (summary.get("null_correct_by_format") or {}).items())
+        + "); "
+        f"right effect first and explained (or partly, with >= 50 % of the gap): "
+        f"{_pct(summary.get('explained_or_partly_when_identified'))}",
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -202,8 +247,9 @@ def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
     colours = {"single": "C0", "pair": "C1", "null": "C2", "withheld": "C3"}
     for kind, colour in colours.items():
         mine = [r for r in records if r["kind"] == kind and r["gap_before"] > 0 and r["gap_after"] == r["gap_after"]]
-        axes[1].scatter([r["gap_before"] for r in mine], [max(r["gap_after"], 1e-3) for r in mine], c=colour,
-                        label=kind, s=18)
+        axes[1].scatter(
+            [r["gap_before"] for r in mine], [max(r["gap_after"], 1e-3) for r in mine], c=colour, label=kind, s=18
+        )
     axes[1].set_xscale("log")
     axes[1].set_yscale("log")
     lims = axes[1].get_xlim()
@@ -247,13 +293,22 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     if not records:
         return [Chart("gap benchmark", "", "", (), notes=("no trial finished yet",))]
     idx = [r["index"] for r in records]
-    gap = Chart("gap before / after per trial (log10)", "trial", "log10 gap", (
-        Curve("before", idx, [float(np.log10(max(r["gap_before"], 1e-6))) for r in records]),
-        Curve("after", idx, [float(np.log10(max(r["gap_after"], 1e-6))) for r in records]),
-    ))
+    gap = Chart(
+        "gap before / after per trial (log10)",
+        "trial",
+        "log10 gap",
+        (
+            Curve("before", idx, [float(np.log10(max(r["gap_before"], 1e-6))) for r in records]),
+            Curve("after", idx, [float(np.log10(max(r["gap_after"], 1e-6))) for r in records]),
+        ),
+    )
     summary = bench.summarise(records, scenario.spec["library"])
     names = list(summary["per_effect"])
-    per = Chart("top-1 per hidden effect", "effect", "top-1 (%)", (
-        Curve("top-1", list(range(len(names))), [100 * (summary["per_effect"][n]["top1"] or 0) for n in names]),
-    ), categories=names)
+    per = Chart(
+        "top-1 per hidden effect",
+        "effect",
+        "top-1 (%)",
+        (Curve("top-1", list(range(len(names))), [100 * (summary["per_effect"][n]["top1"] or 0) for n in names]),),
+        categories=names,
+    )
     return [gap, per]

@@ -36,8 +36,10 @@ def check_size(path, what: str, nbytes: int) -> None:
     """Refuse *what* of *path* when it would take more than the record size limit."""
     limit = max_record_bytes()
     if nbytes > limit:
-        raise GearlabInputError(f"{path}: {what} would take {nbytes / 2**20:,.0f} MB, more than the limit of "
-                                f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
+        raise GearlabInputError(
+            f"{path}: {what} would take {nbytes / 2**20:,.0f} MB, more than the limit of "
+            f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)"
+        )
 
 
 @dataclass

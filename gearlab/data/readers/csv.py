@@ -48,8 +48,10 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
     if not any(_column([row[j].strip() for row in rows[1:2]]).dtype.kind == "f" for j in range(len(header))):
         # not a measured record (a system file reached through a link?): nothing of it is quoted
-        raise GearlabInputError(f"{path}: its first data row (line {lines[1][0]}) holds no number; expected a header "
-                                "row of column names, then rows of numbers")
+        raise GearlabInputError(
+            f"{path}: its first data row (line {lines[1][0]}) holds no number; expected a header "
+            "row of column names, then rows of numbers"
+        )
     index = {h: j for j, h in enumerate(header)}
 
     def get(name: str):

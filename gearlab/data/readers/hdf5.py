@@ -53,8 +53,11 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
     def level_fields(node, is_group: bool) -> tuple[list, list]:
         """(rates, times) defined at one node: its 'fs' attributes, and for a group its
         'fs' and 't'/'time' datasets."""
-        rates = [(f"attribute '{key}' of '{node.name}'", _normalise(value))
-                 for key, value in node.attrs.items() if key.lower() in _RATE_NAMES]
+        rates = [
+            (f"attribute '{key}' of '{node.name}'", _normalise(value))
+            for key, value in node.attrs.items()
+            if key.lower() in _RATE_NAMES
+        ]
         times = []
         if is_group:
             for key in node:

@@ -35,14 +35,16 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         variables = loadmat(path, squeeze_me=True, chars_as_strings=True)
         available = [k for k in variables if not k.startswith("__")]  # __header__, __version__, …
     else:
+
         def wanted(name: str) -> bool:  # the channels asked for and the rate fields (see _keyed)
             return name in names or name.lower() in _RATE_NAMES + _TIME_NAMES
 
         every = _mat5_variables(path.read_bytes(), wanted)
         available = list(dict.fromkeys(n for n in every if n and not n.startswith("__")))
         # squeeze_me: a 1×N row or N×1 column becomes a vector, a 1×1 a scalar.
-        variables = loadmat(path, squeeze_me=True, chars_as_strings=True,
-                            variable_names=[n for n in available if wanted(n)])
+        variables = loadmat(
+            path, squeeze_me=True, chars_as_strings=True, variable_names=[n for n in available if wanted(n)]
+        )
     return _keyed(available, lambda n: variables[n], names)
 
 
@@ -76,11 +78,11 @@ class _Mat5Layout:
         if first >> 16:
             if first >> 16 > 4:
                 raise ValueError(f"a small data element of {first >> 16} bytes at byte {pos}")
-            return first & 0xFFFF, buf[pos + 4:pos + 4 + (first >> 16)], pos + 8
+            return first & 0xFFFF, buf[pos + 4 : pos + 4 + (first >> 16)], pos + 8
         start = pos + 8
         if start + size > end:
             raise ValueError(f"an element of {size} bytes at byte {pos} runs past the end of the variable")
-        return first, buf[start:start + size], min(end, start + (size + 7) // 8 * 8)
+        return first, buf[start : start + size], min(end, start + (size + 7) // 8 * 8)
 
     def data(self, buf: memoryview, pos: int, end: int, types: frozenset = _MI_DATA) -> int:
         kind, _, pos = self.element(buf, pos, end)
@@ -147,8 +149,10 @@ class _Mat5Layout:
             for _ in range(count * (len(fields) // length)):
                 pos = self.matrix(body, pos, end, depth + 1)
         else:  # function handles, classdef objects, Java objects: no measured data
-            raise ValueError(f"variable '{name}' is a MATLAB {('function handle' if mclass == 16 else 'object')}, "
-                             "not numbers or text")
+            raise ValueError(
+                f"variable '{name}' is a MATLAB {('function handle' if mclass == 16 else 'object')}, "
+                "not numbers or text"
+            )
         return name
 
 
@@ -158,8 +162,10 @@ def _inflate(data, at: int) -> bytes:
     inflater = zlib.decompressobj()
     out = inflater.decompress(data, limit + 1)
     if len(out) > limit:
-        raise ValueError(f"the compressed variable at byte {at} inflates to more than the limit of "
-                         f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)")
+        raise ValueError(
+            f"the compressed variable at byte {at} inflates to more than the limit of "
+            f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)"
+        )
     return out
 
 

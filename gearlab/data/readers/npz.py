@@ -22,6 +22,7 @@ def _read_npz(path: Path, names: Sequence[str]) -> Contents:
     if not zipfile.is_zipfile(path):
         raise ValueError("not a zip archive (an .npz file is a zip of named .npy arrays)")
     with np.load(path, allow_pickle=False) as data:  # read inside: members load lazily
+
         def get(name: str):
             check_size(path, f"array '{name}'", _npz_member_bytes(data.zip, f"{name}.npy"))
             return data[name]

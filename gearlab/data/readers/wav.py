@@ -21,8 +21,9 @@ def _read_wav(path: Path, names: Sequence[str]) -> Contents:
         try:
             rate, data = wavfile.read(path)
         except ZeroDivisionError:  # scipy divides by the header's bytes per frame
-            raise ValueError("its header declares 0 channels or 0 bytes per sample; expected at least one "
-                             "channel of samples") from None
+            raise ValueError(
+                "its header declares 0 channels or 0 bytes per sample; expected at least one channel of samples"
+            ) from None
     for w in caught:
         # scipy reads what is there of a truncated file and only warns: refuse, never half a record.
         if "EOF" in str(w.message):
