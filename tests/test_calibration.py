@@ -2,10 +2,14 @@
 (gearlab.learn.calibration) and the `burst` network: behaviour and numbers on small
 synthetic revolutions with known bursts in known noise."""
 
+import dataclasses
+from pathlib import Path
+
 import numpy as np
 import pytest
 import torch
 
+from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.learn.bounds import best_accuracy, detection_at, gain, likelihood_ratio
 from gearlab.learn.calibration import (
@@ -182,6 +186,23 @@ def test_history_threshold_lets_the_asked_share_of_healthy_revolutions_through()
 def test_calibration_settings_are_checked(bad, match):
     with pytest.raises(GearlabInputError, match=match):
         Calibration(**bad).check("s.toml")
+
+
+def test_the_protocol_keys_of_calibration_are_its_fields_with_the_recipe_as_defaults(tmp_path):
+    """Declared once: the transfer kind's [protocol] keys are Calibration's fields, defaults
+    gearlab's recipe, and a bad value is refused there with the file, table and key."""
+    from gearlab.kinds.transfer import CALIBRATION
+    from gearlab.learn.calibration import RECIPE
+
+    assert {k: key.default for k, key in CALIBRATION.items()} == dataclasses.asdict(RECIPE)
+    scenario = Path(__file__).resolve().parents[1] / "scenarios" / "quick.toml"
+    bad = tmp_path / "bad.toml"
+    bad.write_text(scenario.read_text().replace("[protocol]", '[protocol]\nsource_noise = "pinc"', 1))
+    with pytest.raises(
+        GearlabInputError,
+        r"bad.toml.*protocol.*source_noise.*pinc",
+    ):
+        load_scenario(bad)
 
 
 def test_healthy_alignment_compares_the_source_healthy_with_the_history():

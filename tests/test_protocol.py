@@ -22,7 +22,7 @@ from gearlab.errors import GearlabInputError
 from gearlab.kinds import transfer
 from gearlab.kinds.common import planned_counts
 from gearlab.learn import protocol as P
-from gearlab.learn.calibration import THESIS, Calibration
+from gearlab.learn.calibration import RECIPE, THESIS
 from gearlab.learn.protocol import (
     Counts,
     Protocol,
@@ -160,7 +160,6 @@ def scrambled_test_set(dataset: Dataset, test: np.ndarray, signals: bool) -> Dat
     return replace(dataset, X=X, fault=fault, label=fault.copy())
 
 
-RECIPE = Calibration(residual=True, source_noise="auto", alignment="healthy", threshold="history")
 
 
 @pytest.mark.parametrize("calibration", [THESIS, RECIPE], ids=["thesis", "recipe"])

@@ -28,7 +28,7 @@ from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
 from ..files import atomic_write
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
-from ..learn.calibration import ALIGNMENTS, SOURCE_NOISE, THRESHOLDS, Calibration
+from ..learn.calibration import RECIPE, Calibration
 from ..learn.networks import NetworkSettings
 from ..learn.protocol import (
     KS,
@@ -48,7 +48,7 @@ from ..learn.training import pick_device
 from ..plots import transfer_figures
 from ..registry import get_registry
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, keys_of, location
+from ..scenario import Key, Scenario, Table, keys_of, location
 from ..settings import shrunk
 from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
 
@@ -63,13 +63,7 @@ TRAINING = keys_of(
 # How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
 # gearlab's recipe, the thesis's is residual = false, source_noise = "off", alignment =
 # "marginal", threshold = "argmax" (scenarios/expA_thesis.toml, expB_thesis.toml).
-CALIBRATION = {
-    "residual": Key(bool, True, doc="input = revolution minus its domain's healthy reference"),
-    "source_noise": Key(str, "auto", doc=f"fresh sensor noise on source batches: {' | '.join(SOURCE_NOISE)}"),
-    "alignment": Key(str, "healthy", doc=f"what the domain loss aligns: {' | '.join(ALIGNMENTS)}"),
-    "threshold": Key(str, "history", doc=f"fault call: {' | '.join(THRESHOLDS)}"),
-    "false_alarm": Key(float, 0.01, in_range(1e-6, 0.5), "share of the history above a 'history' threshold"),
-}
+CALIBRATION = keys_of(Calibration, **asdict(RECIPE))
 
 TABLES = {
     "source": _DATASET,

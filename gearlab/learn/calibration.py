@@ -40,6 +40,7 @@ import torch
 from torch import nn
 
 from ..errors import GearlabInputError
+from ..settings import declared, in_bounds, setting
 from .history import NOISE_LAWS, gumbel_quantile, noise_law
 
 SOURCE_NOISE = ("off", "auto", *NOISE_LAWS)
@@ -49,31 +50,25 @@ THRESHOLDS = ("argmax", "history")
 
 @dataclass(frozen=True)
 class Calibration:
-    """The four settings above; the defaults are the thesis's recipe."""
+    """The four settings above, declared once (the ``[protocol]`` keys of the kinds that train
+    derive from these fields); the defaults are the thesis's recipe, :data:`RECIPE` gearlab's."""
 
-    residual: bool = False
-    source_noise: str = "off"
-    alignment: str = "marginal"
-    threshold: str = "argmax"
-    false_alarm: float = 0.01
+    residual: bool = setting(bool, False, doc="input = revolution minus its domain's healthy reference")
+    source_noise: str = setting(str, "off", choices=SOURCE_NOISE, doc="fresh sensor noise on source batches")
+    alignment: str = setting(str, "marginal", choices=ALIGNMENTS, doc="what the domain loss aligns")
+    threshold: str = setting(str, "argmax", choices=THRESHOLDS, doc="fault call")
+    false_alarm: float = setting(
+        float, 0.01, low=1e-6, high=0.49, doc="share of the history above a 'history' threshold"
+    )
 
     def check(self, where: str) -> None:
-        for key, value, known in (
-            ("source_noise", self.source_noise, SOURCE_NOISE),
-            ("alignment", self.alignment, ALIGNMENTS),
-            ("threshold", self.threshold, THRESHOLDS),
-        ):
-            if value not in known:
-                raise GearlabInputError(
-                    f"{where}: [protocol] key '{key}': unknown value '{value}'; expected one of {', '.join(known)}"
-                )
-        if not 0.0 < self.false_alarm < 0.5:
-            raise GearlabInputError(
-                f"{where}: [protocol] key 'false_alarm': expected a share in (0, 0.5), got {self.false_alarm!r}"
-            )
+        """Refuse a value outside its declaration (a Calibration made in code, not from a scenario)."""
+        for name, (meta, _) in declared(type(self)).items():
+            in_bounds(meta, getattr(self, name), f"{where}: [protocol] key '{name}'")
 
 
 THESIS = Calibration()
+RECIPE = Calibration(residual=True, source_noise="auto", alignment="healthy", threshold="history")
 
 
 def _rms(x: np.ndarray) -> float:
