@@ -200,7 +200,7 @@ def test_the_protocol_keys_of_calibration_are_its_fields_with_the_recipe_as_defa
     bad.write_text(scenario.read_text().replace("[protocol]", '[protocol]\nsource_noise = "pinc"', 1))
     with pytest.raises(
         GearlabInputError,
-        r"bad.toml.*protocol.*source_noise.*pinc",
+        match=r"bad.toml.*protocol.*source_noise.*pinc",
     ):
         load_scenario(bad)
 
