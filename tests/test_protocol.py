@@ -160,8 +160,6 @@ def scrambled_test_set(dataset: Dataset, test: np.ndarray, signals: bool) -> Dat
     return replace(dataset, X=X, fault=fault, label=fault.copy())
 
 
-
-
 @pytest.mark.parametrize("calibration", [THESIS, RECIPE], ids=["thesis", "recipe"])
 @pytest.mark.parametrize("m", METHODS, ids=lambda m: m.key)
 def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, calibration, monkeypatch):
