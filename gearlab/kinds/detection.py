@@ -143,6 +143,18 @@ class Target:
     positive: str
     files: tuple[TargetFile, ...]
 
+    def read(self, file: TargetFile):
+        """One of the target's records, read with its channels, tacho and units."""
+        return read_record(
+            file.resolved,
+            vibration=self.vibration,
+            tacho=self.tacho,
+            pulses_per_rev=self.pulses_per_rev,
+            sensitivity=self.sensitivity,
+            fs=self.fs,
+            transient=self.transient,
+        )
+
 
 # --- building the scenario ---------------------------------------------------------------
 
@@ -393,15 +405,7 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
     on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
     records = {}
     for i, f in enumerate(target.files):
-        records[f.path] = read_record(
-            f.resolved,
-            vibration=target.vibration,
-            tacho=target.tacho,
-            pulses_per_rev=target.pulses_per_rev,
-            sensitivity=target.sensitivity,
-            fs=target.fs,
-            transient=target.transient,
-        )
+        records[f.path] = target.read(f)
         on_event(Event("advance", stage="records", done=i + 1, total=len(target.files)))
     speeds = {p: r.speed_hz for p, r in records.items()}
     named = conditions_of(list(target.files), speeds)

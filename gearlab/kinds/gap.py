@@ -234,22 +234,14 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     Records of different speeds are different operating conditions: refused. Each record starts at
     one of the tacho's N marks: every record is turned by m/N of a turn into register with the first
     (textzip.align_to, as the detection kind does), so the set has one synchronous average."""
-    from ..data.textzip import align_to, read_record
+    from ..data.textzip import align_to
 
     t = records.target
     rows, speeds, notes = [], {}, []
     files = records.history
     on_event(Event("stage", stage="records", total=len(files), message="measured history records"))
     for i, f in enumerate(files):
-        rec = read_record(
-            f.resolved,
-            vibration=t.vibration,
-            tacho=t.tacho,
-            pulses_per_rev=t.pulses_per_rev,
-            sensitivity=t.sensitivity,
-            fs=t.fs,
-            transient=t.transient,
-        )
+        rec = t.read(f)
         revs = rec.revolutions
         if rows:
             _, revs = align_to(rows[0].mean(axis=0), revs, t.pulses_per_rev)
