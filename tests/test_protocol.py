@@ -132,6 +132,16 @@ def test_splits_are_nested_across_k_and_the_history_core_is_in_every_training_se
     assert all(np.array_equal(core, s.history_core) for s in splits)
 
 
+@pytest.mark.parametrize("ks", [(0, 11), (12,)])
+def test_a_k_that_leaves_no_history_core_is_refused_with_the_key(ks):
+    with pytest.raises(
+        GearlabInputError,
+        match=r"s.toml: \[protocol\] key 'ks': k = 1[12] fault samples do not fit .* 2 healthy ones left",
+    ):
+        check(tiny(ks=ks), "s.toml")
+    check(tiny(ks=(0, 10)), "s.toml")  # 2 healthy left: runs
+
+
 def test_split_is_fixed_by_seed_repetition_and_k():
     p = tiny()
     a, b = split(p, SOURCE, TARGET, 1, 2), split(p, SOURCE, TARGET, 1, 2)

@@ -133,10 +133,12 @@ def _n_val(protocol: Protocol, n: int) -> int:
 
 def check(protocol: Protocol, where: str) -> None:
     """Refuse a protocol that cannot run whatever the data (*where*: the scenario file)."""
-    if max(protocol.ks) > protocol.target_train:
+    # every k's training set keeps the history core, at least 2 healthy samples: the priming's
+    # reference and noise level are read off them
+    if max(protocol.ks) > protocol.target_train - 2:
         raise GearlabInputError(
-            f"{where}: [protocol] key 'ks': k = {max(protocol.ks)} fault samples do not fit in "
-            f"a target training set of target_train = {protocol.target_train}"
+            f"{where}: [protocol] key 'ks': k = {max(protocol.ks)} fault samples do not fit in a target "
+            f"training set of target_train = {protocol.target_train} with 2 healthy ones left"
         )
     if protocol.batch > protocol.target_train:
         raise GearlabInputError(
