@@ -23,7 +23,9 @@ FILES = [
 ]
 
 
-def scenario(folder: Path, files=FILES, methods=("source_only", "mmd", "matched_filter"), extra: str = "") -> Path:
+def scenario(
+    folder: Path, files=FILES, methods=("source_only", "mmd", "matched_filter"), extra: str = "", detection: str = ""
+) -> Path:
     """A tiny detection scenario in *folder*/scenarios, its records in *folder*/data (relative paths)."""
     (folder / "data").mkdir(exist_ok=True)
     (folder / "scenarios").mkdir(exist_ok=True)
@@ -39,7 +41,7 @@ def scenario(folder: Path, files=FILES, methods=("source_only", "mmd", "matched_
         '[source]\npreset = "B-6-ch5"\nteeth = [1, 2, 3]\nfaults = { chip = [20] }\nhealthy = 9\n\n'
         f'[target]\nvibration = 0\ntacho = "2"\npulses_per_rev = {PULSES}\nsensitivity = "10 mV/g"\n'
         f'fs = "{FS} Hz"\nfiles = [\n' + "\n".join(entries) + "\n]\n\n"
-        "[classical]\nmesh_orders = [32]\n\n[detection]\nblocks = [5, 10]\n\n"
+        f"[classical]\nmesh_orders = [32]\n\n[detection]\nblocks = [5, 10]\n{detection}\n"
         f'[network]\nname = "fast"\n\n{methods_text}[protocol]\n{schedule(2)}\n{EXECUTION}\n{extra}'
     )
     path = folder / "scenarios" / "det.toml"
@@ -106,7 +108,9 @@ def flipped(files, signals: bool = False):
 
 def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_path, cache, monkeypatch):
     """Flipping the test files' labels changes no score and no decision, only the figures; other
-    test recordings change no history score, so no threshold and no trained model either."""
+    test recordings change no history score, so no threshold and no trained model either. The
+    networks are trained with two seeds (an ensemble) and thresholded by the random-effects
+    model of the history's records: both see the history alone."""
     import gearlab.learn.protocol as P
 
     seen = []
@@ -121,16 +125,19 @@ def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_pat
     for i, files in enumerate((FILES, flipped(FILES), flipped(FILES, signals=True))):
         folder = tmp_path / f"case{i}"
         folder.mkdir()
-        runs.append(run(cli, scenario(folder, files), tmp_path / "runs"))
+        runs.append(run(cli, scenario(folder, files, detection="seeds = 2"), tmp_path / "runs"))
     records = [{r["unit"]: r for r in map(json.loads, (d / "results.jsonl").read_text().splitlines())} for d in runs]
     first = scores(runs[0])
     for key in ("file", "unit", "index", "method", "score", "decision"):
         assert [r[key] for r in scores(runs[1])] == [r[key] for r in first]
+    assert {u.rsplit("/", 1)[-1] for u in records[0]} >= {"seed0", "seed1"}  # an ensemble's members
     for rec in records[1:]:
         assert rec.keys() == records[0].keys()
         for unit, r in rec.items():
             assert r["history_scores"] == records[0][unit]["history_scores"]
             assert r.get("history") == records[0][unit].get("history")
+            assert r["thresholds_by_rule"] == records[0][unit]["thresholds_by_rule"]
+            assert r["history_models"] == records[0][unit]["history_models"]
     a, b = (json.loads((d / "summary.json").read_text()) for d in runs[:2])
     for ra, rb in zip(a["rows"], b["rows"]):
         assert ra["threshold"] == rb["threshold"]
@@ -138,6 +145,57 @@ def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_pat
             assert rb["auc"] == pytest.approx(1.0 - ra["auc"])
     # what training was handed: history revolutions only, the same in every run
     assert seen and all(np.array_equal(x, seen[i % (len(seen) // 3)]) for i, x in enumerate(seen))
+
+
+def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its_seeds(cli, tmp_path, cache):
+    """Every threshold is the random-effects predictive quantile of the history's units split by
+    record (recomputed here from results.jsonl); a method trained with three seeds scores the
+    median of its members' scores standardised by their own history models, and only that
+    ensemble reaches scores.csv and the table (with its members' AUC range)."""
+    from gearlab.kinds.record_effects import fit, independent_units
+
+    out = run(
+        cli, scenario(tmp_path, methods=("source_only", "matched_filter"), detection="seeds = 3"), tmp_path / "runs"
+    )
+    records = {r["unit"]: r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines())}
+    n_hist = len(next(iter(records.values()))["history_scores"]["revolution"]) // 2  # two equal history records
+    for r in records.values():
+        for u, s in r["history_scores"].items():
+            b, stride = {"revolution": (1, 1), "record5": (5, 1), "record10": (10, 1)}[u]
+            per = len(s) // 2
+            assert per == (n_hist - b) // stride + 1
+            m = fit([s[:per], s[per:]], 0.99, [independent_units(per, b, stride)] * 2)
+            assert r["thresholds"][u] == pytest.approx(m.threshold)
+            assert r["thresholds_by_rule"]["records"][u] == r["thresholds"][u]
+    ensemble = next(r for r in records.values() if r.get("members"))
+    assert len(ensemble["members"]) == 3 and ensemble["method"] == "source_only"
+    members = [records[m] for m in ensemble["members"]]
+    assert {m["seed"] for m in members} == {0, 1, 2}
+    assert len({json.dumps(m["history_scores"]) for m in members}) == 3  # three different trainings
+    assert not any(r.get("members") for r in records.values() if r["method"] == "matched_filter")  # no seeds
+
+    def z(m, scores, u):
+        h = m["history_models"][u]
+        sd = np.sqrt((h["record_sd"] or 0.0) ** 2 + h["unit_sd"] ** 2 + h["mean_se"] ** 2)
+        return (np.asarray(scores) - h["mean"]) / sd
+
+    for path, units in ensemble["test_scores"].items():
+        for u, s in units.items():
+            expected = np.median([z(m, m["test_scores"][path][u], u) for m in members], axis=0)
+            assert s == pytest.approx(expected, rel=1e-6, abs=1e-9)
+    rows = scores(out)
+    assert {r["method"] for r in rows} == {"source_only", "matched_filter", "fm4", "na4"}
+    assert len([r for r in rows if r["method"] == "source_only"]) == len([r for r in rows if r["method"] == "fm4"])
+    assert re.search(r"\| source_only \| [0-9.]+ \([0-9.]+–[0-9.]+\) \|", (out / "table.md").read_text())
+    summary = json.loads((out / "summary.json").read_text())
+    row = next(r for r in summary["rows"] if r["method"] == "source_only" and r["unit"] == "record10")
+    assert len(row["member_auc"]) == 3 and set(row["by_rule"]) == {"records", "pooled"}
+
+
+def test_the_threshold_rule_is_checked(cli, tmp_path):
+    path = scenario(tmp_path, methods=("matched_filter",), detection='threshold = "pooeld"')
+    code, _, err = cli("validate", path)
+    assert code == 2 and "key 'threshold'" in err and "did you mean 'pooled'" in err
 
 
 def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp_path, cache, monkeypatch):

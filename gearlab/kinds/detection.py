@@ -12,7 +12,8 @@ the method's model and threshold are fixed, and their labels only when the figur
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
                           adapter that can learn without target labels
     [classical]           indicators (fm4, na4) of the input-shaft TSA, mesh_orders, shaft_orders, sidebands
-    [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold)
+    [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold),
+                          threshold (records | pooled), seeds (trainings per network method)
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
 
 Records are grouped by operating *condition*: the file's ``condition`` when given, else by
@@ -22,9 +23,14 @@ Each condition has its own history: standardisation
 calibration and thresholds. A condition with test records but no history is refused.
 
 Units scored: every revolution (``revolution``) and the TSA of consecutive blocks of
-``b`` revolutions (``record<b>``). The threshold of a method and unit is the
-``1 - false_alarm`` quantile of a Gumbel law fitted by its quartiles to the method's scores
-of the history's units of that kind (record-level history units: TSAs of sliding windows).
+``b`` revolutions (``record<b>``). The threshold of a method and unit is fixed on the
+method's scores of the history's units of that kind (record-level history units: TSAs of
+sliding windows), for a unit of a *new* record: ``threshold = "records"`` (default) the
+``1 - false_alarm`` predictive quantile of a one-way random-effects model, record effect plus
+within-record spread (``record_effects``); ``"pooled"`` the quantile of a Gumbel law fitted by
+its quartiles to the pooled units (blind to take-to-take variation). With ``seeds`` > 1 every
+network is trained that many times (repetitions 0 …); the method's score is the median over
+its members of each member's score standardised by its own history model, thresholded alike.
 
 Output: results.jsonl (one record per condition x method: the history and test scores),
 scores.csv (file, unit, index, method, score, decision), summary.json, table.md/table.csv
@@ -60,6 +66,7 @@ from ..settings import shrunk
 from ..signals import Standardiser
 from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
 from ..units import to_si
+from . import record_effects
 from .common import class_sizes, device_of, executor_for, simulated_spec, sized
 from .transfer import CALIBRATION, TRAINING, check_training
 from .transfer import TABLES as TRANSFER_TABLES
@@ -75,6 +82,8 @@ HISTORY_STRIDES = 10
 MIN_HISTORY_UNITS = 8
 # Records without a 'condition' whose tacho speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
+THRESHOLDS = ("records", "pooled")
+MAX_SEEDS = 20
 
 TABLES = {
     "source": TRANSFER_TABLES["source"],
@@ -110,6 +119,19 @@ TABLES = {
                 "difference",
                 doc="what the learned methods see: 'difference' (revolution or TSA less its "
                 "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
+            ),
+            "threshold": Key(
+                str,
+                "records",
+                doc="'records': predictive quantile for a new record's unit (record effect + within-record "
+                "spread, one-way random effects); 'pooled': Gumbel quantile of the pooled history units",
+            ),
+            "seeds": Key(
+                int,
+                1,
+                in_range(1, MAX_SEEDS),
+                "trainings per network method and condition; more than 1: the median of their "
+                "history-standardised scores",
             ),
             "source_speed": Key(
                 str,
@@ -313,6 +335,11 @@ def build(scenario: Scenario) -> dict:
             f"{location(path, 'detection', 'source_speed')}: expected one of "
             f"{', '.join(SOURCE_SPEEDS)}, got {shown(t['detection']['source_speed'])}"
         )
+    if t["detection"]["threshold"] not in THRESHOLDS:
+        raise GearlabInputError(
+            f"{location(path, 'detection', 'threshold')}: expected one of {', '.join(THRESHOLDS)}, got "
+            f"{shown(t['detection']['threshold'])}{did_you_mean(str(t['detection']['threshold']), THRESHOLDS)}"
+        )
     if t["detection"]["input"] not in INPUTS:
         raise GearlabInputError(
             f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got "
@@ -332,6 +359,8 @@ def build(scenario: Scenario) -> dict:
         },
         "blocks": tuple(blocks),
         "false_alarm": t["detection"]["false_alarm"],
+        "threshold": t["detection"]["threshold"],
+        "seeds": t["detection"]["seeds"],
     }
 
 
@@ -389,6 +418,14 @@ def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.nda
     return np.stack([revs[s : s + block].mean(axis=0) for s in starts]).astype(revs.dtype)
 
 
+def _window(unit: str) -> tuple[int, int]:
+    """(revolutions per unit, stride of the history's sliding windows) of a unit kind."""
+    if unit == "revolution":
+        return 1, 1
+    b = int(unit.removeprefix("record"))
+    return b, max(1, b // HISTORY_STRIDES)
+
+
 def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
     """{unit name: rows} of one record."""
     out = {"revolution": revs}
@@ -430,9 +467,13 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
                 cond["shifts"][f.path] = shift
                 aligned.append((f, revs))
             cond[role] = aligned
-        cond["history_units"] = {
-            u: np.concatenate([unit_sets(r, blocks, True)[u] for _, r in cond["history"]])
-            for u in unit_sets(cond["history"][0][1][:1], blocks, True)
+        per_record = [unit_sets(r, blocks, True) for _, r in cond["history"]]
+        cond["history_units"] = {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]}
+        # which history units come from which record (in order), and how many are independent:
+        # the threshold models the record-to-record variation (record_effects)
+        cond["history_records"] = {
+            u: [(len(s[u]), record_effects.independent_units(len(s[u]), *_window(u))) for s in per_record]
+            for u in per_record[0]
         }
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
@@ -453,16 +494,32 @@ def _to_lists(scores: dict) -> dict:
     return {k: (_to_lists(v) if isinstance(v, dict) else [float(s) for s in v]) for k, v in scores.items()}
 
 
+def seeds_of(method: Method, seeds: int) -> tuple:
+    """The seeds a method is trained with: (None,) for one training (repetition 0, the record
+    named after the method) and for a detector (no network, nothing random); else 0 … seeds-1,
+    each a member of the method's ensemble."""
+    if seeds == 1 or get_registry().get("adapter", method.adapter).train_on == "detector":
+        return (None,)
+    return tuple(range(seeds))
+
+
+def unit_name(condition: str, method: Method, seed: int | None = None) -> str:
+    """A record's name in results.jsonl: one per condition and method (an ensemble's members:
+    one per seed besides)."""
+    return f"{condition}/{method.key}" + ("" if seed is None else f"/seed{seed}")
+
+
 def train_unit(task: tuple) -> dict:
-    """One method at one condition, in this process or a worker: trained on the source and the
-    history's training revolutions, then its scores of the history units (for the threshold)
-    and, only now, of the test units."""
+    """One method at one condition (one seed of it), in this process or a worker: trained on the
+    source and the history's training revolutions, then its scores of the history units (for the
+    threshold) and, only now, of the test units."""
     import torch
 
-    protocol, method, condition, (Xs, ys, Xv, yv), train, history_units, test_units, states, false_alarm = task
+    protocol, method, condition, seed, (Xs, ys, Xv, yv), train, history_units, test_units, states, rule = task
     torch.set_num_threads(1)
     device = pick_device(protocol.device)
-    with UnitProgress(Path(states).parents[1], f"{condition}/{method.key}") as progress:
+    unit = unit_name(condition, method, seed)
+    with UnitProgress(Path(states).parents[1], unit) as progress:
 
         def report(epoch: int, history) -> None:
             progress(f"epoch {epoch + 1}")
@@ -473,7 +530,7 @@ def train_unit(task: tuple) -> dict:
             (Xs, ys),
             (Xv, yv),
             (train, np.zeros(len(train), dtype=np.int64)),
-            0,
+            seed or 0,  # the repetition: its own torch seed and draws
             0,
             StateStore(Path(states)),
             device,
@@ -481,31 +538,94 @@ def train_unit(task: tuple) -> dict:
         )
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
-    thresholds = decide(hist, false_alarm)
+    fixed = rule.decide(hist)
     test = {path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()}
     return {
-        "unit": f"{condition}/{method.key}",
+        "unit": unit,
         "condition": condition,
         "method": method_name(method),
         "adapter": method.adapter,
+        "seed": seed,
         "history_scores": _to_lists(hist),
-        "thresholds": thresholds,
+        **fixed,
         "test_scores": _to_lists(test),
         "history": history.as_dict() if history is not None else None,
     }
 
 
-def decide(history_scores: dict, false_alarm: float) -> dict[str, float]:
-    """{unit: threshold}: the 1 - false_alarm quantile of the Gumbel law fitted by its quartiles
-    to the history units' scores (gearlab.learn.detectors.gumbel_quantile)."""
-    return {u: gumbel_quantile(np.asarray(s, dtype=np.float64), 1.0 - false_alarm) for u, s in history_scores.items()}
+@dataclass(frozen=True)
+class Rule:
+    """How a threshold is fixed from the history's unit scores alone ([detection] threshold and
+    false_alarm), with the history's record structure: {unit: [(units, independent units) per
+    history record, in the order of the concatenated scores]}."""
+
+    how: str
+    false_alarm: float
+    records: dict
+
+    def models(self, history_scores: dict) -> dict[str, record_effects.RecordEffects]:
+        """{unit: the random-effects model of its scores (record effect + within-record spread)}."""
+        out = {}
+        for u, s in history_scores.items():
+            counts = [n for n, _ in self.records[u]]
+            groups = np.split(np.asarray(s, dtype=np.float64), np.cumsum(counts)[:-1])
+            out[u] = record_effects.fit(groups, 1.0 - self.false_alarm, [m for _, m in self.records[u]])
+        return out
+
+    def decide(self, history_scores: dict) -> dict:
+        """The record's "thresholds" (by this rule), the history models and both rules' thresholds
+        (so a run shows what the other rule would have called)."""
+        models = self.models(history_scores)
+        by_rule = {
+            "records": {u: m.threshold for u, m in models.items()},
+            # the 1 - false_alarm quantile of the Gumbel law fitted by its quartiles to the pooled
+            # history units (gearlab.learn.detectors.gumbel_quantile)
+            "pooled": {
+                u: gumbel_quantile(np.asarray(s, dtype=np.float64), 1.0 - self.false_alarm)
+                for u, s in history_scores.items()
+            },
+        }
+        return {
+            "thresholds": by_rule[self.how],
+            "thresholds_by_rule": by_rule,
+            "history_models": {u: m.as_dict() for u, m in models.items()},
+        }
+
+
+def ensemble_record(unit: str, members: list[dict], rule: Rule) -> dict:
+    """A method trained with several seeds: each member's scores standardised by its own history
+    model (mean and predictive spread of a new healthy record's units, so the members' logit
+    scales compare), their median per unit, thresholded by *rule* on the history like any score."""
+    models = [rule.models(m["history_scores"]) for m in members]
+
+    def median(get) -> np.ndarray:
+        return np.median(np.stack([get(m, ms) for m, ms in zip(members, models)]), axis=0)
+
+    hist = {
+        u: median(lambda m, ms, u=u: ms[u].standardised(m["history_scores"][u])) for u in members[0]["history_scores"]
+    }
+    test = {
+        path: {u: median(lambda m, ms, p=path, u=u: ms[u].standardised(m["test_scores"][p][u])) for u in units}
+        for path, units in members[0]["test_scores"].items()
+    }
+    first = members[0]
+    return {
+        "unit": unit,
+        "condition": first["condition"],
+        "method": first["method"],
+        "adapter": first["adapter"],
+        "members": [m["unit"] for m in members],
+        "history_scores": _to_lists(hist),
+        **rule.decide(hist),
+        "test_scores": _to_lists(test),
+    }
 
 
 def method_name(m: Method) -> str:
     return m.adapter + "".join(f", {k}={v}" for k, v in m.shown)
 
 
-def classical_record(name: str, condition: str, cond: dict, classical: dict, false_alarm: float) -> dict:
+def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
     """A classical indicator's scores: computed on the TSA units, its NA4 reference from the history."""
     orders, shaft = classical["mesh_orders"], classical["shaft_orders"]
     # NA4's denominator: the mean residual variance of the history's units of the same kind
@@ -517,7 +637,7 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, fal
         return na4(X, orders, variance[u], shaft)
 
     hist = {u: score(X, u) for u, X in cond["history_units"].items()}
-    thresholds = decide(hist, false_alarm)  # fixed before any test unit is scored
+    fixed = rule.decide(hist)  # fixed before any test unit is scored
     test = {p: {u: score(X, u) for u, X in units.items()} for p, units in cond["test_units"].items()}
     return {
         "unit": f"{condition}/{name}",
@@ -525,7 +645,7 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, fal
         "method": name,
         "adapter": None,
         "history_scores": _to_lists(hist),
-        "thresholds": thresholds,
+        **fixed,
         "test_scores": _to_lists(test),
     }
 
@@ -585,23 +705,27 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
                     f"the source training set of '{s.name}'"
                 )
-        done = {r["unit"] for r in run.records()}
+        records = {r["unit"]: r for r in run.records()}
+        rules = {
+            c: Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]) for c, cond in conditions.items()
+        }
         for name, cond in conditions.items():
             for indicator in spec["classical"]["indicators"]:
-                if f"{name}/{indicator}" not in done:
-                    run.append(classical_record(indicator, name, cond, spec["classical"], spec["false_alarm"]))
+                if f"{name}/{indicator}" not in records:
+                    run.append(classical_record(indicator, name, cond, spec["classical"], rules[name]))
         shown_to = learned_input(spec)
         splits = {
             c: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[c]], protocol))
             for c in conditions
         }
-        todo = [(name, m) for name in conditions for m in protocol.methods]
-        pending = [(c, m) for c, m in todo if f"{c}/{m.key}" not in done]
+        members = {(c, m): seeds_of(m, spec["seeds"]) for c in conditions for m in protocol.methods}
+        todo = [(c, m, seed) for (c, m), seeds in members.items() for seed in seeds]
+        pending = [(c, m, seed) for c, m, seed in todo if unit_name(c, m, seed) not in records]
         folders = {c: f"condition{i}" for i, c in enumerate(conditions)}
 
         def state_file(unit: tuple) -> Path | None:
-            c, m = unit
-            state = shared_state(m, 0, 0, protocol)
+            c, m, seed = unit
+            state = shared_state(m, seed or 0, 0, protocol)
             return None if state is None else run.path / "states" / folders[c] / f"{state}.pt"
 
         phases = two_phases(pending, state_file)
@@ -611,13 +735,14 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         def record_done(_: int, record: dict) -> None:
             nonlocal finished
             run.append(record)
+            records[record["unit"]] = record
             finished += 1
             on_event(Event("log", message=f"{record['unit']} trained"))
             on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
         for phase in phases:
             tasks = []
-            for c, m in phase:
+            for c, m, seed in phase:
                 cond = conditions[c]
                 states = run.path / "states" / folders[c]
                 states.mkdir(parents=True, exist_ok=True)
@@ -626,15 +751,19 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         protocol,
                         m,
                         c,
+                        seed,
                         splits[c],
                         shown_to(history_training_rows(cond, protocol, c)),
                         {u: shown_to(X) for u, X in cond["history_units"].items()},
                         {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
                         states,
-                        spec["false_alarm"],
+                        rules[c],
                     )
                 )
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+        for (c, m), seeds in members.items():
+            if seeds != (None,) and unit_name(c, m) not in records:
+                run.append(ensemble_record(unit_name(c, m), [records[unit_name(c, m, s)] for s in seeds], rules[c]))
         run.write_json(
             "conditions.json",
             {
@@ -666,7 +795,11 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     spec = scenario.spec
     target: Target = spec["target"]
     labels = {f.path: f.label for f in target.files}
-    records = run.records()
+    everything = run.records()
+    by_unit = {r["unit"]: r for r in everything}
+    # an ensemble's members (one training each) are kept in results.jsonl and shown only as the
+    # spread of their AUCs beside the ensemble's
+    records = [r for r in everything if r.get("seed") is None]
     thresholds = {r["unit"]: r["thresholds"] for r in records}
     # scores.csv: every test unit's score and decision
     buf = io.StringIO()
@@ -679,17 +812,25 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                 for i, s in enumerate(scores):
                     w.writerow([path, u, i, r["method"], repr(float(s)), int(s > thr)])
     run.write_text("scores.csv", buf.getvalue())
+
     # the labels come in only here, to score what was decided
+    def split(r: dict, u: str) -> tuple[np.ndarray, np.ndarray]:
+        neg = [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] != target.positive]
+        pos = [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] == target.positive]
+        return np.concatenate(neg or [np.empty(0)]), np.concatenate(pos or [np.empty(0)])
+
     rows = []
     for r in records:
         for u in r["history_scores"]:
             thr = thresholds[r["unit"]][u]
-            neg = np.concatenate(
-                [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] != target.positive] or [np.empty(0)]
-            )
-            pos = np.concatenate(
-                [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] == target.positive] or [np.empty(0)]
-            )
+            neg, pos = split(r, u)
+            other = {
+                rule: (
+                    100.0 * float(np.mean(pos > t[u])) if len(pos) else None,
+                    100.0 * float(np.mean(neg > t[u])) if len(neg) else None,
+                )
+                for rule, t in r.get("thresholds_by_rule", {}).items()
+            }
             by_label = {}
             for p, units in r["test_scores"].items():
                 by_label.setdefault(labels[p], []).extend(units[u])
@@ -705,6 +846,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                     "n_negative": int(len(neg)),
                     "threshold": thr,
                     "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
+                    # detection and false alarms (%) at each threshold rule's threshold
+                    "by_rule": {rule: {"detection": d, "false_alarm": f} for rule, (d, f) in other.items()},
+                    "member_auc": [auc(*split(by_unit[m], u)) for m in r.get("members", [])],
                 }
             )
     order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
@@ -738,9 +882,16 @@ def _cell(x, fmt="{:.2f}") -> str:
     return "–" if x is None else fmt.format(x)
 
 
+def _spread(aucs) -> str:
+    """An ensemble's member AUCs as their range."""
+    aucs = [a for a in aucs or [] if a is not None]
+    return f" ({min(aucs):.2f}–{max(aucs):.2f})" if aucs else ""
+
+
 def table_md(rows: list[dict]) -> str:
-    """One table per condition: a row per method; AUC, detection and false alarms (% of the
-    test's positive and negative units called at the history's threshold) per unit."""
+    """One table per condition: a row per method; AUC (an ensemble's: with the range of its
+    members' AUCs), detection and false alarms (% of the test's positive and negative units
+    called at the history's threshold) per unit."""
     units = list(dict.fromkeys(r["unit"] for r in rows))
     out = []
     for c in dict.fromkeys(r["condition"] for r in rows):
@@ -755,8 +906,8 @@ def table_md(rows: list[dict]) -> str:
                 parts.append(
                     "| | "
                     if r is None
-                    else f"{_cell(r['auc'], '{:.3f}')} | {_cell(r['detection'], '{:.0f}')} | "
-                    f"{_cell(r['false_alarm'], '{:.0f}')}"
+                    else f"{_cell(r['auc'], '{:.3f}')}{_spread(r.get('member_auc'))} | "
+                    f"{_cell(r['detection'], '{:.0f}')} | {_cell(r['false_alarm'], '{:.0f}')}"
                 )
             out.append(f"| {m} | " + " | ".join(parts) + " |")
         out.append(

@@ -1,0 +1,105 @@
+"""A threshold for a *new* record's units, from a history of a few records.
+
+A detection threshold is applied to the units (revolutions, TSAs) of records that were not in
+the history: another take, another day, another assembly of the gearbox. Its false-alarm rate
+is therefore set by how much a new record's healthy units vary, and that is more than how
+much the units of one history record vary among themselves: each record carries its own
+offset (mounting, temperature, load setting, which tacho mark it started on). Pooling the
+history's units and taking their quantile ignores that offset and calls too much, or — when
+the history's records differ a lot and the pooled law is fitted by its quartiles — nothing.
+
+The standard model for this is the one-way random-effects model (Searle, Casella & McCulloch
+1992, ch. 3; the same as a gauge R&R's part-to-part and repeatability terms): the score of
+unit j of record r is
+
+    y_rj = mu + a_r + e_rj,    a_r ~ N(0, sigma_a^2) (record effect),  e_rj ~ N(0, sigma_e^2),
+
+estimated by the method of moments (ANOVA): sigma_e^2 the pooled within-record variance,
+sigma_a^2 the variance of the record means less what their within-record noise explains,
+mu the mean of the record means. A new record's unit is y = mu + a_new + e_new, with mu known
+only to within Var(mu_hat) = sum_r (sigma_a^2 + sigma_e^2 / m_r) / R^2, so the threshold that
+lets a share alpha of healthy units of a new record through is the predictive quantile
+
+    t = mu_hat + z_(1 - alpha) * sqrt(sigma_a^2 + sigma_e^2 + Var(mu_hat)).
+
+m_r counts the record's *independent* units: sliding TSA windows of b revolutions moved by s
+overlap, and only about (n - 1) s / b + 1 of n such windows are independent.
+
+The quantile is a plug-in (the variances as estimated, a Gaussian law): with R records the
+record variance rests on R - 1 degrees of freedom, so with two records it is a rough figure —
+honest about take-to-take variation where pooling ignores it, but no tolerance bound. With a
+single history record sigma_a^2 cannot be estimated and is taken as 0 (``record_sd`` None).
+Only the history's scores enter: nothing here sees a test record.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.stats import norm
+
+
+@dataclass(frozen=True)
+class RecordEffects:
+    """The fitted model of a history's scores, and its threshold for a new record's units."""
+
+    mean: float  # mu_hat
+    record_sd: float | None  # sigma_a (None: one history record, not estimable)
+    unit_sd: float  # sigma_e
+    mean_se: float  # sqrt(Var(mu_hat))
+    records: int
+    threshold: float
+
+    @property
+    def predictive_sd(self) -> float:
+        return float(np.sqrt((self.record_sd or 0.0) ** 2 + self.unit_sd**2 + self.mean_se**2))
+
+    def standardised(self, scores) -> np.ndarray:
+        """Scores in units of the predictive spread of a new healthy record's units, from its mean
+        (what makes the scores of differently trained models comparable)."""
+        return (np.asarray(scores, dtype=np.float64) - self.mean) / max(self.predictive_sd, 1e-300)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def independent_units(n_units: int, block: int = 1, stride: int = 1) -> float:
+    """How many of *n_units* TSA windows of *block* revolutions, moved by *stride*, are
+    independent (non-overlapping windows: all of them; a revolution: block = stride = 1)."""
+    if n_units <= 0:
+        return 0.0
+    return min(float(n_units), (n_units - 1) * stride / block + 1.0)
+
+
+def fit(groups, p: float, independent=None) -> RecordEffects:
+    """The model of *groups* (one array of unit scores per history record, in any order) and
+    its *p* predictive quantile for a unit of a new record; *independent*: each record's number
+    of independent units (default: its number of units)."""
+    groups = [np.asarray(g, dtype=np.float64).ravel() for g in groups]
+    groups = [g for g in groups if len(g)]
+    if not groups:
+        raise ValueError("record effects: no history scores")
+    m = np.asarray(independent if independent is not None else [len(g) for g in groups], dtype=np.float64)
+    m = np.maximum(m[: len(groups)], 1.0)
+    means = np.array([g.mean() for g in groups])
+    dof = sum(len(g) - 1 for g in groups)
+    within = sum(float(np.sum((g - g.mean()) ** 2)) for g in groups) / dof if dof > 0 else 0.0
+    R = len(groups)
+    mu = float(means.mean())
+    if R >= 2:
+        # E[var(record means)] = sigma_a^2 + mean(sigma_e^2 / m_r)
+        record_var = max(0.0, float(means.var(ddof=1)) - float(np.mean(within / m)))
+        record_sd = float(np.sqrt(record_var))
+    else:
+        record_var, record_sd = 0.0, None
+    mean_var = float(np.sum(record_var + within / m)) / R**2
+    sd = np.sqrt(record_var + within + mean_var)
+    return RecordEffects(
+        mean=mu,
+        record_sd=record_sd,
+        unit_sd=float(np.sqrt(within)),
+        mean_se=float(np.sqrt(mean_var)),
+        records=R,
+        threshold=float(mu + norm.ppf(p) * sd),
+    )

@@ -1,0 +1,75 @@
+"""The threshold for a new record's units: one-way random effects (record effect + within-record
+spread) against the pooled quantile, on scores drawn from a known model."""
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from gearlab.kinds.record_effects import fit, independent_units
+
+
+def records(rng, n_records: int, n_units: int, record_sd: float, unit_sd: float, mean: float = 5.0) -> list:
+    return [mean + record_sd * rng.standard_normal() + unit_sd * rng.standard_normal(n_units) for _ in range(n_records)]
+
+
+def test_the_variance_components_are_recovered():
+    rng = np.random.default_rng(1)
+    m = fit(records(rng, 400, 50, record_sd=2.0, unit_sd=0.5), 0.99)
+    assert m.record_sd == pytest.approx(2.0, rel=0.1)
+    assert m.unit_sd == pytest.approx(0.5, rel=0.02)
+    assert m.mean == pytest.approx(5.0, abs=0.3)
+    assert m.records == 400
+    # the threshold is the predictive quantile: mean + z sqrt(record² + unit² + se²)
+    assert m.threshold == pytest.approx(m.mean + norm.ppf(0.99) * m.predictive_sd)
+    assert m.predictive_sd == pytest.approx(np.hypot(2.0, 0.5), rel=0.1)
+
+
+def test_a_new_records_false_alarms_are_as_asked_where_the_units_own_spread_is_not():
+    """Histories of 8 records, each 100 units, whose record effect is twice the unit spread: a
+    new record's healthy units exceed the random-effects threshold about as often as asked (5 %);
+    a threshold from the units' spread about their record's mean (the record effect ignored, as
+    when one take's units stand for every take) is exceeded several times as often."""
+    rng = np.random.default_rng(7)
+    ours, within = [], []
+    for _ in range(300):
+        history = records(rng, 8, 100, record_sd=1.0, unit_sd=0.5)
+        new = records(rng, 1, 100, record_sd=1.0, unit_sd=0.5)[0]
+        m = fit(history, 0.95)
+        ours.append(np.mean(new > m.threshold))
+        within.append(np.mean(new > m.mean + norm.ppf(0.95) * m.unit_sd))
+    assert 0.03 < np.mean(ours) < 0.09
+    assert np.mean(within) > 3 * np.mean(ours)
+
+
+def test_no_record_effect_gives_the_within_record_quantile():
+    rng = np.random.default_rng(3)
+    history = [rng.standard_normal(2000) for _ in range(5)]  # records differ only by chance
+    m = fit(history, 0.99)
+    assert m.record_sd == pytest.approx(0.0, abs=0.03)
+    assert m.threshold == pytest.approx(norm.ppf(0.99), abs=0.1)
+
+
+def test_one_record_cannot_tell_its_record_effect():
+    rng = np.random.default_rng(4)
+    g = rng.standard_normal(400)
+    m = fit([g], 0.99)
+    assert m.record_sd is None and m.records == 1
+    sd = g.std(ddof=1)
+    assert m.threshold == pytest.approx(g.mean() + norm.ppf(0.99) * sd * np.sqrt(1 + 1 / 400))
+
+
+def test_overlapping_windows_count_as_fewer_independent_units():
+    assert independent_units(110, block=10, stride=1) == pytest.approx(11.9)
+    assert independent_units(30, block=30, stride=3) == pytest.approx(3.9)
+    assert independent_units(119) == 119  # revolutions
+    assert independent_units(4, block=10, stride=10) == 4
+    # fewer independent units: more of the record means' spread is left to the within-record
+    # noise, less to the record effect
+    rng = np.random.default_rng(5)
+    history = records(rng, 3, 50, record_sd=0.3, unit_sd=1.0)
+    assert fit(history, 0.99, [5, 5, 5]).record_sd < fit(history, 0.99).record_sd
+
+
+def test_standardised_scores_are_in_units_of_the_predictive_spread():
+    m = fit([np.array([1.0, 2.0, 3.0]), np.array([3.0, 4.0, 5.0])], 0.99)
+    assert m.standardised([m.mean, m.mean + m.predictive_sd]) == pytest.approx([0.0, 1.0])
