@@ -192,6 +192,29 @@ def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its
     assert len(row["member_auc"]) == 3 and set(row["by_rule"]) == {"records", "pooled"}
 
 
+def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):
+    """[corrected] effects: the source with them added is simulated too (its own dataset), and
+    each method is trained on it as well, its rows named '<method> (<label>)'."""
+    corrected = '[corrected]\nlabel = "noisy"\neffects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
+    path = scenario(tmp_path, methods=("source_only", "matched_filter"), extra=corrected)
+    code, out, err = cli("validate", path)
+    assert code == 0, err
+    assert "source_only (noisy: + sensor_noise)" in out
+    run_dir = run(cli, path, tmp_path / "runs")
+    rows = scores(run_dir)
+    methods = {r["method"] for r in rows}
+    assert methods == {"source_only", "matched_filter", "source_only (noisy)", "matched_filter (noisy)", "fm4", "na4"}
+    plain = [r["score"] for r in rows if r["method"] == "source_only"]
+    noisy = [r["score"] for r in rows if r["method"] == "source_only (noisy)"]
+    assert len(plain) == len(noisy) and plain != noisy
+    conditions = json.loads((run_dir / "conditions.json").read_text())
+    (sources,) = [c["sources"] for c in conditions.values()]
+    assert set(sources) == {"source", "noisy"} and sources["noisy"] != sources["source"]
+    path.write_text(path.read_text().replace('name = "sensor_noise"', 'name = "sensor_nosie"'))
+    code, _, err = cli("validate", path)
+    assert code == 2 and "[corrected]" in err and "sensor_nosie" in err
+
+
 def test_the_threshold_rule_is_checked(cli, tmp_path):
     path = scenario(tmp_path, methods=("matched_filter",), detection='threshold = "pooeld"')
     code, _, err = cli("validate", path)

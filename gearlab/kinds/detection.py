@@ -7,6 +7,9 @@ and thresholded from the source and the history alone; the test records come in 
 the method's model and threshold are fixed, and their labels only when the figures are made.
 
     [source]              a dataset preset with overrides (as in [[datasets]]), healthy + faults
+    [corrected]           effects (as in [[datasets]]) that make the corrected simulator (e.g. what
+                          `gearlab gap` fitted), label: every network method is trained on both
+                          sources, the corrected one's rows named "<method> (<label>)"
     [target]              vibration, tacho, pulses_per_rev, sensitivity, fs, positive, files = [
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
@@ -87,6 +90,12 @@ MAX_SEEDS = 20
 
 TABLES = {
     "source": TRANSFER_TABLES["source"],
+    "corrected": Table(
+        {
+            "effects": Key(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)"),
+            "label": Key(str, "corrected", doc="the corrected source's name in the method rows"),
+        }
+    ),
     "target": Table(
         {
             "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
@@ -286,6 +295,7 @@ def build(scenario: Scenario) -> dict:
     t = scenario.tables
     path = scenario.path
     source = simulated_spec(t["source"], location(path, "source"), scenario.base)
+    corrected = corrected_spec(t, location(path, "corrected"), scenario.base, source)
     sizes = class_sizes(source, location(path, "source"))
     if not sizes["healthy"] or sum(sizes.values()) == sizes["healthy"]:
         raise GearlabInputError(
@@ -347,6 +357,8 @@ def build(scenario: Scenario) -> dict:
         )
     return {
         "source": source,
+        "corrected": corrected,
+        "corrected_label": t["corrected"]["label"],
         "target": target,
         "protocol": protocol,
         "source_speed": t["detection"]["source_speed"],
@@ -364,11 +376,31 @@ def build(scenario: Scenario) -> dict:
     }
 
 
+def corrected_spec(t: dict, where: str, base: Path, source: DatasetSpec) -> DatasetSpec | None:
+    """The [source] with the [corrected] effects after its own (None: no effects given)."""
+    extra = t["corrected"]["effects"]
+    if not extra:
+        return None
+    label = t["corrected"]["label"]
+    if not label or not all(ch.isalnum() or ch in "-_" for ch in label):
+        raise GearlabInputError(
+            f"{where} key 'label': expected a short name of letters, digits, - or _, got {shown(label)}"
+        )
+    entry = {**t["source"], "effects": list(t["source"].get("effects") or []) + list(extra)}
+    spec = simulated_spec(entry, where, base)
+    # effects are part of the cache key only through the name: the corrected source has its own
+    name = f"{source.name}+{label}"
+    return spec.with_(name=name, domain=name)
+
+
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     files = spec["target"].files
     n_hist = sum(f.role == "history" for f in files)
     names = [m.adapter for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
+    if spec.get("corrected") is not None:
+        extra = ", ".join(name for name, _ in spec["corrected"].effects[len(spec["source"].effects) :])
+        names += [f"{m.adapter} ({spec['corrected_label']}: + {extra})" for m in spec["protocol"].methods]
     return (
         f"{sized(spec['source'])} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
         f"test); methods: {', '.join(names)}; units: revolution, " + ", ".join(f"record{b}" for b in spec["blocks"])
@@ -503,10 +535,10 @@ def seeds_of(method: Method, seeds: int) -> tuple:
     return tuple(range(seeds))
 
 
-def unit_name(condition: str, method: Method, seed: int | None = None) -> str:
-    """A record's name in results.jsonl: one per condition and method (an ensemble's members:
-    one per seed besides)."""
-    return f"{condition}/{method.key}" + ("" if seed is None else f"/seed{seed}")
+def unit_name(condition: str, method: Method, seed: int | None = None, variant: str = "") -> str:
+    """A record's name in results.jsonl: one per condition, method and source (*variant*: the
+    corrected source's label); an ensemble's members: one per seed besides."""
+    return f"{condition}/{method.key}" + (f"@{variant}" if variant else "") + ("" if seed is None else f"/seed{seed}")
 
 
 def train_unit(task: tuple) -> dict:
@@ -515,10 +547,10 @@ def train_unit(task: tuple) -> dict:
     threshold) and, only now, of the test units."""
     import torch
 
-    protocol, method, condition, seed, (Xs, ys, Xv, yv), train, history_units, test_units, states, rule = task
+    protocol, method, variant, condition, seed, (Xs, ys, Xv, yv), train, history_units, test_units, states, rule = task
     torch.set_num_threads(1)
     device = pick_device(protocol.device)
-    unit = unit_name(condition, method, seed)
+    unit = unit_name(condition, method, seed, variant)
     with UnitProgress(Path(states).parents[1], unit) as progress:
 
         def report(epoch: int, history) -> None:
@@ -543,7 +575,7 @@ def train_unit(task: tuple) -> dict:
     return {
         "unit": unit,
         "condition": condition,
-        "method": method_name(method),
+        "method": method_name(method, variant),
         "adapter": method.adapter,
         "seed": seed,
         "history_scores": _to_lists(hist),
@@ -621,8 +653,8 @@ def ensemble_record(unit: str, members: list[dict], rule: Rule) -> dict:
     }
 
 
-def method_name(m: Method) -> str:
-    return m.adapter + "".join(f", {k}={v}" for k, v in m.shown)
+def method_name(m: Method, variant: str = "") -> str:
+    return m.adapter + "".join(f", {k}={v}" for k, v in m.shown) + (f" ({variant})" if variant else "")
 
 
 def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
@@ -691,9 +723,18 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     protocol: Protocol = spec["protocol"]
     with executor_for(scenario) as executor:
         conditions = read_target(spec["target"], spec["blocks"], on_event, f"{scenario.path}: [target] key 'files'")
-        specs = {c: source_for(spec["source"], cond, spec["source_speed"]) for c, cond in conditions.items()}
+        # the sources: "" the [source], and the corrected simulator when [corrected] gives effects
+        variants = {"": spec["source"]}
+        if spec.get("corrected") is not None:
+            variants[spec["corrected_label"]] = spec["corrected"]
+        specs = {
+            (c, v): source_for(source, cond, spec["source_speed"])
+            for c, cond in conditions.items()
+            for v, source in variants.items()
+        }
         for c, cond in conditions.items():
-            cond["source"] = specs[c].name
+            cond["source"] = specs[(c, "")].name
+            cond["sources"] = {v or "source": specs[(c, v)].name for v in variants}
         built = list(dict.fromkeys(specs.values()))
         on_event(Event("stage", stage="datasets", total=len(built), message="source datasets"))
         sources = {}
@@ -715,18 +756,21 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     run.append(classical_record(indicator, name, cond, spec["classical"], rules[name]))
         shown_to = learned_input(spec)
         splits = {
-            c: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[c]], protocol))
-            for c in conditions
+            key: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[key]], protocol))
+            for key in specs
         }
-        members = {(c, m): seeds_of(m, spec["seeds"]) for c in conditions for m in protocol.methods}
-        todo = [(c, m, seed) for (c, m), seeds in members.items() for seed in seeds]
-        pending = [(c, m, seed) for c, m, seed in todo if unit_name(c, m, seed) not in records]
-        folders = {c: f"condition{i}" for i, c in enumerate(conditions)}
+        members = {
+            (c, v, m): seeds_of(m, spec["seeds"]) for c in conditions for v in variants for m in protocol.methods
+        }
+        todo = [(c, v, m, seed) for (c, v, m), seeds in members.items() for seed in seeds]
+        pending = [(c, v, m, seed) for c, v, m, seed in todo if unit_name(c, m, seed, v) not in records]
+        # one folder of shared states (primings, source models) per condition and source
+        folders = {(c, v): f"condition{i}" + (f"-{v}" if v else "") for i, c in enumerate(conditions) for v in variants}
 
         def state_file(unit: tuple) -> Path | None:
-            c, m, seed = unit
+            c, v, m, seed = unit
             state = shared_state(m, seed or 0, 0, protocol)
-            return None if state is None else run.path / "states" / folders[c] / f"{state}.pt"
+            return None if state is None else run.path / "states" / folders[(c, v)] / f"{state}.pt"
 
         phases = two_phases(pending, state_file)
         on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} trainings"))
@@ -742,17 +786,18 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         for phase in phases:
             tasks = []
-            for c, m, seed in phase:
+            for c, v, m, seed in phase:
                 cond = conditions[c]
-                states = run.path / "states" / folders[c]
+                states = run.path / "states" / folders[(c, v)]
                 states.mkdir(parents=True, exist_ok=True)
                 tasks.append(
                     (
                         protocol,
                         m,
+                        v,
                         c,
                         seed,
-                        splits[c],
+                        splits[(c, v)],
                         shown_to(history_training_rows(cond, protocol, c)),
                         {u: shown_to(X) for u, X in cond["history_units"].items()},
                         {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
@@ -761,9 +806,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     )
                 )
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
-        for (c, m), seeds in members.items():
-            if seeds != (None,) and unit_name(c, m) not in records:
-                run.append(ensemble_record(unit_name(c, m), [records[unit_name(c, m, s)] for s in seeds], rules[c]))
+        for (c, v, m), seeds in members.items():
+            if seeds != (None,) and unit_name(c, m, None, v) not in records:
+                group = [records[unit_name(c, m, s, v)] for s in seeds]
+                run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
         run.write_json(
             "conditions.json",
             {
@@ -773,6 +819,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "speeds_hz": v["speeds"],
                     "start_marks": v["shifts"],
                     "source": v["source"],
+                    "sources": v["sources"],
                 }
                 for c, v in conditions.items()
             },
@@ -852,7 +899,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                 }
             )
     order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
-    methods = [method_name(m) for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
+    variants = [""] + ([spec["corrected_label"]] if spec.get("corrected") is not None else [])
+    methods = [method_name(m, v) for v in variants for m in spec["protocol"].methods]
+    methods += list(spec["classical"]["indicators"])
     rows.sort(
         key=lambda r: (
             order[r["condition"]],
