@@ -195,7 +195,9 @@ def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its
 def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):
     """[corrected] effects: the source with them added is simulated too (its own dataset), and
     each method is trained on it as well, its rows named '<method> (<label>)'."""
-    corrected = '[corrected]\nlabel = "noisy"\neffects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
+    corrected = (
+        '[corrected]\nlabel = "noisy"\ntsa = 3\neffects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
+    )
     path = scenario(tmp_path, methods=("source_only", "matched_filter"), extra=corrected)
     code, out, err = cli("validate", path)
     assert code == 0, err

@@ -8,8 +8,8 @@ the method's model and threshold are fixed, and their labels only when the figur
 
     [source]              a dataset preset with overrides (as in [[datasets]]), healthy + faults
     [corrected]           effects (as in [[datasets]]) that make the corrected simulator (e.g. what
-                          `gearlab gap` fitted), label: every network method is trained on both
-                          sources, the corrected one's rows named "<method> (<label>)"
+                          `gearlab gap` fitted), tsa (revolutions averaged per sample), label: every
+                          method is trained on both sources, the corrected one's rows "<method> (<label>)"
     [target]              vibration, tacho, pulses_per_rev, sensitivity, fs, positive, files = [
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
@@ -94,6 +94,13 @@ TABLES = {
         {
             "effects": Key(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)"),
             "label": Key(str, "corrected", doc="the corrected source's name in the method rows"),
+            "tsa": Key(
+                int,
+                0,
+                in_range(0, 1000),
+                "a corrected sample is the TSA of this many simulated revolutions, each with its own "
+                "noise (the revolutions of a record-level unit); 0: one revolution",
+            ),
         }
     ),
     "target": Table(
@@ -387,6 +394,8 @@ def corrected_spec(t: dict, where: str, base: Path, source: DatasetSpec) -> Data
             f"{where} key 'label': expected a short name of letters, digits, - or _, got {shown(label)}"
         )
     entry = {**t["source"], "effects": list(t["source"].get("effects") or []) + list(extra)}
+    if t["corrected"]["tsa"]:  # noise drawn on every revolution, then averaged as a record unit is
+        entry.update(tsa=True, revolutions=t["corrected"]["tsa"])
     spec = simulated_spec(entry, where, base)
     # effects are part of the cache key only through the name: the corrected source has its own
     name = f"{source.name}+{label}"
