@@ -24,12 +24,14 @@ close. :func:`measure` sends simulated revolutions through the same chain:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..signals import resample_revolutions
+from .spec import POINTS
 
 TWO_PI = 2.0 * np.pi
 # Start fractions a record keeps (meta): enough for every row a diagnosis simulates.
@@ -110,42 +112,75 @@ def fit_offset(deterministic: np.ndarray, reference: np.ndarray, teeth: int = 1)
     return float((TWO_PI * best) % TWO_PI)
 
 
-def read_at(row: np.ndarray, max_order: int, u0: float, step: float, count: int) -> np.ndarray:
-    """The periodic revolution *row* without orders above *max_order*, read at the *count* angles
-    u0 + k step (revolutions): its Fourier series evaluated exactly there, by a chirp z-transform
-    (the record's samples are uniform in angle but not a whole number per revolution; an
-    interpolation would dull the mesh harmonics by parts per thousand, which 80 quiet revolutions
-    resolve)."""
-    from scipy.signal import czt
+@functools.lru_cache(maxsize=16)
+def _chirp(terms: int, count: int, step: float):
+    """The chirp z-transform plan that evaluates a Fourier series of *terms* orders at *count*
+    angles *step* revolutions apart (from angle 0). Building a plan costs several FFTs; a search
+    reads thousands of revolutions at the same record's step, each from its own start, which is a
+    phase ramp on the coefficients, not another plan."""
+    from scipy.signal import CZT
 
-    F = np.fft.rfft(row)[: max_order + 1] / row.size
-    F[1:] *= 2.0
-    return np.real(czt(F, m=count, w=np.exp(2j * np.pi * step), a=np.exp(-2j * np.pi * u0)))
+    return CZT(terms, m=count, w=np.exp(2j * np.pi * step), a=1.0)
 
 
-def measure(deterministic: np.ndarray, chain: Chain, noise, offset: float = 0.0, first: int = 0) -> np.ndarray:
-    """Rows *deterministic* (n, P) -- angle-domain revolutions in the simulation's frame -- as the
-    target's acquisition and importer would deliver them (module docstring). *noise(i, x)* adds
-    row i's noise to its time-domain samples x (1, L) at the record's rate (None: no noise).
+def _coefficients(rows: np.ndarray, max_order: int) -> np.ndarray:
+    """The one-sided Fourier series coefficients of periodic *rows* (n, P), orders 0..max_order."""
+    F = np.fft.rfft(rows, axis=-1)[..., : max_order + 1] / rows.shape[-1]
+    F[..., 1:] *= 2.0
+    return F
+
+
+def sampled(deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first: int = 0) -> tuple:
+    """Rows *deterministic* (n, P) -- angle-domain revolutions in the simulation's frame -- read at
+    the record's sample times: (x, u), x (n, L) the samples of each row's stretch of record and u
+    (n, L) their angles in revolutions from the row's tacho mark (sample 1 and 2 straddle u = 0).
+    Each row's Fourier series below the record's Nyquist order is evaluated exactly there, by a
+    chirp z-transform (the record's samples are uniform in angle but not a whole number per
+    revolution; an interpolation would dull the mesh harmonics by parts per thousand, which 80
+    quiet revolutions resolve).
     *offset*: the record's tacho zero in the simulation's frame (rad). *first*: the index of the
-    first row among the target's start fractions."""
+    first row among the target's start fractions (none kept: a uniform spread)."""
     X = np.asarray(deterministic, dtype=np.float64)
     n, P = X.shape
     per_rev = chain.samples_per_rev
     # Strictly below the record's Nyquist order: what an anti-alias filter lets through.
     max_order = max(1, min(P // 2, int(math.ceil(chain.nyquist_order)) - 1))
     length = int(math.ceil(per_rev)) + 3
-    out = np.empty((n, P))
-    psi = offset / TWO_PI
+    fractions = chain.fractions
+    index = first + np.arange(n)
+    if fractions:
+        frac = np.asarray(fractions, dtype=np.float64)[index % len(fractions)]
+    else:
+        frac = (0.5 + 0.618034 * index) % 1.0
+    # Sample k lies at revolution (k - 1 - frac) / per_rev: the revolution starts between samples 1 and 2.
+    u = (np.arange(length, dtype=np.float64)[None, :] - 1.0 - frac[:, None]) / per_rev
+    F = _coefficients(X, max_order)
+    F = F * np.exp(2j * np.pi * np.arange(F.shape[1])[None, :] * (u[:, :1] + offset / TWO_PI))
+    return np.real(_chirp(F.shape[1], length, 1.0 / per_rev)(F, axis=-1)), u
+
+
+def tracked(x: np.ndarray, u: np.ndarray, chain: Chain, noise, points: int = POINTS) -> np.ndarray:
+    """Sampled rows (x, u) of :func:`sampled` as the importer delivers them: *noise(i, x)* adds row
+    i's noise to its samples x (1, L) at the record's rate (None: no noise), the record's step
+    rounds them, and resample_revolutions order-tracks them to *points* per revolution."""
+    n = x.shape[0]
+    out = np.empty((n, points))
     for i in range(n):
-        fractions = chain.fractions
-        frac = fractions[(first + i) % len(fractions)] if fractions else (0.5 + 0.618034 * (first + i)) % 1.0
-        # Sample k lies at revolution (k - 1 - frac) / per_rev: the revolution starts between samples 1 and 2.
-        u = (np.arange(length, dtype=np.float64) - 1.0 - frac) / per_rev
-        x = read_at(X[i], max_order, u[0] + psi, 1.0 / per_rev, length)[None, :]
+        xi = x[i : i + 1]
         if noise is not None:
-            x = noise(i, x)
+            xi = noise(i, xi)
         if chain.step > 0:
-            x = np.round(x / chain.step) * chain.step
-        out[i] = resample_revolutions(x[0], TWO_PI * u, points=P)[0]
+            xi = np.round(xi / chain.step) * chain.step
+        out[i] = resample_revolutions(xi[0], TWO_PI * u[i], points=points)[0]
     return out
+
+
+def measure(deterministic: np.ndarray, chain: Chain, noise, offset: float = 0.0, first: int = 0) -> np.ndarray:
+    """Rows *deterministic* (n, P) -- angle-domain revolutions in the simulation's frame -- as the
+    target's acquisition and importer would deliver them (module docstring): :func:`sampled`, then
+    :func:`tracked`. *noise(i, x)* adds row i's noise to its time-domain samples x (1, L) at the
+    record's rate (None: no noise). *offset*: the record's tacho zero in the simulation's frame
+    (rad). *first*: the index of the first row among the target's start fractions."""
+    X = np.asarray(deterministic, dtype=np.float64)
+    x, u = sampled(X, chain, offset, first)
+    return tracked(x, u, chain, noise, X.shape[1])

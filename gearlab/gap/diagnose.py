@@ -65,6 +65,7 @@ import math
 import numbers
 import time
 import warnings
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 
@@ -81,7 +82,7 @@ from ..data.builder import (
     simulate_unit,
     whole_steps_rate,
 )
-from ..data.chain import Chain, fit_offset, measure
+from ..data.chain import Chain, fit_offset, sampled, tracked
 from ..data.spec import POINTS, DatasetSpec
 from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
@@ -359,29 +360,59 @@ def source_rows(spec: DatasetSpec, max_order: int = 0, chain: Chain | None = Non
     return band_limited(out.astype(np.float64) * std + mean, max_order)
 
 
+# The deterministic part of measured rows, sampled at the record's times (gearlab.data.chain.sampled),
+# per source set without its noise: a search re-fits the sensor noise at every point (the nuisance,
+# 6-24 noise levels each) and the signal effects' fits share one simulation, so the same sampled
+# rows came back hundreds of times per fit (80 % of a fit's time went into making them again).
+SAMPLED_KEPT = 32
+_sampled: OrderedDict = OrderedDict()
+
+
+def _sampled_rows(key: tuple, make: Callable[[], tuple]) -> tuple:
+    hit = _sampled.get(key)
+    if hit is None:
+        hit = make()
+        for a in hit:
+            a.setflags(write=False)  # shared by every noise level: never changed in place
+        _sampled[key] = hit
+        if len(_sampled) > SAMPLED_KEPT:
+            _sampled.popitem(last=False)
+    else:
+        _sampled.move_to_end(key)
+    return hit
+
+
 def measured_rows(
     spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float, chain: Chain, teeth: int = 1
 ) -> np.ndarray:
-    """The healthy rows of *spec* through a measured target's chain (gearlab.data.chain.measure):
-    each row one revolution; the non-noise signal effects act in the angle domain on row i's
-    record (the builder's seeds [seed, noise seed, i]), the noise effects and the dataset's noise
-    in time at the record's rate, where a sensor's noise is white. The tacho offset is the
-    chain's, or fitted to the target's synchronous average for this very set (a free rotation:
-    it follows whatever the effects do to the waveform's phase)."""
+    """The healthy rows of *spec* through a measured target's chain (gearlab.data.chain): each row
+    one revolution; the non-noise signal effects act in the angle domain on row i's record (the
+    builder's seeds [seed, noise seed, i]), the noise effects and the dataset's noise in time at the
+    record's rate, where a sensor's noise is white. The tacho offset is the chain's, or fitted to the
+    target's synchronous average for this very set (a free rotation: it follows whatever the effects
+    do to the waveform's phase). The rows before the noise are kept per set (:func:`_sampled_rows`)."""
     effects = EffectChain.load(spec.effects).at("signal") if spec.effects else ()
     shaping = EffectChain(tuple(item for item in effects if not item[0].noise))
     noisy = EffectChain(tuple(item for item in effects if item[0].noise))
     noise_seed = spec.noise.seed if spec.noise else 0
     seeds = [[spec.seed, noise_seed, i] for i in range(spec.healthy)]
-    D = np.empty((spec.healthy, POINTS))
-    for i, seed in enumerate(seeds):
-        row = clean[None, :]
-        if shaping:
-            row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
-        D[i] = row[0]
-    offset = chain.offset
-    if offset is None:
-        offset = fit_offset(D.mean(axis=0), chain.reference, teeth) if chain.reference is not None else 0.0
+
+    def deterministic() -> tuple:
+        D = np.empty((spec.healthy, POINTS))
+        for i, seed in enumerate(seeds):
+            row = clean[None, :]
+            if shaping:
+                row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
+            D[i] = row[0]
+        offset = chain.offset
+        if offset is None:
+            offset = fit_offset(D.mean(axis=0), chain.reference, teeth) if chain.reference is not None else 0.0
+        return sampled(D, chain, offset)
+
+    registry = get_registry()
+    quiet = spec.with_(effects=tuple(e for e in spec.effects if not registry.get("effect", e[0]).noise))
+    reference = None if chain.reference is None else hash(np.asarray(chain.reference).tobytes())
+    x, u = _sampled_rows((quiet, chain, reference, teeth), deterministic)
 
     def noise(i: int, x: np.ndarray) -> np.ndarray:
         if noisy:
@@ -390,7 +421,7 @@ def measured_rows(
             x = add_noise(x, spec.noise.snr_db, spec.noise.kind, np.random.default_rng(seeds[i]))
         return x
 
-    return measure(D, chain, noise if (noisy or spec.noise is not None) else None, offset)
+    return tracked(x, u, chain, noise if (noisy or spec.noise is not None) else None)
 
 
 @dataclass(frozen=True)
@@ -429,12 +460,12 @@ class Scorer:
     features, for the before/after numbers and tests.
     """
 
-    def __init__(self, target_X: np.ndarray, pair):
+    def __init__(self, target_X: np.ndarray, pair, max_order: int = 0):
         self.target = np.asarray(target_X, dtype=np.float64)
         self.pair = gear_ratio(pair)
         self.z1 = self.pair[0]
         self.points = self.target.shape[1]
-        self.plan = BandPlan.make(self.points, self.pair)
+        self.plan = BandPlan.make(self.points, self.pair, highest=max_order)
         self.target_fft = np.fft.rfft(self.target, axis=1)
         self.target_power = np.mean(self.target * self.target, axis=1)
         order = order_views_of_power(power_of_spectrum(self.target_fft, self.points), self.plan)
@@ -691,7 +722,7 @@ def fit_effect(task: tuple) -> dict:
     registry = get_registry()
     effect = registry.get("effect", name)
     space = Space(effect)
-    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source))
+    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source), settings.max_order)
     errors: list[str] = []
 
     def spec_of(params: dict, extra: tuple = ()) -> DatasetSpec:
@@ -815,7 +846,7 @@ def _refit_alone(
     it a candidate would be credited with the better fit of the effects before it — an
     imperfect first fit leaves a residual that any flexible extra effect (noise, a filter, a
     tone) partly absorbs, and extras the target does not have were accepted."""
-    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source))
+    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source), settings.max_order)
     score = scorer.score(rows(source.with_(effects=_by_level(source.effects + tuple(accepted)))))
     refit, score, used = _backfit(
         source, accepted, (), scorer, score, max(2, SIGNAL_EVALS * settings.budget // 2), seed, rows
@@ -933,6 +964,7 @@ def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None 
         permutations=settings.permutations,
         alpha=settings.alpha,
         consecutive=full and settings.consecutive is True,
+        max_order=settings.max_order,
     )
 
 
@@ -970,7 +1002,7 @@ def diagnose(
     search_seed, report_seed = (int(s) for s in np.random.SeedSequence([settings.seed, 9]).generate_state(2))
     base = source.with_(faults=(), healthy=settings.healthy, teeth=None, duplicates=1)
     search, fresh = base.with_(seed=search_seed), base.with_(seed=report_seed)
-    scorer = Scorer(target, pair)
+    scorer = Scorer(target, pair, settings.max_order)
 
     def judged(effects: tuple) -> np.ndarray:
         """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""

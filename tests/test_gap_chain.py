@@ -1,0 +1,84 @@
+"""The measurement chain (gearlab.data.chain) and the diagnosis's reuse of its sampled rows."""
+
+import math
+
+import numpy as np
+import pytest
+
+from gearlab.data.chain import Chain, measure, sampled, tracked
+from gearlab.data.spec import dataset_preset
+from gearlab.gap import diagnose as d
+
+SOURCE = dataset_preset("B-6-ch5").with_(healthy=6)
+
+
+def test_sampled_rows_are_the_fourier_series_at_the_record_times():
+    """Each row is its own revolution's Fourier series below the record's Nyquist order, read at
+    the sample times u = (k - 1 - frac) / per_rev + offset (revolutions), whatever the start."""
+    rng = np.random.default_rng(3)
+    P = 256
+    X = rng.normal(size=(3, P))
+    chain = Chain(fs=40.0 * 97.3, speed=40.0, fractions=(0.1, 0.77, 0.5))
+    offset = 0.9
+    x, u = sampled(X, chain, offset)
+    max_order = math.ceil(chain.nyquist_order) - 1
+    m = np.arange(max_order + 1)
+    for i, frac in enumerate(chain.fractions):
+        np.testing.assert_allclose(u[i], (np.arange(u.shape[1]) - 1.0 - frac) / chain.samples_per_rev)
+        F = np.fft.rfft(X[i])[: max_order + 1] / P
+        F[1:] *= 2.0
+        angles = u[i] + offset / (2 * np.pi)
+        direct = np.real(np.exp(2j * np.pi * np.outer(angles, m)) @ F)
+        np.testing.assert_allclose(x[i], direct, atol=1e-12 * np.abs(direct).max())
+    # measure = sampled, then the importer's order tracking (here with no noise and no step)
+    np.testing.assert_array_equal(measure(X, chain, None, offset), tracked(x, u, chain, None, P))
+
+
+def test_the_rows_before_the_noise_are_reused_and_give_the_same_rows():
+    """A search re-fits the sensor noise at every point: the deterministic rows, sampled at the
+    record's times, are made once per source set, and the rows made again are identical."""
+    clean = d.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
+    chain = Chain(fs=40.0 * 2000.5, speed=40.0, fractions=(0.25, 0.5, 0.75), step=1e-3, reference=clean)
+    noise = d.get_registry().get("effect", "sensor_noise")
+    d._sampled.clear()
+    first = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 10.0}),)), 0, chain)
+    assert len(d._sampled) == 1
+    again = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 10.0}),)), 0, chain)
+    other = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 3.0}),)), 0, chain)
+    assert len(d._sampled) == 1  # another noise level: the same deterministic rows
+    np.testing.assert_array_equal(first, again)
+    assert not np.array_equal(first, other)
+    d._sampled.clear()
+    fresh = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 3.0}),)), 0, chain)
+    np.testing.assert_array_equal(fresh, other)
+    # the cached samples are shared: nobody may change them in place
+    ((x, _),) = d._sampled.values()
+    with pytest.raises(ValueError):
+        x[0, 0] = 1.0
+
+
+def test_the_order_bands_end_at_the_records_passband():
+    """Above a record's passband both sets hold only floating-point rounding (-290 dB): the bands
+    end at the highest order compared, and a change of the arithmetic at 1e-14 no longer moves
+    the gap (it moved a null target's from 1.4 to 2.5, p 0.30 to 0.04)."""
+    from gearlab.gap.stats import gap_report
+    from gearlab.gap.views import BandPlan
+
+    plan = BandPlan.make(4096, (25, 30), highest=792)
+    assert plan.nyquist == 792 and plan.harmonics * 25 + plan.sidebands < plan.floor_start
+    orders = np.concatenate([o for bands in plan.bands().values() for _, o in bands])
+    assert orders.max() == 792
+    assert BandPlan.make(4096, (25, 30), highest=5000) == BandPlan.make(4096, (25, 30), highest=2048)
+    with pytest.raises(Exception, match="passband"):
+        BandPlan.make(4096, (25, 30), highest=20)
+
+    rng = np.random.default_rng(1)
+    clean = d.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
+    source = d.band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), 700)
+    target = d.band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), 700)
+    nudged = d.band_limited(source * (1 + 1e-13), 700)
+    gaps = [
+        gap_report(X, target, (25, 30), bootstrap=0, permutations=50, max_order=700)["total"]["gap"]
+        for X in (source, nudged)
+    ]
+    assert gaps[1] == pytest.approx(gaps[0], rel=1e-6)
