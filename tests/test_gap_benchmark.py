@@ -204,8 +204,11 @@ def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
         seed=0,
         bootstrap=0,
         permutations=200,
+        max_order=max_order,  # the record's passband, as the diagnosis compares it
     )
-    plain = gap_report(Rows(max_order)(search), target, pair, seed=0, bootstrap=0, permutations=200)
+    plain = gap_report(
+        Rows(max_order)(search), target, pair, seed=0, bootstrap=0, permutations=200, max_order=max_order
+    )
     assert not matched["significant"], matched["p_value"]
     assert plain["significant"] and plain["total"]["gap"] > 100 * matched["total"]["gap"]
 

@@ -365,6 +365,7 @@ def gap_report(
     confidence: float = 0.95,
     top: int = 5,
     consecutive: bool = False,
+    max_order: int = 0,
 ) -> dict:
     """Where source and target healthy revolutions differ, and how strongly: a JSON-serialisable dict.
 
@@ -374,7 +375,8 @@ def gap_report(
     latent features of a network trained on the source. *consecutive*: the rows of each set
     are consecutive revolutions of one record, so the output-shaft orders can be resolved
     (reported beside the views, outside the shares: they have one row per block of
-    revolutions).
+    revolutions). *max_order*: the highest shaft order the sets hold (a measured record's
+    passband; 0: P/2): the order bands end there (gearlab.gap.views.BandPlan, ``highest``).
 
     Returns ``views`` (per view: gap, rms_effect, share, their intervals, top features, every
     feature's effect), ``total``, ``top_features``, ``auc``, ``mmd2``, ``p_value``,
@@ -387,7 +389,7 @@ def gap_report(
     alpha = _check_fraction(alpha, "alpha")
     confidence = _check_fraction(confidence, "confidence")
     z1, z2 = gear_ratio(pair)
-    plan = BandPlan.make(Xs.shape[1], (z1, z2))
+    plan = BandPlan.make(Xs.shape[1], (z1, z2), highest=max_order)
     notes = []
 
     # The target's residual is taken against the source's TSA: "how the target deviates from
