@@ -321,3 +321,62 @@ def test_shipped_phm09_scenario_validates(cli):
     code, out, err = cli("validate", Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml")
     assert code == 0, err
     assert "24 measured records (8 history, 16 test)" in out
+
+
+def test_the_shipped_scenario_takes_another_file_list_of_the_rig(tmp_path, monkeypatch):
+    """phm09_chip.toml with only its file list replaced — other speeds (35 and 50 Hz), no
+    'condition' keys, another fault case among the negatives (a bearing: impulses at 3.05 input
+    orders, not synchronous with the input shaft) — groups the records by tacho speed, keeps each
+    speed's history to itself, and its classical baseline calls the chipped pinion's TSA30 and
+    not the bearing's."""
+    import textrecords
+
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection import Rule, classical_record, read_target
+
+    monkeypatch.setattr(textrecords, "FS", 66666.67)  # the rig's rate, as the scenario's fs says
+    data = tmp_path / "data"
+    data.mkdir()
+
+    def make(name, speed, seed, chip=0.0, bearing=0.0):
+        vib, tacho = textrecords.signals(revolutions=45, chip=chip, seed=seed, phase=0.9 * seed, speed=speed)
+        if bearing:  # an outer-race defect: a ring 3.05 times per input revolution
+            t = np.arange(len(vib)) / textrecords.FS
+            since = np.mod(t * speed * 3.05, 1.0) / (speed * 3.05)
+            vib = vib + bearing * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+        textrecords.write_zip(data / f"{name}.zip", textrecords.text(vib, tacho))
+        return name
+
+    files = [
+        (make("good35_1", 35.0, 1), "history", "healthy"),
+        (make("good35_2", 35.0, 2), "history", "healthy"),
+        (make("chip35", 35.0, 3, chip=4.0), "test", "fault"),
+        (make("bearing35", 35.0, 4, bearing=4.0), "test", "bearing outer race"),
+        (make("good50_1", 50.0, 5), "history", "healthy"),
+        (make("good50_2", 50.0, 6), "history", "healthy"),
+        (make("good50_3", 50.0, 7), "test", "healthy"),
+        (make("chip50", 50.0, 8, chip=4.0), "test", "fault"),
+    ]
+    listed = "files = [\n" + "".join(
+        f'  {{ path = "{data / name}.zip", role = "{role}", label = "{label}" }},\n' for name, role, label in files
+    )
+    shipped = (Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml").read_text()
+    text, n = re.subn(r"files = \[\n(.*\n)*?\]", lambda _: listed + "]", shipped)
+    assert n == 1
+    path = tmp_path / "phm09_chip.toml"
+    path.write_text(text)
+    spec = load_scenario(path).spec
+    conditions = read_target(spec["target"], spec["blocks"], lambda e: None)
+    assert set(conditions) == {"35 Hz", "50 Hz"}
+    for name, cond in conditions.items():
+        assert {f.path.split("/")[-1] for f, _ in cond["history"]} == {
+            f"{n}.zip" for n, role, _ in files if role == "history" and name.startswith(n[-4:-2])
+        }
+        rule = Rule(spec["threshold"], spec["false_alarm"], cond["history_records"])
+        fm4 = classical_record("fm4", name, cond, spec["classical"], rule)
+        called = {
+            p.split("/")[-1]: np.mean(np.array(s["record30"]) > fm4["thresholds"]["record30"])
+            for p, s in fm4["test_scores"].items()
+        }
+        for rec, share in called.items():
+            assert share == (1.0 if rec.startswith("chip") else 0.0), (rec, share)
