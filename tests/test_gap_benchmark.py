@@ -421,3 +421,50 @@ def test_quick_benchmark_with_the_real_diagnosis(cli, tmp_path):
     assert code == 0, err
     summary = json.loads(next((tmp_path / "runs" / "gap_benchmark").iterdir()).joinpath("summary.json").read_text())
     assert summary["trials"] == 4
+
+
+# --- targets too weak to show a gap ------------------------------------------------------------------
+
+
+def test_a_target_too_weak_to_show_a_gap_is_scored_by_the_oracle():
+    """An effect trial the diagnosis saw no gap in: when fresh realisations of its target show none
+    either (oracle under ORACLE_SEEN), "no significant gap" is the right answer and top-1 does not
+    apply; when they do, it is a miss."""
+    weak = answers("single", [("shaft_eccentricity", {"e": 1.5e-4, "phase": 0.3})])
+    quiet = fake_result(significant=False, gap_before=1.0, gap_after=1.0)
+    r = bench.score_trial(weak, quiet, oracle=0.2)
+    assert r["too_weak"] and r["right_answer"] and r["top1"] is None and r["oracle_seen"] == 0.2
+    seen = bench.score_trial(weak, quiet, oracle=0.8)
+    assert not seen["too_weak"] and not seen["right_answer"] and seen["top1"] is False
+    assert bench.score_trial(weak, quiet)["top1"] is False  # no oracle: a miss as before
+    named = bench.score_trial(weak, fake_result(["sensor_noise"], significant=False), oracle=0.0)
+    assert named["too_weak"] and not named["right_answer"]  # something named where no gap was seen
+    hit = bench.score_trial(weak, fake_result(["shaft_eccentricity"]))
+    s = bench.summarise([r, seen, hit], LIBRARY)
+    assert s["too_weak"] == 1 and s["top1"] == pytest.approx(0.5) and s["right_answer"] == pytest.approx(2 / 3)
+
+
+def test_the_oracle_sees_a_strong_effect_and_not_a_negligible_one(tmp_path):
+    """oracle_seen writes fresh realisations of the trial's target as measured files and judges the
+    plain source against each as the diagnosis's "before" report does."""
+    acquisition = bench.Acquisition(0.45, 1.0, "npz")
+    registry = get_registry()
+    settings = {**SETTINGS, "bootstrap": 0, "permutations": 100}
+
+    def trial(name, params):
+        return bench.Trial(0, "single", (registry.get("effect", name).spec(params),), None, LIBRARY, 5, acquisition)
+
+    assert bench.oracle_seen(trial("sensor_noise", {"snr_db": 0.0}), SOURCE, settings, 30, tmp_path) == 1.0
+    assert bench.oracle_seen(trial("shaft_eccentricity", {"e": 1e-7}), SOURCE, settings, 30, tmp_path) <= 0.2
+    assert not list(tmp_path.iterdir())  # the realisations are not kept
+
+
+def test_kinds_runs_only_some_trials_of_the_same_draw(write_scenario):
+    """[benchmark] kinds: the trials are drawn as for a full run and only those kinds run."""
+    from gearlab.engine import load_scenario
+
+    head = '[scenario]\nname = "b"\nkind = "gap_benchmark"\n[benchmark]\ntrials = 50\nseed = 0\n'
+    full = load_scenario(write_scenario(head, "full.toml"))
+    held = load_scenario(write_scenario(head + 'kinds = ["withheld"]\n', "held.toml"))
+    assert len(held.spec["trials"]) == 10
+    assert held.spec["trials"] == [t for t in full.spec["trials"] if t.kind == "withheld"]

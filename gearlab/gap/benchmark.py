@@ -457,10 +457,17 @@ def scored_params(name: str, true: Mapping) -> list[str]:
     return [k for k in keys if k in true and isinstance(true[k], (int, float)) and not isinstance(true[k], bool)]
 
 
-def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
+def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float | None = None) -> dict:
     """One trial's record from the generator's answers and the diagnosis's result (contract of
     gearlab.gap.diagnose.diagnose). top1/top3/shrink apply to single and pair trials, null_correct
-    to null trials, out_of_library_unexplained to withheld ones (None elsewhere)."""
+    to null trials, out_of_library_unexplained to withheld ones (None elsewhere).
+
+    *oracle*: for an effect trial the diagnosis saw no gap in, the share of fresh realisations of
+    its target that show one (:func:`oracle_seen`). Under ORACLE_SEEN the effect is too weak for
+    these revolutions: ``too_weak`` is set, top1 is None (no effect can be named first where no gap
+    is seen), and ``right_answer`` is True -- "no significant gap" is the right answer there. Else
+    (or without an oracle) a trial with no gap seen is a miss. ``right_answer`` of an effect trial
+    is top1, or no gap named on a too-weak target."""
     from ..registry import get_registry
 
     registry = registry or get_registry()
@@ -497,11 +504,18 @@ def score_trial(answers: Mapping, result: Mapping, registry=None) -> dict:
         "option_correct": {},
         "null_correct": None,
         "out_of_library_unexplained": None,
+        "oracle_seen": oracle,
+        "too_weak": None,
+        "right_answer": None,
         "wrong_names": [n for n in accepted if n not in hidden],
     }
     if kind in ("single", "pair"):
         record["top1"] = bool(accepted) and accepted[0] in hidden
         record["top3"] = any(n in hidden for n in ranking[:3])
+        record["too_weak"] = not record["significant_before"] and oracle is not None and oracle < ORACLE_SEEN
+        if record["too_weak"]:
+            record["top1"] = record["top3"] = None
+        record["right_answer"] = bool(record["top1"]) or (record["too_weak"] and not accepted)
         errors, sure = [], []
         for name in hidden:
             if name not in fitted:
@@ -544,9 +558,41 @@ class TrialTask:
     revolutions: int
 
 
+# How often an effect's target must show a significant gap, over fresh realisations, for a trial
+# whose diagnosis saw none to count as a miss rather than as too weak to be seen (oracle_seen).
+ORACLE_REPEATS, ORACLE_SEEN = 5, 0.5
+
+
+def oracle_seen(trial: Trial, source: DatasetSpec, settings: Mapping, revolutions: int, folder: Path) -> float:
+    """The share of ORACLE_REPEATS fresh realisations of *trial*'s target (new noise seeds, the same
+    hidden effects and acquisition) in which the plain source shows a significant gap, judged as
+    the diagnosis judges its "before" report. The generator's side: it knows the hidden effects,
+    and asks only whether this many revolutions can show them at all (a 150 um eccentricity on
+    six_dof sits at the edge: docs/gap_benchmark.md, section 3)."""
+    import shutil
+    from dataclasses import replace
+
+    from . import diagnose as d
+
+    seen = 0
+    for k in range(ORACLE_REPEATS):
+        seed = int(np.random.default_rng([trial.seed, 7, k]).integers(1, 2**31 - 1))
+        where = Path(folder) / f"oracle_{k}"
+        try:
+            rows, chain, max_order = import_target(write_target(replace(trial, seed=seed), source, where, revolutions))
+            plain = dict(settings, max_order=max_order) if max_order else dict(settings)
+            report = d.plain_report(source, rows, d.Settings(candidates=tuple(trial.candidates), **plain), chain)
+            seen += d.gap_seen(report)
+        finally:
+            shutil.rmtree(where, ignore_errors=True)
+    return seen / ORACLE_REPEATS
+
+
 def trial_task(task: TrialTask) -> dict:
     """Generate + write + diagnose (from the file) + score one trial. The generator's choices reach
-    the diagnosis only through the written file; scoring reads them back from answers.json after."""
+    the diagnosis only through the written file; scoring reads them back from answers.json after.
+    An effect trial whose diagnosis saw no significant gap is checked by the generator
+    (:func:`oracle_seen`): too weak to be seen, "no significant gap" is the right answer."""
     folder = Path(task.folder)
     started = time.perf_counter()
     path = write_target(task.trial, task.source, folder, task.revolutions)
@@ -555,7 +601,10 @@ def trial_task(task: TrialTask) -> dict:
     result = diagnose_file(path, task.source, candidates, task.settings)
     diagnosed = time.perf_counter()
     atomic_write(folder / "diagnosis.json", json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
-    record = score_trial(read_answers(folder), result)
+    oracle = None
+    if task.trial.kind in ("single", "pair") and not result.get("significant_before"):
+        oracle = oracle_seen(task.trial, task.source, task.settings, task.revolutions, folder)
+    record = score_trial(read_answers(folder), result, oracle=oracle)
     record.update(
         unit=unit_key(task.trial.index),
         index=task.trial.index,
@@ -632,6 +681,10 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         "top3": _rate(r["top3"] for r in effect_trials),
         "top1_single": _rate(r["top1"] for r in effect_trials if r["kind"] == "single"),
         "top1_pair": _rate(r["top1"] for r in effect_trials if r["kind"] == "pair"),
+        # every effect trial: the right effect named first, or -- on a target too weak for any gap to
+        # be seen in fresh realisations (oracle_seen) -- "no significant gap"; too_weak counts those
+        "right_answer": _rate(r.get("right_answer", r["top1"]) for r in effect_trials),
+        "too_weak": sum(bool(r.get("too_weak")) for r in effect_trials),
         "median_shrink": _median(r["shrink"] for r in identified),
         "median_param_error": _median(r["param_error_median"] for r in effect_trials),
         # over the parameters the diagnosis called determined (the goal is on identifiable ones)

@@ -1060,6 +1060,35 @@ def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None 
     )
 
 
+def _prepared(source: DatasetSpec, target_X, settings: Settings, chain: Chain | None) -> tuple:
+    """What every diagnosis starts from: the target (checked, band-limited), its chain (its tacho
+    offset fitted per set against the target's average unless fixed), how rows are made, the
+    settings ('consecutive' resolved), the gear pair and the source as the search and the reports
+    simulate it."""
+    target = band_limited(check_target(target_X), settings.max_order)
+    if chain is not None and chain.offset is None:
+        chain = replace(chain, reference=target.mean(axis=0))
+    if settings.consecutive == "auto":  # a measured record's rows are its consecutive revolutions
+        settings = replace(settings, consecutive=chain is not None)
+    pair = _check_source(source)
+    for i, effect in enumerate(source.effects, start=1):  # the source's own effects must load too
+        get_registry().get("effect", effect[0], f"gap diagnosis: source '{source.name}' effect #{i}")
+    # Two noise seeds: one for the search (common random numbers), one for the reports, so the
+    # fitted parameters are judged on rows they were not fitted to.
+    search_seed, report_seed = (int(s) for s in np.random.SeedSequence([settings.seed, 9]).generate_state(2))
+    base = source.with_(faults=(), healthy=settings.healthy, teeth=None, duplicates=1)
+    rows = Rows(settings.max_order, chain)
+    return target, chain, rows, settings, pair, base.with_(seed=search_seed), base.with_(seed=report_seed)
+
+
+def plain_report(source: DatasetSpec, target_X, settings: Settings, chain: Chain | None = None) -> dict:
+    """The diagnosis's "before" report alone: the plain source (the reports' rows) against the
+    target, as :func:`diagnose` makes it (gap_seen says whether it shows a significant gap)."""
+    check_settings(settings)
+    target, chain, rows, settings, pair, _, fresh = _prepared(source, target_X, settings, chain)
+    return _report(rows(fresh), target, pair, settings)
+
+
 def diagnose(
     source: DatasetSpec,
     target_X: np.ndarray,
@@ -1079,21 +1108,8 @@ def diagnose(
     """
     started = time.perf_counter()
     candidates = check_settings(settings)
-    target = band_limited(check_target(target_X), settings.max_order)
-    if chain is not None and chain.offset is None:
-        chain = replace(chain, reference=target.mean(axis=0))
-    rows = Rows(settings.max_order, chain)
-    if settings.consecutive == "auto":  # a measured record's rows are its consecutive revolutions
-        settings = replace(settings, consecutive=chain is not None)
-    pair = _check_source(source)
-    for i, effect in enumerate(source.effects, start=1):  # the source's own effects must load too
-        get_registry().get("effect", effect[0], f"gap diagnosis: source '{source.name}' effect #{i}")
+    target, chain, rows, settings, pair, search, fresh = _prepared(source, target_X, settings, chain)
     executor = executor or LocalExecutor(1)
-    # Two noise seeds: one for the search (common random numbers), one for the reports, so the
-    # fitted parameters are judged on rows they were not fitted to.
-    search_seed, report_seed = (int(s) for s in np.random.SeedSequence([settings.seed, 9]).generate_state(2))
-    base = source.with_(faults=(), healthy=settings.healthy, teeth=None, duplicates=1)
-    search, fresh = base.with_(seed=search_seed), base.with_(seed=report_seed)
     scorer = Scorer(target, pair, settings.max_order)
 
     def judged(effects: tuple) -> np.ndarray:

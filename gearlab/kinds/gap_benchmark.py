@@ -1,7 +1,8 @@
 """Scenario kind `gap_benchmark`: the blind benchmark of the gap diagnosis (`gearlab gap benchmark`).
 
     [benchmark]   trials, seed, library (effect names; [] = every registered effect),
-                  target_revolutions (healthy revolutions written per target)
+                  target_revolutions (healthy revolutions written per target), kinds (the trial
+                  kinds to run, of those drawn; [] = all)
     [source]      the simulator configuration, a dataset preset with overrides as in [[datasets]]
                   (default B-6-ch5; only its healthy revolutions are used; without a `noise` table
                   it gets the base sensor noise, Gaussian 30 dB, in source and target alike)
@@ -28,6 +29,7 @@ from ..errors import GearlabInputError
 from ..events import Event
 from ..gap import benchmark as bench
 from ..gap.diagnose import Settings
+from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
@@ -44,6 +46,15 @@ _SOURCE_KEYS = {
 }
 _SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
+
+def _kinds(value, where: str) -> list:
+    for kind in value:
+        if kind not in bench.KINDS:
+            hint = did_you_mean(kind, bench.KINDS) if isinstance(kind, str) else ""
+            raise GearlabInputError(f"{where}: {kind!r} is not a trial kind ({', '.join(bench.KINDS)}){hint}")
+    return value
+
+
 TABLES = {
     "benchmark": Table(
         {
@@ -54,6 +65,14 @@ TABLES = {
             ),
             "target_revolutions": Key(
                 int, 80, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000), "healthy revolutions in each written target"
+            ),
+            "kinds": Key(
+                list,
+                [],
+                _kinds,
+                "trial kinds to run (single, pair, null, withheld); [] = all. The trials are drawn as for "
+                'every kind, then only these run (kinds = ["withheld"] with trials = 50: 10 out-of-library '
+                "trials, the same ones a full run of 50 holds)",
             ),
         }
     ),
@@ -86,6 +105,13 @@ def build(scenario: Scenario) -> dict:
     source.check(location(path, "source"))
     library = tuple(library)
     trials = bench.draw_trials(b["trials"], b["seed"], library, source)
+    if b["kinds"]:
+        trials = [trial for trial in trials if trial.kind in b["kinds"]]
+        if not trials:
+            raise GearlabInputError(
+                f"{location(path, 'benchmark', 'kinds')}: no trial of {b['kinds']} among {b['trials']} trials; "
+                "expected more trials"
+            )
     settings = {**t["search"], "seed": b["seed"]}
     return {
         "source": source,
@@ -98,8 +124,8 @@ def build(scenario: Scenario) -> dict:
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    counts = bench.trial_counts(len(spec["trials"]))
-    mix = ", ".join(f"{c} {k}" for k, c in counts.items())
+    counts = {k: sum(t.kind == k for t in spec["trials"]) for k in bench.KINDS}
+    mix = ", ".join(f"{c} {k}" for k, c in counts.items() if c)
     return (
         f"{len(spec['trials'])} blind trials ({mix}) on {spec['source'].name} ({spec['source'].model}), "
         f"{len(spec['library'])} candidate effects, budget {spec['settings']['budget']} per fit"
@@ -163,9 +189,11 @@ def _verdict(r: dict) -> str:
     hidden = "+".join(h[0] for h in r["hidden"])
     shrink = f", gap shrinks {100 * r['shrink']:.0f} %" if r["shrink"] is not None else ""
     verdict = f", {r['verdict']}" if r.get("verdict") else ""
-    return (
-        f"hidden {hidden}, named {r['accepted'] or 'nothing'}: top-1 {'hit' if r['top1'] else 'miss'}{shrink}{verdict}"
-    )
+    if r.get("too_weak"):
+        top = f"too weak to be seen (oracle {_pct(r['oracle_seen'])}): no gap is the right answer"
+    else:
+        top = f"top-1 {'hit' if r['top1'] else 'miss'}"
+    return f"hidden {hidden}, named {r['accepted'] or 'nothing'}: {top}{shrink}{verdict}"
 
 
 def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> None:
@@ -224,6 +252,9 @@ def table_md(summary: dict) -> str:
         + "); "
         f"right effect first and explained (or partly, with >= 50 % of the gap): "
         f"{_pct(summary.get('explained_or_partly_when_identified'))}",
+        "",
+        f"right answer on effect trials (the right effect first, or no gap on the "
+        f"{summary.get('too_weak', 0)} targets too weak to show one): {_pct(summary.get('right_answer'))}",
     ]
     return "\n".join(lines) + "\n"
 
