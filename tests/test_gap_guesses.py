@@ -31,3 +31,34 @@ def test_a_tone_above_one_order_keeps_one_guess():
     x = (np.sin(2 * np.pi * 25 * SPEED * t) + 0.3 * np.sin(2 * np.pi * 1234.5 * t)).reshape(ROWS, N)
     guesses = tone.guesses(x, SPEED)
     assert len(guesses) == 1 and guesses[0]["frequency"] == pytest.approx(1234.5, abs=1.0)
+
+
+def _meshing(ripple_order=None, index=0.0, rows=20):
+    """Revolutions of a 25-tooth mesh (harmonics 1-8 at falling levels), amplitude-modulated at
+    ripple_order shaft orders by *index*, with a little noise."""
+    theta = 2 * np.pi * np.arange(N) / N
+    x = sum(np.cos(25 * k * theta + 0.3 * k) / k for k in range(1, 9))
+    if ripple_order:
+        x = x * (1 + index * np.sin(ripple_order * theta + 0.7))
+    rng = np.random.default_rng(1)
+    return x + 1e-3 * rng.standard_normal((rows, N))
+
+
+@pytest.mark.parametrize("q", [2, 3, 7])
+def test_a_ripples_order_and_amplitude_are_read_off_the_mesh_sidebands(q):
+    """A ripple at q shaft orders puts sidebands at L +- q around every mesh harmonic L: the load
+    ripple's order and amplitude (the modulation index) and the speed ripple's order are guessed,
+    at several phases (the record's tacho offset turns the sidebands' phases)."""
+    registry = get_registry()
+    load = registry.get("effect", "load_fluctuation").guesses(_meshing(q, 0.12), SPEED)
+    assert len(load) == 4 and {g["order"] for g in load} == {q}
+    assert load[0]["amplitude"] == pytest.approx(0.12, rel=0.05)
+    assert len({g["phase"] for g in load}) == 4
+    speed = registry.get("effect", "speed_fluctuation").guesses(_meshing(q, 0.05), SPEED)
+    assert {g["order"] for g in speed} == {q}
+    assert {g["amplitude"] for g in speed} == {0.003, 0.01, 0.03}  # eps is not read off: tried a decade around
+
+
+def test_no_mesh_family_no_ripple_guess():
+    noise = np.random.default_rng(2).standard_normal((20, N))
+    assert get_registry().get("effect", "speed_fluctuation").guesses(noise, SPEED) == []

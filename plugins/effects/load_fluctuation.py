@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from gearlab.api import Effect, Param, hookimpl
+from gearlab_plugins.effects.speed_fluctuation import GUESS_PHASES, sideband_ripple
 
 
 class LoadFluctuation(Effect):
@@ -43,6 +44,17 @@ class LoadFluctuation(Effect):
             return exc
         ripple = eps * exc.load_nm * np.sin(2 * math.pi * q * exc.speed_hz * exc.t + phi)
         return exc.with_load(exc.load + ripple)
+
+    def guesses(self, target_X, speed_hz):
+        """The ripple's order and amplitude from the mesh sidebands (sideband_ripple of
+        speed_fluctuation): the mesh harmonics scale with the load, so the sidebands' modulation
+        index is the load's ripple eps; tried at each of speed_fluctuation's GUESS_PHASES."""
+        found = sideband_ripple(target_X, int(self.params[1].high))
+        if found is None:
+            return []
+        order, eps = found
+        eps = min(max(eps, self.params[0].low), self.params[0].high)
+        return [{"order": order, "amplitude": eps, "phase": phase} for phase in GUESS_PHASES]
 
 
 @hookimpl

@@ -34,6 +34,49 @@ import numpy as np
 
 from gearlab.api import Effect, Param, hookimpl
 
+# Phases tried with a ripple's order read off the target: the sidebands' phases are in the
+# record's tacho frame, turned by an offset a guess cannot know (the diagnosis fits it per set).
+GUESS_PHASES = tuple(k * math.pi / 2 for k in range(4))
+GUESS_AMPLITUDES = (0.003, 0.01, 0.03)  # a speed ripple's eps, a decade around the default
+
+
+def sideband_ripple(target_X, highest: int) -> tuple[int, float] | None:
+    """The order q (1..highest) of a ripple that modulates the mesh, read off the target's
+    synchronous average, and its modulation index m: a ripple at q shaft orders puts sidebands at
+    L +- q around every mesh harmonic L (a healthy gear has none). The mesh harmonics are the
+    strong lines (1e3 above the median order) spaced by the most common gap between them (Z1);
+    q is the offset up to half that spacing with the most sideband power (q and m Z1 +- q put
+    sidebands on the same lines: the smallest stands for them all); m = sqrt(2 R),
+    R the median over harmonics of the sideband pair's power against its line (an AM index:
+    the load ripple's own amplitude). None when no mesh family is seen."""
+    X = np.asarray(target_X, dtype=float)
+    power = np.abs(np.fft.rfft(X.mean(axis=0)) / X.shape[1]) ** 2
+    held = np.nonzero(power > 1e-12 * power.max())[0]
+    if held.size < 2:
+        return None
+    power = power[: int(held.max()) + 1]  # a record's passband: above it, rounding
+    floor = float(np.median(power[1:]))
+    strong = sorted(int(k) for k in np.argsort(-power[1:])[:12] + 1 if power[k] > 1e3 * floor and k > highest)
+    if len(strong) < 2:
+        return None
+    spacing = int(np.bincount(np.diff(strong)).argmax())
+    lines = {k for k in strong if k % spacing == 0}
+    top = power.size - 1
+    best, best_q = 0.0, None
+    # Orders q and m Z1 +- q put sidebands on the same lines: the smallest stands for them all.
+    for q in range(1, min(highest, spacing // 2) + 1):
+        side = sum(power[s] for k in lines for s in (k - q, k + q) if 0 < s <= top and s not in lines)
+        if side > best:
+            best, best_q = side, q
+    if best_q is None:
+        return None
+    ratios = [
+        (power[k - best_q] + power[k + best_q]) / power[k]
+        for k in lines
+        if k + best_q <= top and k - best_q not in lines and k + best_q not in lines
+    ]
+    return best_q, float(np.sqrt(2.0 * np.median(ratios))) if ratios else 0.0
+
 
 class SpeedFluctuation(Effect):
     name = "speed_fluctuation"
@@ -55,6 +98,19 @@ class SpeedFluctuation(Effect):
         angle = exc.angle + eps / q * (math.cos(phi) - np.cos(wt))
         alpha = eps * q * omega**2 * np.cos(wt)
         return exc.with_angle(angle).add_force(lambda e: (-(e.M @ e.rigid_rotation()), alpha))
+
+    def guesses(self, target_X, speed_hz):
+        """The ripple's order from the mesh sidebands (:func:`sideband_ripple`), at GUESS_AMPLITUDES
+        and two of GUESS_PHASES: order tracking takes the angle modulation out of the record, so
+        the sidebands left (inertial torques, the dynamics) do not give eps simply."""
+        found = sideband_ripple(target_X, int(self.params[1].high))
+        if found is None:
+            return []
+        return [
+            {"order": found[0], "amplitude": eps, "phase": phase}
+            for eps in GUESS_AMPLITUDES
+            for phase in GUESS_PHASES[::2]
+        ]
 
 
 @hookimpl
