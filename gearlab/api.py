@@ -9,7 +9,7 @@ modules can move without breaking plugins (docs/plugins.md, docs/architecture.md
         return [MyEffect()]
 
 The torch-based helpers (``mmd2``, ``coral_loss``, ``grad_reverse``, ``median_distance``,
-``template_detector``)
+``template_detector``, ``likelihood_detector``)
 are resolved on first use (PEP 562 ``__getattr__``): importing this module, as the registry
 does for every command, never pays torch's import time. Import them inside the method that
 trains, e.g. ``from gearlab.api import mmd2``.
@@ -40,6 +40,7 @@ _LAZY = {
     "grad_reverse": "gearlab.learn.losses",
     "median_distance": "gearlab.learn.losses",
     "template_detector": "gearlab.learn.detectors",
+    "likelihood_detector": "gearlab.learn.detectors",
 }
 
 __all__ = [

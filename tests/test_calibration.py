@@ -83,6 +83,23 @@ def test_likelihood_ratio_beats_energy_and_knows_its_noise_law(law):
     assert right >= best_accuracy(likelihood_ratio(X, h, shapes, wrong), y) - 1.0
 
 
+@pytest.mark.parametrize("law", ["laplace", "gaussian", "student_t"])
+def test_the_distance_forms_of_the_likelihood_ratio_are_the_elementwise_sums(law):
+    """Laplace and Gaussian are computed as L1 distances and inner products; the same numbers
+    as the sum over samples of log p(r - t) - log p(r)."""
+    import torch
+
+    from gearlab.learn.bounds import _log_density, noise_scale, shape_llr
+
+    rng = np.random.default_rng(4)
+    R, T = torch.as_tensor(rng.laplace(size=(7, 256))), torch.as_tensor(rng.normal(size=(5, 256)))
+    s = noise_scale(R, law)
+    direct = (
+        _log_density(R[:, None] - T[None], s[:, None, None], law) - _log_density(R, s[:, None], law)[:, None]
+    ).sum(-1)
+    assert torch.allclose(shape_llr(R, T, s, law), direct, rtol=1e-10, atol=1e-9)
+
+
 def test_likelihood_ratio_refuses_an_unknown_law_and_gain_recovers_a_scale():
     with pytest.raises(GearlabInputError, match="unknown noise kind 'cauchy'"):
         likelihood_ratio(np.zeros((2, 8)), np.zeros(8), np.ones((1, 8)), "cauchy")

@@ -11,7 +11,7 @@ import pytest
 import torch
 
 from gearlab.errors import GearlabInputError
-from gearlab.learn.detectors import template_detector
+from gearlab.learn.detectors import likelihood_detector, template_detector
 
 L, TEETH = 1024, 16
 t = np.arange(L)
@@ -93,6 +93,48 @@ def test_an_overall_gain_changes_nothing():
     assert np.array_equal(predict(a, X), predict(b, X * 7.0))
 
 
+def test_the_likelihood_ratio_beats_the_cosine_in_impulsive_noise_at_the_same_false_alarm_rate():
+    """Laplace noise, 3x another gain: the likelihood ratio of the simulated shapes (sizes
+    brought over by the references' gain, the law read off the history) finds more faults than
+    the largest cosine, at the false-alarm rate asked."""
+    history, _ = revolutions(120, 0, gain=3.0, noise=1.8, seed=1)
+    X, y = revolutions(600, 600, gain=3.0, noise=1.8, seed=2)
+    lr = likelihood_detector(*SOURCE, history, None, false_alarm=0.01)
+    assert lr.kind == "laplace"
+    found = {}
+    for name, detector in (("lr", lr), ("cosine", template_detector(*SOURCE, history, None, false_alarm=0.01))):
+        p = predict(detector, X)
+        found[name] = (p[y == 1] == 1).mean()
+        assert (p[y == 0] == 1).mean() < 0.03
+    assert found["lr"] > found["cosine"] + 0.05
+
+
+def test_the_likelihood_ratio_takes_the_gain_and_the_labelled_shapes():
+    """A sensor of another sensitivity gives the same calls (the gain is fitted); labelled target
+    faults add their shapes."""
+    history, _ = revolutions(120, 0, gain=1.0, noise=1.0, seed=8)
+    X, _ = revolutions(50, 50, gain=1.0, noise=1.0, seed=9)
+    a = likelihood_detector(*SOURCE, history, None, false_alarm=0.05)
+    b = likelihood_detector(*SOURCE, history * 7.0, None, false_alarm=0.05)
+    assert np.array_equal(predict(a, X), predict(b, X * 7.0))
+    y = np.r_[np.zeros(120), np.ones(3)].astype(np.int64)
+    taught = likelihood_detector(*SOURCE, np.vstack([history, X[-3:]]), y, false_alarm=0.05)
+    assert len(taught.shapes) == len(a.shapes) + 3
+
+
+def test_a_source_whose_healthy_reference_is_zero_keeps_its_units():
+    """A difference signal (the mesh orders removed) is zero on a healthy simulated revolution:
+    no gain can be read off it, and the shapes keep their size instead of turning into NaN."""
+    Xs, ys = SOURCE
+    zeroed = (Xs - HEALTHY).astype(np.float32)  # healthy rows exactly 0, faults their bursts
+    history, _ = revolutions(120, 0, gain=1.0, noise=0.5, seed=10)
+    detector = likelihood_detector(zeroed, ys, history - HEALTHY, None, false_alarm=0.01)
+    assert torch.isfinite(detector.shapes).all() and np.isfinite(float(detector.threshold))
+    X, y = revolutions(200, 200, gain=1.0, noise=0.5, seed=11)
+    p = predict(detector, X - HEALTHY)
+    assert (p[y == 1] == 1).mean() > 0.8
+
+
 @pytest.mark.parametrize(
     "source, target, labels, message",
     [
@@ -101,9 +143,10 @@ def test_an_overall_gain_changes_nothing():
         (SOURCE, SOURCE[0][:10, :512], None, "source revolutions have 1024 samples, target revolutions 512"),
     ],
 )
-def test_training_data_it_cannot_use_is_refused(source, target, labels, message):
+@pytest.mark.parametrize("make", [template_detector, likelihood_detector])
+def test_training_data_it_cannot_use_is_refused(source, target, labels, message, make):
     with pytest.raises(GearlabInputError, match=message):
-        template_detector(*source, target, labels, false_alarm=0.01)
+        make(*source, target, labels, false_alarm=0.01)
 
 
 @pytest.mark.slow

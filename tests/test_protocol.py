@@ -77,6 +77,8 @@ METHODS = (
     method("finetune", True, variant="classifier"),
     method("matched_filter"),
     method("matched_filter", True),
+    method("likelihood_ratio"),
+    method("likelihood_ratio", True),
 )
 
 
@@ -198,8 +200,11 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
     monkeypatch.setattr(P, "train_method", keep_model)
     for name in ("fit_supervised", "fit_adaptation", "embed", "prepare", "calibrate"):
         monkeypatch.setattr(P, name, spy(getattr(P, name)))
-    detector = P.get_registry().get("adapter", "matched_filter")
-    monkeypatch.setattr(detector, "detector", spy(detector.detector))
+    registry = P.get_registry()
+    for name in registry.names("adapter"):  # every detector: its arrays are its training
+        adapter = registry.get("adapter", name)
+        if adapter.train_on == "detector":
+            monkeypatch.setattr(adapter, "detector", spy(adapter.detector))
     # target rows carry their index in the first sample, to be recognised wherever they go
     marked = replace(TARGET, X=TARGET.X.copy())
     marked.X[:, 0] = 1000 + np.arange(len(marked))

@@ -36,12 +36,15 @@ same pinion angle); see docs/learning.md.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import torch
 from torch import nn
 
 from gearlab.errors import GearlabInputError
 
+from .bounds import gain, noise_scale, shape_llr
 from .history import gumbel_quantile, noise_law
 
 LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
@@ -77,6 +80,22 @@ def _unit_rows(R: np.ndarray) -> np.ndarray:
     return R / np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-12)
 
 
+def _checked(name: str, Xs, ys, Xt, yt) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(Xs, ys, Xt, healthy mask of Xt) as float64 arrays, or a one-line error naming the detector."""
+    Xs, Xt = np.asarray(Xs, dtype=np.float64), np.asarray(Xt, dtype=np.float64)
+    ys = np.asarray(ys)
+    if not (ys == 0).any() or not (ys == 1).any():
+        raise GearlabInputError(f"{name}: the source training set needs healthy and fault revolutions")
+    healthy_t = np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0
+    if healthy_t.sum() < 2:
+        raise GearlabInputError(f"{name}: the target training set needs at least 2 healthy revolutions")
+    if Xs.shape[1] != Xt.shape[1]:
+        raise GearlabInputError(
+            f"{name}: source revolutions have {Xs.shape[1]} samples, target revolutions {Xt.shape[1]}"
+        )
+    return Xs, ys, Xt, healthy_t
+
+
 def template_detector(
     Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float, limiter: str = "off"
 ) -> TemplateDetector:
@@ -85,17 +104,7 @@ def template_detector(
     unsupervised case); with labels, the healthy ones are the history and the target's own
     fault revolutions are templates too. *limiter* ``on``/``off``, or ``auto``: on when the
     history's residuals follow an impulsive law (gearlab.learn.calibration.noise_law)."""
-    Xs, Xt = np.asarray(Xs, dtype=np.float64), np.asarray(Xt, dtype=np.float64)
-    ys = np.asarray(ys)
-    if not (ys == 0).any() or not (ys == 1).any():
-        raise GearlabInputError("matched_filter: the source training set needs healthy and fault revolutions")
-    healthy_t = np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0
-    if healthy_t.sum() < 2:
-        raise GearlabInputError("matched_filter: the target training set needs at least 2 healthy revolutions")
-    if Xs.shape[1] != Xt.shape[1]:
-        raise GearlabInputError(
-            f"matched_filter: source revolutions have {Xs.shape[1]} samples, target revolutions {Xt.shape[1]}"
-        )
+    Xs, ys, Xt, healthy_t = _checked("matched_filter", Xs, ys, Xt, yt)
     reference = np.median(Xt[healthy_t], axis=0)
     shapes = [Xs[ys == 1] - np.median(Xs[ys == 0], axis=0)]
     if yt is not None:
@@ -104,6 +113,66 @@ def template_detector(
         limiter = "off" if noise_law(Xt[healthy_t] - reference) == "gaussian" else "on"
     clip = LIMIT if limiter == "on" else 0.0
     detector = TemplateDetector(reference, _unit_rows(np.concatenate(shapes)), threshold=0.0, clip=clip)
+    with torch.no_grad():
+        history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
+    detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
+    return detector
+
+
+class LikelihoodDetector(nn.Module):
+    """The mixture likelihood ratio of the simulated fault shapes (gearlab.learn.bounds):
+
+        log Λ(x) = log (1/J) Σ_j Π_n p(r_n - t_j,n) / p(r_n),     r = x - h
+
+    in the noise law read off the healthy history, at each revolution's own noise scale. With
+    the target's true shapes this is the Bayes detector; with the simulator's, it is as good as
+    the simulator (docs/learning.md, decision 18)."""
+
+    def __init__(self, reference: np.ndarray, shapes: np.ndarray, kind: str, threshold: float):
+        super().__init__()
+        self.register_buffer("reference", torch.as_tensor(reference, dtype=torch.float32))
+        self.register_buffer("shapes", torch.as_tensor(shapes, dtype=torch.float32))
+        self.register_buffer("threshold", torch.tensor(float(threshold)))
+        self.kind = kind
+        self.latent_dim = len(shapes)
+
+    def embed(self, x: torch.Tensor) -> torch.Tensor:
+        """``(B, J)``: each revolution's log-likelihood ratio for every shape."""
+        r = x.reshape(len(x), -1).to(self.reference.dtype) - self.reference
+        return shape_llr(r, self.shapes, noise_scale(r, self.kind), self.kind)
+
+    def score(self, x: torch.Tensor) -> torch.Tensor:
+        return torch.logsumexp(self.embed(x), dim=1) - math.log(self.latent_dim)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        s = self.score(x) - self.threshold
+        return torch.stack([torch.zeros_like(s), s], dim=1)
+
+
+def likelihood_detector(
+    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float
+) -> LikelihoodDetector:
+    """The likelihood-ratio detector of the source's fault shapes on the target's healthy
+    history: reference h = the history's median; shapes = the source's fault revolutions minus
+    its healthy median, times the least-squares gain between the two domains' references (a
+    likelihood ratio needs the shapes' size, a cosine does not); noise law from the
+    history's residuals (gearlab.learn.history.noise_law); threshold at *false_alarm* as
+    `template_detector`'s. With target labels (*yt*) the labelled faults add their own shapes."""
+    Xs, ys, Xt, healthy_t = _checked("likelihood_ratio", Xs, ys, Xt, yt)
+    reference = np.median(Xt[healthy_t], axis=0)
+    source_healthy = np.median(Xs[ys == 0], axis=0)
+    faults = Xs[ys == 1] - source_healthy
+    # A domain's revolutions are standardised by its own healthy statistics (eq. 4.6), so the
+    # gain between the references brings the shapes to the target's size. A reference with no
+    # energy (a difference signal, whose healthy revolution is zero by construction) has no
+    # gain to give: both domains are then in the units the data came in.
+    energy = float(np.dot(source_healthy, source_healthy))
+    size = gain(reference, source_healthy) if energy > 1e-12 * float(np.mean((faults**2).sum(1))) else 1.0
+    shapes = [size * faults]
+    if yt is not None:
+        shapes.append(Xt[~healthy_t] - reference)
+    kind = noise_law(Xt[healthy_t] - reference)
+    detector = LikelihoodDetector(reference, np.concatenate(shapes), kind, threshold=0.0)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
     detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
