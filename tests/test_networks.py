@@ -219,3 +219,31 @@ def test_cuda_forward_backward(name):
     loss = net(x).logsumexp(1).mean()
     loss.backward()
     assert all(p.grad is not None and p.grad.is_cuda for p in net.parameters())
+
+
+@pytest.mark.parametrize("frozen", [False, True], ids=["learning statistics", "statistics fixed"])
+def test_burst_normalises_only_the_extremes_with_the_numbers_of_the_whole_map(frozen):
+    """NormMaxAbs = BatchNorm1d, then |.| and the maximum over the revolution: the same output,
+    gradients and running statistics, whether the statistics are learnt or fixed."""
+    from gearlab.learn.networks import NormMaxAbs
+    from gearlab.learn.training import train_mode
+
+    torch.manual_seed(0)
+    fused = NormMaxAbs(6)
+    with torch.no_grad():
+        fused.weight.copy_(torch.tensor([1.5, -0.7, 0.2, 1.0, -2.0, 0.9]))
+        fused.bias.uniform_(-1, 1)
+        fused.running_mean.uniform_(-0.5, 0.5)
+        fused.running_var.uniform_(0.5, 2.0)
+    whole = nn.BatchNorm1d(6)
+    whole.load_state_dict(fused.state_dict())
+    y = torch.randn(5, 6, 300, requires_grad=True)
+    out = []
+    for layer, reduce in ((whole, lambda z: z.abs().amax(dim=-1)), (fused, lambda z: z)):
+        train_mode(nn.Sequential(layer), freeze_norm=frozen)
+        y.grad = None
+        r = reduce(layer(y))
+        (r * torch.arange(1.0, 7.0)).sum().backward()
+        out.append((r.detach(), y.grad.clone(), layer.weight.grad.clone(), layer.running_var.clone()))
+    for a, b in zip(*out):
+        assert torch.allclose(a, b, atol=1e-6)
