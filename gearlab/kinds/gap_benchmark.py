@@ -302,7 +302,9 @@ def summary_lines(run: RunDir) -> list[str]:
     return [
         table_md(s).rstrip(),
         f"{s['trials']} trials ({', '.join(f'{c} {k}' for k, c in s['by_kind'].items())})",
-        f"top-1 {_pct(s['top1'])} ({mark[met['top1']]}, target 85 %), top-3 {_pct(s['top3'])}",
+        f"top-1 {_pct(s['top1'])} ({mark[met['top1']]}, target 85 %), top-3 {_pct(s['top3'])}; right answer "
+        f"{_pct(s.get('right_answer'))} (the right effect first, or no gap on the {s.get('too_weak', 0)} "
+        "too weak to show one)",
         f"median gap shrink when identified {_pct(s['median_shrink'])} ({mark[met['median_shrink']]}, target 70 %); "
         f"median parameter error {_num(s['median_param_error'])}",
         f"null: no significant gap {_pct(s['null_correct'])} ({mark[met['null_correct']]}, target 90 %)",
