@@ -5,7 +5,9 @@
 1. One training step (forward, backward, SGD update) on a joint domain-adaptation batch of
    40 source + 40 target rotations of 4096 samples, `fast` against `cnn3`, alternating the
    two so that both see the same machine load. Target: fast >= 20x faster.
-2. With --units: the wall time of the protocol's units on Experiment B's datasets (priming,
+2. The same step of `burst` with its normalisation frozen (the joint phase), normalising only
+   each filter's extremes (NormMaxAbs, shipped) against normalising the whole map.
+3. With --units: the wall time of the protocol's units on Experiment B's datasets (priming,
    a baseline, one calibrated run at the full Table 5.3 schedule) and from them an estimate
    of the whole expB.toml table (6 k x 5 repetitions x every method). Target: <= 45 min.
 """
@@ -27,8 +29,8 @@ LENGTH = 4096
 STEPS = 3  # per timing
 
 
-def step_time(name: str, x: torch.Tensor, y: torch.Tensor) -> float:
-    net = build_network(name, 2, seed=0)
+def step_time(name: str, x: torch.Tensor, y: torch.Tensor, net: nn.Module | None = None) -> float:
+    net = build_network(name, 2, seed=0) if net is None else net
     opt = torch.optim.SGD(net.parameters(), lr=0.003)
     loss_fn = nn.CrossEntropyLoss()
 
@@ -57,6 +59,40 @@ def networks(rounds: int) -> None:
     print(f"  fast {1e3 * fast:8.1f} ms")
     print(f"  cnn3 {1e3 * cnn3:8.1f} ms")
     print(f"  ratio cnn3 / fast: {cnn3 / fast:.1f}x   (target >= 20x)")
+
+
+class WholeMap(nn.Module):
+    """BatchNorm1d over the whole filter-bank map, then |.| and the maximum over the revolution:
+    what NormMaxAbs computes from the extremes alone."""
+
+    def __init__(self, fused: nn.BatchNorm1d):
+        super().__init__()
+        self.norm = nn.BatchNorm1d(fused.num_features)
+        self.norm.load_state_dict(fused.state_dict())
+
+    def forward(self, y: torch.Tensor) -> torch.Tensor:
+        return self.norm(y).abs().amax(dim=-1)
+
+
+def burst_frozen(rounds: int) -> None:
+    from gearlab.learn.training import train_mode
+
+    torch.manual_seed(0)
+    x = torch.randn(BATCH, LENGTH)
+    y = torch.randint(0, 2, (BATCH,))
+    times: dict[str, list[float]] = {"extremes": [], "whole map": []}
+    for _ in range(rounds):
+        for name in times:
+            net = build_network("burst", 2, seed=0)
+            if name == "whole map":
+                net.features[-1] = WholeMap(net.features[-1])
+            train_mode(net, freeze_norm=True)
+            times[name].append(step_time("burst", x, y, net))
+    fused, whole = (statistics.median(times[n]) for n in times)
+    print(f"burst, joint-phase step (normalisation frozen), median of {rounds}:")
+    print(f"  extremes (NormMaxAbs) {1e3 * fused:8.1f} ms")
+    print(f"  whole map             {1e3 * whole:8.1f} ms")
+    print(f"  ratio extremes / whole map: {fused / whole:.2f}")
 
 
 def units() -> None:
@@ -117,6 +153,7 @@ def main() -> None:
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
     networks(args.rounds)
+    burst_frozen(args.rounds)
     if args.units:
         units()
 
