@@ -18,7 +18,7 @@ from tiny import EXECUTION, domains, schedule
 
 from gearlab.engine import load_scenario, run_scenario
 from gearlab.gap.stats import gap_report
-from gearlab.kinds import SCENARIO_KINDS, gap
+from gearlab.kinds import SCENARIO_KINDS, gap, transfer
 from gearlab.runs import RunDir
 
 TINY = (
@@ -215,11 +215,12 @@ def test_run_summary_fields(finished):
         "matched_filter (uncorrected)",
         "matched_filter (corrected)",
         "mmd (unsupervised)",
+        transfer.BOUND,  # the reference row: the target is simulated with noise
     ]
     for cell in summary["accuracy"].values():
         assert 0 <= cell["mean"] <= 100 and cell["n"] == 1
     assert summary["source"]["model"] == "six_dof" and summary["target"]["model"] == "eight_dof"
-    assert sorted(records(run)) == sorted(["diagnosis", *ACCURACY_UNITS])
+    assert sorted(records(run)) == sorted(["diagnosis", *ACCURACY_UNITS, "bound"])
     # the corrected source really is another dataset: the fitted effect was added to it
     corrected = records(run)["rep0/corrected/source_only-unsup"]
     assert corrected["variant"] == "corrected"
@@ -266,7 +267,7 @@ def test_resume_skips_finished_units(finished, tiny, cli, calls):
     assert code == 0, err
     assert calls == []  # the diagnosis was not run again
     units = [json.loads(line)["unit"] for line in (partial / "results.jsonl").read_text().splitlines()]
-    assert sorted(units) == sorted(["diagnosis", *ACCURACY_UNITS])  # each unit once
+    assert sorted(units) == sorted(["diagnosis", *ACCURACY_UNITS, "bound"])  # each unit once
     assert (partial / "summary.json").exists()
 
 
