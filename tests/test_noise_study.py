@@ -139,6 +139,31 @@ def test_test_samples_never_reach_training_or_model_selection(monkeypatch):
     assert record["n_test"] == len(test) and record["n_train"] == len(train_rows) and record["n_val"] == len(val_rows)
 
 
+def test_the_healthy_reference_of_the_residual_comes_from_the_training_part(monkeypatch):
+    """residual = true: the training and validation arrays are the revolutions minus the
+    training part's healthy median; replacing every test revolution changes none of them."""
+    from dataclasses import replace
+
+    protocol = replace(FAST, residual=True, epochs=1)
+    handed = []
+    real = ns.fit_supervised
+
+    def spy(net, X, y, *, val, **kw):
+        handed.append((X.copy(), val[0].copy()))
+        return real(net, X, y, val=val, **kw)
+
+    monkeypatch.setattr(ns, "fit_supervised", spy)
+    data = synthetic(small_spec())
+    s = split(np.asarray(data.label, dtype=np.int64), protocol, 0)
+    healthy = np.median(data.X[s.train[np.asarray(data.label)[s.train] == 0]], axis=0)
+    run_unit(protocol, data, run=0)
+    data.X[s.test] = np.random.default_rng(5).normal(size=data.X[s.test].shape) * 9
+    run_unit(protocol, data, run=0)
+    (X0, V0), (X1, V1) = handed
+    assert np.array_equal(X0, X1) and np.array_equal(V0, V1)
+    assert np.allclose(X0, data.X[s.train] - healthy, atol=1e-5)
+
+
 def test_run_unit_record_learns_and_is_consistent():
     data = synthetic(small_spec(tsa=True))
     r = run_unit(FAST, data, run=0)

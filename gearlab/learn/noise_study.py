@@ -53,6 +53,9 @@ class NoiseProtocol:
         int, 15, low=1, high=MAX_EPOCHS, doc="stop after this many epochs without a better validation accuracy"
     )
     seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds torch as 1000 * seed + run")
+    residual: bool = setting(
+        bool, False, doc="input = revolution minus the median healthy revolution of the training part"
+    )
     device: str = "auto"
 
 
@@ -176,14 +179,17 @@ def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | No
     device = pick_device(protocol.device)
     label = np.asarray(dataset.label, dtype=np.int64)
     s = split(label, protocol, run)
+    X = dataset.X
+    if protocol.residual:  # the healthy reference from the training part's labels, never from the test part
+        X = X - np.median(X[s.train[label[s.train] == 0]], axis=0).astype(X.dtype)
     start = time.perf_counter()
-    val_set = (dataset.X[s.val], label[s.val])
+    val_set = (X[s.val], label[s.val])
     net, history = train(
-        protocol, (dataset.X[s.train], label[s.train]), val_set, len(dataset.spec.class_names), run, device, on_epoch
+        protocol, (X[s.train], label[s.train]), val_set, len(dataset.spec.class_names), run, device, on_epoch
     )
     seconds = time.perf_counter() - start
     # Only now, with the model fixed, does the test part come in.
-    pred = predict(net, dataset.X[s.test], device)
+    pred = predict(net, X[s.test], device)
     return {
         "run": run,
         "dataset": dataset.spec.name,
