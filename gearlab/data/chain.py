@@ -139,8 +139,8 @@ def sampled(deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first:
     revolution; an interpolation would dull the mesh harmonics by parts per thousand, which 80
     quiet revolutions resolve).
     *offset*: the record's tacho zero in the simulation's frame (rad). The rows take the target's
-    start fractions evenly spread over its record, from index *first* (none kept: a uniform
-    spread)."""
+    start fractions at evenly spaced quantiles of their distribution, turned by *first* places
+    (none kept: a uniform spread)."""
     X = np.asarray(deterministic, dtype=np.float64)
     n, P = X.shape
     per_rev = chain.samples_per_rev
@@ -149,13 +149,14 @@ def sampled(deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first:
     length = int(math.ceil(per_rev)) + 3
     fractions = chain.fractions
     if fractions:
-        # Spread over the whole record: where the rate is near a whole number of samples per
-        # revolution the fractions drift slowly (0.0125 per revolution at 2698.9875), and the
-        # first 40 of 79 covered half the range; the importer's interpolation loss depends on the
-        # fraction, so the source's residual then had a smaller spread than the target's (+0.5 dB
-        # in every TSA-residual sector: a null target "significant" at p = 0.002 on every seed).
-        spread = (first + np.arange(n) * len(fractions) // n) % len(fractions)
-        frac = np.asarray(fractions, dtype=np.float64)[spread]
+        # The target's distribution of fractions, at evenly spaced quantiles: the importer's
+        # interpolation loss depends on the fraction, and the source's TSA residual must spread as
+        # the target's does. Near a whole number of samples per revolution the fractions drift
+        # slowly (0.0125 per revolution at 2698.9875): the first 40 of 79 covered half the range
+        # (+0.5 dB in every residual sector, a null target "significant" at p = 0.002 on every
+        # seed); at 1614.25 they take 4 values in turn, of which every other row saw only 2.
+        ranked = np.sort(np.asarray(fractions, dtype=np.float64))
+        frac = ranked[(first + ((np.arange(n) + 0.5) * len(ranked) / n).astype(int)) % len(ranked)]
     else:
         frac = (0.5 + 0.618034 * (first + np.arange(n))) % 1.0
     # Sample k lies at revolution (k - 1 - frac) / per_rev: the revolution starts between samples 1 and 2.
