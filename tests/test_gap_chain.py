@@ -152,3 +152,19 @@ def test_the_rows_take_the_targets_start_fractions_at_even_quantiles():
     assert {v: int(np.sum(got == v)) for v in (0.0, 0.25, 0.5, 0.75)} == {0.0: 10, 0.25: 10, 0.5: 10, 0.75: 10}
     whole = [0.25 * (k % 4) for k in range(80)]  # more rows than fractions: each value as often
     np.testing.assert_allclose(np.sort(taken(whole, 200)), np.repeat([0, 0.25, 0.5, 0.75], 50), atol=1e-9)
+
+
+def test_a_whole_number_found_alone_within_the_noise_is_determined():
+    """A filter's order: the orders next to the best were evaluated and are worse beyond the score's
+    noise; nothing lies between, so its interval is the one order (extended to its neighbours it
+    read [2, 4] and "not identifiable" for an order found exactly)."""
+    space = d.Space(_FilterLike())
+    history = [
+        {"params": {"f_c": 6400.0 * 1.15 ** (n - 3), "order": n}, "score": _filter_score({"f_c": 6400.0, "order": n})}
+        for n in range(1, 9)
+    ]
+    best = min(history, key=lambda h: h["score"])
+    intervals = d._intervals(space, history, best, noise=10.0)
+    assert intervals["order"] == [3.0, 3.0] and d.determined(space, intervals)["order"]["determined"]
+    wide = d._intervals(space, history, best, noise=1e9)  # every order within the noise
+    assert wide["order"] == [1.0, 8.0] and not d.determined(space, wide)["order"]["determined"]

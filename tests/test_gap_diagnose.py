@@ -252,7 +252,9 @@ def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_s
         ((True, True, False, 0.9, 0.4), "explained"),  # the test no longer tells them apart
         ((True, True, True, 0.6, 0.995), "explained"),  # told apart, but by a small effect, < 1 % left
         ((True, True, True, 1.0, 0.995), "partly explained"),  # the 1 % rule alone no longer explains
-        ((True, True, True, 0.6, 0.7), "partly explained"),
+        ((True, True, True, 0.6, 0.7), "unexplained"),  # stand-ins removed 4.5-94 %, right effects >= 99.8 %
+        ((True, True, True, 0.9, 0.94), "unexplained"),
+        ((True, True, True, 0.9, 0.998), "partly explained"),  # a pair's weak second effect missed
         ((True, True, True, 0.9, 0.045), "unexplained"),  # a stand-in removing 4.5 % names nothing
     ],
 )
