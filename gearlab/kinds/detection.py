@@ -35,7 +35,8 @@ its quartiles to the pooled units (blind to take-to-take variation). With ``seed
 network is trained that many times (repetitions 0 …); the method's score is the median over
 its members of each member's score standardised by its own history model, thresholded alike.
 
-Output: results.jsonl (one record per condition x method: the history and test scores),
+Output: results.jsonl (one record per condition x source x method: the history and test scores,
+thresholds under both rules, the history model; an ensemble's members one record per seed besides),
 scores.csv (file, unit, index, method, score, decision), summary.json, table.md/table.csv
 (AUC, detection and false-alarm rates per condition, unit and method) and report.html.
 """
@@ -397,7 +398,7 @@ def corrected_spec(t: dict, where: str, base: Path, source: DatasetSpec) -> Data
     if t["corrected"]["tsa"]:  # noise drawn on every revolution, then averaged as a record unit is
         entry.update(tsa=True, revolutions=t["corrected"]["tsa"])
     spec = simulated_spec(entry, where, base)
-    # effects are part of the cache key only through the name: the corrected source has its own
+    # a name of its own for the reports and conditions.json (the cache key hashes the spec anyway)
     name = f"{source.name}+{label}"
     return spec.with_(name=name, domain=name)
 
