@@ -63,6 +63,11 @@ SCHEDULE_PARAMS = (
     Param("lambda_max", "", LAMBDA_MAX, 0.0, 10.0, "largest domain-loss weight λ (Table 5.3)"),
 )
 
+# The detectors' one parameter (matched_filter, likelihood_ratio): their threshold's false-alarm rate
+FALSE_ALARM_PARAM = Param(
+    "false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"
+)
+
 
 # ----------------------------------------------------------------------------- schedule
 
@@ -189,6 +194,7 @@ __all__ = [
     "LAMBDA_EVERY",
     "LAMBDA_MAX",
     "LAMBDA_STEP",
+    "FALSE_ALARM_PARAM",
     "SCHEDULE_PARAMS",
     "SUPERVISIONS",
     "TRAIN_ON",

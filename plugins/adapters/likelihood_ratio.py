@@ -12,7 +12,7 @@ shapes' sizes; it is exact where the simulator is (a corrected simulator, docs/g
 
 from __future__ import annotations
 
-from gearlab.api import Adapter, Param, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, Adapter, hookimpl
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.adapters.
 
@@ -23,9 +23,7 @@ class LikelihoodRatio(Adapter):
         "Physics-template detector: mixture likelihood ratio of the simulated fault shapes in the history's noise "
         "law, thresholded on the healthy history (no network)."
     )
-    params = (
-        Param("false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"),
-    )
+    params = (FALSE_ALARM_PARAM,)
     calibrated = False
     supervision = ("unsupervised", "supervised")
     train_on = "detector"

@@ -14,7 +14,7 @@ turns it on when the history's noise law is not Gaussian (gearlab.learn.history.
 
 from __future__ import annotations
 
-from gearlab.api import Adapter, Param, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, Adapter, Param, hookimpl
 
 LIMITERS = ("off", "on", "auto")
 
@@ -28,7 +28,7 @@ class MatchedFilter(Adapter):
         "reference and the simulated fault responses, thresholded on the healthy history (no network)."
     )
     params = (
-        Param("false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"),
+        FALSE_ALARM_PARAM,
         Param(
             "limiter",
             "",
