@@ -110,7 +110,7 @@ EXPLAINED_SHRINK = 0.99
 # Effects stay named next to a gap still seen only when together they removed at least this share
 # of it ("partly explained"); less is "unexplained", nothing named (dropped_effects). The same 1 %
 # scale: on the measured-file benchmark, right effects left at most 0.2 % (a pair whose weak second
-# effect was missed), stand-ins for an effect outside the library 6-96 % (4.5-94 % removed).
+# effect was missed), stand-ins for an effect outside the library 3-96 % (4.5-97 % removed).
 NAMED_SHARE = EXPLAINED_SHRINK
 # The effect size beside the test: a corrected source whose two-sample classifier AUC is at most
 # this tells the sets apart no better than a coin with a slight bias (Cohen's d about 0.4 for two
