@@ -46,18 +46,24 @@ class ProgressWatcher(threading.Thread):
     def run(self) -> None:
         shown: dict[str, str] = {}
         while not self.stopped.wait(self.every):
-            now = {}
-            for path in self.folder.glob("*.txt") if self.folder.is_dir() else ():
-                try:
-                    now[path.stem.replace("__", "/")] = path.read_text()
-                except OSError:  # it went between the listing and the read
-                    continue
-            for unit, text in now.items():
-                if shown.get(unit) != text:
-                    self.on_event(Event("unit", stage=unit, message=text))
-            for unit in shown.keys() - now.keys():
-                self.on_event(Event("unit", stage=unit))
-            shown = now
+            shown = self.scan(shown)
+        self.scan(shown)  # a last look: a unit that ended since the previous one still says so
+
+    def scan(self, shown: dict[str, str]) -> dict[str, str]:
+        """Send the reports that changed since *shown* and the ends of the units gone; the
+        reports now shown."""
+        now = {}
+        for path in self.folder.glob("*.txt") if self.folder.is_dir() else ():
+            try:
+                now[path.stem.replace("__", "/")] = path.read_text()
+            except OSError:  # it went between the listing and the read
+                continue
+        for unit, text in now.items():
+            if shown.get(unit) != text:
+                self.on_event(Event("unit", stage=unit, message=text))
+        for unit in shown.keys() - now.keys():
+            self.on_event(Event("unit", stage=unit))
+        return now
 
     def stop(self) -> None:
         self.stopped.set()

@@ -100,6 +100,30 @@ def test_units_in_progress_become_unit_events(tmp_path):
     assert not list((tmp_path / "progress").iterdir())
 
 
+def test_a_unit_that_ends_just_before_the_run_stops_is_still_reported_ended(tmp_path):
+    """The watcher looks every few tenths of a second; a unit whose file goes between its last
+    look and the end of the run gets its 'ended' event from a last look at stop."""
+    import time
+
+    from gearlab.engine import ProgressWatcher
+    from gearlab.events import UnitProgress
+    from gearlab.runs import RunDir
+
+    events = []
+    watcher = ProgressWatcher(RunDir(tmp_path), events.append, every=0.05)
+    watcher.start()
+    with UnitProgress(tmp_path, "rep0/k0/mmd-unsup", every=0.0) as progress:
+        progress("epoch 1")
+        for _ in range(200):
+            if events:
+                break
+            time.sleep(0.05)
+        watcher.every = 3600.0  # the next look only at stop
+        time.sleep(0.2)
+    watcher.stop()
+    assert [e.message for e in events] == ["epoch 1", ""]
+
+
 def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch):
     from tiny import domains
 
