@@ -269,9 +269,9 @@ class NormMaxAbs(nn.BatchNorm1d):
     gearlab.learn.training.train_mode) the normalisation is an affine map a·y + c per channel,
     so the largest |a·y + c| lies at the channel's largest or smallest y: those two are picked
     (no gradient flows through the picking) and only they are normalised. The same numbers as
-    normalising the whole map, to rounding, and a joint-phase step takes half the time (the
-    full-map normalisation, absolute value and maximum and their gradients were two thirds of
-    it). While the statistics are learnt the whole map is normalised, as BatchNorm1d does."""
+    normalising the whole map, to rounding, and a joint-phase step takes 0.64-0.80 of the time
+    (benchmarks/learning.py; the full-map normalisation, absolute value and maximum and their
+    gradients were most of it). While the statistics are learnt the whole map is normalised, as BatchNorm1d does."""
 
     def forward(self, y: torch.Tensor) -> torch.Tensor:
         if self.training:
