@@ -380,3 +380,20 @@ def test_the_shipped_scenario_takes_another_file_list_of_the_rig(tmp_path, monke
         }
         for rec, share in called.items():
             assert share == (1.0 if rec.startswith("chip") else 0.0), (rec, share)
+
+
+def test_scores_that_are_not_numbers_give_no_auc_and_are_counted():
+    """A NaN compares false with everything: counted as a score it would read as AUC 0 (the
+    faults ranked last), as likelihood_ratio's NaN scores once did. It gives no AUC, and the
+    table says how many scores were not numbers."""
+    from gearlab.kinds.detection import auc, table_md
+
+    assert auc([0.1, 0.2], [0.3, 0.4]) == 1.0 and auc([0.3, 0.4], [0.1, 0.2]) == 0.0
+    assert auc([0.1, np.nan], [0.3, 0.4]) is None and auc([0.1], [np.inf]) is None
+    row = {"condition": "c", "unit": "record30", "detection": 0.0, "false_alarm": 0.0, "n_positive": 2}
+    rows = [
+        {**row, "method": "lr", "auc": None, "non_finite": 7, "n_negative": 2},
+        {**row, "method": "fm4", "auc": 1.0, "non_finite": 0, "n_negative": 2},
+    ]
+    table = table_md(rows)
+    assert "| lr | – |" in table and "not numbers" in table and "lr 7" in table and "fm4 0" not in table

@@ -841,10 +841,15 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
 
 def auc(negatives: np.ndarray, positives: np.ndarray) -> float | None:
-    """ROC AUC = P(score of a positive > score of a negative), ties counted half (Mann-Whitney)."""
+    """ROC AUC = P(score of a positive > score of a negative), ties counted half (Mann-Whitney).
+    None when a side is empty or holds a score that is not a finite number: a NaN compares
+    false with everything, so it would read as AUC 0 — the chips ranked last — when the method
+    in fact gave no ranking at all (likelihood_ratio's first run, docs/real_data.md)."""
     if not len(negatives) or not len(positives):
         return None
-    n, p = np.asarray(negatives)[:, None], np.asarray(positives)[None, :]
+    n, p = np.asarray(negatives, dtype=np.float64)[:, None], np.asarray(positives, dtype=np.float64)[None, :]
+    if not (np.isfinite(n).all() and np.isfinite(p).all()):
+        return None
     return float(np.mean((p > n) + 0.5 * (p == n)))
 
 
@@ -881,6 +886,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         for u in r["history_scores"]:
             thr = thresholds[r["unit"]][u]
             neg, pos = split(r, u)
+            # scores that are not numbers (a broken method) are counted and shown, never ranked
+            broken = int(np.sum(~np.isfinite(np.concatenate([neg, pos, np.asarray(r["history_scores"][u])]))))
             other = {
                 rule: (
                     100.0 * float(np.mean(pos > t[u])) if len(pos) else None,
@@ -901,6 +908,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                     "false_alarm": 100.0 * float(np.mean(neg > thr)) if len(neg) else None,
                     "n_positive": int(len(pos)),
                     "n_negative": int(len(neg)),
+                    "non_finite": broken,
                     "threshold": thr,
                     "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
                     # detection and false alarms (%) at each threshold rule's threshold
@@ -979,6 +987,14 @@ def table_md(rows: list[dict]) -> str:
             )
             + " |"
         )
+        broken = {m: 0 for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c)}
+        for r in rows:
+            if r["condition"] == c:
+                broken[r["method"]] += r.get("non_finite", 0)
+        if any(broken.values()):
+            out.append(
+                "Scores that are not numbers (no AUC, '–'): " + ", ".join(f"{m} {n}" for m, n in broken.items() if n)
+            )
         out.append("")
     return "\n".join(out)
 
