@@ -24,7 +24,7 @@ from .dynamics.excitation import Excitation
 from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring
 from .effect_contract import Effect, SignalContext
 from .errors import GearlabInputError
-from .learn.adapters import FALSE_ALARM_PARAM, SCHEDULE_PARAMS, Adapter
+from .learn.adapters import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, SCHEDULE_PARAMS, Adapter
 from .params import Param
 from .physics.faults import Fault, region, scaled_ladder
 from .physics.presets import gear_pair
@@ -47,6 +47,8 @@ __all__ = [
     "DOF_ORDER",
     "FALSE_ALARM_PARAM",
     "NOISE_KINDS",
+    "PATHS",
+    "PATH_PARAM",
     "SCHEDULE_PARAMS",
     "Adapter",
     "Assembly",

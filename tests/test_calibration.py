@@ -132,9 +132,9 @@ def test_prepare_takes_references_gain_and_noise_level_from_the_training_arrays(
     assert inputs.noise_law == "laplace"
     assert inputs.noise_rms == pytest.approx(np.sqrt(2.0), rel=0.05)  # Laplace noise of unit scale
     # RMS of the references: source tone 2 (+ its noise averaged down), target 1
-    assert inputs.gain == pytest.approx(0.5, rel=0.1)
+    assert len(inputs.path.taps) == 1 and inputs.path.taps[0] == pytest.approx(0.5, rel=0.1)
     assert np.allclose(inputs.target(Xt), Xt - inputs.target_reference)
-    assert np.allclose(inputs.source(Xs), inputs.gain * (Xs - inputs.source_reference), atol=1e-5)
+    assert np.allclose(inputs.source(Xs), inputs.path.taps[0] * (Xs - inputs.source_reference), atol=1e-5)
     x = torch.zeros(4, L)
     noisy = inputs.augment(x, torch.Generator().manual_seed(1))
     assert noisy.pow(2).mean(1).sqrt().numpy() == pytest.approx(np.full(4, inputs.noise_rms), rel=1e-4)
@@ -151,7 +151,9 @@ def test_a_reference_of_zero_leaves_the_gain_at_one():
     Xs -= np.median(Xs[ys == 0], axis=0)  # exactly zero reference
     Xs[ys == 0] = 0.0
     inputs = prepare(Calibration(residual=True, source_noise="auto"), Xs, ys, Xt, None)
-    assert inputs.gain == 1.0 and np.isfinite(inputs.source(Xs)).all()
+    assert inputs.path.taps.tolist() == [1.0] and np.isfinite(inputs.source(Xs)).all()
+    fir = prepare(Calibration(residual=True, path="fir"), Xs, ys, Xt, None)
+    assert fir.path.taps.tolist() == [1.0] and np.array_equal(fir.source(Xs), inputs.source(Xs))
 
 
 def test_a_few_unlabelled_faults_in_the_history_do_not_move_the_noise_level():

@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING
 from gearlab.errors import GearlabInputError
 from gearlab.params import Param, did_you_mean, resolve_params
 
+from .path import PATHS
+
 if TYPE_CHECKING:  # for the annotations only; see the module docstring
     import torch
     from torch import nn
@@ -66,6 +68,16 @@ SCHEDULE_PARAMS = (
 # The detectors' one parameter (matched_filter, likelihood_ratio): their threshold's false-alarm rate
 FALSE_ALARM_PARAM = Param(
     "false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"
+)
+# ... and how the simulated shapes reach the target (gearlab.learn.path); scenarios may give the names
+PATH_PARAM = Param(
+    "path",
+    "",
+    PATHS.index("fir"),
+    0,
+    len(PATHS) - 1,
+    "simulated shapes to the target: 0 = gain, 1 = fir (filter fitted between the healthy references)",
+    integer=True,
 )
 
 
@@ -195,6 +207,8 @@ __all__ = [
     "LAMBDA_MAX",
     "LAMBDA_STEP",
     "FALSE_ALARM_PARAM",
+    "PATH_PARAM",
+    "PATHS",
     "SCHEDULE_PARAMS",
     "SUPERVISIONS",
     "TRAIN_ON",

@@ -11,8 +11,11 @@ settings, each a named option of ``[protocol]`` with the thesis's choice still a
 ``residual``      input = revolution minus its domain's healthy reference: the median of
                   the source's healthy training revolutions, and of the target's history
                   (the target training revolutions; supervised, the labelled healthy ones).
-                  The source's residuals are scaled by the ratio of the two references' RMS,
-                  so a fault of the same relative size has the same size in both domains.
+                  The source's residuals reach the target's units through ``path``: the
+                  ratio of the two references' RMS (``gain``: a fault of the same relative
+                  size has the same size in both domains) or the filter fitted between them
+                  (``fir``, gearlab.learn.path: the casing path or drive that the simulator
+                  lacks acts on a fault's response as on the healthy mesh signal).
 ``source_noise``  fresh simulated sensor noise on every source batch, at the level of the
                   target history's residuals (the median over revolutions of their RMS) —
                   the thesis's corrected simulator (its sensor noise) used for training.
@@ -42,6 +45,7 @@ from torch import nn
 from ..errors import GearlabInputError
 from ..settings import declared, in_bounds, setting
 from .history import NOISE_LAWS, gumbel_quantile, noise_law
+from .path import IDENTITY, PATHS, Path, fit_path
 
 SOURCE_NOISE = ("off", "auto", *NOISE_LAWS)
 ALIGNMENTS = ("marginal", "healthy")
@@ -54,6 +58,7 @@ class Calibration:
     derive from these fields); the defaults are the thesis's recipe, :data:`RECIPE` gearlab's."""
 
     residual: bool = setting(bool, False, doc="input = revolution minus its domain's healthy reference")
+    path: str = setting(str, "gain", choices=PATHS, doc="source residuals to the target's units (with residual)")
     source_noise: str = setting(str, "off", choices=SOURCE_NOISE, doc="fresh sensor noise on source batches")
     alignment: str = setting(str, "marginal", choices=ALIGNMENTS, doc="what the domain loss aligns")
     threshold: str = setting(str, "argmax", choices=THRESHOLDS, doc="fault call")
@@ -71,10 +76,6 @@ THESIS = Calibration()
 RECIPE = Calibration(residual=True, source_noise="auto", alignment="healthy", threshold="history")
 
 
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(x, dtype=np.float64))))
-
-
 @dataclass(frozen=True)
 class Inputs:
     """The calibration of one unit, fixed from its training arrays."""
@@ -82,7 +83,7 @@ class Inputs:
     settings: Calibration
     source_reference: np.ndarray | None
     target_reference: np.ndarray | None
-    gain: float  # target signal scale over source signal scale
+    path: Path  # source residuals to the target's units
     noise_law: str | None
     noise_rms: float  # of the noise added to source inputs, in the units the network sees
 
@@ -90,7 +91,7 @@ class Inputs:
         X = np.asarray(X, dtype=np.float32)
         if self.source_reference is None:
             return X
-        return (self.gain * (X - self.source_reference)).astype(np.float32)
+        return self.path(X - self.source_reference).astype(np.float32)
 
     def target(self, X: np.ndarray) -> np.ndarray:
         X = np.asarray(X, dtype=np.float32)
@@ -119,7 +120,7 @@ def draw_noise(law: str, shape: tuple[int, ...], generator: torch.Generator) -> 
 
 
 def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None) -> Inputs:
-    """The unit's references, gain and noise from the source training set and the target
+    """The unit's references, path and noise from the source training set and the target
     training set (*yt* None: unsupervised, every target training revolution is history)."""
     ys = np.asarray(ys)
     history = np.asarray(Xt, dtype=np.float64)[np.ones(len(Xt), bool) if yt is None else np.asarray(yt) == 0]
@@ -127,24 +128,18 @@ def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarra
         raise GearlabInputError("calibration: the target training set needs at least 2 healthy revolutions")
     if not (ys == 0).any():
         raise GearlabInputError("calibration: the source training set has no healthy revolutions")
-    healthy_s = np.asarray(Xs, dtype=np.float64)[ys == 0]
-    h_s = np.median(healthy_s, axis=0)
-    h_t = np.median(history, axis=0)
-    # The references' RMS measure the two domains' signal levels; a reference that is (almost)
-    # zero (an input that already removes the synchronous signal, e.g. a TSA difference signal)
-    # measures nothing, and the gain is left at 1 rather than blown up by the ratio.
-    measurable = _rms(h_s) > 1e-3 * _rms(healthy_s) and _rms(h_t) > 1e-3 * _rms(history)
-    gain = _rms(h_t) / _rms(h_s) if measurable else 1.0
+    h_s, h_t, path = fit_path(Xs, ys, history, settings.path if settings.residual else "gain")
     residuals = history - h_t
     law, level = None, 0.0
     if settings.source_noise != "off":
         law = noise_law(residuals) if settings.source_noise == "auto" else settings.source_noise
         # the median over revolutions: a few unlabelled faults in the history do not raise it
         level = float(np.median(np.sqrt(np.mean(residuals**2, axis=1))))
-        if not settings.residual:
-            level /= gain  # raw source revolutions keep the source's own scale
-    refs = (h_s.astype(np.float32), h_t.astype(np.float32)) if settings.residual else (None, None)
-    return Inputs(settings, *refs, gain=gain if settings.residual else 1.0, noise_law=law, noise_rms=level)
+        if not settings.residual:  # raw source revolutions keep the source's own scale
+            level /= path.taps[0]
+    if not settings.residual:
+        return Inputs(settings, None, None, IDENTITY, noise_law=law, noise_rms=level)
+    return Inputs(settings, h_s.astype(np.float32), h_t.astype(np.float32), path, noise_law=law, noise_rms=level)
 
 
 class Calibrated(nn.Module):

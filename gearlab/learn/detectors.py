@@ -44,8 +44,9 @@ from torch import nn
 
 from gearlab.errors import GearlabInputError
 
-from .bounds import gain, noise_scale, shape_llr
+from .bounds import noise_scale, shape_llr
 from .history import gumbel_quantile, noise_law
+from .path import fit_path
 
 LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
 
@@ -97,16 +98,24 @@ def _checked(name: str, Xs, ys, Xt, yt) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def template_detector(
-    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float, limiter: str = "off"
+    Xs: np.ndarray,
+    ys: np.ndarray,
+    Xt: np.ndarray,
+    yt: np.ndarray | None,
+    false_alarm: float,
+    limiter: str = "off",
+    path: str = "fir",
 ) -> TemplateDetector:
     """The detector of the source's fault shapes, referenced and thresholded on the target's
     healthy history. *yt* None: every target training revolution is taken as healthy (the
     unsupervised case); with labels, the healthy ones are the history and the target's own
     fault revolutions are templates too. *limiter* ``on``/``off``, or ``auto``: on when the
-    history's residuals follow an impulsive law (gearlab.learn.calibration.noise_law)."""
+    history's residuals follow an impulsive law (gearlab.learn.calibration.noise_law). *path*:
+    the shapes reach the target through the path fitted between the two healthy references
+    (gearlab.learn.path: ``fir`` the filter, ``gain`` one number, to which a cosine is blind)."""
     Xs, ys, Xt, healthy_t = _checked("matched_filter", Xs, ys, Xt, yt)
-    reference = np.median(Xt[healthy_t], axis=0)
-    shapes = [Xs[ys == 1] - np.median(Xs[ys == 0], axis=0)]
+    source_healthy, reference, through = fit_path(Xs, ys, Xt[healthy_t], path)
+    shapes = [through(Xs[ys == 1] - source_healthy)]
     if yt is not None:
         shapes.append(Xt[~healthy_t] - reference)
     if limiter == "auto":
@@ -150,25 +159,21 @@ class LikelihoodDetector(nn.Module):
 
 
 def likelihood_detector(
-    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float
+    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float, path: str = "fir"
 ) -> LikelihoodDetector:
     """The likelihood-ratio detector of the source's fault shapes on the target's healthy
     history: reference h = the history's median; shapes = the source's fault revolutions minus
-    its healthy median, times the least-squares gain between the two domains' references (a
-    likelihood ratio needs the shapes' size, a cosine does not); noise law from the
-    history's residuals (gearlab.learn.history.noise_law); threshold at *false_alarm* as
-    `template_detector`'s. With target labels (*yt*) the labelled faults add their own shapes."""
+    its healthy median, passed through the path fitted between the two domains' healthy
+    references (gearlab.learn.path; *path* ``fir`` the filter, ``gain`` the ratio of their
+    RMS: a likelihood ratio needs the shapes' size and form, a cosine only their form); noise
+    law from the history's residuals (gearlab.learn.history.noise_law); threshold at
+    *false_alarm* as `template_detector`'s. With target labels (*yt*) the labelled faults add
+    their own shapes."""
     Xs, ys, Xt, healthy_t = _checked("likelihood_ratio", Xs, ys, Xt, yt)
-    reference = np.median(Xt[healthy_t], axis=0)
-    source_healthy = np.median(Xs[ys == 0], axis=0)
-    faults = Xs[ys == 1] - source_healthy
-    # A domain's revolutions are standardised by its own healthy statistics (eq. 4.6), so the
-    # gain between the references brings the shapes to the target's size. A reference with no
-    # energy (a difference signal, whose healthy revolution is zero by construction) has no
-    # gain to give: both domains are then in the units the data came in.
-    energy = float(np.dot(source_healthy, source_healthy))
-    size = gain(reference, source_healthy) if energy > 1e-12 * float(np.mean((faults**2).sum(1))) else 1.0
-    shapes = [size * faults]
+    # A domain's revolutions are standardised by its own healthy statistics (eq. 4.6); the path
+    # between the references brings the shapes to the target's size and form.
+    source_healthy, reference, through = fit_path(Xs, ys, Xt[healthy_t], path)
+    shapes = [through(Xs[ys == 1] - source_healthy)]
     if yt is not None:
         shapes.append(Xt[~healthy_t] - reference)
     kind = noise_law(Xt[healthy_t] - reference)

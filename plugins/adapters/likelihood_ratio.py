@@ -3,7 +3,8 @@ statistic (gearlab.learn.bounds) with the simulation's shapes in place of the ta
 
 No network is trained. A target revolution's residual from the healthy history's median is
 scored by the mixture likelihood ratio of the source's fault shapes, brought to the target's
-size by the gain between the two domains' healthy references, in the noise law read off the
+size and form by the path fitted between the two domains' healthy references (`path`:
+``fir`` a filter, by default, or ``gain`` one number; gearlab.learn.path), in the noise law read off the
 history (Gaussian, Laplace or Student-t) at the revolution's own noise scale; the threshold
 lets `false_alarm` of the history through (a Gumbel law fitted by its quartiles, as
 `matched_filter`). Against `matched_filter`'s largest cosine it knows the noise law and the
@@ -12,7 +13,7 @@ shapes' sizes; it is exact where the simulator is (a corrected simulator, docs/g
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, Adapter, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Adapter, hookimpl
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.adapters.
 
@@ -23,7 +24,8 @@ class LikelihoodRatio(Adapter):
         "Physics-template detector: mixture likelihood ratio of the simulated fault shapes in the history's noise "
         "law, thresholded on the healthy history (no network)."
     )
-    params = (FALSE_ALARM_PARAM,)
+    params = (FALSE_ALARM_PARAM, PATH_PARAM)
+    choices = {"path": PATHS}
     calibrated = False
     supervision = ("unsupervised", "supervised")
     train_on = "detector"
@@ -32,7 +34,10 @@ class LikelihoodRatio(Adapter):
         from gearlab.api import likelihood_detector
 
         (Xs, ys), (Xt, yt) = source, target
-        return likelihood_detector(Xs, ys, Xt, yt, false_alarm=float(self.values(params)["false_alarm"]))
+        values = self.values(params)
+        return likelihood_detector(
+            Xs, ys, Xt, yt, false_alarm=float(values["false_alarm"]), path=PATHS[int(values["path"])]
+        )
 
 
 @hookimpl

@@ -10,11 +10,13 @@ k = 0); supervised, the labelled healthy ones are, and the labelled faults add t
 ``limiter`` (0 off by default, 1 on, 2 auto; scenarios may give the names): a soft limiter on the
 residual before the correlation, the locally optimal statistic in impulsive noise; ``auto``
 turns it on when the history's noise law is not Gaussian (gearlab.learn.history.noise_law).
+``path`` (``fir`` by default, or ``gain``): the shapes reach the target through the filter fitted
+between the two domains' healthy references (gearlab.learn.path).
 """
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, Adapter, Param, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Adapter, Param, hookimpl
 
 LIMITERS = ("off", "on", "auto")
 
@@ -38,11 +40,12 @@ class MatchedFilter(Adapter):
             "soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in impulsive noise)",
             integer=True,
         ),
+        PATH_PARAM,
     )
     calibrated = False
     supervision = ("unsupervised", "supervised")
     train_on = "detector"
-    choices = {"limiter": LIMITERS}
+    choices = {"limiter": LIMITERS, "path": PATHS}
 
     def detector(self, source, target, params=None):
         from gearlab.api import template_detector
@@ -50,7 +53,13 @@ class MatchedFilter(Adapter):
         (Xs, ys), (Xt, yt) = source, target
         values = self.values(params)
         return template_detector(
-            Xs, ys, Xt, yt, false_alarm=float(values["false_alarm"]), limiter=LIMITERS[int(values["limiter"])]
+            Xs,
+            ys,
+            Xt,
+            yt,
+            false_alarm=float(values["false_alarm"]),
+            limiter=LIMITERS[int(values["limiter"])],
+            path=PATHS[int(values["path"])],
         )
 
 
