@@ -1208,7 +1208,44 @@ def diagnose(
         check = _report(judged(fitted), target, pair, settings, bootstrap=0)
         round_info["p_value_after"] = check["p_value"]
         significant = gap_seen(check)
+    if accepted:
+        fitted = profiled(run, accepted, fitted)
     return conclusion(run, result, before, accepted, fitted, started)
+
+
+def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
+    """Stage 3b: every accepted effect profiled next to the others as finally fitted (in parallel,
+    gearlab.gap.identify): honest intervals and "determined" marks, what the data determine where a
+    parameter is not, and a better fit where a profile point found one. Returns the accepted effects
+    (canonical) with those fits."""
+    from .identify import profile_effect
+
+    tasks = [
+        (run.search, fitted, i, run.target, run.settings, run.settings.seed + 5000, run.rows, e.get("intervals", {}))
+        for i, e in enumerate(accepted)
+    ]
+    run.on_event(Event("stage", stage="gap profile", total=len(tasks), message="gap: profiling the fitted parameters"))
+
+    done = 0
+
+    def advance(i, res):
+        nonlocal done
+        done += 1
+        run.on_event(Event("advance", stage="gap profile", done=done, total=len(tasks)))
+
+    out = list(fitted)
+    for i, res in enumerate(run.executor.map(profile_effect, tasks, advance)):
+        entry = accepted[i]
+        if res["params"] != entry["params"]:
+            out[i] = run.spec(entry["name"], res["params"])
+        entry.update(
+            params=res["params"],
+            intervals=res["intervals"],
+            determined=res["determined"],
+            combinations=res["combinations"],
+            profile={k: res[k] for k in ("score", "score_fit", "noise", "evaluations", "seconds")},
+        )
+    return tuple(out)
 
 
 @dataclass

@@ -680,6 +680,8 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
                 "params": e["params"],
                 "intervals": e.get("intervals", {}),
                 "determined": e.get("determined", {}),
+                # where a parameter is not identifiable: what the data do determine (gearlab.gap.identify)
+                "combinations": e.get("combinations", []),
                 "round": e.get("round"),
             }
             for e in result["effects"]
@@ -755,11 +757,15 @@ def views_md(views: dict) -> str:
 
 
 def _params(params: dict, determined: dict | None = None) -> str:
-    """k = v, ...; a parameter the data do not determine (its interval spans most of its range) is
-    marked "not identifiable"."""
+    """k = v, ...; a parameter the data do not determine is marked "not identifiable" (a distant value
+    fits as well: its profile, gearlab.gap.identify) or "not determined: the fit leaves a gap"."""
 
     def mark(k):
-        return " (not identifiable)" if determined and k in determined and not determined[k]["determined"] else ""
+        if not determined or k not in determined or determined[k]["determined"]:
+            return ""
+        if determined[k].get("reason") == "fit leaves a gap":
+            return " (not determined: the fit leaves a gap)"
+        return " (not identifiable)"
 
     return ", ".join((f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}") + mark(k) for k, v in params.items())
 
@@ -803,6 +809,11 @@ def summary_lines(run: RunDir) -> list[str]:
         f"effects: {names or 'none'}; "
         f"verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}",
     ]
+    for e in s["effects"]:
+        for c in e.get("combinations", []):
+            moved = ", ".join(f"{k} x{v:.3g}" for k, v in c["factors"].items())
+            pinned = f"; the data determine {c['determined']} = {c['value']:.4g}" if c.get("determined") else ""
+            lines.append(f"{e['name']}: {moved} fits as well (within the score's noise){pinned}")
     ref = s.get("reference")
     if ref:
         lines.append(

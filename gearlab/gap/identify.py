@@ -1,0 +1,299 @@
+"""Whether the data pin each fitted parameter: a profile along every one (docs/gap.md, "Identifiability").
+
+The search's intervals bracket the points it happened to visit around the minimum it found. Where
+two parameters trade off -- a resonance's mass and stiffness, whose ratio sets its frequency; a
+load inertia far above the gear's, which a stiff coupling makes invisible -- every visited point
+off the valley scores worse, so the bracket is narrow and the value reads "determined" although a
+distant one fits as well (a casing mass found 5x off, a load inertia 650x off, both "determined").
+
+A profile asks the question directly. With the other accepted effects held at their fitted values
+and the score the search used (common random numbers, so a deterministic function of the
+parameters), for each continuous parameter x_j of the effect:
+
+1. a quadratic model of the score around the fit, from a stencil of 1 + 2d + d(d - 1) points
+   HESSIAN_STEP apart on the unit cube; its Hessian H gives the direction along which the other
+   parameters follow x_j at least cost, v_o = -H_oo⁺ H_oj (the valley: for log-scaled mass and
+   stiffness, a straight line in the search's coordinates);
+2. x_j moved PROFILE_DISTANCES of its range to each side (the others started on that line), then
+   the others re-fitted locally (PROFILE_POLISH evaluations per coordinate);
+3. a profile point whose score lies within the score's noise of the best (the bootstrap spread the
+   search's intervals use) is a distant value that fits as well: it widens x_j's interval -- and
+   those of the parameters that moved with it -- past DETERMINED_WIDTH, so x_j reads "not
+   identifiable". The move itself says what the data do determine: x_k x_j^(-δ_k/δ_j) for a pair
+   that moved together (δ the changes of ln x), e.g. k/m for a resonance whose frequency √(k/m) is
+   pinned; a parameter that moved alone does not act on these revolutions at all.
+
+A profile point that scores *lower* than the fit (the search stopped in a local minimum) is taken
+as the fit. Whole-number parameters keep the search's intervals (a filter's order is already
+profiled value by value, gearlab.gap.diagnose._ordinal_profile); text options stay fixed.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from ..registry import get_registry
+
+HESSIAN_STEP = 0.01  # unit-cube step of the quadratic model's stencil
+# Where x_j is moved, in shares of its searched range (unit cube), each side: half the interval width
+# that still reads "determined", then all of it (DETERMINED_WIDTH = 0.25).
+PROFILE_DISTANCES = (0.125, 0.25)
+PROFILE_POLISH = 3  # local re-fit evaluations per other coordinate at a profile point
+DIRECTION_CAP = 4.0  # the valley's slope, capped: a near-flat H_oo must not throw the start across the cube
+# The distant starts: design points per free coordinate, local fits from the best distant ones, and
+# their evaluations per free coordinate.
+STARTS_PER_COORDINATE, DISTANT_FITS, DISTANT_EVALS = 6, 2, 6
+REFIT_EVALS = 10  # a local fit of every coordinate from a better point, evaluations per coordinate
+# A parameter moved with x_j when its change of ln x is at least this share of the largest.
+SIGNIFICANT_MOVE = 0.2
+FIT_SIGMAS = 3.0  # a fit this many noise widths above 0 leaves a gap: no parameter of it is determined
+PASSES = 3  # profiles around a better point found by the last one, at most
+
+
+def profile_effect(task: tuple) -> dict:
+    """Profile the *i*-th accepted effect: task = (search spec, accepted effects (canonical, the
+    order they were accepted in), i, target_X, settings, seed, rows, the search's intervals), with
+    the score the search used and the others held at their fits. Returns :func:`profile`'s record
+    with the effect's name and index."""
+    from .diagnose import NOISE_REPLICATES, Scorer, Space, _by_level, _check_source
+
+    search, fitted, i, target_X, settings, seed, rows, prior = task
+    started = time.perf_counter()
+    name, canonical = fitted[i]
+    effect = get_registry().get("effect", name)
+    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(search), settings.max_order)
+
+    def rows_of(params: dict) -> np.ndarray:
+        effects = _by_level(search.effects + fitted[:i] + (effect.spec(params),) + fitted[i + 1 :])
+        return rows(search.with_(effects=effects))
+
+    def score(params: dict) -> float:
+        try:
+            return scorer.score(rows_of(params))
+        except GearlabInputError:  # a profile point the effect cannot take here
+            return math.inf
+
+    def noise(params: dict) -> float:
+        # the score's noise at the point profiled: the bootstrap spread the search's intervals take
+        return float(np.std(scorer.replicates(rows_of(params), NOISE_REPLICATES, [seed, 2])))
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
+        out = profile(Space(effect), score, noise, dict(canonical), seed, prior)
+    return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}
+
+
+def profile(
+    space, score: Callable[[dict], float], noise_of: Callable[[dict], float], params: dict, seed, prior
+) -> dict:
+    """Profile the parameters *params* of an effect's *space* under *score* (deterministic; lower is
+    better) whose noise at a point is *noise_of*; *prior*: the search's intervals (kept for whole
+    numbers). Returns the best parameters seen (the fit, or a better point), their score, the fit's
+    score, the noise, whether the fit leaves a gap, intervals, ``determined`` marks (with the reason
+    where not) and ``combinations`` (what the data determine where a parameter is not)."""
+    from .diagnose import _intervals, _local, _plain, determined
+
+    u0, choice = space.point_of(params)
+    history: list[dict] = []
+    seen: dict = {}
+
+    def evaluate(u, choice=choice) -> float:
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        params = space.params(u, choice)
+        key = tuple(sorted((k, v if isinstance(v, str) else float(v)) for k, v in params.items()))
+        if key in seen:
+            return seen[key]
+        value = score(params)
+        seen[key] = value
+        history.append({"u": u.copy(), "choice": choice, "params": params, "score": value})
+        return value
+
+    score0 = evaluate(u0)
+    free = [j for j, e in enumerate(space.numbers) if not e["integer"] and e["high"] > e["low"]]
+    paths: dict[int, list[dict]] = {}
+    noise = noise_of(space.params(u0, choice))
+    if free:
+        start = _distant_starts(space, evaluate, history, u0, choice, free, seed)
+        for _ in range(PASSES):  # around the best point; again if the profile found a lower one
+            if not np.array_equal(start, u0):  # a new basin: a local fit of every coordinate first
+                u0 = _local(space, evaluate, start, choice, free, REFIT_EVALS * len(free))["u"].copy()
+            noise = noise_of(space.params(u0, choice))
+            paths = _profile(space, evaluate, history, u0, choice, free, noise)
+            best = min(history, key=lambda h: h["score"])
+            if best["score"] >= evaluate(u0) - noise:
+                break
+            start = best["u"].copy()
+    params0 = space.params(u0, choice)
+
+    best = min(history, key=lambda h: h["score"])
+    intervals = _intervals(space, history, best, noise)
+    for e in space.numbers:  # whole numbers: the search's own profile, widened to the value kept
+        if e["integer"] or e["high"] == e["low"]:
+            value = float(best["params"][e["name"]])
+            lo, hi = prior.get(e["name"], (value, value))
+            intervals[e["name"]] = [min(lo, value), max(hi, value)]
+    marks = determined(space, intervals)
+    # A right model scores 0 within its noise (the score is bias-corrected). A fit that stays FIT_SIGMAS
+    # noise widths above it is a compromise of a model that does not match: its values are pinned only
+    # given that model (a load inertia's plateau: 242 against a noise of 27 where the truth scores 1).
+    gap_left = best["score"] > FIT_SIGMAS * noise
+    for mark in marks.values():
+        mark["reason"] = "fit leaves a gap" if gap_left else None if mark["determined"] else "profile"
+        mark["determined"] = mark["determined"] and not gap_left
+    return {
+        "params": _plain(best["params"]),
+        "score": best["score"],
+        "score_fit": score0,
+        "noise": noise,
+        "gap_left": gap_left,
+        "intervals": intervals,
+        "determined": marks,
+        "combinations": _combinations(space, params0, paths, marks, noise, best["score"]),
+        "evaluations": len(history),
+    }
+
+
+def _profile(space, evaluate, history, u0, choice, free: list[int], noise: float) -> dict[int, list[dict]]:
+    """Per free coordinate j: the profile points, out to each side, that fit within the noise of the
+    best score seen (the module docstring, steps 1-3)."""
+    from .diagnose import _local
+
+    H = _hessian(evaluate, u0, free)
+    paths: dict[int, list[dict]] = {}
+    for a, j in enumerate(free):
+        others = [k for k in free if k != j]
+        slope = _valley(H, a)
+        for side in (1.0, -1.0):
+            previous = None
+            for distance in PROFILE_DISTANCES:
+                if not 0.0 <= u0[j] + side * distance <= 1.0:
+                    break
+                if previous is None:
+                    start = u0.copy()
+                    start[free] = u0[free] + side * distance * slope
+                else:  # along the chord through the last point that fitted (a curved valley)
+                    start = u0 + (previous["u"] - u0) * (distance / abs(previous["u"][j] - u0[j]))
+                start[j] = u0[j] + side * distance
+                start = np.clip(start, 0.0, 1.0)
+                held = u0.copy()  # the others held: a parameter that acts alone, or not at all
+                held[j] = start[j]
+                threshold = min(h["score"] for h in history) + noise
+                point = min(({"u": u, "score": evaluate(u)} for u in (start, held)), key=lambda p: p["score"])
+                if point["score"] > threshold and others:
+                    point = _local(space, evaluate, point["u"], choice, others, PROFILE_POLISH * len(others) + 1)
+                if point["score"] > threshold:
+                    break
+                previous = point
+                paths.setdefault(j, []).append(point)
+    return paths
+
+
+def _distant_starts(space, evaluate, history, u0, choice, free: list[int], seed) -> np.ndarray:
+    """A second fit from distant starts: a Latin hypercube of STARTS_PER_COORDINATE points per
+    coordinate over the free ones, then a local fit from each of the DISTANT_FITS best that lie at
+    least DETERMINED_WIDTH from the fit in some coordinate. The search's budget (16 simulations for
+    four or five parameters) can stop in a wrong basin: a load inertia at 2.6 kg m² (score 2.5e3)
+    where the truth, 3.3e-3, scores 1.0. Returns the point to profile around: the fit, or a distant
+    one that scores lower (the best point seen)."""
+    from scipy.stats import qmc
+
+    from .diagnose import DETERMINED_WIDTH, _local
+
+    design = qmc.LatinHypercube(d=len(free), seed=np.random.default_rng([*np.atleast_1d(seed), 11])).random(
+        STARTS_PER_COORDINATE * len(free)
+    )
+    points = []
+    for row in design:
+        u = u0.copy()
+        u[free] = row
+        points.append((evaluate(u, choice), u))
+    distant = [p for p in sorted(points, key=lambda p: p[0]) if np.max(np.abs(p[1] - u0)) >= DETERMINED_WIDTH]
+    for _, u in distant[:DISTANT_FITS]:
+        _local(space, evaluate, u, choice, free, DISTANT_EVALS * len(free))
+    return min(history, key=lambda h: h["score"])["u"].copy()
+
+
+def _hessian(evaluate, u0: np.ndarray, free: list[int]) -> np.ndarray:
+    """The score's Hessian (unit cube) at *u0* by finite differences HESSIAN_STEP wide: central ones
+    along each coordinate, h(e_a ± e_b) for each pair (H_ab = [f(a+b) - f(a-b) - 2h g_b] / 2h², g_b
+    central). A coordinate that would leave the cube is stepped the other way (a fit at a bound); the
+    score is far from quadratic over a step at a sharp resonance, so H serves only to aim the profile's
+    first step along a valley (:func:`_valley`), never as an interval."""
+    d, h = len(free), HESSIAN_STEP
+    side = np.where(u0[free] + h > 1.0, -1.0, 1.0)  # the step of each coordinate that stays inside
+
+    def at(step: np.ndarray) -> float:
+        u = u0.copy()
+        u[free] = np.clip(u0[free] + step, 0.0, 1.0)
+        value = evaluate(u)
+        return value if math.isfinite(value) else 1e300
+
+    f0 = at(np.zeros(d))
+    plus = [at(side[a] * h * np.eye(d)[a]) for a in range(d)]
+    minus = [at(-side[a] * h * np.eye(d)[a]) for a in range(d)]
+    g = np.array([(p - m) / (2 * h) for p, m in zip(plus, minus)]) * side
+    H = np.diag([(p + m - 2 * f0) / h**2 for p, m in zip(plus, minus)])
+    for a in range(d):
+        for b in range(a + 1, d):
+            ea, eb = side[a] * h * np.eye(d)[a], side[b] * h * np.eye(d)[b]
+            H[a, b] = H[b, a] = (at(ea + eb) - at(ea - eb) - 2 * h * side[b] * g[b]) / (2 * h**2) * side[a] * side[b]
+    return H
+
+
+def _valley(H: np.ndarray, a: int) -> np.ndarray:
+    """The direction (per unit move of coordinate *a*) along which the others follow it at least
+    cost in the quadratic model: 1 for *a*, -H_oo⁺ H_oa for the others (capped)."""
+    d = len(H)
+    v = np.zeros(d)
+    v[a] = 1.0
+    o = [b for b in range(d) if b != a]
+    if o:
+        v[o] = np.clip(-np.linalg.pinv(H[np.ix_(o, o)]) @ H[o, a], -DIRECTION_CAP, DIRECTION_CAP)
+    return v
+
+
+def _combinations(space, params0: dict, paths: dict, marks: dict, noise: float, best: float) -> list[dict]:
+    """What the data determine where a parameter is not identifiable, read off its farthest profile
+    point that fits within the noise: the factors every parameter moved by, and -- for two that
+    moved together -- the product x_k x_j^c (c = -δ_k/δ_j, δ the changes of ln x) that stayed."""
+    out, done = [], set()
+    for j, points in paths.items():
+        e = space.numbers[j]
+        if marks[e["name"]]["determined"]:
+            continue
+        far = points[-1]
+        moved = {}
+        for other in space.numbers:
+            x0, x1 = params0[other["name"]], space.params(far["u"], ())[other["name"]]
+            if x0 > 0 and x1 > 0 and not other["integer"]:
+                moved[other["name"]] = math.log(x1 / x0)
+        largest = max(abs(v) for v in moved.values()) if moved else 0.0
+        names = sorted((k for k, v in moved.items() if largest and abs(v) >= SIGNIFICANT_MOVE * largest), key=str)
+        if not names or frozenset(names) in done:
+            continue
+        done.add(frozenset(names))
+        entry = {
+            "params": names,
+            "factors": {k: float(math.exp(moved[k])) for k in names},
+            "score": float(far["score"]),
+            "within": float(far["score"] - best),
+            "noise": noise,
+        }
+        if len(names) == 1:
+            entry["determined"] = None  # it moved alone: these revolutions do not depend on it
+        elif len(names) == 2:
+            k, m = (e["name"], next(n for n in names if n != e["name"])) if e["name"] in names else names
+            c = -moved[m] / moved[k]
+            entry["determined"] = f"{m} * {k}^{c:.2f}"
+            entry["exponents"] = {m: 1.0, k: float(c)}
+            entry["value"] = float(params0[m] * params0[k] ** c)
+        else:
+            entry["determined"] = None  # several moved together: no single pair to name
+        out.append(entry)
+    return out
