@@ -397,3 +397,47 @@ def test_scores_that_are_not_numbers_give_no_auc_and_are_counted():
     ]
     table = table_md(rows)
     assert "| lr | – |" in table and "not numbers" in table and "lr 7" in table and "fm4 0" not in table
+
+
+def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_path, monkeypatch):
+    """Synthetic records of the rig's layout (input pinion, idler shaft at 1/3 of its speed):
+    a chipped input pinion, a chipped tooth on the idler shaft (once every 3 input revolutions,
+    at the same input angle), an outer-race bearing fault (3.05 impulses per input revolution)
+    and a healthy record. FM4 of the input-shaft TSA leaves the bearing alone but calls the
+    idler's chip as well as the pinion's (it repeats at one input angle); the share of the
+    3-revolution TSA's difference energy at whole input orders tells the two apart."""
+    import textrecords
+
+    from gearlab.data.textzip import read_record
+    from gearlab.kinds.detection import tsa_units
+    from gearlab.signals.indicators import fm4, input_synchronous_share
+
+    fs, speed = 66666.67, 35.0  # the rig's rate; a speed whose revolution is not a whole number of samples
+    monkeypatch.setattr(textrecords, "FS", fs)
+
+    def revolutions(name, chip=0.0, idler=0.0, bearing=0.0):
+        vib, tacho = textrecords.signals(revolutions=46, chip=chip, seed=3, phase=2.7, speed=speed)
+        t = np.arange(len(vib)) / fs
+        theta = 2.7 + 2 * np.pi * speed * t
+        if idler:  # the idler turns once every 3 input revolutions; its chipped tooth meets at 2 rad
+            since = np.mod(theta / 3 - 2.0, 2 * np.pi) / (2 * np.pi * speed / 3)
+            vib = vib + idler * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+        if bearing:
+            since = np.mod(t * speed * 3.05, 1.0) / (speed * 3.05)
+            vib = vib + bearing * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+        path = textrecords.write_zip(tmp_path / f"{name}.zip", textrecords.text(vib, tacho))
+        rec = read_record(path, vibration=0, tacho=2, pulses_per_rev=PULSES, sensitivity=textrecords.SENSITIVITY, fs=fs)
+        return rec.revolutions
+
+    records = {
+        "healthy": revolutions("healthy"),
+        "pinion": revolutions("pinion", chip=4.0),
+        "idler": revolutions("idler", idler=4.0),
+        "bearing": revolutions("bearing", bearing=4.0),
+    }
+    fm4_of = {k: float(fm4(tsa_units(r, 30), [32], 2, 1)[0]) for k, r in records.items()}
+    share = {k: input_synchronous_share(r, 3, [32]) for k, r in records.items()}
+    assert fm4_of["pinion"] > 3 * fm4_of["healthy"] and fm4_of["idler"] > 3 * fm4_of["healthy"]
+    assert fm4_of["bearing"] < 1.5 * fm4_of["healthy"]
+    assert share["pinion"] > 0.8
+    assert all(share[k] < 0.5 for k in ("healthy", "idler", "bearing")), share

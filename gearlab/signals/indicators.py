@@ -62,3 +62,28 @@ def na4(x: np.ndarray, mesh_orders, reference_variance: float, shaft_orders: int
     r = residual_signal(np.atleast_2d(x), mesh_orders, shaft_orders)
     r = r - r.mean(axis=-1, keepdims=True)
     return np.mean(r**4, axis=-1) / max(reference_variance, 1e-300) ** 2
+
+
+def input_synchronous_share(
+    revolutions: np.ndarray, ratio: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1
+) -> float:
+    """Which shaft a record's impulsive content turns with: the share of the energy of its
+    difference signal, averaged over one turn of a shaft that turns *ratio* times slower than
+    the input (``ratio`` consecutive input revolutions), that lies at whole input orders.
+
+    A chipped input pinion repeats every input revolution: its energy is at whole input orders
+    and the share tends to 1. Damage on the slower shaft (on the PHM rig the idler, 96/32 = 3)
+    repeats every *ratio* input revolutions, at the same input angle when the ratio is a whole
+    number, so the input-shaft TSA shows it too (at 1/ratio of its size) and FM4 of that TSA
+    cannot tell the two apart; here its energy spreads over every 1/ratio order and the share
+    is about 1/ratio, as for noise and for a bearing, which turns with neither shaft. Orders
+    are removed as for FM4 (*mesh_orders*, *shaft_orders*, *sidebands* in input orders)."""
+    revolutions = np.atleast_2d(np.asarray(revolutions, dtype=np.float64))
+    if ratio < 1 or len(revolutions) < ratio:
+        raise ValueError(f"expected a whole ratio >= 1 and at least {ratio} revolutions, got {len(revolutions)}")
+    n = len(revolutions) // ratio * ratio
+    turn = revolutions[:n].reshape(n // ratio, -1).mean(axis=0)  # the slow shaft's TSA
+    d = difference_signal(turn[None], [z * ratio for z in mesh_orders], shaft_orders * ratio, sidebands * ratio)[0]
+    power = np.abs(np.fft.rfft(d)) ** 2
+    whole = np.arange(len(power)) % ratio == 0
+    return float(power[whole].sum() / max(power.sum(), 1e-300))
