@@ -9,6 +9,8 @@ kind's summary):
 * ``detector``  the detector as it is: each unit's own noise scale (median absolute residual);
 * ``history σ`` the same shapes and noise law, the noise scale fixed to the healthy history
   units' median scale (of the same unit kind), the same under both hypotheses;
+* ``rev σ``     the same with the history *revolutions'* median scale for every unit kind (what a
+  detector that sees only revolutions when it is built can fix);
 * ``σ alone``   the unit's own noise scale as a score (what the detector divides by);
 * ``|r|``       the norm of the unit's residual from the history's median (anything unusual).
 
@@ -63,9 +65,9 @@ def main(path: str) -> None:
         sources[spec["corrected_label"]] = spec["corrected"]
     print(
         "| condition | source | noise law | shapes' RMS / history residual RMS | unit "
-        "| detector | history σ | σ alone | |r| |"
+        "| detector | history σ | rev σ | σ alone | |r| |"
     )
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for c, cond in conditions.items():
         for name, source in sources.items():
             dataset, _ = load_or_build(source_for(source, cond, spec["source_speed"]))
@@ -74,16 +76,18 @@ def main(path: str) -> None:
             det = likelihood_detector(shown(Xs), ys, Xt, None, spec["false_alarm"])
             ref = det.reference.numpy()
             size = float(np.sqrt(np.mean(det.shapes.numpy() ** 2)) / np.sqrt(np.mean((Xt - ref) ** 2)))
+            rev_sigma = float(noise_scale(torch.as_tensor(Xt) - det.reference, det.kind).median())
             for u in UNITS:
                 hist = shown(cond["history_units"][u])
                 sigma = float(noise_scale(torch.as_tensor(hist) - det.reference, det.kind).median())
-                got = {k: ([], []) for k in ("detector", "history σ", "σ alone", "|r|")}
+                got = {k: ([], []) for k in ("detector", "history σ", "rev σ", "σ alone", "|r|")}
                 for p, units in cond["test_units"].items():
                     X = shown(units[u])
                     r = torch.as_tensor(X) - det.reference
                     k = int(positive[p])
                     got["detector"][k].append(scores(det, X))
                     got["history σ"][k].append(scores(det, X, sigma))
+                    got["rev σ"][k].append(scores(det, X, rev_sigma))
                     got["σ alone"][k].append(noise_scale(r, det.kind).numpy())
                     got["|r|"][k].append(r.norm(dim=1).numpy())
                 cells = []
