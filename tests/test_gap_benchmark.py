@@ -468,3 +468,36 @@ def test_kinds_runs_only_some_trials_of_the_same_draw(write_scenario):
     held = load_scenario(write_scenario(head + 'kinds = ["withheld"]\n', "held.toml"))
     assert len(held.spec["trials"]) == 10
     assert held.spec["trials"] == [t for t in full.spec["trials"] if t.kind == "withheld"]
+
+
+def test_suborder_trials_hide_a_tone_between_the_first_orders_and_are_drawn_only_when_named(write_scenario):
+    from gearlab.data.builder import operating_point
+    from gearlab.engine import load_scenario
+    from gearlab.errors import GearlabInputError
+
+    library = ("sensor_noise", "interference_tone", "tooth_friction")
+    trials = bench.draw_suborder_trials(6, 3, library, SOURCE, first=10)
+    assert trials == bench.draw_suborder_trials(6, 3, library, SOURCE, first=10)
+    speed, _ = operating_point(SOURCE)
+    for k, trial in enumerate(trials):
+        assert trial.index == 10 + k and trial.kind == "suborder" and trial.candidates == library
+        ((name, params),) = trial.hidden
+        order = dict(params)["frequency"] / speed
+        assert name == "interference_tone" and bench.SUBORDER_ORDERS[0] <= order <= bench.SUBORDER_ORDERS[1]
+        assert abs(order - round(order)) >= bench.SUBORDER_CLEAR
+    with pytest.raises(GearlabInputError, match="interference_tone"):
+        bench.draw_suborder_trials(2, 3, ("sensor_noise", "tooth_friction"), SOURCE)
+    # the mix never holds one; kinds = ["suborder"] runs `trials` of them alone, kinds = ["null",
+    # "suborder"] the mix's nulls and as many sub-order trials as `trials`
+    assert all(t.kind in bench.KINDS for t in bench.draw_trials(20, 3, library, SOURCE))
+    head = '[scenario]\nname = "b"\nkind = "gap_benchmark"\n[benchmark]\ntrials = 20\nseed = 0\n'
+    alone = load_scenario(write_scenario(head + 'kinds = ["suborder"]\n', "sub.toml")).spec["trials"]
+    assert [t.kind for t in alone] == ["suborder"] * 20
+    both = load_scenario(write_scenario(head + 'kinds = ["null", "suborder"]\n', "both.toml")).spec["trials"]
+    assert [t.kind for t in both] == ["null"] * 3 + ["suborder"] * 20
+    assert len({t.index for t in both}) == len(both)
+    # scored as an effect trial
+    truth = dict(trials[0].hidden[0][1])
+    answers = {"kind": "suborder", "hidden": [["interference_tone", truth]]}
+    record = bench.score_trial(answers, fake_result(["interference_tone"], params={"interference_tone": truth}))
+    assert record["top1"] and record["param_error_median"] == pytest.approx(0.0)

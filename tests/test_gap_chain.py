@@ -168,3 +168,25 @@ def test_a_whole_number_found_alone_within_the_noise_is_determined():
     assert intervals["order"] == [3.0, 3.0] and d.determined(space, intervals)["order"]["determined"]
     wide = d._intervals(space, history, best, noise=1e9)  # every order within the noise
     assert wide["order"] == [1.0, 8.0] and not d.determined(space, wide)["order"]["determined"]
+
+
+@pytest.mark.parametrize("consecutive", [True, False])
+def test_consecutive_rows_carry_a_tone_from_one_revolution_into_the_next(consecutive):
+    """A measured record's revolutions follow one another: a tone that is not shaft-synchronous runs
+    on across them. With consecutive=True the source's rows are made so (its line in the record read
+    end to end is as narrow as one bin); made one revolution at a time, each row starts the tone at
+    its own phase and the line spreads (a 37.3 Hz tone at 40 Hz was fitted at 55 Hz so)."""
+    from gearlab.effects import effect_spec
+
+    speed = 40.0
+    chain = Chain(fs=speed * 1700.25, speed=speed, fractions=(0.0, 0.25, 0.5, 0.75))
+    spec = SOURCE.with_(healthy=16, noise=None, effects=(effect_spec("interference_tone", frequency=37.3, ratio=1.0),))
+    plain = d.source_rows(SOURCE.with_(healthy=16, noise=None), 0, chain, consecutive)
+    residual = (d.source_rows(spec, 0, chain, consecutive) - plain).reshape(-1)  # the tone alone, end to end
+    power = np.abs(np.fft.rfft(residual)) ** 2
+    line = round(37.3 / speed * 16)  # the record's bins are 1/16 order apart
+    near = power[line - 1 : line + 2].sum() / power.sum()
+    if consecutive:
+        assert near > 0.9, near
+    else:
+        assert near < 0.7, near

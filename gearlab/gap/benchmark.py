@@ -42,6 +42,15 @@ from ..files import atomic_write
 # acceptance criteria are stated on.
 MIX = (("single", 0.50), ("pair", 0.15), ("null", 0.15), ("withheld", 0.20))
 KINDS = tuple(k for k, _ in MIX)
+# Trial kinds outside the mix, drawn only when [benchmark] kinds names them (so the mix's draws stay
+# what they were for every seed): "suborder" hides an interfering tone below one shaft order or
+# between the first orders, which one revolution cannot place (a 37.3 Hz tone at 40 Hz came back at
+# 23.6 or 55 Hz while the search's source gave each revolution its own tone phase); it needs the
+# target's revolutions read as consecutive ones (gearlab.gap.diagnose.measured_rows).
+EXTRA_KINDS = ("suborder",)
+EFFECT_KINDS = ("single", "pair", "suborder")  # scored by the effect named first
+SUBORDER_ORDERS = (0.15, 2.9)  # the tone's frequency in shaft orders, log-uniform ...
+SUBORDER_CLEAR = 0.05  # ... at least this far from a whole order (a shaft line's own place)
 
 # The measured record's channel names: the file convention of the benchmark, public to both sides.
 VIBRATION, TACHO, LABEL = "acc", "tacho", "condition"
@@ -225,6 +234,33 @@ def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, 
     return trials
 
 
+def draw_suborder_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, first: int = 0) -> list:
+    """*n* "suborder" trials (EXTRA_KINDS), a function of (n, seed, library, source) only: an
+    interference tone at SUBORDER_ORDERS shaft orders (not within SUBORDER_CLEAR of a whole one), its
+    level from RANGES, every library effect a candidate. Indices from *first* on."""
+    from ..data.builder import operating_point
+    from ..registry import get_registry
+
+    if "interference_tone" not in library:
+        raise GearlabInputError("benchmark: 'suborder' trials hide an interference_tone, which the library lacks")
+    speed, _ = operating_point(source)
+    tone = get_registry().get("effect", "interference_tone")
+    trials = []
+    for k in range(n):
+        r = np.random.default_rng([seed, 3, k])
+        while True:
+            order = math.exp(r.uniform(*np.log(SUBORDER_ORDERS)))
+            if abs(order - round(order)) >= SUBORDER_CLEAR:
+                break
+        ratio = _draw_value(r, RANGES["interference_tone"]["ratio"])
+        hidden = (tone.spec({"frequency": order * speed, "ratio": ratio}),)
+        acquisition = Acquisition.draw(np.random.default_rng([seed, 4, k]))
+        trials.append(
+            Trial(first + k, "suborder", hidden, None, tuple(library), int(r.integers(1, 2**31 - 1)), acquisition)
+        )
+    return trials
+
+
 # --- generating the target (knows the answer) --------------------------------------------------
 
 
@@ -334,10 +370,18 @@ def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: i
         data, name, calibration = buf.getvalue(), "target.npz", None
     else:
         # The deterministic target (every effect but noise), then the noise in time at the record's rate.
+        # The signal effects act on the record, one revolution after another, as in an acquisition: a
+        # tone that is not shaft-synchronous runs on across revolutions (the builder's rows would give
+        # each revolution its own tone phase, which no measured record has).
         chain = EffectChain.load(spec.effects)
+        signal = {item[0].name for item in chain.at("signal")}
         noisy = EffectChain(tuple(item for item in chain.at("signal") if item[0].noise))
-        quiet = tuple(e for e in spec.effects if not any(e[0] == item[0].name for item in noisy.items))
-        rows = healthy_rows(build_dataset(spec.with_(noise=None, effects=quiet), executor))
+        shaping = EffectChain(tuple(item for item in chain.at("signal") if not item[0].noise))
+        physics = tuple(e for e in spec.effects if e[0] not in signal)
+        rows = healthy_rows(build_dataset(spec.with_(noise=None, effects=physics), executor))
+        rms = float(np.sqrt(np.mean(rows**2)))  # the healthy reference RMS the builder's effects take
+        if shaping:
+            rows = shaping.apply_signal(rows, rows.shape[1] * speed, speed, rms, [trial.seed, EFFECT_STREAM, 1])
         rms = float(np.sqrt(np.mean(rows**2)))
 
         def noise(x: np.ndarray, fs: float) -> np.ndarray:
@@ -509,7 +553,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
         "right_answer": None,
         "wrong_names": [n for n in accepted if n not in hidden],
     }
-    if kind in ("single", "pair"):
+    if kind in EFFECT_KINDS:
         record["top1"] = bool(accepted) and accepted[0] in hidden
         record["top3"] = any(n in hidden for n in ranking[:3])
         record["too_weak"] = not record["significant_before"] and oracle is not None and oracle < ORACLE_SEEN
@@ -602,7 +646,7 @@ def trial_task(task: TrialTask) -> dict:
     diagnosed = time.perf_counter()
     atomic_write(folder / "diagnosis.json", json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
     oracle = None
-    if task.trial.kind in ("single", "pair") and not result.get("significant_before"):
+    if task.trial.kind in EFFECT_KINDS and not result.get("significant_before"):
         oracle = oracle_seen(task.trial, task.source, task.settings, task.revolutions, folder)
     record = score_trial(read_answers(folder), result, oracle=oracle)
     record.update(
@@ -648,7 +692,7 @@ TARGETS = {"top1": 0.85, "median_shrink": 0.70, "null_correct": 0.90, "out_of_li
 
 def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
     """The benchmark's numbers over finished trials (fields of summary.json)."""
-    effect_trials = [r for r in records if r["kind"] in ("single", "pair")]
+    effect_trials = [r for r in records if r["kind"] in EFFECT_KINDS]
     identified = [r for r in effect_trials if r["top1"]]
     per_effect = {}
     for name in library:
@@ -676,11 +720,16 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         }
     summary = {
         "trials": len(records),
-        "by_kind": {k: sum(r["kind"] == k for r in records) for k in KINDS},
+        "by_kind": {
+            k: sum(r["kind"] == k for r in records)
+            for k in KINDS + EXTRA_KINDS
+            if k in KINDS or any(r["kind"] == k for r in records)
+        },
         "top1": _rate(r["top1"] for r in effect_trials),
         "top3": _rate(r["top3"] for r in effect_trials),
         "top1_single": _rate(r["top1"] for r in effect_trials if r["kind"] == "single"),
         "top1_pair": _rate(r["top1"] for r in effect_trials if r["kind"] == "pair"),
+        "top1_suborder": _rate(r["top1"] for r in effect_trials if r["kind"] == "suborder"),
         # every effect trial: the right effect named first, or -- on a target too weak for any gap to
         # be seen in fresh realisations (oracle_seen) -- "no significant gap"; too_weak counts those
         "right_answer": _rate(r.get("right_answer", r["top1"]) for r in effect_trials),

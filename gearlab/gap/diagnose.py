@@ -324,7 +324,9 @@ def band_limited(X: np.ndarray, max_order: int) -> np.ndarray:
     return np.fft.irfft(F, n=X.shape[1], axis=1)
 
 
-def source_rows(spec: DatasetSpec, max_order: int = 0, chain: Chain | None = None) -> np.ndarray:
+def source_rows(
+    spec: DatasetSpec, max_order: int = 0, chain: Chain | None = None, consecutive: bool = False
+) -> np.ndarray:
     """The healthy rows of *spec* in physical units, (spec.healthy, POINTS) float64: exactly
     ``healthy_rows(build_dataset(spec.with_(faults=())))``, without the cache or the fault
     simulations.
@@ -337,7 +339,8 @@ def source_rows(spec: DatasetSpec, max_order: int = 0, chain: Chain | None = Non
 
     *chain*: a measured target's acquisition (gearlab.data.chain): the rows are then made as the
     target's were -- one revolution each, read at the record's rate and start fractions, noise
-    effects in time before the order tracking, rounded to its step -- by :func:`measured_rows`.
+    effects in time before the order tracking, rounded to its step -- by :func:`measured_rows`;
+    *consecutive* (with a chain): as consecutive revolutions of one record.
     """
     registry = get_registry()
     _, pair, _ = spec.check_model()
@@ -347,7 +350,8 @@ def source_rows(spec: DatasetSpec, max_order: int = 0, chain: Chain | None = Non
     clean = _clean_revolution(spec.model, spec.preset, fs, speed, load, spec.channel, physics)
     reference_rms = float(np.sqrt(np.mean(clean**2)))
     if chain is not None:
-        return band_limited(measured_rows(spec, clean, speed, reference_rms, chain, pair.Z1), max_order)
+        rows = measured_rows(spec, clean, speed, reference_rms, chain, pair.Z1, consecutive)
+        return band_limited(rows, max_order)
     mean, std = _reference(spec, clean, speed, reference_rms)
     noise_seed = spec.noise.seed if spec.noise else 0
     kind = spec.noise.kind if spec.noise else None
@@ -394,14 +398,26 @@ def _sampled_rows(key: tuple, make: Callable[[], tuple]) -> tuple:
 
 
 def measured_rows(
-    spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float, chain: Chain, teeth: int = 1
+    spec: DatasetSpec,
+    clean: np.ndarray,
+    speed: float,
+    reference_rms: float,
+    chain: Chain,
+    teeth: int = 1,
+    consecutive: bool = False,
 ) -> np.ndarray:
     """The healthy rows of *spec* through a measured target's chain (gearlab.data.chain): each row
     one revolution; the non-noise signal effects act in the angle domain on row i's record (the
     builder's seeds [seed, noise seed, i]), the noise effects and the dataset's noise in time at the
     record's rate, where a sensor's noise is white. The tacho offset is the chain's, or fitted to the
     target's synchronous average for this very set (a free rotation: it follows whatever the effects
-    do to the waveform's phase). The rows before the noise are kept per set (:func:`_sampled_rows`)."""
+    do to the waveform's phase). The rows before the noise are kept per set (:func:`_sampled_rows`).
+
+    *consecutive*: the rows are consecutive revolutions of one record, as a measured target's are:
+    the non-noise signal effects act on all of them as one record (seeds [seed, noise seed, 0]). A
+    tone that is not shaft-synchronous then runs on from one revolution into the next, as in the
+    target, instead of starting at a random phase in every row: its line is as narrow as the
+    target's, and its share in the synchronous average the same."""
     effects = EffectChain.load(spec.effects).at("signal") if spec.effects else ()
     shaping = EffectChain(tuple(item for item in effects if not item[0].noise))
     noisy = EffectChain(tuple(item for item in effects if item[0].noise))
@@ -410,7 +426,10 @@ def measured_rows(
 
     def deterministic() -> tuple:
         D = np.empty((spec.healthy, POINTS))
-        for i, seed in enumerate(seeds):
+        if consecutive and shaping:
+            record = np.array(np.broadcast_to(clean, D.shape))
+            D[:] = shaping.apply_signal(record, POINTS * speed, speed, reference_rms, [*seeds[0], EFFECT_STREAM])
+        for i, seed in enumerate(seeds if not (consecutive and shaping) else ()):
             row = clean[None, :]
             if shaping:
                 row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
@@ -423,7 +442,7 @@ def measured_rows(
     registry = get_registry()
     quiet = spec.with_(effects=tuple(e for e in spec.effects if not registry.get("effect", e[0]).noise))
     reference = None if chain.reference is None else hash(np.asarray(chain.reference).tobytes())
-    x, u = _sampled_rows((quiet, chain, reference, teeth), deterministic)
+    x, u = _sampled_rows((quiet, chain, reference, teeth, consecutive), deterministic)
 
     def noise(i: int, x: np.ndarray) -> np.ndarray:
         if noisy:
@@ -438,13 +457,15 @@ def measured_rows(
 @dataclass(frozen=True)
 class Rows:
     """How the source's rows are made for one target (picklable, handed to every fit): the band it
-    is compared in (max_order) and, for a measured target, its acquisition chain."""
+    is compared in (max_order) and, for a measured target, its acquisition chain and whether its rows
+    are consecutive revolutions of one record (settings.consecutive)."""
 
     max_order: int = 0
     chain: Chain | None = None
+    consecutive: bool = False
 
     def __call__(self, spec: DatasetSpec) -> np.ndarray:
-        return source_rows(spec, self.max_order, self.chain)
+        return source_rows(spec, self.max_order, self.chain, self.consecutive)
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
@@ -1088,7 +1109,7 @@ def _prepared(source: DatasetSpec, target_X, settings: Settings, chain: Chain | 
     # fitted parameters are judged on rows they were not fitted to.
     search_seed, report_seed = (int(s) for s in np.random.SeedSequence([settings.seed, 9]).generate_state(2))
     base = source.with_(faults=(), healthy=settings.healthy, teeth=None, duplicates=1)
-    rows = Rows(settings.max_order, chain)
+    rows = Rows(settings.max_order, chain, chain is not None and settings.consecutive is True)
     return target, chain, rows, settings, pair, base.with_(seed=search_seed), base.with_(seed=report_seed)
 
 

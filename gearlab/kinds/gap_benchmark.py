@@ -48,10 +48,11 @@ _SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source s
 
 
 def _kinds(value, where: str) -> list:
+    known = bench.KINDS + bench.EXTRA_KINDS
     for kind in value:
-        if kind not in bench.KINDS:
-            hint = did_you_mean(kind, bench.KINDS) if isinstance(kind, str) else ""
-            raise GearlabInputError(f"{where}: {kind!r} is not a trial kind ({', '.join(bench.KINDS)}){hint}")
+        if kind not in known:
+            hint = did_you_mean(kind, known) if isinstance(kind, str) else ""
+            raise GearlabInputError(f"{where}: {kind!r} is not a trial kind ({', '.join(known)}){hint}")
     return value
 
 
@@ -70,9 +71,10 @@ TABLES = {
                 list,
                 [],
                 _kinds,
-                "trial kinds to run (single, pair, null, withheld); [] = all. The trials are drawn as for "
-                'every kind, then only these run (kinds = ["withheld"] with trials = 50: 10 out-of-library '
-                "trials, the same ones a full run of 50 holds)",
+                "trial kinds to run (single, pair, null, withheld, suborder); [] = the first four. The trials "
+                'are drawn as for those, then only the named ones run (kinds = ["withheld"] with trials = 50: '
+                "10 out-of-library trials, the same ones a full run of 50 holds); 'suborder' adds `trials` "
+                "trials of an interfering tone below one shaft order or between the first orders",
             ),
         }
     ),
@@ -107,6 +109,9 @@ def build(scenario: Scenario) -> dict:
     trials = bench.draw_trials(b["trials"], b["seed"], library, source)
     if b["kinds"]:
         trials = [trial for trial in trials if trial.kind in b["kinds"]]
+        if "suborder" in b["kinds"]:
+            first = max((t.index for t in trials), default=-1) + 1
+            trials += bench.draw_suborder_trials(b["trials"], b["seed"], library, source, first)
         if not trials:
             raise GearlabInputError(
                 f"{location(path, 'benchmark', 'kinds')}: no trial of {b['kinds']} among {b['trials']} trials; "
@@ -124,7 +129,7 @@ def build(scenario: Scenario) -> dict:
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    counts = {k: sum(t.kind == k for t in spec["trials"]) for k in bench.KINDS}
+    counts = {k: sum(t.kind == k for t in spec["trials"]) for k in bench.KINDS + bench.EXTRA_KINDS}
     mix = ", ".join(f"{c} {k}" for k, c in counts.items() if c)
     return (
         f"{len(spec['trials'])} blind trials ({mix}) on {spec['source'].name} ({spec['source'].model}), "
@@ -240,7 +245,7 @@ def table_md(summary: dict) -> str:
             f"| {e['named_wrongly']} |"
         )
     lines.append(
-        f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'][k] for k in ('single', 'pair'))} "
+        f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'].get(k, 0) for k in bench.EFFECT_KINDS)} "
         f"| {_pct(summary['top1'])} | {_pct(summary['top3'])} | {_pct(summary['median_shrink'])} | "
         f"{_num(summary['median_param_error'])} | {_num(summary.get('median_param_error_determined'))} | "
         f"| {summary['by_kind']['withheld']} | {_pct(summary['out_of_library_unexplained'])} | |"
@@ -275,7 +280,7 @@ def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
     axes[0].set_ylabel("identified (%)")
     axes[0].set_title("identification per hidden effect")
     axes[0].legend()
-    colours = {"single": "C0", "pair": "C1", "null": "C2", "withheld": "C3"}
+    colours = {"single": "C0", "pair": "C1", "null": "C2", "withheld": "C3", "suborder": "C4"}
     for kind, colour in colours.items():
         mine = [r for r in records if r["kind"] == kind and r["gap_before"] > 0 and r["gap_after"] == r["gap_after"]]
         axes[1].scatter(
