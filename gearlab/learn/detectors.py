@@ -133,22 +133,25 @@ class LikelihoodDetector(nn.Module):
 
         log Λ(x) = log (1/J) Σ_j Π_n p(r_n - t_j,n) / p(r_n),     r = x - h
 
-    in the noise law read off the healthy history, at each revolution's own noise scale. With
-    the target's true shapes this is the Bayes detector; with the simulator's, it is as good as
-    the simulator (docs/learning.md, decision 18)."""
+    in the noise law read off the healthy history, at each revolution's own noise scale, or
+    (*scale* > 0) at that one scale for every revolution. With the target's true shapes this is
+    the Bayes detector; with the simulator's, it is as good as the simulator (docs/learning.md,
+    decision 18)."""
 
-    def __init__(self, reference: np.ndarray, shapes: np.ndarray, kind: str, threshold: float):
+    def __init__(self, reference: np.ndarray, shapes: np.ndarray, kind: str, threshold: float, scale: float = 0.0):
         super().__init__()
         self.register_buffer("reference", torch.as_tensor(reference, dtype=torch.float32))
         self.register_buffer("shapes", torch.as_tensor(shapes, dtype=torch.float32))
         self.register_buffer("threshold", torch.tensor(float(threshold)))
+        self.register_buffer("scale", torch.tensor(float(scale)))
         self.kind = kind
         self.latent_dim = len(shapes)
 
     def embed(self, x: torch.Tensor) -> torch.Tensor:
         """``(B, J)``: each revolution's log-likelihood ratio for every shape."""
         r = x.reshape(len(x), -1).to(self.reference.dtype) - self.reference
-        return shape_llr(r, self.shapes, noise_scale(r, self.kind), self.kind)
+        scale = noise_scale(r, self.kind) if self.scale <= 0 else self.scale.expand(len(r))
+        return shape_llr(r, self.shapes, scale, self.kind)
 
     def score(self, x: torch.Tensor) -> torch.Tensor:
         return torch.logsumexp(self.embed(x), dim=1) - math.log(self.latent_dim)
@@ -158,8 +161,17 @@ class LikelihoodDetector(nn.Module):
         return torch.stack([torch.zeros_like(s), s], dim=1)
 
 
+SCALES = ("unit", "history")  # the noise scale of a scored revolution: its own, or the healthy history's
+
+
 def likelihood_detector(
-    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, false_alarm: float, path: str = "fir"
+    Xs: np.ndarray,
+    ys: np.ndarray,
+    Xt: np.ndarray,
+    yt: np.ndarray | None,
+    false_alarm: float,
+    path: str = "fir",
+    scale: str = "unit",
 ) -> LikelihoodDetector:
     """The likelihood-ratio detector of the source's fault shapes on the target's healthy
     history: reference h = the history's median; shapes = the source's fault revolutions minus
@@ -168,7 +180,13 @@ def likelihood_detector(
     RMS: a likelihood ratio needs the shapes' size and form, a cosine only their form); noise
     law from the history's residuals (gearlab.learn.history.noise_law); threshold at
     *false_alarm* as `template_detector`'s. With target labels (*yt*) the labelled faults add
-    their own shapes."""
+    their own shapes. *scale* ``unit``: each scored revolution's noise scale from its own
+    residual; ``history``: the median of the healthy history revolutions' scales, the same
+    under both hypotheses. Where a fault raises the whole residual rather than adding a sparse
+    shape (the PHM 2009 chip: its units' own scale alone ranks them first), the unit's own
+    scale reads the fault's energy as noise and ranks the faults low (docs/real_data.md)."""
+    if scale not in SCALES:
+        raise ValueError(f"scale must be one of {SCALES}, got {scale!r}")
     Xs, ys, Xt, healthy_t = _checked("likelihood_ratio", Xs, ys, Xt, yt)
     # A domain's revolutions are standardised by its own healthy statistics (eq. 4.6); the path
     # between the references brings the shapes to the target's size and form.
@@ -177,7 +195,11 @@ def likelihood_detector(
     if yt is not None:
         shapes.append(Xt[~healthy_t] - reference)
     kind = noise_law(Xt[healthy_t] - reference)
-    detector = LikelihoodDetector(reference, np.concatenate(shapes), kind, threshold=0.0)
+    fixed = 0.0
+    if scale == "history":
+        residuals = torch.as_tensor(Xt[healthy_t] - reference, dtype=torch.float32)
+        fixed = float(noise_scale(residuals, kind).median())
+    detector = LikelihoodDetector(reference, np.concatenate(shapes), kind, threshold=0.0, scale=fixed)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
     detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))

@@ -13,7 +13,9 @@ shapes' sizes; it is exact where the simulator is (a corrected simulator, docs/g
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Adapter, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Adapter, Param, hookimpl
+
+SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.adapters.
 
@@ -24,8 +26,20 @@ class LikelihoodRatio(Adapter):
         "Physics-template detector: mixture likelihood ratio of the simulated fault shapes in the history's noise "
         "law, thresholded on the healthy history (no network)."
     )
-    params = (FALSE_ALARM_PARAM, PATH_PARAM)
-    choices = {"path": PATHS}
+    params = (
+        FALSE_ALARM_PARAM,
+        PATH_PARAM,
+        Param(
+            "scale",
+            "",
+            0,
+            0,
+            len(SCALES) - 1,
+            "noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)",
+            integer=True,
+        ),
+    )
+    choices = {"path": PATHS, "scale": SCALES}
     calibrated = False
     supervision = ("unsupervised", "supervised")
     train_on = "detector"
@@ -36,7 +50,13 @@ class LikelihoodRatio(Adapter):
         (Xs, ys), (Xt, yt) = source, target
         values = self.values(params)
         return likelihood_detector(
-            Xs, ys, Xt, yt, false_alarm=float(values["false_alarm"]), path=PATHS[int(values["path"])]
+            Xs,
+            ys,
+            Xt,
+            yt,
+            false_alarm=float(values["false_alarm"]),
+            path=PATHS[int(values["path"])],
+            scale=SCALES[int(values["scale"])],
         )
 
 
