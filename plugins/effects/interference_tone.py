@@ -74,14 +74,17 @@ class InterferenceTone(Effect):
         guesses = [{"frequency": peak, "ratio": ratio}]
         # The rows read as one record, one revolution after another: when they are consecutive
         # revolutions of a measured record, its spectrum resolves speed / rows, so a line below one
-        # shaft order (37.3 Hz at 40 Hz) is found where one revolution cannot place it; when they
-        # are independent revolutions the peak only blurs, and the search keeps the better guess.
+        # shaft order (37.3 Hz at 40 Hz) is found where one revolution cannot place it, and a line
+        # between higher orders to a fraction of a hertz -- which a search against consecutive rows
+        # needs (their tone runs on, its line is one record bin wide: 1037 Hz fitted from the
+        # one-revolution peak stayed 5 Hz off and left a gap). When they are independent
+        # revolutions the peak only blurs, and the search keeps the better guess.
         record = residual.reshape(-1)
         long = np.abs(np.fft.rfft(record * np.hanning(record.size), n=2 * record.size)) ** 2
         fl = np.fft.rfftfreq(2 * record.size, d=1.0 / (n * speed_hz))
         keep = (fl >= self.params[0].low) & (fl <= min(self.params[0].high, 0.45 * n * speed_hz))
         fine = float(fl[keep][np.argmax(long[keep])])
-        if abs(fine - peak) > 0.02 * peak:
+        if abs(fine - peak) > 1e-4 * peak:
             guesses.append({"frequency": fine, "ratio": ratio})
         return guesses
 
