@@ -247,3 +247,35 @@ def test_burst_normalises_only_the_extremes_with_the_numbers_of_the_whole_map(fr
         out.append((r.detach(), y.grad.clone(), layer.weight.grad.clone(), layer.running_var.clone()))
     for a, b in zip(*out):
         assert torch.allclose(a, b, atol=1e-6)
+
+
+def test_the_matched_start_puts_the_fault_bursts_into_burst_s_bank():
+    """Two burst shapes at random places: after matched_start the bank holds both (at the bank's
+    rate, normalised, at the random start's norm); the other filters keep their random start."""
+    import numpy as np
+
+    from gearlab.learn.networks import matched_start
+
+    g = np.random.default_rng(0)
+    shapes = [np.exp(-np.arange(60) / 10.0) * np.sin(np.arange(60) / 2.0), np.hanning(60) * np.cos(np.arange(60))]
+    faults = np.zeros((40, 4096))
+    for i, row in enumerate(faults):
+        at = 2 * g.integers(0, 2000)  # on the pool's grid: each shape gives one window
+        row[at : at + 60] = (1 + i % 3) * shapes[i % 2]
+    net = build_network("burst", 2, seed=1)
+    before = net.features[net.bank_layer].weight.detach().clone()
+    assert matched_start(net, faults, seed=0)
+    w = net.features[net.bank_layer].weight.detach()[:, 0, :].numpy().astype(float)
+    assert np.allclose(np.linalg.norm(w[:2], axis=1), before.norm(dim=-1).mean().item(), rtol=1e-5)
+    for shape in shapes:
+        pooled = shape.reshape(-1, 2).mean(1)
+        best = max(
+            np.abs(np.correlate(row, pooled, "full")).max() / np.linalg.norm(row) / np.linalg.norm(pooled) for row in w
+        )
+        assert best > 0.99  # a filter lines up with the burst (up to its sign: the bank's |response| counts)
+    assert torch.equal(net.features[net.bank_layer].weight[2:], before[2:])  # two distinct windows, two filters set
+    fast = build_network("fast", 2, seed=1)
+    state = {k: v.clone() for k, v in fast.state_dict().items()}
+    assert not matched_start(fast, faults, seed=0)  # no bank: the random start stays
+    assert all(torch.equal(v, fast.state_dict()[k]) for k, v in state.items())
+    assert not matched_start(net, np.zeros((5, 4096)), seed=0)

@@ -61,8 +61,8 @@ TRAINING = keys_of(
 )
 
 # How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
-# gearlab's recipe, the thesis's is residual = false, source_noise = "off", alignment =
-# "marginal", threshold = "argmax" (scenarios/expA_thesis.toml, expB_thesis.toml).
+# gearlab's recipe, the thesis's is residual = false, start = "random", source_noise = "off",
+# alignment = "marginal", threshold = "argmax" (scenarios/expA_thesis.toml, expB_thesis.toml).
 CALIBRATION = keys_of(Calibration, **asdict(RECIPE))
 
 TABLES = {

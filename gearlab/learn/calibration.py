@@ -5,7 +5,7 @@ features as a whole. On gearlab's data that fails for three measured reasons
 (docs/learning.md, section 5): the noise-free source teaches the network that anything
 noisy is a fault; at k = 0 the target history is all healthy while the source is half
 faulty, so aligning the whole distributions pulls healthy target revolutions onto source
-faults (label shift); and the network's arg-max calls faults at a rate nobody chose. Four
+faults (label shift); and the network's arg-max calls faults at a rate nobody chose. These
 settings, each a named option of ``[protocol]`` with the thesis's choice still available:
 
 ``residual``      input = revolution minus its domain's healthy reference: the median of
@@ -16,6 +16,10 @@ settings, each a named option of ``[protocol]`` with the thesis's choice still a
                   size has the same size in both domains) or the filter fitted between them
                   (``fir``, gearlab.learn.path: the casing path or drive that the simulator
                   lacks acts on a fault's response as on the healthy mesh signal).
+``start``         ``random`` (thesis) or ``faults``: the priming starts the network's filter
+                  bank as matched filters of the source's fault residuals (as they reach the
+                  target through ``path``; gearlab.learn.networks.matched_start, ``burst``
+                  only; other networks start at random).
 ``source_noise``  fresh simulated sensor noise on every source batch, at the level of the
                   target history's residuals (the median over revolutions of their RMS) —
                   the thesis's corrected simulator (its sensor noise) used for training.
@@ -47,6 +51,7 @@ from ..settings import declared, in_bounds, setting
 from .history import NOISE_LAWS, gumbel_quantile, noise_law
 from .path import IDENTITY, PATHS, Path, fit_path
 
+STARTS = ("random", "faults")
 SOURCE_NOISE = ("off", "auto", *NOISE_LAWS)
 ALIGNMENTS = ("marginal", "healthy")
 THRESHOLDS = ("argmax", "history")
@@ -59,6 +64,7 @@ class Calibration:
 
     residual: bool = setting(bool, False, doc="input = revolution minus its domain's healthy reference")
     path: str = setting(str, "gain", choices=PATHS, doc="source residuals to the target's units (with residual)")
+    start: str = setting(str, "random", choices=STARTS, doc="priming: the filter bank's start (faults: matched)")
     source_noise: str = setting(str, "off", choices=SOURCE_NOISE, doc="fresh sensor noise on source batches")
     alignment: str = setting(str, "marginal", choices=ALIGNMENTS, doc="what the domain loss aligns")
     threshold: str = setting(str, "argmax", choices=THRESHOLDS, doc="fault call")
@@ -73,7 +79,9 @@ class Calibration:
 
 
 THESIS = Calibration()
-RECIPE = Calibration(residual=True, source_noise="auto", alignment="healthy", threshold="history")
+RECIPE = Calibration(
+    residual=True, path="fir", start="faults", source_noise="auto", alignment="healthy", threshold="history"
+)
 
 
 @dataclass(frozen=True)

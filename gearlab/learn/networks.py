@@ -313,7 +313,48 @@ def burst(n_classes: int, dropout: float, length: int) -> Network:
         NormMaxAbs(BURST_FILTERS),
     )
     classifier = nn.Sequential(nn.Linear(BURST_FILTERS, 32), nn.ReLU(), nn.Dropout(dropout), nn.Linear(32, n_classes))
-    return Network("burst", features, classifier, BURST_FILTERS, n_classes, length, fixed_length=False)
+    network = Network("burst", features, classifier, BURST_FILTERS, n_classes, length, fixed_length=False)
+    network.bank_layer = 3  # the filter bank's place in .features (matched_start); an int, not a second registration
+    return network
+
+
+def matched_start(network: Network, faults: np.ndarray, seed: int) -> bool:
+    """Start *network*'s filter bank as matched filters of the simulated *faults* (fault
+    residuals, one revolution a row, as the network will see them): the k-means centroids of
+    each fault's most energetic window of the bank's length, at the bank's rate (the 2-fold
+    average pool), each normalised and turned so its largest sample is positive, at the norm
+    of the random start. The soft limiter in front is left out: a burst below its clip passes
+    it almost linearly. Filters beyond the distinct windows keep their random start; a network
+    without a bank (cnn3, fast) keeps all of it (returns False). Why: trained from a random
+    start, the bank learns the strong faults (cracks, spalls) and leaves the weak ones (pits,
+    chips) to noise; started on them, it keeps them (docs/learning.md, decision 20)."""
+    layer = getattr(network, "bank_layer", None)
+    F = np.asarray(faults, dtype=np.float64)
+    if layer is None or len(F) == 0:
+        return False
+    bank = network.features[layer]
+    from sklearn.cluster import KMeans  # sklearn is slow to import; only priming needs it
+
+    width = bank.kernel_size[0]
+    F = F[:, : F.shape[1] // BURST_DECIMATE * BURST_DECIMATE].reshape(len(F), -1, BURST_DECIMATE).mean(-1)
+    cumulative = np.cumsum(np.concatenate([np.zeros((len(F), 1)), F**2, F[:, :width] ** 2], axis=1), axis=1)
+    energy = cumulative[:, width:] - cumulative[:, :-width]  # of the window starting at each sample, circular
+    # windows that hold a whole burst tie: rounding makes the first of them win, not the last bit
+    first = np.round(energy / energy.max(axis=1, keepdims=True).clip(min=1e-300), 9).argmax(axis=1)
+    windows = np.take_along_axis(F, (first[:, None] + np.arange(width)) % F.shape[1], axis=1)
+    norm = np.linalg.norm(windows, axis=1)
+    windows = windows[norm > 0] / norm[norm > 0, None]
+    windows *= np.sign(windows[np.arange(len(windows)), np.abs(windows).argmax(axis=1)])[:, None]
+    distinct = len(np.unique(windows.round(6), axis=0))
+    if distinct == 0:
+        return False
+    n = min(bank.out_channels, distinct)
+    centres = KMeans(n, n_init=3, random_state=seed).fit(windows).cluster_centers_
+    centres /= np.linalg.norm(centres, axis=1, keepdims=True)
+    with torch.no_grad():
+        scale = bank.weight.norm(dim=-1).mean()
+        bank.weight[:n, 0, :] = torch.as_tensor(centres, dtype=bank.weight.dtype) * scale
+    return True
 
 
 NETWORKS: dict[str, Callable[[int, float, int], Network]] = {"cnn3": cnn3, "fast": fast, "burst": burst}

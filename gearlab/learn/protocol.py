@@ -34,7 +34,7 @@ from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
 from .calibration import THESIS, Calibration, calibrate, prepare
-from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network
+from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network, matched_start
 from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device
 
 KS = (0, 1, 2, 4, 8, 16)
@@ -361,6 +361,8 @@ def train_method(
     def primed() -> dict:
         start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
         net = _net(protocol, seed, device)
+        if protocol.calibration.start == "faults":
+            matched_start(net, start.source(Xs[np.asarray(ys) != 0]), seed)
         fit_supervised(
             net,
             start.source(Xs),
