@@ -97,6 +97,20 @@ def _checked(name: str, Xs, ys, Xt, yt) -> tuple[np.ndarray, np.ndarray, np.ndar
     return Xs, ys, Xt, healthy_t
 
 
+def _shapes(name: str, Xs, ys, Xt, yt, path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The checked target revolutions, which of them are healthy, the target's healthy reference
+    and the fault shapes: the source's fault revolutions minus its healthy reference, through the
+    path fitted between the two references (each domain is standardised by its own healthy
+    statistics, eq. 4.6; the path brings the shapes to the target's size and form), and with
+    target labels the labelled target faults minus the target's reference."""
+    Xs, ys, Xt, healthy_t = _checked(name, Xs, ys, Xt, yt)
+    source_healthy, reference, through = fit_path(Xs, ys, Xt[healthy_t], path)
+    shapes = [through(Xs[ys == 1] - source_healthy)]
+    if yt is not None:
+        shapes.append(Xt[~healthy_t] - reference)
+    return Xt, healthy_t, reference, np.concatenate(shapes)
+
+
 def template_detector(
     Xs: np.ndarray,
     ys: np.ndarray,
@@ -113,15 +127,11 @@ def template_detector(
     history's residuals follow an impulsive law (gearlab.learn.calibration.noise_law). *path*:
     the shapes reach the target through the path fitted between the two healthy references
     (gearlab.learn.path: ``fir`` the filter, ``gain`` one number, to which a cosine is blind)."""
-    Xs, ys, Xt, healthy_t = _checked("matched_filter", Xs, ys, Xt, yt)
-    source_healthy, reference, through = fit_path(Xs, ys, Xt[healthy_t], path)
-    shapes = [through(Xs[ys == 1] - source_healthy)]
-    if yt is not None:
-        shapes.append(Xt[~healthy_t] - reference)
+    Xt, healthy_t, reference, shapes = _shapes("matched_filter", Xs, ys, Xt, yt, path)
     if limiter == "auto":
         limiter = "off" if noise_law(Xt[healthy_t] - reference) == "gaussian" else "on"
     clip = LIMIT if limiter == "on" else 0.0
-    detector = TemplateDetector(reference, _unit_rows(np.concatenate(shapes)), threshold=0.0, clip=clip)
+    detector = TemplateDetector(reference, _unit_rows(shapes), threshold=0.0, clip=clip)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
     detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
@@ -187,19 +197,13 @@ def likelihood_detector(
     scale reads the fault's energy as noise and ranks the faults low (docs/real_data.md)."""
     if scale not in SCALES:
         raise ValueError(f"scale must be one of {SCALES}, got {scale!r}")
-    Xs, ys, Xt, healthy_t = _checked("likelihood_ratio", Xs, ys, Xt, yt)
-    # A domain's revolutions are standardised by its own healthy statistics (eq. 4.6); the path
-    # between the references brings the shapes to the target's size and form.
-    source_healthy, reference, through = fit_path(Xs, ys, Xt[healthy_t], path)
-    shapes = [through(Xs[ys == 1] - source_healthy)]
-    if yt is not None:
-        shapes.append(Xt[~healthy_t] - reference)
+    Xt, healthy_t, reference, shapes = _shapes("likelihood_ratio", Xs, ys, Xt, yt, path)
     kind = noise_law(Xt[healthy_t] - reference)
     fixed = 0.0
     if scale == "history":
         residuals = torch.as_tensor(Xt[healthy_t] - reference, dtype=torch.float32)
         fixed = float(noise_scale(residuals, kind).median())
-    detector = LikelihoodDetector(reference, np.concatenate(shapes), kind, threshold=0.0, scale=fixed)
+    detector = LikelihoodDetector(reference, shapes, kind, threshold=0.0, scale=fixed)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
     detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
