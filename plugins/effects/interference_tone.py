@@ -24,6 +24,8 @@ import numpy as np
 
 from gearlab.api import Effect, GearlabInputError, Param, hookimpl
 
+RATIO_LADDER = (0.5, 0.7, 1.4, 2.0)  # the guessed level's neighbours tried at the record's frequency
+
 
 class InterferenceTone(Effect):
     name = "interference_tone"
@@ -86,6 +88,14 @@ class InterferenceTone(Effect):
         fine = float(fl[keep][np.argmax(long[keep])])
         if abs(fine - peak) > 1e-4 * peak:
             guesses.append({"frequency": fine, "ratio": ratio})
+        # The level is read against the target's whole RMS, the effect's against the healthy
+        # reference's, which other effects (a sensor resonance lifting the mesh harmonics) move: at
+        # the right frequency a level 40 % off scored like a tone at twice the frequency (a 179 Hz
+        # tone next to a 4.9 kHz resonance came back at 357 Hz). The record's frequency is tried at
+        # levels RATIO_LADDER times the reading too.
+        guesses += [
+            {"frequency": fine, "ratio": min(ratio * k, self.params[1].high)} for k in RATIO_LADDER if ratio * k > 0
+        ]
         return guesses
 
 
