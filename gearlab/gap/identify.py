@@ -8,14 +8,17 @@ distant one fits as well (a casing mass found 5x off, a load inertia 650x off, b
 
 A profile asks the question directly. With the other accepted effects held at their fitted values
 and the score the search used (common random numbers, so a deterministic function of the
-parameters), for each continuous parameter x_j of the effect:
+parameters), first a second fit from distant starts (a Latin hypercube, local fits from the best
+distant points: the search's budget can stop in a wrong basin), then for each continuous
+parameter x_j of the effect, around the best point seen:
 
-1. a quadratic model of the score around the fit, from a stencil of 1 + 2d + d(d - 1) points
-   HESSIAN_STEP apart on the unit cube; its Hessian H gives the direction along which the other
-   parameters follow x_j at least cost, v_o = -H_oo⁺ H_oj (the valley: for log-scaled mass and
-   stiffness, a straight line in the search's coordinates);
-2. x_j moved PROFILE_DISTANCES of its range to each side (the others started on that line), then
-   the others re-fitted locally (PROFILE_POLISH evaluations per coordinate);
+1. the score's Hessian H by finite differences HESSIAN_STEP apart on the unit cube (1 + 2d +
+   d(d - 1) points) gives the direction along which the other parameters follow x_j at least
+   cost, v_o = -H_oo⁺ H_oj (the valley: for log-scaled mass and stiffness, a straight line in the
+   search's coordinates);
+2. x_j moved PROFILE_DISTANCES of its range to each side (the others started on that line, or
+   held, whichever scores lower), then the others re-fitted locally (PROFILE_POLISH evaluations
+   per coordinate);
 3. a profile point whose score lies within the score's noise of the best (the bootstrap spread the
    search's intervals use) is a distant value that fits as well: it widens x_j's interval -- and
    those of the parameters that moved with it -- past DETERMINED_WIDTH, so x_j reads "not
@@ -24,8 +27,11 @@ parameters), for each continuous parameter x_j of the effect:
    pinned; a parameter that moved alone does not act on these revolutions at all.
 
 A profile point that scores *lower* than the fit (the search stopped in a local minimum) is taken
-as the fit. Whole-number parameters keep the search's intervals (a filter's order is already
-profiled value by value, gearlab.gap.diagnose._ordinal_profile); text options stay fixed.
+as the fit, and profiled around again (PASSES). A fit that stays more than FIT_SIGMAS noise widths
+above 0 -- what a right model scores, the score being bias-corrected -- leaves a gap: none of its
+parameters is called determined ("fit leaves a gap"). Whole-number parameters keep the search's
+intervals (a filter's order is already profiled value by value,
+gearlab.gap.diagnose._ordinal_profile); text options stay fixed.
 """
 
 from __future__ import annotations
