@@ -71,11 +71,27 @@ def test_an_unknown_kind_is_refused():
         fit_path(np.vstack([[HEALTHY] * 3]), np.zeros(3), domain(resonance, 5, 0.3, seed=4), "spline")
 
 
-def test_references_that_share_no_path_fall_back_to_the_gain():
-    """Two references of noise (medians of noisy difference signals): no filter predicts one
-    from the other, so the path is the ratio of their RMS, not a filter fitted to noise."""
+def test_references_whose_lines_do_not_predict_each_other_fall_back_to_the_gain():
+    """The same lines with amplitudes and phases drawn at random: no smooth filter maps one
+    reference onto the other, so the path is the ratio of their RMS, not a filter fitted to chance."""
     g = np.random.default_rng(5)
-    Xs, ys = g.normal(size=(40, N)), np.r_[np.zeros(30), np.ones(10)]
-    _, _, fir = fit_path(Xs, ys, g.normal(size=(40, N)), "fir")
-    _, _, gain = fit_path(Xs, ys, g.normal(size=(40, N)), "gain")
-    assert len(fir.taps) == 1 and fir.taps[0] == pytest.approx(gain.taps[0], rel=0.2)
+    S = np.fft.rfft(HEALTHY)
+    scrambled = np.fft.irfft(S * g.uniform(0.2, 2.0, S.shape) * np.exp(2j * np.pi * g.uniform(size=S.shape)), n=N)
+    Xs, ys = np.vstack([[HEALTHY] * 20, [HEALTHY + burst(300)]]), np.r_[np.zeros(20), 1]
+    history = domain(lambda x: scrambled, 120, 0.3, seed=8)
+    _, _, fir = fit_path(Xs, ys, history, "fir")
+    _, _, gain = fit_path(Xs, ys, history, "gain")
+    assert len(fir.taps) == 1 and fir.taps[0] == gain.taps[0]
+
+
+def test_medians_of_noise_are_no_reference():
+    """Difference signals averaged over revolutions (the PHM rig's corrected source): their
+    medians are what is left of the noise, so there is no path to read: the identity."""
+    g = np.random.default_rng(6)
+    Xs, ys = g.normal(size=(60, N)), np.r_[np.zeros(50), np.ones(10)]
+    for kind in ("gain", "fir"):
+        assert fit_path(Xs, ys, domain(resonance, 120, 0.3, seed=7), kind)[2] is IDENTITY
+        assert (
+            fit_path(np.vstack([[HEALTHY] * 20, [burst(3)]]), np.r_[np.zeros(20), 1], g.normal(size=(60, N)), kind)[2]
+            is IDENTITY
+        )

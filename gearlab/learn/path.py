@@ -43,6 +43,7 @@ LEADS = (0.5, 0.125)  # share of the taps before lag 0: centred, or mostly causa
 RIDGES = (1e-4, 1e-3, 1e-2, 1e-1)  # candidate λ, relative to the mean diagonal of the normal equations
 LINE_ENERGY = 0.999  # the lines: the fewest order bins holding this share of the source reference's energy
 FOLDS = 5  # cross-validation folds over the lines (interleaved)
+SIGNAL = 10.0  # a reference is a signal when its energy is this many times a noise median's (10 dB)
 COHERENT = 0.5  # a filter must predict the held-out lines to within this share of their energy
 
 
@@ -90,6 +91,15 @@ def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x, dtype=np.float64))))
 
 
+def _is_signal(rows: np.ndarray, median: np.ndarray) -> bool:
+    """Whether the median of *rows* holds a signal rather than what is left of their noise: its
+    energy must stand SIGNAL times above the energy a median of pure noise keeps, about
+    (π/2)·mean ||x - median||² / n for n rows (the sample median's variance, π/2 that of the mean).
+    A median of difference signals (zero by construction, or averaged noise) is not a signal."""
+    spread = float(np.mean(np.sum((rows - median) ** 2, axis=1)))
+    return float(np.sum(median**2)) > SIGNAL * (np.pi / 2) * spread / len(rows) and float(np.sum(median**2)) > 0.0
+
+
 def fit_path(
     Xs: np.ndarray, ys: np.ndarray, target_healthy: np.ndarray, kind: str = "fir"
 ) -> tuple[np.ndarray, np.ndarray, Path]:
@@ -98,15 +108,15 @@ def fit_path(
     path between them:
     ``gain`` the ratio of their RMS (one number: a fault of the same relative size has the same
     size in both domains), ``fir`` the filter of (1) with its length and ridge chosen by
-    cross-validation over the lines. A reference that is (almost) zero, e.g. of a difference
-    signal, which removes the synchronous signal by construction, measures nothing: the path
-    is then the identity rather than blown up by the ratio."""
+    cross-validation over the lines. A reference that is no signal (:func:`_is_signal`), e.g.
+    of a difference signal, which removes the synchronous signal by construction, measures
+    nothing: the path is then the identity rather than a ratio of two noises."""
     if kind not in PATHS:
         raise ValueError(f"path must be one of {PATHS}, got {kind!r}")
     Xs = np.asarray(Xs, dtype=np.float64)
     target_healthy = np.asarray(target_healthy, dtype=np.float64)
     s, t = np.median(Xs[np.asarray(ys) == 0], axis=0), np.median(target_healthy, axis=0)
-    if not (_rms(s) > 1e-3 * _rms(Xs) and _rms(t) > 1e-3 * _rms(target_healthy)):
+    if not (_is_signal(Xs[np.asarray(ys) == 0], s) and _is_signal(target_healthy, t)):
         return s, t, IDENTITY
     gain = Path(np.zeros(1, dtype=int), np.array([_rms(t) / _rms(s)]))
     if kind == "gain":
