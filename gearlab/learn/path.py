@@ -26,9 +26,9 @@ where it is then free to ring.) A reference whose energy is not in lines (they t
 quarter of the orders), or a filter that predicts less than half the held-out lines' energy,
 finds no common path (two references of noise, say): the path is then the gain.
 
-Measured (docs/learning.md, decision 19): the simulator's shapes through the fitted path lift
-``likelihood_ratio`` from 61 to 89 % on Experiment A (the target's own shapes give 88.5 %) and
-from 86 to 89 % on B.
+Measured (docs/learning.md, decision 19; repetition 0, k = 0): the simulator's shapes through
+the fitted path lift ``likelihood_ratio`` from 67 % (the gain) to 89 % on Experiment A, where
+the target's own shapes give 88.5 %, and from 85 to 88.5 % on B.
 """
 
 from __future__ import annotations
