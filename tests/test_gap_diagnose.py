@@ -285,7 +285,8 @@ def test_the_verdict_reads_the_test_and_the_effect_size(case, verdict):
 def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():
     """Per parameter, the diagnosis says whether the data determine it: an interval of a tenth of the
     range (on the search's scale: log for a frequency) is determined, one over most of it is not."""
-    from gearlab.gap.diagnose import DETERMINED_WIDTH, Space, determined
+    from gearlab.gap.diagnose import Space, determined
+    from gearlab.gap.identify import DETERMINED_WIDTH
     from gearlab.registry import get_registry
 
     space = Space(get_registry().get("effect", "sensor_bandwidth"))

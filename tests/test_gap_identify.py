@@ -10,7 +10,8 @@ import pytest
 from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec
 from gearlab.gap import diagnose as d
-from gearlab.gap.identify import FIT_SIGMAS, profile, profile_effect
+from gearlab.gap.diagnose import profile_effect
+from gearlab.gap.identify import FIT_SIGMAS, profile
 
 
 class _ResonanceLike:

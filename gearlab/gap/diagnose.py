@@ -91,6 +91,15 @@ from ..executors import LocalExecutor
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..signals import add_noise
+from .identify import (
+    LOCAL_STEP,
+    _intervals,
+    _local,
+    _OutOfBudget,
+    _plain,
+    determined,
+    profile,
+)
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .views import (
     BandPlan,
@@ -117,8 +126,6 @@ NAMED_SHARE = EXPLAINED_SHRINK
 # normal classes), however small the p-value that many quiet revolutions give it.
 SMALL_AUC = 0.65
 VERDICTS = ("no significant gap", "explained", "partly explained", "unexplained")
-# A parameter is "determined" when its interval spans at most this share of its searched range.
-DETERMINED_WIDTH = 0.25
 SIGNAL_EVALS = 4  # evaluations per budget unit for signal-level effects (they need no new simulation)
 DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling design, the rest refines
 # Whole-number parameters with at most ORDINAL_VALUES values are ordinal (a filter's order, 1-8
@@ -126,7 +133,7 @@ DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling des
 # ORDINAL_EVALS evaluations per free coordinate and one. Local fits (these, and the re-fits of
 # accepted effects) start from a simplex LOCAL_STEP wide (unit cube).
 # A local fit of one coordinate is a bounded Brent search LOCAL_BRACKET either side of its start.
-ORDINAL_VALUES, ORDINAL_EVALS, LOCAL_STEP, LOCAL_BRACKET = 8, 4, 0.05, 0.1
+ORDINAL_VALUES, ORDINAL_EVALS = 8, 4
 NOISE_REPLICATES = 64  # bootstrap replicates for the score noise behind the parameter intervals
 ACCEPT_REPLICATES = 200  # paired bootstrap replicates for the acceptance test
 ACCEPT_CONFIDENCE = 0.95
@@ -619,10 +626,6 @@ class Space:
         return combos
 
 
-class _OutOfBudget(Exception):
-    pass
-
-
 def _fit_search(
     space: Space,
     objective: Callable[[dict], float],
@@ -714,52 +717,6 @@ def _fit_search(
     return history
 
 
-def _local(space: Space, evaluate, u0: np.ndarray, choice: tuple, free: list[int], evaluations: int) -> dict:
-    """A short Nelder-Mead over the coordinates *free* from *u0*, the others held: the best point
-    it saw (u0 included), as a history entry."""
-    from scipy.optimize import minimize
-
-    found = {"u": u0.copy(), "choice": choice, "score": math.inf}
-
-    def at(v) -> float:
-        u = u0.copy()
-        u[free] = np.clip(v, 0.0, 1.0)
-        value = evaluate(u, choice)
-        if value < found["score"]:
-            found.update(u=u, score=value)
-        return value
-
-    try:
-        at(u0[free])
-        if len(free) == 1 and evaluations > 1:
-            # one coordinate: Brent's parabolas converge on a valley where a simplex crawls
-            from scipy.optimize import minimize_scalar
-
-            x = float(u0[free[0]])
-            minimize_scalar(
-                lambda v: at(np.array([v])),
-                bounds=(max(0.0, x - LOCAL_BRACKET), min(1.0, x + LOCAL_BRACKET)),
-                method="bounded",
-                options={"maxiter": evaluations - 1, "xatol": 1e-5},
-            )
-        elif free and evaluations > 1:
-            simplex = [u0[free]] + [
-                u0[free]
-                + np.where(np.arange(len(free)) == i, LOCAL_STEP if u0[j] + LOCAL_STEP <= 1 else -LOCAL_STEP, 0)
-                for i, j in enumerate(free)
-            ]
-            minimize(
-                at,
-                u0[free],
-                method="Nelder-Mead",
-                bounds=[(0.0, 1.0)] * len(free),
-                options={"maxfev": evaluations - 1, "initial_simplex": np.array(simplex), "xatol": 1e-4, "fatol": 0.0},
-            )
-    except _OutOfBudget:
-        pass
-    return {**found, "params": space.params(found["u"], choice)}
-
-
 def _ordinal_profile(space: Space, evaluate, history: list[dict], ordinal: list[int], per_value: int) -> None:
     """Profile the ordinal parameters (a filter's order): from the best point, every other value in
     turn, stepping away from it in both directions, each a short local fit of the continuous
@@ -793,41 +750,6 @@ def _inside(space: Space, guess: dict) -> bool:
         if "choices" not in e and not (isinstance(value, numbers.Real) and e["low"] <= value <= e["high"]):
             return False
     return True
-
-
-def _intervals(space: Space, history: list[dict], best: dict, noise: float) -> dict:
-    """Per numeric parameter: the bracket of every evaluated value within *noise* of the best
-    score, out to the nearest evaluated value outside it on each side (or the bound); a whole
-    number's is the values within it."""
-    out = {}
-    threshold = best["score"] + noise
-    for e in space.numbers:
-        name = e["name"]
-        inside = [h["params"][name] for h in history if h["score"] <= threshold]
-        outside = [h["params"][name] for h in history if h["score"] > threshold]
-        lo_in, hi_in = min(inside), max(inside)
-        if e["integer"]:
-            # Whole numbers: the values outside were evaluated and are worse; nothing lies between
-            # (extended to them, a filter's order found exactly at 3 read [2, 4], "not identifiable").
-            out[name] = [float(lo_in), float(hi_in)]
-            continue
-        below = [x for x in outside if x < lo_in]
-        above = [x for x in outside if x > hi_in]
-        out[name] = [float(max(below)) if below else float(e["low"]), float(min(above)) if above else float(e["high"])]
-    return out
-
-
-def determined(space: Space, intervals: dict) -> dict:
-    """Per numeric parameter: whether the data determine it -- its interval spans at most
-    DETERMINED_WIDTH of the searched range (on the search's own scale: log where the effect says
-    so). A wider one is "not identifiable" from these revolutions: an honest answer, and its
-    fitted value should not be read as a measurement."""
-    out = {}
-    for e in space.numbers:
-        lo, hi = intervals.get(e["name"], (e["low"], e["high"]))
-        width = abs(space.unit(e, hi) - space.unit(e, lo)) if e["high"] > e["low"] else 0.0
-        out[e["name"]] = {"width": float(width), "determined": bool(width <= DETERMINED_WIDTH)}
-    return out
 
 
 # --- one fit: the executor's unit of work ------------------------------------------------------------
@@ -1046,13 +968,6 @@ class _NoiseNuisance:
         return found[0]
 
 
-def _plain(params: dict) -> dict:
-    return {
-        k: (v if isinstance(v, str) else int(v) if isinstance(v, numbers.Integral) else float(v))
-        for k, v in params.items()
-    }
-
-
 # --- the diagnosis -----------------------------------------------------------------------------------
 
 
@@ -1234,13 +1149,42 @@ def diagnose(
     return conclusion(run, result, before, accepted, fitted, started)
 
 
+def profile_effect(task: tuple) -> dict:
+    """Profile the *i*-th accepted effect: task = (search spec, accepted effects (canonical, the
+    order they were accepted in), i, target_X, settings, seed, rows, the search's intervals), with
+    the score the search used and the others held at their fits. Returns :func:`gearlab.gap.identify.profile`'s record
+    with the effect's name and index."""
+    search, fitted, i, target_X, settings, seed, rows, prior = task
+    started = time.perf_counter()
+    name, canonical = fitted[i]
+    effect = get_registry().get("effect", name)
+    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(search), settings.max_order)
+
+    def rows_of(params: dict) -> np.ndarray:
+        effects = _by_level(search.effects + fitted[:i] + (effect.spec(params),) + fitted[i + 1 :])
+        return rows(search.with_(effects=effects))
+
+    def score(params: dict) -> float:
+        try:
+            return scorer.score(rows_of(params))
+        except GearlabInputError:  # a profile point the effect cannot take here
+            return math.inf
+
+    def noise(params: dict) -> float:
+        # the score's noise at the point profiled: the bootstrap spread the search's intervals take
+        return float(np.std(scorer.replicates(rows_of(params), NOISE_REPLICATES, [seed, 2])))
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
+        out = profile(Space(effect), score, noise, dict(canonical), seed, prior)
+    return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}
+
+
 def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
     """Stage 3b: every accepted effect profiled next to the others as finally fitted (in parallel,
     gearlab.gap.identify): honest intervals and "determined" marks, what the data determine where a
     parameter is not, and a better fit where a profile point found one. Returns the accepted effects
     (canonical) with those fits."""
-    from .identify import profile_effect
-
     tasks = [
         (run.search, fitted, i, run.target, run.settings, run.settings.seed + 5000, run.rows, e.get("intervals", {}))
         for i, e in enumerate(accepted)

@@ -37,14 +37,10 @@ gearlab.gap.diagnose._ordinal_profile); text options stay fixed.
 from __future__ import annotations
 
 import math
-import time
-import warnings
+import numbers
 from collections.abc import Callable
 
 import numpy as np
-
-from ..errors import GearlabInputError
-from ..registry import get_registry
 
 HESSIAN_STEP = 0.01  # unit-cube step of the quadratic model's stencil
 # Where x_j is moved, in shares of its searched range (unit cube), each side: half the interval width
@@ -62,37 +58,103 @@ FIT_SIGMAS = 3.0  # a fit this many noise widths above 0 leaves a gap: no parame
 PASSES = 3  # profiles around a better point found by the last one, at most
 
 
-def profile_effect(task: tuple) -> dict:
-    """Profile the *i*-th accepted effect: task = (search spec, accepted effects (canonical, the
-    order they were accepted in), i, target_X, settings, seed, rows, the search's intervals), with
-    the score the search used and the others held at their fits. Returns :func:`profile`'s record
-    with the effect's name and index."""
-    from .diagnose import NOISE_REPLICATES, Scorer, Space, _by_level, _check_source
+# A parameter is "determined" when its interval spans at most this share of its searched range.
+DETERMINED_WIDTH = 0.25
+# A local fit (re-fits of accepted effects, an ordinal profile's, the profile's) starts from a simplex
+# LOCAL_STEP wide (unit cube); one of a single coordinate is a bounded Brent search LOCAL_BRACKET either side.
+LOCAL_STEP, LOCAL_BRACKET = 0.05, 0.1
 
-    search, fitted, i, target_X, settings, seed, rows, prior = task
-    started = time.perf_counter()
-    name, canonical = fitted[i]
-    effect = get_registry().get("effect", name)
-    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(search), settings.max_order)
 
-    def rows_of(params: dict) -> np.ndarray:
-        effects = _by_level(search.effects + fitted[:i] + (effect.spec(params),) + fitted[i + 1 :])
-        return rows(search.with_(effects=effects))
+class _OutOfBudget(Exception):
+    pass
 
-    def score(params: dict) -> float:
-        try:
-            return scorer.score(rows_of(params))
-        except GearlabInputError:  # a profile point the effect cannot take here
-            return math.inf
 
-    def noise(params: dict) -> float:
-        # the score's noise at the point profiled: the bootstrap spread the search's intervals take
-        return float(np.std(scorer.replicates(rows_of(params), NOISE_REPLICATES, [seed, 2])))
+def _local(space, evaluate, u0: np.ndarray, choice: tuple, free: list[int], evaluations: int) -> dict:
+    """A short Nelder-Mead over the coordinates *free* from *u0*, the others held: the best point
+    it saw (u0 included), as a history entry."""
+    from scipy.optimize import minimize
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
-        out = profile(Space(effect), score, noise, dict(canonical), seed, prior)
-    return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}
+    found = {"u": u0.copy(), "choice": choice, "score": math.inf}
+
+    def at(v) -> float:
+        u = u0.copy()
+        u[free] = np.clip(v, 0.0, 1.0)
+        value = evaluate(u, choice)
+        if value < found["score"]:
+            found.update(u=u, score=value)
+        return value
+
+    try:
+        at(u0[free])
+        if len(free) == 1 and evaluations > 1:
+            # one coordinate: Brent's parabolas converge on a valley where a simplex crawls
+            from scipy.optimize import minimize_scalar
+
+            x = float(u0[free[0]])
+            minimize_scalar(
+                lambda v: at(np.array([v])),
+                bounds=(max(0.0, x - LOCAL_BRACKET), min(1.0, x + LOCAL_BRACKET)),
+                method="bounded",
+                options={"maxiter": evaluations - 1, "xatol": 1e-5},
+            )
+        elif free and evaluations > 1:
+            simplex = [u0[free]] + [
+                u0[free]
+                + np.where(np.arange(len(free)) == i, LOCAL_STEP if u0[j] + LOCAL_STEP <= 1 else -LOCAL_STEP, 0)
+                for i, j in enumerate(free)
+            ]
+            minimize(
+                at,
+                u0[free],
+                method="Nelder-Mead",
+                bounds=[(0.0, 1.0)] * len(free),
+                options={"maxfev": evaluations - 1, "initial_simplex": np.array(simplex), "xatol": 1e-4, "fatol": 0.0},
+            )
+    except _OutOfBudget:
+        pass
+    return {**found, "params": space.params(found["u"], choice)}
+
+
+def _intervals(space, history: list[dict], best: dict, noise: float) -> dict:
+    """Per numeric parameter: the bracket of every evaluated value within *noise* of the best
+    score, out to the nearest evaluated value outside it on each side (or the bound); a whole
+    number's is the values within it."""
+    out = {}
+    threshold = best["score"] + noise
+    for e in space.numbers:
+        name = e["name"]
+        inside = [h["params"][name] for h in history if h["score"] <= threshold]
+        outside = [h["params"][name] for h in history if h["score"] > threshold]
+        lo_in, hi_in = min(inside), max(inside)
+        if e["integer"]:
+            # Whole numbers: the values outside were evaluated and are worse; nothing lies between
+            # (extended to them, a filter's order found exactly at 3 read [2, 4], "not identifiable").
+            out[name] = [float(lo_in), float(hi_in)]
+            continue
+        below = [x for x in outside if x < lo_in]
+        above = [x for x in outside if x > hi_in]
+        out[name] = [float(max(below)) if below else float(e["low"]), float(min(above)) if above else float(e["high"])]
+    return out
+
+
+def determined(space, intervals: dict) -> dict:
+    """Per numeric parameter: whether the data determine it -- its interval spans at most
+    DETERMINED_WIDTH of the searched range (on the search's own scale: log where the effect says
+    so). A wider one is "not identifiable" from these revolutions: an honest answer, and its
+    fitted value should not be read as a measurement."""
+    out = {}
+    for e in space.numbers:
+        lo, hi = intervals.get(e["name"], (e["low"], e["high"]))
+        width = abs(space.unit(e, hi) - space.unit(e, lo)) if e["high"] > e["low"] else 0.0
+        out[e["name"]] = {"width": float(width), "determined": bool(width <= DETERMINED_WIDTH)}
+    return out
+
+
+def _plain(params: dict) -> dict:
+    return {
+        k: (v if isinstance(v, str) else int(v) if isinstance(v, numbers.Integral) else float(v))
+        for k, v in params.items()
+    }
 
 
 def profile(
@@ -103,8 +165,6 @@ def profile(
     numbers). Returns the best parameters seen (the fit, or a better point), their score, the fit's
     score, the noise, whether the fit leaves a gap, intervals, ``determined`` marks (with the reason
     where not) and ``combinations`` (what the data determine where a parameter is not)."""
-    from .diagnose import _intervals, _local, _plain, determined
-
     u0, choice = space.point_of(params)
     history: list[dict] = []
     seen: dict = {}
@@ -168,8 +228,6 @@ def profile(
 def _profile(space, evaluate, history, u0, choice, free: list[int], noise: float) -> dict[int, list[dict]]:
     """Per free coordinate j: the profile points, out to each side, that fit within the noise of the
     best score seen (the module docstring, steps 1-3)."""
-    from .diagnose import _local
-
     H = _hessian(evaluate, u0, free)
     paths: dict[int, list[dict]] = {}
     for a, j in enumerate(free):
@@ -208,8 +266,6 @@ def _distant_starts(space, evaluate, history, u0, choice, free: list[int], seed)
     where the truth, 3.3e-3, scores 1.0. Returns the point to profile around: the fit, or a distant
     one that scores lower (the best point seen)."""
     from scipy.stats import qmc
-
-    from .diagnose import DETERMINED_WIDTH, _local
 
     design = qmc.LatinHypercube(d=len(free), seed=np.random.default_rng([*np.atleast_1d(seed), 11])).random(
         STARTS_PER_COORDINATE * len(free)
