@@ -197,6 +197,8 @@ def test_history_threshold_lets_the_asked_share_of_healthy_revolutions_through()
     "bad, match",
     [
         (dict(source_noise="pink"), "source_noise"),
+        (dict(path="spline"), "path"),
+        (dict(start="fault"), "start"),
         (dict(alignment="joint"), "alignment"),
         (dict(threshold="max"), "threshold"),
         (dict(false_alarm=0.7), "false_alarm"),

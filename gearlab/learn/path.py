@@ -97,8 +97,9 @@ def _is_signal(rows: np.ndarray, median: np.ndarray) -> bool:
     energy must stand SIGNAL times above the energy a median of pure noise keeps, about
     (π/2)·mean ||x - median||² / n for n rows (the sample median's variance, π/2 that of the mean).
     A median of difference signals (zero by construction, or averaged noise) is not a signal."""
+    energy = float(np.sum(median**2))
     spread = float(np.mean(np.sum((rows - median) ** 2, axis=1)))
-    return float(np.sum(median**2)) > SIGNAL * (np.pi / 2) * spread / len(rows) and float(np.sum(median**2)) > 0.0
+    return energy > 0.0 and energy > SIGNAL * (np.pi / 2) * spread / len(rows)
 
 
 def fit_path(
@@ -116,8 +117,9 @@ def fit_path(
         raise ValueError(f"path must be one of {PATHS}, got {kind!r}")
     Xs = np.asarray(Xs, dtype=np.float64)
     target_healthy = np.asarray(target_healthy, dtype=np.float64)
-    s, t = np.median(Xs[np.asarray(ys) == 0], axis=0), np.median(target_healthy, axis=0)
-    if not (_is_signal(Xs[np.asarray(ys) == 0], s) and _is_signal(target_healthy, t)):
+    source_healthy = Xs[np.asarray(ys) == 0]
+    s, t = np.median(source_healthy, axis=0), np.median(target_healthy, axis=0)
+    if not (_is_signal(source_healthy, s) and _is_signal(target_healthy, t)):
         return s, t, IDENTITY
     gain = Path(np.zeros(1, dtype=int), np.array([_rms(t) / _rms(s)]))
     if kind == "gain":
