@@ -14,7 +14,8 @@ the method's model and threshold are fixed, and their labels only when the figur
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
                           adapter that can learn without target labels
-    [classical]           indicators (fm4, na4) of the input-shaft TSA, mesh_orders, shaft_orders, sidebands
+    [classical]           indicators (fm4, na4, tooth_energy) of the input-shaft TSA, mesh_orders,
+                          shaft_orders, sidebands
     [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold),
                           threshold (records | pooled), seeds (trainings per network method)
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
@@ -68,7 +69,16 @@ from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location
 from ..settings import shrunk
 from ..signals import Standardiser
-from ..signals.indicators import INDICATORS, difference_signal, fm4, na4, na4_reference
+from ..signals.indicators import (
+    DEFAULT_INDICATORS,
+    INDICATORS,
+    difference_signal,
+    fm4,
+    na4,
+    na4_reference,
+    tooth_energy,
+    tooth_reference,
+)
 from ..units import to_si
 from . import record_effects
 from .common import class_sizes, device_of, executor_for, simulated_spec, sized
@@ -121,8 +131,15 @@ TABLES = {
     "methods": Table(TRANSFER_TABLES["methods"].keys, array=True),
     "classical": Table(
         {
-            "indicators": Key(list, list(INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"),
-            "mesh_orders": Key(list, [], doc="mesh orders of the TSA's shaft (default: the source pinion's teeth)"),
+            "indicators": Key(
+                list, list(DEFAULT_INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"
+            ),
+            "mesh_orders": Key(
+                list,
+                [],
+                doc="mesh orders of the TSA's shaft (default: the source pinion's teeth); the first is the "
+                "tooth count of the gear on that shaft (tooth_energy's windows)",
+            ),
             "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
             "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
         }
@@ -668,15 +685,31 @@ def method_name(m: Method, variant: str = "") -> str:
 
 
 def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
-    """A classical indicator's scores: computed on the TSA units, its NA4 reference from the history."""
-    orders, shaft = classical["mesh_orders"], classical["shaft_orders"]
-    # NA4's denominator: the mean residual variance of the history's units of the same kind
-    variance = {u: na4_reference(X, orders, shaft) for u, X in cond["history_units"].items()} if name == "na4" else {}
+    """A classical indicator's scores: computed on the TSA units, its reference (NA4's variance,
+    tooth_energy's windows) from the history's units of the same kind."""
+    orders, shaft, sidebands = classical["mesh_orders"], classical["shaft_orders"], classical["sidebands"]
+    history = cond["history_units"]
+    reference = {}
+    if name == "na4":  # the denominator: the mean residual variance of the history's units
+        reference = {u: na4_reference(X, orders, shaft) for u, X in history.items()}
+    elif name == "tooth_energy":  # per tooth window: the records' mean and within-record spread
+        reference = {
+            u: tooth_reference(
+                np.split(X, np.cumsum([n for n, _ in cond["history_records"][u]])[:-1]),
+                orders[0],
+                orders,
+                shaft,
+                sidebands,
+            )
+            for u, X in history.items()
+        }
 
     def score(X: np.ndarray, u: str) -> np.ndarray:
         if name == "fm4":
-            return fm4(X, orders, shaft, classical["sidebands"])
-        return na4(X, orders, variance[u], shaft)
+            return fm4(X, orders, shaft, sidebands)
+        if name == "tooth_energy":
+            return tooth_energy(X, orders, reference[u], shaft, sidebands)
+        return na4(X, orders, reference[u], shaft)
 
     hist = {u: score(X, u) for u, X in cond["history_units"].items()}
     fixed = rule.decide(hist)  # fixed before any test unit is scored
