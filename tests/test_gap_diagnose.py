@@ -16,7 +16,19 @@ from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec, model_of
 from gearlab.errors import GearlabInputError
 from gearlab.executors import LocalExecutor
-from gearlab.gap.diagnose import SMALL_AUC, Scorer, Settings, corrected_source, diagnose, source_rows, verdict_of
+from gearlab.gap.diagnose import (
+    NAMED_SHARE,
+    NOISE_WIDTH,
+    SMALL_AUC,
+    Scorer,
+    Settings,
+    corrected_source,
+    diagnose,
+    rms_effect,
+    source_rows,
+    verdict_of,
+    within_noise,
+)
 from gearlab.gap.stats import gap_report
 from gearlab.gap.views import healthy_rows
 
@@ -282,6 +294,39 @@ def test_the_verdict_reads_the_test_and_the_effect_size(case, verdict):
     assert verdict_of(*case) == verdict
 
 
+@pytest.mark.parametrize(
+    "case, verdict",
+    [
+        # a speed ripple fitted within 0.5 %: 97.7 % removed, RMS effect 0.41 left, AUC 0.98
+        ((True, True, True, 0.98, 0.977, NAMED_SHARE, True), "explained"),
+        # stand-ins for a withheld casing path: 97.5 % removed, RMS effect 50 left
+        ((True, True, True, 1.0, 0.975, NAMED_SHARE, False), "unexplained"),
+        # a right effect above the noise width but under 1 % of the gap left stays named
+        ((True, True, True, 1.0, 0.9986, NAMED_SHARE, False), "partly explained"),
+        # within the noise but no effect accepted: nothing explains it
+        ((True, False, True, 0.98, 0.0, NAMED_SHARE, True), "unexplained"),
+    ],
+)
+def test_what_is_left_within_the_noise_width_is_explained(case, verdict):
+    assert verdict_of(*case) == verdict
+
+
+def _report_of(gap: float, features: int) -> dict:
+    return {"total": {"gap": gap, "features": features}}
+
+
+def test_the_noise_width_is_the_rms_effect_of_the_gap_over_its_features():
+    """sqrt(G / P): the mean revolution's RMS shift in units of the rows' own scatter. The rule
+    needs the gap before above the width and what is left within it; a gap within the noise from
+    the start is judged by the test alone."""
+    assert rms_effect(_report_of(36.11, 214)) == pytest.approx(0.4108, abs=1e-4)
+    assert rms_effect(_report_of(-1.0, 10)) == 0.0
+    assert within_noise(_report_of(1581.0, 214), _report_of(36.11, 214))
+    assert not within_noise(_report_of(1.496e7, 149), _report_of(3.717e5, 149))  # a stand-in: RMS 50 left
+    assert not within_noise(_report_of(2.3, 154), _report_of(0.5, 154))  # within the noise before too
+    assert within_noise(_report_of(4.0 * 214, 214), _report_of(NOISE_WIDTH**2 * 214, 214))  # the edge counts
+
+
 def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():
     """Per parameter, the diagnosis says whether the data determine it: an interval of a tenth of the
     range (on the search's scale: log for a frequency) is determined, one over most of it is not."""
@@ -321,3 +366,87 @@ def test_consecutive_rows_add_the_output_shaft_orders_to_the_reports():
     assert on["settings"]["consecutive"] is True and on["before"]["output_shaft"]["blocks"] == [10, 10]
     with pytest.raises(GearlabInputError, match="consecutive"):
         diagnose(source, target, Settings(candidates=("sensor_noise",), consecutive="maybe", **base))
+
+
+class _FakeSearch:
+    effects: tuple = ()
+
+    def with_(self, effects):
+        return effects
+
+
+def _joint_run(score_now: float):
+    """A diagnosis's shared state with a score that reads the effects it is given."""
+    from types import SimpleNamespace
+
+    from gearlab.gap.diagnose import _by_level
+
+    return SimpleNamespace(
+        scorer=SimpleNamespace(score=lambda effects: score_now),
+        rows=lambda effects: _by_level(effects),
+        search=_FakeSearch(),
+        target=None,
+        settings=Settings(seed=3),
+        executor=LocalExecutor(1),
+        on_event=lambda e: None,
+        spec=lambda name, params: (name, tuple(sorted(params.items()))),
+    )
+
+
+@pytest.mark.parametrize("score_now, taken", [(50.0, True), (0.5, False)])
+def test_the_round_s_effect_is_searched_again_next_to_the_backfitted_others(monkeypatch, score_now, taken):
+    """joint_refit: the round's new effect gets a whole search next to the earlier effects (held,
+    then backfitted by fit_effect), accepted sensor noise fitted at every point as the nuisance; the
+    result replaces the round's fit only when it scores lower, every entry getting its parameters
+    in the accepted order."""
+    import gearlab.gap.diagnose as d
+
+    seen = {}
+
+    def fake_fit(task):
+        seen["task"] = task
+        return {
+            "name": task[1],
+            "score": 1.0,
+            "params": {"frequency": 179.0, "ratio": 0.44},
+            "accepted": [["sensor_bandwidth", [["f_n", 4921.0], ["zeta", 0.144]]]],
+            "nuisance": {"name": "sensor_noise", "params": {"snr_db": 31.0}},
+            "intervals": {"frequency": [178.0, 180.0]},
+            "determined": {"frequency": {"determined": True}},
+        }
+
+    monkeypatch.setattr(d, "fit_effect", fake_fit)
+    fitted = (
+        ("sensor_bandwidth", (("f_n", 4930.0), ("zeta", 0.137))),
+        ("interference_tone", (("frequency", 357.0), ("ratio", 0.19))),
+        ("sensor_noise", (("snr_db", 30.0),)),
+    )
+    accepted = [
+        {"name": "sensor_bandwidth", "round": 1, "params": {"f_n": 4930.0, "zeta": 0.137}},
+        {"name": "interference_tone", "round": 2, "params": {"frequency": 357.0, "ratio": 0.19}},
+        {"name": "sensor_noise", "round": 2, "params": {"snr_db": 30.0}, "nuisance_of": "interference_tone"},
+    ]
+    info = {}
+    out = d.joint_refit(_joint_run(score_now), 2, accepted, fitted, info)
+    name, others, nuisance = seen["task"][1], seen["task"][2], seen["task"][6]
+    assert name == "interference_tone" and nuisance  # the accepted noise is fitted at every point
+    assert [n for n, _ in others] == ["sensor_bandwidth"]
+    assert info["joint_refit"]["score_before"] == score_now and info["joint_refit"]["score"] == 1.0
+    if taken:
+        assert [n for n, _ in out] == ["sensor_bandwidth", "interference_tone", "sensor_noise"]
+        assert [e["params"] for e in accepted] == [
+            {"f_n": 4921.0, "zeta": 0.144},
+            {"frequency": 179.0, "ratio": 0.44},
+            {"snr_db": 31.0},
+        ]
+        assert accepted[1]["determined"]["frequency"]["determined"]
+    else:
+        assert out == fitted and accepted[1]["params"] == {"frequency": 357.0, "ratio": 0.19}
+
+
+def test_no_joint_refit_without_one_new_effect():
+    import gearlab.gap.diagnose as d
+
+    fitted = (("sensor_noise", (("snr_db", 30.0),)),)
+    accepted = [{"name": "sensor_noise", "round": 1, "params": {"snr_db": 30.0}}]
+    assert d.joint_refit(_joint_run(5.0), 2, accepted, fitted, {}) == fitted

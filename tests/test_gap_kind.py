@@ -417,3 +417,15 @@ def test_the_summary_says_which_parameters_are_not_identifiable_and_what_the_dat
     text = gap._params({"mf": 40.0, "k_yf": 4e8, "c_yf": 2000.0, "c_xf": 10.0}, determined)
     assert "mf = 40 (not identifiable)" in text and "c_yf = 2000," in text
     assert "c_xf = 10 (not determined: the fit leaves a gap)" in text
+
+
+def test_the_verdict_line_says_when_what_is_left_lies_within_the_noise():
+    from gearlab.kinds.gap import verdict_text
+
+    base = {"verdict": "explained", "unexplained": False, "explained_share": 0.977}
+    within = {**base, "within_noise": True, "significant_after": True, "rms_effect_after": 0.411}
+    assert verdict_text(within) == "explained (what is left within the noise: RMS effect 0.41)"
+    assert verdict_text({**within, "significant_after": False}) == "explained"  # the test sees nothing
+    assert verdict_text(base) == "explained"  # results before the noise width
+    partly = {"verdict": "partly explained", "unexplained": True, "explained_share": 0.9986}
+    assert verdict_text(partly) == "partly explained (100 % of the gap)"

@@ -609,6 +609,9 @@ def verdict_text(result: dict) -> str:
     verdict = result.get("verdict") or ("unexplained" if result["unexplained"] else "explained")
     if verdict == "partly explained" and result.get("explained_share") is not None:
         return f"partly explained ({100 * result['explained_share']:.0f} % of the gap)"
+    if verdict == "explained" and result.get("within_noise") and result.get("significant_after"):
+        # the test still tells the sets apart; what is left lies within the rows' own scatter
+        return f"explained (what is left within the noise: RMS effect {result['rms_effect_after']:.2f})"
     return verdict
 
 
