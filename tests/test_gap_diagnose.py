@@ -13,7 +13,7 @@ import pytest
 
 from gearlab.data.builder import build_dataset
 from gearlab.data.spec import NoiseSpec, dataset_preset
-from gearlab.effects import effect_spec, model_of
+from gearlab.effects import default_candidates, effect_spec, model_of
 from gearlab.errors import GearlabInputError
 from gearlab.executors import LocalExecutor
 from gearlab.gap.diagnose import (
@@ -450,3 +450,28 @@ def test_no_joint_refit_without_one_new_effect():
     fitted = (("sensor_noise", (("snr_db", 30.0),)),)
     accepted = [{"name": "sensor_noise", "round": 1, "params": {"snr_db": 30.0}}]
     assert d.joint_refit(_joint_run(5.0), 2, accepted, fitted, {}) == fitted
+
+
+@pytest.mark.slow
+def test_a_tone_fitted_next_to_a_misfitted_resonance_moves_to_its_frequency(tmp_path):
+    """The pair that the fourth round's benchmark missed (seed 31, trial 23 of 24: a 4.92 kHz sensor
+    resonance, ζ 0.144, with a 179.1 Hz tone at ratio 0.44, written as a measured file): round 2
+    fitted the tone at 359 Hz next to round 1's resonance; searched again next to the backfitted
+    resonance (joint_refit) it lands within 2 % of 179.1 Hz and scores far lower (162 against 2.4e4
+    when measured), and the resonance is named first (4-9 min on 2 shared cores)."""
+    from gearlab.gap import benchmark as bench
+    from gearlab.registry import get_registry
+
+    source = dataset_preset("B-6-ch5").with_(faults=(), healthy=40, noise=bench.BASE_NOISE)
+    library = tuple(default_candidates(get_registry()))
+    trial = bench.draw_trials(24, 31, library, source)[23]
+    assert [name for name, _ in trial.hidden] == ["sensor_bandwidth", "interference_tone"]
+    settings = {"budget": 16, "max_effects": 3, "healthy": 40, "bootstrap": 200, "permutations": 500, "seed": 31}
+    record = bench.trial_task(bench.TrialTask(trial, source, settings, str(tmp_path / "trial"), 80))
+    result = json.loads((tmp_path / "trial" / "diagnosis.json").read_text())
+    result = result.get("result", result)
+    joint = result["rounds"][1]["joint_refit"]
+    assert joint["name"] == "interference_tone"
+    assert abs(joint["params"]["frequency"] / 179.10857 - 1) < 0.02
+    assert joint["score"] < 0.05 * joint["score_before"]
+    assert record["accepted"][0] == "sensor_bandwidth" and record["top1"]
