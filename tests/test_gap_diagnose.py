@@ -317,7 +317,7 @@ def _report_of(gap: float, features: int) -> dict:
 
 def test_the_noise_width_is_the_rms_effect_of_the_gap_over_its_features():
     """sqrt(G / P): the mean revolution's RMS shift in units of the rows' own scatter. The rule
-    needs the gap before above the width and what is left within it; a gap within the noise from
+    needs what was removed above the width and what is left within it; a gap within the noise from
     the start is judged by the test alone."""
     assert rms_effect(_report_of(36.11, 214)) == pytest.approx(0.4108, abs=1e-4)
     assert rms_effect(_report_of(-1.0, 10)) == 0.0
@@ -325,6 +325,9 @@ def test_the_noise_width_is_the_rms_effect_of_the_gap_over_its_features():
     assert not within_noise(_report_of(1.496e7, 149), _report_of(3.717e5, 149))  # a stand-in: RMS 50 left
     assert not within_noise(_report_of(2.3, 154), _report_of(0.5, 154))  # within the noise before too
     assert within_noise(_report_of(4.0 * 214, 214), _report_of(NOISE_WIDTH**2 * 214, 214))  # the edge counts
+    # a gap barely above the width: a stand-in removing a tenth brings it under, but what it
+    # removed (RMS 0.33) is itself within the noise
+    assert not within_noise(_report_of(1.1 * 214, 214), _report_of(0.99 * 214, 214))
 
 
 def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():

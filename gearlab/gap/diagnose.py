@@ -126,8 +126,8 @@ NAMED_SHARE = EXPLAINED_SHRINK
 # gearlab.gap.stats), so sqrt(G / P) over its P features is the RMS shift of the mean revolution in
 # those units. At most 1, the corrected source's mean lies inside the scatter of single revolutions
 # (each feature of one revolution strays 1 on average from its own mean): what is left is within the
-# noise, however small the p-value many quiet revolutions give it. It decides only where the gap
-# before stood above that width (a gap already within the noise is judged by the test alone).
+# noise, however small the p-value many quiet revolutions give it. It decides only where what the
+# effects removed stood above that width (a gap within the noise is judged by the test alone).
 NOISE_WIDTH = 1.0
 # The effect size beside the test: a corrected source whose two-sample classifier AUC is at most
 # this tells the sets apart no better than a coin with a slight bias (Cohen's d about 0.4 for two
@@ -1543,8 +1543,12 @@ def rms_effect(report: dict) -> float:
 
 
 def within_noise(before: dict, after: dict) -> bool:
-    """The gap before stood above the noise width (NOISE_WIDTH) and what is left lies within it."""
-    return rms_effect(before) > NOISE_WIDTH >= rms_effect(after)
+    """What the accepted effects removed stands above the noise width (NOISE_WIDTH: the RMS effect of
+    G_before - G_after) and what is left lies within it: a gap barely above the width, which any
+    stand-in removing a tenth of it would bring under, does not count."""
+    features = before["total"]["features"]
+    removed = float(before["total"]["gap"]) - float(after["total"]["gap"])
+    return features > 0 and math.sqrt(max(0.0, removed) / features) > NOISE_WIDTH >= rms_effect(after)
 
 
 def verdict_of(
@@ -1560,8 +1564,8 @@ def verdict_of(
 
     * no significant gap before: nothing to explain;
     * explained: the corrected source is not told apart from the target (test); or what is left,
-      though the test still sees it, lies within the noise width of a gap that stood above it
-      (*within*, :func:`within_noise`: a speed ripple fitted within 0.5 % leaves 2.3 % of its gap,
+      though the test still sees it, lies within the noise width while what the effects removed
+      stands above it (*within*, :func:`within_noise`: a speed ripple fitted within 0.5 % leaves 2.3 % of its gap,
       RMS effect 0.41, the AUC 0.98 of 40 against 80 quiet revolutions notwithstanding); or only a
       small effect (AUC <= SMALL_AUC) tells them apart with at most 1 - EXPLAINED_SHRINK of the gap left;
     * partly explained: effects were accepted (each removed a significant share of what was left,
