@@ -47,9 +47,10 @@ def synthetic(spec) -> Dataset:
                 intensity += [step] * spec.duplicates
                 tooth += [n] * spec.duplicates
     label, intensity = np.array(label), np.array(intensity)
-    std = 0.3 if spec.tsa else 1.0
+    std = 0.0 if spec.noise is None else 0.3 if spec.tsa else 1.0  # noise None: the noise-free twin
     rng = np.random.default_rng(len(label))
     X = (std * rng.standard_normal((len(label), LENGTH))).astype(np.float32)
+    X += np.sin(2 * np.pi * 4 * np.arange(LENGTH) / LENGTH).astype(np.float32)  # the mesh: a revolution is never zero
     for i, (c, step) in enumerate(zip(label, intensity)):
         if c:
             X[i, 16 * c : 16 * c + 12] += 3.0 * step / 20
@@ -84,7 +85,7 @@ def fake_builder(monkeypatch):
     made = []
 
     def load_or_build(spec, executor=None, on_event=None):
-        made.append(spec.name)
+        made.append(spec.name if spec.noise is not None else f"{spec.name} (noise-free twin)")
         dataset = synthetic(spec)
         save(dataset)  # the training units load their datasets from the cache
         return dataset, False
@@ -299,11 +300,11 @@ def test_run_writes_records_summary_tables_and_figures(cli, write_scenario, tmp_
         f"{n}/{v}/run{r}" for n in ("gaussian", "student_t") for r in (0, 1) for v in ("noisy", "tsa")
     ]
     assert fake_builder == [
-        "A-casing_noise-gaussian",
-        "A-casing_TSA-gaussian",
-        "A-casing_noise-student_t",
-        "A-casing_TSA-student_t",
-    ]  # each once
+        name
+        for noise in ("gaussian", "student_t")
+        for variant in ("noise", "TSA")
+        for name in (f"A-casing_{variant}-{noise}", f"A-casing_{variant}-{noise} (noise-free twin)")
+    ]  # each once, the twin for the Bayes bound after it
     assert {r["dataset"] for r in records} == {
         "A-casing_noise-gaussian",
         "A-casing_TSA-gaussian",
@@ -327,8 +328,16 @@ def test_run_writes_records_summary_tables_and_figures(cli, write_scenario, tmp_
         assert res["tsa"]["accuracy"]["mean"] > res["noisy"]["accuracy"]["mean"]  # less noise in the synthetic TSA set
     table = (run / "table.md").read_text()
     assert "| gaussian |" in table and "| student_t |" in table and "TSA accuracy" in table
+    assert "TSA bound (%)" in table
     csv = (run / "table.csv").read_text().splitlines()
     assert csv[0].startswith("noise,noisy_accuracy_mean,noisy_accuracy_std") and len(csv) == 3
+    assert csv[0].endswith(",runs,noisy_bound_mean,noisy_bound_std,tsa_bound_mean,tsa_bound_std")
+    bound = json.loads((run / "bound.json").read_text())
+    for noise in ("gaussian", "student_t"):
+        for v in ("noisy", "tsa"):
+            assert len(bound[noise][v]) == 2  # a run each
+            # the classifier that knows the shapes beats the network trained for four epochs
+            assert summary["bound"][noise][v]["mean"] >= summary["results"][noise][v]["accuracy"]["mean"]
     for name in ("accuracy_vs_intensity.png", "accuracy_vs_rfa.png", "confusion.png"):
         assert (run / "figures" / name).stat().st_size > 10_000
     assert "data:image/png;base64," in (run / "report.html").read_text()
@@ -443,3 +452,28 @@ def test_quick_run_of_the_shipped_scenario_builds_real_datasets(cli, tmp_path):
     assert code == 0, err
     summary = json.loads((run_dir(out) / "summary.json").read_text())
     assert set(summary["results"]["gaussian"]) >= {"noisy", "tsa", "tsa_gain"}
+
+
+def test_the_matched_start_takes_the_training_part_s_faults_only(monkeypatch):
+    """start = "faults": the filter bank starts on the training part's fault revolutions less
+    its healthy median (the bursts); the validation and test parts never reach it."""
+    from dataclasses import replace
+
+    protocol = replace(FAST, network="burst", start="faults", epochs=1)
+    seen = []
+    real = ns.matched_start
+
+    def spy(net, faults, seed):
+        seen.append(np.array(faults))
+        return real(net, faults, seed)
+
+    monkeypatch.setattr(ns, "matched_start", spy)
+    data = synthetic(small_spec(tsa=True))
+    label = np.asarray(data.label, dtype=np.int64)
+    s = split(label, protocol, 0)
+    run_unit(protocol, data, run=0)
+    train = s.train
+    expected = data.X[train][label[train] != 0] - np.median(data.X[train][label[train] == 0], axis=0)
+    ((faults,),) = [seen]
+    assert np.allclose(faults, expected, atol=1e-5)
+    assert run_unit(replace(protocol, start="random"), data, run=0) and len(seen) == 1  # random: no matched start

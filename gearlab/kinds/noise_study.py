@@ -28,8 +28,9 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
+from ..learn.bounds import class_bound
 from ..learn.networks import NetworkSettings
-from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, run_unit
+from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, mean_std, run_unit, split
 from ..params import did_you_mean
 from ..plots import noise_study_figures
 from ..runs import RunDir
@@ -186,9 +187,16 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         done = {r["unit"] for r in run.records()}
         todo = units(spec)
         pending = [(noise, r, v) for noise, r, v in todo if unit_name(noise, r, v) not in done]
-        for noise in dict.fromkeys(noise for noise, _, _ in pending):  # built (or found) once, before training
-            for s in spec["datasets"][noise].values():
-                load_or_build(s, executor, on_event)
+        with_bound = not (run.path / "bound.json").exists()
+        bound: dict[str, dict[str, list[float]]] = {}
+        for noise in dict.fromkeys(noise for noise, _, _ in pending + (todo if with_bound else [])):
+            for variant, s in spec["datasets"][noise].items():  # built (or found) once, before training
+                data, _ = load_or_build(s, executor, on_event)
+                if with_bound and s.noise is not None:
+                    bound.setdefault(noise, {})[variant] = bayes_bound(data, s, protocol, executor, on_event)
+                del data  # one dataset in memory at a time
+        if with_bound:
+            run.write_json("bound.json", bound)
         on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
         finished = len(todo) - len(pending)
         on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
@@ -215,6 +223,26 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             tasks.append((protocol, dataset, cache.entry_path(dataset), noise, r, variant, run.path))
         executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
         summarise(scenario, run)
+
+
+def bound_law(spec: DatasetSpec) -> str:
+    """The noise law of a chapter-4 row: the dataset's own, but the mean of J Gaussian or
+    Laplace draws (TSA) is Gaussian to within its kurtosis 3 + 3/J; a Student-t(2) mean keeps
+    its heavy tail (infinite variance: no central limit)."""
+    kind = spec.noise.kind
+    return "gaussian" if spec.tsa and kind == "laplace" else kind
+
+
+def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None, on_event=lambda e: None) -> list:
+    """The accuracy (%) on each run's test part of the Bayes classifier with the true shapes
+    (gearlab.learn.bounds.class_bound): the most any network can reach on *data*. Needs the
+    dataset's noise-free twin (built, or found in the cache)."""
+    on_event(Event("log", message=f"the Bayes bound of {spec.name}: its noise-free twin and the class likelihoods"))
+    clean, _ = load_or_build(spec.with_(noise=None), executor, on_event)
+    label = np.asarray(data.label, dtype=np.int64)
+    pred = class_bound(data.X, clean.X, label, bound_law(spec))
+    tests = [split(label, protocol, r).test for r in range(protocol.runs)]
+    return [100.0 * float((pred[t] == label[t]).mean()) for t in tests]
 
 
 def train_unit(task: tuple) -> dict:
@@ -254,48 +282,74 @@ def results(records: list[dict]) -> dict:
 
 
 def _cell(stats: dict | None, key: str) -> str:
-    c = (stats or {}).get(key) or {}
-    return f"{c['mean']:.1f} ± {c['std']:.1f}" if c.get("mean") is not None else ""
+    return _mean_text((stats or {}).get(key))
 
 
-def table_md(res: dict) -> str:
+def _mean_text(c: dict | None) -> str:
+    return f"{c['mean']:.1f} ± {c['std']:.1f}" if c and c.get("mean") is not None else ""
+
+
+def bound_cells(bound: dict | None, runs: int) -> dict:
+    """{noise: {variant: mean ± std}} of the bound over the first *runs* runs (those trained)."""
+    return {
+        noise: {v: mean_std(acc[:runs]) for v, acc in variants.items()} for noise, variants in (bound or {}).items()
+    }
+
+
+def table_md(res: dict, bound: dict | None = None) -> str:
+    """Noise type x noisy/TSA; with *bound* (bound_cells) the Bayes bound beside each accuracy."""
+    extra = " noisy bound (%) | TSA bound (%) |" if bound else ""
     lines = [
         "| noise | noisy accuracy (%) | TSA accuracy (%) | TSA gain (points) | noisy fault-as-healthy (%) "
-        "| TSA fault-as-healthy (%) | runs |",
-        "|---|---|---|---|---|---|---|",
+        "| TSA fault-as-healthy (%) | runs |" + extra,
+        "|---|---|---|---|---|---|---|" + ("---|---|" if bound else ""),
     ]
     for noise, r in res.items():
         gain = r.get("tsa_gain")
         gain_text = f"{gain['mean']:+.1f} ± {gain['std']:.1f}" if gain else ""
         runs = "/".join(str(r[v]["runs"]) for v in VARIANTS if v in r)
+        b = (bound or {}).get(noise, {})
+        bound_text = "".join(f" {_mean_text(b.get(v))} |" for v in VARIANTS) if bound else ""
         lines.append(
             f"| {noise} | {_cell(r.get('noisy'), 'accuracy')} | {_cell(r.get('tsa'), 'accuracy')} | "
             f"{gain_text} | "
             f"{_cell(r.get('noisy'), 'fault_as_healthy')} | {_cell(r.get('tsa'), 'fault_as_healthy')} | {runs} |"
+            + bound_text
         )
     return "\n".join(lines) + "\n"
 
 
-def table_csv(res: dict) -> str:
+def table_csv(res: dict, bound: dict | None = None) -> str:
     columns = [f"{v}_{m}_{s}" for v in VARIANTS for m in ("accuracy", "fault_as_healthy") for s in ("mean", "std")]
-    rows = ["noise," + ",".join(columns) + ",tsa_gain_mean,tsa_gain_std,runs"]
+    columns += [f"{v}_bound_{s}" for v in VARIANTS for s in ("mean", "std")] if bound else []
+    rows = [
+        "noise," + ",".join(columns[:8]) + ",tsa_gain_mean,tsa_gain_std,runs" + "".join("," + c for c in columns[8:])
+    ]
     for noise, r in res.items():
         cells = []
         for v in VARIANTS:
             for m in ("accuracy", "fault_as_healthy"):
                 c = r.get(v, {}).get(m) or {}
-                cells += [f"{c[s]:.4f}" if c.get(s) is not None else "" for s in ("mean", "std")]
+                cells += [_number(c.get(s)) for s in ("mean", "std")]
         gain = r.get("tsa_gain") or {}
-        cells += [f"{gain[s]:.4f}" if s in gain else "" for s in ("mean", "std")]
+        cells += [_number(gain.get(s)) for s in ("mean", "std")]
         cells.append(str(min(r[v]["runs"] for v in VARIANTS if v in r)))
+        if bound:
+            cells += [_number((bound.get(noise, {}).get(v) or {}).get(s)) for v in VARIANTS for s in ("mean", "std")]
         rows.append(f"{noise}," + ",".join(cells))
     return "\n".join(rows) + "\n"
+
+
+def _number(x: float | None) -> str:
+    return f"{x:.4f}" if x is not None else ""
 
 
 def summarise(scenario: Scenario, run: RunDir) -> None:
     spec = scenario.spec
     records = run.records()
     res = results(records)
+    bound_path = run.path / "bound.json"
+    bound = bound_cells(json.loads(bound_path.read_text()), spec["protocol"].runs) if bound_path.exists() else None
     summary = {
         "kind": "noise_study",
         "scenario": scenario.name,
@@ -305,11 +359,12 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             for noise, variants in spec["datasets"].items()
         },
         "results": res,
+        "bound": bound,
         "units": len(records),
     }
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(res))
-    run.write_text("table.csv", table_csv(res))
+    run.write_text("table.md", table_md(res, bound))
+    run.write_text("table.csv", table_csv(res, bound))
     noise_study_figures(run.figures, res)
 
 
@@ -317,7 +372,7 @@ def summary_lines(run: RunDir) -> list[str]:
     summary = json.loads((run.path / "summary.json").read_text())
     return [
         "test accuracy and fault-as-healthy rate [%], mean ± std over runs (thesis 4.3):",
-        table_md(summary["results"]).rstrip(),
+        table_md(summary["results"], summary.get("bound")).rstrip(),
     ]
 
 

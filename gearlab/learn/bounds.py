@@ -117,3 +117,50 @@ def detection_at(score: np.ndarray, y: np.ndarray, false_alarm: float) -> float:
     score, y = np.asarray(score), np.asarray(y)
     threshold = np.quantile(score[y == 0], 1.0 - false_alarm)
     return float(100.0 * (score[y == 1] > threshold).mean())
+
+
+def class_bound(X: np.ndarray, clean: np.ndarray, label: np.ndarray, kind: str, chunk: int = 256) -> np.ndarray:
+    """The predicted class of each row of *X* by the Bayes classifier that knows the true
+    shapes: *clean* is the noise-free twin of *X* (row i the same revolution without noise),
+    *label* the classes. The chapter-4 model (thesis 4.1.1, eq. 4.3-4.5): a row is
+    ``x = α·c + n``, its clean revolution ``c`` one of its class's distinct clean rows (equally
+    likely), and noise of law *kind* whose scale follows the revolution's own RMS (the SNR is
+    set per revolution). α (the noisy dataset's standardisation against the clean one's) and
+    the noise-to-signal ratio are read off the paired rows by medians. The class posterior is
+    the class's share times the mean likelihood over its shapes, the prediction its arg max.
+    It knows every shape and the noise law, so its accuracy is a bound, not a method's.
+    Rows are taken *chunk* at a time, so memory stays near the two arrays given."""
+    if kind not in NOISE_LAWS:
+        raise GearlabInputError(f"unknown noise kind '{kind}'; known: {', '.join(NOISE_LAWS)}")
+    label = np.asarray(label)
+    rows = [slice(i, i + chunk) for i in range(0, len(X), chunk)]
+
+    def pair(r: slice) -> tuple[torch.Tensor, torch.Tensor]:
+        return torch.as_tensor(np.asarray(X[r], dtype=np.float64)), torch.as_tensor(
+            np.asarray(clean[r], dtype=np.float64)
+        )
+
+    fits = [((x * c).sum(1), (c * c).sum(1)) for x, c in map(pair, rows)]
+    alpha = float(torch.median(torch.cat([xc / cc.clamp_min(1e-300) for xc, cc in fits])))
+    ratio = torch.cat(
+        [noise_scale(x - alpha * c, kind) / (c**2).mean(1).sqrt().clamp_min(1e-300) for x, c in map(pair, rows)]
+    )
+    ratio = float(torch.median(ratio))
+    classes = np.unique(label)
+    log_post = torch.empty(len(X), len(classes), dtype=torch.float64)
+    for j, c in enumerate(classes):
+        shapes = torch.as_tensor(np.unique(np.asarray(clean[label == c], dtype=np.float64), axis=0))
+        scale = (ratio * (shapes**2).mean(1).sqrt()).clamp_min(1e-12)
+        S = alpha * shapes
+        norm = X.shape[1] * torch.log(scale)[None]  # the densities' normalisation, per shape
+        for r in rows:
+            x = torch.as_tensor(np.asarray(X[r], dtype=np.float64))
+            if kind == "laplace":
+                ll = -torch.cdist(x, S, p=1.0) / scale[None]
+            elif kind == "gaussian":
+                ll = -(torch.cdist(x, S) ** 2) / (2.0 * scale[None] ** 2)
+            else:  # Student-t: no distance form
+                ll = torch.stack([_log_density(x - s, sc, kind).sum(1) for s, sc in zip(S, scale)], dim=1)
+            log_post[r, j] = torch.logsumexp(ll - norm, dim=1) - math.log(len(S))
+        log_post[:, j] += math.log((label == c).mean())
+    return classes[log_post.argmax(dim=1).numpy()]

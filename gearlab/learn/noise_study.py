@@ -28,7 +28,8 @@ import torch
 
 from ..errors import GearlabInputError
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
-from .networks import build_network
+from .calibration import STARTS
+from .networks import build_network, matched_start
 from .training import fit_supervised, pick_device, predict
 
 VARIANTS = ("noisy", "tsa")
@@ -55,6 +56,9 @@ class NoiseProtocol:
     seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds torch as 1000 * seed + run")
     residual: bool = setting(
         bool, False, doc="input = revolution minus the median healthy revolution of the training part"
+    )
+    start: str = setting(
+        str, "random", choices=STARTS, doc="the filter bank's start (faults: matched to the training part's faults)"
     )
     device: str = "auto"
 
@@ -122,7 +126,10 @@ def train(
     X, y = train_set
     seed = 1000 * protocol.seed + run
     torch.manual_seed(seed)  # dropout masks
-    net = build_network(protocol.network, n_classes, protocol.dropout, length=X.shape[1], seed=seed).to(device)
+    net = build_network(protocol.network, n_classes, protocol.dropout, length=X.shape[1], seed=seed)
+    if protocol.start == "faults":  # the bursts: fault samples less the healthy training revolutions' median
+        matched_start(net, X[y != 0] - np.median(X[y == 0], axis=0), seed)
+    net = net.to(device)
     history = fit_supervised(
         net,
         X,
@@ -214,7 +221,8 @@ def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | No
     }
 
 
-def _mean_std(values: list[float]) -> dict:
+def mean_std(values: list[float]) -> dict:
+    """{mean, std (n - 1), n} of the values that are not None."""
     v = np.asarray([x for x in values if x is not None], dtype=float)
     if not len(v):
         return {"mean": None, "std": None, "n": 0}
@@ -249,8 +257,8 @@ def aggregate(records: list[dict]) -> dict:
     for name in runs[0]:
         steps = sorted({s for c in runs for s in c[name]})
         values = [[c[name][s] for c in runs if s in c[name]] for s in steps]
-        acc = [_mean_std([v[1] for v in vs]) for vs in values]
-        healthy = [_mean_std([v[2] for v in vs]) for vs in values]
+        acc = [mean_std([v[1] for v in vs]) for vs in values]
+        healthy = [mean_std([v[2] for v in vs]) for vs in values]
         curves[name] = {
             "steps": steps,
             "rfa": [vs[0][0] for vs in values],
@@ -261,10 +269,10 @@ def aggregate(records: list[dict]) -> dict:
         }
     return {
         "runs": len(records),
-        "accuracy": _mean_std([r["accuracy"] for r in records]),
-        "fault_as_healthy": _mean_std([r["fault_as_healthy"] for r in records]),
-        "healthy_as_fault": _mean_std([r["healthy_as_fault"] for r in records]),
-        "class_accuracy": {c: _mean_std([r["class_accuracy"][c] for r in records]) for c in classes},
+        "accuracy": mean_std([r["accuracy"] for r in records]),
+        "fault_as_healthy": mean_std([r["fault_as_healthy"] for r in records]),
+        "healthy_as_fault": mean_std([r["healthy_as_fault"] for r in records]),
+        "class_accuracy": {c: mean_std([r["class_accuracy"][c] for r in records]) for c in classes},
         "classes": classes,
         "confusion": np.sum([r["confusion"] for r in records], axis=0).tolist(),  # Figure 4.6: runs compiled
         "curves": curves,
