@@ -412,19 +412,19 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     a chipped input pinion, a chipped tooth on the idler shaft (once every 3 input revolutions,
     at the same input angle), an outer-race bearing fault (3.05 impulses per input revolution)
     and a healthy record. FM4 of the input-shaft TSA leaves the bearing alone but calls the
-    idler's chip as well as the pinion's (it repeats at one input angle); the share of the
-    3-revolution TSA's difference energy at whole input orders tells the two apart."""
+    idler's chip as well as the pinion's (it repeats at one input angle), and so does tooth_energy;
+    the share of the 3-revolution TSA's difference energy at whole input orders tells the two apart."""
     import textrecords
 
     from gearlab.data.textzip import read_record
     from gearlab.kinds.detection import tsa_units
-    from gearlab.signals.indicators import fm4, input_synchronous_share
+    from gearlab.signals.indicators import fm4, input_synchronous_share, tooth_energy, tooth_reference
 
     fs, speed = 66666.67, 35.0  # the rig's rate; a speed whose revolution is not a whole number of samples
     monkeypatch.setattr(textrecords, "FS", fs)
 
-    def revolutions(name, chip=0.0, idler=0.0, bearing=0.0):
-        vib, tacho = textrecords.signals(revolutions=46, chip=chip, seed=3, phase=2.7, speed=speed)
+    def revolutions(name, chip=0.0, idler=0.0, bearing=0.0, seed=3):
+        vib, tacho = textrecords.signals(revolutions=46, chip=chip, seed=seed, phase=2.7, speed=speed)
         t = np.arange(len(vib)) / fs
         theta = 2.7 + 2 * np.pi * speed * t
         if idler:  # the idler turns once every 3 input revolutions; its chipped tooth meets at 2 rad
@@ -449,6 +449,11 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     assert fm4_of["bearing"] < 1.5 * fm4_of["healthy"]
     assert share["pinion"] > 0.8
     assert all(share[k] < 0.5 for k in ("healthy", "idler", "bearing")), share
+    # tooth_energy, against two healthy history records, calls the idler's chip as FM4 does
+    history = [tsa_units(revolutions(f"history{seed}", seed=seed), 30, 3) for seed in (10, 11)]
+    reference = tooth_reference(history, 32, [32])
+    tooth = {k: float(tooth_energy(tsa_units(r, 30), [32], reference)[0]) for k, r in records.items()}
+    assert tooth["pinion"] > 3 * tooth["healthy"] and tooth["idler"] > 3 * tooth["healthy"], tooth
 
 
 def test_tooth_energy_finds_the_one_tooth_fm4_dilutes_and_ignores_a_record_level():
