@@ -11,7 +11,7 @@ from gearlab.learn.bounds import _log_density, class_bound
 LENGTH = 64
 
 
-def problem(kind: str, level: float, seed: int = 0, n: int = 60):
+def problem(kind: str, level: float, seed: int = 0, n: int = 60, sizes=(0.5, 1.0), teeth=1):
     """Three classes: a mesh sine (healthy) and two bursts at two sizes each; noise of *kind*
     at *level* times each revolution's RMS, the noisy rows standardised by 0.7 (as a noisy
     chapter-4 dataset is against its twin)."""
@@ -19,8 +19,8 @@ def problem(kind: str, level: float, seed: int = 0, n: int = 60):
     t = np.arange(LENGTH)
     mesh = np.sin(2 * np.pi * 4 * t / LENGTH)
     shapes = {0: [mesh]}
-    for c, where in ((1, 10), (2, 40)):
-        shapes[c] = [mesh + a * np.exp(-0.5 * ((t - where) / 2.0) ** 2) for a in (0.5, 1.0)]
+    for c, where in ((1, 10), (2, 40)):  # a class's bursts on *teeth* teeth, 6 samples apart
+        shapes[c] = [mesh + a * np.exp(-0.5 * ((t - where - 6 * z) / 2.0) ** 2) for z in range(teeth) for a in sizes]
     label = np.repeat([0, 1, 2], n)
     clean = np.stack([shapes[c][i % len(shapes[c])] for i, c in enumerate(label)])
     draw = {
