@@ -87,6 +87,23 @@ def test_the_search_score_cannot_be_lowered_by_noise_the_target_lacks():
     assert abs(scores[0]) < 0.05 * scores[1] and scores[0] < scores[1] < scores[2]
 
 
+def test_a_source_far_noisier_than_the_target_cannot_score_below_a_right_one():
+    """The source's sampling term is capped at the target's spread. Uncapped, the score of a source
+    whose rows scatter 100x the target's is unbiased but as noisy as that scatter, and a search
+    that minimises it finds the draws far below 0 -- better than the right model (a 3 Hz tone at
+    10x the signal, the bound of its ratio, on consecutive revolutions: -1.8e5 against the right
+    drive inertias' 0.3, and it won its round). Capped, the source's own scatter stays in the score."""
+    rng = np.random.default_rng(0)
+    Ft = rng.normal(0.0, 1.0, (80, 50))
+    right = rng.normal(0.0, 1.0, (40, 50))
+    wild = rng.normal(0.5, 100.0, (40, 50))  # its mean off by half a spread, its scatter 100x
+    vs = wild.var(axis=0, ddof=1)
+    uncapped = np.sum((Ft.mean(axis=0) - wild.mean(axis=0)) ** 2 - vs / 40 - Ft.var(axis=0, ddof=1) / 80)
+    assert uncapped < -100.0 < Scorer.mismatch(right, Ft)  # uncapped, this draw beat the right model
+    assert abs(Scorer.mismatch(right, Ft)) < 5.0  # a right model keeps its score near 0
+    assert Scorer.mismatch(wild, Ft) > 1000.0 * abs(Scorer.mismatch(right, Ft))
+
+
 def test_diagnose_gets_only_the_target_rows():
     # The diagnosis must not be able to learn the target's making: no spec, no dataset.
     assert list(inspect.signature(diagnose).parameters) == [

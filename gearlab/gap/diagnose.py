@@ -498,6 +498,12 @@ class Scorer:
     candidate can change, so adding noise lowers the score only where the target really is
     noisy (its noise-floor, residual and kurtosis features). The subtracted terms remove the
     sampling bias of (μ_t − μ_s)², so the score of a right model is ≈ 0 whatever its noise.
+    The source's term is v_s capped at the target's v_t: uncapped, a source far noisier than
+    the target lowered the score without bound (a 3 Hz tone at 10x the signal, the bound of its
+    ratio, scored -1.8e5 against a target the right drive inertias scored 0.3 on, and won its
+    round); capped, a source noisier than the target is credited no more than the target's own
+    spread (that point scores +6.6e4, the plain source 9.1e3), and a right model, v_s ≈ v_t,
+    keeps its ≈ 0.
 
     **Cheap**: the target's order bands, waveform statistics and rfft are computed once; a
     source set costs one rfft (its order power and, by linearity, its TSA and both residuals'
@@ -544,7 +550,7 @@ class Scorer:
         ms, mt = Fs.mean(axis=0), Ft.mean(axis=0)
         vs, vt = Fs.var(axis=0, ddof=1), Ft.var(axis=0, ddof=1)
         scale2 = Scorer._scale(Ft, ms) ** 2
-        return float(np.sum(((mt - ms) ** 2 - vs / len(Fs) - vt / len(Ft)) / scale2))
+        return float(np.sum(((mt - ms) ** 2 - np.minimum(vs, vt) / len(Fs) - vt / len(Ft)) / scale2))
 
     def score(self, source_X: np.ndarray) -> float:
         Fs, Ft, _ = self.features(source_X)
@@ -561,7 +567,7 @@ class Scorer:
         a, va = resampled_moments(Fs, mt, scale, replicates, rng)
         b, vb = resampled_moments(Ft, mt, scale, replicates, rng)
         # A replicate's squared difference carries the sampling noise twice (data and resampling).
-        return np.sum((b - a) ** 2 - 2.0 * (va / len(Fs) + vb / len(Ft)), axis=1)
+        return np.sum((b - a) ** 2 - 2.0 * (np.minimum(va, vb) / len(Fs) + vb / len(Ft)), axis=1)
 
     def report_gap(self, source_X: np.ndarray) -> float:
         """gap_report's total (bias-corrected squared effect sizes on the pooled spread)."""
