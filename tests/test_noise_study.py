@@ -418,6 +418,7 @@ def test_shipped_scenario_is_table_4_1(cli):
         (tiny(batch=4096), "[protocol] key 'batch'", "larger than the training set"),
         (tiny().replace("epochs = 4", "epoch = 4"), "[protocol] key 'epoch'", "did you mean 'epochs'"),
         (tiny().replace("runs = 2", "runs = 0"), "[protocol] key 'runs'", "outside"),
+        (tiny().replace("runs = 2", "runs = 2\nstart = 'fault'"), "[protocol] key 'start'", "did you mean 'faults'"),
         (
             tiny().replace("teeth = [1, 2]", "teeth = [1, 2]\nnoise = { kind = 'laplace', snr_db = 0 }"),
             "[dataset] key 'noise'",
