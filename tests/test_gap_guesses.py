@@ -71,3 +71,24 @@ def test_a_ripples_order_and_amplitude_are_read_off_the_mesh_sidebands(q):
 def test_no_mesh_family_no_ripple_guess():
     noise = np.random.default_rng(2).standard_normal((20, N))
     assert get_registry().get("effect", "speed_fluctuation").guesses(noise, SPEED) == []
+
+
+def test_a_line_below_one_order_is_read_to_a_fraction_of_a_record_bin_with_its_level():
+    """A search against consecutive rows scores such a line by the record's own lines, a valley a few
+    tenths of a percent of its frequency wide: the record's peak is zoomed to 1/100 of a bin (0.005 Hz
+    here) and its level read by the whole record's least squares. Rows that are not consecutive (each
+    its own tone phase) keep the one-revolution level: their record holds no coherent line."""
+    tone = get_registry().get("effect", "interference_tone")
+    t = np.arange(ROWS * N) / (N * SPEED)
+    rng = np.random.default_rng(4)
+    mesh = np.sin(2 * np.pi * 25 * SPEED * t)
+    x = (mesh + 0.2 * np.sqrt(2) * np.sin(2 * np.pi * 7.29 * t + 2.0)).reshape(ROWS, N)
+    x = x + 0.05 * rng.standard_normal(x.shape)
+    guesses = tone.guesses(x, SPEED)
+    assert guesses[1]["frequency"] == pytest.approx(7.29, rel=2e-3)  # a record bin is 0.5 Hz
+    assert guesses[1]["ratio"] == pytest.approx(0.2 / np.sqrt(0.5 + 0.05**2), rel=0.01)  # against the rest RMS
+    assert tone.guess_step < 0.01  # the search starts on that scale from such a reading
+    phases = rng.uniform(0, 2 * np.pi, (ROWS, 1))
+    rows = np.sin(2 * np.pi * 25 * SPEED * t[:N]) + 0.2 * np.sqrt(2) * np.sin(2 * np.pi * 167.3 * t[:N] + phases)
+    independent = tone.guesses(rows, SPEED)
+    assert independent[1]["ratio"] == pytest.approx(independent[0]["ratio"])  # the one-revolution level

@@ -130,7 +130,9 @@ def _coefficients(rows: np.ndarray, max_order: int) -> np.ndarray:
     return F
 
 
-def sampled(deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first: int = 0) -> tuple:
+def sampled(
+    deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first: int = 0, record: bool = False
+) -> tuple:
     """Rows *deterministic* (n, P) -- angle-domain revolutions in the simulation's frame -- read at
     the record's sample times: (x, u), x (n, L) the samples of each row's stretch of record and u
     (n, L) their angles in revolutions from the row's tacho mark (sample 1 and 2 straddle u = 0).
@@ -140,9 +142,19 @@ def sampled(deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first:
     quiet revolutions resolve).
     *offset*: the record's tacho zero in the simulation's frame (rad). The rows take the target's
     start fractions at evenly spaced quantiles of their distribution, turned by *first* places
-    (none kept: a uniform spread)."""
+    (none kept: a uniform spread).
+    *record*: the rows are consecutive revolutions of one record (a tone that runs on from one into
+    the next). Each is then read through the Fourier series of itself and its two neighbours
+    (three revolutions, row i in the middle), as the record holds it, not as its own row repeated:
+    one row's series wraps its end onto its start, and a line that is not a whole order then jumps
+    there, which rings in every row with the tone's phase (images at k +- the tone's order, 11 dB
+    under a 1.25-order tone). The first and last rows serve as neighbours only: n - 2 come back."""
     X = np.asarray(deterministic, dtype=np.float64)
+    if record:
+        X = np.concatenate([X[:-2], X[1:-1], X[2:]], axis=1)  # (n - 2, 3P): row i+1 in the middle
+    span = 3 if record else 1  # revolutions per series
     n, P = X.shape
+    P //= span
     per_rev = chain.samples_per_rev
     # Strictly below the record's Nyquist order: what an anti-alias filter lets through.
     max_order = max(1, min(P // 2, int(math.ceil(chain.nyquist_order)) - 1))
@@ -161,9 +173,10 @@ def sampled(deterministic: np.ndarray, chain: Chain, offset: float = 0.0, first:
         frac = (0.5 + 0.618034 * (first + np.arange(n))) % 1.0
     # Sample k lies at revolution (k - 1 - frac) / per_rev: the revolution starts between samples 1 and 2.
     u = (np.arange(length, dtype=np.float64)[None, :] - 1.0 - frac[:, None]) / per_rev
-    F = _coefficients(X, max_order)
-    F = F * np.exp(2j * np.pi * np.arange(F.shape[1])[None, :] * (u[:, :1] + offset / TWO_PI))
-    return np.real(_chirp(F.shape[1], length, 1.0 / per_rev)(F, axis=-1)), u
+    F = _coefficients(X, span * max_order)  # line m is order m / span
+    middle = span // 2  # the row's own revolution within its series
+    F = F * np.exp(2j * np.pi * np.arange(F.shape[1])[None, :] * (middle + u[:, :1] + offset / TWO_PI) / span)
+    return np.real(_chirp(F.shape[1], length, 1.0 / (span * per_rev))(F, axis=-1)), u
 
 
 def tracked(x: np.ndarray, u: np.ndarray, chain: Chain, noise, points: int = POINTS) -> np.ndarray:

@@ -102,10 +102,13 @@ from .identify import (
 )
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .views import (
+    RECORD_MIN_BLOCKS,
     BandPlan,
     gear_ratio,
     order_views_of_power,
     power_of_spectrum,
+    record_blocks,
+    record_view,
     residual_view_of_spectrum,
     waveform_view,
 )
@@ -440,19 +443,25 @@ def measured_rows(
     seeds = [[spec.seed, noise_seed, i] for i in range(spec.healthy)]
 
     def deterministic() -> tuple:
-        D = np.empty((spec.healthy, POINTS))
-        if consecutive and shaping:
-            record = np.array(np.broadcast_to(clean, D.shape))
-            D[:] = shaping.apply_signal(record, POINTS * speed, speed, reference_rms, [*seeds[0], EFFECT_STREAM])
-        for i, seed in enumerate(seeds if not (consecutive and shaping) else ()):
-            row = clean[None, :]
-            if shaping:
-                row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
-            D[i] = row[0]
+        record = consecutive and bool(shaping)
+        if record:
+            # One record, a revolution longer at each end: those two are read only as the
+            # neighbours of the first and last rows (gearlab.data.chain.sampled, record).
+            D = np.array(np.broadcast_to(clean, (spec.healthy + 2, POINTS)))
+            D = shaping.apply_signal(D, POINTS * speed, speed, reference_rms, [*seeds[0], EFFECT_STREAM])
+            rows = D[1:-1]
+        else:
+            D = np.empty((spec.healthy, POINTS))
+            for i, seed in enumerate(seeds):
+                row = clean[None, :]
+                if shaping:
+                    row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
+                D[i] = row[0]
+            rows = D
         offset = chain.offset
         if offset is None:
-            offset = fit_offset(D.mean(axis=0), chain.reference, teeth) if chain.reference is not None else 0.0
-        return sampled(D, chain, offset)
+            offset = fit_offset(rows.mean(axis=0), chain.reference, teeth) if chain.reference is not None else 0.0
+        return sampled(D, chain, offset, record=record)
 
     registry = get_registry()
     quiet = spec.with_(effects=tuple(e for e in spec.effects if not registry.get("effect", e[0]).noise))
@@ -513,8 +522,13 @@ class Scorer:
     features, for the before/after numbers and tests.
     """
 
-    def __init__(self, target_X: np.ndarray, pair, max_order: int = 0):
+    def __init__(self, target_X: np.ndarray, pair, max_order: int = 0, consecutive: bool = False):
         self.target = np.asarray(target_X, dtype=np.float64)
+        # Consecutive rows (a measured record's): the record's fractional lines join the score
+        # (gearlab.gap.views.record_view), a second group of rows, one per block.
+        self.target_record = (
+            record_view(self.target).features if consecutive and self._has_record(self.target) else None
+        )
         self.pair = gear_ratio(pair)
         self.z1 = self.pair[0]
         self.points = self.target.shape[1]
@@ -552,18 +566,38 @@ class Scorer:
         scale2 = Scorer._scale(Ft, ms) ** 2
         return float(np.sum(((mt - ms) ** 2 - np.minimum(vs, vt) / len(Fs) - vt / len(Ft)) / scale2))
 
+    @staticmethod
+    def _has_record(X: np.ndarray) -> bool:
+        return record_blocks(len(X)) >= RECORD_MIN_BLOCKS
+
+    def record(self, source_X: np.ndarray) -> np.ndarray | None:
+        """The source's record features (blocks of consecutive rows), or None where the score has
+        no record group (independent rows, or too few rows for RECORD_MIN_BLOCKS blocks)."""
+        if self.target_record is None or not self._has_record(source_X):
+            return None
+        return record_view(source_X).features
+
     def score(self, source_X: np.ndarray) -> float:
         Fs, Ft, _ = self.features(source_X)
-        return self.mismatch(Fs, Ft)
+        Rs = self.record(source_X)
+        return self.mismatch(Fs, Ft) + (self.mismatch(Rs, self.target_record) if Rs is not None else 0.0)
 
     def replicates(self, source_X: np.ndarray, replicates: int, seed) -> np.ndarray:
         """Bootstrap replicates of :meth:`score` (rows of both sets resampled as multinomial
         counts, the scale held at the full target's): the same *seed* resamples the same row
         indices, so two sources' replicates are paired."""
         Fs, Ft, _ = self.features(source_X)
-        mt = Ft.mean(axis=0)
-        scale = self._scale(Ft, Fs.mean(axis=0))
         rng = np.random.default_rng(seed)
+        out = self._replicates(Fs, Ft, replicates, rng)
+        Rs = self.record(source_X)
+        if Rs is not None:  # the blocks resampled as rows of their own group
+            out = out + self._replicates(Rs, self.target_record, replicates, rng)
+        return out
+
+    @classmethod
+    def _replicates(cls, Fs: np.ndarray, Ft: np.ndarray, replicates: int, rng: np.random.Generator) -> np.ndarray:
+        mt = Ft.mean(axis=0)
+        scale = cls._scale(Ft, Fs.mean(axis=0))
         a, va = resampled_moments(Fs, mt, scale, replicates, rng)
         b, vb = resampled_moments(Ft, mt, scale, replicates, rng)
         # A replicate's squared difference carries the sampling noise twice (data and resampling).
@@ -573,6 +607,11 @@ class Scorer:
         """gap_report's total (bias-corrected squared effect sizes on the pooled spread)."""
         Fs, Ft, sizes = self.features(source_X)
         return float(view_gaps(effect_sizes(Fs, Ft)["d"], sizes, len(Fs), len(Ft)).sum())
+
+
+def _scorer(target_X, source: DatasetSpec, settings: Settings, rows: Rows) -> Scorer:
+    """The search's score against *target_X*, with the record's lines where the rows are consecutive."""
+    return Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source), settings.max_order, rows.consecutive)
 
 
 # --- the search space of one effect ------------------------------------------------------------------
@@ -647,13 +686,15 @@ def _fit_search(
     seed: int,
     start: dict | None = None,
     guesses: Sequence[dict] = (),
+    guess_step: float | None = None,
 ) -> list[dict]:
     """Minimise *objective* over *space* with at most *evaluations* calls; every evaluated point.
 
     *start*: parameters to start from instead of the defaults; with it there is no design,
     only the local refinement (re-fitting an accepted effect next to a new one). *guesses*:
     points tried right after the defaults (the effect's reading of the target; the design
-    gets fewer points)."""
+    gets fewer points). *guess_step*: the effect reads its guesses to about this share of each
+    range (Effect.guess_step); when a guess beats the design, Nelder-Mead starts that small there."""
     from scipy.optimize import minimize
     from scipy.stats import qmc
 
@@ -682,6 +723,7 @@ def _fit_search(
         evaluate(u0, c0)
         for guess in guesses:
             evaluate(*space.point_of({**space.defaults, **guess}))
+        read = {id(h) for h in history[1:]}  # the guesses as evaluated
         width = space.dims + len(space.options)
         n_design = 0 if start is not None else max(1, math.ceil(DESIGN_SHARE * evaluations)) - 1 - len(guesses)
         if width and n_design > 0:
@@ -697,6 +739,12 @@ def _fit_search(
             # 0.35 of every range and spent its evaluations shrinking back (a sensor's f_n fitted
             # 0.6 % off stayed there, and a second effect was accepted for the residual).
             step = LOCAL_STEP if local else 0.5 / max(2, n_design + 1) ** (1.0 / space.dims)
+            if guess_step and not local and id(start) in read:
+                # A reading of the target beat the design: a simplex one design cell wide (a tenth of
+                # the range) around a tone's line a few tenths of a percent wide spent its evaluations
+                # shrinking back and ended 3-8 % off; started at the reading's own precision it
+                # stays in the valley.
+                step = guess_step
             x0 = start["u"]
             simplex = [x0]
             for i in range(space.dims):
@@ -782,7 +830,7 @@ def fit_effect(task: tuple) -> dict:
     registry = get_registry()
     effect = registry.get("effect", name)
     space = Space(effect)
-    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source), settings.max_order)
+    scorer = _scorer(target_X, source, settings, rows)
     errors: list[str] = []
 
     def spec_of(params: dict, extra: tuple = ()) -> DatasetSpec:
@@ -807,7 +855,9 @@ def fit_effect(task: tuple) -> dict:
         # stiff mounting's natural frequency); one line per point would bury the progress.
         warnings.simplefilter("ignore", UserWarning)
         guesses = [g for g in effect.guesses(scorer.target, operating_point(source)[0]) if _inside(space, g)]
-        history = _fit_search(space, objective, evaluations, seed, guesses=guesses)
+        history = _fit_search(
+            space, objective, evaluations, seed, guesses=guesses, guess_step=getattr(effect, "guess_step", None)
+        )
         if name == NUISANCE:
             # The noise alone gets the same wide Brent search that the other candidates' noise
             # nuisance gets, so that "beats the noise alone" compares like with like.
@@ -906,7 +956,7 @@ def _refit_alone(
     it a candidate would be credited with the better fit of the effects before it — an
     imperfect first fit leaves a residual that any flexible extra effect (noise, a filter, a
     tone) partly absorbs, and extras the target does not have were accepted."""
-    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(source), settings.max_order)
+    scorer = _scorer(target_X, source, settings, rows)
     score = scorer.score(rows(source.with_(effects=_by_level(source.effects + tuple(accepted)))))
     refit, score, used = _backfit(
         source, accepted, (), scorer, score, max(2, SIGNAL_EVALS * settings.budget // 2), seed, rows
@@ -1071,7 +1121,7 @@ def diagnose(
     candidates = check_settings(settings)
     target, chain, rows, settings, pair, search, fresh = _prepared(source, target_X, settings, chain)
     executor = executor or LocalExecutor(1)
-    scorer = Scorer(target, pair, settings.max_order)
+    scorer = Scorer(target, pair, settings.max_order, rows.consecutive)
 
     def judged(effects: tuple) -> np.ndarray:
         """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""
@@ -1174,7 +1224,7 @@ def profile_effect(task: tuple) -> dict:
     started = time.perf_counter()
     name, canonical = fitted[i]
     effect = get_registry().get("effect", name)
-    scorer = Scorer(np.asarray(target_X, dtype=np.float64), _check_source(search), settings.max_order)
+    scorer = _scorer(target_X, search, settings, rows)
 
     def rows_of(params: dict) -> np.ndarray:
         effects = _by_level(search.effects + fitted[:i] + (effect.spec(params),) + fitted[i + 1 :])

@@ -355,6 +355,53 @@ def output_shaft_view(X, pair, plan: BandPlan | None = None, multiples: int = 3)
     return View("output_shaft", _db(np.stack(columns, axis=1)), tuple(names), "dB")
 
 
+# --- the record: lines below and between the first shaft orders ----------------------------------
+
+RECORD_BLOCK = 10  # revolutions per block: lines every 1/10 order
+RECORD_ORDERS = 3  # the fractional lines below this order are compared
+RECORD_RATE = 16  # points per revolution the record is averaged down to (orders below 8 kept)
+RECORD_MIN_BLOCKS = 3  # half-overlapping blocks per set, at least (20 rows)
+
+
+def record_blocks(n: int, block: int = RECORD_BLOCK) -> int:
+    """How many half-overlapping blocks of *block* consecutive revolutions *n* rows give."""
+    return 0 if n < block else (n - block) // (block // 2) + 1
+
+
+def record_view(X, block: int = RECORD_BLOCK, orders: int = RECORD_ORDERS) -> View:
+    """The fractional lines below *orders* shaft orders, dB, from *consecutive* revolutions.
+
+    One revolution cannot place a line below one order (a 10 Hz tone at 40 Hz is a slow drift
+    across the row) nor tell one between orders from its integer neighbours; *block* consecutive
+    revolutions give lines every 1/block order. Each row minus the set's own synchronous average
+    (the shaft-synchronous part lies on whole orders only; removed, no window leaks it into the
+    fractional lines), averaged down to RECORD_RATE points per revolution (a boxcar: aligned with
+    the revolutions, the same linear filter over the whole record; it nulls orders RECORD_RATE k),
+    joined into one record, cut into half-overlapping blocks, a periodic Hann window on each: the
+    power at order k/block for every k below *orders* x block that is not a multiple of *block*.
+    One feature row per block (:func:`record_blocks`). Rows must be consecutive revolutions of one
+    record, as a measured record's are (gearlab.gap.diagnose.Rows.consecutive)."""
+    X = check_revolutions(X)
+    n, P = X.shape
+    blocks = record_blocks(n, block)
+    if blocks < 1:
+        raise GearlabInputError(f"record view: needs at least {block} consecutive revolutions, got {n}")
+    residual = X - X.mean(axis=0)
+    edges = np.round(np.arange(RECORD_RATE + 1) * P / RECORD_RATE).astype(int)
+    low = np.add.reduceat(residual, edges[:-1], axis=1) / np.diff(edges)
+    record = low.reshape(-1)
+    length, hop = block * RECORD_RATE, (block // 2) * RECORD_RATE
+    starts = np.arange(blocks) * hop
+    frames = record[starts[:, None] + np.arange(length)]
+    window = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(length) / length)
+    spectrum = np.fft.rfft(frames * window, axis=1)
+    lines = np.array([k for k in range(1, orders * block) if k % block])
+    power = np.abs(spectrum[:, lines]) ** 2 * (2.0 / (length * np.sum(window**2)))
+    floor = RESIDUAL_FLOOR * float(np.mean(X * X))
+    names = tuple(f"order {k / block:.3g}" for k in lines)
+    return View("record", _db(np.maximum(power, floor)), names, "dB")
+
+
 # --- TSA residual --------------------------------------------------------------------------------
 
 
