@@ -17,6 +17,14 @@ are read only to print these figures.
   standardised by its own history model, fused by the larger of the two (``max``) or their sum
   over √2 (``sum``); for tooth_energy the windows are fused before the maximum (the same window
   of both housings);
+* the fifth round's synchronous variants (``floor_variants``): each window's TSA energy E_k
+  against the non-synchronous floor F_k = V_k/N that its record's revolution-to-revolution
+  spread predicts (``async_floor``): ``tooth_sync`` (the kind's indicator: (E_k − F_k) / mean_j
+  E_j), ``ln E/F`` (the window's TSA energy over its floor), ``ln sync share`` (ln of
+  max(E_k − F_k, 0) + F_k·√(2/L_k) over its mean, L_k the window's samples: the noise's
+  standard error as the least), ``ln V share`` (the floor's own localisation: ln of V_k's
+  share, V_k of the unit's own N revolutions), each standardised per window by the history's within-record spread, and
+  ``tooth_sync`` by each window's record SD and by the record variance pooled over the windows;
 * the halves check (``halves``): do the two halves of one record differ as much as two takes
   of the same gearbox do? (what splitting history records into more "records" assumes).
 
@@ -39,7 +47,7 @@ import numpy as np
 from gearlab.engine import load_scenario
 from gearlab.kinds import detection, record_effects
 from gearlab.kinds.detection import ROLES, Rule, _window, auc, classical_record, read_target, tsa_units
-from gearlab.signals.indicators import fm4, tooth_windows
+from gearlab.signals.indicators import async_floor, difference_signal, fm4, tooth_windows, window_energy
 
 
 def swapped(target):
@@ -56,7 +64,12 @@ def swapped(target):
 
 
 def model(groups, unit: str, p: float) -> record_effects.RecordEffects:
-    return record_effects.fit(groups, p, [record_effects.independent_units(len(g), *_window(unit)) for g in groups])
+    return record_effects.fit(
+        groups,
+        p,
+        [record_effects.independent_units(len(g), *_window(unit)) for g in groups],
+        [record_effects.overlap_dof(len(g), *_window(unit)) for g in groups],
+    )
 
 
 def split_history(cond: dict, unit: str, X: np.ndarray) -> list[np.ndarray]:
@@ -77,6 +90,52 @@ def tooth_z(cond: dict, unit: str, orders, how: str):
         sd = np.sqrt(record + np.array([f.unit_sd**2 + f.mean_se**2 for f in fits]))
     test = {p: (tooth_windows(u[unit], orders[0], orders) - mean) / sd for p, u in cond["test_units"].items()}
     return [(g - mean) / sd for g in hist], test
+
+
+def floor_variants(cond: dict, unit: str, orders) -> dict[str, tuple]:
+    """{variant: (history z per record, test z per file)}: the synchronous variants above, (unit,
+    window) standardised; the floor of every unit from all revolutions of its own record."""
+    n = _window(unit)[0]
+    teeth = orders[0]
+
+    def block_floors(revs, stride):  # V_k of each unit's own N revolutions (for ln V share)
+        return np.stack([async_floor(revs[s : s + n], teeth, orders) for s in range(0, len(revs) - n + 1, stride)])
+
+    def stats(X, floor, blocks):
+        energy = window_energy(difference_signal(X, orders), teeth)
+        f = floor[None] / n
+        share = np.maximum(energy - f, 0.0) + f * np.sqrt(2.0 / (X.shape[-1] / teeth))
+        return {
+            "tooth_sync": (energy - f) / energy.mean(axis=1, keepdims=True),
+            "ln E/F": np.log(energy / f),
+            "ln sync share": np.log(share / share.mean(axis=1, keepdims=True)),
+            "ln V share": np.log(blocks / blocks.mean(axis=1, keepdims=True)),
+        }
+
+    hist_x = split_history(cond, unit, cond["history_units"][unit])
+    hist = [
+        stats(X, async_floor(r, teeth, orders), block_floors(r, _window(unit)[1]))
+        for X, (_, r) in zip(hist_x, cond["history"])
+    ]
+    revs = {f.path: r for f, r in cond["test"]}
+    test = {
+        p: stats(u[unit], async_floor(revs[p], teeth, orders), block_floors(revs[p], n))
+        for p, u in cond["test_units"].items()
+    }
+    out = {}
+    for name in hist[0]:
+        hs = [h[name] for h in hist]
+        fits = [model([g[:, k] for g in hs], unit, 0.5) for k in range(teeth)]
+        mean = np.array([f.mean for f in fits])
+        # tooth_sync by the within-record spread is the kind's own row ("tooth_sync ch0")
+        spreads = {} if name == "tooth_sync" else {"": np.array([f.unit_sd for f in fits])}
+        if name == "tooth_sync":
+            spreads[" (record sd)"] = np.array([f.predictive_sd for f in fits])
+            record = np.mean([(f.record_sd or 0.0) ** 2 for f in fits])
+            spreads[" (pooled record sd)"] = np.sqrt(record + np.array([f.unit_sd**2 + f.mean_se**2 for f in fits]))
+        for how, sd in spreads.items():
+            out[name + how] = ([(g - mean) / sd for g in hs], {p: (t[name] - mean) / sd for p, t in test.items()})
+    return out
 
 
 def figures(hist_groups, test, labels, positive, unit, p):
@@ -126,7 +185,9 @@ def main() -> None:
             # per channel: the indicators' scores, as (history groups, test per file)
             per = {}
             for ch, conds in enumerate(channels):
-                for name in ("fm4", "tooth_energy"):
+                for name in ("fm4", "tooth_energy", "tooth_sync"):
+                    if ch == 1 and name == "tooth_sync":
+                        continue
                     r = classical_record(name, c, conds[c], classical, rule)
                     hist = split_history(conds[c], unit, np.asarray(r["history_scores"][unit]))
                     test = {f: np.asarray(s[unit]) for f, s in r["test_scores"].items()}
@@ -142,6 +203,10 @@ def main() -> None:
                         rows.setdefault(name, {})[key] = figures(
                             [z.max(1) for z in h], {f: z.max(1) for f, z in t.items()}, labels, target.positive, unit, p
                         )
+            for name, (h, t) in floor_variants(channels[0][c], unit, orders).items():
+                rows.setdefault(f"{name} (variant)", {})[key] = figures(
+                    [z.max(1) for z in h], {f: z.max(1) for f, z in t.items()}, labels, target.positive, unit, p
+                )
             for name in ("fm4", "tooth_energy"):  # scores standardised per channel, then fused
                 z = []
                 for ch in (0, 1):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from gearlab.kinds.record_effects import fit, independent_units
+from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
 
 
 def records(rng, n_records: int, n_units: int, record_sd: float, unit_sd: float, mean: float = 5.0) -> list:
@@ -73,3 +73,22 @@ def test_overlapping_windows_count_as_fewer_independent_units():
 def test_standardised_scores_are_in_units_of_the_predictive_spread():
     m = fit([np.array([1.0, 2.0, 3.0]), np.array([3.0, 4.0, 5.0])], 0.99)
     assert m.standardised([m.mean, m.mean + m.predictive_sd]) == pytest.approx([0.0, 1.0])
+
+
+def test_overlapping_windows_sum_of_squares_has_fewer_degrees_of_freedom():
+    """Sliding TSA windows share revolutions, so their spread about their record's mean is narrower
+    than a new record's unit varies: their sum of squares has overlap_dof degrees of freedom, not
+    n − 1 (30 windows of 30 revolutions moved by 3, as a PHM record at 30 Hz gives: 21.1, not 29)."""
+    assert overlap_dof(4, 10, 10) == 3.0 and overlap_dof(5) == 4.0  # no overlap: n − 1
+    assert overlap_dof(30, 30, 3) == pytest.approx(21.1, abs=0.05)
+    rng = np.random.default_rng(6)
+    n, block, stride = 45, 30, 3
+    ss = []
+    for _ in range(4000):
+        revs = rng.standard_normal(n)
+        windows = np.array([revs[s : s + block].mean() for s in range(0, n - block + 1, stride)])
+        ss.append(np.sum((windows - windows.mean()) ** 2))
+    m = len(windows)
+    # the variance of one window's mean of independent revolutions is 1/block
+    assert np.mean(ss) / overlap_dof(m, block, stride) == pytest.approx(1 / block, rel=0.05)
+    assert np.mean(ss) / (m - 1) < 0.3 / block  # n − 1 would call it less than a third of that

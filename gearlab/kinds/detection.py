@@ -14,7 +14,7 @@ the method's model and threshold are fixed, and their labels only when the figur
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
                           adapter that can learn without target labels
-    [classical]           indicators (fm4, na4, tooth_energy) of the input-shaft TSA, mesh_orders,
+    [classical]           indicators (fm4, na4, tooth_energy, tooth_sync) of the input-shaft TSA, mesh_orders,
                           shaft_orders, sidebands
     [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold),
                           threshold (records | pooled), seeds (trainings per network method)
@@ -72,12 +72,16 @@ from ..signals import Standardiser
 from ..signals.indicators import (
     DEFAULT_INDICATORS,
     INDICATORS,
+    async_floor,
     difference_signal,
     fm4,
     na4,
     na4_reference,
+    sync_windows,
     tooth_energy,
     tooth_reference,
+    tooth_sync,
+    window_reference,
 )
 from ..units import to_si
 from . import record_effects
@@ -138,7 +142,7 @@ TABLES = {
                 list,
                 [],
                 doc="mesh orders of the TSA's shaft (default: the source pinion's teeth); the first is the "
-                "tooth count of the gear on that shaft (tooth_energy's windows)",
+                "tooth count of the gear on that shaft (the localised indicators' windows)",
             ),
             "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
             "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
@@ -628,7 +632,8 @@ class Rule:
         for u, s in history_scores.items():
             counts = [n for n, _ in self.records[u]]
             groups = np.split(np.asarray(s, dtype=np.float64), np.cumsum(counts)[:-1])
-            out[u] = record_effects.fit(groups, 1.0 - self.false_alarm, [m for _, m in self.records[u]])
+            dofs = [record_effects.overlap_dof(n, *_window(u)) for n in counts]
+            out[u] = record_effects.fit(groups, 1.0 - self.false_alarm, [m for _, m in self.records[u]], dofs)
         return out
 
     def decide(self, history_scores: dict) -> dict:
@@ -686,34 +691,54 @@ def method_name(m: Method, variant: str = "") -> str:
 
 def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
     """A classical indicator's scores: computed on the TSA units, its reference (NA4's variance,
-    tooth_energy's windows) from the history's units of the same kind."""
+    tooth_energy's and tooth_sync's windows) from the history's units of the same kind; tooth_sync's
+    non-synchronous floor from each unit's own record (its revolutions, no label)."""
     orders, shaft, sidebands = classical["mesh_orders"], classical["shaft_orders"], classical["sidebands"]
     history = cond["history_units"]
+    # the history's units of each kind, one array per history record (in the order of cond["history"])
+    per_record = {
+        u: np.split(X, np.cumsum([n for n, _ in cond["history_records"][u]])[:-1]) for u, X in history.items()
+    }
+    # tooth_sync: each record's non-synchronous floor per window, from all its own revolutions
+    floors = {}
+    if name == "tooth_sync":
+        floors = {f.path: async_floor(r, orders[0], orders, shaft, sidebands) for role in ROLES for f, r in cond[role]}
+    # the localised indicators' within-record spread: that of independent units, from sliding windows
+    dofs = {u: [record_effects.overlap_dof(len(X), *_window(u)) for X in groups] for u, groups in per_record.items()}
     reference = {}
     if name == "na4":  # the denominator: the mean residual variance of the history's units
         reference = {u: na4_reference(X, orders, shaft) for u, X in history.items()}
     elif name == "tooth_energy":  # per tooth window: the records' mean and within-record spread
         reference = {
-            u: tooth_reference(
-                np.split(X, np.cumsum([n for n, _ in cond["history_records"][u]])[:-1]),
-                orders[0],
-                orders,
-                shaft,
-                sidebands,
+            u: tooth_reference(groups, orders[0], orders, shaft, sidebands, dofs[u]) for u, groups in per_record.items()
+        }
+    elif name == "tooth_sync":
+        reference = {
+            u: window_reference(
+                [
+                    sync_windows(X, _window(u)[0], floors[f.path], orders, shaft, sidebands)
+                    for (f, _), X in zip(cond["history"], groups)
+                ],
+                dofs[u],
             )
-            for u, X in history.items()
+            for u, groups in per_record.items()
         }
 
-    def score(X: np.ndarray, u: str) -> np.ndarray:
+    def score(X: np.ndarray, u: str, path: str) -> np.ndarray:
         if name == "fm4":
             return fm4(X, orders, shaft, sidebands)
         if name == "tooth_energy":
             return tooth_energy(X, orders, reference[u], shaft, sidebands)
+        if name == "tooth_sync":
+            return tooth_sync(X, _window(u)[0], floors[path], orders, reference[u], shaft, sidebands)
         return na4(X, orders, reference[u], shaft)
 
-    hist = {u: score(X, u) for u, X in cond["history_units"].items()}
+    hist = {
+        u: np.concatenate([score(X, u, f.path) for (f, _), X in zip(cond["history"], groups)])
+        for u, groups in per_record.items()
+    }
     fixed = rule.decide(hist)  # fixed before any test unit is scored
-    test = {p: {u: score(X, u) for u, X in units.items()} for p, units in cond["test_units"].items()}
+    test = {p: {u: score(X, u, p) for u, X in units.items()} for p, units in cond["test_units"].items()}
     return {
         "unit": f"{condition}/{name}",
         "condition": condition,

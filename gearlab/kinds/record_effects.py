@@ -23,7 +23,9 @@ lets a share alpha of healthy units of a new record through is the predictive qu
     t = mu_hat + z_(1 - alpha) * sqrt(sigma_a^2 + sigma_e^2 + Var(mu_hat)).
 
 m_r counts the record's *independent* units: sliding TSA windows of b revolutions moved by s
-overlap, and only about (n - 1) s / b + 1 of n such windows are independent.
+overlap, and only about (n - 1) s / b + 1 of n such windows are independent. For the same
+reason their sum of squares about the record's mean has fewer degrees of freedom than n - 1
+(``overlap_dof``); sigma_e^2 divides by those, so it is the variance of a unit of a new record.
 
 The quantile is a plug-in (the variances as estimated, a Gaussian law): with R records the
 record variance rests on R - 1 degrees of freedom, so with two records it is a rough figure —
@@ -72,18 +74,36 @@ def independent_units(n_units: int, block: int = 1, stride: int = 1) -> float:
     return min(float(n_units), (n_units - 1) * stride / block + 1.0)
 
 
-def fit(groups, p: float, independent=None) -> RecordEffects:
+def overlap_dof(n_units: int, block: int = 1, stride: int = 1) -> float:
+    """The degrees of freedom of the sum of squares of *n_units* sliding TSA windows of *block*
+    revolutions moved by *stride* about their own mean: its expectation in units of one window's
+    variance, n − (1/n) Σ_ij ρ_ij with ρ_ij = max(0, 1 − |i − j|·stride/block), the correlation of
+    two windows' means of independent revolutions (n − 1 for non-overlapping windows). Dividing
+    that sum of squares by n − 1 instead underestimates a window's variance where they overlap:
+    by a factor 0.73 for 30 windows of 30 revolutions moved by 3 (a PHM record at 30 Hz), 0.23
+    for 6 of them."""
+    if n_units <= 0:
+        return 0.0
+    lag = np.arange(-(n_units - 1), n_units)
+    rho = np.maximum(0.0, 1.0 - np.abs(lag) * stride / block)
+    pairs = n_units - np.abs(lag)  # how many (i, j) pairs lie at each lag
+    return float(n_units - np.sum(rho * pairs) / n_units)
+
+
+def fit(groups, p: float, independent=None, dofs=None) -> RecordEffects:
     """The model of *groups* (one array of unit scores per history record, in any order) and
     its *p* predictive quantile for a unit of a new record; *independent*: each record's number
-    of independent units (default: its number of units)."""
+    of independent units (default: its number of units); *dofs*: each record's degrees of
+    freedom of its within-record sum of squares (default n − 1; sliding windows: overlap_dof)."""
     groups = [np.asarray(g, dtype=np.float64).ravel() for g in groups]
-    groups = [g for g in groups if len(g)]
-    if not groups:
+    keep = [i for i, g in enumerate(groups) if len(g)]
+    if not keep:
         raise ValueError("record effects: no history scores")
+    groups = [groups[i] for i in keep]
     m = np.asarray(independent if independent is not None else [len(g) for g in groups], dtype=np.float64)
     m = np.maximum(m[: len(groups)], 1.0)
     means = np.array([g.mean() for g in groups])
-    dof = sum(len(g) - 1 for g in groups)
+    dof = sum(len(g) - 1 for g in groups) if dofs is None else float(sum(dofs[i] for i in keep))
     within = sum(float(np.sum((g - g.mean()) ** 2)) for g in groups) / dof if dof > 0 else 0.0
     R = len(groups)
     mu = float(means.mean())

@@ -1,4 +1,5 @@
-"""Classical gear condition indicators of a time-synchronous average (TSA): FM4, NA4, tooth_energy.
+"""Classical gear condition indicators of a time-synchronous average (TSA): FM4, NA4, tooth_energy,
+tooth_sync.
 
 What a gear-diagnosis engineer computes on the input-shaft TSA before any learning
 (Stewart 1977; Zakrajsek, Townsend & Decker 1993, NASA TM-106032). With the TSA x of one
@@ -22,6 +23,22 @@ revolution on a uniform angle grid and X its order spectrum (order = harmonic of
   left to the threshold rule, as for every score. It calls *any* change of where in the
   revolution the energy lies, including non-synchronous impulses that leak through the
   average (a bearing; docs/real_data.md).
+* **tooth_sync**: tooth_energy read on the *synchronous* part of each window. A TSA of N
+  revolutions keeps what repeats at one input angle every revolution (a pinion tooth) and, of
+  what does not (noise, a bearing's impulses, which slip in angle from one revolution to the
+  next), an energy of about V_k/N, V_k the per-revolution variance of the difference signal in
+  window k about the record's TSA (the variance of a mean of N independent draws). The
+  window's synchronous energy is estimated as E_k − V_k/N (E_k the TSA's window energy, V_k
+  from all revolutions of the unit's own record: no history, no label), taken as a share of the
+  TSA's mean window energy, u_k = (E_k − V_k/N) / mean_j E_j, standardised per window by the
+  healthy history like tooth_energy (mean of the records' means, pooled within-record spread);
+  the indicator is max_k (u_k − ū_k)/σ_k. An asynchronous burst train raises E_k and V_k/N
+  alike and leaves u_k in expectation (it only dilutes it, through mean_j E_j), where
+  tooth_energy's log share of E_k calls it. A share and linear in energy: the record's level
+  cancels, and a window without synchronous content is not blown up as by a logarithm of a
+  near-zero estimate. Damage that repeats at one input angle every few revolutions (a tooth on
+  the idler, whose shaft turns once every 3 input revolutions on the PHM rig) is synchronous
+  with the input too, at a fraction of its size, and is called as FM4 calls it.
 
 All orders refer to the shaft the TSA is synchronous with (here the input shaft: mesh
 orders 32 for stage 1 and 16 for stage 2 of the PHM 2009 spur rig).
@@ -31,8 +48,8 @@ from __future__ import annotations
 
 import numpy as np
 
-INDICATORS = ("fm4", "na4", "tooth_energy")
-# what a scenario computes when it names none (tooth_energy is asked for by name)
+INDICATORS = ("fm4", "na4", "tooth_energy", "tooth_sync")
+# what a scenario computes when it names none (the localised ones are asked for by name)
 DEFAULT_INDICATORS = ("fm4", "na4")
 
 
@@ -77,35 +94,70 @@ def na4(x: np.ndarray, mesh_orders, reference_variance: float, shaft_orders: int
     return np.mean(r**4, axis=-1) / max(reference_variance, 1e-300) ** 2
 
 
-def tooth_windows(x: np.ndarray, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1) -> np.ndarray:
-    """s_k: ln of each of the *teeth* equal angle windows' share of the difference signal's energy,
-    (rows of *x*, teeth); the windows' edges are the nearest samples to 2πk/teeth."""
-    d = difference_signal(np.atleast_2d(x), mesh_orders, shaft_orders, sidebands)
+def window_energy(d: np.ndarray, teeth: int) -> np.ndarray:
+    """Mean square of each row of *d* over *teeth* equal angle windows, (rows, teeth); the
+    windows' edges are the nearest samples to 2πk/teeth."""
     n = d.shape[-1]
     if not 1 <= teeth <= n:
         raise ValueError(f"expected 1 … {n} tooth windows, got {teeth}")
     edges = np.round(np.arange(teeth) * n / teeth).astype(int)
-    energy = np.add.reduceat(d**2, edges, axis=-1) / np.diff(np.append(edges, n))
-    energy = np.maximum(energy, 1e-300)
+    return np.add.reduceat(d**2, edges, axis=-1) / np.diff(np.append(edges, n))
+
+
+def tooth_windows(x: np.ndarray, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1) -> np.ndarray:
+    """s_k: ln of each of the *teeth* equal angle windows' share of the difference signal's energy,
+    (rows of *x*, teeth)."""
+    d = difference_signal(np.atleast_2d(x), mesh_orders, shaft_orders, sidebands)
+    energy = np.maximum(window_energy(d, teeth), 1e-300)
     return np.log(energy / energy.mean(axis=-1, keepdims=True))
 
 
-def tooth_reference(history, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1):
-    """tooth_energy's (mean, spread) per window from the healthy history, given as one array of
-    TSA units per history record: the mean of the records' means (each record counts once) and
-    the pooled within-record standard deviation (the unit-to-unit spread, which the history
-    estimates well; the record-to-record part stays in the threshold rule)."""
-    groups = [tooth_windows(h, teeth, mesh_orders, shaft_orders, sidebands) for h in history]
-    groups = [g for g in groups if len(g)]
-    if not groups:
-        raise ValueError("tooth_energy: no history units")
+def async_floor(revolutions: np.ndarray, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1):
+    """V_k: the per-revolution variance of the difference signal in each of *teeth* windows about
+    the TSA of all *revolutions* of one record (unbiased, n − 1), i.e. what does not repeat every
+    revolution; a TSA of N of them keeps about V_k / N of it. NaN with fewer than 2 revolutions."""
+    d = difference_signal(np.atleast_2d(revolutions), mesh_orders, shaft_orders, sidebands)
+    n = len(d)
+    if n < 2:
+        return np.full(teeth, np.nan)
+    return window_energy(d - d.mean(axis=0), teeth).sum(axis=0) / (n - 1)
+
+
+def sync_windows(
+    x: np.ndarray, revolutions: int, floor: np.ndarray, mesh_orders, shaft_orders: int = 2, sidebands: int = 1
+) -> np.ndarray:
+    """u_k: each window's synchronous energy E_k − V_k/N as a share of the mean window energy, for
+    rows of *x* that are TSAs of N = *revolutions* revolutions of a record whose floor V_k is
+    *floor* (async_floor; its length is the number of windows), (rows of *x*, teeth)."""
+    d = difference_signal(np.atleast_2d(x), mesh_orders, shaft_orders, sidebands)
+    energy = window_energy(d, len(floor))
+    return (energy - np.asarray(floor)[None] / revolutions) / np.maximum(energy.mean(axis=-1, keepdims=True), 1e-300)
+
+
+def window_reference(groups, dofs=None):
+    """A localised indicator's (mean, spread) per window from the healthy history, given as one
+    array (units, windows) per history record: the mean of the records' means (each record counts
+    once) and the pooled within-record standard deviation (the unit-to-unit spread, which the
+    history estimates well; the record-to-record part stays in the threshold rule). *dofs*: each
+    record's degrees of freedom of its sum of squares (default n − 1; overlapping TSA windows have
+    fewer: gearlab.kinds.record_effects.overlap_dof), so the spread is that of independent units."""
+    keep = [i for i, g in enumerate(groups) if len(g)]
+    if not keep:
+        raise ValueError("no history units")
+    groups = [groups[i] for i in keep]
+    dof = sum(len(g) - 1 for g in groups) if dofs is None else float(sum(dofs[i] for i in keep))
     mean = np.mean([g.mean(axis=0) for g in groups], axis=0)
-    dof = sum(len(g) - 1 for g in groups)
     if dof > 0:
         spread = np.sqrt(sum(np.sum((g - g.mean(axis=0)) ** 2, axis=0) for g in groups) / dof)
     else:  # one unit per record: only the spread between them is known
         spread = np.concatenate(groups).std(axis=0)
     return mean, np.maximum(spread, 1e-12)
+
+
+def tooth_reference(history, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1, dofs=None):
+    """tooth_energy's (mean, spread) per window (window_reference) from the history's TSA units,
+    one array per history record."""
+    return window_reference([tooth_windows(h, teeth, mesh_orders, shaft_orders, sidebands) for h in history], dofs)
 
 
 def tooth_energy(x: np.ndarray, mesh_orders, reference, shaft_orders: int = 2, sidebands: int = 1) -> np.ndarray:
@@ -114,6 +166,17 @@ def tooth_energy(x: np.ndarray, mesh_orders, reference, shaft_orders: int = 2, s
     mean, spread = reference
     s = tooth_windows(x, len(mean), mesh_orders, shaft_orders, sidebands)
     return np.max((s - mean) / spread, axis=-1)
+
+
+def tooth_sync(
+    x: np.ndarray, revolutions: int, floor, mesh_orders, reference, shaft_orders: int = 2, sidebands: int = 1
+) -> np.ndarray:
+    """tooth_sync of each row of *x* (TSAs of *revolutions* revolutions of one record with
+    async_floor *floor*): the largest standardised synchronous window share, against *reference*
+    = window_reference of the history's sync_windows."""
+    mean, spread = reference
+    u = sync_windows(x, revolutions, floor, mesh_orders, shaft_orders, sidebands)
+    return np.max((u - mean) / spread, axis=-1)
 
 
 def input_synchronous_share(
