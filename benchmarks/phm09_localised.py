@@ -17,14 +17,19 @@ are read only to print these figures.
   standardised by its own history model, fused by the larger of the two (``max``) or their sum
   over √2 (``sum``); for tooth_energy the windows are fused before the maximum (the same window
   of both housings);
-* the fifth round's synchronous variants (``floor_variants``): each window's TSA energy E_k
-  against the non-synchronous floor F_k = V_k/N that its record's revolution-to-revolution
-  spread predicts (``async_floor``): ``tooth_sync`` (the kind's indicator: (E_k − F_k) / mean_j
-  E_j), ``ln E/F`` (the window's TSA energy over its floor), ``ln sync share`` (ln of
-  max(E_k − F_k, 0) + F_k·√(2/L_k) over its mean, L_k the window's samples: the noise's
-  standard error as the least), ``ln V share`` (the floor's own localisation: ln of V_k's
-  share, V_k of the unit's own N revolutions), each standardised per window by the history's within-record spread, and
-  ``tooth_sync`` by each window's record SD and by the record variance pooled over the windows;
+* ``tooth_sync``: the kind's indicator with the scenario's ``slow_shafts`` (row ``tooth_sync
+  ch0``) and with ``slow_shafts`` = [] (all pairs of revolutions), [5] and [3, 5]; ``tooth_sync + own se``:
+  each window's z divided by √(σ_k² + se_k²) instead of σ_k, se_k the unit's own jackknife
+  (leave one revolution out) standard error of its synchronous share (``jackknife_variant``);
+* the fifth round's first synchronous variants (``floor_variants``): each window's TSA energy
+  E_k against the non-synchronous floor F_k = V_k/N that its record's revolution-to-revolution
+  spread predicts (``async_floor``, all revolutions of the record): ``sync share, record
+  floor`` ((E_k − F_k) / mean_j E_j, the first form of tooth_sync), ``ln E/F`` (the window's
+  TSA energy over its floor), ``ln sync share`` (ln of max(E_k − F_k, 0) + F_k·√(2/L_k) over
+  its mean, L_k the window's samples: the noise's standard error as the least), ``ln V share``
+  (the floor's own localisation: ln of V_k's share, V_k of the unit's own N revolutions), each
+  standardised per window by the history's within-record spread, and ``sync share, record
+  floor`` by each window's record SD and by the record variance pooled over the windows;
 * the halves check (``halves``): do the two halves of one record differ as much as two takes
   of the same gearbox do? (what splitting history records into more "records" assumes).
 
@@ -47,7 +52,16 @@ import numpy as np
 from gearlab.engine import load_scenario
 from gearlab.kinds import detection, record_effects
 from gearlab.kinds.detection import ROLES, Rule, _window, auc, classical_record, read_target, tsa_units
-from gearlab.signals.indicators import async_floor, difference_signal, fm4, tooth_windows, window_energy
+from gearlab.signals.indicators import (
+    async_floor,
+    difference_signal,
+    fm4,
+    pair_mask,
+    tooth_windows,
+    window_energy,
+    window_gram,
+    window_reference,
+)
 
 
 def swapped(target):
@@ -106,7 +120,7 @@ def floor_variants(cond: dict, unit: str, orders) -> dict[str, tuple]:
         f = floor[None] / n
         share = np.maximum(energy - f, 0.0) + f * np.sqrt(2.0 / (X.shape[-1] / teeth))
         return {
-            "tooth_sync": (energy - f) / energy.mean(axis=1, keepdims=True),
+            "sync share, record floor": (energy - f) / energy.mean(axis=1, keepdims=True),
             "ln E/F": np.log(energy / f),
             "ln sync share": np.log(share / share.mean(axis=1, keepdims=True)),
             "ln V share": np.log(blocks / blocks.mean(axis=1, keepdims=True)),
@@ -127,15 +141,45 @@ def floor_variants(cond: dict, unit: str, orders) -> dict[str, tuple]:
         hs = [h[name] for h in hist]
         fits = [model([g[:, k] for g in hs], unit, 0.5) for k in range(teeth)]
         mean = np.array([f.mean for f in fits])
-        # tooth_sync by the within-record spread is the kind's own row ("tooth_sync ch0")
-        spreads = {} if name == "tooth_sync" else {"": np.array([f.unit_sd for f in fits])}
-        if name == "tooth_sync":
+        spreads = {"": np.array([f.unit_sd for f in fits])}
+        if name == "sync share, record floor":
             spreads[" (record sd)"] = np.array([f.predictive_sd for f in fits])
             record = np.mean([(f.record_sd or 0.0) ** 2 for f in fits])
             spreads[" (pooled record sd)"] = np.sqrt(record + np.array([f.unit_sd**2 + f.mean_se**2 for f in fits]))
         for how, sd in spreads.items():
             out[name + how] = ([(g - mean) / sd for g in hs], {p: (t[name] - mean) / sd for p, t in test.items()})
     return out
+
+
+def jackknife_variant(cond: dict, unit: str, orders, slow) -> tuple:
+    """tooth_sync's window z with the unit's own jackknife standard error beside the history's
+    spread: (u_k − ū_k) / √(σ_k² + se_k²); (history z per record, test z per file)."""
+    n, stride = _window(unit)
+    teeth = orders[0]
+
+    def shares(revs, step):
+        gram = window_gram(revs, teeth, orders)
+        mask = pair_mask(n, slow)
+        total, each = mask.sum(), mask.sum(axis=1)
+        u, se = [], []
+        for s in range(0, len(revs) - n + 1, step):
+            g = gram[:, s : s + n, s : s + n]
+            t = np.sum(g * mask, axis=(1, 2))
+            left = (t[:, None] - 2 * np.einsum("krs,rs->kr", g, mask)) / (total - 2 * each)[None]
+            scale = (g.sum(axis=(1, 2)) / n**2).mean()
+            u.append(t / total / scale)
+            se.append(np.sqrt((n - 1) / n * np.sum((left - left.mean(axis=1, keepdims=True)) ** 2, axis=1)) / scale)
+        return np.array(u), np.array(se)
+
+    hist = [shares(r, stride) for _, r in cond["history"]]
+    dofs = [record_effects.overlap_dof(len(u), n, stride) for u, _ in hist]
+    mean, spread = window_reference([u for u, _ in hist], dofs)
+    test = {f.path: shares(r, n) for f, r in cond["test"]}
+
+    def z(u, se):
+        return (u - mean) / np.sqrt(spread**2 + se**2)
+
+    return [z(*h) for h in hist], {p: z(*t) for p, t in test.items()}
 
 
 def figures(hist_groups, test, labels, positive, unit, p):
@@ -203,6 +247,21 @@ def main() -> None:
                         rows.setdefault(name, {})[key] = figures(
                             [z.max(1) for z in h], {f: z.max(1) for f, z in t.items()}, labels, target.positive, unit, p
                         )
+            for slow in ((), (5,), (3, 5)):
+                r = classical_record("tooth_sync", c, channels[0][c], {**classical, "slow_shafts": slow}, rule)
+                rows.setdefault(f"tooth_sync, slow_shafts = {list(slow)}", {})[key] = figures(
+                    split_history(channels[0][c], unit, np.asarray(r["history_scores"][unit])),
+                    {f: np.asarray(s[unit]) for f, s in r["test_scores"].items()},
+                    labels,
+                    target.positive,
+                    unit,
+                    p,
+                )
+            for slow in (classical["slow_shafts"], ()):
+                h, t = jackknife_variant(channels[0][c], unit, orders, slow)
+                rows.setdefault(f"tooth_sync + own se, slow_shafts = {list(slow)}", {})[key] = figures(
+                    [z.max(1) for z in h], {f: z.max(1) for f, z in t.items()}, labels, target.positive, unit, p
+                )
             for name, (h, t) in floor_variants(channels[0][c], unit, orders).items():
                 rows.setdefault(f"{name} (variant)", {})[key] = figures(
                     [z.max(1) for z in h], {f: z.max(1) for f, z in t.items()}, labels, target.positive, unit, p

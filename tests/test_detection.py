@@ -247,6 +247,10 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
         (lambda t: t.replace('adapter = "mmd"', 'adapter = "mmd"\nsupervised = true'), "no labels a method may use"),
         (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
         (
+            lambda t: t.replace("mesh_orders = [32]", "mesh_orders = [32]\nslow_shafts = [1, 3]"),
+            r"\[classical\] key 'slow_shafts': expected whole numbers of input revolutions 2",
+        ),
+        (
             lambda t: t.replace('preset = "B-6-ch5"', 'file = "../data/h1.zip"\nvibration = "0"\nspeed = 16.0'),
             r"\[source\] key 'file': the source is a simulator configuration",
         ),
@@ -416,20 +420,21 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     a chipped input pinion, a chipped tooth on the idler shaft (once every 3 input revolutions,
     at the same input angle), an outer-race bearing fault (3.05 impulses per input revolution)
     and a healthy record. FM4 of the input-shaft TSA leaves the bearing alone but calls the
-    idler's chip as well as the pinion's (it repeats at one input angle), and so do tooth_energy and
-    tooth_sync; the share of the 3-revolution TSA's difference energy at whole input orders tells
-    the two apart. The bearing raises tooth_energy, the more the stronger it is; tooth_sync (the
-    synchronous part of each tooth window) it leaves where a healthy record is, however strong."""
+    idler's chip as well as the pinion's (it repeats at one input angle), and so does tooth_energy;
+    the share of the 3-revolution TSA's difference energy at whole input orders tells the two apart,
+    and so does tooth_sync told the idler's period (slow_shafts = [3]: the pairs of revolutions 3
+    apart left out), which without it calls the idler's chip too. The bearing raises tooth_energy,
+    the more the stronger it is; tooth_sync (the synchronous part of each tooth window) it leaves
+    where a healthy record is, however strong."""
     import textrecords
 
     from gearlab.data.textzip import read_record
     from gearlab.kinds.detection import tsa_units
     from gearlab.kinds.record_effects import overlap_dof
     from gearlab.signals.indicators import (
-        async_floor,
         fm4,
         input_synchronous_share,
-        sync_windows,
+        sync_shares,
         tooth_energy,
         tooth_reference,
         tooth_sync,
@@ -474,16 +479,18 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     tooth = {k: float(tooth_energy(tsa_units(r, 30), [32], reference)[0]) for k, r in records.items()}
     assert tooth["pinion"] > 3 * tooth["healthy"] and tooth["idler"] > 3 * tooth["healthy"], tooth
     assert tooth["strong bearing"] > tooth["bearing"] > tooth["healthy"], tooth
-    # tooth_sync: each record's non-synchronous floor from its own revolutions
-    sync_reference = window_reference(
-        [sync_windows(h, 30, async_floor(r, 32, [32]), [32]) for h, r in zip(history, past)], dofs
-    )
-    sync = {
-        k: float(tooth_sync(tsa_units(r, 30), 30, async_floor(r, 32, [32]), [32], sync_reference)[0])
-        for k, r in records.items()
-    }
-    assert sync["pinion"] > 10 * sync["healthy"] and sync["idler"] > 10 * sync["healthy"], sync
-    assert sync["bearing"] < sync["healthy"] + 1.0 and sync["strong bearing"] < sync["healthy"] + 1.0, sync
+    # tooth_sync: the products of different revolutions of each unit, all pairs or none 3 apart
+    sync = {}
+    for slow in ((), (3,)):
+        ref = window_reference([sync_shares(r, 30, 3, 32, [32], slow) for r in past], dofs)
+        sync[slow] = {k: float(tooth_sync(sync_shares(r, 30, 30, 32, [32], slow), ref)[0]) for k, r in records.items()}
+        s = sync[slow]
+        assert s["pinion"] > 20 * max(s["healthy"], 1.0), (slow, s)
+        assert s["bearing"] < s["healthy"] + 1.0 and s["strong bearing"] < s["healthy"] + 1.0, (slow, s)
+    assert sync[()]["idler"] > 20 * max(sync[()]["healthy"], 1.0), sync  # all pairs: the idler's chip is called
+    # its period given: 109 -> 3.2, among a new healthy record (1.6) and the bearing (2.4): the
+    # estimate's own spread grows where the impulse is (its products with other revolutions' noise)
+    assert sync[(3,)]["idler"] < 0.05 * sync[()]["idler"] and sync[(3,)]["idler"] < sync[(3,)]["healthy"] + 2.0, sync
 
 
 def test_tooth_energy_finds_the_one_tooth_fm4_dilutes_and_ignores_a_record_level():
@@ -521,21 +528,25 @@ def test_tooth_energy_finds_the_one_tooth_fm4_dilutes_and_ignores_a_record_level
 
 
 def test_tooth_sync_reads_the_synchronous_part_of_each_tooth_window():
-    """tooth_sync: each tooth window's TSA energy less the floor V_k/N that the record's own
-    revolution-to-revolution spread predicts for a TSA of N revolutions, as a share of the mean
-    window energy, standardised by the history. A TSA of noise keeps V_k/N (the floor is that of
-    a mean of N independent draws); a tooth that adds the same impulse every revolution is
+    """tooth_sync: each tooth window's synchronous energy — the mean product of different
+    revolutions' difference signals over the window, the TSA's window energy less the floor V_k/N
+    of its revolution-to-revolution variance — as a share of the TSA's mean window energy,
+    standardised by the history. A TSA of noise keeps V_k/N (the floor of a mean of N independent
+    draws) and its synchronous share is 0; a tooth that adds the same impulse every revolution is
     called; bursts 3.05 times a revolution (asynchronous: they slip in angle), however strong, are
-    not; the record's level cancels."""
+    not; an impulse every 5th revolution at one angle (a tooth on a shaft turning 5 times slower)
+    is called unless that shaft's period is given; the record's level cancels."""
     from gearlab.kinds.detection import tsa_units
     from gearlab.kinds.record_effects import overlap_dof
     from gearlab.signals.indicators import (
         async_floor,
         difference_signal,
-        sync_windows,
+        pair_mask,
+        sync_shares,
         tooth_energy,
         tooth_reference,
         tooth_sync,
+        window_energy,
         window_reference,
     )
 
@@ -548,9 +559,9 @@ def test_tooth_sync_reads_the_synchronous_part_of_each_tooth_window():
         since = np.mod(theta - at, 2 * np.pi)
         return np.exp(-since * 60.0) * np.sin(40 * since)
 
-    def record(revolutions=90, chip=0.0, bursts=0.0) -> np.ndarray:
+    def record(revolutions=90, chip=0.0, bursts=0.0, every=1) -> np.ndarray:
         x = np.sin(teeth * theta) + 0.3 * rng.standard_normal((revolutions, n))
-        x[:, tooth] += chip * np.sin(40 * theta[tooth])
+        x[::every, tooth] += chip * np.sin(40 * theta[tooth])
         if bursts:  # asynchronous: 3.05 a revolution (an outer race), slipping in angle from one to the next
             for j in range(int(3.05 * revolutions)):
                 r, at = divmod(j / 3.05, 1.0)
@@ -562,32 +573,44 @@ def test_tooth_sync_reads_the_synchronous_part_of_each_tooth_window():
     floor = async_floor(noise, teeth, [teeth])
     # (the per-sample variance of the noise's difference signal: 0.3² less the removed orders' share)
     assert floor.shape == (teeth,) and np.allclose(floor, np.mean(difference_signal(noise, [teeth]) ** 2), rtol=0.1)
-    u = sync_windows(tsa_units(noise, block), block, floor, [teeth])
-    assert abs(u.mean()) < 0.05 and u.std() < 0.5
-    assert np.isnan(async_floor(noise[:1], teeth, [teeth])).all()
+    units = tsa_units(noise, block)
+    tsa_energy = window_energy(difference_signal(units, [teeth]), teeth)
+    assert np.mean(tsa_energy) == pytest.approx(np.mean(floor) / block, rel=0.1)
+    u = sync_shares(noise, block, block, teeth, [teeth])
+    assert u.shape == (len(units), teeth) and abs(u.mean()) < 0.05
+    # with every pair: the TSA's window energy less the floor of the unit's own revolutions
+    first = noise[:block]
+    energy = window_energy(difference_signal(first.mean(axis=0)[None], [teeth]), teeth)[0]
+    assert np.allclose(u[0] * energy.mean(), energy - async_floor(first, teeth, [teeth]) / block)
+    assert pair_mask(6, (3,)).sum() == 6 * 5 - 6  # the 6 ordered pairs 3 apart left out (and lag 0)
 
     past = [record(), record()]
     history = [tsa_units(r, block, 3) for r in past]
     dofs = [overlap_dof(len(h), block, 3) for h in history]
-    ref_sync = window_reference(
-        [sync_windows(h, block, async_floor(r, teeth, [teeth]), [teeth]) for h, r in zip(history, past)], dofs
-    )
     ref_energy = tooth_reference(history, teeth, [teeth], dofs=dofs)
+    refs = {
+        slow: window_reference([sync_shares(r, block, 3, teeth, [teeth], slow) for r in past], dofs)
+        for slow in ((), (5,))
+    }
 
-    def scores(r: np.ndarray) -> tuple[float, float]:
-        x = tsa_units(r, block)
+    def scores(r: np.ndarray, slow=()) -> tuple[float, float]:
         return (
-            float(tooth_sync(x, block, async_floor(r, teeth, [teeth]), [teeth], ref_sync).max()),
-            float(tooth_energy(x, [teeth], ref_energy).max()),
+            float(tooth_sync(sync_shares(r, block, block, teeth, [teeth], slow), refs[slow]).max()),
+            float(tooth_energy(tsa_units(r, block), [teeth], ref_energy).max()),
         )
 
     healthy, chipped = scores(record()), scores(record(chip=0.2))
     assert chipped[0] > healthy[0] + 10.0 and chipped[1] > healthy[1] + 3.0
     for strength in (3.0, 30.0):  # the bursts' energy up to 9 and 900 times the noise's
         assert scores(record(bursts=strength))[0] < healthy[0] + 1.0, (healthy, strength)
+    # a tooth on a shaft turning 5 times slower: called, unless its period is given
+    fifth = record(chip=1.0, every=5)  # its TSA: 0.2, the size of the pinion chip below
+    assert scores(fifth)[0] > healthy[0] + 10.0 and scores(fifth)[1] > healthy[1] + 3.0
+    # given its period, its mean share is 0; what stays (15.5 -> 4.7, a new healthy record 2.3) is the
+    # spread its products with other revolutions' noise add where it strikes
+    assert scores(fifth, (5,))[0] < 0.4 * scores(fifth)[0]
+    assert scores(record(chip=0.2), (5,))[0] > healthy[0] + 10.0  # the pinion's still is
     r = record(chip=0.2)
-    x = tsa_units(r, block)
     assert np.allclose(
-        tooth_sync(30.0 * x, block, async_floor(30.0 * r, teeth, [teeth]), [teeth], ref_sync),
-        tooth_sync(x, block, async_floor(r, teeth, [teeth]), [teeth], ref_sync),
+        sync_shares(30.0 * r, block, block, teeth, [teeth]), sync_shares(r, block, block, teeth, [teeth])
     )

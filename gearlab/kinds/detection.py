@@ -15,7 +15,7 @@ the method's model and threshold are fixed, and their labels only when the figur
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
                           adapter that can learn without target labels
     [classical]           indicators (fm4, na4, tooth_energy, tooth_sync) of the input-shaft TSA, mesh_orders,
-                          shaft_orders, sidebands
+                          shaft_orders, sidebands, slow_shafts (tooth_sync)
     [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold),
                           threshold (records | pooled), seeds (trainings per network method)
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
@@ -72,12 +72,11 @@ from ..signals import Standardiser
 from ..signals.indicators import (
     DEFAULT_INDICATORS,
     INDICATORS,
-    async_floor,
     difference_signal,
     fm4,
     na4,
     na4_reference,
-    sync_windows,
+    sync_shares,
     tooth_energy,
     tooth_reference,
     tooth_sync,
@@ -146,6 +145,13 @@ TABLES = {
             ),
             "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
             "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
+            "slow_shafts": Key(
+                list,
+                [],
+                doc="periods, in whole input revolutions, of the other shafts whose localised damage "
+                "tooth_sync is to tell from the input pinion's (a shaft turning q times slower, q whole, "
+                "brings a tooth back to one input angle every q revolutions; the PHM rig: [3, 5])",
+            ),
         }
     ),
     "detection": Table(
@@ -344,6 +350,12 @@ def build(scenario: Scenario) -> dict:
         raise GearlabInputError(
             f"{location(path, 'classical', 'mesh_orders')}: expected whole orders 1 … 1000, got {shown(orders)}"
         )
+    slow = c["slow_shafts"]
+    if not all(isinstance(q, int) and not isinstance(q, bool) and 2 <= q <= 1000 for q in slow):
+        raise GearlabInputError(
+            f"{location(path, 'classical', 'slow_shafts')}: expected whole numbers of input revolutions "
+            f"2 … 1000 (a shaft turning q times slower than the input), got {shown(slow)}"
+        )
     blocks = t["detection"]["blocks"]
     if not all(isinstance(b, int) and not isinstance(b, bool) and 2 <= b <= 10_000 for b in blocks) or len(
         set(blocks)
@@ -397,6 +409,7 @@ def build(scenario: Scenario) -> dict:
             "mesh_orders": tuple(orders),
             "shaft_orders": c["shaft_orders"],
             "sidebands": c["sidebands"],
+            "slow_shafts": tuple(slow),
         },
         "blocks": tuple(blocks),
         "false_alarm": t["detection"]["false_alarm"],
@@ -691,18 +704,32 @@ def method_name(m: Method, variant: str = "") -> str:
 
 def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
     """A classical indicator's scores: computed on the TSA units, its reference (NA4's variance,
-    tooth_energy's and tooth_sync's windows) from the history's units of the same kind; tooth_sync's
-    non-synchronous floor from each unit's own record (its revolutions, no label)."""
+    tooth_energy's and tooth_sync's windows) from the history's units of the same kind; tooth_sync
+    reads each unit's own revolutions (their pairs), not only their TSA."""
     orders, shaft, sidebands = classical["mesh_orders"], classical["shaft_orders"], classical["sidebands"]
     history = cond["history_units"]
     # the history's units of each kind, one array per history record (in the order of cond["history"])
     per_record = {
         u: np.split(X, np.cumsum([n for n, _ in cond["history_records"][u]])[:-1]) for u, X in history.items()
     }
-    # tooth_sync: each record's non-synchronous floor per window, from all its own revolutions
-    floors = {}
+    # tooth_sync: each unit's synchronous window shares from its own revolutions, {path: {unit: shares}}
+    shares = {}
     if name == "tooth_sync":
-        floors = {f.path: async_floor(r, orders[0], orders, shaft, sidebands) for role in ROLES for f, r in cond[role]}
+        for role in ROLES:
+            for f, revs in cond[role]:
+                shares[f.path] = {
+                    u: sync_shares(
+                        revs,
+                        _window(u)[0],
+                        _window(u)[1] if role == "history" else _window(u)[0],
+                        orders[0],
+                        orders,
+                        classical["slow_shafts"],
+                        shaft,
+                        sidebands,
+                    )
+                    for u in history
+                }
     # the localised indicators' within-record spread: that of independent units, from sliding windows
     dofs = {u: [record_effects.overlap_dof(len(X), *_window(u)) for X in groups] for u, groups in per_record.items()}
     reference = {}
@@ -713,24 +740,15 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
             u: tooth_reference(groups, orders[0], orders, shaft, sidebands, dofs[u]) for u, groups in per_record.items()
         }
     elif name == "tooth_sync":
-        reference = {
-            u: window_reference(
-                [
-                    sync_windows(X, _window(u)[0], floors[f.path], orders, shaft, sidebands)
-                    for (f, _), X in zip(cond["history"], groups)
-                ],
-                dofs[u],
-            )
-            for u, groups in per_record.items()
-        }
+        reference = {u: window_reference([shares[f.path][u] for f, _ in cond["history"]], dofs[u]) for u in history}
 
     def score(X: np.ndarray, u: str, path: str) -> np.ndarray:
         if name == "fm4":
             return fm4(X, orders, shaft, sidebands)
         if name == "tooth_energy":
             return tooth_energy(X, orders, reference[u], shaft, sidebands)
-        if name == "tooth_sync":
-            return tooth_sync(X, _window(u)[0], floors[path], orders, reference[u], shaft, sidebands)
+        if name == "tooth_sync":  # the units' own revolutions (X is their TSA)
+            return tooth_sync(shares[path][u], reference[u])
         return na4(X, orders, reference[u], shaft)
 
     hist = {

@@ -27,18 +27,20 @@ revolution on a uniform angle grid and X its order spectrum (order = harmonic of
   revolutions keeps what repeats at one input angle every revolution (a pinion tooth) and, of
   what does not (noise, a bearing's impulses, which slip in angle from one revolution to the
   next), an energy of about V_k/N, V_k the per-revolution variance of the difference signal in
-  window k about the record's TSA (the variance of a mean of N independent draws). The
-  window's synchronous energy is estimated as E_k − V_k/N (E_k the TSA's window energy, V_k
-  from all revolutions of the unit's own record: no history, no label), taken as a share of the
-  TSA's mean window energy, u_k = (E_k − V_k/N) / mean_j E_j, standardised per window by the
-  healthy history like tooth_energy (mean of the records' means, pooled within-record spread);
-  the indicator is max_k (u_k − ū_k)/σ_k. An asynchronous burst train raises E_k and V_k/N
-  alike and leaves u_k in expectation (it only dilutes it, through mean_j E_j), where
-  tooth_energy's log share of E_k calls it. A share and linear in energy: the record's level
-  cancels, and a window without synchronous content is not blown up as by a logarithm of a
-  near-zero estimate. Damage that repeats at one input angle every few revolutions (a tooth on
-  the idler, whose shaft turns once every 3 input revolutions on the PHM rig) is synchronous
-  with the input too, at a fraction of its size, and is called as FM4 calls it.
+  window k about the TSA (the variance of a mean of N independent draws). The window's
+  synchronous energy S_k = E_k − V_k/N is estimated without a floor as the mean product of the
+  difference signals of *different* revolutions of the unit over the window (noise of two
+  revolutions is independent: its products average to 0), taken as a share of the TSA's mean
+  window energy, u_k = S_k / mean_j E_j, standardised per window by the healthy history like
+  tooth_energy (mean of the records' means, pooled within-record spread); the indicator is
+  max_k (u_k − ū_k)/σ_k. An asynchronous burst train raises E_k and V_k/N alike and leaves S_k
+  (it only dilutes u_k, through mean_j E_j), where tooth_energy's log share of E_k rises with it.
+  A share and linear in energy: the record's level cancels, and a window without synchronous
+  content is not blown up as by a logarithm of a near-zero estimate. Damage that repeats at one
+  input angle every q revolutions (a tooth on a shaft turning q times slower: on the PHM rig the
+  idler, q = 3, and the output, q = 5) is synchronous with the input too, at 1/q of its size:
+  FM4 and tooth_energy call it. Given the *slow* periods, tooth_sync leaves out the pairs of
+  revolutions whose lag is a multiple of one, and such damage then scores 0 (sync_shares).
 
 All orders refer to the shaft the TSA is synchronous with (here the input shaft: mesh
 orders 32 for stage 1 and 16 for stage 2 of the PHM 2009 spur rig).
@@ -94,14 +96,17 @@ def na4(x: np.ndarray, mesh_orders, reference_variance: float, shaft_orders: int
     return np.mean(r**4, axis=-1) / max(reference_variance, 1e-300) ** 2
 
 
-def window_energy(d: np.ndarray, teeth: int) -> np.ndarray:
-    """Mean square of each row of *d* over *teeth* equal angle windows, (rows, teeth); the
-    windows' edges are the nearest samples to 2πk/teeth."""
-    n = d.shape[-1]
+def _edges(n: int, teeth: int) -> np.ndarray:
+    """The *teeth* + 1 edges of equal angle windows of *n* samples: the nearest samples to 2πk/teeth."""
     if not 1 <= teeth <= n:
         raise ValueError(f"expected 1 … {n} tooth windows, got {teeth}")
-    edges = np.round(np.arange(teeth) * n / teeth).astype(int)
-    return np.add.reduceat(d**2, edges, axis=-1) / np.diff(np.append(edges, n))
+    return np.append(np.round(np.arange(teeth) * n / teeth).astype(int), n)
+
+
+def window_energy(d: np.ndarray, teeth: int) -> np.ndarray:
+    """Mean square of each row of *d* over *teeth* equal angle windows, (rows, teeth)."""
+    edges = _edges(d.shape[-1], teeth)
+    return np.add.reduceat(d**2, edges[:-1], axis=-1) / np.diff(edges)
 
 
 def tooth_windows(x: np.ndarray, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1) -> np.ndarray:
@@ -123,15 +128,60 @@ def async_floor(revolutions: np.ndarray, teeth: int, mesh_orders, shaft_orders: 
     return window_energy(d - d.mean(axis=0), teeth).sum(axis=0) / (n - 1)
 
 
-def sync_windows(
-    x: np.ndarray, revolutions: int, floor: np.ndarray, mesh_orders, shaft_orders: int = 2, sidebands: int = 1
+def window_gram(revolutions: np.ndarray, teeth: int, mesh_orders, shaft_orders: int = 2, sidebands: int = 1):
+    """G[k, r, s]: the mean over tooth window k of the product of revolutions r and s's difference
+    signals, (teeth, revolutions, revolutions); its diagonal is each revolution's window energy."""
+    d = difference_signal(np.atleast_2d(revolutions), mesh_orders, shaft_orders, sidebands)
+    edges = _edges(d.shape[-1], teeth)
+    return np.stack([d[:, a:b] @ d[:, a:b].T / (b - a) for a, b in zip(edges[:-1], edges[1:])])
+
+
+def pair_mask(n: int, slow=()) -> np.ndarray:
+    """(n, n): the pairs of revolutions r ≠ s whose lag r − s is no multiple of any of the *slow*
+    shafts' periods (in input revolutions)."""
+    lag = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    keep = lag > 0
+    for q in slow:
+        keep &= lag % q != 0
+    return keep
+
+
+def sync_shares(
+    revolutions: np.ndarray,
+    block: int,
+    stride: int,
+    teeth: int,
+    mesh_orders,
+    slow=(),
+    shaft_orders: int = 2,
+    sidebands: int = 1,
 ) -> np.ndarray:
-    """u_k: each window's synchronous energy E_k − V_k/N as a share of the mean window energy, for
-    rows of *x* that are TSAs of N = *revolutions* revolutions of a record whose floor V_k is
-    *floor* (async_floor; its length is the number of windows), (rows of *x*, teeth)."""
-    d = difference_signal(np.atleast_2d(x), mesh_orders, shaft_orders, sidebands)
-    energy = window_energy(d, len(floor))
-    return (energy - np.asarray(floor)[None] / revolutions) / np.maximum(energy.mean(axis=-1, keepdims=True), 1e-300)
+    """u_k of each TSA unit of *block* consecutive *revolutions* of one record (units starting at 0,
+    stride, 2·stride, … as detection.tsa_units makes them), (units, teeth): each window's
+    synchronous energy S_k as a share of the unit's TSA mean window energy. S_k is the mean of
+    G[k, r, s] (window_gram) over the unit's pairs of different revolutions (pair_mask): what
+    repeats every revolution adds its energy to every pair, independent noise and impulses that
+    slip in angle (a bearing) add nothing in expectation — the same as the TSA's window energy less
+    the floor V_k/N of its revolution-to-revolution variance. Leaving out the pairs whose lag is a
+    multiple of a *slow* shaft's period q removes what repeats every q revolutions and not every
+    one (a tooth on that shaft): it then scores |s|² − Σ_a |d_a|² / (q(q − 1)) for a signal
+    s + d_(r mod q), 0 for one impulse every q revolutions. block = 1: each revolution paired
+    with every other revolution of the record."""
+    gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
+    n = gram.shape[-1]
+    diagonal = np.einsum("krr->rk", gram)
+    if block == 1:
+        mask = pair_mask(n, slow)
+        sync = np.einsum("krs,rs->rk", gram, mask) / np.maximum(mask.sum(axis=1), 1)[:, None]
+        return sync / np.maximum(diagonal.mean(axis=1, keepdims=True), 1e-300)
+    mask = pair_mask(block, slow)
+    out = []
+    for s in range(0, n - block + 1, stride):
+        g = gram[:, s : s + block, s : s + block]
+        sync = np.sum(g * mask, axis=(1, 2)) / max(mask.sum(), 1)
+        energy = g.sum(axis=(1, 2)) / block**2  # the TSA's window energies
+        out.append(sync / max(energy.mean(), 1e-300))
+    return np.array(out).reshape(-1, teeth)
 
 
 def window_reference(groups, dofs=None):
@@ -168,15 +218,11 @@ def tooth_energy(x: np.ndarray, mesh_orders, reference, shaft_orders: int = 2, s
     return np.max((s - mean) / spread, axis=-1)
 
 
-def tooth_sync(
-    x: np.ndarray, revolutions: int, floor, mesh_orders, reference, shaft_orders: int = 2, sidebands: int = 1
-) -> np.ndarray:
-    """tooth_sync of each row of *x* (TSAs of *revolutions* revolutions of one record with
-    async_floor *floor*): the largest standardised synchronous window share, against *reference*
-    = window_reference of the history's sync_windows."""
+def tooth_sync(shares: np.ndarray, reference) -> np.ndarray:
+    """tooth_sync of each unit from its sync_shares: the largest standardised synchronous window
+    share, against *reference* = window_reference of the history's sync_shares."""
     mean, spread = reference
-    u = sync_windows(x, revolutions, floor, mesh_orders, shaft_orders, sidebands)
-    return np.max((u - mean) / spread, axis=-1)
+    return np.max((shares - mean) / spread, axis=-1)
 
 
 def input_synchronous_share(
