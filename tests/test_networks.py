@@ -9,7 +9,7 @@ from torch import nn
 from gearlab.errors import GearlabInputError
 from gearlab.learn.networks import DEFAULT_NETWORK, NETWORKS, TORCH_INIT, Network, build_network
 
-NAMES = ["cnn3", "fast", "burst"]
+NAMES = ["cnn3", "fast", "burst", "shapes"]
 
 
 @pytest.fixture(scope="module")
@@ -149,8 +149,9 @@ def test_burst_uses_pytorch_default_init():
 
 
 # burst starts from PyTorch's smaller weights and its batch norm's running statistics lag
-# behind in ten steps (eval loss 0.69 -> 0.54 at 10 steps, 0.13 at 30)
-STEPS = {"cnn3": 10, "fast": 10, "burst": 30}
+# behind in ten steps (eval loss 0.69 -> 0.54 at 10 steps, 0.13 at 30); shapes from its random start
+# learns its templates at a tenth of the step (0.69 -> 0.51 at 30 steps)
+STEPS = {"cnn3": 10, "fast": 10, "burst": 30, "shapes": 100}
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -279,3 +280,57 @@ def test_the_matched_start_puts_the_fault_bursts_into_burst_s_bank():
     assert not matched_start(fast, faults, seed=0)  # no bank: the random start stays
     assert all(torch.equal(v, fast.state_dict()[k]) for k, v in state.items())
     assert not matched_start(net, np.zeros((5, 4096)), seed=0)
+
+
+def _faults_and_rows(length: int = 512, n_faults: int = 12, n_rows: int = 8):
+    import numpy as np
+
+    g = np.random.default_rng(4)
+    faults = np.zeros((n_faults, length))
+    for row in faults:
+        at = g.integers(0, length - 60)
+        row[at : at + 60] = g.normal(0, 2, 60) * np.hanning(60)
+    X = g.laplace(0, 1, (n_rows, length))
+    X[: n_rows // 2] += faults[: n_rows // 2]
+    return faults, X
+
+
+def test_shapes_started_on_the_faults_is_the_likelihood_ratio_detector():
+    """Started on the fault shapes, the fault logit less the healthy one is the Bayes detector's
+    log mixture likelihood ratio in Laplace noise (gearlab.learn.bounds.likelihood_ratio), to
+    float32 rounding; the healthy logit is the zero shape's, 0."""
+    import numpy as np
+
+    from gearlab.learn.bounds import likelihood_ratio
+    from gearlab.learn.networks import matched_start
+
+    faults, X = _faults_and_rows()
+    net = build_network("shapes", 2, length=512, seed=0).eval()
+    assert matched_start(net, faults, seed=0)
+    with torch.no_grad():
+        logits = net(torch.as_tensor(X, dtype=torch.float32)).double().numpy()
+    want = likelihood_ratio(X, np.zeros(512), faults, "laplace")
+    assert np.allclose(logits[:, 0], 0.0)
+    assert np.allclose(logits[:, 1], want, rtol=1e-4, atol=1e-2)
+    assert (want[:4] > want[4:].max()).all()  # and it ranks the rows holding a fault first
+
+
+def test_shapes_templates_learn_at_a_tenth_of_the_step_and_only_members_weigh():
+    """One Adam step moves every weight by the learning rate: the templates by SHAPE_STEP of it;
+    the log weights of templates outside a class's mixture (the healthy class's, and those beyond
+    the faults in use) get no gradient."""
+    from gearlab.learn.networks import SHAPE_STEP, matched_start
+
+    faults, X = _faults_and_rows()
+    net = build_network("shapes", 2, length=512, seed=0)
+    matched_start(net, faults, seed=0)
+    before = net.features[1].shapes.detach().clone()
+    opt = torch.optim.Adam(net.parameters(), lr=1e-2)
+    y = torch.tensor([1, 1, 1, 1, 0, 0, 0, 0])
+    nn.functional.cross_entropy(net(torch.as_tensor(X, dtype=torch.float32)), y).backward()
+    grad = net.classifier.log_weight.grad
+    assert torch.count_nonzero(grad[1:, 0]) == 0 and torch.count_nonzero(grad[0, 1:]) == 0
+    assert torch.count_nonzero(grad[len(faults) + 1 :]) == 0
+    opt.step()
+    moved = (net.features[1].shapes.detach() - before).abs()
+    assert moved.max() == pytest.approx(SHAPE_STEP * 1e-2, rel=1e-2)  # Adam: lr · g / (|g| + eps)

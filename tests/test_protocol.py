@@ -172,14 +172,19 @@ def scrambled_test_set(dataset: Dataset, test: np.ndarray, signals: bool) -> Dat
     return replace(dataset, X=X, fault=fault, label=fault.copy())
 
 
-@pytest.mark.parametrize("calibration", [THESIS, RECIPE], ids=["thesis", "recipe"])
+@pytest.mark.parametrize(
+    "calibration, network",
+    [(THESIS, "burst"), (RECIPE, "burst"), (RECIPE, "shapes")],
+    ids=["thesis", "recipe", "recipe-shapes"],
+)
 @pytest.mark.parametrize("m", METHODS, ids=lambda m: m.key)
-def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, calibration, monkeypatch):
+def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, calibration, network, monkeypatch):
     """With the split fixed, flipping the target test labels and replacing the test signals
     changes nothing of the trained model, its training curves or the epoch kept; only the
     score. No training function is ever handed a target test row: not the networks' training,
-    nor the calibration's references, noise level and history threshold (gearlab's recipe)."""
-    p, k = tiny(calibration=calibration), 2
+    nor the calibration's references, noise level and history threshold (gearlab's recipe),
+    nor the `shapes` network's templates (built at the data's length, 256 samples)."""
+    p, k = tiny(calibration=calibration, network=network), 2
     fixed = split(p, SOURCE, TARGET, 0, k)
     monkeypatch.setattr(P, "split", lambda *args: fixed)
     models, handed = [], []

@@ -18,8 +18,8 @@ settings, each a named option of ``[protocol]`` with the thesis's choice still a
                   lacks acts on a fault's response as on the healthy mesh signal).
 ``start``         ``random`` (thesis) or ``faults``: the priming starts the network's filter
                   bank as matched filters of the source's fault residuals (as they reach the
-                  target through ``path``; gearlab.learn.networks.matched_start, ``burst``
-                  only; other networks start at random).
+                  target through ``path``; gearlab.learn.networks.matched_start: ``burst``'s
+                  bank, ``shapes``' templates; other networks start at random).
 ``source_noise``  fresh simulated sensor noise on every source batch, at the level of the
                   target history's residuals (the median over revolutions of their RMS) —
                   the thesis's corrected simulator (its sensor noise) used for training.

@@ -73,6 +73,22 @@ with PyTorch's default initialisation (``_torch_uniform``). Measured on Experime
 (repetition 0, k = 0, trained on the noise-augmented source, history threshold): 80-81 %
 against `fast`'s 73-75 % on the same recipe; on the perfectly corrected simulator 85 %
 against `fast`'s 74-77 % (docs/learning.md, section 6).
+
+``shapes`` — the Bayes detector's form, learnt (beyond the thesis)
+-----------------------------------------------------------------
+``burst`` finds 69.6 % of Experiment B's faults at 1 % false alarms where the likelihood ratio
+of the simulated shapes finds 80.3 %: a bank of short filters and a maximum do not rank as a
+mixture of whole-revolution likelihoods does. ``shapes`` has that form and learns it:
+
+    ShapeLikelihood: z_j = (||r||_1 - ||r - t_j||_1) / b      256 whole-revolution templates t_j,
+                                                              Laplace law, b = median|r| / ln 2
+    ShapeMixture:    logit_c = log Σ_j w_j,c exp(z_j)         healthy = the zero shape (z_0 = 0)
+
+Its matched start (``[protocol] start = "faults"``) sets the templates to the source's fault
+residuals and the weights equal, which is the `likelihood_ratio` detector exactly; training then
+moves the templates at a tenth of the step (at the full step the priming pulled them off the
+simulated shapes: Experiment B, repetition 0, k = 0, 81.4 % against 88.1 % at the start). From a
+random start it learns slowly. It needs revolutions of the length it was built for.
 """
 
 from __future__ import annotations
@@ -88,6 +104,8 @@ from torch import nn
 from gearlab.errors import GearlabInputError
 from gearlab.params import did_you_mean
 from gearlab.settings import setting
+
+from .bounds import noise_scale, shape_llr
 
 DEFAULT_NETWORK = "burst"
 DEFAULT_DROPOUT = 0.005  # Han et al. (2019a), thesis 3.1.6 and Table 5.3
@@ -160,10 +178,10 @@ def _torch_uniform(module: nn.Module, generator: torch.Generator | None) -> None
     bank is followed by batch normalisation, so only the weights' scale relative to Adam's
     fixed step size changes, and smaller weights move further per step."""
     for layer in module.modules():
-        if isinstance(layer, (nn.Conv1d, nn.Linear)):
+        if isinstance(layer, (nn.Conv1d, nn.Linear, ShapeLikelihood)):
             bound = 1.0 / math.sqrt(layer.weight[0].numel())
             nn.init.uniform_(layer.weight, -bound, bound, generator=generator)
-            if layer.bias is not None:
+            if getattr(layer, "bias", None) is not None:
                 nn.init.uniform_(layer.bias, -bound, bound, generator=generator)
 
 
@@ -318,6 +336,85 @@ def burst(n_classes: int, dropout: float, length: int) -> Network:
     return network
 
 
+SHAPES = 256  # whole-revolution templates of the `shapes` network (Experiment B's source has ~270 training faults)
+SHAPE_STEP = 0.1  # templates learn at a tenth of the optimiser's step (docs/learning.md, section 6)
+
+
+class ShapeLikelihood(nn.Module):
+    """``(B, L)`` residual revolutions -> ``(B, J)``: each template's log-likelihood ratio in
+    Laplace noise at the revolution's own scale b (gearlab.learn.bounds, eq. of `shape_llr`),
+
+        z_j = (||r||_1 - ||r - t_j||_1) / b,        b = median|r| / ln 2,
+
+    so a sample far out (an impulse) moves z_j by at most |t_j,n| / b: the Laplace law's own
+    limiter. The templates are stored divided by `SHAPE_STEP`, so that Adam's fixed step size
+    moves them by a tenth of what it moves other weights."""
+
+    def __init__(self, n_shapes: int, length: int):
+        super().__init__()
+        self.weight = nn.Parameter(torch.zeros(n_shapes, length))
+
+    @property
+    def shapes(self) -> torch.Tensor:
+        return self.weight * SHAPE_STEP
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        r = x.reshape(len(x), -1)
+        with torch.no_grad():  # the scale is the noise's, not a feature to learn
+            b = noise_scale(r, "laplace")
+        return shape_llr(r, self.shapes, b, "laplace")
+
+
+class ShapeMixture(nn.Module):
+    """``(B, J)`` -> ``(B, C)`` logits: class c's log mixture likelihood ratio against healthy,
+
+        logit_c = log Σ_j w_j,c · exp(z_j),        z_0 = 0 (the healthy shape: no response),
+
+    with learnt log weights ``log w`` (J + 1 x C) over a fixed membership: healthy is the zero
+    shape alone, every fault class a mixture of the templates in use. Started as the Bayes
+    detector's mixture (gearlab.learn.bounds): the templates in use equally weighted."""
+
+    def __init__(self, n_shapes: int, n_classes: int):
+        super().__init__()
+        self.log_weight = nn.Parameter(torch.zeros(n_shapes + 1, n_classes))
+        self.register_buffer("member", torch.zeros(n_shapes + 1, n_classes, dtype=torch.bool))
+        self.use(n_shapes)
+
+    def use(self, n: int) -> None:
+        """Healthy = the zero shape; each fault class = the first *n* templates, equally weighted."""
+        with torch.no_grad():
+            self.member.zero_()
+            self.member[0, 0] = True
+            self.member[1 : n + 1, 1:] = True
+            self.log_weight.fill_(-math.log(max(n, 1)))
+            self.log_weight[0, 0] = 0.0
+
+    def forward(self, z: torch.Tensor) -> torch.Tensor:
+        z = torch.cat([torch.zeros_like(z[:, :1]), z], dim=1)
+        log_weight = self.log_weight.masked_fill(~self.member, -math.inf)
+        return torch.logsumexp(z[:, :, None] + log_weight[None], dim=1)
+
+
+def shapes(n_classes: int, dropout: float, length: int) -> Network:
+    """The Bayes detector's form as a network: `SHAPES` whole-revolution templates scored by
+    their Laplace likelihood ratio, a learnt mixture per class. *dropout* is not used (there is
+    no dense layer to drop)."""
+    features = nn.Sequential(AsChannels(), ShapeLikelihood(SHAPES, length))
+    network = Network("shapes", features, ShapeMixture(SHAPES, n_classes), SHAPES, n_classes, length, fixed_length=True)
+    return network
+
+
+def _start_shapes(network: Network, faults: np.ndarray, seed: int) -> bool:
+    """`shapes`' matched start: its templates are the simulated fault residuals themselves (a
+    seeded choice of `SHAPES` when there are more), the mixture that of the Bayes detector."""
+    rng = np.random.default_rng(seed)
+    F = faults[rng.permutation(len(faults))[:SHAPES]]
+    with torch.no_grad():
+        network.features[1].weight[: len(F)] = torch.as_tensor(F / SHAPE_STEP, dtype=torch.float32)
+    network.classifier.use(len(F))
+    return True
+
+
 def matched_start(network: Network, faults: np.ndarray, seed: int) -> bool:
     """Start *network*'s filter bank as matched filters of the simulated *faults* (fault
     residuals, one revolution a row, as the network will see them): the k-means centroids of
@@ -328,9 +425,13 @@ def matched_start(network: Network, faults: np.ndarray, seed: int) -> bool:
     without a bank (cnn3, fast) keeps all of it (returns False). Why: trained from a random
     start, the bank learns the strong faults (cracks, spalls) and leaves the weak ones (pits,
     chips) to noise; started on them, it keeps them (docs/learning.md, decision 20)."""
-    layer = getattr(network, "bank_layer", None)
     F = np.asarray(faults, dtype=np.float64)
-    if layer is None or len(F) == 0:
+    if len(F) == 0:
+        return False
+    if network.name == "shapes":
+        return _start_shapes(network, F, seed)
+    layer = getattr(network, "bank_layer", None)
+    if layer is None:
         return False
     bank = network.features[layer]
     from sklearn.cluster import KMeans  # sklearn is slow to import; only priming needs it
@@ -357,8 +458,16 @@ def matched_start(network: Network, faults: np.ndarray, seed: int) -> bool:
     return True
 
 
-NETWORKS: dict[str, Callable[[int, float, int], Network]] = {"cnn3": cnn3, "fast": fast, "burst": burst}
-TORCH_INIT = ("burst",)  # initialised as PyTorch does (_torch_uniform); the thesis's nets He-uniform (Table 3.1)
+NETWORKS: dict[str, Callable[[int, float, int], Network]] = {
+    "cnn3": cnn3,
+    "fast": fast,
+    "burst": burst,
+    "shapes": shapes,
+}
+TORCH_INIT = (
+    "burst",
+    "shapes",
+)  # initialised as PyTorch does (_torch_uniform); the thesis's nets He-uniform (Table 3.1)
 
 
 def build_network(

@@ -239,9 +239,9 @@ def shared_state(method: Method, rep: int, k: int, protocol: Protocol) -> str | 
     return f"rep{rep}_primed" if adapter.calibrated else None
 
 
-def _net(protocol: Protocol, seed: int, device):
+def _net(protocol: Protocol, seed: int, device, length: int):
     torch.manual_seed(seed)
-    return build_network(protocol.network, n_classes=2, dropout=protocol.dropout).to(device)
+    return build_network(protocol.network, n_classes=2, dropout=protocol.dropout, length=length).to(device)
 
 
 def _cpu_state(net) -> dict:
@@ -360,7 +360,7 @@ def train_method(
 
     def primed() -> dict:
         start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
-        net = _net(protocol, seed, device)
+        net = _net(protocol, seed, device, Xs.shape[1])
         if protocol.calibration.start == "faults":
             matched_start(net, start.source(Xs[np.asarray(ys) != 0]), seed)
         fit_supervised(
@@ -383,7 +383,7 @@ def train_method(
     if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
 
         def trained() -> dict:
-            net = _net(protocol, seed, device)
+            net = _net(protocol, seed, device, Xs.shape[1])
             fit_supervised(
                 net,
                 Xs,
@@ -397,11 +397,11 @@ def train_method(
             )
             return _cpu_state(net)
 
-        net = _net(protocol, seed, device)
+        net = _net(protocol, seed, device, Xs.shape[1])
         net.load_state_dict(states.get(shared_state(method, rep, k, protocol), trained))
         return net, None, {}
     if adapter.calibrated:
-        net = _net(protocol, seed, device)
+        net = _net(protocol, seed, device, Xs.shape[1])
         net.load_state_dict(states.get(shared_state(method, rep, k, protocol), primed))
         Xt_in = inputs.target(Xt)
         Xv, yv = source_val
@@ -410,7 +410,7 @@ def train_method(
             Xv = augment(torch.as_tensor(Xv), torch.Generator().manual_seed(seed)).numpy()
         source_val = (Xv, yv)
     else:
-        net = _net(protocol, seed + 17, device)
+        net = _net(protocol, seed + 17, device, Xs.shape[1])
         Xt_in = Xt
     if adapter.train_on == "target":  # target_only from scratch, finetune from the primed network
         # 10 % of the labelled target training samples decide when to stop (Table 5.3)
