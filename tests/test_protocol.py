@@ -321,6 +321,20 @@ def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, c
         assert moved == {"classifier.3.weight", "classifier.3.bias"}
 
 
+def test_finetune_last_of_shapes_retrains_its_mixture_weights_only():
+    """`shapes`' classifier is one layer (the mixture): 'last' retrains its log weights, no template."""
+    p = tiny(methods=(method("finetune", True, variant="last"),), network="shapes")
+    store = StateStore(None)
+    s = split(p, SOURCE, TARGET, 0, 2)
+    source = (SOURCE.X[s.source_train], SOURCE.fault[s.source_train].astype(np.int64))
+    val = (SOURCE.X[s.source_val], SOURCE.fault[s.source_val].astype(np.int64))
+    target = (TARGET.X[s.target_train], TARGET.fault[s.target_train].astype(np.int64))
+    net, _, _ = train_method(p, p.methods[0], source, val, target, 0, 2, store, torch.device("cpu"))
+    primed = store.memory["rep0_primed"]
+    moved = {name for name, value in net.state_dict().items() if not torch.equal(value, primed[name])}
+    assert moved == {"classifier.log_weight"}
+
+
 def test_adapter_parameters_reach_training():
     p = tiny(methods=(method("mmd"), method("mmd", lambda_max=0.2)))
     default, capped = (run_unit(p, SOURCE, TARGET, 0, 0, m, StateStore(None)) for m in p.methods)

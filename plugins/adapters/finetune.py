@@ -52,15 +52,13 @@ class Finetune(Adapter):
         return VARIANTS[int(value)]
 
     def trainable(self, network, params: Mapping | None = None) -> list:
-        # torch here, not at the top: the registry imports this module on every command
-        from torch import nn
-
         variant = self.variant(params)
         if variant == "all":
             return list(network.parameters())
         if variant == "classifier":
             return list(network.classifier.parameters())
-        last = [m for m in network.classifier.modules() if isinstance(m, nn.Linear)][-1]
+        # the last layer that holds weights: a dense layer, or a classifier that is one layer (shapes' mixture)
+        last = [m for m in network.classifier.modules() if any(True for _ in m.parameters(recurse=False))][-1]
         return list(last.parameters())
 
 
