@@ -298,12 +298,9 @@ def test_the_recipe_primes_once_per_repetition_from_the_history_core(tmp_path, m
     assert not any((row == X).all(1).any() for X in tested for row in core)
 
 
-@pytest.mark.parametrize(
-    "variant, changed",
-    [("all", {"features", "classifier"}), ("classifier", {"classifier"}), ("last", {"classifier.3"})],
-)
-def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, changed):
-    p = tiny(methods=(method("finetune", True, variant=variant),))
+def _finetuned_weights_moved(variant: str, network: str = "burst") -> set[str]:
+    """The state entries a finetune *variant* changed from the repetition's priming."""
+    p = tiny(methods=(method("finetune", True, variant=variant),), network=network)
     store = StateStore(None)
     s = split(p, SOURCE, TARGET, 0, 2)
     source = (SOURCE.X[s.source_train], SOURCE.fault[s.source_train].astype(np.int64))
@@ -311,11 +308,19 @@ def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, c
     target = (TARGET.X[s.target_train], TARGET.fault[s.target_train].astype(np.int64))
     net, _, _ = train_method(p, p.methods[0], source, val, target, 0, 2, store, torch.device("cpu"))
     primed = store.memory["rep0_primed"]
-    moved = {
+    return {
         name
         for name, value in net.state_dict().items()
         if value.dtype.is_floating_point and not torch.equal(value, primed[name])
     }
+
+
+@pytest.mark.parametrize(
+    "variant, changed",
+    [("all", {"features", "classifier"}), ("classifier", {"classifier"}), ("last", {"classifier.3"})],
+)
+def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, changed):
+    moved = _finetuned_weights_moved(variant)
     assert moved and all(any(name.startswith(c + ".") for c in changed) for name in moved)
     if variant == "last":
         assert moved == {"classifier.3.weight", "classifier.3.bias"}
@@ -323,16 +328,7 @@ def test_finetune_variants_retrain_only_their_layers_from_the_priming(variant, c
 
 def test_finetune_last_of_shapes_retrains_its_mixture_weights_only():
     """`shapes`' classifier is one layer (the mixture): 'last' retrains its log weights, no template."""
-    p = tiny(methods=(method("finetune", True, variant="last"),), network="shapes")
-    store = StateStore(None)
-    s = split(p, SOURCE, TARGET, 0, 2)
-    source = (SOURCE.X[s.source_train], SOURCE.fault[s.source_train].astype(np.int64))
-    val = (SOURCE.X[s.source_val], SOURCE.fault[s.source_val].astype(np.int64))
-    target = (TARGET.X[s.target_train], TARGET.fault[s.target_train].astype(np.int64))
-    net, _, _ = train_method(p, p.methods[0], source, val, target, 0, 2, store, torch.device("cpu"))
-    primed = store.memory["rep0_primed"]
-    moved = {name for name, value in net.state_dict().items() if not torch.equal(value, primed[name])}
-    assert moved == {"classifier.log_weight"}
+    assert _finetuned_weights_moved("last", network="shapes") == {"classifier.log_weight"}
 
 
 def test_adapter_parameters_reach_training():
