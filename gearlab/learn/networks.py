@@ -400,8 +400,7 @@ def shapes(n_classes: int, dropout: float, length: int) -> Network:
     their Laplace likelihood ratio, a learnt mixture per class. *dropout* is not used (there is
     no dense layer to drop)."""
     features = nn.Sequential(AsChannels(), ShapeLikelihood(SHAPES, length))
-    network = Network("shapes", features, ShapeMixture(SHAPES, n_classes), SHAPES, n_classes, length, fixed_length=True)
-    return network
+    return Network("shapes", features, ShapeMixture(SHAPES, n_classes), SHAPES, n_classes, length, fixed_length=True)
 
 
 def _start_shapes(network: Network, faults: np.ndarray, seed: int) -> bool:
