@@ -250,6 +250,17 @@ def test_scoring_a_single_hit_and_its_parameter_error():
     assert r["wrong_names"] == []
 
 
+def test_an_effect_taken_back_at_the_end_is_listed_but_not_a_wrong_name():
+    """needed_effects moves an extra the final fit does not need to unneeded_effects: the record lists
+    it apart, and only what stays named counts as named (wrongly or not)."""
+    result = fake_result(["load_fluctuation"], 10.0, 0.01)
+    result["unneeded_effects"] = [{"name": "sensor_noise", "round": 1, "nuisance_of": "load_fluctuation"}]
+    r = bench.score_trial(answers("single", [("load_fluctuation", {"amplitude": 0.1, "order": 2})]), result)
+    assert r["accepted"] == ["load_fluctuation"] and r["unneeded"] == ["sensor_noise"]
+    assert r["top1"] and r["wrong_names"] == []
+    assert bench.score_trial(answers("null"), fake_result(significant=False))["unneeded"] == []
+
+
 def test_scoring_misses_pairs_phases_and_options():
     miss = bench.score_trial(
         answers("single", [("tooth_friction", {"mu_f": 0.1})]), fake_result(["mesh_damping", "tooth_friction"])

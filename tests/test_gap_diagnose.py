@@ -24,8 +24,10 @@ from gearlab.gap.diagnose import (
     Settings,
     corrected_source,
     diagnose,
+    needed_effects,
     rms_effect,
     source_rows,
+    unneeded_note,
     verdict_of,
     within_noise,
 )
@@ -345,6 +347,91 @@ def test_the_noise_width_is_the_rms_effect_of_the_gap_over_its_features():
     # a gap barely above the width: a stand-in removing a tenth brings it under, but what it
     # removed (RMS 0.33) is itself within the noise
     assert not within_noise(_report_of(1.1 * 214, 214), _report_of(0.99 * 214, 214))
+
+
+def _seen_report(gap: float, features: int, seen: bool, auc: float) -> dict:
+    """A report as gap_seen and rms_effect read it: the MMD test's verdict and the classifier AUC
+    (40 source against 80 target revolutions)."""
+    return {
+        "total": {"gap": gap, "features": features},
+        "significant": seen,
+        "auc": auc,
+        "n_source": 40,
+        "n_target": 80,
+        "alpha": 0.05,
+    }
+
+
+def _spec(name: str) -> tuple:
+    return (name, (("x", 1.0),))
+
+
+def _needed(reports: dict, names_rounds: list, before: dict) -> tuple:
+    """needed_effects on canned reports keyed by the effects' names."""
+    accepted = [{"name": n, "round": r, **({"nuisance_of": o} if o else {})} for n, r, o in names_rounds]
+    fitted = tuple(_spec(n) for n, _, _ in names_rounds)
+    calls = []
+
+    def report_of(fx):
+        calls.append(fx)
+        return reports[tuple(name for name, _ in fx)]
+
+    return needed_effects(before, accepted, fitted, report_of) + (calls,)
+
+
+def test_an_effect_that_only_nibbles_at_a_remainder_within_the_noise_is_not_named():
+    """Seed 53's trial 9 (a load ripple; sensor noise named beside it in round 1): without the noise
+    the ripple leaves RMS 0.45 (G 28.1 over 139 features), within the noise width, and with it the
+    test still sees the gap (AUC 0.886): the noise is taken back, with a note. A weak eccentricity
+    next to a low-pass (seed 47's trial 20) makes the gap unseen: it stays."""
+    before = _seen_report(2.214e4, 139, True, 1.0)
+    reports = {
+        ("load_fluctuation", "sensor_noise"): _seen_report(19.14, 139, True, 0.886),
+        ("load_fluctuation",): _seen_report(28.07, 139, True, 0.999),
+    }
+    accepted, fitted, unneeded, _ = _needed(
+        reports, [("load_fluctuation", 1, None), ("sensor_noise", 1, "load_fluctuation")], before
+    )
+    assert [e["name"] for e in accepted] == ["load_fluctuation"] and fitted == (_spec("load_fluctuation"),)
+    assert [u["name"] for u in unneeded] == ["sensor_noise"]
+    assert unneeded[0]["reason"] == "within noise without it"
+    assert unneeded[0]["gap_without"] == 28.07 and unneeded[0]["rms_effect_without"] == pytest.approx(0.449, abs=1e-3)
+    assert "sensor_noise (round 1) not named" in unneeded_note(unneeded[0]) and "0.45" in unneeded_note(unneeded[0])
+
+    before = _seen_report(4.428e6, 214, True, 1.0)
+    reports = {
+        ("sensor_lowpass", "shaft_eccentricity"): _seen_report(0.0719, 214, False, 0.397),
+        ("sensor_lowpass",): _seen_report(12.79, 214, True, 0.989),
+    }
+    accepted, _, unneeded, _ = _needed(reports, [("sensor_lowpass", 1, None), ("shaft_eccentricity", 2, None)], before)
+    assert [e["name"] for e in accepted] == ["sensor_lowpass", "shaft_eccentricity"] and unneeded == []
+
+
+def test_a_stand_in_the_final_fit_does_better_without_is_not_named_but_a_right_second_effect_is():
+    """Seed 53's trial 14 (mesh damping and a load ripple): round 2 accepted a speed ripple for the
+    load ripple, round 3 the load ripple too. Checked last-accepted first: the load ripple removes 80 %
+    of what the others leave (kept); without the speed ripple the gap falls from 328 to 166 (taken
+    back); then without the noise beside the mesh damping it falls to 148 (taken back). The first
+    round's effect is never checked. (The stored fits' reports, current code.)"""
+    before = _seen_report(5.958e5, 144, True, 1.0)
+    reports = {
+        ("mesh_damping", "sensor_noise", "speed_fluctuation", "load_fluctuation"): _seen_report(327.9, 144, True, 1.0),
+        ("mesh_damping", "sensor_noise", "speed_fluctuation"): _seen_report(1643.0, 144, True, 1.0),
+        ("mesh_damping", "sensor_noise", "load_fluctuation"): _seen_report(166.1, 144, True, 1.0),
+        ("mesh_damping", "load_fluctuation"): _seen_report(148.1, 144, True, 1.0),
+    }
+    rounds = [
+        ("mesh_damping", 1, None),
+        ("sensor_noise", 1, "mesh_damping"),
+        ("speed_fluctuation", 2, None),
+        ("load_fluctuation", 3, None),
+    ]
+    accepted, fitted, unneeded, calls = _needed(reports, rounds, before)
+    assert [e["name"] for e in accepted] == ["mesh_damping", "load_fluctuation"]
+    assert [u["name"] for u in unneeded] == ["speed_fluctuation", "sensor_noise"]
+    assert unneeded[0]["share_of_rest"] < 0 and "166.1 against 327.9" in unneeded_note(unneeded[0])
+    assert unneeded[1]["share_of_rest"] < 0 and unneeded[1]["gap_without"] == 148.1
+    assert all(fx[0] == _spec("mesh_damping") for fx in calls)  # never judged without the first
 
 
 def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():

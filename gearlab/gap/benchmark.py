@@ -528,6 +528,8 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
         "hidden": [[n, p] for n, p in answers["hidden"]],
         "withheld": answers.get("withheld"),
         "accepted": accepted,
+        # named by a round but taken back at the end: the final fit did not need them (needed_effects)
+        "unneeded": [e["name"] for e in result.get("unneeded_effects", [])],
         "ranking": ranking[:5],
         "gap_before": before,
         "gap_after": after,

@@ -52,6 +52,9 @@ Design, in the order the work happens:
    corrected source is checked against the target on the fresh rows: no longer
    significant ends the loop.
 3. **After.** ``gap_report`` of the corrected source (fresh rows) against the target.
+   First every effect named after the first must still be needed by the final fit
+   (:func:`needed_effects`: without it a gap above the noise width is left, of which it removes
+   at least ``MIN_SHARE``); the others move to ``unneeded_effects``, with a note.
    ``unexplained`` = the gap before is significant, and nothing was accepted or the
    corrected source does not close it: a significant gap is left *and* more than
    ``1 - EXPLAINED_SHRINK`` of the gap before. The ranked names are then what helped
@@ -1527,14 +1530,25 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         else None
     )
 
+    reports: dict = {(): before}
+
+    def report_of(fitted: tuple) -> dict:
+        if fitted not in reports:
+            reports[fitted] = _report(run.judged(fitted), run.target, run.pair, run.settings)
+        return reports[fitted]
+
     def judge(fitted: tuple) -> tuple[dict, float, float]:
-        after = _report(run.judged(fitted), run.target, run.pair, run.settings) if fitted else before
+        after = report_of(fitted)
         gap_after = float(after["total"]["gap"])
         shrink = 1.0 - gap_after / gap_before if gap_before > 0 else 0.0
         if reference is not None:
             reference["shrink"] = 1.0 - gap_after / reference["gap"] if reference["gap"] > 0 else 0.0
         return after, shrink, reference["shrink"] if reference else shrink
 
+    accepted, fitted, unneeded = needed_effects(before, accepted, fitted, report_of)
+    if unneeded:
+        result["unneeded_effects"] = unneeded
+        result["notes"] += [unneeded_note(u) for u in unneeded]
     after, shrink, share = judge(fitted)
     # Against the noise fitted alone (reference 'noise', measured records) the share is of what the
     # noise leaves, not of the whole gap: there MIN_SHARE of it keeps a name (a rig's unpublished
@@ -1568,6 +1582,71 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         seconds=time.perf_counter() - started,
     )
     return result
+
+
+def needed_effects(
+    before: dict, accepted: list[dict], fitted: tuple, report_of: Callable[[tuple], dict]
+) -> tuple[list[dict], tuple, list[dict]]:
+    """Stage 4a: every effect named after the first -- a later round's, or the sensor noise named
+    beside a round's effect -- keeps its name only if the effects as finally fitted need it, judged
+    with the others as they stand on the report's fresh rows. It is taken back when, without it,
+
+    * the test sees no gap (gap_seen); or
+    * what is left lies within the noise width (within_noise) while with it the test still sees a
+      gap: it only takes a part of a remainder within the rows' scatter, and the verdict rests on
+      the noise width either way (sensor noise next to a ripple, a sensor filter next to drive
+      inertias or a casing path left RMS 0.22-0.97 without them, the test seeing the gap with them);
+      an effect that makes the gap unseen (a weak eccentricity next to a low-pass) stays; or
+    * it removes less than MIN_SHARE of what is left without it (a speed ripple accepted before the
+      right load ripple: without it the gap fell from 328 to 166).
+
+    Acceptance judged each on the search's score against what the round's baseline left; this is the
+    same question asked of the final fit. Checked last-accepted first; the first round's effect
+    always stays. Returns (accepted, fitted, the unneeded entries, with the report's gap with and
+    without them)."""
+    unneeded: list[dict] = []
+    for i in reversed(range(len(accepted))):
+        entry = accepted[i]
+        if entry["round"] == 1 and not entry.get("nuisance_of"):
+            continue
+        rest = fitted[:i] + fitted[i + 1 :]
+        full, without = report_of(fitted), report_of(rest)
+        with_it, left = float(full["total"]["gap"]), float(without["total"]["gap"])
+        share = (left - with_it) / left if left > 0 else 0.0
+        closed = not gap_seen(without) or (within_noise(before, without) and gap_seen(full))
+        if closed or share < MIN_SHARE:
+            unneeded.append(
+                {
+                    **entry,
+                    "gap_with": with_it,
+                    "gap_without": left,
+                    "share_of_rest": share,
+                    "rms_effect_without": rms_effect(without),
+                    "reason": ("no gap seen without it" if not gap_seen(without) else "within noise without it")
+                    if closed
+                    else "removes under MIN_SHARE of the rest",
+                }
+            )
+            accepted, fitted = accepted[:i] + accepted[i + 1 :], rest
+    return accepted, fitted, unneeded
+
+
+def unneeded_note(entry: dict) -> str:
+    """The report's line for an effect needed_effects took back."""
+    if entry["reason"].startswith("no gap"):
+        why = "without it the test sees no gap"
+    elif entry["reason"].startswith("within"):
+        why = (
+            f"what the others leave without it lies within the noise width (RMS effect "
+            f"{entry['rms_effect_without']:.2f}), and with it the test still sees a gap"
+        )
+    elif entry["share_of_rest"] <= 0.0:
+        why = f"the others leave less without it (gap {entry['gap_without']:.4g} against {entry['gap_with']:.4g})"
+    else:
+        why = (
+            f"it removes {100 * entry['share_of_rest']:.0f} % of what the others leave (under {100 * MIN_SHARE:.0f} %)"
+        )
+    return f"{entry['name']} (round {entry['round']}) not named: {why}"
 
 
 def auc_z(report: dict) -> float:
