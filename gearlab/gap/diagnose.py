@@ -100,6 +100,7 @@ from .identify import (
     _local,
     _OutOfBudget,
     _plain,
+    alias_refit,
     determined,
     profile,
 )
@@ -1243,9 +1244,19 @@ def profile_effect(task: tuple) -> dict:
         # the score's noise at the point profiled: the bootstrap spread the search's intervals take
         return float(np.std(scorer.replicates(rows_of(params), NOISE_REPLICATES, [seed, 2])))
 
+    params, aliases = dict(canonical), None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
-        out = profile(Space(effect), score, noise, dict(canonical), seed, prior)
+        if getattr(effect, "pitch_aliases", None):
+            # A ripple's phase: the search ends at some tooth-pitch alias (identify.alias_refit).
+            teeth = _check_source(search).Z1
+            found = alias_refit(Space(effect), score, params, *effect.pitch_aliases, teeth)
+            aliases = {"score_before": score(params), "score": found["score"], "evaluations": found["evaluations"]}
+            params = found["params"]
+        out = profile(Space(effect), score, noise, params, seed, prior)
+    if aliases is not None:
+        out["aliases"] = aliases
+        out["evaluations"] += aliases["evaluations"]
     return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}
 
 
@@ -1277,7 +1288,9 @@ def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
             intervals=res["intervals"],
             determined=res["determined"],
             combinations=res["combinations"],
-            profile={k: res[k] for k in ("score", "score_fit", "noise", "evaluations", "seconds")},
+            profile={
+                k: res[k] for k in ("score", "score_fit", "noise", "evaluations", "seconds", "aliases") if k in res
+            },
         )
     return tuple(out)
 

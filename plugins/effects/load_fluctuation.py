@@ -32,6 +32,9 @@ class LoadFluctuation(Effect):
     doc = "load torque ripple eps at whole input-shaft order q"
     level = "excitation"
     breaks_symmetry = True
+    # The record sees the phase only up to turns by whole tooth pitches: phi and phi + 2 pi q j / Z1
+    # differ by a few percent of the revolution once the tacho offset is fitted (gearlab.gap.identify.alias_refit).
+    pitch_aliases = ("phase", "order")
     params = (
         Param("amplitude", "", 0.1, 0.0, 1.0, "relative peak load torque fluctuation eps"),
         Param("order", "", 1, 1, 64, "fluctuation frequency in input-shaft orders q", integer=True),

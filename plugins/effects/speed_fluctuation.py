@@ -83,6 +83,9 @@ class SpeedFluctuation(Effect):
     doc = "input speed ripple eps at whole shaft order q: moved TVMS, tacho and inertial torques"
     level = "excitation"
     breaks_symmetry = True
+    # The record sees the phase only up to turns by whole tooth pitches: phi and phi + 2 pi q j / Z1
+    # differ by a few percent of the revolution once the tacho offset is fitted (gearlab.gap.identify.alias_refit).
+    pitch_aliases = ("phase", "order")
     params = (
         Param("amplitude", "", 0.01, 0.0, 0.1, "relative peak speed fluctuation eps"),
         Param("order", "", 1, 1, 32, "fluctuation frequency in input-shaft orders q", integer=True),
