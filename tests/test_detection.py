@@ -251,6 +251,14 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
             r"\[classical\] key 'slow_shafts': expected whole numbers of input revolutions 2",
         ),
         (
+            lambda t: t.replace("mesh_orders = [32]", "mesh_orders = [32]\nshafts = { idler = 1.5 }"),
+            r"\[classical\] key 'shafts': expected \{name = whole number of input revolutions 2",
+        ),
+        (
+            lambda t: t.replace("mesh_orders = [32]", "mesh_orders = [32]\nshafts = { input = 3 }"),
+            r"\[classical\] key 'shafts': 'input' and 'nothing' are taken",
+        ),
+        (
             lambda t: t.replace('preset = "B-6-ch5"', 'file = "../data/h1.zip"\nvibration = "0"\nspeed = 16.0'),
             r"\[source\] key 'file': the source is a simulator configuration",
         ),
@@ -415,6 +423,27 @@ def test_scores_that_are_not_numbers_give_no_auc_and_are_counted():
     assert "| lr | – |" in table and "not numbers" in table and "lr 7" in table and "fm4 0" not in table
 
 
+def rig_record(path: Path, speed=35.0, seed=3, chip=0.0, idler=0.0, output=0.0, bearing=0.0, phase=2.7) -> Path:
+    """A synthetic record of the PHM rig's layout at its rate (textrecords.FS must be set to it):
+    the mesh tone and noise of textrecords.signals (46 revolutions), a chipped input pinion tooth
+    (*chip*: a ring once a revolution), a chipped tooth on the idler shaft (*idler*: once every 3
+    input revolutions, at the same input angle), on the output shaft (*output*: every 5th) or an
+    outer-race bearing defect (*bearing*: a ring 3.05 times per input revolution)."""
+    import textrecords
+
+    vib, tacho = textrecords.signals(revolutions=46, chip=chip, seed=seed, phase=phase, speed=speed)
+    t = np.arange(len(vib)) / textrecords.FS
+    theta = phase + 2 * np.pi * speed * t
+    for size, q, at in ((idler, 3, 2.0), (output, 5, 4.0)):  # the slow shaft's tooth meets at *at* rad
+        if size:
+            since = np.mod(theta / q - at, 2 * np.pi) / (2 * np.pi * speed / q)
+            vib = vib + size * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+    if bearing:
+        since = np.mod(t * speed * 3.05, 1.0) / (speed * 3.05)
+        vib = vib + bearing * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+    return textrecords.write_zip(path, textrecords.text(vib, tacho))
+
+
 def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_path, monkeypatch):
     """Synthetic records of the rig's layout (input pinion, idler shaft at 1/3 of its speed):
     a chipped input pinion, a chipped tooth on the idler shaft (once every 3 input revolutions,
@@ -445,16 +474,7 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     monkeypatch.setattr(textrecords, "FS", fs)
 
     def revolutions(name, chip=0.0, idler=0.0, bearing=0.0, seed=3):
-        vib, tacho = textrecords.signals(revolutions=46, chip=chip, seed=seed, phase=2.7, speed=speed)
-        t = np.arange(len(vib)) / fs
-        theta = 2.7 + 2 * np.pi * speed * t
-        if idler:  # the idler turns once every 3 input revolutions; its chipped tooth meets at 2 rad
-            since = np.mod(theta / 3 - 2.0, 2 * np.pi) / (2 * np.pi * speed / 3)
-            vib = vib + idler * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
-        if bearing:
-            since = np.mod(t * speed * 3.05, 1.0) / (speed * 3.05)
-            vib = vib + bearing * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
-        path = textrecords.write_zip(tmp_path / f"{name}.zip", textrecords.text(vib, tacho))
+        path = rig_record(tmp_path / f"{name}.zip", speed, seed, chip=chip, idler=idler, bearing=bearing)
         rec = read_record(path, vibration=0, tacho=2, pulses_per_rev=PULSES, sensitivity=textrecords.SENSITIVITY, fs=fs)
         return rec.revolutions
 
@@ -614,3 +634,72 @@ def test_tooth_sync_reads_the_synchronous_part_of_each_tooth_window():
     assert np.allclose(
         sync_shares(30.0 * r, block, block, teeth, [teeth]), sync_shares(r, block, block, teeth, [teeth])
     )
+
+
+def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path, monkeypatch):
+    """phm09_chip.toml with its file list replaced by synthetic records of the rig's layout: a
+    localised fault is put on the shaft where its synchronous part is strongest — a chipped input
+    pinion on the input shaft, a chipped idler-shaft tooth (every 3rd input revolution, at one input
+    angle, which FM4 of the input TSA calls at 1/3 of its size) on the idler, an output-shaft tooth
+    (every 5th) on the output, a bearing's impulses (3.05 a revolution) and a new healthy record on
+    none (at TSA30; at TSA10 the bearing may be put on a slow shaft, never on the input) — and
+    pinion_sync calls a pinion fault only where the input shaft wins: the chip and nothing else, in
+    every record-level unit."""
+    import textrecords
+
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection import Rule, classical_record, read_target, shafts_csv
+
+    monkeypatch.setattr(textrecords, "FS", 66666.67)
+    data = tmp_path / "data"
+    data.mkdir()
+    files = {  # name: (role, label, the fault's sizes)
+        "good1": ("history", "healthy", {}),
+        "good2": ("history", "healthy", {}),
+        "good3": ("test", "healthy", {}),
+        "pinion": ("test", "fault", {"chip": 4.0}),
+        "idler": ("test", "idler tooth", {"idler": 4.0}),
+        "output": ("test", "output tooth", {"output": 4.0}),
+        "bearing": ("test", "bearing outer race", {"bearing": 4.0}),
+    }
+    for i, (name, (_, _, sizes)) in enumerate(files.items()):
+        rig_record(data / f"{name}.zip", seed=10 + i, phase=0.9 * i, **sizes)
+    listed = "files = [\n" + "".join(
+        f'  {{ path = "{data / name}.zip", role = "{role}", label = "{label}" }},\n'
+        for name, (role, label, _) in files.items()
+    )
+    shipped = (Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml").read_text()
+    path = tmp_path / "phm09_chip.toml"
+    path.write_text(re.sub(r"files = \[\n(.*\n)*?\]", lambda _: listed + "]", shipped))
+    spec = load_scenario(path).spec
+    assert "pinion_sync" in spec["classical"]["indicators"]
+    assert spec["classical"]["shafts"] == (("idler", 3), ("output", 5))
+    ((name, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    r = classical_record(
+        "pinion_sync",
+        name,
+        cond,
+        spec["classical"],
+        Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]),
+    )
+    expected = {"good3": "nothing", "pinion": "input", "idler": "idler", "output": "output", "bearing": "nothing"}
+    for p, units in r["shafts"]["named"].items():
+        record = Path(p).stem
+        for u in ("record10", "record30"):
+            if record == "bearing" and u == "record10":
+                # two turns of the output shaft in a TSA10: one lag per phase, no median over lags to
+                # tell impulses that return at some lags from a tooth; put on a slow shaft or on none,
+                # never on the input shaft
+                assert "input" not in units[u], units[u]
+                continue
+            assert set(units[u]) == {expected[record]}, (record, u, units[u], r["shafts"]["strengths"][p][u])
+            called = np.array(r["test_scores"][p][u]) > r["thresholds"][u]
+            assert called.all() if record == "pinion" else not called.any(), (record, u, r["test_scores"][p][u])
+    # the idler's tooth is seen in both views at one size: its phase pattern (2/3 of A²) and its image
+    # in the input TSA (A²/9, times 6); the input strength is what the input TSA shows of it
+    strengths = {Path(p).stem: np.array(s["record30"]) for p, s in r["shafts"]["strengths"].items()}
+    idler, pinion = strengths["idler"], strengths["pinion"]
+    assert idler[0, 1] > 3 * idler[0, 0] and pinion[0, 0] > 10 * max(pinion[0, 1], pinion[0, 2], 0.1)
+    rows = shafts_csv([r]).splitlines()
+    assert rows[0] == "condition,file,unit,index,shaft,strength_input,strength_idler,strength_output"
+    assert len(rows) == 1 + sum(len(v) for units in r["test_scores"].values() for v in units.values())

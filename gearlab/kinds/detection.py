@@ -14,8 +14,9 @@ the method's model and threshold are fixed, and their labels only when the figur
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
                           adapter that can learn without target labels
-    [classical]           indicators (fm4, na4, tooth_energy, tooth_sync) of the input-shaft TSA, mesh_orders,
-                          shaft_orders, sidebands, slow_shafts (tooth_sync)
+    [classical]           indicators (fm4, na4, tooth_energy, tooth_sync, pinion_sync) of the input-shaft TSA,
+                          mesh_orders, shaft_orders, sidebands, slow_shafts (tooth_sync), shafts (pinion_sync:
+                          the other shafts, {name = period in input revolutions})
     [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold),
                           threshold (records | pooled), seeds (trainings per network method)
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
@@ -39,7 +40,9 @@ its members of each member's score standardised by its own history model, thresh
 Output: results.jsonl (one record per condition x source x method: the history and test scores,
 thresholds under both rules, the history model; an ensemble's members one record per seed besides),
 scores.csv (file, unit, index, method, score, decision), summary.json, table.md/table.csv
-(AUC, detection and false-alarm rates per condition, unit and method) and report.html.
+(AUC, detection and false-alarm rates per condition, unit and method) and report.html; with
+pinion_sync, shafts.csv (file, unit, index, the shaft each test unit's localised damage is put on,
+or "nothing", and each shaft's strength) and its counts per label in table.md.
 """
 
 from __future__ import annotations
@@ -76,6 +79,9 @@ from ..signals.indicators import (
     fm4,
     na4,
     na4_reference,
+    pinion_sync,
+    shaft_parts,
+    shaft_strengths,
     sync_shares,
     tooth_energy,
     tooth_reference,
@@ -151,6 +157,14 @@ TABLES = {
                 doc="periods, in whole input revolutions, of the other shafts whose localised damage "
                 "tooth_sync is to tell from the input pinion's (a shaft turning q times slower, q whole, "
                 "brings a tooth back to one input angle every q revolutions; the PHM rig: [3, 5])",
+            ),
+            "shafts": Key(
+                dict,
+                {},
+                doc="the other shafts a localised fault may turn with, {name = period in whole input "
+                "revolutions} (the PHM rig: {idler = 3, output = 5}): pinion_sync puts a fault on the "
+                "shaft where its synchronous part is strongest and calls a pinion fault only when the "
+                "input shaft wins",
             ),
         }
     ),
@@ -356,6 +370,17 @@ def build(scenario: Scenario) -> dict:
             f"{location(path, 'classical', 'slow_shafts')}: expected whole numbers of input revolutions "
             f"2 … 1000 (a shaft turning q times slower than the input), got {shown(slow)}"
         )
+    shafts = c["shafts"]
+    if not all(isinstance(q, int) and not isinstance(q, bool) and 2 <= q <= 1000 for q in shafts.values()):
+        raise GearlabInputError(
+            f"{location(path, 'classical', 'shafts')}: expected {{name = whole number of input revolutions "
+            f"2 … 1000 a turn}} (a shaft turning q times slower than the input), got {shown(shafts)}"
+        )
+    if "input" in shafts or "nothing" in shafts:
+        raise GearlabInputError(
+            f"{location(path, 'classical', 'shafts')}: 'input' and 'nothing' are taken (the input shaft and "
+            f"no shaft); name the other shafts, e.g. {{idler = 3, output = 5}}"
+        )
     blocks = t["detection"]["blocks"]
     if not all(isinstance(b, int) and not isinstance(b, bool) and 2 <= b <= 10_000 for b in blocks) or len(
         set(blocks)
@@ -410,6 +435,7 @@ def build(scenario: Scenario) -> dict:
             "shaft_orders": c["shaft_orders"],
             "sidebands": c["sidebands"],
             "slow_shafts": tuple(slow),
+            "shafts": tuple(shafts.items()),
         },
         "blocks": tuple(blocks),
         "false_alarm": t["detection"]["false_alarm"],
@@ -704,32 +730,33 @@ def method_name(m: Method, variant: str = "") -> str:
 
 def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
     """A classical indicator's scores: computed on the TSA units, its reference (NA4's variance,
-    tooth_energy's and tooth_sync's windows) from the history's units of the same kind; tooth_sync
-    reads each unit's own revolutions (their pairs), not only their TSA."""
+    tooth_energy's, tooth_sync's and pinion_sync's windows) from the history's units of the same kind;
+    tooth_sync and pinion_sync read each unit's own revolutions (their pairs), not only their TSA.
+    pinion_sync's record also names, per test unit, the shaft its localised damage turns with
+    (shaft_attribution)."""
     orders, shaft, sidebands = classical["mesh_orders"], classical["shaft_orders"], classical["sidebands"]
     history = cond["history_units"]
     # the history's units of each kind, one array per history record (in the order of cond["history"])
     per_record = {
         u: np.split(X, np.cumsum([n for n, _ in cond["history_records"][u]])[:-1]) for u, X in history.items()
     }
-    # tooth_sync: each unit's synchronous window shares from its own revolutions, {path: {unit: shares}}
+    periods = [q for _, q in classical["shafts"]]
+    # tooth_sync: each unit's synchronous window shares from its own revolutions, {path: {unit: shares}};
+    # pinion_sync: each unit's parts per shaft (shaft_parts), flattened to (units, shafts x windows)
     shares = {}
-    if name == "tooth_sync":
+    if name in ("tooth_sync", "pinion_sync"):
         for role in ROLES:
             for f, revs in cond[role]:
-                shares[f.path] = {
-                    u: sync_shares(
-                        revs,
-                        _window(u)[0],
-                        _window(u)[1] if role == "history" else _window(u)[0],
-                        orders[0],
-                        orders,
-                        classical["slow_shafts"],
-                        shaft,
-                        sidebands,
-                    )
-                    for u in history
-                }
+                shares[f.path] = {}
+                for u in history:
+                    block, stride = _window(u)[0], _window(u)[1] if role == "history" else _window(u)[0]
+                    if name == "tooth_sync":
+                        shares[f.path][u] = sync_shares(
+                            revs, block, stride, orders[0], orders, classical["slow_shafts"], shaft, sidebands
+                        )
+                    else:
+                        parts = shaft_parts(revs, block, stride, orders[0], orders, periods, shaft, sidebands)
+                        shares[f.path][u] = parts.reshape(len(parts), -1)
     # the localised indicators' within-record spread: that of independent units, from sliding windows
     dofs = {u: [record_effects.overlap_dof(len(X), *_window(u)) for X in groups] for u, groups in per_record.items()}
     reference = {}
@@ -739,8 +766,11 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
         reference = {
             u: tooth_reference(groups, orders[0], orders, shaft, sidebands, dofs[u]) for u, groups in per_record.items()
         }
-    elif name == "tooth_sync":
+    elif name in ("tooth_sync", "pinion_sync"):
         reference = {u: window_reference([shares[f.path][u] for f, _ in cond["history"]], dofs[u]) for u in history}
+
+    def strengths(path: str, u: str) -> np.ndarray:  # pinion_sync: (units, 1 + shafts)
+        return shaft_strengths(shares[path][u].reshape(-1, 1 + len(periods), orders[0]), periods, reference[u])
 
     def score(X: np.ndarray, u: str, path: str) -> np.ndarray:
         if name == "fm4":
@@ -749,6 +779,8 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
             return tooth_energy(X, orders, reference[u], shaft, sidebands)
         if name == "tooth_sync":  # the units' own revolutions (X is their TSA)
             return tooth_sync(shares[path][u], reference[u])
+        if name == "pinion_sync":
+            return pinion_sync(strengths(path, u))
         return na4(X, orders, reference[u], shaft)
 
     hist = {
@@ -756,6 +788,19 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
         for u, groups in per_record.items()
     }
     fixed = rule.decide(hist)  # fixed before any test unit is scored
+    extra = {}
+    if name == "pinion_sync":
+        # a pinion fault is called only where the input shaft wins, i.e. its score is above 0
+        fixed["thresholds"] = {u: max(t, 0.0) for u, t in fixed["thresholds"].items()}
+        fixed["thresholds_by_rule"] = {
+            how: {u: max(t, 0.0) for u, t in by.items()} for how, by in fixed["thresholds_by_rule"].items()
+        }
+        extra["shafts"] = shaft_attribution(
+            ("input", *(n for n, _ in classical["shafts"])),
+            {u: np.concatenate([strengths(f.path, u) for f, _ in cond["history"]]) for u in history},
+            {f.path: {u: strengths(f.path, u) for u in history} for f, _ in cond["test"]},
+            rule,
+        )
     test = {p: {u: score(X, u, p) for u, X in units.items()} for p, units in cond["test_units"].items()}
     return {
         "unit": f"{condition}/{name}",
@@ -765,6 +810,27 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
         "history_scores": _to_lists(hist),
         **fixed,
         "test_scores": _to_lists(test),
+        **extra,
+    }
+
+
+def shaft_attribution(names: tuple, history: dict, test: dict, rule: Rule) -> dict:
+    """Which shaft each test unit's localised damage turns with. A tooth on any shaft whose period is
+    a whole number of input revolutions leaves an image in the input TSA (1/q of its size), so a unit
+    has localised damage when the input shaft's strength (indicators.shaft_strengths) lies above its
+    threshold — fixed by *rule* on the history's input strengths, as any score's — and the damage is
+    put on the shaft with the largest strength; otherwise "nothing" (a bearing's impulses, noise).
+    *history*: {unit: (history units, shafts)}, *test*: {path: {unit: (units, shafts)}}."""
+    thresholds = {u: rule.decide({u: h[:, 0]})["thresholds"][u] for u, h in history.items()}
+
+    def named(s: np.ndarray, u: str) -> list[str]:
+        return [names[int(np.argmax(row))] if row[0] > thresholds[u] else "nothing" for row in s]
+
+    return {
+        "names": list(names),
+        "thresholds": thresholds,
+        "named": {p: {u: named(s, u) for u, s in units.items()} for p, units in test.items()},
+        "strengths": {p: {u: s.tolist() for u, s in units.items()} for p, units in test.items()},
     }
 
 
@@ -950,6 +1016,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                 for i, s in enumerate(scores):
                     w.writerow([path, u, i, r["method"], repr(float(s)), int(s > thr)])
     run.write_text("scores.csv", buf.getvalue())
+    attributed = [r for r in records if "shafts" in r]
+    if attributed:
+        run.write_text("shafts.csv", shafts_csv(attributed))
 
     # the labels come in only here, to score what was decided
     def split(r: dict, u: str) -> tuple[np.ndarray, np.ndarray]:
@@ -1017,7 +1086,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     if (run.path / "conditions.json").exists():
         summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(rows) + "\n" + labels_md(rows))
+    run.write_text("table.md", table_md(rows) + "\n" + labels_md(rows) + shafts_md(attributed, labels))
     run.write_text("table.csv", table_csv(rows))
 
 
@@ -1094,6 +1163,53 @@ def labels_md(rows: list[dict]) -> str:
             + " | ".join(_cell(r["called_by_label"].get(k), "{:.0f}") for k in labels)
             + " |"
         )
+    return "\n".join(out) + "\n"
+
+
+def shafts_csv(records: list[dict]) -> str:
+    """One row per test unit of each pinion_sync record: the shaft its localised damage is put on
+    ("nothing": no shaft above its threshold) and every shaft's strength."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    names = list(dict.fromkeys(n for r in records for n in r["shafts"]["names"]))
+    w.writerow(["condition", "file", "unit", "index", "shaft", *(f"strength_{n}" for n in names)])
+    for r in records:
+        a = r["shafts"]
+        for path, units in a["named"].items():
+            for u, named in units.items():
+                for i, (shaft, strength) in enumerate(zip(named, a["strengths"][path][u])):
+                    values = dict(zip(a["names"], strength))
+                    w.writerow(
+                        [r["condition"], path, u, i, shaft, *(repr(float(values.get(n, np.nan))) for n in names)]
+                    )
+    return buf.getvalue()
+
+
+def shafts_md(records: list[dict], labels: dict) -> str:
+    """pinion_sync's attribution per condition and test label, for the longest TSA: the share (%) of
+    the label's units put on each shaft."""
+    if not records:
+        return ""
+    units = [u for u in records[0]["shafts"]["thresholds"] if u != "revolution"]
+    if not units:
+        return ""
+    unit = max(units, key=lambda u: int(u.removeprefix("record")))
+    names = list(dict.fromkeys(n for r in records for n in r["shafts"]["names"])) + ["nothing"]
+    out = [
+        f"\nWhich shaft (pinion_sync, {unit}: % of each label's units put on each shaft)\n",
+        "| condition | label | " + " | ".join(names) + " |",
+        "|---|---|" + "---|" * len(names),
+    ]
+    for r in records:
+        by_label: dict[str, list[str]] = {}
+        for path, units_named in r["shafts"]["named"].items():
+            by_label.setdefault(labels[path], []).extend(units_named[unit])
+        for label, named in by_label.items():
+            out.append(
+                f"| {r['condition']} | {label} | "
+                + " | ".join(f"{100.0 * named.count(n) / len(named):.0f}" for n in names)
+                + " |"
+            )
     return "\n".join(out) + "\n"
 
 

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
-INDICATORS = ("fm4", "na4", "tooth_energy", "tooth_sync")
+INDICATORS = ("fm4", "na4", "tooth_energy", "tooth_sync", "pinion_sync")
 # what a scenario computes when it names none (the localised ones are asked for by name)
 DEFAULT_INDICATORS = ("fm4", "na4")
 
@@ -182,6 +182,99 @@ def sync_shares(
         energy = g.sum(axis=(1, 2)) / block**2  # the TSA's window energies
         out.append(sync / max(energy.mean(), 1e-300))
     return np.array(out).reshape(-1, teeth)
+
+
+def shaft_parts(
+    revolutions: np.ndarray,
+    block: int,
+    stride: int,
+    teeth: int,
+    mesh_orders,
+    shafts=(),
+    shaft_orders: int = 2,
+    sidebands: int = 1,
+) -> np.ndarray:
+    """Which shaft each tooth window's synchronous content turns with, (units, 1 + len(shafts), teeth).
+
+    Row 0 is the input shaft's part, sync_shares with every pair: |s_k|², the energy in window k of
+    what repeats every input revolution. Row i is the phase pattern of shaft i, which turns once every
+    q = shafts[i] input revolutions (whole q; on the PHM rig the idler, 3, and the output, 5): the
+    unit's revolutions fall into q phases j = r mod q (the shaft's angle, from the same tacho), and
+    P_jk, the synchronous energy of phase j's TSA in window k, is the mean window product of its
+    revolutions at each lag (a multiple of q; a revolution is never paired with itself, so noise and
+    slipping impulses average to 0), then the median over the lags (content that comes back at only
+    some lags, as a bearing's impulses returning to one angle every 20 revolutions, is no shaft's).
+    The row holds max_j P_jk − mean_j P_jk. A chipped pinion tooth adds A at one angle every
+    revolution: |s|² = A² and P_jk = A² at every phase, so its pattern is 0. A chipped tooth on the
+    slow shaft adds A at one input angle every q-th revolution: P = A² at its phase and 0 at the
+    others, a pattern of A²(q − 1)/q, while the input TSA shows it at A/q: |s|² = A²/q² (the idler:
+    2/3 against 1/9 of A²; the output: 4/5 against 1/25). All rows are shares of the unit's TSA mean
+    window energy, as sync_shares' (the record's level cancels; the rows compare in one unit). Units
+    as sync_shares: *block* consecutive revolutions moved by *stride*; block = 1: each revolution with
+    every other of the record for the input part, the whole record's phases for the slow shafts (one
+    revolution has one phase), each as a share of the revolution's own energy."""
+    gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
+    n = gram.shape[-1]
+
+    def slow_part(g: np.ndarray, q: int) -> np.ndarray:
+        b = g.shape[-1]
+        phases = []
+        for j in range(q):
+            # the synchronous energy of phase j's TSA: the mean product of its revolutions at each lag
+            # (a multiple of q), then the median over the lags: content that comes back at only some
+            # lags (a bearing whose impulses return to one angle every 20 revolutions) is no shaft's
+            r = np.arange(j, b, q)
+            means = [g[:, r[:-m], r[m:]].mean(axis=1) for m in range(1, len(r))]
+            if not means:  # fewer than two turns of the shaft in the unit
+                return np.full(g.shape[0], np.nan)
+            phases.append(np.median(means, axis=0))
+        phases = np.array(phases)  # (q, teeth)
+        return phases.max(axis=0) - phases.mean(axis=0)
+
+    rows = []
+    if block == 1:  # each revolution's own energy is the unit of its shares, as in sync_shares
+        inputs = sync_shares(revolutions, 1, 1, teeth, mesh_orders, (), shaft_orders, sidebands)
+        energy = np.maximum(np.einsum("krr->r", gram) / teeth, 1e-300)
+        slow = np.stack([slow_part(gram, q) for q in shafts]) if shafts else np.empty((0, teeth))
+        return np.stack([np.vstack([inputs[r], slow / energy[r]]) for r in range(n)])
+    mask = pair_mask(block)
+    for s in range(0, n - block + 1, stride):
+        g = gram[:, s : s + block, s : s + block]
+        norm = max(g.sum(axis=(1, 2)).mean() / block**2, 1e-300)  # the TSA's mean window energy
+        sync = np.sum(g * mask, axis=(1, 2)) / max(mask.sum(), 1)
+        rows.append(np.stack([sync / norm] + [slow_part(g, q) / norm for q in shafts]))
+    return np.array(rows).reshape(-1, 1 + len(shafts), teeth)
+
+
+def shaft_strengths(parts: np.ndarray, shafts, reference) -> np.ndarray:
+    """How strongly a localised fault turns with each shaft, (units, 1 + len(shafts)), from the units'
+    shaft_parts against *reference* = (mean, spread) of the history's parts (window_reference of the
+    flattened parts; the mean is used), in the parts' common unit (a share of the TSA's window energy),
+    so the shafts compare. e_ik: the excess of part i in tooth window k over the history's mean. The
+    input shaft's strength is max_k e_0k. A tooth on a shaft of period q shows in two views that must
+    agree: its own phase pattern, e_qk = A²(q − 1)/q (max_j − mean_j of the phases' synchronous
+    energies, A² and 0), and its image in the input TSA, e_0k = A²/q² (one impulse every q-th
+    revolution, averaged over all); the shaft's strength is max_k min(e_qk, q(q − 1)·e_0k), the
+    smaller of the two sightings at one size. A pinion tooth has no phase pattern (e_qk ≈ 0); a
+    pattern with no image in the input TSA is no tooth on a shaft."""
+    mean = np.asarray(reference[0]).reshape(parts.shape[1:])
+    excess = parts - mean  # (units, shafts, teeth)
+    out = [excess[:, 0].max(axis=-1)]
+    for i, q in enumerate(shafts, start=1):
+        out.append(np.minimum(excess[:, i], q * (q - 1) * excess[:, 0]).max(axis=-1))
+    return np.stack(out, axis=1)
+
+
+def pinion_sync(strengths: np.ndarray) -> np.ndarray:
+    """pinion_sync of each unit from its shaft_strengths: the input shaft's strength less the
+    strongest other shaft's (or less 0 when none gained), positive only where the input shaft wins with
+    an excess of its own (a localised fault is put on the shaft where its synchronous part is
+    strongest), and higher the more it stands above the others."""
+    if strengths.shape[1] == 1:
+        return strengths[:, 0]
+    # a shaft that lost ground against the history (its excess below 0) is no rival: a strong bearing
+    # dilutes every share, and the input shaft's loss must not read as its win
+    return strengths[:, 0] - np.maximum(strengths[:, 1:].max(axis=1), 0.0)
 
 
 def window_reference(groups, dofs=None):
