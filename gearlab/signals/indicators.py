@@ -1,5 +1,5 @@
 """Classical gear condition indicators of a time-synchronous average (TSA): FM4, NA4, tooth_energy,
-tooth_sync.
+tooth_sync, pinion_sync.
 
 What a gear-diagnosis engineer computes on the input-shaft TSA before any learning
 (Stewart 1977; Zakrajsek, Townsend & Decker 1993, NASA TM-106032). With the TSA x of one
@@ -41,6 +41,11 @@ revolution on a uniform angle grid and X its order spectrum (order = harmonic of
   idler, q = 3, and the output, q = 5) is synchronous with the input too, at 1/q of its size:
   FM4 and tooth_energy call it. Given the *slow* periods, tooth_sync leaves out the pairs of
   revolutions whose lag is a multiple of one, and such damage then scores 0 (sync_shares).
+* **pinion_sync**: which shaft a localised fault turns with. Each unit's synchronous part is read
+  for the input shaft and, from the same tacho, for every shaft turning once every q input
+  revolutions (the revolutions' phases r mod q: shaft_parts); a fault is put on the shaft where it
+  is strongest (shaft_strengths), and the score is the input shaft's strength less the strongest
+  other's, so a pinion fault is called only where the input shaft wins.
 
 All orders refer to the shaft the TSA is synchronous with (here the input shaft: mesh
 orders 32 for stage 1 and 16 for stage 2 of the PHM 2009 spur rig).
