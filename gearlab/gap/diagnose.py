@@ -1211,6 +1211,7 @@ def diagnose(
         accepted += entries
         if r > 1:
             fitted = joint_refit(run, r, accepted, fitted, round_info)
+        fitted = realiased(run, r, accepted, fitted, round_info)
         check = _report(judged(fitted), target, pair, settings, bootstrap=0)
         round_info["p_value_after"] = check["p_value"]
         significant = gap_seen(check)
@@ -1244,19 +1245,9 @@ def profile_effect(task: tuple) -> dict:
         # the score's noise at the point profiled: the bootstrap spread the search's intervals take
         return float(np.std(scorer.replicates(rows_of(params), NOISE_REPLICATES, [seed, 2])))
 
-    params, aliases = dict(canonical), None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
-        if getattr(effect, "pitch_aliases", None):
-            # A ripple's phase: the search ends at some tooth-pitch alias (identify.alias_refit).
-            teeth = _check_source(search).Z1
-            found = alias_refit(Space(effect), score, params, *effect.pitch_aliases, teeth)
-            aliases = {"score_before": score(params), "score": found["score"], "evaluations": found["evaluations"]}
-            params = found["params"]
-        out = profile(Space(effect), score, noise, params, seed, prior)
-    if aliases is not None:
-        out["aliases"] = aliases
-        out["evaluations"] += aliases["evaluations"]
+        out = profile(Space(effect), score, noise, dict(canonical), seed, prior)
     return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}
 
 
@@ -1288,9 +1279,7 @@ def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
             intervals=res["intervals"],
             determined=res["determined"],
             combinations=res["combinations"],
-            profile={
-                k: res[k] for k in ("score", "score_fit", "noise", "evaluations", "seconds", "aliases") if k in res
-            },
+            profile={k: res[k] for k in ("score", "score_fit", "noise", "evaluations", "seconds")},
         )
     return tuple(out)
 
@@ -1481,6 +1470,55 @@ def attribution(
         )
         info["nuisance"] = top["nuisance"]
     return refit + (spec,) + noise, refit, entries
+
+
+def realiased(run: _Run, r: int, accepted: list[dict], fitted: tuple, info: dict) -> tuple:
+    """Stage 3a': the round's new effect, when the record sees its phase only up to whole tooth
+    pitches (Effect.pitch_aliases: a ripple), moved to the best of its phase's aliases next to the
+    others as fitted (gearlab.gap.identify.alias_refit, the search's score), before the round's check.
+    The search ends at some alias a few degrees off (a 3 % order-2 speed ripple 57 deg off, score 205
+    against 5 at the truth), and what such a fit leaves was taken up by the next rounds (a low-pass
+    accepted for 26 % of it). Returns the accepted effects (canonical) with the better phase."""
+    out = list(fitted)
+    for i, entry in enumerate(accepted):
+        effect = get_registry().get("effect", entry["name"])
+        if entry["round"] != r or entry.get("nuisance_of") or not getattr(effect, "pitch_aliases", None):
+            continue
+
+        def score(params: dict, i=i, effect=effect) -> float:
+            effects = _by_level(run.search.effects + tuple(out[:i]) + (effect.spec(params),) + tuple(out[i + 1 :]))
+            try:
+                return run.scorer.score(run.rows(run.search.with_(effects=effects)))
+            except GearlabInputError:
+                return math.inf
+
+        params = dict(out[i][1])
+        started = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            before = score(params)
+            found = alias_refit(Space(effect), score, params, *effect.pitch_aliases, run.pair.Z1)
+        info.setdefault("aliases", []).append(
+            {
+                "name": entry["name"],
+                "score_before": before,
+                "score": found["score"],
+                "params": _plain(found["params"]),
+                "evaluations": found["evaluations"],
+                "seconds": time.perf_counter() - started,
+            }
+        )
+        if found["score"] < before:
+            out[i] = effect.spec(found["params"])
+            entry["params"] = _plain(found["params"])
+            run.on_event(
+                Event(
+                    "log",
+                    message=f"gap: round {r}: {entry['name']} at its best phase alias: score {before:.4g} -> "
+                    f"{found['score']:.4g}",
+                )
+            )
+    return tuple(out)
 
 
 def joint_refit(run: _Run, r: int, accepted: list[dict], fitted: tuple, info: dict) -> tuple:
