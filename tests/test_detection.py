@@ -219,6 +219,37 @@ def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cac
     assert code == 2 and "[corrected]" in err and "sensor_nosie" in err
 
 
+def test_pinion_sync_runs_end_to_end_and_writes_which_shaft(cli, tmp_path, cache):
+    """The detection kind with pinion_sync listed: scores.csv has its rows, shafts.csv names a
+    shaft (or nothing) for every test unit with each shaft's strength, and table.md has the per-label
+    attribution. Units too short for a shaft's turn (the output's 5 revolutions in a TSA5) give it
+    no part, and the other shafts still decide."""
+    path = scenario(tmp_path, methods=("matched_filter",))
+    path.write_text(
+        path.read_text().replace(
+            "mesh_orders = [32]",
+            'mesh_orders = [32]\nindicators = ["fm4", "pinion_sync"]\nshafts = { idler = 3, output = 5 }',
+        )
+    )
+    out = run(cli, path, tmp_path / "runs")
+    rows = [r for r in scores(out) if r["method"] == "pinion_sync"]
+    assert rows and all(np.isfinite(float(r["score"])) for r in rows)
+    with (out / "shafts.csv").open() as f:
+        shafts = list(csv.DictReader(f))
+    assert len(shafts) == len(rows)
+    assert {r["shaft"] for r in shafts} <= {"input", "idler", "output", "nothing"}
+    strength = {(r["file"], r["unit"], r["index"]): r for r in shafts}
+    for r in rows:  # a pinion fault is called only where the input shaft wins
+        if r["decision"] == "1":
+            s = strength[(r["file"], r["unit"], r["index"])]
+            others = [float(s[k]) for k in ("strength_idler", "strength_output") if s[k] != "nan"]
+            assert float(s["strength_input"]) > max(others + [0.0])
+    assert any(r["decision"] == "1" for r in rows)
+    assert all(r["strength_output"] == "nan" for r in shafts if r["unit"] == "record5")
+    assert all(r["shaft"] == "input" for r in shafts if r["unit"] == "record10" and "f" in Path(r["file"]).stem)
+    assert "Which shaft (pinion_sync, record10" in (out / "table.md").read_text()
+
+
 def test_the_threshold_rule_is_checked(cli, tmp_path):
     path = scenario(tmp_path, methods=("matched_filter",), detection='threshold = "pooeld"')
     code, _, err = cli("validate", path)

@@ -823,7 +823,8 @@ def shaft_attribution(names: tuple, history: dict, test: dict, rule: Rule) -> di
     *history*: {unit: (history units, shafts)}, *test*: {path: {unit: (units, shafts)}}."""
     thresholds = {u: rule.decide({u: h[:, 0]})["thresholds"][u] for u, h in history.items()}
 
-    def named(s: np.ndarray, u: str) -> list[str]:
+    def named(s: np.ndarray, u: str) -> list[str]:  # a shaft the unit is too short to see (NaN) is none
+        s = np.where(np.isnan(s), -np.inf, s)
         return [names[int(np.argmax(row))] if row[0] > thresholds[u] else "nothing" for row in s]
 
     return {

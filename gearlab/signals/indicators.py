@@ -217,7 +217,8 @@ def shaft_parts(
     window energy, as sync_shares' (the record's level cancels; the rows compare in one unit). Units
     as sync_shares: *block* consecutive revolutions moved by *stride*; block = 1: each revolution with
     every other of the record for the input part, the whole record's phases for the slow shafts (one
-    revolution has one phase), each as a share of the revolution's own energy."""
+    revolution has one phase), each as a share of the revolution's own energy. A unit too short to
+    hold two of the slow shaft's phases twice has no part for it (NaN)."""
     gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
     n = gram.shape[-1]
 
@@ -230,10 +231,11 @@ def shaft_parts(
             # lags (a bearing whose impulses return to one angle every 20 revolutions) is no shaft's
             r = np.arange(j, b, q)
             means = [g[:, r[:-m], r[m:]].mean(axis=1) for m in range(1, len(r))]
-            if not means:  # fewer than two turns of the shaft in the unit
-                return np.full(g.shape[0], np.nan)
-            phases.append(np.median(means, axis=0))
-        phases = np.array(phases)  # (q, teeth)
+            if means:  # a phase the unit holds once has no pair
+                phases.append(np.median(means, axis=0))
+        if len(phases) < 2:  # the unit is too short to see this shaft's turn: no part (NaN)
+            return np.full(g.shape[0], np.nan)
+        phases = np.array(phases)  # (phases with a pair, teeth)
         return phases.max(axis=0) - phases.mean(axis=0)
 
     rows = []
@@ -275,11 +277,11 @@ def pinion_sync(strengths: np.ndarray) -> np.ndarray:
     strongest other shaft's (or less 0 when none gained), positive only where the input shaft wins with
     an excess of its own (a localised fault is put on the shaft where its synchronous part is
     strongest), and higher the more it stands above the others."""
-    if strengths.shape[1] == 1:
-        return strengths[:, 0]
     # a shaft that lost ground against the history (its excess below 0) is no rival: a strong bearing
-    # dilutes every share, and the input shaft's loss must not read as its win
-    return strengths[:, 0] - np.maximum(strengths[:, 1:].max(axis=1), 0.0)
+    # dilutes every share, and the input shaft's loss must not read as its win; nor is a shaft whose
+    # turn the unit is too short to see (NaN)
+    others = np.where(np.isnan(strengths[:, 1:]), -np.inf, strengths[:, 1:])
+    return strengths[:, 0] - np.maximum(others.max(axis=1, initial=-np.inf), 0.0)
 
 
 def window_reference(groups, dofs=None):
