@@ -248,6 +248,7 @@ def test_pinion_sync_runs_end_to_end_and_writes_which_shaft(cli, tmp_path, cache
     assert all(r["strength_output"] == "nan" for r in shafts if r["unit"] == "record5")
     assert all(r["shaft"] == "input" for r in shafts if r["unit"] == "record10" and "f" in Path(r["file"]).stem)
     assert "Which shaft (pinion_sync, record10" in (out / "table.md").read_text()
+    assert "Which shaft (pinion_sync, record10" in (out / "report.html").read_text()
 
 
 def test_the_threshold_rule_is_checked(cli, tmp_path):

@@ -1083,11 +1083,13 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "methods": list(dict.fromkeys(r["method"] for r in records)),
         "false_alarm_asked": spec["false_alarm"],
         "rows": rows,
+        # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
+        "shafts_md": shafts_md(attributed, labels),
     }
     if (run.path / "conditions.json").exists():
         summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(rows) + "\n" + labels_md(rows) + shafts_md(attributed, labels))
+    run.write_text("table.md", table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"])
     run.write_text("table.csv", table_csv(rows))
 
 
@@ -1242,6 +1244,7 @@ def summary_lines(run: RunDir) -> list[str]:
         "false alarms asked):",
         table_md(summary["rows"]).rstrip(),
         labels_md(summary["rows"]).rstrip(),
+        *([summary["shafts_md"].strip()] if summary.get("shafts_md") else []),
     ]
 
 
