@@ -674,9 +674,9 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
     pinion on the input shaft, a chipped idler-shaft tooth (every 3rd input revolution, at one input
     angle, which FM4 of the input TSA calls at 1/3 of its size) on the idler, an output-shaft tooth
     (every 5th) on the output, a bearing's impulses (3.05 a revolution) and a new healthy record on
-    none (at TSA30; at TSA10 the bearing may be put on a slow shaft, never on the input) — and
-    pinion_sync calls a pinion fault only where the input shaft wins: the chip and nothing else, in
-    every record-level unit."""
+    none (at TSA30; at TSA10 the bearing may be put on a slow shaft, never on the input), a chipped
+    pinion beside an idler tooth of equal size on the input — and pinion_sync calls a pinion fault only
+    where the input shaft wins: the chipped pinions and nothing else, in every record-level unit."""
     import textrecords
 
     from gearlab.engine import load_scenario
@@ -693,6 +693,7 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
         "idler": ("test", "idler tooth", {"idler": 4.0}),
         "output": ("test", "output tooth", {"output": 4.0}),
         "bearing": ("test", "bearing outer race", {"bearing": 4.0}),
+        "both": ("test", "fault", {"chip": 4.0, "idler": 4.0}),  # a chipped pinion among other damage
     }
     for i, (name, (_, _, sizes)) in enumerate(files.items()):
         rig_record(data / f"{name}.zip", seed=10 + i, phase=0.9 * i, **sizes)
@@ -714,7 +715,14 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
         spec["classical"],
         Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]),
     )
-    expected = {"good3": "nothing", "pinion": "input", "idler": "idler", "output": "output", "bearing": "nothing"}
+    expected = {
+        "good3": "nothing",
+        "pinion": "input",
+        "idler": "idler",
+        "output": "output",
+        "bearing": "nothing",
+        "both": "input",  # the pinion's chip (A²) outweighs the idler's tooth of equal size (2/3 A²)
+    }
     for p, units in r["shafts"]["named"].items():
         record = Path(p).stem
         for u in ("record10", "record30"):
@@ -726,7 +734,7 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
                 continue
             assert set(units[u]) == {expected[record]}, (record, u, units[u], r["shafts"]["strengths"][p][u])
             called = np.array(r["test_scores"][p][u]) > r["thresholds"][u]
-            assert called.all() if record == "pinion" else not called.any(), (record, u, r["test_scores"][p][u])
+            assert called.all() if expected[record] == "input" else not called.any(), (record, r["test_scores"][p][u])
     # the idler's tooth is seen in both views at one size: its phase pattern (2/3 of A²) and its image
     # in the input TSA (A²/9, times 6); the input strength is what the input TSA shows of it
     strengths = {Path(p).stem: np.array(s["record30"]) for p, s in r["shafts"]["strengths"].items()}
