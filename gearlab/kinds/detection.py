@@ -86,6 +86,7 @@ from ..signals.indicators import (
     tooth_energy,
     tooth_reference,
     tooth_sync,
+    window_gram,
     window_reference,
 )
 from ..units import to_si
@@ -748,14 +749,15 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
         for role in ROLES:
             for f, revs in cond[role]:
                 shares[f.path] = {}
+                gram = window_gram(revs, orders[0], orders, shaft, sidebands)  # one per record, every unit kind
                 for u in history:
                     block, stride = _window(u)[0], _window(u)[1] if role == "history" else _window(u)[0]
                     if name == "tooth_sync":
                         shares[f.path][u] = sync_shares(
-                            revs, block, stride, orders[0], orders, classical["slow_shafts"], shaft, sidebands
+                            revs, block, stride, orders[0], orders, classical["slow_shafts"], shaft, sidebands, gram
                         )
                     else:
-                        parts = shaft_parts(revs, block, stride, orders[0], orders, periods, shaft, sidebands)
+                        parts = shaft_parts(revs, block, stride, orders[0], orders, periods, shaft, sidebands, gram)
                         shares[f.path][u] = parts.reshape(len(parts), -1)
     # the localised indicators' within-record spread: that of independent units, from sliding windows
     dofs = {u: [record_effects.overlap_dof(len(X), *_window(u)) for X in groups] for u, groups in per_record.items()}

@@ -160,6 +160,7 @@ def sync_shares(
     slow=(),
     shaft_orders: int = 2,
     sidebands: int = 1,
+    gram: np.ndarray | None = None,
 ) -> np.ndarray:
     """u_k of each TSA unit of *block* consecutive *revolutions* of one record (units starting at 0,
     stride, 2·stride, … as detection.tsa_units makes them), (units, teeth): each window's
@@ -171,8 +172,9 @@ def sync_shares(
     multiple of a *slow* shaft's period q removes what repeats every q revolutions and not every
     one (a tooth on that shaft): it then scores |s|² − Σ_a |d_a|² / (q(q − 1)) for a signal
     s + d_(r mod q), 0 for one impulse every q revolutions. block = 1: each revolution paired
-    with every other revolution of the record."""
-    gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
+    with every other revolution of the record. *gram*: the record's window_gram, when already made."""
+    if gram is None:
+        gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
     n = gram.shape[-1]
     diagonal = np.einsum("krr->rk", gram)
     if block == 1:
@@ -198,6 +200,7 @@ def shaft_parts(
     shafts=(),
     shaft_orders: int = 2,
     sidebands: int = 1,
+    gram: np.ndarray | None = None,
 ) -> np.ndarray:
     """Which shaft each tooth window's synchronous content turns with, (units, 1 + len(shafts), teeth).
 
@@ -218,8 +221,10 @@ def shaft_parts(
     as sync_shares: *block* consecutive revolutions moved by *stride*; block = 1: each revolution with
     every other of the record for the input part, the whole record's phases for the slow shafts (one
     revolution has one phase), each as a share of the revolution's own energy. A unit too short to
-    hold two of the slow shaft's phases twice has no part for it (NaN)."""
-    gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
+    hold two of the slow shaft's phases twice has no part for it (NaN). *gram*: the record's
+    window_gram, when already made (one per record serves every unit kind)."""
+    if gram is None:
+        gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
     n = gram.shape[-1]
 
     def slow_part(g: np.ndarray, q: int) -> np.ndarray:
@@ -240,8 +245,9 @@ def shaft_parts(
 
     rows = []
     if block == 1:  # each revolution's own energy is the unit of its shares, as in sync_shares
-        inputs = sync_shares(revolutions, 1, 1, teeth, mesh_orders, (), shaft_orders, sidebands)
-        energy = np.maximum(np.einsum("krr->r", gram) / teeth, 1e-300)
+        diagonal = np.einsum("krr->kr", gram)
+        energy = np.maximum(diagonal.mean(axis=0), 1e-300)
+        inputs = ((gram.sum(axis=2) - diagonal) / max(n - 1, 1)).T / energy[:, None]  # every other revolution
         slow = np.stack([slow_part(gram, q) for q in shafts]) if shafts else np.empty((0, teeth))
         return np.stack([np.vstack([inputs[r], slow / energy[r]]) for r in range(n)])
     mask = pair_mask(block)
