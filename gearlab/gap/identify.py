@@ -61,6 +61,7 @@ PASSES = 3  # profiles around a better point found by the last one, at most
 # their first simplex (the phase in radians; the other continuous parameters as a share of their value).
 ALIAS_SCAN_STEP = math.radians(0.5)
 ALIAS_FITS, ALIAS_EVALS = 3, 24
+ALIAS_BRACKET, ALIAS_BRENT = math.radians(3.0), 8
 ALIAS_SIMPLEX_PHASE, ALIAS_SIMPLEX_SHARE = math.radians(0.5), 0.02
 
 
@@ -248,15 +249,16 @@ def alias_refit(space, score: Callable[[dict], float], params: dict, phase: str,
     A budgeted search ends at some alias, a few degrees off. Three steps, *score* deterministic:
 
     1. the phase scanned over one alias period (2 pi gcd(q, Z1) / Z1) around the fit, ALIAS_SCAN_STEP
-       apart, the rest held: the within-alias phase, to about a degree;
-    2. every alias at that phase, one evaluation each;
+       apart, the rest held: the within-alias phase, to a few degrees;
+    2. at every alias, a bounded Brent search of the phase ALIAS_BRACKET either side of that offset
+       (ALIAS_BRENT evaluations): the fit's alias's valley need not lie where the true one's does;
     3. a local Nelder-Mead fit of the phase and the other continuous parameters (the amplitude) from
        each of the ALIAS_FITS best aliases, ALIAS_EVALS evaluations, a simplex ALIAS_SIMPLEX_PHASE and
        ALIAS_SIMPLEX_SHARE of each value wide (a 5 % amplitude error moves the score more than the
        alias does).
 
     Returns the best point seen (the fit included) as {"params", "score", "evaluations"}."""
-    from scipy.optimize import minimize
+    from scipy.optimize import minimize, minimize_scalar
 
     q = int(params[order]) if isinstance(order, str) else int(order)
     period, count = pitch_alias_period(q, teeth)
@@ -276,10 +278,21 @@ def alias_refit(space, score: Callable[[dict], float], params: dict, phase: str,
     base = float(params[phase])
     scan = [(at({**params, phase: base + o}), o) for o in np.arange(-period / 2, period / 2, ALIAS_SCAN_STEP)]
     base += min(scan, key=lambda s: s[0])[1]
-    ranked = sorted((at({**params, phase: base + period * j}), j) for j in range(count))
+    # The scan ran on the fit's alias, whose valley need not lie where the true alias's does: each
+    # alias gets a bounded Brent search of the phase ALIAS_BRACKET either side (ALIAS_BRENT evaluations).
+    ranked = []
+    for j in range(count):
+        res = minimize_scalar(
+            lambda x: at({**params, phase: x}),
+            bounds=(base + period * j - ALIAS_BRACKET, base + period * j + ALIAS_BRACKET),
+            method="bounded",
+            options={"maxiter": ALIAS_BRENT, "xatol": 1e-4},
+        )
+        ranked.append((float(res.fun), float(res.x)))
+    ranked.sort()
     names = [phase] + others
-    for _, j in ranked[:ALIAS_FITS]:
-        x0 = np.array([base + period * j] + [float(params[n]) for n in others])
+    for _, start in ranked[:ALIAS_FITS]:
+        x0 = np.array([start] + [float(params[n]) for n in others])
         steps = [ALIAS_SIMPLEX_PHASE] + [
             ALIAS_SIMPLEX_SHARE * (abs(x) if x != 0 else by_name[n]["high"] - by_name[n]["low"])
             for x, n in zip(x0[1:], others)
