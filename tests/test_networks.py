@@ -20,7 +20,7 @@ def cnn3():
 
 def test_registered_names():
     assert set(NAMES) <= set(NETWORKS)
-    assert DEFAULT_NETWORK == "burst"  # the transfer kind's default (docs/learning.md, section 6)
+    assert DEFAULT_NETWORK == "shapes"  # the transfer kind's default (docs/learning.md, section 6)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -334,3 +334,30 @@ def test_shapes_templates_learn_at_a_tenth_of_the_step_and_only_members_weigh():
     opt.step()
     moved = (net.features[1].shapes.detach() - before).abs()
     assert moved.max() == pytest.approx(SHAPE_STEP * 1e-2, rel=1e-2)  # Adam: lr · g / (|g| + eps)
+
+
+def test_shapes_with_classes_and_priors_is_the_bayes_classifier():
+    """Started with per-class templates, a noise law and class priors, `shapes` outputs the
+    Bayes classifier's log posteriors up to one constant per row: log p_c + log mean_j p(r | t_j)
+    over class c's templates, healthy the zero shape (Gaussian law, scale from median|r|)."""
+    import numpy as np
+
+    from gearlab.learn.networks import matched_start
+
+    rng = np.random.default_rng(0)
+    faults, classes = rng.normal(size=(9, 64)), np.array([1, 1, 2, 2, 2, 3, 3, 3, 3])
+    prior = np.array([0.4, 0.2, 0.3, 0.1])
+    net = build_network("shapes", 4, length=64, seed=0)
+    assert matched_start(net, faults, seed=0, classes=classes, law="gaussian", prior=prior)
+    r = rng.normal(size=(6, 64)) + np.concatenate([np.zeros((2, 64)), faults[[0, 4, 8, 3]]])
+    sigma = np.sort(np.abs(r), axis=1)[:, 31] / 0.6744897501960817  # torch's median: the lower middle
+    llr = (2 * r @ faults.T - (faults**2).sum(1)) / (2 * sigma[:, None] ** 2)
+    expected = np.stack(
+        [np.log(prior[0]) + np.zeros(len(r))]
+        + [np.log(prior[c]) + np.log(np.exp(llr[:, classes == c]).mean(1)) for c in (1, 2, 3)],
+        axis=1,
+    )
+    with torch.no_grad():
+        got = net(torch.as_tensor(r, dtype=torch.float32)).double().numpy()
+    assert np.allclose(got, expected, rtol=1e-4, atol=1e-3)
+    assert net.classifier.member.sum(0).tolist() == [1, 2, 3, 4]  # healthy: the zero shape alone

@@ -415,6 +415,9 @@ def test_shipped_scenario_is_table_4_1(cli):
         (tiny(noises='["gausian"]'), "[study] key 'noises'", "did you mean 'gaussian'"),
         (tiny(noises="[]"), "[study] key 'noises'", "non-empty"),
         (tiny(network="cnn4"), "[network] key 'name'", "did you mean 'cnn3'"),
+        (tiny(network="shapes"), "[protocol] key 'residual'", "expected residual = true"),
+        (tiny().replace("runs = 2", "runs = 2\nstart = 'clean'"), "[protocol] key 'start'", "expected [network] name"),
+        (tiny().replace("runs = 2", "runs = 2\nstart = 'clear'"), "[protocol] key 'start'", "did you mean 'clean'"),
         (tiny(batch=4096), "[protocol] key 'batch'", "larger than the training set"),
         (tiny().replace("epochs = 4", "epoch = 4"), "[protocol] key 'epoch'", "did you mean 'epochs'"),
         (tiny().replace("runs = 2", "runs = 0"), "[protocol] key 'runs'", "outside"),
@@ -478,3 +481,62 @@ def test_the_matched_start_takes_the_training_part_s_faults_only(monkeypatch):
     ((faults,),) = [seen]
     assert np.allclose(faults, expected, atol=1e-5)
     assert run_unit(replace(protocol, start="random"), data, run=0) and len(seen) == 1  # random: no matched start
+
+
+def test_the_clean_start_takes_the_training_part_s_noise_free_twin_only():
+    """start = "clean": the network starts on the distinct noise-free fault shapes of the
+    training part (α·(twin - its healthy median), with their classes) and the rows' noise law;
+    replacing every validation and test row of the twin changes nothing."""
+    from dataclasses import replace
+
+    protocol = replace(FAST, network="shapes", residual=True, start="clean", epochs=1)
+    spec = small_spec(tsa=True)
+    data, twin = synthetic(spec), synthetic(spec.with_(noise=None))
+    label = np.asarray(data.label, dtype=np.int64)
+    s = split(label, protocol, 0)
+    faults, classes = ns.clean_faults(data.X[s.train], twin.X[s.train], label[s.train])
+    train_twin = twin.X[s.train]
+    expected = train_twin[label[s.train] != 0] - np.median(train_twin[label[s.train] == 0], axis=0)
+    assert len(faults) == len(np.unique(expected.round(6), axis=0)) == 4 * 4  # type x step (every tooth alike)
+    assert set(classes) == {1, 2, 3, 4}
+    # α = 1 here: the synthetic noisy rows are the twin plus zero-mean noise
+    assert any(np.allclose(faults[0], e, rtol=0.05, atol=0.05) for e in expected)
+    first = run_unit(protocol, data, run=0, twin=twin)
+    others = np.setdiff1d(np.arange(len(label)), s.train)
+    twin.X[others] = np.random.default_rng(2).normal(size=twin.X[others].shape) * 9
+    assert run_unit(protocol, data, run=0, twin=twin)["accuracy"] == first["accuracy"]
+    laws = {name: ns.noise_law(dataset_preset(name)) for name in ("A-casing_TSA-laplace", "A-casing_noise-laplace")}
+    assert laws == {"A-casing_TSA-laplace": "gaussian", "A-casing_noise-laplace": "laplace"}  # a mean of 60 draws
+    assert ns.noise_law(dataset_preset("A-casing_TSA-student_t")) == "student_t"  # keeps its heavy tail
+
+
+def test_shapes_from_the_clean_start_come_near_the_bayes_classifier():
+    """The shapes network started on the training part's noise-free shapes is the Bayes
+    classifier of those shapes (up to the class priors, which one epoch learns): on the
+    synthetic TSA set it comes within a few points of `class_bound`, which knows every shape
+    of the test part too; a random start after one epoch is far below."""
+    from dataclasses import replace
+
+    from gearlab.learn.bounds import class_bound
+
+    protocol = replace(FAST, network="shapes", residual=True, start="clean", epochs=1)
+    spec = small_spec(tsa=True)
+    data, twin = synthetic(spec), synthetic(spec.with_(noise=None))
+    label = np.asarray(data.label, dtype=np.int64)
+    test = split(label, protocol, 0).test
+    bound = 100.0 * float((class_bound(data.X, twin.X, label, "gaussian")[test] == label[test]).mean())
+    clean = run_unit(protocol, data, run=0, twin=twin)["accuracy"]
+    random = run_unit(replace(protocol, start="random"), data, run=0)["accuracy"]
+    assert clean >= bound - 3.0, (clean, bound)
+    assert random < clean - 10.0, (random, clean)
+
+
+def test_a_run_with_the_clean_start_hands_each_worker_the_twin(cli, write_scenario, tmp_path, fake_builder):
+    text = tiny(noises='["gaussian"]', network="shapes", runs=1).replace(
+        "runs = 1", "runs = 1\nresidual = true\nstart = 'clean'"
+    )
+    code, out, err = cli("run", write_scenario(text), "--out", tmp_path / "runs")
+    assert code == 0, err
+    records = RunDir(run_dir(out)).records()
+    assert [r["unit"] for r in records] == ["gaussian/noisy/run0", "gaussian/tsa/run0"]
+    assert all(r["accuracy"] > 60.0 for r in records), [r["accuracy"] for r in records]

@@ -30,7 +30,17 @@ from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
 from ..learn.bounds import class_bound
 from ..learn.networks import NetworkSettings
-from ..learn.noise_study import VARIANTS, NoiseProtocol, aggregate, check_batch, check_split, mean_std, run_unit, split
+from ..learn.noise_study import (
+    VARIANTS,
+    NoiseProtocol,
+    aggregate,
+    check_batch,
+    check_split,
+    mean_std,
+    noise_law,
+    run_unit,
+    split,
+)
 from ..params import did_you_mean
 from ..plots import noise_study_figures
 from ..runs import RunDir
@@ -105,6 +115,16 @@ def build(scenario: Scenario) -> dict:
     protocol = NoiseProtocol(
         network=t["network"]["name"], dropout=t["network"]["dropout"], device=device_of(scenario), **p
     )
+    if protocol.start == "clean" and protocol.network != "shapes":
+        raise GearlabInputError(
+            f"{location(scenario.path, 'protocol', 'start')}: the clean start sets the shapes network's templates; "
+            f"expected [network] name = 'shapes' (got '{protocol.network}')"
+        )
+    if protocol.network == "shapes" and not protocol.residual:
+        raise GearlabInputError(
+            f"{location(scenario.path, 'protocol', 'residual')}: the shapes network scores residuals from the healthy "
+            "revolution; expected residual = true"
+        )
     spec = {
         "datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
         "protocol": protocol,
@@ -217,20 +237,17 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
         # the datasets by cache entry path: a worker process may not share this one's environment
-        tasks = []
+        tasks, twins = [], set()
         for noise, r, variant in pending:
             dataset = spec["datasets"][noise][variant]
-            tasks.append((protocol, dataset, cache.entry_path(dataset), noise, r, variant, run.path))
+            twin = dataset.with_(noise=None) if protocol.start == "clean" else None
+            if twin is not None and twin not in twins:  # the clean start's shapes: built (or found) once, here
+                load_or_build(twin, executor, on_event)
+                twins.add(twin)
+            twin_path = cache.entry_path(twin) if twin is not None else None
+            tasks.append((protocol, dataset, cache.entry_path(dataset), twin, twin_path, noise, r, variant, run.path))
         executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
         summarise(scenario, run)
-
-
-def bound_law(spec: DatasetSpec) -> str:
-    """The noise law of a chapter-4 row: the dataset's own, but the mean of J Gaussian or
-    Laplace draws (TSA) is Gaussian to within its kurtosis 3 + 3/J; a Student-t(2) mean keeps
-    its heavy tail (infinite variance: no central limit)."""
-    kind = spec.noise.kind
-    return "gaussian" if spec.tsa and kind == "laplace" else kind
 
 
 def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None, on_event=lambda e: None) -> list:
@@ -240,7 +257,7 @@ def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None,
     on_event(Event("log", message=f"the Bayes bound of {spec.name}: its noise-free twin and the class likelihoods"))
     clean, _ = load_or_build(spec.with_(noise=None), executor, on_event)
     label = np.asarray(data.label, dtype=np.int64)
-    pred = class_bound(data.X, clean.X, label, bound_law(spec))
+    pred = class_bound(data.X, clean.X, label, noise_law(spec))
     tests = [split(label, protocol, r).test for r in range(protocol.runs)]
     return [100.0 * float((pred[t] == label[t]).mean()) for t in tests]
 
@@ -248,7 +265,7 @@ def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None,
 def train_unit(task: tuple) -> dict:
     """One training run, in this process or a worker, on one torch thread (as the transfer
     kind's units: a result does not depend on how many run side by side)."""
-    protocol, dataset_spec_, path, noise, r, variant, run_path = task
+    protocol, dataset_spec_, path, twin, twin_path, noise, r, variant, run_path = task
     torch.set_num_threads(1)
     unit = unit_name(noise, r, variant)
     with UnitProgress(run_path, unit) as progress:
@@ -256,7 +273,8 @@ def train_unit(task: tuple) -> dict:
         def report(epoch: int, history) -> None:
             progress(f"epoch {epoch + 1}, validation accuracy {100 * history.val_acc[-1]:.1f} %")
 
-        result = run_unit(protocol, cache.load(dataset_spec_, path), r, on_epoch=report)
+        clean = cache.load(twin, twin_path) if twin is not None else None
+        result = run_unit(protocol, cache.load(dataset_spec_, path), r, on_epoch=report, twin=clean)
     return {"unit": unit, "noise": noise, "variant": variant, **result}
 
 

@@ -107,7 +107,7 @@ from gearlab.settings import setting
 
 from .bounds import noise_scale, shape_llr
 
-DEFAULT_NETWORK = "burst"
+DEFAULT_NETWORK = "shapes"
 DEFAULT_DROPOUT = 0.005  # Han et al. (2019a), thesis 3.1.6 and Table 5.3
 DEFAULT_LENGTH = 4096  # samples per rotation (thesis 3.1.6)
 
@@ -342,17 +342,20 @@ SHAPE_STEP = 0.1  # templates learn at a tenth of the optimiser's step (docs/lea
 
 class ShapeLikelihood(nn.Module):
     """``(B, L)`` residual revolutions -> ``(B, J)``: each template's log-likelihood ratio in
-    Laplace noise at the revolution's own scale b (gearlab.learn.bounds, eq. of `shape_llr`),
+    the noise law *law* at the revolution's own scale (gearlab.learn.bounds, `shape_llr`); for
+    Laplace noise (the default: the chapter-5 targets' law)
 
         z_j = (||r||_1 - ||r - t_j||_1) / b,        b = median|r| / ln 2,
 
     so a sample far out (an impulse) moves z_j by at most |t_j,n| / b: the Laplace law's own
     limiter. The templates are stored divided by `SHAPE_STEP`, so that Adam's fixed step size
-    moves them by a tenth of what it moves other weights."""
+    moves them by a tenth of what it moves other weights. The law is the start's (`matched_start`),
+    not a weight: a state dict does not carry it."""
 
-    def __init__(self, n_shapes: int, length: int):
+    def __init__(self, n_shapes: int, length: int, law: str = "laplace"):
         super().__init__()
         self.weight = nn.Parameter(torch.zeros(n_shapes, length))
+        self.law = law
 
     @property
     def shapes(self) -> torch.Tensor:
@@ -361,8 +364,11 @@ class ShapeLikelihood(nn.Module):
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         r = x.reshape(len(x), -1)
         with torch.no_grad():  # the scale is the noise's, not a feature to learn
-            b = noise_scale(r, "laplace")
-        return shape_llr(r, self.shapes, b, "laplace")
+            b = noise_scale(r, self.law)
+        return shape_llr(r, self.shapes, b, self.law)
+
+    def extra_repr(self) -> str:
+        return f"{len(self.weight)} templates, {self.law} noise"
 
 
 class ShapeMixture(nn.Module):
@@ -371,23 +377,31 @@ class ShapeMixture(nn.Module):
         logit_c = log Σ_j w_j,c · exp(z_j),        z_0 = 0 (the healthy shape: no response),
 
     with learnt log weights ``log w`` (J + 1 x C) over a fixed membership: healthy is the zero
-    shape alone, every fault class a mixture of the templates in use. Started as the Bayes
-    detector's mixture (gearlab.learn.bounds): the templates in use equally weighted."""
+    shape alone, each fault class a mixture of its own templates. Started as the Bayes
+    detector's mixture (gearlab.learn.bounds): each class's templates equally weighted."""
 
     def __init__(self, n_shapes: int, n_classes: int):
         super().__init__()
         self.log_weight = nn.Parameter(torch.zeros(n_shapes + 1, n_classes))
         self.register_buffer("member", torch.zeros(n_shapes + 1, n_classes, dtype=torch.bool))
-        self.use(n_shapes)
+        # a block of templates per fault class until a start says which template is whose
+        self.use(1 + np.arange(n_shapes) * max(n_classes - 1, 1) // max(n_shapes, 1))
 
-    def use(self, n: int) -> None:
-        """Healthy = the zero shape; each fault class = the first *n* templates, equally weighted."""
+    def use(self, classes: np.ndarray, prior: np.ndarray | None = None) -> None:
+        """Healthy = the zero shape; template j belongs to fault class ``classes[j]`` (the
+        templates beyond ``len(classes)`` to none); each class's templates equally weighted,
+        times the class's *prior* probability when given (the Bayes classifier's posterior)."""
+        classes = np.asarray(classes, dtype=np.int64)
+        log_prior = np.zeros(self.log_weight.shape[1]) if prior is None else np.log(np.asarray(prior, dtype=float))
         with torch.no_grad():
             self.member.zero_()
             self.member[0, 0] = True
-            self.member[1 : n + 1, 1:] = True
-            self.log_weight.fill_(-math.log(max(n, 1)))
-            self.log_weight[0, 0] = 0.0
+            self.log_weight.zero_()
+            self.log_weight[0, 0] = float(log_prior[0])
+            for c in np.unique(classes):
+                mine = 1 + np.flatnonzero(classes == c)
+                self.member[mine, c] = True
+                self.log_weight[mine, c] = float(log_prior[c]) - math.log(len(mine))
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:
         z = torch.cat([torch.zeros_like(z[:, :1]), z], dim=1)
@@ -396,27 +410,48 @@ class ShapeMixture(nn.Module):
 
 
 def shapes(n_classes: int, dropout: float, length: int) -> Network:
-    """The Bayes detector's form as a network: `SHAPES` whole-revolution templates scored by
-    their Laplace likelihood ratio, a learnt mixture per class. *dropout* is not used (there is
-    no dense layer to drop)."""
-    features = nn.Sequential(AsChannels(), ShapeLikelihood(SHAPES, length))
-    return Network("shapes", features, ShapeMixture(SHAPES, n_classes), SHAPES, n_classes, length, fixed_length=True)
+    """The Bayes detector's form as a network: `SHAPES` whole-revolution templates per fault
+    class scored by their likelihood ratio, a learnt mixture per class. *dropout* is not used
+    (there is no dense layer to drop)."""
+    n_shapes = SHAPES * max(n_classes - 1, 1)
+    features = nn.Sequential(AsChannels(), ShapeLikelihood(n_shapes, length))
+    return Network(
+        "shapes", features, ShapeMixture(n_shapes, n_classes), n_shapes, n_classes, length, fixed_length=True
+    )
 
 
-def _start_shapes(network: Network, faults: np.ndarray, seed: int) -> bool:
-    """`shapes`' matched start: its templates are the simulated fault residuals themselves (a
-    seeded choice of `SHAPES` when there are more), the mixture that of the Bayes detector."""
+def _start_shapes(
+    network: Network, faults: np.ndarray, classes: np.ndarray, seed: int, law: str, prior: np.ndarray | None
+) -> bool:
+    """`shapes`' matched start: its templates are the fault residuals themselves (per class a
+    seeded choice of `SHAPES` when there are more), the mixture, the class priors and the noise
+    law those of the Bayes classifier."""
     rng = np.random.default_rng(seed)
-    F = faults[rng.permutation(len(faults))[:SHAPES]]
+    chosen = np.concatenate([rng.permutation(np.flatnonzero(classes == c))[:SHAPES] for c in np.unique(classes)])
+    likelihood = network.features[1]
+    if len(chosen) > len(likelihood.weight):
+        raise ValueError(
+            f"{len(chosen)} templates for a bank of {len(likelihood.weight)}: more fault classes than built"
+        )
     with torch.no_grad():
-        network.features[1].weight[: len(F)] = torch.as_tensor(F / SHAPE_STEP, dtype=torch.float32)
-    network.classifier.use(len(F))
+        likelihood.weight[: len(chosen)] = torch.as_tensor(faults[chosen] / SHAPE_STEP, dtype=torch.float32)
+    likelihood.law = law
+    network.classifier.use(classes[chosen], prior)
     return True
 
 
-def matched_start(network: Network, faults: np.ndarray, seed: int) -> bool:
+def matched_start(
+    network: Network,
+    faults: np.ndarray,
+    seed: int,
+    classes: np.ndarray | None = None,
+    law: str = "laplace",
+    prior: np.ndarray | None = None,
+) -> bool:
     """Start *network*'s filter bank as matched filters of the simulated *faults* (fault
-    residuals, one revolution a row, as the network will see them): the k-means centroids of
+    residuals, one revolution a row, as the network will see them; *classes* their fault
+    classes, all 1 when not given; *law* the noise law and *prior* the class probabilities,
+    healthy first, which only `shapes` uses): the k-means centroids of
     each fault's most energetic window of the bank's length, at the bank's rate (the 2-fold
     average pool), each normalised and turned so its largest sample is positive, at the norm
     of the random start. The soft limiter in front is left out: a burst below its clip passes
@@ -428,7 +463,8 @@ def matched_start(network: Network, faults: np.ndarray, seed: int) -> bool:
     if len(F) == 0:
         return False
     if network.name == "shapes":
-        return _start_shapes(network, F, seed)
+        classes = np.ones(len(F), np.int64) if classes is None else np.asarray(classes)
+        return _start_shapes(network, F, classes, seed, law, prior)
     layer = getattr(network, "bank_layer", None)
     if layer is None:
         return False

@@ -30,9 +30,12 @@ from ..errors import GearlabInputError
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .calibration import STARTS
 from .networks import build_network, matched_start
-from .training import fit_supervised, pick_device, predict
+from .training import embed, fit_supervised, pick_device, predict
 
 VARIANTS = ("noisy", "tsa")
+# the network's start: random, matched to the training part's noisy faults, or to the same
+# revolutions without noise (the simulator's own shapes: what a hybrid model knows; decision 22)
+NOISE_STARTS = (*STARTS, "clean")
 
 
 @dataclass(frozen=True)
@@ -58,9 +61,33 @@ class NoiseProtocol:
         bool, False, doc="input = revolution minus the median healthy revolution of the training part"
     )
     start: str = setting(
-        str, "random", choices=STARTS, doc="the filter bank's start (faults: matched to the training part's faults)"
+        str,
+        "random",
+        choices=NOISE_STARTS,
+        doc="the network's start (faults: matched to the training part's faults; clean: to their noise-free twins)",
     )
     device: str = "auto"
+
+
+def noise_law(spec) -> str:
+    """The noise law of a chapter-4 row: the dataset's own, but the mean of J Gaussian or
+    Laplace draws (TSA) is Gaussian to within its kurtosis 3 + 3/J; a Student-t(2) mean keeps
+    its heavy tail (infinite variance: no central limit). Noise-free rows: Laplace (any law)."""
+    kind = spec.noise.kind if spec.noise is not None else "laplace"
+    return "gaussian" if spec.tsa and kind == "laplace" else kind
+
+
+def clean_faults(X: np.ndarray, clean: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct noise-free fault shapes of a training part and their classes, as the residual
+    input sees them: α·(c - h), h the clean healthy revolution (the median of the healthy rows)
+    and α the noisy rows' scale against the clean ones (the median of <x, c> / <c, c>, as
+    gearlab.learn.bounds.class_bound reads it)."""
+    X, C = np.asarray(X, dtype=np.float64), np.asarray(clean, dtype=np.float64)
+    alpha = float(np.median((X * C).sum(1) / (C * C).sum(1).clip(min=1e-300)))
+    faults = alpha * (C[y != 0] - np.median(C[y == 0], axis=0))
+    _, first = np.unique(faults.round(9), axis=0, return_index=True)  # duplicates differ only by noise
+    first = np.sort(first)
+    return faults[first], y[y != 0][first]
 
 
 @dataclass(frozen=True)
@@ -121,17 +148,30 @@ def train(
     run: int,
     device: torch.device,
     on_epoch: Callable | None = None,
+    clean: tuple[np.ndarray, np.ndarray] | None = None,
+    law: str = "laplace",
 ):
-    """The model of one run, made from the training and validation arrays only."""
+    """The model of one run, made from the training and validation arrays only (and, for the
+    `clean` start, the training part's noise-free fault shapes and classes *clean*,
+    `clean_faults`; *law* the rows' noise law)."""
     X, y = train_set
     seed = 1000 * protocol.seed + run
     torch.manual_seed(seed)  # dropout masks
     net = build_network(protocol.network, n_classes, protocol.dropout, length=X.shape[1], seed=seed)
     if protocol.start == "faults":  # the bursts: fault samples less the healthy training revolutions' median
         matched_start(net, X[y != 0] - np.median(X[y == 0], axis=0), seed)
+    elif protocol.start == "clean":  # the Bayes classifier of the simulator's exact shapes, the training part's priors
+        prior = np.bincount(y, minlength=n_classes) / len(y)
+        matched_start(net, clean[0], seed, classes=clean[1], law=law, prior=prior)
     net = net.to(device)
+    fitted, (Xv, yv) = net, val_set
+    if protocol.start == "clean":
+        # Learning the exact shapes again from noisy copies can only lose (docs/learning.md,
+        # decision 22), so they stay fixed: their likelihoods are computed once, and only the
+        # mixture trains on them.
+        fitted, X, Xv = net.classifier, embed(net, X, device).cpu().numpy(), embed(net, Xv, device).cpu().numpy()
     history = fit_supervised(
-        net,
+        fitted,
         X,
         y,
         rng=np.random.default_rng([protocol.seed, run, 1]),
@@ -140,7 +180,7 @@ def train(
         batch=protocol.batch,
         optimizer="adam",
         lr=protocol.lr,
-        val=val_set,
+        val=(Xv, yv),
         patience=protocol.patience,
         on_epoch=on_epoch,
     )
@@ -181,18 +221,28 @@ def scores(
     }
 
 
-def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | None = None) -> dict:
-    """Train and score run *run* on *dataset*."""
+def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | None = None, twin=None) -> dict:
+    """Train and score run *run* on *dataset* (*twin*: its noise-free twin, which the `clean`
+    start needs; only its training part is read)."""
     device = pick_device(protocol.device)
     label = np.asarray(dataset.label, dtype=np.int64)
     s = split(label, protocol, run)
     X = dataset.X
+    clean = clean_faults(X[s.train], twin.X[s.train], label[s.train]) if protocol.start == "clean" else None
     if protocol.residual:  # the healthy reference from the training part's labels, never from the test part
         X = X - np.median(X[s.train[label[s.train] == 0]], axis=0).astype(X.dtype)
     start = time.perf_counter()
     val_set = (X[s.val], label[s.val])
     net, history = train(
-        protocol, (X[s.train], label[s.train]), val_set, len(dataset.spec.class_names), run, device, on_epoch
+        protocol,
+        (X[s.train], label[s.train]),
+        val_set,
+        len(dataset.spec.class_names),
+        run,
+        device,
+        on_epoch,
+        clean=clean,
+        law=noise_law(dataset.spec),
     )
     seconds = time.perf_counter() - start
     # Only now, with the model fixed, does the test part come in.
