@@ -408,6 +408,24 @@ def test_shipped_scenario_is_table_4_1(cli):
     assert (p.runs, p.batch, p.dropout, p.test_fraction, p.val_fraction) == (5, 256, 0.1, 0.333, 0.2)
 
 
+def test_the_hybrid_scenario_is_the_same_study_with_the_simulator_s_shapes():
+    """ch4_hybrid.toml differs from ch4_noise.toml only in the network and its start."""
+    faithful = load_scenario(ROOT / "scenarios" / "ch4_noise.toml").spec
+    hybrid = load_scenario(ROOT / "scenarios" / "ch4_hybrid.toml").spec
+    assert hybrid["datasets"] == {n: faithful["datasets"][n] for n in ("gaussian", "laplace")}
+    p, q = hybrid["protocol"], faithful["protocol"]
+    assert (p.network, p.residual, p.start) == ("shapes", True, "clean")
+    assert (p.runs, p.batch, p.test_fraction, p.val_fraction, p.epochs, p.patience, p.seed) == (
+        q.runs,
+        q.batch,
+        q.test_fraction,
+        q.val_fraction,
+        q.epochs,
+        q.patience,
+        q.seed,
+    )
+
+
 @pytest.mark.parametrize(
     "text, where, message",
     [
