@@ -208,15 +208,24 @@ def second_channel(target, blocks, first: dict) -> dict:
         return read_target(dataclasses.replace(target, vibration=1), blocks, lambda e: None)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
+def command_line(description: str | None = None, indicators: str | None = None):
+    """The phm09 benchmarks' common command line: the scenario, --swap-takes, --units and, given
+    a default, --indicators. Returns (args, the scenario's spec, its target with the takes swapped
+    when asked, {file path: label})."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("scenario")
     ap.add_argument("--swap-takes", action="store_true")
     ap.add_argument("--units", default="record30")
+    if indicators is not None:
+        ap.add_argument("--indicators", default=indicators)
     args = ap.parse_args()
     spec = load_scenario(args.scenario).spec
     target = swapped(spec["target"]) if args.swap_takes else spec["target"]
-    labels = {f.path: f.label for f in target.files}
+    return args, spec, target, {f.path: f.label for f in target.files}
+
+
+def main() -> None:
+    args, spec, target, labels = command_line()
     classical, p = spec["classical"], 1.0 - spec["false_alarm"]
     orders = classical["mesh_orders"]
     first = read_target(target, spec["blocks"], lambda e: None)

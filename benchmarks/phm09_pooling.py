@@ -23,13 +23,10 @@ The test labels are read only to print the figures (and the healthy test takes' 
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
-from phm09_localised import swapped
+from phm09_localised import command_line
 from scipy.stats import norm
 
-from gearlab.engine import load_scenario
 from gearlab.kinds.detection import Rule, auc, classical_record, read_target
 
 
@@ -41,15 +38,8 @@ def threshold(model: dict, record_var: float, m: list[float], p: float) -> float
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scenario")
-    ap.add_argument("--swap-takes", action="store_true")
-    ap.add_argument("--units", default="record30")
-    ap.add_argument("--indicators", default="fm4,na4,tooth_energy,tooth_sync,pinion_sync")
-    args = ap.parse_args()
-    spec = load_scenario(args.scenario).spec
-    target = swapped(spec["target"]) if args.swap_takes else spec["target"]
-    labels = {f.path: f.label for f in target.files}
+    indicators = "fm4,na4,tooth_energy,tooth_sync,pinion_sync"
+    args, spec, target, labels = command_line(__doc__.splitlines()[0], indicators=indicators)
     p = 1.0 - spec["false_alarm"]
     conditions = read_target(target, spec["blocks"], lambda e: None)
     groups = {"loads": lambda c: c.split(" ")[0], "speeds": lambda c: c.split(" ", 2)[2], "all": lambda c: ""}

@@ -15,25 +15,14 @@ per shaft and label. The test labels are read only to print these figures.
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
-from phm09_localised import swapped
+from phm09_localised import command_line
 
-from gearlab.engine import load_scenario
 from gearlab.kinds.detection import Rule, auc, classical_record, read_target
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scenario")
-    ap.add_argument("--swap-takes", action="store_true")
-    ap.add_argument("--units", default="record30")
-    ap.add_argument("--indicators", default="tooth_sync,pinion_sync")
-    args = ap.parse_args()
-    spec = load_scenario(args.scenario).spec
-    target = swapped(spec["target"]) if args.swap_takes else spec["target"]
-    labels = {f.path: f.label for f in target.files}
+    args, spec, target, labels = command_line(__doc__.splitlines()[0], indicators="tooth_sync,pinion_sync")
     conditions = read_target(target, spec["blocks"], lambda e: None)
     units = args.units.split(",")
     print("| condition | indicator | unit | AUC | det / FA % | called % per label |")
