@@ -41,11 +41,14 @@ revolution on a uniform angle grid and X its order spectrum (order = harmonic of
   idler, q = 3, and the output, q = 5) is synchronous with the input too, at 1/q of its size:
   FM4 and tooth_energy call it. Given the *slow* periods, tooth_sync leaves out the pairs of
   revolutions whose lag is a multiple of one, and such damage then scores 0 (sync_shares).
-* **pinion_sync**: which shaft a localised fault turns with. Each unit's synchronous part is read
-  for the input shaft and, from the same tacho, for every shaft turning once every q input
-  revolutions (the revolutions' phases r mod q: shaft_parts); a fault is put on the shaft where it
-  is strongest (shaft_strengths), and the score is the input shaft's strength less the strongest
-  other's, so a pinion fault is called only where the input shaft wins.
+* **pinion_sync**: which shaft a localised fault turns with. For every shaft turning once every q
+  input revolutions (whole q, read from the same tacho: the revolutions' phases r mod q) the shaft's
+  TSA holds q copies of the input revolution; their mean is the input TSA. A pinion tooth appears in
+  every copy at one input angle (on a rig without a hunting tooth it meets the same q teeth of the slow
+  shaft's gear), scaled by any smooth, non-reversing modulation of that shaft's turn (an eccentric
+  idler); a tooth of the slow shaft appears in one copy. What the copies hold beyond the modulated mean
+  (modulated_residual) is the slow shaft's own; the score is the input TSA's largest localised excess
+  that no slow shaft's tooth explains (shaft_parts, shaft_strengths).
 
 All orders refer to the shaft the TSA is synchronous with (here the input shaft: mesh
 orders 32 for stage 1 and 16 for stage 2 of the PHM 2009 spur rig).
@@ -191,6 +194,84 @@ def sync_shares(
     return np.array(out).reshape(-1, teeth)
 
 
+def _first_harmonic_basis(q: int) -> tuple[np.ndarray, float]:
+    """An orthonormal basis (rows) of the gains a smooth once-per-turn modulation gives the q copies
+    of the input revolution in one turn of a shaft of period q: g_j = m + Re(β e^{2πij/q}), the mean
+    and the first harmonic of the shaft's angle; and α, the cone |β| <= m (the modulation never
+    reverses the sign: m(φ) >= 0 over the whole turn) in the basis' coordinates, |b| <= α·t with t the
+    mean's coordinate and b the harmonic's."""
+    j = np.arange(q)
+    if q == 2:  # one harmonic direction: g = m + β(−1)^j, |β| <= m
+        return np.array([np.ones(2), np.cos(np.pi * j)]) / np.sqrt(2), 1.0
+    rows = [
+        np.ones(q) / np.sqrt(q),
+        np.cos(2 * np.pi * j / q) * np.sqrt(2 / q),
+        np.sin(2 * np.pi * j / q) * np.sqrt(2 / q),
+    ]
+    return np.array(rows), 1.0 / np.sqrt(2)  # |b|² = |β|² q/2, t² = m² q
+
+
+def modulation_distance(gains: np.ndarray) -> np.ndarray:
+    """Squared distance of each row of *gains* (…, q) from the gains a non-negative, smooth
+    once-per-turn modulation can give the q copies (_first_harmonic_basis): the part beyond the first
+    harmonic plus the distance from the cone |β| <= m, projected in the (t, |b|) plane."""
+    basis, alpha = _first_harmonic_basis(gains.shape[-1])
+    coef = gains @ basis.T
+    beyond = np.maximum(np.sum(gains**2, axis=-1) - np.sum(coef**2, axis=-1), 0.0)
+    t, r = coef[..., 0], np.linalg.norm(coef[..., 1:], axis=-1)
+    c, s = 1.0 / np.sqrt(1 + alpha**2), alpha / np.sqrt(1 + alpha**2)  # the cone's edge in (t, r)
+    along = np.maximum(t * c + r * s, 0.0)
+    off = np.where(r <= alpha * t, 0.0, (t - along * c) ** 2 + (r - along * s) ** 2)
+    return beyond + off
+
+
+def single_phase_residual(q: int) -> float:
+    """What modulated_residual keeps of a tooth on a shaft of period q (one impulse of window energy 1
+    in one of the q copies, none in the others), per copy: its gains against the symmetric part are
+    q at its phase and 0 elsewhere (m = 1 and |β| = 2: a modulation that would reverse sign, outside
+    the cone), and the symmetric part's energy is 1/q². 1/27 for the idler (q = 3), 0.093 for q = 5; 0 for
+    q = 2, whose full modulation 1 + cos φ empties one copy (a tooth on a half-speed shaft cannot be
+    told from a pinion chip seen at every other turn)."""
+    gains = np.zeros(q)
+    gains[0] = q
+    return float(modulation_distance(gains)) / q**3
+
+
+def modulated_residual(gram: np.ndarray, q: int) -> np.ndarray:
+    """The localised content of a unit's slow-shaft TSA that no input-synchronous event explains, per
+    tooth window, (teeth,): a shaft of period q (whole input revolutions) sees the unit's revolutions in
+    q phases j = r mod q (its TSA is q input revolutions long: the q phase TSAs c_j in turn). Its
+    q-fold symmetric part is their mean p, the input TSA; a chipped pinion tooth appears in every copy
+    at the same input angle, and a modulation of the mesh smooth in the shaft's angle (an eccentric
+    idler) scales the copies unequally, c_j = g_j p with g_j = m + Re(β e^{2πij/q}), |β| <= m, adding
+    no localised content; a tooth on the slow shaft appears in one copy only. Per window k:
+    R_k = min over those gains of (1/q) Σ_j |c_j − g_j p|²_k = (1/q)(Σ_j |c_j|² − Σ_j ⟨c_j, p⟩²/|p|²
+    + |p|² d²(g*)), g*_j = ⟨c_j, p⟩/|p|² the free gains and d² their modulation_distance. Every
+    product is synchronous: ⟨c_i, c_j⟩ is the mean window product of revolution pairs r ∈ i, s ∈ j,
+    r ≠ s (window_gram's off-diagonal: noise and slipping impulses average to 0). A pinion chip gives
+    R ≈ 0 however its copies are modulated within the cone; a slow-shaft tooth of window energy A²
+    gives A²·single_phase_residual(q) (A²/27 for the idler) beside an input image A²/q². Where p has
+    no synchronous energy (|p|² <= 0) nothing is symmetric and R_k = (1/q) Σ_j |c_j|². *gram*: the
+    unit's window_gram, (teeth, revolutions, revolutions); NaN when a phase has no pair."""
+    teeth, b, _ = gram.shape
+    phase = np.arange(b) % q
+    member = (phase[None, :] == np.arange(q)[:, None]).astype(np.float64)  # (q, b)
+    count = member.sum(axis=1)
+    if b < 2 * q:  # a phase held once has no pair of its own: the shaft's turn is not seen twice
+        return np.full(teeth, np.nan)
+    off = gram * (1.0 - np.eye(b))  # products of different revolutions only
+    pairs = np.outer(count, count) - np.diag(count)
+    M = np.einsum("ir,krs,js->kij", member, off, member) / pairs  # ⟨c_i, c_j⟩, (teeth, q, q)
+    cp = M.mean(axis=2)  # ⟨c_j, p⟩
+    pp = M.mean(axis=(1, 2))  # |p|²
+    own = np.einsum("kii->k", M)
+    ok = pp > 0
+    safe = np.where(ok, pp, 1.0)
+    free = cp / safe[:, None]
+    left = own - np.sum(cp**2, axis=1) / safe + safe * modulation_distance(free)
+    return np.where(ok, left, own) / q
+
+
 def shaft_parts(
     revolutions: np.ndarray,
     block: int,
@@ -205,89 +286,84 @@ def shaft_parts(
     """Which shaft each tooth window's synchronous content turns with, (units, 1 + len(shafts), teeth).
 
     Row 0 is the input shaft's part, sync_shares with every pair: |s_k|², the energy in window k of
-    what repeats every input revolution. Row i is the phase pattern of shaft i, which turns once every
-    q = shafts[i] input revolutions (whole q; on the PHM rig the idler, 3, and the output, 5): the
-    unit's revolutions fall into q phases j = r mod q (the shaft's angle, from the same tacho), and
-    P_jk, the synchronous energy of phase j's TSA in window k, is the mean window product of its
-    revolutions at each lag (a multiple of q; a revolution is never paired with itself, so noise and
-    slipping impulses average to 0), then the median over the lags (content that comes back at only
-    some lags, as a bearing's impulses returning to one angle every 20 revolutions, is no shaft's).
-    The row holds max_j P_jk − mean_j P_jk. A chipped pinion tooth adds A at one angle every
-    revolution: |s|² = A² and P_jk = A² at every phase, so its pattern is 0. A chipped tooth on the
-    slow shaft adds A at one input angle every q-th revolution: P = A² at its phase and 0 at the
-    others, a pattern of A²(q − 1)/q, while the input TSA shows it at A/q: |s|² = A²/q² (the idler:
-    2/3 against 1/9 of A²; the output: 4/5 against 1/25). All rows are shares of the unit's TSA mean
-    window energy, as sync_shares' (the record's level cancels; the rows compare in one unit). Units
-    as sync_shares: *block* consecutive revolutions moved by *stride*; block = 1: each revolution with
-    every other of the record for the input part, the whole record's phases for the slow shafts (one
-    revolution has one phase), each as a share of the revolution's own energy. A unit too short to
-    hold two of the slow shaft's phases twice has no part for it (NaN). *gram*: the record's
-    window_gram, when already made (one per record serves every unit kind)."""
+    what repeats every input revolution (the slow shafts' TSAs' symmetric part). Row i is what shaft
+    i's TSA (q = shafts[i] input revolutions; whole q: on the PHM rig the idler, 3, and the output, 5)
+    holds beyond that part once each of its q copies may carry its own gain of a smooth, non-reversing
+    once-per-turn modulation (modulated_residual): 0 for a chipped pinion tooth however eccentric the
+    idler, A²·single_phase_residual(q) for a tooth of that shaft, whose input image is A²/q². All rows
+    are shares of the unit's TSA mean window energy, as sync_shares' (the record's level cancels; the
+    rows compare in one unit). Units as sync_shares: *block* consecutive revolutions moved by
+    *stride*; block = 1: each revolution with every other of the record for the input part, the whole
+    record's phases for the slow shafts (one revolution has one phase), each as a share of the
+    revolution's own energy. A unit too short to hold each phase of a slow shaft twice has no part for
+    it (NaN). *gram*: the record's window_gram, when already made (one per record serves every unit
+    kind)."""
     if gram is None:
         gram = window_gram(revolutions, teeth, mesh_orders, shaft_orders, sidebands)
     n = gram.shape[-1]
-
-    def slow_part(g: np.ndarray, q: int) -> np.ndarray:
-        b = g.shape[-1]
-        phases = []
-        for j in range(q):
-            # the synchronous energy of phase j's TSA: the mean product of its revolutions at each lag
-            # (a multiple of q), then the median over the lags: content that comes back at only some
-            # lags (a bearing whose impulses return to one angle every 20 revolutions) is no shaft's
-            r = np.arange(j, b, q)
-            means = [g[:, r[:-m], r[m:]].mean(axis=1) for m in range(1, len(r))]
-            if means:  # a phase the unit holds once has no pair
-                phases.append(np.median(means, axis=0))
-        if len(phases) < 2:  # the unit is too short to see this shaft's turn: no part (NaN)
-            return np.full(g.shape[0], np.nan)
-        phases = np.array(phases)  # (phases with a pair, teeth)
-        return phases.max(axis=0) - phases.mean(axis=0)
-
     rows = []
     if block == 1:  # each revolution's own energy is the unit of its shares, as in sync_shares
         diagonal = np.einsum("krr->kr", gram)
         energy = np.maximum(diagonal.mean(axis=0), 1e-300)
         inputs = ((gram.sum(axis=2) - diagonal) / max(n - 1, 1)).T / energy[:, None]  # every other revolution
-        slow = np.stack([slow_part(gram, q) for q in shafts]) if shafts else np.empty((0, teeth))
+        slow = np.stack([modulated_residual(gram, q) for q in shafts]) if shafts else np.empty((0, teeth))
         return np.stack([np.vstack([inputs[r], slow / energy[r]]) for r in range(n)])
     mask = pair_mask(block)
     for s in range(0, n - block + 1, stride):
         g = gram[:, s : s + block, s : s + block]
         norm = max(g.sum(axis=(1, 2)).mean() / block**2, 1e-300)  # the TSA's mean window energy
         sync = np.sum(g * mask, axis=(1, 2)) / max(mask.sum(), 1)
-        rows.append(np.stack([sync / norm] + [slow_part(g, q) / norm for q in shafts]))
+        rows.append(np.stack([sync / norm] + [modulated_residual(g, q) / norm for q in shafts]))
     return np.array(rows).reshape(-1, 1 + len(shafts), teeth)
 
 
 def shaft_strengths(parts: np.ndarray, shafts, reference) -> np.ndarray:
     """How strongly a localised fault turns with each shaft, (units, 1 + len(shafts)), from the units'
     shaft_parts against *reference* = (mean, spread) of the history's parts (window_reference of the
-    flattened parts; the mean is used), in the parts' common unit (a share of the TSA's window energy),
-    so the shafts compare. e_ik: the excess of part i in tooth window k over the history's mean. The
-    input shaft's strength is max_k e_0k. A tooth on a shaft of period q shows in two views that must
-    agree: its own phase pattern, e_qk = A²(q − 1)/q (max_j − mean_j of the phases' synchronous
-    energies, A² and 0), and its image in the input TSA, e_0k = A²/q² (one impulse every q-th
-    revolution, averaged over all); the shaft's strength is max_k min(e_qk, q(q − 1)·e_0k), the
-    smaller of the two sightings at one size. A pinion tooth has no phase pattern (e_qk ≈ 0); a
-    pattern with no image in the input TSA is no tooth on a shaft."""
+    flattened parts; the mean is used), in the parts' common unit (a share of the TSA's window energy)
+    brought to the energy A² of the tooth that would give them, so the shafts compare. e_ik: the excess
+    of part i in tooth window k over the history's mean. The input shaft's strength is max_k e_0k (a
+    pinion tooth: A²; the input TSA's localised content, whatever turns it). A tooth on a shaft of
+    period q shows in two views that must agree: what that shaft's TSA holds beyond any modulated
+    input-synchronous event, e_qk = A²·f_q (f_q = single_phase_residual(q)), and its image in the input
+    TSA, e_0k = A²/q²; the shaft's strength is max_k min(e_qk/f_q, q²·e_0k), the smaller of the two
+    sightings at one size. A pinion tooth leaves no residual (e_qk ≈ 0) and a residual with no image in
+    the input TSA is no tooth on a shaft. A shaft whose residual cannot see a tooth (f_q = 0: q = 2,
+    whose full modulation 1 + cos φ empties one copy) has no strength (NaN)."""
     mean = np.asarray(reference[0]).reshape(parts.shape[1:])
-    excess = parts - mean  # (units, shafts, teeth)
+    excess = parts - mean  # (units, 1 + shafts, teeth)
     out = [excess[:, 0].max(axis=-1)]
     for i, q in enumerate(shafts, start=1):
-        out.append(np.minimum(excess[:, i], q * (q - 1) * excess[:, 0]).max(axis=-1))
+        f = single_phase_residual(q)
+        if f <= 1e-12:
+            out.append(np.full(len(parts), np.nan))
+            continue
+        out.append(np.minimum(excess[:, i] / f, q * q * excess[:, 0]).max(axis=-1))  # NaN stays NaN
     return np.stack(out, axis=1)
 
 
-def pinion_sync(strengths: np.ndarray) -> np.ndarray:
-    """pinion_sync of each unit from its shaft_strengths: the input shaft's strength less the
-    strongest other shaft's (or less 0 when none gained), positive only where the input shaft wins with
-    an excess of its own (a localised fault is put on the shaft where its synchronous part is
-    strongest), and higher the more it stands above the others."""
-    # a shaft that lost ground against the history (its excess below 0) is no rival: a strong bearing
-    # dilutes every share, and the input shaft's loss must not read as its win; nor is a shaft whose
-    # turn the unit is too short to see (NaN)
-    others = np.where(np.isnan(strengths[:, 1:]), -np.inf, strengths[:, 1:])
-    return strengths[:, 0] - np.maximum(others.max(axis=1, initial=-np.inf), 0.0)
+def pinion_sync(parts: np.ndarray, shafts, reference) -> np.ndarray:
+    """pinion_sync of each unit from its shaft_parts: the largest localised excess of the input TSA
+    that no tooth of a slow shaft explains, max_k (e_0k − max_q X_qk), e_0k the input part's excess in
+    window k (shaft_strengths) and X_qk = min(2·e_qk/(f_q q²), e_0k) the share of it shaft q's residual
+    explains. The residual's sighting of a tooth of shaft q predicts its input image: e_qk/f_q = A²,
+    the image A²/q², so r_k = e_qk/(f_q q² e_0k) is 0 for a pinion tooth (no residual however the
+    idler modulates it) and 1 for a tooth of that shaft; the image counts as explained from r = 1/2,
+    the midpoint, up (the estimates scatter around both: a TSA10's residual sees an idler tooth at
+    0.8 of its image). A chipped pinion tooth scores A²; a tooth on the idler about 0; a chipped pinion
+    beside other damage keeps its own window's A². A slow shaft that lost ground against the history
+    (e_qk < 0: a strong bearing dilutes every share) or that the unit is too short to see (NaN) explains
+    nothing."""
+    mean = np.asarray(reference[0]).reshape(parts.shape[1:])
+    excess = parts - mean  # (units, 1 + shafts, teeth)
+    inputs = excess[:, 0]
+    explained = np.zeros_like(inputs)
+    for i, q in enumerate(shafts, start=1):
+        f = single_phase_residual(q)
+        if f > 1e-12:
+            image = np.nan_to_num(np.maximum(2.0 * excess[:, i] / (f * q * q), 0.0), nan=0.0)
+            explained = np.maximum(explained, np.minimum(image, np.maximum(inputs, 0.0)))
+    return (inputs - explained).max(axis=-1)
 
 
 def window_reference(groups, dofs=None):
