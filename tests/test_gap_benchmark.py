@@ -455,6 +455,19 @@ def test_a_target_too_weak_to_show_a_gap_is_scored_by_the_oracle():
     assert s["too_weak"] == 1 and s["top1"] == pytest.approx(0.5) and s["right_answer"] == pytest.approx(2 / 3)
 
 
+def test_a_gap_seen_within_the_noise_width_with_nothing_named_stays_a_miss_and_is_counted():
+    """The diagnosis's below_noise_width (a gap seen, its RMS effect within the noise width): with
+    nothing named the trial is flagged, and it is still a miss of right_answer (the effect shows)."""
+    weak = answers("single", [("shaft_eccentricity", {"e": 1.6e-4, "phase": 0.3})])
+    flagged = bench.score_trial(weak, {**fake_result(unexplained=True), "below_noise_width": True})
+    assert flagged["below_noise_width"] and flagged["top1"] is False and not flagged["right_answer"]
+    named = bench.score_trial(weak, {**fake_result(["shaft_eccentricity"]), "below_noise_width": True})
+    assert not named["below_noise_width"] and named["right_answer"]
+    assert not bench.score_trial(weak, fake_result(unexplained=True))["below_noise_width"]
+    s = bench.summarise([flagged, named], LIBRARY)
+    assert s["below_noise_width"] == 1 and s["right_answer"] == pytest.approx(0.5)
+
+
 def test_the_oracle_sees_a_strong_effect_and_not_a_negligible_one(tmp_path):
     """oracle_seen writes fresh realisations of the trial's target as measured files and judges the
     plain source against each as the diagnosis's "before" report does."""

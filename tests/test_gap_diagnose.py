@@ -362,6 +362,16 @@ def _seen_report(gap: float, features: int, seen: bool, auc: float) -> dict:
     }
 
 
+def test_a_gap_seen_within_the_noise_width_is_below_what_the_diagnosis_attributes():
+    """A 160 um eccentricity: seen (AUC 0.74) with an RMS effect of 0.13 -- below the noise width;
+    a speed ripple's RMS effect of 30 is not; nor is a gap the test does not see."""
+    from gearlab.gap.diagnose import below_noise_width
+
+    assert below_noise_width(_seen_report(0.13**2 * 300, 300, True, 0.74))
+    assert not below_noise_width(_seen_report(30.0**2 * 300, 300, True, 1.0))
+    assert not below_noise_width(_seen_report(0.13**2 * 300, 300, False, 0.5))
+
+
 def _spec(name: str) -> tuple:
     return (name, (("x", 1.0),))
 

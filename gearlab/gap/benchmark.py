@@ -552,6 +552,9 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
         "out_of_library_unexplained": None,
         "oracle_seen": oracle,
         "too_weak": None,
+        # a gap seen but within the noise width, nothing named: the diagnosis's word that it lies below
+        # what it attributes (still a miss of right_answer: the effect shows, but too little to name)
+        "below_noise_width": bool(result.get("below_noise_width")) and not accepted,
         "right_answer": None,
         "wrong_names": [n for n in accepted if n not in hidden],
     }
@@ -736,6 +739,7 @@ def summarise(records: Sequence[Mapping], library: Sequence[str]) -> dict:
         # be seen in fresh realisations (oracle_seen) -- "no significant gap"; too_weak counts those
         "right_answer": _rate(r.get("right_answer", r["top1"]) for r in effect_trials),
         "too_weak": sum(bool(r.get("too_weak")) for r in effect_trials),
+        "below_noise_width": sum(bool(r.get("below_noise_width")) for r in effect_trials),
         "median_shrink": _median(r["shrink"] for r in identified),
         "median_param_error": _median(r["param_error_median"] for r in effect_trials),
         # over the parameters the diagnosis called determined (the goal is on identifiable ones)

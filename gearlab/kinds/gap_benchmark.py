@@ -198,6 +198,8 @@ def _verdict(r: dict) -> str:
         top = f"too weak to be seen (oracle {_pct(r['oracle_seen'])}): no gap is the right answer"
     else:
         top = f"top-1 {'hit' if r['top1'] else 'miss'}"
+        if r.get("below_noise_width"):
+            top += " (a gap seen, within the noise width: below what the diagnosis attributes)"
     return f"hidden {hidden}, named {r['accepted'] or 'nothing'}: {top}{shrink}{verdict}"
 
 
@@ -259,7 +261,9 @@ def table_md(summary: dict) -> str:
         f"{_pct(summary.get('explained_or_partly_when_identified'))}",
         "",
         f"right answer on effect trials (the right effect first, or no gap on the "
-        f"{summary.get('too_weak', 0)} targets too weak to show one): {_pct(summary.get('right_answer'))}",
+        f"{summary.get('too_weak', 0)} targets too weak to show one): {_pct(summary.get('right_answer'))}; "
+        f"of the misses, {summary.get('below_noise_width', 0)} with a gap seen but within the noise width "
+        "(nothing named: below what the diagnosis attributes)",
     ]
     return "\n".join(lines) + "\n"
 
