@@ -144,7 +144,7 @@ VERDICTS = ("no significant gap", "explained", "partly explained", "unexplained"
 SIGNAL_EVALS = 4  # evaluations per budget unit for signal-level effects (they need no new simulation)
 # Simulations per budget unit for a model-level effect: one per MODEL_DIMS of its parameters (at least
 # one). A Nelder-Mead step in d dimensions costs about d; with 16 for casing_path's five, its design
-# had 8 points in a 5-D cube and lost to a damped sensor resonance on 2 of 6 development casings.
+# had 8 points in a 5-D cube and lost to a damped sensor resonance on 2 of 5 development casings.
 MODEL_DIMS = 2
 DESIGN_SHARE = 0.5  # part of a fit's evaluations spent on the space-filling design, the rest refines
 # Whole-number parameters with at most ORDINAL_VALUES values are ordinal (a filter's order, 1-8
