@@ -670,3 +670,23 @@ def test_a_light_casing_path_beats_a_damped_sensor_resonance_in_its_round():
     assert casing_fit["evaluations"] >= 3 * 16 - 1
     assert casing_fit["score"] < 0.1 * sensor_fit["score"]
     assert casing_fit["params"]["mf"] == pytest.approx(5.01, rel=0.3)  # above the mounts it is the mass
+
+
+@pytest.mark.slow
+def test_a_tone_s_noise_nuisance_takes_the_law_at_its_own_point():
+    """Laplace noise beside a 180 Hz tone: the law is decided at every point of the tone's search, so
+    at its fit, not at its defaults (24.75 Hz at half the signal's RMS, where Student-t came out)."""
+    from gearlab.gap import diagnose as d
+
+    source = B6.with_(noise=NoiseSpec("gaussian", 30.0, 0))
+    hidden = (
+        effect_spec("interference_tone", frequency=180.0, ratio=0.2),
+        effect_spec("sensor_noise", kind="laplace", snr_db=10.0),
+    )
+    target_X = target_rows(source.with_(effects=hidden, seed=23, noise=NoiseSpec("gaussian", 30.0, 23)))
+    settings = Settings(candidates=("interference_tone", "sensor_noise"), **{**FAST, "budget": 16})
+    target, _, rows, s, _, search, _ = d._prepared(source, target_X, settings, None)
+    fit = d.fit_effect((search, "interference_tone", (), target, s, 5, True, rows))
+    assert fit["params"]["frequency"] == pytest.approx(180.0, rel=0.05)
+    assert fit["nuisance"]["params"]["kind"] == "laplace"
+    assert min(fit["nuisance"]["tails"], key=fit["nuisance"]["tails"].get) == "laplace"

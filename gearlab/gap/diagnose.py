@@ -885,8 +885,9 @@ def fit_effect(task: tuple) -> dict:
                 value = wide.fit({})
                 # Its law is the one the residual's tails decide, not the more flexible one that the
                 # score may prefer within its noise (_NoiseNuisance).
-                history = [h for h in history if h["params"]["kind"] == wide.kind]
-                law = dict(wide.tails)
+                law = wide.tails_at[()]
+                kind = wide.at[()]["kind"]
+                history = [h for h in history if h["params"]["kind"] == kind]
                 history.append({"u": None, "choice": None, "params": dict(wide.at[()]), "score": value})
             except GearlabInputError as exc:
                 errors.append(str(exc))
@@ -910,7 +911,7 @@ def fit_effect(task: tuple) -> dict:
             "name": NUISANCE,
             "params": _plain(fitted_noise),
             "evaluations": noise.evaluations,
-            "tails": dict(noise.tails),  # each law's distance from the target's tails: what chose it
+            "tails": noise.tails_at[_key(best["params"])],  # each law's distance from the target's tails
         }
     if accepted and math.isfinite(best["score"]):
         # Backfitting: the effects accepted earlier were fitted without this one (a noise level
@@ -1033,12 +1034,15 @@ class _NoiseNuisance:
     wide search (bounded Brent over the whole SNR range for every kind); later points a local one
     (within ±NUISANCE_STEP dB).
 
-    **The noise law** (Gaussian, Laplace, Student-t) is decided once, at the first point, by the
-    residual's tails (:func:`tail_shape`): each kind at its fitted SNR is made, and the kind whose
-    rows' tails lie nearest the target's is kept for every later point. Chosen by the score, the more
-    flexible law won within the score's noise: Gaussian noise at 17.4 dB came out Laplace (6.45 against
-    6.67 for the true law on the search rows), and a load ripple with Gaussian noise beside it then
-    removed 85 % of what that Laplace noise left, on fresh rows, and was named first."""
+    **The noise law** (Gaussian, Laplace, Student-t) is decided at every point by the residual's
+    tails (:func:`tail_shape`): each law is made at the point's fitted SNR, and the one whose rows'
+    tails lie nearest the target's gives the point its score. Chosen by the score, the more flexible
+    law won within the score's noise: Gaussian noise at 17.4 dB came out Laplace (6.45 against 6.67
+    for the true law on the search rows), and a load ripple with Gaussian noise beside it then removed
+    85 % of what that Laplace noise left, on fresh rows, and was named first. Decided once at the
+    first point (a candidate's defaults), the law was wrong wherever the candidate itself changes the
+    residual: a tone's defaults (24.75 Hz at half the signal's RMS) made Laplace noise beside a 180 Hz
+    tone come out Student-t."""
 
     def __init__(self, rows_of: Callable[[dict, tuple], np.ndarray], scorer: Scorer):
         self.effect = get_registry().get("effect", NUISANCE)
@@ -1046,46 +1050,45 @@ class _NoiseNuisance:
         self.low, self.high = space["snr_db"]["low"], space["snr_db"]["high"]
         self.kinds = list(space["kind"]["choices"])
         self.rows_of, self.scorer = rows_of, scorer
-        self.kind: str | None = None  # the law, once decided
         self.best: tuple[float, dict] | None = None  # best (score, noise) over all points
-        self.tails: dict = {}  # kind -> distance of its rows' tail_shape from the target's (the decision)
         self.at: dict = {}  # point -> its fitted noise
+        self.tails_at: dict = {}  # point -> each law's distance from the target's tails (the decision)
         self.evaluations = 0
 
-    def _value(self, params: dict, noise: dict) -> float:
+    def _rows(self, params: dict, noise: dict) -> np.ndarray:
         self.evaluations += 1
-        return self.scorer.score(self.rows_of(params, (self.effect.spec(noise),)))
+        return self.rows_of(params, (self.effect.spec(noise),))
 
-    def _brent(self, params: dict, kind: str, lo: float, hi: float, iterations: int) -> tuple[float, dict]:
+    def _brent(self, params: dict, kind: str, lo: float, hi: float, iterations: int) -> dict:
         from scipy.optimize import minimize_scalar
 
         res = minimize_scalar(
-            lambda s: self._value(params, {"snr_db": float(s), "kind": kind}),
+            lambda s: self.scorer.score(self._rows(params, {"snr_db": float(s), "kind": kind})),
             bounds=(lo, hi),
             method="bounded",
             options={"maxiter": iterations, "xatol": 0.2},
         )
-        return float(res.fun), {"snr_db": float(res.x), "kind": kind}
-
-    def _decide(self, params: dict, fits: dict) -> str:
-        """The kind whose rows, at its fitted SNR next to *params*, have the target's tails."""
-        target = self.scorer.tails
-        for kind, (_, noise) in fits.items():
-            X = self.rows_of(params, (self.effect.spec(noise),))
-            self.tails[kind] = float(np.abs(tail_shape(X) - target).sum())
-        return min(self.tails, key=self.tails.get)
+        return {"snr_db": float(res.x), "kind": kind}
 
     def fit(self, params: dict) -> float:
-        if self.kind is None:
-            fits = {kind: self._brent(params, kind, self.low, self.high, NUISANCE_WIDE) for kind in self.kinds}
-            self.kind = self._decide(params, fits)
-            found = fits[self.kind]
+        """The score at *params* with the noise fitted beside it: its level by Brent (every law over
+        the whole range at the first point; the best point's law within ±NUISANCE_STEP dB of its level
+        later, the other laws at that level), its law by the tails."""
+        if self.best is None:
+            levels = [self._brent(params, kind, self.low, self.high, NUISANCE_WIDE) for kind in self.kinds]
         else:
-            s0 = self.best[1]["snr_db"]
-            found = self._brent(
-                params, self.kind, max(self.low, s0 - NUISANCE_STEP), min(self.high, s0 + NUISANCE_STEP), NUISANCE_LOCAL
-            )
-        self.at[_key(params)] = found[1]
+            s0, k0 = self.best[1]["snr_db"], self.best[1]["kind"]
+            lo, hi = max(self.low, s0 - NUISANCE_STEP), min(self.high, s0 + NUISANCE_STEP)
+            first = self._brent(params, k0, lo, hi, NUISANCE_LOCAL)
+            levels = [first] + [{"snr_db": first["snr_db"], "kind": k} for k in self.kinds if k != k0]
+        target, found, tails = self.scorer.tails, None, {}
+        for noise in levels:
+            X = self._rows(params, noise)
+            tails[noise["kind"]] = float(np.abs(tail_shape(X) - target).sum())
+            if found is None or tails[noise["kind"]] < tails[found[1]["kind"]]:
+                found = (self.scorer.score(X), noise)
+        key = _key(params)
+        self.at[key], self.tails_at[key] = found[1], tails
         if self.best is None or found[0] < self.best[0]:
             self.best = found
         return found[0]
