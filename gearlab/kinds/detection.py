@@ -62,7 +62,7 @@ from ..errors import GearlabInputError, shown
 from ..events import Event, UnitProgress
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
 from ..learn.calibration import Calibration
-from ..learn.detectors import gumbel_quantile
+from ..learn.history import gumbel_quantile
 from ..learn.protocol import Method, Protocol, StateStore, fault_score, shared_state
 from ..learn.schedule import two_phases
 from ..learn.training import pick_device
@@ -683,7 +683,7 @@ class Rule:
         by_rule = {
             "records": {u: m.threshold for u, m in models.items()},
             # the 1 - false_alarm quantile of the Gumbel law fitted by its quartiles to the pooled
-            # history units (gearlab.learn.detectors.gumbel_quantile)
+            # history units (gearlab.learn.history.gumbel_quantile)
             "pooled": {
                 u: gumbel_quantile(np.asarray(s, dtype=np.float64), 1.0 - self.false_alarm)
                 for u, s in history_scores.items()

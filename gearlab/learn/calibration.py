@@ -31,8 +31,9 @@ settings, each a named option of ``[protocol]`` with the thesis's choice still a
                   history is at k = 0 (label shift, Zhang et al. 2013).
 ``threshold``     ``argmax`` (thesis) or ``history``: the network's fault score (logit
                   difference) thresholded at the ``1 - false_alarm`` quantile of a Gumbel law
-                  fitted to the history's scores by their quartiles (as ``matched_filter``), so
-                  the few unlabelled faults of a history at k > 0 do not drag it up.
+                  fitted to the history's scores by their quartiles and refitted without the
+                  scores above it (``history_threshold``, as ``matched_filter``), so the few
+                  unlabelled faults of a history at k > 0 do not drag it up.
 
 Everything here is computed from the training arrays: the target *test* revolutions never
 reach it (tests/test_protocol.py).
@@ -48,7 +49,7 @@ from torch import nn
 
 from ..errors import GearlabInputError
 from ..settings import declared, in_bounds, setting
-from .history import NOISE_LAWS, gumbel_quantile, noise_law
+from .history import NOISE_LAWS, history_threshold, noise_law
 from .path import IDENTITY, PATHS, Path, fit_path
 
 STARTS = ("random", "faults")
@@ -193,5 +194,5 @@ def calibrate(network: nn.Module, inputs: Inputs, Xt: np.ndarray, yt: np.ndarray
             .cpu()
             .numpy()
         )
-        model.threshold.fill_(gumbel_quantile(scores, 1.0 - inputs.settings.false_alarm))
+        model.threshold.fill_(history_threshold(scores, 1.0 - inputs.settings.false_alarm))
     return model

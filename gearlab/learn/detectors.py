@@ -17,9 +17,11 @@ tooth) the statistic is the largest cosine over them:
   six to eight DOF) may turn a response over;
 * the threshold lets a share ``false_alarm`` of healthy revolutions through: the
   ``1 - false_alarm`` quantile of a Gumbel law (the law of a maximum of many noisy
-  correlations) fitted to the healthy history's own scores by their quartiles. Quartiles,
-  not the upper tail, because an unlabelled history may hold a few fault revolutions (k of
-  the 120), whose scores an empirical upper quantile would follow.
+  correlations) fitted to the healthy history's own scores by their quartiles, then refitted
+  without the scores above it until it stops moving (`history_threshold`). Quartiles, not the
+  upper tail, and the refit, because an unlabelled history may hold a few fault revolutions
+  (k of the 120), whose scores an empirical upper quantile would follow and which would widen
+  the quartiles.
 
 In impulsive noise (Laplace, Student-t) the correlation is no longer the likelihood-ratio
 statistic: the locally optimal detector passes the residual through the noise's score
@@ -45,7 +47,7 @@ from torch import nn
 from gearlab.errors import GearlabInputError
 
 from .bounds import noise_scale, shape_llr
-from .history import gumbel_quantile, noise_law
+from .history import history_threshold, noise_law
 from .path import fit_path
 
 LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
@@ -134,7 +136,7 @@ def template_detector(
     detector = TemplateDetector(reference, _unit_rows(shapes), threshold=0.0, clip=clip)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
-    detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
+    detector.threshold.fill_(history_threshold(history, 1.0 - false_alarm))
     return detector
 
 
@@ -206,5 +208,5 @@ def likelihood_detector(
     detector = LikelihoodDetector(reference, shapes, kind, threshold=0.0, scale=fixed)
     with torch.no_grad():
         history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
-    detector.threshold.fill_(gumbel_quantile(history, 1.0 - false_alarm))
+    detector.threshold.fill_(history_threshold(history, 1.0 - false_alarm))
     return detector

@@ -3,7 +3,7 @@ threshold on any score that lets a chosen share of healthy revolutions through.
 
 Both are read off data that may hold a few unlabelled faults (k of the 120 target training
 revolutions): the noise law from the kurtosis of the residuals pooled over the history, the
-threshold from the quartiles of the history's scores, which the few faults barely move.
+threshold from the quartiles of the history's scores, refitted without the scores above it.
 """
 
 from __future__ import annotations
@@ -23,6 +23,26 @@ def gumbel_quantile(scores: np.ndarray, p: float) -> float:
     beta = (q3 - q1) / (np.log(np.log(4.0)) - np.log(np.log(4.0 / 3.0)))
     mu = q1 + beta * np.log(np.log(4.0))
     return float(mu - beta * np.log(-np.log(p)))
+
+
+def history_threshold(scores: np.ndarray, p: float) -> float:
+    """`gumbel_quantile` of a history's *scores*, refitted without the scores it finds to be
+    faults: those above the threshold beyond the (1 - p) share of healthy ones expected there,
+    the highest first, until that count stops growing. Why: the faults a history may hold
+    unlabelled score above the healthy ones and widen the quartiles (Experiment B, k = 16 of
+    120: `likelihood_ratio` 87.7 % plain, 88.6 % refitted, 5 repetitions); a healthy history has about the
+    expected share above, so it keeps its threshold (k = 0: the same accuracy to the digit)."""
+    s = np.sort(np.asarray(scores, dtype=np.float64))
+    n, faults = len(s), 0
+    threshold = gumbel_quantile(s, p)
+    while n - faults >= 4:
+        above = int(np.sum(s > threshold)) - (1.0 - p) * (n - faults)
+        more = max(faults, int(np.floor(above)))
+        if more == faults:
+            break
+        faults = more
+        threshold = gumbel_quantile(s[: n - faults], p)
+    return threshold
 
 
 def noise_law(residuals: np.ndarray) -> str:
