@@ -7,7 +7,10 @@
    two so that both see the same machine load. Target: fast >= 20x faster.
 2. The same step of `burst` with its normalisation frozen (the joint phase), normalising only
    each filter's extremes (NormMaxAbs, shipped) against normalising the whole map.
-3. With --units: the wall time of the protocol's units on Experiment B's datasets (priming,
+3. The same step of `shapes` (a joint-phase batch, started on 256 fault bursts): each template
+   on its own eighth of the revolution (shipped) against the same templates over the whole
+   revolution (the likelihoods are the same; tests/test_networks.py).
+4. With --units: the wall time of the protocol's units on Experiment B's datasets (priming,
    a baseline, one calibrated run at the full Table 5.3 schedule) and from them an estimate
    of the whole expB.toml table (6 k x 5 repetitions x every method). Target: <= 45 min.
 """
@@ -95,6 +98,32 @@ def burst_frozen(rounds: int) -> None:
     print(f"  ratio extremes / whole map: {fused / whole:.2f}")
 
 
+def shapes_local(rounds: int) -> None:
+    from gearlab.learn.networks import ShapeLikelihood, matched_start
+
+    torch.manual_seed(0)
+    x = torch.randn(BATCH, LENGTH)
+    y = torch.randint(0, 2, (BATCH,))
+    rng = np.random.default_rng(0)
+    faults = np.zeros((256, LENGTH))
+    for row in faults:  # decaying bursts of ~100 samples at random angles, as Experiment B's faults
+        at = rng.integers(LENGTH)
+        row[(at + np.arange(200)) % LENGTH] = rng.normal(size=200) * np.exp(-np.arange(200) / 40.0)
+    times: dict[str, list[float]] = {"local": [], "whole revolution": []}
+    for _ in range(rounds):
+        for name in times:
+            net = build_network("shapes", 2, seed=0)
+            if name == "whole revolution":
+                net.features[1] = ShapeLikelihood(len(net.features[1].weight), LENGTH)
+            matched_start(net, faults, seed=0)
+            times[name].append(step_time("shapes", x, y, net))
+    local, whole = (statistics.median(times[n]) for n in times)
+    print(f"shapes, joint-phase step (256 templates), median of {rounds}:")
+    print(f"  local (an eighth of the revolution) {1e3 * local:8.1f} ms")
+    print(f"  whole revolution                    {1e3 * whole:8.1f} ms")
+    print(f"  ratio whole / local: {whole / local:.1f}x")
+
+
 def units() -> None:
     from gearlab.data.cache import load_or_build
     from gearlab.engine import load_scenario
@@ -154,6 +183,7 @@ def main() -> None:
     torch.set_num_threads(args.threads)
     networks(args.rounds)
     burst_frozen(args.rounds)
+    shapes_local(args.rounds)
     if args.units:
         units()
 
