@@ -49,6 +49,25 @@ def step_time(name: str, x: torch.Tensor, y: torch.Tensor, net: nn.Module | None
     return (time.perf_counter() - t) / STEPS
 
 
+def compare(rounds: int, name: str, title: str, variants: dict) -> None:
+    """Print the median step time of each variant of network *name* (label -> a function that
+    builds it) on one joint-phase batch, the variants alternated round by round so that all see
+    the same machine load, and the second's time over the first's."""
+    torch.manual_seed(0)
+    x = torch.randn(BATCH, LENGTH)
+    y = torch.randint(0, 2, (BATCH,))
+    times: dict[str, list[float]] = {label: [] for label in variants}
+    for _ in range(rounds):
+        for label, build in variants.items():
+            times[label].append(step_time(name, x, y, build()))
+    median = {label: statistics.median(t) for label, t in times.items()}
+    print(f"{title}, median of {rounds}:")
+    for label, seconds in median.items():
+        print(f"  {label:36s} {1e3 * seconds:8.1f} ms")
+    first, second = median
+    print(f"  ratio {second} / {first}: {median[second] / median[first]:.2f}x")
+
+
 def networks(rounds: int) -> None:
     torch.manual_seed(0)
     x = torch.randn(BATCH, LENGTH)
@@ -80,48 +99,43 @@ class WholeMap(nn.Module):
 def burst_frozen(rounds: int) -> None:
     from gearlab.learn.training import train_mode
 
-    torch.manual_seed(0)
-    x = torch.randn(BATCH, LENGTH)
-    y = torch.randint(0, 2, (BATCH,))
-    times: dict[str, list[float]] = {"extremes": [], "whole map": []}
-    for _ in range(rounds):
-        for name in times:
-            net = build_network("burst", 2, seed=0)
-            if name == "whole map":
-                net.features[-1] = WholeMap(net.features[-1])
-            train_mode(net, freeze_norm=True)
-            times[name].append(step_time("burst", x, y, net))
-    fused, whole = (statistics.median(times[n]) for n in times)
-    print(f"burst, joint-phase step (normalisation frozen), median of {rounds}:")
-    print(f"  extremes (NormMaxAbs) {1e3 * fused:8.1f} ms")
-    print(f"  whole map             {1e3 * whole:8.1f} ms")
-    print(f"  ratio extremes / whole map: {fused / whole:.2f}")
+    def frozen(whole_map: bool) -> nn.Module:
+        net = build_network("burst", 2, seed=0)
+        if whole_map:
+            net.features[-1] = WholeMap(net.features[-1])
+        train_mode(net, freeze_norm=True)
+        return net
+
+    compare(
+        rounds,
+        "burst",
+        "burst, joint-phase step (normalisation frozen)",
+        {"extremes (NormMaxAbs)": lambda: frozen(False), "whole map": lambda: frozen(True)},
+    )
 
 
 def shapes_local(rounds: int) -> None:
     from gearlab.learn.networks import ShapeLikelihood, matched_start
 
-    torch.manual_seed(0)
-    x = torch.randn(BATCH, LENGTH)
-    y = torch.randint(0, 2, (BATCH,))
     rng = np.random.default_rng(0)
     faults = np.zeros((256, LENGTH))
     for row in faults:  # decaying bursts of ~100 samples at random angles, as Experiment B's faults
         at = rng.integers(LENGTH)
         row[(at + np.arange(200)) % LENGTH] = rng.normal(size=200) * np.exp(-np.arange(200) / 40.0)
-    times: dict[str, list[float]] = {"local": [], "whole revolution": []}
-    for _ in range(rounds):
-        for name in times:
-            net = build_network("shapes", 2, seed=0)
-            if name == "whole revolution":
-                net.features[1] = ShapeLikelihood(len(net.features[1].weight), LENGTH)
-            matched_start(net, faults, seed=0)
-            times[name].append(step_time("shapes", x, y, net))
-    local, whole = (statistics.median(times[n]) for n in times)
-    print(f"shapes, joint-phase step (256 templates), median of {rounds}:")
-    print(f"  local (an eighth of the revolution) {1e3 * local:8.1f} ms")
-    print(f"  whole revolution                    {1e3 * whole:8.1f} ms")
-    print(f"  ratio whole / local: {whole / local:.1f}x")
+
+    def started(whole_revolution: bool) -> nn.Module:
+        net = build_network("shapes", 2, seed=0)
+        if whole_revolution:
+            net.features[1] = ShapeLikelihood(len(net.features[1].weight), LENGTH)
+        matched_start(net, faults, seed=0)
+        return net
+
+    compare(
+        rounds,
+        "shapes",
+        "shapes, joint-phase step (256 templates)",
+        {"local (an eighth of the revolution)": lambda: started(False), "whole revolution": lambda: started(True)},
+    )
 
 
 def units() -> None:
