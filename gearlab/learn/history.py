@@ -3,7 +3,7 @@ threshold on any score that lets a chosen share of healthy revolutions through.
 
 Both are read off data that may hold a few unlabelled faults (k of the 120 target training
 revolutions): the noise law from the kurtosis of the residuals pooled over the history, the
-threshold from the quartiles of the history's scores, refitted without the scores above it.
+threshold from the quartiles of the history's scores, refitted without those it finds to be faults.
 """
 
 from __future__ import annotations
