@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from textrecords import FS, PULSES, record
+from textrecords import FS, PULSES, record, rig_record
 from tiny import EXECUTION, schedule
 
 PHM09 = Path(__file__).resolve().parents[2] / "shared" / "data" / "phm09"
@@ -452,38 +452,6 @@ def test_scores_that_are_not_numbers_give_no_auc_and_are_counted():
     ]
     table = table_md(rows)
     assert "| lr | – |" in table and "not numbers" in table and "lr 7" in table and "fm4 0" not in table
-
-
-def rig_record(
-    path: Path, speed=35.0, seed=3, chip=0.0, idler=0.0, output=0.0, bearing=0.0, phase=2.7, eccentric=0.0
-) -> Path:
-    """A synthetic record of the PHM rig's layout at its rate (textrecords.FS must be set to it):
-    the mesh tone and noise of textrecords.signals (46 revolutions), a chipped input pinion tooth
-    (*chip*: a ring once a revolution), a chipped tooth on the idler shaft (*idler*: once every 3
-    input revolutions, at the same input angle), on the output shaft (*output*: every 5th) or an
-    outer-race bearing defect (*bearing*: a ring 3.05 times per input revolution). *eccentric*: an
-    eccentric idler, which multiplies the mesh and the pinion chip's ring by 1 + eccentric·cos(θ/3 − 0.5)
-    (θ the input angle: once per idler turn, smooth, never reversing for eccentric <= 1)."""
-    import textrecords
-
-    vib, tacho = textrecords.signals(
-        revolutions=46, chip=0.0 if eccentric else chip, seed=seed, phase=phase, speed=speed
-    )
-    t = np.arange(len(vib)) / textrecords.FS
-    theta = phase + 2 * np.pi * speed * t
-    if eccentric:  # textrecords.signals' mesh and chip, modulated by the idler's turn
-        swing = eccentric * np.cos(theta / 3 - 0.5)
-        vib = vib + swing * (np.sin(textrecords.TEETH * theta) + 0.3 * np.sin(2 * textrecords.TEETH * theta + 0.4))
-        since = np.mod(theta - 1.0, 2 * np.pi) / (2 * np.pi * speed)
-        vib = vib + chip * (1 + swing) * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
-    for size, q, at in ((idler, 3, 2.0), (output, 5, 4.0)):  # the slow shaft's tooth meets at *at* rad
-        if size:
-            since = np.mod(theta / q - at, 2 * np.pi) / (2 * np.pi * speed / q)
-            vib = vib + size * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
-    if bearing:
-        since = np.mod(t * speed * 3.05, 1.0) / (speed * 3.05)
-        vib = vib + bearing * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
-    return textrecords.write_zip(path, textrecords.text(vib, tacho))
 
 
 def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_path, monkeypatch):

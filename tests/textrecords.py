@@ -1,4 +1,4 @@
-"""Small synthetic records in the PHM 2009 text format (tests only): a zip of one
+"""Small synthetic records in the PHM 2009 text format (tests, and benchmarks/phm09_other_damage.py): a zip of one
 whitespace-separated text with columns accelerometer (V), second accelerometer (V), tacho (V)."""
 
 import io
@@ -56,3 +56,31 @@ def write_zip(path: Path, data: bytes, member: str = "record.txt") -> Path:
 
 def record(path: Path, **kw) -> Path:
     return write_zip(Path(path), text(*signals(**kw)))
+
+
+def rig_record(
+    path: Path, speed=35.0, seed=3, chip=0.0, idler=0.0, output=0.0, bearing=0.0, phase=2.7, eccentric=0.0
+) -> Path:
+    """A synthetic record of the PHM rig's layout at its rate (FS must be set to it):
+    the mesh tone and noise of signals (46 revolutions), a chipped input pinion tooth
+    (*chip*: a ring once a revolution), a chipped tooth on the idler shaft (*idler*: once every 3
+    input revolutions, at the same input angle), on the output shaft (*output*: every 5th) or an
+    outer-race bearing defect (*bearing*: a ring 3.05 times per input revolution). *eccentric*: an
+    eccentric idler, which multiplies the mesh and the pinion chip's ring by 1 + eccentric·cos(θ/3 − 0.5)
+    (θ the input angle: once per idler turn, smooth, never reversing for eccentric <= 1)."""
+    vib, tacho = signals(revolutions=46, chip=0.0 if eccentric else chip, seed=seed, phase=phase, speed=speed)
+    t = np.arange(len(vib)) / FS
+    theta = phase + 2 * np.pi * speed * t
+    if eccentric:  # signals' mesh and chip, modulated by the idler's turn
+        swing = eccentric * np.cos(theta / 3 - 0.5)
+        vib = vib + swing * (np.sin(TEETH * theta) + 0.3 * np.sin(2 * TEETH * theta + 0.4))
+        since = np.mod(theta - 1.0, 2 * np.pi) / (2 * np.pi * speed)
+        vib = vib + chip * (1 + swing) * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+    for size, q, at in ((idler, 3, 2.0), (output, 5, 4.0)):  # the slow shaft's tooth meets at *at* rad
+        if size:
+            since = np.mod(theta / q - at, 2 * np.pi) / (2 * np.pi * speed / q)
+            vib = vib + size * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+    if bearing:
+        since = np.mod(t * speed * 3.05, 1.0) / (speed * 3.05)
+        vib = vib + bearing * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
+    return write_zip(path, text(vib, tacho))
