@@ -219,6 +219,45 @@ def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cac
     assert code == 2 and "[corrected]" in err and "sensor_nosie" in err
 
 
+def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cache, monkeypatch):
+    """[corrected] history_units = "tsa": the corrected source's methods are handed the history's TSAs
+    of `tsa` revolutions (as the corrected samples are averaged), the plain source's methods its
+    revolutions — every row handed over is one of those, as the methods see them; a wrong value is
+    refused with the choices."""
+    import gearlab.learn.protocol as P
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection import learned_input, read_target, tsa_units
+
+    seen = []
+    train_method = P.train_method
+
+    def spy(protocol, method, source, source_val, target, *args, **kwargs):
+        seen.append(np.array(target[0], copy=True))
+        return train_method(protocol, method, source, source_val, target, *args, **kwargs)
+
+    monkeypatch.setattr(P, "train_method", spy)
+    corrected = (
+        '[corrected]\ntsa = 3\nhistory_units = "tsa"\n'
+        'effects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
+    )
+    path = scenario(tmp_path, methods=("source_only",), extra=corrected)
+    run(cli, path, tmp_path / "runs")
+    spec = load_scenario(path).spec
+    ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    shown = learned_input(spec)
+    revolutions = np.concatenate([shown(r) for _, r in cond["history"]])
+    tsas = np.concatenate([shown(tsa_units(r, 3, 1)) for _, r in cond["history"]])
+
+    def among(rows, pool) -> bool:
+        return all(np.abs(pool - row).max(axis=1).min() < 1e-6 for row in rows)
+
+    assert len(seen) == 2  # the plain source's training and the corrected one's
+    assert sorted((among(rows, revolutions), among(rows, tsas)) for rows in seen) == [(False, True), (True, False)]
+    path.write_text(path.read_text().replace('history_units = "tsa"', 'history_units = "tsas"'))
+    code, _, err = cli("validate", path)
+    assert code == 2 and "history_units" in err and "revolution, tsa" in err
+
+
 def test_pinion_sync_runs_end_to_end_and_writes_which_shaft(cli, tmp_path, cache):
     """The detection kind with pinion_sync listed: scores.csv has its rows, shafts.csv names a
     shaft (or nothing) for every test unit with each shaft's strength, a called pinion fault on the

@@ -69,7 +69,7 @@ from ..learn.training import pick_device
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, location
+from ..scenario import Key, Scenario, Table, in_range, location, one_of
 from ..settings import shrunk
 from ..signals import Standardiser
 from ..signals.indicators import (
@@ -107,6 +107,7 @@ MIN_HISTORY_UNITS = 8
 # Records without a 'condition' whose tacho speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
 THRESHOLDS = ("records", "pooled")
+CORRECTED_HISTORY = ("revolution", "tsa")
 MAX_SEEDS = 20
 
 TABLES = {
@@ -121,6 +122,14 @@ TABLES = {
                 in_range(0, 1000),
                 "a corrected sample is the TSA of this many simulated revolutions, each with its own "
                 "noise (the revolutions of a record-level unit); 0: one revolution",
+            ),
+            "history_units": Key(
+                str,
+                "revolution",
+                one_of(*CORRECTED_HISTORY),
+                "what the corrected source's methods see of the history in training: 'revolution' (the "
+                "history revolutions, as the plain source's) or 'tsa' (the history's TSAs of `tsa` "
+                "revolutions, sliding as its units are: the target at the corrected sample's averaging)",
             ),
         }
     ),
@@ -426,6 +435,8 @@ def build(scenario: Scenario) -> dict:
         "source": source,
         "corrected": corrected,
         "corrected_label": t["corrected"]["label"],
+        # the corrected source's history training rows: TSAs of its `tsa` revolutions, or revolutions
+        "corrected_history": t["corrected"]["tsa"] if t["corrected"]["history_units"] == "tsa" else 0,
         "target": target,
         "protocol": protocol,
         "source_speed": t["detection"]["source_speed"],
@@ -880,9 +891,13 @@ def source_for(source: DatasetSpec, cond: dict, how: str) -> DatasetSpec:
     return source.with_(speed_hz=speed, name=f"{source.name}@{speed:g}Hz", domain=f"{source.name}@{speed:g}Hz")
 
 
-def history_training_rows(cond: dict, protocol: Protocol, condition: str) -> np.ndarray:
-    """The history revolutions a network trains on: target_train of them at random (seeded)."""
-    revs = np.concatenate([r for _, r in cond["history"]])
+def history_training_rows(cond: dict, protocol: Protocol, condition: str, tsa: int = 0) -> np.ndarray:
+    """The history revolutions a network trains on: target_train of them at random (seeded); with
+    *tsa* > 1 the history's TSAs of *tsa* revolutions instead (sliding as its history units are)."""
+    if tsa > 1:
+        revs = np.concatenate([tsa_units(r, tsa, max(1, tsa // HISTORY_STRIDES)) for _, r in cond["history"]])
+    else:
+        revs = np.concatenate([r for _, r in cond["history"]])
     rng = np.random.default_rng([protocol.seed, sum(map(ord, condition))])
     take = rng.permutation(len(revs))[: protocol.target_train]
     return revs[np.sort(take)]
@@ -977,7 +992,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         c,
                         seed,
                         splits[(c, v)],
-                        shown_to(history_training_rows(cond, protocol, c)),
+                        shown_to(history_training_rows(cond, protocol, c, spec["corrected_history"] if v else 0)),
                         {u: shown_to(X) for u, X in cond["history_units"].items()},
                         {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
                         states,

@@ -90,11 +90,10 @@ def overlap_dof(n_units: int, block: int = 1, stride: int = 1) -> float:
     return float(n_units - np.sum(rho * pairs) / n_units)
 
 
-def fit(groups, p: float, independent=None, dofs=None) -> RecordEffects:
-    """The model of *groups* (one array of unit scores per history record, in any order) and
-    its *p* predictive quantile for a unit of a new record; *independent*: each record's number
-    of independent units (default: its number of units); *dofs*: each record's degrees of
-    freedom of its within-record sum of squares (default n − 1; sliding windows: overlap_dof)."""
+def moments(groups, independent=None, dofs=None) -> tuple[np.ndarray, float, np.ndarray, float | None]:
+    """(record means, sigma_e^2, independent units per record, the unbiased method-of-moments
+    estimate of sigma_a^2 — not truncated at 0; None for one record) of *groups*, as `fit` takes
+    them (records without units left out)."""
     groups = [np.asarray(g, dtype=np.float64).ravel() for g in groups]
     keep = [i for i, g in enumerate(groups) if len(g)]
     if not keep:
@@ -105,11 +104,26 @@ def fit(groups, p: float, independent=None, dofs=None) -> RecordEffects:
     means = np.array([g.mean() for g in groups])
     dof = sum(len(g) - 1 for g in groups) if dofs is None else float(sum(dofs[i] for i in keep))
     within = sum(float(np.sum((g - g.mean()) ** 2)) for g in groups) / dof if dof > 0 else 0.0
-    R = len(groups)
+    # E[var(record means)] = sigma_a^2 + mean(sigma_e^2 / m_r)
+    record_var = float(means.var(ddof=1)) - float(np.mean(within / m)) if len(groups) >= 2 else None
+    return means, within, m, record_var
+
+
+def fit(groups, p: float, independent=None, dofs=None, record_var: float | None = None) -> RecordEffects:
+    """The model of *groups* (one array of unit scores per history record, in any order) and
+    its *p* predictive quantile for a unit of a new record; *independent*: each record's number
+    of independent units (default: its number of units); *dofs*: each record's degrees of
+    freedom of its within-record sum of squares (default n − 1; sliding windows: overlap_dof);
+    *record_var*: sigma_a^2 when known from elsewhere (`pooled_record_ratio`), else estimated
+    from these records."""
+    means, within, m, estimate = moments(groups, independent, dofs)
+    R = len(means)
     mu = float(means.mean())
-    if R >= 2:
-        # E[var(record means)] = sigma_a^2 + mean(sigma_e^2 / m_r)
-        record_var = max(0.0, float(means.var(ddof=1)) - float(np.mean(within / m)))
+    if record_var is not None:
+        record_var = max(0.0, float(record_var))
+        record_sd = float(np.sqrt(record_var))
+    elif R >= 2:
+        record_var = max(0.0, estimate)
         record_sd = float(np.sqrt(record_var))
     else:
         record_var, record_sd = 0.0, None
