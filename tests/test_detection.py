@@ -106,11 +106,9 @@ def flipped(files, signals: bool = False):
     return out
 
 
-def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_path, cache, monkeypatch):
-    """Flipping the test files' labels changes no score and no decision, only the figures; other
-    test recordings change no history score, so no threshold and no trained model either. The
-    networks are trained with two seeds (an ensemble) and thresholded by the random-effects
-    model of the history's records: both see the history alone."""
+@pytest.fixture
+def handed(monkeypatch) -> list:
+    """The target rows every training of this test is handed (a spy on the protocol's train_method)."""
     import gearlab.learn.protocol as P
 
     seen = []
@@ -121,6 +119,15 @@ def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_pat
         return train_method(protocol, method, source, source_val, target, *args, **kwargs)
 
     monkeypatch.setattr(P, "train_method", spy)
+    return seen
+
+
+def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_path, cache, handed):
+    """Flipping the test files' labels changes no score and no decision, only the figures; other
+    test recordings change no history score, so no threshold and no trained model either. The
+    networks are trained with two seeds (an ensemble) and thresholded by the random-effects
+    model of the history's records: both see the history alone."""
+    seen = handed
     runs = []
     for i, files in enumerate((FILES, flipped(FILES), flipped(FILES, signals=True))):
         folder = tmp_path / f"case{i}"
@@ -219,23 +226,14 @@ def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cac
     assert code == 2 and "[corrected]" in err and "sensor_nosie" in err
 
 
-def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cache, monkeypatch):
+def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cache, handed):
     """[corrected] history_units = "tsa": the corrected source's methods are handed the history's TSAs
     of `tsa` revolutions (as the corrected samples are averaged), the plain source's methods its
     revolutions — every row handed over is one of those, as the methods see them; a wrong value is
     refused with the choices."""
-    import gearlab.learn.protocol as P
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection import learned_input, read_target, tsa_units
 
-    seen = []
-    train_method = P.train_method
-
-    def spy(protocol, method, source, source_val, target, *args, **kwargs):
-        seen.append(np.array(target[0], copy=True))
-        return train_method(protocol, method, source, source_val, target, *args, **kwargs)
-
-    monkeypatch.setattr(P, "train_method", spy)
     corrected = (
         '[corrected]\ntsa = 3\nhistory_units = "tsa"\n'
         'effects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
@@ -251,8 +249,8 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     def among(rows, pool) -> bool:
         return all(np.abs(pool - row).max(axis=1).min() < 1e-6 for row in rows)
 
-    assert len(seen) == 2  # the plain source's training and the corrected one's
-    assert sorted((among(rows, revolutions), among(rows, tsas)) for rows in seen) == [(False, True), (True, False)]
+    assert len(handed) == 2  # the plain source's training and the corrected one's
+    assert sorted((among(rows, revolutions), among(rows, tsas)) for rows in handed) == [(False, True), (True, False)]
     path.write_text(path.read_text().replace('history_units = "tsa"', 'history_units = "tsas"'))
     code, _, err = cli("validate", path)
     assert code == 2 and "history_units" in err and "revolution, tsa" in err
