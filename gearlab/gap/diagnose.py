@@ -832,10 +832,13 @@ def _inside(space: Space, guess: dict) -> bool:
 
 def fit_effect(task: tuple) -> dict:
     """Fit effect *name* on top of the *accepted* effects: task = (source spec, effect name,
-    accepted effects (canonical), target_X, settings, seed, nuisance, rows (a :class:`Rows`)).
-    The source spec is already the search spec (healthy only, the search's noise seed). Returns
-    the best parameters, their score (the gap total), the intervals, and how many evaluations and seconds it took."""
-    source, name, accepted, target_X, settings, seed, nuisance, rows = task
+    accepted effects (canonical), target_X, settings, seed, nuisance, rows (a :class:`Rows`)[, start]).
+    The source spec is already the search spec (healthy only, the search's noise seed). *start*: the
+    parameters of the effect's coarse fit in its round: then only the fine stage runs, from there
+    (:func:`_fine_stage`). Returns the best parameters, their score (the gap total), the intervals,
+    and how many evaluations and seconds it took."""
+    source, name, accepted, target_X, settings, seed, nuisance, rows, *rest = task
+    start = rest[0] if rest else None
     nuisance = bool(nuisance)  # fit sensor noise jointly at every point (see _NoiseNuisance)
     started = time.perf_counter()
     if name is None:
@@ -870,9 +873,26 @@ def fit_effect(task: tuple) -> dict:
         # stiff mounting's natural frequency); one line per point would bury the progress.
         warnings.simplefilter("ignore", UserWarning)
         guesses = [g for g in effect.guesses(scorer.target, operating_point(source)[0]) if _inside(space, g)]
-        history = _fit_search(
-            space, objective, evaluations, seed, guesses=guesses, guess_step=getattr(effect, "guess_step", None)
-        )
+        if start is None:
+            history = _fit_search(
+                space, objective, evaluations, seed, guesses=guesses, guess_step=getattr(effect, "guess_step", None)
+            )
+        else:  # the coarse fit's best point, its noise fitted again: where the fine stage starts
+            history = _fit_search(space, objective, 1, seed, start=start)
+        if start is not None and _fine(effect, space, settings):
+
+            def held(params: dict, extra: tuple) -> float:
+                try:
+                    return scorer.score(rows(spec_of(params, extra)))
+                except GearlabInputError as exc:
+                    errors.append(str(exc))
+                    return math.inf
+
+            def spread(params: dict, extra: tuple) -> float:
+                X = rows(spec_of(params, extra))
+                return float(np.std(scorer.replicates(X, NOISE_REPLICATES, [seed, 2])))
+
+            history = _fine_stage(space, history, held, spread, noise, seed)
         law = None
         if name == NUISANCE:
             # The noise alone gets the same wide Brent search that the other candidates' noise
@@ -938,6 +958,71 @@ def fit_effect(task: tuple) -> dict:
         result["error"] = errors[-1] if errors else "no evaluation succeeded"
     result["seconds"] = time.perf_counter() - started
     return result
+
+
+def _fine(effect, space: Space, settings: Settings) -> bool:
+    """Whether an effect's fits get the fine stage (:func:`_fine_stage`): model-level, more than
+    MODEL_DIMS parameters (casing_path, drive_inertias), and the default budget or more (--quick
+    keeps the coarse search alone, and says that it may miss)."""
+    return effect.level == "model" and space.dims > MODEL_DIMS and settings.budget >= Settings().budget
+
+
+def _fine_stage(
+    space: Space,
+    history: list[dict],
+    held: Callable[[dict, tuple], float],
+    noise_of: Callable[[dict, tuple], float],
+    noise,
+    seed: int,
+) -> list[dict]:
+    """Coarse to fine, for a model-level effect of more than MODEL_DIMS parameters (casing_path,
+    drive_inertias): from the coarse search's best point, the profile's own search
+    (gearlab.gap.identify.profile: a second fit from distant starts, then each parameter moved along
+    the score's valley and the others re-fitted, again around every better point found).
+    The noise nuisance is *held* at the best point's noise and fitted again only where a point beats
+    the best so far (fitted at every point it made each evaluation three to four times dearer; held
+    at the coarse best's, it stood in for part of that point's misfit and kept the fine stage from
+    the truth). *noise_of(params, extra)*: the score's bootstrap spread there. The coarse search (48
+    simulations for the casing's five parameters) stopped 1e3-1e4 times above the truth's score on a
+    development casing; what it left was taken up by a second round of every candidate (a sensor
+    filter fitted and re-fitted beside it) and found only by the final profile. Returns *history*
+    with the fine points."""
+    best = min(history, key=lambda h: h["score"])
+    if not math.isfinite(best["score"]):
+        return history
+    seen = {_key(h["params"]): h["score"] for h in history}
+    trail = [best]
+    now = {"best": best, "extra": ()}
+    if noise is not None:
+        now["extra"] = (noise.effect.spec(noise.at[_key(best["params"])]),)
+
+    def score(params: dict) -> float:
+        key = _key(params)
+        if key in seen:
+            return seen[key]
+        value = held(params, now["extra"])
+        if noise is not None:
+            top = _key(now["best"]["params"])
+            noise.at[key], noise.tails_at[key] = noise.at[top], noise.tails_at[top]  # what it was scored with
+            if value < now["best"]["score"]:
+                try:
+                    refit = noise.fit(params)  # records its noise in noise.at[key] ...
+                except GearlabInputError:
+                    refit = math.inf
+                if refit <= value:
+                    value = refit
+                    now["extra"] = (noise.effect.spec(noise.at[key]),)
+                else:  # ... unless the held one scores lower
+                    noise.at[key], noise.tails_at[key] = noise.at[top], noise.tails_at[top]
+        seen[key] = value
+        u, choice = space.point_of(params)
+        trail.append({"u": u, "choice": choice, "params": dict(params), "score": value})
+        if value < now["best"]["score"]:
+            now["best"] = trail[-1]
+        return value
+
+    profile(space, score, lambda params: noise_of(params, now["extra"]), dict(best["params"]), [seed, 17], {})
+    return history + trail[1:]
 
 
 def _backfit(
@@ -1305,7 +1390,9 @@ def profile_effect(task: tuple) -> dict:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
-        out = profile(Space(effect), score, noise, dict(canonical), seed, prior)
+        space = Space(effect)
+        # a search with the fine stage has made the distant starts on this score
+        out = profile(space, score, noise, dict(canonical), seed, prior, distant=not _fine(effect, space, settings))
     return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}
 
 
@@ -1406,7 +1493,7 @@ def greedy_round(
 
     fits = run.executor.map(fit_effect, tasks, advance)
     baseline = next((f for f in fits if f["name"] is None), None)
-    fits = sorted((f for f in fits if f["name"] is not None), key=lambda f: f["score"])
+    fits = fine_fits(run, r, sorted((f for f in fits if f["name"] is not None), key=lambda f: f["score"]), tasks)
     if baseline is not None and baseline["score"] < gap_now:
         # The accepted effects re-fitted alone: the gap a candidate must reduce further.
         fitted = _as_tuple(baseline["accepted"])
@@ -1432,12 +1519,54 @@ def greedy_round(
                     "evaluations",
                     "seconds",
                     "error",
+                    "coarse_score",
                 )
             }
             for f in fits
         ],
     }
     return fits, fitted, info
+
+
+# The round's fits (coarse searches) ranked this high get the fine stage when their effect takes it
+# (_fine: casing_path, drive_inertias): a weak coarse fit must not lose its round to a stand-in (a
+# damped sensor resonance for a casing path), and the other effects' rounds pay nothing for it.
+FINE_RANKS = 3
+
+
+def fine_fits(run: _Run, r: int, fits: list[dict], tasks: list[tuple]) -> list[dict]:
+    """Stage 1b: the fine stage (:func:`_fine_stage`) for the round's first FINE_RANKS fits whose
+    effect takes it, from their coarse fits, in parallel, each kept where it scores lower. Returns the
+    fits ranked again."""
+    registry, by_name = get_registry(), {task[1]: task for task in tasks}
+    again = [
+        f
+        for f in fits[:FINE_RANKS]
+        if math.isfinite(f["score"])
+        and _fine(registry.get("effect", f["name"]), Space(registry.get("effect", f["name"])), run.settings)
+    ]
+    if not again:
+        return fits
+    stage = f"gap fine {r}"
+    names = ", ".join(f["name"] for f in again)
+    run.on_event(Event("stage", stage=stage, total=len(again), message=f"gap: round {r}, the fine stage for {names}"))
+    done = 0
+
+    def advance(i, res):
+        nonlocal done
+        done += 1
+        run.on_event(Event("advance", stage=stage, done=done, total=len(again)))
+
+    tasks = [by_name[f["name"]] + (f["params"],) for f in again]
+    out = {id(f): f for f in fits}
+    for coarse, fine in zip(again, run.executor.map(fit_effect, tasks, advance)):
+        if fine["score"] < coarse["score"]:
+            fine.update(
+                evaluations=fine["evaluations"] + coarse["evaluations"], seconds=fine["seconds"] + coarse["seconds"]
+            )
+            fine["coarse_score"] = coarse["score"]
+            out[id(coarse)] = fine
+    return sorted(out.values(), key=lambda f: f["score"])
 
 
 def noise_arbitration(run: _Run, r: int, top: dict, alone_fit: dict | None, fitted: tuple, info: dict) -> dict:

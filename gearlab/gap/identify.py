@@ -165,13 +165,21 @@ def _plain(params: dict) -> dict:
 
 
 def profile(
-    space, score: Callable[[dict], float], noise_of: Callable[[dict], float], params: dict, seed, prior
+    space,
+    score: Callable[[dict], float],
+    noise_of: Callable[[dict], float],
+    params: dict,
+    seed,
+    prior,
+    distant: bool = True,
 ) -> dict:
     """Profile the parameters *params* of an effect's *space* under *score* (deterministic; lower is
     better) whose noise at a point is *noise_of*; *prior*: the search's intervals (kept for whole
-    numbers). Returns the best parameters seen (the fit, or a better point), their score, the fit's
-    score, the noise, whether the fit leaves a gap, intervals, ``determined`` marks (with the reason
-    where not) and ``combinations`` (what the data determine where a parameter is not)."""
+    numbers). *distant*: start with the second fit from distant starts (False where the search's fine
+    stage, :func:`refine`, has made it on the same score). Returns the best parameters seen (the fit,
+    or a better point), their score, the fit's score, the noise, whether the fit leaves a gap,
+    intervals, ``determined`` marks (with the reason where not) and ``combinations`` (what the data
+    determine where a parameter is not)."""
     u0, choice = space.point_of(params)
     history: list[dict] = []
     seen: dict = {}
@@ -192,7 +200,7 @@ def profile(
     paths: dict[int, list[dict]] = {}
     noise = noise_of(space.params(u0, choice))
     if free:
-        start = _distant_starts(space, evaluate, history, u0, choice, free, seed)
+        start = _distant_starts(space, evaluate, history, u0, choice, free, seed) if distant else u0
         for _ in range(PASSES):  # around the best point; again if the profile found a lower one
             if not np.array_equal(start, u0):  # a new basin: a local fit of every coordinate first
                 u0 = _local(space, evaluate, start, choice, free, REFIT_EVALS * len(free))["u"].copy()
