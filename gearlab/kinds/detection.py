@@ -8,8 +8,9 @@ the method's model and threshold are fixed, and their labels only when the figur
 
     [source]              a dataset preset with overrides (as in [[datasets]]), healthy + faults
     [corrected]           effects (as in [[datasets]]) that make the corrected simulator (e.g. what
-                          `gearlab gap` fitted), tsa (revolutions averaged per sample), label: every
-                          method is trained on both sources, the corrected one's rows "<method> (<label>)"
+                          `gearlab gap` fitted), tsa (revolutions averaged per sample), history_units
+                          (what of the history its methods train on), label: every method is trained on
+                          both sources, the corrected one's rows "<method> (<label>)"
     [target]              vibration, tacho, pulses_per_rev, sensitivity, fs, positive, files = [
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
