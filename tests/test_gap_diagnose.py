@@ -690,3 +690,17 @@ def test_a_tone_s_noise_nuisance_takes_the_law_at_its_own_point():
     assert fit["params"]["frequency"] == pytest.approx(180.0, rel=0.05)
     assert fit["nuisance"]["params"]["kind"] == "laplace"
     assert min(fit["nuisance"]["tails"], key=fit["nuisance"]["tails"].get) == "laplace"
+
+
+def test_rounds_go_on_only_while_what_is_left_stands_above_the_noise_width():
+    """another_round: a gap still seen after a round whose rest lies within the noise width (RMS 0.6
+    of a removed RMS 40) ends the search; a rest above the width (RMS 3), or a gap seen from a start
+    within the width (nothing removed above it), goes on; a gap no longer seen ends it."""
+    from gearlab.gap.diagnose import another_round
+
+    before = _seen_report(40.0**2 * 200, 200, True, 1.0)
+    assert not another_round(before, _seen_report(0.6**2 * 200, 200, True, 0.9))
+    assert another_round(before, _seen_report(3.0**2 * 200, 200, True, 1.0))
+    assert not another_round(before, _seen_report(3.0**2 * 200, 200, False, 0.55))
+    weak = _seen_report(0.9**2 * 200, 200, True, 0.8)
+    assert another_round(weak, _seen_report(0.5**2 * 200, 200, True, 0.7))
