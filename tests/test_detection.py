@@ -122,17 +122,20 @@ def handed(monkeypatch) -> list:
     return seen
 
 
-def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_path, cache, handed):
+@pytest.mark.parametrize("history_fit", ["all", "crossed"])
+def test_test_labels_and_signals_never_reach_training_or_thresholds(cli, tmp_path, cache, handed, history_fit):
     """Flipping the test files' labels changes no score and no decision, only the figures; other
     test recordings change no history score, so no threshold and no trained model either. The
     networks are trained with two seeds (an ensemble) and thresholded by the random-effects
-    model of the history's records: both see the history alone."""
+    model of the history's records: both see the history alone -- also when each history record
+    is scored by the trainings that left it out (history_fit = "crossed")."""
     seen = handed
     runs = []
     for i, files in enumerate((FILES, flipped(FILES), flipped(FILES, signals=True))):
         folder = tmp_path / f"case{i}"
         folder.mkdir()
-        runs.append(run(cli, scenario(folder, files, detection="seeds = 2"), tmp_path / "runs"))
+        detection = f'seeds = 2\nhistory_fit = "{history_fit}"'
+        runs.append(run(cli, scenario(folder, files, detection=detection), tmp_path / "runs"))
     records = [{r["unit"]: r for r in map(json.loads, (d / "results.jsonl").read_text().splitlines())} for d in runs]
     first = scores(runs[0])
     for key in ("file", "unit", "index", "method", "score", "decision"):
@@ -199,6 +202,67 @@ def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its
     summary = json.loads((out / "summary.json").read_text())
     row = next(r for r in summary["rows"] if r["method"] == "source_only" and r["unit"] == "record10")
     assert len(row["member_auc"]) == 3 and set(row["by_rule"]) == {"records", "pooled"}
+
+
+def test_crossed_history_fit_scores_each_history_record_by_the_training_that_left_it_out(cli, tmp_path, cache, handed):
+    """history_fit = "crossed": one training per history record, handed the other records' revolutions
+    only; the method's history scores are each record's scores by the training that left it out,
+    standardised by that training's model of the records it trained on, its test scores the mean of
+    the trainings' standardised scores, and its threshold the rule's on those history scores. Only
+    the method (not its folds) reaches scores.csv. With one history record it is refused."""
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection import learned_input, read_target
+    from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
+
+    path = scenario(tmp_path, methods=("source_only",), detection='history_fit = "crossed"')
+    out = run(cli, path, tmp_path / "runs")
+    records = {r["unit"]: r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines())}
+    crossed = next(r for r in records.values() if r.get("folds"))
+    folds = [records[u] for u in crossed["folds"]]
+    assert [f["fold"] for f in folds] == [0, 1] and crossed["method"] == "source_only"
+    # what each training was handed: revolutions of the history record it did not leave out
+    spec = load_scenario(path).spec
+    ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    shown = learned_input(spec)
+    history = [shown(r) for _, r in cond["history"]]
+
+    def among(rows, pool) -> bool:
+        return all(np.abs(pool - row).max(axis=1).min() < 1e-6 for row in rows)
+
+    assert len(handed) == 2
+    for k, rows in enumerate(handed):
+        assert among(rows, history[1 - k]) and not among(rows, history[k])
+    windows = {"revolution": (1, 1), "record5": (5, 1), "record10": (10, 1)}
+    expected_hist = {}
+    for u, (b, stride) in windows.items():
+        per = len(folds[0]["history_scores"][u]) // 2  # two equal history records
+        parts, tests = [], []
+        for k, f in enumerate(folds):
+            s = np.asarray(f["history_scores"][u])
+            own, other = (s[:per], s[per:]) if k == 0 else (s[per:], s[:per])
+            m = fit([other], 0.99, [independent_units(per, b, stride)], [overlap_dof(per, b, stride)])
+            sd = np.sqrt(m.unit_sd**2 + m.mean_se**2)
+            parts.append((own - m.mean) / sd)
+            tests.append({p: (np.asarray(f["test_scores"][p][u]) - m.mean) / sd for p in f["test_scores"]})
+        expected_hist[u] = np.concatenate(parts)
+        assert crossed["history_scores"][u] == pytest.approx(expected_hist[u], rel=1e-6, abs=1e-9)
+        for p, s in crossed["test_scores"].items():
+            assert s[u] == pytest.approx((tests[0][p] + tests[1][p]) / 2, rel=1e-6, abs=1e-9)
+        m = fit(
+            [expected_hist[u][:per], expected_hist[u][per:]],
+            0.99,
+            [independent_units(per, b, stride)] * 2,
+            [overlap_dof(per, b, stride)] * 2,
+        )
+        assert crossed["thresholds"][u] == pytest.approx(m.threshold, rel=1e-6)
+    methods = [r["method"] for r in scores(out) if r["unit"] == "record10"]
+    assert methods.count("source_only") == methods.count("fm4")  # the folds are not rows of their own
+    one = [f for f in FILES if f[0] != "h2"]
+    lone = tmp_path / "lone"
+    lone.mkdir()
+    code, _, err = cli("run", scenario(lone, one, detection='history_fit = "crossed"'), "--out", tmp_path / "r2")
+    assert code == 2 and "[detection] key 'history_fit'" in err and "at least two" in err
+    assert not list((tmp_path / "r2").rglob("results.jsonl"))
 
 
 def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):

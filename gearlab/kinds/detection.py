@@ -108,6 +108,10 @@ MIN_HISTORY_UNITS = 8
 # Records without a 'condition' whose tacho speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
 THRESHOLDS = ("records", "pooled")
+# How a network's history scores are made: "all" -- trained on every history record and scoring them
+# (in-sample); "crossed" -- one training per history record left out, which scores it (a new record's
+# scores, as the test records' are)
+HISTORY_FITS = ("all", "crossed")
 CORRECTED_HISTORY = ("revolution", "tsa")
 MAX_SEEDS = 20
 
@@ -194,6 +198,14 @@ TABLES = {
                 "records",
                 doc="'records': predictive quantile for a new record's unit (record effect + within-record "
                 "spread, one-way random effects); 'pooled': Gumbel quantile of the pooled history units",
+            ),
+            "history_fit": Key(
+                str,
+                "all",
+                one_of(*HISTORY_FITS),
+                "how a network's history scores are made: 'all' (trained on every history record, "
+                "which it then scores) or 'crossed' (one training per history record left out of its "
+                "training rows; that record's units are scored by it, the test units by all of them)",
             ),
             "seeds": Key(
                 int,
@@ -454,6 +466,7 @@ def build(scenario: Scenario) -> dict:
         "false_alarm": t["detection"]["false_alarm"],
         "threshold": t["detection"]["threshold"],
         "seeds": t["detection"]["seeds"],
+        "history_fit": t["detection"]["history_fit"],
     }
 
 
@@ -618,10 +631,18 @@ def seeds_of(method: Method, seeds: int) -> tuple:
     return tuple(range(seeds))
 
 
-def unit_name(condition: str, method: Method, seed: int | None = None, variant: str = "") -> str:
+def unit_name(
+    condition: str, method: Method, seed: int | None = None, variant: str = "", fold: int | None = None
+) -> str:
     """A record's name in results.jsonl: one per condition, method and source (*variant*: the
-    corrected source's label); an ensemble's members: one per seed besides."""
-    return f"{condition}/{method.key}" + (f"@{variant}" if variant else "") + ("" if seed is None else f"/seed{seed}")
+    corrected source's label); an ensemble's members: one per seed besides; with
+    history_fit = "crossed" the trainings that left out one history record (*fold*) besides."""
+    return (
+        f"{condition}/{method.key}"
+        + (f"@{variant}" if variant else "")
+        + ("" if seed is None else f"/seed{seed}")
+        + ("" if fold is None else f"/fold{fold}")
+    )
 
 
 def train_unit(task: tuple) -> dict:
@@ -630,10 +651,23 @@ def train_unit(task: tuple) -> dict:
     threshold) and, only now, of the test units."""
     import torch
 
-    protocol, method, variant, condition, seed, (Xs, ys, Xv, yv), train, history_units, test_units, states, rule = task
+    (
+        protocol,
+        method,
+        variant,
+        condition,
+        seed,
+        fold,
+        (Xs, ys, Xv, yv),
+        train,
+        history_units,
+        test_units,
+        states,
+        rule,
+    ) = task
     torch.set_num_threads(1)
     device = pick_device(protocol.device)
-    unit = unit_name(condition, method, seed, variant)
+    unit = unit_name(condition, method, seed, variant, fold)
     with UnitProgress(Path(states).parents[1], unit) as progress:
 
         def report(epoch: int, history) -> None:
@@ -661,6 +695,7 @@ def train_unit(task: tuple) -> dict:
         "method": method_name(method, variant),
         "adapter": method.adapter,
         "seed": seed,
+        **({} if fold is None else {"fold": fold}),
         "history_scores": _to_lists(hist),
         **fixed,
         "test_scores": _to_lists(test),
@@ -731,6 +766,50 @@ def ensemble_record(unit: str, members: list[dict], rule: Rule) -> dict:
         "method": first["method"],
         "adapter": first["adapter"],
         "members": [m["unit"] for m in members],
+        "history_scores": _to_lists(hist),
+        **rule.decide(hist),
+        "test_scores": _to_lists(test),
+    }
+
+
+def crossed_record(unit: str, folds: list[dict], rule: Rule) -> dict:
+    """One training's scores made from its folds (history_fit = "crossed"): fold k was trained with
+    history record k left out of its training rows. Each fold's scores are standardised by the
+    model of the records it trained on (record_effects; with one record, its mean and within-record
+    spread), so record k's units, standardised by fold k, are what a *new* record's units score
+    against a model aligned to the others -- the record-to-record spread the threshold needs, which
+    a network scoring the very records it was aligned to hides (docs/real_data.md: TSAs of the
+    history as the target, the history's two records 0.0-0.4 sigma_e apart, a new take of the
+    eccentric idler 0.1-5.5). A test unit's score is the mean over the folds (none saw it).
+    Thresholded by *rule* on the history scores so made."""
+    first = folds[0]
+    units = list(first["history_scores"])
+    counts = {u: [n for n, _ in rule.records[u]] for u in units}
+    hist: dict[str, np.ndarray] = {}
+    test: dict[str, dict[str, np.ndarray]] = {p: {} for p in first["test_scores"]}
+    for u in units:
+        out, tests = [], []
+        for k, fold in enumerate(folds):
+            groups = np.split(np.asarray(fold["history_scores"][u], dtype=np.float64), np.cumsum(counts[u])[:-1])
+            keep = [i for i in range(len(groups)) if i != k]
+            model = record_effects.fit(
+                [groups[i] for i in keep],
+                1.0 - rule.false_alarm,
+                [rule.records[u][i][1] for i in keep],
+                [record_effects.overlap_dof(counts[u][i], *_window(u)) for i in keep],
+            )
+            out.append(model.standardised(groups[k]))
+            tests.append({p: model.standardised(fold["test_scores"][p][u]) for p in fold["test_scores"]})
+        hist[u] = np.concatenate(out)
+        for p in test:
+            test[p][u] = np.mean([t[p] for t in tests], axis=0)
+    return {
+        "unit": unit,
+        "condition": first["condition"],
+        "method": first["method"],
+        "adapter": first["adapter"],
+        "seed": first["seed"],
+        "folds": [f["unit"] for f in folds],
         "history_scores": _to_lists(hist),
         **rule.decide(hist),
         "test_scores": _to_lists(test),
@@ -904,6 +983,21 @@ def history_training_rows(cond: dict, protocol: Protocol, condition: str, tsa: i
     return revs[np.sort(take)]
 
 
+def folds_of(history_fit: str, cond: dict, condition: str, path) -> tuple:
+    """The history records left out one at a time (history_fit = "crossed"), or (None,): one
+    training on them all."""
+    if history_fit == "all":
+        return (None,)
+    if len(cond["history"]) < 2:
+        files = ", ".join(f.path for f, _ in cond["history"])
+        raise GearlabInputError(
+            f"{location(path, 'detection', 'history_fit')}: 'crossed' leaves out one history record at a "
+            f"time and needs at least two per condition; condition '{condition}' has one ({files}); "
+            "expected 'all' or another history record"
+        )
+    return tuple(range(len(cond["history"])))
+
+
 def source_split(source, protocol: Protocol):
     rng = np.random.default_rng([protocol.seed, 0])
     order = rng.permutation(len(source.X))
@@ -918,6 +1012,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     protocol: Protocol = spec["protocol"]
     with executor_for(scenario) as executor:
         conditions = read_target(spec["target"], spec["blocks"], on_event, f"{scenario.path}: [target] key 'files'")
+        folds = {c: folds_of(spec["history_fit"], cond, c, scenario.path) for c, cond in conditions.items()}
         # the sources: "" the [source], and the corrected simulator when [corrected] gives effects
         variants = {"": spec["source"]}
         if spec.get("corrected") is not None:
@@ -957,13 +1052,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         members = {
             (c, v, m): seeds_of(m, spec["seeds"]) for c in conditions for v in variants for m in protocol.methods
         }
-        todo = [(c, v, m, seed) for (c, v, m), seeds in members.items() for seed in seeds]
-        pending = [(c, v, m, seed) for c, v, m, seed in todo if unit_name(c, m, seed, v) not in records]
+        todo = [(c, v, m, seed, k) for (c, v, m), seeds in members.items() for seed in seeds for k in folds[c]]
+        pending = [unit for unit in todo if unit_name(unit[0], unit[2], unit[3], unit[1], unit[4]) not in records]
         # one folder of shared states (primings, source models) per condition and source
         folders = {(c, v): f"condition{i}" + (f"-{v}" if v else "") for i, c in enumerate(conditions) for v in variants}
 
         def state_file(unit: tuple) -> Path | None:
-            c, v, m, seed = unit
+            c, v, m, seed, _ = unit
             state = shared_state(m, seed or 0, 0, protocol)
             return None if state is None else run.path / "states" / folders[(c, v)] / f"{state}.pt"
 
@@ -981,10 +1076,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         for phase in phases:
             tasks = []
-            for c, v, m, seed in phase:
+            for c, v, m, seed, k in phase:
                 cond = conditions[c]
                 states = run.path / "states" / folders[(c, v)]
                 states.mkdir(parents=True, exist_ok=True)
+                trained_on = (
+                    cond if k is None else {**cond, "history": [h for i, h in enumerate(cond["history"]) if i != k]}
+                )
                 tasks.append(
                     (
                         protocol,
@@ -992,8 +1090,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         v,
                         c,
                         seed,
+                        k,
                         splits[(c, v)],
-                        shown_to(history_training_rows(cond, protocol, c, spec["corrected_history"] if v else 0)),
+                        shown_to(history_training_rows(trained_on, protocol, c, spec["corrected_history"] if v else 0)),
                         {u: shown_to(X) for u, X in cond["history_units"].items()},
                         {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
                         states,
@@ -1002,6 +1101,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 )
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
         for (c, v, m), seeds in members.items():
+            for seed in seeds if folds[c] != (None,) else ():  # a training's folds make its record
+                if unit_name(c, m, seed, v) not in records:
+                    group = [records[unit_name(c, m, seed, v, k)] for k in folds[c]]
+                    records[unit_name(c, m, seed, v)] = crossed_record(unit_name(c, m, seed, v), group, rules[c])
+                    run.append(records[unit_name(c, m, seed, v)])
             if seeds != (None,) and unit_name(c, m, None, v) not in records:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
@@ -1046,7 +1150,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     by_unit = {r["unit"]: r for r in everything}
     # an ensemble's members (one training each) are kept in results.jsonl and shown only as the
     # spread of their AUCs beside the ensemble's
-    records = [r for r in everything if r.get("seed") is None]
+    records = [r for r in everything if r.get("seed") is None and r.get("fold") is None]
     thresholds = {r["unit"]: r["thresholds"] for r in records}
     # scores.csv: every test unit's score and decision
     buf = io.StringIO()
