@@ -19,7 +19,9 @@ the method's model and threshold are fixed, and their labels only when the figur
                           mesh_orders, shaft_orders, sidebands, slow_shafts (tooth_sync), shafts (pinion_sync:
                           the other shafts, {name = period in input revolutions})
     [detection]           blocks (revolutions per record-level TSA), false_alarm (asked of the threshold),
-                          threshold (records | pooled), seeds (trainings per network method)
+                          threshold (records | pooled), seeds (trainings per network method),
+                          history_fit (all | crossed: each history record scored by a training
+                          that left it out)
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
 
 Records are grouped by operating *condition*: the file's ``condition`` when given, else by
