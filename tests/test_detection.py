@@ -263,6 +263,11 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     code, _, err = cli("run", scenario(lone, one, detection='history_fit = "crossed"'), "--out", tmp_path / "r2")
     assert code == 2 and "[detection] key 'history_fit'" in err and "at least two" in err
     assert not list((tmp_path / "r2").rglob("results.jsonl"))
+    # a training that leaves a record out has fewer history rows: a batch above them is refused up front
+    path.write_text(path.read_text().replace("target_train = 8\nbatch = 4", "target_train = 60\nbatch = 45"))
+    code, _, err = cli("run", path, "--out", tmp_path / "r3")
+    assert code == 2 and "[protocol] key 'batch': 45" in err and "left out" in err
+    assert not list((tmp_path / "r3").rglob("results.jsonl"))
 
 
 def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):

@@ -1000,6 +1000,14 @@ def folds_of(history_fit: str, cond: dict, condition: str, path) -> tuple:
     return tuple(range(len(cond["history"])))
 
 
+def trained_on(cond: dict, fold: int | None) -> dict:
+    """The condition as a training sees it: its history without record *fold* (history_fit =
+    "crossed"), or whole."""
+    if fold is None:
+        return cond
+    return {**cond, "history": [h for i, h in enumerate(cond["history"]) if i != fold]}
+
+
 def source_split(source, protocol: Protocol):
     rng = np.random.default_rng([protocol.seed, 0])
     order = rng.permutation(len(source.X))
@@ -1024,6 +1032,18 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             for c, cond in conditions.items()
             for v, source in variants.items()
         }
+        for c, cond in conditions.items():  # before any work: every training has a batch of history rows
+            for k in folds[c]:
+                for v in variants:
+                    n = len(
+                        history_training_rows(trained_on(cond, k), protocol, c, spec["corrected_history"] if v else 0)
+                    )
+                    if n < protocol.batch:
+                        left = "" if k is None else f" with history record {cond['history'][k][0].path} left out"
+                        raise GearlabInputError(
+                            f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than the {n} "
+                            f"history rows condition '{c}' trains on{left}; expected a smaller batch"
+                        )
         for c, cond in conditions.items():
             cond["source"] = specs[(c, "")].name
             cond["sources"] = {v or "source": specs[(c, v)].name for v in variants}
@@ -1082,9 +1102,6 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 cond = conditions[c]
                 states = run.path / "states" / folders[(c, v)]
                 states.mkdir(parents=True, exist_ok=True)
-                trained_on = (
-                    cond if k is None else {**cond, "history": [h for i, h in enumerate(cond["history"]) if i != k]}
-                )
                 tasks.append(
                     (
                         protocol,
@@ -1094,7 +1111,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         seed,
                         k,
                         splits[(c, v)],
-                        shown_to(history_training_rows(trained_on, protocol, c, spec["corrected_history"] if v else 0)),
+                        shown_to(
+                            history_training_rows(
+                                trained_on(cond, k), protocol, c, spec["corrected_history"] if v else 0
+                            )
+                        ),
                         {u: shown_to(X) for u, X in cond["history_units"].items()},
                         {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
                         states,
