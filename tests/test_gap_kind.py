@@ -326,6 +326,13 @@ def test_partial_run_tables_and_charts(finished, tiny):
         ),
         ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),
         ("healthy = 12\nnoise", 'healthy = 12\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
+        # a measured file names its channel as text: an index (a records' column) is refused with the fix
+        (
+            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'file = "rec.wav"\nvibration = 0\nspeed = "40 Hz"',
+            "[target] key 'vibration'",
+        ),
     ],
 )
 def test_bad_input_refused(tiny, cli, old, new, where):
@@ -337,6 +344,8 @@ def test_bad_input_refused(tiny, cli, old, new, where):
     assert code == 2, err
     message = err.strip()
     assert "\n" not in message and str(tiny) in message and where in message, message
+    if "vibration = 0" in new:
+        assert 'vibration = "0"' in message
     assert not out_dir.exists()
 
 

@@ -211,7 +211,8 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
             if not isinstance(entry[key], str):
                 raise GearlabInputError(
                     f"{where} key '{key}': a column index belongs to measured records "
-                    "('files'); a 'file' names its channel"
+                    f"('files'); a 'file' names its channel as text (a WAV's channels are named "
+                    f'"0", "1", ...): expected e.g. {key} = "{entry[key]}"'
                 )
         return dataset_spec(entry, where, base)
     from .detection import target_spec
