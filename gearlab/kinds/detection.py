@@ -715,15 +715,26 @@ class Rule:
     false_alarm: float
     records: dict
 
+    def groups(self, u: str, scores) -> list[np.ndarray]:
+        """The history's *scores* of unit kind *u*, one array per history record."""
+        counts = [n for n, _ in self.records[u]]
+        return np.split(np.asarray(scores, dtype=np.float64), np.cumsum(counts)[:-1])
+
+    def model(self, u: str, scores, keep=None) -> record_effects.RecordEffects:
+        """The random-effects model (record effect + within-record spread) of the history's *scores*
+        of unit kind *u*, over the records *keep* (default: all)."""
+        groups = self.groups(u, scores)
+        keep = range(len(groups)) if keep is None else keep
+        return record_effects.fit(
+            [groups[i] for i in keep],
+            1.0 - self.false_alarm,
+            [self.records[u][i][1] for i in keep],
+            [record_effects.overlap_dof(self.records[u][i][0], *_window(u)) for i in keep],
+        )
+
     def models(self, history_scores: dict) -> dict[str, record_effects.RecordEffects]:
-        """{unit: the random-effects model of its scores (record effect + within-record spread)}."""
-        out = {}
-        for u, s in history_scores.items():
-            counts = [n for n, _ in self.records[u]]
-            groups = np.split(np.asarray(s, dtype=np.float64), np.cumsum(counts)[:-1])
-            dofs = [record_effects.overlap_dof(n, *_window(u)) for n in counts]
-            out[u] = record_effects.fit(groups, 1.0 - self.false_alarm, [m for _, m in self.records[u]], dofs)
-        return out
+        """{unit: the random-effects model of its scores}."""
+        return {u: self.model(u, s) for u, s in history_scores.items()}
 
     def decide(self, history_scores: dict) -> dict:
         """The record's "thresholds" (by this rule), the history models and both rules' thresholds
@@ -785,22 +796,14 @@ def crossed_record(unit: str, folds: list[dict], rule: Rule) -> dict:
     eccentric idler 0.1-5.5). A test unit's score is the mean over the folds (none saw it).
     Thresholded by *rule* on the history scores so made."""
     first = folds[0]
-    units = list(first["history_scores"])
-    counts = {u: [n for n, _ in rule.records[u]] for u in units}
     hist: dict[str, np.ndarray] = {}
     test: dict[str, dict[str, np.ndarray]] = {p: {} for p in first["test_scores"]}
-    for u in units:
+    for u in first["history_scores"]:
         out, tests = [], []
         for k, fold in enumerate(folds):
-            groups = np.split(np.asarray(fold["history_scores"][u], dtype=np.float64), np.cumsum(counts[u])[:-1])
-            keep = [i for i in range(len(groups)) if i != k]
-            model = record_effects.fit(
-                [groups[i] for i in keep],
-                1.0 - rule.false_alarm,
-                [rule.records[u][i][1] for i in keep],
-                [record_effects.overlap_dof(counts[u][i], *_window(u)) for i in keep],
-            )
-            out.append(model.standardised(groups[k]))
+            scores = fold["history_scores"][u]
+            model = rule.model(u, scores, keep=[i for i in range(len(folds)) if i != k])
+            out.append(model.standardised(rule.groups(u, scores)[k]))
             tests.append({p: model.standardised(fold["test_scores"][p][u]) for p in fold["test_scores"]})
         hist[u] = np.concatenate(out)
         for p in test:
@@ -1075,7 +1078,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             (c, v, m): seeds_of(m, spec["seeds"]) for c in conditions for v in variants for m in protocol.methods
         }
         todo = [(c, v, m, seed, k) for (c, v, m), seeds in members.items() for seed in seeds for k in folds[c]]
-        pending = [unit for unit in todo if unit_name(unit[0], unit[2], unit[3], unit[1], unit[4]) not in records]
+        pending = [(c, v, m, seed, k) for c, v, m, seed, k in todo if unit_name(c, m, seed, v, k) not in records]
         # one folder of shared states (primings, source models) per condition and source
         folders = {(c, v): f"condition{i}" + (f"-{v}" if v else "") for i, c in enumerate(conditions) for v in variants}
 
@@ -1125,10 +1128,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
         for (c, v, m), seeds in members.items():
             for seed in seeds if folds[c] != (None,) else ():  # a training's folds make its record
-                if unit_name(c, m, seed, v) not in records:
+                name = unit_name(c, m, seed, v)
+                if name not in records:
                     group = [records[unit_name(c, m, seed, v, k)] for k in folds[c]]
-                    records[unit_name(c, m, seed, v)] = crossed_record(unit_name(c, m, seed, v), group, rules[c])
-                    run.append(records[unit_name(c, m, seed, v)])
+                    records[name] = crossed_record(name, group, rules[c])
+                    run.append(records[name])
             if seeds != (None,) and unit_name(c, m, None, v) not in records:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
