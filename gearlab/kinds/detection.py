@@ -53,6 +53,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -667,6 +668,7 @@ def train_unit(task: tuple) -> dict:
         states,
         rule,
     ) = task
+    started = time.perf_counter()
     torch.set_num_threads(1)
     device = pick_device(protocol.device)
     unit = unit_name(condition, method, seed, variant, fold)
@@ -687,6 +689,9 @@ def train_unit(task: tuple) -> dict:
             device,
             report,
         )
+    # what the model learned of the simulator, from training data only: its scores of the source's
+    # held-out revolutions (0.5: it does not tell the simulated fault from healthy)
+    held_out = fault_score(model, Xv, device)
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
     fixed = rule.decide(hist)
@@ -702,6 +707,8 @@ def train_unit(task: tuple) -> dict:
         **fixed,
         "test_scores": _to_lists(test),
         "history": history.as_dict() if history is not None else None,
+        "source_auc": auc(held_out[yv == 0], held_out[yv != 0]),
+        "seconds": time.perf_counter() - started,
     }
 
 
@@ -782,6 +789,20 @@ def ensemble_record(unit: str, members: list[dict], rule: Rule) -> dict:
         "history_scores": _to_lists(hist),
         **rule.decide(hist),
         "test_scores": _to_lists(test),
+        **trained_together(members),
+    }
+
+
+def trained_together(parts: list[dict]) -> dict:
+    """An ensemble's or a crossed training's source AUC (the median of its parts') and training
+    time (their sum); nothing for records written before units kept them."""
+    aucs = [p["source_auc"] for p in parts if p.get("source_auc") is not None]
+    if not all("seconds" in p for p in parts):
+        return {}
+    return {
+        "source_auc": float(np.median(aucs)) if aucs else None,
+        "part_source_auc": [p.get("source_auc") for p in parts],
+        "seconds": float(sum(p["seconds"] for p in parts)),
     }
 
 
@@ -818,6 +839,7 @@ def crossed_record(unit: str, folds: list[dict], rule: Rule) -> dict:
         "history_scores": _to_lists(hist),
         **rule.decide(hist),
         "test_scores": _to_lists(test),
+        **trained_together(folds),
     }
 
 
@@ -1239,10 +1261,14 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     variants = [""] + ([spec["corrected_label"]] if spec.get("corrected") is not None else [])
     methods = [method_name(m, v) for v in variants for m in spec["protocol"].methods]
     methods += list(spec["classical"]["indicators"])
+
+    def rank(method: str) -> int:
+        return methods.index(method) if method in methods else len(methods)
+
     rows.sort(
         key=lambda r: (
             order[r["condition"]],
-            methods.index(r["method"]) if r["method"] in methods else len(methods),
+            rank(r["method"]),
             r["unit"] != "revolution",
             r["unit"],
         )
@@ -1259,10 +1285,23 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
     }
+    summary["learned"] = [
+        {
+            "condition": r["condition"],
+            "method": r["method"],
+            "source_auc": r["source_auc"],
+            "part_source_auc": r.get("part_source_auc", []),
+            "seconds": r["seconds"],
+        }
+        for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
+        if "seconds" in r
+    ]
     if (run.path / "conditions.json").exists():
         summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
     run.write_json("summary.json", summary)
-    run.write_text("table.md", table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"])
+    run.write_text(
+        "table.md", table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"] + learned_md(summary["learned"])
+    )
     run.write_text("table.csv", table_csv(rows))
 
 
@@ -1338,6 +1377,28 @@ def labels_md(rows: list[dict]) -> str:
             f"| {r['condition']} | {r['method']} | "
             + " | ".join(_cell(r["called_by_label"].get(k), "{:.0f}") for k in labels)
             + " |"
+        )
+    return "\n".join(out) + "\n"
+
+
+def learned_md(learned: list[dict]) -> str:
+    """What each method that learns from the simulator learned of it: the ROC AUC of its scores of
+    the source's held-out revolutions (an ensemble's: the median over its members, with their
+    range), and the training time, all of its trainings together. From training data only: a row
+    near 0.5 cannot tell the simulated fault from healthy, so its calls on the records are not what
+    the simulator taught it."""
+    if not learned:
+        return ""
+    out = [
+        "\nWhat each method learned of the simulator (ROC AUC of its scores of the source's held-out "
+        "revolutions, 0.5 = chance; training time, all seeds)\n",
+        "| condition | method | source AUC | training (s) |",
+        "|---|---|---|---|",
+    ]
+    for r in learned:
+        out.append(
+            f"| {r['condition']} | {r['method']} | {_cell(r['source_auc'])}{_spread(r['part_source_auc'])} | "
+            f"{r['seconds']:.0f} |"
         )
     return "\n".join(out) + "\n"
 
@@ -1418,6 +1479,7 @@ def summary_lines(run: RunDir) -> list[str]:
         table_md(summary["rows"]).rstrip(),
         labels_md(summary["rows"]).rstrip(),
         *([summary["shafts_md"].strip()] if summary.get("shafts_md") else []),
+        *([learned_md(summary["learned"]).strip()] if summary.get("learned") else []),
     ]
 
 
