@@ -16,7 +16,16 @@ from tiny import transfer
 from gearlab.data.spec import DATASET_PRESETS
 from gearlab.engine import run_scenario
 from gearlab.report import caption
-from gearlab.verdict import THESIS, best_per_k, collapsed, experiment, gap_lines, transfer_lines, transfer_table
+from gearlab.verdict import (
+    THESIS,
+    best_per_k,
+    collapsed,
+    detection_lines,
+    experiment,
+    gap_lines,
+    transfer_lines,
+    transfer_table,
+)
 
 HERE = Path(__file__).resolve().parent
 TRANSFER = transfer('[[methods]]\nadapter = "source_only"\n\n[[methods]]\nadapter = "mmd"\n', repetitions=2)
@@ -223,6 +232,43 @@ def runs(tmp_path_factory):
         gap = run_scenario(HERE / "tui_scenarios" / "tgap.toml", out=base / "runs").path
         data = run_scenario(HERE / "tui_scenarios" / "tdata.toml", out=base / "runs").path
     return {"transfer": transfers, "gap": gap, "dataset": data}
+
+
+def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_learned_nothing():
+    """At the longest TSA: the rows meeting AUC >= 0.95 with >= 90 % found at <= 5 % false alarms,
+    the best learned row against the best classical one (detection less false alarms, then AUC),
+    and the learned rows whose scores of the simulator's held-out revolutions are near chance (never
+    the best learned row)."""
+
+    def row(condition, method, auc, det, fa, unit="record30"):
+        return {"condition": condition, "unit": unit, "method": method, "auc": auc, "detection": det, "false_alarm": fa}
+
+    rows = [
+        row("high", "coral", 0.99, 95.0, 0.0),
+        row("high", "mmd (corrected)", 1.0, 100.0, 0.0),  # the best on the labels, but it learned nothing
+        row("high", "fm4", 1.0, 100.0, 67.0),
+        row("high", "na4", 0.98, 95.0, 0.0),
+        row("high", "coral", 0.5, 0.0, 0.0, unit="record10"),  # another unit: not judged
+        row("low", "coral", 0.6, 20.0, 0.0),
+        row("low", "mmd (corrected)", None, None, None),
+        row("low", "fm4", 0.9, 50.0, 0.0),
+    ]
+    learned = [
+        {"condition": c, "method": m, "source_auc": a, "part_source_auc": [], "seconds": 1.0}
+        for c, m, a in [("high", "coral", 1.0), ("high", "mmd (corrected)", 0.55), ("low", "coral", 0.98)]
+    ] + [{"condition": "low", "method": "mmd (corrected)", "source_auc": 0.61, "part_source_auc": [], "seconds": 1.0}]
+    lines = detection_lines({"rows": rows, "learned": learned})
+    assert lines[0].startswith("At record30 ")
+    assert lines[1] == (
+        "high: goal met by coral, mmd (corrected), na4; best learned coral (AUC 0.99, 95 / 0 %), better than the "
+        "best classical na4 (AUC 0.98, 95 / 0 %); did not learn the simulated fault (source AUC <= 0.6), so their "
+        "calls are not the simulator's teaching: mmd (corrected)."
+    )
+    assert lines[2] == (
+        "low: goal met by no row; best learned coral (AUC 0.60, 20 / 0 %), behind the best classical fm4 "
+        "(AUC 0.90, 50 / 0 %)."
+    )
+    assert detection_lines({"rows": [row("high", "fm4", 1.0, 100.0, 0.0, unit="revolution")]}) == []
 
 
 def test_the_report_opens_with_the_verdict_numbers_its_figures_and_folds_the_json(runs):
