@@ -205,32 +205,34 @@ def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its
 
 
 def test_each_learned_row_keeps_what_it_learned_of_the_simulator_and_its_time(cli, tmp_path, cache):
-    """Every training keeps the ROC AUC of its scores of the source's held-out revolutions (training
-    data only) and its time; an ensemble the median of its members' AUCs and the sum of their
-    times. The matched filter, whose templates are the simulated faults, ranks the noise-free
-    source's held-out faults perfectly. table.md lists the learned rows, not the classical ones,
-    and the report's verdict judges every condition."""
+    """Every training keeps the ROC AUC of a network's scores of the source's held-out revolutions
+    (training data only) and its time; an ensemble the median of its members' AUCs and the sum of
+    their times. Trained long enough, source_only ranks the noise-free simulator's held-out chips
+    first; the matched filter, built on the history, has no source AUC. table.md lists the learned
+    rows, not the classical ones, and the report's verdict judges every condition."""
     path = scenario(tmp_path, methods=("source_only", "matched_filter"), detection="seeds = 3")
-    # both classes among the held-out tenth of the source: every pinion tooth chipped, more healthy
+    # both classes among the held-out tenth of the source (every pinion tooth chipped, more healthy
+    # revolutions), and training long enough to learn them
     text = path.read_text().replace("teeth = [1, 2, 3]", f"teeth = {list(range(1, 17))}")
-    path.write_text(text.replace("healthy = 9", "healthy = 40"))
+    text = text.replace("healthy = 9", "healthy = 40").replace("baseline_epochs = 2", "baseline_epochs = 40")
+    path.write_text(text.replace("patience = 2", "patience = 40"))
     out = run(cli, path, tmp_path / "runs")
     records = {r["unit"]: r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines())}
     ensemble = next(r for r in records.values() if r.get("members"))
     members = [records[m] for m in ensemble["members"]]
-    assert all(0.0 <= m["source_auc"] <= 1.0 and m["seconds"] > 0 for m in members)
+    assert all(m["source_auc"] >= 0.9 and m["seconds"] > 0 for m in members)
     assert ensemble["source_auc"] == pytest.approx(np.median([m["source_auc"] for m in members]))
     assert ensemble["part_source_auc"] == [m["source_auc"] for m in members]
     assert ensemble["seconds"] == pytest.approx(sum(m["seconds"] for m in members))
     matched = next(r for r in records.values() if r["method"] == "matched_filter")
-    assert matched["source_auc"] == 1.0
+    assert matched["source_auc"] is None and matched["seconds"] > 0
     assert not any("source_auc" in r for r in records.values() if r["method"] in ("fm4", "na4"))
     summary = json.loads((out / "summary.json").read_text())
     assert [r["method"] for r in summary["learned"]] == ["source_only", "matched_filter"]
     table = (out / "table.md").read_text()
     assert "| condition | method | source AUC | training (s) |" in table
     assert re.search(r"\| source_only \| [0-9.]+ \([0-9.]+–[0-9.]+\) \| [0-9]+ \|", table)
-    assert "| matched_filter | 1.00 |" in table
+    assert re.search(r"\| matched_filter \| – \| [0-9]+ \|", table)
     report = (out / "report.html").read_text()
     assert "Verdict" in report and "best learned" in report
 
