@@ -410,8 +410,8 @@ def _alone_versus_credited(summary: Mapping) -> list[str]:
 
 # --------------------------------------------------------------------------- detection
 
-# What a user asks of a record-level decision (the real-rig issue's goal): the fault found in at
-# least 90 % of the faulty units at no more than 5 % false alarms, with an AUC of 0.95 or more.
+# What a user asks of a record-level decision (docs/real_data.md): the fault found in at least
+# 90 % of the faulty units at no more than 5 % false alarms, with an AUC of 0.95 or more.
 GOAL_AUC, GOAL_DETECTION, GOAL_FALSE_ALARM = 0.95, 90.0, 5.0
 # A learned method whose scores of the simulator's own held-out revolutions rank the fault at
 # no better than this AUC has not learned the simulated fault (0.5 is chance).
