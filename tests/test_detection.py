@@ -224,6 +224,9 @@ def test_each_learned_row_keeps_what_it_learned_of_the_simulator_and_its_time(cl
     assert ensemble["source_auc"] == pytest.approx(np.median([m["source_auc"] for m in members]))
     assert ensemble["part_source_auc"] == [m["source_auc"] for m in members]
     assert ensemble["seconds"] == pytest.approx(sum(m["seconds"] for m in members))
+    # the held-out tenth of the 40 healthy and 16 chipped source revolutions, both classes in it
+    assert ensemble["source_units"] == members[0]["source_units"] and sum(ensemble["source_units"]) == 6
+    assert min(ensemble["source_units"]) >= 1
     matched = next(r for r in records.values() if r["method"] == "matched_filter")
     assert matched["source_auc"] is None and matched["seconds"] > 0
     assert not any("source_auc" in r for r in records.values() if r["method"] in ("fm4", "na4"))

@@ -713,6 +713,7 @@ def train_unit(task: tuple) -> dict:
         "test_scores": _to_lists(test),
         "history": history.as_dict() if history is not None else None,
         "source_auc": None if held_out is None else auc(held_out[yv == 0], held_out[yv != 0]),
+        "source_units": [int(np.sum(yv == 0)), int(np.sum(yv != 0))],  # held out: healthy, faulty
         "seconds": time.perf_counter() - started,
     }
 
@@ -802,11 +803,12 @@ def trained_together(parts: list[dict]) -> dict:
     """An ensemble's or a crossed training's source AUC (the median of its parts') and training
     time (their sum); nothing for records written before units kept them."""
     aucs = [p["source_auc"] for p in parts if p.get("source_auc") is not None]
-    if not all("seconds" in p for p in parts):
+    if not all("seconds" in p and "source_units" in p for p in parts):
         return {}
     return {
         "source_auc": float(np.median(aucs)) if aucs else None,
         "part_source_auc": [p.get("source_auc") for p in parts],
+        "source_units": parts[0]["source_units"],  # one held-out split for every part
         "seconds": float(sum(p["seconds"] for p in parts)),
     }
 
@@ -1296,10 +1298,11 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             "method": r["method"],
             "source_auc": r["source_auc"],
             "part_source_auc": r.get("part_source_auc", []),
+            "source_units": r["source_units"],
             "seconds": r["seconds"],
         }
         for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
-        if "seconds" in r
+        if "source_units" in r
     ]
     if (run.path / "conditions.json").exists():
         summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
