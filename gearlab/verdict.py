@@ -24,6 +24,7 @@ from statistics import NormalDist
 import numpy as np
 
 from .data.spec import DATASET_PRESETS
+from .kinds.detection import longest_tsa
 from .kinds.transfer import BOUND, table_md
 from .runs import RunDir
 
@@ -450,10 +451,9 @@ def detection_lines(summary: Mapping) -> list[str]:
     that did not learn the simulated fault (their source AUC within chance_auc of the simulator's
     held-out revolutions, training data alone; they are never counted as the best learned row)."""
     rows = summary.get("rows") or []
-    records = [u for u in dict.fromkeys(r["unit"] for r in rows) if u != "revolution"]
-    if not records:
+    unit = longest_tsa(r["unit"] for r in rows)
+    if unit is None:
         return []
-    unit = max(records, key=lambda u: int(u.removeprefix("record")))
     learned = {(r["condition"], r["method"]): r for r in summary.get("learned") or []}
     lines = [
         f"At {unit} (detected / false alarms % at the history's threshold; goal: AUC >= {GOAL_AUC}, "

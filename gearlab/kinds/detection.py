@@ -559,6 +559,13 @@ def _window(unit: str) -> tuple[int, int]:
     return b, max(1, b // HISTORY_STRIDES)
 
 
+def longest_tsa(units) -> str | None:
+    """The record-level unit kind of the most revolutions among *units* ("record30" of
+    "revolution", "record10", "record30"); None when there is none."""
+    records = [u for u in dict.fromkeys(units) if u != "revolution"]
+    return max(records, key=lambda u: _window(u)[0]) if records else None
+
+
 def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
     """{unit name: rows} of one record."""
     out = {"revolution": revs}
@@ -627,11 +634,16 @@ def _to_lists(scores: dict) -> dict:
     return {k: (_to_lists(v) if isinstance(v, dict) else [float(s) for s in v]) for k, v in scores.items()}
 
 
+def is_detector(method: Method) -> bool:
+    """A method with no network: a model built from the training arrays (matched_filter, likelihood_ratio)."""
+    return get_registry().get("adapter", method.adapter).train_on == "detector"
+
+
 def seeds_of(method: Method, seeds: int) -> tuple:
     """The seeds a method is trained with: (None,) for one training (repetition 0, the record
     named after the method) and for a detector (no network, nothing random); else 0 … seeds-1,
     each a member of the method's ensemble."""
-    if seeds == 1 or get_registry().get("adapter", method.adapter).train_on == "detector":
+    if seeds == 1 or is_detector(method):
         return (None,)
     return tuple(range(seeds))
 
@@ -695,8 +707,7 @@ def train_unit(task: tuple) -> dict:
     # held-out revolutions (0.5: it does not tell the simulated fault from healthy). A detector is
     # built in the target's frame (the history's reference, the path to it), where a source
     # revolution means nothing.
-    detector = get_registry().get("adapter", method.adapter).train_on == "detector"
-    held_out = None if detector else fault_score(model, Xv, device)
+    held_out = None if is_detector(method) else fault_score(model, Xv, device)
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
     fixed = rule.decide(hist)
@@ -1370,10 +1381,9 @@ def table_md(rows: list[dict]) -> str:
 def labels_md(rows: list[dict]) -> str:
     """Called units (%) per test label at the history's threshold, for the longest TSA: is other
     damage (a negative label) taken for the fault?"""
-    units = [u for u in dict.fromkeys(r["unit"] for r in rows) if u != "revolution"]
-    if not units:
+    unit = longest_tsa(r["unit"] for r in rows)
+    if unit is None:
         return ""
-    unit = max(units, key=lambda u: int(u.removeprefix("record")))
     picked = [r for r in rows if r["unit"] == unit]
     labels = list(dict.fromkeys(k for r in picked for k in r["called_by_label"]))
     out = [
@@ -1435,10 +1445,9 @@ def shafts_md(records: list[dict], labels: dict) -> str:
     the label's units put on each shaft."""
     if not records:
         return ""
-    units = [u for u in records[0]["shafts"]["thresholds"] if u != "revolution"]
-    if not units:
+    unit = longest_tsa(records[0]["shafts"]["thresholds"])
+    if unit is None:
         return ""
-    unit = max(units, key=lambda u: int(u.removeprefix("record")))
     names = list(dict.fromkeys(n for r in records for n in r["shafts"]["names"])) + ["nothing"]
     out = [
         f"\nWhich shaft (pinion_sync, {unit}: % of each label's units put on each shaft)\n",
