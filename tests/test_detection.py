@@ -233,9 +233,10 @@ def test_each_learned_row_keeps_what_it_learned_of_the_simulator_and_its_time(cl
     summary = json.loads((out / "summary.json").read_text())
     assert [r["method"] for r in summary["learned"]] == ["source_only", "matched_filter"]
     table = (out / "table.md").read_text()
-    assert "| condition | method | source AUC | training (s) |" in table
-    assert re.search(r"\| source_only \| [0-9.]+ \([0-9.]+–[0-9.]+\) \| [0-9]+ \|", table)
-    assert re.search(r"\| matched_filter \| – \| [0-9]+ \|", table)
+    assert "| condition | method | source AUC | bound | training (s) |" in table
+    # a noise-free source has no bound (every simulated fault differs from healthy)
+    assert re.search(r"\| source_only \| [0-9.]+ \([0-9.]+–[0-9.]+\) \| – \| [0-9]+ \|", table)
+    assert re.search(r"\| matched_filter \| – \| – \| [0-9]+ \|", table)
     report = (out / "report.html").read_text()
     assert "Verdict" in report and "best learned" in report
 
@@ -359,6 +360,89 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     path.write_text(path.read_text().replace('history_units = "tsa"', 'history_units = "tsas"'))
     code, _, err = cli("validate", path)
     assert code == 2 and "history_units" in err and "revolution, tsa" in err
+
+
+def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_sample(cli, tmp_path, cache, monkeypatch):
+    """[corrected] draws = 3: the corrected source holds three noise draws of each sample; its
+    networks are handed them as (n, 3, L), split by sample (no draw of a held-out sample is trained
+    on), and a batch row is always a draw of its own sample; its detector is built from every draw;
+    the held-out counts are samples, not draws. The plain source keeps one draw."""
+    import torch
+
+    import gearlab.learn.protocol as P
+    import gearlab.learn.training as T
+
+    handed, rows = [], []
+    train_method, pick = P.train_method, T._rows
+
+    def spy(protocol, method, source, source_val, target, *args, **kwargs):
+        handed.append((method.adapter, np.array(source[0], copy=True), np.array(source_val[0], copy=True)))
+        return train_method(protocol, method, source, source_val, target, *args, **kwargs)
+
+    def rows_spy(X, index, draws):
+        out = pick(X, index, draws)
+        if X.ndim == 3:  # every row one of its own sample's draws
+            own = X[index]
+            assert torch.all((own == out[:, None]).all(dim=2).any(dim=1))
+            rows.append(int(torch.all(own[:, 0] == out)))
+        return out
+
+    monkeypatch.setattr(P, "train_method", spy)
+    monkeypatch.setattr(T, "_rows", rows_spy)
+    corrected = (
+        '[corrected]\nlabel = "noisy"\ntsa = 3\ndraws = 3\n'
+        'effects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
+    )
+    path = scenario(tmp_path, methods=("source_only", "matched_filter"), extra=corrected)
+    run_dir = run(cli, path, tmp_path / "runs")
+    nets = [(X, V) for adapter, X, V in handed if adapter == "source_only"]
+    assert sorted(X.ndim for X, _ in nets) == [2, 3]
+    ((X, V),) = [(X, V) for X, V in nets if X.ndim == 3]
+    assert X.shape[1] == 3 and V.ndim == 2  # one draw of the held-out samples decides when to stop
+    assert not np.array_equal(X[:, 0], X[:, 1])  # the draws differ
+    trained = X.reshape(-1, X.shape[-1])
+    assert all(np.abs(trained - v).max(axis=1).min() > 1e-3 for v in V)  # held-out samples: no draw trained on
+    assert rows and 0 in rows  # batches took other draws than the first
+    records = [json.loads(line) for line in (run_dir / "results.jsonl").read_text().splitlines()]
+    (noisy,) = [r for r in records if r["method"] == "source_only (noisy)" and r.get("seed") is None]
+    (plain,) = [r for r in records if r["method"] == "source_only" and r.get("seed") is None]
+    assert noisy["source_units"] == [3 * n for n in plain["source_units"]]  # every draw of the held-out samples
+    # the bound of each source: the noisy one's from its noise-free twin, none for the noise-free one
+    (cond,) = json.loads((run_dir / "conditions.json").read_text()).values()
+    assert cond["source_bound"]["source"] is None and "noisy" in cond["source_bound"]  # numbers: the next test
+    learned = {r["method"]: r for r in json.loads((run_dir / "summary.json").read_text())["learned"]}
+    assert learned["source_only (noisy)"]["source_bound"] == cond["source_bound"]["noisy"]
+    assert "| bound |" in (run_dir / "table.md").read_text()
+    path.write_text(path.read_text().replace("draws = 3", "draws = 0"))
+    code, _, err = cli("validate", path)
+    assert code == 2 and "[corrected] key 'draws'" in err
+
+
+def test_the_source_bound_is_the_likelihood_ratio_with_the_noise_free_shapes(cache):
+    """source_bound: the ROC AUC of the detector that knows the source's noise-free fault shapes
+    (its twin without the noise effect) on every draw of the held-out samples: near 1 where the
+    noise is weak, lower where it buries the chip, and none for a source without a noise effect."""
+    from gearlab.data.cache import load_or_build
+    from gearlab.data.spec import DATASET_PRESETS
+    from gearlab.effects import effect_spec
+    from gearlab.kinds.detection import source_bound
+    from gearlab.learn.protocol import Method, Protocol
+
+    protocol = Protocol(methods=(Method("source_only", False),))
+    base = DATASET_PRESETS["B-6-ch5"].with_(faults=(("chip", (20,)),), teeth=tuple(range(1, 17)), healthy=16)
+    bound = {}
+    for snr in (40.0, -15.0):
+        spec = base.with_(
+            effects=(effect_spec("sensor_noise", kind="gaussian", snr_db=snr),),
+            tsa=True,
+            revolutions=3,
+            duplicates=4,
+            healthy=64,
+            name=f"noisy{snr:g}",
+        )
+        bound[snr] = source_bound(spec, load_or_build(spec)[0], protocol, 4, None, lambda e: None)
+    assert bound[40.0] > 0.95 and 0.5 < bound[-15.0] < bound[40.0] - 0.1
+    assert source_bound(base, load_or_build(base)[0], protocol, 1, None, lambda e: None) is None
 
 
 def test_pinion_sync_runs_end_to_end_and_writes_which_shaft(cli, tmp_path, cache):

@@ -8,9 +8,10 @@ the method's model and threshold are fixed, and their labels only when the figur
 
     [source]              a dataset preset with overrides (as in [[datasets]]), healthy + faults
     [corrected]           effects (as in [[datasets]]) that make the corrected simulator (e.g. what
-                          `gearlab gap` fitted), tsa (revolutions averaged per sample), history_units
-                          (what of the history its methods train on), label: every method is trained on
-                          both sources, the corrected one's rows "<method> (<label>)"
+                          `gearlab gap` fitted), tsa (revolutions averaged per sample), draws (noise
+                          draws of each sample, one at random per batch row), history_units (what of
+                          the history its methods train on), label: every method is trained on both
+                          sources, the corrected one's rows "<method> (<label>)"
     [target]              vibration, tacho, pulses_per_rev, sensitivity, fs, positive, files = [
                             { path, role = "history" | "test", label, condition (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
@@ -45,7 +46,8 @@ thresholds under both rules, the history model; an ensemble's members one record
 scores.csv (file, unit, index, method, score, decision), summary.json, table.md/table.csv
 (AUC, detection and false-alarm rates per condition, unit and method; below them what each learned
 method learned of the simulator: the ROC AUC of its scores of the source's held-out revolutions,
-and its training time) and report.html; with
+beside the bound of that source (source_bound: the likelihood ratio that knows its noise-free
+fault shapes), and its training time) and report.html; with
 pinion_sync, shafts.csv (file, unit, index, the shaft each test unit's localised damage is put on,
 or "nothing", and each shaft's strength) and its counts per label in table.md.
 """
@@ -67,9 +69,10 @@ from ..data.textzip import align_to, parse_sensitivity, read_record
 from ..errors import GearlabInputError, shown
 from ..events import Event, UnitProgress
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
+from ..learn.bounds import bayes_scores
 from ..learn.calibration import Calibration
 from ..learn.history import gumbel_quantile
-from ..learn.protocol import Method, Protocol, StateStore, fault_score, shared_state
+from ..learn.protocol import Method, Protocol, StateStore, each_draw, fault_score, shared_state
 from ..learn.schedule import two_phases
 from ..learn.training import pick_device
 from ..params import did_you_mean
@@ -119,6 +122,7 @@ THRESHOLDS = ("records", "pooled")
 HISTORY_FITS = ("all", "crossed")
 CORRECTED_HISTORY = ("revolution", "tsa")
 MAX_SEEDS = 20
+MAX_DRAWS = 64
 
 TABLES = {
     "source": TRANSFER_TABLES["source"],
@@ -132,6 +136,14 @@ TABLES = {
                 in_range(0, 1000),
                 "a corrected sample is the TSA of this many simulated revolutions, each with its own "
                 "noise (the revolutions of a record-level unit); 0: one revolution",
+            ),
+            "draws": Key(
+                int,
+                1,
+                in_range(1, MAX_DRAWS),
+                "noise draws of each corrected sample; a network trains on one of them at random per "
+                "batch row, so it cannot learn the noise of one draw by heart (docs/real_data.md, "
+                "twelfth round)",
             ),
             "history_units": Key(
                 str,
@@ -455,6 +467,7 @@ def build(scenario: Scenario) -> dict:
         "corrected_label": t["corrected"]["label"],
         # the corrected source's history training rows: TSAs of its `tsa` revolutions, or revolutions
         "corrected_history": t["corrected"]["tsa"] if t["corrected"]["history_units"] == "tsa" else 0,
+        "corrected_draws": t["corrected"]["draws"],
         "target": target,
         "protocol": protocol,
         "source_speed": t["detection"]["source_speed"],
@@ -489,6 +502,10 @@ def corrected_spec(t: dict, where: str, base: Path, source: DatasetSpec) -> Data
     if t["corrected"]["tsa"]:  # noise drawn on every revolution, then averaged as a record unit is
         entry.update(tsa=True, revolutions=t["corrected"]["tsa"])
     spec = simulated_spec(entry, where, base)
+    # draws: every sample D times, each with its own seed (the builder's duplicates; D healthy
+    # samples for each one), in runs of D rows that source_split folds into (n, D, L)
+    draws = t["corrected"]["draws"]
+    spec = spec.with_(duplicates=spec.duplicates * draws, healthy=spec.healthy * draws)
     # a name of its own for the reports and conditions.json (the cache key hashes the spec anyway)
     name = f"{source.name}+{label}"
     return spec.with_(name=name, domain=name)
@@ -695,7 +712,7 @@ def train_unit(task: tuple) -> dict:
             protocol,
             method,
             (Xs, ys),
-            (Xv, yv),
+            (Xv[:, 0] if Xv.ndim == 3 else Xv, yv),  # one draw decides when to stop: an epoch's cost
             (train, np.zeros(len(train), dtype=np.int64)),
             seed or 0,  # the repetition: its own torch seed and draws
             0,
@@ -704,10 +721,11 @@ def train_unit(task: tuple) -> dict:
             report,
         )
     # what a network learned of the simulator, from training data only: its scores of the source's
-    # held-out revolutions (0.5: it does not tell the simulated fault from healthy). A detector is
-    # built in the target's frame (the history's reference, the path to it), where a source
-    # revolution means nothing.
-    held_out = None if is_detector(method) else fault_score(model, Xv, device)
+    # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
+    # healthy). A detector is built in the target's frame (the history's reference, the path to
+    # it), where a source revolution means nothing.
+    held_out = None if is_detector(method) else fault_score(model, Xv.reshape(-1, Xv.shape[-1]), device)
+    y_held = np.repeat(yv, len(held_out) // len(yv)) if held_out is not None else yv
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
     fixed = rule.decide(hist)
@@ -717,14 +735,17 @@ def train_unit(task: tuple) -> dict:
         "condition": condition,
         "method": method_name(method, variant),
         "adapter": method.adapter,
+        "source": variant or "source",
         "seed": seed,
         **({} if fold is None else {"fold": fold}),
         "history_scores": _to_lists(hist),
         **fixed,
         "test_scores": _to_lists(test),
         "history": history.as_dict() if history is not None else None,
-        "source_auc": None if held_out is None else auc(held_out[yv == 0], held_out[yv != 0]),
-        "source_units": [int(np.sum(yv == 0)), int(np.sum(yv != 0))],  # held out: healthy, faulty
+        "source_auc": None if held_out is None else auc(held_out[y_held == 0], held_out[y_held != 0]),
+        # held-out rows scored, healthy and faulty (every draw: for a network that has learned
+        # nothing of the fault, its scores of the draws are as independent as those of samples)
+        "source_units": [int(np.sum(y_held == 0)), int(np.sum(y_held != 0))],
         "seconds": time.perf_counter() - started,
     }
 
@@ -820,6 +841,7 @@ def trained_together(parts: list[dict]) -> dict:
         "source_auc": float(np.median(aucs)) if aucs else None,
         "part_source_auc": [p.get("source_auc") for p in parts],
         "source_units": parts[0]["source_units"],  # one held-out split for every part
+        "source": parts[0].get("source", "source"),
         "seconds": float(sum(p["seconds"] for p in parts)),
     }
 
@@ -1051,13 +1073,45 @@ def trained_on(cond: dict, fold: int | None) -> dict:
     return {**cond, "history": [h for i, h in enumerate(cond["history"]) if i != fold]}
 
 
-def source_split(source, protocol: Protocol):
+def source_split(source, protocol: Protocol, draws: int = 1):
+    """The source's training and held-out samples (X, y, X, y); with *draws* > 1 the dataset's
+    runs of that many noise draws of one sample (corrected_spec) as X (n, draws, L), split by
+    sample, so that no draw of a held-out sample is trained on."""
+    X, y = source.X, source.fault.astype(np.int64)
+    if draws > 1:
+        X, y = X.reshape(-1, draws, X.shape[-1]), y[::draws]
     rng = np.random.default_rng([protocol.seed, 0])
-    order = rng.permutation(len(source.X))
+    order = rng.permutation(len(X))
     n_val = max(1, round(protocol.val_fraction * len(order)))
     tr, va = np.sort(order[n_val:]), np.sort(order[:n_val])
-    y = source.fault.astype(np.int64)
-    return source.X[tr], y[tr], source.X[va], y[va]
+    return X[tr], y[tr], X[va], y[va]
+
+
+def source_bound(spec: DatasetSpec, source, protocol: Protocol, draws: int, executor, on_event) -> float | None:
+    """The best ranking of the source's held-out samples (every draw) that any learned method could
+    reach: the ROC AUC of the likelihood-ratio detector that knows the source's noise-free fault
+    shapes and its noise law (gearlab.learn.bounds), the shapes from the source's noise-free twin
+    (its effects less the one that declares itself noise). From training data only. None for a
+    source with no noise effect (noise free: every simulated fault differs from healthy) or more
+    than one (no single law)."""
+    registry = get_registry()
+    noise = [e for e in spec.effects if getattr(registry.get("effect", e[0]), "noise", False)]
+    if len(noise) != 1:
+        return None
+    twin = spec.with_(
+        effects=tuple(e for e in spec.effects if e not in noise),
+        duplicates=spec.duplicates // draws,
+        healthy=spec.healthy // draws,
+        name=f"{spec.name} (noise free)",
+        domain=f"{spec.name} (noise free)",
+    )
+    clean, _ = load_or_build(twin, executor, on_event)
+    Xs, ys, Xv, yv = source_split(source, protocol, draws)
+    healthy = Xs[ys == 0].reshape(-1, Xs.shape[-1])  # fixes the scale between the twin and the source
+    kind = dict(noise[0][1]).get("kind", "gaussian")
+    scores = bayes_scores(Xv.reshape(-1, Xv.shape[-1]), healthy, clean, kind)
+    y = np.repeat(yv, len(scores) // len(yv))
+    return auc(scores[y == 0], scores[y != 0])
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
@@ -1096,11 +1150,17 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         for i, s in enumerate(built):
             sources[s], _ = load_or_build(s, executor, on_event)
             on_event(Event("advance", stage="datasets", done=i + 1, total=len(built)))
-            if len(sources[s].X) - max(1, round(protocol.val_fraction * len(sources[s].X))) < protocol.batch:
+            n = len(sources[s].X) // (spec["corrected_draws"] if s == spec.get("corrected") else 1)
+            if n - max(1, round(protocol.val_fraction * n)) < protocol.batch:
                 raise GearlabInputError(
                     f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
                     f"the source training set of '{s.name}'"
                 )
+        on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
+        bounds = {
+            (c, v): source_bound(s, sources[s], protocol, spec["corrected_draws"] if v else 1, executor, on_event)
+            for (c, v), s in specs.items()
+        }
         records = {r["unit"]: r for r in run.records()}
         rules = {
             c: Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]) for c, cond in conditions.items()
@@ -1111,7 +1171,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     run.append(classical_record(indicator, name, cond, spec["classical"], rules[name]))
         shown_to = learned_input(spec)
         splits = {
-            key: tuple(shown_to(a) if a.ndim == 2 else a for a in source_split(sources[specs[key]], protocol))
+            key: tuple(
+                a if a.ndim == 1 else each_draw(shown_to, a)
+                for a in source_split(sources[specs[key]], protocol, spec["corrected_draws"] if key[1] else 1)
+            )
             for key in specs
         }
         members = {
@@ -1186,6 +1249,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "start_marks": v["shifts"],
                     "source": v["source"],
                     "sources": v["sources"],
+                    # what the best detector of each source's held-out samples reaches (source_bound)
+                    "source_bound": {w or "source": bounds[(c, w)] for w in variants},
                 }
                 for c, v in conditions.items()
             },
@@ -1303,11 +1368,15 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
     }
+    where = run.path / "conditions.json"
+    conditions = json.loads(where.read_text()) if where.exists() else None
+    bound = {c: v.get("source_bound", {}) for c, v in (conditions or {}).items()}
     summary["learned"] = [
         {
             "condition": r["condition"],
             "method": r["method"],
             "source_auc": r["source_auc"],
+            "source_bound": bound.get(r["condition"], {}).get(r.get("source", "source")),
             "part_source_auc": r.get("part_source_auc", []),
             "source_units": r["source_units"],
             "seconds": r["seconds"],
@@ -1315,8 +1384,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
         if "source_units" in r
     ]
-    if (run.path / "conditions.json").exists():
-        summary["conditions"] = json.loads((run.path / "conditions.json").read_text())
+    if conditions is not None:
+        summary["conditions"] = conditions
     run.write_json("summary.json", summary)
     run.write_text(
         "table.md", table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"] + learned_md(summary["learned"])
@@ -1409,14 +1478,16 @@ def learned_md(learned: list[dict]) -> str:
         return ""
     out = [
         "\nWhat each method learned of the simulator (ROC AUC of a network's scores of the source's held-out "
-        "revolutions, 0.5 = chance; a detector, built on the history, has none; training time, all seeds)\n",
-        "| condition | method | source AUC | training (s) |",
-        "|---|---|---|---|",
+        "revolutions, 0.5 = chance; a detector, built on the history, has none; the bound: the likelihood "
+        "ratio that knows the source's noise-free fault shapes and noise law, – for a noise-free source; "
+        "training time, all seeds)\n",
+        "| condition | method | source AUC | bound | training (s) |",
+        "|---|---|---|---|---|",
     ]
     for r in learned:
         out.append(
             f"| {r['condition']} | {r['method']} | {_cell(r['source_auc'])}{_spread(r['part_source_auc'])} | "
-            f"{r['seconds']:.0f} |"
+            f"{_cell(r.get('source_bound'))} | {r['seconds']:.0f} |"
         )
     return "\n".join(out) + "\n"
 

@@ -343,12 +343,16 @@ def train_method(
     core: np.ndarray | None = None,
 ):
     """The model a method makes from the training arrays (no target test data here). *core*:
-    the target training rows the repetition's priming is calibrated on (default: all of them)."""
+    the target training rows the repetition's priming is calibrated on (default: all of them).
+    The source's X may be (n, D, L), D noise draws of each sample: the networks train on a draw
+    at random per row and batch (training._rows); the calibration, a network's input length and
+    the latent maps take the first draw; a detector is built from all draws."""
     registry = get_registry()
     adapter = registry.get("adapter", method.adapter)
     params = dict(method.params)
     rng = np.random.default_rng([protocol.seed, rep, k, 7])
-    Xs, ys = source
+    drawn, ys = source
+    Xs = drawn[:, 0] if drawn.ndim == 3 else drawn  # one draw of each source sample
     Xt, yt = target
     seed = 1000 * protocol.seed + rep
     # The calibration of a calibrated method (gearlab.learn.calibration; the thesis's recipe
@@ -365,7 +369,7 @@ def train_method(
             matched_start(net, start.source(Xs[np.asarray(ys) != 0]), seed)
         fit_supervised(
             net,
-            start.source(Xs),
+            each_draw(start.source, drawn),
             ys,
             rng=np.random.default_rng([protocol.seed, rep, 1]),
             device=device,
@@ -379,14 +383,15 @@ def train_method(
         return _cpu_state(net)
 
     if adapter.train_on == "detector":  # no network: a model built from the training arrays
-        return adapter.detector(source, (Xt, yt if method.supervised else None), params).to(device), None, {}
+        every = (drawn.reshape(-1, drawn.shape[-1]), np.repeat(ys, len(drawn[0]))) if drawn.ndim == 3 else source
+        return adapter.detector(every, (Xt, yt if method.supervised else None), params).to(device), None, {}
     if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
 
         def trained() -> dict:
             net = _net(protocol, seed, device, Xs.shape[1])
             fit_supervised(
                 net,
-                Xs,
+                drawn,
                 ys,
                 rng=np.random.default_rng([protocol.seed, rep, 2]),
                 device=device,
@@ -442,7 +447,7 @@ def train_method(
         net,
         adapter,
         modules,
-        (Xs_in, ys[take]),
+        (each_draw(inputs.source, drawn[take]), ys[take]),
         source_val,
         (Xt_in, yt if method.supervised else None),
         rng=rng,
@@ -473,6 +478,13 @@ def train_method(
             "source_val_accuracy": 100.0 * accuracy(net, *source_val, device),
         },
     )
+
+
+def each_draw(f: Callable, X: np.ndarray) -> np.ndarray:
+    """f of each draw of X (n, D, L), or of X (n, L)."""
+    if X.ndim == 2:
+        return f(X)
+    return np.stack([f(X[:, d]) for d in range(X.shape[1])], axis=1)
 
 
 def _calibrated(net, inputs, Xt, yt, source_val, device):

@@ -88,6 +88,23 @@ def train_mode(net: nn.Module, freeze_norm: bool = False) -> None:
                 layer.eval()
 
 
+def _rows(X: torch.Tensor, index: torch.Tensor, draws: np.random.Generator | None) -> torch.Tensor:
+    """Training rows *index* of X: (n, L), or (n, D, L) holding D noise draws of each sample, of
+    which each row takes one at random. A noisy source drawn once is learned by heart, noise and
+    all (a few hundred samples against 4096 values each); fresh draws leave only the signal to
+    learn (docs/real_data.md, twelfth round)."""
+    if X.ndim == 2:
+        return X[index]
+    pick = torch.as_tensor(draws.integers(X.shape[1], size=len(index)), device=X.device)
+    return X[index, pick]
+
+
+def _draws(X: np.ndarray, rng: np.random.Generator) -> np.random.Generator | None:
+    """The generator of the rows' draws, spawned from *rng* only for a source with draws (so the
+    stream of every other training stays as it was)."""
+    return np.random.default_rng(int(rng.integers(2**62))) if X.ndim == 3 else None
+
+
 def _batches(n: int, batch: int, rng: np.random.Generator) -> Iterable[np.ndarray]:
     order = rng.permutation(n)
     for i in range(0, n, batch):
@@ -114,8 +131,9 @@ def fit_supervised(
 ) -> History:
     """Cross-entropy training; with *val*, keep the epoch of best validation accuracy and stop
     after *patience* epochs without improvement (Table 5.3: 'validation accuracy maximum').
-    *freeze_norm*: see train_mode. *augment(batch, generator)*: applied to every training
-    batch (fresh sensor noise, gearlab.learn.calibration), never to the validation set."""
+    *X*: (n, L), or (n, D, L) with D noise draws of each sample (_rows). *freeze_norm*: see
+    train_mode. *augment(batch, generator)*: applied to every training batch (fresh sensor
+    noise, gearlab.learn.calibration), never to the validation set."""
     if batch > len(X):
         raise GearlabInputError(f"batch size {batch} is larger than the training set ({len(X)} samples)")
     net.to(device)
@@ -124,13 +142,15 @@ def fit_supervised(
     loss_fn = nn.CrossEntropyLoss()
     Xt, yt = _tensor(X, device), _labels(y, device)
     generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
+    draws = _draws(X, rng)
     history, best_state, best = History(), None, -math.inf
     for epoch in range(epochs):
         train_mode(net, freeze_norm)
         total = 0.0
         for idx in _batches(len(X), batch, rng):
             index = torch.as_tensor(idx, device=device)
-            xb = augment(Xt[index], generator) if augment else Xt[index]
+            xb = _rows(Xt, index, draws)
+            xb = augment(xb, generator) if augment else xb
             opt.zero_grad()
             loss = loss_fn(net(xb), yt[index])
             _step(opt, params, loss)
@@ -179,7 +199,8 @@ def fit_adaptation(
     has stopped moving. The kept model is the post-ramp epoch with the best source validation
     accuracy, ties broken by the lower discrepancy.
 
-    *augment(batch, generator)* is applied to every source batch. *alignment* ``marginal``
+    The source's rows may hold noise draws (fit_supervised). *augment(batch, generator)* is
+    applied to every source batch. *alignment* ``marginal``
     (thesis) feeds the adapter all source and all target features of a batch; ``healthy``
     only the source's healthy ones against the target's (unsupervised: the whole history;
     supervised: its healthy ones, and the two domains' faults against each other as well),
@@ -199,6 +220,7 @@ def fit_adaptation(
     yt_t = _labels(yt, device) if yt is not None else None
     history = History()
     generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
+    draws = _draws(Xs, rng)
     best_key, best_state = None, None
     for epoch in range(max_epochs):
         lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs, params)  # the ramp ends at min_epochs
@@ -209,7 +231,8 @@ def fit_adaptation(
             m = min(len(s_idx), len(t_idx))
             s = torch.as_tensor(s_idx[:m], device=device)
             t = torch.as_tensor(t_idx[:m], device=device)
-            xs = augment(Xs_t[s], generator) if augment else Xs_t[s]
+            xs = _rows(Xs_t, s, draws)
+            xs = augment(xs, generator) if augment else xs
             opt.zero_grad()
             z = net.embed(torch.cat([xs, Xt_t[t]]))
             z_s, z_t = z[:m], z[m:]
