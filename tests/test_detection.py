@@ -365,10 +365,12 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
 def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_sample(cli, tmp_path, cache, monkeypatch):
     """[corrected] draws = 3: the corrected source holds three noise draws of each sample; its
     networks are handed them as (n, 3, L), split by sample (no draw of a held-out sample is trained
-    on), and a batch row is always a draw of its own sample; its detector is built from every draw;
+    on), and a batch row is always a draw of its own sample; its detector's templates are each
+    sample's mean over its draws;
     the held-out counts are samples, not draws. The plain source keeps one draw."""
     import torch
 
+    import gearlab.api as api
     import gearlab.learn.protocol as P
     import gearlab.learn.training as T
 
@@ -387,8 +389,16 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
             rows.append(int(torch.all(own[:, 0] == out)))
         return out
 
+    templates = []
+    template_detector = api.template_detector
+
+    def detector_spy(Xs, ys, *args, **kwargs):
+        templates.append(np.array(Xs, copy=True))
+        return template_detector(Xs, ys, *args, **kwargs)
+
     monkeypatch.setattr(P, "train_method", spy)
     monkeypatch.setattr(T, "_rows", rows_spy)
+    monkeypatch.setattr(api, "template_detector", detector_spy)
     corrected = (
         '[corrected]\nlabel = "noisy"\ntsa = 3\ndraws = 3\n'
         'effects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
@@ -403,6 +413,8 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
     trained = X.reshape(-1, X.shape[-1])
     assert all(np.abs(trained - v).max(axis=1).min() > 1e-3 for v in V)  # held-out samples: no draw trained on
     assert rows and 0 in rows  # batches took other draws than the first
+    ((drawn, _),) = [(X, V) for adapter, X, V in handed if adapter == "matched_filter" and X.ndim == 3]
+    assert any(np.allclose(t, drawn.mean(axis=1), atol=1e-6) for t in templates)  # the mean of the draws
     records = [json.loads(line) for line in (run_dir / "results.jsonl").read_text().splitlines()]
     (noisy,) = [r for r in records if r["method"] == "source_only (noisy)" and r.get("seed") is None]
     (plain,) = [r for r in records if r["method"] == "source_only" and r.get("seed") is None]

@@ -346,7 +346,7 @@ def train_method(
     the target training rows the repetition's priming is calibrated on (default: all of them).
     The source's X may be (n, D, L), D noise draws of each sample: the networks train on a draw
     at random per row and batch (training._rows); the calibration, a network's input length and
-    the latent maps take the first draw; a detector is built from all draws."""
+    the latent maps take the first draw; a detector is built from each sample's mean over its draws."""
     registry = get_registry()
     adapter = registry.get("adapter", method.adapter)
     params = dict(method.params)
@@ -383,8 +383,10 @@ def train_method(
         return _cpu_state(net)
 
     if adapter.train_on == "detector":  # no network: a model built from the training arrays
-        every = (drawn.reshape(-1, drawn.shape[-1]), np.repeat(ys, len(drawn[0]))) if drawn.ndim == 3 else source
-        return adapter.detector(every, (Xt, yt if method.supervised else None), params).to(device), None, {}
+        # its templates: each sample's mean over its draws, the least noisy estimate of its shape
+        # (single draws as templates would be noisy, and 16 times as many of them)
+        shapes = (drawn.mean(axis=1), ys) if drawn.ndim == 3 else source
+        return adapter.detector(shapes, (Xt, yt if method.supervised else None), params).to(device), None, {}
     if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
 
         def trained() -> dict:
