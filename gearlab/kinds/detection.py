@@ -1145,22 +1145,20 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             cond["source"] = specs[(c, "")].name
             cond["sources"] = {v or "source": specs[(c, v)].name for v in variants}
         built = list(dict.fromkeys(specs.values()))
+        draws = {s: spec["corrected_draws"] if v else 1 for (_, v), s in specs.items()}  # per sample
         on_event(Event("stage", stage="datasets", total=len(built), message="source datasets"))
         sources = {}
         for i, s in enumerate(built):
             sources[s], _ = load_or_build(s, executor, on_event)
             on_event(Event("advance", stage="datasets", done=i + 1, total=len(built)))
-            n = len(sources[s].X) // (spec["corrected_draws"] if s == spec.get("corrected") else 1)
+            n = len(sources[s].X) // draws[s]
             if n - max(1, round(protocol.val_fraction * n)) < protocol.batch:
                 raise GearlabInputError(
                     f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
                     f"the source training set of '{s.name}'"
                 )
         on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
-        bounds = {
-            (c, v): source_bound(s, sources[s], protocol, spec["corrected_draws"] if v else 1, executor, on_event)
-            for (c, v), s in specs.items()
-        }
+        bounds = {key: source_bound(s, sources[s], protocol, draws[s], executor, on_event) for key, s in specs.items()}
         records = {r["unit"]: r for r in run.records()}
         rules = {
             c: Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]) for c, cond in conditions.items()
@@ -1173,7 +1171,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         splits = {
             key: tuple(
                 a if a.ndim == 1 else each_draw(shown_to, a)
-                for a in source_split(sources[specs[key]], protocol, spec["corrected_draws"] if key[1] else 1)
+                for a in source_split(sources[specs[key]], protocol, draws[specs[key]])
             )
             for key in specs
         }
