@@ -307,6 +307,46 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     assert not list((tmp_path / "r3").rglob("results.jsonl"))
 
 
+def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_path, cache, monkeypatch):
+    """[detection] points = 1024: every method is handed source, held-out and history rows of 1024
+    samples, each the band-limited form of what it would see at 4096 (orders below 512), and the
+    test units it scores too; the classical rows are not touched. Out of range: refused."""
+    import gearlab.learn.protocol as P
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection import learned_input, read_target
+
+    handed, scored = [], []
+    train_method, fault_score = P.train_method, P.fault_score
+
+    def spy(protocol, method, source, source_val, target, *args, **kwargs):
+        handed.append((np.array(source[0]), np.array(source_val[0]), np.array(target[0])))
+        return train_method(protocol, method, source, source_val, target, *args, **kwargs)
+
+    def score_spy(model, X, device, *args, **kwargs):
+        scored.append(np.shape(X)[-1])
+        return fault_score(model, X, device, *args, **kwargs)
+
+    monkeypatch.setattr(P, "train_method", spy)
+    monkeypatch.setattr("gearlab.kinds.detection.fault_score", score_spy)
+    path = scenario(tmp_path, methods=("source_only", "matched_filter"), detection="points = 1024")
+    out = run(cli, path, tmp_path / "runs")
+    assert handed and all(x.shape[-1] == 1024 for rows in handed for x in rows)
+    assert scored and set(scored) == {1024}
+    spec = load_scenario(path).spec
+    ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    full = learned_input({**spec, "points": 4096})
+    history = np.concatenate([full(r) for _, r in cond["history"]])
+    spectrum = np.fft.rfft(history, axis=-1)
+    spectrum[..., 512:] = 0.0
+    expected = np.fft.irfft(spectrum, n=4096, axis=-1)[..., ::4]  # the band-limited rows at every 4th angle
+    rows = handed[0][2]
+    assert all(np.abs(expected - row).max(axis=1).min() < 1e-5 for row in rows)
+    assert {r["method"] for r in scores(out)} >= {"fm4", "source_only", "matched_filter"}
+    path.write_text(path.read_text().replace("points = 1024", "points = 32"))
+    code, _, err = cli("validate", path)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "[detection] key 'points'" in err
+
+
 def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):
     """[corrected] effects: the source with them added is simulated too (its own dataset), and
     each method is trained on it as well, its rows named '<method> (<label>)'."""

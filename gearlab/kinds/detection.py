@@ -64,7 +64,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.cache import load_or_build
-from ..data.spec import DatasetSpec
+from ..data.spec import POINTS, DatasetSpec
 from ..data.textzip import align_to, parse_sensitivity, read_record
 from ..errors import GearlabInputError, shown
 from ..events import Event, UnitProgress
@@ -84,6 +84,7 @@ from ..signals import Standardiser
 from ..signals.indicators import (
     DEFAULT_INDICATORS,
     INDICATORS,
+    band_limited,
     difference_signal,
     fm4,
     na4,
@@ -209,6 +210,13 @@ TABLES = {
                 "difference",
                 doc="what the learned methods see: 'difference' (revolution or TSA less its "
                 "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
+            ),
+            "points": Key(
+                int,
+                POINTS,
+                in_range(64, POINTS),
+                "samples per revolution the learned methods see: the order spectrum of what they see cut "
+                f"below points / 2 ({POINTS}, the records' grid: all of it)",
             ),
             "threshold": Key(
                 str,
@@ -472,6 +480,7 @@ def build(scenario: Scenario) -> dict:
         "protocol": protocol,
         "source_speed": t["detection"]["source_speed"],
         "input": t["detection"]["input"],
+        "points": t["detection"]["points"],
         "classical": {
             "indicators": tuple(c["indicators"]),
             "mesh_orders": tuple(orders),
@@ -1022,11 +1031,15 @@ def shaft_attribution(names: tuple, history: dict, test: dict, rule: Rule, pinio
 def learned_input(spec: dict):
     """What the learned methods see of a revolution or TSA (source and target alike): as it is,
     or its difference signal (shaft orders, mesh harmonics and their sidebands removed, as for
-    FM4), which leaves what one tooth adds and drops what every tooth and each build share."""
+    FM4), which leaves what one tooth adds and drops what every tooth and each build share; at
+    [detection] points per revolution (band_limited: a network's step costs in proportion)."""
+    points = spec["points"]
     if spec["input"] == "revolution":
-        return lambda X: X
+        return lambda X: band_limited(X, points)
     c = spec["classical"]
-    return lambda X: difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32)
+    return lambda X: band_limited(
+        difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32), points
+    )
 
 
 def source_for(source: DatasetSpec, cond: dict, how: str) -> DatasetSpec:
