@@ -96,7 +96,8 @@ def main() -> None:
     cost = epoch_seconds(protocol, adapters, args.epochs)
 
     total = sum(r["seconds"] for r in trainings)
-    by_method: dict[str, list[float]] = defaultdict(lambda: [0.0, 0, 0, 0.0])  # seconds, trainings, extra epochs, their cost
+    # per method: seconds, trainings, epochs beyond the floor, their cost
+    by_method: dict[str, list[float]] = defaultdict(lambda: [0.0, 0, 0, 0.0])
     for r in trainings:
         row = by_method[r["method"]]
         row[0] += r["seconds"]
