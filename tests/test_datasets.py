@@ -249,6 +249,27 @@ def test_builds_are_deterministic_across_runs_workers_and_chunks(monkeypatch):
     assert not np.array_equal(other_seed.X, one.X)
 
 
+def test_datasets_that_differ_in_signal_effects_alone_share_their_simulations(monkeypatch):
+    """A corrected source (signal-level effects added) after its plain source simulates nothing new,
+    and is the dataset it would be simulated afresh; an excitation-level effect simulates again."""
+    spec = small(healthy=3)
+    signal = spec.with_(effects=(("sensor_offset", (("offset", 2.0),)), ("sensor_noise", (("snr_db", 20.0),))))
+    excitation = spec.with_(effects=(("load_level", (("factor", 1.1),)),))
+    simulated = []
+    simulate_unit = builder.simulate_unit
+    monkeypatch.setattr(builder, "simulate_unit", lambda task: simulated.append(task) or simulate_unit(task))
+    monkeypatch.setattr(builder, "_SIMULATED", builder.OrderedDict())
+    build_dataset(spec, LocalExecutor(1))
+    first = len(simulated)
+    shared = build_dataset(signal, LocalExecutor(1))
+    assert first > 0 and len(simulated) == first  # nothing simulated for the signal effects
+    builder._SIMULATED.clear()
+    afresh = build_dataset(signal, LocalExecutor(1))
+    assert len(simulated) == 2 * first and np.array_equal(shared.X, afresh.X)
+    build_dataset(excitation, LocalExecutor(1))
+    assert len(simulated) == 3 * first
+
+
 # --- cache -------------------------------------------------------------------------------
 
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -167,6 +168,19 @@ def simulate_unit(task: tuple) -> np.ndarray:
     return np.stack([angle_samples(np.roll(periodic, (n - task.tooth) * per_tooth), angle=angle) for n in task.teeth])
 
 
+# The simulations this process made, newest last: a run that builds a source, its corrected
+# variant and that one's noise-free twin (signal-level effects apart) simulates the rig once.
+_SIMULATED: OrderedDict[SimTask, np.ndarray] = OrderedDict()
+KEEP_SIMULATED = 2048  # a two-stage revolution is 32 kB: at most 64 MB
+
+
+def _remember(task: SimTask, rows: np.ndarray) -> None:
+    rows.setflags(write=False)  # shared by the datasets that reuse it
+    _SIMULATED[task] = rows
+    while len(_SIMULATED) > KEEP_SIMULATED:
+        _SIMULATED.popitem(last=False)
+
+
 class RowsTask(NamedTuple):
     """A chunk of samples: their clean revolutions and how to make the kept rows."""
 
@@ -244,11 +258,16 @@ def build_dataset(
         units = [(case, 1, teeth) for case in cases]
     else:
         units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth]
+    # a simulation sees the model- and excitation-level effects only (the signal-level ones act on
+    # its rows, below), so datasets that differ in those alone share it (_SIMULATED)
+    mechanical = tuple(e for e in spec.effects if registry.get("effect", e[0]).level != "signal")
     tasks = [
-        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, spec.effects, n)
+        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, mechanical, n)
         for (f, s), n, rows in units
     ]
-    on_event(Event("stage", stage="simulate", total=len(tasks), message=f"{spec.name}: {len(tasks)} simulations"))
+    todo = [task for task in dict.fromkeys(tasks) if task not in _SIMULATED]
+    reused = f" ({len(tasks) - len(todo)} done before)" if len(todo) < len(tasks) else ""
+    on_event(Event("stage", stage="simulate", total=len(todo), message=f"{spec.name}: {len(todo)} simulations{reused}"))
     done = 0
 
     def advance(stage, total):
@@ -259,9 +278,13 @@ def build_dataset(
 
         return callback
 
+    fresh = dict(zip(todo, executor.map(simulate_unit, todo, advance("simulate", len(todo)))))
     base: dict = {}
-    for (case, _, _), rows in zip(units, executor.map(simulate_unit, tasks, advance("simulate", len(tasks)))):
+    for (case, _, _), task in zip(units, tasks):
+        rows = fresh[task] if task in fresh else _SIMULATED[task]
         base[case] = rows if case not in base else np.concatenate([base[case], rows])  # teeth in order
+    for task, rows in fresh.items():
+        _remember(task, rows)
 
     # 2. the samples and their labels
     label, intensity, tooth, rfa, source = [], [], [], [], []
