@@ -6,7 +6,8 @@ Table 5.3): the stopping rule is read from epoch `min_epochs` on (gearlab.learn.
 the run's floor, with the same trainings and every adaptation stopped at the first epoch the rule
 allows, is its training time less the epochs it ran beyond that, each at the epoch cost measured
 here, side by side, on this machine: `fit_adaptation` itself on the run's shapes (`fast`, the
-scenario's batch, target_train rows per domain, each method's own domain loss) and random data.
+scenario's points per revolution and batch, target_train rows per domain, each method's own
+domain loss) and random data.
 
     python benchmarks/phm09_runtime.py RUN [--wall SECONDS] [--epochs 40]
 
@@ -35,7 +36,6 @@ from gearlab.learn.networks import build_network
 from gearlab.learn.training import fit_adaptation
 from gearlab.registry import get_registry
 
-LENGTH = 4096
 SOURCE_VAL = 32  # the source's held-out share (10 % of 320 samples)
 
 
@@ -45,20 +45,21 @@ def wall_seconds(run: Path) -> float:
     return (run / "summary.json").stat().st_mtime - started
 
 
-def epoch_seconds(protocol, adapters: list[str], epochs: int, rounds: int = 3) -> dict[str, float]:
-    """Seconds per adaptation epoch of each adapter on random data of the run's shapes, the
-    adapters alternated round by round so that all see the same machine load."""
+def epoch_seconds(protocol, points: int, adapters: list[str], epochs: int, rounds: int = 3) -> dict[str, float]:
+    """Seconds per adaptation epoch of each adapter on random data of the run's shapes (*points*
+    samples per revolution), the adapters alternated round by round so that all see the same
+    machine load."""
     rng = np.random.default_rng(0)
     n = protocol.target_train
-    Xs = rng.normal(size=(n, LENGTH)).astype(np.float32)
+    Xs = rng.normal(size=(n, points)).astype(np.float32)
     ys = np.arange(n) % 2
-    Xv, yv = rng.normal(size=(SOURCE_VAL, LENGTH)).astype(np.float32), np.arange(SOURCE_VAL) % 2
-    Xt = rng.normal(size=(n, LENGTH)).astype(np.float32)
+    Xv, yv = rng.normal(size=(SOURCE_VAL, points)).astype(np.float32), np.arange(SOURCE_VAL) % 2
+    Xt = rng.normal(size=(n, points)).astype(np.float32)
     times: dict[str, list[float]] = defaultdict(list)
     for _ in range(rounds):
         for name in adapters:
             adapter = get_registry().get("adapter", name)
-            net = build_network(protocol.network, 2, dropout=protocol.dropout, length=LENGTH, seed=0)
+            net = build_network(protocol.network, 2, dropout=protocol.dropout, length=points, seed=0)
             modules = adapter.extra_modules(net.latent_dim, {})
             started = time.perf_counter()
             fit_adaptation(
@@ -88,12 +89,13 @@ def main() -> None:
     torch.set_num_threads(1)  # as each worker of a run
     run = args.run
     base = json.loads((run / "run.json").read_text())["base"]  # where the scenario's paths are resolved
-    protocol = load_scenario(run / "scenario.toml", base=base).spec["protocol"]
+    spec = load_scenario(run / "scenario.toml", base=base).spec
+    protocol = spec["protocol"]
     records = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines() if line.strip()]
     trainings = [r for r in records if "seconds" in r and "members" not in r]  # each training once
     floor = protocol.min_epochs + 1  # the first epoch the stopping rule may stop at
     adapters = sorted({r["adapter"] for r in trainings if r.get("history") and r["history"]["train_loss"]})
-    cost = epoch_seconds(protocol, adapters, args.epochs)
+    cost = epoch_seconds(protocol, spec["points"], adapters, args.epochs)
 
     total = sum(r["seconds"] for r in trainings)
     # per method: seconds, trainings, epochs beyond the floor, their cost
@@ -110,7 +112,10 @@ def main() -> None:
     wall = args.wall if args.wall is not None else wall_seconds(run)
     saved = sum(row[3] for row in by_method.values())
     print(f"run {run}: wall {wall / 60:.1f} min; {len(trainings)} trainings, {total / 60:.1f} min of training time")
-    print(f"adaptation epoch here (fit_adaptation, {protocol.network}, batch {protocol.batch} + {protocol.batch}):")
+    print(
+        f"adaptation epoch here (fit_adaptation, {protocol.network}, {spec['points']} points, "
+        f"batch {protocol.batch} + {protocol.batch}):"
+    )
     for name, seconds in cost.items():
         print(f"  {name:14s} {1e3 * seconds:6.1f} ms")
     print(f"{'method':30s} {'trainings':>9s} {'minutes':>8s} {'epochs > ' + str(floor - 1):>12s} {'their min':>9s}")

@@ -266,8 +266,13 @@ def build_dataset(
         for (f, s), n, rows in units
     ]
     todo = [task for task in dict.fromkeys(tasks) if task not in _SIMULATED]
-    reused = f" ({len(tasks) - len(todo)} done before)" if len(todo) < len(tasks) else ""
-    on_event(Event("stage", stage="simulate", total=len(todo), message=f"{spec.name}: {len(todo)} simulations{reused}"))
+    if todo:
+        reused = f" ({len(tasks) - len(todo)} done before)" if len(todo) < len(tasks) else ""
+        on_event(
+            Event("stage", stage="simulate", total=len(todo), message=f"{spec.name}: {len(todo)} simulations{reused}")
+        )
+    else:
+        on_event(Event("log", message=f"{spec.name}: its {len(tasks)} simulations done before"))
     done = 0
 
     def advance(stage, total):
