@@ -268,6 +268,10 @@ def test_datasets_that_differ_in_signal_effects_alone_share_their_simulations(mo
     assert len(simulated) == 2 * first and np.array_equal(shared.X, afresh.X)
     build_dataset(excitation, LocalExecutor(1))
     assert len(simulated) == 3 * first
+    newest = next(reversed(builder._SIMULATED.values()))
+    monkeypatch.setattr(builder, "KEEP_SIMULATED", 2 * newest.nbytes)  # what a process keeps is bounded
+    build_dataset(spec.with_(seed=5, load_nm=1.5 * builder.operating_point(spec)[1]), LocalExecutor(1))
+    assert sum(r.nbytes for r in builder._SIMULATED.values()) <= 2 * newest.nbytes
 
 
 # --- cache -------------------------------------------------------------------------------

@@ -171,14 +171,15 @@ def simulate_unit(task: tuple) -> np.ndarray:
 # The simulations this process made, newest last: a run that builds a source, its corrected
 # variant and that one's noise-free twin (signal-level effects apart) simulates the rig once.
 _SIMULATED: OrderedDict[SimTask, np.ndarray] = OrderedDict()
-KEEP_SIMULATED = 2048  # a two-stage revolution is 32 kB: at most 64 MB
+KEEP_SIMULATED = 256 * 2**20  # bytes: a two-stage run's 161 revolutions a speed are 5 MB
 
 
 def _remember(task: SimTask, rows: np.ndarray) -> None:
     rows.setflags(write=False)  # shared by the datasets that reuse it
     _SIMULATED[task] = rows
-    while len(_SIMULATED) > KEEP_SIMULATED:
-        _SIMULATED.popitem(last=False)
+    kept = sum(r.nbytes for r in _SIMULATED.values())
+    while kept > KEEP_SIMULATED:
+        kept -= _SIMULATED.popitem(last=False)[1].nbytes
 
 
 class RowsTask(NamedTuple):
