@@ -345,6 +345,11 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     path.write_text(path.read_text().replace("points = 1024", "points = 32"))
     code, _, err = cli("validate", path)
     assert code == 2 and len(err.strip().splitlines()) == 1 and "[detection] key 'points'" in err
+    # in range, but fewer than the network takes: refused before any work too
+    path.write_text(path.read_text().replace("points = 32", "points = 100").replace('name = "fast"', 'name = "cnn3"'))
+    code, _, err = cli("validate", path)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "[detection] key 'points': 100 is too few" in err and "at least 113 samples" in err
 
 
 def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):

@@ -72,6 +72,7 @@ from ..learn import protocol as chapter5  # train_method looked up at call time 
 from ..learn.bounds import bayes_scores
 from ..learn.calibration import Calibration
 from ..learn.history import gumbel_quantile
+from ..learn.networks import build_network
 from ..learn.protocol import Method, Protocol, StateStore, each_draw, fault_score, shared_state
 from ..learn.schedule import two_phases
 from ..learn.training import pick_device
@@ -450,6 +451,11 @@ def build(scenario: Scenario) -> dict:
         calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
     )
     protocol.calibration.check(str(path))
+    points = t["detection"]["points"]
+    try:  # a network that cannot take that many samples is refused now, not in the middle of a run
+        build_network(protocol.network, 2, dropout=protocol.dropout, length=points)
+    except GearlabInputError as e:
+        raise GearlabInputError(f"{location(path, 'detection', 'points')}: {points} is too few: {e}") from None
     if p["batch"] > p["target_train"]:
         raise GearlabInputError(
             f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than target_train = {p['target_train']}"
@@ -480,7 +486,7 @@ def build(scenario: Scenario) -> dict:
         "protocol": protocol,
         "source_speed": t["detection"]["source_speed"],
         "input": t["detection"]["input"],
-        "points": t["detection"]["points"],
+        "points": points,
         "classical": {
             "indicators": tuple(c["indicators"]),
             "mesh_orders": tuple(orders),
