@@ -1305,7 +1305,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["file", "unit", "index", "method", "score", "decision"])
-    for r in records:
+    for r in sorted(records, key=lambda r: r["unit"]):  # not in the order the trainings finished
         for path, units in r["test_scores"].items():
             for u, scores in units.items():
                 thr = thresholds[r["unit"]][u]
