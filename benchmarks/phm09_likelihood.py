@@ -58,7 +58,6 @@ def scores(det, X: np.ndarray, scale: float | None = None) -> np.ndarray:
 def main(path: str) -> None:
     spec = load_scenario(path).spec
     conditions = read_target(spec["target"], spec["blocks"], lambda e: None)
-    shown = learned_input(spec)
     positive = {f.path: f.label == spec["target"].positive for f in spec["target"].files}
     sources = {"plain": spec["source"]}
     if spec.get("corrected") is not None:
@@ -69,6 +68,7 @@ def main(path: str) -> None:
     )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for c, cond in conditions.items():
+        shown = learned_input(spec, cond["max_order"])
         for name, source in sources.items():
             dataset, _ = load_or_build(source_for(source, cond, spec["source_speed"]))
             Xs, ys, _, _ = source_split(dataset, spec["protocol"])

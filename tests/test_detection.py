@@ -260,7 +260,7 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     # what each training was handed: revolutions of the history record it did not leave out
     spec = load_scenario(path).spec
     ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
-    shown = learned_input(spec)
+    shown = learned_input(spec, cond["max_order"])
     history = [shown(r) for _, r in cond["history"]]
 
     def among(rows, pool) -> bool:
@@ -309,8 +309,10 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
 
 def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_path, cache, monkeypatch):
     """[detection] points = 1024: every method is handed source, held-out and history rows of 1024
-    samples, each the band-limited form of what it would see at 4096 (orders below 512), and the
-    test units it scores too; the classical rows are not touched. Out of range: refused."""
+    samples, each the band-limited form of what it would see at 4096, and the test units it scores
+    too; the classical rows are not touched. The band is the records' own: these hold 512 samples
+    a revolution, so nothing above order 230 (90 % of their Nyquist order 256), and the simulated
+    source is cut there too. Out of range: refused."""
     import gearlab.learn.protocol as P
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection import learned_input, read_target
@@ -334,13 +336,18 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     assert scored and set(scored) == {1024}
     spec = load_scenario(path).spec
     ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    assert cond["max_order"] == 230
     full = learned_input({**spec, "points": 4096})
     history = np.concatenate([full(r) for _, r in cond["history"]])
     spectrum = np.fft.rfft(history, axis=-1)
-    spectrum[..., 512:] = 0.0
+    spectrum[..., 231:] = 0.0
     expected = np.fft.irfft(spectrum, n=4096, axis=-1)[..., ::4]  # the band-limited rows at every 4th angle
     rows = handed[0][2]
     assert all(np.abs(expected - row).max(axis=1).min() < 1e-5 for row in rows)
+    for source, held_out, _ in handed:  # the simulated rows hold nothing above the records' band either
+        for x in (source, held_out):
+            power = np.abs(np.fft.rfft(x, axis=-1)) ** 2
+            assert power[..., 231:].sum() < 1e-9 * power.sum() and power[..., 200:231].sum() > 0
     assert {r["method"] for r in scores(out)} >= {"fm4", "source_only", "matched_filter"}
     path.write_text(path.read_text().replace("points = 1024", "points = 32"))
     code, _, err = cli("validate", path)
@@ -393,7 +400,7 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     run(cli, path, tmp_path / "runs")
     spec = load_scenario(path).spec
     ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
-    shown = learned_input(spec)
+    shown = learned_input(spec, cond["max_order"])
     revolutions = np.concatenate([shown(r) for _, r in cond["history"]])
     tsas = np.concatenate([shown(tsa_units(r, 3, 1)) for _, r in cond["history"]])
 

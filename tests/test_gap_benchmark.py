@@ -180,8 +180,9 @@ def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
     between samples, with its tacho 7-200 degrees off the simulation's zero and (int16) quantised,
     imported -- against the source made through the same chain -- shows no significant gap, while
     the source without the chain shows a large one."""
-    from gearlab.gap.diagnose import Rows, band_limited
+    from gearlab.gap.diagnose import Rows
     from gearlab.gap.stats import gap_report
+    from gearlab.signals.indicators import band_limited
 
     acquisition = bench.Acquisition(
         {"npz": 0.43, "npz-int16": 0.33, "wav": 0.61}[fmt],
@@ -194,7 +195,7 @@ def test_a_null_target_acquired_as_a_measured_file_shows_no_gap(fmt, tmp_path):
     assert len(rows) >= 58 and 0 < max_order < 2048
     assert len(set(chain.fractions)) > 10  # revolutions start between samples
     assert (chain.step > 0) == (fmt != "npz")  # integer formats are quantised, at a known step
-    target = band_limited(rows, max_order)
+    target = band_limited(rows, max_order=max_order)
     search = SOURCE.with_(healthy=40, seed=123)
     pair = search.check_model()[1]
     matched = gap_report(

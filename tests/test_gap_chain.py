@@ -8,6 +8,7 @@ import pytest
 from gearlab.data.chain import Chain, measure, sampled, tracked
 from gearlab.data.spec import dataset_preset
 from gearlab.gap import diagnose as d
+from gearlab.signals.indicators import band_limited
 
 SOURCE = dataset_preset("B-6-ch5").with_(healthy=6)
 
@@ -74,9 +75,9 @@ def test_the_order_bands_end_at_the_records_passband():
 
     rng = np.random.default_rng(1)
     clean = d.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
-    source = d.band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), 700)
-    target = d.band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), 700)
-    nudged = d.band_limited(source * (1 + 1e-13), 700)
+    source = band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), max_order=700)
+    target = band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), max_order=700)
+    nudged = band_limited(source * (1 + 1e-13), max_order=700)
     gaps = [
         gap_report(X, target, (25, 30), bootstrap=0, permutations=50, max_order=700)["total"]["gap"]
         for X in (source, nudged)

@@ -379,3 +379,20 @@ def test_mismatched_lengths_and_sources():
         cut_revolutions(np.zeros(20_000), FS, tacho=wrap(theta), speed_hz=SPEED)
     with pytest.raises(GearlabInputError, match="at least 2 are needed"):
         steady_start(np.zeros((1, 8)))
+
+
+def test_band_limiting_keeps_the_orders_asked_for_and_nothing_else():
+    """band_limited: orders up to max_order kept exactly, none above; with points, the rows at
+    that many angles, as the full band-limited row sampled there; nothing to cut, the rows as
+    they are."""
+    from gearlab.signals.indicators import band_limited
+
+    theta = 2 * np.pi * np.arange(4096) / 4096
+    x = np.stack([np.cos(3 * theta) + 0.5 * np.sin(700 * theta + k) + 0.2 * np.cos(1500 * theta) for k in range(3)])
+    low = band_limited(x, max_order=1000)
+    assert np.allclose(low, x - 0.2 * np.cos(1500 * theta))
+    assert np.allclose(band_limited(x, max_order=600), np.cos(3 * theta))
+    short = band_limited(x, 1024, max_order=600)
+    assert short.shape == (3, 1024) and np.allclose(short, np.cos(3 * theta[::4]))
+    assert np.allclose(band_limited(x, 2048), low[..., ::2])  # orders below 1024: order 1500 goes
+    assert band_limited(x) is x and band_limited(x, 4096, max_order=2048) is x and band_limited(x, 8192) is x

@@ -69,6 +69,11 @@ class Chain:
     def nyquist_order(self) -> float:
         return 0.5 * self.samples_per_rev
 
+    @property
+    def max_order(self) -> int:
+        """The highest shaft order the record holds: PASSBAND of its Nyquist order."""
+        return int(PASSBAND * self.nyquist_order)
+
 
 def chain_of(meta: dict) -> Chain:
     """A measured file's chain from the importer's meta (gearlab.data.importers): its rate, tacho

@@ -423,7 +423,7 @@ def read_answers(folder: Path) -> dict:
 def import_target(path: Path):
     """The healthy revolutions of a written target, in physical units, through the importer, and
     its measurement chain (None for the angle-domain record, which has none to match)."""
-    from ..data.chain import PASSBAND, chain_of
+    from ..data.chain import chain_of
     from ..data.importers import MeasuredSpec, import_measured
     from ..gap.views import healthy_rows
 
@@ -450,7 +450,7 @@ def import_target(path: Path):
     if not units:
         return rows, None, 0
     chain = chain_of(dataset.meta)
-    return rows, chain, int(PASSBAND * chain.nyquist_order)
+    return rows, chain, chain.max_order
 
 
 def _diagnose(

@@ -94,6 +94,7 @@ from ..executors import LocalExecutor
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..signals import add_noise
+from ..signals.indicators import band_limited
 from .identify import (
     LOCAL_STEP,
     _intervals,
@@ -341,15 +342,6 @@ def _reference(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms
     return reference.mean, reference.std
 
 
-def band_limited(X: np.ndarray, max_order: int) -> np.ndarray:
-    """*X* (rows of revolutions) without the shaft orders above *max_order* (0: unchanged)."""
-    if not max_order or max_order >= X.shape[1] // 2:
-        return X
-    F = np.fft.rfft(X, axis=1)
-    F[:, max_order + 1 :] = 0.0
-    return np.fft.irfft(F, n=X.shape[1], axis=1)
-
-
 def source_rows(
     spec: DatasetSpec, max_order: int = 0, chain: Chain | None = None, consecutive: bool = False
 ) -> np.ndarray:
@@ -377,7 +369,7 @@ def source_rows(
     reference_rms = float(np.sqrt(np.mean(clean**2)))
     if chain is not None:
         rows = measured_rows(spec, clean, speed, reference_rms, chain, pair.Z1, consecutive)
-        return band_limited(rows, max_order)
+        return band_limited(rows, max_order=max_order)
     mean, std = _reference(spec, clean, speed, reference_rms)
     noise_seed = spec.noise.seed if spec.noise else 0
     kind = spec.noise.kind if spec.noise else None
@@ -398,7 +390,7 @@ def source_rows(
             reference_rms,
         )
         out[lo : lo + len(idx)] = noisy_rows(tuple(task))
-    return band_limited(out.astype(np.float64) * std + mean, max_order)
+    return band_limited(out.astype(np.float64) * std + mean, max_order=max_order)
 
 
 # The deterministic part of measured rows, sampled at the record's times (gearlab.data.chain.sampled),
@@ -1223,7 +1215,7 @@ def _prepared(source: DatasetSpec, target_X, settings: Settings, chain: Chain | 
     offset fitted per set against the target's average unless fixed), how rows are made, the
     settings ('consecutive' resolved), the gear pair and the source as the search and the reports
     simulate it."""
-    target = band_limited(check_target(target_X), settings.max_order)
+    target = band_limited(check_target(target_X), max_order=settings.max_order)
     if chain is not None and chain.offset is None:
         chain = replace(chain, reference=target.mean(axis=0))
     if settings.consecutive == "auto":  # a measured record's rows are its consecutive revolutions

@@ -64,6 +64,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.cache import load_or_build
+from ..data.chain import Chain
 from ..data.spec import POINTS, DatasetSpec
 from ..data.textzip import align_to, parse_sensitivity, read_record
 from ..errors import GearlabInputError, shown
@@ -629,6 +630,11 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
                 f"{where}: condition '{name}' ({files}) has no history record; "
                 "each condition needs its own healthy history (give 'condition' to group files)"
             )
+        # The highest order every history record holds, where the acquisition's anti-alias filter
+        # leaves data (as the gap kind compares).
+        cond["max_order"] = min(
+            Chain(fs=records[f.path].fs, speed=speeds[f.path]).max_order for f, _ in cond["history"]
+        )
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["shifts"] = {}
@@ -1034,17 +1040,21 @@ def shaft_attribution(names: tuple, history: dict, test: dict, rule: Rule, pinio
     }
 
 
-def learned_input(spec: dict):
+def learned_input(spec: dict, max_order: int | None = None):
     """What the learned methods see of a revolution or TSA (source and target alike): as it is,
     or its difference signal (shaft orders, mesh harmonics and their sidebands removed, as for
     FM4), which leaves what one tooth adds and drops what every tooth and each build share; at
-    [detection] points per revolution (band_limited: a network's step costs in proportion)."""
+    [detection] points per revolution (band_limited: a network's step costs in proportion), and
+    no order above *max_order*: the condition's records hold none there (read_target), while a
+    simulated revolution, and the sensor noise added to it, reach order POINTS / 2."""
     points = spec["points"]
     if spec["input"] == "revolution":
-        return lambda X: band_limited(X, points)
+        return lambda X: band_limited(X, points, max_order)
     c = spec["classical"]
     return lambda X: band_limited(
-        difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32), points
+        difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32),
+        points,
+        max_order,
     )
 
 
@@ -1139,6 +1149,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     with executor_for(scenario) as executor:
         conditions = read_target(spec["target"], spec["blocks"], on_event, f"{scenario.path}: [target] key 'files'")
         folds = {c: folds_of(spec["history_fit"], cond, c, scenario.path) for c, cond in conditions.items()}
+        for c, cond in conditions.items():
+            top = min(cond["max_order"], spec["points"] // 2)
+            on_event(Event("log", message=f"{c}: the learned methods see shaft orders up to {top} (the records' band)"))
         # the sources: "" the [source], and the corrected simulator when [corrected] gives effects
         variants = {"": spec["source"]}
         if spec.get("corrected") is not None:
@@ -1186,13 +1199,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             for indicator in spec["classical"]["indicators"]:
                 if f"{name}/{indicator}" not in records:
                     run.append(classical_record(indicator, name, cond, spec["classical"], rules[name]))
-        shown_to = learned_input(spec)
+        shown = {c: learned_input(spec, cond["max_order"]) for c, cond in conditions.items()}
         splits = {
-            key: tuple(
-                a if a.ndim == 1 else each_draw(shown_to, a)
-                for a in source_split(sources[specs[key]], protocol, draws[specs[key]])
+            (c, v): tuple(
+                a if a.ndim == 1 else each_draw(shown[c], a)
+                for a in source_split(sources[specs[(c, v)]], protocol, draws[specs[(c, v)]])
             )
-            for key in specs
+            for c, v in specs
         }
         members = {
             (c, v, m): seeds_of(m, spec["seeds"]) for c in conditions for v in variants for m in protocol.methods
@@ -1234,13 +1247,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         seed,
                         k,
                         splits[(c, v)],
-                        shown_to(
+                        shown[c](
                             history_training_rows(
                                 trained_on(cond, k), protocol, c, spec["corrected_history"] if v else 0
                             )
                         ),
-                        {u: shown_to(X) for u, X in cond["history_units"].items()},
-                        {p: {u: shown_to(X) for u, X in units.items()} for p, units in cond["test_units"].items()},
+                        {u: shown[c](X) for u, X in cond["history_units"].items()},
+                        {p: {u: shown[c](X) for u, X in units.items()} for p, units in cond["test_units"].items()},
                         states,
                         rules[c],
                     )
@@ -1264,6 +1277,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "test": [f.path for f, _ in v["test"]],
                     "speeds_hz": v["speeds"],
                     "start_marks": v["shifts"],
+                    "max_order": v["max_order"],  # the highest order the learned methods see (read_target)
                     "source": v["source"],
                     "sources": v["sources"],
                     # what the best detector of each source's held-out samples reaches (source_bound)

@@ -453,7 +453,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 f"the records' {fs:g} Hz at {speed:.4g} Hz shaft speed",
             )
             source_spec = source_spec.with_(speed_hz=round(speed, 3))
-            settings["max_order"] = int(PASSBAND * fs / (2 * speed))
+            settings["max_order"] = Chain(fs=fs, speed=speed).max_order
             record_notes.append(
                 f"compared up to shaft order {settings['max_order']} ({PASSBAND:g} of the records' "
                 "Nyquist order): the source is low-passed to the records' bandwidth"
@@ -472,7 +472,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             chain = None
             if (target.meta or {}).get("source") == "measured":
                 chain = chain_of(target.meta)
-                settings["max_order"] = int(PASSBAND * chain.nyquist_order)
+                settings["max_order"] = chain.max_order
             on_event(Event("advance", stage="datasets", done=1, total=1))
         if note:
             on_event(Event("log", message=note))

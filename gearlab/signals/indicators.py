@@ -80,15 +80,20 @@ def difference_signal(x: np.ndarray, mesh_orders, shaft_orders: int = 2, sideban
     return _masked(x, mesh_orders, shaft_orders, sidebands)
 
 
-def band_limited(x: np.ndarray, points: int) -> np.ndarray:
-    """*x* (rows: revolutions) at *points* samples per revolution, its orders below points / 2
-    kept: a revolution is periodic, so truncating its order spectrum is the exact band-limited
-    resampling (no filter, no edge). Rows of *points* samples or fewer are returned as they are."""
+def band_limited(x: np.ndarray, points: int | None = None, max_order: int | None = None) -> np.ndarray:
+    """*x* (rows: revolutions) at *points* samples per revolution (None: as many as it has), its
+    orders below points / 2 kept and none above *max_order* (None or 0: all): a revolution is
+    periodic, so truncating its order spectrum is the exact band-limited resampling (no filter, no
+    edge). Rows are never lengthened; rows with nothing to cut are returned as they are."""
     x = np.asarray(x)
-    if points >= x.shape[-1]:
+    n = x.shape[-1] if points is None else min(points, x.shape[-1])
+    keep = n // 2 + 1 if n == x.shape[-1] else (n + 1) // 2  # rfft bins; a shortened row drops its Nyquist bin
+    if max_order:
+        keep = min(keep, max_order + 1)
+    if n == x.shape[-1] and keep == n // 2 + 1:
         return x
-    X = np.fft.rfft(x, axis=-1)[..., : (points + 1) // 2]
-    return (np.fft.irfft(X, n=points, axis=-1) * (points / x.shape[-1])).astype(x.dtype, copy=False)
+    X = np.fft.rfft(x, axis=-1)[..., :keep]
+    return (np.fft.irfft(X, n=n, axis=-1) * (n / x.shape[-1])).astype(x.dtype, copy=False)
 
 
 def residual_signal(x: np.ndarray, mesh_orders, shaft_orders: int = 2) -> np.ndarray:
