@@ -447,9 +447,11 @@ def _cell(x) -> str:
 
 def detection_lines(summary: Mapping) -> list[str]:
     """Per condition, at the longest TSA: which rows meet the goal, the best learned row against the
-    best classical one (_merit, on the test labels, after every decision was fixed), and the learned rows
+    best classical one (_merit, on the test labels, after every decision was fixed), the learned rows
     that did not learn the simulated fault (their source AUC within chance_auc of the simulator's
-    held-out revolutions, training data alone; they are never counted as the best learned row)."""
+    held-out revolutions, training data alone; they are never counted as the best learned row), and
+    those whose domain loss aligned the history with a single point (training data alone; named,
+    still counted)."""
     rows = summary.get("rows") or []
     unit = longest_tsa(r["unit"] for r in rows)
     if unit is None:
@@ -488,6 +490,13 @@ def detection_lines(summary: Mapping) -> list[str]:
             text += (
                 "; did not learn the simulated fault (source AUC within chance, one-sided 5 %), so their calls "
                 "are not the simulator's teaching: " + ", ".join(blind)
+            )
+        point = [m for (cc, m), r in learned.items() if cc == c and r.get("aligned_to_a_point")]
+        if point:
+            text += (
+                "; aligned the history with a single point (the source's samples they align it with are one "
+                "input, a noise-free healthy revolution), so where they put a record unlike the history is "
+                "not calibrated: " + ", ".join(point)
             )
         lines.append(text + ".")
     return lines

@@ -233,7 +233,7 @@ def test_each_learned_row_keeps_what_it_learned_of_the_simulator_and_its_time(cl
     summary = json.loads((out / "summary.json").read_text())
     assert [r["method"] for r in summary["learned"]] == ["source_only", "matched_filter"]
     table = (out / "table.md").read_text()
-    assert "| condition | method | source AUC | bound | training (s) |" in table
+    assert "| condition | method | source AUC | bound | training (s) | history aligned with |" in table
     # a noise-free source has no bound (every simulated fault differs from healthy)
     assert re.search(r"\| source_only \| [0-9.]+ \([0-9.]+–[0-9.]+\) \| – \| [0-9]+ \|", table)
     assert re.search(r"\| matched_filter \| – \| – \| [0-9]+ \|", table)
@@ -1025,3 +1025,35 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
     rows = shafts_csv([r]).splitlines()
     assert rows[0] == "condition,file,unit,index,shaft,strength_input,strength_idler,strength_output"
     assert len(rows) == 1 + sum(len(v) for units in r["test_scores"].values() for v in units.values())
+
+
+def test_a_domain_loss_that_aligns_the_history_with_one_input_is_named():
+    """aligned_to_a_point, from the training arrays alone: a joint adapter (coral, mmd, dann) whose
+    source rows for the alignment are one input over and over -- the zero difference signal of a
+    noise-free simulator's healthy revolutions -- aligns the history with a point; healthy rows
+    that differ (sensor noise, or noise draws of them), fresh noise on every batch, all rows under
+    marginal alignment (the chips differ) or a method without a domain loss do not."""
+    from gearlab.kinds.detection import aligned_to_a_point
+    from gearlab.learn.calibration import Calibration
+    from gearlab.learn.protocol import Method, Protocol
+
+    rng = np.random.default_rng(0)
+    ys = np.r_[np.zeros(20, dtype=np.int64), np.ones(20, dtype=np.int64)]
+    chips = rng.normal(size=(20, 256))
+    plain = np.r_[np.zeros((20, 256)), chips]  # healthy: the mesh tones removed leave nothing
+    noisy = plain + 0.1 * rng.normal(size=plain.shape)
+    drawn = np.repeat(plain[:, None], 4, axis=1) + 0.1 * rng.normal(size=(40, 4, 256))
+
+    def protocol(**calibration) -> Protocol:
+        return Protocol(methods=(Method("coral", False),), calibration=Calibration(**calibration))
+
+    healthy = protocol(alignment="healthy")
+    for adapter in ("coral", "mmd", "dann"):
+        assert aligned_to_a_point(healthy, Method(adapter, False), plain, ys)
+    assert aligned_to_a_point(healthy, Method("coral", False), np.r_[np.ones((20, 256)), chips], ys)  # one input
+    assert not aligned_to_a_point(healthy, Method("coral", False), noisy, ys)
+    assert not aligned_to_a_point(healthy, Method("coral", False), drawn, ys)
+    assert not aligned_to_a_point(protocol(alignment="marginal"), Method("coral", False), plain, ys)
+    assert not aligned_to_a_point(protocol(alignment="healthy", source_noise="auto"), Method("coral", False), plain, ys)
+    for other in ("source_only", "matched_filter", "likelihood_ratio"):
+        assert not aligned_to_a_point(healthy, Method(other, False), plain, ys)

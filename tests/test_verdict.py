@@ -255,8 +255,14 @@ def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_
         row("low", "fm4", 0.9, 50.0, 0.0),
     ]
 
-    def learned(condition, method, auc, units=(16, 16)):
-        return {"condition": condition, "method": method, "source_auc": auc, "source_units": list(units)}
+    def learned(condition, method, auc, units=(16, 16), point=False):
+        return {
+            "condition": condition,
+            "method": method,
+            "source_auc": auc,
+            "source_units": list(units),
+            "aligned_to_a_point": point,
+        }
 
     # chance at 5 % one-sided: 0.667 for 16 + 16 held-out revolutions, 0.580 for 64 + 64
     assert chance_auc(16, 16) == pytest.approx(0.5 + 1.6449 * (33 / 3072) ** 0.5, abs=1e-4)
@@ -266,7 +272,7 @@ def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_
             "learned": [
                 learned("high", "coral", 1.0),
                 learned("high", "mmd (corrected)", 0.66),  # within chance for 16 + 16
-                learned("low", "coral", 0.98),
+                learned("low", "coral", 0.98, point=True),  # named, still the best learned row
                 learned("low", "mmd (corrected)", 0.61, units=(64, 64)),  # above chance for 64 + 64
             ],
         }
@@ -279,7 +285,9 @@ def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_
     )
     assert lines[2] == (
         "low: goal met by no row; best learned coral (AUC 0.60, 20 / 0 %), behind the best classical fm4 "
-        "(AUC 0.90, 50 / 0 %)."
+        "(AUC 0.90, 50 / 0 %); aligned the history with a single point (the source's samples they align it "
+        "with are one input, a noise-free healthy revolution), so where they put a record unlike the history "
+        "is not calibrated: coral."
     )
     assert detection_lines({"rows": [row("high", "fm4", 1.0, 100.0, 0.0, unit="revolution")]}) == []
 

@@ -767,8 +767,24 @@ def train_unit(task: tuple) -> dict:
         # held-out rows scored, healthy and faulty (every draw: for a network that has learned
         # nothing of the fault, its scores of the draws are as independent as those of samples)
         "source_units": [int(np.sum(y_held == 0)), int(np.sum(y_held != 0))],
+        "aligned_to_a_point": aligned_to_a_point(protocol, method, Xs, ys),
         "seconds": time.perf_counter() - started,
     }
+
+
+def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: np.ndarray) -> bool:
+    """Whether a method's domain loss aligns the history with a single point: a joint adapter whose
+    source rows for the alignment (the healthy ones with alignment = "healthy", all of them with
+    "marginal"), with no fresh noise on its batches, are one input over and over -- the difference
+    signal of a noise-free simulator's healthy revolution, which is zero (docs/real_data.md,
+    fourteenth round). The loss can then only pull every history unit onto the network's image of
+    that input, and leaves a record unlike the history wherever the training's path puts it.
+    From the training arrays alone."""
+    if get_registry().get("adapter", method.adapter).train_on != "joint" or protocol.calibration.source_noise != "off":
+        return False
+    rows = Xs[np.asarray(ys) == 0] if protocol.calibration.alignment == "healthy" else Xs
+    rows = np.asarray(rows, dtype=np.float64).reshape(-1, rows.shape[-1])  # draws, if any, are rows too
+    return len(rows) > 0 and float(np.ptp(rows, axis=0).max()) <= 1e-6 * float(np.abs(rows).max())
 
 
 @dataclass(frozen=True)
@@ -863,6 +879,7 @@ def trained_together(parts: list[dict]) -> dict:
         "part_source_auc": [p.get("source_auc") for p in parts],
         "source_units": parts[0]["source_units"],  # one held-out split for every part
         "source": parts[0].get("source", "source"),
+        "aligned_to_a_point": any(p.get("aligned_to_a_point", False) for p in parts),
         "seconds": float(sum(p["seconds"] for p in parts)),
     }
 
@@ -1410,6 +1427,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             "source_bound": bound.get(r["condition"], {}).get(r.get("source", "source")),
             "part_source_auc": r.get("part_source_auc", []),
             "source_units": r["source_units"],
+            "aligned_to_a_point": r.get("aligned_to_a_point", False),
             "seconds": r["seconds"],
         }
         for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
@@ -1503,22 +1521,25 @@ def learned_md(learned: list[dict]) -> str:
     """What each method that learns from the simulator learned of it: the ROC AUC of a network's
     scores of the source's held-out revolutions (an ensemble's: the median over its members, with
     their range; a detector's "–": it is built in the target's frame), and the training time, all
-    of its trainings together. From training data only: a row near 0.5 cannot tell the simulated
-    fault from healthy, so its calls on the records are not what the simulator taught it."""
+    of its trainings together, and whether its domain loss aligned the history with a single point
+    (aligned_to_a_point). From training data only: a row near 0.5 cannot tell the simulated fault
+    from healthy, so its calls on the records are not what the simulator taught it."""
     if not learned:
         return ""
     out = [
         "\nWhat each method learned of the simulator (ROC AUC of a network's scores of the source's held-out "
         "revolutions, 0.5 = chance; a detector, built on the history, has none; the bound: the likelihood "
         "ratio that knows the source's noise-free fault shapes and noise law, – for a noise-free source; "
-        "training time, all seeds)\n",
-        "| condition | method | source AUC | bound | training (s) |",
-        "|---|---|---|---|---|",
+        "training time, all seeds; history aligned with: a point when the source's samples its domain loss "
+        "aligns the history with are one input, a noise-free healthy revolution)\n",
+        "| condition | method | source AUC | bound | training (s) | history aligned with |",
+        "|---|---|---|---|---|---|",
     ]
     for r in learned:
+        point = "a point" if r.get("aligned_to_a_point") else ""
         out.append(
             f"| {r['condition']} | {r['method']} | {_cell(r['source_auc'])}{_spread(r['part_source_auc'])} | "
-            f"{_cell(r.get('source_bound'))} | {r['seconds']:.0f} |"
+            f"{_cell(r.get('source_bound'))} | {r['seconds']:.0f} | {point} |"
         )
     return "\n".join(out) + "\n"
 
