@@ -1167,8 +1167,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         conditions = read_target(spec["target"], spec["blocks"], on_event, f"{scenario.path}: [target] key 'files'")
         folds = {c: folds_of(spec["history_fit"], cond, c, scenario.path) for c, cond in conditions.items()}
         for c, cond in conditions.items():
-            top = min(cond["max_order"], spec["points"] // 2)
-            on_event(Event("log", message=f"{c}: the learned methods see shaft orders up to {top} (the records' band)"))
+            band = f"no shaft order above {cond['max_order']} (the records' band)"
+            on_event(Event("log", message=f"{c}: the learned methods see {band}"))
         # the sources: "" the [source], and the corrected simulator when [corrected] gives effects
         variants = {"": spec["source"]}
         if spec.get("corrected") is not None:
@@ -1294,7 +1294,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "test": [f.path for f, _ in v["test"]],
                     "speeds_hz": v["speeds"],
                     "start_marks": v["shifts"],
-                    "max_order": v["max_order"],  # the highest order the learned methods see (read_target)
+                    "max_order": v["max_order"],  # the records' band: no higher order reaches a learned method
                     "source": v["source"],
                     "sources": v["sources"],
                     # what the best detector of each source's held-out samples reaches (source_bound)
