@@ -783,7 +783,7 @@ def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: n
     if get_registry().get("adapter", method.adapter).train_on != "joint" or protocol.calibration.source_noise != "off":
         return False
     rows = Xs[np.asarray(ys) == 0] if protocol.calibration.alignment == "healthy" else Xs
-    rows = np.asarray(rows, dtype=np.float64).reshape(-1, rows.shape[-1])  # draws, if any, are rows too
+    rows = np.asarray(rows).reshape(-1, rows.shape[-1])  # draws, if any, are rows too
     return len(rows) > 0 and float(np.ptp(rows, axis=0).max()) <= 1e-6 * float(np.abs(rows).max())
 
 
@@ -1224,6 +1224,14 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             )
             for c, v in specs
         }
+        # the units every training of a condition scores, as the learned methods see them (made once)
+        units_seen = {
+            c: (
+                {u: shown[c](X) for u, X in cond["history_units"].items()},
+                {p: {u: shown[c](X) for u, X in units.items()} for p, units in cond["test_units"].items()},
+            )
+            for c, cond in conditions.items()
+        }
         members = {
             (c, v, m): seeds_of(m, spec["seeds"]) for c in conditions for v in variants for m in protocol.methods
         }
@@ -1269,8 +1277,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                                 trained_on(cond, k), protocol, c, spec["corrected_history"] if v else 0
                             )
                         ),
-                        {u: shown[c](X) for u, X in cond["history_units"].items()},
-                        {p: {u: shown[c](X) for u, X in units.items()} for p, units in cond["test_units"].items()},
+                        *units_seen[c],
                         states,
                         rules[c],
                     )
