@@ -1057,3 +1057,23 @@ def test_a_domain_loss_that_aligns_the_history_with_one_input_is_named():
     assert not aligned_to_a_point(protocol(alignment="healthy", source_noise="auto"), Method("coral", False), plain, ys)
     for other in ("source_only", "matched_filter", "likelihood_ratio"):
         assert not aligned_to_a_point(healthy, Method(other, False), plain, ys)
+
+
+def test_a_training_that_aligns_the_history_with_a_point_ends_at_its_ramp(cli, tmp_path, cache):
+    """Against a single point the domain discrepancy never settles, so such a training (the plain
+    source's coral here: its healthy difference signals are all zero) ends at the ramp's end
+    (min_epochs) and keeps that epoch; the same method on a source whose healthy rows differ (the
+    corrected one, with sensor noise) is left to the stopping rule."""
+    corrected = (
+        '[corrected]\nlabel = "noisy"\ntsa = 3\neffects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
+    )
+    path = scenario(tmp_path, methods=("coral",), extra=corrected)
+    protocol = 'max_epochs = 30\nalignment = "healthy"\nsource_noise = "off"\nresidual = false'
+    path.write_text(path.read_text().replace("max_epochs = 2", protocol))
+    out = run(cli, path, tmp_path / "runs")
+    records = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+    trained = {r["method"]: r for r in records if r.get("history") and r["history"]["train_loss"]}
+    plain, noisy = trained["coral"], trained["coral (noisy)"]
+    assert plain["aligned_to_a_point"] and not noisy["aligned_to_a_point"]
+    assert len(plain["history"]["train_loss"]) == 2 and plain["history"]["best_epoch"] == 1
+    assert len(noisy["history"]["train_loss"]) > 2
