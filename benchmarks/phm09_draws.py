@@ -21,7 +21,7 @@ the methods asked; no test label is read (only the trainings' source AUCs are pr
     python benchmarks/phm09_draws.py scenarios/phm09_chip.toml OUT [--condition "30 Hz high load"]
         [--methods source_only dann coral mmd] [--seeds 2]
 
-About 2 min per method and arm at 30 Hz high load on this machine (both sources are trained).
+About 11 min for the four methods at 30 Hz high load on this machine (both sources are trained).
 """
 
 from __future__ import annotations
