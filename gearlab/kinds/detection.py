@@ -784,8 +784,8 @@ def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: n
     "marginal"), with no fresh noise on its batches, are one input over and over -- the difference
     signal of a noise-free simulator's healthy revolution, which is zero (docs/real_data.md,
     fourteenth round). The loss can then only pull every history unit onto the network's image of
-    that input, and leaves a record unlike the history wherever the training's path puts it.
-    From the training arrays alone."""
+    that input, and leaves a record unlike the history wherever the training's path puts it; such a
+    training ends at its ramp's end (train_unit). From the training arrays alone."""
     if get_registry().get("adapter", method.adapter).train_on != "joint" or protocol.calibration.source_noise != "off":
         return False
     rows = Xs[np.asarray(ys) == 0] if protocol.calibration.alignment == "healthy" else Xs
