@@ -509,6 +509,45 @@ def test_the_source_bound_is_the_likelihood_ratio_with_the_noise_free_shapes(cac
     assert source_bound(base, load_or_build(base)[0], protocol, 1, None, lambda e: None) is None
 
 
+def test_the_noise_free_twin_holds_each_run_of_draws_without_its_noise(cache):
+    """noise_free_twin: sample i of the twin is the signal of draws i·D ... (i + 1)·D - 1 of the
+    noisy source without their noise. In the units both share (each dataset is standardised by its
+    own healthy reference), the draws' mean less the twin's sample is the noise averaged over D
+    draws; against another sample (the pairing off by one) the chip's difference is added."""
+    from gearlab.data.cache import load_or_build
+    from gearlab.data.spec import DATASET_PRESETS
+    from gearlab.effects import effect_spec
+    from gearlab.kinds.detection import noise_effects, noise_free_twin
+
+    draws = 4
+    spec = DATASET_PRESETS["B-6-ch5"].with_(
+        faults=(("chip", (20,)),),
+        teeth=tuple(range(1, 9)),
+        effects=(effect_spec("sensor_noise", kind="gaussian", snr_db=30.0),),
+        tsa=True,
+        revolutions=3,
+        duplicates=draws,
+        healthy=8 * draws,
+        name="noisy",
+    )
+    twin = noise_free_twin(spec, draws)
+    assert noise_effects(spec) and not noise_effects(twin)
+    noisy, clean = load_or_build(spec)[0], load_or_build(twin)[0]
+
+    def physical(data):
+        mean, std = data.reference
+        return data.X.astype(np.float64) * std + mean
+
+    X, C = physical(noisy).reshape(len(clean), draws, -1), physical(clean)
+    assert np.array_equal(noisy.fault[::draws], clean.fault) and np.array_equal(noisy.tooth[::draws], clean.tooth)
+    deviation = X - X.mean(axis=1, keepdims=True)
+    averaged_noise = np.sqrt(np.mean(deviation**2) * draws / (draws - 1) / draws)
+    paired = np.sqrt(np.mean((X.mean(axis=1) - C) ** 2))
+    chipped = np.flatnonzero(clean.fault == 1)
+    off_by_one = np.sqrt(np.mean((X.mean(axis=1)[chipped] - C[np.roll(chipped, 1)]) ** 2))
+    assert paired < 1.2 * averaged_noise < off_by_one
+
+
 def test_pinion_sync_runs_end_to_end_and_writes_which_shaft(cli, tmp_path, cache):
     """The detection kind with pinion_sync listed: scores.csv has its rows, shafts.csv names a
     shaft (or nothing) for every test unit with each shaft's strength, a called pinion fault on the

@@ -1139,6 +1139,25 @@ def source_split(source, protocol: Protocol, draws: int = 1):
     return X[tr], y[tr], X[va], y[va]
 
 
+def noise_effects(spec: DatasetSpec) -> list:
+    """The effects of *spec* that declare themselves noise."""
+    registry = get_registry()
+    return [e for e in spec.effects if getattr(registry.get("effect", e[0]), "noise", False)]
+
+
+def noise_free_twin(spec: DatasetSpec, draws: int) -> DatasetSpec:
+    """*spec* less its noise effects, one sample for each of its runs of *draws* noise draws: sample
+    i of the twin is the noise-free signal of draws i·draws ... (i + 1)·draws - 1 of *spec*."""
+    noise = noise_effects(spec)
+    return spec.with_(
+        effects=tuple(e for e in spec.effects if e not in noise),
+        duplicates=spec.duplicates // draws,
+        healthy=spec.healthy // draws,
+        name=f"{spec.name} (noise free)",
+        domain=f"{spec.name} (noise free)",
+    )
+
+
 def source_bound(spec: DatasetSpec, source, protocol: Protocol, draws: int, executor, on_event) -> float | None:
     """The best ranking of the source's held-out samples (every draw) that any learned method could
     reach: the ROC AUC of the likelihood-ratio detector that knows the source's noise-free fault
@@ -1146,18 +1165,10 @@ def source_bound(spec: DatasetSpec, source, protocol: Protocol, draws: int, exec
     (its effects less the one that declares itself noise). From training data only. None for a
     source with no noise effect (noise free: every simulated fault differs from healthy) or more
     than one (no single law)."""
-    registry = get_registry()
-    noise = [e for e in spec.effects if getattr(registry.get("effect", e[0]), "noise", False)]
+    noise = noise_effects(spec)
     if len(noise) != 1:
         return None
-    twin = spec.with_(
-        effects=tuple(e for e in spec.effects if e not in noise),
-        duplicates=spec.duplicates // draws,
-        healthy=spec.healthy // draws,
-        name=f"{spec.name} (noise free)",
-        domain=f"{spec.name} (noise free)",
-    )
-    clean, _ = load_or_build(twin, executor, on_event)
+    clean, _ = load_or_build(noise_free_twin(spec, draws), executor, on_event)
     Xs, ys, Xv, yv = source_split(source, protocol, draws)
     healthy = Xs[ys == 0].reshape(-1, Xs.shape[-1])  # fixes the scale between the twin and the source
     kind = dict(noise[0][1]).get("kind", "gaussian")
