@@ -1,0 +1,231 @@
+"""Issue 19, sixteenth round: is the simulated chip too small, or of the wrong form?
+
+The corrected networks rank the simulated chips well under their source's bound, and what they
+call on the records does not follow what they learned of the simulator. Two readings: the
+simulated chip is too weak under the fitted noise to be learned, or it is learned and is not what
+the real chip looks like. This benchmark measures both, for a detection scenario with a
+`[corrected]` source:
+
+* ``--factors A ...`` (the size): every chip of the corrected source multiplied by A, exactly: the
+  corrected sample is its noise-free signal (``detection.noise_free_twin``) plus its noise draws,
+  and A - 1 times its chip response (the twin's chipped sample less the twin's healthy one) is
+  added, the noise draws unchanged. The kind is run with ``--methods`` per factor (a run folder
+  each, under OUT) and prints, per condition, the corrected rows' source AUC (training data only,
+  beside the source's bound, which the factor raises too) and their record30 AUC and detected /
+  false alarms % on the records.
+* ``--path`` (a transfer path from the history): every chip response first passes the gain of the
+  records' mesh harmonics over the simulator's, from the healthy history alone: at each multiple
+  of 16 orders the median over the history records of ln |record| - ln |simulator| (their mean
+  revolutions), a running median over 5 harmonics, 0 dB at orders up to 64, linear in between,
+  zero phase (the mesh harmonics' phases do not follow a short filter:
+  ``gearlab.learn.path.fit_path`` finds no path between these references and gives one gain).
+* ``--form`` (reads test records, a diagnosis, no decision): the real chip's synchronous signature
+  is the mean revolution of a chipped record less that of the record of the same take whose only
+  difference is the chip (``--base-label``; on the PHM rig spur2 against spur3), as the learned
+  methods see it; the control is a healthy-pinion record less the same base (spur1 against
+  spur3). For each it prints where its energy lies over order bands, the same for the simulated
+  chips (the largest step, as simulated and through ``--path``'s gain), and the best normalised
+  correlation of any simulated chip (every tooth and step) with it over the eighth of the
+  revolution holding most of that chip's energy.
+
+The records' figures read the test labels (as the kind's table does); nothing here feeds a
+decision of the shipped scenario.
+
+    python benchmarks/phm09_chip_form.py scenarios/phm09_chip.toml OUT [--factors 4 16] [--path]
+        [--form] [--methods source_only] [--seeds 3] [--swap-takes]
+
+About 75 s per factor for ``source_only`` (both sources are trained: the plain rows are the shipped
+ones, a check), 9 min for ``dann``, on this machine with two workers; ``--form`` about 1 min.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+from phm09_localised import swapped
+
+from gearlab.data.cache import load_or_build
+from gearlab.engine import load_scenario
+from gearlab.kinds import detection
+from gearlab.learn.protocol import Method
+from gearlab.runs import RunDir
+
+BANDS = ((3, 60), (60, 160), (160, 320), (320, 1024))  # shaft orders
+STEP = 16  # the rig's mesh harmonics are multiples of the stage-2 mesh order
+
+
+def twin(spec, cond):
+    """The condition's corrected source spec and its noise-free twin (a dataset)."""
+    source = detection.source_for(spec["corrected"], cond, spec["source_speed"])
+    clean, _ = load_or_build(detection.noise_free_twin(source, spec["corrected_draws"]))
+    return source, clean
+
+
+def history_gain(clean, cond) -> np.ndarray:
+    """|G| per order of a revolution (zero phase): the records' mesh harmonics over the simulator's."""
+    n = clean.X.shape[-1]
+    sim = np.abs(np.fft.rfft(clean.X[clean.fault == 0].astype(np.float64).mean(axis=0)))
+    orders = np.arange(STEP, min(cond["max_order"], n // 2) + 1, STEP)
+    ratio = np.median(
+        [np.log(np.abs(np.fft.rfft(revs.mean(axis=0)))[orders] / sim[orders]) for _, revs in cond["history"]], axis=0
+    )
+    padded = np.pad(ratio, 2, mode="edge")
+    smooth = np.array([np.median(padded[i : i + 5]) for i in range(len(ratio))])
+    smooth -= np.median(smooth[orders <= 64])
+    return np.exp(np.interp(np.arange(n // 2 + 1), orders, smooth))
+
+
+def through(gain: np.ndarray | None, x: np.ndarray) -> np.ndarray:
+    if gain is None:
+        return x
+    return np.fft.irfft(np.fft.rfft(x, axis=-1) * gain, n=x.shape[-1], axis=-1)
+
+
+def chip_responses(clean) -> np.ndarray:
+    """Each twin sample less the twin's healthy revolution (zero for a healthy sample)."""
+    X = clean.X.astype(np.float64)
+    return X - X[clean.fault == 0].mean(axis=0)
+
+
+def patched_split(factor: float, gains: dict):
+    """detection.source_split with the corrected source's chips times *factor*, through its gain."""
+    shipped = detection.source_split
+
+    def split(source, protocol, draws=1):
+        if draws == 1:
+            return shipped(source, protocol, draws)
+        clean, _ = load_or_build(detection.noise_free_twin(source.spec, draws))
+        chip = chip_responses(clean) * (clean.reference[1] / source.reference[1])  # the source's units
+        added = through(gains.get(source.spec.name), factor * chip) - chip
+        X = source.X.reshape(len(clean), draws, -1) + added[:, None, :]
+        return shipped(dataclasses.replace(source, X=X.reshape(source.X.shape).astype(np.float32)), protocol, draws)
+
+    return split
+
+
+def run_factor(scenario, out: Path, factor: float, gains: dict) -> Path:
+    shipped = detection.source_split
+    detection.source_split = patched_split(factor, gains)
+    try:
+        run = RunDir.create(out, scenario)
+        with run.lock():
+            detection.run(scenario, run, lambda e: None)
+    finally:
+        detection.source_split = shipped
+    return run.path
+
+
+def print_factor(path: Path, factor: float) -> None:
+    summary = json.loads((path / "summary.json").read_text())
+    learned = {(r["condition"], r["method"]): r for r in summary.get("learned", [])}
+    print(f"\nchips x {factor:g} ({path}):")
+    print("| condition | row | source AUC (seeds) [bound] | record30 AUC (seeds), det / FA |")
+    print("|---|---|---|---|")
+    for r in summary["rows"]:
+        if r["unit"] != "record30" or "(" not in r["method"] or (r["condition"], r["method"]) not in learned:
+            continue
+        s = learned[(r["condition"], r["method"])]
+        part = s.get("part_source_auc") or [s["source_auc"]]
+        members = [a for a in r.get("member_auc") or [] if a is not None]
+        spread = f" ({min(members):.2f}-{max(members):.2f})" if members else ""
+        print(
+            f"| {r['condition']} | {r['method']} | {s['source_auc']:.2f} ({min(part):.2f}-{max(part):.2f}) "
+            f"[{s['source_bound']:.2f}] | {r['auc']:.2f}{spread}, {r['detection']:.0f} / {r['false_alarm']:.0f} |"
+        )
+
+
+def shares(x: np.ndarray) -> str:
+    """Energy % per order band of *x*, or of its rows together."""
+    power = (np.abs(np.fft.rfft(x)) ** 2).reshape(-1, x.shape[-1] // 2 + 1).sum(axis=0)
+    total = power[BANDS[0][0] :].sum()
+    return " / ".join(f"{power[a:b].sum() / total * 100:.0f}" for a, b in BANDS)
+
+
+def best_local(chips: np.ndarray, tooth, step, x: np.ndarray) -> str:
+    """The simulated chip that best matches *x* over the eighth of the revolution holding most of its energy."""
+    n, w = len(x), len(x) // 8
+    best = (0.0, 0)
+    for i in np.flatnonzero(step > 0):
+        energy = np.convolve(np.r_[chips[i] ** 2, chips[i, : w - 1] ** 2], np.ones(w), "valid")
+        window = (int(np.argmax(energy)) + np.arange(w)) % n
+        a, b = chips[i, window], x[window] - x[window].mean()
+        best = max(best, (abs(a @ b) / (np.linalg.norm(a) * np.linalg.norm(b) + 1e-30), i))
+    r, i = best
+    return f"{r:.2f} (tooth {tooth[i]}, step {step[i]})"
+
+
+def form(spec, conditions, base_label: str) -> None:
+    """The real chip against the simulated ones (reads test records and labels: a diagnosis)."""
+    labels = {f.path: f.label for f in spec["target"].files}
+    positive = spec["target"].positive
+    print(f"\nenergy % per order band ({', '.join(f'{a}-{b}' for a, b in BANDS)}) and the best local correlation")
+    print("| condition | signature | RMS | energy % | best simulated chip, local corr |")
+    print("|---|---|---|---|---|")
+    for c, cond in conditions.items():
+        shown = detection.learned_input(spec, cond["max_order"])
+        _, clean = twin(spec, cond)
+        gain = history_gain(clean, cond)
+        largest = np.flatnonzero(clean.intensity == clean.intensity.max())
+        for name, g in (("simulated chip, largest step", None), ("the same through the history's gain", gain)):
+            chips = shown(through(g, chip_responses(clean)))
+            print(f"| {c} | {name} | | {shares(chips[largest])} | |")
+        chips = shown(chip_responses(clean))
+        mean = {f.path: shown(r.mean(axis=0, keepdims=True))[0] for f, r in cond["history"] + cond["test"]}
+        takes: dict[str, dict[str, str]] = {}
+        for path in mean:
+            take = re.search(r"_(\d+)\.zip$", path)
+            if take:
+                takes.setdefault(take.group(1), {})[labels[path]] = path
+        for take, by_label in sorted(takes.items()):
+            if base_label not in by_label:
+                continue
+            for label, path in sorted(by_label.items()):
+                if label == base_label:
+                    continue
+                x = mean[path] - mean[by_label[base_label]]
+                what = "chip" if label == positive else "control"
+                rms = np.sqrt(np.mean(x**2))
+                print(
+                    f"| {c} | take {take}: {label} less {base_label} ({what}) | {rms:.2f} | {shares(x)} | "
+                    f"{best_local(chips, clean.tooth, clean.intensity, x)} |"
+                )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scenario", type=Path)
+    parser.add_argument("out", type=Path)
+    parser.add_argument("--factors", nargs="*", type=float, default=[])
+    parser.add_argument("--path", action="store_true")
+    parser.add_argument("--form", action="store_true")
+    parser.add_argument("--base-label", default="eccentric idler")
+    parser.add_argument("--methods", nargs="+", default=["source_only"])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--swap-takes", action="store_true")
+    args = parser.parse_args()
+    scenario = load_scenario(args.scenario, {"detection": {"seeds": args.seeds}})
+    spec = scenario.spec
+    if spec.get("corrected") is None:
+        raise SystemExit(f"{args.scenario}: no [corrected] source to change")
+    if args.swap_takes:
+        spec["target"] = swapped(spec["target"])
+    spec["protocol"] = dataclasses.replace(spec["protocol"], methods=tuple(Method(m, False) for m in args.methods))
+    conditions = detection.read_target(spec["target"], spec["blocks"], lambda e: None)
+    gains = {}
+    if args.path:
+        for cond in conditions.values():
+            source, clean = twin(spec, cond)
+            gains[source.name] = history_gain(clean, cond)
+    if args.form:
+        form(spec, conditions, args.base_label)
+    for factor in args.factors:
+        print_factor(run_factor(scenario, args.out / f"x{factor:g}", factor, gains), factor)
+
+
+if __name__ == "__main__":
+    main()
