@@ -40,20 +40,17 @@ ones, a check), 9 min for ``dann``, on this machine with two workers; ``--form``
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import re
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
-from phm09_localised import swapped
+from phm09_localised import learned_parser, learned_scenario, run_detection
 
 from gearlab.data.cache import load_or_build
-from gearlab.engine import load_scenario
 from gearlab.kinds import detection
-from gearlab.learn.protocol import Method
-from gearlab.runs import RunDir
 
 BANDS = ((3, 60), (60, 160), (160, 320), (320, 1024))  # shaft orders
 STEP = 16  # the rig's mesh harmonics are multiples of the stage-2 mesh order
@@ -109,15 +106,8 @@ def patched_split(factor: float, gains: dict):
 
 
 def run_factor(scenario, out: Path, factor: float, gains: dict) -> Path:
-    shipped = detection.source_split
-    detection.source_split = patched_split(factor, gains)
-    try:
-        run = RunDir.create(out, scenario)
-        with run.lock():
-            detection.run(scenario, run, lambda e: None)
-    finally:
-        detection.source_split = shipped
-    return run.path
+    with mock.patch.object(detection, "source_split", patched_split(factor, gains)):
+        return run_detection(scenario, out)
 
 
 def print_factor(path: Path, factor: float) -> None:
@@ -197,24 +187,16 @@ def form(spec, conditions, base_label: str) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scenario", type=Path)
-    parser.add_argument("out", type=Path)
+    parser = learned_parser(__doc__.splitlines()[0])
     parser.add_argument("--factors", nargs="*", type=float, default=[])
     parser.add_argument("--path", action="store_true")
     parser.add_argument("--form", action="store_true")
     parser.add_argument("--base-label", default="eccentric idler")
-    parser.add_argument("--methods", nargs="+", default=["source_only"])
-    parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--swap-takes", action="store_true")
     args = parser.parse_args()
-    scenario = load_scenario(args.scenario, {"detection": {"seeds": args.seeds}})
+    scenario = learned_scenario(args)
     spec = scenario.spec
     if spec.get("corrected") is None:
         raise SystemExit(f"{args.scenario}: no [corrected] source to change")
-    if args.swap_takes:
-        spec["target"] = swapped(spec["target"])
-    spec["protocol"] = dataclasses.replace(spec["protocol"], methods=tuple(Method(m, False) for m in args.methods))
     conditions = detection.read_target(spec["target"], spec["blocks"], lambda e: None)
     gains = {}
     if args.path:

@@ -30,9 +30,11 @@ import argparse
 import dataclasses
 import json
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import torch
+from phm09_localised import run_detection
 
 import gearlab.learn.training as training
 from gearlab.data.cache import load_or_build
@@ -40,7 +42,6 @@ from gearlab.engine import load_scenario
 from gearlab.executors import LocalExecutor
 from gearlab.kinds import detection
 from gearlab.learn.protocol import Method, each_draw
-from gearlab.runs import RunDir
 
 SHIPPED = training._rows
 
@@ -91,20 +92,15 @@ def stationarity(scenario, condition: str, samples: int = 60) -> None:
 
 
 def source_aucs(scenario, out: Path, rows) -> tuple[dict, float | None]:
-    training._rows = rows
-    try:
-        run = RunDir.create(out, scenario)
-        with run.lock():
-            detection.run(scenario, run, lambda e: None)
-    finally:
-        training._rows = SHIPPED
-    records = [json.loads(line) for line in (run.path / "results.jsonl").read_text().splitlines() if line.strip()]
+    with mock.patch.object(training, "_rows", rows):
+        path = run_detection(scenario, out)
+    records = [json.loads(line) for line in (path / "results.jsonl").read_text().splitlines() if line.strip()]
     aucs = {
         (r["method"], r["seed"]): r["source_auc"]
         for r in records
         if r.get("source") != "source" and r.get("seed") is not None and r.get("source_auc") is not None
     }
-    (cond,) = json.loads((run.path / "conditions.json").read_text()).values()
+    (cond,) = json.loads((path / "conditions.json").read_text()).values()
     bound = next(v for k, v in cond["source_bound"].items() if k != "source")
     return aucs, bound
 

@@ -45,6 +45,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import re
+from pathlib import Path
 from unittest import mock
 
 import numpy as np
@@ -52,6 +53,8 @@ import numpy as np
 from gearlab.engine import load_scenario
 from gearlab.kinds import detection, record_effects
 from gearlab.kinds.detection import ROLES, Rule, _window, auc, classical_record, read_target, tsa_units
+from gearlab.learn.protocol import Method
+from gearlab.runs import RunDir
 from gearlab.signals.indicators import (
     async_floor,
     difference_signal,
@@ -206,6 +209,36 @@ def second_channel(target, blocks, first: dict) -> dict:
 
     with mock.patch.object(detection, "align_to", turned):
         return read_target(dataclasses.replace(target, vibration=1), blocks, lambda e: None)
+
+
+def learned_parser(description: str) -> argparse.ArgumentParser:
+    """The command line of the phm09 benchmarks that train: the scenario, an output folder for the
+    kind's runs, the methods, seeds and --swap-takes."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("scenario", type=Path)
+    parser.add_argument("out", type=Path)
+    parser.add_argument("--methods", nargs="+", default=["source_only"])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--swap-takes", action="store_true")
+    return parser
+
+
+def learned_scenario(args):
+    """The scenario of *args* (learned_parser) with its seeds, methods and, asked, the takes swapped."""
+    scenario = load_scenario(args.scenario, {"detection": {"seeds": args.seeds}})
+    spec = scenario.spec
+    if args.swap_takes:
+        spec["target"] = swapped(spec["target"])
+    spec["protocol"] = dataclasses.replace(spec["protocol"], methods=tuple(Method(m, False) for m in args.methods))
+    return scenario
+
+
+def run_detection(scenario, out: Path) -> Path:
+    """The detection kind run on *scenario* in a new run folder under *out*; its path."""
+    run = RunDir.create(out, scenario)
+    with run.lock():
+        detection.run(scenario, run, lambda e: None)
+    return run.path
 
 
 def command_line(description: str | None = None, indicators: str | None = None):

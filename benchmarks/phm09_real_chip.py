@@ -19,19 +19,15 @@ About 1 min for ``source_only`` on this machine (the plain source only; the scen
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import re
-from pathlib import Path
+from unittest import mock
 
 import numpy as np
-from phm09_localised import swapped
+from phm09_localised import learned_parser, learned_scenario, run_detection
 
-from gearlab.engine import load_scenario
 from gearlab.kinds import detection
-from gearlab.learn.protocol import Method
-from gearlab.runs import RunDir
 
 UNIT, BLOCK = "record30", 30
 
@@ -79,20 +75,12 @@ def figures(record: dict, skip: str, labels: dict, positive: str) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scenario", type=Path)
-    parser.add_argument("out", type=Path)
+    parser = learned_parser(__doc__.splitlines()[0])
     parser.add_argument("--teach", default="1", help="the take of the chipped records taught")
-    parser.add_argument("--methods", nargs="+", default=["source_only"])
-    parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--swap-takes", action="store_true")
     args = parser.parse_args()
-    scenario = load_scenario(args.scenario, {"detection": {"seeds": args.seeds}})
+    scenario = learned_scenario(args)
     spec = scenario.spec
-    if args.swap_takes:
-        spec["target"] = swapped(spec["target"])
     spec["corrected"] = None  # one source: the real units
-    spec["protocol"] = dataclasses.replace(spec["protocol"], methods=tuple(Method(m, False) for m in args.methods))
     conditions = detection.read_target(spec["target"], spec["blocks"], lambda e: None)
     units, paths = taught(spec, conditions, args.teach)
     load = detection.load_or_build
@@ -102,16 +90,11 @@ def main() -> None:
             return units[dataset_spec.name], None
         return load(dataset_spec, *rest, **kwargs)
 
-    detection.load_or_build = real_units
-    try:
-        run = RunDir.create(args.out, scenario)
-        with run.lock():
-            detection.run(scenario, run, lambda e: None)
-    finally:
-        detection.load_or_build = load
+    with mock.patch.object(detection, "load_or_build", real_units):
+        path = run_detection(scenario, args.out)
     labels = {f.path: f.label for f in spec["target"].files}
-    records = [json.loads(line) for line in (run.path / "results.jsonl").read_text().splitlines() if line.strip()]
-    print(f"taught: the chipped take {args.teach}{' (takes swapped)' if args.swap_takes else ''}; {run.path}")
+    records = [json.loads(line) for line in (path / "results.jsonl").read_text().splitlines() if line.strip()]
+    print(f"taught: the chipped take {args.teach}{' (takes swapped)' if args.swap_takes else ''}; {path}")
     print(f"| condition | row | source AUC (seeds) | {UNIT} AUC, det / FA, the take not taught |")
     print("|---|---|---|---|")
     for r in records:
