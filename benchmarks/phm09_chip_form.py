@@ -19,6 +19,8 @@ the real chip looks like. This benchmark measures both, for a detection scenario
   revolutions), a running median over 5 harmonics, 0 dB at orders up to 64, linear in between,
   zero phase (the mesh harmonics' phases do not follow a short filter:
   ``gearlab.learn.path.fit_path`` finds no path between these references and gives one gain).
+  The bound printed is the kind's: the likelihood ratio with the chip shapes as simulated, so with
+  a factor or the gain it is a lower figure than the changed source's own bound.
 * ``--form`` (reads test records, a diagnosis, no decision): the real chip's synchronous signature
   is the mean revolution of a chipped record less that of the record of the same take whose only
   difference is the chip (``--base-label``; on the PHM rig spur2 against spur3), as the learned
