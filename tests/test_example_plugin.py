@@ -29,7 +29,7 @@ from gearlab.physics.stiffness import contact_geometry
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "gearlab-wear"
-BUILTIN_FAULTS = {"crack", "chip", "spall", "pit"}
+BUILTIN_FAULTS = {"crack", "chip", "broken_tip", "spall", "pit"}
 MEAN = re.compile(r"TVMS mean (\S+) N/m")
 
 

@@ -10,7 +10,7 @@ from gearlab.physics.stiffness import contact_geometry, tooth_pair_compliances
 from gearlab_plugins.faults.pit import draw_pits
 
 PRESETS = ["luo2019", "meng2020"]
-KINDS = ["crack", "chip", "spall", "pit"]
+KINDS = ["crack", "chip", "broken_tip", "spall", "pit"]
 
 
 def tvms(registry, pair, model, specs, points=4096):
@@ -82,7 +82,7 @@ def test_crack_loss_grows_with_depth_per_explicit_parameters(registry, pairs, mo
         previous = k
 
 
-@pytest.mark.parametrize("kind", ["crack", "chip", "spall", "pit"])
+@pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("preset", PRESETS)
 def test_step_1_is_exactly_healthy(registry, pairs, models, preset, kind):
     pair, model = pairs[preset], models[preset]
@@ -133,6 +133,66 @@ def test_chip_changes_only_the_hertz_term(registry, pairs, models, preset):
     np.testing.assert_array_equal(after["hertz"][below], before["hertz"][below])
     # the tip is where the chip takes the most width
     assert after["hertz"][-1] / before["hertz"][-1] == np.max(after["hertz"] / before["hertz"])
+
+
+# --- broken tip: the chip with a sharp fracture edge ---------------------------------------------
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_broken_tip_loses_contact_above_its_fracture_line_where_the_chip_tapers(registry, pairs, models, preset):
+    pair, model = pairs[preset], models[preset]
+    broken, chip = registry.get("fault", "broken_tip"), registry.get("fault", "chip")
+    params = broken.at_step(pair, 20)
+    assert params == chip.at_step(pair, 20)  # the same ladder: depth b, the whole face width at step 20
+    phi = np.linspace(0.0, pair.theta_t, 1601)
+    x = pinion_contact_x(pair, phi)
+    dx = np.diff(model.pinion_section.x).max()
+    line = model.pinion_section.tooth_height - params["b"]
+    above, below = x > line + dx, x < line - dx
+    assert above.sum() > 50 and below.sum() > 50
+    healthy = model.tooth_pair_stiffness(phi)
+    k_broken = model.tooth_pair_stiffness(phi, [broken.place(1, params, pair)])
+    k_chip = model.tooth_pair_stiffness(phi, [chip.place(1, params, pair)])
+    # Above the line the whole width is gone: no contact, where the tapered chip still carries load
+    # until the very tip (it has lost nothing just above its line and everything at the tip).
+    assert np.all(k_broken[above] == 0.0)
+    assert k_chip[above][0] > 0.99 * healthy[above][0] and np.all(k_chip[above][:-1] > 0.0)
+    # Below the line the tooth is the healthy one: every compliance term the same.
+    np.testing.assert_array_equal(k_broken[below], healthy[below])
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_broken_tip_keeps_the_width_left_above_its_line(registry, pairs, models, preset):
+    pair, model = pairs[preset], models[preset]
+    broken = registry.get("fault", "broken_tip")
+    params = broken.at_step(pair, 11)  # about half the face width
+    healthy_section = model.pinion_section
+    section = broken.apply(healthy_section, params, pair)
+    above = healthy_section.x > healthy_section.tooth_height - params["b"]
+    share = (pair.face_width - params["c"]) / pair.face_width
+    for name in ("L", "A", "I"):  # Table 2.2's section: A_x and I_x in proportion to the width
+        np.testing.assert_allclose(getattr(section, name)[above], share * getattr(healthy_section, name)[above])
+        np.testing.assert_array_equal(getattr(section, name)[~above], getattr(healthy_section, name)[~above])
+    np.testing.assert_array_equal(section.h, healthy_section.h)
+    phi = np.linspace(0.0, pair.theta_t, 1601)
+    x = pinion_contact_x(pair, phi)
+    on = x > healthy_section.tooth_height - params["b"] + np.diff(healthy_section.x).max()
+    before = tooth_pair_compliances(pair, phi, healthy_section, model.gear_section)
+    after = tooth_pair_compliances(pair, phi, section, model.gear_section)
+    np.testing.assert_allclose(after["hertz"][on], before["hertz"][on] / share)  # eq. 2.94 with L - c
+    assert np.all(after["bending1"][on] > before["bending1"][on])
+    # The TVMS loses more the wider the break.
+    means = [tvms(registry, pair, model, [("broken_tip", 3, step)]).mean for step in range(1, 21)]
+    assert np.all(np.diff(means) < 0)
+
+
+def test_broken_tip_refuses_a_break_past_the_root_or_the_face(registry, pairs):
+    pair = pairs["meng2020"]
+    broken = registry.get("fault", "broken_tip")
+    with pytest.raises(GearlabInputError, match=r"fracture depth b = 5 mm reaches past the tooth root"):
+        broken.resolve({"b": "5 mm", "c": "10 mm"}, pair, "fault broken_tip@3")
+    with pytest.raises(GearlabInputError, match=r"broken width c = 25 mm exceeds the face width 20 mm"):
+        broken.resolve({"b": "1 mm", "c": "25 mm"}, pair, "fault broken_tip@3")
 
 
 # --- spall: depth lowers beam stiffness after the spall (Fig. 2.13 discussion) -----------------

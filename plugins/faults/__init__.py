@@ -1,1 +1,1 @@
-"""Built-in fault plugins: crack (incl. broken tooth), chip, spall, pit (thesis 2.2)."""
+"""Built-in fault plugins: crack (incl. broken tooth), chip, broken_tip, spall, pit (thesis 2.2)."""
