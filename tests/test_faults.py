@@ -188,11 +188,11 @@ def test_broken_tip_keeps_the_width_left_above_its_line(registry, pairs, models,
 
 def test_broken_tip_refuses_a_break_past_the_root_or_the_face(registry, pairs):
     pair = pairs["meng2020"]
-    broken = registry.get("fault", "broken_tip")
-    with pytest.raises(GearlabInputError, match=r"fracture depth b = 5 mm reaches past the tooth root"):
-        broken.resolve({"b": "5 mm", "c": "10 mm"}, pair, "fault broken_tip@3")
-    with pytest.raises(GearlabInputError, match=r"broken width c = 25 mm exceeds the face width 20 mm"):
-        broken.resolve({"b": "1 mm", "c": "25 mm"}, pair, "fault broken_tip@3")
+    broken, where = registry.get("fault", "broken_tip"), "fault broken_tip@3"
+    with pytest.raises(GearlabInputError, match=rf"^{where}: chip depth b = 5 mm reaches past the tooth root"):
+        broken.resolve({"b": "5 mm", "c": "10 mm"}, pair, where)
+    with pytest.raises(GearlabInputError, match=rf"^{where}: chip width c = 25 mm exceeds the face width 20 mm"):
+        broken.resolve({"b": "1 mm", "c": "25 mm"}, pair, where)
 
 
 # --- spall: depth lowers beam stiffness after the spall (Fig. 2.13 discussion) -----------------

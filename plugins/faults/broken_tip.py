@@ -7,44 +7,22 @@ surface instead: over the width c the tooth above the fracture line, depth b bel
 gone. Where the contact point lies above that line the mating tooth touches only the width left,
 L - c (no contact at all when c is the whole face width: the pair leaves mesh early, at the
 line), and the section there keeps (L - c)/L of its area and second moment (the generalised
-section of Table 2.2: A_x = 2 h_x L, I_x = 2 h_x^3 L / 3). The stiffness steps at the line
-rather than sloping into it, so the chip's response is broadband where the tapered chip's is
-not (docs/real_data.md, seventeenth round).
+section of Table 2.2: A_x = 2 h_x L, I_x = 2 h_x^3 L / 3). The same parameters, limits and
+ladder as the chip (b fixed, c growing to the full face), so step n of either is the same b and
+c; only the shape of the loss differs (docs/real_data.md, seventeenth round).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, Param, hookimpl, scaled_ladder
-
-# The chip's ladders (Tables 2.5 / 2.6): the same depth b, the width c growing to the full face.
-LADDERS = {
-    "luo2019": ({"b": 1e-3, "c": 0.0}, {"b": 1e-3, "c": 16e-3}),
-    "meng2020": ({"b": 1.07e-3, "c": 0.0}, {"b": 1.07e-3, "c": 20e-3}),
-}
+from gearlab.api import hookimpl
+from gearlab_plugins.faults.chip import Chip
 
 
-class BrokenTip(Fault):
+class BrokenTip(Chip):
     name = "broken_tip"
     doc = "Tip corner broken off along a line b below the tip over width c: the chip with a sharp fracture edge."
-    params = (
-        Param("b", "m", 1e-3, 0.0, 0.05, "depth of the fracture line below the tooth tip", "mm"),
-        Param("c", "m", 0.0, 0.0, 1.0, "width broken off across the face", "mm"),
-    )
-
-    def check(self, params, pair, where):
-        height = pair.pinion.tooth_height
-        if params["b"] >= height:
-            raise GearlabInputError(
-                f"{where}: fracture depth b = {params['b'] * 1e3:g} mm reaches past the tooth root "
-                f"(tooth height {height * 1e3:.4g} mm)"
-            )
-        if params["c"] > pair.face_width:
-            raise GearlabInputError(
-                f"{where}: broken width c = {params['c'] * 1e3:g} mm exceeds "
-                f"the face width {pair.face_width * 1e3:g} mm"
-            )
 
     def apply(self, section, params, pair):
         b, c = params["b"], params["c"]
@@ -53,9 +31,6 @@ class BrokenTip(Fault):
         above = section.x > section.tooth_height - b
         left = np.where(above, np.maximum(section.L - c, 0.0) / section.L, 1.0)  # share of the width left
         return section.replace(L=section.L * left, A=section.A * left, I=section.I * left)
-
-    def ladder_endpoints(self, pair):
-        return scaled_ladder(pair, LADDERS, "meng2020")
 
 
 @hookimpl
