@@ -29,12 +29,18 @@ the real chip looks like. This benchmark measures both, for a detection scenario
   chips (the largest step, as simulated and through ``--path``'s gain), and the best normalised
   correlation of any simulated chip (every tooth and step) with it over the eighth of the
   revolution holding most of that chip's energy.
+* ``--contact`` (the simulator alone): can a chip make the teeth lose contact and strike again? The
+  stage-1 mesh deflection P u over the last of four revolutions at the scenario source's speed and
+  load, healthy and with the source's fault at its largest step on tooth 1 (the integrator stepped
+  one step at a time to read displacements, which a simulation does not keep).
+* ``--fault KIND`` (every option): the source's chip replaced by another fault plugin at the same
+  ladder steps, e.g. ``broken_tip`` (the seventeenth round).
 
 The records' figures read the test labels (as the kind's table does); nothing here feeds a
 decision of the shipped scenario.
 
     python benchmarks/phm09_chip_form.py scenarios/phm09_chip.toml OUT [--factors 4 16] [--path]
-        [--form] [--methods source_only] [--seeds 3] [--swap-takes]
+        [--form] [--contact] [--fault broken_tip] [--methods source_only] [--seeds 3] [--swap-takes]
 
 About 75 s per factor for ``source_only`` (both sources are trained: the plain rows are the shipped
 ones, a check), 9 min for ``dann``, on this machine with two workers; ``--form`` about 1 min.
@@ -51,8 +57,12 @@ from unittest import mock
 import numpy as np
 from phm09_localised import learned_parser, learned_scenario, run_detection
 
+from gearlab.data.builder import whole_steps_rate
 from gearlab.data.cache import load_or_build
+from gearlab.dynamics.newmark import Simulator, _integrate_meshes
 from gearlab.kinds import detection
+from gearlab.physics.faults import place_fault
+from gearlab.registry import get_registry
 
 BANDS = ((3, 60), (60, 160), (160, 320), (320, 1024))  # shaft orders
 STEP = 16  # the rig's mesh harmonics are multiples of the stage-2 mesh order
@@ -188,11 +198,53 @@ def form(spec, conditions, base_label: str) -> None:
                 )
 
 
+def deflection(sim: Simulator, faults, speed: float, load: float, revolutions: int = 4) -> np.ndarray:
+    """Stage-1 mesh deflection P u (m) at every step of the last revolution, from the static equilibrium."""
+    per_rev = sim.fs / speed
+    steps = int(round(revolutions * per_rev))
+    t = np.arange(steps + 1) / sim.fs
+    tvms, _, k = sim._nominal_stiffness(faults, np.mod(2 * np.pi * speed * t, 2 * np.pi), per_rev, steps)
+    F, (u, v, a) = sim._equilibrium(load, tvms.mean)
+    shaft = 2 * np.pi * speed * t
+    k_all = np.column_stack([k] + [sim._mesh_series(i, shaft, per_rev) for i in range(len(sim.meshes))])
+    n, mu, GF = len(sim.dofs), np.array([sim.mu, *sim.mesh_mu]), sim.G @ F
+    out, channel, d = np.empty((2, 1)), np.zeros(1, dtype=np.int64), np.empty(steps)
+    for i in range(steps):  # one step per call: the state (u, v, a) is updated in place
+        rows = np.ascontiguousarray(k_all[i + 1 : i + 2])
+        _integrate_meshes(
+            sim.GMC, GF, np.zeros((n, 0)), np.zeros((1, 0)), sim.Wm, sim.Pm, sim.PW, rows, mu,
+            sim.c, 1.0 / sim.fs, sim.gamma, u, v, a, channel, out,
+        )  # fmt: skip
+        d[i] = sim.P @ u
+    return d[-int(round(per_rev)) :]
+
+
+def contact(spec) -> None:
+    """Does the stage-1 mesh ever lose contact in the simulator (deflection <= 0)?"""
+    source = spec["source"]
+    registry = get_registry()
+    model = registry.get("model", source.model)
+    pair, _ = model.resolve(source.preset, None, source.name)
+    fs = whole_steps_rate(source.fs, source.speed_hz, pair.Z1)  # as the dataset builder runs it
+    sim = Simulator(model, source.preset, fs)
+    kind, steps = source.faults[0]
+    print(f"\nstage-1 mesh deflection over a revolution, um ({source.name}, {source.speed_hz:g} Hz, fs {fs:g} Hz)")
+    print("| fault | load N m | min | mean | max | min / mean |")
+    print("|---|---|---|---|---|---|")
+    for step in (None, max(steps)):
+        faults = [] if step is None else [place_fault(registry, sim.pair, kind, 1, step=step)]
+        for load in (source.load_nm, source.load_nm / 5):
+            d = deflection(sim, faults, source.speed_hz, load) * 1e6
+            name = "healthy" if step is None else f"{kind}@1 step {step}"
+            print(f"| {name} | {load:g} | {d.min():.3f} | {d.mean():.3f} | {d.max():.3f} | {d.min() / d.mean():.3f} |")
+
+
 def main() -> None:
     parser = learned_parser(__doc__.splitlines()[0])
     parser.add_argument("--factors", nargs="*", type=float, default=[])
     parser.add_argument("--path", action="store_true")
     parser.add_argument("--form", action="store_true")
+    parser.add_argument("--contact", action="store_true")
     parser.add_argument("--base-label", default="eccentric idler")
     args = parser.parse_args()
     scenario = learned_scenario(args)
@@ -205,6 +257,8 @@ def main() -> None:
         for cond in conditions.values():
             source, clean = twin(spec, cond)
             gains[source.name] = history_gain(clean, cond)
+    if args.contact:
+        contact(spec)
     if args.form:
         form(spec, conditions, args.base_label)
     for factor in args.factors:

@@ -50,6 +50,7 @@ from unittest import mock
 
 import numpy as np
 
+from gearlab.data.spec import PHM09_CHIP_STEPS
 from gearlab.engine import load_scenario
 from gearlab.kinds import detection, record_effects
 from gearlab.kinds.detection import ROLES, Rule, _window, auc, classical_record, read_target, tsa_units
@@ -213,19 +214,24 @@ def second_channel(target, blocks, first: dict) -> dict:
 
 def learned_parser(description: str) -> argparse.ArgumentParser:
     """The command line of the phm09 benchmarks that train: the scenario, an output folder for the
-    kind's runs, the methods, seeds and --swap-takes."""
+    kind's runs, the methods, seeds, --swap-takes and --fault."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("scenario", type=Path)
     parser.add_argument("out", type=Path)
     parser.add_argument("--methods", nargs="+", default=["source_only"])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--swap-takes", action="store_true")
+    parser.add_argument("--fault", help="a fault plugin in place of the source's chip, at the same ladder steps")
     return parser
 
 
 def learned_scenario(args):
-    """The scenario of *args* (learned_parser) with its seeds, methods and, asked, the takes swapped."""
-    scenario = load_scenario(args.scenario, {"detection": {"seeds": args.seeds}})
+    """The scenario of *args* (learned_parser) with its seeds, methods and, asked, the takes swapped
+    and the source's fault replaced."""
+    overrides = {"detection": {"seeds": args.seeds}}
+    if args.fault:
+        overrides["source"] = {"faults": {args.fault: list(PHM09_CHIP_STEPS)}}
+    scenario = load_scenario(args.scenario, overrides)
     spec = scenario.spec
     if args.swap_takes:
         spec["target"] = swapped(spec["target"])
