@@ -18,7 +18,8 @@ the real chip looks like. This benchmark measures both, for a detection scenario
   of 16 orders the median over the history records of ln |record| - ln |simulator| (their mean
   revolutions), a running median over 5 harmonics, 0 dB at orders up to 64, linear in between,
   zero phase (the mesh harmonics' phases do not follow a short filter:
-  ``gearlab.learn.path.fit_path`` finds no path between these references and gives one gain).
+  ``gearlab.learn.path.fit_path`` finds no path between these references and gives one gain);
+  ``--path minimum``: the minimum-phase response of the same gain instead (causal: it rings after).
   The bound printed is the kind's: the likelihood ratio with the chip shapes as simulated, so with
   a factor or the gain it is a lower figure than the changed source's own bound.
 * ``--form`` (reads test records, a diagnosis, no decision): the real chip's synchronous signature
@@ -28,7 +29,8 @@ the real chip looks like. This benchmark measures both, for a detection scenario
   spur3). For each it prints where its energy lies over order bands, the same for the simulated
   chips (the largest step, as simulated and through ``--path``'s gain), and the best normalised
   correlation of any simulated chip (every tooth and step) with it over the eighth of the
-  revolution holding most of that chip's energy.
+  revolution holding most of that chip's energy: as simulated, through ``--path``'s zero-phase gain,
+  and through the minimum-phase response of the same gain (a structure rings after an impact).
 * ``--contact`` (the simulator alone): can a chip make the teeth lose contact and strike again? The
   stage-1 mesh deflection P u over the last of four revolutions at the scenario source's speed and
   load, healthy and with the source's fault at its largest step on tooth 1 (the integrator stepped
@@ -39,7 +41,7 @@ the real chip looks like. This benchmark measures both, for a detection scenario
 The records' figures read the test labels (as the kind's table does); nothing here feeds a
 decision of the shipped scenario.
 
-    python benchmarks/phm09_chip_form.py scenarios/phm09_chip.toml OUT [--factors 4 16] [--path]
+    python benchmarks/phm09_chip_form.py scenarios/phm09_chip.toml OUT [--factors 4 16] [--path [minimum]]
         [--form] [--contact] [--fault broken_tip] [--methods source_only] [--seeds 3] [--swap-takes]
 
 About 75 s per factor for ``source_only`` (both sources are trained: the plain rows are the shipped
@@ -87,6 +89,18 @@ def history_gain(clean, cond) -> np.ndarray:
     smooth = np.array([np.median(padded[i : i + 5]) for i in range(len(ratio))])
     smooth -= np.median(smooth[orders <= 64])
     return np.exp(np.interp(np.arange(n // 2 + 1), orders, smooth))
+
+
+def minimum_phase(gain: np.ndarray) -> np.ndarray:
+    """The causal, minimum-phase response with the magnitude *gain* (per order of a revolution): the
+    folded real cepstrum of ln |gain| (Oppenheim & Schafer, ch. 12). A structure's path rings after
+    what strikes it; the zero-phase gain spreads a chip's response both ways in time."""
+    n = 2 * (len(gain) - 1)
+    cepstrum = np.fft.irfft(np.log(gain), n=n)
+    folded = np.zeros(n)
+    folded[0], folded[n // 2] = cepstrum[0], cepstrum[n // 2]
+    folded[1 : n // 2] = 2 * cepstrum[1 : n // 2]
+    return np.exp(np.fft.rfft(folded))
 
 
 def through(gain: np.ndarray | None, x: np.ndarray) -> np.ndarray:
@@ -166,17 +180,20 @@ def form(spec, conditions, base_label: str) -> None:
     labels = {f.path: f.label for f in spec["target"].files}
     positive = spec["target"].positive
     print(f"\nenergy % per order band ({', '.join(f'{a}-{b}' for a, b in BANDS)}) and the best local correlation")
-    print("| condition | signature | RMS | energy % | best simulated chip, local corr |")
+    print(
+        "| condition | signature | RMS | energy % | best simulated chip, local corr "
+        "(as simulated / zero-phase gain / minimum-phase gain) |"
+    )
     print("|---|---|---|---|---|")
     for c, cond in conditions.items():
         shown = detection.learned_input(spec, cond["max_order"])
         _, clean = twin(spec, cond)
         gain = history_gain(clean, cond)
         largest = np.flatnonzero(clean.intensity == clean.intensity.max())
-        for name, g in (("simulated chip, largest step", None), ("the same through the history's gain", gain)):
-            chips = shown(through(g, chip_responses(clean)))
-            print(f"| {c} | {name} | | {shares(chips[largest])} | |")
-        chips = shown(chip_responses(clean))
+        paths = {"as simulated": None, "zero-phase gain": gain, "minimum-phase gain": minimum_phase(gain)}
+        chips = {name: shown(through(g, chip_responses(clean))) for name, g in paths.items()}
+        for name, x in chips.items():
+            print(f"| {c} | simulated chip, largest step, {name} | | {shares(x[largest])} | |")
         mean = {f.path: shown(r.mean(axis=0, keepdims=True))[0] for f, r in cond["history"] + cond["test"]}
         takes: dict[str, dict[str, str]] = {}
         for path in mean:
@@ -192,10 +209,8 @@ def form(spec, conditions, base_label: str) -> None:
                 x = mean[path] - mean[by_label[base_label]]
                 what = "chip" if label == positive else "control"
                 rms = np.sqrt(np.mean(x**2))
-                print(
-                    f"| {c} | take {take}: {label} less {base_label} ({what}) | {rms:.2f} | {shares(x)} | "
-                    f"{best_local(chips, clean.tooth, clean.intensity, x)} |"
-                )
+                best = " / ".join(best_local(y, clean.tooth, clean.intensity, x) for y in chips.values())
+                print(f"| {c} | take {take}: {label} less {base_label} ({what}) | {rms:.2f} | {shares(x)} | {best} |")
 
 
 def deflection(sim: Simulator, faults, speed: float, load: float, revolutions: int = 4) -> np.ndarray:
@@ -242,7 +257,7 @@ def contact(spec) -> None:
 def main() -> None:
     parser = learned_parser(__doc__.splitlines()[0])
     parser.add_argument("--factors", nargs="*", type=float, default=[])
-    parser.add_argument("--path", action="store_true")
+    parser.add_argument("--path", nargs="?", const="zero", choices=["zero", "minimum"])
     parser.add_argument("--form", action="store_true")
     parser.add_argument("--contact", action="store_true")
     parser.add_argument("--base-label", default="eccentric idler")
@@ -256,7 +271,8 @@ def main() -> None:
     if args.path:
         for cond in conditions.values():
             source, clean = twin(spec, cond)
-            gains[source.name] = history_gain(clean, cond)
+            gain = history_gain(clean, cond)
+            gains[source.name] = gain if args.path == "zero" else minimum_phase(gain)
     if args.contact:
         contact(spec)
     if args.form:
