@@ -10,7 +10,7 @@ from gearlab.params import Param
 from gearlab.physics.faults import Fault
 from gearlab.registry import get_registry, hookimpl, load_registry
 
-BUILTIN_FAULTS = ["chip", "crack", "pit", "spall"]
+BUILTIN_FAULTS = ["broken_tip", "chip", "crack", "pit", "spall"]
 
 
 class FakeDist:
@@ -131,7 +131,7 @@ def test_unknown_plugin_name_suggests_and_lists():
         registry.get("fault", "crak")
     message = str(info.value)
     assert "did you mean 'crack'" in message
-    assert "chip, crack, pit, spall" in message
+    assert "broken_tip, chip, crack, pit, spall" in message
     assert isinstance(info.value, GearlabInputError)  # the CLI turns it into exit code 2
     with pytest.raises(UnknownPluginError, match=r"scenario\.toml: unknown fault 'wer'"):
         registry.get("fault", "wer", where="scenario.toml")
