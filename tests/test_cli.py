@@ -82,6 +82,8 @@ def test_stiffness_points_option(cli, tmp_path):
         (["--preset", "luo2019", "--fault", "chip@3:c=-1mm"], "outside"),
         (["--preset", "luo2019", "--fault", "chip@3:c=1 s"], "wrong dimension"),
         (["--preset", "luo2019", "--fault", "chip@3:width=1mm"], "unknown parameter 'width'"),
+        (["--preset", "luo2019", "--fault", "broken_tip@3:b=50mm,c=3mm"], "chip depth b = 50 mm reaches past"),
+        (["--preset", "luo2019", "--fault", "broken_tip@3:b=1mm,c=30mm"], "exceeds the face width 16 mm"),
         (["--preset", "luo2019", "--points", "3"], "--points"),
     ],
 )
