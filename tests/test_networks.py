@@ -308,7 +308,7 @@ def test_shapes_started_on_the_faults_is_the_likelihood_ratio_detector():
 
     faults, X = _faults_and_rows()
     net = build_network("shapes", 2, length=1024, seed=0).eval()
-    assert matched_start(net, faults, seed=0)
+    assert matched_start(net, faults, seed=0, law="laplace")
     with torch.no_grad():
         logits = net(torch.as_tensor(X, dtype=torch.float32)).double().numpy()
     want = likelihood_ratio(X, np.zeros(1024), faults, "laplace")
@@ -325,7 +325,7 @@ def test_shapes_templates_learn_at_a_tenth_of_the_step_and_only_members_weigh():
 
     faults, X = _faults_and_rows()
     net = build_network("shapes", 2, length=1024, seed=0)
-    matched_start(net, faults, seed=0)
+    matched_start(net, faults, seed=0, law="laplace")
     before = net.features[1].shapes.detach().clone()
     opt = torch.optim.Adam(net.parameters(), lr=1e-2)
     y = torch.tensor([1, 1, 1, 1, 0, 0, 0, 0])

@@ -710,3 +710,34 @@ def test_no_training_step_moves_the_weights_further_than_the_clipped_gradient_al
     moved = float(torch.sqrt(sum(((p.detach() - q) ** 2).sum() for p, q in zip(net.parameters(), start))))
     assert moved <= 4 * 30.0 * MAX_GRAD_NORM * (1 + 1e-5)
     assert np.all(np.isfinite(history.train_loss))
+
+
+@pytest.mark.parametrize("law", ["gaussian", "laplace", "student_t"])
+def test_shapes_scores_its_templates_in_the_history_noise_law(law):
+    """The `shapes` network's law is read off the target history (its residuals' kurtosis), as
+    `likelihood_ratio`'s is: a target with Gaussian or Student-t noise is not scored as Laplace."""
+    from gearlab.learn.networks import ShapeLikelihood
+
+    rng = np.random.default_rng(5)
+    noise = {
+        "gaussian": rng.normal,
+        "laplace": rng.laplace,
+        "student_t": lambda size: rng.standard_t(2, size=size),
+    }[law](size=TARGET.X.shape)
+    target = replace(TARGET, X=(np.sin(np.arange(256) / 5.0) + noise).astype(np.float32))
+    p, k = tiny(calibration=RECIPE, network="shapes"), 0
+    s = split(p, SOURCE, target, 0, k)
+    model, _, _ = train_method(
+        p,
+        method("mmd"),
+        (SOURCE.X[s.source_train], SOURCE.fault[s.source_train].astype(np.int64)),
+        (SOURCE.X[s.source_val], SOURCE.fault[s.source_val].astype(np.int64)),
+        (target.X[s.target_train], target.fault[s.target_train].astype(np.int64)),
+        0,
+        k,
+        StateStore(None),
+        "cpu",
+        core=target.X[s.history_core],
+    )
+    laws = {m.law for m in model.modules() if isinstance(m, ShapeLikelihood)}
+    assert laws == {law}

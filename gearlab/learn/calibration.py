@@ -128,6 +128,13 @@ def draw_noise(law: str, shape: tuple[int, ...], generator: torch.Generator) -> 
     return z / torch.sqrt(-torch.log(u))
 
 
+def history_law(history: np.ndarray) -> str:
+    """The noise law of a target history: that of its residuals about its median revolution
+    (its reference, as in `prepare`), read from the kurtosis (gearlab.learn.history.noise_law)."""
+    h = np.asarray(history, dtype=np.float64)
+    return noise_law(h - np.median(h, axis=0))
+
+
 def prepare(settings: Calibration, Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None) -> Inputs:
     """The unit's references, path and noise from the source training set and the target
     training set (*yt* None: unsupervised, every target training revolution is history)."""

@@ -346,7 +346,7 @@ SHAPE_STEP = 0.1  # templates learn at a tenth of the optimiser's step (docs/lea
 class ShapeLikelihood(nn.Module):
     """``(B, L)`` residual revolutions -> ``(B, J)``: each template's log-likelihood ratio in
     the noise law *law* at the revolution's own scale (gearlab.learn.bounds, `shape_llr`); for
-    Laplace noise (the default: the chapter-5 targets' law)
+    Laplace noise (the law is the target history's, `calibration.history_law`)
 
         z_j = (||r||_1 - ||r - t_j||_1) / b,        b = median|r| / ln 2,
 
@@ -458,6 +458,14 @@ def shapes(n_classes: int, dropout: float, length: int) -> Network:
     )
 
 
+def use_law(network: nn.Module, law: str) -> None:
+    """Score *network*'s `shapes` templates (if it has any) in the noise law *law*: the law is
+    not a weight, so a network built again from a state dict is told it here."""
+    for module in network.modules():
+        if isinstance(module, ShapeLikelihood):
+            module.law = law
+
+
 def _start_shapes(
     network: Network, faults: np.ndarray, classes: np.ndarray, seed: int, law: str, prior: np.ndarray | None
 ) -> bool:
@@ -482,7 +490,7 @@ def matched_start(
     faults: np.ndarray,
     seed: int,
     classes: np.ndarray | None = None,
-    law: str = "laplace",
+    law: str | None = None,
     prior: np.ndarray | None = None,
 ) -> bool:
     """Start *network*'s filter bank as matched filters of the simulated *faults* (fault
@@ -500,6 +508,8 @@ def matched_start(
     if len(F) == 0:
         return False
     if network.name == "shapes":
+        if law is None:  # the law is the target history's (calibration.history_law), never assumed
+            raise ValueError("matched_start: a `shapes` network needs the noise law of its history")
         classes = np.ones(len(F), np.int64) if classes is None else np.asarray(classes)
         return _start_shapes(network, F, classes, seed, law, prior)
     layer = getattr(network, "bank_layer", None)

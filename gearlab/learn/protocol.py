@@ -33,8 +33,8 @@ from ..files import atomic_write
 from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
-from .calibration import THESIS, Calibration, calibrate, prepare
-from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network, matched_start
+from .calibration import THESIS, Calibration, calibrate, history_law, prepare
+from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network, matched_start, use_law
 from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device
 
 KS = (0, 1, 2, 4, 8, 16)
@@ -361,12 +361,15 @@ def train_method(
     # serves every method and every k of the repetition.
     inputs = prepare(protocol.calibration, Xs, ys, Xt, None) if adapter.calibrated else None
     augment = inputs.augment if inputs is not None and inputs.noise_law else None
+    # `shapes` scores its templates in the noise law of the history the priming reads, as
+    # `likelihood_ratio` does: the target's law is found, never assumed.
+    law = history_law(Xt if core is None else core) if adapter.calibrated else None
 
     def primed() -> dict:
         start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
         net = _net(protocol, seed, device, Xs.shape[1])
         if protocol.calibration.start == "faults":
-            matched_start(net, start.source(Xs[np.asarray(ys) != 0]), seed)
+            matched_start(net, start.source(Xs[np.asarray(ys) != 0]), seed, law=law)
         fit_supervised(
             net,
             each_draw(start.source, drawn),
@@ -410,6 +413,7 @@ def train_method(
     if adapter.calibrated:
         net = _net(protocol, seed, device, Xs.shape[1])
         net.load_state_dict(states.get(shared_state(method, rep, k, protocol), primed))
+        use_law(net, law)
         Xt_in = inputs.target(Xt)
         Xv, yv = source_val
         Xv = inputs.source(Xv)
