@@ -145,8 +145,7 @@ TABLES = {
                 1,
                 in_range(1, MAX_DRAWS),
                 "noise draws of each corrected sample; a network trains on one of them at random per "
-                "batch row, so it cannot learn the noise of one draw by heart (docs/real_data.md, "
-                "twelfth round)",
+                "batch row, so it cannot learn the noise of one draw by heart (docs/real_data.md)",
             ),
             "history_units": Key(
                 str,
@@ -726,7 +725,7 @@ def train_unit(task: tuple) -> dict:
     unit = unit_name(condition, method, seed, variant, fold)
     point = aligned_to_a_point(protocol, method, Xs, ys)
     # Against a single point the domain discrepancy falls by a few per cent every 25 epochs for as
-    # long as the training lasts (docs/real_data.md, fourteenth round): the stopping rule's "it has
+    # long as the training lasts: the stopping rule's "it has
     # stopped moving" never holds, and no epoch after the ramp is nearer convergence than the
     # ramp's end. Such a training ends there, at the first epoch its kept model may come from.
     trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
@@ -782,8 +781,8 @@ def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: n
     """Whether a method's domain loss aligns the history with a single point: a joint adapter whose
     source rows for the alignment (the healthy ones with alignment = "healthy", all of them with
     "marginal"), with no fresh noise on its batches, are one input over and over -- the difference
-    signal of a noise-free simulator's healthy revolution, which is zero (docs/real_data.md,
-    fourteenth round). The loss can then only pull every history unit onto the network's image of
+    signal of a noise-free simulator's healthy revolution, which is zero. The loss can then only
+    pull every history unit onto the network's image of
     that input, and leaves a record unlike the history wherever the training's path puts it; such a
     training ends at its ramp's end (train_unit). From the training arrays alone."""
     if get_registry().get("adapter", method.adapter).train_on != "joint" or protocol.calibration.source_noise != "off":
@@ -896,8 +895,8 @@ def crossed_record(unit: str, folds: list[dict], rule: Rule) -> dict:
     model of the records it trained on (record_effects; with one record, its mean and within-record
     spread), so record k's units, standardised by fold k, are what a *new* record's units score
     against a model aligned to the others -- the record-to-record spread the threshold needs, which
-    a network scoring the very records it was aligned to hides (docs/real_data.md: TSAs of the
-    history as the target, the history's two records 0.0-0.4 sigma_e apart, a new take of the
+    a network scoring the very records it was aligned to hides (on the PHM 2009 records, with TSAs
+    of the history as the target: the history's two records 0.0-0.4 sigma_e apart, a new take of the
     eccentric idler 0.1-5.5). A test unit's score is the mean over the folds (none saw it).
     Thresholded by *rule* on the history scores so made."""
     first = folds[0]
@@ -1337,7 +1336,7 @@ def auc(negatives: np.ndarray, positives: np.ndarray) -> float | None:
     """ROC AUC = P(score of a positive > score of a negative), ties counted half (Mann-Whitney).
     None when a side is empty or holds a score that is not a finite number: a NaN compares
     false with everything, so it would read as AUC 0 — the chips ranked last — when the method
-    in fact gave no ranking at all (likelihood_ratio's first run, docs/real_data.md)."""
+    in fact gave no ranking at all (a detector whose scores were NaN read so)."""
     if not len(negatives) or not len(positives):
         return None
     n, p = np.asarray(negatives, dtype=np.float64)[:, None], np.asarray(positives, dtype=np.float64)[None, :]

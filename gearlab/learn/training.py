@@ -92,7 +92,7 @@ def _rows(X: torch.Tensor, index: torch.Tensor, draws: np.random.Generator | Non
     """Training rows *index* of X: (n, L), or (n, D, L) holding D noise draws of each sample, of
     which each row takes one at random. A noisy source drawn once is learned by heart, noise and
     all (a few hundred samples against 4096 values each); fresh draws leave only the signal to
-    learn (docs/real_data.md, twelfth round)."""
+    learn (the PHM 2009 corrected source: docs/real_data.md)."""
     if X.ndim == 2:
         return X[index]
     pick = torch.as_tensor(draws.integers(X.shape[1], size=len(index)), device=X.device)

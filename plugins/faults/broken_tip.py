@@ -9,7 +9,7 @@ L - c (no contact at all when c is the whole face width: the pair leaves mesh ea
 line), and the section there keeps (L - c)/L of its area and second moment (the generalised
 section of Table 2.2: A_x = 2 h_x L, I_x = 2 h_x^3 L / 3). The same parameters, limits and
 ladder as the chip (b fixed, c growing to the full face), so step n of either is the same b and
-c; only the shape of the loss differs (docs/real_data.md, seventeenth round).
+c; only the shape of the loss differs (docs/real_data.md, "What limits it").
 """
 
 from __future__ import annotations
