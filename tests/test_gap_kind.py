@@ -28,7 +28,7 @@ name = "tinygap"
 kind = "gap"
 
 """
-    + domains(healthy=12)
+    + domains(healthy=14)
     + """
 [diagnosis]
 candidates = ["sensor_noise", "drive_inertias"]
@@ -43,7 +43,7 @@ seed = 0
 methods = ["mmd", "matched_filter"]
 repetitions = 1
 """
-    + schedule()
+    + schedule().replace("target_train = 8", "target_train = 10")  # the history: >= 10 rows for the statistics
     + "\n"
     + EXECUTION
 )
@@ -242,9 +242,37 @@ def test_run_summary_fields(finished):
 def test_diagnosis_sees_only_the_target_rows(finished):
     _, log = finished
     (call,) = log
-    assert isinstance(call["target_X"], np.ndarray) and call["target_X"].shape == (12, 4096)
+    assert isinstance(call["target_X"], np.ndarray) and call["target_X"].shape == (10, 4096)
     assert call["source"].model == "six_dof" and not call["source"].effects and call["source"].noise is None
     assert call["settings"].candidates == ("sensor_noise", "drive_inertias") and call["settings"].budget == 2
+
+
+def test_diagnosis_fits_on_the_history_and_no_test_row(finished):
+    """The rows the diagnosis is given are the target history (the healthy rows every repetition
+    trains on): none is a test row of any repetition the accuracy table or the bound scores, and
+    no label goes in (rows only)."""
+    from gearlab.data.cache import load_or_build
+    from gearlab.learn.protocol import history_of, split
+
+    run, log = finished
+    (call,) = log
+    spec = load_scenario(run / "scenario.toml").spec
+    protocol = spec["protocol"]
+    target, _ = load_or_build(spec["target"])
+    source, _ = load_or_build(spec["source"])
+    mean, std = target.reference
+    physical = np.asarray(target.X, dtype=np.float64) * std + mean
+    given = [int(np.flatnonzero(np.all(np.isclose(physical, row), axis=1))[0]) for row in call["target_X"]]
+    history = history_of(protocol, target)
+    assert sorted(given) == history.tolist()
+    assert set(given) <= set(np.flatnonzero(target.fault == 0))
+    for rep in range(protocol.repetitions):
+        s = split(protocol, source, target, rep, 0, history)
+        assert not set(given) & set(s.target_test.tolist())
+        assert set(given) <= set(s.target_train.tolist())
+    for r in records(run).values():
+        if "n_test" in r:  # each accuracy unit scored the rows outside the history
+            assert r["n_test"] == len(target.X) - protocol.target_train
 
 
 def test_summary_lines(finished):
@@ -312,9 +340,10 @@ def test_partial_run_tables_and_charts(finished, tiny):
             'candidates = ["sensor_noise", 3]',
             "[diagnosis] key 'candidates'",
         ),
-        ("healthy = 12\nnoise", "healthy = 0\nnoise", "[target] key 'healthy'"),
-        ("healthy = 12\nnoise", "healthy = 5\nnoise", "[target] key 'healthy'"),
+        ("healthy = 14\nnoise", "healthy = 0\nnoise", "[target] key 'healthy'"),
+        ("healthy = 14\nnoise", "healthy = 5\nnoise", "[target] key 'healthy'"),
         ("budget = 2", "budget = 0", "[diagnosis] key 'budget'"),
+        ("target_train = 10", "target_train = 6", "[accuracy] key 'target_train'"),  # a history too short
         ("healthy = 10\nbootstrap", "healthy = 3\nbootstrap", "[diagnosis] key 'healthy'"),
         ("seed = 0\n", "seed = 0\nalpha = 1.0\n", "[diagnosis] key 'alpha'"),
         ('methods = ["mmd", "matched_filter"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
@@ -325,10 +354,10 @@ def test_partial_run_tables_and_charts(finished, tiny):
             "[target] key 'fs'",
         ),
         ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),
-        ("healthy = 12\nnoise", 'healthy = 12\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
+        ("healthy = 14\nnoise", 'healthy = 14\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
         # a measured file names its channel as text: an index (a records' column) is refused with the fix
         (
-            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 14\n'
             'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
             'file = "rec.wav"\nvibration = 0\nspeed = "40 Hz"',
             "[target] key 'vibration'",
@@ -357,7 +386,7 @@ def test_measured_target_with_too_few_revolutions_leaves_no_run(tiny, cli, calls
     np.savez(tiny.parent / "rec.npz", acc=np.sin(2 * np.pi * 25 * speed * t), fs=np.array(fs))
     tiny.write_text(
         TINY.replace(
-            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 14\n'
             'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
             'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"',
         )
@@ -380,7 +409,7 @@ def test_a_measured_target_goes_with_its_chain_and_its_units(tiny, cli, calls, u
     np.savez(tiny.parent / "rec.npz", acc=counts, fs=np.array(fs))
     tiny.write_text(
         TINY.replace(
-            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 12\n'
+            'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 14\n'
             'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
             'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"\n' + units,
         ).replace("[accuracy]\n", "[accuracy]\nenabled = false\n")

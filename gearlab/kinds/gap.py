@@ -36,7 +36,7 @@ from ..errors import GearlabInputError
 from ..events import Event
 from ..gap.diagnose import Settings
 from ..learn.networks import NetworkSettings
-from ..learn.protocol import Counts, Method, Protocol, check, check_data, shared_state
+from ..learn.protocol import Counts, Method, Protocol, check, check_data, history_of, shared_state
 from ..learn.schedule import two_phases
 from ..registry import get_registry
 from ..runs import RunDir
@@ -167,6 +167,8 @@ def build(scenario: Scenario) -> dict:
         seed=a["seed"],
         device=device_of(scenario),
     )
+    if isinstance(target, DatasetSpec):  # the diagnosis reads the history only (learn.protocol.history_of)
+        check_healthy(min(healthy, protocol.target_train), location(path, "accuracy", "target_train"))
     if a["enabled"]:
         if protocol.min_epochs > protocol.max_epochs:
             raise GearlabInputError(
@@ -369,20 +371,20 @@ def quick(scenario: Scenario) -> None:
 # --- run -------------------------------------------------------------------------------------------
 
 
-def target_rows(dataset, z1: int, where: str) -> tuple[np.ndarray, str]:
-    """The target's healthy revolutions in physical units, checked; and a note on what was used.
-    An unlabelled measured record is taken as healthy throughout (the importer standardises it
-    against all its revolutions alike); one whose units are unknown gets a warning."""
-    from ..gap.views import healthy_rows
-
-    note = ""
+def target_rows(dataset, history: np.ndarray, z1: int, where: str) -> tuple[np.ndarray, str]:
+    """The target's history revolutions in physical units, checked; and a note on what was used.
+    A labelled target gives its *history* rows only (`learn.protocol.history_of`: healthy rows that
+    every repetition trains on, so no test row reaches the diagnosis). An unlabelled measured record
+    is taken as healthy throughout (the importer standardises it against all its revolutions alike;
+    there is no test set); one whose units are unknown gets a warning."""
     labels = np.asarray(dataset.label)
+    mean, std = dataset.reference
     if len(labels) and np.all(labels == -1):
-        mean, std = dataset.reference
         rows = np.asarray(dataset.X, dtype=np.float64) * std + mean
         note = "the target is unlabelled: all its revolutions are taken as healthy"
     else:
-        rows = healthy_rows(dataset) if (labels == 0).any() else np.empty((0, dataset.X.shape[1]))
+        rows = np.asarray(dataset.X, dtype=np.float64)[history] * std + mean
+        note = f"the diagnosis reads the target history: {len(rows)} healthy training revolutions, no test row"
     check_healthy(len(rows), where)
     meta = dataset.meta or {}
     if meta.get("source") == "measured":
@@ -468,7 +470,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))
             target, _ = load_or_build(spec["target"], executor, on_event)
-            target_X, note = target_rows(target, z1, location(scenario.path, "target"))
+            history = history_of(spec["protocol"], target)
+            target_X, note = target_rows(target, history, z1, location(scenario.path, "target"))
             chain = None
             if (target.meta or {}).get("source") == "measured":
                 chain = chain_of(target.meta)
@@ -509,7 +512,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     corrected = corrected.with_(
                         name=f"{source_spec.name}-corrected", domain=f"{source_spec.name}-corrected"
                     )
-                accuracy(scenario, run, corrected, executor, on_event, done)
+                accuracy(scenario, run, corrected, history, executor, on_event, done)
         summarise(scenario, run, notes)
 
 
@@ -525,7 +528,10 @@ def _brief(record: dict) -> dict:
     }
 
 
-def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, on_event, done: dict) -> None:
+def accuracy(
+    scenario: Scenario, run: RunDir, corrected: DatasetSpec, history: np.ndarray, executor, on_event, done: dict
+) -> None:
+    """Every method trained on the history (and no other target row) and scored on the rest."""
     spec = scenario.spec
     protocol: Protocol = spec["protocol"]
     sources = {UNCORRECTED: spec["source"], CORRECTED: corrected}
@@ -571,7 +577,7 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
             continue
         target_data = (spec["target"], cache.entry_path(spec["target"]))
         tasks = [
-            (protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.path / "states" / variant)
+            (protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.path / "states" / variant, history)
             for rep, variant, m in phase
             for s in [source_of(variant, m)]
         ]
@@ -592,7 +598,7 @@ def accuracy(scenario: Scenario, run: RunDir, corrected: DatasetSpec, executor, 
     if "bound" not in done:  # the best any method could do on these test sets (simulated noisy targets only)
         source, _ = load_or_build(spec["source"], executor, on_event)
         target, _ = load_or_build(spec["target"], executor, on_event)
-        bound = bayes_bound(spec["target"], source, target, replace(protocol, ks=(0,)), executor, on_event)
+        bound = bayes_bound(spec["target"], source, target, replace(protocol, ks=(0,)), executor, on_event, history)
         if bound is not None:
             run.append({"unit": "bound", **bound})
 

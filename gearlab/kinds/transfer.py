@@ -254,8 +254,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 def train_unit(task: tuple) -> dict:
     """One unit of work, in this process or a worker: the datasets come from the cache (they
     were built before), shared states from the run directory. One torch thread per unit,
-    so that a result does not depend on how many workers run side by side."""
-    protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states = task
+    so that a result does not depend on how many workers run side by side. An eighth element,
+    when there is one, is the fixed target history (gearlab.learn.protocol.split)."""
+    protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states, *history = task
     torch.set_num_threads(1)
     source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
     # states/ lies in the run directory, beside the progress/ folder the engine watches
@@ -265,13 +266,25 @@ def train_unit(task: tuple) -> dict:
             acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
             progress(f"epoch {epoch + 1}{acc}")
 
-        return run_unit(protocol, source, target, rep, k, method, StateStore(states), on_epoch=report)
+        return run_unit(
+            protocol,
+            source,
+            target,
+            rep,
+            k,
+            method,
+            StateStore(states),
+            on_epoch=report,
+            history=next(iter(history), None),
+        )
 
 
 BOUND = "Bayes bound (target's own shapes and noise law, best threshold)"
 
 
-def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None) -> dict | None:
+def bayes_bound(
+    target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None, history=None
+) -> dict | None:
     """The reference column of the table: the accuracy (%) of the Bayes detector
     (gearlab.learn.bounds) on each (repetition, k)'s target test set, with the best threshold,
     and the faults it finds at 1 % false alarms. None unless the target is simulated with noise
@@ -287,7 +300,7 @@ def bayes_bound(target_spec, source, target, protocol: Protocol, executor=None, 
     for k in protocol.ks:
         acc, det = [], []
         for rep in range(protocol.repetitions):
-            test = split(protocol, source, target, rep, k).target_test
+            test = split(protocol, source, target, rep, k, history).target_test
             y = target.fault[test]
             acc.append(best_accuracy(scores[test], y))
             det.append(detection_at(scores[test], y, 0.01))

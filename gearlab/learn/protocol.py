@@ -39,6 +39,7 @@ from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_devi
 
 KS = (0, 1, 2, 4, 8, 16)
 TARGET_DRAW = 1  # seeds the repetition's target orders apart from its source split
+HISTORY_DRAW = 2  # seeds a history fixed across repetitions (history_of) apart from both
 ADAM_LR = 1e-3  # TensorFlow's default, which the thesis's Adam runs used (Table 5.3)
 
 
@@ -181,17 +182,29 @@ def check_data(protocol: Protocol, source: Counts, target: Counts, where: str) -
         )
 
 
-def split(protocol: Protocol, source, target, rep: int, k: int) -> Split:
+def history_of(protocol: Protocol, target) -> np.ndarray:
+    """A target history fixed across repetitions: target_train - max(ks) healthy rows drawn once.
+    What a kind fits on the target besides its networks (the gap diagnosis) reads these rows and
+    passes them to `split`, which keeps them in every repetition's training set: never a test row."""
+    rng = np.random.default_rng([protocol.seed, HISTORY_DRAW])
+    healthy = rng.permutation(np.flatnonzero(target.fault == 0))
+    return np.sort(healthy[: protocol.target_train - max(protocol.ks)])
+
+
+def split(protocol: Protocol, source, target, rep: int, k: int, history: np.ndarray | None = None) -> Split:
     """Random source validation split and target orders (per repetition); the target training
     set takes the first k faults and the first target_train - k healthy samples of the orders.
     The history core is the first target_train - max(ks) healthy ones: in every k's training
-    set, in no k's test set."""
+    set, in no k's test set. *history* (`history_of`): healthy rows that come first in every
+    repetition's order, so that the core is exactly they."""
     rng = np.random.default_rng([protocol.seed, rep])
     order = rng.permutation(len(source.X))
     n_val = _n_val(protocol, len(order))
     rng_t = np.random.default_rng([protocol.seed, rep, TARGET_DRAW])
     faults = rng_t.permutation(np.flatnonzero(target.fault == 1))
     healthy = rng_t.permutation(np.flatnonzero(target.fault == 0))
+    if history is not None:
+        healthy = np.concatenate([rng_t.permutation(history), healthy[~np.isin(healthy, history)]])
     train = np.sort(np.concatenate([faults[:k], healthy[: protocol.target_train - k]]))
     test = np.setdiff1d(np.arange(len(target.X)), train)
     core = np.sort(healthy[: protocol.target_train - max(*protocol.ks, k)])
@@ -257,10 +270,12 @@ def run_unit(
     method: Method,
     states: StateStore,
     on_epoch: Callable | None = None,
+    history: np.ndarray | None = None,
 ) -> dict:
-    """Train one method for one (repetition, k) and score it on the target test set."""
+    """Train one method for one (repetition, k) and score it on the target test set (*history*:
+    see `split`)."""
     device = pick_device(protocol.device)
-    s = split(protocol, source, target, rep, k)
+    s = split(protocol, source, target, rep, k, history)
     Xs, ys = source.X[s.source_train], source.fault[s.source_train].astype(np.int64)
     val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
     Xt = target.X[s.target_train]
