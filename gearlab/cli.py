@@ -96,12 +96,20 @@ Faults (repeat --fault for several, on the same or different teeth):
 `gearlab plugins` lists every fault's parameters, units, defaults and bounds.
 
 Example: gearlab stiffness --preset luo2019 --fault crack@1=10 --plot tvms.png
+
+A gear pair of your own: gearlab stiffness --gearbox my_gearbox.toml --stage 1 (docs/gearbox.md)
 """
 
 
 @app.command(help=STIFFNESS_HELP)
 def stiffness(
-    preset: Annotated[str, typer.Option(help="gear-pair preset: luo2019 (Table 2.3) or meng2020 (Table 2.4)")],
+    preset: Annotated[
+        str | None, typer.Option(help="gear-pair preset: luo2019 (Table 2.3) or meng2020 (Table 2.4)")
+    ] = None,
+    gearbox: Annotated[
+        str | None, typer.Option(help="a gearbox description (.toml, docs/gearbox.md) or a built-in one's name")
+    ] = None,
+    stage: Annotated[int, typer.Option(help="with --gearbox: the stage whose gear pair to compute (1 = input)")] = 1,
     fault: Annotated[list[str] | None, typer.Option(help="KIND@TOOTH=STEP or KIND@TOOTH:NAME=VALUE,...")] = None,
     points: Annotated[int, typer.Option(help="samples over one pinion revolution")] = 4096,
     csv: Annotated[Path | None, typer.Option(help="write theta_rad,k_N_per_m to this CSV file")] = None,
@@ -112,13 +120,12 @@ def stiffness(
     from .files import atomic_write
     from .kinds.stiffness import csv_text
     from .physics.faults import parse_fault_option, place_fault
-    from .physics.presets import gear_pair
     from .physics.stiffness import MeshStiffnessModel, StiffnessOptions
     from .registry import get_registry
 
     if not 64 <= points <= 1 << 20:
         raise GearlabInputError(f"--points: expected 64 .. {1 << 20}, got {points}")
-    pair = gear_pair(preset)
+    pair = _stiffness_pair(preset, gearbox, stage)
     registry = get_registry()
     placed = []
     for text in fault or []:
@@ -150,6 +157,26 @@ def stiffness(
         label = " + ".join(p.label for p in placed) or "healthy"
         tvms_figure(curves + [(label, ms.theta, ms.k)], f"TVMS of {pair.name}: {label}", plot)
         console.print(f"wrote {plot}")
+
+
+def _stiffness_pair(preset: str | None, gearbox: str | None, stage: int):
+    """The gear pair of `gearlab stiffness`: a preset's, or a stage's of a gearbox description."""
+    if preset is None and gearbox is None:
+        raise GearlabInputError("Missing option '--preset' (a gear-pair preset) or '--gearbox' (a gearbox description)")
+    if preset is not None and gearbox is not None:
+        raise GearlabInputError("--preset and --gearbox: give one gear pair, not both")
+    if preset is not None:
+        from .physics.presets import gear_pair
+
+        return gear_pair(preset)
+    from .gearbox import gear_pair as stage_pair
+    from .gearbox import resolve_gearbox
+
+    box = resolve_gearbox(gearbox)
+    if not 1 <= stage <= len(box.stages):
+        count = len(box.stages)
+        raise GearlabInputError(f"--stage: {box.source} has {count} stage(s); expected 1 .. {count}")
+    return stage_pair(box, box.stages[stage - 1])
 
 
 def _simulator(model: str, preset: str | None, fs: float = 200e3):

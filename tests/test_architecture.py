@@ -31,7 +31,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "gearlab.executors",
         ),
     ),
-    ("physics and signals", ("gearlab.physics", "gearlab.signals")),
+    ("physics and signals", ("gearlab.physics", "gearlab.signals", "gearlab.gearbox")),
     ("dynamics", ("gearlab.dynamics",)),
     ("effect contract", ("gearlab.effect_contract",)),
     ("plugin registry", ("gearlab.registry",)),

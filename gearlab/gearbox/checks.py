@@ -1,0 +1,176 @@
+"""Geometry of a described spur stage (ISO 21771) and the checks a gear engineer makes first.
+
+For a stage of module m, pressure angle α, tooth counts z1, z2 and profile shifts x1, x2:
+
+    d = m z,  d_b = d cos α,  d_a = d + 2 m (h_a* + x),  d_f = d - 2 m (h_f* - x)    (no tip shortening)
+    inv α_w = inv α + 2 tan α (x1 + x2) / (z1 + z2),   a_w = m (z1 + z2) cos α / (2 cos α_w)
+    ε_α = (√(r_a1² - r_b1²) + √(r_a2² - r_b2²) - a_w sin α_w) / (π m cos α)
+
+Checks, each a one-line error naming the key:
+
+* centre distance: a given centre distance must equal a_w (the tooth counts, module and
+  shifts fix it); the message says which tooth sum or shift sum would fit;
+* undercut: x ≥ (5/6) h_a* - z sin²α / 2 (the practical limit of DIN 3960 / Niemann: slight
+  undercut that stays off the active flank is accepted, z ≥ 14 at 20 deg and x = 0);
+* interference: the mating tip must meet each flank on its involute, above the form circle
+  where the generating rack's straight flank ends (roll length L_F = r sin α - m (h_FfP* - x) / sin α,
+  h_FfP* = h_f* - ρ_fP* (1 - sin α));
+* contact ratio ε_α ≥ 1; pointed teeth (tip thickness s_a ≤ 0); a bore that cuts the root circle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import GearlabInputError
+
+# Slack on the practical undercut limit: at 20 deg and x = 0 it admits z = 14 (x_min' = 0.015).
+_UNDERCUT_SLACK = 0.02
+# A described centre distance agrees with a_w within this share of the module (or 10 µm).
+_CENTRE_TOLERANCE = 0.02
+
+
+def involute(angle: float) -> float:
+    return math.tan(angle) - angle
+
+
+def inverse_involute(value: float) -> float:
+    """α with inv α = value (Newton from a cube-root start; converges in a few steps below 60 deg)."""
+    if value <= 0:
+        return 0.0
+    a = (3.0 * value) ** (1.0 / 3.0)
+    for _ in range(50):
+        step = (involute(a) - value) / math.tan(a) ** 2  # d inv α / dα = tan²α
+        a -= step
+        if abs(step) < 1e-15:
+            break
+    return a
+
+
+@dataclass(frozen=True)
+class StageGeometry:
+    """Diameters (m), operating pressure angle (rad), centre distances (m), contact ratio of a stage."""
+
+    d: tuple[float, float]
+    d_b: tuple[float, float]
+    d_a: tuple[float, float]
+    d_f: tuple[float, float]
+    alpha_w: float
+    a: float  # reference centre distance m (z1 + z2) / 2
+    a_w: float  # operating centre distance
+    contact_ratio: float
+    tip_thickness: tuple[float, float]  # s_a
+    roll_start: tuple[float, float]  # roll length from T_i on the line of action where contact starts
+    roll_form: tuple[float, float]  # roll length of the form circle (end of the generated involute)
+
+    def describe(self) -> dict:
+        return {
+            "d_mm": [v * 1e3 for v in self.d],
+            "d_b_mm": [v * 1e3 for v in self.d_b],
+            "d_a_mm": [v * 1e3 for v in self.d_a],
+            "d_f_mm": [v * 1e3 for v in self.d_f],
+            "alpha_w_deg": math.degrees(self.alpha_w),
+            "a_mm": self.a * 1e3,
+            "a_w_mm": self.a_w * 1e3,
+            "contact_ratio": self.contact_ratio,
+        }
+
+
+def stage_geometry(stage) -> StageGeometry:
+    m, alpha = stage.module, stage.pressure_angle
+    gears = (stage.pinion, stage.wheel)
+    z1, z2 = stage.pinion.z, stage.wheel.z
+    x_sum = stage.pinion.x + stage.wheel.x
+    alpha_w = inverse_involute(involute(alpha) + 2.0 * math.tan(alpha) * x_sum / (z1 + z2))
+    a = 0.5 * m * (z1 + z2)
+    a_w = a * math.cos(alpha) / math.cos(alpha_w)
+    d = tuple(m * g.z for g in gears)
+    d_b = tuple(v * math.cos(alpha) for v in d)
+    d_a = tuple(v + 2 * m * (stage.addendum + g.x) for v, g in zip(d, gears))
+    d_f = tuple(v - 2 * m * (stage.dedendum - g.x) for v, g in zip(d, gears))
+    tip_roll = tuple(math.sqrt(max(0.0, (ra / 2) ** 2 - (rb / 2) ** 2)) for ra, rb in zip(d_a, d_b))
+    line = a_w * math.sin(alpha_w)  # T1 T2, the line of action between the base-circle tangents
+    epsilon = (tip_roll[0] + tip_roll[1] - line) / (math.pi * m * math.cos(alpha))
+    roll_start = (line - tip_roll[1], line - tip_roll[0])
+    h_ffp = stage.dedendum - stage.tool_tip_radius * (1 - math.sin(alpha))
+    roll_form = tuple(v / 2 * math.sin(alpha) - m * (h_ffp - g.x) / math.sin(alpha) for v, g in zip(d, gears))
+    s_a = []
+    for va, vb, g in zip(d_a, d_b, gears):
+        alpha_a = math.acos(min(1.0, vb / va))
+        s_a.append(va * (math.pi / (2 * g.z) + 2 * g.x * math.tan(alpha) / g.z + involute(alpha) - involute(alpha_a)))
+    return StageGeometry(d, d_b, d_a, d_f, alpha_w, a, a_w, epsilon, tuple(s_a), roll_start, roll_form)
+
+
+def _mm(v: float) -> str:
+    return f"{v * 1e3:.4g} mm"
+
+
+def check_geometry(box) -> None:
+    """Raise on the first stage whose geometry cannot mesh (see the module doc)."""
+    for stage in box.stages:
+        check_stage(stage)
+
+
+def check_stage(stage) -> StageGeometry:
+    g = stage_geometry(stage)
+    m, alpha = stage.module, stage.pressure_angle
+    z1, z2 = stage.pinion.z, stage.wheel.z
+    gears = (("pinion", stage.pinion), ("wheel", stage.wheel))
+    x_sum = stage.pinion.x + stage.wheel.x
+    # Undercut, before the checks that an undercut tooth would fail in a less telling way.
+    for _, gear in gears:
+        x_min = 5.0 / 6.0 * stage.addendum - gear.z * math.sin(alpha) ** 2 / 2
+        if gear.x < x_min - _UNDERCUT_SLACK:
+            raise GearlabInputError(
+                f"{gear.where} key 'z': {gear.z} teeth at x = {gear.x:g} are undercut (α = "
+                f"{math.degrees(alpha):g} deg, h_a* = {stage.addendum:g}): the tool cuts into the active flank; "
+                f"expected a profile shift x ≥ {x_min:.3f} or more teeth"
+            )
+    if stage.centre_distance is not None:
+        tolerance = max(_CENTRE_TOLERANCE * m, 1e-5)
+        given = stage.centre_distance
+        if abs(given - g.a_w) > tolerance:
+            teeth = 2 * given / m
+            fit = f"z1 + z2 = {teeth:.4g} at this module" + (
+                "" if abs(teeth - round(teeth)) > 0.01 else f" ({round(teeth)} teeth)"
+            )
+            cos_w = g.a * math.cos(alpha) / given
+            shift = ""
+            if 0 < cos_w < 1:
+                x_fit = (involute(math.acos(cos_w)) - involute(alpha)) * (z1 + z2) / (2 * math.tan(alpha))
+                if -1.5 < x_fit < 2.5:
+                    shift = f", or a profile shift sum x1 + x2 = {x_fit:.3f}"
+            raise GearlabInputError(
+                f"{stage.where} key 'centre_distance': {_mm(given)} contradicts z1 = {z1}, z2 = {z2}, m = {_mm(m)}, "
+                f"x1 + x2 = {x_sum:g}, which mesh at a_w = {_mm(g.a_w)}; expected {fit}{shift}"
+            )
+    for (_, gear), s_a in zip(gears, g.tip_thickness):
+        if s_a <= 0:
+            raise GearlabInputError(
+                f"{gear.where} key 'x': the teeth are pointed (tip thickness {_mm(s_a)} at x = {gear.x:g}); "
+                "expected a smaller profile shift or addendum"
+            )
+    for (_, gear), d_f in zip(gears, g.d_f):
+        if gear.bore >= d_f:
+            raise GearlabInputError(
+                f"{gear.where} key 'bore': {_mm(gear.bore)} reaches the root circle d_f = {_mm(d_f)}; "
+                "expected a bore smaller than the root diameter"
+            )
+    # Interference: the mating tip must meet each flank on its involute (above the form circle).
+    for (role, gear), (other, _), start, form in zip(gears, reversed(gears), g.roll_start, g.roll_form):
+        limit = max(form, 0.0)
+        if start < limit:
+            where = "below its base circle" if start < 0 else "below the end of its involute (in the fillet)"
+            raise GearlabInputError(
+                f"{gear.where} key 'z': the {other}'s tip meets the {role} {where} (interference: contact starts "
+                f"{_mm(start)} from T on the line of action, the involute at {_mm(limit)}); expected more {role} "
+                "teeth, a positive profile shift or a shorter addendum"
+            )
+    if g.contact_ratio < 1.0:
+        raise GearlabInputError(
+            f"{stage.where}: contact ratio ε_α = {g.contact_ratio:.3f} below 1 (z1 = {z1}, z2 = {z2}, "
+            f"α_w = {math.degrees(g.alpha_w):.3g} deg): the next tooth pair would engage only after the last "
+            "lost contact; expected ε_α ≥ 1 (more teeth, a larger addendum or a smaller pressure angle)"
+        )
+    return g

@@ -1,0 +1,149 @@
+"""What gearlab derives from a description: the gear pairs of the potential-energy model.
+
+Each stage becomes a :class:`gearlab.physics.geometry.GearPair` (pinion = gear 1 drives the
+wheel = gear 2), so the stiffness engine and every fault plugin work on it unchanged:
+
+    Z1, Z2 = z;  module = m;  pressure_angle = α;  face_width = min(b1, b2) (the contact width)
+    addendum = h_a*;  clearance = h_f* - h_a*;  tool_tip_radius = ρ_fP*;  hub_radius = d_bore / 2
+    E, nu = the gears' common material
+
+The PEM geometry of thesis 2.1 has no profile shift and one material for both teeth (the
+Hertz term of eq. 2.94 assumes it): a stage outside that is refused here, naming the key,
+while the order table and `gearlab inspect` still take it. Different bores are kept: the
+fillet term (eq. 2.46) of each gear uses its own hub radius.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from ..errors import GearlabInputError
+from ..physics.geometry import GearPair
+
+
+@dataclass(frozen=True)
+class StagePair(GearPair):
+    """A GearPair whose wheel sits on its own bore: hub_radius is the pinion's, wheel_hub_radius the wheel's."""
+
+    wheel_hub_radius: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        wheel = dataclasses.replace(self.gear, hub_radius=self.wheel_hub_radius)
+        if not 0 < self.wheel_hub_radius < wheel.R_r:
+            raise GearlabInputError(
+                f"gear pair {self.name!r}: wheel_hub_radius {self.wheel_hub_radius * 1e3:g} mm must be smaller "
+                f"than the wheel root radius {wheel.R_r * 1e3:.4g} mm"
+            )
+        object.__setattr__(self, "gear", wheel)
+
+
+def pair_name(box, stage) -> str:
+    if stage.name:
+        return stage.name
+    return box.name if len(box.stages) == 1 else f"{box.name}_stage{stage.index}"
+
+
+def gear_pair(box, stage) -> GearPair:
+    """The GearPair of one stage of the description *box* (see the module doc)."""
+    for gear in (stage.pinion, stage.wheel):
+        if gear.x != 0:
+            raise GearlabInputError(
+                f"{gear.where} key 'x': the mesh-stiffness model (thesis 2.1) is written for gears without "
+                f"profile shift; x = {gear.x:g} is kept for the order table and inspect, but no gear pair can be "
+                "derived from it yet"
+            )
+    p, w = stage.pinion.material, stage.wheel.material
+    if (p.E, p.nu) != (w.E, w.nu):
+        raise GearlabInputError(
+            f"{stage.wheel.where} key 'material': the mesh-stiffness model (eq. 2.94) takes one material for both "
+            f"gears; the pinion has E = {p.E / 1e9:g} GPa, nu = {p.nu:g} and the wheel E = {w.E / 1e9:g} GPa, "
+            f"nu = {w.nu:g}"
+        )
+    values = dict(
+        Z1=stage.pinion.z,
+        Z2=stage.wheel.z,
+        module=stage.module,
+        face_width=min(stage.pinion.face_width, stage.wheel.face_width),
+        pressure_angle=stage.pressure_angle,
+        E=p.E,
+        nu=p.nu,
+        hub_radius=stage.pinion.bore / 2,
+        addendum=stage.addendum,
+        clearance=stage.dedendum - stage.addendum,
+        tool_tip_radius=stage.tool_tip_radius,
+        name=pair_name(box, stage),
+    )
+    try:
+        if stage.wheel.bore == stage.pinion.bore:
+            return GearPair(**values)
+        return StagePair(**values, wheel_hub_radius=stage.wheel.bore / 2)
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{stage.where}: {exc}") from None
+
+
+def gear_pairs(box) -> tuple[GearPair, ...]:
+    """The gear pairs of every stage, input first."""
+    return tuple(gear_pair(box, stage) for stage in box.stages)
+
+
+# --- the lumped model ----------------------------------------------------------------------------
+#
+# The existing formulations: one stage -> ten_dof (and its eight/six-DOF subsets, which pick
+# their parameters from it), two stages -> two_stage (the PHM 2009 rig's model). Names are
+# those of thesis Tables 2.3 and 2.4.
+
+_DYNAMICS_NAMES = {
+    "motor_inertia": "I11",
+    "load_inertia": "I22",
+    "coupling_stiffness": "k_c",
+    "coupling_damping": "c_c",
+    "bearing_stiffness": "k_b",
+    "bearing_damping": "c_b",
+    "casing_mass": "mf",
+    "mounting_stiffness_x": "k_xf",
+    "mounting_stiffness_y": "k_yf",
+    "mounting_damping_x": "c_xf",
+    "mounting_damping_y": "c_yf",
+    "mesh_damping_ratio": "zeta",
+}
+_SHAFT_BLOCKS = {1: (("m1", "I12"), ("m2", "I21")), 2: (("m1", "I12"), ("m2", "I21"), ("m3", "I31"))}
+MODELS = {1: "ten_dof", 2: "two_stage"}
+
+
+def disc(gear, module: float) -> tuple[float, float]:
+    """(mass kg, polar inertia kg m^2) of a gear as a solid disc of its reference diameter d = m z
+    with its bore: m = ρ π (d² - d_bore²) b / 4, J = m (d² + d_bore²) / 8."""
+    d, bore = module * gear.z, gear.bore
+    mass = gear.material.density * 3.141592653589793 * (d * d - bore * bore) * gear.face_width / 4
+    return mass, mass * (d * d + bore * bore) / 8
+
+
+def shaft_blocks(box) -> list[tuple[float, float]]:
+    """(mass, inertia) of each shaft's block: as described, else the sum of its gears' discs."""
+    gears: list[list[tuple[float, float]]] = [[] for _ in box.shafts]
+    for k, stage in enumerate(box.stages):
+        gears[k].append(disc(stage.pinion, stage.module))
+        gears[k + 1].append(disc(stage.wheel, stage.module))
+    out = []
+    for i, parts in enumerate(gears):
+        mass = box.shaft_mass[i] if box.shaft_mass[i] is not None else sum(m for m, _ in parts)
+        inertia = box.shaft_inertia[i] if box.shaft_inertia[i] is not None else sum(j for _, j in parts)
+        out.append((mass, inertia))
+    return out
+
+
+def lumped_params(box) -> tuple[str, dict[str, float]]:
+    """(model name, its parameters) of the lumped model of *box*: ten_dof for one stage, two_stage
+    for two. Three stages have no lumped formulation yet (refused in one line)."""
+    stages = len(box.stages)
+    if stages not in MODELS:
+        raise GearlabInputError(
+            f"{box.source}: [[stages]]: no lumped model for {stages} stages yet (one stage: ten_dof, two: two_stage); "
+            "the gear pairs and the order table are derived all the same"
+        )
+    params = {_DYNAMICS_NAMES[k]: v for k, v in box.dynamics.items()}
+    for (m_name, i_name), (mass, inertia) in zip(_SHAFT_BLOCKS[stages], shaft_blocks(box)):
+        params[m_name], params[i_name] = mass, inertia
+    return MODELS[stages], params
