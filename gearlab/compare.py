@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .charts import Chart, Curve
+from .confined import read_file
 from .engine import scenario_of
 from .errors import GearlabInputError
 from .kinds import SCENARIO_KINDS
@@ -188,7 +189,7 @@ def compare_html(runs: list[Compared], figures: Path) -> str:
     ]
     for i, chart in enumerate(compare_charts(runs), start=1):
         png = chart_figure(chart, Path(figures) / f"compare_{i}.png")
-        data = base64.b64encode(png.read_bytes()).decode()
+        data = base64.b64encode(read_file(png)).decode()  # drawn just now into the caller's folder
         caption = f"Figure {i}. {chart.title}: the runs overlaid ({chart.ylabel} against {chart.xlabel or 'category'})."
         parts.append(
             f"<figure><img alt='{html.escape(chart.title)}' src='data:image/png;base64,{data}'>"

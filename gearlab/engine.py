@@ -8,12 +8,12 @@ callback: the CLI draws rich progress bars from them, the TUI its widgets.
 
 from __future__ import annotations
 
-import shutil
 import threading
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from .confined import Confined
 from .errors import GearlabInputError
 from .events import PROGRESS, Event, EventSink, ignore_events
 from .files import cannot_write, write_problem
@@ -39,9 +39,12 @@ class ProgressWatcher(threading.Thread):
 
     def __init__(self, run: RunDir, on_event: EventSink, every: float = 0.5):
         super().__init__(daemon=True)
-        self.folder, self.on_event, self.every = run.path / PROGRESS, on_event, every
+        self.folder, self.on_event, self.every = run.file(PROGRESS), on_event, every
         self.stopped = threading.Event()
-        shutil.rmtree(self.folder, ignore_errors=True)  # left by a killed run
+        try:
+            self.folder.remove_tree()  # left by a killed run
+        except OSError:
+            pass
 
     def run(self) -> None:
         shown: dict[str, str] = {}
@@ -53,10 +56,14 @@ class ProgressWatcher(threading.Thread):
         """Send the reports that changed since *shown* and the ends of the units gone; the
         reports now shown."""
         now = {}
-        for path in self.folder.glob("*.txt") if self.folder.is_dir() else ():
+        try:
+            reports = self.folder.files("*.txt")
+        except (OSError, GearlabInputError):  # progress/ is no folder of the run's own: nothing to show
+            reports = []
+        for path in reports:
             try:
-                now[path.stem.replace("__", "/")] = path.read_text()
-            except OSError:  # it went between the listing and the read
+                now[path.stem.replace("__", "/")] = path.read_bytes(limit=1 << 16).decode(errors="replace")
+            except (OSError, GearlabInputError):  # it went between the listing and the read
                 continue
         for unit, text in now.items():
             if shown.get(unit) != text:
@@ -82,14 +89,18 @@ def _serialised(on_event: EventSink) -> EventSink:
 
 
 def load_scenario(
-    path: str | Path, overrides: Mapping[str, Mapping[str, Any]] | None = None, base: str | Path | None = None
+    path: str | Path | Confined,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    base: str | Path | None = None,
 ) -> Scenario:
     """Read, validate and resolve a scenario; raises GearlabInputError with file/table/key.
 
+    *path*: a scenario file, or a run directory's copy of one (RunDir.scenario_file()).
     *overrides* ({table: {key: value}}, e.g. the CLI's --executor or --trials) replace keys of
     the file before validation, so they are checked like the file's own values."""
-    path = Path(path)
-    data = read_toml(path)
+    source = path if isinstance(path, Confined) else Path(path)
+    path = source.path if isinstance(source, Confined) else source
+    data = read_toml(source)
     for table, values in (overrides or {}).items():
         if not isinstance(data.get(table, {}), dict):
             raise GearlabInputError(f"{location(path, table)}: expected a table, to set {', '.join(values)} in")
@@ -116,7 +127,7 @@ def load_scenario(
 
 def scenario_of(run: RunDir) -> Scenario:
     """The scenario as *run* ran it (shrunk alike when started with --quick)."""
-    scenario = load_scenario(run.scenario_path(), base=run.base())
+    scenario = load_scenario(run.scenario_file(), base=run.base())
     if run.quick:
         SCENARIO_KINDS[scenario.kind].quick(scenario)
     return scenario
@@ -199,7 +210,7 @@ def _resumed_scenario(
     if quick and not run.quick:
         raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
     scenario = load_scenario(
-        scenario_path or run.scenario_path(), overrides, base=None if scenario_path else run.base()
+        scenario_path or run.scenario_file(), overrides, base=None if scenario_path else run.base()
     )
     if not run.started_with(scenario):
         raise GearlabInputError(
@@ -215,6 +226,6 @@ def _resumed_scenario(
 
 
 def write_report(run: RunDir) -> Path:
-    html = build_report(run.path)
+    html = build_report(run)
     run.write_text("report.html", html)
     return run.path / "report.html"

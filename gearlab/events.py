@@ -14,7 +14,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .files import atomic_write, inside
+from .confined import Confined
 
 
 @dataclass(frozen=True)
@@ -59,16 +59,20 @@ class UnitProgress:
     Use as a context manager: the file goes when the unit ends."""
 
     def __init__(self, run_path: Path, unit: str, every: float = 0.5):
-        self.path = inside(run_path, PROGRESS, unit.replace("/", "__") + ".txt")
+        self.file = Confined(run_path, (PROGRESS, unit.replace("/", "__") + ".txt"))
         self.every, self.last = every, -every
+
+    @property
+    def path(self) -> Path:
+        return self.file.path
 
     def __call__(self, text: str) -> None:
         if time.monotonic() - self.last >= self.every:  # a few writes a second at most
-            atomic_write(self.path, text)
+            self.file.write(text)
             self.last = time.monotonic()
 
     def __enter__(self) -> UnitProgress:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.path.unlink(missing_ok=True)
+        self.file.unlink()

@@ -1,27 +1,43 @@
-"""Figures (matplotlib, no display needed)."""
+"""Figures (matplotlib, no display needed).
+
+A figure is drawn in memory and written whole (save): inside a run directory through
+gearlab.confined (no link followed, a fresh temporary name), elsewhere (a file named on the
+command line) by atomic rename.
+"""
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import matplotlib
 
 from .charts import dataset_examples
+from .confined import Confined, read_file, write_file
 from .signals import order_spectrum, spectrum
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+Target = Path | Confined  # where a figure goes: a run directory's file, or one the user named
 
-def save(fig, path: Path) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    tmp.replace(path)
+
+def _target(path) -> Target:
+    return path if isinstance(path, Confined) else Path(path)
+
+
+def save(fig, path: Target, dpi: int = 120, **options) -> Target:
+    """Write *fig* as a PNG at *path* (rendered in memory, then written whole) and close it."""
+    path = _target(path)
+    buf = io.BytesIO()
+    try:
+        options = {"bbox_inches": "tight", **options}
+        fig.savefig(buf, format=(path.suffix or ".png")[1:], dpi=dpi, **options)
+    finally:
+        plt.close(fig)
+    write_file(path, buf.getvalue())
     return path
 
 
@@ -145,9 +161,10 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
     return save(fig, path)
 
 
-def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> None:
+def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> None:
     """Figures 5.5/5.6 (accuracy vs k), 5.7 (training curves), 5.8 (confusion), 5.9 (latent maps)."""
-    figures = Path(run_path) / "figures"
+    run_path = _target(run_path)
+    figures = run_path / "figures"
     # accuracy against k with one-standard-deviation bands
     fig, ax = plt.subplots(figsize=(10, 4.5), layout="constrained")
     colours = plt.get_cmap("tab20").colors  # one colour per method, for up to 20 methods
@@ -210,13 +227,13 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
     save(fig, figures / "confusion_k0.png")
 
     # latent feature maps after adaptation (Figure 5.9): a PCA of source and target training features
-    latent_files = sorted((Path(run_path) / "latent").glob("*.npz")) if (Path(run_path) / "latent").exists() else []
+    latent_files = _files(run_path / "latent", "*.npz")
     if latent_files:
         fig, axes = plt.subplots(
             1, len(latent_files), figsize=(3.2 * len(latent_files), 3.2), squeeze=False, layout="constrained"
         )
         for ax, f in zip(axes[0], latent_files):
-            with np.load(f, allow_pickle=False) as d:
+            with _npz(f) as d:
                 zs, zt = d["source"], d["target"]
             z = np.concatenate([zs, zt])
             if not np.all(np.isfinite(z)):  # a diverged unit: say so rather than fail the whole report
@@ -247,9 +264,20 @@ def transfer_figures(run_path: Path, records: list[dict], table: dict, ks) -> No
         save(fig, figures / "latent_maps.png")
 
 
-def _latent_labels(path: Path) -> list:
+def _files(folder: Target, pattern: str) -> list:
+    if isinstance(folder, Confined):
+        return folder.files(pattern)
+    return sorted(folder.glob(pattern)) if folder.is_dir() else []
+
+
+def _npz(path: Target):
+    """An .npz opened without pickle, its bytes read through the run directory."""
+    return np.load(io.BytesIO(read_file(path)), allow_pickle=False)
+
+
+def _latent_labels(path: Target) -> list:
     """The class labels (0 healthy, 1 fault) stored beside a latent map, or None per domain."""
-    with np.load(path, allow_pickle=False) as d:
+    with _npz(path) as d:
         return [d["source_label"] if "source_label" in d else None, d["target_label"] if "target_label" in d else None]
 
 
@@ -338,7 +366,7 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
     """Figures 4.4 (accuracy per fault type against intensity step, with the fault-as-healthy
     share), 4.5 (against relative fault area, up to 50 %) and 4.6 (confusion matrices compiled
     over runs). *results*: {noise: {variant: learn.noise_study.aggregate(...)}}."""
-    figures = Path(figures)
+    figures = _target(figures)
     results = {n: r for n, r in results.items() if any(v in r for v in VARIANT_TITLES)}
     if not results:
         return
@@ -420,7 +448,7 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
 def gap_figures(figures: Path, summary: Mapping) -> None:
     """The gap diagnosis (kind `gap`): per-view gap before/after with bootstrap intervals, the
     effect ranking (share of the gap each candidate removes alone), accuracy before/after."""
-    figures = Path(figures)
+    figures = _target(figures)
     views = summary["views"]
     names = list(views)
     x = np.arange(len(names))

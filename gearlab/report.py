@@ -9,6 +9,7 @@ import html
 import json
 from pathlib import Path
 
+from .runs import RunDir
 from .verdict import experiment, verdict_lines, verdict_table
 
 STYLE = (
@@ -148,10 +149,12 @@ def caption(stem: str, summary: dict) -> tuple[str, str]:
     return CAPTIONS.get(stem, ("", stem.replace("_", " ") + "."))
 
 
-def build_report(run_path: Path) -> str:
-    run_path = Path(run_path)
-    summary_file = run_path / "summary.json"
-    summary = json.loads(summary_file.read_text()) if summary_file.exists() else {}
+def build_report(run: RunDir | Path) -> str:
+    """report.html of a run. Every file is read through the run directory (RunDir.file): a
+    link planted at a figure or a table is refused, never followed into the page."""
+    run = run if isinstance(run, RunDir) else RunDir(Path(run))
+    run_path = run.path
+    summary = run.summary()
     title = f"gearlab run: {summary.get('scenario', run_path.parent.name)} ({summary.get('kind', '?')})"
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'>",
@@ -163,7 +166,7 @@ def build_report(run_path: Path) -> str:
     said = verdict_lines(run_path) if summary else []
     if said:
         parts += ["<section id='verdict'><h2>Verdict</h2>", *(f"<p>{html.escape(s)}</p>" for s in said), "</section>"]
-    table = run_path / "table.md"
+    table = run.file("table.md")
     text = (verdict_table(run_path) if summary else None) or (table.read_text() if table.exists() else "")
     # a kind may write several tables, separated by blank lines (the gap kind: per-view gap,
     # effect ranking, accuracy); each is rendered on its own, numbered
@@ -175,7 +178,7 @@ def build_report(run_path: Path) -> str:
                 "; reference rows in italics: the thesis's values" if "(thesis" in block else ""
             )
         parts += [f"<h2>{html.escape(head)}</h2>", markdown_table(block)]
-    figures = sorted((run_path / "figures").glob("*.png")) if (run_path / "figures").exists() else []
+    figures = run.figures.files("*.png")
     figures.sort(key=lambda f: ORDER.index(f.stem) if f.stem in ORDER else len(ORDER))  # the thesis's order
     if figures:
         parts.append("<h2>Figures</h2>")
@@ -188,7 +191,7 @@ def build_report(run_path: Path) -> str:
             f"src='data:image/png;base64,{data}'><figcaption><b>{html.escape(label)}.</b> "
             f"{html.escape(text)}</figcaption></figure>"
         )
-    scenario = run_path / "scenario.toml"
+    scenario = run.file("scenario.toml")
     if scenario.exists():
         parts += [
             "<details><summary>Resolved scenario (scenario.toml)</summary>",

@@ -7,6 +7,10 @@ temporary name and renamed, so a killed run never leaves a half-written file; th
 results store is append-only, so ``--resume`` redoes nothing that finished. One process at
 a time works in a run directory: it holds an flock on ``.lock`` for the whole run.
 
+Every file of a run is reached through :class:`gearlab.confined.Confined` (``RunDir.file``):
+no symbolic link is followed, and a run directory opened again (``--resume``, ``report``,
+``compare``) is refused when it holds a link, a device or another account's entry.
+
 The scenario kinds write into a RunDir; the engine that creates, resumes and reports a run
 (gearlab.engine) sits above the kinds.
 """
@@ -19,18 +23,21 @@ import hashlib
 import json
 import os
 import shutil
+import stat
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import tomli_w
 
+from .confined import Confined, is_temporary, refuse_unsafe
 from .errors import GearlabInputError
-from .files import atomic_write, inside, write_problem
+from .files import inside, write_problem
 from .scenario import Scenario
 
 RUN_FILE = "run.json"  # how the run was started (--quick), for --resume
 LOCK_FILE = ".lock"  # flocked by the process running in the directory; holds its pid
+RESULTS_FILE = "results.jsonl"  # one finished unit a line
 
 
 class RunLock:
@@ -58,15 +65,17 @@ class RunDir:
 
     @property
     def results_path(self) -> Path:
-        return self.path / "results.jsonl"
+        """Where the results store lies (for messages; it is read and written through file())."""
+        return self.path / RESULTS_FILE
 
     @property
-    def figures(self) -> Path:
-        return self.path / "figures"
+    def figures(self) -> Confined:
+        return self.file("figures")
 
-    def file(self, *parts: str) -> Path:
-        """The path of a file of this run, refused unless it lies inside the run directory."""
-        return inside(self.path, *parts)
+    def file(self, *parts: str) -> Confined:
+        """A file (or folder) of this run, reached without following a link; a name that
+        leads out of the run directory is refused."""
+        return Confined(self.path, parts)
 
     @classmethod
     def create(cls, base: Path, scenario: Scenario, quick: bool = False) -> RunDir:
@@ -117,23 +126,43 @@ class RunDir:
         if self.created is not None:
             _remove_empty(self.path.parent, self.created)
 
+    def meta(self) -> dict:
+        """run.json: how the run was started ({} when it has none)."""
+        meta = self.file(RUN_FILE)
+        if not meta.is_file():
+            return {}
+        try:
+            found = json.loads(meta.read_bytes(limit=1 << 24))
+        except ValueError:
+            raise GearlabInputError(f"{meta}: damaged (not JSON); expected what 'gearlab run' wrote") from None
+        if not isinstance(found, dict):
+            raise GearlabInputError(f"{meta}: damaged (not a JSON object); expected what 'gearlab run' wrote")
+        return found
+
     @property
     def quick(self) -> bool:
         """Whether the run was started with --quick (a resume must shrink it alike)."""
-        meta = self.path / RUN_FILE
-        return bool(json.loads(meta.read_text()).get("quick")) if meta.is_file() else False
+        return bool(self.meta().get("quick"))
 
     def base(self) -> Path | None:
         """The folder of the scenario file the run was started from (relative paths in it)."""
-        meta = self.path / RUN_FILE
-        base = json.loads(meta.read_text()).get("base") if meta.is_file() else None
-        return Path(base) if base else None
+        base = self.meta().get("base")
+        return Path(base) if isinstance(base, str) and base else None
 
     @classmethod
     def open(cls, path: Path) -> RunDir:
+        """An existing run directory, for --resume, report or compare: refused when it holds a
+        symbolic link, a device or another account's entry (nothing in it is then touched)."""
         path = Path(path)
-        if not (path / "scenario.toml").is_file():
+        if not path.is_dir():
+            raise GearlabInputError(f"{path}: not a gearlab run directory (no such folder)")
+        marker = Confined(path, ("scenario.toml",)).stat()
+        if marker is None:
             raise GearlabInputError(f"{path}: not a gearlab run directory (no scenario.toml)")
+        if not stat.S_ISREG(marker.st_mode):  # a link there is refused by name below
+            refuse_unsafe(path)
+            raise GearlabInputError(f"{path}: not a gearlab run directory (scenario.toml is not a file)")
+        refuse_unsafe(path)
         return cls(path)
 
     def lock(self) -> RunLock:
@@ -143,9 +172,9 @@ class RunDir:
         dies (SIGKILL included), so a killed run never blocks its --resume. The lock file
         is left in place: removing it would let two processes lock two different files.
         """
-        path = self.path / LOCK_FILE
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            # never through a link, never a file with another name elsewhere: it is truncated below
+            fd = self.file(LOCK_FILE).open_own(os.O_RDWR | os.O_CREAT)
         except OSError as exc:
             raise GearlabInputError(f"{self.path}: cannot lock the run directory ({exc.strerror or exc})") from None
         try:
@@ -162,16 +191,19 @@ class RunDir:
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         return RunLock(fd)
 
-    def scenario_path(self) -> Path:
+    def scenario_file(self) -> Confined:
         """The scenario file to resume from: the original text, else the resolved one."""
-        original = self.path / "scenario.original.toml"
-        return original if original.is_file() else self.path / "scenario.toml"
+        original = self.file("scenario.original.toml")
+        return original if original.exists() else self.file("scenario.toml")
+
+    def scenario_path(self) -> Path:
+        return self.scenario_file().path
 
     def started_with(self, scenario: Scenario) -> bool:
         """Whether *scenario* resolves to the tables this run was started with (a resume with
         another would mix its units with those finished)."""
         # [execution] says where units run, not what they compute: a run may resume elsewhere
-        stored = tomllib.loads((self.path / "scenario.toml").read_text())
+        stored = tomllib.loads(self.file("scenario.toml").read_text())
         stored.pop("execution", None)
         given = {table: values for table, values in scenario.tables.items() if table != "execution"}
         return stored == tomllib.loads(tomli_w.dumps(_tomlable(given)))
@@ -179,10 +211,11 @@ class RunDir:
     def records(self) -> list[dict]:
         """Finished units. A line cut short by a kill (no newline yet) is ignored, and so is a
         damaged line, without hiding the records appended after it."""
-        if not self.results_path.exists():
+        store = self.file(RESULTS_FILE)
+        if not store.exists():
             return []
         out = []
-        for line in self.results_path.read_text().splitlines(keepends=True):
+        for line in store.read_bytes().decode(errors="replace").splitlines(keepends=True):
             if not line.endswith("\n"):
                 continue
             try:
@@ -192,36 +225,47 @@ class RunDir:
         return out
 
     def append(self, record: dict) -> None:
-        line = json.dumps(record, sort_keys=True) + "\n"
-        try:
-            with open(self.results_path, "a") as f:
-                f.write(line)
-                f.flush()
-                os.fsync(f.fileno())
-        except OSError as exc:  # a full disk: a partial line is dropped on --resume (truncate_partial)
-            exc.filename = exc.filename or str(self.results_path)
-            raise
+        # a full disk: a partial line is dropped on --resume (truncate_partial)
+        self.file(RESULTS_FILE).append(json.dumps(record, sort_keys=True) + "\n")
 
     def write_json(self, name: str, obj) -> None:
-        atomic_write(self.file(name), json.dumps(obj, indent=2, sort_keys=True) + "\n")
+        self.file(name).write(json.dumps(obj, indent=2, sort_keys=True) + "\n")
 
     def write_text(self, name: str, text: str | bytes) -> None:
-        atomic_write(self.file(name), text)
+        self.file(name).write(text)
+
+    def read_json(self, name: str, default=None):
+        """A JSON file of this run (summary.json, bound.json), read without following a link;
+        *default* when there is none."""
+        found = self.file(name)
+        if not found.exists():
+            return default
+        try:
+            return json.loads(found.read_bytes())
+        except ValueError:
+            raise GearlabInputError(f"{found}: damaged (not JSON); expected what 'gearlab run' wrote") from None
+
+    def summary(self) -> dict:
+        """summary.json ({} before the run is summarised)."""
+        found = self.read_json("summary.json", {})
+        return found if isinstance(found, dict) else {}
 
     def remove_temporaries(self) -> None:
         """Remove the temporary files of atomic writes cut short by a kill. Only with the run
         directory locked: then no writer of this run is alive."""
-        for tmp in self.path.rglob(".*.tmp"):
-            tmp.unlink(missing_ok=True)
+        for entry, st in list(self.file().walk()):
+            if is_temporary(entry.name) and not stat.S_ISDIR(st.st_mode):
+                entry.unlink()
 
     def truncate_partial(self) -> None:
         """Drop a trailing partial line left by a killed run, so appends stay line-aligned."""
-        if not self.results_path.exists():
+        store = self.file(RESULTS_FILE)
+        if not store.exists():
             return
-        data = self.results_path.read_bytes()
+        data = store.read_bytes()
         cut = data.rfind(b"\n") + 1
         if cut != len(data):
-            atomic_write(self.results_path, data[:cut])
+            store.write(data[:cut])
 
 
 def _fresh_folder(parent: Path, stamp: str) -> Path:
@@ -287,9 +331,8 @@ def input_digests(scenario: Scenario) -> dict[str, str | None]:
 
 def check_inputs(run: RunDir) -> None:
     """Refuse to resume *run* when a measured file it read has changed or gone since it started."""
-    meta = run.path / RUN_FILE
-    stored = json.loads(meta.read_text()).get("inputs") if meta.is_file() else None
-    for path, digest in (stored or {}).items():
+    stored = run.meta().get("inputs")
+    for path, digest in (stored if isinstance(stored, dict) else {}).items():
         now = _digest(Path(path))
         if now != digest:
             change = "is gone" if now is None else "has changed"

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .confined import Confined
 from .errors import GearlabInputError, clipped, shown
 from .params import did_you_mean
 from .settings import declared, in_bounds
@@ -251,9 +252,12 @@ def _nearby(path: Path) -> str:
     return f" (did you mean '{files[close[0]]}'?)" if close else ""
 
 
-def read_toml(path: Path) -> dict:
+def read_toml(source: Path | Confined) -> dict:
+    """The tables of a scenario file: one the user names, or a run directory's copy (a
+    Confined, read without following a link)."""
+    path = source.path if isinstance(source, Confined) else source
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = (source.read_bytes() if isinstance(source, Confined) else path.read_bytes()).decode("utf-8")
     except FileNotFoundError:
         raise GearlabInputError(f"{path}: no such scenario file{_nearby(path)}") from None
     except IsADirectoryError:

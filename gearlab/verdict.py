@@ -15,7 +15,6 @@ compared like the shipped ones.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -124,8 +123,7 @@ def _plain(value):
 
 
 def load_summary(run_path: Path) -> dict:
-    path = Path(run_path) / "summary.json"
-    return json.loads(path.read_text()) if path.is_file() else {}
+    return RunDir(Path(run_path)).summary()
 
 
 def _records(run_path: Path) -> list[dict]:

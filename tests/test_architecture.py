@@ -26,6 +26,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "gearlab.units",
             "gearlab.params",
             "gearlab.files",
+            "gearlab.confined",
             "gearlab.events",
             "gearlab.charts",
             "gearlab.executors",

@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..confined import Confined
 from ..data.spec import DatasetSpec, NoiseSpec
 from ..errors import GearlabInputError
-from ..files import atomic_write
 
 # --- the trial mix ----------------------------------------------------------------------------
 
@@ -345,16 +345,24 @@ def stored(record: dict, fs: float, fmt: str) -> tuple[bytes, str, dict]:
     return buf.getvalue(), "target.wav", {**calibration, "gain": full * 32768 / 32767}
 
 
-def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: int, executor=None) -> Path:
+def _held(folder: Path | str | Confined) -> Confined:
+    """The trial's folder, reached through Confined: a run directory's targets/trial_NNN as the
+    kind gives it, or a plain folder (a test, a benchmark script) below its trusted parent."""
+    if isinstance(folder, Confined):
+        return folder
+    folder = Path(folder)
+    return Confined(folder.parent, (folder.name,))
+
+
+def write_target(trial: Trial, source: DatasetSpec, folder: Path | Confined, revolutions: int, executor=None) -> Path:
     """Simulate the trial's target, write it as folder/target.<ext> (with folder/calibration.json)
-    and the answers as folder/answers.json."""
+    and the answers as folder/answers.json; the path of the target for the importer to read."""
     from ..data.builder import EFFECT_STREAM, build_dataset, operating_point
     from ..effects import EffectChain
     from ..gap.views import healthy_rows
     from ..signals import add_noise
 
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = _held(folder)
     spec = target_spec(trial, source, revolutions)
     speed, _ = operating_point(spec)
     acq = trial.acquisition
@@ -394,10 +402,9 @@ def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: i
 
         record, fs = acquired_record(rows, speed, acq, noise)
         data, name, calibration = stored(record, fs, acq.format)
-    path = folder / name
-    atomic_write(path, data)
+    (folder / name).write(data)
     if calibration is not None:
-        atomic_write(folder / "calibration.json", json.dumps(calibration, indent=1, sort_keys=True))
+        (folder / "calibration.json").write(json.dumps(calibration, indent=1, sort_keys=True))
     answers = {
         "index": trial.index,
         "kind": trial.kind,
@@ -409,12 +416,12 @@ def write_target(trial: Trial, source: DatasetSpec, folder: Path, revolutions: i
         if acq is None
         else {"rate_share": acq.rate_share, "offset_deg": math.degrees(acq.offset), "format": acq.format},
     }
-    atomic_write(folder / "answers.json", json.dumps(answers, indent=1, sort_keys=True))
-    return path
+    (folder / "answers.json").write(json.dumps(answers, indent=1, sort_keys=True))
+    return (folder / name).path
 
 
-def read_answers(folder: Path) -> dict:
-    return json.loads((Path(folder) / "answers.json").read_text())
+def read_answers(folder: Path | Confined) -> dict:
+    return json.loads((_held(folder) / "answers.json").read_bytes())
 
 
 # --- the diagnosis (knows only the file) ---------------------------------------------------------
@@ -603,7 +610,7 @@ class TrialTask:
     trial: Trial
     source: DatasetSpec
     settings: dict  # gearlab.gap.diagnose.Settings fields except candidates
-    folder: str
+    folder: str | Confined  # a run directory's targets/trial_NNN (Confined), or a plain folder
     revolutions: int
 
 
@@ -612,13 +619,14 @@ class TrialTask:
 ORACLE_REPEATS, ORACLE_SEEN = 5, 0.5
 
 
-def oracle_seen(trial: Trial, source: DatasetSpec, settings: Mapping, revolutions: int, folder: Path) -> float:
+def oracle_seen(
+    trial: Trial, source: DatasetSpec, settings: Mapping, revolutions: int, folder: Path | Confined
+) -> float:
     """The share of ORACLE_REPEATS fresh realisations of *trial*'s target (new noise seeds, the same
     hidden effects and acquisition) in which the plain source shows a significant gap, judged as
     the diagnosis judges its "before" report. The generator's side: it knows the hidden effects,
     and asks only whether this many revolutions can show them at all (a 150 um eccentricity on
     six_dof sits at the edge: docs/gap_benchmark.md, section 3)."""
-    import shutil
     from dataclasses import replace
 
     from . import diagnose as d
@@ -626,14 +634,14 @@ def oracle_seen(trial: Trial, source: DatasetSpec, settings: Mapping, revolution
     seen = 0
     for k in range(ORACLE_REPEATS):
         seed = int(np.random.default_rng([trial.seed, 7, k]).integers(1, 2**31 - 1))
-        where = Path(folder) / f"oracle_{k}"
+        where = _held(folder) / f"oracle_{k}"
         try:
             rows, chain, max_order = import_target(write_target(replace(trial, seed=seed), source, where, revolutions))
             plain = dict(settings, max_order=max_order) if max_order else dict(settings)
             report = d.plain_report(source, rows, d.Settings(candidates=tuple(trial.candidates), **plain), chain)
             seen += d.gap_seen(report)
         finally:
-            shutil.rmtree(where, ignore_errors=True)
+            where.remove_tree()
     return seen / ORACLE_REPEATS
 
 
@@ -642,14 +650,14 @@ def trial_task(task: TrialTask) -> dict:
     the diagnosis only through the written file; scoring reads them back from answers.json after.
     An effect trial whose diagnosis saw no significant gap is checked by the generator
     (:func:`oracle_seen`): too weak to be seen, "no significant gap" is the right answer."""
-    folder = Path(task.folder)
+    folder = _held(task.folder)
     started = time.perf_counter()
     path = write_target(task.trial, task.source, folder, task.revolutions)
     generated = time.perf_counter()
     candidates = task.trial.candidates
     result = diagnose_file(path, task.source, candidates, task.settings)
     diagnosed = time.perf_counter()
-    atomic_write(folder / "diagnosis.json", json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
+    (folder / "diagnosis.json").write(json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
     oracle = None
     if task.trial.kind in EFFECT_KINDS and not result.get("significant_before"):
         oracle = oracle_seen(task.trial, task.source, task.settings, task.revolutions, folder)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict
 
 import numpy as np
@@ -100,7 +99,7 @@ def figures(dataset, run: RunDir) -> None:
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    summary = json.loads((run.path / "summary.json").read_text())
+    summary = run.read_json("summary.json")
     lines = [table_md(summary).rstrip()]
     for name, d in summary["datasets"].items():
         lines.append(

@@ -20,7 +20,6 @@ ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures a
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -566,7 +565,7 @@ def accuracy(
     def state_file(unit: tuple):
         rep, variant, m = unit
         state = shared_state(m, rep, 0, protocol)  # the gap kind scores k = 0 only
-        return None if state is None else run.path / "states" / variant / f"{state}.pt"
+        return None if state is None else run.file("states", variant, f"{state}.pt")
 
     phases = two_phases(pending, state_file)
     finished = len(todo) - len(pending)
@@ -577,7 +576,7 @@ def accuracy(
             continue
         target_data = (spec["target"], cache.entry_path(spec["target"]))
         tasks = [
-            (protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.path / "states" / variant, history)
+            (protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.file("states", variant), history)
             for rep, variant, m in phase
             for s in [source_of(variant, m)]
         ]
@@ -808,7 +807,7 @@ def tables_md(summary: dict) -> str:
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    s = json.loads((run.path / "summary.json").read_text())
+    s = run.read_json("summary.json")
     names = ", ".join(
         f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'], e.get('determined'))})" for e in s["effects"]
     )

@@ -17,7 +17,6 @@ and report.html. docs/gap_benchmark.md explains the mix, the ranges and the scor
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import asdict, replace
 
@@ -173,7 +172,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 t,
                 spec["source"],
                 spec["settings"],
-                str(run.path / "targets" / f"trial_{t.index:03d}"),
+                run.file("targets", f"trial_{t.index:03d}"),
                 spec["revolutions"],
             )
             for t in pending
@@ -275,6 +274,8 @@ def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from ..plots import save
+
     names = list(summary["per_effect"])
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     x = np.arange(len(names))
@@ -299,13 +300,11 @@ def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
     axes[1].set_title("gap before / after, per trial")
     axes[1].legend(fontsize=8)
     fig.tight_layout()
-    run.figures.mkdir(parents=True, exist_ok=True)
-    fig.savefig(run.figures / "gap_benchmark.png", dpi=90)
-    plt.close(fig)
+    save(fig, run.figures / "gap_benchmark.png", dpi=90, bbox_inches=None)
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    s = json.loads((run.path / "summary.json").read_text())
+    s = run.read_json("summary.json")
     met = s["met"]
     mark = {True: "ok", False: "below target"}
     return [

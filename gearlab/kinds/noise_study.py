@@ -16,7 +16,6 @@ of Figures 4.4-4.6.
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, replace
 
 import numpy as np
@@ -207,7 +206,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         done = {r["unit"] for r in run.records()}
         todo = units(spec)
         pending = [(noise, r, v) for noise, r, v in todo if unit_name(noise, r, v) not in done]
-        with_bound = not (run.path / "bound.json").exists()
+        with_bound = not run.file("bound.json").exists()
         bound: dict[str, dict[str, list[float]]] = {}
         for noise in dict.fromkeys(noise for noise, _, _ in pending + (todo if with_bound else [])):
             for variant, s in spec["datasets"][noise].items():  # built (or found) once, before training
@@ -366,8 +365,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     spec = scenario.spec
     records = run.records()
     res = results(records)
-    bound_path = run.path / "bound.json"
-    bound = bound_cells(json.loads(bound_path.read_text()), spec["protocol"].runs) if bound_path.exists() else None
+    bound_path = run.file("bound.json")
+    bound = bound_cells(run.read_json("bound.json"), spec["protocol"].runs) if bound_path.exists() else None
     summary = {
         "kind": "noise_study",
         "scenario": scenario.name,
@@ -387,7 +386,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    summary = json.loads((run.path / "summary.json").read_text())
+    summary = run.read_json("summary.json")
     return [
         "test accuracy and fault-as-healthy rate [%], mean ± std over runs (thesis 4.3):",
         table_md(summary["results"], summary.get("bound")).rstrip(),

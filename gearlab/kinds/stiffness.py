@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..charts import Chart, Curve
+from ..confined import read_file
 from ..errors import GearlabInputError
 from ..events import Event
 from ..physics.faults import LADDER_STEPS, place_fault
@@ -141,7 +142,7 @@ def csv_text(theta: np.ndarray, k: np.ndarray) -> str:
 
 
 def read_csv(path) -> tuple[np.ndarray, np.ndarray]:
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    data = np.loadtxt(io.BytesIO(read_file(path)), delimiter=",", skiprows=1, ndmin=2)
     return data[:, 0], data[:, 1]
 
 
@@ -206,7 +207,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     panels = {}
     for case in spec.cases:
         if case.fault:
-            theta, k = read_csv(run.path / "cases" / f"{case.name}.csv")
+            theta, k = read_csv(run.file("cases", f"{case.name}.csv"))
             panels.setdefault(case.fault, []).append((case.step, theta, k))
     if panels:
         ladder_grid(
@@ -219,7 +220,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             {f: ([int(s) for s in v], [v[s]["rfa"] for s in v]) for f, v in sweep.items()}, run.figures / "rfa.png"
         )
     other = [c for c in spec.cases if not c.fault]
-    curves = [(c.name, *read_csv(run.path / "cases" / f"{c.name}.csv")) for c in other]
+    curves = [(c.name, *read_csv(run.file("cases", f"{c.name}.csv"))) for c in other]
     tvms_figure(curves, f"TVMS over one pinion revolution, {pair.name}", run.figures / "tvms_cases.png")
 
 
@@ -265,9 +266,7 @@ def _table_csv(sweep) -> str:
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    import json
-
-    summary = json.loads((run.path / "summary.json").read_text())
+    summary = run.read_json("summary.json")
     h = summary["healthy"]
     lines = [f"healthy TVMS: mean {h['mean']:.4g} N/m, min {h['min']:.4g}, max {h['max']:.4g}"]
     for fault, steps in summary["sweep"].items():
@@ -292,7 +291,7 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     shown = [c for c in spec.cases if not c.fault] + list(worst.values())
     curves = []
     for case in shown:
-        path = run.path / "cases" / f"{case.name}.csv"
+        path = run.file("cases", f"{case.name}.csv")
         if case.name in done and path.is_file():
             theta, k = read_csv(path)
             curves.append(Curve(case.name, np.degrees(theta), k / 1e8))

@@ -13,7 +13,6 @@ figures (Figures 5.5-5.9) and report.html.
 from __future__ import annotations
 
 import io
-import json
 from dataclasses import asdict, replace
 from pathlib import Path
 
@@ -26,7 +25,6 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
-from ..files import atomic_write
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at
 from ..learn.calibration import RECIPE, Calibration
 from ..learn.networks import NetworkSettings
@@ -204,7 +202,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         def state_file(unit: tuple) -> Path | None:
             rep, k, m = unit
             state = shared_state(m, rep, k, protocol)
-            return None if state is None else run.path / "states" / f"{state}.pt"
+            return None if state is None else run.file("states", f"{state}.pt")
 
         phases = two_phases(pending, state_file)
         first = phases[0]
@@ -245,7 +243,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         for phase in phases:
             # the cache entries by path: a worker process may not share this one's environment
             data = [(spec[d], cache.entry_path(spec[d])) for d in ("source", "target")]
-            tasks = [(protocol, *data, rep, k, m, run.path / "states") for rep, k, m in phase]
+            tasks = [(protocol, *data, rep, k, m, run.file("states")) for rep, k, m in phase]
             # a unit asks the executor for a GPU unless the scenario trains on the CPU
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
         summarise(scenario, run)
@@ -260,7 +258,7 @@ def train_unit(task: tuple) -> dict:
     torch.set_num_threads(1)
     source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
     # states/ lies in the run directory, beside the progress/ folder the engine watches
-    with UnitProgress(Path(states).parent, unit_key(rep, k, method)) as progress:
+    with UnitProgress(states.root, unit_key(rep, k, method)) as progress:
 
         def report(epoch: int, history) -> None:
             acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
@@ -316,7 +314,7 @@ def bayes_bound(
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:
     buf = io.BytesIO()
     np.savez(buf, **latent)
-    atomic_write(run.path / "latent" / (unit.replace("/", "_") + ".npz"), buf.getvalue())
+    run.write_text(f"latent/{unit.replace('/', '_')}.npz", buf.getvalue())
 
 
 def columns(protocol: Protocol) -> list[Method]:
@@ -407,18 +405,17 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "device": str(pick_device(protocol.device)),  # where the units trained (cuda when present, by default)
         "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
     }
-    bound_path = run.path / "bound.json"
-    if bound_path.exists():
-        summary["bound"] = json.loads(bound_path.read_text())
+    if run.file("bound.json").exists():
+        summary["bound"] = run.read_json("bound.json")
         tab = {**tab, BOUND: summary["bound"]["accuracy"]}  # the reference column of table.md/csv
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(tab, protocol.ks, list(tab)) + measures_md(summary, protocol.ks))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
-    transfer_figures(run.path, records, tab, protocol.ks)
+    transfer_figures(run.file(), records, tab, protocol.ks)
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    summary = json.loads((run.path / "summary.json").read_text())
+    summary = run.read_json("summary.json")
     ks = summary["protocol"]["ks"]
     tab, methods = summary["table"], summary["methods"]
     if "bound" in summary:

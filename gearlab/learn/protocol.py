@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from ..confined import Confined
 from ..errors import GearlabInputError
-from ..files import atomic_write
 from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
@@ -213,9 +213,12 @@ def split(protocol: Protocol, source, target, rep: int, k: int, history: np.ndar
 
 class StateStore:
     """Per-repetition network states shared by runs (the priming, the source-only model):
-    torch state dicts in the run directory, loaded with weights_only=True."""
+    torch state dicts in the run directory's states/ folder (a Confined: no link followed),
+    loaded with weights_only=True."""
 
-    def __init__(self, directory: Path | None):
+    def __init__(self, directory: Confined | Path | None):
+        if isinstance(directory, Path):  # a folder of its own (a test, a benchmark): its parent is trusted
+            directory = Confined(directory.parent, (directory.name,))
         self.directory = directory
         self.memory: dict[str, dict] = {}
 
@@ -224,7 +227,7 @@ class StateStore:
             return self.memory[name]
         path = self.directory / f"{name}.pt" if self.directory else None
         if path is not None and path.exists():
-            state = torch.load(path, weights_only=True, map_location="cpu")
+            state = load_state(path)
         else:
             # Making a state draws from torch's global generator; fork it so that the caller
             # continues exactly as when the state is loaded (a resumed run, a later unit).
@@ -232,10 +235,26 @@ class StateStore:
                 state = make()
             if path is not None:
                 buf = io.BytesIO()
-                torch.save(state, buf)
-                atomic_write(path, buf.getvalue())
+                torch.save(state, buf)  # into memory; written whole through the run directory
+                path.write(buf.getvalue())
         self.memory[name] = state
         return state
+
+
+def load_state(path: Confined) -> dict:
+    """A stored network state; a damaged file (cut short, overwritten) is one line that says
+    how to recover, not a traceback: weights_only=True runs no code of the file either way."""
+    data = path.read_bytes()
+    try:
+        state = torch.load(io.BytesIO(data), weights_only=True, map_location="cpu")
+    except Exception as exc:  # noqa: BLE001 - UnpicklingError, RuntimeError, EOFError, ... of a damaged file
+        raise GearlabInputError(
+            f"{path}: damaged network state ({type(exc).__name__}); remove the file and resume: "
+            "the state is trained again"
+        ) from None
+    if not isinstance(state, dict):
+        raise GearlabInputError(f"{path}: not a network state (a {type(state).__name__}); remove it and resume")
+    return state
 
 
 def unit_key(rep: int, k: int, method: Method) -> str:
