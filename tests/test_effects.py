@@ -141,7 +141,7 @@ def test_search_space_has_bounds_scales_and_choices():
         "unit": "N*m/rad",
         "low": 1.0,
         "high": 1e8,
-        "default": 1e4,
+        "default": 1e3,
         "integer": False,
         "log": True,
     }
@@ -210,29 +210,54 @@ def test_third_party_effect_loads_and_contract_breaches_are_reported():
 # --- model level -----------------------------------------------------------------------------
 
 
+# Table 2.4's drive (Chaari et al. 2012, Mohammed et al. 2015): Dataset B-8's values, given here, never
+# the effect's defaults (a diagnosis starts at the defaults; it must not start at a target's answer)
+TABLE_2_4_DRIVE = effect_spec("drive_inertias", I11=0.0043, I22=0.0045, k_c=1e4, c_c=10.0)
+# Table 2.3's casing (Luo et al. 2019b): Dataset A-casing's values
+TABLE_2_3_CASING = effect_spec("casing_path", mf=18.509, k_xf=1.9912e8, k_yf=2.036e8, c_xf=1995.56, c_yf=2005.80)
+
+
+def test_no_model_effect_defaults_to_a_target_preset():
+    """The defaults of the effects that add DOFs are none of the presets' values (Tables 2.3, 2.4):
+    the corrected simulator must be found from the target's data, not start at the answer."""
+    from gearlab.gap.diagnose import Space
+    from gearlab_plugins.models.presets import LUO2019, MENG2020
+
+    for name in ("drive_inertias", "casing_path"):
+        for p in REG.get("effect", name).params:
+            assert all(p.default != preset["params"].get(p.name) for preset in (LUO2019, MENG2020)), (name, p.name)
+    # a search starts from the source: a six_dof source has no drive (the defaults), a ten_dof source
+    # has its own, which the search starts from
+    drive = REG.get("effect", "drive_inertias")
+    assert Space(drive, dataset_preset("B-6-ch5")).defaults == {p.name: p.default for p in drive.params}
+    assert Space(drive, dataset_preset("A-pinion-ch5")).defaults == {
+        k: LUO2019["params"][k] for k in ("I11", "I22", "k_c", "c_c")
+    }
+
+
 def test_drive_inertias_on_six_dof_is_the_eight_dof_model_of_dataset_b():
-    sim, config, _ = configured([effect_spec("drive_inertias")])
+    sim, config, _ = configured([TABLE_2_4_DRIVE])
     assert model_of(config).name == "eight_dof" and sim.model is REG.get("model", "eight_dof")
     assert (config.input_dof, config.load_dof) == ("theta11", "theta22")  # the motor turns at fixed speed
     eight = _simulator("eight_dof", "meng2020", fs_of(B))
     for faults in ((), (("crack", 5, 20),)):
         placed = [place_fault(REG, eight.pair, n, t, step=s) for n, t, s in faults]
         want = steady_revolution(eight, placed, 40.0, 20.0, "pinion_y")
-        got, angle = revolution([effect_spec("drive_inertias")], faults=faults)
+        got, angle = revolution([TABLE_2_4_DRIVE], faults=faults)
         assert angle is None and np.array_equal(got, want)
     # on a model that has them, it only sets their values
     _, ten, _ = configured([effect_spec("drive_inertias", I11="0.01 kg*m^2")], A)
-    assert model_of(ten).name == "ten_dof" and ten.params["I11"] == 0.01 and ten.params["I22"] == 0.0045
+    assert model_of(ten).name == "ten_dof" and ten.params["I11"] == 0.01 and ten.params["I22"] == 1e-3
 
 
 def test_casing_path_moves_the_pinion_sensor_to_the_casing():
-    # Experiment A: A-pinion (x1) with the casing path is A-casing (xf)
-    got, _ = revolution([effect_spec("casing_path")], A)
+    # Experiment A: A-pinion (x1) with Table 2.3's casing path is A-casing (xf)
+    got, _ = revolution([TABLE_2_3_CASING], A)
     want = steady_revolution(_simulator("ten_dof", "luo2019", fs_of(A)), [], 25.2, 7.0, "casing_x")
     assert np.array_equal(got, want)
     # on the six-DOF model it adds the casing (bearings no longer grounded) and the sensor follows
     _, config, _ = configured([effect_spec("casing_path")])
-    assert model_of(config).name == "six_dof+xf+yf" and config.channel == "casing_y" and config.params["mf"] == 18.509
+    assert model_of(config).name == "six_dof+xf+yf" and config.channel == "casing_y" and config.params["mf"] == 10.0
     casing, _ = revolution([effect_spec("casing_path")])
     pinion, _ = revolution()
     assert rms(casing) < 0.2 * rms(pinion)  # the path hides the gear vibration (Figure 2.28)

@@ -624,13 +624,26 @@ def _scorer(target_X, source: DatasetSpec, settings: Settings, rows: Rows) -> Sc
 
 class Space:
     """An effect's space() as a unit cube: one coordinate per number (linear or log between
-    its bounds, rounded for integers) and one per text option (cut into equal parts)."""
+    its bounds, rounded for integers) and one per text option (cut into equal parts).
 
-    def __init__(self, effect):
+    *source*: the source spec a search starts from. Where the source's own model already has a
+    parameter of the effect (a ten_dof source's casing, motor and load), the search's first point
+    takes the source's value, not the effect's default: a diagnosis starts from the source."""
+
+    def __init__(self, effect, source: DatasetSpec | None = None):
         entries = effect.space()
         self.numbers = [e for e in entries if "choices" not in e]
         self.options = [e for e in entries if "choices" in e]
         self.defaults = {e["name"]: e["default"] for e in entries}
+        if source is not None:
+            own = source.model_config().params
+            self.defaults.update(
+                {
+                    e["name"]: own[e["name"]]
+                    for e in self.numbers
+                    if e["low"] <= own.get(e["name"], -math.inf) <= e["high"]
+                }
+            )
 
     @property
     def dims(self) -> int:
@@ -659,8 +672,7 @@ class Space:
         return out
 
     def default_point(self) -> tuple[np.ndarray, tuple[str, ...]]:
-        u = np.array([self.unit(e, e["default"]) for e in self.numbers])
-        return u, tuple(e["default"] for e in self.options)
+        return self.point_of(self.defaults)
 
     def point_of(self, params: dict) -> tuple[np.ndarray, tuple[str, ...]]:
         u = np.array([self.unit(e, params[e["name"]]) for e in self.numbers])
@@ -837,7 +849,7 @@ def fit_effect(task: tuple) -> dict:
         return _refit_alone(source, accepted, target_X, settings, seed, started, rows)
     registry = get_registry()
     effect = registry.get("effect", name)
-    space = Space(effect)
+    space = Space(effect, source)
     scorer = _scorer(target_X, source, settings, rows)
     errors: list[str] = []
 

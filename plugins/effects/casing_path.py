@@ -10,8 +10,9 @@ Realisation. The effect adds the casing DOFs xf, yf (eq. 2.96) when the model la
 the bearings then connect the gear blocks to the casing instead of to ground (eq. 2.100,
 2.101) — sets the casing's mass and mounting, and moves the sensor from the gear block to
 the casing in the same direction (pinion_x -> casing_x, pinion_y -> casing_y). On the
-ten_dof model (Dataset A) only the sensor moves and the casing takes these values: with the
-defaults, A-pinion becomes A-casing.
+ten_dof model (Dataset A) only the sensor moves and the casing takes these values; a diagnosis
+starts there from the model's own casing (gearlab.gap.diagnose.Space), so with the source's values
+A-pinion becomes A-casing.
 
 Bounds (log-scale search for all five). Casing mass 0.1 to 1000 kg (a light cover to a heavy
 industrial housing; Table 2.3: 18.5 kg); mounting stiffness 1e5 to 1e11 N/m (rubber mounts to
@@ -19,7 +20,9 @@ a rigid foundation; Table 2.3: 2e8); damping 1 to 1e6 N*s/m (a bolted joint is n
 1 N*s/m is a damping ratio of 1e-5 for 18.5 kg on 2e8 N/m; Table 2.3's 2000 is 0.016). On a
 linear scale from 0 a search's design put every point at damping ratios of 0.5-10 (an
 over-damped casing), far from any mounting's.
-Defaults: Table 2.3 (Luo et al. 2019b).
+Defaults: round values of a small cast housing (10 kg on 1e8 N/m mounts, 1e3 N*s/m), none of them a
+preset's: an effect's defaults are where a diagnosis starts, and a start at the answer would be found
+without being identified.
 
 Where a diagnosis looks (guesses). A mounting's natural frequency f_m = sqrt(k / m_f) / 2 pi
 splits the casing's response: below f_m the casing follows the bearings (stiffness-controlled),
@@ -48,11 +51,11 @@ class CasingPath(Effect):
     level = "model"
     breaks_symmetry = False
     params = (
-        Param("mf", "kg", 18.509, 0.1, 1000.0, "mass of the gearbox casing"),
-        Param("k_xf", "N/m", 1.9912e8, 1e5, 1e11, "casing mounting stiffness, x"),
-        Param("k_yf", "N/m", 2.036e8, 1e5, 1e11, "casing mounting stiffness, y"),
-        Param("c_xf", "N*s/m", 1995.56, 1.0, 1e6, "casing mounting damping, x"),
-        Param("c_yf", "N*s/m", 2005.80, 1.0, 1e6, "casing mounting damping, y"),
+        Param("mf", "kg", 10.0, 0.1, 1000.0, "mass of the gearbox casing"),
+        Param("k_xf", "N/m", 1e8, 1e5, 1e11, "casing mounting stiffness, x"),
+        Param("k_yf", "N/m", 1e8, 1e5, 1e11, "casing mounting stiffness, y"),
+        Param("c_xf", "N*s/m", 1e3, 1.0, 1e6, "casing mounting damping, x"),
+        Param("c_yf", "N*s/m", 1e3, 1.0, 1e6, "casing mounting damping, y"),
     )
     log_scale = frozenset({"mf", "k_xf", "k_yf", "c_xf", "c_yf"})
 

@@ -17,7 +17,10 @@ Bounds (log-scale search). Inertias 1e-6 to 10 kg*m^2: from a small servo motor 
 induction motor or flywheel; Table 2.3 (0.016, 0.005) and Table 2.4 (0.0043, 0.0045) lie
 inside. Coupling stiffness 1 to 1e8 N*m/rad: from a soft elastomer coupling (Table 2.3's
 330) to a stiff disc coupling (Table 2.4's 1e4 is in between). Damping 0 to 1e4 N*m*s/rad.
-Defaults: Table 2.4 (Chaari et al. 2012, Mohammed et al. 2015).
+Defaults: round values of a small test-rig drive (1e-3 kg*m^2, 1e3 N*m/rad, 1 N*m*s/rad), none of
+them a preset's (Table 2.3 or 2.4): an effect's defaults are where a diagnosis starts, and a start at
+the answer would be found without being identified. On a model that has the motor and load, the
+diagnosis starts from that model's own values instead (gearlab.gap.diagnose.Space).
 """
 
 from gearlab.api import Effect, Param, hookimpl
@@ -29,10 +32,10 @@ class DriveInertias(Effect):
     level = "model"
     breaks_symmetry = False
     params = (
-        Param("I11", "kg*m^2", 0.0043, 1e-6, 10.0, "mass moment of inertia of the motor"),
-        Param("I22", "kg*m^2", 0.0045, 1e-6, 10.0, "mass moment of inertia of the load"),
-        Param("k_c", "N*m/rad", 1e4, 1.0, 1e8, "torsional stiffness of both couplings"),
-        Param("c_c", "N*m*s/rad", 10.0, 0.0, 1e4, "torsional damping of both couplings"),
+        Param("I11", "kg*m^2", 1e-3, 1e-6, 10.0, "mass moment of inertia of the motor"),
+        Param("I22", "kg*m^2", 1e-3, 1e-6, 10.0, "mass moment of inertia of the load"),
+        Param("k_c", "N*m/rad", 1e3, 1.0, 1e8, "torsional stiffness of both couplings"),
+        Param("c_c", "N*m*s/rad", 1.0, 0.0, 1e4, "torsional damping of both couplings"),
     )
     log_scale = frozenset({"I11", "I22", "k_c"})
 
