@@ -9,6 +9,7 @@ GEARLAB_FUZZ_EXAMPLES, e.g. `GEARLAB_FUZZ_EXAMPLES=3000 pytest tests/test_fuzz.p
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import copy
 import faulthandler
@@ -17,7 +18,9 @@ import os
 import random
 import shutil
 import sys
+import tempfile
 import tomllib
+import zipfile
 from datetime import timedelta
 from pathlib import Path
 
@@ -79,9 +82,25 @@ def refused_or_fine(action) -> object:
 # ============================================================================= scenarios
 
 
-def measured_files_absolute(doc: dict) -> dict | None:
+# Stands in for the shipped scenarios' records where they are not here (../shared is optional):
+# validation only asks that each named file exists, so the fuzzer reaches [target] files in any
+# clone. Made once per process, removed at its end.
+STAND_INS = Path(tempfile.mkdtemp(prefix="gearlab-fuzz-"))
+atexit.register(shutil.rmtree, STAND_INS, ignore_errors=True)
+
+
+def stand_in(name: str) -> Path:
+    """A small record named *name* in STAND_INS (one per name: a scenario lists each once)."""
+    path = STAND_INS / name
+    if not path.exists():
+        with zipfile.ZipFile(path, "w") as z:
+            z.writestr("record.txt", "0.1 0.2 0\n")
+    return path
+
+
+def measured_files_absolute(doc: dict) -> dict:
     """A shipped scenario with its [target] files (relative to scenarios/) made absolute, so it
-    validates from any folder; None when those records are not here (../shared is optional)."""
+    validates from any folder; a record that is not here is replaced by a stand-in."""
     files = doc.get("target", {}).get("files")
     if not isinstance(files, list):
         return doc
@@ -89,7 +108,7 @@ def measured_files_absolute(doc: dict) -> dict | None:
         path = Path(f["path"])
         f["path"] = str(path if path.is_absolute() else (ROOT / "scenarios" / path).resolve())
         if not Path(f["path"]).is_file():
-            return None
+            f["path"] = str(stand_in(Path(f["path"]).name))
     return doc
 
 
@@ -341,7 +360,11 @@ def nudge(value):
     if isinstance(value, float):
         return st.sampled_from([-value, 0.0, value * 1e300, float("nan"), float("inf"), 3, str(value)])
     if isinstance(value, str):
-        return st.sampled_from([value.upper(), value[:-1], value + "x", "", value + "\n", value * 50, f" {value} "])
+        # a name over 255 bytes, alone or as a folder on the way: no file system takes it
+        return st.sampled_from(
+            [value.upper(), value[:-1], value + "x", "", value + "\n", value * 50, f" {value} "]
+            + ["x" * 300, f"{'y' * 300}/{value}", f"{value}.{'z' * 256}"]
+        )
     return st.sampled_from([[], {}, [value], {"x": value}])
 
 
@@ -407,6 +430,7 @@ def scenario_file(tmp_path_factory):
     """One file the examples overwrite; validation is warmed up (registry, units, gear pairs)
     so that the deadline measures the input's cost, not the first import."""
     path = tmp_path_factory.mktemp("fuzz") / "s.toml"
+    write_formats(path.parent, make_record(n=8000))  # the records the scenarios name (rec.npz)
     for doc in REAL.values():
         path.write_bytes(toml_bytes(doc))
         validate(path)
@@ -427,6 +451,21 @@ def test_shipped_scenarios_are_valid(scenario_file):
     for name, doc in REAL.items():
         scenario_file.write_bytes(toml_bytes(doc))
         assert validate(scenario_file) is not None, name
+
+
+def test_the_fuzz_reaches_target_files_and_names_no_file_system_takes(scenario_file):
+    """In any clone, with the records of ../shared or without: the detection scenario's
+    [target] files are among those mutated, and a mutation may make a name (or a folder on the
+    way) longer than 255 bytes, which is refused in one line."""
+    chip = copy.deepcopy(REAL["phm09_chip.toml"])
+    assert chip["target"]["files"]
+    assert any(len(part.encode()) > 255 for v in nudge("rec.zip").elements for part in v.split("/"))
+    first = chip["target"]["files"][0]["path"]
+    for long in ("x" * 300, f"{'y' * 300}/{first}", f"{first}.{'z' * 256}"):
+        chip["target"]["files"][0]["path"] = long
+        scenario_file.write_bytes(toml_bytes(chip))
+        with pytest.raises(GearlabInputError, match="File name too long"):
+            load_scenario(scenario_file)
 
 
 @fuzz(400)

@@ -252,17 +252,31 @@ def _prefixed(prefix: str):
         raise GearlabInputError(f"{prefix}: {exc}") from None
 
 
-def _check_exists(path: Path) -> None:
+def file_problem(path: Path) -> str | None:
+    """Why *path* cannot be read as a measured file ('no such file', 'is not a file', a name
+    too long, a NUL in it), or None when it is a file. Every kind checks its measured files
+    so when a scenario is loaded: `gearlab validate` finds them all."""
     try:
         exists, is_file = path.exists(), path.is_file()
     except (OSError, ValueError) as exc:  # a name too long, a NUL character in it, ...
-        raise GearlabInputError(
-            f"{_one_line_repr(str(path))}: cannot be a measured record: {getattr(exc, 'strerror', None) or exc}"
-        ) from None
+        return f"cannot be a measured record: {getattr(exc, 'strerror', None) or exc}"
     if not exists:
-        raise GearlabInputError(f"{path}: no such file; expected a measured record ({_supported()})")
-    if not is_file:
-        raise GearlabInputError(f"{path}: is not a file; expected a measured record ({_supported()})")
+        return "no such file"
+    return None if is_file else "is not a file"
+
+
+def check_measured_file(path: Path, where: str = "", expected: str = "") -> None:
+    """Refuse *path* in one line (prefixed with *where*) unless it is a readable file."""
+    problem = file_problem(Path(path))
+    if problem is not None:
+        head = f"{where}: " if where else ""
+        shown_path = _one_line_repr(str(path)) if problem.startswith("cannot") else str(path)
+        raise GearlabInputError(
+            f"{head}{shown_path}: {problem}; expected {expected or f'a measured record ({_supported()})'}"
+        )
+
+
+_check_exists = check_measured_file
 
 
 def _supported() -> str:

@@ -12,7 +12,11 @@ record reaches gearlab through three steps:
 
 The text is read from the archive in blocks of ``CHUNK_BYTES`` and only the asked-for
 columns are kept, so a 13 MB text needs about the size of those columns (plus one block),
-never the whole text and its parsed table at once.
+never the whole text and its parsed table at once. The one memory limit of every measured
+file (``GEARLAB_MAX_RECORD_MB``, gearlab.data.readers.base) holds here too: a text (or a
+zip member) declaring more is refused before a byte is inflated, and the text read and the
+columns kept are counted while streaming, so an archive that lies about its size is
+stopped at the limit too.
 
 Columns are chosen by 0-based index (an int, or a text of digits) or by name when the
 first row is a header of names. A tacho with ``pulses_per_rev`` = N equally spaced marks
@@ -27,6 +31,7 @@ what was expected.
 
 from __future__ import annotations
 
+import os
 import re
 import zipfile
 from contextlib import contextmanager
@@ -39,15 +44,13 @@ from ..errors import GearlabInputError, shown
 from ..signals import POINTS, angle_from_pulses, cut_revolutions, steady_start_stats
 from ..signals.checks import fmt_hz
 from ..units import to_si
+from .readers.base import check_size, max_record_bytes
 
 __all__ = ["TextRecord", "align_to", "parse_sensitivity", "read_columns", "read_record"]
 
 # Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
 # a block's tokens (about 60 bytes each as Python objects) stay a few tens of MB.
 CHUNK_BYTES = 1 << 18
-# Largest text accepted inside an archive (the PHM 2009 records are 13 MB): a damaged or
-# hostile archive announcing more is refused before anything is inflated.
-MAX_TEXT_BYTES = 1 << 31
 STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer sensitivities (ISO 80000-3)
 TWO_PI = 2.0 * np.pi
 
@@ -81,6 +84,7 @@ def _open_text(path: Path):
     try:
         if path.suffix.lower() != ".zip":
             with path.open("rb") as f:
+                check_size(path, "the text", os.fstat(f.fileno()).st_size)
                 yield f, str(path)
             return
         with zipfile.ZipFile(path) as z:
@@ -91,11 +95,8 @@ def _open_text(path: Path):
                     f"{path}: expected a zip archive of exactly one text file, found {len(members)} ({names})"
                 )
             info = members[0]
-            if info.file_size > MAX_TEXT_BYTES:
-                raise GearlabInputError(
-                    f"{path}: member {shown(info.filename)} holds {info.file_size} bytes of "
-                    f"text; expected at most {MAX_TEXT_BYTES}"
-                )
+            # declared: a few kB of deflated zeros may announce gigabytes (a zip bomb)
+            check_size(path, f"member {shown(info.filename)} (as its archive declares it)", info.file_size)
             with z.open(info) as f:
                 yield f, f"{path}: member {shown(info.filename)}"
     except FileNotFoundError:
@@ -173,11 +174,16 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
     header: list[str] | None = None
     width = 0
     picked: list[int] = []
+    limit = max_record_bytes()
+    text_bytes, kept_bytes = 0, 0  # of text read and of columns kept, against the limit
     with _open_text(path) as (stream, where):
         line_no = 1  # number of the first line of the pending block
         rest = b""
         while True:
             data = stream.read(CHUNK_BYTES)
+            text_bytes += len(data)
+            if text_bytes > limit:  # more than declared (a lying archive, a file that grows)
+                check_size(where, "the text read so far", text_bytes)
             block = rest + data
             if data:
                 cut = block.rfind(b"\n") + 1
@@ -221,6 +227,9 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                 if values.size != rows * width:
                     raise _bad_line(block, line_no, width, where)
                 parts.append(values.reshape(rows, width)[:, picked].copy())
+                kept_bytes += parts[-1].nbytes
+                if kept_bytes > limit:  # short rows of many numbers: the columns outgrow their text
+                    check_size(where, "the columns read so far", kept_bytes)
             line_no += lines_here
             if not data:
                 break
@@ -263,7 +272,13 @@ def read_record(
     from the tacho's N = *pulses_per_rev* marks per revolution and cut the complete
     revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
     found, _, _ = read_columns(path, [vibration, tacho])
-    vib = found[vibration] / sensitivity
+    raw = found[vibration]
+    if raw.size and raw.min() == raw.max():  # refused as every other reader's import refuses it
+        raise GearlabInputError(
+            f"{path}: vibration column {shown(vibration)}: all {raw.size} values equal {raw[0]:g}; expected "
+            "a measured vibration (a constant column: a wrong column, or a sensor not connected)"
+        )
+    vib = raw / sensitivity
     where = f"{path}: tacho column {shown(tacho)}"
     try:
         angle = angle_from_pulses(found[tacho], fs) / pulses_per_rev

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import asdict
 from pathlib import Path
 
-from ..data.importers import MeasuredSpec
+from ..data.importers import MeasuredSpec, check_measured_file
 from ..data.spec import DATASET_PRESETS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import parse_sensitivity
 from ..effects import effects_from_tables
@@ -72,6 +72,10 @@ DATASET_TABLE = Table(
 MAX_SAMPLES = 10**6
 
 
+# keys of a measured 'file' entry that mean nothing to a simulated preset
+MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "gain")
+
+
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
     """A dataset preset with the entry's overrides applied, or a measured file to import
     (shared by the dataset, transfer and gap kinds). *base*: the scenario's folder."""
@@ -81,6 +85,12 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
         if entry.get("effects"):
             raise GearlabInputError(f"{where} key 'effects': effects act on simulations; a measured 'file' has none")
         return measured_spec(entry, where, base)
+    for key in MEASURED_ONLY:  # said of a simulation, such a key would be silently ignored
+        if entry.get(key) not in (None, ""):
+            raise GearlabInputError(
+                f"{where} key '{key}': a key of measured data ('file'); a simulated 'preset' has none"
+                + (" (its channel is chosen with 'channel')" if key == "vibration" else "")
+            )
     spec = dataset_preset(entry["preset"], where)
     changes = {}
     for key in ("model", "channel"):
@@ -162,6 +172,7 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
         raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")
     path = Path(entry["file"])
     path = path if path.is_absolute() else base / path
+    check_measured_file(path, f"{where} key 'file'")
     speed = quantity(entry, "speed", where) if entry["speed"] is not None else None
     fs = quantity(entry, "fs", where) if entry["fs"] is not None else None
     names = entry["class_names"]

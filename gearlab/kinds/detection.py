@@ -56,7 +56,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -65,6 +64,7 @@ import numpy as np
 
 from ..data.cache import load_or_build
 from ..data.chain import Chain
+from ..data.importers import check_measured_file
 from ..data.spec import POINTS, DatasetSpec
 from ..data.textzip import align_to, parse_sensitivity, read_record
 from ..errors import GearlabInputError, shown
@@ -315,10 +315,7 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
             raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
         path = Path(f["path"])
         resolved = path if path.is_absolute() else base / path
-        if not resolved.is_file():
-            raise GearlabInputError(
-                f"{at}: {resolved}: no such file; expected a measured record (.zip of one text file, or the text)"
-            )
+        check_measured_file(resolved, at, "a measured record (.zip of one text file, or the text)")
         out.append(TargetFile(f["path"], str(resolved), f["role"], f["label"], condition))
     seen = {}
     for i, f in enumerate(out):
@@ -729,7 +726,7 @@ def train_unit(task: tuple) -> dict:
     # stopped moving" never holds, and no epoch after the ramp is nearer convergence than the
     # ramp's end. Such a training ends there, at the first epoch its kept model may come from.
     trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
-    with UnitProgress(Path(states).parents[1], unit) as progress:
+    with UnitProgress(states.root, unit) as progress:
 
         def report(epoch: int, history) -> None:
             progress(f"epoch {epoch + 1}")
@@ -742,7 +739,7 @@ def train_unit(task: tuple) -> dict:
             (train, np.zeros(len(train), dtype=np.int64)),
             seed or 0,  # the repetition: its own torch seed and draws
             0,
-            StateStore(Path(states)),
+            StateStore(states),
             device,
             report,
         )
@@ -1259,7 +1256,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         def state_file(unit: tuple) -> Path | None:
             c, v, m, seed, _ = unit
             state = shared_state(m, seed or 0, 0, protocol)
-            return None if state is None else run.path / "states" / folders[(c, v)] / f"{state}.pt"
+            return None if state is None else run.file("states", folders[(c, v)], f"{state}.pt")
 
         phases = two_phases(pending, state_file)
         on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} trainings"))
@@ -1277,8 +1274,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             tasks = []
             for c, v, m, seed, k in phase:
                 cond = conditions[c]
-                states = run.path / "states" / folders[(c, v)]
-                states.mkdir(parents=True, exist_ok=True)
+                states = run.file("states", folders[(c, v)])
                 tasks.append(
                     (
                         protocol,
@@ -1439,8 +1435,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
     }
-    where = run.path / "conditions.json"
-    conditions = json.loads(where.read_text()) if where.exists() else None
+    conditions = run.read_json("conditions.json")
     bound = {c: v.get("source_bound", {}) for c, v in (conditions or {}).items()}
     summary["learned"] = [
         {
@@ -1635,7 +1630,7 @@ def table_csv(rows: list[dict]) -> str:
 
 
 def summary_lines(run: RunDir) -> list[str]:
-    summary = json.loads((run.path / "summary.json").read_text())
+    summary = run.read_json("summary.json")
     return [
         f"ROC AUC, detection and false alarms at the history's threshold ({100 * summary['false_alarm_asked']:g} % "
         "false alarms asked):",

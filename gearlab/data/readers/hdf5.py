@@ -35,6 +35,7 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
     h5py = _h5py()
 
     def read(ds):
+        _own_data(h5py, path, ds)
         # declared, not stored: a dataset never written takes no room in the file
         check_size(path, f"dataset '{ds.name}'", (ds.size or 0) * max(ds.dtype.itemsize, 8))
         if h5py.check_string_dtype(ds.dtype) is not None:
@@ -61,6 +62,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         times = []
         if is_group:
             for key in node:
+                if not isinstance(node.get(key, getlink=True), h5py.HardLink):
+                    continue  # a link is no field of this group (an external one would open another file)
                 child = node.get(key)
                 if isinstance(child, h5py.Dataset) and key.lower() in _RATE_NAMES:
                     rates.append((f"dataset '{child.name}'", read(child)))
@@ -73,9 +76,11 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         seen: set[str] = set()
         for name in dict.fromkeys(names):
             try:
-                obj = f[name.strip("/")]
+                obj = _hard_linked(h5py, path, f, name)
             except (KeyError, ValueError, TypeError):
                 continue  # not there: reported with the list of datasets
+            if obj is None:
+                continue
             if not isinstance(obj, h5py.Dataset):
                 continue  # a group is not a channel
             contents.found[name] = read(obj)
@@ -91,6 +96,45 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                         seen.add(where)
                         kind.append((where, value))
         return contents
+
+
+def _hard_linked(h5py, path: Path, f, name: str):
+    """The object at *name*, reached through hard links only: a soft or external link on the
+    way is refused in one line (an external link opens another file, a soft link may lead
+    anywhere in this one); None when there is nothing at *name*."""
+    node, walked = f, ""
+    for part in name.strip("/").split("/"):
+        link = node.get(part, getlink=True)
+        if link is None:
+            return None
+        walked = f"{walked}/{part}"
+        if isinstance(link, h5py.ExternalLink):
+            raise GearlabInputError(
+                f"{path}: '{walked}' is an external link (to {link.filename}:{link.path}); expected a "
+                "dataset stored in this file"
+            )
+        if not isinstance(link, h5py.HardLink):
+            raise GearlabInputError(
+                f"{path}: '{walked}' is a soft link ({type(link).__name__} to {link.path}); expected a "
+                "dataset stored under its own name"
+            )
+        node = node[part]
+    return node
+
+
+def _own_data(h5py, path: Path, ds) -> None:
+    """Refuse a dataset whose samples are not in this file: external raw storage (any file the
+    writer named) or a virtual dataset (a view of others' data, possibly in other files)."""
+    if ds.is_virtual:
+        raise GearlabInputError(
+            f"{path}: dataset '{ds.name}' is a virtual dataset (a view of other datasets); expected "
+            "its samples stored in this file"
+        )
+    if ds.external:
+        raise GearlabInputError(
+            f"{path}: dataset '{ds.name}' keeps its samples in another file ({ds.external[0][0]!r}, "
+            "external storage); expected them stored in this file"
+        )
 
 
 _HDF5_MAX_OBJECTS = 100_000
