@@ -240,6 +240,8 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
         )
     else:
         lines.append("No method collapsed to one class.")
+    if summary.get("bound_unavailable"):
+        lines.append(f"No Bayes bound: {summary['bound_unavailable']}.")
     bound = (summary.get("bound") or {}).get("accuracy") or {}
     told = [(r["k"], bound[str(r["k"])]["mean"] - r["mean"]) for r in rows if str(r["k"]) in bound]
     if told:

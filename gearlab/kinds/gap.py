@@ -675,8 +675,10 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
     result = next(r["result"] for r in records if r["unit"] == "diagnosis")
     acc = accuracy_table(records, spec["protocol"])
     bound = next((r for r in records if r["unit"] == "bound"), None)
-    if acc and bound is not None:  # the reference row, as in the transfer table
+    if acc and bound is not None and "accuracy" in bound:  # the reference row, as in the transfer table
         acc[bound["label"]] = bound["accuracy"]["0"]
+    elif bound is not None:
+        notes = [*notes, f"Bayes bound unavailable: {bound['unavailable']}"]
     summary = {
         "kind": "gap",
         "scenario": scenario.name,

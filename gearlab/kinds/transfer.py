@@ -25,7 +25,7 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
-from ..learn.bounds import bayes_scores, best_accuracy, detection_at
+from ..learn.bounds import bayes_scores, best_accuracy, detection_at, twin_problem
 from ..learn.calibration import RECIPE, Calibration
 from ..learn.networks import NetworkSettings
 from ..learn.protocol import (
@@ -287,11 +287,16 @@ def bayes_bound(
     (gearlab.learn.bounds) on each (repetition, k)'s target test set, with the best threshold,
     and the faults it finds at 1 % false alarms. None unless the target is simulated with noise
     (the detector needs its noise-free twin); it knows the test labels, so it is a bound, not a
-    method."""
+    method. A target whose twin lies outside the detector's model (`twin_problem`) gets
+    ``{"label", "unavailable": why}`` instead of a number that methods could beat."""
     if not isinstance(target_spec, DatasetSpec) or target_spec.noise is None:
         return None
     on_event(Event("log", message="the Bayes bound: the target's noise-free twin and its likelihood ratios"))
     clean, _ = load_or_build(target_spec.with_(noise=None), executor, on_event)
+    problem = twin_problem(clean)
+    if problem is not None:
+        on_event(Event("log", message=f"the Bayes bound is unavailable: {problem}"))
+        return {"label": BOUND, "unavailable": problem}
     healthy = target.X[target.fault == 0]
     scores = bayes_scores(target.X, healthy, clean, target_spec.noise.kind)
     cells: dict[str, dict[str, dict]] = {"accuracy": {}, "detection_at_1pct": {}}
@@ -405,9 +410,12 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "device": str(pick_device(protocol.device)),  # where the units trained (cuda when present, by default)
         "healthy_share_of_test": float(np.mean([r["healthy_share"] for r in records])) if records else None,
     }
-    if run.file("bound.json").exists():
-        summary["bound"] = run.read_json("bound.json")
+    bound = run.read_json("bound.json") if run.file("bound.json").exists() else {}
+    if "accuracy" in bound:
+        summary["bound"] = bound
         tab = {**tab, BOUND: summary["bound"]["accuracy"]}  # the reference column of table.md/csv
+    elif "unavailable" in bound:
+        summary["bound_unavailable"] = bound["unavailable"]
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(tab, protocol.ks, list(tab)) + measures_md(summary, protocol.ks))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
@@ -424,6 +432,8 @@ def summary_lines(run: RunDir) -> list[str]:
         "target-domain test accuracy [%], mean ± std over repetitions (Table 5.4 layout):",
         table_md(tab, ks, methods).rstrip(),
     ]
+    if summary.get("bound_unavailable"):
+        lines.append(f"Bayes bound unavailable: {summary['bound_unavailable']}")
     if summary.get("healthy_share_of_test") is not None:
         lines.append(f"healthy share of the target test sets: {summary['healthy_share_of_test']:.2f} %")
     if summary.get("device"):
