@@ -179,6 +179,66 @@ def _stiffness_pair(preset: str | None, gearbox: str | None, stage: int):
     return stage_pair(box, box.stages[stage - 1])
 
 
+@app.command()
+def inspect(
+    file: Annotated[Path, typer.Argument(help="a recording: .csv, .npz, .h5/.hdf5, .wav or .mat")],
+    gearbox: Annotated[
+        str | None, typer.Option(help="a gearbox description (.toml, docs/gearbox.md) or a built-in one's name")
+    ] = None,
+    vibration: Annotated[str | None, typer.Option(help="vibration channel (default: the only one)")] = None,
+    tacho: Annotated[str | None, typer.Option(help="tacho channel: pulses or the shaft angle in rad")] = None,
+    tacho_kind: Annotated[str, typer.Option(help="auto, angle or pulses")] = "auto",
+    pulses_per_rev: Annotated[int | None, typer.Option(help="tacho pulses per revolution (default 1)")] = None,
+    tacho_shaft: Annotated[str | None, typer.Option(help="the shaft the tacho reads (default: the input)")] = None,
+    speed: Annotated[
+        str | None, typer.Option(help="input-shaft speed without a tacho, e.g. '25 Hz', '1500 rpm'")
+    ] = None,
+    fs: Annotated[str | None, typer.Option(help="sampling rate when the file has none, e.g. '20 kHz'")] = None,
+    sensitivity: Annotated[str | None, typer.Option(help="sensor sensitivity, e.g. '10 mV/g'")] = None,
+    gain: Annotated[str | None, typer.Option(help="volts per file unit, e.g. '0.5 mV'")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+) -> None:
+    """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts).
+
+    Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho
+    """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
+    from .data.importers import TACHO_KINDS
+    from .data.textzip import parse_sensitivity
+    from .gearbox import resolve_gearbox, speed_hz
+    from .inspect import InspectOptions, inspect_record, json_ready, render
+    from .units import to_si
+
+    if tacho_kind not in TACHO_KINDS:
+        raise GearlabInputError(f"--tacho-kind: {tacho_kind!r} is not one of {', '.join(TACHO_KINDS)}")
+    if pulses_per_rev is not None and not 1 <= pulses_per_rev <= 10_000:
+        raise GearlabInputError(f"--pulses-per-rev: expected 1 .. 10000, got {pulses_per_rev}")
+    rate = None if fs is None else to_si(fs, "Hz", "--fs")
+    if rate is not None and not 0 < rate <= 1e7:
+        raise GearlabInputError(f"--fs: expected a sampling rate in (0, 10 MHz], got {fs!r}")
+    volts = None if gain is None else to_si(gain, "V", "--gain")
+    if volts is not None and not volts > 0:
+        raise GearlabInputError(f"--gain: expected a positive number of volts per file unit, got {gain!r}")
+    options = InspectOptions(
+        vibration=vibration,
+        tacho=tacho,
+        tacho_kind=tacho_kind,
+        pulses_per_rev=pulses_per_rev,
+        tacho_shaft=tacho_shaft,
+        speed_hz=None if speed is None else speed_hz(speed, "--speed"),
+        fs=rate,
+        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "--sensitivity"),
+        gain=volts,
+    )
+    box = None if gearbox is None else resolve_gearbox(gearbox)
+    if box is not None and tacho_shaft is not None:
+        box.shaft_index(tacho_shaft, "--tacho-shaft")
+    report = inspect_record(str(file), box, options)
+    if as_json:
+        typer.echo(json.dumps(json_ready(report)))
+        return
+    render(report, console)
+
+
 def _simulator(model: str, preset: str | None, fs: float = 200e3):
     from .dynamics.newmark import Simulator
     from .registry import get_registry

@@ -38,7 +38,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("plugin registry", ("gearlab.registry",)),
     ("effect chain and learning", ("gearlab.effects", "gearlab.learn")),
     ("datasets", ("gearlab.data",)),
-    ("gap diagnosis", ("gearlab.gap",)),
+    ("gap diagnosis and recording inspection", ("gearlab.gap", "gearlab.inspect")),
     ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
     ("scenario kinds", ("gearlab.kinds",)),
     ("verdict and report", ("gearlab.verdict", "gearlab.report")),

@@ -1,0 +1,691 @@
+"""`gearlab inspect`: what a recording holds, and whether a gearbox description matches it.
+
+    file ─► channels, sampling rate              the importer's readers (gearlab.data.importers)
+         ─► input-shaft angle θ(t)               tacho (angle or pulses, N per revolution, on any
+                                                 shaft) | speed found from the mesh lines
+         ─► order spectrum                        the record resampled at uniform θ over its R
+                                                 complete revolutions, Hann window: bins of 1/R order
+         ─► lines                                 peaks 15 dB over the running median, refined by a
+                                                 parabola through the log amplitudes
+         ─► the description's orders tested       mesh order of every stage; each shaft's order from
+                                                 the sidebands around the measured mesh (z = M / o)
+         ─► TSA per shaft, verdict                "the description matches this recording" or what differs
+
+Tolerances (docs/gearbox.md): a line matches a mesh order M within 2 bins + 1e-3 M (speed
+drift smears high orders); a sideband spacing matches a shaft order o within 2 bins / j + 1e-3 o
+for the j-th sideband. Without a tacho the speed comes from the mesh lines: every strong line
+is tried as a mesh harmonic of every stage, each hypothesis scored by the spectral power the
+description's lines then explain; a declared speed limits the search to ±1 %, two hypotheses
+explaining nearly as much at different speeds are refused as ambiguous.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from .data.importers import (
+    _angle_tacho,
+    _prefixed,
+    _read,
+    _same_length,
+    _sampling_rate,
+    _series,
+    _tacho_kind,
+)
+from .data.readers.base import _listing
+from .errors import GearlabInputError
+from .gearbox import Gearbox, order_table
+from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
+from .signals.checks import fmt_hz
+
+TWO_PI = 2.0 * np.pi
+THRESHOLD_DB = 15.0  # a line stands this far over the running median of the spectrum
+FLOOR_BINS = 201  # width of the running median (bins)
+PEAK_BINS = 7  # a line is the largest value within ±3 bins (Hann sidelobes are not lines)
+DECLARED_RANGE = 0.01  # a declared speed is trusted to ±1 %
+AMBIGUOUS = 0.9  # a second speed hypothesis explaining ≥ 90 % of the best one's power is ambiguous
+SPEED_AGREE = 0.005  # two hypotheses within 0.5 % are the same speed
+DRIFT = 1e-3  # relative smear of an order by speed drift
+WINDOW = 0.3  # sidebands are searched within ±0.3 o of where the description puts them
+UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
+MAX_TSA_POINTS = 1 << 15
+
+
+@dataclass(frozen=True)
+class InspectOptions:
+    vibration: str | None = None
+    tacho: str | None = None
+    tacho_kind: str = "auto"
+    pulses_per_rev: int | None = None  # default: the description's [sensor] pulses_per_rev, else 1
+    tacho_shaft: str | None = None  # default: the description's [sensor] tacho, else the input
+    speed_hz: float | None = None  # declared input-shaft speed (default: the description's)
+    fs: float | None = None
+    sensitivity: float | None = None  # V per m/s²
+    gain: float | None = None  # V per file unit
+    threshold_db: float = THRESHOLD_DB
+
+
+@dataclass
+class Lines:
+    """Spectral lines: position (orders or Hz), amplitude, dB over the running median."""
+
+    at: np.ndarray
+    amp: np.ndarray
+    db: np.ndarray
+
+    def near(self, x: float, tol: float) -> int | None:
+        """Index of the strongest line within ±tol of x, or None."""
+        inside = np.flatnonzero(np.abs(self.at - x) <= tol)
+        return None if inside.size == 0 else int(inside[np.argmax(self.amp[inside])])
+
+    def closest(self, x: float, half: float, exclude=()) -> int | None:
+        inside = [i for i in np.flatnonzero(np.abs(self.at - x) <= half) if i not in exclude]
+        return None if not inside else int(min(inside, key=lambda i: abs(self.at[i] - x)))
+
+
+def find_lines(axis: np.ndarray, amp: np.ndarray, threshold_db: float, low: float, high: float) -> Lines:
+    """Peaks of a spectrum standing *threshold_db* over its running median, refined to a fraction
+    of a bin (parabola through the log amplitude of the peak bin and its neighbours)."""
+    floor = ndimage.median_filter(amp, size=min(FLOOR_BINS, amp.size | 1), mode="nearest")
+    floor = np.maximum(floor, 1e-300)
+    peak = (ndimage.maximum_filter(amp, size=PEAK_BINS, mode="nearest") == amp) & (
+        amp > floor * 10 ** (threshold_db / 20)
+    )
+    peak[[0, -1]] = False
+    idx = np.flatnonzero(peak & (axis >= low) & (axis <= high))
+    step = axis[1] - axis[0]
+    with np.errstate(divide="ignore"):
+        l, c, r = (np.log(np.maximum(amp[idx + k], 1e-300)) for k in (-1, 0, 1))
+    denom = l - 2 * c + r
+    delta = np.where(denom < 0, 0.5 * (l - r) / np.where(denom < 0, denom, -1), 0.0)
+    delta = np.clip(delta, -0.5, 0.5)
+    at = axis[idx] + delta * step
+    height = np.exp(c - 0.25 * (l - r) * delta)
+    order = np.argsort(-height)
+    return Lines(at[order], height[order], 20 * np.log10(height[order] / floor[idx][order]))
+
+
+# --- the record -------------------------------------------------------------------------------
+
+
+@dataclass
+class Record:
+    path: str
+    format: str
+    channels: list[str]
+    vibration: str
+    signal: np.ndarray
+    fs: float
+    fs_source: str
+    tacho_name: str | None
+    tacho: np.ndarray | None
+
+
+_RATE_OR_TIME = ("fs", "t", "time")
+
+
+def read_record(path: str, options: InspectOptions) -> Record:
+    listing, fmt = _read(path, [])
+    channels = [c for c in listing.available if str(c).lower() not in _RATE_OR_TIME]
+    vibration = options.vibration
+    if vibration is None:
+        left = [c for c in channels if c != options.tacho]
+        if len(left) != 1:
+            raise GearlabInputError(
+                f"{path}: which channel is the vibration? the file has {_listing(channels)}; expected --vibration NAME"
+            )
+        vibration = left[0]
+    roles = {vibration: "vibration"}
+    if options.tacho is not None:
+        roles.setdefault(options.tacho, "tacho")
+    contents, fmt = _read(path, list(roles), roles)
+    scale = (1.0 if options.gain is None else options.gain) / (
+        1.0 if options.sensitivity is None else options.sensitivity
+    )
+    vib = _series(contents.found[vibration], vibration, "vibration", path) * scale
+    fs, fs_source = _sampling_rate(contents, options.fs, vib.size, path)
+    tacho = None
+    if options.tacho is not None:
+        tacho = _series(contents.found[options.tacho], options.tacho, "tacho", path)
+        _same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
+    return Record(str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho)
+
+
+# --- speed ------------------------------------------------------------------------------------
+
+
+@dataclass
+class Speed:
+    mean_hz: float
+    source: str
+    angle: np.ndarray  # continuous input-shaft angle per sample (rad)
+    per_revolution_hz: np.ndarray  # speed of each complete revolution (or of each revolution-long stretch)
+    declared_hz: float | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def describe(self) -> dict:
+        s = self.per_revolution_hz
+        return {
+            "mean_hz": self.mean_hz,
+            "min_hz": float(s.min()) if s.size else self.mean_hz,
+            "max_hz": float(s.max()) if s.size else self.mean_hz,
+            "variation_percent": float(100 * (s.max() - s.min()) / self.mean_hz) if s.size else 0.0,
+            "std_percent": float(100 * s.std() / self.mean_hz) if s.size else 0.0,
+            "source": self.source,
+            "declared_hz": self.declared_hz,
+            "notes": self.notes,
+        }
+
+
+def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
+    kind = _tacho_kind(rec.tacho) if options.tacho_kind == "auto" else options.tacho_kind
+    shaft = options.tacho_shaft or (box.sensor.tacho if box else "input")
+    ratio = 1.0
+    if box is not None:
+        ratio = float(order_table(box).shaft_orders[box.shaft_index(shaft, "--tacho-shaft")])
+    ppr = options.pulses_per_rev or (box.sensor.pulses_per_rev if box else 1)
+    where = f"{rec.path}: tacho '{rec.tacho_name}'"
+    if kind == "angle":
+        with _prefixed(f"{where} (read as the shaft angle in rad)"):
+            theta = unwrap_tacho(_angle_tacho(rec.tacho))
+        how = f"tacho '{rec.tacho_name}' (shaft angle) on the {shaft} shaft"
+    else:
+        with _prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"):
+            theta = angle_from_pulses(rec.tacho, rec.fs) / ppr
+        how = f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution) on the {shaft} shaft"
+    theta = theta / ratio  # the input shaft's angle
+    turns = (theta[-1] - theta[0]) / TWO_PI
+    if turns <= 0:
+        raise GearlabInputError(f"{where}: the shaft angle does not advance; expected a turning shaft")
+    mean = turns * rec.fs / (theta.size - 1)
+    with _prefixed(where):
+        starts = revolution_starts(theta) if turns >= 2 else np.zeros(0)
+    per_rev = rec.fs / np.diff(starts) if starts.size >= 2 else np.zeros(0)
+    return Speed(mean, how, theta, per_rev)
+
+
+def _hz_lines(rec: Record, threshold_db: float) -> Lines:
+    freq, amp = spectrum(rec.signal, rec.fs)
+    return find_lines(freq, amp, threshold_db, 2 * freq[1], 0.45 * rec.fs)
+
+
+def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
+    """The input speed of a record without a tacho: declared, refined by the mesh lines; or
+    found from the mesh lines alone (see the module doc)."""
+    declared = options.speed_hz or (box.speed_hz if box else None)
+    n = rec.signal.size
+    if box is None:
+        if declared is None:
+            raise GearlabInputError(
+                f"{rec.path}: no tacho and no speed: give --tacho NAME, --speed (e.g. '25 Hz'), or --gearbox "
+                "to find the speed from its mesh orders"
+            )
+        theta = TWO_PI * declared * np.arange(n) / rec.fs
+        return Speed(declared, "declared", theta, np.zeros(0), declared)
+    table = order_table(box)
+    lines = _hz_lines(rec, options.threshold_db)
+    if lines.at.size == 0:
+        raise GearlabInputError(
+            f"{rec.path}: vibration '{rec.vibration}' shows no spectral line; cannot find the speed"
+        )
+    df = rec.fs / n
+    explained_orders = np.array([o for _, o in table.lines()])
+    mesh_orders = np.array([h * float(t.mesh) for t in table.stages for h in (1, 2, 3)])
+    weight = np.minimum(lines.db, 40.0)
+
+    def tol(f):
+        return max(2.5 * df, DRIFT * f)
+
+    hypotheses = []
+    for i in range(min(12, lines.at.size)):
+        for s in table.stages:
+            for h in (1, 2, 3):
+                f = lines.at[i] / (h * float(s.mesh))
+                if declared is not None and abs(f / declared - 1) > DECLARED_RANGE:
+                    continue
+                meshes, m_orders = [], []
+                for t in table.stages:
+                    q = lines.near(float(t.mesh) * f, tol(float(t.mesh) * f))
+                    span = SPAN * float(max(t.pinion_shaft_order, t.wheel_shaft_order)) * f
+                    if q is not None and carrier(lines, q, span) == q:
+                        meshes.append(q)  # a mesh fundamental that is its neighbourhood's carrier
+                        m_orders.append(float(t.mesh))
+                if not meshes:
+                    continue
+                predicted = explained_orders * f
+                hit = np.array([np.min(np.abs(predicted - x)) <= tol(x) for x in lines.at])
+                harmonic = mesh_orders * f
+                on_mesh = np.array([np.min(np.abs(harmonic - x)) <= tol(x) for x in lines.at])
+                # least squares over the mesh fundamentals: f = Σ L M / Σ M²
+                at, m_orders = lines.at[meshes], np.array(m_orders)
+                refined = float(np.sum(at * m_orders) / np.sum(m_orders**2))
+                # a carrier outweighs its sidebands: the mesh harmonics decide, the rest breaks ties
+                # lines explained, each by its height over the floor (capped): a speed that explains
+                # the sidebands too beats one that only puts a mesh harmonic on the carrier
+                score = (len(meshes), float(weight[hit].sum() + weight[on_mesh].sum()))
+                hypotheses.append((score, refined, f"{fmt_hz(lines.at[i])} as {h}×M{s.index}"))
+    hypotheses.sort(key=lambda h: (-h[0][0], -h[0][1]))
+    distinct = []
+    for h in hypotheses:
+        if all(abs(h[1] / d[1] - 1) > SPEED_AGREE for d in distinct):
+            distinct.append(h)
+    if not distinct:
+        if declared is None:
+            raise GearlabInputError(
+                f"{rec.path}: no tacho, and no line of the spectrum fits a mesh order of {box.source} at any "
+                "speed; give --tacho NAME or --speed (e.g. '25 Hz')"
+            )
+        theta = TWO_PI * declared * np.arange(n) / rec.fs
+        speed = Speed(declared, "declared", theta, np.zeros(0), declared)
+        speed.notes.append(f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at the declared speed")
+        return speed
+    best = distinct[0]
+    if (
+        declared is None
+        and len(distinct) > 1
+        and distinct[1][0][0] == best[0][0]
+        and distinct[1][0][1] >= AMBIGUOUS * best[0][1]
+    ):
+        other = distinct[1]
+        raise GearlabInputError(
+            f"{rec.path}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
+            f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; give --speed or --tacho"
+        )
+    f = best[1]
+    theta = TWO_PI * f * np.arange(n) / rec.fs
+    how = f"from the mesh lines ({best[2]})" + (f", declared {fmt_hz(declared)}" if declared else "")
+    speed = Speed(f, how, theta, _demodulated_speed(rec, table, f), declared)
+    return speed
+
+
+def _demodulated_speed(rec: Record, table, f: float) -> np.ndarray:
+    """Speed of each revolution-long stretch from the instantaneous frequency of the first mesh
+    line (band ±0.45 of the slowest shaft's frequency, so no sideband enters): f(t) = f_M(t) / M."""
+    mesh = float(table.stages[0].mesh)
+    slowest = float(min(table.shaft_orders)) * f
+    n = rec.signal.size
+    spec = np.fft.fft(rec.signal)
+    freq = np.fft.fftfreq(n, 1 / rec.fs)
+    band = np.abs(freq - mesh * f) <= 0.45 * slowest
+    analytic = np.fft.ifft(np.where(band, 2 * spec, 0))
+    phase = np.unwrap(np.angle(analytic))
+    per_rev = max(2, int(round(rec.fs / f)))
+    count = phase.size // per_rev
+    if count < 3:
+        return np.zeros(0)
+    ends = phase[: count * per_rev : per_rev]
+    speeds = np.diff(ends) * rec.fs / (per_rev * TWO_PI * mesh)
+    return speeds[1:-1] if speeds.size > 4 else speeds  # the ends carry the band filter's edge effects
+
+
+# --- the order spectrum and the description's orders ----------------------------------------------
+
+
+def order_spectrum(rec: Record, speed: Speed):
+    """(orders, amplitude, revolutions, points per revolution) of the record at uniform input angle."""
+    per_rev = rec.fs / speed.mean_hz
+    points = int(min(1 << 14, max(64, 2 ** math.ceil(math.log2(per_rev)))))
+    with _prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
+        revs = resample_revolutions(rec.signal, speed.angle, points=points)
+    orders, amp = spectrum(revs.reshape(-1), points)  # "Hz" per revolution: orders
+    return orders, amp, revs.shape[0], points
+
+
+def _tol_mesh(order: float, bin_: float) -> float:
+    return 2 * bin_ + DRIFT * order
+
+
+SPAN = 3.5  # a mesh carrier is the strongest line within ±3.5 shaft orders (its sidebands j ≤ 3)
+
+
+def carrier(lines: Lines, i: int, span: float, others=()) -> int:
+    """The strongest line within ±span of line *i*, unless it sits on another stage's mesh
+    harmonic (*others*: (order, tolerance)): the line at a described mesh order may be a sideband
+    of the real carrier (z off by j teeth puts M on the j-th sideband of the pinion's shaft)."""
+    near = np.flatnonzero(np.abs(lines.at - lines.at[i]) <= span)
+    near = [q for q in near if not any(abs(lines.at[q] - o) <= t for o, t in others)]
+    return int(max(near, key=lambda q: lines.amp[q])) if near else i
+
+
+def comb(lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset()) -> tuple | None:
+    """(spacing, tolerance, lines) of the sideband family of a shaft around the mesh line *mesh*.
+
+    Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
+    (j = 1, 2, 3, within ±30 % of the described o) is scored by the amplitudes of the offsets at
+    ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the least-squares
+    fit through its lines, so a 57- and a 58-tooth wheel are told apart once 2 bins / 3 < o / 57."""
+    m = float(lines.at[mesh])
+    near = np.flatnonzero((np.abs(lines.at - m) <= 3.9 * o) & (np.arange(lines.at.size) != mesh))
+    near = np.array([q for q in near if q not in exclude], dtype=int)
+    if near.size == 0:
+        return None
+    d, a = lines.at[near] - m, lines.amp[near]
+    best = None
+    for c in {abs(v) / j for v in d for j in (1, 2, 3) if 0.7 * o <= abs(v) / j <= 1.3 * o}:
+        hits = []
+        for j in (-3, -2, -1, 1, 2, 3):
+            q = int(np.argmin(np.abs(d - j * c)))
+            if abs(d[q] - j * c) <= 2 * bin_ + DRIFT * abs(j) * c:
+                hits.append((j, q))
+        if not any(abs(j) == 1 for j, _ in hits):
+            continue
+        score = sum(a[q] for _, q in hits)
+        if best is None or score > best[0] * 1.01 or (score >= best[0] * 0.99 and abs(c - o) < abs(best[1] - o)):
+            best = (score, c, hits)
+    if best is None:
+        return None
+    score, _, hits = best
+    js = np.array([j for j, _ in hits], dtype=float)
+    ds = np.array([d[q] for _, q in hits])
+    ws = np.array([a[q] for _, q in hits])
+    spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
+    jmax = int(max(abs(js)))
+    return spacing, 2 * bin_ / jmax + DRIFT * spacing, len(hits), {int(near[q]) for _, q in hits}, score
+
+
+def families(
+    lines: Lines, mesh: int, orders: tuple[float, float], bin_: float, known=(False, False), exclude=frozenset()
+) -> list:
+    """The combs of a stage's two shafts around its carrier. A line both combs claim (the third
+    sideband of a slow wheel on the first of its pinion's shaft) goes to the comb of a shaft whose
+    order is known already (the tacho's, or measured at the stage before), else to the stronger
+    comb; the other is fitted again without it."""
+    found = [comb(lines, mesh, o, bin_, exclude) for o in orders]
+    if all(found) and found[0][3] & found[1][3]:
+        strong = 0 if (known[0], found[0][4]) >= (known[1], found[1][4]) else 1
+        weak = 1 - strong
+        found[weak] = comb(lines, mesh, orders[weak], bin_, exclude | found[strong][3])
+    return found
+
+
+def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool) -> dict:
+    """Every stage's mesh order and every shaft's order tested against the lines (module doc).
+
+    Stages are taken input first: a shaft's order measured at one stage (the wheel's sidebands)
+    is the pinion shaft's order of the next, so a wrong tooth count upstream is not blamed on a
+    later stage."""
+    table = order_table(box)
+    bin_ = 1.0 / revolutions
+    explained = table.lines()
+
+    def is_explained(x: float) -> bool:
+        return any(abs(x - o) <= _tol_mesh(o, bin_) for _, o in explained)
+
+    measured_shaft: dict[int, tuple[float, float, str]] = {}  # shaft -> (order, tolerance, source)
+    if tacho_on_input:
+        measured_shaft[0] = (1.0, 0.0, "tacho")
+    stages, differences, shaft_notes, named_shafts = [], [], {}, set()
+    for k, s in enumerate(table.stages):
+        expected = float(s.mesh)
+        o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
+        span = SPAN * float(max(s.pinion_shaft_order, s.wheel_shaft_order))
+        others = [
+            (h * float(t.mesh), _tol_mesh(h * float(t.mesh), bin_))
+            for t in table.stages
+            if t is not s
+            for h in (1, 2, 3)
+        ]
+        entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
+        i = lines.near(expected, _tol_mesh(expected, bin_))
+        if i is not None:
+            i = carrier(lines, i, span, others)
+        matched = i is not None and abs(lines.at[i] - expected) <= _tol_mesh(expected, bin_)
+        if i is None:
+            # the strongest unexplained line that is a whole number of teeth on the pinion's shaft
+            for q in range(lines.at.size):
+                z = lines.at[q] / o_p
+                if not is_explained(lines.at[q]) and 6 <= z <= 1000 and abs(z - round(z)) * o_p <= _tol_mesh(z, bin_):
+                    i = carrier(lines, q, span, others)
+                    break
+        entry["matched"] = bool(matched)
+        if i is None:
+            differences.append(
+                f"stage {s.index}: no line at mesh order {expected:.4g} (a {s.pinion_teeth}-tooth pinion)"
+            )
+            stages.append(entry)
+            continue
+        measured = float(lines.at[i])
+        if not matched:
+            differences.append(
+                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected "
+                f"(a {measured / o_p:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth})"
+            )
+        entry.update(measured_order=measured, error_orders=measured - expected, amplitude=float(lines.amp[i]))
+        entry["db_over_floor"] = float(lines.db[i])
+        combs = families(
+            lines,
+            i,
+            tuple(
+                measured_shaft.get(q, (float(o),))[0]
+                for q, o in ((k, s.pinion_shaft_order), (k + 1, s.wheel_shaft_order))
+            ),
+            bin_,
+            (k in measured_shaft, k + 1 in measured_shaft),
+            # other stages' mesh harmonics are no sidebands of this one
+            frozenset(q for q in range(lines.at.size) if any(abs(lines.at[q] - o) <= t for o, t in others)),
+        )
+        for (key, role, shaft_k, described), found in zip(
+            (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
+        ):
+            if shaft_k not in measured_shaft:
+                if found is None:
+                    continue
+                measured_shaft[shaft_k] = (found[0], found[1], f"{found[2]} sideband(s) of M{s.index}")
+            o_seen, tol, _ = measured_shaft[shaft_k]
+            z = measured / o_seen
+            spread = z * tol / o_seen
+            entry[f"{key}_seen"], entry[f"{key}_resolution"] = z, spread
+            if abs(z - described) > max(0.5, spread):
+                named_shafts.add(shaft_k)
+                if role == "pinion" and not matched and round(z) == round(measured / o_p):
+                    continue  # the mesh message has said it
+                differences.append(
+                    f"stage {s.index}: the {role} on the {table.shafts[shaft_k]} shaft shows {z:.1f} ± {spread:.1f} "
+                    f"teeth (mesh order {measured:.4g} / shaft order {o_seen:.4g}), {described} described"
+                )
+        stages.append(entry)
+
+    shafts = []
+    for k, (name, o) in enumerate(zip(table.shafts, table.shaft_orders)):
+        o = float(o)
+        entry = {"shaft": name, "expected_order": o}
+        if k in measured_shaft:
+            seen, tol, source = measured_shaft[k]
+            entry.update(measured_order=seen, tolerance=tol, source=source, matched=bool(abs(seen - o) <= tol))
+            if not entry["matched"]:
+                shaft_notes[k] = f"{name} shaft: order {seen:.4g} measured ({source}), {o:.4g} expected"
+        else:
+            entry.update(measured_order=None, source="not seen (no sidebands of this shaft)", matched=None)
+        shafts.append(entry)
+    differences += [text for k, text in shaft_notes.items() if k not in named_shafts]
+    unexplained = [
+        {"order": float(lines.at[q]), "amplitude": float(lines.amp[q]), "db_over_floor": float(lines.db[q])}
+        for q in range(lines.at.size)
+        if not is_explained(lines.at[q]) and 20 * math.log10(lines.amp[q] / lines.amp[0]) >= UNEXPLAINED_DB
+    ][:8]
+    return {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
+
+
+def shaft_tsa(rec: Record, speed: Speed, box: Gearbox | None) -> list[dict]:
+    """TSA of the record over each shaft's own revolutions: revolutions averaged, RMS, its strongest orders."""
+    if box is None:
+        names, orders = ("input",), (1.0,)
+    else:
+        table = order_table(box)
+        names, orders = table.shafts, tuple(float(o) for o in table.shaft_orders)
+    out = []
+    for name, o in zip(names, orders):
+        per_rev = rec.fs / (speed.mean_hz * o)
+        points = int(min(MAX_TSA_POINTS, max(64, 2 ** math.ceil(math.log2(per_rev)))))
+        theta = speed.angle * o
+        count = int((theta[-1] - theta[0]) // TWO_PI) - 1
+        if count < 2:
+            out.append({"shaft": name, "revolutions": max(count, 0), "note": "fewer than 2 complete revolutions"})
+            continue
+        avg = tsa(resample_revolutions(rec.signal, theta, points=points))
+        amp = np.abs(np.fft.rfft(avg - avg.mean())) * 2 / points
+        top = np.argsort(-amp)[:3]
+        out.append(
+            {
+                "shaft": name,
+                "revolutions": count,
+                "rms": float(np.sqrt(np.mean((avg - avg.mean()) ** 2))),
+                "share_of_signal_rms": float(np.std(avg) / max(np.std(rec.signal), 1e-300)),
+                "strongest_orders": [int(t) for t in top],
+                "tsa": avg,
+            }
+        )
+    return out
+
+
+def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> dict:
+    """Everything `gearlab inspect` shows, as plain numbers (the TSA curves as arrays)."""
+    rec = read_record(path, options)
+    speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+    orders, amp, revolutions, points = order_spectrum(rec, speed)
+    top = min(points / 2, rec.fs / (2 * speed.mean_hz)) * 0.9
+    lines = find_lines(orders, amp, options.threshold_db, 1.5 / revolutions, top)
+    report = {
+        "file": rec.path,
+        "format": rec.format,
+        "channels": rec.channels,
+        "vibration": rec.vibration,
+        "tacho": rec.tacho_name,
+        "fs_hz": rec.fs,
+        "fs_source": rec.fs_source,
+        "samples": int(rec.signal.size),
+        "duration_s": rec.signal.size / rec.fs,
+        "rms": float(np.std(rec.signal)),
+        "speed": speed.describe(),
+        "revolutions": revolutions,
+        "order_resolution": 1.0 / revolutions,
+        "max_order": top,
+        "lines": [
+            {"order": float(a), "hz": float(a * speed.mean_hz), "amplitude": float(v), "db_over_floor": float(d)}
+            for a, v, d in zip(lines.at[:12], lines.amp[:12], lines.db[:12])
+        ],
+        "spectrum": (orders, amp),
+        "tsa": shaft_tsa(rec, speed, box),
+    }
+    if box is not None:
+        tacho_shaft = options.tacho_shaft or box.sensor.tacho
+        on_input = rec.tacho is not None and tacho_shaft == box.shafts[0]
+        report["gearbox"] = box.name
+        report["order_table"] = order_table(box).describe(speed.mean_hz)
+        report["check"] = check_description(lines, box, revolutions, on_input)
+        differences = report["check"]["differences"]
+        report["matches"] = not differences
+        report["verdict"] = (
+            f"the description {box.name!r} matches this recording"
+            if not differences
+            else f"the description {box.name!r} differs: " + "; ".join(differences)
+        )
+    return report
+
+
+def json_ready(report: dict) -> dict:
+    """The report without its arrays (the spectrum, the TSA curves): what --json prints."""
+    out = {k: v for k, v in report.items() if k != "spectrum"}
+    out["tsa"] = [{k: v for k, v in t.items() if k != "tsa"} for t in report["tsa"]]
+    return out
+
+
+# --- the terminal ----------------------------------------------------------------------------------
+
+
+def render(report: dict, console, width: int = 100) -> None:
+    """The report in the terminal: tables (rich) and the order spectrum (plotext)."""
+    import plotext
+    from rich.markup import escape
+    from rich.table import Table
+    from rich.text import Text
+
+    sp = report["speed"]
+    console.print(
+        f"[bold]{escape(report['file'])}[/bold] ({report['format']}): {report['samples']} samples at "
+        f"{fmt_hz(report['fs_hz'])} ({escape(report['fs_source'])}), {report['duration_s']:.4g} s; channels: "
+        f"{escape(', '.join(map(str, report['channels'])))}; vibration {escape(report['vibration'])!r}"
+        + (f", tacho {escape(report['tacho'])!r}" if report["tacho"] else "")
+    )
+    console.print(
+        f"speed {sp['mean_hz']:.5g} Hz ({sp['mean_hz'] * 60:.5g} rpm) {escape(sp['source'])}; "
+        f"{sp['min_hz']:.5g} .. {sp['max_hz']:.5g} Hz (variation {sp['variation_percent']:.3g} %); "
+        f"{report['revolutions']} input revolutions, order resolution {report['order_resolution']:.3g}"
+    )
+    for note in sp["notes"]:
+        console.print(f"[yellow]note:[/yellow] {escape(note)}")
+    orders, amp = report["spectrum"]
+    top = report["max_order"]
+    marks = []
+    if "check" in report:
+        marks = [s["expected_order"] for s in report["check"]["stages"]]
+        top = min(top, 3.3 * max(marks))
+    keep = (orders > 0) & (orders <= top)
+    step = max(1, int(keep.sum() // 4000))
+    x, y = orders[keep][::step], 20 * np.log10(np.maximum(amp[keep][::step], 1e-12))
+    plotext.clf()
+    plotext.plotsize(width, 18)
+    plotext.theme("pro")
+    plotext.plot(x.tolist(), y.tolist(), marker="braille")
+    for m in marks:
+        plotext.vline(m, "red")
+    plotext.title("order spectrum (dB); red: the description's mesh orders")
+    plotext.xlabel("input-shaft order")
+    console.print(Text.from_ansi(plotext.build()))
+
+    if "check" in report:
+        check = report["check"]
+        t = Table(title=f"gearbox {report['gearbox']!r}: mesh orders")
+        for col in ("stage", "z1/z2", "expected", "measured", "error", "dB over floor", "z seen", "status"):
+            t.add_column(col)
+        for s in check["stages"]:
+            seen = " / ".join(f"{s[k]:.2f}" for k in ("z1_seen", "z2_seen") if k in s) or "-"
+            t.add_row(
+                str(s["stage"]),
+                f"{s['z1']}/{s['z2']}",
+                f"{s['expected_order']:.4f}",
+                f"{s['measured_order']:.4f}" if "measured_order" in s else "-",
+                f"{s['error_orders']:+.4f}" if "error_orders" in s else "-",
+                f"{s['db_over_floor']:.1f}" if "db_over_floor" in s else "-",
+                seen,
+                "[green]ok[/green]" if s["matched"] else "[red]differs[/red]",
+            )
+        console.print(t)
+        t = Table(title="shaft orders")
+        for col in ("shaft", "expected", "measured", "from", "status"):
+            t.add_column(col)
+        for s in check["shafts"]:
+            status = {True: "[green]ok[/green]", False: "[red]differs[/red]", None: "-"}[s["matched"]]
+            measured = "-" if s["measured_order"] is None else f"{s['measured_order']:.5f}"
+            t.add_row(s["shaft"], f"{s['expected_order']:.5f}", measured, escape(s["source"]), status)
+        console.print(t)
+        if check["unexplained"]:
+            console.print(
+                "lines the description does not explain: "
+                + ", ".join(
+                    f"order {u['order']:.4g} ({u['order'] * sp['mean_hz']:.5g} Hz, {u['db_over_floor']:.0f} dB)"
+                    for u in check["unexplained"]
+                )
+            )
+    t = Table(title="time-synchronous average per shaft")
+    for col in ("shaft", "revolutions", "TSA rms", "share of signal rms", "strongest orders"):
+        t.add_column(col)
+    for s in report["tsa"]:
+        if "rms" not in s:
+            t.add_row(s["shaft"], str(s["revolutions"]), "-", "-", s.get("note", ""))
+            continue
+        t.add_row(
+            s["shaft"],
+            str(s["revolutions"]),
+            f"{s['rms']:.4g}",
+            f"{s['share_of_signal_rms']:.3f}",
+            ", ".join(map(str, s["strongest_orders"])),
+        )
+    console.print(t)
+    if "verdict" in report:
+        colour = "green" if report["matches"] else "red"
+        console.print(f"[bold {colour}]{escape(report['verdict'])}[/bold {colour}]")
