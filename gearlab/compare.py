@@ -21,7 +21,6 @@ from .engine import scenario_of
 from .errors import GearlabInputError
 from .kinds import SCENARIO_KINDS
 from .kinds.transfer import table
-from .plots import chart_figure
 from .report import STYLE, markdown_table
 from .runs import RunDir
 from .scenario import Scenario
@@ -188,6 +187,8 @@ def compare_html(runs: list[Compared], figures: Path) -> str:
         *map(markdown_table, blocks),
     ]
     for i, chart in enumerate(compare_charts(runs), start=1):
+        from .plots import chart_figure  # here, not at the top: start-up time (matplotlib; the TUI's compare)
+
         png = chart_figure(chart, Path(figures) / f"compare_{i}.png")
         data = base64.b64encode(read_file(png)).decode()  # drawn just now into the caller's folder
         caption = f"Figure {i}. {chart.title}: the runs overlaid ({chart.ylabel} against {chart.xlabel or 'category'})."

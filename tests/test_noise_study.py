@@ -16,7 +16,9 @@ import pytest
 from conftest import ROOT
 
 import gearlab.kinds.noise_study as kind
+import gearlab.learn.networks as networks
 import gearlab.learn.noise_study as ns
+import gearlab.learn.training as training
 from gearlab.data.cache import save
 from gearlab.data.spec import Dataset, dataset_preset
 from gearlab.engine import load_scenario
@@ -125,13 +127,13 @@ def test_test_samples_never_reach_training_or_model_selection(monkeypatch):
     data = synthetic(small_spec())
     data.X[:, 0] = np.arange(len(data.X))  # each row carries its own index
     seen = []
-    real = ns.fit_supervised
+    real = training.fit_supervised  # the study imports it where it trains (start-up time)
 
     def spy(net, X, y, *, val, **kw):
         seen.append((X[:, 0].astype(int), val[0][:, 0].astype(int)))
         return real(net, X, y, val=val, **kw)
 
-    monkeypatch.setattr(ns, "fit_supervised", spy)
+    monkeypatch.setattr(training, "fit_supervised", spy)
     record = run_unit(FAST, data, run=1)
     test = split(np.asarray(data.label, dtype=np.int64), FAST, 1).test
     ((train_rows, val_rows),) = seen
@@ -147,13 +149,13 @@ def test_the_healthy_reference_of_the_residual_comes_from_the_training_part(monk
 
     protocol = replace(FAST, residual=True, epochs=1)
     handed = []
-    real = ns.fit_supervised
+    real = training.fit_supervised  # the study imports it where it trains (start-up time)
 
     def spy(net, X, y, *, val, **kw):
         handed.append((X.copy(), val[0].copy()))
         return real(net, X, y, val=val, **kw)
 
-    monkeypatch.setattr(ns, "fit_supervised", spy)
+    monkeypatch.setattr(training, "fit_supervised", spy)
     data = synthetic(small_spec())
     s = split(np.asarray(data.label, dtype=np.int64), protocol, 0)
     healthy = np.median(data.X[s.train[np.asarray(data.label)[s.train] == 0]], axis=0)
@@ -483,13 +485,13 @@ def test_the_matched_start_takes_the_training_part_s_faults_only(monkeypatch):
 
     protocol = replace(FAST, network="burst", start="faults", epochs=1)
     seen = []
-    real = ns.matched_start
+    real = networks.matched_start  # imported where the study trains (start-up time)
 
     def spy(net, faults, seed):
         seen.append(np.array(faults))
         return real(net, faults, seed)
 
-    monkeypatch.setattr(ns, "matched_start", spy)
+    monkeypatch.setattr(networks, "matched_start", spy)
     data = synthetic(small_spec(tsa=True))
     label = np.asarray(data.label, dtype=np.int64)
     s = split(label, protocol, 0)

@@ -21,7 +21,9 @@ from gearlab.engine import load_scenario, run_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.kinds import transfer
 from gearlab.kinds.common import planned_counts
+from gearlab.learn import calibration as C
 from gearlab.learn import protocol as P
+from gearlab.learn import training as T
 from gearlab.learn.calibration import RECIPE, THESIS
 from gearlab.learn.protocol import (
     Counts,
@@ -203,8 +205,9 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
         return wrapped
 
     monkeypatch.setattr(P, "train_method", keep_model)
-    for name in ("fit_supervised", "fit_adaptation", "embed", "prepare", "calibrate"):
-        monkeypatch.setattr(P, name, spy(getattr(P, name)))
+    # the protocol imports these where it trains (start-up time): spied on in their modules
+    for module, name in ((T, "fit_supervised"), (T, "fit_adaptation"), (T, "embed"), (C, "prepare"), (C, "calibrate")):
+        monkeypatch.setattr(module, name, spy(getattr(module, name)))
     registry = P.get_registry()
     for name in registry.names("adapter"):  # every detector: its arrays are its training
         adapter = registry.get("adapter", name)
@@ -284,8 +287,8 @@ def test_the_recipe_primes_once_per_repetition_from_the_history_core(tmp_path, m
         def get(self, name, make):
             return super().get(name, lambda: made.append(name) or make())
 
-    real = P.prepare
-    monkeypatch.setattr(P, "prepare", lambda c, Xs, ys, Xt, yt: primed_on.append(Xt) or real(c, Xs, ys, Xt, yt))
+    real = C.prepare
+    monkeypatch.setattr(C, "prepare", lambda c, Xs, ys, Xt, yt: primed_on.append(Xt) or real(c, Xs, ys, Xt, yt))
     store = Counting(tmp_path / "states")
     for rep in range(p.repetitions):
         for k in p.ks:
@@ -522,7 +525,7 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
         def killed(*args, **kwargs):
             raise KeyboardInterrupt
 
-        mp.setattr(P, "fit_adaptation", killed)
+        mp.setattr(T, "fit_adaptation", killed)  # the protocol imports it where it trains
         with pytest.raises(KeyboardInterrupt):
             run_scenario(tiny_toml, out=tiny_toml.parent / "runs")
     (run,) = (tiny_toml.parent / "runs" / "tiny").iterdir()

@@ -24,12 +24,11 @@ import functools
 import math
 from collections import OrderedDict
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from ..dynamics.config import ModelConfig
-from ..dynamics.newmark import Simulator
 from ..effects import EffectChain, config_of, model_of
 from ..errors import GearlabInputError
 from ..events import Event
@@ -38,6 +37,9 @@ from ..physics.faults import place_fault
 from ..registry import get_registry
 from ..signals import Standardiser, add_noise, resample_revolutions, steady_start, tsa
 from .spec import POINTS, Dataset, DatasetSpec
+
+if TYPE_CHECKING:
+    from ..dynamics.newmark import Simulator
 
 STEADY_RTOL = 1e-6
 CHUNK = 256  # samples per noise task
@@ -51,12 +53,16 @@ def whole_steps_rate(fs: float, speed_hz: float, Z1: int) -> float:
 
 @functools.lru_cache(maxsize=8)
 def _simulator(model: str, preset: str, fs: float) -> Simulator:
+    from ..dynamics.newmark import Simulator  # here, not at the top: start-up time (numba)
+
     return Simulator(get_registry().get("model", model), preset, fs)
 
 
 @functools.lru_cache(maxsize=8)
 def _configured_simulator(config: ModelConfig, fs: float) -> Simulator:
     """The simulator of a configuration made by model-level effects (cached per worker process)."""
+    from ..dynamics.newmark import Simulator  # start-up time
+
     model = model_of(config)
     return Simulator(model, config.preset, fs, overrides=config.overrides(model), mesh_damping=config.mesh_damping)
 

@@ -15,7 +15,6 @@ from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
-from ..learn.training import pick_device
 from ..scenario import Key, Scenario, Table, in_range, location, plain_name
 from ..settings import from_inline
 from ..units import to_si
@@ -258,7 +257,11 @@ def device_of(scenario: Scenario) -> str:
     """The scenario's [execution] device for training, checked here when units train in this
     machine's processes (a Ray cluster's workers may have a GPU that this machine lacks)."""
     ex = scenario.tables["execution"]
-    if ex["executor"] == "local":
+    # auto and cpu always resolve (the key allows nothing else), so only cuda is looked for,
+    # and torch imported only then (start-up time: checking a scenario loads no torch)
+    if ex["executor"] == "local" and ex["device"] == "cuda":
+        from ..learn.training import pick_device
+
         try:
             pick_device(ex["device"])
         except GearlabInputError as exc:

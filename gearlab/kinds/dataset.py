@@ -13,7 +13,6 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
-from ..plots import dataset_signals
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
@@ -95,6 +94,8 @@ def table_md(summary: dict) -> str:
 
 
 def figures(dataset, run: RunDir) -> None:
+    from ..plots import dataset_signals  # here, not at the top: start-up time (matplotlib)
+
     dataset_signals(dataset, run.file("figures", f"signals_{dataset.spec.name}.png"))
 
 

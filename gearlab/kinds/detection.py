@@ -71,12 +71,10 @@ from ..errors import GearlabInputError, shown
 from ..events import Event, UnitProgress
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
 from ..learn.bounds import bayes_scores
-from ..learn.calibration import Calibration
+from ..learn.config import Calibration, check_length
 from ..learn.history import gumbel_quantile
-from ..learn.networks import build_network
 from ..learn.protocol import Method, Protocol, StateStore, each_draw, fault_score, shared_state
 from ..learn.schedule import two_phases
-from ..learn.training import pick_device
 from ..params import did_you_mean
 from ..registry import get_registry
 from ..runs import RunDir
@@ -450,7 +448,7 @@ def build(scenario: Scenario) -> dict:
     protocol.calibration.check(str(path))
     points = t["detection"]["points"]
     try:  # a network that cannot take that many samples is refused now, not in the middle of a run
-        build_network(protocol.network, 2, dropout=protocol.dropout, length=points)
+        check_length(protocol.network, points)
     except GearlabInputError as e:
         raise GearlabInputError(f"{location(path, 'detection', 'points')}: {points} is too few: {e}") from None
     if p["batch"] > p["target_train"]:
@@ -701,6 +699,8 @@ def train_unit(task: tuple) -> dict:
     source and the history's training revolutions, then its scores of the history units (for the
     threshold) and, only now, of the test units."""
     import torch
+
+    from ..learn.training import pick_device  # here, not at the top: start-up time
 
     (
         protocol,

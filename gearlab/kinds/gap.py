@@ -34,7 +34,7 @@ from ..effects import default_candidates
 from ..errors import GearlabInputError
 from ..events import Event
 from ..gap.diagnose import Settings
-from ..learn.networks import NetworkSettings
+from ..learn.config import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, history_of, shared_state
 from ..learn.schedule import two_phases
 from ..registry import get_registry

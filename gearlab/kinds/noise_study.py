@@ -19,7 +19,6 @@ from __future__ import annotations
 from dataclasses import asdict, replace
 
 import numpy as np
-import torch
 
 from ..charts import Chart, Curve
 from ..data import cache
@@ -28,7 +27,7 @@ from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
 from ..learn.bounds import class_bound
-from ..learn.networks import NetworkSettings
+from ..learn.config import NetworkSettings
 from ..learn.noise_study import (
     VARIANTS,
     NoiseProtocol,
@@ -41,7 +40,6 @@ from ..learn.noise_study import (
     split,
 )
 from ..params import did_you_mean
-from ..plots import noise_study_figures
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
 from ..signals import NOISE_KINDS
@@ -264,6 +262,8 @@ def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None,
 def train_unit(task: tuple) -> dict:
     """One training run, in this process or a worker, on one torch thread (as the transfer
     kind's units: a result does not depend on how many run side by side)."""
+    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
     protocol, dataset_spec_, path, twin, twin_path, noise, r, variant, run_path = task
     torch.set_num_threads(1)
     unit = unit_name(noise, r, variant)
@@ -382,6 +382,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(res, bound))
     run.write_text("table.csv", table_csv(res, bound))
+    from ..plots import noise_study_figures  # here, not at the top: start-up time (matplotlib)
+
     noise_study_figures(run.figures, res)
 
 

@@ -39,7 +39,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.stats import norm
 
 
 @dataclass(frozen=True)
@@ -129,6 +128,8 @@ def fit(groups, p: float, independent=None, dofs=None, record_var: float | None 
         record_var, record_sd = 0.0, None
     mean_var = float(np.sum(record_var + within / m)) / R**2
     sd = np.sqrt(record_var + within + mean_var)
+    from scipy.stats import norm  # here, not at the top: start-up time (scipy.stats takes ~1 s)
+
     return RecordEffects(
         mean=mu,
         record_sd=record_sd,

@@ -18,7 +18,6 @@ from ..events import Event
 from ..physics.faults import LADDER_STEPS, place_fault
 from ..physics.presets import PAIR_PRESETS, gear_pair
 from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions
-from ..plots import ladder_grid, rfa_curves, tvms_figure
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of, plain_name
@@ -200,6 +199,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", _table_md(sweep))
     run.write_text("table.csv", _table_csv(sweep))
+
+    from ..plots import ladder_grid, rfa_curves, tvms_figure  # here, not at the top: start-up time (matplotlib)
 
     pitch = 360.0 / pair.Z1
     lo = (spec.tooth - 2) * pitch

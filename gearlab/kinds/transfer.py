@@ -17,7 +17,6 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from ..charts import Chart, Curve
 from ..data import cache
@@ -26,8 +25,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, UnitProgress
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at, twin_problem
-from ..learn.calibration import RECIPE, Calibration
-from ..learn.networks import NetworkSettings
+from ..learn.config import RECIPE, Calibration, NetworkSettings
 from ..learn.protocol import (
     KS,
     Counts,
@@ -42,8 +40,6 @@ from ..learn.protocol import (
     unit_key,
 )
 from ..learn.schedule import two_phases
-from ..learn.training import pick_device
-from ..plots import transfer_figures
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
@@ -254,6 +250,8 @@ def train_unit(task: tuple) -> dict:
     were built before), shared states from the run directory. One torch thread per unit,
     so that a result does not depend on how many workers run side by side. An eighth element,
     when there is one, is the fixed target history (gearlab.learn.protocol.split)."""
+    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
     protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states, *history = task
     torch.set_num_threads(1)
     source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
@@ -394,6 +392,8 @@ def table_csv(tab: dict, ks) -> str:
 def summarise(scenario: Scenario, run: RunDir) -> None:
     protocol: Protocol = scenario.spec["protocol"]
     records = run.records()
+    from ..learn.training import pick_device  # start-up time (torch)
+
     tab = table(records, protocol)
     summary = {
         "kind": "transfer",
@@ -419,6 +419,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(tab, protocol.ks, list(tab)) + measures_md(summary, protocol.ks))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
+    from ..plots import transfer_figures  # here, not at the top: start-up time (matplotlib)
+
     transfer_figures(run.file(), records, tab, protocol.ks)
 
 

@@ -27,12 +27,15 @@ noise-free twin (the same dataset without noise), so it exists for simulated tar
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from ..errors import GearlabInputError
 from .history import NOISE_LAWS
+
+if TYPE_CHECKING:
+    import torch
 
 # median of |n| for unit scale: Laplace ln 2, Gaussian 0.6745, Student-t(2) sqrt(2/3)
 _MEDIAN_ABS = {"laplace": math.log(2.0), "gaussian": 0.6744897501960817, "student_t": math.sqrt(2.0 / 3.0)}
@@ -41,6 +44,8 @@ _NU = 2.0  # Student-t degrees of freedom of the thesis's noise (4.1.1)
 
 def _log_density(n: torch.Tensor, scale: torch.Tensor, kind: str) -> torch.Tensor:
     """log p(n) up to a constant, elementwise, for noise of *kind* at *scale* (broadcast)."""
+    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
     if kind == "laplace":
         return -n.abs() / scale
     if kind == "gaussian":
@@ -54,6 +59,8 @@ def shape_llr(R: torch.Tensor, shapes: torch.Tensor, scale: torch.Tensor, kind: 
     torch computes without the (rows, J, samples) array: for Laplace
     (||r||_1 - ||r - t_j||_1) / b, for Gaussian (2<r, t_j> - ||t_j||^2) / (2 sigma^2)
     (15-40 times faster than elementwise, the same numbers to rounding)."""
+    import torch  # start-up time, as above
+
     s = scale[:, None]
     if kind == "laplace":
         return (R.abs().sum(1, keepdim=True) - torch.cdist(R, shapes, p=1.0)) / s
@@ -77,6 +84,8 @@ def likelihood_ratio(X: np.ndarray, healthy: np.ndarray, shapes: np.ndarray, kin
     *shapes* (J rows, responses added to *healthy*) and the noise *kind*."""
     if kind not in NOISE_LAWS:
         raise GearlabInputError(f"unknown noise kind '{kind}'; known: {', '.join(NOISE_LAWS)}")
+    import torch  # start-up time, as above
+
     T = torch.as_tensor(np.asarray(shapes, dtype=np.float64))
     R = torch.as_tensor(np.asarray(X, dtype=np.float64)) - torch.as_tensor(np.asarray(healthy, dtype=np.float64))
     llr = shape_llr(R, T, noise_scale(R, kind), kind)
@@ -164,6 +173,8 @@ def class_bound(X: np.ndarray, clean: np.ndarray, label: np.ndarray, kind: str, 
     Rows are taken *chunk* at a time, so memory stays near the two arrays given."""
     if kind not in NOISE_LAWS:
         raise GearlabInputError(f"unknown noise kind '{kind}'; known: {', '.join(NOISE_LAWS)}")
+    import torch  # start-up time, as above
+
     label = np.asarray(label)
     rows = [slice(i, i + chunk) for i in range(0, len(X), chunk)]
 
@@ -204,6 +215,8 @@ def _elementwise(
     """``(rows, shapes)``: the log-likelihood sum over the samples of x - shape at each shape's
     scale, elementwise, in float32 blocks of *block* shapes (a sum over 4096 samples keeps
     about 1e-3 nats, far below the class margins; float64 took 5 times as long)."""
+    import torch  # start-up time, as above
+
     x32 = x.float()[:, None, :]
     out = torch.empty(len(x), len(shapes), dtype=torch.float64)
     for k in range(0, len(shapes), block):

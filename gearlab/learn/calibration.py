@@ -48,41 +48,17 @@ import torch
 from torch import nn
 
 from ..errors import GearlabInputError
-from ..settings import declared, in_bounds, setting
-from .history import NOISE_LAWS, history_threshold, noise_law
-from .path import IDENTITY, PATHS, Path, fit_path
-
-STARTS = ("random", "faults")
-SOURCE_NOISE = ("off", "auto", *NOISE_LAWS)
-ALIGNMENTS = ("marginal", "healthy")
-THRESHOLDS = ("argmax", "history")
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """The four settings above, declared once (the ``[protocol]`` keys of the kinds that train
-    derive from these fields); the defaults are the thesis's recipe, :data:`RECIPE` gearlab's."""
-
-    residual: bool = setting(bool, False, doc="input = revolution minus its domain's healthy reference")
-    path: str = setting(str, "gain", choices=PATHS, doc="source residuals to the target's units (with residual)")
-    start: str = setting(str, "random", choices=STARTS, doc="priming: the filter bank's start (faults: matched)")
-    source_noise: str = setting(str, "off", choices=SOURCE_NOISE, doc="fresh sensor noise on source batches")
-    alignment: str = setting(str, "marginal", choices=ALIGNMENTS, doc="what the domain loss aligns")
-    threshold: str = setting(str, "argmax", choices=THRESHOLDS, doc="fault call")
-    false_alarm: float = setting(
-        float, 0.01, low=1e-6, high=0.49, doc="share of the history above a 'history' threshold"
-    )
-
-    def check(self, where: str) -> None:
-        """Refuse a value outside its declaration (a Calibration made in code, not from a scenario)."""
-        for name, (meta, _) in declared(type(self)).items():
-            in_bounds(meta, getattr(self, name), f"{where}: [protocol] key '{name}'")
-
-
-THESIS = Calibration()
-RECIPE = Calibration(
-    residual=True, path="fir", start="faults", source_noise="auto", alignment="healthy", threshold="history"
+from .config import (  # noqa: F401 (re-exported)
+    ALIGNMENTS,
+    RECIPE,
+    SOURCE_NOISE,
+    STARTS,
+    THESIS,
+    THRESHOLDS,
+    Calibration,
 )
+from .history import history_threshold, noise_law
+from .path import IDENTITY, Path, fit_path
 
 
 @dataclass(frozen=True)

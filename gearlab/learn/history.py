@@ -9,7 +9,6 @@ threshold from the quartiles of the history's scores, refitted without those it 
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import kurtosis
 
 NOISE_LAWS = ("gaussian", "laplace", "student_t")  # the thesis's noise laws (4.1.1)
 # Kurtosis (Pearson) between the laws' own: Gaussian 3 | Laplace 6 | Student-t(2) unbounded.
@@ -47,5 +46,7 @@ def history_threshold(scores: np.ndarray, p: float) -> float:
 
 def noise_law(residuals: np.ndarray) -> str:
     """The noise law whose kurtosis is nearest that of the pooled history residuals."""
+    from scipy.stats import kurtosis  # here, not at the top: start-up time (scipy.stats takes ~1 s)
+
     k = float(kurtosis(np.asarray(residuals, dtype=np.float64).ravel(), fisher=False))
     return NOISE_LAWS[int(np.searchsorted(_KURTOSIS_SPLITS, k))]

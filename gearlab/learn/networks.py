@@ -97,7 +97,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -105,13 +104,9 @@ from torch import nn
 
 from gearlab.errors import GearlabInputError
 from gearlab.params import did_you_mean
-from gearlab.settings import setting
 
 from .bounds import noise_scale, shape_llr
-
-DEFAULT_NETWORK = "shapes"
-DEFAULT_DROPOUT = 0.005  # Han et al. (2019a), thesis 3.1.6 and Table 5.3
-DEFAULT_LENGTH = 4096  # samples per rotation (thesis 3.1.6)
+from .config import DEFAULT_DROPOUT, DEFAULT_LENGTH, DEFAULT_NETWORK, NetworkSettings  # noqa: F401 (re-exported)
 
 
 class AsChannels(nn.Module):
@@ -579,21 +574,3 @@ def build_network(
     generator = torch.Generator().manual_seed(seed) if seed is not None else None
     (_torch_uniform if name in TORCH_INIT else _he_uniform)(network, generator)
     return network.train()
-
-
-def _network_name(name: str, where: str) -> str:
-    if name not in NETWORKS:
-        raise GearlabInputError(
-            f"{where}: unknown network '{name}'{did_you_mean(name, list(NETWORKS))}; "
-            f"known networks: {', '.join(NETWORKS)}"
-        )
-    return name
-
-
-@dataclass(frozen=True)
-class NetworkSettings:
-    """A scenario's [network] table (transfer, detection, gap, noise_study; a kind may give
-    other defaults, gearlab.scenario.keys_of)."""
-
-    name: str = setting(str, DEFAULT_NETWORK, check=_network_name, doc=f"network: {', '.join(NETWORKS)}")
-    dropout: float = setting(float, DEFAULT_DROPOUT, low=0.0, high=0.95, doc="dropout rate (Table 5.3: 0.5 %)")

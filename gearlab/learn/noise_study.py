@@ -22,15 +22,16 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from ..errors import GearlabInputError
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
-from .calibration import STARTS
-from .networks import build_network, matched_start
-from .training import embed, fit_supervised, pick_device, predict
+from .config import STARTS
+
+if TYPE_CHECKING:
+    import torch
 
 VARIANTS = ("noisy", "tsa")
 # the network's start: random, matched to the training part's noisy faults, or to the same
@@ -154,6 +155,11 @@ def train(
     """The model of one run, made from the training and validation arrays only (and, for the
     `clean` start, the training part's noise-free fault shapes and classes *clean*,
     `clean_faults`; *law* the rows' noise law)."""
+    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
+    from .networks import build_network, matched_start
+    from .training import embed, fit_supervised
+
     X, y = train_set
     seed = 1000 * protocol.seed + run
     torch.manual_seed(seed)  # dropout masks
@@ -224,6 +230,8 @@ def scores(
 def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | None = None, twin=None) -> dict:
     """Train and score run *run* on *dataset* (*twin*: its noise-free twin, which the `clean`
     start needs; only its training part is read)."""
+    from .training import pick_device, predict  # start-up time
+
     device = pick_device(protocol.device)
     label = np.asarray(dataset.label, dtype=np.int64)
     s = split(label, protocol, run)

@@ -26,16 +26,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from ..confined import Confined
 from ..errors import GearlabInputError
 from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
-from .calibration import THESIS, Calibration, calibrate, history_law, prepare
-from .networks import DEFAULT_DROPOUT, DEFAULT_NETWORK, build_network, matched_start, use_law
-from .training import accuracy, embed, fit_adaptation, fit_supervised, pick_device
+from .config import DEFAULT_DROPOUT, DEFAULT_NETWORK, THESIS, Calibration
+
+# torch, the networks, the training loops and the calibrated model are imported inside the
+# functions that train (start-up time): checking a scenario reads this module's settings only.
 
 KS = (0, 1, 2, 4, 8, 16)
 TARGET_DRAW = 1  # seeds the repetition's target orders apart from its source split
@@ -231,6 +231,8 @@ class StateStore:
         else:
             # Making a state draws from torch's global generator; fork it so that the caller
             # continues exactly as when the state is loaded (a resumed run, a later unit).
+            import torch  # start-up time
+
             with torch.random.fork_rng():
                 state = make()
             if path is not None:
@@ -244,6 +246,8 @@ class StateStore:
 def load_state(path: Confined) -> dict:
     """A stored network state; a damaged file (cut short, overwritten) is one line that says
     how to recover, not a traceback: weights_only=True runs no code of the file either way."""
+    import torch  # start-up time
+
     data = path.read_bytes()
     try:
         state = torch.load(io.BytesIO(data), weights_only=True, map_location="cpu")
@@ -272,6 +276,10 @@ def shared_state(method: Method, rep: int, k: int, protocol: Protocol) -> str | 
 
 
 def _net(protocol: Protocol, seed: int, device, length: int):
+    import torch  # start-up time
+
+    from .networks import build_network
+
     torch.manual_seed(seed)
     return build_network(protocol.network, n_classes=2, dropout=protocol.dropout, length=length).to(device)
 
@@ -293,6 +301,8 @@ def run_unit(
 ) -> dict:
     """Train one method for one (repetition, k) and score it on the target test set (*history*:
     see `split`)."""
+    from .training import accuracy, pick_device  # start-up time
+
     device = pick_device(protocol.device)
     s = split(protocol, source, target, rep, k, history)
     Xs, ys = source.X[s.source_train], source.fault[s.source_train].astype(np.int64)
@@ -327,14 +337,17 @@ def run_unit(
     }
 
 
-@torch.no_grad()
 def fault_score(model, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
     """logit(fault) - logit(healthy) of each revolution: > 0 is a fault call (the arg-max)."""
+    import torch  # start-up time
+
     model.eval()
     out = []
-    for i in range(0, len(X), batch):
-        logits = model(torch.as_tensor(np.ascontiguousarray(X[i : i + batch]), dtype=torch.float32, device=device))
-        out.append((logits[:, 1] - logits[:, 0]).cpu().numpy())
+    with torch.no_grad():
+        for i in range(0, len(X), batch):
+            rows = torch.as_tensor(np.ascontiguousarray(X[i : i + batch]), dtype=torch.float32, device=device)
+            logits = model(rows)
+            out.append((logits[:, 1] - logits[:, 0]).cpu().numpy())
     return np.concatenate(out) if out else np.empty(0)
 
 
@@ -381,6 +394,12 @@ def train_method(
     The source's X may be (n, D, L), D noise draws of each sample: the networks train on a draw
     at random per row and batch (training._rows); the calibration, a network's input length and
     the latent maps take the first draw; a detector is built from each sample's mean over its draws."""
+    import torch  # start-up time
+
+    from .calibration import history_law, prepare
+    from .networks import matched_start, use_law
+    from .training import accuracy, embed, fit_adaptation, fit_supervised
+
     registry = get_registry()
     adapter = registry.get("adapter", method.adapter)
     params = dict(method.params)
@@ -530,6 +549,8 @@ def each_draw(f: Callable, X: np.ndarray) -> np.ndarray:
 def _calibrated(net, inputs, Xt, yt, source_val, device):
     """A calibrated method's model: the network as the thesis uses it, or behind the target's
     reference and the history threshold when the protocol asks for them."""
+    from .calibration import calibrate  # start-up time
+
     settings = inputs.settings if inputs is not None else THESIS
     if settings.residual or settings.threshold != "argmax":
         return calibrate(net, inputs, Xt, yt, device)

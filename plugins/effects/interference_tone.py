@@ -21,7 +21,6 @@ ratio of 0.5.
 """
 
 import numpy as np
-from scipy.signal import zoom_fft
 
 from gearlab.api import Effect, GearlabInputError, Param, hookimpl
 
@@ -100,6 +99,8 @@ class InterferenceTone(Effect):
         # whose valley is a few tenths of a percent of the frequency wide (a 7.3 Hz tone started
         # from the half-bin grid, 0.25 Hz, ended 4.5 % off); the level then from the whole record's
         # least squares at that frequency (one revolution holds a fifth of such a line's cycle).
+        from scipy.signal import zoom_fft  # here, not at the top: start-up time (every command loads plugins)
+
         bin_hz = fs / record.size
         lo, hi = max(fine - bin_hz, self.params[0].low), fine + bin_hz
         zoom = np.abs(zoom_fft(tapered, [lo, hi], m=ZOOM, fs=fs, endpoint=True)) ** 2

@@ -1,0 +1,88 @@
+"""Start-up: checking a scenario, `--help` and the TUI's first screen load no torch, no numba
+(the simulator's kernels), no scipy.stats, sklearn or matplotlib (issue 42; docs/architecture.md:
+the modules that need them import them inside the functions that train, simulate or draw).
+
+Each case runs in a fresh interpreter and reads its sys.modules afterwards, so what the rest of
+the suite imported does not hide an import."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+from conftest import ROOT
+
+HEAVY = ("torch", "numba", "scipy.stats", "sklearn", "matplotlib")
+
+CASES = {
+    # the README's command: `gearlab validate scenarios/quick.toml`
+    "validate": """
+from gearlab.cli import main
+sys.argv = ["gearlab", "validate", "scenarios/quick.toml"]
+try:
+    main()
+except SystemExit as e:
+    assert not e.code, e.code
+""",
+    # every shipped scenario checked and described, as the TUI's tree and `gearlab validate` do
+    "every scenario": """
+from pathlib import Path
+from gearlab.cli import describe_spec
+from gearlab.engine import load_scenario
+for path in sorted(Path("scenarios").glob("*.toml")) + sorted(Path("tests/tui_scenarios").glob("*.toml")):
+    describe_spec(load_scenario(path))
+""",
+    "help": """
+from gearlab.cli import main
+sys.argv = ["gearlab", "--help"]
+try:
+    main()
+except SystemExit as e:
+    assert not e.code, e.code
+""",
+    # the TUI's first screen: the scenario tree filled, the plugins tab too
+    "tui": """
+import asyncio
+from gearlab.tui.app import GearlabApp
+
+async def first_screen():
+    app = GearlabApp("scenarios")
+    async with app.run_test() as pilot:
+        await pilot.pause()
+        assert app.entries and all(entry.ok for entry in app.entries), [e.path for e in app.entries if not e.ok]
+
+asyncio.run(first_screen())
+""",
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_start_up_loads_no_heavy_module(case):
+    code = (
+        "import sys\n"
+        + CASES[case]
+        + f"\nprint(__import__('json').dumps([m for m in {HEAVY!r} if m in sys.modules]))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == [], f"{case} imported them"
+
+
+def test_the_torch_free_network_settings_match_the_networks():
+    """gearlab.learn.config knows the networks' names and shortest revolutions without torch:
+    the same as building them."""
+    from gearlab.errors import GearlabInputError
+    from gearlab.learn.config import NETWORK_NAMES, check_length, shortest_length
+    from gearlab.learn.networks import NETWORKS, build_network
+
+    assert NETWORK_NAMES == tuple(NETWORKS)
+    for name in NETWORK_NAMES:
+        shortest = shortest_length(name)
+        build_network(name, 2, length=shortest)
+        check_length(name, shortest)
+        if shortest > 1:
+            with pytest.raises(GearlabInputError) as built:
+                build_network(name, 2, length=shortest - 1)
+            with pytest.raises(GearlabInputError) as checked:
+                check_length(name, shortest - 1)
+            assert str(checked.value) == str(built.value)
