@@ -99,6 +99,11 @@ CAPTIONS = {
         "",
         "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
     ),
+    "transfer_benchmark": (
+        "",
+        "Random unseen targets: each method's target test accuracy (%) per trial beside the trial's Bayes "
+        "bound, and its distance to the bound over the trials that have one (dotted: 5 points).",
+    ),
 }
 
 
@@ -118,6 +123,7 @@ ORDER = [
     "gap_effect_ranking",
     "gap_accuracy",
     "gap_benchmark",
+    "transfer_benchmark",
 ]
 
 

@@ -2,7 +2,7 @@
 fulfils gearlab.kinds.contract.ScenarioKind (TABLES, build, describe, quick, run,
 summary_lines, records_table, charts); the helpers they share are in gearlab.kinds.common."""
 
-from . import dataset, detection, gap, gap_benchmark, noise_study, stiffness, transfer
+from . import dataset, detection, gap, gap_benchmark, noise_study, stiffness, transfer, transfer_benchmark
 from .contract import ScenarioKind
 
 SCENARIO_KINDS: dict[str, ScenarioKind] = {
@@ -13,4 +13,5 @@ SCENARIO_KINDS: dict[str, ScenarioKind] = {
     "gap": gap,
     "gap_benchmark": gap_benchmark,
     "detection": detection,
+    "transfer_benchmark": transfer_benchmark,
 }

@@ -1,0 +1,546 @@
+"""Scenario kind `transfer_benchmark`: the frozen recipe on random unseen targets (`gearlab transfer-benchmark`).
+
+    [benchmark]   trials, seed
+    [source]      the simulator, a dataset preset with overrides (default B-6-ch5); each trial runs
+                  it at the target's speed (a tacho gives it) and at its own load (the load is unknown)
+    [network]     as in a transfer scenario
+    [[methods]]   as in a transfer scenario, unsupervised only (k = 0: no target label is used)
+    [protocol]    repetitions and the training and calibration keys of a transfer scenario, the same
+                  for every trial: nothing is set per target
+
+Each trial draws a target that no gearlab setting was chosen on (`draw`; the ranges below and in
+docs/learning.md): the source's gearbox at another speed and load, one mismatch of the model (drive,
+bearings or mesh damping), a sensor resonance, a low-pass or neither, in a quarter of the trials a
+non-synchronous tone, another noise law and level, and another mix of fault types and teeth. Every
+method trains on the target history (k = 0) and is scored on the target's test set beside the Bayes
+bound of that target (gearlab.kinds.transfer.bayes_bound; unavailable where its model does not hold,
+as with a tone).
+
+Selection rule (printed with every run): settings may be tuned on seeds below 1000; figures are
+reported on seeds never used before, chosen after the code is frozen.
+
+Output: results.jsonl (per trial a `trialNNN/target` record of what was drawn and its bound, and one
+record per repetition and method), summary.json (per trial, and per method the median accuracy, the
+distance to the bound, the share of trials within 5 points, the gain over the likelihood-ratio start),
+table.md, a figure and report.html.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..charts import Chart, Curve
+from ..data import cache
+from ..data.cache import load_or_build
+from ..data.spec import NOISE_KINDS, DatasetSpec, NoiseSpec
+from ..effects import effect_spec
+from ..errors import GearlabInputError
+from ..events import Event
+from ..learn.config import Calibration, NetworkSettings
+from ..learn.protocol import Counts, Protocol, check, check_data, shared_state, unit_key
+from ..learn.schedule import two_phases
+from ..runs import RunDir
+from ..scenario import Key, Scenario, Table, in_range, keys_of, location
+from ..settings import MAX_SEED, shrunk
+from .common import DATASET_TABLE, device_of, executor_for, simulated_spec
+from .transfer import BOUND, CALIBRATION, TRAINING, bayes_bound, method, train_unit
+
+REPORT_SEEDS = 1000  # seeds below: development; at or above: reported figures (the selection rule)
+SELECTION_RULE = (
+    f"selection rule: settings may be tuned on seeds below {REPORT_SEEDS}; figures are reported on seeds "
+    "never used before, chosen after the code is frozen"
+)
+CLOSE = 5.0  # points: a method within this of its trial's bound counts as close
+BASELINE = "likelihood_ratio"  # the start of the calibrated networks (gearlab.learn.calibration)
+
+# What a trial draws: (low, high) uniform, (low, high, "log") log-uniform, (low, high, "int") whole
+# numbers with both ends. One model mismatch of MODEL_EFFECTS, one sensor of SENSORS ("none" adds
+# nothing), a tone in TONE_SHARE of the trials, a noise law of NOISE_KINDS.
+SPEED_HZ = (30.0, 50.0)
+LOAD_NM = (10.0, 30.0)
+SNR_DB = (-3.0, 6.0)
+TONE_SHARE = 0.25
+FAULT_TYPES = (2, 4, "int")  # how many of the source's fault types the target holds
+TEETH_SHARE = (0.5, 1.0)  # of the source's teeth that carry the target's faults
+MODEL_EFFECTS = {
+    "drive_inertias": {
+        "I11": (1e-3, 2e-2, "log"),
+        "I22": (1e-3, 2e-2, "log"),
+        "k_c": (1e3, 1e5, "log"),
+        "c_c": (1.0, 30.0),
+    },
+    "bearing_stiffness": {"k_factor": (0.3, 3.0, "log"), "c_factor": (0.3, 3.0, "log")},
+    "mesh_damping": {"zeta": (0.03, 0.15)},
+}
+SENSORS = {
+    "none": {},
+    "sensor_bandwidth": {"f_n": (3e3, 3e4, "log"), "zeta": (0.05, 0.4)},
+    "sensor_lowpass": {"f_c": (3e3, 3e4, "log"), "order": (2, 6, "int")},
+}
+TONE = {"frequency": (5.0, 3000.0, "log"), "ratio": (0.1, 0.8)}
+
+_SOURCE_KEYS = {
+    k: v
+    for k, v in DATASET_TABLE.keys.items()
+    if k not in ("file", "vibration", "tacho", "labels", "sensitivity", "gain", "class_names", "transient")
+}
+_SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
+
+TABLES = {
+    "benchmark": Table(
+        {
+            "trials": Key(int, 24, in_range(1, 10000), "number of random targets (>= 24 for the goals)"),
+            "seed": Key(int, 0, in_range(0, MAX_SEED), f"seeds the draws; below {REPORT_SEEDS}: development"),
+        }
+    ),
+    "source": Table(_SOURCE_KEYS),
+    "network": Table(keys_of(NetworkSettings)),
+    "methods": Table(
+        {
+            "adapter": Key(str, doc="adapter plugin, unsupervised (the targets give no label)"),
+            "supervised": Key(bool, False, doc="must be false: k = 0"),
+            "params": Key(dict, {}, doc="adapter parameters"),
+        },
+        array=True,
+        required=True,
+    ),
+    "protocol": Table({**keys_of(Protocol, ("repetitions",)), **TRAINING, **CALIBRATION}),
+}
+
+
+def build(scenario: Scenario) -> dict:
+    t, path = scenario.tables, scenario.path
+    methods = tuple(method(m, location(path, "methods", index=i)) for i, m in enumerate(t["methods"]))
+    for i, m in enumerate(methods):
+        if m.supervised:
+            raise GearlabInputError(
+                f"{location(path, 'methods', index=i, key='supervised')}: expected false: the benchmark's "
+                "targets give no labels (k = 0)"
+            )
+    p = t["protocol"]
+    if p["min_epochs"] > p["max_epochs"]:
+        raise GearlabInputError(
+            f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
+            f"max_epochs = {p['max_epochs']}"
+        )
+    protocol = Protocol(
+        methods=methods,
+        network=t["network"]["name"],
+        dropout=t["network"]["dropout"],
+        ks=(0,),
+        repetitions=p["repetitions"],
+        **{key: p[key] for key in TRAINING},
+        device=device_of(scenario),
+        calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
+    )
+    protocol.calibration.check(str(path))
+    check(protocol, str(path))
+    entry = {**{k: v.default for k, v in DATASET_TABLE.keys.items()}, **t["source"]}
+    source = simulated_spec(entry, location(path, "source"), scenario.base or path.parent)
+    source.check_model(location(path, "source"))
+    return {"benchmark": dict(t["benchmark"]), "source": source, "protocol": protocol}
+
+
+def describe(scenario: Scenario) -> str:
+    spec = scenario.spec
+    b, p = spec["benchmark"], spec["protocol"]
+    use = "development" if b["seed"] < REPORT_SEEDS else "report"
+    return (
+        f"{b['trials']} random targets from {spec['source'].name} (seed {b['seed']}, {use}), "
+        f"{len(p.methods)} methods x {p.repetitions} repetitions at k = 0, network {p.network}"
+    )
+
+
+def quick(scenario: Scenario) -> None:
+    """Smoke run: 2 trials, one short repetition."""
+    spec = scenario.spec
+    spec["benchmark"] = {**spec["benchmark"], "trials": min(spec["benchmark"]["trials"], 2)}
+    spec["protocol"] = shrunk(spec["protocol"], repetitions=1)
+
+
+# --- the draw --------------------------------------------------------------------------------------
+
+
+def _value(rng: np.random.Generator, spec: tuple) -> float | int:
+    low, high, *scale = spec
+    if scale == ["log"]:
+        return float(math.exp(rng.uniform(math.log(low), math.log(high))))
+    if scale == ["int"]:
+        return int(rng.integers(low, high + 1))
+    return float(rng.uniform(low, high))
+
+
+def _effect(rng: np.random.Generator, name: str, ranges: dict):
+    params = {key: _value(rng, spec) for key, spec in ranges.items()}
+    return effect_spec(name, **params), params
+
+
+def draw(rng: np.random.Generator, source: DatasetSpec, index: int, target_train: int) -> tuple[DatasetSpec, dict]:
+    """Trial *index*'s target and what was drawn (the answers, shown beside the results). Its healthy
+    revolutions are the history (*target_train*) plus as many as it has fault revolutions, so that
+    the test set is half faulty whatever the mix."""
+    _, _, source_teeth = source.check_model()
+    speed, load = _value(rng, SPEED_HZ), _value(rng, LOAD_NM)
+    model = str(rng.choice(sorted(MODEL_EFFECTS)))
+    sensor = str(rng.choice(sorted(SENSORS)))
+    effects, drawn = [], {}
+    for name, ranges in ((model, MODEL_EFFECTS[model]), (sensor, SENSORS[sensor])):
+        if ranges:
+            spec, drawn[name] = _effect(rng, name, ranges)
+            effects.append(spec)
+    tone = bool(rng.random() < TONE_SHARE)
+    if tone:
+        spec, drawn["interference_tone"] = _effect(rng, "interference_tone", TONE)
+        effects.append(spec)
+    law, snr = str(rng.choice(NOISE_KINDS)), _value(rng, SNR_DB)
+    n_types = min(_value(rng, FAULT_TYPES), len(source.faults))
+    faults = tuple(source.faults[i] for i in sorted(rng.choice(len(source.faults), n_types, replace=False)))
+    n_teeth = max(1, round(_value(rng, TEETH_SHARE) * len(source_teeth)))
+    teeth = tuple(int(t) for t in sorted(rng.choice(np.asarray(source_teeth), n_teeth, replace=False)))
+    fault_rows = sum(len(steps) for _, steps in faults) * len(teeth) * source.duplicates
+    name = f"trial{index:03d}"
+    target = source.with_(
+        name=name,
+        domain=name,
+        speed_hz=round(speed, 3),
+        load_nm=round(load, 3),
+        effects=source.effects + tuple(effects),
+        noise=NoiseSpec(law, round(snr, 3), int(rng.integers(0, 2**31))),
+        faults=faults,
+        teeth=teeth,
+        healthy=target_train + fault_rows,
+    )
+    answers = {
+        "speed_hz": target.speed_hz,
+        "load_nm": target.load_nm,
+        "model": model,
+        "sensor": sensor,
+        "tone": tone,
+        "noise": law,
+        "snr_db": target.noise.snr_db,
+        "faults": [n for n, _ in faults],
+        "teeth": len(teeth),
+        "effects": drawn,
+    }
+    return target, answers
+
+
+def trials(spec: dict) -> list[tuple[str, DatasetSpec, DatasetSpec, dict]]:
+    """(name, source at the target's speed, target, answers) of every trial, drawn in order from the seed."""
+    b, source, protocol = spec["benchmark"], spec["source"], spec["protocol"]
+    out = []
+    for i in range(b["trials"]):
+        rng = np.random.default_rng([b["seed"], i])
+        target, answers = draw(rng, source, i, protocol.target_train)
+        at_speed = source.with_(
+            name=f"{source.name}@{target.speed_hz:g}Hz", domain=source.domain, speed_hz=target.speed_hz
+        )
+        out.append((target.name, at_speed, target, answers))
+    return out
+
+
+# --- run -------------------------------------------------------------------------------------------
+
+
+def run(scenario: Scenario, run: RunDir, on_event) -> None:
+    spec = scenario.spec
+    protocol: Protocol = spec["protocol"]
+    on_event(Event("log", message=SELECTION_RULE))
+    drawn = trials(spec)
+    done = {r["unit"] for r in run.records()}
+    with executor_for(scenario) as executor:
+        on_event(Event("stage", stage="targets", total=len(drawn), message="targets and their Bayes bounds"))
+        for i, (name, source_spec, target_spec, answers) in enumerate(drawn):
+            source, _ = load_or_build(source_spec, executor)
+            target, _ = load_or_build(target_spec, executor)
+            check_data(protocol, Counts.of(source), Counts.of(target), f"{scenario.path}: {name}")
+            if f"{name}/target" not in done:
+                bound = bayes_bound(target_spec, source, target, protocol, executor, on_event)
+                run.append({"unit": f"{name}/target", "trial": name, "answers": answers, "bound": bound})
+            on_event(Event("advance", stage="targets", done=i + 1, total=len(drawn)))
+
+        todo = [(t, rep, m) for t in range(len(drawn)) for rep in range(protocol.repetitions) for m in protocol.methods]
+
+        def key(unit: tuple) -> str:
+            t, rep, m = unit
+            return f"{drawn[t][0]}/{unit_key(rep, 0, m)}"
+
+        pending = [u for u in todo if key(u) not in done]
+
+        def state_file(unit: tuple):
+            t, rep, m = unit
+            state = shared_state(m, rep, 0, protocol)
+            return None if state is None else run.file("states", drawn[t][0], f"{state}.pt")
+
+        on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
+        finished = len(todo) - len(pending)
+        on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+        for phase in two_phases(pending, state_file):
+
+            def record_done(i: int, record: dict, phase=phase) -> None:
+                nonlocal finished
+                t, _, _ = phase[i]
+                record.pop("_latent", None)
+                record.update(unit=key(phase[i]), trial=drawn[t][0])
+                run.append(record)
+                finished += 1
+                on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %"))
+                on_event(Event("record", stage="runs", record=record))
+                on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
+            tasks = [
+                (
+                    protocol,
+                    (drawn[t][1], cache.entry_path(drawn[t][1])),
+                    (drawn[t][2], cache.entry_path(drawn[t][2])),
+                    rep,
+                    0,
+                    m,
+                    run.file("states", drawn[t][0]),
+                )
+                for t, rep, m in phase
+            ]
+            executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+    summarise(scenario, run)
+
+
+# --- summary ---------------------------------------------------------------------------------------
+
+
+def per_trial(records: list[dict]) -> dict[str, dict]:
+    """{trial: {answers, bound (mean accuracy or None), unavailable, accuracy {method: mean}}}."""
+    out: dict[str, dict] = {}
+    for r in records:
+        if r["unit"].endswith("/target"):
+            bound = r["bound"] or {}
+            out[r["trial"]] = {
+                "answers": r["answers"],
+                "bound": bound["accuracy"]["0"]["mean"] if "accuracy" in bound else None,
+                "unavailable": bound.get("unavailable") or ("" if bound else "the target has no noise"),
+                "accuracy": {},
+            }
+    scores: dict[tuple[str, str], list[float]] = {}
+    for r in records:
+        if "accuracy" in r and r.get("trial") in out:
+            scores.setdefault((r["trial"], r["method"]), []).append(r["accuracy"])
+    for (trial, label), values in scores.items():
+        out[trial]["accuracy"][label] = float(np.mean(values))
+    return out
+
+
+def per_method(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
+    """Per method over the trials: median and 10th percentile of the accuracy, and over the trials
+    with a bound the median distance to it and the share within CLOSE points."""
+    out = {}
+    for label in labels:
+        acc = [t["accuracy"][label] for t in trials_.values() if label in t["accuracy"]]
+        gaps = [t["bound"] - t["accuracy"][label] for t in trials_.values() if label in t["accuracy"] and t["bound"]]
+        out[label] = {
+            "trials": len(acc),
+            "median": float(np.median(acc)) if acc else None,
+            "p10": float(np.percentile(acc, 10)) if acc else None,
+            "median_gap": float(np.median(gaps)) if gaps else None,
+            "within_close": float(np.mean(np.asarray(gaps) <= CLOSE)) if gaps else None,
+            "bounded_trials": len(gaps),
+        }
+    return out
+
+
+# Which trials a method's gain over its start is told for: where the path differs (a sensor), where
+# the noise model is wrong (a tone, or noise with infinite variance), and the rest.
+GROUPS = {
+    "all": lambda a: True,
+    "no sensor effect": lambda a: a["sensor"] == "none",
+    "sensor resonance or low-pass": lambda a: a["sensor"] != "none",
+    "student_t noise": lambda a: a["noise"] == "student_t",
+    "tone": lambda a: a["tone"],
+}
+
+
+def domain_gain(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
+    """Each method's accuracy less the likelihood-ratio detector's (the calibrated networks' start),
+    by what the trial's target holds: a sensor (the path differs) or a tone (the noise model is wrong)."""
+    base = next((label for label in labels if label.startswith(f"{BASELINE} ")), None)
+    if base is None:
+        return {}
+    out = {}
+    for label in labels:
+        if label == base:
+            continue
+        out[label] = {}
+        for group, holds in GROUPS.items():
+            d = [
+                t["accuracy"][label] - t["accuracy"][base]
+                for t in trials_.values()
+                if holds(t["answers"]) and label in t["accuracy"] and base in t["accuracy"]
+            ]
+            out[label][group] = {"mean": float(np.mean(d)), "trials": len(d)} if d else None
+    return out
+
+
+def summarise(scenario: Scenario, run: RunDir) -> None:
+    spec = scenario.spec
+    labels = [m.label for m in spec["protocol"].methods]
+    trials_ = per_trial(run.records())
+    source_only = next((label for label in labels if label.startswith("source_only ")), None)
+    beaten = {
+        label: sum(
+            t["accuracy"][source_only] < t["accuracy"][label]
+            for t in trials_.values()
+            if label in t["accuracy"] and source_only in t["accuracy"]
+        )
+        for label in labels
+        if source_only and label != source_only
+    }
+    summary = {
+        "kind": "transfer_benchmark",
+        "scenario": scenario.name,
+        "seed": spec["benchmark"]["seed"],
+        "use": "development" if spec["benchmark"]["seed"] < REPORT_SEEDS else "report",
+        "selection_rule": SELECTION_RULE,
+        "source": spec["source"].name,
+        "methods": labels,
+        "trials": trials_,
+        "per_method": per_method(trials_, labels),
+        "source_only_below": beaten,
+        "domain_gain": domain_gain(trials_, labels),
+    }
+    run.write_json("summary.json", summary)
+    run.write_text("table.md", tables_md(summary))
+    figure(run, summary)
+
+
+def _n(x, digits: int = 1) -> str:
+    return "–" if x is None else f"{x:.{digits}f}"
+
+
+def trials_md(summary: dict) -> str:
+    labels = summary["methods"]
+    head = ["trial", "speed Hz", "load N m", "model", "sensor", "tone", "noise", "SNR dB", "Bayes bound", *labels]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, t in summary["trials"].items():
+        a = t["answers"]
+        row = [
+            name,
+            f"{a['speed_hz']:.1f}",
+            f"{a['load_nm']:.1f}",
+            a["model"],
+            a["sensor"],
+            "yes" if a["tone"] else "no",
+            a["noise"],
+            f"{a['snr_db']:.1f}",
+            _n(t["bound"]) if t["bound"] is not None else "unavailable",
+            *[_n(t["accuracy"].get(label)) for label in labels],
+        ]
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def methods_md(summary: dict) -> str:
+    head = ["method", "median accuracy %", "10th percentile %", "median points below the bound", "within 5 points"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for label in summary.get("methods") or summary["per_method"]:
+        m = summary["per_method"][label]
+        within = f"{100 * m['within_close']:.0f} % of {m['bounded_trials']}" if m["within_close"] is not None else "–"
+        lines.append(f"| {label} | {_n(m['median'])} | {_n(m['p10'])} | {_n(m['median_gap'])} | {within} |")
+    return "\n".join(lines) + "\n"
+
+
+def gain_md(summary: dict) -> str:
+    gains = summary["domain_gain"]
+    if not gains:
+        return ""
+    groups = list(GROUPS)
+    lines = [
+        f"| method: points over {BASELINE} | " + " | ".join(groups) + " |",
+        "|" + "---|" * (len(groups) + 1),
+    ]
+    for label in [m for m in summary["methods"] if m in gains]:
+        by = gains[label]
+        cells = [f"{by[g]['mean']:+.1f} ({by[g]['trials']})" if by[g] else "–" for g in groups]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def tables_md(summary: dict) -> str:
+    return "\n".join(filter(None, [methods_md(summary), gain_md(summary), trials_md(summary)]))
+
+
+def summary_lines(run: RunDir) -> list[str]:
+    s = run.read_json("summary.json")
+    lines = [
+        f"{s['selection_rule']}; this run: seed {s['seed']} ({s['use']})",
+        f"{len(s['trials'])} random targets from {s['source']}, k = 0; accuracy (%) per method over the trials:",
+        methods_md(s).rstrip(),
+    ]
+    if s["domain_gain"]:
+        lines += [f"points over {BASELINE} (its start) by what the targets hold (trials):", gain_md(s).rstrip()]
+    for label, count in s["source_only_below"].items():
+        lines.append(f"source_only below {label} on {count} of {len(s['trials'])} trials")
+    unavailable = sum(t["bound"] is None for t in s["trials"].values())
+    if unavailable:
+        lines.append(f"Bayes bound unavailable on {unavailable} trials (a tone: outside its model)")
+    return lines
+
+
+def records_table(scenario: Scenario, records: list[dict]) -> str:
+    labels = [m.label for m in scenario.spec["protocol"].methods]
+    trials_ = per_trial(records)
+    return methods_md({"methods": labels, "per_method": per_method(trials_, labels)}) if trials_ else ""
+
+
+def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
+    """Each method's accuracy per trial beside the trial's bound (the TUI draws it)."""
+    labels = [m.label for m in scenario.spec["protocol"].methods]
+    trials_ = per_trial(run.records())
+    names = list(trials_)
+    curves = []
+    for label in [*labels, BOUND]:
+        pts = [
+            (i, trials_[n]["bound"] if label == BOUND else trials_[n]["accuracy"].get(label))
+            for i, n in enumerate(names)
+        ]
+        pts = [(i, y) for i, y in pts if y is not None]
+        if pts:
+            curves.append(Curve(label, [i for i, _ in pts], [y for _, y in pts]))
+    return [Chart("target test accuracy per random target", "trial", "accuracy (%)", tuple(curves))]
+
+
+def figure(run: RunDir, summary: dict) -> None:
+    """Accuracy per trial (methods and bound) and each method's distance to the bound (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..plots import save
+
+    names = list(summary["trials"])
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.5))
+    x = np.arange(len(names))
+    for label in summary["methods"]:
+        axes[0].plot(x, [summary["trials"][n]["accuracy"].get(label, np.nan) for n in names], "o", ms=4, label=label)
+    bound = [summary["trials"][n]["bound"] for n in names]
+    axes[0].plot(x, [np.nan if b is None else b for b in bound], "k_", ms=12, label=BOUND)
+    axes[0].set_xticks(x, [n.removeprefix("trial") for n in names], fontsize=7)
+    axes[0].set_xlabel("trial")
+    axes[0].set_ylabel("target test accuracy (%)")
+    axes[0].set_title("accuracy per random target")
+    gaps = [
+        [
+            t["bound"] - t["accuracy"][label]
+            for t in summary["trials"].values()
+            if t["bound"] is not None and label in t["accuracy"]
+        ]
+        for label in summary["methods"]
+    ]
+    axes[1].boxplot([g or [np.nan] for g in gaps], tick_labels=[label.split(" ")[0] for label in summary["methods"]])
+    axes[1].tick_params(axis="x", labelrotation=30)
+    axes[1].axhline(CLOSE, color="k", ls=":", lw=0.8)
+    axes[1].set_ylabel("points below the Bayes bound")
+    axes[1].set_title("distance to the bound, trials with a bound")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=4, fontsize=8)
+    fig.tight_layout(rect=(0, 0.12, 1, 1))
+    save(fig, run.figures / "transfer_benchmark.png", dpi=90, bbox_inches=None)
