@@ -1,6 +1,6 @@
 """`gearlab inspect`: what a recording holds, and whether a gearbox description matches it.
 
-    file ─► channels, sampling rate              the importer's readers (gearlab.data.importers)
+    file ─► channels, sampling rate              the one import path (gearlab.data.recordings)
          ─► input-shaft angle θ(t)               tacho (angle or pulses, N per revolution, on any
                                                  shaft) | speed found from the mesh lines
          ─► order spectrum                        the record resampled at uniform θ over its R
@@ -25,31 +25,33 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
-from .data.importers import (
-    _angle_tacho,
-    _prefixed,
-    _read,
-    _same_length,
-    _sampling_rate,
-    _series,
-    _tacho_kind,
-)
 from .data.readers.base import _listing
+from .data.recordings import (
+    angle_tacho,
+    is_rate_or_time,
+    prefixed,
+    read_contents,
+    same_length,
+    sampling_rate,
+    series,
+    tacho_kind,
+)
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
+from .gearbox.speed import (
+    DRIFT,
+    SPAN,
+    THRESHOLD_DB,
+    Lines,
+    carrier,
+    find_lines,
+    speed_from_mesh,
+)
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
 
 TWO_PI = 2.0 * np.pi
-THRESHOLD_DB = 15.0  # a line stands this far over the running median of the spectrum
-FLOOR_BINS = 201  # width of the running median (bins)
-PEAK_BINS = 7  # a line is the largest value within ±3 bins (Hann sidelobes are not lines)
-DECLARED_RANGE = 0.01  # a declared speed is trusted to ±1 %
-AMBIGUOUS = 0.9  # a second speed hypothesis explaining ≥ 90 % of the best one's power is ambiguous
-SPEED_AGREE = 0.005  # two hypotheses within 0.5 % are the same speed
-DRIFT = 1e-3  # relative smear of an order by speed drift
 WINDOW = 0.3  # sidebands are searched within ±0.3 o of where the description puts them
 UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
 MAX_TSA_POINTS = 1 << 15
@@ -69,46 +71,6 @@ class InspectOptions:
     threshold_db: float = THRESHOLD_DB
 
 
-@dataclass
-class Lines:
-    """Spectral lines: position (orders or Hz), amplitude, dB over the running median."""
-
-    at: np.ndarray
-    amp: np.ndarray
-    db: np.ndarray
-
-    def near(self, x: float, tol: float) -> int | None:
-        """Index of the strongest line within ±tol of x, or None."""
-        inside = np.flatnonzero(np.abs(self.at - x) <= tol)
-        return None if inside.size == 0 else int(inside[np.argmax(self.amp[inside])])
-
-    def closest(self, x: float, half: float, exclude=()) -> int | None:
-        inside = [i for i in np.flatnonzero(np.abs(self.at - x) <= half) if i not in exclude]
-        return None if not inside else int(min(inside, key=lambda i: abs(self.at[i] - x)))
-
-
-def find_lines(axis: np.ndarray, amp: np.ndarray, threshold_db: float, low: float, high: float) -> Lines:
-    """Peaks of a spectrum standing *threshold_db* over its running median, refined to a fraction
-    of a bin (parabola through the log amplitude of the peak bin and its neighbours)."""
-    floor = ndimage.median_filter(amp, size=min(FLOOR_BINS, amp.size | 1), mode="nearest")
-    floor = np.maximum(floor, 1e-300)
-    peak = (ndimage.maximum_filter(amp, size=PEAK_BINS, mode="nearest") == amp) & (
-        amp > floor * 10 ** (threshold_db / 20)
-    )
-    peak[[0, -1]] = False
-    idx = np.flatnonzero(peak & (axis >= low) & (axis <= high))
-    step = axis[1] - axis[0]
-    with np.errstate(divide="ignore"):
-        l, c, r = (np.log(np.maximum(amp[idx + k], 1e-300)) for k in (-1, 0, 1))
-    denom = l - 2 * c + r
-    delta = np.where(denom < 0, 0.5 * (l - r) / np.where(denom < 0, denom, -1), 0.0)
-    delta = np.clip(delta, -0.5, 0.5)
-    at = axis[idx] + delta * step
-    height = np.exp(c - 0.25 * (l - r) * delta)
-    order = np.argsort(-height)
-    return Lines(at[order], height[order], 20 * np.log10(height[order] / floor[idx][order]))
-
-
 # --- the record -------------------------------------------------------------------------------
 
 
@@ -125,12 +87,9 @@ class Record:
     tacho: np.ndarray | None
 
 
-_RATE_OR_TIME = ("fs", "t", "time")
-
-
 def read_record(path: str, options: InspectOptions) -> Record:
-    listing, fmt = _read(path, [])
-    channels = [c for c in listing.available if str(c).lower() not in _RATE_OR_TIME]
+    listing, fmt = read_contents(path, [])
+    channels = [c for c in listing.available if not is_rate_or_time(str(c))]
     vibration = options.vibration
     if vibration is None:
         left = [c for c in channels if c != options.tacho]
@@ -142,16 +101,16 @@ def read_record(path: str, options: InspectOptions) -> Record:
     roles = {vibration: "vibration"}
     if options.tacho is not None:
         roles.setdefault(options.tacho, "tacho")
-    contents, fmt = _read(path, list(roles), roles)
+    contents, fmt = read_contents(path, list(roles), roles)
     scale = (1.0 if options.gain is None else options.gain) / (
         1.0 if options.sensitivity is None else options.sensitivity
     )
-    vib = _series(contents.found[vibration], vibration, "vibration", path) * scale
-    fs, fs_source = _sampling_rate(contents, options.fs, vib.size, path)
+    vib = series(contents.found[vibration], vibration, "vibration", path) * scale
+    fs, fs_source = sampling_rate(contents, options.fs, vib.size, path)
     tacho = None
     if options.tacho is not None:
-        tacho = _series(contents.found[options.tacho], options.tacho, "tacho", path)
-        _same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
+        tacho = series(contents.found[options.tacho], options.tacho, "tacho", path)
+        same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
     return Record(str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho)
 
 
@@ -182,7 +141,7 @@ class Speed:
 
 
 def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
-    kind = _tacho_kind(rec.tacho) if options.tacho_kind == "auto" else options.tacho_kind
+    kind = tacho_kind(rec.tacho) if options.tacho_kind == "auto" else options.tacho_kind
     shaft = options.tacho_shaft or (box.sensor.tacho if box else "input")
     ratio = 1.0
     if box is not None:
@@ -190,11 +149,11 @@ def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
     ppr = options.pulses_per_rev or (box.sensor.pulses_per_rev if box else 1)
     where = f"{rec.path}: tacho '{rec.tacho_name}'"
     if kind == "angle":
-        with _prefixed(f"{where} (read as the shaft angle in rad)"):
-            theta = unwrap_tacho(_angle_tacho(rec.tacho))
+        with prefixed(f"{where} (read as the shaft angle in rad)"):
+            theta = unwrap_tacho(angle_tacho(rec.tacho))
         how = f"tacho '{rec.tacho_name}' (shaft angle) on the {shaft} shaft"
     else:
-        with _prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"):
+        with prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"):
             theta = angle_from_pulses(rec.tacho, rec.fs) / ppr
         how = f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution) on the {shaft} shaft"
     theta = theta / ratio  # the input shaft's angle
@@ -202,20 +161,15 @@ def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
     if turns <= 0:
         raise GearlabInputError(f"{where}: the shaft angle does not advance; expected a turning shaft")
     mean = turns * rec.fs / (theta.size - 1)
-    with _prefixed(where):
+    with prefixed(where):
         starts = revolution_starts(theta) if turns >= 2 else np.zeros(0)
     per_rev = rec.fs / np.diff(starts) if starts.size >= 2 else np.zeros(0)
     return Speed(mean, how, theta, per_rev)
 
 
-def _hz_lines(rec: Record, threshold_db: float) -> Lines:
-    freq, amp = spectrum(rec.signal, rec.fs)
-    return find_lines(freq, amp, threshold_db, 2 * freq[1], 0.45 * rec.fs)
-
-
 def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
     """The input speed of a record without a tacho: declared, refined by the mesh lines; or
-    found from the mesh lines alone (see the module doc)."""
+    found from the mesh lines alone (gearlab.gearbox.speed)."""
     declared = options.speed_hz or (box.speed_hz if box else None)
     n = rec.signal.size
     if box is None:
@@ -226,79 +180,16 @@ def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
             )
         theta = TWO_PI * declared * np.arange(n) / rec.fs
         return Speed(declared, "declared", theta, np.zeros(0), declared)
-    table = order_table(box)
-    lines = _hz_lines(rec, options.threshold_db)
-    if lines.at.size == 0:
-        raise GearlabInputError(
-            f"{rec.path}: vibration '{rec.vibration}' shows no spectral line; cannot find the speed"
-        )
-    df = rec.fs / n
-    explained_orders = np.array([o for _, o in table.lines()])
-    mesh_orders = np.array([h * float(t.mesh) for t in table.stages for h in (1, 2, 3)])
-    weight = np.minimum(lines.db, 40.0)
-
-    def tol(f):
-        return max(2.5 * df, DRIFT * f)
-
-    hypotheses = []
-    for i in range(min(12, lines.at.size)):
-        for s in table.stages:
-            for h in (1, 2, 3):
-                f = lines.at[i] / (h * float(s.mesh))
-                if declared is not None and abs(f / declared - 1) > DECLARED_RANGE:
-                    continue
-                meshes, m_orders = [], []
-                for t in table.stages:
-                    q = lines.near(float(t.mesh) * f, tol(float(t.mesh) * f))
-                    span = SPAN * float(max(t.pinion_shaft_order, t.wheel_shaft_order)) * f
-                    if q is not None and carrier(lines, q, span) == q:
-                        meshes.append(q)  # a mesh fundamental that is its neighbourhood's carrier
-                        m_orders.append(float(t.mesh))
-                if not meshes:
-                    continue
-                predicted = explained_orders * f
-                hit = np.array([np.min(np.abs(predicted - x)) <= tol(x) for x in lines.at])
-                harmonic = mesh_orders * f
-                on_mesh = np.array([np.min(np.abs(harmonic - x)) <= tol(x) for x in lines.at])
-                # least squares over the mesh fundamentals: f = Σ L M / Σ M²
-                at, m_orders = lines.at[meshes], np.array(m_orders)
-                refined = float(np.sum(at * m_orders) / np.sum(m_orders**2))
-                # a carrier outweighs its sidebands: the mesh harmonics decide, the rest breaks ties
-                # lines explained, each by its height over the floor (capped): a speed that explains
-                # the sidebands too beats one that only puts a mesh harmonic on the carrier
-                score = (len(meshes), float(weight[hit].sum() + weight[on_mesh].sum()))
-                hypotheses.append((score, refined, f"{fmt_hz(lines.at[i])} as {h}×M{s.index}"))
-    hypotheses.sort(key=lambda h: (-h[0][0], -h[0][1]))
-    distinct = []
-    for h in hypotheses:
-        if all(abs(h[1] / d[1] - 1) > SPEED_AGREE for d in distinct):
-            distinct.append(h)
-    if not distinct:
-        if declared is None:
-            raise GearlabInputError(
-                f"{rec.path}: no tacho, and no line of the spectrum fits a mesh order of {box.source} at any "
-                "speed; give --tacho NAME or --speed (e.g. '25 Hz')"
-            )
-        theta = TWO_PI * declared * np.arange(n) / rec.fs
-        speed = Speed(declared, "declared", theta, np.zeros(0), declared)
-        speed.notes.append(f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at the declared speed")
-        return speed
-    best = distinct[0]
-    if (
-        declared is None
-        and len(distinct) > 1
-        and distinct[1][0][0] == best[0][0]
-        and distinct[1][0][1] >= AMBIGUOUS * best[0][1]
-    ):
-        other = distinct[1]
-        raise GearlabInputError(
-            f"{rec.path}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
-            f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; give --speed or --tacho"
-        )
-    f = best[1]
+    f, how, note = speed_from_mesh(
+        rec.signal, rec.fs, box, declared, f"{rec.path}: vibration '{rec.vibration}'", options.threshold_db
+    )
     theta = TWO_PI * f * np.arange(n) / rec.fs
-    how = f"from the mesh lines ({best[2]})" + (f", declared {fmt_hz(declared)}" if declared else "")
-    speed = Speed(f, how, theta, _demodulated_speed(rec, table, f), declared)
+    if how == "declared":
+        speed = Speed(f, how, theta, np.zeros(0), declared)
+    else:
+        speed = Speed(f, how, theta, _demodulated_speed(rec, order_table(box), f), declared)
+    if note:
+        speed.notes.append(note)
     return speed
 
 
@@ -329,7 +220,7 @@ def order_spectrum(rec: Record, speed: Speed):
     """(orders, amplitude, revolutions, points per revolution) of the record at uniform input angle."""
     per_rev = rec.fs / speed.mean_hz
     points = int(min(1 << 14, max(64, 2 ** math.ceil(math.log2(per_rev)))))
-    with _prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
+    with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
         revs = resample_revolutions(rec.signal, speed.angle, points=points)
     orders, amp = spectrum(revs.reshape(-1), points)  # "Hz" per revolution: orders
     return orders, amp, revs.shape[0], points
@@ -337,18 +228,6 @@ def order_spectrum(rec: Record, speed: Speed):
 
 def _tol_mesh(order: float, bin_: float) -> float:
     return 2 * bin_ + DRIFT * order
-
-
-SPAN = 3.5  # a mesh carrier is the strongest line within ±3.5 shaft orders (its sidebands j ≤ 3)
-
-
-def carrier(lines: Lines, i: int, span: float, others=()) -> int:
-    """The strongest line within ±span of line *i*, unless it sits on another stage's mesh
-    harmonic (*others*: (order, tolerance)): the line at a described mesh order may be a sideband
-    of the real carrier (z off by j teeth puts M on the j-th sideband of the pinion's shaft)."""
-    near = np.flatnonzero(np.abs(lines.at - lines.at[i]) <= span)
-    near = [q for q in near if not any(abs(lines.at[q] - o) <= t for o, t in others)]
-    return int(max(near, key=lambda q: lines.amp[q])) if near else i
 
 
 def comb(lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset()) -> tuple | None:

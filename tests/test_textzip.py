@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from textrecords import FS, PULSES, SENSITIVITY, SPEED, record, signals, text, write_zip
 
-from gearlab.data import textzip
+from gearlab.data.readers import text as text_reader
 from gearlab.data.textzip import align_to, parse_sensitivity, read_columns, read_record
 from gearlab.errors import GearlabInputError
 
@@ -67,7 +67,7 @@ def test_blocks_split_anywhere_give_the_same_columns(tmp_path, monkeypatch):
     whole = read_columns(write_zip(tmp_path / "a.zip", data), [0, 1, 2])[0]
     messy = b"# a comment\r\n\r\n" + data.replace(b"\n", b"\r\n", 50) + b"\n\n"
     for size in (7, 100, 4093):
-        monkeypatch.setattr(textzip, "CHUNK_BYTES", size)
+        monkeypatch.setattr(text_reader, "CHUNK_BYTES", size)
         got = read_columns(write_zip(tmp_path / f"m{size}.zip", messy), [0, 1, 2])[0]
         assert all(np.array_equal(got[c], whole[c]) for c in whole)
 
@@ -84,7 +84,7 @@ def test_streaming_needs_about_the_kept_columns_not_the_text(tmp_path):
         tracemalloc.stop()
     kept = cols[0].nbytes
     assert peak < 0.8 * len(data)  # the whole text is never held, let alone parsed at once
-    assert peak < 3 * kept + 12 * textzip.CHUNK_BYTES
+    assert peak < 3 * kept + 12 * text_reader.CHUNK_BYTES
 
 
 @pytest.mark.parametrize(

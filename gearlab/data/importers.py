@@ -5,49 +5,23 @@ tacho channel, or at a known nominal speed, in whatever file the acquisition sys
 writes. :func:`import_measured` reads such a record and sends it through the functions
 of :mod:`gearlab.signals` that also turn simulated records into samples:
 
-    file ─► named channels + sampling rate          read_channels (one small reader per format:
-                                                    gearlab.data.readers)
-         ─► numeric, finite, equal lengths          check_signal
+    file ─► channels, rate, vibration in m/s²       gearlab.data.recordings (the one import path of a
+                                                    measured file, every format and kind)
          ─► continuous input-shaft angle            unwrap_tacho | angle_from_pulses | angle_from_speed
+                                                    (no tacho: a declared speed, or the speed found
+                                                    from a gearbox description's mesh lines)
          ─► complete revolutions at 4096 angles     cut_revolutions
-         ─► start-up transient dropped              steady_start_stats (the method for measured data)
+         ─► start-up transient dropped              steady_start_stats (the method for measured data;
+                                                    a level that never settles is kept whole, with
+                                                    a warning in meta["warnings"])
          ─► standardised against healthy data       Standardiser (eq. 2.112/4.6)
-
-Formats (by extension) and where the sampling rate comes from:
-
-    .csv          header row of column names, numeric columns, '#' comment lines;
-                  rate from a 't'/'time' column (seconds, uniform) or a comment '# fs = 51200'
-    .npz          arrays by name, loaded without pickle; rate from a scalar 'fs' or a 't' array
-    .h5 / .hdf5   datasets by path ("group/acc"); rate from an attribute 'fs' on the channel,
-                  else from an 'fs' attribute or 'fs'/'t' dataset in its group, or the
-                  nearest group above that has one (up to the file's root)
-    .wav          channels by index ("0", "1", …); rate from the header; integer PCM scaled to ±1
-    .mat          MATLAB v5 variables (scipy), or v7.3 (an HDF5 file, read with h5py); rate
-                  from a variable 'fs' or 'Fs'
-
-Zipped whitespace-separated text with a multi-pulse tacho and a sensor sensitivity (the PHM 2009
-gearbox records) is read by :mod:`gearlab.data.textzip`, for the measured [target] of the
-detection kind (docs/real_data.md).
-
-Names 'fs' (any case) and 't'/'time' are looked up the same way in every keyed format; when
-the file carries a rate and one is given too (MeasuredSpec.fs) they must agree.
-
-Every bad file raises :class:`GearlabInputError` with one line that names the file, the
-channel and what was expected; nothing is returned half-built.
-
-Sizes are checked before anything is read: the file, and every channel as its file declares
-it (an HDF5 dataset never written, an NPZ member that inflates), may hold at most
-GEARLAB_MAX_RECORD_MB megabytes (default MAX_RECORD_MB), so that a file claiming more than
-memory holds is refused in one line instead of exhausting it.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import math
 from collections.abc import Sequence
-from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -69,33 +43,30 @@ from ..signals import (
 )
 from ..signals.checks import check_int, check_positive, fmt_hz
 from .chain import FRACTIONS_KEPT
-from .readers import READERS, Contents, check_size
-from .readers.base import _listing, _one_line, _one_line_repr
+from .readers.base import _one_line_repr
+from .recordings import (
+    FORMATS,
+    TACHO_KINDS,
+    angle_tacho,
+    check_measured_file,
+    prefixed,
+    read_channels,
+    read_contents,
+    same_length,
+    sampling_rate,
+    series,
+    tacho_kind,
+)
 from .spec import Dataset
 
 __all__ = ["FORMATS", "MeasuredSpec", "import_measured", "read_channels"]
 
 TWO_PI = 2.0 * np.pi
 
-# Extension -> format name used in messages.
-FORMATS = {".csv": "CSV", ".npz": "NPZ", ".h5": "HDF5", ".hdf5": "HDF5", ".wav": "WAV", ".mat": "MATLAB"}
-TACHO_KINDS = ("auto", "angle", "pulses")
 # "periodic" (steady_start) compares waveforms and needs a noise-free simulation: not offered.
 IMPORT_TRANSIENTS = ("stats", "none")
 # Bumped whenever the importer's output for the same file and options changes (cache keys).
 IMPORTER_VERSION = "1"
-
-# A time column is uniform when every step, and every sample's distance from the straight
-# line through its ends, stays within this fraction of a sampling period: rounding of written
-# times (to the microsecond at 50 kHz: 5 %) stays below it, a dropped sample does not.
-_TIME_JITTER = 0.25
-# Relative agreement asked of two sampling rates (the file's and the one given).
-_RATE_RTOL = 1e-6
-# A wrapped angle spans one turn; measured ones may fall a little short or overshoot.
-_TURN_SLACK = 0.01
-# Share of rising steps that marks a channel as a shaft angle rather than a pulse train
-# (a pulse train is flat most of the time, an angle rises at every sample).
-_RISING_SHARE = 0.9
 # Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
 # cannot even be unwrapped).
 _MIN_SAMPLES_PER_REV = 2
@@ -113,7 +84,7 @@ class MeasuredSpec:
     vibration:   channel/column/variable/dataset name of the vibration (WAV: channel index "0")
     tacho:       a tacho channel: the shaft angle in rad (wrapped, e.g. [-π, π) or [0, 2π), or
                  continuous) or a once-per-revolution pulse train; None with speed_hz
-    tacho_kind:  "auto" (detected, see _tacho_kind), "angle" or "pulses"
+    tacho_kind:  "auto" (detected, see tacho_kind), "angle" or "pulses"
     speed_hz:    nominal constant input-shaft speed when there is no tacho (revolutions/s)
     fs:          sampling rate (Hz) when the file does not carry one; checked when it does
     labels:      optional channel with the class (name or index into class_names) of the whole
@@ -168,7 +139,7 @@ class MeasuredSpec:
     def key(self) -> str:
         """Cache key: sha256 over the file's bytes, its format and the options (24 hex chars)."""
         path = Path(self.path)
-        _check_exists(path)
+        check_measured_file(path)
         digest = hashlib.sha256()
         try:
             with path.open("rb") as f:
@@ -208,7 +179,7 @@ class MeasuredSpec:
                 f"{where}: unknown tacho_kind '{self.tacho_kind}'{did_you_mean(str(self.tacho_kind), TACHO_KINDS)}; "
                 f"known: {', '.join(TACHO_KINDS)}"
             )
-        with _prefixed(where):
+        with prefixed(where):
             if self.speed_hz is not None:
                 check_positive(self.speed_hz, "speed_hz (nominal shaft speed)", "Hz")
             if self.fs is not None:
@@ -240,284 +211,6 @@ class MeasuredSpec:
             )
 
 
-# --- errors ------------------------------------------------------------------------------
-
-
-@contextmanager
-def _prefixed(prefix: str):
-    """Re-raise GearlabInputError from the shared pipeline with the file (and channel) in front."""
-    try:
-        yield
-    except GearlabInputError as exc:
-        raise GearlabInputError(f"{prefix}: {exc}") from None
-
-
-def file_problem(path: Path) -> str | None:
-    """Why *path* cannot be read as a measured file ('no such file', 'is not a file', a name
-    too long, a NUL in it), or None when it is a file. Every kind checks its measured files
-    so when a scenario is loaded: `gearlab validate` finds them all."""
-    try:
-        exists, is_file = path.exists(), path.is_file()
-    except (OSError, ValueError) as exc:  # a name too long, a NUL character in it, ...
-        return f"cannot be a measured record: {getattr(exc, 'strerror', None) or exc}"
-    if not exists:
-        return "no such file"
-    return None if is_file else "is not a file"
-
-
-def check_measured_file(path: Path, where: str = "", expected: str = "") -> None:
-    """Refuse *path* in one line (prefixed with *where*) unless it is a readable file."""
-    problem = file_problem(Path(path))
-    if problem is not None:
-        head = f"{where}: " if where else ""
-        shown_path = _one_line_repr(str(path)) if problem.startswith("cannot") else str(path)
-        raise GearlabInputError(
-            f"{head}{shown_path}: {problem}; expected {expected or f'a measured record ({_supported()})'}"
-        )
-
-
-_check_exists = check_measured_file
-
-
-def _supported() -> str:
-    return ", ".join(FORMATS)
-
-
-# --- reading a file (the readers themselves: gearlab.data.readers) ---------------------------
-
-
-def _read(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
-    """Read *names* from *path*: (contents, format name). Every failure is one clear line."""
-    path = Path(path)
-    _check_exists(path)
-    fmt = FORMATS.get(path.suffix.lower())
-    if fmt is None:
-        raise GearlabInputError(
-            f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {_supported()}"
-        )
-    check_size(path, "the file", path.stat().st_size)
-    try:
-        contents = READERS[fmt](path, names)
-    except GearlabInputError:
-        raise
-    except MemoryError:
-        raise GearlabInputError(f"cannot read {path} as {fmt}: not enough memory for what it declares") from None
-    except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file
-        raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
-    for name in names:
-        if name not in contents.found:
-            role = f"{roles[name]} " if roles and name in roles else ""
-            raise GearlabInputError(
-                f"{path}: no {role}channel '{name}'{did_you_mean(name, contents.available)}; "
-                f"the file has: {_listing(contents.available)}"
-            )
-    return contents, fmt
-
-
-def read_channels(path, names: Sequence[str]) -> tuple[dict[str, np.ndarray], float | None]:
-    """The named channels of a measured-data file and its sampling rate (None if it has none).
-
-    Arrays come back as stored (numbers, or text for label channels; WAV PCM scaled to
-    ±1). The rate is the file's 'fs' field or follows from its time vector; raises on a
-    missing file or channel, an unreadable file, or a bad or inconsistent rate field.
-    """
-    names = list(names)
-    contents, _ = _read(path, names)
-    rate = _file_rate(contents, None, str(path))
-    return contents.found, (None if rate is None else rate[0])
-
-
-# --- sampling rate -----------------------------------------------------------------------
-
-
-def _rate_value(value, where: str, path: str) -> float:
-    arr = np.asarray(value)
-    shown = _one_line_repr(arr.item()) if arr.size == 1 else f"{arr.size} values"
-    if arr.dtype.kind not in "biuf" or arr.size != 1:
-        raise GearlabInputError(f"{path}: sampling rate field {where} must be one number in Hz, got {shown}")
-    fs = float(arr.item())
-    if not math.isfinite(fs) or fs <= 0:
-        raise GearlabInputError(f"{path}: sampling rate {where} must be positive, got {fs:g} Hz")
-    return fs
-
-
-def _rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float]:
-    """(fs, relative uncertainty) from a time vector in seconds, checked to be uniform.
-
-    fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling
-    period of that uniform grid. The rate is known only as well as the times were written
-    (rounded to a few digits in a CSV file), so its uncertainty, 2·max deviation / span,
-    widens the agreement asked of a given fs.
-    """
-    arr = np.asarray(value)
-    if arr.dtype.kind not in "biuf":
-        raise GearlabInputError(f"{path}: {where} must hold numbers (seconds), got dtype {arr.dtype}")
-    with _prefixed(path):
-        t = check_signal(np.squeeze(arr) if arr.ndim > 1 else arr, where)
-    if n is not None and t.size != n:
-        raise GearlabInputError(
-            f"{path}: {where} has {t.size} samples but the vibration has {n}; expected one time per sample"
-        )
-    if t.size < 2:
-        raise GearlabInputError(f"{path}: {where} has {t.size} sample; at least 2 are needed for a sampling rate")
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        i = int(np.flatnonzero(steps <= 0)[0])
-        raise GearlabInputError(
-            f"{path}: {where} does not increase between samples {i} and {i + 1} "
-            f"({t[i]:.9g} -> {t[i + 1]:.9g} s); expected increasing times in seconds"
-        )
-    span = float(t[-1] - t[0])
-    dt = span / (t.size - 1)
-    uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt)
-    if uneven.size:  # a gap, a repeated block, a clock jump: name the first
-        i = int(uneven[0])
-        raise GearlabInputError(
-            f"{path}: {where} is not uniformly sampled: the step between samples {i} and {i + 1} is "
-            f"{steps[i]:.6g} s, {steps[i] / dt:.3g} times the mean step {dt:.6g} s; expected uniform sampling"
-        )
-    deviation = np.abs(t - (t[0] + dt * np.arange(t.size)))
-    worst = int(np.argmax(deviation))
-    if deviation[worst] > _TIME_JITTER * dt:  # steps each fine but drifting
-        raise GearlabInputError(
-            f"{path}: {where} is not uniformly sampled: sample {worst} is {deviation[worst] / dt:.3g} sampling "
-            f"periods off the uniform grid of {fmt_hz(1 / dt)} (a gap or jitter); expected uniform sampling"
-        )
-    return (t.size - 1) / span, 2.0 * float(deviation[worst]) / span
-
-
-def _file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
-    """(fs, relative tolerance, where) from the file's rate fields, or None when it has none.
-
-    An explicit 'fs' field comes first; all fields the file has must agree with each other.
-    """
-    found = [(_rate_value(v, where, path), _RATE_RTOL, where) for where, v in contents.rates]
-    for where, v in contents.times:
-        fs, uncertainty = _rate_from_time(v, where, path, n)
-        found.append((fs, max(_RATE_RTOL, uncertainty), where))
-    if not found:
-        return None
-    fs0, tol0, where0 = found[0]
-    for fs, tol, where in found[1:]:
-        if abs(fs - fs0) > max(tol, tol0) * fs0:
-            raise GearlabInputError(
-                f"{path}: the sampling rates in the file disagree: {where0} gives {fmt_hz(fs0)}, "
-                f"{where} gives {fmt_hz(fs)}; expected one rate"
-            )
-    return found[0]
-
-
-def _sampling_rate(contents: Contents, given: float | None, n: int, path: str) -> tuple[float, str]:
-    """The rate to use and where it came from: the file's, checked against a given one."""
-    from_file = _file_rate(contents, n, path)
-    if from_file is None:
-        if given is None:
-            raise GearlabInputError(
-                f"{path}: no sampling rate: the file has no 'fs'/time and none was given (--fs / fs = ...)"
-            )
-        return float(given), "given"
-    fs, tol, where = from_file
-    if given is not None:
-        if abs(given - fs) > tol * fs:
-            raise GearlabInputError(
-                f"{path}: the sampling rate given, fs = {given:.10g} Hz, disagrees with {where} in the file "
-                f"({fs:.10g} Hz); expected them equal (relative difference <= {tol:.2g})"
-            )
-        # Agreeing within the tolerance; the given figure is exact where a time column is rounded.
-        return float(given), f"given, agrees with {where}"
-    return fs, where
-
-
-# --- channels ----------------------------------------------------------------------------
-
-
-def _first_text(arr: np.ndarray) -> tuple[int, str]:
-    """Position and value of the first entry of a text array that is not a number."""
-    for i, v in enumerate(arr.ravel().tolist()):
-        try:
-            float(v)
-        except (TypeError, ValueError):
-            return i, v
-    return 0, arr.ravel()[0] if arr.size else ""
-
-
-def _series(raw, name: str, role: str, path: str) -> np.ndarray:
-    """A channel as a 1-D finite float64 time series (check_signal), or one clear line."""
-    what = f"{role} channel '{name}'"
-    arr = np.asarray(raw)
-    if arr.dtype.kind in "US":
-        i, v = _first_text(arr)
-        shown = "an empty field" if v == "" else repr(v)
-        raise GearlabInputError(f"{path}: {what} is not numeric: {shown} at sample {i}; expected numbers")
-    if arr.dtype.kind not in "biuf":
-        raise GearlabInputError(f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers")
-    if arr.dtype.kind == "b" and role == "vibration":  # a tacho's pulses may be true/false; a vibration not
-        raise GearlabInputError(f"{path}: {what} holds true/false values; expected a vibration signal of numbers")
-    if arr.ndim > 1 and sum(s > 1 for s in arr.shape) <= 1:
-        arr = arr.reshape(-1)  # a 1×N or N×1 matrix is one channel
-    if arr.ndim == 0:
-        raise GearlabInputError(f"{path}: {what} holds a single value; expected a time series, one value per sample")
-    if arr.ndim > 1:
-        raise GearlabInputError(f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)")
-    with _prefixed(path):
-        return check_signal(arr, what)
-
-
-def _same_length(x: np.ndarray, name: str, role: str, n: int, vibration: str, path: str) -> None:
-    if x.size != n:
-        raise GearlabInputError(
-            f"{path}: {role} channel '{name}' has {x.size} samples but vibration channel '{vibration}' has {n}; "
-            "expected channels of equal length (one value per sample)"
-        )
-
-
-# --- shaft angle -------------------------------------------------------------------------
-
-
-def _wrap(x: np.ndarray) -> np.ndarray:
-    """Angle into [-π, π): keeps every angle modulo 2π, so where revolutions start."""
-    return (x + np.pi) % TWO_PI - np.pi
-
-
-def _tacho_kind(tacho: np.ndarray) -> str:
-    """ "angle" or "pulses" for a tacho channel (tacho_kind = "auto").
-
-    A shaft angle rises at (nearly) every sample: steadily (continuous angle), or with
-    wraps of about −2π between steady rises when it is wrapped, in which case it spans one
-    turn (2π ± 1 %). A once-per-revolution pulse train is flat between edges that jump
-    both ways. Anything that is not an angle is read as pulses.
-    """
-    steps = np.diff(tacho)
-    if steps.size == 0:
-        return "pulses"
-    wraps = np.abs(steps) > np.pi
-    rising = np.mean(steps[~wraps] > 0) if np.any(~wraps) else 0.0
-    if rising < _RISING_SHARE:
-        return "pulses"
-    if not wraps.any():
-        return "angle"  # continuous
-    span = float(tacho.max() - tacho.min())
-    one_turn = abs(span - TWO_PI) <= _TURN_SLACK * TWO_PI
-    return "angle" if one_turn and np.all(steps[wraps] < 0) else "pulses"
-
-
-def _angle_tacho(tacho: np.ndarray) -> np.ndarray:
-    """A tacho read as an angle -> the wrapped tacho that cut_revolutions unwraps.
-
-    Wrapped angles of any one-turn interval ([-π, π), [0, 2π), a slight overshoot) and
-    continuous angles all become the same [-π, π) tacho; an angle spanning more than a
-    turn with wraps in it (degrees?) is refused.
-    """
-    span = float(tacho.max() - tacho.min())
-    continuous = not np.any(np.abs(np.diff(tacho)) > np.pi)
-    if span <= (1 + _TURN_SLACK) * TWO_PI or continuous:
-        return _wrap(tacho)
-    raise GearlabInputError(
-        f"spans {span:.4g} (from {tacho.min():.4g} to {tacho.max():.4g}), more than one turn (2π), and jumps "
-        "back: expected the shaft angle in radians, wrapped into one turn or continuous (degrees? multiply by π/180)"
-    )
-
-
 def _shaft_angle(
     spec: MeasuredSpec, tacho: np.ndarray | None, fs: float, n: int, path: str
 ) -> tuple[dict, np.ndarray, str]:
@@ -533,14 +226,14 @@ def _shaft_angle(
             angle_from_speed(n, fs, spec.speed_hz),
             f"nominal speed {fmt_hz(spec.speed_hz)}",
         )
-    kind = _tacho_kind(tacho) if spec.tacho_kind == "auto" else spec.tacho_kind
+    kind = tacho_kind(tacho) if spec.tacho_kind == "auto" else spec.tacho_kind
     detected = ", detected" if spec.tacho_kind == "auto" else ""
     if kind == "angle":
-        with _prefixed(f"{path}: tacho '{spec.tacho}' (read as the shaft angle in rad{detected})"):
-            wrapped = _angle_tacho(tacho)
+        with prefixed(f"{path}: tacho '{spec.tacho}' (read as the shaft angle in rad{detected})"):
+            wrapped = angle_tacho(tacho)
             return {"tacho": wrapped}, unwrap_tacho(wrapped), f"tacho '{spec.tacho}' (shaft angle{detected})"
     # angle_from_pulses fails only for want of edges: a tacho that never completes a revolution.
-    with _prefixed(
+    with prefixed(
         f"{path}: tacho '{spec.tacho}' never completes a revolution "
         f"(read as a once-per-revolution pulse train{detected})"
     ):
@@ -580,7 +273,7 @@ def _revolution_bounds(angle: np.ndarray, fs: float, source: str, path: str) -> 
                 f"({turns:.3g} revolutions in {n} samples); expected at least {_MIN_SAMPLES_PER_REV} samples per "
                 "revolution: is the sampling rate or the speed right?"
             )
-    with _prefixed(f"{path}: {source}"):
+    with prefixed(f"{path}: {source}"):
         starts = revolution_starts(angle)  # also checks the angle increases (shaft turning forwards)
     if starts.size < 2:
         raise GearlabInputError(
@@ -626,7 +319,7 @@ def _class_indices(raw, spec: MeasuredSpec, n: int, path: str) -> np.ndarray:
         return np.asarray([lookup[v] for v in values.tolist()], dtype=np.int64)[inverse.reshape(-1)]
     if arr.dtype.kind not in "biuf":
         raise GearlabInputError(f"{path}: {what} is stored as {arr.dtype}; expected class names or class indices")
-    with _prefixed(path):
+    with prefixed(path):
         values = check_signal(arr, what)
     bad = np.flatnonzero((values != np.round(values)) | (values < 0) | (values >= len(names)))
     if bad.size:
@@ -674,7 +367,7 @@ def _steady_start(revs: np.ndarray, labels: np.ndarray | None, spec: MeasuredSpe
     run = revs.shape[0] if labels is None else int(np.argmax(np.append(labels != labels[0], True)))
     if run < 2:
         return 0, "not judged (fewer than 2 revolutions to compare)"
-    with _prefixed(f"{path}: vibration channel '{spec.vibration}'"):
+    with prefixed(f"{path}: vibration channel '{spec.vibration}'"):
         try:
             start = steady_start_stats(revs[:run], *(() if spec.rtol is None else (spec.rtol,)))
         except GearlabInputError as exc:
@@ -726,18 +419,18 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
     for role, name in (("tacho", spec.tacho), ("labels", spec.labels)):
         if name is not None:
             roles.setdefault(name, role)
-    contents, fmt = _read(path, list(roles), roles)
+    contents, fmt = read_contents(path, list(roles), roles)
 
     raw = np.asarray(contents.found[spec.vibration])
     # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
     step = contents.steps.get(spec.vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
-    vib = _series(raw, spec.vibration, "vibration", path) * spec.scale
+    vib = series(raw, spec.vibration, "vibration", path) * spec.scale
     n = vib.size
-    fs, fs_source = _sampling_rate(contents, spec.fs, n, path)
+    fs, fs_source = sampling_rate(contents, spec.fs, n, path)
     tacho = None
     if spec.tacho is not None:
-        tacho = _series(contents.found[spec.tacho], spec.tacho, "tacho", path)
-        _same_length(tacho, spec.tacho, "tacho", n, spec.vibration, path)
+        tacho = series(contents.found[spec.tacho], spec.tacho, "tacho", path)
+        same_length(tacho, spec.tacho, "tacho", n, spec.vibration, path)
     per_sample = None
     if spec.labels is not None:
         per_sample = _class_indices(contents.found[spec.labels], spec, n, path)
@@ -748,7 +441,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
 
     # The shared pipeline: the same call as for simulated records. The transient is judged
     # below on the leading single-label run rather than inside (see _steady_start).
-    with _prefixed(f"{path}: vibration channel '{spec.vibration}'"):
+    with prefixed(f"{path}: vibration channel '{spec.vibration}'"):
         cut = cut_revolutions(vib, fs, **source, points=spec.points, transient="none")
     revs = cut.revolutions
     if revs.shape[0] != starts.size - 1:  # pragma: no cover - both follow from the same angle
@@ -772,7 +465,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
                 f"'{spec.class_names[0]}' (class 0){dropped}: the record has no healthy data to standardise "
                 "against (eq. 2.112); expected some revolutions labelled healthy"
             )
-    with _prefixed(f"{path}: healthy reference of vibration channel '{spec.vibration}'"):
+    with prefixed(f"{path}: healthy reference of vibration channel '{spec.vibration}'"):
         standardiser = Standardiser.fit(revs[healthy])
     X = standardiser.apply(revs)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -12,8 +13,28 @@ import numpy as np
 
 from ...errors import GearlabInputError
 
-_RATE_NAMES = ("fs",)  # compared lower-case: fs, Fs, FS
-_TIME_NAMES = ("t", "time")
+_RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate")  # compared lower-case: fs, Fs, FS
+
+# A time channel by any of its common names, with its unit if the name says one: t, time, time_s,
+# "Time [s]", "t (ms)", timestamp, Zeit, ... (seconds unless the name says ms or us)
+_TIME_NAME = re.compile(
+    r"^(?:t|time|times|timestamp|zeit|temps|tiempo|elapsed)"
+    r"(?:\s*[_\-.]?\s*[\[(]?\s*(s|sec|secs|second|seconds|ms|msec|us|µs|μs)\s*[\])]?)?$"
+)
+_TIME_UNITS = {"ms": 1e-3, "msec": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+
+
+def time_scale(name: str) -> float | None:
+    """Seconds per value of a channel named as a time vector (see _TIME_NAME), or None."""
+    match = _TIME_NAME.match(" ".join(str(name).split()).lower())
+    if match is None:
+        return None
+    return _TIME_UNITS.get(match.group(1) or "s", 1.0)
+
+
+def is_rate_or_time(name: str) -> bool:
+    """Whether a channel name is a sampling-rate field or a time vector (no signal channel)."""
+    return str(name).lower() in _RATE_NAMES or time_scale(name) is not None
 
 
 # Most megabytes a measured file, and each channel as stored (decoded), may hold; the import
@@ -76,21 +97,29 @@ def _normalise(value) -> np.ndarray:
     return arr
 
 
-def _keyed(available: Iterable[str], get, names: Sequence[str]) -> Contents:
+def _keyed(available: Iterable[str], get, names: Sequence[str], listed: Iterable[str] | None = None) -> Contents:
     """Contents of a format whose channels are looked up by name (CSV, NPZ, MATLAB v5).
 
     The sampling rate fields are the entries named fs (any case) and the time vectors the
-    entries named t or time, wherever the format keeps its names.
+    entries named as a time vector (time_scale), wherever the format keeps its names.
     """
     available = list(available)
     present = set(available)
-    contents = Contents({n: _normalise(get(n)) for n in dict.fromkeys(names) if n in present}, available)
-    for n in available:
+    shown = available if listed is None else list(listed)  # what the file names (not index aliases)
+    contents = Contents({n: _normalise(get(n)) for n in dict.fromkeys(names) if n in present}, shown)
+    for n in shown:
         if n.lower() in _RATE_NAMES:
             contents.rates.append((f"'{n}'", _normalise(get(n))))
-        elif n.lower() in _TIME_NAMES:
-            contents.times.append((f"time '{n}'", _normalise(get(n))))
+        elif time_scale(n) is not None:
+            contents.times.append(_time_field(f"time '{n}'", _normalise(get(n)), time_scale(n)))
     return contents
+
+
+def _time_field(where: str, value: np.ndarray, scale: float) -> tuple[str, np.ndarray]:
+    """(where, times in seconds) of a time vector written in *scale* seconds per value."""
+    if scale == 1.0 or value.dtype.kind not in "biuf":
+        return where, value  # text is refused where the rate is computed, naming the field
+    return f"{where} (x {scale:g} s)", value * scale
 
 
 def _scalar(text: str):

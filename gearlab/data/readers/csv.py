@@ -1,5 +1,6 @@
-"""CSV: a header row of column names, numeric columns, '#' comment lines; the rate from a 't'/'time'
-column or a comment '# fs = 51200'."""
+"""CSV and delimited text: columns separated by commas, semicolons, tabs or blanks; a header row of
+names or none (columns "0", "1", …); '#' comment lines; the rate from a time column or a comment
+'# fs = 51200'."""
 
 from __future__ import annotations
 
@@ -12,10 +13,49 @@ from ...errors import GearlabInputError
 from .base import Contents, _column, _keyed, _scalar
 
 _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
+# a field that is a number written with a decimal comma (a semicolon-separated European export)
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+
+
+def delimiter_of(line: str) -> str | None:
+    """The field separator of a delimited line: ';' (whose fields may carry decimal commas), tab,
+    ',', or None for blanks."""
+    for d in (";", "\t", ","):
+        if d in line:
+            return d
+    return None
+
+
+def split_rows(lines: list[str], delimiter: str | None) -> list[list[str]]:
+    if delimiter is None:
+        return [line.split() for line in lines]
+    rows = [[f.strip() for f in row] for row in csv.reader(lines, delimiter=delimiter)]
+    if delimiter == ";":  # "0,25" is a number with a decimal comma here
+        rows = [[f.replace(",", ".") if _DECIMAL_COMMA.match(f) else f for f in row] for row in rows]
+    return rows
+
+
+def is_header(row: list[str]) -> bool:
+    """A first row is a header unless every field is a number."""
+    return _column(row).dtype.kind != "f"
+
+
+def header_names(header: list[str] | None, width: int) -> list[str]:
+    return header if header is not None else [str(j) for j in range(width)]
+
+
+def column_index(name: str, names: list[str]) -> int | None:
+    """The column *name* stands for: a name of the header, or a 0-based index written in digits."""
+    if name in names:
+        return names.index(name)
+    text = str(name).strip()
+    if text.isdigit() and int(text) < len(names):
+        return int(text)
+    return None
 
 
 def _read_csv(path: Path, names: Sequence[str]) -> Contents:
-    """Header row of names, numeric columns, '#' comments ('# fs = 51200' gives a field 'fs')."""
+    """Delimited columns with or without a header row, '#' comments ('# fs = 51200' gives a field 'fs')."""
     text = path.read_text(encoding="utf-8-sig")  # a BOM from spreadsheet exports is dropped
     fields: dict[str, object] = {}
     lines: list[tuple[int, str]] = []
@@ -30,34 +70,40 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
             continue
         lines.append((number, line))
     if not lines:
-        raise GearlabInputError(f"{path}: no header row; expected a first line of column names, then numbers")
-    header_line = lines[0][1]
-    delimiter = next((d for d in (",", ";", "\t") if d in header_line), ",")
-    rows = list(csv.reader((line for _, line in lines), delimiter=delimiter))
-    header = [h.strip() for h in rows[0]]
-    if len(set(header)) != len(header):
+        raise GearlabInputError(f"{path}: no rows; expected a header row of column names (or none), then numbers")
+    delimiter = delimiter_of(lines[0][1])
+    rows = split_rows([line for _, line in lines], delimiter)
+    header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
+    if header is None:
+        data, data_lines = rows, lines
+    else:
+        data, data_lines = rows[1:], lines[1:]
+    width = len(rows[0])
+    if header is not None and len(set(header)) != len(header):
         twice = next(h for h in header if header.count(h) > 1)
         raise GearlabInputError(f"{path}: column '{twice}' appears twice in the header; expected distinct names")
-    for (number, _), row in zip(lines[1:], rows[1:]):
-        if len(row) != len(header):
+    for (number, _), row in zip(data_lines, data):
+        if len(row) != width:
             raise GearlabInputError(
-                f"{path}: line {number} has {len(row)} fields but the header has {len(header)}; "
-                "expected one value per column (a truncated or ragged file?)"
+                f"{path}: line {number} has {len(row)} fields but the {'header' if header else 'first row'} has "
+                f"{width}; expected one value per column (a truncated or ragged file?)"
             )
-    if len(rows) < 2:
+    if not data:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
-    if not any(_column([row[j].strip() for row in rows[1:2]]).dtype.kind == "f" for j in range(len(header))):
+    if not any(_column(data[0][j : j + 1]).dtype.kind == "f" for j in range(width)):
         # not a measured record (a system file reached through a link?): nothing of it is quoted
         raise GearlabInputError(
-            f"{path}: its first data row (line {lines[1][0]}) holds no number; expected a header "
+            f"{path}: its first data row (line {data_lines[0][0]}) holds no number; expected a header "
             "row of column names, then rows of numbers"
         )
-    index = {h: j for j, h in enumerate(header)}
+    columns = header_names(header, width)
 
     def get(name: str):
-        if name in index:
-            j = index[name]
-            return _column([row[j].strip() for row in rows[1:]])
+        j = column_index(name, columns)
+        if j is not None:
+            return _column([row[j] for row in data])
         return fields[name]
 
-    return _keyed([*header, *fields], get, names)
+    # an index asked for ("0", "2") is found as that column, under the name it was asked by
+    asked = [n for n in names if n not in columns and n not in fields and column_index(n, columns) is not None]
+    return _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])

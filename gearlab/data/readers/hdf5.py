@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, _TIME_NAMES, Contents, _normalise, check_size
+from .base import _RATE_NAMES, Contents, _normalise, _time_field, check_size, time_scale
 
 
 def _h5py():
@@ -67,8 +67,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                 child = node.get(key)
                 if isinstance(child, h5py.Dataset) and key.lower() in _RATE_NAMES:
                     rates.append((f"dataset '{child.name}'", read(child)))
-                elif isinstance(child, h5py.Dataset) and key.lower() in _TIME_NAMES:
-                    times.append((f"time dataset '{child.name}'", read(child)))
+                elif isinstance(child, h5py.Dataset) and time_scale(key) is not None:
+                    times.append(_time_field(f"time dataset '{child.name}'", read(child), time_scale(key)))
         return rates, times
 
     with h5py.File(path, "r") as f:

@@ -8,7 +8,7 @@ import zlib
 from collections.abc import Sequence
 from pathlib import Path
 
-from .base import _RATE_NAMES, _TIME_NAMES, Contents, _keyed, max_record_bytes
+from .base import Contents, _keyed, is_rate_or_time, max_record_bytes
 from .hdf5 import _read_hdf5
 
 
@@ -37,7 +37,7 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
     else:
 
         def wanted(name: str) -> bool:  # the channels asked for and the rate fields (see _keyed)
-            return name in names or name.lower() in _RATE_NAMES + _TIME_NAMES
+            return name in names or is_rate_or_time(name)
 
         every = _mat5_variables(path.read_bytes(), wanted)
         available = list(dict.fromkeys(n for n in every if n and not n.startswith("__")))

@@ -1,0 +1,223 @@
+"""Blank-separated text, plain (.txt, .dat) or one text file in a .zip (the PHM 2009 gearbox
+records): one row per sample, columns separated by blanks, a header row of names or none.
+
+The text is read from the archive in blocks of ``CHUNK_BYTES`` and only the asked-for columns
+are kept, so a 13 MB text needs about the size of those columns (plus one block), never the
+whole text and its parsed table at once. The one memory limit of every measured file
+(``GEARLAB_MAX_RECORD_MB``, gearlab.data.readers.base) holds here too: a text (or a zip member)
+declaring more is refused before a byte is inflated, and the text read and the columns kept are
+counted while streaming, so an archive that lies about its size is stopped at the limit too.
+"""
+
+from __future__ import annotations
+
+import os
+import zipfile
+from collections.abc import Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import GearlabInputError, shown
+from .base import Contents, _keyed, check_size, max_record_bytes, time_scale
+from .csv import column_index, header_names
+
+# Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
+# a block's tokens (about 60 bytes each as Python objects) stay a few tens of MB.
+CHUNK_BYTES = 1 << 18
+
+
+# --- reading the columns -----------------------------------------------------------------
+
+
+@contextmanager
+def _open_text(path: Path):
+    """A binary stream of the record's text: the one text member of a .zip, or the file."""
+    try:
+        if path.suffix.lower() != ".zip":
+            with path.open("rb") as f:
+                check_size(path, "the text", os.fstat(f.fileno()).st_size)
+                yield f, str(path)
+            return
+        with zipfile.ZipFile(path) as z:
+            members = [i for i in z.infolist() if not i.is_dir() and not i.filename.startswith("__MACOSX/")]
+            if len(members) != 1:
+                names = ", ".join(shown(i.filename, 40) for i in members[:5]) or "none"
+                raise GearlabInputError(
+                    f"{path}: expected a zip archive of exactly one text file, found {len(members)} ({names})"
+                )
+            info = members[0]
+            # declared: a few kB of deflated zeros may announce gigabytes (a zip bomb)
+            check_size(path, f"member {shown(info.filename)} (as its archive declares it)", info.file_size)
+            with z.open(info) as f:
+                yield f, f"{path}: member {shown(info.filename)}"
+    except FileNotFoundError:
+        raise GearlabInputError(
+            f"{path}: no such file; expected a measured record (.zip of one text file, or the text)"
+        ) from None
+    except IsADirectoryError:
+        raise GearlabInputError(f"{path}: is a directory; expected a measured record") from None
+    except zipfile.BadZipFile as exc:
+        raise GearlabInputError(f"{path}: not a readable zip archive ({exc})") from None
+    except (OSError, EOFError, zipfile.LargeZipFile, NotImplementedError, RuntimeError) as exc:
+        # a truncated archive, an encrypted member, an unsupported compression
+        raise GearlabInputError(f"{path}: cannot read ({exc})") from None
+
+
+def _is_number(token: bytes) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _resolve(columns, header: list[str] | None, width: int, where: str) -> list[int]:
+    """Column indices of the asked-for columns (0-based index or header name)."""
+    out = []
+    for c in columns:
+        if isinstance(c, bool):
+            raise GearlabInputError(f"{where}: column {c!r}: expected a 0-based index or a column name")
+        if isinstance(c, str) and c.strip().isdigit():
+            c = int(c)
+        if isinstance(c, int):
+            if not 0 <= c < width:
+                raise GearlabInputError(
+                    f"{where}: column {c} does not exist; the file has {width} columns "
+                    f"(0-based indices 0 … {width - 1})"
+                )
+            out.append(c)
+        elif header is not None and c in header:
+            out.append(header.index(c))
+        else:
+            known = ", ".join(header) if header else f"no header row, so indices 0 … {width - 1}"
+            raise GearlabInputError(f"{where}: no column named {shown(c)}; known: {known}")
+    return out
+
+
+def _bad_line(block: bytes, first_line: int, width: int, where: str) -> GearlabInputError:
+    """The error for the first line of *block* that is not *width* numbers (slow path)."""
+    for offset, line in enumerate(block.split(b"\n")):
+        tokens = line.split()
+        if not tokens or tokens[0].startswith(b"#"):
+            continue
+        number = first_line + offset
+        if len(tokens) != width:
+            return GearlabInputError(
+                f"{where}: line {number} has {len(tokens)} fields, expected {width} (as the first data line)"
+            )
+        for i, t in enumerate(tokens):
+            if not _is_number(t):
+                text = t.decode("utf-8", "replace")
+                return GearlabInputError(f"{where}: line {number} column {i}: {shown(text)} is not a number")
+    return GearlabInputError(f"{where}: unreadable numbers near line {first_line}")  # pragma: no cover
+
+
+def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
+    """The asked-for columns of a whitespace-separated text (or a .zip of one), streamed.
+
+    Returns ({column as asked: float64 array}, header names or None, number of columns).
+    Blank lines and lines starting with '#' are skipped; a first data line that is not all
+    numbers is the header of column names.
+    """
+    path = Path(path)
+    columns = list(dict.fromkeys(columns))
+    parts: list[np.ndarray] = []
+    header: list[str] | None = None
+    width = 0
+    picked: list[int] = []
+    limit = max_record_bytes()
+    text_bytes, kept_bytes = 0, 0  # of text read and of columns kept, against the limit
+    with _open_text(path) as (stream, where):
+        line_no = 1  # number of the first line of the pending block
+        rest = b""
+        while True:
+            data = stream.read(CHUNK_BYTES)
+            text_bytes += len(data)
+            if text_bytes > limit:  # more than declared (a lying archive, a file that grows)
+                check_size(where, "the text read so far", text_bytes)
+            block = rest + data
+            if data:
+                cut = block.rfind(b"\n") + 1
+                if cut == 0:  # one line longer than a block: read on
+                    rest = block
+                    if len(rest) > 64 * CHUNK_BYTES:
+                        raise GearlabInputError(
+                            f"{where}: line {line_no} is longer than {64 * CHUNK_BYTES} bytes; "
+                            "expected rows of a few numbers"
+                        )
+                    continue
+                block, rest = block[:cut], block[cut:]
+            elif not block:
+                break
+            else:
+                rest = b""
+            lines_here = block.count(b"\n") + (0 if block.endswith(b"\n") else 1)
+            if b"#" in block or b"\r" in block or not width:
+                kept = []
+                for line in block.split(b"\n"):
+                    tokens = line.split()
+                    if not tokens or tokens[0].startswith(b"#"):
+                        continue
+                    if not width:  # the first data line: a header, or the first row
+                        width = len(tokens)
+                        if not all(_is_number(t) for t in tokens):
+                            header = [t.decode("utf-8", "replace") for t in tokens]
+                            continue
+                    kept.append(line)
+                body = b"\n".join(kept)
+                if width and not picked:
+                    picked = _resolve(columns, header, width, where)
+            else:
+                body = block
+            if body.strip():
+                try:
+                    values = np.array(body.split(), dtype=np.float64)
+                except ValueError:
+                    raise _bad_line(block, line_no, width, where) from None
+                rows = sum(1 for line in body.split(b"\n") if line.strip())
+                if values.size != rows * width:
+                    raise _bad_line(block, line_no, width, where)
+                parts.append(values.reshape(rows, width)[:, picked].copy())
+                kept_bytes += parts[-1].nbytes
+                if kept_bytes > limit:  # short rows of many numbers: the columns outgrow their text
+                    check_size(where, "the columns read so far", kept_bytes)
+            line_no += lines_here
+            if not data:
+                break
+    if not parts:
+        raise GearlabInputError(
+            f"{where}: no rows of numbers; expected one row per sample, columns separated by blanks"
+        )
+    table = np.concatenate(parts) if len(parts) > 1 else parts[0]
+    return {c: table[:, i] for i, c in enumerate(columns)}, header, width
+
+
+def first_row(path) -> tuple[list[str] | None, int]:
+    """(header names or None, number of columns) from the first data line of a text record,
+    without reading the rest."""
+    path = Path(path)
+    with _open_text(path) as (stream, where):
+        for line in stream:
+            tokens = line.split()
+            if not tokens or tokens[0].startswith(b"#"):
+                continue
+            if all(_is_number(t) for t in tokens):
+                return None, len(tokens)
+            return [t.decode("utf-8", "replace") for t in tokens], len(tokens)
+    raise GearlabInputError(f"{where}: no rows of numbers; expected one row per sample, columns separated by blanks")
+
+
+def _read_text(path: Path, names: Sequence[str]) -> Contents:
+    """The asked-for columns (by header name or 0-based index) and any time column."""
+    header, width = first_row(path)
+    columns = header_names(header, width)
+    wanted = [n for n in dict.fromkeys(names) if column_index(n, columns) is not None]
+    wanted += [c for c in columns if time_scale(c) is not None and c not in wanted]
+    found = {}
+    if wanted:
+        read, _, _ = read_columns(path, [column_index(n, columns) for n in wanted])
+        found = {n: read[column_index(n, columns)] for n in wanted}
+    asked = [n for n in wanted if n not in columns]
+    return _keyed([*columns, *asked], lambda n: found[n], names, listed=columns)

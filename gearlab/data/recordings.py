@@ -1,0 +1,360 @@
+"""The one import path of a measured recording, for every kind: the file, its channels, their
+roles and units, the sampling rate and the shaft angle (docs/real_data.md).
+
+    file ─► named channels + rate fields          read_contents: one small reader per format
+                                                  (gearlab.data.readers)
+         ─► vibration in m/s², tacho, rate         read_recording: units from the sensitivity, the
+                                                  gain and what a column's name says ('acc_V')
+         ─► complete revolutions                   cut_recording (the detection and gap [target]);
+                                                  gearlab.data.importers.import_measured (a dataset)
+
+    check_recording opens only a file's header (its channel names, rate fields and storage
+    types) and checks what a scenario says of it: `gearlab validate` finds a wrong column, a
+    missing rate or a unit mistake without reading the data.
+
+Formats (by extension) and where the sampling rate comes from:
+
+    .csv / .tsv   columns separated by commas, semicolons, tabs or blanks; a header row of names,
+                  or none (columns "0", "1", …); '#' comment lines; the rate from a time column
+                  (time, t, time_s, 'Time [s]', 'time (ms)', …: see time_scale) or a comment
+                  '# fs = 51200'
+    .txt / .dat   blank-separated text, plain or one text file in a .zip (gearlab.data.textzip:
+    .zip          streamed, for records of many megabytes); a header row or none
+    .npz          arrays by name, loaded without pickle; rate from a scalar 'fs' or a time array
+    .h5 / .hdf5   datasets by path ("group/acc"); rate from an attribute 'fs' on the channel,
+                  else from an 'fs' attribute or 'fs'/time dataset in its group, or the
+                  nearest group above that has one (up to the file's root)
+    .wav          channels by index ("0", "1", …); rate from the header; integer PCM scaled to ±1
+    .mat          MATLAB v5 variables (scipy), or v7.3 (an HDF5 file, read with h5py); rate
+                  from a variable 'fs' or 'Fs' or a time variable
+
+A channel is named as its file names it, or by its 0-based column index in a text file (an
+integer in a scenario, or its digits). Rate fields are 'fs' in any case (and sample_rate,
+sampling_rate); when the file carries a rate and one is given too they must agree.
+
+Every bad file raises :class:`GearlabInputError` with one line that names the file, the
+channel and what was expected; nothing is returned half-built. Sizes are checked before
+anything is read (GEARLAB_MAX_RECORD_MB, gearlab.data.readers.base).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from ..params import did_you_mean
+from ..signals import check_signal
+from ..signals.checks import fmt_hz
+from .readers import READERS, Contents, check_size
+from .readers.base import _listing, _one_line, _one_line_repr
+from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
+from .readers.base import time_scale as time_scale
+
+TWO_PI = 2.0 * np.pi
+
+# Extension -> format name used in messages.
+FORMATS = {
+    ".csv": "CSV",
+    ".tsv": "CSV",
+    ".txt": "text",
+    ".dat": "text",
+    ".zip": "zipped text",
+    ".npz": "NPZ",
+    ".h5": "HDF5",
+    ".hdf5": "HDF5",
+    ".wav": "WAV",
+    ".mat": "MATLAB",
+}
+TACHO_KINDS = ("auto", "angle", "pulses")
+
+# A time column is uniform when every step, and every sample's distance from the straight
+# line through its ends, stays within this fraction of a sampling period: rounding of written
+# times (to the microsecond at 50 kHz: 5 %) stays below it, a dropped sample does not.
+_TIME_JITTER = 0.25
+# Relative agreement asked of two sampling rates (the file's and the one given).
+_RATE_RTOL = 1e-6
+# A wrapped angle spans one turn; measured ones may fall a little short or overshoot.
+_TURN_SLACK = 0.01
+# Share of rising steps that marks a channel as a shaft angle rather than a pulse train
+# (a pulse train is flat most of the time, an angle rises at every sample).
+_RISING_SHARE = 0.9
+
+
+# --- errors ------------------------------------------------------------------------------
+
+
+@contextmanager
+def prefixed(prefix: str):
+    """Re-raise GearlabInputError from the shared pipeline with the file (and channel) in front."""
+    try:
+        yield
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{prefix}: {exc}") from None
+
+
+def file_problem(path: Path) -> str | None:
+    """Why *path* cannot be read as a measured file ('no such file', 'is not a file', a name
+    too long, a NUL in it), or None when it is a file. Every kind checks its measured files
+    so when a scenario is loaded: `gearlab validate` finds them all."""
+    try:
+        exists, is_file = path.exists(), path.is_file()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL character in it, ...
+        return f"cannot be a measured record: {getattr(exc, 'strerror', None) or exc}"
+    if not exists:
+        return "no such file"
+    return None if is_file else "is not a file"
+
+
+def check_measured_file(path: Path, where: str = "", expected: str = "") -> None:
+    """Refuse *path* in one line (prefixed with *where*) unless it is a readable file."""
+    problem = file_problem(Path(path))
+    if problem is not None:
+        head = f"{where}: " if where else ""
+        shown_path = _one_line_repr(str(path)) if problem.startswith("cannot") else str(path)
+        raise GearlabInputError(
+            f"{head}{shown_path}: {problem}; expected {expected or f'a measured record ({supported()})'}"
+        )
+
+
+def supported() -> str:
+    return ", ".join(FORMATS)
+
+
+# --- reading a file (the readers themselves: gearlab.data.readers) ---------------------------
+
+
+def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
+    """Read *names* from *path*: (contents, format name). Every failure is one clear line."""
+    path = Path(path)
+    check_measured_file(path)
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise GearlabInputError(
+            f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {supported()}"
+        )
+    check_size(path, "the file", path.stat().st_size)
+    try:
+        contents = READERS[fmt](path, names)
+    except GearlabInputError:
+        raise
+    except MemoryError:
+        raise GearlabInputError(f"cannot read {path} as {fmt}: not enough memory for what it declares") from None
+    except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file
+        raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
+    for name in names:
+        if name not in contents.found:
+            role = f"{roles[name]} " if roles and name in roles else ""
+            raise GearlabInputError(
+                f"{path}: no {role}channel '{name}'{did_you_mean(name, contents.available)}; "
+                f"the file has: {_listing(contents.available)}"
+            )
+    return contents, fmt
+
+
+def read_channels(path, names: Sequence[str]) -> tuple[dict[str, np.ndarray], float | None]:
+    """The named channels of a measured-data file and its sampling rate (None if it has none).
+
+    Arrays come back as stored (numbers, or text for label channels; WAV PCM scaled to
+    ±1). The rate is the file's 'fs' field or follows from its time vector; raises on a
+    missing file or channel, an unreadable file, or a bad or inconsistent rate field.
+    """
+    names = list(names)
+    contents, _ = read_contents(path, names)
+    rate = file_rate(contents, None, str(path))
+    return contents.found, (None if rate is None else rate[0])
+
+
+# --- sampling rate -----------------------------------------------------------------------
+
+
+def rate_value(value, where: str, path: str) -> float:
+    arr = np.asarray(value)
+    shown = _one_line_repr(arr.item()) if arr.size == 1 else f"{arr.size} values"
+    if arr.dtype.kind not in "biuf" or arr.size != 1:
+        raise GearlabInputError(f"{path}: sampling rate field {where} must be one number in Hz, got {shown}")
+    fs = float(arr.item())
+    if not math.isfinite(fs) or fs <= 0:
+        raise GearlabInputError(f"{path}: sampling rate {where} must be positive, got {fs:g} Hz")
+    return fs
+
+
+def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float]:
+    """(fs, relative uncertainty) from a time vector in seconds, checked to be uniform.
+
+    fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling
+    period of that uniform grid. The rate is known only as well as the times were written
+    (rounded to a few digits in a CSV file), so its uncertainty, 2·max deviation / span,
+    widens the agreement asked of a given fs.
+    """
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "biuf":
+        raise GearlabInputError(f"{path}: {where} must hold numbers (seconds), got dtype {arr.dtype}")
+    with prefixed(path):
+        t = check_signal(np.squeeze(arr) if arr.ndim > 1 else arr, where)
+    if n is not None and t.size != n:
+        raise GearlabInputError(
+            f"{path}: {where} has {t.size} samples but the vibration has {n}; expected one time per sample"
+        )
+    if t.size < 2:
+        raise GearlabInputError(f"{path}: {where} has {t.size} sample; at least 2 are needed for a sampling rate")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        i = int(np.flatnonzero(steps <= 0)[0])
+        raise GearlabInputError(
+            f"{path}: {where} does not increase between samples {i} and {i + 1} "
+            f"({t[i]:.9g} -> {t[i + 1]:.9g} s); expected increasing times in seconds"
+        )
+    span = float(t[-1] - t[0])
+    dt = span / (t.size - 1)
+    uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt)
+    if uneven.size:  # a gap, a repeated block, a clock jump: name the first
+        i = int(uneven[0])
+        raise GearlabInputError(
+            f"{path}: {where} is not uniformly sampled: the step between samples {i} and {i + 1} is "
+            f"{steps[i]:.6g} s, {steps[i] / dt:.3g} times the mean step {dt:.6g} s; expected uniform sampling"
+        )
+    deviation = np.abs(t - (t[0] + dt * np.arange(t.size)))
+    worst = int(np.argmax(deviation))
+    if deviation[worst] > _TIME_JITTER * dt:  # steps each fine but drifting
+        raise GearlabInputError(
+            f"{path}: {where} is not uniformly sampled: sample {worst} is {deviation[worst] / dt:.3g} sampling "
+            f"periods off the uniform grid of {fmt_hz(1 / dt)} (a gap or jitter); expected uniform sampling"
+        )
+    return (t.size - 1) / span, 2.0 * float(deviation[worst]) / span
+
+
+def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
+    """(fs, relative tolerance, where) from the file's rate fields, or None when it has none.
+
+    An explicit 'fs' field comes first; all fields the file has must agree with each other.
+    """
+    found = [(rate_value(v, where, path), _RATE_RTOL, where) for where, v in contents.rates]
+    for where, v in contents.times:
+        fs, uncertainty = rate_from_time(v, where, path, n)
+        found.append((fs, max(_RATE_RTOL, uncertainty), where))
+    if not found:
+        return None
+    fs0, tol0, where0 = found[0]
+    for fs, tol, where in found[1:]:
+        if abs(fs - fs0) > max(tol, tol0) * fs0:
+            raise GearlabInputError(
+                f"{path}: the sampling rates in the file disagree: {where0} gives {fmt_hz(fs0)}, "
+                f"{where} gives {fmt_hz(fs)}; expected one rate"
+            )
+    return found[0]
+
+
+def sampling_rate(contents: Contents, given: float | None, n: int, path: str) -> tuple[float, str]:
+    """The rate to use and where it came from: the file's, checked against a given one."""
+    from_file = file_rate(contents, n, path)
+    if from_file is None:
+        if given is None:
+            raise GearlabInputError(
+                f"{path}: no sampling rate: the file has no 'fs'/time and none was given (--fs / fs = ...)"
+            )
+        return float(given), "given"
+    fs, tol, where = from_file
+    if given is not None:
+        if abs(given - fs) > tol * fs:
+            raise GearlabInputError(
+                f"{path}: the sampling rate given, fs = {given:.10g} Hz, disagrees with {where} in the file "
+                f"({fs:.10g} Hz); expected them equal (relative difference <= {tol:.2g})"
+            )
+        # Agreeing within the tolerance; the given figure is exact where a time column is rounded.
+        return float(given), f"given, agrees with {where}"
+    return fs, where
+
+
+# --- channels ----------------------------------------------------------------------------
+
+
+def _first_text(arr: np.ndarray) -> tuple[int, str]:
+    """Position and value of the first entry of a text array that is not a number."""
+    for i, v in enumerate(arr.ravel().tolist()):
+        try:
+            float(v)
+        except (TypeError, ValueError):
+            return i, v
+    return 0, arr.ravel()[0] if arr.size else ""
+
+
+def series(raw, name: str, role: str, path: str) -> np.ndarray:
+    """A channel as a 1-D finite float64 time series (check_signal), or one clear line."""
+    what = f"{role} channel '{name}'"
+    arr = np.asarray(raw)
+    if arr.dtype.kind in "US":
+        i, v = _first_text(arr)
+        shown = "an empty field" if v == "" else repr(v)
+        raise GearlabInputError(f"{path}: {what} is not numeric: {shown} at sample {i}; expected numbers")
+    if arr.dtype.kind not in "biuf":
+        raise GearlabInputError(f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers")
+    if arr.dtype.kind == "b" and role == "vibration":  # a tacho's pulses may be true/false; a vibration not
+        raise GearlabInputError(f"{path}: {what} holds true/false values; expected a vibration signal of numbers")
+    if arr.ndim > 1 and sum(s > 1 for s in arr.shape) <= 1:
+        arr = arr.reshape(-1)  # a 1×N or N×1 matrix is one channel
+    if arr.ndim == 0:
+        raise GearlabInputError(f"{path}: {what} holds a single value; expected a time series, one value per sample")
+    if arr.ndim > 1:
+        raise GearlabInputError(f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)")
+    with prefixed(path):
+        return check_signal(arr, what)
+
+
+def same_length(x: np.ndarray, name: str, role: str, n: int, vibration: str, path: str) -> None:
+    if x.size != n:
+        raise GearlabInputError(
+            f"{path}: {role} channel '{name}' has {x.size} samples but vibration channel '{vibration}' has {n}; "
+            "expected channels of equal length (one value per sample)"
+        )
+
+
+# --- shaft angle -------------------------------------------------------------------------
+
+
+def wrap(x: np.ndarray) -> np.ndarray:
+    """Angle into [-π, π): keeps every angle modulo 2π, so where revolutions start."""
+    return (x + np.pi) % TWO_PI - np.pi
+
+
+def tacho_kind(tacho: np.ndarray) -> str:
+    """ "angle" or "pulses" for a tacho channel (tacho_kind = "auto").
+
+    A shaft angle rises at (nearly) every sample: steadily (continuous angle), or with
+    wraps of about −2π between steady rises when it is wrapped, in which case it spans one
+    turn (2π ± 1 %). A once-per-revolution pulse train is flat between edges that jump
+    both ways. Anything that is not an angle is read as pulses.
+    """
+    steps = np.diff(tacho)
+    if steps.size == 0:
+        return "pulses"
+    wraps = np.abs(steps) > np.pi
+    rising = np.mean(steps[~wraps] > 0) if np.any(~wraps) else 0.0
+    if rising < _RISING_SHARE:
+        return "pulses"
+    if not wraps.any():
+        return "angle"  # continuous
+    span = float(tacho.max() - tacho.min())
+    one_turn = abs(span - TWO_PI) <= _TURN_SLACK * TWO_PI
+    return "angle" if one_turn and np.all(steps[wraps] < 0) else "pulses"
+
+
+def angle_tacho(tacho: np.ndarray) -> np.ndarray:
+    """A tacho read as an angle -> the wrapped tacho that cut_revolutions unwraps.
+
+    Wrapped angles of any one-turn interval ([-π, π), [0, 2π), a slight overshoot) and
+    continuous angles all become the same [-π, π) tacho; an angle spanning more than a
+    turn with wraps in it (degrees?) is refused.
+    """
+    span = float(tacho.max() - tacho.min())
+    continuous = not np.any(np.abs(np.diff(tacho)) > np.pi)
+    if span <= (1 + _TURN_SLACK) * TWO_PI or continuous:
+        return wrap(tacho)
+    raise GearlabInputError(
+        f"spans {span:.4g} (from {tacho.min():.4g} to {tacho.max():.4g}), more than one turn (2π), and jumps "
+        "back: expected the shaft angle in radians, wrapped into one turn or continuous (degrees? multiply by π/180)"
+    )
