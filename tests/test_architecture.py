@@ -40,6 +40,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("datasets", ("gearlab.data",)),
     ("gap diagnosis and recording inspection", ("gearlab.gap", "gearlab.inspect")),
     ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
+    ("shared kind parts", ("gearlab.parts",)),
     ("scenario kinds", ("gearlab.kinds",)),
     ("verdict and report", ("gearlab.verdict", "gearlab.report")),
     ("run engine", ("gearlab.engine",)),
@@ -158,6 +159,30 @@ def test_the_check_sees_function_level_imports_and_orders_the_layers():
     assert any(t == "gearlab.learn.losses" and not top for t, _, top in GRAPH["gearlab.learn.adapters"])
     assert layer_of("gearlab.dynamics.newmark") < layer_of("gearlab.effects") < layer_of("gearlab.engine")
     assert layer_of("gearlab.kinds.gap") == layer_of("gearlab.kinds")
+
+
+def kind_of(module: str) -> str | None:
+    """The registered scenario kind whose module (or package) holds *module*, if any."""
+    from gearlab.kinds import SCENARIO_KINDS
+
+    for kind in SCENARIO_KINDS.values():
+        if module == kind.__name__ or module.startswith(kind.__name__ + "."):
+            return kind.__name__
+    return None
+
+
+def test_no_scenario_kind_imports_another():
+    # what kinds share lives below them (gearlab.parts, gearlab.kinds.common); only the registry
+    # (gearlab.kinds itself) names every kind
+    crossing = [
+        f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {m} imports the kind {kind_of(t)}"
+        for m, edges in GRAPH.items()
+        if m.startswith("gearlab.kinds.")
+        for t, line, _ in edges
+        if kind_of(t) is not None and kind_of(t) != kind_of(m)
+    ]
+    assert not crossing, "a scenario kind imports another:\n" + "\n".join(crossing)
+    assert kind_of("gearlab.kinds.transfer") == "gearlab.kinds.transfer" and kind_of("gearlab.kinds.common") is None
 
 
 def test_plugins_import_gearlab_only_through_the_public_api():

@@ -11,16 +11,17 @@ import pytest
 from gearlab.data.builder import build_dataset
 from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec
-from gearlab.kinds import transfer
 from gearlab.learn.bounds import twin_problem
 from gearlab.learn.protocol import Protocol, StateStore, run_unit
+from gearlab.parts.bound import bayes_bound
+from gearlab.parts.training import method
 from gearlab.registry import get_registry
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 COMMON = dict(teeth=(1, 2, 3), faults=(("crack", (13,)),), healthy=30)
 DETECTORS = tuple(
-    transfer.method({"adapter": name, "supervised": False, "params": {}}, "test")
+    method({"adapter": name, "supervised": False, "params": {}}, "test")
     for name in ("likelihood_ratio", "matched_filter")
 )
 PROTOCOL = Protocol(methods=DETECTORS, ks=(0,), repetitions=2, target_train=16, batch=4, device="cpu")
@@ -37,7 +38,7 @@ def target_with(*effects):
 
 def bound_and_methods(source, spec):
     target = build_dataset(spec)
-    bound = transfer.bayes_bound(spec, source, target, PROTOCOL)
+    bound = bayes_bound(spec, source, target, PROTOCOL)
     methods = {
         m.label: np.mean(
             [run_unit(PROTOCOL, source, target, rep, 0, m, StateStore(None))["accuracy"] for rep in (0, 1)]

@@ -212,8 +212,8 @@ def test_calibration_settings_are_checked(bad, match):
 def test_the_protocol_keys_of_calibration_are_its_fields_with_the_recipe_as_defaults(tmp_path):
     """Declared once: the transfer kind's [protocol] keys are Calibration's fields, defaults
     gearlab's recipe, and a bad value is refused there with the file, table and key."""
-    from gearlab.kinds.transfer import CALIBRATION
     from gearlab.learn.calibration import RECIPE
+    from gearlab.parts.training import CALIBRATION
 
     assert {k: key.default for k, key in CALIBRATION.items()} == dataclasses.asdict(RECIPE)
     scenario = Path(__file__).resolve().parents[1] / "scenarios" / "quick.toml"

@@ -18,7 +18,8 @@ from tiny import EXECUTION, domains, schedule
 
 from gearlab.engine import load_scenario, run_scenario
 from gearlab.gap.stats import gap_report
-from gearlab.kinds import SCENARIO_KINDS, gap, transfer
+from gearlab.kinds import SCENARIO_KINDS, gap
+from gearlab.parts.bound import BOUND
 from gearlab.runs import RunDir
 
 TINY = (
@@ -215,7 +216,7 @@ def test_run_summary_fields(finished):
         "matched_filter (uncorrected)",
         "matched_filter (corrected)",
         "mmd (unsupervised)",
-        transfer.BOUND,  # the reference row: the target is simulated with noise
+        BOUND,  # the reference row: the target is simulated with noise
     ]
     for cell in summary["accuracy"].values():
         assert 0 <= cell["mean"] <= 100 and cell["n"] == 1

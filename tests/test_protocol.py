@@ -35,6 +35,8 @@ from gearlab.learn.protocol import (
     split,
     train_method,
 )
+from gearlab.parts import training
+from gearlab.parts.bound import BOUND
 from gearlab.runs import RunDir
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -66,7 +68,7 @@ TARGET = synthetic(12, 28, seed=2, offset=0.5)
 
 
 def method(adapter: str, supervised: bool = False, **params):
-    return transfer.method({"adapter": adapter, "supervised": supervised, "params": params}, "test")
+    return training.method({"adapter": adapter, "supervised": supervised, "params": params}, "test")
 
 
 METHODS = (
@@ -506,7 +508,7 @@ def test_summary_table_and_report(finished, cli):
         assert r["balanced_accuracy"] == pytest.approx(recall)
     md = (finished / "table.md").read_text().splitlines()
     md = md[: md.index("")]  # the accuracy table; the balanced accuracy and detection rates follow
-    assert md[0] == "| k (target fault samples) | " + " | ".join([*labels, transfer.BOUND]) + " |"
+    assert md[0] == "| k (target fault samples) | " + " | ".join([*labels, BOUND]) + " |"
     assert [row.split("|")[1].strip() for row in md[2:]] == ["0", "2"]
     assert all(re.fullmatch(r"\d+\.\d\d ± \d+\.\d", c.strip()) for row in md[2:] for c in row.split("|")[2:-1])
 
@@ -537,8 +539,8 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
         f.write(json.dumps({"unit": next(u for u in UNITS if u not in kept), "accuracy": 0.0})[:25])
 
     ran = []
-    real = transfer.run_unit
-    monkeypatch.setattr(transfer, "run_unit", lambda *a, **kw: ran.append(a[3:5]) or real(*a, **kw))
+    real = training.run_unit
+    monkeypatch.setattr(training, "run_unit", lambda *a, **kw: ran.append(a[3:5]) or real(*a, **kw))
     code, out, err = cli("run", "--resume", run)
     assert code == 0, err
     assert out.splitlines()[-1] == f"run directory: {run}"
@@ -558,7 +560,7 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_to
 
 def test_last_line_of_a_run_is_the_run_directory(finished, tiny_toml, cli, monkeypatch):
     # A finished run resumed: nothing left to train, the outputs rewritten.
-    monkeypatch.setattr(transfer, "run_unit", lambda *a, **kw: pytest.fail("a finished unit ran again"))
+    monkeypatch.setattr(training, "run_unit", lambda *a, **kw: pytest.fail("a finished unit ran again"))
     code, out, err = cli("run", tiny_toml, "--resume", finished)
     assert code == 0, err
     assert out.splitlines()[-1] == f"run directory: {finished}"

@@ -64,9 +64,8 @@ import numpy as np
 
 from ..data.cache import load_or_build
 from ..data.chain import Chain
-from ..data.importers import check_measured_file
 from ..data.spec import POINTS, DatasetSpec
-from ..data.textzip import align_to, parse_sensitivity, read_record
+from ..data.textzip import align_to
 from ..errors import GearlabInputError, shown
 from ..events import Event, UnitProgress
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
@@ -76,6 +75,9 @@ from ..learn.history import gumbel_quantile
 from ..learn.protocol import Method, Protocol, StateStore, each_draw, fault_score, shared_state
 from ..learn.schedule import two_phases
 from ..params import did_you_mean
+from ..parts import training
+from ..parts.measured import ROLES, Target, TargetFile, target_spec
+from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of
@@ -99,17 +101,11 @@ from ..signals.indicators import (
     window_gram,
     window_reference,
 )
-from ..units import to_si
 from . import record_effects
-from .common import class_sizes, device_of, executor_for, simulated_spec, sized
-from .transfer import CALIBRATION, TRAINING, check_training
-from .transfer import TABLES as TRANSFER_TABLES
-from .transfer import method as transfer_method
+from .common import DATASET_TABLE, class_sizes, device_of, executor_for, simulated_spec, sized
 
-ROLES = ("history", "test")
 SOURCE_SPEEDS = ("records", "source")
 INPUTS = ("difference", "revolution")
-FILE_KEYS = ("path", "role", "label", "condition")
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
 HISTORY_STRIDES = 10
 # Fewest history units of a kind that a threshold may be fitted to (by their quartiles).
@@ -126,7 +122,7 @@ MAX_SEEDS = 20
 MAX_DRAWS = 64
 
 TABLES = {
-    "source": TRANSFER_TABLES["source"],
+    "source": Table(DATASET_TABLE.keys, required=True),
     "corrected": Table(
         {
             "effects": Key(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)"),
@@ -168,8 +164,8 @@ TABLES = {
         },
         required=True,
     ),
-    "network": TRANSFER_TABLES["network"],
-    "methods": Table(TRANSFER_TABLES["methods"].keys, array=True),
+    "network": NETWORK,
+    "methods": Table(METHOD_KEYS, array=True),
     "classical": Table(
         {
             "indicators": Key(
@@ -250,111 +246,7 @@ TABLES = {
 }
 
 
-@dataclass(frozen=True)
-class TargetFile:
-    path: str  # as written in the scenario (scores.csv's 'file')
-    resolved: str
-    role: str
-    label: str
-    condition: str  # "" until known (the tacho speed)
-
-
-@dataclass(frozen=True)
-class Target:
-    vibration: int | str
-    tacho: int | str
-    pulses_per_rev: int
-    sensitivity: float  # V per m/s²
-    fs: float
-    transient: str
-    positive: str
-    files: tuple[TargetFile, ...]
-
-    def read(self, file: TargetFile):
-        """One of the target's records, read with its channels, tacho and units."""
-        return read_record(
-            file.resolved,
-            vibration=self.vibration,
-            tacho=self.tacho,
-            pulses_per_rev=self.pulses_per_rev,
-            sensitivity=self.sensitivity,
-            fs=self.fs,
-            transient=self.transient,
-        )
-
-
 # --- building the scenario ---------------------------------------------------------------
-
-
-def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
-    """The [target] 'files' list: each {path, role, label, condition?}, paths relative to *base*;
-    every role in *need* must be present (the gap kind needs the history alone)."""
-    if not files:
-        raise GearlabInputError(f"{where}: expected a list of files, each {{ path, role = 'history' | 'test', label }}")
-    out = []
-    for i, f in enumerate(files):
-        at = f"{where} entry {i + 1}"
-        if not isinstance(f, dict):
-            raise GearlabInputError(f"{at}: expected a table {{ path, role, label }}, got {shown(f)}")
-        for key in f:
-            if key not in FILE_KEYS:
-                raise GearlabInputError(
-                    f"{at}: unknown key '{key}'{did_you_mean(key, FILE_KEYS)}; known keys: {', '.join(FILE_KEYS)}"
-                )
-        for key in ("path", "role", "label"):
-            if not isinstance(f.get(key), str) or not f[key]:
-                raise GearlabInputError(f"{at}: '{key}' must be a non-empty text")
-        if f["role"] not in ROLES:
-            raise GearlabInputError(
-                f"{at}: role '{f['role']}'{did_you_mean(f['role'], ROLES)} is not one of {', '.join(ROLES)}"
-            )
-        condition = f.get("condition", "")
-        if not isinstance(condition, str):
-            raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
-        path = Path(f["path"])
-        resolved = path if path.is_absolute() else base / path
-        check_measured_file(resolved, at, "a measured record (.zip of one text file, or the text)")
-        out.append(TargetFile(f["path"], str(resolved), f["role"], f["label"], condition))
-    seen = {}
-    for i, f in enumerate(out):
-        if seen.setdefault(f.resolved, i) != i:
-            raise GearlabInputError(f"{where} entry {i + 1}: {f.path} is listed twice (entry {seen[f.resolved] + 1})")
-    for role in need:
-        if not any(f.role == role for f in out):
-            raise GearlabInputError(
-                f"{where}: no file has role = '{role}'; expected at least "
-                + " and ".join(f"one {r}" for r in need)
-                + " file"
-            )
-    return tuple(out)
-
-
-def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
-    if t["fs"] is None:
-        raise GearlabInputError(
-            f"{where} key 'fs': missing; text records carry no sampling rate (e.g. fs = '66666.67 Hz')"
-        )
-    fs = to_si(t["fs"], "Hz", f"{where} key 'fs'")
-    if not fs > 0:
-        raise GearlabInputError(f"{where} key 'fs': expected a positive sampling rate, got {shown(t['fs'])}")
-    if t["transient"] not in ("none", "stats"):
-        raise GearlabInputError(f"{where} key 'transient': expected 'none' or 'stats', got {shown(t['transient'])}")
-    for key in ("vibration", "tacho"):
-        if isinstance(t[key], int) and t[key] < 0:
-            raise GearlabInputError(f"{where} key '{key}': a column index is 0 or more, got {t[key]}")
-    if t["vibration"] == t["tacho"]:
-        raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
-    files = target_files(t["files"], f"{where} key 'files'", base, need)
-    return Target(
-        t["vibration"],
-        t["tacho"],
-        t["pulses_per_rev"],
-        parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'"),
-        fs,
-        t["transient"],
-        t["positive"],
-        files,
-    )
 
 
 def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
@@ -371,7 +263,7 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
     out = []
     for i, entry in enumerate(entries):
         at = location(where, "methods", index=i)
-        m = transfer_method(entry, at)
+        m = training.method(entry, at)
         if m.supervised:
             raise GearlabInputError(f"{at} key 'supervised': the measured target has no labels a method may use")
         if registry.get("adapter", m.adapter).train_on == "target":

@@ -37,6 +37,10 @@ from ..gap.diagnose import Settings
 from ..learn.config import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, history_of, shared_state
 from ..learn.schedule import two_phases
+from ..parts import training
+from ..parts.bound import bayes_bound
+from ..parts.measured import Target, target_spec
+from ..parts.training import TRAINING, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
@@ -51,8 +55,6 @@ from .common import (
     simulated_spec,
     sized,
 )
-from .transfer import TRAINING, bayes_bound, train_unit
-from .transfer import method as transfer_method
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # The target may also be measured records in the detection kind's shape (a list of files with a
@@ -194,7 +196,7 @@ class Records:
     the diagnosis reads the history files (healthy data of one operating condition)."""
 
     name: str
-    target: object  # gearlab.kinds.detection.Target
+    target: Target
     units_known: bool = True  # a sensitivity was given (else the values are taken as m/s², with a warning)
 
     @property
@@ -216,8 +218,6 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
                     f'"0", "1", ...): expected e.g. {key} = "{entry[key]}"'
                 )
         return dataset_spec(entry, where, base)
-    from .detection import target_spec
-
     for key in ("preset", "file"):
         if entry[key]:
             raise GearlabInputError(f"{where}: give either 'files' (measured records) or '{key}', not both")
@@ -330,7 +330,7 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
                 f"{where}: source_only is always trained (on the uncorrected and the "
                 "corrected source); list DA methods only"
             )
-        m = transfer_method({"adapter": name, "supervised": False, "params": {}}, f"{where} entry {i + 1}")
+        m = training.method({"adapter": name, "supervised": False, "params": {}}, f"{where} entry {i + 1}")
         if get_registry().get("adapter", m.adapter).train_on not in ("joint", "detector"):
             raise GearlabInputError(
                 f"{where} entry {i + 1}: '{name}' is neither a domain-adaptation method nor "

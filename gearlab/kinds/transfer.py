@@ -21,57 +21,33 @@ import numpy as np
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
-from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
-from ..events import Event, UnitProgress
-from ..learn.bounds import bayes_scores, best_accuracy, detection_at, twin_problem
-from ..learn.config import RECIPE, Calibration, NetworkSettings
+from ..events import Event
+from ..learn.config import Calibration
 from ..learn.protocol import (
     KS,
     Counts,
     Method,
     Protocol,
-    StateStore,
     check,
     check_data,
-    run_unit,
     shared_state,
-    split,
     unit_key,
 )
 from ..learn.schedule import two_phases
-from ..registry import get_registry
+from ..parts.bound import BOUND, bayes_bound
+from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training, method, train_unit
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
 from ..settings import shrunk
 from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
-# Table 5.3's training settings: the keys of every kind that trains the chapter-5 way, declared
-# on the Protocol dataclass
-TRAINING = keys_of(
-    Protocol,
-    ("target_train", "batch", "lr", "prime_epochs", "baseline_epochs", "patience", "min_epochs", "max_epochs", "seed"),
-)
-
-# How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
-# gearlab's recipe, the thesis's is residual = false, start = "random", source_noise = "off",
-# alignment = "marginal", threshold = "argmax" (scenarios/expA_thesis.toml, expB_thesis.toml).
-CALIBRATION = keys_of(Calibration, **asdict(RECIPE))
-
 TABLES = {
     "source": _DATASET,
     "target": _DATASET,
-    "network": Table(keys_of(NetworkSettings)),
-    "methods": Table(
-        {
-            "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
-            "supervised": Key(bool, False, doc="use the target training labels"),
-            "params": Key(dict, {}, doc="adapter parameters"),
-        },
-        array=True,
-        required=True,
-    ),
+    "network": NETWORK,
+    "methods": Table(METHOD_KEYS, array=True, required=True),
     "protocol": Table(
         {
             "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
@@ -128,31 +104,6 @@ def build(scenario: Scenario) -> dict:
     if None not in planned:
         check_data(protocol, *planned, str(path))
     return {"source": source, "target": target, "protocol": protocol}
-
-
-def check_training(t: dict, path) -> None:
-    """The [protocol] epochs of a kind that trains the chapter-5 way (transfer, detection)."""
-    p = t["protocol"]
-    if p["min_epochs"] > p["max_epochs"]:
-        raise GearlabInputError(
-            f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
-            f"max_epochs = {p['max_epochs']}"
-        )
-
-
-def method(entry: dict, where: str) -> Method:
-    """A [[methods]] entry: the adapter by name, its supervision variant and parameters."""
-    adapter = get_registry().get("adapter", entry["adapter"], f"{where} key 'adapter'")
-    mode = "supervised" if entry["supervised"] else "unsupervised"
-    if mode not in adapter.supervision:
-        raise GearlabInputError(
-            f"{where} key 'supervised': adapter '{adapter.name}' has no {mode} variant "
-            f"(it has: {', '.join(adapter.supervision)})"
-        )
-    params = adapter.resolve(entry["params"], f"{where} key 'params'")
-    return Method(
-        adapter.name, entry["supervised"], tuple(sorted(params.items())), tuple(sorted(entry["params"].items()))
-    )
 
 
 def describe(scenario: Scenario) -> str:
@@ -243,75 +194,6 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             # a unit asks the executor for a GPU unless the scenario trains on the CPU
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
         summarise(scenario, run)
-
-
-def train_unit(task: tuple) -> dict:
-    """One unit of work, in this process or a worker: the datasets come from the cache (they
-    were built before), shared states from the run directory. One torch thread per unit,
-    so that a result does not depend on how many workers run side by side. An eighth element,
-    when there is one, is the fixed target history (gearlab.learn.protocol.split)."""
-    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
-
-    protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states, *history = task
-    torch.set_num_threads(1)
-    source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
-    # states/ lies in the run directory, beside the progress/ folder the engine watches
-    with UnitProgress(states.root, unit_key(rep, k, method)) as progress:
-
-        def report(epoch: int, history) -> None:
-            acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
-            progress(f"epoch {epoch + 1}{acc}")
-
-        return run_unit(
-            protocol,
-            source,
-            target,
-            rep,
-            k,
-            method,
-            StateStore(states),
-            on_epoch=report,
-            history=next(iter(history), None),
-        )
-
-
-BOUND = "Bayes bound (target's own shapes and noise law, best threshold)"
-
-
-def bayes_bound(
-    target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None, history=None
-) -> dict | None:
-    """The reference column of the table: the accuracy (%) of the Bayes detector
-    (gearlab.learn.bounds) on each (repetition, k)'s target test set, with the best threshold,
-    and the faults it finds at 1 % false alarms. None unless the target is simulated with noise
-    (the detector needs its noise-free twin); it knows the test labels, so it is a bound, not a
-    method. A target whose twin lies outside the detector's model (`twin_problem`) gets
-    ``{"label", "unavailable": why}`` instead of a number that methods could beat."""
-    if not isinstance(target_spec, DatasetSpec) or target_spec.noise is None:
-        return None
-    on_event(Event("log", message="the Bayes bound: the target's noise-free twin and its likelihood ratios"))
-    clean, _ = load_or_build(target_spec.with_(noise=None), executor, on_event)
-    problem = twin_problem(clean)
-    if problem is not None:
-        on_event(Event("log", message=f"the Bayes bound is unavailable: {problem}"))
-        return {"label": BOUND, "unavailable": problem}
-    healthy = target.X[target.fault == 0]
-    scores = bayes_scores(target.X, healthy, clean, target_spec.noise.kind)
-    cells: dict[str, dict[str, dict]] = {"accuracy": {}, "detection_at_1pct": {}}
-    for k in protocol.ks:
-        acc, det = [], []
-        for rep in range(protocol.repetitions):
-            test = split(protocol, source, target, rep, k, history).target_test
-            y = target.fault[test]
-            acc.append(best_accuracy(scores[test], y))
-            det.append(detection_at(scores[test], y, 0.01))
-        for name, values in (("accuracy", acc), ("detection_at_1pct", det)):
-            cells[name][str(k)] = {
-                "mean": float(np.mean(values)),
-                "std": float(np.std(values, ddof=1)) if len(values) > 1 else 0.0,
-                "n": len(values),
-            }
-    return {"label": BOUND, "noise": target_spec.noise.kind, **cells}
 
 
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:

@@ -13,7 +13,7 @@ docs/learning.md): the source's gearbox at another speed and load, one mismatch 
 bearings or mesh damping), a sensor resonance, a low-pass or neither, in a quarter of the trials a
 non-synchronous tone, another noise law and level, and another mix of fault types and teeth. Every
 method trains on the target history (k = 0) and is scored on the target's test set beside the Bayes
-bound of that target (gearlab.kinds.transfer.bayes_bound; unavailable where its model does not hold,
+bound of that target (gearlab.parts.bound.bayes_bound; unavailable where its model does not hold,
 as with a tone).
 
 Selection rule (printed with every run): settings may be tuned on seeds below 1000; figures are
@@ -38,14 +38,15 @@ from ..data.spec import NOISE_KINDS, DatasetSpec, NoiseSpec
 from ..effects import effect_spec
 from ..errors import GearlabInputError
 from ..events import Event
-from ..learn.config import Calibration, NetworkSettings
+from ..learn.config import Calibration
 from ..learn.protocol import Counts, Protocol, check, check_data, shared_state, unit_key
 from ..learn.schedule import two_phases
+from ..parts.bound import BOUND, bayes_bound
+from ..parts.training import CALIBRATION, NETWORK, TRAINING, method, train_unit
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
 from ..settings import MAX_SEED, shrunk
 from .common import DATASET_TABLE, device_of, executor_for, simulated_spec
-from .transfer import BOUND, CALIBRATION, TRAINING, bayes_bound, method, train_unit
 
 REPORT_SEEDS = 1000  # seeds below: development; at or above: reported figures (the selection rule)
 SELECTION_RULE = (
@@ -96,7 +97,7 @@ TABLES = {
         }
     ),
     "source": Table(_SOURCE_KEYS),
-    "network": Table(keys_of(NetworkSettings)),
+    "network": NETWORK,
     "methods": Table(
         {
             "adapter": Key(str, doc="adapter plugin, unsupervised (the targets give no label)"),

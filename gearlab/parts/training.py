@@ -1,0 +1,90 @@
+"""Training the chapter-5 way, as every kind that trains does (transfer, gap, detection,
+transfer_benchmark): the [protocol] training and calibration keys, the [network] table and the
+[[methods]] keys, a [[methods]] entry resolved to a Method, and one training unit."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+from ..data import cache
+from ..errors import GearlabInputError
+from ..events import UnitProgress
+from ..learn.config import RECIPE, Calibration, NetworkSettings
+from ..learn.protocol import Method, Protocol, StateStore, run_unit, unit_key
+from ..registry import get_registry
+from ..scenario import Key, Table, keys_of, location
+
+# Table 5.3's training settings: the keys of every kind that trains the chapter-5 way, declared
+# on the Protocol dataclass
+TRAINING = keys_of(
+    Protocol,
+    ("target_train", "batch", "lr", "prime_epochs", "baseline_epochs", "patience", "min_epochs", "max_epochs", "seed"),
+)
+
+# How calibrated methods use the target history (gearlab.learn.calibration); the defaults are
+# gearlab's recipe, the thesis's is residual = false, start = "random", source_noise = "off",
+# alignment = "marginal", threshold = "argmax" (scenarios/expA_thesis.toml, expB_thesis.toml).
+CALIBRATION = keys_of(Calibration, **asdict(RECIPE))
+
+# The [network] table of a kind that trains, and the keys of a [[methods]] entry.
+NETWORK = Table(keys_of(NetworkSettings))
+METHOD_KEYS = {
+    "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
+    "supervised": Key(bool, False, doc="use the target training labels"),
+    "params": Key(dict, {}, doc="adapter parameters"),
+}
+
+
+def check_training(t: dict, path) -> None:
+    """The [protocol] epochs of a kind that trains the chapter-5 way (transfer, detection)."""
+    p = t["protocol"]
+    if p["min_epochs"] > p["max_epochs"]:
+        raise GearlabInputError(
+            f"{location(path, 'protocol', 'min_epochs')}: {p['min_epochs']} is larger than "
+            f"max_epochs = {p['max_epochs']}"
+        )
+
+
+def method(entry: dict, where: str) -> Method:
+    """A [[methods]] entry: the adapter by name, its supervision variant and parameters."""
+    adapter = get_registry().get("adapter", entry["adapter"], f"{where} key 'adapter'")
+    mode = "supervised" if entry["supervised"] else "unsupervised"
+    if mode not in adapter.supervision:
+        raise GearlabInputError(
+            f"{where} key 'supervised': adapter '{adapter.name}' has no {mode} variant "
+            f"(it has: {', '.join(adapter.supervision)})"
+        )
+    params = adapter.resolve(entry["params"], f"{where} key 'params'")
+    return Method(
+        adapter.name, entry["supervised"], tuple(sorted(params.items())), tuple(sorted(entry["params"].items()))
+    )
+
+
+def train_unit(task: tuple) -> dict:
+    """One unit of work, in this process or a worker: the datasets come from the cache (they
+    were built before), shared states from the run directory. One torch thread per unit,
+    so that a result does not depend on how many workers run side by side. An eighth element,
+    when there is one, is the fixed target history (gearlab.learn.protocol.split)."""
+    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
+    protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states, *history = task
+    torch.set_num_threads(1)
+    source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
+    # states/ lies in the run directory, beside the progress/ folder the engine watches
+    with UnitProgress(states.root, unit_key(rep, k, method)) as progress:
+
+        def report(epoch: int, history) -> None:
+            acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
+            progress(f"epoch {epoch + 1}{acc}")
+
+        return run_unit(
+            protocol,
+            source,
+            target,
+            rep,
+            k,
+            method,
+            StateStore(states),
+            on_epoch=report,
+            history=next(iter(history), None),
+        )
