@@ -71,7 +71,11 @@ def runs_of(scenario: Scenario, cwd: Path) -> list[RunEntry]:
 
 
 def run_entry(path: Path) -> RunEntry:
-    return RunEntry(path, len(RunDir(path).records()), (path / "summary.json").is_file())
+    try:
+        records = len(RunDir(path).records())
+    except (GearlabInputError, OSError):  # a link planted at results.jsonl: listed, refused when opened
+        records = 0
+    return RunEntry(path, records, (path / "summary.json").is_file())
 
 
 _WHERE = re.compile(r"\[\[?(?P<table>[\w.]+)\]?\](?: #(?P<index>\d+))?(?: key '(?P<key>[^']+)')?")
