@@ -218,7 +218,7 @@ def test_the_tacho_offset_is_found_between_pitch_aliases():
     """A healthy gear's revolution nearly repeats every tooth pitch: the offset must be the true
     one, not a pitch away (the mesh orders alone cannot tell them apart)."""
     from gearlab.data.chain import fit_offset
-    from gearlab.gap.diagnose import source_rows
+    from gearlab.gap.scoring import source_rows
 
     clean = source_rows(SOURCE.with_(healthy=1, noise=None))[0]
     z1 = SOURCE.check_model()[1].Z1

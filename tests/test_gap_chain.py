@@ -8,6 +8,8 @@ import pytest
 from gearlab.data.chain import Chain, measure, sampled, tracked
 from gearlab.data.spec import dataset_preset
 from gearlab.gap import diagnose as d
+from gearlab.gap import identify, scoring
+from gearlab.gap import search as gap_search
 from gearlab.signals.indicators import band_limited
 
 SOURCE = dataset_preset("B-6-ch5").with_(healthy=6)
@@ -38,22 +40,22 @@ def test_sampled_rows_are_the_fourier_series_at_the_record_times():
 def test_the_rows_before_the_noise_are_reused_and_give_the_same_rows():
     """A search re-fits the sensor noise at every point: the deterministic rows, sampled at the
     record's times, are made once per source set, and the rows made again are identical."""
-    clean = d.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
+    clean = scoring.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
     chain = Chain(fs=40.0 * 2000.5, speed=40.0, fractions=(0.25, 0.5, 0.75), step=1e-3, reference=clean)
     noise = d.get_registry().get("effect", "sensor_noise")
-    d._sampled.clear()
-    first = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 10.0}),)), 0, chain)
-    assert len(d._sampled) == 1
-    again = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 10.0}),)), 0, chain)
-    other = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 3.0}),)), 0, chain)
-    assert len(d._sampled) == 1  # another noise level: the same deterministic rows
+    scoring._sampled.clear()
+    first = scoring.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 10.0}),)), 0, chain)
+    assert len(scoring._sampled) == 1
+    again = scoring.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 10.0}),)), 0, chain)
+    other = scoring.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 3.0}),)), 0, chain)
+    assert len(scoring._sampled) == 1  # another noise level: the same deterministic rows
     np.testing.assert_array_equal(first, again)
     assert not np.array_equal(first, other)
-    d._sampled.clear()
-    fresh = d.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 3.0}),)), 0, chain)
+    scoring._sampled.clear()
+    fresh = scoring.source_rows(SOURCE.with_(effects=(noise.spec({"snr_db": 3.0}),)), 0, chain)
     np.testing.assert_array_equal(fresh, other)
     # the cached samples are shared: nobody may change them in place
-    ((x, _),) = d._sampled.values()
+    ((x, _),) = scoring._sampled.values()
     with pytest.raises(ValueError):
         x[0, 0] = 1.0
 
@@ -74,7 +76,7 @@ def test_the_order_bands_end_at_the_records_passband():
         BandPlan.make(4096, (25, 30), highest=20)
 
     rng = np.random.default_rng(1)
-    clean = d.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
+    clean = scoring.source_rows(SOURCE.with_(healthy=1, noise=None))[0]
     source = band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), max_order=700)
     target = band_limited(clean + rng.normal(0, 0.03 * clean.std(), (40, 4096)), max_order=700)
     nudged = band_limited(source * (1 + 1e-13), max_order=700)
@@ -107,11 +109,11 @@ def test_an_ordinal_parameter_is_profiled_not_left_where_the_design_found_it(pro
     """Nelder-Mead on a rounded coordinate stays at the order of the best design point; the
     profile fits the corner at every order (a 3-pole low-pass came back as 5 poles at 7.6 kHz)."""
     if not profiled:
-        monkeypatch.setattr(d, "ORDINAL_VALUES", 0)
+        monkeypatch.setattr(gap_search, "ORDINAL_VALUES", 0)
     space = d.Space(_FilterLike())
     found = []
     for seed in range(8):
-        history = d._fit_search(space, _filter_score, 64, seed)
+        history = gap_search._fit_search(space, _filter_score, 64, seed)
         best = min(history, key=lambda h: h["score"])
         found.append((best["params"]["order"], best["params"]["f_c"]))
     right = [order == 3 and abs(f_c / 6400.0 - 1) < 0.01 for order, f_c in found]
@@ -127,7 +129,7 @@ def test_a_local_refit_starts_small_and_converges():
     stayed 0.6 % off, and a second effect was accepted for the residual)."""
     space = d.Space(_FilterLike())
     start = {"f_c": 6400.0 * 1.006, "order": 3}
-    history = d._fit_search(space, _filter_score, 32, 0, start=start)
+    history = gap_search._fit_search(space, _filter_score, 32, 0, start=start)
     best = min(history, key=lambda h: h["score"])
     assert best["params"]["f_c"] == pytest.approx(6400.0, rel=5e-4)
 
@@ -165,10 +167,10 @@ def test_a_whole_number_found_alone_within_the_noise_is_determined():
         for n in range(1, 9)
     ]
     best = min(history, key=lambda h: h["score"])
-    intervals = d._intervals(space, history, best, noise=10.0)
-    assert intervals["order"] == [3.0, 3.0] and d.determined(space, intervals)["order"]["determined"]
-    wide = d._intervals(space, history, best, noise=1e9)  # every order within the noise
-    assert wide["order"] == [1.0, 8.0] and not d.determined(space, wide)["order"]["determined"]
+    intervals = identify._intervals(space, history, best, noise=10.0)
+    assert intervals["order"] == [3.0, 3.0] and identify.determined(space, intervals)["order"]["determined"]
+    wide = identify._intervals(space, history, best, noise=1e9)  # every order within the noise
+    assert wide["order"] == [1.0, 8.0] and not identify.determined(space, wide)["order"]["determined"]
 
 
 @pytest.mark.parametrize("consecutive", [True, False])
@@ -182,8 +184,8 @@ def test_consecutive_rows_carry_a_tone_from_one_revolution_into_the_next(consecu
     speed = 40.0
     chain = Chain(fs=speed * 1700.25, speed=speed, fractions=(0.0, 0.25, 0.5, 0.75))
     spec = SOURCE.with_(healthy=16, noise=None, effects=(effect_spec("interference_tone", frequency=37.3, ratio=1.0),))
-    plain = d.source_rows(SOURCE.with_(healthy=16, noise=None), 0, chain, consecutive)
-    residual = (d.source_rows(spec, 0, chain, consecutive) - plain).reshape(-1)  # the tone alone, end to end
+    plain = scoring.source_rows(SOURCE.with_(healthy=16, noise=None), 0, chain, consecutive)
+    residual = (scoring.source_rows(spec, 0, chain, consecutive) - plain).reshape(-1)  # the tone alone, end to end
     power = np.abs(np.fft.rfft(residual)) ** 2
     line = round(37.3 / speed * 16)  # the record's bins are 1/16 order apart
     near = power[line - 1 : line + 2].sum() / power.sum()

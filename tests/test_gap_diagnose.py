@@ -16,21 +16,18 @@ from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import default_candidates, effect_spec, model_of
 from gearlab.errors import GearlabInputError
 from gearlab.executors import LocalExecutor
-from gearlab.gap.diagnose import (
+from gearlab.gap.conclusion import (
     NAMED_SHARE,
     NOISE_WIDTH,
     SMALL_AUC,
-    Scorer,
-    Settings,
-    corrected_source,
-    diagnose,
     needed_effects,
     rms_effect,
-    source_rows,
     unneeded_note,
     verdict_of,
     within_noise,
 )
+from gearlab.gap.diagnose import Scorer, Settings, corrected_source, diagnose
+from gearlab.gap.scoring import source_rows
 from gearlab.gap.stats import gap_report
 from gearlab.gap.views import healthy_rows
 
@@ -370,7 +367,7 @@ def _seen_report(gap: float, features: int, seen: bool, auc: float) -> dict:
 def test_a_gap_seen_within_the_noise_width_is_below_what_the_diagnosis_attributes():
     """A 160 um eccentricity: seen (AUC 0.74) with an RMS effect of 0.13 -- below the noise width;
     a speed ripple's RMS effect of 30 is not; nor is a gap the test does not see."""
-    from gearlab.gap.diagnose import below_noise_width
+    from gearlab.gap.conclusion import below_noise_width
 
     assert below_noise_width(_seen_report(0.13**2 * 300, 300, True, 0.74))
     assert not below_noise_width(_seen_report(30.0**2 * 300, 300, True, 1.0))
@@ -452,8 +449,8 @@ def test_a_stand_in_the_final_fit_does_better_without_is_not_named_but_a_right_s
 def test_a_parameter_whose_interval_spans_its_range_is_not_identifiable():
     """Per parameter, the diagnosis says whether the data determine it: an interval of a tenth of the
     range (on the search's scale: log for a frequency) is determined, one over most of it is not."""
-    from gearlab.gap.diagnose import Space, determined
-    from gearlab.gap.identify import DETERMINED_WIDTH
+    from gearlab.gap.diagnose import Space
+    from gearlab.gap.identify import DETERMINED_WIDTH, determined
     from gearlab.registry import get_registry
 
     space = Space(get_registry().get("effect", "sensor_bandwidth"))
@@ -605,7 +602,7 @@ def test_a_tone_fitted_next_to_a_misfitted_resonance_moves_to_its_frequency(tmp_
 
 def test_the_tail_shape_reads_each_noise_law():
     """The central 99 % range over the IQR: 3.82 (Gaussian), 6.64 (Laplace), 12.2 (Student-t, nu = 2)."""
-    from gearlab.gap.diagnose import tail_shape
+    from gearlab.gap.scoring import tail_shape
 
     rng = np.random.default_rng(3)
     synchronous = np.sin(np.linspace(0.0, 40.0, 1024))  # the same in every row: the residual drops it

@@ -10,6 +10,8 @@ import pytest
 from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec
 from gearlab.gap import diagnose as d
+from gearlab.gap import scoring
+from gearlab.gap import search as gap_search
 from gearlab.gap.diagnose import profile_effect
 from gearlab.gap.identify import FIT_SIGMAS, profile
 
@@ -83,7 +85,7 @@ def test_a_motor_inertia_behind_a_prescribed_speed_is_not_identifiable():
     (the score is bit-identical over its range), while the load inertia and the coupling act."""
     b6 = dataset_preset("B-6-ch5").with_(faults=(), healthy=24, noise=NoiseSpec("gaussian", 30.0, 0))
     true = effect_spec("drive_inertias", I11=0.0122, I22=0.00332, k_c=55209.0)
-    target = d.source_rows(b6.with_(effects=(true,), seed=77, noise=NoiseSpec("gaussian", 30.0, 77), healthy=48))
+    target = scoring.source_rows(b6.with_(effects=(true,), seed=77, noise=NoiseSpec("gaussian", 30.0, 77), healthy=48))
     settings = d.Settings(candidates=("drive_inertias",))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -219,7 +221,7 @@ def test_the_fine_stage_takes_a_coarse_search_out_of_its_wrong_basin(with_noise)
         held_with.append(extra)
         return _two_basins(params)
 
-    out = d._fine_stage(space, history, held, lambda params, extra: 1.0, noise, 3)
+    out = gap_search._fine_stage(space, history, held, lambda params, extra: 1.0, noise, 3)
     best = min(out, key=lambda h: h["score"])
     assert out[0] is history[0] and len(out) > 1
     assert best["params"]["m"] == pytest.approx(2.0, rel=0.05) and best["score"] < 1.0

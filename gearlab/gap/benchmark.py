@@ -46,7 +46,7 @@ KINDS = tuple(k for k, _ in MIX)
 # what they were for every seed): "suborder" hides an interfering tone below one shaft order or
 # between the first orders, which one revolution cannot place (a 37.3 Hz tone at 40 Hz came back at
 # 23.6 or 55 Hz while the search's source gave each revolution its own tone phase); it needs the
-# target's revolutions read as consecutive ones (gearlab.gap.diagnose.measured_rows).
+# target's revolutions read as consecutive ones (gearlab.gap.scoring.measured_rows).
 EXTRA_KINDS = ("suborder",)
 EFFECT_KINDS = ("single", "pair", "suborder")  # scored by the effect named first
 SUBORDER_ORDERS = (0.15, 2.9)  # the tone's frequency in shaft orders, log-uniform ...
@@ -609,7 +609,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
 class TrialTask:
     trial: Trial
     source: DatasetSpec
-    settings: dict  # gearlab.gap.diagnose.Settings fields except candidates
+    settings: dict  # gearlab.gap.scoring.Settings fields except candidates
     folder: str | Confined  # a run directory's targets/trial_NNN (Confined), or a plain folder
     revolutions: int
 
@@ -629,7 +629,8 @@ def oracle_seen(
     six_dof sits at the edge: docs/gap_benchmark.md, section 3)."""
     from dataclasses import replace
 
-    from . import diagnose as d
+    from .conclusion import gap_seen
+    from .scoring import Settings, plain_report
 
     seen = 0
     for k in range(ORACLE_REPEATS):
@@ -638,8 +639,8 @@ def oracle_seen(
         try:
             rows, chain, max_order = import_target(write_target(replace(trial, seed=seed), source, where, revolutions))
             plain = dict(settings, max_order=max_order) if max_order else dict(settings)
-            report = d.plain_report(source, rows, d.Settings(candidates=tuple(trial.candidates), **plain), chain)
-            seen += d.gap_seen(report)
+            report = plain_report(source, rows, Settings(candidates=tuple(trial.candidates), **plain), chain)
+            seen += gap_seen(report)
         finally:
             where.remove_tree()
     return seen / ORACLE_REPEATS

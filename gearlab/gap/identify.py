@@ -31,7 +31,7 @@ as the fit, and profiled around again (PASSES). A fit that stays more than FIT_S
 above 0 -- what a right model scores, the score being bias-corrected -- leaves a gap: none of its
 parameters is called determined ("fit leaves a gap"). Whole-number parameters keep the search's
 intervals (a filter's order is already profiled value by value,
-gearlab.gap.diagnose._ordinal_profile); text options stay fixed.
+gearlab.gap.search._ordinal_profile); text options stay fixed.
 """
 
 from __future__ import annotations

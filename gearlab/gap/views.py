@@ -380,7 +380,7 @@ def record_view(X, block: int = RECORD_BLOCK, orders: int = RECORD_ORDERS) -> Vi
     joined into one record, cut into half-overlapping blocks, a periodic Hann window on each: the
     power at order k/block for every k below *orders* x block that is not a multiple of *block*.
     One feature row per block (:func:`record_blocks`). Rows must be consecutive revolutions of one
-    record, as a measured record's are (gearlab.gap.diagnose.Rows.consecutive)."""
+    record, as a measured record's are (gearlab.gap.scoring.Rows.consecutive)."""
     X = check_revolutions(X)
     n, P = X.shape
     blocks = record_blocks(n, block)

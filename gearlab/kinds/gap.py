@@ -94,7 +94,7 @@ UNCORRECTED, CORRECTED = "uncorrected", "corrected"
 TABLES = {
     "source": _DATASET,
     "target": _TARGET,
-    # declared once, on gearlab.gap.diagnose.Settings: keys, checks, --quick limits and docs
+    # declared once, on gearlab.gap.scoring.Settings: keys, checks, --quick limits and docs
     "diagnosis": Table(keys_of(Settings)),
     "accuracy": Table(
         {

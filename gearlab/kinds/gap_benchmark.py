@@ -78,7 +78,7 @@ TABLES = {
         }
     ),
     "source": Table(_SOURCE_KEYS),
-    # the diagnosis's own settings, declared once on gearlab.gap.diagnose.Settings
+    # the diagnosis's own settings, declared once on gearlab.gap.scoring.Settings
     "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
 }
 
