@@ -513,11 +513,17 @@ def test_ragged_csv_and_pickled_npz(rec, tmp_path, files):
     fails(spec_for(path, vibration="acc", speed_hz=25), "single array")
 
 
-def test_record_that_never_settles(rec, tmp_path):
+def test_a_record_that_never_settles_is_kept_whole_with_a_warning(rec, tmp_path):
+    """Issue 39: a drifting (or a steady but spread) level is no failure: every revolution is kept
+    and the drift is said once, in meta["warnings"]."""
     growing = rec.acc * np.linspace(1, 3, N)
     path = write_npz(tmp_path / "r.npz", {"acc": growing, "tacho": rec.tacho, "fs": FS})
-    fails(spec_for(path, vibration="acc", tacho="tacho"), "never settles", "transient = 'none'")
-    assert len(import_measured(spec_for(path, vibration="acc", tacho="tacho", transient="none"))) == COMPLETE
+    ds = import_measured(spec_for(path, vibration="acc", tacho="tacho"))
+    assert len(ds) == COMPLETE and ds.meta["transient_revolutions"] == 0
+    (warning,) = ds.meta["warnings"]
+    assert "never settles" in warning and "every revolution is kept" in warning and "\n" not in warning
+    kept = import_measured(spec_for(path, vibration="acc", tacho="tacho", transient="none"))
+    assert len(kept) == COMPLETE and "warnings" not in kept.meta
 
 
 @pytest.mark.parametrize("fmt", FORMATS)

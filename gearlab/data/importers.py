@@ -33,13 +33,9 @@ from ..params import did_you_mean
 from ..signals import (
     POINTS,
     Standardiser,
-    angle_from_pulses,
-    angle_from_speed,
     check_signal,
     cut_revolutions,
     revolution_starts,
-    steady_start_stats,
-    unwrap_tacho,
 )
 from ..signals.checks import check_int, check_positive, fmt_hz
 from .chain import FRACTIONS_KEPT
@@ -47,15 +43,12 @@ from .readers.base import _one_line_repr
 from .recordings import (
     FORMATS,
     TACHO_KINDS,
-    angle_tacho,
     check_measured_file,
     prefixed,
     read_channels,
-    read_contents,
-    same_length,
-    sampling_rate,
-    series,
-    tacho_kind,
+    read_recording,
+    shaft_angle,
+    steady_start,
 )
 from .spec import Dataset
 
@@ -66,7 +59,7 @@ TWO_PI = 2.0 * np.pi
 # "periodic" (steady_start) compares waveforms and needs a noise-free simulation: not offered.
 IMPORT_TRANSIENTS = ("stats", "none")
 # Bumped whenever the importer's output for the same file and options changes (cache keys).
-IMPORTER_VERSION = "1"
+IMPORTER_VERSION = "2"  # 2: units from channel names, the steady-start warning
 # Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
 # cannot even be unwrapped).
 _MIN_SAMPLES_PER_REV = 2
@@ -98,7 +91,11 @@ class MeasuredSpec:
     gain:        volts per file unit: per count for integer arrays, at full scale for integer WAV
                  (read as ±1); None: not given (1). The vibration in m/s² is file value × gain /
                  sensitivity; with neither given the record's units are unknown and its values are
-                 taken as m/s² (meta "units" says so, and the gap kind warns)
+                 taken as m/s² (meta "units" says so, and the gap kind warns); a channel whose name
+                 says its unit (acc_V, "acc [m/s^2]", acc_g) is taken so (recordings.channel_scale)
+    pulses_per_rev: marks per revolution of a pulse tacho
+    gearbox:     a gearbox description (file or built-in name): without a tacho, the speed is found
+                 from its mesh lines (to ±1 % of speed_hz when that is given too)
     """
 
     name: str
@@ -115,6 +112,8 @@ class MeasuredSpec:
     rtol: float | None = None
     sensitivity: float | None = None
     gain: float | None = None
+    pulses_per_rev: int = 1
+    gearbox: str | None = None
 
     def canonical(self) -> dict:
         """The options that shape the data: not the name (a label) nor where the file lies (nor the
@@ -122,8 +121,8 @@ class MeasuredSpec:
         d = asdict(self)
         d.pop("name")
         d.pop("path")
-        for key in ("sensitivity", "gain"):
-            if d[key] is None:
+        for key, default in (("sensitivity", None), ("gain", None), ("pulses_per_rev", 1), ("gearbox", None)):
+            if d[key] == default:
                 d.pop(key)
         return d
 
@@ -168,11 +167,15 @@ class MeasuredSpec:
                 raise GearlabInputError(f"{where}: '{label}' must be a non-empty text, got {value!r}")
         if "\0" in self.path:
             raise GearlabInputError(f"{where}: 'path' contains a NUL character")
-        if (self.tacho is None) == (self.speed_hz is None):
-            got = "both" if self.tacho is not None else "neither"
+        if self.tacho is not None and (self.speed_hz is not None or self.gearbox is not None):
             raise GearlabInputError(
-                f"{where}: give either a tacho channel (tacho = ...) or a nominal shaft speed "
-                f"(speed_hz = ...) to know the shaft angle, got {got}"
+                f"{where}: give either a tacho channel (tacho = ...) or a nominal shaft speed (speed = ...) or a "
+                "gearbox description to find it from (gearbox = ...) to know the shaft angle, got both"
+            )
+        if self.tacho is None and self.speed_hz is None and self.gearbox is None:
+            raise GearlabInputError(
+                f"{where}: give either a tacho channel (tacho = ...) or a nominal shaft speed (speed = ...) or a "
+                "gearbox description to find it from (gearbox = ...) to know the shaft angle, got neither"
             )
         if self.tacho_kind not in TACHO_KINDS:
             raise GearlabInputError(
@@ -191,6 +194,7 @@ class MeasuredSpec:
             if self.gain is not None:
                 check_positive(self.gain, "gain (V per file unit)", "V")
             check_int(self.points, "points per revolution", minimum=2)
+            check_int(self.pulses_per_rev, "pulses_per_rev (tacho pulses per revolution)", minimum=1)
         names = self.class_names
         if (
             isinstance(names, str)
@@ -209,39 +213,6 @@ class MeasuredSpec:
                 f"{where}: unknown transient detection '{self.transient}' for measured data; "
                 f"known: {', '.join(IMPORT_TRANSIENTS)}"
             )
-
-
-def _shaft_angle(
-    spec: MeasuredSpec, tacho: np.ndarray | None, fs: float, n: int, path: str
-) -> tuple[dict, np.ndarray, str]:
-    """(cut_revolutions' angle argument, the continuous angle it computes from it, a description).
-
-    The angle is computed here with the very functions cut_revolutions applies to the
-    same argument, so revolution boundaries found here (for labels) are exactly those of
-    the revolutions it cuts.
-    """
-    if tacho is None:
-        return (
-            {"speed_hz": float(spec.speed_hz)},
-            angle_from_speed(n, fs, spec.speed_hz),
-            f"nominal speed {fmt_hz(spec.speed_hz)}",
-        )
-    kind = tacho_kind(tacho) if spec.tacho_kind == "auto" else spec.tacho_kind
-    detected = ", detected" if spec.tacho_kind == "auto" else ""
-    if kind == "angle":
-        with prefixed(f"{path}: tacho '{spec.tacho}' (read as the shaft angle in rad{detected})"):
-            wrapped = angle_tacho(tacho)
-            return {"tacho": wrapped}, unwrap_tacho(wrapped), f"tacho '{spec.tacho}' (shaft angle{detected})"
-    # angle_from_pulses fails only for want of edges: a tacho that never completes a revolution.
-    with prefixed(
-        f"{path}: tacho '{spec.tacho}' never completes a revolution "
-        f"(read as a once-per-revolution pulse train{detected})"
-    ):
-        return (
-            {"pulses": tacho},
-            angle_from_pulses(tacho, fs),
-            f"tacho '{spec.tacho}' (once-per-revolution pulses{detected})",
-        )
 
 
 def _revolution_bounds(angle: np.ndarray, fs: float, source: str, path: str) -> np.ndarray:
@@ -354,42 +325,20 @@ def _revolution_labels(per_sample: np.ndarray, starts: np.ndarray, spec: Measure
 # --- the import --------------------------------------------------------------------------
 
 
-def _steady_start(revs: np.ndarray, labels: np.ndarray | None, spec: MeasuredSpec, path: str) -> tuple[int, str]:
-    """Index of the first steady revolution and how it was found.
+def _steady_start(
+    revs: np.ndarray, labels: np.ndarray | None, spec: MeasuredSpec, path: str
+) -> tuple[int, str, str | None]:
+    """Index of the first steady revolution, how it was found, and a warning (a level that never
+    settles: every revolution kept, recordings.steady_start).
 
-    A start-up transient lies at the start of the record. It is judged
-    (steady_start_stats, as cut_revolutions(transient="stats") does) on the leading
-    revolutions that share the first label: a later change of condition in a labelled
-    record changes the vibration level too, and must not be taken for a transient.
+    A start-up transient lies at the start of the record. It is judged on the leading revolutions
+    that share the first label: a later change of condition in a labelled record changes the
+    vibration level too, and must not be taken for a transient.
     """
     if spec.transient == "none":
-        return 0, "not detected (transient = 'none')"
+        return 0, "not detected (transient = 'none')", None
     run = revs.shape[0] if labels is None else int(np.argmax(np.append(labels != labels[0], True)))
-    if run < 2:
-        return 0, "not judged (fewer than 2 revolutions to compare)"
-    with prefixed(f"{path}: vibration channel '{spec.vibration}'"):
-        try:
-            start = steady_start_stats(revs[:run], *(() if spec.rtol is None else (spec.rtol,)))
-        except GearlabInputError as exc:
-            raise GearlabInputError(
-                f"{exc}; in the import: rtol = ..., or transient = 'none' if the record is steady from its start"
-            ) from None
-    return start, "stats"
-
-
-def units_note(spec: MeasuredSpec, fmt: str, integer: bool) -> str:
-    """What the record's values were taken as: m/s² through the sensitivity and gain, or -- neither
-    given -- "unknown" (one line; the gap kind warns with it)."""
-    if spec.units_known:
-        return (
-            f"m/s² = value x gain {1.0 if spec.gain is None else spec.gain:g} V / sensitivity "
-            f"{1.0 if spec.sensitivity is None else spec.sensitivity:g} V/(m/s²)"
-        )
-    what = "integer counts (full-scale fractions for WAV)" if integer else "numbers"
-    return (
-        f"unknown: the {fmt} record holds {what} with no sensitivity or gain given; its values are taken "
-        "as m/s² (set sensitivity = '10 mV/g' and, for integer data, gain = volts per count)"
-    )
+    return steady_start(revs[:run], f"{path}: vibration channel '{spec.vibration}'", spec.rtol)
 
 
 def import_measured(spec: MeasuredSpec) -> Dataset:
@@ -415,27 +364,28 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
     """
     spec.check()
     path = str(spec.path)
-    roles = {spec.vibration: "vibration"}
-    for role, name in (("tacho", spec.tacho), ("labels", spec.labels)):
-        if name is not None:
-            roles.setdefault(name, role)
-    contents, fmt = read_contents(path, list(roles), roles)
-
-    raw = np.asarray(contents.found[spec.vibration])
-    # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
-    step = contents.steps.get(spec.vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
-    vib = series(raw, spec.vibration, "vibration", path) * spec.scale
-    n = vib.size
-    fs, fs_source = sampling_rate(contents, spec.fs, n, path)
-    tacho = None
-    if spec.tacho is not None:
-        tacho = series(contents.found[spec.tacho], spec.tacho, "tacho", path)
-        same_length(tacho, spec.tacho, "tacho", n, spec.vibration, path)
+    rec = read_recording(
+        path,
+        spec.vibration,
+        spec.tacho,
+        fs=spec.fs,
+        sensitivity=spec.sensitivity,
+        gain=spec.gain,
+        extra=() if spec.labels is None else ((spec.labels, "labels"),),
+    )
+    vib, fs, n = rec.signal, rec.fs, rec.signal.size
     per_sample = None
     if spec.labels is not None:
-        per_sample = _class_indices(contents.found[spec.labels], spec, n, path)
+        per_sample = _class_indices(rec.extra[spec.labels], spec, n, path)
 
-    source, angle, how = _shaft_angle(spec, tacho, fs, n, path)
+    box = None
+    if spec.gearbox is not None:
+        from ..gearbox import resolve_gearbox
+
+        box = resolve_gearbox(spec.gearbox)
+    source, angle, how = shaft_angle(
+        rec, kind=spec.tacho_kind, pulses_per_rev=spec.pulses_per_rev, speed_hz=spec.speed_hz, gearbox=box
+    )
     starts = _revolution_bounds(angle, fs, how, path)
     labels = None if per_sample is None else _revolution_labels(per_sample, starts, spec, path)
 
@@ -446,7 +396,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
     revs = cut.revolutions
     if revs.shape[0] != starts.size - 1:  # pragma: no cover - both follow from the same angle
         raise RuntimeError(f"importer bug: {revs.shape[0]} revolutions cut, {starts.size - 1} bounded")
-    start, transient = _steady_start(revs, labels, spec, path)
+    start, transient, warning = _steady_start(revs, labels, spec, path)
     revs = revs[start:]
     fractions = starts[start:-1][:FRACTIONS_KEPT] % 1.0  # where the kept revolutions start between samples
     count = revs.shape[0]
@@ -490,9 +440,9 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
         meta={
             "source": "measured",
             "file": path,
-            "format": fmt,
+            "format": rec.format,
             "fs_hz": float(fs),
-            "fs_source": fs_source,
+            "fs_source": rec.fs_source,
             "speed_hz": float(cut.speed_hz),
             "angle_source": how,
             "samples": int(n),
@@ -503,7 +453,8 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
             "healthy_revolutions": int(healthy.sum()),
             # the measurement chain (gearlab.data.chain): what a simulation goes through to compare
             "start_fractions": [round(float(f), 4) for f in fractions],
-            "quantum": float(step * spec.scale),
-            "units": units_note(spec, fmt, step > 0),
+            "quantum": rec.step,
+            "units": rec.units,
+            **({"warnings": [warning]} if warning else {}),
         },
     )

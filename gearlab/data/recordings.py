@@ -40,8 +40,10 @@ anything is read (GEARLAB_MAX_RECORD_MB, gearlab.data.readers.base).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +56,7 @@ from .readers import READERS, Contents, check_size
 from .readers.base import _listing, _one_line, _one_line_repr
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
+from .readers.headers import HEADERS, Header
 
 TWO_PI = 2.0 * np.pi
 
@@ -358,3 +361,348 @@ def angle_tacho(tacho: np.ndarray) -> np.ndarray:
         f"spans {span:.4g} (from {tacho.min():.4g} to {tacho.max():.4g}), more than one turn (2π), and jumps "
         "back: expected the shaft angle in radians, wrapped into one turn or continuous (degrees? multiply by π/180)"
     )
+
+
+# --- units -------------------------------------------------------------------------------
+
+STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer units and sensitivities (ISO 80000-3)
+# A unit at the end of a channel's name, after a separator or in brackets: acc_V, "acc [mV]",
+# acc_ms2, "acc (m/s^2)", acc_g. Volts are case-sensitive (a 'v' ends many words).
+_VOLT_NAME = re.compile(r"(?:^|[_\s\-.(\[])(m?V)[)\]]?$")
+_ACCELERATION_NAME = re.compile(r"(?:[_\s\-.(\[])(m/s\^?2|m/s²|m/s/s|ms2|mps2|g)[)\]]?$", re.IGNORECASE)
+
+
+def name_unit(name: str) -> tuple[str, str, float] | None:
+    """(quantity, unit, SI factor) a channel's name declares: ("voltage", "mV", 1e-3),
+    ("acceleration", "g", 9.80665), ...; None when it says none."""
+    text = " ".join(str(name).split())
+    match = _VOLT_NAME.search(text)
+    if match:
+        unit = match.group(1)
+        return "voltage", unit, 1e-3 if unit == "mV" else 1.0
+    match = _ACCELERATION_NAME.search(text)
+    if match:
+        unit = match.group(1)
+        return "acceleration", unit, STANDARD_GRAVITY if unit.lower() == "g" else 1.0
+    return None
+
+
+def channel_scale(
+    name: str, sensitivity: float | None, gain: float | None, where: str, integer: bool = False
+) -> tuple[float, str]:
+    """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the
+    channel's name says of its unit (a column in volts needs a sensitivity, one in m/s² or g must
+    not have one; mV are volts / 1000). *where*: the scenario table, for the one-line errors that
+    name its key; *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
+    said = name_unit(name)
+    if said is not None and said[0] == "voltage" and sensitivity is None:
+        raise GearlabInputError(
+            f"{where} key 'sensitivity': missing; channel '{name}' is in volts ({said[1]}, as its name says); "
+            "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
+        )
+    if said is not None and said[0] == "acceleration":
+        for key, value in (("sensitivity", sensitivity), ("gain", gain)):
+            if value is not None:
+                raise GearlabInputError(
+                    f"{where} key '{key}': channel '{name}' is an acceleration already ({said[1]}, as its name "
+                    f"says); expected no {key}"
+                )
+        if said[2] == 1.0:
+            return 1.0, f"m/s² (channel '{name}')"
+        return said[2], f"m/s² = value x {said[2]:g} (channel '{name}' in {said[1]})"
+    if integer and sensitivity is not None and gain is None:
+        raise GearlabInputError(
+            f"{where} key 'gain': missing; channel '{name}' holds integer counts, so the sensitivity needs the "
+            "volts per count (a WAV file's: the volts at full scale), e.g. gain = '0.3 mV'"
+        )
+    volts = gain if gain is not None else (said[2] if said is not None else 1.0)
+    if sensitivity is None and gain is None:
+        return 1.0, "unknown (no sensitivity or gain given: the values are taken as m/s²)"
+    return volts / (1.0 if sensitivity is None else sensitivity), (
+        f"m/s² = value x {volts:g} V / sensitivity {1.0 if sensitivity is None else sensitivity:g} V/(m/s²)"
+    )
+
+
+# --- a recording ---------------------------------------------------------------------------
+
+
+def channel_key(value) -> str:
+    """A channel as a scenario names it (a name, or a 0-based column index) as the readers take it."""
+    return str(value) if isinstance(value, int) and not isinstance(value, bool) else value
+
+
+def named(name: str, columns: list[str]) -> str:
+    """The header name of a column asked for by its 0-based index ("1"), else *name* (what its
+    unit is read from)."""
+    if name not in columns and str(name).strip().isdigit() and int(name) < len(columns):
+        return columns[int(name)]
+    return name
+
+
+@dataclass
+class Recording:
+    """One measured file's vibration (m/s²) and tacho, its rate, and what else was asked for."""
+
+    path: str
+    format: str
+    channels: list[str]  # the file's signal channels (rate and time fields left out)
+    vibration: str
+    signal: np.ndarray
+    fs: float
+    fs_source: str
+    tacho_name: str | None
+    tacho: np.ndarray | None
+    step: float  # one quantisation step in m/s² (0: floating-point data)
+    units: str  # how the values became m/s² (channel_scale)
+    extra: dict[str, np.ndarray] = field(default_factory=dict)  # other channels asked for, as stored
+
+
+def read_recording(
+    path,
+    vibration,
+    tacho=None,
+    *,
+    fs: float | None = None,
+    sensitivity: float | None = None,
+    gain: float | None = None,
+    extra: Sequence[tuple[str, str]] = (),
+    where: str = "",
+) -> Recording:
+    """The vibration in m/s² (channel_scale), the tacho and the rate of one file; *extra*: (name,
+    role) of other channels to return as stored (a labels channel). *where*: the scenario table the
+    keys come from, for the errors on units (default: the file)."""
+    path = str(path)
+    vibration, tacho = channel_key(vibration), channel_key(tacho) if tacho is not None else None
+    roles = {vibration: "vibration"}
+    for name, role in ((tacho, "tacho"), *extra):
+        if name is not None:
+            roles.setdefault(channel_key(name), role)
+    contents, fmt = read_contents(path, list(roles), roles)
+    raw = np.asarray(contents.found[vibration])
+    # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
+    step = contents.steps.get(vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
+    scale, units = channel_scale(named(vibration, contents.available), sensitivity, gain, where or path)
+    vib = series(raw, vibration, "vibration", path) * scale
+    rate, fs_source = sampling_rate(contents, fs, vib.size, path)
+    tacho_values = None
+    if tacho is not None:
+        tacho_values = series(contents.found[tacho], tacho, "tacho", path)
+        same_length(tacho_values, tacho, "tacho", vib.size, vibration, path)
+    channels = [c for c in contents.available if not is_rate_or_time(str(c))]
+    return Recording(
+        path,
+        fmt,
+        channels,
+        vibration,
+        vib,
+        rate,
+        fs_source,
+        tacho,
+        tacho_values,
+        float(step * scale),
+        units,
+        {channel_key(n): contents.found[channel_key(n)] for n, _ in extra if n is not None},
+    )
+
+
+# --- the shaft angle and the revolutions ---------------------------------------------------
+
+
+def shaft_angle(
+    rec: Recording,
+    *,
+    kind: str = "auto",
+    pulses_per_rev: int = 1,
+    speed_hz: float | None = None,
+    gearbox=None,
+) -> tuple[dict, np.ndarray, str]:
+    """(cut_revolutions' angle argument, the continuous angle it computes from it, a description).
+
+    From the tacho: a shaft angle, or a pulse train of *pulses_per_rev* marks per revolution (the
+    j-th rising edge at 2πj/N); without one: the declared speed, or -- with a gearbox description
+    and no speed, or to refine a declared one to ±1 % -- the speed its mesh lines show
+    (gearlab.gearbox.speed; refused when ambiguous). The angle is computed here with the very
+    functions cut_revolutions applies to the same argument, so revolution boundaries found here
+    (for labels) are exactly those of the revolutions it cuts.
+    """
+    from ..signals import angle_from_pulses, angle_from_speed, unwrap_tacho
+
+    path, n, fs = rec.path, rec.signal.size, rec.fs
+    if rec.tacho is None:
+        how = "nominal speed"
+        if gearbox is not None:
+            from ..gearbox.speed import speed_from_mesh
+
+            speed_hz, found, _ = speed_from_mesh(
+                rec.signal, fs, gearbox, speed_hz, f"{path}: vibration channel '{rec.vibration}'"
+            )
+            how = f"speed {found} ({gearbox.name})"
+        if speed_hz is None:
+            raise GearlabInputError(
+                f"{path}: no tacho and no speed: expected a tacho channel, a speed (e.g. '25 Hz'), or a gearbox "
+                "description to find the speed from its mesh orders"
+            )
+        return {"speed_hz": float(speed_hz)}, angle_from_speed(n, fs, speed_hz), f"{how} {fmt_hz(speed_hz)}"
+    name = rec.tacho_name
+    found_kind = kind if kind != "auto" else ("pulses" if pulses_per_rev > 1 else tacho_kind(rec.tacho))
+    detected = ", detected" if kind == "auto" and pulses_per_rev == 1 else ""
+    if found_kind == "angle":
+        with prefixed(f"{path}: tacho '{name}' (read as the shaft angle in rad{detected})"):
+            wrapped = angle_tacho(rec.tacho)
+            return {"tacho": wrapped}, unwrap_tacho(wrapped), f"tacho '{name}' (shaft angle{detected})"
+    # angle_from_pulses fails only for want of edges: a tacho that never completes a revolution.
+    what = "a once-per-revolution pulse train" if pulses_per_rev == 1 else f"{pulses_per_rev} pulses per revolution"
+    with prefixed(f"{path}: tacho '{name}' never completes a revolution (read as {what}{detected})"):
+        angle = angle_from_pulses(rec.tacho, fs)
+    if pulses_per_rev == 1:
+        return {"pulses": rec.tacho}, angle, f"tacho '{name}' (once-per-revolution pulses{detected})"
+    angle = angle / pulses_per_rev
+    # the wrapped angle in [-π, π): cut_revolutions unwraps it and starts revolutions at its 2πk crossings
+    return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"tacho '{name}' ({pulses_per_rev} pulses per revolution)"
+
+
+def steady_start(revs: np.ndarray, where: str, rtol: float | None = None) -> tuple[int, str, str | None]:
+    """(index of the first steady revolution, how it was found, a warning or None).
+
+    A start-up transient is dropped (steady_start_stats). A level that never settles -- a steady
+    record whose revolution-to-revolution spread exceeds the tolerance, or a slow drift -- is no
+    failure: every revolution is kept and the drift is said in a warning."""
+    from ..signals import steady_start_stats
+
+    if revs.shape[0] < 2:
+        return 0, "not judged (fewer than 2 revolutions to compare)", None
+    try:
+        return steady_start_stats(revs, *(() if rtol is None else (rtol,))), "stats", None
+    except GearlabInputError as exc:
+        return (
+            0,
+            "none found (level drifts; every revolution kept)",
+            (
+                f"{where}: {exc}; every revolution is kept (transient = 'none' says the record is steady, "
+                "rtol = ... widens the tolerance)"
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class CutRecording:
+    """One measured record cut into revolutions: *revolutions* (n, points) in m/s², not
+    standardised, in record order, starting at the first tacho mark."""
+
+    path: str
+    revolutions: np.ndarray
+    speed_hz: float
+    fs: float
+    samples: int
+    transient_revolutions: int
+    angle_source: str = ""
+    warnings: tuple[str, ...] = ()
+
+
+def cut_recording(
+    path,
+    *,
+    vibration,
+    tacho=None,
+    pulses_per_rev: int = 1,
+    sensitivity: float | None = None,
+    gain: float | None = None,
+    fs: float | None = None,
+    speed_hz: float | None = None,
+    gearbox=None,
+    points: int | None = None,
+    transient: str = "none",
+    where: str = "",
+) -> CutRecording:
+    """Read a record (read_recording), find the shaft angle (shaft_angle) and cut its complete
+    revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
+    from ..signals import POINTS, cut_revolutions
+
+    rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, where=where)
+    raw = rec.signal
+    if raw.size and raw.min() == raw.max():  # a wrong column, or a sensor not connected
+        raise GearlabInputError(
+            f"{path}: vibration column {_one_line_repr(rec.vibration)}: all {raw.size} values equal {raw[0]:g}; "
+            "expected a measured vibration (a constant column: a wrong column, or a sensor not connected)"
+        )
+    source, angle, how = shaft_angle(rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox)
+    turns = (angle[-1] - angle[0]) / TWO_PI
+    if turns < 2:
+        raise GearlabInputError(
+            f"{path}: by {how}, the record shows {turns:.3g} revolutions in {raw.size} samples at "
+            f"{fmt_hz(rec.fs)}; expected at least 2 (is pulses_per_rev right?)"
+        )
+    with prefixed(f"{path}: vibration column {_one_line_repr(rec.vibration)}"):
+        cut = cut_revolutions(raw, rec.fs, **source, points=points or POINTS, transient="none")
+    start, warning = 0, None
+    if transient == "stats":
+        start, _, warning = steady_start(cut.revolutions, f"{path}: vibration column {_one_line_repr(rec.vibration)}")
+    return CutRecording(
+        str(path),
+        cut.revolutions[start:],
+        float(cut.speed_hz),
+        float(rec.fs),
+        int(raw.size),
+        int(start),
+        how,
+        () if warning is None else (warning,),
+    )
+
+
+# --- the header alone: what `gearlab validate` checks -----------------------------------------
+
+
+def read_header(path) -> Header:
+    """What *path* says of itself (Header), its data unread; every failure is one line."""
+    path = Path(path)
+    check_measured_file(path)
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise GearlabInputError(
+            f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {supported()}"
+        )
+    try:
+        return HEADERS[fmt](path)
+    except GearlabInputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file
+        raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
+
+
+def check_recording(
+    path,
+    where: str,
+    channels: dict[str, object],
+    *,
+    fs: float | None = None,
+    sensitivity: float | None = None,
+    gain: float | None = None,
+) -> Header:
+    """Check what a scenario says of a measured file against its header alone (read_header): every
+    channel in *channels* ({key: channel}, e.g. {"vibration": "acc_V", "tacho": 2}) is there, a
+    sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale) are
+    given. *where*: the scenario's table ("s.toml: [datasets] #1"); every error is one line that
+    names it, the key and the file."""
+    header = read_header(path)
+    for key, value in channels.items():
+        if value is None or value == "":
+            continue
+        name = channel_key(value)
+        if not header.find(name) and header.channels:
+            index = " (or a 0-based column index)" if header.indexed else ""
+            raise GearlabInputError(
+                f"{where} key '{key}': {path} has no channel {_one_line_repr(name)}"
+                f"{did_you_mean(str(name), [str(c) for c in header.channels])}; the file has: "
+                f"{_listing(header.channels)}{index}"
+            )
+    if not header.rate and fs is None:
+        raise GearlabInputError(
+            f"{where} key 'fs': missing; {path} carries no sampling rate (no 'fs' field, no time column such as "
+            "time, t, time_s or 'Time [s]'); expected the rate, e.g. fs = '51.2 kHz'"
+        )
+    vibration = channels.get("vibration")
+    if vibration not in (None, ""):
+        name = channel_key(vibration)
+        name = named(name, header.channels) if header.indexed else name
+        channel_scale(name, sensitivity, gain, where, name in header.integer)
+    return header

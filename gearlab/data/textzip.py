@@ -32,15 +32,14 @@ what was expected.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import GearlabInputError, shown
-from ..signals import POINTS, angle_from_pulses, cut_revolutions, steady_start_stats
-from ..signals.checks import fmt_hz
+from ..signals import POINTS
 from ..units import to_si
-from .readers.text import read_columns
+from .readers.text import read_columns as read_columns  # its home before the one import path
+from .recordings import CutRecording, cut_recording
 
 __all__ = ["TextRecord", "align_to", "parse_sensitivity", "read_columns", "read_record"]
 
@@ -70,18 +69,9 @@ def parse_sensitivity(value, where: str) -> float:
 
 # --- a record ----------------------------------------------------------------------------
 
-
-@dataclass(frozen=True)
-class TextRecord:
-    """One measured record cut into revolutions: *revolutions* (n, points) in m/s², not
-    standardised, in record order, starting at the first tacho mark."""
-
-    path: str
-    revolutions: np.ndarray
-    speed_hz: float
-    fs: float
-    samples: int
-    transient_revolutions: int
+# A record cut into revolutions: the one import path's (gearlab.data.recordings.cut_recording),
+# which reads text records as every other format.
+TextRecord = CutRecording
 
 
 def read_record(
@@ -90,42 +80,22 @@ def read_record(
     vibration,
     tacho,
     pulses_per_rev: int,
-    sensitivity: float,
-    fs: float,
+    sensitivity: float | None,
+    fs: float | None,
     points: int = POINTS,
     transient: str = "none",
-) -> TextRecord:
-    """Read a record (``read_columns``), convert the vibration to m/s², find the shaft angle
-    from the tacho's N = *pulses_per_rev* marks per revolution and cut the complete
-    revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
-    found, _, _ = read_columns(path, [vibration, tacho])
-    raw = found[vibration]
-    if raw.size and raw.min() == raw.max():  # refused as every other reader's import refuses it
-        raise GearlabInputError(
-            f"{path}: vibration column {shown(vibration)}: all {raw.size} values equal {raw[0]:g}; expected "
-            "a measured vibration (a constant column: a wrong column, or a sensor not connected)"
-        )
-    vib = raw / sensitivity
-    where = f"{path}: tacho column {shown(tacho)}"
-    try:
-        angle = angle_from_pulses(found[tacho], fs) / pulses_per_rev
-    except GearlabInputError as exc:
-        raise GearlabInputError(f"{where}: {exc}") from None
-    turns = (angle[-1] - angle[0]) / TWO_PI
-    if turns < 2:
-        raise GearlabInputError(
-            f"{where}: the {pulses_per_rev}-pulses-per-revolution tacho shows {turns:.3g} "
-            f"revolutions in {vib.size} samples at {fmt_hz(fs)}; expected at least 2 (is "
-            "pulses_per_rev right?)"
-        )
-    # the wrapped angle in [-π, π): cut_revolutions unwraps it and starts revolutions at its 2πk crossings
-    wrapped = (angle + np.pi) % TWO_PI - np.pi
-    try:
-        cut = cut_revolutions(vib, fs, tacho=wrapped, points=points, transient="none")
-        start = steady_start_stats(cut.revolutions) if transient == "stats" else 0
-    except GearlabInputError as exc:
-        raise GearlabInputError(f"{path}: vibration column {shown(vibration)}: {exc}") from None
-    return TextRecord(str(path), cut.revolutions[start:], float(cut.speed_hz), float(fs), int(vib.size), int(start))
+) -> CutRecording:
+    """A record's complete revolutions in m/s², through the one import path (cut_recording)."""
+    return cut_recording(
+        path,
+        vibration=vibration,
+        tacho=tacho,
+        pulses_per_rev=pulses_per_rev,
+        sensitivity=sensitivity,
+        fs=fs,
+        points=points,
+        transient=transient,
+    )
 
 
 def align_to(reference: np.ndarray, signal: np.ndarray, marks: int) -> tuple[int, np.ndarray]:

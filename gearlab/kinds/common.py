@@ -8,7 +8,8 @@ from __future__ import annotations
 from dataclasses import asdict
 from pathlib import Path
 
-from ..data.importers import MeasuredSpec, check_measured_file
+from ..data.importers import MeasuredSpec
+from ..data.recordings import channel_key, check_measured_file, check_recording
 from ..data.spec import DATASET_PRESETS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import parse_sensitivity
 from ..effects import effects_from_tables
@@ -22,9 +23,23 @@ from ..units import to_si
 DATASET_TABLE = Table(
     {
         "preset": Key(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'file')"),
-        "file": Key(str, "", doc="measured data: a .csv, .npz, .h5, .wav or .mat file, relative to the scenario"),
-        "vibration": Key(str, "", doc="measured data: the vibration channel"),
-        "tacho": Key(str, "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed'"),
+        "file": Key(
+            str,
+            "",
+            doc="measured data: a .csv, .txt, .zip (of one text file), .npz, .h5, .wav or .mat file, relative "
+            "to the scenario",
+        ),
+        "vibration": Key((int, str), "", doc="measured data: the vibration channel (name or 0-based column)"),
+        "tacho": Key(
+            (int, str), "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed' or 'gearbox'"
+        ),
+        "pulses_per_rev": Key(int, None, in_range(1, 10_000), "measured data: tacho pulses per input-shaft revolution"),
+        "gearbox": Key(
+            str,
+            "",
+            doc="measured data without a tacho: a gearbox description (file or built-in name) whose mesh "
+            "orders the speed is found from (to ±1 % of 'speed' when given)",
+        ),
         "labels": Key(str, "", doc="measured data: an optional label channel"),
         "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
         "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
@@ -72,7 +87,7 @@ MAX_SAMPLES = 10**6
 
 
 # keys of a measured 'file' entry that mean nothing to a simulated preset
-MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "gain")
+MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "gain", "pulses_per_rev", "gearbox")
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
@@ -85,7 +100,7 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
             raise GearlabInputError(f"{where} key 'effects': effects act on simulations; a measured 'file' has none")
         return measured_spec(entry, where, base)
     for key in MEASURED_ONLY:  # said of a simulation, such a key would be silently ignored
-        if entry.get(key) not in (None, ""):
+        if entry.get(key) not in (None, "") and not (key == "pulses_per_rev" and entry[key] == 1):
             raise GearlabInputError(
                 f"{where} key '{key}': a key of measured data ('file'); a simulated 'preset' has none"
                 + (" (its channel is chosen with 'channel')" if key == "vibration" else "")
@@ -167,30 +182,55 @@ def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
 
 
 def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
-    if not entry["vibration"]:
+    """A measured 'file' entry, checked against the file's header (its channels, rate and units:
+    recordings.check_recording) so that `gearlab validate` finds a wrong name before any work."""
+    if entry["vibration"] == "":
         raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")
     path = Path(entry["file"])
     path = path if path.is_absolute() else base / path
     check_measured_file(path, f"{where} key 'file'")
     speed = quantity(entry, "speed", where) if entry["speed"] is not None else None
     fs = quantity(entry, "fs", where) if entry["fs"] is not None else None
+    units = units_of(entry, where)
+    channels = {key: entry[key] for key in ("vibration", "tacho", "labels")}
+    check_recording(path, where, channels, fs=fs, **units)
+    gearbox = None
+    if entry.get("gearbox"):
+        gearbox = gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)
     names = entry["class_names"]
     if not names or not all(isinstance(n, str) for n in names):
         raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
     spec = MeasuredSpec(
         name=entry["name"] or path.stem,
         path=str(path),
-        vibration=entry["vibration"],
-        tacho=entry["tacho"] or None,
+        vibration=channel_key(entry["vibration"]),
+        tacho=None if entry["tacho"] == "" else channel_key(entry["tacho"]),
         speed_hz=speed,
         fs=fs,
         labels=entry["labels"] or None,
         class_names=tuple(names),
         transient=entry["transient"],
-        **units_of(entry, where),
+        pulses_per_rev=entry.get("pulses_per_rev") or 1,
+        gearbox=gearbox,
+        **units,
     )
-    spec.check()
+    spec.check(where)
     return spec
+
+
+def gearbox_name(value: str, where: str, base: Path) -> str:
+    """A gearbox description as a measured entry names it: a built-in name, or a file relative to
+    the scenario (returned resolved); loaded here so that a bad description fails validate."""
+    from ..gearbox import builtin_gearboxes, resolve_gearbox
+
+    if value not in builtin_gearboxes():
+        path = Path(value)
+        value = str(path if path.is_absolute() else base / path)
+    try:
+        resolve_gearbox(value)
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{where}: {exc}") from None
+    return value
 
 
 def units_of(entry: dict, where: str) -> dict:

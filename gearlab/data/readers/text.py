@@ -198,14 +198,20 @@ def first_row(path) -> tuple[list[str] | None, int]:
     """(header names or None, number of columns) from the first data line of a text record,
     without reading the rest."""
     path = Path(path)
+    header = None
     with _open_text(path) as (stream, where):
-        for line in stream:
+        for number, line in enumerate(stream, start=1):
             tokens = line.split()
             if not tokens or tokens[0].startswith(b"#"):
                 continue
             if all(_is_number(t) for t in tokens):
-                return None, len(tokens)
-            return [t.decode("utf-8", "replace") for t in tokens], len(tokens)
+                return header, len(tokens) if header is None else len(header)
+            if header is not None:  # not a record (a system file?): nothing of it is quoted
+                raise GearlabInputError(
+                    f"{where}: its first data row (line {number}) holds no number; expected a header row "
+                    "of column names, then rows of numbers separated by blanks"
+                )
+            header = [t.decode("utf-8", "replace") for t in tokens]
     raise GearlabInputError(f"{where}: no rows of numbers; expected one row per sample, columns separated by blanks")
 
 

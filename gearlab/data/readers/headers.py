@@ -1,0 +1,158 @@
+"""What each format says of a file before its data is read (`gearlab validate`,
+gearlab.data.recordings.check_recording): its channels, whether it carries a sampling rate (a
+field or a time vector), which channels hold integers."""
+
+from __future__ import annotations
+
+import struct
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import GearlabInputError
+from .base import is_rate_or_time
+
+
+@dataclass(frozen=True)
+class Header:
+    """What a file says of itself before its data is read: its channels (rate and time fields
+    included), whether it carries a rate (a field or a time vector), and its integer channels."""
+
+    format: str
+    channels: list[str]
+    rate: bool
+    integer: frozenset[str] = frozenset()
+    indexed: bool = False  # channels may be named by 0-based column index (text formats)
+
+    def find(self, name: str) -> bool:
+        if name in self.channels:
+            return True
+        return self.indexed and str(name).strip().isdigit() and int(name) < len(self.channels)
+
+
+def _csv_header(path: Path) -> Header:
+    from .base import _column
+    from .csv import _COMMENT_FIELD, delimiter_of, header_names, is_header, split_rows
+
+    fields, names, number = [], None, 0
+    with path.open(encoding="utf-8-sig", errors="replace") as f:
+        for number, line in enumerate(f, start=1):
+            stripped = line.strip()
+            if stripped.startswith("#"):
+                match = _COMMENT_FIELD.match(stripped)
+                if match:
+                    fields.append(match.group(1))
+                continue
+            if not stripped:
+                continue
+            row = split_rows([line], delimiter_of(line))[0]
+            if names is None and is_header(row):
+                names = header_names(row, len(row))  # quoted only once a row of numbers follows
+                continue
+            if not any(_column(row[j : j + 1]).dtype.kind == "f" for j in range(len(row))):
+                # not a measured record (a system file reached through a link?): nothing of it is quoted
+                raise GearlabInputError(
+                    f"{path}: its first data row (line {number}) holds no number; expected a header "
+                    "row of column names, then rows of numbers"
+                )
+            names = names if names is not None else header_names(None, len(row))
+            break
+        else:
+            raise GearlabInputError(
+                f"{path}: no rows of numbers; expected a header row of column names (or none), then numbers"
+            )
+    every = [*names, *fields]
+    return Header("CSV", every, any(is_rate_or_time(n) for n in every), indexed=True)
+
+
+def _text_header(path: Path, fmt: str) -> Header:
+    from .csv import header_names
+    from .text import first_row
+
+    header, width = first_row(path)
+    names = header_names(header, width)
+    return Header(fmt, names, any(is_rate_or_time(n) for n in names), indexed=True)
+
+
+def _npz_header(path: Path) -> Header:
+    names, integer = [], set()
+    with zipfile.ZipFile(path) as archive:
+        for info in archive.infolist():
+            if not info.filename.endswith(".npy"):
+                continue
+            name = info.filename[:-4]
+            names.append(name)
+            with archive.open(info) as f:
+                version = np.lib.format.read_magic(f)
+                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+                _, _, dtype = read(f, max_header_size=10_000)
+            if dtype.kind in "iu":
+                integer.add(name)
+    return Header("NPZ", names, any(is_rate_or_time(n) for n in names), frozenset(integer))
+
+
+def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
+    from .hdf5 import _h5py, _hdf5_datasets
+
+    h5py = _h5py()
+    with h5py.File(path, "r") as f:
+        names = _hdf5_datasets(h5py, f)
+        integer = {n for n in names if f[n].dtype.kind in "iu"}
+        rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
+        # an 'fs' attribute anywhere (on a dataset or a group) is a rate field of what lies under it
+        rate = rate or any(is_rate_or_time(k) for n in ["/", *names] for k in f[n].attrs)
+        groups = set()
+        for n in names:
+            parts = n.split("/")[:-1]
+            groups.update("/".join(parts[: i + 1]) for i in range(len(parts)))
+        rate = rate or any(is_rate_or_time(k) for g in groups for k in f[g].attrs)
+    return Header(fmt, names, rate, frozenset(integer))
+
+
+def _wav_header(path: Path) -> Header:
+    """Channels, rate and sample format from the RIFF 'fmt ' chunk."""
+    with path.open("rb") as f:
+        riff = f.read(12)
+        if len(riff) < 12 or riff[:4] not in (b"RIFF", b"RIFX") or riff[8:12] != b"WAVE":
+            raise ValueError("no RIFF/WAVE header")
+        order = "<" if riff[:4] == b"RIFF" else ">"
+        for _ in range(1000):
+            head = f.read(8)
+            if len(head) < 8:
+                break
+            kind, size = head[:4], struct.unpack(order + "I", head[4:])[0]
+            if kind == b"fmt ":
+                body = f.read(min(size, 64))
+                tag, channels, _rate = struct.unpack(order + "HHI", body[:8])
+                names = [str(i) for i in range(channels)]
+                if tag == 0xFFFE and len(body) >= 26:  # the extensible format's own sub-format tag
+                    tag = struct.unpack(order + "H", body[24:26])[0]
+                integer = frozenset(names) if tag == 1 else frozenset()  # 1: PCM (3: IEEE float)
+                return Header("WAV", names, True, integer, indexed=True)
+            f.seek(size + (size & 1), 1)
+    raise ValueError("no 'fmt ' chunk in its header")
+
+
+def _mat_header(path: Path) -> Header:
+    from .matlab import _is_mat73, _mat5_variables
+
+    if _is_mat73(path):
+        return _hdf5_header(path, "MATLAB")
+    with path.open("rb") as f:
+        if 0 in f.read(4):  # v4: no header to list; the run reads it
+            return Header("MATLAB", [], True)
+    names = [n for n in _mat5_variables(path.read_bytes(), lambda name: False) if n and not n.startswith("__")]
+    return Header("MATLAB", names, any(is_rate_or_time(n) for n in names))
+
+
+HEADERS = {
+    "CSV": _csv_header,
+    "text": lambda p: _text_header(p, "text"),
+    "zipped text": lambda p: _text_header(p, "zipped text"),
+    "NPZ": _npz_header,
+    "HDF5": _hdf5_header,
+    "WAV": _wav_header,
+    "MATLAB": _mat_header,
+}
