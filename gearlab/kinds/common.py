@@ -172,7 +172,7 @@ def quantity(entry: dict, key: str, where: str) -> float:
 def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
     """A [source] entry that must be a simulation (the gap and detection kinds: measured data
     can only be their [target])."""
-    spec = dataset_spec(entry, where, base)
+    spec = None if entry.get("file") else dataset_spec(entry, where, base)  # the file's header is not read
     if not isinstance(spec, DatasetSpec):
         raise GearlabInputError(
             f"{where} key 'file': the source is a simulator configuration; give a 'preset' "

@@ -156,11 +156,14 @@ TABLES = {
             "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
             "tacho": Key((int, str), doc="tacho column: 0-based index or header name"),
             "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "tacho pulses per input-shaft revolution"),
-            "sensitivity": Key((int, float, str), 1.0, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"),
-            "fs": Key((int, float, str), doc="sampling rate, e.g. '66666.67 Hz' (text files carry none)"),
+            "sensitivity": Key(
+                (int, float, str), None, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"
+            ),
+            "gain": Key((int, float, str), None, doc="volts per file unit (integer counts; WAV: at full scale)"),
+            "fs": Key((int, float, str), None, doc="sampling rate, e.g. '66666.67 Hz', when a file carries none"),
             "transient": Key(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution"),
             "positive": Key(str, "fault", doc="the label of records with the fault to detect; every other is negative"),
-            "files": Key(list, doc="[{path, role = 'history' | 'test', label, condition (optional)}, ...]"),
+            "files": Key(list, doc="[{file, role = 'history' | 'test', label, condition (optional)}, ...]"),
         },
         required=True,
     ),
@@ -244,6 +247,7 @@ TABLES = {
     ),
     "protocol": Table({**TRAINING, **CALIBRATION}),
 }
+OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 # --- building the scenario ---------------------------------------------------------------

@@ -113,6 +113,7 @@ TABLES = {
     ),
     "network": Table(keys_of(NetworkSettings, name="fast")),
 }
+OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 # --- build: every check before any work ---------------------------------------------------------
@@ -224,15 +225,13 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     for key in ("vibration", "tacho"):
         if entry[key] == "":
             raise GearlabInputError(f"{where} key '{key}': missing; measured records need the {key} column")
-    if entry["gain"] is not None:
-        raise GearlabInputError(f"{where} key 'gain': text records hold volts; give their 'sensitivity'")
-    sensitivity = 1.0 if entry["sensitivity"] is None else entry["sensitivity"]
-    target = target_spec({**entry, "sensitivity": sensitivity, "positive": "fault"}, where, base, need=("history",))
+    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",))
     return Records(entry["name"] or "measured records", target, entry["sensitivity"] is not None)
 
 
-def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str]]:
-    """The history records' revolutions in m/s² (n, POINTS), their mean tacho speed, and notes.
+def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float]:
+    """The history records' revolutions in m/s² (n, POINTS), their mean tacho speed, notes, and
+    their sampling rate (the [target]'s fs, or the first record's own).
     Records of different speeds are different operating conditions: refused. Each record starts at
     one of the tacho's N marks: every record is turned by m/N of a turn into register with the first
     (textzip.align_to, as the detection kind does), so the set has one synchronous average."""
@@ -266,7 +265,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
         f"(tacho); the source simulates that speed"
     )
-    return X, speed, notes
+    return X, speed, notes, t.fs or rec.fs
 
 
 def check_healthy(count: int, where: str) -> None:
@@ -445,8 +444,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         records = isinstance(spec["target"], Records)
         settings = dict(spec["settings"])
         if records:  # measured records: the history's revolutions; the source runs at their tacho speed
-            target_X, speed, record_notes = read_history(spec["target"], on_event)
-            fs = spec["target"].target.fs
+            target_X, speed, record_notes, fs = read_history(spec["target"], on_event)
             check_points(
                 fs / speed,
                 z1,

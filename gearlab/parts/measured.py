@@ -6,14 +6,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..data.importers import check_measured_file
-from ..data.textzip import parse_sensitivity, read_record
+from ..data.recordings import channel_key, check_measured_file, check_recording, cut_recording
+from ..data.textzip import parse_sensitivity
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
 from ..units import to_si
 
 ROLES = ("history", "test")
-FILE_KEYS = ("path", "role", "label", "condition")
+# 'file' as in every kind's measured entry; 'path', its name before, is read the same
+FILE_KEYS = ("file", "role", "label", "condition", "path")
 
 
 @dataclass(frozen=True)
@@ -30,41 +31,48 @@ class Target:
     vibration: int | str
     tacho: int | str
     pulses_per_rev: int
-    sensitivity: float  # V per m/s²
-    fs: float
+    sensitivity: float | None  # V per m/s² (None: not given; the values are taken as m/s²)
+    fs: float | None  # None: each file's own (a time column, an 'fs' field)
     transient: str
     positive: str
     files: tuple[TargetFile, ...]
+    gain: float | None = None  # V per file unit
 
     def read(self, file: TargetFile):
-        """One of the target's records, read with its channels, tacho and units."""
-        return read_record(
+        """One of the target's records, read through the one import path (any format) with its
+        channels, tacho and units: its revolutions (recordings.cut_recording)."""
+        return cut_recording(
             file.resolved,
             vibration=self.vibration,
             tacho=self.tacho,
             pulses_per_rev=self.pulses_per_rev,
             sensitivity=self.sensitivity,
+            gain=self.gain,
             fs=self.fs,
             transient=self.transient,
         )
 
 
 def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
-    """The [target] 'files' list: each {path, role, label, condition?}, paths relative to *base*;
+    """The [target] 'files' list: each {file, role, label, condition?}, paths relative to *base*;
     every role in *need* must be present (the gap kind needs the history alone)."""
     if not files:
-        raise GearlabInputError(f"{where}: expected a list of files, each {{ path, role = 'history' | 'test', label }}")
+        raise GearlabInputError(f"{where}: expected a list of files, each {{ file, role = 'history' | 'test', label }}")
     out = []
     for i, f in enumerate(files):
         at = f"{where} entry {i + 1}"
         if not isinstance(f, dict):
-            raise GearlabInputError(f"{at}: expected a table {{ path, role, label }}, got {shown(f)}")
+            raise GearlabInputError(f"{at}: expected a table {{ file, role, label }}, got {shown(f)}")
         for key in f:
             if key not in FILE_KEYS:
                 raise GearlabInputError(
-                    f"{at}: unknown key '{key}'{did_you_mean(key, FILE_KEYS)}; known keys: {', '.join(FILE_KEYS)}"
+                    f"{at}: unknown key '{key}'{did_you_mean(key, FILE_KEYS)}; known keys: {', '.join(FILE_KEYS[:-1])}"
                 )
-        for key in ("path", "role", "label"):
+        if "path" in f:
+            if "file" in f:
+                raise GearlabInputError(f"{at}: give 'file' (the record), not both 'file' and 'path'")
+            f = {**f, "file": f["path"]}
+        for key in ("file", "role", "label"):
             if not isinstance(f.get(key), str) or not f[key]:
                 raise GearlabInputError(f"{at}: '{key}' must be a non-empty text")
         if f["role"] not in ROLES:
@@ -74,10 +82,10 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
         condition = f.get("condition", "")
         if not isinstance(condition, str):
             raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
-        path = Path(f["path"])
+        path = Path(f["file"])
         resolved = path if path.is_absolute() else base / path
-        check_measured_file(resolved, at, "a measured record (.zip of one text file, or the text)")
-        out.append(TargetFile(f["path"], str(resolved), f["role"], f["label"], condition))
+        check_measured_file(resolved, f"{at} key 'file'")
+        out.append(TargetFile(f["file"], str(resolved), f["role"], f["label"], condition))
     seen = {}
     for i, f in enumerate(out):
         if seen.setdefault(f.resolved, i) != i:
@@ -93,28 +101,35 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
 
 
 def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
-    if t["fs"] is None:
-        raise GearlabInputError(
-            f"{where} key 'fs': missing; text records carry no sampling rate (e.g. fs = '66666.67 Hz')"
-        )
-    fs = to_si(t["fs"], "Hz", f"{where} key 'fs'")
-    if not fs > 0:
-        raise GearlabInputError(f"{where} key 'fs': expected a positive sampling rate, got {shown(t['fs'])}")
+    """The [target] of measured records: the keys of every measured entry (vibration, tacho,
+    pulses_per_rev, sensitivity, gain, fs) and the files, each checked against its header
+    (recordings.check_recording: its channels, a sampling rate, units) before any work."""
+    fs = None
+    if t.get("fs") is not None:
+        fs = to_si(t["fs"], "Hz", f"{where} key 'fs'")
+        if not fs > 0:
+            raise GearlabInputError(f"{where} key 'fs': expected a positive sampling rate, got {shown(t['fs'])}")
     if t["transient"] not in ("none", "stats"):
         raise GearlabInputError(f"{where} key 'transient': expected 'none' or 'stats', got {shown(t['transient'])}")
     for key in ("vibration", "tacho"):
         if isinstance(t[key], int) and t[key] < 0:
             raise GearlabInputError(f"{where} key '{key}': a column index is 0 or more, got {t[key]}")
-    if t["vibration"] == t["tacho"]:
+    vibration, tacho = channel_key(t["vibration"]), channel_key(t["tacho"])
+    if vibration == tacho:
         raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
+    sensitivity = None
+    if t.get("sensitivity") is not None:
+        sensitivity = parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'")
+    gain = None
+    if t.get("gain") is not None:
+        gain = to_si(t["gain"], "V", f"{where} key 'gain'")
+        if not gain > 0:
+            raise GearlabInputError(
+                f"{where} key 'gain': expected a positive voltage per file unit, got {shown(t['gain'])}"
+            )
     files = target_files(t["files"], f"{where} key 'files'", base, need)
-    return Target(
-        t["vibration"],
-        t["tacho"],
-        t["pulses_per_rev"],
-        parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'"),
-        fs,
-        t["transient"],
-        t["positive"],
-        files,
-    )
+    for f in files:
+        check_recording(
+            f.resolved, where, {"vibration": vibration, "tacho": tacho}, fs=fs, sensitivity=sensitivity, gain=gain
+        )
+    return Target(vibration, tacho, t["pulses_per_rev"], sensitivity, fs, t["transient"], t["positive"], files, gain)
