@@ -131,7 +131,8 @@ def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmoni
 
 
 def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
-    """Per class: revolutions at low, middle and top intensity, and their order spectra."""
+    """Per class: revolutions at low, middle and top intensity, and their order spectra (an
+    unlabelled recording has no class: recording_signals)."""
     names = dataset.spec.class_names
     fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.3 * len(names)), squeeze=False, layout="constrained")
     angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]
@@ -158,6 +159,26 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
         else f"measured: {Path(spec.path).name}, {spec.vibration}"
     )
     fig.suptitle(f"dataset {spec.name}: {origin}")
+    return save(fig, path)
+
+
+def recording_signals(charts, title: str, path: Path) -> Path:
+    """An unlabelled recording's views (gearlab.kinds.dataset.recording_views): its revolutions,
+    their synchronous average with the revolutions' spread, and order spectra, one panel each."""
+    fig, axes = plt.subplots(3, 1, figsize=(12, 8), layout="constrained")
+    for ax, chart in zip(axes, charts):
+        for curve in chart.curves:
+            ax.plot(curve.x, curve.y, lw=0.6, label=curve.label)
+            if curve.err is not None:
+                y, e = np.asarray(curve.y), np.asarray(curve.err)
+                ax.fill_between(curve.x, y - e, y + e, alpha=0.2, lw=0)
+        ax.set_title(chart.title, fontsize=9)
+        ax.set_xlabel(chart.xlabel)
+        ax.set_ylabel(chart.ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1].set_yscale("log")
+    fig.suptitle(title)
     return save(fig, path)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict
+from pathlib import Path
 
 import numpy as np
 
@@ -53,7 +54,14 @@ def quick(scenario: Scenario) -> None:
     ]
 
 
+def unlabelled(dataset) -> bool:
+    """A recording without a labels channel: every revolution's label is -1 (no class to show)."""
+    return len(dataset) > 0 and bool((dataset.label < 0).all())
+
+
 def class_counts(dataset) -> dict[str, int]:
+    if unlabelled(dataset):
+        return {"unlabelled": len(dataset)}
     return {name: int((dataset.label == c).sum()) for c, name in enumerate(dataset.spec.class_names)}
 
 
@@ -75,6 +83,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if spec.name not in done:
                 run.append(record)
                 on_event(Event("record", stage="datasets", record=record))
+            for warning in dataset.meta.get("warnings", []):  # a level that never settled, kept whole
+                on_event(Event("log", message=f"WARNING: {warning}"))
             summary["datasets"][spec.name] = {**record, "spec": asdict(spec), "shape": list(dataset.X.shape)}
             figures(dataset, run)
         run.write_json("summary.json", summary)
@@ -94,9 +104,15 @@ def table_md(summary: dict) -> str:
 
 
 def figures(dataset, run: RunDir) -> None:
-    from ..plots import dataset_signals  # here, not at the top: start-up time (matplotlib)
+    from ..plots import dataset_signals, recording_signals  # here, not at the top: start-up time (matplotlib)
 
-    dataset_signals(dataset, run.file("figures", f"signals_{dataset.spec.name}.png"))
+    target = run.file("figures", f"signals_{dataset.spec.name}.png")
+    if unlabelled(dataset):
+        spec = dataset.spec
+        title = f"recording {spec.name}: {spec.vibration} of {Path(spec.path).name} (unlabelled)"
+        recording_signals(recording_views(dataset), title, target)
+    else:
+        dataset_signals(dataset, target)
 
 
 def summary_lines(run: RunDir) -> list[str]:
@@ -126,6 +142,9 @@ def charts(scenario: Scenario, run: RunDir) -> list:
         if dataset is None:
             out.append(Chart(f"dataset {spec.name}", "", "", (), notes=("not in the dataset cache any more",)))
             continue
+        if unlabelled(dataset):  # no class to show: the recording itself
+            out.extend(recording_views(dataset))
+            continue
         examples = dataset_examples(dataset, per_class=1)
         angle = np.arange(dataset.X.shape[1]) * 360.0 / dataset.X.shape[1]
         out.append(
@@ -143,3 +162,33 @@ def charts(scenario: Scenario, run: RunDir) -> list:
             spectra.append(Curve(label, orders[keep], amp[keep]))
         out.append(Chart(f"{spec.name}: order spectra", "shaft order", "amplitude", tuple(spectra)))
     return out
+
+
+def recording_views(dataset, max_order: float = 200.0) -> tuple[Chart, Chart, Chart]:
+    """An unlabelled recording (no class to show): (its first, middle and last revolutions; their
+    time-synchronous average over every revolution, ± the revolutions' standard deviation; the
+    order spectra of one revolution and of the TSA, where what is not synchronous averages away)."""
+    X = np.asarray(dataset.X, dtype=np.float64)
+    n, points = X.shape
+    angle = np.arange(points) * 360.0 / points
+    rows = sorted({0, n // 2, n - 1})
+    revolution = dataset.revolution
+    revolutions = Chart(
+        f"{dataset.spec.name}: revolutions (of {n})",
+        "input-shaft angle (deg)",
+        "standardised",
+        tuple(Curve(f"revolution {int(revolution[i])}", angle, X[i]) for i in rows),
+    )
+    average = X.mean(axis=0)
+    tsa = Chart(
+        f"{dataset.spec.name}: time-synchronous average of {n} revolutions (band: ± their std)",
+        "input-shaft angle (deg)",
+        "standardised",
+        (Curve("TSA", angle, average, X.std(axis=0)),),
+    )
+    spectra = []
+    for label, y in ((f"revolution {int(revolution[rows[0]])}", X[rows[0]]), ("TSA", average)):
+        orders, amp = order_spectrum(y)
+        keep = orders <= max_order
+        spectra.append(Curve(label, orders[keep], amp[keep]))
+    return revolutions, tsa, Chart(f"{dataset.spec.name}: order spectra", "shaft order", "amplitude", tuple(spectra))
