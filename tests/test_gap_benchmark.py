@@ -1,4 +1,4 @@
-"""The blind benchmark of the gap diagnosis (gearlab/gap/benchmark.py, kind `gap_benchmark`;
+"""The blind benchmark of the gap diagnosis (gearlab/kinds/gap_benchmark/trials.py, kind `gap_benchmark`;
 docs/gap_benchmark.md): the diagnosis never receives the generator's choices, trials are
 drawn seeded in the documented mix, a written target round-trips through the importer, the
 scoring on hand-made results, a tiny run through `gearlab run`, and bad input.
@@ -21,8 +21,8 @@ import pytest
 from gearlab.data.builder import build_dataset
 from gearlab.data.spec import dataset_preset
 from gearlab.effects import default_candidates
-from gearlab.gap import benchmark as bench
 from gearlab.gap.views import healthy_rows
+from gearlab.kinds.gap_benchmark import trials as bench
 from gearlab.registry import get_registry
 
 LIBRARY = tuple(default_candidates(get_registry()))  # the shipped library: every effect but the opt-in ones

@@ -222,7 +222,7 @@ def test_the_search_scores_a_sub_order_tone_by_the_records_lines(tmp_path):
     record's fractional lines (gearlab.gap.views.record_view, blocks of 10 revolutions): 3 % off then
     scores far above the truth, which stays near 0 (bias-corrected)."""
     from gearlab.effects import effect_spec
-    from gearlab.gap import benchmark as bench
+    from gearlab.kinds.gap_benchmark import trials as bench
 
     source = SOURCE.with_(faults=(), healthy=40, noise=bench.BASE_NOISE)  # the default search's rows
     truth = {"frequency": 7.29, "ratio": 0.22}

@@ -579,7 +579,7 @@ def test_a_tone_fitted_next_to_a_misfitted_resonance_moves_to_its_frequency(tmp_
     resonance (joint_refit) it lands within a few percent of 179.1 Hz, not at twice it, and scores
     far lower (162 against 2.4e4 when measured), and the resonance is named first (2-9 min on 2
     shared cores)."""
-    from gearlab.gap import benchmark as bench
+    from gearlab.kinds.gap_benchmark import trials as bench
     from gearlab.registry import get_registry
 
     source = dataset_preset("B-6-ch5").with_(faults=(), healthy=40, noise=bench.BASE_NOISE)

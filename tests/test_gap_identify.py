@@ -159,7 +159,7 @@ def test_a_speed_ripples_phase_is_found_from_a_measured_record(tmp_path):
     alias (57 deg off, score 205); the round's alias step (diagnose.realiased) brings the phase back
     within a degree before the check, and the profile calls it determined (1-2 min on 2 shared cores)."""
     from gearlab.effects import EffectChain, default_candidates
-    from gearlab.gap import benchmark as bench
+    from gearlab.kinds.gap_benchmark import trials as bench
     from gearlab.registry import get_registry
 
     hidden = effect_spec("speed_fluctuation", amplitude=0.03, order=2, phase=1.0)

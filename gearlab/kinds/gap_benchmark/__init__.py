@@ -8,7 +8,7 @@
                   it gets the base sensor noise, Gaussian 30 dB, in source and target alike)
     [search]      the diagnosis's settings: budget, max_effects, healthy, bootstrap, permutations, alpha
 
-One unit = one trial (gearlab.gap.benchmark.trial_task): draw -> simulate -> write target.npz ->
+One unit = one trial (gearlab.kinds.gap_benchmark.trials.trial_task): draw -> simulate -> write target.npz ->
 diagnose from the file -> score. Output: results.jsonl (one record per trial), targets/trial_NNN/
 (target.npz, answers.json, diagnosis.json), summary.json (trials, top1, top3, median_shrink,
 median_param_error, null_correct, out_of_library_unexplained, per_effect, ...), table.md, a figure
@@ -22,18 +22,18 @@ from dataclasses import asdict, replace
 
 import numpy as np
 
-from ..charts import Chart, Curve
-from ..effects import default_candidates
-from ..errors import GearlabInputError
-from ..events import Event
-from ..gap import benchmark as bench
-from ..gap.diagnose import Settings
-from ..params import did_you_mean
-from ..registry import get_registry
-from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, keys_of, location
-from ..settings import quick_limits
-from .common import DATASET_TABLE, dataset_spec, executor_for
+from ...charts import Chart, Curve
+from ...effects import default_candidates
+from ...errors import GearlabInputError
+from ...events import Event
+from ...gap.diagnose import Settings
+from ...params import did_you_mean
+from ...registry import get_registry
+from ...runs import RunDir
+from ...scenario import Key, Scenario, Table, in_range, keys_of, location
+from ...settings import quick_limits
+from ..common import DATASET_TABLE, dataset_spec, executor_for
+from . import trials as bench
 
 MAX_TRIALS = 10000
 MAX_SEED = 2**32 - 1
@@ -81,6 +81,7 @@ TABLES = {
     # the diagnosis's own settings, declared once on gearlab.gap.scoring.Settings
     "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
 }
+OVERRIDES: tuple[str, ...] = ("trials", "seed")  # [benchmark] keys that `gearlab gap FILE` and the TUI may set
 
 
 def build(scenario: Scenario) -> dict:
@@ -274,7 +275,7 @@ def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..plots import save
+    from ...plots import save
 
     names = list(summary["per_effect"])
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))

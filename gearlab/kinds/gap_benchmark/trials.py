@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..confined import Confined
-from ..data.spec import DatasetSpec, NoiseSpec
-from ..errors import GearlabInputError
+from ...confined import Confined
+from ...data.spec import DatasetSpec, NoiseSpec
+from ...errors import GearlabInputError
 
 # --- the trial mix ----------------------------------------------------------------------------
 
@@ -185,8 +185,8 @@ def draw_params(effect, rng: np.random.Generator) -> dict:
 def draw_trials(n: int, seed: int, library: Sequence[str], source: DatasetSpec, registry=None) -> list[Trial]:
     """*n* trials, a function of (n, seed, library, source) only. Single and withheld effects go
     round the library in a seeded order, so every effect is hidden about equally often."""
-    from ..effects import EffectChain
-    from ..registry import get_registry
+    from ...effects import EffectChain
+    from ...registry import get_registry
 
     registry = registry or get_registry()
     library = tuple(library)
@@ -238,8 +238,8 @@ def draw_suborder_trials(n: int, seed: int, library: Sequence[str], source: Data
     """*n* "suborder" trials (EXTRA_KINDS), a function of (n, seed, library, source) only: an
     interference tone at SUBORDER_ORDERS shaft orders (not within SUBORDER_CLEAR of a whole one), its
     level from RANGES, every library effect a candidate. Indices from *first* on."""
-    from ..data.builder import operating_point
-    from ..registry import get_registry
+    from ...data.builder import operating_point
+    from ...registry import get_registry
 
     if "interference_tone" not in library:
         raise GearlabInputError("benchmark: 'suborder' trials hide an interference_tone, which the library lacks")
@@ -357,10 +357,10 @@ def _held(folder: Path | str | Confined) -> Confined:
 def write_target(trial: Trial, source: DatasetSpec, folder: Path | Confined, revolutions: int, executor=None) -> Path:
     """Simulate the trial's target, write it as folder/target.<ext> (with folder/calibration.json)
     and the answers as folder/answers.json; the path of the target for the importer to read."""
-    from ..data.builder import EFFECT_STREAM, build_dataset, operating_point
-    from ..effects import EffectChain
-    from ..gap.views import healthy_rows
-    from ..signals import add_noise
+    from ...data.builder import EFFECT_STREAM, build_dataset, operating_point
+    from ...effects import EffectChain
+    from ...gap.views import healthy_rows
+    from ...signals import add_noise
 
     folder = _held(folder)
     spec = target_spec(trial, source, revolutions)
@@ -430,9 +430,9 @@ def read_answers(folder: Path | Confined) -> dict:
 def import_target(path: Path):
     """The healthy revolutions of a written target, in physical units, through the importer, and
     its measurement chain (None for the angle-domain record, which has none to match)."""
-    from ..data.chain import chain_of
-    from ..data.importers import MeasuredSpec, import_measured
-    from ..gap.views import healthy_rows
+    from ...data.chain import chain_of
+    from ...data.importers import MeasuredSpec, import_measured
+    from ...gap.views import healthy_rows
 
     path = Path(path)
     calibration = path.parent / "calibration.json"
@@ -470,7 +470,7 @@ def _diagnose(
 ) -> dict:
     """gearlab.gap.diagnose.diagnose with the search settings (a plain dict, picklable); imported here
     so that the benchmark loads without it. Serial inside a trial: trials are what runs in parallel."""
-    from . import diagnose as d
+    from ...gap import diagnose as d
 
     settings = {**dict(settings), "max_order": max_order} if max_order else dict(settings)
     return d.diagnose(
@@ -519,7 +519,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
     is seen), and ``right_answer`` is True -- "no significant gap" is the right answer there. Else
     (or without an oracle) a trial with no gap seen is a miss. ``right_answer`` of an effect trial
     is top1, or no gap named on a too-weak target."""
-    from ..registry import get_registry
+    from ...registry import get_registry
 
     registry = registry or get_registry()
     kind = answers["kind"]
@@ -629,8 +629,8 @@ def oracle_seen(
     six_dof sits at the edge: docs/gap_benchmark.md, section 3)."""
     from dataclasses import replace
 
-    from .conclusion import gap_seen
-    from .scoring import Settings, plain_report
+    from ...gap.conclusion import gap_seen
+    from ...gap.scoring import Settings, plain_report
 
     seen = 0
     for k in range(ORACLE_REPEATS):
