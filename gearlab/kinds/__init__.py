@@ -1,5 +1,5 @@
 """Scenario kinds, by the name a scenario gives in [scenario] kind. Each is a module that
-fulfils gearlab.kinds.contract.ScenarioKind (TABLES, build, describe, quick, run,
+fulfils gearlab.kinds.contract.ScenarioKind (TABLES, OVERRIDES, build, describe, quick, run,
 summary_lines, records_table, charts); the helpers they share are in gearlab.kinds.common."""
 
 from . import dataset, detection, gap, gap_benchmark, noise_study, stiffness, transfer, transfer_benchmark

@@ -23,6 +23,9 @@ class ScenarioKind(Protocol):
     # The kind's tables beyond [scenario], [output] and [execution]: checked key by key before
     # any work (gearlab.engine.load_scenario).
     TABLES: Mapping[str, Table]
+    # The [benchmark] keys that a run of a scenario file of this kind may set on its command line
+    # (`gearlab gap FILE --trials N --seed S`; the TUI's run-with-options form offers them), or ().
+    OVERRIDES: tuple[str, ...]
 
     def build(self, scenario: Scenario) -> Any:
         """The scenario's resolved spec (becomes scenario.spec); GearlabInputError naming file,

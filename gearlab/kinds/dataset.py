@@ -20,6 +20,7 @@ from ..signals import order_spectrum
 from .common import DATASET_TABLE, dataset_spec, executor_for, sized
 
 TABLES = {"datasets": DATASET_TABLE}
+OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:

@@ -79,6 +79,7 @@ TABLES = {
     "network": Table(keys_of(NetworkSettings, name=NoiseProtocol.network, dropout=NoiseProtocol.dropout)),
     "protocol": Table(keys_of(NoiseProtocol)),
 }
+OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 def preset_name(noise: str, variant: str) -> str:

@@ -47,6 +47,7 @@ TABLES = {
         array=True,
     ),
 }
+OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 @dataclass(frozen=True)

@@ -57,6 +57,7 @@ TABLES = {
         }
     ),
 }
+OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 def build(scenario: Scenario) -> dict:

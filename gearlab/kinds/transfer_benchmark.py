@@ -109,6 +109,7 @@ TABLES = {
     ),
     "protocol": Table({**keys_of(Protocol, ("repetitions",)), **TRAINING, **CALIBRATION}),
 }
+OVERRIDES: tuple[str, ...] = ()  # --trials and --seed: `gearlab transfer-benchmark`, not a file of its own
 
 
 def build(scenario: Scenario) -> dict:

@@ -13,6 +13,7 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.screen import ModalScreen
 from textual.widgets import Button, Checkbox, DataTable, Input, Label, Select, Static
 
+from ..kinds import SCENARIO_KINDS
 from ..scenario import EXECUTION_TABLE, Scenario
 
 
@@ -23,8 +24,8 @@ class RunOptions:
     quick: bool = False
     executor: str | None = None
     device: str | None = None
-    trials: int | None = None  # gap_benchmark only
-    seed: int | None = None  # gap_benchmark only
+    trials: int | None = None  # a kind whose OVERRIDES has them only
+    seed: int | None = None
 
 
 class KeysScreen(ModalScreen):
@@ -79,7 +80,7 @@ class RunOptionsScreen(ModalScreen[RunOptions | None]):
     def __init__(self, scenario: Scenario):
         super().__init__()
         self.scenario = scenario
-        self.benchmark = scenario.kind == "gap_benchmark"
+        self.benchmark = "trials" in SCENARIO_KINDS[scenario.kind].OVERRIDES  # the kind contract
 
     def compose(self) -> ComposeResult:
         execution = self.scenario.tables.get("execution", {})
