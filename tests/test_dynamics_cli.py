@@ -168,10 +168,10 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
 
     # again: everything comes from the cache (figures are redrawn; stub them, they were checked above)
     import gearlab.plots
+    from gearlab.confined import write_file
 
     def stub(dataset, path):
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(b"stub")
+        write_file(path, b"stub")  # a file of the run directory (a Confined), as plots.save writes it
         return path
 
     monkeypatch.setattr(gearlab.plots, "dataset_signals", stub)
