@@ -120,7 +120,7 @@ SCENARIO_TABLE = Table(
     {
         "name": Key(str, check=plain_name, doc="run name, used for runs/<name>/"),
         "description": Key(str, ""),
-        "kind": Key(str, doc="stiffness | dataset | noise_study | transfer | gap | gap_benchmark | detection | transfer_benchmark"),
+        "kind": Key(str, doc="the scenario kind: a name of gearlab.kinds.SCENARIO_KINDS (gearlab validate lists them)"),
     },
     required=True,
 )
