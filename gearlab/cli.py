@@ -16,9 +16,9 @@ from typing import Annotated
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from .cliconv import HELP_NAMES, ConventionalGroup, conventional
 from .errors import GearlabInputError
 
 # Each command imports what it needs inside its function (start-up time): `gearlab --help`,
@@ -26,11 +26,14 @@ from .errors import GearlabInputError
 # a cycle (tests/test_architecture.py).
 
 app = typer.Typer(
-    add_completion=False,
+    cls=ConventionalGroup,
+    add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    context_settings={"help_option_names": HELP_NAMES},
     help="gearlab: gear mesh stiffness, gearbox dynamics, fault classifiers and their calibration.",
 )
+conventional(app)  # -h, SCENARIO / [SCENARIO], PATH / TEXT / INTEGER, no type beside a flag (gearlab.cliconv)
 console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 
@@ -450,16 +453,20 @@ def _run(
             )
             typer.echo(f"run directory: {result.path}")
             return
-        with ProgressView() as view:
+        from .terminal import ProgressView
+
+        with ProgressView(err_console) as view:
             result = run_scenario(
                 scenario, out=out, resume=resume, quick=quick, overrides=overrides, on_event=remembered(view.handle)
             )
     except KeyboardInterrupt:
         raise Interrupted(started[-1] if started else None) from None
+    from .terminal import print_results
+    from .verdict import verdict_lines
+
     kind = scenario_of(result).kind
-    for line in SCENARIO_KINDS[kind].summary_lines(result):
-        console.print(line)
-    console.print(f"report: {result.path / 'report.html'}")
+    print_results(console, verdict_lines(result), SCENARIO_KINDS[kind].summary_lines(result))
+    console.print(f"report: {result.path / 'report.html'}", markup=False, highlight=False)
     typer.echo(f"run directory: {result.path}")
 
 
@@ -478,6 +485,7 @@ def gap(
     quick: Quick = False,
     executor: Executor = None,
     ray_address: RayAddress = None,
+    device: Device = None,
     events: Events = False,
 ) -> None:
     """Diagnose the sim-to-real gap of a scenario, or run the blind benchmark of the diagnosis.
@@ -488,7 +496,7 @@ def gap(
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     from .engine import load_scenario
 
-    overrides = _execution(executor, ray_address, None)
+    overrides = _execution(executor, ray_address, device)
     given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
     if scenario == "benchmark":
         path = _shipped_scenario(BENCHMARK, "gap_benchmark")
@@ -568,6 +576,32 @@ def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> 
 
 
 @app.command()
+def runs(
+    directory: Annotated[Path, typer.Argument(help="a folder of runs (searched 4 levels down)")] = Path("runs"),
+    as_json: Annotated[bool, typer.Option("--json", help="print a JSON list")] = False,
+) -> None:
+    """List past runs, newest first: name, kind, start, duration, status, headline figure, run directory.
+
+    Status: finished, failed, cancelled, running, stopped (killed or crashed: gearlab run --resume RUN_DIR continues it).
+
+    Example: gearlab runs runs/quick
+    """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
+    from dataclasses import asdict
+
+    from .runinfo import list_runs
+    from .terminal import print_table, runs_table
+
+    found = list_runs(directory)
+    if as_json:
+        typer.echo(json.dumps([{**asdict(r), "path": str(r.path)} for r in found], indent=1))
+        return
+    if not found:
+        console.print(f"no runs under {directory}", markup=False, highlight=False)
+        return
+    print_table(console, runs_table(found))
+
+
+@app.command()
 def compare(
     run_dirs: Annotated[list[Path], typer.Argument(help="two or more run directories of one kind")],
     html: Annotated[Path | None, typer.Option(help="also write a self-contained comparison page (HTML) here")] = None,
@@ -586,11 +620,32 @@ def compare(
         raise GearlabInputError(f"--html {html}: directory {html.parent} does not exist")
     for line in compare_lines(runs):
         console.print(line, markup=False, highlight=False)
+    _print_scenario_differences(run_dirs)
     console.print(compare_markdown(runs).rstrip(), markup=False, highlight=False)
     if html is not None:
         with tempfile.TemporaryDirectory() as figures:  # the PNGs are inlined, then go
             atomic_write(html, compare_html(runs, Path(figures)))
         console.print(f"wrote {html}", markup=False, highlight=False)
+
+
+def _print_scenario_differences(run_dirs: list[Path]) -> None:
+    """The scenario keys whose values differ between the compared runs (A, B, ... as compare names them)."""
+    from rich.text import Text
+
+    from .runinfo import scenario_differences
+    from .terminal import print_table
+
+    rows = scenario_differences(run_dirs)
+    if not rows:
+        console.print("scenarios: the same (apart from their names)", markup=False, highlight=False)
+        return
+    table = Table(title=Text("scenario differences", style="bold"), title_justify="left")
+    table.add_column("key")
+    for i in range(len(run_dirs)):
+        table.add_column(chr(ord("A") + i) if i < 26 else str(i + 1), overflow="fold")
+    for key, values in rows:
+        table.add_row(Text(key), *(Text(v) for v in values))
+    print_table(console, table)
 
 
 @app.command()
@@ -610,61 +665,6 @@ def tui(directory: Annotated[Path, typer.Argument(help="folder of scenario files
 
 def _print_event(event) -> None:
     print(event.to_json(), flush=True)
-
-
-class ProgressView:
-    """Rich progress bars fed by the run engine's events (one bar per stage)."""
-
-    def __init__(self):
-        self.progress = Progress(
-            TextColumn("{task.description}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            console=err_console,
-            transient=False,
-        )
-        self.tasks: dict[str, int] = {}  # stage -> rich task id (terminal) or last step told (log lines)
-        self.labels: dict[str, str] = {}
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        # Started by the first stage only: a run refused before any work prints its error line alone.
-        return self.progress.__exit__(*exc) if self.tasks and err_console.is_terminal else None
-
-    def handle(self, event) -> None:
-        if not err_console.is_terminal:  # a log file or a pipe: lines that keep their labels
-            self._line(event)
-            return
-        if event.kind == "stage":
-            if not self.tasks:
-                self.progress.start()
-            self.tasks[event.stage] = self.progress.add_task(event.message or event.stage, total=event.total or None)
-        elif event.kind == "advance" and event.stage in self.tasks:
-            self.progress.update(self.tasks[event.stage], completed=event.done, total=event.total or None)
-        elif event.kind == "log":
-            self.progress.console.print(event.message)
-
-    def _line(self, event) -> None:
-        """One line per stage start, per tenth of a stage (at most) and per log message."""
-        if event.kind == "stage":
-            self.tasks[event.stage] = 0
-            self.labels[event.stage] = event.message or event.stage
-            err_console.print(
-                f"{self.labels[event.stage]}: started ({event.total or '?'} steps)", markup=False, highlight=False
-            )
-        elif event.kind == "advance" and event.stage in self.tasks:
-            step = max(1, (event.total or 10) // 10)
-            last = self.tasks[event.stage]
-            if event.done > last and (event.done >= last + step or (event.total and event.done >= event.total)):
-                self.tasks[event.stage] = event.done
-                err_console.print(
-                    f"{self.labels[event.stage]}: {event.done}/{event.total or '?'}", markup=False, highlight=False
-                )
-        elif event.kind == "log":
-            err_console.print(event.message, markup=False, highlight=False)
 
 
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:

@@ -19,6 +19,7 @@ from .events import PROGRESS, Event, EventSink, ignore_events
 from .files import cannot_write, write_problem
 from .kinds import SCENARIO_KINDS
 from .report import build_report
+from .runinfo import Session
 from .runs import RunDir, check_inputs
 from .scenario import (
     EXECUTION_TABLE,
@@ -166,15 +167,22 @@ def run_scenario(
             scenario = _resumed_scenario(run, scenario_path, quick, overrides)
         on_event(Event("run", message=str(run.path)))
         on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
+        session = Session(run, scenario.tables.get("execution"))  # run.json: who, where, when
         watcher = ProgressWatcher(run, on_event)
         watcher.start()
+        status = "failed"
         try:
             SCENARIO_KINDS[scenario.kind].run(scenario, run, on_event)
             write_report(run)
+            status = "finished"
+        except (KeyboardInterrupt, SystemExit):  # Ctrl-C, or SIGTERM (a TUI's cancel)
+            status = "cancelled"
+            raise
         except GearlabInputError:
             # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
             if resume is None and not run.records():
                 run.discard()
+                status = ""
             raise
         except OSError as exc:
             if write_problem(exc) is None:
@@ -184,6 +192,7 @@ def run_scenario(
             kept = resume is not None or bool(run.records())
             if not kept:
                 run.discard()
+                status = ""
             then = (
                 f"; the run is kept: once fixed, resume with: gearlab run --resume {run.path}"
                 if kept
@@ -192,7 +201,18 @@ def run_scenario(
             raise GearlabInputError(f"{cannot_write(exc, run.path)}{then}") from None
         finally:
             watcher.stop()
+            if status:
+                session.end(status, device=_trained_on(run) if status == "finished" else None)
     return run
+
+
+def _trained_on(run: RunDir) -> str | None:
+    """Where the run's networks trained, when its summary says (run.json's device)."""
+    try:
+        device = run.summary().get("device")
+    except (OSError, GearlabInputError):
+        return None
+    return device if isinstance(device, str) else None
 
 
 def output_base(scenario: Scenario, out: str | Path | None = None) -> Path:

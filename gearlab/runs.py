@@ -41,13 +41,25 @@ RESULTS_FILE = "results.jsonl"  # one finished unit a line
 
 
 class RunLock:
-    """The run directory held by this process (see RunDir.lock); released on close or exit."""
+    """The run directory held by this process (see RunDir.lock); released on close or exit,
+    its lock file removed then (no stale .lock is left behind a run that ended)."""
 
-    def __init__(self, fd: int):
+    def __init__(self, fd: int, file: Confined | None = None):
         self.fd: int | None = fd
+        self.file = file
 
     def release(self) -> None:
-        if self.fd is not None:
+        if self.fd is None:
+            return
+        try:
+            # Removed while still held, and only when the name still is the file held: a process
+            # that opened it meanwhile finds, once it holds it, that the name is gone (or another
+            # file) and locks the name afresh (RunDir.lock), so two never hold the directory.
+            if self.file is not None and _same_file(self.file.stat(), os.fstat(self.fd)):
+                self.file.unlink()
+        except (OSError, GearlabInputError):
+            pass  # a lock file left behind is harmless: the next lock takes it over
+        finally:
             os.close(self.fd)  # closing the only descriptor drops the flock
             self.fd = None
 
@@ -169,27 +181,36 @@ class RunDir:
         """Hold the run directory for this process, or refuse when another process holds it.
 
         An flock, not a marker file: the kernel drops it when the holder dies, however it
-        dies (SIGKILL included), so a killed run never blocks its --resume. The lock file
-        is left in place: removing it would let two processes lock two different files.
+        dies (SIGKILL included), so a killed run never blocks its --resume. The holder removes
+        the lock file as it ends (RunLock.release); a file locked here that is no longer the
+        one of that name (removed meanwhile by the holder ending) is let go and the name
+        locked again, so two processes never hold two different files.
         """
-        try:
-            # never through a link, never a file with another name elsewhere: it is truncated below
-            fd = self.file(LOCK_FILE).open_own(os.O_RDWR | os.O_CREAT)
-        except OSError as exc:
-            raise GearlabInputError(f"{self.path}: cannot lock the run directory ({exc.strerror or exc})") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
-            os.close(fd)
-            who = f" (pid {holder})" if holder.isdigit() else ""
-            raise GearlabInputError(
-                f"{self.path}: another gearlab process{who} is running in this run directory; "
-                "wait for it to end (or stop it), then resume"
-            ) from None
+        lock_file = self.file(LOCK_FILE)
+        for _ in range(100):
+            try:
+                # never through a link, never a file with another name elsewhere: it is truncated below
+                fd = lock_file.open_own(os.O_RDWR | os.O_CREAT)
+            except OSError as exc:
+                raise GearlabInputError(f"{self.path}: cannot lock the run directory ({exc.strerror or exc})") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
+                os.close(fd)
+                who = f" (pid {holder})" if holder.isdigit() else ""
+                raise GearlabInputError(
+                    f"{self.path}: another gearlab process{who} is running in this run directory; "
+                    "wait for it to end (or stop it), then resume"
+                ) from None
+            if _same_file(lock_file.stat(), os.fstat(fd)):
+                break
+            os.close(fd)  # the previous holder removed it as it ended: lock the name afresh
+        else:
+            raise GearlabInputError(f"{self.path}: cannot lock the run directory (its lock file keeps changing)")
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-        return RunLock(fd)
+        return RunLock(fd, lock_file)
 
     def scenario_file(self) -> Confined:
         """The scenario file to resume from: the original text, else the resolved one."""
@@ -266,6 +287,10 @@ class RunDir:
         cut = data.rfind(b"\n") + 1
         if cut != len(data):
             store.write(data[:cut])
+
+
+def _same_file(a: os.stat_result | None, b: os.stat_result) -> bool:
+    return a is not None and (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
 def _fresh_folder(parent: Path, stamp: str) -> Path:

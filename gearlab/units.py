@@ -19,11 +19,12 @@ def _ureg() -> pint.UnitRegistry:
     return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
 
 
-def to_si(value: object, unit: str, where: str) -> float:
+def to_si(value: object, unit: str, where: str, *, as_written: str | None = None) -> float:
     """Convert *value* (a number already in *unit*, or a string with its own unit) to *unit*.
 
     *unit* is the SI unit the caller stores ("m", "rad", "Hz", "N*m", "" for a pure number).
-    *where* names the place the value came from, for the error message.
+    *where* names the place the value came from, for the error message; *as_written*, the
+    user's own text when the caller rewrote it before (messages quote what the user wrote).
     """
     if isinstance(value, bool):
         raise GearlabInputError(
@@ -35,7 +36,7 @@ def to_si(value: object, unit: str, where: str) -> float:
         except OverflowError:  # an integer beyond any float (TOML integers have no size limit)
             raise GearlabInputError(f"{where}: expected a finite number, got {shown(value)}") from None
     elif isinstance(value, str):
-        number = _parse(value, unit, where)
+        number = _parse(value, unit, where, as_written if as_written is not None else value)
     else:
         raise GearlabInputError(
             f"{where}: expected a number or a quantity with a unit of {_describe(unit)}"
@@ -75,14 +76,16 @@ def _screen(text: str, unit: str, where: str) -> None:
             )
 
 
-def _parse(text: str, unit: str, where: str) -> float:
+def _parse(text: str, unit: str, where: str, written: str | None = None) -> float:
+    written = text if written is None else written
     _screen(text, unit, where)
     ureg = _ureg()
     try:
         quantity = ureg.Quantity(text.strip().replace("µ", "u").replace("μ", "u"))
     except Exception:
         raise GearlabInputError(
-            f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})"
+            f"{where}: cannot read {written!r} as a quantity; expected e.g. {example(unit)!r} ({_describe(unit)})"
+            f"{_case_hint(written)}"
         ) from None
     target = ureg.Unit(unit) if unit else ureg.dimensionless
     try:
@@ -93,14 +96,59 @@ def _parse(text: str, unit: str, where: str) -> float:
         return float(quantity.to(target).magnitude)
     except pint.DimensionalityError:
         raise GearlabInputError(
-            f"{where}: {text!r} has the wrong dimension; expected a quantity in {_describe(unit)}"
+            f"{where}: {written!r} has the wrong dimension; expected a quantity in {_describe(unit)}, "
+            f"e.g. {example(unit)!r}{_case_hint(written)}"
         ) from None
     except OverflowError:
-        raise GearlabInputError(f"{where}: expected a finite number, got {text!r}") from None
+        raise GearlabInputError(f"{where}: expected a finite number, got {written!r}") from None
     except (TypeError, ValueError, ArithmeticError):  # a complex magnitude, an offset unit's arithmetic, ...
         raise GearlabInputError(
-            f"{where}: cannot read {text!r} as a quantity; expected e.g. '3.175 mm' ({_describe(unit)})"
+            f"{where}: cannot read {written!r} as a quantity; expected e.g. {example(unit)!r} ({_describe(unit)})"
         ) from None
+
+
+# An example quantity per stored unit, for messages (a length is no example of a frequency).
+EXAMPLES = {
+    "m": "3.175 mm",
+    "rad": "20 deg",
+    "Hz": "25 Hz",
+    "N*m": "100 N*m",
+    "N": "500 N",
+    "N/m": "2e8 N/m",
+    "V": "0.5 mV",
+    "V*s^2/m": "10 mV/g",
+    "s": "0.4 s",
+    "kg": "1.2 kg",
+    "kg*m^2": "0.002 kg*m^2",
+    "Pa": "206 GPa",
+    "W": "1.5 kW",
+    "m/s^2": "9.81 m/s^2",
+    "": "0.5",
+}
+
+# Units people type, in their case-sensitive spelling: '10 mv/g' is read as millivolt only when
+# written 'mV' (pint's 'mv' is no unit; 'MM' would be megamolar).
+_COMMON = (
+    "mV", "uV", "V", "kV", "Hz", "kHz", "MHz", "mm", "um", "cm", "m", "km", "N", "kN", "rpm", "deg",
+    "rad", "s", "ms", "us", "g", "kg", "Pa", "kPa", "MPa", "GPa", "W", "kW", "mW", "dB",
+)  # fmt: skip
+
+
+def example(unit: str) -> str:
+    """An example quantity in *unit* for a message: '25 Hz' for Hz, '10 mV/g' for a sensitivity."""
+    return EXAMPLES.get(unit.replace(" ", ""), f"1 {unit}" if unit else "0.5")
+
+
+def _case_hint(text: str) -> str:
+    """'; units are case-sensitive: mV' when *text* holds a common unit in the wrong case."""
+    right = []
+    for token in re.findall(r"[A-Za-z_]+", text):
+        if token in _COMMON:
+            continue
+        match = next((c for c in _COMMON if c.lower() == token.lower()), None)
+        if match and match not in right:
+            right.append(match)
+    return f"; units are case-sensitive: {', '.join(right)}" if right else ""
 
 
 def _describe(unit: str) -> str:

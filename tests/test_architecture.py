@@ -42,11 +42,19 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
     ("shared kind parts", ("gearlab.parts",)),
     ("scenario kinds", ("gearlab.kinds",)),
-    ("verdict and report", ("gearlab.verdict", "gearlab.report")),
+    ("verdict and report", ("gearlab.verdict", "gearlab.report", "gearlab.runinfo")),
     ("run engine", ("gearlab.engine",)),
     (
         "front-ends and the plugin API",
-        ("gearlab.compare", "gearlab.tui", "gearlab.cli", "gearlab.__main__", "gearlab.api"),
+        (
+            "gearlab.compare",
+            "gearlab.tui",
+            "gearlab.cli",
+            "gearlab.cliconv",
+            "gearlab.terminal",
+            "gearlab.__main__",
+            "gearlab.api",
+        ),
     ),
 ]
 

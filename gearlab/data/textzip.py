@@ -56,10 +56,11 @@ _GRAVITY = re.compile(r"(?<![\w.])g(?![\w])")
 def parse_sensitivity(value, where: str) -> float:
     """An accelerometer sensitivity ("10 mV/g", "1.02 mV/(m/s^2)", or a number in V/(m/s²))
     as volts per m/s²."""
+    written = value if isinstance(value, str) else None  # messages quote the user's text
     if isinstance(value, str):
         value = _GRAVITY.sub("g_n", value)
     try:
-        s = to_si(value, "V*s^2/m", where)
+        s = to_si(value, "V*s^2/m", where, as_written=written)
     except GearlabInputError as exc:
         raise GearlabInputError(f"{exc} (volts per acceleration, e.g. '10 mV/g'; g is standard gravity)") from None
     if not s > 0:

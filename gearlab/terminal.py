@@ -1,0 +1,309 @@
+"""What `gearlab run` draws in the terminal: progress with counts, rate and ETA (rich bars on
+a terminal, log lines otherwise), and at the end of a run its verdict and its tables as rich
+tables. Also the table of `gearlab runs`.
+
+Loaded by the CLI's commands that run or list runs (rich only: no torch, numba or matplotlib).
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Iterable
+
+from rich.console import Console
+from rich.measure import Measurement
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, Task, TextColumn, TimeElapsedColumn
+from rich.table import Table
+from rich.text import Text
+
+QUIET_S = 5.0  # a log line at least this often while a unit says how far it is
+
+
+def clock(seconds: float | None) -> str:
+    """1:02:03, 2:03 or 0:05; '-:--' when unknown."""
+    if seconds is None or seconds != seconds or seconds < 0:
+        return "-:--"
+    seconds = int(round(seconds))
+    hours, rest = divmod(seconds, 3600)
+    minutes, s = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{s:02d}" if hours else f"{minutes}:{s:02d}"
+
+
+class Pace:
+    """Rate and time left of a stage from its counts: the steps done since the stage was first
+    seen (a resumed run starts with some done), over the time since then."""
+
+    def __init__(self, done: int = 0, now: float | None = None):
+        self.start = time.monotonic() if now is None else now
+        self.done0 = done
+        self.done = done
+
+    def update(self, done: int) -> None:
+        if done < self.done0:  # counted afresh
+            self.done0 = done
+        self.done = done
+
+    def rate(self, now: float | None = None) -> float | None:
+        """Steps a second, None before the first step."""
+        now = time.monotonic() if now is None else now
+        steps = self.done - self.done0
+        return steps / max(now - self.start, 1e-9) if steps > 0 else None
+
+    def left(self, total: int | None, now: float | None = None) -> float | None:
+        rate = self.rate(now)
+        if not total or rate is None:
+            return None
+        return max(total - self.done, 0) / rate
+
+    def rate_text(self, now: float | None = None) -> str:
+        rate = self.rate(now)
+        if rate is None:
+            return ""
+        return f"{rate:.1f}/s" if rate >= 1 else f"{clock(1 / rate)}/step"
+
+
+class PaceColumn(ProgressColumn):
+    """'1.2/s ETA 0:42' (or '0:17/step ETA 3:10') from the task's Pace; the unit in progress
+    beside a stage that cannot count yet."""
+
+    def render(self, task: Task) -> Text:
+        pace: Pace | None = task.fields.get("pace")
+        note = task.fields.get("note") or ""
+        if pace is None:
+            return Text(note, style="dim")
+        if task.finished:
+            return Text("done", style="green")
+        rate = pace.rate_text()
+        if not rate:
+            return Text(note or "ETA after the first step", style="dim")
+        return Text(f"{rate} ETA {clock(pace.left(int(task.total or 0)))}", style="cyan")
+
+
+class StageOnly(ProgressColumn):
+    """A column drawn for stages only: a unit's line shows its text alone."""
+
+    def __init__(self, column: ProgressColumn):
+        super().__init__()
+        self.column = column
+
+    def render(self, task: Task):
+        return Text("") if task.fields.get("unit") else self.column.render(task)
+
+
+class ProgressView:
+    """Rich progress bars fed by the run engine's events: one bar per stage with its counts,
+    rate, elapsed time and ETA; a line per unit in progress (what it says: 'epoch 12, ...')
+    so that no stage stays silent. Not on a terminal (a log file, a pipe): one line per stage
+    start, per tenth of a stage with its rate and ETA, and, every QUIET_S seconds at most,
+    what the units in progress say."""
+
+    def __init__(self, console: Console):
+        self.console = console
+        self.progress = Progress(
+            TextColumn("{task.description}"),
+            StageOnly(BarColumn()),
+            StageOnly(MofNCompleteColumn()),
+            StageOnly(TimeElapsedColumn()),
+            StageOnly(PaceColumn()),
+            console=console,
+            transient=False,
+        )
+        self.tasks: dict[str, int] = {}  # stage -> rich task id
+        self.units: dict[str, int] = {}  # unit in progress -> rich task id (a line, no bar)
+        self.paces: dict[str, Pace] = {}
+        self.labels: dict[str, str] = {}
+        self.told: dict[str, int] = {}  # log lines: stage -> last step told
+        self.said: dict[str, float] = {}  # log lines: unit -> when it was last told
+        self.started = False
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        # Started by the first stage only: a run refused before any work prints its error line alone.
+        if self.started:
+            for task in list(self.units.values()):
+                self.progress.remove_task(task)
+            self.units.clear()
+            return self.progress.__exit__(*exc)
+        return None
+
+    def handle(self, event) -> None:
+        if event.kind == "stage":
+            self.paces[event.stage] = Pace(event.done)
+            self.labels[event.stage] = event.message or event.stage
+        elif event.kind == "advance" and event.stage in self.paces:
+            self.paces[event.stage].update(event.done)
+        if not self.console.is_terminal:  # a log file or a pipe: lines that keep their labels
+            self._line(event)
+            return
+        if event.kind == "stage":
+            if not self.started:
+                self.progress.start()
+                self.started = True
+            self.tasks[event.stage] = self.progress.add_task(
+                self.labels[event.stage], total=event.total or None, pace=self.paces[event.stage]
+            )
+        elif event.kind == "advance" and event.stage in self.tasks:
+            self.progress.update(self.tasks[event.stage], completed=event.done, total=event.total or None)
+        elif event.kind == "unit" and self.started:
+            self._unit(event)
+        elif event.kind == "log":
+            self.progress.console.print(event.message, markup=False, highlight=False)
+
+    def _unit(self, event) -> None:
+        """A unit in progress as a line under the bars (removed when it ends)."""
+        text = f"  {event.stage}: {event.message.strip()}"
+        if not event.message:
+            task = self.units.pop(event.stage, None)
+            if task is not None:
+                self.progress.remove_task(task)
+        elif event.stage in self.units:
+            self.progress.update(self.units[event.stage], description=Text(text, style="dim"))
+        else:
+            self.units[event.stage] = self.progress.add_task(Text(text, style="dim"), total=None, unit=True)
+
+    def _line(self, event) -> None:
+        """One line per stage start, per tenth of a stage (at most) with rate and ETA, per
+        log message; a unit in progress every QUIET_S seconds at most."""
+        say = self.console.print
+        if event.kind == "stage":
+            self.told[event.stage] = event.done
+            say(f"{self.labels[event.stage]}: started ({event.total or '?'} steps)", markup=False, highlight=False)
+        elif event.kind == "advance" and event.stage in self.told:
+            step = max(1, (event.total or 10) // 10)
+            last = self.told[event.stage]
+            if event.done > last and (event.done >= last + step or (event.total and event.done >= event.total)):
+                self.told[event.stage] = event.done
+                pace = self.paces[event.stage]
+                rate = pace.rate_text()
+                tail = (
+                    ", done"
+                    if event.total and event.done >= event.total
+                    else f", {rate}, ETA {clock(pace.left(event.total))}"
+                    if rate
+                    else ""
+                )
+                say(
+                    f"{self.labels[event.stage]}: {event.done}/{event.total or '?'}{tail}",
+                    markup=False,
+                    highlight=False,
+                )
+        elif event.kind == "unit" and event.message:
+            now = time.monotonic()
+            if now - self.said.get(event.stage, -QUIET_S) >= QUIET_S:
+                self.said[event.stage] = now
+                say(f"  {event.stage}: {event.message.strip()}", markup=False, highlight=False)
+        elif event.kind == "log":
+            say(event.message, markup=False, highlight=False)
+
+
+# --------------------------------------------------------------------------- end of a run
+
+_SEPARATOR = re.compile(r"^\|?\s*:?-{2,}:?\s*(\|\s*:?-{2,}:?\s*)*\|?\s*$")
+
+
+def _cells(line: str) -> list[str]:
+    line = line.strip()
+    if line.startswith("|"):
+        line = line[1:]
+    if line.endswith("|"):
+        line = line[:-1]
+    return [cell.strip().replace("**", "") for cell in re.split(r"(?<!\\)\|", line)]
+
+
+def markdown_tables(text: str) -> list[tuple[str, list[str], list[list[str]]]] | None:
+    """The Markdown tables of *text* as (caption, header, rows) (a line before a table, when
+    not a table line, is its caption); None when *text* holds no table."""
+    lines = [line for line in text.splitlines() if line.strip()]
+    found, i, caption = [], 0, ""
+    while i < len(lines):
+        if lines[i].lstrip().startswith("|") and i + 1 < len(lines) and _SEPARATOR.match(lines[i + 1].strip()):
+            header = _cells(lines[i])
+            rows, i = [], i + 2
+            while i < len(lines) and lines[i].lstrip().startswith("|"):
+                rows.append(_cells(lines[i]))
+                i += 1
+            found.append((caption, header, rows))
+            caption = ""
+        else:
+            caption = lines[i].strip()
+            i += 1
+    return found or None
+
+
+def rich_table(caption: str, header: list[str], rows: list[list[str]]) -> Table:
+    table = Table(title=Text(caption.rstrip(":"), style="bold") if caption else None, title_justify="left")
+    for i, name in enumerate(header):
+        table.add_column(Text(name), justify="left" if i == 0 else "right", overflow="fold")
+    for row in rows:
+        table.add_row(*(Text(cell) for cell in row[: len(header)]), *([""] * (len(header) - len(row))))
+    return table
+
+
+def results(lines: Iterable[str]) -> list:
+    """The summary lines of a run as things to print: a Markdown table (with the line before
+    it, its caption) as a rich table, every other line as plain text."""
+    shown: list = []
+    pending: str | None = None  # a line that may be the caption of the table that follows
+    for line in lines:
+        tables = markdown_tables(line) if "|" in line else None
+        if tables is None:
+            if pending is not None:
+                shown.append(Text(pending))
+            pending = line
+            continue
+        for n, (caption, header, rows) in enumerate(tables):
+            if n == 0 and not caption and pending is not None and pending.rstrip().endswith(":"):
+                caption, pending = pending, None
+            if pending is not None:
+                shown.append(Text(pending))
+                pending = None
+            shown.append(rich_table(caption, header, rows))
+    if pending is not None:
+        shown.append(Text(pending))
+    return shown
+
+
+def print_results(console: Console, verdict: list[str], summary: list[str]) -> None:
+    """The verdict first, then the run's tables and lines. A table wider than the terminal
+    folds its cells; off a terminal (a log, a pipe) it keeps its natural width."""
+    if verdict:
+        console.print(Text("Verdict", style="bold underline"))
+        for line in verdict:
+            console.print(Text(f"• {line}"))
+        console.print()
+    for item in results(summary):
+        print_table(console, item) if isinstance(item, Table) else console.print(item)
+
+
+def print_table(console: Console, table: Table) -> None:
+    """On a terminal, folded to its width; elsewhere (a log, a pipe) at its natural width, so
+    that no cell is cut into pieces for a reader that has no width."""
+    if console.is_terminal:
+        console.print(table)
+    else:
+        natural = Measurement.get(console, console.options.update_width(10_000), table).maximum
+        # Console.print caps width at the console's own: a wide one for this table, same file
+        Console(file=console.file, width=max(natural, console.width), soft_wrap=True).print(table)
+
+
+def runs_table(runs) -> Table:
+    from .runinfo import date_text, duration_text
+
+    styles = {"finished": "green", "failed": "red", "cancelled": "yellow", "stopped": "yellow", "running": "cyan"}
+    table = Table(title=Text("gearlab runs", style="bold"), title_justify="left")
+    for name in ("name", "kind", "started", "duration", "status", "headline", "run directory"):
+        table.add_column(name, overflow="fold")
+    for r in runs:
+        table.add_row(
+            Text(r.name),
+            Text(r.kind),
+            Text(date_text(r.started)),
+            Text(duration_text(r.duration_s)),
+            Text(r.status, style=styles.get(r.status, "")),
+            Text(r.problem or r.headline or "-"),
+            Text(str(r.path)),
+        )
+    return table
