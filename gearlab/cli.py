@@ -576,6 +576,51 @@ def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> 
 
 
 @app.command()
+def score(
+    run_dir: Annotated[Path, typer.Argument(help="a finished detection run directory")],
+    files: Annotated[list[Path], typer.Argument(help="new recordings of the run's target (any format it reads)")],
+    condition: Annotated[
+        str | None, typer.Option(help="the run's condition to score them in (default: the nearest tacho speed)")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print the rows as JSON")] = False,
+) -> None:
+    """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
+
+    Per record, method and unit (revolution, recordN): the units called over the threshold, the record's decision
+    (most of its units called) and the threshold rule. Each row is appended to the run's scoring history
+    (scoring/history.jsonl), whose trend per method the report shows.
+
+    Example: gearlab score runs/det/20260101-120000-000000 today.csv
+    """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
+    from rich.table import Table
+
+    from .engine import score_recordings
+    from .runs import RunDir
+
+    rows = score_recordings(RunDir.open(run_dir), files, condition)
+    if as_json:
+        typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
+        return
+    table = Table(title=f"scored with {run_dir}")
+    for col in ("file", "condition", "method", "unit", "called", "median score", "threshold", "decision"):
+        table.add_column(col)
+    for r in rows:
+        median = "-" if r["median_score"] is None else f"{r['median_score']:.3g}"
+        colour = "red" if r["decision"] == "fault" else "green"
+        table.add_row(
+            r["file"],
+            r["condition"],
+            r["method"],
+            r["unit"],
+            f"{r['called']} / {r['units']}",
+            median,
+            f"{r['threshold']:.3g} ({r['rule']})",
+            f"[{colour}]{r['decision']}[/{colour}]",
+        )
+    console.print(table)
+
+
+@app.command()
 def runs(
     directory: Annotated[Path, typer.Argument(help="a folder of runs (searched 4 levels down)")] = Path("runs"),
     as_json: Annotated[bool, typer.Option("--json", help="print a JSON list")] = False,

@@ -249,3 +249,23 @@ def write_report(run: RunDir) -> Path:
     html = build_report(run)
     run.write_text("report.html", html)
     return run.path / "report.html"
+
+
+def score_recordings(
+    run: RunDir, files: list[Path], condition: str | None = None, on_event: EventSink = ignore_events
+) -> list[dict]:
+    """New recordings scored by a finished run's trained methods and thresholds (`gearlab score`):
+    the run's kind must offer scoring (a `score` function: the detection kind); the rows are
+    appended to the run's scoring history and the report is rebuilt to show its trend."""
+    with run.lock():  # one process at a time in a run directory
+        kind = (run.read_json("summary.json") or {}).get("kind")
+        scorer = getattr(SCENARIO_KINDS.get(kind), "score", None)
+        if scorer is None:
+            raise GearlabInputError(
+                f"{run.path}: "
+                + (f"a {kind} run keeps no trained methods to score with" if kind else "not a finished run")
+                + "; expected a finished detection run"
+            )
+        rows = scorer(run, files, condition, on_event)
+        write_report(run)
+    return rows

@@ -182,6 +182,23 @@ def recording_signals(charts, title: str, path: Path) -> Path:
     return save(fig, path)
 
 
+def score_trend(charts, path: Path) -> Path:
+    """The scoring history's trends (gearlab.kinds.detection.score_trends): per condition, each
+    method's score of the records scored in turn, less its threshold (above the line: called)."""
+    fig, axes = plt.subplots(len(charts), 1, figsize=(10, 3.2 * len(charts)), squeeze=False, layout="constrained")
+    for ax, chart in zip(axes[:, 0], charts):
+        for curve in chart.curves:
+            ax.plot(curve.x, curve.y, marker="o", ms=3, lw=0.8, label=curve.label)
+        ax.axhline(0.0, color="k", lw=0.8, ls="--")
+        ax.set_title(chart.title, fontsize=9)
+        ax.set_xlabel(chart.xlabel)
+        ax.set_ylabel(chart.ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle("gearlab score: the scored records' trend per method")
+    return save(fig, path)
+
+
 def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> None:
     """Figures 5.5/5.6 (accuracy vs k), 5.7 (training curves), 5.8 (confusion), 5.9 (latent maps)."""
     run_path = _target(run_path)

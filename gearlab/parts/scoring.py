@@ -1,0 +1,129 @@
+"""Day-to-day scoring (`gearlab score RUN_DIR FILE...`): what a finished run keeps so that new
+recordings are scored by its trained methods and thresholds without training again, and the
+history of those scores.
+
+    run directory
+      scoring.json                 what scoring needs besides the arrays: the target's keys, the
+                                   units, the threshold rule, each condition's speed and history
+      scoring/condition<i>.npz     a condition's standardiser, alignment reference and history
+                                   revolutions (standardised, aligned)
+      scoring/models/<key>.pt      each training's model, as trained (model_key)
+      scoring/history.jsonl        one line per scored record, method and unit: appended
+
+Every file is reached through the run directory (gearlab.confined: no link followed). A model is
+a whole torch module saved with torch.save and loaded with weights_only=True: the unpickler
+builds only the torch.nn and gearlab module classes the file names (a file naming anything else
+is refused), never runs code of the file.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import importlib
+import io
+import json
+
+import numpy as np
+
+from ..confined import Confined
+from ..errors import GearlabInputError
+from ..runs import RunDir
+
+SCORING_FILE = "scoring.json"
+MODELS = ("scoring", "models")
+HISTORY = ("scoring", "history.jsonl")
+
+
+def model_key(unit: str) -> str:
+    """A training's model file name: its unit name (which holds '/', ',' and '=') hashed."""
+    return hashlib.sha256(unit.encode()).hexdigest()[:20]
+
+
+def save_model(folder: Confined, unit: str, model) -> None:
+    """*model* (a torch module) into *folder*/<model_key(unit)>.pt, written whole."""
+    import torch  # here: start-up time
+
+    buf = io.BytesIO()
+    torch.save(model.to("cpu"), buf)
+    (folder / f"{model_key(unit)}.pt").write(buf.getvalue())
+
+
+def _allowed(name: str):
+    """The class a model file names, when it is a torch.nn or gearlab module class; else None."""
+    import torch
+
+    module, _, attr = name.rpartition(".")
+    if not (module.startswith("torch.nn.modules.") or module.startswith("gearlab.")):
+        return None
+    try:
+        cls = getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError):
+        return None
+    return cls if isinstance(cls, type) and issubclass(cls, torch.nn.Module) else None
+
+
+def load_model(folder: Confined, unit: str):
+    """The model of training *unit* (save_model), on the CPU, in evaluation mode."""
+    import torch
+
+    path = folder / f"{model_key(unit)}.pt"
+    if not path.exists():
+        raise GearlabInputError(
+            f"{path}: missing: the trained model of '{unit}' (a run from before gearlab score kept its "
+            "models); expected a run made by this version: run the scenario again"
+        )
+    data = path.read_bytes()
+    try:
+        names = torch.serialization.get_unsafe_globals_in_checkpoint(io.BytesIO(data))
+        classes = [_allowed(n) for n in names]
+        if any(c is None for c in classes):
+            bad = next(n for n, c in zip(names, classes) if c is None)
+            raise GearlabInputError(f"{path}: names {bad!r}, not a module class of torch or gearlab; refused")
+        with torch.serialization.safe_globals(classes):
+            model = torch.load(io.BytesIO(data), weights_only=True, map_location="cpu")
+    except GearlabInputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a damaged file fails in torch's own ways
+        raise GearlabInputError(f"{path}: damaged model ({type(exc).__name__}); run the scenario again") from None
+    if not isinstance(model, torch.nn.Module):
+        raise GearlabInputError(f"{path}: not a model (a {type(model).__name__}); run the scenario again")
+    return model.eval()
+
+
+def save_arrays(target: Confined, **arrays) -> None:
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    target.write(buf.getvalue())
+
+
+def load_arrays(source: Confined) -> dict[str, np.ndarray]:
+    if not source.exists():
+        raise GearlabInputError(f"{source}: missing; expected the run's scoring state (run the scenario again)")
+    try:
+        with np.load(io.BytesIO(source.read_bytes()), allow_pickle=False) as data:
+            return {k: data[k] for k in data.files}
+    except (ValueError, OSError, EOFError) as exc:
+        raise GearlabInputError(f"{source}: damaged ({exc}); run the scenario again") from None
+
+
+def append_history(run: RunDir, rows: list[dict]) -> None:
+    """Append scored rows to the run's scoring history (one JSON line each), stamped now."""
+    stamp = _dt.datetime.now().isoformat(timespec="seconds")
+    target = run.file(*HISTORY)
+    target.parent.mkdir()
+    target.append("".join(json.dumps({"scored_at": stamp, **r}) + "\n" for r in rows))
+
+
+def read_history(run: RunDir) -> list[dict]:
+    """The scoring history (append_history), oldest first; [] when nothing was scored yet."""
+    source = run.file(*HISTORY)
+    if not source.exists():
+        return []
+    out = []
+    for line in source.read_text().splitlines():
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError:
+            continue  # a line cut short by a crash: the others stand
+    return out

@@ -1,0 +1,109 @@
+"""`gearlab score RUN_DIR FILE...` (issue 39, item 6): new recordings scored by a finished detection
+run's trained methods at its thresholds, nothing trained again; the rows appended to the run's
+scoring history, whose trend the report's charts show."""
+
+import json
+
+import numpy as np
+import pytest
+from test_detection import FILES, run, scenario
+from textrecords import record
+
+import gearlab.learn.protocol as P
+from gearlab.parts import scoring
+from gearlab.runs import RunDir
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+
+
+def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, cache, monkeypatch):
+    files = [*FILES, ("h4", "history", "healthy", 0.0)]
+    path = scenario(tmp_path, files=files, methods=("source_only", "matched_filter"), detection="seeds = 2\n")
+    out = run(cli, path, tmp_path / "runs")
+    assert (out / "scoring.json").is_file()
+    # two new records of the rig: a healthy one and a chipped one (not seen by the run)
+    record(tmp_path / "new_ok.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
+    record(tmp_path / "new_chip.zip", revolutions=40, chip=4.0, seed=12, phase=1.1)
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("gearlab score trained a method")
+
+    monkeypatch.setattr(P, "train_method", no_training)
+    code, stdout, err = cli("score", out, tmp_path / "new_ok.zip", tmp_path / "new_chip.zip", "--json")
+    assert code == 0, err
+    rows = json.loads(stdout)
+    methods = {r["method"] for r in rows}
+    assert methods == {"source_only", "matched_filter", "fm4", "na4"}
+    assert {r["unit"] for r in rows} == {"revolution", "record5", "record10"}
+    by = {(r["file"].rsplit("/", 1)[-1], r["method"], r["unit"]): r for r in rows}
+    # the synthetic chip rings once a revolution: FM4 of the TSA calls the chipped record, not the healthy one
+    assert by[("new_chip.zip", "fm4", "record10")]["decision"] == "fault"
+    assert by[("new_ok.zip", "fm4", "record10")]["decision"] == "healthy"
+    for r in rows:
+        assert r["rule"] == "records" and 0 <= r["called"] <= r["units"] and np.isfinite(r["threshold"])
+    # the run's own thresholds: a record already scored in the run scores alike
+    summary = json.loads((out / "summary.json").read_text())
+    fm4 = next(x for x in summary["rows"] if x["method"] == "fm4" and x["unit"] == "record10")
+    assert by[("new_chip.zip", "fm4", "record10")]["threshold"] == pytest.approx(fm4["threshold"])
+    # the history: appended, shown as a trend per method
+    history = scoring.read_history(RunDir.open(out))
+    assert len(history) == len(rows) and all("scored_at" in h for h in history)
+    code, _, err = cli("score", out, tmp_path / "new_chip.zip")
+    assert code == 0, err
+    assert len(scoring.read_history(RunDir.open(out))) == len(rows) + len(rows) // 2
+    from gearlab.kinds import SCENARIO_KINDS
+
+    (chart,) = SCENARIO_KINDS["detection"].charts(None, RunDir.open(out))
+    assert {c.label for c in chart.curves} == methods and all(len(c.x) == 3 for c in chart.curves)
+    assert (out / "figures" / "score_trend.png").is_file() and "score_trend" in (out / "report.html").read_text()
+
+
+def test_score_refuses_a_run_that_is_not_a_detection_run_and_a_record_of_no_condition(cli, tmp_path, cache):
+    path = scenario(tmp_path, methods=("matched_filter",))
+    out = run(cli, path, tmp_path / "runs")
+    fast = tmp_path / "fast.zip"
+    record(fast, revolutions=40, seed=3, speed=40.0)
+    code, _, err = cli("score", out, fast)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "more than 5%" in err, err
+    code, _, err = cli("score", out, tmp_path / "missing.csv")
+    assert code == 2 and "no such file" in err, err
+    (out / "scoring.json").unlink()
+    code, _, err = cli("score", out, tmp_path / "data" / "h1.zip")
+    assert code == 2 and "scoring.json" in err, err
+
+
+def test_a_model_file_naming_a_foreign_class_is_refused(tmp_path):
+    import pickle
+
+    from gearlab.confined import Confined
+    from gearlab.errors import GearlabInputError
+
+    folder = Confined(tmp_path, ("models",))
+
+    class Evil:
+        def __reduce__(self):
+            return (print, ("ran",))
+
+    import io
+    import zipfile
+
+    import torch
+
+    buf = io.BytesIO()
+    torch.save({"x": torch.zeros(1)}, buf)
+    # a checkpoint whose pickle names builtins.print
+    data = bytearray(buf.getvalue())
+    with zipfile.ZipFile(io.BytesIO(bytes(data))) as z:
+        members = {n: z.read(n) for n in z.namelist()}
+    name = next(n for n in members if n.endswith("data.pkl"))
+    members[name] = pickle.dumps(Evil(), protocol=2)
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w") as z:
+        for n, v in members.items():
+            z.writestr(n, v)
+    (folder / f"{scoring.model_key('u')}.pt").write(out.getvalue())
+    with pytest.raises(GearlabInputError, match="refused|damaged"):
+        scoring.load_model(folder, "u")
