@@ -26,9 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .data.readers.base import _listing
 from .data.recordings import (
     angle_tacho,
+    channel_listing,
     is_rate_or_time,
     prefixed,
     read_contents,
@@ -95,7 +95,8 @@ def read_record(path: str, options: InspectOptions) -> Record:
         left = [c for c in channels if c != options.tacho]
         if len(left) != 1:
             raise GearlabInputError(
-                f"{path}: which channel is the vibration? the file has {_listing(channels)}; expected --vibration NAME"
+                f"{path}: which channel is the vibration? the file has {channel_listing(channels)}; "
+                "expected --vibration NAME"
             )
         vibration = left[0]
     roles = {vibration: "vibration"}

@@ -124,6 +124,11 @@ def check_measured_file(path: Path, where: str = "", expected: str = "") -> None
         )
 
 
+def channel_listing(names) -> str:
+    """A file's channel names on one line, for messages (long lists cut short)."""
+    return _listing(names)
+
+
 def supported() -> str:
     return ", ".join(FORMATS)
 
