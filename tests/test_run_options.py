@@ -124,15 +124,26 @@ def test_a_unit_that_ends_just_before_the_run_stops_is_still_reported_ended(tmp_
     assert [e.message for e in events] == ["epoch 1", ""]
 
 
-def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch):
+@pytest.fixture(scope="module")
+def domains_cache(tmp_path_factory):
+    """One dataset cache for the two runs below: the same tiny domains, simulated once."""
+    return tmp_path_factory.mktemp("cache")
+
+
+def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache):
     from tiny import domains
 
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("GEARLAB_CACHE", str(domains_cache))
     path = tmp_path / "t.toml"
+    # the unit must outlast a few of the watcher's half-second looks: 200 epochs of the cheap
+    # `fast` network take 1.5 s or more (`shapes`, the default, took 40 s for 400)
     path.write_text(
         '[scenario]\nname = "t"\nkind = "transfer"\n\n'
         + domains()
         + """
+[network]
+name = "fast"
+
 [[methods]]
 adapter = "mmd"
 
@@ -142,9 +153,9 @@ repetitions = 1
 target_train = 8
 batch = 4
 prime_epochs = 2
-patience = 400
-min_epochs = 400
-max_epochs = 400
+patience = 200
+min_epochs = 200
+max_epochs = 200
 
 [execution]
 workers = 1
@@ -159,7 +170,7 @@ device = "cpu"
     assert reports[-1]["message"] == ""  # it ended
 
 
-def test_a_terminated_run_leaves_no_worker_behind(tmp_path):
+def test_a_terminated_run_leaves_no_worker_behind(tmp_path, domains_cache):
     """kill (SIGTERM) of `gearlab run` stops its worker processes too: none is left computing."""
     import os
     import signal
@@ -174,6 +185,9 @@ def test_a_terminated_run_leaves_no_worker_behind(tmp_path):
         '[scenario]\nname = "t"\nkind = "transfer"\n\n'
         + domains()
         + """
+[network]
+name = "fast"
+
 [[methods]]
 adapter = "mmd"
 
@@ -192,7 +206,7 @@ workers = 2
 device = "cpu"
 """
     )
-    env = {**os.environ, "GEARLAB_CACHE": str(tmp_path / "cache")}
+    env = {**os.environ, "GEARLAB_CACHE": str(domains_cache)}
     proc = subprocess.Popen(
         [sys.executable, "-m", "gearlab", "run", str(path), "--events", "--out", str(tmp_path / "runs")],
         stdout=subprocess.PIPE,
