@@ -41,6 +41,41 @@ def markdown_table(text: str) -> str:
 _markdown_table = markdown_table  # the name other modules used before
 
 
+def _is_row(line: str) -> bool:
+    return line.lstrip().startswith("|")
+
+
+def table_blocks(text: str) -> list[tuple[str, str]]:
+    """(title, Markdown table) of each table in *text* (blocks separated by blank lines): the
+    lines of text just before a table, in its block or the block before, are its title; a
+    paragraph after the last table comes back as (paragraph, '')."""
+    out: list[tuple[str, str]] = []
+    pending: list[str] = []
+    for block in (b for b in text.split("\n\n") if b.strip()):
+        lines = [line for line in block.strip().splitlines() if line.strip()]
+        first = next((i for i, line in enumerate(lines) if _is_row(line)), None)
+        if first is None:
+            pending += lines
+            continue
+        out.append((" ".join(line.strip() for line in pending + lines[:first]), "\n".join(lines[first:])))
+        pending = []
+    if pending:
+        out.append((" ".join(pending), ""))
+    return out
+
+
+def header_title(table: str) -> str:
+    """A title made of a table's header when its kind gave none: 'view: gap before, share
+    before, ... (16 Hz)' from '| 16 Hz: view | gap before | share before | ...'."""
+    head = [c.strip() for c in table.strip().splitlines()[0].strip().strip("|").split("|")]
+    first, rest = head[0], [c for c in head[1:] if c]
+    where, _, label = first.rpartition(":") if ":" in first else ("", "", first)
+    shown = ", ".join(dict.fromkeys(rest[:6])) + (", ..." if len(rest) > 6 else "")
+    title = f"{shown} per {label.strip()}" if shown else label.strip()
+    title = title[:1].upper() + title[1:]
+    return f"{title} ({where.strip()})" if where.strip() else title
+
+
 # figure file stem -> (the thesis figure it repeats, what it shows); the captions that depend
 # on the run (k, repetitions, experiment, dataset) are made in caption()
 CAPTIONS = {
@@ -175,15 +210,19 @@ def build_report(run: RunDir | Path) -> str:
     table = run.file("table.md")
     text = (verdict_table(run_path) if summary else None) or (table.read_text() if table.exists() else "")
     # a kind may write several tables, separated by blank lines (the gap kind: per-view gap,
-    # effect ranking, accuracy); each is rendered on its own, numbered
-    blocks = [b for b in text.split("\n\n") if b.strip()]
-    for i, block in enumerate(blocks, start=1):
-        head = f"Table {i}"
-        if summary.get("kind") == "transfer" and i == 1:
-            head += ". Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4" + (
+    # effect ranking, accuracy); each is rendered on its own, numbered and titled
+    if text.strip():
+        parts.append("<h2>Tables</h2>")
+    for i, (title, block) in enumerate(table_blocks(text), start=1):
+        if summary.get("kind") == "transfer" and i == 1 and not title:
+            title = "Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4" + (
                 "; reference rows in italics: the thesis's values" if "(thesis" in block else ""
             )
-        parts += [f"<h2>{html.escape(head)}</h2>", markdown_table(block)]
+        if not block:  # a paragraph after the last table
+            parts.append(f"<p>{html.escape(title)}</p>")
+            continue
+        titled = f"<caption><b>Table {i}.</b> {html.escape(title or header_title(block))}</caption>"
+        parts.append(markdown_table(block).replace("<table>", f"<table>{titled}", 1))
     figures = run.figures.files("*.png")
     figures.sort(key=lambda f: ORDER.index(f.stem) if f.stem in ORDER else len(ORDER))  # the thesis's order
     if figures:

@@ -143,6 +143,9 @@ def _span(values: Sequence[float], digits: int = 1) -> str:
     return f"{low:.{digits}f}" if round(low, digits) == round(high, digits) else f"{low:.{digits}f}-{high:.{digits}f}"
 
 
+TIE_POINTS = 0.05  # a margin under this shows as 0.0 points: the methods tie
+
+
 def best_per_k(table: Mapping[str, Mapping[str, Mapping]], ks: Sequence) -> list[dict]:
     """Per k (where two or more methods have a result): the best method, its mean, the
     runner-up and the margin in points, and whether the margin is within one standard
@@ -154,9 +157,13 @@ def best_per_k(table: Mapping[str, Mapping[str, Mapping]], ks: Sequence) -> list
             continue
         cells.sort(key=lambda c: -c[1]["mean"])
         (best, b), rest = cells[0], cells[1:]
+        # methods level with the best (a margin that shows as 0.0 points): a tie, not a win
+        tied = [best] + [m for m, c in rest if b["mean"] - c["mean"] < TIE_POINTS]
+        rest = rest[len(tied) - 1 :]
         row = {
             "k": k,
             "best": best,
+            "tied": tied if len(tied) > 1 else [],
             "mean": b["mean"],
             "std": b["std"],
             "second": None,
@@ -197,7 +204,7 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
     if not rows:
         return ["No unit has finished yet: there is nothing to judge."]
     lines = []
-    if len(table) == 1 or rows[0]["second"] is None:
+    if len(table) == 1 or (rows[0]["second"] is None and not rows[0]["tied"]):
         only = rows[0]["best"]
         lines.append(
             f"One method, {only}: {_span([r['mean'] for r in rows], 2)} % target test accuracy "
@@ -206,7 +213,8 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
     else:
         groups: list[list[dict]] = []
         for row in rows:  # consecutive k with the same winner, told together
-            if groups and groups[-1][-1]["best"] == row["best"]:
+            last = groups[-1][-1] if groups else None
+            if last is not None and (last["best"], last.get("tied")) == (row["best"], row.get("tied")):
                 groups[-1].append(row)
             else:
                 groups.append([row])
@@ -216,10 +224,16 @@ def transfer_lines(summary: Mapping, records: Sequence[Mapping]) -> list[str]:
             where = (
                 "every k" if len(group) == len(rows) and len(rows) > 1 else f"k = {_ks_text([r['k'] for r in group])}"
             )
-            text = (
-                f"{group[0]['best']} is best at {where} ({_span([r['mean'] for r in group], 2)} %), "
-                f"{_span([r['margin'] for r in group])} points ahead of {' / '.join(seconds)}"
-            )
+            means = _span([r["mean"] for r in group], 2)
+            if group[0].get("tied"):
+                text = f"{' and '.join(group[0]['tied'])} tie at {where} ({means} %)"
+                if seconds != [None]:
+                    text += f", {_span([r['margin'] for r in group])} points ahead of {' / '.join(seconds)}"
+            else:
+                text = (
+                    f"{group[0]['best']} is best at {where} ({means} %), "
+                    f"{_span([r['margin'] for r in group])} points ahead of {' / '.join(seconds)}"
+                )
             close = [r["k"] for r in group if r["within_std"]]
             if close:
                 text += f" (within one standard deviation at k = {_ks_text(close)})"

@@ -277,3 +277,29 @@ def test_unit_messages_quote_the_users_text_with_a_fitting_example(text, unit, e
     with pytest.raises(GearlabInputError) as caught:
         parse_sensitivity(text, "--sensitivity") if unit is None else to_si(text, unit, "x")
     assert expected in str(caught.value) and "g_n" not in str(caught.value)
+
+
+def test_a_tie_is_said_as_a_tie():
+    from gearlab.verdict import transfer_lines
+
+    table = {
+        "a": {"0": {"mean": 97.1, "std": 1.0}, "4": {"mean": 99.0, "std": 1.0}},
+        "b": {"0": {"mean": 97.1, "std": 1.0}, "4": {"mean": 90.0, "std": 1.0}},
+        "c": {"0": {"mean": 80.0, "std": 1.0}, "4": {"mean": 50.0, "std": 1.0}},
+    }
+    (line, *_) = transfer_lines({"table": table, "protocol": {"ks": [0, 4]}}, [])
+    assert line.startswith("a and b tie at k = 0 (97.10 %), 17.1 points ahead of c; a is best at k = 4")
+    two = {"a": {"0": {"mean": 100.0, "std": 0.0}}, "b": {"0": {"mean": 100.0, "std": 0.0}}}
+    assert transfer_lines({"table": two, "protocol": {"ks": [0]}}, [])[0] == "a and b tie at k = 0 (100.00 %)."
+
+
+def test_report_tables_are_titled_by_their_paragraph_or_their_header():
+    from gearlab.report import header_title, table_blocks
+
+    text = (
+        "| 16 Hz: method | AUC | det % |\n|---|---|---|\n| fm4 | 1.0 | 100 |\n\n"
+        "What each learned\n\n| a | b |\n|---|---|\n| 1 | 2 |"
+    )
+    (t1, b1), (t2, b2) = table_blocks(text)
+    assert t1 == "" and header_title(b1) == "AUC, det % per method (16 Hz)"
+    assert t2 == "What each learned" and b2.startswith("| a | b |")

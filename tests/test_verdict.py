@@ -457,6 +457,69 @@ def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
         assert shot.stat().st_size > 10_000, kind
 
 
+# Run in the page once it has loaded: the layout basics, written into the page for --dump-dom.
+LAYOUT_CHECK = """<script>addEventListener('load', () => {
+  const width = document.documentElement.clientWidth, problems = [];
+  for (const e of document.querySelectorAll('body *')) {
+    const box = e.getBoundingClientRect();
+    if (box.width && box.right > width + 1 && !e.closest('details')) problems.push('wider than the page: ' + e.tagName);
+  }
+  document.querySelectorAll('table').forEach((t, i) => {
+    const c = t.querySelector('caption');
+    if (!c || !c.textContent.trim()) problems.push('table ' + (i + 1) + ' has no caption');
+  });
+  document.querySelectorAll('img').forEach((img, i) => {
+    if (!img.alt) problems.push('figure ' + (i + 1) + ' has no alt text');
+    const f = img.closest('figure');
+    if (!f || !f.querySelector('figcaption')) problems.push('figure ' + (i + 1) + ' has no caption');
+    if (!img.naturalWidth) problems.push('figure ' + (i + 1) + ' does not decode');
+  });
+  const out = document.createElement('pre');
+  out.id = 'layout-check';
+  out.textContent = problems.length ? problems.join('; ') : 'layout ok';
+  document.body.appendChild(out);
+});</script>"""
+
+
+@pytest.mark.skipif(chromium() is None, reason="no Chromium installed (apt-get install chromium to run this check)")
+def test_each_kinds_report_keeps_to_the_page_and_titles_every_table_and_figure(runs, tmp_path):
+    """Issue 41: in a 1000-pixel-wide window no element is wider than the page (the folded
+    scenario and summary aside), every table has a caption, every figure an alt text and a
+    caption, every image decodes; the verdict comes first."""
+    stiffness = run_scenario(
+        Path(__file__).parents[1] / "scenarios" / "stiffness_verification.toml", out=tmp_path / "runs", quick=True
+    ).path
+    kinds = {"transfer": runs["transfer"][0], "gap": runs["gap"], "dataset": runs["dataset"], "stiffness": stiffness}
+    for kind, run in kinds.items():
+        html = (run / "report.html").read_text()
+        assert "<table>" not in html or html.count("<table><caption><b>Table ") == html.count("<table>"), kind
+        if "<section id='verdict'>" in html:
+            assert html.index("<section id='verdict'>") < html.find("<table>") or "<table>" not in html, kind
+        page = tmp_path / f"{kind}.html"
+        page.write_text(html.replace("</body>", LAYOUT_CHECK + "</body>"))
+        done = subprocess.run(
+            [
+                chromium(),
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--window-size=1000,1400",
+                "--virtual-time-budget=5000",
+                "--dump-dom",
+                "--proxy-server=127.0.0.1:9",
+                "--proxy-bypass-list=<-loopback>",
+                f"--user-data-dir={tmp_path / ('profile-' + kind)}",
+                page.as_uri(),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        found = re.search(r'<pre id="layout-check">([^<]*)</pre>', done.stdout)
+        assert found, (kind, done.stderr[-2000:])
+        assert found.group(1) == "layout ok", (kind, found.group(1))
+
+
 def test_the_bayes_bound_is_set_beside_the_best_method():
     table = {"a": {"0": cell(80.0), "4": cell(84.0)}, "b": {"0": cell(70.0), "4": cell(71.0)}}
     summary = {

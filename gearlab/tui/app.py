@@ -41,7 +41,7 @@ from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
 from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, scan
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
-from .widgets import ChartView, ResultTable, Stages
+from .widgets import BrowserTree, ChartView, ResultTable, Stages
 
 # Below this many columns the sidebar folds away while a run or results are on show.
 NARROW = 100
@@ -106,7 +106,7 @@ class GearlabApp(App):
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         with Horizontal():
-            yield Tree("scenarios", id="browser")
+            yield BrowserTree("scenarios", id="browser")
             with TabbedContent(id="views", initial="scenario"):
                 with TabPane("Scenario", id="scenario"):
                     with VerticalScroll():

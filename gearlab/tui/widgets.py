@@ -7,8 +7,9 @@ import math
 import plotext
 from rich.text import Text
 from textual.app import ComposeResult
+from textual.binding import Binding
 from textual.containers import Vertical
-from textual.widgets import DataTable, Label, ProgressBar, Static
+from textual.widgets import DataTable, Label, ProgressBar, Static, Tree
 
 from ..charts import Chart
 
@@ -143,6 +144,34 @@ class ChartView(Static):
         plotext.xlabel(label)  # horizontal bars: the values run along x
 
 
+class BrowserTree(Tree):
+    """The sidebar's tree with the file browsers' arrows: → unfolds a node (or, unfolded, goes
+    to its first child), ← folds it (or, folded, goes to its parent)."""
+
+    BINDINGS = [
+        Binding("right", "unfold", "Unfold", show=False),
+        Binding("left", "fold", "Fold", show=False),
+    ]
+
+    def action_unfold(self) -> None:
+        node = self.cursor_node
+        if node is None:
+            return
+        if node.allow_expand and not node.is_expanded:
+            node.expand()
+        elif node.is_expanded and node.children:
+            self.move_cursor(node.children[0])
+
+    def action_fold(self) -> None:
+        node = self.cursor_node
+        if node is None:
+            return
+        if node.is_expanded and node.children:
+            node.collapse()
+        elif node.parent is not None and not node.parent.is_root:
+            self.move_cursor(node.parent)
+
+
 def stage_id(stage: str) -> str:
     """A widget id for a stage name: any name ('gap before', 'gap round 2', 'trial 3/40')
     maps to letters, digits, '-' and '_' only, and two names never share an id (the hex
@@ -170,7 +199,7 @@ class Stages(Vertical):
             key = stage_id(stage)
             self.mount(
                 Label(message or stage, id=f"label-{key}"),
-                ProgressBar(total=total or None, id=f"bar-{key}", show_eta=False),
+                ProgressBar(total=total or None, id=f"bar-{key}", show_eta=True),  # counts, % and ETA
             )
         else:
             self.query_one(f"#label-{stage_id(stage)}", Label).update(message or stage)

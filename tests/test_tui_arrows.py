@@ -1,0 +1,74 @@
+"""Issue 41: the TUI's tree takes → and ← as docs/tui.md says (unfold / go to the first child,
+fold / go to the parent), at 80x24 and 160x45; progress bars show their ETA."""
+
+import asyncio
+from pathlib import Path
+
+import pytest
+from conftest import ROOT
+from textual.widgets import ProgressBar, Tree
+
+from gearlab.tui import GearlabApp
+
+SIZES = [(160, 45), (80, 24)]
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    """A scenarios folder holding a stiffness scenario with one finished quick run."""
+    from gearlab.engine import run_scenario
+
+    base = tmp_path_factory.mktemp("arrows")
+    sc = base / "scenarios"
+    sc.mkdir()
+    text = (ROOT / "scenarios" / "stiffness_verification.toml").read_text()
+    text = text.split("[output]")[0] + f'\n[output]\ndir = "{base / "runs"}"\n'
+    (sc / "stiff.toml").write_text(text)
+    run_scenario(sc / "stiff.toml", quick=True)
+    return sc
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_right_unfolds_and_enters_left_leaves_and_folds(folder, size):
+    async def main():
+        async with GearlabApp(folder).run_test(size=size) as pilot:
+            await pilot.pause()
+            tree = pilot.app.query_one("#browser", Tree)
+            node = next(n for n in tree.root.children if str(n.label).endswith("stiff.toml"))
+            tree.focus()
+            tree.move_cursor(node)
+            await pilot.pause()
+            assert not node.is_expanded
+            await pilot.press("right")
+            assert node.is_expanded
+            await pilot.press("right")
+            assert tree.cursor_node is node.children[0]
+            await pilot.press("left")
+            assert tree.cursor_node is node and node.is_expanded
+            await pilot.press("left")
+            assert not node.is_expanded
+
+    asyncio.run(main())
+
+
+def test_progress_bars_show_an_eta():
+    from gearlab.tui.widgets import Stages
+
+    async def main():
+        from textual.app import App
+
+        class Host(App):
+            def compose(self):
+                yield Stages()
+
+        async with Host().run_test(size=(100, 10)) as pilot:
+            stages = pilot.app.query_one(Stages)
+            stages.start("runs", "4 training runs", 4)
+            await pilot.pause()
+            assert pilot.app.query_one(ProgressBar).show_eta
+
+    asyncio.run(main())
+
+
+def test_the_docs_say_what_the_arrows_do():
+    assert "→ ←" in (Path(ROOT) / "docs" / "tui.md").read_text()
