@@ -338,6 +338,9 @@ def gap_lines(summary: Mapping) -> list[str]:
         + "."
     ]
     effects = summary.get("effects") or []
+    said = summary.get("verdict") or ""  # the run's own verdict, as its log line said it (gearlab.gap.conclusion)
+    if said.startswith(("structure differs", "level differs")):  # ended before any effect was searched
+        return [*lines, f"{said[0].upper()}{said[1:]}; no effect was searched."]
     shrink = summary.get("shrink", 0.0)
     after_text = (
         f"gap {before:.4g} -> {after:.4g}, {_pct(shrink)} removed; "
@@ -346,9 +349,12 @@ def gap_lines(summary: Mapping) -> list[str]:
     )
     if effects:
         named = ", ".join(
-            f"{e['name']} ({_params(e.get('params', {}))}; credited with {_pct(e['share_removed'])})" for e in effects
+            f"{e['name']} (final fit: {_params(e.get('params', {}))}; credited with {_pct(e['share_removed'])})"
+            for e in effects
         )
         verdict = "UNEXPLAINED: the gap is not closed" if summary.get("unexplained") else "the gap is explained"
+        if said:
+            verdict = f"the gap is {said}" if said.startswith("explained") else said.upper()
         lines.append(f"Named effects: {named}; {after_text}; {verdict}.")
     else:
         ranking = summary.get("ranking") or []

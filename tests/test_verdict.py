@@ -206,8 +206,8 @@ def test_gap_verdict_names_the_effects_and_explains_alone_versus_credited():
         "in mesh (70.0 %), shaft (25.0 %)."
     )
     assert lines[1] == (
-        "Named effects: drive_inertias (J = 2; credited with 0.0 %), sensor_noise (snr_db = 10; "
-        "credited with 99.0 %); gap 1000 -> 10, 99.0 % removed; no longer significant (p = 0.4); "
+        "Named effects: drive_inertias (final fit: J = 2; credited with 0.0 %), sensor_noise (final fit: "
+        "snr_db = 10; credited with 99.0 %); gap 1000 -> 10, 99.0 % removed; no longer significant (p = 0.4); "
         "the gap is explained."
     )
     assert lines[2] == (

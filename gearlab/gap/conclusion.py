@@ -45,7 +45,24 @@ NOISE_WIDTH = 1.0
 # this tells the sets apart no better than a coin with a slight bias (Cohen's d about 0.4 for two
 # normal classes), however small the p-value that many quiet revolutions give it.
 SMALL_AUC = 0.65
-VERDICTS = ("no significant gap", "explained", "partly explained", "unexplained")
+# "structure differs" and "level differs" end a diagnosis before any effect is searched
+# (gearlab.gap.structure): the tooth count or speed differ, or the target is the source x a factor.
+VERDICTS = ("no significant gap", "explained", "partly explained", "unexplained", "structure differs", "level differs")
+
+
+def verdict_text(result: dict) -> str:
+    """The verdict as every front end shows it (the run's log line, summary.json, the report): with
+    the explained share when partly explained, with its one line when the structure or the level
+    differs (results before the verdicts existed: read from 'unexplained')."""
+    verdict = result.get("verdict") or ("unexplained" if result["unexplained"] else "explained")
+    if result.get("difference"):
+        return f"{verdict}: {result['difference']}"
+    if verdict == "partly explained" and result.get("explained_share") is not None:
+        return f"partly explained ({100 * result['explained_share']:.0f} % of the gap)"
+    if verdict == "explained" and result.get("within_noise") and result.get("significant_after"):
+        # the test still tells the sets apart; what is left lies within the rows' own scatter
+        return f"explained (what is left within the noise: RMS effect {result['rms_effect_after']:.2f})"
+    return verdict
 
 
 def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitted: tuple, started: float) -> dict:

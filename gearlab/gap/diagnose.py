@@ -9,7 +9,10 @@ loop adds further effects while the gap stays significant. See docs/gap.md.
 Design, in the order the work happens:
 
 1. **Before.** ``gap_report`` of the plain source against the target (full bootstrap and
-   permutations). No significant gap: nothing to explain, no search (the null case).
+   permutations). No significant gap: nothing to explain, no search (the null case). Then what
+   no effect changes (gearlab.gap.structure): a measured target's speed, the target's mesh order
+   against the source's tooth count, a pure scale factor; a difference ends the diagnosis with
+   one line saying what differs (``structure differs``, ``level differs``), no effect searched.
 2. **Round r** (r = 1 .. max_effects): one executor task per remaining candidate
    (:func:`fit_effect`, a picklable top-level function). A task fits the candidate on top
    of the effects accepted so far:
@@ -81,6 +84,7 @@ from .conclusion import MIN_SHARE, another_round, chain_record, conclusion, gap_
 from .identify import _plain, alias_refit
 from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_removal, _prepared, _report, check_settings
 from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect
+from .structure import first_difference, stopped
 
 
 def diagnose(
@@ -142,6 +146,14 @@ def diagnose(
             "the target revolutions are all identical (noise-free): effect sizes rest on "
             "numerical floors and rounding; add the sensor noise a real target has"
         )
+
+    # Structure before effects (gearlab.gap.structure): what no effect changes ends the diagnosis.
+    verdict, line, result["structure"] = first_difference(
+        source, target, pair, settings, rows, fresh, plain, before, chain
+    )
+    if verdict is not None:
+        on_event(Event("log", message=f"gap: {verdict}: {line}"))
+        return {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}
 
     run = _Run(
         scorer,

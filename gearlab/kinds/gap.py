@@ -33,6 +33,7 @@ from ..data.spec import DatasetSpec
 from ..effects import default_candidates
 from ..errors import GearlabInputError
 from ..events import Event
+from ..gap.conclusion import verdict_text  # the kind's log line, summary and report say one verdict
 from ..gap.diagnose import Settings
 from ..learn.config import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, history_of, shared_state
@@ -607,18 +608,6 @@ def diagnosis_line(result: dict) -> str:
     return f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}"
 
 
-def verdict_text(result: dict) -> str:
-    """The verdict, with the explained share when partly explained (results before the verdicts
-    existed: read from 'unexplained')."""
-    verdict = result.get("verdict") or ("unexplained" if result["unexplained"] else "explained")
-    if verdict == "partly explained" and result.get("explained_share") is not None:
-        return f"partly explained ({100 * result['explained_share']:.0f} % of the gap)"
-    if verdict == "explained" and result.get("within_noise") and result.get("significant_after"):
-        # the test still tells the sets apart; what is left lies within the rows' own scatter
-        return f"explained (what is left within the noise: RMS effect {result['rms_effect_after']:.2f})"
-    return verdict
-
-
 def shrink_text(before: float, after: float) -> str:
     if before <= 0:
         return "n/a"
@@ -703,6 +692,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "verdict": verdict_text(result),
         "explained_share": result.get("explained_share"),
         "chain": result.get("chain"),
+        "structure": result.get("structure"),  # speed, mesh order and level measured before any effect
         "significant_before": result["significant_before"],
         "significant_after": result["significant_after"],
         "auc_before": result["before"]["auc"],
@@ -781,10 +771,13 @@ def _params(params: dict, determined: dict | None = None) -> str:
 
 def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
     chosen = {e["name"]: e for e in accepted}
-    lines = ["| effect | share of the gap removed (round 1) | fitted parameters | accepted |", "|---|---|---|---|"]
+    # each row's parameters are its round-1 fit (alone, its noise beside it); an accepted effect's final
+    # fit, next to the others, is in the verdict and the summary's effects
+    head = "| effect | share of the gap removed (round 1) | parameters (round-1 fit, alone) | accepted (final fit) |"
+    lines = [head, "|---|---|---|---|"]
     for r in ranking:
         e = chosen.get(r["name"])
-        mark = f"round {e.get('round')}, {_pct(e['share_removed'])}" if e else ""
+        mark = f"round {e.get('round')}, {_pct(e['share_removed'])}; {_params(e['params'])}" if e else ""
         lines.append(f"| {r['name']} | {_pct(r['share_removed'])} | {_params(r.get('params', {}))} | {mark} |")
     return "\n".join(lines) + "\n"
 
@@ -809,7 +802,8 @@ def tables_md(summary: dict) -> str:
 def summary_lines(run: RunDir) -> list[str]:
     s = run.read_json("summary.json")
     names = ", ".join(
-        f"{e['name']} ({_pct(e['share_removed'])}; {_params(e['params'], e.get('determined'))})" for e in s["effects"]
+        f"{e['name']} ({_pct(e['share_removed'])}; final fit: {_params(e['params'], e.get('determined'))})"
+        for e in s["effects"]
     )
     lines = [
         f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "

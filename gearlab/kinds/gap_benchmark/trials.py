@@ -428,8 +428,9 @@ def read_answers(folder: Path | Confined) -> dict:
 
 
 def import_target(path: Path):
-    """The healthy revolutions of a written target, in physical units, through the importer, and
-    its measurement chain (None for the angle-domain record, which has none to match)."""
+    """The healthy revolutions of a written target, in physical units (the file's values where it has
+    no calibration beside it), through the importer, and its measurement chain (None for the
+    angle-domain record, which has none to match)."""
     from ...data.chain import chain_of
     from ...data.importers import MeasuredSpec, import_measured
     from ...gap.views import healthy_rows
@@ -454,9 +455,12 @@ def import_target(path: Path):
         if not wav
         else np.asarray(dataset.X, np.float64) * dataset.reference[1] + dataset.reference[0]
     )
-    if not units:
-        return rows, None, 0
     chain = chain_of(dataset.meta)
+    if chain.samples_per_rev == rows.shape[1] and not any(chain.fractions) and not chain.step:
+        return rows, None, 0  # the angle-domain record: the importer's resampling is the identity
+    # Any other record goes through its chain, calibrated or not: a record written elsewhere, with no
+    # calibration beside it, had its noise order-tracked by the importer, which the source's noise
+    # must be too (else a 200 kHz null was 'explained' by a sensor resonance at its 100 kHz bound).
     return rows, chain, chain.max_order
 
 

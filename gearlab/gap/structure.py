@@ -1,0 +1,237 @@
+"""Structure before effects (docs/gap.md, "Structure"): what no effect can change is checked before
+any effect is searched, and a difference ends the diagnosis with one line that says what differs.
+
+* **Tooth count.** The target's order spectrum (its revolutions one after another, as `gearlab
+  inspect` reads a record: gearlab.signals.spectrum, lines by gearlab.gearbox.speed.find_lines and
+  the description's mesh order tested by gearlab.inspect.check_description) against the source's
+  gear pair: mesh harmonics h Z1 with their sidebands (j <= SIDEBANDS, either shaft). The strongest
+  lines of a gear record are often high mesh harmonics (B-6-ch5: order 250, ten times its mesh
+  order), so the line at Z1 alone decides nothing: the target differs when most of the power of
+  its strongest lines lies off the source's comb (OFF_COMB); its own mesh order is then the comb
+  that holds them (the largest, so not a divisor of it).
+* **Speed.** A measured target's speed (its tacho, or the speed it was cut at) against the
+  source's: beyond SPEED_TOL the source simulates another operating point.
+* **Level.** A pure scale factor (the target is the source x c: a record without its sensitivity
+  or gain) is no effect: when the source scaled by the factor of their synchronous averages closes
+  the gap as the verdict would judge an effect's fit, the diagnosis says the level or the units
+  differ, and by how much.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+# A target whose strongest lines (STRONGEST, above order MIN_TEETH) hold at least this share of their
+# power off the source's comb of mesh harmonics and sidebands may be another gearbox (then those lines
+# hold a comb of their own, FAMILY): a 20-tooth record against B-6-ch5's 25 teeth holds 58 % there
+# (its 200 and 300 lie on both combs), a 26- or 24-tooth one 100 %, a right one 0-5 % (a 0.5-ratio
+# interference tone beside it: 4-5 %).
+OFF_COMB = 0.25
+STRONGEST = 8
+MIN_TEETH = 6  # a pinion of fewer teeth is no gear (inspect's bound too)
+SIDEBANDS = 3
+FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
+# The source simulates another speed when a measured target's differs by more than this (one rig at
+# one setting drifts by well under 1 %; gearlab.kinds.gap.SPEED_SPREAD).
+SPEED_TOL = 0.02
+# A scale factor within this of 1 is a calibration's tolerance, left to the effects.
+LEVEL_TOL = 0.1
+
+
+@dataclass(frozen=True)
+class _Stage:
+    index: int
+    pinion: object
+    wheel: object
+
+
+@dataclass(frozen=True)
+class _Gear:
+    z: int
+
+
+@dataclass(frozen=True)
+class _PairDescription:
+    """The source's gear pair as the one-stage description gearlab.gearbox.order_table reads."""
+
+    stages: tuple
+    shafts: tuple = ("input", "output")
+
+    @classmethod
+    def of(cls, z1: int, z2: int) -> _PairDescription:
+        return cls((_Stage(1, _Gear(int(z1)), _Gear(int(z2))),))
+
+
+def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.ndarray) -> np.ndarray:
+    """Which orders *x* lie on a mesh harmonic h z (h >= 1) or one of its sidebands h z +- j o."""
+    offsets = np.array([0.0] + [s * j * o for o in shaft_orders for j in range(1, SIDEBANDS + 1) for s in (-1, 1)])
+    h = np.maximum(1, np.round((x[:, None] - offsets[None, :]) / z))
+    return np.any(np.abs(x[:, None] - h * z - offsets[None, :]) <= tol[:, None], axis=1)
+
+
+def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0) -> dict:
+    """The target's mesh order against the source's Z1 (module doc): {'expected', 'measured' (the
+    target's mesh order, or None when its lines do not show one), 'off_comb' (share of the strongest
+    lines' power off the source's comb), 'lines', 'inspect' (check_description's stage), 'differs'}."""
+    from ..gearbox.speed import THRESHOLD_DB, find_lines
+    from ..inspect import _tol_mesh, check_description
+    from ..signals import spectrum
+
+    n, points = target.shape
+    orders, amp = spectrum(np.asarray(target, dtype=np.float64).reshape(-1), points)
+    top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
+    lines = find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
+    check = check_description(lines, _PairDescription.of(z1, z2), n, True)
+    # ranked by the spectrum at the line's bin: the parabola's height overshoots where a noise-free
+    # record's neighbouring bins are rounding (a line at order 1808 ranked above the mesh harmonics)
+    x = lines.at[lines.at >= MIN_TEETH - 0.5]
+    power = amp[np.clip(np.round(x / (orders[1] - orders[0])).astype(int), 0, amp.size - 1)] ** 2
+    keep = np.argsort(-power, kind="stable")[:STRONGEST]
+    x, power = x[keep], power[keep]
+    out = {
+        "expected": float(z1),
+        "measured": None,
+        "off_comb": None,
+        "lines": [float(v) for v in x],
+        "inspect": check["stages"][0],
+        "differs": False,
+    }
+    if x.size < 2:  # one line is a comb of itself: nothing to tell
+        return out
+    tol = np.array([_tol_mesh(v, 1.0 / n) for v in x])
+    on = _on_comb(x, z1, (1.0, z1 / z2), tol)
+    out["off_comb"] = float(power[~on].sum() / power.sum())
+    if out["off_comb"] < OFF_COMB:
+        out["measured"] = float(z1)
+        return out
+    # Another gear is a family: its mesh harmonics. A tone (an interference line) is one line, so
+    # the lines off the source's comb must hold a comb of their own, of at least FAMILY lines: every
+    # such line / h is a candidate mesh order, harmonics only (sidebands would let a small one hold
+    # anything); the one holding most of their power, the largest among near-equals (not a divisor).
+    xo, po, to = x[~on], power[~on], tol[~on]
+    held = []
+    for c in {float(v / h) for v in xo for h in range(1, 41) if v / h >= MIN_TEETH - 0.5}:
+        hit = _on_comb(xo, c, (), to)
+        if hit.sum() >= FAMILY:
+            held.append((float(po[hit].sum() / po.sum()), c))
+    if not held:
+        return out
+    best = max(share for share, _ in held)
+    out.update(measured=max(c for share, c in held if share >= best - 0.05), differs=True)
+    return out
+
+
+def mesh_line(check: dict, z1: int) -> str:
+    """The one line of a tooth-count difference."""
+    m = check["measured"]
+    whole = abs(m - round(m)) <= 0.05
+    line = f"mesh order {m:.1f} measured, {z1} expected: the source simulates a {z1}-tooth pinion"
+    if whole:
+        return line + f" (the target's shows {round(m)} teeth)"
+    return line + (
+        f" (not a whole number of teeth: the target's revolutions were cut at a speed {100 * abs(m / z1 - 1):.1f} % "
+        "off its shaft's, or another gear meshes)"
+    )
+
+
+def speed_line(target_speed: float, source_speed: float) -> str | None:
+    """The one line of a speed difference, or None within SPEED_TOL."""
+    if abs(target_speed / source_speed - 1.0) <= SPEED_TOL:
+        return None
+    return (
+        f"speed {target_speed:.4g} Hz measured, {source_speed:.4g} Hz expected: the source simulates "
+        f"{source_speed:.4g} Hz (set its speed_hz to the record's)"
+    )
+
+
+def level_factor(target: np.ndarray, source: np.ndarray) -> float:
+    """The scale c with target ~ c x source, from the magnitudes of their synchronous averages'
+    orders (a rotation -- a tacho's zero elsewhere on the shaft -- leaves them): least squares
+    sum |T||S| / sum |S|^2, weighted to the source's strong lines, where the target's noise counts
+    least."""
+    T = np.abs(np.fft.rfft(np.mean(target, axis=0)))[1:]
+    S = np.abs(np.fft.rfft(np.mean(source, axis=0)))[1:]
+    denominator = float(np.sum(S * S))
+    return float(np.sum(T * S) / denominator) if denominator > 0 else 1.0
+
+
+def scaled_rows(rows, spec, c: float) -> np.ndarray:
+    """The source's rows x c, through the target's chain as a source at level c would go: its
+    quantisation step (in the target's units) is c times the source's."""
+    if rows.chain is not None and rows.chain.step > 0:
+        rows = replace(rows, chain=replace(rows.chain, step=rows.chain.step / c))
+    return rows(spec) * c
+
+
+def level_line(c: float) -> str:
+    factor = c if c >= 1 else 1.0 / c
+    shown = f"{factor:.2g}" if factor < 10 else f"{factor:.3g}" if factor < 1000 else f"{round(factor, -2):.0f}"
+    how = f"x {shown}" if c >= 1 else f"/ {shown}"
+    return (
+        f"level/units differ by a factor of ~{shown}: give sensitivity and gain (the target is the source {how} "
+        "within its noise; no effect is fitted to a scale)"
+    )
+
+
+def level_differs(c: float) -> bool:
+    return math.isfinite(c) and c > 0 and abs(math.log(c)) > math.log1p(LEVEL_TOL)
+
+
+def stopped(result: dict, before: dict, verdict: str, line: str) -> dict:
+    """*result* ended before any effect search: nothing fitted, the gap as it was, the verdict and
+    its one line (``difference``)."""
+    from .conclusion import rms_effect
+
+    result.update(
+        after=before,
+        gap_after=result["gap_before"],
+        significant_after=result["significant_before"],
+        shrink=0.0,
+        effects=[],
+        unexplained=True,
+        verdict=verdict,
+        difference=line,
+        explained_share=None,
+        rms_effect_before=rms_effect(before),
+        rms_effect_after=rms_effect(before),
+        within_noise=False,
+        corrected_effects=[],
+    )
+    result["notes"].append(f"{verdict}: {line}; no effect was searched")
+    return result
+
+
+def first_difference(source, target, pair, settings, rows, fresh, plain, before, chain) -> tuple:
+    """(verdict, its one line, what was measured) of the first thing no effect changes that differs
+    between the *source* and the *target* -- its speed (a measured target's chain), its tooth count,
+    a pure scale factor -- or (None, None, what was measured). *plain*: the plain source's rows on
+    the reports' seeds (*fresh*), *before* their report against the target, *rows* how the source's
+    rows are made."""
+    from ..data.builder import operating_point
+    from .conclusion import gap_seen, verdict_of, within_noise
+    from .scoring import _report
+
+    record: dict = {}
+    if chain is not None:
+        record["speed_hz"] = {"target": chain.speed, "source": operating_point(source)[0]}
+        line = speed_line(chain.speed, record["speed_hz"]["source"])
+        if line:
+            return "structure differs", line, record
+    record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, settings.max_order)
+    if mesh["differs"]:
+        return "structure differs", mesh_line(mesh, pair.Z1), record
+    if not gap_seen(before):
+        return None, None, record
+    c = level_factor(target, plain)
+    record["level"] = {"factor": c}
+    if not level_differs(c):
+        return None, None, record
+    after = _report(scaled_rows(rows, fresh, c), target, pair, settings)
+    gap0, gap1 = float(before["total"]["gap"]), float(after["total"]["gap"])
+    share = 1.0 - gap1 / gap0 if gap0 > 0 else 0.0
+    closed = verdict_of(True, True, gap_seen(after), float(after["auc"]), share, within=within_noise(before, after))
+    record["level"].update(gap_scaled=gap1, p_scaled=float(after["p_value"]), closes=closed == "explained")
+    return ("level differs", level_line(c), record) if closed == "explained" else (None, None, record)
