@@ -465,6 +465,7 @@ EVERY_KIND = [
     ("stiff.toml", SIZES[1]),
     ("transfer.toml", SIZES[0]),
     ("det.toml", SIZES[1]),
+    ("ttbench.toml", SIZES[0]),
 ]
 
 
