@@ -318,7 +318,9 @@ def test_imported_dataset_goes_through_the_cache(files, tmp_path, monkeypatch):
 def test_file_missing_and_unknown_extension(tmp_path):
     fails(spec_for(tmp_path / "nothing.csv", vibration="acc", speed_hz=25), "nothing.csv", "no such file")
     (tmp_path / "r.xls").write_text("acc\n1\n")
-    fails(spec_for(tmp_path / "r.xls", vibration="acc", speed_hz=25), "unknown file type '.xls'", ".csv", ".zip", ".mat")
+    fails(
+        spec_for(tmp_path / "r.xls", vibration="acc", speed_hz=25), "unknown file type '.xls'", ".csv", ".zip", ".mat"
+    )
 
 
 @pytest.mark.parametrize(
