@@ -105,10 +105,11 @@ def measured_files_absolute(doc: dict) -> dict:
     if not isinstance(files, list):
         return doc
     for f in files:
-        path = Path(f["path"])
-        f["path"] = str(path if path.is_absolute() else (ROOT / "scenarios" / path).resolve())
-        if not Path(f["path"]).is_file():
-            f["path"] = str(stand_in(Path(f["path"]).name))
+        key = "file" if "file" in f else "path"  # 'path': the key's name before 'file'
+        path = Path(f[key])
+        f[key] = str(path if path.is_absolute() else (ROOT / "scenarios" / path).resolve())
+        if not Path(f[key]).is_file():
+            f[key] = str(stand_in(Path(f[key]).name))
     return doc
 
 
@@ -460,9 +461,9 @@ def test_the_fuzz_reaches_target_files_and_names_no_file_system_takes(scenario_f
     chip = copy.deepcopy(REAL["phm09_chip.toml"])
     assert chip["target"]["files"]
     assert any(len(part.encode()) > 255 for v in nudge("rec.zip").elements for part in v.split("/"))
-    first = chip["target"]["files"][0]["path"]
+    first = chip["target"]["files"][0]["file"]
     for long in ("x" * 300, f"{'y' * 300}/{first}", f"{first}.{'z' * 256}"):
-        chip["target"]["files"][0]["path"] = long
+        chip["target"]["files"][0]["file"] = long
         scenario_file.write_bytes(toml_bytes(chip))
         with pytest.raises(GearlabInputError, match="File name too long"):
             load_scenario(scenario_file)
