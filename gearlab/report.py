@@ -9,8 +9,9 @@ import html
 import json
 from pathlib import Path
 
+from .kinds.transfer_verdict import experiment
 from .runs import RunDir
-from .verdict import experiment, verdict_lines, verdict_table
+from .verdict import verdict_lines, verdict_table
 
 STYLE = (
     "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"

@@ -17,7 +17,7 @@ from gearlab.gap.diagnose import Settings, diagnose
 from gearlab.gap.structure import level_line, mesh_check
 from gearlab.gap.views import healthy_rows
 from gearlab.kinds.gap import ranking_md, verdict_text
-from gearlab.verdict import gap_lines
+from gearlab.kinds.gap_verdict import gap_lines
 
 SOURCE = dataset_preset("B-6-ch5").with_(faults=(), healthy=24, noise=NoiseSpec("gaussian", 30.0, 1))
 FAST = dict(healthy=24, bootstrap=20, permutations=99, budget=4, seed=0, max_effects=1)

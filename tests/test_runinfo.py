@@ -280,7 +280,7 @@ def test_unit_messages_quote_the_users_text_with_a_fitting_example(text, unit, e
 
 
 def test_a_tie_is_said_as_a_tie():
-    from gearlab.verdict import transfer_lines
+    from gearlab.kinds.transfer_verdict import transfer_lines
 
     table = {
         "a": {"0": {"mean": 97.1, "std": 1.0}, "4": {"mean": 99.0, "std": 1.0}},

@@ -15,20 +15,26 @@ from tiny import transfer
 
 from gearlab.data.spec import DATASET_PRESETS
 from gearlab.engine import run_scenario
+from gearlab.kinds import detection
+from gearlab.kinds import transfer as transfer_kind
+from gearlab.kinds.detection_verdict import chance_auc
+from gearlab.kinds.gap_verdict import gap_lines
+from gearlab.kinds.transfer_verdict import THESIS, best_per_k, collapsed, experiment, transfer_lines
 from gearlab.report import caption
-from gearlab.verdict import (
-    THESIS,
-    best_per_k,
-    chance_auc,
-    collapsed,
-    detection_lines,
-    experiment,
-    gap_lines,
-    transfer_lines,
-    transfer_table,
-)
 
 HERE = Path(__file__).resolve().parent
+
+
+def detection_lines(summary: dict) -> list[str]:
+    """A detection run's verdict, through the kind contract."""
+    return detection.verdict_lines(summary, [])
+
+
+def transfer_table(summary: dict) -> str | None:
+    """A transfer run's table against the bound and the thesis, through the kind contract."""
+    return transfer_kind.verdict_table(summary)
+
+
 TRANSFER = transfer('[[methods]]\nadapter = "source_only"\n\n[[methods]]\nadapter = "mmd"\n', repetitions=2)
 
 

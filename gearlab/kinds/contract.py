@@ -49,3 +49,10 @@ class ScenarioKind(Protocol):
 
     def charts(self, scenario: Scenario, run: RunDir) -> list[Chart]:
         """The run's charts as data (the TUI draws them in the terminal; compare overlays them)."""
+
+    def verdict_lines(self, summary: dict, records: list[dict]) -> list[str]:
+        """The verdict of a finished run in a few sentences computed from its summary.json and
+        records (report.html opens with it, `gearlab run` ends with it, the TUI shows it); []."""
+
+    def verdict_table(self, summary: dict) -> str | None:
+        """The run's table against its references (Markdown), or None where table.md says it all."""

@@ -193,3 +193,13 @@ def recording_views(dataset, max_order: float = 200.0) -> tuple[Chart, Chart, Ch
         keep = orders <= max_order
         spectra.append(Curve(label, orders[keep], amp[keep]))
     return revolutions, tsa, Chart(f"{dataset.spec.name}: order spectra", "shaft order", "amplitude", tuple(spectra))
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
+    return []
+
+
+def verdict_table(summary: dict) -> str | None:
+    """None: table.md says it all (gearlab.kinds.contract)."""
+    return None

@@ -1752,3 +1752,14 @@ def score_trends(run: RunDir) -> list:
                 )
             )
     return out
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """Per condition, the rows meeting the goal and what the learned rows learned (kinds.detection_verdict)."""
+    from .detection_verdict import detection_lines  # read only for a verdict
+
+    return detection_lines(summary, longest_tsa(r["unit"] for r in summary.get("rows") or []))
+
+
+def verdict_table(summary: dict) -> str | None:
+    return None  # table.md's per-condition tables say it all

@@ -56,6 +56,7 @@ from .common import (
     simulated_spec,
     sized,
 )
+from .gap_verdict import gap_lines
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 # The target may also be measured records in the detection kind's shape (a list of files with a
@@ -906,3 +907,12 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
             )
         )
     return out
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """The named effects and their numbers (gearlab.kinds.gap_verdict)."""
+    return gap_lines(summary)
+
+
+def verdict_table(summary: dict) -> str | None:
+    return None  # table.md's per-view, ranking and accuracy tables say it all

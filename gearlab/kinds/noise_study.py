@@ -413,3 +413,13 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
             Chart(f"{noise} noise: fault accuracy against intensity", "intensity step", "accuracy (%)", tuple(curves))
         )
     return out
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
+    return []
+
+
+def verdict_table(summary: dict) -> str | None:
+    """None: table.md says it all (gearlab.kinds.contract)."""
+    return None

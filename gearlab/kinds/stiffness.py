@@ -303,3 +303,13 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
         rfa = tuple(Curve(f, [int(s) for s in steps], [v["rfa"] for v in steps.values()]) for f, steps in sweep.items())
         out.append(Chart("relative fault area of each ladder (eq. 2.113)", "intensity step", "RFA", rfa))
     return out
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
+    return []
+
+
+def verdict_table(summary: dict) -> str | None:
+    """None: table.md says it all (gearlab.kinds.contract)."""
+    return None

@@ -41,6 +41,7 @@ from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
 from ..settings import shrunk
 from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
+from .transfer_verdict import transfer_lines, transfer_table
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 TABLES = {
@@ -351,3 +352,13 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
             xticks=list(protocol.ks),
         )
     ]
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """The best method per k, collapses, the bound and the thesis (gearlab.kinds.transfer_verdict)."""
+    return transfer_lines(summary, records)
+
+
+def verdict_table(summary: dict) -> str | None:
+    """Table 5.4's layout with the bound and, for Experiments A and B, the thesis's rows."""
+    return transfer_table(summary, table_md) if summary.get("table") else None

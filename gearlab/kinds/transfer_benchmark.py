@@ -546,3 +546,13 @@ def figure(run: RunDir, summary: dict) -> None:
     fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=4, fontsize=8)
     fig.tight_layout(rect=(0, 0.12, 1, 1))
     save(fig, run.figures / "transfer_benchmark.png", dpi=90, bbox_inches=None)
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
+    return []
+
+
+def verdict_table(summary: dict) -> str | None:
+    """None: table.md says it all (gearlab.kinds.contract)."""
+    return None

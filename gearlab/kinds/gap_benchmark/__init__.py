@@ -354,3 +354,13 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
         categories=names,
     )
     return [gap, per]
+
+
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
+    return []
+
+
+def verdict_table(summary: dict) -> str | None:
+    """None: table.md says it all (gearlab.kinds.contract)."""
+    return None

@@ -1,0 +1,97 @@
+"""The verdict of a detection run (gearlab.kinds.detection's verdict_lines): per condition, the
+rows that meet the record-level goal, the best learned row against the best classical one, and the
+learned rows that did not learn the simulated fault."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from statistics import NormalDist
+
+# What a user asks of a record-level decision (docs/real_data.md): the fault found in at least
+# 90 % of the faulty units at no more than 5 % false alarms, with an AUC of 0.95 or more.
+GOAL_AUC, GOAL_DETECTION, GOAL_FALSE_ALARM = 0.95, 90.0, 5.0
+# A learned method has learned the simulated fault when its scores rank the simulator's own
+# held-out faulty revolutions above the healthy ones better than chance would, one-sided at 5 %.
+CHANCE_LEVEL = 0.05
+
+
+def chance_auc(n_healthy: int, n_faulty: int, level: float = CHANCE_LEVEL) -> float:
+    """The AUC that scores unrelated to the labels exceed with probability *level*: the normal
+    approximation of the Mann-Whitney statistic's null law, mean 1/2 and variance
+    (n0 + n1 + 1) / (12 n0 n1) (ties aside); 0.67 for 16 and 16 revolutions at 5 %."""
+    z = NormalDist().inv_cdf(1.0 - level)
+    return 0.5 + z * math.sqrt((n_healthy + n_faulty + 1) / (12.0 * n_healthy * n_faulty))
+
+
+def _merit(row: Mapping) -> tuple:
+    """Ranks rows on the test labels: what their decisions got right (detection less false alarms at
+    the history's threshold, what a user acts on), then the AUC."""
+    auc = row["auc"] if row["auc"] is not None else -1.0
+    return ((row["detection"] or 0.0) - (row["false_alarm"] or 0.0), auc)
+
+
+def _said(row: Mapping) -> str:
+    auc = "–" if row["auc"] is None else f"{row['auc']:.2f}"
+    return f"{row['method']} (AUC {auc}, {_cell(row['detection'])} / {_cell(row['false_alarm'])} %)"
+
+
+def _cell(x) -> str:
+    return "–" if x is None else f"{x:.0f}"
+
+
+def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
+    """Per condition, at the longest TSA: which rows meet the goal, the best learned row against the
+    best classical one (_merit, on the test labels, after every decision was fixed), the learned rows
+    that did not learn the simulated fault (their source AUC within chance_auc of the simulator's
+    held-out revolutions, training data alone; they are never counted as the best learned row), and
+    those whose domain loss aligned the history with a single point (training data alone; named,
+    still counted). *unit*: the
+    longest TSA of the rows, at which they are judged (gearlab.kinds.detection.longest_tsa)."""
+    rows = summary.get("rows") or []
+    if unit is None:
+        return []
+    learned = {(r["condition"], r["method"]): r for r in summary.get("learned") or []}
+    lines = [
+        f"At {unit} (detected / false alarms % at the history's threshold; goal: AUC >= {GOAL_AUC}, "
+        f">= {GOAL_DETECTION:.0f} % detected at <= {GOAL_FALSE_ALARM:.0f} % false alarms):"
+    ]
+    for c in dict.fromkeys(r["condition"] for r in rows):
+        at = [r for r in rows if r["condition"] == c and r["unit"] == unit]
+        met = [
+            r
+            for r in at
+            if r["auc"] is not None
+            and r["auc"] >= GOAL_AUC
+            and (r["detection"] or 0.0) >= GOAL_DETECTION
+            and (r["false_alarm"] or 0.0) <= GOAL_FALSE_ALARM
+        ]
+        blind = [
+            m
+            for (cc, m), r in learned.items()
+            if cc == c and r["source_auc"] is not None and r["source_auc"] <= chance_auc(*r["source_units"])
+        ]
+        # a row that did not learn the simulated fault is no evidence for what the simulator teaches
+        nets = [r for r in at if (c, r["method"]) in learned and r["method"] not in blind]
+        classical = [r for r in at if (c, r["method"]) not in learned]
+        text = f"{c}: goal met by " + (", ".join(r["method"] for r in met) if met else "no row")
+        if nets and classical:
+            best_net, best_classical = max(nets, key=_merit), max(classical, key=_merit)
+            than = {1: "better than", 0: "level with", -1: "behind"}[
+                (_merit(best_net) > _merit(best_classical)) - (_merit(best_net) < _merit(best_classical))
+            ]
+            text += f"; best learned {_said(best_net)}, {than} the best classical {_said(best_classical)}"
+        if blind:
+            text += (
+                "; did not learn the simulated fault (source AUC within chance, one-sided 5 %), so their calls "
+                "are not the simulator's teaching: " + ", ".join(blind)
+            )
+        point = [m for (cc, m), r in learned.items() if cc == c and r.get("aligned_to_a_point")]
+        if point:
+            text += (
+                "; aligned the history with a single point (the source's samples they align it with are one "
+                "input, a noise-free healthy revolution), so where they put a record unlike the history is "
+                "not calibrated: " + ", ".join(point)
+            )
+        lines.append(text + ".")
+    return lines

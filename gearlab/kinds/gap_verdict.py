@@ -1,0 +1,119 @@
+"""The verdict of a gap run (gearlab.kinds.gap's verdict_lines): the named effects with the
+numbers that matter in one sentence, and why an effect's share alone can differ from the share it
+is credited with."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def gap_lines(summary: Mapping) -> list[str]:
+    views = summary.get("views") or {}
+    before, after = summary.get("gap_before"), summary.get("gap_after")
+    if before is None:
+        return ["The diagnosis has not finished: there is nothing to judge."]
+    where = sorted(views, key=lambda v: -(views[v].get("share_before") or 0.0))
+    top = [v for v in where if (views[v].get("share_before") or 0.0) >= 0.1][:3] or where[:1]
+    differ = "differ significantly" if summary.get("significant_before") else "do not differ significantly"
+    lines = [
+        f"The simulator and the target {differ} "
+        f"(gap {before:.4g}, p = {summary.get('p_before', float('nan')):.3g}); the gap lies mostly in "
+        + ", ".join(f"{v} ({_pct(views[v].get('share_before') or 0.0)})" for v in top)
+        + "."
+    ]
+    effects = summary.get("effects") or []
+    said = summary.get("verdict") or ""  # the run's own verdict, as its log line said it (gearlab.gap.conclusion)
+    if said.startswith(("structure differs", "level differs")):  # ended before any effect was searched
+        return [*lines, f"{said[0].upper()}{said[1:]}; no effect was searched."]
+    shrink = summary.get("shrink", 0.0)
+    after_text = (
+        f"gap {before:.4g} -> {after:.4g}, {_pct(shrink)} removed; "
+        f"{'still significant' if summary.get('significant_after') else 'no longer significant'} "
+        f"(p = {summary.get('p_after', float('nan')):.3g})"
+    )
+    if effects:
+        named = ", ".join(
+            f"{e['name']} (final fit: {_params(e.get('params', {}))}; credited with {_pct(e['share_removed'])})"
+            for e in effects
+        )
+        verdict = "UNEXPLAINED: the gap is not closed" if summary.get("unexplained") else "the gap is explained"
+        if said:
+            verdict = f"the gap is {said}" if said.startswith("explained") else said.upper()
+        lines.append(f"Named effects: {named}; {after_text}; {verdict}.")
+    else:
+        ranking = summary.get("ranking") or []
+        best = (
+            f" (the best candidate, {ranking[0]['name']}, removes {_pct(ranking[0]['share_removed'])} alone)"
+            if ranking
+            else ""
+        )
+        lines.append(
+            (
+                "UNEXPLAINED: no candidate effect closes the gap"
+                if summary.get("unexplained")
+                else "No effect named: there is no significant gap to explain"
+            )
+            + f"{best}."
+        )
+    lines += _alone_versus_credited(summary)
+    acc = summary.get("accuracy") or {}
+    pairs = [
+        (n.replace(" (uncorrected)", ""), acc[n], acc.get(n.replace("(uncorrected)", "(corrected)")))
+        for n in acc
+        if n.endswith("(uncorrected)")
+    ]
+    told = [f"{m} {u['mean']:.1f} -> {c['mean']:.1f} %" for m, u, c in pairs if c is not None]
+    if told:
+        lines.append("Target fault detection at k = 0, uncorrected -> corrected simulator: " + ", ".join(told) + ".")
+    return lines
+
+
+def _params(params: Mapping) -> str:
+    return ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}" for k, v in params.items())
+
+
+def _alone_versus_credited(summary: Mapping) -> list[str]:
+    """An effect that removes most of the gap alone (the ranking) yet is credited with little
+    (the accepted effects' shares) is no contradiction: say why, for each such effect."""
+    alone = {r["name"]: r["share_removed"] for r in summary.get("ranking") or []}
+    effects = summary.get("effects") or []
+    out = []
+    for e in effects:
+        if e["name"] not in alone or alone[e["name"]] - e["share_removed"] < 0.2:
+            continue
+        # a round accepts one candidate and, at most, the sensor noise fitted beside it
+        noise = [
+            f["name"]
+            for f in effects
+            if f is not e and (f.get("nuisance_of") == e["name"] or f.get("round", -1) == e.get("round"))
+        ]
+        earlier = [
+            f["name"]
+            for f in effects
+            if f is not e and not f.get("nuisance_of") and f.get("round", 0) < e.get("round", 0)
+        ]
+        said = f"{e['name']} removes {_pct(alone[e['name']])} of the gap in the ranking"
+        if noise:
+            why = (
+                f"{said} (fitted there with {' and '.join(noise)} beside it) but is credited with "
+                f"{_pct(e['share_removed'])}: {' and '.join(noise)} alone explains that part of the gap, and "
+                "the credited shares split what they remove together (a Shapley value)"
+            )
+        elif earlier:
+            why = (
+                f"{said} (added alone) but is credited with {_pct(e['share_removed'])}"
+                f": {', '.join(earlier)}, accepted in an "
+                "earlier round, already explain that part of the gap"
+            )
+        else:
+            why = (
+                f"{said} (added alone) but is credited with {_pct(e['share_removed'])}: "
+                "the credited share is measured on fresh "
+                "revolutions, the ranking's on those it was fitted to"
+            )
+        out.append(why + ".")
+    return out
