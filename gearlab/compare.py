@@ -20,7 +20,6 @@ from .confined import read_file
 from .engine import scenario_of
 from .errors import GearlabInputError
 from .kinds import SCENARIO_KINDS
-from .kinds.transfer import table
 from .report import STYLE, markdown_table
 from .runs import RunDir
 from .scenario import Scenario
@@ -63,28 +62,17 @@ def load_runs(paths) -> list[Compared]:
     return runs
 
 
-def _transfer_cells(c: Compared) -> dict[str, dict[str, dict]]:
-    return table(c.run.records(), c.scenario.spec["protocol"])
+def _side_by_side(runs: list[Compared]) -> tuple[str, str] | None:
+    """The kind's own table of the runs side by side and its title (its compare_table), if any."""
+    return SCENARIO_KINDS[runs[0].kind].compare_table([(c.letter, c.scenario, c.run.records()) for c in runs])
 
 
 def compare_markdown(runs: list[Compared]) -> str:
-    """Transfer: a row per method and k, a column per run (mean ± std) and, for each run after
-    the first, its difference to A in points. Other kinds: each run's table, lettered."""
-    if runs[0].kind == "transfer":
-        cells = [_transfer_cells(c) for c in runs]
-        methods = list(dict.fromkeys(m for tab in cells for m in tab))
-        ks = list(dict.fromkeys(k for c in runs for k in c.scenario.spec["protocol"].ks))
-        head = ["method", "k"] + [c.letter for c in runs] + [f"{c.letter} − A" for c in runs[1:]]
-        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        for m in methods:
-            for k in ks:
-                got = [tab.get(m, {}).get(str(k)) for tab in cells]
-                if not any(got):
-                    continue
-                shown = [f"{g['mean']:.2f} ± {g['std']:.1f}" if g else "" for g in got]
-                delta = [f"{g['mean'] - got[0]['mean']:+.2f}" if g and got[0] else "" for g in got[1:]]
-                lines.append(f"| {m} | {k} | " + " | ".join(shown + delta) + " |")
-        return "\n".join(lines) + "\n"
+    """The kind's side-by-side table where it has one (transfer: a row per method and k, a column per
+    run and each run's difference to A); else each run's table, lettered."""
+    joined = _side_by_side(runs)
+    if joined is not None:
+        return joined[1]
     parts = []
     for c in runs:
         text = SCENARIO_KINDS[c.kind].records_table(c.scenario, c.run.records()).strip()
@@ -176,14 +164,9 @@ def compare_html(runs: list[Compared], figures: Path) -> str:
             "</section>",
         ]
     blocks = [b for b in compare_markdown(runs).split("\n\n") if b.strip()]
+    joined = _side_by_side(runs)
     parts += [
-        "<h2>Table 1. "
-        + (
-            "Target test accuracy (%) of each run, mean ± std over repetitions"
-            if runs[0].kind == "transfer"
-            else "The runs’ tables"
-        )
-        + "</h2>",
+        "<h2>Table 1. " + (joined[0] if joined is not None else "The runs’ tables") + "</h2>",
         *map(markdown_table, blocks),
     ]
     for i, chart in enumerate(compare_charts(runs), start=1):

@@ -56,3 +56,7 @@ class ScenarioKind(Protocol):
 
     def verdict_table(self, summary: dict) -> str | None:
         """The run's table against its references (Markdown), or None where table.md says it all."""
+
+    def compare_table(self, runs: list[tuple]) -> tuple[str, str] | None:
+        """(title, Markdown table) of several runs side by side, *runs* being (letter, scenario,
+        records) in the order compared; None: `gearlab compare` letters each run's own table."""

@@ -203,3 +203,8 @@ def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
 def verdict_table(summary: dict) -> str | None:
     """None: table.md says it all (gearlab.kinds.contract)."""
     return None
+
+
+def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
+    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
+    return None

@@ -1763,3 +1763,8 @@ def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
 
 def verdict_table(summary: dict) -> str | None:
     return None  # table.md's per-condition tables say it all
+
+
+def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
+    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
+    return None

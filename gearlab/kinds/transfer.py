@@ -362,3 +362,24 @@ def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
 def verdict_table(summary: dict) -> str | None:
     """Table 5.4's layout with the bound and, for Experiments A and B, the thesis's rows."""
     return transfer_table(summary, table_md) if summary.get("table") else None
+
+
+def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
+    """(title, Markdown) of transfer runs side by side: a row per method and k, a column per run
+    (mean ± std) and, for each run after the first, its difference to A in points. *runs*:
+    (letter, scenario, records) in the order compared."""
+    cells = [table(records, scenario.spec["protocol"]) for _, scenario, records in runs]
+    letters = [letter for letter, _, _ in runs]
+    methods = list(dict.fromkeys(m for tab in cells for m in tab))
+    ks = list(dict.fromkeys(k for _, scenario, _ in runs for k in scenario.spec["protocol"].ks))
+    head = ["method", "k", *letters] + [f"{letter} − {letters[0]}" for letter in letters[1:]]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for m in methods:
+        for k in ks:
+            got = [tab.get(m, {}).get(str(k)) for tab in cells]
+            if not any(got):
+                continue
+            shown = [f"{g['mean']:.2f} ± {g['std']:.1f}" if g else "" for g in got]
+            delta = [f"{g['mean'] - got[0]['mean']:+.2f}" if g and got[0] else "" for g in got[1:]]
+            lines.append(f"| {m} | {k} | " + " | ".join(shown + delta) + " |")
+    return "Target test accuracy (%) of each run, mean ± std over repetitions", "\n".join(lines) + "\n"
