@@ -453,7 +453,7 @@ def test_the_summary_says_which_parameters_are_not_identifiable_and_what_the_dat
         "c_yf": {"determined": True, "reason": None, "width": 0.01},
         "c_xf": {"determined": False, "reason": "fit leaves a gap", "width": 0.01},
     }
-    text = gap._params({"mf": 40.0, "k_yf": 4e8, "c_yf": 2000.0, "c_xf": 10.0}, determined)
+    text = gap.params_text({"mf": 40.0, "k_yf": 4e8, "c_yf": 2000.0, "c_xf": 10.0}, determined)
     assert "mf = 40 (not identifiable)" in text and "c_yf = 2000," in text
     assert "c_xf = 10 (not determined: the fit leaves a gap)" in text
 

@@ -20,7 +20,7 @@ ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures a
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 
 import numpy as np
 
@@ -40,7 +40,7 @@ from ..learn.protocol import Counts, Method, Protocol, check, check_data, histor
 from ..learn.schedule import two_phases
 from ..parts import training
 from ..parts.bound import bayes_bound
-from ..parts.measured import Target, target_spec
+from ..parts.measured import target_spec
 from ..parts.training import TRAINING, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
@@ -56,6 +56,14 @@ from .common import (
     simulated_spec,
     sized,
 )
+from .gap_inputs import (
+    Records,
+    check_healthy,
+    check_points,
+    check_sampling,
+    read_history,
+)
+from .gap_tables import accuracy_md, params_text, percent, ranking_md, tables_md, views_md
 from .gap_verdict import gap_lines
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
@@ -82,14 +90,6 @@ _TARGET = Table(
     },
     required=True,
 )
-# History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
-# record are two conditions; one rig at one setting drifts by well under 1 %).
-SPEED_SPREAD = 0.02
-# The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
-MIN_HEALTHY = 10
-# Mesh sidebands the order bands resolve beside each mesh harmonic (gearlab.gap.views.BandPlan):
-# a revolution must be sampled finely enough for the first mesh order plus these.
-SIDEBANDS = 3
 UNCORRECTED, CORRECTED = "uncorrected", "corrected"
 
 
@@ -193,20 +193,6 @@ def build(scenario: Scenario) -> dict:
     }
 
 
-@dataclass(frozen=True)
-class Records:
-    """Measured records as the gap's target: the [target] of the detection kind (files with roles);
-    the diagnosis reads the history files (healthy data of one operating condition)."""
-
-    name: str
-    target: Target
-    units_known: bool = True  # a sensitivity was given (else the values are taken as m/s², with a warning)
-
-    @property
-    def history(self):
-        return tuple(f for f in self.target.files if f.role == "history")
-
-
 def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Records:
     """The [target]: measured records ('files'), or a dataset entry (a preset, or one 'file')."""
     if not entry["files"]:
@@ -229,77 +215,6 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
             raise GearlabInputError(f"{where} key '{key}': missing; measured records need the {key} column")
     target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",))
     return Records(entry["name"] or "measured records", target, entry["sensitivity"] is not None)
-
-
-def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float]:
-    """The history records' revolutions in m/s² (n, POINTS), their mean tacho speed, notes, and
-    their sampling rate (the [target]'s fs, or the first record's own).
-    Records of different speeds are different operating conditions: refused. Each record starts at
-    one of the tacho's N marks: every record is turned by m/N of a turn into register with the first
-    (textzip.align_to, as the detection kind does), so the set has one synchronous average."""
-    from ..data.textzip import align_to
-
-    t = records.target
-    rows, speeds, notes = [], {}, []
-    files = records.history
-    on_event(Event("stage", stage="records", total=len(files), message="measured history records"))
-    for i, f in enumerate(files):
-        rec = t.read(f)
-        revs = rec.revolutions
-        if rows:
-            _, revs = align_to(rows[0].mean(axis=0), revs, t.pulses_per_rev)
-        rows.append(revs)
-        speeds[f.path] = rec.speed_hz
-        on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
-    low, high = min(speeds.values()), max(speeds.values())
-    if high > low * (1 + SPEED_SPREAD):
-        shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
-        raise GearlabInputError(
-            f"[target] key 'files': the history records run at different speeds ({shown}); "
-            "the gap is diagnosed for one operating condition: give one speed's records"
-        )
-    skipped = len(t.files) - len(files)
-    if skipped:
-        notes.append(f"{skipped} test file(s) of the [target] are not used: the gap is measured on the history")
-    X = np.concatenate(rows).astype(np.float64)
-    speed = float(np.average(list(speeds.values()), weights=[len(r) for r in rows]))
-    notes.append(
-        f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
-        f"(tacho); the source simulates that speed"
-    )
-    return X, speed, notes, t.fs or rec.fs
-
-
-def check_healthy(count: int, where: str) -> None:
-    if count == 0:
-        raise GearlabInputError(
-            f"{where}: the target has no healthy data; the gap is measured on healthy "
-            f"revolutions (expected at least {MIN_HEALTHY})"
-        )
-    if count < MIN_HEALTHY:
-        raise GearlabInputError(
-            f"{where}: too few healthy target revolutions for the gap statistics: {count}; "
-            f"expected at least {MIN_HEALTHY}"
-        )
-
-
-def check_sampling(spec: DatasetSpec, z1: int, where: str) -> None:
-    """The simulation rate must resolve the first mesh order and its sidebands in time: fs / speed
-    samples per revolution, of which the highest order is half."""
-    from ..data.builder import operating_point
-
-    speed, _ = operating_point(spec)
-    check_points(spec.fs / speed, z1, f"{where} key 'fs'", f"fs = {spec.fs:g} Hz at {speed:g} Hz")
-
-
-def check_points(points: float, z1: int, where: str, what: str) -> None:
-    need = 2 * (z1 + SIDEBANDS) + 1
-    if points < need:
-        raise GearlabInputError(
-            f"{where}: sampling rate too low for the mesh harmonics: {what} gives "
-            f"{points:.4g} samples per revolution, fewer than {need} needed to resolve mesh "
-            f"order {z1} (a {z1}-tooth pinion) and its {SIDEBANDS} sidebands"
-        )
 
 
 def candidates(names, where: str) -> tuple[str, ...]:
@@ -726,84 +641,10 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
     gap_figures(run.figures, summary)
 
 
-def _interval(iv) -> str:
-    return f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else ""
-
-
-def _pct(x) -> str:
-    return f"{100 * x:.1f} %" if x is not None else ""
-
-
-def views_md(views: dict) -> str:
-    noise = any("gap_noise" in v for v in views.values())  # a column for the noise-alone reference
-    lines = [
-        "| view | gap before | share before | "
-        + ("gap with noise alone | " if noise else "")
-        + "gap after | share after |",
-        "|---|---|---|---|---|" + ("---|" if noise else ""),
-    ]
-    for name, v in views.items():
-        after = "" if v["gap_after"] is None else f"{v['gap_after']:.4g}{_interval(v['gap_after_interval'])}"
-        share_iv = v["share_before_interval"]
-        share_before = _pct(v["share_before"]) + (
-            f" [{100 * share_iv[0]:.0f}, {100 * share_iv[1]:.0f}]" if share_iv else ""
-        )
-        middle = (f"{v['gap_noise']:.4g} | " if v.get("gap_noise") is not None else " | ") if noise else ""
-        lines.append(
-            f"| {name} | {v['gap_before']:.4g}{_interval(v['gap_before_interval'])} | {share_before} | "
-            f"{middle}{after} | {_pct(v['share_after'])} |"
-        )
-    return "\n".join(lines) + "\n"
-
-
-def _params(params: dict, determined: dict | None = None) -> str:
-    """k = v, ...; a parameter the data do not determine is marked "not identifiable" (a distant value
-    fits as well: its profile, gearlab.gap.identify) or "not determined: the fit leaves a gap"."""
-
-    def mark(k):
-        if not determined or k not in determined or determined[k]["determined"]:
-            return ""
-        if determined[k].get("reason") == "fit leaves a gap":
-            return " (not determined: the fit leaves a gap)"
-        return " (not identifiable)"
-
-    return ", ".join((f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}") + mark(k) for k, v in params.items())
-
-
-def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
-    chosen = {e["name"]: e for e in accepted}
-    # each row's parameters are its round-1 fit (alone, its noise beside it); an accepted effect's final
-    # fit, next to the others, is in the verdict and the summary's effects
-    head = "| effect | share of the gap removed (round 1) | parameters (round-1 fit, alone) | accepted (final fit) |"
-    lines = [head, "|---|---|---|---|"]
-    for r in ranking:
-        e = chosen.get(r["name"])
-        mark = f"round {e.get('round')}, {_pct(e['share_removed'])}; {_params(e['params'])}" if e else ""
-        lines.append(f"| {r['name']} | {_pct(r['share_removed'])} | {_params(r.get('params', {}))} | {mark} |")
-    return "\n".join(lines) + "\n"
-
-
-def accuracy_md(acc: dict, order: list[str] | None = None) -> str:
-    lines = ["| model (k = 0) | target test accuracy (%) | repetitions |", "|---|---|---|"]
-    lines += [
-        f"| {label} | {acc[label]['mean']:.2f} ± {acc[label]['std']:.1f} | {acc[label]['n']} |"
-        for label in (order or list(acc))
-    ]
-    return "\n".join(lines) + "\n"
-
-
-def tables_md(summary: dict) -> str:
-    """Three tables separated by blank lines: per-view gap, effect ranking, accuracy."""
-    parts = [views_md(summary["views"]), ranking_md(summary["ranking"], summary["effects"])]
-    if summary.get("accuracy"):
-        parts.append(accuracy_md(summary["accuracy"]))
-    return "\n".join(parts)
-
-
 def summary_lines(run: RunDir) -> list[str]:
     s = run.read_json("summary.json")
     names = ", ".join(
-        f"{e['name']} ({_pct(e['share_removed'])}; final fit: {_params(e['params'], e.get('determined'))})"
+        f"{e['name']} ({percent(e['share_removed'])}; final fit: {params_text(e['params'], e.get('determined'))})"
         for e in s["effects"]
     )
     lines = [
@@ -821,7 +662,7 @@ def summary_lines(run: RunDir) -> list[str]:
     ref = s.get("reference")
     if ref:
         lines.append(
-            f"against the source with its sensor noise alone ({_params(ref['params'])}): gap {ref['gap']:.4g} "
+            f"against the source with its sensor noise alone ({params_text(ref['params'])}): gap {ref['gap']:.4g} "
             f"-> {s['gap_after']:.4g}; {shrink_text(ref['gap'], s['gap_after'])} removed beyond the noise"
         )
     shaft = s.get("output_shaft") or {}
