@@ -1,0 +1,106 @@
+"""docs/your_gearbox.md runs as written (issue 39, item 8): its files (```toml blocks whose first
+line is `# NAME.toml`) are written to a fresh folder, and its commands (```bash blocks, one a
+line) run there in order through the CLI -- the example recordings' script, then describe,
+inspect, diagnose the gap, detect, list runs and score. Every command must exit 0 and print each
+`# prints:` line under it; `RUN_DIR` is the last run's directory. So a command, a key or an
+output the guide shows cannot drift from what gearlab does. About a minute and a half on a busy
+core (the guide's runs use --quick and detectors without networks)."""
+
+from __future__ import annotations
+
+import json
+import re
+import runpy
+import shlex
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+GUIDE = ROOT / "docs" / "your_gearbox.md"
+FENCE = re.compile(r"^```(\w+)\n(.*?)^```$", re.M | re.S)
+
+
+def blocks() -> list[tuple[str, str]]:
+    return [(m.group(1), m.group(2)) for m in FENCE.finditer(GUIDE.read_text())]
+
+
+def steps() -> list[tuple[str, str | list[str]]]:
+    """In the guide's order: ("file", name, text) and ("run", command, [expected output, ...])."""
+    out = []
+    for lang, text in blocks():
+        if lang == "toml":
+            first = text.splitlines()[0]
+            name = re.fullmatch(r"# (\S+\.toml)", first)
+            assert name, f"a toml block of the guide starts with '# NAME.toml', got {first!r}"
+            out.append(("file", name.group(1), text))
+        elif lang == "bash":
+            for line in text.splitlines():
+                if line.startswith("# prints: "):
+                    out[-1][2].append(line.removeprefix("# prints: "))
+                elif line.strip() and not line.startswith("#"):
+                    out.append(("run", line, []))
+    return out
+
+
+def test_the_guide_has_every_step():
+    kinds = [(k, a.split()[:2]) for k, a, _ in steps()]
+    commands = [a for k, a in kinds if k == "run"]
+    for needed in (["gearlab", "inspect"], ["gearlab", "run"], ["gearlab", "score"], ["gearlab", "validate"]):
+        assert needed in commands, needed
+    detect = next(t for k, n, t in steps() if k == "file" and n == "detect.toml")
+    assert len(detect.splitlines()) < 30  # the goal: a detection scenario of under 30 lines
+
+
+@pytest.fixture
+def run_cli(cli, tmp_path, monkeypatch):
+    """Run one guide line in *tmp_path*: (exit code, printed text)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("COLUMNS", "250")  # rich tables unwrapped, so phrases stay on one line
+
+    def run(line: str) -> tuple[int, str]:
+        args = shlex.split(line)
+        if args[0] == "python":
+            script = ROOT / args[1]
+            monkeypatch.setattr(sys, "argv", [str(script), *args[2:]])
+            runpy.run_path(str(script), run_name="__main__")
+            return 0, ""
+        assert args[0] == "gearlab", line
+        code, out, err = cli(*args[1:])
+        return code, out + err
+
+    return run
+
+
+def test_the_guide_runs_start_to_finish(run_cli, tmp_path):
+    run_dir = None
+    for kind, what, expected in steps():
+        if kind == "file":
+            (tmp_path / what).write_text(expected)
+            continue
+        line = what.replace("RUN_DIR", str(run_dir))
+        code, out = run_cli(line)
+        assert code == 0, f"{line}\n{out}"
+        flat = " ".join(out.split())
+        for phrase in expected:
+            assert phrase in flat, f"{line}: expected {phrase!r} in\n{out}"
+        found = re.findall(r"^run directory: (.+)$", out, re.M)
+        if found:
+            run_dir = Path(found[-1].strip())
+            if run_dir.parts[1] == "rig16_gap":
+                gap = json.loads((tmp_path / run_dir / "summary.json").read_text())
+    # step 4: the guide's [corrected] effects are what its gap diagnosis fitted
+    detect = tomllib.loads((tmp_path / "detect.toml").read_text())
+    (written,) = detect["corrected"]["effects"]
+    ((name, params),) = gap["corrected_effects"]
+    params = dict(params)
+    assert written["name"] == name and written["kind"] == params["kind"]
+    assert abs(written["snr_db"] - params["snr_db"]) < 1.0
+    # step 7: next week's chipped take was scored with the run's thresholds and called a fault
+    history = [json.loads(x) for x in (tmp_path / run_dir / "scoring" / "history.jsonl").read_text().splitlines()]
+    fm4 = [h for h in history if h["method"] == "fm4" and h["unit"] == "record10"]
+    assert fm4 and all(h["decision"] == "fault" for h in fm4)
+    assert (tmp_path / run_dir / "report.html").is_file()
