@@ -307,3 +307,16 @@ def device_of(scenario: Scenario) -> str:
         except GearlabInputError as exc:
             raise GearlabInputError(f"{location(scenario.path, 'execution', 'device')}: {exc}") from None
     return ex["device"]
+
+
+# The kind contract's defaults for a kind whose summary lines say it all (gearlab.kinds.contract).
+def no_verdict(summary: dict, records: list[dict]) -> list[str]:
+    return []
+
+
+def no_table(summary: dict) -> str | None:
+    return None
+
+
+def no_compare(runs: list[tuple]) -> tuple[str, str] | None:
+    return None  # `gearlab compare` letters each run's own table

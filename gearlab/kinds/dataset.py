@@ -17,7 +17,7 @@ from ..events import Event
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
-from .common import DATASET_TABLE, dataset_spec, executor_for, sized
+from .common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_verdict, sized
 
 TABLES = {"datasets": DATASET_TABLE}
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
@@ -195,16 +195,4 @@ def recording_views(dataset, max_order: float = 200.0) -> tuple[Chart, Chart, Ch
     return revolutions, tsa, Chart(f"{dataset.spec.name}: order spectra", "shaft order", "amplitude", tuple(spectra))
 
 
-def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
-    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
-    return []
-
-
-def verdict_table(summary: dict) -> str | None:
-    """None: table.md says it all (gearlab.kinds.contract)."""
-    return None
-
-
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all

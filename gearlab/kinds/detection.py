@@ -104,7 +104,7 @@ from ..signals.indicators import (
     window_reference,
 )
 from . import record_effects
-from .common import DATASET_TABLE, class_sizes, device_of, executor_for, simulated_spec, sized
+from .common import DATASET_TABLE, class_sizes, device_of, executor_for, no_compare, simulated_spec, sized
 
 SOURCE_SPEEDS = ("records", "source")
 INPUTS = ("difference", "revolution")
@@ -1765,6 +1765,4 @@ def verdict_table(summary: dict) -> str | None:
     return None  # table.md's per-condition tables say it all
 
 
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+compare_table = no_compare  # each detection run's own tables, lettered

@@ -52,6 +52,7 @@ from .common import (
     dataset_spec,
     device_of,
     executor_for,
+    no_compare,
     planned_counts,
     simulated_spec,
     sized,
@@ -759,6 +760,4 @@ def verdict_table(summary: dict) -> str | None:
     return None  # table.md's per-view, ranking and accuracy tables say it all
 
 
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+compare_table = no_compare  # each gap run's own tables, lettered

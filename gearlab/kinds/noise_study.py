@@ -43,7 +43,17 @@ from ..params import did_you_mean
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
 from ..signals import NOISE_KINDS
-from .common import DATASET_TABLE, class_sizes, dataset_spec, device_of, executor_for, noise_spec
+from .common import (
+    DATASET_TABLE,
+    class_sizes,
+    dataset_spec,
+    device_of,
+    executor_for,
+    no_compare,
+    no_table,
+    no_verdict,
+    noise_spec,
+)
 
 # What a study may change in the chapter-4 presets; the preset itself, the noise kind and
 # TSA are what the study varies.
@@ -415,16 +425,4 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return out
 
 
-def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
-    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
-    return []
-
-
-def verdict_table(summary: dict) -> str | None:
-    """None: table.md says it all (gearlab.kinds.contract)."""
-    return None
-
-
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all

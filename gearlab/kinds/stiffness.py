@@ -21,6 +21,7 @@ from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOption
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of, plain_name
+from .common import no_compare, no_table, no_verdict
 
 TABLES = {
     "stiffness": Table(
@@ -305,16 +306,4 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return out
 
 
-def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
-    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
-    return []
-
-
-def verdict_table(summary: dict) -> str | None:
-    """None: table.md says it all (gearlab.kinds.contract)."""
-    return None
-
-
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all

@@ -46,7 +46,7 @@ from ..parts.training import CALIBRATION, NETWORK, TRAINING, method, train_unit
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
 from ..settings import MAX_SEED, shrunk
-from .common import DATASET_TABLE, device_of, executor_for, simulated_spec
+from .common import DATASET_TABLE, device_of, executor_for, no_compare, no_table, no_verdict, simulated_spec
 
 REPORT_SEEDS = 1000  # seeds below: development; at or above: reported figures (the selection rule)
 SELECTION_RULE = (
@@ -548,16 +548,4 @@ def figure(run: RunDir, summary: dict) -> None:
     save(fig, run.figures / "transfer_benchmark.png", dpi=90, bbox_inches=None)
 
 
-def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
-    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
-    return []
-
-
-def verdict_table(summary: dict) -> str | None:
-    """None: table.md says it all (gearlab.kinds.contract)."""
-    return None
-
-
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all

@@ -32,7 +32,7 @@ from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Key, Scenario, Table, in_range, keys_of, location
 from ...settings import quick_limits
-from ..common import DATASET_TABLE, dataset_spec, executor_for
+from ..common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_verdict
 from . import trials as bench
 
 MAX_TRIALS = 10000
@@ -356,16 +356,4 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return [gap, per]
 
 
-def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
-    """No verdict beyond the summary lines (gearlab.kinds.contract)."""
-    return []
-
-
-def verdict_table(summary: dict) -> str | None:
-    """None: table.md says it all (gearlab.kinds.contract)."""
-    return None
-
-
-def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
-    """None: `gearlab compare` shows each run's own table, lettered (gearlab.kinds.contract)."""
-    return None
+verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
