@@ -257,7 +257,9 @@ def test_front_ends_do_not_switch_on_kind_names():
 def test_plugins_import_gearlab_only_through_the_public_api():
     root = PACKAGE.parent
     private = []
-    for path in sorted([*(root / "plugins").rglob("*.py"), *(root / "examples").rglob("*.py")]):
+    # the plugin packages: the built-in ones and the out-of-tree example (examples/your_gearbox is a
+    # user's script that makes recordings, not a plugin)
+    for path in sorted([*(root / "plugins").rglob("*.py"), *(root / "examples" / "gearlab-wear").rglob("*.py")]):
         for node in ast.walk(ast.parse(path.read_text())):
             names = (
                 [a.name for a in node.names]
