@@ -11,9 +11,11 @@ from __future__ import annotations
 import errno
 import os
 import tempfile
+import tomllib
+from collections.abc import Callable
 from pathlib import Path
 
-from .errors import GearlabInputError, shown
+from .errors import GearlabInputError, clipped, shown
 
 
 def current_umask() -> int:
@@ -85,3 +87,29 @@ def cannot_write(exc: OSError, where: Path | str = "") -> GearlabInputError:
     problem = write_problem(exc) or exc.strerror or type(exc).__name__
     path = exc.filename or where
     return GearlabInputError(f"{path}: cannot write: {problem}" if path else f"cannot write: {problem}")
+
+
+def toml_tables(path: Path, read: Callable[[], bytes], missing: str, directory: str) -> dict:
+    """The tables of a TOML file a user names (a scenario, a gearbox description), *read* giving
+    its bytes; one line for each way it cannot be read: "<path>: <missing>" when it is not there,
+    "<path>: <directory>" when it is a folder."""
+    try:
+        text = read().decode("utf-8")
+    except FileNotFoundError:
+        raise GearlabInputError(f"{path}: {missing}") from None
+    except IsADirectoryError:
+        raise GearlabInputError(f"{path}: {directory}") from None
+    except UnicodeDecodeError as exc:
+        raise GearlabInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise GearlabInputError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except ValueError as exc:  # TOMLDecodeError, or an integer of more digits than Python converts
+        raise GearlabInputError(f"{path}: invalid TOML: {clipped(str(exc))}") from None
+    except RecursionError:  # arrays or inline tables nested hundreds deep
+        raise GearlabInputError(
+            f"{path}: invalid TOML: nested too deeply (arrays or tables inside one another hundreds of levels deep)"
+        ) from None
+    except MemoryError:
+        raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None

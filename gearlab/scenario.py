@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from .confined import Confined
-from .errors import GearlabInputError, clipped, shown
+from .errors import GearlabInputError, shown
+from .files import toml_tables
 from .params import did_you_mean
 from .settings import declared, in_bounds
 
@@ -256,23 +256,9 @@ def read_toml(source: Path | Confined) -> dict:
     """The tables of a scenario file: one the user names, or a run directory's copy (a
     Confined, read without following a link)."""
     path = source.path if isinstance(source, Confined) else source
-    try:
-        text = (source.read_bytes() if isinstance(source, Confined) else path.read_bytes()).decode("utf-8")
-    except FileNotFoundError:
-        raise GearlabInputError(f"{path}: no such scenario file{_nearby(path)}") from None
-    except IsADirectoryError:
-        raise GearlabInputError(f"{path}: is a directory, expected a scenario .toml file") from None
-    except UnicodeDecodeError as exc:
-        raise GearlabInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise GearlabInputError(f"{path}: cannot read ({exc.strerror})") from None
-    try:
-        return tomllib.loads(text)
-    except ValueError as exc:  # TOMLDecodeError, or an integer of more digits than Python converts
-        raise GearlabInputError(f"{path}: invalid TOML: {clipped(str(exc))}") from None
-    except RecursionError:  # arrays or inline tables nested hundreds deep
-        raise GearlabInputError(
-            f"{path}: invalid TOML: nested too deeply (arrays or tables inside one another hundreds of levels deep)"
-        ) from None
-    except MemoryError:
-        raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None
+    return toml_tables(
+        path,
+        source.read_bytes if isinstance(source, Confined) else path.read_bytes,
+        f"no such scenario file{_nearby(path)}",
+        "is a directory, expected a scenario .toml file",
+    )

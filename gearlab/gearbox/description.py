@@ -21,12 +21,12 @@ The geometry is checked (gearlab.gearbox.checks) as soon as it is read.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import GearlabInputError, clipped, shown
+from ..errors import GearlabInputError, shown
+from ..files import toml_tables
 from ..params import Param, did_you_mean
 from ..units import to_si
 
@@ -263,20 +263,12 @@ TABLES = ("gearbox", "operation", "materials", "stages", "shafts", "sensor", "dy
 def read_description(path: Path | str) -> dict:
     """The TOML of a description file, or one line on why it cannot be read."""
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise GearlabInputError(f"{path}: no such gearbox description (a .toml file, docs/gearbox.md)") from None
-    except IsADirectoryError:
-        raise GearlabInputError(f"{path}: is a directory; expected a gearbox description .toml file") from None
-    except UnicodeDecodeError as exc:
-        raise GearlabInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise GearlabInputError(f"{path}: cannot read ({exc.strerror})") from None
-    try:
-        return tomllib.loads(text)
-    except (ValueError, RecursionError) as exc:
-        raise GearlabInputError(f"{path}: invalid TOML: {clipped(str(exc))}") from None
+    return toml_tables(
+        path,
+        path.read_bytes,
+        "no such gearbox description (a .toml file, docs/gearbox.md)",
+        "is a directory; expected a gearbox description .toml file",
+    )
 
 
 def load_gearbox(path: Path | str) -> Gearbox:
