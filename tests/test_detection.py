@@ -301,7 +301,9 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     assert code == 2 and "[detection] key 'history_fit'" in err and "at least two" in err
     assert not list((tmp_path / "r2").rglob("results.jsonl"))
     # a training that leaves a record out has fewer history rows: a batch above them is refused up front
-    path.write_text(path.read_text().replace("target_train = 8\nbatch = 4", "target_train = 60\nbatch = 45"))
+    # (the source large enough for that batch, which is checked first, from its spec)
+    text = path.read_text().replace("target_train = 8\nbatch = 4", "target_train = 60\nbatch = 45")
+    path.write_text(text.replace("faults = { chip = [20] }\nhealthy = 9", "faults = { chip = [20] }\nhealthy = 60", 1))
     code, _, err = cli("run", path, "--out", tmp_path / "r3")
     assert code == 2 and "[protocol] key 'batch': 45" in err and "left out" in err
     assert not list((tmp_path / "r3").rglob("results.jsonl"))
@@ -606,6 +608,10 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
         (lambda t: t.replace('adapter = "mmd"', 'adapter = "target_only"'), "no unsupervised variant"),
         (lambda t: t.replace('adapter = "mmd"', 'adapter = "mmd"\nsupervised = true'), "no labels a method may use"),
         (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
+        (
+            lambda t: t.replace("target_train = 8\nbatch = 4", "target_train = 14\nbatch = 12"),
+            r"\[protocol\] key 'batch': 12 is larger than the source training set \(11 of the 12 samples",
+        ),
         (
             lambda t: t.replace("mesh_orders = [32]", "mesh_orders = [32]\nslow_shafts = [1, 3]"),
             r"\[classical\] key 'slow_shafts': expected whole numbers of input revolutions 2",

@@ -353,6 +353,12 @@ def build(scenario: Scenario) -> dict:
         raise GearlabInputError(
             f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than target_train = {p['target_train']}"
         )
+    n = sum(sizes.values())  # the source's samples, known from its spec: refused now, not after simulating
+    if n - max(1, round(protocol.val_fraction * n)) < p["batch"]:
+        raise GearlabInputError(
+            f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than the source training set "
+            f"({n - max(1, round(protocol.val_fraction * n))} of the {n} samples of '{source.name}')"
+        )
     if t["detection"]["source_speed"] not in SOURCE_SPEEDS:
         raise GearlabInputError(
             f"{location(path, 'detection', 'source_speed')}: expected one of "
