@@ -136,15 +136,22 @@ def supported() -> str:
 # --- reading a file (the readers themselves: gearlab.data.readers) ---------------------------
 
 
-def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
-    """Read *names* from *path*: (contents, format name). Every failure is one clear line."""
-    path = Path(path)
+def format_of(path: Path) -> str:
+    """The reader's name for a measured file that may be read (check_measured_file), by its suffix;
+    one line naming the supported types otherwise."""
     check_measured_file(path)
     fmt = FORMATS.get(path.suffix.lower())
     if fmt is None:
         raise GearlabInputError(
             f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {supported()}"
         )
+    return fmt
+
+
+def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
+    """Read *names* from *path*: (contents, format name). Every failure is one clear line."""
+    path = Path(path)
+    fmt = format_of(path)
     check_size(path, "the file", path.stat().st_size)
     try:
         contents = READERS[fmt](path, names)
@@ -660,12 +667,7 @@ def cut_recording(
 def read_header(path) -> Header:
     """What *path* says of itself (Header), its data unread; every failure is one line."""
     path = Path(path)
-    check_measured_file(path)
-    fmt = FORMATS.get(path.suffix.lower())
-    if fmt is None:
-        raise GearlabInputError(
-            f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {supported()}"
-        )
+    fmt = format_of(path)
     try:
         return HEADERS[fmt](path)
     except GearlabInputError:
