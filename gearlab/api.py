@@ -24,6 +24,7 @@ from .dynamics.excitation import Excitation
 from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring
 from .effect_contract import Effect, SignalContext
 from .errors import GearlabInputError
+from .gearbox.simulation import DescribedPresets
 from .learn.adapters import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, SCHEDULE_PARAMS, Adapter
 from .params import Param
 from .physics.faults import Fault, region, scaled_ladder
@@ -52,6 +53,7 @@ __all__ = [
     "SCHEDULE_PARAMS",
     "Adapter",
     "Assembly",
+    "DescribedPresets",
     "DynamicModel",
     "Effect",
     "Excitation",

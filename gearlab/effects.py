@@ -21,6 +21,7 @@ from .dynamics.config import DerivedModel, ModelConfig, sorted_values
 from .dynamics.model import DynamicModel
 from .effect_contract import LEVELS, Effect, EffectSpec, SignalContext
 from .errors import GearlabInputError
+from .gearbox.simulation import is_reference
 from .registry import get_registry
 
 
@@ -49,7 +50,8 @@ def _model_for(base: str, preset: str, dofs: tuple[str, ...], input_dof: str, lo
     base_model = registry.get("model", base)
     for name in [base] + registry.names("model"):
         m = registry.get("model", name)
-        if tuple(m.dofs) == dofs and (m.input_dof, m.load_dof) == (input_dof, load_dof) and preset in m.presets:
+        takes = preset in m.presets or is_reference(preset) and m.stages == base_model.stages  # a description
+        if tuple(m.dofs) == dofs and (m.input_dof, m.load_dof) == (input_dof, load_dof) and takes:
             return m
     added = [d for d in dofs if d not in base_model.dofs]
     return DerivedModel(

@@ -221,8 +221,8 @@ def test_no_model_effect_defaults_to_a_target_preset():
     """The defaults of the effects that add DOFs are none of the presets' values (Tables 2.3, 2.4):
     the corrected simulator must be found from the target's data, not start at the answer."""
     from gearlab.gap.diagnose import Space
-    from gearlab_plugins.models.presets import LUO2019, MENG2020
 
+    LUO2019, MENG2020 = REG.get("model", "ten_dof").preset("luo2019"), REG.get("model", "eight_dof").preset("meng2020")
     for name in ("drive_inertias", "casing_path"):
         for p in REG.get("effect", name).params:
             assert all(p.default != preset["params"].get(p.name) for preset in (LUO2019, MENG2020)), (name, p.name)

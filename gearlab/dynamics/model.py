@@ -25,6 +25,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import GearlabInputError
+from ..gearbox.simulation import is_reference, preset_of_reference
 from ..params import Param, did_you_mean, resolve_params
 from ..physics.geometry import GearPair
 from ..physics.presets import gear_pair
@@ -108,8 +109,10 @@ class DynamicModel:
     dofs: ClassVar[tuple[str, ...]]
     input_dof: ClassVar[str]
     load_dof: ClassVar[str]
-    # preset name -> {"pair": gear-pair preset, "params": {...}, "speeds_hz": (...), "loads_nm": (...)}
+    # preset name -> {"pair": gear-pair preset or GearPair, "params": {...}, "speeds_hz": (...), "loads_nm": (...)};
+    # a preset "gearbox:..." is a gearbox description's (gearlab.gearbox.simulation), of *stages* stages
     presets: ClassVar[Mapping[str, Mapping]]
+    stages: ClassVar[int] = 1
 
     @property
     def params(self) -> tuple[Param, ...]:
@@ -129,6 +132,8 @@ class DynamicModel:
 
     def preset(self, name: str, where: str = "") -> Mapping:
         """The preset *name*; an unknown one is an input error naming *where* it was asked for."""
+        if is_reference(name):
+            return preset_of_reference(name, tuple(self.param_names()), self.stages, self.name)
         try:
             return self.presets[name]
         except KeyError:
@@ -144,7 +149,7 @@ class DynamicModel:
         """The gear pair and the full parameter set of a preset, with optional overrides (units allowed)."""
         p = self.preset(preset, where)
         values = resolve_params(self.params, {**p["params"], **(overrides or {})}, where or f"model '{self.name}'")
-        return gear_pair(p["pair"]), values
+        return (p["pair"] if isinstance(p["pair"], GearPair) else gear_pair(p["pair"])), values
 
     def assemble(self, pair: GearPair, values: Mapping[str, float]) -> Assembly:
         return lumped_assembly(self.dofs, pair, values, self.input_dof, self.load_dof)
@@ -156,7 +161,11 @@ class DynamicModel:
             "dofs": list(self.dofs),
             "channels": list(self.channels),
             "presets": {
-                k: {"pair": v["pair"], "speeds_hz": list(v["speeds_hz"]), "loads_nm": list(v["loads_nm"])}
+                k: {
+                    "pair": str(getattr(v["pair"], "name", v["pair"])),
+                    "speeds_hz": list(v["speeds_hz"]),
+                    "loads_nm": list(v["loads_nm"]),
+                }
                 for k, v in self.presets.items()
             },
         }

@@ -24,9 +24,12 @@ from ..physics.geometry import GearPair
 
 @dataclass(frozen=True)
 class StagePair(GearPair):
-    """A GearPair whose wheel sits on its own bore: hub_radius is the pinion's, wheel_hub_radius the wheel's."""
+    """A GearPair whose wheel sits on its own bore: hub_radius is the pinion's, wheel_hub_radius the wheel's.
+    *next_stage*: the pair its wheel's shaft drives in a two-stage train (train_pair), which the
+    two-stage model meshes second (plugins/models/two_stage.py)."""
 
     wheel_hub_radius: float = 0.0
+    next_stage: GearPair | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -86,6 +89,13 @@ def gear_pair(box, stage) -> GearPair:
 def gear_pairs(box) -> tuple[GearPair, ...]:
     """The gear pairs of every stage, input first."""
     return tuple(gear_pair(box, stage) for stage in box.stages)
+
+
+def train_pair(first: GearPair, second: GearPair) -> StagePair:
+    """Stage 1's pair carrying stage 2's: what a two-stage model simulates (the same mesh stiffness
+    as *first*, the wheel on its own bore as before)."""
+    values = {f.name: getattr(first, f.name) for f in dataclasses.fields(GearPair) if f.init}
+    return StagePair(**values, wheel_hub_radius=first.gear.hub_radius, next_stage=second)
 
 
 # --- the lumped model ----------------------------------------------------------------------------

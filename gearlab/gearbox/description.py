@@ -165,6 +165,7 @@ class Gearbox:
     load_nm: float | None  # output torque
     sensor: Sensor
     dynamics: dict[str, float] = field(default_factory=dict)
+    stated: tuple[str, ...] = ()  # the [dynamics] keys the description gives (the rest are DYNAMICS defaults)
 
     def shaft_index(self, name: str, where: str) -> int:
         try:
@@ -317,7 +318,20 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
     dyn.known(p.name for p in DYNAMICS)
     dynamics = {p.name: dyn.param(p) for p in DYNAMICS}
 
-    box = Gearbox(name, description, source, stages, shafts, shaft_mass, shaft_inertia, speed, load, sensor, dynamics)
+    box = Gearbox(
+        name,
+        description,
+        source,
+        stages,
+        shafts,
+        shaft_mass,
+        shaft_inertia,
+        speed,
+        load,
+        sensor,
+        dynamics,
+        tuple(dyn.data),
+    )
     check_geometry(box)
     return box
 

@@ -1,7 +1,7 @@
 """The eight-DOF model of thesis 2.4.2: the 10-DOF model without the casing (Dataset B-8)."""
 
-from gearlab.api import DOF_ORDER, DynamicModel, hookimpl
-from gearlab_plugins.models.presets import MENG2020, only
+from gearlab.api import DOF_ORDER, DescribedPresets, DynamicModel, hookimpl
+from gearlab_plugins.models.presets import MENG2020
 
 
 class EightDof(DynamicModel):
@@ -12,7 +12,7 @@ class EightDof(DynamicModel):
     load_dof = "theta22"
 
 
-EightDof.presets = {"meng2020": only(MENG2020, EightDof().param_names())}
+EightDof.presets = DescribedPresets(EightDof(), {"meng2020": MENG2020})
 
 
 @hookimpl

@@ -4,8 +4,8 @@ No motor and no load: the pinion turns at the fixed input speed and the load tor
 on the driven gear directly.
 """
 
-from gearlab.api import DynamicModel, hookimpl
-from gearlab_plugins.models.presets import MENG2020, only
+from gearlab.api import DescribedPresets, DynamicModel, hookimpl
+from gearlab_plugins.models.presets import MENG2020
 
 
 class SixDof(DynamicModel):
@@ -16,7 +16,7 @@ class SixDof(DynamicModel):
     load_dof = "theta21"
 
 
-SixDof.presets = {"meng2020": only(MENG2020, SixDof().param_names())}
+SixDof.presets = DescribedPresets(SixDof(), {"meng2020": MENG2020})
 
 
 @hookimpl

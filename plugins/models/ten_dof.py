@@ -1,6 +1,6 @@
 """The 10-DOF model of Luo et al. (2019b), thesis 2.3 and Table 2.3: Dataset A."""
 
-from gearlab.api import DOF_ORDER, DynamicModel, hookimpl
+from gearlab.api import DOF_ORDER, DescribedPresets, DynamicModel, hookimpl
 from gearlab_plugins.models.presets import LUO2019
 
 
@@ -10,7 +10,9 @@ class TenDof(DynamicModel):
     dofs = DOF_ORDER
     input_dof = "theta11"
     load_dof = "theta22"
-    presets = {"luo2019": LUO2019}
+
+
+TenDof.presets = DescribedPresets(TenDof(), {"luo2019": LUO2019})
 
 
 @hookimpl

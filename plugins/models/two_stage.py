@@ -23,6 +23,9 @@ input's), so the 16x input-order mesh is physics. The assembly is a rank-two upd
 constant matrices; gearlab.dynamics.newmark integrates it exactly (Woodbury, one 2 x 2 system
 per step).
 
+A two-stage gearbox description (gearlab.gearbox.simulation) runs on this model with its own two
+pairs (StagePair.next_stage) and the same layout: stage 2's centre line anti-parallel to stage 1's.
+
 Symmetry: the stage-2 mesh repeats every 2 pinion pitches (16 per input turn), so the response
 to a chip on tooth n is not tooth 1's shifted by (n - 1)/32 turn (breaks_symmetry).
 """
@@ -31,47 +34,14 @@ import math
 
 import numpy as np
 
-from gearlab.api import Assembly, DynamicModel, Mesh, add_spring, gear_pair, hookimpl
+from gearlab.api import Assembly, DescribedPresets, DynamicModel, Mesh, add_spring, gear_pair, hookimpl
 
 DOFS = ("x1", "y1", "theta11", "theta12", "x2", "y2", "theta21", "x3", "y3", "theta31", "theta22", "xf", "yf")
 
-# Lumped parameters of the rig (docs/real_data.md, "The rig simulator", gives each source).
-# Gear blocks: solid steel discs (7850 kg/m^3) of pitch diameter x 20 mm face plus a 5/8 in
-# steel shaft of 0.25 m (0.39 kg); the idler block carries its 96T gear and its 48T pinion.
-# Motor and load: Table 2.4 (Chaari et al. 2012) -- unpublished for the rig, fitted by
-# drive_inertias. Bearings: 1e8 N/m, a ball bearing of this size in series with its housing
-# (fitted by bearing_stiffness). Casing: a 10 kg housing on 2e8 N/m mounts (Table 2.3's
-# stiffness; fitted by casing_path). zeta: 0.07 (thesis, eq. 2.107; fitted by mesh_damping).
-PHM09 = {
-    "pair": "phm09_stage1",
-    "pair2": "phm09_stage2",
-    "params": {
-        "m1": 0.89,
-        "m2": 6.07,
-        "m3": 3.54,
-        "I11": 0.0043,
-        "I12": 2.6e-4,
-        "I21": 0.0223,
-        "I31": 0.0101,
-        "I22": 0.0045,
-        "k_b": 1e8,
-        "c_b": 2e3,
-        "k_c": 1e4,
-        "c_c": 10.0,
-        "mf": 10.0,
-        "k_xf": 2e8,
-        "k_yf": 2e8,
-        "c_xf": 2e3,
-        "c_yf": 2e3,
-        "zeta": 0.07,
-    },
-    "speeds_hz": (30.0, 40.0),
-    # Output torque, not published ("High"/"Low"): 20 N*m is 4 N*m at the input, 0.75 kW at 30 Hz,
-    # a fraction of a small rig motor; the diagnosis fits the level (load_level).
-    "loads_nm": (20.0,),
-    "speed_hz": 30.0,
-    "load_nm": 20.0,
-}
+# The rig's lumped parameters live in its description, gearlab/gearbox/presets/phm09.toml (their
+# sources: docs/real_data.md, "The rig simulator"); here the operating points of its datasets.
+# Load: output torque, not published ("High"/"Low"); the diagnosis fits the level (load_level).
+PHM09 = {"speeds_hz": (30.0, 40.0), "loads_nm": (20.0,)}
 
 
 class TwoStage(DynamicModel):
@@ -83,7 +53,7 @@ class TwoStage(DynamicModel):
     dofs = DOFS
     input_dof = "theta11"
     load_dof = "theta22"
-    presets = {"phm09": PHM09}
+    stages = 2
     breaks_symmetry = True
 
     def param_names(self):
@@ -109,7 +79,9 @@ class TwoStage(DynamicModel):
         )
 
     def second_pair(self, pair):
-        """The stage-2 pair of the preset whose stage 1 is *pair*."""
+        """The stage-2 pair of the preset whose stage 1 is *pair*: a description's carries it (next_stage)."""
+        if getattr(pair, "next_stage", None) is not None:
+            return pair.next_stage
         return gear_pair(next(p["pair2"] for p in self.presets.values() if p["pair"] == pair.name))
 
     def assemble(self, pair, values):
@@ -184,6 +156,9 @@ def two_stage_assembly(pair, pair2, v) -> Assembly:
         meshes=(Mesh(pair2, P2, r1, ("m2", "m3")),),
         rigid={"theta11": 1.0, "theta12": 1.0, "theta21": r1, "theta31": r2, "theta22": r2},
     )
+
+
+TwoStage.presets = DescribedPresets(TwoStage(), {"phm09": PHM09})
 
 
 @hookimpl

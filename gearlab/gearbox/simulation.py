@@ -1,0 +1,181 @@
+"""Simulating a gearbox description: the lumped model, its parameters, its sensor channel and its
+operating point, and the preset a dataset spec names it by (docs/gearbox.md, "Simulating it").
+
+A dataset spec names its model's parameters by a preset string. A description's is a reference,
+``gearbox:NAME#HASH``: NAME a built-in description or a file's absolute path, HASH the first 12
+hex digits of the file's SHA-256. So the spec (and the dataset cache key) changes when the file
+does, a worker process reads the file itself, and a file edited after the spec was made is
+refused rather than simulated in two versions.
+
+The lumped model (thesis 2.3, 2.4.2; plugins/models), by what the description gives:
+
+* one stage: ``ten_dof`` (pinion and wheel blocks, motor, load and the housing on its mounts)
+  when [dynamics] gives a housing value (casing_mass, mounting_*) or no drive value either;
+  ``eight_dof`` (no housing: the bearings grounded) when it gives the drive (motor_inertia,
+  load_inertia, coupling_*) and no housing value;
+* two stages: ``two_stage``, its second mesh the description's stage 2;
+* three stages: refused (no lumped formulation yet).
+
+A [source] may name another model with ``model`` (six_dof, say) of the same number of stages.
+The values: each shaft's block from [[shafts]] (else its gears as solid discs), the rest from
+[dynamics] (else the DYNAMICS defaults; FITTED names the gap-diagnosis effect that fits each).
+The channel from [sensor]: on a model with a housing the accelerometer sits on it (casing_x,
+casing_y: the lumped housing is one block, so 'near' picks nothing); without one, on the block
+of the shaft it is near (input: pinion_, output of one stage: gear_, two stages: gear_ for the
+idler, output_ for the output). 'radial' is y, the axis nearest the line of action
+(eq. 2.104: cos α of the mesh force); 'axial' is refused (the models have no axial DOF).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+
+from ..errors import GearlabInputError
+from .derive import gear_pairs, lumped_params, train_pair
+from .description import FITTED, Gearbox
+
+PREFIX = "gearbox:"
+HOUSING = ("casing_mass", "mounting_stiffness_x", "mounting_stiffness_y", "mounting_damping_x", "mounting_damping_y")
+DRIVE = ("motor_inertia", "load_inertia", "coupling_stiffness", "coupling_damping")
+
+
+def is_reference(preset: str) -> bool:
+    return isinstance(preset, str) and preset.startswith(PREFIX)
+
+
+def _file(spec: str) -> Path:
+    from . import builtin_gearboxes
+
+    builtin = builtin_gearboxes()
+    return builtin[spec] if spec in builtin and not Path(spec).exists() else Path(spec)
+
+
+def reference(spec: str) -> str:
+    """The preset reference of a description: a built-in name or a file path (made absolute)."""
+    path = _file(spec)
+    name = spec if path != Path(spec) else str(path.resolve())
+    return f"{PREFIX}{name}#{hashlib.sha256(path.read_bytes()).hexdigest()[:12]}"
+
+
+@functools.lru_cache(maxsize=32)
+def referenced(ref: str) -> Gearbox:
+    """The description a reference names, checked to be the file it was made from."""
+    from . import resolve_gearbox
+
+    spec, _, digest = ref.removeprefix(PREFIX).rpartition("#")
+    box = resolve_gearbox(spec)
+    now = reference(spec).rpartition("#")[2]
+    if now != digest:
+        raise GearlabInputError(
+            f"{spec}: the gearbox description changed since the dataset was specified (content {digest}, now "
+            f"{now}); run the scenario again"
+        )
+    return box
+
+
+def label(preset: str) -> str:
+    """A preset as people read it: a description's name and file, else the preset name."""
+    if not is_reference(preset):
+        return preset
+    return preset.removeprefix(PREFIX).rpartition("#")[0]
+
+
+def model_name(box: Gearbox) -> str:
+    """The lumped model a description implies (module doc)."""
+    stages = len(box.stages)
+    if stages == 2:
+        return "two_stage"
+    if stages != 1:
+        raise GearlabInputError(
+            f"{box.source}: [[stages]]: {stages} stages: no lumped model simulates more than two stages yet (one "
+            "stage: ten_dof or eight_dof, two: two_stage); the stiffness model, the order table and inspect take it"
+        )
+    stated = set(box.stated)
+    return "eight_dof" if stated & set(DRIVE) and not stated & set(HOUSING) else "ten_dof"
+
+
+def channel(box: Gearbox, model: str, channels: tuple[str, ...]) -> str:
+    """The channel of *model* (its *channels*) where the description's [sensor] sits (module doc)."""
+    where = f"{box.source}: [sensor] key 'direction'"
+    direction = {"x": "x", "y": "y", "radial": "y"}.get(box.sensor.direction)
+    if direction is None:
+        raise GearlabInputError(
+            f"{where}: {box.sensor.direction!r}: the lumped models have no axial motion; expected x, y or radial "
+            "(or give 'channel' in the [source])"
+        )
+    if f"casing_{direction}" in channels:
+        return f"casing_{direction}"
+    shaft = box.shafts.index(box.sensor.near)
+    block = ("pinion", "gear", "output")[shaft] if shaft < 3 else ""
+    name = f"{block}_{direction}"
+    if name not in channels:
+        raise GearlabInputError(
+            f"{box.source}: [sensor] key 'near': model '{model}' has no block on shaft {box.sensor.near!r}; its "
+            f"channels: {', '.join(channels)} (give 'channel' in the [source])"
+        )
+    return name
+
+
+def defaults(box: Gearbox) -> list[str]:
+    """The [dynamics] values the description leaves to their defaults, '(fit: EFFECT)' where the gap
+    diagnosis may fit one."""
+    return [
+        f"{key}{f' (fit: {FITTED[key]})' if key in FITTED else ''}" for key in box.dynamics if key not in box.stated
+    ]
+
+
+def preset_of(box: Gearbox, names: tuple[str, ...], stages: int, model: str = "") -> dict:
+    """A model preset ({"pair", "params", "speed_hz", "load_nm", "speeds_hz", "loads_nm"}) from
+    *box* for a model of *stages* stages taking the parameters *names*."""
+    if len(box.stages) != stages:
+        raise GearlabInputError(
+            f"{box.source}: [[stages]]: {len(box.stages)} stage(s), but model '{model}' simulates {stages} "
+            f"(the description's model: {model_name(box)})"
+        )
+    _, params = lumped_params(box)
+    pairs = gear_pairs(box)
+    return {
+        "pair": pairs[0] if stages == 1 else train_pair(*pairs),
+        "params": {k: v for k, v in params.items() if k in names},
+        "speed_hz": box.speed_hz,
+        "load_nm": box.load_nm,
+        "speeds_hz": () if box.speed_hz is None else (box.speed_hz,),
+        "loads_nm": () if box.load_nm is None else (box.load_nm,),
+    }
+
+
+@functools.lru_cache(maxsize=32)
+def preset_of_reference(ref: str, names: tuple[str, ...], stages: int, model: str = "") -> dict:
+    """preset_of the description *ref* names (a reference: :func:`reference`)."""
+    return preset_of(referenced(ref), names, stages, model)
+
+
+class DescribedPresets(Mapping):
+    """A model plugin's presets, each read from the built-in description of its name on first use
+    (registering the plugins reads no file), with the plugin's *extra* keys (the operating points
+    its datasets use) on top: the preset and the description are one thing."""
+
+    def __init__(self, model, extra: Mapping[str, Mapping]):
+        self._model, self._extra, self._read = model, dict(extra), {}
+
+    def __getitem__(self, name: str) -> dict:
+        if name not in self._extra:
+            raise KeyError(name)
+        if name not in self._read:
+            from . import resolve_gearbox
+
+            m = self._model
+            self._read[name] = {
+                **preset_of(resolve_gearbox(name), m.param_names(), m.stages, m.name),
+                **self._extra[name],
+            }
+        return self._read[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._extra)
+
+    def __len__(self) -> int:
+        return len(self._extra)
