@@ -26,7 +26,8 @@ class Excitation:
         M u'' + (Cc + c(t) P^T P) u' + (Kc + k(t) P^T P) u = F0 T_l(t)/T_l + sum_j b_j g_j(t),
 
     with k(t) = k(θ(t)) read from the TVMS over one revolution (with the faults) at the
-    input-shaft angle θ(t), c(t) = c0 + mu k(t) (eq. 2.107-2.109), the load torque series
+    input-shaft angle θ(t) (over one wheel revolution, at the wheel's angle (Z1/Z2) θ(t), when a
+    fault sits on the wheel), c(t) = c0 + mu k(t) (eq. 2.107-2.109), the load torque series
     T_l(t) and extra forces (vector b_j over the free DOFs, series g_j). An excitation effect
     returns a changed copy: a new angle (``with_angle``), a new TVMS table (``with_tvms``),
     a new load series, or one more force (``add_force``). Forces are evaluated last, on the
@@ -38,7 +39,7 @@ class Excitation:
     load_nm: float  # mean load torque T_l
     t: np.ndarray  # s
     angle: np.ndarray  # continuous input-shaft (= pinion) angle θ(t), rad
-    tvms: MeshStiffness  # k(θ) over one revolution, faults included
+    tvms: MeshStiffness  # k over one revolution of its gear (pinion, or a faulted wheel), faults included
     load: np.ndarray  # load torque T_l(t), N*m
     dofs: tuple[str, ...]  # free DOFs (the input DOF is prescribed)
     M: np.ndarray  # mass matrix of the free DOFs
@@ -65,7 +66,11 @@ class Excitation:
 
     def with_tvms(self, k: np.ndarray) -> Excitation:
         table = MeshStiffness(
-            theta=self.tvms.theta, k=np.asarray(k, dtype=float), pair=self.tvms.pair, faults=self.tvms.faults
+            theta=self.tvms.theta,
+            k=np.asarray(k, dtype=float),
+            pair=self.tvms.pair,
+            faults=self.tvms.faults,
+            gear=self.tvms.gear,
         )
         return dataclasses.replace(self, tvms=table)
 
@@ -106,18 +111,21 @@ class Excitation:
         return self.vector({"theta11": 1.0, "theta12": 1.0, "theta21": ratio, "theta22": ratio})
 
     def tooth_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per pinion tooth n = 1..Z1 on the TVMS grid: its local mesh angle phi (rad since its contact
-        began), whether it is in mesh, and its pair stiffness k_n (faults included), each (Z1, points).
+        """Per tooth n = 1..Z of the table's gear (the pinion, Z = Z1, or a faulted wheel, Z = Z2) on the
+        TVMS grid: its pair's local mesh angle phi (pinion rad since its contact began), whether it is in
+        mesh, and its pair stiffness k_n (faults included), each (Z, points).
 
-        Tooth n meshes for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t (eq. 2.51-2.54); the
-        local angle is formed in integer arithmetic so every tooth sees the same angles at
-        corresponding grid points and the per-tooth picture shifts exactly with the tooth.
+        Pinion tooth n meshes for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t (eq. 2.51-2.54), wheel
+        tooth n for (n-1) 2 pi/Z2 <= theta_2 < (n-1) 2 pi/Z2 + theta_t Z1/Z2; the local angle is formed in
+        integer arithmetic so every tooth sees the same angles at corresponding grid points and the
+        per-tooth picture shifts exactly with the tooth.
         """
         pair, points = self.pair, len(self.tvms.theta)
         Z1 = pair.Z1
+        Z = Z1 if self.tvms.gear == "pinion" else pair.Z2
         j = np.arange(points, dtype=np.int64)[None, :]
-        n = np.arange(Z1, dtype=np.int64)[:, None]
-        phi = 2 * np.pi * np.mod(j * Z1 - n * points, points * Z1) / (points * Z1)
+        n = np.arange(Z, dtype=np.int64)[:, None]
+        phi = 2 * np.pi * np.mod(j * Z - n * points, points * Z) / (points * Z1)
         in_mesh = phi < pair.theta_t
         k = np.zeros(phi.shape)
         k[in_mesh] = self.stiffness.tooth_pair_stiffness(phi[in_mesh])  # all teeth healthy, one pass
@@ -129,11 +137,12 @@ class Excitation:
 
     def at_angle(self, table: np.ndarray) -> np.ndarray:
         """Read a per-revolution table on the TVMS grid at θ(t): by index while θ is the nominal angle on
-        a grid of whole steps per revolution (exact, so tooth shifts stay exact), else interpolated."""
+        a grid of whole steps per revolution (exact, so tooth shifts stay exact), else interpolated. The
+        table spans a revolution of the TVMS's gear, which turns tvms.turns times per input turn."""
         if self.index is not None:
             return table[self.index]
         theta = np.append(self.tvms.theta, 2 * np.pi)
-        return np.interp(np.mod(self.angle, 2 * np.pi), theta, np.append(table, table[0]))
+        return np.interp(np.mod(self.tvms.turns * self.angle, 2 * np.pi), theta, np.append(table, table[0]))
 
     def force_terms(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """(vector, series) of every extra force, the load-torque variation included."""

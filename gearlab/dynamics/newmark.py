@@ -21,6 +21,7 @@ import time
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numba
 import numpy as np
@@ -361,22 +362,28 @@ class Simulator:
         """
         where = f"model '{self.model.name}', preset '{self.preset}'"
         speed, load, channels = self._operating_point(speed_hz, load_nm, duration, channels, where)
+        staged = self.faults_by_stage(faults, where)
         start = time.perf_counter()
         steps = int(round(duration * self.fs))
         t = np.arange(steps + 1) / self.fs
         phase = np.mod(2 * np.pi * speed * t, 2 * np.pi)  # nominal pinion angle: fixed input speed
         per_rev = self.fs / speed
-        tvms, index, k = self._nominal_stiffness(faults, phase, per_rev, steps)
+        tvms, index, k = self._nominal_stiffness(staged[0], phase, per_rev, steps, speed)
         k_mean = tvms.mean
         forces, angle = [], None
         if effects:
             k, k_mean, forces, angle = self._excite(effects, tvms, index, t, speed, load)
             if angle is not None:
                 phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
-        F, (u, v, a) = self._equilibrium(load, k_mean)
+        # a faulted further mesh: the static start at its own mean, as stage 1's (the healthy ones as before)
+        means = tuple(
+            self.mesh_table(i, on, self._grid(self.mesh_models[i].pair, on)).mean if on else km
+            for i, (on, km) in enumerate(zip(staged[1:], self.mesh_means))
+        )
+        F, (u, v, a) = self._equilibrium(load, k_mean, means)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
         out = np.empty((steps + 1, len(out_idx)))
-        failed = self._newmark(k, forces, angle, t, speed, per_rev, F, (u, v, a), out_idx, out)
+        failed = self._newmark(k, forces, angle, t, speed, per_rev, F, (u, v, a), out_idx, out, staged[1:])
         if failed >= 0:
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise SimulationError(
@@ -428,9 +435,56 @@ class Simulator:
                 )
         return speed, load, channels
 
-    def _nominal_stiffness(self, faults: Sequence[PlacedFault], phase: np.ndarray, per_rev: float, steps: int):
-        """The TVMS over one revolution (faults included) and k(t) at the nominal angle *phase*:
-        (table, table index per step or None, k(t))."""
+    @property
+    def stages(self) -> int:
+        """Gear meshes of the model: 1, or 1 + its further meshes (a multi-stage train)."""
+        return 1 + len(self.meshes)
+
+    def faults_by_stage(self, faults: Sequence[PlacedFault], where: str = "") -> tuple[tuple[PlacedFault, ...], ...]:
+        """*faults* split by the stage they sit on (stage 1 first); a stage the model lacks is an input error."""
+        out: list[list[PlacedFault]] = [[] for _ in range(self.stages)]
+        for f in faults:
+            if isinstance(f.stage, bool) or not isinstance(f.stage, int) or not 1 <= f.stage <= self.stages:
+                raise GearlabInputError(
+                    f"{where or self.model.name}: fault {f.label} sits on stage {f.stage!r}; "
+                    f"the model has stage(s) 1..{self.stages}"
+                )
+            out[f.stage - 1].append(f)
+        return tuple(tuple(on) for on in out)
+
+    def gear_turns(self, stage: int, gear: str) -> float:
+        """Revolutions of a gear per input-shaft revolution: stage 1's pinion 1, its wheel Z1/Z2,
+        a further stage's pinion its mesh's ratio (its shaft's) and its wheel that times Z1/Z2 of its pair."""
+        pair, turns = (self.pair, 1.0) if stage == 1 else (self.meshes[stage - 2].pair, self.meshes[stage - 2].ratio)
+        return turns if gear == "pinion" else turns * pair.Z1 / pair.Z2
+
+    def period(self, faults: Sequence[PlacedFault] = ()) -> int:
+        """Input revolutions after which the steady response repeats: 1 healthy or with pinion faults on
+        stage 1 (every further mesh repeats within one input turn in the built-in models), else the
+        least number of input turns that turns every faulted gear a whole number of times."""
+        turns = [Fraction(self.gear_turns(f.stage, f.gear)).limit_denominator(10_000) for f in faults]
+        return math.lcm(1, *(q.denominator for q in turns))
+
+    @staticmethod
+    def _grid(pair, faults: Sequence[PlacedFault]) -> int:
+        """Points of a TVMS table over one revolution of the faulted gear on a pitch-aligned grid of
+        TVMS_POINTS per pinion revolution's worth of mesh periods (the same points per mesh period)."""
+        Z = pair.Z2 if faults and faults[0].gear == "wheel" else pair.Z1
+        return Z * math.ceil(TVMS_POINTS / pair.Z1)
+
+    def mesh_table(self, i: int, faults: Sequence[PlacedFault], points: int):
+        """The TVMS of further mesh *i* (faults included) over one revolution of its faulted gear."""
+        return self.mesh_models[i].mesh_stiffness(faults, points=points)
+
+    def _nominal_stiffness(
+        self, faults: Sequence[PlacedFault], phase: np.ndarray, per_rev: float, steps: int, speed: float = 0.0
+    ):
+        """The TVMS over one revolution of the faulted gear (the pinion when none is) and k(t) at the
+        nominal angle, whose input-shaft phase is *phase*: (table, table index per step or None, k(t))."""
+        if faults and faults[0].gear == "wheel":
+            turns = self.pair.Z1 / self.pair.Z2
+            shaft = 2 * np.pi * speed * (np.arange(steps + 1) / self.fs)  # the nominal input angle, unwrapped
+            return self._table_series(self.stiffness, faults, turns, shaft, per_rev)
         if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
             # A whole number of steps per revolution: the TVMS on exactly those angles, no
             # interpolation, so a fault on tooth n sees exactly the shifted TVMS of tooth 1.
@@ -441,12 +495,30 @@ class Simulator:
         tvms = self.stiffness.mesh_stiffness(faults, points=points)
         return tvms, None, np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
 
-    def _equilibrium(self, load: float, k_mean: float) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    def _table_series(self, model, faults, turns: float, shaft: np.ndarray, per_rev: float | None):
+        """A mesh's TVMS over one revolution of its table's gear, which turns *turns* times per input
+        turn, and k(t) at input angle *shaft*: exact table entries when that gear's revolution is a
+        whole number of steps (nominal speed), else interpolated. (table, index or None, k(t))."""
+        if per_rev is not None:
+            steps_per_turn = per_rev / turns
+            if abs(steps_per_turn - round(steps_per_turn)) < 1e-9 * steps_per_turn:
+                table = model.mesh_stiffness(faults, points=round(steps_per_turn))
+                index = np.arange(len(shaft)) % round(steps_per_turn)
+                return table, index, table.k[index]
+        table = model.mesh_stiffness(faults, points=self._grid(model.pair, faults))
+        k = np.interp(
+            np.mod(turns * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi), np.append(table.k, table.k[0])
+        )
+        return table, None, k
+
+    def _equilibrium(
+        self, load: float, k_mean: float, mesh_means: Sequence[float] | None = None
+    ) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """The load vector F and the start (u, v, a): the static equilibrium at the mean stiffness, at rest."""
         F = np.zeros(len(self.dofs))
         F[self.load_index] = -load  # T_l opposes the driven gear's rotation (eq. 2.111)
         K_mean = self.Kc + k_mean * np.outer(self.P, self.P)
-        for km, P in zip(self.mesh_means, self.mesh_P):
+        for km, P in zip(self.mesh_means if mesh_means is None else mesh_means, self.mesh_P):
             K_mean = K_mean + km * np.outer(P, P)
         u = np.linalg.solve(K_mean, F)
         return F, (u, np.zeros_like(u), np.zeros_like(u))
@@ -463,9 +535,11 @@ class Simulator:
         start: tuple,
         out_idx: np.ndarray,
         out: np.ndarray,
+        mesh_faults: Sequence[Sequence[PlacedFault]] = (),
     ) -> int:
         """The time loop (one of three compiled integrators: one mesh, one mesh with extra forces,
-        several meshes); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1."""
+        several meshes); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1.
+        *mesh_faults*: the faults on each further mesh (stage 2 first)."""
         steps = len(t) - 1
         G_F = self.G @ F
         # the arguments every integrator ends with: Newmark constants, step, state (updated in place), output
@@ -473,8 +547,13 @@ class Simulator:
         if self.meshes:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
             shaft = 2 * np.pi * speed * t if angle is None else angle
+            on = list(mesh_faults) + [()] * (len(self.meshes) - len(mesh_faults))
             k_all = np.column_stack(
-                [k] + [self._mesh_series(i, shaft, per_rev if angle is None else None) for i in range(len(self.meshes))]
+                [k]
+                + [
+                    self._mesh_series(i, shaft, per_rev if angle is None else None, *([on[i]] if on[i] else []))
+                    for i in range(len(self.meshes))
+                ]
             )
             n = len(self.dofs)
             GB, g = np.zeros((n, 0)), np.zeros((steps, 0))
@@ -494,21 +573,14 @@ class Simulator:
         g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
         return np.ascontiguousarray(self.G @ B), g
 
-    def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None) -> np.ndarray:
+    def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None, faults=()) -> np.ndarray:
         """k(t) of further mesh *i* with the input shaft at angle *shaft*: its pinion turns at ratio x the
-        input. Exact table entries when its pinion's revolution is a whole number of steps (nominal
+        input; with *faults* (on one of its gears) its table spans a revolution of the faulted gear, read at
+        that gear's angle. Exact table entries when that revolution is a whole number of steps (nominal
         speed), else interpolated on a pitch-aligned grid."""
         mesh, model = self.meshes[i], self.mesh_models[i]
-        if per_rev is not None:
-            steps_per_turn = per_rev / mesh.ratio
-            if abs(steps_per_turn - round(steps_per_turn)) < 1e-9 * steps_per_turn:
-                table = model.mesh_stiffness(points=round(steps_per_turn)).k
-                return table[np.arange(len(shaft)) % round(steps_per_turn)]
-        points = mesh.pair.Z1 * math.ceil(TVMS_POINTS / mesh.pair.Z1)
-        table = model.mesh_stiffness(points=points)
-        return np.interp(
-            np.mod(mesh.ratio * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi), np.append(table.k, table.k[0])
-        )
+        turns = self.gear_turns(i + 2, faults[0].gear) if faults else mesh.ratio
+        return self._table_series(model, faults, turns, shaft, per_rev)[2]
 
     def _excite(self, effects, tvms, index, t, speed, load):
         """Apply excitation-level effects to the nominal excitation: (k(t), mean k, forces, moved angle or None)."""

@@ -10,7 +10,9 @@ implements three functions:
 
 and, where a parameter's limit depends on the gear pair (a crack deeper than the tooth is
 thick, a spall past the tip), ``check(params, pair)``. Nothing else in gearlab needs to
-know about a fault type.
+know about a fault type. Every function works on gear 1 of the *pair* it is given: for a fault
+on the wheel gearlab passes the pair seen from the wheel (``GearPair.seen_from``), so a plugin
+written for the pinion serves any gear of any stage unchanged.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from ..errors import GearlabInputError
 from ..params import Param, resolve_params
 from .geometry import GearPair
 from .sections import ToothSection, healthy_section
-from .stiffness import PlacedFault
+from .stiffness import GEARS, PlacedFault
 
 LADDER_STEPS = 20
 
@@ -77,11 +79,21 @@ class Fault:
             raise GearlabInputError(f"{where or self.name}: intensity step must lie in 1..{LADDER_STEPS}, got {step}")
         return self.ladder(pair)[step - 1]
 
-    def place(self, tooth: int, params: Mapping[str, float], pair: GearPair, where: str = "") -> PlacedFault:
+    def place(
+        self,
+        tooth: int,
+        params: Mapping[str, float],
+        pair: GearPair,
+        where: str = "",
+        gear: str = "pinion",
+        stage: int = 1,
+    ) -> PlacedFault:
+        """The fault on *tooth* of *gear* ("pinion" or "wheel") of *pair*, the train's stage *stage*."""
         where = where or f"fault {self.name}@{tooth}"
-        if isinstance(tooth, bool) or not isinstance(tooth, int) or not 1 <= tooth <= pair.Z1:
-            raise GearlabInputError(f"{where}: tooth must be a pinion tooth number in 1..{pair.Z1}, got {tooth!r}")
-        return PlacedFault(fault=self, tooth=tooth, params=dict(params))
+        Z = pair.seen_from(gear).Z1
+        if isinstance(tooth, bool) or not isinstance(tooth, int) or not 1 <= tooth <= Z:
+            raise GearlabInputError(f"{where}: tooth must be a {gear} tooth number in 1..{Z}, got {tooth!r}")
+        return PlacedFault(fault=self, tooth=tooth, params=dict(params), gear=gear, stage=stage)
 
     def describe(self) -> dict:
         return {"doc": self.doc, "params": [p.describe() for p in self.params]}
@@ -120,11 +132,24 @@ _LENGTH_KEYS = {"b", "l_s", "h_s", "x_1", "u", "sigma_u", "r", "sigma_r", "q0", 
 
 
 def place_fault(
-    registry, pair: GearPair, kind: str, tooth, step=None, params: Mapping | None = None, where: str = ""
+    registry,
+    pair: GearPair,
+    kind: str,
+    tooth,
+    step=None,
+    params: Mapping | None = None,
+    where: str = "",
+    gear: str = "pinion",
+    stage: int = 1,
 ) -> PlacedFault:
-    """Resolve a fault by plugin name on *pair*: a ladder *step* (1..20) or explicit *params*."""
+    """Resolve a fault by plugin name on *tooth* of *gear* ("pinion" or "wheel") of *pair* (stage
+    *stage* of the train): a ladder *step* (1..20) or explicit *params*. The plugin's ladder, bounds
+    and checks see the pair from the faulted gear (GearPair.seen_from), i.e. that gear's geometry."""
     where = where or f"fault {kind}@{tooth}"
     fault = registry.get("fault", kind, where)
+    if gear not in GEARS:
+        raise GearlabInputError(f"{where}: gear must be one of {', '.join(GEARS)}, got {gear!r}")
+    view = pair.seen_from(gear)
     if step is not None and params:
         raise GearlabInputError(f"{where}: give either a ladder step or explicit parameters, not both")
     if step is not None:
@@ -132,10 +157,10 @@ def place_fault(
             raise GearlabInputError(
                 f"{where}: intensity step must be a whole number in 1..{LADDER_STEPS}, got {step!r}"
             )
-        resolved = fault.resolve(fault.at_step(pair, step, where), pair, where)
+        resolved = fault.resolve(fault.at_step(view, step, where), view, where)
     else:
-        resolved = fault.resolve(params or {}, pair, where)
-    return fault.place(tooth, resolved, pair, where)
+        resolved = fault.resolve(params or {}, view, where)
+    return fault.place(tooth, resolved, pair, where, gear=gear, stage=stage)
 
 
 FAULT_SYNTAX = "KIND@TOOTH=STEP (ladder step 1..20, 1 = healthy) or KIND@TOOTH:NAME=VALUE,... (explicit, with units)"

@@ -8,6 +8,7 @@ theta_s the double- and single-contact durations in pinion angle. SI units throu
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 
@@ -257,6 +258,32 @@ class GearPair:
     def alpha1_gear(self, theta):
         """Eq. 2.8: force angle on the driven gear tooth, as a function of the pinion angle."""
         return self.roll_tip_gear - self.gear.alpha_2 - self.Z1 / self.Z2 * theta
+
+    def seen_from(self, gear: str) -> GearPair:
+        """The pair with *gear* ("pinion" or "wheel") as gear 1: the pair itself, or the same mesh
+        with the roles of the two gears exchanged (Z1 <-> Z2, each gear keeping its own hub).
+
+        A fault plugin works on gear 1 of the pair it is given (its section, its geometry checks,
+        its ladder); on the wheel it is given this view. The mesh is the same, so its path of
+        contact, contact ratio and contact duration in wheel angle, theta_t Z1/Z2, follow from
+        eq. 2.7, 2.8, 2.49-2.51 with the indices exchanged; no check needs to run again.
+        """
+        if gear == "pinion":
+            return self
+        if gear != "wheel":
+            raise GearlabInputError(f"gear must be 'pinion' or 'wheel', got {gear!r}")
+        view = copy.copy(self)
+        for name, value in (
+            ("Z1", self.Z2),
+            ("Z2", self.Z1),
+            ("hub_radius", self.gear.hub_radius),
+            ("pinion", self.gear),
+            ("gear", self.pinion),
+        ):
+            object.__setattr__(view, name, value)
+        if hasattr(view, "wheel_hub_radius"):  # a pair whose gears sit on different bores
+            object.__setattr__(view, "wheel_hub_radius", self.pinion.hub_radius)
+        return view
 
     def describe(self) -> dict:
         p, g = self.pinion, self.gear

@@ -153,31 +153,51 @@ def tooth_pair_compliances(
     return out
 
 
+GEARS = ("pinion", "wheel")  # gear 1 (the driver) and gear 2 of a pair
+
+
+def gear_label(stage: int, gear: str) -> str:
+    """Short name of a gear of a train: "pinion"/"wheel" of stage 1, "s2-pinion", ... of later stages."""
+    return gear if stage == 1 else f"s{stage}-{gear}"
+
+
 @dataclass(frozen=True)
 class PlacedFault:
-    """A fault plugin with resolved parameters (SI) sitting on pinion tooth *tooth* (1-based)."""
+    """A fault plugin with resolved parameters (SI) on tooth *tooth* (1-based) of one gear: the
+    *gear* ("pinion", gear 1, or "wheel", gear 2) of the train's *stage* (1 = the input stage)."""
 
     fault: object  # gearlab.physics.faults.Fault
     tooth: int
     params: dict
+    gear: str = "pinion"
+    stage: int = 1
 
     @property
     def label(self) -> str:
-        return f"{self.fault.name}@{self.tooth}"
+        if (self.stage, self.gear) == (1, "pinion"):
+            return f"{self.fault.name}@{self.tooth}"
+        return f"{self.fault.name}@{gear_label(self.stage, self.gear)}:{self.tooth}"
 
 
 @dataclass(frozen=True)
 class MeshStiffness:
-    """TVMS k(theta) over one pinion revolution, theta = 2 pi j / n."""
+    """TVMS k(theta) over one revolution of *gear* (the faulted gear; the pinion when healthy),
+    theta = 2 pi j / n its angle."""
 
     theta: np.ndarray
     k: np.ndarray
     pair: GearPair
     faults: tuple[PlacedFault, ...] = ()
+    gear: str = "pinion"
 
     @property
     def mean(self) -> float:
         return float(self.k.mean())
+
+    @property
+    def turns(self) -> float:
+        """Revolutions of the table's gear per pinion revolution: 1, or Z1/Z2 for the wheel."""
+        return 1.0 if self.gear == "pinion" else self.pair.Z1 / self.pair.Z2
 
 
 class MeshStiffnessModel:
@@ -190,71 +210,104 @@ class MeshStiffnessModel:
         self.gear_section = healthy_section(pair.gear, pair.face_width, options.nodes)
         self._gear_integrals = self._integrals(self.gear_section)
         self._pinion_integrals = self._integrals(self.pinion_section)
-        self._healthy_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._healthy_cache: dict[tuple[int, str], tuple[np.ndarray, np.ndarray]] = {}
 
     def _integrals(self, section: ToothSection) -> SectionIntegrals:
         return SectionIntegrals(section, start=0.0 if self.options.root_region else section.d_1)
 
-    def faulted_section(self, faults: Sequence[PlacedFault]) -> ToothSection:
-        """The pinion section with *faults* applied in order (several faults on one tooth compose)."""
-        section = self.pinion_section
+    def faulted_section(self, faults: Sequence[PlacedFault], gear: str = "pinion") -> ToothSection:
+        """The section of *gear* with *faults* applied in order (several faults on one tooth compose).
+
+        A plugin edits gear 1 of the pair it is given, so on the wheel it gets the pair seen from
+        the wheel (GearPair.seen_from): its checks, its ladder and its geometry are the wheel's.
+        """
+        section = self.pinion_section if gear == "pinion" else self.gear_section
+        view = self.pair.seen_from(gear)
         for placed in faults:
-            section = placed.fault.apply(section, placed.params, self.pair)
+            section = placed.fault.apply(section, placed.params, view)
         return section
 
     def tooth_pair_stiffness(self, phi: np.ndarray, faults: Sequence[PlacedFault] = ()) -> np.ndarray:
-        section = self.faulted_section(faults)
-        integrals = self._integrals(section) if faults else self._pinion_integrals
-        total = tooth_pair_compliances(
-            self.pair, phi, section, self.gear_section, self.options, integrals, self._gear_integrals
-        )["total"]
+        """k of one tooth pair (eq. 2.47, 2.48) at pinion angles *phi* since its contact began, with
+        *faults* on its pinion tooth and/or its wheel tooth (each changes its own gear's section)."""
+        on_pinion = [f for f in faults if f.gear == "pinion"]
+        on_wheel = [f for f in faults if f.gear != "pinion"]
+        pinion, gear = self.pinion_section, self.gear_section
+        pinion_integrals, gear_integrals = self._pinion_integrals, self._gear_integrals
+        if on_pinion:
+            pinion = self.faulted_section(on_pinion)
+            pinion_integrals = self._integrals(pinion)
+        if on_wheel:
+            gear = self.faulted_section(on_wheel, "wheel")
+            gear_integrals = self._integrals(gear)
+        total = tooth_pair_compliances(self.pair, phi, pinion, gear, self.options, pinion_integrals, gear_integrals)[
+            "total"
+        ]
         with np.errstate(divide="ignore"):
             return np.where(np.isfinite(total), 1.0 / total, 0.0)
 
     def mesh_stiffness(self, faults: Sequence[PlacedFault] = (), points: int = 4096) -> MeshStiffness:
-        """Superpose all Z1 tooth pairs over one revolution (eq. 2.51-2.54).
+        """Superpose all tooth pairs over one revolution of the faulted gear (eq. 2.51-2.54).
 
-        Tooth n is in mesh for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t; taking the
-        local angle modulo 2 pi wraps the last tooth's second double-contact zone onto the
-        start of the revolution (eq. 2.53, 2.54). The healthy TVMS is computed once per grid;
-        a fault only replaces its own tooth's contribution.
+        Pinion faults (and no fault): one pinion revolution, Z1 mesh periods. Pinion tooth n is in
+        mesh for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t; taking the local angle modulo
+        2 pi wraps the last tooth's second double-contact zone onto the start of the revolution
+        (eq. 2.53, 2.54). Wheel faults: one wheel revolution, Z2 mesh periods; the wheel turns
+        theta_2 = (Z1/Z2) theta_1 (R_b1 theta_1 = R_b2 theta_2 along the line of action), so wheel
+        tooth m is in mesh for (m-1) 2 pi/Z2 <= theta_2 < (m-1) 2 pi/Z2 + (Z1/Z2) theta_t, where its
+        pair's pinion angle since contact began is (Z2/Z1)(theta_2 - (m-1) 2 pi/Z2). Faults on both
+        gears of a pair repeat only over the hunting period and are refused. The healthy TVMS is
+        computed once per grid; a fault only replaces its own tooth's contribution.
         """
+        gears = {placed.gear for placed in faults}
+        if len(gears) > 1:
+            labels = ", ".join(placed.label for placed in faults)
+            raise GearlabInputError(
+                f"faults {labels}: faults on both gears of one pair are not supported (their TVMS repeats only "
+                "over the hunting-tooth period); put them on one gear"
+            )
+        gear = gears.pop() if gears else "pinion"
+        if gear not in GEARS:
+            raise GearlabInputError(f"fault {faults[0].label}: gear must be one of {', '.join(GEARS)}, got {gear!r}")
+        Z = self.pair.Z1 if gear == "pinion" else self.pair.Z2
         by_tooth: dict[int, list[PlacedFault]] = {}
         for placed in faults:
-            if not 1 <= placed.tooth <= self.pair.Z1:
-                raise GearlabInputError(
-                    f"fault {placed.label}: tooth must lie in 1..{self.pair.Z1}, got {placed.tooth}"
-                )
+            if not 1 <= placed.tooth <= Z:
+                raise GearlabInputError(f"fault {placed.label}: tooth must lie in 1..{Z}, got {placed.tooth}")
             by_tooth.setdefault(placed.tooth, []).append(placed)
-        theta, healthy = self._healthy(points)
+        theta, healthy = self._healthy(points, gear)
         k = healthy.copy()
         for tooth, tooth_faults in by_tooth.items():
-            phi, in_mesh = self._arc(points, [tooth])
+            phi, in_mesh = self._arc(points, [tooth], gear)
             k[in_mesh[0]] += self.tooth_pair_stiffness(phi, tooth_faults) - self.tooth_pair_stiffness(phi)
-        return MeshStiffness(theta=theta, k=k, pair=self.pair, faults=tuple(faults))
+        return MeshStiffness(theta=theta, k=k, pair=self.pair, faults=tuple(faults), gear=gear)
 
-    def _arc(self, points: int, teeth: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-        """Local angles of *teeth* where they are in mesh, and the (teeth, points) in-mesh mask.
+    def _arc(self, points: int, teeth: Sequence[int], gear: str = "pinion") -> tuple[np.ndarray, np.ndarray]:
+        """Pinion angles of the pairs of *teeth* (of *gear*) since their contact began, where they are in
+        mesh, and the (teeth, points) in-mesh mask, on a grid of *points* over one revolution of *gear*.
 
-        The local angle of tooth n at grid point j is 2 pi ((j Z1 - (n-1) points) mod (points Z1)) / (points Z1):
-        integer arithmetic, so every tooth sees bit-identical angles at corresponding points and
-        a tooth's arc starts on the same side of a grid point for every tooth.
+        The local angle of tooth n at grid point j is 2 pi ((j Z - (n-1) points) mod (points Z)) / (points Z1),
+        Z the teeth of *gear* (the wheel's angle times Z2/Z1 is the pinion's): integer arithmetic, so
+        every tooth sees bit-identical angles at corresponding points and a tooth's arc starts on the
+        same side of a grid point for every tooth.
         """
         Z1 = self.pair.Z1
+        Z = Z1 if gear == "pinion" else self.pair.Z2
         j = np.arange(points, dtype=np.int64)[None, :]
         n = np.asarray(teeth, dtype=np.int64)[:, None]
-        local = 2 * np.pi * np.mod(j * Z1 - (n - 1) * points, points * Z1) / (points * Z1)
+        local = 2 * np.pi * np.mod(j * Z - (n - 1) * points, points * Z) / (points * Z1)
         in_mesh = local < self.pair.theta_t
         return local[in_mesh], in_mesh
 
-    def _healthy(self, points: int) -> tuple[np.ndarray, np.ndarray]:
-        if points not in self._healthy_cache:
+    def _healthy(self, points: int, gear: str = "pinion") -> tuple[np.ndarray, np.ndarray]:
+        if (points, gear) not in self._healthy_cache:
             theta = 2 * np.pi * np.arange(points) / points
-            phi, in_mesh = self._arc(points, range(1, self.pair.Z1 + 1))
+            Z = self.pair.Z1 if gear == "pinion" else self.pair.Z2
+            phi, in_mesh = self._arc(points, range(1, Z + 1), gear)
             per_tooth = np.zeros(in_mesh.shape)
             per_tooth[in_mesh] = self.tooth_pair_stiffness(phi)  # all healthy teeth in one pass
-            self._healthy_cache[points] = (theta, per_tooth.sum(axis=0))
-        theta, k = self._healthy_cache[points]
+            self._healthy_cache[(points, gear)] = (theta, per_tooth.sum(axis=0))
+        theta, k = self._healthy_cache[(points, gear)]
         return theta, k
 
 

@@ -14,9 +14,9 @@ from gearlab.api import Fault, GearlabInputError, Param, hookimpl
 
 
 def max_half_thickness(pair) -> float:
-    """Largest h_x of the healthy pinion tooth. The involute is thickest at alpha = 0
-    (h = R_b alpha_2), a few micrometres above the base circle, so a crack must reach
-    2 max(h_x), not 2 h_c, to cut the whole tooth."""
+    """Largest h_x of the healthy tooth of gear 1 (the faulted gear, by the Fault contract). The
+    involute is thickest at alpha = 0 (h = R_b alpha_2), a few micrometres above the base circle,
+    so a crack must reach 2 max(h_x), not 2 h_c, to cut the whole tooth."""
     g = pair.pinion
     candidates = [g.half_thickness(g.alpha_root), g.half_thickness(g.alpha_tip)]
     if g.alpha_tip <= 0.0 <= g.alpha_root:
@@ -62,7 +62,7 @@ class Crack(Fault):
             if depth > thickness * (1 + 1e-9):
                 raise GearlabInputError(
                     f"{where}: parameter '{key}' = {params[key] * 1e3:g} mm makes the crack deeper than the tooth is "
-                    f"thick ({thickness * 1e3:.4g} mm for the {pair.name or 'given'} pinion)"
+                    f"thick ({thickness * 1e3:.4g} mm for the {pair.Z1}-tooth gear of the {pair.name or 'given'} pair)"
                 )
 
     def effective_crack_height(self, params, pair) -> float:
