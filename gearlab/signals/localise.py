@@ -1,0 +1,659 @@
+"""Which gear: the shaft, and the gear on it, whose synchronous average carries a localised change.
+
+A localised tooth fault (chip, crack, broken tooth) strikes once per revolution of its shaft. Its
+signature is periodic in that shaft's angle and nothing else's, and being short it spreads its
+energy evenly over many harmonics of that shaft. The train's speed ratios are fractions of tooth
+counts (gearlab.gearbox.orders), so these harmonics can be told apart:
+
+Grand period. After P input revolutions (the order table's train period, P = 15 on the PHM 2009
+rig: input 1, idler 1/3, output 1/5) every shaft s has turned a whole number n_s = o_s P of times
+(15, 5, 3). The record, resampled in the input angle, is averaged over its grand periods (a TSA of
+P input revolutions) and read in grand-period orders q (q / P input orders). A component
+synchronous with shaft s lives only at q multiple of n_s; q synchronous with several shafts is
+shared (every input order, q = 15k, is also an idler and an output order), q synchronous with s
+alone is *exclusive* to s. Mesh harmonics, shared by all, are left out with their first
+sidebands (the regular content a difference signal removes). An input-pinion chip is periodic in
+the idler's turn too -- three equal impulses per idler revolution -- but only at idler orders
+multiple of 3, so it is not read as idler content.
+
+Evidence. Per order, the synchronous power of the record S(q) = |X̄(q)|² − n(q) (the mean's
+noise n = the spread of the grand periods about their mean over their number, smoothed over
+neighbouring orders) is compared with the healthy history's, Δ(q) = S(q) − S_h(q). A fault on
+shaft s adds a level L_s, about flat across a band, at every order synchronous with s: so in each
+band of orders the mean Δ of each class (the set of shafts an order is synchronous with) is
+Σ_{s in class} L_s, solved for the L_s by weighted least squares (on the rig: L_idler from the
+idler-exclusive orders, L_output from the output-exclusive ones, L_input from the shared orders
+less both). Weights are 1 / the null variance of Δ(q): the record's noise, plus the history's
+record-to-record spread of that order's power (no order carries a line's natural variation as
+evidence). The bands combine as independent estimates into z_s = L_s / sd(L_s) per shaft; the
+shafts rank by z. A shaft is flagged above a threshold fixed on the history alone: the largest
+z of the history's own records, each left out of its reference in turn, and at least the
+Gaussian quantile at the false-alarm rate shared out among the shafts. No shaft over its
+threshold: nothing localised.
+
+Which gear on a shaft. A shaft carrying two gears (stage k's wheel, stage k+1's pinion) is read
+by where its exclusive excess lies: near the mesh harmonics of one stage only or of the other
+(each order belongs to its nearest mesh-harmonic position; a position may be both stages'). A
+tooth fault modulates its own mesh, so its sidebands gather about its own stage's harmonics. When
+one stage's harmonics are all also the other's (the rig: 32 = 2 × 16), the excess about the shared
+positions is compared with that about the other stage's own: STAGE_RATIO times more names the
+stage whose harmonics are all shared.
+
+Tooth. The named shaft's orders, each weighted by the share of its power that is new
+(clip(Δ / |X̄|², 0, 1)), form the shaft's residual; the peak of its envelope's energy over one
+pitch (within one tooth's event the envelope itself follows the carrier's waveform), in that
+shaft's angle o_s θ (θ the record's continuous input angle, zero at its first tacho mark),
+divided by the tooth pitch 2π/z, is the tooth index of each gear on the shaft (tooth n spans
+pitches n − 1 … n from the shaft's zero). A strike's ring moves the peak later by its decay
+time: on a slow shaft's fine-pitched gear, by a pitch or more.
+
+Fallback. When the record holds fewer than *min_periods* grand periods (tooth counts with few
+common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
+is taken instead, the record resampled at that shaft's angle, and an absolute order x = m o_s of
+shaft s's TSA is synchronous with shaft r when x / o_r is whole: the same classes, each order read
+from the TSA of the fastest shaft it is synchronous with. The result says which was used.
+
+Everything is numpy: no torch, nothing from the layers above.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from fractions import Fraction
+from statistics import NormalDist
+
+import numpy as np
+from scipy.ndimage import uniform_filter1d
+
+from ..errors import GearlabInputError
+from .checks import check_array, check_int
+
+STAGE_RATIO = 1.0  # modulation depth at shared harmonics over the other stage's own that names the shared stage
+MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
+SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
+FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
+WEIGHT_SMOOTH = 101  # orders over which noise powers are smoothed for the weights (spread)
+KAPPA = 4.0  # a history line: mean power this many noise sds of the mean over zero
+
+
+# --- the train: shafts, gears, orders ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Gear:
+    shaft: str
+    stage: int
+    role: str  # "pinion" (the stage's driver) or "wheel"
+    teeth: int
+
+    @property
+    def name(self) -> str:
+        kind = "pinion" if self.role == "pinion" else "gear"
+        return f"{self.shaft} {kind} {self.teeth}T (stage {self.stage})"
+
+
+def gears_of(table) -> dict[str, list[Gear]]:
+    """The gears on each shaft of an order table (gearlab.gearbox.orders.OrderTable), input first."""
+    out: dict[str, list[Gear]] = {s: [] for s in table.shafts}
+    for st in table.stages:
+        out[st.pinion_shaft].append(Gear(st.pinion_shaft, st.index, "pinion", st.pinion_teeth))
+        out[st.wheel_shaft].append(Gear(st.wheel_shaft, st.index, "wheel", st.wheel_teeth))
+    return out
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The orders read, and what each is: the same for a record and its history.
+
+    mode: "grand" (one average over grand periods of *period* input revolutions) or "shafts"
+    (each shaft's own TSA); orders: input orders of the kept lines; sync: (orders, shafts) bool,
+    synchronous with each shaft; source: the shaft whose TSA an order is read from (-1: the grand
+    average); index: the order's bin in that average; owners: (orders, stages) bool, the stages whose
+    mesh harmonic is the order's nearest mesh-harmonic position; carrier: the order is a mesh
+    harmonic (read for the gear on a shaft, never as evidence)."""
+
+    mode: str
+    period: int
+    shafts: tuple[str, ...]
+    shaft_orders: tuple[Fraction, ...]
+    points: int
+    orders: np.ndarray
+    sync: np.ndarray
+    source: np.ndarray
+    index: np.ndarray
+    owners: np.ndarray
+    carrier: np.ndarray
+    meshes: tuple[float, ...]
+    min_order: float
+    max_order: float
+    band: float
+    note: str
+
+
+def _excluded(x: np.ndarray, table, sidebands: int) -> tuple[np.ndarray, np.ndarray]:
+    """(mesh harmonics and their first *sidebands* sidebands by either shaft of the stage, the
+    mesh harmonics alone)."""
+    out, harmonic = np.zeros(x.shape, bool), np.zeros(x.shape, bool)
+    for st in table.stages:
+        mesh = float(st.mesh)
+        h = np.round(x / mesh)
+        d = x - h * mesh
+        harmonic |= (h >= 1) & (np.abs(d) < 1e-9 * np.maximum(x, 1))
+        for o in {float(st.pinion_shaft_order), float(st.wheel_shaft_order)}:
+            j = np.round(d / o)
+            out |= (h >= 1) & (np.abs(j) <= sidebands) & (np.abs(d - j * o) < 1e-9 * np.maximum(x, 1))
+    return out, harmonic
+
+
+def _owners(x: np.ndarray, table) -> np.ndarray:
+    """(orders, stages) bool: the stages with a mesh harmonic at each order's nearest harmonic position."""
+    meshes = np.array([float(st.mesh) for st in table.stages])
+    cand = []
+    for m in meshes:
+        h = np.maximum(np.floor(x / m), 1)
+        cand += [h * m, (h + 1) * m]
+    cand = np.stack(cand, axis=1)
+    pos = cand[np.arange(x.size), np.argmin(np.abs(cand - x[:, None]), axis=1)]
+    r = pos[:, None] / meshes[None, :]
+    return np.abs(r - np.round(r)) < 1e-9
+
+
+def layout(
+    table,
+    points: int,
+    revolutions: int,
+    *,
+    max_order: float | None = None,
+    min_order: float | None = None,
+    band: float | None = None,
+    sidebands: int = SIDEBANDS,
+    min_periods: int = MIN_PERIODS,
+) -> Layout:
+    """The orders a record of *revolutions* input revolutions at *points* per revolution is read at."""
+    points = check_int(points, "points per revolution", minimum=8)
+    revolutions = check_int(revolutions, "revolutions", minimum=1)
+    shafts = tuple(table.shafts)
+    o = tuple(Fraction(f) for f in table.shaft_orders)
+    lowest_mesh = min(float(st.mesh) for st in table.stages)
+    top = 0.45 * points if max_order is None else float(max_order)
+    lo = lowest_mesh / 2 if min_order is None else float(min_order)
+    width = max(lowest_mesh / 2, 2.0) if band is None else float(band)
+    if not 0 < lo < top <= points / 2:
+        raise GearlabInputError(
+            f"localisation band {lo:g} … {top:g} input orders: expected 0 < min_order < max_order <= {points / 2:g} "
+            f"(half the {points} points per revolution)"
+        )
+    P = int(table.train_period)
+    if revolutions // P >= min_periods:
+        q = np.arange(1, int(math.floor(top * P)) + 1)
+        x = q / P
+        n = np.array([int(f * P) for f in o])
+        sync = (q[:, None] % n[None, :]) == 0
+        source = np.full(q.size, -1)
+        index = q
+        turns = ", ".join(f"{s} {k}" for s, k in zip(shafts, n))
+        note = f"grand period of {P} input revolutions ({turns} turns), {revolutions // P} averaged"
+    else:
+        xs, syncs, sources, idx = [], [], [], []
+        fastest = np.argsort([-float(f) for f in o], kind="stable")
+        for s in range(len(shafts)):
+            m = np.arange(1, int(math.floor(top / float(o[s]))) + 1)
+            frac = [k * o[s] for k in m]
+            sy = np.array([[(f / r).denominator == 1 for r in o] for f in frac], bool).reshape(m.size, len(o))
+            first = np.array([next(int(r) for r in fastest if row[r]) for row in sy], int)
+            keep = first == s
+            xs.append(m[keep] * float(o[s]))
+            syncs.append(sy[keep])
+            sources.append(np.full(int(keep.sum()), s))
+            idx.append(m[keep])
+        x, sync, source, index = (np.concatenate(a) for a in (xs, syncs, sources, idx))
+        order = np.argsort(x, kind="stable")
+        x, sync, source, index = x[order], sync[order], source[order], index[order]
+        note = (
+            f"per-shaft TSAs: the grand period ({P} input revolutions) fits {revolutions // P} time(s) in "
+            f"{revolutions} revolutions, fewer than {min_periods}"
+        )
+    excluded, harmonic = _excluded(x, table, sidebands)
+    keep = sync.any(axis=1) & (x <= top) & (((x >= lo) & ~excluded) | harmonic)
+    if not (keep & ~harmonic).any():
+        raise GearlabInputError(f"no shaft-synchronous order left between orders {lo:g} and {top:g} to localise with")
+    x, harmonic = x[keep], harmonic[keep]
+    return Layout(
+        "grand" if source[0] == -1 else "shafts",
+        P,
+        shafts,
+        o,
+        points,
+        x,
+        sync[keep],
+        source[keep],
+        index[keep],
+        _owners(x, table),
+        harmonic,
+        tuple(float(st.mesh) for st in table.stages),
+        lo,
+        top,
+        width,
+        note,
+    )
+
+
+# --- one unit's synchronous content ----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Content:
+    """One unit (a record, or a piece of a history record) at a layout's orders.
+
+    mean: complex mean amplitude per order; noise: the noise power of that mean; power: the
+    synchronous power |mean|² − noise; periods: the averages behind it (grand periods, or the
+    fewest shaft revolutions)."""
+
+    mean: np.ndarray
+    noise: np.ndarray
+    power: np.ndarray
+    periods: int
+    first_revolution: int
+
+
+def _averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, np.ndarray]:
+    """(mean amplitude spectrum, noise power of the mean) of equal segments, bins 0 … top."""
+    n, length = segments.shape
+    Y = np.fft.rfft(segments, axis=1)[:, : top + 1] * (2.0 / length)
+    mean = Y.mean(axis=0)
+    scatter = np.sum(np.abs(Y - mean) ** 2, axis=0) / max(n - 1, 1)
+    # one bin's scatter from a few segments is rough: the noise varies slowly across orders
+    noise = uniform_filter1d(scatter, size=max(1, smooth), mode="nearest") / n
+    return mean, noise
+
+
+def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0) -> Content:
+    """The synchronous content of consecutive input *revolutions* (R, points) at *lay*'s orders.
+
+    *first_revolution*: the input revolution revolutions[0] is, counted from the angle's zero (the
+    first tacho mark): the slower shafts' angles, and so the tooth index, are measured from there."""
+    revs = check_array(revolutions, "revolutions", min_ndim=2)
+    if revs.ndim != 2 or revs.shape[1] != lay.points:
+        raise GearlabInputError(
+            f"revolutions of shape {revs.shape}: expected (revolutions, {lay.points}) consecutive input revolutions"
+        )
+    first_revolution = check_int(first_revolution, "first revolution", minimum=0)
+    R, pts = revs.shape
+    y = revs.reshape(-1)
+    mean = np.zeros(lay.orders.size, complex)
+    noise = np.zeros(lay.orders.size)
+    if lay.mode == "grand":
+        P = lay.period
+        n = R // P
+        if n < 2:
+            raise GearlabInputError(f"{R} revolutions hold {n} grand period of {P}; expected at least 2")
+        m, v = _averaged(y[: n * P * pts].reshape(n, P * pts), int(lay.index.max()), P)
+        mean[:], noise[:] = m[lay.index], v[lay.index]
+        periods = n
+    else:
+        periods = None
+        for s, o in enumerate(lay.shaft_orders):
+            sel = lay.source == s
+            if not sel.any():
+                continue
+            per = pts / float(o)  # input-angle samples per turn of shaft s
+            size = int(2 ** math.ceil(math.log2(per)))
+            j0 = math.ceil(first_revolution * o)
+            n = math.floor((first_revolution + R) * o + 1e-9) - j0
+            if n < 2:
+                raise GearlabInputError(
+                    f"{R} input revolutions hold {max(n, 0)} complete turns of the {lay.shafts[s]} shaft; "
+                    "expected at least 2"
+                )
+            turns = j0 + np.arange(n)[:, None] + np.arange(size)[None, :] / size
+            at = np.clip((turns / float(o) - first_revolution) * pts, 0, y.size - 1)
+            m, v = _averaged(np.interp(at, np.arange(y.size), y), int(lay.index[sel].max()), 3)
+            mean[sel], noise[sel] = m[lay.index[sel]], v[lay.index[sel]]
+            periods = n if periods is None else min(periods, n)
+    return Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution)
+
+
+# --- the history --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Spread:
+    """The history's per-order synchronous power and its record-to-record spread."""
+
+    power: np.ndarray  # S_h: mean synchronous power of the units
+    line: np.ndarray  # bool: S_h significant (KAPPA sd of its noise); elsewhere only noise
+    between: np.ndarray  # variance of a line's power from unit to unit beyond its noise
+    unit_noise: np.ndarray  # noise power of a unit's mean, smoothed over WEIGHT_SMOOTH orders
+    units: int
+
+
+def _smooth(x: np.ndarray) -> np.ndarray:
+    return uniform_filter1d(x, size=WEIGHT_SMOOTH, mode="nearest")
+
+
+def _estimate_var(power: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """Variance of |X̄|² − n about |μ|² = *power* for a complex Gaussian mean of noise power n."""
+    return noise**2 + 2 * np.maximum(power, 0) * noise
+
+
+def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
+    """The units' mean power and, at the orders where it is a line, its spread beyond noise.
+
+    The weights of the evidence (_null_var) are built from what is fixed here, never from one
+    order's own noisy estimate: a weight that rises where an order's power or spread happened to
+    come out low picks the orders where Δ = S − S_h comes out high, and biases every class mean up.
+    So the noise enters smoothed over many orders, and an order's power and spread only where the
+    history holds a line there (KAPPA times the noise of its mean); elsewhere Δ is noise alone.
+    *evidence*: the orders read as evidence (not the mesh harmonics), whose lines give the common
+    relative spread."""
+    if len(units) < 2:
+        raise GearlabInputError(f"the history holds {len(units)} unit; expected at least 2 to measure its spread")
+    P = np.stack([u.power for u in units])
+    mean = P.mean(axis=0)
+    noise = np.mean([_smooth(u.noise) for u in units], axis=0)
+    line = mean > KAPPA * noise / math.sqrt(len(units))
+    nv = np.mean([_estimate_var(mean, u.noise) for u in units], axis=0)
+    b = np.maximum(P.var(axis=0, ddof=1) - nv, 0.0)
+    # two or three units give each order's spread with one or two degrees of freedom: a line
+    # whose units happen to agree must still be allowed its share of the common relative spread
+    strong = (mean > 10 * np.sqrt(nv)) & (True if evidence is None else evidence)
+    alpha2 = float(np.median(b[strong] / mean[strong] ** 2)) if strong.sum() >= 5 else 0.0
+    between = np.where(line, np.maximum(b, alpha2 * np.maximum(mean, 0) ** 2), 0.0)
+    return Spread(mean, line, between, noise, len(units))
+
+
+# --- the evidence ------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ShaftEvidence:
+    shaft: str
+    gears: tuple[str, ...]
+    level: float  # L_s: the excess synchronous power per order (signal units² per order)
+    sd: float
+    z: float
+    threshold: float
+    orders: int  # exclusive orders of the shaft read
+    flagged: bool
+    gear: str | None = None  # the gear named on the shaft (its stage's sidebands carry the excess)
+    stage_evidence: dict = field(default_factory=dict)
+    tooth: dict = field(default_factory=dict)  # gear name -> {"pitches": float, "tooth": int}
+
+    def describe(self) -> dict:
+        return {
+            "shaft": self.shaft,
+            "gears": list(self.gears),
+            "level": self.level,
+            "sd": self.sd,
+            "z": self.z,
+            "threshold": self.threshold,
+            "exclusive_orders": self.orders,
+            "flagged": self.flagged,
+            "gear": self.gear,
+            "stage_evidence": self.stage_evidence,
+            "tooth": self.tooth,
+        }
+
+
+def _null_var(rec: Content, ref: Spread) -> np.ndarray:
+    """Variance of Δ = S − S_h under the history (see spread: nothing in it follows one order's own
+    noisy estimate, the record's noise included)."""
+    lines = np.where(ref.line, ref.power, 0.0)
+    return (
+        _estimate_var(lines, _smooth(rec.noise))
+        + ref.between * (1 + 1 / ref.units)
+        + _estimate_var(lines, ref.unit_noise) / ref.units
+    )
+
+
+def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """(L_s, sd(L_s)) per shaft: band by band weighted least squares over the order classes."""
+    delta = rec.power - ref.power
+    w = 1.0 / np.maximum(_null_var(rec, ref), 1e-300)
+    k = len(lay.shafts)
+    code = lay.sync @ (1 << np.arange(k))
+    num, info = np.zeros(k), np.zeros(k)
+    edges = np.arange(lay.min_order, lay.max_order + lay.band, lay.band)
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        inb = (lay.orders >= lo) & (lay.orders < hi) & ~lay.carrier
+        classes = np.unique(code[inb])
+        if classes.size < k:
+            continue
+        A, d, wc = [], [], []
+        for c in classes:
+            sel = inb & (code == c)
+            A.append([(int(c) >> s) & 1 for s in range(k)])
+            wc.append(w[sel].sum())
+            d.append(float(np.sum(w[sel] * delta[sel]) / wc[-1]))
+        A, d, wc = np.array(A, float), np.array(d), np.array(wc)
+        F = A.T @ (A * wc[:, None])
+        if np.linalg.matrix_rank(F) < k:
+            continue
+        cov = np.linalg.inv(F)
+        L = cov @ (A.T @ (wc * d))
+        var = np.diag(cov)
+        num += L / var
+        info += 1 / var
+    if not info.any():
+        raise GearlabInputError("no band of orders holds every shaft's class of orders: nothing to localise with")
+    info = np.where(info > 0, info, np.nan)
+    return num / info, 1 / np.sqrt(info)
+
+
+def _stage_of(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], levels) -> tuple[Gear, dict]:
+    """The gear of a two-gear shaft whose mesh carries the shaft's localised excess as sidebands.
+
+    A tooth fault modulates its own stage's mesh: its sidebands gather within about a quarter of a
+    mesh order of that stage's harmonics (a one-tooth dip spans ~Z shaft orders; half its power lies
+    within ~Z/4), while its impulse's ring spreads evenly. Per mesh-harmonic position p: the shaft's
+    excess at the orders near p (other shafts' flat levels and this shaft's far-from-any-harmonic
+    level taken off) over the history's power of the harmonic at p, e_p -- the depth of modulation
+    the carrier at p shows. Positions are grouped by whose harmonic they are (one stage, the other,
+    both); the larger mean names the stage. A stage all of whose harmonics are also the other's (the
+    rig: 32 = 2 x 16) is named when the shared positions show more than the other stage's own: a
+    fault on the other stage's gear modulates only its own part of a shared carrier, so its shared
+    positions show less depth than its own (ratio <= STAGE_RATIO = 1)."""
+    ev = ~lay.carrier & lay.sync[:, shaft]
+    others = np.where(np.arange(len(lay.shafts)) == shaft, 0.0, np.nan_to_num(levels))
+    delta = rec.power - ref.power - lay.sync @ others
+    w = 1.0 / np.maximum(_null_var(rec, ref), 1e-300)
+    meshes = np.array(lay.meshes)
+    pos = np.round(lay.orders[:, None] / meshes[None, :]) * meshes[None, :]
+    pos = np.where(pos > 0, pos, np.inf)
+    nearest = pos[np.arange(lay.orders.size), np.argmin(np.abs(pos - lay.orders[:, None]), axis=1)]
+    near = np.abs(lay.orders - nearest) <= min(meshes[g.stage - 1] for g in gears) / 4
+    far = ev & ~near
+    broadband = float(np.sum(w[far] * delta[far]) / np.sum(w[far])) if far.sum() >= 3 else 0.0
+    ka, kb = (g.stage - 1 for g in gears)
+    groups: dict[str, list] = {}
+    for c in np.flatnonzero(lay.carrier):
+        carrier = float(ref.power[c])
+        sel = ev & near & (np.abs(nearest - lay.orders[c]) < 1e-9)
+        if carrier <= 0 or sel.sum() < 2:
+            continue
+        a, b = lay.owners[c, ka], lay.owners[c, kb]
+        kind = "both" if a and b else (gears[0].name if a else gears[1].name if b else None)
+        if kind is None:
+            continue
+        info = float(np.sum(w[sel])) * carrier**2
+        depth = float(np.sum(w[sel] * (delta[sel] - broadband)) / np.sum(w[sel])) / carrier
+        groups.setdefault(kind, []).append((depth, info))
+    e = {k: sum(d * i for d, i in v) / sum(i for _, i in v) for k, v in groups.items()}
+    dens = {f"{k} positions": v for k, v in e.items()}
+    own = [g for g in gears if g.name in e]
+    if len(own) == 2:
+        return max(gears, key=lambda g: e[g.name]), dens
+    if len(own) == 1 and "both" in e:
+        alone = own[0]
+        ratio = e["both"] / e[alone.name] if e[alone.name] > 0 else math.inf
+        dens["ratio shared / own"] = ratio
+        return (next(g for g in gears if g is not alone) if ratio > STAGE_RATIO else alone), dens
+    return (own[0] if own else gears[0]), dens
+
+
+def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear]) -> dict:
+    """Peak of the shaft's residual envelope in the shaft's angle, in tooth pitches of each gear on it."""
+    sel = lay.sync[:, shaft] & ~lay.carrier
+    o = lay.shaft_orders[shaft]
+    if lay.mode == "grand":
+        n_s = int(o * lay.period)
+        m = lay.index[sel] // n_s
+        offset = 2 * math.pi * float((o * rec.first_revolution) % 1)
+    else:
+        sel = sel & (lay.source == shaft)
+        m = lay.index[sel]
+        offset = 0.0
+    if not sel.any():
+        return {}
+    X = rec.mean[sel]
+    gain = np.clip((rec.power[sel] - ref.power[sel]) / np.maximum(np.abs(X) ** 2, 1e-300), 0, 1)
+    size = int(2 ** math.ceil(math.log2(8 * max(int(m.max()), max(g.teeth for g in gears)) + 1)))
+    spec = np.zeros(size, complex)
+    np.add.at(spec, m, gain * X)
+    env = np.abs(np.fft.ifft(spec)) ** 2  # analytic: positive orders only
+    # the energy over one pitch of the finer gear: inside a one-tooth event the envelope follows
+    # the carrier's waveform, whose own peak may lie anywhere in the mesh cycle
+    width = max(1, int(round(size / max(g.teeth for g in gears))))
+    env = uniform_filter1d(env, size=width, mode="wrap")
+    i = int(np.argmax(env))
+    a, b, c = env[i - 1], env[i], env[(i + 1) % size]
+    shift = 0.5 * (a - c) / (a - 2 * b + c) if (a - 2 * b + c) < 0 else 0.0
+    angle = (2 * math.pi * (i + shift) / size + offset) % (2 * math.pi)
+    out = {"angle_deg": math.degrees(angle)}
+    for g in gears:
+        pitches = angle / (2 * math.pi / g.teeth)
+        out[g.name] = {"pitches": pitches, "tooth": int(math.floor(pitches)) % g.teeth + 1, "of": g.teeth}
+    return out
+
+
+def threshold_floor(shafts: int, false_alarm: float = FALSE_ALARM) -> float:
+    return NormalDist().inv_cdf(1 - false_alarm / shafts)
+
+
+@dataclass(frozen=True)
+class Localisation:
+    """The shafts ranked by the z of their localised excess; *named*: the gear named first, or None
+    (nothing localised: no shaft over its threshold)."""
+
+    method: str
+    ranking: tuple[ShaftEvidence, ...]
+    named: str | None
+    named_shaft: str | None
+
+    def summary(self) -> str:
+        top = self.ranking[0]
+        if self.named is None:
+            return f"nothing localised (largest: {top.shaft} z = {top.z:.2f}, threshold {top.threshold:.2f})"
+        ev = next(e for e in self.ranking if e.shaft == self.named_shaft)
+        tooth = ev.tooth.get(self.named, {})
+        at = f", tooth {tooth['tooth']} of {tooth['of']}" if tooth else ""
+        return f"{self.named}: z = {ev.z:.2f} (threshold {ev.threshold:.2f}){at}"
+
+    def describe(self) -> dict:
+        return {
+            "method": self.method,
+            "named": self.named,
+            "named_shaft": self.named_shaft,
+            "summary": self.summary(),
+            "shafts": [e.describe() for e in self.ranking],
+        }
+
+
+@dataclass(frozen=True)
+class History:
+    """A healthy history read for localisation: its layout, the spread of its units and the thresholds."""
+
+    layout: Layout
+    spread: Spread
+    thresholds: np.ndarray
+    left_out_z: np.ndarray  # (history records, shafts): each record's z against the rest
+    note: str
+
+
+def _units(revs: np.ndarray, first: int, lay: Layout, pieces: int) -> list[Content]:
+    """*revs* as *pieces* consecutive units (each a whole number of grand periods in grand mode)."""
+    R = revs.shape[0]
+    step = lay.period if lay.mode == "grand" else 1
+    size = (R // pieces) // step * step
+    if pieces == 1 or size < 2 * step:
+        return [content(revs, lay, first)]
+    return [content(revs[i * size : (i + 1) * size], lay, first + i * size) for i in range(pieces)]
+
+
+def history(
+    records: list[np.ndarray],
+    table,
+    *,
+    first_revolutions: list[int] | None = None,
+    false_alarm: float = FALSE_ALARM,
+    revolutions: int | None = None,
+    **options,
+) -> History:
+    """Read a healthy history: *records* of consecutive input revolutions (R_i, points) of one gearbox.
+
+    Units: each record, or each half of one when the history holds fewer than 4 records (two units
+    at least are needed for a spread). Thresholds: per shaft, the largest z of a history record
+    against the units of the others (left out in turn), and at least the Gaussian quantile at
+    *false_alarm* / the number of shafts. *revolutions* (default: the shortest record) fixes the
+    layout's mode; *options* go to :func:`layout`."""
+    if not records:
+        raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
+    revs = [check_array(r, f"history record {i}", min_ndim=2) for i, r in enumerate(records)]
+    firsts = first_revolutions or [0] * len(revs)
+    shortest = min(r.shape[0] for r in revs)
+    lay = layout(table, revs[0].shape[1], revolutions or shortest, **options)
+    pieces = 1 if len(revs) >= 4 else 2
+    units = [_units(r, f, lay, pieces) for r, f in zip(revs, firsts)]
+    flat = [u for us in units for u in us]
+    ref = spread(flat, ~lay.carrier)
+    floor = threshold_floor(len(lay.shafts), false_alarm)
+    loo = []
+    for i, r in enumerate(revs):
+        rest = [u for j, us in enumerate(units) if j != i for u in us]
+        if len(rest) < 2:
+            continue
+        level, sd = shaft_levels(content(r, lay, firsts[i]), spread(rest, ~lay.carrier), lay)
+        loo.append(level / sd)
+    loo = np.array(loo).reshape(-1, len(lay.shafts))
+    thr = np.maximum(floor, np.nanmax(loo, axis=0)) if loo.size else np.full(len(lay.shafts), floor)
+    note = (
+        f"{len(revs)} history record(s) in {len(flat)} units; thresholds: the largest left-out z, at least "
+        f"{floor:.2f} (false alarm {false_alarm:g} shared by {len(lay.shafts)} shafts)"
+    )
+    return History(lay, ref, np.asarray(thr, float), loo, note)
+
+
+def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0) -> Localisation:
+    """Rank the shafts of *table* by the localised change *revolutions* carry against *hist*."""
+    lay = hist.layout
+    rec = content(revolutions, lay, first_revolution)
+    level, sd = shaft_levels(rec, hist.spread, lay)
+    z = level / sd
+    gears = gears_of(table)
+    excl = lay.sync & ((lay.sync.sum(axis=1) == 1) & ~lay.carrier)[:, None]
+    out = []
+    for s, name in enumerate(lay.shafts):
+        zs = float(z[s]) if np.isfinite(z[s]) else -math.inf
+        flagged = zs > hist.thresholds[s]
+        on = gears[name]
+        gear, dens = (on[0], {}) if len(on) == 1 else _stage_of(rec, hist.spread, lay, s, on, level)
+        out.append(
+            ShaftEvidence(
+                name,
+                tuple(g.name for g in on),
+                float(level[s]),
+                float(sd[s]),
+                zs,
+                float(hist.thresholds[s]),
+                int(excl[:, s].sum()),
+                bool(flagged),
+                gear.name,
+                dens,
+                tooth_index(rec, hist.spread, lay, s, on) if flagged else {},
+            )
+        )
+    ranking = tuple(sorted(out, key=lambda e: -e.z))
+    top = next((e for e in ranking if e.flagged), None)
+    method = lay.note + "; " + hist.note
+    return Localisation(method, ranking, None if top is None else top.gear, None if top is None else top.shaft)
