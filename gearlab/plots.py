@@ -183,7 +183,7 @@ def recording_signals(charts, title: str, path: Path) -> Path:
 
 
 def score_trend(charts, path: Path) -> Path:
-    """The scoring history's trends (gearlab.kinds.detection.score_trends): per condition, each
+    """The scoring history's trends (gearlab.kinds.detection_scoring.score_trends): per condition, each
     method's score of the records scored in turn, less its threshold (above the line: called)."""
     fig, axes = plt.subplots(len(charts), 1, figsize=(10, 3.2 * len(charts)), squeeze=False, layout="constrained")
     for ax, chart in zip(axes[:, 0], charts):

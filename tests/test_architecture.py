@@ -195,7 +195,7 @@ def test_no_scenario_kind_imports_another():
 
 # No module is longer than this; the ones still over it, to be split (issue 38): the list only shrinks.
 MAX_LINES = 800
-TOO_LONG = {"gearlab.kinds.detection"}
+TOO_LONG: set[str] = set()
 
 
 def test_no_module_is_over_the_line_limit():

@@ -248,7 +248,7 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     the trainings' standardised scores, and its threshold the rule's on those history scores. Only
     the method (not its folds) reaches scores.csv. With one history record it is refused."""
     from gearlab.engine import load_scenario
-    from gearlab.kinds.detection import learned_input, read_target
+    from gearlab.kinds.detection_records import learned_input, read_target
     from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
 
     path = scenario(tmp_path, methods=("source_only",), detection='history_fit = "crossed"')
@@ -317,7 +317,7 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     source is cut there too. Out of range: refused."""
     import gearlab.learn.protocol as P
     from gearlab.engine import load_scenario
-    from gearlab.kinds.detection import learned_input, read_target
+    from gearlab.kinds.detection_records import learned_input, read_target
 
     handed, scored = [], []
     train_method, fault_score = P.train_method, P.fault_score
@@ -331,7 +331,7 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
         return fault_score(model, X, device, *args, **kwargs)
 
     monkeypatch.setattr(P, "train_method", spy)
-    monkeypatch.setattr("gearlab.kinds.detection.fault_score", score_spy)
+    monkeypatch.setattr("gearlab.kinds.detection_units.fault_score", score_spy)
     path = scenario(tmp_path, methods=("source_only", "matched_filter"), detection="points = 1024")
     out = run(cli, path, tmp_path / "runs")
     assert handed and all(x.shape[-1] == 1024 for rows in handed for x in rows)
@@ -392,7 +392,7 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     revolutions — every row handed over is one of those, as the methods see them; a wrong value is
     refused with the choices."""
     from gearlab.engine import load_scenario
-    from gearlab.kinds.detection import learned_input, read_target, tsa_units
+    from gearlab.kinds.detection_records import learned_input, read_target, tsa_units
 
     corrected = (
         '[corrected]\ntsa = 3\nhistory_units = "tsa"\n'
@@ -491,7 +491,7 @@ def test_the_source_bound_is_the_likelihood_ratio_with_the_noise_free_shapes(cac
     from gearlab.data.cache import load_or_build
     from gearlab.data.spec import DATASET_PRESETS
     from gearlab.effects import effect_spec
-    from gearlab.kinds.detection import source_bound
+    from gearlab.kinds.detection_units import source_bound
     from gearlab.learn.protocol import Method, Protocol
 
     protocol = Protocol(methods=(Method("source_only", False),))
@@ -519,7 +519,7 @@ def test_the_noise_free_twin_holds_each_run_of_draws_without_its_noise(cache):
     from gearlab.data.cache import load_or_build
     from gearlab.data.spec import DATASET_PRESETS
     from gearlab.effects import effect_spec
-    from gearlab.kinds.detection import noise_effects, noise_free_twin
+    from gearlab.kinds.detection_units import noise_effects, noise_free_twin
 
     draws = 4
     spec = DATASET_PRESETS["B-6-ch5"].with_(
@@ -657,7 +657,7 @@ def test_blocks_longer_than_the_history_are_refused_and_leave_no_run(cli, tmp_pa
 
 
 def test_records_without_condition_join_the_history_of_nearest_speed():
-    from gearlab.kinds.detection import TargetFile, conditions_of
+    from gearlab.kinds.detection_records import TargetFile, conditions_of
 
     files = [
         TargetFile(p, p, role, "x", cond)
@@ -712,7 +712,9 @@ def test_the_shipped_scenario_takes_another_file_list_of_the_rig(tmp_path, monke
     import textrecords
 
     from gearlab.engine import load_scenario
-    from gearlab.kinds.detection import Rule, classical_record, read_target
+    from gearlab.kinds.detection_classical import classical_record
+    from gearlab.kinds.detection_records import read_target
+    from gearlab.kinds.detection_units import Rule
 
     monkeypatch.setattr(textrecords, "FS", 66666.67)  # the rig's rate, as the scenario's fs says
     data = tmp_path / "data"
@@ -776,7 +778,8 @@ def test_scores_that_are_not_numbers_give_no_auc_and_are_counted():
     """A NaN compares false with everything: counted as a score it would read as AUC 0 (the
     faults ranked last), as likelihood_ratio's NaN scores once did. It gives no AUC, and the
     table says how many scores were not numbers."""
-    from gearlab.kinds.detection import auc, table_md
+    from gearlab.kinds.detection_tables import table_md
+    from gearlab.parts.roc import auc
 
     assert auc([0.1, 0.2], [0.3, 0.4]) == 1.0 and auc([0.3, 0.4], [0.1, 0.2]) == 0.0
     assert auc([0.1, np.nan], [0.3, 0.4]) is None and auc([0.1], [np.inf]) is None
@@ -803,7 +806,7 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     import textrecords
 
     from gearlab.data.textzip import read_record
-    from gearlab.kinds.detection import tsa_units
+    from gearlab.kinds.detection_records import tsa_units
     from gearlab.kinds.record_effects import overlap_dof
     from gearlab.signals.indicators import (
         fm4,
@@ -901,7 +904,7 @@ def test_tooth_sync_reads_the_synchronous_part_of_each_tooth_window():
     called; bursts 3.05 times a revolution (asynchronous: they slip in angle), however strong, are
     not; an impulse every 5th revolution at one angle (a tooth on a shaft turning 5 times slower)
     is called unless that shaft's period is given; the record's level cancels."""
-    from gearlab.kinds.detection import tsa_units
+    from gearlab.kinds.detection_records import tsa_units
     from gearlab.kinds.record_effects import overlap_dof
     from gearlab.signals.indicators import (
         async_floor,
@@ -997,7 +1000,10 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
     import textrecords
 
     from gearlab.engine import load_scenario
-    from gearlab.kinds.detection import Rule, classical_record, read_target, shafts_csv
+    from gearlab.kinds.detection_classical import classical_record
+    from gearlab.kinds.detection_records import read_target
+    from gearlab.kinds.detection_tables import shafts_csv
+    from gearlab.kinds.detection_units import Rule
 
     monkeypatch.setattr(textrecords, "FS", 66666.67)
     data = tmp_path / "data"
@@ -1078,7 +1084,7 @@ def test_a_domain_loss_that_aligns_the_history_with_one_input_is_named():
     noise-free simulator's healthy revolutions -- aligns the history with a point; healthy rows
     that differ (sensor noise, or noise draws of them), fresh noise on every batch, all rows under
     marginal alignment (the chips differ) or a method without a domain loss do not."""
-    from gearlab.kinds.detection import aligned_to_a_point
+    from gearlab.kinds.detection_units import aligned_to_a_point
     from gearlab.learn.calibration import Calibration
     from gearlab.learn.protocol import Method, Protocol
 

@@ -47,7 +47,7 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
     held-out revolutions, training data alone; they are never counted as the best learned row), and
     those whose domain loss aligned the history with a single point (training data alone; named,
     still counted). *unit*: the
-    longest TSA of the rows, at which they are judged (gearlab.kinds.detection.longest_tsa)."""
+    longest TSA of the rows, at which they are judged (gearlab.kinds.detection_records.longest_tsa)."""
     rows = summary.get("rows") or []
     if unit is None:
         return []

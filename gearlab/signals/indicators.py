@@ -182,7 +182,7 @@ def sync_shares(
     gram: np.ndarray | None = None,
 ) -> np.ndarray:
     """u_k of each TSA unit of *block* consecutive *revolutions* of one record (units starting at 0,
-    stride, 2·stride, … as detection.tsa_units makes them), (units, teeth): each window's
+    stride, 2·stride, … as kinds.detection_records.tsa_units makes them), (units, teeth): each window's
     synchronous energy S_k as a share of the unit's TSA mean window energy. S_k is the mean of
     G[k, r, s] (window_gram) over the unit's pairs of different revolutions (pair_mask): what
     repeats every revolution adds its energy to every pair, independent noise and impulses that

@@ -1,0 +1,205 @@
+"""The detection kind's measured records (gearlab.kinds.detection): the target's records grouped
+by operating condition, standardised against and aligned to each condition's history, cut into
+the units that are scored (every revolution, TSAs of blocks of revolutions), and what a learned
+method sees of them and of its training rows."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.chain import Chain
+from ..data.spec import DatasetSpec
+from ..data.textzip import align_to
+from ..errors import GearlabInputError
+from ..events import Event
+from ..learn.protocol import Protocol
+from ..parts.measured import ROLES, Target, TargetFile
+from ..scenario import location
+from ..signals import Standardiser
+from ..signals.indicators import band_limited, difference_signal
+from . import record_effects
+
+# Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
+HISTORY_STRIDES = 10
+# Fewest history units of a kind that a threshold may be fitted to (by their quartiles).
+MIN_HISTORY_UNITS = 8
+# Records without a 'condition' whose tacho speeds lie within this fraction share a history.
+SPEED_GROUP = 0.05
+
+
+def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str, str]:
+    """{file path: condition}: the file's own 'condition', else its speed group. History records
+    without one are grouped by tacho speed (a group spans SPEED_GROUP of its slowest record's
+    speed; named by its median to 1 Hz); a test record joins the group of nearest speed, or one
+    of its own (which has no history) when none lies within SPEED_GROUP of it."""
+    out = {f.path: f.condition for f in files if f.condition}
+    groups: list[list[float]] = []
+    for v in sorted(speeds[f.path] for f in files if not f.condition and f.role == "history"):
+        if groups and v <= groups[-1][0] * (1 + SPEED_GROUP):
+            groups[-1].append(v)
+        else:
+            groups.append([v])
+    centres = [float(np.median(g)) for g in groups]
+    for f in files:
+        if f.condition:
+            continue
+        v = speeds[f.path]
+        near = min(range(len(centres)), key=lambda i: abs(centres[i] - v)) if centres else None
+        if near is not None and abs(centres[near] - v) <= SPEED_GROUP * centres[near]:
+            v = centres[near]
+        out[f.path] = f"{v:.0f} Hz"
+    return out
+
+
+def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.ndarray:
+    """TSAs of *block* consecutive revolutions: non-overlapping blocks (stride = block), or sliding
+    windows moved by *stride* revolutions."""
+    stride = stride or block
+    starts = range(0, revs.shape[0] - block + 1, stride)
+    if not len(starts):
+        return np.empty((0, revs.shape[1]), dtype=revs.dtype)
+    return np.stack([revs[s : s + block].mean(axis=0) for s in starts]).astype(revs.dtype)
+
+
+def unit_window(unit: str) -> tuple[int, int]:
+    """(revolutions per unit, stride of the history's sliding windows) of a unit kind."""
+    if unit == "revolution":
+        return 1, 1
+    b = int(unit.removeprefix("record"))
+    return b, max(1, b // HISTORY_STRIDES)
+
+
+def longest_tsa(units) -> str | None:
+    """The record-level unit kind of the most revolutions among *units* ("record30" of
+    "revolution", "record10", "record30"); None when there is none."""
+    records = [u for u in dict.fromkeys(units) if u != "revolution"]
+    return max(records, key=lambda u: unit_window(u)[0]) if records else None
+
+
+def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
+    """{unit name: rows} of one record."""
+    out = {"revolution": revs}
+    for b in blocks:
+        out[f"record{b}"] = tsa_units(revs, b, max(1, b // HISTORY_STRIDES) if history else None)
+    return out
+
+
+def read_target(target: Target, blocks, on_event, where: str = "[target] key 'files'") -> dict[str, dict]:
+    """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
+    read, standardised against its condition's history and aligned to its first history record.
+    Only the records' signals are used here (no label)."""
+    conditions: dict[str, dict] = {}
+    on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
+    records = {}
+    for i, f in enumerate(target.files):
+        records[f.path] = target.read(f)
+        on_event(Event("advance", stage="records", done=i + 1, total=len(target.files)))
+    speeds = {p: r.speed_hz for p, r in records.items()}
+    named = conditions_of(list(target.files), speeds)
+    for f in target.files:
+        cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}})
+        cond[f.role].append((f, records[f.path].revolutions))
+        cond["speeds"][f.path] = speeds[f.path]
+    for name, cond in conditions.items():
+        if not cond["history"]:
+            files = ", ".join(f.path for f, _ in cond["test"])
+            raise GearlabInputError(
+                f"{where}: condition '{name}' ({files}) has no history record; "
+                "each condition needs its own healthy history (give 'condition' to group files)"
+            )
+        # The highest order every history record holds, where the acquisition's anti-alias filter
+        # leaves data (as the gap kind compares).
+        cond["max_order"] = min(
+            Chain(fs=records[f.path].fs, speed=speeds[f.path]).max_order for f, _ in cond["history"]
+        )
+        standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
+        reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
+        cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
+        cond["shifts"] = {}
+        for role in ROLES:
+            aligned = []
+            for f, revs in cond[role]:
+                shift, revs = align_to(reference, standardiser.apply(revs), target.pulses_per_rev)
+                cond["shifts"][f.path] = shift
+                aligned.append((f, revs))
+            cond[role] = aligned
+        per_record = [unit_sets(r, blocks, True) for _, r in cond["history"]]
+        cond["history_units"] = {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]}
+        # which history units come from which record (in order), and how many are independent:
+        # the threshold models the record-to-record variation (record_effects)
+        cond["history_records"] = {
+            u: [(len(s[u]), record_effects.independent_units(len(s[u]), *unit_window(u))) for s in per_record]
+            for u in per_record[0]
+        }
+        for u, X in cond["history_units"].items():
+            if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
+                longest = max(len(r) for _, r in cond["history"])
+                raise GearlabInputError(
+                    f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
+                    f"(its longest record has {longest} revolutions); expected at least "
+                    f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
+                )
+        cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
+    return conditions
+
+
+def learned_input(spec: dict, max_order: int | None = None):
+    """What the learned methods see of a revolution or TSA (source and target alike): as it is,
+    or its difference signal (shaft orders, mesh harmonics and their sidebands removed, as for
+    FM4), which leaves what one tooth adds and drops what every tooth and each build share; at
+    [detection] points per revolution (band_limited: a network's step costs in proportion), and
+    no order above *max_order*: the condition's records hold none there (read_target), while a
+    simulated revolution, and the sensor noise added to it, reach order POINTS / 2."""
+    points = spec["points"]
+    if spec["input"] == "revolution":
+        return lambda X: band_limited(X, points, max_order)
+    c = spec["classical"]
+    return lambda X: band_limited(
+        difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32),
+        points,
+        max_order,
+    )
+
+
+def source_for(source: DatasetSpec, cond: dict, how: str) -> DatasetSpec:
+    """The source simulated at the condition's speed (the median of its history records' tacho
+    speeds, to 1 Hz), or as given."""
+    if how == "source":
+        return source
+    speed = float(round(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])))
+    return source.with_(speed_hz=speed, name=f"{source.name}@{speed:g}Hz", domain=f"{source.name}@{speed:g}Hz")
+
+
+def history_training_rows(cond: dict, protocol: Protocol, condition: str, tsa: int = 0) -> np.ndarray:
+    """The history revolutions a network trains on: target_train of them at random (seeded); with
+    *tsa* > 1 the history's TSAs of *tsa* revolutions instead (sliding as its history units are)."""
+    if tsa > 1:
+        revs = np.concatenate([tsa_units(r, tsa, max(1, tsa // HISTORY_STRIDES)) for _, r in cond["history"]])
+    else:
+        revs = np.concatenate([r for _, r in cond["history"]])
+    rng = np.random.default_rng([protocol.seed, sum(map(ord, condition))])
+    take = rng.permutation(len(revs))[: protocol.target_train]
+    return revs[np.sort(take)]
+
+
+def folds_of(history_fit: str, cond: dict, condition: str, path) -> tuple:
+    """The history records left out one at a time (history_fit = "crossed"), or (None,): one
+    training on them all."""
+    if history_fit == "all":
+        return (None,)
+    if len(cond["history"]) < 2:
+        files = ", ".join(f.path for f, _ in cond["history"])
+        raise GearlabInputError(
+            f"{location(path, 'detection', 'history_fit')}: 'crossed' leaves out one history record at a "
+            f"time and needs at least two per condition; condition '{condition}' has one ({files}); "
+            "expected 'all' or another history record"
+        )
+    return tuple(range(len(cond["history"])))
+
+
+def trained_on(cond: dict, fold: int | None) -> dict:
+    """The condition as a training sees it: its history without record *fold* (history_fit =
+    "crossed"), or whole."""
+    if fold is None:
+        return cond
+    return {**cond, "history": [h for i, h in enumerate(cond["history"]) if i != fold]}

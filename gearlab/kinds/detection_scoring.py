@@ -1,0 +1,221 @@
+"""Day-to-day scoring of the detection kind (`gearlab score`; gearlab.kinds.detection): what a
+finished run keeps for it (store_scoring), new recordings scored by the run's trained methods at
+its thresholds with nothing trained again (score), and the trend of what was scored."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.recordings import cut_recording
+from ..data.textzip import align_to
+from ..errors import GearlabInputError
+from ..events import Event
+from ..learn.protocol import fault_score
+from ..params import did_you_mean
+from ..parts import scoring
+from ..parts.measured import Target, TargetFile
+from ..runs import RunDir
+from ..signals import Standardiser
+from . import record_effects
+from .detection_classical import classical_record
+from .detection_records import SPEED_GROUP, learned_input, longest_tsa, unit_sets, unit_window
+from .detection_units import Rule
+
+
+def store_scoring(run: RunDir, spec: dict, conditions: dict) -> None:
+    """What `gearlab score` needs of the finished run: the target's keys, the units and threshold
+    rule, and per condition its speed, standardiser, alignment reference and history revolutions
+    (the thresholds and classical references are made from them as the run made them)."""
+    target: Target = spec["target"]
+    out = {
+        "target": {
+            k: getattr(target, k)
+            for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
+        },
+        "blocks": list(spec["blocks"]),
+        "threshold": spec["threshold"],
+        "false_alarm": spec["false_alarm"],
+        "points": spec["points"],
+        "input": spec["input"],
+        "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in spec["classical"].items()},
+        "conditions": {},
+    }
+    for i, (name, cond) in enumerate(conditions.items()):
+        history = np.concatenate([r for _, r in cond["history"]])
+        file = f"condition{i}.npz"
+        scoring.save_arrays(
+            run.file("scoring", file),
+            standardiser=np.array([cond["standardiser"].mean, cond["standardiser"].std]),
+            reference=cond["reference"],
+            history=history.astype(np.float32),
+        )
+        out["conditions"][name] = {
+            "file": file,
+            "speed_hz": float(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])),
+            "max_order": cond["max_order"],
+            "history": [[f.path, len(r)] for f, r in cond["history"]],
+        }
+    run.write_json(scoring.SCORING_FILE, out)
+
+
+def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[TargetFile, np.ndarray]]) -> dict:
+    """A condition as read_target makes it, from the stored history and the new *records*
+    (standardised and aligned as the run's records were)."""
+    c = meta["conditions"][name]
+    arrays = scoring.load_arrays(run.file("scoring", c["file"]))
+    standardiser = Standardiser(*(float(v) for v in arrays["standardiser"]))
+    parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
+    history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
+    ppr = meta["target"]["pulses_per_rev"]
+    test = [(f, align_to(arrays["reference"], standardiser.apply(revs), ppr)[1]) for f, revs in records]
+    blocks = meta["blocks"]
+    per_record = [unit_sets(r, blocks, True) for _, r in history]
+    return {
+        "history": history,
+        "test": test,
+        "max_order": c["max_order"],
+        "history_units": {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]},
+        "history_records": {
+            u: [(len(s[u]), record_effects.independent_units(len(s[u]), *unit_window(u))) for s in per_record]
+            for u in per_record[0]
+        },
+        "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
+    }
+
+
+def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str:
+    names = list(meta["conditions"])
+    if asked is not None:
+        if asked not in names:
+            raise GearlabInputError(
+                f"--condition '{asked}'{did_you_mean(asked, names)}: not a condition of the run; "
+                f"known: {', '.join(names)}"
+            )
+        return asked
+    near = min(names, key=lambda c: abs(meta["conditions"][c]["speed_hz"] - speed))
+    centre = meta["conditions"][near]["speed_hz"]
+    if abs(speed - centre) > SPEED_GROUP * centre:
+        known = ", ".join(f"'{c}' ({meta['conditions'][c]['speed_hz']:.2f} Hz)" for c in names)
+        raise GearlabInputError(
+            f"{path}: runs at {speed:.2f} Hz, more than {SPEED_GROUP:.0%} from every condition's history ({known}); "
+            "expected a record of a trained condition, or --condition NAME"
+        )
+    return near
+
+
+def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: dict) -> dict:
+    """{path: {unit: scores}} of a learned method's record (one training, an ensemble of seeds, or
+    crossed folds) on the units *seen* ({path: {unit: X}} as the method sees them)."""
+    models = scoring.MODELS
+
+    def raw(unit: str) -> dict:
+        model = scoring.load_model(run.file(*models), unit)
+        return {p: {u: fault_score(model, X, "cpu") for u, X in units.items()} for p, units in seen.items()}
+
+    if "members" in record:  # an ensemble: the median of its members' history-standardised scores
+        members = [by_unit[m] for m in record["members"]]
+        parts = []
+        for m in members:
+            scored, ms = raw(m["unit"]), rule.models(m["history_scores"])
+            parts.append({p: {u: ms[u].standardised(s) for u, s in units.items()} for p, units in scored.items()})
+        return {p: {u: np.median([q[p][u] for q in parts], axis=0) for u in seen[p]} for p in seen}
+    if "folds" in record:  # crossed: the mean over the folds, each standardised by its training's records
+        parts = []
+        for k, name in enumerate(record["folds"]):
+            fold = by_unit[name]
+            keep = [i for i in range(len(record["folds"])) if i != k]
+            scored = raw(name)
+            models = {u: rule.model(u, fold["history_scores"][u], keep=keep) for u in fold["history_scores"]}
+            parts.append({p: {u: models[u].standardised(s) for u, s in units.items()} for p, units in scored.items()})
+        return {p: {u: np.mean([q[p][u] for q in parts], axis=0) for u in seen[p]} for p in seen}
+    return raw(record["unit"])
+
+
+def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: None) -> list[dict]:
+    """New recordings scored by a finished run's trained methods at its thresholds, nothing trained
+    again: one row per file, method and unit kind (its units' scores, how many are called, the
+    threshold and the record's decision: the majority of its units called), appended to the run's
+    scoring history."""
+    meta = run.read_json(scoring.SCORING_FILE)
+    if meta is None:
+        raise GearlabInputError(
+            f"{run.path}: no {scoring.SCORING_FILE}: not a finished detection run (or one from before gearlab "
+            "score kept its models); expected a finished run: run the scenario again"
+        )
+    keys = meta["target"]
+    cut = {}
+    for i, file in enumerate(files):
+        rec = cut_recording(str(file), **keys)
+        name = _condition_of(meta, str(file), rec.speed_hz, condition)
+        cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), rec.revolutions))
+        on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
+    by_unit = {r["unit"]: r for r in run.records()}
+    shown_spec = {"points": meta["points"], "input": meta["input"], "classical": meta["classical"]}
+    classical = {**meta["classical"], "shafts": tuple(tuple(x) for x in meta["classical"]["shafts"])}
+    rows = []
+    for name, records in cut.items():
+        cond = _scoring_condition(run, meta, name, records)
+        rule = Rule(meta["threshold"], meta["false_alarm"], cond["history_records"])
+        shown = learned_input(shown_spec, cond["max_order"])
+        seen = {p: {u: shown(X) for u, X in units.items()} for p, units in cond["test_units"].items()}
+        for r in by_unit.values():
+            if r["condition"] != name or r.get("seed") is not None or r.get("fold") is not None:
+                continue
+            if r["adapter"] is None:
+                made = classical_record(r["method"], name, cond, classical, rule)
+                scores, thresholds = made["test_scores"], made["thresholds"]
+            else:
+                scores, thresholds = _learned_scores(run, r, seen, rule, by_unit), r["thresholds"]
+            for f, _ in records:
+                for u, s in scores[f.path].items():
+                    s = np.asarray(s, dtype=np.float64)
+                    called = int(np.sum(s > thresholds[u]))
+                    rows.append(
+                        {
+                            "file": f.path,
+                            "condition": name,
+                            "method": r["method"],
+                            "unit": u,
+                            "units": int(s.size),
+                            "called": called,
+                            "threshold": float(thresholds[u]),
+                            "rule": meta["threshold"],
+                            "median_score": float(np.median(s)) if s.size else None,
+                            "decision": "fault" if s.size and called > s.size / 2 else "healthy",
+                            "scores": [float(x) for x in s],
+                        }
+                    )
+    scoring.append_history(run, rows)
+    trends = score_trends(run)
+    if trends:
+        from ..plots import score_trend  # here, not at the top: start-up time (matplotlib)
+
+        score_trend(trends, run.file("figures", "score_trend.png"))
+    return rows
+
+
+def score_trends(run: RunDir) -> list:
+    """Per condition and method: the median score of each scored record's longest TSA units, in the
+    order they were scored, beside the threshold (gearlab.parts.scoring's history)."""
+    from ..charts import Chart, Curve
+
+    rows = scoring.read_history(run)
+    unit = longest_tsa(r["unit"] for r in rows) or "revolution"
+    out = []
+    for c in dict.fromkeys(r["condition"] for r in rows):
+        picked = [r for r in rows if r["condition"] == c and r["unit"] == unit and r["median_score"] is not None]
+        curves = []
+        for m in dict.fromkeys(r["method"] for r in picked):
+            mine = [r for r in picked if r["method"] == m]
+            x = list(range(1, len(mine) + 1))
+            curves.append(Curve(m, x, [r["median_score"] - r["threshold"] for r in mine]))
+        if curves:
+            out.append(
+                Chart(
+                    f"{c}: scored records, {unit} (median score less the threshold: above 0 is called)",
+                    "record scored (in order)",
+                    "score - threshold",
+                    tuple(curves),
+                )
+            )
+    return out

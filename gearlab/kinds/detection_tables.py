@@ -1,0 +1,306 @@
+"""The detection kind's results (gearlab.kinds.detection): scores.csv, shafts.csv, summary.json
+and table.md/table.csv made from a run's records, where the test labels come in for the first
+time (to score what was decided), and the tables the CLI, the TUI and report.html show."""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import asdict
+
+import numpy as np
+
+from ..parts.measured import Target
+from ..parts.roc import auc
+from ..runs import RunDir
+from ..scenario import Scenario
+from .detection_records import longest_tsa
+from .detection_units import method_name
+
+
+def summarise(scenario: Scenario, run: RunDir) -> None:
+    spec = scenario.spec
+    target: Target = spec["target"]
+    labels = {f.path: f.label for f in target.files}
+    everything = run.records()
+    by_unit = {r["unit"]: r for r in everything}
+    # an ensemble's members (one training each) are kept in results.jsonl and shown only as the
+    # spread of their AUCs beside the ensemble's
+    records = [r for r in everything if r.get("seed") is None and r.get("fold") is None]
+    thresholds = {r["unit"]: r["thresholds"] for r in records}
+    # scores.csv: every test unit's score and decision
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["file", "unit", "index", "method", "score", "decision"])
+    for r in sorted(records, key=lambda r: r["unit"]):  # not in the order the trainings finished
+        for path, units in r["test_scores"].items():
+            for u, scores in units.items():
+                thr = thresholds[r["unit"]][u]
+                for i, s in enumerate(scores):
+                    w.writerow([path, u, i, r["method"], repr(float(s)), int(s > thr)])
+    run.write_text("scores.csv", buf.getvalue())
+    attributed = [r for r in records if "shafts" in r]
+    if attributed:
+        run.write_text("shafts.csv", shafts_csv(attributed))
+
+    # the labels come in only here, to score what was decided
+    def split(r: dict, u: str) -> tuple[np.ndarray, np.ndarray]:
+        neg = [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] != target.positive]
+        pos = [r["test_scores"][p][u] for p in r["test_scores"] if labels[p] == target.positive]
+        return np.concatenate(neg or [np.empty(0)]), np.concatenate(pos or [np.empty(0)])
+
+    rows = []
+    for r in records:
+        for u in r["history_scores"]:
+            thr = thresholds[r["unit"]][u]
+            neg, pos = split(r, u)
+            # scores that are not numbers (a broken method) are counted and shown, never ranked
+            broken = int(np.sum(~np.isfinite(np.concatenate([neg, pos, np.asarray(r["history_scores"][u])]))))
+            other = {
+                rule: (
+                    100.0 * float(np.mean(pos > t[u])) if len(pos) else None,
+                    100.0 * float(np.mean(neg > t[u])) if len(neg) else None,
+                )
+                for rule, t in r.get("thresholds_by_rule", {}).items()
+            }
+            by_label = {}
+            for p, units in r["test_scores"].items():
+                by_label.setdefault(labels[p], []).extend(units[u])
+            rows.append(
+                {
+                    "condition": r["condition"],
+                    "unit": u,
+                    "method": r["method"],
+                    "auc": auc(neg, pos),
+                    "detection": 100.0 * float(np.mean(pos > thr)) if len(pos) else None,
+                    "false_alarm": 100.0 * float(np.mean(neg > thr)) if len(neg) else None,
+                    "n_positive": int(len(pos)),
+                    "n_negative": int(len(neg)),
+                    "non_finite": broken,
+                    "threshold": thr,
+                    "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
+                    # detection and false alarms (%) at each threshold rule's threshold
+                    "by_rule": {rule: {"detection": d, "false_alarm": f} for rule, (d, f) in other.items()},
+                    "member_auc": [auc(*split(by_unit[m], u)) for m in r.get("members", [])],
+                }
+            )
+    order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
+    variants = [""] + ([spec["corrected_label"]] if spec.get("corrected") is not None else [])
+    methods = [method_name(m, v) for v in variants for m in spec["protocol"].methods]
+    methods += list(spec["classical"]["indicators"])
+
+    def rank(method: str) -> int:
+        return methods.index(method) if method in methods else len(methods)
+
+    rows.sort(
+        key=lambda r: (
+            order[r["condition"]],
+            rank(r["method"]),
+            r["unit"] != "revolution",
+            r["unit"],
+        )
+    )
+    summary = {
+        "kind": "detection",
+        "scenario": scenario.name,
+        "source": asdict(spec["source"]),
+        "target": {**asdict(target), "files": [asdict(f) for f in target.files]},
+        "protocol": {k: v for k, v in asdict(spec["protocol"]).items() if k != "methods"},
+        "methods": list(dict.fromkeys(r["method"] for r in records)),
+        "false_alarm_asked": spec["false_alarm"],
+        "rows": rows,
+        # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
+        "shafts_md": shafts_md(attributed, labels),
+    }
+    conditions = run.read_json("conditions.json")
+    bound = {c: v.get("source_bound", {}) for c, v in (conditions or {}).items()}
+    summary["learned"] = [
+        {
+            "condition": r["condition"],
+            "method": r["method"],
+            "source_auc": r["source_auc"],
+            "source_bound": bound.get(r["condition"], {}).get(r.get("source", "source")),
+            "part_source_auc": r.get("part_source_auc", []),
+            "source_units": r["source_units"],
+            "aligned_to_a_point": r.get("aligned_to_a_point", False),
+            "seconds": r["seconds"],
+        }
+        for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
+        if "source_units" in r
+    ]
+    if conditions is not None:
+        summary["conditions"] = conditions
+    run.write_json("summary.json", summary)
+    run.write_text(
+        "table.md", table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"] + learned_md(summary["learned"])
+    )
+    run.write_text("table.csv", table_csv(rows))
+
+
+def _cell(x, fmt="{:.2f}") -> str:
+    return "–" if x is None else fmt.format(x)
+
+
+def _spread(aucs) -> str:
+    """An ensemble's member AUCs as their range."""
+    aucs = [a for a in aucs or [] if a is not None]
+    return f" ({min(aucs):.2f}–{max(aucs):.2f})" if aucs else ""
+
+
+def table_md(rows: list[dict]) -> str:
+    """One table per condition: a row per method; AUC (an ensemble's: with the range of its
+    members' AUCs), detection and false alarms (% of the test's positive and negative units
+    called at the history's threshold) per unit."""
+    units = list(dict.fromkeys(r["unit"] for r in rows))
+    out = []
+    for c in dict.fromkeys(r["condition"] for r in rows):
+        cells = {(r["method"], r["unit"]): r for r in rows if r["condition"] == c}
+        first = next(r for r in rows if r["condition"] == c)
+        out.append(f"| {c}: method | " + " | ".join(f"{u} AUC | det % | FA %" for u in units) + " |")
+        out.append("|---|" + "---|---|---|" * len(units))
+        for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c):
+            parts = []
+            for u in units:
+                r = cells.get((m, u))
+                parts.append(
+                    "| | "
+                    if r is None
+                    else f"{_cell(r['auc'], '{:.3f}')}{_spread(r.get('member_auc'))} | "
+                    f"{_cell(r['detection'], '{:.0f}')} | {_cell(r['false_alarm'], '{:.0f}')}"
+                )
+            out.append(f"| {m} | " + " | ".join(parts) + " |")
+        out.append(
+            "| units (pos / neg) | "
+            + " | ".join(
+                f"{cells[(first['method'], u)]['n_positive']} / {cells[(first['method'], u)]['n_negative']} | |"
+                if (first["method"], u) in cells
+                else "| |"
+                for u in units
+            )
+            + " |"
+        )
+        broken = {m: 0 for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c)}
+        for r in rows:
+            if r["condition"] == c:
+                broken[r["method"]] += r.get("non_finite", 0)
+        if any(broken.values()):
+            out.append(
+                "Scores that are not numbers (no AUC, '–'): " + ", ".join(f"{m} {n}" for m, n in broken.items() if n)
+            )
+        out.append("")
+    return "\n".join(out)
+
+
+def labels_md(rows: list[dict]) -> str:
+    """Called units (%) per test label at the history's threshold, for the longest TSA: is other
+    damage (a negative label) taken for the fault?"""
+    unit = longest_tsa(r["unit"] for r in rows)
+    if unit is None:
+        return ""
+    picked = [r for r in rows if r["unit"] == unit]
+    labels = list(dict.fromkeys(k for r in picked for k in r["called_by_label"]))
+    out = [
+        f"| {unit}: condition | method | " + " | ".join(f"called % '{k}'" for k in labels) + " |",
+        "|---|---|" + "---|" * len(labels),
+    ]
+    for r in picked:
+        out.append(
+            f"| {r['condition']} | {r['method']} | "
+            + " | ".join(_cell(r["called_by_label"].get(k), "{:.0f}") for k in labels)
+            + " |"
+        )
+    return "\n".join(out) + "\n"
+
+
+def learned_md(learned: list[dict]) -> str:
+    """What each method that learns from the simulator learned of it: the ROC AUC of a network's
+    scores of the source's held-out revolutions (an ensemble's: the median over its members, with
+    their range; a detector's "–": it is built in the target's frame), and the training time, all
+    of its trainings together, and whether its domain loss aligned the history with a single point
+    (aligned_to_a_point). From training data only: a row near 0.5 cannot tell the simulated fault
+    from healthy, so its calls on the records are not what the simulator taught it."""
+    if not learned:
+        return ""
+    out = [
+        "\nWhat each method learned of the simulator (ROC AUC of a network's scores of the source's held-out "
+        "revolutions, 0.5 = chance; a detector, built on the history, has none; the bound: the likelihood "
+        "ratio that knows the source's noise-free fault shapes and noise law, – for a noise-free source; "
+        "training time, all seeds; history aligned with: a point when the source's samples its domain loss "
+        "aligns the history with are one input, a noise-free healthy revolution)\n",
+        "| condition | method | source AUC | bound | training (s) | history aligned with |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in learned:
+        point = "a point" if r.get("aligned_to_a_point") else ""
+        out.append(
+            f"| {r['condition']} | {r['method']} | {_cell(r['source_auc'])}{_spread(r['part_source_auc'])} | "
+            f"{_cell(r.get('source_bound'))} | {r['seconds']:.0f} | {point} |"
+        )
+    return "\n".join(out) + "\n"
+
+
+def shafts_csv(records: list[dict]) -> str:
+    """One row per test unit of each pinion_sync record: the shaft its localised damage is put on
+    ("nothing": no shaft above its threshold) and every shaft's strength."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    names = list(dict.fromkeys(n for r in records for n in r["shafts"]["names"]))
+    w.writerow(["condition", "file", "unit", "index", "shaft", *(f"strength_{n}" for n in names)])
+    for r in records:
+        a = r["shafts"]
+        for path, units in a["named"].items():
+            for u, named in units.items():
+                for i, (shaft, strength) in enumerate(zip(named, a["strengths"][path][u])):
+                    values = dict(zip(a["names"], strength))
+                    w.writerow(
+                        [r["condition"], path, u, i, shaft, *(repr(float(values.get(n, np.nan))) for n in names)]
+                    )
+    return buf.getvalue()
+
+
+def shafts_md(records: list[dict], labels: dict) -> str:
+    """pinion_sync's attribution per condition and test label, for the longest TSA: the share (%) of
+    the label's units put on each shaft."""
+    if not records:
+        return ""
+    unit = longest_tsa(records[0]["shafts"]["thresholds"])
+    if unit is None:
+        return ""
+    names = list(dict.fromkeys(n for r in records for n in r["shafts"]["names"])) + ["nothing"]
+    out = [
+        f"\nWhich shaft (pinion_sync, {unit}: % of each label's units put on each shaft)\n",
+        "| condition | label | " + " | ".join(names) + " |",
+        "|---|---|" + "---|" * len(names),
+    ]
+    for r in records:
+        by_label: dict[str, list[str]] = {}
+        for path, units_named in r["shafts"]["named"].items():
+            by_label.setdefault(labels[path], []).extend(units_named[unit])
+        for label, named in by_label.items():
+            out.append(
+                f"| {r['condition']} | {label} | "
+                + " | ".join(f"{100.0 * named.count(n) / len(named):.0f}" for n in names)
+                + " |"
+            )
+    return "\n".join(out) + "\n"
+
+
+def table_csv(rows: list[dict]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(
+        ["condition", "unit", "method", "auc", "detection", "false_alarm", "n_positive", "n_negative", "threshold"]
+    )
+    for r in rows:
+        w.writerow(
+            [
+                r["condition"],
+                r["unit"],
+                r["method"],
+                *(("" if r[k] is None else f"{r[k]:.4f}") for k in ("auc", "detection", "false_alarm")),
+                r["n_positive"],
+                r["n_negative"],
+                f"{r['threshold']:.6g}",
+            ]
+        )
+    return buf.getvalue()
