@@ -1,0 +1,225 @@
+"""A simulated record of a gearbox as a user would record it: seconds of the housing acceleration
+at the logger's sampling rate with a once-per-revolution tacho, for a speed, a load, damage on any
+gear of the train, and sensor noise.
+
+    from gearlab.data.simulated import simulated_record
+    rec = simulated_record([{"name": "chip", "gear": "output gear", "tooth": 5, "step": 20}],
+                           speed_hz=35.0, revolutions=60, snr_db=20.0, seed=3)
+    rec.vibration, rec.tacho, rec.angle, rec.fs       # m/s², V, rad, Hz
+    rec.write_csv("chipped_output.csv")               # time_s, acc_ms2, tacho_V
+
+Defaults: the PHM 2009 rig (model two_stage, preset phm09, the housing's x channel, 66 666.67 Hz).
+A fault is a placement table (gearlab.data.placement: name, gear, stage, tooth, step or params)
+or a PlacedFault.
+
+Realisation, the dataset builder's (gearlab.data.builder): the rig is simulated at the nearest
+rate above fs with a whole number of steps per tooth pitch until the response is steady
+(builder.steady_response), one period of it kept: 1 input revolution for a healthy gearbox or a
+faulted input pinion, the faulted shaft's period otherwise (3 input turns for the idler's gears,
+5 for the output gear). The record repeats that period from a seeded random start, as a recording
+starts anywhere in the gears' turns; it is read at the logger's sampling instants through its
+Fourier series (components at or above fs/2 left out, as a logger's anti-alias filter does) and
+a cubic spline on it 8 times oversampled. Then the signal-level effects and the sensor noise, as
+every dataset's J revolutions get them (EffectChain.apply_signal, signals.add_noise).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..effects import EffectChain, config_of, effects_from_tables
+from ..errors import GearlabInputError, shown
+from ..files import atomic_write
+from ..physics.faults import place_fault
+from ..physics.stiffness import PlacedFault
+from ..registry import get_registry
+from ..signals import NOISE_KINDS, add_noise
+from .builder import _configured_simulator, _simulator, steady_response, whole_steps_rate
+from .placement import gear_name, gear_of, shaft_names
+from .spec import PHM09_FS
+
+TACHO_V = 5.0  # the tacho's high level, V (a TTL key-phasor)
+TACHO_DUTY = 0.05  # share of a revolution the pulse is high
+OVERSAMPLE = 8  # spline grid per simulated step: interpolation error ~1e-4 at the logger's Nyquist
+PLACEMENT_KEYS = ("name", "gear", "stage", "tooth", "step", "params")
+
+
+@dataclass(frozen=True)
+class SimulatedRecord:
+    """One simulated record: what a data logger on the gearbox would hold, and what made it."""
+
+    vibration: np.ndarray  # m/s², the sensor channel at fs
+    tacho: np.ndarray  # V, once-per-revolution pulses of the input shaft: rising edge (mid-level) at θ = 2πk
+    angle: np.ndarray  # rad, the input shaft's continuous angle at each sample (θ = 0 at a tooth-1 mesh start)
+    fs: float  # Hz
+    speed_hz: float  # input shaft
+    load_nm: float
+    channel: str
+    faults: tuple[str, ...]  # labels of the placed faults (PlacedFault.label)
+    gears: tuple[str, ...]  # the faulted gears in words ("output gear", ...)
+    period: int  # input revolutions after which the clean signal repeats
+    start: float  # input revolutions into the clean period at the first sample
+
+    @property
+    def t(self) -> np.ndarray:
+        return np.arange(self.vibration.size) / self.fs
+
+    def write_csv(self, path, sensitivity: float | None = None) -> Path:
+        """The record as a CSV the importers read (docs/recordings.md): time_s, the vibration in m/s²
+        (acc_ms2) or, with a *sensitivity* in V per m/s², in volts (acc_V), and tacho_V."""
+        path = Path(path)
+        if sensitivity is None:
+            name, values = "acc_ms2", self.vibration
+        else:
+            name, values = "acc_V", self.vibration * sensitivity
+        table = np.column_stack([self.t, values, self.tacho])
+        lines = [f"time_s,{name},tacho_V"] + [f"{t:.9g},{v:.9g},{p:.6g}" for t, v, p in table]
+        atomic_write(path, "\n".join(lines) + "\n")
+        return path
+
+
+def place(entries: Sequence, sim, preset: str, where: str = "faults") -> list[PlacedFault]:
+    """Placement tables (or PlacedFaults, kept) -> PlacedFaults on the simulator's gears."""
+    registry = get_registry()
+    pairs = (sim.pair, *(m.pair for m in sim.meshes))
+    shafts = shaft_names(preset, len(pairs))
+    out = []
+    for i, entry in enumerate(entries, start=1):
+        here = f"{where} #{i}"
+        if isinstance(entry, PlacedFault):
+            out.append(entry)
+            continue
+        if not isinstance(entry, Mapping):
+            raise GearlabInputError(
+                f'{here}: expected a table {{name = "chip", gear = "output gear", tooth = 5, step = 20}}, '
+                f"got {shown(entry)}"
+            )
+        unknown = [k for k in entry if k not in PLACEMENT_KEYS]
+        if unknown:
+            raise GearlabInputError(f"{here}: unknown key {shown(unknown[0])}; known: {', '.join(PLACEMENT_KEYS)}")
+        if not isinstance(entry.get("name"), str):
+            raise GearlabInputError(f"{here}: missing 'name' (a fault plugin: {', '.join(registry.names('fault'))})")
+        stage, gear = gear_of(entry, shafts, here)
+        step = entry.get("step")
+        if step is None and entry.get("params") is None:
+            raise GearlabInputError(f"{here}: give a ladder 'step' (1..20) or explicit 'params'")
+        out.append(
+            place_fault(
+                registry,
+                pairs[stage - 1],
+                entry["name"],
+                entry.get("tooth", 1),
+                step,
+                entry.get("params"),
+                where=here,
+                gear=gear,
+                stage=stage,
+            )
+        )
+    return out
+
+
+def _periodic_at(x: np.ndarray, fs_sim: float, fs: float, times: np.ndarray) -> np.ndarray:
+    """A periodic signal *x* (one period at fs_sim) at *times* (s), its components >= fs/2 left out."""
+    from scipy.interpolate import CubicSpline
+
+    n = x.size
+    spectrum = np.fft.rfft(x)
+    spectrum[np.arange(spectrum.size) * fs_sim / n >= fs / 2] = 0.0  # the logger's anti-alias filter
+    fine = np.fft.irfft(spectrum, n * OVERSAMPLE) * OVERSAMPLE
+    period = n / fs_sim
+    grid = np.arange(n * OVERSAMPLE + 1) * (period / (n * OVERSAMPLE))
+    spline = CubicSpline(grid, np.append(fine, fine[0]), bc_type="periodic")
+    return spline(np.mod(times, period))
+
+
+def tacho_pulses(angle: np.ndarray, step: float) -> np.ndarray:
+    """Once-per-revolution pulses (TACHO_V high for TACHO_DUTY of a turn) whose rising edge crosses the
+    mid-level exactly at θ = 2πk: a two-sample linear ramp, so the importers' edge interpolation
+    (signals.angle_from_pulses) reads the crossing without a quantisation error. *step*: θ per sample."""
+    phase = np.mod(angle + np.pi, 2 * np.pi) - np.pi  # θ - 2πk in [-π, π)
+    ramp = np.clip(phase / (2 * step) + 0.5, 0.0, 1.0)
+    return TACHO_V * np.where(phase < 2 * np.pi * TACHO_DUTY, ramp, 0.0)
+
+
+def simulated_record(
+    faults: Sequence = (),
+    *,
+    speed_hz: float = 30.0,
+    load_nm: float = 20.0,
+    revolutions: float = 60.0,
+    snr_db: float | None = None,
+    noise_kind: str = "gaussian",
+    effects: Sequence = (),
+    seed: int = 0,
+    fs: float = PHM09_FS,
+    model: str = "two_stage",
+    preset: str = "phm09",
+    channel: str = "casing_x",
+) -> SimulatedRecord:
+    """A record of *revolutions* input turns at *fs* of *channel* of *model*/*preset* at *speed_hz* and
+    *load_nm*, with *faults* (placement tables or PlacedFaults), *effects* (scenario tables, e.g.
+    ``{name = "sensor_lowpass", ...}``) and sensor noise at *snr_db* (dB against the record's RMS, of
+    *noise_kind*; None: none). *seed* draws the start in the gears' period and the noise."""
+    where = "simulated record"
+    for key, value, low in (("speed_hz", speed_hz, 0.0), ("revolutions", revolutions, 0.0), ("fs", fs, 0.0)):
+        if isinstance(value, bool) or not isinstance(value, int | float) or not (math.isfinite(value) and value > low):
+            raise GearlabInputError(f"{where}: '{key}' must be a positive number, got {shown(value)}")
+    if snr_db is not None and noise_kind not in NOISE_KINDS:
+        raise GearlabInputError(
+            f"{where}: 'noise_kind' must be one of {', '.join(NOISE_KINDS)}, got {shown(noise_kind)}"
+        )
+    registry = get_registry()
+    chain = EffectChain.load(effects_from_tables(list(effects), f"{where}: effects")) if effects else EffectChain()
+    base = registry.get("model", model, where)
+    pair, _ = base.resolve(preset, where=where)
+    fs_sim = whole_steps_rate(fs, speed_hz, pair.Z1)
+    if chain:
+        config = chain.model_config(config_of(model, preset, channel, where), where)
+        sim, excitation, channel = _configured_simulator(config, fs_sim), chain.at("excitation"), config.channel
+    else:
+        sim, excitation = _simulator(model, preset, fs_sim), ()
+        if channel not in base.channels:
+            raise GearlabInputError(
+                f"{where}: model '{model}' has no channel '{channel}'; its channels: {', '.join(base.channels)}"
+            )
+    placed = place(list(faults), sim, preset)
+    shafts = shaft_names(preset, sim.stages)
+    clean, moved = steady_response(sim, placed, speed_hz, load_nm, channel, excitation)
+    period = sim.period(placed)
+    rng = np.random.default_rng([seed, 0])
+    start = float(rng.uniform(0.0, period))  # input turns into the clean period at the first sample
+    n = int(math.ceil(revolutions * fs / speed_hz))
+    times = (start / speed_hz) + np.arange(n) / fs
+    vibration = _periodic_at(clean, fs_sim, fs, times)
+    angle = 2 * np.pi * speed_hz * times
+    if moved is not None:  # an excitation effect moved the shaft: its (periodic) deviation from the nominal
+        nominal = 2 * np.pi * np.arange(moved.size) / (fs_sim / speed_hz)
+        deviation = np.interp(np.mod(times, period / speed_hz) * fs_sim, np.arange(moved.size), moved - nominal)
+        angle = angle + deviation
+    angle = angle - 2 * np.pi * math.floor(angle[0] / (2 * np.pi))  # the first sample in [0, 2π)
+    signal_effects = chain.at("signal")
+    if signal_effects:
+        healthy, _ = steady_response(sim, [], speed_hz, load_nm, channel, excitation)
+        rms = float(np.sqrt(np.mean(healthy**2)))
+        vibration = EffectChain(signal_effects).apply_signal(vibration[None, :], fs, speed_hz, rms, [seed, 1])[0]
+    if snr_db is not None:
+        vibration = add_noise(vibration[None, :], snr_db, noise_kind, np.random.default_rng([seed, 2]))[0]
+    return SimulatedRecord(
+        vibration=vibration,
+        tacho=tacho_pulses(angle, 2 * np.pi * speed_hz / fs),
+        angle=angle,
+        fs=float(fs),
+        speed_hz=float(speed_hz),
+        load_nm=float(load_nm),
+        channel=channel,
+        faults=tuple(f.label for f in placed),
+        gears=tuple(gear_name(f.stage, f.gear, shafts) for f in placed),
+        period=period,
+        start=start,
+    )
