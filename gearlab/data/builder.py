@@ -24,6 +24,7 @@ import functools
 import math
 from collections import OrderedDict
 from collections.abc import Callable
+from fractions import Fraction
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -95,13 +96,18 @@ def steady_response(
     other than the input pinion the steady response repeats only after sim.period(faults)
     input revolutions (3 for the 96T idler gear of the PHM 2009 rig, 5 for its 80T output
     gear): what is returned is then that many revolutions, one period, from a tacho zero.
+    A train whose later mesh is no whole input order (a description's 21/53 then 29/61: order
+    609/53) repeats only after mesh_cycle(sim) turns: steadiness is judged on such cycles, and
+    the last period of the last cycle is returned (the later mesh at one phase, the same for
+    every fault case).
     """
     per_rev = int(round(sim.fs / speed))
     period = sim.period(faults)
-    per_block = per_rev * period
-    blocks = 8
+    cycle = math.lcm(period, mesh_cycle(sim))
+    per_block = per_rev * cycle
+    blocks, most = (8, 256) if cycle == period else (3, 12)  # a long cycle: few blocks (the transient is in the first)
     while True:
-        result = sim.run(faults, speed, load, duration=blocks * period / speed, channels=[channel], effects=effects)
+        result = sim.run(faults, speed, load, duration=blocks * cycle / speed, channels=[channel], effects=effects)
         x = result.channels[channel][: blocks * per_block].reshape(blocks, per_block)
         try:
             first = steady_start(x, rtol=STEADY_RTOL)
@@ -110,17 +116,24 @@ def steady_response(
         if first <= blocks - 2:
             angle = None
             if result.angle is not None:
-                angle = result.angle[(blocks - 1) * per_block : blocks * per_block] - 2 * np.pi * (
-                    (blocks - 1) * period
+                angle = result.angle[blocks * per_block - period * per_rev : blocks * per_block] - 2 * np.pi * (
+                    blocks * cycle - period
                 )
-            return x[-1].copy(), angle
-        if blocks >= 256:
+            return x[-1, -period * per_rev :].copy(), angle
+        if blocks >= most:
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise GearlabInputError(
                 f"model '{sim.model.name}' ({labels}, {speed:g} Hz): the response does not settle within "
-                f"{blocks * period} revolutions"
+                f"{blocks * cycle} revolutions"
             )
         blocks *= 4
+
+
+def mesh_cycle(sim: Simulator) -> int:
+    """Input revolutions after which every mesh of the train repeats: 1 when each further mesh is a
+    whole input order (the built-in models: 16 on the PHM 2009 rig), else its order's denominator."""
+    orders = [Fraction(mesh.ratio * mesh.pair.Z1).limit_denominator(10_000) for mesh in sim.meshes]
+    return math.lcm(1, *(order.denominator for order in orders))
 
 
 def angle_samples(periodic: np.ndarray, points: int = POINTS, angle: np.ndarray | None = None) -> np.ndarray:

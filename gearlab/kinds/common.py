@@ -10,19 +10,20 @@ from pathlib import Path
 
 from ..data.importers import MeasuredSpec
 from ..data.recordings import channel_key, check_measured_file, check_recording
-from ..data.spec import DATASET_PRESETS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
+from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import parse_sensitivity
 from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
+from ..registry import get_registry
 from ..scenario import Key, Scenario, Table, in_range, location, plain_name
 from ..settings import from_inline
 from ..units import to_si
 
 DATASET_TABLE = Table(
     {
-        "preset": Key(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'file')"),
+        "preset": Key(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'gearbox' or 'file')"),
         "file": Key(
             str,
             "",
@@ -37,8 +38,9 @@ DATASET_TABLE = Table(
         "gearbox": Key(
             str,
             "",
-            doc="measured data without a tacho: a gearbox description (file or built-in name) whose mesh "
-            "orders the speed is found from (to ±1 % of 'speed' when given)",
+            doc="a gearbox description (file relative to the scenario, or a built-in name): without 'file', the "
+            "simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and sizes); "
+            "with a measured 'file' and no tacho, the mesh orders the speed is found from",
         ),
         "labels": Key(str, "", doc="measured data: an optional label channel"),
         "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
@@ -87,14 +89,16 @@ MAX_SAMPLES = 10**6
 
 
 # keys of a measured 'file' entry that mean nothing to a simulated preset
-MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "gain", "pulses_per_rev", "gearbox")
+MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "gain", "pulses_per_rev")
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
     """A dataset preset with the entry's overrides applied, or a measured file to import
     (shared by the dataset, transfer and gap kinds). *base*: the scenario's folder."""
-    if bool(entry["preset"]) == bool(entry["file"]):
-        raise GearlabInputError(f"{where}: give exactly one of 'preset' (simulated) or 'file' (measured data)")
+    if bool(entry["preset"] or entry.get("gearbox") and not entry["file"]) == bool(entry["file"]):
+        raise GearlabInputError(
+            f"{where}: give exactly one of 'preset' or 'gearbox' (simulated) or 'file' (measured data)"
+        )
     if entry["file"]:
         if entry.get("effects"):
             raise GearlabInputError(f"{where} key 'effects': effects act on simulations; a measured 'file' has none")
@@ -105,7 +109,9 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
                 f"{where} key '{key}': a key of measured data ('file'); a simulated 'preset' has none"
                 + (" (its channel is chosen with 'channel')" if key == "vibration" else "")
             )
-    spec = dataset_preset(entry["preset"], where)
+    spec = dataset_preset(entry["preset"], where) if entry["preset"] else None
+    if entry.get("gearbox"):
+        spec = described_spec(entry, where, base, spec)
     changes = {}
     for key in ("model", "channel"):
         if entry[key]:
@@ -153,6 +159,44 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
 
 # Ranges of a dataset's quantities (unit, largest value, as said): beyond them a value is a
 # mistake (fs = 1e300 would ask for more samples per revolution than any memory holds).
+def described_spec(entry: dict, where: str, base: Path, preset: DatasetSpec | None) -> DatasetSpec:
+    """The simulator a 'gearbox' description implies (gearlab.gearbox.simulation): its model (or the
+    entry's 'model'), its values, the channel of its [sensor] (or 'channel'), the speed and load of
+    its [operation] (or 'speed', 'load'). The faults and sizes: *preset*'s when one is named, else
+    the chapter-5 ladders (CH5_STEPS) on every pinion tooth with a quarter more healthy samples."""
+    from ..gearbox.simulation import channel, model_name, reference, referenced
+
+    here = f"{where} key 'gearbox'"
+    if entry["model_preset"]:
+        raise GearlabInputError(
+            f"{where} key 'model_preset': the 'gearbox' description gives the model's values; give one of the two"
+        )
+    ref = reference(gearbox_name(entry["gearbox"], here, base))
+    try:
+        box = referenced(ref)
+        model = entry["model"] or model_name(box)
+        plugin = get_registry().get("model", model, where)
+        plugin.preset(ref)  # the model takes the description (its number of stages)
+        chan = entry["channel"] or channel(box, model, plugin.channels)
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{here}: {exc}") from None
+    operation = {}
+    for key, value, unit in (("speed", box.speed_hz, "input-shaft speed"), ("load", box.load_nm, "output torque")):
+        if value is None and entry[key] is None:
+            raise GearlabInputError(
+                f"{here}: {box.source}: [operation] key '{key}': missing; a simulation needs the {unit} "
+                f"(or give '{key}' here)"
+            )
+        operation[f"{key}_{'hz' if key == 'speed' else 'nm'}"] = value
+    if preset is None:
+        faults = tuple((name, CH5_STEPS[name]) for name in FAULTS)
+        preset = DatasetSpec(box.name, model, ref, chan, faults=faults, healthy=15 * box.stages[0].pinion.z)
+        preset = preset.with_(domain=box.name)
+    else:
+        preset = preset.with_(name=f"{box.name}_{preset.name}", domain=f"{box.name}_{preset.name}")
+    return preset.with_(model=model, preset=ref, channel=chan, **operation)
+
+
 QUANTITIES = {"speed": ("Hz", 1e3, "1 kHz"), "load": ("N*m", 1e6, "1e6 N*m"), "fs": ("Hz", 1e7, "10 MHz")}
 
 
