@@ -32,6 +32,7 @@ class Key:
     default: Any = _REQUIRED
     check: Callable[[Any, str], Any] | None = None  # returns the converted value or raises
     doc: str = ""
+    unit: str = ""  # the SI unit a plain number is read in (docs/settings.md)
 
     @property
     def required(self) -> bool:
@@ -62,7 +63,9 @@ def keys_of(cls, names: tuple[str, ...] | None = None, **defaults) -> dict[str, 
                 return in_bounds(meta, value, where)
 
             check.choices = meta.choices  # what a front-end may offer (the TUI's run form)
-        out[name] = Key(meta.types, _REQUIRED if default is dataclasses.MISSING else default, check, meta.doc)
+            check.setting = meta  # its bounds and --quick limit, for docs/settings.md
+        default = _REQUIRED if default is dataclasses.MISSING else default
+        out[name] = Key(meta.types, default, check, meta.doc, meta.unit)
     return out
 
 
@@ -89,6 +92,7 @@ def in_range(low: float | None = None, high: float | None = None) -> Callable[[A
             raise GearlabInputError(f"{where}: {shown(value)} is outside {span}")
         return value
 
+    check.bounds = (low, high)  # what docs/settings.md shows
     return check
 
 

@@ -2,7 +2,7 @@
 limit and doc, and everything else is derived from it — the scenario keys and their checks
 (gearlab.scenario.keys_of), the --quick shrinking (:func:`shrunk`), the checks of an inline
 table such as ``noise = {kind = "laplace", snr_db = 0}`` (:func:`from_inline`) and the
-reference tables of docs/settings.md (:func:`markdown_table`).
+reference tables of docs/settings.md (gearlab.settings_doc, through the scenario keys).
 
     @dataclass(frozen=True)
     class NoiseSpec:
@@ -157,27 +157,3 @@ def from_inline(cls, table: Mapping, where: str, defaults: Mapping | None = None
             value = str(value)
         values[name] = in_bounds(meta, value, f"{where}: {name}") if meta.check else value
     return cls(**values)
-
-
-def markdown_table(cls, title: str = "") -> str:
-    """The reference table of *cls* for docs/settings.md: key, type, unit, default, bounds, --quick, doc."""
-    rows = [
-        f"### {title}\n" if title else "",
-        "| key | type | unit | default | bounds | --quick | meaning |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for name, (meta, default) in declared(cls).items():
-        types = meta.types if isinstance(meta.types, tuple) else (meta.types,)
-        bounds = (
-            " \\| ".join(meta.choices)
-            if meta.choices
-            else f"[{meta.low if meta.low is not None else ''}, {meta.high if meta.high is not None else ''}]"
-            if meta.low is not None or meta.high is not None
-            else ""
-        )
-        shown_default = "required" if default is dataclasses.MISSING else repr(default)
-        rows.append(
-            f"| `{name}` | {' or '.join(t.__name__ for t in types)} | {meta.unit} | {shown_default} | "
-            f"{bounds} | {'' if meta.quick is None else f'≤ {meta.quick}'} | {meta.doc} |"
-        )
-    return "\n".join(r for r in rows if r) + "\n"

@@ -54,6 +54,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "gearlab.terminal",
             "gearlab.__main__",
             "gearlab.api",
+            "gearlab.notebook",  # the notebook API, reached as gearlab.<name> (resolved on first use)
+            "gearlab.settings_doc",
         ),
     ),
 ]

@@ -1,69 +1,50 @@
 """Settings declared once (gearlab.settings): the scenario keys, the --quick limits and the
-reference tables of docs/settings.md all come from the dataclass fields.
+reference tables of docs/settings.md all come from the declarations.
 
-Run this file as a script to rewrite docs/settings.md after changing a declaration:
-    python tests/test_settings.py
+After changing a declaration, rewrite docs/settings.md with:
+    python -m gearlab.settings_doc
 """
 
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import pytest
 
+from gearlab import settings_doc
 from gearlab.data.spec import NoiseSpec
 from gearlab.errors import GearlabInputError
-from gearlab.gap.diagnose import Settings
 from gearlab.kinds import SCENARIO_KINDS
 from gearlab.learn.networks import NetworkSettings
 from gearlab.learn.noise_study import NoiseProtocol
 from gearlab.learn.protocol import Method, Protocol
 from gearlab.scenario import keys_of, validate_table
-from gearlab.settings import declared, from_inline, markdown_table, shrunk
-
-DOC = Path(__file__).resolve().parent.parent / "docs" / "settings.md"
-
-# (title, dataclass, which scenario tables it declares)
-TABLES = [
-    (
-        "[network]",
-        NetworkSettings,
-        "transfer, detection, gap and noise_study scenarios (gap and noise_study: "
-        'default name = "fast"; noise_study: default dropout = 0.1)',
-    ),
-    (
-        "[protocol] (chapter-5 training)",
-        Protocol,
-        "transfer and detection [protocol], gap [accuracy]: the training "
-        "keys (repetitions: transfer only; gap's [accuracy] defaults to 3)",
-    ),
-    ("[protocol] (chapter-4 noise study)", NoiseProtocol, "noise_study [protocol]"),
-    ("[diagnosis]", Settings, "gap [diagnosis]; the gap benchmark's [search] takes the same fields"),
-    (
-        "noise = {...}",
-        NoiseSpec,
-        "a dataset's inline noise table ([source], [target], [[datasets]]; noise_study "
-        "[dataset]: snr_db and seed only, the kind comes from [study])",
-    ),
-]
-
-
-def reference() -> str:
-    parts = [
-        "# Settings reference\n",
-        "Generated from the settings dataclasses (their field metadata: `gearlab.settings.setting`) by\n"
-        "`python tests/test_settings.py`; `tests/test_settings.py` fails when this page and the\n"
-        "declarations differ. The scenario key checks and the `--quick` limits come from the same\n"
-        "declarations. How a scenario uses each table: docs/scenarios.md.\n",
-    ]
-    for title, cls, where in TABLES:
-        parts.append(f"## {title}\n\n`{cls.__module__}.{cls.__name__}`: {where}.\n\n{markdown_table(cls)}")
-    return "\n".join(parts)
+from gearlab.settings import declared, from_inline, shrunk
 
 
 def test_the_docs_reference_is_generated_from_the_declarations():
-    assert DOC.read_text() == reference(), "docs/settings.md is stale: run python tests/test_settings.py"
+    assert settings_doc.DOC.read_text() == settings_doc.reference(), (
+        "docs/settings.md is stale: run python -m gearlab.settings_doc"
+    )
+    assert settings_doc.main(["--check"]) == 0
+
+
+def test_the_reference_has_every_table_of_every_kind(tmp_path):
+    text = settings_doc.reference()
+    sections = text.split("\n## ")
+    for kind, module in SCENARIO_KINDS.items():
+        section = next(s for s in sections if s.startswith(f'kind = "{kind}"'))
+        for name, table in module.TABLES.items():
+            assert f"### `{'[[' if table.array else '['}{name}{']]' if table.array else ']'}`" in section, (kind, name)
+    # a declared setting brings its bounds and --quick limit; a Key its in_range bounds and unit
+    assert "| `budget` | int | 16 |  | [1, 10000] | ≤ 4 | source simulations per effect fit" in text
+    assert "| `speed` | number or str |  | Hz |  |  | input-shaft speed" in text
+    assert "| `snr_db` | float | required | dB |" in text
+    # a stale page is found, and the generator rewrites it
+    stale = tmp_path / "settings.md"
+    stale.write_text(text.replace("≤ 4", "≤ 5"))
+    assert settings_doc.main([str(stale), "--check"]) == 1
+    assert settings_doc.main([str(stale)]) == 0 and stale.read_text() == text
 
 
 def test_scenario_keys_come_from_the_declaration():
@@ -106,8 +87,3 @@ def test_an_inline_table_is_read_as_declared():
     ):
         from_inline(NoiseSpec, {"kind": "laplace"}, "w")
     assert [f.name for f in dataclasses.fields(NoiseSpec)] == list(declared(NoiseSpec))
-
-
-if __name__ == "__main__":
-    DOC.write_text(reference())
-    print(f"wrote {DOC}")
