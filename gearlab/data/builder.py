@@ -2,8 +2,11 @@
 
 Structure exploited (docs/physics.md, Builder):
 
-* Steady state is periodic in the input-shaft revolution (fixed speed, faults on the
-  pinion only), so one steady revolution per simulation is the whole clean signal.
+* Steady state is periodic in the input-shaft revolution (fixed speed, healthy or a fault
+  on the input pinion), so one steady revolution per simulation is the whole clean signal.
+  A fault on a slower gear repeats once per turn of its shaft (3 input turns for the PHM
+  2009 rig's idler, 5 for its output gear): a sample's J revolutions then follow that
+  period from the revolution in which the damaged tooth meshes (period_samples).
 * Tooth-shift symmetry: the steady response to a fault on tooth n is the tooth-1 response
   shifted by (n - 1)/Z1 of a revolution. The integration rate is rounded up to a whole
   number of steps per tooth pitch, so the shift is an exact whole-sample rotation of the
@@ -37,6 +40,7 @@ from ..executors import LocalExecutor
 from ..physics.faults import place_fault
 from ..registry import get_registry
 from ..signals import Standardiser, add_noise, resample_revolutions, steady_start, tsa
+from .placement import parse_fault_key, shaft_names
 from .spec import POINTS, Dataset, DatasetSpec
 
 if TYPE_CHECKING:
@@ -184,12 +188,38 @@ def simulate_unit(task: tuple) -> np.ndarray:
         excitation, channel = chain.at("excitation"), config.channel
     faults = []
     if task.fault is not None:
-        faults = [place_fault(get_registry(), sim.pair, task.fault, task.tooth, step=task.step)]
+        name, stage, gear = parse_fault_key(task.fault, shaft_names(task.preset, sim.stages), f"model '{task.model}'")
+        pair = sim.pair if stage == 1 else sim.meshes[stage - 2].pair
+        faults = [place_fault(get_registry(), pair, name, task.tooth, step=task.step, gear=gear, stage=stage)]
     periodic, angle = steady_response(sim, faults, task.speed, task.load, channel, excitation)
     if angle is not None and tuple(task.teeth) != (task.tooth,):
         raise RuntimeError("an excitation effect moved the shaft angle but does not declare breaks_symmetry")
+    period = sim.period(faults)
+    if period > 1:
+        return np.stack([period_samples(sim, faults[0], periodic, period, n, task.tooth, angle) for n in task.teeth])
     per_tooth = len(periodic) // sim.pair.Z1  # whole by construction of fs
     return np.stack([angle_samples(np.roll(periodic, (n - task.tooth) * per_tooth), angle=angle) for n in task.teeth])
+
+
+def period_samples(sim: Simulator, fault, periodic: np.ndarray, period: int, n: int, tooth: int, angle=None):
+    """The *period* steady input revolutions of a fault on a slower gear as one row of period x POINTS
+    angles, starting with the revolution in which its tooth *n* comes into mesh (a sample's first
+    revolution shows the damage; its J revolutions follow the gears' turns). *periodic* holds the
+    fault on *tooth*: on a one-stage train tooth n's response is it turned by n - tooth pitches
+    (the tooth-shift symmetry; else n is *tooth*). Tooth n of a gear meshing at input order q
+    comes into mesh (n - 1)/q input turns after tooth 1, which mesh at the period's start."""
+    per_rev = len(periodic) // period
+    pair = sim.pair if fault.stage == 1 else sim.meshes[fault.stage - 2].pair
+    order = Fraction(sim.gear_turns(fault.stage, fault.gear) * (pair.Z1 if fault.gear == "pinion" else pair.Z2))
+    first = math.floor((n - 1) / order.limit_denominator(10_000))  # the input revolution tooth n meshes in
+    x = np.roll(periodic, (n - tooth) * (per_rev // sim.pair.Z1) - first * per_rev)
+    if angle is None:
+        theta = 2 * np.pi * np.arange(len(x) + 1) / per_rev
+    else:  # the moved angle over the period, from tooth n's revolution on (n is tooth here)
+        turned = np.concatenate([angle[first * per_rev :], angle[: first * per_rev] + 2 * np.pi * period])
+        theta = np.append(turned - turned[0], 2 * np.pi * period)
+    theta[-1] = 2 * np.pi * period  # exactly the period's turns
+    return resample_revolutions(np.append(x, x[0]), theta, POINTS).reshape(-1)
 
 
 # The simulations this process made, newest last: a run that builds a source, its corrected
@@ -230,11 +260,12 @@ def noisy_rows(task: tuple) -> np.ndarray:
     chain = EffectChain(signal)
     out = np.empty((len(task.clean), POINTS), dtype=np.float32)
     for i, (row, seed) in enumerate(zip(task.clean, task.seeds)):
-        if task.noise_kind is None and not chain:
-            kept = row
+        revs = row.reshape(-1, POINTS)  # one revolution, or a slower gear's period of them (period_samples)
+        if task.noise_kind is None and not chain:  # clean: the TSA of J revolutions differs only over a period
+            kept = revs[0] if len(revs) == 1 or not task.use_tsa else tsa(revs[np.arange(task.revolutions) % len(revs)])
         else:
             j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
-            record = np.broadcast_to(row, (j, POINTS))
+            record = np.broadcast_to(revs[0], (j, POINTS)) if len(revs) == 1 else revs[np.arange(j) % len(revs)]
             if chain:  # J consecutive revolutions of one record, sampled at POINTS x speed
                 record = chain.apply_signal(
                     record, POINTS * task.speed_hz, task.speed_hz, task.reference_rms, [*seed, EFFECT_STREAM]
@@ -279,10 +310,15 @@ def build_dataset(
     #    breaks the tooth-shift symmetry
     chain = spec.effect_chain() if spec.effects else EffectChain()
     cases = [(None, None)] + [(name, step) for name, steps in spec.faults for step in steps]
+    classes = spec.fault_classes() if spec.faults else {}  # each class's gear and teeth
+
+    def teeth_of(case):
+        return teeth if case[0] is None else classes[case[0]].teeth
+
     if not chain.breaks_symmetry and not getattr(model, "breaks_symmetry", False):
-        units = [(case, 1, teeth) for case in cases]
+        units = [(case, 1, teeth_of(case)) for case in cases]
     else:
-        units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth]
+        units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth_of(case)]
     # a simulation sees the model- and excitation-level effects only (the signal-level ones act on
     # its rows, below), so datasets that differ in those alone share it (_SIMULATED)
     mechanical = tuple(e for e in spec.effects if registry.get("effect", e[0]).level != "signal")
@@ -321,10 +357,12 @@ def build_dataset(
     for _ in range(spec.healthy):
         label.append(0), intensity.append(0), tooth.append(0), rfa.append(0.0), source.append(((None, None), 0))
     for c, (name, steps) in enumerate(spec.faults, start=1):
-        fault = registry.get("fault", name)
+        on = classes[name]
+        fault = registry.get("fault", on.name)
+        view = on.pair.seen_from(on.gear)  # the plugin's ladder and area on the faulted gear
         for step in steps:
-            area = fault.rfa(fault.at_step(pair, step), pair)
-            for t_index, n in enumerate(teeth):
+            area = fault.rfa(fault.at_step(view, step), view)
+            for t_index, n in enumerate(on.teeth):
                 for _ in range(spec.duplicates):
                     label.append(c), intensity.append(step), tooth.append(n), rfa.append(area)
                     source.append(((name, step), t_index))
@@ -342,7 +380,8 @@ def build_dataset(
     chunks = []
     for lo in range(0, n, CHUNK):
         idx = range(lo, min(n, lo + CHUNK))
-        clean = np.stack([base[source[i][0]][source[i][1]] for i in idx])
+        rows = [base[source[i][0]][source[i][1]] for i in idx]
+        clean = np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
         seeds = [[spec.seed, noise_seed, i] for i in idx]
         chunks.append(
             RowsTask(
@@ -373,7 +412,7 @@ def build_dataset(
         label=np.asarray(label, dtype=np.int8),
         fault=(np.asarray(label) > 0).astype(np.int8),
         intensity=np.asarray(intensity, dtype=np.int8),
-        tooth=np.asarray(tooth, dtype=np.int8),
+        tooth=np.asarray(tooth, dtype=np.int8 if max(tooth, default=0) < 128 else np.int16),
         rfa=np.asarray(rfa, dtype=np.float32),
         revolution=np.full(n, -1 if spec.tsa else 0, dtype=np.int16),
         domain=np.zeros(n, dtype=np.int8),

@@ -17,12 +17,17 @@ output) are understood on every model. A bad value is one line naming the key.
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 from ..errors import GearlabInputError, shown
+from ..gearbox import builtin_gearboxes, resolve_gearbox
 from ..gearbox.description import SHAFT_NAMES
+from ..gearbox.simulation import is_reference, referenced
 from ..params import did_you_mean
-from ..physics.stiffness import GEARS
+from ..physics.stiffness import GEARS, gear_label
+from ..registry import get_registry
 
 WHEEL_WORDS = ("gear", "wheel")  # "output gear" and "output wheel" name the same gear
 
@@ -31,9 +36,6 @@ WHEEL_WORDS = ("gear", "wheel")  # "output gear" and "output wheel" name the sam
 def shaft_names(preset: str, stages: int) -> tuple[str, ...]:
     """The shafts of a model preset, input first: its gearbox description's names when the preset
     is one (a built-in description or a gearbox reference), else the default names."""
-    from ..gearbox import builtin_gearboxes, resolve_gearbox
-    from ..gearbox.simulation import is_reference, referenced
-
     box = None
     if is_reference(preset):
         box = referenced(preset)
@@ -42,6 +44,11 @@ def shaft_names(preset: str, stages: int) -> tuple[str, ...]:
     if box is not None and len(box.shafts) == stages + 1:
         return tuple(box.shafts)
     return SHAFT_NAMES[stages] if stages in SHAFT_NAMES else tuple(f"shaft {i + 1}" for i in range(stages + 1))
+
+
+def model_shafts(model: str, preset: str, where: str = "") -> tuple[str, ...]:
+    """shaft_names of a registered model's preset."""
+    return shaft_names(preset, get_registry().get("model", model, where).stages)
 
 
 def gear_words(shafts: tuple[str, ...]) -> dict[str, tuple[int, str]]:
@@ -99,3 +106,97 @@ def train_pairs(model, preset: str, where: str = "") -> tuple:
     """The gear pairs of a model preset, stage 1 first (a multi-stage model's further meshes)."""
     pair, values = model.resolve(preset, where=where)
     return (pair, *(m.pair for m in model.assemble(pair, values).meshes))
+
+
+# --- a dataset's fault classes -------------------------------------------------------------------
+#
+# A dataset's `faults` maps a class key to ladder steps: the fault plugin's name for the input
+# pinion (stage 1, as always), "NAME@GEAR" for another gear, GEAR its gear_label ("wheel",
+# "s2-pinion", "s2-wheel", ...), which the class name then says.
+
+
+def fault_key(name: str, stage: int, gear: str) -> str:
+    """The class key of fault *name* on (stage, gear): "chip", "chip@wheel", "chip@s2-wheel"."""
+    return name if (stage, gear) == (1, "pinion") else f"{name}@{gear_label(stage, gear)}"
+
+
+def parse_fault_key(key: str, shafts: tuple[str, ...], where: str) -> tuple[str, int, str]:
+    """(plugin name, stage, gear) of a class key (fault_key, or "NAME@WORDS": "chip@output gear")."""
+    name, at, where_on = key.partition("@")
+    if not at:
+        return key, 1, "pinion"
+    stage, gear = None, where_on.strip()
+    labelled = re.fullmatch(r"s(\d+)-(pinion|wheel)", gear)
+    if labelled:
+        stage, gear = int(labelled.group(1)), labelled.group(2)
+    stage, gear = resolve_gear(gear, stage, shafts, f"{where}, fault '{key}'")
+    return name.strip(), stage, gear
+
+
+def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[str, tuple[int, ...]], ...]:
+    """A scenario's `faults`, ``{chip = [18, 20], "chip@output gear" = [20]}`` or a list of tables
+    ``[{name = "chip", gear = "wheel", stage = 2, steps = [20]}]``, as (class key, ladder steps)
+    pairs with canonical keys (fault_key)."""
+    where = f"{where} key 'faults'"
+    if isinstance(raw, Mapping):
+        items = [(key, steps, f"{where}: '{key}' must map to a list of ladder steps") for key, steps in raw.items()]
+    elif isinstance(raw, list):
+        items = []
+        for i, entry in enumerate(raw, start=1):
+            here = f"{where} #{i}"
+            if not isinstance(entry, Mapping) or not isinstance(entry.get("name"), str):
+                raise GearlabInputError(
+                    f'{here}: expected a table {{name = "chip", gear = "output gear", steps = [20]}}, '
+                    f"got {shown(entry)}"
+                )
+            unknown = [k for k in entry if k not in ("name", "gear", "stage", "steps")]
+            if unknown:
+                raise GearlabInputError(f"{here}: unknown key {shown(unknown[0])}; known: name, gear, stage, steps")
+            stage, gear = gear_of(entry, shafts, here)
+            if "steps" not in entry:
+                raise GearlabInputError(f"{here}: missing 'steps' (ladder steps 1..20, e.g. steps = [18, 20])")
+            what = f"{here} key 'steps': expected a list of ladder steps"
+            items.append((fault_key(entry["name"], stage, gear), entry["steps"], what))
+    else:
+        raise GearlabInputError(f"{where}: expected {{fault = [steps]}} or a list of tables, got {shown(raw)}")
+    out: dict[str, tuple[int, ...]] = {}
+    for key, steps, what in items:
+        if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
+            raise GearlabInputError(f"{what}, got {shown(steps)}")
+        name, stage, gear = parse_fault_key(key, shafts, where)
+        canonical = fault_key(name, stage, gear)
+        if canonical in out:
+            raise GearlabInputError(f"{where}: fault '{canonical}' is listed twice")
+        out[canonical] = tuple(steps)
+    return tuple(out.items())
+
+
+@dataclass(frozen=True)
+class FaultClass:
+    """A dataset's fault class: its plugin on one gear of the train, and the teeth it is put on."""
+
+    key: str
+    name: str  # the fault plugin
+    stage: int
+    gear: str  # "pinion" | "wheel"
+    teeth: tuple[int, ...]
+    pair: object  # the stage's GearPair (pinion = its gear 1)
+
+
+def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, FaultClass]:
+    """Each class key of a dataset's *faults* resolved on *model*/*preset*: its gear, and its teeth:
+    *teeth* (each checked against that gear) or, when None, every tooth of that gear."""
+    pairs = train_pairs(model, preset, where)
+    shafts = shaft_names(preset, len(pairs))
+    out = {}
+    for key, _ in faults:
+        name, stage, gear = parse_fault_key(key, shafts, where)
+        pair = pairs[stage - 1]
+        Z = pair.Z1 if gear == "pinion" else pair.Z2
+        chosen = tuple(range(1, Z + 1)) if teeth is None else tuple(teeth)
+        for n in chosen:
+            if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= Z:
+                on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{key}')"
+                raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{Z}{on}")
+        out[key] = FaultClass(key, name, stage, gear, chosen, pair)
+    return out

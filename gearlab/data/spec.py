@@ -21,6 +21,7 @@ from ..physics.faults import LADDER_STEPS
 from ..registry import get_registry
 from ..settings import MAX_SEED, setting
 from ..signals import NOISE_KINDS
+from .placement import fault_classes
 
 POINTS = 4096  # samples per revolution (thesis 2.4)
 FAULTS = ("crack", "chip", "spall", "pit")
@@ -44,8 +45,10 @@ class DatasetSpec:
     channel: str
     speed_hz: float | None = None  # None: the preset's operating point
     load_nm: float | None = None
-    faults: tuple[tuple[str, tuple[int, ...]], ...] = ()  # (fault plugin, ladder steps)
-    teeth: tuple[int, ...] | None = None  # None: every pinion tooth
+    # (class key, ladder steps): the fault plugin's name on the input pinion, "NAME@GEAR" on another gear
+    # (gearlab.data.placement.fault_key: chip@wheel, chip@s2-wheel), which the class name then says
+    faults: tuple[tuple[str, tuple[int, ...]], ...] = ()
+    teeth: tuple[int, ...] | None = None  # None: every tooth of the faulted gear
     duplicates: int = 1
     healthy: int = 0
     revolutions: int = 1  # J noisy revolutions per sample: TSA averages them, else the first is kept
@@ -117,12 +120,21 @@ class DatasetSpec:
         if self.effects:
             self.model_config(where)  # effect names, parameters and what they do to the model
         teeth = tuple(range(1, pair.Z1 + 1)) if self.teeth is None else self.teeth
-        for n in teeth:
-            if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= pair.Z1:
-                raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{pair.Z1}")
-        for name, _ in self.faults:
-            registry.get("fault", name, where)
+        classes = fault_classes(model, self.preset, self.faults, self.teeth, where)  # gears and their teeth
+        if not classes or any((c.stage, c.gear) == (1, "pinion") for c in classes.values()):
+            for n in teeth:
+                if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= pair.Z1:
+                    raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{pair.Z1}")
+        for c in classes.values():
+            registry.get("fault", c.name, where)
         return model, pair, teeth
+
+    def fault_classes(self, where: str = ""):
+        """Each fault class resolved on the model: its plugin, gear (stage, pinion or wheel) and teeth
+        (gearlab.data.placement.FaultClass), by class key."""
+        where = where or f"dataset '{self.name}'"
+        model = get_registry().get("model", self.model, where)
+        return fault_classes(model, self.preset, self.faults, self.teeth, where)
 
     def effect_chain(self, where: str = ""):
         """The dataset's effects, loaded and ordered by level (gearlab.effects.EffectChain)."""

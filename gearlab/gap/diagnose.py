@@ -212,6 +212,37 @@ def diagnose(
     return conclusion(run, result, before, accepted, fitted, started)
 
 
+def diagnose_dataset(
+    source: DatasetSpec,
+    target,
+    settings: Settings,
+    executor=None,
+    on_event: Callable[[Event], None] = lambda e: None,
+) -> dict:
+    """:func:`diagnose` against a target Dataset, simulated or imported (gearlab.data): its healthy
+    revolutions (label 0; every revolution of an unlabelled record) in physical units and, for a
+    measured record, its acquisition chain, the source compared up to the order the record holds.
+    The gap kind reads a labelled target's history rows alone (no test row); here every healthy row
+    of *target* goes in, so hold out what is to be scored later."""
+    from dataclasses import replace
+
+    from ..data.chain import chain_of
+    from .views import healthy_rows
+
+    meta = getattr(target, "meta", None) or {}
+    labels = np.asarray(target.label)
+    if len(labels) and np.all(labels == -1):  # an unlabelled record: taken as healthy throughout
+        mean, std = target.reference
+        rows = np.asarray(target.X, dtype=np.float64) * std + mean
+    else:
+        rows = healthy_rows(target)
+    chain = None
+    if meta.get("source") == "measured":
+        chain = chain_of(meta)
+        settings = replace(settings, max_order=chain.max_order)
+    return diagnose(source, rows, settings, executor, on_event, chain)
+
+
 def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
     """Stage 3b: every accepted effect profiled next to the others as finally fitted (in parallel,
     gearlab.gap.identify): honest intervals and "determined" marks, what the data determine where a

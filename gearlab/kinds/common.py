@@ -9,6 +9,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from ..data.importers import MeasuredSpec
+from ..data.placement import canonical_faults, model_shafts
 from ..data.recordings import channel_key, check_measured_file, check_recording
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import parse_sensitivity
@@ -64,8 +65,13 @@ DATASET_TABLE = Table(
         "channel": Key(str, "", doc="measurement channel, e.g. pinion_x, casing_x"),
         "speed": Key((int, float, str), None, doc="input-shaft speed, e.g. '25.2 Hz'", unit="Hz"),
         "load": Key((int, float, str), None, doc="load torque, e.g. '7 N*m'", unit="N*m"),
-        "faults": Key(dict, None, doc="{fault = [steps]} replacing the preset's ladders"),
-        "teeth": Key(list, None, doc="pinion teeth carrying faults (default: all)"),
+        "faults": Key(
+            (dict, list),
+            None,
+            doc="{fault = [steps]} replacing the preset's ladders (input pinion), or a list of "
+            "{name, gear, stage, steps}, gear 'pinion', 'wheel' or words ('output gear')",
+        ),
+        "teeth": Key(list, None, doc="teeth carrying faults (default: all of the faulted gear)"),
         "duplicates": Key(int, None, in_range(1), "samples per fault, ladder step and tooth"),
         "healthy": Key(int, None, in_range(0), "healthy samples"),
         "revolutions": Key(int, None, in_range(1), "J noisy revolutions per sample (TSA averages them)"),
@@ -125,15 +131,9 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     for key in ("speed", "load", "fs"):
         if entry[key] is not None:
             changes[{"speed": "speed_hz", "load": "load_nm", "fs": "fs"}[key]] = quantity(entry, key, where)
-    if entry["faults"] is not None:
-        faults = []
-        for name, steps in entry["faults"].items():
-            if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
-                raise GearlabInputError(
-                    f"{where} key 'faults': '{name}' must map to a list of ladder steps, got {shown(steps)}"
-                )
-            faults.append((name, tuple(steps)))
-        changes["faults"] = tuple(faults)
+    if entry["faults"] is not None:  # {fault = [steps]} or [{name, gear, stage, steps}]: data.placement
+        shafts = model_shafts(changes.get("model", spec.model), changes.get("preset", spec.preset), where)
+        changes["faults"] = canonical_faults(entry["faults"], shafts, where)
     if entry["teeth"] is not None:
         if not all(isinstance(t, int) and not isinstance(t, bool) for t in entry["teeth"]):
             raise GearlabInputError(
@@ -308,8 +308,10 @@ def class_sizes(spec: DatasetSpec | MeasuredSpec, where: str = "") -> dict[str, 
     out), so that protocols are checked before anything is built; None for measured data."""
     if not isinstance(spec, DatasetSpec):
         return None
-    _, _, teeth = spec.check_model(where)
-    return {"healthy": spec.healthy, **{name: len(steps) * len(teeth) * spec.duplicates for name, steps in spec.faults}}
+    spec.check_model(where)
+    teeth = {key: len(c.teeth) for key, c in spec.fault_classes(where).items()}  # each on its gear's teeth
+    sizes = {name: len(steps) * teeth[name] * spec.duplicates for name, steps in spec.faults}
+    return {"healthy": spec.healthy, **sizes}
 
 
 def sized(spec: DatasetSpec | MeasuredSpec) -> str:

@@ -1,0 +1,455 @@
+"""The Python API for notebooks and scripts (docs/api.md): each function is one step a user takes,
+named as the docs name it, and reachable as ``gearlab.<name>`` (resolved on first use, so
+``import gearlab`` stays instant). Keys are those of a scenario file (docs/settings.md): what a
+notebook says, a scenario can say too, and is checked with the same one-line errors.
+
+    import gearlab
+    data = gearlab.simulate("B-6-ch5", teeth=[1, 2], faults={"crack": [13]}, healthy=8)
+
+Every function here is a thin layer over the library that the scenario kinds and the CLI use:
+no second implementation of a step lives here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .errors import GearlabInputError
+
+if TYPE_CHECKING:  # the annotations only: the modules load on first use (start-up time)
+    import numpy as np
+
+    from .data.recordings import Recording
+    from .data.spec import Dataset, DatasetSpec
+    from .gearbox import Gearbox
+    from .runs import RunDir
+    from .scenario import Scenario
+
+__all__ = [
+    "corrected_source",
+    "detector_scores",
+    "diagnose_gap",
+    "fit_detector",
+    "gearbox_orders",
+    "import_recording",
+    "inspect_recording",
+    "load_gearbox",
+    "load_scenario",
+    "open_run",
+    "read_recording",
+    "run_scenario",
+    "run_verdict",
+    "score_detector",
+    "simulate",
+]
+
+
+# --- gearbox descriptions ----------------------------------------------------------------------
+
+
+def load_gearbox(description: str | Path) -> Gearbox:
+    """A gearbox description (docs/gearbox.md): a .toml file, or a built-in one's name (luo2019,
+    meng2020, phm09), checked with ISO 21771 geometry.
+
+    >>> box = gearlab.load_gearbox("phm09")
+    >>> box.shafts, [(s.pinion.z, s.wheel.z) for s in box.stages]
+    (('input', 'idler', 'output'), [(32, 96), (48, 80)])
+    """
+    from .gearbox import resolve_gearbox
+
+    return resolve_gearbox(description)
+
+
+def gearbox_orders(gearbox: Gearbox | str | Path, speed: float | str | None = None) -> dict:
+    """The order table of a description: each shaft's order, each stage's mesh order and hunting
+    tooth; in Hz too at *speed* (the input shaft's, e.g. ``"30 Hz"`` or ``"1800 rpm"``).
+
+    >>> orders = gearlab.gearbox_orders("phm09", speed="30 Hz")
+    >>> [(s["stage"], s["mesh_order"], s["mesh_hz"]) for s in orders["stages"]]
+    [(1, 32.0, 960.0), (2, 16.0, 480.0)]
+    """
+    from .gearbox import order_table, speed_hz
+
+    box = gearbox if hasattr(gearbox, "stages") else load_gearbox(gearbox)
+    return order_table(box).describe(None if speed is None else speed_hz(speed, "speed"))
+
+
+# --- datasets: simulated and imported ------------------------------------------------------------
+
+
+def _dataset(where: str, entry: Mapping[str, Any]) -> Dataset:
+    """A [[datasets]] entry checked as a scenario's is (kinds.common), built or read from the cache."""
+    from .data.cache import load_or_build
+    from .kinds.common import DATASET_TABLE, dataset_spec
+    from .scenario import location, validate_table
+
+    values = validate_table(where, "datasets", DATASET_TABLE, dict(entry))
+    spec = dataset_spec(values, location(where, "datasets"), Path.cwd())
+    return load_or_build(spec)[0]
+
+
+def simulate(preset: str | DatasetSpec, **keys) -> Dataset:
+    """A simulated dataset: a preset (``B-6-ch5``, ``A-pinion``, ...; docs/scenarios.md) with the keys
+    of a scenario's ``[[datasets]]`` entry (docs/settings.md: ``teeth``, ``faults``, ``healthy``,
+    ``noise``, ``speed``, ``effects``, ...), or a DatasetSpec as it is. Built once, then read from the
+    dataset cache (``GEARLAB_CACHE``). ``X`` holds one standardised revolution (4096 points) a row,
+    ``label`` its class (0 healthy), ``fault`` 0/1.
+
+    >>> data = gearlab.simulate("B-6-ch5", teeth=[1, 2], faults={"crack": [13]}, healthy=8)
+    >>> data.X.shape, data.spec.class_names, int(data.fault.sum())
+    ((10, 4096), ('healthy', 'crack'), 2)
+    """
+    from .data.spec import DatasetSpec
+
+    if isinstance(preset, DatasetSpec):
+        if keys:
+            raise GearlabInputError(
+                f"gearlab.simulate: a DatasetSpec is simulated as it is; got keys {', '.join(keys)} "
+                "(use spec.with_(...), or give a preset name with the keys)"
+            )
+        from .data.cache import load_or_build
+
+        return load_or_build(preset)[0]
+    return _dataset("gearlab.simulate", {"preset": preset, **keys})
+
+
+def _si(value, unit: str, where: str) -> float | None:
+    from .units import to_si
+
+    return None if value is None else to_si(value, unit, where)
+
+
+def read_recording(
+    path: str | Path,
+    vibration: str | int,
+    tacho: str | int | None = None,
+    *,
+    fs: float | str | None = None,
+    sensitivity: float | str | None = None,
+    gain: float | str | None = None,
+) -> Recording:
+    """One measured file as it is (docs/recordings.md: .csv, .txt, .zip, .npz, .h5, .wav, .mat): the
+    vibration in m/s² (through *sensitivity*, e.g. ``"100 mV/g"``, and *gain*, volts per file unit),
+    the tacho as stored and the sampling rate (the file's, or *fs*, e.g. ``"20 kHz"``).
+
+    >>> import numpy as np
+    >>> t = np.arange(20_000) / 20e3                           # 1 s at 20 kHz; the shaft at 25 Hz
+    >>> acc = 0.1 * np.cos(2 * np.pi * 16 * 25 * t)            # a 16-tooth mesh, in volts
+    >>> np.savez("rig.npz", acc=acc, tacho=(25 * t % 1 < 0.1).astype(float), fs=20e3)
+    >>> rec = gearlab.read_recording("rig.npz", "acc", "tacho", sensitivity="100 mV/g")
+    >>> rec.fs, rec.signal.size, round(float(rec.signal.max()), 3)   # 0.1 V at 100 mV/g: 1 g
+    (20000.0, 20000, 9.807)
+    """
+    from .data.recordings import read_recording as read
+    from .data.textzip import parse_sensitivity
+
+    return read(
+        path,
+        vibration,
+        tacho,
+        fs=_si(fs, "Hz", "fs"),
+        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "sensitivity"),
+        gain=_si(gain, "V", "gain"),
+    )
+
+
+def import_recording(path: str | Path, vibration: str | int, **keys) -> Dataset:
+    """A measured file as a dataset of revolutions, as a scenario's ``[[datasets]]`` entry with
+    ``file`` imports it (docs/real_data.md): cut at the tacho (``tacho``, ``pulses_per_rev``) or a
+    ``speed``, resampled to 4096 points a revolution, standardised against its healthy class.
+    Keys: those of ``[[datasets]]`` (docs/settings.md: ``tacho``, ``labels``, ``sensitivity``, ``fs``,
+    ``transient``, ...). Without ``labels`` every revolution is unlabelled (label -1).
+
+    >>> import numpy as np
+    >>> t = np.arange(40_000) / 20e3                           # 2 s at 20 kHz; the shaft at 25 Hz
+    >>> acc = np.sin(2 * np.pi * 16 * 25 * t) + 0.1 * np.random.default_rng(0).standard_normal(t.size)
+    >>> np.savez("rig.npz", acc=acc, tacho=(25 * t % 1 < 0.1).astype(float), fs=20e3)
+    >>> data = gearlab.import_recording("rig.npz", "acc", tacho="tacho", transient="none")
+    >>> data.X.shape, set(data.label.tolist()), round(data.meta["speed_hz"], 6)
+    ((48, 4096), {-1}, 25.0)
+    """
+    return _dataset("gearlab.import_recording", {"file": str(path), "vibration": vibration, **keys})
+
+
+def inspect_recording(
+    path: str | Path,
+    gearbox: Gearbox | str | Path | None = None,
+    *,
+    vibration: str | None = None,
+    tacho: str | None = None,
+    tacho_kind: str = "auto",
+    pulses_per_rev: int | None = None,
+    tacho_shaft: str | None = None,
+    speed: float | str | None = None,
+    fs: float | str | None = None,
+    sensitivity: float | str | None = None,
+    gain: float | str | None = None,
+) -> dict:
+    """What ``gearlab inspect`` shows of a recording, as a dict: rate, duration, channels, the speed
+    (from the tacho, a declared *speed* or the mesh lines of *gearbox*), the order spectrum's lines
+    and the TSA of each shaft; with a *gearbox*, whether the description matches (``matches``,
+    ``verdict``). The arrays (``spectrum``, each ``tsa``) are kept.
+
+    >>> import numpy as np
+    >>> t = np.arange(40_000) / 20e3
+    >>> acc = np.sin(2 * np.pi * 16 * 25 * t) * (1 + 0.2 * np.sin(2 * np.pi * 25 * t))
+    >>> np.savez("rig.npz", acc=acc, tacho=(25 * t % 1 < 0.1).astype(float), fs=20e3)
+    >>> report = gearlab.inspect_recording("rig.npz", "luo2019", vibration="acc", tacho="tacho")
+    >>> report["revolutions"], round(report["lines"][0]["order"], 2), report["matches"]
+    (48, 16.0, True)
+    """
+    from .data.textzip import parse_sensitivity
+    from .gearbox import speed_hz
+    from .inspect import InspectOptions, inspect_record
+
+    box = None if gearbox is None else gearbox if hasattr(gearbox, "stages") else load_gearbox(gearbox)
+    options = InspectOptions(
+        vibration=vibration,
+        tacho=tacho,
+        tacho_kind=tacho_kind,
+        pulses_per_rev=pulses_per_rev,
+        tacho_shaft=tacho_shaft,
+        speed_hz=None if speed is None else speed_hz(speed, "speed"),
+        fs=_si(fs, "Hz", "fs"),
+        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "sensitivity"),
+        gain=_si(gain, "V", "gain"),
+    )
+    return inspect_record(str(path), box, options)
+
+
+# --- the gap between a simulator and a target ------------------------------------------------------
+
+
+def _source_spec(source) -> DatasetSpec:
+    from .data.spec import DatasetSpec, dataset_preset
+
+    spec = getattr(source, "spec", source)
+    if isinstance(spec, str):
+        spec = dataset_preset(spec, "gearlab.diagnose_gap: source")
+    if not isinstance(spec, DatasetSpec):
+        raise GearlabInputError(
+            f"gearlab.diagnose_gap: the source must be a simulation (a preset name, a DatasetSpec or a "
+            f"simulated dataset), got {type(source).__name__}"
+        )
+    return spec
+
+
+def diagnose_gap(source: str | DatasetSpec | Dataset, target: Dataset, **settings) -> dict:
+    """Which unmodelled effects make the *source* simulator into the *target* (docs/gap.md): the gap
+    before, the effects fitted and accepted, the gap after and a ``verdict``. *source*: a preset
+    name, a DatasetSpec or a simulated dataset (its spec: the simulator configuration; its faults
+    play no part); *target*: a dataset, simulated or imported, whose healthy revolutions (all of an
+    unlabelled record) are the only thing of it the diagnosis sees. *settings*: the ``[diagnosis]``
+    keys (docs/settings.md: ``candidates``, ``budget``, ``max_effects``, ``healthy``, ...).
+
+    >>> target = gearlab.simulate("B-6-ch5", teeth=[1], faults={"crack": [13]}, healthy=30,
+    ...                           noise={"kind": "laplace", "snr_db": 10, "seed": 1})
+    >>> result = gearlab.diagnose_gap("B-6-ch5", target, candidates=["sensor_noise"], budget=4,
+    ...                               max_effects=1, healthy=20, bootstrap=20, permutations=50)
+    >>> result["verdict"], [(e["name"], e["params"]["kind"]) for e in result["effects"]]
+    ('explained', [('sensor_noise', 'laplace')])
+    """
+    from .gap.diagnose import Settings, diagnose_dataset
+    from .params import did_you_mean
+    from .settings import declared
+
+    known = list(declared(Settings))
+    for name in settings:
+        if name not in known:
+            raise GearlabInputError(
+                f"gearlab.diagnose_gap: unknown setting '{name}'{did_you_mean(name, known)}; known: {', '.join(known)}"
+            )
+    if isinstance(settings.get("candidates"), list):
+        settings["candidates"] = tuple(settings["candidates"])
+    return diagnose_dataset(_source_spec(source), target, Settings(**settings))
+
+
+def corrected_source(source: str | DatasetSpec | Dataset, result: dict) -> DatasetSpec:
+    """The *source* with the effects a diagnosis fitted (``diagnose_gap``'s result) added: the
+    corrected simulator, to simulate (``gearlab.simulate(spec)``) or to train on.
+
+    >>> spec = gearlab.corrected_source("B-6-ch5", {"corrected_effects": [["sensor_noise",
+    ...                                 [["kind", "laplace"], ["snr_db", 10.0]]]]})
+    >>> [name for name, _ in spec.effects]
+    ['sensor_noise']
+    """
+    from .gap.diagnose import corrected_source as corrected
+
+    return corrected(_source_spec(source), result)
+
+
+# --- detectors ---------------------------------------------------------------------------------------
+
+
+def _rows(data, where: str):
+    import numpy as np
+
+    X = np.asarray(getattr(data, "X", data), dtype=np.float32)
+    if X.ndim != 2:
+        raise GearlabInputError(f"{where}: expected revolutions (n, points) or a dataset, got shape {X.shape}")
+    return X
+
+
+def fit_detector(
+    method: str,
+    source: Dataset,
+    target: Dataset | np.ndarray,
+    target_labels: Sequence[int] | np.ndarray | None = None,
+    **params,
+):
+    """A detector that trains no network (docs/learning.md: ``likelihood_ratio``, ``matched_filter``,
+    or a plugin's), built from the simulated *source* (its revolutions and fault labels) and the
+    target's training revolutions: a dataset or an array, all taken as the healthy history unless
+    *target_labels* (0 healthy, 1 fault) say otherwise. *params*: the method's parameters
+    (``false_alarm``, ``path``, ...; ``gearlab plugins`` lists them). Revolutions are given
+    standardised, as datasets hold them.
+
+    >>> source = gearlab.simulate("B-6-ch5", teeth=[1, 2, 3], faults={"crack": [13]}, healthy=9)
+    >>> target = gearlab.simulate("B-8-ch5", teeth=[1, 2, 3], faults={"crack": [13]}, healthy=40,
+    ...                           noise={"kind": "laplace", "snr_db": 0, "seed": 1})
+    >>> history = target.X[target.fault == 0][:30]                # healthy revolutions, no labels used
+    >>> detector = gearlab.fit_detector("likelihood_ratio", source, history, false_alarm=0.05)
+    >>> type(detector).__name__
+    'LikelihoodDetector'
+    """
+    import numpy as np
+
+    from .registry import get_registry
+
+    where = f"gearlab.fit_detector('{method}')"
+    adapter = get_registry().get("adapter", method, where)
+    if adapter.train_on != "detector":
+        raise GearlabInputError(
+            f"{where}: '{method}' trains a network (train_on = {adapter.train_on!r}); expected a detector "
+            "(a method with train_on = 'detector', such as likelihood_ratio or matched_filter): run a scenario "
+            "to train a network"
+        )
+    if not hasattr(source, "fault"):
+        raise GearlabInputError(f"{where}: the source must be a labelled dataset (gearlab.simulate)")
+    Xs, ys = _rows(source, f"{where}: source"), np.asarray(source.fault)
+    Xt = _rows(target, f"{where}: target")
+    yt = None if target_labels is None else np.asarray(target_labels)
+    if yt is not None and yt.shape != (len(Xt),):
+        raise GearlabInputError(f"{where}: {len(yt)} target labels for {len(Xt)} target revolutions")
+    return adapter.detector((Xs, ys), (Xt, yt), adapter.resolve(params, where))
+
+
+def detector_scores(detector, revolutions: Dataset | np.ndarray) -> np.ndarray:
+    """Each revolution's score less the detector's threshold: above 0, a fault is called.
+
+    >>> source = gearlab.simulate("B-6-ch5", teeth=[1, 2, 3], faults={"crack": [13]}, healthy=9)
+    >>> detector = gearlab.fit_detector("matched_filter", source, source.X[source.fault == 0])
+    >>> scores = gearlab.detector_scores(detector, source.X)
+    >>> bool((scores[source.fault == 1] > 0).all())               # the source's own faults
+    True
+    """
+    import numpy as np
+    import torch
+
+    X = _rows(revolutions, "gearlab.detector_scores")
+    with torch.no_grad():
+        logits = detector(torch.as_tensor(X)).numpy()
+    # a detector's logits are [0, score - threshold] (gearlab.learn.adapters: scored as a network's)
+    return np.asarray(logits[:, 1] - logits[:, 0], dtype=np.float64)
+
+
+def score_detector(
+    detector, revolutions: Dataset | np.ndarray, fault: Sequence[int] | np.ndarray | None = None
+) -> dict:
+    """How a detector does on labelled revolutions (*fault*: 0 healthy, 1 fault; a dataset's own by
+    default): ``auc`` (ROC area of its scores), ``detected`` (share of faults called) and
+    ``false_alarms`` (share of healthy revolutions called), with the counts.
+
+    >>> source = gearlab.simulate("B-6-ch5", teeth=[1, 2, 3], faults={"crack": [13]}, healthy=9)
+    >>> detector = gearlab.fit_detector("matched_filter", source, source.X[source.fault == 0])
+    >>> gearlab.score_detector(detector, source)["auc"]
+    1.0
+    """
+    import numpy as np
+
+    from .parts.roc import auc
+
+    labels = getattr(revolutions, "fault", None) if fault is None else fault
+    if labels is None:
+        raise GearlabInputError("gearlab.score_detector: give the revolutions' fault labels (0 healthy, 1 fault)")
+    y = np.asarray(labels)
+    scores = detector_scores(detector, revolutions)
+    if y.shape != scores.shape:
+        raise GearlabInputError(f"gearlab.score_detector: {y.size} labels for {scores.size} revolutions")
+    healthy, faulty = scores[y == 0], scores[y == 1]
+    return {
+        "auc": auc(healthy, faulty),
+        "detected": float(np.mean(faulty > 0)) if faulty.size else None,
+        "false_alarms": float(np.mean(healthy > 0)) if healthy.size else None,
+        "healthy": int(healthy.size),
+        "faults": int(faulty.size),
+    }
+
+
+# --- scenarios and runs ------------------------------------------------------------------------------
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """A scenario file read and checked as ``gearlab validate`` does (every table and key; plugin
+    names; measured files' headers): its ``kind``, ``tables`` (defaults filled) and ``spec``.
+
+    >>> Path("one.toml").write_text('[scenario]\\nname = "one"\\nkind = "dataset"\\n'
+    ...                             '[[datasets]]\\npreset = "B-6-ch5"\\nhealthy = 4\\n') and None
+    >>> scenario = gearlab.load_scenario("one.toml")
+    >>> scenario.kind, [spec.healthy for spec in scenario.spec]
+    ('dataset', [4])
+    """
+    from .engine import load_scenario as load
+
+    return load(path)
+
+
+def run_scenario(
+    path: str | Path,
+    *,
+    quick: bool = False,
+    out: str | Path | None = None,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    on_event=None,
+) -> RunDir:
+    """Run a scenario file as ``gearlab run`` does, into a new run directory under *out* (default:
+    its ``[output] dir``); *quick*: the smoke-test sizes (``--quick``); *overrides*: ``{table: {key:
+    value}}`` replacing keys of the file; *on_event*: a callback for the progress events. Returns the
+    run directory: ``.path``, ``.summary()``, ``.records()``; ``run_verdict(run)``.
+
+    >>> Path("one.toml").write_text('''
+    ... [scenario]
+    ... name = "one"
+    ... kind = "dataset"
+    ... [[datasets]]
+    ... preset = "B-6-ch5"
+    ... teeth = [1]
+    ... faults = { crack = [13] }
+    ... healthy = 4
+    ... ''') and None
+    >>> run = gearlab.run_scenario("one.toml", out="runs")
+    >>> [(r["unit"], r["n"]) for r in run.records()]
+    [('B-6-ch5', 5)]
+    """
+    from .engine import run_scenario as run
+    from .events import ignore_events
+
+    return run(path, quick=quick, out=out, overrides=overrides, on_event=on_event or ignore_events)
+
+
+def open_run(path: str | Path) -> RunDir:
+    """A run directory written before (``gearlab runs`` lists them), to read its ``summary()`` and
+    ``records()``; refused when it holds a link or another account's entry."""
+    from .runs import RunDir
+
+    return RunDir.open(Path(path))
+
+
+def run_verdict(run: RunDir | str | Path) -> list[str]:
+    """The verdict of a finished run, as ``gearlab run`` ends with it and report.html opens with it
+    ([] for kinds without one)."""
+    from .verdict import verdict_lines
+
+    return verdict_lines(run)
