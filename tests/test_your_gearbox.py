@@ -52,6 +52,9 @@ def test_the_guide_has_every_step():
         assert needed in commands, needed
     detect = next(t for k, n, t in steps() if k == "file" and n == "detect.toml")
     assert len(detect.splitlines()) < 30  # the goal: a detection scenario of under 30 lines
+    # the example recordings are the simulation of the guide's own description
+    rig16 = next(t for k, n, t in steps() if k == "file" and n == "rig16.toml")
+    assert rig16 == (ROOT / "examples" / "your_gearbox" / "rig16.toml").read_text()
 
 
 @pytest.fixture

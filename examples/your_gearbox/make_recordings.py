@@ -2,11 +2,12 @@
 
     python examples/your_gearbox/make_recordings.py [FOLDER]
 
-A single-stage spur gearbox, 16/48 teeth (the simulator's luo2019 pair: docs/your_gearbox.md
-says why), input shaft at 25 Hz and 7 N m, an accelerometer at 100 mV/g on the housing (x), a
-once-per-revolution tacho; 20 kHz, columns time_s, acc_V, tacho_V. The vibration is gearlab's own
-ten-DOF simulation of that gearbox with sensor noise (25 dB), so what the gap
-diagnosis should find is known. Files: history1.csv, history2.csv (healthy), test_healthy.csv,
+The single-stage spur gearbox of rig16.toml (beside this script; the guide's step 1 writes the
+same description): 16/48 teeth, input shaft at 25 Hz and 7 N m, an accelerometer at 100 mV/g on
+the housing (x), a once-per-revolution tacho; 20 kHz, columns time_s, acc_V, tacho_V. The
+vibration is gearlab's own simulation of that description (the ten-DOF model, the lumped values
+it leaves to their defaults) with sensor noise (25 dB), so what the gap diagnosis should find is
+known. Files: history1.csv, history2.csv (healthy), test_healthy.csv,
 test_chip.csv (a chipped pinion tooth), next_week.csv (chipped too).
 """
 
@@ -19,6 +20,7 @@ import numpy as np
 
 SPEED = 25.0  # Hz, input shaft
 LOAD = 7.0  # N m
+DESCRIPTION = Path(__file__).with_name("rig16.toml")
 FS = 20_000.0  # the logger's rate: 800 samples per revolution
 SIM_FS = 200_000.0  # the simulation's rate
 SENSITIVITY = 0.1 / 9.80665  # 100 mV/g, in V per m/s²
@@ -37,10 +39,11 @@ FILES = {  # name: (chip step or None, seed)
 def revolution(chip: int | None) -> np.ndarray:
     """One steady revolution of the housing's x acceleration (m/s²) at the logger's rate."""
     from gearlab.data.builder import _simulator, steady_revolution
+    from gearlab.gearbox.simulation import reference
     from gearlab.physics.faults import place_fault
     from gearlab.registry import get_registry
 
-    sim = _simulator("ten_dof", "luo2019", SIM_FS)
+    sim = _simulator("ten_dof", reference(str(DESCRIPTION)), SIM_FS)
     faults = [] if chip is None else [place_fault(get_registry(), sim.pair, "chip", 1, step=chip)]
     rev = steady_revolution(sim, faults, SPEED, LOAD, "casing_x")
     per_rev = int(round(FS / SPEED))
