@@ -199,16 +199,20 @@ def inspect(
     fs: Annotated[str | None, typer.Option(help="sampling rate when the file has none, e.g. '20 kHz'")] = None,
     sensitivity: Annotated[str | None, typer.Option(help="sensor sensitivity, e.g. '10 mV/g'")] = None,
     gain: Annotated[str | None, typer.Option(help="volts per file unit, e.g. '0.5 mV'")] = None,
+    history: Annotated[
+        list[Path] | None,
+        typer.Option(help="healthy records of the same gearbox (repeat the option): localise the change (--gearbox)"),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
 ) -> None:
-    """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts).
+    """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts); with --history, which shaft and gear carry a localised change against those healthy records.
 
-    Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho
+    Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho --history healthy1.csv --history healthy2.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     from .data.importers import TACHO_KINDS
     from .data.textzip import parse_sensitivity
     from .gearbox import resolve_gearbox, speed_hz
-    from .inspect import InspectOptions, inspect_record, json_ready, render
+    from .inspect import InspectOptions, inspect_record, json_ready, localisation, render, render_localisation
     from .units import to_si
 
     if tacho_kind not in TACHO_KINDS:
@@ -235,11 +239,17 @@ def inspect(
     box = None if gearbox is None else resolve_gearbox(gearbox)
     if box is not None and tacho_shaft is not None:
         box.shaft_index(tacho_shaft, "--tacho-shaft")
+    if history and box is None:
+        raise GearlabInputError("--history: localising needs the gearbox's shafts and teeth; give --gearbox too")
     report = inspect_record(str(file), box, options)
+    if history:
+        report["localisation"] = localisation(str(file), [str(h) for h in history], box, options)
     if as_json:
         typer.echo(json.dumps(json_ready(report)))
         return
     render(report, console)
+    if history:
+        render_localisation(report["localisation"], console)
 
 
 def _simulator(model: str, preset: str | None, fs: float = 200e3):

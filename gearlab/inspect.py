@@ -569,3 +569,63 @@ def render(report: dict, console, width: int = 100) -> None:
     if "verdict" in report:
         colour = "green" if report["matches"] else "red"
         console.print(f"[bold {colour}]{escape(report['verdict'])}[/bold {colour}]")
+
+
+# --- which gear: localisation against healthy history records ----------------------------------------
+
+
+def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple[np.ndarray, int, float]:
+    """(complete input revolutions at the pipeline's points, the first one's number from the angle's
+    zero modulo the train period, the record's Nyquist order) of one file read as inspect reads it."""
+    from .signals import POINTS
+
+    rec = read_record(path, options)
+    speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+    with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
+        revs = resample_revolutions(rec.signal, speed.angle, points=POINTS)
+    first = math.ceil(speed.angle[0] / TWO_PI) % order_table(box).train_period
+    return revs, first, rec.fs / (2 * speed.mean_hz)
+
+
+def localisation(path: str, history: list[str], box: Gearbox, options: InspectOptions) -> dict:
+    """Which shaft and gear the record's synchronous average carries a localised change on, against
+    healthy *history* records of the same gearbox read with the same options
+    (gearlab.signals.localise; orders up to 90 % of the lowest Nyquist order among them)."""
+    from .signals import POINTS
+    from .signals import localise as L
+
+    if not history:
+        raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
+    table = order_table(box)
+    revs, first, nyquist = _input_revolutions(path, box, options)
+    past = [_input_revolutions(p, box, options) for p in history]
+    top = min(0.9 * min([nyquist] + [n for _, _, n in past]), 0.45 * POINTS)
+    hist = L.history([r for r, _, _ in past], table, first_revolutions=[f for _, f, _ in past], max_order=top)
+    out = L.localise(revs, hist, table, first_revolution=first).describe()
+    out["history"] = list(history)
+    return out
+
+
+def render_localisation(loc: dict, console) -> None:
+    """The per-shaft evidence of `gearlab inspect --history` in the terminal."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    t = Table(title="which gear: localised change per shaft (against the history)")
+    for col in ("shaft", "gears", "z", "threshold", "flagged", "tooth (peak, pitches)"):
+        t.add_column(col)
+    for s in loc["shafts"]:
+        found = [v for k, v in s["tooth"].items() if k != "angle_deg"]
+        teeth = "; ".join(f"{v['tooth']} of {v['of']} ({v['pitches']:.1f})" for v in found)
+        t.add_row(
+            s["shaft"],
+            escape(", ".join(s["gears"])),
+            f"{s['z']:.2f}",
+            f"{s['threshold']:.2f}",
+            "[red]yes[/red]" if s["flagged"] else "no",
+            teeth or "-",
+        )
+    console.print(t)
+    console.print(f"[dim]{escape(loc['method'])}[/dim]")
+    colour = "yellow" if loc["named"] else "green"
+    console.print(f"[bold {colour}]{escape(loc['summary'])}[/bold {colour}]")
