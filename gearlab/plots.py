@@ -15,6 +15,7 @@ import matplotlib
 
 from .charts import dataset_examples
 from .confined import Confined, read_file, write_file
+from .gearbox.simulation import label as preset_label
 from .signals import order_spectrum, spectrum
 
 matplotlib.use("Agg")
@@ -126,7 +127,7 @@ def signal_and_spectrum(sim, path: Path, mesh_hz: float, start: int = 0, harmoni
         for ax in row:
             ax.grid(alpha=0.3)
     labels = ", ".join(f.label for f in sim.faults) or "healthy"
-    fig.suptitle(f"{sim.model} ({sim.preset}), {labels}, {sim.speed_hz:g} Hz, {sim.load_nm:g} N·m")
+    fig.suptitle(f"{sim.model} ({preset_label(sim.preset)}), {labels}, {sim.speed_hz:g} Hz, {sim.load_nm:g} N·m")
     return save(fig, path)
 
 
@@ -154,7 +155,7 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
                 ax.legend(fontsize=7, loc="upper right")
     spec = dataset.spec
     origin = (
-        f"{spec.model} ({spec.preset}), {spec.channel}"
+        f"{spec.model} ({preset_label(spec.preset)}), {spec.channel}"
         if hasattr(spec, "model")
         else f"measured: {Path(spec.path).name}, {spec.vibration}"
     )

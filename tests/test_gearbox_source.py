@@ -123,6 +123,17 @@ def test_a_description_alone_gets_the_chapter_5_ladders_and_a_preset_only_its_fa
 # --- a user's gearbox: tooth counts no preset has ------------------------------------------------
 
 
+def test_the_defaults_a_description_leaves_are_the_ones_its_model_uses():
+    from gearlab.gearbox import resolve_gearbox
+    from gearlab.gearbox.simulation import defaults
+    from gearlab.registry import get_registry
+
+    names = get_registry().get("model", "eight_dof").param_names()
+    assert defaults(resolve_gearbox("meng2020"), names) == []  # its housing keys are unused by eight_dof
+    names = get_registry().get("model", "ten_dof").param_names()
+    assert "casing_mass (fit: casing_path)" in defaults(resolve_gearbox("meng2020"), names)
+
+
 def test_a_one_stage_description_simulates_its_own_mesh(tmp_path):
     (tmp_path / "rig20.toml").write_text(RIG20)
     spec = small(source(tmp_path, gearbox="rig20.toml"), (("chip", (20,)),), (1,))
@@ -174,6 +185,9 @@ def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkey
     assert code == 0, err
     flat = " ".join(out.split())
     assert "effects: sensor_noise" in flat and "verdict: explained" in flat
+    # the run says which of the simulator's values are the defaults' guesses, and which the diagnosis may fit
+    assert "the source's gearbox description leaves to defaults" in flat and "casing_mass (fit: casing_path)" in flat
+    assert "the input, output shaft blocks (solid discs)" in flat
 
 
 # --- what the simulator cannot take: one line naming file, table and key ---------------------------------

@@ -104,7 +104,7 @@ def train_pair(first: GearPair, second: GearPair) -> StagePair:
 # their parameters from it), two stages -> two_stage (the PHM 2009 rig's model). Names are
 # those of thesis Tables 2.3 and 2.4.
 
-_DYNAMICS_NAMES = {
+DYNAMICS_NAMES = {
     "motor_inertia": "I11",
     "load_inertia": "I22",
     "coupling_stiffness": "k_c",
@@ -153,7 +153,7 @@ def lumped_params(box) -> tuple[str, dict[str, float]]:
             f"{box.source}: [[stages]]: no lumped model for {stages} stages yet (one stage: ten_dof, two: two_stage); "
             "the gear pairs and the order table are derived all the same"
         )
-    params = {_DYNAMICS_NAMES[k]: v for k, v in box.dynamics.items()}
+    params = {DYNAMICS_NAMES[k]: v for k, v in box.dynamics.items()}
     for (m_name, i_name), (mass, inertia) in zip(_SHAFT_BLOCKS[stages], shaft_blocks(box)):
         params[m_name], params[i_name] = mass, inertia
     return MODELS[stages], params

@@ -34,7 +34,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from ..errors import GearlabInputError
-from .derive import gear_pairs, lumped_params, train_pair
+from .derive import DYNAMICS_NAMES, gear_pairs, lumped_params, train_pair
 from .description import FITTED, Gearbox
 
 PREFIX = "gearbox:"
@@ -119,12 +119,14 @@ def channel(box: Gearbox, model: str, channels: tuple[str, ...]) -> str:
     return name
 
 
-def defaults(box: Gearbox) -> list[str]:
-    """The [dynamics] values the description leaves to their defaults, '(fit: EFFECT)' where the gap
-    diagnosis may fit one."""
-    return [
-        f"{key}{f' (fit: {FITTED[key]})' if key in FITTED else ''}" for key in box.dynamics if key not in box.stated
-    ]
+def defaults(box: Gearbox, names: tuple[str, ...]) -> list[str]:
+    """What the description leaves to defaults of a model taking the parameters *names*: its
+    [dynamics] keys, '(fit: EFFECT)' where the gap diagnosis may fit one, and the shaft blocks it
+    leaves to solid discs."""
+    used = [key for key in box.dynamics if key not in box.stated and DYNAMICS_NAMES[key] in names]
+    out = [f"{key}{f' (fit: {FITTED[key]})' if key in FITTED else ''}" for key in used]
+    discs = [name for name, m, j in zip(box.shafts, box.shaft_mass, box.shaft_inertia) if m is None or j is None]
+    return out + ([f"the {', '.join(discs)} shaft blocks (solid discs)"] if discs else [])
 
 
 def preset_of(box: Gearbox, names: tuple[str, ...], stages: int, model: str = "") -> dict:

@@ -35,6 +35,7 @@ from ..errors import GearlabInputError
 from ..events import Event
 from ..gap.conclusion import verdict_text  # the kind's log line, summary and report say one verdict
 from ..gap.diagnose import Settings
+from ..gearbox.simulation import defaults, is_reference, referenced
 from ..learn.config import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, history_of, shared_state
 from ..learn.schedule import two_phases
@@ -412,6 +413,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         notes = [note] if note else []
         if spec["accuracy"] and records:
+        if is_reference(source_spec.preset):  # which of the simulator's values are the defaults' guesses
+            names = get_registry().get("model", source_spec.model).param_names()
+            guessed = ", ".join(defaults(referenced(source_spec.preset), names))
+            if guessed:
+                notes.append(f"the source's gearbox description leaves to defaults (docs/gearbox.md): {guessed}")
             notes.append(
                 "accuracy skipped: measured history records carry no labelled faults (the detection "
                 "kind scores real test files)"
