@@ -10,6 +10,7 @@ from gearlab.data.builder import SimTask, build_dataset, operating_point, simula
 from gearlab.data.placement import canonical_faults, shaft_names
 from gearlab.data.spec import POINTS, dataset_preset
 from gearlab.errors import GearlabInputError
+from gearlab.physics.presets import gear_pair
 
 ON_EVERY_GEAR = (("chip", (20,)), ("chip@wheel", (20,)), ("chip@s2-pinion", (20,)), ("chip@s2-wheel", (20,)))
 
@@ -110,3 +111,25 @@ def test_a_dataset_of_faults_on_every_gear_validates(cli, write_scenario):
     faults = '[{ name = "chip", steps = [20] }, { name = "chip", gear = "output gear", steps = [20] }]'
     code, out, err = cli("validate", write_scenario(SCENARIO + f"faults = {faults}\nteeth = [3]\n"))
     assert code == 0, err
+
+
+def test_the_period_of_damage_on_each_gear_and_the_bound_on_it():
+    import math
+
+    from gearlab.data.placement import MAX_PERIOD, check_period, train_period
+    from gearlab.physics.geometry import GearPair
+
+    rig = (gear_pair("phm09_stage1"), gear_pair("phm09_stage2"))
+    assert [train_period(rig, s, g) for s, g in ((1, "pinion"), (1, "wheel"), (2, "pinion"), (2, "wheel"))] == [
+        1,
+        3,
+        3,
+        5,
+    ]
+    common = dict(module=2e-3, face_width=20e-3, pressure_angle=math.radians(20), E=200e9, nu=0.3, hub_radius=8e-3)
+    coprime = (GearPair(Z1=21, Z2=53, **common), GearPair(Z1=29, Z2=61, **common))
+    # stage 2 meshes 609/53 times per input turn; its wheel turns 609/3233 times
+    assert [train_period(coprime, s, g) for s, g in ((1, "pinion"), (1, "wheel"), (2, "wheel"))] == [53, 53, 3233]
+    check_period(MAX_PERIOD, "x", "here")
+    with pytest.raises(GearlabInputError, match=r"^here: damage repeats only after 3233 input revolutions"):
+        check_period(3233, "damage", "here")

@@ -90,7 +90,7 @@ def steady_revolution(sim: Simulator, faults, speed: float, load: float, channel
 
 
 def steady_response(
-    sim: Simulator, faults, speed: float, load: float, channel: str, effects=()
+    sim: Simulator, faults, speed: float, load: float, channel: str, effects=(), whole_cycle: bool = False
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """:func:`steady_revolution` under excitation-level *effects* ((Effect, params) pairs): the
     revolution and, when an effect moved the shaft angle, its angle from 0 to 2 pi (else None).
@@ -103,7 +103,7 @@ def steady_response(
     A train whose later mesh is no whole input order (a description's 21/53 then 29/61: order
     609/53) repeats only after mesh_cycle(sim) turns: steadiness is judged on such cycles, and
     the last period of the last cycle is returned (the later mesh at one phase, the same for
-    every fault case).
+    every fault case), or with *whole_cycle* the whole last cycle (a record longer than it).
     """
     per_rev = int(round(sim.fs / speed))
     period = sim.period(faults)
@@ -118,12 +118,12 @@ def steady_response(
         except GearlabInputError:
             first = blocks
         if first <= blocks - 2:
-            angle = None
+            angle, kept = None, cycle if whole_cycle else period
             if result.angle is not None:
-                angle = result.angle[blocks * per_block - period * per_rev : blocks * per_block] - 2 * np.pi * (
-                    blocks * cycle - period
+                angle = result.angle[blocks * per_block - kept * per_rev : blocks * per_block] - 2 * np.pi * (
+                    blocks * cycle - kept
                 )
-            return x[-1, -period * per_rev :].copy(), angle
+            return x[-1, -kept * per_rev :].copy(), angle
         if blocks >= most:
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise GearlabInputError(

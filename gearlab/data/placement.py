@@ -17,9 +17,11 @@ output) are understood on every model. A bad value is one line naming the key.
 from __future__ import annotations
 
 import functools
+import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
+from fractions import Fraction
 
 from ..errors import GearlabInputError, shown
 from ..gearbox import builtin_gearboxes, resolve_gearbox
@@ -181,6 +183,33 @@ class FaultClass:
     gear: str  # "pinion" | "wheel"
     teeth: tuple[int, ...]
     pair: object  # the stage's GearPair (pinion = its gear 1)
+    period: int = 1  # input revolutions after which the train with this damage repeats
+
+
+# Input revolutions a steady response may take to repeat: damage on the output gear of a train of
+# co-prime tooth counts (21/53 then 29/61) repeats only after 3233 turns, minutes of simulation.
+MAX_PERIOD = 1000
+
+
+def train_period(pairs, stage: int, gear: str) -> int:
+    """Input revolutions after which a train with damage on (stage, gear) repeats: the least number
+    that turns the faulted gear and engages every mesh a whole number of times (exact tooth ratios)."""
+    turns, periods = Fraction(1), []
+    for k, pair in enumerate(pairs, start=1):
+        mesh = turns * pair.Z1  # mesh periods per input turn
+        periods.append(mesh.denominator)
+        if k == stage:
+            periods.append((turns * (Fraction(pair.Z1, pair.Z2) if gear == "wheel" else 1)).denominator)
+        turns *= Fraction(pair.Z1, pair.Z2)
+    return math.lcm(*periods)
+
+
+def check_period(period: int, what: str, where: str) -> None:
+    if period > MAX_PERIOD:
+        raise GearlabInputError(
+            f"{where}: {what} repeats only after {period} input revolutions (the train's tooth counts share "
+            f"no factor); a steady simulation takes at most {MAX_PERIOD}: put the damage on another gear"
+        )
 
 
 def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, FaultClass]:
@@ -198,5 +227,7 @@ def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, Fa
             if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= Z:
                 on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{key}')"
                 raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{Z}{on}")
-        out[key] = FaultClass(key, name, stage, gear, chosen, pair)
+        period = train_period(pairs, stage, gear)
+        check_period(period, f"fault '{key}' on the {gear_name(stage, gear, shafts)}", where)
+        out[key] = FaultClass(key, name, stage, gear, chosen, pair, period)
     return out

@@ -39,8 +39,8 @@ from ..physics.faults import place_fault
 from ..physics.stiffness import PlacedFault
 from ..registry import get_registry
 from ..signals import NOISE_KINDS, add_noise
-from .builder import _configured_simulator, _simulator, steady_response, whole_steps_rate
-from .placement import gear_name, gear_of, shaft_names
+from .builder import _configured_simulator, _simulator, mesh_cycle, steady_response, whole_steps_rate
+from .placement import check_period, gear_name, gear_of, shaft_names, train_period
 from .spec import PHM09_FS
 
 TACHO_V = 5.0  # the tacho's high level, V (a TTL key-phasor)
@@ -62,7 +62,7 @@ class SimulatedRecord:
     channel: str
     faults: tuple[str, ...]  # labels of the placed faults (PlacedFault.label)
     gears: tuple[str, ...]  # the faulted gears in words ("output gear", ...)
-    period: int  # input revolutions after which the clean signal repeats
+    period: int  # input revolutions after which the clean signal repeats (the faulted shaft's, the meshes')
     start: float  # input revolutions into the clean period at the first sample
 
     @property
@@ -189,9 +189,13 @@ def simulated_record(
                 f"{where}: model '{model}' has no channel '{channel}'; its channels: {', '.join(base.channels)}"
             )
     placed = place(list(faults), sim, preset)
+    pairs = (sim.pair, *(m.pair for m in sim.meshes))
+    for f in placed:
+        check_period(train_period(pairs, f.stage, f.gear), f"damage {f.label}", where)
     shafts = shaft_names(preset, sim.stages)
-    clean, moved = steady_response(sim, placed, speed_hz, load_nm, channel, excitation)
-    period = sim.period(placed)
+    # the whole cycle: a later mesh of no whole input order repeats only after mesh_cycle turns
+    clean, moved = steady_response(sim, placed, speed_hz, load_nm, channel, excitation, whole_cycle=True)
+    period = math.lcm(sim.period(placed), mesh_cycle(sim))
     rng = np.random.default_rng([seed, 0])
     start = float(rng.uniform(0.0, period))  # input turns into the clean period at the first sample
     n = int(math.ceil(revolutions * fs / speed_hz))
