@@ -274,6 +274,7 @@ ALLOWED = {
     ("gearlab/cli.py", None): "files the user names on the command line: --out, --csv, --plot, --html",
     ("gearlab/data", None): "measured input files (read only) and the dataset cache in $GEARLAB_CACHE",
     ("gearlab/runs.py", "_digest"): "the measured input files a run reads, hashed for --resume",
+    ("gearlab/settings_doc.py", "main"): "docs/settings.md in the source tree, a developer's command",
 }
 SAVES = {"save", "savez", "savez_compressed", "savetxt", "tofile"}
 LOADS = {"load", "loadtxt", "fromfile"}
