@@ -96,6 +96,7 @@ from .detection_units import (
     train_unit,
     unit_name,
 )
+from .detection_which_gear import localise_target
 
 SOURCE_SPEEDS = ("records", "source")
 INPUTS = ("difference", "revolution")
@@ -562,6 +563,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if seeds != (None,) and unit_name(c, m, None, v) not in records:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
+        # which gear each test record's change is on, from the raw records (before any score is made)
+        localised = localise_target(spec["source"], conditions)
+        if localised is not None:
+            run.write_json("localisation.json", localised)
         run.write_json(
             "conditions.json",
             {
@@ -591,6 +596,7 @@ def summary_lines(run: RunDir) -> list[str]:
         table_md(summary["rows"]).rstrip(),
         labels_md(summary["rows"]).rstrip(),
         *([summary["shafts_md"].strip()] if summary.get("shafts_md") else []),
+        *([summary["which_gear"]["md"].strip()] if summary.get("which_gear") else []),
         *([learned_md(summary["learned"]).strip()] if summary.get("learned") else []),
     ]
 

@@ -100,6 +100,9 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
         cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}})
         cond[f.role].append((f, records[f.path].revolutions))
         cond["speeds"][f.path] = speeds[f.path]
+        # as cut, before standardising and aligning (which rotate each revolution): what
+        # localisation reads (detection_which_gear), with the first revolution's number from the tacho
+        cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].transient_revolutions)
     for name, cond in conditions.items():
         if not cond["history"]:
             files = ", ".join(f.path for f, _ in cond["test"])

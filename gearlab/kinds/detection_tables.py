@@ -16,6 +16,7 @@ from ..runs import RunDir
 from ..scenario import Scenario
 from .detection_records import longest_tsa
 from .detection_units import method_name
+from .detection_which_gear import which_gear_summary
 
 
 def summarise(scenario: Scenario, run: RunDir) -> None:
@@ -111,6 +112,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "rows": rows,
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
+        # each test record's change localised on a gear; flags on damage elsewhere (detection_which_gear)
+        "which_gear": which_gear_summary(run.read_json("localisation.json"), records, labels),
     }
     conditions = run.read_json("conditions.json")
     bound = {c: v.get("source_bound", {}) for c, v in (conditions or {}).items()}
@@ -131,8 +134,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     if conditions is not None:
         summary["conditions"] = conditions
     run.write_json("summary.json", summary)
+    which = summary["which_gear"].get("md", "")
     run.write_text(
-        "table.md", table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"] + learned_md(summary["learned"])
+        "table.md",
+        table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"] + which + learned_md(summary["learned"]),
     )
     run.write_text("table.csv", table_csv(rows))
 

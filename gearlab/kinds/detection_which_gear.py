@@ -1,0 +1,192 @@
+"""Which gear, in the detection kind (gearlab.kinds.detection): every test record's localised change
+named against its condition's history records (gearlab.signals.localise), and a flag on a record
+whose change lies on another gear than the one the scenario watches reported as other damage.
+
+The watched gear is the source's faulty gear: the gear its fault classes sit on (the 32T input
+pinion for scenarios/phm09_chip.toml). A test record is read whole (its complete revolutions as
+cut from the tacho, before the detection's standardisation and alignment, which rotate each
+revolution and so break the slower shafts' continuity) and localised against the raw history
+records of its condition, orders up to the condition's band. What a method's flag on one of its
+units then means:
+
+    the record's change named on a shaft that carries a watched gear   a watched-gear fault
+    named on another shaft                                             other damage: <that gear>
+    nothing localised                                                  a watched-gear fault (no
+                                                                       evidence of where it lies)
+
+The localisation uses the records' signals only; the labels come in with the tables (summarise).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.spec import DatasetSpec
+from ..errors import GearlabInputError
+from ..signals import POINTS
+from ..signals import localise as L
+from .detection_records import longest_tsa
+
+WATCHED, OTHER, NOT_LOCALISED = "watched-gear fault", "other damage", "nothing localised"
+
+
+def gearbox_of(source: DatasetSpec):
+    """The gearbox description the source simulates (a built-in one named by its preset, or a
+    description it references), or None: no shafts to localise on."""
+    from ..gearbox import builtin_gearboxes, resolve_gearbox
+    from ..gearbox.simulation import is_reference, referenced
+
+    if is_reference(source.preset):
+        return referenced(source.preset)
+    if source.preset in builtin_gearboxes():
+        return resolve_gearbox(source.preset)
+    return None
+
+
+def watched_gears(source: DatasetSpec, table) -> list[str]:
+    """Names (signals.localise.Gear.name) of the gears the source's fault classes sit on."""
+    on = {(c.stage, c.gear) for c in source.fault_classes().values()}
+    gears = [g for shaft in L.gears_of(table).values() for g in shaft]
+    return [g.name for g in gears if (g.stage, g.role) in on]
+
+
+def call_of(found: dict, watched: list[str]) -> str:
+    """What a flag on a record means, from its localisation (Localisation.describe())."""
+    if found["named"] is None:
+        return NOT_LOCALISED
+    ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
+    if any(g in watched for g in ev["gears"]):
+        return f"{WATCHED}: {found['named']}"
+    return f"{OTHER}: {found['named']}"
+
+
+def localise_target(source: DatasetSpec, conditions: dict) -> dict | None:
+    """Every test record of every condition localised against the condition's history records
+    (conditions as detection_records.read_target makes them, with each record's raw revolutions in
+    cond["raw"]); None when the source simulates no gearbox description."""
+    box = gearbox_of(source)
+    if box is None:
+        return None
+    from ..gearbox import order_table
+
+    table = order_table(box)
+    watched = watched_gears(source, table)
+    out = {"gearbox": box.name, "watched": watched, "conditions": {}, "records": {}}
+    for name, cond in conditions.items():
+        raw = cond["raw"]
+        history = [raw[f.path] for f, _ in cond["history"]]
+        top = min(float(cond["max_order"]), 0.45 * POINTS)
+        try:  # records too short for a spread or a band without every shaft's orders: said, not fatal
+            hist = L.history([r for r, _ in history], table, first_revolutions=[k for _, k in history], max_order=top)
+        except GearlabInputError as exc:
+            out["conditions"][name] = {"history": [f.path for f, _ in cond["history"]], "note": f"not localised: {exc}"}
+            continue
+        out["conditions"][name] = {
+            "history": [f.path for f, _ in cond["history"]],
+            "thresholds": dict(zip(hist.layout.shafts, map(float, hist.thresholds))),
+            "note": hist.note,
+        }
+        for f, _ in cond["test"]:
+            revs, first = raw[f.path]
+            try:
+                found = L.localise(revs, hist, table, first_revolution=first).describe()
+            except GearlabInputError as exc:
+                found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+            out["records"][f.path] = {"condition": name, **found, "call": call_of(found, watched)}
+    return out
+
+
+def _tooth(found: dict) -> str:
+    if found["named"] is None:
+        return "–"
+    ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
+    return " / ".join(f"{t['tooth']} of {t['of']}" for k, t in ev["tooth"].items() if k != "angle_deg") or "–"
+
+
+def records_md(loc: dict, labels: dict) -> str:
+    """Per test record: its label, the gear its change is localised on with the evidence (each
+    shaft's z against its threshold, the tooth), and what a flag on it means."""
+    if not loc or not loc["records"]:
+        return ""
+    out = [
+        f"\nWhich gear (each test record against its condition's history; watched: {', '.join(loc['watched'])}; "
+        "z of each shaft's localised change over its threshold; a flag on a record whose change lies on "
+        "another gear is other damage)\n",
+        "| condition | file | label | localised on | z / threshold per shaft | tooth | a flag is |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for path, r in loc["records"].items():
+        z = ", ".join(f"{s['shaft']} {s['z']:.1f}/{s['threshold']:.1f}" for s in r["shafts"])
+        out.append(
+            f"| {r['condition']} | {path} | {labels.get(path, '')} | {r['named'] or 'nothing'} | {z} | "
+            f"{_tooth(r)} | {r['call']} |"
+        )
+    return "\n".join(out) + "\n"
+
+
+def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
+    """Per condition and method, for the longest TSA: of each test label's units, the % called a
+    watched-gear fault and the % called other damage (the record's change localised elsewhere)."""
+    if not loc or not records:
+        return []
+    unit = longest_tsa(u for r in records for u in r["thresholds"])
+    out = []
+    for r in records:
+        if unit is None or unit not in r["thresholds"]:
+            continue
+        thr = r["thresholds"][unit]
+        watched: dict[str, list[int]] = {}
+        other: dict[str, list[int]] = {}
+        for path, units in r["test_scores"].items():
+            s = np.asarray(units[unit], dtype=np.float64)
+            flagged = s > thr
+            elsewhere = loc["records"].get(path, {}).get("call", "").startswith(OTHER)
+            label = labels[path]
+            watched.setdefault(label, []).extend((flagged & ~elsewhere).astype(int).tolist())
+            other.setdefault(label, []).extend((flagged & elsewhere).astype(int).tolist())
+        out.append(
+            {
+                "condition": r["condition"],
+                "method": r["method"],
+                "unit": unit,
+                "watched": {k: 100.0 * float(np.mean(v)) if v else None for k, v in watched.items()},
+                "other": {k: 100.0 * float(np.mean(v)) if v else None for k, v in other.items()},
+            }
+        )
+    return out
+
+
+def calls_md(calls: list[dict]) -> str:
+    """calls_by_label as a table: 'watched % / other %' per label."""
+    if not calls:
+        return ""
+    labels = list(dict.fromkeys(k for c in calls for k in c["watched"]))
+    unit = calls[0]["unit"]
+    out = [
+        f"\nUnits called (% of each test label's {unit} units): a watched-gear fault / other damage (the "
+        "record's change localised on another gear)\n",
+        f"| {unit}: condition | method | " + " | ".join(f"'{k}' watched / other %" for k in labels) + " |",
+        "|---|---|" + "---|" * len(labels),
+    ]
+    for c in calls:
+        cells = []
+        for k in labels:
+            w, o = c["watched"].get(k), c["other"].get(k)
+            cells.append("–" if w is None else f"{w:.0f} / {o:.0f}")
+        out.append(f"| {c['condition']} | {c['method']} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
+
+
+def which_gear_summary(loc: dict | None, records: list[dict], labels: dict) -> dict:
+    """What summary.json and table.md say of it: each test record's localisation and call, the
+    units called a watched-gear fault or other damage per method and label, and their tables."""
+    if not loc:
+        return {}
+    calls = calls_by_label(loc, records, labels)
+    return {
+        "gearbox": loc["gearbox"],
+        "watched": loc["watched"],
+        "records": {p: {k: r[k] for k in ("condition", "named", "summary", "call")} for p, r in loc["records"].items()},
+        "calls": calls,
+        "md": records_md(loc, labels) + calls_md(calls),
+    }

@@ -1,0 +1,136 @@
+"""Which gear in the detection kind (gearlab.kinds.detection_which_gear): on simulated PHM 2009 rig
+records (gearlab.data.simulated), a flag on a record whose change is localised on another gear than
+the source's faulty one (the 32T input pinion of phm09_chip) is other damage, not that fault."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gearlab.data.simulated import simulated_record
+from gearlab.data.spec import dataset_preset
+from gearlab.kinds import detection_which_gear as D
+from gearlab.parts.measured import TargetFile
+from gearlab.signals import cut_revolutions
+
+SPEED = 40.0
+
+
+def raw(faults, seed):
+    rec = simulated_record(faults, speed_hz=SPEED, revolutions=80, snr_db=30.0, seed=seed)
+    return cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none").revolutions, 0
+
+
+@pytest.fixture(scope="module")
+def target():
+    files = {
+        "h1": ("history", "healthy", [], 1),
+        "h2": ("history", "healthy", [], 2),
+        "wheel": ("test", "broken output tooth", [{"name": "crack", "gear": "output gear", "tooth": 3, "step": 20}], 3),
+        "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
+        "ok": ("test", "healthy", [], 5),
+    }
+    tf = {p: TargetFile(p, p, role, label, "40 Hz") for p, (role, label, _, _) in files.items()}
+    cond = {
+        "history": [(tf["h1"], None), (tf["h2"], None)],
+        "test": [(tf[p], None) for p in ("wheel", "pinion", "ok")],
+        "raw": {p: raw(faults, seed) for p, (_, _, faults, seed) in files.items()},
+        "max_order": int(0.9 * 66666.67 / 2 / SPEED),
+    }
+    source = dataset_preset("phm09-30")
+    return source, {"40 Hz": cond}, {p: label for p, (_, label, _, _) in files.items()}
+
+
+def test_the_watched_gear_is_the_sources_faulty_one(target):
+    source, _, _ = target
+    box = D.gearbox_of(source)
+    assert box.name == "phm09"
+    from gearlab.gearbox import order_table
+
+    assert D.watched_gears(source, order_table(box)) == ["input pinion 32T (stage 1)"]
+
+
+def test_a_flag_on_damage_elsewhere_is_other_damage(target):
+    source, conditions, labels = target
+    loc = D.localise_target(source, conditions)
+    calls = {p: r["call"] for p, r in loc["records"].items()}
+    assert calls == {
+        "wheel": "other damage: output gear 80T (stage 2)",
+        "pinion": "watched-gear fault: input pinion 32T (stage 1)",
+        "ok": "nothing localised",
+    }, {p: r["summary"] for p, r in loc["records"].items()}
+    # a method that flags every unit of every test record: the output gear's flags are other damage
+    record = {
+        "condition": "40 Hz",
+        "method": "flags everything",
+        "thresholds": {"revolution": 0.0, "record30": 0.0},
+        "test_scores": {p: {"revolution": [1.0] * 4, "record30": [1.0, 1.0]} for p in ("wheel", "pinion", "ok")},
+    }
+    (called,) = D.calls_by_label(loc, [record], labels)
+    assert called["unit"] == "record30"
+    assert called["watched"] == {"broken output tooth": 0.0, "fault": 100.0, "healthy": 100.0}
+    assert called["other"] == {"broken output tooth": 100.0, "fault": 0.0, "healthy": 0.0}
+    text = D.records_md(loc, labels) + D.calls_md([called])
+    assert "| 40 Hz | wheel | broken output tooth | output gear 80T (stage 2) |" in text
+    assert "other damage: output gear 80T (stage 2) |" in text
+    assert "| 40 Hz | flags everything | 0 / 100 | 100 / 0 | 100 / 0 |" in text
+
+
+def test_a_source_without_a_gearbox_description_localises_nothing():
+    source = dataset_preset("phm09-30").with_(preset="no such description")
+    assert D.gearbox_of(source) is None
+    assert D.localise_target(source, {}) is None
+
+
+def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, monkeypatch):
+    """The detection kind end to end on simulated rig records (source: the rig simulator with a
+    chipped input pinion, as phm09_chip's): localisation.json names each test record's gear,
+    table.md and report.html carry the which-gear tables, and a flag on the record with a cracked
+    output-gear tooth is counted as other damage, never as a fault of the watched input pinion."""
+    import json
+
+    from tiny import EXECUTION, schedule
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    data = tmp_path / "data"
+    data.mkdir()
+    files = {
+        "h1": ("history", "healthy", [], 1),
+        "h2": ("history", "healthy", [], 2),
+        "wheel": ("test", "output gear", [{"name": "crack", "gear": "output gear", "tooth": 3, "step": 20}], 3),
+        "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
+        "ok": ("test", "healthy", [], 5),
+    }
+    entries = []
+    for name, (role, label, faults, seed) in files.items():
+        rec = simulated_record(faults, speed_hz=30.0, revolutions=80, snr_db=30.0, seed=seed)
+        np.savez(data / f"{name}.npz", acc=rec.vibration, tacho=rec.tacho, fs=rec.fs)
+        entries.append(f'  {{ file = "../data/{name}.npz", role = "{role}", label = "{label}" }},')
+    (tmp_path / "scenarios").mkdir()
+    path = tmp_path / "scenarios" / "which.toml"
+    path.write_text(
+        '[scenario]\nname = "which"\nkind = "detection"\n\n'
+        '[source]\npreset = "phm09-30"\nteeth = [1, 2]\nfaults = { chip = [20] }\nhealthy = 4\n\n'
+        '[target]\nvibration = "acc"\ntacho = "tacho"\npulses_per_rev = 1\npositive = "fault"\nfiles = [\n'
+        + "\n".join(entries)
+        + '\n]\n\n[classical]\nindicators = ["fm4"]\nmesh_orders = [32, 16]\n\n[detection]\nblocks = [10]\n\n'
+        f'[network]\nname = "fast"\n\n[[methods]]\nadapter = "matched_filter"\n\n[protocol]\n{schedule(2)}\n'
+        f"{EXECUTION}"
+    )
+    code, out, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 0, err
+    run = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
+    loc = json.loads((run / "localisation.json").read_text())
+    assert loc["watched"] == ["input pinion 32T (stage 1)"]
+    calls = {Path(p).stem: r["call"] for p, r in loc["records"].items()}
+    assert calls["wheel"] == "other damage: output gear 80T (stage 2)", loc["records"]
+    assert calls["pinion"] == "watched-gear fault: input pinion 32T (stage 1)"
+    summary = json.loads((run / "summary.json").read_text())
+    for c in summary["which_gear"]["calls"]:  # every method: no output-gear unit is a pinion fault
+        assert c["watched"]["output gear"] == 0.0, c
+    fm4 = next(c for c in summary["which_gear"]["calls"] if c["method"] == "fm4")
+    assert fm4["other"]["output gear"] > 0.0  # FM4 flags the cracked output tooth: other damage
+    for page in ("table.md", "report.html"):
+        text = (run / page).read_text()
+        assert "Which gear (each test record against its condition" in text
+        assert "other damage: output gear 80T (stage 2)" in text
