@@ -159,8 +159,6 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     return spec
 
 
-# Ranges of a dataset's quantities (unit, largest value, as said): beyond them a value is a
-# mistake (fs = 1e300 would ask for more samples per revolution than any memory holds).
 def described_spec(entry: dict, where: str, base: Path, preset: DatasetSpec | None) -> DatasetSpec:
     """The simulator a 'gearbox' description implies (gearlab.gearbox.simulation): its model (or the
     entry's 'model'), its values, the channel of its [sensor] (or 'channel'), the speed and load of
@@ -199,6 +197,8 @@ def described_spec(entry: dict, where: str, base: Path, preset: DatasetSpec | No
     return preset.with_(model=model, preset=ref, channel=chan, **operation)
 
 
+# Ranges of a dataset's quantities (unit, largest value, as said): beyond them a value is a
+# mistake (fs = 1e300 would ask for more samples per revolution than any memory holds).
 QUANTITIES = {"speed": ("Hz", 1e3, "1 kHz"), "load": ("N*m", 1e6, "1e6 N*m"), "fs": ("Hz", 1e7, "10 MHz")}
 
 
@@ -221,8 +221,8 @@ def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
     spec = None if entry.get("file") else dataset_spec(entry, where, base)  # the file's header is not read
     if not isinstance(spec, DatasetSpec):
         raise GearlabInputError(
-            f"{where} key 'file': the source is a simulator configuration; give a 'preset' "
-            "(measured data can only be the [target])"
+            f"{where} key 'file': the source is a simulator configuration; give a 'preset' or a 'gearbox' "
+            "description (measured data can only be the [target])"
         )
     return spec
 
