@@ -597,8 +597,9 @@ def score(
     """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
 
     Per record, method and unit (revolution, recordN): the units called over the threshold, the record's decision
-    (most of its units called) and the threshold rule. Each row is appended to the run's scoring history
-    (scoring/history.jsonl), whose trend per method the report shows.
+    (most of its units called), the threshold rule, and the gear the record's change is localised on against the
+    run's history (a flag on a gear other than the one the run watches is other damage). Each row is appended to
+    the run's scoring history (scoring/history.jsonl), whose trend per method the report shows.
 
     Example: gearlab score runs/det/20260101-120000-000000 today.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
@@ -612,7 +613,7 @@ def score(
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
         return
     table = Table(title=f"scored with {run_dir}")
-    for col in ("file", "condition", "method", "unit", "called", "median score", "threshold", "decision"):
+    for col in ("file", "condition", "method", "unit", "called", "median score", "threshold", "decision", "localised"):
         table.add_column(col)
     for r in rows:
         median = "-" if r["median_score"] is None else f"{r['median_score']:.3g}"
@@ -626,6 +627,7 @@ def score(
             median,
             f"{r['threshold']:.3g} ({r['rule']})",
             f"[{colour}]{r['decision']}[/{colour}]",
+            r.get("localised") or "-",
         )
     console.print(table)
 

@@ -134,3 +134,10 @@ def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, mo
         text = (run / page).read_text()
         assert "Which gear (each test record against its condition" in text
         assert "other damage: output gear 80T (stage 2)" in text
+    # gearlab score: the new record's gear from the run's stored history, records unread
+    code, out, err = cli("score", run, data / "wheel.npz", data / "ok.npz", "--json")
+    assert code == 0, err
+    scored = {(Path(r["file"]).stem, r["method"], r["unit"]): r for r in json.loads(out)}
+    assert {r["localised"] for k, r in scored.items() if k[0] == "wheel"} == {"output gear 80T (stage 2)"}
+    assert {r["call"] for k, r in scored.items() if k[0] == "wheel"} == {"other damage: output gear 80T (stage 2)"}
+    assert {r["call"] for k, r in scored.items() if k[0] == "ok"} == {"nothing localised"}

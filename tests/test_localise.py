@@ -246,3 +246,19 @@ def test_inspect_with_history_names_the_damaged_gear_of_simulated_rig_records(tm
         timeout=300,
     )
     assert bad.returncode == 2 and "give --gearbox too" in bad.stderr and bad.stderr.count("\n") == 1
+
+
+def test_a_saved_history_localises_as_the_one_read_from_records(tmp_path):
+    """History.state() holds plain arrays (np.savez, no pickle) from which History.restored remakes
+    it for the same gearbox, records unread (what `gearlab score` uses); another gearbox is refused."""
+    table = train((18, 45))
+    rng = np.random.default_rng(4)
+    hist = history(table, 60, rng)
+    np.savez(tmp_path / "h.npz", **hist.state())
+    with np.load(tmp_path / "h.npz", allow_pickle=False) as f:
+        back = L.History.restored({k: f[k] for k in f.files}, table)
+    rec = record(table, 60, rng, fault=(0, 1, 5))
+    a, b = L.localise(rec, hist, table).describe(), L.localise(rec, back, table).describe()
+    assert a == b and a["named"] == "input pinion 18T (stage 1)"
+    with pytest.raises(GearlabInputError, match="saved for another gearbox description"):
+        L.History.restored(hist.state(), train((19, 45)))

@@ -96,7 +96,7 @@ from .detection_units import (
     train_unit,
     unit_name,
 )
-from .detection_which_gear import localise_target
+from .detection_which_gear import store_localisation
 
 SOURCE_SPEEDS = ("records", "source")
 INPUTS = ("difference", "revolution")
@@ -564,9 +564,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
         # which gear each test record's change is on, from the raw records (before any score is made)
-        localised = localise_target(spec["source"], conditions)
-        if localised is not None:
-            run.write_json("localisation.json", localised)
+        store_localisation(run, spec["source"], conditions)
         run.write_json(
             "conditions.json",
             {

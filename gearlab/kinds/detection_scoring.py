@@ -20,6 +20,7 @@ from . import record_effects
 from .detection_classical import classical_record
 from .detection_records import SPEED_GROUP, learned_input, longest_tsa, unit_sets, unit_window
 from .detection_units import Rule
+from .detection_which_gear import localise_scored
 
 
 def store_scoring(run: RunDir, spec: dict, conditions: dict) -> None:
@@ -134,7 +135,8 @@ def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: 
 def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: None) -> list[dict]:
     """New recordings scored by a finished run's trained methods at its thresholds, nothing trained
     again: one row per file, method and unit kind (its units' scores, how many are called, the
-    threshold and the record's decision: the majority of its units called), appended to the run's
+    threshold and the record's decision: the majority of its units called; the gear the record's
+    change is localised on and what a flag on it is, detection_which_gear), appended to the run's
     scoring history."""
     meta = run.read_json(scoring.SCORING_FILE)
     if meta is None:
@@ -143,12 +145,14 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
             "score kept its models); expected a finished run: run the scenario again"
         )
     keys = meta["target"]
-    cut = {}
+    cut, raw = {}, {}
     for i, file in enumerate(files):
         rec = cut_recording(str(file), **keys)
         name = _condition_of(meta, str(file), rec.speed_hz, condition)
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), rec.revolutions))
+        raw.setdefault(name, []).append((str(file), rec.revolutions, rec.transient_revolutions))
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
+    localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
     by_unit = {r["unit"]: r for r in run.records()}
     shown_spec = {"points": meta["points"], "input": meta["input"], "classical": meta["classical"]}
     classical = {**meta["classical"], "shafts": tuple(tuple(x) for x in meta["classical"]["shafts"])}
@@ -182,6 +186,8 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
                             "rule": meta["threshold"],
                             "median_score": float(np.median(s)) if s.size else None,
                             "decision": "fault" if s.size and called > s.size / 2 else "healthy",
+                            "localised": localised.get(f.path, {}).get("named"),
+                            "call": localised.get(f.path, {}).get("call"),
                             "scores": [float(x) for x in s],
                         }
                     )

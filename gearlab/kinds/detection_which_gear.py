@@ -30,16 +30,17 @@ from .detection_records import longest_tsa
 WATCHED, OTHER, NOT_LOCALISED = "watched-gear fault", "other damage", "nothing localised"
 
 
-def gearbox_of(source: DatasetSpec):
-    """The gearbox description the source simulates (a built-in one named by its preset, or a
-    description it references), or None: no shafts to localise on."""
+def gearbox_of(source: DatasetSpec | str):
+    """The gearbox description the source (or a model preset) simulates: a built-in one named by the
+    preset, or a description it references; None: no shafts to localise on."""
     from ..gearbox import builtin_gearboxes, resolve_gearbox
     from ..gearbox.simulation import is_reference, referenced
 
-    if is_reference(source.preset):
-        return referenced(source.preset)
-    if source.preset in builtin_gearboxes():
-        return resolve_gearbox(source.preset)
+    preset = source if isinstance(source, str) else source.preset
+    if is_reference(preset):
+        return referenced(preset)
+    if preset in builtin_gearboxes():
+        return resolve_gearbox(preset)
     return None
 
 
@@ -60,10 +61,11 @@ def call_of(found: dict, watched: list[str]) -> str:
     return f"{OTHER}: {found['named']}"
 
 
-def localise_target(source: DatasetSpec, conditions: dict) -> dict | None:
+def localise_target(source: DatasetSpec, conditions: dict, histories: dict | None = None) -> dict | None:
     """Every test record of every condition localised against the condition's history records
     (conditions as detection_records.read_target makes them, with each record's raw revolutions in
-    cond["raw"]); None when the source simulates no gearbox description."""
+    cond["raw"]); None when the source simulates no gearbox description. *histories*, when given,
+    receives each condition's signals.localise.History (what `gearlab score` localises with)."""
     box = gearbox_of(source)
     if box is None:
         return None
@@ -71,7 +73,7 @@ def localise_target(source: DatasetSpec, conditions: dict) -> dict | None:
 
     table = order_table(box)
     watched = watched_gears(source, table)
-    out = {"gearbox": box.name, "watched": watched, "conditions": {}, "records": {}}
+    out = {"gearbox": box.name, "preset": source.preset, "watched": watched, "conditions": {}, "records": {}}
     for name, cond in conditions.items():
         raw = cond["raw"]
         history = [raw[f.path] for f, _ in cond["history"]]
@@ -86,6 +88,8 @@ def localise_target(source: DatasetSpec, conditions: dict) -> dict | None:
             "thresholds": dict(zip(hist.layout.shafts, map(float, hist.thresholds))),
             "note": hist.note,
         }
+        if histories is not None:
+            histories[name] = hist
         for f, _ in cond["test"]:
             revs, first = raw[f.path]
             try:
@@ -93,6 +97,48 @@ def localise_target(source: DatasetSpec, conditions: dict) -> dict | None:
             except GearlabInputError as exc:
                 found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
             out["records"][f.path] = {"condition": name, **found, "call": call_of(found, watched)}
+    return out
+
+
+def store_localisation(run, source: DatasetSpec, conditions: dict) -> None:
+    """localisation.json (localise_target) and each condition's history state for `gearlab score`
+    (scoring/localisation<i>.npz, named in localisation.json's condition entry as "state")."""
+    from ..parts import scoring
+
+    histories: dict = {}
+    found = localise_target(source, conditions, histories)
+    if found is None:
+        return
+    for i, (name, hist) in enumerate(histories.items()):
+        file = f"localisation{i}.npz"
+        scoring.save_arrays(run.file("scoring", file), **hist.state())
+        found["conditions"][name]["state"] = file
+    run.write_json("localisation.json", found)
+
+
+def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
+    """{path: {"named", "summary", "call"}} of new records ({condition: [(path, revolutions, first)]})
+    localised with the run's stored histories (store_localisation); {} for a run without them."""
+    from ..gearbox import order_table
+    from ..parts import scoring
+
+    meta = run.read_json("localisation.json")
+    box = gearbox_of(meta["preset"]) if meta else None
+    if box is None:
+        return {}
+    table = order_table(box)
+    out = {}
+    for name, recs in records.items():
+        state = meta["conditions"].get(name, {}).get("state")
+        if state is None:
+            continue
+        hist = L.History.restored(scoring.load_arrays(run.file("scoring", state)), table)
+        for path, revs, first in recs:
+            try:
+                found = L.localise(revs, hist, table, first_revolution=first).describe()
+            except GearlabInputError as exc:
+                found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+            out[path] = {"named": found["named"], "summary": found["summary"], "call": call_of(found, meta["watched"])}
     return out
 
 

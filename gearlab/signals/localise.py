@@ -60,6 +60,7 @@ Everything is numpy: no torch, nothing from the layers above.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -586,6 +587,35 @@ class History:
     thresholds: np.ndarray
     left_out_z: np.ndarray  # (history records, shafts): each record's z against the rest
     note: str
+    args: dict = field(default_factory=dict)  # layout()'s arguments: the layout is remade from them
+
+    def state(self) -> dict[str, np.ndarray]:
+        """Plain arrays (np.savez) from which :meth:`restored` remakes this history, records unread."""
+        sp = self.spread
+        return {
+            "power": sp.power,
+            "line": sp.line,
+            "between": sp.between,
+            "unit_noise": sp.unit_noise,
+            "units": np.array(sp.units),
+            "thresholds": self.thresholds,
+            "left_out_z": self.left_out_z,
+            "note": np.array(self.note),
+            "args": np.array(json.dumps(self.args)),
+        }
+
+    @staticmethod
+    def restored(state: dict, table) -> History:
+        """The history :meth:`state` saved, for the gearbox of order table *table*."""
+        args = json.loads(str(state["args"]))
+        lay = layout(table, **args)
+        if lay.orders.size != state["power"].size:
+            raise GearlabInputError(
+                f"a saved localisation history holds {state['power'].size} orders, the gearbox's layout "
+                f"{lay.orders.size}: saved for another gearbox description"
+            )
+        sp = Spread(state["power"], state["line"], state["between"], state["unit_noise"], int(state["units"]))
+        return History(lay, sp, state["thresholds"], state["left_out_z"], str(state["note"]), args)
 
 
 def _units(revs: np.ndarray, first: int, lay: Layout, pieces: int) -> list[Content]:
@@ -619,7 +649,8 @@ def history(
     revs = [check_array(r, f"history record {i}", min_ndim=2) for i, r in enumerate(records)]
     firsts = first_revolutions or [0] * len(revs)
     shortest = min(r.shape[0] for r in revs)
-    lay = layout(table, revs[0].shape[1], revolutions or shortest, **options)
+    args = {"points": int(revs[0].shape[1]), "revolutions": int(revolutions or shortest), **options}
+    lay = layout(table, **args)
     pieces = 1 if len(revs) >= 4 else 2
     units = [_units(r, f, lay, pieces) for r, f in zip(revs, firsts)]
     flat = [u for us in units for u in us]
@@ -638,7 +669,7 @@ def history(
         f"{len(revs)} history record(s) in {len(flat)} units; thresholds: the largest left-out z, at least "
         f"{floor:.2f} (false alarm {false_alarm:g} shared by {len(lay.shafts)} shafts)"
     )
-    return History(lay, ref, np.asarray(thr, float), loo, note)
+    return History(lay, ref, np.asarray(thr, float), loo, note, args)
 
 
 def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0) -> Localisation:
