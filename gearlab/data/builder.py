@@ -40,6 +40,7 @@ from ..executors import LocalExecutor
 from ..physics.faults import place_fault
 from ..registry import get_registry
 from ..signals import Standardiser, add_noise, resample_revolutions, steady_start, tsa
+from . import placement
 from .placement import parse_fault_key, shaft_names
 from .spec import POINTS, Dataset, DatasetSpec
 
@@ -108,6 +109,12 @@ def steady_response(
     per_rev = int(round(sim.fs / speed))
     period = sim.period(faults)
     cycle = math.lcm(period, mesh_cycle(sim))
+    if cycle > placement.MAX_PERIOD:  # a healthy train too (a wheel of over 1000 teeth): hours of simulation
+        labels = ", ".join(f.label for f in faults) or "healthy"
+        raise GearlabInputError(
+            f"model '{sim.model.name}' ({labels}): the steady response repeats only every {cycle} input "
+            f"revolutions (the meshes' orders); a steady simulation takes at most {placement.MAX_PERIOD}"
+        )
     per_block = per_rev * cycle
     blocks, most = (8, 256) if cycle == period else (3, 12)  # a long cycle: few blocks (the transient is in the first)
     while True:
