@@ -49,7 +49,9 @@ method learned of the simulator: the ROC AUC of its scores of the source's held-
 beside the bound of that source (source_bound: the likelihood ratio that knows its noise-free
 fault shapes), and its training time) and report.html; with
 pinion_sync, shafts.csv (file, unit, index, the shaft each test unit's localised damage is put on,
-or "nothing", and each shaft's strength) and its counts per label in table.md.
+or "nothing", and each shaft's strength) and its counts per label in table.md. When the source
+simulates a gearbox description: localisation.json, the gear each test record's change is on and
+what a flag on it is (a watched-gear fault, or other damage: kinds.detection_which_gear), in table.md.
 """
 
 from __future__ import annotations
