@@ -199,6 +199,33 @@ def test_no_tacho_the_speed_comes_from_the_gearbox_mesh_order(tmp_path, referenc
     assert rec.tacho is None and resolve_gearbox(str(gearbox)).name == "rig20"
 
 
+def test_an_edited_gearbox_description_is_not_served_from_the_cache(tmp_path, monkeypatch):
+    """The speed of a record without a tacho comes from the description's tooth count: the cache
+    key follows the description's content (not its name or place), so an edited one imports again."""
+    from gearlab.data.cache import load_or_build
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    _, acc, _ = signals()
+    np.savez(tmp_path / "r.npz", acc=acc, fs=FS)
+    text = (
+        '[gearbox]\nname = "rig"\n[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
+        'pinion = {{ z = {z}, bore = "20 mm" }}\nwheel = {{ z = 57, bore = "30 mm" }}\n'
+    )
+    gearbox = tmp_path / "rig.toml"
+    gearbox.write_text(text.format(z=20))
+    spec = MeasuredSpec(name="r", path=str(tmp_path / "r.npz"), vibration="acc", gearbox=str(gearbox))
+    first, cached = load_or_build(spec)
+    assert not cached and first.meta["speed_hz"] == pytest.approx(SPEED, rel=1e-4)
+    elsewhere = tmp_path / "moved" / "other.toml"
+    elsewhere.parent.mkdir()
+    elsewhere.write_text(text.format(z=20))
+    assert MeasuredSpec(name="r", path=spec.path, vibration="acc", gearbox=str(elsewhere)).key() == spec.key()
+    assert load_or_build(spec)[1]
+    gearbox.write_text(text.format(z=40))  # the same file, a 40-tooth pinion: the mesh line at 500 Hz is 12.5 Hz
+    again, cached = load_or_build(spec)
+    assert not cached and again.meta["speed_hz"] == pytest.approx(SPEED / 2, rel=1e-4)
+
+
 def test_the_user_story_from_a_csv_to_a_detection_report(cli, tmp_path, monkeypatch):
     """Issue 39: CSVs in volts at 100 mV/g with time_s and tacho_V columns, a scenario of under 30
     lines, to a detection report."""

@@ -136,7 +136,9 @@ class MeasuredSpec:
         return self.sensitivity is not None or self.gain is not None
 
     def key(self) -> str:
-        """Cache key: sha256 over the file's bytes, its format and the options (24 hex chars)."""
+        """Cache key: sha256 over the file's bytes, its format and the options (24 hex chars); a
+        gearbox description by its content, not its name or place (the speed found without a
+        tacho follows its tooth counts: an edited description must not reuse the old import)."""
         path = Path(self.path)
         check_measured_file(path)
         digest = hashlib.sha256()
@@ -146,11 +148,19 @@ class MeasuredSpec:
                     digest.update(block)
         except OSError as exc:
             raise GearlabInputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+        options = self.canonical()
+        if self.gearbox is not None:
+            from ..gearbox.simulation import reference
+
+            try:
+                options["gearbox"] = reference(self.gearbox).rpartition("#")[2]
+            except OSError as exc:
+                raise GearlabInputError(f"{self.gearbox}: cannot read ({exc.strerror or exc})") from None
         text = json.dumps(
             {
                 "file": digest.hexdigest(),
                 "format": path.suffix.lower(),
-                "options": self.canonical(),
+                "options": options,
                 "importer": IMPORTER_VERSION,
                 "physics": PHYSICS_VERSION,
             },
