@@ -9,7 +9,7 @@ import html
 import json
 from pathlib import Path
 
-from .kinds.transfer_verdict import experiment
+from .kinds import SCENARIO_KINDS
 from .runs import RunDir
 from .verdict import verdict_lines, verdict_table
 
@@ -77,118 +77,28 @@ def header_title(table: str) -> str:
     return f"{title} ({where.strip()})" if where.strip() else title
 
 
-# figure file stem -> (the thesis figure it repeats, what it shows); the captions that depend
-# on the run (k, repetitions, experiment, dataset) are made in caption()
-CAPTIONS = {
-    "training_curves": (
-        "Figure 5.7",
-        "Training curves of the first repetition at the middle k: source validation "
-        "accuracy (%, left axis), domain discrepancy and λ (dimensionless, right axis) against epoch; "
-        "the dashed line marks the epoch kept.",
-    ),
-    "latent_maps": (
-        "Figure 5.9",
-        "Latent features of the first repetition after adaptation: source and target "
-        "training samples projected on their first two principal components (PCA, dimensionless); "
-        "colour: domain, marker: class (o healthy, x fault) where the run stored the labels.",
-    ),
-    "accuracy_vs_intensity": (
-        "Figure 4.4",
-        "Test accuracy (%) per fault type against the intensity step (1-20), all "
-        "faults (black) and faults predicted healthy (green, dashed); mean ± std over runs; "
-        "noisy left, TSA right.",
-    ),
-    "accuracy_vs_rfa": (
-        "Figure 4.5",
-        "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); mean ± std over runs.",
-    ),
-    "confusion": (
-        "Figure 4.6",
-        "Confusion matrices compiled over all runs (counts; shading: share of the true class).",
-    ),
-    "tvms_ladders": (
-        "Figure 2.33",
-        "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step "
-        "of each fault ladder; colour: intensity step.",
-    ),
-    "rfa": (
-        "Figure 2.32",
-        "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.",
-    ),
-    "tvms_cases": ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases."),
-    "gap_per_view": (
-        "",
-        "Where the gap lies: per-view gap (sum of squared effect sizes, dimensionless) of the healthy "
-        "revolutions before and after correcting the simulator, with bootstrap intervals.",
-    ),
-    "gap_effect_ranking": (
-        "",
-        "Which effect: share of the gap (%) each candidate removes when added to the "
-        "simulator alone; accepted effects in blue.",
-    ),
-    "gap_accuracy": (
-        "",
-        "How far: target test accuracy (%) at k = 0 of models trained on the uncorrected and the "
-        "corrected simulator; mean ± std over repetitions.",
-    ),
-    "gap_benchmark": (
-        "",
-        "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
-    ),
-    "transfer_benchmark": (
-        "",
-        "Random unseen targets: each method's target test accuracy (%) per trial beside the trial's Bayes "
-        "bound, and its distance to the bound over the trials that have one (dotted: 5 points).",
-    ),
-}
+def _kind(summary: dict):
+    return SCENARIO_KINDS.get(summary.get("kind"))
 
 
-# figures in the order the thesis numbers them (then any other, by name)
-ORDER = [
-    "rfa",
-    "tvms_ladders",
-    "tvms_cases",
-    "accuracy_vs_intensity",
-    "accuracy_vs_rfa",
-    "confusion",
-    "accuracy_vs_k",
-    "training_curves",
-    "confusion_k0",
-    "latent_maps",
-    "gap_per_view",
-    "gap_effect_ranking",
-    "gap_accuracy",
-    "gap_benchmark",
-    "transfer_benchmark",
-]
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    """The run's kind's captions of its figures by file stem, in the order it shows them
+    (kinds.contract: figure_captions)."""
+    kind = _kind(summary)
+    return kind.figure_captions(summary) if kind is not None else {}
 
 
 def caption(stem: str, summary: dict) -> tuple[str, str]:
     """(thesis figure it repeats or '', what the figure shows) for a figure file of a run."""
-    protocol = summary.get("protocol") or {}
-    reps = protocol.get("repetitions") or protocol.get("runs")
-    over = f" over {reps} repetitions" if reps else ""
-    if stem == "accuracy_vs_k":
-        found = experiment(summary) if summary.get("kind") == "transfer" else None
-        return (
-            found[2] if found else "Figures 5.5/5.6",
-            f"Target test accuracy (%) against the number of target fault samples k in the training set: "
-            f"mean{over}, band ± one standard deviation; solid lines supervised, dashed unsupervised.",
-        )
-    if stem == "confusion_k0":
-        return (
-            "Figure 5.8",
-            f"Confusion matrices at k = {min(protocol.get('ks') or [0])}, summed{over} (counts of "
-            "target test samples; rows: true class, columns: predicted class).",
-        )
-    if stem.startswith("signals_"):
-        return (
-            "Figures 2.34-2.39",
-            f"Dataset {stem[len('signals_') :]}: a revolution per class at low, middle and "
-            "top intensity (standardised acceleration against input-shaft angle, deg) and its order "
-            "spectrum (amplitude against shaft order).",
-        )
-    return CAPTIONS.get(stem, ("", stem.replace("_", " ") + "."))
+    return figure_captions(summary).get(stem, ("", stem.replace("_", " ") + "."))
+
+
+def alt_text(label: str, text: str) -> str:
+    """A figure's alt text: its number and what it shows, to the first clause of its caption."""
+    first = text.split("; ")[0].split(". ")[0].rstrip(".")
+    if len(first) > 160:  # cut at a word
+        first = first[:160].rsplit(" ", 1)[0] + " …"
+    return f"{label}: {first}"
 
 
 def build_report(run: RunDir | Path) -> str:
@@ -215,25 +125,25 @@ def build_report(run: RunDir | Path) -> str:
     if text.strip():
         parts.append("<h2>Tables</h2>")
     for i, (title, block) in enumerate(table_blocks(text), start=1):
-        if summary.get("kind") == "transfer" and i == 1 and not title:
-            title = "Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4" + (
-                "; reference rows in italics: the thesis's values" if "(thesis" in block else ""
-            )
+        if block and not title and _kind(summary) is not None:
+            title = _kind(summary).table_title(summary, i, block)
         if not block:  # a paragraph after the last table
             parts.append(f"<p>{html.escape(title)}</p>")
             continue
         titled = f"<caption><b>Table {i}.</b> {html.escape(title or header_title(block))}</caption>"
         parts.append(markdown_table(block).replace("<table>", f"<table>{titled}", 1))
     figures = run.figures.files("*.png")
-    figures.sort(key=lambda f: ORDER.index(f.stem) if f.stem in ORDER else len(ORDER))  # the thesis's order
+    captions = figure_captions(summary)
+    order = list(captions)  # the kind's order (the thesis's where it repeats its figures), then by name
+    figures.sort(key=lambda f: (order.index(f.stem) if f.stem in captions else len(order), f.name))
     if figures:
         parts.append("<h2>Figures</h2>")
     for i, fig in enumerate(figures, start=1):
         data = base64.b64encode(fig.read_bytes()).decode()
-        thesis, text = caption(fig.stem, summary)
+        thesis, text = captions.get(fig.stem, ("", fig.stem.replace("_", " ") + "."))
         label = f"Figure {i}" + (f" (as thesis {thesis})" if thesis else "")
         parts.append(
-            f"<figure id='{html.escape(fig.stem)}'><img alt='{html.escape(label)}' "
+            f"<figure id='{html.escape(fig.stem)}'><img alt='{html.escape(alt_text(label, text))}' "
             f"src='data:image/png;base64,{data}'><figcaption><b>{html.escape(label)}.</b> "
             f"{html.escape(text)}</figcaption></figure>"
         )

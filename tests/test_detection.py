@@ -94,6 +94,70 @@ def test_scores_csv_has_a_row_per_test_unit_and_method(cli, tmp_path, cache):
     assert "fm4" in (out / "report.html").read_text()
 
 
+def test_the_report_draws_each_methods_roc_and_its_scores_per_record_and_in_time(cli, tmp_path, cache):
+    """Issue 41: the detection report has figures, each with an alt text and a caption, and titled
+    tables. The ROC drawn of each method at the verdict's unit (the longest TSA) is made of the
+    test scores the table's AUC is: the area under the drawn curve is the table's AUC, and the
+    legend says it. The per-record figures split the history's scores by record (the units each
+    history record gave) and place a test record's units at the revolution each starts at."""
+    from gearlab.engine import load_scenario
+    from gearlab.kinds import detection
+    from gearlab.kinds.detection_figures import record_panels
+    from gearlab.runs import RunDir
+
+    path = scenario(tmp_path)
+    out = run(cli, path, tmp_path / "runs")
+    figures = {p.name for p in (out / "figures").iterdir()}
+    assert figures == {"detection_roc.png", "detection_scores_1.png", "detection_time_1.png"}
+    html = (out / "report.html").read_text()
+    for stem in ("detection_roc", "detection_scores_1", "detection_time_1"):
+        figure = re.search(rf"<figure id='{stem}'><img alt='([^']+)' src='data:image/png;base64,[^']+'>"
+                           r"<figcaption><b>Figure \d\.</b> ([^<]+)</figcaption>", html)  # fmt: skip
+        assert figure and figure.group(1).startswith("Figure ") and "record10" in figure.group(2), stem
+    assert "the legend gives each method&#x27;s ROC AUC" in html and "dashed: the method&#x27;s threshold" in html
+    # every table titled by the kind (not made of its header), none left without one
+    titles = re.findall(r"<caption><b>Table \d+\.</b> ([^<]+)</caption>", html)
+    assert html.count("<table>") == len(titles) == 3
+    assert titles[0].startswith("Condition 16 Hz: ROC AUC") and titles[1].startswith("Units called (%")
+    assert titles[2].startswith("What each method learned of the simulator")
+    # the column that was empty says what each domain loss aligns the history with
+    summary = json.loads((out / "summary.json").read_text())
+    aligned = {r["method"]: r["aligned_with"] for r in summary["learned"]}
+    assert aligned["source_only"] == aligned["matched_filter"] == "– (no domain loss)"
+    assert aligned["mmd"] in ("the source's healthy samples", "every source sample", "a point")
+
+    rundir = RunDir(out)
+    (roc,) = [c for c in detection.charts(load_scenario(path), rundir) if "ROC" in c.title]
+    rows = {r["method"]: r for r in summary["rows"] if r["unit"] == "record10"}
+    table = (out / "table.md").read_text()
+    assert len(roc.curves) == len(rows) == 5
+    for curve in roc.curves:
+        method, shown = re.fullmatch(r"(.+) \(AUC ([0-9.]+)\)", curve.label).groups()
+        assert float(shown) == pytest.approx(rows[method]["auc"], abs=5e-4)
+        assert np.trapezoid(curve.y, curve.x) == pytest.approx(rows[method]["auc"], abs=1e-12)
+        assert re.search(rf"\| {method} \| [0-9.]+ \| [0-9]+ \| [0-9]+ \| {shown} \|", table)  # record10's column
+        assert curve.x[0] == curve.y[0] == 0.0 and curve.x[-1] == curve.y[-1] == 1.0
+    # every chipped unit above every healthy one: all found before the first false alarm
+    fm4 = next(c for c in roc.curves if c.label.startswith("fm4 "))
+    assert rows["fm4"]["auc"] == 1.0 and max(y for x, y in zip(fm4.x, fm4.y) if x == 0.0) == 1.0
+
+    conditions = json.loads((out / "conditions.json").read_text())
+    ((_, panels),) = record_panels(summary, rundir.records(), conditions).items()
+    records = {r["method"]: r for r in rundir.records()}
+    for panel in panels:
+        names = [name for name, _, _ in panel["records"]]
+        assert names == ["h1", "h2", "h3", "f1", "f2"]  # the history's records, then the test's, negatives first
+        assert [kind for _, kind, _ in panel["records"]] == ["history", "history", "healthy", "fault", "fault"]
+        history = np.concatenate([s for _, kind, (_, s) in panel["records"] if kind == "history"])
+        assert history.tolist() == records[panel["method"]]["history_scores"]["record10"]
+        counts = conditions["16 Hz"]["history_units"]["record10"]
+        assert [len(s) for _, kind, (_, s) in panel["records"] if kind == "history"] == counts
+        _, _, (x, s) = panel["records"][3]
+        assert s.tolist() == records[panel["method"]]["test_scores"]["../data/f1.zip"]["record10"]
+        assert x.tolist() == [0, 10, 20][: len(s)]
+        assert panel["threshold"] == records[panel["method"]]["thresholds"]["record10"]
+
+
 def flipped(files, signals: bool = False):
     """The test files' labels swapped (and, with *signals*, other recordings under the same names)."""
     out = []

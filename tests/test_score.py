@@ -56,7 +56,9 @@ def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, c
     assert len(scoring.read_history(RunDir.open(out))) == len(rows) + len(rows) // 2
     from gearlab.kinds import SCENARIO_KINDS
 
-    (chart,) = SCENARIO_KINDS["detection"].charts(None, RunDir.open(out))
+    charts = SCENARIO_KINDS["detection"].charts(None, RunDir.open(out))
+    (chart,) = [c for c in charts if "scored records" in c.title]  # beside the run's ROC per condition
+    assert [c.title for c in charts if c is not chart] == ["16 Hz: ROC on the test's record10 units"]
     assert {c.label for c in chart.curves} == methods and all(len(c.x) == 3 for c in chart.curves)
     assert (out / "figures" / "score_trend.png").is_file() and "score_trend" in (out / "report.html").read_text()
 

@@ -11,6 +11,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from test_detection import scenario as detection_scenario
 from tiny import transfer
 
 from gearlab.data.spec import DATASET_PRESETS
@@ -238,7 +239,9 @@ def runs(tmp_path_factory):
         transfers = [run_scenario(base / "t.toml", out=base / "runs").path for _ in range(2)]
         gap = run_scenario(HERE / "tui_scenarios" / "tgap.toml", out=base / "runs").path
         data = run_scenario(HERE / "tui_scenarios" / "tdata.toml", out=base / "runs").path
-    return {"transfer": transfers, "gap": gap, "dataset": data}
+        (base / "det").mkdir()
+        found = run_scenario(detection_scenario(base / "det"), out=base / "runs").path
+    return {"transfer": transfers, "gap": gap, "dataset": data, "detection": found}
 
 
 def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_learned_nothing():
@@ -313,26 +316,28 @@ def test_the_report_opens_with_the_verdict_numbers_its_figures_and_folds_the_jso
 
 
 def test_every_figure_a_kind_writes_has_a_caption():
-    stems = [
-        "accuracy_vs_k",
-        "training_curves",
-        "confusion_k0",
-        "latent_maps",
-        "accuracy_vs_intensity",
-        "accuracy_vs_rfa",
-        "confusion",
-        "tvms_ladders",
-        "rfa",
-        "tvms_cases",
-        "signals_B-6",
-        "gap_per_view",
-        "gap_effect_ranking",
-        "gap_accuracy",
-        "gap_benchmark",
-    ]
-    for stem in stems:
-        _, text = caption(stem, {})
-        assert text != stem.replace("_", " ") + "." and "(" in text or stem == "gap_benchmark"
+    """Each kind captions its own figures (kinds.contract: figure_captions); the report names no kind."""
+    detection_summary = {"rows": [{"condition": "16 Hz", "unit": u} for u in ("revolution", "record30")]}
+    stems = {
+        "transfer": ["accuracy_vs_k", "training_curves", "confusion_k0", "latent_maps"],
+        "noise_study": ["accuracy_vs_intensity", "accuracy_vs_rfa", "confusion"],
+        "stiffness": ["rfa", "tvms_ladders", "tvms_cases"],
+        "dataset": ["signals_B-6"],
+        "gap": ["gap_per_view", "gap_effect_ranking", "gap_accuracy"],
+        "gap_benchmark": ["gap_benchmark"],
+        "transfer_benchmark": ["transfer_benchmark"],
+        "detection": ["detection_roc", "detection_scores_1", "detection_time_1", "score_trend"],
+    }
+    for kind, names in stems.items():
+        summary = {"kind": kind, "datasets": {"B-6": {}}, **(detection_summary if kind == "detection" else {})}
+        for stem in names:
+            _, text = caption(stem, summary)
+            assert text != stem.replace("_", " ") + "." and ("(" in text or ":" in text), (kind, stem)
+        # another kind's figure of that name has no caption of its own
+        other = {"kind": "gap" if kind == "stiffness" else "stiffness"}
+        assert caption(names[0], other) == ("", names[0].replace("_", " ") + "."), kind
+    assert caption("accuracy_vs_k", {"kind": "transfer"})[0] == "Figures 5.5/5.6"
+    assert "record30 scores per record" in caption("detection_scores_1", {"kind": "detection", **detection_summary})[1]
 
 
 def test_compare_cli_prints_the_tables_side_by_side_and_writes_a_page(runs, cli, tmp_path):
@@ -421,7 +426,8 @@ def chromium() -> str | None:
 def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
     """Rendered by Chromium with the network cut off: the verdict and the captions are in the
     page it draws, every image decodes, and the page asked for nothing outside itself."""
-    for kind, run in (("transfer", runs["transfer"][0]), ("gap", runs["gap"]), ("dataset", runs["dataset"])):
+    for kind in ("transfer", "gap", "dataset", "detection"):
+        run = runs[kind][0] if kind == "transfer" else runs[kind]
         report = run / "report.html"
         html = report.read_text()
         assert not re.search(r"""(src|href)=['"]?(https?:)?//""", html), kind
@@ -443,7 +449,7 @@ def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
         )
         dom = done.stdout
         assert "<figcaption>" in dom and dom.count("<img") == html.count("<img"), kind
-        if kind in ("transfer", "gap"):
+        if kind in ("transfer", "gap", "detection"):
             assert '<section id="verdict">' in dom, kind
         shot = tmp_path / f"{kind}.png"
         subprocess.run(
@@ -495,7 +501,13 @@ def test_each_kinds_report_keeps_to_the_page_and_titles_every_table_and_figure(r
     stiffness = run_scenario(
         Path(__file__).parents[1] / "scenarios" / "stiffness_verification.toml", out=tmp_path / "runs", quick=True
     ).path
-    kinds = {"transfer": runs["transfer"][0], "gap": runs["gap"], "dataset": runs["dataset"], "stiffness": stiffness}
+    kinds = {
+        "transfer": runs["transfer"][0],
+        "gap": runs["gap"],
+        "dataset": runs["dataset"],
+        "stiffness": stiffness,
+        "detection": runs["detection"],
+    }
     for kind, run in kinds.items():
         html = (run / "report.html").read_text()
         assert "<table>" not in html or html.count("<table><caption><b>Table ") == html.count("<table>"), kind

@@ -368,3 +368,11 @@ def no_table(summary: dict) -> str | None:
 
 def no_compare(runs: list[tuple]) -> tuple[str, str] | None:
     return None  # `gearlab compare` letters each run's own table
+
+
+def no_title(summary: dict, index: int, table: str) -> str:
+    return ""  # report.html titles an untitled table from its header
+
+
+def no_figures(summary: dict) -> dict[str, tuple[str, str]]:
+    return {}  # a kind that draws no figure

@@ -60,3 +60,11 @@ class ScenarioKind(Protocol):
     def compare_table(self, runs: list[tuple]) -> tuple[str, str] | None:
         """(title, Markdown table) of several runs side by side, *runs* being (letter, scenario,
         records) in the order compared; None: `gearlab compare` letters each run's own table."""
+
+    def table_title(self, summary: dict, index: int, table: str) -> str:
+        """The title of report.html's *index*-th table (from 1, Markdown *table*) where the kind's text
+        gave it none; "": report.html makes one of the table's header."""
+
+    def figure_captions(self, summary: dict) -> dict[str, tuple[str, str]]:
+        """{figure file stem: (the thesis figure it repeats or "", what it shows)} of the run's figures
+        (run.figures), in the order report.html shows them; a figure not named is shown last, by name."""

@@ -17,7 +17,7 @@ from ..events import Event
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
-from .common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_verdict, sized
+from .common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, no_verdict, sized
 
 TABLES = {"datasets": DATASET_TABLE}
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
@@ -196,3 +196,16 @@ def recording_views(dataset, max_order: float = 200.0) -> tuple[Chart, Chart, Ch
 
 
 verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+table_title = no_title
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    """Each dataset's revolutions per class (Figures 2.34-2.39)."""
+    return {
+        f"signals_{name}": (
+            "Figures 2.34-2.39",
+            f"Dataset {name}: a revolution per class at low, middle and top intensity (standardised "
+            "acceleration against input-shaft angle, deg) and its order spectrum (amplitude against shaft order).",
+        )
+        for name in summary.get("datasets") or {}
+    }

@@ -74,8 +74,10 @@ from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of
 from ..settings import shrunk
 from ..signals.indicators import DEFAULT_INDICATORS, INDICATORS
-from .common import DATASET_TABLE, class_sizes, device_of, executor_for, no_compare, simulated_spec, sized
+from .common import DATASET_TABLE, class_sizes, device_of, executor_for, no_compare, no_title, simulated_spec, sized
 from .detection_classical import classical_record
+from .detection_figures import captions, roc_charts
+from .detection_figures import draw as draw_figures
 from .detection_records import (
     folds_of,
     history_training_rows,
@@ -580,12 +582,15 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "sources": v["sources"],
                     # what the best detector of each source's held-out samples reaches (source_bound)
                     "source_bound": {w or "source": bounds[(c, w)] for w in variants},
+                    # each history record's units of each kind, in order (the figures split its scores)
+                    "history_units": {u: [n for n, _ in counts] for u, counts in v["history_records"].items()},
                 }
                 for c, v in conditions.items()
             },
         )
         store_scoring(run, spec, conditions)
         summarise(scenario, run)
+        draw_figures(run)
 
 
 def summary_lines(run: RunDir) -> list[str]:
@@ -606,8 +611,10 @@ def records_table(scenario: Scenario, records: list[dict]) -> str:
 
 
 def charts(scenario: Scenario, run: RunDir) -> list:
-    """The scoring history (`gearlab score`) as a trend per condition and method."""
-    return score_trends(run)
+    """Each method's ROC per condition (kinds.detection_figures) and the scoring history (`gearlab score`)
+    as a trend per condition and method."""
+    summary = run.read_json("summary.json")
+    return (roc_charts(summary, run.records()) if summary else []) + score_trends(run)
 
 
 def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
@@ -622,3 +629,17 @@ def verdict_table(summary: dict) -> str | None:
 
 
 compare_table = no_compare  # each detection run's own tables, lettered
+table_title = no_title  # table.md titles its tables
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    """The ROC, per condition the scores per record and in time order (kinds.detection_figures), then
+    the trend of what `gearlab score` scored."""
+    return {
+        **captions(summary),
+        "score_trend": (
+            "",
+            "gearlab score: per condition, each method's median score of each scored record's longest TSA "
+            "units less its threshold, in the order the records were scored (above 0: called).",
+        ),
+    }

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..parts.measured import Target
 from ..parts.roc import auc
+from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario
 from .detection_records import longest_tsa
@@ -109,6 +110,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "protocol": {k: v for k, v in asdict(spec["protocol"]).items() if k != "methods"},
         "methods": list(dict.fromkeys(r["method"] for r in records)),
         "false_alarm_asked": spec["false_alarm"],
+        "threshold_rule": spec["threshold"],
         "rows": rows,
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
@@ -126,6 +128,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             "part_source_auc": r.get("part_source_auc", []),
             "source_units": r["source_units"],
             "aligned_to_a_point": r.get("aligned_to_a_point", False),
+            "aligned_with": aligned_with(r, spec["protocol"].calibration.alignment),
             "seconds": r["seconds"],
         }
         for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
@@ -142,6 +145,17 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_text("table.csv", table_csv(rows))
 
 
+def aligned_with(record: dict, alignment: str) -> str:
+    """What a learned method's domain loss aligns the history with: nothing for a method without one
+    (trained on the source alone, or a detector), a single point (aligned_to_a_point), else the
+    source's samples that [protocol] alignment names."""
+    if get_registry().get("adapter", record["adapter"]).train_on != "joint":
+        return "– (no domain loss)"
+    if record.get("aligned_to_a_point"):
+        return "a point"
+    return "the source's healthy samples" if alignment == "healthy" else "every source sample"
+
+
 def _cell(x, fmt="{:.2f}") -> str:
     return "–" if x is None else fmt.format(x)
 
@@ -155,12 +169,26 @@ def _spread(aucs) -> str:
 def table_md(rows: list[dict]) -> str:
     """One table per condition: a row per method; AUC (an ensemble's: with the range of its
     members' AUCs), detection and false alarms (% of the test's positive and negative units
-    called at the history's threshold) per unit."""
+    called at the history's threshold) per unit; above each its title (report.html's caption), which
+    counts any scores that are not numbers."""
     units = list(dict.fromkeys(r["unit"] for r in rows))
     out = []
     for c in dict.fromkeys(r["condition"] for r in rows):
         cells = {(r["method"], r["unit"]): r for r in rows if r["condition"] == c}
         first = next(r for r in rows if r["condition"] == c)
+        broken = {m: 0 for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c)}
+        for r in rows:
+            if r["condition"] == c:
+                broken[r["method"]] += r.get("non_finite", 0)
+        out.append(
+            f"Condition {c}: ROC AUC of each method's test scores, and the test's positive (det %) and negative "
+            "(FA %) units called at the threshold fixed on the history, per unit kind"
+            + (
+                "; scores that are not numbers (no AUC, '–'): " + ", ".join(f"{m} {n}" for m, n in broken.items() if n)
+                if any(broken.values())
+                else ""
+            )
+        )
         out.append(f"| {c}: method | " + " | ".join(f"{u} AUC | det % | FA %" for u in units) + " |")
         out.append("|---|" + "---|---|---|" * len(units))
         for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c):
@@ -184,14 +212,6 @@ def table_md(rows: list[dict]) -> str:
             )
             + " |"
         )
-        broken = {m: 0 for m in dict.fromkeys(r["method"] for r in rows if r["condition"] == c)}
-        for r in rows:
-            if r["condition"] == c:
-                broken[r["method"]] += r.get("non_finite", 0)
-        if any(broken.values()):
-            out.append(
-                "Scores that are not numbers (no AUC, '–'): " + ", ".join(f"{m} {n}" for m, n in broken.items() if n)
-            )
         out.append("")
     return "\n".join(out)
 
@@ -205,6 +225,8 @@ def labels_md(rows: list[dict]) -> str:
     picked = [r for r in rows if r["unit"] == unit]
     labels = list(dict.fromkeys(k for r in picked for k in r["called_by_label"]))
     out = [
+        f"Units called (% of each test label's {unit} units) at the threshold fixed on the history: is other "
+        "damage (a negative label) taken for the fault?",
         f"| {unit}: condition | method | " + " | ".join(f"called % '{k}'" for k in labels) + " |",
         "|---|---|" + "---|" * len(labels),
     ]
@@ -221,25 +243,25 @@ def learned_md(learned: list[dict]) -> str:
     """What each method that learns from the simulator learned of it: the ROC AUC of a network's
     scores of the source's held-out revolutions (an ensemble's: the median over its members, with
     their range; a detector's "–": it is built in the target's frame), and the training time, all
-    of its trainings together, and whether its domain loss aligned the history with a single point
-    (aligned_to_a_point). From training data only: a row near 0.5 cannot tell the simulated fault
+    of its trainings together, and what its domain loss aligns the history with (aligned_with; a
+    single point: aligned_to_a_point). From training data only: a row near 0.5 cannot tell the simulated fault
     from healthy, so its calls on the records are not what the simulator taught it."""
     if not learned:
         return ""
     out = [
-        "\nWhat each method learned of the simulator (ROC AUC of a network's scores of the source's held-out "
-        "revolutions, 0.5 = chance; a detector, built on the history, has none; the bound: the likelihood "
-        "ratio that knows the source's noise-free fault shapes and noise law, – for a noise-free source; "
-        "training time, all seeds; history aligned with: a point when the source's samples its domain loss "
-        "aligns the history with are one input, a noise-free healthy revolution)\n",
+        "\nWhat each method learned of the simulator, from training data only: the ROC AUC of its scores of the "
+        "source's held-out samples (0.5 = chance; – for a detector, built on the history), the bound (the "
+        "likelihood ratio that knows the source's noise-free fault shapes and noise law; – for a noise-free "
+        "source), the training time of all its trainings, and what its domain loss aligns the history with "
+        "(a point: the source's samples it aligns with are one input, a noise-free healthy revolution)\n",
         "| condition | method | source AUC | bound | training (s) | history aligned with |",
         "|---|---|---|---|---|---|",
     ]
     for r in learned:
-        point = "a point" if r.get("aligned_to_a_point") else ""
+        aligned = r.get("aligned_with") or ("a point" if r.get("aligned_to_a_point") else "–")
         out.append(
             f"| {r['condition']} | {r['method']} | {_cell(r['source_auc'])}{_spread(r['part_source_auc'])} | "
-            f"{_cell(r.get('source_bound'))} | {r['seconds']:.0f} | {point} |"
+            f"{_cell(r.get('source_bound'))} | {r['seconds']:.0f} | {aligned} |"
         )
     return "\n".join(out) + "\n"
 

@@ -51,6 +51,7 @@ from .common import (
     executor_for,
     no_compare,
     no_table,
+    no_title,
     no_verdict,
     noise_spec,
 )
@@ -426,3 +427,22 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
 
 
 verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+table_title = no_title
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    return {
+        "accuracy_vs_intensity": (
+            "Figure 4.4",
+            "Test accuracy (%) per fault type against the intensity step (1-20), all faults (black) and faults "
+            "predicted healthy (green, dashed); mean ± std over runs; noisy left, TSA right.",
+        ),
+        "accuracy_vs_rfa": (
+            "Figure 4.5",
+            "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); mean ± std over runs.",
+        ),
+        "confusion": (
+            "Figure 4.6",
+            "Confusion matrices compiled over all runs (counts; shading: share of the true class).",
+        ),
+    }

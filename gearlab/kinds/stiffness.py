@@ -21,7 +21,7 @@ from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOption
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of, plain_name
-from .common import no_compare, no_table, no_verdict
+from .common import no_compare, no_table, no_title, no_verdict
 
 TABLES = {
     "stiffness": Table(
@@ -307,3 +307,19 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
 
 
 verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+table_title = no_title
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    return {
+        "rfa": (
+            "Figure 2.32",
+            "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.",
+        ),
+        "tvms_ladders": (
+            "Figure 2.33",
+            "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step of each fault ladder; "
+            "colour: intensity step.",
+        ),
+        "tvms_cases": ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases."),
+    }

@@ -41,7 +41,7 @@ from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, keys_of, location
 from ..settings import shrunk
 from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
-from .transfer_verdict import transfer_lines, transfer_table
+from .transfer_verdict import experiment, transfer_lines, transfer_table
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 TABLES = {
@@ -362,6 +362,47 @@ def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
 def verdict_table(summary: dict) -> str | None:
     """Table 5.4's layout with the bound and, for Experiments A and B, the thesis's rows."""
     return transfer_table(summary, table_md) if summary.get("table") else None
+
+
+def table_title(summary: dict, index: int, table: str) -> str:
+    """The first table: Table 5.4's layout (verdict_table)."""
+    if index != 1:
+        return ""
+    return "Target test accuracy (%), mean ± std over the repetitions, in the layout of thesis Table 5.4" + (
+        "; reference rows in italics: the thesis's values" if "(thesis" in table else ""
+    )
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    """Figures 5.5/5.6 (or the thesis figure of the experiment the run repeats), 5.7, 5.8 and 5.9."""
+    protocol = summary.get("protocol") or {}
+    reps = protocol.get("repetitions") or protocol.get("runs")
+    over = f" over {reps} repetitions" if reps else ""
+    found = experiment(summary)
+    return {
+        "accuracy_vs_k": (
+            found[2] if found else "Figures 5.5/5.6",
+            f"Target test accuracy (%) against the number of target fault samples k in the training set: "
+            f"mean{over}, band ± one standard deviation; solid lines supervised, dashed unsupervised.",
+        ),
+        "training_curves": (
+            "Figure 5.7",
+            "Training curves of the first repetition at the middle k: source validation accuracy (%, left axis), "
+            "domain discrepancy and λ (dimensionless, right axis) against epoch; the dashed line marks the epoch "
+            "kept.",
+        ),
+        "confusion_k0": (
+            "Figure 5.8",
+            f"Confusion matrices at k = {min(protocol.get('ks') or [0])}, summed{over} (counts of target test "
+            "samples; rows: true class, columns: predicted class).",
+        ),
+        "latent_maps": (
+            "Figure 5.9",
+            "Latent features of the first repetition after adaptation: source and target training samples "
+            "projected on their first two principal components (PCA, dimensionless); colour: domain, marker: "
+            "class (o healthy, x fault) where the run stored the labels.",
+        ),
+    }
 
 
 def compare_table(runs: list[tuple]) -> tuple[str, str] | None:

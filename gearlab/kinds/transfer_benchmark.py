@@ -46,7 +46,7 @@ from ..parts.training import CALIBRATION, NETWORK, TRAINING, method, train_unit
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
 from ..settings import MAX_SEED, shrunk
-from .common import DATASET_TABLE, device_of, executor_for, no_compare, no_table, no_verdict, simulated_spec
+from .common import DATASET_TABLE, device_of, executor_for, no_compare, no_table, no_title, no_verdict, simulated_spec
 
 REPORT_SEEDS = 1000  # seeds below: development; at or above: reported figures (the selection rule)
 SELECTION_RULE = (
@@ -549,3 +549,14 @@ def figure(run: RunDir, summary: dict) -> None:
 
 
 verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+table_title = no_title
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    return {
+        "transfer_benchmark": (
+            "",
+            "Random unseen targets: each method's target test accuracy (%) per trial beside the trial's Bayes "
+            "bound, and its distance to the bound over the trials that have one (dotted: 5 points).",
+        )
+    }

@@ -32,7 +32,7 @@ from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Key, Scenario, Table, in_range, keys_of, location
 from ...settings import quick_limits
-from ..common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_verdict
+from ..common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, no_verdict
 from . import trials as bench
 
 MAX_TRIALS = 10000
@@ -357,3 +357,13 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
 
 
 verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+table_title = no_title
+
+
+def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
+    return {
+        "gap_benchmark": (
+            "",
+            "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
+        )
+    }
