@@ -372,7 +372,3 @@ def no_compare(runs: list[tuple]) -> tuple[str, str] | None:
 
 def no_title(summary: dict, index: int, table: str) -> str:
     return ""  # report.html titles an untitled table from its header
-
-
-def no_figures(summary: dict) -> dict[str, tuple[str, str]]:
-    return {}  # a kind that draws no figure
