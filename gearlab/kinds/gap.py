@@ -413,12 +413,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         on_event(Event("log", message=diagnosis_line(result)))
 
         notes = [note] if note else []
-        if spec["accuracy"] and records:
         if is_reference(source_spec.preset):  # which of the simulator's values are the defaults' guesses
             names = get_registry().get("model", source_spec.model).param_names()
             guessed = ", ".join(defaults(referenced(source_spec.preset), names))
             if guessed:
                 notes.append(f"the source's gearbox description leaves to defaults (docs/gearbox.md): {guessed}")
+        if spec["accuracy"] and records:
             notes.append(
                 "accuracy skipped: measured history records carry no labelled faults (the detection "
                 "kind scores real test files)"
