@@ -57,27 +57,27 @@ def _conform(params) -> None:
             param.__class__ = ConventionalOption
 
 
-class ConventionalCommand(TyperCommand):
+class _Conforming:
+    """A command or group whose parameters, its own and those click adds (--help), follow the conventions."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        _conform(self.params)
+
+    def get_params(self, ctx):
+        params = super().get_params(ctx)
+        _conform(params)
+        return params
+
+
+class ConventionalCommand(_Conforming, TyperCommand):
     def __init__(self, *args, **kwargs):
         kwargs["context_settings"] = {"help_option_names": HELP_NAMES, **(kwargs.get("context_settings") or {})}
         super().__init__(*args, **kwargs)
-        _conform(self.params)
-
-    def get_params(self, ctx):
-        params = super().get_params(ctx)
-        _conform(params)
-        return params
 
 
-class ConventionalGroup(TyperGroup):
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        _conform(self.params)
-
-    def get_params(self, ctx):
-        params = super().get_params(ctx)
-        _conform(params)
-        return params
+class ConventionalGroup(_Conforming, TyperGroup):
+    pass
 
 
 def conventional(app: typer.Typer) -> typer.Typer:
