@@ -1,0 +1,235 @@
+"""Training throughput of the default networks against a plain PyTorch loop and the machine's
+limit, measured side by side in one run.
+
+    python benchmarks/training.py [--rounds N] [--steps S] [--threads T] [--clock wall|cpu]
+                                  [--device cpu|cuda] [--networks shapes,fast]
+
+For each default network (`shapes`: scenarios/quick.toml, expB.toml, transfer_benchmark.toml;
+`fast`: scenarios/phm09_chip.toml, 2048 points) at its scenario's batch (40) with its optimiser
+(Adam, the priming and the baselines) and loss (cross-entropy), three figures, alternated round
+by round so that all see the same machine load, the median of the rounds printed:
+
+* gearlab: samples per second of `gearlab.learn.training.fit_supervised` (one epoch of S
+  batches a round, its own batching, clipping and loss bookkeeping);
+* plain: the same network, batch, optimiser and loss in the plainest loop (tensors made once,
+  a random order, zero_grad / forward / backward / step);
+* limit: the network's forward + backward FLOPs per sample divided by the peaks measured in the
+  same round: a matrix product (n x n) and a friendly conv1d (64 -> 64 channels), at T threads.
+  Counted: convolutions and dense layers (2 FLOPs a multiply-add forward; backward the weights'
+  gradient, and the input's where the input needs one), against the conv1d and the matmul peak;
+  `shapes`' template distances |r_n - t_jn| (a subtraction, an absolute value and a sum forward,
+  a sign, a product and a sum for the templates' gradient: 6 FLOPs a sample and template
+  element) against the matmul peak (a CPU issues those as many vector operations per cycle as
+  fused multiply-adds). Normalisation, activations, pooling and the optimiser are not counted,
+  so the limit is optimistic: a ratio gearlab / limit of 1 cannot be reached.
+
+Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
+samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
+On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the
+wall clock: the figures then hold for a free core. About 30 s with the defaults.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+import torch
+from torch import nn
+
+from gearlab.learn.networks import ShapeLikelihood, build_network, matched_start
+from gearlab.learn.training import fit_supervised
+
+# network, samples per revolution, batch, where it is the default
+CASES = (
+    ("shapes", 4096, 40, "quick, expB, transfer_benchmark"),
+    ("fast", 2048, 40, "phm09_chip"),
+)
+CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}  # cpu: this process's CPU seconds
+clock = CLOCKS["wall"]
+MATMUL = 512  # n of the n x n matrix product: large enough to be compute-bound
+CONV = (8, 64, 64, 5, 1024)  # batch, channels in and out, kernel, length of the friendly conv1d
+
+
+def synchronize(device: torch.device) -> None:
+    if device.type == "cuda":
+        torch.cuda.synchronize()
+
+
+def flops_per_sample(net: nn.Module, length: int, device: torch.device) -> dict[str, float]:
+    """Forward + backward FLOPs of one sample (see the module's docstring), by the peak they are
+    held against: ``{"conv": ..., "matmul": ...}``."""
+    counts = {"conv": 0.0, "matmul": 0.0}
+    hooks = []
+
+    def layer(kind: str) -> Callable:
+        def hook(module, inputs, output):
+            x = inputs[0]
+            macs = output.numel() // len(output) * (module.weight[0].numel())
+            # forward, the weights' gradient, and the input's when it needs one
+            counts[kind] += 2 * macs * (3 if x.requires_grad else 2)
+
+        return hook
+
+    for module in net.modules():
+        if isinstance(module, nn.Conv1d):
+            hooks.append(module.register_forward_hook(layer("conv")))
+        elif isinstance(module, nn.Linear):
+            hooks.append(module.register_forward_hook(layer("matmul")))
+        elif isinstance(module, ShapeLikelihood):
+            counts["matmul"] += 6 * module.weight.numel()
+    net.train()(torch.randn(2, length, device=device))  # two samples: batch normalisation needs them
+    for hook in hooks:
+        hook.remove()
+    return counts
+
+
+def peaks(device: torch.device) -> dict[str, float]:
+    """FLOP/s of an n x n matrix product and of a friendly conv1d, the best of three each."""
+    a, b = torch.randn(MATMUL, MATMUL, device=device), torch.randn(MATMUL, MATMUL, device=device)
+    n, c_in, c_out, k, length = CONV
+    x, w = torch.randn(n, c_in, length, device=device), torch.randn(c_out, c_in, k, device=device)
+    conv_flops = 2 * n * c_out * (length - k + 1) * c_in * k
+
+    def best(f: Callable[[], object], flops: float) -> float:
+        f()
+        times = []
+        for _ in range(3):
+            synchronize(device)
+            t = clock()
+            f()
+            synchronize(device)
+            times.append(clock() - t)
+        return flops / min(times)
+
+    return {
+        "matmul": best(lambda: a @ b, 2 * MATMUL**3),
+        "conv": best(lambda: torch.nn.functional.conv1d(x, w), conv_flops),
+    }
+
+
+def network(name: str, length: int, device: torch.device) -> nn.Module:
+    """*name* for 2 classes; `shapes` started on decaying bursts at random angles (as Experiment
+    B's faults), so that its templates sit in as many windows as in a run."""
+    net = build_network(name, 2, length=length, seed=0)
+    if name == "shapes":
+        rng = np.random.default_rng(0)
+        faults = np.zeros((256, length))
+        for row in faults:
+            at = rng.integers(length)
+            row[(at + np.arange(200)) % length] = rng.normal(size=200) * np.exp(-np.arange(200) / 40.0)
+        matched_start(net, faults, seed=0, law="laplace")
+    return net.to(device)
+
+
+def gearlab_run(net: nn.Module, X: np.ndarray, y: np.ndarray, batch: int, epochs: int, device: torch.device) -> float:
+    """Seconds of gearlab's supervised training over X for *epochs* (one call, as a priming is)."""
+    synchronize(device)
+    t = clock()
+    fit_supervised(
+        net, X, y, rng=np.random.default_rng(0), device=device, epochs=epochs, batch=batch, val=None, patience=None
+    )
+    synchronize(device)
+    return clock() - t
+
+
+def plain_run(
+    net: nn.Module, opt: torch.optim.Optimizer, X: torch.Tensor, y: torch.Tensor, batch: int, epochs: int
+) -> float:
+    """Seconds of the plainest loop over X for *epochs* (tensors already on the device)."""
+    loss_fn = nn.CrossEntropyLoss()
+    net.train()
+    synchronize(X.device)
+    t = clock()
+    for _ in range(epochs):
+        order = torch.randperm(len(X), device=X.device)
+        for i in range(0, len(X), batch):
+            idx = order[i : i + batch]
+            opt.zero_grad()
+            loss_fn(net(X[idx]), y[idx]).backward()
+            opt.step()
+    synchronize(X.device)
+    return clock() - t
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5, help="alternated rounds (median); 15 for a steadier figure")
+    parser.add_argument("--steps", type=int, default=20, help="training steps per figure and round")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads (1: as each unit of a run trains)")
+    parser.add_argument("--device", default="cpu", choices=("cpu", "cuda"))
+    parser.add_argument(
+        "--clock",
+        default="wall",
+        choices=tuple(CLOCKS),
+        help="wall time, or this process's CPU time (steadier where other work shares the cores)",
+    )
+    parser.add_argument("--networks", default=",".join(c[0] for c in CASES), help="comma-separated, of: shapes, fast")
+    args = parser.parse_args()
+    global clock
+    clock = CLOCKS[args.clock]
+    torch.set_num_threads(args.threads)
+    device = torch.device(args.device)
+    cases = [c for c in CASES if c[0] in args.networks.split(",")]
+    rng = np.random.default_rng(1)
+    setups = {}
+    # an epoch of up to 5 batches, repeated: a call's set-up is spread over its S steps as a
+    # priming's over its epochs, without copying S batches of data
+    per_epoch = min(args.steps, 5)
+    epochs = -(-args.steps // per_epoch)
+    for name, length, batch, _ in cases:
+        X = rng.standard_normal((per_epoch * batch, length)).astype(np.float32)
+        y = rng.integers(0, 2, len(X))
+        gearlab_net, plain_net = network(name, length, device), network(name, length, device)
+        setups[name] = dict(
+            X=X,
+            y=y,
+            gearlab=gearlab_net,
+            plain=plain_net,
+            opt=torch.optim.Adam(plain_net.parameters(), lr=1e-3),
+            Xt=torch.as_tensor(X, device=device),
+            yt=torch.as_tensor(y, device=device),
+            flops=flops_per_sample(network(name, length, device), length, device),
+            times={"gearlab": [], "plain": [], "limit": []},
+        )
+    peak_rounds: dict[str, list[float]] = {"matmul": [], "conv": []}
+    for _ in range(args.rounds):  # alternated: a load that comes and goes hits every figure alike
+        for name, _, batch, _ in cases:
+            s = setups[name]
+            samples = epochs * len(s["X"])
+            s["times"]["gearlab"].append(gearlab_run(s["gearlab"], s["X"], s["y"], batch, epochs, device) / samples)
+            s["times"]["plain"].append(plain_run(s["plain"], s["opt"], s["Xt"], s["yt"], batch, epochs) / samples)
+            peak = peaks(device)
+            for kind in peak_rounds:
+                peak_rounds[kind].append(peak[kind])
+            s["times"]["limit"].append(sum(s["flops"][kind] / peak[kind] for kind in peak))
+    matmul, conv = (statistics.median(peak_rounds[k]) for k in ("matmul", "conv"))
+    load = f", load average {os.getloadavg()[0]:.1f}" if hasattr(os, "getloadavg") else ""
+    print(
+        f"training throughput on {args.device}, {args.threads} torch thread(s) of {os.cpu_count()} CPUs{load}; "
+        f"{args.clock} clock, median of {args.rounds} alternated rounds of {args.steps} steps"
+    )
+    print(f"peaks at {args.threads} thread(s): matmul {matmul / 1e9:.1f} GFLOP/s, conv1d {conv / 1e9:.1f} GFLOP/s")
+    header = (
+        f"{'network':8s} {'input':>11s} {'MFLOP/sa':>8s} {'gearlab/s':>9s} {'plain/s':>9s} {'limit/s':>9s} "
+        f"{'gl/core':>8s} {'ms/step':>7s} {'gearlab/plain':>13s} {'gearlab/limit':>13s}"
+    )
+    print(header)
+    for name, length, batch, where in cases:
+        s = setups[name]
+        rate = {k: 1.0 / statistics.median(v) for k, v in s["times"].items()}
+        print(
+            f"{name:8s} {f'{batch} x {length}':>11s} {sum(s['flops'].values()) / 1e6:8.2f} {rate['gearlab']:9.0f} "
+            f"{rate['plain']:9.0f} {rate['limit']:9.0f} {rate['gearlab'] / args.threads:8.0f} "
+            f"{1e3 * batch / rate['gearlab']:7.2f} {rate['gearlab'] / rate['plain']:13.2f} "
+            f"{rate['gearlab'] / rate['limit']:13.3f}   ({where})"
+        )
+    print("(samples/s; gl/core = gearlab's per thread; the limit counts convolutions, dense layers and templates only)")
+
+
+if __name__ == "__main__":
+    main()
