@@ -395,6 +395,62 @@ def test_shapes_local_templates_are_the_whole_revolution_likelihood_exactly(law)
     assert torch.allclose(layer(r), dense, rtol=1e-5, atol=1e-4)
 
 
+@pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
+def test_shapes_compiled_laplace_scores_and_gradients_are_torch_s(dtype):
+    """The compiled loops (LaplaceGain, taken for a CPU input that needs no gradient) give the
+    per-window torch.cdist path's scores and template gradients, wrapping windows included."""
+    import numpy as np
+
+    from gearlab.learn.networks import LaplaceGain, ShapeLikelihood
+
+    rng = np.random.default_rng(2)
+    layer = ShapeLikelihood(6, 96, law="laplace", width=24).to(dtype)
+    bursts = np.zeros((6, 96))
+    for j, centre in enumerate([2, 20, 30, 50, 80, 95]):  # two share a window, two wrap round
+        bursts[j, (centre + np.arange(-5, 5)) % 96] = rng.normal(size=10)
+    layer.place(bursts)
+    r = torch.as_tensor(rng.laplace(size=(9, 96)), dtype=dtype)
+    assert LaplaceGain.applies(r, layer.weight) and not LaplaceGain.applies(r.clone().requires_grad_(), layer.weight)
+    g = torch.as_tensor(rng.normal(size=(9, 6)), dtype=dtype)
+    scores, grads = [], []
+    for x in (r, r.clone().requires_grad_()):  # compiled, then torch's path
+        layer.weight.grad = None
+        z = layer(x)
+        (z * g).sum().backward()
+        scores.append(z.detach())
+        grads.append(layer.weight.grad.clone())
+    tol = 1e-5 if dtype == torch.float32 else 1e-12
+    assert torch.allclose(scores[0], scores[1], rtol=tol, atol=tol * scores[1].abs().max())
+    assert torch.allclose(grads[0], grads[1], rtol=tol, atol=tol)
+    assert grads[0].abs().sum() > 0
+
+
+@pytest.mark.parametrize("length", [2048, 2050, 256])
+def test_fast_window_conv_and_pair_pool_are_conv1d_and_max_pool(length):
+    """`fast`'s first convolution as a product of windows and its pool's gradient without
+    indices: the outputs of nn.Conv1d and nn.MaxPool1d(2, ceil_mode=True) exactly, the same
+    gradients to rounding (an odd map, 2050 samples, takes max_pool1d itself)."""
+    import copy
+
+    from gearlab.learn.networks import MaxPool2, WindowConv1d
+
+    net = build_network("fast", 2, length=length, seed=0)
+    assert isinstance(net.features[1], WindowConv1d) and isinstance(net.features[4], MaxPool2)
+    reference = copy.deepcopy(net)
+    reference.features[1].__class__ = nn.Conv1d
+    reference.features[4] = nn.MaxPool1d(2, ceil_mode=True)
+    x, y = torch.randn(8, length), torch.tensor([0, 1] * 4)
+    outputs = []
+    for model in (net, reference):
+        torch.manual_seed(3)  # the same dropout
+        out = model(x)
+        nn.functional.cross_entropy(out, y).backward()
+        outputs.append(out.detach())
+    assert torch.equal(outputs[0], outputs[1])
+    for a, b in zip(net.parameters(), reference.parameters(), strict=True):
+        assert torch.allclose(a.grad, b.grad, rtol=1e-4, atol=1e-6 * b.grad.abs().max())
+
+
 def test_shapes_place_keeps_the_window_with_most_energy():
     """A template wider than its window keeps the grid window that holds most of its energy."""
     import numpy as np

@@ -105,7 +105,7 @@ from torch import nn
 from gearlab.errors import GearlabInputError
 from gearlab.params import did_you_mean
 
-from .bounds import noise_scale, shape_llr
+from .bounds import lower_median, noise_scale, shape_llr
 from .config import DEFAULT_DROPOUT, DEFAULT_LENGTH, DEFAULT_NETWORK, NetworkSettings  # noqa: F401 (re-exported)
 
 
@@ -218,6 +218,54 @@ def cnn3(n_classes: int, dropout: float, length: int) -> Network:
     return Network("cnn3", features, classifier, latent, n_classes, length, fixed_length=True)
 
 
+class WindowConv1d(nn.Conv1d):
+    """nn.Conv1d of a one-channel signal as a matrix product of its windows (unfold: a view, no
+    copy): weight (C, K) @ windows (B, K, L_out). For `fast`'s wide strided first layer on one
+    CPU thread, forward and the weights' gradient take 0.55 of the convolution's time
+    (benchmarks/training.py); the same sums in another order (gradients apart by rounding).
+    Any other case (channels, groups, dilation, padding mode) is nn.Conv1d's."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if self.in_channels != 1 or self.dilation != (1,) or self.padding_mode != "zeros" or x.dim() != 3:
+            return super().forward(x)
+        (size,), (stride,), (pad,) = self.kernel_size, self.stride, self.padding
+        windows = nn.functional.pad(x[:, 0], (pad, pad)).unfold(1, size, stride)  # (B, L_out, K)
+        y = self.weight[:, 0] @ windows.mT
+        return y if self.bias is None else y + self.bias[:, None]
+
+
+class MaxPool2(nn.Module):
+    """nn.MaxPool1d(2, ceil_mode=True): on the CPU its backward needs the maxima's indices, which
+    torch finds by a slow path (16 times the plain maximum for `fast`'s (40, 16, 128) map, and as
+    long as its first convolution). Here the maximum is the plain pool and the gradient goes to
+    the larger of each pair (to the second on a tie, where max_pool picks the first: after the
+    ReLU in front, a tie is two zeros, whose gradient the ReLU stops either way)."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if x.shape[-1] % 2 or not x.requires_grad:
+            return nn.functional.max_pool1d(x, 2, ceil_mode=True)
+        return _PairMax.apply(x)
+
+
+class _PairMax(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, x: torch.Tensor) -> torch.Tensor:
+        ctx.save_for_backward(x)
+        return nn.functional.max_pool1d(x, 2)
+
+    @staticmethod
+    def backward(ctx, grad: torch.Tensor) -> torch.Tensor:
+        (x,) = ctx.saved_tensors
+        # the first of a pair takes the gradient where it is the larger (threshold_backward: grad
+        # where first - second > 0, else 0), the second the rest: no boolean masks, which are
+        # slow on the CPU
+        out = torch.empty_like(x)
+        first = torch.ops.aten.threshold_backward(grad, x[..., 0::2] - x[..., 1::2], 0.0)
+        out[..., 0::2] = first
+        torch.sub(grad, first, out=out[..., 1::2])
+        return out
+
+
 def fast(n_classes: int, dropout: float, length: int) -> Network:
     """The thesis recipe's CPU network: wide strided first kernel (16 x 64, stride 16), two small
     strided convolutions, global average pooling to 64 features."""
@@ -225,8 +273,9 @@ def fast(n_classes: int, dropout: float, length: int) -> Network:
         raise GearlabInputError(f"network 'fast': signals must have at least 64 samples, got {length}")
 
     def block(c_in: int, c_out: int, size: int, stride: int, padding: int) -> list[nn.Module]:
+        conv = WindowConv1d if c_in == 1 else nn.Conv1d
         return [
-            nn.Conv1d(c_in, c_out, size, stride=stride, padding=padding, bias=False),
+            conv(c_in, c_out, size, stride=stride, padding=padding, bias=False),
             nn.BatchNorm1d(c_out),
             nn.ReLU(),
         ]
@@ -234,7 +283,7 @@ def fast(n_classes: int, dropout: float, length: int) -> Network:
     features = nn.Sequential(
         AsChannels(),
         *block(1, 16, 64, stride=16, padding=24),
-        nn.MaxPool1d(2, ceil_mode=True),
+        MaxPool2(),
         *block(16, 32, 3, stride=2, padding=1),
         *block(32, 64, 3, stride=2, padding=1),
         nn.AdaptiveAvgPool1d(1),
@@ -262,17 +311,6 @@ class RobustLimiter(nn.Module):
         scale = 1.4826 * lower_median(centred.abs())
         z = centred / scale.clamp_min(1e-12)
         return self.clip * torch.tanh(z / self.clip)
-
-
-def lower_median(x: torch.Tensor) -> torch.Tensor:
-    """``x.median(dim=-1, keepdim=True).values`` (the lower of the two middle values), by a
-    partial sort on the CPU: numpy's introselect is about 5 times faster than torch's median
-    there, which made the limiter a sixth to a third of a training step. No gradient flows through it
-    (the network's input needs none), so a tensor that needs one takes torch's path."""
-    if x.device.type != "cpu" or x.requires_grad:
-        return x.median(dim=-1, keepdim=True).values
-    middle = (x.shape[-1] - 1) // 2
-    return torch.from_numpy(np.partition(x.numpy(), middle, axis=-1)[..., middle : middle + 1])
 
 
 class NormMaxAbs(nn.BatchNorm1d):
@@ -338,6 +376,46 @@ SHAPE_REACH = 8  # a `shapes` template spans an eighth of a revolution (ShapeLik
 SHAPE_STEP = 0.1  # templates learn at a tenth of the optimiser's step (docs/learning.md, section 6)
 
 
+class LaplaceGain(torch.autograd.Function):
+    """``(padded (B, L + width), templates (J, width), offset (J,))`` -> ``(B, J)``: each local
+    template's Laplace score before the scale, sum_n |r_n| - |r_n - t_j,n| over its window, and
+    the templates' gradient, by the compiled loops of gearlab.learn.kernels. The same numbers as
+    the per-window torch.cdist of `ShapeLikelihood` to rounding (the sums' order differs; its
+    tests compare the two), at a fifth of a training step's time (benchmarks/training.py)."""
+
+    @staticmethod
+    def applies(padded: torch.Tensor, templates: torch.Tensor) -> bool:
+        """The loops serve CPU tensors of one floating precision whose revolutions need no
+        gradient (a network's input); anything else takes torch's path."""
+        return (
+            padded.device.type == "cpu"
+            and templates.device.type == "cpu"
+            and padded.dtype == templates.dtype
+            and padded.dtype in (torch.float32, torch.float64)
+            and not padded.requires_grad
+        )
+
+    @staticmethod
+    def forward(ctx, padded: torch.Tensor, templates: torch.Tensor, offset: torch.Tensor) -> torch.Tensor:
+        from . import kernels  # numba: loaded when a network first scores (start-up time)
+
+        p, t = padded.detach().contiguous(), templates.detach().contiguous()
+        o = offset.detach().to(torch.int64).contiguous()
+        out = torch.empty(len(p), len(t), dtype=p.dtype)
+        kernels.laplace_gain(p.numpy(), t.numpy(), o.numpy(), out.numpy())
+        ctx.save_for_backward(p, t, o)
+        return out
+
+    @staticmethod
+    def backward(ctx, grad: torch.Tensor):
+        from . import kernels
+
+        p, t, o = ctx.saved_tensors
+        out = torch.empty_like(t)
+        kernels.laplace_gain_grad(p.numpy(), t.numpy(), o.numpy(), grad.contiguous().numpy(), out.numpy())
+        return None, out, None
+
+
 class ShapeLikelihood(nn.Module):
     """``(B, L)`` residual revolutions -> ``(B, J)``: each template's log-likelihood ratio in
     the noise law *law* at the revolution's own scale (gearlab.learn.bounds, `shape_llr`); for
@@ -394,6 +472,8 @@ class ShapeLikelihood(nn.Module):
             return shape_llr(r, self.shapes, b, self.law)
         padded = torch.cat([r, r[:, : self.width]], dim=1)  # circular windows
         local = self.weight * SHAPE_STEP
+        if self.law == "laplace" and LaplaceGain.applies(padded, local):
+            return LaplaceGain.apply(padded, local, self.offset) / b[:, None]
         z = torch.empty(len(r), len(local), dtype=r.dtype, device=r.device)
         for start in torch.unique(self.offset).tolist():
             mine = torch.nonzero(self.offset == start).squeeze(1)
