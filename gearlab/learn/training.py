@@ -138,7 +138,7 @@ def fit_supervised(
         raise GearlabInputError(f"batch size {batch} is larger than the training set ({len(X)} samples)")
     net.to(device)
     params = list(parameters) if parameters is not None else list(net.parameters())
-    opt = torch.optim.Adam(params, lr=lr) if optimizer == "adam" else torch.optim.SGD(params, lr=lr)
+    opt = _optimizer(optimizer, params, lr)
     loss_fn = nn.CrossEntropyLoss()
     Xt, yt = _tensor(X, device), _labels(y, device)
     generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
@@ -146,7 +146,7 @@ def fit_supervised(
     history, best_state, best = History(), None, -math.inf
     for epoch in range(epochs):
         train_mode(net, freeze_norm)
-        total = 0.0
+        total = _zero(device)
         for idx in _batches(len(X), batch, rng):
             index = torch.as_tensor(idx, device=device)
             xb = _rows(Xt, index, draws)
@@ -154,8 +154,8 @@ def fit_supervised(
             opt.zero_grad()
             loss = loss_fn(net(xb), yt[index])
             _step(opt, params, loss)
-            total += loss.item() * len(idx)
-        history.train_loss.append(total / len(X))
+            total += loss.detach().double() * len(idx)
+        history.train_loss.append(total.item() / len(X))
         if val is not None:
             acc = accuracy(net, *val, device)
             history.val_acc.append(acc)
@@ -214,7 +214,7 @@ def fit_adaptation(
     net.to(device)
     modules.to(device)
     weights = list(net.parameters()) + list(modules.parameters())
-    opt = torch.optim.SGD(weights, lr=lr)
+    opt = _optimizer("sgd", weights, lr)
     ce = nn.CrossEntropyLoss()
     Xs_t, ys_t, Xt_t = _tensor(Xs, device), _labels(ys, device), _tensor(Xt, device)
     yt_t = _labels(yt, device) if yt is not None else None
@@ -226,7 +226,7 @@ def fit_adaptation(
         lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs, params)  # the ramp ends at min_epochs
         train_mode(net, freeze_norm=True)
         modules.train()
-        total, discrepancy, batches = 0.0, 0.0, 0
+        total, discrepancy, batches = _zero(device), 0.0, 0
         for s_idx, t_idx in zip(_batches(len(Xs), batch, rng), _batches(len(Xt), batch, rng)):
             m = min(len(s_idx), len(t_idx))
             s = torch.as_tensor(s_idx[:m], device=device)
@@ -243,12 +243,12 @@ def fit_adaptation(
             for a, b in pairs:
                 loss = loss + adapter.domain_loss(a, b, modules, lam, params)
             _step(opt, weights, loss)
-            total += loss.item()
+            total += loss.detach().double()
             # The epoch's discrepancy is measured on the latent batches it trained on: every
             # training sample once, with no extra pass through the network.
             discrepancy += sum(adapter.discrepancy(a.detach(), b.detach(), modules, params) for a, b in pairs)
             batches += 1
-        history.train_loss.append(total)
+        history.train_loss.append(total.item())
         history.lam.append(lam)
         history.val_acc.append(accuracy(net, *source_val, device))
         history.discrepancy.append(discrepancy / batches)
@@ -282,15 +282,39 @@ def _aligned(
     return [(a, b) for a, b in pairs if len(a) >= 2 and len(b) >= 2]
 
 
+def _optimizer(name: str, params: list, lr: float) -> torch.optim.Optimizer:
+    """Adam or SGD (no momentum, no weight decay), fused: one kernel updates every parameter,
+    where the default loops over them op by op. On one CPU thread Adam's step takes a fifth of
+    the time for `fast` (benchmarks/training.py); the updates are the same to rounding (3e-8
+    apart after 5 steps), so trainings drift apart within their seeds' spread. A device torch has
+    no fused kernel for takes the default."""
+    fused = all(p.device.type in ("cpu", "cuda") and p.is_floating_point() for p in params) or None
+    if name == "adam":
+        return torch.optim.Adam(params, lr=lr, fused=fused)
+    return torch.optim.SGD(params, lr=lr, fused=fused)
+
+
+def _zero(device) -> torch.Tensor:
+    """A float64 loss sum on *device*: adding each batch's loss there, not as a Python number,
+    spares a device synchronisation per step (loss.item()); the same float64 sum."""
+    return torch.zeros((), dtype=torch.float64, device=device)
+
+
 def _step(opt: torch.optim.Optimizer, params: list, loss: torch.Tensor) -> None:
     """One optimiser step, the gradient norm clipped at MAX_GRAD_NORM. A stable run never reaches
     it, so its numbers do not change (its gradients are scaled by exactly 1). The adversarial
     game of DANN sometimes does: in a full Experiment A run one unit of 330 jumped from a loss of
     0.65 to 36 in its third step (gradient norm 1.6e3) and, when lambda reached 1, to 5e20 and
-    NaN, which left a network that called everything healthy."""
+    NaN, which left a network that called everything healthy. The norms are taken in one call
+    for all parameters (foreach; torch's default on a CPU is one call each), the same numbers."""
     loss.backward()
-    nn.utils.clip_grad_norm_(params, MAX_GRAD_NORM)
+    nn.utils.clip_grad_norm_(params, MAX_GRAD_NORM, foreach=_foreach(params))
     opt.step()
+
+
+def _foreach(params: list) -> bool | None:
+    """True where torch has the foreach kernels for every parameter's device, else its default."""
+    return all(p.device.type in ("cpu", "cuda") for p in params) or None
 
 
 def _keep_best(net: nn.Module, history: History, best_state: dict | None) -> History:
