@@ -128,7 +128,13 @@ def fit_path(
     if key not in _FITTED:  # every method of a (repetition, k) asks for the same path
         if len(_FITTED) >= 64:
             _FITTED.pop(next(iter(_FITTED)))
-        _FITTED[key] = _filter(s, t, gain)
+        from threadpoolctl import threadpool_limits  # loaded by a fit only (start-up time)
+
+        # ~600 small solves: on one BLAS thread, as the unit's torch; numpy's own default (a
+        # thread per core, waiting on each other) made a fit 4-11 times slower on 2 busy cores
+        # (1.97-4.71 s against 0.41-0.47 s, Experiment B's references), with the same taps
+        with threadpool_limits(1, user_api="blas"):
+            _FITTED[key] = _filter(s, t, gain)
     return s, t, _FITTED[key]
 
 
