@@ -54,7 +54,7 @@ import numpy as np
 from .dynamics.config import ModelConfig
 from .dynamics.excitation import Excitation
 from .errors import GearlabInputError
-from .params import Param, did_you_mean, resolve_params
+from .params import Param, did_you_mean, plugin_description, refuse_unknown, resolve_params
 
 LEVELS = ("model", "excitation", "signal")
 HOOKS = {"model": "apply_model", "excitation": "apply_excitation", "signal": "apply_signal"}
@@ -136,12 +136,7 @@ class Effect:
     def resolve(self, given: Mapping[str, object], where: str = "") -> dict:
         """Defaults filled, units parsed, bounds and choices checked: {param: SI value or choice}."""
         where = where or f"effect '{self.name}'"
-        known = [p.name for p in self.params] + list(self.options)
-        for key in given:
-            if key not in known:
-                raise GearlabInputError(
-                    f"{where}: unknown parameter '{key}'{did_you_mean(key, known)}; known: {', '.join(known) or 'none'}"
-                )
+        refuse_unknown(given, [p.name for p in self.params] + list(self.options), where)
         values: dict = resolve_params(self.params, {k: v for k, v in given.items() if k not in self.options}, where)
         for key, choices in self.options.items():
             value = given.get(key, choices[0])
@@ -177,13 +172,12 @@ class Effect:
         return out
 
     def describe(self) -> dict:
-        return {
-            "doc": self.doc,
-            "params": [p.describe() for p in self.params],
-            "level": self.level,
-            "breaks_symmetry": bool(self.breaks_symmetry),
-            "options": {k: list(v) for k, v in self.options.items()},
-        }
+        return plugin_description(
+            self,
+            level=self.level,
+            breaks_symmetry=bool(self.breaks_symmetry),
+            options={k: list(v) for k, v in self.options.items()},
+        )
 
 
 def hook_problem(obj) -> str:

@@ -44,17 +44,26 @@ def did_you_mean(name: str, known: list[str] | tuple[str, ...]) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
+def refuse_unknown(given, known: list[str] | tuple[str, ...], where: str) -> None:
+    """A one-line error for the first parameter of *given* that is not *known*: the closest known one and the list."""
+    for key in given:
+        if key not in known:
+            raise GearlabInputError(
+                f"{where}: unknown parameter '{key}'{did_you_mean(key, known)}; known: {', '.join(known) or 'none'}"
+            )
+
+
+def plugin_description(plugin, **more) -> dict:
+    """What every plugin's describe() holds (its doc, its parameters), and *more* of its kind's."""
+    return {"doc": plugin.doc, "params": [p.describe() for p in plugin.params], **more}
+
+
 def resolve_params(schema: tuple[Param, ...], given: Mapping[str, object], where: str) -> dict[str, float]:
     """Fill defaults, parse units, check names, types and the schema's static bounds."""
     by_name = {p.name: p for p in schema}
     if not isinstance(given, Mapping):
         raise GearlabInputError(f"{where}: expected a table of parameters {{name = value, ...}}, got {given!r}")
-    for key in given:
-        if key not in by_name:
-            raise GearlabInputError(
-                f"{where}: unknown parameter '{key}'{did_you_mean(key, list(by_name))}; "
-                f"known: {', '.join(by_name) or 'none'}"
-            )
+    refuse_unknown(given, list(by_name), where)
     values: dict[str, float] = {}
     for p in schema:
         here = f"{where}, parameter '{p.name}'"

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..gearbox.simulation import is_reference, preset_of_reference
-from ..params import Param, did_you_mean, resolve_params
+from ..params import Param, did_you_mean, plugin_description, resolve_params
 from ..physics.geometry import GearPair
 from ..physics.presets import gear_pair
 
@@ -155,12 +155,11 @@ class DynamicModel:
         return lumped_assembly(self.dofs, pair, values, self.input_dof, self.load_dof)
 
     def describe(self) -> dict:
-        return {
-            "doc": self.doc,
-            "params": [p.describe() for p in self.params],
-            "dofs": list(self.dofs),
-            "channels": list(self.channels),
-            "presets": {
+        return plugin_description(
+            self,
+            dofs=list(self.dofs),
+            channels=list(self.channels),
+            presets={
                 k: {
                     "pair": str(getattr(v["pair"], "name", v["pair"])),
                     "speeds_hz": list(v["speeds_hz"]),
@@ -168,7 +167,7 @@ class DynamicModel:
                 }
                 for k, v in self.presets.items()
             },
-        }
+        )
 
 
 def add_spring(K: np.ndarray, C: np.ndarray, i: int, j: int | None, k: float, c: float) -> None:

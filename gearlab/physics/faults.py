@@ -23,7 +23,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import GearlabInputError
-from ..params import Param, resolve_params
+from ..params import Param, plugin_description, resolve_params
 from .geometry import GearPair
 from .sections import ToothSection, healthy_section
 from .stiffness import GEARS, PlacedFault
@@ -96,7 +96,7 @@ class Fault:
         return PlacedFault(fault=self, tooth=tooth, params=dict(params), gear=gear, stage=stage)
 
     def describe(self) -> dict:
-        return {"doc": self.doc, "params": [p.describe() for p in self.params]}
+        return plugin_description(self)
 
 
 def region(section: ToothSection, start: float, end: float) -> np.ndarray:

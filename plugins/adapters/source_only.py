@@ -10,13 +10,11 @@ from gearlab.api import Adapter, hookimpl
 
 
 class SourceOnly(Adapter):
+    """The base adapter's defaults: no parameters, not calibrated, trained on the source with Adam."""
+
     name = "source_only"
     doc = "Uncalibrated baseline: train on the labelled source domain only (Adam), no target data."
-    params = ()
-    calibrated = False
     supervision = ("unsupervised",)
-    train_on = "source"
-    optimizer = "adam"
 
 
 @hookimpl

@@ -10,11 +10,8 @@ from gearlab.api import Adapter, hookimpl
 class TargetOnly(Adapter):
     name = "target_only"
     doc = "Uncalibrated baseline: train on the labelled target training samples only (Adam), no source data."
-    params = ()
-    calibrated = False
     supervision = ("supervised",)
-    train_on = "target"
-    optimizer = "adam"
+    train_on = "target"  # the rest as the base adapter: no parameters, not calibrated, Adam
 
 
 @hookimpl
