@@ -39,17 +39,17 @@ from ..events import Event
 from ..executors import LocalExecutor
 from ..physics.faults import place_fault
 from ..registry import get_registry
-from ..signals import Standardiser, add_noise, resample_revolutions, steady_start, tsa
+from ..signals import Standardiser, resample_revolutions, steady_start, tsa
 from . import placement
 from .placement import parse_fault_key, shaft_names
-from .spec import POINTS, Dataset, DatasetSpec
+from .realise import REFERENCE_ROW, Seeds, realise, row_seed
+from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
 if TYPE_CHECKING:
     from ..dynamics.newmark import Simulator
 
 STEADY_RTOL = 1e-6
 CHUNK = 256  # samples per noise task
-EFFECT_STREAM = 7  # seeds the signal effects' own generators apart from the dataset noise's
 
 
 def whole_steps_rate(fs: float, speed_hz: float, Z1: int) -> float:
@@ -259,12 +259,14 @@ class RowsTask(NamedTuple):
 
 
 def noisy_rows(task: tuple) -> np.ndarray:
-    """Rows for a chunk of samples: clean revolutions -> J revolutions with signal effects and
-    noise -> kept row (the first revolution, or the TSA of all J)."""
+    """Rows for a chunk of samples: clean revolutions -> J revolutions realised (signal effects,
+    noise; gearlab.data.realise, seeds Seeds.of_row) -> kept row (the first revolution, or the TSA
+    of all J)."""
     task = RowsTask(*task)
     mean, std = task.reference
     signal = EffectChain.load(task.effects).at("signal") if task.effects else ()
     chain = EffectChain(signal)
+    noise = None if task.noise_kind is None else NoiseSpec(task.noise_kind, task.snr_db)  # its seed is in task.seeds
     out = np.empty((len(task.clean), POINTS), dtype=np.float32)
     for i, (row, seed) in enumerate(zip(task.clean, task.seeds)):
         revs = row.reshape(-1, POINTS)  # one revolution, or a slower gear's period of them (period_samples)
@@ -273,32 +275,61 @@ def noisy_rows(task: tuple) -> np.ndarray:
         else:
             j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
             record = np.broadcast_to(revs[0], (j, POINTS)) if len(revs) == 1 else revs[np.arange(j) % len(revs)]
-            if chain:  # J consecutive revolutions of one record, sampled at POINTS x speed
-                record = chain.apply_signal(
-                    record, POINTS * task.speed_hz, task.speed_hz, task.reference_rms, [*seed, EFFECT_STREAM]
-                )
-            if task.noise_kind is not None:
-                record = add_noise(record, task.snr_db, task.noise_kind, np.random.default_rng(seed))
-            kept = tsa(record) if task.use_tsa else record[0]
+            # J consecutive revolutions of one record, sampled at POINTS x speed
+            realised = realise(
+                record,
+                chain,
+                noise,
+                Seeds.of_row(seed),
+                fs=POINTS * task.speed_hz,
+                speed_hz=task.speed_hz,
+                reference_rms=task.reference_rms,
+                average=task.use_tsa,
+            )
+            kept = realised if task.use_tsa else realised[0]
         out[i] = (kept - mean) / std  # eq. 2.112 / 4.6; TSA of standardised = standardised TSA
     return out
+
+
+def row_tasks(
+    spec: DatasetSpec, n: int, clean_of: Callable[[range], object], reference: tuple, speed: float, reference_rms: float
+) -> list[RowsTask]:
+    """The row tasks of *spec*'s *n* samples, CHUNK samples a task: *clean_of(idx)* gives the clean
+    revolutions of samples idx, each sample's row seed is row_seed(spec, i) (gearlab.data.realise),
+    *reference* the domain's (mean, std)."""
+    kind, snr = (spec.noise.kind, spec.noise.snr_db) if spec.noise else (None, 0.0)
+    return [
+        RowsTask(
+            clean_of(idx),
+            [row_seed(spec, i) for i in idx],
+            kind,
+            snr,
+            spec.revolutions,
+            spec.tsa,
+            reference,
+            spec.effects,
+            speed,
+            reference_rms,
+        )
+        for idx in (range(lo, min(n, lo + CHUNK)) for lo in range(0, n, CHUNK))
+    ]
 
 
 def healthy_reference(spec: DatasetSpec, healthy: np.ndarray, speed: float, reference_rms: float) -> Standardiser:
     """The domain's healthy reference (eq. 2.112, 4.6): the clean healthy revolution, or 64
     revolutions of it through the signal-level effects and the dataset's noise when it has them."""
     signal = EffectChain(EffectChain.load(spec.effects).at("signal")) if spec.effects else EffectChain()
-    noise_seed = spec.noise.seed if spec.noise else 0
     if spec.noise is None and not signal:
         return Standardiser.fit(healthy)
-    record = np.broadcast_to(healthy, (64, POINTS))
-    if signal:
-        record = signal.apply_signal(
-            record, POINTS * speed, speed, reference_rms, [spec.seed, noise_seed, 2**32 - 1, EFFECT_STREAM]
-        )
-    if spec.noise is not None:
-        rng = np.random.default_rng([spec.seed, spec.noise.seed, 2**32 - 1])
-        record = add_noise(record, spec.noise.snr_db, spec.noise.kind, rng)
+    record = realise(
+        np.broadcast_to(healthy, (64, POINTS)),
+        signal,
+        spec.noise,
+        Seeds.of_row(row_seed(spec, REFERENCE_ROW)),
+        fs=POINTS * speed,
+        speed_hz=speed,
+        reference_rms=reference_rms,
+    )
     return Standardiser.fit(record)
 
 
@@ -377,33 +408,16 @@ def build_dataset(
     # 3. the domain's healthy reference (eq. 2.112, 4.6)
     reference_row = base[(None, None)][0]
     reference_rms = float(np.sqrt(np.mean(reference_row**2)))
-    noise_seed = spec.noise.seed if spec.noise else 0
     reference = healthy_reference(spec, reference_row, speed, reference_rms)
 
     # 4. signal effects, noise, TSA and standardisation, streamed in chunks
     n = len(label)
-    noise_kind = spec.noise.kind if spec.noise else None
-    snr = spec.noise.snr_db if spec.noise else 0.0
-    chunks = []
-    for lo in range(0, n, CHUNK):
-        idx = range(lo, min(n, lo + CHUNK))
+
+    def clean_of(idx: range):
         rows = [base[source[i][0]][source[i][1]] for i in idx]
-        clean = np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
-        seeds = [[spec.seed, noise_seed, i] for i in idx]
-        chunks.append(
-            RowsTask(
-                clean,
-                seeds,
-                noise_kind,
-                snr,
-                spec.revolutions,
-                spec.tsa,
-                (reference.mean, reference.std),
-                spec.effects,
-                speed,
-                reference_rms,
-            )
-        )
+        return np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
+
+    chunks = row_tasks(spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms)
     on_event(Event("stage", stage="samples", total=len(chunks), message=f"{spec.name}: {n} samples"))
     done = 0
     X = np.empty((n, POINTS), dtype=np.float32)

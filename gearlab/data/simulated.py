@@ -20,7 +20,7 @@ faulted input pinion, the faulted shaft's period otherwise (3 input turns for th
 starts anywhere in the gears' turns; it is read at the logger's sampling instants through its
 Fourier series (components at or above fs/2 left out, as a logger's anti-alias filter does) and
 a cubic spline on it 8 times oversampled. Then the signal-level effects and the sensor noise, as
-every dataset's J revolutions get them (EffectChain.apply_signal, signals.add_noise).
+every dataset's J revolutions get them (gearlab.data.realise; seeds [seed, 1] and [seed, 2]).
 """
 
 from __future__ import annotations
@@ -38,10 +38,11 @@ from ..files import atomic_write
 from ..physics.faults import place_fault
 from ..physics.stiffness import PlacedFault
 from ..registry import get_registry
-from ..signals import NOISE_KINDS, add_noise
+from ..signals import NOISE_KINDS
 from .builder import _configured_simulator, _simulator, mesh_cycle, steady_response, whole_steps_rate
 from .placement import check_period, gear_name, gear_of, shaft_names, train_period
-from .spec import PHM09_FS
+from .realise import Seeds, realise
+from .spec import PHM09_FS, NoiseSpec
 
 TACHO_V = 5.0  # the tacho's high level, V (a TTL key-phasor)
 TACHO_DUTY = 0.05  # share of a revolution the pulse is high
@@ -207,13 +208,15 @@ def simulated_record(
         deviation = np.interp(np.mod(times, period / speed_hz) * fs_sim, np.arange(moved.size), moved - nominal)
         angle = angle + deviation
     angle = angle - 2 * np.pi * math.floor(angle[0] / (2 * np.pi))  # the first sample in [0, 2π)
-    signal_effects = chain.at("signal")
-    if signal_effects:
+    signal = EffectChain(chain.at("signal"))
+    rms = 0.0  # the signal effects' reference: the clean healthy signal's RMS (a simulation: only when needed)
+    if signal:
         healthy, _ = steady_response(sim, [], speed_hz, load_nm, channel, excitation)
         rms = float(np.sqrt(np.mean(healthy**2)))
-        vibration = EffectChain(signal_effects).apply_signal(vibration[None, :], fs, speed_hz, rms, [seed, 1])[0]
-    if snr_db is not None:
-        vibration = add_noise(vibration[None, :], snr_db, noise_kind, np.random.default_rng([seed, 2]))[0]
+    noise = None if snr_db is None else NoiseSpec(noise_kind, snr_db)
+    vibration = realise(
+        vibration[None, :], signal, noise, Seeds([seed, 1], [seed, 2]), fs=fs, speed_hz=speed_hz, reference_rms=rms
+    )[0]
     return SimulatedRecord(
         vibration=vibration,
         tacho=tacho_pulses(angle, 2 * np.pi * speed_hz / fs),

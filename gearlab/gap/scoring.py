@@ -16,23 +16,21 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..data.builder import (
-    CHUNK,
-    EFFECT_STREAM,
-    RowsTask,
     SimTask,
     healthy_reference,
     noisy_rows,
     operating_point,
+    row_tasks,
     simulate_unit,
     whole_steps_rate,
 )
 from ..data.chain import Chain, fit_offset, sampled, tracked
+from ..data.realise import Seeds, parts, realise, row_seed
 from ..data.spec import POINTS, DatasetSpec
 from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
-from ..signals import add_noise
 from ..signals.indicators import band_limited
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .views import (
@@ -261,25 +259,10 @@ def source_rows(
         rows = measured_rows(spec, clean, speed, reference_rms, chain, pair.Z1, consecutive)
         return band_limited(rows, max_order=max_order)
     mean, std = _reference(spec, clean, speed, reference_rms)
-    noise_seed = spec.noise.seed if spec.noise else 0
-    kind = spec.noise.kind if spec.noise else None
-    snr = spec.noise.snr_db if spec.noise else 0.0
-    out = np.empty((spec.healthy, POINTS), dtype=np.float32)
-    for lo in range(0, spec.healthy, CHUNK):
-        idx = range(lo, min(spec.healthy, lo + CHUNK))
-        task = RowsTask(
-            np.broadcast_to(clean, (len(idx), POINTS)),
-            [[spec.seed, noise_seed, i] for i in idx],
-            kind,
-            snr,
-            spec.revolutions,
-            spec.tsa,
-            (mean, std),
-            spec.effects,
-            speed,
-            reference_rms,
-        )
-        out[lo : lo + len(idx)] = noisy_rows(tuple(task))
+    tasks = row_tasks(
+        spec, spec.healthy, lambda idx: np.broadcast_to(clean, (len(idx), POINTS)), (mean, std), speed, reference_rms
+    )
+    out = np.concatenate([noisy_rows(tuple(task)) for task in tasks] or [np.empty((0, POINTS), np.float32)])
     return band_limited(out.astype(np.float64) * std + mean, max_order=max_order)
 
 
@@ -326,27 +309,19 @@ def measured_rows(
     tone that is not shaft-synchronous then runs on from one revolution into the next, as in the
     target, instead of starting at a random phase in every row: its line is as narrow as the
     target's, and its share in the synchronous average the same."""
-    effects = EffectChain.load(spec.effects).at("signal") if spec.effects else ()
-    shaping = EffectChain(tuple(item for item in effects if not item[0].noise))
-    noisy = EffectChain(tuple(item for item in effects if item[0].noise))
-    noise_seed = spec.noise.seed if spec.noise else 0
-    seeds = [[spec.seed, noise_seed, i] for i in range(spec.healthy)]
+    shaping, noisy = parts(EffectChain.load(spec.effects) if spec.effects else EffectChain())
+    seeds = [Seeds.of_row(row_seed(spec, i)) for i in range(spec.healthy)]  # the builder's
 
     def deterministic() -> tuple:
         record = consecutive and bool(shaping)
+        here = {"fs": POINTS * speed, "speed_hz": speed, "reference_rms": reference_rms}
         if record:
             # One record, a revolution longer at each end: those two are read only as the
             # neighbours of the first and last rows (gearlab.data.chain.sampled, record).
-            D = np.array(np.broadcast_to(clean, (spec.healthy + 2, POINTS)))
-            D = shaping.apply_signal(D, POINTS * speed, speed, reference_rms, [*seeds[0], EFFECT_STREAM])
+            D = realise(np.broadcast_to(clean, (spec.healthy + 2, POINTS)), shaping, None, seeds[0], **here)
             rows = D[1:-1]
         else:
-            D = np.empty((spec.healthy, POINTS))
-            for i, seed in enumerate(seeds):
-                row = clean[None, :]
-                if shaping:
-                    row = shaping.apply_signal(row, POINTS * speed, speed, reference_rms, [*seed, EFFECT_STREAM])
-                D[i] = row[0]
+            D = realise(np.broadcast_to(clean, (spec.healthy, POINTS)), shaping, None, seeds, **here)
             rows = D
         offset = chain.offset
         if offset is None:
@@ -359,11 +334,7 @@ def measured_rows(
     x, u = _sampled_rows((quiet, chain, reference, teeth, consecutive), deterministic)
 
     def noise(i: int, x: np.ndarray) -> np.ndarray:
-        if noisy:
-            x = noisy.apply_signal(x, chain.fs, speed, reference_rms, [*seeds[i], EFFECT_STREAM])
-        if spec.noise is not None:
-            x = add_noise(x, spec.noise.snr_db, spec.noise.kind, np.random.default_rng(seeds[i]))
-        return x
+        return realise(x, noisy, spec.noise, seeds[i], fs=chain.fs, speed_hz=speed, reference_rms=reference_rms)
 
     return tracked(x, u, chain, noise if (noisy or spec.noise is not None) else None)
 

@@ -75,7 +75,13 @@ DATASET_TABLE = Table(
         "duplicates": Key(int, None, in_range(1), "samples per fault, ladder step and tooth"),
         "healthy": Key(int, None, in_range(0), "healthy samples"),
         "revolutions": Key(int, None, in_range(1), "J noisy revolutions per sample (TSA averages them)"),
-        "noise": Key(dict, None, doc="{kind = 'laplace', snr_db = 0, seed = 0}; an empty table removes noise"),
+        "noise": Key(
+            dict,
+            None,
+            doc="the dataset's noise {kind = 'laplace', snr_db = 0, seed = 0}, added after every effect from its "
+            "own seed; an empty table removes it. The sensor_noise effect adds the same noise at its place among "
+            "the effects (a later sensor_lowpass filters it), from the effects' seeds: what a gap diagnosis fits",
+        ),
         "tsa": Key(bool, None, doc="a sample is the synchronous average of its J revolutions"),
         "seed": Key(int, None, in_range(0, 2**32 - 1), "seeds the dataset's noise and effect draws"),
         "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'", unit="Hz"),

@@ -357,10 +357,10 @@ def _held(folder: Path | str | Confined) -> Confined:
 def write_target(trial: Trial, source: DatasetSpec, folder: Path | Confined, revolutions: int, executor=None) -> Path:
     """Simulate the trial's target, write it as folder/target.<ext> (with folder/calibration.json)
     and the answers as folder/answers.json; the path of the target for the importer to read."""
-    from ...data.builder import EFFECT_STREAM, build_dataset, operating_point
+    from ...data.builder import build_dataset, operating_point
+    from ...data.realise import EFFECT_STREAM, Seeds, parts, realise
     from ...effects import EffectChain
     from ...gap.views import healthy_rows
-    from ...signals import add_noise
 
     folder = _held(folder)
     spec = target_spec(trial, source, revolutions)
@@ -381,24 +381,28 @@ def write_target(trial: Trial, source: DatasetSpec, folder: Path | Confined, rev
         # The signal effects act on the record, one revolution after another, as in an acquisition: a
         # tone that is not shaft-synchronous runs on across revolutions (the builder's rows would give
         # each revolution its own tone phase, which no measured record has).
+        # Seeds (gearlab.data.realise): the non-noise effects [seed, EFFECT_STREAM, 1], the noise
+        # effects [seed, EFFECT_STREAM], the dataset's noise [seed, 5].
         chain = EffectChain.load(spec.effects)
         signal = {item[0].name for item in chain.at("signal")}
-        noisy = EffectChain(tuple(item for item in chain.at("signal") if item[0].noise))
-        shaping = EffectChain(tuple(item for item in chain.at("signal") if not item[0].noise))
+        shaping, noisy = parts(chain)
         physics = tuple(e for e in spec.effects if e[0] not in signal)
         rows = healthy_rows(build_dataset(spec.with_(noise=None, effects=physics), executor))
         rms = float(np.sqrt(np.mean(rows**2)))  # the healthy reference RMS the builder's effects take
-        if shaping:
-            rows = shaping.apply_signal(rows, rows.shape[1] * speed, speed, rms, [trial.seed, EFFECT_STREAM, 1])
+        rows = realise(
+            rows,
+            shaping,
+            None,
+            Seeds([trial.seed, EFFECT_STREAM, 1], ()),
+            fs=rows.shape[1] * speed,
+            speed_hz=speed,
+            reference_rms=rms,
+        )
         rms = float(np.sqrt(np.mean(rows**2)))
 
         def noise(x: np.ndarray, fs: float) -> np.ndarray:
-            x = x[None, :]
-            if noisy:
-                x = noisy.apply_signal(x, fs, speed, rms, [trial.seed, EFFECT_STREAM])
-            if spec.noise is not None:
-                x = add_noise(x, spec.noise.snr_db, spec.noise.kind, np.random.default_rng([trial.seed, 5]))
-            return x[0]
+            seeds = Seeds([trial.seed, EFFECT_STREAM], [trial.seed, 5])
+            return realise(x[None, :], noisy, spec.noise, seeds, fs=fs, speed_hz=speed, reference_rms=rms)[0]
 
         record, fs = acquired_record(rows, speed, acq, noise)
         data, name, calibration = stored(record, fs, acq.format)
