@@ -38,6 +38,15 @@ def write_scenario(tmp_path):
     return write
 
 
+@pytest.fixture(scope="module")
+def module_cache(tmp_path_factory):
+    """One dataset cache for the tests of a module that asks for it: GEARLAB_CACHE while the module runs."""
+    path = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(path))
+        yield path
+
+
 @pytest.fixture(scope="session", autouse=True)
 def one_torch_thread():
     """Tiny networks gain nothing from threads, and on a busy machine threads spin against each other:

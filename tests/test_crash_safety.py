@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from test_protocol import TINY, UNITS
+from tiny import bare_dataset, run_once, stiffness
 
 from gearlab.data import cache
 from gearlab.data.spec import Dataset, DatasetSpec
@@ -34,24 +35,14 @@ pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 CLI = [sys.executable, "-c", "from gearlab.cli import main; main()"]
 
-STIFFNESS = """\
-[scenario]
-name = "stiff"
-kind = "stiffness"
-
-[stiffness]
-pair = "luo2019"
-points = 512
-
-[sweep]
-faults = ["crack", "chip", "spall", "pit"]
-tooth = 5
-steps = [1, 6]
-
-[[cases]]
-name = "two faults"
-faults = [{ kind = "crack", tooth = 2, step = 12 }, { kind = "pit", tooth = 9, step = 20 }]
-"""
+STIFFNESS = stiffness(
+    512,
+    ["crack", "chip", "spall", "pit"],
+    (1, 6),
+    tooth=5,
+    cases='[[cases]]\nname = "two faults"\n'
+    'faults = [{ kind = "crack", tooth = 2, step = 12 }, { kind = "pit", tooth = 9, step = 20 }]\n',
+)
 STIFFNESS_UNITS = 1 + 4 * 6 + 1
 
 
@@ -173,11 +164,7 @@ def assert_cache_whole(cache_dir: Path) -> None:
 @pytest.fixture(scope="module")
 def tiny_reference(tmp_path_factory):
     """The tiny transfer scenario run without interruption, with a cache of its own."""
-    base = tmp_path_factory.mktemp("reference")
-    (base / "tiny.toml").write_text(TINY)
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
-        return run_scenario(base / "tiny.toml", out=base / "runs").path
+    return run_once(tmp_path_factory.mktemp("reference"), "tiny.toml", TINY)
 
 
 @pytest.fixture(scope="module")
@@ -305,19 +292,8 @@ def test_resume_removes_temporary_files_of_killed_writes(tmp_path, stiffness_ref
 
 def small_dataset(spec: DatasetSpec) -> Dataset:
     n = 6
-    zeros = np.zeros(n, dtype=np.int8)
-    return Dataset(
-        spec=spec,
-        X=np.arange(n * 8, dtype=np.float32).reshape(n, 8),
-        label=zeros,
-        fault=zeros,
-        intensity=zeros,
-        tooth=zeros,
-        rfa=np.zeros(n, np.float32),
-        revolution=zeros.astype(np.int16),
-        domain=zeros,
-        domains=(spec.name,),
-    )
+    X = np.arange(n * 8, dtype=np.float32).reshape(n, 8)
+    return bare_dataset(X, np.zeros(n, dtype=np.int8), spec, domains=(spec.name,))
 
 
 SPEC = DatasetSpec(name="tiny", model="six_dof", preset="meng2020", channel="pinion_y", healthy=6)

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
-from tiny import records, transfer
+from tiny import BASELINES_AND_MMD, records, transfer
 
 from gearlab import executors
 from gearlab.errors import GearlabInputError
@@ -215,17 +215,7 @@ def test_one_ray_session_per_process(ray_session):
 # ----------------------------------------------------------------------------- same records
 
 
-TINY = transfer("""\
-[[methods]]
-adapter = "source_only"
-
-[[methods]]
-adapter = "target_only"
-supervised = true
-
-[[methods]]
-adapter = "mmd"
-""")
+TINY = transfer(BASELINES_AND_MMD)
 
 
 def test_local_and_ray_give_the_same_records(ray_session, tmp_path, monkeypatch):

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tiny import EXECUTION, domains, schedule
+from tiny import EXECUTION, domains, run_once, schedule
 
-from gearlab.engine import load_scenario, run_scenario
+from gearlab.engine import load_scenario
 from gearlab.gap.stats import gap_report
 from gearlab.kinds import SCENARIO_KINDS, gap
 from gearlab.parts.bound import BOUND
@@ -137,29 +137,17 @@ def calls(monkeypatch):
     return log
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("cache")
-
-
 @pytest.fixture
-def tiny(tmp_path, cache, monkeypatch):
-    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
-    path = tmp_path / "tinygap.toml"
-    path.write_text(TINY)
-    return path
+def tiny(write_scenario, module_cache):
+    return write_scenario(TINY, "tinygap.toml")
 
 
 @pytest.fixture(scope="module")
-def finished(tmp_path_factory, cache):
+def finished(tmp_path_factory, module_cache):
     """One uninterrupted run of the tiny scenario with the stand-in diagnosis."""
-    base = tmp_path_factory.mktemp("finished")
-    (base / "tinygap.toml").write_text(TINY)
     log: list = []
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(cache))
-        mp.setitem(sys.modules, "gearlab.gap.diagnose", fake_module(log))
-        run = run_scenario(base / "tinygap.toml", out=base / "runs").path
+    base = tmp_path_factory.mktemp("finished")
+    run = run_once(base, "tinygap.toml", TINY, module_cache, {"gearlab.gap.diagnose": fake_module(log)})
     return run, log
 
 

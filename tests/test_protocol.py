@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from tiny import BASELINES_AND_MMD, bare_dataset, run_once
 from tiny import transfer as tiny_scenario
 
 from gearlab.data.cache import load_or_build
@@ -49,18 +50,7 @@ def synthetic(faults: int, healthy: int, length: int = 256, seed: int = 0, offse
     fault = (np.arange(n) < faults).astype(np.int8)
     X = rng.normal(size=(n, length)) + np.sin(np.arange(length) / 5.0) + offset
     X[fault == 1, ::32] += 4.0
-    zeros = np.zeros(n, dtype=np.int8)
-    return Dataset(
-        spec=None,
-        X=X.astype(np.float32),
-        label=fault.copy(),
-        fault=fault,
-        intensity=zeros,
-        tooth=zeros,
-        rfa=np.zeros(n, np.float32),
-        revolution=zeros.astype(np.int16),
-        domain=zeros,
-    )
+    return bare_dataset(X.astype(np.float32), fault)
 
 
 SOURCE = synthetic(20, 30, seed=1)
@@ -211,10 +201,9 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
     for module, name in ((T, "fit_supervised"), (T, "fit_adaptation"), (T, "embed"), (C, "prepare"), (C, "calibrate")):
         monkeypatch.setattr(module, name, spy(getattr(module, name)))
     registry = P.get_registry()
-    for name in registry.names("adapter"):  # every detector: its arrays are its training
-        adapter = registry.get("adapter", name)
-        if adapter.train_on == "detector":
-            monkeypatch.setattr(adapter, "detector", spy(adapter.detector))
+    for name in registry.names("detector"):  # every detector: its arrays are its training
+        detector = registry.get("detector", name)
+        monkeypatch.setattr(detector, "fit", spy(detector.fit))
     # target rows carry their index in the first sample, to be recognised wherever they go
     marked = replace(TARGET, X=TARGET.X.copy())
     marked.X[:, 0] = 1000 + np.arange(len(marked))
@@ -409,17 +398,8 @@ def test_results_store_skips_cut_and_damaged_lines_without_hiding_later_ones(tmp
 
 
 TINY = tiny_scenario(
-    """\
-[[methods]]
-adapter = "source_only"
-
-[[methods]]
-adapter = "target_only"
-supervised = true
-
-[[methods]]
-adapter = "mmd"
-
+    BASELINES_AND_MMD
+    + """
 [[methods]]
 adapter = "finetune"
 supervised = true
@@ -435,27 +415,14 @@ UNITS = [
 ]
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("cache")
-
-
 @pytest.fixture
-def tiny_toml(tmp_path, cache, monkeypatch):
-    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
-    path = tmp_path / "tiny.toml"
-    path.write_text(TINY)
-    return path
+def tiny_toml(write_scenario, module_cache):
+    return write_scenario(TINY, "tiny.toml")
 
 
 @pytest.fixture(scope="module")
-def finished(tmp_path_factory, cache):
-    """One uninterrupted run of the tiny scenario."""
-    base = tmp_path_factory.mktemp("finished")
-    (base / "tiny.toml").write_text(TINY)
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(cache))
-        return run_scenario(base / "tiny.toml", out=base / "runs").path
+def finished(tmp_path_factory, module_cache):
+    return run_once(tmp_path_factory.mktemp("finished"), "tiny.toml", TINY, module_cache)
 
 
 def lines_of(run: Path) -> list[str]:

@@ -6,20 +6,9 @@ import json
 from pathlib import Path
 
 import pytest
+from tiny import domains, stiffness
 
-STIFFNESS = """\
-[scenario]
-name = "stiff"
-kind = "stiffness"
-
-[stiffness]
-pair = "luo2019"
-points = 256
-
-[sweep]
-faults = ["crack"]
-steps = [1, 3]
-"""
+STIFFNESS = stiffness(256, ["crack"], (1, 3))
 
 
 @pytest.fixture
@@ -130,17 +119,12 @@ def domains_cache(tmp_path_factory):
     return tmp_path_factory.mktemp("cache")
 
 
-def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache):
-    from tiny import domains
-
-    monkeypatch.setenv("GEARLAB_CACHE", str(domains_cache))
-    path = tmp_path / "t.toml"
-    # the unit must outlast a few of the watcher's half-second looks: 200 epochs of the cheap
-    # `fast` network take 1.5 s or more (`shapes`, the default, took 40 s for 400)
-    path.write_text(
+def mmd_run(ks: list[int], repetitions: int, epochs: int, workers: int) -> str:
+    """A transfer scenario of the tiny domains whose one method (mmd) trains exactly *epochs* epochs."""
+    return (
         '[scenario]\nname = "t"\nkind = "transfer"\n\n'
         + domains()
-        + """
+        + f"""
 [network]
 name = "fast"
 
@@ -148,20 +132,28 @@ name = "fast"
 adapter = "mmd"
 
 [protocol]
-ks = [0]
-repetitions = 1
+ks = {ks}
+repetitions = {repetitions}
 target_train = 8
 batch = 4
 prime_epochs = 2
-patience = 200
-min_epochs = 200
-max_epochs = 200
+patience = {epochs}
+min_epochs = {epochs}
+max_epochs = {epochs}
 
 [execution]
-workers = 1
+workers = {workers}
 device = "cpu"
 """
     )
+
+
+def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache):
+    monkeypatch.setenv("GEARLAB_CACHE", str(domains_cache))
+    path = tmp_path / "t.toml"
+    # the unit must outlast a few of the watcher's half-second looks: 200 epochs of the cheap
+    # `fast` network take 1.5 s or more (`shapes`, the default, took 40 s for 400)
+    path.write_text(mmd_run(ks=[0], repetitions=1, epochs=200, workers=1))
     code, out, err = cli("run", path, "--events", "--out", tmp_path / "runs")
     assert code == 0, err
     units = [json.loads(line) for line in out.splitlines() if line.startswith("{") and '"unit"' in line]
@@ -178,34 +170,8 @@ def test_a_terminated_run_leaves_no_worker_behind(tmp_path, domains_cache):
     import sys
     import time
 
-    from tiny import domains
-
     path = tmp_path / "t.toml"
-    path.write_text(
-        '[scenario]\nname = "t"\nkind = "transfer"\n\n'
-        + domains()
-        + """
-[network]
-name = "fast"
-
-[[methods]]
-adapter = "mmd"
-
-[protocol]
-ks = [0, 2]
-repetitions = 2
-target_train = 8
-batch = 4
-prime_epochs = 2
-patience = 100000
-min_epochs = 100000
-max_epochs = 100000
-
-[execution]
-workers = 2
-device = "cpu"
-"""
-    )
+    path.write_text(mmd_run(ks=[0, 2], repetitions=2, epochs=100000, workers=2))
     env = {**os.environ, "GEARLAB_CACHE": str(domains_cache)}
     proc = subprocess.Popen(
         [sys.executable, "-m", "gearlab", "run", str(path), "--events", "--out", str(tmp_path / "runs")],

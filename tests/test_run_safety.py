@@ -22,6 +22,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from tiny import stiffness
 
 from gearlab import confined
 from gearlab.confined import Confined, refuse_unsafe
@@ -34,24 +35,8 @@ from gearlab.runs import RunDir
 ROOT = Path(__file__).resolve().parents[1]
 SECRET = b"the user's own file: never to be written, read or shown by gearlab\n"
 
-STIFFNESS = """\
-[scenario]
-name = "stiff"
-kind = "stiffness"
-
-[stiffness]
-pair = "luo2019"
-points = 256
-
-[sweep]
-faults = ["crack"]
-tooth = 5
-steps = [1, 10]
-
-[[cases]]
-name = "pitted"
-faults = [{ kind = "pit", tooth = 9, step = 20 }]
-"""
+PITTED = '[[cases]]\nname = "pitted"\nfaults = [{ kind = "pit", tooth = 9, step = 20 }]\n'
+STIFFNESS = stiffness(256, ["crack"], (1, 10), tooth=5, cases=PITTED)
 
 
 def one_line_refusal(code: int, out: str, err: str) -> str:

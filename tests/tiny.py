@@ -2,7 +2,13 @@
 healthy samples, so that a transfer run trains in seconds."""
 
 import json
+import sys
 from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gearlab.data.spec import Dataset
 
 DOMAINS = """\
 [source]
@@ -37,6 +43,20 @@ device = "cpu"
 """
 
 
+# The two baselines and one calibrated method: [[methods]] of a tiny transfer scenario.
+BASELINES_AND_MMD = """\
+[[methods]]
+adapter = "source_only"
+
+[[methods]]
+adapter = "target_only"
+supervised = true
+
+[[methods]]
+adapter = "mmd"
+"""
+
+
 def domains(healthy: int = 9) -> str:
     """The [source] and [target] tables of the tiny scenarios."""
     return DOMAINS.format(healthy=healthy)
@@ -52,6 +72,52 @@ def transfer(methods: str, repetitions: int = 1, max_epochs: int = 3) -> str:
         f'[scenario]\nname = "tiny"\nkind = "transfer"\n\n{domains()}\n[network]\nname = "fast"\n\n{methods}\n'
         f"[protocol]\nks = [0, 2]\nrepetitions = {repetitions}\n{schedule(max_epochs)}\n{EXECUTION}"
     )
+
+
+def stiffness(points: int, faults: list[str], steps: tuple[int, int], tooth: int | None = None, cases: str = "") -> str:
+    """A stiffness scenario ("stiff") of the luo2019 pair: *faults* swept over *steps* (on *tooth*), then
+    the [[cases]] tables *cases*."""
+    text = (
+        f'[scenario]\nname = "stiff"\nkind = "stiffness"\n\n[stiffness]\npair = "luo2019"\npoints = {points}\n\n'
+        f"[sweep]\nfaults = {json.dumps(faults)}\n"
+    )
+    if tooth is not None:
+        text += f"tooth = {tooth}\n"
+    text += f"steps = [{steps[0]}, {steps[1]}]\n"
+    return f"{text}\n{cases}" if cases else text
+
+
+def bare_dataset(X: np.ndarray, fault: np.ndarray, spec=None, **more) -> Dataset:
+    """The samples *X*, labelled healthy (0) or faulty (1) by *fault*, and nothing else: no intensity, tooth,
+    fault area or revolution, one domain."""
+    zeros = np.zeros(len(X), dtype=np.int8)
+    return Dataset(
+        spec=spec,
+        X=X,
+        label=fault.copy(),
+        fault=fault,
+        intensity=zeros,
+        tooth=zeros,
+        rfa=np.zeros(len(X), np.float32),
+        revolution=zeros.astype(np.int16),
+        domain=zeros,
+        **more,
+    )
+
+
+def run_once(folder: Path, name: str, text: str, cache: Path | None = None, modules: dict | None = None) -> Path:
+    """The run directory of one uninterrupted run of the scenario *text* (written to folder/name, run into
+    folder/runs) on the dataset cache *cache* (default: folder/cache), *modules* standing in for those of
+    sys.modules while it runs."""
+    from gearlab.engine import run_scenario
+
+    path = folder / name
+    path.write_text(text)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(cache or folder / "cache"))
+        for module, stand_in in (modules or {}).items():
+            mp.setitem(sys.modules, module, stand_in)
+        return run_scenario(path, out=folder / "runs").path
 
 
 def records(run: Path) -> dict[str, dict]:
