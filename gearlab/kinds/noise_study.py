@@ -373,6 +373,24 @@ def _number(x: float | None) -> str:
     return f"{x:.4f}" if x is not None else ""
 
 
+# report.html's captions of the figures drawn below: {file stem: (the thesis figure it repeats or "", what it shows)}
+CAPTIONS = {
+    "accuracy_vs_intensity": (
+        "Figure 4.4",
+        "Test accuracy (%) per fault type against the intensity step (1-20), all faults (black) and faults "
+        "predicted healthy (green, dashed); mean ± std over runs; noisy left, TSA right.",
+    ),
+    "accuracy_vs_rfa": (
+        "Figure 4.5",
+        "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); mean ± std over runs.",
+    ),
+    "confusion": (
+        "Figure 4.6",
+        "Confusion matrices compiled over all runs (counts; shading: share of the true class).",
+    ),
+}
+
+
 def summarise(scenario: Scenario, run: RunDir) -> None:
     spec = scenario.spec
     records = run.records()
@@ -431,18 +449,4 @@ table_title = no_title
 
 
 def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
-    return {
-        "accuracy_vs_intensity": (
-            "Figure 4.4",
-            "Test accuracy (%) per fault type against the intensity step (1-20), all faults (black) and faults "
-            "predicted healthy (green, dashed); mean ± std over runs; noisy left, TSA right.",
-        ),
-        "accuracy_vs_rfa": (
-            "Figure 4.5",
-            "Test accuracy (%) per fault type against relative fault area (%, up to 50 %); mean ± std over runs.",
-        ),
-        "confusion": (
-            "Figure 4.6",
-            "Confusion matrices compiled over all runs (counts; shading: share of the true class).",
-        ),
-    }
+    return CAPTIONS

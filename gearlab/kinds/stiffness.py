@@ -181,6 +181,21 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     summarise(scenario, run)
 
 
+# report.html's captions of the figures drawn below: {file stem: (the thesis figure it repeats or "", what it shows)}
+CAPTIONS = {
+    "rfa": (
+        "Figure 2.32",
+        "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.",
+    ),
+    "tvms_ladders": (
+        "Figure 2.33",
+        "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step of each fault ladder; "
+        "colour: intensity step.",
+    ),
+    "tvms_cases": ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases."),
+}
+
+
 def summarise(scenario: Scenario, run: RunDir) -> None:
     spec: Spec = scenario.spec
     records = {r["unit"]: r for r in run.records()}
@@ -311,15 +326,4 @@ table_title = no_title
 
 
 def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
-    return {
-        "rfa": (
-            "Figure 2.32",
-            "Relative fault area (fraction of the healthy tooth) against intensity step per fault type.",
-        ),
-        "tvms_ladders": (
-            "Figure 2.33",
-            "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) for every step of each fault ladder; "
-            "colour: intensity step.",
-        ),
-        "tvms_cases": ("", "Time-varying mesh stiffness (1e8 N/m) against pinion angle (deg) of the scenario's cases."),
-    }
+    return CAPTIONS

@@ -510,6 +510,16 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return [Chart("target test accuracy per random target", "trial", "accuracy (%)", tuple(curves))]
 
 
+# report.html's captions of the figures drawn below: {file stem: (the thesis figure it repeats or "", what it shows)}
+CAPTIONS = {
+    "transfer_benchmark": (
+        "",
+        "Random unseen targets: each method's target test accuracy (%) per trial beside the trial's Bayes "
+        "bound, and its distance to the bound over the trials that have one (dotted: 5 points).",
+    )
+}
+
+
 def figure(run: RunDir, summary: dict) -> None:
     """Accuracy per trial (methods and bound) and each method's distance to the bound (PNG)."""
     import matplotlib
@@ -553,10 +563,4 @@ table_title = no_title
 
 
 def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
-    return {
-        "transfer_benchmark": (
-            "",
-            "Random unseen targets: each method's target test accuracy (%) per trial beside the trial's Bayes "
-            "bound, and its distance to the bound over the trials that have one (dotted: 5 points).",
-        )
-    }
+    return CAPTIONS

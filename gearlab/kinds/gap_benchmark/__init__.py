@@ -268,6 +268,15 @@ def table_md(summary: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+# report.html's captions of the figures drawn below: {file stem: (the thesis figure it repeats or "", what it shows)}
+CAPTIONS = {
+    "gap_benchmark": (
+        "",
+        "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
+    )
+}
+
+
 def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
     """Per-effect identification and the gap before/after of every trial (PNG for report.html)."""
     import matplotlib
@@ -361,9 +370,4 @@ table_title = no_title
 
 
 def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
-    return {
-        "gap_benchmark": (
-            "",
-            "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
-        )
-    }
+    return CAPTIONS
