@@ -91,3 +91,28 @@ def test_a_bad_placement_is_one_line(fault, message):
     with pytest.raises(GearlabInputError, match=message) as err:
         simulated_record([fault], speed_hz=SPEED, revolutions=1)
     assert "\n" not in str(err.value)
+
+
+def test_a_gearbox_description_is_simulated_as_its_source_would_be(healthy, tmp_path):
+    # the built-in description of the PHM 2009 rig is the two_stage model's preset: the same record
+    described = simulated_record(gearbox="phm09", speed_hz=SPEED, revolutions=6, seed=4)
+    assert described.channel == healthy.channel == "casing_x" and described.load_nm == 20.0
+    np.testing.assert_array_equal(described.vibration, healthy.vibration)
+    # a user's one-stage description: its model (ten_dof, the housing), its sensor's channel and its
+    # operating point; integrated at sim_fs, read at the logger's fs, the mesh lines where z1 puts them
+    path = tmp_path / "rig.toml"
+    path.write_text(
+        '[gearbox]\nname = "r"\n[operation]\nspeed = "20 Hz"\nload = "9 N*m"\n[[stages]]\nmodule = "2 mm"\n'
+        'face_width = "15 mm"\npinion = { z = 23, bore = "15 mm" }\nwheel = { z = 71, bore = "20 mm" }\n'
+        '[sensor]\nnear = "input"\ndirection = "y"\n'
+    )
+    rec = simulated_record(gearbox=str(path), revolutions=20, seed=1, fs=10_000.0, sim_fs=120e3)
+    assert (rec.speed_hz, rec.load_nm, rec.channel, rec.fs) == (20.0, 9.0, "casing_y", 10_000.0)
+    revs = resample_revolutions(rec.vibration, rec.angle, 512)
+    amp = np.abs(np.fft.rfft(revs.mean(axis=0)))
+    strongest = np.argsort(amp)[-3:]
+    assert all(k % 23 == 0 for k in strongest), strongest
+    with pytest.raises(GearlabInputError, match="give a 'gearbox' description or a 'preset', not both"):
+        simulated_record(gearbox=str(path), preset="phm09", revolutions=1)
+    with pytest.raises(GearlabInputError, match="nothere.toml"):
+        simulated_record(gearbox=str(tmp_path / "nothere.toml"), revolutions=1)

@@ -9,6 +9,10 @@ gear of the train, and sensor noise.
     rec.write_csv("chipped_output.csv")               # time_s, acc_ms2, tacho_V
 
 Defaults: the PHM 2009 rig (model two_stage, preset phm09, the housing's x channel, 66 666.67 Hz).
+Any gearbox description instead, as a scenario's ``[source] gearbox`` simulates it:
+
+    rec = simulated_record(gearbox="rig.toml", speed_hz=31.4, fs=25_000, sim_fs=200_000, snr_db=25)
+
 A fault is a placement table (gearlab.data.placement: name, gear, stage, tooth, step or params)
 or a PlacedFault.
 
@@ -148,27 +152,76 @@ def tacho_pulses(angle: np.ndarray, step: float) -> np.ndarray:
     return TACHO_V * np.where(phase < 2 * np.pi * TACHO_DUTY, ramp, 0.0)
 
 
+def _what_to_simulate(gearbox, model, preset, channel, speed_hz, load_nm) -> tuple[str, str, str, float, float]:
+    """(model, preset, channel, speed, load): a description's (module doc of gearlab.gearbox.simulation)
+    where one is named, else the PHM 2009 rig's; what the caller gives wins."""
+    if gearbox is None:
+        return (
+            model or "two_stage",
+            preset or "phm09",
+            channel or "casing_x",
+            30.0 if speed_hz is None else speed_hz,
+            20.0 if load_nm is None else load_nm,
+        )
+    from ..gearbox.simulation import channel as sensor_channel
+    from ..gearbox.simulation import model_name, reference, referenced
+
+    if preset is not None:
+        raise GearlabInputError(
+            f"simulated record: give a 'gearbox' description or a 'preset', not both (got {shown(preset)})"
+        )
+    try:
+        ref = reference(str(gearbox))
+    except OSError as exc:
+        raise GearlabInputError(f"{gearbox}: cannot read the gearbox description ({exc.strerror or exc})") from None
+    box = referenced(ref)
+    model = model or model_name(box)
+    channel = channel or sensor_channel(box, model, get_registry().get("model", model).channels)
+    speed_hz = box.speed_hz if speed_hz is None else speed_hz
+    load_nm = box.load_nm if load_nm is None else load_nm
+    for key, value in (("speed", speed_hz), ("load", load_nm)):
+        if value is None:
+            raise GearlabInputError(
+                f"{box.source}: [operation] key '{key}': missing, and the simulated record was given none"
+            )
+    return model, ref, channel, speed_hz, load_nm
+
+
 def simulated_record(
     faults: Sequence = (),
     *,
-    speed_hz: float = 30.0,
-    load_nm: float = 20.0,
+    speed_hz: float | None = None,
+    load_nm: float | None = None,
     revolutions: float = 60.0,
     snr_db: float | None = None,
     noise_kind: str = "gaussian",
     effects: Sequence = (),
     seed: int = 0,
     fs: float = PHM09_FS,
-    model: str = "two_stage",
-    preset: str = "phm09",
-    channel: str = "casing_x",
+    model: str | None = None,
+    preset: str | None = None,
+    channel: str | None = None,
+    gearbox: str | None = None,
+    sim_fs: float | None = None,
 ) -> SimulatedRecord:
     """A record of *revolutions* input turns at *fs* of *channel* of *model*/*preset* at *speed_hz* and
     *load_nm*, with *faults* (placement tables or PlacedFaults), *effects* (scenario tables, e.g.
     ``{name = "sensor_lowpass", ...}``) and sensor noise at *snr_db* (dB against the record's RMS, of
-    *noise_kind*; None: none). *seed* draws the start in the gears' period and the noise."""
+    *noise_kind*; None: none). *seed* draws the start in the gears' period and the noise.
+
+    *gearbox*: a description (a file or a built-in name) simulated as a ``[source] gearbox`` is
+    (gearlab.gearbox.simulation): its model, its [sensor]'s channel, its [operation] speed and load
+    unless given. Else the PHM 2009 rig (two_stage, phm09, casing_x, 30 Hz, 20 N m). *sim_fs*: the
+    model's integration rate (default *fs*); a logger's rate is often too low for a stiff mesh's
+    natural frequencies, so a description's record is simulated faster and read at *fs*."""
     where = "simulated record"
-    for key, value, low in (("speed_hz", speed_hz, 0.0), ("revolutions", revolutions, 0.0), ("fs", fs, 0.0)):
+    model, preset, channel, speed_hz, load_nm = _what_to_simulate(gearbox, model, preset, channel, speed_hz, load_nm)
+    for key, value, low in (
+        ("speed_hz", speed_hz, 0.0),
+        ("revolutions", revolutions, 0.0),
+        ("fs", fs, 0.0),
+        ("sim_fs", fs if sim_fs is None else sim_fs, 0.0),
+    ):
         if isinstance(value, bool) or not isinstance(value, int | float) or not (math.isfinite(value) and value > low):
             raise GearlabInputError(f"{where}: '{key}' must be a positive number, got {shown(value)}")
     if snr_db is not None and noise_kind not in NOISE_KINDS:
@@ -179,7 +232,7 @@ def simulated_record(
     chain = EffectChain.load(effects_from_tables(list(effects), f"{where}: effects")) if effects else EffectChain()
     base = registry.get("model", model, where)
     pair, _ = base.resolve(preset, where=where)
-    fs_sim = whole_steps_rate(fs, speed_hz, pair.Z1)
+    fs_sim = whole_steps_rate(fs if sim_fs is None else max(sim_fs, fs), speed_hz, pair.Z1)
     if chain:
         config = chain.model_config(config_of(model, preset, channel, where), where)
         sim, excitation, channel = _configured_simulator(config, fs_sim), chain.at("excitation"), config.channel
