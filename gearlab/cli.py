@@ -122,21 +122,13 @@ def stiffness(
 ) -> None:
     from .files import atomic_write
     from .kinds.stiffness import csv_text
-    from .physics.faults import parse_fault_option, place_fault
     from .physics.stiffness import MeshStiffnessModel, StiffnessOptions
-    from .registry import get_registry
 
     if not 64 <= points <= 1 << 20:
         raise GearlabInputError(f"--points: expected 64 .. {1 << 20}, got {points}")
     pair = _stiffness_pair(preset, gearbox, stage)
-    registry = get_registry()
-    placed = []
-    for text in fault or []:
-        kind, tooth, step, params = parse_fault_option(text)
-        placed.append(place_fault(registry, pair, kind, tooth, step, params, where=f"--fault {text!r}"))
-    for path in (csv, plot):
-        if path is not None and not path.parent.exists():
-            raise GearlabInputError(f"{path}: directory {path.parent} does not exist")
+    placed = _placed_faults(pair, fault)
+    _check_folders(csv, plot)
     model = MeshStiffnessModel(pair, StiffnessOptions(fillet=fillet, root_region=root_region))
     start = time.perf_counter()
     ms = model.mesh_stiffness(placed, points)
@@ -160,6 +152,24 @@ def stiffness(
         label = " + ".join(p.label for p in placed) or "healthy"
         tvms_figure(curves + [(label, ms.theta, ms.k)], f"TVMS of {pair.name}: {label}", plot)
         console.print(f"wrote {plot}")
+
+
+def _placed_faults(pair, options: list[str] | None) -> list:
+    """The --fault options (KIND@TOOTH=STEP or KIND@TOOTH:NAME=VALUE,...) placed on *pair*."""
+    from .physics.faults import parse_fault_option, place_fault
+    from .registry import get_registry
+
+    return [
+        place_fault(get_registry(), pair, *parse_fault_option(text), where=f"--fault {text!r}")
+        for text in options or []
+    ]
+
+
+def _check_folders(*paths: Path | None) -> None:
+    """Refuse an output file whose folder does not exist, before any work."""
+    for path in paths:
+        if path is not None and not path.parent.exists():
+            raise GearlabInputError(f"{path}: directory {path.parent} does not exist")
 
 
 def _stiffness_pair(preset: str | None, gearbox: str | None, stage: int):
@@ -314,21 +324,14 @@ def simulate(
     import numpy as np
 
     from .files import atomic_write
-    from .physics.faults import parse_fault_option, place_fault
-    from .registry import get_registry
 
     if out.suffix != ".npz":
         raise GearlabInputError(f"--out {out}: expected a .npz file name")
-    for path in (out, plot):
-        if path is not None and not path.parent.exists():
-            raise GearlabInputError(f"{path}: directory {path.parent} does not exist")
+    _check_folders(out, plot)
     with warnings.catch_warnings(record=True) as caught:  # held back: a refused input gets one error line
         warnings.simplefilter("always")
         sim = _simulator(model, preset, fs)
-        placed = []
-        for text in fault or []:
-            kind, tooth, step, params = parse_fault_option(text)
-            placed.append(place_fault(get_registry(), sim.pair, kind, tooth, step, params, where=f"--fault {text!r}"))
+        placed = _placed_faults(sim.pair, fault)
         result = sim.run(placed, speed, load, duration)
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
@@ -507,11 +510,10 @@ def gap(
     from .engine import load_scenario
 
     overrides = _execution(executor, ray_address, device)
-    given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
+    given = _benchmark_keys(trials, seed)
     if scenario == "benchmark":
         path = _shipped_scenario(BENCHMARK, "gap_benchmark")
-        if given:
-            overrides["benchmark"] = given
+        overrides.update(given)
     else:
         path = Path(scenario)
         if not path.exists() and "/" not in scenario and not scenario.endswith(".toml"):
@@ -522,8 +524,7 @@ def gap(
                 raise GearlabInputError(f"gap: '{scenario}' is neither a scenario file nor 'benchmark'{hint}")
         kind = load_scenario(path).kind
         if kind == "gap_benchmark":  # a benchmark file of one's own takes --trials and --seed too
-            if given:
-                overrides["benchmark"] = given
+            overrides.update(given)
         elif given:
             raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark` (or a gap_benchmark file)")
         elif kind != "gap":
@@ -532,6 +533,12 @@ def gap(
                 f'"{kind}" (run it with `gearlab run`)'
             )
     _run(None if resume else path, out, resume, quick, overrides, events)
+
+
+def _benchmark_keys(trials: int | None, seed: int | None) -> dict:
+    """The [benchmark] keys set on the command line: {"benchmark": {...}}, or {} when none is."""
+    given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
+    return {"benchmark": given} if given else {}
 
 
 def _shipped_scenario(name: str, kind: str) -> Path:
@@ -564,10 +571,7 @@ def transfer_benchmark(
 
     Example: gearlab transfer-benchmark --trials 24 --seed 1000
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    overrides = _execution(executor, ray_address, None)
-    given = {key: value for key, value in (("trials", trials), ("seed", seed)) if value is not None}
-    if given:
-        overrides["benchmark"] = given
+    overrides = {**_execution(executor, ray_address, None), **_benchmark_keys(trials, seed)}
     path = None if resume else _shipped_scenario("transfer_benchmark.toml", "transfer_benchmark")
     _run(path, out, resume, quick, overrides, events)
 
