@@ -5,6 +5,7 @@ without its gain, a 200 kHz record with its noise added at that rate) invent no 
 log line and its report say the same verdict, and every parameter row says which fit it is."""
 
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from gearlab.data.builder import build_dataset
 from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec
 from gearlab.gap.diagnose import Settings, diagnose
-from gearlab.gap.structure import level_line, mesh_check
+from gearlab.gap.structure import later_stages, level_line, mesh_check, speed_line
 from gearlab.gap.views import healthy_rows
 from gearlab.kinds.gap import ranking_md, verdict_text
 from gearlab.kinds.gap_verdict import gap_lines
@@ -130,6 +131,55 @@ def test_a_record_at_another_speed_ends_in_one_line(clean, tmp_path):
     result = diagnosed(rows, chain, max_order)
     assert result["verdict"] == "structure differs" and result["effects"] == []
     assert result["difference"].startswith("speed 30 Hz measured, 40 Hz expected: the source simulates 40 Hz")
+
+
+def train_rows(stages, seed: int, n: int = 40, points: int = 4096) -> np.ndarray:
+    """Revolutions of a train of *stages* ((z1, z2), ...): each mesh's harmonics 1-3, the later
+    stage's 0.3 of the first's, modulated by both of its shafts (sidebands), white noise."""
+    rng = np.random.default_rng(seed)
+    theta = 2 * np.pi * np.arange(n * points) / points
+    x, o = np.zeros(theta.size), 1.0
+    for k, (z1, z2) in enumerate(stages):
+        mod = 1 + 0.2 * np.cos(o * theta) + 0.1 * np.cos(o * z1 / z2 * theta + 1.0)
+        for h in (1, 2, 3):
+            x += 0.3**k / h * mod * np.cos(h * o * z1 * theta + rng.uniform(0, 6))
+        o *= z1 / z2
+    return (x + rng.normal(0, 0.05, x.size)).reshape(n, points)
+
+
+def described_pair(*stages):
+    """A simulator's pair as the gap sees it: stage 1's, carrying the next (StagePair.next_stage)."""
+    pair = None
+    for z1, z2 in reversed(stages):
+        pair = SimpleNamespace(Z1=z1, Z2=z2, next_stage=pair)
+    return pair
+
+
+def test_a_later_stage_of_another_tooth_count_ends_in_one_line():
+    record = train_rows([(24, 60), (35, 83)], seed=1)
+    # the source of the right counts reads as the record does; its mesh 2 at 14 (= 24/60 x 35)
+    right = later_stages(record, train_rows([(24, 60), (35, 83)], seed=2), described_pair((24, 60), (35, 83)))
+    assert right["line"] is None and right["stages"][0]["target"] == pytest.approx(14.0, abs=1e-3)
+    # a 33-tooth second pinion described: its mesh at 13.2, the record's at 14 (two sidebands of the
+    # 0.4-order shaft off 13.2, so no comb of the source's tells them apart: its own reading does)
+    wrong = later_stages(record, train_rows([(24, 60), (33, 83)], seed=2), described_pair((24, 60), (33, 83)))
+    assert wrong["line"].startswith(
+        "stage 2: mesh order 14 measured, 13.2 expected: the source simulates a 33-tooth pinion on the "
+        "intermediate shaft turning at order 0.4 (the target's mesh is 35.0 such teeth"
+    )
+    assert later_stages(record, record, described_pair((24, 60))) == {"stages": [], "line": None}
+
+
+def test_a_speed_found_from_the_mesh_lines_names_the_tooth_count_it_trades_with():
+    # no tacho: only speed x teeth is measured, so a 19-tooth pinion at 28 Hz reads as 20 teeth at 26.6 Hz
+    assert speed_line(26.6, 28.0, 20) == (
+        "speed 26.6 Hz found from the mesh lines (no tacho), 28 Hz expected: the record's mesh at 532 Hz is a "
+        "20-tooth pinion's at 26.6 Hz or a 19-tooth pinion's at 28 Hz: check the tooth count, or give the "
+        "record's speed or a tacho"
+    )
+    assert speed_line(27.0, 28.0, 20).startswith("speed 27 Hz found from the mesh lines (no tacho), 28 Hz expected")
+    assert speed_line(27.9, 28.0, 20) is None
+    assert speed_line(26.6, 28.0).startswith("speed 26.6 Hz measured, 28 Hz expected")
 
 
 # --- the level ----------------------------------------------------------------------------------------

@@ -52,6 +52,8 @@ class Chain:
     step:      the record's quantisation step in physical units (integer formats), 0 = none
     offset:    the angle (rad) of the record's tacho zero in the simulation's frame; None = fitted
                for every simulated set against *reference* (the target's synchronous average)
+    speed_from_mesh: no tacho: the speed was found from a gearbox description's mesh lines, so only
+               speed x pinion teeth is measured
     """
 
     fs: float
@@ -60,6 +62,7 @@ class Chain:
     step: float = 0.0
     offset: float | None = None
     reference: np.ndarray | None = field(default=None, compare=False, repr=False)
+    speed_from_mesh: bool = False
 
     @property
     def samples_per_rev(self) -> float:
@@ -83,6 +86,7 @@ def chain_of(meta: dict) -> Chain:
         speed=float(meta["speed_hz"]),
         fractions=tuple(float(f) for f in meta.get("start_fractions", ())),
         step=float(meta.get("quantum", 0.0)),
+        speed_from_mesh=bool(meta.get("speed_from_mesh", False)),
     )
 
 

@@ -455,6 +455,9 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
             "fs_source": rec.fs_source,
             "speed_hz": float(cut.speed_hz),
             "angle_source": how,
+            # no tacho, no declared speed: found from the description's mesh lines, where a speed and a
+            # pinion's tooth count trade off (the gap's structure line names both)
+            "speed_from_mesh": rec.tacho is None and box is not None and spec.speed_hz is None,
             "samples": int(n),
             "complete_revolutions": int(cut.complete),
             "transient_revolutions": int(start),

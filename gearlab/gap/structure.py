@@ -64,6 +64,17 @@ class _PairDescription:
     def of(cls, z1: int, z2: int) -> _PairDescription:
         return cls((_Stage(1, _Gear(int(z1)), _Gear(int(z2))),))
 
+    @classmethod
+    def train(cls, pair) -> _PairDescription:
+        """Every stage of a simulator's pair: a two-stage model's carries the next (StagePair.next_stage)."""
+        stages = []
+        while pair is not None:
+            stages.append(_Stage(len(stages) + 1, _Gear(int(pair.Z1)), _Gear(int(pair.Z2))))
+            pair = getattr(pair, "next_stage", None)
+        from ..gearbox.description import SHAFT_NAMES
+
+        return cls(tuple(stages), SHAFT_NAMES[len(stages)])
+
 
 def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.ndarray) -> np.ndarray:
     """Which orders *x* lie on a mesh harmonic h z (h >= 1) or one of its sidebands h z +- j o."""
@@ -124,6 +135,64 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0) -> dict
     return out
 
 
+def _lines(rows: np.ndarray, max_order: int):
+    """The spectral lines of revolutions *rows* (n, P) laid end to end, as `gearlab inspect` reads a record."""
+    from ..gearbox.speed import THRESHOLD_DB, find_lines
+    from ..signals import spectrum
+
+    n, points = rows.shape
+    orders, amp = spectrum(np.asarray(rows, dtype=np.float64).reshape(-1), points)
+    top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
+    return find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
+
+
+def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 0) -> dict:
+    """Stages after the first of a multi-stage source: where the target's lines put each stage's
+    mesh order against where the source's own lines put it, both read alike (inspect's
+    check_description on each). A later stage's mesh is often weak, or held by its harmonics, so it
+    is not tested against the description's order but against the source's reading of itself: the
+    stage differs when the target's reading moves off the source's and the target holds no line
+    where the source's is. {'stages': [{stage, expected, source, target}], 'line': the one line of
+    the first difference, or None}."""
+    from ..inspect import _tol_mesh, check_description
+
+    box = _PairDescription.train(pair)
+    out: dict = {"stages": [], "line": None}
+    if len(box.stages) < 2:
+        return out
+    from ..gearbox import order_table
+
+    table = order_table(box)
+    read = {}
+    for name, rows in (("target", target), ("source", source)):
+        lines = _lines(rows, max_order)
+        read[name] = (lines, rows.shape[0], check_description(lines, box, rows.shape[0], True)["stages"])
+    for k in range(1, len(box.stages)):
+        t, s = read["target"][2][k], read["source"][2][k]
+        entry = {
+            "stage": k + 1,
+            "expected": float(table.stages[k].mesh),
+            "source": s.get("measured_order"),
+            "target": t.get("measured_order"),
+        }
+        out["stages"].append(entry)
+        if entry["source"] is None or entry["target"] is None or out["line"] is not None:
+            continue
+        lines, n, _ = read["target"]
+        tol = max(_tol_mesh(entry["source"], 1.0 / n), _tol_mesh(entry["source"], 1.0 / read["source"][1]))
+        if abs(entry["target"] - entry["source"]) <= tol or lines.near(entry["source"], tol) is not None:
+            continue
+        st = table.stages[k]
+        seen = entry["target"] / float(st.pinion_shaft_order)
+        out["line"] = (
+            f"stage {k + 1}: mesh order {entry['target']:.4g} measured, {entry['expected']:.4g} expected: the source "
+            f"simulates a {st.pinion_teeth}-tooth pinion on the {st.pinion_shaft} shaft turning at order "
+            f"{float(st.pinion_shaft_order):.4g} (the target's mesh is {seen:.1f} such teeth: a tooth count of "
+            f"stage {k + 1}, or a wheel upstream, differs)"
+        )
+    return out
+
+
 def mesh_line(check: dict, z1: int) -> str:
     """The one line of a tooth-count difference."""
     m = check["measured"]
@@ -137,13 +206,24 @@ def mesh_line(check: dict, z1: int) -> str:
     )
 
 
-def speed_line(target_speed: float, source_speed: float) -> str | None:
-    """The one line of a speed difference, or None within SPEED_TOL."""
+def speed_line(target_speed: float, source_speed: float, z1: int | None = None) -> str | None:
+    """The one line of a speed difference, or None within SPEED_TOL. *z1*: the source's pinion teeth
+    when the target's speed was found from the mesh lines (no tacho): the record then measures only
+    speed x teeth, and another tooth count at the source's speed may explain it as well."""
     if abs(target_speed / source_speed - 1.0) <= SPEED_TOL:
         return None
+    if z1 is not None:
+        teeth = z1 * target_speed / source_speed
+        if abs(teeth - round(teeth)) <= 0.05 and round(teeth) >= MIN_TEETH:
+            return (
+                f"speed {target_speed:.4g} Hz found from the mesh lines (no tacho), {source_speed:.4g} Hz expected: "
+                f"the record's mesh at {z1 * target_speed:.4g} Hz is a {z1}-tooth pinion's at {target_speed:.4g} Hz "
+                f"or a {round(teeth)}-tooth pinion's at {source_speed:.4g} Hz: check the tooth count, or give the "
+                "record's speed or a tacho"
+            )
     return (
-        f"speed {target_speed:.4g} Hz measured, {source_speed:.4g} Hz expected: the source simulates "
-        f"{source_speed:.4g} Hz (set its speed_hz to the record's)"
+        f"speed {target_speed:.4g} Hz {'found from the mesh lines (no tacho)' if z1 else 'measured'}, "
+        f"{source_speed:.4g} Hz expected: the source simulates {source_speed:.4g} Hz (set its speed_hz to the record's)"
     )
 
 
@@ -217,12 +297,17 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
     record: dict = {}
     if chain is not None:
         record["speed_hz"] = {"target": chain.speed, "source": operating_point(source)[0]}
-        line = speed_line(chain.speed, record["speed_hz"]["source"])
+        line = speed_line(chain.speed, record["speed_hz"]["source"], pair.Z1 if chain.speed_from_mesh else None)
         if line:
             return "structure differs", line, record
     record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, settings.max_order)
     if mesh["differs"]:
         return "structure differs", mesh_line(mesh, pair.Z1), record
+    later = later_stages(target, plain, pair, settings.max_order)
+    if later["stages"]:
+        record["later_stages"] = later["stages"]
+    if later["line"]:
+        return "structure differs", later["line"], record
     if not gap_seen(before):
         return None, None, record
     c = level_factor(target, plain)
