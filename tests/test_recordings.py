@@ -160,6 +160,27 @@ def test_header_checks_name_the_table_key_and_file(tmp_path):
     assert read_header(wav).rate and read_header(wav).channels == ["0", "1"]
 
 
+@pytest.mark.parametrize(
+    "written, said",
+    [
+        (100, "100 (100 V per m/s²)"),  # a bare number is V per m/s²: meant as 100 mV/g, 1000 times off
+        ("100 V/g", "'100 V/g' (10.2 V per m/s²)"),
+        ("0.001 mV/g", "'0.001 mV/g' (1.02e-07 V per m/s²)"),
+    ],
+)
+def test_a_sensitivity_no_accelerometer_has_is_refused(written, said):
+    from gearlab.data.textzip import parse_sensitivity
+
+    with pytest.raises(GearlabInputError) as info:
+        parse_sensitivity(written, "s.toml: [target] key 'sensitivity'")
+    assert str(info.value) == (
+        f"s.toml: [target] key 'sensitivity': {said} is no accelerometer's sensitivity (0.01 mV/g to 10 V/g); "
+        "expected one with its unit, e.g. '100 mV/g'"
+    )
+    assert parse_sensitivity("10 V/g", "x") == pytest.approx(10 / 9.80665)
+    assert parse_sensitivity(0.0102, "x") == 0.0102
+
+
 def test_validate_refuses_bad_input_in_one_line_from_the_header(cli, tmp_path):
     layouts(tmp_path)
     scenario = tmp_path / "s.toml"

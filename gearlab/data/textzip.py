@@ -44,6 +44,8 @@ from .recordings import CutRecording, cut_recording
 __all__ = ["TextRecord", "align_to", "parse_sensitivity", "read_columns", "read_record"]
 
 STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer sensitivities (ISO 80000-3)
+# V per m/s²: accelerometers span 0.01 mV/g (shock) to 10 V/g (seismic); outside it, a unit is wrong
+SENSITIVITY_RANGE = (1e-5 / STANDARD_GRAVITY, 10.0 / STANDARD_GRAVITY)
 TWO_PI = 2.0 * np.pi
 
 
@@ -65,6 +67,13 @@ def parse_sensitivity(value, where: str) -> float:
         raise GearlabInputError(f"{exc} (volts per acceleration, e.g. '10 mV/g'; g is standard gravity)") from None
     if not s > 0:
         raise GearlabInputError(f"{where}: expected a positive sensitivity such as '10 mV/g', got {shown(value)}")
+    if not SENSITIVITY_RANGE[0] <= s <= SENSITIVITY_RANGE[1]:
+        # a bare number is V per m/s²: '100' meant as 100 mV/g would scale the record by ~1000
+        said = f"{shown(value if written is None else written)} ({s:.3g} V per m/s²)"
+        raise GearlabInputError(
+            f"{where}: {said} is no accelerometer's sensitivity (0.01 mV/g to 10 V/g); expected one with its unit, "
+            "e.g. '100 mV/g'"
+        )
     return s
 
 
