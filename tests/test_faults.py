@@ -101,16 +101,21 @@ def test_zero_depth_crack_leaves_the_tooth_healthy(registry, pairs, models, pres
     np.testing.assert_array_equal(section.h, model.pinion_section.h)
 
 
+def _worst_on_pinion(registry, pair, model, kind: str):
+    """The parameters of *kind*'s worst ladder step (20) and the pinion section it leaves."""
+    fault = registry.get("fault", kind)
+    params = fault.at_step(pair, 20)
+    return params, fault.apply(model.pinion_section, params, pair)
+
+
 # --- chip: only the Hertz term ----------------------------------------------------------------
 
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_chip_changes_only_the_hertz_term(registry, pairs, models, preset):
     pair, model = pairs[preset], models[preset]
-    chip = registry.get("fault", "chip")
-    params = chip.at_step(pair, 20)
     healthy_section = model.pinion_section
-    chipped = chip.apply(healthy_section, params, pair)
+    params, chipped = _worst_on_pinion(registry, pair, model, "chip")
     # The section arrays other than L are untouched
     for name in ("x", "h", "A", "I"):
         np.testing.assert_array_equal(getattr(chipped, name), getattr(healthy_section, name))
@@ -201,10 +206,8 @@ def test_broken_tip_refuses_a_break_past_the_root_or_the_face(registry, pairs):
 @pytest.mark.parametrize("preset", PRESETS)
 def test_spall_lowers_beam_stiffness_past_the_spall_but_not_hertz(registry, pairs, models, preset):
     pair, model = pairs[preset], models[preset]
-    spall = registry.get("fault", "spall")
-    params = spall.at_step(pair, 20)
     healthy_section = model.pinion_section
-    spalled = spall.apply(healthy_section, params, pair)
+    params, spalled = _worst_on_pinion(registry, pair, model, "spall")
 
     phi = np.linspace(0.0, pair.theta_t, 1601)
     before = tooth_pair_compliances(pair, phi, healthy_section, model.gear_section)
