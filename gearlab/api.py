@@ -1,4 +1,4 @@
-"""The public API for plugin authors: everything a fault, model, adapter or effect plugin may
+"""The public API for plugin authors: everything a fault, model, adapter, detector or effect plugin may
 import from gearlab. A plugin imports from here and nowhere else in gearlab, so gearlab's
 modules can move without breaking plugins (docs/plugins.md, docs/architecture.md).
 
@@ -9,7 +9,7 @@ modules can move without breaking plugins (docs/plugins.md, docs/architecture.md
         return [MyEffect()]
 
 The torch-based helpers (``mmd2``, ``coral_loss``, ``grad_reverse``, ``median_distance``,
-``template_detector``, ``likelihood_detector``)
+``template_statistic``, ``likelihood_statistic``, ``template_detector``, ``likelihood_detector``)
 are resolved on first use (PEP 562 ``__getattr__``): importing this module, as the registry
 does for every command, never pays torch's import time. Import them inside the method that
 trains, e.g. ``from gearlab.api import mmd2``.
@@ -25,7 +25,9 @@ from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring
 from .effect_contract import Effect, SignalContext
 from .errors import GearlabInputError
 from .gearbox.simulation import DescribedPresets
-from .learn.adapters import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, SCHEDULE_PARAMS, Adapter
+from .learn.adapters import SCHEDULE_PARAMS, Adapter
+from .learn.detector_contract import FALSE_ALARM_PARAM, PATH_PARAM, Detector
+from .learn.path import PATHS
 from .params import Param
 from .physics.faults import Fault, region, scaled_ladder
 from .physics.presets import gear_pair
@@ -40,6 +42,8 @@ _LAZY = {
     "coral_loss": "gearlab.learn.losses",
     "grad_reverse": "gearlab.learn.losses",
     "median_distance": "gearlab.learn.losses",
+    "template_statistic": "gearlab.learn.detectors",
+    "likelihood_statistic": "gearlab.learn.detectors",
     "template_detector": "gearlab.learn.detectors",
     "likelihood_detector": "gearlab.learn.detectors",
 }
@@ -54,6 +58,7 @@ __all__ = [
     "Adapter",
     "Assembly",
     "DescribedPresets",
+    "Detector",
     "DynamicModel",
     "Effect",
     "Excitation",

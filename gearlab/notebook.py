@@ -319,13 +319,13 @@ def fit_detector(
     from .registry import get_registry
 
     where = f"gearlab.fit_detector('{method}')"
-    adapter = get_registry().get("adapter", method, where)
-    if adapter.train_on != "detector":
+    registry = get_registry()
+    if registry.kind_of(method) == "adapter":
         raise GearlabInputError(
-            f"{where}: '{method}' trains a network (train_on = {adapter.train_on!r}); expected a detector "
-            "(a method with train_on = 'detector', such as likelihood_ratio or matched_filter): run a scenario "
-            "to train a network"
+            f"{where}: '{method}' trains a network (an adapter); expected a detector "
+            f"({', '.join(registry.names('detector'))}): run a scenario to train a network"
         )
+    detector = registry.get("detector", method, where)
     if not hasattr(source, "fault"):
         raise GearlabInputError(f"{where}: the source must be a labelled dataset (gearlab.simulate)")
     Xs, ys = _rows(source, f"{where}: source"), np.asarray(source.fault)
@@ -333,7 +333,7 @@ def fit_detector(
     yt = None if target_labels is None else np.asarray(target_labels)
     if yt is not None and yt.shape != (len(Xt),):
         raise GearlabInputError(f"{where}: {len(yt)} target labels for {len(Xt)} target revolutions")
-    return adapter.detector((Xs, ys), (Xt, yt), adapter.resolve(params, where))
+    return detector.fit((Xs, ys), (Xt, yt), detector.resolve(params, where))
 
 
 def detector_scores(detector, revolutions: Dataset | np.ndarray) -> np.ndarray:
@@ -351,7 +351,7 @@ def detector_scores(detector, revolutions: Dataset | np.ndarray) -> np.ndarray:
     X = _rows(revolutions, "gearlab.detector_scores")
     with torch.no_grad():
         logits = detector(torch.as_tensor(X)).numpy()
-    # a detector's logits are [0, score - threshold] (gearlab.learn.adapters: scored as a network's)
+    # a detector's logits are [0, score - threshold] (gearlab.learn.detector_contract: scored as a network's)
     return np.asarray(logits[:, 1] - logits[:, 0], dtype=np.float64)
 
 

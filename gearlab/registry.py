@@ -51,6 +51,10 @@ class HookSpecs:
         """Domain-adaptation methods: extra modules, domain loss on latent features, lambda schedule."""
 
     @hookspec
+    def gearlab_detectors(self) -> list:
+        """Detectors: no network; fitted on the source's fault shapes and the target's healthy history."""
+
+    @hookspec
     def gearlab_effects(self) -> list:
         """Unmodelled effects for the sim-to-real gap diagnosis, with bounded parameters and a level."""
 
@@ -59,14 +63,19 @@ KINDS = {
     "fault": "gearlab_faults",
     "model": "gearlab_models",
     "adapter": "gearlab_adapters",
+    "detector": "gearlab_detectors",
     "effect": "gearlab_effects",
 }
+# The kinds a scenario's methods name (`[[methods]] adapter = ...`, a `methods` list): one namespace,
+# so that one lookup finds a method whatever its kind
+METHODS = ("adapter", "detector")
 
 # What each kind of plugin object must provide, beyond `name` and `params`.
 REQUIRED = {
     "fault": ("apply", "ladder_endpoints", "rfa", "resolve", "ladder"),
     "model": ("assemble", "resolve", "preset"),
     "adapter": (),
+    "detector": ("fit", "resolve"),
     # and a level, a breaks_symmetry flag and the hook of its level (gearlab.effect_contract.hook_problem);
     # subclasses of gearlab.effect_contract.Effect have all but the hook
     "effect": ("resolve", "spec", "space", "check_config"),
@@ -90,19 +99,24 @@ class Registry:
     packages: dict[tuple[str, str], str] = field(default_factory=dict)
     problems: list[PluginProblem] = field(default_factory=list)
 
-    def names(self, kind: str) -> list[str]:
-        return sorted(self.plugins[kind])
+    def names(self, kind: str | tuple[str, ...]) -> list[str]:
+        """The names of one kind, or of several (METHODS) in one sorted list."""
+        kinds = (kind,) if isinstance(kind, str) else kind
+        return sorted(name for k in kinds for name in self.plugins[k])
 
-    def get(self, kind: str, name: str, where: str = ""):
-        try:
-            return self.plugins[kind][name]
-        except KeyError:
-            known = self.names(kind)
-            prefix = f"{where}: " if where else ""
-            raise UnknownPluginError(
-                f"{prefix}unknown {kind} '{name}'{did_you_mean(name, known)}"
-                f"; known {kind}s: {', '.join(known) or 'none'}"
-            ) from None
+    def kind_of(self, name: str, kinds: tuple[str, ...] = METHODS) -> str | None:
+        """Which of *kinds* registers *name* (None: none does); names are unique across METHODS."""
+        return next((k for k in kinds if name in self.plugins[k]), None)
+
+    def get(self, kind: str | tuple[str, ...], name: str, where: str = ""):
+        """The plugin *name* of *kind*, or of whichever of several kinds holds it (METHODS)."""
+        kinds = (kind,) if isinstance(kind, str) else kind
+        found = self.kind_of(name, kinds)
+        if found is not None:
+            return self.plugins[found][name]
+        prefix = f"{where}: " if where else ""
+        known = "; ".join(f"known {k}s: {', '.join(self.names(k)) or 'none'}" for k in kinds)
+        raise UnknownPluginError(f"{prefix}unknown {kinds[0]} '{name}'{did_you_mean(name, self.names(kinds))}; {known}")
 
     def add(self, kind: str, obj, package: str, plugin: str) -> None:
         problem = _contract_problem(kind, obj)
@@ -110,12 +124,12 @@ class Registry:
             self.problems.append(PluginProblem(package, plugin, problem))
             return
         name = obj.name
-        if name in self.plugins[kind]:
-            first = self.packages[(kind, name)]
+        taken = self.kind_of(name, METHODS if kind in METHODS else (kind,))
+        if taken is not None:
+            first = f"package '{self.packages[(taken, name)]}'"
+            owner = first if taken == kind else f"the {taken} of {first}"  # a method's name is one lookup
             self.problems.append(
-                PluginProblem(
-                    package, plugin, f"{kind} name '{name}' is already registered by package '{first}'; ignored"
-                )
+                PluginProblem(package, plugin, f"{kind} name '{name}' is already registered by {owner}; ignored")
             )
             return
         self.plugins[kind][name] = obj

@@ -277,7 +277,7 @@ def test_matched_filter_limiter_by_name_and_its_effect_in_impulsive_noise():
     from gearlab.learn.detectors import template_detector
     from gearlab.registry import get_registry
 
-    adapter = get_registry().get("adapter", "matched_filter")
+    adapter = get_registry().get("detector", "matched_filter")
     assert adapter.resolve({"limiter": "auto"})["limiter"] == 2
     with pytest.raises(GearlabInputError, match="parameter 'limiter': unknown value 'of'.*did you mean 'off'"):
         adapter.resolve({"limiter": "of"})

@@ -508,15 +508,15 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
         return out
 
     templates = []
-    template_detector = api.template_detector
+    template_statistic = api.template_statistic
 
     def detector_spy(Xs, ys, *args, **kwargs):
         templates.append(np.array(Xs, copy=True))
-        return template_detector(Xs, ys, *args, **kwargs)
+        return template_statistic(Xs, ys, *args, **kwargs)
 
     monkeypatch.setattr(P, "train_method", spy)
     monkeypatch.setattr(T, "_rows", rows_spy)
-    monkeypatch.setattr(api, "template_detector", detector_spy)
+    monkeypatch.setattr(api, "template_statistic", detector_spy)
     corrected = (
         '[corrected]\nlabel = "noisy"\ntsa = 3\ndraws = 3\n'
         'effects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20 }]\n'
@@ -756,6 +756,7 @@ def test_without_methods_every_label_free_adapter_runs(tmp_path):
     spec = load_scenario(path).spec
     registry = get_registry()
     expected = {n for n in registry.names("adapter") if registry.get("adapter", n).train_on != "target"}
+    expected |= set(registry.names("detector"))
     assert {m.adapter for m in spec["protocol"].methods} == expected
     assert {"source_only", "mmd", "dann", "coral", "matched_filter"} <= expected
 

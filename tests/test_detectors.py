@@ -1,4 +1,4 @@
-"""The physics-template detector (gearlab.learn.detectors, adapter `matched_filter`).
+"""The physics-template detectors (gearlab.learn.detectors; detector plugins `matched_filter`, `likelihood_ratio`).
 
 Synthetic revolutions: a healthy periodic signal, a fault adds a short decaying burst at one
 of several teeth; the target sees the same shapes through another gain and under Laplace noise.
@@ -170,9 +170,33 @@ def test_experiment_b_at_k_0_without_target_labels():
     assert (p[y == 0] == 0).mean() > 0.95  # healthy revolutions are not called faulty
 
 
+@pytest.mark.parametrize("name", ["matched_filter", "likelihood_ratio"])
+def test_the_detector_plugins_fit_on_the_history_and_threshold_at_its_false_alarm_rate(name):
+    """A detector plugin (gearlab.learn.detector_contract) is no adapter: the base class fits the
+    plugin's statistic, then thresholds the healthy history's scores (the labelled-healthy rows
+    when labels are given), as the library functions do."""
+    from gearlab.api import Adapter, Detector
+    from gearlab.registry import get_registry
+
+    detector = get_registry().get("detector", name)
+    assert isinstance(detector, Detector) and not isinstance(detector, Adapter)
+    assert detector.params[0].name == "false_alarm" and set(detector.supervision) == {"unsupervised", "supervised"}
+    assert detector.describe()["params"][0]["name"] == "false_alarm"
+    library = {"matched_filter": template_detector, "likelihood_ratio": likelihood_detector}[name]
+    history, _ = revolutions(120, 0, gain=2.0, noise=1.0, seed=12)
+    X, y = revolutions(100, 100, gain=2.0, noise=1.0, seed=13)
+    for labels in (None, np.r_[np.zeros(120), np.ones(3)].astype(np.int64)):
+        rows = history if labels is None else np.vstack([history, X[-3:]])
+        fitted = detector.fit(SOURCE, (rows, labels), detector.resolve({"false_alarm": 0.05}))
+        assert float(fitted.threshold) == float(library(*SOURCE, rows, labels, false_alarm=0.05).threshold)
+        scores = detector.score(fitted, history)  # the history's scores give the threshold, no other row
+        assert float(fitted.threshold) == pytest.approx(detector.threshold(scores, 0.05), rel=1e-6)
+    assert (predict(fitted, X)[y == 1] == 1).mean() > 0.5
+
+
 @pytest.mark.parametrize("value", [0.0, 0.7, -0.1])
 def test_a_false_alarm_rate_that_means_nothing_is_refused(value):
     from gearlab.registry import get_registry
 
     with pytest.raises(GearlabInputError, match=r"false_alarm.*outside"):
-        get_registry().get("adapter", "matched_filter").resolve({"false_alarm": value})
+        get_registry().get("detector", "matched_filter").resolve({"false_alarm": value})

@@ -55,8 +55,8 @@ def test_the_default_is_each_units_own_scale_and_history_is_the_historys_median(
     expected = float(noise_scale(torch.as_tensor(history, dtype=torch.float32) - fixed.reference, fixed.kind).median())
     assert float(fixed.scale) == pytest.approx(expected, rel=1e-6)
     assert torch.allclose(fixed.embed(X), shape_llr(r, fixed.shapes, fixed.scale.expand(5), fixed.kind))
-    adapter = get_registry().get("adapter", "likelihood_ratio")
+    adapter = get_registry().get("detector", "likelihood_ratio")
     assert adapter.choices["scale"] == ("unit", "history")
-    assert float(adapter.detector((Xs, ys), (history, None), {"scale": 1}).scale) == pytest.approx(expected, rel=1e-6)
+    assert float(adapter.fit((Xs, ys), (history, None), {"scale": 1}).scale) == pytest.approx(expected, rel=1e-6)
     with pytest.raises(ValueError, match="scale"):
         likelihood_detector(Xs, ys, history, None, 0.01, scale="revolution")

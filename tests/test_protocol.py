@@ -201,10 +201,9 @@ def test_target_test_samples_cannot_reach_training_stopping_or_selection(m, cali
     for module, name in ((T, "fit_supervised"), (T, "fit_adaptation"), (T, "embed"), (C, "prepare"), (C, "calibrate")):
         monkeypatch.setattr(module, name, spy(getattr(module, name)))
     registry = P.get_registry()
-    for name in registry.names("adapter"):  # every detector: its arrays are its training
-        adapter = registry.get("adapter", name)
-        if adapter.train_on == "detector":
-            monkeypatch.setattr(adapter, "detector", spy(adapter.detector))
+    for name in registry.names("detector"):  # every detector: its arrays are its training
+        detector = registry.get("detector", name)
+        monkeypatch.setattr(detector, "fit", spy(detector.fit))
     # target rows carry their index in the first sample, to be recognised wherever they go
     marked = replace(TARGET, X=TARGET.X.copy())
     marked.X[:, 0] = 1000 + np.arange(len(marked))

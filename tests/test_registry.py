@@ -198,6 +198,37 @@ def test_duplicate_between_two_third_parties_keeps_the_first_by_package_name():
     assert "bbb-wear" in str(registry.problems[0]) and "aaa-wear" in str(registry.problems[0])
 
 
+def test_adapters_and_detectors_share_one_namespace_and_one_lookup():
+    """A scenario's methods name adapters and detectors alike: a detector may not take an
+    adapter's name, and one lookup finds either kind (or lists both)."""
+    from gearlab.api import Detector
+    from gearlab.registry import METHODS
+
+    class Shadow(Detector):
+        name = "mmd"
+
+        def statistic(self, source, target, params=None):
+            return None
+
+    shadow = FakeEntryPoint("shadow", "shadow-pkg", plugin_module("s", Shadow(), hook="gearlab_detectors"))
+    registry = load_registry([*builtin_entry_points(), shadow])
+    assert registry.names("detector") == ["likelihood_ratio", "matched_filter"]
+    assert registry.kind_of("mmd") == "adapter" and registry.kind_of("matched_filter") == "detector"
+    (problem,) = registry.problems
+    assert "detector name 'mmd' is already registered by the adapter of package 'gearlab'" in str(problem)
+    assert registry.get(METHODS, "matched_filter").kind == "detector"
+    assert registry.get(METHODS, "mmd").kind == "adapter"
+    assert registry.names(METHODS) == sorted(registry.names("adapter") + registry.names("detector"))
+    with pytest.raises(
+        UnknownPluginError,
+        match=r"w: unknown adapter 'matched_filtr' \(did you mean 'matched_filter'"
+        r"\?\); known adapters: coral, .*; known detectors: likelihood_ratio, matched_filter$",
+    ):
+        registry.get(METHODS, "matched_filtr", "w")
+    with pytest.raises(UnknownPluginError, match=r"unknown detector 'mmd'"):
+        registry.get("detector", "mmd")
+
+
 @pytest.mark.parametrize(
     "obj, message",
     [

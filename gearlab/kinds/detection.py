@@ -69,7 +69,7 @@ from ..params import did_you_mean
 from ..parts import training
 from ..parts.measured import target_spec
 from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training
-from ..registry import get_registry
+from ..registry import METHODS, get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of
 from ..settings import shrunk
@@ -245,16 +245,21 @@ OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 # --- building the scenario ---------------------------------------------------------------
 
 
+def trains_on_target(name: str) -> bool:
+    """An adapter that trains on labelled target rows (target_only, finetune): the history has none."""
+    registry = get_registry()
+    return registry.kind_of(name) == "adapter" and registry.get("adapter", name).train_on == "target"
+
+
 def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
-    """The [[methods]]; none listed: every registered adapter that learns without target labels
-    (source-trained, domain-adaptation and detector methods), in the registry's order."""
+    """The [[methods]]; none listed: every registered adapter and detector that learns without
+    target labels (source-trained, domain-adaptation and detector methods), in name order."""
     registry = get_registry()
     if not entries:
         entries = [
             {"adapter": name, "supervised": False, "params": {}}
-            for name in registry.names("adapter")
-            if registry.get("adapter", name).train_on != "target"
-            and "unsupervised" in registry.get("adapter", name).supervision
+            for name in registry.names(METHODS)
+            if not trains_on_target(name) and "unsupervised" in registry.get(METHODS, name).supervision
         ]
     out = []
     for i, entry in enumerate(entries):
@@ -262,7 +267,7 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
         m = training.method(entry, at)
         if m.supervised:
             raise GearlabInputError(f"{at} key 'supervised': the measured target has no labels a method may use")
-        if registry.get("adapter", m.adapter).train_on == "target":
+        if trains_on_target(m.adapter):
             raise GearlabInputError(
                 f"{at} key 'adapter': '{m.adapter}' trains on labelled target data; the measured history has none"
             )

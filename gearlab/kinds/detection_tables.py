@@ -10,9 +10,9 @@ from dataclasses import asdict
 
 import numpy as np
 
+from ..learn.protocol import domain_adapting
 from ..parts.measured import Target
 from ..parts.roc import auc
-from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario
 from .detection_records import longest_tsa
@@ -149,7 +149,7 @@ def aligned_with(record: dict, alignment: str) -> str:
     """What a learned method's domain loss aligns the history with: nothing for a method without one
     (trained on the source alone, or a detector), a single point (aligned_to_a_point), else the
     source's samples that [protocol] alignment names."""
-    if get_registry().get("adapter", record["adapter"]).train_on != "joint":
+    if not domain_adapting(record["adapter"]):
         return "– (no domain loss)"
     if record.get("aligned_to_a_point"):
         return "a point"

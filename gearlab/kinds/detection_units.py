@@ -18,7 +18,7 @@ from ..events import UnitProgress
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
 from ..learn.bounds import bayes_scores
 from ..learn.history import gumbel_quantile
-from ..learn.protocol import Method, Protocol, StateStore, fault_score
+from ..learn.protocol import Method, Protocol, StateStore, domain_adapting, fault_score
 from ..parts import scoring
 from ..parts.roc import auc
 from ..registry import get_registry
@@ -30,16 +30,11 @@ def to_lists(scores: dict) -> dict:
     return {k: (to_lists(v) if isinstance(v, dict) else [float(s) for s in v]) for k, v in scores.items()}
 
 
-def is_detector(method: Method) -> bool:
-    """A method with no network: a model built from the training arrays (matched_filter, likelihood_ratio)."""
-    return get_registry().get("adapter", method.adapter).train_on == "detector"
-
-
 def seeds_of(method: Method, seeds: int) -> tuple:
     """The seeds a method is trained with: (None,) for one training (repetition 0, the record
     named after the method) and for a detector (no network, nothing random); else 0 … seeds-1,
     each a member of the method's ensemble."""
-    if seeds == 1 or is_detector(method):
+    if seeds == 1 or method.is_detector:
         return (None,)
     return tuple(range(seeds))
 
@@ -111,7 +106,7 @@ def train_unit(task: tuple) -> dict:
     # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
     # healthy). A detector is built in the target's frame (the history's reference, the path to
     # it), where a source revolution means nothing.
-    held_out = None if is_detector(method) else fault_score(model, Xv.reshape(-1, Xv.shape[-1]), device)
+    held_out = None if method.is_detector else fault_score(model, Xv.reshape(-1, Xv.shape[-1]), device)
     y_held = np.repeat(yv, len(held_out) // len(yv)) if held_out is not None else yv
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
@@ -148,7 +143,7 @@ def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: n
     pull every history unit onto the network's image of
     that input, and leaves a record unlike the history wherever the training's path puts it; such a
     training ends at its ramp's end (train_unit). From the training arrays alone."""
-    if get_registry().get("adapter", method.adapter).train_on != "joint" or protocol.calibration.source_noise != "off":
+    if not domain_adapting(method.adapter) or protocol.calibration.source_noise != "off":
         return False
     rows = Xs[np.asarray(ys) == 0] if protocol.calibration.alignment == "healthy" else Xs
     rows = np.asarray(rows).reshape(-1, rows.shape[-1])  # draws, if any, are rows too

@@ -37,7 +37,7 @@ from ..gap.conclusion import verdict_text  # the kind's log line, summary and re
 from ..gap.diagnose import Settings
 from ..gearbox.simulation import defaults, is_reference, referenced
 from ..learn.config import NetworkSettings
-from ..learn.protocol import Counts, Method, Protocol, check, check_data, history_of, shared_state
+from ..learn.protocol import Counts, Method, Protocol, check, check_data, domain_adapting, history_of, shared_state
 from ..learn.schedule import two_phases
 from ..parts import training
 from ..parts.bound import bayes_bound
@@ -109,7 +109,7 @@ TABLES = {
             "methods": Key(
                 list,
                 ["mmd", "dann", "matched_filter"],
-                doc="shown beside (adapter names): unsupervised DA baselines, on "
+                doc="shown beside (adapter or detector names): unsupervised DA baselines, on "
                 "the uncorrected source; detectors, on both sources",
             ),
             "repetitions": Key(int, 3, in_range(1, 1000)),
@@ -243,14 +243,16 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
     out: list[Method] = []
     for i, name in enumerate(names):
         if not isinstance(name, str):
-            raise GearlabInputError(f"{where}: entry {i + 1} must be an adapter name, got {type(name).__name__}")
+            raise GearlabInputError(
+                f"{where}: entry {i + 1} must be an adapter or detector name, got {type(name).__name__}"
+            )
         if name == "source_only":
             raise GearlabInputError(
                 f"{where}: source_only is always trained (on the uncorrected and the "
                 "corrected source); list DA methods only"
             )
         m = training.method({"adapter": name, "supervised": False, "params": {}}, f"{where} entry {i + 1}")
-        if get_registry().get("adapter", m.adapter).train_on not in ("joint", "detector"):
+        if not (m.is_detector or domain_adapting(m.adapter)):
             raise GearlabInputError(
                 f"{where} entry {i + 1}: '{name}' is neither a domain-adaptation method nor "
                 "a detector (it trains on the source or target alone)"
@@ -320,7 +322,7 @@ def unit_name(rep: int, variant: str, m: Method) -> str:
 def on_both_sources(m: Method) -> bool:
     """Methods that learn from the simulation alone (source_only, the detectors' fault shapes)
     are scored with the uncorrected and the corrected source; DA methods with the uncorrected one."""
-    return get_registry().get("adapter", m.adapter).train_on in ("source", "detector")
+    return m.is_detector or get_registry().get("adapter", m.adapter).train_on == "source"
 
 
 def accuracy_columns(protocol: Protocol) -> list[tuple[str, Method]]:
@@ -459,8 +461,7 @@ def accuracy(
     sources = {UNCORRECTED: spec["source"], CORRECTED: corrected}
 
     def source_of(variant: str, m: Method) -> DatasetSpec:
-        detector = get_registry().get("adapter", m.adapter).train_on == "detector"
-        return noise_free(sources[variant]) if detector else sources[variant]
+        return noise_free(sources[variant]) if m.is_detector else sources[variant]
 
     todo = accuracy_units(protocol)
     pending = [u for u in todo if unit_name(*u) not in done]

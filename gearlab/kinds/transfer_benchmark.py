@@ -100,9 +100,9 @@ TABLES = {
     "network": NETWORK,
     "methods": Table(
         {
-            "adapter": Key(str, doc="adapter plugin, unsupervised (the targets give no label)"),
+            "adapter": Key(str, doc="adapter or detector plugin, unsupervised (the targets give no label)"),
             "supervised": Key(bool, False, doc="must be false: k = 0"),
-            "params": Key(dict, {}, doc="adapter parameters"),
+            "params": Key(dict, {}, doc="its parameters"),
         },
         array=True,
         required=True,

@@ -15,8 +15,8 @@ group (hook ``gearlab_adapters``). The trainer asks it for
 
 ``calibrated`` adapters are primed on the full source set and then adapted (thesis 5.4.2);
 ``train_on`` says which data the (post-priming) training step sees: "source", "target" or
-"joint" (40 source + 40 target samples a batch); "detector" methods train no network and
-build their model from the training arrays in ``detector(source, target, params)``;
+"joint" (40 source + 40 target samples a batch); a method that trains no network is a
+detector, another kind of plugin (gearlab.learn.detector_contract);
 ``optimizer`` is "adam" (TensorFlow defaults) for the uncalibrated baselines and "sgd"
 (lr 0.003) for the calibrated methods.
 
@@ -35,16 +35,14 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from gearlab.errors import GearlabInputError
-from gearlab.params import Param, did_you_mean, resolve_params
-
-from .path import PATHS
+from gearlab.params import Param, did_you_mean, plugin_description, resolve_params
 
 if TYPE_CHECKING:  # for the annotations only; see the module docstring
     import torch
     from torch import nn
 
 SUPERVISIONS = ("unsupervised", "supervised")
-TRAIN_ON = ("source", "target", "joint", "detector")
+TRAIN_ON = ("source", "target", "joint")
 
 # Table 5.3: λ starts at 0 and grows by 0.05 every 25 epochs up to 1.
 LAMBDA_STEP = 0.05
@@ -65,20 +63,6 @@ SCHEDULE_PARAMS = (
     Param("lambda_max", "", LAMBDA_MAX, 0.0, 10.0, "largest domain-loss weight λ (Table 5.3)"),
 )
 
-# The detectors' one parameter (matched_filter, likelihood_ratio): their threshold's false-alarm rate
-FALSE_ALARM_PARAM = Param(
-    "false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"
-)
-# ... and how the simulated shapes reach the target (gearlab.learn.path); scenarios may give the names
-PATH_PARAM = Param(
-    "path",
-    "",
-    PATHS.index("fir"),
-    0,
-    len(PATHS) - 1,
-    "simulated shapes to the target: 0 = gain, 1 = fir (filter fitted between the healthy references)",
-    integer=True,
-)
 
 
 # ----------------------------------------------------------------------------- schedule
@@ -96,19 +80,15 @@ def lambda_schedule(
 # ----------------------------------------------------------------------------- contract
 
 
-class Adapter:
-    """Base of every adapter plugin; the defaults are those of a method without domain loss."""
+class MethodPlugin:
+    """What every method a scenario names has, an adapter (below) or a detector
+    (gearlab.learn.detector_contract): a name, a parameter schema, the supervision it offers."""
 
+    kind: str = ""  # its registry kind, for messages
     name: str = ""
     doc: str = ""
     params: tuple[Param, ...] = ()
-    calibrated: bool = False
     supervision: tuple[str, ...] = SUPERVISIONS
-    train_on: str = "source"
-    optimizer: str = "adam"
-
-    # ---- parameters
-
     choices: dict[str, tuple[str, ...]] = {}  # parameter -> names of its codes 0, 1, ... (scenarios may give either)
 
     def coerce(self, given: Mapping[str, object], where: str) -> dict:
@@ -128,13 +108,32 @@ class Adapter:
 
     def resolve(self, given: Mapping[str, object] | None = None, where: str = "") -> dict:
         """Defaults filled, units parsed, names and bounds checked (GearlabInputError otherwise)."""
-        where = where or f"adapter '{self.name}'"
+        where = where or f"{self.kind} '{self.name}'"
         return resolve_params(self.params, self.coerce(given or {}, where), where)
 
     def values(self, params: Mapping[str, object] | None) -> dict:
         values = {p.name: p.default for p in self.params}
         values.update(params or {})
         return values
+
+    def named(self, params: Mapping[str, object] | None) -> dict:
+        """:meth:`values` with each ``choices`` parameter's code turned into its name."""
+        values = self.values(params)
+        for key, names in self.choices.items():
+            values[key] = names[int(values[key])]
+        return values
+
+    def __repr__(self) -> str:
+        return f"<{self.kind} {self.name}>"
+
+
+class Adapter(MethodPlugin):
+    """Base of every adapter plugin; the defaults are those of a method without domain loss."""
+
+    kind = "adapter"
+    calibrated: bool = False
+    train_on: str = "source"
+    optimizer: str = "adam"
 
     # ---- training
 
@@ -180,38 +179,26 @@ class Adapter:
         """The network parameters this method's training step updates; all of them by default."""
         return list(network.parameters())
 
-    def detector(self, source, target, params: Mapping | None = None) -> nn.Module:
-        """The model of a ``train_on = "detector"`` method, from the training arrays *source*
-        = (X, y) and *target* = (X, y, or None when unsupervised); its logits are scored as a
-        network's."""
-        raise NotImplementedError(f"adapter '{self.name}' trains a network (train_on = {self.train_on!r})")
-
     # ---- description
 
     def describe(self) -> dict:
-        return {
-            "doc": self.doc,
-            "params": [p.describe() for p in self.params],
-            "calibrated": self.calibrated,
-            "supervision": list(self.supervision),
-            "train_on": self.train_on,
-            "optimizer": self.optimizer,
-        }
-
-    def __repr__(self) -> str:
-        return f"<adapter {self.name}>"
+        return plugin_description(
+            self,
+            calibrated=self.calibrated,
+            supervision=list(self.supervision),
+            train_on=self.train_on,
+            optimizer=self.optimizer,
+        )
 
 
 __all__ = [
     "LAMBDA_EVERY",
     "LAMBDA_MAX",
     "LAMBDA_STEP",
-    "FALSE_ALARM_PARAM",
-    "PATH_PARAM",
-    "PATHS",
     "SCHEDULE_PARAMS",
     "SUPERVISIONS",
     "TRAIN_ON",
     "Adapter",
+    "MethodPlugin",
     "lambda_schedule",
 ]

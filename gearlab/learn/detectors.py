@@ -47,7 +47,8 @@ from torch import nn
 from gearlab.errors import GearlabInputError
 
 from .bounds import noise_scale, shape_llr
-from .history import history_threshold, noise_law
+from .detector_contract import Detector
+from .history import noise_law
 from .path import fit_path
 
 LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
@@ -113,31 +114,27 @@ def _shapes(name: str, Xs, ys, Xt, yt, path: str) -> tuple[np.ndarray, np.ndarra
     return Xt, healthy_t, reference, np.concatenate(shapes)
 
 
-def template_detector(
-    Xs: np.ndarray,
-    ys: np.ndarray,
-    Xt: np.ndarray,
-    yt: np.ndarray | None,
-    false_alarm: float,
-    limiter: str = "off",
-    path: str = "fir",
+def template_statistic(
+    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, limiter: str = "off", path: str = "fir"
 ) -> TemplateDetector:
-    """The detector of the source's fault shapes, referenced and thresholded on the target's
-    healthy history. *yt* None: every target training revolution is taken as healthy (the
-    unsupervised case); with labels, the healthy ones are the history and the target's own
-    fault revolutions are templates too. *limiter* ``on``/``off``, or ``auto``: on when the
-    history's residuals follow an impulsive law (gearlab.learn.calibration.noise_law). *path*:
-    the shapes reach the target through the path fitted between the two healthy references
-    (gearlab.learn.path: ``fir`` the filter, ``gain`` one number, to which a cosine is blind)."""
+    """The detector of the source's fault shapes referenced on the target's healthy history,
+    its threshold not set yet (gearlab.learn.detector_contract.Detector.fit sets it). *yt* None:
+    every target training revolution is taken as healthy (the unsupervised case); with labels,
+    the healthy ones are the history and the target's own fault revolutions are templates too.
+    *limiter* ``on``/``off``, or ``auto``: on when the history's residuals follow an impulsive
+    law (gearlab.learn.calibration.noise_law). *path*: the shapes reach the target through the
+    path fitted between the two healthy references (gearlab.learn.path: ``fir`` the filter,
+    ``gain`` one number, to which a cosine is blind)."""
     Xt, healthy_t, reference, shapes = _shapes("matched_filter", Xs, ys, Xt, yt, path)
     if limiter == "auto":
         limiter = "off" if noise_law(Xt[healthy_t] - reference) == "gaussian" else "on"
     clip = LIMIT if limiter == "on" else 0.0
-    detector = TemplateDetector(reference, _unit_rows(shapes), threshold=0.0, clip=clip)
-    with torch.no_grad():
-        history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
-    detector.threshold.fill_(history_threshold(history, 1.0 - false_alarm))
-    return detector
+    return TemplateDetector(reference, _unit_rows(shapes), threshold=0.0, clip=clip)
+
+
+def template_detector(Xs, ys, Xt, yt, false_alarm: float, limiter: str = "off", path: str = "fir") -> TemplateDetector:
+    """`template_statistic` thresholded on the healthy history at *false_alarm*."""
+    return Detector.thresholded(template_statistic(Xs, ys, Xt, yt, limiter, path), (Xt, yt), false_alarm)
 
 
 class LikelihoodDetector(nn.Module):
@@ -176,23 +173,17 @@ class LikelihoodDetector(nn.Module):
 SCALES = ("unit", "history")  # the noise scale of a scored revolution: its own, or the healthy history's
 
 
-def likelihood_detector(
-    Xs: np.ndarray,
-    ys: np.ndarray,
-    Xt: np.ndarray,
-    yt: np.ndarray | None,
-    false_alarm: float,
-    path: str = "fir",
-    scale: str = "unit",
+def likelihood_statistic(
+    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, path: str = "fir", scale: str = "unit"
 ) -> LikelihoodDetector:
     """The likelihood-ratio detector of the source's fault shapes on the target's healthy
-    history: reference h = the history's median; shapes = the source's fault revolutions minus
+    history, its threshold not set yet (as `template_statistic`'s): reference h = the history's
+    median; shapes = the source's fault revolutions minus
     its healthy median, passed through the path fitted between the two domains' healthy
     references (gearlab.learn.path; *path* ``fir`` the filter, ``gain`` the ratio of their
     RMS: a likelihood ratio needs the shapes' size and form, a cosine only their form); noise
-    law from the history's residuals (gearlab.learn.history.noise_law); threshold at
-    *false_alarm* as `template_detector`'s. With target labels (*yt*) the labelled faults add
-    their own shapes. *scale* ``unit``: each scored revolution's noise scale from its own
+    law from the history's residuals (gearlab.learn.history.noise_law). With target labels
+    (*yt*) the labelled faults add their own shapes. *scale* ``unit``: each scored revolution's noise scale from its own
     residual; ``history``: the median of the healthy history revolutions' scales, the same
     under both hypotheses. Where a fault raises the whole residual rather than adding a sparse
     shape (the PHM 2009 chip: its units' own scale alone ranks them first), the unit's own
@@ -205,8 +196,11 @@ def likelihood_detector(
     if scale == "history":
         residuals = torch.as_tensor(Xt[healthy_t] - reference, dtype=torch.float32)
         fixed = float(noise_scale(residuals, kind).median())
-    detector = LikelihoodDetector(reference, shapes, kind, threshold=0.0, scale=fixed)
-    with torch.no_grad():
-        history = detector.score(torch.as_tensor(Xt[healthy_t], dtype=torch.float32)).numpy()
-    detector.threshold.fill_(history_threshold(history, 1.0 - false_alarm))
-    return detector
+    return LikelihoodDetector(reference, shapes, kind, threshold=0.0, scale=fixed)
+
+
+def likelihood_detector(
+    Xs, ys, Xt, yt, false_alarm: float, path: str = "fir", scale: str = "unit"
+) -> LikelihoodDetector:
+    """`likelihood_statistic` thresholded on the healthy history at *false_alarm*."""
+    return Detector.thresholded(likelihood_statistic(Xs, ys, Xt, yt, path, scale), (Xt, yt), false_alarm)

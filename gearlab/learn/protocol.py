@@ -64,6 +64,12 @@ class Method:
         extra = "".join(f"-{k}={v}" for k, v in self.shown)
         return f"{self.adapter}-{'sup' if self.supervised else 'unsup'}{extra}"
 
+    @property
+    def is_detector(self) -> bool:
+        """A detector plugin (gearlab.learn.detector_contract), not an adapter: no network is
+        trained, the model is fitted on the training arrays (`adapter` names either kind)."""
+        return get_registry().kind_of(self.adapter) == "detector"
+
 
 @dataclass
 class Protocol:
@@ -265,10 +271,19 @@ def unit_key(rep: int, k: int, method: Method) -> str:
     return f"rep{rep}/k{k}/{method.key}"
 
 
+def domain_adapting(name: str) -> bool:
+    """Whether method *name* adapts the domains: an adapter trained on joint source and target
+    batches with a domain loss (not a detector, nor a source- or target-only training)."""
+    registry = get_registry()
+    return registry.kind_of(name) == "adapter" and registry.get("adapter", name).train_on == "joint"
+
+
 def shared_state(method: Method, rep: int, k: int, protocol: Protocol) -> str | None:
     """The name of the shared state a method starts from, if any (see train_method): one per
     repetition (a priming that depends on the target history reads the history core, which
     every k shares)."""
+    if method.is_detector:  # nothing trained, nothing shared
+        return None
     adapter = get_registry().get("adapter", method.adapter)
     if adapter.train_on == "source":
         return f"rep{rep}_source_only"
@@ -401,10 +416,16 @@ def train_method(
     from .training import accuracy, embed, fit_adaptation, fit_supervised
 
     registry = get_registry()
-    adapter = registry.get("adapter", method.adapter)
     params = dict(method.params)
-    rng = np.random.default_rng([protocol.seed, rep, k, 7])
     drawn, ys = source
+    if method.is_detector:  # no network: a model fitted on the training arrays
+        # its shapes: each sample's mean over its draws, the least noisy estimate of its shape
+        # (single draws as templates would be noisy, and 16 times as many of them)
+        shapes = (drawn.mean(axis=1), ys) if drawn.ndim == 3 else source
+        target = (target[0], target[1] if method.supervised else None)
+        return registry.get("detector", method.adapter).fit(shapes, target, params).to(device), None, {}
+    adapter = registry.get("adapter", method.adapter)
+    rng = np.random.default_rng([protocol.seed, rep, k, 7])
     Xs = drawn[:, 0] if drawn.ndim == 3 else drawn  # one draw of each source sample
     Xt, yt = target
     seed = 1000 * protocol.seed + rep
@@ -438,11 +459,6 @@ def train_method(
         )
         return _cpu_state(net)
 
-    if adapter.train_on == "detector":  # no network: a model built from the training arrays
-        # its templates: each sample's mean over its draws, the least noisy estimate of its shape
-        # (single draws as templates would be noisy, and 16 times as many of them)
-        shapes = (drawn.mean(axis=1), ys) if drawn.ndim == 3 else source
-        return adapter.detector(shapes, (Xt, yt if method.supervised else None), params).to(device), None, {}
     if adapter.train_on == "source":  # the uncalibrated source model: it never depends on k
 
         def trained() -> dict:

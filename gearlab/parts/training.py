@@ -11,7 +11,7 @@ from ..errors import GearlabInputError
 from ..events import UnitProgress
 from ..learn.config import RECIPE, Calibration, NetworkSettings
 from ..learn.protocol import Method, Protocol, StateStore, run_unit, unit_key
-from ..registry import get_registry
+from ..registry import METHODS, get_registry
 from ..scenario import Key, Table, keys_of, location
 
 # Table 5.3's training settings: the keys of every kind that trains the chapter-5 way, declared
@@ -29,9 +29,13 @@ CALIBRATION = keys_of(Calibration, **asdict(RECIPE))
 # The [network] table of a kind that trains, and the keys of a [[methods]] entry.
 NETWORK = Table(keys_of(NetworkSettings))
 METHOD_KEYS = {
-    "adapter": Key(str, doc="adapter plugin: source_only, target_only, mmd, dann, coral, finetune"),
+    "adapter": Key(
+        str,
+        doc="adapter (source_only, target_only, mmd, dann, coral, finetune) or detector plugin "
+        "(likelihood_ratio, matched_filter)",
+    ),
     "supervised": Key(bool, False, doc="use the target training labels"),
-    "params": Key(dict, {}, doc="adapter parameters"),
+    "params": Key(dict, {}, doc="its parameters"),
 }
 
 
@@ -46,17 +50,18 @@ def check_training(t: dict, path) -> None:
 
 
 def method(entry: dict, where: str) -> Method:
-    """A [[methods]] entry: the adapter by name, its supervision variant and parameters."""
-    adapter = get_registry().get("adapter", entry["adapter"], f"{where} key 'adapter'")
+    """A [[methods]] entry: the adapter or detector by name (one lookup: key 'adapter' names
+    either), its supervision variant and parameters."""
+    plugin = get_registry().get(METHODS, entry["adapter"], f"{where} key 'adapter'")
     mode = "supervised" if entry["supervised"] else "unsupervised"
-    if mode not in adapter.supervision:
+    if mode not in plugin.supervision:
         raise GearlabInputError(
-            f"{where} key 'supervised': adapter '{adapter.name}' has no {mode} variant "
-            f"(it has: {', '.join(adapter.supervision)})"
+            f"{where} key 'supervised': {plugin.kind} '{plugin.name}' has no {mode} variant "
+            f"(it has: {', '.join(plugin.supervision)})"
         )
-    params = adapter.resolve(entry["params"], f"{where} key 'params'")
+    params = plugin.resolve(entry["params"], f"{where} key 'params'")
     return Method(
-        adapter.name, entry["supervised"], tuple(sorted(params.items())), tuple(sorted(entry["params"].items()))
+        plugin.name, entry["supervised"], tuple(sorted(params.items())), tuple(sorted(entry["params"].items()))
     )
 
 

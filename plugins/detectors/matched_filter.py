@@ -16,14 +16,14 @@ between the two domains' healthy references (gearlab.learn.path).
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Adapter, Param, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, hookimpl
 
 LIMITERS = ("off", "on", "auto")
 
-# torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.adapters.
+# torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
 
-class MatchedFilter(Adapter):
+class MatchedFilter(Detector):
     name = "matched_filter"
     doc = (
         "Physics-template detector: largest cosine between a revolution's residual from the target's healthy "
@@ -42,27 +42,15 @@ class MatchedFilter(Adapter):
         ),
         PATH_PARAM,
     )
-    calibrated = False
-    supervision = ("unsupervised", "supervised")
-    train_on = "detector"
     choices = {"limiter": LIMITERS, "path": PATHS}
 
-    def detector(self, source, target, params=None):
-        from gearlab.api import template_detector
+    def statistic(self, source, target, params=None):
+        from gearlab.api import template_statistic
 
-        (Xs, ys), (Xt, yt) = source, target
-        values = self.values(params)
-        return template_detector(
-            Xs,
-            ys,
-            Xt,
-            yt,
-            false_alarm=float(values["false_alarm"]),
-            limiter=LIMITERS[int(values["limiter"])],
-            path=PATHS[int(values["path"])],
-        )
+        values = self.named(params)
+        return template_statistic(*source, *target, limiter=values["limiter"], path=values["path"])
 
 
 @hookimpl
-def gearlab_adapters():
+def gearlab_detectors():
     return [MatchedFilter()]

@@ -13,14 +13,14 @@ shapes' sizes; it is exact where the simulator is (a corrected simulator, docs/g
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Adapter, Param, hookimpl
+from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, hookimpl
 
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 
-# torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.adapters.
+# torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
 
-class LikelihoodRatio(Adapter):
+class LikelihoodRatio(Detector):
     name = "likelihood_ratio"
     doc = (
         "Physics-template detector: mixture likelihood ratio of the simulated fault shapes in the history's noise "
@@ -40,26 +40,14 @@ class LikelihoodRatio(Adapter):
         ),
     )
     choices = {"path": PATHS, "scale": SCALES}
-    calibrated = False
-    supervision = ("unsupervised", "supervised")
-    train_on = "detector"
 
-    def detector(self, source, target, params=None):
-        from gearlab.api import likelihood_detector
+    def statistic(self, source, target, params=None):
+        from gearlab.api import likelihood_statistic
 
-        (Xs, ys), (Xt, yt) = source, target
-        values = self.values(params)
-        return likelihood_detector(
-            Xs,
-            ys,
-            Xt,
-            yt,
-            false_alarm=float(values["false_alarm"]),
-            path=PATHS[int(values["path"])],
-            scale=SCALES[int(values["scale"])],
-        )
+        values = self.named(params)
+        return likelihood_statistic(*source, *target, path=values["path"], scale=values["scale"])
 
 
 @hookimpl
-def gearlab_adapters():
+def gearlab_detectors():
     return [LikelihoodRatio()]
