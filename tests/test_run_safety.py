@@ -409,6 +409,17 @@ def test_an_external_link_is_no_rate_field_either(tmp_path):
 # ----------------------------------------------------------------------------- memory
 
 
+def refused_peak(path: Path, message: str) -> int:
+    """The most memory (bytes) that reading two columns of *path* took before it was refused with *message*."""
+    tracemalloc.start()
+    try:
+        with pytest.raises(GearlabInputError, match=message):
+            read_columns(path, [0, 1])
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
 def test_a_zip_bomb_is_refused_under_the_memory_limit(tmp_path, monkeypatch):
     """S7: 49 kB of zip holding 32 MB of '0 0 0' lines: refused by its declared size under
     GEARLAB_MAX_RECORD_MB, before anything is inflated."""
@@ -419,14 +430,7 @@ def test_a_zip_bomb_is_refused_under_the_memory_limit(tmp_path, monkeypatch):
                 f.write(b"0 0 0\n" * 100_000)
     assert bomb.stat().st_size < 100_000
     monkeypatch.setenv("GEARLAB_MAX_RECORD_MB", "4")
-    tracemalloc.start()
-    try:
-        with pytest.raises(GearlabInputError, match="more than the limit of 4 MB"):
-            read_columns(bomb, [0, 1])
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    assert peak < 4 * 2**20
+    assert refused_peak(bomb, "more than the limit of 4 MB") < 4 * 2**20
 
 
 def test_the_limit_holds_while_streaming(tmp_path, monkeypatch):
@@ -435,14 +439,7 @@ def test_the_limit_holds_while_streaming(tmp_path, monkeypatch):
     text = tmp_path / "r.txt"
     text.write_bytes(b"0 0 0\n" * 1_500_000)  # 9 MB of text, 24 MB of the two columns
     monkeypatch.setenv("GEARLAB_MAX_RECORD_MB", "10")
-    tracemalloc.start()
-    try:
-        with pytest.raises(GearlabInputError, match="the columns read so far"):
-            read_columns(text, [0, 1])
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    assert peak < 10 * 2**20 + 40 * 2**20  # the limit, plus a block's tokens
+    assert refused_peak(text, "the columns read so far") < 10 * 2**20 + 40 * 2**20  # the limit, plus a block's tokens
 
 
 # ----------------------------------------------------------------------------- T1, T2, V
