@@ -23,28 +23,16 @@ import math
 
 import numpy as np
 
-from gearlab.api import Effect, Param, hookimpl
-from gearlab_plugins.effects.speed_fluctuation import GUESS_PHASES, sideband_ripple
+from gearlab.api import hookimpl
+from gearlab_plugins.effects.speed_fluctuation import GUESS_PHASES, ShaftRipple, sideband_ripple
 
 
-class LoadFluctuation(Effect):
+class LoadFluctuation(ShaftRipple):
     name = "load_fluctuation"
     doc = "load torque ripple eps at whole input-shaft order q"
-    level = "excitation"
-    breaks_symmetry = True
-    # The record sees the phase only up to turns by whole tooth pitches: phi and phi + 2 pi q j / Z1
-    # differ by a few percent of the revolution once the tacho offset is fitted (gearlab.gap.identify.alias_refit).
-    pitch_aliases = ("phase", "order")
-    params = (
-        Param("amplitude", "", 0.1, 0.0, 1.0, "relative peak load torque fluctuation eps"),
-        Param("order", "", 1, 1, 64, "fluctuation frequency in input-shaft orders q", integer=True),
-        Param("phase", "rad", 0.0, 0.0, 2 * math.pi, "phase phi at the first tacho zero", "deg"),
-    )
+    params = ShaftRipple.ripple_params("load torque", 0.1, 1.0, 64)
 
-    def apply_excitation(self, exc, params):
-        eps, q, phi = params["amplitude"], params["order"], params["phase"]
-        if eps == 0.0:
-            return exc
+    def rippled(self, exc, eps, q, phi):
         ripple = eps * exc.load_nm * np.sin(2 * math.pi * q * exc.speed_hz * exc.t + phi)
         return exc.with_load(exc.load + ripple)
 

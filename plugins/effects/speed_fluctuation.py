@@ -78,24 +78,40 @@ def sideband_ripple(target_X, highest: int) -> tuple[int, float] | None:
     return best_q, float(np.sqrt(2.0 * np.median(ratios))) if ratios else 0.0
 
 
-class SpeedFluctuation(Effect):
-    name = "speed_fluctuation"
-    doc = "input speed ripple eps at whole shaft order q: moved TVMS, tacho and inertial torques"
+class ShaftRipple(Effect):
+    """A ripple eps sin(q Omega t + phi) at whole orders q of the input shaft (this module's speed
+    ripple, load_fluctuation's load ripple): locked to the shaft angle, not to the tooth pitch."""
+
     level = "excitation"
     breaks_symmetry = True
     # The record sees the phase only up to turns by whole tooth pitches: phi and phi + 2 pi q j / Z1
     # differ by a few percent of the revolution once the tacho offset is fitted (gearlab.gap.identify.alias_refit).
     pitch_aliases = ("phase", "order")
-    params = (
-        Param("amplitude", "", 0.01, 0.0, 0.1, "relative peak speed fluctuation eps"),
-        Param("order", "", 1, 1, 32, "fluctuation frequency in input-shaft orders q", integer=True),
-        Param("phase", "rad", 0.0, 0.0, 2 * math.pi, "phase phi at the first tacho zero", "deg"),
-    )
+
+    @staticmethod
+    def ripple_params(what: str, default: float, high: float, orders: int) -> tuple[Param, ...]:
+        """eps (relative peak of *what*, *default*, 0 .. *high*), q (1 .. *orders*) and phi."""
+        return (
+            Param("amplitude", "", default, 0.0, high, f"relative peak {what} fluctuation eps"),
+            Param("order", "", 1, 1, orders, "fluctuation frequency in input-shaft orders q", integer=True),
+            Param("phase", "rad", 0.0, 0.0, 2 * math.pi, "phase phi at the first tacho zero", "deg"),
+        )
 
     def apply_excitation(self, exc, params):
         eps, q, phi = params["amplitude"], params["order"], params["phase"]
-        if eps == 0.0:
-            return exc
+        return exc if eps == 0.0 else self.rippled(exc, eps, q, phi)
+
+    def rippled(self, exc, eps: float, q: int, phi: float):
+        """*exc* with the ripple of relative amplitude eps > 0, order q and phase phi."""
+        raise NotImplementedError
+
+
+class SpeedFluctuation(ShaftRipple):
+    name = "speed_fluctuation"
+    doc = "input speed ripple eps at whole shaft order q: moved TVMS, tacho and inertial torques"
+    params = ShaftRipple.ripple_params("speed", 0.01, 0.1, 32)
+
+    def rippled(self, exc, eps, q, phi):
         omega = 2 * math.pi * exc.speed_hz
         wt = q * omega * exc.t + phi
         angle = exc.angle + eps / q * (math.cos(phi) - np.cos(wt))
