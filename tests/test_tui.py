@@ -20,7 +20,7 @@ from gearlab.registry import load_registry
 from gearlab.runs import RunDir
 from gearlab.tui import GearlabApp
 from gearlab.tui.catalog import error_line, run_entry
-from gearlab.tui.widgets import stage_id
+from gearlab.tui.progress import stage_id
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -773,8 +773,9 @@ def test_keys_panel_form_palette_and_notification(kinds_folder):
         await pilot.press("question_mark")
         await pilot.pause()
         assert isinstance(app.screen, KeysScreen)
-        keys = rows(app.screen.query_one(DataTable))
-        assert ["C", "Compare the marked runs"] in keys and ["f", "Run with options…"] in keys
+        keys = app.screen.rows
+        assert ("C", "Compare the marked runs (two or more, one kind)") in keys
+        assert ("f", "Run with options: --quick, --executor, --device, a benchmark's --trials and --seed") in keys
         await pilot.press("escape")
         await pilot.pause()
         assert not isinstance(app.screen, KeysScreen)

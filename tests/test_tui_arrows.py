@@ -1,12 +1,12 @@
 """Issue 41: the TUI's tree takes → and ← as docs/tui.md says (unfold / go to the first child,
-fold / go to the parent), at 80x24 and 160x45; progress bars show their ETA."""
+fold / go to the parent), at 80x24 and 160x45 (the stage bars' ETA: tests/test_tui_edges.py)."""
 
 import asyncio
 from pathlib import Path
 
 import pytest
 from conftest import ROOT
-from textual.widgets import ProgressBar, Tree
+from textual.widgets import Tree
 
 from gearlab.tui import GearlabApp
 
@@ -47,25 +47,6 @@ def test_right_unfolds_and_enters_left_leaves_and_folds(folder, size):
             assert tree.cursor_node is node and node.is_expanded
             await pilot.press("left")
             assert not node.is_expanded
-
-    asyncio.run(main())
-
-
-def test_progress_bars_show_an_eta():
-    from gearlab.tui.widgets import Stages
-
-    async def main():
-        from textual.app import App
-
-        class Host(App):
-            def compose(self):
-                yield Stages()
-
-        async with Host().run_test(size=(100, 10)) as pilot:
-            stages = pilot.app.query_one(Stages)
-            stages.start("runs", "4 training runs", 4)
-            await pilot.pause()
-            assert pilot.app.query_one(ProgressBar).show_eta
 
     asyncio.run(main())
 

@@ -28,9 +28,8 @@ from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
-from textual.widgets import DataTable, Footer, RichLog, Static, TabbedContent, TabPane, Tree
+from textual.widgets import Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
-from .. import registry as plugins
 from ..compare import compare_charts, compare_lines, compare_markdown, load_runs
 from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
@@ -40,8 +39,10 @@ from ..runs import RunDir
 from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
 from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, scan
+from .plugins import PluginsPane
+from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
-from .widgets import BrowserTree, ChartView, ResultTable, Stages
+from .widgets import BrowserTree, ChartView, ResultTable
 
 # Below this many columns the sidebar folds away while a run or results are on show.
 NARROW = 100
@@ -50,7 +51,7 @@ NARROW = 100
 class GearlabApp(App):
     TITLE = "gearlab"
     CSS = """
-    #browser { width: 34; max-width: 42%; border-right: solid $primary-darken-2; }
+    #browser { width: 34; min-width: 20; max-width: 45%; border-right: solid $primary-darken-2; }
     #browser.folded { display: none; }
     #views { width: 1fr; }
     #scenario-status, #run-status, #results-status, #units { padding: 0 1; }
@@ -58,30 +59,62 @@ class GearlabApp(App):
     #log { height: 1fr; min-height: 4; border-top: solid $primary-darken-2; }
     #verdict { padding: 0 1; margin-bottom: 1; height: auto; }
     #results-lines { padding: 0 1; height: auto; }
-    #plugin-table { height: 1fr; }
-    #problems { height: auto; padding: 0 1; color: $error; }
     """
     # The footer shows the first few (q first, so that it is never cut off at 80 columns);
     # `?` lists them all.
     BINDINGS = [
-        Binding("q", "quit", "Quit"),
+        Binding("q", "quit", "Quit", tooltip="Quit (a run in progress is cancelled; its finished units stay)"),
         Binding("question_mark", "keys", "Keys", key_display="?", tooltip="This list of keys"),
-        Binding("r", "run(False)", "Run", tooltip="Run the highlighted scenario"),
-        Binding("k", "run(True)", "Quick", tooltip="Quick run (--quick: shrunk for a smoke run)"),
+        Binding(
+            "r", "run(False)", "Run", tooltip="Run the highlighted scenario (or the scenario of the highlighted run)"
+        ),
+        Binding("k", "run(True)", "Quick", tooltip="Quick run (--quick: the scenario shrunk for a smoke run)"),
         Binding("c", "cancel", "Cancel", tooltip="Cancel the run in progress (its finished units stay)"),
-        Binding("u", "resume", "Resume", tooltip="Resume the highlighted unfinished run"),
-        Binding("o", "open_report", "Report", tooltip="Open the run's report.html in the web browser"),
-        Binding("f", "run_with_options", "Run with options…", show=False),
-        Binding("m", "mark", "Mark a run for comparison", show=False),
-        Binding("C", "compare", "Compare the marked runs", show=False),
-        Binding("n", "next_chart", "Next chart", show=False),
+        Binding(
+            "u", "resume", "Resume", tooltip="Resume the highlighted unfinished run (cancelled, killed or crashed)"
+        ),
+        Binding("o", "open_report", "Report", tooltip="Open the highlighted (else the shown) run's report.html"),
+        Binding(
+            "f",
+            "run_with_options",
+            "Run with options…",
+            show=False,
+            tooltip="Run with options: --quick, --executor, --device, a benchmark's --trials and --seed",
+        ),
+        Binding(
+            "m",
+            "mark",
+            "Mark a run for comparison",
+            show=False,
+            tooltip="Mark or unmark the highlighted run for comparison (▣)",
+        ),
+        Binding(
+            "C",
+            "compare",
+            "Compare the marked runs",
+            show=False,
+            tooltip="Compare the marked runs (two or more, one kind)",
+        ),
+        Binding("n", "next_chart", "Next chart", show=False, tooltip="Next chart in the Results tab"),
         Binding("b", "toggle_sidebar", "Fold or show the sidebar", show=False),
         Binding("1", "show('scenario')", "Scenario tab", show=False),
         Binding("2", "show('run')", "Progress tab", show=False),
         Binding("3", "show('results')", "Results tab", show=False),
         Binding("p", "show('plugins')", "Plugins tab", show=False),
-        Binding("f5", "rescan", "Rescan the folder", show=False),
-        Binding("escape", "close", "Close the comparison, show the sidebar", show=False),
+        Binding(
+            "f5",
+            "rescan",
+            "Rescan the folder",
+            show=False,
+            tooltip="Rescan the folder (validation status and past runs)",
+        ),
+        Binding(
+            "escape",
+            "close",
+            "Close the comparison, show the sidebar",
+            show=False,
+            tooltip="Close a panel, then the comparison, then unfold the sidebar",
+        ),
     ]
 
     def __init__(self, directory: Path | str = "scenarios"):
@@ -126,14 +159,12 @@ class GearlabApp(App):
                         yield ChartView(id="chart")
                         yield Static("", id="results-lines")
                 with TabPane("Plugins", id="plugins"):
-                    yield DataTable(id="plugin-table", cursor_type="row")
-                    yield Static("", id="problems")
+                    yield PluginsPane()
         yield Footer()
 
     def on_mount(self) -> None:
         self.tree.guide_depth = 2  # the narrowest guides Textual draws: room for the file names
         self.rescan()
-        self.fill_plugins()
 
     # ------------------------------------------------------------------ browser
     @property
@@ -181,6 +212,7 @@ class GearlabApp(App):
                     target, unfolded = leaf, unfolded | {entry.path}
             if entry.path in unfolded and entry.runs:
                 node.expand()
+        tree.styles.width = tree.fit_width()  # every name whole, up to the CSS's max-width
         line = self._line_of(target) if target is not None else None
         # nothing kept (the first scan, or the file went): the first scenario, not the folder
         tree.cursor_line = line if line is not None else (1 if self.entries else 0)
@@ -210,6 +242,9 @@ class GearlabApp(App):
         return Text.assemble(mark, when, ("" if run.finished else f" {run.units} units", "dim"))
 
     def on_tree_node_highlighted(self, event: Tree.NodeHighlighted) -> None:
+        # the whole name of what the cursor is on, whatever the sidebar's width cut of it
+        path = getattr(event.node.data, "path", None)
+        self.tree.tooltip = str(self._shown(path)) if path is not None else None
         self._open(event.node.data, switch=False)  # moving through the tree only fills the views
 
     def on_tree_node_selected(self, event: Tree.NodeSelected) -> None:
@@ -242,7 +277,7 @@ class GearlabApp(App):
             status.update(
                 Text.assemble(
                     ("✓ valid", "bold green"),
-                    f"  {s.name} ({s.kind}): {s.description}\n",
+                    f"  {self._shown(entry.path)}\n{s.name} ({s.kind}): {s.description}\n",
                     SCENARIO_KINDS[s.kind].describe(s),
                     f"\n{runs} in {self._shown(runs_base(s, self.cwd) / s.name)}; r run, k quick run, "
                     "f run with options",
@@ -386,7 +421,7 @@ class GearlabApp(App):
         if event.kind == "run":
             self.run_path = Path(event.message)
         elif event.kind == "stage":
-            stages.start(event.stage, event.message, event.total)
+            stages.start(event.stage, event.message, event.total, event.done)
         elif event.kind == "advance":
             stages.advance(event.stage, event.done, event.total)
         elif event.kind == "unit":  # a unit in progress says how far it is; empty: it ended
@@ -423,6 +458,7 @@ class GearlabApp(App):
             self.query_one("#log", RichLog).write(f"(the live table cannot be drawn: {type(exc).__name__}: {exc})")
 
     def finish(self, code: int, stderr: str) -> None:
+        self.query_one("#stages", Stages).stop()  # no bar moves once the run has ended
         self.running = {}
         self.query_one("#units", Static).update("")
         log = self.query_one("#log", RichLog)
@@ -615,27 +651,13 @@ class GearlabApp(App):
             self.notify(f"OK: {s.name} ({s.kind}); {SCENARIO_KINDS[s.kind].describe(s)}", title="valid")
         self.rescan()
 
-    # ------------------------------------------------------------------ plugins
-    def fill_plugins(self) -> None:
-        registry = plugins.get_registry()  # looked up at call time: a test may give its own registry
-        table = self.query_one("#plugin-table", DataTable)
-        rows = registry.describe()
-        # fixed widths, the cells wrapped in them (rows as high as they need): the long kinds
-        # ("effect (excitation, breaks tooth-shift symmetry)") and the parameters are read
-        # whole, and kind, name and package fit beside the folded sidebar at 80 columns
-        kinds = [plugins.kind_text(row) for row in rows]
-        table.add_column("kind", width=max(16, *(len(w) for k in kinds for w in k.split())))
-        table.add_column("name", width=max((len(row["name"]) for row in rows), default=4))
-        table.add_column("package", width=max((len(row["package"]) for row in rows), default=7))
-        table.add_column("parameters", width=40)
-        for kind, row in zip(kinds, rows):
-            # Text, not str: a DataTable reads "[mm]" in a string as markup
-            table.add_row(Text(kind), row["name"], row["package"], Text(plugins.params_text(row) or "-"), height=None)
-        problems = [f"problem: {p}" for p in registry.problems]
-        self.query_one("#problems", Static).update(Text("\n".join(problems)))
-
     def action_show(self, tab: str) -> None:
         self.switch_to(tab)
+        # the keys go where the tab is read: ↑ ↓ in the plugin table, in the tree for a scenario
+        if tab == "plugins":
+            self.query_one("#plugin-table").focus()
+        elif tab == "scenario":
+            self.tree.focus()
 
     async def action_quit(self) -> None:
         if self.process is not None:  # leave no orphan run behind; its finished units stay

@@ -6,12 +6,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from rich.table import Table
 from rich.text import Text
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.containers import Horizontal, VerticalScroll
 from textual.screen import ModalScreen
-from textual.widgets import Button, Checkbox, DataTable, Input, Label, Select, Static
+from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from ..kinds import SCENARIO_KINDS
 from ..scenario import EXECUTION_TABLE, Scenario
@@ -29,31 +30,38 @@ class RunOptions:
 
 
 class KeysScreen(ModalScreen):
-    """Every key binding of the app, those the footer leaves out included."""
+    """Every key binding of the app, those the footer leaves out included, with what each does
+    in words wrapped to the panel's width (never cut: the panel scrolls when they do not fit)."""
 
     BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close")]
     DEFAULT_CSS = """
     KeysScreen { align: center middle; }
-    KeysScreen > Vertical { width: 64; max-width: 95%; height: auto; max-height: 90%;
-                            border: thick $primary; background: $surface; padding: 0 1; }
-    KeysScreen DataTable { height: auto; max-height: 20; }
+    KeysScreen > VerticalScroll { width: 72; max-width: 95%; height: auto; max-height: 90%;
+                                  border: thick $primary; background: $surface; padding: 0 1; }
+    KeysScreen #keys { height: auto; }
     """
+
+    # keys that are no binding of the app: the tree's own and the palette
+    TREE = (
+        ("↑ ↓", "move in the tree"),
+        ("→ ←", "unfold a scenario (then go to its first run), fold it (or go back up to it)"),
+        ("enter", "open a scenario (Scenario tab) or a past run (Results tab)"),
+        ("ctrl+p", "command palette: run, quick run, validate a scenario; open a run; compare the marked runs"),
+    )
 
     def __init__(self, bindings: Sequence[Binding]):
         super().__init__()
-        self.bindings = bindings
+        self.rows = [(b.key_display or b.key, b.tooltip or b.description) for b in bindings] + list(self.TREE)
 
     def compose(self) -> ComposeResult:
-        with Vertical():
-            yield Label(Text("keys (escape closes; ctrl+p: command palette)", style="bold"))
-            yield DataTable(id="keys", cursor_type="none", show_header=False)
-
-    def on_mount(self) -> None:
-        table = self.query_one("#keys", DataTable)
-        table.add_columns("key", "what it does")
-        for b in self.bindings:
-            table.add_row(Text(b.key_display or b.key), b.tooltip or b.description)
-        table.add_row("↑ ↓ enter", "move in the tree; enter opens a scenario or a run")
+        table = Table.grid(padding=(0, 2))
+        table.add_column(no_wrap=True, style="bold")
+        table.add_column(overflow="fold")  # words wrap; only a word longer than a line folds
+        for key, what in self.rows:
+            table.add_row(Text(key), Text(what))
+        with VerticalScroll():
+            yield Label(Text("keys (escape closes; ↑ ↓ scroll)", style="bold"))
+            yield Static(table, id="keys")
 
 
 def _choices(key: str) -> list[tuple[str, str]]:

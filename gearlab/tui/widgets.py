@@ -1,19 +1,48 @@
-"""Widgets of the gearlab TUI: a markdown table shown as a DataTable, a terminal chart, stage bars."""
+"""Widgets of the gearlab TUI: a markdown table shown as a DataTable, a terminal chart, the tree.
+The Progress tab's stage bars are in gearlab.tui.progress."""
 
 from __future__ import annotations
 
 import math
+import textwrap
 
 import plotext
+from rich.console import Console
 from rich.text import Text
-from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Vertical
-from textual.widgets import DataTable, Label, ProgressBar, Static, Tree
+from textual.widgets import DataTable, Static, Tree
 
 from ..charts import Chart
 
 COLORS = ("blue+", "red+", "green+", "magenta+", "cyan+", "yellow+", "orange", "white", "blue", "red", "green")
+# the same colours in rich's names, for the legend drawn under a plot
+RICH_COLORS = (
+    "bright_blue",
+    "bright_red",
+    "bright_green",
+    "bright_magenta",
+    "bright_cyan",
+    "bright_yellow",
+    "dark_orange",
+    "white",
+    "blue",
+    "red",
+    "green",
+)
+
+
+def legend(labels: list[str], width: int) -> list[Text]:
+    """Lines of '━━ label' entries in the curves' colours, as many to a line as *width* holds;
+    a label too long for a line wraps (it is never cut)."""
+    lines, line = [], Text()
+    for i, label in enumerate(labels):
+        entry = Text.assemble(("━━ ", RICH_COLORS[i % len(RICH_COLORS)]), label)
+        if line and line.cell_len + 3 + entry.cell_len > width:
+            lines.append(line)
+            line = Text()
+        line = Text.assemble(line, "   ", entry) if line else entry
+    lines.append(line)
+    return [part for one in lines for part in one.wrap(Console(width=width), width)]
 
 
 def markdown_tables(text: str) -> list[list[list[str]]]:
@@ -44,22 +73,22 @@ class ResultTable(DataTable):
             return
         width = max(len(row) for table in tables for row in table)
         head = tables[0][0] + [""] * (width - len(tables[0][0]))
-        # a long name with a qualifier ('mmd (unsupervised)', 'Bayes bound (target's own ...)')
-        # heads its column on two lines: the columns stay as wide as their numbers need
-        split = [h.split(" (", 1) if " (" in h and len(h) > 14 else [h] for h in head]
-        self.header_height = 2 if any(len(parts) > 1 for parts in split) else 1
-        for parts in split:
-            label = Text(parts[0] + ("\n(" + parts[1] if len(parts) > 1 else ""))
-            self.add_column(
-                label,
-                width=max(
-                    min(max(len(line) for line in label.plain.splitlines()), 24),
-                    max(
-                        (len(row[i]) for t in tables for row in t[1:] for i in [len(self.columns)] if i < len(row)),
-                        default=1,
-                    ),
-                ),
-            )
+        # every cell below the first header: the data, and the later tables' headers (bold rows)
+        below = [row for n, table in enumerate(tables) for row in (table[1:] if n == 0 else table)]
+        labels = []
+        for i, h in enumerate(head):
+            # a long name with a qualifier ('mmd (unsupervised)', 'Bayes bound (target's own
+            # shapes and noise law)') heads its column on more lines, wrapped, never cut: the
+            # column stays as wide as its numbers need, 24 cells at least for a long name
+            parts = h.split(" (", 1) if " (" in h and len(h) > 14 else [h]
+            parts = parts[:1] + [f"({p}" for p in parts[1:]]
+            data = max((len(row[i]) for row in below if i < len(row)), default=1)
+            longest_word = max((len(w) for w in h.split()), default=1)
+            cells = max(min(max(len(p) for p in parts), 24), data, longest_word)
+            labels.append((Text("\n".join(line for p in parts for line in textwrap.wrap(p, cells) or [""])), cells))
+        self.header_height = max(len(label.plain.splitlines()) for label, _ in labels)
+        for label, cells in labels:
+            self.add_column(label, width=cells)
         for i, table in enumerate(tables):
             if i:
                 self.add_row(*([""] * width))
@@ -69,14 +98,19 @@ class ResultTable(DataTable):
 
 
 class ChartView(Static):
-    """One chart drawn with plotext to the widget's size; `notes` say what could not be drawn."""
+    """One chart drawn with plotext to the widget's width, its legend under the plot (plotext
+    draws its own over the curves' top left corner, hiding them); `notes` say what could not
+    be drawn."""
 
-    DEFAULT_CSS = "ChartView { height: 18; }"
+    DEFAULT_CSS = "ChartView { height: auto; }"
+    PLOT_HEIGHT = 18  # rows of the plot itself, title and axis labels included
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.chart: Chart | None = None
         self.place = ""
+        # the last drawing, what it was drawn for, and its chart (held: its id is not reused)
+        self.drawn: tuple[tuple, Text, Chart] | None = None
 
     def show(self, chart: Chart | None, place: str = "") -> None:
         """Draw *chart*; *place* ("chart 2/3") heads it, so a user knows there are more."""
@@ -91,8 +125,18 @@ class ChartView(Static):
         curves = [c for c in chart.curves if len(c.y)]  # plotext cannot draw an empty series
         if not curves:
             return Text(f"{head}: " + ("; ".join(chart.notes) or "nothing to draw yet"), style="dim")
+        width = max(self.size.width, 20)
+        # plotext takes a tenth of a second or more for a long curve, and Textual renders a
+        # widget of auto height for its layout and again to draw it: drawn once per chart and width
+        key = (id(chart), self.place, width)
+        if self.drawn is None or self.drawn[0] != key:
+            self.drawn = (key, self._draw(chart, curves, head, width), chart)
+        return self.drawn[1]
+
+    def _draw(self, chart: Chart, curves, head: str, width: int) -> Text:
         plotext.clf()
-        plotext.plotsize(max(self.size.width, 20), max(self.size.height, 8))
+        plotext.limitsize(False, False)  # the widget's size, not the terminal's (a test has none)
+        plotext.plotsize(width, self.PLOT_HEIGHT)
         plotext.theme("pro")
         if chart.categories is not None:
             self._bars(chart, curves)
@@ -100,16 +144,18 @@ class ChartView(Static):
             self._lines(chart, curves)
         plotext.title(head)
         try:
-            return Text.from_ansi(plotext.build())
+            plot = Text.from_ansi(plotext.build().rstrip("\n"))
         except Exception as exc:  # noqa: BLE001 - a chart that cannot be drawn must not take the TUI down
             return Text(f"{head}: cannot draw it at this size ({type(exc).__name__})", style="dim")
+        named = len(curves) > 1 or chart.categories is None  # one series of bars: the axis names it
+        return Text("\n").join([plot, *legend([c.label for c in curves], width)]) if named else plot
 
     @staticmethod
     def _lines(chart: Chart, curves) -> None:
         for i, curve in enumerate(curves):
             x, y = [float(v) for v in curve.x], [float(v) for v in curve.y]
             color = COLORS[i % len(COLORS)]
-            plotext.plot(x, y, label=curve.label, marker="braille", color=color)
+            plotext.plot(x, y, marker="braille", color=color)  # no label: the legend goes under the plot
             if curve.err is not None:
                 plotext.error(x, y, yerr=[float(v) for v in curve.err], color=color)
         if chart.xticks is not None:
@@ -137,21 +183,49 @@ class ChartView(Static):
             plotext.multiple_bar(
                 names,
                 values,
-                labels=[c.label for c in curves],
                 orientation="horizontal",
                 color=[COLORS[i % len(COLORS)] for i in range(len(values))],
             )
         plotext.xlabel(label)  # horizontal bars: the values run along x
 
 
+def shorten(text: Text, width: int) -> Text:
+    """*text* in at most *width* cells: cut in the middle ('✓ stiffness_ver…ion.toml'), so that
+    both a name's start and its end (which tells apart 'gap_expA' and 'gap_expB') stay."""
+    if text.cell_len <= width or width < 8:
+        return text
+    tail = (width - 1) // 2
+    head = width - 1 - tail
+    return Text.assemble(text[:head], "…", text[len(text) - tail :])
+
+
 class BrowserTree(Tree):
     """The sidebar's tree with the file browsers' arrows: → unfolds a node (or, unfolded, goes
-    to its first child), ← folds it (or, folded, goes to its parent)."""
+    to its first child), ← folds it (or, folded, goes to its parent). The sidebar is as wide as
+    its longest line needs (up to a share of the screen, app CSS); a label wider than that is
+    cut in its middle, never at its end, and the highlighted node's whole name is its tooltip
+    and heads the Scenario tab."""
 
     BINDINGS = [
         Binding("right", "unfold", "Unfold", show=False),
         Binding("left", "fold", "Fold", show=False),
     ]
+    DEFAULT_CSS = "BrowserTree { scrollbar-size-vertical: 1; }"
+
+    def render_label(self, node, base_style, style) -> Text:
+        label = super().render_label(node, base_style, style)
+        depth = 0
+        while node.parent is not None:
+            node, depth = node.parent, depth + 1
+        return shorten(label, self.scrollable_content_region.width - depth * self.guide_depth)
+
+    def fit_width(self) -> int:
+        """The cells the tree needs to show every line whole (border and scrollbar included)."""
+        lines = [(self.root, 0)] + [(n, 1) for n in self.root.children]
+        lines += [(c, 2) for n in self.root.children for c in n.children]
+        icons = len(self.ICON_NODE)
+        widths = [depth * self.guide_depth + n.label.cell_len + (icons if n.allow_expand else 0) for n, depth in lines]
+        return max(widths) + 2  # the right border and a one-cell scrollbar
 
     def action_unfold(self) -> None:
         node = self.cursor_node
@@ -170,46 +244,3 @@ class BrowserTree(Tree):
             node.collapse()
         elif node.parent is not None and not node.parent.is_root:
             self.move_cursor(node.parent)
-
-
-def stage_id(stage: str) -> str:
-    """A widget id for a stage name: any name ('gap before', 'gap round 2', 'trial 3/40')
-    maps to letters, digits, '-' and '_' only, and two names never share an id (the hex
-    code of every other character is spelled out)."""
-    return "".join(c if c.isascii() and (c.isalnum() or c == "_") else f"-{ord(c):x}-" for c in stage)
-
-
-class Stages(Vertical):
-    """A labelled progress bar per stage of a run (datasets, simulate, priming, runs, ...)."""
-
-    DEFAULT_CSS = """
-    Stages { height: auto; }
-    Stages > Label { width: 1fr; }
-    """
-
-    def compose(self) -> ComposeResult:
-        return iter(())
-
-    def reset(self) -> None:
-        self.remove_children()
-
-    def start(self, stage: str, message: str, total: int) -> None:
-        bar = self._bar(stage)
-        if bar is None:
-            key = stage_id(stage)
-            self.mount(
-                Label(message or stage, id=f"label-{key}"),
-                ProgressBar(total=total or None, id=f"bar-{key}", show_eta=True),  # counts, % and ETA
-            )
-        else:
-            self.query_one(f"#label-{stage_id(stage)}", Label).update(message or stage)
-            bar.update(total=total or None, progress=0)
-
-    def advance(self, stage: str, done: int, total: int) -> None:
-        bar = self._bar(stage)
-        if bar is not None:
-            bar.update(total=total or None, progress=done)
-
-    def _bar(self, stage: str) -> ProgressBar | None:
-        found = self.query(f"#bar-{stage_id(stage)}")
-        return found.first(ProgressBar) if found else None
