@@ -146,14 +146,9 @@ class GearPair:
 
     def __post_init__(self) -> None:
         self._check()
-        common = dict(
-            module=self.module,
-            pressure_angle=self.pressure_angle,
-            addendum=self.addendum,
-            clearance=self.clearance,
-            hub_radius=self.hub_radius,
-            tool_tip_radius=self.tool_tip_radius,
-        )
+        # one rack (module, pressure angle, addendum, clearance, tool tip) and one hub for both gears
+        shared = ("module", "pressure_angle", "addendum", "clearance", "hub_radius", "tool_tip_radius")
+        common = {name: getattr(self, name) for name in shared}
         object.__setattr__(self, "pinion", Gear(Z=self.Z1, **common))
         object.__setattr__(self, "gear", Gear(Z=self.Z2, **common))
         self._check_mesh()
