@@ -45,6 +45,7 @@ class Table:
     array: bool = False  # [[table]]: an array of tables
     required: bool = False
     doc: str = ""
+    moved: Mapping[str, str] | None = None  # a key this table had: where its setting is now (one line)
 
 
 def keys_of(cls, names: tuple[str, ...] | None = None, **defaults) -> dict[str, Key]:
@@ -194,6 +195,8 @@ def validate_table(path, name: str, table: Table, data: Mapping, index: int | No
     if not isinstance(data, Mapping):
         raise GearlabInputError(f"{location(path, name, index=index)}: expected a table, got {type(data).__name__}")
     for key in data:
+        if key in (table.moved or {}):  # an older file: one line that names the key to use
+            raise GearlabInputError(f"{location(path, name, key, index)}: {table.moved[key]}")
         if key not in table.keys:
             raise GearlabInputError(
                 f"{location(path, name, key, index)}: unknown key{did_you_mean(key, list(table.keys))}; "

@@ -651,6 +651,34 @@ def test_the_threshold_rule_is_checked(cli, tmp_path):
     assert code == 2 and "key 'threshold'" in err and "did you mean 'pooled'" in err
 
 
+@pytest.mark.parametrize(
+    "protocol, methods, message",
+    [
+        ('threshold = "argmax"', "", "[protocol] key 'threshold': a detection scenario's one threshold rule is "
+         "[detection] threshold ('records' or 'pooled')"),
+        ("false_alarm = 0.05", "", "[protocol] key 'false_alarm': a detection scenario's one false-alarm rate is "
+         "[detection] false_alarm"),
+        ("", "params = { false_alarm = 0.05 }\n", "[[methods]] #1 key 'params': false_alarm is set once for the "
+         "scenario: [detection] false_alarm"),
+    ],
+)  # fmt: skip
+def test_one_threshold_rule_and_one_false_alarm_rate(cli, tmp_path, protocol, methods, message):
+    """An older file's second threshold key or false-alarm rate is one line naming the one to use;
+    the models' own thresholds keep gearlab's recipe (re-fixed on the history's units anyway)."""
+    from gearlab.engine import load_scenario
+    from gearlab.learn.config import RECIPE
+
+    path = scenario(tmp_path, methods=("matched_filter",), detection="false_alarm = 0.05")
+    spec = load_scenario(path).spec
+    assert spec["false_alarm"] == 0.05
+    assert (spec["protocol"].calibration.threshold, spec["protocol"].calibration.false_alarm) == ("history", 0.01)
+    assert dict(spec["protocol"].methods[0].params)["false_alarm"] == RECIPE.false_alarm
+    text = path.read_text().replace('adapter = "matched_filter"\n', f'adapter = "matched_filter"\n{methods}')
+    path.write_text(text.replace("[protocol]\n", f"[protocol]\n{protocol}\n"))
+    code, _, err = cli("validate", path)
+    assert code == 2 and message in err and len(err.splitlines()) == 1, err
+
+
 def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp_path, cache, monkeypatch):
     path = scenario(tmp_path, methods=("matched_filter",))
     monkeypatch.chdir(tmp_path / "data")  # anywhere but the scenario's folder

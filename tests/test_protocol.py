@@ -568,6 +568,10 @@ BAD = {
         "[[methods]] #4: finetune (supervised, variant=classifier)"
         " is the same method as #3, finetune (supervised, variant=1)",
     ),
+    "detector false_alarm": (
+        ('adapter = "mmd"', 'adapter = "matched_filter"\nparams = { false_alarm = 0.05 }'),
+        "[[methods]] #3 key 'params': false_alarm is set once for the scenario: [protocol] false_alarm",
+    ),
     "k > faults": (
         ("ks = [0, 2]", "ks = [0, 4]"),
         "[protocol] key 'ks': k = 4 target fault samples asked for, the target 'B-8-ch5' has 3",
@@ -613,6 +617,22 @@ def test_bad_scenario_is_refused_before_any_work(case, tiny_toml, cli, monkeypat
     assert_refused(code, err, message, tiny_toml.parent / "runs")
     code, _, err = cli("validate", tiny_toml)
     assert code == 2 and message in err
+
+
+def test_the_protocols_false_alarm_rate_is_the_detectors_too(tiny_toml):
+    """One false-alarm rate a scenario: [protocol] false_alarm thresholds the 'history' networks and
+    every detector; it is not a detector's parameter shown in its label or unit key."""
+    tiny_toml.write_text(
+        edit(
+            edit(TINY, 'adapter = "mmd"', 'adapter = "matched_filter"'),
+            "ks = [0, 2]",
+            "ks = [0, 2]\nfalse_alarm = 0.05",
+        )
+    )
+    protocol = load_scenario(tiny_toml).spec["protocol"]
+    (detector,) = [m for m in protocol.methods if m.is_detector]
+    assert protocol.calibration.false_alarm == dict(detector.params)["false_alarm"] == 0.05
+    assert detector.label == "matched_filter (unsupervised)" and detector.key == "matched_filter-unsup"
 
 
 def test_datasets_found_unfit_once_built_leave_no_run_behind(tiny_toml, cli, monkeypatch):

@@ -62,7 +62,7 @@ from ..data.cache import load_or_build
 from ..data.spec import POINTS, DatasetSpec
 from ..errors import GearlabInputError, shown
 from ..events import Event
-from ..learn.config import Calibration, check_length
+from ..learn.config import RECIPE, Calibration, check_length
 from ..learn.protocol import Method, Protocol, each_draw, shared_state
 from ..learn.schedule import two_phases
 from ..params import did_you_mean
@@ -112,6 +112,12 @@ HISTORY_FITS = ("all", "crossed")
 CORRECTED_HISTORY = ("revolution", "tsa")
 MAX_SEEDS = 20
 MAX_DRAWS = 64
+
+# One threshold rule and one false-alarm rate in a detection scenario, [detection]'s: every method's
+# threshold is fixed on the history's units, which re-fixes a calibrated network's or a detector's
+# own (a shift of all its scores), so [protocol] has no threshold keys here; the models' own keep
+# gearlab's recipe (a history threshold at 1 %).
+UNIT_THRESHOLD = {"threshold": RECIPE.threshold, "false_alarm": RECIPE.false_alarm}
 
 TABLES = {
     "source": Table(DATASET_TABLE.keys, required=True),
@@ -237,7 +243,16 @@ TABLES = {
             ),
         }
     ),
-    "protocol": Table({**TRAINING, **CALIBRATION}),
+    # One threshold rule and one false-alarm rate, [detection]'s (UNIT_THRESHOLD)
+    "protocol": Table(
+        {**TRAINING, **{k: v for k, v in CALIBRATION.items() if k not in UNIT_THRESHOLD}},
+        moved={
+            "threshold": "a detection scenario's one threshold rule is [detection] threshold "
+            "('records' or 'pooled'): every method's threshold is fixed on the history's units",
+            "false_alarm": "a detection scenario's one false-alarm rate is [detection] false_alarm: "
+            "every method's threshold is fixed on the history's units",
+        },
+    ),
 }
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
@@ -264,7 +279,7 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
     out = []
     for i, entry in enumerate(entries):
         at = location(where, "methods", index=i)
-        m = training.method(entry, at)
+        m = training.method(entry, at, UNIT_THRESHOLD["false_alarm"], "[detection] false_alarm")
         if m.supervised:
             raise GearlabInputError(f"{at} key 'supervised': the measured target has no labels a method may use")
         if trains_on_target(m.adapter):
@@ -336,7 +351,7 @@ def build(scenario: Scenario) -> dict:
         repetitions=1,
         **{key: p[key] for key in TRAINING},
         device=device_of(scenario),
-        calibration=Calibration(**{key: p[key] for key in CALIBRATION}),
+        calibration=Calibration(**{key: p[key] for key in CALIBRATION if key in p}, **UNIT_THRESHOLD),
     )
     protocol.calibration.check(str(path))
     points = t["detection"]["points"]

@@ -65,7 +65,8 @@ def build(scenario: Scenario) -> dict:
     """Resolve and check everything that can be checked before any dataset is built."""
     t = scenario.tables
     path = scenario.path
-    methods = [method(m, location(path, "methods", index=i)) for i, m in enumerate(t["methods"])]
+    p = t["protocol"]  # its false_alarm: the detectors' too (one rate a scenario)
+    methods = [method(m, location(path, "methods", index=i), p["false_alarm"]) for i, m in enumerate(t["methods"])]
     seen: dict[tuple, int] = {}
     for i, m in enumerate(methods):
         # the same training twice, whatever the spelling (variant = "classifier" or 1)
@@ -75,7 +76,6 @@ def build(scenario: Scenario) -> dict:
                 f"{location(path, 'methods', index=i)}: {m.label} is the same method as "
                 f"#{first + 1}, {methods[first].label}"
             )
-    p = t["protocol"]
     ks = p["ks"]
     # whole numbers checked first: set() of a list holding a list would fail
     if (

@@ -114,7 +114,8 @@ OVERRIDES: tuple[str, ...] = ()  # --trials and --seed: `gearlab transfer-benchm
 
 def build(scenario: Scenario) -> dict:
     t, path = scenario.tables, scenario.path
-    methods = tuple(method(m, location(path, "methods", index=i)) for i, m in enumerate(t["methods"]))
+    rate = t["protocol"]["false_alarm"]  # the detectors' too (one rate a scenario)
+    methods = tuple(method(m, location(path, "methods", index=i), rate) for i, m in enumerate(t["methods"]))
     for i, m in enumerate(methods):
         if m.supervised:
             raise GearlabInputError(

@@ -49,9 +49,13 @@ def check_training(t: dict, path) -> None:
         )
 
 
-def method(entry: dict, where: str) -> Method:
+def method(
+    entry: dict, where: str, false_alarm: float | None = None, rate_key: str = "[protocol] false_alarm"
+) -> Method:
     """A [[methods]] entry: the adapter or detector by name (one lookup: key 'adapter' names
-    either), its supervision variant and parameters."""
+    either), its supervision variant and parameters. A detector's false-alarm rate is the
+    scenario's one (*false_alarm*, the value of *rate_key*; None: the detector's default), which
+    an entry's params may not set again."""
     plugin = get_registry().get(METHODS, entry["adapter"], f"{where} key 'adapter'")
     mode = "supervised" if entry["supervised"] else "unsupervised"
     if mode not in plugin.supervision:
@@ -59,7 +63,13 @@ def method(entry: dict, where: str) -> Method:
             f"{where} key 'supervised': {plugin.kind} '{plugin.name}' has no {mode} variant "
             f"(it has: {', '.join(plugin.supervision)})"
         )
-    params = plugin.resolve(entry["params"], f"{where} key 'params'")
+    given = dict(entry["params"])
+    if plugin.kind == "detector":
+        if "false_alarm" in given:
+            raise GearlabInputError(f"{where} key 'params': false_alarm is set once for the scenario: {rate_key}")
+        if false_alarm is not None:
+            given["false_alarm"] = false_alarm  # resolved as the detector's own, not shown in its label
+    params = plugin.resolve(given, f"{where} key 'params'")
     return Method(
         plugin.name, entry["supervised"], tuple(sorted(params.items())), tuple(sorted(entry["params"].items()))
     )
