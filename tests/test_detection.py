@@ -117,9 +117,12 @@ def test_the_report_draws_each_methods_roc_and_its_scores_per_record_and_in_time
     assert "the legend gives each method&#x27;s ROC AUC" in html and "dashed: the method&#x27;s threshold" in html
     # every table titled by the kind (not made of its header), none left without one
     titles = re.findall(r"<caption><b>Table \d+\.</b> ([^<]+)</caption>", html)
-    assert html.count("<table>") == len(titles) == 3
+    assert html.count("<table>") == len(titles) == 5
     assert titles[0].startswith("Condition 16 Hz: ROC AUC") and titles[1].startswith("Units called (%")
-    assert titles[2].startswith("What each method learned of the simulator")
+    # the which-gear tables (localisation of each test record, then the calls split by where)
+    assert titles[2].startswith("Which gear (") and "watched: input pinion" in titles[2]
+    assert titles[3].startswith("Units called (%") and "other damage" in titles[3]
+    assert titles[4].startswith("What each method learned of the simulator")
     # the column that was empty says what each domain loss aligns the history with
     summary = json.loads((out / "summary.json").read_text())
     aligned = {r["method"]: r["aligned_with"] for r in summary["learned"]}
