@@ -15,7 +15,7 @@ from gearlab.data.builder import build_dataset
 from gearlab.data.spec import NoiseSpec, dataset_preset
 from gearlab.effects import effect_spec
 from gearlab.gap.diagnose import Settings, diagnose
-from gearlab.gap.structure import later_stages, level_line, mesh_check, speed_line
+from gearlab.gap.structure import later_combs, later_stages, level_line, mesh_check, speed_line
 from gearlab.gap.views import healthy_rows
 from gearlab.kinds.gap import ranking_md, verdict_text
 from gearlab.kinds.gap_verdict import gap_lines
@@ -133,16 +133,16 @@ def test_a_record_at_another_speed_ends_in_one_line(clean, tmp_path):
     assert result["difference"].startswith("speed 30 Hz measured, 40 Hz expected: the source simulates 40 Hz")
 
 
-def train_rows(stages, seed: int, n: int = 40, points: int = 4096) -> np.ndarray:
-    """Revolutions of a train of *stages* ((z1, z2), ...): each mesh's harmonics 1-3, the later
-    stage's 0.3 of the first's, modulated by both of its shafts (sidebands), white noise."""
+def train_rows(stages, seed: int, n: int = 40, points: int = 4096, later: float = 0.3) -> np.ndarray:
+    """Revolutions of a train of *stages* ((z1, z2), ...): each mesh's harmonics 1-3, a later
+    stage's *later* of the first's, modulated by both of its shafts (sidebands), white noise."""
     rng = np.random.default_rng(seed)
     theta = 2 * np.pi * np.arange(n * points) / points
     x, o = np.zeros(theta.size), 1.0
     for k, (z1, z2) in enumerate(stages):
         mod = 1 + 0.2 * np.cos(o * theta) + 0.1 * np.cos(o * z1 / z2 * theta + 1.0)
         for h in (1, 2, 3):
-            x += 0.3**k / h * mod * np.cos(h * o * z1 * theta + rng.uniform(0, 6))
+            x += later**k / h * mod * np.cos(h * o * z1 * theta + rng.uniform(0, 6))
         o *= z1 / z2
     return (x + rng.normal(0, 0.05, x.size)).reshape(n, points)
 
@@ -168,6 +168,20 @@ def test_a_later_stage_of_another_tooth_count_ends_in_one_line():
         "intermediate shaft turning at order 0.4 (the target's mesh is 35.0 such teeth"
     )
     assert later_stages(record, record, described_pair((24, 60))) == {"stages": [], "line": None}
+
+
+def test_a_second_mesh_as_strong_as_the_first_is_the_sources_own_and_one_tooth_off_is_told():
+    # a reducer's second mesh (14) as strong as its first (24): no other pinion, once the source's
+    # later stages are its comb too (the first stage's comb alone held 24 x 35/60 = 14's harmonics off it)
+    record = train_rows([(24, 60), (35, 83)], seed=3, later=0.9)
+    later = later_combs(described_pair((24, 60), (35, 83)))
+    assert later == ((14.0, (0.4, pytest.approx(14 / 83))),)
+    assert mesh_check(record, 24, 60)["differs"]
+    assert not mesh_check(record, 24, 60, later=later)["differs"]
+    # a 25-tooth source: the record's 24, 48, 72 sit on its sidebands 25 - 1, 50 - 2, 75 - 3, and no
+    # line on its mesh harmonics
+    wrong = mesh_check(record, 25, 60, later=later_combs(described_pair((25, 60), (35, 83))))
+    assert wrong["on_mesh"] < 0.25 and wrong["differs"] and wrong["measured"] == pytest.approx(24, abs=1e-2)
 
 
 def test_a_speed_found_from_the_mesh_lines_names_the_tooth_count_it_trades_with():

@@ -8,7 +8,9 @@ any effect is searched, and a difference ends the diagnosis with one line that s
   lines of a gear record are often high mesh harmonics (B-6-ch5: order 250, ten times its mesh
   order), so the line at Z1 alone decides nothing: the target differs when most of the power of
   its strongest lines lies off the source's comb (OFF_COMB); its own mesh order is then the comb
-  that holds them (the largest, so not a divisor of it).
+  that holds them (the largest, so not a divisor of it). A multi-stage source's later meshes are its
+  comb too; a comb that holds the lines through its sidebands alone (ON_MESH) is another pinion's
+  too. A later stage's mesh order is read off the target and off the source alike (later_stages).
 * **Speed.** A measured target's speed (its tacho, or the speed it was cut at) against the
   source's: beyond SPEED_TOL the source simulates another operating point.
 * **Level.** A pure scale factor (the target is the source x c: a record without its sensitivity
@@ -33,6 +35,10 @@ OFF_COMB = 0.25
 STRONGEST = 8
 MIN_TEETH = 6  # a pinion of fewer teeth is no gear (inspect's bound too)
 SIDEBANDS = 3
+# ... or when less than this share of that power lies on the source's mesh harmonics themselves (the
+# rest on their sidebands): a right record's mesh harmonics hold most of it (B-6-ch5, the PHM 2009
+# records against phm09; see mesh_check)
+ON_MESH = 0.25
 FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 # The source simulates another speed when a measured target's differs by more than this (one rig at
 # one setting drifts by well under 1 %; gearlab.kinds.gap_inputs.SPEED_SPREAD).
@@ -83,10 +89,12 @@ def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.n
     return np.any(np.abs(x[:, None] - h * z - offsets[None, :]) <= tol[:, None], axis=1)
 
 
-def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0) -> dict:
+def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = ()) -> dict:
     """The target's mesh order against the source's Z1 (module doc): {'expected', 'measured' (the
     target's mesh order, or None when its lines do not show one), 'off_comb' (share of the strongest
-    lines' power off the source's comb), 'lines', 'inspect' (check_description's stage), 'differs'}."""
+    lines' power off the source's comb), 'lines', 'inspect' (check_description's stage), 'differs'}.
+    *later*: the later stages of a multi-stage source, (mesh order, (its shafts' orders)) each, whose
+    combs are the source's too (a second mesh as strong as the first is no other pinion)."""
     from ..gearbox.speed import THRESHOLD_DB, find_lines
     from ..inspect import _tol_mesh, check_description
     from ..signals import spectrum
@@ -114,24 +122,36 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0) -> dict
         return out
     tol = np.array([_tol_mesh(v, 1.0 / n) for v in x])
     on = _on_comb(x, z1, (1.0, z1 / z2), tol)
+    for mesh, shaft_orders in later:
+        on |= _on_comb(x, mesh, shaft_orders, tol)
     out["off_comb"] = float(power[~on].sum() / power.sum())
-    if out["off_comb"] < OFF_COMB:
+    # the source's mesh harmonics themselves (no sideband): a pinion one tooth off puts its harmonics
+    # h (z1 - 1), h <= SIDEBANDS, on the comb's sidebands, so a comb holding the lines through its
+    # sidebands alone is another pinion's (a 24-tooth record against 25: 24, 48, 72 on 25 - 1, 50 - 2,
+    # 75 - 3); a gear's mesh harmonics outweigh their sidebands
+    on_mesh = _on_comb(x, z1, (), tol)
+    for mesh, _ in later:
+        on_mesh |= _on_comb(x, mesh, (), tol)
+    out["on_mesh"] = float(power[on_mesh].sum() / power.sum())
+    pools = ([~on] if out["off_comb"] >= OFF_COMB else []) + ([~on_mesh] if out["on_mesh"] < ON_MESH else [])
+    if not pools:
         out["measured"] = float(z1)
         return out
     # Another gear is a family: its mesh harmonics. A tone (an interference line) is one line, so
     # the lines off the source's comb must hold a comb of their own, of at least FAMILY lines: every
     # such line / h is a candidate mesh order, harmonics only (sidebands would let a small one hold
     # anything); the one holding most of their power, the largest among near-equals (not a divisor).
-    xo, po, to = x[~on], power[~on], tol[~on]
-    held = []
-    for c in {float(v / h) for v in xo for h in range(1, 41) if v / h >= MIN_TEETH - 0.5}:
-        hit = _on_comb(xo, c, (), to)
-        if hit.sum() >= FAMILY:
-            held.append((float(po[hit].sum() / po.sum()), c))
-    if not held:
-        return out
-    best = max(share for share, _ in held)
-    out.update(measured=max(c for share, c in held if share >= best - 0.05), differs=True)
+    for pool in pools:
+        xo, po, to = x[pool], power[pool], tol[pool]
+        held = []
+        for c in {float(v / h) for v in xo for h in range(1, 41) if v / h >= MIN_TEETH - 0.5}:
+            hit = _on_comb(xo, c, (), to)
+            if hit.sum() >= FAMILY:
+                held.append((float(po[hit].sum() / po.sum()), c))
+        if held:
+            best = max(share for share, _ in held)
+            out.update(measured=max(c for share, c in held if share >= best - 0.05), differs=True)
+            return out
     return out
 
 
@@ -144,6 +164,14 @@ def _lines(rows: np.ndarray, max_order: int):
     orders, amp = spectrum(np.asarray(rows, dtype=np.float64).reshape(-1), points)
     top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
     return find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
+
+
+def later_combs(pair) -> tuple:
+    """(mesh order, (pinion and wheel shaft orders)) of each stage after the first of *pair*'s train."""
+    from ..gearbox import order_table
+
+    stages = order_table(_PairDescription.train(pair)).stages[1:]
+    return tuple((float(s.mesh), (float(s.pinion_shaft_order), float(s.wheel_shaft_order))) for s in stages)
 
 
 def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 0) -> dict:
@@ -300,7 +328,7 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
         line = speed_line(chain.speed, record["speed_hz"]["source"], pair.Z1 if chain.speed_from_mesh else None)
         if line:
             return "structure differs", line, record
-    record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, settings.max_order)
+    record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, settings.max_order, later_combs(pair))
     if mesh["differs"]:
         return "structure differs", mesh_line(mesh, pair.Z1), record
     later = later_stages(target, plain, pair, settings.max_order)
