@@ -7,7 +7,10 @@ module, face width, bores; no [dynamics]), and simulates one healthy record of i
 simulator of that description (gearlab.data.simulated.simulated_record(gearbox=...): the model
 integrated at >= 150 kHz, read at the logger's rate): input speed 15-50 Hz, load 5-40 N m, sensor
 noise 10-30 dB under the record's RMS, a pinion run-out (shaft_eccentricity, 0-30 um) in half the
-records, 4-8 s at a logger rate of 10-51.2 kHz (at least 5 samples per mesh period).
+records, 4-8 s at a logger rate of 10-51.2 kHz (at least 5 samples per mesh period). Or, as an
+evaluator's own generator would make it (--source synthetic; mix: either, drawn per trial): every
+mesh's harmonics 1 to 3-8 amplitude-modulated by both of its shafts, a later mesh 0.3-1.5 times the
+first, shaft lines, white noise, a speed swinging by up to 0.3 %.
 
 The record is written in a random format, as loggers write them: CSV with a header (time column
 `time_s`, `t`, `Time [s]`, `t (ms)` or `time`; comma, semicolon, tab or blank) or without one (a
@@ -21,7 +24,8 @@ description and with a wrong one (one gear's tooth count off by 1-3), measuring:
 order error (measured - the true mesh order; goal |e| <= 0.05), the speed error (goal |e| <= 0.5 %),
 that the right description is said to match, and that the wrong one is called out (goal 100 %).
 A wrong wheel count on the last stage shows only in that wheel's shaft sidebands: a healthy
-simulated gear modulates nothing, so inspect says "not checked" there, reported apart ("unseen").
+simulated gear modulates nothing, so inspect says "not checked" there, reported apart ("last
+wheel") for the simulator's records.
 
 Selection rule (docs/learning.md): development seeds < 1000, reported figures on seeds >= 1000.
 
@@ -40,6 +44,7 @@ import re
 import tempfile
 from collections import defaultdict
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -199,6 +204,48 @@ def write_recording(rec, rng, folder: Path, fmt: str, tacho: bool) -> tuple[Path
     return path, opts, units
 
 
+@dataclass(frozen=True)
+class Synthetic:
+    """A record made outside gearlab's simulator, as an evaluator's own generator would make it."""
+
+    vibration: np.ndarray
+    tacho: np.ndarray
+    fs: float
+    speed_hz: float  # the input shaft's mean speed over the record
+
+    @property
+    def t(self) -> np.ndarray:
+        return np.arange(self.vibration.size) / self.fs
+
+
+def synthetic_record(box: dict, speed: float, fs: float, seconds: float, snr_db: float, rng) -> Synthetic:
+    """Every mesh's harmonics 1-3..8 (random, falling amplitudes; a later stage 0.3-1.5 times the
+    first's), amplitude-modulated by both of its shafts (depths 5-30 %), shaft lines, white noise at
+    *snr_db*; the input shaft's speed swinging by up to 0.3 % (a motor's), a 0-5 V pulse tacho."""
+    n = int(seconds * fs)
+    t = np.arange(n) / fs
+    swing, rate = rng.uniform(0.0, 0.003), rng.uniform(0.2, 1.0)
+    theta = 2 * np.pi * speed * t + swing * speed / rate * (1 - np.cos(2 * np.pi * rate * t))
+    x, o, orders = np.zeros(n), 1.0, [1.0]
+    for k, stage in enumerate(box["stages"]):
+        z1, z2 = stage["pinion"]["z"], stage["wheel"]["z"]
+        level = 1.0 if k == 0 else rng.uniform(0.3, 1.5)
+        mod = (
+            1
+            + rng.uniform(0.05, 0.3) * np.cos(o * theta + rng.uniform(0, 6))
+            + rng.uniform(0.05, 0.3) * np.cos(o * z1 / z2 * theta + rng.uniform(0, 6))
+        )
+        for h in range(1, int(rng.integers(3, 9)) + 1):
+            x += level * rng.uniform(0.2, 1.0) / h * mod * np.cos(h * o * z1 * theta + rng.uniform(0, 6))
+        o *= z1 / z2
+        orders.append(o)
+    for q in orders:
+        x += 0.1 * np.cos(q * theta + rng.uniform(0, 6))
+    x = (x + rng.standard_normal(n) * np.std(x) * 10 ** (-snr_db / 20)) * rng.uniform(0.5, 5.0)
+    tacho = np.where(np.mod(theta, 2 * np.pi) < 0.3, 5.0, 0.0)
+    return Synthetic(x, tacho, fs, float((theta[-1] - theta[0]) / (2 * np.pi * (n - 1) / fs)))
+
+
 def inspect_cli(args: list[str]) -> dict:
     """`gearlab inspect ... --json` in process: its JSON, or {"error": the one line}."""
     from gearlab.cli import app
@@ -220,7 +267,7 @@ def trial(args: tuple) -> dict:
 
     from gearlab.data.simulated import simulated_record
 
-    seed, index, stages, keep = args
+    seed, index, stages, keep, source = args
     rng = np.random.default_rng([seed, index, stages])
     box = draw_gearbox(rng, stages, USED)
     speed = float(rng.uniform(15.0, 50.0))
@@ -235,6 +282,13 @@ def trial(args: tuple) -> dict:
     mode = "tacho" if tacho else str(rng.choice(["declared", "found"]))
     declared = speed * (1 + rng.uniform(-0.005, 0.005)) if mode == "declared" else None
     effects = [{"name": "shaft_eccentricity", "e": runout, "phase": float(rng.uniform(0, 2 * np.pi))}] if runout else []
+    # the record's maker: gearlab's simulator of the description, or another generator (its own stream,
+    # so a trial's gearbox, speed, format ... are the same whichever made its record)
+    maker = (
+        source
+        if source != "mix"
+        else ("sim", "synthetic")[int(np.random.default_rng([seed, index, stages, 7]).integers(2))]
+    )
     row = {
         "seed": seed,
         "index": index,
@@ -246,6 +300,7 @@ def trial(args: tuple) -> dict:
         "mode": mode,
         "snr_db": snr,
         "runout_um": runout * 1e6,
+        "source": maker,
     }
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -254,19 +309,24 @@ def trial(args: tuple) -> dict:
             folder.mkdir(parents=True, exist_ok=True)
         right = folder / "right.toml"
         right.write_text(toml_text("right", box, declared, load))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            rec = simulated_record(
-                gearbox=str(right),
-                speed_hz=speed,
-                load_nm=load,
-                revolutions=seconds * speed,
-                snr_db=snr,
-                effects=effects,
-                seed=int(rng.integers(1 << 30)),
-                fs=fs,
-                sim_fs=SIM_FS,
-            )
+        sim_seed = int(rng.integers(1 << 30))
+        if maker == "synthetic":
+            rec = synthetic_record(box, speed, fs, seconds, snr, np.random.default_rng([seed, index, stages, 8]))
+            speed = row["speed_hz"] = rec.speed_hz
+        else:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                rec = simulated_record(
+                    gearbox=str(right),
+                    speed_hz=speed,
+                    load_nm=load,
+                    revolutions=seconds * speed,
+                    snr_db=snr,
+                    effects=effects,
+                    seed=sim_seed,
+                    fs=fs,
+                    sim_fs=SIM_FS,
+                )
         path, opts, units = write_recording(rec, rng, folder, fmt, tacho)
         row["units"] = units
         if keep:
@@ -301,7 +361,7 @@ def trial(args: tuple) -> dict:
             row["wrong_called"], row["wrong_verdict"] = not got["matches"], got["verdict"]
         last = len(box["stages"])
         # a last stage's wheel shows only in its shaft's sidebands, which a healthy simulated gear lacks
-        row["wrong_unseen"] = what.startswith(f"s{last}-wheel")
+        row["wrong_unseen"] = maker == "sim" and what.startswith(f"s{last}-wheel")
     return row
 
 
@@ -323,20 +383,21 @@ def quantiles(values) -> str:
 def table(rows: list[dict]) -> str:
     groups = defaultdict(list)
     for r in rows:
-        groups[(r["stages"], r["mode"])].append(r)
+        groups[(r["source"], r["stages"], "tacho" if r["mode"] == "tacho" else "no tacho: " + r["mode"])].append(r)
     out = [
-        "| stages | speed from | records | errors | mesh-order error 50/90/max (orders) | within 0.05 | speed error % "
-        "50/90/max | within 0.5 % | right matched | wrong called out (seen) | wrong called out (last wheel) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| maker | stages | speed from | records | errors | mesh-order error 50/90/max (orders) | within 0.05 "
+        "| speed error % 50/90/max | within 0.5 % | right matched | wrong called out (seen) "
+        "| wrong called out (last wheel) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for (stages, mode), rs in sorted(groups.items()):
+    for (maker, stages, mode), rs in sorted(groups.items()):
         ok = [r for r in rs if not r["error"]]
         mesh = [e for r in ok for e in r["mesh_err"]]
         speed = [100 * r["speed_err"] for r in ok]
         seen = [r for r in rs if not r["wrong_unseen"]]
         unseen = [r for r in rs if r["wrong_unseen"]]
         out.append(
-            f"| {stages} | {mode} | {len(rs)} | {len(rs) - len(ok)} | {quantiles(mesh)} | "
+            f"| {maker} | {stages} | {mode} | {len(rs)} | {len(rs) - len(ok)} | {quantiles(mesh)} | "
             f"{sum(abs(e) <= MESH_GOAL for e in mesh)}/{len(mesh)} | {quantiles(speed)} | "
             f"{sum(abs(e) <= 100 * SPEED_GOAL for e in speed)}/{len(speed)} | "
             f"{sum(r['matches'] for r in ok)}/{len(ok)} | "
@@ -354,12 +415,15 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--rows", type=Path, help="write every trial's row here (JSON lines)")
     parser.add_argument("--verbose", action="store_true", help="print each trial's row as it finishes")
+    parser.add_argument(
+        "--source", choices=("mix", "sim", "synthetic"), default="mix", help="the records' maker (mix: either, drawn)"
+    )
     parser.add_argument("--only", type=int, nargs="+", help="these trial indices only (to look at one again)")
     parser.add_argument("--keep", type=Path, help="keep each trial's description and recording under this folder")
     a = parser.parse_args()
     used = used_pairs()
     keep = str(a.keep.resolve()) if a.keep else ""
-    jobs = [(a.seed, i, s, keep) for s in a.stages for i in range(a.trials) if not a.only or i in a.only]
+    jobs = [(a.seed, i, s, keep, a.source) for s in a.stages for i in range(a.trials) if not a.only or i in a.only]
     rows = []
     if a.workers > 1:
         with ProcessPoolExecutor(a.workers, initializer=_init, initargs=(used,)) as pool:
@@ -389,8 +453,8 @@ def main() -> None:
             problems.append(f"wrong {r['wrong']} said: {r['wrong_verdict']}")
         if problems:
             print(
-                f"- seed {r['seed']} #{r['index']} {r['counts']} {r['speed_hz']:.2f} Hz {r['format']} {r['mode']} "
-                f"{r['units']} fs {r['fs']:g}: " + " | ".join(problems)
+                f"- seed {r['seed']} #{r['index']} {r['source']} {r['counts']} {r['speed_hz']:.2f} Hz {r['format']} "
+                f"{r['mode']} {r['units']} fs {r['fs']:g}: " + " | ".join(problems)
             )
 
 
