@@ -22,6 +22,10 @@ DECLARED_RANGE = 0.01  # a declared speed is trusted to ±1 %
 AMBIGUOUS = 0.9  # a second speed hypothesis explaining ≥ 90 % of the best one's power is ambiguous
 SPEED_AGREE = 0.005  # two hypotheses within 0.5 % are the same speed
 DRIFT = 1e-3  # relative smear of an order by speed drift
+# A mesh line is tried as harmonic 1-40 of each stage: a simulated mesh can hold its power at
+# harmonics 4-11 with its fundamental under the threshold (B-6-ch5: orders 100, 175, 225 of 25).
+MAX_HARMONIC = 40
+EVIDENCE = 16  # hypotheses are scored on the strongest lines
 
 
 @dataclass
@@ -80,11 +84,12 @@ def speed_from_mesh(
     signal: np.ndarray, fs: float, box: Gearbox, declared: float | None, where: str, threshold_db: float = THRESHOLD_DB
 ) -> tuple[float, str, str | None]:
     """(input speed in Hz, how it was found, a note or None) of a record without a tacho, from the
-    description's mesh lines: each strong line tried as a mesh harmonic (1-3) of each stage; a
-    hypothesis must put a mesh fundamental on a carrier, and is scored by the lines it explains. A
-    *declared* speed limits the search to ±1 % (and is kept, with a note, when no line fits); with
-    none, two hypotheses at different speeds that explain nearly as much are refused as ambiguous.
-    *where*: the file and channel, for the messages."""
+    description's mesh lines: each strong line tried as a mesh harmonic (1-MAX_HARMONIC) of each
+    stage; a hypothesis must put a mesh harmonic on a carrier, and is scored by the stages it finds
+    and the lines it explains; of those explaining as much (TIE) the fastest, the harmonic family's
+    fundamental. A *declared* speed limits the search to ±1 % (and is kept, with a note, when no
+    line fits); with none, two hypotheses at speeds that are not multiples of each other and
+    explain nearly as much are refused as ambiguous. *where*: the file and channel, for the messages."""
     n = signal.size
     table = order_table(box)
     freq, amp = spectrum(signal, fs)
@@ -94,65 +99,97 @@ def speed_from_mesh(
             return declared, "declared", "no spectral line to check the declared speed against"
         raise GearlabInputError(f"{where}: shows no spectral line; cannot find the speed")
     df = fs / n
-    explained_orders = np.array([o for _, o in table.lines()])
-    mesh_orders = np.array([h * float(t.mesh) for t in table.stages for h in (1, 2, 3)])
-    weight = np.minimum(lines.db, 40.0)
+    # the strongest lines are the evidence; each counts by its height over the floor (capped), so
+    # the speed that explains the sidebands too beats one that only puts a harmonic on a carrier
+    x, weight = lines.at[:EVIDENCE], np.minimum(lines.db[:EVIDENCE], 40.0)
+    tol = np.maximum(2.5 * df, DRIFT * x)
+    slowest = float(min(table.shaft_orders))
 
-    def tol(f):
-        return max(2.5 * df, DRIFT * f)
+    def explain(f: float, slack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """At input speed *f*: (the evidence of each line, whether it lies on a mesh harmonic, that
+        harmonic's order h M, the stages with a carrier on a mesh harmonic). A line is explained by
+        a mesh harmonic h M (h up to MAX_HARMONIC: a simulated mesh can hold its power at harmonics
+        4-11 with no line at M), by a sideband h M ± j o (j ≤ 3, either shaft of the stage) or by a
+        harmonic of a shaft; its evidence is log(1 / c), c the share of the axis around it that
+        the explaining comb covers (2 slack / spacing, the sidebands' windows counted once): a
+        comb dense enough to hold any line is no evidence, and a speed f / k, which explains
+        every line f does with k times the coverage, has less."""
+        evidence = np.zeros(x.size)
+        on_mesh, hm = np.zeros(x.size, bool), np.zeros(x.size)
+        stages = 0
+
+        def credit(near: np.ndarray, cover: np.ndarray) -> None:
+            evidence[:] = np.maximum(evidence, np.where(near, np.log(1.0 / np.maximum(cover, 1e-12)), 0.0))
+
+        for s in table.stages:
+            m = float(s.mesh)
+            shafts = (float(s.pinion_shaft_order), float(s.wheel_shaft_order))
+            offsets = np.unique(np.round([0.0] + [k * j * o for o in shafts for j in (1, 2, 3) for k in (-1, 1)], 12))
+            inside = x <= (MAX_HARMONIC + 0.5) * m * f  # beyond, no harmonic of this mesh is read
+            comb = np.zeros(x.size, bool)
+            for off in offsets:
+                h = np.maximum(1.0, np.round((x / f - off) / m))
+                near = (np.abs(x - (h * m + off) * f) <= slack) & inside
+                comb |= near
+                if off == 0.0:
+                    hm = np.where(near & ~on_mesh, h * m, hm)
+                    on_mesh |= near
+                    credit(near, 2 * slack / (m * f))
+                    span = SPAN * max(shafts) * f
+                    stages += any(carrier(lines, int(q), span) == q for q in np.flatnonzero(near))
+            gaps = np.diff(offsets) * f
+            credit(comb, (2 * slack + np.minimum(gaps[None, :], 2 * slack[:, None]).sum(axis=1)) / (m * f))
+        for o in table.shaft_orders:
+            spacing = float(o) * f
+            near = np.abs(x - np.maximum(1.0, np.round(x / spacing)) * spacing) <= slack
+            credit(near, 2 * slack / spacing)
+        return evidence, on_mesh, hm, stages
 
     hypotheses = []
-    for i in range(min(12, lines.at.size)):
+    for i in range(min(12, x.size)):
         for s in table.stages:
-            for h in (1, 2, 3):
-                f = lines.at[i] / (h * float(s.mesh))
-                if declared is not None and abs(f / declared - 1) > DECLARED_RANGE:
-                    continue
-                meshes, m_orders = [], []
-                for t in table.stages:
-                    q = lines.near(float(t.mesh) * f, tol(float(t.mesh) * f))
-                    span = SPAN * float(max(t.pinion_shaft_order, t.wheel_shaft_order)) * f
-                    if q is not None and carrier(lines, q, span) == q:
-                        meshes.append(q)  # a mesh fundamental that is its neighbourhood's carrier
-                        m_orders.append(float(t.mesh))
-                if not meshes:
-                    continue
-                predicted = explained_orders * f
-                hit = np.array([np.min(np.abs(predicted - x)) <= tol(x) for x in lines.at])
-                harmonic = mesh_orders * f
-                on_mesh = np.array([np.min(np.abs(harmonic - x)) <= tol(x) for x in lines.at])
-                # least squares over the mesh fundamentals: f = Σ L M / Σ M²
-                at, m_orders = lines.at[meshes], np.array(m_orders)
-                refined = float(np.sum(at * m_orders) / np.sum(m_orders**2))
-                # a carrier outweighs its sidebands: the mesh harmonics decide, the rest breaks ties
-                # lines explained, each by its height over the floor (capped): a speed that explains
-                # the sidebands too beats one that only puts a mesh harmonic on the carrier
-                score = (len(meshes), float(weight[hit].sum() + weight[on_mesh].sum()))
-                hypotheses.append((score, refined, f"{fmt_hz(lines.at[i])} as {h}×M{s.index}"))
-    hypotheses.sort(key=lambda h: (-h[0][0], -h[0][1]))
-    distinct = []
-    for h in hypotheses:
-        if all(abs(h[1] / d[1] - 1) > SPEED_AGREE for d in distinct):
-            distinct.append(h)
-    if not distinct:
-        if declared is None:
-            raise GearlabInputError(
-                f"{where}: no tacho, and no line of the spectrum fits a mesh order of {box.source} at any "
-                "speed; expected a tacho channel or a declared speed (e.g. '25 Hz')"
+            for h in range(1, MAX_HARMONIC + 1):
+                f = x[i] / (h * float(s.mesh))
+                if f * slowest < 2 * df:  # a shaft line the record cannot resolve: higher h only lower f
+                    break
+                # the hypothesis's own error grows with the harmonic: explained within it, refitted by
+                # least squares over the mesh harmonics (f = Σ w L hM / Σ w (hM)²), explained again
+                on_mesh, hm = explain(f, tol + tol[i] * x / x[i])[1:3]
+                if on_mesh.any():
+                    w = weight[on_mesh]
+                    f = float(np.sum(w * x[on_mesh] * hm[on_mesh]) / np.sum(w * hm[on_mesh] ** 2))
+                evidence, _, _, stages = explain(f, tol)
+                if not stages:
+                    continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
+                hypotheses.append((float(np.sum(weight * evidence)), f, f"{fmt_hz(x[i])} as {h}×M{s.index}"))
+    if declared is not None:
+        # the declared speed, refined by the best hypothesis near it, unless the lines fit another speed
+        # much better: a few weak lines always fit within ±1 % as some harmonic, and a wrong tooth count
+        # is then read at the declared speed (inspect: "mesh order 23 measured, 24 expected")
+        near = [h for h in hypotheses if abs(h[1] / declared - 1) <= DECLARED_RANGE]
+        if not near:
+            return declared, "declared", f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at this speed"
+        best, overall = max(near, key=lambda h: h[0]), max(hypotheses, key=lambda h: h[0])
+        if best[0] < AMBIGUOUS * overall[0]:
+            return (
+                declared,
+                "declared",
+                f"the mesh lines fit {fmt_hz(overall[1])} ({overall[2]}) better than the declared speed: the speed or "
+                "a tooth count differs",
             )
-        return declared, "declared", f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at the declared speed"
-    best = distinct[0]
-    if (
-        declared is None
-        and len(distinct) > 1
-        and distinct[1][0][0] == best[0][0]
-        and distinct[1][0][1] >= AMBIGUOUS * best[0][1]
-    ):
-        other = distinct[1]
+        return best[1], f"from the mesh lines ({best[2]}), declared {fmt_hz(declared)}", None
+    if not hypotheses:
         raise GearlabInputError(
-            f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
-            f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared speed "
-            "(e.g. '25 Hz') or a tacho channel"
+            f"{where}: no tacho, and no line of the spectrum fits a mesh order of {box.source} at any "
+            "speed; expected a tacho channel or a declared speed (e.g. '25 Hz')"
         )
-    how = f"from the mesh lines ({best[2]})" + (f", declared {fmt_hz(declared)}" if declared else "")
-    return best[1], how, None
+    best = max(hypotheses, key=lambda h: h[0])
+    for other in hypotheses:
+        ratio = max(best[1] / other[1], other[1] / best[1])  # a multiple is the same family, not another speed
+        if other[0] >= AMBIGUOUS * best[0] and abs(ratio - round(ratio)) > SPEED_AGREE * ratio:
+            raise GearlabInputError(
+                f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
+                f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared "
+                "speed (e.g. '25 Hz') or a tacho channel"
+            )
+    return best[1], f"from the mesh lines ({best[2]})", None
