@@ -1,6 +1,7 @@
 """The Textual TUI, driven with keys through Textual's pilot, and snapshots of its main screens.
 
-Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios.
+Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios,
+except in the tests of what the TUI starts, not of the run (`stub_engine`).
 """
 
 from __future__ import annotations
@@ -549,6 +550,31 @@ def two_with_runs(folder, tmp_path):
     return folder
 
 
+STUB_ENGINE = "import json, time; print(json.dumps({'kind': 'log', 'message': 'stub'}), flush=True); time.sleep(0.5)"
+
+
+@pytest.fixture
+def stub_engine(monkeypatch):
+    """For tests of what the TUI runs, not of the run: the child it starts is a stand-in that
+    writes one event line and ends (exit 0) instead of `python -m gearlab ...`; the list
+    returned gets the gearlab arguments of each start. test_run_fills_the_table_then_opens_the_results,
+    the every-kind runs and cancel/resume keep the real engine."""
+    started, real = [], asyncio.create_subprocess_exec
+
+    async def stand_in(program, *args, **kwargs):
+        assert args[:2] == ("-m", "gearlab"), args
+        started.append(list(args[2:]))
+        return await real(program, "-c", STUB_ENGINE, **kwargs)
+
+    monkeypatch.setattr(asyncio, "create_subprocess_exec", stand_in)
+    return started
+
+
+def ended(app, started: list) -> bool:
+    """A stand-in run was started and has ended (it lives half a second: a poll may miss it)."""
+    return bool(started) and text_of(app, "#run-status").startswith("finished")
+
+
 def node_named(app, name: str):
     return next(n for n in app.query_one("#browser", Tree).root.children if str(n.label).endswith(name))
 
@@ -562,7 +588,7 @@ async def unfold(pilot, name: str):
 
 
 @pytest.mark.parametrize("size", SIZES)
-def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_with_runs, size):
+def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_with_runs, stub_engine, size):
     async def script(pilot):
         app = pilot.app
         tree = app.query_one("#browser", Tree)
@@ -573,9 +599,10 @@ def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_
         assert tree.cursor_node.data.path.name == "tail.toml"
         assert node_named(app, "stiff.toml").is_expanded  # unfolded stays unfolded
         await pilot.press("r")
-        await until(pilot, lambda: app.process is not None, 30)
-        assert app.run_scenario.name == "other"
-        await until(pilot, lambda: app.process is None)
+        await until(pilot, lambda: ended(app, stub_engine), 30)
+        assert app.run_scenario.name == "other" and app.process is None
+        (args,) = stub_engine
+        assert args[:2] == ["run", str(two_with_runs / "tail.toml")] and "--quick" not in args
         # the run's end rescans: still on tail.toml, and r runs other again
         assert tree.cursor_node.data.path.name == "tail.toml"
 
@@ -583,7 +610,7 @@ def test_after_a_rescan_the_cursor_stays_on_the_same_scenario_and_r_runs_it(two_
 
 
 @pytest.mark.parametrize("size", SIZES)
-def test_u_resumes_only_the_highlighted_run(two_with_runs, tmp_path, size):
+def test_u_resumes_only_the_highlighted_run(two_with_runs, stub_engine, tmp_path, size):
     async def script(pilot):
         app = pilot.app
         tree = app.query_one("#browser", Tree)
@@ -595,15 +622,16 @@ def test_u_resumes_only_the_highlighted_run(two_with_runs, tmp_path, size):
         await select(pilot, "tail.toml")  # the cursor moves away: u must not resume what was opened
         await pilot.press("u")
         await pilot.pause()
-        assert app.process is None
+        assert app.process is None and not stub_engine
         await pilot.press("f5")
         await pilot.pause()
         tree.move_cursor(node_named(app, "stiff.toml").children[0])
         await pilot.pause()
         await pilot.press("u")
-        await until(pilot, lambda: app.process is not None, 30)
-        assert app.run_path.name == "20260102-000000-000000"
-        await until(pilot, lambda: app.process is None)
+        await until(pilot, lambda: ended(app, stub_engine), 30)
+        assert app.run_path.name == "20260102-000000-000000" and app.process is None
+        resumed = tmp_path / "runs" / "stiff" / "20260102-000000-000000"
+        assert stub_engine == [["run", "--resume", str(resumed), "--events"]]  # the first u started none
 
     drive(GearlabApp(two_with_runs), script, size)
 
