@@ -320,7 +320,9 @@ def _remove_empty(folder: Path, created: Path) -> None:
 
 def input_paths(scenario: Scenario) -> list[Path]:
     """The measured files a scenario reads: every 'file' of its tables and each of 'files'
-    (a name, or a table with its 'path'), resolved against the scenario's folder."""
+    (a name, or a table with its 'path'), resolved against the scenario's folder; and each
+    'gearbox' description that is a file (not a built-in name): it decides the speed of a record
+    without a tacho and what a described source simulates."""
     base = Path(scenario.base or scenario.path.parent)
     found: list[Path] = []
 
@@ -330,6 +332,8 @@ def input_paths(scenario: Scenario) -> list[Path]:
                 names = [value] if key == "file" else value if key == "files" and isinstance(value, list) else []
                 names = [n.get("path") if isinstance(n, dict) else n for n in names]
                 found.extend((base / name).resolve() for name in names if isinstance(name, str) and name)
+                if key == "gearbox" and isinstance(value, str) and value and (base / value).is_file():
+                    found.append((base / value).resolve())
                 walk(value)
         elif isinstance(node, list):
             for item in node:

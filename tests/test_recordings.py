@@ -247,6 +247,30 @@ def test_an_edited_gearbox_description_is_not_served_from_the_cache(tmp_path, mo
     assert not cached and again.meta["speed_hz"] == pytest.approx(SPEED / 2, rel=1e-4)
 
 
+def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, tmp_path, monkeypatch):
+    """Its finished units were computed at the speed the old description gave: like a changed
+    measured file, a changed description refuses the resume."""
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    _, acc, _ = signals()
+    np.savez(tmp_path / "r.npz", acc=acc, fs=FS)
+    box = '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\npinion = {{ z = {z}, bore = "20 mm" }}\n'
+    box += 'wheel = {{ z = 57, bore = "30 mm" }}\n'
+    (tmp_path / "rig.toml").write_text(box.format(z=20))
+    scenario = tmp_path / "m.toml"
+    scenario.write_text(
+        '[scenario]\nname = "m"\nkind = "dataset"\n[[datasets]]\nfile = "r.npz"\nvibration = "acc"\n'
+        'gearbox = "rig.toml"\ntransient = "none"\n'
+    )
+    code, out, err = cli("run", scenario, "--out", tmp_path / "runs")
+    assert code == 0, err
+    run = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
+    assert str((tmp_path / "rig.toml").resolve()) in json.loads((run / "run.json").read_text())["inputs"]
+    (run / "results.jsonl").unlink()  # as if killed before its unit finished
+    (tmp_path / "rig.toml").write_text(box.format(z=40))
+    code, _, err = cli("run", "--resume", run)
+    assert code == 2 and "rig.toml: has changed since the run" in err, err
+
+
 def test_the_user_story_from_a_csv_to_a_detection_report(cli, tmp_path, monkeypatch):
     """Issue 39: CSVs in volts at 100 mV/g with time_s and tacho_V columns, a scenario of under 30
     lines, to a detection report."""
