@@ -165,3 +165,24 @@ def test_run_unwritable_output(cli, tmp_path):
 def test_resume_not_a_run_dir(cli, tmp_path):
     code, _, err = cli("run", "--resume", tmp_path)
     assert code == 2 and "not a gearlab run directory" in err
+
+
+def test_a_file_without_a_rate_gets_it_from_the_scenario_not_from_run(cli, tmp_path):
+    """A CSV without a time column: the rate is the measured entry's 'fs' (what a run computes lives
+    in its scenario, which the run directory keeps; `run` options say only where it runs), and a
+    run without it is refused at validate, naming the key, before any run directory is made."""
+    fs, speed = 10_000.0, 25.0
+    t = np.arange(int(fs)) / fs
+    acc, tacho = np.sin(2 * np.pi * 20 * speed * t), np.where(np.mod(speed * t, 1.0) < 0.05, 5.0, 0.0)
+    np.savetxt(tmp_path / "r.csv", np.c_[acc, tacho], delimiter=",", header="acc,tacho", comments="", fmt="%.6g")
+    entry = '[scenario]\nname = "m"\nkind = "dataset"\n[[datasets]]\nfile = "r.csv"\n'
+    entry += 'vibration = "acc"\ntacho = "tacho"\n'
+    scenario = tmp_path / "m.toml"
+    scenario.write_text(entry)
+    code, _, err = cli("run", scenario, "--out", tmp_path / "runs")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "[[datasets]] #1 key 'fs': missing" in err and "carries no sampling rate" in err and "r.csv" in err, err
+    assert not (tmp_path / "runs").exists()
+    scenario.write_text(entry + 'fs = "10 kHz"\ntransient = "none"\n')
+    code, out, err = cli("validate", scenario)
+    assert code == 0 and "OK" in out, err
