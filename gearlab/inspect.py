@@ -636,7 +636,9 @@ def render(report: dict, console, width: int = 100) -> None:
     marks = []
     if "check" in report:
         marks = [s["expected_order"] for s in report["check"]["stages"]]
-        top = min(top, 3.3 * max(marks))
+        # to the third mesh harmonic, or further where the strongest lines are (harmonics 4-10 of a mesh)
+        strongest = max((line["order"] for line in report["lines"][:5]), default=0.0)
+        top = min(top, max(3.3 * max(marks), 1.1 * strongest))
     keep = (orders > 0) & (orders <= top)
     step = max(1, int(keep.sum() // 4000))
     x, y = orders[keep][::step], 20 * np.log10(np.maximum(amp[keep][::step], 1e-12))
