@@ -320,3 +320,35 @@ batch = 4
     assert "fm4" in (run_dir / "report.html").read_text()
     rows = {(r["method"], r["unit"]): r for r in json.loads((run_dir / "summary.json").read_text())["rows"]}
     assert rows[("fm4", "record5")]["auc"] == 1.0  # the chipped record's every TSA above the healthy one's
+
+
+def test_a_tacho_on_the_output_shaft_gives_the_input_shafts_revolutions(tmp_path):
+    """A description whose [sensor] tacho reads the output shaft: its pulses (one per output turn,
+    1/3 of the input's speed on a 16/48 stage) are turned into the input shaft's angle, so the cut
+    revolutions are the input's (the mesh at order 16 of them, 3 times as many as output turns);
+    without the description the same file is cut at the tacho's shaft (order 48)."""
+    from gearlab.gearbox import load_gearbox
+
+    text = (Path(__file__).parents[1] / "examples" / "your_gearbox" / "rig16.toml").read_text()
+    text = text.replace('tacho = "input" ', 'tacho = "output"')
+    assert 'tacho = "output"' in text
+    (tmp_path / "rig16_out.toml").write_text(text)
+    box = load_gearbox(tmp_path / "rig16_out.toml")
+    fs, f_in = 20_000.0, 25.0
+    t = np.arange(int(2.0 * fs)) / fs
+    theta_in = 2 * np.pi * f_in * t + 0.3
+    vibration = np.sin(16 * theta_in)
+    theta_out = theta_in / 3
+    tacho = (np.mod(theta_out, 2 * np.pi) < 0.2).astype(float) * 5.0
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([t, vibration, tacho]), delimiter=",", header="time_s,acc,tacho", comments="")
+
+    def mesh_order(cut):
+        spectrum = np.abs(np.fft.rfft(cut.revolutions.mean(axis=0)))
+        return int(np.argmax(spectrum))
+
+    with_box = cut_recording(path, vibration="acc", tacho="tacho", gearbox=box, points=1024)
+    plain = cut_recording(path, vibration="acc", tacho="tacho", points=1024)
+    assert mesh_order(with_box) == 16 and with_box.speed_hz == pytest.approx(f_in, rel=1e-3)
+    assert mesh_order(plain) == 48 and plain.speed_hz == pytest.approx(f_in / 3, rel=1e-3)
+    assert "on the output shaft" in with_box.angle_source

@@ -520,6 +520,16 @@ def read_recording(
 # --- the shaft angle and the revolutions ---------------------------------------------------
 
 
+def _tacho_ratio(gearbox, path) -> float:
+    """Turns of the shaft the description's tacho reads per input turn (1 without a description)."""
+    if gearbox is None:
+        return 1.0
+    from ..gearbox.orders import order_table
+
+    index = gearbox.shaft_index(gearbox.sensor.tacho, f"{path}: [sensor] key 'tacho'")
+    return float(order_table(gearbox).shaft_orders[index])
+
+
 def shaft_angle(
     rec: Recording,
     *,
@@ -556,6 +566,11 @@ def shaft_angle(
             )
         return {"speed_hz": float(speed_hz)}, angle_from_speed(n, fs, speed_hz), f"{how} {fmt_hz(speed_hz)}"
     name = rec.tacho_name
+    ratio = _tacho_ratio(gearbox, path)
+    if ratio != 1.0:  # a tacho on a slower or faster shaft: its angle / ratio is the input shaft's
+        source, angle, how = shaft_angle(rec, kind=kind, pulses_per_rev=pulses_per_rev)
+        angle = angle / ratio
+        return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"{how} on the {gearbox.sensor.tacho} shaft"
     found_kind = kind if kind != "auto" else ("pulses" if pulses_per_rev > 1 else tacho_kind(rec.tacho))
     detected = ", detected" if kind == "auto" and pulses_per_rev == 1 else ""
     if found_kind == "angle":
