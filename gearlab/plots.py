@@ -241,8 +241,12 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
             ax.set_xlabel("epoch")
             ax.set_ylabel("accuracy (%)")
             ax2.set_ylabel("discrepancy, λ (1)")
-            ax.legend(fontsize=7, loc="lower left")
-            ax2.legend(fontsize=7, loc="lower right")
+            # one legend for both axes, outside the plot: inside it hid the curves
+            lines = ax.get_legend_handles_labels()
+            lines2 = ax2.get_legend_handles_labels()
+            ax.legend(
+                lines[0] + lines2[0], lines[1] + lines2[1], fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0)
+            )
         save(fig, figures / "training_curves.png")
 
     # confusion matrices at the smallest k, summed over repetitions (Figure 5.8)
@@ -256,7 +260,8 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
                 cm += np.asarray(r["confusion"])
         ax.imshow(cm, cmap="Blues")
         for (a, b), v in np.ndenumerate(cm):
-            ax.text(b, a, str(v), ha="center", va="center", fontsize=9)
+            dark = v > cm.max() / 2  # white on the dark cells, readable at the report's width
+            ax.text(b, a, str(v), ha="center", va="center", fontsize=12, color="white" if dark else "black")
         ax.set_xticks([0, 1], ["healthy", "fault"])
         ax.set_yticks([0, 1], ["healthy", "fault"])
         ax.set_xlabel("predicted (count)")
@@ -278,9 +283,11 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
             if not np.all(np.isfinite(z)):  # a diverged unit: say so rather than fail the whole report
                 ax.set_title(f"{f.stem.replace('_', ' ')}\n(non-finite features: training diverged)", fontsize=7)
                 continue
-            z = z - z.mean(0)
-            _, _, vt = np.linalg.svd(z, full_matrices=False)
-            p = z @ vt[:2].T
+            p, collapsed = latent_projection(z)
+            if p is None:
+                ax.set_title(f"{f.stem.replace('_', ' ')}\n(features collapse to {collapsed}: no map)", fontsize=7)
+                ax.set_axis_off()
+                continue
             # colour: domain; marker: class, where the unit stored the labels (healthy o, fault x)
             labels = _latent_labels(f)
             for (lo, hi), domain, colour in (
@@ -299,8 +306,22 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
             ax.set_title(f.stem.replace("_", " "), fontsize=7)
             ax.set_xlabel("PC 1 (1)", fontsize=7)
             ax.set_ylabel("PC 2 (1)", fontsize=7)
-            ax.legend(fontsize=6)
+            ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(0.0, -0.18), ncol=2)
         save(fig, figures / "latent_maps.png")
+
+
+def latent_projection(z: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """The first two principal components of features *z* (rows), or (None, "a point"/"a line")
+    when they collapse: a PCA of features on a point or a line (a detector's one score, a
+    saturated layer) is rounding noise drawn at axes of 1e-15, so no map is drawn of it."""
+    z = z - z.mean(0)
+    sv, vt = np.linalg.svd(z, full_matrices=False)[1:]
+    scale = 1e-9 * max(1.0, float(np.abs(z).max(initial=0.0)))
+    if sv.size == 0 or sv[0] <= scale:
+        return None, "a point"
+    if sv.size < 2 or sv[1] <= 1e-6 * sv[0]:
+        return None, "a line"
+    return z @ vt[:2].T, ""
 
 
 def _files(folder: Target, pattern: str) -> list:

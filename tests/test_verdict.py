@@ -554,3 +554,20 @@ def test_the_bayes_bound_is_set_beside_the_best_method():
     md = transfer_table(summary).splitlines()
     assert md[0].endswith("| Bayes bound (target's own shapes and noise law, best threshold) |")
     assert md[2] == "| 0 | 80.00 ± 1.0 | 70.00 ± 1.0 | 92.00 ± 0.0 |"
+
+
+def test_a_latent_map_of_collapsed_features_is_not_drawn():
+    """Issue 41: features on a point or a line gave latent maps at axes of 1e-15 with the points on
+    lines; such a panel now says the features collapse, and spread features keep their map."""
+    import numpy as np
+
+    from gearlab.plots import latent_projection
+
+    rng = np.random.default_rng(0)
+    spread = rng.normal(size=(40, 8))
+    p, what = latent_projection(spread)
+    assert p.shape == (40, 2) and what == ""
+    point = np.ones((40, 8)) * 3.0 + 1e-13 * rng.normal(size=(40, 8))
+    assert latent_projection(point) == (None, "a point")
+    line = np.outer(rng.normal(size=40), rng.normal(size=8)) + 1e-14 * rng.normal(size=(40, 8))
+    assert latent_projection(line) == (None, "a line")
