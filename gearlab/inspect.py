@@ -299,8 +299,8 @@ def comb(lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset()) ->
 
 
 def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expected: float) -> tuple | None:
-    """(mesh order, index of its strongest harmonic) of the harmonic family among a stage's lines,
-    or None when they hold none. A mesh's power can sit at harmonics 4-11 with its fundamental
+    """(mesh order, index of its strongest harmonic, the orders of its lines) of the harmonic family
+    among a stage's lines, or None when they hold none. A mesh's power can sit at harmonics 4-11 with its fundamental
     under the threshold (the B-6-ch5 source: orders 100, 175, 225, no line at 25), so the order
     is read as the fundamental of a family, not as one line.
 
@@ -333,7 +333,7 @@ def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expe
 
     def scored(m: float, hit: np.ndarray) -> tuple:
         strongest = top[int(np.argmax(np.where(hit, lines.amp[top], -np.inf)))]
-        return float(np.sum(power * (hit - 2 * tol / m))), m, strongest
+        return float(np.sum(power * (hit - 2 * tol / m))), m, strongest, x[hit]
 
     m, hit = fit(expected, tol)
     prior = scored(m, hit) if hit.any() else None
@@ -350,6 +350,41 @@ def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expe
     if best is None or (prior is not None and best[0] < prior[0] + FAMILY_MARGIN):
         return None if prior is None else prior[1:]
     return best[1:]
+
+
+def harmonic_comb(lines: Lines, candidates: list[float], bin_: float, theirs) -> tuple[int, float] | None:
+    """(index of the strongest line, mesh order refitted over its harmonics) of the candidate mesh
+    order the lines bear out, lines on another stage's harmonics (*theirs*) left out; None when no
+    candidate has a line. The first candidate is the description's M; another, M + j o (a tooth
+    count off by j, M on the j-th sideband of its carrier), is taken when its line is the stronger
+    over the floor at each of the first three harmonics where either has one (two at least) and its
+    harmonics hold more power: a real mesh's sidebands can outgrow its line at a harmonic (PHM 2009
+    at 40 Hz, low load: order 124 over 128, whose power made 31's harmonics hold 6 times 32's) but
+    not at its first ones."""
+    keep = np.array([not any(abs(a - o) <= t for o, t in theirs) for a in lines.at], dtype=bool)
+
+    def comb(c: float) -> tuple[np.ndarray, list, float]:
+        db, found = np.full(3, -np.inf), []
+        for h in range(1, MAX_HARMONIC + 1):
+            inside = np.flatnonzero(keep & (np.abs(lines.at - h * c) <= 2 * bin_ + DRIFT * h * c))
+            if inside.size:
+                q = int(inside[np.argmax(lines.db[inside])])
+                found.append((h, q))
+                if h <= 3:
+                    db[h - 1] = lines.db[q]
+        return db, found, float(sum(lines.amp[q] ** 2 for _, q in found))
+
+    first, found, held = comb(candidates[0])
+    for c in candidates[1:]:
+        db, hits, power = comb(c)
+        seen = np.isfinite(db) | np.isfinite(first)
+        if seen.sum() >= 2 and np.all(db[seen] > first[seen]) and power > held:
+            first, found, held = db, hits, power
+    if not found:
+        return None
+    h, q = np.array([f[0] for f in found], dtype=float), np.array([f[1] for f in found])
+    w = lines.amp[q] ** 2
+    return int(q[np.argmax(w)]), float(np.sum(w * h * lines.at[q]) / np.sum(w * h * h))
 
 
 def families(
@@ -405,29 +440,30 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
             for h in (1, 2, 3)
         ]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
-        # the harmonic family the lines hold, off the other stages' mesh harmonics (unless on this one's)
-        family = mesh_family(
-            lines,
-            o_p,
-            bin_,
-            span,
-            [
-                (h * float(t.mesh), _tol_mesh(h * float(t.mesh), bin_))
-                for t in table.stages
-                if t is not s
-                for h in range(1, MAX_HARMONIC + 1)
-                if abs(h * float(t.mesh) / expected - round(h * float(t.mesh) / expected)) > 1e-9
-            ],
-            expected,
-        )
-        i = lines.near(expected, _tol_mesh(expected, bin_))
-        if i is not None:
-            i = carrier(lines, i, span, others)
-            measured = float(lines.at[i])
+        # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
+        theirs = [
+            (h * float(t.mesh), _tol_mesh(h * float(t.mesh), bin_))
+            for t in table.stages
+            if t is not s
+            for h in range(1, MAX_HARMONIC + 1)
+            if abs(h * float(t.mesh) / expected - round(h * float(t.mesh) / expected)) > 1e-9
+        ]
+        family = mesh_family(lines, o_p, bin_, span, theirs, expected)
+        i = None
+        if lines.near(expected, _tol_mesh(expected, bin_)) is not None:
+            # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)?
+            found = harmonic_comb(lines, [expected] + [expected + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
+            if found is not None:
+                i, measured = found
         if family is not None and (i is None or abs(measured - expected) <= _tol_mesh(expected, bin_)):
-            # no line at M, or one that another family outweighs (M twice the record's): the family's order
-            if i is None or abs(family[0] - expected) > _tol_mesh(expected, bin_):
-                measured, i = family
+            # no line at M, or one at M that is the 2nd or 3rd harmonic of a family holding more of
+            # the power (a description of twice or three times the teeth): the family's order
+            ratio = expected / family[0]
+            # ... with two lines of its own at least, off M's harmonics (one line at M / 2 is a tone)
+            own = [x for x in family[2] if abs(x / expected - round(x / expected)) * expected > _tol_mesh(x, bin_)]
+            divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= _tol_mesh(expected, bin_)
+            if i is None or (divisor and len(own) >= 2):
+                measured, i = family[:2]
         matched = i is not None and abs(measured - expected) <= _tol_mesh(expected, bin_)
         entry["matched"] = bool(matched)
         if i is None:

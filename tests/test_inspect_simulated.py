@@ -7,7 +7,8 @@ The B-6-ch5 source (six_dof on meng2020's 25/30 pair, the pinion's y channel, 40
 expected" against the meng2020 description before (its strongest lines are orders 100-250), and
 the same record without a tacho was refused as of ambiguous speed. Gearboxes of tooth counts no
 other test uses are simulated from their descriptions (gearlab.gearbox.simulation) and inspected
-with a tacho, with the speed declared, and with the speed found from the mesh lines.
+with a tacho, with the speed declared, and with the speed found from the mesh lines. And the
+PHM 2009 rig's measured records against its built-in description (where ../shared holds them).
 """
 
 from __future__ import annotations
@@ -17,10 +18,11 @@ import tomllib
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from gearlab.data.simulated import simulated_record
 from gearlab.data.spec import dataset_preset
-from gearlab.gearbox import load_gearbox, parse_gearbox
+from gearlab.gearbox import load_gearbox, parse_gearbox, resolve_gearbox
 from gearlab.gearbox.simulation import channel, model_name, reference
 from gearlab.inspect import InspectOptions, inspect_record
 from gearlab.registry import get_registry
@@ -120,3 +122,18 @@ def test_a_described_gearbox_simulated_and_inspected(tmp_path, stages):
             assert abs(stage["measured_order"] - stage["expected_order"]) < ORDER_TOL, (label, report["verdict"])
         assert abs(report["speed"]["mean_hz"] / speed - 1) < SPEED_TOL, (label, report["speed"])
         assert report["matches"], (label, report["verdict"])
+
+
+PHM09 = ROOT.parent / "shared" / "data" / "phm09"
+
+
+@pytest.mark.skipif(not PHM09.is_dir(), reason="the PHM 2009 records (../shared/data/phm09) are not here")
+@pytest.mark.parametrize("name", ["spur1_40hz_Low_1", "spur2_30hz_Low_2", "spur3_40hz_High_1"])
+def test_the_phm09_description_matches_the_rigs_records(name):
+    """Measured records of the rig: its mesh lines are weaker than input-shaft sidebands beside them
+    (31 and 33 over 32; 16 1/3 over 16 with the eccentric idler) and a line stands at every input
+    order; inspect said "mesh order 31.67 measured, 32 expected" on all 24 records of the subset."""
+    options = InspectOptions(vibration="0", tacho="2", pulses_per_rev=10, fs=66666.67)
+    report = inspect_record(str(PHM09 / f"{name}.zip"), resolve_gearbox("phm09"), options)
+    assert [round(s["measured_order"], 1) for s in report["check"]["stages"]] == [32.0, 16.0], report["verdict"]
+    assert report["matches"], report["verdict"]
