@@ -300,19 +300,15 @@ def comb(lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset()) ->
 
 def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expected: float) -> tuple | None:
     """(mesh order, index of its strongest harmonic, the orders of its lines) of the harmonic family
-    among a stage's lines, or None when they hold none. A mesh's power can sit at harmonics 4-11 with its fundamental
-    under the threshold (the B-6-ch5 source: orders 100, 175, 225, no line at 25), so the order
-    is read as the fundamental of a family, not as one line.
-
-    The lines: the strongest carriers off the other stages' mesh harmonics (*others*: order,
-    tolerance), each by its share of their power. The candidates: each line / h (h up to
-    MAX_HARMONIC) that is a whole number of teeth (6-1000) on the pinion's shaft and holds a family
-    (two lines or more), refitted by least squares over its harmonics (M = Σ p h L / Σ p h²) and
-    scored by the power on its harmonics less what a comb that dense holds by chance (2 tol / M of
-    the axis): a subharmonic M / k holds every line M holds and loses, so the best is the family's
-    gcd. The description's order is the prior: another family is read only when it holds
-    FAMILY_MARGIN more of the power (a record whose even harmonics dominate is not a gear of
-    twice the teeth; a few weak lines at the half order do not halve the tooth count)."""
+    among a stage's lines, or None: a mesh's power can sit at harmonics 4-11 with its fundamental
+    under the threshold (the B-6-ch5 source: orders 100, 175, 225, no line at 25). The lines: the
+    strongest carriers off the other stages' mesh harmonics (*others*), by their share of power.
+    The candidates: each line / h (h up to MAX_HARMONIC) of whole teeth (6-1000) on the pinion's
+    shaft holding two lines or more, refitted over its harmonics (M = Σ p h L / Σ p h²), scored by
+    their power less what so dense a comb holds by chance (2 tol / M): a subharmonic M / k holds
+    what M holds and loses, so the best is the gcd. The description's order is the prior: another
+    family must hold FAMILY_MARGIN more of the power (even harmonics dominating are no gear of
+    twice the teeth)."""
     top = [
         q
         for q in range(min(EVIDENCE, lines.at.size))
@@ -354,13 +350,11 @@ def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expe
 
 def harmonic_comb(lines: Lines, candidates: list[float], bin_: float, theirs) -> tuple[int, float] | None:
     """(index of the strongest line, mesh order refitted over its harmonics) of the candidate mesh
-    order the lines bear out, lines on another stage's harmonics (*theirs*) left out; None when no
-    candidate has a line. The first candidate is the description's M; another, M + j o (a tooth
-    count off by j, M on the j-th sideband of its carrier), is taken when its line is the stronger
-    over the floor at each of the first three harmonics where either has one (two at least) and its
-    harmonics hold more power: a real mesh's sidebands can outgrow its line at a harmonic (PHM 2009
-    at 40 Hz, low load: order 124 over 128, whose power made 31's harmonics hold 6 times 32's) but
-    not at its first ones."""
+    order the lines bear out, lines on another stage's harmonics (*theirs*) left out, or None. The
+    first candidate is the description's M; another, M + j o (a tooth count off by j), is taken when
+    its line is the stronger over the floor at each of the first three harmonics where either has
+    one (two at least) and its harmonics hold more power: a real mesh's sidebands can outgrow its
+    line at one harmonic (PHM 2009, 40 Hz, low load: 124 over 128) but not at its first ones."""
     keep = np.array([not any(abs(a - o) <= t for o, t in theirs) for a in lines.at], dtype=bool)
 
     def comb(c: float) -> tuple[np.ndarray, list, float]:
