@@ -29,8 +29,11 @@ except SystemExit as e:
 from pathlib import Path
 from gearlab.cli import describe_spec
 from gearlab.engine import load_scenario
+# the PHM 2009 scenarios read ../shared/data/phm09 at load time: left out where a checkout has none
+no_rig = not Path("../shared/data/phm09").is_dir()
 for path in sorted(Path("scenarios").glob("*.toml")) + sorted(Path("tests/tui_scenarios").glob("*.toml")):
-    describe_spec(load_scenario(path))
+    if not (no_rig and path.name.startswith("phm09")):
+        describe_spec(load_scenario(path))
 """,
     "help": """
 from gearlab.cli import main
@@ -43,13 +46,16 @@ except SystemExit as e:
     # the TUI's first screen: the scenario tree filled, the plugins tab too
     "tui": """
 import asyncio
+from pathlib import Path
 from gearlab.tui.app import GearlabApp
 
 async def first_screen():
     app = GearlabApp("scenarios")
     async with app.run_test() as pilot:
         await pilot.pause()
-        assert app.entries and all(entry.ok for entry in app.entries), [e.path for e in app.entries if not e.ok]
+        no_rig = not Path("../shared/data/phm09").is_dir()  # the PHM 2009 scenarios' records, where present
+        bad = [e.path for e in app.entries if not e.ok and not (no_rig and Path(e.path).name.startswith("phm09"))]
+        assert app.entries and not bad, bad
 
 asyncio.run(first_screen())
 """,
