@@ -219,32 +219,21 @@ def inspect(
 
     Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho --history healthy1.csv --history healthy2.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .data.importers import TACHO_KINDS
-    from .data.textzip import parse_sensitivity
-    from .gearbox import resolve_gearbox, speed_hz
-    from .inspect import InspectOptions, inspect_record, json_ready, localisation, render, render_localisation
-    from .units import to_si
+    from .gearbox import resolve_gearbox
+    from .inspect import inspect_record, json_ready, localisation, render, render_localisation
+    from .notebook import inspect_options
 
-    if tacho_kind not in TACHO_KINDS:
-        raise GearlabInputError(f"--tacho-kind: {tacho_kind!r} is not one of {', '.join(TACHO_KINDS)}")
-    if pulses_per_rev is not None and not 1 <= pulses_per_rev <= 10_000:
-        raise GearlabInputError(f"--pulses-per-rev: expected 1 .. 10000, got {pulses_per_rev}")
-    rate = None if fs is None else to_si(fs, "Hz", "--fs")
-    if rate is not None and not 0 < rate <= 1e7:
-        raise GearlabInputError(f"--fs: expected a sampling rate in (0, 10 MHz], got {fs!r}")
-    volts = None if gain is None else to_si(gain, "V", "--gain")
-    if volts is not None and not volts > 0:
-        raise GearlabInputError(f"--gain: expected a positive number of volts per file unit, got {gain!r}")
-    options = InspectOptions(
+    options = inspect_options(
+        flag=lambda key: "--" + key.replace("_", "-"),
         vibration=vibration,
         tacho=tacho,
         tacho_kind=tacho_kind,
         pulses_per_rev=pulses_per_rev,
         tacho_shaft=tacho_shaft,
-        speed_hz=None if speed is None else speed_hz(speed, "--speed"),
-        fs=rate,
-        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "--sensitivity"),
-        gain=volts,
+        speed=speed,
+        fs=fs,
+        sensitivity=sensitivity,
+        gain=gain,
     )
     box = None if gearbox is None else resolve_gearbox(gearbox)
     if box is not None and tacho_shaft is not None:

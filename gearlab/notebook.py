@@ -173,6 +173,40 @@ def import_recording(path: str | Path, vibration: str | int, **keys) -> Dataset:
     return _dataset("gearlab.import_recording", {"file": str(path), "vibration": vibration, **keys})
 
 
+def inspect_options(*, flag=lambda key: key, **given):
+    """InspectOptions from the user's texts (`gearlab inspect`'s options, inspect_recording's
+    keywords), checked once for both: a wrong value is one line naming *flag(key)* (the CLI passes
+    '--pulses-per-rev' for 'pulses_per_rev')."""
+    from .data.importers import TACHO_KINDS
+    from .data.textzip import parse_sensitivity
+    from .gearbox import speed_hz
+    from .inspect import InspectOptions
+
+    kind, ppr, fs, gain = given["tacho_kind"], given["pulses_per_rev"], given["fs"], given["gain"]
+    if kind not in TACHO_KINDS:
+        raise GearlabInputError(f"{flag('tacho_kind')}: {kind!r} is not one of {', '.join(TACHO_KINDS)}")
+    if ppr is not None and not 1 <= ppr <= 10_000:
+        raise GearlabInputError(f"{flag('pulses_per_rev')}: expected 1 .. 10000, got {ppr}")
+    rate = _si(fs, "Hz", flag("fs"))
+    if rate is not None and not 0 < rate <= 1e7:
+        raise GearlabInputError(f"{flag('fs')}: expected a sampling rate in (0, 10 MHz], got {fs!r}")
+    volts = _si(gain, "V", flag("gain"))
+    if volts is not None and not volts > 0:
+        raise GearlabInputError(f"{flag('gain')}: expected a positive number of volts per file unit, got {gain!r}")
+    speed, sensitivity = given["speed"], given["sensitivity"]
+    return InspectOptions(
+        vibration=given["vibration"],
+        tacho=given["tacho"],
+        tacho_kind=kind,
+        pulses_per_rev=ppr,
+        tacho_shaft=given["tacho_shaft"],
+        speed_hz=None if speed is None else speed_hz(speed, flag("speed")),
+        fs=rate,
+        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, flag("sensitivity")),
+        gain=volts,
+    )
+
+
 def inspect_recording(
     path: str | Path,
     gearbox: Gearbox | str | Path | None = None,
@@ -200,21 +234,19 @@ def inspect_recording(
     >>> report["revolutions"], round(report["lines"][0]["order"], 2), report["matches"]
     (48, 16.0, True)
     """
-    from .data.textzip import parse_sensitivity
-    from .gearbox import speed_hz
-    from .inspect import InspectOptions, inspect_record
+    from .inspect import inspect_record
 
     box = None if gearbox is None else gearbox if hasattr(gearbox, "stages") else load_gearbox(gearbox)
-    options = InspectOptions(
+    options = inspect_options(
         vibration=vibration,
         tacho=tacho,
         tacho_kind=tacho_kind,
         pulses_per_rev=pulses_per_rev,
         tacho_shaft=tacho_shaft,
-        speed_hz=None if speed is None else speed_hz(speed, "speed"),
-        fs=_si(fs, "Hz", "fs"),
-        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "sensitivity"),
-        gain=_si(gain, "V", "gain"),
+        speed=speed,
+        fs=fs,
+        sensitivity=sensitivity,
+        gain=gain,
     )
     return inspect_record(str(path), box, options)
 
