@@ -137,3 +137,24 @@ def test_a_measured_target_reaches_the_diagnosis_with_its_chain(workdir, monkeyp
     assert seen["chain"] is not None and seen["chain"].fs == pytest.approx(20e3)
     assert seen["settings"].max_order == seen["chain"].max_order > 0 and seen["settings"].budget == 4
     assert seen["source"].name == "B-6-ch5"
+
+
+@pytest.mark.parametrize(
+    ("keys", "says"),
+    [
+        ({"pulses_per_rev": 0}, "pulses_per_rev: expected 1 .. 10000, got 0"),
+        ({"gain": "-1 V"}, "gain: expected a positive number of volts per file unit"),
+        ({"fs": "20 MHz"}, "fs: expected a sampling rate in (0, 10 MHz]"),
+        ({"tacho_kind": "edges"}, "tacho_kind: 'edges' is not one of"),
+    ],
+)
+def test_inspect_recording_refuses_what_the_cli_refuses(tmp_path, keys, says):
+    """One check of inspect's options for the notebook and the CLI: the keyword is named as written."""
+    import gearlab
+    from gearlab.errors import GearlabInputError
+
+    path = tmp_path / "rig.npz"
+    np.savez(path, acc=np.sin(np.arange(4000)), fs=20e3)
+    with pytest.raises(GearlabInputError) as caught:
+        gearlab.inspect_recording(path, vibration="acc", **keys)
+    assert str(caught.value).startswith(says) and "\n" not in str(caught.value)
