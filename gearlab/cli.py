@@ -121,7 +121,6 @@ def stiffness(
     root_region: Annotated[bool, typer.Option(help="include the straight root region d_1")] = True,
 ) -> None:
     from .files import atomic_write
-    from .kinds.stiffness import csv_text
     from .physics.stiffness import MeshStiffnessModel, StiffnessOptions
 
     if not 64 <= points <= 1 << 20:
@@ -143,7 +142,7 @@ def stiffness(
         )
         console.print(f"  {p.label}: RFA {p.fault.rfa(p.params, pair):.4f}  ({shown})")
     if csv is not None:
-        atomic_write(csv, csv_text(ms.theta, ms.k))
+        atomic_write(csv, ms.csv_text())
         console.print(f"wrote {csv}")
     if plot is not None:
         from .plots import tvms_figure
@@ -497,6 +496,7 @@ def gap(
     Example: gearlab gap scenarios/gap_expB.toml --quick; gearlab gap benchmark --trials 4
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     from .engine import load_scenario
+    from .kinds import SCENARIO_KINDS
 
     overrides = _execution(executor, ray_address, device)
     given = _benchmark_keys(trials, seed)
@@ -512,11 +512,12 @@ def gap(
             if hint:
                 raise GearlabInputError(f"gap: '{scenario}' is neither a scenario file nor 'benchmark'{hint}")
         kind = load_scenario(path).kind
-        if kind == "gap_benchmark":  # a benchmark file of one's own takes --trials and --seed too
+        contract = SCENARIO_KINDS[kind]
+        if contract.OVERRIDES:  # a benchmark file of one's own takes --trials and --seed too
             overrides.update(given)
         elif given:
             raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark` (or a gap_benchmark file)")
-        elif kind != "gap":
+        elif "diagnosis" not in contract.TABLES:  # `gearlab gap` diagnoses: a kind with a [diagnosis] table
             raise GearlabInputError(
                 f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
                 f'"{kind}" (run it with `gearlab run`)'
@@ -547,6 +548,9 @@ def transfer_benchmark(
     seed: Annotated[
         int | None, typer.Option(help="seed of the draws: below 1000 development, else a reported figure")
     ] = None,
+    only: Annotated[
+        list[int] | None, typer.Option(help="run trial I alone (repeatable), drawn as in the full run")
+    ] = None,
     out: Out = None,
     resume: Resume = None,
     quick: Quick = False,
@@ -558,9 +562,11 @@ def transfer_benchmark(
 
     Runs scenarios/transfer_benchmark.toml (from the current folder, else from the gearlab source tree) with --trials and --seed set on the command line. Selection rule: settings may be tuned on seeds below 1000; figures are reported on seeds never used before, chosen after the code is frozen.
 
-    Example: gearlab transfer-benchmark --trials 24 --seed 1000
+    Example: gearlab transfer-benchmark --trials 24 --seed 1000; one trial again: --trials 24 --seed 3 --only 9
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     overrides = {**_execution(executor, ray_address, None), **_benchmark_keys(trials, seed)}
+    if only:
+        overrides.setdefault("benchmark", {})["only"] = list(only)
     path = None if resume else _shipped_scenario("transfer_benchmark.toml", "transfer_benchmark")
     _run(path, out, resume, quick, overrides, events)
 

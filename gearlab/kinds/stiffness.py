@@ -135,13 +135,6 @@ def quick(scenario: Scenario) -> None:
     spec.cases = [c for c in spec.cases if not c.fault or c.step in (1, 10, LADDER_STEPS)]
 
 
-def csv_text(theta: np.ndarray, k: np.ndarray) -> str:
-    buf = io.StringIO()
-    buf.write("theta_rad,k_N_per_m\n")
-    np.savetxt(buf, np.column_stack([theta, k]), delimiter=",", fmt="%.10g")
-    return buf.getvalue()
-
-
 def read_csv(path) -> tuple[np.ndarray, np.ndarray]:
     data = np.loadtxt(io.BytesIO(read_file(path)), delimiter=",", skiprows=1, ndmin=2)
     return data[:, 0], data[:, 1]
@@ -156,7 +149,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     for i, case in enumerate(spec.cases):
         if case.name not in done:
             ms = model.mesh_stiffness(case.faults, spec.points)
-            run.write_text(f"cases/{case.name}.csv", csv_text(ms.theta, ms.k))
+            run.write_text(f"cases/{case.name}.csv", ms.csv_text())
             record = {
                 "unit": case.name,
                 "fault": case.fault,

@@ -16,6 +16,7 @@ after the change of variable x(alpha); for faulted sections it is eq. 2.88-2.93.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -198,6 +199,14 @@ class MeshStiffness:
     def turns(self) -> float:
         """Revolutions of the table's gear per pinion revolution: 1, or Z1/Z2 for the wheel."""
         return 1.0 if self.gear == "pinion" else self.pair.Z1 / self.pair.Z2
+
+    def csv_text(self) -> str:
+        """The table as CSV, theta_rad,k_N_per_m to 10 significant digits: `gearlab stiffness
+        --csv` and a stiffness run's cases/*.csv (read back by kinds.stiffness.read_csv)."""
+        buf = io.StringIO()
+        buf.write("theta_rad,k_N_per_m\n")
+        np.savetxt(buf, np.column_stack([self.theta, self.k]), delimiter=",", fmt="%.10g")
+        return buf.getvalue()
 
 
 class MeshStiffnessModel:
