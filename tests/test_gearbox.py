@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from thesis_tables import TABLE_2_3, TABLE_2_4
 
 from gearlab.errors import GearlabInputError
 from gearlab.gearbox import (
@@ -30,18 +31,9 @@ from gearlab.physics.presets import gear_pair as preset_pair
 from gearlab.physics.stiffness import MeshStiffnessModel
 from gearlab.registry import get_registry
 
-# The lumped parameters as published: thesis Table 2.3 (Luo et al. 2019b), Table 2.4 (Meng et al.
-# 2020 with Chaari et al. 2012 and Mohammed et al. 2015), and the PHM 2009 rig simulator's choices
-# (docs/real_data.md); the built-in descriptions, and so the models' presets, must say exactly these.
-TABLE_2_3 = {
-    "m1": 1.272, "m2": 3.5367, "mf": 18.509, "I11": 0.016107, "I12": 0.0001751, "I21": 0.006828,
-    "I22": 0.005153, "k_b": 8.5364e7, "c_b": 2.134e4, "k_c": 330.0, "c_c": 23.1, "k_xf": 1.9912e8,
-    "k_yf": 2.036e8, "c_xf": 1995.56, "c_yf": 2005.80, "zeta": 0.07,
-}  # fmt: skip
-TABLE_2_4 = {
-    "m1": 0.3083, "m2": 0.4439, "I11": 0.0043, "I12": 0.96e-4, "I21": 2e-4, "I22": 0.0045, "k_b": 6.56e8,
-    "c_b": 1.8e3, "k_c": 1e4, "c_c": 10.0, "zeta": 0.07,
-}  # fmt: skip
+# The lumped parameters as published (thesis_tables: Tables 2.3 and 2.4) and the PHM 2009 rig
+# simulator's choices (docs/real_data.md); the built-in descriptions, and so the models' presets,
+# must say exactly these.
 RIG = {
     "m1": 0.89, "m2": 6.07, "m3": 3.54, "I11": 0.0043, "I12": 2.6e-4, "I21": 0.0223, "I31": 0.0101,
     "I22": 0.0045, "k_b": 1e8, "c_b": 2e3, "k_c": 1e4, "c_c": 10.0, "mf": 10.0, "k_xf": 2e8, "k_yf": 2e8,
