@@ -1,7 +1,8 @@
 """Scenario TOML files: schema, validation before any work, resolution of plugins by name.
 
 A scenario has a ``[scenario]`` table (name, description, kind) and the tables its kind
-declares. Each kind module (gearlab.kinds.*) gives a schema of tables and keys; every
+declares. Each kind module (gearlab.kinds.*) gives a schema of tables whose keys are the
+fields of settings dataclasses (gearlab.settings.setting, turned into keys by keys_of); every
 key is checked for type and range here, unknown keys get a "did you mean", and every
 error names the file, the table and the key. ``gearlab validate`` prints the same errors.
 """
@@ -19,14 +20,15 @@ from .confined import Confined
 from .errors import GearlabInputError, shown
 from .files import toml_tables
 from .params import did_you_mean
-from .settings import declared, in_bounds
+from .settings import declared, in_bounds, setting
 
 _REQUIRED = object()
 
 
 @dataclass(frozen=True)
 class Key:
-    """One key of a scenario table: its type(s), default and an optional converter/check."""
+    """One key of a scenario table: its type(s), default and an optional converter/check. Made by
+    keys_of from a settings dataclass (gearlab.settings), the one place a setting is declared."""
 
     types: type | tuple[type, ...]
     default: Any = _REQUIRED
@@ -121,14 +123,15 @@ def plain_name(value: str, where: str) -> str:
     return value
 
 
-SCENARIO_TABLE = Table(
-    {
-        "name": Key(str, check=plain_name, doc="run name, used for runs/<name>/"),
-        "description": Key(str, ""),
-        "kind": Key(str, doc="the scenario kind: a name of gearlab.kinds.SCENARIO_KINDS (gearlab validate lists them)"),
-    },
-    required=True,
-)
+@dataclass(frozen=True, kw_only=True)
+class ScenarioHead:
+    """[scenario]"""
+
+    name: str = setting(str, check=plain_name, doc="run name, used for runs/<name>/")
+    description: str = setting(str, "")
+    kind: str = setting(
+        str, doc="the scenario kind: a name of gearlab.kinds.SCENARIO_KINDS (gearlab validate lists them)"
+    )
 
 
 def folder(value: str, where: str) -> str:
@@ -140,17 +143,26 @@ def folder(value: str, where: str) -> str:
     return value
 
 
-OUTPUT_TABLE = Table({"dir": Key(str, "runs", folder, doc="base directory of run directories")})
+@dataclass(frozen=True, kw_only=True)
+class Output:
+    """[output]"""
+
+    dir: str = setting(str, "runs", check=folder, doc="base directory of run directories")
 
 
-EXECUTION_TABLE = Table(
-    {
-        "executor": Key(str, "local", one_of("local", "ray"), "local process pool or a Ray cluster"),
-        "workers": Key(int, 0, in_range(0), "processes for the local executor (CPUs of a local Ray); 0 = all cores"),
-        "address": Key(str, "", doc="Ray cluster address, below --ray-address and RAY_ADDRESS; '' = a local Ray"),
-        "device": Key(str, "auto", one_of("auto", "cpu", "cuda"), "where networks train"),
-    }
-)
+@dataclass(frozen=True, kw_only=True)
+class Execution:
+    """[execution]"""
+
+    executor: str = setting(str, "local", choices=("local", "ray"), doc="local process pool or a Ray cluster")
+    workers: int = setting(int, 0, low=0, doc="processes for the local executor (CPUs of a local Ray); 0 = all cores")
+    address: str = setting(str, "", doc="Ray cluster address, below --ray-address and RAY_ADDRESS; '' = a local Ray")
+    device: str = setting(str, "auto", choices=("auto", "cpu", "cuda"), doc="where networks train")
+
+
+SCENARIO_TABLE = Table(keys_of(ScenarioHead), required=True)
+OUTPUT_TABLE = Table(keys_of(Output))
+EXECUTION_TABLE = Table(keys_of(Execution))
 
 
 @dataclass

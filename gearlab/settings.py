@@ -9,12 +9,15 @@ reference tables of docs/settings.md (gearlab.settings_doc, through the scenario
         kind: str = setting(str, choices=NOISE_KINDS, doc="noise distribution")
         snr_db: float = setting(float, unit="dB", doc="signal-to-noise ratio")
 
-A field without a default (``setting(types, ...)`` alone) is required. Base layer: imports
-nothing of gearlab but the errors and the did-you-mean helper.
+A field without a default (``setting(types, ...)`` alone) is required. Every scenario table is
+declared so (``kw_only=True`` where a required key follows one with a default): a kind's
+``Table(keys_of(cls))`` and, in build(), ``typed(cls, table)``. Base layer: imports nothing of
+gearlab but the errors and the did-you-mean helper.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from collections.abc import Callable, Iterable, Mapping
@@ -59,14 +62,29 @@ def setting(
     quick: Any = None,
     check: Callable[[Any, str], Any] | None = None,
 ) -> Any:
-    """A dataclass field declared with everything the scenario, --quick and the docs need."""
+    """A dataclass field declared with everything the scenario, --quick and the docs need. A list
+    or table default is copied for each instance (a dataclass refuses a shared mutable default)."""
     meta = Setting(types, low, high, unit, doc, tuple(choices), quick, check)
+    if isinstance(default, (list, dict)):
+        return dataclasses.field(default_factory=lambda: copy.deepcopy(default), metadata={"setting": meta})
     return dataclasses.field(default=default, metadata={"setting": meta})
+
+
+def _default(f: dataclasses.Field):
+    return f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
 
 
 def declared(cls) -> dict[str, tuple[Setting, Any]]:
     """{field: (its Setting, its default or MISSING)} of the fields of *cls* declared with setting()."""
-    return {f.name: (f.metadata["setting"], f.default) for f in dataclasses.fields(cls) if "setting" in f.metadata}
+    return {f.name: (f.metadata["setting"], _default(f)) for f in dataclasses.fields(cls) if "setting" in f.metadata}
+
+
+def typed(cls, values: Mapping):
+    """A validated scenario table (gearlab.scenario.validate_table's dict) as an instance of its
+    settings dataclass *cls*: the keys *cls* declares, the others (a table sharing keys with
+    another declaration) left out."""
+    names = {f.name for f in dataclasses.fields(cls)}
+    return cls(**{k: v for k, v in values.items() if k in names})
 
 
 def in_bounds(meta: Setting, value, where: str):
