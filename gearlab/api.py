@@ -21,7 +21,7 @@ import importlib
 
 from .dynamics.config import ModelConfig
 from .dynamics.excitation import Excitation
-from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring
+from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring, drive_dofs
 from .effect_contract import Effect, SignalContext
 from .errors import GearlabInputError
 from .gearbox.simulation import DescribedPresets
@@ -70,6 +70,7 @@ __all__ = [
     "SignalContext",
     "add_noise",
     "add_spring",
+    "drive_dofs",
     "fillet_compliance",
     "gear_pair",
     "healthy_section",

@@ -42,6 +42,14 @@ CHANNEL_DOFS = {
     "output_y": "y3",  # the output block of a two-stage model (plugins/models/two_stage.py)
 }
 
+
+def drive_dofs(dofs) -> tuple[str, str]:
+    """(input_dof, load_dof) of a one-stage lumped model with *dofs*: the motor's and the load's
+    rotations where it has them (theta11, theta22), else the pinion's and the gear's (theta12,
+    theta21; the speed then is the pinion's and the load torque acts on the gear, thesis 2.4.2)."""
+    return ("theta11" if "theta11" in dofs else "theta12"), ("theta22" if "theta22" in dofs else "theta21")
+
+
 # Every parameter a lumped gearbox model can take; a model declares the ones it uses.
 LUMPED_PARAMS = {
     p.name: p
