@@ -5,7 +5,7 @@ protocol. The kind contract itself is gearlab.kinds.contract.ScenarioKind."""
 
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ..data.importers import MeasuredSpec
@@ -18,83 +18,89 @@ from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
 from ..registry import get_registry
-from ..scenario import Key, Scenario, Table, in_range, location, plain_name
-from ..settings import from_inline
+from ..scenario import Scenario, Table, keys_of, location, plain_name
+from ..settings import from_inline, setting
 from ..units import to_si
 
-DATASET_TABLE = Table(
-    {
-        "preset": Key(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'gearbox' or 'file')"),
-        "file": Key(
-            str,
-            "",
-            doc="measured data: a .csv, .txt, .zip (of one text file), .npz, .h5, .wav or .mat file, relative "
-            "to the scenario",
-        ),
-        "vibration": Key((int, str), "", doc="measured data: the vibration channel (name or 0-based column)"),
-        "tacho": Key(
-            (int, str), "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed' or 'gearbox'"
-        ),
-        "pulses_per_rev": Key(int, None, in_range(1, 10_000), "measured data: tacho pulses per input-shaft revolution"),
-        "gearbox": Key(
-            str,
-            "",
-            doc="a gearbox description (file relative to the scenario, or a built-in name): without 'file', the "
-            "simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and sizes); "
-            "with a measured 'file' and no tacho, the mesh orders the speed is found from",
-        ),
-        "labels": Key(str, "", doc="measured data: an optional label channel"),
-        "class_names": Key(list, ["healthy", "fault"], doc="measured data: class names, healthy first"),
-        "transient": Key(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all"),
-        "sensitivity": Key(
-            (int, float, str),
-            None,
-            doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
-            "V per m/s²); without it or 'gain' the units are unknown",
-            unit="V*s^2/m",
-        ),
-        "gain": Key(
-            (int, float, str),
-            None,
-            doc="measured data: volts per file unit, e.g. '0.3 mV' per count of an integer record (WAV: at full scale)",
-            unit="V",
-        ),
-        "name": Key(str, "", lambda v, where: v and plain_name(v, where), "label (default: the preset name)"),
-        "model": Key(str, "", doc="dynamic model plugin (default: the preset's)"),
-        "model_preset": Key(str, "", doc="the model's parameter preset (default: the preset's)"),
-        "channel": Key(str, "", doc="measurement channel, e.g. pinion_x, casing_x"),
-        "speed": Key((int, float, str), None, doc="input-shaft speed, e.g. '25.2 Hz'", unit="Hz"),
-        "load": Key((int, float, str), None, doc="load torque, e.g. '7 N*m'", unit="N*m"),
-        "faults": Key(
-            (dict, list),
-            None,
-            doc="{fault = [steps]} replacing the preset's ladders (input pinion), or a list of "
-            "{name, gear, stage, steps}, gear 'pinion', 'wheel' or words ('output gear')",
-        ),
-        "teeth": Key(list, None, doc="teeth carrying faults (default: all of the faulted gear)"),
-        "duplicates": Key(int, None, in_range(1), "samples per fault, ladder step and tooth"),
-        "healthy": Key(int, None, in_range(0), "healthy samples"),
-        "revolutions": Key(int, None, in_range(1), "J noisy revolutions per sample (TSA averages them)"),
-        "noise": Key(
-            dict,
-            None,
-            doc="the dataset's noise {kind = 'laplace', snr_db = 0, seed = 0}, added after every effect from its "
-            "own seed; an empty table removes it. The sensor_noise effect adds the same noise at its place among "
-            "the effects (a later sensor_lowpass filters it), from the effects' seeds: what a gap diagnosis fits",
-        ),
-        "tsa": Key(bool, None, doc="a sample is the synchronous average of its J revolutions"),
-        "seed": Key(int, None, in_range(0, 2**32 - 1), "seeds the dataset's noise and effect draws"),
-        "fs": Key((int, float, str), None, doc="integration rate, e.g. '200 kHz'", unit="Hz"),
-        "effects": Key(
-            list,
-            None,
-            doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
-            "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)",
-        ),
-    },
-    array=True,
-    required=True,
-)
+
+@dataclass(frozen=True, kw_only=True)
+class DatasetEntry:
+    """A dataset table ([[datasets]], [source], [target]): a simulated preset or a measured file."""
+
+    preset: str = setting(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'gearbox' or 'file')")
+    file: str = setting(
+        str,
+        "",
+        doc="measured data: a .csv, .txt, .zip (of one text file), .npz, .h5, .wav or .mat file, relative "
+        "to the scenario",
+    )
+    vibration: int | str = setting((int, str), "", doc="measured data: the vibration channel (name or 0-based column)")
+    tacho: int | str = setting(
+        (int, str), "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed' or 'gearbox'"
+    )
+    pulses_per_rev: int | None = setting(
+        int, None, low=1, high=10_000, doc="measured data: tacho pulses per input-shaft revolution"
+    )
+    gearbox: str = setting(
+        str,
+        "",
+        doc="a gearbox description (file relative to the scenario, or a built-in name): without 'file', the "
+        "simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and sizes); "
+        "with a measured 'file' and no tacho, the mesh orders the speed is found from",
+    )
+    labels: str = setting(str, "", doc="measured data: an optional label channel")
+    class_names: list = setting(list, ["healthy", "fault"], doc="measured data: class names, healthy first")
+    transient: str = setting(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all")
+    sensitivity: float | str | None = setting(
+        (int, float, str),
+        None,
+        doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
+        "V per m/s²); without it or 'gain' the units are unknown",
+        unit="V*s^2/m",
+    )
+    gain: float | str | None = setting(
+        (int, float, str),
+        None,
+        doc="measured data: volts per file unit, e.g. '0.3 mV' per count of an integer record (WAV: at full scale)",
+        unit="V",
+    )
+    name: str = setting(
+        str, "", check=lambda v, where: v and plain_name(v, where), doc="label (default: the preset name)"
+    )
+    model: str = setting(str, "", doc="dynamic model plugin (default: the preset's)")
+    model_preset: str = setting(str, "", doc="the model's parameter preset (default: the preset's)")
+    channel: str = setting(str, "", doc="measurement channel, e.g. pinion_x, casing_x")
+    speed: float | str | None = setting((int, float, str), None, doc="input-shaft speed, e.g. '25.2 Hz'", unit="Hz")
+    load: float | str | None = setting((int, float, str), None, doc="load torque, e.g. '7 N*m'", unit="N*m")
+    faults: dict | list | None = setting(
+        (dict, list),
+        None,
+        doc="{fault = [steps]} replacing the preset's ladders (input pinion), or a list of "
+        "{name, gear, stage, steps}, gear 'pinion', 'wheel' or words ('output gear')",
+    )
+    teeth: list | None = setting(list, None, doc="teeth carrying faults (default: all of the faulted gear)")
+    duplicates: int | None = setting(int, None, low=1, doc="samples per fault, ladder step and tooth")
+    healthy: int | None = setting(int, None, low=0, doc="healthy samples")
+    revolutions: int | None = setting(int, None, low=1, doc="J noisy revolutions per sample (TSA averages them)")
+    noise: dict | None = setting(
+        dict,
+        None,
+        doc="the dataset's noise {kind = 'laplace', snr_db = 0, seed = 0}, added after every effect from its "
+        "own seed; an empty table removes it. The sensor_noise effect adds the same noise at its place among "
+        "the effects (a later sensor_lowpass filters it), from the effects' seeds: what a gap diagnosis fits",
+    )
+    tsa: bool | None = setting(bool, None, doc="a sample is the synchronous average of its J revolutions")
+    seed: int | None = setting(int, None, low=0, high=2**32 - 1, doc="seeds the dataset's noise and effect draws")
+    fs: float | str | None = setting((int, float, str), None, doc="integration rate, e.g. '200 kHz'", unit="Hz")
+    effects: list | None = setting(
+        list,
+        None,
+        doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
+        "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)",
+    )
+
+
+DATASET_TABLE = Table(keys_of(DatasetEntry), array=True, required=True)
 
 
 # Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
