@@ -139,9 +139,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         target, _ = load_or_build(spec["target"], executor, on_event)
         on_event(Event("advance", stage="datasets", done=2, total=2))
         check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
+        # a stage of its own: the noise-free twin and the likelihood ratios take seconds (issue 41)
+        on_event(Event("stage", stage="bound", total=1, message="Bayes bound of the target test sets"))
         bound = bayes_bound(spec["target"], source, target, protocol, executor, on_event)
         if bound is not None:
             run.write_json("bound.json", bound)
+        on_event(Event("advance", stage="bound", done=1, total=1))
         done = {r["unit"] for r in run.records()}
         todo = units(protocol)
         pending = [(rep, k, m) for rep, k, m in todo if unit_key(rep, k, m) not in done]

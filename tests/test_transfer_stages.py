@@ -1,0 +1,25 @@
+"""The `transfer` kind tells its front-end every step (issue 41: no stage silent for more than 5 s):
+the Bayes bound, which takes seconds (the target's noise-free twin, its likelihood ratios), is a
+stage of its own between the datasets and the training runs."""
+
+from __future__ import annotations
+
+from tiny import transfer
+
+from gearlab.engine import run_scenario
+
+
+def test_the_bayes_bound_is_a_stage_of_its_own(tmp_path, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "tiny.toml"
+    path.write_text(transfer('[[methods]]\nadapter = "source_only"\n', max_epochs=2))
+    events = []
+    run = run_scenario(path, out=tmp_path / "runs", on_event=events.append)
+    assert (run.path / "bound.json").exists()  # the tiny target is simulated with noise: there is a bound
+    stages = [(e.kind, e.stage) for e in events if e.kind in ("stage", "advance") and e.stage]
+    assert ("stage", "bound") in stages and ("advance", "bound") in stages
+    begin, end = stages.index(("stage", "bound")), stages.index(("advance", "bound"))
+    done = max(i for i, s in enumerate(stages) if s == ("advance", "datasets"))
+    assert done < begin < end < stages.index(("stage", "runs"))  # after the datasets, before the runs
+    bound_logs = [e for e in events if e.kind == "log" and "Bayes bound" in e.message]
+    assert bound_logs  # what the stage does is said while it runs
