@@ -20,33 +20,42 @@ from ..physics.presets import PAIR_PRESETS, gear_pair
 from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions
 from ..registry import get_registry
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, location, one_of, plain_name
+from ..scenario import Scenario, Table, keys_of, location, plain_name
+from ..settings import setting, typed
 from .common import no_compare, no_table, no_title, no_verdict
 
+
+@dataclass(frozen=True, kw_only=True)
+class Pair:
+    """[stiffness]"""
+
+    pair: str = setting(str, choices=PAIR_PRESETS, doc="gear-pair preset")
+    points: int = setting(int, 4096, low=64, high=1 << 20, doc="samples over one pinion revolution")
+    fillet: bool = setting(bool, True, doc="include the fillet-foundation term")
+    root_region: bool = setting(bool, True, doc="include the straight root region d_1")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Sweep:
+    """[sweep]"""
+
+    faults: list = setting(list, [], doc="fault plugin names to sweep over their ladders")
+    tooth: int = setting(int, 5, low=1, doc="pinion tooth carrying the fault")
+    steps: list = setting(list, [1, LADDER_STEPS], doc="first and last ladder step, inclusive")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CaseEntry:
+    """[[cases]]"""
+
+    name: str = setting(str, check=plain_name, doc="case name (file name of its CSV)")
+    faults: list = setting(list, [], doc="list of {kind, tooth, step} or {kind, tooth, params}")
+
+
 TABLES = {
-    "stiffness": Table(
-        {
-            "pair": Key(str, check=one_of(*PAIR_PRESETS), doc="gear-pair preset"),
-            "points": Key(int, 4096, in_range(64, 1 << 20), "samples over one pinion revolution"),
-            "fillet": Key(bool, True, doc="include the fillet-foundation term"),
-            "root_region": Key(bool, True, doc="include the straight root region d_1"),
-        },
-        required=True,
-    ),
-    "sweep": Table(
-        {
-            "faults": Key(list, [], doc="fault plugin names to sweep over their ladders"),
-            "tooth": Key(int, 5, in_range(1), "pinion tooth carrying the fault"),
-            "steps": Key(list, [1, LADDER_STEPS], doc="first and last ladder step, inclusive"),
-        }
-    ),
-    "cases": Table(
-        {
-            "name": Key(str, check=plain_name, doc="case name (file name of its CSV)"),
-            "faults": Key(list, [], doc="list of {kind, tooth, step} or {kind, tooth, params}"),
-        },
-        array=True,
-    ),
+    "stiffness": Table(keys_of(Pair), required=True),
+    "sweep": Table(keys_of(Sweep)),
+    "cases": Table(keys_of(CaseEntry), array=True),
 }
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
@@ -72,29 +81,29 @@ class Spec:
 def build(scenario: Scenario) -> Spec:
     t = scenario.tables
     registry = get_registry()
-    pair = gear_pair(t["stiffness"]["pair"])
-    sweep = t["sweep"]
+    st, sweep = typed(Pair, t["stiffness"]), typed(Sweep, t["sweep"])
+    pair = gear_pair(st.pair)
     where = scenario.where("sweep", "steps")
-    steps = sweep["steps"]
+    steps = sweep.steps
     if len(steps) != 2 or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
         raise GearlabInputError(f"{where}: expected [first, last] whole numbers, got {steps!r}")
     if not 1 <= steps[0] <= steps[1] <= LADDER_STEPS:
         raise GearlabInputError(f"{where}: expected 1 <= first <= last <= {LADDER_STEPS}, got {steps!r}")
-    if not 1 <= sweep["tooth"] <= pair.Z1:
+    if not 1 <= sweep.tooth <= pair.Z1:
         raise GearlabInputError(
-            f"{scenario.where('sweep', 'tooth')}: tooth must lie in 1..{pair.Z1}, got {sweep['tooth']}"
+            f"{scenario.where('sweep', 'tooth')}: tooth must lie in 1..{pair.Z1}, got {sweep.tooth}"
         )
     cases = [Case("healthy", ())]
-    for i, name in enumerate(sweep["faults"]):
+    for i, name in enumerate(sweep.faults):
         here = f"{scenario.where('sweep', 'faults')} item {i + 1}"
         if not isinstance(name, str):
             raise GearlabInputError(f"{here}: expected a fault name, got {name!r}")
         for step in range(steps[0], steps[1] + 1):
-            placed = place_fault(registry, pair, name, sweep["tooth"], step=step, where=here)
+            placed = place_fault(registry, pair, name, sweep.tooth, step=step, where=here)
             cases.append(Case(f"{name}_step{step:02d}", (placed,), name, step))
-    for i, case in enumerate(t["cases"]):
+    for i, case in enumerate(typed(CaseEntry, c) for c in t["cases"]):
         placed = []
-        for j, f in enumerate(case["faults"]):
+        for j, f in enumerate(case.faults):
             here = f"{location(scenario.path, 'cases', 'faults', i)} item {j + 1}"
             if not isinstance(f, dict) or "kind" not in f or "tooth" not in f:
                 raise GearlabInputError(
@@ -113,15 +122,14 @@ def build(scenario: Scenario) -> Spec:
             if not isinstance(f.get("params", {}), dict):
                 raise GearlabInputError(f"{here} key 'params': expected a table of parameters, got {f['params']!r}")
             placed.append(place_fault(registry, pair, f["kind"], f["tooth"], f.get("step"), f.get("params"), here))
-        cases.append(Case(case["name"], tuple(placed)))
+        cases.append(Case(case.name, tuple(placed)))
     names = [c.name for c in cases]
     if len(set(names)) != len(names):
         raise GearlabInputError(
             f"{scenario.path}: case names must be unique; repeated: {sorted({n for n in names if names.count(n) > 1})}"
         )
-    st = t["stiffness"]
-    options = StiffnessOptions(fillet=st["fillet"], root_region=st["root_region"])
-    return Spec(pair, options, st["points"], cases, list(sweep["faults"]), sweep["tooth"])
+    options = StiffnessOptions(fillet=st.fillet, root_region=st.root_region)
+    return Spec(pair, options, st.points, cases, list(sweep.faults), sweep.tooth)
 
 
 def describe(scenario: Scenario) -> str:
