@@ -18,40 +18,26 @@ from gearlab.gearbox import builtin_gearboxes
 from gearlab.kinds.common import DATASET_TABLE, dataset_spec
 from gearlab.signals import spectrum
 
-RIG20 = """[gearbox]
-name = "rig20"
-[operation]
-speed = "25 Hz"
-load = "10 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 20, bore = "20 mm" }
-wheel = { z = 47, bore = "25 mm" }
-[sensor]
-near = "input"
-direction = "y"
-"""
 
-RIG2S = """[gearbox]
-name = "rig2s"
-[operation]
-speed = "25 Hz"
-load = "30 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 21, bore = "20 mm" }
-wheel = { z = 53, bore = "25 mm" }
-[[stages]]
-module = "2.5 mm"
-face_width = "25 mm"
-pinion = { z = 29, bore = "25 mm" }
-wheel = { z = 61, bore = "30 mm" }
-[sensor]
-near = "input"
-direction = "x"
-"""
+def _stage(z1, z2, module="2 mm", width="20 mm", bores=("20 mm", "20 mm")):
+    gears = f'pinion = {{ z = {z1}, bore = "{bores[0]}" }}\nwheel = {{ z = {z2}, bore = "{bores[1]}" }}\n'
+    return f'[[stages]]\nmodule = "{module}"\nface_width = "{width}"\n' + gears
+
+
+def _gearbox(name, load, direction, *stages):
+    """A description's text: 25 Hz, *load*, the sensor near the input in *direction*."""
+    head = f'[gearbox]\nname = "{name}"\n[operation]\nspeed = "25 Hz"\nload = "{load}"\n'
+    return head + "".join(stages) + f'[sensor]\nnear = "input"\ndirection = "{direction}"\n'
+
+
+RIG20 = _gearbox("rig20", "10 N*m", "y", _stage(20, 47, bores=("20 mm", "25 mm")))
+RIG2S = _gearbox(
+    "rig2s",
+    "30 N*m",
+    "x",
+    _stage(21, 53, bores=("20 mm", "25 mm")),
+    _stage(29, 61, "2.5 mm", "25 mm", ("25 mm", "30 mm")),
+)
 
 
 def source(base: Path = Path("."), **given):
@@ -206,11 +192,6 @@ def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkey
 
 
 # --- what the simulator cannot take: one line naming file, table and key ---------------------------------
-
-
-def _stage(z1, z2):
-    gears = f'pinion = {{ z = {z1}, bore = "20 mm" }}\nwheel = {{ z = {z2}, bore = "20 mm" }}\n'
-    return '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n' + gears
 
 
 @pytest.mark.parametrize(
