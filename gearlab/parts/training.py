@@ -4,7 +4,7 @@ transfer_benchmark): the [protocol] training and calibration keys, the [network]
 
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 
 from ..data import cache
 from ..errors import GearlabInputError
@@ -12,7 +12,8 @@ from ..events import UnitProgress
 from ..learn.config import RECIPE, Calibration, NetworkSettings
 from ..learn.protocol import Method, Protocol, StateStore, run_unit, unit_key
 from ..registry import METHODS, get_registry
-from ..scenario import Key, Table, keys_of, location
+from ..scenario import Table, keys_of, location
+from ..settings import setting
 
 # Table 5.3's training settings: the keys of every kind that trains the chapter-5 way, declared
 # on the Protocol dataclass
@@ -28,15 +29,22 @@ CALIBRATION = keys_of(Calibration, **asdict(RECIPE))
 
 # The [network] table of a kind that trains, and the keys of a [[methods]] entry.
 NETWORK = Table(keys_of(NetworkSettings))
-METHOD_KEYS = {
-    "adapter": Key(
+
+
+@dataclass(frozen=True, kw_only=True)
+class MethodEntry:
+    """A [[methods]] entry: resolved to a learn.protocol.Method by method()."""
+
+    adapter: str = setting(
         str,
         doc="adapter (source_only, target_only, mmd, dann, coral, finetune) or detector plugin "
         "(likelihood_ratio, matched_filter)",
-    ),
-    "supervised": Key(bool, False, doc="use the target training labels"),
-    "params": Key(dict, {}, doc="its parameters"),
-}
+    )
+    supervised: bool = setting(bool, False, doc="use the target training labels")
+    params: dict = setting(dict, {}, doc="its parameters")
+
+
+METHOD_KEYS = keys_of(MethodEntry)
 
 
 def check_training(t: dict, path) -> None:
