@@ -13,7 +13,7 @@ figures (Figures 5.5-5.9) and report.html.
 from __future__ import annotations
 
 import io
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -38,10 +38,18 @@ from ..learn.schedule import two_phases
 from ..parts.bound import BOUND, bayes_bound
 from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training, method, train_unit
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, keys_of, location
-from ..settings import shrunk
+from ..scenario import Scenario, Table, keys_of, location
+from ..settings import setting, shrunk
 from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
 from .transfer_verdict import experiment, transfer_lines, transfer_table
+
+
+@dataclass(frozen=True, kw_only=True)
+class Shots:
+    """[protocol] ks: the rest of [protocol] is declared on Protocol and Calibration."""
+
+    ks: list = setting(list, list(KS), doc="numbers of target fault samples in the target training set")
+
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
 TABLES = {
@@ -51,7 +59,7 @@ TABLES = {
     "methods": Table(METHOD_KEYS, array=True, required=True),
     "protocol": Table(
         {
-            "ks": Key(list, list(KS), doc="numbers of target fault samples in the target training set"),
+            **keys_of(Shots),
             **keys_of(Protocol, ("repetitions",)),
             **TRAINING,
             **CALIBRATION,
