@@ -16,7 +16,7 @@ of Figures 4.4-4.6.
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -41,10 +41,12 @@ from ..learn.noise_study import (
 )
 from ..params import did_you_mean
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, keys_of, location
+from ..scenario import Scenario, Table, keys_of, location
+from ..settings import setting
 from ..signals import NOISE_KINDS
 from .common import (
     DATASET_TABLE,
+    DatasetEntry,
     class_sizes,
     dataset_spec,
     device_of,
@@ -73,20 +75,26 @@ _OVERRIDES = (
     "fs",
 )
 
+
+@dataclass(frozen=True, kw_only=True)
+class Study:
+    """[study]"""
+
+    noises: list = setting(
+        list, list(NOISE_KINDS), doc=f"noise types, each studied noisy and with TSA: {', '.join(NOISE_KINDS)}"
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudyDataset(DatasetEntry):
+    """[dataset]: the keys of _OVERRIDES and the noise's level (its kind is what the study varies)."""
+
+    noise: dict | None = setting(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises")
+
+
 TABLES = {
-    "study": Table(
-        {
-            "noises": Key(
-                list, list(NOISE_KINDS), doc=f"noise types, each studied noisy and with TSA: {', '.join(NOISE_KINDS)}"
-            ),
-        }
-    ),
-    "dataset": Table(
-        {
-            **{k: DATASET_TABLE.keys[k] for k in _OVERRIDES},
-            "noise": Key(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises"),
-        }
-    ),
+    "study": Table(keys_of(Study)),
+    "dataset": Table(keys_of(StudyDataset, (*_OVERRIDES, "noise"))),
     "network": Table(keys_of(NetworkSettings, name=NoiseProtocol.network, dropout=NoiseProtocol.dropout)),
     "protocol": Table(keys_of(NoiseProtocol)),
 }
