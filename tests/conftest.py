@@ -38,6 +38,19 @@ def write_scenario(tmp_path):
     return write
 
 
+@pytest.fixture
+def run_scenario(cli, write_scenario, tmp_path):
+    """`gearlab run` of a scenario *text* (written into tmp_path, its runs under tmp_path/runs), which
+    must finish: the run directory it printed last."""
+
+    def run(text: str, name: str = "s.toml") -> Path:
+        code, out, err = cli("run", write_scenario(text, name), "--out", tmp_path / "runs")
+        assert code == 0, err
+        return Path(out.strip().splitlines()[-1].removeprefix("run directory: "))
+
+    return run
+
+
 @pytest.fixture(scope="module")
 def module_cache(tmp_path_factory):
     """One dataset cache for the tests of a module that asks for it: GEARLAB_CACHE while the module runs."""

@@ -2,23 +2,18 @@
 through the same pipeline as a third party's recording."""
 
 import json
-from pathlib import Path
 
 
-def test_dataset_scenario_imports_a_measured_file(cli, tmp_path, monkeypatch):
+def test_dataset_scenario_imports_a_measured_file(cli, run_scenario, tmp_path, monkeypatch):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     code, _, err = cli(
         "simulate", "--model", "six_dof", "--preset", "meng2020", "--duration", "0.3", "--out", tmp_path / "rec.npz"
     )
     assert code == 0, err
-    scenario = tmp_path / "measured.toml"
-    scenario.write_text(
+    run = run_scenario(
         '[scenario]\nname = "measured"\nkind = "dataset"\n\n'
         '[[datasets]]\nfile = "rec.npz"\nname = "bench"\nvibration = "pinion_y"\ntacho = "tacho"\n'
     )
-    code, out, err = cli("run", scenario, "--out", tmp_path / "runs")
-    assert code == 0, err
-    run = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
     summary = json.loads((run / "summary.json").read_text())
     bench = summary["datasets"]["bench"]
     assert bench["shape"][1] == 4096

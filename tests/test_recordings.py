@@ -247,7 +247,7 @@ def test_an_edited_gearbox_description_is_not_served_from_the_cache(tmp_path, mo
     assert not cached and again.meta["speed_hz"] == pytest.approx(SPEED / 2, rel=1e-4)
 
 
-def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, tmp_path, monkeypatch):
+def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, run_scenario, tmp_path, monkeypatch):
     """Its finished units were computed at the speed the old description gave: like a changed
     measured file, a changed description refuses the resume."""
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
@@ -256,14 +256,10 @@ def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, tmp_pat
     box = '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\npinion = {{ z = {z}, bore = "20 mm" }}\n'
     box += 'wheel = {{ z = 57, bore = "30 mm" }}\n'
     (tmp_path / "rig.toml").write_text(box.format(z=20))
-    scenario = tmp_path / "m.toml"
-    scenario.write_text(
+    run = run_scenario(
         '[scenario]\nname = "m"\nkind = "dataset"\n[[datasets]]\nfile = "r.npz"\nvibration = "acc"\n'
         'gearbox = "rig.toml"\ntransient = "none"\n'
     )
-    code, out, err = cli("run", scenario, "--out", tmp_path / "runs")
-    assert code == 0, err
-    run = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
     assert str((tmp_path / "rig.toml").resolve()) in json.loads((run / "run.json").read_text())["inputs"]
     (run / "results.jsonl").unlink()  # as if killed before its unit finished
     (tmp_path / "rig.toml").write_text(box.format(z=40))
@@ -271,7 +267,7 @@ def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, tmp_pat
     assert code == 2 and "rig.toml: has changed since the run" in err, err
 
 
-def test_the_user_story_from_a_csv_to_a_detection_report(cli, tmp_path, monkeypatch):
+def test_the_user_story_from_a_csv_to_a_detection_report(cli, write_scenario, run_scenario, tmp_path, monkeypatch):
     """Issue 39: CSVs in volts at 100 mV/g with time_s and tacho_V columns, a scenario of under 30
     lines, to a detection report."""
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
@@ -310,13 +306,9 @@ adapter = "matched_filter"
 batch = 4
 """
     assert len(text.splitlines()) < 30
-    path = tmp_path / "rig20.toml"
-    path.write_text(text)
-    code, out, err = cli("validate", path)
+    code, out, err = cli("validate", write_scenario(text, "rig20.toml"))
     assert code == 0, err
-    code, out, err = cli("run", path, "--out", tmp_path / "runs")
-    assert code == 0, err
-    run_dir = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
+    run_dir = run_scenario(text, "rig20.toml")
     assert "fm4" in (run_dir / "report.html").read_text()
     rows = {(r["method"], r["unit"]): r for r in json.loads((run_dir / "summary.json").read_text())["rows"]}
     assert rows[("fm4", "record5")]["auc"] == 1.0  # the chipped record's every TSA above the healthy one's
