@@ -49,7 +49,6 @@ class CasingPath(Effect):
     name = "casing_path"
     doc = "casing mass and mounting between the bearings and the sensor; the sensor moves to the casing"
     level = "model"
-    breaks_symmetry = False
     params = (
         Param("mf", "kg", 10.0, 0.1, 1000.0, "mass of the gearbox casing"),
         Param("k_xf", "N/m", 1e8, 1e5, 1e11, "casing mounting stiffness, x"),

@@ -22,7 +22,6 @@ class SensorOffset(Effect):
     name = "sensor_offset"
     doc = "constant (DC) offset on the measured acceleration: a sensor or amplifier bias"
     level = "signal"
-    breaks_symmetry = False
     opt_in = True
     params = (Param("offset", "m/s^2", 0.0, -1000.0, 1000.0, "constant added to the acceleration"),)
 

@@ -51,7 +51,6 @@ class ToothFriction(Effect):
     name = "tooth_friction"
     doc = "Coulomb sliding friction mu_f across the line of action, reversing at the pitch point"
     level = "excitation"
-    breaks_symmetry = False
     params = (Param("mu_f", "", 0.05, 0.0, 0.3, "friction coefficient between the flanks"),)
 
     def apply_excitation(self, exc, params):
