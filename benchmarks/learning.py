@@ -32,8 +32,7 @@ LENGTH = 4096
 STEPS = 3  # per timing
 
 
-def step_time(name: str, x: torch.Tensor, y: torch.Tensor, net: nn.Module | None = None) -> float:
-    net = build_network(name, 2, seed=0) if net is None else net
+def step_time(net: nn.Module, x: torch.Tensor, y: torch.Tensor) -> float:
     opt = torch.optim.SGD(net.parameters(), lr=0.003)
     loss_fn = nn.CrossEntropyLoss()
 
@@ -49,9 +48,9 @@ def step_time(name: str, x: torch.Tensor, y: torch.Tensor, net: nn.Module | None
     return (time.perf_counter() - t) / STEPS
 
 
-def compare(rounds: int, name: str, title: str, variants: dict) -> None:
-    """Print the median step time of each variant of network *name* (label -> a function that
-    builds it) on one joint-phase batch, the variants alternated round by round so that all see
+def compare(rounds: int, title: str, variants: dict) -> None:
+    """Print the median step time of each variant of a network (label -> a function that builds
+    it) on one joint-phase batch, the variants alternated round by round so that all see
     the same machine load, and the second's time over the first's."""
     torch.manual_seed(0)
     x = torch.randn(BATCH, LENGTH)
@@ -59,7 +58,7 @@ def compare(rounds: int, name: str, title: str, variants: dict) -> None:
     times: dict[str, list[float]] = {label: [] for label in variants}
     for _ in range(rounds):
         for label, build in variants.items():
-            times[label].append(step_time(name, x, y, build()))
+            times[label].append(step_time(build(), x, y))
     median = {label: statistics.median(t) for label, t in times.items()}
     print(f"{title}, median of {rounds}:")
     for label, seconds in median.items():
@@ -75,7 +74,7 @@ def networks(rounds: int) -> None:
     times: dict[str, list[float]] = {"fast": [], "cnn3": []}
     for _ in range(rounds):
         for name in times:
-            times[name].append(step_time(name, x, y))
+            times[name].append(step_time(build_network(name, 2, seed=0), x, y))
     fast, cnn3 = (statistics.median(times[n]) for n in ("fast", "cnn3"))
     print(f"training step, batch {BATCH} x {LENGTH}, {torch.get_num_threads()} threads (median of {rounds}):")
     print(f"  fast {1e3 * fast:8.1f} ms")
@@ -108,7 +107,6 @@ def burst_frozen(rounds: int) -> None:
 
     compare(
         rounds,
-        "burst",
         "burst, joint-phase step (normalisation frozen)",
         {"extremes (NormMaxAbs)": lambda: frozen(False), "whole map": lambda: frozen(True)},
     )
@@ -132,7 +130,6 @@ def shapes_local(rounds: int) -> None:
 
     compare(
         rounds,
-        "shapes",
         "shapes, joint-phase step (256 templates)",
         {"local (an eighth of the revolution)": lambda: started(False), "whole revolution": lambda: started(True)},
     )
