@@ -20,7 +20,7 @@ ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures a
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -45,8 +45,8 @@ from ..parts.measured import target_spec
 from ..parts.training import TRAINING, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, keys_of, location
-from ..settings import quick_limits, shrunk
+from ..scenario import Scenario, Table, keys_of, location
+from ..settings import quick_limits, setting, shrunk
 from .common import (
     DATASET_TABLE,
     class_sizes,
@@ -61,6 +61,7 @@ from .common import (
 )
 from .gap_inputs import (
     Records,
+    TargetEntry,
     check_healthy,
     check_points,
     check_sampling,
@@ -70,52 +71,33 @@ from .gap_tables import accuracy_md, params_text, percent, ranking_md, tables_md
 from .gap_verdict import gap_lines
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
-# The target may also be measured records in the detection kind's shape (a list of files with a
-# tacho of N pulses per revolution, docs/real_data.md); the diagnosis reads their history files.
-_TARGET = Table(
-    {
-        **DATASET_TABLE.keys,
-        "vibration": Key((int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"),
-        "tacho": Key((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)"),
-        "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "records: tacho pulses per input-shaft revolution"),
-        "sensitivity": Key(
-            (int, float, str),
-            None,
-            doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V "
-            "per m/s²); without it (or 'gain') the units are unknown",
-        ),
-        "files": Key(
-            list,
-            [],
-            doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
-            "the history files (healthy, one operating condition)",
-        ),
-    },
-    required=True,
-)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Accuracy:
+    """[accuracy], with the Table 5.3 training keys (TRAINING)."""
+
+    enabled: bool = setting(
+        bool, True, doc="train source-only models on the uncorrected and corrected source (needs target labels)"
+    )
+    methods: list = setting(
+        list,
+        ["mmd", "dann", "matched_filter"],
+        doc="shown beside (adapter or detector names): unsupervised DA baselines, on "
+        "the uncorrected source; detectors, on both sources",
+    )
+    repetitions: int = setting(int, 3, low=1, high=1000)
+
+
 UNCORRECTED, CORRECTED = "uncorrected", "corrected"
 
 
 TABLES = {
     "source": _DATASET,
-    "target": _TARGET,
+    "target": Table(keys_of(TargetEntry), required=True),
     # declared once, on gearlab.gap.scoring.Settings: keys, checks, --quick limits and docs
     "diagnosis": Table(keys_of(Settings)),
-    "accuracy": Table(
-        {
-            "enabled": Key(
-                bool, True, doc="train source-only models on the uncorrected and corrected source (needs target labels)"
-            ),
-            "methods": Key(
-                list,
-                ["mmd", "dann", "matched_filter"],
-                doc="shown beside (adapter or detector names): unsupervised DA baselines, on "
-                "the uncorrected source; detectors, on both sources",
-            ),
-            "repetitions": Key(int, 3, in_range(1, 1000)),
-            **TRAINING,
-        }
-    ),
+    "accuracy": Table({**keys_of(Accuracy), **TRAINING}),
     "network": Table(keys_of(NetworkSettings, name="fast")),
 }
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
@@ -200,7 +182,7 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     """The [target]: measured records ('files'), or a dataset entry (a preset, or one 'file')."""
     if not entry["files"]:
         for key in ("pulses_per_rev",):
-            if entry[key] != _TARGET.keys[key].default:
+            if entry[key] != getattr(TargetEntry(), key):
                 raise GearlabInputError(f"{where} key '{key}': belongs to measured records ('files')")
         for key in ("vibration", "tacho"):
             if not isinstance(entry[key], str):

@@ -12,6 +12,8 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
+from ..settings import setting
+from .common import DatasetEntry
 
 # History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
 # record are two conditions; one rig at one setting drifts by well under 1 %).
@@ -21,6 +23,30 @@ MIN_HEALTHY = 10
 # Mesh sidebands the order bands resolve beside each mesh harmonic (gearlab.gap.views.BandPlan):
 # a revolution must be sampled finely enough for the first mesh order plus these.
 SIDEBANDS = 3
+
+
+@dataclass(frozen=True, kw_only=True)
+class TargetEntry(DatasetEntry):
+    """[target]: a dataset entry, or measured records in the detection kind's shape (a list of files with
+    a tacho of N pulses per revolution, docs/real_data.md); the diagnosis reads their history files."""
+
+    vibration: int | str = setting(
+        (int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"
+    )
+    tacho: int | str = setting((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)")
+    pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="records: tacho pulses per input-shaft revolution")
+    sensitivity: float | str | None = setting(
+        (int, float, str),
+        None,
+        doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V "
+        "per m/s²); without it (or 'gain') the units are unknown",
+    )
+    files: list = setting(
+        list,
+        [],
+        doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
+        "the history files (healthy, one operating condition)",
+    )
 
 
 @dataclass(frozen=True)
