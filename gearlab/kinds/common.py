@@ -103,6 +103,17 @@ class DatasetEntry:
 DATASET_TABLE = Table(keys_of(DatasetEntry), array=True, required=True)
 
 
+@dataclass(frozen=True, kw_only=True)
+class SourceEntry(DatasetEntry):
+    """The [source] of a benchmark kind (gap_benchmark, transfer_benchmark): a simulated entry."""
+
+    preset: str = setting(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
+
+
+_NOT_SIMULATED = ("file", "vibration", "tacho", "labels", "sensitivity", "gain", "class_names", "transient")
+SOURCE_KEYS = keys_of(SourceEntry, tuple(k for k in DATASET_TABLE.keys if k not in _NOT_SIMULATED))
+
+
 # Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
 # 12 800. The table's keys bound no product, so absurd sizes are refused before any work.
 MAX_SAMPLES = 10**6

@@ -18,7 +18,7 @@ and report.html. docs/gap_benchmark.md explains the mix, the ranges and the scor
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -30,20 +30,13 @@ from ...gap.diagnose import Settings
 from ...params import did_you_mean
 from ...registry import get_registry
 from ...runs import RunDir
-from ...scenario import Key, Scenario, Table, in_range, keys_of, location
-from ...settings import quick_limits
-from ..common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, no_verdict
+from ...scenario import Scenario, Table, keys_of, location
+from ...settings import quick_limits, setting, typed
+from ..common import SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title, no_verdict
 from . import trials as bench
 
 MAX_TRIALS = 10000
 MAX_SEED = 2**32 - 1
-
-_SOURCE_KEYS = {
-    k: v
-    for k, v in DATASET_TABLE.keys.items()
-    if k not in ("file", "vibration", "tacho", "labels", "sensitivity", "gain", "class_names", "transient")
-}
-_SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
 
 def _kinds(value, where: str) -> list:
@@ -55,29 +48,32 @@ def _kinds(value, where: str) -> list:
     return value
 
 
+@dataclass(frozen=True, kw_only=True)
+class Benchmark:
+    """[benchmark]"""
+
+    trials: int = setting(int, 40, low=1, high=MAX_TRIALS, doc="number of trials (>= 40 for the acceptance numbers)")
+    seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seeds the trials' draws and the diagnosis")
+    library: list = setting(
+        list, [], doc="candidate effects (registered names); [] = every registered effect but the opt-in ones"
+    )
+    target_revolutions: int = setting(
+        int, 80, low=bench.MIN_TARGET_REVOLUTIONS, high=100000, doc="healthy revolutions in each written target"
+    )
+    kinds: list = setting(
+        list,
+        [],
+        check=_kinds,
+        doc="trial kinds to run (single, pair, null, withheld, suborder); [] = the first four. The trials "
+        'are drawn as for those, then only the named ones run (kinds = ["withheld"] with trials = 50: '
+        "10 out-of-library trials, the same ones a full run of 50 holds); 'suborder' adds `trials` "
+        "trials of an interfering tone below one shaft order or between the first orders",
+    )
+
+
 TABLES = {
-    "benchmark": Table(
-        {
-            "trials": Key(int, 40, in_range(1, MAX_TRIALS), "number of trials (>= 40 for the acceptance numbers)"),
-            "seed": Key(int, 0, in_range(0, MAX_SEED), "seeds the trials' draws and the diagnosis"),
-            "library": Key(
-                list, [], doc="candidate effects (registered names); [] = every registered effect but the opt-in ones"
-            ),
-            "target_revolutions": Key(
-                int, 80, in_range(bench.MIN_TARGET_REVOLUTIONS, 100000), "healthy revolutions in each written target"
-            ),
-            "kinds": Key(
-                list,
-                [],
-                _kinds,
-                "trial kinds to run (single, pair, null, withheld, suborder); [] = the first four. The trials "
-                'are drawn as for those, then only the named ones run (kinds = ["withheld"] with trials = 50: '
-                "10 out-of-library trials, the same ones a full run of 50 holds); 'suborder' adds `trials` "
-                "trials of an interfering tone below one shaft order or between the first orders",
-            ),
-        }
-    ),
-    "source": Table(_SOURCE_KEYS),
+    "benchmark": Table(keys_of(Benchmark)),
+    "source": Table(SOURCE_KEYS),
     # the diagnosis's own settings, declared once on gearlab.gap.scoring.Settings
     "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
 }
@@ -89,9 +85,9 @@ def build(scenario: Scenario) -> dict:
     t = scenario.tables
     path = scenario.path
     registry = get_registry()
-    b = t["benchmark"]
+    b = typed(Benchmark, t["benchmark"])
     where = location(path, "benchmark", "library")
-    library = b["library"] or default_candidates(registry)
+    library = b.library or default_candidates(registry)
     if not all(isinstance(n, str) for n in library):
         raise GearlabInputError(f"{where}: expected a list of effect names, got {library!r}")
     for name in library:
@@ -100,30 +96,30 @@ def build(scenario: Scenario) -> dict:
         raise GearlabInputError(f"{where}: names an effect twice")
     if len(library) < 2:
         raise GearlabInputError(f"{where}: needs at least 2 effects (pairs and withheld trials), got {len(library)}")
-    entry = {**{k: v.default for k, v in DATASET_TABLE.keys.items()}, **t["source"]}
+    entry = asdict(typed(SourceEntry, t["source"]))
     source = dataset_spec(entry, location(path, "source"), path.parent)
     noise = source.noise if "noise" in scenario.raw.get("source", {}) else bench.BASE_NOISE
     source = source.with_(faults=(), healthy=t["search"]["healthy"], noise=noise)
     source.check(location(path, "source"))
     library = tuple(library)
-    trials = bench.draw_trials(b["trials"], b["seed"], library, source)
-    if b["kinds"]:
-        trials = [trial for trial in trials if trial.kind in b["kinds"]]
-        if "suborder" in b["kinds"]:
+    trials = bench.draw_trials(b.trials, b.seed, library, source)
+    if b.kinds:
+        trials = [trial for trial in trials if trial.kind in b.kinds]
+        if "suborder" in b.kinds:
             first = max((t.index for t in trials), default=-1) + 1
-            trials += bench.draw_suborder_trials(b["trials"], b["seed"], library, source, first)
+            trials += bench.draw_suborder_trials(b.trials, b.seed, library, source, first)
         if not trials:
             raise GearlabInputError(
-                f"{location(path, 'benchmark', 'kinds')}: no trial of {b['kinds']} among {b['trials']} trials; "
+                f"{location(path, 'benchmark', 'kinds')}: no trial of {b.kinds} among {b.trials} trials; "
                 "expected more trials"
             )
-    settings = {**t["search"], "seed": b["seed"]}
+    settings = {**t["search"], "seed": b.seed}
     return {
         "source": source,
         "library": library,
         "trials": trials,
         "settings": settings,
-        "revolutions": b["target_revolutions"],
+        "revolutions": b.target_revolutions,
     }
 
 
