@@ -46,7 +46,17 @@ from ..parts.training import CALIBRATION, NETWORK, TRAINING, method, train_unit
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
 from ..settings import MAX_SEED, shrunk
-from .common import DATASET_TABLE, device_of, executor_for, no_compare, no_table, no_title, no_verdict, simulated_spec
+from .common import (
+    DATASET_TABLE,
+    SOURCE_KEYS,
+    device_of,
+    executor_for,
+    no_compare,
+    no_table,
+    no_title,
+    no_verdict,
+    simulated_spec,
+)
 
 REPORT_SEEDS = 1000  # seeds below: development; at or above: reported figures (the selection rule)
 SELECTION_RULE = (
@@ -82,13 +92,6 @@ SENSORS = {
 }
 TONE = {"frequency": (5.0, 3000.0, "log"), "ratio": (0.1, 0.8)}
 
-_SOURCE_KEYS = {
-    k: v
-    for k, v in DATASET_TABLE.keys.items()
-    if k not in ("file", "vibration", "tacho", "labels", "sensitivity", "gain", "class_names", "transient")
-}
-_SOURCE_KEYS["preset"] = Key(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
-
 TABLES = {
     "benchmark": Table(
         {
@@ -96,7 +99,7 @@ TABLES = {
             "seed": Key(int, 0, in_range(0, MAX_SEED), f"seeds the draws; below {REPORT_SEEDS}: development"),
         }
     ),
-    "source": Table(_SOURCE_KEYS),
+    "source": Table(SOURCE_KEYS),  # common.SourceEntry
     "network": NETWORK,
     "methods": Table(
         {
