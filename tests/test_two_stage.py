@@ -104,31 +104,16 @@ def test_rank_m_step_reduces_to_the_single_mesh_step():
     for multi in (False, True):
         u, v, a = np.linalg.solve(one.Kc + one.k_mean * np.outer(one.P, one.P), F), np.zeros(n), np.zeros(n)
         out = np.empty((steps + 1, n))
+        # the load without a time-varying part, then the Newmark constants, step, state and output
+        loaded = (one.GMC, one.G @ F, np.zeros((n, 0)), np.zeros((steps, 0)))
+        state = (one.c, 1 / one.fs, one.gamma, u, v, a, idx, out)
         if multi:
             W = one.G @ one.P[:, None]
             _integrate_meshes(
-                one.GMC,
-                one.G @ F,
-                np.zeros((n, 0)),
-                np.zeros((steps, 0)),
-                W,
-                one.P[None, :],
-                one.P[None, :] @ W,
-                k[:, None].copy(),
-                np.array([one.mu]),
-                one.c,
-                1 / one.fs,
-                one.gamma,
-                u,
-                v,
-                a,
-                idx,
-                out,
+                *loaded, W, one.P[None, :], one.P[None, :] @ W, k[:, None].copy(), np.array([one.mu]), *state
             )
         else:
-            _integrate(
-                one.GMC, one.G @ F, one.w, one.P, one.pw, k, one.mu, one.c, 1 / one.fs, one.gamma, u, v, a, idx, out
-            )
+            _integrate(*loaded, one.w, one.P, one.pw, k, one.mu, *state)
         outs.append(out)
     np.testing.assert_allclose(outs[1], outs[0], rtol=1e-9, atol=1e-9 * np.abs(outs[0]).max())
 

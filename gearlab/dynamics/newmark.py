@@ -62,50 +62,17 @@ def _advance(u, v, a, u_new, c, dt, gamma, out, out_idx, step):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})  # NaN checks stay valid
-def _integrate(GMC, gF, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
+def _integrate(GMC, gF, GB, g, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
     """Advance len(k) steps from (u, v, a); out[0] is the start, out[i] the state after step i.
 
-    GMC = [G M | G Cc] with G = K_hat_c^-1; c = (a0, a1, a2, a3, a4, a5) Newmark constants.
+    GMC = [G M | G Cc] with G = K_hat_c^-1; c = (a0, a1, a2, a3, a4, a5) Newmark constants; the load
+    F(t) = F0 + B g(t) with gF = G F0, GB = G B (n, m), g (steps, m): m = 0 (GB (n, 0), g (steps, 0))
+    without the time-varying part, the empty loop over it adding nothing (the same floats).
     Returns the step where the response diverged, or -1.
     """
     n = u.shape[0]
-    mz = np.empty(2 * n)  # [M-part | C-part] of the effective load
-    y = np.empty(n)
-    for j in range(out_idx.shape[0]):
-        out[0, j] = a[out_idx[j]]
-    for step in range(k.shape[0]):
-        kk = k[step]
-        pz = 0.0
-        for i in range(n):
-            mz[i] = c[0] * u[i] + c[2] * v[i] + c[3] * a[i]
-            mz[n + i] = c[1] * u[i] + c[4] * v[i] + c[5] * a[i]
-            pz += p[i] * mz[n + i]
-        damping = mu * kk * pz
-        py = 0.0
-        for i in range(n):
-            acc = gF[i] + damping * w[i]
-            for j in range(2 * n):
-                acc += GMC[i, j] * mz[j]
-            y[i] = acc
-            py += p[i] * acc
-        s = kk * (1.0 + c[1] * mu)
-        corr = s * py / (1.0 + s * pw)
-        for i in range(n):
-            y[i] -= corr * w[i]  # u at the new step
-        if _advance(u, v, a, y, c, dt, gamma, out, out_idx, step):
-            return step
-    return -1
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
-def _integrate_forced(GMC, gF, GB, g, w, p, pw, k, mu, c, dt, gamma, u, v, a, out_idx, out):
-    """:func:`_integrate` with a time-varying load F(t) = F0 + B g(t): GB = G B (n, m), g (steps, m).
-
-    Kept apart so that the unforced loop, which every effect-free dataset uses, stays as it was.
-    """
-    n = u.shape[0]
     m = GB.shape[1]
-    mz = np.empty(2 * n)
+    mz = np.empty(2 * n)  # [M-part | C-part] of the effective load
     y = np.empty(n)
     for j in range(out_idx.shape[0]):
         out[0, j] = a[out_idx[j]]
@@ -137,7 +104,7 @@ def _integrate_forced(GMC, gF, GB, g, w, p, pw, k, mu, c, dt, gamma, u, v, a, ou
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _integrate_meshes(GMC, gF, GB, g, W, Pm, PW, k, mu, c, dt, gamma, u, v, a, out_idx, out):
-    """:func:`_integrate_forced` for m meshes (a multi-stage gearbox): K_hat(t) = K_hat_c + sum_i s_i(t) P_i^T P_i,
+    """:func:`_integrate` for m meshes (a multi-stage gearbox): K_hat(t) = K_hat_c + sum_i s_i(t) P_i^T P_i,
     a rank-m update solved each step by the Woodbury identity with an m x m system,
 
         u = y - W z,   (I + S PW) z = S (Pm y),   S = diag(k_i (1 + a1 mu_i)),
@@ -303,21 +270,11 @@ class Simulator:
                 np.empty((2, 1)),
             )
 
-        _integrate(self.GMC, np.zeros(n), self.w, self.P, self.pw, np.ones(1), self.mu, *tail())
+        unloaded = (self.GMC, np.zeros(n), np.zeros((n, 0)), np.zeros((1, 0)))  # no load, no forces
+        _integrate(*unloaded, self.w, self.P, self.pw, np.ones(1), self.mu, *tail())
         if self.meshes:
             m = len(self.Pm)
-            _integrate_meshes(
-                self.GMC,
-                np.zeros(n),
-                np.zeros((n, 0)),
-                np.zeros((1, 0)),
-                self.Wm,
-                self.Pm,
-                self.PW,
-                np.ones((1, m)),
-                np.zeros(m),
-                *tail(),
-            )
+            _integrate_meshes(*unloaded, self.Wm, self.Pm, self.PW, np.ones((1, m)), np.zeros(m), *tail())
 
     def natural_frequencies(self, k: float | None = None, fixed_input: bool = True) -> np.ndarray:
         """Undamped natural frequencies (Hz) at mesh stiffness k (default: the mean)."""
@@ -537,13 +494,15 @@ class Simulator:
         out: np.ndarray,
         mesh_faults: Sequence[Sequence[PlacedFault]] = (),
     ) -> int:
-        """The time loop (one of three compiled integrators: one mesh, one mesh with extra forces,
-        several meshes); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1.
+        """The time loop (one of two compiled integrators: one mesh, several meshes; either with extra
+        forces); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1.
         *mesh_faults*: the faults on each further mesh (stage 2 first)."""
         steps = len(t) - 1
         G_F = self.G @ F
         # the arguments every integrator ends with: Newmark constants, step, state (updated in place), output
         tail = (self.c, 1.0 / self.fs, self.gamma, *start, out_idx, out)
+        n = len(self.dofs)
+        GB, g = self._forcing(forces) if forces else (np.zeros((n, 0)), np.zeros((steps, 0)))
         if self.meshes:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
             shaft = 2 * np.pi * speed * t if angle is None else angle
@@ -555,17 +514,10 @@ class Simulator:
                     for i in range(len(self.meshes))
                 ]
             )
-            n = len(self.dofs)
-            GB, g = np.zeros((n, 0)), np.zeros((steps, 0))
-            if forces:
-                GB, g = self._forcing(forces)
             mu = np.array([self.mu, *self.mesh_mu])
             k_meshes = np.ascontiguousarray(k_all[1:])
             return _integrate_meshes(self.GMC, G_F, GB, g, self.Wm, self.Pm, self.PW, k_meshes, mu, *tail)
-        if forces:
-            GB, g = self._forcing(forces)
-            return _integrate_forced(self.GMC, G_F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, *tail)
-        return _integrate(self.GMC, G_F, self.w, self.P, self.pw, k[1:], self.mu, *tail)
+        return _integrate(self.GMC, G_F, GB, g, self.w, self.P, self.pw, k[1:], self.mu, *tail)
 
     def _forcing(self, forces: list) -> tuple[np.ndarray, np.ndarray]:
         """G B (the force vectors through K_hat_c^-1) and the force series g from the second step on."""
