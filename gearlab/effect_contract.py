@@ -83,7 +83,8 @@ class SignalContext:
 
 
 class Effect:
-    """An unmodelled effect: override the hook of its level (``HOOKS[level]``) and nothing else.
+    """An unmodelled effect: override the hook of its level (``HOOKS[level]``) and nothing else; the
+    hook it overrides is its ``level`` (a class may name it too, and then must override that one).
 
     Parameters: ``params`` are bounded numbers with SI units (gearlab.params.Param) — what a
     diagnosis fits by bounded search; ``log_scale`` names those best searched on a log
@@ -93,7 +94,6 @@ class Effect:
 
     name: ClassVar[str]
     doc: ClassVar[str] = ""
-    level: ClassVar[str]
     breaks_symmetry: ClassVar[bool] = False
     # True for a zero-mean random addition (measurement noise): it leaves the simulation's
     # expected response as it is, so the fault shapes a detector matches are taken without it
@@ -106,6 +106,12 @@ class Effect:
     params: ClassVar[tuple[Param, ...]] = ()
     options: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     log_scale: ClassVar[frozenset[str]] = frozenset()
+
+    @property
+    def level(self) -> str | None:
+        """The level whose hook the class overrides; None where it overrides none or several."""
+        own = [level for level, hook in HOOKS.items() if getattr(type(self), hook) is not getattr(Effect, hook)]
+        return own[0] if len(own) == 1 else None
 
     # --- the hook of the effect's level (one of three) ---
     def apply_model(self, config: ModelConfig, params: Mapping) -> ModelConfig:
@@ -183,6 +189,8 @@ class Effect:
 def hook_problem(obj) -> str:
     """What is wrong with an effect plugin's level, symmetry flag or hook ('' when nothing)."""
     level = getattr(obj, "level", None)
+    if level is None and isinstance(obj, Effect):
+        return f"effect '{obj.name}': override exactly one of {', '.join(HOOKS.values())} (its level's hook)"
     if level not in LEVELS:
         return f"effect '{obj.name}': level must be one of {', '.join(LEVELS)}, got {level!r}"
     if not isinstance(getattr(obj, "breaks_symmetry", None), bool):

@@ -188,9 +188,24 @@ class BadSymmetry(Hum):
     breaks_symmetry = "no"
 
 
+class Hiss(Effect):  # names no level: the one hook it overrides is its level
+    name = "hiss"
+    params = (Param("ratio", "", 0.1, 0.0, 1.0, "level"),)
+
+    def apply_signal(self, x, params, ctx):
+        return x + params["ratio"] * ctx.rng.standard_normal(x.shape)
+
+
+class TwoHooks(Hiss):
+    name = "twohooks"
+
+    def apply_model(self, config, params):
+        return config
+
+
 def test_third_party_effect_loads_and_contract_breaches_are_reported():
     module = types.ModuleType("thirdparty")
-    module.gearlab_effects = hookimpl(lambda: [Hum(), NoHook(), BadLevel(), BadSymmetry()])
+    module.gearlab_effects = hookimpl(lambda: [Hum(), NoHook(), BadLevel(), BadSymmetry(), Hiss(), TwoHooks()])
     module.gearlab_effects.__name__ = "gearlab_effects"
     builtin = [ep for ep in importlib.metadata.entry_points(group="gearlab") if ep.dist.name == "gearlab"]
     registry = load_registry(builtin + [_EntryPoint("hum", module)])
@@ -199,7 +214,9 @@ def test_third_party_effect_loads_and_contract_breaches_are_reported():
     assert "effect 'nohook' of level 'model' lacks apply_model" in problems
     assert "level must be one of model, excitation, signal, got 'sensor'" in problems
     assert "breaks_symmetry must be True or False" in problems
-    assert not {"nohook", "badlevel", "badsymmetry"} & set(registry.names("effect"))
+    assert "effect 'twohooks': override exactly one of apply_model, apply_excitation, apply_signal" in problems
+    assert not {"nohook", "badlevel", "badsymmetry", "twohooks"} & set(registry.names("effect"))
+    assert registry.get("effect", "hiss").level == "signal"
     # a third-party effect goes through the same chain as the built-in ones
     chain = EffectChain.load((("hum", (("ratio", 0.5),)),), registry=registry)
     x = np.zeros((2, 64))

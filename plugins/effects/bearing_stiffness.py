@@ -22,7 +22,6 @@ from gearlab.api import Effect, Param, hookimpl
 class BearingStiffness(Effect):
     name = "bearing_stiffness"
     doc = "bearing stiffness and damping multiplied by mismatch factors"
-    level = "model"
     params = (
         Param("k_factor", "", 0.5, 0.1, 10.0, "factor on the bearing stiffness k_b"),
         Param("c_factor", "", 1.0, 0.1, 10.0, "factor on the bearing damping c_b"),

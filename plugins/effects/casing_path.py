@@ -48,7 +48,6 @@ GUESS_FREQUENCIES = (30.0, 1e4)  # Hz: from below a 40 Hz shaft speed to well in
 class CasingPath(Effect):
     name = "casing_path"
     doc = "casing mass and mounting between the bearings and the sensor; the sensor moves to the casing"
-    level = "model"
     params = (
         Param("mf", "kg", 10.0, 0.1, 1000.0, "mass of the gearbox casing"),
         Param("k_xf", "N/m", 1e8, 1e5, 1e11, "casing mounting stiffness, x"),

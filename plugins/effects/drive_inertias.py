@@ -29,7 +29,6 @@ from gearlab.api import Effect, Param, hookimpl
 class DriveInertias(Effect):
     name = "drive_inertias"
     doc = "motor and load inertias with their couplings (adds theta11, theta22 when missing; six_dof -> eight_dof)"
-    level = "model"
     params = (
         Param("I11", "kg*m^2", 1e-3, 1e-6, 10.0, "mass moment of inertia of the motor"),
         Param("I22", "kg*m^2", 1e-3, 1e-6, 10.0, "mass moment of inertia of the load"),

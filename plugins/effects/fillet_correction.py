@@ -28,7 +28,6 @@ from gearlab.api import Effect, Param, fillet_compliance, hookimpl
 class FilletCorrection(Effect):
     name = "fillet_correction"
     doc = "softer fillet foundation while two tooth pairs are loaded (double-contact overestimate of eq. 2.41-2.46)"
-    level = "excitation"
     params = (
         Param("lam", "", 0.25, 0.0, 1.0, "extra fillet compliance in double contact, as a fraction of the pair's own"),
     )

@@ -31,7 +31,6 @@ ZOOM = 201  # points of the zoomed record spectrum over two record bins around i
 class InterferenceTone(Effect):
     name = "interference_tone"
     doc = "non-synchronous sinusoid from a nearby machine, level relative to the healthy signal RMS"
-    level = "signal"
     params = (
         Param("frequency", "Hz", 24.75, 1.0, 2e4, "frequency of the interfering machine's line"),
         Param("ratio", "", 0.5, 0.0, 10.0, "tone RMS / RMS of the domain's healthy signal"),

@@ -22,7 +22,6 @@ from gearlab.api import Effect, Param, hookimpl
 class LoadLevel(Effect):
     name = "load_level"
     doc = "mean load torque multiplied by a factor (an unpublished load, fitted)"
-    level = "excitation"
     opt_in = True  # a quantity of the rig not published: fitted when a scenario names it
     params = (Param("factor", "", 1.0, 0.2, 5.0, "load torque / the preset's load torque"),)
     log_scale = frozenset({"factor"})

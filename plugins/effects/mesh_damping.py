@@ -23,7 +23,6 @@ from gearlab.api import Effect, Param, hookimpl
 class MeshDamping(Effect):
     name = "mesh_damping"
     doc = "mesh damping ratio zeta and model: constant c_m (eq. 2.107) or proportional to k(t) (eq. 2.108)"
-    level = "model"
     params = (Param("zeta", "", 0.07, 0.0, 0.3, "mesh damping ratio (eq. 2.107)"),)
     options = {"model": ("constant", "proportional")}
 

@@ -43,7 +43,6 @@ def steady_state(x, fs: float, response) -> np.ndarray:
 class SensorBandwidth(Effect):
     name = "sensor_bandwidth"
     doc = "second-order sensor response: low-pass (zeta ~ 0.7) or mounted resonance (small zeta) at f_n"
-    level = "signal"
     params = (
         Param("f_n", "Hz", 5e3, 100.0, 1e5, "natural (corner) frequency of the sensor and its mounting", "kHz"),
         Param("zeta", "", 0.707, 0.01, 1.0, "damping ratio: 0.707 flat low-pass, small values a resonance peak"),

@@ -35,7 +35,6 @@ def frequency_response(f: np.ndarray, f_c: float, order: int) -> np.ndarray:
 class SensorLowpass(Effect):
     name = "sensor_lowpass"
     doc = "the acquisition's anti-alias low-pass: Butterworth of order n with corner f_c"
-    level = "signal"
     params = (
         Param("f_c", "Hz", 5e3, 100.0, 1e5, "corner (-3 dB) frequency of the filter", "kHz"),
         Param("order", "", 4, 1, 8, "number of poles n (roll-off -20 n dB/decade)", integer=True),

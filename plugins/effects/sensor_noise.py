@@ -19,7 +19,6 @@ from gearlab.api import NOISE_KINDS, Effect, Param, add_noise, hookimpl
 class SensorNoise(Effect):
     name = "sensor_noise"
     doc = "additive measurement noise (Gaussian, Laplace or Student-t nu=2) at an SNR, per revolution (eq. 4.1-4.5)"
-    level = "signal"
     noise = True
     params = (Param("snr_db", "", 10.0, -20.0, 80.0, "signal-to-noise ratio in dB, 10 log10 (RMS_s / RMS_n)^2"),)
     options = {"kind": NOISE_KINDS}

@@ -21,7 +21,6 @@ from gearlab.api import Effect, Param, hookimpl
 class SensorOffset(Effect):
     name = "sensor_offset"
     doc = "constant (DC) offset on the measured acceleration: a sensor or amplifier bias"
-    level = "signal"
     opt_in = True
     params = (Param("offset", "m/s^2", 0.0, -1000.0, 1000.0, "constant added to the acceleration"),)
 

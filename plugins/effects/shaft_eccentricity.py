@@ -30,7 +30,6 @@ from gearlab.api import Effect, Param, hookimpl
 class ShaftEccentricity(Effect):
     name = "shaft_eccentricity"
     doc = "pinion run-out e: once-per-revolution transmission error along the line of action"
-    level = "excitation"
     breaks_symmetry = True
     params = (
         Param("e", "m", 20e-6, 0.0, 200e-6, "run-out (eccentricity) of the pinion", "um"),

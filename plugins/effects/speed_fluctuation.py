@@ -82,7 +82,6 @@ class ShaftRipple(Effect):
     """A ripple eps sin(q Omega t + phi) at whole orders q of the input shaft (this module's speed
     ripple, load_fluctuation's load ripple): locked to the shaft angle, not to the tooth pitch."""
 
-    level = "excitation"
     breaks_symmetry = True
     # The record sees the phase only up to turns by whole tooth pitches: phi and phi + 2 pi q j / Z1
     # differ by a few percent of the revolution once the tacho offset is fitted (gearlab.gap.identify.alias_refit).

@@ -50,7 +50,6 @@ def friction_pattern(exc, mu_f: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
 class ToothFriction(Effect):
     name = "tooth_friction"
     doc = "Coulomb sliding friction mu_f across the line of action, reversing at the pitch point"
-    level = "excitation"
     params = (Param("mu_f", "", 0.05, 0.0, 0.3, "friction coefficient between the flanks"),)
 
     def apply_excitation(self, exc, params):
