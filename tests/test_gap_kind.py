@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import sys
 import types
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -171,14 +172,14 @@ def test_shipped_gap_scenarios_validate(cli):
         code, out, err = cli("validate", root / name)
         assert code == 0, err
         s = load_scenario(root / name)
-        assert s.spec["settings"]["candidates"] == ()  # every registered effect
+        assert s.spec["settings"].candidates == ()  # every registered effect
 
 
 def test_quick_shrinks(tiny):
     s = load_scenario(tiny.parent / "tinygap.toml")
-    s.spec["settings"]["budget"] = 16
+    s.spec["settings"] = replace(s.spec["settings"], budget=16)
     gap.quick(s)
-    assert s.spec["settings"]["budget"] == 4 and s.spec["protocol"].repetitions == 1
+    assert s.spec["settings"].budget == 4 and s.spec["protocol"].repetitions == 1
 
 
 # --- a run -----------------------------------------------------------------------------------------

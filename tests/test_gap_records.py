@@ -151,4 +151,4 @@ def test_shipped_rig_gap_scenarios_validate():
         s = load_scenario(root / name)
         assert s.spec["source"].model == "two_stage" and s.spec["source"].speed_hz == speed
         assert all(f.role == "history" for f in s.spec["target"].target.files)
-        assert s.spec["settings"]["reference"] == "noise"
+        assert s.spec["settings"].reference == "noise"

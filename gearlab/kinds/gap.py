@@ -46,7 +46,7 @@ from ..parts.training import TRAINING, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location
-from ..settings import quick_limits, setting, shrunk
+from ..settings import setting, shrunk, typed
 from .common import (
     DATASET_TABLE,
     class_sizes,
@@ -126,12 +126,9 @@ def build(scenario: Scenario) -> dict:
         check_sampling(target, pair.Z1, location(path, "target"))
         healthy = class_sizes(target)["healthy"]
         check_healthy(healthy, location(path, "target", "healthy"))
-    d = t["diagnosis"]
-    settings = {
-        "candidates": candidates(d["candidates"], location(path, "diagnosis", "candidates")),
-        **{k: v for k, v in d.items() if k != "candidates"},
-    }
-    if settings["reference"] == "noise" and settings["candidates"] and "sensor_noise" not in settings["candidates"]:
+    d = typed(Settings, t["diagnosis"])
+    settings = replace(d, candidates=candidates(d.candidates, location(path, "diagnosis", "candidates")))
+    if settings.reference == "noise" and settings.candidates and "sensor_noise" not in settings.candidates:
         raise GearlabInputError(
             f"{location(path, 'diagnosis', 'reference')}: reference = 'noise' needs "
             "'sensor_noise' among the candidates (the noise fitted alone is the reference)"
@@ -247,11 +244,11 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    s = spec["settings"]
-    n = len(s["candidates"]) or len(default_candidates(get_registry()))
+    s: Settings = spec["settings"]
+    n = len(s.candidates) or len(default_candidates(get_registry()))
     line = (
         f"gap of {sized(spec['source'])} -> {sized(spec['target'])}: {n} candidate effects x budget "
-        f"{s['budget']}, up to {s['max_effects']} greedy rounds, {s['healthy']} source healthy revolutions "
+        f"{s.budget}, up to {s.max_effects} greedy rounds, {s.healthy} source healthy revolutions "
         "per evaluation"
     )
     if spec["accuracy"]:
@@ -264,8 +261,7 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: small search budgets, fewer revolutions and resamples, one short repetition."""
     spec = scenario.spec
-    s = spec["settings"]
-    spec["settings"] = {**s, **{k: min(s[k], limit) for k, limit in quick_limits(Settings).items()}}
+    spec["settings"] = shrunk(spec["settings"])  # the --quick limits declared on Settings
     p: Protocol = spec["protocol"]
     spec["protocol"] = shrunk(p, repetitions=1)  # and the --quick limits declared on Protocol
 
@@ -336,7 +332,7 @@ def noise_free(spec: DatasetSpec) -> DatasetSpec:
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
-    from ..gap.diagnose import Settings, corrected_source, diagnose
+    from ..gap.diagnose import corrected_source, diagnose
     from ..gap.views import gear_pair_of
 
     spec = scenario.spec
@@ -346,7 +342,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         z1 = gear_pair_of(source_spec).Z1
 
         records = isinstance(spec["target"], Records)
-        settings = dict(spec["settings"])
+        settings: Settings = spec["settings"]
         if records:  # measured records: the history's revolutions; the source runs at their tacho speed
             target_X, speed, record_notes, fs = read_history(spec["target"], on_event)
             check_points(
@@ -356,9 +352,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 f"the records' {fs:g} Hz at {speed:.4g} Hz shaft speed",
             )
             source_spec = source_spec.with_(speed_hz=round(speed, 3))
-            settings["max_order"] = Chain(fs=fs, speed=speed).max_order
+            settings = replace(settings, max_order=Chain(fs=fs, speed=speed).max_order)
             record_notes.append(
-                f"compared up to shaft order {settings['max_order']} ({PASSBAND:g} of the records' "
+                f"compared up to shaft order {settings.max_order} ({PASSBAND:g} of the records' "
                 "Nyquist order): the source is low-passed to the records' bandwidth"
             )
             if not spec["target"].units_known:
@@ -376,7 +372,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             chain = None
             if (target.meta or {}).get("source") == "measured":
                 chain = chain_of(target.meta)
-                settings["max_order"] = chain.max_order
+                settings = replace(settings, max_order=chain.max_order)
             on_event(Event("advance", stage="datasets", done=1, total=1))
         if note:
             on_event(Event("log", message=note))
@@ -385,9 +381,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("stage", stage="diagnosis", total=1, message="gap diagnosis"))
             # Only the source configuration and the target's healthy rows go in: nothing of how the
             # target was made (its spec, effects, labels) reaches the diagnosis.
-            result = diagnose(
-                source_spec, target_X, Settings(**settings), executor=executor, on_event=on_event, chain=chain
-            )
+            result = diagnose(source_spec, target_X, settings, executor=executor, on_event=on_event, chain=chain)
             record = {"unit": "diagnosis", "result": result, "note": note}
             run.append(record)
             done["diagnosis"] = record
@@ -619,7 +613,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         },
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
-        "settings": result.get("settings", spec["settings"]),
+        "settings": result.get("settings", asdict(spec["settings"])),
         "notes": notes + list(result.get("notes", [])) + list(result["before"].get("notes", [])),
     }
     if acc:
