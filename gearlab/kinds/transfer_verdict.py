@@ -1,62 +1,39 @@
 """The verdict of a transfer run (gearlab.kinds.transfer's verdict_lines and verdict_table): the
 best method at each k and by how much, the methods that collapsed to one class (with their
 predicted-fault share), the Bayes bound, and, for Experiments A and B, how the numbers stand
-against the thesis's Tables 5.4 and 5.5, whose values are given below as a reference row of the
-table. Method names are read from the results, never assumed: any adapter a plugin adds is
+against the thesis's Tables 5.4 and 5.5, whose values (transfer_thesis.toml) are a reference row
+of the table. Method names are read from the results, never assumed: any adapter a plugin adds is
 compared like the shipped ones."""
 
 from __future__ import annotations
 
+import tomllib
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 import numpy as np
 
 from ..data.spec import DATASET_PRESETS
 from ..parts.bound import BOUND
 
-# The thesis's Tables 5.4 (Experiment A) and 5.5 (Experiment B): target test accuracy (%),
-# mean ± std over repetitions, per k, in gearlab's method labels. Facts quoted from the
-# thesis, shown beside gearlab's numbers; nothing is computed from them.
-THESIS_COLUMNS = (
-    "source_only (unsupervised)",
-    "dann (unsupervised)",
-    "mmd (unsupervised)",
-    "target_only (supervised)",
-    "dann (supervised)",
-    "mmd (supervised)",
-)
-THESIS_KS = (0, 1, 2, 4, 8, 16)
-_TABLE_5_4 = """
-51.73 0.0  74.02 12  80.92 5.0  48.28 0.0  84.14 2.7  88.51 1.6
-51.73 0.0  87.13 5.7  92.73 3.8  48.74 0.6  87.13 4.7  89.20 2.1
-51.73 0.0  84.37 7.9  85.84 7.1  48.51 0.5  84.37 4.1  89.20 2.7
-51.73 0.0  84.83 5.2  82.30 9.5  49.43 0.0  86.90 3.7  88.74 2.6
-51.73 0.0  91.26 3.3  89.43 5.5  56.78 3.0  94.94 3.7  90.57 4.9
-51.73 0.0  88.05 4.3  93.33 3.2  76.09 0.9  93.79 3.3  94.25 1.9
-"""
-_TABLE_5_5 = """
-46.67 0.0  82.07 7.4  91.26 2.2  53.33 0.0  83.56 5.8  76.73 6.1
-46.67 0.0  85.48 8.4  92.44 2.0  53.33 0.0  84.59 8.1  83.61 3.5
-46.67 0.0  88.30 4.2  90.07 6.1  53.33 0.0  90.37 3.8  93.63 2.7
-46.67 0.0  87.85 4.2  93.19 3.4  56.44 2.3  90.22 9.1  86.96 5.2
-46.67 0.0  88.30 5.5  94.37 1.5  63.11 2.1  93.63 4.1  90.81 4.8
-46.67 0.0  88.74 3.5  93.78 3.5  66.97 2.0  93.33 5.8  93.93 2.7
-"""
+# The thesis's Tables 5.4 (Experiment A) and 5.5 (Experiment B), quoted in transfer_thesis.toml.
+_QUOTED = tomllib.loads((Path(__file__).resolve().parent / "transfer_thesis.toml").read_text())
+THESIS_COLUMNS: tuple[str, ...] = tuple(_QUOTED["columns"])
+THESIS_KS: tuple[int, ...] = tuple(_QUOTED["ks"])
 
 
-def _thesis_table(text: str) -> dict[str, dict[int, tuple[float, float]]]:
-    out: dict[str, dict[int, tuple[float, float]]] = {c: {} for c in THESIS_COLUMNS}
-    for k, line in zip(THESIS_KS, text.strip().splitlines()):
-        values = [float(v) for v in line.split()]
-        for i, column in enumerate(THESIS_COLUMNS):
-            out[column][k] = (values[2 * i], values[2 * i + 1])
-    return out
+def _thesis_table(rows: list) -> dict[str, dict[int, tuple[float, float]]]:
+    """{column: {k: (mean, std)}} of a table's rows (one per k: each column's mean and std in turn)."""
+    return {
+        column: {k: (float(row[2 * i]), float(row[2 * i + 1])) for k, row in zip(THESIS_KS, rows)}
+        for i, column in enumerate(THESIS_COLUMNS)
+    }
 
 
 # (source domain, target domain) -> the experiment, its table and its figure
 THESIS = {
-    ("A-pinion-ch5", "A-casing-ch5"): ("Experiment A", "Table 5.4", "Figure 5.5", _thesis_table(_TABLE_5_4)),
-    ("B-6-ch5", "B-8-ch5"): ("Experiment B", "Table 5.5", "Figure 5.6", _thesis_table(_TABLE_5_5)),
+    ("A-pinion-ch5", "A-casing-ch5"): ("Experiment A", "Table 5.4", "Figure 5.5", _thesis_table(_QUOTED["table_5_4"])),
+    ("B-6-ch5", "B-8-ch5"): ("Experiment B", "Table 5.5", "Figure 5.6", _thesis_table(_QUOTED["table_5_5"])),
 }
 
 
