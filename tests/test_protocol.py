@@ -590,9 +590,10 @@ BAD = {
         ("repetitions = 2", "repetitons = 2"),
         "[protocol] key 'repetitons': unknown key (did you mean 'repetitions'?)",
     ),
-    "ks fraction": (("ks = [0, 2]", "ks = [0, 1.5]"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
-    "ks repeated": (("ks = [0, 2]", "ks = [2, 2]"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
-    "ks empty": (("ks = [0, 2]", "ks = []"), "[protocol] key 'ks': expected a list of distinct whole numbers"),
+    **{
+        f"ks {case}": (("ks = [0, 2]", f"ks = {ks}"), "[protocol] key 'ks': expected a list of distinct whole numbers")
+        for case, ks in (("fraction", "[0, 1.5]"), ("repeated", "[2, 2]"), ("empty", "[]"))
+    },
     "ks text": (("ks = [0, 2]", 'ks = "0, 2"'), "[protocol] key 'ks': expected a list, got str"),
     "epochs": (("min_epochs = 2", "min_epochs = 5"), "[protocol] key 'min_epochs': 5 is larger than max_epochs = 3"),
 }
