@@ -117,12 +117,15 @@ def test_the_report_draws_each_methods_roc_and_its_scores_per_record_and_in_time
     assert "the legend gives each method&#x27;s ROC AUC" in html and "dashed: the method&#x27;s threshold" in html
     # every table titled by the kind (not made of its header), none left without one
     titles = re.findall(r"<caption><b>Table \d+\.</b> ([^<]+)</caption>", html)
-    assert html.count("<table>") == len(titles) == 5
+    assert html.count("<table>") == len(titles) == 6
     assert titles[0].startswith("Condition 16 Hz: ROC AUC") and titles[1].startswith("Units called (%")
     # the which-gear tables (localisation of each test record, then the calls split by where)
     assert titles[2].startswith("Which gear (") and "watched: input pinion" in titles[2]
     assert titles[3].startswith("Units called (%") and "other damage" in titles[3]
     assert titles[4].startswith("What each method learned of the simulator")
+    # each record's speed and how it was found (here the tacho's), and the turn that aligned it
+    assert titles[5].startswith("Records: each record&#x27;s speed, how it was found")
+    assert "| tacho " in (out / "table.md").read_text()
     # the column that was empty says what each domain loss aligns the history with
     summary = json.loads((out / "summary.json").read_text())
     aligned = {r["method"]: r["aligned_with"] for r in summary["learned"]}
@@ -1224,3 +1227,16 @@ def test_a_training_that_aligns_the_history_with_a_point_ends_at_its_ramp(cli, t
     assert plain["aligned_to_a_point"] and not noisy["aligned_to_a_point"]
     assert len(plain["history"]["train_loss"]) == 2 and plain["history"]["best_epoch"] == 1
     assert len(noisy["history"]["train_loss"]) > 2
+
+
+def test_a_declared_speed_in_rpm_is_turns_per_minute():
+    """'1680 rpm' is 28 turns a second, for the detection [target] (and a file's own speed) as for a
+    dataset entry's speed; pint alone would read 176 (rad/s, 2π per turn)."""
+    from gearlab.errors import GearlabInputError
+    from gearlab.kinds.common import quantity
+    from gearlab.parts.measured import speed_of
+
+    assert speed_of("1680 rpm", "w") == pytest.approx(28.0) and speed_of(25, "w") == 25.0
+    assert quantity({"speed": "1680 rpm"}, "speed", "w") == pytest.approx(28.0)
+    with pytest.raises(GearlabInputError, match=r"^w: expected an input-shaft speed up to 1 kHz"):
+        speed_of("2 kHz", "w")

@@ -109,3 +109,24 @@ def test_a_model_file_naming_a_foreign_class_is_refused(tmp_path):
     (folder / f"{scoring.model_key('u')}.pt").write(out.getvalue())
     with pytest.raises(GearlabInputError, match="refused|damaged"):
         scoring.load_model(folder, "u")
+
+
+def test_a_run_without_a_tacho_reads_a_new_record_as_it_read_its_own():
+    """The keys a new record is cut with (detection_scoring.reading_keys): the run's tacho, or without
+    one its declared speed and description; speeds declared per file only give a new record the
+    speed of the condition it is scored in, one the run has alone or --condition names."""
+    from gearlab.errors import GearlabInputError
+    from gearlab.kinds.detection_scoring import reading_keys
+
+    target = {"vibration": "acc", "tacho": None, "pulses_per_rev": 1, "speed_hz": None, "gearbox": None}
+    one = {"target": target, "conditions": {"28 Hz": {"speed_hz": 28.04}}}
+    assert reading_keys(one, None)["speed_hz"] == 28.04
+    assert reading_keys({**one, "target": {**target, "speed_hz": 25.0}}, None)["speed_hz"] == 25.0
+    assert reading_keys({**one, "target": {**target, "tacho": "tach"}}, None)["speed_hz"] is None
+    two = {"target": target, "conditions": {"28 Hz": {"speed_hz": 28.04}, "40 Hz": {"speed_hz": 40.1}}}
+    assert reading_keys(two, "40 Hz")["speed_hz"] == 40.1
+    with pytest.raises(GearlabInputError, match=r"^--condition: missing; .* known: 28 Hz, 40 Hz$"):
+        reading_keys(two, None)
+    # a run from before the target could go without a tacho kept neither key
+    old = {"target": {"vibration": 0, "tacho": "2", "pulses_per_rev": 10}, "conditions": one["conditions"]}
+    assert "gearbox" not in reading_keys(old, None) and "speed_hz" not in reading_keys(old, None)

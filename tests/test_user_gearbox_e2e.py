@@ -156,6 +156,7 @@ adapter = "matched_filter"
 """
 
 CSV_KEYS = 'vibration = "acc_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"'
+H5_KEYS = 'vibration = "acc"\ngearbox = "rig.toml"'  # no tacho: each record's speed from its mesh orders
 WAV_KEYS = 'vibration = 0\ntacho = 1\ngain = "1 V"\nsensitivity = "100 mV/g"'
 
 
@@ -214,6 +215,7 @@ def one_stage(tmp_path_factory):
     scenarios = {
         "gap.toml": GAP.format(name="rig1953", box="rig.toml", keys=CSV_KEYS, ext="csv"),
         "detect.toml": DETECT.format(name="rig1953", box="rig.toml", keys=CSV_KEYS, ext="csv"),
+        "detect_nt.toml": DETECT.format(name="rig1953_nt", box="rig.toml", keys=H5_KEYS, ext="h5"),
     }
     for name, text in scenarios.items():
         (folder / name).write_text(text)
@@ -238,10 +240,17 @@ def two_stage(tmp_path_factory):
     return folder, takes
 
 
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    """One dataset cache for the module: the tacho and the tacho-less detection simulate the same
+    source (its key is its content), once."""
+    return tmp_path_factory.mktemp("cache")
+
+
 @pytest.fixture
-def gearlab(cli, monkeypatch, tmp_path):
+def gearlab(cli, monkeypatch, cache):
     """`gearlab ARGS` in a folder: (exit code, stdout + stderr)."""
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
     monkeypatch.setenv("COLUMNS", "250")
 
     def run(folder, *args):
@@ -321,6 +330,47 @@ def test_one_stage_from_recordings_to_scoring(one_stage, gearlab):
     assert fm4 and all(r["decision"] == "fault" for r in fm4), fm4
 
 
+def test_one_stage_detection_and_scoring_without_a_tacho(one_stage, gearlab):
+    """The HDF5 takes have no tacho: each record's speed is found from the description's mesh orders,
+    the records are aligned by correlation and turned into the source's frame, and the chip is found
+    as from the CSV with its tacho; `gearlab score` reads next week's take the same way."""
+    folder, takes = one_stage
+    code, out = gearlab(folder, "validate", "detect_nt.toml")
+    assert code == 0 and out.startswith("OK:"), out
+    # a speed declared instead, for the target or per file, is read too (the angle of that speed)
+    (folder / "speed_nt.toml").write_text(
+        (folder / "detect_nt.toml").read_text().replace('gearbox = "rig.toml"\nfiles', 'speed = "1680 rpm"\nfiles')
+        .replace('"test_ok.h5",', '"test_ok.h5", speed = "27.94 Hz",')
+    )  # fmt: skip
+    code, out = gearlab(folder, "validate", "speed_nt.toml")
+    assert code == 0 and out.startswith("OK:"), out
+    code, out = gearlab(folder, "run", "detect_nt.toml", "--quick")
+    assert code == 0, out
+    assert "Records: each record's speed, how it was found" in summary_line(out), out  # the CLI says it too
+    summary = json.loads((folder / run_dir(out) / "summary.json").read_text())
+    ((name, cond),) = summary["conditions"].items()
+    assert name == "28 Hz" and cond["tacho"] is False
+    for path, speed in cond["speeds_hz"].items():
+        take = path.removesuffix(".h5")
+        assert abs(speed / (28.0 * TAKES[take][2]) - 1) < 0.005, (path, speed)  # the speed each was made at
+        assert "mesh" in cond["speed_from"][path], cond["speed_from"]
+    rows = {(r["method"], r["unit"]): r for r in summary["rows"]}
+    for method in ("matched_filter", "fm4"):  # a learned method in the source's frame, a classical one
+        r = rows[(method, "record10")]
+        assert r["auc"] >= 0.95 and r["detection"] == 100 and r["false_alarm"] == 0, r
+    assert "relative index" in (folder / run_dir(out) / "table.md").read_text()
+    code, out = gearlab(folder, "score", run_dir(out), "next.h5", "test_ok.h5", "--json")
+    assert code == 0, out
+    scored = [r for r in json.loads(out) if r["unit"] == "record10" and r["method"] in ("matched_filter", "fm4")]
+    assert len(scored) == 4 and all("mesh" in r["speed_from"] for r in scored), scored
+    assert {(r["file"], r["method"]): r["decision"] for r in scored} == {
+        ("next.h5", "matched_filter"): "fault",
+        ("next.h5", "fm4"): "fault",
+        ("test_ok.h5", "matched_filter"): "healthy",
+        ("test_ok.h5", "fm4"): "healthy",
+    }
+
+
 @pytest.mark.slow
 def test_two_stage_from_recordings_to_scoring(two_stage, gearlab):
     folder, takes = two_stage
@@ -367,6 +417,16 @@ def test_two_stage_from_recordings_to_scoring(two_stage, gearlab):
             "gap.toml",
             ('"100 mV/g"', '"100 mV/s"'),
             "gap.toml: [target] key 'sensitivity': '100 mV/s' has the wrong dimension",
+        ),
+        (  # no tacho, no speed and no description: nothing gives the shaft angle
+            "detect_nt.toml",
+            ('gearbox = "rig.toml"\nfiles', "files"),
+            "detect_nt.toml: [target] key 'tacho': missing; hist1.h5 has no tacho, speed or gearbox",
+        ),
+        (  # a tacho gives the speed: a declared one beside it is refused
+            "detect.toml",
+            ('tacho = "tacho_V"', 'tacho = "tacho_V"\nspeed = "28 Hz"'),
+            "detect.toml: [target] key 'speed': hist1.csv has a tacho ('tacho_V'), which gives its speed",
         ),
         (  # a bare number is V per m/s²: 100 is no accelerometer's
             "gap.toml",

@@ -229,6 +229,10 @@ def quantity(entry: dict, key: str, where: str) -> float:
     """A speed, load or rate of a dataset entry in SI units, checked against its range."""
     unit, high, said = QUANTITIES[key]
     value = to_si(entry[key], unit, f"{where} key '{key}'")
+    if key == "speed" and 0 < value < 1e5:  # '1500 rpm' is 25 turns a second, not pint's 157 (rad/s)
+        from ..gearbox.description import speed_hz
+
+        value = speed_hz(entry[key], f"{where} key '{key}'")
     if value < 0 or value == 0 and key != "load":
         raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {shown(entry[key])}")
     if value > high:

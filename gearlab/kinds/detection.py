@@ -12,8 +12,9 @@ the method's model and threshold are fixed, and their labels only when the figur
                           draws of each sample, one at random per batch row), history_units (what of
                           the history its methods train on), label: every method is trained on both
                           sources, the corrected one's rows "<method> (<label>)"
-    [target]              vibration, tacho, pulses_per_rev, sensitivity, fs, positive, files = [
-                            { path, role = "history" | "test", label, condition (optional) }, ...]
+    [target]              vibration, tacho (or without one: speed and/or gearbox), pulses_per_rev,
+                          sensitivity, fs, positive, files = [
+                            { file, role = "history" | "test", label, condition, speed (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
                           adapter that can learn without target labels
     [classical]           indicators (fm4, na4, tooth_energy, tooth_sync, pinion_sync) of the input-shaft TSA,
@@ -26,10 +27,13 @@ the method's model and threshold are fixed, and their labels only when the figur
     [network], [protocol] as in a transfer scenario (one training per method and condition, k = 0)
 
 Records are grouped by operating *condition*: the file's ``condition`` when given, else by
-tacho speed (``conditions_of``: within 5 %, a test record with the history of nearest speed).
+speed (``conditions_of``: within 5 %, a test record with the history of nearest speed): the
+tacho's, or without one the declared speed or the one the description's mesh orders show
+(recordings.shaft_angle; conditions.json and table.md say per record how it was found).
 Each condition has its own history: standardisation
-(eq. 2.112), the alignment of records that start at different tacho marks, the methods'
-calibration and thresholds. A condition with test records but no history is refused.
+(eq. 2.112), the alignment of records that start at different tacho marks (without a tacho, at
+any sample of the revolution), the methods' calibration and thresholds. A condition with test
+records but no history is refused.
 
 Units scored: every revolution (``revolution``) and the TSA of consecutive blocks of
 ``b`` revolutions (``record<b>``). The threshold of a method and unit is fixed on the
@@ -74,7 +78,17 @@ from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, location, one_of
 from ..settings import shrunk
 from ..signals.indicators import DEFAULT_INDICATORS, INDICATORS
-from .common import DATASET_TABLE, class_sizes, device_of, executor_for, no_compare, no_title, simulated_spec, sized
+from .common import (
+    DATASET_TABLE,
+    class_sizes,
+    device_of,
+    executor_for,
+    gearbox_name,
+    no_compare,
+    no_title,
+    simulated_spec,
+    sized,
+)
 from .detection_classical import classical_record
 from .detection_figures import captions, roc_charts
 from .detection_figures import draw as draw_figures
@@ -84,6 +98,7 @@ from .detection_records import (
     learned_input,
     longest_tsa,
     read_target,
+    register_to_source,
     source_for,
     trained_on,
 )
@@ -152,8 +167,23 @@ TABLES = {
     "target": Table(
         {
             "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
-            "tacho": Key((int, str), doc="tacho column: 0-based index or header name"),
+            "tacho": Key(
+                (int, str), "", doc="tacho column: 0-based index or header name; or give 'speed' or 'gearbox'"
+            ),
             "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "tacho pulses per input-shaft revolution"),
+            "speed": Key(
+                (int, float, str),
+                None,
+                doc="without a tacho: the input-shaft speed, e.g. '25 Hz' (a file entry may give its own "
+                "'speed'); with 'gearbox' too, refined to ±1 % by the mesh orders",
+                unit="Hz",
+            ),
+            "gearbox": Key(
+                str,
+                "",
+                doc="without a tacho: a gearbox description (file relative to the scenario, or a built-in "
+                "name) whose mesh orders give each record's speed",
+            ),
             "sensitivity": Key(
                 (int, float, str), None, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"
             ),
@@ -161,7 +191,7 @@ TABLES = {
             "fs": Key((int, float, str), None, doc="sampling rate, e.g. '66666.67 Hz', when a file carries none"),
             "transient": Key(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution"),
             "positive": Key(str, "fault", doc="the label of records with the fault to detect; every other is negative"),
-            "files": Key(list, doc="[{file, role = 'history' | 'test', label, condition (optional)}, ...]"),
+            "files": Key(list, doc="[{file, role = 'history' | 'test', label, condition, speed (both optional)}, ...]"),
         },
         required=True,
     ),
@@ -303,7 +333,10 @@ def build(scenario: Scenario) -> dict:
             f"{location(path, 'source')}: the source needs healthy and faulty revolutions (has {sizes})"
         )
     _, pair, _ = source.check_model(location(path, "source"))
-    target = target_spec(t["target"], location(path, "target"), scenario.base)
+    entry = t["target"]
+    if entry["gearbox"]:  # resolved and loaded now: a bad description fails validate
+        entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], location(path, "target", "gearbox"), scenario.base)}
+    target = target_spec(entry, location(path, "target"), scenario.base)
     c = t["classical"]
     for name in c["indicators"]:
         if name not in INDICATORS:
@@ -501,6 +534,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     f"{scenario.path}: [protocol] key 'batch': {protocol.batch} is larger than "
                     f"the source training set of '{s.name}'"
                 )
+        for c, cond in conditions.items():
+            if not cond["tacho"]:  # records whose angle starts where they do: into the source's frame
+                turn = register_to_source(cond, sources[specs[(c, "")]])
+                on_event(Event("log", message=f"{c}: turned by {turn} samples into the source's frame (no tacho)"))
         on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
         bounds = {key: source_bound(s, sources[s], protocol, draws[s], executor, on_event) for key, s in specs.items()}
         records = {r["unit"]: r for r in run.records()}
@@ -596,7 +633,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "history": [f.path for f, _ in v["history"]],
                     "test": [f.path for f, _ in v["test"]],
                     "speeds_hz": v["speeds"],
+                    # how each record's speed (and shaft angle) was found: tacho, declared, mesh orders
+                    "speed_from": v["speed_from"],
+                    # each record's turn into register with the history: in tacho marks, or without a
+                    # tacho in samples of the revolution (correlation; read_target)
                     "start_marks": v["shifts"],
+                    "tacho": v["tacho"],
                     "max_order": v["max_order"],  # the records' band: no higher order reaches a learned method
                     "source": v["source"],
                     "sources": v["sources"],
@@ -615,6 +657,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
 def summary_lines(run: RunDir) -> list[str]:
     summary = run.read_json("summary.json")
+    conditions = summary.get("conditions") or {}
     return [
         f"ROC AUC, detection and false alarms at the history's threshold ({100 * summary['false_alarm_asked']:g} % "
         "false alarms asked):",
@@ -623,6 +666,8 @@ def summary_lines(run: RunDir) -> list[str]:
         *([summary["shafts_md"].strip()] if summary.get("shafts_md") else []),
         *([summary["which_gear"]["md"].strip()] if summary.get("which_gear") else []),
         *([learned_md(summary["learned"]).strip()] if summary.get("learned") else []),
+        # without a tacho, how each record's speed was found and what that changes (table.md has it always)
+        *([summary["records_md"].strip()] if not all(c.get("tacho", True) for c in conditions.values()) else []),
     ]
 
 

@@ -23,15 +23,16 @@ from . import record_effects
 HISTORY_STRIDES = 10
 # Fewest history units of a kind that a threshold may be fitted to (by their quartiles).
 MIN_HISTORY_UNITS = 8
-# Records without a 'condition' whose tacho speeds lie within this fraction share a history.
+# Records without a 'condition' whose speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
 
 
 def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str, str]:
     """{file path: condition}: the file's own 'condition', else its speed group. History records
-    without one are grouped by tacho speed (a group spans SPEED_GROUP of its slowest record's
-    speed; named by its median to 1 Hz); a test record joins the group of nearest speed, or one
-    of its own (which has no history) when none lies within SPEED_GROUP of it."""
+    without one are grouped by speed -- the tacho's, declared, or found from the mesh orders -- (a
+    group spans SPEED_GROUP of its slowest record's speed; named by its median to 1 Hz); a test
+    record joins the group of nearest speed, or one of its own (which has no history) when none lies
+    within SPEED_GROUP of it."""
     out = {f.path: f.condition for f in files if f.condition}
     groups: list[list[float]] = []
     for v in sorted(speeds[f.path] for f in files if not f.condition and f.role == "history"):
@@ -49,6 +50,19 @@ def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str
             v = centres[near]
         out[f.path] = f"{v:.0f} Hz"
     return out
+
+
+def aligned(reference: np.ndarray, revs: np.ndarray, tacho, pulses_per_rev: int) -> tuple[int, np.ndarray]:
+    """(turn, *revs* turned into register with *reference*): with a tacho, by one of its N marks
+    (textzip.align_to); without one (the angle from a speed, zero at the record's first sample) by
+    any whole sample of the revolution, the turn whose mean revolution correlates best with
+    *reference* -- align_to's correlation at every sample at once (one inverse FFT)."""
+    if tacho is not None:
+        return align_to(reference, revs, pulses_per_rev)
+    n = reference.shape[-1]
+    corr = np.fft.irfft(np.conj(np.fft.rfft(reference)) * np.fft.rfft(np.mean(np.atleast_2d(revs), axis=0)), n=n)
+    turn = int(np.argmax(corr))
+    return turn, np.roll(revs, -turn, axis=-1)  # x(θ) -> x(θ + 2π turn / n), as align_to turns
 
 
 def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.ndarray:
@@ -97,11 +111,15 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
     speeds = {p: r.speed_hz for p, r in records.items()}
     named = conditions_of(list(target.files), speeds)
     for f in target.files:
-        cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}})
+        cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}, "speed_from": {}})
         cond[f.role].append((f, records[f.path].revolutions))
         cond["speeds"][f.path] = speeds[f.path]
+        # how the record's shaft angle was found: its tacho, a declared speed, the mesh orders
+        cond["speed_from"][f.path] = records[f.path].angle_source
+        on_event(Event("log", message=f"{f.path}: {speeds[f.path]:.3f} Hz, from {records[f.path].angle_source}"))
         # as cut, before standardising and aligning (which rotate each revolution): what
         # localisation reads (detection_which_gear), with the first revolution's number from the tacho
+        # mark (without a tacho, from the record's first sample)
         cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].transient_revolutions)
     for name, cond in conditions.items():
         if not cond["history"]:
@@ -118,14 +136,14 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
-        cond["shifts"] = {}
+        cond["shifts"], cond["tacho"] = {}, target.tacho is not None
         for role in ROLES:
-            aligned = []
+            turned = []
             for f, revs in cond[role]:
-                shift, revs = align_to(reference, standardiser.apply(revs), target.pulses_per_rev)
+                shift, revs = aligned(reference, standardiser.apply(revs), target.tacho, target.pulses_per_rev)
                 cond["shifts"][f.path] = shift
-                aligned.append((f, revs))
-            cond[role] = aligned
+                turned.append((f, revs))
+            cond[role] = turned
         per_record = [unit_sets(r, blocks, True) for _, r in cond["history"]]
         cond["history_units"] = {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]}
         # which history units come from which record (in order), and how many are independent:
@@ -144,6 +162,29 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
                 )
         cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
     return conditions
+
+
+def register_to_source(cond: dict, source) -> int:
+    """Without a tacho, a record's angle is zero where it starts, a place in the gears' turn the
+    simulator knows nothing of, while the learned methods learned the simulated fault shapes in the
+    source's frame (the chip at its angle within the mesh cycle). The condition -- its reference,
+    every record and unit alike -- is turned by the whole-sample turn whose history mean revolution
+    correlates best with the *source*'s healthy mean revolution; returns that turn (samples). With
+    a tacho the records keep the frame of its mark."""
+    healthy = np.asarray(source.X)[np.asarray(source.fault) == 0].mean(axis=0)
+    points = cond["reference"].size
+    turn, _ = aligned(healthy, cond["reference"], None, 1)
+
+    def turned(x: np.ndarray) -> np.ndarray:
+        return np.roll(x, -turn, axis=-1)  # x(θ) -> x(θ + 2π turn / points), as align_to turns
+
+    cond["reference"] = turned(cond["reference"])
+    for role in ROLES:
+        cond[role] = [(f, turned(r)) for f, r in cond[role]]
+    cond["history_units"] = {u: turned(x) for u, x in cond["history_units"].items()}
+    cond["test_units"] = {p: {u: turned(x) for u, x in units.items()} for p, units in cond["test_units"].items()}
+    cond["shifts"] = {p: (m + turn) % points for p, m in cond["shifts"].items()}
+    return turn
 
 
 def learned_input(spec: dict, max_order: int | None = None):
@@ -165,8 +206,8 @@ def learned_input(spec: dict, max_order: int | None = None):
 
 
 def source_for(source: DatasetSpec, cond: dict, how: str) -> DatasetSpec:
-    """The source simulated at the condition's speed (the median of its history records' tacho
-    speeds, to 1 Hz), or as given."""
+    """The source simulated at the condition's speed (the median of its history records' speeds,
+    to 1 Hz), or as given."""
     if how == "source":
         return source
     speed = float(round(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])))

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.recordings import cut_recording
-from ..data.textzip import align_to
 from ..errors import GearlabInputError
 from ..events import Event
 from ..learn.protocol import fault_score
@@ -18,7 +17,7 @@ from ..runs import RunDir
 from ..signals import Standardiser
 from . import record_effects
 from .detection_classical import classical_record
-from .detection_records import SPEED_GROUP, learned_input, longest_tsa, unit_sets, unit_window
+from .detection_records import SPEED_GROUP, aligned, learned_input, longest_tsa, unit_sets, unit_window
 from .detection_units import Rule
 from .detection_which_gear import localise_scored
 
@@ -29,9 +28,12 @@ def store_scoring(run: RunDir, spec: dict, conditions: dict) -> None:
     (the thresholds and classical references are made from them as the run made them)."""
     target: Target = spec["target"]
     out = {
+        # cut_recording's keys; without a tacho, the declared speed and the description (a resolved path)
+        # whose mesh orders give a new record's speed
         "target": {
             k: getattr(target, k)
             for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
+            + ("speed_hz", "gearbox")
         },
         "blocks": list(spec["blocks"]),
         "threshold": spec["threshold"],
@@ -67,8 +69,9 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
     standardiser = Standardiser(*(float(v) for v in arrays["standardiser"]))
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
-    ppr = meta["target"]["pulses_per_rev"]
-    test = [(f, align_to(arrays["reference"], standardiser.apply(revs), ppr)[1]) for f, revs in records]
+    keys = meta["target"]
+    reference, tacho, ppr = arrays["reference"], keys["tacho"], keys["pulses_per_rev"]
+    test = [(f, aligned(reference, standardiser.apply(revs), tacho, ppr)[1]) for f, revs in records]
     blocks = meta["blocks"]
     per_record = [unit_sets(r, blocks, True) for _, r in history]
     return {
@@ -132,6 +135,30 @@ def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: 
     return raw(record["unit"])
 
 
+def reading_keys(meta: dict, condition: str | None) -> dict:
+    """cut_recording's keys for a new record, as the run read its target: its tacho; or without
+    one the run's declared speed and description (the speed from its mesh orders). A run whose
+    speeds were declared per file only gives a new record the speed of its condition's history:
+    the condition asked (--condition), or the run's only one."""
+    keys = dict(meta["target"])
+    gearbox = keys.pop("gearbox", None)  # a run from before the target could go without a tacho has none
+    if gearbox:
+        from ..gearbox import resolve_gearbox
+
+        keys["gearbox"] = resolve_gearbox(gearbox)
+    if keys["tacho"] is None and keys.get("speed_hz") is None and not gearbox:
+        names = list(meta["conditions"])
+        if condition is None and len(names) > 1:
+            raise GearlabInputError(
+                "--condition: missing; the run's records had no tacho and their speeds were declared per file: "
+                f"expected the condition whose speed a new record runs at; known: {', '.join(names)}"
+            )
+        name = condition if condition is not None else names[0]
+        if name in meta["conditions"]:  # an unknown one is refused, with the known ones, by _condition_of
+            keys["speed_hz"] = meta["conditions"][name]["speed_hz"]
+    return keys
+
+
 def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: None) -> list[dict]:
     """New recordings scored by a finished run's trained methods at its thresholds, nothing trained
     again: one row per file, method and unit kind (its units' scores, how many are called, the
@@ -144,11 +171,13 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
             f"{run.path}: no {scoring.SCORING_FILE}: not a finished detection run (or one from before gearlab "
             "score kept its models); expected a finished run: run the scenario again"
         )
-    keys = meta["target"]
-    cut, raw = {}, {}
+    keys = reading_keys(meta, condition)
+    cut, raw, found = {}, {}, {}
     for i, file in enumerate(files):
         rec = cut_recording(str(file), **keys)
         name = _condition_of(meta, str(file), rec.speed_hz, condition)
+        on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}"))
+        found[str(file)] = (rec.speed_hz, rec.angle_source)
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), rec.revolutions))
         raw.setdefault(name, []).append((str(file), rec.revolutions, rec.transient_revolutions))
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
@@ -186,6 +215,8 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
                             "rule": meta["threshold"],
                             "median_score": float(np.median(s)) if s.size else None,
                             "decision": "fault" if s.size and called > s.size / 2 else "healthy",
+                            "speed_hz": found[f.path][0],
+                            "speed_from": found[f.path][1],  # the tacho, a declared speed, the mesh orders
                             "localised": localised.get(f.path, {}).get("named"),
                             "call": localised.get(f.path, {}).get("call"),
                             "scores": [float(x) for x in s],

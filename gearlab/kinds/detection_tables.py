@@ -136,11 +136,19 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     ]
     if conditions is not None:
         summary["conditions"] = conditions
+    summary["records_md"] = records_md(conditions)
     run.write_json("summary.json", summary)
     which = summary["which_gear"].get("md", "")
     run.write_text(
         "table.md",
-        table_md(rows) + "\n" + labels_md(rows) + summary["shafts_md"] + which + learned_md(summary["learned"]),
+        table_md(rows)
+        + "\n"
+        + labels_md(rows)
+        + summary["shafts_md"]
+        + which
+        + learned_md(summary["learned"])
+        + "\n"
+        + summary["records_md"],
     )
     run.write_text("table.csv", table_csv(rows))
 
@@ -214,6 +222,37 @@ def table_md(rows: list[dict]) -> str:
         )
         out.append("")
     return "\n".join(out)
+
+
+def records_md(conditions: dict | None) -> str:
+    """Per record: its condition, role, speed and how it was found (a tacho, a declared speed, the
+    description's mesh orders: recordings.shaft_angle), and the turn that put it in register with
+    its condition's history; without a tacho, what that changes is said under the table."""
+    if not conditions:
+        return ""
+    out = [
+        "Records: each record's speed, how it was found, and the turn that aligned it with its condition's history",
+        "| condition | file | role | speed Hz | speed from | turned by |",
+        "|---|---|---|---|---|---|",
+    ]
+    tacho = True
+    for c, v in conditions.items():
+        tacho = tacho and v.get("tacho", True)
+        turn = "{} marks" if v.get("tacho", True) else "{} samples"
+        for role in ("history", "test"):
+            for path in v[role]:
+                how = v.get("speed_from", {}).get(path, "tacho")
+                shift = turn.format(v["start_marks"][path]) if path in v.get("start_marks", {}) else "–"
+                out.append(f"| {c} | {path} | {role} | {v['speeds_hz'][path]:.3f} | {how} | {shift} |")
+    if not tacho:
+        out.append(
+            "\nWithout a tacho, each revolution starts where the record does (the shaft angle of its speed, "
+            "zero at its first sample): records are aligned with the history by the correlation of their mean "
+            "revolution at any whole-sample turn, then together into the frame of the source's healthy mean "
+            "revolution, in which the learned methods learned the fault's shape; the tooth a localisation "
+            "names is counted from the record's first sample, a relative index, not a tooth number on the gear."
+        )
+    return "\n".join(out) + "\n"
 
 
 def labels_md(rows: list[dict]) -> str:

@@ -4,7 +4,7 @@ whose change lies on another gear than the one the scenario watches reported as 
 
 The watched gear is the source's faulty gear: the gear its fault classes sit on (the 32T input
 pinion for scenarios/phm09_chip.toml). A test record is read whole (its complete revolutions as
-cut from the tacho, before the detection's standardisation and alignment, which rotate each
+cut from the tacho or the found speed, before the detection's standardisation and alignment, which rotate each
 revolution and so break the slower shafts' continuity) and localised against the raw history
 records of its condition, orders up to the condition's band. What a method's flag on one of its
 units then means:
@@ -74,6 +74,9 @@ def localise_target(source: DatasetSpec, conditions: dict, histories: dict | Non
     table = order_table(box)
     watched = watched_gears(source, table)
     out = {"gearbox": box.name, "preset": source.preset, "watched": watched, "conditions": {}, "records": {}}
+    # where a tooth index counts from: the tacho mark, or without a tacho the record's first sample
+    tacho = all(cond.get("tacho", True) for cond in conditions.values())
+    out["tooth_from"] = "the first tacho mark" if tacho else "each record's first sample (no tacho: a relative index)"
     for name, cond in conditions.items():
         raw = cond["raw"]
         history = [raw[f.path] for f, _ in cond["history"]]
@@ -156,8 +159,9 @@ def records_md(loc: dict, labels: dict) -> str:
         return ""
     out = [
         f"\nWhich gear (each test record against its condition's history; watched: {', '.join(loc['watched'])}; "
-        "z of each shaft's localised change over its threshold; a flag on a record whose change lies on "
-        "another gear is other damage)\n",
+        "z of each shaft's localised change over its threshold; the tooth counted from "
+        f"{loc.get('tooth_from', 'the first tacho mark')}; a flag on a record whose change lies on another gear "
+        "is other damage)\n",
         "| condition | file | label | localised on | z / threshold per shaft | tooth | a flag is |",
         "|---|---|---|---|---|---|---|",
     ]

@@ -13,8 +13,9 @@ from ..params import did_you_mean
 from ..units import to_si
 
 ROLES = ("history", "test")
-# 'file' as in every kind's measured entry; 'path', its name before, is read the same
-FILE_KEYS = ("file", "role", "label", "condition", "path")
+# 'file' as in every kind's measured entry; 'speed' a record's own declared speed (no tacho); 'path',
+# the file's name before, is read the same
+FILE_KEYS = ("file", "role", "label", "condition", "speed", "path")
 
 
 @dataclass(frozen=True)
@@ -23,13 +24,14 @@ class TargetFile:
     resolved: str
     role: str
     label: str
-    condition: str  # "" until known (the tacho speed)
+    condition: str  # "" until known (the record's speed)
+    speed_hz: float | None = None  # declared for this record alone (no tacho)
 
 
 @dataclass(frozen=True)
 class Target:
     vibration: int | str
-    tacho: int | str
+    tacho: int | str | None  # None: the speed is declared or found from the description's mesh orders
     pulses_per_rev: int
     sensitivity: float | None  # V per m/s² (None: not given; the values are taken as m/s²)
     fs: float | None  # None: each file's own (a time column, an 'fs' field)
@@ -37,10 +39,16 @@ class Target:
     positive: str
     files: tuple[TargetFile, ...]
     gain: float | None = None  # V per file unit
+    speed_hz: float | None = None  # declared input-shaft speed of every record without a tacho
+    gearbox: str | None = None  # a description (file or built-in name): the speed from its mesh orders
 
     def read(self, file: TargetFile):
         """One of the target's records, read through the one import path (any format) with its
-        channels, tacho and units: its revolutions (recordings.cut_recording)."""
+        channels, tacho and units: its revolutions (recordings.cut_recording). Without a tacho, the
+        shaft angle of the record's declared speed (its own, else the target's) or of the speed its
+        description's mesh orders show (refining a declared one to ±1 %: recordings.shaft_angle)."""
+        from ..gearbox import resolve_gearbox
+
         return cut_recording(
             file.resolved,
             vibration=self.vibration,
@@ -50,6 +58,8 @@ class Target:
             gain=self.gain,
             fs=self.fs,
             transient=self.transient,
+            speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
+            gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
         )
 
 
@@ -82,10 +92,11 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
         condition = f.get("condition", "")
         if not isinstance(condition, str):
             raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
+        speed = None if f.get("speed") is None else speed_of(f["speed"], f"{at} key 'speed'")
         path = Path(f["file"])
         resolved = path if path.is_absolute() else base / path
         check_measured_file(resolved, f"{at} key 'file'")
-        out.append(TargetFile(f["file"], str(resolved), f["role"], f["label"], condition))
+        out.append(TargetFile(f["file"], str(resolved), f["role"], f["label"], condition, speed))
     seen = {}
     for i, f in enumerate(out):
         if seen.setdefault(f.resolved, i) != i:
@@ -100,9 +111,20 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
     return tuple(out)
 
 
+def speed_of(value, where: str) -> float:
+    """A declared input-shaft speed ('25 Hz', '1500 rpm'; a number: Hz) in revolutions per second."""
+    from ..gearbox.description import speed_hz  # rpm is 1/60 Hz there, not pint's 2π/60 rad/s
+
+    speed = speed_hz(value, where)
+    if speed > 1e3:
+        raise GearlabInputError(f"{where}: expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got {shown(value)}")
+    return speed
+
+
 def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
     """The [target] of measured records: the keys of every measured entry (vibration, tacho,
-    pulses_per_rev, sensitivity, gain, fs) and the files, each checked against its header
+    pulses_per_rev, sensitivity, gain, fs; without a tacho, speed or gearbox: the description, a
+    path as the caller resolved it) and the files, each checked against its header
     (recordings.check_recording: its channels, a sampling rate, units) before any work."""
     fs = None
     if t.get("fs") is not None:
@@ -114,9 +136,12 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
     for key in ("vibration", "tacho"):
         if isinstance(t[key], int) and t[key] < 0:
             raise GearlabInputError(f"{where} key '{key}': a column index is 0 or more, got {t[key]}")
-    vibration, tacho = channel_key(t["vibration"]), channel_key(t["tacho"])
+    vibration = channel_key(t["vibration"])
+    tacho = None if t["tacho"] in (None, "") else channel_key(t["tacho"])
     if vibration == tacho:
         raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
+    speed = None if t.get("speed") is None else speed_of(t["speed"], f"{where} key 'speed'")
+    gearbox = t.get("gearbox") or None
     sensitivity = None
     if t.get("sensitivity") is not None:
         sensitivity = parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'")
@@ -128,8 +153,39 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
                 f"{where} key 'gain': expected a positive voltage per file unit, got {shown(t['gain'])}"
             )
     files = target_files(t["files"], f"{where} key 'files'", base, need)
-    for f in files:
+    if tacho is None and t["pulses_per_rev"] != 1:
+        raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
+    for i, f in enumerate(files):
+        declared = f.speed_hz if f.speed_hz is not None else speed
+        # the shaft angle comes from one of them (recordings.shaft_angle): a tacho, or a speed
+        # declared or found from the description's mesh orders
+        if tacho is not None and (declared is not None or gearbox):
+            at = f"{where} key " + (
+                "'speed'" if speed is not None else "'gearbox'" if gearbox else f"'files' entry {i + 1} key 'speed'"
+            )
+            raise GearlabInputError(
+                f"{at}: {f.path} has a tacho ({t['tacho']!r}), which gives its speed; expected a tacho, or "
+                "without one a 'speed' (e.g. '25 Hz') or a 'gearbox' description, not both"
+            )
+        if tacho is None and declared is None and not gearbox:
+            raise GearlabInputError(
+                f"{where} key 'tacho': missing; {f.path} has no tacho, speed or gearbox to know its shaft angle "
+                "from; expected a tacho channel, a 'speed' (e.g. '25 Hz') or a 'gearbox' description whose "
+                "mesh orders give the speed"
+            )
         check_recording(
             f.resolved, where, {"vibration": vibration, "tacho": tacho}, fs=fs, sensitivity=sensitivity, gain=gain
         )
-    return Target(vibration, tacho, t["pulses_per_rev"], sensitivity, fs, t["transient"], t["positive"], files, gain)
+    return Target(
+        vibration,
+        tacho,
+        t["pulses_per_rev"],
+        sensitivity,
+        fs,
+        t["transient"],
+        t["positive"],
+        files,
+        gain,
+        speed,
+        gearbox,
+    )
