@@ -1,27 +1,60 @@
-"""Parameter schemas for plugins: name, SI unit, bounds, default and a line of doc."""
+"""Parameter schemas for plugins: name, SI unit, bounds, default and a line of doc, on the Setting
+record a scenario key is declared with too (gearlab.settings)."""
 
 from __future__ import annotations
 
 import difflib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from .errors import GearlabInputError
 from .units import display, to_si
 
 
 @dataclass(frozen=True)
-class Param:
-    """One plugin parameter. Values are stored in SI (*unit*); *display_unit* is for people."""
+class Setting:
+    """What a setting declares besides its name and default: a scenario key's (gearlab.settings.setting)
+    or a plugin parameter's (Param, which adds the unit shown to people)."""
 
-    name: str
-    unit: str
-    default: float
-    low: float
-    high: float
-    doc: str
-    display_unit: str = ""
-    integer: bool = False
+    types: type | tuple[type, ...]
+    low: float | None = None
+    high: float | None = None
+    unit: str = ""
+    doc: str = ""
+    choices: tuple[str, ...] = ()
+    quick: Any = None  # --quick: the value is at most this
+    check: Callable[[Any, str], Any] | None = None  # a check of its own: returns the value or raises
+    display_unit: str = ""  # the unit shown to people where it is not the SI *unit*
+
+
+@dataclass(frozen=True, init=False)
+class Param(Setting):
+    """One plugin parameter: a Setting with a name and a default. Values are stored in SI (*unit*);
+    *display_unit* is for people. Written Param(name, unit, default, low, high, doc[, display_unit,
+    integer])."""
+
+    name: str = ""
+    default: float = 0.0
+
+    def __init__(
+        self,
+        name: str,
+        unit: str,
+        default: float,
+        low: float,
+        high: float,
+        doc: str,
+        display_unit: str = "",
+        integer: bool = False,
+    ):
+        super().__init__(int if integer else float, low, high, unit, doc, display_unit=display_unit)
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "default", default)
+
+    @property
+    def integer(self) -> bool:
+        return self.types is int
 
     def describe(self) -> dict:
         return {

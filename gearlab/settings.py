@@ -21,11 +21,10 @@ import copy
 import dataclasses
 import math
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from .errors import GearlabInputError, shown
-from .params import did_you_mean
+from .params import Setting, did_you_mean
 
 # Most epochs any training key may ask for (the thesis trains for at most 800): beyond it a
 # value is a mistake that would hold a run for years.
@@ -34,20 +33,6 @@ MAX_EPOCHS = 100_000
 MAX_SEED = 2**32 - 1
 # beyond this the list of units of a protocol would not fit in memory
 MAX_REPETITIONS = 1000
-
-
-@dataclass(frozen=True)
-class Setting:
-    """What a field declares besides its name and default."""
-
-    types: type | tuple[type, ...]
-    low: float | None = None
-    high: float | None = None
-    unit: str = ""
-    doc: str = ""
-    choices: tuple[str, ...] = ()
-    quick: Any = None  # --quick: the value is at most this
-    check: Callable[[Any, str], Any] | None = None  # a check of its own: returns the value or raises
 
 
 def setting(
