@@ -496,7 +496,7 @@ def gap(
     Example: gearlab gap scenarios/gap_expB.toml --quick; gearlab gap benchmark --trials 4
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     from .engine import load_scenario
-    from .kinds import SCENARIO_KINDS
+    from .kinds import GAP_COMMAND_KINDS, SCENARIO_KINDS
 
     overrides = _execution(executor, ray_address, device)
     given = _benchmark_keys(trials, seed)
@@ -512,12 +512,11 @@ def gap(
             if hint:
                 raise GearlabInputError(f"gap: '{scenario}' is neither a scenario file nor 'benchmark'{hint}")
         kind = load_scenario(path).kind
-        contract = SCENARIO_KINDS[kind]
-        if contract.OVERRIDES:  # a benchmark file of one's own takes --trials and --seed too
+        if kind in GAP_COMMAND_KINDS and SCENARIO_KINDS[kind].OVERRIDES:  # a benchmark file takes --trials, --seed
             overrides.update(given)
         elif given:
             raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark` (or a gap_benchmark file)")
-        elif "diagnosis" not in contract.TABLES:  # `gearlab gap` diagnoses: a kind with a [diagnosis] table
+        elif kind not in GAP_COMMAND_KINDS:
             raise GearlabInputError(
                 f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
                 f'"{kind}" (run it with `gearlab run`)'

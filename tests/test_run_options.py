@@ -49,6 +49,14 @@ def test_gap_refuses_a_scenario_of_another_kind(cli, scenario):
     refused(code, err, str(scenario), "[scenario] key 'kind'", '"gap"', "gearlab run")
 
 
+def test_gap_refuses_the_transfer_benchmark_though_it_diagnoses_too(cli):
+    """`gearlab gap` runs the kinds gearlab.kinds.GAP_COMMAND_KINDS names, not every kind with a
+    [diagnosis] table (the transfer benchmark diagnoses each target on the way)."""
+    shipped = Path(__file__).resolve().parents[1] / "scenarios" / "transfer_benchmark.toml"
+    code, _, err = cli("gap", shipped)
+    refused(code, err, "[scenario] key 'kind'", '"gap"', '"transfer_benchmark"', "gearlab run")
+
+
 def test_gap_scenario_refuses_benchmark_options(cli, scenario):
     code, _, err = cli("gap", scenario, "--trials", "3")
     refused(code, err, "--trials and --seed belong to `gearlab gap benchmark`")

@@ -15,3 +15,7 @@ SCENARIO_KINDS: dict[str, ScenarioKind] = {
     "detection": detection,
     "transfer_benchmark": transfer_benchmark,
 }
+
+# The kinds `gearlab gap FILE` runs, the gap's diagnosis and its benchmark (`gearlab run` runs every
+# kind): the command's own kinds are named here, with the registry, not in the CLI.
+GAP_COMMAND_KINDS: tuple[str, ...] = ("gap", "gap_benchmark")
