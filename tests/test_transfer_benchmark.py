@@ -52,6 +52,28 @@ repetitions = 1
     + EXECUTION
 )
 
+# The same with the per-trial correction: a history of 10 rows (the diagnosis's statistics need 10),
+# a small diagnosis (the tests below stand a recorder in for it).
+CORRECTED = TINY.replace("target_train = 8", "target_train = 10").replace(
+    "repetitions = 1\n",
+    "repetitions = 2\ncorrect_source = true\n",
+) + (
+    """
+[diagnosis]
+candidates = ["sensor_noise", "bearing_stiffness"]
+budget = 2
+max_effects = 1
+healthy = 10
+bootstrap = 10
+permutations = 20
+"""
+)
+# what the stand-in diagnosis fits: a model effect (kept in the corrected source) and noise (left out)
+FITTED = [
+    ["bearing_stiffness", [["c_factor", 1.0], ["k_factor", 0.5]]],
+    ["sensor_noise", [["kind", "gaussian"], ["snr_db", 3.0]]],
+]
+
 
 @pytest.fixture
 def tiny(tmp_path, monkeypatch):
@@ -98,6 +120,10 @@ def test_registered_validated_and_a_supervised_method_refused(tiny, cli):
     code, _, err = cli("validate", tiny)
     assert code == 2 and "\n" not in err.strip()
     assert "[[methods]] #3 key 'supervised'" in err and str(tiny) in err
+    tiny.write_text(TINY + '\n[diagnosis]\ncandidates = ["bearing_stifness"]\n')  # the correction's effects
+    code, _, err = cli("validate", tiny)
+    assert code == 2 and "\n" not in err.strip()
+    assert "[diagnosis]" in err and "did you mean 'bearing_stiffness'" in err and str(tiny) in err
 
 
 def test_a_tiny_benchmark_runs_end_to_end(tiny):
@@ -124,3 +150,127 @@ def test_a_tiny_benchmark_runs_end_to_end(tiny):
     lines = SCENARIO_KINDS["transfer_benchmark"].summary_lines(RunDir.open(run))
     assert lines[0].startswith("selection rule") and "seed 3 (development)" in lines[0]
     assert (run / "figures" / "transfer_benchmark.png").exists() and "<img" in (run / "report.html").read_text()
+
+
+# --- the per-trial corrected source ----------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def corrected(tmp_path_factory):
+    """One run of the tiny benchmark with the correction; a recorder stands in for the diagnosis
+    (what it fits is FITTED) and keeps what it was given."""
+    calls: list[dict] = []
+
+    def diagnose(source, target_X, settings, executor=None, on_event=None, chain=None):
+        calls.append({"source": source, "target_X": np.array(target_X), "settings": settings, "chain": chain})
+        effects = [{"name": n, "params": dict(p), "share_removed": 0.5} for n, p in FITTED]
+        return {
+            "gap_before": 10.0,
+            "gap_after": 1.0,
+            "unexplained": False,
+            "effects": effects,
+            "corrected_effects": FITTED,
+        }
+
+    # the histories the training units and the bounds are given (one worker: in this process)
+    train_unit, bayes_bound = tb.train_unit, tb.bayes_bound
+    histories: dict[str, list] = {"units": [], "bounds": []}
+
+    def unit(task):
+        histories["units"].append((task[2][0].name, task[7]))
+        return train_unit(task)
+
+    def bound(target_spec, *args):
+        histories["bounds"].append((target_spec.name, args[-1]))
+        return bayes_bound(target_spec, *args)
+
+    base = tmp_path_factory.mktemp("corrected")
+    path = base / "corrected.toml"
+    path.write_text(CORRECTED)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
+        mp.setattr("gearlab.gap.diagnose.diagnose", diagnose)
+        mp.setattr(tb, "train_unit", unit)
+        mp.setattr(tb, "bayes_bound", bound)
+        run = run_scenario(path, out=base / "runs").path
+    return run, calls, base / "cache", histories
+
+
+def test_the_correction_fits_on_the_history_alone(corrected, monkeypatch):
+    """Each trial's diagnosis is given the plain source and the target's history rows: healthy rows
+    in every repetition's training set and in none's test set; rows only (no label, nothing of how
+    the target was drawn). Every unit, plain or corrected, scores the rows outside the history."""
+    from gearlab.data.cache import load_or_build
+    from gearlab.gap.scoring import Settings
+    from gearlab.learn.protocol import history_of, split
+
+    run, calls, cache, histories = corrected
+    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
+    spec = load_scenario(run / "scenario.toml").spec
+    protocol = spec["protocol"]
+    drawn = tb.trials(spec)
+    assert len(calls) == len(drawn) == 2  # one diagnosis per trial
+    records = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines()]
+    for (name, source_spec, target_spec, _), call in zip(drawn, calls, strict=True):
+        assert call["source"] == source_spec and not call["source"].effects and call["chain"] is None
+        assert call["settings"] == Settings(**spec["diagnosis"]) and call["settings"].budget == 2
+        assert isinstance(call["target_X"], np.ndarray) and call["target_X"].shape == (10, 4096)
+        target, _ = load_or_build(target_spec)
+        source, _ = load_or_build(source_spec)
+        mean, std = target.reference
+        physical = np.asarray(target.X, dtype=np.float64) * std + mean
+        given = [int(np.flatnonzero(np.all(np.isclose(physical, row), axis=1))[0]) for row in call["target_X"]]
+        history = history_of(protocol, target)
+        assert sorted(given) == history.tolist()
+        assert not target.fault[given].any()
+        for rep in range(protocol.repetitions):
+            s = split(protocol, source, target, rep, 0, history)
+            assert not set(given) & set(s.target_test.tolist())
+            assert set(given) <= set(s.target_train.tolist())
+        # the units and the bound split with that history: it stays out of every test set they score
+        given_to = [h for target_name, h in histories["units"] + histories["bounds"] if target_name == name]
+        assert len(given_to) == 2 * 2 * 3 + 1 and all(np.array_equal(h, history) for h in given_to)
+        scored = [r for r in records if r.get("trial") == name and "n_test" in r]
+        assert len(scored) == 2 * 2 * 3  # two sources x two repetitions x three methods
+        assert {r["n_test"] for r in scored} == {len(target.X) - protocol.target_train}
+
+
+def test_both_sources_reported_per_trial_and_in_distribution(corrected):
+    run, *_ = corrected
+    summary = json.loads((run / "summary.json").read_text())
+    plain = ["source_only (unsupervised)", "likelihood_ratio (unsupervised)", "mmd (unsupervised)"]
+    assert summary["corrected"] and summary["methods"] == plain + [tb.corrected_label(m) for m in plain]
+    assert tb.corrected_label(plain[2]) == "mmd (unsupervised, corrected source)"
+    for name, t in summary["trials"].items():
+        assert set(t["accuracy"]) == set(summary["methods"])
+        assert [e["name"] for e in t["correction"]["effects"]] == ["bearing_stiffness", "sensor_noise"]
+        assert (run / "states" / f"{name}-corrected").is_dir()  # its own source-only model and priming
+    assert set(summary["per_method"]) == set(summary["methods"])
+    table = (run / "table.md").read_text()
+    assert (
+        "| mmd (unsupervised, corrected source) |" in table
+        and "bearing_stiffness c_factor=1 k_factor=0.5; sensor_noise" in table
+    )
+    lines = tb.summary_lines(RunDir.open(run))
+    assert "the corrections of the source fitted (trials): bearing_stiffness 2, sensor_noise 2" in lines
+
+
+def test_the_corrected_source_keeps_the_model_and_path_effects_not_the_noise():
+    spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
+    assert spec["correct"] and spec["diagnosis"]["budget"] == 16  # shipped: on, with the shipped budget
+    _, source, _, _ = tb.trials(spec)[0]
+    fixed = tb.corrected_spec(source, {"trial": "trial000", "corrected_effects": FITTED})
+    assert [name for name, _ in fixed.effects] == ["bearing_stiffness"] and fixed.noise == source.noise
+    assert fixed.name == "trial000-corrected-source" and fixed.key() != source.key()
+    # noise alone fitted: the corrected source is the plain one (its runs repeat the plain rows)
+    assert tb.corrected_spec(source, {"trial": "trial000", "corrected_effects": FITTED[1:]}) is source
+
+
+def test_only_runs_the_named_trials_as_drawn_in_the_full_run(cli, tmp_path):
+    spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
+    full = tb.trials(spec)
+    picked = tb.trials({**spec, "benchmark": {**spec["benchmark"], "only": [3, 9]}})
+    assert [t[2] for t in picked] == [full[3][2], full[9][2]]
+    code, _, err = cli("transfer-benchmark", "--trials", "4", "--only", "5", "--out", tmp_path / "runs")
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "[benchmark] key 'only'" in err and "from 0 to 3" in err and not (tmp_path / "runs").exists()

@@ -6,7 +6,8 @@
     [network]     as in a transfer scenario
     [[methods]]   as in a transfer scenario, unsupervised only (k = 0: no target label is used)
     [protocol]    repetitions and the training and calibration keys of a transfer scenario, the same
-                  for every trial: nothing is set per target
+                  for every trial: nothing is set per target; correct_source (below)
+    [diagnosis]   the gap diagnosis's settings (gearlab.gap.scoring.Settings; defaults: the shipped ones)
 
 Each trial draws a target that no gearlab setting was chosen on (`draw`; the ranges below and in
 docs/learning.md): the source's gearbox at another speed and load, one mismatch of the model (drive,
@@ -16,18 +17,26 @@ method trains on the target history (k = 0) and is scored on the target's test s
 bound of that target (gearlab.parts.bound.bayes_bound; unavailable where its model does not hold,
 as with a tone).
 
+With `correct_source`, each trial also corrects the source: the gap diagnosis (gearlab.gap.diagnose,
+its effect library and budget) fitted on the target's history rows alone (`learn.protocol.history_of`:
+healthy rows every repetition trains on; no test row, no label), the fitted effects added to the
+source, and every method run again on that corrected source (its noise effects left out, as the
+plain source has none: the recipe reads the noise off the history). Both rows are reported.
+
 Selection rule (printed with every run): settings may be tuned on seeds below 1000; figures are
 reported on seeds never used before, chosen after the code is frozen.
 
-Output: results.jsonl (per trial a `trialNNN/target` record of what was drawn and its bound, and one
-record per repetition and method), summary.json (per trial, and per method the median accuracy, the
-distance to the bound, the share of trials within 5 points, the gain over the likelihood-ratio start),
-table.md, a figure and report.html.
+Output: results.jsonl (per trial a `trialNNN/target` record of what was drawn and its bound, a
+`trialNNN/correction` record of the fitted effects, and one record per source, repetition and
+method), summary.json (per trial, and per method the median accuracy, the distance to the bound, the
+share of trials within 5 points, the gain over the likelihood-ratio start), table.md, a figure and
+report.html.
 """
 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -38,14 +47,17 @@ from ..data.spec import NOISE_KINDS, DatasetSpec, NoiseSpec
 from ..effects import effect_spec
 from ..errors import GearlabInputError
 from ..events import Event
+from ..gap.scoring import Settings as Diagnosis
+from ..gap.scoring import check_settings
 from ..learn.config import Calibration
-from ..learn.protocol import Counts, Protocol, check, check_data, shared_state, unit_key
+from ..learn.protocol import Counts, Protocol, check, check_data, history_of, shared_state, unit_key
 from ..learn.schedule import two_phases
 from ..parts.bound import BOUND, bayes_bound
 from ..parts.training import CALIBRATION, NETWORK, TRAINING, method, train_unit
+from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Key, Scenario, Table, in_range, keys_of, location
-from ..settings import MAX_SEED, shrunk
+from ..settings import MAX_SEED, quick_limits, shrunk
 from .common import (
     DATASET_TABLE,
     SOURCE_KEYS,
@@ -97,6 +109,7 @@ TABLES = {
         {
             "trials": Key(int, 24, in_range(1, 10000), "number of random targets (>= 24 for the goals)"),
             "seed": Key(int, 0, in_range(0, MAX_SEED), f"seeds the draws; below {REPORT_SEEDS}: development"),
+            "only": Key(list, [], doc="trial indices to run, each drawn as in the full run ([] = every trial)"),
         }
     ),
     "source": Table(SOURCE_KEYS),  # common.SourceEntry
@@ -110,7 +123,21 @@ TABLES = {
         array=True,
         required=True,
     ),
-    "protocol": Table({**keys_of(Protocol, ("repetitions",)), **TRAINING, **CALIBRATION}),
+    "protocol": Table(
+        {
+            **keys_of(Protocol, ("repetitions",)),
+            **TRAINING,
+            **CALIBRATION,
+            "correct_source": Key(
+                bool,
+                False,
+                doc="per trial, also run every method on the source corrected by the gap diagnosis of the "
+                "target history ([diagnosis])",
+            ),
+        }
+    ),
+    # declared once, on gearlab.gap.scoring.Settings (as the gap kind's [diagnosis]); defaults: the shipped ones
+    "diagnosis": Table(keys_of(Diagnosis)),
 }
 OVERRIDES: tuple[str, ...] = ()  # --trials and --seed: `gearlab transfer-benchmark`, not a file of its own
 
@@ -146,24 +173,48 @@ def build(scenario: Scenario) -> dict:
     entry = {**{k: v.default for k, v in DATASET_TABLE.keys.items()}, **t["source"]}
     source = simulated_spec(entry, location(path, "source"), scenario.base or path.parent)
     source.check_model(location(path, "source"))
-    return {"benchmark": dict(t["benchmark"]), "source": source, "protocol": protocol}
+    b = t["benchmark"]
+    for index in b["only"]:
+        if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < b["trials"]:
+            raise GearlabInputError(
+                f"{location(path, 'benchmark', 'only')}: expected trial indices from 0 to {b['trials'] - 1} "
+                f"(trials = {b['trials']}), got {index!r}"
+            )
+    diagnosis = {**t["diagnosis"], "candidates": tuple(t["diagnosis"]["candidates"])}
+    try:  # the diagnosis's own checks: registered candidates, none twice
+        check_settings(Diagnosis(**diagnosis))
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{location(path, 'diagnosis')}: {exc}") from None
+    return {
+        "benchmark": {**b, "only": sorted(set(b["only"]))},
+        "source": source,
+        "protocol": protocol,
+        "correct": bool(p["correct_source"]),
+        "diagnosis": diagnosis,
+    }
 
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     b, p = spec["benchmark"], spec["protocol"]
     use = "development" if b["seed"] < REPORT_SEEDS else "report"
+    which = f"trials {', '.join(map(str, b['only']))} of " if b["only"] else ""
+    sources = ", on the plain and the corrected source" if spec["correct"] else ""
     return (
-        f"{b['trials']} random targets from {spec['source'].name} (seed {b['seed']}, {use}), "
-        f"{len(p.methods)} methods x {p.repetitions} repetitions at k = 0, network {p.network}"
+        f"{which}{b['trials']} random targets from {spec['source'].name} (seed {b['seed']}, {use}), "
+        f"{len(p.methods)} methods x {p.repetitions} repetitions at k = 0{sources}, network {p.network}"
     )
 
 
 def quick(scenario: Scenario) -> None:
-    """Smoke run: 2 trials, one short repetition."""
+    """Smoke run: 2 trials, one short repetition, a small diagnosis."""
     spec = scenario.spec
-    spec["benchmark"] = {**spec["benchmark"], "trials": min(spec["benchmark"]["trials"], 2)}
+    b = spec["benchmark"]
+    # trials chosen by `only` stay those (the first two of them): a quick look at one trial
+    spec["benchmark"] = {**b, "only": b["only"][:2]} if b["only"] else {**b, "trials": min(b["trials"], 2)}
     spec["protocol"] = shrunk(spec["protocol"], repetitions=1)
+    d = spec["diagnosis"]
+    spec["diagnosis"] = {**d, **{k: min(d[k], limit) for k, limit in quick_limits(Diagnosis).items()}}
 
 
 # --- the draw --------------------------------------------------------------------------------------
@@ -234,10 +285,11 @@ def draw(rng: np.random.Generator, source: DatasetSpec, index: int, target_train
 
 
 def trials(spec: dict) -> list[tuple[str, DatasetSpec, DatasetSpec, dict]]:
-    """(name, source at the target's speed, target, answers) of every trial, drawn in order from the seed."""
+    """(name, source at the target's speed, target, answers) of every trial (those of `only` if it
+    names some), drawn from the seed: trial i's draw depends on the seed and i alone."""
     b, source, protocol = spec["benchmark"], spec["source"], spec["protocol"]
     out = []
-    for i in range(b["trials"]):
+    for i in b.get("only") or range(b["trials"]):
         rng = np.random.default_rng([b["seed"], i])
         target, answers = draw(rng, source, i, protocol.target_train)
         at_speed = source.with_(
@@ -249,66 +301,159 @@ def trials(spec: dict) -> list[tuple[str, DatasetSpec, DatasetSpec, dict]]:
 
 # --- run -------------------------------------------------------------------------------------------
 
+PLAIN, CORRECTED = "plain", "corrected"  # the source a method trains on
+
+
+def corrected_label(label: str) -> str:
+    """A method's label on the corrected source: 'mmd (unsupervised)' -> 'mmd (unsupervised, corrected source)'."""
+    return f"{label[:-1]}, corrected source)"
+
+
+def labels_of(spec: dict) -> list[str]:
+    """The summary's method labels: every method on the plain source, then on the corrected one."""
+    plain = [m.label for m in spec["protocol"].methods]
+    return plain + ([corrected_label(label) for label in plain] if spec.get("correct") else [])
+
+
+def correction(spec: dict, name: str, source_spec: DatasetSpec, target, history, executor, on_event) -> dict:
+    """Trial *name*'s correction record: the gap diagnosis of the plain source against the target's
+    history rows in physical units. Rows alone go in: no label, no test row, nothing of how the
+    target was drawn."""
+    from ..gap import diagnose as gap  # looked up at call time: a test watches what it is given
+
+    mean, std = target.reference
+    rows = np.asarray(target.X, dtype=np.float64)[history] * std + mean  # physical units, as simulated
+    started = time.perf_counter()
+    result = gap.diagnose(source_spec, rows, Diagnosis(**spec["diagnosis"]), executor=executor, on_event=on_event)
+    return {
+        "unit": f"{name}/correction",
+        "trial": name,
+        "rows": len(rows),
+        "gap_before": result["gap_before"],
+        "gap_after": result["gap_after"],
+        "unexplained": result["unexplained"],
+        "effects": [{k: e.get(k) for k in ("name", "params", "share_removed")} for e in result["effects"]],
+        "corrected_effects": result["corrected_effects"],
+        "seconds": round(time.perf_counter() - started, 1),
+    }
+
+
+def corrected_spec(source_spec: DatasetSpec, record: dict) -> DatasetSpec:
+    """The plain source with the fitted effects but the noise ones: the plain source is noise-free
+    (the recipe reads the noise law off the history), so only what the diagnosis found of the model
+    and the path changes. The plain source itself where nothing else was fitted."""
+    from ..gap.diagnose import corrected_source
+
+    registry = get_registry()
+    effects = tuple(e for e in corrected_source(source_spec, record).effects if not registry.get("effect", e[0]).noise)
+    if effects == source_spec.effects:
+        return source_spec
+    label = f"{record['trial']}-corrected-source"  # a label only (not in the cache key)
+    return source_spec.with_(effects=effects, name=label, domain=label)
+
+
+def correction_line(record: dict) -> str:
+    fitted = ", ".join(e["name"] for e in record["effects"]) or "no effect"
+    return (
+        f"{record['trial']}: the diagnosis of its history ({record['rows']} healthy rows) fits {fitted}: "
+        f"gap {record['gap_before']:.4g} -> {record['gap_after']:.4g} ({record['seconds']:.0f} s)"
+    )
+
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol: Protocol = spec["protocol"]
     on_event(Event("log", message=SELECTION_RULE))
     drawn = trials(spec)
-    done = {r["unit"] for r in run.records()}
+    done = {r["unit"]: r for r in run.records()}
+    variants = (PLAIN, CORRECTED) if spec["correct"] else (PLAIN,)
+    todo = [
+        (t, v, rep, m)
+        for t in range(len(drawn))
+        for v in variants
+        for rep in range(protocol.repetitions)
+        for m in protocol.methods
+    ]
+
+    def key(unit: tuple) -> str:
+        t, v, rep, m = unit
+        return f"{drawn[t][0]}/{'corrected/' if v == CORRECTED else ''}{unit_key(rep, 0, m)}"
+
+    def folder(t: int, v: str) -> str:  # each source has its own states (source-only model, priming)
+        return drawn[t][0] + ("-corrected" if v == CORRECTED else "")
+
+    def state_file(unit: tuple):
+        t, v, rep, m = unit
+        state = shared_state(m, rep, 0, protocol)
+        return None if state is None else run.file("states", folder(t, v), f"{state}.pt")
+
+    finished = sum(key(u) in done for u in todo)
+
+    def record_done(unit: tuple, record: dict) -> None:
+        nonlocal finished
+        t, v, _, m = unit
+        record.pop("_latent", None)
+        record.update(unit=key(unit), trial=drawn[t][0], variant=v)
+        if v == CORRECTED:
+            record["method"] = corrected_label(m.label)
+        run.append(record)
+        done[record["unit"]] = record
+        finished += 1
+        on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %"))
+        on_event(Event("record", stage="runs", record=record))
+        on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+
     with executor_for(scenario) as executor:
-        on_event(Event("stage", stage="targets", total=len(drawn), message="targets and their Bayes bounds"))
-        for i, (name, source_spec, target_spec, answers) in enumerate(drawn):
+        # trial by trial (bound, correction, training runs): a run stopped early holds whole trials
+        on_event(Event("stage", stage="trials", total=len(drawn), message="targets, bounds, corrections and runs"))
+        on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
+        on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
+        for t, (name, source_spec, target_spec, answers) in enumerate(drawn):
             source, _ = load_or_build(source_spec, executor)
             target, _ = load_or_build(target_spec, executor)
             check_data(protocol, Counts.of(source), Counts.of(target), f"{scenario.path}: {name}")
+            history = history_of(protocol, target)  # in every repetition's training set, in no test set
             if f"{name}/target" not in done:
-                bound = bayes_bound(target_spec, source, target, protocol, executor, on_event)
+                bound = bayes_bound(target_spec, source, target, protocol, executor, on_event, history)
                 run.append({"unit": f"{name}/target", "trial": name, "answers": answers, "bound": bound})
-            on_event(Event("advance", stage="targets", done=i + 1, total=len(drawn)))
-
-        todo = [(t, rep, m) for t in range(len(drawn)) for rep in range(protocol.repetitions) for m in protocol.methods]
-
-        def key(unit: tuple) -> str:
-            t, rep, m = unit
-            return f"{drawn[t][0]}/{unit_key(rep, 0, m)}"
-
-        pending = [u for u in todo if key(u) not in done]
-
-        def state_file(unit: tuple):
-            t, rep, m = unit
-            state = shared_state(m, rep, 0, protocol)
-            return None if state is None else run.file("states", drawn[t][0], f"{state}.pt")
-
-        on_event(Event("stage", stage="runs", total=len(todo), message=f"{len(todo)} training runs"))
-        finished = len(todo) - len(pending)
-        on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
-        for phase in two_phases(pending, state_file):
-
-            def record_done(i: int, record: dict, phase=phase) -> None:
-                nonlocal finished
-                t, _, _ = phase[i]
-                record.pop("_latent", None)
-                record.update(unit=key(phase[i]), trial=drawn[t][0])
-                run.append(record)
-                finished += 1
-                on_event(Event("log", message=f"{record['unit']}: target test accuracy {record['accuracy']:.1f} %"))
-                on_event(Event("record", stage="runs", record=record))
-                on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
-
-            tasks = [
-                (
-                    protocol,
-                    (drawn[t][1], cache.entry_path(drawn[t][1])),
-                    (drawn[t][2], cache.entry_path(drawn[t][2])),
-                    rep,
-                    0,
-                    m,
-                    run.file("states", drawn[t][0]),
+            sources = {PLAIN: source_spec}
+            if spec["correct"]:
+                unit = f"{name}/correction"
+                if unit not in done:
+                    done[unit] = correction(spec, name, source_spec, target, history, executor, on_event)
+                    run.append(done[unit])
+                on_event(Event("log", message=correction_line(done[unit])))
+                sources[CORRECTED] = corrected_spec(source_spec, done[unit])
+                built, _ = load_or_build(sources[CORRECTED], executor)
+                check_data(protocol, Counts.of(built), Counts.of(target), f"{scenario.path}: {name}, corrected")
+            # nothing corrected (the fit added noise only, or nothing): its runs would repeat the plain ones
+            same = [u for u in todo if u[0] == t and u[1] == CORRECTED and sources[CORRECTED] is source_spec]
+            pending = [u for u in todo if u[0] == t and u not in same and key(u) not in done]
+            for phase in two_phases(pending, state_file):
+                tasks = [
+                    (
+                        protocol,
+                        (sources[v], cache.entry_path(sources[v])),
+                        (target_spec, cache.entry_path(target_spec)),
+                        rep,
+                        0,
+                        m,
+                        run.file("states", folder(t, v)),
+                        history,
+                    )
+                    for _, v, rep, m in phase
+                ]
+                executor.map(
+                    train_unit,
+                    tasks,
+                    on_done=lambda i, record, phase=phase: record_done(phase[i], record),
+                    gpu=protocol.device != "cpu",
                 )
-                for t, rep, m in phase
-            ]
-            executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+            for u in same:
+                if key(u) not in done:
+                    plain = done[key((t, PLAIN, *u[2:]))]
+                    record_done(u, {**plain, "same_as_plain": True})
+            on_event(Event("advance", stage="trials", done=t + 1, total=len(drawn)))
     summarise(scenario, run)
 
 
@@ -316,7 +461,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
 
 def per_trial(records: list[dict]) -> dict[str, dict]:
-    """{trial: {answers, bound (mean accuracy or None), unavailable, accuracy {method: mean}}}."""
+    """{trial: {answers, bound (mean accuracy or None), unavailable, correction (the fitted effects,
+    or None), accuracy {method: mean}}}."""
     out: dict[str, dict] = {}
     for r in records:
         if r["unit"].endswith("/target"):
@@ -325,8 +471,12 @@ def per_trial(records: list[dict]) -> dict[str, dict]:
                 "answers": r["answers"],
                 "bound": bound["accuracy"]["0"]["mean"] if "accuracy" in bound else None,
                 "unavailable": bound.get("unavailable") or ("" if bound else "the target has no noise"),
+                "correction": None,
                 "accuracy": {},
             }
+    for r in records:
+        if r["unit"].endswith("/correction") and r["trial"] in out:
+            out[r["trial"]]["correction"] = {k: r[k] for k in ("effects", "gap_before", "gap_after", "unexplained")}
     scores: dict[tuple[str, str], list[float]] = {}
     for r in records:
         if "accuracy" in r and r.get("trial") in out:
@@ -355,20 +505,23 @@ def per_method(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
 
 
 # Which trials a method's gain over its start is told for: where the path differs (a sensor), where
-# the noise model is wrong (a tone, or noise with infinite variance), and the rest.
+# the noise model is wrong (a tone, or noise with infinite variance), where the structure's resonances
+# move (the bearings), and the rest.
 GROUPS = {
     "all": lambda a: True,
     "no sensor effect": lambda a: a["sensor"] == "none",
     "sensor resonance or low-pass": lambda a: a["sensor"] != "none",
     "student_t noise": lambda a: a["noise"] == "student_t",
     "tone": lambda a: a["tone"],
+    "bearing stiffness": lambda a: a["model"] == "bearing_stiffness",
 }
 
 
 def domain_gain(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
-    """Each method's accuracy less the likelihood-ratio detector's (the calibrated networks' start),
-    by what the trial's target holds: a sensor (the path differs) or a tone (the noise model is wrong)."""
-    base = next((label for label in labels if label.startswith(f"{BASELINE} ")), None)
+    """Each method's accuracy less the likelihood-ratio detector's on the plain source (the calibrated
+    networks' start), by what the trial's target holds: a sensor (the path differs) or a tone (the
+    noise model is wrong)."""
+    base = next((label for label in labels if label.startswith(f"{BASELINE} ")), None)  # the plain one: first
     if base is None:
         return {}
     out = {}
@@ -388,9 +541,9 @@ def domain_gain(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
 
 def summarise(scenario: Scenario, run: RunDir) -> None:
     spec = scenario.spec
-    labels = [m.label for m in spec["protocol"].methods]
+    labels = labels_of(spec)
     trials_ = per_trial(run.records())
-    source_only = next((label for label in labels if label.startswith("source_only ")), None)
+    source_only = next((label for label in labels if label.startswith("source_only ")), None)  # plain: first
     beaten = {
         label: sum(
             t["accuracy"][source_only] < t["accuracy"][label]
@@ -404,6 +557,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "kind": "transfer_benchmark",
         "scenario": scenario.name,
         "seed": spec["benchmark"]["seed"],
+        "only": spec["benchmark"]["only"],
+        "corrected": spec["correct"],
         "use": "development" if spec["benchmark"]["seed"] < REPORT_SEEDS else "report",
         "selection_rule": SELECTION_RULE,
         "source": spec["source"].name,
@@ -424,7 +579,9 @@ def _n(x, digits: int = 1) -> str:
 
 def trials_md(summary: dict) -> str:
     labels = summary["methods"]
-    head = ["trial", "speed Hz", "load N m", "model", "sensor", "tone", "noise", "SNR dB", "Bayes bound", *labels]
+    head = ["trial", "speed Hz", "load N m", "model", "sensor", "tone", "noise", "SNR dB", "Bayes bound"]
+    corrected = summary.get("corrected")
+    head += ["fitted effects", *labels] if corrected else labels
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, t in summary["trials"].items():
         a = t["answers"]
@@ -438,10 +595,23 @@ def trials_md(summary: dict) -> str:
             a["noise"],
             f"{a['snr_db']:.1f}",
             _n(t["bound"]) if t["bound"] is not None else "unavailable",
+            *([fitted_text(t["correction"])] if corrected else []),
             *[_n(t["accuracy"].get(label)) for label in labels],
         ]
         lines.append("| " + " | ".join(row) + " |")
     return "\n".join(lines) + "\n"
+
+
+def fitted_text(correction: dict | None) -> str:
+    """The effects a trial's correction fitted, with their parameters: 'bearing_stiffness k_factor=0.41'."""
+    if correction is None:
+        return "–"
+    parts = [
+        e["name"]
+        + "".join(f" {k}={v:.3g}" if isinstance(v, float) else f" {k}={v}" for k, v in (e["params"] or {}).items())
+        for e in correction["effects"]
+    ]
+    return "; ".join(parts) or "none"
 
 
 def methods_md(summary: dict) -> str:
@@ -476,8 +646,9 @@ def tables_md(summary: dict) -> str:
 
 def summary_lines(run: RunDir) -> list[str]:
     s = run.read_json("summary.json")
+    only = f" (trials {', '.join(map(str, s['only']))} only)" if s.get("only") else ""
     lines = [
-        f"{s['selection_rule']}; this run: seed {s['seed']} ({s['use']})",
+        f"{s['selection_rule']}; this run: seed {s['seed']} ({s['use']}){only}",
         f"{len(s['trials'])} random targets from {s['source']}, k = 0; accuracy (%) per method over the trials:",
         methods_md(s).rstrip(),
     ]
@@ -485,6 +656,13 @@ def summary_lines(run: RunDir) -> list[str]:
         lines += [f"points over {BASELINE} (its start) by what the targets hold (trials):", gain_md(s).rstrip()]
     for label, count in s["source_only_below"].items():
         lines.append(f"source_only below {label} on {count} of {len(s['trials'])} trials")
+    fitted: dict[str, int] = {}
+    for t in s["trials"].values():
+        for e in (t["correction"] or {}).get("effects", ()):
+            fitted[e["name"]] = fitted.get(e["name"], 0) + 1
+    if s.get("corrected"):
+        counts = ", ".join(f"{name} {n}" for name, n in sorted(fitted.items(), key=lambda x: -x[1])) or "nothing"
+        lines.append(f"the corrections of the source fitted (trials): {counts}")
     unavailable = sum(t["bound"] is None for t in s["trials"].values())
     if unavailable:
         lines.append(f"Bayes bound unavailable on {unavailable} trials (a tone: outside its model)")
@@ -492,14 +670,14 @@ def summary_lines(run: RunDir) -> list[str]:
 
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:
-    labels = [m.label for m in scenario.spec["protocol"].methods]
+    labels = labels_of(scenario.spec)
     trials_ = per_trial(records)
     return methods_md({"methods": labels, "per_method": per_method(trials_, labels)}) if trials_ else ""
 
 
 def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     """Each method's accuracy per trial beside the trial's bound (the TUI draws it)."""
-    labels = [m.label for m in scenario.spec["protocol"].methods]
+    labels = labels_of(scenario.spec)
     trials_ = per_trial(run.records())
     names = list(trials_)
     curves = []
@@ -552,7 +730,8 @@ def figure(run: RunDir, summary: dict) -> None:
         ]
         for label in summary["methods"]
     ]
-    axes[1].boxplot([g or [np.nan] for g in gaps], tick_labels=[label.split(" ")[0] for label in summary["methods"]])
+    ticks = [label.split(" ")[0] + (" corr." if "corrected source" in label else "") for label in summary["methods"]]
+    axes[1].boxplot([g or [np.nan] for g in gaps], tick_labels=ticks)
     axes[1].tick_params(axis="x", labelrotation=30)
     axes[1].axhline(CLOSE, color="k", ls=":", lw=0.8)
     axes[1].set_ylabel("points below the Bayes bound")
