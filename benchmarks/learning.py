@@ -125,7 +125,7 @@ def shapes_local(rounds: int) -> None:
         net = build_network("shapes", 2, seed=0)
         if whole_revolution:
             net.features[1] = ShapeLikelihood(len(net.features[1].weight), LENGTH)
-        matched_start(net, faults, seed=0)
+        matched_start(net, faults, seed=0, law="gaussian")  # the bursts above are Gaussian
         return net
 
     compare(
