@@ -2,9 +2,10 @@
 with tooth counts no preset has, described as a user would (tooth counts, module, face width,
 bores, speed, load, sensor), recordings written as loggers write them, in two formats each (one
 without a tacho), scenario files of under 30 lines, and every step a user takes: validate,
-inspect, a gap diagnosis, a detection run, scoring a new recording. Bad input -- a wrong column,
-a missing file, a sensitivity in the wrong unit, a geometry error -- is one line at validate time,
-exit 2, naming the file, the table and the key.
+inspect, a gap diagnosis, a detection run, scoring a new recording -- from the takes with a tacho
+and from those without (each record's speed from the description's mesh orders). Bad input -- a
+wrong column, a missing file, a sensitivity in the wrong unit, a geometry error, no tacho, speed or
+description -- is one line at validate time, exit 2, naming the file, the table and the key.
 
 The recordings are gearlab's simulation of each description (gearlab.data.simulated, the model
 integrated at 200 kHz and read at the logger's rate) with sensor noise at 25 dB:
@@ -157,6 +158,7 @@ adapter = "matched_filter"
 
 CSV_KEYS = 'vibration = "acc_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"'
 H5_KEYS = 'vibration = "acc"\ngearbox = "rig.toml"'  # no tacho: each record's speed from its mesh orders
+MAT_KEYS = 'vibration = "acc"\ngearbox = "box.toml"'
 WAV_KEYS = 'vibration = 0\ntacho = 1\ngain = "1 V"\nsensitivity = "100 mV/g"'
 
 
@@ -234,6 +236,7 @@ def two_stage(tmp_path_factory):
         "gap.toml": GAP.format(name="reducer", box="box.toml", keys=WAV_KEYS, ext="wav"),
         "gap_nt.toml": GAP_NO_TACHO.format(name="reducer", box="box.toml", ext="mat"),
         "detect.toml": DETECT.format(name="reducer", box="box.toml", keys=WAV_KEYS, ext="wav"),
+        "detect_nt.toml": DETECT.format(name="reducer_nt", box="box.toml", keys=MAT_KEYS, ext="mat"),
     }
     for name, text in scenarios.items():
         (folder / name).write_text(text)
@@ -374,7 +377,7 @@ def test_one_stage_detection_and_scoring_without_a_tacho(one_stage, gearlab):
 @pytest.mark.slow
 def test_two_stage_from_recordings_to_scoring(two_stage, gearlab):
     folder, takes = two_stage
-    for scenario in ("gap.toml", "gap_nt.toml", "detect.toml"):
+    for scenario in ("gap.toml", "gap_nt.toml", "detect.toml", "detect_nt.toml"):
         code, out = gearlab(folder, "validate", scenario)
         assert code == 0 and out.startswith("OK:"), out
     expected = mesh_orders((24, 60), (35, 83))
@@ -398,6 +401,18 @@ def test_two_stage_from_recordings_to_scoring(two_stage, gearlab):
     assert code == 0, out
     fm4 = [r for r in json.loads(out) if r["method"] == "fm4" and r["unit"] == "record10"]
     assert fm4 and all(r["decision"] == "fault" for r in fm4), fm4
+    # the MATLAB takes have no tacho: the speed from both stages' mesh orders, the chip found alike
+    code, out = gearlab(folder, "run", "detect_nt.toml", "--quick")
+    assert code == 0, out
+    summary = json.loads((folder / run_dir(out) / "summary.json").read_text())
+    ((_, cond),) = summary["conditions"].items()
+    assert all("mesh" in how for how in cond["speed_from"].values()), cond["speed_from"]
+    r = next(r for r in summary["rows"] if r["method"] == "matched_filter" and r["unit"] == "record10")
+    assert r["auc"] >= 0.95 and r["detection"] == 100 and r["false_alarm"] == 0, r
+    code, out = gearlab(folder, "score", run_dir(out), "next.mat", "--json")
+    assert code == 0, out
+    mf = [r for r in json.loads(out) if r["method"] == "matched_filter" and r["unit"] == "record10"]
+    assert mf and all(r["decision"] == "fault" for r in mf), mf
 
 
 @pytest.mark.parametrize(
