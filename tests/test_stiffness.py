@@ -113,6 +113,22 @@ def test_model_is_not_changed_by_a_faulted_call(registry, pairs, models):
     np.testing.assert_array_equal(model.mesh_stiffness(points=4096).k, before)
 
 
+def test_models_of_one_pair_share_its_healthy_tvms_and_no_call_changes_it(registry, pairs):
+    """Computed once per pair, options and grid (a gap search makes a simulator per point it tries);
+    read-only, so no caller can change what the next model of the pair gets."""
+    pair = pairs["meng2020"]
+    a, b = MeshStiffnessModel(pair), MeshStiffnessModel(pair)
+    assert a._healthy(1024)[1] is b._healthy(1024)[1]
+    assert MeshStiffnessModel(pair, StiffnessOptions(fillet=False))._healthy(1024)[1] is not a._healthy(1024)[1]
+    healthy = a.mesh_stiffness(points=1024)
+    with pytest.raises(ValueError):
+        healthy.theta[0] = 1.0
+    crack = registry.get("fault", "crack")
+    faulted = b.mesh_stiffness([crack.place(2, crack.at_step(pair, 15), pair)], points=1024).k
+    faulted[:] = 0.0  # a faulted TVMS is the caller's own copy
+    assert np.array_equal(MeshStiffnessModel(pair).mesh_stiffness(points=1024).k, healthy.k) and healthy.k.any()
+
+
 @pytest.mark.parametrize("preset", PRESETS)
 @pytest.mark.parametrize("kind, step", [("crack", 15), ("chip", 20), ("spall", 20), ("pit", 20)])
 def test_fault_on_tooth_n_is_the_tooth_1_tvms_shifted(registry, pairs, models, preset, kind, step):

@@ -17,6 +17,7 @@ after the change of variable x(alpha); for faulted sections it is eq. 2.88-2.93.
 from __future__ import annotations
 
 import io
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -209,6 +210,13 @@ class MeshStiffness:
         return buf.getvalue()
 
 
+# The healthy TVMS depends on the pair, the options and the grid alone: shared by every model of
+# one pair (in this process). A gap search makes a new simulator for each parameter set it tries,
+# and computing its pair's healthy TVMS again was 12 ms of each (an eighth of a drive-inertias fit).
+HEALTHY_KEPT = 64
+_HEALTHY: OrderedDict = OrderedDict()
+
+
 class MeshStiffnessModel:
     """Builds TVMS for one gear pair; the healthy sections and integrals are made once."""
 
@@ -219,7 +227,6 @@ class MeshStiffnessModel:
         self.gear_section = healthy_section(pair.gear, pair.face_width, options.nodes)
         self._gear_integrals = self._integrals(self.gear_section)
         self._pinion_integrals = self._integrals(self.pinion_section)
-        self._healthy_cache: dict[tuple[int, str], tuple[np.ndarray, np.ndarray]] = {}
 
     def _integrals(self, section: ToothSection) -> SectionIntegrals:
         return SectionIntegrals(section, start=0.0 if self.options.root_region else section.d_1)
@@ -309,15 +316,23 @@ class MeshStiffnessModel:
         return local[in_mesh], in_mesh
 
     def _healthy(self, points: int, gear: str = "pinion") -> tuple[np.ndarray, np.ndarray]:
-        if (points, gear) not in self._healthy_cache:
+        key = (self.pair, self.options, points, gear)
+        hit = _HEALTHY.get(key)
+        if hit is None:
             theta = 2 * np.pi * np.arange(points) / points
             Z = self.pair.Z1 if gear == "pinion" else self.pair.Z2
             phi, in_mesh = self._arc(points, range(1, Z + 1), gear)
             per_tooth = np.zeros(in_mesh.shape)
             per_tooth[in_mesh] = self.tooth_pair_stiffness(phi)  # all healthy teeth in one pass
-            self._healthy_cache[(points, gear)] = (theta, per_tooth.sum(axis=0))
-        theta, k = self._healthy_cache[(points, gear)]
-        return theta, k
+            hit = (theta, per_tooth.sum(axis=0))
+            for a in hit:
+                a.setflags(write=False)  # shared by every model of the pair: never changed in place
+            _HEALTHY[key] = hit
+            if len(_HEALTHY) > HEALTHY_KEPT:
+                _HEALTHY.popitem(last=False)
+        else:
+            _HEALTHY.move_to_end(key)
+        return hit
 
 
 def mesh_stiffness(
