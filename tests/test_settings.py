@@ -94,7 +94,7 @@ def test_an_inline_table_is_read_as_declared():
 
 # Scenario keys written by hand (gearlab.scenario.Key) where a settings dataclass should declare
 # them: what is left, per module. A count may only go down; every other module has none.
-HAND_WRITTEN_KEYS = {"kinds/detection.py": 30, "kinds/transfer_benchmark.py": 7}
+HAND_WRITTEN_KEYS = {"kinds/detection.py": 30}
 
 
 def test_scenario_keys_are_declared_only_as_settings():

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -53,11 +54,11 @@ from ..learn.config import Calibration
 from ..learn.protocol import Counts, Protocol, check, check_data, history_of, shared_state, unit_key
 from ..learn.schedule import two_phases
 from ..parts.bound import BOUND, bayes_bound
-from ..parts.training import CALIBRATION, NETWORK, TRAINING, method, train_unit
+from ..parts.training import CALIBRATION, NETWORK, TRAINING, MethodEntry, method, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, keys_of, location
-from ..settings import MAX_SEED, quick_limits, shrunk
+from ..scenario import Scenario, Table, keys_of, location
+from ..settings import MAX_SEED, quick_limits, setting, shrunk
 from .common import (
     DATASET_TABLE,
     SOURCE_KEYS,
@@ -104,38 +105,43 @@ SENSORS = {
 }
 TONE = {"frequency": (5.0, 3000.0, "log"), "ratio": (0.1, 0.8)}
 
+
+@dataclass(frozen=True, kw_only=True)
+class Benchmark:
+    """[benchmark]"""
+
+    trials: int = setting(int, 24, low=1, high=10000, doc="number of random targets (>= 24 for the goals)")
+    seed: int = setting(int, 0, low=0, high=MAX_SEED, doc=f"seeds the draws; below {REPORT_SEEDS}: development")
+    only: list = setting(list, [], doc="trial indices to run, each drawn as in the full run ([] = every trial)")
+
+
+@dataclass(frozen=True, kw_only=True)
+class UnsupervisedMethod(MethodEntry):
+    """[[methods]]: the targets give no label (k = 0)."""
+
+    adapter: str = setting(str, doc="adapter or detector plugin, unsupervised (the targets give no label)")
+    supervised: bool = setting(bool, False, doc="must be false: k = 0")
+    params: dict = setting(dict, {}, doc="its parameters")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Correction:
+    """[protocol] correct_source, beside the Protocol and Calibration keys."""
+
+    correct_source: bool = setting(
+        bool,
+        False,
+        doc="per trial, also run every method on the source corrected by the gap diagnosis of the "
+        "target history ([diagnosis])",
+    )
+
+
 TABLES = {
-    "benchmark": Table(
-        {
-            "trials": Key(int, 24, in_range(1, 10000), "number of random targets (>= 24 for the goals)"),
-            "seed": Key(int, 0, in_range(0, MAX_SEED), f"seeds the draws; below {REPORT_SEEDS}: development"),
-            "only": Key(list, [], doc="trial indices to run, each drawn as in the full run ([] = every trial)"),
-        }
-    ),
+    "benchmark": Table(keys_of(Benchmark)),
     "source": Table(SOURCE_KEYS),  # common.SourceEntry
     "network": NETWORK,
-    "methods": Table(
-        {
-            "adapter": Key(str, doc="adapter or detector plugin, unsupervised (the targets give no label)"),
-            "supervised": Key(bool, False, doc="must be false: k = 0"),
-            "params": Key(dict, {}, doc="its parameters"),
-        },
-        array=True,
-        required=True,
-    ),
-    "protocol": Table(
-        {
-            **keys_of(Protocol, ("repetitions",)),
-            **TRAINING,
-            **CALIBRATION,
-            "correct_source": Key(
-                bool,
-                False,
-                doc="per trial, also run every method on the source corrected by the gap diagnosis of the "
-                "target history ([diagnosis])",
-            ),
-        }
-    ),
+    "methods": Table(keys_of(UnsupervisedMethod), array=True, required=True),
+    "protocol": Table({**keys_of(Protocol, ("repetitions",)), **TRAINING, **CALIBRATION, **keys_of(Correction)}),
     # declared once, on gearlab.gap.scoring.Settings (as the gap kind's [diagnosis]); defaults: the shipped ones
     "diagnosis": Table(keys_of(Diagnosis)),
 }
@@ -712,10 +718,16 @@ def figure(run: RunDir, summary: dict) -> None:
     from ..plots import save
 
     names = list(summary["trials"])
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.5))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
     x = np.arange(len(names))
+    plain = [label for label in summary["methods"] if "corrected source" not in label]
     for label in summary["methods"]:
-        axes[0].plot(x, [summary["trials"][n]["accuracy"].get(label, np.nan) for n in names], "o", ms=4, label=label)
+        # a method on the corrected source: its plain row's colour, an open square
+        corrected = label not in plain
+        i = plain.index(label.replace(", corrected source", "")) if corrected else plain.index(label)
+        style = {"marker": "s", "mfc": "none"} if corrected else {"marker": "o"}
+        y = [summary["trials"][n]["accuracy"].get(label, np.nan) for n in names]
+        axes[0].plot(x, y, ls="none", ms=4, color=f"C{i}", label=label, **style)
     bound = [summary["trials"][n]["bound"] for n in names]
     axes[0].plot(x, [np.nan if b is None else b for b in bound], "k_", ms=12, label=BOUND)
     axes[0].set_xticks(x, [n.removeprefix("trial") for n in names], fontsize=7)
@@ -732,12 +744,12 @@ def figure(run: RunDir, summary: dict) -> None:
     ]
     ticks = [label.split(" ")[0] + (" corr." if "corrected source" in label else "") for label in summary["methods"]]
     axes[1].boxplot([g or [np.nan] for g in gaps], tick_labels=ticks)
-    axes[1].tick_params(axis="x", labelrotation=30)
+    axes[1].tick_params(axis="x", labelrotation=45, labelsize=7)
     axes[1].axhline(CLOSE, color="k", ls=":", lw=0.8)
     axes[1].set_ylabel("points below the Bayes bound")
     axes[1].set_title("distance to the bound, trials with a bound")
     fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=4, fontsize=8)
-    fig.tight_layout(rect=(0, 0.12, 1, 1))
+    fig.tight_layout(rect=(0, 0.17, 1, 1))
     save(fig, run.figures / "transfer_benchmark.png", dpi=90, bbox_inches=None)
 
 
