@@ -178,10 +178,10 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     """Stages after the first of a multi-stage source: where the target's lines put each stage's
     mesh order against where the source's own lines put it, both read alike (inspect's
     check_description on each). A later stage's mesh is often weak, or held by its harmonics, so it
-    is not tested against the description's order but against the source's reading of itself: the
-    stage differs when the target's reading moves off the source's and the target holds no line
-    where the source's is. {'stages': [{stage, expected, source, target}], 'line': the one line of
-    the first difference, or None}."""
+    is not tested against the description's order but against the source's reading of itself (a
+    mesh of no whole input order: against the description's): the stage differs when the target's
+    reading moves off that and the target holds no line there. {'stages': [{stage, expected, source,
+    target}], 'line': the one line of the first difference, or None}."""
     from ..inspect import _tol_mesh, check_description
 
     box = _PairDescription.train(pair)
@@ -204,11 +204,18 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
             "target": t.get("measured_order"),
         }
         out["stages"].append(entry)
-        if entry["source"] is None or entry["target"] is None or out["line"] is not None:
+        # A mesh of no whole input order is held by the source at one phase (its revolutions are one
+        # steady period each, builder.steady_response): laid end to end they show whole orders only,
+        # so its reading of itself says nothing and the target is read against the described order.
+        whole = abs(entry["expected"] - round(entry["expected"])) < 1e-6
+        reference = entry["source"] if whole else entry["expected"]
+        if reference is None or entry["target"] is None or out["line"] is not None:
             continue
         lines, n, _ = read["target"]
-        tol = max(_tol_mesh(entry["source"], 1.0 / n), _tol_mesh(entry["source"], 1.0 / read["source"][1]))
-        if abs(entry["target"] - entry["source"]) <= tol or lines.near(entry["source"], tol) is not None:
+        tol = _tol_mesh(reference, 1.0 / n)
+        if whole:
+            tol = max(tol, _tol_mesh(reference, 1.0 / read["source"][1]))
+        if abs(entry["target"] - reference) <= tol or lines.near(reference, tol) is not None:
             continue
         st = table.stages[k]
         seen = entry["target"] / float(st.pinion_shaft_order)

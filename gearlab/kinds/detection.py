@@ -60,6 +60,7 @@ what a flag on it is (a watched-gear fault, or other damage: kinds.detection_whi
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..data.cache import load_or_build
@@ -75,8 +76,8 @@ from ..parts.measured import target_spec
 from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training
 from ..registry import METHODS, get_registry
 from ..runs import RunDir
-from ..scenario import Key, Scenario, Table, in_range, location, one_of
-from ..settings import shrunk
+from ..scenario import Scenario, Table, keys_of, location
+from ..settings import setting, shrunk
 from ..signals.indicators import DEFAULT_INDICATORS, INDICATORS
 from .common import (
     DATASET_TABLE,
@@ -134,145 +135,166 @@ MAX_DRAWS = 64
 # gearlab's recipe (a history threshold at 1 %).
 UNIT_THRESHOLD = {"threshold": RECIPE.threshold, "false_alarm": RECIPE.false_alarm}
 
+
+@dataclass(frozen=True, kw_only=True)
+class Corrected:
+    """[corrected]: the corrected source (the [source] with the effects a gap diagnosis found)."""
+
+    effects: list = setting(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)")
+    label: str = setting(str, "corrected", doc="the corrected source's name in the method rows")
+    tsa: int = setting(
+        int,
+        0,
+        low=0,
+        high=1000,
+        doc="a corrected sample is the TSA of this many simulated revolutions, each with its own "
+        "noise (the revolutions of a record-level unit); 0: one revolution",
+    )
+    draws: int = setting(
+        int,
+        1,
+        low=1,
+        high=MAX_DRAWS,
+        doc="noise draws of each corrected sample; a network trains on one of them at random per "
+        "batch row, so it cannot learn the noise of one draw by heart (docs/real_data.md)",
+    )
+    history_units: str = setting(
+        str,
+        "revolution",
+        choices=CORRECTED_HISTORY,
+        doc="what the corrected source's methods see of the history in training: 'revolution' (the "
+        "history revolutions, as the plain source's) or 'tsa' (the history's TSAs of `tsa` "
+        "revolutions, sliding as its units are: the target at the corrected sample's averaging)",
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class TargetRecords:
+    """[target]: the measured records, history and test."""
+
+    vibration: int | str = setting((int, str), doc="vibration column: 0-based index or header name")
+    tacho: int | str = setting(
+        (int, str), "", doc="tacho column: 0-based index or header name; or give 'speed' or 'gearbox'"
+    )
+    pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="tacho pulses per input-shaft revolution")
+    speed: float | str | None = setting(
+        (int, float, str),
+        None,
+        doc="without a tacho: the input-shaft speed, e.g. '25 Hz' (a file entry may give its own "
+        "'speed'); with 'gearbox' too, refined to ±1 % by the mesh orders",
+        unit="Hz",
+    )
+    gearbox: str = setting(
+        str,
+        "",
+        doc="without a tacho: a gearbox description (file relative to the scenario, or a built-in "
+        "name) whose mesh orders give each record's speed",
+    )
+    sensitivity: float | str | None = setting(
+        (int, float, str), None, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"
+    )
+    gain: float | str | None = setting(
+        (int, float, str), None, doc="volts per file unit (integer counts; WAV: at full scale)"
+    )
+    fs: float | str | None = setting(
+        (int, float, str), None, doc="sampling rate, e.g. '66666.67 Hz', when a file carries none"
+    )
+    transient: str = setting(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution")
+    positive: str = setting(str, "fault", doc="the label of records with the fault to detect; every other is negative")
+    files: list = setting(list, doc="[{file, role = 'history' | 'test', label, condition, speed (both optional)}, ...]")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Classical:
+    """[classical]: the classical indicators of the TSA."""
+
+    indicators: list = setting(
+        list, list(DEFAULT_INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"
+    )
+    mesh_orders: list = setting(
+        list,
+        [],
+        doc="mesh orders of the TSA's shaft (default: the source pinion's teeth); the first is the "
+        "tooth count of the gear on that shaft (the localised indicators' windows)",
+    )
+    shaft_orders: int = setting(int, 2, low=0, high=100, doc="low shaft orders removed with the mesh harmonics")
+    sidebands: int = setting(int, 1, low=0, high=100, doc="sidebands either side of each mesh harmonic (FM4)")
+    slow_shafts: list = setting(
+        list,
+        [],
+        doc="periods, in whole input revolutions, of the other shafts whose localised damage "
+        "tooth_sync is to tell from the input pinion's (a shaft turning q times slower, q whole, "
+        "brings a tooth back to one input angle every q revolutions; the PHM rig: [3, 5])",
+    )
+    shafts: dict = setting(
+        dict,
+        {},
+        doc="the other shafts a localised fault may turn with, {name = period in whole input "
+        "revolutions} (the PHM rig: {idler = 3, output = 5}): pinion_sync calls a pinion fault "
+        "only for localised content of the input TSA that no tooth of these shafts explains (what "
+        "each shaft's TSA holds beyond the input TSA's copies under a smooth modulation of its turn)",
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Detection:
+    """[detection]: the record-level units, the one threshold rule and false-alarm rate."""
+
+    blocks: list = setting(list, [10, 30], doc="revolutions per record-level TSA unit")
+    false_alarm: float = setting(
+        float, 0.01, low=1e-6, high=0.5, doc="share of healthy history units above the threshold"
+    )
+    input: str = setting(
+        str,
+        "difference",
+        doc="what the learned methods see: 'difference' (revolution or TSA less its "
+        "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
+    )
+    points: int = setting(
+        int,
+        POINTS,
+        low=64,
+        high=POINTS,
+        doc="samples per revolution the learned methods see: the order spectrum of what they see cut "
+        f"below points / 2 ({POINTS}, the records' grid: all of it)",
+    )
+    threshold: str = setting(
+        str,
+        "records",
+        doc="'records': predictive quantile for a new record's unit (record effect + within-record "
+        "spread, one-way random effects); 'pooled': Gumbel quantile of the pooled history units",
+    )
+    history_fit: str = setting(
+        str,
+        "all",
+        choices=HISTORY_FITS,
+        doc="how a network's history scores are made: 'all' (trained on every history record, "
+        "which it then scores) or 'crossed' (one training per history record left out of its "
+        "training rows; that record's units are scored by it, the test units by all of them)",
+    )
+    seeds: int = setting(
+        int,
+        1,
+        low=1,
+        high=MAX_SEEDS,
+        doc="trainings per network method and condition; more than 1: the median of their history-standardised scores",
+    )
+    source_speed: str = setting(
+        str,
+        "records",
+        doc="'records': the source simulated at each condition's history speed "
+        "(to 1 Hz); 'source': at the [source]'s own speed",
+    )
+
+
 TABLES = {
     "source": Table(DATASET_TABLE.keys, required=True),
-    "corrected": Table(
-        {
-            "effects": Key(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)"),
-            "label": Key(str, "corrected", doc="the corrected source's name in the method rows"),
-            "tsa": Key(
-                int,
-                0,
-                in_range(0, 1000),
-                "a corrected sample is the TSA of this many simulated revolutions, each with its own "
-                "noise (the revolutions of a record-level unit); 0: one revolution",
-            ),
-            "draws": Key(
-                int,
-                1,
-                in_range(1, MAX_DRAWS),
-                "noise draws of each corrected sample; a network trains on one of them at random per "
-                "batch row, so it cannot learn the noise of one draw by heart (docs/real_data.md)",
-            ),
-            "history_units": Key(
-                str,
-                "revolution",
-                one_of(*CORRECTED_HISTORY),
-                "what the corrected source's methods see of the history in training: 'revolution' (the "
-                "history revolutions, as the plain source's) or 'tsa' (the history's TSAs of `tsa` "
-                "revolutions, sliding as its units are: the target at the corrected sample's averaging)",
-            ),
-        }
-    ),
-    "target": Table(
-        {
-            "vibration": Key((int, str), doc="vibration column: 0-based index or header name"),
-            "tacho": Key(
-                (int, str), "", doc="tacho column: 0-based index or header name; or give 'speed' or 'gearbox'"
-            ),
-            "pulses_per_rev": Key(int, 1, in_range(1, 10_000), "tacho pulses per input-shaft revolution"),
-            "speed": Key(
-                (int, float, str),
-                None,
-                doc="without a tacho: the input-shaft speed, e.g. '25 Hz' (a file entry may give its own "
-                "'speed'); with 'gearbox' too, refined to ±1 % by the mesh orders",
-                unit="Hz",
-            ),
-            "gearbox": Key(
-                str,
-                "",
-                doc="without a tacho: a gearbox description (file relative to the scenario, or a built-in "
-                "name) whose mesh orders give each record's speed",
-            ),
-            "sensitivity": Key(
-                (int, float, str), None, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"
-            ),
-            "gain": Key((int, float, str), None, doc="volts per file unit (integer counts; WAV: at full scale)"),
-            "fs": Key((int, float, str), None, doc="sampling rate, e.g. '66666.67 Hz', when a file carries none"),
-            "transient": Key(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution"),
-            "positive": Key(str, "fault", doc="the label of records with the fault to detect; every other is negative"),
-            "files": Key(list, doc="[{file, role = 'history' | 'test', label, condition, speed (both optional)}, ...]"),
-        },
-        required=True,
-    ),
+    "corrected": Table(keys_of(Corrected)),
+    "target": Table(keys_of(TargetRecords), required=True),
     "network": NETWORK,
     "methods": Table(METHOD_KEYS, array=True),
-    "classical": Table(
-        {
-            "indicators": Key(
-                list, list(DEFAULT_INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"
-            ),
-            "mesh_orders": Key(
-                list,
-                [],
-                doc="mesh orders of the TSA's shaft (default: the source pinion's teeth); the first is the "
-                "tooth count of the gear on that shaft (the localised indicators' windows)",
-            ),
-            "shaft_orders": Key(int, 2, in_range(0, 100), "low shaft orders removed with the mesh harmonics"),
-            "sidebands": Key(int, 1, in_range(0, 100), "sidebands either side of each mesh harmonic (FM4)"),
-            "slow_shafts": Key(
-                list,
-                [],
-                doc="periods, in whole input revolutions, of the other shafts whose localised damage "
-                "tooth_sync is to tell from the input pinion's (a shaft turning q times slower, q whole, "
-                "brings a tooth back to one input angle every q revolutions; the PHM rig: [3, 5])",
-            ),
-            "shafts": Key(
-                dict,
-                {},
-                doc="the other shafts a localised fault may turn with, {name = period in whole input "
-                "revolutions} (the PHM rig: {idler = 3, output = 5}): pinion_sync calls a pinion fault "
-                "only for localised content of the input TSA that no tooth of these shafts explains (what "
-                "each shaft's TSA holds beyond the input TSA's copies under a smooth modulation of its turn)",
-            ),
-        }
-    ),
-    "detection": Table(
-        {
-            "blocks": Key(list, [10, 30], doc="revolutions per record-level TSA unit"),
-            "false_alarm": Key(float, 0.01, in_range(1e-6, 0.5), "share of healthy history units above the threshold"),
-            "input": Key(
-                str,
-                "difference",
-                doc="what the learned methods see: 'difference' (revolution or TSA less its "
-                "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
-            ),
-            "points": Key(
-                int,
-                POINTS,
-                in_range(64, POINTS),
-                "samples per revolution the learned methods see: the order spectrum of what they see cut "
-                f"below points / 2 ({POINTS}, the records' grid: all of it)",
-            ),
-            "threshold": Key(
-                str,
-                "records",
-                doc="'records': predictive quantile for a new record's unit (record effect + within-record "
-                "spread, one-way random effects); 'pooled': Gumbel quantile of the pooled history units",
-            ),
-            "history_fit": Key(
-                str,
-                "all",
-                one_of(*HISTORY_FITS),
-                "how a network's history scores are made: 'all' (trained on every history record, "
-                "which it then scores) or 'crossed' (one training per history record left out of its "
-                "training rows; that record's units are scored by it, the test units by all of them)",
-            ),
-            "seeds": Key(
-                int,
-                1,
-                in_range(1, MAX_SEEDS),
-                "trainings per network method and condition; more than 1: the median of their "
-                "history-standardised scores",
-            ),
-            "source_speed": Key(
-                str,
-                "records",
-                doc="'records': the source simulated at each condition's history speed "
-                "(to 1 Hz); 'source': at the [source]'s own speed",
-            ),
-        }
-    ),
+    "classical": Table(keys_of(Classical)),
+    "detection": Table(keys_of(Detection)),
     # One threshold rule and one false-alarm rate, [detection]'s (UNIT_THRESHOLD)
     "protocol": Table(
         {**TRAINING, **{k: v for k, v in CALIBRATION.items() if k not in UNIT_THRESHOLD}},
