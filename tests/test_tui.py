@@ -62,7 +62,7 @@ adapter = "source_only"
 [[methods]]
 adapter = "mmd"
 """,
-        repetitions=3,
+        repetitions=2,  # 8 units: cancel/resume stops after the second and resumes the rest
         max_epochs=40,
     )
     + '[output]\ndir = "{runs}"\n'
@@ -231,7 +231,7 @@ def transfer_folder(folder, tmp_path):
 
 
 def test_cancel_keeps_finished_units_and_resume_completes_the_run(transfer_folder, tmp_path):
-    total = 3 * 2 * 2
+    total = 2 * 2 * 2
 
     async def script(pilot):
         app = pilot.app
@@ -436,7 +436,7 @@ def kinds_folder(tmp_path, monkeypatch, kinds_cache):
     shutil.copytree(KINDS_DIR, folder)
     (folder / "stiff.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
     (folder / "transfer.toml").write_text(
-        TRANSFER.replace("{runs}", "runs").replace("repetitions = 3", "repetitions = 1")
+        TRANSFER.replace("{runs}", "runs").replace("repetitions = 2", "repetitions = 1")
     )
     detection_scenario(tmp_path, methods=("source_only", "matched_filter"))  # scenarios/det.toml, records in data/
     return folder
@@ -718,9 +718,7 @@ def finished_runs(tmp_path_factory):
     base = tmp_path_factory.mktemp("finished_tui")
     folder = base / "scenarios"
     shutil.copytree(KINDS_DIR, folder)
-    (folder / "transfer.toml").write_text(
-        TRANSFER.replace("{runs}", str(base / "runs")).replace("repetitions = 3", "repetitions = 2")
-    )
+    (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", str(base / "runs")))
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(base / "cache"))
         transfers = [run_scenario(folder / "transfer.toml").path for _ in range(2)]
