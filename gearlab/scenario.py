@@ -10,7 +10,6 @@ error names the file, the table and the key. ``gearlab validate`` prints the sam
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,20 +81,6 @@ def one_of(*choices: str) -> Callable[[Any, str], Any]:
         return value
 
     check.choices = choices  # what a front-end may offer (the TUI's run form)
-    return check
-
-
-def in_range(low: float | None = None, high: float | None = None) -> Callable[[Any, str], Any]:
-    def check(value, where):
-        # written as "not inside" so that NaN, which compares false with everything, is outside
-        if not ((low is None or value >= low) and (high is None or value <= high)) or (
-            isinstance(value, float) and not math.isfinite(value)
-        ):
-            span = f"[{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
-            raise GearlabInputError(f"{where}: {shown(value)} is outside {span}")
-        return value
-
-    check.bounds = (low, high)  # what docs/settings.md shows
     return check
 
 
