@@ -1,8 +1,8 @@
 """docs/settings.md, generated from the declarations: every table of every scenario kind, one row per
-key (type, default, unit, bounds, --quick limit, meaning), read off the kinds' TABLES
-(`gearlab.scenario.Key`; a key declared with `gearlab.settings.setting` brings its bounds and
---quick limit through `keys_of`). A table that repeats one printed before (the dataset keys of
-every [source], a [network]) is written as that table and what differs.
+key (type, default, unit, bounds, --quick limit, meaning), read off the kinds' TABLES (each key a
+`gearlab.settings.setting` field of a settings dataclass, made a scenario key with its bounds and
+--quick limit by `gearlab.scenario.keys_of`). A table that repeats one printed before (the dataset
+keys of every [source], a [network]) is written as that table and what differs.
 
     python -m gearlab.settings_doc            # rewrite docs/settings.md
     python -m gearlab.settings_doc --check    # exit 1 when docs/settings.md is out of date
@@ -73,14 +73,8 @@ def _span(low, high) -> str:
 
 def row(name: str, key: Key) -> str:
     """One key's row: key, type, default, unit, bounds, --quick, meaning."""
-    check = key.check
-    meta = getattr(check, "setting", None)
-    if meta is not None:
-        bounds = " \\| ".join(meta.choices) if meta.choices else _span(meta.low, meta.high)
-    elif getattr(check, "choices", None):
-        bounds = " \\| ".join(check.choices)
-    else:
-        bounds = _span(*getattr(check, "bounds", (None, None)))
+    meta = getattr(key.check, "setting", None)  # keys_of's check carries its field's declaration
+    bounds = "" if meta is None else " \\| ".join(meta.choices) if meta.choices else _span(meta.low, meta.high)
     quick = "" if meta is None or meta.quick is None else f"≤ {_num(meta.quick)}"
     default = "required" if key.required else _cell(_toml(key.default))
     return f"| `{name}` | {_type(key.types)} | {default} | {key.unit} | {bounds} | {quick} | {_cell(key.doc)} |"
