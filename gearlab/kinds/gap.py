@@ -53,6 +53,7 @@ from .common import (
     dataset_spec,
     device_of,
     executor_for,
+    gearbox_name,
     no_compare,
     no_title,
     planned_counts,
@@ -66,6 +67,8 @@ from .gap_inputs import (
     check_points,
     check_sampling,
     read_history,
+    units_declared,
+    units_warning,
 )
 from .gap_tables import accuracy_md, params_text, percent, ranking_md, tables_md, views_md
 from .gap_verdict import gap_lines
@@ -192,11 +195,14 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     for key in ("preset", "file"):
         if entry[key]:
             raise GearlabInputError(f"{where}: give either 'files' (measured records) or '{key}', not both")
-    for key in ("vibration", "tacho"):
-        if entry[key] == "":
-            raise GearlabInputError(f"{where} key '{key}': missing; measured records need the {key} column")
+    if entry["vibration"] == "":
+        raise GearlabInputError(f"{where} key 'vibration': missing; measured records need the vibration column")
+    # without a tacho, a declared 'speed' or the 'gearbox' description's mesh orders give each record's
+    # speed (parts.measured.target_spec refuses none of the three; the description resolved and loaded now)
+    if entry["gearbox"]:
+        entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)}
     target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",))
-    return Records(entry["name"] or "measured records", target, entry["sensitivity"] is not None)
+    return Records(entry["name"] or "measured records", target, units_declared(target))
 
 
 def candidates(names, where: str) -> tuple[str, ...]:
@@ -288,8 +294,8 @@ def target_rows(dataset, history: np.ndarray, z1: int, where: str) -> tuple[np.n
     if meta.get("source") == "measured":
         fs, speed = float(meta["fs_hz"]), float(meta["speed_hz"])
         check_points(fs / speed, z1, where, f"the record's {fs:g} Hz at {speed:.4g} Hz shaft speed")
-        if str(meta.get("units", "")).startswith("unknown"):
-            note = "; ".join(filter(None, [note, f"WARNING: units {meta['units']}"]))
+        if str(meta.get("units", "")).startswith("unknown"):  # what fits volts, and m/s² already
+            note = "; ".join(filter(None, [note, units_warning(dataset.spec.vibration, rows)]))
     return rows, note
 
 
@@ -343,8 +349,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         records = isinstance(spec["target"], Records)
         settings: Settings = spec["settings"]
-        if records:  # measured records: the history's revolutions; the source runs at their tacho speed
-            target_X, speed, record_notes, fs = read_history(spec["target"], on_event)
+        if records:  # measured records: the history's revolutions; the source runs at their speed
+            target_X, speed, record_notes, fs, from_mesh = read_history(spec["target"], on_event)
             check_points(
                 fs / speed,
                 z1,
@@ -357,12 +363,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 f"compared up to shaft order {settings.max_order} ({PASSBAND:g} of the records' "
                 "Nyquist order): the source is low-passed to the records' bandwidth"
             )
-            if not spec["target"].units_known:
-                record_notes.append(
-                    "WARNING: units unknown: no sensitivity given; the records' values are taken "
-                    "as m/s² (set sensitivity = '10 mV/g')"
-                )
-            chain = Chain(fs=fs, speed=speed)  # text records: start fractions not kept (drawn uniformly)
+            if not spec["target"].units_known:  # what fits values in volts, and values in m/s² already
+                record_notes.append(units_warning(spec["target"].target.vibration, target_X))
+            # start fractions not kept (drawn uniformly)
+            chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh)
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))

@@ -1,6 +1,7 @@
 """What the gap kind checks and reads of its target before any diagnosis (gearlab.kinds.gap):
-measured history records of one operating condition, enough healthy revolutions, a rate that
-resolves the mesh harmonics."""
+measured history records of one operating condition (with a tacho, or without one a declared
+speed or the description's mesh orders, as the detection kind reads them), enough healthy
+revolutions, a rate that resolves the mesh harmonics, and what is said when their units are unknown."""
 
 from __future__ import annotations
 
@@ -28,12 +29,17 @@ SIDEBANDS = 3
 @dataclass(frozen=True, kw_only=True)
 class TargetEntry(DatasetEntry):
     """[target]: a dataset entry, or measured records in the detection kind's shape (a list of files with
-    a tacho of N pulses per revolution, docs/real_data.md); the diagnosis reads their history files."""
+    a tacho of N pulses per revolution, or without one a 'speed' or 'gearbox'; docs/real_data.md); the
+    diagnosis reads their history files."""
 
     vibration: int | str = setting(
         (int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"
     )
-    tacho: int | str = setting((int, str), "", doc="measured data: the tacho channel (records: 0-based column or name)")
+    tacho: int | str = setting(
+        (int, str),
+        "",
+        doc="measured data: the tacho channel (records: 0-based column or name); or give 'speed' or 'gearbox'",
+    )
     pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="records: tacho pulses per input-shaft revolution")
     sensitivity: float | str | None = setting(
         (int, float, str),
@@ -56,32 +62,36 @@ class Records:
 
     name: str
     target: Target
-    units_known: bool = True  # a sensitivity was given (else the values are taken as m/s², with a warning)
+    # a sensitivity was given, or the vibration channel's name says its unit (else the values are
+    # taken as m/s², with a warning: units_warning)
+    units_known: bool = True
 
     @property
     def history(self):
         return tuple(f for f in self.target.files if f.role == "history")
 
 
-def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float]:
-    """The history records' revolutions in m/s² (n, POINTS), their mean tacho speed, notes, and
-    their sampling rate (the [target]'s fs, or the first record's own).
-    Records of different speeds are different operating conditions: refused. Each record starts at
-    one of the tacho's N marks: every record is turned by m/N of a turn into register with the first
-    (textzip.align_to, as the detection kind does), so the set has one synchronous average."""
-    from ..data.textzip import align_to
+def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float, bool]:
+    """The history records' revolutions in m/s² (n, POINTS), their mean speed, notes, their sampling
+    rate (the [target]'s fs, or the first record's own), and whether the speed was found from the
+    description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh).
+    Records of different speeds are different operating conditions: refused. Every record is turned
+    into register with the first (detection_records.aligned, as the detection kind does): with a tacho
+    by m/N of a turn (one of its N marks), without one by any whole sample of the revolution (each
+    record's angle is zero at its first sample), so the set has one synchronous average."""
+    from .detection_records import aligned
 
     t = records.target
-    rows, speeds, notes = [], {}, []
+    rows, speeds, found, notes = [], {}, {}, []
     files = records.history
     on_event(Event("stage", stage="records", total=len(files), message="measured history records"))
     for i, f in enumerate(files):
         rec = t.read(f)
         revs = rec.revolutions
         if rows:
-            _, revs = align_to(rows[0].mean(axis=0), revs, t.pulses_per_rev)
+            _, revs = aligned(rows[0].mean(axis=0), revs, t.tacho, t.pulses_per_rev)
         rows.append(revs)
-        speeds[f.path] = rec.speed_hz
+        speeds[f.path], found[f.path] = rec.speed_hz, rec.angle_source
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     low, high = min(speeds.values()), max(speeds.values())
     if high > low * (1 + SPEED_SPREAD):
@@ -95,11 +105,43 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         notes.append(f"{skipped} test file(s) of the [target] are not used: the gap is measured on the history")
     X = np.concatenate(rows).astype(np.float64)
     speed = float(np.average(list(speeds.values()), weights=[len(r) for r in rows]))
+    # how the speed was found: the tacho, a declared speed, or the description's mesh lines (each its own)
+    how = "; ".join(dict.fromkeys(found.values()))
     notes.append(
-        f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz "
-        f"(tacho); the source simulates that speed"
+        f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz ({how}); "
+        "the source simulates that speed"
     )
-    return X, speed, notes, t.fs or rec.fs
+    from_mesh = t.tacho is None and bool(t.gearbox) and t.speed_hz is None and all(f.speed_hz is None for f in files)
+    return X, speed, notes, t.fs or rec.fs, from_mesh
+
+
+def units_warning(channel, X: np.ndarray) -> str:
+    """What is said of measured values whose units are unknown (no sensitivity, and a vibration
+    *channel* whose name says no unit: recordings.channel_scale), *X* the rows taken as m/s²: what
+    fits values in volts and what fits values in m/s² already, and how a file says the latter (a
+    channel name ending in the unit: recordings.name_unit)."""
+    return (
+        f"WARNING: units unknown: no sensitivity given and vibration channel '{channel}' names no unit; "
+        f"the values are taken as m/s² (RMS {float(np.sqrt(np.mean(np.square(X)))):.3g}). Values in volts "
+        "need the sensor's sensitivity (e.g. sensitivity = '10 mV/g'; integer counts a gain too); values "
+        "already in m/s² need none: a channel name ending in its unit (e.g. 'acc_ms2', 'acc [m/s^2]' or "
+        "'acc [g]') says so, and this warning goes"
+    )
+
+
+def units_declared(target: Target) -> bool:
+    """A sensitivity is given, or the vibration channel's name in the first history file's header says
+    the values are an acceleration already (recordings.name_unit: m/s², g; a name in volts without a
+    sensitivity is refused before: recordings.channel_scale)."""
+    from ..data.recordings import channel_key, name_unit, named, read_header
+
+    if target.sensitivity is not None:
+        return True
+    first = next(f for f in target.files if f.role == "history")
+    header = read_header(first.resolved)
+    name = channel_key(target.vibration)
+    said = name_unit(named(name, header.channels) if header.indexed else name)
+    return said is not None and said[0] == "acceleration"
 
 
 def check_healthy(count: int, where: str) -> None:
