@@ -588,46 +588,26 @@ def score(
     run_dir: Annotated[Path, typer.Argument(help="a finished detection run directory")],
     files: Annotated[list[Path], typer.Argument(help="new recordings of the run's target (any format it reads)")],
     condition: Annotated[
-        str | None, typer.Option(help="the run's condition to score them in (default: the nearest tacho speed)")
+        str | None, typer.Option(help="the run's condition to score them in (default: the nearest speed)")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print the rows as JSON")] = False,
 ) -> None:
     """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
 
-    Per record, method and unit (revolution, recordN): the units called over the threshold, the record's decision
-    (most of its units called), the threshold rule, and the gear the record's change is localised on against the
-    run's history (a flag on a gear other than the one the run watches is other damage). Each row is appended to
-    the run's scoring history (scoring/history.jsonl), whose trend per method the report shows.
+    Per record: its speed and how it was found, and the gear its change is localised on against the run's history, with the evidence (each shaft's z over its threshold, the tooth). Per method and unit (revolution, recordN): the units called over the threshold, the median score less the threshold, and the decision: most units called is a fault, or "other damage: <gear>" when the change lies on a gear the run does not watch (as the run's which-gear table calls it). Each row is appended to the run's scoring history (scoring/history.jsonl), whose trend per method the report and the TUI show.
 
     Example: gearlab score runs/det/20260101-120000-000000 today.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from rich.table import Table
-
     from .engine import score_recordings
     from .runs import RunDir
+    from .terminal import score_tables
 
     rows = score_recordings(RunDir.open(run_dir), files, condition)
     if as_json:
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
         return
-    table = Table(title=f"scored with {run_dir}")
-    for col in ("file", "condition", "method", "unit", "called", "median score", "threshold", "decision", "localised"):
-        table.add_column(col)
-    for r in rows:
-        median = "-" if r["median_score"] is None else f"{r['median_score']:.3g}"
-        colour = "red" if r["decision"] == "fault" else "green"
-        table.add_row(
-            r["file"],
-            r["condition"],
-            r["method"],
-            r["unit"],
-            f"{r['called']} / {r['units']}",
-            median,
-            f"{r['threshold']:.3g} ({r['rule']})",
-            f"[{colour}]{r['decision']}[/{colour}]",
-            r.get("localised") or "-",
-        )
-    console.print(table)
+    for item in score_tables(rows, run_dir, console.width):  # per file: its speed, which gear, a table
+        console.print(item)
 
 
 @app.command()

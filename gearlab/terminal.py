@@ -1,6 +1,6 @@
 """What `gearlab run` draws in the terminal: progress with counts, rate and ETA (rich bars on
 a terminal, log lines otherwise), and at the end of a run its verdict and its tables as rich
-tables. Also the table of `gearlab runs`.
+tables. Also the table of `gearlab runs` and what `gearlab score` prints.
 
 Loaded by the CLI's commands that run or list runs (rich only: no torch, numba or matplotlib).
 """
@@ -307,3 +307,52 @@ def runs_table(runs) -> Table:
             Text(str(r.path)),
         )
     return table
+
+
+def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
+    """What `gearlab score` prints (kinds.detection_scoring.score's rows): per scored file, a line
+    with its speed and how it was found, its condition and the threshold rule, a line with the gear
+    its change is localised on and the evidence, then a table that fits *width* columns (a terminal's):
+    per method and unit the units called, the median score less the threshold (above 0: most units
+    called) and the decision ("other damage: <gear>" when the change lies on a gear not watched)."""
+    shown: list = [Text(f"scored with {run_dir}", style="bold")]
+    for file in dict.fromkeys(r["file"] for r in rows):
+        mine = [r for r in rows if r["file"] == file]
+        r0 = mine[0]
+        shown.append(
+            Text(
+                f"{file}: {r0['speed_hz']:.3f} Hz, from {r0['speed_from']}; condition {r0['condition']}; "
+                f"thresholds: {r0['rule']}"
+            )
+        )
+        if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)
+            where = r0.get("localised") or "nothing"
+            shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))
+        cells = [
+            [
+                r["method"],
+                r["unit"],
+                f"{r['called']}/{r['units']}",
+                "-" if r["median_score"] is None else f"{r['median_score'] - r['threshold']:+.3g}",
+                r["decision"],
+            ]
+            for r in mine
+        ]
+        header = ("method", "unit", "called", "median-thr", "decision")
+        natural = [max(len(c) for c in col) for col in zip(header, *cells)]
+        method_width, decision_width = None, None
+        if sum(natural) + 3 * len(header) + 1 > width:  # too wide: method names wrap at their words,
+            # a decision such as "other damage: output gear 71T (stage 1)" keeps two lines at most
+            method_width = max(len(w) for c in cells for w in c[0].split())
+            decision_width = min(natural[-1], max(22, width - 3 * len(header) - 1 - method_width - sum(natural[1:4])))
+        table = Table()
+        table.add_column("method", overflow="fold", max_width=method_width)
+        table.add_column("unit", overflow="fold")
+        table.add_column("called", justify="right", overflow="fold")
+        table.add_column("median-thr", justify="right", overflow="fold")
+        table.add_column("decision", overflow="fold", min_width=decision_width)
+        for c, r in zip(cells, mine):
+            colour = "green" if r["decision"] == "healthy" else "red" if r["decision"] == "fault" else "yellow"
+            table.add_row(*(Text(x) for x in c[:4]), Text(c[4], style=colour))
+        shown.append(table)
+    return shown

@@ -19,7 +19,7 @@ from . import record_effects
 from .detection_classical import classical_record
 from .detection_records import SPEED_GROUP, aligned, learned_input, longest_tsa, unit_sets, unit_window
 from .detection_units import Rule
-from .detection_which_gear import localise_scored
+from .detection_which_gear import decision_of, is_other, localise_scored
 
 
 def store_scoring(run: RunDir, spec: dict, conditions: dict) -> None:
@@ -162,9 +162,10 @@ def reading_keys(meta: dict, condition: str | None) -> dict:
 def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: None) -> list[dict]:
     """New recordings scored by a finished run's trained methods at its thresholds, nothing trained
     again: one row per file, method and unit kind (its units' scores, how many are called, the
-    threshold and the record's decision: the majority of its units called; the gear the record's
-    change is localised on and what a flag on it is, detection_which_gear), appended to the run's
-    scoring history."""
+    threshold and the record's decision: the majority of its units called, a fault -- or "other
+    damage: <gear>" when the record's change is localised on a gear the run does not watch, as the
+    run's own which-gear table calls it (detection_which_gear.decision_of) -- with the localisation's
+    evidence), appended to the run's scoring history."""
     meta = run.read_json(scoring.SCORING_FILE)
     if meta is None:
         raise GearlabInputError(
@@ -203,6 +204,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
                 for u, s in scores[f.path].items():
                     s = np.asarray(s, dtype=np.float64)
                     called = int(np.sum(s > thresholds[u]))
+                    where = localised.get(f.path, {})
                     rows.append(
                         {
                             "file": f.path,
@@ -214,11 +216,14 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
                             "threshold": float(thresholds[u]),
                             "rule": meta["threshold"],
                             "median_score": float(np.median(s)) if s.size else None,
-                            "decision": "fault" if s.size and called > s.size / 2 else "healthy",
+                            # most units called: a fault, or other damage when the record's change lies
+                            # on another gear (the detection run's which-gear rule)
+                            "decision": decision_of(bool(s.size) and called > s.size / 2, where.get("call")),
                             "speed_hz": found[f.path][0],
                             "speed_from": found[f.path][1],  # the tacho, a declared speed, the mesh orders
-                            "localised": localised.get(f.path, {}).get("named"),
-                            "call": localised.get(f.path, {}).get("call"),
+                            "localised": where.get("named"),
+                            "call": where.get("call"),
+                            "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth
                             "scores": [float(x) for x in s],
                         }
                     )
@@ -233,7 +238,8 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
 
 def score_trends(run: RunDir) -> list:
     """Per condition and method: the median score of each scored record's longest TSA units, in the
-    order they were scored, beside the threshold (gearlab.parts.scoring's history)."""
+    order they were scored, beside the threshold (gearlab.parts.scoring's history); the title names
+    the scored records a method called other damage (on a gear the run does not watch)."""
     from ..charts import Chart, Curve
 
     rows = scoring.read_history(run)
@@ -241,15 +247,22 @@ def score_trends(run: RunDir) -> list:
     out = []
     for c in dict.fromkeys(r["condition"] for r in rows):
         picked = [r for r in rows if r["condition"] == c and r["unit"] == unit and r["median_score"] is not None]
-        curves = []
+        curves, other = [], {}
         for m in dict.fromkeys(r["method"] for r in picked):
             mine = [r for r in picked if r["method"] == m]
             x = list(range(1, len(mine) + 1))
             curves.append(Curve(m, x, [r["median_score"] - r["threshold"] for r in mine]))
+            for i, r in enumerate(mine, 1):
+                if is_other(r["decision"]):
+                    other.setdefault(r["decision"], set()).add(i)
+        said = "".join(
+            f"; records {', '.join(map(str, sorted(n)))}: {d}" if len(n) > 1 else f"; record {min(n)}: {d}"
+            for d, n in other.items()
+        )
         if curves:
             out.append(
                 Chart(
-                    f"{c}: scored records, {unit} (median score less the threshold: above 0 is called)",
+                    f"{c}: scored records, {unit} (median score less the threshold: above 0 is called){said}",
                     "record scored (in order)",
                     "score - threshold",
                     tuple(curves),

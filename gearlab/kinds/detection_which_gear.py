@@ -61,6 +61,29 @@ def call_of(found: dict, watched: list[str]) -> str:
     return f"{OTHER}: {found['named']}"
 
 
+def is_other(call: str | None) -> bool:
+    """A record's call (call_of) names damage on another gear than the watched ones."""
+    return bool(call) and call.startswith(OTHER)
+
+
+def decision_of(called: bool, call: str | None) -> str:
+    """A record's decision (`gearlab score`) from its units' majority called and its call (call_of),
+    by the rule the detection run's tables count its flags with (calls_by_label): not called,
+    healthy; called on a record whose change lies on another gear, that other damage ("other damage:
+    output gear 71T (stage 1)"); otherwise a fault of the watched gear (localised on it, or nowhere)."""
+    if not called:
+        return "healthy"
+    return call if is_other(call) else "fault"
+
+
+def evidence(found: dict) -> str:
+    """The localisation's evidence in a line: each shaft's z of its localised change over its
+    threshold, strongest first, and the tooth of the named shaft's gears."""
+    z = ", ".join(f"{s['shaft']} z {s['z']:.1f}/{s['threshold']:.1f}" for s in found["shafts"])
+    tooth = _tooth(found)
+    return z + ("" if tooth == "–" else f"; tooth {tooth}")
+
+
 def localise_target(source: DatasetSpec, conditions: dict, histories: dict | None = None) -> dict | None:
     """Every test record of every condition localised against the condition's history records
     (conditions as detection_records.read_target makes them, with each record's raw revolutions in
@@ -120,7 +143,7 @@ def store_localisation(run, source: DatasetSpec, conditions: dict) -> None:
 
 
 def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
-    """{path: {"named", "summary", "call"}} of new records ({condition: [(path, revolutions, first)]})
+    """{path: {"named", "summary", "call", "evidence"}} of new records ({condition: [(path, revolutions, first)]})
     localised with the run's stored histories (store_localisation); {} for a run without them."""
     from ..gearbox import order_table
     from ..parts import scoring
@@ -141,7 +164,12 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
                 found = L.localise(revs, hist, table, first_revolution=first).describe()
             except GearlabInputError as exc:
                 found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
-            out[path] = {"named": found["named"], "summary": found["summary"], "call": call_of(found, meta["watched"])}
+            out[path] = {
+                "named": found["named"],
+                "summary": found["summary"],
+                "call": call_of(found, meta["watched"]),
+                "evidence": evidence(found),
+            }
     return out
 
 
@@ -190,7 +218,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
         for path, units in r["test_scores"].items():
             s = np.asarray(units[unit], dtype=np.float64)
             flagged = s > thr
-            elsewhere = loc["records"].get(path, {}).get("call", "").startswith(OTHER)
+            elsewhere = is_other(loc["records"].get(path, {}).get("call"))
             label = labels[path]
             watched.setdefault(label, []).extend((flagged & ~elsewhere).astype(int).tolist())
             other.setdefault(label, []).extend((flagged & elsewhere).astype(int).tolist())
