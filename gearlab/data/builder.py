@@ -11,6 +11,10 @@ Structure exploited (docs/physics.md, Builder):
   shifted by (n - 1)/Z1 of a revolution. The integration rate is rounded up to a whole
   number of steps per tooth pitch, so the shift is an exact whole-sample rotation of the
   periodic revolution: one simulation per fault and intensity serves all Z1 teeth.
+* A later mesh of no whole input order (a description's 17/59 then 26/83) repeats only after a
+  cycle of mesh_cycle input revolutions, at another phase in each: a unit then holds the whole
+  cycle, and each sample's revolutions are consecutive ones of it from a revolution drawn per
+  sample (gearlab.data.realise, "A train's cycle"), as in a recording.
 * Noise and TSA are added per sample from the sample's own seeded generator, in chunks,
   so memory stays bounded and results do not depend on the worker count.
 
@@ -42,7 +46,7 @@ from ..registry import get_registry
 from ..signals import Standardiser, resample_revolutions, steady_start, tsa
 from . import placement
 from .placement import parse_fault_key, shaft_names
-from .realise import REFERENCE_ROW, Seeds, realise, row_seed
+from .realise import REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
 from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
 if TYPE_CHECKING:
@@ -103,8 +107,8 @@ def steady_response(
     gear): what is returned is then that many revolutions, one period, from a tacho zero.
     A train whose later mesh is no whole input order (a description's 21/53 then 29/61: order
     609/53) repeats only after mesh_cycle(sim) turns: steadiness is judged on such cycles, and
-    the last period of the last cycle is returned (the later mesh at one phase, the same for
-    every fault case), or with *whole_cycle* the whole last cycle (a record longer than it).
+    the last period of the last cycle is returned (the later mesh at one phase), or with
+    *whole_cycle* the whole last cycle (a dataset's rows, a record: the later mesh at every phase).
     """
     per_rev = int(round(sim.fs / speed))
     period = sim.period(faults)
@@ -179,7 +183,9 @@ class SimTask(NamedTuple):
 
 
 def simulate_unit(task: tuple) -> np.ndarray:
-    """Steady revolutions (len(teeth), POINTS) of one fault case on every requested tooth.
+    """Steady revolutions (len(teeth), R x POINTS) of one fault case on every requested tooth: R the
+    revolutions after which the train repeats (1; a slower damaged gear's period; a later mesh's
+    cycle), from the revolution in which the tooth meshes.
 
     Without a symmetry-breaking effect the fault sits on *tooth* and every requested tooth
     is an exact whole-sample rotation of that revolution (tooth-shift symmetry).
@@ -198,34 +204,46 @@ def simulate_unit(task: tuple) -> np.ndarray:
         name, stage, gear = parse_fault_key(task.fault, shaft_names(task.preset, sim.stages), f"model '{task.model}'")
         pair = sim.pair if stage == 1 else sim.meshes[stage - 2].pair
         faults = [place_fault(get_registry(), pair, name, task.tooth, step=task.step, gear=gear, stage=stage)]
-    periodic, angle = steady_response(sim, faults, task.speed, task.load, channel, excitation)
+    periodic, angle = steady_response(sim, faults, task.speed, task.load, channel, excitation, whole_cycle=True)
     if angle is not None and tuple(task.teeth) != (task.tooth,):
         raise RuntimeError("an excitation effect moved the shaft angle but does not declare breaks_symmetry")
-    period = sim.period(faults)
-    if period > 1:
-        return np.stack([period_samples(sim, faults[0], periodic, period, n, task.tooth, angle) for n in task.teeth])
+    cycle = math.lcm(sim.period(faults), mesh_cycle(sim))
+    if cycle > 1:
+        if faults:
+            return np.stack([period_samples(sim, faults[0], periodic, cycle, n, task.tooth, angle) for n in task.teeth])
+        per_tooth = len(periodic) // cycle // sim.pair.Z1
+        return np.stack([turned(periodic, cycle, (n - task.tooth) * per_tooth, angle) for n in task.teeth])
     per_tooth = len(periodic) // sim.pair.Z1  # whole by construction of fs
     return np.stack([angle_samples(np.roll(periodic, (n - task.tooth) * per_tooth), angle=angle) for n in task.teeth])
 
 
 def period_samples(sim: Simulator, fault, periodic: np.ndarray, period: int, n: int, tooth: int, angle=None):
-    """The *period* steady input revolutions of a fault on a slower gear as one row of period x POINTS
-    angles, starting with the revolution in which its tooth *n* comes into mesh (a sample's first
-    revolution shows the damage; its J revolutions follow the gears' turns). *periodic* holds the
-    fault on *tooth*: on a one-stage train tooth n's response is it turned by n - tooth pitches
-    (the tooth-shift symmetry; else n is *tooth*). Tooth n of a gear meshing at input order q
-    comes into mesh (n - 1)/q input turns after tooth 1, which mesh at the period's start."""
+    """The *period* steady input revolutions of a fault on a slower gear (or a later mesh's cycle, a
+    whole number of its periods) as one row of period x POINTS angles, starting with the revolution
+    in which its tooth *n* comes into mesh (a sample's first revolution shows the damage; its J
+    revolutions follow the gears' turns). *periodic* holds the fault on *tooth*: on a one-stage
+    train tooth n's response is it turned by n - tooth pitches (the tooth-shift symmetry; else n is
+    *tooth*). Tooth n of a gear meshing at input order q comes into mesh (n - 1)/q input turns after
+    tooth 1, which mesh at the period's start."""
     per_rev = len(periodic) // period
     pair = sim.pair if fault.stage == 1 else sim.meshes[fault.stage - 2].pair
     order = Fraction(sim.gear_turns(fault.stage, fault.gear) * (pair.Z1 if fault.gear == "pinion" else pair.Z2))
     first = math.floor((n - 1) / order.limit_denominator(10_000))  # the input revolution tooth n meshes in
-    x = np.roll(periodic, (n - tooth) * (per_rev // sim.pair.Z1) - first * per_rev)
+    return turned(periodic, period, (n - tooth) * (per_rev // sim.pair.Z1), angle, first)
+
+
+def turned(periodic: np.ndarray, revolutions: int, shift: int, angle=None, first: int = 0) -> np.ndarray:
+    """*revolutions* steady input revolutions (time samples from a tacho zero) turned by *shift*
+    samples and started at revolution *first*, as one row of revolutions x POINTS angles (order
+    tracking at the moved *angle*, when an effect moved it; then *shift* is 0)."""
+    per_rev = len(periodic) // revolutions
+    x = np.roll(periodic, shift - first * per_rev)
     if angle is None:
         theta = 2 * np.pi * np.arange(len(x) + 1) / per_rev
-    else:  # the moved angle over the period, from tooth n's revolution on (n is tooth here)
-        turned = np.concatenate([angle[first * per_rev :], angle[: first * per_rev] + 2 * np.pi * period])
-        theta = np.append(turned - turned[0], 2 * np.pi * period)
-    theta[-1] = 2 * np.pi * period  # exactly the period's turns
+    else:  # the moved angle over the revolutions, from revolution *first* on
+        moved = np.concatenate([angle[first * per_rev :], angle[: first * per_rev] + 2 * np.pi * revolutions])
+        theta = np.append(moved - moved[0], 2 * np.pi * revolutions)
+    theta[-1] = 2 * np.pi * revolutions  # exactly the revolutions' turns
     return resample_revolutions(np.append(x, x[0]), theta, POINTS).reshape(-1)
 
 
@@ -256,6 +274,7 @@ class RowsTask(NamedTuple):
     effects: tuple = ()  # the dataset's effects (canonical); the signal-level ones act here
     speed_hz: float = 0.0
     reference_rms: float = 0.0  # RMS of the clean healthy revolution
+    starts: tuple = ()  # per sample, the revolution of its clean cycle its record starts at (realise.record)
 
 
 def noisy_rows(task: tuple) -> np.ndarray:
@@ -269,15 +288,15 @@ def noisy_rows(task: tuple) -> np.ndarray:
     noise = None if task.noise_kind is None else NoiseSpec(task.noise_kind, task.snr_db)  # its seed is in task.seeds
     out = np.empty((len(task.clean), POINTS), dtype=np.float32)
     for i, (row, seed) in enumerate(zip(task.clean, task.seeds)):
-        revs = row.reshape(-1, POINTS)  # one revolution, or a slower gear's period of them (period_samples)
+        revs = row.reshape(-1, POINTS)  # one revolution, or a slower gear's period or a mesh cycle of them
+        start = task.starts[i] if task.starts else 0
         if task.noise_kind is None and not chain:  # clean: the TSA of J revolutions differs only over a period
-            kept = revs[0] if len(revs) == 1 or not task.use_tsa else tsa(revs[np.arange(task.revolutions) % len(revs)])
+            kept = revs[start] if len(revs) == 1 or not task.use_tsa else tsa(record(revs, task.revolutions, start))
         else:
             j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
-            record = np.broadcast_to(revs[0], (j, POINTS)) if len(revs) == 1 else revs[np.arange(j) % len(revs)]
             # J consecutive revolutions of one record, sampled at POINTS x speed
             realised = realise(
-                record,
+                record(revs, j, start),
                 chain,
                 noise,
                 Seeds.of_row(seed),
@@ -292,37 +311,51 @@ def noisy_rows(task: tuple) -> np.ndarray:
 
 
 def row_tasks(
-    spec: DatasetSpec, n: int, clean_of: Callable[[range], object], reference: tuple, speed: float, reference_rms: float
+    spec: DatasetSpec,
+    n: int,
+    clean_of: Callable[[range], object],
+    reference: tuple,
+    speed: float,
+    reference_rms: float,
+    period_of: Callable[[int], int] = lambda i: 1,
 ) -> list[RowsTask]:
     """The row tasks of *spec*'s *n* samples, CHUNK samples a task: *clean_of(idx)* gives the clean
     revolutions of samples idx, each sample's row seed is row_seed(spec, i) (gearlab.data.realise),
-    *reference* the domain's (mean, std)."""
+    *reference* the domain's (mean, std); sample i's record starts at realise.first_revolution of its
+    clean cycle, a whole number of *period_of(i)* (its damaged gear's period) in."""
     kind, snr = (spec.noise.kind, spec.noise.snr_db) if spec.noise else (None, 0.0)
-    return [
-        RowsTask(
-            clean_of(idx),
-            [row_seed(spec, i) for i in idx],
-            kind,
-            snr,
-            spec.revolutions,
-            spec.tsa,
-            reference,
-            spec.effects,
-            speed,
-            reference_rms,
+    tasks = []
+    for idx in (range(lo, min(n, lo + CHUNK)) for lo in range(0, n, CHUNK)):
+        clean = clean_of(idx)
+        starts = tuple(first_revolution(spec.seed, i, row.size // POINTS, period_of(i)) for i, row in zip(idx, clean))
+        seeds = [row_seed(spec, i) for i in idx]
+        tasks.append(
+            RowsTask(
+                clean,
+                seeds,
+                kind,
+                snr,
+                spec.revolutions,
+                spec.tsa,
+                reference,
+                spec.effects,
+                speed,
+                reference_rms,
+                starts,
+            )
         )
-        for idx in (range(lo, min(n, lo + CHUNK)) for lo in range(0, n, CHUNK))
-    ]
+    return tasks
 
 
 def healthy_reference(spec: DatasetSpec, healthy: np.ndarray, speed: float, reference_rms: float) -> Standardiser:
-    """The domain's healthy reference (eq. 2.112, 4.6): the clean healthy revolution, or 64
-    revolutions of it through the signal-level effects and the dataset's noise when it has them."""
+    """The domain's healthy reference (eq. 2.112, 4.6): the clean healthy revolution (a later mesh's
+    cycle of them), or 64 consecutive revolutions of it through the signal-level effects and the
+    dataset's noise when it has them."""
     signal = EffectChain(EffectChain.load(spec.effects).at("signal")) if spec.effects else EffectChain()
     if spec.noise is None and not signal:
         return Standardiser.fit(healthy)
-    record = realise(
-        np.broadcast_to(healthy, (64, POINTS)),
+    realised = realise(
+        record(healthy.reshape(-1, POINTS), 64),
         signal,
         spec.noise,
         Seeds.of_row(row_seed(spec, REFERENCE_ROW)),
@@ -330,7 +363,7 @@ def healthy_reference(spec: DatasetSpec, healthy: np.ndarray, speed: float, refe
         speed_hz=speed,
         reference_rms=reference_rms,
     )
-    return Standardiser.fit(record)
+    return Standardiser.fit(realised)
 
 
 def build_dataset(
@@ -417,7 +450,15 @@ def build_dataset(
         rows = [base[source[i][0]][source[i][1]] for i in idx]
         return np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
 
-    chunks = row_tasks(spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms)
+    # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in
+    pairs = placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'") if classes else ()
+    periods = {name: placement.gear_period(pairs, on.stage, on.gear) for name, on in classes.items()}
+
+    def period_of(i: int) -> int:
+        name = source[i][0][0]
+        return 1 if name is None else periods[name]
+
+    chunks = row_tasks(spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms, period_of)
     on_event(Event("stage", stage="samples", total=len(chunks), message=f"{spec.name}: {n} samples"))
     done = 0
     X = np.empty((n, POINTS), dtype=np.float32)

@@ -1,6 +1,6 @@
 """Content-addressed dataset cache: `$GEARLAB_CACHE/<key>.npz`, no pickle, atomic writes.
 
-The key hashes the canonical spec and the physics version (DatasetSpec.key). An entry is
+The key hashes the canonical spec and the physics version (DatasetSpec.key; :func:`entry_key`). An entry is
 written to a temporary file in the cache directory and renamed into place, so a killed
 build leaves no entry. Each entry records the shape, dtype and a sha256 of every array
 it holds; an entry that is unreadable or does not match them (damaged, tampered with,
@@ -75,8 +75,29 @@ def _fallback(path: Path, exc: OSError) -> Path:
     return _FALLBACK[0]
 
 
+# Revisions of how a simulated dataset's rows are made, for the trains they change only: every other
+# dataset keeps the key (and the entry) it had. "cycle": a later mesh of no whole input order, rows
+# drawn over its whole cycle (builder, issue 39) instead of one revolution with the mesh at one phase.
+ROWS_REVISION = "cycle"
+
+
+def entry_key(spec: DatasetSpec) -> str:
+    """The cache key of *spec*'s dataset: DatasetSpec.key, that key with ROWS_REVISION hashed in for
+    a simulated train whose meshes repeat only after several input revolutions (placement.mesh_cycle_of)."""
+    key = spec.key()
+    if isinstance(spec, MeasuredSpec):
+        return key
+    from ..registry import get_registry
+    from .placement import mesh_cycle_of, train_pairs
+
+    where = f"dataset '{spec.name}'"
+    if mesh_cycle_of(train_pairs(get_registry().get("model", spec.model, where), spec.preset, where)) == 1:
+        return key
+    return hashlib.sha256(f"{key}:{ROWS_REVISION}".encode()).hexdigest()[:24]
+
+
 def entry_path(spec: DatasetSpec) -> Path:
-    name = f"{spec.key()}.npz"
+    name = f"{entry_key(spec)}.npz"
     path = cache_dir() / name
     if _FALLBACK and not path.exists() and (_FALLBACK[0] / name).exists():
         return _FALLBACK[0] / name
@@ -100,7 +121,7 @@ def _layout(arrays: dict[str, np.ndarray]) -> dict:
 def save(dataset: Dataset) -> Path:
     arrays = {name: np.asarray(getattr(dataset, name)) for name in ARRAYS}
     meta = {
-        "key": dataset.key,
+        "key": entry_key(dataset.spec),
         "spec": asdict(dataset.spec),
         "domains": list(dataset.domains),
         "reference": list(dataset.reference),
@@ -145,7 +166,7 @@ def load(spec: DatasetSpec, path: Path | None = None) -> Dataset | None:
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            if meta["key"] != spec.key():
+            if meta["key"] != entry_key(spec):
                 raise ValueError("key mismatch")
             arrays = {name: data[name] for name in ARRAYS}
         _check_entry(meta, arrays)
@@ -193,7 +214,7 @@ def load_or_build(
     Returns (dataset, was_cached)."""
     cached = load(spec)
     if cached is not None:
-        on_event(Event("log", message=f"dataset {spec.name}: from cache ({spec.key()})"))
+        on_event(Event("log", message=f"dataset {spec.name}: from cache ({entry_key(spec)})"))
         return cached, True
     if isinstance(spec, MeasuredSpec):
         dataset = import_measured(spec)

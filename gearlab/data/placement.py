@@ -204,6 +204,26 @@ def train_period(pairs, stage: int, gear: str) -> int:
     return math.lcm(*periods)
 
 
+def gear_period(pairs, stage: int, gear: str) -> int:
+    """Input revolutions after which the gear (stage, gear) has turned a whole number of times: 1 for the
+    input pinion, 3 for the PHM 2009 rig's 96T idler gear (Simulator.period of damage on it)."""
+    turns = Fraction(1)
+    for pair in pairs[: stage - 1]:
+        turns *= Fraction(pair.Z1, pair.Z2)
+    return (turns * (Fraction(pairs[stage - 1].Z1, pairs[stage - 1].Z2) if gear == "wheel" else 1)).denominator
+
+
+def mesh_cycle_of(pairs) -> int:
+    """Input revolutions after which every mesh of the train repeats (builder.mesh_cycle, from the
+    tooth counts): 1 when each later mesh is a whole input order (the PHM 2009 rig's 16), 59 for a
+    17/59 then 26/83 train (its later mesh at 442/59 orders)."""
+    turns, cycle = Fraction(1), 1
+    for pair in pairs:
+        cycle = math.lcm(cycle, (turns * pair.Z1).denominator)
+        turns *= Fraction(pair.Z1, pair.Z2)
+    return cycle
+
+
 def check_period(period: int, what: str, where: str) -> None:
     if period > MAX_PERIOD:
         raise GearlabInputError(

@@ -14,6 +14,14 @@ and a simulated record (gearlab.data.simulated) alike.
 A measured target's chain puts its sampling between the non-noise effects and the noise (a
 sensor's noise is white in time): its callers realise twice, :func:`parts` of the chain apart.
 
+**A train's cycle.** A later mesh of no whole input order (17/59 then 26/83: 442/59 orders) repeats
+only after a cycle of input revolutions (builder.mesh_cycle: 59 here, 1 on every built-in train), at
+another phase in each. The simulator's rows then hold the whole steady cycle, and a row's record is
+J consecutive revolutions of it (:func:`record`) from a revolution drawn per row
+(:func:`first_revolution`), as a recording's stretch starts anywhere: each raw revolution holds
+the later mesh at its own phase, and their TSA averages it away as a recording's does. A cycle of
+one period (every whole-order train) draws nothing: its rows are the same bits as before.
+
 **Seeds** (:class:`Seeds`). Signal effect k (1-based, in the order of the chain given) draws from
 ``default_rng([*effects, k])`` and the record's time within the hour of recording from
 ``[*effects, 0]`` (EffectChain.apply_signal); the dataset's noise from ``default_rng(noise)``.
@@ -45,6 +53,7 @@ from ..effects import EffectChain
 from ..signals import add_noise, tsa
 
 EFFECT_STREAM = 7  # seeds the signal effects' own generators apart from the dataset noise's
+CYCLE_STREAM = 11  # seeds the revolution of the cycle a row's record starts at
 REFERENCE_ROW = 2**32 - 1  # the row index that seeds a dataset's healthy reference (no sample's)
 
 
@@ -65,6 +74,26 @@ def row_seed(spec, i: int) -> list[int]:
     """The seed of row *i* of dataset *spec* (a DatasetSpec): [seed, noise seed, i], the noise's
     own seed 0 when it has none."""
     return [spec.seed, spec.noise.seed if spec.noise else 0, i]
+
+
+def first_revolution(seed: int, i: int, revolutions: int, period: int = 1) -> int:
+    """The revolution of a steady cycle of *revolutions* at which record *i* of a dataset seeded *seed*
+    starts (module docstring): a whole number of *period*s in (the period of its damaged gear, so its
+    first revolution holds the damaged tooth, builder.period_samples), drawn from
+    ``default_rng([seed, i, CYCLE_STREAM])``; 0, no draw, when the cycle is one period. Not seeded by
+    the noise: a dataset and its noise-free twin cut the same revolutions."""
+    choices = revolutions // period
+    if choices <= 1:
+        return 0
+    return period * int(np.random.default_rng([seed, i, CYCLE_STREAM]).integers(choices))
+
+
+def record(revolutions: np.ndarray, count: int, start: int = 0) -> np.ndarray:
+    """*count* consecutive revolutions (count, L) of the steady cycle *revolutions* (R, L) from
+    revolution *start* on, the cycle repeating: one revolution is broadcast (not copied)."""
+    if len(revolutions) == 1:
+        return np.broadcast_to(revolutions[0], (count, revolutions.shape[1]))
+    return revolutions[(start + np.arange(count)) % len(revolutions)]
 
 
 def parts(chain: EffectChain) -> tuple[EffectChain, EffectChain]:

@@ -318,7 +318,7 @@ def chain_record(chain: Chain, spec: DatasetSpec, z1: int) -> dict:
             spec.channel,
             physics,
         )
-        offset = fit_offset(clean, chain.reference, z1)
+        offset = fit_offset(clean.reshape(-1, len(chain.reference)).mean(axis=0), chain.reference, z1)
     fr = np.asarray(chain.fractions) if chain.fractions else np.empty(0)
     return {
         "fs_hz": chain.fs,

@@ -25,7 +25,8 @@ from ..data.builder import (
     whole_steps_rate,
 )
 from ..data.chain import Chain, fit_offset, sampled, tracked
-from ..data.realise import Seeds, parts, realise, row_seed
+from ..data.realise import Seeds, first_revolution, parts, realise, row_seed
+from ..data.realise import record as cycle_record
 from ..data.spec import POINTS, DatasetSpec
 from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
@@ -212,7 +213,8 @@ def _by_level(effects) -> tuple:
 def _clean_revolution(
     model: str, preset: str, fs: float, speed: float, load: float, channel: str, effects: tuple
 ) -> np.ndarray:
-    """The steady healthy revolution (POINTS,) under the model- and excitation-level *effects*.
+    """The steady healthy revolution (POINTS,) under the model- and excitation-level *effects*; a
+    later mesh's cycle of them (R x POINTS,) where it is no whole input order (builder.mesh_cycle).
 
     Cached per process: a signal-level candidate only transforms this revolution, so its
     whole fit costs one simulation. It is the builder's own simulation unit for the healthy
@@ -260,7 +262,12 @@ def source_rows(
         return band_limited(rows, max_order=max_order)
     mean, std = _reference(spec, clean, speed, reference_rms)
     tasks = row_tasks(
-        spec, spec.healthy, lambda idx: np.broadcast_to(clean, (len(idx), POINTS)), (mean, std), speed, reference_rms
+        spec,
+        spec.healthy,
+        lambda idx: np.broadcast_to(clean, (len(idx), clean.size)),
+        (mean, std),
+        speed,
+        reference_rms,
     )
     out = np.concatenate([noisy_rows(tuple(task)) for task in tasks] or [np.empty((0, POINTS), np.float32)])
     return band_limited(out.astype(np.float64) * std + mean, max_order=max_order)
@@ -311,17 +318,21 @@ def measured_rows(
     target's, and its share in the synchronous average the same."""
     shaping, noisy = parts(EffectChain.load(spec.effects) if spec.effects else EffectChain())
     seeds = [Seeds.of_row(row_seed(spec, i)) for i in range(spec.healthy)]  # the builder's
+    revs = clean.reshape(-1, POINTS)  # a later mesh's cycle of revolutions, else one
 
     def deterministic() -> tuple:
-        record = consecutive and bool(shaping)
+        # a later mesh's cycle makes consecutive rows a record even without an effect: its line runs on
+        record = consecutive and (bool(shaping) or len(revs) > 1)
         here = {"fs": POINTS * speed, "speed_hz": speed, "reference_rms": reference_rms}
         if record:
             # One record, a revolution longer at each end: those two are read only as the
             # neighbours of the first and last rows (gearlab.data.chain.sampled, record).
-            D = realise(np.broadcast_to(clean, (spec.healthy + 2, POINTS)), shaping, None, seeds[0], **here)
+            D = realise(cycle_record(revs, spec.healthy + 2), shaping, None, seeds[0], **here)
             rows = D[1:-1]
-        else:
-            D = realise(np.broadcast_to(clean, (spec.healthy, POINTS)), shaping, None, seeds, **here)
+        else:  # each row its own record: the builder's revolution of the cycle for its row i
+            starts = [first_revolution(spec.seed, i, len(revs)) for i in range(spec.healthy)]
+            own = revs[starts] if len(revs) > 1 else np.broadcast_to(clean, (spec.healthy, POINTS))
+            D = realise(own, shaping, None, seeds, **here)
             rows = D
         offset = chain.offset
         if offset is None:
