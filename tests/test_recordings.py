@@ -5,6 +5,7 @@ a wrong column, a missing rate or a unit mistake from the file's header alone.""
 
 import io
 import json
+import re
 import zipfile
 from pathlib import Path
 
@@ -344,3 +345,33 @@ def test_a_tacho_on_the_output_shaft_gives_the_input_shafts_revolutions(tmp_path
     assert mesh_order(with_box) == 16 and with_box.speed_hz == pytest.approx(f_in, rel=1e-3)
     assert mesh_order(plain) == 48 and plain.speed_hz == pytest.approx(f_in / 3, rel=1e-3)
     assert "on the output shaft" in with_box.angle_source
+
+
+@pytest.mark.parametrize("unit, scale", [("m/s^2", 1.0), ("g", 9.80665), ("V", None), ("mV", None)])
+def test_an_hdf5_units_attribute_says_the_channels_unit(tmp_path, unit, scale):
+    """A logger's HDF5 channel named plainly ('acc') with a 'units' attribute: in m/s² or g it
+    is read as such with no sensitivity, and a sensitivity is refused (at validate, from the
+    header alone, and on reading); in volts a sensitivity is required. The attribute's word is
+    quoted in the error."""
+    _, acc, _ = signals()
+    path = tmp_path / "take.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["fs"] = FS
+        f.create_dataset("acc", data=acc if scale is None else acc / scale).attrs["units"] = unit
+    if scale is not None:
+        rec = read_recording(path, "acc")
+        assert np.allclose(rec.signal, acc) and "unknown" not in rec.units
+        check_recording(path, "s.toml: [target]", {"vibration": "acc"})
+        for call in (
+            lambda: check_recording(path, "s.toml: [target]", {"vibration": "acc"}, sensitivity=SENSITIVITY),
+            lambda: read_recording(path, "acc", sensitivity=SENSITIVITY, where="s.toml: [target]"),
+        ):
+            said = rf"^s.toml: \[target\] key 'sensitivity': .*file's unit '{re.escape(unit)}'"
+            with pytest.raises(GearlabInputError, match=said):
+                call()
+    else:
+        with pytest.raises(GearlabInputError, match=rf"key 'sensitivity': missing; .*in volts .*unit '{unit}'"):
+            check_recording(path, "s.toml: [target]", {"vibration": "acc"})
+        volts = 1e-3 if unit == "mV" else 1.0  # the stored values are the acceleration's digits in V or mV
+        rec = read_recording(path, "acc", sensitivity=SENSITIVITY)
+        assert np.allclose(rec.signal, acc * volts / SENSITIVITY)

@@ -400,24 +400,32 @@ def name_unit(name: str) -> tuple[str, str, float] | None:
 
 
 def channel_scale(
-    name: str, sensitivity: float | None, gain: float | None, where: str, integer: bool = False
+    name: str,
+    sensitivity: float | None,
+    gain: float | None,
+    where: str,
+    integer: bool = False,
+    unit: str | None = None,
 ) -> tuple[float, str]:
     """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the
-    channel's name says of its unit (a column in volts needs a sensitivity, one in m/s² or g must
-    not have one; mV are volts / 1000). *where*: the scenario table, for the one-line errors that
-    name its key; *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
-    said = name_unit(name)
+    channel's name -- or else the *unit* the file states for it (an HDF5 'units' attribute) --
+    says of its unit (a column in volts needs a sensitivity, one in m/s² or g must not have one;
+    mV are volts / 1000). *where*: the scenario table, for the one-line errors that name its key;
+    *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
+    said, says = name_unit(name), "as its name says"
+    if said is None and unit is not None:
+        said, says = name_unit(f"[{unit}]"), f"as the file's unit '{unit}' says"
     if said is not None and said[0] == "voltage" and sensitivity is None:
         raise GearlabInputError(
-            f"{where} key 'sensitivity': missing; channel '{name}' is in volts ({said[1]}, as its name says); "
+            f"{where} key 'sensitivity': missing; channel '{name}' is in volts ({said[1]}, {says}); "
             "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
         )
     if said is not None and said[0] == "acceleration":
         for key, value in (("sensitivity", sensitivity), ("gain", gain)):
             if value is not None:
                 raise GearlabInputError(
-                    f"{where} key '{key}': channel '{name}' is an acceleration already ({said[1]}, as its name "
-                    f"says); expected no {key}"
+                    f"{where} key '{key}': channel '{name}' is an acceleration already ({said[1]}, {says}); "
+                    f"expected no {key}"
                 )
         if said[2] == 1.0:
             return 1.0, f"m/s² (channel '{name}')"
@@ -493,7 +501,8 @@ def read_recording(
     raw = np.asarray(contents.found[vibration])
     # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
     step = contents.steps.get(vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
-    scale, units = channel_scale(named(vibration, contents.available), sensitivity, gain, where or path)
+    name = named(vibration, contents.available)
+    scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name))
     vib = series(raw, vibration, "vibration", path) * scale
     rate, fs_source = sampling_rate(contents, fs, vib.size, path)
     tacho_values = None
@@ -726,5 +735,5 @@ def check_recording(
     if vibration not in (None, ""):
         name = channel_key(vibration)
         name = named(name, header.channels) if header.indexed else name
-        channel_scale(name, sensitivity, gain, where, name in header.integer)
+        channel_scale(name, sensitivity, gain, where, name in header.integer, header.units.get(name))
     return header

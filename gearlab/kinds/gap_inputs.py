@@ -130,9 +130,10 @@ def units_warning(channel, X: np.ndarray) -> str:
 
 
 def units_declared(target: Target) -> bool:
-    """A sensitivity is given, or the vibration channel's name in the first history file's header says
-    the values are an acceleration already (recordings.name_unit: m/s², g; a name in volts without a
-    sensitivity is refused before: recordings.channel_scale)."""
+    """A sensitivity is given, or the vibration channel's name (or the unit the file states for it)
+    in the first history file's header says the values are an acceleration already
+    (recordings.name_unit: m/s², g; volts without a sensitivity are refused before:
+    recordings.channel_scale)."""
     from ..data.recordings import channel_key, name_unit, named, read_header
 
     if target.sensitivity is not None:
@@ -140,7 +141,8 @@ def units_declared(target: Target) -> bool:
     first = next(f for f in target.files if f.role == "history")
     header = read_header(first.resolved)
     name = channel_key(target.vibration)
-    said = name_unit(named(name, header.channels) if header.indexed else name)
+    name = named(name, header.channels) if header.indexed else name
+    said = name_unit(name) or (name_unit(f"[{header.units[name]}]") if name in header.units else None)
     return said is not None and said[0] == "acceleration"
 
 

@@ -77,6 +77,18 @@ class Contents:
     times: list[tuple[str, object]] = field(default_factory=list)
     # the value step of channels a reader has already turned from integers to floats (WAV PCM)
     steps: dict[str, float] = field(default_factory=dict)
+    # the unit a file states for a channel beside its name (an HDF5 'units' attribute: "m/s^2", "V")
+    units: dict[str, str] = field(default_factory=dict)
+
+
+def stated_unit(attrs) -> str | None:
+    """The unit an HDF5 object's attributes state ('units' or 'unit', as text or bytes), or None."""
+    for key in ("units", "unit", "Units", "Unit"):
+        value = attrs.get(key)
+        if value is not None:
+            value = value.decode(errors="replace") if isinstance(value, bytes) else str(value)
+            return value.strip() or None
+    return None
 
 
 def _text_array(values: np.ndarray) -> np.ndarray:

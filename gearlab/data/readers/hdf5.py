@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, Contents, _normalise, _time_field, check_size, time_scale
+from .base import _RATE_NAMES, Contents, _normalise, _time_field, check_size, stated_unit, time_scale
 
 
 def _h5py():
@@ -84,6 +84,9 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
             if not isinstance(obj, h5py.Dataset):
                 continue  # a group is not a channel
             contents.found[name] = read(obj)
+            unit = stated_unit(obj.attrs)
+            if unit is not None:
+                contents.units[name] = unit
             node, is_group = obj, False
             while True:  # from the channel up to the root; the nearest definition wins
                 rates, times = level_fields(node, is_group)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import struct
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +25,7 @@ class Header:
     rate: bool
     integer: frozenset[str] = frozenset()
     indexed: bool = False  # channels may be named by 0-based column index (text formats)
+    units: dict[str, str] = field(default_factory=dict)  # a unit a channel states (Contents.units)
 
     def find(self, name: str) -> bool:
         if name in self.channels:
@@ -94,12 +95,14 @@ def _npz_header(path: Path) -> Header:
 
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
+    from .base import stated_unit
     from .hdf5 import _h5py, _hdf5_datasets
 
     h5py = _h5py()
     with h5py.File(path, "r") as f:
         names = _hdf5_datasets(h5py, f)
         integer = {n for n in names if f[n].dtype.kind in "iu"}
+        units = {n: unit for n in names if (unit := stated_unit(f[n].attrs)) is not None}
         rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
         # an 'fs' attribute anywhere (on a dataset or a group) is a rate field of what lies under it
         rate = rate or any(is_rate_or_time(k) for n in ["/", *names] for k in f[n].attrs)
@@ -108,7 +111,7 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
             parts = n.split("/")[:-1]
             groups.update("/".join(parts[: i + 1]) for i in range(len(parts)))
         rate = rate or any(is_rate_or_time(k) for g in groups for k in f[g].attrs)
-    return Header(fmt, names, rate, frozenset(integer))
+    return Header(fmt, names, rate, frozenset(integer), units=units)
 
 
 def _wav_header(path: Path) -> Header:
