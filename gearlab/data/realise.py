@@ -81,7 +81,9 @@ def first_revolution(seed: int, i: int, revolutions: int, period: int = 1) -> in
     starts (module docstring): a whole number of *period*s in (the period of its damaged gear, so its
     first revolution holds the damaged tooth, builder.period_samples), drawn from
     ``default_rng([seed, i, CYCLE_STREAM])``; 0, no draw, when the cycle is one period. Not seeded by
-    the noise: a dataset and its noise-free twin cut the same revolutions."""
+    the noise: a dataset and the same spec without noise cut the same revolutions (a twin of fewer
+    samples, one per run of draws, detection_units.noise_free_twin, does not: its bound is then
+    approximate on such a train)."""
     choices = revolutions // period
     if choices <= 1:
         return 0
