@@ -48,7 +48,7 @@ from .gearbox.speed import (
     Lines,
     carrier,
     find_lines,
-    speed_from_mesh,
+    follow_speed,
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
@@ -175,7 +175,8 @@ def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
 
 def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
     """The input speed of a record without a tacho: declared, refined by the mesh lines; or
-    found from the mesh lines alone (gearlab.gearbox.speed)."""
+    found from the mesh lines alone; then followed through the record on the phase of a mesh
+    harmonic (gearlab.gearbox.speed.follow_speed)."""
     declared = options.speed_hz or (box.speed_hz if box else None)
     n = rec.signal.size
     if box is None:
@@ -186,45 +187,17 @@ def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
             )
         theta = TWO_PI * declared * np.arange(n) / rec.fs
         return Speed(declared, "declared", theta, np.zeros(0), declared)
-    f, how, note = speed_from_mesh(
+    theta, f, how, note = follow_speed(
         rec.signal, rec.fs, box, declared, f"{rec.path}: vibration '{rec.vibration}'", options.threshold_db
     )
-    theta = TWO_PI * f * np.arange(n) / rec.fs
-    if how == "declared":
-        speed = Speed(f, how, theta, np.zeros(0), declared)
+    if theta is None:
+        speed = Speed(f, how, TWO_PI * f * np.arange(n) / rec.fs, np.zeros(0), declared)
     else:
-        speed = Speed(f, how, theta, _demodulated_speed(rec, order_table(box), f), declared)
+        starts = revolution_starts(theta - theta[0])
+        speed = Speed(f, how, theta, rec.fs / np.diff(starts), declared)
     if note:
         speed.notes.append(note)
     return speed
-
-
-def _demodulated_speed(rec: Record, table, f: float) -> np.ndarray:
-    """Speed of each revolution-long stretch from the instantaneous frequency of the first stage's
-    strongest mesh harmonic h M (its fundamental can be under the floor), in a band ±0.45 of the
-    slowest shaft's frequency, so no sideband enters: f(t) = f_hM(t) / (h M)."""
-    slowest = float(min(table.shaft_orders)) * f
-    n = rec.signal.size
-    spec = np.fft.fft(rec.signal)
-    freq = np.fft.fftfreq(n, 1 / rec.fs)
-    bands = [
-        np.abs(freq - h * float(table.stages[0].mesh) * f) <= 0.45 * slowest
-        for h in range(1, MAX_HARMONIC + 1)
-        if (h * float(table.stages[0].mesh) + 0.45 * float(min(table.shaft_orders))) * f < rec.fs / 2
-    ]
-    if not bands:
-        return np.zeros(0)
-    h = int(np.argmax([np.abs(spec[b]).max(initial=0.0) for b in bands]))
-    band, mesh = bands[h], (h + 1) * float(table.stages[0].mesh)
-    analytic = np.fft.ifft(np.where(band, 2 * spec, 0))
-    phase = np.unwrap(np.angle(analytic))
-    per_rev = max(2, int(round(rec.fs / f)))
-    count = phase.size // per_rev
-    if count < 3:
-        return np.zeros(0)
-    ends = phase[: count * per_rev : per_rev]
-    speeds = np.diff(ends) * rec.fs / (per_rev * TWO_PI * mesh)
-    return speeds[1:-1] if speeds.size > 4 else speeds  # the ends carry the band filter's edge effects
 
 
 # --- the order spectrum and the description's orders ----------------------------------------------
@@ -262,21 +235,30 @@ def _tol_mesh(order: float, bin_: float) -> float:
     return 2 * bin_ + DRIFT * order
 
 
-def comb(lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset()) -> tuple | None:
-    """(spacing, tolerance, lines) of the sideband family of a shaft around the mesh line *mesh*.
+def comb(
+    lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset(), rival: float | None = None
+) -> tuple | None:
+    """(spacing, tolerance, count, {line: |j|}, score) of the sideband family of a shaft around the
+    mesh line *mesh*.
 
     Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
-    (j = 1, 2, 3, within ±30 % of the described o) is scored by the amplitudes of the offsets at
-    ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the least-squares
-    fit through its lines, so a 57- and a 58-tooth wheel are told apart once 2 bins / 3 < o / 57."""
+    (j = 1, 2, 3, within ±30 % of the described o, and nearer o than the stage's other shaft's
+    order *rival*: that spacing is the other shaft's evidence) is scored by the amplitudes of the
+    offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
+    least-squares fit through its lines, so a 57- and a 58-tooth wheel are told apart once
+    2 bins / 3 < o / 57."""
     m = float(lines.at[mesh])
     near = np.flatnonzero((np.abs(lines.at - m) <= 3.9 * o) & (np.arange(lines.at.size) != mesh))
     near = np.array([q for q in near if q not in exclude], dtype=int)
     if near.size == 0:
         return None
     d, a = lines.at[near] - m, lines.amp[near]
+
+    def allowed(c: float) -> bool:
+        return 0.7 * o <= c <= 1.3 * o and (rival is None or abs(math.log(c / o)) < abs(math.log(c / rival)))
+
     best = None
-    for c in {abs(v) / j for v in d for j in (1, 2, 3) if 0.7 * o <= abs(v) / j <= 1.3 * o}:
+    for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
         hits = []
         for j in (-3, -2, -1, 1, 2, 3):
             q = int(np.argmin(np.abs(d - j * c)))
@@ -295,7 +277,7 @@ def comb(lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset()) ->
     ws = np.array([a[q] for _, q in hits])
     spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
     jmax = int(max(abs(js)))
-    return spacing, 2 * bin_ / jmax + DRIFT * spacing, len(hits), {int(near[q]) for _, q in hits}, score
+    return spacing, 2 * bin_ / jmax + DRIFT * spacing, len(hits), {int(near[q]): abs(j) for j, q in hits}, score
 
 
 def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expected: float) -> tuple | None:
@@ -385,14 +367,21 @@ def families(
     lines: Lines, mesh: int, orders: tuple[float, float], bin_: float, known=(False, False), exclude=frozenset()
 ) -> list:
     """The combs of a stage's two shafts around its carrier. A line both combs claim (the third
-    sideband of a slow wheel on the first of its pinion's shaft) goes to the comb of a shaft whose
-    order is known already (the tacho's, or measured at the stage before), else to the stronger
-    comb; the other is fitted again without it."""
-    found = [comb(lines, mesh, o, bin_, exclude) for o in orders]
-    if all(found) and found[0][3] & found[1][3]:
-        strong = 0 if (known[0], found[0][4]) >= (known[1], found[1][4]) else 1
-        weak = 1 - strong
-        found[weak] = comb(lines, mesh, orders[weak], bin_, exclude | found[strong][3])
+    sideband of a slow wheel on the first of its pinion's shaft) goes to the comb it is the nearer
+    sideband of (|j| the smaller: a first sideband is the likelier), on a tie to the comb of a
+    shaft whose order is known already (the tacho's, or measured at the stage before), else to the
+    stronger comb; a comb that lost lines is fitted again without them."""
+    found = [comb(lines, mesh, o, bin_, exclude, rival) for o, rival in (orders, orders[::-1])]
+    if all(found) and found[0][3].keys() & found[1][3].keys():
+        rank = [(known[k], found[k][4]) for k in (0, 1)]
+        lost: list[set] = [set(), set()]
+        for q in found[0][3].keys() & found[1][3].keys():
+            j0, j1 = found[0][3][q], found[1][3][q]
+            keeper = 0 if (j0 < j1 or (j0 == j1 and rank[0] >= rank[1])) else 1
+            lost[1 - keeper].add(q)
+        for k in (0, 1):
+            if lost[k]:
+                found[k] = comb(lines, mesh, orders[k], bin_, exclude | lost[k], orders[1 - k])
     return found
 
 

@@ -19,7 +19,7 @@ from gearlab.inspect import InspectOptions, inspect_record
 def synthesise(stages, speed=25.0, fs=5000.0, revs=600, noise=0.3, seed=0, swing=0.0):
     """A gearbox vibration: every mesh with its harmonics 1-3, amplitude-modulated by both of its
     shafts (sidebands j = 1-3), shaft lines, white noise; a once-per-revolution tacho. *swing*: a
-    slow relative speed swing (tacho records only)."""
+    slow relative speed swing (a motor's, at 0.5 Hz)."""
     rng = np.random.default_rng(seed)
     n = int(revs / speed * fs)
     t = np.arange(n) / fs
@@ -100,6 +100,28 @@ def test_a_slow_speed_swing_is_measured_from_the_tacho(tmp_path):
     report, errors, _ = check(path, described((20, 57)), True)
     assert report["matches"] and max(errors) < 0.05
     assert 0.5 < report["speed"]["variation_percent"] < 2.0
+
+
+@pytest.mark.parametrize(
+    "stages, speed", [(((26, 37),), "24.05 Hz"), (((26, 37),), None), (((22, 29), (17, 51)), None)], ids=str
+)
+def test_a_swinging_speed_without_a_tacho_is_followed_on_a_mesh_phase(tmp_path, stages, speed):
+    """Read at a constant speed, a 0.3 % swing smeared every line over the sidebands beside it:
+    "the wheel shows 29.8 teeth (shaft order 0.87), 37 described" and the speed 0.17 % off."""
+    path = record(tmp_path, stages, speed=24.0, revs=150, swing=0.003)
+    report, errors, speed_error = check(path, described(*stages, speed=speed), False, speed=24.0)
+    assert report["matches"], report["verdict"]
+    assert max(errors) < 1e-3 and speed_error < 2e-4, (errors, report["speed"])
+    assert 0.4 < report["speed"]["variation_percent"] < 0.8  # the swing seen: ± 0.3 %
+
+
+def test_a_line_two_combs_claim_goes_to_the_nearer_sideband(tmp_path):
+    """A 21/63 pair: the pinion shaft's first sidebands are the wheel shaft's third ones; the
+    wheel's comb took them and no sideband was left to show the input shaft's order."""
+    path = record(tmp_path, ((21, 63),), revs=300)
+    report, errors, _ = check(path, described((21, 63)), False)
+    assert report["matches"] and max(errors) < 1e-3, report["verdict"]
+    assert all(s["matched"] for s in report["check"]["shafts"]), report["check"]["shafts"]
 
 
 WRONG = [

@@ -26,6 +26,7 @@ DRIFT = 1e-3  # relative smear of an order by speed drift
 # harmonics 4-11 with its fundamental under the threshold (B-6-ch5: orders 100, 175, 225 of 25).
 MAX_HARMONIC = 40
 EVIDENCE = 16  # hypotheses are scored on the strongest lines
+AMBIGUOUS_TRIES = 8  # an ambiguous speed: the best hypotheses followed on their mesh phase
 
 
 @dataclass
@@ -78,6 +79,14 @@ def carrier(lines: Lines, i: int, span: float, others=()) -> int:
     near = np.flatnonzero(np.abs(lines.at - lines.at[i]) <= span)
     near = [q for q in near if not any(abs(lines.at[q] - o) <= t for o, t in others)]
     return int(max(near, key=lambda q: lines.amp[q])) if near else i
+
+
+class AmbiguousSpeed(GearlabInputError):
+    """Two speeds explain the mesh lines about equally; *speeds*: every hypothesis, best first."""
+
+    def __init__(self, message: str, speeds: list[float]):
+        super().__init__(message)
+        self.speeds = speeds
 
 
 def speed_from_mesh(
@@ -187,9 +196,114 @@ def speed_from_mesh(
     for other in hypotheses:
         ratio = max(best[1] / other[1], other[1] / best[1])  # a multiple is the same family, not another speed
         if other[0] >= AMBIGUOUS * best[0] and abs(ratio - round(ratio)) > SPEED_AGREE * ratio:
-            raise GearlabInputError(
+            raise AmbiguousSpeed(
                 f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
                 f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared "
-                "speed (e.g. '25 Hz') or a tacho channel"
+                "speed (e.g. '25 Hz') or a tacho channel",
+                [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
             )
     return best[1], f"from the mesh lines ({best[2]})", None
+
+
+TRACK_CUTOFF = 0.45  # the angle's deviation is kept below this share (to 1.5 x) of the slowest shaft's frequency
+UPSAMPLE = 8  # before reading a record at uniform angle (linear interpolation at 8x the rate: no false lines)
+
+
+def follow_speed(
+    signal: np.ndarray, fs: float, box: Gearbox, declared: float | None, where: str, threshold_db: float = THRESHOLD_DB
+) -> tuple[np.ndarray | None, float, str, str | None]:
+    """(input angle per sample or None, mean input speed in Hz, how it was found, a note or None)
+    of a record without a tacho: the speed from the mesh lines (speed_from_mesh), followed through
+    the record on the phase of a first-stage mesh harmonic (mesh_angle), and found again on the
+    record read at that uniform angle, where a swinging speed no longer smears the lines (a 0.3 %
+    swing at 15 Hz made the sidebands of a 40-tooth mesh fit a third of the declared speed). Kept
+    when the two agree within SPEED_AGREE and, with a declared speed, the lines confirm it (else
+    None: the constant speed of the first look, as before)."""
+    from scipy.signal import resample_poly
+
+    n = signal.size
+    up = int(max(1, min(UPSAMPLE, (1 << 24) // max(n, 1))))
+    fine = resample_poly(signal, up, 1)[: (n - 1) * up + 1] if up > 1 else signal
+    try:
+        f, how, note = speed_from_mesh(signal, fs, box, declared, where, threshold_db)
+    except AmbiguousSpeed as exc:
+        # smeared lines can fit several speeds: the one whose mesh phase, followed, leaves lines that
+        # fit that speed and no other is the speed (several such: still ambiguous)
+        # (a smeared line read as harmonic h of a mesh: the speed can be k times faster, the line its h / k)
+        tries: list[float] = []
+        for f in (k * g for g in exc.speeds[:AMBIGUOUS_TRIES] for k in (1, 2, 3, 4)):
+            if not any(abs(f / g - 1) <= SPEED_AGREE for g in tries):
+                tries.append(f)
+        found: list[tuple] = []
+        for f in tries:
+            got = _followed(signal, fine, up, fs, box, declared, where, threshold_db, f, "")
+            if got[0] is not None and not any(abs(got[1] / g[1] - 1) <= SPEED_AGREE for g in found):
+                found.append(got)
+        if len(found) != 1:
+            raise
+        return found[0]
+    return _followed(signal, fine, up, fs, box, declared, where, threshold_db, f, how, note)
+
+
+def _followed(signal, fine, up, fs, box, declared, where, threshold_db, f, how, note=None) -> tuple:
+    """follow_speed from a first speed *f* (its *how*, *note*): (angle or None, speed, how, note)."""
+    n = signal.size
+    for _ in range(3):  # a first look at a wrong multiple of the speed is corrected on the second
+        theta = mesh_angle(signal, fs, box, f)
+        if theta is None:
+            break
+        mean = (theta[-1] - theta[0]) * fs / (2 * np.pi * (n - 1))
+        if declared is not None and abs(mean / declared - 1) > DECLARED_RANGE:
+            break  # the phase followed another line than the declared speed's mesh
+        fine_theta = np.interp(np.arange(fine.size) / up, np.arange(n), theta)
+        even = np.interp(np.linspace(theta[0], theta[-1], n), fine_theta, fine)
+        try:
+            f2, how2, note2 = speed_from_mesh(even, fs, box, declared, where, threshold_db)
+        except GearlabInputError:  # ambiguous, or no line fits: the phase followed was no mesh's
+            break
+        if how2 != "declared" and abs(f2 / mean - 1) <= SPEED_AGREE:
+            return theta, mean, how2 + ", followed on a mesh harmonic's phase", note2
+        if how2 == "declared":
+            break
+        f = f2
+    return None, f, how, note
+
+
+def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float) -> np.ndarray | None:
+    """The input-shaft angle per sample (rad) of a record without a tacho, tracked on the phase of
+    the strongest harmonic h M of the first stage's mesh (tacho-less order tracking; M of the first
+    stage is its pinion's count, which a declared speed checks), or None when no harmonic stands
+    clear of its neighbours. A motor's speed swinging by 0.3 % moves harmonic 3 of a 40-tooth mesh
+    by 0.36 orders: read at a constant speed, every line of it smears over the sidebands that tell
+    the shafts apart (a 25-tooth pinion read as 32). The harmonic's analytic signal is taken in a
+    band half-way to the nearest other mesh harmonic (of any stage), wide enough for the swing, and
+    its phase low-passed below TRACK_CUTOFF of the slowest shaft's frequency: a shaft's sidebands
+    (its amplitude and phase modulation) leave the angle alone, a slower speed change is followed."""
+    table = order_table(box)
+    n = signal.size
+    spec = np.fft.fft(signal)
+    freq = np.fft.fftfreq(n, 1 / fs)
+    cutoff = TRACK_CUTOFF * float(min(table.shaft_orders)) * f
+    every = np.array([h * float(s.mesh) * f for s in table.stages for h in range(1, MAX_HARMONIC + 1)])
+    best = None
+    for h in range(1, MAX_HARMONIC + 1):
+        c = h * float(table.stages[0].mesh) * f
+        others = np.abs(every - c)
+        half = 0.5 * float(others[others > 1e-9 * c].min(initial=c))
+        if c + half >= fs / 2 or half < 2 * cutoff:
+            continue
+        power = float(np.sum(np.abs(spec[np.abs(freq - c) <= cutoff]) ** 2))
+        if best is None or power > best[0]:
+            best = (power, c, half, h * float(table.stages[0].mesh))
+    if best is None:
+        return None
+    _, c, half, order = best
+    t = np.arange(n) / fs
+    analytic = np.fft.ifft(np.where(np.abs(freq - c) <= half, 2 * spec, 0))
+    phase = np.unwrap(np.angle(analytic * np.exp(-2j * np.pi * c * t)))  # slow: the deviation from c
+    line = np.polyval(np.polyfit(t, phase, 1), t)
+    wiggle = np.concatenate([phase - line, (phase - line)[::-1]])  # mirrored: no jump where the FFT wraps
+    # flat to the cutoff, a cosine down to 1.5 times it (a sharp edge rings: lines at ± the cutoff)
+    edge = np.clip((np.abs(np.fft.fftfreq(wiggle.size, 1 / fs)) - cutoff) / (0.5 * cutoff), 0.0, 1.0)
+    smooth = np.fft.ifft(np.fft.fft(wiggle) * 0.5 * (1 + np.cos(np.pi * edge))).real[:n]
+    return (2 * np.pi * c * t + line + smooth) / order
