@@ -295,9 +295,10 @@ def modes(
 
 @app.command()
 def simulate(
-    model: Annotated[str, typer.Option(help="dynamic model: ten_dof, eight_dof, six_dof, ...")],
     out: Annotated[Path, typer.Option(help="output .npz: t, tacho, tvms and one acceleration array per channel")],
+    model: Annotated[str | None, typer.Option(help="dynamic model: ten_dof, ... (default: the --gearbox's)")] = None,
     preset: Annotated[str | None, typer.Option(help="parameter preset (default: the model's first)")] = None,
+    gearbox: Annotated[str | None, typer.Option(help="a gearbox description (file or built-in name)")] = None,
     speed: Annotated[float | None, typer.Option(help="input-shaft speed, Hz (default: the preset's)")] = None,
     load: Annotated[float | None, typer.Option(help="load torque T_l, N*m (default: the preset's)")] = None,
     fault: Annotated[list[str] | None, typer.Option(help="KIND@TOOTH=STEP or KIND@TOOTH:NAME=VALUE,...")] = None,
@@ -312,7 +313,9 @@ def simulate(
     import numpy as np
 
     from .files import atomic_write
+    from .gearbox.simulation import label, simulate_command
 
+    model, preset, speed, load = simulate_command(gearbox, model, preset, speed, load)
     if out.suffix != ".npz":
         raise GearlabInputError(f"--out {out}: expected a .npz file name")
     _check_folders(out, plot)
@@ -330,7 +333,7 @@ def simulate(
     atomic_write(out, buf.getvalue())
     labels = ", ".join(p.label for p in placed) or "healthy"
     console.print(
-        f"{model} ({sim.preset}, {labels}): {duration:g} s at {fs:g} Hz, {result.speed_hz:g} Hz, "
+        f"{model} ({label(sim.preset)}, {labels}): {duration:g} s at {fs:g} Hz, {result.speed_hz:g} Hz, "
         f"{result.load_nm:g} N*m; simulation wall time {result.wall_s * 1e3:.1f} ms"
     )
     console.print(f"wrote {out} (channels: {', '.join(result.channels)})")

@@ -137,3 +137,29 @@ def test_the_phm09_description_matches_the_rigs_records(name):
     report = inspect_record(str(PHM09 / f"{name}.zip"), resolve_gearbox("phm09"), options)
     assert [round(s["measured_order"], 1) for s in report["check"]["stages"]] == [32.0, 16.0], report["verdict"]
     assert report["matches"], report["verdict"]
+
+
+def test_simulate_a_described_gearbox(cli, tmp_path):
+    """`gearlab simulate --gearbox G` (issue 39): the description's model, values and operating
+    point, as a [source] gearbox simulates it; its record shows the description's mesh order."""
+    text = '[operation]\nspeed = "30 Hz"\nload = "8 N*m"\n[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
+    gears = 'pinion = { z = 23, bore = "20 mm" }\nwheel = { z = 53, bore = "20 mm" }\n'
+    (tmp_path / "box.toml").write_text(text + gears)
+    out = tmp_path / "sim.npz"
+    code, stdout, err = cli("simulate", "--gearbox", tmp_path / "box.toml", "--out", out, "--duration", "0.6")
+    assert code == 0, err
+    said = " ".join(stdout.split())  # however the terminal wrapped it
+    assert "ten_dof (" in said and "box.toml, healthy): 0.6 s at 200000 Hz, 30 Hz, 8 N*m" in said
+    report = inspect_record(str(out), load_gearbox(tmp_path / "box.toml"), InspectOptions("casing_x", "tacho"))
+    assert abs(report["check"]["stages"][0]["measured_order"] - 23) < ORDER_TOL and report["matches"], report["verdict"]
+    for args, message in (
+        (["--gearbox", tmp_path / "box.toml", "--preset", "luo2019"], "--preset luo2019: the --gearbox description"),
+        (["--gearbox", tmp_path / "box.toml", "--model", "two_stage"], "1 stage(s), but model 'two_stage'"),
+        (["--gearbox", tmp_path / "none.toml"], "--gearbox"),
+        ([], "give --model NAME (and --preset) or --gearbox DESCRIPTION"),
+    ):
+        code, _, err = cli("simulate", *args, "--out", out)
+        assert code == 2 and message in err and err.count("\n") == 1, err
+    (tmp_path / "box.toml").write_text(text.replace('speed = "30 Hz"\n', "") + gears)
+    code, _, err = cli("simulate", "--gearbox", tmp_path / "box.toml", "--out", out)
+    assert code == 2 and "[operation] key 'speed': missing; expected it there or --speed" in err, err

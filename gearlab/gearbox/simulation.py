@@ -181,3 +181,27 @@ class DescribedPresets(Mapping):
 
     def __len__(self) -> int:
         return len(self._extra)
+
+
+def simulate_command(
+    gearbox: str | None, model: str | None, preset: str | None, speed: float | None, load: float | None
+) -> tuple[str, str | None, float | None, float | None]:
+    """(model, preset, speed, load) of `gearlab simulate`: with --gearbox, the description simulated
+    as a [source] gearbox is (its model unless --model, its values, its [operation] speed and load
+    unless --speed and --load); else --model and --preset as given."""
+    if gearbox is None:
+        if model is None:
+            raise GearlabInputError("gearlab simulate: give --model NAME (and --preset) or --gearbox DESCRIPTION")
+        return model, preset, speed, load
+    if preset is not None:
+        raise GearlabInputError(f"--preset {preset}: the --gearbox description gives the model's values; give one")
+    try:
+        ref = reference(gearbox)
+    except OSError as exc:
+        raise GearlabInputError(f"--gearbox {gearbox}: cannot read the description ({exc.strerror or exc})") from None
+    box = referenced(ref)
+    model = model or model_name(box)
+    for key, option, value in (("speed", "--speed", speed), ("load", "--load", load)):
+        if value is None and getattr(box, f"{key}_hz" if key == "speed" else f"{key}_nm") is None:
+            raise GearlabInputError(f"{box.source}: [operation] key '{key}': missing; expected it there or {option}")
+    return model, ref, speed if speed is not None else box.speed_hz, load if load is not None else box.load_nm
