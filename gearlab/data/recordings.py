@@ -551,8 +551,9 @@ def shaft_angle(
 
     From the tacho: a shaft angle, or a pulse train of *pulses_per_rev* marks per revolution (the
     j-th rising edge at 2πj/N); without one: the declared speed, or -- with a gearbox description
-    and no speed, or to refine a declared one to ±1 % -- the speed its mesh lines show
-    (gearlab.gearbox.speed; refused when ambiguous). The angle is computed here with the very
+    and no speed, or to refine a declared one to ±1 % -- the speed its mesh lines show, followed
+    through the record on a mesh harmonic's phase (follow_speed; constant where it follows none;
+    refused when ambiguous). The angle is computed here with the very
     functions cut_revolutions applies to the same argument, so revolution boundaries found here
     (for labels) are exactly those of the revolutions it cuts.
     """
@@ -562,12 +563,23 @@ def shaft_angle(
     if rec.tacho is None:
         how = "nominal speed"
         if gearbox is not None:
-            from ..gearbox.speed import speed_from_mesh
+            from ..gearbox.speed import follow_speed
 
-            speed_hz, found, _ = speed_from_mesh(
+            # a real record's speed always swings a little (0.3 %: every mesh line smeared over its
+            # sidebands, the TSA's mesh harmonic lost); followed on a mesh harmonic's phase, the
+            # revolutions are cut where the shaft turns, as from a tacho
+            theta, speed_hz, found, _ = follow_speed(
                 rec.signal, fs, gearbox, speed_hz, f"{path}: vibration channel '{rec.vibration}'"
             )
-            how = f"speed {found} ({gearbox.name})"
+            if theta is not None:
+                found = found.removesuffix(", followed on a mesh harmonic's phase")
+                angle = wrap(theta - theta[0])  # zero at the first sample, as at a constant speed
+                return (
+                    {"tacho": angle},
+                    unwrap_tacho(angle),
+                    f"speed followed on the mesh phase ({found}; {gearbox.name}), mean {fmt_hz(speed_hz)}",
+                )
+            how = f"constant speed {found} ({gearbox.name})"
         if speed_hz is None:
             raise GearlabInputError(
                 f"{path}: no tacho and no speed: expected a tacho channel, a speed (e.g. '25 Hz'), or a gearbox "
