@@ -30,6 +30,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "gearlab.events",
             "gearlab.charts",
             "gearlab.executors",
+            "gearlab.memo",
         ),
     ),
     ("physics and signals", ("gearlab.physics", "gearlab.signals", "gearlab.gearbox")),

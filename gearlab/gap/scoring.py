@@ -9,8 +9,6 @@ from __future__ import annotations
 import functools
 import math
 import numbers
-from collections import OrderedDict
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -30,6 +28,7 @@ from ..data.realise import record as cycle_record
 from ..data.spec import POINTS, DatasetSpec
 from ..effects import LEVELS, EffectChain, default_candidates
 from ..errors import GearlabInputError
+from ..memo import SharedArrays
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..signals.indicators import band_limited
@@ -277,22 +276,7 @@ def source_rows(
 # per source set without its noise: a search re-fits the sensor noise at every point (the nuisance,
 # 6-24 noise levels each) and the signal effects' fits share one simulation, so the same sampled
 # rows came back hundreds of times per fit (80 % of a fit's time went into making them again).
-SAMPLED_KEPT = 32
-_sampled: OrderedDict = OrderedDict()
-
-
-def _sampled_rows(key: tuple, make: Callable[[], tuple]) -> tuple:
-    hit = _sampled.get(key)
-    if hit is None:
-        hit = make()
-        for a in hit:
-            a.setflags(write=False)  # shared by every noise level: never changed in place
-        _sampled[key] = hit
-        if len(_sampled) > SAMPLED_KEPT:
-            _sampled.popitem(last=False)
-    else:
-        _sampled.move_to_end(key)
-    return hit
+_sampled = SharedArrays(32)
 
 
 def measured_rows(
@@ -309,7 +293,7 @@ def measured_rows(
     builder's seeds [seed, noise seed, i]), the noise effects and the dataset's noise in time at the
     record's rate, where a sensor's noise is white. The tacho offset is the chain's, or fitted to the
     target's synchronous average for this very set (a free rotation: it follows whatever the effects
-    do to the waveform's phase). The rows before the noise are kept per set (:func:`_sampled_rows`).
+    do to the waveform's phase). The rows before the noise are kept per set (`_sampled`).
 
     *consecutive*: the rows are consecutive revolutions of one record, as a measured target's are:
     the non-noise signal effects act on all of them as one record (seeds [seed, noise seed, 0]). A
@@ -342,7 +326,7 @@ def measured_rows(
     registry = get_registry()
     quiet = spec.with_(effects=tuple(e for e in spec.effects if not registry.get("effect", e[0]).noise))
     reference = None if chain.reference is None else hash(np.asarray(chain.reference).tobytes())
-    x, u = _sampled_rows((quiet, chain, reference, teeth, consecutive), deterministic)
+    x, u = _sampled.get_or_make((quiet, chain, reference, teeth, consecutive), deterministic)
 
     def noise(i: int, x: np.ndarray) -> np.ndarray:
         return realise(x, noisy, spec.noise, seeds[i], fs=chain.fs, speed_hz=speed, reference_rms=reference_rms)

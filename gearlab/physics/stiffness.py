@@ -17,13 +17,13 @@ after the change of variable x(alpha); for faulted sections it is eq. 2.88-2.93.
 from __future__ import annotations
 
 import io
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import GearlabInputError
+from ..memo import SharedArrays
 from .geometry import Gear, GearPair
 from .sections import DEFAULT_NODES, ToothSection, healthy_section
 
@@ -213,8 +213,7 @@ class MeshStiffness:
 # The healthy TVMS depends on the pair, the options and the grid alone: shared by every model of
 # one pair (in this process). A gap search makes a new simulator for each parameter set it tries,
 # and computing its pair's healthy TVMS again was 12 ms of each (an eighth of a drive-inertias fit).
-HEALTHY_KEPT = 64
-_HEALTHY: OrderedDict = OrderedDict()
+_HEALTHY = SharedArrays(64)
 
 
 class MeshStiffnessModel:
@@ -316,23 +315,15 @@ class MeshStiffnessModel:
         return local[in_mesh], in_mesh
 
     def _healthy(self, points: int, gear: str = "pinion") -> tuple[np.ndarray, np.ndarray]:
-        key = (self.pair, self.options, points, gear)
-        hit = _HEALTHY.get(key)
-        if hit is None:
+        def make() -> tuple[np.ndarray, np.ndarray]:
             theta = 2 * np.pi * np.arange(points) / points
             Z = self.pair.Z1 if gear == "pinion" else self.pair.Z2
             phi, in_mesh = self._arc(points, range(1, Z + 1), gear)
             per_tooth = np.zeros(in_mesh.shape)
             per_tooth[in_mesh] = self.tooth_pair_stiffness(phi)  # all healthy teeth in one pass
-            hit = (theta, per_tooth.sum(axis=0))
-            for a in hit:
-                a.setflags(write=False)  # shared by every model of the pair: never changed in place
-            _HEALTHY[key] = hit
-            if len(_HEALTHY) > HEALTHY_KEPT:
-                _HEALTHY.popitem(last=False)
-        else:
-            _HEALTHY.move_to_end(key)
-        return hit
+            return theta, per_tooth.sum(axis=0)
+
+        return _HEALTHY.get_or_make((self.pair, self.options, points, gear), make)
 
 
 def mesh_stiffness(
