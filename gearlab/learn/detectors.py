@@ -13,9 +13,8 @@ tooth) the statistic is the largest cosine over them:
 * ``h`` is the target's healthy reference: the sample median of its healthy history
   (thesis 5.4.2: the target's training data is that history);
 * the templates ``t_j`` are the source's fault revolutions minus the source's healthy
-  reference and what its healthy revolutions carry from sample to sample (a later mesh of no
-  whole input order, at each sample's phase: `asynchronous`), normalised; the sign is left
-  free, since a change of path (pinion to casing, six to eight DOF) may turn a response over;
+  reference, normalised; the sign is left free, since a change of path (pinion to casing,
+  six to eight DOF) may turn a response over;
 * the threshold lets a share ``false_alarm`` of healthy revolutions through: the
   ``1 - false_alarm`` quantile of a Gumbel law (the law of a maximum of many noisy
   correlations) fitted to the healthy history's own scores by their quartiles, then refitted
@@ -101,43 +100,15 @@ def _checked(name: str, Xs, ys, Xt, yt) -> tuple[np.ndarray, np.ndarray, np.ndar
     return Xs, ys, Xt, healthy_t
 
 
-SPREAD = 4.0  # a healthy direction stands out of the noise at this many times the median's energy (6 dB)
-
-
-def asynchronous(spread: np.ndarray) -> np.ndarray:
-    """Orthonormal rows (m, L) spanning what the source's healthy revolutions carry beyond their
-    reference from sample to sample, *spread* (n, L) the revolutions less the reference: on a train
-    whose later mesh is no whole input order (17/59 + 26/83) that mesh at the phase of each
-    sample's revolution of the cycle (gearlab.data.realise, "A train's cycle"). The directions of
-    *spread* whose energy exceeds SPREAD times the median direction's: n rows of white noise in L
-    points spread within (1 ± sqrt(n/L))² of it (Marchenko-Pastur), a whole-order train's clean
-    revolutions, all equal to their median, not at all; none is kept there (m = 0)."""
-    if len(spread) < 3:
-        return np.empty((0, spread.shape[1]))
-    _, s, vt = np.linalg.svd(spread, full_matrices=False)
-    energy = s**2
-    return vt[energy > SPREAD * np.median(energy)]
-
-
-def _synchronous(shapes: np.ndarray, spread: np.ndarray) -> np.ndarray:
-    """*shapes* (fault revolutions less the healthy reference) less their least-squares fit by the
-    healthy revolutions' *spread* about it (`asynchronous`): a fault sample's later mesh at its own
-    phase is what a healthy sample at that phase holds, so a template keeps the fault's
-    synchronous response. The same array when the spread is noise."""
-    basis = asynchronous(spread)
-    return shapes - (shapes @ basis.T) @ basis if len(basis) else shapes
-
-
 def _shapes(name: str, Xs, ys, Xt, yt, path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The checked target revolutions, which of them are healthy, the target's healthy reference
-    and the fault shapes: the source's fault revolutions minus its healthy reference and their
-    asynchronous part (`_synchronous`), through the
+    and the fault shapes: the source's fault revolutions minus its healthy reference, through the
     path fitted between the two references (each domain is standardised by its own healthy
     statistics, eq. 4.6; the path brings the shapes to the target's size and form), and with
     target labels the labelled target faults minus the target's reference."""
     Xs, ys, Xt, healthy_t = _checked(name, Xs, ys, Xt, yt)
     source_healthy, reference, through = fit_path(Xs, ys, Xt[healthy_t], path)
-    shapes = [through(_synchronous(Xs[ys == 1] - source_healthy, Xs[ys == 0] - source_healthy))]
+    shapes = [through(Xs[ys == 1] - source_healthy)]
     if yt is not None:
         shapes.append(Xt[~healthy_t] - reference)
     return Xt, healthy_t, reference, np.concatenate(shapes)
