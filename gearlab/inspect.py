@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .data.recordings import (
+    Recording,
     angle_tacho,
     channel_listing,
     is_rate_or_time,
@@ -79,20 +80,9 @@ class InspectOptions:
 # --- the record -------------------------------------------------------------------------------
 
 
-@dataclass
-class Record:
-    path: str
-    format: str
-    channels: list[str]
-    vibration: str
-    signal: np.ndarray
-    fs: float
-    fs_source: str
-    tacho_name: str | None
-    tacho: np.ndarray | None
-
-
-def read_record(path: str, options: InspectOptions) -> Record:
+def read_record(path: str, options: InspectOptions) -> Recording:
+    """The record as *options* name it: unlike read_recording, the vibration is scaled by the given
+    gain / sensitivity alone (no unit read from a channel's name), so any column can be inspected."""
     listing, fmt = read_contents(path, [])
     channels = [c for c in listing.available if not is_rate_or_time(str(c))]
     vibration = options.vibration
@@ -117,7 +107,8 @@ def read_record(path: str, options: InspectOptions) -> Record:
     if options.tacho is not None:
         tacho = series(contents.found[options.tacho], options.tacho, "tacho", path)
         same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
-    return Record(str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho)
+    units = f"value x {scale:g} (gain / sensitivity)"
+    return Recording(str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho, units=units)
 
 
 # --- speed ------------------------------------------------------------------------------------
@@ -146,7 +137,7 @@ class Speed:
         }
 
 
-def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
+def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -> Speed:
     kind = tacho_kind(rec.tacho) if options.tacho_kind == "auto" else options.tacho_kind
     shaft = options.tacho_shaft or (box.sensor.tacho if box else "input")
     ratio = 1.0
@@ -173,7 +164,7 @@ def _tacho_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
     return Speed(mean, how, theta, per_rev)
 
 
-def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> Speed:
+def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -> Speed:
     """The input speed of a record without a tacho: declared, refined by the mesh lines; or
     found from the mesh lines alone; then followed through the record on the phase of a mesh
     harmonic (gearlab.gearbox.speed.follow_speed)."""
@@ -203,7 +194,7 @@ def _found_speed(rec: Record, box: Gearbox | None, options: InspectOptions) -> S
 # --- the order spectrum and the description's orders ----------------------------------------------
 
 
-def upsampled(rec: Record, speed: Speed) -> tuple[np.ndarray, np.ndarray]:
+def upsampled(rec: Recording, speed: Speed) -> tuple[np.ndarray, np.ndarray]:
     """(signal, input angle) band-limited interpolated UPSAMPLE times (fewer for a long record), for
     the linear interpolation at uniform angle: on the record's own samples it leaves an image of a
     line at ν cycles per sample at 1 - ν, about (ν / (1 - ν))² below it (the B-6-ch5 source at 500
@@ -219,7 +210,7 @@ def upsampled(rec: Record, speed: Speed) -> tuple[np.ndarray, np.ndarray]:
     return signal, angle
 
 
-def order_spectrum(rec: Record, speed: Speed, fine: tuple | None = None):
+def order_spectrum(rec: Recording, speed: Speed, fine: tuple | None = None):
     """(orders, amplitude, revolutions, points per revolution) of the record at uniform input angle
     (*fine*: the record upsampled, :func:`upsampled`)."""
     signal, angle = fine or (rec.signal, speed.angle)
@@ -516,7 +507,7 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
     return {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
 
 
-def shaft_tsa(rec: Record, speed: Speed, box: Gearbox | None, fine: tuple | None = None) -> list[dict]:
+def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | None = None) -> list[dict]:
     """TSA of the record over each shaft's own revolutions: revolutions averaged, RMS, its strongest
     orders (*fine*: the record upsampled, :func:`upsampled`)."""
     signal, angle = fine or (rec.signal, speed.angle)

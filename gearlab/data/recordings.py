@@ -472,8 +472,8 @@ class Recording:
     fs_source: str
     tacho_name: str | None
     tacho: np.ndarray | None
-    step: float  # one quantisation step in m/s² (0: floating-point data)
     units: str  # how the values became m/s² (channel_scale)
+    step: float = 0.0  # one quantisation step in m/s² (0: floating-point data, or not read: inspect)
     extra: dict[str, np.ndarray] = field(default_factory=dict)  # other channels asked for, as stored
 
 
@@ -520,8 +520,8 @@ def read_recording(
         fs_source,
         tacho,
         tacho_values,
-        float(step * scale),
         units,
+        float(step * scale),
         {channel_key(n): contents.found[channel_key(n)] for n, _ in extra if n is not None},
     )
 
