@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from gearboxes import description, stage
 from test_detection import run, scenario
 from textrecords import FS, record, signals
 
@@ -97,19 +98,7 @@ def _records(folder: Path, header: str) -> list[dict]:
     return files
 
 
-BOX = """[gearbox]
-name = "box32"
-[operation]
-speed = "16 Hz"
-load = "40 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 32, bore = "25 mm" }
-wheel = { z = 71, bore = "35 mm" }
-[sensor]
-near = "input"
-"""
+BOX = description(stage(32, 71, bores=("25 mm", "35 mm")), name="box32", speed="16 Hz", load="40 N*m", near="input")
 
 
 @pytest.mark.parametrize("keys", [{"speed": "16 Hz"}, {"gearbox": "box.toml"}])

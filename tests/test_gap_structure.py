@@ -5,10 +5,10 @@ without its gain, a 200 kHz record with its noise added at that rate) invent no 
 log line and its report say the same verdict, and every parameter row says which fit it is."""
 
 import warnings
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from gearboxes import described_pair
 
 import gearlab.kinds.gap_benchmark.trials as bench
 from gearlab.data.builder import build_dataset
@@ -145,14 +145,6 @@ def train_rows(stages, seed: int, n: int = 40, points: int = 4096, later: float 
             x += later**k / h * mod * np.cos(h * o * z1 * theta + rng.uniform(0, 6))
         o *= z1 / z2
     return (x + rng.normal(0, 0.05, x.size)).reshape(n, points)
-
-
-def described_pair(*stages):
-    """A simulator's pair as the gap sees it: stage 1's, carrying the next (StagePair.next_stage)."""
-    pair = None
-    for z1, z2 in reversed(stages):
-        pair = SimpleNamespace(Z1=z1, Z2=z2, next_stage=pair)
-    return pair
 
 
 def test_a_later_stage_of_another_tooth_count_ends_in_one_line():

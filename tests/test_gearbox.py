@@ -8,6 +8,7 @@ import subprocess
 import sys
 from fractions import Fraction
 
+import gearboxes
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -304,10 +305,7 @@ def _gearlab(*args):
 
 def test_stiffness_of_a_described_gear_pair(tmp_path):
     path = tmp_path / "g.toml"
-    path.write_text(
-        '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
-        'pinion = {z = 20, bore = "20 mm"}\nwheel = {z = 57, bore = "30 mm"}\n'
-    )
+    path.write_text(gearboxes.description(gearboxes.stage(20, 57, bores=("20 mm", "30 mm"))))
     ok = _gearlab("stiffness", "--gearbox", str(path), "--points", "256")
     assert ok.returncode == 0, ok.stderr
     assert (

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from gearboxes import description, stage
 
 from gearlab.data.builder import _simulator, build_dataset, mesh_cycle
 from gearlab.data.spec import CH5_STEPS, dataset_preset
@@ -19,24 +20,18 @@ from gearlab.kinds.common import DATASET_TABLE, dataset_spec
 from gearlab.signals import spectrum
 
 
-def _stage(z1, z2, module="2 mm", width="20 mm", bores=("20 mm", "20 mm")):
-    gears = f'pinion = {{ z = {z1}, bore = "{bores[0]}" }}\nwheel = {{ z = {z2}, bore = "{bores[1]}" }}\n'
-    return f'[[stages]]\nmodule = "{module}"\nface_width = "{width}"\n' + gears
-
-
-def _gearbox(name, load, direction, *stages):
+def _rig(name, load, direction, *stages):
     """A description's text: 25 Hz, *load*, the sensor near the input in *direction*."""
-    head = f'[gearbox]\nname = "{name}"\n[operation]\nspeed = "25 Hz"\nload = "{load}"\n'
-    return head + "".join(stages) + f'[sensor]\nnear = "input"\ndirection = "{direction}"\n'
+    return description(*stages, name=name, speed="25 Hz", load=load, near="input", direction=direction)
 
 
-RIG20 = _gearbox("rig20", "10 N*m", "y", _stage(20, 47, bores=("20 mm", "25 mm")))
-RIG2S = _gearbox(
+RIG20 = _rig("rig20", "10 N*m", "y", stage(20, 47, bores=("20 mm", "25 mm")))
+RIG2S = _rig(
     "rig2s",
     "30 N*m",
     "x",
-    _stage(21, 53, bores=("20 mm", "25 mm")),
-    _stage(29, 61, "2.5 mm", "25 mm", ("25 mm", "30 mm")),
+    stage(21, 53, bores=("20 mm", "25 mm")),
+    stage(29, 61, "2.5 mm", "25 mm", ("25 mm", "30 mm")),
 )
 
 
@@ -197,7 +192,7 @@ def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkey
 @pytest.mark.parametrize(
     "text, given, expected",
     [
-        (RIG20 + _stage(23, 41) + _stage(19, 67), {}, r"\[\[stages\]\]: 3 stages: no lumped model simulates more"),
+        (RIG20 + stage(23, 41) + stage(19, 67), {}, r"\[\[stages\]\]: 3 stages: no lumped model simulates more"),
         (RIG2S, {"model": "ten_dof"}, r"\[\[stages\]\]: 2 stage\(s\), but model 'ten_dof' simulates 1"),
         (RIG20.replace('direction = "y"', 'direction = "axial"'), {}, r"\[sensor\] key 'direction': 'axial'"),
         (RIG20.replace('speed = "25 Hz"\n', ""), {}, r"\[operation\] key 'speed': missing"),

@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+from gearboxes import description, stage
 
 from gearlab.errors import GearlabInputError
 from gearlab.gearbox import order_table, parse_gearbox
@@ -205,10 +206,7 @@ def gearlab(*args):
 def test_the_command_in_the_terminal_and_as_json(tmp_path):
     path = record(tmp_path, ((20, 57),), revs=300)
     box = tmp_path / "box.toml"
-    box.write_text(
-        '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
-        'pinion = {z = 20, bore = "1 cm"}\nwheel = {z = 57, bore = "1 cm"}\n'
-    )
+    box.write_text(description(stage(20, 57, bores=("1 cm", "1 cm"))))
     out = gearlab("inspect", path, "--gearbox", box, "--vibration", "acc", "--tacho", "tacho")
     assert out.returncode == 0, out.stderr
     assert "matches this recording" in out.stdout and "order spectrum" in out.stdout

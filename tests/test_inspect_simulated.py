@@ -19,6 +19,7 @@ import tomllib
 import numpy as np
 import pytest
 from conftest import ROOT
+from gearboxes import description, stage
 
 from gearlab.data.simulated import simulated_record
 from gearlab.data.spec import dataset_preset
@@ -94,12 +95,9 @@ DESCRIBED = [((22, 51),), ((21, 45), (30, 67))]  # tooth counts no other test us
 @pytest.mark.parametrize("stages", DESCRIBED, ids=lambda s: "+".join(f"{a}-{b}" for a, b in s))
 def test_a_described_gearbox_simulated_and_inspected(tmp_path, stages):
     speed = 35.0
-    text = f'[gearbox]\nname = "box"\n[operation]\nspeed = "{speed:g} Hz"\nload = "10 N*m"\n'
-    for z1, z2 in stages:
-        text += f'[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\npinion = {{ z = {z1}, bore = "20 mm" }}\n'
-        text += f'wheel = {{ z = {z2}, bore = "20 mm" }}\n'
     described = tmp_path / "box.toml"
-    described.write_text(text)
+    pairs = [stage(z1, z2) for z1, z2 in stages]
+    described.write_text(description(*pairs, name="box", speed=f"{speed:g} Hz", load="10 N*m"))
     box = load_gearbox(described)
     model = model_name(box)
     rec = simulated_record(
@@ -115,11 +113,12 @@ def test_a_described_gearbox_simulated_and_inspected(tmp_path, stages):
     )
     path = str(tmp_path / "rec.npz")
     np.savez(path, acc_ms2=rec.vibration, tacho_V=rec.tacho, fs=rec.fs)
-    no_speed = parse_gearbox({"stages": tomllib.loads(text)["stages"]}, "box.toml")  # the same, no [operation]
+    unspoken = tomllib.loads(description(*pairs))["stages"]  # the same, no [operation]
+    no_speed = parse_gearbox({"stages": unspoken}, "box.toml")
     for label, b, tacho in (("tacho", box, "tacho_V"), ("declared", box, None), ("found", no_speed, None)):
         report = inspect_record(path, b, InspectOptions(vibration="acc_ms2", tacho=tacho))
-        for stage in report["check"]["stages"]:
-            assert abs(stage["measured_order"] - stage["expected_order"]) < ORDER_TOL, (label, report["verdict"])
+        for read in report["check"]["stages"]:
+            assert abs(read["measured_order"] - read["expected_order"]) < ORDER_TOL, (label, report["verdict"])
         assert abs(report["speed"]["mean_hz"] / speed - 1) < SPEED_TOL, (label, report["speed"])
         assert report["matches"], (label, report["verdict"])
 
@@ -142,9 +141,7 @@ def test_the_phm09_description_matches_the_rigs_records(name):
 def test_simulate_a_described_gearbox(cli, tmp_path):
     """`gearlab simulate --gearbox G` (issue 39): the description's model, values and operating
     point, as a [source] gearbox simulates it; its record shows the description's mesh order."""
-    text = '[operation]\nspeed = "30 Hz"\nload = "8 N*m"\n[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
-    gears = 'pinion = { z = 23, bore = "20 mm" }\nwheel = { z = 53, bore = "20 mm" }\n'
-    (tmp_path / "box.toml").write_text(text + gears)
+    (tmp_path / "box.toml").write_text(description(stage(23, 53), speed="30 Hz", load="8 N*m"))
     out = tmp_path / "sim.npz"
     code, stdout, err = cli("simulate", "--gearbox", tmp_path / "box.toml", "--out", out, "--duration", "0.6")
     assert code == 0, err
@@ -160,6 +157,6 @@ def test_simulate_a_described_gearbox(cli, tmp_path):
     ):
         code, _, err = cli("simulate", *args, "--out", out)
         assert code == 2 and message in err and err.count("\n") == 1, err
-    (tmp_path / "box.toml").write_text(text.replace('speed = "30 Hz"\n', "") + gears)
+    (tmp_path / "box.toml").write_text(description(stage(23, 53), load="8 N*m"))
     code, _, err = cli("simulate", "--gearbox", tmp_path / "box.toml", "--out", out)
     assert code == 2 and "[operation] key 'speed': missing; expected it there or --speed" in err, err

@@ -1,9 +1,8 @@
 """Gearboxes and recordings made outside the project, run as a user would (issue 39, "How it will be
 checked"): the findings of such a run, each fixed and kept fixed here on small generated inputs."""
 
-from types import SimpleNamespace
-
 import numpy as np
+from gearboxes import described_pair
 
 from gearlab.gap.structure import later_stages
 
@@ -20,13 +19,6 @@ def _train(stages, theta: np.ndarray, rng) -> np.ndarray:
     return x + rng.normal(0, 0.05, x.size)
 
 
-def _pair(*stages):
-    pair = None
-    for z1, z2 in reversed(stages):
-        pair = SimpleNamespace(Z1=z1, Z2=z2, next_stage=pair)
-    return pair
-
-
 def test_a_later_mesh_of_no_whole_order_is_read_against_the_description():
     # A 17/59 + 26/83 fan reducer (mesh 2 at 17 x 26/59 = 7.4915 orders) written as an int16 WAV
     # without a tacho: the gap diagnosis of its right description ended 'structure differs: stage 2:
@@ -37,11 +29,11 @@ def test_a_later_mesh_of_no_whole_order_is_read_against_the_description():
     record = _train([(17, 59), (26, 83)], theta, rng).reshape(60, points)
     one = _train([(17, 59), (26, 83)], theta[:points], rng)
     source = np.tile(one, (20, 1)) + rng.normal(0, 0.05, (20, points))
-    right = later_stages(record, source, _pair((17, 59), (26, 83)))
+    right = later_stages(record, source, described_pair((17, 59), (26, 83)))
     assert right["line"] is None
     assert abs(right["stages"][0]["target"] - 17 * 26 / 59) < 0.01
     # a 24-tooth second pinion described (mesh 2 at 6.915) is still called out, naming stage 2
-    wrong = later_stages(record, source, _pair((17, 59), (24, 83)))
+    wrong = later_stages(record, source, described_pair((17, 59), (24, 83)))
     assert wrong["line"].startswith(
         "stage 2: mesh order 7.492 measured, 6.915 expected: the source simulates a 24-tooth pinion"
     )

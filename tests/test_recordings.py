@@ -13,6 +13,7 @@ import h5py
 import numpy as np
 import pytest
 import scipy.io
+from gearboxes import description, stage
 from scipy.io import wavfile
 
 from gearlab.data.importers import MeasuredSpec, import_measured
@@ -203,15 +204,16 @@ def test_validate_refuses_bad_input_in_one_line_from_the_header(cli, tmp_path):
     assert code == 0, err
 
 
+def rig(z1: int, **keys) -> str:
+    """A description of one 2 mm z1/57 pair on 20/30 mm bores (*keys*: description()'s)."""
+    return description(stage(z1, 57, bores=("20 mm", "30 mm")), **keys)
+
+
 def test_no_tacho_the_speed_comes_from_the_gearbox_mesh_order(tmp_path, reference):
     _, acc, _ = signals()
     np.savez(tmp_path / "r.npz", acc=acc, fs=FS)
     gearbox = tmp_path / "rig20.toml"
-    gearbox.write_text(
-        '[gearbox]\nname = "rig20"\n[operation]\nspeed = "1500 rpm"\nload = "10 N*m"\n'
-        '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
-        'pinion = { z = 20, bore = "20 mm" }\nwheel = { z = 57, bore = "30 mm" }\n'
-    )
+    gearbox.write_text(rig(20, name="rig20", speed="1500 rpm", load="10 N*m"))
     from gearlab.gearbox import resolve_gearbox
 
     rec = read_recording(tmp_path / "r.npz", "acc")
@@ -229,21 +231,17 @@ def test_an_edited_gearbox_description_is_not_served_from_the_cache(tmp_path, mo
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     _, acc, _ = signals()
     np.savez(tmp_path / "r.npz", acc=acc, fs=FS)
-    text = (
-        '[gearbox]\nname = "rig"\n[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
-        'pinion = {{ z = {z}, bore = "20 mm" }}\nwheel = {{ z = 57, bore = "30 mm" }}\n'
-    )
     gearbox = tmp_path / "rig.toml"
-    gearbox.write_text(text.format(z=20))
+    gearbox.write_text(rig(20, name="rig"))
     spec = MeasuredSpec(name="r", path=str(tmp_path / "r.npz"), vibration="acc", gearbox=str(gearbox))
     first, cached = load_or_build(spec)
     assert not cached and first.meta["speed_hz"] == pytest.approx(SPEED, rel=1e-4)
     elsewhere = tmp_path / "moved" / "other.toml"
     elsewhere.parent.mkdir()
-    elsewhere.write_text(text.format(z=20))
+    elsewhere.write_text(rig(20, name="rig"))
     assert MeasuredSpec(name="r", path=spec.path, vibration="acc", gearbox=str(elsewhere)).key() == spec.key()
     assert load_or_build(spec)[1]
-    gearbox.write_text(text.format(z=40))  # the same file, a 40-tooth pinion: the mesh line at 500 Hz is 12.5 Hz
+    gearbox.write_text(rig(40, name="rig"))  # the same file, a 40-tooth pinion: the mesh line at 500 Hz is 12.5 Hz
     again, cached = load_or_build(spec)
     assert not cached and again.meta["speed_hz"] == pytest.approx(SPEED / 2, rel=1e-4)
 
@@ -254,16 +252,14 @@ def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, run_sce
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     _, acc, _ = signals()
     np.savez(tmp_path / "r.npz", acc=acc, fs=FS)
-    box = '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\npinion = {{ z = {z}, bore = "20 mm" }}\n'
-    box += 'wheel = {{ z = 57, bore = "30 mm" }}\n'
-    (tmp_path / "rig.toml").write_text(box.format(z=20))
+    (tmp_path / "rig.toml").write_text(rig(20))
     run = run_scenario(
         '[scenario]\nname = "m"\nkind = "dataset"\n[[datasets]]\nfile = "r.npz"\nvibration = "acc"\n'
         'gearbox = "rig.toml"\ntransient = "none"\n'
     )
     assert str((tmp_path / "rig.toml").resolve()) in json.loads((run / "run.json").read_text())["inputs"]
     (run / "results.jsonl").unlink()  # as if killed before its unit finished
-    (tmp_path / "rig.toml").write_text(box.format(z=40))
+    (tmp_path / "rig.toml").write_text(rig(40))
     code, _, err = cli("run", "--resume", run)
     assert code == 2 and "rig.toml: has changed since the run" in err, err
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gearboxes import description, stage
 
 from gearlab.data.builder import _simulator, angle_samples, steady_revolution, whole_steps_rate
 from gearlab.data.recordings import read_recording
@@ -101,11 +102,8 @@ def test_a_gearbox_description_is_simulated_as_its_source_would_be(healthy, tmp_
     # a user's one-stage description: its model (ten_dof, the housing), its sensor's channel and its
     # operating point; integrated at sim_fs, read at the logger's fs, the mesh lines where z1 puts them
     path = tmp_path / "rig.toml"
-    path.write_text(
-        '[gearbox]\nname = "r"\n[operation]\nspeed = "20 Hz"\nload = "9 N*m"\n[[stages]]\nmodule = "2 mm"\n'
-        'face_width = "15 mm"\npinion = { z = 23, bore = "15 mm" }\nwheel = { z = 71, bore = "20 mm" }\n'
-        '[sensor]\nnear = "input"\ndirection = "y"\n'
-    )
+    one = stage(23, 71, width="15 mm", bores=("15 mm", "20 mm"))
+    path.write_text(description(one, name="r", speed="20 Hz", load="9 N*m", near="input", direction="y"))
     rec = simulated_record(gearbox=str(path), revolutions=20, seed=1, fs=10_000.0, sim_fs=120e3)
     assert (rec.speed_hz, rec.load_nm, rec.channel, rec.fs) == (20.0, 9.0, "casing_y", 10_000.0)
     revs = resample_revolutions(rec.vibration, rec.angle, 512)

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from gearboxes import description, stage
 
 from gearlab.data.builder import (
     _simulator,
@@ -24,30 +25,15 @@ from gearlab.gearbox.simulation import channel, model_name, reference
 from gearlab.registry import get_registry
 
 # 19/47 then 23/71: the later mesh at 19 x 23/47 = 9.2979 input orders, repeating after 47 turns
-BOX = """
-[gearbox]
-name = "reducer"
-
-[operation]
-speed = "35 Hz"
-load = "15 N*m"
-
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 19, bore = "20 mm" }
-wheel = { z = 47, bore = "25 mm" }
-
-[[stages]]
-module = "2.5 mm"
-face_width = "25 mm"
-pinion = { z = 23, bore = "25 mm" }
-wheel = { z = 71, bore = "35 mm" }
-
-[sensor]
-near = "input"
-direction = "x"
-"""
+BOX = description(
+    stage(19, 47, bores=("20 mm", "25 mm")),
+    stage(23, 71, "2.5 mm", "25 mm", ("25 mm", "35 mm")),
+    name="reducer",
+    speed="35 Hz",
+    load="15 N*m",
+    near="input",
+    direction="x",
+)
 ROWS = 48
 
 

@@ -26,6 +26,7 @@ import re
 import h5py
 import numpy as np
 import pytest
+from gearboxes import description, stage
 from scipy.io import savemat, wavfile
 
 from gearlab.data.simulated import simulated_record
@@ -43,53 +44,13 @@ TAKES = {
     "next": (20, 5, 1.002),
 }
 
-ONE_STAGE = """\
+SENSOR = dict(near="input", tacho="input")  # the accelerometer and the tacho by the input shaft
 # rig.toml: our 19/53 test gearbox
-[gearbox]
-name = "rig1953"
-
-[operation]
-speed = "28 Hz"
-load = "12 N*m"
-
-[[stages]]
-module = "2 mm"
-face_width = "18 mm"
-pinion = { z = 19, bore = "14 mm" }
-wheel = { z = 53, bore = "20 mm" }
-
-[sensor]
-near = "input"
-direction = "x"
-tacho = "input"
-"""
-
-TWO_STAGE = """\
+RIG = stage(19, 53, width="18 mm", bores=("14 mm", "20 mm"))
+ONE_STAGE = description(RIG, name="rig1953", speed="28 Hz", load="12 N*m", direction="x", **SENSOR)
 # box.toml: a two-stage reducer, 24/60 then 35/83
-[gearbox]
-name = "reducer"
-
-[operation]
-speed = "1800 rpm"
-load = "15 N*m"
-
-[[stages]]
-module = "1.5 mm"
-face_width = "15 mm"
-pinion = { z = 24, bore = "12 mm" }
-wheel = { z = 60, bore = "20 mm" }
-
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 35, bore = "20 mm" }
-wheel = { z = 83, bore = "30 mm" }
-
-[sensor]
-near = "input"
-direction = "y"
-tacho = "input"
-"""
+REDUCER = (stage(24, 60, "1.5 mm", "15 mm", ("12 mm", "20 mm")), stage(35, 83, bores=("20 mm", "30 mm")))
+TWO_STAGE = description(*REDUCER, name="reducer", speed="1800 rpm", load="15 N*m", direction="y", **SENSOR)
 
 GAP = """\
 [scenario]
@@ -206,41 +167,42 @@ def write_mat(path, rec) -> None:
     savemat(path, {"acc": rec.vibration[:, None], "fs": np.array([[rec.fs]])})
 
 
+def rig_folder(folder, box: str, text: str, fs: float, writers: dict, scenarios: dict) -> tuple:
+    """*folder* holding the description *box* (its *text*), the takes at *fs* in each format of
+    *writers* (extension: writer) and the *scenarios* (file name: text)."""
+    (folder / box).write_text(text)
+    takes = records(folder / box, fs)
+    for name, rec in takes.items():
+        for ext, write in writers.items():
+            write(folder / f"{name}.{ext}", rec)
+    for name, scenario in scenarios.items():
+        (folder / name).write_text(scenario)
+    return folder, takes
+
+
+def scenarios(name: str, box: str, keys: str, ext: str, nt_keys: str, nt_ext: str) -> dict:
+    """The gap and detection scenarios of the takes with a tacho (*keys*, *ext*) and a detection of
+    those without (*nt_keys*, *nt_ext*)."""
+    return {
+        "gap.toml": GAP.format(name=name, box=box, keys=keys, ext=ext),
+        "detect.toml": DETECT.format(name=name, box=box, keys=keys, ext=ext),
+        "detect_nt.toml": DETECT.format(name=f"{name}_nt", box=box, keys=nt_keys, ext=nt_ext),
+    }
+
+
 @pytest.fixture(scope="module")
 def one_stage(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("rig1953")
-    (folder / "rig.toml").write_text(ONE_STAGE)
-    takes = records(folder / "rig.toml", 12_800.0)
-    for name, rec in takes.items():
-        write_csv(folder / f"{name}.csv", rec)
-        write_h5(folder / f"{name}.h5", rec)
-    scenarios = {
-        "gap.toml": GAP.format(name="rig1953", box="rig.toml", keys=CSV_KEYS, ext="csv"),
-        "detect.toml": DETECT.format(name="rig1953", box="rig.toml", keys=CSV_KEYS, ext="csv"),
-        "detect_nt.toml": DETECT.format(name="rig1953_nt", box="rig.toml", keys=H5_KEYS, ext="h5"),
-    }
-    for name, text in scenarios.items():
-        (folder / name).write_text(text)
-    return folder, takes
+    files = scenarios("rig1953", "rig.toml", CSV_KEYS, "csv", H5_KEYS, "h5")
+    writers = {"csv": write_csv, "h5": write_h5}
+    return rig_folder(tmp_path_factory.mktemp("rig1953"), "rig.toml", ONE_STAGE, 12_800.0, writers, files)
 
 
 @pytest.fixture(scope="module")
 def two_stage(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("reducer")
-    (folder / "box.toml").write_text(TWO_STAGE)
-    takes = records(folder / "box.toml", 20_000.0)
-    for name, rec in takes.items():
-        write_wav(folder / f"{name}.wav", rec)
-        write_mat(folder / f"{name}.mat", rec)
-    scenarios = {
-        "gap.toml": GAP.format(name="reducer", box="box.toml", keys=WAV_KEYS, ext="wav"),
-        "gap_nt.toml": GAP_NO_TACHO.format(name="reducer", box="box.toml", ext="mat"),
-        "detect.toml": DETECT.format(name="reducer", box="box.toml", keys=WAV_KEYS, ext="wav"),
-        "detect_nt.toml": DETECT.format(name="reducer_nt", box="box.toml", keys=MAT_KEYS, ext="mat"),
-    }
-    for name, text in scenarios.items():
-        (folder / name).write_text(text)
-    return folder, takes
+    files = scenarios("reducer", "box.toml", WAV_KEYS, "wav", MAT_KEYS, "mat")
+    files["gap_nt.toml"] = GAP_NO_TACHO.format(name="reducer", box="box.toml", ext="mat")
+    writers = {"wav": write_wav, "mat": write_mat}
+    return rig_folder(tmp_path_factory.mktemp("reducer"), "box.toml", TWO_STAGE, 20_000.0, writers, files)
 
 
 @pytest.fixture(scope="module")
@@ -280,8 +242,8 @@ def mesh_orders(*stages) -> list[float]:
 
 def check_inspect(report: dict, expected: list[float], speed_hz: float) -> None:
     assert report["matches"], report["verdict"]
-    for stage, m in zip(report["check"]["stages"], expected):
-        assert abs(stage["measured_order"] - m) <= 0.05, (stage, m)  # issue 39's goal
+    for read, m in zip(report["check"]["stages"], expected):
+        assert abs(read["measured_order"] - m) <= 0.05, (read, m)  # issue 39's goal
     assert abs(report["speed"]["mean_hz"] / speed_hz - 1) <= 0.005, report["speed"]
 
 

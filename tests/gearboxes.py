@@ -1,0 +1,32 @@
+"""Gearbox descriptions as a user writes them (docs/your_gearbox.md), for the tests that need one on
+disk: `description(stage(19, 53), name="rig", speed="28 Hz", ...)` is the TOML text. A section or key
+left as None is not written, so a test can leave out what it checks is not needed."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+
+def stage(z1, z2, module="2 mm", width="20 mm", bores=("20 mm", "20 mm")) -> str:
+    """One [[stages]] table: pinion z1 and wheel z2 of *module* and face *width*, on *bores*."""
+    gears = f'pinion = {{ z = {z1}, bore = "{bores[0]}" }}\nwheel = {{ z = {z2}, bore = "{bores[1]}" }}\n'
+    return f'[[stages]]\nmodule = "{module}"\nface_width = "{width}"\n' + gears
+
+
+def _table(table: str, **keys) -> str:
+    given = "".join(f'{key} = "{value}"\n' for key, value in keys.items() if value is not None)
+    return f"[{table}]\n{given}" if given else ""
+
+
+def description(*stages, name=None, speed=None, load=None, near=None, direction=None, tacho=None) -> str:
+    """A description's text: [gearbox], [operation], the *stages* (stage() texts), [sensor]."""
+    head = _table("gearbox", name=name) + _table("operation", speed=speed, load=load)
+    return head + "".join(stages) + _table("sensor", near=near, direction=direction, tacho=tacho)
+
+
+def described_pair(*stages):
+    """A simulator's pair as the gap sees it: stage 1's, carrying the next (StagePair.next_stage)."""
+    pair = None
+    for z1, z2 in reversed(stages):
+        pair = SimpleNamespace(Z1=z1, Z2=z2, next_stage=pair)
+    return pair
