@@ -1,7 +1,8 @@
 """The Textual TUI, driven with keys through Textual's pilot, and snapshots of its main screens.
 
 Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios,
-except in the tests of what the TUI starts, not of the run (`stub_engine`).
+except in the tests of what the TUI starts, not of the run (`stub_engine`), and in the every-kind
+runs, whose child replays a run the real engine made once in this session (`replayed`).
 """
 
 from __future__ import annotations
@@ -432,21 +433,29 @@ def kinds_folder(tmp_path, monkeypatch, kinds_cache):
     gap_benchmark): each runs for a few seconds with the real engine."""
     monkeypatch.setenv("GEARLAB_CACHE", str(kinds_cache))
     monkeypatch.chdir(tmp_path)
-    folder = tmp_path / "scenarios"
+    return make_kinds_folder(tmp_path)
+
+
+def make_kinds_folder(base: Path) -> Path:
+    """*base*/scenarios with the tiny scenario of every kind (their runs in 'runs', relative)."""
+    folder = base / "scenarios"
     shutil.copytree(KINDS_DIR, folder)
     (folder / "stiff.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
     (folder / "transfer.toml").write_text(
         TRANSFER.replace("{runs}", "runs").replace("repetitions = 2", "repetitions = 1")
     )
-    detection_scenario(tmp_path, methods=("source_only", "matched_filter"))  # scenarios/det.toml, records in data/
+    detection_scenario(base, methods=("source_only", "matched_filter"))  # scenarios/det.toml, records in data/
     return folder
 
 
-async def run_to_the_end(pilot, name: str, key: str = "r") -> None:
+async def run_to_the_end(pilot, name: str, key: str = "r", then=None) -> None:
+    """Run scenario *name* from the TUI and wait for its end; *then()* once it says 'running'."""
     app = pilot.app
     await select(pilot, name)
     await pilot.press(key)
     assert text_of(app, "#run-status").startswith("running")
+    if then is not None:
+        then()
     # the status says 'running' until the child ends (a child that fails at once ends between polls)
     await until(pilot, lambda: app.process is None and not text_of(app, "#run-status").startswith("running"), 300)
     status = text_of(app, "#run-status")
@@ -470,11 +479,87 @@ EVERY_KIND = [
 ]
 
 
+# The child a replayed run starts: it puts the recorded run directory where the run would have
+# made it and writes the recorded event lines, that run directory's path in them made the new one.
+# It starts when the test has seen the TUI say 'running' (file *go* made, a minute at most), as a
+# real run takes its time.
+REPLAY = """
+import shutil, sys, time
+from pathlib import Path
+
+made, written, lines, into, go = sys.argv[1:]
+start = time.monotonic()
+while not Path(go).exists() and time.monotonic() - start < 60:
+    time.sleep(0.02)
+Path(into).parent.mkdir(parents=True, exist_ok=True)
+shutil.copytree(made, into)
+sys.stdout.write(Path(lines).read_text().replace(written, into))
+"""
+
+
+@pytest.fixture(scope="module")
+def kind_streams(tmp_path_factory, kinds_cache):
+    """{scenario file: (its run directory, that directory as the events write it, the file of the
+    event lines)}: each tiny scenario of EVERY_KIND run once by the real engine, as `gearlab run
+    FILE --out RUNS --events` beside the scenarios' folder, in this process (its imports already made)."""
+    from contextlib import redirect_stdout
+    from io import StringIO
+
+    from gearlab.cli import main
+
+    base = tmp_path_factory.mktemp("kind_streams")
+    streams = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(kinds_cache))
+        mp.chdir(base)
+        folder = make_kinds_folder(base)
+        for name in dict(EVERY_KIND):
+            # what the TUI starts (but its --out)
+            mp.setattr(
+                "sys.argv", ["gearlab", "run", str(Path("scenarios") / name), "--out", str(base / "runs"), "--events"]
+            )
+            out = StringIO()
+            with redirect_stdout(out):
+                try:
+                    main()
+                except SystemExit as exc:
+                    assert not exc.code, f"{name}: exit {exc.code}"
+            lines = out.getvalue().splitlines()
+            (made,) = [json.loads(x)["message"] for x in lines if x.startswith("{") and json.loads(x)["kind"] == "run"]
+            (folder.parent / f"{name}.events").write_text("\n".join(lines) + "\n")
+            streams[name] = (str(base / made), made, folder.parent / f"{name}.events")
+    return streams
+
+
+@pytest.fixture
+def replayed(monkeypatch, kind_streams, tmp_path):
+    """The TUI's child replays the recorded run of the scenario it is asked to run (kind_streams):
+    for the tests of how the TUI follows each kind's events and opens its results, not of how it
+    starts a run (the runs of test_run_fills_the_table_then_opens_the_results, the quick run,
+    cancel/resume and where runs go keep the real child); the list gets each start's arguments."""
+    started, real = [], asyncio.create_subprocess_exec
+
+    async def stand_in(program, *args, **kwargs):
+        assert args[:2] == ("-m", "gearlab"), args
+        started.append(list(args[2:]))
+        made, written, lines = kind_streams[Path(args[3]).name]
+        into = str(tmp_path / "runs" / Path(made).parent.name / Path(made).name)
+        return await real(program, "-c", REPLAY, made, written, str(lines), into, str(tmp_path / "go"), **kwargs)
+
+    monkeypatch.setattr(asyncio, "create_subprocess_exec", stand_in)
+    return started
+
+
 @pytest.mark.parametrize("name,size", EVERY_KIND)
-def test_every_scenario_kind_runs_from_the_tui_to_the_end(kinds_folder, name, size):
+def test_every_scenario_kind_runs_from_the_tui_to_the_end(kinds_folder, replayed, tmp_path, name, size):
+    """Each kind's events, as the real engine writes them in this session, drawn to the end and its
+    run opened in the results view (the engine's run recorded once, replayed by the TUI's child)."""
+
     async def script(pilot):
         app = pilot.app
-        await run_to_the_end(pilot, name)
+        await run_to_the_end(pilot, name, then=(tmp_path / "go").touch)
+        assert replayed == [["run", str(Path("scenarios") / name), "--out", str(tmp_path / "runs"), "--events"]]
+        assert app.run_path.parent.parent == tmp_path / "runs"  # the replayed run, where the child put it
         if name == "tgap.toml":  # stage names with spaces ('gap before') got bars of their own
             assert app.query(f"#bar-{stage_id('gap before')}") and app.query(f"#bar-{stage_id('gap after')}")
         assert app.query_one("#views", TabbedContent).active == "results"
@@ -558,7 +643,7 @@ def stub_engine(monkeypatch):
     """For tests of what the TUI runs, not of the run: the child it starts is a stand-in that
     writes one event line and ends (exit 0) instead of `python -m gearlab ...`; the list
     returned gets the gearlab arguments of each start. test_run_fills_the_table_then_opens_the_results,
-    the every-kind runs and cancel/resume keep the real engine."""
+    the quick run, cancel/resume and where runs go keep the real engine."""
     started, real = [], asyncio.create_subprocess_exec
 
     async def stand_in(program, *args, **kwargs):
@@ -711,8 +796,9 @@ def test_at_80x24_the_footer_the_sidebar_and_the_tables_fit(repo_scenarios):
 
 
 @pytest.fixture(scope="module")
-def finished_runs(tmp_path_factory):
-    """Two finished runs of the tiny transfer scenario and one of the tiny gap scenario."""
+def finished_runs(tmp_path_factory, kinds_cache):
+    """Two finished runs of the tiny transfer scenario and one of the tiny gap scenario (their
+    datasets those of the every-kind runs)."""
     from gearlab.engine import run_scenario
 
     base = tmp_path_factory.mktemp("finished_tui")
@@ -720,7 +806,7 @@ def finished_runs(tmp_path_factory):
     shutil.copytree(KINDS_DIR, folder)
     (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", str(base / "runs")))
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
+        mp.setenv("GEARLAB_CACHE", str(kinds_cache))
         transfers = [run_scenario(folder / "transfer.toml").path for _ in range(2)]
         gap_run = run_scenario(folder / "tgap.toml", out=base / "runs").path
     return folder, transfers, gap_run
