@@ -5,6 +5,7 @@ selection rule printed with every run."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ from tiny import EXECUTION, SCHEDULE
 from gearlab.engine import load_scenario, run_scenario
 from gearlab.kinds import SCENARIO_KINDS
 from gearlab.kinds import transfer_benchmark as tb
+from gearlab.kinds import transfer_benchmark_draw as draws
 from gearlab.runs import RunDir
 
 TINY = (
@@ -88,18 +90,19 @@ def test_the_draw_is_fixed_by_the_seed_and_stays_in_its_ranges():
     drawn = tb.trials(spec)
     again = tb.trials(spec)
     assert [t[2] for t in drawn] == [t[2] for t in again]  # the same seed, the same targets
-    other = tb.trials({**spec, "benchmark": {**spec["benchmark"], "seed": 1000}})
+    other = tb.trials(replace(spec, benchmark=replace(spec.benchmark, seed=1000)))
     assert [t[2] for t in other] != [t[2] for t in drawn]
     laws, sensors, models, tones = set(), set(), set(), 0
     for _, source, target, a in drawn:
-        assert source.speed_hz == target.speed_hz and source.load_nm == spec["source"].load_nm  # load unknown
-        assert tb.SPEED_HZ[0] <= a["speed_hz"] <= tb.SPEED_HZ[1] and tb.LOAD_NM[0] <= a["load_nm"] <= tb.LOAD_NM[1]
-        assert tb.SNR_DB[0] <= a["snr_db"] <= tb.SNR_DB[1]
-        assert 2 <= len(a["faults"]) <= 4 and set(a["faults"]) <= {n for n, _ in spec["source"].faults}
+        assert source.speed_hz == target.speed_hz and source.load_nm == spec.source.load_nm  # load unknown
+        assert draws.SPEED_HZ[0] <= a["speed_hz"] <= draws.SPEED_HZ[1]
+        assert draws.LOAD_NM[0] <= a["load_nm"] <= draws.LOAD_NM[1]
+        assert draws.SNR_DB[0] <= a["snr_db"] <= draws.SNR_DB[1]
+        assert 2 <= len(a["faults"]) <= 4 and set(a["faults"]) <= {n for n, _ in spec.source.faults}
         fault_rows = sum(len(s) for _, s in target.faults) * len(target.teeth)
-        assert target.healthy == spec["protocol"].target_train + fault_rows  # the test set is half faulty
+        assert target.healthy == spec.protocol.target_train + fault_rows  # the test set is half faulty
         for effect, params in a["effects"].items():
-            ranges = {**tb.MODEL_EFFECTS, **tb.SENSORS, "interference_tone": tb.TONE}[effect]
+            ranges = {**draws.MODEL_EFFECTS, **draws.SENSORS, "interference_tone": draws.TONE}[effect]
             for key, value in params.items():
                 assert ranges[key][0] <= value <= ranges[key][1], (effect, key)
         laws.add(a["noise"])
@@ -107,8 +110,8 @@ def test_the_draw_is_fixed_by_the_seed_and_stays_in_its_ranges():
         models.add(a["model"])
         tones += a["tone"]
     # 24 trials cover every law, sensor and model mismatch, and some tones
-    assert laws == {"gaussian", "laplace", "student_t"} and sensors == set(tb.SENSORS)
-    assert models == set(tb.MODEL_EFFECTS) and 0 < tones < len(drawn)
+    assert laws == {"gaussian", "laplace", "student_t"} and sensors == set(draws.SENSORS)
+    assert models == set(draws.MODEL_EFFECTS) and 0 < tones < len(drawn)
 
 
 def test_registered_validated_and_a_supervised_method_refused(tiny, cli):
@@ -201,19 +204,18 @@ def test_the_correction_fits_on_the_history_alone(corrected, monkeypatch):
     in every repetition's training set and in none's test set; rows only (no label, nothing of how
     the target was drawn). Every unit, plain or corrected, scores the rows outside the history."""
     from gearlab.data.cache import load_or_build
-    from gearlab.gap.scoring import Settings
     from gearlab.learn.protocol import history_of, split
 
     run, calls, cache, histories = corrected
     monkeypatch.setenv("GEARLAB_CACHE", str(cache))
     spec = load_scenario(run / "scenario.toml").spec
-    protocol = spec["protocol"]
+    protocol = spec.protocol
     drawn = tb.trials(spec)
     assert len(calls) == len(drawn) == 2  # one diagnosis per trial
     records = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines()]
     for (name, source_spec, target_spec, _), call in zip(drawn, calls, strict=True):
         assert call["source"] == source_spec and not call["source"].effects and call["chain"] is None
-        assert call["settings"] == Settings(**spec["diagnosis"]) and call["settings"].budget == 2
+        assert call["settings"] == spec.diagnosis and call["settings"].budget == 2
         assert isinstance(call["target_X"], np.ndarray) and call["target_X"].shape == (10, 4096)
         target, _ = load_or_build(target_spec)
         source, _ = load_or_build(source_spec)
@@ -258,7 +260,7 @@ def test_both_sources_reported_per_trial_and_in_distribution(corrected):
 
 def test_the_corrected_source_keeps_the_model_and_path_effects_not_the_noise():
     spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
-    assert spec["correct"] and spec["diagnosis"]["budget"] == 16  # shipped: on, with the shipped budget
+    assert spec.correct and spec.diagnosis.budget == 16  # shipped: on, with the shipped budget
     _, source, _, _ = tb.trials(spec)[0]
     fixed = tb.corrected_spec(source, {"trial": "trial000", "corrected_effects": FITTED})
     assert [name for name, _ in fixed.effects] == ["bearing_stiffness"] and fixed.noise == source.noise
@@ -292,7 +294,7 @@ def test_a_fitted_tone_stays_out_of_the_corrected_source(tiny):
 def test_only_runs_the_named_trials_as_drawn_in_the_full_run(cli, tmp_path):
     spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
     full = tb.trials(spec)
-    picked = tb.trials({**spec, "benchmark": {**spec["benchmark"], "only": [3, 9]}})
+    picked = tb.trials(replace(spec, benchmark=replace(spec.benchmark, only=[3, 9])))
     assert [t[2] for t in picked] == [full[3][2], full[9][2]]
     code, _, err = cli("transfer-benchmark", "--trials", "4", "--only", "5", "--out", tmp_path / "runs")
     assert code == 2 and len(err.strip().splitlines()) == 1

@@ -9,13 +9,13 @@
                   for every trial: nothing is set per target; correct_source (below)
     [diagnosis]   the gap diagnosis's settings (gearlab.gap.scoring.Settings; defaults: the shipped ones)
 
-Each trial draws a target that no gearlab setting was chosen on (`draw`; the ranges below and in
-docs/learning.md): the source's gearbox at another speed and load, one mismatch of the model (drive,
-bearings or mesh damping), a sensor resonance, a low-pass or neither, in a quarter of the trials a
-non-synchronous tone, another noise law and level, and another mix of fault types and teeth. Every
-method trains on the target history (k = 0) and is scored on the target's test set beside the Bayes
-bound of that target (gearlab.parts.bound.bayes_bound; unavailable where its model does not hold,
-as with a tone).
+Each trial draws a target that no gearlab setting was chosen on (`transfer_benchmark_draw`; the
+ranges there and in docs/learning.md): the source's gearbox at another speed and load, one mismatch
+of the model (drive, bearings or mesh damping), a sensor resonance, a low-pass or neither, in a
+quarter of the trials a non-synchronous tone, another noise law and level, and another mix of fault
+types and teeth. Every method trains on the target history (k = 0) and is scored on the target's
+test set beside the Bayes bound of that target (gearlab.parts.bound.bayes_bound; unavailable where
+its model does not hold, as with a tone).
 
 With `correct_source`, each trial also corrects the source: the gap diagnosis (gearlab.gap.diagnose,
 its effect library and budget) fitted on the target's history rows alone (`learn.protocol.history_of`:
@@ -37,17 +37,15 @@ report.html.
 
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
-from ..data.spec import NOISE_KINDS, DatasetSpec, NoiseSpec
-from ..effects import effect_spec
+from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..gap.scoring import Settings as Diagnosis
@@ -61,7 +59,7 @@ from ..parts.training import CALIBRATION, NETWORK, TRAINING, MethodEntry, method
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location
-from ..settings import MAX_SEED, quick_limits, setting, shrunk
+from ..settings import MAX_SEED, setting, shrunk, typed
 from .common import (
     DATASET_TABLE,
     SOURCE_KEYS,
@@ -73,6 +71,7 @@ from .common import (
     no_verdict,
     simulated_spec,
 )
+from .transfer_benchmark_draw import draw
 
 REPORT_SEEDS = 1000  # seeds below: development; at or above: reported figures (the selection rule)
 SELECTION_RULE = (
@@ -81,32 +80,6 @@ SELECTION_RULE = (
 )
 CLOSE = 5.0  # points: a method within this of its trial's bound counts as close
 BASELINE = "likelihood_ratio"  # the start of the calibrated networks (gearlab.learn.calibration)
-
-# What a trial draws: (low, high) uniform, (low, high, "log") log-uniform, (low, high, "int") whole
-# numbers with both ends. One model mismatch of MODEL_EFFECTS, one sensor of SENSORS ("none" adds
-# nothing), a tone in TONE_SHARE of the trials, a noise law of NOISE_KINDS.
-SPEED_HZ = (30.0, 50.0)
-LOAD_NM = (10.0, 30.0)
-SNR_DB = (-3.0, 6.0)
-TONE_SHARE = 0.25
-FAULT_TYPES = (2, 4, "int")  # how many of the source's fault types the target holds
-TEETH_SHARE = (0.5, 1.0)  # of the source's teeth that carry the target's faults
-MODEL_EFFECTS = {
-    "drive_inertias": {
-        "I11": (1e-3, 2e-2, "log"),
-        "I22": (1e-3, 2e-2, "log"),
-        "k_c": (1e3, 1e5, "log"),
-        "c_c": (1.0, 30.0),
-    },
-    "bearing_stiffness": {"k_factor": (0.3, 3.0, "log"), "c_factor": (0.3, 3.0, "log")},
-    "mesh_damping": {"zeta": (0.03, 0.15)},
-}
-SENSORS = {
-    "none": {},
-    "sensor_bandwidth": {"f_n": (3e3, 3e4, "log"), "zeta": (0.05, 0.4)},
-    "sensor_lowpass": {"f_c": (3e3, 3e4, "log"), "order": (2, 6, "int")},
-}
-TONE = {"frequency": (5.0, 3000.0, "log"), "ratio": (0.1, 0.8)}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -151,7 +124,19 @@ TABLES = {
 OVERRIDES: tuple[str, ...] = ()  # --trials and --seed: `gearlab transfer-benchmark`, not a file of its own
 
 
-def build(scenario: Scenario) -> dict:
+@dataclass(frozen=True)
+class Spec:
+    """What build() checked: [benchmark] (its `only` sorted, each index once), the source, the
+    protocol, [protocol] correct_source and the [diagnosis] settings."""
+
+    benchmark: Benchmark
+    source: DatasetSpec
+    protocol: Protocol
+    correct: bool
+    diagnosis: Diagnosis
+
+
+def build(scenario: Scenario) -> Spec:
     t, path = scenario.tables, scenario.path
     rate = t["protocol"]["false_alarm"]  # the detectors' too (one rate a scenario)
     methods = tuple(method(m, location(path, "methods", index=i), rate) for i, m in enumerate(t["methods"]))
@@ -182,35 +167,36 @@ def build(scenario: Scenario) -> dict:
     entry = {**{k: v.default for k, v in DATASET_TABLE.keys.items()}, **t["source"]}
     source = simulated_spec(entry, location(path, "source"), scenario.base or path.parent)
     source.check_model(location(path, "source"))
-    b = t["benchmark"]
-    for index in b["only"]:
-        if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < b["trials"]:
+    b = typed(Benchmark, t["benchmark"])
+    for index in b.only:
+        if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < b.trials:
             raise GearlabInputError(
-                f"{location(path, 'benchmark', 'only')}: expected trial indices from 0 to {b['trials'] - 1} "
-                f"(trials = {b['trials']}), got {index!r}"
+                f"{location(path, 'benchmark', 'only')}: expected trial indices from 0 to {b.trials - 1} "
+                f"(trials = {b.trials}), got {index!r}"
             )
-    diagnosis = {**t["diagnosis"], "candidates": tuple(t["diagnosis"]["candidates"])}
+    d = typed(Diagnosis, t["diagnosis"])
+    diagnosis = replace(d, candidates=tuple(d.candidates))
     try:  # the diagnosis's own checks: registered candidates, none twice
-        check_settings(Diagnosis(**diagnosis))
+        check_settings(diagnosis)
     except GearlabInputError as exc:
         raise GearlabInputError(f"{location(path, 'diagnosis')}: {exc}") from None
-    return {
-        "benchmark": {**b, "only": sorted(set(b["only"]))},
-        "source": source,
-        "protocol": protocol,
-        "correct": bool(p["correct_source"]),
-        "diagnosis": diagnosis,
-    }
+    return Spec(
+        benchmark=replace(b, only=sorted(set(b.only))),
+        source=source,
+        protocol=protocol,
+        correct=bool(p["correct_source"]),
+        diagnosis=diagnosis,
+    )
 
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    b, p = spec["benchmark"], spec["protocol"]
-    use = "development" if b["seed"] < REPORT_SEEDS else "report"
-    which = f"trials {', '.join(map(str, b['only']))} of " if b["only"] else ""
-    sources = ", on the plain and the corrected source" if spec["correct"] else ""
+    b, p = spec.benchmark, spec.protocol
+    use = "development" if b.seed < REPORT_SEEDS else "report"
+    which = f"trials {', '.join(map(str, b.only))} of " if b.only else ""
+    sources = ", on the plain and the corrected source" if spec.correct else ""
     return (
-        f"{which}{b['trials']} random targets from {spec['source'].name} (seed {b['seed']}, {use}), "
+        f"{which}{b.trials} random targets from {spec.source.name} (seed {b.seed}, {use}), "
         f"{len(p.methods)} methods x {p.repetitions} repetitions at k = 0{sources}, network {p.network}"
     )
 
@@ -218,88 +204,23 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: 2 trials, one short repetition, a small diagnosis."""
     spec = scenario.spec
-    b = spec["benchmark"]
-    # trials chosen by `only` stay those (the first two of them): a quick look at one trial
-    spec["benchmark"] = {**b, "only": b["only"][:2]} if b["only"] else {**b, "trials": min(b["trials"], 2)}
-    spec["protocol"] = shrunk(spec["protocol"], repetitions=1)
-    d = spec["diagnosis"]
-    spec["diagnosis"] = {**d, **{k: min(d[k], limit) for k, limit in quick_limits(Diagnosis).items()}}
-
-
-# --- the draw --------------------------------------------------------------------------------------
-
-
-def _value(rng: np.random.Generator, spec: tuple) -> float | int:
-    low, high, *scale = spec
-    if scale == ["log"]:
-        return float(math.exp(rng.uniform(math.log(low), math.log(high))))
-    if scale == ["int"]:
-        return int(rng.integers(low, high + 1))
-    return float(rng.uniform(low, high))
-
-
-def _effect(rng: np.random.Generator, name: str, ranges: dict):
-    params = {key: _value(rng, spec) for key, spec in ranges.items()}
-    return effect_spec(name, **params), params
-
-
-def draw(rng: np.random.Generator, source: DatasetSpec, index: int, target_train: int) -> tuple[DatasetSpec, dict]:
-    """Trial *index*'s target and what was drawn (the answers, shown beside the results). Its healthy
-    revolutions are the history (*target_train*) plus as many as it has fault revolutions, so that
-    the test set is half faulty whatever the mix."""
-    _, _, source_teeth = source.check_model()
-    speed, load = _value(rng, SPEED_HZ), _value(rng, LOAD_NM)
-    model = str(rng.choice(sorted(MODEL_EFFECTS)))
-    sensor = str(rng.choice(sorted(SENSORS)))
-    effects, drawn = [], {}
-    for name, ranges in ((model, MODEL_EFFECTS[model]), (sensor, SENSORS[sensor])):
-        if ranges:
-            spec, drawn[name] = _effect(rng, name, ranges)
-            effects.append(spec)
-    tone = bool(rng.random() < TONE_SHARE)
-    if tone:
-        spec, drawn["interference_tone"] = _effect(rng, "interference_tone", TONE)
-        effects.append(spec)
-    law, snr = str(rng.choice(NOISE_KINDS)), _value(rng, SNR_DB)
-    n_types = min(_value(rng, FAULT_TYPES), len(source.faults))
-    faults = tuple(source.faults[i] for i in sorted(rng.choice(len(source.faults), n_types, replace=False)))
-    n_teeth = max(1, round(_value(rng, TEETH_SHARE) * len(source_teeth)))
-    teeth = tuple(int(t) for t in sorted(rng.choice(np.asarray(source_teeth), n_teeth, replace=False)))
-    fault_rows = sum(len(steps) for _, steps in faults) * len(teeth) * source.duplicates
-    name = f"trial{index:03d}"
-    target = source.with_(
-        name=name,
-        domain=name,
-        speed_hz=round(speed, 3),
-        load_nm=round(load, 3),
-        effects=source.effects + tuple(effects),
-        noise=NoiseSpec(law, round(snr, 3), int(rng.integers(0, 2**31))),
-        faults=faults,
-        teeth=teeth,
-        healthy=target_train + fault_rows,
+    b = spec.benchmark
+    scenario.spec = replace(
+        spec,
+        # trials chosen by `only` stay those (the first two of them): a quick look at one trial
+        benchmark=replace(b, only=b.only[:2]) if b.only else replace(b, trials=min(b.trials, 2)),
+        protocol=shrunk(spec.protocol, repetitions=1),
+        diagnosis=shrunk(spec.diagnosis),  # the --quick limits declared on the diagnosis settings
     )
-    answers = {
-        "speed_hz": target.speed_hz,
-        "load_nm": target.load_nm,
-        "model": model,
-        "sensor": sensor,
-        "tone": tone,
-        "noise": law,
-        "snr_db": target.noise.snr_db,
-        "faults": [n for n, _ in faults],
-        "teeth": len(teeth),
-        "effects": drawn,
-    }
-    return target, answers
 
 
-def trials(spec: dict) -> list[tuple[str, DatasetSpec, DatasetSpec, dict]]:
+def trials(spec: Spec) -> list[tuple[str, DatasetSpec, DatasetSpec, dict]]:
     """(name, source at the target's speed, target, answers) of every trial (those of `only` if it
     names some), drawn from the seed: trial i's draw depends on the seed and i alone."""
-    b, source, protocol = spec["benchmark"], spec["source"], spec["protocol"]
+    b, source, protocol = spec.benchmark, spec.source, spec.protocol
     out = []
-    for i in b.get("only") or range(b["trials"]):
-        rng = np.random.default_rng([b["seed"], i])
+    for i in b.only or range(b.trials):
+        rng = np.random.default_rng([b.seed, i])
         target, answers = draw(rng, source, i, protocol.target_train)
         at_speed = source.with_(
             name=f"{source.name}@{target.speed_hz:g}Hz", domain=source.domain, speed_hz=target.speed_hz
@@ -318,13 +239,13 @@ def corrected_label(label: str) -> str:
     return f"{label[:-1]}, corrected source)"
 
 
-def labels_of(spec: dict) -> list[str]:
+def labels_of(spec: Spec) -> list[str]:
     """The summary's method labels: every method on the plain source, then on the corrected one."""
-    plain = [m.label for m in spec["protocol"].methods]
-    return plain + ([corrected_label(label) for label in plain] if spec.get("correct") else [])
+    plain = [m.label for m in spec.protocol.methods]
+    return plain + ([corrected_label(label) for label in plain] if spec.correct else [])
 
 
-def correction(spec: dict, name: str, source_spec: DatasetSpec, target, history, executor, on_event) -> dict:
+def correction(spec: Spec, name: str, source_spec: DatasetSpec, target, history, executor, on_event) -> dict:
     """Trial *name*'s correction record: the gap diagnosis of the plain source against the target's
     history rows in physical units. Rows alone go in: no label, no test row, nothing of how the
     target was drawn."""
@@ -333,7 +254,7 @@ def correction(spec: dict, name: str, source_spec: DatasetSpec, target, history,
     mean, std = target.reference
     rows = np.asarray(target.X, dtype=np.float64)[history] * std + mean  # physical units, as simulated
     started = time.perf_counter()
-    result = gap.diagnose(source_spec, rows, Diagnosis(**spec["diagnosis"]), executor=executor, on_event=on_event)
+    result = gap.diagnose(source_spec, rows, spec.diagnosis, executor=executor, on_event=on_event)
     return {
         "unit": f"{name}/correction",
         "trial": name,
@@ -400,11 +321,11 @@ def correction_line(record: dict) -> str:
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
-    protocol: Protocol = spec["protocol"]
+    protocol = spec.protocol
     on_event(Event("log", message=SELECTION_RULE))
     drawn = trials(spec)
     done = {r["unit"]: r for r in run.records()}
-    variants = (PLAIN, CORRECTED) if spec["correct"] else (PLAIN,)
+    variants = (PLAIN, CORRECTED) if spec.correct else (PLAIN,)
     todo = [
         (t, v, rep, m)
         for t in range(len(drawn))
@@ -455,7 +376,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 bound = bayes_bound(target_spec, source, target, protocol, executor, on_event, history)
                 run.append({"unit": f"{name}/target", "trial": name, "answers": answers, "bound": bound})
             sources = {PLAIN: source_spec}
-            if spec["correct"]:
+            if spec.correct:
                 unit = f"{name}/correction"
                 if unit not in done:
                     done[unit] = correction(spec, name, source_spec, target, history, executor, on_event)
@@ -599,12 +520,12 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     summary = {
         "kind": "transfer_benchmark",
         "scenario": scenario.name,
-        "seed": spec["benchmark"]["seed"],
-        "only": spec["benchmark"]["only"],
-        "corrected": spec["correct"],
-        "use": "development" if spec["benchmark"]["seed"] < REPORT_SEEDS else "report",
+        "seed": spec.benchmark.seed,
+        "only": spec.benchmark.only,
+        "corrected": spec.correct,
+        "use": "development" if spec.benchmark.seed < REPORT_SEEDS else "report",
         "selection_rule": SELECTION_RULE,
-        "source": spec["source"].name,
+        "source": spec.source.name,
         "methods": labels,
         "trials": trials_,
         "per_method": per_method(trials_, labels),
