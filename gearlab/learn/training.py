@@ -282,16 +282,63 @@ def _aligned(
     return [(a, b) for a, b in pairs if len(a) >= 2 and len(b) >= 2]
 
 
-def _optimizer(name: str, params: list, lr: float) -> torch.optim.Optimizer:
+def _optimizer(name: str, params: list, lr: float):
     """Adam or SGD (no momentum, no weight decay), fused: one kernel updates every parameter,
     where the default loops over them op by op. On one CPU thread Adam's step takes a fifth of
     the time for `fast` (benchmarks/training.py); the updates are the same to rounding (3e-8
     apart after 5 steps), so trainings drift apart within their seeds' spread. A device torch has
-    no fused kernel for takes the default."""
-    fused = all(p.device.type in ("cpu", "cuda") and p.is_floating_point() for p in params) or None
+    no fused kernel for takes torch.optim's default."""
+    if all(p.device.type in ("cpu", "cuda") and p.is_floating_point() for p in params):
+        return _Fused(name, params, lr)
     if name == "adam":
-        return torch.optim.Adam(params, lr=lr, fused=fused)
-    return torch.optim.SGD(params, lr=lr, fused=fused)
+        return torch.optim.Adam(params, lr=lr)
+    return torch.optim.SGD(params, lr=lr)
+
+
+class _Fused:
+    """torch.optim's Adam / SGD with fused=True, bit for bit: the same kernels (torch._fused_adam_,
+    torch._fused_sgd_) on the same state, with torch's defaults (betas 0.9/0.999, eps 1e-8, no
+    weight decay, no momentum), a parameter without a gradient left out of a step as torch does.
+    Not torch.optim itself: its Optimizer imports torch._dynamo on first use (torch 2.13:
+    add_param_group and step are dynamo-disabled), 1.6-3.7 s in every process that trains, for
+    a compiler gearlab never uses (tests/test_training_optimizer.py holds both points)."""
+
+    def __init__(self, name: str, params: list, lr: float):
+        self.adam, self.params, self.lr = name == "adam", list(params), lr
+        self.state: dict[torch.nn.Parameter, tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = {}
+
+    def zero_grad(self) -> None:
+        for p in self.params:
+            p.grad = None
+
+    @torch.no_grad()
+    def step(self) -> None:
+        groups: dict[tuple, list[torch.Tensor]] = {}
+        for p in self.params:
+            if p.grad is not None:
+                groups.setdefault((p.device, p.dtype), []).append(p)
+        for params in groups.values():
+            grads = [p.grad for p in params]
+            if not self.adam:
+                torch._fused_sgd_(
+                    params, grads, [], weight_decay=0.0, momentum=0.0, lr=self.lr, dampening=0.0,
+                    nesterov=False, maximize=False, is_first_step=False,
+                )  # fmt: skip
+                continue
+            state = [self.state.get(p) or self._new(p) for p in params]
+            steps = [s[0] for s in state]
+            torch._foreach_add_(steps, 1)
+            torch._fused_adam_(
+                params, grads, [s[1] for s in state], [s[2] for s in state], [], steps, amsgrad=False,
+                lr=self.lr, beta1=0.9, beta2=0.999, weight_decay=0.0, eps=1e-8, maximize=False,
+            )  # fmt: skip
+
+    def _new(self, p: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """A parameter's step count (float32, on its device, as torch keeps it for fused), first
+        and second moments."""
+        step = torch.zeros((), dtype=torch.float32, device=p.device)
+        self.state[p] = (step, torch.zeros_like(p), torch.zeros_like(p))
+        return self.state[p]
 
 
 def _zero(device) -> torch.Tensor:
@@ -300,7 +347,7 @@ def _zero(device) -> torch.Tensor:
     return torch.zeros((), dtype=torch.float64, device=device)
 
 
-def _step(opt: torch.optim.Optimizer, params: list, loss: torch.Tensor) -> None:
+def _step(opt, params: list, loss: torch.Tensor) -> None:
     """One optimiser step, the gradient norm clipped at MAX_GRAD_NORM. A stable run never reaches
     it, so its numbers do not change (its gradients are scaled by exactly 1). The adversarial
     game of DANN sometimes does: in a full Experiment A run one unit of 330 jumped from a loss of
