@@ -23,3 +23,19 @@ def test_the_bayes_bound_is_a_stage_of_its_own(tmp_path, monkeypatch):
     assert done < begin < end < stages.index(("stage", "runs"))  # after the datasets, before the runs
     bound_logs = [e for e in events if e.kind == "log" and "Bayes bound" in e.message]
     assert bound_logs  # what the stage does is said while it runs
+
+
+def test_the_priming_and_the_source_model_say_how_far_they_are():
+    """The shared states a repetition's first units train (the priming of the calibrated methods,
+    the source-only model) took a minute of a quick run's 'priming 0/4' with no line under the bar
+    (issue 41): their epochs reach the unit's progress as 'priming, epoch i of n'."""
+    from test_protocol import SOURCE, TARGET, method, tiny
+
+    from gearlab.learn.protocol import StateStore, run_unit
+
+    p = tiny(methods=(method("source_only"), method("mmd")), prime_epochs=2, baseline_epochs=3, patience=3)
+    for m, what in zip(p.methods, ("source model, epoch {} of 3", "priming, epoch {} of 2")):
+        said: list[str] = []
+        run_unit(p, SOURCE, TARGET, 0, 0, m, StateStore(None), on_epoch=lambda e, h, text="", to=said: to.append(text))
+        shared = [t for t in said if t]  # the unit's own epochs say nothing more (text "")
+        assert shared == [what.format(i) for i in range(1, 4 if m.adapter == "source_only" else 3)], (m, said)

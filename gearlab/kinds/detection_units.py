@@ -87,8 +87,8 @@ def train_unit(task: tuple) -> dict:
     trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
     with UnitProgress(states.root, unit) as progress:
 
-        def report(epoch: int, history) -> None:
-            progress(f"epoch {epoch + 1}")
+        def report(epoch: int, history, what: str = "") -> None:
+            progress(what or f"epoch {epoch + 1}")  # what: a shared state's training (the priming)
 
         model, history, _ = chapter5.train_method(
             trained,

@@ -439,6 +439,13 @@ def train_method(
     # `likelihood_ratio` does: the target's law is found, never assumed.
     law = history_law(Xt if core is None else core) if adapter.calibrated else None
 
+    def told(what: str, epochs: int):
+        """on_epoch for a shared state's training (the priming, the source model): a minute or
+        more on a full source before the unit's own epochs, so it says what it trains and how far."""
+        if on_epoch is None:
+            return None
+        return lambda epoch, history: on_epoch(epoch, history, f"{what}, epoch {epoch + 1} of {epochs}")
+
     def primed() -> dict:
         start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
         net = _net(protocol, seed, device, Xs.shape[1])
@@ -456,6 +463,7 @@ def train_method(
             val=None,
             patience=None,
             augment=start.augment if start.noise_law else None,
+            on_epoch=told("priming", protocol.prime_epochs),
         )
         return _cpu_state(net)
 
@@ -473,6 +481,7 @@ def train_method(
                 batch=protocol.batch,
                 val=source_val,
                 patience=protocol.patience,
+                on_epoch=told("source model", protocol.baseline_epochs),
             )
             return _cpu_state(net)
 

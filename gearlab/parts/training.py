@@ -96,9 +96,9 @@ def train_unit(task: tuple) -> dict:
     # states/ lies in the run directory, beside the progress/ folder the engine watches
     with UnitProgress(states.root, unit_key(rep, k, method)) as progress:
 
-        def report(epoch: int, history) -> None:
+        def report(epoch: int, history, what: str = "") -> None:
             acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
-            progress(f"epoch {epoch + 1}{acc}")
+            progress(f"{what or f'epoch {epoch + 1}'}{acc}")
 
         return run_unit(
             protocol,
