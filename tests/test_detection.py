@@ -336,6 +336,7 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     the method (not its folds) reaches scores.csv. With one history record it is refused."""
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import learned_input, read_target
+    from gearlab.kinds.detection_settings import learned_settings
     from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
 
     path = scenario(tmp_path, methods=("source_only",), detection='history_fit = "crossed"')
@@ -346,8 +347,8 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     assert [f["fold"] for f in folds] == [0, 1] and crossed["method"] == "source_only"
     # what each training was handed: revolutions of the history record it did not leave out
     spec = load_scenario(path).spec
-    ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
-    shown = learned_input(spec, cond["max_order"])
+    ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
+    shown = learned_input(learned_settings(spec.detection, spec.classical), cond["max_order"])
     history = [shown(r) for _, r in cond["history"]]
 
     def among(rows, pool) -> bool:
@@ -405,6 +406,7 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     import gearlab.learn.protocol as P
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import learned_input, read_target
+    from gearlab.kinds.detection_settings import learned_settings
 
     handed, scored = [], []
     train_method, fault_score = P.train_method, P.fault_score
@@ -424,9 +426,9 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     assert handed and all(x.shape[-1] == 1024 for rows in handed for x in rows)
     assert scored and set(scored) == {1024}
     spec = load_scenario(path).spec
-    ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
     assert cond["max_order"] == 230
-    full = learned_input({**spec, "points": 4096})
+    full = learned_input({**learned_settings(spec.detection, spec.classical), "points": 4096})
     history = np.concatenate([full(r) for _, r in cond["history"]])
     spectrum = np.fft.rfft(history, axis=-1)
     spectrum[..., 231:] = 0.0
@@ -480,6 +482,7 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     refused with the choices."""
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import learned_input, read_target, tsa_units
+    from gearlab.kinds.detection_settings import learned_settings
 
     corrected = (
         '[corrected]\ntsa = 3\nhistory_units = "tsa"\n'
@@ -488,8 +491,8 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     path = scenario(tmp_path, methods=("source_only",), extra=corrected)
     run(cli, path, tmp_path / "runs")
     spec = load_scenario(path).spec
-    ((_, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
-    shown = learned_input(spec, cond["max_order"])
+    ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
+    shown = learned_input(learned_settings(spec.detection, spec.classical), cond["max_order"])
     revolutions = np.concatenate([shown(r) for _, r in cond["history"]])
     tsas = np.concatenate([shown(tsa_units(r, 3, 1)) for _, r in cond["history"]])
 
@@ -693,9 +696,9 @@ def test_one_threshold_rule_and_one_false_alarm_rate(cli, tmp_path, protocol, me
 
     path = scenario(tmp_path, methods=("matched_filter",), detection="false_alarm = 0.05")
     spec = load_scenario(path).spec
-    assert spec["false_alarm"] == 0.05
-    assert (spec["protocol"].calibration.threshold, spec["protocol"].calibration.false_alarm) == ("history", 0.01)
-    assert dict(spec["protocol"].methods[0].params)["false_alarm"] == RECIPE.false_alarm
+    assert spec.detection.false_alarm == 0.05
+    assert (spec.protocol.calibration.threshold, spec.protocol.calibration.false_alarm) == ("history", 0.01)
+    assert dict(spec.protocol.methods[0].params)["false_alarm"] == RECIPE.false_alarm
     text = path.read_text().replace('adapter = "matched_filter"\n', f'adapter = "matched_filter"\n{methods}')
     path.write_text(text.replace("[protocol]\n", f"[protocol]\n{protocol}\n"))
     code, _, err = cli("validate", path)
@@ -709,7 +712,7 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(cli, tmp
     from gearlab.engine import scenario_of
     from gearlab.runs import RunDir
 
-    assert scenario_of(RunDir.open(out)).spec["target"].files[0].path == "../data/h1.zip"
+    assert scenario_of(RunDir.open(out)).spec.target.files[0].path == "../data/h1.zip"
 
 
 @pytest.mark.parametrize(
@@ -808,7 +811,7 @@ def test_without_methods_every_label_free_adapter_runs(tmp_path):
     registry = get_registry()
     expected = {n for n in registry.names("adapter") if registry.get("adapter", n).train_on != "target"}
     expected |= set(registry.names("detector"))
-    assert {m.adapter for m in spec["protocol"].methods} == expected
+    assert {m.adapter for m in spec.protocol.methods} == expected
     assert {"source_only", "mmd", "dann", "coral", "matched_filter"} <= expected
 
 
@@ -864,16 +867,16 @@ def test_the_shipped_scenario_takes_another_file_list_of_the_rig(tmp_path, monke
     path = tmp_path / "phm09_chip.toml"
     path.write_text(text)
     spec = load_scenario(path).spec
-    conditions = read_target(spec["target"], spec["blocks"], lambda e: None)
+    conditions = read_target(spec.target, spec.detection.blocks, lambda e: None)
     assert set(conditions) == {"35 Hz", "50 Hz"}
     for name, cond in conditions.items():
         assert {f.path.split("/")[-1] for f, _ in cond["history"]} == {
             f"{n}.zip" for n, role, _ in files if role == "history" and name.startswith(n[-4:-2])
         }
-        rule = Rule(spec["threshold"], spec["false_alarm"], cond["history_records"])
-        assert {"tooth_energy", "tooth_sync"} <= set(spec["classical"]["indicators"])
+        rule = Rule(spec.detection.threshold, spec.detection.false_alarm, cond["history_records"])
+        assert {"tooth_energy", "tooth_sync"} <= set(spec.classical.indicators)
         for indicator in ("fm4", "tooth_energy", "tooth_sync"):
-            r = classical_record(indicator, name, cond, spec["classical"], rule)
+            r = classical_record(indicator, name, cond, spec.classical, rule)
             called = {
                 p.split("/")[-1]: np.mean(np.array(s["record30"]) > r["thresholds"]["record30"])
                 for p, s in r["test_scores"].items()
@@ -1147,15 +1150,15 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
     path = tmp_path / "phm09_chip.toml"
     path.write_text(re.sub(r"files = \[\n(.*\n)*?\]", lambda _: listed + "]", shipped))
     spec = load_scenario(path).spec
-    assert "pinion_sync" in spec["classical"]["indicators"]
-    assert spec["classical"]["shafts"] == (("idler", 3), ("output", 5))
-    ((name, cond),) = read_target(spec["target"], spec["blocks"], lambda e: None).items()
+    assert "pinion_sync" in spec.classical.indicators
+    assert spec.classical.shafts == (("idler", 3), ("output", 5))
+    ((name, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
     r = classical_record(
         "pinion_sync",
         name,
         cond,
-        spec["classical"],
-        Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]),
+        spec.classical,
+        Rule(spec.detection.threshold, spec.detection.false_alarm, cond["history_records"]),
     )
     expected = {
         "good3": "nothing",

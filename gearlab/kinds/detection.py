@@ -60,14 +60,14 @@ what a flag on it is (a watched-gear fault, or other damage: kinds.detection_whi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import replace
 from pathlib import Path
 
 from ..data.cache import load_or_build
-from ..data.spec import POINTS, DatasetSpec
+from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, shown
 from ..events import Event
-from ..learn.config import RECIPE, Calibration, check_length
+from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, each_draw, shared_state
 from ..learn.schedule import two_phases
 from ..params import did_you_mean
@@ -77,8 +77,8 @@ from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_
 from ..registry import METHODS, get_registry
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location
-from ..settings import setting, shrunk
-from ..signals.indicators import DEFAULT_INDICATORS, INDICATORS
+from ..settings import shrunk, typed
+from ..signals.indicators import INDICATORS
 from .common import (
     DATASET_TABLE,
     class_sizes,
@@ -105,6 +105,18 @@ from .detection_records import (
 )
 from .detection_scoring import score as score  # the kind's `gearlab score` (engine.score_recordings)
 from .detection_scoring import score_trends, store_scoring
+from .detection_settings import (
+    INPUTS,
+    SOURCE_SPEEDS,
+    THRESHOLDS,
+    UNIT_THRESHOLD,
+    Classical,
+    Corrected,
+    Detection,
+    Spec,
+    TargetRecords,
+    learned_settings,
+)
 from .detection_tables import labels_md, learned_md, summarise, table_md
 from .detection_units import (
     Rule,
@@ -117,175 +129,6 @@ from .detection_units import (
     unit_name,
 )
 from .detection_which_gear import store_localisation
-
-SOURCE_SPEEDS = ("records", "source")
-INPUTS = ("difference", "revolution")
-THRESHOLDS = ("records", "pooled")
-# How a network's history scores are made: "all" -- trained on every history record and scoring them
-# (in-sample); "crossed" -- one training per history record left out, which scores it (a new record's
-# scores, as the test records' are)
-HISTORY_FITS = ("all", "crossed")
-CORRECTED_HISTORY = ("revolution", "tsa")
-MAX_SEEDS = 20
-MAX_DRAWS = 64
-
-# One threshold rule and one false-alarm rate in a detection scenario, [detection]'s: every method's
-# threshold is fixed on the history's units, which re-fixes a calibrated network's or a detector's
-# own (a shift of all its scores), so [protocol] has no threshold keys here; the models' own keep
-# gearlab's recipe (a history threshold at 1 %).
-UNIT_THRESHOLD = {"threshold": RECIPE.threshold, "false_alarm": RECIPE.false_alarm}
-
-
-@dataclass(frozen=True, kw_only=True)
-class Corrected:
-    """[corrected]: the corrected source (the [source] with the effects a gap diagnosis found)."""
-
-    effects: list = setting(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)")
-    label: str = setting(str, "corrected", doc="the corrected source's name in the method rows")
-    tsa: int = setting(
-        int,
-        0,
-        low=0,
-        high=1000,
-        doc="a corrected sample is the TSA of this many simulated revolutions, each with its own "
-        "noise (the revolutions of a record-level unit); 0: one revolution",
-    )
-    draws: int = setting(
-        int,
-        1,
-        low=1,
-        high=MAX_DRAWS,
-        doc="noise draws of each corrected sample; a network trains on one of them at random per "
-        "batch row, so it cannot learn the noise of one draw by heart (docs/real_data.md)",
-    )
-    history_units: str = setting(
-        str,
-        "revolution",
-        choices=CORRECTED_HISTORY,
-        doc="what the corrected source's methods see of the history in training: 'revolution' (the "
-        "history revolutions, as the plain source's) or 'tsa' (the history's TSAs of `tsa` "
-        "revolutions, sliding as its units are: the target at the corrected sample's averaging)",
-    )
-
-
-@dataclass(frozen=True, kw_only=True)
-class TargetRecords:
-    """[target]: the measured records, history and test."""
-
-    vibration: int | str = setting((int, str), doc="vibration column: 0-based index or header name")
-    tacho: int | str = setting(
-        (int, str), "", doc="tacho column: 0-based index or header name; or give 'speed' or 'gearbox'"
-    )
-    pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="tacho pulses per input-shaft revolution")
-    speed: float | str | None = setting(
-        (int, float, str),
-        None,
-        doc="without a tacho: the input-shaft speed, e.g. '25 Hz' (a file entry may give its own "
-        "'speed'); with 'gearbox' too, refined to ±1 % by the mesh orders",
-        unit="Hz",
-    )
-    gearbox: str = setting(
-        str,
-        "",
-        doc="without a tacho: a gearbox description (file relative to the scenario, or a built-in "
-        "name) whose mesh orders give each record's speed",
-    )
-    sensitivity: float | str | None = setting(
-        (int, float, str), None, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"
-    )
-    gain: float | str | None = setting(
-        (int, float, str), None, doc="volts per file unit (integer counts; WAV: at full scale)"
-    )
-    fs: float | str | None = setting(
-        (int, float, str), None, doc="sampling rate, e.g. '66666.67 Hz', when a file carries none"
-    )
-    transient: str = setting(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution")
-    positive: str = setting(str, "fault", doc="the label of records with the fault to detect; every other is negative")
-    files: list = setting(list, doc="[{file, role = 'history' | 'test', label, condition, speed (both optional)}, ...]")
-
-
-@dataclass(frozen=True, kw_only=True)
-class Classical:
-    """[classical]: the classical indicators of the TSA."""
-
-    indicators: list = setting(
-        list, list(DEFAULT_INDICATORS), doc=f"classical indicators of the TSA: {', '.join(INDICATORS)}"
-    )
-    mesh_orders: list = setting(
-        list,
-        [],
-        doc="mesh orders of the TSA's shaft (default: the source pinion's teeth); the first is the "
-        "tooth count of the gear on that shaft (the localised indicators' windows)",
-    )
-    shaft_orders: int = setting(int, 2, low=0, high=100, doc="low shaft orders removed with the mesh harmonics")
-    sidebands: int = setting(int, 1, low=0, high=100, doc="sidebands either side of each mesh harmonic (FM4)")
-    slow_shafts: list = setting(
-        list,
-        [],
-        doc="periods, in whole input revolutions, of the other shafts whose localised damage "
-        "tooth_sync is to tell from the input pinion's (a shaft turning q times slower, q whole, "
-        "brings a tooth back to one input angle every q revolutions; the PHM rig: [3, 5])",
-    )
-    shafts: dict = setting(
-        dict,
-        {},
-        doc="the other shafts a localised fault may turn with, {name = period in whole input "
-        "revolutions} (the PHM rig: {idler = 3, output = 5}): pinion_sync calls a pinion fault "
-        "only for localised content of the input TSA that no tooth of these shafts explains (what "
-        "each shaft's TSA holds beyond the input TSA's copies under a smooth modulation of its turn)",
-    )
-
-
-@dataclass(frozen=True, kw_only=True)
-class Detection:
-    """[detection]: the record-level units, the one threshold rule and false-alarm rate."""
-
-    blocks: list = setting(list, [10, 30], doc="revolutions per record-level TSA unit")
-    false_alarm: float = setting(
-        float, 0.01, low=1e-6, high=0.5, doc="share of healthy history units above the threshold"
-    )
-    input: str = setting(
-        str,
-        "difference",
-        doc="what the learned methods see: 'difference' (revolution or TSA less its "
-        "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
-    )
-    points: int = setting(
-        int,
-        POINTS,
-        low=64,
-        high=POINTS,
-        doc="samples per revolution the learned methods see: the order spectrum of what they see cut "
-        f"below points / 2 ({POINTS}, the records' grid: all of it)",
-    )
-    threshold: str = setting(
-        str,
-        "records",
-        doc="'records': predictive quantile for a new record's unit (record effect + within-record "
-        "spread, one-way random effects); 'pooled': Gumbel quantile of the pooled history units",
-    )
-    history_fit: str = setting(
-        str,
-        "all",
-        choices=HISTORY_FITS,
-        doc="how a network's history scores are made: 'all' (trained on every history record, "
-        "which it then scores) or 'crossed' (one training per history record left out of its "
-        "training rows; that record's units are scored by it, the test units by all of them)",
-    )
-    seeds: int = setting(
-        int,
-        1,
-        low=1,
-        high=MAX_SEEDS,
-        doc="trainings per network method and condition; more than 1: the median of their history-standardised scores",
-    )
-    source_speed: str = setting(
-        str,
-        "records",
-        doc="'records': the source simulated at each condition's history speed "
-        "(to 1 Hz); 'source': at the [source]'s own speed",
-    )
-
 
 TABLES = {
     "source": Table(DATASET_TABLE.keys, required=True),
@@ -344,11 +187,12 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
     return tuple(out)
 
 
-def build(scenario: Scenario) -> dict:
+def build(scenario: Scenario) -> Spec:
     t = scenario.tables
     path = scenario.path
     source = simulated_spec(t["source"], location(path, "source"), scenario.base)
-    corrected = corrected_spec(t, location(path, "corrected"), scenario.base, source)
+    cor = typed(Corrected, t["corrected"])
+    corrected = corrected_spec(cor, t["source"], location(path, "corrected"), scenario.base, source)
     sizes = class_sizes(source, location(path, "source"))
     if not sizes["healthy"] or sum(sizes.values()) == sizes["healthy"]:
         raise GearlabInputError(
@@ -359,25 +203,25 @@ def build(scenario: Scenario) -> dict:
     if entry["gearbox"]:  # resolved and loaded now: a bad description fails validate
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], location(path, "target", "gearbox"), scenario.base)}
     target = target_spec(entry, location(path, "target"), scenario.base)
-    c = t["classical"]
-    for name in c["indicators"]:
+    c = typed(Classical, t["classical"])
+    for name in c.indicators:
         if name not in INDICATORS:
             raise GearlabInputError(
                 f"{location(path, 'classical', 'indicators')}: unknown indicator "
                 f"{shown(name)}{did_you_mean(str(name), INDICATORS)}; known: {', '.join(INDICATORS)}"
             )
-    orders = c["mesh_orders"] or [pair.Z1]
+    orders = c.mesh_orders or [pair.Z1]
     if not all(isinstance(o, int) and not isinstance(o, bool) and 1 <= o <= 1000 for o in orders):
         raise GearlabInputError(
             f"{location(path, 'classical', 'mesh_orders')}: expected whole orders 1 … 1000, got {shown(orders)}"
         )
-    slow = c["slow_shafts"]
+    slow = c.slow_shafts
     if not all(isinstance(q, int) and not isinstance(q, bool) and 2 <= q <= 1000 for q in slow):
         raise GearlabInputError(
             f"{location(path, 'classical', 'slow_shafts')}: expected whole numbers of input revolutions "
             f"2 … 1000 (a shaft turning q times slower than the input), got {shown(slow)}"
         )
-    shafts = c["shafts"]
+    shafts = c.shafts
     if not all(isinstance(q, int) and not isinstance(q, bool) and 2 <= q <= 1000 for q in shafts.values()):
         raise GearlabInputError(
             f"{location(path, 'classical', 'shafts')}: expected {{name = whole number of input revolutions "
@@ -388,7 +232,8 @@ def build(scenario: Scenario) -> dict:
             f"{location(path, 'classical', 'shafts')}: 'input' and 'nothing' are taken (the input shaft and "
             f"no shaft); name the other shafts, e.g. {{idler = 3, output = 5}}"
         )
-    blocks = t["detection"]["blocks"]
+    d = typed(Detection, t["detection"])
+    blocks = d.blocks
     if not all(isinstance(b, int) and not isinstance(b, bool) and 2 <= b <= 10_000 for b in blocks) or len(
         set(blocks)
     ) != len(blocks):
@@ -409,7 +254,7 @@ def build(scenario: Scenario) -> dict:
         calibration=Calibration(**{key: p[key] for key in CALIBRATION if key in p}, **UNIT_THRESHOLD),
     )
     protocol.calibration.check(str(path))
-    points = t["detection"]["points"]
+    points = d.points
     try:  # a network that cannot take that many samples is refused now, not in the middle of a run
         check_length(protocol.network, points)
     except GearlabInputError as e:
@@ -424,66 +269,58 @@ def build(scenario: Scenario) -> dict:
             f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than the source training set "
             f"({n - max(1, round(protocol.val_fraction * n))} of the {n} samples of '{source.name}')"
         )
-    if t["detection"]["source_speed"] not in SOURCE_SPEEDS:
+    if d.source_speed not in SOURCE_SPEEDS:
         raise GearlabInputError(
             f"{location(path, 'detection', 'source_speed')}: expected one of "
-            f"{', '.join(SOURCE_SPEEDS)}, got {shown(t['detection']['source_speed'])}"
+            f"{', '.join(SOURCE_SPEEDS)}, got {shown(d.source_speed)}"
         )
-    if t["detection"]["threshold"] not in THRESHOLDS:
+    if d.threshold not in THRESHOLDS:
         raise GearlabInputError(
             f"{location(path, 'detection', 'threshold')}: expected one of {', '.join(THRESHOLDS)}, got "
-            f"{shown(t['detection']['threshold'])}{did_you_mean(str(t['detection']['threshold']), THRESHOLDS)}"
+            f"{shown(d.threshold)}{did_you_mean(str(d.threshold), THRESHOLDS)}"
         )
-    if t["detection"]["input"] not in INPUTS:
+    if d.input not in INPUTS:
         raise GearlabInputError(
-            f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got "
-            f"{shown(t['detection']['input'])}"
+            f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got {shown(d.input)}"
         )
-    return {
-        "source": source,
-        "corrected": corrected,
-        "corrected_label": t["corrected"]["label"],
-        # the corrected source's history training rows: TSAs of its `tsa` revolutions, or revolutions
-        "corrected_history": t["corrected"]["tsa"] if t["corrected"]["history_units"] == "tsa" else 0,
-        "corrected_draws": t["corrected"]["draws"],
-        "target": target,
-        "protocol": protocol,
-        "source_speed": t["detection"]["source_speed"],
-        "input": t["detection"]["input"],
-        "points": points,
-        "classical": {
-            "indicators": tuple(c["indicators"]),
-            "mesh_orders": tuple(orders),
-            "shaft_orders": c["shaft_orders"],
-            "sidebands": c["sidebands"],
-            "slow_shafts": tuple(slow),
-            "shafts": tuple(shafts.items()),
-        },
-        "blocks": tuple(blocks),
-        "false_alarm": t["detection"]["false_alarm"],
-        "threshold": t["detection"]["threshold"],
-        "seeds": t["detection"]["seeds"],
-        "history_fit": t["detection"]["history_fit"],
-    }
+    return Spec(
+        source=source,
+        corrected=corrected,
+        corrected_label=cor.label,
+        corrected_history=cor.tsa if cor.history_units == "tsa" else 0,
+        corrected_draws=cor.draws,
+        target=target,
+        protocol=protocol,
+        classical=replace(
+            c,
+            indicators=tuple(c.indicators),
+            mesh_orders=tuple(orders),
+            slow_shafts=tuple(slow),
+            shafts=tuple(shafts.items()),
+        ),
+        detection=replace(d, blocks=tuple(blocks)),
+    )
 
 
-def corrected_spec(t: dict, where: str, base: Path, source: DatasetSpec) -> DatasetSpec | None:
-    """The [source] with the [corrected] effects after its own (None: no effects given)."""
-    extra = t["corrected"]["effects"]
-    if not extra:
+def corrected_spec(
+    cor: Corrected, source_entry: dict, where: str, base: Path, source: DatasetSpec
+) -> DatasetSpec | None:
+    """The [source] (its table *source_entry*, its spec *source*) with the [corrected] effects after
+    its own (None: no effects given)."""
+    if not cor.effects:
         return None
-    label = t["corrected"]["label"]
+    label = cor.label
     if not label or not all(ch.isalnum() or ch in "-_" for ch in label):
         raise GearlabInputError(
             f"{where} key 'label': expected a short name of letters, digits, - or _, got {shown(label)}"
         )
-    entry = {**t["source"], "effects": list(t["source"].get("effects") or []) + list(extra)}
-    if t["corrected"]["tsa"]:  # noise drawn on every revolution, then averaged as a record unit is
-        entry.update(tsa=True, revolutions=t["corrected"]["tsa"])
+    entry = {**source_entry, "effects": list(source_entry.get("effects") or []) + list(cor.effects)}
+    if cor.tsa:  # noise drawn on every revolution, then averaged as a record unit is
+        entry.update(tsa=True, revolutions=cor.tsa)
     spec = simulated_spec(entry, where, base)
     # draws: every sample D times, each with its own seed (the builder's duplicates; D healthy
     # samples for each one), in runs of D rows that source_split folds into (n, D, L)
-    draws = t["corrected"]["draws"]
+    draws = cor.draws
     spec = spec.with_(duplicates=spec.duplicates * draws, healthy=spec.healthy * draws)
     # a name of its own for the reports and conditions.json (the cache key hashes the spec anyway)
     name = f"{source.name}+{label}"
@@ -492,48 +329,48 @@ def corrected_spec(t: dict, where: str, base: Path, source: DatasetSpec) -> Data
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    files = spec["target"].files
+    files = spec.target.files
     n_hist = sum(f.role == "history" for f in files)
-    names = [m.adapter for m in spec["protocol"].methods] + list(spec["classical"]["indicators"])
-    if spec.get("corrected") is not None:
-        extra = ", ".join(name for name, _ in spec["corrected"].effects[len(spec["source"].effects) :])
-        names += [f"{m.adapter} ({spec['corrected_label']}: + {extra})" for m in spec["protocol"].methods]
+    names = [m.adapter for m in spec.protocol.methods] + list(spec.classical.indicators)
+    if spec.corrected is not None:
+        extra = ", ".join(name for name, _ in spec.corrected.effects[len(spec.source.effects) :])
+        names += [f"{m.adapter} ({spec.corrected_label}: + {extra})" for m in spec.protocol.methods]
     return (
-        f"{sized(spec['source'])} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
-        f"test); methods: {', '.join(names)}; units: revolution, " + ", ".join(f"record{b}" for b in spec["blocks"])
+        f"{sized(spec.source)} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
+        f"test); methods: {', '.join(names)}; units: revolution, "
+        + ", ".join(f"record{b}" for b in spec.detection.blocks)
     )
 
 
 def quick(scenario: Scenario) -> None:
     """Smoke run: short training."""
-    p = scenario.spec["protocol"]
-    scenario.spec["protocol"] = shrunk(p, prime_epochs=20, baseline_epochs=30, min_epochs=30, max_epochs=40)
+    p = scenario.spec.protocol
+    shorter = shrunk(p, prime_epochs=20, baseline_epochs=30, min_epochs=30, max_epochs=40)
+    scenario.spec = replace(scenario.spec, protocol=shorter)
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
-    protocol: Protocol = spec["protocol"]
+    protocol, d = spec.protocol, spec.detection
     with executor_for(scenario) as executor:
-        conditions = read_target(spec["target"], spec["blocks"], on_event, f"{scenario.path}: [target] key 'files'")
-        folds = {c: folds_of(spec["history_fit"], cond, c, scenario.path) for c, cond in conditions.items()}
+        conditions = read_target(spec.target, d.blocks, on_event, f"{scenario.path}: [target] key 'files'")
+        folds = {c: folds_of(d.history_fit, cond, c, scenario.path) for c, cond in conditions.items()}
         for c, cond in conditions.items():
             band = f"no shaft order above {cond['max_order']} (the records' band)"
             on_event(Event("log", message=f"{c}: the learned methods see {band}"))
         # the sources: "" the [source], and the corrected simulator when [corrected] gives effects
-        variants = {"": spec["source"]}
-        if spec.get("corrected") is not None:
-            variants[spec["corrected_label"]] = spec["corrected"]
+        variants = {"": spec.source}
+        if spec.corrected is not None:
+            variants[spec.corrected_label] = spec.corrected
         specs = {
-            (c, v): source_for(source, cond, spec["source_speed"])
+            (c, v): source_for(source, cond, d.source_speed)
             for c, cond in conditions.items()
             for v, source in variants.items()
         }
         for c, cond in conditions.items():  # before any work: every training has a batch of history rows
             for k in folds[c]:
                 for v in variants:
-                    n = len(
-                        history_training_rows(trained_on(cond, k), protocol, c, spec["corrected_history"] if v else 0)
-                    )
+                    n = len(history_training_rows(trained_on(cond, k), protocol, c, spec.corrected_history if v else 0))
                     if n < protocol.batch:
                         left = "" if k is None else f" with history record {cond['history'][k][0].path} left out"
                         raise GearlabInputError(
@@ -544,7 +381,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             cond["source"] = specs[(c, "")].name
             cond["sources"] = {v or "source": specs[(c, v)].name for v in variants}
         built = list(dict.fromkeys(specs.values()))
-        draws = {s: spec["corrected_draws"] if v else 1 for (_, v), s in specs.items()}  # per sample
+        draws = {s: spec.corrected_draws if v else 1 for (_, v), s in specs.items()}  # per sample
         on_event(Event("stage", stage="datasets", total=len(built), message="source datasets"))
         sources = {}
         for i, s in enumerate(built):
@@ -563,14 +400,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
         bounds = {key: source_bound(s, sources[s], protocol, draws[s], executor, on_event) for key, s in specs.items()}
         records = {r["unit"]: r for r in run.records()}
-        rules = {
-            c: Rule(spec["threshold"], spec["false_alarm"], cond["history_records"]) for c, cond in conditions.items()
-        }
+        rules = {c: Rule(d.threshold, d.false_alarm, cond["history_records"]) for c, cond in conditions.items()}
         for name, cond in conditions.items():
-            for indicator in spec["classical"]["indicators"]:
+            for indicator in spec.classical.indicators:
                 if f"{name}/{indicator}" not in records:
-                    run.append(classical_record(indicator, name, cond, spec["classical"], rules[name]))
-        shown = {c: learned_input(spec, cond["max_order"]) for c, cond in conditions.items()}
+                    run.append(classical_record(indicator, name, cond, spec.classical, rules[name]))
+        learned = learned_settings(d, spec.classical)
+        shown = {c: learned_input(learned, cond["max_order"]) for c, cond in conditions.items()}
         splits = {
             (c, v): tuple(
                 a if a.ndim == 1 else each_draw(shown[c], a)
@@ -586,9 +422,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             )
             for c, cond in conditions.items()
         }
-        members = {
-            (c, v, m): seeds_of(m, spec["seeds"]) for c in conditions for v in variants for m in protocol.methods
-        }
+        members = {(c, v, m): seeds_of(m, d.seeds) for c in conditions for v in variants for m in protocol.methods}
         todo = [(c, v, m, seed, k) for (c, v, m), seeds in members.items() for seed in seeds for k in folds[c]]
         pending = [(c, v, m, seed, k) for c, v, m, seed, k in todo if unit_name(c, m, seed, v, k) not in records]
         # one folder of shared states (primings, source models) per condition and source
@@ -626,9 +460,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         k,
                         splits[(c, v)],
                         shown[c](
-                            history_training_rows(
-                                trained_on(cond, k), protocol, c, spec["corrected_history"] if v else 0
-                            )
+                            history_training_rows(trained_on(cond, k), protocol, c, spec.corrected_history if v else 0)
                         ),
                         *units_seen[c],
                         states,
@@ -647,7 +479,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
         # which gear each test record's change is on, from the raw records (before any score is made)
-        store_localisation(run, spec["source"], conditions)
+        store_localisation(run, spec.source, conditions)
         run.write_json(
             "conditions.json",
             {

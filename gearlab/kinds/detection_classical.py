@@ -23,22 +23,23 @@ from ..signals.indicators import (
 )
 from . import record_effects
 from .detection_records import unit_window
+from .detection_settings import Classical
 from .detection_units import Rule, to_lists
 
 
-def classical_record(name: str, condition: str, cond: dict, classical: dict, rule: Rule) -> dict:
+def classical_record(name: str, condition: str, cond: dict, classical: Classical, rule: Rule) -> dict:
     """A classical indicator's scores: computed on the TSA units, its reference (NA4's variance,
     tooth_energy's, tooth_sync's and pinion_sync's windows) from the history's units of the same kind;
     tooth_sync and pinion_sync read each unit's own revolutions (their pairs), not only their TSA.
     pinion_sync's record also names, per test unit, the shaft its localised damage turns with
     (shaft_attribution)."""
-    orders, shaft, sidebands = classical["mesh_orders"], classical["shaft_orders"], classical["sidebands"]
+    orders, shaft, sidebands = classical.mesh_orders, classical.shaft_orders, classical.sidebands
     history = cond["history_units"]
     # the history's units of each kind, one array per history record (in the order of cond["history"])
     per_record = {
         u: np.split(X, np.cumsum([n for n, _ in cond["history_records"][u]])[:-1]) for u, X in history.items()
     }
-    periods = [q for _, q in classical["shafts"]]
+    periods = [q for _, q in classical.shafts]
     # tooth_sync: each unit's synchronous window shares from its own revolutions, {path: {unit: shares}};
     # pinion_sync: each unit's parts per shaft (shaft_parts), flattened to (units, shafts x windows)
     shares = {}
@@ -51,7 +52,7 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
                     block, stride = unit_window(u)[0], unit_window(u)[1] if role == "history" else unit_window(u)[0]
                     if name == "tooth_sync":
                         shares[f.path][u] = sync_shares(
-                            revs, block, stride, orders[0], orders, classical["slow_shafts"], shaft, sidebands, gram
+                            revs, block, stride, orders[0], orders, classical.slow_shafts, shaft, sidebands, gram
                         )
                     else:
                         parts = shaft_parts(revs, block, stride, orders[0], orders, periods, shaft, sidebands, gram)
@@ -110,7 +111,7 @@ def classical_record(name: str, condition: str, cond: dict, classical: dict, rul
     test = {p: {u: score(X, u, p) for u, X in units.items()} for p, units in cond["test_units"].items()}
     if name == "pinion_sync":
         extra["shafts"] = shaft_attribution(
-            ("input", *(n for n, _ in classical["shafts"])),
+            ("input", *(n for n, _ in classical.shafts)),
             {u: np.concatenate([strengths(f.path, u) for f, _ in cond["history"]]) for u in history},
             {f.path: {u: strengths(f.path, u) for u in history} for f, _ in cond["test"]},
             rule,

@@ -4,6 +4,8 @@ its thresholds with nothing trained again (score), and the trend of what was sco
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 
 from ..data.recordings import cut_recording
@@ -12,21 +14,22 @@ from ..events import Event
 from ..learn.protocol import fault_score
 from ..params import did_you_mean
 from ..parts import scoring
-from ..parts.measured import Target, TargetFile
+from ..parts.measured import TargetFile
 from ..runs import RunDir
 from ..signals import Standardiser
 from . import record_effects
 from .detection_classical import classical_record
 from .detection_records import SPEED_GROUP, aligned, learned_input, longest_tsa, unit_sets, unit_window
+from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
 from .detection_which_gear import decision_of, is_other, localise_scored
 
 
-def store_scoring(run: RunDir, spec: dict, conditions: dict) -> None:
+def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
     """What `gearlab score` needs of the finished run: the target's keys, the units and threshold
     rule, and per condition its speed, standardiser, alignment reference and history revolutions
     (the thresholds and classical references are made from them as the run made them)."""
-    target: Target = spec["target"]
+    target, d = spec.target, spec.detection
     out = {
         # cut_recording's keys; without a tacho, the declared speed and the description (a resolved path)
         # whose mesh orders give a new record's speed
@@ -35,12 +38,12 @@ def store_scoring(run: RunDir, spec: dict, conditions: dict) -> None:
             for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
             + ("speed_hz", "gearbox")
         },
-        "blocks": list(spec["blocks"]),
-        "threshold": spec["threshold"],
-        "false_alarm": spec["false_alarm"],
-        "points": spec["points"],
-        "input": spec["input"],
-        "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in spec["classical"].items()},
+        "blocks": list(d.blocks),
+        "threshold": d.threshold,
+        "false_alarm": d.false_alarm,
+        "points": d.points,
+        "input": d.input,
+        "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(spec.classical).items()},
         "conditions": {},
     }
     for i, (name, cond) in enumerate(conditions.items()):
@@ -185,7 +188,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
     by_unit = {r["unit"]: r for r in run.records()}
     shown_spec = {"points": meta["points"], "input": meta["input"], "classical": meta["classical"]}
-    classical = {**meta["classical"], "shafts": tuple(tuple(x) for x in meta["classical"]["shafts"])}
+    classical = stored_classical(meta["classical"])
     rows = []
     for name, records in cut.items():
         cond = _scoring_condition(run, meta, name, records)

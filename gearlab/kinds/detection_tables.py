@@ -22,7 +22,7 @@ from .detection_which_gear import which_gear_summary
 
 def summarise(scenario: Scenario, run: RunDir) -> None:
     spec = scenario.spec
-    target: Target = spec["target"]
+    target: Target = spec.target
     labels = {f.path: f.label for f in target.files}
     everything = run.records()
     by_unit = {r["unit"]: r for r in everything}
@@ -87,9 +87,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                 }
             )
     order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
-    variants = [""] + ([spec["corrected_label"]] if spec.get("corrected") is not None else [])
-    methods = [method_name(m, v) for v in variants for m in spec["protocol"].methods]
-    methods += list(spec["classical"]["indicators"])
+    variants = [""] + ([spec.corrected_label] if spec.corrected is not None else [])
+    methods = [method_name(m, v) for v in variants for m in spec.protocol.methods]
+    methods += list(spec.classical.indicators)
 
     def rank(method: str) -> int:
         return methods.index(method) if method in methods else len(methods)
@@ -105,12 +105,12 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     summary = {
         "kind": "detection",
         "scenario": scenario.name,
-        "source": asdict(spec["source"]),
+        "source": asdict(spec.source),
         "target": {**asdict(target), "files": [asdict(f) for f in target.files]},
-        "protocol": {k: v for k, v in asdict(spec["protocol"]).items() if k != "methods"},
+        "protocol": {k: v for k, v in asdict(spec.protocol).items() if k != "methods"},
         "methods": list(dict.fromkeys(r["method"] for r in records)),
-        "false_alarm_asked": spec["false_alarm"],
-        "threshold_rule": spec["threshold"],
+        "false_alarm_asked": spec.detection.false_alarm,
+        "threshold_rule": spec.detection.threshold,
         "rows": rows,
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
@@ -128,7 +128,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
             "part_source_auc": r.get("part_source_auc", []),
             "source_units": r["source_units"],
             "aligned_to_a_point": r.get("aligned_to_a_point", False),
-            "aligned_with": aligned_with(r, spec["protocol"].calibration.alignment),
+            "aligned_with": aligned_with(r, spec.protocol.calibration.alignment),
             "seconds": r["seconds"],
         }
         for r in sorted(records, key=lambda r: (order[r["condition"]], rank(r["method"])))
