@@ -631,8 +631,9 @@ def render(report: dict, console, width: int = 100) -> None:
     console.print(
         f"[bold]{escape(report['file'])}[/bold] ({report['format']}): {report['samples']} samples at "
         f"{fmt_hz(report['fs_hz'])} ({escape(report['fs_source'])}), {report['duration_s']:.4g} s; channels: "
-        f"{escape(', '.join(map(str, report['channels'])))}; vibration {escape(report['vibration'])!r}"
-        + (f", tacho {escape(report['tacho'])!r}" if report["tacho"] else "")
+        f"{escape(', '.join(map(str, report['channels'])))}; vibration {escape(repr(report['vibration']))}"
+        # repr before escape: repr doubles escape's backslash, and '[m/s²]' would be read as markup
+        + (f", tacho {escape(repr(report['tacho']))}" if report["tacho"] else "")
     )
     console.print(
         f"speed {sp['mean_hz']:.5g} Hz ({sp['mean_hz'] * 60:.5g} rpm) {escape(sp['source'])}; "
