@@ -2,8 +2,10 @@
 checked"): the findings of such a run, each fixed and kept fixed here on small generated inputs."""
 
 import numpy as np
+import pytest
 from gearboxes import described_pair
 
+from gearlab.errors import GearlabInputError
 from gearlab.gap.structure import later_stages
 
 
@@ -37,3 +39,57 @@ def test_a_later_mesh_of_no_whole_order_is_read_against_the_description():
     assert wrong["line"].startswith(
         "stage 2: mesh order 7.492 measured, 6.915 expected: the source simulates a 24-tooth pinion"
     )
+
+
+def _rig_csv(path, header: str, revs: int = 120, seed: int = 1) -> None:
+    """A 23/61 gearbox at 24.5 Hz in m/s² with a once-per-turn tacho, ';'-separated, as a German
+    logger writes it (columns 't [s]', 'Beschl. [m/s²]', 'Tacho [V]')."""
+    fs, f = 8192.0, 24.5
+    t = np.arange(int(revs / f * fs)) / fs
+    theta = 2 * np.pi * f * t
+    x = _train([(23, 61)], theta, np.random.default_rng(seed))
+    tacho = np.where(theta % (2 * np.pi) < 0.3, 5.0, 0.0)
+    rows = "".join(f"{a:.6f};{b:.5f};{c:.1f}\n" for a, b, c in zip(t, x, tacho))
+    path.write_text(header + "\n" + rows, encoding="utf-8")
+
+
+def test_a_channel_named_with_a_unit_in_brackets_is_printed_as_named(tmp_path):
+    # 'Beschl. [m/s²]' was printed "vibration 'Beschl. \'": repr after rich's escape doubled its
+    # backslash, and '[m/s²]' was read as markup and dropped
+    from rich.console import Console
+
+    from gearlab.inspect import InspectOptions, inspect_record, render
+
+    path = tmp_path / "mon.csv"
+    _rig_csv(path, "t [s];Beschl. [m/s²];Tacho [V]")
+    report = inspect_record(str(path), None, InspectOptions(vibration="Beschl. [m/s²]", tacho="Tacho [V]"))
+    console = Console(record=True, width=1000)
+    render(report, console)
+    assert "vibration 'Beschl. [m/s²]', tacho 'Tacho [V]'" in console.export_text()
+
+
+def test_an_hdf5_channel_is_found_by_its_last_name_as_in_the_mat_files_beside_it(tmp_path):
+    # history in HDF5 under 'measurement/', tests in MAT v5 with the same names at the top: one
+    # [target] vibration = "radial" named a channel of only one of the two kinds of file
+    import h5py
+    import scipy.io
+
+    from gearlab.data.recordings import check_recording, read_contents
+
+    x = np.random.default_rng(0).normal(size=256)
+    with h5py.File(tmp_path / "week01.h5", "w") as h:
+        g = h.create_group("measurement")
+        g.create_dataset("radial", data=x).attrs["unit"] = "V"
+        g.create_dataset("axial", data=x)
+        g.attrs["sample_rate"] = 1000.0
+        h.create_dataset("other/axial", data=x)  # 'axial' is in two groups: no last-name match
+    scipy.io.savemat(tmp_path / "week05.mat", {"radial": x[:, None], "Fs": 1000.0})
+    for name in ("week01.h5", "week05.mat"):
+        contents, _ = read_contents(tmp_path / name, ["radial"])
+        assert np.allclose(contents.found["radial"].ravel(), x)
+        check_recording(tmp_path / name, "s.toml: [target]", {"vibration": "radial"}, sensitivity=0.001)
+    # the unit the HDF5 file states is found through the last name too: volts need a sensitivity
+    with pytest.raises(GearlabInputError, match="sensitivity"):
+        check_recording(tmp_path / "week01.h5", "s.toml: [target]", {"vibration": "radial"})
+    with pytest.raises(GearlabInputError, match="no channel 'axial'"):
+        read_contents(tmp_path / "week01.h5", ["axial"])

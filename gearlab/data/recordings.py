@@ -746,6 +746,6 @@ def check_recording(
     vibration = channels.get("vibration")
     if vibration not in (None, ""):
         name = channel_key(vibration)
-        name = named(name, header.channels) if header.indexed else name
+        name = named(name, header.channels) if header.indexed else header.resolve(name)
         channel_scale(name, sensitivity, gain, where, name in header.integer, header.units.get(name))
     return header

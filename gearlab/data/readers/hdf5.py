@@ -1,5 +1,6 @@
-"""HDF5: datasets by path ("group/acc"); the rate from an 'fs' attribute on the channel or the nearest
-group above that has one, or an 'fs'/'t' dataset there."""
+"""HDF5: datasets by path ("group/acc", or "acc" where one dataset has that last name); the rate
+from an 'fs' attribute on the channel or the nearest group above that has one, or an 'fs'/'t'
+dataset there."""
 
 from __future__ import annotations
 
@@ -77,6 +78,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         for name in dict.fromkeys(names):
             try:
                 obj = _hard_linked(h5py, path, f, name)
+                if obj is None and (full := leaf_match(contents.available, name)) is not None:
+                    obj = _hard_linked(h5py, path, f, full)
             except (KeyError, ValueError, TypeError):
                 continue  # not there: reported with the list of datasets
             if obj is None:
@@ -99,6 +102,15 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                         seen.add(where)
                         kind.append((where, value))
         return contents
+
+
+def leaf_match(datasets: Sequence[str], name: str) -> str | None:
+    """The one dataset path whose last part is *name* ("measurement/radial" for "radial"), or None:
+    a logger's MAT or CSV files name the channel bare, and one scenario key names it in every file."""
+    if "/" in name:
+        return None
+    hits = [d for d in datasets if d.rsplit("/", 1)[-1] == name]
+    return hits[0] if len(hits) == 1 else None
 
 
 def _hard_linked(h5py, path: Path, f, name: str):

@@ -26,11 +26,20 @@ class Header:
     integer: frozenset[str] = frozenset()
     indexed: bool = False  # channels may be named by 0-based column index (text formats)
     units: dict[str, str] = field(default_factory=dict)  # a unit a channel states (Contents.units)
+    nested: bool = False  # channels are paths ("group/acc"), found by their last part alone too
 
     def find(self, name: str) -> bool:
-        if name in self.channels:
+        if name in self.channels or self.resolve(name) in self.channels:
             return True
         return self.indexed and str(name).strip().isdigit() and int(name) < len(self.channels)
+
+    def resolve(self, name: str) -> str:
+        """The channel as the file names it: a nested file's "acc" is its one "group/acc"."""
+        if name in self.channels or not self.nested:
+            return name
+        from .hdf5 import leaf_match
+
+        return leaf_match(self.channels, str(name)) or name
 
 
 def _csv_header(path: Path) -> Header:
@@ -111,7 +120,7 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
             parts = n.split("/")[:-1]
             groups.update("/".join(parts[: i + 1]) for i in range(len(parts)))
         rate = rate or any(is_rate_or_time(k) for g in groups for k in f[g].attrs)
-    return Header(fmt, names, rate, frozenset(integer), units=units)
+    return Header(fmt, names, rate, frozenset(integer), units=units, nested=True)
 
 
 def _wav_header(path: Path) -> Header:
