@@ -671,10 +671,20 @@ def test_pinion_sync_runs_end_to_end_and_writes_which_shaft(cli, tmp_path, cache
     assert "Which shaft (pinion_sync, record10" in (out / "report.html").read_text()
 
 
-def test_the_threshold_rule_is_checked(cli, tmp_path):
-    path = scenario(tmp_path, methods=("matched_filter",), detection='threshold = "pooeld"')
+@pytest.mark.parametrize(
+    "key, value, message",
+    [
+        ("threshold", "pooeld", "'pooeld' is not one of records, pooled (did you mean 'pooled'?)"),
+        ("source_speed", "record", "'record' is not one of records, source (did you mean 'records'?)"),
+        ("input", "raw", "'raw' is not one of difference, revolution"),
+    ],
+)
+def test_the_detection_choices_are_checked(cli, tmp_path, key, value, message):
+    """[detection]'s threshold rule, source speed and input: one line naming the key, the value and
+    the choices (checked with the key's type, before any other check of the scenario)."""
+    path = scenario(tmp_path, methods=("matched_filter",), detection=f'{key} = "{value}"')
     code, _, err = cli("validate", path)
-    assert code == 2 and "key 'threshold'" in err and "did you mean 'pooled'" in err
+    assert code == 2 and f"[detection] key '{key}': {message}" in err and len(err.strip().splitlines()) == 1
 
 
 @pytest.mark.parametrize(

@@ -106,9 +106,6 @@ from .detection_records import (
 from .detection_scoring import score as score  # the kind's `gearlab score` (engine.score_recordings)
 from .detection_scoring import score_trends, store_scoring
 from .detection_settings import (
-    INPUTS,
-    SOURCE_SPEEDS,
-    THRESHOLDS,
     UNIT_THRESHOLD,
     Classical,
     Corrected,
@@ -268,20 +265,6 @@ def build(scenario: Scenario) -> Spec:
         raise GearlabInputError(
             f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than the source training set "
             f"({n - max(1, round(protocol.val_fraction * n))} of the {n} samples of '{source.name}')"
-        )
-    if d.source_speed not in SOURCE_SPEEDS:
-        raise GearlabInputError(
-            f"{location(path, 'detection', 'source_speed')}: expected one of "
-            f"{', '.join(SOURCE_SPEEDS)}, got {shown(d.source_speed)}"
-        )
-    if d.threshold not in THRESHOLDS:
-        raise GearlabInputError(
-            f"{location(path, 'detection', 'threshold')}: expected one of {', '.join(THRESHOLDS)}, got "
-            f"{shown(d.threshold)}{did_you_mean(str(d.threshold), THRESHOLDS)}"
-        )
-    if d.input not in INPUTS:
-        raise GearlabInputError(
-            f"{location(path, 'detection', 'input')}: expected one of {', '.join(INPUTS)}, got {shown(d.input)}"
         )
     return Spec(
         source=source,

@@ -144,6 +144,7 @@ class Detection:
     input: str = setting(
         str,
         "difference",
+        choices=INPUTS,
         doc="what the learned methods see: 'difference' (revolution or TSA less its "
         "shaft and mesh orders, as FM4's) or 'revolution' (as it is)",
     )
@@ -158,6 +159,7 @@ class Detection:
     threshold: str = setting(
         str,
         "records",
+        choices=THRESHOLDS,
         doc="'records': predictive quantile for a new record's unit (record effect + within-record "
         "spread, one-way random effects); 'pooled': Gumbel quantile of the pooled history units",
     )
@@ -179,6 +181,7 @@ class Detection:
     source_speed: str = setting(
         str,
         "records",
+        choices=SOURCE_SPEEDS,
         doc="'records': the source simulated at each condition's history speed "
         "(to 1 Hz); 'source': at the [source]'s own speed",
     )
