@@ -89,11 +89,13 @@ from .common import (
     no_title,
     simulated_spec,
     sized,
+    with_source_gearbox,
 )
 from .detection_classical import classical_record
 from .detection_figures import captions, roc_charts
 from .detection_figures import draw as draw_figures
 from .detection_records import (
+    asynchronous_orders,
     folds_of,
     history_training_rows,
     learned_input,
@@ -101,6 +103,7 @@ from .detection_records import (
     read_target,
     register_to_source,
     source_for,
+    synchronous_input,
     trained_on,
 )
 from .detection_scoring import score as score  # the kind's `gearlab score` (engine.score_recordings)
@@ -196,7 +199,7 @@ def build(scenario: Scenario) -> Spec:
             f"{location(path, 'source')}: the source needs healthy and faulty revolutions (has {sizes})"
         )
     _, pair, _ = source.check_model(location(path, "source"))
-    entry = t["target"]
+    entry = with_source_gearbox(t["target"], t["source"])
     if entry["gearbox"]:  # resolved and loaded now: a bad description fails validate
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], location(path, "target", "gearbox"), scenario.base)}
     target = target_spec(entry, location(path, "target"), scenario.base)
@@ -389,7 +392,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 if f"{name}/{indicator}" not in records:
                     run.append(classical_record(indicator, name, cond, spec.classical, rules[name]))
         learned = learned_settings(d, spec.classical)
-        shown = {c: learned_input(learned, cond["max_order"]) for c, cond in conditions.items()}
+        later = asynchronous_orders(spec.source)  # a later mesh of no whole input order: out of every input
+        shown = {
+            c: synchronous_input(learned_input(learned, cond["max_order"]), later) for c, cond in conditions.items()
+        }
         splits = {
             (c, v): tuple(
                 a if a.ndim == 1 else each_draw(shown[c], a)

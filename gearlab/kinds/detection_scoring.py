@@ -19,7 +19,16 @@ from ..runs import RunDir
 from ..signals import Standardiser
 from . import record_effects
 from .detection_classical import classical_record
-from .detection_records import SPEED_GROUP, aligned, learned_input, longest_tsa, unit_sets, unit_window
+from .detection_records import (
+    SPEED_GROUP,
+    aligned,
+    asynchronous_orders,
+    learned_input,
+    longest_tsa,
+    synchronous_input,
+    unit_sets,
+    unit_window,
+)
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
 from .detection_which_gear import decision_of, is_other, localise_scored
@@ -43,6 +52,8 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         "false_alarm": d.false_alarm,
         "points": d.points,
         "input": d.input,
+        # the later mesh orders the learned methods never see (detection_records.asynchronous_orders)
+        "later_orders": list(asynchronous_orders(spec.source)),
         "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(spec.classical).items()},
         "conditions": {},
     }
@@ -193,7 +204,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
     for name, records in cut.items():
         cond = _scoring_condition(run, meta, name, records)
         rule = Rule(meta["threshold"], meta["false_alarm"], cond["history_records"])
-        shown = learned_input(shown_spec, cond["max_order"])
+        shown = synchronous_input(learned_input(shown_spec, cond["max_order"]), tuple(meta.get("later_orders", ())))
         seen = {p: {u: shown(X) for u, X in units.items()} for p, units in cond["test_units"].items()}
         for r in by_unit.values():
             if r["condition"] != name or r.get("seed") is not None or r.get("fold") is not None:
