@@ -48,7 +48,7 @@ def test_the_non_whole_mesh_orders_of_a_train(tmp_path):
     # and so its figures, stay bit for bit what they were
     for name, preset in DATASET_PRESETS.items():
         assert asynchronous_orders(preset) == (), name
-    seen = learned_input({"points": P, "input": "revolution", "classical": {}}, None)
+    seen = learned_input("revolution", P, None)
     assert synchronous_input(seen, ()) is seen
 
 

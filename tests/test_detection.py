@@ -336,7 +336,6 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     the method (not its folds) reaches scores.csv. With one history record it is refused."""
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import learned_input, read_target
-    from gearlab.kinds.detection_settings import learned_settings
     from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
 
     path = scenario(tmp_path, methods=("source_only",), detection='history_fit = "crossed"')
@@ -348,7 +347,7 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     # what each training was handed: revolutions of the history record it did not leave out
     spec = load_scenario(path).spec
     ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
-    shown = learned_input(learned_settings(spec.detection, spec.classical), cond["max_order"])
+    shown = learned_input(spec.detection.input, spec.detection.points, spec.classical, cond["max_order"])
     history = [shown(r) for _, r in cond["history"]]
 
     def among(rows, pool) -> bool:
@@ -406,7 +405,6 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     import gearlab.learn.protocol as P
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import learned_input, read_target
-    from gearlab.kinds.detection_settings import learned_settings
 
     handed, scored = [], []
     train_method, fault_score = P.train_method, P.fault_score
@@ -428,7 +426,7 @@ def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_pa
     spec = load_scenario(path).spec
     ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
     assert cond["max_order"] == 230
-    full = learned_input({**learned_settings(spec.detection, spec.classical), "points": 4096})
+    full = learned_input(spec.detection.input, 4096, spec.classical)
     history = np.concatenate([full(r) for _, r in cond["history"]])
     spectrum = np.fft.rfft(history, axis=-1)
     spectrum[..., 231:] = 0.0
@@ -482,7 +480,6 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     refused with the choices."""
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import learned_input, read_target, tsa_units
-    from gearlab.kinds.detection_settings import learned_settings
 
     corrected = (
         '[corrected]\ntsa = 3\nhistory_units = "tsa"\n'
@@ -492,7 +489,7 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     run(cli, path, tmp_path / "runs")
     spec = load_scenario(path).spec
     ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
-    shown = learned_input(learned_settings(spec.detection, spec.classical), cond["max_order"])
+    shown = learned_input(spec.detection.input, spec.detection.points, spec.classical, cond["max_order"])
     revolutions = np.concatenate([shown(r) for _, r in cond["history"]])
     tsas = np.concatenate([shown(tsa_units(r, 3, 1)) for _, r in cond["history"]])
 

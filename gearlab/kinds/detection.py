@@ -114,7 +114,6 @@ from .detection_settings import (
     Detection,
     Spec,
     TargetRecords,
-    learned_settings,
 )
 from .detection_tables import labels_md, learned_md, summarise, table_md
 from .detection_units import (
@@ -390,10 +389,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             for indicator in spec.classical.indicators:
                 if f"{name}/{indicator}" not in records:
                     run.append(classical_record(indicator, name, cond, spec.classical, rules[name]))
-        learned = learned_settings(d, spec.classical)
         later = asynchronous_orders(spec.source)  # a later mesh of no whole input order: out of every input
         shown = {
-            c: synchronous_input(learned_input(learned, cond["max_order"]), later) for c, cond in conditions.items()
+            c: synchronous_input(learned_input(d.input, d.points, spec.classical, cond["max_order"]), later)
+            for c, cond in conditions.items()
         }
         splits = {
             (c, v): tuple(

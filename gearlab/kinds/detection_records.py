@@ -21,6 +21,7 @@ from ..scenario import location
 from ..signals import Standardiser
 from ..signals.indicators import band_limited, difference_signal
 from . import record_effects
+from .detection_settings import Classical
 
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
 HISTORY_STRIDES = 10
@@ -228,19 +229,19 @@ def without_asynchronous(X: np.ndarray, orders) -> np.ndarray:
     return np.fft.irfft(F, n=X.shape[-1], axis=-1).astype(X.dtype, copy=False)
 
 
-def learned_input(spec: dict, max_order: int | None = None):
-    """What the learned methods see of a revolution or TSA (source and target alike): as it is,
-    or its difference signal (shaft orders, mesh harmonics and their sidebands removed, as for
-    FM4), which leaves what one tooth adds and drops what every tooth and each build share; at
-    [detection] points per revolution (band_limited: a network's step costs in proportion), and
-    no order above *max_order*: the condition's records hold none there (read_target), while a
-    simulated revolution, and the sensor noise added to it, reach order POINTS / 2."""
-    points = spec["points"]
-    if spec["input"] == "revolution":
+def learned_input(how: str, points: int, classical: Classical | None, max_order: int | None = None):
+    """What the learned methods see of a revolution or TSA (source and target alike): as it is
+    (*how* = [detection] input "revolution"), or its difference signal (the shaft orders, mesh
+    harmonics and sidebands of *classical* removed, as for FM4), which leaves what one tooth adds
+    and drops what every tooth and each build share; at *points* per revolution (band_limited: a
+    network's step costs in proportion), and no order above *max_order*: the condition's records
+    hold none there (read_target), while a simulated revolution, and the sensor noise added to it,
+    reach order POINTS / 2."""
+    if how == "revolution":
         return lambda X: band_limited(X, points, max_order)
-    c = spec["classical"]
+    c = classical
     return lambda X: band_limited(
-        difference_signal(X, c["mesh_orders"], c["shaft_orders"], c["sidebands"]).astype(np.float32),
+        difference_signal(X, c.mesh_orders, c.shaft_orders, c.sidebands).astype(np.float32),
         points,
         max_order,
     )

@@ -198,13 +198,15 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
     by_unit = {r["unit"]: r for r in run.records()}
-    shown_spec = {"points": meta["points"], "input": meta["input"], "classical": meta["classical"]}
     classical = stored_classical(meta["classical"])
     rows = []
     for name, records in cut.items():
         cond = _scoring_condition(run, meta, name, records)
         rule = Rule(meta["threshold"], meta["false_alarm"], cond["history_records"])
-        shown = synchronous_input(learned_input(shown_spec, cond["max_order"]), tuple(meta.get("later_orders", ())))
+        shown = synchronous_input(
+            learned_input(meta["input"], meta["points"], classical, cond["max_order"]),
+            tuple(meta.get("later_orders", ())),
+        )
         seen = {p: {u: shown(X) for u, X in units.items()} for p, units in cond["test_units"].items()}
         for r in by_unit.values():
             if r["condition"] != name or r.get("seed") is not None or r.get("fold") is not None:

@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 from ..data.spec import POINTS, DatasetSpec
 from ..learn.config import RECIPE
@@ -197,12 +197,6 @@ def stored_classical(stored: dict) -> Classical:
         slow_shafts=tuple(stored["slow_shafts"]),
         shafts=tuple((name, q) for name, q in stored["shafts"]),
     )
-
-
-def learned_settings(detection: Detection, classical: Classical) -> dict:
-    """What kinds.detection_records.learned_input reads, as a run stores it for `gearlab score`
-    (scoring.json's points, input and classical)."""
-    return {"points": detection.points, "input": detection.input, "classical": asdict(classical)}
 
 
 @dataclass(frozen=True)
