@@ -93,3 +93,49 @@ def test_an_hdf5_channel_is_found_by_its_last_name_as_in_the_mat_files_beside_it
         check_recording(tmp_path / "week01.h5", "s.toml: [target]", {"vibration": "radial"})
     with pytest.raises(GearlabInputError, match="no channel 'axial'"):
         read_contents(tmp_path / "week01.h5", ["axial"])
+
+
+def test_a_declared_speed_is_refined_by_the_source_description_in_detection_and_gap(tmp_path):
+    # A conveyor reducer 18/67 + 29/71 in int16 WAVs without a tacho, its motor's nameplate speed
+    # declared ([target] speed = "2400 rpm") and no [target] gearbox: every record was read at 40 Hz
+    # flat while the motor ran 0.5 % faster, 400 revolutions slipped a fifth of a turn, the TSAs lost
+    # their mesh (localisation found nothing, likelihood_ratio AUC 0.52). The [source] description
+    # is the same gearbox: its mesh lines refine the declared speed, as with [target] gearbox.
+    import scipy.io.wavfile
+    from gearboxes import description, stage
+
+    from gearlab.engine import load_scenario
+
+    fs, f = 12800, 40.2
+    theta = 2 * np.pi * f * np.arange(6 * fs) / fs
+    for name in ("h1", "h2", "t1"):
+        x = _train([(18, 67), (29, 71)], theta, np.random.default_rng(len(name) + ord(name[-1])))
+        scipy.io.wavfile.write(tmp_path / f"{name}.wav", fs, np.round(x / 4 * 32767).astype(np.int16))
+    (tmp_path / "reducer.toml").write_text(
+        description(stage(18, 67), stage(29, 71, module="3 mm"), speed="2400 rpm", load="20 N*m")
+    )
+    files = "\n".join(
+        f'  {{ file = "{n}.wav", role = "{r}", label = "{lab}" }},'
+        for n, r, lab in (("h1", "history", "healthy"), ("h2", "history", "healthy"), ("t1", "test", "fault"))
+    )
+    units = 'sensitivity = "100 mV/g"\ngain = "4 V"\n'
+    target = f'[target]\nvibration = "0"\nspeed = "2400 rpm"\n{units}files = [\n{files}\n]\n'
+    detection = (
+        '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "reducer.toml"\n'
+        "faults = { chip = [20] }\nhealthy = 48\n" + target + '[[methods]]\nadapter = "likelihood_ratio"\n'
+    )
+    gap = (
+        '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "reducer.toml"\n'
+        + target
+        + "[accuracy]\nenabled = false\n"
+    )
+    (tmp_path / "detect.toml").write_text(detection)
+    (tmp_path / "gap.toml").write_text(gap)
+    targets = [
+        load_scenario(tmp_path / "detect.toml").spec.target,
+        load_scenario(tmp_path / "gap.toml").spec["target"].target,
+    ]
+    for t in targets:
+        rec = t.read(t.files[0])
+        assert abs(rec.speed_hz / f - 1) < 2e-4, rec.angle_source
+        assert "declared 40 Hz" in rec.angle_source and "followed" in rec.angle_source

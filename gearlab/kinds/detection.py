@@ -89,6 +89,7 @@ from .common import (
     no_title,
     simulated_spec,
     sized,
+    with_source_gearbox,
 )
 from .detection_classical import classical_record
 from .detection_figures import captions, roc_charts
@@ -197,7 +198,7 @@ def build(scenario: Scenario) -> Spec:
             f"{location(path, 'source')}: the source needs healthy and faulty revolutions (has {sizes})"
         )
     _, pair, _ = source.check_model(location(path, "source"))
-    entry = t["target"]
+    entry = with_source_gearbox(t["target"], t["source"])
     if entry["gearbox"]:  # resolved and loaded now: a bad description fails validate
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], location(path, "target", "gearbox"), scenario.base)}
     target = target_spec(entry, location(path, "target"), scenario.base)
