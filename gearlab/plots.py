@@ -258,7 +258,7 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
         for r in records:
             if r["method"] == label and r["k"] == k0:
                 cm += np.asarray(r["confusion"])
-        ax.imshow(cm, cmap="Blues")
+        ax.imshow(cm, cmap="Blues", vmin=0)  # from 0: the text colour below follows the cell's shade
         for (a, b), v in np.ndenumerate(cm):
             dark = v > cm.max() / 2  # white on the dark cells, readable at the report's width
             ax.text(b, a, str(v), ha="center", va="center", fontsize=12, color="white" if dark else "black")

@@ -13,10 +13,11 @@ from .kinds import SCENARIO_KINDS
 from .runs import RunDir
 from .verdict import verdict_lines, verdict_table
 
+# .scroll: a table wider than the page (a benchmark's per-trial table, many methods) scrolls in its own box
 STYLE = (
     "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
     "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-    "th{background:#eee}tr.reference td{color:#555;font-style:italic;background:#f7f7ff}"
+    "th{background:#eee}.scroll{overflow-x:auto}tr.reference td{color:#555;font-style:italic;background:#f7f7ff}"
     "img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}pre{background:#f6f6f6;padding:1em;overflow:auto}"
     "figure{margin:1.5em 0}figcaption{font-size:0.92em;color:#333}"
     "#verdict{background:#f3f8f3;border-left:4px solid #4a4;padding:0.3em 1em}"
@@ -131,7 +132,9 @@ def build_report(run: RunDir | Path) -> str:
             parts.append(f"<p>{html.escape(title)}</p>")
             continue
         titled = f"<caption><b>Table {i}.</b> {html.escape(title or header_title(block))}</caption>"
-        parts.append(markdown_table(block).replace("<table>", f"<table>{titled}", 1))
+        parts.append(
+            "<div class='scroll'>" + markdown_table(block).replace("<table>", f"<table>{titled}", 1) + "</div>"
+        )
     figures = run.figures.files("*.png")
     captions = figure_captions(summary)
     order = list(captions)  # the kind's order (the thesis's where it repeats its figures), then by name

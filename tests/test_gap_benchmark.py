@@ -17,6 +17,7 @@ import struct
 
 import numpy as np
 import pytest
+from browser import check_report, chromium
 
 from gearlab.data.builder import build_dataset
 from gearlab.data.spec import dataset_preset
@@ -396,6 +397,8 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     assert names[:3] == ["answers.json", "calibration.json", "diagnosis.json"] and len(names) == 4
     assert names[3] in ("target.npz", "target.wav")
     assert "top-1" in out
+    if chromium():  # the report as a reader gets it (issue 41: a browser test covers every kind)
+        check_report(run_dir / "report.html", tmp_path / "browser")
     # resume: nothing left to do, nothing recomputed
     monkeypatch.setattr(bench, "_diagnose", lambda *a: pytest.fail("a finished trial was diagnosed again"))
     code, out, err = cli("run", "--resume", run_dir)

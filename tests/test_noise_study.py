@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from browser import check_report, chromium
 from conftest import ROOT
 
 import gearlab.kinds.noise_study as kind
@@ -343,6 +344,8 @@ def test_run_writes_records_summary_tables_and_figures(cli, write_scenario, tmp_
     for name in ("accuracy_vs_intensity.png", "accuracy_vs_rfa.png", "confusion.png"):
         assert (run / "figures" / name).stat().st_size > 10_000
     assert "data:image/png;base64," in (run / "report.html").read_text()
+    if chromium():  # the report as a reader gets it (issue 41: a browser test covers every kind)
+        check_report(run / "report.html", tmp_path / "browser")
     assert "TSA accuracy" in out  # summary_lines
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from browser import check_report, chromium
 from tiny import EXECUTION, SCHEDULE
 
 from gearlab.engine import load_scenario, run_scenario
@@ -153,6 +154,8 @@ def test_a_tiny_benchmark_runs_end_to_end(tiny):
     lines = SCENARIO_KINDS["transfer_benchmark"].summary_lines(RunDir.open(run))
     assert lines[0].startswith("selection rule") and "seed 3 (development)" in lines[0]
     assert (run / "figures" / "transfer_benchmark.png").exists() and "<img" in (run / "report.html").read_text()
+    if chromium():  # the report as a reader gets it (issue 41: a browser test covers every kind)
+        check_report(run / "report.html", tiny.parent / "browser")
 
 
 # --- the per-trial corrected source ----------------------------------------------------------------

@@ -17,7 +17,7 @@ from ..events import Event
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
-from .common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, no_verdict, sized
+from .common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, sized
 
 TABLES = {"datasets": DATASET_TABLE}
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
@@ -195,7 +195,16 @@ def recording_views(dataset, max_order: float = 200.0) -> tuple[Chart, Chart, Ch
     return revolutions, tsa, Chart(f"{dataset.spec.name}: order spectra", "shaft order", "amplitude", tuple(spectra))
 
 
-verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """What each dataset holds: its revolutions per class and their length (report.html opens with it)."""
+    lines = []
+    for name, d in (summary.get("datasets") or {}).items():
+        counts = ", ".join(f"{n} {label}" for label, n in (d.get("counts") or {}).items())
+        lines.append(f"{name}: {d['n']} revolutions of {d['shape'][1]} samples ({counts}).")
+    return lines
+
+
+verdict_table, compare_table = no_table, no_compare  # the summary lines say the rest
 table_title = no_title
 
 

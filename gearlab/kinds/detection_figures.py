@@ -173,8 +173,13 @@ def captions(summary: dict) -> dict[str, tuple[str, str]]:
 
 
 def draw(run: RunDir) -> None:
-    """The figures of a finished detection run, into run.figures."""
-    from ..plots import save  # here, not at the top: start-up time (matplotlib)
+    """The figures of a finished detection run, into run.figures. Their constrained layout already
+    fits everything on the canvas (legends, suptitle), so they are saved without bbox_inches='tight',
+    which measured every artist again (the scores figure 0.95 -> 0.64 s of CPU)."""
+    from ..plots import save as saved  # here, not at the top: start-up time (matplotlib)
+
+    def save(fig, path):
+        return saved(fig, path, bbox_inches=None)
 
     summary = run.read_json("summary.json")
     if not summary or headline_unit(summary) is None:

@@ -54,7 +54,6 @@ from .common import (
     no_compare,
     no_table,
     no_title,
-    no_verdict,
     noise_spec,
 )
 
@@ -452,7 +451,29 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return out
 
 
-verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """Per noise, what the TSA changes: accuracy, faults called healthy, beside the Bayes bound
+    (report.html opens with it)."""
+    lines = []
+    for noise, res in (summary.get("results") or {}).items():
+        noisy, tsa, gain = res.get("noisy"), res.get("tsa"), res.get("tsa_gain")
+        if not noisy or not tsa:
+            continue
+        bound = (summary.get("bound") or {}).get(noise) or {}
+        limits = [f"{bound[v]['mean']:.1f} %" for v in VARIANTS if bound.get(v)]
+        lines.append(
+            f"{noise} noise: test accuracy {noisy['accuracy']['mean']:.1f} % on the noisy signals, "
+            f"{tsa['accuracy']['mean']:.1f} % after the TSA"
+            + (f" ({gain['mean']:+.1f} points over {gain['n']} runs)" if gain else "")
+            + f"; faults called healthy {noisy['fault_as_healthy']['mean']:.1f} -> "
+            f"{tsa['fault_as_healthy']['mean']:.1f} %"
+            + (f"; Bayes bound {' -> '.join(limits)}" if limits else "")
+            + "."
+        )
+    return lines
+
+
+verdict_table, compare_table = no_table, no_compare  # the summary lines say the rest
 table_title = no_title
 
 

@@ -22,7 +22,7 @@ from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location, plain_name
 from ..settings import setting, typed
-from .common import no_compare, no_table, no_title, no_verdict
+from .common import no_compare, no_table, no_title
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -322,7 +322,26 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return out
 
 
-verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """The healthy TVMS, and how far each fault's largest step lowers its mean (report.html opens with it)."""
+    h = summary.get("healthy")
+    if not h:
+        return []
+    name = (summary.get("pair") or {}).get("name", "the pair")
+    lines = [
+        f"Healthy TVMS of {name}: mean {h['mean']:.4g} N/m, from {h['min']:.4g} to {h['max']:.4g} N/m over a "
+        "pinion revolution."
+    ]
+    falls = []
+    for fault, steps in (summary.get("sweep") or {}).items():
+        last = steps[max(steps, key=int)]
+        falls.append(f"{fault} {100 * (1 - last['mean'] / h['mean']):.1f} % (RFA {last['rfa']:.3f})")
+    if falls:
+        lines.append("At each fault's largest step the mean TVMS falls by: " + ", ".join(falls) + ".")
+    return lines
+
+
+verdict_table, compare_table = no_table, no_compare  # the summary lines say the rest
 table_title = no_title
 
 

@@ -68,7 +68,6 @@ from .common import (
     no_compare,
     no_table,
     no_title,
-    no_verdict,
     simulated_spec,
 )
 from .transfer_benchmark_draw import draw
@@ -713,7 +712,26 @@ def figure(run: RunDir, summary: dict) -> None:
     save(fig, run.figures / "transfer_benchmark.png", dpi=90, bbox_inches=None)
 
 
-verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """The best median method, its distance to the bound, and the run's use (report.html opens with it)."""
+    per = summary.get("per_method") or {}
+    if not per:
+        return []
+    best = max(per, key=lambda label: per[label]["median"])
+    m = per[best]
+    line = (
+        f"Over {len(summary['trials'])} random targets (seed {summary['seed']}, {summary['use']}), {best} has the "
+        f"best median target test accuracy, {m['median']:.1f} % (10th percentile {m['p10']:.1f} %)"
+    )
+    if m["median_gap"] is not None:
+        line += (
+            f"; a median {m['median_gap']:.1f} points below the Bayes bound on the {m['bounded_trials']} trials that "
+            f"have one, within {CLOSE:g} points on {100 * m['within_close']:.0f} % of them"
+        )
+    return [line + "."]
+
+
+verdict_table, compare_table = no_table, no_compare  # the summary lines say the rest
 table_title = no_title
 
 

@@ -32,7 +32,7 @@ from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Scenario, Table, keys_of, location
 from ...settings import quick_limits, setting, typed
-from ..common import SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title, no_verdict
+from ..common import SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title
 from . import trials as bench
 
 MAX_TRIALS = 10000
@@ -361,7 +361,25 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return [gap, per]
 
 
-verdict_lines, verdict_table, compare_table = no_verdict, no_table, no_compare  # the summary lines say it all
+def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
+    """The benchmark's four measures against their targets (report.html opens with it)."""
+    s, said = summary, []
+    for key, what in (
+        ("top1", "named the hidden effect first"),
+        ("median_shrink", "shrank the gap (median, when identified) by"),
+        ("null_correct", "saw no gap in the null targets"),
+        ("out_of_library_unexplained", "left unexplained the out-of-library targets"),
+    ):
+        if s.get(key) is not None:
+            met = "met" if s["met"][key] else "below"
+            said.append(f"{what} {_pct(s[key])} (target {_pct(s['targets'][key])}: {met})")
+    if not said:
+        said.append("measured nothing against its targets (no trial of a kind that is scored)")
+    weak = f" ({s['too_weak']} too weak to show a gap)" if s.get("too_weak") else ""
+    return [f"On {s['trials']} blind trials{weak}, the diagnosis " + "; ".join(said) + "."]
+
+
+verdict_table, compare_table = no_table, no_compare  # the summary lines say the rest
 table_title = no_title
 
 
