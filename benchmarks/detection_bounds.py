@@ -41,10 +41,10 @@ SCENARIOS = Path(__file__).parents[1] / "scenarios"
 
 def bounds(name: str) -> dict[str, float]:
     scenario = load_scenario(SCENARIOS / f"{name}.toml")
-    protocol = scenario.spec["protocol"]
-    source, _ = load_or_build(scenario.spec["source"])
-    target, _ = load_or_build(scenario.spec["target"])
-    clean, _ = load_or_build(scenario.spec["target"].with_(noise=None))
+    protocol = scenario.spec.protocol
+    source, _ = load_or_build(scenario.spec.source)
+    target, _ = load_or_build(scenario.spec.target)
+    clean, _ = load_or_build(scenario.spec.target.with_(noise=None))
     s = split(protocol, source, target, rep=0, k=0)
     test, y = s.target_test, target.fault[s.target_test].astype(np.int64)
     history = target.X[s.target_train].astype(np.float64)
@@ -86,7 +86,7 @@ def bounds(name: str) -> dict[str, float]:
     with torch.no_grad():
         called = detector(X_test).argmax(1).numpy()
     out["matched_filter (source shapes, history threshold)"] = 100 * (called == y).mean()
-    kind = scenario.spec["target"].noise.kind
+    kind = scenario.spec.target.noise.kind
     bayes = bayes_scores(target.X[test], history, clean, kind)
     out[f"Bayes ({kind} likelihood ratio, target shapes), told threshold"] = best_accuracy(bayes, y)
     out["Bayes: faults found at 1 % false alarms"] = detection_at(bayes, y, 0.01)

@@ -78,8 +78,8 @@ def scenario_runs(path: Path, workers: int, quick: bool) -> None:
     if quick:
         SCENARIO_KINDS[scenario.kind].quick(scenario)
     t = time.perf_counter()
-    for side in ("source", "target"):
-        load_or_build(scenario.spec[side], LocalExecutor(workers))
+    for data in (scenario.spec.source, scenario.spec.target):
+        load_or_build(data, LocalExecutor(workers))
     print(
         f"\n{path.name}{' --quick' if quick else ''}: datasets built in {time.perf_counter() - t:.1f} s "
         "(shared by all runs below)"

@@ -143,9 +143,9 @@ def units() -> None:
 
     scenario = load_scenario("scenarios/expB.toml")
     spec = scenario.spec
-    source, _ = load_or_build(spec["source"])
-    target, _ = load_or_build(spec["target"])
-    full: Protocol = spec["protocol"]
+    source, _ = load_or_build(spec.source)
+    target, _ = load_or_build(spec.target)
+    full: Protocol = spec.protocol
     timed = {}
     states = StateStore(None)
 

@@ -158,9 +158,9 @@ def test_experiment_b_at_k_0_without_target_labels():
     from gearlab.learn.protocol import split
 
     scenario = load_scenario(Path(__file__).parents[1] / "scenarios" / "expB.toml")
-    source, _ = load_or_build(scenario.spec["source"])
-    target, _ = load_or_build(scenario.spec["target"])
-    s = split(scenario.spec["protocol"], source, target, rep=0, k=0)
+    source, _ = load_or_build(scenario.spec.source)
+    target, _ = load_or_build(scenario.spec.target)
+    s = split(scenario.spec.protocol, source, target, rep=0, k=0)
     detector = template_detector(
         source.X[s.source_train], source.fault[s.source_train], target.X[s.target_train], None, false_alarm=0.01
     )

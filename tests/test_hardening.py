@@ -484,7 +484,7 @@ def test_a_transfer_runs_copy_finds_its_relative_target_file(tmp_path, record_fi
     monkeypatch.chdir(tmp_path / "sc")
     run = RunDir.create(tmp_path / "runs", load_scenario("t.toml"))
     monkeypatch.chdir(tmp_path)
-    target = scenario_of(run).spec["target"]
+    target = scenario_of(run).spec.target
     assert Path(target.path).resolve() == (data / "rec.npz").resolve()
 
 

@@ -441,10 +441,10 @@ def test_two_workers_give_the_records_of_one(finished, tiny_toml):
 
 def test_planned_class_counts_are_those_built(finished, tiny_toml):
     spec = load_scenario(tiny_toml).spec
-    for side in ("source", "target"):
-        built, cached = load_or_build(spec[side])
+    for side, data in (("source", spec.source), ("target", spec.target)):
+        built, cached = load_or_build(data)
         assert cached
-        assert planned_counts(spec[side], side) == Counts.of(built)
+        assert planned_counts(data, side) == Counts.of(built)
 
 
 def test_summary_table_and_report(finished, cli):
@@ -630,7 +630,7 @@ def test_the_protocols_false_alarm_rate_is_the_detectors_too(tiny_toml):
             "ks = [0, 2]\nfalse_alarm = 0.05",
         )
     )
-    protocol = load_scenario(tiny_toml).spec["protocol"]
+    protocol = load_scenario(tiny_toml).spec.protocol
     (detector,) = [m for m in protocol.methods if m.is_detector]
     assert protocol.calibration.false_alarm == dict(detector.params)["false_alarm"] == 0.05
     assert detector.label == "matched_filter (unsupervised)" and detector.key == "matched_filter-unsup"

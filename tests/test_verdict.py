@@ -159,7 +159,7 @@ def test_the_shipped_chapter_5_scenarios_get_their_thesis_table(name, table):
     from gearlab.engine import load_scenario
 
     spec = load_scenario(HERE.parent / "scenarios" / f"{name}.toml").spec
-    summary = json.loads(json.dumps({side: asdict(spec[side]) for side in ("source", "target")}))
+    summary = json.loads(json.dumps({"source": asdict(spec.source), "target": asdict(spec.target)}))
     assert experiment(summary)[1] == table
     summary["target"]["teeth"] = [1, 2]  # reduced: not the thesis's experiment
     assert experiment(summary) is None

@@ -21,6 +21,8 @@ import numpy as np
 from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
+from ..data.importers import MeasuredSpec
+from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..learn.config import Calibration
@@ -69,7 +71,16 @@ TABLES = {
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
-def build(scenario: Scenario) -> dict:
+@dataclass(frozen=True)
+class Spec:
+    """What build() checked: the source and target datasets (simulated or measured) and the protocol."""
+
+    source: DatasetSpec | MeasuredSpec
+    target: DatasetSpec | MeasuredSpec
+    protocol: Protocol
+
+
+def build(scenario: Scenario) -> Spec:
     """Resolve and check everything that can be checked before any dataset is built."""
     t = scenario.tables
     path = scenario.path
@@ -113,24 +124,24 @@ def build(scenario: Scenario) -> dict:
     planned = planned_counts(source, location(path, "source")), planned_counts(target, location(path, "target"))
     if None not in planned:
         check_data(protocol, *planned, str(path))
-    return {"source": source, "target": target, "protocol": protocol}
+    return Spec(source, target, protocol)
 
 
 def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
     spec = scenario.spec
-    p: Protocol = spec["protocol"]
+    p = spec.protocol
     return (
-        f"{sized(spec['source'])} -> {sized(spec['target'])}, network {p.network}, {len(p.methods)} methods x "
+        f"{sized(spec.source)} -> {sized(spec.target)}, network {p.network}, {len(p.methods)} methods x "
         f"{len(p.ks)} k x {p.repetitions} repetitions = {len(p.methods) * len(p.ks) * p.repetitions} training runs"
     )
 
 
 def quick(scenario: Scenario) -> None:
     """Smoke run: 2 repetitions, k in {0, 4}, short training."""
-    p = scenario.spec["protocol"]
-    p = shrunk(p)  # the --quick limits declared on Protocol
-    scenario.spec["protocol"] = replace(p, ks=tuple(k for k in p.ks if k in (0, 4)) or p.ks[:1])
+    p = shrunk(scenario.spec.protocol)  # the --quick limits declared on Protocol
+    ks = tuple(k for k in p.ks if k in (0, 4)) or p.ks[:1]
+    scenario.spec = replace(scenario.spec, protocol=replace(p, ks=ks))
 
 
 def units(protocol: Protocol) -> list[tuple[int, int, Method]]:
@@ -139,17 +150,17 @@ def units(protocol: Protocol) -> list[tuple[int, int, Method]]:
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
-    protocol: Protocol = spec["protocol"]
+    protocol = spec.protocol
     with executor_for(scenario) as executor:
         on_event(Event("stage", stage="datasets", total=2, message="datasets"))
-        source, _ = load_or_build(spec["source"], executor, on_event)
+        source, _ = load_or_build(spec.source, executor, on_event)
         on_event(Event("advance", stage="datasets", done=1, total=2))
-        target, _ = load_or_build(spec["target"], executor, on_event)
+        target, _ = load_or_build(spec.target, executor, on_event)
         on_event(Event("advance", stage="datasets", done=2, total=2))
         check_data(protocol, Counts.of(source), Counts.of(target), str(scenario.path))
         # a stage of its own: the noise-free twin and the likelihood ratios take seconds (issue 41)
         on_event(Event("stage", stage="bound", total=1, message="Bayes bound of the target test sets"))
-        bound = bayes_bound(spec["target"], source, target, protocol, executor, on_event)
+        bound = bayes_bound(spec.target, source, target, protocol, executor, on_event)
         if bound is not None:
             run.write_json("bound.json", bound)
         on_event(Event("advance", stage="bound", done=1, total=1))
@@ -202,7 +213,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         for phase in phases:
             # the cache entries by path: a worker process may not share this one's environment
-            data = [(spec[d], cache.entry_path(spec[d])) for d in ("source", "target")]
+            data = [(d, cache.entry_path(d)) for d in (spec.source, spec.target)]
             tasks = [(protocol, *data, rep, k, m, run.file("states")) for rep, k, m in phase]
             # a unit asks the executor for a GPU unless the scenario trains on the CPU
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
@@ -285,7 +296,7 @@ def table_csv(tab: dict, ks) -> str:
 
 
 def summarise(scenario: Scenario, run: RunDir) -> None:
-    protocol: Protocol = scenario.spec["protocol"]
+    protocol = scenario.spec.protocol
     records = run.records()
     from ..learn.training import pick_device  # start-up time (torch)
 
@@ -293,8 +304,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     summary = {
         "kind": "transfer",
         "scenario": scenario.name,
-        "source": asdict(scenario.spec["source"]),
-        "target": asdict(scenario.spec["target"]),
+        "source": asdict(scenario.spec.source),
+        "target": asdict(scenario.spec.target),
         "protocol": {k: v for k, v in asdict(protocol).items() if k != "methods"},
         "methods": list(tab),  # the column order (JSON objects are written with sorted keys)
         "table": tab,
@@ -340,14 +351,14 @@ def summary_lines(run: RunDir) -> list[str]:
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:
     """The Table 5.4 layout of the records so far (the TUI fills it as units finish)."""
-    protocol: Protocol = scenario.spec["protocol"]
+    protocol = scenario.spec.protocol
     tab = table(records, protocol)
     return table_md(tab, protocol.ks, list(tab))
 
 
 def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     """Accuracy against k with a ± std band per method (Figures 5.5/5.6)."""
-    protocol: Protocol = scenario.spec["protocol"]
+    protocol = scenario.spec.protocol
     tab = table(run.records(), protocol)
     curves = []
     for label, per_k in tab.items():
@@ -420,10 +431,10 @@ def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
     """(title, Markdown) of transfer runs side by side: a row per method and k, a column per run
     (mean ± std) and, for each run after the first, its difference to A in points. *runs*:
     (letter, scenario, records) in the order compared."""
-    cells = [table(records, scenario.spec["protocol"]) for _, scenario, records in runs]
+    cells = [table(records, scenario.spec.protocol) for _, scenario, records in runs]
     letters = [letter for letter, _, _ in runs]
     methods = list(dict.fromkeys(m for tab in cells for m in tab))
-    ks = list(dict.fromkeys(k for _, scenario, _ in runs for k in scenario.spec["protocol"].ks))
+    ks = list(dict.fromkeys(k for _, scenario, _ in runs for k in scenario.spec.protocol.ks))
     head = ["method", "k", *letters] + [f"{letter} − {letters[0]}" for letter in letters[1:]]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for m in methods:
