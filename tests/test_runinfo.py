@@ -87,7 +87,11 @@ def test_gearlab_runs_lists_past_runs(finished, cli):
     assert code == 0, err
     (found,) = json.loads(out)
     assert found["name"] == "stiffness_verification" and found["kind"] == "stiffness"
-    assert found["status"] == "finished" and found["duration_s"] > 0 and found["headline"].startswith("healthy TVMS")
+    assert (
+        found["status"] == "finished"
+        and found["duration_s"] > 0
+        and found["headline"].startswith("Healthy TVMS of luo2019: mean")
+    )
     assert Path(found["path"]) == base / run
     code, out, err = cli("runs", base / "runs")
     assert code == 0 and "stiffness_verification" in out and "finished" in out
