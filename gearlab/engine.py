@@ -15,7 +15,7 @@ from typing import Any
 
 from .confined import Confined
 from .errors import GearlabInputError
-from .events import PROGRESS, Event, EventSink, ignore_events
+from .events import PROGRESS, Event, EventSink, ignore_events, telling_figures
 from .files import cannot_write, write_problem
 from .kinds import SCENARIO_KINDS
 from .report import build_report
@@ -172,8 +172,10 @@ def run_scenario(
         watcher.start()
         status = "failed"
         try:
-            SCENARIO_KINDS[scenario.kind].run(scenario, run, on_event)
-            write_report(run)
+            with telling_figures(on_event) as finish:
+                SCENARIO_KINDS[scenario.kind].run(scenario, run, on_event)
+                write_report(run)
+                finish()
             status = "finished"
         except (KeyboardInterrupt, SystemExit):  # Ctrl-C, or SIGTERM (a TUI's cancel)
             status = "cancelled"

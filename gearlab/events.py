@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -50,6 +52,43 @@ def ignore_events(_: Event) -> None:
 
 
 PROGRESS = "progress"  # the run directory's folder of units in progress
+
+REPORT = "report"  # the stage of a run's last step: its figures and report.html
+_figures: ContextVar[Callable[[str], None] | None] = ContextVar("figures", default=None)
+
+
+def figure_written(name: str) -> None:
+    """Called by gearlab.plots.save for each figure it writes: counted by the run in progress, if any."""
+    tell = _figures.get()
+    if tell is not None:
+        tell(name)
+
+
+@contextmanager
+def telling_figures(on_event: EventSink) -> Iterator[Callable[[], None]]:
+    """While a run's kind runs and its report is written: a 'report' stage, started by the first
+    figure, that counts the figures drawn (a run's end drew its figures for seconds, a detection
+    run's a dozen, with no sign of life: issue 41). Yields the call that ends the stage once
+    report.html is written."""
+    drawn: list[str] = []
+
+    def tell(name: str) -> None:
+        if not drawn:
+            on_event(Event("stage", stage=REPORT, message="figures and report.html"))
+        drawn.append(name)
+        on_event(Event("advance", stage=REPORT, done=len(drawn)))
+
+    def finish() -> None:
+        if not drawn:
+            on_event(Event("stage", stage=REPORT, total=1, message="report.html"))
+        n = max(len(drawn), 1)
+        on_event(Event("advance", stage=REPORT, done=n, total=n))
+
+    token = _figures.set(tell)
+    try:
+        yield finish
+    finally:
+        _figures.reset(token)
 
 
 class UnitProgress:

@@ -15,6 +15,7 @@ import matplotlib
 
 from .charts import dataset_examples
 from .confined import Confined, read_file, write_file
+from .events import figure_written
 from .gearbox.simulation import label as preset_label
 from .signals import order_spectrum, spectrum
 
@@ -39,6 +40,7 @@ def save(fig, path: Target, dpi: int = 120, **options) -> Target:
     finally:
         plt.close(fig)
     write_file(path, buf.getvalue())
+    figure_written(path.name)  # the run in progress counts it (its 'report' stage)
     return path
 
 

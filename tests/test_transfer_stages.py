@@ -1,6 +1,7 @@
 """The `transfer` kind tells its front-end every step (issue 41: no stage silent for more than 5 s):
 the Bayes bound, which takes seconds (the target's noise-free twin, its likelihood ratios), is a
-stage of its own between the datasets and the training runs."""
+stage of its own between the datasets and the training runs; the shared states say their epochs;
+the figures and report.html (every kind's last step, gearlab.events.telling_figures) are a stage."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from tiny import transfer
 from gearlab.engine import run_scenario
 
 
-def test_the_bayes_bound_is_a_stage_of_its_own(tmp_path, monkeypatch):
+def test_the_bayes_bound_and_the_report_are_stages_of_their_own(tmp_path, monkeypatch):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     path = tmp_path / "tiny.toml"
     path.write_text(transfer('[[methods]]\nadapter = "source_only"\n', max_epochs=2))
@@ -23,6 +24,12 @@ def test_the_bayes_bound_is_a_stage_of_its_own(tmp_path, monkeypatch):
     assert done < begin < end < stages.index(("stage", "runs"))  # after the datasets, before the runs
     bound_logs = [e for e in events if e.kind == "log" and "Bayes bound" in e.message]
     assert bound_logs  # what the stage does is said while it runs
+    # the run's end (its figures, then report.html) is a stage of its own too, a step per figure
+    figures = sorted(p.name for p in (run.path / "figures").iterdir())
+    report = [e for e in events if e.stage == "report"]
+    assert stages.index(("stage", "report")) > max(i for i, s in enumerate(stages) if s == ("advance", "runs"))
+    assert [e.done for e in report if e.kind == "advance"] == [*range(1, len(figures) + 1), len(figures)]
+    assert report[-1].total == len(figures) >= 2 and report[0].message == "figures and report.html"
 
 
 def test_the_priming_and_the_source_model_say_how_far_they_are():
