@@ -385,10 +385,10 @@ def test_resume_skips_finished_units(cli, write_scenario, tmp_path, fake_builder
 def test_quick_shrinks_the_study():
     scenario = load_scenario(ROOT / "scenarios" / "ch4_noise.toml")
     kind.quick(scenario)
-    assert list(scenario.spec["datasets"]) == ["gaussian"]
-    protocol = scenario.spec["protocol"]
+    assert list(scenario.spec.datasets) == ["gaussian"]
+    protocol = scenario.spec.protocol
     assert protocol.runs == 1 and protocol.epochs <= 15
-    noisy, tsa = scenario.spec["datasets"]["gaussian"]["noisy"], scenario.spec["datasets"]["gaussian"]["tsa"]
+    noisy, tsa = scenario.spec.datasets["gaussian"]["noisy"], scenario.spec.datasets["gaussian"]["tsa"]
     assert noisy.with_(tsa=True, name=tsa.name, domain=tsa.domain) == tsa
     sizes = kind.class_sizes(noisy, "")
     assert sum(sizes.values()) <= 500 and sizes["healthy"] == sum(sizes.values()) // 2
@@ -398,8 +398,8 @@ def test_shipped_scenario_is_table_4_1(cli):
     code, out, err = cli("validate", ROOT / "scenarios" / "ch4_noise.toml")
     assert code == 0, err
     scenario = load_scenario(ROOT / "scenarios" / "ch4_noise.toml")
-    assert list(scenario.spec["datasets"]) == ["gaussian", "laplace", "student_t"]
-    for noise, variants in scenario.spec["datasets"].items():
+    assert list(scenario.spec.datasets) == ["gaussian", "laplace", "student_t"]
+    for noise, variants in scenario.spec.datasets.items():
         assert variants["noisy"] == dataset_preset(f"A-casing_noise-{noise}")
         assert variants["tsa"] == dataset_preset(f"A-casing_TSA-{noise}")
         assert kind.class_sizes(variants["tsa"], "") == {
@@ -409,7 +409,7 @@ def test_shipped_scenario_is_table_4_1(cli):
             "spall": 1600,
             "pit": 1600,
         }
-    p = scenario.spec["protocol"]
+    p = scenario.spec.protocol
     assert (p.runs, p.batch, p.dropout, p.test_fraction, p.val_fraction) == (5, 256, 0.1, 0.333, 0.2)
 
 
@@ -417,8 +417,8 @@ def test_the_hybrid_scenario_is_the_same_study_with_the_simulator_s_shapes():
     """ch4_hybrid.toml differs from ch4_noise.toml only in the network and its start."""
     faithful = load_scenario(ROOT / "scenarios" / "ch4_noise.toml").spec
     hybrid = load_scenario(ROOT / "scenarios" / "ch4_hybrid.toml").spec
-    assert hybrid["datasets"] == {n: faithful["datasets"][n] for n in ("gaussian", "laplace")}
-    p, q = hybrid["protocol"], faithful["protocol"]
+    assert hybrid.datasets == {n: faithful.datasets[n] for n in ("gaussian", "laplace")}
+    p, q = hybrid.protocol, faithful.protocol
     assert (p.network, p.residual, p.start) == ("shapes", True, "clean")
     assert (p.runs, p.batch, p.test_fraction, p.val_fraction, p.epochs, p.patience, p.seed) == (
         q.runs,

@@ -104,16 +104,24 @@ def preset_name(noise: str, variant: str) -> str:
     return f"A-casing_{'TSA' if variant == 'tsa' else 'noise'}-{noise}"
 
 
-def check(spec: dict, path) -> None:
+@dataclass(frozen=True)
+class Spec:
+    """What build() checked: {noise type: {variant: its dataset}} and the protocol."""
+
+    datasets: dict[str, dict[str, DatasetSpec]]
+    protocol: NoiseProtocol
+
+
+def check(spec: Spec, path) -> None:
     """The split and the batch size against the class sizes (all the study's datasets share them)."""
     where = location(path, "dataset")
-    dataset = next(iter(spec["datasets"].values()))["noisy"]
+    dataset = next(iter(spec.datasets.values()))["noisy"]
     sizes = class_sizes(dataset, where)
-    check_split(sizes, spec["protocol"], where)
-    check_batch(sizes, spec["protocol"], location(path, "protocol", "batch"))
+    check_split(sizes, spec.protocol, where)
+    check_batch(sizes, spec.protocol, location(path, "protocol", "batch"))
 
 
-def build(scenario: Scenario) -> dict:
+def build(scenario: Scenario) -> Spec:
     t = scenario.tables
     noises = t["study"]["noises"]
     where = location(scenario.path, "study", "noises")
@@ -141,10 +149,7 @@ def build(scenario: Scenario) -> dict:
             f"{location(scenario.path, 'protocol', 'residual')}: the shapes network scores residuals from the healthy "
             "revolution; expected residual = true"
         )
-    spec = {
-        "datasets": {noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises},
-        "protocol": protocol,
-    }
+    spec = Spec({noise: {v: _dataset(scenario, noise, v) for v in VARIANTS} for noise in noises}, protocol)
     check(spec, scenario.path)
     return spec
 
@@ -174,7 +179,7 @@ def describe(scenario: Scenario) -> str:
     """One line for `gearlab validate` and the TUI: what the scenario will do."""
     spec = scenario.spec
     return (
-        f"noise types {', '.join(spec['datasets'])}, noisy and TSA, network {spec['protocol'].network}: "
+        f"noise types {', '.join(spec.datasets)}, noisy and TSA, network {spec.protocol.network}: "
         f"{len(units(spec))} training runs"
     )
 
@@ -197,19 +202,19 @@ def quick(scenario: Scenario) -> None:
         )
 
     spec = scenario.spec
-    noise, variants = next(iter(spec["datasets"].items()))
-    p = spec["protocol"]
-    scenario.spec = {
-        "datasets": {noise: {v: shrink(s) for v, s in variants.items()}},
-        "protocol": replace(p, runs=1, epochs=min(p.epochs, 15), patience=min(p.patience, 5), batch=min(p.batch, 32)),
-    }
+    noise, variants = next(iter(spec.datasets.items()))
+    p = spec.protocol
+    scenario.spec = Spec(
+        {noise: {v: shrink(s) for v, s in variants.items()}},
+        replace(p, runs=1, epochs=min(p.epochs, 15), patience=min(p.patience, 5), batch=min(p.batch, 32)),
+    )
     check(scenario.spec, scenario.path)
 
 
-def units(spec: dict) -> list[tuple[str, int, str]]:
+def units(spec: Spec) -> list[tuple[str, int, str]]:
     """(noise, run, variant): a noise type's noisy and TSA runs alternate, so a cut-short study
     still holds paired results."""
-    return [(noise, r, v) for noise in spec["datasets"] for r in range(spec["protocol"].runs) for v in VARIANTS]
+    return [(noise, r, v) for noise in spec.datasets for r in range(spec.protocol.runs) for v in VARIANTS]
 
 
 def unit_name(noise: str, run: int, variant: str) -> str:
@@ -218,7 +223,7 @@ def unit_name(noise: str, run: int, variant: str) -> str:
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
-    protocol: NoiseProtocol = spec["protocol"]
+    protocol = spec.protocol
     with executor_for(scenario) as executor:
         done = {r["unit"] for r in run.records()}
         todo = units(spec)
@@ -226,7 +231,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         with_bound = not run.file("bound.json").exists()
         bound: dict[str, dict[str, list[float]]] = {}
         for noise in dict.fromkeys(noise for noise, _, _ in pending + (todo if with_bound else [])):
-            for variant, s in spec["datasets"][noise].items():  # built (or found) once, before training
+            for variant, s in spec.datasets[noise].items():  # built (or found) once, before training
                 data, _ = load_or_build(s, executor, on_event)
                 if with_bound and s.noise is not None:
                     bound.setdefault(noise, {})[variant] = bayes_bound(data, s, protocol, executor, on_event)
@@ -255,7 +260,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         # the datasets by cache entry path: a worker process may not share this one's environment
         tasks, twins = [], set()
         for noise, r, variant in pending:
-            dataset = spec["datasets"][noise][variant]
+            dataset = spec.datasets[noise][variant]
             twin = dataset.with_(noise=None) if protocol.start == "clean" else None
             if twin is not None and twin not in twins:  # the clean start's shapes: built (or found) once, here
                 load_or_build(twin, executor, on_event)
@@ -403,14 +408,14 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     records = run.records()
     res = results(records)
     bound_path = run.file("bound.json")
-    bound = bound_cells(run.read_json("bound.json"), spec["protocol"].runs) if bound_path.exists() else None
+    bound = bound_cells(run.read_json("bound.json"), spec.protocol.runs) if bound_path.exists() else None
     summary = {
         "kind": "noise_study",
         "scenario": scenario.name,
-        "protocol": asdict(spec["protocol"]),
+        "protocol": asdict(spec.protocol),
         "datasets": {
             noise: {v: {"name": s.name, "key": s.key(), "spec": asdict(s)} for v, s in variants.items()}
-            for noise, variants in spec["datasets"].items()
+            for noise, variants in spec.datasets.items()
         },
         "results": res,
         "bound": bound,
