@@ -172,14 +172,14 @@ def test_shipped_gap_scenarios_validate(cli):
         code, out, err = cli("validate", root / name)
         assert code == 0, err
         s = load_scenario(root / name)
-        assert s.spec["settings"].candidates == ()  # every registered effect
+        assert s.spec.settings.candidates == ()  # every registered effect
 
 
 def test_quick_shrinks(tiny):
     s = load_scenario(tiny.parent / "tinygap.toml")
-    s.spec["settings"] = replace(s.spec["settings"], budget=16)
+    s.spec = replace(s.spec, settings=replace(s.spec.settings, budget=16))
     gap.quick(s)
-    assert s.spec["settings"].budget == 4 and s.spec["protocol"].repetitions == 1
+    assert s.spec.settings.budget == 4 and s.spec.protocol.repetitions == 1
 
 
 # --- a run -----------------------------------------------------------------------------------------
@@ -247,9 +247,9 @@ def test_diagnosis_fits_on_the_history_and_no_test_row(finished):
     run, log = finished
     (call,) = log
     spec = load_scenario(run / "scenario.toml").spec
-    protocol = spec["protocol"]
-    target, _ = load_or_build(spec["target"])
-    source, _ = load_or_build(spec["source"])
+    protocol = spec.protocol
+    target, _ = load_or_build(spec.target)
+    source, _ = load_or_build(spec.source)
     mean, std = target.reference
     physical = np.asarray(target.X, dtype=np.float64) * std + mean
     given = [int(np.flatnonzero(np.all(np.isclose(physical, row), axis=1))[0]) for row in call["target_X"]]

@@ -149,6 +149,6 @@ def test_shipped_rig_gap_scenarios_validate():
     root = Path(__file__).resolve().parents[1] / "scenarios"
     for name, speed in (("phm09_gap.toml", 30.0), ("phm09_gap_40hz.toml", 40.0)):
         s = load_scenario(root / name)
-        assert s.spec["source"].model == "two_stage" and s.spec["source"].speed_hz == speed
-        assert all(f.role == "history" for f in s.spec["target"].target.files)
-        assert s.spec["settings"].reference == "noise"
+        assert s.spec.source.model == "two_stage" and s.spec.source.speed_hz == speed
+        assert all(f.role == "history" for f in s.spec.target.target.files)
+        assert s.spec.settings.reference == "noise"

@@ -133,7 +133,7 @@ def test_a_declared_speed_is_refined_by_the_source_description_in_detection_and_
     (tmp_path / "gap.toml").write_text(gap)
     targets = [
         load_scenario(tmp_path / "detect.toml").spec.target,
-        load_scenario(tmp_path / "gap.toml").spec["target"].target,
+        load_scenario(tmp_path / "gap.toml").spec.target.target,
     ]
     for t in targets:
         rec = t.read(t.files[0])

@@ -110,7 +110,19 @@ OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 # --- build: every check before any work ---------------------------------------------------------
 
 
-def build(scenario: Scenario) -> dict:
+@dataclass(frozen=True)
+class Spec:
+    """What build() checked: the source, the target (simulated, imported or measured records), the
+    diagnosis settings, the accuracy's protocol and whether the accuracy is measured."""
+
+    source: DatasetSpec
+    target: DatasetSpec | MeasuredSpec | Records
+    settings: Settings
+    protocol: Protocol
+    accuracy: bool
+
+
+def build(scenario: Scenario) -> Spec:
     t = scenario.tables
     path = scenario.path
     # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
@@ -170,13 +182,7 @@ def build(scenario: Scenario) -> dict:
         # a simulated target without faults has nothing to detect: the accuracy is skipped (run)
         if None not in planned and planned[1].faults:
             check_data(protocol, *planned, f"{path}: [accuracy]")
-    return {
-        "source": source,
-        "target": target,
-        "settings": settings,
-        "protocol": protocol,
-        "accuracy": bool(a["enabled"]),
-    }
+    return Spec(source, target, settings, protocol, bool(a["enabled"]))
 
 
 def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Records:
@@ -251,15 +257,15 @@ def da_methods(names, where: str) -> tuple[Method, ...]:
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    s: Settings = spec["settings"]
+    s = spec.settings
     n = len(s.candidates) or len(default_candidates(get_registry()))
     line = (
-        f"gap of {sized(spec['source'])} -> {sized(spec['target'])}: {n} candidate effects x budget "
+        f"gap of {sized(spec.source)} -> {sized(spec.target)}: {n} candidate effects x budget "
         f"{s.budget}, up to {s.max_effects} greedy rounds, {s.healthy} source healthy revolutions "
         "per evaluation"
     )
-    if spec["accuracy"]:
-        p: Protocol = spec["protocol"]
+    if spec.accuracy:
+        p = spec.protocol
         columns = [label_of(variant, m) for variant, m in accuracy_columns(p)]
         line += f"; accuracy: {len(columns)} models x {p.repetitions} repetitions ({', '.join(columns)})"
     return line
@@ -268,9 +274,11 @@ def describe(scenario: Scenario) -> str:
 def quick(scenario: Scenario) -> None:
     """Smoke run: small search budgets, fewer revolutions and resamples, one short repetition."""
     spec = scenario.spec
-    spec["settings"] = shrunk(spec["settings"])  # the --quick limits declared on Settings
-    p: Protocol = spec["protocol"]
-    spec["protocol"] = shrunk(p, repetitions=1)  # and the --quick limits declared on Protocol
+    scenario.spec = replace(
+        spec,
+        settings=shrunk(spec.settings),  # the --quick limits declared on Settings
+        protocol=shrunk(spec.protocol, repetitions=1),  # and those declared on Protocol
+    )
 
 
 # --- run -------------------------------------------------------------------------------------------
@@ -345,13 +353,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     with executor_for(scenario) as executor:
         done = {r["unit"]: r for r in run.records()}
-        source_spec: DatasetSpec = spec["source"]
+        source_spec = spec.source
         z1 = gear_pair_of(source_spec).Z1
 
-        records = isinstance(spec["target"], Records)
-        settings: Settings = spec["settings"]
+        records = isinstance(spec.target, Records)
+        settings = spec.settings
         if records:  # measured records: the history's revolutions; the source runs at their speed
-            target_X, speed, record_notes, fs, from_mesh = read_history(spec["target"], on_event)
+            target_X, speed, record_notes, fs, from_mesh = read_history(spec.target, on_event)
             check_points(
                 fs / speed,
                 z1,
@@ -364,15 +372,15 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 f"compared up to shaft order {settings.max_order} ({PASSBAND:g} of the records' "
                 "Nyquist order): the source is low-passed to the records' bandwidth"
             )
-            if not spec["target"].units_known:  # what fits values in volts, and values in m/s² already
-                record_notes.append(units_warning(spec["target"].target.vibration, target_X))
+            if not spec.target.units_known:  # what fits values in volts, and values in m/s² already
+                record_notes.append(units_warning(spec.target.target.vibration, target_X))
             # start fractions not kept (drawn uniformly)
             chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh)
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))
-            target, _ = load_or_build(spec["target"], executor, on_event)
-            history = history_of(spec["protocol"], target)
+            target, _ = load_or_build(spec.target, executor, on_event)
+            history = history_of(spec.protocol, target)
             target_X, note = target_rows(target, history, z1, location(scenario.path, "target"))
             chain = None
             if (target.meta or {}).get("source") == "measured":
@@ -401,13 +409,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             guessed = ", ".join(defaults(referenced(source_spec.preset), names))
             if guessed:
                 notes.append(f"the source's gearbox description leaves to defaults (docs/gearbox.md): {guessed}")
-        if spec["accuracy"] and records:
+        if spec.accuracy and records:
             notes.append(
                 "accuracy skipped: measured history records carry no labelled faults (the detection "
                 "kind scores real test files)"
             )
             on_event(Event("log", message=notes[-1]))
-        elif spec["accuracy"]:
+        elif spec.accuracy:
             if not (np.asarray(target.fault) == 1).any():
                 notes.append("accuracy skipped: the target has no labelled fault samples")
                 on_event(Event("log", message=notes[-1]))
@@ -438,8 +446,8 @@ def accuracy(
 ) -> None:
     """Every method trained on the history (and no other target row) and scored on the rest."""
     spec = scenario.spec
-    protocol: Protocol = spec["protocol"]
-    sources = {UNCORRECTED: spec["source"], CORRECTED: corrected}
+    protocol = spec.protocol
+    sources = {UNCORRECTED: spec.source, CORRECTED: corrected}
 
     def source_of(variant: str, m: Method) -> DatasetSpec:
         return noise_free(sources[variant]) if m.is_detector else sources[variant]
@@ -459,7 +467,7 @@ def accuracy(
                 message=f"source datasets ({', '.join(s.name for s in needed)})",
             )
         )
-        target, _ = load_or_build(spec["target"], executor, on_event)
+        target, _ = load_or_build(spec.target, executor, on_event)
         for i, s in enumerate(needed):
             built, _ = load_or_build(s, executor, on_event)
             check_data(protocol, Counts.of(built), Counts.of(target), f"{scenario.path}: [accuracy]")
@@ -479,7 +487,7 @@ def accuracy(
     for phase in phases:
         if not phase:
             continue
-        target_data = (spec["target"], cache.entry_path(spec["target"]))
+        target_data = (spec.target, cache.entry_path(spec.target))
         tasks = [
             (protocol, (s, cache.entry_path(s)), target_data, rep, 0, m, run.file("states", variant), history)
             for rep, variant, m in phase
@@ -500,9 +508,9 @@ def accuracy(
         executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
 
     if "bound" not in done:  # the best any method could do on these test sets (simulated noisy targets only)
-        source, _ = load_or_build(spec["source"], executor, on_event)
-        target, _ = load_or_build(spec["target"], executor, on_event)
-        bound = bayes_bound(spec["target"], source, target, replace(protocol, ks=(0,)), executor, on_event, history)
+        source, _ = load_or_build(spec.source, executor, on_event)
+        target, _ = load_or_build(spec.target, executor, on_event)
+        bound = bayes_bound(spec.target, source, target, replace(protocol, ks=(0,)), executor, on_event, history)
         if bound is not None:
             run.append({"unit": "bound", **bound})
 
@@ -566,7 +574,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
     spec = scenario.spec
     records = run.records()
     result = next(r["result"] for r in records if r["unit"] == "diagnosis")
-    acc = accuracy_table(records, spec["protocol"])
+    acc = accuracy_table(records, spec.protocol)
     bound = next((r for r in records if r["unit"] == "bound"), None)
     if acc and bound is not None and "accuracy" in bound:  # the reference row, as in the transfer table
         acc[bound["label"]] = bound["accuracy"]["0"]
@@ -575,8 +583,8 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
     summary = {
         "kind": "gap",
         "scenario": scenario.name,
-        "source": asdict(spec["source"]),
-        "target": asdict(spec["target"]),
+        "source": asdict(spec.source),
+        "target": asdict(spec.target),
         "effects": [
             {
                 "name": e["name"],
@@ -618,7 +626,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         },
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
-        "settings": result.get("settings", asdict(spec["settings"])),
+        "settings": result.get("settings", asdict(spec.settings)),
         "notes": notes + list(result.get("notes", [])) + list(result["before"].get("notes", [])),
     }
     if acc:
@@ -679,7 +687,7 @@ def records_table(scenario: Scenario, records: list[dict]) -> str:
     if diag is not None:
         result = diag["result"]
         parts += [views_md(view_rows(result)), ranking_md(result["ranking"], result["effects"])]
-    acc = accuracy_table(records, scenario.spec["protocol"])
+    acc = accuracy_table(records, scenario.spec.protocol)
     if acc:
         parts.append(accuracy_md(acc))
     return "\n".join(parts) if parts else "| diagnosis |\n|---|\n| running |\n"
@@ -718,7 +726,7 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
                     categories=[r["name"] for r in ranking],
                 )
             )
-    acc = accuracy_table(records, scenario.spec["protocol"])
+    acc = accuracy_table(records, scenario.spec.protocol)
     if acc:
         labels = list(acc)
         out.append(
