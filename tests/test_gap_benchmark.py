@@ -494,8 +494,8 @@ def test_kinds_runs_only_some_trials_of_the_same_draw(write_scenario):
     head = '[scenario]\nname = "b"\nkind = "gap_benchmark"\n[benchmark]\ntrials = 50\nseed = 0\n'
     full = load_scenario(write_scenario(head, "full.toml"))
     held = load_scenario(write_scenario(head + 'kinds = ["withheld"]\n', "held.toml"))
-    assert len(held.spec["trials"]) == 10
-    assert held.spec["trials"] == [t for t in full.spec["trials"] if t.kind == "withheld"]
+    assert len(held.spec.trials) == 10
+    assert held.spec.trials == [t for t in full.spec.trials if t.kind == "withheld"]
 
 
 def test_suborder_trials_hide_a_tone_between_the_first_orders_and_are_drawn_only_when_named(write_scenario):
@@ -519,9 +519,9 @@ def test_suborder_trials_hide_a_tone_between_the_first_orders_and_are_drawn_only
     # "suborder"] the mix's nulls and as many sub-order trials as `trials`
     assert all(t.kind in bench.KINDS for t in bench.draw_trials(20, 3, library, SOURCE))
     head = '[scenario]\nname = "b"\nkind = "gap_benchmark"\n[benchmark]\ntrials = 20\nseed = 0\n'
-    alone = load_scenario(write_scenario(head + 'kinds = ["suborder"]\n', "sub.toml")).spec["trials"]
+    alone = load_scenario(write_scenario(head + 'kinds = ["suborder"]\n', "sub.toml")).spec.trials
     assert [t.kind for t in alone] == ["suborder"] * 20
-    both = load_scenario(write_scenario(head + 'kinds = ["null", "suborder"]\n', "both.toml")).spec["trials"]
+    both = load_scenario(write_scenario(head + 'kinds = ["null", "suborder"]\n', "both.toml")).spec.trials
     assert [t.kind for t in both] == ["null"] * 3 + ["suborder"] * 20
     assert len({t.index for t in both}) == len(both)
     # scored as an effect trial

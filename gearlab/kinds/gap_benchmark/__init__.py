@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from ...charts import Chart, Curve
+from ...data.spec import DatasetSpec
 from ...effects import default_candidates
 from ...errors import GearlabInputError
 from ...events import Event
@@ -80,7 +81,20 @@ TABLES = {
 OVERRIDES: tuple[str, ...] = ("trials", "seed")  # [benchmark] keys that `gearlab gap FILE` and the TUI may set
 
 
-def build(scenario: Scenario) -> dict:
+@dataclass(frozen=True)
+class Spec:
+    """What build() checked: the source, the effect library, the drawn trials, the search settings
+    and the target revolutions. *settings* stays the plain dict (the [search] keys and the seed)
+    each trial task takes and summary.json shows."""
+
+    source: DatasetSpec
+    library: tuple[str, ...]
+    trials: list
+    settings: dict
+    revolutions: int
+
+
+def build(scenario: Scenario) -> Spec:
     """Everything checked before any simulation: the library's names, the source, the trial draw."""
     t = scenario.tables
     path = scenario.path
@@ -114,41 +128,39 @@ def build(scenario: Scenario) -> dict:
                 "expected more trials"
             )
     settings = {**t["search"], "seed": b.seed}
-    return {
-        "source": source,
-        "library": library,
-        "trials": trials,
-        "settings": settings,
-        "revolutions": b.target_revolutions,
-    }
+    return Spec(source, library, trials, settings, b.target_revolutions)
 
 
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
-    counts = {k: sum(t.kind == k for t in spec["trials"]) for k in bench.KINDS + bench.EXTRA_KINDS}
+    counts = {k: sum(t.kind == k for t in spec.trials) for k in bench.KINDS + bench.EXTRA_KINDS}
     mix = ", ".join(f"{c} {k}" for k, c in counts.items() if c)
     return (
-        f"{len(spec['trials'])} blind trials ({mix}) on {spec['source'].name} ({spec['source'].model}), "
-        f"{len(spec['library'])} candidate effects, budget {spec['settings']['budget']} per fit"
+        f"{len(spec.trials)} blind trials ({mix}) on {spec.source.name} ({spec.source.model}), "
+        f"{len(spec.library)} candidate effects, budget {spec.settings['budget']} per fit"
     )
 
 
 def quick(scenario: Scenario) -> None:
     """Smoke run: 4 trials (one of each kind), small searches and statistics: a few minutes on 2 cores."""
     spec = scenario.spec
-    n = min(len(spec["trials"]), 4)
-    spec["trials"] = bench.draw_trials(n, spec["settings"]["seed"], spec["library"], spec["source"])
-    s = spec["settings"]
-    spec["settings"] = {**s, **{k: min(s[k], limit) for k, limit in quick_limits(Settings).items() if k in s}}
-    spec["source"] = replace(spec["source"], healthy=spec["settings"]["healthy"])
-    spec["revolutions"] = min(spec["revolutions"], 40)
+    n = min(len(spec.trials), 4)
+    s = spec.settings
+    settings = {**s, **{k: min(s[k], limit) for k, limit in quick_limits(Settings).items() if k in s}}
+    scenario.spec = replace(
+        spec,
+        trials=bench.draw_trials(n, s["seed"], spec.library, spec.source),
+        settings=settings,
+        source=replace(spec.source, healthy=settings["healthy"]),
+        revolutions=min(spec.revolutions, 40),
+    )
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     started = time.perf_counter()
     spec = scenario.spec
     with executor_for(scenario) as executor:
-        trials = spec["trials"]
+        trials = spec.trials
         done = {r["unit"] for r in run.records()}
         pending = [t for t in trials if bench.unit_key(t.index) not in done]
         total = len(trials)
@@ -167,10 +179,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         tasks = [
             bench.TrialTask(
                 t,
-                spec["source"],
-                spec["settings"],
+                spec.source,
+                spec.settings,
                 run.file("targets", f"trial_{t.index:03d}"),
-                spec["revolutions"],
+                spec.revolutions,
             )
             for t in pending
         ]
@@ -205,12 +217,12 @@ def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> 
     summary = {
         "kind": "gap_benchmark",
         "scenario": scenario.name,
-        "source": asdict(spec["source"]),
-        "library": list(spec["library"]),
-        "settings": spec["settings"],
+        "source": asdict(spec.source),
+        "library": list(spec.library),
+        "settings": spec.settings,
         "mix": dict(bench.MIX),
-        "target_revolutions": spec["revolutions"],
-        **bench.summarise(records, spec["library"]),
+        "target_revolutions": spec.revolutions,
+        **bench.summarise(records, spec.library),
     }
     summary["trial_seconds"] = float(sum(r.get("seconds", 0.0) for r in records))  # summed over trials (all workers)
     summary["elapsed_seconds"] = elapsed  # wall time of this session of the run (a resumed run: since resuming)
@@ -331,7 +343,7 @@ def summary_lines(run: RunDir) -> list[str]:
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:
     """The per-effect table of the trials finished so far (the TUI fills it as trials finish)."""
-    return table_md(bench.summarise(sorted(records, key=lambda r: r["index"]), scenario.spec["library"]))
+    return table_md(bench.summarise(sorted(records, key=lambda r: r["index"]), scenario.spec.library))
 
 
 def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
@@ -349,7 +361,7 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
             Curve("after", idx, [float(np.log10(max(r["gap_after"], 1e-6))) for r in records]),
         ),
     )
-    summary = bench.summarise(records, scenario.spec["library"])
+    summary = bench.summarise(records, scenario.spec.library)
     names = list(summary["per_effect"])
     per = Chart(
         "top-1 per hidden effect",
