@@ -8,6 +8,7 @@ the gap diagnosis and the learners send events without knowing the engine.
 
 from __future__ import annotations
 
+import functools
 import json
 import time
 from collections.abc import Callable, Iterator
@@ -52,6 +53,48 @@ def ignore_events(_: Event) -> None:
 
 
 PROGRESS = "progress"  # the run directory's folder of units in progress
+
+_said: ContextVar[Callable[[str], None] | None] = ContextVar("said", default=None)
+
+
+def unit_says(text: str) -> None:
+    """What the unit in progress is doing, for its progress line, when one listens (saying)."""
+    tell = _said.get()
+    if tell is not None:
+        tell(text)
+
+
+def stages_to_unit(event: Event) -> None:
+    """An EventSink for work inside a unit (a benchmark trial's diagnosis, minutes of it): each
+    stage it starts becomes the unit's progress line, when one listens."""
+    if event.kind == "stage":
+        unit_says(event.message or event.stage)
+
+
+@contextmanager
+def saying(progress: Callable[[str], None]) -> Iterator[None]:
+    """unit_says and stages_to_unit reach *progress* (a UnitProgress) while the unit runs."""
+    token = _said.set(progress)
+    try:
+        yield
+    finally:
+        _said.reset(token)
+
+
+def told_unit(where: Callable) -> Callable:
+    """Decorates a unit's function: while it runs, unit_says (and a diagnosis's stages_to_unit)
+    reach its progress line; where(task) gives (run directory, unit name)."""
+
+    def decorate(work: Callable) -> Callable:
+        @functools.wraps(work)
+        def told(task):
+            with UnitProgress(*where(task)) as progress, saying(progress):
+                return work(task)
+
+        return told
+
+    return decorate
+
 
 REPORT = "report"  # the stage of a run's last step: its figures and report.html
 _figures: ContextVar[Callable[[str], None] | None] = ContextVar("figures", default=None)

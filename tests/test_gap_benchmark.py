@@ -128,6 +128,40 @@ def test_the_trial_task_hands_the_diagnosis_only_public_values():
     assert "candidates = task.trial.candidates" in source
 
 
+def test_a_trial_in_progress_says_what_it_does(tmp_path, monkeypatch):
+    """Issue 41 (no stage silent for more than 5 s): a trial takes minutes, up to eleven, inside one
+    unit; its target, each stage its diagnosis starts (the diagnosis's default on_event) and the
+    oracle's realisations reach the unit's progress line, and the line goes when the trial ends."""
+    from gearlab.confined import Confined
+    from gearlab.events import Event, UnitProgress, stages_to_unit
+    from gearlab.gap import diagnose
+
+    assert inspect.signature(diagnose.diagnose).parameters["on_event"].default is stages_to_unit
+    said = []
+    monkeypatch.setattr(UnitProgress, "__call__", lambda self, text: said.append((self.path.name, text)))
+
+    def stand_in(source, target_X, settings, candidates, chain=None, max_order=0):
+        stages_to_unit(Event("stage", stage="gap round 1", message="gap: round 1, fitting 2 effects"))
+        return fake_result(significant=False)  # no gap seen: the oracle looks
+
+    monkeypatch.setattr(bench, "_diagnose", stand_in)
+    monkeypatch.setattr(bench, "ORACLE_REPEATS", 2)
+    monkeypatch.setattr("gearlab.gap.scoring.plain_report", lambda *a, **k: {})
+    monkeypatch.setattr("gearlab.gap.conclusion.gap_seen", lambda report: False)
+    folder = Confined(tmp_path, ("targets", "trial_007"))  # as the kind hands it: below the run directory
+    trial = trial_of("single")
+    bench.trial_task(bench.TrialTask(trial, SOURCE, SETTINGS, folder, 12))
+    line = f"trial {trial.index:03d}.txt"  # the progress/ file of the unit
+    assert said == [
+        (line, "simulating and writing the target"),
+        (line, "gap: round 1, fitting 2 effects"),
+        (line, "no gap seen: the oracle's realisation 1 of 2"),
+        (line, "no gap seen: the oracle's realisation 2 of 2"),
+    ]
+    assert not (tmp_path / "progress" / line).exists()
+    assert stages_to_unit(Event("stage", message="outside a unit")) is None  # no unit listening: nothing
+
+
 # --- drawing ----------------------------------------------------------------------------------------
 
 

@@ -77,7 +77,7 @@ import numpy as np
 from ..data.chain import Chain
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
-from ..events import Event
+from ..events import Event, stages_to_unit
 from ..executors import LocalExecutor
 from ..registry import get_registry
 from .conclusion import MIN_SHARE, another_round, chain_record, conclusion, gap_seen, rms_effect
@@ -92,7 +92,7 @@ def diagnose(
     target_X: np.ndarray,
     settings: Settings,
     executor=None,
-    on_event: Callable[[Event], None] = lambda e: None,
+    on_event: Callable[[Event], None] = stages_to_unit,  # default: the line of a unit that runs it, if any
     chain: Chain | None = None,
 ) -> dict:
     """Where the gap between the *source* simulator and the target's healthy revolutions lies,
@@ -217,7 +217,7 @@ def diagnose_dataset(
     target,
     settings: Settings,
     executor=None,
-    on_event: Callable[[Event], None] = lambda e: None,
+    on_event: Callable[[Event], None] = stages_to_unit,
 ) -> dict:
     """:func:`diagnose` against a target Dataset, simulated or imported (gearlab.data): its healthy
     revolutions (label 0; every revolution of an unlabelled record) in physical units and, for a

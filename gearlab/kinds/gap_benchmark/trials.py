@@ -34,6 +34,7 @@ import numpy as np
 from ...confined import Confined
 from ...data.spec import DatasetSpec, NoiseSpec
 from ...errors import GearlabInputError
+from ...events import told_unit, unit_says
 
 # --- the trial mix ----------------------------------------------------------------------------
 
@@ -642,6 +643,7 @@ def oracle_seen(
 
     seen = 0
     for k in range(ORACLE_REPEATS):
+        unit_says(f"no gap seen: the oracle's realisation {k + 1} of {ORACLE_REPEATS}")
         seed = int(np.random.default_rng([trial.seed, 7, k]).integers(1, 2**31 - 1))
         where = _held(folder) / f"oracle_{k}"
         try:
@@ -654,6 +656,8 @@ def oracle_seen(
     return seen / ORACLE_REPEATS
 
 
+# minutes a trial, up to eleven: its target, each stage of its diagnosis, the oracle, on its progress line
+@told_unit(lambda task: (_held(task.folder).root, unit_key(task.trial.index)))
 def trial_task(task: TrialTask) -> dict:
     """Generate + write + diagnose (from the file) + score one trial. The generator's choices reach
     the diagnosis only through the written file; scoring reads them back from answers.json after.
@@ -661,23 +665,18 @@ def trial_task(task: TrialTask) -> dict:
     (:func:`oracle_seen`): too weak to be seen, "no significant gap" is the right answer."""
     folder = _held(task.folder)
     started = time.perf_counter()
+    unit_says("simulating and writing the target")
     path = write_target(task.trial, task.source, folder, task.revolutions)
     generated = time.perf_counter()
     candidates = task.trial.candidates
     result = diagnose_file(path, task.source, candidates, task.settings)
     diagnosed = time.perf_counter()
     (folder / "diagnosis.json").write(json.dumps(result, indent=1, sort_keys=True, default=_jsonable))
-    oracle = None
-    if task.trial.kind in EFFECT_KINDS and not result.get("significant_before"):
-        oracle = oracle_seen(task.trial, task.source, task.settings, task.revolutions, folder)
+    unseen = task.trial.kind in EFFECT_KINDS and not result.get("significant_before")
+    oracle = oracle_seen(task.trial, task.source, task.settings, task.revolutions, folder) if unseen else None
     record = score_trial(read_answers(folder), result, oracle=oracle)
-    record.update(
-        unit=unit_key(task.trial.index),
-        index=task.trial.index,
-        candidates=len(candidates),
-        seconds=round(diagnosed - started, 3),
-        generate_seconds=round(generated - started, 3),
-    )
+    record.update(unit=unit_key(task.trial.index), index=task.trial.index, candidates=len(candidates))
+    record.update(seconds=round(diagnosed - started, 3), generate_seconds=round(generated - started, 3))
     return record
 
 
