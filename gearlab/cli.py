@@ -558,6 +558,7 @@ def transfer_benchmark(
     quick: Quick = False,
     executor: Executor = None,
     ray_address: RayAddress = None,
+    device: Device = None,
     events: Events = False,
 ) -> None:
     """Run gearlab's frozen recipe on random unseen targets, each beside its Bayes bound.
@@ -566,7 +567,7 @@ def transfer_benchmark(
 
     Example: gearlab transfer-benchmark --trials 24 --seed 1000; one trial again: --trials 24 --seed 3 --only 9
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    overrides = {**_execution(executor, ray_address, None), **_benchmark_keys(trials, seed)}
+    overrides = {**_execution(executor, ray_address, device), **_benchmark_keys(trials, seed)}
     if only:
         overrides.setdefault("benchmark", {})["only"] = list(only)
     path = None if resume else _shipped_scenario("transfer_benchmark.toml", "transfer_benchmark")

@@ -253,8 +253,9 @@ def test_dash_h_metavars_and_completion(cli, monkeypatch):
     assert "compare [OPTIONS] RUN_DIRS..." in out
     code, out, _ = cli("stiffness", "-h")
     assert re.search(r"--fault\s+TEXT", out) and re.search(r"--points\s+INTEGER", out)
-    code, out, _ = cli("gap", "-h")
-    assert "--device" in out
+    for command in ("gap", "transfer-benchmark"):  # both train networks, as run does
+        code, out, _ = cli(command, "-h")
+        assert "--device" in out, command
     code, _, err = cli("gap")
     assert code == 2 and "Missing argument 'SCENARIO'" in err
 
@@ -262,6 +263,8 @@ def test_dash_h_metavars_and_completion(cli, monkeypatch):
 def test_gap_takes_device(cli, tmp_path):
     # refused as an [execution] value, so it reached the scenario's table
     code, _, err = cli("gap", ROOT / "scenarios" / "gap_expB.toml", "--device", "tpu", "--out", tmp_path)
+    assert code == 2 and "device" in err and "tpu" in err
+    code, _, err = cli("transfer-benchmark", "--device", "tpu", "--out", tmp_path)
     assert code == 2 and "device" in err and "tpu" in err
 
 
