@@ -4,7 +4,7 @@ A kind is a module of gearlab.kinds registered by name in ``SCENARIO_KINDS`` (th
 ``kind = "..."`` of a scenario's [scenario] table). Everything outside the kind reaches it
 through the names below and nothing else; ``tests/test_architecture.py`` checks that every
 registered kind provides them. (The registry's *plugin* kinds — fault, model, adapter,
-effect — are another thing: gearlab.registry.KINDS.)
+detector, effect — are another thing: gearlab.registry.KINDS.)
 """
 
 from __future__ import annotations
@@ -28,14 +28,16 @@ class ScenarioKind(Protocol):
     OVERRIDES: tuple[str, ...]
 
     def build(self, scenario: Scenario) -> Any:
-        """The scenario's resolved spec (becomes scenario.spec); GearlabInputError naming file,
-        table and key for anything the tables alone could not refuse."""
+        """The scenario's resolved spec, typed (the kind's `Spec` dataclass; the dataset
+        kind: its list of dataset specs), which becomes scenario.spec; GearlabInputError naming
+        file, table and key for anything the tables alone could not refuse."""
 
     def describe(self, scenario: Scenario) -> str:
         """One line of what the scenario will do (`gearlab validate`, the TUI's scenario view)."""
 
     def quick(self, scenario: Scenario) -> None:
-        """Shrink scenario.spec in place for a smoke run (--quick; a resume shrinks alike)."""
+        """Shrink scenario.spec for a smoke run, in place or by a smaller spec in its place
+        (--quick; a resume shrinks alike)."""
 
     def run(self, scenario: Scenario, run: RunDir, on_event: EventSink) -> None:
         """Do the work into *run*: append one record per finished unit (skipping those already
