@@ -248,6 +248,8 @@ def inspect_recording(
         sensitivity=sensitivity,
         gain=gain,
     )
+    if box is not None and tacho_shaft is not None:  # named as the keyword here, as the CLI names its flag
+        box.shaft_index(tacho_shaft, "tacho_shaft")
     return inspect_record(str(path), box, options)
 
 

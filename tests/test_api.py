@@ -146,6 +146,7 @@ def test_a_measured_target_reaches_the_diagnosis_with_its_chain(workdir, monkeyp
         ({"gain": "-1 V"}, "gain: expected a positive number of volts per file unit"),
         ({"fs": "20 MHz"}, "fs: expected a sampling rate in (0, 10 MHz]"),
         ({"tacho_kind": "edges"}, "tacho_kind: 'edges' is not one of"),
+        ({"gearbox": "luo2019", "tacho_shaft": "idler"}, "tacho_shaft: unknown shaft 'idler'; the shafts are"),
     ],
 )
 def test_inspect_recording_refuses_what_the_cli_refuses(tmp_path, keys, says):
