@@ -87,6 +87,15 @@ def test_best_method_per_k_with_its_margin_and_the_runner_up():
     assert lines[1] == "No method collapsed to one class."
 
 
+def test_methods_level_to_the_shown_point_tie_and_none_is_called_best():
+    """Issue 41: the verdict called a 0.0-point tie 'best'; methods whose means show the same to a
+    tenth of a point tie, and the margin is told from the best of the rest."""
+    table = {"a": {"0": cell(88.65)}, "b": {"0": cell(88.64)}, "c": {"0": cell(85.05)}}
+    line = transfer_lines({"table": table, "protocol": {"ks": [0]}}, [])[0]
+    assert line == "a and b tie at k = 0 (88.65 %), 3.6 points ahead of c."
+    assert " best " not in line
+
+
 def test_a_method_that_wins_everywhere_is_said_once_and_any_name_works():
     table = {
         "my_plugin (unsupervised, alpha=2)": {"0": cell(90.0), "4": cell(92.0)},
