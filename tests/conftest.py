@@ -74,6 +74,30 @@ def one_torch_thread():
     torch.set_num_threads(before)
 
 
+@pytest.fixture(scope="session", autouse=True)
+def one_local_worker_unless_asked():
+    """A scenario run in a test's process that leaves [execution] workers at 0 (all cores) runs its
+    units in that process, as `workers = 1` does: `pytest -n` already gives each core a test file,
+    and a pool per run started one process per core that imported torch, numba and gearlab again
+    (tests/test_gap_records.py, test_recordings.py and test_gearbox_source.py: 56 s of CPU with
+    their pools' processes, 31 s of it in the pools). The pool is tested where a test asks for one
+    (LocalExecutor(2), `workers = 2`: test_executors, test_protocol, test_run_options) and in every
+    `gearlab` child process (the TUI's runs, crash safety), which this does not reach; a run's
+    records do not depend on its worker count (test_protocol.test_two_workers_give_the_records_of_one);
+    test_executors checks that 0 still means every core."""
+    from gearlab import executors
+
+    real = executors.LocalExecutor.__init__
+
+    def init(self, workers=None):
+        real(self, 1 if workers is None else workers)
+
+    init.every_core = real  # the real default, for the test that holds it
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(executors.LocalExecutor, "__init__", init)
+        yield
+
+
 @pytest.fixture(scope="session")
 def registry():
     return get_registry()

@@ -137,6 +137,16 @@ def test_bad_worker_counts_are_refused(name, workers):
         make_executor(name, workers)
 
 
+def test_no_worker_count_means_one_local_worker_per_core(monkeypatch):
+    """[execution] workers = 0, the default, is a worker per core (conftest runs the scenarios of
+    the tests' own processes on one: this checks the real default)."""
+    monkeypatch.setattr(executors.os, "cpu_count", lambda: 7)
+    executor = LocalExecutor.__new__(LocalExecutor)
+    LocalExecutor.__init__.every_core(executor, None)
+    assert executor.workers == 7
+    assert LocalExecutor().workers == 1 and LocalExecutor(3).workers == 3  # conftest's, for the tests
+
+
 def test_unknown_executor_is_refused():
     with pytest.raises(GearlabInputError, match="unknown executor 'dask'; known: local, ray"):
         make_executor("dask")
