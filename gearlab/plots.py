@@ -316,8 +316,13 @@ def latent_projection(z: np.ndarray) -> tuple[np.ndarray | None, str]:
     """The first two principal components of features *z* (rows), or (None, "a point"/"a line")
     when they collapse: a PCA of features on a point or a line (a detector's one score, a
     saturated layer) is rounding noise drawn at axes of 1e-15, so no map is drawn of it."""
+    from threadpoolctl import threadpool_limits
+
     z = z - z.mean(0)
-    sv, vt = np.linalg.svd(z, full_matrices=False)[1:]
+    # one BLAS thread: a 240 x 256 SVD took 0.04 s on one, 0.3-3 s with its threads contending on a busy
+    # two-core machine (a quick run's four latent maps were 11 s of its report stage)
+    with threadpool_limits(1, user_api="blas"):
+        sv, vt = np.linalg.svd(z, full_matrices=False)[1:]
     scale = 1e-9 * max(1.0, float(np.abs(z).max(initial=0.0)))
     if sv.size == 0 or sv[0] <= scale:
         return None, "a point"

@@ -578,3 +578,23 @@ def test_confusion_matrix_numbers_stand_out_of_their_cells(tmp_path, monkeypatch
         r, g, b, _ = image.cmap(image.norm(image.get_array()[y, x]))
         shade = 0.2126 * r + 0.7152 * g + 0.0722 * b
         assert (text.get_color() == "white") == (shade < 0.5), (text.get_text(), shade)
+
+
+def test_the_latent_projection_runs_on_one_blas_thread(monkeypatch):
+    """Issue 41 (no stage silent): a quick run's four latent maps took 11 s of its report stage, the
+    SVDs' BLAS threads contending on a busy two-core machine (0.04 s each on one thread)."""
+    import numpy as np
+    from threadpoolctl import threadpool_info
+
+    from gearlab.plots import latent_projection
+
+    threads = []
+    svd = np.linalg.svd
+
+    def spy(*args, **kwargs):
+        threads.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+        return svd(*args, **kwargs)
+
+    monkeypatch.setattr(np.linalg, "svd", spy)
+    latent_projection(np.random.default_rng(0).normal(size=(40, 8)))
+    assert threads and set(threads) == {1}
