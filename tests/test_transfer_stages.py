@@ -5,6 +5,7 @@ the figures and report.html (every kind's last step, gearlab.events.telling_figu
 
 from __future__ import annotations
 
+import pytest
 from tiny import transfer
 
 from gearlab.engine import run_scenario
@@ -46,3 +47,27 @@ def test_the_priming_and_the_source_model_say_how_far_they_are():
         run_unit(p, SOURCE, TARGET, 0, 0, m, StateStore(None), on_epoch=lambda e, h, text="", to=said: to.append(text))
         shared = [t for t in said if t]  # the unit's own epochs say nothing more (text "")
         assert shared == [what.format(i) for i in range(1, 4 if m.adapter == "source_only" else 3)], (m, said)
+
+
+def test_a_training_unit_says_it_started_before_it_loads_torch_and_the_data(tmp_path, monkeypatch):
+    """A unit in a fresh worker imports torch and reads its datasets (seconds on a busy machine) before
+    its first epoch can say anything: it says it started first."""
+    from test_protocol import method, tiny
+
+    from gearlab.confined import Confined
+    from gearlab.data import cache
+    from gearlab.events import UnitProgress
+    from gearlab.parts import training
+
+    said = []
+    monkeypatch.setattr(UnitProgress, "__call__", lambda self, text: said.append(text))
+
+    def load(spec, path):
+        said.append("load")
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(cache, "load", load)
+    task = (tiny(), (None, None), (None, None), 0, 0, method("mmd"), Confined(tmp_path, ("states",)))
+    with pytest.raises(RuntimeError, match="stop here"):
+        training.train_unit(task)
+    assert said == ["starting: torch and the datasets", "load"]

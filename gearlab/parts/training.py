@@ -88,13 +88,14 @@ def train_unit(task: tuple) -> dict:
     were built before), shared states from the run directory. One torch thread per unit,
     so that a result does not depend on how many workers run side by side. An eighth element,
     when there is one, is the fixed target history (gearlab.learn.protocol.split)."""
-    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
-
     protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states, *history = task
-    torch.set_num_threads(1)
-    source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
     # states/ lies in the run directory, beside the progress/ folder the engine watches
     with UnitProgress(states.root, unit_key(rep, k, method)) as progress:
+        progress("starting: torch and the datasets")  # seconds in a fresh worker, before any epoch
+        import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
+        torch.set_num_threads(1)
+        source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
 
         def report(epoch: int, history, what: str = "") -> None:
             acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
