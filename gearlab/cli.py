@@ -437,6 +437,8 @@ def _run(
     scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict, events: bool
 ) -> None:
     """Run the engine, drawing its events as progress bars (or printing them as JSON lines)."""
+    if not events and err_console.is_terminal:  # the engine's imports take seconds before its first event
+        err_console.print(f"gearlab: starting {scenario or resume}", style="dim", markup=False, highlight=False)
     from .engine import run_scenario, scenario_of
     from .kinds import SCENARIO_KINDS
 

@@ -414,6 +414,26 @@ def test_progress_is_log_lines_when_stderr_is_not_a_terminal(cli, tmp_path, monk
     assert "━" not in err  # no bar drawn into a file
 
 
+def test_a_run_on_a_terminal_says_it_starts_before_the_engines_imports(cli, tmp_path, monkeypatch):
+    """Issue 41 (no stage silent): torch, numba and the scenario's checks take seconds before the
+    first event; a person at a terminal sees a line at once. Not in a log or a pipe, where an error
+    stays one line."""
+    import io
+
+    from rich.console import Console
+
+    import gearlab.cli
+
+    screen = io.StringIO()
+    monkeypatch.setattr(gearlab.cli, "err_console", Console(file=screen, force_terminal=True, soft_wrap=True))
+    monkeypatch.setattr("gearlab.engine.run_scenario", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
+    cli("run", tmp_path / "mine.toml")
+    shown = re.sub(r"\x1b\[[0-9;]*m", "", screen.getvalue())  # the line is dim
+    assert shown.splitlines()[0] == f"gearlab: starting {tmp_path / 'mine.toml'}"
+    cli("run", tmp_path / "mine.toml", "--events")  # --events (the TUI reads stdout): nothing more
+    assert re.sub(r"\x1b\[[0-9;]*m", "", screen.getvalue()).count("gearlab: starting") == 1
+
+
 def test_help_texts_have_an_example_and_no_broken_lines(cli, monkeypatch):
     monkeypatch.setenv("COLUMNS", "250")  # wide: any line break left in a paragraph is in the text itself
     for command in ("run", "gap", "compare", "validate", "report", "tui", "plugins", "modes", "simulate"):
