@@ -77,12 +77,19 @@ def lower_median(x: torch.Tensor) -> torch.Tensor:
     """``x.median(dim=-1, keepdim=True).values`` (the lower of the two middle values), by a
     partial sort on the CPU: numpy's introselect is about 5 times faster than torch's median
     there, which made the burst network's limiter a sixth to a third of a training step, and the
-    `shapes` network's scale half of one (benchmarks/training.py). No gradient flows through it
-    (the network's input needs none), so a tensor that needs one takes torch's path."""
+    `shapes` network's scale half of one (benchmarks/training.py); float32 rows (training's) take
+    kernels.lower_median32, the same element in a fifth to a half of numpy's time. No gradient
+    flows through it (the network's input needs none), so a tensor that needs one takes torch's path."""
     import torch  # start-up time, as above
 
     if x.device.type != "cpu" or x.requires_grad:
         return x.median(dim=-1, keepdim=True).values
+    if x.dtype == torch.float32 and x.dim() > 0 and x.shape[-1] > 0:  # training's precision: compiled
+        from . import kernels  # numba: loaded when first needed (start-up time)
+
+        out = torch.empty(*x.shape[:-1], 1, dtype=x.dtype)
+        kernels.lower_median32(x.reshape(-1, x.shape[-1]).contiguous().numpy(), out.view(-1).numpy())
+        return out
     middle = (x.shape[-1] - 1) // 2
     return torch.from_numpy(np.partition(x.numpy(), middle, axis=-1)[..., middle : middle + 1])
 

@@ -59,3 +59,46 @@ def laplace_gain_grad(
             r = padded[b, start : start + width]
             for n in range(width):
                 o[n] += g * np.sign(r[n] - t[n])
+
+
+KEY_BITS = 12  # the first pass sorts float32 keys into 2**12 buckets by their top bits
+
+
+@numba.njit(cache=True)
+def lower_median32(x: np.ndarray, out: np.ndarray) -> None:
+    """out[b] = the lower median of float32 row x[b] (the element np.partition puts in the
+    middle; NaN counts as the largest, as there). A two-pass radix selection: each value's bits
+    as an unsigned key in the order of the values, a count of the keys' top `KEY_BITS` bits finds
+    the bucket that holds the median, and only that bucket (a few hundred of 4096) is sorted.
+    numpy's introselect took 30-40 us a row of 4096, a sixth of a `shapes` training step."""
+    n = x.shape[1]
+    middle = (n - 1) // 2
+    keys = np.empty(n, np.uint32)
+    bucket = np.empty(n, np.uint32)
+    counts = np.empty(1 << KEY_BITS, np.int64)
+    sign, shift = np.uint32(0x80000000), 32 - KEY_BITS
+    for b in range(x.shape[0]):
+        bits = x[b].view(np.uint32)
+        for i in range(n):
+            k = bits[i]
+            if k & np.uint32(0x7FFFFFFF) > np.uint32(0x7F800000):  # NaN: after everything
+                keys[i] = np.uint32(0xFFFFFFFF)
+            elif k & sign:  # negative: larger magnitude, smaller key
+                keys[i] = ~k
+            else:
+                keys[i] = k | sign
+        counts[:] = 0
+        for i in range(n):
+            counts[keys[i] >> shift] += 1
+        below, top = 0, 0
+        while below + counts[top] <= middle:
+            below += counts[top]
+            top += 1
+        size = 0
+        for i in range(n):
+            if keys[i] >> shift == top:
+                bucket[size] = keys[i]
+                size += 1
+        k = np.sort(bucket[:size])[middle - below]
+        k = k ^ sign if k & sign else ~k
+        out[b : b + 1].view(np.uint32)[0] = k

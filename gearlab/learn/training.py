@@ -92,11 +92,12 @@ def _rows(X: torch.Tensor, index: torch.Tensor, draws: np.random.Generator | Non
     """Training rows *index* of X: (n, L), or (n, D, L) holding D noise draws of each sample, of
     which each row takes one at random. A noisy source drawn once is learned by heart, noise and
     all (a few hundred samples against 4096 values each); fresh draws leave only the signal to
-    learn (the PHM 2009 corrected source: docs/real_data.md)."""
+    learn (the PHM 2009 corrected source: docs/real_data.md). index_select, not X[index]: the
+    same rows in a fifth to a tenth of the time on a CPU (advanced indexing's general path)."""
     if X.ndim == 2:
-        return X[index]
+        return X.index_select(0, index)
     pick = torch.as_tensor(draws.integers(X.shape[1], size=len(index)), device=X.device)
-    return X[index, pick]
+    return X.flatten(0, 1).index_select(0, index * X.shape[1] + pick)
 
 
 def _draws(X: np.ndarray, rng: np.random.Generator) -> np.random.Generator | None:
@@ -152,7 +153,7 @@ def fit_supervised(
             xb = _rows(Xt, index, draws)
             xb = augment(xb, generator) if augment else xb
             opt.zero_grad()
-            loss = loss_fn(net(xb), yt[index])
+            loss = loss_fn(net(xb), yt.index_select(0, index))
             _step(opt, params, loss)
             total += loss.detach().double() * len(idx)
         history.train_loss.append(total.item() / len(X))
@@ -234,7 +235,7 @@ def fit_adaptation(
             xs = _rows(Xs_t, s, draws)
             xs = augment(xs, generator) if augment else xs
             opt.zero_grad()
-            z = net.embed(torch.cat([xs, Xt_t[t]]))
+            z = net.embed(torch.cat([xs, _rows(Xt_t, t, None)]))
             z_s, z_t = z[:m], z[m:]
             loss = ce(net.classifier(z_s), ys_t[s])
             if yt_t is not None:
@@ -355,8 +356,24 @@ def _step(opt, params: list, loss: torch.Tensor) -> None:
     NaN, which left a network that called everything healthy. The norms are taken in one call
     for all parameters (foreach; torch's default on a CPU is one call each), the same numbers."""
     loss.backward()
-    nn.utils.clip_grad_norm_(params, MAX_GRAD_NORM, foreach=_foreach(params))
+    _clip(params)
     opt.step()
+
+
+def _clip(params: list) -> None:
+    """nn.utils.clip_grad_norm_(params, MAX_GRAD_NORM, foreach=True), the same numbers, for the
+    gradients on the CPU in one precision: its steps without its grouping of tensors by device,
+    and without its multiplication by a factor of exactly 1 (every stable step; a NaN norm still
+    multiplies, as there). It took 0.3-0.6 ms of a 6-9 ms step. Elsewhere torch's, which avoids
+    the device synchronisation the comparison needs."""
+    grads = [p.grad for p in params if p.grad is not None]
+    if not grads or any(g.device.type != "cpu" or g.dtype != grads[0].dtype for g in grads):
+        nn.utils.clip_grad_norm_(params, MAX_GRAD_NORM, foreach=_foreach(params))
+        return
+    total = torch.linalg.vector_norm(torch.stack(torch._foreach_norm(grads, 2.0)), 2.0)
+    factor = MAX_GRAD_NORM / (total + 1e-6)
+    if not factor >= 1.0:
+        torch._foreach_mul_(grads, factor.clamp(max=1.0))
 
 
 def _foreach(params: list) -> bool | None:
