@@ -31,6 +31,7 @@ from .data.recordings import (
     angle_tacho,
     channel_listing,
     is_rate_or_time,
+    name_unit,
     prefixed,
     read_contents,
     same_length,
@@ -101,6 +102,12 @@ def read_record(path: str, options: InspectOptions) -> Recording:
                 "expected --vibration NAME"
             )
         vibration = left[0]
+    said = name_unit(str(vibration))
+    if said is not None and said[0] == "acceleration" and options.sensitivity is not None:
+        raise GearlabInputError(  # the values would come out 1 / sensitivity too large, unsaid
+            f"{path}: --sensitivity: channel '{vibration}' is an acceleration already ({said[1]}, as its name "
+            "says); expected no --sensitivity"
+        )
     roles = {vibration: "vibration"}
     if options.tacho is not None:
         roles.setdefault(options.tacho, "tacho")

@@ -156,3 +156,15 @@ def test_a_last_wheel_one_tooth_off_is_called_out_without_a_tacho(tmp_path):
     assert right["matches"], right["verdict"]
     wrong = inspect_record(str(tmp_path / "rec.npz"), described((18, 67), (29, 70), speed="40 Hz"), options)
     assert "the wheel on the output shaft shows 71.0" in wrong["verdict"]
+
+
+def test_inspect_refuses_a_sensitivity_for_a_channel_named_in_m_s2(tmp_path):
+    # 'Beschl. [m/s²]' with --sensitivity "100 mV/g" was divided by it (values 98 times too large,
+    # unsaid), where validate refuses the same sensitivity in a scenario
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    path = tmp_path / "mon.csv"
+    _rig_csv(path, "t [s];Beschl. [m/s²];Tacho [V]", revs=20)
+    options = InspectOptions(vibration="Beschl. [m/s²]", tacho="Tacho [V]", sensitivity=0.1 / 9.80665)
+    with pytest.raises(GearlabInputError, match=r"--sensitivity: channel 'Beschl. \[m/s²\]' is an acceleration"):
+        inspect_record(str(path), None, options)
