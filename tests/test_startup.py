@@ -1,5 +1,5 @@
 """Start-up: checking a scenario, `--help` and the TUI's first screen load no torch, no numba
-(the simulator's kernels), no scipy.stats, sklearn or matplotlib (issue 42; docs/architecture.md:
+(the simulator's kernels), no scipy.stats or scipy.ndimage, sklearn or matplotlib (issue 42; docs/architecture.md:
 the modules that need them import them inside the functions that train, simulate or draw).
 
 Each case runs in a fresh interpreter and reads its sys.modules afterwards, so what the rest of
@@ -12,7 +12,7 @@ import sys
 import pytest
 from conftest import ROOT
 
-HEAVY = ("torch", "numba", "scipy.stats", "sklearn", "matplotlib")
+HEAVY = ("torch", "numba", "scipy.stats", "scipy.ndimage", "sklearn", "matplotlib")
 
 CASES = {
     # the README's command: `gearlab validate scenarios/quick.toml`

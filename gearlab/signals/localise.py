@@ -67,7 +67,6 @@ from fractions import Fraction
 from statistics import NormalDist
 
 import numpy as np
-from scipy.ndimage import uniform_filter1d
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
@@ -77,6 +76,15 @@ MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
 SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
 FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
 WEIGHT_SMOOTH = 101  # orders over which noise powers are smoothed for the weights (spread)
+
+def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
+    """scipy's moving mean, imported on first use: scipy.ndimage costs 0.4 s that `gearlab
+    validate` and `--help` (which import the detection kind, not run it) need not pay."""
+    from scipy.ndimage import uniform_filter1d as moving_mean
+
+    return moving_mean(x, size=size, mode=mode)
+
+
 KAPPA = 8.0  # a history line: mean power this many noise sds of its mean over zero (see spread)
 
 
