@@ -736,9 +736,10 @@ def render(report: dict, console, width: int = 100) -> None:
 # --- which gear: localisation against healthy history records ----------------------------------------
 
 
-def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple[np.ndarray, int, float]:
+def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple[np.ndarray, int, float, int]:
     """(complete input revolutions at the pipeline's points, the first one's number from the angle's
-    zero modulo the train period, the record's Nyquist order) of one file read as inspect reads it."""
+    zero modulo the train period, the record's Nyquist order, the tacho marks they may start at) of
+    one file read as inspect reads it."""
     from .signals import POINTS
 
     rec = read_record(path, options)
@@ -746,7 +747,16 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
         revs = resample_revolutions(rec.signal, speed.angle, points=POINTS)
     first = math.ceil(speed.angle[0] / TWO_PI) % order_table(box).train_period
-    return revs, first, rec.fs / (2 * speed.mean_hz)
+    return revs, first, rec.fs / (2 * speed.mean_hz), _marks(rec, box, options)
+
+
+def _marks(rec: Recording, box: Gearbox, options: InspectOptions) -> int:
+    """Tacho marks per input turn the record's revolutions may start at (localisation turns each take
+    to the first history take's mark): a pulse tacho's on the input shaft; else 1 (nothing turned)."""
+    if rec.tacho is None or (options.tacho_shaft or box.sensor.tacho) != "input":
+        return 1
+    kind = tacho_kind(rec.tacho) if options.tacho_kind == "auto" else options.tacho_kind
+    return (options.pulses_per_rev or box.sensor.pulses_per_rev) if kind == "pulses" else 1
 
 
 def localisation(path: str, history: list[str], box: Gearbox, options: InspectOptions) -> dict:
@@ -759,10 +769,11 @@ def localisation(path: str, history: list[str], box: Gearbox, options: InspectOp
     if not history:
         raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
     table = order_table(box)
-    revs, first, nyquist = _input_revolutions(path, box, options)
+    revs, first, nyquist, _ = _input_revolutions(path, box, options)
     past = [_input_revolutions(p, box, options) for p in history]
-    top = min(0.9 * min([nyquist] + [n for _, _, n in past]), 0.45 * POINTS)
-    hist = L.history([r for r, _, _ in past], table, first_revolutions=[f for _, f, _ in past], max_order=top)
+    top = min(0.9 * min([nyquist] + [n for _, _, n, _ in past]), 0.45 * POINTS)
+    firsts, marks = [f for _, f, _, _ in past], max(k for *_, k in past)
+    hist = L.history([r for r, *_ in past], table, first_revolutions=firsts, max_order=top, marks=marks)
     out = L.localise(revs, hist, table, first_revolution=first).describe()
     out["history"] = list(history)
     return out

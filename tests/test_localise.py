@@ -262,3 +262,68 @@ def test_a_saved_history_localises_as_the_one_read_from_records(tmp_path):
     assert a == b and a["named"] == "input pinion 18T (stage 1)"
     with pytest.raises(GearlabInputError, match="saved for another gearbox description"):
         L.History.restored(hist.state(), train((19, 45)))
+
+
+def test_takes_starting_at_different_tacho_marks_name_the_same_tooth(tmp_path):
+    """Gearbox D's case (one stage 23/61, a tacho of 2 marks per turn, a chipped pinion tooth): two
+    takes of one chip, one starting at each mark, localised with `gearlab inspect --history`
+    against healthy takes, name the same tooth (before aligning each take to the first history
+    take by its synchronous average, their tooth counts started half a turn apart)."""
+    import json
+
+    from gearboxes import description, stage
+    from typer.testing import CliRunner
+
+    from gearlab.cli import app
+    from gearlab.data.simulated import simulated_record, tacho_pulses
+
+    box = tmp_path / "pump.toml"
+    one = stage(23, 61, width="30 mm", bores=("30 mm", "45 mm"))
+    box.write_text(description(one, name="pump", speed="24.5 Hz", load="60 N*m", near="input", direction="x"))
+
+    def save(name, faults, seed, start=0.0):
+        """A take of the record from *start* input turns on, its tacho marking θ = πk (2 per turn)."""
+        rec = simulated_record(faults, gearbox=str(box), revolutions=64, snr_db=30.0, seed=seed, fs=10_000.0)
+        keep = rec.angle >= 2 * np.pi * start
+        tacho = tacho_pulses(2 * rec.angle, 2 * 2 * np.pi * rec.speed_hz / rec.fs)  # 2θ: marks at θ = πk
+        path = tmp_path / f"{name}.npz"
+        np.savez(path, acc=rec.vibration[keep], tacho=tacho[keep], fs=rec.fs)
+        return str(path)
+
+    chip = [{"name": "chip", "gear": "input pinion", "tooth": 6, "step": 20}]
+    history = [save("healthy1", [], 1), save("healthy2", [], 2, start=0.25)]
+    takes = [save("chip_a", chip, 3, start=0.25), save("chip_b", chip, 3, start=0.75)]
+    common = ["--gearbox", str(box), "--vibration", "acc", "--tacho", "tacho", "--pulses-per-rev", "2"]
+    common += [x for h in history for x in ("--history", h)]
+    runner = CliRunner()
+    teeth = []
+    for take in takes:
+        out = runner.invoke(app, ["inspect", take, *common, "--json"])
+        assert out.exit_code == 0, out.output
+        loc = json.loads(out.stdout)["localisation"]
+        assert loc["named_shaft"] == "input", loc["summary"]
+        ev = next(s for s in loc["shafts"] if s["shaft"] == "input")
+        teeth.append(next(t["tooth"] for k, t in ev["tooth"].items() if k != "angle_deg"))
+    assert teeth[0] == teeth[1], teeth
+
+
+def test_a_saved_history_of_two_marks_per_turn_turns_each_take_to_its_first_records_mark(tmp_path):
+    """What `gearlab score` localises with (History.state / restored) keeps the tacho's marks and the
+    first history record's mean revolution: a take cut half a turn later (at the other of 2 marks)
+    names the same tooth as one cut at the first record's mark; one mark per turn turns nothing."""
+    table = train((19, 38))
+    rng = np.random.default_rng(11)
+    hist = L.history([record(table, 60, rng) for _ in range(3)], table, marks=2)
+    np.savez(tmp_path / "h.npz", **hist.state())
+    with np.load(tmp_path / "h.npz", allow_pickle=False) as f:
+        back = L.History.restored({k: f[k] for k in f.files}, table)
+    full = record(table, 62, rng, fault=(0, 1, 5)).reshape(-1)
+    at_first = full[: 60 * POINTS].reshape(60, POINTS)
+    at_second = full[POINTS // 2 : POINTS // 2 + 60 * POINTS].reshape(60, POINTS)
+    name = gear_name(table, 0, 1)
+    teeth = [L.localise(take, back, table).describe() for take in (at_first, at_second)]
+    found = [next(s for s in t["shafts"] if s["shaft"] == "input")["tooth"][name] for t in teeth]
+    assert [near_tooth(f, 5) for f in found] == [True, True], found
+    assert "advanced 1/2 turn" in teeth[1]["method"]
+    m, same = L.turned(at_second, hist.reference, 1)
+    assert m == 0 and same is at_second

@@ -142,6 +142,7 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
         cond["shifts"], cond["tacho"] = {}, target.tacho is not None
+        cond["marks"] = target.pulses_per_rev if target.tacho is not None else 1  # localisation turns to a mark
         for role in ROLES:
             turned = []
             for f, revs in cond[role]:

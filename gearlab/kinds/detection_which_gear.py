@@ -99,13 +99,20 @@ def localise_target(source: DatasetSpec, conditions: dict, histories: dict | Non
     out = {"gearbox": box.name, "preset": source.preset, "watched": watched, "conditions": {}, "records": {}}
     # where a tooth index counts from: the tacho mark, or without a tacho the record's first sample
     tacho = all(cond.get("tacho", True) for cond in conditions.values())
-    out["tooth_from"] = "the first tacho mark" if tacho else "each record's first sample (no tacho: a relative index)"
+    marks = max(cond.get("marks", 1) for cond in conditions.values())
+    out["tooth_from"] = (
+        ("the first history record's first tacho mark" if marks > 1 else "the first tacho mark")
+        if tacho
+        else "each record's first sample (no tacho: a relative index)"
+    )
     for name, cond in conditions.items():
         raw = cond["raw"]
         history = [raw[f.path] for f, _ in cond["history"]]
         top = min(float(cond["max_order"]), 0.45 * POINTS)
         try:  # records too short for a spread or a band without every shaft's orders: said, not fatal
-            hist = L.history([r for r, _ in history], table, first_revolutions=[k for _, k in history], max_order=top)
+            firsts = [k for _, k in history]
+            marks = cond.get("marks", 1)  # each take turned to the first history record's tacho mark
+            hist = L.history([r for r, _ in history], table, first_revolutions=firsts, max_order=top, marks=marks)
         except GearlabInputError as exc:
             out["conditions"][name] = {"history": [f.path for f, _ in cond["history"]], "note": f"not localised: {exc}"}
             continue

@@ -46,8 +46,13 @@ Tooth. The named shaft's orders, each weighted by the share of its power that is
 pitch (within one tooth's event the envelope itself follows the carrier's waveform), in that
 shaft's angle o_s θ (θ the record's continuous input angle, zero at its first tacho mark),
 divided by the tooth pitch 2π/z, is the tooth index of each gear on the shaft (tooth n spans
-pitches n − 1 … n from the shaft's zero). A strike's ring moves the peak later by its decay
-time: on a slow shaft's fine-pitched gear, by a pitch or more.
+pitches n − 1 … n from the shaft's zero). A tacho of N marks per turn starts each take's
+revolutions at any one of them, so a take is first advanced by the m/N turn (m = 0 … N − 1, a
+continuous cut: its first m/N turn dropped) whose mean revolution correlates best with the first
+history record's (:func:`turned`): every take, and every later one scored against the saved
+history, counts from the mark the first history record starts at. One mark: nothing moves. A
+strike's ring moves the peak later by its decay time: on a slow shaft's fine-pitched gear, by a
+pitch or more.
 
 Fallback. When the record holds fewer than *min_periods* grand periods (tooth counts with few
 common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
@@ -552,6 +557,26 @@ def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[
     return out
 
 
+def turned(revolutions: np.ndarray, reference: np.ndarray, marks: int) -> tuple[int, np.ndarray]:
+    """(m, *revolutions* advanced by m/*marks* of a turn): m = 0 … marks − 1, the advance whose mean
+    revolution correlates best with *reference* (a mean revolution at the same points).
+
+    The record is cut again m/marks of a turn later, continuously (the slower shafts' turns stay
+    whole), one revolution shorter when m > 0; an advance rounds to the nearest point."""
+    revs = np.asarray(revolutions)
+    if marks <= 1:
+        return 0, revs
+    pts = revs.shape[1]
+    # circular cross-correlation: corr[k] = Σ reference(i) mean(i + k), at every point at once
+    corr = np.fft.irfft(np.conj(np.fft.rfft(reference)) * np.fft.rfft(revs.mean(axis=0)), n=pts)
+    at = [round(m * pts / marks) % pts for m in range(marks)]
+    m = int(np.argmax(corr[at]))
+    if at[m] == 0:
+        return 0, revs
+    flat = revs.reshape(-1)[at[m] :]
+    return m, flat[: (flat.size // pts) * pts].reshape(-1, pts)
+
+
 def threshold_floor(shafts: int, false_alarm: float = FALSE_ALARM) -> float:
     return NormalDist().inv_cdf(1 - false_alarm / shafts)
 
@@ -596,6 +621,8 @@ class History:
     left_out_z: np.ndarray  # (history records, shafts): each record's z against the rest
     note: str
     args: dict = field(default_factory=dict)  # layout()'s arguments: the layout is remade from them
+    marks: int = 1  # tacho marks per turn: each take is turned to *reference* (see turned)
+    reference: np.ndarray | None = None  # the first history record's mean revolution
 
     def state(self) -> dict[str, np.ndarray]:
         """Plain arrays (np.savez) from which :meth:`restored` remakes this history, records unread."""
@@ -610,6 +637,8 @@ class History:
             "left_out_z": self.left_out_z,
             "note": np.array(self.note),
             "args": np.array(json.dumps(self.args)),
+            "marks": np.array(self.marks),
+            "reference": np.zeros(0) if self.reference is None else self.reference,
         }
 
     @staticmethod
@@ -623,7 +652,10 @@ class History:
                 f"{lay.orders.size}: saved for another gearbox description"
             )
         sp = Spread(state["power"], state["line"], state["between"], state["unit_noise"], int(state["units"]))
-        return History(lay, sp, state["thresholds"], state["left_out_z"], str(state["note"]), args)
+        # a history saved before takes were turned to a mark (no "marks"): one mark, nothing turned
+        marks = int(state["marks"]) if "marks" in state else 1
+        reference = state["reference"] if marks > 1 else None
+        return History(lay, sp, state["thresholds"], state["left_out_z"], str(state["note"]), args, marks, reference)
 
 
 def _units(revs: np.ndarray, first: int, lay: Layout, pieces: int) -> list[Content]:
@@ -643,6 +675,7 @@ def history(
     first_revolutions: list[int] | None = None,
     false_alarm: float = FALSE_ALARM,
     revolutions: int | None = None,
+    marks: int = 1,
     **options,
 ) -> History:
     """Read a healthy history: *records* of consecutive input revolutions (R_i, points) of one gearbox.
@@ -651,10 +684,14 @@ def history(
     at least are needed for a spread). Thresholds: per shaft, the largest z of a history record
     against the units of the others (left out in turn), and at least the Gaussian quantile at
     *false_alarm* / the number of shafts. *revolutions* (default: the shortest record) fixes the
-    layout's mode; *options* go to :func:`layout`."""
+    layout's mode; *options* go to :func:`layout`. *marks*: the tacho's marks per turn, each record
+    turned to the first's mark (:func:`turned`)."""
     if not records:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
     revs = [check_array(r, f"history record {i}", min_ndim=2) for i, r in enumerate(records)]
+    marks = check_int(marks, "tacho marks per turn", minimum=1)
+    reference = revs[0].mean(axis=0) if marks > 1 else None
+    revs = [turned(r, reference, marks)[1] for r in revs]
     firsts = first_revolutions or [0] * len(revs)
     shortest = min(r.shape[0] for r in revs)
     args = {"points": int(revs[0].shape[1]), "revolutions": int(revolutions or shortest), **options}
@@ -677,12 +714,13 @@ def history(
         f"{len(revs)} history record(s) in {len(flat)} units; thresholds: the largest left-out z, at least "
         f"{floor:.2f} (false alarm {false_alarm:g} shared by {len(lay.shafts)} shafts)"
     )
-    return History(lay, ref, np.asarray(thr, float), loo, note, args)
+    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference)
 
 
 def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0) -> Localisation:
     """Rank the shafts of *table* by the localised change *revolutions* carry against *hist*."""
     lay = hist.layout
+    m, revolutions = turned(check_array(revolutions, "revolutions", min_ndim=2), hist.reference, hist.marks)
     rec = content(revolutions, lay, first_revolution)
     level, sd = shaft_levels(rec, hist.spread, lay)
     z = level / sd
@@ -713,4 +751,8 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
     ranking = tuple(sorted(out, key=lambda e: -e.z))
     top = next((e for e in ranking if e.flagged), None)
     method = lay.note + "; " + hist.note
+    if hist.marks > 1:
+        method += (
+            f"; teeth counted from the first history record's tacho mark (this record advanced {m}/{hist.marks} turn)"
+        )
     return Localisation(method, ranking, None if top is None else top.gear, None if top is None else top.shaft)
