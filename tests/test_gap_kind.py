@@ -457,3 +457,28 @@ def test_the_verdict_line_says_when_what_is_left_lies_within_the_noise():
     assert verdict_text(base) == "explained"  # results before the noise width
     partly = {"verdict": "partly explained", "unexplained": True, "explained_share": 0.9986}
     assert verdict_text(partly) == "partly explained (100 % of the gap)"
+
+
+def test_effects_accepted_then_not_named_are_said_with_the_reason():
+    """The search's progress said 'sensor_noise ... (accepted)'; when the accepted set together
+    removes under the share a named set must, none is named (stand-ins): the log line and the
+    verdict say which were fitted and why they are not named, instead of a bare 'effects: none'."""
+    from gearlab.kinds.gap_verdict import gap_lines
+
+    result = {
+        "gap_before": 4.0e5,
+        "gap_after": 2.8e4,
+        "effects": [],
+        "verdict": "unexplained",
+        "unexplained": True,
+        "dropped_effects": [{"name": "sensor_noise"}, {"name": "interference_tone"}],
+        "dropped_share": 0.932,
+        "dropped_below": 0.99,
+    }
+    line = gap.diagnosis_line(result)
+    reason = "sensor_noise, interference_tone fitted, then not named: together 93 % of the gap, under the 99 %"
+    assert f"effects: none ({reason} a named set removes); unexplained" in line
+    summary = {"gap_before": 4.0e5, "gap_after": 2.8e4, "unexplained": True, "dropped": gap.dropped_text(result)}
+    assert any(s.startswith(f"Effects {reason}") for s in gap_lines(summary))
+    assert not any("not named" in s for s in gap_lines({**summary, "dropped": None}))
+    assert "not named" not in gap.diagnosis_line({**result, "dropped_effects": []})

@@ -113,6 +113,7 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         # speed ripple with 80 % of its own scale; the report's gap, on the pooled spread, saw 4.5 %
         # go; stand-ins for a withheld mesh damping removed 94 %).
         result["dropped_effects"], accepted, fitted = accepted, [], ()
+        result["dropped_share"], result["dropped_below"] = float(share), float(named)
         after, shrink, share = judge(fitted)
     run.on_event(Event("advance", stage="gap after", done=1, total=1))
     if reference is not None:

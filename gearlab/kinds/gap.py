@@ -518,8 +518,19 @@ def accuracy(
 def diagnosis_line(result: dict) -> str:
     before, after = result["gap_before"], result["gap_after"]
     names = ", ".join(f"{e['name']} ({100 * e['share_removed']:.0f} %)" for e in result["effects"]) or "none"
+    if result.get("dropped_effects"):  # the progress said them accepted: say why none is named
+        names += f" ({dropped_text(result)})"
     verdict = verdict_text(result)
     return f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}"
+
+
+def dropped_text(result: dict) -> str:
+    """Why effects the search accepted are not named (gearlab.gap.conclusion: stand-ins)."""
+    names = ", ".join(e["name"] for e in result["dropped_effects"])
+    return (
+        f"{names} fitted, then not named: together {100 * result['dropped_share']:.0f} % of the gap, "
+        f"under the {100 * result['dropped_below']:.0f} % a named set removes"
+    )
 
 
 def shrink_text(before: float, after: float) -> str:
@@ -604,6 +615,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "reference": result.get("reference"),  # settings reference = 'noise': the source with its noise alone
         "unexplained": result["unexplained"],
         "verdict": verdict_text(result),
+        "dropped": dropped_text(result) if result.get("dropped_effects") else None,
         "explained_share": result.get("explained_share"),
         "chain": result.get("chain"),
         "structure": result.get("structure"),  # speed, mesh order and level measured before any effect

@@ -59,6 +59,8 @@ def gap_lines(summary: Mapping) -> list[str]:
             )
             + f"{best}."
         )
+        if summary.get("dropped"):  # the search accepted them; the progress line said so
+            lines.append(f"Effects {summary['dropped']}: stand-ins for an effect outside the library.")
     lines += _alone_versus_credited(summary)
     acc = summary.get("accuracy") or {}
     pairs = [
