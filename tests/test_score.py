@@ -10,6 +10,7 @@ from test_detection import FILES, run, scenario
 from textrecords import record
 
 import gearlab.learn.protocol as P
+from gearlab.kinds import detection_scoring
 from gearlab.parts import scoring
 from gearlab.runs import RunDir
 
@@ -23,7 +24,7 @@ def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, c
     files = [*FILES, ("h4", "history", "healthy", 0.0)]
     path = scenario(tmp_path, files=files, methods=("source_only", "matched_filter"), detection="seeds = 2\n")
     out = run(cli, path, tmp_path / "runs")
-    assert (out / "scoring.json").is_file()
+    assert json.loads((out / "scoring.json").read_text())["input_version"] == detection_scoring.INPUT_VERSION
     # two new records of the rig: a healthy one and a chipped one (not seen by the run)
     record(tmp_path / "new_ok.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
     record(tmp_path / "new_chip.zip", revolutions=40, chip=4.0, seed=12, phase=1.1)
@@ -130,3 +131,39 @@ def test_a_run_without_a_tacho_reads_a_new_record_as_it_read_its_own():
     # a run from before the target could go without a tacho kept neither key
     old = {"target": {"vibration": 0, "tacho": "2", "pulses_per_rev": 10}, "conditions": one["conditions"]}
     assert "gearbox" not in reading_keys(old, None) and "speed_hz" not in reading_keys(old, None)
+
+
+def test_a_run_whose_learned_methods_saw_another_input_is_refused(tmp_path, monkeypatch):
+    """The outside-user check's gearbox E (18/67 + 29/71, its later mesh at 7.79 input orders): a run
+    made before d9a4d9b changed that train's learned input, scored after it, called its healthy take
+    a fault in 40 of 40 record10 units (likelihood_ratio; 0 of 40 with the run's own input). Such a
+    run is refused in one line; a run from before the key of a train with no such mesh is scored."""
+    from gearlab.errors import GearlabInputError
+    from gearlab.kinds import detection_scoring as S
+
+    class Passed(Exception):  # the check let the run through: scoring went on to read the records
+        pass
+
+    def passed(*args, **kwargs):
+        raise Passed
+
+    monkeypatch.setattr(S, "reading_keys", passed)
+    run = RunDir(tmp_path)
+    cases = [
+        ({"later_orders": [18 * 29 / 67]}, "input_version 1 "),  # before the key: version 1
+        ({"later_orders": [18 * 29 / 67], "input_version": 1}, "input_version 1 "),
+        ({"later_orders": [], "input_version": S.INPUT_VERSION + 1}, f"input_version {S.INPUT_VERSION + 1} "),
+        ({"later_orders": [18 * 29 / 67], "input_version": S.INPUT_VERSION}, None),
+        ({"later_orders": []}, None),  # a whole-order train before the key: its input never changed
+        ({}, None),  # a run from before the later orders were kept
+    ]
+    for meta, refused in cases:
+        run.write_json(scoring.SCORING_FILE, {"conditions": {}, **meta})
+        if refused is None:
+            with pytest.raises(Passed):
+                S.score(run, [])
+            continue
+        with pytest.raises(GearlabInputError) as found:
+            S.score(run, [])
+        line = str(found.value)
+        assert refused in line and "run the scenario again" in line and "\n" not in line, line

@@ -33,6 +33,14 @@ from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
 from .detection_which_gear import decision_of, is_other, localise_scored
 
+# What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
+# its models and thresholds hold for that input only. 1: a later mesh of no whole input order zeroed
+# at the whole orders beside its harmonics (1c8fae6); 2: fitted out of each revolution (d9a4d9b).
+# Bump it with every change of what they see.
+INPUT_VERSION = 2
+# what each version did to a later mesh of no whole input order, for the refusal's line
+LATER_INPUT = {1: "zeroed at the whole orders beside it", 2: "fitted out of each revolution"}
+
 
 def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
     """What `gearlab score` needs of the finished run: the target's keys, the units and threshold
@@ -52,6 +60,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         "false_alarm": d.false_alarm,
         "points": d.points,
         "input": d.input,
+        "input_version": INPUT_VERSION,
         # the later mesh orders the learned methods never see (detection_records.asynchronous_orders)
         "later_orders": list(asynchronous_orders(spec.source)),
         "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(spec.classical).items()},
@@ -99,6 +108,27 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
         },
         "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
     }
+
+
+def _same_input(run: RunDir, meta: dict) -> None:
+    """A run whose learned methods saw another input than this gearlab gives them is refused: on
+    the outside-user check's gearbox E (18/67 + 29/71), a run trained on version 1's input scored
+    its healthy take with version 2's 40 of 40 record10 units called by likelihood_ratio (0 of 40
+    with its own input). A run from before the key (version 1) of a train with no such mesh saw
+    what version 2 gives."""
+    made = meta.get("input_version", 1)
+    if made == INPUT_VERSION or (made == 1 and not meta.get("later_orders")):
+        return
+
+    def said(v) -> str:
+        known = isinstance(v, int) and v in LATER_INPUT
+        return f"a later mesh of no whole input order {LATER_INPUT[v]}" if known else "not one this gearlab knows"
+
+    raise GearlabInputError(
+        f"{run.path}: {scoring.SCORING_FILE}: input_version {made} ({said(made)}); this gearlab's learned input "
+        f"is version {INPUT_VERSION} ({said(INPUT_VERSION)}), for which the run's models and thresholds do not "
+        "hold; expected a run of this version: run the scenario again"
+    )
 
 
 def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str:
@@ -186,6 +216,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
             f"{run.path}: no {scoring.SCORING_FILE}: not a finished detection run (or one from before gearlab "
             "score kept its models); expected a finished run: run the scenario again"
         )
+    _same_input(run, meta)
     keys = reading_keys(meta, condition)
     cut, raw, found = {}, {}, {}
     for i, file in enumerate(files):
