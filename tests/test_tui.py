@@ -796,9 +796,11 @@ def test_at_80x24_the_footer_the_sidebar_and_the_tables_fit(repo_scenarios):
 
 
 @pytest.fixture(scope="module")
-def finished_runs(tmp_path_factory, kinds_cache):
-    """Two finished runs of the tiny transfer scenario and one of the tiny gap scenario (their
-    datasets those of the every-kind runs)."""
+def finished_runs(tmp_path_factory, kinds_cache, kind_streams):
+    """Two finished runs of the tiny transfer scenario (their datasets those of the every-kind
+    runs) and the every-kind run of the tiny gap scenario. The second transfer run is a copy of
+    the first under a later time stamp: the same scenario and seeds give the same records
+    (tests/test_crash_safety.py), and these tests check the TUI's view of two runs, not the engine."""
     from gearlab.engine import run_scenario
 
     base = tmp_path_factory.mktemp("finished_tui")
@@ -807,9 +809,10 @@ def finished_runs(tmp_path_factory, kinds_cache):
     (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", str(base / "runs")))
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(kinds_cache))
-        transfers = [run_scenario(folder / "transfer.toml").path for _ in range(2)]
-        gap_run = run_scenario(folder / "tgap.toml", out=base / "runs").path
-    return folder, transfers, gap_run
+        first = run_scenario(folder / "transfer.toml").path
+    second = first.with_name(f"{first.name[:-6]}{int(first.name[-6:]) + 1:06d}")
+    shutil.copytree(first, second)
+    return folder, [first, second], Path(kind_streams["tgap.toml"][0])
 
 
 @pytest.mark.parametrize("size", SIZES)
