@@ -13,10 +13,9 @@
                                                  measured mesh (z = M / o)
          ─► TSA per shaft, verdict                "the description matches this recording" or what differs
 
-Tolerances (docs/gearbox.md): a line matches a mesh order M within 2 bins + 1e-3 M (speed
-drift smears high orders); a sideband spacing matches a shaft order o within 0.5 bin / j + 1e-3 o
-for the j-th sideband (2 bins / j for sidebands under 16 bins apart). Without a tacho the speed
-comes from the mesh lines (gearlab.gearbox.speed.speed_from_mesh).
+Tolerances (docs/gearbox.md): a line matches a mesh order M within 2 bins + 1e-3 M (speed drift smears high
+orders); a sideband spacing matches a shaft order o within 0.5 bin / j + 1e-3 o for the j-th sideband (2 bins / j
+under 16 bins apart). Without a tacho the speed comes from the mesh lines (gearbox.speed.speed_from_mesh).
 """
 
 from __future__ import annotations
@@ -61,12 +60,9 @@ UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the 
 MAX_TSA_POINTS = 1 << 15
 UPSAMPLE = 8  # the record's rate is raised this much before order tracking (upsampled)
 MAX_UPSAMPLED = 1 << 24  # samples: a longer record is raised less
-# A sideband spacing's tolerance, in bins over the furthest sideband j: sidebands SEPARATED bins
-# apart or more are refined to a small part of a bin (no neighbour in the window's main lobe) and
-# z = M / o does not move with a speed error: on outside records (23/61, 18/67 + 29/71, 37/83, with
-# and without a tacho) z was seen within 0.016 teeth, and at 2 bins a 71-tooth output wheel
-# described as 70 (10 s at 40 Hz, sidebands 44 bins apart) passed, z 71.0 "± 1.7". Closer ones keep
-# 2 bins (a 0.6 s simulation, 8 bins apart, put a comb 0.1 order off).
+# A sideband spacing's tolerance, bins over the furthest sideband j: sidebands SEPARATED bins apart or
+# more are refined to a small part of a bin (outside records: z within 0.016 teeth; at 2 bins a 71-tooth
+# wheel described as 70 passed); closer ones keep 2 bins (a 0.6 s simulation put a comb 0.1 order off).
 SIDEBAND_BINS, SEPARATED = 0.5, 16
 FAMILY_MARGIN = 0.1  # another harmonic family than the described one must hold 10 % more of the lines' power
 
