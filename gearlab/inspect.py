@@ -734,8 +734,7 @@ def render(report: dict, console, width: int = 100) -> None:
 
 def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple[np.ndarray, int, float, int]:
     """(complete input revolutions at the pipeline's points, the first one's number from the angle's
-    zero modulo the train period, the record's Nyquist order, the tacho marks they may start at) of
-    one file read as inspect reads it."""
+    zero modulo the train period, the Nyquist order, the tacho's marks per turn) of one file as read."""
     from .signals import POINTS
 
     rec = read_record(path, options)
@@ -743,16 +742,11 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
         revs = resample_revolutions(rec.signal, speed.angle, points=POINTS)
     first = math.ceil(speed.angle[0] / TWO_PI) % order_table(box).train_period
-    return revs, first, rec.fs / (2 * speed.mean_hz), _marks(rec, box, options)
-
-
-def _marks(rec: Recording, box: Gearbox, options: InspectOptions) -> int:
-    """Tacho marks per input turn the record's revolutions may start at (localisation turns each take
-    to the first history take's mark): a pulse tacho's on the input shaft; else 1 (nothing turned)."""
-    if rec.tacho is None or (options.tacho_shaft or box.sensor.tacho) != "input":
-        return 1
-    kind = tacho_kind(rec.tacho) if options.tacho_kind == "auto" else options.tacho_kind
-    return (options.pulses_per_rev or box.sensor.pulses_per_rev) if kind == "pulses" else 1
+    # the tacho marks a take may start at (localisation turns each take to the first history take's)
+    kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
+    on_input = (options.tacho_shaft or box.sensor.tacho) == "input"
+    marks = (options.pulses_per_rev or box.sensor.pulses_per_rev) if kind == "pulses" and on_input else 1
+    return revs, first, rec.fs / (2 * speed.mean_hz), marks
 
 
 def localisation(path: str, history: list[str], box: Gearbox, options: InspectOptions) -> dict:
