@@ -76,11 +76,6 @@ import numpy as np
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
 
-STAGE_RATIO = 1.0  # modulation depth at shared harmonics over the other stage's own for the shared stage
-MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
-SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
-FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
-WEIGHT_SMOOTH = 101  # orders over which noise powers are smoothed for the weights (spread)
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
     """scipy's moving mean, imported on first use: scipy.ndimage costs 0.4 s that `gearlab
@@ -90,6 +85,11 @@ def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
     return moving_mean(x, size=size, mode=mode)
 
 
+STAGE_RATIO = 1.0  # modulation depth at shared harmonics over the other stage's own for the shared stage
+MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
+SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
+FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
+WEIGHT_SMOOTH = 101  # orders over which noise powers are smoothed for the weights (spread)
 KAPPA = 8.0  # a history line: mean power this many noise sds of its mean over zero (see spread)
 
 
