@@ -1,0 +1,114 @@
+"""The tiny detection scenario of the detection tests (tests/test_detection*.py): five records of
+textrecords, two of them history, its scenario file, and `gearlab run` of it in-process."""
+
+import contextlib
+import csv
+import functools
+import io
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from textrecords import FS, PULSES, record
+from tiny import EXECUTION, schedule
+
+# (file, role, label, chip size): two healthy history records, a healthy and two chipped test records
+FILES = [
+    ("h1", "history", "healthy", 0.0),
+    ("h2", "history", "healthy", 0.0),
+    ("h3", "test", "healthy", 0.0),
+    ("f1", "test", "fault", 4.0),
+    ("f2", "test", "fault", 4.0),
+]
+
+
+@functools.cache
+def record_bytes(chip: float, seed: int) -> bytes:
+    """The zip of a 40-revolution record (textrecords.record), made once per process: the same
+    recordings go into many tests' folders, and writing their text is a good part of a small run."""
+    with tempfile.TemporaryDirectory() as folder:
+        return record(Path(folder) / "r.zip", revolutions=40, chip=chip, seed=seed, phase=0.7 * seed).read_bytes()
+
+
+def scenario(
+    folder: Path, files=FILES, methods=("source_only", "mmd", "matched_filter"), extra: str = "", detection: str = ""
+) -> Path:
+    """A tiny detection scenario in *folder*/scenarios, its records in *folder*/data (relative paths)."""
+    (folder / "data").mkdir(exist_ok=True)
+    (folder / "scenarios").mkdir(exist_ok=True)
+    entries = []
+    for i, (name, role, label, chip) in enumerate(files):
+        path = folder / "data" / f"{name}.zip"
+        if not path.exists():
+            path.write_bytes(record_bytes(chip, i))
+        entries.append(f'  {{ path = "../data/{name}.zip", role = "{role}", label = "{label}" }},')
+    methods_text = "".join(f'[[methods]]\nadapter = "{m}"\n\n' for m in methods)
+    text = (
+        f'[scenario]\nname = "det"\nkind = "detection"\n\n'
+        '[source]\npreset = "B-6-ch5"\nteeth = [1, 2, 3]\nfaults = { chip = [20] }\nhealthy = 9\n\n'
+        f'[target]\nvibration = 0\ntacho = "2"\npulses_per_rev = {PULSES}\nsensitivity = "10 mV/g"\n'
+        f'fs = "{FS} Hz"\nfiles = [\n' + "\n".join(entries) + "\n]\n\n"
+        f"[classical]\nmesh_orders = [32]\n\n[detection]\nblocks = [5, 10]\n{detection}\n"
+        f'[network]\nname = "fast"\n\n{methods_text}[protocol]\n{schedule(2)}\n{EXECUTION}\n{extra}'
+    )
+    path = folder / "scenarios" / "det.toml"
+    path.write_text(text)
+    return path
+
+
+def run(cli, path: Path, out: Path) -> Path:
+    code, stdout, err = cli("run", path, "--out", out)
+    assert code == 0, err
+    return Path(stdout.strip().splitlines()[-1].split(": ", 1)[1])
+
+
+def run_in_module(path: Path, out: Path, cwd: Path | None = None) -> Path:
+    """`gearlab run` in-process as run() does, for a module's fixture (the cli fixture is a test's own),
+    from the folder *cwd* if given."""
+    from gearlab.cli import main
+
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        mp.setattr(sys, "argv", ["gearlab", "run", str(path), "--out", str(out)])
+        if cwd:
+            mp.chdir(cwd)
+        try:
+            main()
+        except SystemExit as exc:
+            assert not exc.code, stderr.getvalue()
+    return Path(stdout.getvalue().strip().splitlines()[-1].split(": ", 1)[1])
+
+
+def scores(run_dir: Path) -> list[dict]:
+    with (run_dir / "scores.csv").open() as f:
+        return list(csv.DictReader(f))
+
+
+def flipped(files, signals: bool = False):
+    """The test files' labels swapped (and, with *signals*, other recordings under the same names)."""
+    out = []
+    for name, role, label, chip in files:
+        if role == "test":
+            label = {"healthy": "fault", "fault": "healthy"}[label]
+            if signals:
+                chip = 4.0 - chip
+        out.append((name, role, label, chip))
+    return out
+
+
+def training_spy(monkeypatch) -> list:
+    """The target rows every training of this test is handed: a spy on the protocol's train_method,
+    set with *monkeypatch* (the test's, which removes it)."""
+    import gearlab.learn.protocol as P
+
+    seen = []
+    train_method = P.train_method
+
+    def spy(protocol, method, source, source_val, target, *args, **kwargs):
+        seen.append(np.array(target[0], copy=True))
+        return train_method(protocol, method, source, source_val, target, *args, **kwargs)
+
+    monkeypatch.setattr(P, "train_method", spy)
+    return seen
