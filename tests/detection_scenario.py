@@ -64,9 +64,17 @@ def run(cli, path: Path, out: Path) -> Path:
     return Path(stdout.strip().splitlines()[-1].split(": ", 1)[1])
 
 
-def run_in_module(path: Path, out: Path, cwd: Path | None = None) -> Path:
+def without_figures(monkeypatch) -> None:
+    """The report's figures not drawn (2-3 s of a tiny run's 5): they are drawn from the run's files after
+    every score is written, and the tests that read them, or only need them drawn for a setup of their
+    own (test_the_report_draws..., the first run of test_test_labels..., test_a_corrected_source_trains...,
+    test_pinion_sync_runs_end_to_end...), keep them."""
+    monkeypatch.setattr("gearlab.kinds.detection.draw_figures", lambda run: None)
+
+
+def run_in_module(path: Path, out: Path, cwd: Path | None = None, figures: bool = True) -> Path:
     """`gearlab run` in-process as run() does, for a module's fixture (the cli fixture is a test's own),
-    from the folder *cwd* if given."""
+    from the folder *cwd* if given, without the report's figures unless *figures*."""
     from gearlab.cli import main
 
     stdout, stderr = io.StringIO(), io.StringIO()
@@ -74,6 +82,8 @@ def run_in_module(path: Path, out: Path, cwd: Path | None = None) -> Path:
         mp.setattr(sys, "argv", ["gearlab", "run", str(path), "--out", str(out)])
         if cwd:
             mp.chdir(cwd)
+        if not figures:
+            without_figures(mp)
         try:
             main()
         except SystemExit as exc:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from detection_scenario import FILES, flipped, run, run_in_module, scenario, scores, training_spy
+from detection_scenario import FILES, flipped, run, run_in_module, scenario, scores, training_spy, without_figures
 
 
 @pytest.fixture
@@ -38,7 +38,13 @@ def three_seeds(tmp_path_factory, module_cache) -> Path:
     text = path.read_text().replace("teeth = [1, 2, 3]", f"teeth = {list(range(1, 17))}")
     text = text.replace("healthy = 9", "healthy = 40").replace("baseline_epochs = 2", "baseline_epochs = 15")
     path.write_text(text.replace("patience = 2", "patience = 15"))
-    return run_in_module(path, folder / "runs")
+    return run_in_module(path, folder / "runs", figures=False)
+
+
+@pytest.fixture
+def no_figures(monkeypatch) -> None:
+    """The report's figures not drawn (detection_scenario.without_figures): this test reads none."""
+    without_figures(monkeypatch)
 
 
 @pytest.fixture
@@ -261,7 +267,9 @@ def test_each_learned_row_keeps_what_it_learned_of_the_simulator_and_its_time(th
     assert "Verdict" in report and "best learned" in report
 
 
-def test_crossed_history_fit_scores_each_history_record_by_the_training_that_left_it_out(cli, tmp_path, cache, handed):
+def test_crossed_history_fit_scores_each_history_record_by_the_training_that_left_it_out(
+    cli, tmp_path, cache, handed, no_figures
+):
     """history_fit = "crossed": one training per history record, handed the other records' revolutions
     only; the method's history scores are each record's scores by the training that left it out,
     standardised by that training's model of the records it trained on, its test scores the mean of
@@ -329,7 +337,7 @@ def test_crossed_history_fit_scores_each_history_record_by_the_training_that_lef
     assert not list((tmp_path / "r3").rglob("results.jsonl"))
 
 
-def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_path, cache, monkeypatch):
+def test_the_learned_methods_see_the_points_per_revolution_asked_for(cli, tmp_path, cache, monkeypatch, no_figures):
     """[detection] points = 1024: every method is handed source, held-out and history rows of 1024
     samples, each the band-limited form of what it would see at 4096, and the test units it scores
     too; the classical rows are not touched. The band is the records' own: these hold 512 samples

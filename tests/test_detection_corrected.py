@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from detection_scenario import run, scenario, scores, training_spy
+from detection_scenario import run, scenario, scores, training_spy, without_figures
 
 
 @pytest.fixture
@@ -14,6 +14,12 @@ def cache(module_cache):
     """One dataset cache for the module (content-addressed): most tests simulate the same tiny source,
     and none asserts on whether a dataset was built or found."""
     return module_cache
+
+
+@pytest.fixture
+def no_figures(monkeypatch) -> None:
+    """The report's figures not drawn (detection_scenario.without_figures): this test reads none."""
+    without_figures(monkeypatch)
 
 
 @pytest.fixture
@@ -47,7 +53,7 @@ def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cac
     assert code == 2 and "[corrected]" in err and "sensor_nosie" in err
 
 
-def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cache, handed):
+def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cache, handed, no_figures):
     """[corrected] history_units = "tsa": the corrected source's methods are handed the history's TSAs
     of `tsa` revolutions (as the corrected samples are averaged), the plain source's methods its
     revolutions — every row handed over is one of those, as the methods see them; a wrong value is
@@ -77,7 +83,9 @@ def test_the_corrected_source_may_train_on_the_historys_tsas(cli, tmp_path, cach
     assert code == 2 and "history_units" in err and "revolution, tsa" in err
 
 
-def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_sample(cli, tmp_path, cache, monkeypatch):
+def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_sample(
+    cli, tmp_path, cache, monkeypatch, no_figures
+):
     """[corrected] draws = 3: the corrected source holds three noise draws of each sample; its
     networks are handed them as (n, 3, L), split by sample (no draw of a held-out sample is trained
     on), and a batch row is always a draw of its own sample; its detector's templates are each
@@ -243,7 +251,7 @@ def test_a_domain_loss_that_aligns_the_history_with_one_input_is_named():
         assert not aligned_to_a_point(healthy, Method(other, False), plain, ys)
 
 
-def test_a_training_that_aligns_the_history_with_a_point_ends_at_its_ramp(cli, tmp_path, cache):
+def test_a_training_that_aligns_the_history_with_a_point_ends_at_its_ramp(cli, tmp_path, cache, no_figures):
     """Against a single point the domain discrepancy never settles, so such a training (the plain
     source's coral here: its healthy difference signals are all zero) ends at the ramp's end
     (min_epochs) and keeps that epoch; the same method on a source whose healthy rows differ (the
