@@ -112,3 +112,20 @@ def pairs():
 def models(pairs):
     """One stiffness model per gear-pair preset (their healthy TVMS caches are shared)."""
     return {name: MeshStiffnessModel(pair) for name, pair in pairs.items()}
+
+
+@pytest.fixture
+def no_figures(monkeypatch) -> None:
+    """A detection run's report figures not drawn (detection_scenario.without_figures): for a test
+    that reads none."""
+    from detection_scenario import without_figures
+
+    without_figures(monkeypatch)
+
+
+@pytest.fixture
+def handed(monkeypatch) -> list:
+    """The target rows every training of a detection test is handed (detection_scenario.training_spy)."""
+    from detection_scenario import training_spy
+
+    return training_spy(monkeypatch)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from detection_scenario import FILES, flipped, run, run_in_module, scenario, scores, training_spy, without_figures
+from detection_scenario import FILES, flipped, run, run_in_module, scenario, scores
 
 
 @pytest.fixture
@@ -39,18 +39,6 @@ def three_seeds(tmp_path_factory, module_cache) -> Path:
     text = text.replace("healthy = 9", "healthy = 40").replace("baseline_epochs = 2", "baseline_epochs = 15")
     path.write_text(text.replace("patience = 2", "patience = 15"))
     return run_in_module(path, folder / "runs", figures=False)
-
-
-@pytest.fixture
-def no_figures(monkeypatch) -> None:
-    """The report's figures not drawn (detection_scenario.without_figures): this test reads none."""
-    without_figures(monkeypatch)
-
-
-@pytest.fixture
-def handed(monkeypatch) -> list:
-    """The target rows every training of this test is handed."""
-    return training_spy(monkeypatch)
 
 
 def test_scores_csv_has_a_row_per_test_unit_and_method(plain_run):

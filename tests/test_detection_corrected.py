@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from detection_scenario import run, scenario, scores, training_spy, without_figures
+from detection_scenario import run, scenario, scores
 
 
 @pytest.fixture
@@ -14,18 +14,6 @@ def cache(module_cache):
     """One dataset cache for the module (content-addressed): most tests simulate the same tiny source,
     and none asserts on whether a dataset was built or found."""
     return module_cache
-
-
-@pytest.fixture
-def no_figures(monkeypatch) -> None:
-    """The report's figures not drawn (detection_scenario.without_figures): this test reads none."""
-    without_figures(monkeypatch)
-
-
-@pytest.fixture
-def handed(monkeypatch) -> list:
-    """The target rows every training of this test is handed."""
-    return training_spy(monkeypatch)
 
 
 def test_a_corrected_source_trains_every_method_a_second_time(cli, tmp_path, cache):
