@@ -60,6 +60,32 @@ def test_columns_by_index_and_by_header_name(tmp_path):
     assert np.array_equal(read_columns(tmp_path / "c.txt", [0])[0][0], by_index[0])
 
 
+@pytest.mark.parametrize(
+    "header, sep",
+    [('"t [s]",Accel (V),"tacho, V"', ","), ("t [s];Accel (V);tacho V", ";"), ("t\tAccel (V)\ttacho", "\t")],
+)
+def test_zipped_delimited_text_reads_as_the_csv_reader_does(tmp_path, monkeypatch, header, sep):
+    """A zipped CSV export (commas, semicolons with decimal commas, tabs; names with blanks):
+    the streamed columns equal the plain CSV reader's, at any block size."""
+    from gearlab.data.readers.csv import _read_csv
+
+    vib, tacho = signals(revolutions=2)
+    t = np.arange(vib.size) / FS
+    rows = [sep.join(f"{v:.6f}" for v in row) for row in zip(t, vib, tacho)]
+    if sep == ";":
+        rows = [r.replace(".", ",") for r in rows]  # a European export's decimal commas
+    data = (header + "\n" + "\n".join(rows) + "\n").encode()
+    (tmp_path / "plain.csv").write_bytes(data)
+    names = [n.strip('"') for n in __import__("csv").reader([header], delimiter=sep).__next__()]
+    expected = _read_csv(tmp_path / "plain.csv", names).found
+    for size in (9, 4093, text_reader.CHUNK_BYTES):
+        monkeypatch.setattr(text_reader, "CHUNK_BYTES", size)
+        got, head, width = read_columns(write_zip(tmp_path / f"r{size}.zip", data), names)
+        assert head == names and width == 3
+        assert all(np.array_equal(got[n], expected[n]) for n in names)
+    assert np.allclose(got[names[2]], np.round(tacho, 6))
+
+
 def test_blocks_split_anywhere_give_the_same_columns(tmp_path, monkeypatch):
     """Lines cut by the block boundary, comments, blank and CRLF lines: the same numbers."""
     vib, tacho = signals(revolutions=2)

@@ -1,5 +1,7 @@
-"""Blank-separated text, plain (.txt, .dat) or one text file in a .zip (the PHM 2009 gearbox
-records): one row per sample, columns separated by blanks, a header row of names or none.
+"""Delimited text, plain (.txt, .dat) or one text file in a .zip (the PHM 2009 gearbox records,
+a zipped CSV export): one row per sample, columns separated by blanks, commas, semicolons (their
+numbers may carry decimal commas) or tabs, as the first data line shows; a header row of names or
+none.
 
 The text is read from the archive in blocks of ``CHUNK_BYTES`` and only the asked-for columns
 are kept, so a 13 MB text needs about the size of those columns (plus one block), never the
@@ -21,7 +23,7 @@ import numpy as np
 
 from ...errors import GearlabInputError, shown
 from .base import Contents, _keyed, check_size, max_record_bytes, time_scale
-from .csv import column_index, header_names
+from .csv import column_index, delimiter_of, header_names, split_rows
 
 # Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
 # a block's tokens (about 60 bytes each as Python objects) stay a few tens of MB.
@@ -71,6 +73,30 @@ def _is_number(token: bytes) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _blanks(text: bytes, delimiter: str | None) -> bytes:
+    """Rows of *delimiter*-separated numbers as blank-separated ones, which numpy parses fast.
+    A semicolon's fields may hold decimal commas ("0,25"): there a comma is never a separator."""
+    if delimiter == ";":
+        return text.replace(b",", b".").replace(b";", b" ")
+    if delimiter == ",":
+        return text.replace(b",", b" ")
+    return text  # tabs and blanks: bytes.split() takes both
+
+
+def _fields(line: bytes, delimiter: str | None) -> list[str]:
+    """A header line's names: delimited fields (quoted ones may hold blanks or commas), or blank-separated."""
+    text = line.decode("utf-8-sig", "replace").strip()
+    return split_rows([text], delimiter)[0] if delimiter else text.split()
+
+
+def _delimiter(block: bytes) -> str | None:
+    """The separator the first data line of *block* uses (None: blanks)."""
+    for line in block.split(b"\n"):
+        if line.strip() and not line.lstrip().startswith(b"#"):
+            return delimiter_of(line.decode("utf-8", "replace"))
+    return None
 
 
 def _resolve(columns, header: list[str] | None, width: int, where: str) -> list[int]:
@@ -127,6 +153,7 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
     header: list[str] | None = None
     width = 0
     picked: list[int] = []
+    delimiter: str | None = None
     limit = max_record_bytes()
     text_bytes, kept_bytes = 0, 0  # of text read and of columns kept, against the limit
     with _open_text(path) as (stream, where):
@@ -154,31 +181,34 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
             else:
                 rest = b""
             lines_here = block.count(b"\n") + (0 if block.endswith(b"\n") else 1)
+            if not width:
+                delimiter = _delimiter(block)
             if b"#" in block or b"\r" in block or not width:
                 kept = []
                 for line in block.split(b"\n"):
-                    tokens = line.split()
+                    tokens = _blanks(line, delimiter).split()
                     if not tokens or tokens[0].startswith(b"#"):
                         continue
                     if not width:  # the first data line: a header, or the first row
-                        width = len(tokens)
                         if not all(_is_number(t) for t in tokens):
-                            header = [t.decode("utf-8", "replace") for t in tokens]
+                            header = _fields(line, delimiter)
+                            width = len(header)
                             continue
-                    kept.append(line)
+                        width = len(tokens)
+                    kept.append(_blanks(line, delimiter))
                 body = b"\n".join(kept)
                 if width and not picked:
                     picked = _resolve(columns, header, width, where)
             else:
-                body = block
+                body = _blanks(block, delimiter)
             if body.strip():
                 try:
                     values = np.array(body.split(), dtype=np.float64)
                 except ValueError:
-                    raise _bad_line(block, line_no, width, where) from None
+                    raise _bad_line(_blanks(block, delimiter), line_no, width, where) from None
                 rows = sum(1 for line in body.split(b"\n") if line.strip())
                 if values.size != rows * width:
-                    raise _bad_line(block, line_no, width, where)
+                    raise _bad_line(_blanks(block, delimiter), line_no, width, where)
                 parts.append(values.reshape(rows, width)[:, picked].copy())
                 kept_bytes += parts[-1].nbytes
                 if kept_bytes > limit:  # short rows of many numbers: the columns outgrow their text
@@ -200,8 +230,11 @@ def first_row(path) -> tuple[list[str] | None, int]:
     path = Path(path)
     header = None
     with _open_text(path) as (stream, where):
+        delimiter = None
         for number, line in enumerate(stream, start=1):
-            tokens = line.split()
+            if header is None and line.strip() and not line.lstrip().startswith(b"#"):
+                delimiter = delimiter_of(line.decode("utf-8", "replace"))
+            tokens = _blanks(line, delimiter).split()
             if not tokens or tokens[0].startswith(b"#"):
                 continue
             if all(_is_number(t) for t in tokens):
@@ -211,7 +244,7 @@ def first_row(path) -> tuple[list[str] | None, int]:
                     f"{where}: its first data row (line {number}) holds no number; expected a header row "
                     "of column names, then rows of numbers separated by blanks"
                 )
-            header = [t.decode("utf-8", "replace") for t in tokens]
+            header = _fields(line, delimiter)
     raise GearlabInputError(f"{where}: no rows of numbers; expected one row per sample, columns separated by blanks")
 
 
