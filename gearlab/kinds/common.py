@@ -22,55 +22,164 @@ from ..scenario import Scenario, Table, keys_of, location, plain_name
 from ..settings import from_inline, setting
 from ..units import to_si
 
+# --- the keys of a measured recording, declared once ---------------------------------------------
+# Every table that reads a recording ([[datasets]] and the [source]'s 'file', the gap's and the
+# detection's [target]) names these keys with measured(): one wording, one set of bounds and one
+# one-line error each, checked when the table is read (`gearlab validate`); a kind gives only its
+# own default where it differs (docs/settings.md lists it per table).
+
+
+def _column(value, where: str):
+    """A channel: a name, or a 0-based column index."""
+    if isinstance(value, int) and not isinstance(value, bool) and value < 0:
+        raise GearlabInputError(f"{where}: a column index is 0 or more, got {value}")
+    return value
+
+
+def _quantity_of(key: str):
+    def check(value, where: str):
+        _quantity(value, key, where)
+        return value  # as written: the kind converts it (quantity) when it builds
+
+    return check
+
+
+def _sensitivity(value, where: str):
+    parse_sensitivity(value, where)
+    return value
+
+
+def gain_si(value, where: str) -> float:
+    """A gain (volts per file unit, e.g. '0.3 mV') in V."""
+    gain = to_si(value, "V", where)
+    if not gain > 0:
+        raise GearlabInputError(
+            f"{where}: expected a positive voltage per file unit such as '0.3 mV', got {shown(value)}"
+        )
+    return gain
+
+
+def _gain(value, where: str):
+    gain_si(value, where)
+    return value
+
+
+TRANSIENTS = ("stats", "none")
+_SAME = object()  # measured(): the declared default
+
+MEASURED = {
+    "file": {
+        "types": str,
+        "default": "",
+        "doc": "measured data: a .csv, .txt, .zip (of one text file), .npz, .h5, .wav or .mat file, relative "
+        "to the scenario",
+    },
+    "files": {
+        "types": list,
+        "default": [],
+        "doc": "measured records, each {file, role = 'history' | 'test', label, condition, speed (the last "
+        "two optional)}, relative to the scenario; a gap diagnosis reads the history (healthy, one speed)",
+    },
+    "vibration": {
+        "types": (int, str),
+        "default": "",
+        "check": _column,
+        "doc": "measured data: the vibration channel (name or 0-based column)",
+    },
+    "tacho": {
+        "types": (int, str),
+        "default": "",
+        "check": _column,
+        "doc": "measured data: a tacho channel (shaft angle or pulses; name or 0-based column); or give "
+        "'speed' or 'gearbox'",
+    },
+    "pulses_per_rev": {
+        "types": int,
+        "default": 1,
+        "low": 1,
+        "high": 10_000,
+        "doc": "measured data: tacho pulses per input-shaft revolution",
+    },
+    "speed": {
+        "types": (int, float, str),
+        "default": None,
+        "unit": "Hz",
+        "check": _quantity_of("speed"),
+        "doc": "input-shaft speed in (0, 1 kHz], e.g. '25 Hz' or '1500 rpm': a simulation's; of measured "
+        "data without a tacho, the records' (a 'files' entry may give its own), refined to ±1 % by "
+        "a 'gearbox' description's mesh orders",
+    },
+    "fs": {
+        "types": (int, float, str),
+        "default": None,
+        "unit": "Hz",
+        "check": _quantity_of("fs"),
+        "doc": "sampling rate in (0, 10 MHz], e.g. '200 kHz': a simulation's integration rate; of measured "
+        "data, when a file carries none",
+    },
+    "gearbox": {
+        "types": str,
+        "default": "",
+        "doc": "a gearbox description (file relative to the scenario, or a built-in name): of measured data "
+        "without a tacho, the mesh orders each record's speed is found from; without 'file' or 'files', "
+        "the simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and "
+        "sizes)",
+    },
+    "sensitivity": {
+        "types": (int, float, str),
+        "default": None,
+        "unit": "V*s^2/m",
+        "check": _sensitivity,
+        "doc": "measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²); without it or "
+        "'gain' the units are unknown",
+    },
+    "gain": {
+        "types": (int, float, str),
+        "default": None,
+        "unit": "V",
+        "check": _gain,
+        "doc": "measured data: volts per file unit, e.g. '0.3 mV' per count of an integer record (WAV: at full scale)",
+    },
+    "transient": {
+        "types": str,
+        "default": "stats",
+        "choices": TRANSIENTS,
+        "doc": "measured data: 'stats' drops a start-up transient, 'none' keeps every revolution",
+    },
+}
+
+
+def measured(name: str, default=_SAME):
+    """The settings field of the measured-data key *name* (MEASURED), with a kind's own *default*
+    where it differs (dataclasses.MISSING: required)."""
+    declared = dict(MEASURED[name])
+    if default is not _SAME:
+        declared["default"] = default
+    return setting(**declared)
+
 
 @dataclass(frozen=True, kw_only=True)
 class DatasetEntry:
     """A dataset table ([[datasets]], [source], [target]): a simulated preset or a measured file."""
 
     preset: str = setting(str, "", doc=f"dataset preset: {', '.join(DATASET_PRESETS)} (or give 'gearbox' or 'file')")
-    file: str = setting(
-        str,
-        "",
-        doc="measured data: a .csv, .txt, .zip (of one text file), .npz, .h5, .wav or .mat file, relative "
-        "to the scenario",
-    )
-    vibration: int | str = setting((int, str), "", doc="measured data: the vibration channel (name or 0-based column)")
-    tacho: int | str = setting(
-        (int, str), "", doc="measured data: a tacho channel (shaft angle or pulses); or give 'speed' or 'gearbox'"
-    )
-    pulses_per_rev: int | None = setting(
-        int, None, low=1, high=10_000, doc="measured data: tacho pulses per input-shaft revolution"
-    )
-    gearbox: str = setting(
-        str,
-        "",
-        doc="a gearbox description (file relative to the scenario, or a built-in name): without 'file', the "
-        "simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and sizes); "
-        "with a measured 'file' and no tacho, the mesh orders the speed is found from",
-    )
+    file: str = measured("file")
+    vibration: int | str = measured("vibration")
+    tacho: int | str = measured("tacho")
+    pulses_per_rev: int = measured("pulses_per_rev")
+    gearbox: str = measured("gearbox")
     labels: str = setting(str, "", doc="measured data: an optional label channel")
     class_names: list = setting(list, ["healthy", "fault"], doc="measured data: class names, healthy first")
-    transient: str = setting(str, "stats", doc="measured data: 'stats' drops a start-up transient, 'none' keeps all")
-    sensitivity: float | str | None = setting(
-        (int, float, str),
-        None,
-        doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: "
-        "V per m/s²); without it or 'gain' the units are unknown",
-        unit="V*s^2/m",
-    )
-    gain: float | str | None = setting(
-        (int, float, str),
-        None,
-        doc="measured data: volts per file unit, e.g. '0.3 mV' per count of an integer record (WAV: at full scale)",
-        unit="V",
-    )
+    transient: str = measured("transient")
+    sensitivity: float | str | None = measured("sensitivity")
+    gain: float | str | None = measured("gain")
     name: str = setting(
         str, "", check=lambda v, where: v and plain_name(v, where), doc="label (default: the preset name)"
     )
     model: str = setting(str, "", doc="dynamic model plugin (default: the preset's)")
     model_preset: str = setting(str, "", doc="the model's parameter preset (default: the preset's)")
     channel: str = setting(str, "", doc="measurement channel, e.g. pinion_x, casing_x")
-    speed: float | str | None = setting((int, float, str), None, doc="input-shaft speed, e.g. '25.2 Hz'", unit="Hz")
+    speed: float | str | None = measured("speed")
     load: float | str | None = setting((int, float, str), None, doc="load torque, e.g. '7 N*m'", unit="N*m")
     faults: dict | list | None = setting(
         (dict, list),
@@ -91,7 +200,7 @@ class DatasetEntry:
     )
     tsa: bool | None = setting(bool, None, doc="a sample is the synchronous average of its J revolutions")
     seed: int | None = setting(int, None, low=0, high=2**32 - 1, doc="seeds the dataset's noise and effect draws")
-    fs: float | str | None = setting((int, float, str), None, doc="integration rate, e.g. '200 kHz'", unit="Hz")
+    fs: float | str | None = measured("fs")
     effects: list | None = setting(
         list,
         None,
@@ -227,18 +336,20 @@ QUANTITIES = {"speed": ("Hz", 1e3, "1 kHz"), "load": ("N*m", 1e6, "1e6 N*m"), "f
 
 def quantity(entry: dict, key: str, where: str) -> float:
     """A speed, load or rate of a dataset entry in SI units, checked against its range."""
+    return _quantity(entry[key], key, f"{where} key '{key}'")
+
+
+def _quantity(given, key: str, where: str) -> float:
     unit, high, said = QUANTITIES[key]
-    value = to_si(entry[key], unit, f"{where} key '{key}'")
+    value = to_si(given, unit, where)
     if key == "speed" and 0 < value < 1e5:  # '1500 rpm' is 25 turns a second, not pint's 157 (rad/s)
         from ..gearbox.description import speed_hz
 
-        value = speed_hz(entry[key], f"{where} key '{key}'")
+        value = speed_hz(given, where)
     if value < 0 or value == 0 and key != "load":
-        raise GearlabInputError(f"{where} key '{key}': expected a positive value, got {shown(entry[key])}")
+        raise GearlabInputError(f"{where}: expected a positive value, got {shown(given)}")
     if value > high:
-        raise GearlabInputError(
-            f"{where} key '{key}': {shown(entry[key])} is outside {'[0' if key == 'load' else '(0'} {unit}, {said}]"
-        )
+        raise GearlabInputError(f"{where}: {shown(given)} is outside {'[0' if key == 'load' else '(0'} {unit}, {said}]")
     return value
 
 
@@ -324,13 +435,7 @@ def units_of(entry: dict, where: str) -> dict:
     if entry.get("sensitivity") is not None:
         out["sensitivity"] = parse_sensitivity(entry["sensitivity"], f"{where} key 'sensitivity'")
     if entry.get("gain") is not None:
-        gain = to_si(entry["gain"], "V", f"{where} key 'gain'")
-        if not gain > 0:
-            raise GearlabInputError(
-                f"{where} key 'gain': expected a positive voltage per file unit such as "
-                f"'0.3 mV', got {shown(entry['gain'])}"
-            )
-        out["gain"] = gain
+        out["gain"] = gain_si(entry["gain"], f"{where} key 'gain'")
     return out
 
 

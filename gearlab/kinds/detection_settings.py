@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass
 
 from ..data.spec import POINTS, DatasetSpec
 from ..learn.config import RECIPE
@@ -12,6 +12,7 @@ from ..learn.protocol import Protocol
 from ..parts.measured import Target
 from ..settings import setting
 from ..signals.indicators import DEFAULT_INDICATORS, INDICATORS
+from .common import measured
 
 SOURCE_SPEEDS = ("records", "source")
 INPUTS = ("difference", "revolution")
@@ -65,38 +66,19 @@ class Corrected:
 
 @dataclass(frozen=True, kw_only=True)
 class TargetRecords:
-    """[target]: the measured records, history and test."""
+    """[target]: the measured records, history and test, with every kind's measured-data keys."""
 
-    vibration: int | str = setting((int, str), doc="vibration column: 0-based index or header name")
-    tacho: int | str = setting(
-        (int, str), "", doc="tacho column: 0-based index or header name; or give 'speed' or 'gearbox'"
-    )
-    pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="tacho pulses per input-shaft revolution")
-    speed: float | str | None = setting(
-        (int, float, str),
-        None,
-        doc="without a tacho: the input-shaft speed, e.g. '25 Hz' (a file entry may give its own "
-        "'speed'); with 'gearbox' too, refined to ±1 % by the mesh orders",
-        unit="Hz",
-    )
-    gearbox: str = setting(
-        str,
-        "",
-        doc="without a tacho: a gearbox description (file relative to the scenario, or a built-in "
-        "name) whose mesh orders give each record's speed",
-    )
-    sensitivity: float | str | None = setting(
-        (int, float, str), None, doc="sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²)"
-    )
-    gain: float | str | None = setting(
-        (int, float, str), None, doc="volts per file unit (integer counts; WAV: at full scale)"
-    )
-    fs: float | str | None = setting(
-        (int, float, str), None, doc="sampling rate, e.g. '66666.67 Hz', when a file carries none"
-    )
-    transient: str = setting(str, "none", doc="'stats' drops a start-up transient, 'none' keeps every revolution")
+    vibration: int | str = measured("vibration", MISSING)
+    tacho: int | str = measured("tacho")
+    pulses_per_rev: int = measured("pulses_per_rev")
+    speed: float | str | None = measured("speed")
+    gearbox: str = measured("gearbox")
+    sensitivity: float | str | None = measured("sensitivity")
+    gain: float | str | None = measured("gain")
+    fs: float | str | None = measured("fs")
+    transient: str = measured("transient", "none")
     positive: str = setting(str, "fault", doc="the label of records with the fault to detect; every other is negative")
-    files: list = setting(list, doc="[{file, role = 'history' | 'test', label, condition, speed (both optional)}, ...]")
+    files: list = measured("files", MISSING)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -13,8 +13,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
-from ..settings import setting
-from .common import DatasetEntry
+from .common import DatasetEntry, measured
 
 # History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
 # record are two conditions; one rig at one setting drifts by well under 1 %).
@@ -28,31 +27,10 @@ SIDEBANDS = 3
 
 @dataclass(frozen=True, kw_only=True)
 class TargetEntry(DatasetEntry):
-    """[target]: a dataset entry, or measured records in the detection kind's shape (a list of files with
-    a tacho of N pulses per revolution, or without one a 'speed' or 'gearbox'; docs/real_data.md); the
-    diagnosis reads their history files."""
+    """[target]: a dataset entry, or measured records in the detection kind's shape ('files', read
+    with the same measured-data keys); the diagnosis reads their history files."""
 
-    vibration: int | str = setting(
-        (int, str), "", doc="measured data: the vibration channel (records: 0-based column or name)"
-    )
-    tacho: int | str = setting(
-        (int, str),
-        "",
-        doc="measured data: the tacho channel (records: 0-based column or name); or give 'speed' or 'gearbox'",
-    )
-    pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="records: tacho pulses per input-shaft revolution")
-    sensitivity: float | str | None = setting(
-        (int, float, str),
-        None,
-        doc="measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V "
-        "per m/s²); without it (or 'gain') the units are unknown",
-    )
-    files: list = setting(
-        list,
-        [],
-        doc="measured records: [{path, role = 'history', label}, ...]; the diagnosis reads "
-        "the history files (healthy, one operating condition)",
-    )
+    files: list = measured("files")
 
 
 @dataclass(frozen=True)
