@@ -482,3 +482,6 @@ def test_effects_accepted_then_not_named_are_said_with_the_reason():
     assert any(s.startswith(f"Effects {reason}") for s in gap_lines(summary))
     assert not any("not named" in s for s in gap_lines({**summary, "dropped": None}))
     assert "not named" not in gap.diagnosis_line({**result, "dropped_effects": []})
+    # a share that rounds to the level is shown with the decimals that tell them apart
+    close = gap.dropped_text({**result, "dropped_share": 0.9874})
+    assert "together 98.7 % of the gap, under the 99.0 %" in close

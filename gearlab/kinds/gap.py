@@ -527,9 +527,12 @@ def diagnosis_line(result: dict) -> str:
 def dropped_text(result: dict) -> str:
     """Why effects the search accepted are not named (gearlab.gap.conclusion: stand-ins)."""
     names = ", ".join(e["name"] for e in result["dropped_effects"])
+    share, below = 100 * result["dropped_share"], 100 * result["dropped_below"]
+    # as many decimals as it takes to show the share under the level (98.7 under 99, not 99 under 99)
+    digits = next((d for d in range(4) if round(share, d) < round(below, d)), 3)
     return (
-        f"{names} fitted, then not named: together {100 * result['dropped_share']:.0f} % of the gap, "
-        f"under the {100 * result['dropped_below']:.0f} % a named set removes"
+        f"{names} fitted, then not named: together {share:.{digits}f} % of the gap, "
+        f"under the {below:.{digits}f} % a named set removes"
     )
 
 
