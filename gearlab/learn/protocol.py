@@ -545,6 +545,12 @@ def train_method(
         alignment=protocol.calibration.alignment,
         on_epoch=on_epoch,
     )
+    if augment is not None:
+        # the source as training showed it: with the target's noise (drawn once, as the validation
+        # set's). A noise-free source residual has a noise scale of ~0, so the `shapes` network's
+        # likelihood ratios (divided by that scale) were ~1e14 against the target's ~1e2, and
+        # every map a line (issue 41)
+        Xs_in = augment(torch.as_tensor(Xs_in), torch.Generator().manual_seed(seed + 1)).numpy()
     with torch.no_grad():
         latent = {
             "source": embed(net, Xs_in, device).cpu().numpy(),
