@@ -3,6 +3,8 @@ through the same pipeline as a third party's recording."""
 
 import json
 
+import numpy as np
+
 
 def test_dataset_scenario_imports_a_measured_file(cli, run_scenario, tmp_path, monkeypatch):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
@@ -20,10 +22,12 @@ def test_dataset_scenario_imports_a_measured_file(cli, run_scenario, tmp_path, m
     assert 10 <= bench["n"] <= 12  # 12 revolutions at 40 Hz in 0.3 s, minus any start-up transient
 
 
-def test_measured_entry_needs_exactly_one_source(cli, write_scenario):
+def test_measured_entry_needs_exactly_one_source(cli, write_scenario, tmp_path):
     bad = write_scenario('[scenario]\nname = "m"\nkind = "dataset"\n\n[[datasets]]\npreset = "B-6"\nfile = "x.npz"\n')
     code, _, err = cli("validate", bad)
     assert code == 2 and "exactly one of 'preset'" in err
+    # no 'vibration': the file's one signal channel, so a file of two needs the key
+    np.savez(tmp_path / "x.npz", acc=np.zeros(10), axial=np.zeros(10), fs=np.array(1e3))
     bad = write_scenario('[scenario]\nname = "m"\nkind = "dataset"\n\n[[datasets]]\nfile = "x.npz"\n', "b.toml")
     code, _, err = cli("validate", bad)
-    assert code == 2 and "needs 'vibration'" in err
+    assert code == 2 and "key 'vibration': missing, and" in err and "has 2 signal channels (acc, axial)" in err

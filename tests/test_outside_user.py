@@ -168,3 +168,41 @@ def test_inspect_refuses_a_sensitivity_for_a_channel_named_in_m_s2(tmp_path):
     options = InspectOptions(vibration="Beschl. [m/s²]", tacho="Tacho [V]", sensitivity=0.1 / 9.80665)
     with pytest.raises(GearlabInputError, match=r"--sensitivity: channel 'Beschl. \[m/s²\]' is an acceleration"):
         inspect_record(str(path), None, options)
+
+
+def test_a_file_of_one_signal_channel_needs_no_vibration_key_in_any_kind(tmp_path):
+    # A blower's npz (acc, fs) without a tacho: inspect took its one channel, but the detection's
+    # [target] refused "key 'vibration': missing", the gap's and a [[datasets]] file too.
+    from gearboxes import description, stage
+
+    from gearlab.engine import load_scenario
+
+    fs, f = 8192.0, 30.0
+    theta = 2 * np.pi * f * np.arange(int(4 * fs)) / fs
+    for name in ("h1", "h2", "t1"):
+        x = _train([(21, 55)], theta, np.random.default_rng(ord(name[-1])))
+        np.savez(tmp_path / f"{name}.npz", acc=x, fs=np.array(fs))
+    np.savez(tmp_path / "two.npz", acc=x, axial=x, fs=np.array(fs))
+    (tmp_path / "blower.toml").write_text(description(stage(21, 55), speed="30 Hz", load="20 N*m"))
+    files = "\n".join(
+        f'  {{ file = "{n}.npz", role = "{r}", label = "{lab}" }},'
+        for n, r, lab in (("h1", "history", "healthy"), ("h2", "history", "healthy"), ("t1", "test", "fault"))
+    )
+    target = f'[target]\ngearbox = "blower.toml"\nfiles = [\n{files}\n]\n'
+    scenarios = {
+        "detect.toml": '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "blower.toml"\n'
+        "faults = { chip = [20] }\nhealthy = 48\n" + target + '[[methods]]\nadapter = "likelihood_ratio"\n',
+        "gap.toml": '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "blower.toml"\n'
+        + target
+        + "[accuracy]\nenabled = false\n",
+        "dataset.toml": '[scenario]\nname = "s"\nkind = "dataset"\n[[datasets]]\nfile = "h1.npz"\nspeed = "30 Hz"\n',
+    }
+    for name, text in scenarios.items():
+        (tmp_path / name).write_text(text)
+    assert load_scenario(tmp_path / "detect.toml").spec.target.vibration == "acc"
+    assert load_scenario(tmp_path / "gap.toml").spec.target.target.vibration == "acc"
+    assert load_scenario(tmp_path / "dataset.toml").spec[0].vibration == "acc"
+    # two signal channels: which one is the user's to say, in one line naming the key
+    (tmp_path / "detect.toml").write_text(scenarios["detect.toml"].replace('"t1.npz"', '"two.npz"'))
+    with pytest.raises(GearlabInputError, match=r"\[target\] key 'vibration': missing, and .*two.npz has 2 signal"):
+        load_scenario(tmp_path / "detect.toml")

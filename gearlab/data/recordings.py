@@ -712,6 +712,22 @@ def read_header(path) -> Header:
         raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
 
 
+def only_vibration(path, tacho, where: str) -> str:
+    """The vibration channel of a file whose scenario names none: its one channel besides the
+    tacho and any rate or time field (as `gearlab inspect` takes it), read from the header alone;
+    a one-line error naming *where*'s 'vibration' key when there are several or none."""
+    header = read_header(path)
+    tacho_name = None if tacho in (None, "") else named(channel_key(tacho), header.channels)
+    left = [c for c in header.channels if not is_rate_or_time(str(c)) and c != tacho_name]
+    if len(left) != 1:
+        raise GearlabInputError(
+            f"{where} key 'vibration': missing, and {path} has {len(left)} signal channels "
+            f"({_listing(left) or 'none'}); expected the vibration channel's name"
+            + (" or 0-based column index" if header.indexed else "")
+        )
+    return left[0]
+
+
 def check_recording(
     path,
     where: str,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..data.importers import MeasuredSpec
 from ..data.placement import canonical_faults, model_shafts
-from ..data.recordings import channel_key, check_measured_file, check_recording
+from ..data.recordings import channel_key, check_measured_file, check_recording, only_vibration
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import parse_sensitivity
 from ..effects import effects_from_tables
@@ -84,7 +84,8 @@ MEASURED = {
         "types": (int, str),
         "default": "",
         "check": _column,
-        "doc": "measured data: the vibration channel (name or 0-based column)",
+        "doc": "measured data: the vibration channel (name or 0-based column; default: the file's one "
+        "channel besides the tacho and time)",
     },
     "tacho": {
         "types": (int, str),
@@ -368,11 +369,11 @@ def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
 def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     """A measured 'file' entry, checked against the file's header (its channels, rate and units:
     recordings.check_recording) so that `gearlab validate` finds a wrong name before any work."""
-    if entry["vibration"] == "":
-        raise GearlabInputError(f"{where}: a measured 'file' needs 'vibration' (the vibration channel)")
     path = Path(entry["file"])
     path = path if path.is_absolute() else base / path
     check_measured_file(path, f"{where} key 'file'")
+    if entry["vibration"] == "":  # as inspect takes it: the file's one channel besides the tacho and time
+        entry = {**entry, "vibration": only_vibration(path, entry["tacho"], where)}
     speed = quantity(entry, "speed", where) if entry["speed"] is not None else None
     fs = quantity(entry, "fs", where) if entry["fs"] is not None else None
     units = units_of(entry, where)

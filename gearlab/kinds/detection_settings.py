@@ -68,7 +68,7 @@ class Corrected:
 class TargetRecords:
     """[target]: the measured records, history and test, with every kind's measured-data keys."""
 
-    vibration: int | str = measured("vibration", MISSING)
+    vibration: int | str = measured("vibration")
     tacho: int | str = measured("tacho")
     pulses_per_rev: int = measured("pulses_per_rev")
     speed: float | str | None = measured("speed")

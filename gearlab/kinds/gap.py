@@ -202,8 +202,6 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     for key in ("preset", "file"):
         if entry[key]:
             raise GearlabInputError(f"{where}: give either 'files' (measured records) or '{key}', not both")
-    if entry["vibration"] == "":
-        raise GearlabInputError(f"{where} key 'vibration': missing; measured records need the vibration column")
     # without a tacho, a declared 'speed' or the 'gearbox' description's mesh orders give each record's
     # speed (parts.measured.target_spec refuses none of the three; the description resolved and loaded now)
     if entry["gearbox"]:

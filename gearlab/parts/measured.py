@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..data.recordings import channel_key, check_measured_file, check_recording, cut_recording
+from ..data.recordings import channel_key, check_measured_file, check_recording, cut_recording, only_vibration
 from ..data.textzip import parse_sensitivity
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
@@ -153,6 +153,14 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
                 f"{where} key 'gain': expected a positive voltage per file unit, got {shown(t['gain'])}"
             )
     files = target_files(t["files"], f"{where} key 'files'", base, need)
+    if vibration == "":  # as inspect takes it: each file's one channel besides the tacho and time
+        found = sorted({only_vibration(f.resolved, tacho, where) for f in files})
+        if len(found) > 1:
+            raise GearlabInputError(
+                f"{where} key 'vibration': missing, and the files' one signal channels differ "
+                f"({', '.join(found)}); expected the vibration channel's name"
+            )
+        vibration = found[0]
     if tacho is None and t["pulses_per_rev"] != 1:
         raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
     for i, f in enumerate(files):
