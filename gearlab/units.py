@@ -1,6 +1,8 @@
 """Quantities with units: SI numbers or strings such as "3.175 mm", "20 deg", "25.2 Hz".
 
-Parsing goes through pint; everything inside gearlab is a float in SI base units.
+Parsing goes through pint; everything inside gearlab is a float in SI base units. The units
+scenarios use are read from a table of pint's own factors first: building pint's registry takes
+0.2-0.3 s, a third of `gearlab validate` (issue 42), and the table gives the same floats.
 """
 
 from __future__ import annotations
@@ -9,14 +11,64 @@ import functools
 import math
 import re
 
-import pint
-
 from .errors import GearlabInputError, shown
 
 
 @functools.cache
-def _ureg() -> pint.UnitRegistry:
+def _ureg():
+    import pint  # 0.3 s with its registry: only for the units FACTORS does not hold
+
     return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+
+
+# FACTORS[to][written]: pint's conversion factor from the unit *written* to the unit *to*, so that
+# a number times it is the float pint returns (pint converts a magnitude by one multiplication).
+# Written out, not computed, so that common quantities need no registry; tests/test_units.py checks
+# every entry and many numbers against pint. A unit spelled otherwise still goes through pint.
+FACTORS = {
+    "m": {"m": 1.0, "mm": 0.001, "um": 1e-06, "cm": 0.01, "km": 1000.0, "in": 0.0254},
+    "mm": {"m": 1000.0},
+    "um": {"m": 1000000.0},
+    "rad": {"rad": 1.0, "deg": 0.017453292519943295},
+    "deg": {"rad": 57.29577951308232},
+    "Hz": {"Hz": 1.0, "kHz": 1000.0, "MHz": 1000000.0},
+    "kHz": {"Hz": 0.001},
+    "revolution/s": {"rpm": 0.016666666666666666, "rad/s": 0.15915494309189535, "deg/s": 0.002777777777777778},
+    "N*m": {"N*m": 1.0, "kN*m": 1000.0},
+    "N": {"N": 1.0, "kN": 1000.0},
+    "N/m": {"N/m": 1.0},
+    "N*s/m": {"N*s/m": 1.0},
+    "N*m/rad": {"N*m/rad": 1.0},
+    "N*m*s/rad": {"N*m*s/rad": 1.0},
+    "V": {"V": 1.0, "mV": 0.001, "uV": 1e-06},
+    "V*s^2/m": {"V*s^2/m": 1.0, "mV/g_n": 0.00010197162129779284, "V/g_n": 0.10197162129779283, "mV/(m/s^2)": 0.001},
+    "s": {"s": 1.0, "ms": 0.001, "us": 1e-06},
+    "kg": {"kg": 1.0, "g": 0.001},
+    "kg*m^2": {"kg*m^2": 1.0},
+    "kg/m^3": {"kg/m^3": 1.0},
+    "Pa": {"Pa": 1.0, "kPa": 1000.0, "MPa": 1000000.0, "GPa": 1000000000.0},
+    "W": {"W": 1.0, "kW": 1000.0, "mW": 0.001},
+    "m/s^2": {"m/s^2": 1.0, "g_n": 9.80665},
+}  # fmt: skip
+
+# An unsigned number as pint reads it (a signed one, whose integer zero pint keeps unsigned, and
+# Python's other literals go through pint), then the unit as written.
+_QUANTITY = re.compile(
+    r"\s*(?P<number>(?:0|[1-9]\d*)(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)\s*(?P<unit>.*?)\s*"
+)
+
+
+def _from_table(text: str, unit: str) -> float | None:
+    """*text* in *unit* by FACTORS, or None when the table cannot say (pint then decides)."""
+    match = _QUANTITY.fullmatch(text)
+    if match is None:
+        return None
+    written = match.group("unit")
+    factor = FACTORS.get(unit, {}).get(written) if written else 1.0  # a bare number is SI already
+    if factor is None:
+        return None
+    number = float(match.group("number")) * factor
+    return number if math.isfinite(number) else None  # pint's own words for an overflow
 
 
 def to_si(value: object, unit: str, where: str, *, as_written: str | None = None) -> float:
@@ -79,9 +131,15 @@ def _screen(text: str, unit: str, where: str) -> None:
 def _parse(text: str, unit: str, where: str, written: str | None = None) -> float:
     written = text if written is None else written
     _screen(text, unit, where)
+    text = text.strip().replace("µ", "u").replace("μ", "u")
+    known = _from_table(text, unit)
+    if known is not None:
+        return known
+    import pint
+
     ureg = _ureg()
     try:
-        quantity = ureg.Quantity(text.strip().replace("µ", "u").replace("μ", "u"))
+        quantity = ureg.Quantity(text)
     except Exception:
         raise GearlabInputError(
             f"{where}: cannot read {written!r} as a quantity; expected e.g. {example(unit)!r} ({_describe(unit)})"
@@ -159,6 +217,9 @@ def display(value: float, unit: str, display_unit: str) -> str:
     """Format an SI value in a friendlier unit, e.g. 0.005 m -> '5 mm'."""
     if not display_unit or display_unit == unit:
         return f"{value:g} {unit}".strip()
+    factor = FACTORS.get(display_unit, {}).get(unit)
+    if factor is not None:
+        return f"{value * factor:.6g} {display_unit}"
     ureg = _ureg()
     shown = ureg.Quantity(value, unit or "dimensionless").to(display_unit).magnitude
     return f"{shown:.6g} {display_unit}"

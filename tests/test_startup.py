@@ -92,3 +92,26 @@ def test_the_torch_free_network_settings_match_the_networks():
             with pytest.raises(GearlabInputError) as checked:
                 check_length(name, shortest - 1)
             assert str(checked.value) == str(built.value)
+
+
+def test_validate_loads_only_its_own_kind():
+    """The kinds' modules load on first use (0.2 s of validate without bytecode caches, issue 42):
+    checking the transfer scenario quick.toml imports the transfer kind and no other."""
+    code = (
+        CASES["validate"]
+        + "\nprint(__import__('json').dumps(sorted(m for m in sys.modules if m.startswith('gearlab.kinds.'))))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", "import sys\n" + code], cwd=ROOT, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    kinds = {
+        "dataset",
+        "detection",
+        "gap",
+        "gap_benchmark",
+        "noise_study",
+        "stiffness",
+        "transfer",
+        "transfer_benchmark",
+    }
+    loaded = {m.split(".")[2] for m in json.loads(done.stdout.strip().splitlines()[-1])}
+    assert loaded & kinds == {"transfer"}, loaded
