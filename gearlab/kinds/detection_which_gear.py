@@ -9,8 +9,10 @@ revolution and so break the slower shafts' continuity) and localised against the
 records of its condition, orders up to the condition's band. What a method's flag on one of its
 units then means:
 
-    the record's change named on a shaft that carries a watched gear   a watched-gear fault
-    named on another shaft                                             other damage: <that gear>
+    the record's change named on a watched gear, or on the shaft of    a watched-gear fault
+    one with both its gears (which of the two undecided)
+    named on another gear (another shaft's, or the other of a shaft's  other damage: <that gear>
+    two, told apart by the length of its event)
     nothing localised                                                  a watched-gear fault (no
                                                                        evidence of where it lies)
 
@@ -56,7 +58,9 @@ def call_of(found: dict, watched: list[str]) -> str:
     if found["named"] is None:
         return NOT_LOCALISED
     ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
-    if any(g in watched for g in ev["gears"]):
+    # one gear of a two-gear shaft named by its event (ev["which"]): only that gear; both: either
+    on = [ev["which"]] if ev.get("which") else ev["gears"]
+    if any(g in watched for g in on):
         return f"{WATCHED}: {found['named']}"
     return f"{OTHER}: {found['named']}"
 
@@ -81,7 +85,7 @@ def evidence(found: dict) -> str:
     threshold, strongest first, and the tooth of the named shaft's gears."""
     z = ", ".join(f"{s['shaft']} z {s['z']:.1f}/{s['threshold']:.1f}" for s in found["shafts"])
     tooth = _tooth(found)
-    return z + ("" if tooth == "–" else f"; tooth {tooth}")
+    return z + ("" if tooth == "–" else f"; tooth {tooth}") + _which(found)
 
 
 def localise_target(source: DatasetSpec, conditions: dict, histories: dict | None = None) -> dict | None:
@@ -184,7 +188,16 @@ def _tooth(found: dict) -> str:
     if found["named"] is None:
         return "–"
     ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
-    return " / ".join(f"{t['tooth']} of {t['of']}" for k, t in ev["tooth"].items() if k != "angle_deg") or "–"
+    on = [ev["which"]] if ev.get("which") else ev["gears"]
+    return " / ".join(f"{ev['tooth'][g]['tooth']} of {ev['tooth'][g]['of']}" for g in on if g in ev["tooth"]) or "–"
+
+
+def _which(found: dict) -> str:
+    """The named shaft's evidence for which of its two gears ("" for a one-gear shaft)."""
+    if found["named"] is None:
+        return ""
+    ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
+    return L.which_line(ev.get("stage_evidence", {}), ev.get("which"))
 
 
 def records_md(loc: dict, labels: dict) -> str:
@@ -196,15 +209,15 @@ def records_md(loc: dict, labels: dict) -> str:
         f"\nWhich gear (each test record against its condition's history; watched: {', '.join(loc['watched'])}; "
         "z of each shaft's localised change over its threshold; the tooth counted from "
         f"{loc.get('tooth_from', 'the first tacho mark')}; a flag on a record whose change lies on another gear "
-        "is other damage)\n",
-        "| condition | file | label | localised on | z / threshold per shaft | tooth | a flag is |",
-        "|---|---|---|---|---|---|---|",
+        "is other damage; which of a shaft's two gears: the length of the fault's event)\n",
+        "| condition | file | label | localised on | z / threshold per shaft | tooth | which gear | a flag is |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for path, r in loc["records"].items():
         z = ", ".join(f"{s['shaft']} {s['z']:.1f}/{s['threshold']:.1f}" for s in r["shafts"])
         out.append(
             f"| {r['condition']} | {path} | {labels.get(path, '')} | {r['named'] or 'nothing'} | {z} | "
-            f"{_tooth(r)} | {r['call']} |"
+            f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {r['call']} |"
         )
     return "\n".join(out) + "\n"
 
