@@ -113,6 +113,7 @@ def test_the_damaged_gear_is_named_first_with_its_tooth(teeth, revolutions, shaf
     assert named.z > named.threshold
     assert near_tooth(named.tooth[name], tooth)
     assert f"{named.tooth[name]['tooth']} of {named.tooth[name]['of']}" in res.summary()
+    assert ("step" in named.tooth[name]) == (shaft > 0)  # the slower shafts' teeth: up to a step
     if len(on) == 1:
         assert res.named == name and named.which is None
     elif stage == 1:
@@ -379,3 +380,7 @@ def test_the_rig_simulators_idler_gears_are_told_apart(gear, named):
     other = next(g for g in ev["gears"] if g != named)
     assert call_of(found, [other]).startswith("other damage: " + named)
     assert call_of(found, [named]).startswith("watched-gear fault: " + named)
+    # the idler turns 1/3 per input turn: a take's first mark finds it at any of 3 angles, so its
+    # gears' teeth are counted up to steps of z / 3, and the summary says so
+    step = {"idler gear 96T (stage 1)": 32, "idler pinion 48T (stage 2)": 16}[named]
+    assert ev["tooth"][named]["step"] == step and f"up to {step}-tooth steps between takes" in found["summary"]

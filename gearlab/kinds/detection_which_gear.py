@@ -189,7 +189,7 @@ def _tooth(found: dict) -> str:
         return "–"
     ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
     on = [ev["which"]] if ev.get("which") else ev["gears"]
-    return " / ".join(f"{ev['tooth'][g]['tooth']} of {ev['tooth'][g]['of']}" for g in on if g in ev["tooth"]) or "–"
+    return " / ".join(L.tooth_words(ev["tooth"][g]) for g in on if g in ev["tooth"]) or "–"
 
 
 def _which(found: dict) -> str:

@@ -55,9 +55,13 @@ pitches n − 1 … n from the shaft's zero). A tacho of N marks per turn starts
 revolutions at any one of them, so a take is first advanced by the m/N turn (m = 0 … N − 1, a
 continuous cut: its first m/N turn dropped) whose mean revolution correlates best with the first
 history record's (:func:`turned`): every take, and every later one scored against the saved
-history, counts from the mark the first history record starts at. One mark: nothing moves. A
-strike's ring moves the peak later by its decay time: on a slow shaft's fine-pitched gear, by a
-pitch or more.
+history, counts from the mark the first history record starts at. One mark: nothing moves. On a
+shaft of order a/b (b > 1: the idler's 1/3) the count is defined only up to steps of z/b teeth (32
+of the idler's 96): a take's first mark finds that shaft at any of b angles, and nothing tells
+which -- the healthy simulated records hold no content of the slow shafts' own orders to align
+their grand periods by (tried: the take's grand-period mean against the first history record's,
+right for 7 of 120 takes on development seeds). The tooth says so ("step"). A strike's ring moves
+the peak later by its decay time: on a slow shaft's fine-pitched gear, by a pitch or more.
 
 Fallback. When the record holds fewer than *min_periods* grand periods (tooth counts with few
 common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
@@ -553,6 +557,8 @@ def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[
     for g in gears:
         pitches = angle / (2 * math.pi / g.teeth)
         out[g.name] = {"pitches": pitches, "tooth": int(math.floor(pitches)) % g.teeth + 1, "of": g.teeth}
+        if o.denominator > 1:  # see the module's docstring, "Tooth": defined up to steps of z / b
+            out[g.name]["step"] = g.teeth / o.denominator
     return out
 
 
@@ -574,6 +580,11 @@ def turned(revolutions: np.ndarray, reference: np.ndarray, marks: int) -> tuple[
         return 0, revs
     flat = revs.reshape(-1)[at[m] :]
     return m, flat[: (flat.size // pts) * pts].reshape(-1, pts)
+
+
+def tooth_words(t: dict) -> str:
+    """ "17 of 96", with the step it is defined up to on a shaft of no whole input order."""
+    return f"{t['tooth']} of {t['of']}" + (f" (up to {t['step']:g}-tooth steps between takes)" if "step" in t else "")
 
 
 def which_line(evidence: dict, which: str | None) -> str:
@@ -608,7 +619,7 @@ class Localisation:
             return f"nothing localised (largest: {top.shaft} z = {top.z:.2f}, threshold {top.threshold:.2f})"
         ev = next(e for e in self.ranking if e.shaft == self.named_shaft)
         teeth = [ev.tooth[g] for g in ([ev.which] if ev.which else ev.gears) if g in ev.tooth]
-        at = (", tooth " + " / ".join(f"{t['tooth']} of {t['of']}" for t in teeth)) if teeth else ""
+        at = (", tooth " + " / ".join(map(tooth_words, teeth))) if teeth else ""
         which = which_line(ev.stage_evidence, ev.which)
         return f"{self.named}: z = {ev.z:.2f} (threshold {ev.threshold:.2f}){at}{which}"
 
