@@ -244,8 +244,10 @@ def comb(
 
     Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
     (j = 1, 2, 3, within ±30 % of the described o, and nearer o than the stage's other shaft's
-    order *rival*: that spacing is the other shaft's evidence) is scored by the amplitudes of the
-    offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
+    order *rival*: that spacing is the other shaft's evidence; nor 2, 3, 1/2 or 1/3 rival off o: the
+    comb of the one seen in the other's every 2nd or 3rd line, as a train of three shows from its
+    meshes' tones with the stages on both shafts of its middle one) is scored by the amplitudes of
+    the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
     least-squares fit through its lines, so a 57- and a 58-tooth wheel are told apart once
     0.5 bin / 3 < o / 57 (sidebands 16 bins apart or more; else 2 bins)."""
     m = float(lines.at[mesh])
@@ -253,10 +255,11 @@ def comb(
     near = np.array([q for q in near if q not in exclude], dtype=int)
     if near.size == 0:
         return None
-    d, a = lines.at[near] - m, lines.amp[near]
+    d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 1 / 2, 1 / 3)
 
     def allowed(c: float) -> bool:
-        return 0.7 * o <= c <= 1.3 * o and (rival is None or abs(math.log(c / o)) < abs(math.log(c / rival)))
+        nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= 0.01 * c for n in nths)
+        return 0.7 * o <= c <= 1.3 * o and not nth and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
 
     best = None
     for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
