@@ -192,7 +192,11 @@ def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkey
 @pytest.mark.parametrize(
     "text, given, expected",
     [
-        (RIG20 + stage(23, 41) + stage(19, 67), {}, r"\[\[stages\]\]: 3 stages: no lumped model simulates more"),
+        (
+            RIG20 + stage(23, 41) + stage(19, 67),
+            {"model": "two_stage"},
+            r"\[\[stages\]\]: 3 stage\(s\), but model 'two_stage' simulates 2 \(the description's model: three_stage\)",
+        ),
         (RIG2S, {"model": "ten_dof"}, r"\[\[stages\]\]: 2 stage\(s\), but model 'ten_dof' simulates 1"),
         (RIG20.replace('direction = "y"', 'direction = "axial"'), {}, r"\[sensor\] key 'direction': 'axial'"),
         (RIG20.replace('speed = "25 Hz"\n', ""), {}, r"\[operation\] key 'speed': missing"),

@@ -39,7 +39,9 @@ CHANNEL_DOFS = {
     "casing_x": "xf",
     "casing_y": "yf",
     "output_x": "x3",
-    "output_y": "y3",  # the output block of a two-stage model (plugins/models/two_stage.py)
+    "output_y": "y3",  # the output block of a two- or three-stage model (plugins/models/two_stage.py)
+    "shaft3_x": "x4",
+    "shaft3_y": "y4",  # a three-stage model's block on shaft 3, its second intermediate shaft
 }
 
 
@@ -61,8 +63,10 @@ LUMPED_PARAMS = {
         Param("I12", "kg*m^2", 1e-4, 1e-9, 1e3, "mass moment of inertia of the pinion block"),
         Param("I21", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the gear block"),
         Param("I22", "kg*m^2", 1e-2, 1e-9, 1e3, "mass moment of inertia of the load"),
-        Param("m3", "kg", 1.0, 1e-6, 1e4, "mass of the output block of a two-stage model"),
+        Param("m3", "kg", 1.0, 1e-6, 1e4, "mass of the output block of a two- or three-stage model"),
         Param("I31", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the output gear block"),
+        Param("m4", "kg", 1.0, 1e-6, 1e4, "mass of the second intermediate block of a three-stage model"),
+        Param("I41", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the second intermediate block"),
         Param("k_b", "N/m", 1e8, 1e3, 1e12, "bearing stiffness, x and y of both shafts"),
         Param("c_b", "N*s/m", 1e3, 0.0, 1e8, "bearing damping, x and y of both shafts"),
         Param("k_c", "N*m/rad", 1e3, 0.0, 1e9, "coupling stiffness motor-pinion and gear-load"),

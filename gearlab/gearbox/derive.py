@@ -25,8 +25,8 @@ from ..physics.geometry import GearPair
 @dataclass(frozen=True)
 class StagePair(GearPair):
     """A GearPair whose wheel sits on its own bore: hub_radius is the pinion's, wheel_hub_radius the wheel's.
-    *next_stage*: the pair its wheel's shaft drives in a two-stage train (train_pair), which the
-    two-stage model meshes second (plugins/models/two_stage.py)."""
+    *next_stage*: the pair its wheel's shaft drives in a two- or three-stage train (train_pair), which
+    the multi-stage models mesh next (plugins/models/two_stage.py)."""
 
     wheel_hub_radius: float = 0.0
     next_stage: GearPair | None = None
@@ -91,18 +91,20 @@ def gear_pairs(box) -> tuple[GearPair, ...]:
     return tuple(gear_pair(box, stage) for stage in box.stages)
 
 
-def train_pair(first: GearPair, second: GearPair) -> StagePair:
-    """Stage 1's pair carrying stage 2's: what a two-stage model simulates (the same mesh stiffness
-    as *first*, the wheel on its own bore as before)."""
+def train_pair(first: GearPair, second: GearPair, *rest: GearPair) -> StagePair:
+    """Stage 1's pair carrying stage 2's, which carries stage 3's when given: what a multi-stage
+    model simulates (each pair the same mesh stiffness as before, each wheel on its own bore)."""
     values = {f.name: getattr(first, f.name) for f in dataclasses.fields(GearPair) if f.init}
-    return StagePair(**values, wheel_hub_radius=first.gear.hub_radius, next_stage=second)
+    after = train_pair(second, *rest) if rest else second
+    return StagePair(**values, wheel_hub_radius=first.gear.hub_radius, next_stage=after)
 
 
 # --- the lumped model ----------------------------------------------------------------------------
 #
 # The existing formulations: one stage -> ten_dof (and its eight/six-DOF subsets, which pick
-# their parameters from it), two stages -> two_stage (the PHM 2009 rig's model). Names are
-# those of thesis Tables 2.3 and 2.4.
+# their parameters from it), two stages -> two_stage (the PHM 2009 rig's model), three ->
+# three_stage (two_stage with a block on shaft 3: m4, I41). Names are those of thesis Tables 2.3
+# and 2.4; each shaft's block (mass m, polar inertia I) as plugins/models/two_stage.py numbers them.
 
 DYNAMICS_NAMES = {
     "motor_inertia": "I11",
@@ -118,8 +120,12 @@ DYNAMICS_NAMES = {
     "mounting_damping_y": "c_yf",
     "mesh_damping_ratio": "zeta",
 }
-_SHAFT_BLOCKS = {1: (("m1", "I12"), ("m2", "I21")), 2: (("m1", "I12"), ("m2", "I21"), ("m3", "I31"))}
-MODELS = {1: "ten_dof", 2: "two_stage"}
+_SHAFT_BLOCKS = {
+    1: (("m1", "I12"), ("m2", "I21")),
+    2: (("m1", "I12"), ("m2", "I21"), ("m3", "I31")),
+    3: (("m1", "I12"), ("m2", "I21"), ("m4", "I41"), ("m3", "I31")),  # the output block stays m3, I31
+}
+MODELS = {1: "ten_dof", 2: "two_stage", 3: "three_stage"}
 
 
 def disc(gear, module: float) -> tuple[float, float]:
@@ -146,13 +152,8 @@ def shaft_blocks(box) -> list[tuple[float, float]]:
 
 def lumped_params(box) -> tuple[str, dict[str, float]]:
     """(model name, its parameters) of the lumped model of *box*: ten_dof for one stage, two_stage
-    for two. Three stages have no lumped formulation yet (refused in one line)."""
+    for two, three_stage for three (a description has 1 to 3)."""
     stages = len(box.stages)
-    if stages not in MODELS:
-        raise GearlabInputError(
-            f"{box.source}: [[stages]]: no lumped model for {stages} stages yet (one stage: ten_dof, two: two_stage); "
-            "the gear pairs and the order table are derived all the same"
-        )
     params = {DYNAMICS_NAMES[k]: v for k, v in box.dynamics.items()}
     for (m_name, i_name), (mass, inertia) in zip(_SHAFT_BLOCKS[stages], shaft_blocks(box)):
         params[m_name], params[i_name] = mass, inertia

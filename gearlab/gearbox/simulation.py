@@ -14,15 +14,15 @@ The lumped model (thesis 2.3, 2.4.2; plugins/models), by what the description gi
   ``eight_dof`` (no housing: the bearings grounded) when it gives the drive (motor_inertia,
   load_inertia, coupling_*) and no housing value;
 * two stages: ``two_stage``, its second mesh the description's stage 2;
-* three stages: refused (no lumped formulation yet).
+* three stages: ``three_stage`` (two_stage with a third mesh and a block on shaft 3).
 
 A [source] may name another model with ``model`` (six_dof, say) of the same number of stages.
 The values: each shaft's block from [[shafts]] (else its gears as solid discs), the rest from
 [dynamics] (else the DYNAMICS defaults; FITTED names the gap-diagnosis effect that fits each).
 The channel from [sensor]: on a model with a housing the accelerometer sits on it (casing_x,
 casing_y: the lumped housing is one block, so 'near' picks nothing); without one, on the block
-of the shaft it is near (input: pinion_, output of one stage: gear_, two stages: gear_ for the
-idler, output_ for the output). 'radial' is y, the axis nearest the line of action
+of the shaft it is near (input: pinion_, output of one stage: gear_, of a train: gear_ for shaft
+2, shaft3_ for shaft 3 of three, output_ for the output). 'radial' is y, the axis nearest the line of action
 (eq. 2.104: cos α of the mesh force); 'axial' is refused (the models have no axial DOF).
 """
 
@@ -34,7 +34,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from ..errors import GearlabInputError
-from .derive import DYNAMICS_NAMES, gear_pairs, lumped_params, train_pair
+from .derive import DYNAMICS_NAMES, MODELS, gear_pairs, lumped_params, train_pair
 from .description import FITTED, Gearbox
 
 PREFIX = "gearbox:"
@@ -86,13 +86,8 @@ def label(preset: str) -> str:
 def model_name(box: Gearbox) -> str:
     """The lumped model a description implies (module doc)."""
     stages = len(box.stages)
-    if stages == 2:
-        return "two_stage"
-    if stages != 1:
-        raise GearlabInputError(
-            f"{box.source}: [[stages]]: {stages} stages: no lumped model simulates more than two stages yet (one "
-            "stage: ten_dof or eight_dof, two: two_stage); the stiffness model, the order table and inspect take it"
-        )
+    if stages > 1:
+        return MODELS[stages]
     stated = set(box.stated)
     return "eight_dof" if stated & set(DRIVE) and not stated & set(HOUSING) else "ten_dof"
 
@@ -109,7 +104,8 @@ def channel(box: Gearbox, model: str, channels: tuple[str, ...]) -> str:
     if f"casing_{direction}" in channels:
         return f"casing_{direction}"
     shaft = box.shafts.index(box.sensor.near)
-    block = ("pinion", "gear", "output")[shaft] if shaft < 3 else ""
+    block = ("pinion", "gear", "output") if len(box.shafts) < 4 else ("pinion", "gear", "shaft3", "output")
+    block = block[shaft] if shaft < len(block) else ""
     name = f"{block}_{direction}"
     if name not in channels:
         raise GearlabInputError(
@@ -140,7 +136,7 @@ def preset_of(box: Gearbox, names: tuple[str, ...], stages: int, model: str = ""
     _, params = lumped_params(box)
     pairs = gear_pairs(box)
     return {
-        "pair": pairs[0] if stages == 1 else train_pair(*pairs),
+        "pair": pairs[0] if stages == 1 else train_pair(*pairs),  # stage 1 carrying the next
         "params": {k: v for k, v in params.items() if k in names},
         "speed_hz": box.speed_hz,
         "load_nm": box.load_nm,
@@ -183,6 +179,18 @@ class DescribedPresets(Mapping):
         return len(self._extra)
 
 
+def model_command(gearbox: str, model: str | None, preset: str | None) -> tuple[str, str]:
+    """(model, preset) of `gearlab simulate` or `modes` with --gearbox: the description's model unless
+    --model, its reference as the preset."""
+    if preset is not None:
+        raise GearlabInputError(f"--preset {preset}: the --gearbox description gives the model's values; give one")
+    try:
+        ref = reference(gearbox)
+    except OSError as exc:
+        raise GearlabInputError(f"--gearbox {gearbox}: cannot read the description ({exc.strerror or exc})") from None
+    return model or model_name(referenced(ref)), ref
+
+
 def simulate_command(
     gearbox: str | None, model: str | None, preset: str | None, speed: float | None, load: float | None
 ) -> tuple[str, str | None, float | None, float | None]:
@@ -193,14 +201,8 @@ def simulate_command(
         if model is None:
             raise GearlabInputError("gearlab simulate: give --model NAME (and --preset) or --gearbox DESCRIPTION")
         return model, preset, speed, load
-    if preset is not None:
-        raise GearlabInputError(f"--preset {preset}: the --gearbox description gives the model's values; give one")
-    try:
-        ref = reference(gearbox)
-    except OSError as exc:
-        raise GearlabInputError(f"--gearbox {gearbox}: cannot read the description ({exc.strerror or exc})") from None
+    model, ref = model_command(gearbox, model, preset)
     box = referenced(ref)
-    model = model or model_name(box)
     for key, option, value in (("speed", "--speed", speed), ("load", "--load", load)):
         if value is None and getattr(box, f"{key}_hz" if key == "speed" else f"{key}_nm") is None:
             raise GearlabInputError(f"{box.source}: [operation] key '{key}': missing; expected it there or {option}")
