@@ -193,6 +193,7 @@ def _stiffness_pair(preset: str | None, gearbox: str | None, stage: int):
 
 @app.command()
 def inspect(
+    ctx: typer.Context,
     file: Annotated[Path, typer.Argument(help="a recording: .csv, .npz, .h5/.hdf5, .wav or .mat")],
     gearbox: Annotated[
         str | None, typer.Option(help="a gearbox description (.toml, docs/gearbox.md) or a built-in one's name")
@@ -218,30 +219,12 @@ def inspect(
 
     Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho --history healthy1.csv --history healthy2.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .gearbox import resolve_gearbox
-    from .inspect import inspect_record, json_ready, localisation, render, render_localisation
-    from .notebook import inspect_options
+    from .inspect import json_ready, render, render_localisation
+    from .notebook import inspect_recording
 
-    options = inspect_options(
-        flag=lambda key: "--" + key.replace("_", "-"),
-        vibration=vibration,
-        tacho=tacho,
-        tacho_kind=tacho_kind,
-        pulses_per_rev=pulses_per_rev,
-        tacho_shaft=tacho_shaft,
-        speed=speed,
-        fs=fs,
-        sensitivity=sensitivity,
-        gain=gain,
-    )
-    box = None if gearbox is None else resolve_gearbox(gearbox)
-    if box is not None and tacho_shaft is not None:
-        box.shaft_index(tacho_shaft, "--tacho-shaft")
-    if history and box is None:
-        raise GearlabInputError("--history: localising needs the gearbox's shafts and teeth; give --gearbox too")
-    report = inspect_record(str(file), box, options)
-    if history:
-        report["localisation"] = localisation(str(file), [str(h) for h in history], box, options)
+    # the recording's options are inspect_recording's keywords, by name (its checks name them by flag)
+    options = {k: v for k, v in ctx.params.items() if k not in ("file", "history", "as_json")}
+    report = inspect_recording(file, history=history or (), flag=_option, **options)
     if as_json:
         typer.echo(json.dumps(json_ready(report)))
         return
@@ -373,6 +356,11 @@ def describe_spec(s) -> str:
 Out = Annotated[
     Path | None, typer.Option(help="base directory for the run directory (default: the scenario's output dir)")
 ]
+def _option(key: str) -> str:
+    """The option of a keyword of the Python API (gearlab.notebook), as its errors name it here."""
+    return "--" + key.replace("_", "-")
+
+
 Resume = Annotated[Path | None, typer.Option(help="continue the run in this run directory")]
 Quick = Annotated[bool, typer.Option(help="shrink the scenario for a smoke run")]
 Executor = Annotated[

@@ -173,16 +173,28 @@ def import_recording(path: str | Path, vibration: str | int, **keys) -> Dataset:
     return _dataset("gearlab.import_recording", {"file": str(path), "vibration": vibration, **keys})
 
 
-def inspect_options(*, flag=lambda key: key, **given):
-    """InspectOptions from the user's texts (`gearlab inspect`'s options, inspect_recording's
-    keywords), checked once for both: a wrong value is one line naming *flag(key)* (the CLI passes
+def inspect_options(
+    *,
+    vibration: str | None = None,
+    tacho: str | None = None,
+    tacho_kind: str = "auto",
+    pulses_per_rev: int | None = None,
+    tacho_shaft: str | None = None,
+    speed: float | str | None = None,
+    fs: float | str | None = None,
+    sensitivity: float | str | None = None,
+    gain: float | str | None = None,
+    flag=lambda key: key,
+):
+    """InspectOptions from the user's texts (inspect_recording's keywords, which `gearlab inspect`'s
+    options are), checked once: a wrong value is one line naming *flag(key)* (the CLI passes
     '--pulses-per-rev' for 'pulses_per_rev')."""
     from .data.importers import TACHO_KINDS
     from .data.textzip import parse_sensitivity
     from .gearbox import speed_hz
     from .inspect import InspectOptions
 
-    kind, ppr, fs, gain = given["tacho_kind"], given["pulses_per_rev"], given["fs"], given["gain"]
+    kind, ppr = tacho_kind, pulses_per_rev
     if kind not in TACHO_KINDS:
         raise GearlabInputError(f"{flag('tacho_kind')}: {kind!r} is not one of {', '.join(TACHO_KINDS)}")
     if ppr is not None and not 1 <= ppr <= 10_000:
@@ -193,13 +205,12 @@ def inspect_options(*, flag=lambda key: key, **given):
     volts = _si(gain, "V", flag("gain"))
     if volts is not None and not volts > 0:
         raise GearlabInputError(f"{flag('gain')}: expected a positive number of volts per file unit, got {gain!r}")
-    speed, sensitivity = given["speed"], given["sensitivity"]
     return InspectOptions(
-        vibration=given["vibration"],
-        tacho=given["tacho"],
+        vibration=vibration,
+        tacho=tacho,
         tacho_kind=kind,
         pulses_per_rev=ppr,
-        tacho_shaft=given["tacho_shaft"],
+        tacho_shaft=tacho_shaft,
         speed_hz=None if speed is None else speed_hz(speed, flag("speed")),
         fs=rate,
         sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, flag("sensitivity")),
@@ -211,20 +222,18 @@ def inspect_recording(
     path: str | Path,
     gearbox: Gearbox | str | Path | None = None,
     *,
-    vibration: str | None = None,
-    tacho: str | None = None,
-    tacho_kind: str = "auto",
-    pulses_per_rev: int | None = None,
-    tacho_shaft: str | None = None,
-    speed: float | str | None = None,
-    fs: float | str | None = None,
-    sensitivity: float | str | None = None,
-    gain: float | str | None = None,
+    history: Sequence[str | Path] = (),
+    flag=lambda key: key,
+    **options,
 ) -> dict:
     """What ``gearlab inspect`` shows of a recording, as a dict: rate, duration, channels, the speed
     (from the tacho, a declared *speed* or the mesh lines of *gearbox*), the order spectrum's lines
     and the TSA of each shaft; with a *gearbox*, whether the description matches (``matches``,
-    ``verdict``). The arrays (``spectrum``, each ``tsa``) are kept.
+    ``verdict``); with *history* (healthy records of the same gearbox) and a *gearbox*, which shaft
+    and gear carry a localised change (``localisation``). The arrays (``spectrum``, each ``tsa``) are
+    kept. *options*: ``vibration``, ``tacho``, ``tacho_kind`` (auto, angle, pulses),
+    ``pulses_per_rev``, ``tacho_shaft``, ``speed``, ``fs``, ``sensitivity``, ``gain``, as
+    inspect_options checks them; *flag* names a keyword in an error (the CLI passes its options).
 
     >>> import numpy as np
     >>> t = np.arange(40_000) / 20e3
@@ -234,23 +243,20 @@ def inspect_recording(
     >>> report["revolutions"], round(report["lines"][0]["order"], 2), report["matches"]
     (48, 16.0, True)
     """
-    from .inspect import inspect_record
+    from .inspect import inspect_record, localisation
 
+    checked = inspect_options(flag=flag, **options)
     box = None if gearbox is None else gearbox if hasattr(gearbox, "stages") else load_gearbox(gearbox)
-    options = inspect_options(
-        vibration=vibration,
-        tacho=tacho,
-        tacho_kind=tacho_kind,
-        pulses_per_rev=pulses_per_rev,
-        tacho_shaft=tacho_shaft,
-        speed=speed,
-        fs=fs,
-        sensitivity=sensitivity,
-        gain=gain,
-    )
-    if box is not None and tacho_shaft is not None:  # named as the keyword here, as the CLI names its flag
-        box.shaft_index(tacho_shaft, "tacho_shaft")
-    return inspect_record(str(path), box, options)
+    if box is not None and checked.tacho_shaft is not None:
+        box.shaft_index(checked.tacho_shaft, flag("tacho_shaft"))
+    if history and box is None:
+        raise GearlabInputError(
+            f"{flag('history')}: localising needs the gearbox's shafts and teeth; give {flag('gearbox')} too"
+        )
+    report = inspect_record(str(path), box, checked)
+    if history:
+        report["localisation"] = localisation(str(path), [str(h) for h in history], box, checked)
+    return report
 
 
 # --- the gap between a simulator and a target ------------------------------------------------------

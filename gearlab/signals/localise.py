@@ -44,7 +44,9 @@ excess lies below half the finer gear's tooth order (a low mode's ring then sets
 simulator and a 21/63 + 24/56 train, development seeds 0, 40 trials each: medians u = 0.00 and
 -0.01 for the wheel (96T, 63T), 0.48 and 0.46 for the pinion (48T, 24T). The modulation of each
 stage's mesh harmonics, the physical reading, did not tell them apart on the simulator (sidebands
-gather about neither: a tooth's loss of stiffness moves the load through the coupled shaft).
+gather about neither: a tooth's loss of stiffness moves the load through the coupled shaft). The
+width follows the structure's modes too: fresh seed 1071 (benchmarks/localisation.py) named 9 of 10
+flagged 48T faults at 35 Hz the 96T, and 11 of 13 63T faults at 20 Hz the 24T; other speeds held.
 
 Tooth. The named shaft's orders, each weighted by the share of its power that is new
 (clip(Δ / |X̄|², 0, 1)), form the shaft's residual; the peak of its envelope's energy over one
