@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import json
+import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -18,6 +19,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from .confined import Confined
+from .errors import GearlabInputError
 
 
 @dataclass(frozen=True)
@@ -97,64 +99,168 @@ def told_unit(where: Callable) -> Callable:
 
 
 REPORT = "report"  # the stage of a run's last step: its figures and report.html
-_figures: ContextVar[Callable[[str], None] | None] = ContextVar("figures", default=None)
+_figures: ContextVar[_Figures | None] = ContextVar("figures", default=None)
+
+
+class _Figures:
+    """The 'report' stage of the run in progress: i of n, n being the figures the kind said it
+    would draw (figures_ahead) and report.html; figures drawn unannounced count with no total."""
+
+    def __init__(self, on_event: EventSink):
+        self.on_event = on_event
+        self.planned = self.drawn = 0
+        self.started = False
+
+    @property
+    def total(self) -> int:
+        """The figures and report.html; 0 (unknown) while no figure was announced."""
+        return max(self.planned, self.drawn) + 1 if self.planned else 0
+
+    def _say(self, message: str = "figures and report.html") -> None:
+        if not self.started:
+            self.started = True
+            self.on_event(Event("stage", stage=REPORT, done=self.drawn, total=self.total, message=message))
+        else:
+            self.on_event(Event("advance", stage=REPORT, done=self.drawn, total=self.total))
+
+    def ahead(self, count: int) -> None:
+        self.planned = max(self.planned, self.drawn) + count
+        self._say()
+
+    def written(self) -> None:
+        self.drawn += 1
+        self._say()
+
+    def finish(self) -> None:
+        self.planned = self.drawn = max(self.planned, self.drawn)  # a figure announced, not drawn
+        if not self.started:
+            self._say("figures and report.html" if self.drawn else "report.html")
+        n = self.drawn + 1
+        self.on_event(Event("advance", stage=REPORT, done=n, total=n))
+
+
+def report_begins() -> None:
+    """Called by a kind before it loads its drawing code (matplotlib: 2-3 s on a busy machine): the
+    run in progress (if any) starts its 'report' stage, its total told by figures_ahead."""
+    figures = _figures.get()
+    if figures is not None and not figures.started:
+        figures._say()
+
+
+def figures_ahead(count: int) -> None:
+    """Called by a kind's drawing code before it draws *count* figures: the run in progress (if any)
+    starts its 'report' stage, or extends it, so that it counts i of n with an ETA from the first
+    figure on (issue 41: a count that grew as the figures came had no total, so no ETA)."""
+    figures = _figures.get()
+    if figures is not None and count > 0:
+        figures.ahead(count)
 
 
 def figure_written(name: str) -> None:
     """Called by gearlab.plots.save for each figure it writes: counted by the run in progress, if any."""
-    tell = _figures.get()
-    if tell is not None:
-        tell(name)
+    figures = _figures.get()
+    if figures is not None:
+        figures.written()
 
 
 @contextmanager
 def telling_figures(on_event: EventSink) -> Iterator[Callable[[], None]]:
-    """While a run's kind runs and its report is written: a 'report' stage, started by the first
-    figure, that counts the figures drawn (a run's end drew its figures for seconds, a detection
-    run's a dozen, with no sign of life: issue 41). Yields the call that ends the stage once
-    report.html is written."""
-    drawn: list[str] = []
-
-    def tell(name: str) -> None:
-        if not drawn:
-            on_event(Event("stage", stage=REPORT, message="figures and report.html"))
-        drawn.append(name)
-        on_event(Event("advance", stage=REPORT, done=len(drawn)))
-
-    def finish() -> None:
-        if not drawn:
-            on_event(Event("stage", stage=REPORT, total=1, message="report.html"))
-        n = max(len(drawn), 1)
-        on_event(Event("advance", stage=REPORT, done=n, total=n))
-
-    token = _figures.set(tell)
+    """While a run's kind runs and its report is written: a 'report' stage that counts the figures
+    drawn, i of the figures announced (figures_ahead) and report.html (a run's end drew its figures
+    for seconds, a detection run's a dozen, with no sign of life: issue 41). It starts when the kind
+    announces its figures, else with the first figure written, else for report.html alone. Yields
+    the call that ends the stage once report.html is written."""
+    figures = _Figures(on_event)
+    token = _figures.set(figures)
     try:
-        yield finish
+        yield figures.finish
     finally:
         _figures.reset(token)
+
+
+STANDING_S = 3.0  # a unit's line that stood this long says for how long, each second
 
 
 class UnitProgress:
     """What a unit in progress reports ('epoch 120, validation accuracy 88 %'), written to a
     small file in the run directory's progress/ folder, from whichever process or cluster node
     runs the unit; the engine watches the folder (ProgressWatcher) and sends 'unit' events.
-    Use as a context manager: the file goes when the unit ends."""
+    Use as a context manager: the file goes when the unit ends.
+
+    While it is open a thread keeps the file current: a report that came within *every* of the
+    last write is written when that time is up (it was dropped before, and the line showed an
+    older step), and a report that stood STANDING_S says for how long ('starting: importing
+    torch (7 s)'), so that a step that cannot count (an import, a first epoch on a busy machine)
+    is not silent (issue 41)."""
 
     def __init__(self, run_path: Path, unit: str, every: float = 0.5):
         self.file = Confined(run_path, (PROGRESS, unit.replace("/", "__") + ".txt"))
         self.every, self.last = every, -every
+        self.text, self.since, self.shown = "", 0.0, ""
+        self.lock = threading.Lock()
+        self.closed = threading.Event()
+        self.keeper: threading.Thread | None = None
 
     @property
     def path(self) -> Path:
         return self.file.path
 
     def __call__(self, text: str) -> None:
-        if time.monotonic() - self.last >= self.every:  # a few writes a second at most
-            self.file.write(text)
-            self.last = time.monotonic()
+        with self.lock:
+            if text != self.text:
+                self.text, self.since = text, time.monotonic()
+            if time.monotonic() - self.last >= self.every:  # a few writes a second at most
+                self._write(text)
+
+    def _write(self, text: str) -> None:
+        self.file.write(text)
+        self.last, self.shown = time.monotonic(), text
+
+    def _keep(self) -> None:
+        while not self.closed.wait(max(self.every, 0.05)):
+            with self.lock:
+                if self.closed.is_set() or not self.text:
+                    continue
+                stood = time.monotonic() - self.since
+                line = self.text if stood < STANDING_S else f"{self.text} ({stood:.0f} s)"
+                if line != self.shown:
+                    try:
+                        self._write(line)
+                    except (OSError, GearlabInputError):  # the unit's own next report says so
+                        pass
 
     def __enter__(self) -> UnitProgress:
+        self.keeper = threading.Thread(target=self._keep, daemon=True)
+        self.keeper.start()
         return self
 
     def __exit__(self, *exc) -> None:
+        self.closed.set()
+        if self.keeper is not None:
+            self.keeper.join()
         self.file.unlink()
+
+
+@contextmanager
+def standing(on_event: EventSink, name: str, text: str) -> Iterator[None]:
+    """A step of the run's own process that cannot count (importing torch: 2-5 s on a busy machine) as
+    a unit's line under the bars, 'name: text', that says for how long each second once it stood
+    STANDING_S, as a unit's own line does (UnitProgress); the line goes when the step ends."""
+    done = threading.Event()
+    on_event(Event("unit", stage=name, message=text))
+
+    def keep() -> None:
+        began = time.monotonic()
+        while not done.wait(1.0):
+            stood = time.monotonic() - began
+            if stood >= STANDING_S:
+                on_event(Event("unit", stage=name, message=f"{text} ({stood:.0f} s)"))
+
+    keeper = threading.Thread(target=keep, daemon=True)
+    keeper.start()
+    try:
+        yield
+    finally:
+        done.set()
+        keeper.join()
+        on_event(Event("unit", stage=name))

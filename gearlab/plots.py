@@ -15,7 +15,7 @@ import matplotlib
 
 from .charts import dataset_examples
 from .confined import Confined, read_file, write_file
-from .events import figure_written
+from .events import figure_written, figures_ahead
 from .gearbox.simulation import label as preset_label
 from .signals import order_spectrum, spectrum
 
@@ -206,6 +206,9 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
     """Figures 5.5/5.6 (accuracy vs k), 5.7 (training curves), 5.8 (confusion), 5.9 (latent maps)."""
     run_path = _target(run_path)
     figures = run_path / "figures"
+    curved = [r for r in records if r.get("history") and r["rep"] == 0 and r["history"].get("discrepancy")]
+    latent_files = _files(run_path / "latent", "*.npz")
+    figures_ahead(2 + bool(curved) + bool(latent_files))  # the run's 'report' stage counts i of n
     # accuracy against k with one-standard-deviation bands
     fig, ax = plt.subplots(figsize=(10, 4.5), layout="constrained")
     colours = plt.get_cmap("tab20").colors  # one colour per method, for up to 20 methods
@@ -225,7 +228,6 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
     save(fig, figures / "accuracy_vs_k.png")
 
     # training curves of the first repetition at the middle k (Figure 5.7)
-    curved = [r for r in records if r.get("history") and r["rep"] == 0 and r["history"].get("discrepancy")]
     if curved:
         k_show = sorted({r["k"] for r in curved})[len({r["k"] for r in curved}) // 2]
         shown = [r for r in curved if r["k"] == k_show]
@@ -273,7 +275,6 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
     save(fig, figures / "confusion_k0.png")
 
     # latent feature maps after adaptation (Figure 5.9): a PCA of source and target training features
-    latent_files = _files(run_path / "latent", "*.npz")
     if latent_files:
         fig, axes = plt.subplots(
             1, len(latent_files), figsize=(3.2 * len(latent_files), 3.2), squeeze=False, layout="constrained"
@@ -437,6 +438,7 @@ def noise_study_figures(figures: Path, results: Mapping[str, Mapping[str, dict]]
     results = {n: r for n, r in results.items() if any(v in r for v in VARIANT_TITLES)}
     if not results:
         return
+    figures_ahead(3)
 
     fig, panels = _study_grid(results)
     for ax, noise, variant, stats in panels:
@@ -517,6 +519,7 @@ def gap_figures(figures: Path, summary: Mapping) -> None:
     effect ranking (share of the gap each candidate removes alone), accuracy before/after."""
     figures = _target(figures)
     views = summary["views"]
+    figures_ahead(1 + bool(summary.get("ranking")) + bool(summary.get("accuracy")))
     names = list(views)
     x = np.arange(len(names))
     fig, ax = plt.subplots(figsize=(9, 3.8), layout="constrained")

@@ -9,6 +9,7 @@ import pytest
 from tiny import transfer
 
 from gearlab.engine import run_scenario
+from gearlab.parts.bound import STEPS
 
 
 def test_the_bayes_bound_and_the_report_are_stages_of_their_own(tmp_path, monkeypatch):
@@ -25,12 +26,18 @@ def test_the_bayes_bound_and_the_report_are_stages_of_their_own(tmp_path, monkey
     assert done < begin < end < stages.index(("stage", "runs"))  # after the datasets, before the runs
     bound_logs = [e for e in events if e.kind == "log" and "Bayes bound" in e.message]
     assert bound_logs  # what the stage does is said while it runs
-    # the run's end (its figures, then report.html) is a stage of its own too, a step per figure
+    # in steps with a total (the twin, then tenths of the target's revolutions): an ETA after the first
+    bound = [e for e in events if e.stage == "bound" and e.kind in ("stage", "advance")]
+    assert {e.total for e in bound} == {STEPS} and STEPS > 2
+    assert [e.done for e in bound if e.kind == "advance"] == [*range(1, STEPS + 1), STEPS]
+    # the run's end (its figures, then report.html) is a stage of its own too, started before
+    # matplotlib loads: i of n, n the figures announced before the first is drawn, and report.html
     figures = sorted(p.name for p in (run.path / "figures").iterdir())
     report = [e for e in events if e.stage == "report"]
+    n = len(figures) + 1
     assert stages.index(("stage", "report")) > max(i for i, s in enumerate(stages) if s == ("advance", "runs"))
-    assert [e.done for e in report if e.kind == "advance"] == [*range(1, len(figures) + 1), len(figures)]
-    assert report[-1].total == len(figures) >= 2 and report[0].message == "figures and report.html"
+    assert report[0].kind == "stage" and report[0].done == 0 and report[0].message == "figures and report.html"
+    assert [(e.done, e.total) for e in report[1:]] == [(i, n) for i in range(n)] + [(n, n)] and n >= 3
 
 
 def test_the_priming_and_the_source_model_say_how_far_they_are():
@@ -70,4 +77,4 @@ def test_a_training_unit_says_it_started_before_it_loads_torch_and_the_data(tmp_
     task = (tiny(), (None, None), (None, None), 0, 0, method("mmd"), Confined(tmp_path, ("states",)))
     with pytest.raises(RuntimeError, match="stop here"):
         training.train_unit(task)
-    assert said == ["starting: torch and the datasets", "load"]
+    assert said == ["starting: importing torch", "starting: reading dataset 1 of 2 (source)", "load"]

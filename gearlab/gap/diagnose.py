@@ -84,6 +84,7 @@ from .conclusion import MIN_SHARE, another_round, chain_record, conclusion, gap_
 from .identify import _plain, alias_refit
 from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_removal, _prepared, _report, check_settings
 from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect
+from .stats import REPORT_PARTS
 from .structure import first_difference, stopped
 
 
@@ -114,10 +115,18 @@ def diagnose(
         """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""
         return rows(fresh.with_(effects=_by_level(fresh.effects + effects)))
 
-    on_event(Event("stage", stage="gap before", total=1, message=f"gap: {source.name} against the target"))
+    # steps: the source's rows, then the report's parts (seconds each on a busy machine: issue 41)
+    steps, done = 1 + REPORT_PARTS, 0
+
+    def step() -> None:
+        nonlocal done
+        done += 1
+        on_event(Event("advance", stage="gap before", done=done, total=steps))
+
+    on_event(Event("stage", stage="gap before", total=steps, message=f"gap: {source.name} against the target"))
     plain = judged(())
-    before = _report(plain, target, pair, settings)
-    on_event(Event("advance", stage="gap before", done=1, total=1))
+    step()
+    before = _report(plain, target, pair, settings, on_part=step)
     result = {
         "before": before,
         "gap_before": float(before["total"]["gap"]),

@@ -516,7 +516,7 @@ def _paired_removal(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarr
     }
 
 
-def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None = None) -> dict:
+def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None = None, on_part=lambda: None) -> dict:
     """A gap report; the full ones (before, after) resolve the output-shaft orders when the target's
     rows are consecutive (settings.consecutive, resolved by diagnose). The source's rows stand in as
     consecutive: a one-revolution-periodic simulation's revolutions differ only by their noise."""
@@ -531,6 +531,7 @@ def _report(source_X, target_X, pair, settings: Settings, bootstrap: int | None 
         alpha=settings.alpha,
         consecutive=full and settings.consecutive is True,
         max_order=settings.max_order,
+        on_part=on_part,
     )
 
 

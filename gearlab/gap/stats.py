@@ -353,6 +353,9 @@ def compare_views(
     }
 
 
+REPORT_PARTS = 4  # gap_report's parts, each told by its on_part
+
+
 def gap_report(
     source_X,
     target_X,
@@ -366,6 +369,7 @@ def gap_report(
     top: int = 5,
     consecutive: bool = False,
     max_order: int = 0,
+    on_part: Callable[[], None] = lambda: None,
 ) -> dict:
     """Where source and target healthy revolutions differ, and how strongly: a JSON-serialisable dict.
 
@@ -377,6 +381,8 @@ def gap_report(
     (reported beside the views, outside the shares: they have one row per block of
     revolutions). *max_order*: the highest shaft order the sets hold (a measured record's
     passband; 0: P/2): the order bands end there (gearlab.gap.views.BandPlan, ``highest``).
+    *on_part*: called as each of its REPORT_PARTS parts ends (the views, the effect sizes and their
+    bootstrap, the classifier AUC, the permutation test), for a progress bar.
 
     Returns ``views`` (per view: gap, rms_effect, share, their intervals, top features, every
     feature's effect), ``total``, ``top_features``, ``auc``, ``mmd2``, ``p_value``,
@@ -404,13 +410,17 @@ def gap_report(
     source_views = [source_views[i] for i in kept]
     target_views = [target_views[i] for i in kept]
 
+    on_part()
     report = {"n_source": len(Xs), "n_target": len(Xt), "bands": plan.describe()}
     report.update(compare_views(source_views, target_views, bootstrap, seed, confidence, top))
+    on_part()
 
     Fs = np.concatenate([v.features for v in source_views], axis=1)
     Ft = np.concatenate([v.features for v in target_views], axis=1)
     report["auc"] = classifier_auc(Fs, Ft, seed)
+    on_part()
     report.update(mmd_test(Fs, Ft, permutations, seed))
+    on_part()
     report.update(
         alpha=alpha,
         significant=bool(report["p_value"] < alpha),

@@ -13,7 +13,7 @@ from ..data.cache import load_or_build
 from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
-from ..events import Event
+from ..events import Event, figures_ahead
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
@@ -70,6 +70,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     with executor_for(scenario) as executor:
         done = {r["unit"]: r for r in run.records()}
         summary = {"kind": "dataset", "scenario": scenario.name, "datasets": {}}
+        figures_ahead(len(scenario.spec))  # a figure per dataset, each drawn once it is built
         for spec in scenario.spec:
             dataset, cached = load_or_build(spec, executor, on_event)
             record = done.get(spec.name) or {

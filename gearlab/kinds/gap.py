@@ -32,7 +32,7 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..effects import default_candidates
 from ..errors import GearlabInputError
-from ..events import Event
+from ..events import Event, report_begins
 from ..gap.conclusion import verdict_text  # the kind's log line, summary and report say one verdict
 from ..gap.diagnose import Settings
 from ..gearbox.simulation import defaults, is_reference, referenced
@@ -647,6 +647,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         summary["accuracy_order"] = list(acc)  # the column order (JSON objects are written with sorted keys)
     run.write_json("summary.json", summary)
     run.write_text("table.md", tables_md(summary))
+    report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
     from ..plots import gap_figures
 
     gap_figures(run.figures, summary)

@@ -25,7 +25,7 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
-from ..events import Event, UnitProgress
+from ..events import Event, UnitProgress, report_begins
 from ..learn.bounds import class_bound
 from ..learn.config import NetworkSettings
 from ..learn.noise_study import (
@@ -424,6 +424,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(res, bound))
     run.write_text("table.csv", table_csv(res, bound))
+    report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
     from ..plots import noise_study_figures  # here, not at the top: start-up time (matplotlib)
 
     noise_study_figures(run.figures, res)

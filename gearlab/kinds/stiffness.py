@@ -14,7 +14,7 @@ import numpy as np
 from ..charts import Chart, Curve
 from ..confined import read_file
 from ..errors import GearlabInputError
-from ..events import Event
+from ..events import Event, figures_ahead, report_begins
 from ..physics.faults import LADDER_STEPS, place_fault
 from ..physics.presets import PAIR_PRESETS, gear_pair
 from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions
@@ -218,6 +218,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_text("table.md", _table_md(sweep))
     run.write_text("table.csv", _table_csv(sweep))
 
+    report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
     from ..plots import ladder_grid, rfa_curves, tvms_figure  # here, not at the top: start-up time (matplotlib)
 
     pitch = 360.0 / pair.Z1
@@ -228,6 +229,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         if case.fault:
             theta, k = read_csv(run.file("cases", f"{case.name}.csv"))
             panels.setdefault(case.fault, []).append((case.step, theta, k))
+    figures_ahead(1 + 2 * bool(panels))  # the run's 'report' stage counts i of n
     if panels:
         ladder_grid(
             panels,

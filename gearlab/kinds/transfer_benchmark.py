@@ -47,7 +47,7 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
-from ..events import Event
+from ..events import Event, figures_ahead, report_begins
 from ..gap.scoring import Settings as Diagnosis
 from ..gap.scoring import check_settings
 from ..learn.bounds import twin_problem
@@ -669,6 +669,7 @@ CAPTIONS = {
 
 def figure(run: RunDir, summary: dict) -> None:
     """Accuracy per trial (methods and bound) and each method's distance to the bound (PNG)."""
+    report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -676,6 +677,7 @@ def figure(run: RunDir, summary: dict) -> None:
 
     from ..plots import save
 
+    figures_ahead(1)  # the run's 'report' stage counts i of n
     names = list(summary["trials"])
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
     x = np.arange(len(names))

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..confined import Confined
 from ..errors import GearlabInputError
+from ..events import unit_says
 from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
@@ -433,6 +434,8 @@ def train_method(
     # changes nothing): references and noise from the target training set taken as history
     # whatever the supervision; the priming's from the history core, so that one priming
     # serves every method and every k of the repetition.
+    if adapter.calibrated:  # seconds on a busy machine (the path's fit): the unit's line says so
+        unit_says("calibration: the references, the transfer path and the noise law")
     inputs = prepare(protocol.calibration, Xs, ys, Xt, None) if adapter.calibrated else None
     augment = inputs.augment if inputs is not None and inputs.noise_law else None
     # `shapes` scores its templates in the noise law of the history the priming reads, as
@@ -447,10 +450,13 @@ def train_method(
         return lambda epoch, history: on_epoch(epoch, history, f"{what}, epoch {epoch + 1} of {epochs}")
 
     def primed() -> dict:
+        unit_says("priming: calibration on the history core")
         start = prepare(protocol.calibration, Xs, ys, Xt if core is None else core, None)
         net = _net(protocol, seed, device, Xs.shape[1])
         if protocol.calibration.start == "faults":
+            unit_says("priming: matched start of the filter bank")
             matched_start(net, start.source(Xs[np.asarray(ys) != 0]), seed, law=law)
+        unit_says(f"priming, epoch 1 of {protocol.prime_epochs}: training")
         fit_supervised(
             net,
             each_draw(start.source, drawn),

@@ -7,32 +7,51 @@ import numpy as np
 
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
-from ..events import Event
+from ..events import Event, standing
 from ..learn.bounds import bayes_scores, best_accuracy, detection_at, twin_problem
 from ..learn.protocol import Protocol, split
 
 BOUND = "Bayes bound (target's own shapes and noise law, best threshold)"
+PARTS = 10  # the target's revolutions are scored a tenth at a time: steps with counts and an ETA
+STEPS = 2 + PARTS  # the noise-free twin, torch, then the tenths
 
 
 def bayes_bound(
-    target_spec, source, target, protocol: Protocol, executor=None, on_event=lambda e: None, history=None
+    target_spec,
+    source,
+    target,
+    protocol: Protocol,
+    executor=None,
+    on_event=lambda e: None,
+    history=None,
+    on_step=lambda done: None,
 ) -> dict | None:
     """The reference column of the table: the accuracy (%) of the Bayes detector
     (gearlab.learn.bounds) on each (repetition, k)'s target test set, with the best threshold,
     and the faults it finds at 1 % false alarms. None unless the target is simulated with noise
     (the detector needs its noise-free twin); it knows the test labels, so it is a bound, not a
     method. A target whose twin lies outside the detector's model (`twin_problem`) gets
-    ``{"label", "unavailable": why}`` instead of a number that methods could beat."""
+    ``{"label", "unavailable": why}`` instead of a number that methods could beat. *on_step(done)*:
+    each of its STEPS as it ends (a quick run's bound took 6-12 s at load 8-9 as one step: issue 41)."""
     if not isinstance(target_spec, DatasetSpec) or target_spec.noise is None:
         return None
     on_event(Event("log", message="the Bayes bound: the target's noise-free twin and its likelihood ratios"))
     clean, _ = load_or_build(target_spec.with_(noise=None), executor, on_event)
+    on_step(1)
     problem = twin_problem(clean)
     if problem is not None:
         on_event(Event("log", message=f"the Bayes bound is unavailable: {problem}"))
         return {"label": BOUND, "unavailable": problem}
+    with standing(on_event, "bound", "loading torch for the likelihood ratios"):
+        import torch  # noqa: F401 (the first ratio would load it: 5 s of a quick run's first tenth at load 11)
+    on_step(2)
     healthy = target.X[target.fault == 0]
-    scores = bayes_scores(target.X, healthy, clean, target_spec.noise.kind)
+    scores = []
+    for i, rows in enumerate(np.array_split(np.arange(len(target.X)), PARTS), start=3):
+        # each row's score is its own (its noise scale, its distances): the same numbers as at once
+        scores.append(bayes_scores(target.X[rows], healthy, clean, target_spec.noise.kind))
+        on_step(i)
+    scores = np.concatenate(scores)
     cells: dict[str, dict[str, dict]] = {"accuracy": {}, "detection_at_1pct": {}}
     for k in protocol.ks:
         acc, det = [], []

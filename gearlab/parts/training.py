@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass
 
 from ..data import cache
 from ..errors import GearlabInputError
-from ..events import UnitProgress
+from ..events import UnitProgress, saying
 from ..learn.config import RECIPE, Calibration, NetworkSettings
 from ..learn.protocol import Method, Protocol, StateStore, run_unit, unit_key
 from ..registry import METHODS, get_registry
@@ -91,24 +91,31 @@ def train_unit(task: tuple) -> dict:
     protocol, (source_spec, source_path), (target_spec, target_path), rep, k, method, states, *history = task
     # states/ lies in the run directory, beside the progress/ folder the engine watches
     with UnitProgress(states.root, unit_key(rep, k, method)) as progress:
-        progress("starting: torch and the datasets")  # seconds in a fresh worker, before any epoch
+        # seconds in a fresh worker before any epoch (a quick run's 'starting' line stood 10 s at load
+        # 9): each step says itself, and one that stands says for how long (UnitProgress)
+        progress("starting: importing torch")
         import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
 
         torch.set_num_threads(1)
-        source, target = cache.load(source_spec, source_path), cache.load(target_spec, target_path)
+        progress("starting: reading dataset 1 of 2 (source)")
+        source = cache.load(source_spec, source_path)
+        progress("starting: reading dataset 2 of 2 (target)")
+        target = cache.load(target_spec, target_path)
+        progress("starting: splitting the data")
 
         def report(epoch: int, history, what: str = "") -> None:
             acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
             progress(f"{what or f'epoch {epoch + 1}'}{acc}")
 
-        return run_unit(
-            protocol,
-            source,
-            target,
-            rep,
-            k,
-            method,
-            StateStore(states),
-            on_epoch=report,
-            history=next(iter(history), None),
-        )
+        with saying(progress):  # the calibration's and the priming's steps (unit_says) reach the line too
+            return run_unit(
+                protocol,
+                source,
+                target,
+                rep,
+                k,
+                method,
+                StateStore(states),
+                on_epoch=report,
+                history=next(iter(history), None),
+            )

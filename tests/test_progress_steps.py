@@ -1,0 +1,139 @@
+"""No stage silent for more than 5 s, every bar with an ETA after its first step (issue 41): the
+report stage counts i of n, a unit's line that stands says for how long, the Bayes bound and the
+gap's "before" report count their steps, and a tiny run's events come no further apart than 5 s."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from tiny import transfer
+
+from gearlab.events import REPORT, Event, UnitProgress, figure_written, figures_ahead, telling_figures
+
+QUIET_S = 5.0  # the issue's goal: no stage silent for longer
+
+
+def told(events: list[Event]) -> list[tuple]:
+    return [(e.kind, e.done, e.total) for e in events if e.stage == REPORT]
+
+
+def test_the_report_stage_counts_i_of_n_announced_figures_and_report_html():
+    events: list[Event] = []
+    with telling_figures(events.append) as finish:
+        figures_ahead(2)  # before the first is drawn: the stage starts with its total
+        figure_written("a.png")
+        figure_written("b.png")
+        finish()
+    assert told(events) == [("stage", 0, 3), ("advance", 1, 3), ("advance", 2, 3), ("advance", 3, 3)]
+    assert events[0].message == "figures and report.html"
+
+
+def test_figures_announced_in_turns_add_up_and_unannounced_ones_claim_no_total():
+    events: list[Event] = []
+    with telling_figures(events.append) as finish:
+        figures_ahead(1)
+        figure_written("a.png")
+        figures_ahead(2)  # a second drawing function of the same run
+        figure_written("b.png")
+        figure_written("c.png")
+        finish()
+    assert told(events) == [("stage", 0, 2), ("advance", 1, 2), ("advance", 1, 4), ("advance", 2, 4)] + [
+        ("advance", 3, 4),
+        ("advance", 4, 4),
+    ]
+    events.clear()
+    with telling_figures(events.append) as finish:
+        figure_written("a.png")  # a kind that did not say how many: a count, no made-up total
+        finish()
+    assert told(events) == [("stage", 1, 0), ("advance", 2, 2)]
+    events.clear()
+    with telling_figures(events.append) as finish:
+        finish()  # no figure at all: report.html is the one step
+    assert told(events) == [("stage", 0, 0), ("advance", 1, 1)] and events[0].message == "report.html"
+
+
+def test_a_units_line_that_stands_says_for_how_long(tmp_path, monkeypatch):
+    """A step that cannot count (importing torch in a fresh worker: 10 s at load 9) is not silent: its
+    line is rewritten each second once it has stood STANDING_S; a report that came too soon after
+    the last write is written once its time is up, not dropped."""
+    from gearlab import events
+
+    monkeypatch.setattr(events, "STANDING_S", 0.3)
+    written: list[str] = []
+    write = UnitProgress._write
+    monkeypatch.setattr(UnitProgress, "_write", lambda self, text: (written.append(text), write(self, text)))
+    with UnitProgress(tmp_path, "rep0/k0/mmd-unsup", every=0.05) as progress:
+        progress("starting: importing torch")
+        progress("starting: reading dataset 1 of 2 (source)")  # within 0.05 s of the last write
+        time.sleep(1.6)
+    assert written[0] == "starting: importing torch"
+    assert written[1] == "starting: reading dataset 1 of 2 (source)"
+    standing = [t for t in written[2:] if t.startswith("starting: reading dataset 1 of 2 (source) (")]
+    assert {"starting: reading dataset 1 of 2 (source) (1 s)"} <= set(standing), written
+    assert not (tmp_path / "progress").exists() or not list((tmp_path / "progress").iterdir())
+
+
+def test_the_gap_report_tells_each_of_its_parts():
+    from gearlab.gap.stats import REPORT_PARTS, gap_report
+
+    rng = np.random.default_rng(0)
+    source, target = rng.normal(size=(12, 256)), rng.normal(size=(12, 256)) * 1.2
+    parts: list[int] = []
+    gap_report(source, target, (25, 30), bootstrap=5, permutations=10, on_part=lambda: parts.append(1))
+    assert len(parts) == REPORT_PARTS >= 4
+
+
+def test_a_tiny_runs_events_are_never_further_apart_than_5_s(tmp_path, monkeypatch):
+    """A tiny transfer run end to end (the datasets simulated, the bound, the training units, the
+    figures and report.html): the longest wait between two events, and every stage with a total
+    from its first step on (the ETA needs one)."""
+    from gearlab.engine import run_scenario
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "tiny.toml"
+    path.write_text(transfer('[[methods]]\nadapter = "source_only"\n\n[[methods]]\nadapter = "mmd"\n', max_epochs=2))
+    stamped: list[tuple[float, Event]] = []
+    started = time.monotonic()
+    run_scenario(path, out=tmp_path / "runs", on_event=lambda e: stamped.append((time.monotonic(), e)))
+    ended = time.monotonic()
+    times = [started] + [t for t, _ in stamped] + [ended]
+    gaps = np.diff(times)
+    worst = int(np.argmax(gaps))
+    after = stamped[worst - 1][1] if worst else None
+    assert gaps.max() <= QUIET_S, f"{gaps.max():.1f} s silent after {after}"
+    totals: dict[str, int] = {}
+    for _, e in stamped:
+        if e.kind == "stage":
+            totals[e.stage] = e.total
+        elif e.kind == "advance" and e.done > 0:
+            totals[e.stage] = e.total or totals.get(e.stage, 0)
+            assert totals[e.stage] > 0, f"stage {e.stage!r}: step {e.done} with no total, so no ETA"
+    assert {"datasets", "bound", "runs", REPORT} <= set(totals)
+
+
+def test_the_bounds_scores_in_tenths_are_its_scores_at_once():
+    """The Bayes bound scores the target's revolutions a tenth at a time, a step each
+    (gearlab.parts.bound; its events: tests/test_transfer_stages.py): each row's score is its own."""
+    from gearlab.learn.bounds import likelihood_ratio
+
+    rng = np.random.default_rng(3)
+    X = rng.laplace(size=(30, 64))
+    healthy, shapes = np.zeros(64), rng.normal(size=(4, 64))
+    whole = likelihood_ratio(X, healthy, shapes, "laplace")
+    parts = [likelihood_ratio(X[r], healthy, shapes, "laplace") for r in np.array_split(np.arange(30), 10)]
+    assert np.array_equal(whole, np.concatenate(parts))
+
+
+def test_a_step_of_the_runs_own_process_that_cannot_count_says_for_how_long(monkeypatch):
+    """The Bayes bound's first step loads torch in the run's process (5 s at load 11): a line under
+    the bars that says for how long, gone when the step ends."""
+    from gearlab import events
+
+    monkeypatch.setattr(events, "STANDING_S", 0.5)
+    said: list[Event] = []
+    with events.standing(said.append, "bound", "loading torch"):
+        time.sleep(2.3)
+    messages = [e.message for e in said]
+    assert messages[0] == "loading torch" and messages[-1] == ""
+    assert {"loading torch (1 s)", "loading torch (2 s)"} <= set(messages) and {e.stage for e in said} == {"bound"}
