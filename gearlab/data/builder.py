@@ -386,7 +386,8 @@ def build_dataset(
     def teeth_of(case):
         return teeth if case[0] is None else classes[case[0]].teeth
 
-    if not chain.breaks_symmetry and not getattr(model, "breaks_symmetry", False):
+    symmetric = not chain.breaks_symmetry and not getattr(model, "breaks_symmetry", False)
+    if symmetric:
         units = [(case, 1, teeth_of(case)) for case in cases]
     else:
         units = [(cases[0], 1, (1,))] + [(case, n, (n,)) for case in cases[1:] for n in teeth_of(case)]
@@ -446,8 +447,21 @@ def build_dataset(
     # 4. signal effects, noise, TSA and standardisation, streamed in chunks
     n = len(label)
 
+    def twin_of(i: int) -> tuple:
+        """Where sample i's clean rows come from in the healthy twin (spec.healthy_twin): the healthy
+        cycle as its fault's rows were made (from the same tacho zero: the later mesh at the same
+        phase), turned as its tooth's rows are when one simulation serves every tooth of the input
+        pinion; a fault on a slower gear starts a whole number of that gear's turns into its cycle,
+        and its twin is then that far off."""
+        (name, _), t = source[i]
+        if name is None:
+            return source[i]
+        on = classes[name]
+        turned = symmetric and (on.stage, on.gear) == (1, "pinion") and on.teeth[t] in teeth
+        return ((None, None), teeth.index(on.teeth[t]) if turned else 0)
+
     def clean_of(idx: range):
-        rows = [base[source[i][0]][source[i][1]] for i in idx]
+        rows = [base[src[0]][src[1]] for src in (twin_of(i) if spec.healthy_twin else source[i] for i in idx)]
         return np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
 
     # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in

@@ -60,6 +60,10 @@ class DatasetSpec:
     # Unmodelled effects (gearlab.effects; the gap diagnosis, docs/gap.md): ((name, ((param, SI value), ...)), ...),
     # each resolved and sorted by gearlab.effects.effect_spec; applied model -> excitation -> signal.
     effects: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()
+    # Every fault sample made healthy at the same point (its cycle revolution, tooth turn, effects and
+    # noise draws): the dataset's healthy twin, whose row i a fault row i differs from by the fault
+    # alone (builder.build_dataset; the detectors' templates on a train of a long cycle)
+    healthy_twin: bool = False
 
     def canonical(self) -> dict:
         d = asdict(self)
@@ -67,6 +71,8 @@ class DatasetSpec:
         d.pop("domain")
         if not self.effects:
             d.pop("effects")  # so every dataset without effects keeps the key it had before effects existed
+        if not self.healthy_twin:
+            d.pop("healthy_twin")  # likewise for every dataset that is no twin
         return d
 
     def key(self) -> str:

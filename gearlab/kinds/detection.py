@@ -121,7 +121,9 @@ from .detection_units import (
     Rule,
     crossed_record,
     ensemble_record,
+    healthy_twin,
     seeds_of,
+    signature_rows,
     source_bound,
     source_split,
     train_unit,
@@ -402,6 +404,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             )
             for c, v in specs
         }
+        detector_splits = dict(splits)
+        if later:  # the detectors' shapes: each fault row less its healthy twin (signature_rows)
+            twins = {s: load_or_build(healthy_twin(s), executor, on_event)[0] for s in built}
+            for c, v in specs:
+                s, (Xs, ys, Xv, yv) = specs[(c, v)], splits[(c, v)]
+                Ts = each_draw(shown[c], source_split(twins[s], protocol, draws[s])[0])
+                detector_splits[(c, v)] = (signature_rows(Xs, ys, Ts), ys, Xv, yv)
         # the units every training of a condition scores, as the learned methods see them (made once)
         units_seen = {
             c: (
@@ -446,7 +455,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         c,
                         seed,
                         k,
-                        splits[(c, v)],
+                        (detector_splits if m.is_detector else splits)[(c, v)],
                         shown[c](
                             history_training_rows(trained_on(cond, k), protocol, c, spec.corrected_history if v else 0)
                         ),
