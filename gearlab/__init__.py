@@ -1,7 +1,8 @@
 """gearlab: a hybrid gearbox condition-monitoring lab (physics model + transfer learning).
 
 The Python API for notebooks (docs/api.md): load a gearbox description, simulate, import and
-inspect a recording, diagnose the gap, fit and score a detector, run a scenario file.
+inspect a recording, diagnose the gap, fit and score a detector, run a scenario file and score
+new recordings with a finished run.
 
     import gearlab
     data = gearlab.simulate("B-6-ch5", teeth=[1, 2], faults={"crack": [13]}, healthy=8)
@@ -21,6 +22,7 @@ _API = dict.fromkeys(
         "load_gearbox",
         "gearbox_orders",
         "simulate",
+        "simulate_signals",
         "read_recording",
         "import_recording",
         "inspect_recording",
@@ -33,6 +35,7 @@ _API = dict.fromkeys(
         "run_scenario",
         "open_run",
         "run_verdict",
+        "score_recordings",
     ),
     "gearlab.notebook",
 )

@@ -296,17 +296,26 @@ def simulate(
     import numpy as np
 
     from .files import atomic_write
-    from .gearbox.simulation import label, simulate_command
+    from .gearbox.simulation import label
+    from .notebook import simulate_signals
+    from .registry import get_registry
 
-    model, preset, speed, load = simulate_command(gearbox, model, preset, speed, load)
     if out.suffix != ".npz":
         raise GearlabInputError(f"--out {out}: expected a .npz file name")
     _check_folders(out, plot)
     with warnings.catch_warnings(record=True) as caught:  # held back: a refused input gets one error line
         warnings.simplefilter("always")
-        sim = _simulator(model, preset, fs)
-        placed = _placed_faults(sim.pair, fault)
-        result = sim.run(placed, speed, load, duration)
+        result = simulate_signals(
+            model,
+            preset,
+            gearbox=gearbox,
+            speed=speed,
+            load=load,
+            faults=fault or (),
+            duration=duration,
+            fs=fs,
+            flag=_option,
+        )
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     import io
@@ -314,9 +323,9 @@ def simulate(
     buf = io.BytesIO()
     np.savez(buf, t=result.t, tacho=result.tacho, tvms=result.tvms, **result.channels)
     atomic_write(out, buf.getvalue())
-    labels = ", ".join(p.label for p in placed) or "healthy"
+    labels = ", ".join(p.label for p in result.faults) or "healthy"
     console.print(
-        f"{model} ({label(sim.preset)}, {labels}): {duration:g} s at {fs:g} Hz, {result.speed_hz:g} Hz, "
+        f"{result.model} ({label(result.preset)}, {labels}): {duration:g} s at {fs:g} Hz, {result.speed_hz:g} Hz, "
         f"{result.load_nm:g} N*m; simulation wall time {result.wall_s * 1e3:.1f} ms"
     )
     console.print(f"wrote {out} (channels: {', '.join(result.channels)})")
@@ -331,8 +340,14 @@ def simulate(
         except GearlabInputError:
             steady = 0
         start = int(np.ceil(revolution_starts(unwrap_tacho(result.tacho))[steady]))
-        signal_and_spectrum(result, plot, mesh_hz=result.speed_hz * sim.pair.Z1, start=start)
+        pair, _ = get_registry().get("model", result.model).resolve(result.preset)  # the mesh the plot marks
+        signal_and_spectrum(result, plot, mesh_hz=result.speed_hz * pair.Z1, start=start)
         console.print(f"wrote {plot} (steady from t = {result.t[start]:.3f} s)")
+
+
+def _option(key: str) -> str:
+    """The option of a keyword of the Python API (gearlab.notebook), as its errors name it here."""
+    return "--" + key.replace("_", "-")
 
 
 @app.command()
@@ -356,11 +371,6 @@ def describe_spec(s) -> str:
 Out = Annotated[
     Path | None, typer.Option(help="base directory for the run directory (default: the scenario's output dir)")
 ]
-def _option(key: str) -> str:
-    """The option of a keyword of the Python API (gearlab.notebook), as its errors name it here."""
-    return "--" + key.replace("_", "-")
-
-
 Resume = Annotated[Path | None, typer.Option(help="continue the run in this run directory")]
 Quick = Annotated[bool, typer.Option(help="shrink the scenario for a smoke run")]
 Executor = Annotated[
@@ -592,11 +602,10 @@ def score(
 
     Example: gearlab score runs/det/20260101-120000-000000 today.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .engine import score_recordings
-    from .runs import RunDir
+    from .notebook import score_recordings
     from .terminal import score_tables
 
-    rows = score_recordings(RunDir.open(run_dir), files, condition)
+    rows = score_recordings(run_dir, files, condition)
     if as_json:
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
         return

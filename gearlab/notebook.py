@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # the annotations only: the modules load on first use (start-
 
     from .data.recordings import Recording
     from .data.spec import Dataset, DatasetSpec
+    from .dynamics.newmark import Simulation
     from .gearbox import Gearbox
     from .runs import RunDir
     from .scenario import Scenario
@@ -42,7 +43,9 @@ __all__ = [
     "run_scenario",
     "run_verdict",
     "score_detector",
+    "score_recordings",
     "simulate",
+    "simulate_signals",
 ]
 
 
@@ -113,6 +116,46 @@ def simulate(preset: str | DatasetSpec, **keys) -> Dataset:
 
         return load_or_build(preset)[0]
     return _dataset("gearlab.simulate", {"preset": preset, **keys})
+
+
+def simulate_signals(
+    model: str | None = None,
+    preset: str | None = None,
+    *,
+    gearbox: str | Path | None = None,
+    speed: float | None = None,
+    load: float | None = None,
+    faults: Sequence[str] = (),
+    duration: float = 0.4,
+    fs: float = 200e3,
+    flag=lambda key: key,
+) -> Simulation:
+    """One run of a dynamic model, as ``gearlab simulate`` makes it (docs/physics.md): Newmark
+    integration from the static equilibrium at a fixed input *speed* (Hz) and *load* (N*m; both
+    the preset's by default) for *duration* s at *fs* Hz. *model* and *preset* (default: the model's
+    first), or a *gearbox* description (its model unless *model*, its values, speed and load);
+    *faults*: ``KIND@TOOTH=STEP`` or ``KIND@TOOTH:NAME=VALUE,...`` as ``--fault`` takes them.
+    Returns ``t``, ``tacho`` (the input-shaft angle), ``tvms`` (N/m) and ``channels`` (m/s²).
+    *flag* names a keyword in an error (the CLI passes its options).
+
+    >>> sim = gearlab.simulate_signals("six_dof", preset="meng2020", faults=["crack@1=20"], duration=0.05)
+    >>> sorted(sim.channels), sim.t.size, sim.speed_hz, [f.label for f in sim.faults]
+    (['gear_x', 'gear_y', 'pinion_x', 'pinion_y'], 10001, 40.0, ['crack@1'])
+    """
+    from .dynamics.newmark import Simulator
+    from .gearbox.simulation import simulate_command
+    from .physics.faults import parse_fault_option, place_fault
+    from .registry import get_registry
+
+    model, preset, speed, load = simulate_command(None if gearbox is None else str(gearbox), model, preset, speed, load)
+    registry = get_registry()
+    dynamic = registry.get("model", model, flag("model"))
+    if preset is None and not dynamic.presets:  # three_stage: no built-in train of three stages
+        raise GearlabInputError(f"{flag('model')} {model}: no built-in preset; give {flag('gearbox')} DESCRIPTION")
+    sim = Simulator(dynamic, next(iter(dynamic.presets)) if preset is None else preset, fs)
+    where = flag("fault")
+    placed = [place_fault(registry, sim.pair, *parse_fault_option(text), where=f"{where} {text!r}") for text in faults]
+    return sim.run(placed, speed, load, duration)
 
 
 def _si(value, unit: str, where: str) -> float | None:
@@ -493,3 +536,58 @@ def run_verdict(run: RunDir | str | Path) -> list[str]:
     from .verdict import verdict_lines
 
     return verdict_lines(run)
+
+
+def score_recordings(
+    run: RunDir | str | Path, files: Sequence[str | Path], condition: str | None = None, on_event=None
+) -> list[dict]:
+    """New recordings scored by a finished detection run's trained methods at its thresholds, nothing
+    trained again, as ``gearlab score RUN_DIR FILE...`` does (docs/your_gearbox.md): the files are
+    read with the run's ``[target]`` keys, in the *condition* of nearest speed unless named. One row
+    per file, method and unit: ``units``, ``called`` (over the threshold), ``median_score``,
+    ``threshold``, ``decision``, and which gear the change lies on (``localised``, ``evidence``).
+    The rows are appended to the run's scoring history, whose trend its report shows.
+
+    >>> import numpy as np
+    >>> t = np.arange(40_000) / 20e3                           # 2 s at 20 kHz; the shaft at 25 Hz
+    >>> for i, name in enumerate(["h1", "h2", "ok", "chip", "today_ok", "today"]):
+    ...     acc = 0.1 * np.sin(2 * np.pi * 400 * t) + 0.01 * np.random.default_rng(i).standard_normal(t.size)
+    ...     acc += 0.05 * ("chip" in name or name == "today") * (25 * t % 1 < 0.02)  # a knock a turn
+    ...     np.savez(f"{name}.npz", acc=acc, tacho=(25 * t % 1 < 0.1).astype(float), fs=20e3)
+    >>> Path("watch.toml").write_text('''
+    ... [scenario]
+    ... name = "watch"
+    ... kind = "detection"
+    ... [source]
+    ... gearbox = "luo2019"
+    ... faults = { chip = [20] }
+    ... teeth = [1, 2]
+    ... healthy = 8
+    ... [target]
+    ... vibration = "acc"
+    ... tacho = "tacho"
+    ... sensitivity = "100 mV/g"
+    ... files = [{ file = "h1.npz", role = "history", label = "healthy" },
+    ...          { file = "h2.npz", role = "history", label = "healthy" },
+    ...          { file = "ok.npz", role = "test", label = "healthy" },
+    ...          { file = "chip.npz", role = "test", label = "fault" }]
+    ... [[methods]]
+    ... adapter = "matched_filter"
+    ... [detection]
+    ... blocks = [10]
+    ... [protocol]
+    ... batch = 8
+    ... [execution]
+    ... workers = 1
+    ... ''') and None
+    >>> run = gearlab.run_scenario("watch.toml", out="runs")
+    >>> rows = gearlab.score_recordings(run, ["today_ok.npz", "today.npz"])
+    >>> [(r["file"], r["decision"]) for r in rows if r["method"] == "fm4" and r["unit"] == "record10"]
+    [('today_ok.npz', 'healthy'), ('today.npz', 'fault')]
+    """
+    from .engine import score_recordings as score
+    from .events import ignore_events
+    from .runs import RunDir
+
+    run = run if isinstance(run, RunDir) else RunDir.open(Path(run))
+    return score(run, [Path(f) for f in files], condition, on_event or ignore_events)
