@@ -430,8 +430,9 @@ def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
         ),
         "latent_maps": (
             "Figure 5.9",
-            "Latent features of the first repetition after adaptation: source and target training samples "
-            "projected on their first two principal components (PCA, dimensionless); colour: domain, marker: "
+            "Latent features of the first repetition after adaptation: source (with the target's noise where "
+            "training added it) and target training samples projected on their first two principal components "
+            "(PCA, dimensionless); colour: domain, marker: "
             "class (o healthy, x fault) where the run stored the labels.",
         ),
     }
