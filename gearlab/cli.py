@@ -239,22 +239,33 @@ def _simulator(model: str, preset: str | None, fs: float = 200e3):
 
     dynamic = get_registry().get("model", model, "--model")
     if preset is None:
+        if not dynamic.presets:  # three_stage: no built-in train of three stages
+            raise GearlabInputError(f"--model {model}: no built-in preset; give --gearbox DESCRIPTION")
         preset = next(iter(dynamic.presets))
     return Simulator(dynamic, preset, fs)
 
 
 @app.command()
 def modes(
-    model: Annotated[str, typer.Option(help="dynamic model: ten_dof, eight_dof, six_dof, ...")],
+    model: Annotated[
+        str | None, typer.Option(help="dynamic model: ten_dof, eight_dof, six_dof, ... (default: the --gearbox's)")
+    ] = None,
     preset: Annotated[str | None, typer.Option(help="parameter preset (default: the model's first)")] = None,
+    gearbox: Annotated[str | None, typer.Option(help="a gearbox description (file or built-in name)")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
 ) -> None:
     """Undamped natural frequencies (Hz) of a model at its mean mesh stiffness.
 
     `frequencies_hz` are those of the free model (every DOF, so a rigid-body 0 Hz mode when the shafts are free); `fixed_input_hz` those of the model as simulated, with the input shaft held at its fixed speed.
 
-    Example: gearlab modes --model ten_dof
+    Example: gearlab modes --model ten_dof; gearlab modes --gearbox my.toml
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
+    from .gearbox.simulation import label, model_command
+
+    if gearbox is not None:
+        model, preset = model_command(gearbox, model, preset)
+    elif model is None:
+        raise GearlabInputError("gearlab modes: give --model NAME (and --preset) or --gearbox DESCRIPTION")
     sim = _simulator(model, preset)
     free = sim.natural_frequencies(fixed_input=False)
     fixed = sim.natural_frequencies(fixed_input=True)
@@ -271,7 +282,7 @@ def modes(
             )
         )
         return
-    console.print(f"{model} ({sim.preset}), mean mesh stiffness {sim.k_mean:.4g} N/m")
+    console.print(f"{model} ({label(sim.preset)}), mean mesh stiffness {sim.k_mean:.4g} N/m")
     console.print("free model (Hz):        " + ", ".join(f"{f:.1f}" for f in free))
     console.print("fixed input speed (Hz): " + ", ".join(f"{f:.1f}" for f in fixed))
 

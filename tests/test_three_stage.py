@@ -6,6 +6,7 @@ the gear names of a three-stage train and a detection scenario that validate acc
 from __future__ import annotations
 
 import dataclasses
+import json
 import warnings
 
 import numpy as np
@@ -86,6 +87,17 @@ def test_rigid_rotation_strains_no_mesh_and_the_free_train_has_one_rigid_mode(si
     K = asm.Kc + sum(np.outer(p, p) * 3e8 for p in (asm.P, *(m.P for m in asm.meshes)))
     lam = scipy.linalg.eigh(K, asm.M, eigvals_only=True)
     assert abs(lam[0]) < 1e-6 * lam[1] and (lam[1:] > 0).all()
+
+
+def test_gearlab_modes_of_a_description(cli, coprime):
+    code, out, err = cli("modes", "--gearbox", str(coprime), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    free, fixed = np.array(data["frequencies_hz"]), np.array(data["fixed_input_hz"])
+    assert data["model"] == "three_stage" and len(free) == 16 and len(fixed) == 15
+    assert np.isfinite(free).all() and abs(free[0]) < 1e-3 and (free[1:] > 10).all() and (fixed > 10).all()
+    code, out, err = cli("modes", "--model", "three_stage")
+    assert code == 2 and "--model three_stage: no built-in preset; give --gearbox DESCRIPTION" in err
 
 
 def test_static_mesh_forces_pass_the_load_torque_along_the_train(sim):
