@@ -147,7 +147,7 @@ def test_inspect_finds_the_three_mesh_orders(sim, coprime, tmp_path):
 
     result = sim.run([], SPEED, LOAD, duration=4.0, channels=["casing_y"])
     keep = result.t >= 1.0
-    x = result.channels["casing_y"][keep]  # 90 revolutions with sensor noise at 25 dB
+    x = result.channels["casing_y"][keep]  # 90 revolutions with sensor noise at 25 dB (60: see docs/gearbox.md, Limits)
     np.savez(
         tmp_path / "rec.npz",
         acc=x + np.random.default_rng(1).normal(0, x.std() * 10 ** (-25 / 20), x.size),
