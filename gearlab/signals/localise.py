@@ -34,19 +34,20 @@ threshold: nothing localised.
 Which gear on a shaft. A shaft carrying two gears (stage k's wheel, stage k+1's pinion) is named by
 the length of the fault's event (:func:`which_gear`): a tooth fault lasts while its tooth is in
 mesh, about a pitch of its own gear, so the event of the finer gear (more teeth) is shorter. The
-shaft's exclusive orders up to WIDTH_SPAN times the finer gear's tooth count, each weighted by its
-new share as for the tooth, give an envelope whose RMS width w about its peak is read in pitches
-of the finer gear: ~1 for its faults, ~(Z_fine / Z_coarse)^0.46 for the coarser gear's (the
-bandwidth and the ring shorten it from the ratio itself). u = log w / log(Z_fine / Z_coarse) names
-the finer gear below U_FINE, the coarser above U_COARSE, and both (as the shaft) between, or when
-the tooth counts differ by less than MIN_RATIO, or z < WIDTH_Z, or more than WIDTH_LOW of the
-excess lies below half the finer gear's tooth order (a low mode's ring then sets the width). Rig
-simulator and a 21/63 + 24/56 train, development seeds 0, 40 trials each: medians u = 0.00 and
--0.01 for the wheel (96T, 63T), 0.48 and 0.46 for the pinion (48T, 24T). The modulation of each
-stage's mesh harmonics, the physical reading, did not tell them apart on the simulator (sidebands
-gather about neither: a tooth's loss of stiffness moves the load through the coupled shaft). The
-width follows the structure's modes too: fresh seed 1071 (benchmarks/localisation.py) named 9 of 10
-flagged 48T faults at 35 Hz the 96T, and 11 of 13 63T faults at 20 Hz the 24T; other speeds held.
+shaft's exclusive orders from 1/2 to 4 times the finer gear's tooth count (WIDTH_BAND), each
+weighted by its new share as for the tooth, give an envelope whose RMS width w about its peak is
+read in pitches of the finer gear. u = log w / log(Z_fine / Z_coarse) names the finer gear below
+U_FINE, the coarser above U_COARSE, and both (as the shaft) between, or when the tooth counts differ
+by less than MIN_RATIO, or z < WIDTH_Z, or more than WIDTH_LOW of the excess lies below half the
+finer gear's tooth order (a low mode's ring then sets the width). Rig simulator and a 21/63 + 24/56
+train, development seeds 0 and 300 (the latter every speed alike): medians u = -0.20 and -0.18 for
+the wheel (96T, 63T), 0.50 and 0.26 for the pinion (48T, 24T). The width follows the structure's
+modes as well as the teeth: read up to twice the finer gear's teeth only (the first version,
+0652bd2), fresh seed 1071 named 9 of 10 flagged 48T faults at 35 Hz the 96T and 11 of 13 63T faults
+at 20 Hz the 24T; the wider band and wider undecided zone are the second (development seeds only).
+The modulation of each stage's mesh harmonics, the physical reading, did not tell them apart on the
+simulator (sidebands gather about neither: a tooth's loss of stiffness moves the load through the
+coupled shaft).
 
 Tooth. The named shaft's orders, each weighted by the share of its power that is new
 (clip(Δ / |X̄|², 0, 1)), form the shaft's residual; the peak of its envelope's energy over one
@@ -96,8 +97,8 @@ def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
     return moving_mean(x, size=size, mode=mode)
 
 
-WIDTH_SPAN = 2.0  # orders read for the event's width: up to this many times the finer gear's teeth
-U_FINE, U_COARSE = 0.15, 0.3  # log width / log tooth ratio naming the finer, the coarser gear
+WIDTH_BAND = (0.5, 4.0)  # orders read for the event's width, in the finer gear's tooth counts
+U_FINE, U_COARSE = 0.0, 0.35  # log width / log tooth ratio naming the finer, the coarser gear
 MIN_RATIO = 1.3  # tooth ratio of a shaft's two gears below which their events are too alike
 WIDTH_Z = 10.0  # z of the shaft under which the width is too noisy to name one gear
 WIDTH_LOW = 0.3  # share of the excess below half the finer gear's tooth order: a low mode's ring
@@ -508,19 +509,20 @@ def which_gear(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[G
     module's docstring, "Which gear on a shaft"."""
     fine, coarse = sorted(gears, key=lambda g: -g.teeth)
     ratio = fine.teeth / coarse.teeth
-    expect = {fine.name: 1.0, coarse.name: ratio**0.46}
+    expect = {fine.name: ratio**-0.2, coarse.name: ratio**0.4}
     ev: dict = {"event width": f"pitches of the {fine.teeth}T {fine.role}", "expected": expect}
     sel, m = _harmonics(lay, shaft, lay.sync[:, shaft] & (lay.sync.sum(axis=1) == 1) & ~lay.carrier)
-    keep = m <= WIDTH_SPAN * fine.teeth
-    sel[np.flatnonzero(sel)[~keep]] = False
-    m = m[keep]
     excess = np.clip(rec.power[sel] - ref.power[sel], 0, None)
-    low = float(excess[m < fine.teeth / 2].sum() / max(excess.sum(), 1e-300))
+    upto = m <= WIDTH_BAND[1] * fine.teeth
+    low = float(excess[upto & (m < fine.teeth / 2)].sum() / max(excess[upto].sum(), 1e-300))
+    keep = upto & (m >= WIDTH_BAND[0] * fine.teeth)
+    sel[np.flatnonzero(sel)[~keep]] = False
+    m, excess = m[keep], excess[keep]
     if ratio < MIN_RATIO:
         return None, {**ev, "undecided": f"tooth counts {fine.teeth} and {coarse.teeth} too alike"}
     if m.size < 3 or not excess.any():
         return None, {**ev, "undecided": "no new power in the shaft's orders"}
-    size = int(2 ** math.ceil(math.log2(16 * WIDTH_SPAN * fine.teeth)))
+    size = int(2 ** math.ceil(math.log2(16 * WIDTH_BAND[1] * fine.teeth)))
     env = _envelope(rec, ref, sel, m, size)
     d = ((np.arange(size) - int(np.argmax(env)) + size // 2) % size - size // 2) / size * fine.teeth
     near = np.abs(d) <= 4  # within 4 pitches of the peak, above the envelope's floor
