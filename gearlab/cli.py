@@ -209,6 +209,10 @@ def inspect(
     fs: Annotated[str | None, typer.Option(help="sampling rate when the file has none, e.g. '20 kHz'")] = None,
     sensitivity: Annotated[str | None, typer.Option(help="sensor sensitivity, e.g. '10 mV/g'")] = None,
     gain: Annotated[str | None, typer.Option(help="volts per file unit, e.g. '0.5 mV'")] = None,
+    unit: Annotated[
+        str | None,
+        typer.Option(help="vibration unit where its name and file say none: m/s^2, g, V, mV (+ --sensitivity)"),
+    ] = None,
     history: Annotated[
         list[Path] | None,
         typer.Option(help="healthy records of the same gearbox (repeat the option): localise the change (--gearbox)"),

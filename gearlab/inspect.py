@@ -29,6 +29,7 @@ from .data.recordings import (
     Recording,
     angle_tacho,
     channel_listing,
+    channel_scale,
     is_rate_or_time,
     name_unit,
     prefixed,
@@ -78,6 +79,7 @@ class InspectOptions:
     fs: float | None = None
     sensitivity: float | None = None  # V per m/s²
     gain: float | None = None  # V per file unit
+    unit: str | None = None  # the vibration's unit where its name and file say none (recordings.UNITS)
     threshold_db: float = THRESHOLD_DB
 
 
@@ -85,8 +87,8 @@ class InspectOptions:
 
 
 def read_record(path: str, options: InspectOptions) -> Recording:
-    """The record as *options* name it: unlike read_recording, the vibration is scaled by the given
-    gain / sensitivity alone (no unit read from a channel's name), so any column can be inspected."""
+    """The record as *options* name it: unlike read_recording, the vibration is scaled by the given gain /
+    sensitivity alone (no unit read from a channel's name: any column can be inspected), or by a --unit."""
     listing, fmt = read_contents(path, [])
     channels = [c for c in listing.available if not is_rate_or_time(str(c))]
     vibration = options.vibration
@@ -108,16 +110,17 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     if options.tacho is not None:
         roles.setdefault(options.tacho, "tacho")
     contents, fmt = read_contents(path, list(roles), roles)
-    scale = (1.0 if options.gain is None else options.gain) / (
-        1.0 if options.sensitivity is None else options.sensitivity
-    )
+    scale = (options.gain or 1.0) / (options.sensitivity or 1.0)  # both positive when given
+    units = f"value x {scale:g} (gain / sensitivity)"
+    if options.unit is not None:
+        declared = {"unit": contents.units.get(vibration), "declared": options.unit, "flag": lambda key: f"--{key}"}
+        scale, units = channel_scale(str(vibration), options.sensitivity, options.gain, str(path), **declared)
     vib = series(contents.found[vibration], vibration, "vibration", path) * scale
     fs, fs_source = sampling_rate(contents, options.fs, vib.size, path)
     tacho = None
     if options.tacho is not None:
         tacho = series(contents.found[options.tacho], options.tacho, "tacho", path)
         same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
-    units = f"value x {scale:g} (gain / sensitivity)"
     return Recording(str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho, units=units)
 
 

@@ -172,9 +172,11 @@ def read_recording(
     fs: float | str | None = None,
     sensitivity: float | str | None = None,
     gain: float | str | None = None,
+    unit: str | None = None,
 ) -> Recording:
     """One measured file as it is (docs/recordings.md: .csv, .txt, .zip, .npz, .h5, .wav, .mat): the
-    vibration in m/s² (through *sensitivity*, e.g. ``"100 mV/g"``, and *gain*, volts per file unit),
+    vibration in m/s² (through *sensitivity*, e.g. ``"100 mV/g"``, and *gain*, volts per file unit;
+    *unit*, ``"g"``, ``"m/s^2"``, ``"V"`` or ``"mV"``, where the channel's name and file say none),
     the tacho as stored and the sampling rate (the file's, or *fs*, e.g. ``"20 kHz"``).
 
     >>> import numpy as np
@@ -195,7 +197,17 @@ def read_recording(
         fs=_si(fs, "Hz", "fs"),
         sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "sensitivity"),
         gain=_si(gain, "V", "gain"),
+        unit=_unit(unit, "unit"),
     )
+
+
+def _unit(value: str | None, where: str) -> str | None:
+    """A 'unit' as a scenario's key takes it (recordings.UNITS), else a one-line error naming *where*."""
+    from .data.recordings import UNITS
+
+    if value is not None and value not in UNITS:
+        raise GearlabInputError(f"{where}: {value!r} is not one of {', '.join(UNITS)}")
+    return value
 
 
 def import_recording(path: str | Path, vibration: str | int, **keys) -> Dataset:
@@ -227,6 +239,7 @@ def inspect_options(
     fs: float | str | None = None,
     sensitivity: float | str | None = None,
     gain: float | str | None = None,
+    unit: str | None = None,
     flag=lambda key: key,
 ):
     """InspectOptions from the user's texts (inspect_recording's keywords, which `gearlab inspect`'s
@@ -258,6 +271,7 @@ def inspect_options(
         fs=rate,
         sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, flag("sensitivity")),
         gain=volts,
+        unit=_unit(unit, flag("unit")),
     )
 
 
@@ -275,7 +289,7 @@ def inspect_recording(
     ``verdict``); with *history* (healthy records of the same gearbox) and a *gearbox*, which shaft
     and gear carry a localised change (``localisation``). The arrays (``spectrum``, each ``tsa``) are
     kept. *options*: ``vibration``, ``tacho``, ``tacho_kind`` (auto, angle, pulses),
-    ``pulses_per_rev``, ``tacho_shaft``, ``speed``, ``fs``, ``sensitivity``, ``gain``, as
+    ``pulses_per_rev``, ``tacho_shaft``, ``speed``, ``fs``, ``sensitivity``, ``gain``, ``unit``, as
     inspect_options checks them; *flag* names a keyword in an error (the CLI passes its options).
 
     >>> import numpy as np

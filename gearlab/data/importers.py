@@ -43,6 +43,7 @@ from .readers.base import _one_line_repr
 from .recordings import (
     FORMATS,
     TACHO_KINDS,
+    UNITS,
     check_measured_file,
     prefixed,
     read_channels,
@@ -93,6 +94,8 @@ class MeasuredSpec:
                  sensitivity; with neither given the record's units are unknown and its values are
                  taken as m/s² (meta "units" says so, and the gap kind warns); a channel whose name
                  says its unit (acc_V, "acc [m/s^2]", acc_g) is taken so (recordings.channel_scale)
+    unit:        the vibration channel's unit where neither its name nor the file says it (recordings.UNITS:
+                 "m/s^2", "g", "V" or "mV"); None: not given
     pulses_per_rev: marks per revolution of a pulse tacho
     gearbox:     a gearbox description (file or built-in name): without a tacho, the speed is found
                  from its mesh lines (to ±1 % of speed_hz when that is given too)
@@ -114,6 +117,7 @@ class MeasuredSpec:
     gain: float | None = None
     pulses_per_rev: int = 1
     gearbox: str | None = None
+    unit: str | None = None
 
     def canonical(self) -> dict:
         """The options that shape the data: not the name (a label) nor where the file lies (nor the
@@ -121,7 +125,13 @@ class MeasuredSpec:
         d = asdict(self)
         d.pop("name")
         d.pop("path")
-        for key, default in (("sensitivity", None), ("gain", None), ("pulses_per_rev", 1), ("gearbox", None)):
+        for key, default in (
+            ("sensitivity", None),
+            ("gain", None),
+            ("pulses_per_rev", 1),
+            ("gearbox", None),
+            ("unit", None),
+        ):
             if d[key] == default:
                 d.pop(key)
         return d
@@ -133,7 +143,7 @@ class MeasuredSpec:
 
     @property
     def units_known(self) -> bool:
-        return self.sensitivity is not None or self.gain is not None
+        return self.sensitivity is not None or self.gain is not None or self.unit is not None
 
     def key(self) -> str:
         """Cache key: sha256 over the file's bytes, its format and the options (24 hex chars); a
@@ -187,6 +197,8 @@ class MeasuredSpec:
                 f"{where}: give either a tacho channel (tacho = ...) or a nominal shaft speed (speed = ...) or a "
                 "gearbox description to find it from (gearbox = ...) to know the shaft angle, got neither"
             )
+        if self.unit is not None and self.unit not in UNITS:
+            raise GearlabInputError(f"{where}: unit {self.unit!r} is not one of {', '.join(UNITS)}")
         if self.tacho_kind not in TACHO_KINDS:
             raise GearlabInputError(
                 f"{where}: unknown tacho_kind '{self.tacho_kind}'{did_you_mean(str(self.tacho_kind), TACHO_KINDS)}; "
@@ -381,6 +393,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
         fs=spec.fs,
         sensitivity=spec.sensitivity,
         gain=spec.gain,
+        unit=spec.unit,
         extra=() if spec.labels is None else ((spec.labels, "labels"),),
     )
     vib, fs, n = rec.signal, rec.fs, rec.signal.size

@@ -4,7 +4,8 @@ roles and units, the sampling rate and the shaft angle (docs/real_data.md).
     file ─► named channels + rate fields          read_contents: one small reader per format
                                                   (gearlab.data.readers)
          ─► vibration in m/s², tacho, rate         read_recording: units from the sensitivity, the
-                                                  gain and what a column's name says ('acc_V')
+                                                  gain and what a column's name says ('acc_V'),
+                                                  else the file or the scenario's 'unit' key
          ─► complete revolutions                   cut_recording (the detection and gap [target]);
                                                   gearlab.data.importers.import_measured (a dataset)
 
@@ -399,6 +400,11 @@ def name_unit(name: str) -> tuple[str, str, float] | None:
     return None
 
 
+# What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
+# (a headerless text column): the quantity and factor are name_unit's, as if the name ended in it.
+UNITS = ("m/s^2", "m/s²", "g", "V", "mV")
+
+
 def channel_scale(
     name: str,
     sensitivity: float | None,
@@ -406,33 +412,53 @@ def channel_scale(
     where: str,
     integer: bool = False,
     unit: str | None = None,
+    declared: str | None = None,
+    flag=None,
 ) -> tuple[float, str]:
     """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the
-    channel's name -- or else the *unit* the file states for it (an HDF5 'units' attribute) --
-    says of its unit (a column in volts needs a sensitivity, one in m/s² or g must not have one;
-    mV are volts / 1000). *where*: the scenario table, for the one-line errors that name its key;
-    *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
+    channel's name -- or else the *unit* the file states for it (an HDF5 'units' attribute), or else
+    the scenario's 'unit' key (*declared*, which neither may contradict) -- says of its unit (volts
+    need a sensitivity, m/s² or g must not have one; mV are volts / 1000). *where*: the scenario
+    table, for the one-line errors that name its key (or *flag*(key): a command's option); *integer*:
+    the channel holds integer counts (a sensitivity then needs a gain)."""
+
+    def at(key: str) -> str:
+        return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
+
     said, says = name_unit(name), "as its name says"
     if said is None and unit is not None:
         said, says = name_unit(f"[{unit}]"), f"as the file's unit '{unit}' says"
+    if declared is not None:
+        given = name_unit(f"[{declared}]")
+        if said is not None and (said[0], said[2]) != (given[0], given[2]):  # m/s^2 and ms2 agree
+            raise GearlabInputError(
+                f"{at('unit')}: '{declared}' contradicts channel '{name}', which is in {said[1]} ({says}); "
+                f"expected no unit (or '{said[1]}')"
+            )
+        if said is None:
+            said, says = given, "as " + (flag("unit") if flag else "key 'unit'") + " says"
     if said is not None and said[0] == "voltage" and sensitivity is None:
         raise GearlabInputError(
-            f"{where} key 'sensitivity': missing; channel '{name}' is in volts ({said[1]}, {says}); "
+            f"{at('sensitivity')}: missing; channel '{name}' is in volts ({said[1]}, {says}); "
             "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
         )
     if said is not None and said[0] == "acceleration":
         for key, value in (("sensitivity", sensitivity), ("gain", gain)):
+            if value is not None and declared is not None:  # which of the two is wrong, only the user knows
+                raise GearlabInputError(
+                    f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected "
+                    f"no {key} (values in volts: unit = 'V' or 'mV' with the sensitivity)"
+                )
             if value is not None:
                 raise GearlabInputError(
-                    f"{where} key '{key}': channel '{name}' is an acceleration already ({said[1]}, {says}); "
-                    f"expected no {key}"
+                    f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key}"
                 )
         if said[2] == 1.0:
             return 1.0, f"m/s² (channel '{name}')"
         return said[2], f"m/s² = value x {said[2]:g} (channel '{name}' in {said[1]})"
     if integer and sensitivity is not None and gain is None:
         raise GearlabInputError(
-            f"{where} key 'gain': missing; channel '{name}' holds integer counts, so the sensitivity needs the "
+            f"{at('gain')}: missing; channel '{name}' holds integer counts, so the sensitivity needs the "
             "volts per count (a WAV file's: the volts at full scale), e.g. gain = '0.3 mV'"
         )
     volts = gain if gain is not None else (said[2] if said is not None else 1.0)
@@ -485,12 +511,13 @@ def read_recording(
     fs: float | None = None,
     sensitivity: float | None = None,
     gain: float | None = None,
+    unit: str | None = None,
     extra: Sequence[tuple[str, str]] = (),
     where: str = "",
 ) -> Recording:
-    """The vibration in m/s² (channel_scale), the tacho and the rate of one file; *extra*: (name,
-    role) of other channels to return as stored (a labels channel). *where*: the scenario table the
-    keys come from, for the errors on units (default: the file)."""
+    """The vibration in m/s² (channel_scale; *unit*: the scenario's 'unit' key), the tacho and the
+    rate of one file; *extra*: (name, role) of other channels to return as stored (a labels channel).
+    *where*: the scenario table the keys come from, for the errors on units (default: the file)."""
     path = str(path)
     vibration, tacho = channel_key(vibration), channel_key(tacho) if tacho is not None else None
     roles = {vibration: "vibration"}
@@ -502,7 +529,7 @@ def read_recording(
     # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
     step = contents.steps.get(vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
     name = named(vibration, contents.available)
-    scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name))
+    scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name), declared=unit)
     vib = series(raw, vibration, "vibration", path) * scale
     rate, fs_source = sampling_rate(contents, fs, vib.size, path)
     tacho_values = None
@@ -655,6 +682,7 @@ def cut_recording(
     pulses_per_rev: int = 1,
     sensitivity: float | None = None,
     gain: float | None = None,
+    unit: str | None = None,
     fs: float | None = None,
     speed_hz: float | None = None,
     gearbox=None,
@@ -666,7 +694,7 @@ def cut_recording(
     revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
     from ..signals import POINTS, cut_revolutions
 
-    rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, where=where)
+    rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
     raw = rec.signal
     if raw.size and raw.min() == raw.max():  # a wrong column, or a sensor not connected
         raise GearlabInputError(
@@ -736,12 +764,13 @@ def check_recording(
     fs: float | None = None,
     sensitivity: float | None = None,
     gain: float | None = None,
+    unit: str | None = None,
 ) -> Header:
     """Check what a scenario says of a measured file against its header alone (read_header): every
     channel in *channels* ({key: channel}, e.g. {"vibration": "acc_V", "tacho": 2}) is there, a
-    sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale) are
-    given. *where*: the scenario's table ("s.toml: [datasets] #1"); every error is one line that
-    names it, the key and the file."""
+    sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale, with
+    the scenario's *unit*) are given. *where*: the scenario's table ("s.toml: [datasets] #1");
+    every error is one line that names it, the key and the file."""
     header = read_header(path)
     for key, value in channels.items():
         if value is None or value == "":
@@ -763,5 +792,5 @@ def check_recording(
     if vibration not in (None, ""):
         name = channel_key(vibration)
         name = named(name, header.channels) if header.indexed else header.resolve(name)
-        channel_scale(name, sensitivity, gain, where, name in header.integer, header.units.get(name))
+        channel_scale(name, sensitivity, gain, where, name in header.integer, header.units.get(name), unit)
     return header

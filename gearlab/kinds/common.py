@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..data.importers import MeasuredSpec
 from ..data.placement import canonical_faults, model_shafts
-from ..data.recordings import channel_key, check_measured_file, check_recording, only_vibration
+from ..data.recordings import UNITS, channel_key, check_measured_file, check_recording, only_vibration
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import parse_sensitivity
 from ..effects import effects_from_tables
@@ -134,6 +134,13 @@ MEASURED = {
         "doc": "measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²); without it or "
         "'gain' the units are unknown",
     },
+    "unit": {
+        "types": str,
+        "default": "",
+        "choices": UNITS,
+        "doc": "measured data: the vibration channel's unit where neither its name ('acc_V', 'acc [g]') nor "
+        "the file says it (a headerless column): 'm/s^2', 'g', or 'V' / 'mV' with a 'sensitivity'",
+    },
     "gain": {
         "types": (int, float, str),
         "default": None,
@@ -173,6 +180,7 @@ class DatasetEntry:
     class_names: list = setting(list, ["healthy", "fault"], doc="measured data: class names, healthy first")
     transient: str = measured("transient")
     sensitivity: float | str | None = measured("sensitivity")
+    unit: str = measured("unit")
     gain: float | str | None = measured("gain")
     name: str = setting(
         str, "", check=lambda v, where: v and plain_name(v, where), doc="label (default: the preset name)"
@@ -220,7 +228,7 @@ class SourceEntry(DatasetEntry):
     preset: str = setting(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
 
-_NOT_SIMULATED = ("file", "vibration", "tacho", "labels", "sensitivity", "gain", "class_names", "transient")
+_NOT_SIMULATED = ("file", "vibration", "tacho", "labels", "sensitivity", "unit", "gain", "class_names", "transient")
 SOURCE_KEYS = keys_of(SourceEntry, tuple(k for k in DATASET_TABLE.keys if k not in _NOT_SIMULATED))
 
 
@@ -230,7 +238,7 @@ MAX_SAMPLES = 10**6
 
 
 # keys of a measured 'file' entry that mean nothing to a simulated preset
-MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "gain", "pulses_per_rev")
+MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "unit", "gain", "pulses_per_rev")
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
@@ -431,8 +439,9 @@ def with_source_gearbox(target: dict, source: dict) -> dict:
 
 
 def units_of(entry: dict, where: str) -> dict:
-    """sensitivity (V per m/s²) and gain (V per file unit) of a measured 'file' entry, as given."""
-    out = {}
+    """sensitivity (V per m/s²), gain (V per file unit) and unit (one of UNITS) of a measured 'file'
+    entry, as given."""
+    out = {"unit": entry["unit"]} if entry.get("unit") else {}
     if entry.get("sensitivity") is not None:
         out["sensitivity"] = parse_sensitivity(entry["sensitivity"], f"{where} key 'sensitivity'")
     if entry.get("gain") is not None:

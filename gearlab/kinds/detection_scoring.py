@@ -53,7 +53,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         "target": {
             k: getattr(target, k)
             for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
-            + ("speed_hz", "gearbox")
+            + ("speed_hz", "gearbox", "unit")
         },
         "blocks": list(d.blocks),
         "threshold": d.threshold,

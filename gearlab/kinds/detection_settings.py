@@ -74,6 +74,7 @@ class TargetRecords:
     speed: float | str | None = measured("speed")
     gearbox: str = measured("gearbox")
     sensitivity: float | str | None = measured("sensitivity")
+    unit: str = measured("unit")
     gain: float | str | None = measured("gain")
     fs: float | str | None = measured("fs")
     transient: str = measured("transient", "none")

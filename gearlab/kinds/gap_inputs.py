@@ -97,24 +97,26 @@ def units_warning(channel, X: np.ndarray) -> str:
     """What is said of measured values whose units are unknown (no sensitivity, and a vibration
     *channel* whose name says no unit: recordings.channel_scale), *X* the rows taken as m/s²: what
     fits values in volts and what fits values in m/s² already, and how a file says the latter (a
-    channel name ending in the unit: recordings.name_unit)."""
+    channel name ending in the unit: recordings.name_unit; a file whose channels have no names: the
+    'unit' key)."""
     return (
         f"WARNING: units unknown: no sensitivity given and vibration channel '{channel}' names no unit; "
         f"the values are taken as m/s² (RMS {float(np.sqrt(np.mean(np.square(X)))):.3g}). Values in volts "
         "need the sensor's sensitivity (e.g. sensitivity = '10 mV/g'; integer counts a gain too); values "
         "already in m/s² need none: a channel name ending in its unit (e.g. 'acc_ms2', 'acc [m/s^2]' or "
-        "'acc [g]') says so, and this warning goes"
+        "'acc [g]') says so, or in a file whose channels have no names unit = 'g' (or 'm/s^2'), and this "
+        "warning goes"
     )
 
 
 def units_declared(target: Target) -> bool:
-    """A sensitivity is given, or the vibration channel's name (or the unit the file states for it)
-    in the first history file's header says the values are an acceleration already
+    """A sensitivity or a 'unit' is given, or the vibration channel's name (or the unit the file
+    states for it) in the first history file's header says the values are an acceleration already
     (recordings.name_unit: m/s², g; volts without a sensitivity are refused before:
     recordings.channel_scale)."""
     from ..data.recordings import channel_key, name_unit, named, read_header
 
-    if target.sensitivity is not None:
+    if target.sensitivity is not None or target.unit is not None:
         return True
     first = next(f for f in target.files if f.role == "history")
     header = read_header(first.resolved)

@@ -41,6 +41,7 @@ class Target:
     gain: float | None = None  # V per file unit
     speed_hz: float | None = None  # declared input-shaft speed of every record without a tacho
     gearbox: str | None = None  # a description (file or built-in name): the speed from its mesh orders
+    unit: str | None = None  # the vibration's unit where its name and file say none (recordings.UNITS)
 
     def read(self, file: TargetFile):
         """One of the target's records, read through the one import path (any format) with its
@@ -56,6 +57,7 @@ class Target:
             pulses_per_rev=self.pulses_per_rev,
             sensitivity=self.sensitivity,
             gain=self.gain,
+            unit=self.unit,
             fs=self.fs,
             transient=self.transient,
             speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
@@ -123,19 +125,12 @@ def speed_of(value, where: str) -> float:
 
 def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
     """The [target] of measured records: the keys of every measured entry (vibration, tacho,
-    pulses_per_rev, sensitivity, gain, fs; without a tacho, speed or gearbox: the description, a
-    path as the caller resolved it) and the files, each checked against its header
-    (recordings.check_recording: its channels, a sampling rate, units) before any work."""
-    fs = None
-    if t.get("fs") is not None:
-        fs = to_si(t["fs"], "Hz", f"{where} key 'fs'")
-        if not fs > 0:
-            raise GearlabInputError(f"{where} key 'fs': expected a positive sampling rate, got {shown(t['fs'])}")
-    if t["transient"] not in ("none", "stats"):
-        raise GearlabInputError(f"{where} key 'transient': expected 'none' or 'stats', got {shown(t['transient'])}")
-    for key in ("vibration", "tacho"):
-        if isinstance(t[key], int) and t[key] < 0:
-            raise GearlabInputError(f"{where} key '{key}': a column index is 0 or more, got {t[key]}")
+    pulses_per_rev, sensitivity, unit, gain, fs; without a tacho, speed or gearbox: the description,
+    a path as the caller resolved it) and the files, each checked against its header
+    (recordings.check_recording: its channels, a sampling rate, units) before any work. *t* was
+    checked as kinds.common.MEASURED declares its keys (bounds, choices, column indices) when the
+    table was read; here the values become SI."""
+    fs = None if t.get("fs") is None else to_si(t["fs"], "Hz", f"{where} key 'fs'")
     vibration = channel_key(t["vibration"])
     tacho = None if t["tacho"] in (None, "") else channel_key(t["tacho"])
     if vibration == tacho:
@@ -145,13 +140,8 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
     sensitivity = None
     if t.get("sensitivity") is not None:
         sensitivity = parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'")
-    gain = None
-    if t.get("gain") is not None:
-        gain = to_si(t["gain"], "V", f"{where} key 'gain'")
-        if not gain > 0:
-            raise GearlabInputError(
-                f"{where} key 'gain': expected a positive voltage per file unit, got {shown(t['gain'])}"
-            )
+    gain = None if t.get("gain") is None else to_si(t["gain"], "V", f"{where} key 'gain'")
+    unit = t.get("unit") or None
     files = target_files(t["files"], f"{where} key 'files'", base, need)
     if vibration == "":  # as inspect takes it: each file's one channel besides the tacho and time
         found = sorted({only_vibration(f.resolved, tacho, where) for f in files})
@@ -182,7 +172,13 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
                 "mesh orders give the speed"
             )
         check_recording(
-            f.resolved, where, {"vibration": vibration, "tacho": tacho}, fs=fs, sensitivity=sensitivity, gain=gain
+            f.resolved,
+            where,
+            {"vibration": vibration, "tacho": tacho},
+            fs=fs,
+            sensitivity=sensitivity,
+            gain=gain,
+            unit=unit,
         )
     return Target(
         vibration,
@@ -196,4 +192,5 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
         gain,
         speed,
         gearbox,
+        unit,
     )
