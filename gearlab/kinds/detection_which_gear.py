@@ -249,6 +249,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
                 "unit": unit,
                 "watched": {k: 100.0 * float(np.mean(v)) if v else None for k, v in watched.items()},
                 "other": {k: 100.0 * float(np.mean(v)) if v else None for k, v in other.items()},
+                "units": {k: len(v) for k, v in watched.items()},
             }
         )
     return out
