@@ -7,10 +7,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from tiny import bare_dataset
+from tiny import bare_dataset, protocol
 
 from gearlab.learn.calibration import RECIPE
-from gearlab.learn.protocol import Protocol, StateStore, run_unit
+from gearlab.learn.protocol import StateStore, run_unit
 from gearlab.parts import training
 from gearlab.plots import latent_projection
 
@@ -38,22 +38,10 @@ def test_calibrated_latent_features_share_the_targets_scale():
     source = revolutions(20, 30, rng, noise=0.0)  # noise-free, as the simulator's source
     target = revolutions(12, 28, rng, noise=0.3, gain=1.3)
     mmd = training.method({"adapter": "mmd", "supervised": False, "params": {}}, "test")
-    protocol = Protocol(
-        methods=(mmd,),
-        ks=(0,),
-        repetitions=1,
-        target_train=12,
-        batch=4,
-        prime_epochs=2,
-        baseline_epochs=2,
-        patience=2,
-        min_epochs=2,
-        max_epochs=2,
-        network="shapes",
-        device="cpu",
-        calibration=replace(RECIPE),
+    tiny = protocol(
+        [mmd], ks=(0,), repetitions=1, baseline_epochs=2, max_epochs=2, network="shapes", calibration=replace(RECIPE)
     )
-    latent = run_unit(protocol, source, target, 0, 0, mmd, StateStore(None))["_latent"]
+    latent = run_unit(tiny, source, target, 0, 0, mmd, StateStore(None))["_latent"]
     zs, zt = np.abs(latent["source"]).max(), np.abs(latent["target"]).max()
     assert np.isfinite(zs) and zs < 100 * zt, (zs, zt)  # 1.4e13 against 60 before the fix
     points, collapsed = latent_projection(np.concatenate([latent["source"], latent["target"]]))

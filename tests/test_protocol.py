@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from tiny import BASELINES_AND_MMD, bare_dataset, run_once
+from tiny import BASELINES_AND_MMD, bare_dataset, protocol, run_once
 from tiny import transfer as tiny_scenario
 
 from gearlab.data.cache import load_or_build
@@ -77,20 +77,7 @@ METHODS = (
 
 
 def tiny(**changes) -> Protocol:
-    base = Protocol(
-        methods=METHODS,
-        ks=(0, 2),
-        repetitions=2,
-        target_train=12,
-        batch=4,
-        prime_epochs=2,
-        baseline_epochs=3,
-        patience=2,
-        min_epochs=2,
-        max_epochs=3,
-        dropout=0.1,
-        device="cpu",
-    )
+    base = protocol(METHODS, ks=(0, 2), repetitions=2, baseline_epochs=3, max_epochs=3, dropout=0.1)
     return replace(base, **changes)
 
 

@@ -87,6 +87,15 @@ def stiffness(points: int, faults: list[str], steps: tuple[int, int], tooth: int
     return f"{text}\n{cases}" if cases else text
 
 
+def protocol(methods, **changes):
+    """A protocol that trains in a second or two: two epochs of priming, a patience of 2, batches of 4
+    (gearlab.learn.protocol.Protocol); *changes* replace any field."""
+    from gearlab.learn.protocol import Protocol
+
+    base = dict(target_train=12, batch=4, prime_epochs=2, patience=2, min_epochs=2, device="cpu")
+    return Protocol(methods=tuple(methods), **{**base, **changes})
+
+
 def bare_dataset(X: np.ndarray, fault: np.ndarray, spec=None, **more) -> Dataset:
     """The samples *X*, labelled healthy (0) or faulty (1) by *fault*, and nothing else: no intensity, tooth,
     fault area or revolution, one domain."""
