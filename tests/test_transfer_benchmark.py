@@ -14,6 +14,7 @@ from browser import check_report, chromium
 from tiny import EXECUTION, SCHEDULE
 
 from gearlab.engine import load_scenario, run_scenario
+from gearlab.gap.diagnose import WITHHELD
 from gearlab.kinds import SCENARIO_KINDS
 from gearlab.kinds import transfer_benchmark as tb
 from gearlab.kinds import transfer_benchmark_draw as draws
@@ -259,6 +260,65 @@ def test_both_sources_reported_per_trial_and_in_distribution(corrected):
     )
     lines = tb.summary_lines(RunDir.open(run))
     assert "the corrections of the source fitted (trials): bearing_stiffness 2, sensor_noise 2" in lines
+    # the stand-in explains the gap: the correction is applied, its rows trained on the corrected source
+    records = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines()]
+    assert [r["withheld"] for r in records if r["unit"].endswith("/correction")] == ["", ""]
+    assert all(not t["correction"]["withheld"] for t in summary["trials"].values())
+    assert not any(r.get("same_as_plain") for r in records) and WITHHELD not in table
+    assert not any(WITHHELD in line for line in lines)
+
+
+# A diagnosis that leaves the gap unexplained with effects fitted and kept: partly explained, under the
+# share that applies them (against the noise fitted alone, reference 'noise', 95 % of what it leaves).
+PARTLY = {"verdict": "partly explained", "unexplained": True, "explained_share": 0.95}
+
+
+def test_an_unexplained_gap_leaves_the_plain_source_and_says_so(tmp_path, monkeypatch):
+    """A tiny corrected run whose diagnosis leaves the gap unexplained: its corrected rows repeat the
+    plain ones (no training on the fitted source) and the record, the table and the summary say why."""
+
+    def diagnose(source, target_X, settings, executor=None, on_event=None, chain=None):
+        effects = [{"name": n, "params": dict(p), "share_removed": 0.5} for n, p in FITTED]
+        return {"gap_before": 10.0, "gap_after": 1.0, **PARTLY, "effects": effects, "corrected_effects": FITTED}
+
+    path = tmp_path / "unexplained.toml"
+    path.write_text(CORRECTED.replace("repetitions = 2", "repetitions = 1").replace("seed = 3", "seed = 3\nonly = [0]"))
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr("gearlab.gap.diagnose.diagnose", diagnose)
+    run = run_scenario(path, out=tmp_path / "runs").path
+    records = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines()]
+    (fit,) = [r for r in records if r["unit"].endswith("/correction")]
+    assert fit["withheld"] == f"{WITHHELD} (partly explained, 95.00 % of the gap removed)"
+    plain = {r["method"]: r for r in records if r.get("variant") == "plain"}
+    fixed = [r for r in records if r.get("variant") == "corrected"]
+    assert len(plain) == len(fixed) == 3 and not (run / "states" / "trial000-corrected").exists()
+    for r in fixed:
+        assert r["same_as_plain"] and r["accuracy"] == plain[r["method"].replace(", corrected source", "")]["accuracy"]
+    assert f"left out: sensor_noise (noise); {fit['withheld']} |" in (run / "table.md").read_text()
+    lines = tb.summary_lines(RunDir.open(run))
+    assert f"{WITHHELD.replace(':', ',')} (the plain source used): trial000" in lines
+
+
+def test_the_correction_is_applied_only_where_the_gap_is_explained():
+    from gearlab.gap.diagnose import APPLY_SHARE, correction_withheld
+
+    spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
+    _, source, _, _ = tb.trials(spec)[0]
+    record = {"trial": "trial000", "corrected_effects": FITTED}
+    for verdict, applied in [
+        ({"verdict": "explained", "unexplained": False, "explained_share": 0.9999}, True),
+        ({"verdict": "partly explained", "unexplained": True, "explained_share": APPLY_SHARE}, True),
+        ({"verdict": "partly explained", "unexplained": True, "explained_share": 0.9998}, True),  # seed 1, trial 2
+        ({"verdict": "structure differs", "unexplained": True, "explained_share": None}, False),
+        (PARTLY, False),
+        ({"verdict": "unexplained", "unexplained": True, "explained_share": 0.4}, False),
+        ({"unexplained": True}, False),  # a record from before the verdicts: read from 'unexplained'
+        ({"unexplained": False}, True),
+    ]:
+        fixed = tb.corrected_spec(source, {**record, **verdict})
+        assert (fixed is not source) == applied and (correction_withheld(verdict) == "") == applied
+        assert applied or correction_withheld(verdict).startswith(WITHHELD)
+    assert correction_withheld({"verdict": "unexplained", "explained_share": 0.0}) == f"{WITHHELD} (unexplained)"
 
 
 def test_the_corrected_source_keeps_the_model_and_path_effects_not_the_noise():

@@ -249,6 +249,7 @@ def correction(spec: Spec, name: str, source_spec: DatasetSpec, target, history,
     history rows in physical units. Rows alone go in: no label, no test row, nothing of how the
     target was drawn."""
     from ..gap import diagnose as gap  # looked up at call time: a test watches what it is given
+    from ..gap.diagnose import correction_withheld
 
     mean, std = target.reference
     rows = np.asarray(target.X, dtype=np.float64)[history] * std + mean  # physical units, as simulated
@@ -261,6 +262,8 @@ def correction(spec: Spec, name: str, source_spec: DatasetSpec, target, history,
         "gap_before": result["gap_before"],
         "gap_after": result["gap_after"],
         "unexplained": result["unexplained"],
+        **{k: result.get(k) for k in ("verdict", "explained_share", "rms_effect_after")},
+        "withheld": correction_withheld(result),  # why the corrected rows use the plain source ('' : they do not)
         "effects": [{k: e.get(k) for k in ("name", "params", "share_removed")} for e in result["effects"]],
         "corrected_effects": result["corrected_effects"],
         "seconds": round(time.perf_counter() - started, 1),
@@ -292,9 +295,12 @@ def left_out(source_spec: DatasetSpec, record: dict, executor=None) -> list[dict
 def corrected_spec(source_spec: DatasetSpec, record: dict) -> DatasetSpec:
     """The plain source with the fitted effects but those `left_out` names in *record* and the noise
     ones: only what the diagnosis found of the model and the path changes. The plain source itself
-    where nothing else was fitted."""
-    from ..gap.diagnose import corrected_source
+    where nothing else was fitted, and where the diagnosis did not explain the gap
+    (gap.diagnose.correction_withheld: the corrected rows then repeat the plain ones)."""
+    from ..gap.diagnose import corrected_source, correction_withheld
 
+    if correction_withheld(record):
+        return source_spec
     registry = get_registry()
     out = {e["name"] for e in record.get("left_out", ())}
     effects = tuple(
@@ -309,12 +315,15 @@ def corrected_spec(source_spec: DatasetSpec, record: dict) -> DatasetSpec:
 
 
 def correction_line(record: dict) -> str:
+    from ..gap.diagnose import correction_withheld
+
     fitted = ", ".join(e["name"] for e in record["effects"]) or "no effect"
     out = ", ".join(f"{e['name']} ({e['why']})" for e in record.get("left_out", ()))
     return (
         f"{record['trial']}: the diagnosis of its history ({record['rows']} healthy rows) fits {fitted}: "
         f"gap {record['gap_before']:.4g} -> {record['gap_after']:.4g} ({record['seconds']:.0f} s)"
         + (f"; left out of the corrected source: {out}" if out else "")
+        + (f"; {withheld}" if (withheld := correction_withheld(record)) else "")
     )
 
 
@@ -423,6 +432,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 def per_trial(records: list[dict]) -> dict[str, dict]:
     """{trial: {answers, bound (mean accuracy or None), unavailable, correction (the fitted effects,
     or None), accuracy {method: mean}}}."""
+    from ..gap.diagnose import correction_withheld
+
     out: dict[str, dict] = {}
     for r in records:
         if r["unit"].endswith("/target"):
@@ -438,7 +449,9 @@ def per_trial(records: list[dict]) -> dict[str, dict]:
         if r["unit"].endswith("/correction") and r["trial"] in out:
             out[r["trial"]]["correction"] = {
                 **{k: r[k] for k in ("effects", "gap_before", "gap_after", "unexplained")},
+                **{k: r.get(k) for k in ("verdict", "explained_share")},
                 "left_out": r.get("left_out", []),
+                "withheld": correction_withheld(r),
             }
     scores: dict[tuple[str, str], list[float]] = {}
     for r in records:
@@ -576,7 +589,8 @@ def fitted_text(correction: dict | None) -> str:
         for e in correction["effects"]
     ]
     out = ", ".join(f"{e['name']} ({e['why']})" for e in correction.get("left_out", ()))
-    return "; ".join(parts + ([f"left out: {out}"] if out else [])) or "none"
+    withheld = [correction["withheld"]] if correction.get("withheld") else []
+    return "; ".join(parts + ([f"left out: {out}"] if out else []) + withheld) or "none"
 
 
 def methods_md(summary: dict) -> str:
@@ -628,6 +642,9 @@ def summary_lines(run: RunDir) -> list[str]:
     if s.get("corrected"):
         counts = ", ".join(f"{name} {n}" for name, n in sorted(fitted.items(), key=lambda x: -x[1])) or "nothing"
         lines.append(f"the corrections of the source fitted (trials): {counts}")
+        withheld = [n for n, t in s["trials"].items() if (t["correction"] or {}).get("withheld")]
+        if withheld:
+            lines.append(f"gap not explained, correction not applied (the plain source used): {', '.join(withheld)}")
     unavailable = sum(t["bound"] is None for t in s["trials"].values())
     if unavailable:
         lines.append(f"Bayes bound unavailable on {unavailable} trials (a tone: outside its model)")
