@@ -12,6 +12,9 @@ residual before the correlation, the locally optimal statistic in impulsive nois
 turns it on when the history's noise law is not Gaussian (gearlab.learn.history.noise_law).
 ``path`` (``fir`` by default, or ``gain``): the shapes reach the target through the filter fitted
 between the two domains' healthy references (gearlab.learn.path).
+``scale`` (``history`` by default, or ``unit``): a correlation over the healthy history's median
+residual norm, or over the scored revolution's own (the cosine, which a fault response the
+shapes miss pushes below the healthy revolutions'; gearlab.learn.detectors).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from __future__ import annotations
 from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, hookimpl
 
 LIMITERS = ("off", "on", "auto")
+SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
@@ -26,8 +30,9 @@ LIMITERS = ("off", "on", "auto")
 class MatchedFilter(Detector):
     name = "matched_filter"
     doc = (
-        "Physics-template detector: largest cosine between a revolution's residual from the target's healthy "
-        "reference and the simulated fault responses, thresholded on the healthy history (no network)."
+        "Physics-template detector: largest correlation between a revolution's residual from the target's healthy "
+        "reference and the simulated fault responses over the history's noise level, thresholded on the healthy "
+        "history (no network)."
     )
     params = (
         FALSE_ALARM_PARAM,
@@ -41,14 +46,26 @@ class MatchedFilter(Detector):
             integer=True,
         ),
         PATH_PARAM,
+        Param(
+            "scale",
+            "",
+            1,
+            0,
+            len(SCALES) - 1,
+            "noise level of a correlation: 0 = unit (the revolution's own residual norm: cosine), 1 = history "
+            "(the healthy history's median)",
+            integer=True,
+        ),
     )
-    choices = {"limiter": LIMITERS, "path": PATHS}
+    choices = {"limiter": LIMITERS, "path": PATHS, "scale": SCALES}
 
     def statistic(self, source, target, params=None):
         from gearlab.api import template_statistic
 
         values = self.named(params)
-        return template_statistic(*source, *target, limiter=values["limiter"], path=values["path"])
+        return template_statistic(
+            *source, *target, limiter=values["limiter"], path=values["path"], scale=values["scale"]
+        )
 
 
 @hookimpl
