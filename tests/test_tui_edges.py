@@ -325,14 +325,16 @@ def test_a_long_column_name_wraps_in_its_header_and_later_headers_are_not_cut():
 
 @pytest.fixture(scope="module")
 def made_runs(tmp_path_factory):
-    """Two finished quick stiffness runs, made once (a few seconds)."""
+    """Two finished quick stiffness runs: one made once, twice (the scenarios fixture copies each
+    under its own time stamp; the same scenario gives the same run, and these tests read the
+    TUI's view of two runs, not the engine)."""
     from gearlab.engine import run_scenario
 
     base = tmp_path_factory.mktemp("edges")
     source = base / "stiff.toml"
     text = (ROOT / "scenarios" / "stiffness_verification.toml").read_text().split("[output]")[0]
     source.write_text(text.replace('name = "stiffness_verification"', 'name = "stiff"'))
-    return [run_scenario(source, out=base / "made", quick=True).path for _ in range(2)]
+    return [run_scenario(source, out=base / "made", quick=True).path] * 2
 
 
 @pytest.fixture

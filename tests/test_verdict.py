@@ -245,12 +245,16 @@ def runs(tmp_path_factory):
     (base / "t.toml").write_text(TRANSFER)
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(base / "cache"))
-        transfers = [run_scenario(base / "t.toml", out=base / "runs").path for _ in range(2)]
+        first = run_scenario(base / "t.toml", out=base / "runs").path
         gap = run_scenario(HERE / "tui_scenarios" / "tgap.toml", out=base / "runs").path
         data = run_scenario(HERE / "tui_scenarios" / "tdata.toml", out=base / "runs").path
         (base / "det").mkdir()
         found = run_scenario(detection_scenario(base / "det"), out=base / "runs").path
-    return {"transfer": transfers, "gap": gap, "dataset": data, "detection": found}
+    # The second transfer run is a copy of the first under a later time stamp: the same scenario and
+    # seeds give the same records (tests/test_crash_safety.py); these tests read two runs, not the engine.
+    second = first.with_name(f"{first.name[:-6]}{int(first.name[-6:]) + 1:06d}")
+    shutil.copytree(first, second)
+    return {"transfer": [first, second], "gap": gap, "dataset": data, "detection": found}
 
 
 def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_learned_nothing():
