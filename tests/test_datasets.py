@@ -327,6 +327,7 @@ VARIATIONS = {
     "tsa": True,
     "seed": 1,
     "fs": 250e3,
+    "healthy_twin": True,
 }
 
 
