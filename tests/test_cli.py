@@ -101,7 +101,7 @@ def test_stiffness_bad_input_one_line_exit_2(cli, args, message):
         (["stiffness"], "Missing option '--preset'"),
         (["stiffness", "--preset", "luo2019", "--points", "many"], "Invalid value for '--points'"),
         (["stiffness", "--preset", "luo2019", "--bogus"], "No such option: --bogus"),
-        (["modes"], "Missing option '--model'"),
+        (["modes"], "give --model NAME (and --preset) or --gearbox DESCRIPTION"),
         (["stifness"], "No such command 'stifness'"),
     ],
 )
