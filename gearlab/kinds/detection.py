@@ -462,6 +462,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         *units_seen[c],
                         states,
                         rules[c],
+                        bool(later),  # the detectors whiten their rows (gearlab.learn.whiten)
                     )
                 )
             executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")

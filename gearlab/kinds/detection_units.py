@@ -74,6 +74,7 @@ def train_unit(task: tuple) -> dict:
         test_units,
         states,
         rule,
+        whiten,
     ) = task
     started = time.perf_counter()
     torch.set_num_threads(1)
@@ -102,6 +103,14 @@ def train_unit(task: tuple) -> dict:
             device,
             report,
         )
+    if whiten and method.is_detector:
+        # a detector sees every row through the whitening filter of its own history rows' residuals
+        # (gearlab.learn.whiten: their coloured leftover ranked single healthy revolutions); the
+        # filter is kept in the model, so the units below and `gearlab score`'s pass through it too
+        from ..learn.whiten import whitened, whitening_of
+
+        false_alarm = get_registry().get("detector", method.adapter).values(dict(method.params))["false_alarm"]
+        model = whitened(model.to("cpu"), whitening_of(train), train, float(false_alarm)).to(device)
     # what a network learned of the simulator, from training data only: its scores of the source's
     # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
     # healthy). A detector is built in the target's frame (the history's reference, the path to
