@@ -17,6 +17,7 @@ from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
+from ..params import did_you_mean
 from ..registry import get_registry
 from ..scenario import Scenario, Table, keys_of, location, plain_name
 from ..settings import from_inline, setting
@@ -33,6 +34,15 @@ def _column(value, where: str):
     """A channel: a name, or a 0-based column index."""
     if isinstance(value, int) and not isinstance(value, bool) and value < 0:
         raise GearlabInputError(f"{where}: a column index is 0 or more, got {value}")
+    return value
+
+
+def _unit(value, where: str):
+    """A declared unit, or '' (none declared: what a run's resolved scenario.toml writes back)."""
+    if value and value not in UNITS:
+        raise GearlabInputError(
+            f"{where}: {shown(value)} is not one of {', '.join(UNITS)}{did_you_mean(str(value), UNITS)}"
+        )
     return value
 
 
@@ -137,7 +147,7 @@ MEASURED = {
     "unit": {
         "types": str,
         "default": "",
-        "choices": UNITS,
+        "check": _unit,
         "doc": "measured data: the vibration channel's unit where neither its name ('acc_V', 'acc [g]') nor "
         "the file says it (a headerless column): 'm/s^2', 'g', or 'V' / 'mV' with a 'sensitivity'",
     },
