@@ -50,6 +50,49 @@ class Event:
 EventSink = Callable[[Event], None]
 
 
+def clock(seconds: float | None) -> str:
+    """1:02:03, 2:03 or 0:05; '-:--' when unknown."""
+    if seconds is None or seconds != seconds or seconds < 0:
+        return "-:--"
+    seconds = int(round(seconds))
+    hours, rest = divmod(seconds, 3600)
+    minutes, s = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{s:02d}" if hours else f"{minutes}:{s:02d}"
+
+
+class Pace:
+    """Rate and time left of a stage from its counts: the steps done since the stage was first
+    seen (a resumed run starts with some done), over the time since then."""
+
+    def __init__(self, done: int = 0, now: float | None = None):
+        self.start = time.monotonic() if now is None else now
+        self.done0 = done
+        self.done = done
+
+    def update(self, done: int) -> None:
+        if done < self.done0:  # counted afresh
+            self.done0 = done
+        self.done = done
+
+    def rate(self, now: float | None = None) -> float | None:
+        """Steps a second, None before the first step."""
+        now = time.monotonic() if now is None else now
+        steps = self.done - self.done0
+        return steps / max(now - self.start, 1e-9) if steps > 0 else None
+
+    def left(self, total: int | None, now: float | None = None) -> float | None:
+        rate = self.rate(now)
+        if not total or rate is None:
+            return None
+        return max(total - self.done, 0) / rate
+
+    def rate_text(self, now: float | None = None) -> str:
+        rate = self.rate(now)
+        if rate is None:
+            return ""
+        return f"{rate:.1f}/s" if rate >= 1 else f"{clock(1 / rate)}/step"
+
+
 def ignore_events(_: Event) -> None:
     pass
 
@@ -68,18 +111,35 @@ def unit_says(text: str) -> None:
 
 def stages_to_unit(event: Event) -> None:
     """An EventSink for work inside a unit (a benchmark trial's diagnosis, minutes of it): each
-    stage it starts becomes the unit's progress line, when one listens."""
+    stage it starts becomes the unit's progress line, when one listens, and counts there with its
+    ETA after the first step ('gap: round 1, fitting 13 effects: 3 of 13, ETA 2:54'), as the
+    run's own bars do (issue 41: a trial's line showed the stage's name alone for minutes)."""
+    stages = _stages.get()
+    if stages is None:  # no unit listening
+        return
     if event.kind == "stage":
-        unit_says(event.message or event.stage)
+        stages[event.stage] = (event.message or event.stage, Pace(event.done))
+    elif event.kind != "advance" or event.stage not in stages:
+        return
+    text, pace = stages[event.stage]
+    pace.update(event.done)
+    if event.total:
+        left = pace.left(event.total) if event.kind == "advance" and event.done < event.total else None
+        text += f": {event.done} of {event.total}" + ("" if left is None else f", ETA {clock(left)}")
+    unit_says(text)
+
+
+_stages: ContextVar[dict[str, tuple[str, Pace]] | None] = ContextVar("stages", default=None)
 
 
 @contextmanager
 def saying(progress: Callable[[str], None]) -> Iterator[None]:
     """unit_says and stages_to_unit reach *progress* (a UnitProgress) while the unit runs."""
-    token = _said.set(progress)
+    token, stages = _said.set(progress), _stages.set({})
     try:
         yield
     finally:
+        _stages.reset(stages)
         _said.reset(token)
 
 

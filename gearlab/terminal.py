@@ -17,50 +17,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColum
 from rich.table import Table
 from rich.text import Text
 
+from .events import Pace, clock
+
 QUIET_S = 5.0  # a log line at least this often while a unit says how far it is
-
-
-def clock(seconds: float | None) -> str:
-    """1:02:03, 2:03 or 0:05; '-:--' when unknown."""
-    if seconds is None or seconds != seconds or seconds < 0:
-        return "-:--"
-    seconds = int(round(seconds))
-    hours, rest = divmod(seconds, 3600)
-    minutes, s = divmod(rest, 60)
-    return f"{hours}:{minutes:02d}:{s:02d}" if hours else f"{minutes}:{s:02d}"
-
-
-class Pace:
-    """Rate and time left of a stage from its counts: the steps done since the stage was first
-    seen (a resumed run starts with some done), over the time since then."""
-
-    def __init__(self, done: int = 0, now: float | None = None):
-        self.start = time.monotonic() if now is None else now
-        self.done0 = done
-        self.done = done
-
-    def update(self, done: int) -> None:
-        if done < self.done0:  # counted afresh
-            self.done0 = done
-        self.done = done
-
-    def rate(self, now: float | None = None) -> float | None:
-        """Steps a second, None before the first step."""
-        now = time.monotonic() if now is None else now
-        steps = self.done - self.done0
-        return steps / max(now - self.start, 1e-9) if steps > 0 else None
-
-    def left(self, total: int | None, now: float | None = None) -> float | None:
-        rate = self.rate(now)
-        if not total or rate is None:
-            return None
-        return max(total - self.done, 0) / rate
-
-    def rate_text(self, now: float | None = None) -> str:
-        rate = self.rate(now)
-        if rate is None:
-            return ""
-        return f"{rate:.1f}/s" if rate >= 1 else f"{clock(1 / rate)}/step"
 
 
 class PaceColumn(ProgressColumn):

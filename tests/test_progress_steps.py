@@ -5,6 +5,7 @@ gap's "before" report count their steps, and a tiny run's stages each give a tot
 from __future__ import annotations
 
 import time
+from types import SimpleNamespace
 
 import numpy as np
 from tiny import transfer
@@ -129,3 +130,23 @@ def test_a_step_of_the_runs_own_process_that_cannot_count_says_for_how_long(monk
     messages = [e.message for e in said]
     assert messages[0] == "loading torch" and messages[-1] == ""
     assert {"loading torch (1 s)", "loading torch (2 s)"} <= set(messages) and {e.stage for e in said} == {"bound"}
+
+
+def test_a_diagnosis_inside_a_unit_counts_its_steps_with_an_eta_on_the_units_line(monkeypatch):
+    """A benchmark trial's diagnosis (stages_to_unit, minutes inside one unit) showed each stage's
+    name alone: its steps now count on the unit's line, with an ETA after the first one."""
+    from gearlab import events as ev
+
+    now = iter([100.0, 130.0, 131.0, 132.0])  # the stage starts at 100 s, its first of 4 steps ends at 130 s
+    monkeypatch.setattr(ev, "time", SimpleNamespace(monotonic=lambda: next(now)))
+    said: list[str] = []
+    with ev.saying(said.append):
+        ev.stages_to_unit(Event("stage", stage="gap round 1", total=4, message="gap: round 1, fitting 4 effects"))
+        ev.stages_to_unit(Event("advance", stage="gap round 1", done=1, total=4))
+        ev.stages_to_unit(Event("advance", stage="gap round 1", done=4, total=4))
+        ev.stages_to_unit(Event("advance", stage="another unit's stage", done=1, total=2))
+    assert said == [
+        "gap: round 1, fitting 4 effects: 0 of 4",
+        "gap: round 1, fitting 4 effects: 1 of 4, ETA 1:30",
+        "gap: round 1, fitting 4 effects: 4 of 4",
+    ]
