@@ -206,3 +206,41 @@ def test_a_file_of_one_signal_channel_needs_no_vibration_key_in_any_kind(tmp_pat
     (tmp_path / "detect.toml").write_text(scenarios["detect.toml"].replace('"t1.npz"', '"two.npz"'))
     with pytest.raises(GearlabInputError, match=r"\[target\] key 'vibration': missing, and .*two.npz has 2 signal"):
         load_scenario(tmp_path / "detect.toml")
+
+
+def test_gap_records_without_tacho_or_speed_take_the_source_description(tmp_path):
+    # A 14/39 mixer in HDF5 without a tacho and no speed declared: docs/your_gearbox.md says the gap's
+    # [target] needs 'nothing but the description', yet validate refused it ("key 'tacho': missing;
+    # ... no tacho, speed or gearbox"). The [source] description is the same gearbox: its mesh lines
+    # give each record's speed. (A detection's [target] names its 'gearbox', as the guide says.)
+    import h5py
+    from gearboxes import description, stage
+
+    from gearlab.engine import load_scenario
+
+    fs, f = 8192.0, 44.7
+    theta = 2 * np.pi * f * np.arange(int(5 * fs)) / fs
+    for i, name in enumerate(("h1", "h2", "t1")):
+        x = _train([(14, 39)], theta, np.random.default_rng(i))
+        with h5py.File(tmp_path / f"{name}.h5", "w") as h:
+            h.create_group("daq").create_dataset("acc", data=x).attrs["fs"] = fs
+    (tmp_path / "mixer.toml").write_text(
+        description(
+            stage(14, 39).replace("[[stages]]\n", '[[stages]]\npressure_angle = "25 deg"\n'),
+            speed="45 Hz",
+            load="15 N*m",
+        )
+    )
+    files = "\n".join(
+        f'  {{ file = "{n}.h5", role = "{r}", label = "{lab}" }},'
+        for n, r, lab in (("h1", "history", "healthy"), ("h2", "history", "healthy"), ("t1", "test", "fault"))
+    )
+    target = f'[target]\nvibration = "acc"\nunit = "m/s^2"\nfiles = [\n{files}\n]\n'
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "s"\nkind = "gap"\n[source]\ngearbox = "mixer.toml"\n'
+        + target
+        + "[accuracy]\nenabled = false\n"
+    )
+    t = load_scenario(tmp_path / "gap.toml").spec.target.target
+    rec = t.read(t.files[0])
+    assert abs(rec.speed_hz / f - 1) < 1e-3 and "mesh" in rec.angle_source, rec.angle_source

@@ -436,14 +436,21 @@ def gearbox_name(value: str, where: str, base: Path) -> str:
     return value
 
 
-def with_source_gearbox(target: dict, source: dict) -> dict:
+def with_source_gearbox(target: dict, source: dict, undeclared: bool = False) -> dict:
     """The [target] table of measured records without a tacho, given the [source]'s gearbox
     description when it names none: the same gearbox, whose mesh lines refine a declared speed (a
     motor's nameplate 2400 rpm ran at 39.96-40.05 Hz: read at 40 Hz flat, 400 revolutions slipped a
-    fifth of a turn and every TSA lost its mesh) and follow it through each record."""
+    fifth of a turn and every TSA lost its mesh) and follow it through each record. *undeclared*:
+    with no speed declared either, the description gives it (the gap's [target] needs nothing but
+    the [source]'s description, docs/your_gearbox.md step 3)."""
     files = target.get("files") or []
     declared = target.get("speed") is not None or any(isinstance(f, dict) and "speed" in f for f in files)
-    if declared and target.get("tacho") in ("", None) and not target.get("gearbox") and source.get("gearbox"):
+    if (
+        (declared or (undeclared and files))
+        and target.get("tacho") in ("", None)
+        and not target.get("gearbox")
+        and source.get("gearbox")
+    ):
         return {**target, "gearbox": source["gearbox"]}
     return target
 

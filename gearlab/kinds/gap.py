@@ -128,7 +128,7 @@ def build(scenario: Scenario) -> Spec:
     # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
     base = scenario.base or path.parent
     source = simulated_spec(t["source"], location(path, "source"), base)
-    target = target_of(with_source_gearbox(t["target"], t["source"]), location(path, "target"), base)
+    target = target_of(with_source_gearbox(t["target"], t["source"], undeclared=True), location(path, "target"), base)
     _, pair, _ = source.check_model(location(path, "source"))
     check_sampling(source, pair.Z1, location(path, "source"))
     if isinstance(target, DatasetSpec):
