@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -29,6 +29,8 @@ import numpy as np
 from ..errors import GearlabInputError
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .config import STARTS
+from .runner import cut, generator, orders
+from .runner import run_unit as held_out
 
 if TYPE_CHECKING:
     import torch
@@ -97,7 +99,11 @@ class Split:
 
     train: np.ndarray
     val: np.ndarray
-    test: np.ndarray
+    test: np.ndarray | None
+
+    def training(self) -> Split:
+        """The split as the training sees it: no test row (gearlab.learn.runner)."""
+        return replace(self, test=None)
 
 
 def part_sizes(n: int, protocol: NoiseProtocol) -> tuple[int, int, int]:
@@ -129,16 +135,10 @@ def check_batch(class_sizes: dict[str, int], protocol: NoiseProtocol, where: str
 
 
 def split(label: np.ndarray, protocol: NoiseProtocol, run: int) -> Split:
-    """Stratified split of run *run*: test first, then validation from what is left, per class."""
-    rng = np.random.default_rng([protocol.seed, run])
-    parts: tuple[list, list, list] = ([], [], [])
-    for c in np.unique(label):
-        members = rng.permutation(np.flatnonzero(label == c))
-        n_train, n_val, _ = part_sizes(len(members), protocol)
-        parts[0].append(members[:n_train])
-        parts[1].append(members[n_train : n_train + n_val])
-        parts[2].append(members[n_train + n_val :])
-    return Split(*(np.sort(np.concatenate(p)) for p in parts))
+    """Stratified split of run *run* (gearlab.learn.runner): per class, training, then validation,
+    then test rows of the class's random order."""
+    drawn = orders(label, np.unique(label), generator(protocol.seed, run))
+    return Split(*cut(drawn, {c: part_sizes(len(rows), protocol)[:2] for c, rows in drawn.items()}))
 
 
 def train(
@@ -229,54 +229,57 @@ def scores(
 
 def run_unit(protocol: NoiseProtocol, dataset, run: int, on_epoch: Callable | None = None, twin=None) -> dict:
     """Train and score run *run* on *dataset* (*twin*: its noise-free twin, which the `clean`
-    start needs; only its training part is read)."""
-    from .training import pick_device, predict  # start-up time
-
-    device = pick_device(protocol.device)
+    start needs; only its training part is read), as every unit runs (gearlab.learn.runner.run_unit)."""
     label = np.asarray(dataset.label, dtype=np.int64)
-    s = split(label, protocol, run)
-    X = dataset.X
-    clean = clean_faults(X[s.train], twin.X[s.train], label[s.train]) if protocol.start == "clean" else None
-    if protocol.residual:  # the healthy reference from the training part's labels, never from the test part
-        X = X - np.median(X[s.train[label[s.train] == 0]], axis=0).astype(X.dtype)
-    start = time.perf_counter()
-    val_set = (X[s.val], label[s.val])
-    net, history = train(
-        protocol,
-        (X[s.train], label[s.train]),
-        val_set,
-        len(dataset.spec.class_names),
-        run,
-        device,
-        on_epoch,
-        clean=clean,
-        law=noise_law(dataset.spec),
-    )
-    seconds = time.perf_counter() - start
-    # Only now, with the model fixed, does the test part come in.
-    pred = predict(net, X[s.test], device)
-    return {
-        "run": run,
-        "dataset": dataset.spec.name,
-        "key": dataset.key,
-        "classes": list(dataset.spec.class_names),
-        "n_train": int(len(s.train)),
-        "n_val": int(len(s.val)),
-        "n_test": int(len(s.test)),
-        "val_accuracy": 100.0 * history.val_acc[history.best_epoch],  # of the kept epoch
-        "device": str(device),
-        "best_epoch": history.best_epoch,
-        "stopped_epoch": history.stopped_epoch,
-        "train_seconds": seconds,
-        "history": {"train_loss": history.train_loss, "val_acc": history.val_acc},
-        **scores(
-            label[s.test],
-            pred,
-            np.asarray(dataset.intensity)[s.test],
-            np.asarray(dataset.rfa)[s.test],
-            tuple(dataset.spec.class_names),
-        ),
-    }
+
+    def fit(s: Split, device):
+        X = dataset.X
+        clean = clean_faults(X[s.train], twin.X[s.train], label[s.train]) if protocol.start == "clean" else None
+        if protocol.residual:  # the healthy reference from the training part's labels, never from the test part
+            X = X - np.median(X[s.train[label[s.train] == 0]], axis=0).astype(X.dtype)
+        start = time.perf_counter()
+        net, history = train(
+            protocol,
+            (X[s.train], label[s.train]),
+            (X[s.val], label[s.val]),
+            len(dataset.spec.class_names),
+            run,
+            device,
+            on_epoch,
+            clean=clean,
+            law=noise_law(dataset.spec),
+        )
+        return s, X, net, history, time.perf_counter() - start
+
+    def score(fitted, test: np.ndarray, device) -> dict:
+        from .training import predict  # start-up time
+
+        s, X, net, history, seconds = fitted
+        pred = predict(net, X[test], device)
+        return {
+            "run": run,
+            "dataset": dataset.spec.name,
+            "key": dataset.key,
+            "classes": list(dataset.spec.class_names),
+            "n_train": int(len(s.train)),
+            "n_val": int(len(s.val)),
+            "n_test": int(len(test)),
+            "val_accuracy": 100.0 * history.val_acc[history.best_epoch],  # of the kept epoch
+            "device": str(device),
+            "best_epoch": history.best_epoch,
+            "stopped_epoch": history.stopped_epoch,
+            "train_seconds": seconds,
+            "history": {"train_loss": history.train_loss, "val_acc": history.val_acc},
+            **scores(
+                label[test],
+                pred,
+                np.asarray(dataset.intensity)[test],
+                np.asarray(dataset.rfa)[test],
+                tuple(dataset.spec.class_names),
+            ),
+        }
+
+    return held_out(split(label, protocol, run), fit, score, protocol.device)
 
 
 def mean_std(values: list[float]) -> dict:

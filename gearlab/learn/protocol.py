@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import io
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +34,8 @@ from ..registry import get_registry
 from ..settings import MAX_EPOCHS, MAX_REPETITIONS, MAX_SEED, setting
 from .bounds import detection_at
 from .config import DEFAULT_DROPOUT, DEFAULT_NETWORK, THESIS, Calibration
+from .runner import cut, generator, orders, put_first
+from .runner import run_unit as held_out
 
 # torch, the networks, the training loops and the calibrated model are imported inside the
 # functions that train (start-up time): checking a scenario reads this module's settings only.
@@ -114,6 +116,14 @@ class Split:
     target_train: np.ndarray
     target_test: np.ndarray
     history_core: np.ndarray  # target training rows of every k of the repetition (all healthy)
+
+    @property
+    def test(self) -> np.ndarray | None:
+        return self.target_test
+
+    def training(self) -> Split:
+        """The split as a method's training sees it: no target test row (gearlab.learn.runner)."""
+        return replace(self, target_test=None)
 
 
 @dataclass(frozen=True)
@@ -199,23 +209,20 @@ def history_of(protocol: Protocol, target) -> np.ndarray:
 
 
 def split(protocol: Protocol, source, target, rep: int, k: int, history: np.ndarray | None = None) -> Split:
-    """Random source validation split and target orders (per repetition); the target training
-    set takes the first k faults and the first target_train - k healthy samples of the orders.
-    The history core is the first target_train - max(ks) healthy ones: in every k's training
-    set, in no k's test set. *history* (`history_of`): healthy rows that come first in every
-    repetition's order, so that the core is exactly they."""
-    rng = np.random.default_rng([protocol.seed, rep])
-    order = rng.permutation(len(source.X))
-    n_val = _n_val(protocol, len(order))
-    rng_t = np.random.default_rng([protocol.seed, rep, TARGET_DRAW])
-    faults = rng_t.permutation(np.flatnonzero(target.fault == 1))
-    healthy = rng_t.permutation(np.flatnonzero(target.fault == 0))
+    """Random source validation split and target orders (per repetition, gearlab.learn.runner); the
+    target training set takes the first k faults and the first target_train - k healthy samples of
+    the orders. The history core is the first target_train - max(ks) healthy ones: in every k's
+    training set, in no k's test set. *history* (`history_of`): healthy rows that come first in
+    every repetition's order, so that the core is exactly they."""
+    one = np.zeros(len(source.X), dtype=np.int64)  # the source split is not stratified: one class
+    source_val, source_train = cut(orders(one, (0,), generator(protocol.seed, rep)), {0: (_n_val(protocol, len(one)),)})
+    rng = generator(protocol.seed, rep, TARGET_DRAW)
+    drawn = orders(target.fault, (1, 0), rng)  # faults first: the stream's order
     if history is not None:
-        healthy = np.concatenate([rng_t.permutation(history), healthy[~np.isin(healthy, history)]])
-    train = np.sort(np.concatenate([faults[:k], healthy[: protocol.target_train - k]]))
-    test = np.setdiff1d(np.arange(len(target.X)), train)
-    core = np.sort(healthy[: protocol.target_train - max(*protocol.ks, k)])
-    return Split(np.sort(order[n_val:]), np.sort(order[:n_val]), train, test, core)
+        drawn[0] = put_first(drawn[0], history, rng)
+    train, test = cut(drawn, {1: (k,), 0: (protocol.target_train - k,)})
+    core, _ = cut({0: drawn[0]}, {0: (protocol.target_train - max(*protocol.ks, k),)})
+    return Split(source_train, source_val, train, test, core)
 
 
 class StateStore:
@@ -316,41 +323,46 @@ def run_unit(
     history: np.ndarray | None = None,
 ) -> dict:
     """Train one method for one (repetition, k) and score it on the target test set (*history*:
-    see `split`)."""
-    from .training import accuracy, pick_device  # start-up time
+    see `split`), as every unit runs (gearlab.learn.runner.run_unit)."""
 
-    device = pick_device(protocol.device)
-    s = split(protocol, source, target, rep, k, history)
-    Xs, ys = source.X[s.source_train], source.fault[s.source_train].astype(np.int64)
-    val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
-    Xt = target.X[s.target_train]
-    yt = target.fault[s.target_train].astype(np.int64)
-    model, history, extra = train_method(
-        protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch, core=target.X[s.history_core]
-    )
-    # Only now, with the model fixed, does the target test set come in.
-    X_test, y_test = target.X[s.target_test], target.fault[s.target_test].astype(np.int64)
-    score = fault_score(model, X_test, device)
-    pred = (score > 0).astype(np.int64)
-    confusion = [[int(((y_test == a) & (pred == b)).sum()) for b in (0, 1)] for a in (0, 1)]
-    val_acc = extra.pop("source_val_accuracy", None)
-    return {
-        "unit": unit_key(rep, k, method),
-        "rep": rep,
-        "k": k,
-        "method": method.label,
-        "adapter": method.adapter,
-        "supervised": method.supervised,
-        "accuracy": 100.0 * float((pred == y_test).mean()),
-        "healthy_share": 100.0 * float((y_test == 0).mean()),
-        "predicted_fault_share": 100.0 * float((pred == 1).mean()),
-        "confusion": confusion,
-        "n_test": int(len(y_test)),
-        "source_val_accuracy": 100.0 * accuracy(model, *val, device) if val_acc is None else val_acc,
-        "history": history.as_dict() if history is not None else None,
-        **detection_rates(score, y_test, target.label[s.target_test], class_names(target)),
-        **extra,
-    }
+    def fit(s: Split, device):
+        Xs, ys = source.X[s.source_train], source.fault[s.source_train].astype(np.int64)
+        val = (source.X[s.source_val], source.fault[s.source_val].astype(np.int64))
+        Xt = target.X[s.target_train]
+        yt = target.fault[s.target_train].astype(np.int64)
+        made = train_method(
+            protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch, core=target.X[s.history_core]
+        )
+        return val, *made
+
+    def score(fitted, test: np.ndarray, device) -> dict:
+        from .training import accuracy  # start-up time
+
+        val, model, trained, extra = fitted
+        X_test, y_test = target.X[test], target.fault[test].astype(np.int64)
+        score = fault_score(model, X_test, device)
+        pred = (score > 0).astype(np.int64)
+        confusion = [[int(((y_test == a) & (pred == b)).sum()) for b in (0, 1)] for a in (0, 1)]
+        val_acc = extra.pop("source_val_accuracy", None)
+        return {
+            "unit": unit_key(rep, k, method),
+            "rep": rep,
+            "k": k,
+            "method": method.label,
+            "adapter": method.adapter,
+            "supervised": method.supervised,
+            "accuracy": 100.0 * float((pred == y_test).mean()),
+            "healthy_share": 100.0 * float((y_test == 0).mean()),
+            "predicted_fault_share": 100.0 * float((pred == 1).mean()),
+            "confusion": confusion,
+            "n_test": int(len(y_test)),
+            "source_val_accuracy": 100.0 * accuracy(model, *val, device) if val_acc is None else val_acc,
+            "history": trained.as_dict() if trained is not None else None,
+            **detection_rates(score, y_test, target.label[test], class_names(target)),
+            **extra,
+        }
+
+    return held_out(split(protocol, source, target, rep, k, history), fit, score, protocol.device)
 
 
 def fault_score(model, X: np.ndarray, device, batch: int = 256) -> np.ndarray:
