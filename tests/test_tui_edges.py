@@ -481,3 +481,56 @@ def test_every_key_of_the_docs_does_what_they_say(scenarios, monkeypatch, size):
         assert {KEY_NAMES.get(k, k) for k in docs_keys()} <= pressed  # not one key of the docs left out
 
     asyncio.run(main())
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_the_docs_finer_key_points_palette_escape_order_o_on_the_shown_run_and_q_during_a_run(
+    scenarios, monkeypatch, size
+):
+    """What the every-key walk leaves out of docs/tui.md's table: ctrl+p opens a run and compares
+    the marked runs; escape closes a panel first, then the comparison, then unfolds the sidebar;
+    `o` with a scenario highlighted opens the run on show; `q` cancels a run in progress."""
+    opened = []
+    monkeypatch.setattr("webbrowser.open", lambda url: opened.append(url) or True)
+    runs = Path.cwd() / "runs" / "stiff"
+
+    async def palette(pilot, command: str) -> None:
+        await pilot.press("ctrl+p")
+        await pilot.pause()
+        assert isinstance(pilot.app.screen, CommandPalette)
+        await pilot.press(*command)
+        await pilot.pause(0.3)  # the palette searches in the background
+        await pilot.press("down", "enter")
+        await pilot.pause()
+
+    async def main():
+        app = GearlabApp(scenarios)
+        async with app.run_test(size=size) as pilot:
+            await pilot.pause()
+            tree = app.query_one("#browser", Tree)
+            tabs = app.query_one("#views", TabbedContent)
+            await palette(pilot, "Open run stiff.toml 20260103")
+            assert tabs.active == "results" and app.opened.path.name == "20260103-000000-000000"
+            tree.move_cursor(tree.root.children[0])  # a scenario highlighted: o opens the run on show
+            await key(pilot, "o")
+            assert opened == [(runs / "20260103-000000-000000" / "report.html").resolve().as_uri()]
+            stiff = tree.root.children[0]
+            for run in stiff.children[:2]:
+                tree.move_cursor(run)
+                await key(pilot, "m")
+            await palette(pilot, "Compare the 2 marked")
+            assert app.comparing and tabs.active == "results"
+            app.tree.add_class("folded")
+            await key(pilot, "question_mark")
+            await key(pilot, "escape")  # the panel first
+            assert not isinstance(app.screen, KeysScreen) and app.comparing and tree.has_class("folded")
+            await key(pilot, "escape")  # then the comparison
+            assert not app.comparing and tree.has_class("folded")
+            await key(pilot, "escape")  # then the sidebar
+            assert not tree.has_class("folded")
+            child = subprocess.Popen(["sleep", "30"], start_new_session=True)
+            app.process = child
+            await key(pilot, "q")
+            assert child.wait(timeout=10) != 0 and app.return_code == 0
+
+    asyncio.run(main())
