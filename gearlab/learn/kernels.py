@@ -30,15 +30,29 @@ def laplace_gain(padded: np.ndarray, templates: np.ndarray, offset: np.ndarray, 
     rows = padded.shape[0]
     n_templates, width = templates.shape
     for first in range(0, rows, ROWS):  # a block of rows stays in the cache while every template passes
+        last = min(first + ROWS, rows)
         for j in range(n_templates):
             start = offset[j]
             t = templates[j]
-            for b in range(first, min(first + ROWS, rows)):
-                r = padded[b, start : start + width]
-                acc = t[0] * 0  # in the templates' precision
+            b = first
+            while b + 4 <= last:  # four rows a pass: each template sample loaded once for four
+                r0, r1 = padded[b, start : start + width], padded[b + 1, start : start + width]
+                r2, r3 = padded[b + 2, start : start + width], padded[b + 3, start : start + width]
+                a0 = a1 = a2 = a3 = t[0] * 0  # in the templates' precision
+                for n in range(width):
+                    tn = t[n]
+                    a0 += abs(r0[n]) - abs(r0[n] - tn)
+                    a1 += abs(r1[n]) - abs(r1[n] - tn)
+                    a2 += abs(r2[n]) - abs(r2[n] - tn)
+                    a3 += abs(r3[n]) - abs(r3[n] - tn)
+                out[b, j], out[b + 1, j], out[b + 2, j], out[b + 3, j] = a0, a1, a2, a3
+                b += 4
+            for rest in range(b, last):
+                r = padded[rest, start : start + width]
+                acc = t[0] * 0
                 for n in range(width):
                     acc += abs(r[n]) - abs(r[n] - t[n])
-                out[b, j] = acc
+                out[rest, j] = acc
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -54,9 +68,23 @@ def laplace_gain_grad(
         t = templates[j]
         o = out[j]
         o[:] = 0
-        for b in range(rows):
-            g = grad[b, j]
-            r = padded[b, start : start + width]
+        b = 0
+        while b + 4 <= rows:  # four rows a pass: the gradient row loaded and stored once for four
+            g0, g1, g2, g3 = grad[b, j], grad[b + 1, j], grad[b + 2, j], grad[b + 3, j]
+            r0, r1 = padded[b, start : start + width], padded[b + 1, start : start + width]
+            r2, r3 = padded[b + 2, start : start + width], padded[b + 3, start : start + width]
+            for n in range(width):
+                tn = t[n]
+                o[n] += (
+                    g0 * np.sign(r0[n] - tn)
+                    + g1 * np.sign(r1[n] - tn)
+                    + g2 * np.sign(r2[n] - tn)
+                    + g3 * np.sign(r3[n] - tn)
+                )
+            b += 4
+        for rest in range(b, rows):
+            g = grad[rest, j]
+            r = padded[rest, start : start + width]
             for n in range(width):
                 o[n] += g * np.sign(r[n] - t[n])
 
@@ -79,14 +107,11 @@ def lower_median32(x: np.ndarray, out: np.ndarray) -> None:
     sign, shift = np.uint32(0x80000000), 32 - KEY_BITS
     for b in range(x.shape[0]):
         bits = x[b].view(np.uint32)
-        for i in range(n):
+        for i in range(n):  # without branches, so that the compiler vectorises the loop
             k = bits[i]
-            if k & np.uint32(0x7FFFFFFF) > np.uint32(0x7F800000):  # NaN: after everything
-                keys[i] = np.uint32(0xFFFFFFFF)
-            elif k & sign:  # negative: larger magnitude, smaller key
-                keys[i] = ~k
-            else:
-                keys[i] = k | sign
+            flip = np.uint32(0) - (k >> np.uint32(31))  # negative: all bits flipped (larger magnitude, smaller key)
+            nan = k & np.uint32(0x7FFFFFFF) > np.uint32(0x7F800000)  # NaN: after everything
+            keys[i] = np.uint32(0xFFFFFFFF) if nan else k ^ (flip | sign)
         counts[:] = 0
         for i in range(n):
             counts[keys[i] >> shift] += 1
@@ -95,10 +120,9 @@ def lower_median32(x: np.ndarray, out: np.ndarray) -> None:
             below += counts[top]
             top += 1
         size = 0
-        for i in range(n):
-            if keys[i] >> shift == top:
-                bucket[size] = keys[i]
-                size += 1
+        for i in range(n):  # every key written, kept where it lies in the median's bucket
+            bucket[size] = keys[i]
+            size += keys[i] >> shift == top
         k = np.sort(bucket[:size])[middle - below]
         k = k ^ sign if k & sign else ~k
         out[b : b + 1].view(np.uint32)[0] = k
