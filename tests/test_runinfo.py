@@ -242,7 +242,9 @@ def test_dash_h_metavars_and_completion(cli, monkeypatch):
     monkeypatch.setenv("COLUMNS", "200")
     code, out, _ = cli("-h")
     assert code == 0 and "--install-completion" in out and "--show-completion" in out
-    for command in ("run", "gap", "stiffness", "compare", "runs", "tui", "inspect", "plugins", "report"):
+    commands = re.findall(r"^│ ([a-z][a-z-]+) ", out.split("Commands")[1], flags=re.M)  # every one -h lists
+    assert {"run", "gap", "transfer-benchmark", "score", "simulate", "modes", "validate", "tui"} <= set(commands)
+    for command in commands:
         code, out, _ = cli(command, "-h")
         assert code == 0, command
         assert "<bool>" not in out and "<list" not in out and "<str>" not in out and "{" not in out, command
@@ -258,6 +260,13 @@ def test_dash_h_metavars_and_completion(cli, monkeypatch):
         assert "--device" in out, command
     code, _, err = cli("gap")
     assert code == 2 and "Missing argument 'SCENARIO'" in err
+    # the completion itself, as the installed script asks the command (bash's protocol)
+    for words, expected in (("gearlab ru", ["run", "runs"]), ("gearlab run --ou", ["--out"])):
+        env = {**os.environ, "_GEARLAB_COMPLETE": "complete_bash", "COMP_WORDS": words}
+        env["COMP_CWORD"] = str(len(words.split()) - 1)
+        script = Path(sys.executable).with_name("gearlab")  # the installed command a shell completes
+        done = subprocess.run([script, *words.split()[1:]], env=env, capture_output=True, text=True)
+        assert done.returncode == 0 and done.stdout.split() == expected, (words, done.stdout, done.stderr)
 
 
 def test_gap_takes_device(cli, tmp_path):
