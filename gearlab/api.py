@@ -34,7 +34,7 @@ from .physics.presets import gear_pair
 from .physics.sections import healthy_section
 from .physics.stiffness import fillet_compliance
 from .registry import hookimpl
-from .signals import NOISE_KINDS, add_noise
+from .signals import NOISE_KINDS, SNR_DB_RANGE, add_noise
 
 # name -> module, imported on first access (torch)
 _LAZY = {
@@ -55,6 +55,7 @@ __all__ = [
     "PATHS",
     "PATH_PARAM",
     "SCHEDULE_PARAMS",
+    "SNR_DB_RANGE",
     "Adapter",
     "Assembly",
     "DescribedPresets",

@@ -156,6 +156,8 @@ def from_inline(cls, table: Mapping, where: str, defaults: Mapping | None = None
                     f"{where}: {name} must be a finite number of {meta.unit or 'units'}, got {str(value)[:40]}"
                 )
             value = float(value)
+            if not meta.check:  # its bounds (with a check, the line below checks both)
+                value = in_bounds(meta, value, f"{where}: {name}")
         else:
             value = str(value)
         values[name] = in_bounds(meta, value, f"{where}: {name}") if meta.check else value

@@ -20,7 +20,7 @@ from ..params import did_you_mean
 from ..physics.faults import LADDER_STEPS
 from ..registry import get_registry
 from ..settings import MAX_SEED, setting
-from ..signals import NOISE_KINDS
+from ..signals import NOISE_KINDS, SNR_DB_RANGE
 from .placement import fault_classes
 
 POINTS = 4096  # samples per revolution (thesis 2.4)
@@ -33,7 +33,13 @@ class NoiseSpec:
     (read by gearlab.settings.from_inline; the kind is checked by DatasetSpec.check)."""
 
     kind: str = setting(str, choices=NOISE_KINDS, doc="noise distribution (thesis 4.1)")
-    snr_db: float = setting(float, unit="dB", doc="signal-to-noise ratio: noise RMS = signal RMS x 10^(-SNR/20)")
+    snr_db: float = setting(
+        float,
+        unit="dB",
+        low=SNR_DB_RANGE[0],
+        high=SNR_DB_RANGE[1],
+        doc="signal-to-noise ratio: noise RMS = signal RMS x 10^(-SNR/20)",
+    )
     seed: int = setting(int, 0, low=0, high=MAX_SEED, doc="seed of the noise draws")
 
 

@@ -14,7 +14,7 @@ wrong and what was expected.
 
 from .angle import angle_from_pulses, angle_from_speed, unwrap_tacho
 from .checks import check_signal
-from .noise import NOISE_KINDS, add_noise, tsa
+from .noise import NOISE_KINDS, SNR_DB_RANGE, add_noise, tsa
 from .pipeline import (
     POINTS,
     TRANSIENT_METHODS,
@@ -31,6 +31,7 @@ from .standardise import Standardiser, StandardiserAccumulator
 __all__ = [
     "NOISE_KINDS",
     "POINTS",
+    "SNR_DB_RANGE",
     "TRANSIENT_METHODS",
     "CutRevolutions",
     "Standardiser",

@@ -24,6 +24,9 @@ from ..errors import GearlabInputError
 from .checks import check_array, check_real
 
 NOISE_KINDS = ("gaussian", "laplace", "student_t")
+# The SNRs a measurement noise may have: a dataset's noise and the sensor_noise effect alike
+# (one declaration; the effect's docstring says why these)
+SNR_DB_RANGE = (-20.0, 80.0)
 
 _STANDARD_NOISE = {
     "gaussian": lambda rng, shape: rng.standard_normal(shape),

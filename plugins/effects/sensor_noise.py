@@ -9,18 +9,20 @@ Each revolution of the record is scaled to its own RMS, exactly as gearlab.signa
 does for the thesis's datasets, so TSA over the J revolutions averages it down.
 
 Bounds. SNR from -20 dB (noise ten times the signal RMS: beyond the 0 dB stress test of
-chapter 4) to 80 dB (noise 1e-4 of the signal: a laboratory sensor, practically clean).
+chapter 4) to 80 dB (noise 1e-4 of the signal: a laboratory sensor, practically clean), the
+bounds of a dataset's ``noise = {kind, snr_db, seed}`` too (gearlab.signals.SNR_DB_RANGE): the
+effect is that noise at its place among the signal effects, drawn from the effects' streams.
 Default 10 dB: a usable industrial measurement, milder than the thesis's 0 dB.
 """
 
-from gearlab.api import NOISE_KINDS, Effect, Param, add_noise, hookimpl
+from gearlab.api import NOISE_KINDS, SNR_DB_RANGE, Effect, Param, add_noise, hookimpl
 
 
 class SensorNoise(Effect):
     name = "sensor_noise"
     doc = "additive measurement noise (Gaussian, Laplace or Student-t nu=2) at an SNR, per revolution (eq. 4.1-4.5)"
     noise = True
-    params = (Param("snr_db", "", 10.0, -20.0, 80.0, "signal-to-noise ratio in dB, 10 log10 (RMS_s / RMS_n)^2"),)
+    params = (Param("snr_db", "", 10.0, *SNR_DB_RANGE, "signal-to-noise ratio in dB, 10 log10 (RMS_s / RMS_n)^2"),)
     options = {"kind": NOISE_KINDS}
 
     def apply_signal(self, x, params, ctx):
