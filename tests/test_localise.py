@@ -379,3 +379,84 @@ def test_the_rig_simulators_idler_gears_are_told_apart(gear, named):
     # gears' teeth are counted up to steps of z / 3, and the summary says so
     step = {"idler gear 96T (stage 1)": 32, "idler pinion 48T (stage 2)": 16}[named]
     assert ev["tooth"][named]["step"] == step and f"up to {step}-tooth steps between takes" in found["summary"]
+
+
+def test_a_narrow_event_names_the_finer_gear_under_the_width_z():
+    """Noise widens a fault's event and never narrows it: under z = WIDTH_Z an event that reads as
+    narrow as the finer gear's tooth names that gear (before: any event under z = 10 named both),
+    a wide one stays undecided. The synthetic 50T wheel at a shallow dip, six takes."""
+    table = train((20, 50), (25, 35))
+    named = []
+    for seed in range(100, 106):
+        rng = np.random.default_rng(seed)
+        hist = history(table, 280, rng)
+        res = L.localise(record(table, 280, rng, fault=(1, 1, 44), depth=0.12), hist, table)
+        ev = next(e for e in res.ranking if e.shaft == "intermediate")
+        assert ev.flagged and ev.z < L.WIDTH_Z, ev.describe()
+        if ev.which is None:
+            assert "too noisy" in ev.stage_evidence["undecided"] and ev.stage_evidence["u"] > L.U_FINE
+        named.append(ev.which)
+    assert "intermediate pinion 25T (stage 2)" not in named, named
+    assert named.count("intermediate gear 50T (stage 1)") >= 3, named
+
+
+TWO = """[gearbox]
+name = "two"
+[operation]
+speed = "25 Hz"
+load = "40 N*m"
+[[stages]]
+module = "2 mm"
+face_width = "20 mm"
+pinion = { z = 21, bore = "20 mm" }
+wheel = { z = 63, bore = "20 mm" }
+[[stages]]
+module = "3 mm"
+face_width = "20 mm"
+pinion = { z = 24, bore = "20 mm" }
+wheel = { z = 56, bore = "20 mm" }
+[sensor]
+near = "input"
+direction = "x"
+"""
+
+
+@pytest.mark.parametrize(("kind", "speed"), [("spall", 25.0), ("crack", 30.0)])
+def test_a_stage_2_pinion_fault_on_a_21_63_24_56_train_is_named_the_24t_pinion(tmp_path, kind, speed):
+    """The simulated 24T pinion (stage 2) on the intermediate shaft of a 21/63 + 24/56 train, whose
+    event reads wider than the 63T wheel's (0.1 < u <= 0.35), is named alone (before: 'intermediate
+    shaft: 63T gear (stage 1) or 24T pinion (stage 2)', a fault of the 63T for a scenario watching
+    it); a scenario watching the 63T calls it other damage."""
+    from gearlab.data.simulated import simulated_record
+    from gearlab.gearbox import order_table, resolve_gearbox
+    from gearlab.kinds.detection_which_gear import call_of
+    from gearlab.signals import cut_revolutions
+
+    box = tmp_path / "two.toml"
+    box.write_text(TWO)
+    table = order_table(resolve_gearbox(str(box)))
+
+    def take(faults, s):
+        rec = simulated_record(
+            faults,
+            gearbox=str(box),
+            speed_hz=speed,
+            revolutions=4 * speed,
+            snr_db=25.0,
+            seed=s,
+            fs=20_000.0,
+            sim_fs=60_000.0,
+        )
+        cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
+        return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+
+    hist = [take([], 101), take([], 102)]
+    revs, first = take([{"name": kind, "gear": "intermediate pinion", "tooth": 7, "step": 20}], 103)
+    top = min(0.9 * 10_000 / speed, 0.45 * hist[0][0].shape[1])
+    h = L.history([r for r, _ in hist], table, first_revolutions=[f for _, f in hist], max_order=top)
+    found = L.localise(revs, h, table, first_revolution=first).describe()
+    pinion = "intermediate pinion 24T (stage 2)"
+    ev = next(s for s in found["shafts"] if s["shaft"] == "intermediate")
+    assert found["named"] == pinion and ev["which"] == pinion, found["summary"]
+    assert 0.1 < ev["stage_evidence"]["u"] <= 0.35  # the band the shaft was named with both gears in
+    assert call_of(found, ["intermediate gear 63T (stage 1)"]).startswith("other damage: " + pinion)
