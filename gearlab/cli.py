@@ -237,18 +237,6 @@ def inspect(
         render_localisation(report["localisation"], console)
 
 
-def _simulator(model: str, preset: str | None, fs: float = 200e3):
-    from .dynamics.newmark import Simulator
-    from .registry import get_registry
-
-    dynamic = get_registry().get("model", model, "--model")
-    if preset is None:
-        if not dynamic.presets:  # three_stage: no built-in train of three stages
-            raise GearlabInputError(f"--model {model}: no built-in preset; give --gearbox DESCRIPTION")
-        preset = next(iter(dynamic.presets))
-    return Simulator(dynamic, preset, fs)
-
-
 @app.command()
 def modes(
     model: Annotated[
@@ -264,13 +252,11 @@ def modes(
 
     Example: gearlab modes --model ten_dof; gearlab modes --gearbox my.toml
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .gearbox.simulation import label, model_command
+    from .gearbox.simulation import label
+    from .notebook import simulator
 
-    if gearbox is not None:
-        model, preset = model_command(gearbox, model, preset)
-    elif model is None:
-        raise GearlabInputError("gearlab modes: give --model NAME (and --preset) or --gearbox DESCRIPTION")
-    sim = _simulator(model, preset)
+    sim = simulator(model, preset, gearbox=gearbox, flag=_option)  # its checks name the options here
+    model = sim.model.name  # the --gearbox's when not given
     free = sim.natural_frequencies(fixed_input=False)
     fixed = sim.natural_frequencies(fixed_input=True)
     if as_json:

@@ -142,20 +142,44 @@ def simulate_signals(
     >>> sorted(sim.channels), sim.t.size, sim.speed_hz, [f.label for f in sim.faults]
     (['gear_x', 'gear_y', 'pinion_x', 'pinion_y'], 10001, 40.0, ['crack@1'])
     """
-    from .dynamics.newmark import Simulator
     from .gearbox.simulation import simulate_command
     from .physics.faults import parse_fault_option, place_fault
     from .registry import get_registry
 
-    model, preset, speed, load = simulate_command(None if gearbox is None else str(gearbox), model, preset, speed, load)
-    registry = get_registry()
-    dynamic = registry.get("model", model, flag("model"))
+    model, preset, speed, load = simulate_command(
+        None if gearbox is None else str(gearbox), model, preset, speed, load, flag
+    )
+    sim = simulator(model, preset, fs=fs, flag=flag)
+    where = flag("fault")
+    placed = [
+        place_fault(get_registry(), sim.pair, *parse_fault_option(text), where=f"{where} {text!r}") for text in faults
+    ]
+    return sim.run(placed, speed, load, duration)
+
+
+def simulator(
+    model: str | None = None,
+    preset: str | None = None,
+    *,
+    gearbox: str | Path | None = None,
+    fs: float = 200e3,
+    flag=lambda key: key,
+):
+    """The simulator (gearlab.dynamics.newmark.Simulator) of *model* and *preset* (default: the
+    model's first) or of a *gearbox* description, with the checks of simulate_signals: what
+    simulate_signals runs and ``gearlab modes`` reads the natural frequencies of. *flag*: as there."""
+    from .dynamics.newmark import Simulator
+    from .gearbox.simulation import model_command
+    from .registry import get_registry
+
+    if gearbox is not None:
+        model, preset = model_command(str(gearbox), model, preset, flag)
+    elif model is None:
+        raise GearlabInputError(f"give {flag('model')} NAME (and {flag('preset')}) or {flag('gearbox')} DESCRIPTION")
+    dynamic = get_registry().get("model", model, flag("model"))
     if preset is None and not dynamic.presets:  # three_stage: no built-in train of three stages
         raise GearlabInputError(f"{flag('model')} {model}: no built-in preset; give {flag('gearbox')} DESCRIPTION")
-    sim = Simulator(dynamic, next(iter(dynamic.presets)) if preset is None else preset, fs)
-    where = flag("fault")
-    placed = [place_fault(registry, sim.pair, *parse_fault_option(text), where=f"{where} {text!r}") for text in faults]
-    return sim.run(placed, speed, load, duration)
+    return Simulator(dynamic, next(iter(dynamic.presets)) if preset is None else preset, fs)
 
 
 def _si(value, unit: str, where: str) -> float | None:

@@ -323,12 +323,12 @@ def test_model_dependent_mistakes_in_a_dataset_scenario(cli, write_scenario, tmp
 
 
 def test_internal_error_is_exit_1_with_one_line(cli, monkeypatch):
-    import gearlab.cli
+    import gearlab.notebook
 
     def broken(*args, **kwargs):
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(gearlab.cli, "_simulator", broken)
+    monkeypatch.setattr(gearlab.notebook, "simulator", broken)
     code, _, err = cli("modes", "--model", "six_dof")
     assert code == 1
     assert "internal error: RuntimeError: boom" in err

@@ -179,31 +179,38 @@ class DescribedPresets(Mapping):
         return len(self._extra)
 
 
-def model_command(gearbox: str, model: str | None, preset: str | None) -> tuple[str, str]:
-    """(model, preset) of `gearlab simulate` or `modes` with --gearbox: the description's model unless
-    --model, its reference as the preset."""
+def model_command(gearbox: str, model: str | None, preset: str | None, flag=lambda key: key) -> tuple[str, str]:
+    """(model, preset) of a *gearbox* description: its model unless *model*, its reference as the
+    preset. *flag* names a keyword in an error (the CLI passes its options: --preset, ...)."""
     if preset is not None:
-        raise GearlabInputError(f"--preset {preset}: the --gearbox description gives the model's values; give one")
+        raise GearlabInputError(
+            f"{flag('preset')} {preset}: the {flag('gearbox')} description gives the model's values; give one"
+        )
     try:
         ref = reference(gearbox)
     except OSError as exc:
-        raise GearlabInputError(f"--gearbox {gearbox}: cannot read the description ({exc.strerror or exc})") from None
+        raise GearlabInputError(
+            f"{flag('gearbox')} {gearbox}: cannot read the description ({exc.strerror or exc})"
+        ) from None
     return model or model_name(referenced(ref)), ref
 
 
 def simulate_command(
-    gearbox: str | None, model: str | None, preset: str | None, speed: float | None, load: float | None
+    gearbox: str | None,
+    model: str | None,
+    preset: str | None,
+    speed: float | None,
+    load: float | None,
+    flag=lambda key: key,
 ) -> tuple[str, str | None, float | None, float | None]:
-    """(model, preset, speed, load) of `gearlab simulate`: with --gearbox, the description simulated
-    as a [source] gearbox is (its model unless --model, its values, its [operation] speed and load
-    unless --speed and --load); else --model and --preset as given."""
-    if gearbox is None:
-        if model is None:
-            raise GearlabInputError("gearlab simulate: give --model NAME (and --preset) or --gearbox DESCRIPTION")
+    """(model, preset, speed, load) of a simulation: with a *gearbox*, the description simulated as a
+    [source] gearbox is (its model unless *model*, its values, its [operation] speed and load unless
+    *speed* and *load*); else *model* and *preset* as given. *flag*: as in model_command."""
+    if gearbox is None:  # the model is checked where it is loaded (gearlab.notebook.simulator)
         return model, preset, speed, load
-    model, ref = model_command(gearbox, model, preset)
+    model, ref = model_command(gearbox, model, preset, flag)
     box = referenced(ref)
-    for key, option, value in (("speed", "--speed", speed), ("load", "--load", load)):
+    for key, value in (("speed", speed), ("load", load)):
         if value is None and getattr(box, f"{key}_hz" if key == "speed" else f"{key}_nm") is None:
-            raise GearlabInputError(f"{box.source}: [operation] key '{key}': missing; expected it there or {option}")
+            raise GearlabInputError(f"{box.source}: [operation] key '{key}': missing; expected it there or {flag(key)}")
     return model, ref, speed if speed is not None else box.speed_hz, load if load is not None else box.load_nm
