@@ -16,7 +16,9 @@ Per case it prints: the records flagged (a shaft over its history threshold); of
 gear named first (alone), its shaft named with both its gears (the intermediate shaft's two gears
 undecided), and of all records those named on a wrong gear (another shaft, or the other gear of
 the damaged gear's shaft; for a healthy record, any gear named). For the rig, also the records
-called a fault of the input pinion that scenarios/phm09_chip.toml watches. The tooth found is
+called a fault of the input pinion that scenarios/phm09_chip.toml watches; for a gear of the
+intermediate shaft, the records a scenario watching the shaft's other gear calls its own fault
+(detection_which_gear.call_of: that gear named, or the shaft with both). The tooth found is
 scored against the tooth placed (the simulator's shafts are at their zero when the input is, so
 the record's first tacho mark gives every shaft's angle).
 
@@ -174,8 +176,10 @@ def report(rows: list[dict], box: str) -> None:
 
     print(
         f"{'damage':20s} {'records':>7s} {'flagged':>11s} {'named 1st':>11s} {'shaft, both':>11s}"
-        f" {'wrong gear':>11s} {'called input pinion':>11s} {'tooth ±0.5':>17s}"
+        f" {'wrong gear':>11s} {'called input pinion':>11s} {'tooth ±0.5':>17s} {'other gear watched':>18s}"
     )
+    gears = dict(BOXES[box]["gears"])
+    shaft_of = {w: w.split()[0] for w in gears}
     for case in ("healthy", *(w for w, _ in BOXES[box]["gears"])):
         rs = by.get(case, [])
         if not rs:
@@ -187,17 +191,23 @@ def report(rows: list[dict], box: str) -> None:
         watched = sum(r["named"] == WATCHED for r in rs) if box == "phm09" else None
         gaps = np.array([r["tooth_off"] for r in flagged if "tooth_off" in r])
         middle = float(np.median(gaps)) if gaps.size else 0.0
+        # a scenario watching the other gear of the damaged gear's shaft (call_of): a fault of it when
+        # that gear is named, or the shaft with both its gears
+        other = [gears[w] for w in gears if w != case and case in gears and shaft_of[w] == shaft_of[case]]
+        mine = sum(r["named"] in other or bool(r.get("both")) for r in rs) if other else None
         print(
             f"{case:20s} {len(rs):7d} {pct(len(flagged), len(rs))}"
             + (f" {pct(right, len(flagged))} {pct(both, len(flagged))}" if case != "healthy" else " " * 24)
             + f" {pct(len(wrong), len(rs))}"
             + (f" {pct(watched, len(rs))}" if watched is not None else " " * 12)
-            + (f" {middle:+6.2f} {np.mean(np.abs(gaps - middle) < 0.5) * 100:5.1f} %" if gaps.size else "")
+            + (f" {middle:+6.2f} {np.mean(np.abs(gaps - middle) < 0.5) * 100:5.1f} %" if gaps.size else " " * 15)
+            + (f" {pct(mine, len(rs)):>18s}" if mine is not None else "")
         )
     print("flagged: of all records; named 1st: of the flagged, the damaged gear named alone; shaft, both: of the")
     print("flagged, its shaft named with both its gears (which undecided); wrong gear: of all records, named on a")
     print("gear that is not the damaged one (healthy: any); called input pinion: of all records (phm09_chip's gear);")
-    print("tooth: the peak's median offset from the placed tooth's middle (pitches), the share within half a pitch.")
+    print("tooth: the peak's median offset from the placed tooth's middle (pitches), the share within half a pitch;")
+    print("other gear watched: of all records, called a fault of the shaft's other gear by a scenario watching it.")
 
 
 def main(argv=None) -> None:
