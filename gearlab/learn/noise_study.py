@@ -180,7 +180,7 @@ def train(
         fitted,
         X,
         y,
-        rng=np.random.default_rng([protocol.seed, run, 1]),
+        rng=generator(protocol.seed, run, 1),
         device=device,
         epochs=protocol.epochs,
         batch=protocol.batch,

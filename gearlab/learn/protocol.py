@@ -438,7 +438,7 @@ def train_method(
         target = (target[0], target[1] if method.supervised else None)
         return registry.get("detector", method.adapter).fit(shapes, target, params).to(device), None, {}
     adapter = registry.get("adapter", method.adapter)
-    rng = np.random.default_rng([protocol.seed, rep, k, 7])
+    rng = generator(protocol.seed, rep, k, 7)
     Xs = drawn[:, 0] if drawn.ndim == 3 else drawn  # one draw of each source sample
     Xt, yt = target
     seed = 1000 * protocol.seed + rep
@@ -473,7 +473,7 @@ def train_method(
             net,
             each_draw(start.source, drawn),
             ys,
-            rng=np.random.default_rng([protocol.seed, rep, 1]),
+            rng=generator(protocol.seed, rep, 1),
             device=device,
             epochs=protocol.prime_epochs,
             batch=protocol.batch,
@@ -493,7 +493,7 @@ def train_method(
                 net,
                 drawn,
                 ys,
-                rng=np.random.default_rng([protocol.seed, rep, 2]),
+                rng=generator(protocol.seed, rep, 2),
                 device=device,
                 epochs=protocol.baseline_epochs,
                 batch=protocol.batch,
@@ -543,7 +543,7 @@ def train_method(
         extra = {"source_val_accuracy": 100.0 * accuracy(net, *source_val, device)} if adapter.calibrated else {}
         return _calibrated(net, inputs, Xt, yt, source_val, device), history, extra
     modules = adapter.extra_modules(net.latent_dim, params)
-    take = np.random.default_rng([protocol.seed, rep, k, 3]).permutation(len(Xs))[: len(Xt)]
+    take = generator(protocol.seed, rep, k, 3).permutation(len(Xs))[: len(Xt)]
     Xs_in = inputs.source(Xs[take])
     history = fit_adaptation(
         net,
