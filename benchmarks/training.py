@@ -23,6 +23,11 @@ by round so that all see the same machine load, the median of the rounds printed
   fused multiply-adds). Normalisation, activations, pooling and the optimiser are not counted,
   so the limit is optimistic: a ratio gearlab / limit of 1 cannot be reached.
 
+Where the distance to the limit lies: gearlab is timed at batch 2 as well (`SMALL`, the same
+steps), and a step's time taken as a + b * batch through the two: `step ms` is a, the cost of a
+step whatever its batch (operator dispatch, the autograd engine, the optimiser, Python), `GF/s`
+the counted FLOPs per sample over b, the speed of the work that grows with the batch.
+
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
 On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the
@@ -51,6 +56,7 @@ CASES = (
 )
 CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}  # cpu: this process's CPU seconds
 clock = CLOCKS["wall"]
+SMALL = 2  # the second batch of gearlab's timing: a step's fixed cost and its per-sample speed
 MATMUL = 512  # n of the n x n matrix product: large enough to be compute-bound
 CONV = (8, 64, 64, 5, 1024)  # batch, channels in and out, kernel, length of the friendly conv1d
 
@@ -194,7 +200,7 @@ def main() -> None:
             Xt=torch.as_tensor(X, device=device),
             yt=torch.as_tensor(y, device=device),
             flops=flops_per_sample(network(name, length, device), length, device),
-            times={"gearlab": [], "plain": [], "limit": []},
+            times={"gearlab": [], "plain": [], "limit": [], "small": []},
         )
     peak_rounds: dict[str, list[float]] = {"matmul": [], "conv": []}
     for _ in range(args.rounds):  # alternated: a load that comes and goes hits every figure alike
@@ -202,6 +208,10 @@ def main() -> None:
             s = setups[name]
             samples = epochs * len(s["X"])
             s["times"]["gearlab"].append(gearlab_run(s["gearlab"], s["X"], s["y"], batch, epochs, device) / samples)
+            small = slice(0, per_epoch * SMALL)  # as many steps at batch SMALL
+            s["times"]["small"].append(
+                gearlab_run(s["gearlab"], s["X"][small], s["y"][small], SMALL, epochs, device) / (epochs * small.stop)
+            )
             s["times"]["plain"].append(plain_run(s["plain"], s["opt"], s["Xt"], s["yt"], batch, epochs) / samples)
             peak = peaks(device)
             for kind in peak_rounds:
@@ -216,19 +226,32 @@ def main() -> None:
     print(f"peaks at {args.threads} thread(s): matmul {matmul / 1e9:.1f} GFLOP/s, conv1d {conv / 1e9:.1f} GFLOP/s")
     header = (
         f"{'network':8s} {'input':>11s} {'MFLOP/sa':>8s} {'gearlab/s':>9s} {'plain/s':>9s} {'limit/s':>9s} "
-        f"{'gl/core':>8s} {'ms/step':>7s} {'gearlab/plain':>13s} {'gearlab/limit':>13s}"
+        f"{'gl/core':>8s} {'ms/step':>7s} {'step ms':>7s} {'GF/s':>5s} {'gearlab/plain':>13s} {'gearlab/limit':>13s}"
     )
     print(header)
     for name, length, batch, where in cases:
         s = setups[name]
         rate = {k: 1.0 / statistics.median(v) for k, v in s["times"].items()}
+        fixed, per_sample = split(batch / rate["gearlab"], SMALL / rate["small"], batch)
+        flops = sum(s["flops"].values())
         print(
-            f"{name:8s} {f'{batch} x {length}':>11s} {sum(s['flops'].values()) / 1e6:8.2f} {rate['gearlab']:9.0f} "
+            f"{name:8s} {f'{batch} x {length}':>11s} {flops / 1e6:8.2f} {rate['gearlab']:9.0f} "
             f"{rate['plain']:9.0f} {rate['limit']:9.0f} {rate['gearlab'] / args.threads:8.0f} "
-            f"{1e3 * batch / rate['gearlab']:7.2f} {rate['gearlab'] / rate['plain']:13.2f} "
-            f"{rate['gearlab'] / rate['limit']:13.3f}   ({where})"
+            f"{1e3 * batch / rate['gearlab']:7.2f} {1e3 * fixed:7.2f} {flops / per_sample / 1e9:5.1f} "
+            f"{rate['gearlab'] / rate['plain']:13.2f} {rate['gearlab'] / rate['limit']:13.3f}   ({where})"
         )
     print("(samples/s; gl/core = gearlab's per thread; the limit counts convolutions, dense layers and templates only)")
+    print(
+        f"(step ms: a step's cost whatever its batch, GF/s: the counted FLOPs' speed in the rest, from gearlab at "
+        f"batch {SMALL} and at the network's)"
+    )
+
+
+def split(step: float, small_step: float, batch: int) -> tuple[float, float]:
+    """A step's seconds as a + b * batch through *step* (at *batch*) and *small_step* (at SMALL):
+    (a, b), the fixed cost of a step and the seconds per sample."""
+    per_sample = (step - small_step) / (batch - SMALL)
+    return step - per_sample * batch, per_sample
 
 
 if __name__ == "__main__":

@@ -43,3 +43,13 @@ def test_a_tiny_run_prints_the_ratios(monkeypatch, capsys):
     gearlab_per_plain, gearlab_per_limit = float(fields[-3]), float(fields[-2])  # then "(scenarios)"
     assert 0 < gearlab_per_plain and 0 < gearlab_per_limit < 1  # no network beats the machine's limit
     assert "matmul" in out and "conv1d" in out
+    ms_per_step, fixed_ms, speed = float(fields[-6]), float(fields[-5]), float(fields[-4])
+    assert 0 < fixed_ms < ms_per_step and speed > 0  # a batch of 2 costs more than 1/20 and less than all of 40's
+
+
+def test_a_step_splits_into_its_fixed_cost_and_a_cost_per_sample():
+    """Steps of 2.0 + 0.1 * batch ms: 2.2 ms at batch 2 and 6.0 at 40 give back both terms."""
+    bench = _benchmark()
+    assert bench.SMALL == 2
+    fixed, per_sample = bench.split(6.0e-3, 2.2e-3, 40)
+    assert abs(fixed - 2.0e-3) < 1e-12 and abs(per_sample - 0.1e-3) < 1e-12
