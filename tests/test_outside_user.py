@@ -244,3 +244,23 @@ def test_gap_records_without_tacho_or_speed_take_the_source_description(tmp_path
     t = load_scenario(tmp_path / "gap.toml").spec.target.target
     rec = t.read(t.files[0])
     assert abs(rec.speed_hz / f - 1) < 1e-3 and "mesh" in rec.angle_source, rec.angle_source
+
+
+def test_a_mat_struct_s_fields_are_channels_with_its_rate(tmp_path):
+    # A hoist's logger saves each take as MAT v5 struct rec.{acc, enc, fs}: 'no vibration channel
+    # 'acc'; the file has: rec', and 'rec.acc' or 'rec/acc' alike. A scalar struct's fields are
+    # channels by path, as a v7.3 file's groups are ("rec/acc", "rec.acc", or "acc" alone), its fs a
+    # rate field; the header (validate) lists them too.
+    import scipy.io
+
+    from gearlab.data.readers.headers import HEADERS
+    from gearlab.data.recordings import read_channels
+
+    acc, enc = np.arange(4096.0), np.tile([0.0, 5.0], 2048)
+    scipy.io.savemat(tmp_path / "take.mat", {"rec": {"acc": acc[:, None], "enc": enc, "fs": 20480.0}, "note": "ok"})
+    header = HEADERS["MATLAB"](tmp_path / "take.mat")
+    assert header.channels == ["rec", "note", "rec/acc", "rec/enc", "rec/fs"] and header.rate
+    assert header.find("acc") and header.find("rec.enc") and header.find("rec/acc")
+    for names in (["acc", "enc"], ["rec.acc", "rec/enc"]):
+        found, fs = read_channels(tmp_path / "take.mat", names)
+        assert fs == 20480.0 and np.array_equal(found[names[0]], acc) and np.array_equal(found[names[1]], enc)

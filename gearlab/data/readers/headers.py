@@ -37,6 +37,8 @@ class Header:
         """The channel as the file names it: a nested file's "acc" is its one "group/acc"."""
         if name in self.channels or not self.nested:
             return name
+        if self.format == "MATLAB" and str(name).replace(".", "/") in self.channels:
+            return str(name).replace(".", "/")  # a struct's field as MATLAB writes it: rec.acc
         from .hdf5 import leaf_match
 
         return leaf_match(self.channels, str(name)) or name
@@ -155,8 +157,11 @@ def _mat_header(path: Path) -> Header:
     with path.open("rb") as f:
         if 0 in f.read(4):  # v4: no header to list; the run reads it
             return Header("MATLAB", [], True)
-    names = [n for n in _mat5_variables(path.read_bytes(), lambda name: False) if n and not n.startswith("__")]
-    return Header("MATLAB", names, any(is_rate_or_time(n) for n in names))
+    fields: list[str] = []
+    names = [n for n in _mat5_variables(path.read_bytes(), lambda name: False, fields) if n and not n.startswith("__")]
+    names += fields  # a scalar struct's fields, by path
+    rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
+    return Header("MATLAB", names, rate, nested=bool(fields))
 
 
 HEADERS = {

@@ -1,4 +1,6 @@
-"""MATLAB: v5 variables (scipy) or v7.3 (an HDF5 file, read with h5py); the rate from 'fs'/'Fs'."""
+"""MATLAB: v5 variables (scipy) or v7.3 (an HDF5 file, read with h5py); the rate from 'fs'/'Fs'.
+A scalar struct's fields are channels by path, as a v7.3 file's groups are: "rec/acc" (or "rec.acc",
+or "acc" where one field has that last name), its "rec/fs" a rate field."""
 
 from __future__ import annotations
 
@@ -8,8 +10,8 @@ import zlib
 from collections.abc import Sequence
 from pathlib import Path
 
-from .base import Contents, _keyed, is_rate_or_time, max_record_bytes
-from .hdf5 import _read_hdf5
+from .base import _RATE_NAMES, Contents, _keyed, _normalise, _time_field, is_rate_or_time, max_record_bytes, time_scale
+from .hdf5 import _read_hdf5, leaf_match
 
 
 def _is_mat73(path: Path) -> bool:
@@ -19,33 +21,71 @@ def _is_mat73(path: Path) -> bool:
     return len(header) == 128 and header[124:126] in (b"\x00\x02", b"\x02\x00")
 
 
+def field_path(name: str, fields: Sequence[str]) -> str | None:
+    """The struct field path *name* means ("rec/acc", "rec.acc" or a unique last name "acc"), or None."""
+    if name in fields:
+        return name
+    dotted = name.replace(".", "/")
+    if dotted in fields:
+        return dotted
+    return leaf_match(fields, name)
+
+
 def _read_mat(path: Path, names: Sequence[str]) -> Contents:
     """MATLAB variables by name: v4/v5 through scipy, v7.3 (HDF5) through h5py.
 
     A v5 file's layout is checked first (_mat5_variables), and scipy reads only the
     variables asked for and the rate fields, never the others (objects, function handles).
+    A scalar struct's fields (a logger's rec.acc, rec.fs) are channels by path (field_path).
     """
     if _is_mat73(path):
-        return _read_hdf5(path, names, matlab=True)
+        alias = {n: n.replace(".", "/") for n in names}  # no MATLAB name has a dot: rec.acc is a field
+        contents = _read_hdf5(path, list(dict.fromkeys(alias.values())), matlab=True)
+        contents.found = {n: contents.found[a] for n, a in alias.items() if a in contents.found}
+        return contents
     from scipy.io import loadmat
 
     with path.open("rb") as f:
         v4 = 0 in f.read(4)  # how scipy tells v4 files from v5 ones
+    fields: list[str] = []
     if v4:  # scipy's v4 reader is plain Python over numpy: nothing to check first
         variables = loadmat(path, squeeze_me=True, chars_as_strings=True)
         available = [k for k in variables if not k.startswith("__")]  # __header__, __version__, …
-    else:
+        return _keyed(available, lambda n: variables[n], names)
 
-        def wanted(name: str) -> bool:  # the channels asked for and the rate fields (see _keyed)
-            return name in names or is_rate_or_time(name)
+    def wanted(name: str) -> bool:  # the channels asked for and the rate fields (see _keyed)
+        return name in names or is_rate_or_time(name)
 
-        every = _mat5_variables(path.read_bytes(), wanted)
-        available = list(dict.fromkeys(n for n in every if n and not n.startswith("__")))
-        # squeeze_me: a 1×N row or N×1 column becomes a vector, a 1×1 a scalar.
-        variables = loadmat(
-            path, squeeze_me=True, chars_as_strings=True, variable_names=[n for n in available if wanted(n)]
-        )
-    return _keyed(available, lambda n: variables[n], names)
+    every = _mat5_variables(path.read_bytes(), wanted, fields)
+    top = list(dict.fromkeys(n for n in every if n and not n.startswith("__")))
+    paths = {n: field_path(n, fields) for n in names if n not in top}
+    paths = {n: p for n, p in paths.items() if p is not None}
+    # a struct's rate and time fields count where one of its fields is asked for (HDF5's nearest group)
+    used = {p.split("/", 1)[0] for p in paths.values()}
+    load = [n for n in top if wanted(n) or n in used]
+    # squeeze_me: a 1×N row or N×1 column becomes a vector, a 1×1 a scalar; a struct an object
+    variables = loadmat(path, squeeze_me=True, chars_as_strings=True, struct_as_record=False, variable_names=load)
+
+    def get(name: str):
+        parts = name.split("/")
+        value = variables[parts[0]]
+        for part in parts[1:]:
+            value = getattr(value, part)
+        return value
+
+    contents = _keyed(top, get, [n for n in names if n not in paths])
+    contents.available = top + fields
+    for name, full in paths.items():
+        contents.found[name] = _normalise(get(full))
+    for full in fields:
+        leaf = full.rsplit("/", 1)[-1]
+        if full.split("/", 1)[0] not in used:
+            continue
+        if leaf.lower() in _RATE_NAMES:
+            contents.rates.append((f"'{full}'", _normalise(get(full))))
+        elif time_scale(leaf) is not None:
+            contents.times.append(_time_field(f"time '{full}'", _normalise(get(full)), time_scale(leaf)))
+    return contents
 
 
 # --- MATLAB v5 layout ----------------------------------------------------------------------
@@ -67,8 +107,9 @@ class _Mat5Layout:
     """Walks MATLAB v5 elements: tag (type, size) then data padded to 8 bytes, or a small data
     element (size and type in one word, up to 4 bytes of data in the next)."""
 
-    def __init__(self, order: str):
+    def __init__(self, order: str, fields: list | None = None):
         self.order = order
+        self.fields = fields  # collects "var/field" paths of scalar structs' numeric and text fields
 
     def element(self, buf: memoryview, pos: int, end: int) -> tuple[int, memoryview, int]:
         """(type, data, position after it) of the element at *pos*; it must end by *end*."""
@@ -90,17 +131,18 @@ class _Mat5Layout:
             raise ValueError(f"a data element of type {kind}, which MATLAB does not use there")
         return pos
 
-    def matrix(self, buf: memoryview, pos: int, end: int, depth: int) -> int:
-        """A matrix element inside a cell or struct; the position after it."""
+    def matrix(self, buf: memoryview, pos: int, end: int, depth: int, path: str | None = None) -> int:
+        """A matrix element inside a cell or struct (*path*: a scalar struct's field); the position after it."""
         kind, body, after = self.element(buf, pos, end)
         if kind != _MI_MATRIX:
             raise ValueError(f"a cell or field of element type {kind}, expected a matrix")
         if body:  # an empty matrix has no body at all
-            self.body(body, depth, lambda name: True)
+            self.body(body, depth, lambda name: True, path)
         return after
 
-    def body(self, body: memoryview, depth: int, read) -> str:
+    def body(self, body: memoryview, depth: int, read, path: str | None = None) -> str:
         """Check a matrix: array flags, dimensions, name and, when read(name), its contents.
+        A scalar struct is walked whatever read says, its fields' paths kept (self.fields).
         Returns the name."""
         if depth > _MAT_MAX_DEPTH:
             raise ValueError(f"cells or structs nested more than {_MAT_MAX_DEPTH} deep")
@@ -123,8 +165,12 @@ class _Mat5Layout:
         if kind not in _MI_TEXT:
             raise ValueError("a matrix without a valid name")
         name = bytes(raw).decode("latin1")
-        if not read(name):
+        here = name if path is None else path
+        scalar_struct = mclass == _MX_STRUCT and count == 1 and self.fields is not None
+        if not read(name) and not scalar_struct:
             return name  # scipy reads no more of a variable it is not asked for
+        if path is not None and self.fields is not None and mclass in (*_MX_NUMERIC, _MX_CHAR):
+            self.fields.append(path)
         if mclass in _MX_NUMERIC:
             for _ in range(2 if is_complex else 1):  # real part, imaginary part
                 pos = self.data(body, pos, end)
@@ -146,8 +192,12 @@ class _Mat5Layout:
             kind, fields, pos = self.element(body, pos, end)
             if kind not in _MI_TEXT or length <= 0:
                 raise ValueError("a struct without valid field names")
-            for _ in range(count * (len(fields) // length)):
-                pos = self.matrix(body, pos, end, depth + 1)
+            keys = [
+                bytes(fields[i : i + length]).split(b"\0", 1)[0].decode("latin1") for i in range(0, len(fields), length)
+            ]
+            for i in range(count * (len(fields) // length)):
+                sub = f"{here}/{keys[i]}" if scalar_struct and here else None
+                pos = self.matrix(body, pos, end, depth + 1, sub)
         else:  # function handles, classdef objects, Java objects: no measured data
             raise ValueError(
                 f"variable '{name}' is a MATLAB {('function handle' if mclass == 16 else 'object')}, "
@@ -169,12 +219,13 @@ def _inflate(data, at: int) -> bytes:
     return out
 
 
-def _mat5_variables(data: bytes, read) -> list[str]:
+def _mat5_variables(data: bytes, read, fields: list | None = None) -> list[str]:
     """Names of the variables of a MATLAB v5 file, after checking their layout: every
-    variable's header, and in full those for which read(name) is true."""
+    variable's header, and in full those for which read(name) is true. *fields*: a list that
+    collects the field paths of scalar structs ("rec/acc"), walked in full."""
     if len(data) < 128 or data[126:128] not in (b"IM", b"MI"):
         raise ValueError("no MATLAB 5 header (128 bytes ending in 'IM' or 'MI')")
-    layout = _Mat5Layout("<" if data[126:128] == b"IM" else ">")
+    layout = _Mat5Layout("<" if data[126:128] == b"IM" else ">", fields)
     data = memoryview(data)  # slices without copies of the arrays
     names = []
     pos = 128
