@@ -264,3 +264,27 @@ def test_a_mat_struct_s_fields_are_channels_with_its_rate(tmp_path):
     for names in (["acc", "enc"], ["rec.acc", "rec/enc"]):
         found, fs = read_channels(tmp_path / "take.mat", names)
         assert fs == 20480.0 and np.array_equal(found[names[0]], acc) and np.array_equal(found[names[1]], enc)
+
+
+def test_a_two_stage_record_against_a_one_stage_source_names_both_meshes():
+    # A 26/73 + 33/59 reducer (meshes at orders 26 and 11.75, the second as strong) against the built-in
+    # B-6-ch5 (25 teeth) ended 'structure differs: mesh order 11.8 measured, 25 expected ... (not a
+    # whole number of teeth: the target's revolutions were cut at a speed 53.0 % off its shaft's, or
+    # another gear meshes)': its tacho had the speed right, and the 26 went unsaid (on the 25-comb's
+    # sidebands). Both meshes are named now.
+    from gearlab.gap.structure import mesh_check, mesh_line
+
+    points, rng = 4096, np.random.default_rng(3)
+    theta = 2 * np.pi * np.arange(60 * points) / points
+    x, o = np.zeros(theta.size), 1.0
+    for (z1, z2), level in (((26, 73), 1.0), ((33, 59), 1.2)):
+        mod = 1 + 0.1 * np.cos(o * theta) + 0.1 * np.cos(o * z1 / z2 * theta + 1.0)
+        for h in (1, 2, 3):
+            x += level / h * mod * np.cos(h * o * z1 * theta + 0.7 * h)
+        o *= z1 / z2
+    check = mesh_check((x + rng.normal(0, 0.05, x.size)).reshape(60, points), 25, 30)
+    assert check["differs"]
+    assert mesh_line(check, 25).startswith(
+        "mesh orders 26 and 11.75 measured, 25 expected: the source simulates a 25-tooth pinion (the target "
+        "shows 2 meshes: another gear train; 26 teeth on the shaft its revolutions follow)"
+    )
