@@ -288,3 +288,23 @@ def test_a_two_stage_record_against_a_one_stage_source_names_both_meshes():
         "mesh orders 26 and 11.75 measured, 25 expected: the source simulates a 25-tooth pinion (the target "
         "shows 2 meshes: another gear train; 26 teeth on the shaft its revolutions follow)"
     )
+
+
+def test_a_pinion_that_interferes_is_told_the_keys_the_simulator_takes(tmp_path):
+    # A 14/39 mixer (20 deg): 'expected more pinion teeth, a positive profile shift or a shorter
+    # addendum'. Given x = 0.3 it was inspected, then refused by gap and detection (the simulator takes
+    # no profile shift); the keys that make it simulable ('addendum', 'pressure_angle') went unnamed.
+    from gearboxes import description, stage
+
+    from gearlab.gearbox import resolve_gearbox
+
+    path = tmp_path / "mixer.toml"
+    path.write_text(description(stage(14, 39), speed="45 Hz"))
+    with pytest.raises(GearlabInputError) as error:
+        resolve_gearbox(str(path))
+    text = str(error.value)
+    assert "key 'z': the wheel's tip meets the pinion" in text and "shorter 'addendum' (h_a* = 1)" in text
+    assert "larger 'pressure_angle' (α = 20 deg)" in text and "x (inspect only" in text
+    for key in ("addendum = 0.9", 'pressure_angle = "22.5 deg"'):  # the remedies named are simulable
+        path.write_text(description(stage(14, 39).replace("[[stages]]\n", f"[[stages]]\n{key}\n"), speed="45 Hz"))
+        assert resolve_gearbox(str(path)).stages[0].pinion.z == 14

@@ -25,6 +25,9 @@ from dataclasses import dataclass
 
 from ..errors import GearlabInputError
 
+# What a remedy by profile shift leaves out: a 14-tooth pinion told to take x = 0.3 could be inspected
+# but never simulated (description.py refuses x != 0 for a gear pair)
+_NO_SHIFT = "the simulator's mesh stiffness takes no profile shift yet"
 # Slack on the practical undercut limit: at 20 deg and x = 0 it admits z = 14 (x_min' = 0.015).
 _UNDERCUT_SLACK = 0.02
 # A described centre distance agrees with a_w within this share of the module (or 10 µm).
@@ -125,7 +128,8 @@ def check_stage(stage) -> StageGeometry:
             raise GearlabInputError(
                 f"{gear.where} key 'z': {gear.z} teeth at x = {gear.x:g} are undercut (α = "
                 f"{math.degrees(alpha):g} deg, h_a* = {stage.addendum:g}): the tool cuts into the active flank; "
-                f"expected a profile shift x ≥ {x_min:.3f} or more teeth"
+                f"expected a profile shift x ≥ {x_min:.3f} (inspect only: {_NO_SHIFT}), more teeth, or a larger "
+                "'pressure_angle' or shorter 'addendum' of the stage"
             )
     if stage.centre_distance is not None:
         tolerance = max(_CENTRE_TOLERANCE * m, 1e-5)
@@ -165,7 +169,8 @@ def check_stage(stage) -> StageGeometry:
             raise GearlabInputError(
                 f"{gear.where} key 'z': the {other}'s tip meets the {role} {where} (interference: contact starts "
                 f"{_mm(start)} from T on the line of action, the involute at {_mm(limit)}); expected more {role} "
-                "teeth, a positive profile shift or a shorter addendum"
+                f"teeth, a shorter 'addendum' (h_a* = {stage.addendum:g}) or a larger 'pressure_angle' (α = "
+                f"{math.degrees(alpha):g} deg) of the stage, or a positive profile shift x (inspect only: {_NO_SHIFT})"
             )
     if g.contact_ratio < 1.0:
         raise GearlabInputError(
