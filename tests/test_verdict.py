@@ -495,6 +495,37 @@ def test_detection_figures_skip_the_tight_bbox_pass_and_keep_within_their_canvas
         assert box.x0 >= -1 and box.y0 >= -1 and box.x1 <= fig.bbox.x1 + 1 and box.y1 <= fig.bbox.y1 + 1
 
 
+def test_roc_legends_stay_beside_their_own_axes_on_the_canvas():
+    """Issue 41 (phm09_chip, four conditions, 17 methods): with equal-aspect axes the constrained layout
+    reserved each legend's room beside the axes it placed, then the aspect moved the axes in its cell;
+    each legend of the left column lay over the right column's axes, the right column's past the canvas."""
+    import itertools
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from gearlab.charts import Chart, Curve
+    from gearlab.kinds.detection_figures import _roc_figure
+
+    methods = [f"likelihood_ratio_{i} (corrected)" for i in range(17)]
+    conditions = ["30 Hz high load", "30 Hz low load", "40 Hz high load"]
+    rows = [
+        {"condition": c, "unit": "record30", "method": m, "detection": 50.0, "false_alarm": 10.0}
+        for c in conditions
+        for m in methods
+    ]
+    curves = tuple(Curve(f"{m} (AUC 0.500)", [0.0, 0.5, 1.0], [0.0, 0.5, 1.0]) for m in methods)
+    charts = [Chart(f"{c}: ROC on the test's record30 units", "false alarms", "detection", curves) for c in conditions]
+    fig = _roc_figure(charts, {"rows": rows})
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    for ax in axes:
+        box = ax.get_tightbbox(renderer)  # the axes, its labels and its legend
+        assert box.x0 >= -1 and box.y0 >= -1 and box.x1 <= fig.bbox.x1 + 1 and box.y1 <= fig.bbox.y1 + 1
+    for a, b in itertools.permutations(axes, 2):
+        assert not a.get_legend().get_window_extent(renderer).overlaps(b.get_tightbbox(renderer))
+
+
 def test_the_bayes_bound_is_set_beside_the_best_method():
     table = {"a": {"0": cell(80.0), "4": cell(84.0)}, "b": {"0": cell(70.0), "4": cell(71.0)}}
     summary = {

@@ -283,8 +283,11 @@ def _roc_figure(charts: list[Chart], summary: dict):
     rows = {(r["condition"], r["method"]): r for r in summary["rows"] if r["unit"] == headline_unit(summary)}
     cols = min(2, len(charts))
     grid_rows = -(-len(charts) // cols)
+    # near-square axes from the figure's shape, not set_aspect: the constrained layout reserves the
+    # legend's room beside the axes it placed, and an equal aspect then moved each axes within its
+    # cell, its legend over the next column's axes and off the canvas (phm09_chip, four conditions)
     fig, axes = plt.subplots(
-        grid_rows, cols, figsize=(6.4 * cols, 4.6 * grid_rows), squeeze=False, layout="constrained"
+        grid_rows, cols, figsize=(6.4 * cols, 4.0 * grid_rows + 0.4), squeeze=False, layout="constrained"
     )
     for ax in axes.flat[len(charts) :]:
         ax.set_visible(False)
@@ -301,7 +304,6 @@ def _roc_figure(charts: list[Chart], summary: dict):
                 ax.plot(row["false_alarm"] / 100, row["detection"] / 100, "o", ms=4, color=colour)
         ax.set_xlim(-0.02, 1.02)
         ax.set_ylim(-0.02, 1.02)
-        ax.set_aspect("equal")
         ax.set_xlabel(chart.xlabel, fontsize=8)
         ax.set_ylabel(chart.ylabel, fontsize=8)
         ax.set_title(chart.title + ("; " + "; ".join(chart.notes) if chart.notes else ""), fontsize=9)
