@@ -28,6 +28,16 @@ steps), and a step's time taken as a + b * batch through the two: `step ms` is a
 step whatever its batch (operator dispatch, the autograd engine, the optimiser, Python), `GF/s`
 the counted FLOPs per sample over b, the speed of the work that grows with the batch.
 
+Measured against these steps on one thread and not adopted (no gain beyond the load's noise, or
+a loss): 3 or 8 units' `fast` as one network of grouped convolutions (16.4-16.9 against
+17.1-19.2 ms for 3 steps, 42.6-44.8 against 42.5-47.0 for 8) or torch.func.vmap over stacked
+weights (21-22 against 16-18 ms for 3); torch.compile
+(106 s to compile, 7.5 against 5.5 ms a step); `fast` channels-last with its convolutions as
+products of windows (3.76 against 3.43 ms for the layers); its stride-2 convolutions as batched
+products (1.41 against 1.87 ms at batch 2, 4.77 against 4.30 at 40); oneDNN off (5.77 against
+4.95 ms); batch normalisation or the `shapes` mixture by hand-written gradients; one flat buffer
+for the optimiser and the clipping (0.06 ms of a step).
+
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
 On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the
