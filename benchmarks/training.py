@@ -6,8 +6,12 @@ limit, measured side by side in one run.
 
 For each default network (`shapes`: scenarios/quick.toml, expB.toml, transfer_benchmark.toml;
 `fast`: scenarios/phm09_chip.toml, 2048 points) at its scenario's batch (40) with its optimiser
-(Adam, the priming and the baselines) and loss (cross-entropy), three figures, alternated round
-by round so that all see the same machine load, the median of the rounds printed:
+(Adam, the priming and the baselines) and loss (cross-entropy), and for `fast` in the joint step
+of the calibrated methods (`fast+coral`: a source and a target batch embedded together, SGD,
+cross-entropy plus the CORAL loss; phm09_chip's coral, mmd and dann units took 2,650 of its
+units' 2,737 s at 5e2310c, source_only 72), three figures, alternated round by round so that
+all see the same machine load, the median of the rounds printed (a joint step's samples are its
+source and target rows):
 
 * gearlab: samples per second of `gearlab.learn.training.fit_supervised` (one epoch of S
   batches a round, its own batching, clipping and loss bookkeeping);
@@ -57,15 +61,19 @@ import torch
 from torch import nn
 
 from gearlab.learn.networks import ShapeLikelihood, build_network, matched_start
-from gearlab.learn.training import fit_supervised
+from gearlab.learn.training import fit_adaptation, fit_supervised
+from gearlab.registry import METHODS, get_registry
 
-# network, samples per revolution, batch, where it is the default
+# row name, network, samples per revolution, batch, the adapter of a joint step (None: supervised),
+# where it is the default
 CASES = (
-    ("shapes", 4096, 40, "quick, expB, transfer_benchmark"),
-    ("fast", 2048, 40, "phm09_chip"),
+    ("shapes", "shapes", 4096, 40, None, "quick, expB, transfer_benchmark"),
+    ("fast", "fast", 2048, 40, None, "phm09_chip"),
+    ("fast+coral", "fast", 2048, 40, "coral", "phm09_chip's coral, mmd, dann"),
 )
 CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}  # cpu: this process's CPU seconds
 clock = CLOCKS["wall"]
+JOINT_LR = 0.003  # fit_adaptation's SGD learning rate (Table 5.3)
 SMALL = 2  # the second batch of gearlab's timing: a step's fixed cost and its per-sample speed
 MATMUL = 512  # n of the n x n matrix product: large enough to be compute-bound
 CONV = (8, 64, 64, 5, 1024)  # batch, channels in and out, kernel, length of the friendly conv1d
@@ -142,21 +150,29 @@ def network(name: str, length: int, device: torch.device) -> nn.Module:
     return net.to(device)
 
 
-def gearlab_run(net: nn.Module, X: np.ndarray, y: np.ndarray, batch: int, epochs: int, device: torch.device) -> float:
-    """Seconds of gearlab's supervised training over X for *epochs* (one call, as a priming is)."""
+def gearlab_run(s: dict, rows: int, batch: int, epochs: int, device: torch.device) -> float:
+    """Seconds of gearlab's training on the first *rows* of the case *s* for *epochs* (one call, as a
+    priming or an adaptation is): supervised, or joint with its adapter (the source's first batch
+    its validation set, the target unlabelled)."""
+    X, y, rng = s["X"][:rows], s["y"][:rows], np.random.default_rng(0)
     synchronize(device)
     t = clock()
-    fit_supervised(
-        net, X, y, rng=np.random.default_rng(0), device=device, epochs=epochs, batch=batch, val=None, patience=None
-    )
+    if s["adapter"] is None:
+        fit_supervised(s["gearlab"], X, y, rng=rng, device=device, epochs=epochs, batch=batch, val=None, patience=None)
+    else:
+        fit_adaptation(
+            s["gearlab"], s["adapter"], s["modules"], (X, y), (X[:batch], y[:batch]), (s["X_target"][:rows], None),
+            rng=rng, device=device, batch=batch, min_epochs=epochs, max_epochs=epochs, params=s["params"],
+        )  # fmt: skip
     synchronize(device)
     return clock() - t
 
 
-def plain_run(
-    net: nn.Module, opt: torch.optim.Optimizer, X: torch.Tensor, y: torch.Tensor, batch: int, epochs: int
-) -> float:
-    """Seconds of the plainest loop over X for *epochs* (tensors already on the device)."""
+def plain_run(s: dict, batch: int, epochs: int) -> float:
+    """Seconds of the plainest loop over the case *s* for *epochs* (tensors already on the device):
+    a joint step embeds a source and a target batch together and adds the adapter's loss at full
+    weight."""
+    net, opt, X, y, X_target = s["plain"], s["opt"], s["Xt"], s["yt"], s["Xt_target"]
     loss_fn = nn.CrossEntropyLoss()
     net.train()
     synchronize(X.device)
@@ -166,7 +182,15 @@ def plain_run(
         for i in range(0, len(X), batch):
             idx = order[i : i + batch]
             opt.zero_grad()
-            loss_fn(net(X[idx]), y[idx]).backward()
+            if s["adapter"] is None:
+                loss = loss_fn(net(X[idx]), y[idx])
+            else:
+                z = net.embed(torch.cat([X[idx], X_target[idx]]))
+                z_s, z_t = z[: len(idx)], z[len(idx) :]
+                loss = loss_fn(net.classifier(z_s), y[idx]) + s["adapter"].domain_loss(
+                    z_s, z_t, s["plain_modules"], 1.0, s["params"]
+                )
+            loss.backward()
             opt.step()
     synchronize(X.device)
     return clock() - t
@@ -184,7 +208,9 @@ def main() -> None:
         choices=tuple(CLOCKS),
         help="wall time, or this process's CPU time (steadier where other work shares the cores)",
     )
-    parser.add_argument("--networks", default=",".join(c[0] for c in CASES), help="comma-separated, of: shapes, fast")
+    parser.add_argument(
+        "--networks", default=",".join(c[0] for c in CASES), help="comma-separated, of: shapes, fast, fast+coral"
+    )
     args = parser.parse_args()
     global clock
     clock = CLOCKS[args.clock]
@@ -197,32 +223,34 @@ def main() -> None:
     # priming's over its epochs, without copying S batches of data
     per_epoch = min(args.steps, 5)
     epochs = -(-args.steps // per_epoch)
-    for name, length, batch, _ in cases:
-        X = rng.standard_normal((per_epoch * batch, length)).astype(np.float32)
+    for row, name, length, batch, adapter, _ in cases:
+        X, X_target = rng.standard_normal((2, per_epoch * batch, length)).astype(np.float32)
         y = rng.integers(0, 2, len(X))
         gearlab_net, plain_net = network(name, length, device), network(name, length, device)
-        setups[name] = dict(
-            X=X,
-            y=y,
-            gearlab=gearlab_net,
-            plain=plain_net,
-            opt=torch.optim.Adam(plain_net.parameters(), lr=1e-3),
-            Xt=torch.as_tensor(X, device=device),
-            yt=torch.as_tensor(y, device=device),
-            flops=flops_per_sample(network(name, length, device), length, device),
-            times={"gearlab": [], "plain": [], "limit": [], "small": []},
-        )
+        s = setups[row] = dict(X=X, y=y, X_target=X_target, gearlab=gearlab_net, plain=plain_net, adapter=None)
+        s.update(Xt=torch.as_tensor(X, device=device), yt=torch.as_tensor(y, device=device))
+        s.update(Xt_target=torch.as_tensor(X_target, device=device))
+        s["opt"] = torch.optim.Adam(plain_net.parameters(), lr=1e-3)
+        if adapter is not None:  # as gearlab's joint training: its SGD at its learning rate
+            plugin = get_registry().get(METHODS, adapter, "benchmark")
+            s.update(adapter=plugin, params=plugin.resolve({}, "benchmark"))
+            s.update(modules=plugin.extra_modules(gearlab_net.latent_dim, s["params"]).to(device))
+            s["plain_modules"] = plugin.extra_modules(plain_net.latent_dim, s["params"]).to(device)
+            weights = list(plain_net.parameters()) + list(s["plain_modules"].parameters())
+            s["opt"] = torch.optim.SGD(weights, lr=JOINT_LR)
+        s["rows"] = batch * (1 if adapter is None else 2)  # through the network in a step
+        s["flops"] = flops_per_sample(network(name, length, device), length, device)
+        s["times"] = {"gearlab": [], "plain": [], "limit": [], "small": []}
     peak_rounds: dict[str, list[float]] = {"matmul": [], "conv": []}
     for _ in range(args.rounds):  # alternated: a load that comes and goes hits every figure alike
-        for name, _, batch, _ in cases:
-            s = setups[name]
-            samples = epochs * len(s["X"])
-            s["times"]["gearlab"].append(gearlab_run(s["gearlab"], s["X"], s["y"], batch, epochs, device) / samples)
-            small = slice(0, per_epoch * SMALL)  # as many steps at batch SMALL
-            s["times"]["small"].append(
-                gearlab_run(s["gearlab"], s["X"][small], s["y"][small], SMALL, epochs, device) / (epochs * small.stop)
-            )
-            s["times"]["plain"].append(plain_run(s["plain"], s["opt"], s["Xt"], s["yt"], batch, epochs) / samples)
+        for row, _, _, batch, _, _ in cases:
+            s = setups[row]
+            samples = epochs * per_epoch * s["rows"]
+            s["times"]["gearlab"].append(gearlab_run(s, len(s["X"]), batch, epochs, device) / samples)
+            # as many steps at batch SMALL
+            small = gearlab_run(s, per_epoch * SMALL, SMALL, epochs, device)
+            s["times"]["small"].append(small / (samples * SMALL // batch))
+            s["times"]["plain"].append(plain_run(s, batch, epochs) / samples)
             peak = peaks(device)
             for kind in peak_rounds:
                 peak_rounds[kind].append(peak[kind])
@@ -235,19 +263,21 @@ def main() -> None:
     )
     print(f"peaks at {args.threads} thread(s): matmul {matmul / 1e9:.1f} GFLOP/s, conv1d {conv / 1e9:.1f} GFLOP/s")
     header = (
-        f"{'network':8s} {'input':>11s} {'MFLOP/sa':>8s} {'gearlab/s':>9s} {'plain/s':>9s} {'limit/s':>9s} "
+        f"{'network':10s} {'input':>14s} {'MFLOP/sa':>8s} {'gearlab/s':>9s} {'plain/s':>9s} {'limit/s':>9s} "
         f"{'gl/core':>8s} {'ms/step':>7s} {'step ms':>7s} {'GF/s':>5s} {'gearlab/plain':>13s} {'gearlab/limit':>13s}"
     )
     print(header)
-    for name, length, batch, where in cases:
-        s = setups[name]
+    for row, _, length, batch, adapter, where in cases:
+        s = setups[row]
         rate = {k: 1.0 / statistics.median(v) for k, v in s["times"].items()}
-        fixed, per_sample = split(batch / rate["gearlab"], SMALL / rate["small"], batch)
+        rows, small_rows = s["rows"], s["rows"] * SMALL // batch
+        fixed, per_sample = split(rows / rate["gearlab"], small_rows / rate["small"], rows, small_rows)
         flops = sum(s["flops"].values())
+        shape = f"{batch} x {length}" if adapter is None else f"{batch}+{batch} x {length}"
         print(
-            f"{name:8s} {f'{batch} x {length}':>11s} {flops / 1e6:8.2f} {rate['gearlab']:9.0f} "
+            f"{row:10s} {shape:>14s} {flops / 1e6:8.2f} {rate['gearlab']:9.0f} "
             f"{rate['plain']:9.0f} {rate['limit']:9.0f} {rate['gearlab'] / args.threads:8.0f} "
-            f"{1e3 * batch / rate['gearlab']:7.2f} {1e3 * fixed:7.2f} {flops / per_sample / 1e9:5.1f} "
+            f"{1e3 * rows / rate['gearlab']:7.2f} {1e3 * fixed:7.2f} {flops / per_sample / 1e9:5.1f} "
             f"{rate['gearlab'] / rate['plain']:13.2f} {rate['gearlab'] / rate['limit']:13.3f}   ({where})"
         )
     print("(samples/s; gl/core = gearlab's per thread; the limit counts convolutions, dense layers and templates only)")
@@ -257,11 +287,11 @@ def main() -> None:
     )
 
 
-def split(step: float, small_step: float, batch: int) -> tuple[float, float]:
-    """A step's seconds as a + b * batch through *step* (at *batch*) and *small_step* (at SMALL):
-    (a, b), the fixed cost of a step and the seconds per sample."""
-    per_sample = (step - small_step) / (batch - SMALL)
-    return step - per_sample * batch, per_sample
+def split(step: float, small_step: float, rows: int, small_rows: int) -> tuple[float, float]:
+    """A step's seconds as a + b * rows through *step* (of *rows*) and *small_step* (of
+    *small_rows*): (a, b), the fixed cost of a step and the seconds per sample."""
+    per_sample = (step - small_step) / (rows - small_rows)
+    return step - per_sample * rows, per_sample
 
 
 if __name__ == "__main__":

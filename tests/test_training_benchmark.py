@@ -4,6 +4,7 @@ count by hand, and one tiny run that prints the table."""
 import importlib.util
 import sys
 
+import pytest
 import torch
 from conftest import ROOT
 
@@ -29,21 +30,23 @@ def test_fast_flops_per_sample_are_counted_by_hand():
     assert counts["matmul"] == 2 * (64 * 64 + 64 * 2) * 3
 
 
-def test_a_tiny_run_prints_the_ratios(monkeypatch, capsys):
+@pytest.mark.parametrize("case", ["fast", "fast+coral"])
+def test_a_tiny_run_prints_the_ratios(monkeypatch, capsys, case):
+    """A supervised and a joint step (the calibrated methods', most of phm09_chip's training)."""
     bench = _benchmark()
     threads = torch.get_num_threads()
-    monkeypatch.setattr(sys, "argv", ["training.py", "--rounds", "1", "--steps", "1", "--networks", "fast"])
+    monkeypatch.setattr(sys, "argv", ["training.py", "--rounds", "1", "--steps", "1", "--networks", case])
     try:
         bench.main()
     finally:
         torch.set_num_threads(threads)
     out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if line.startswith("fast "))
-    fields = row.split()
-    gearlab_per_plain, gearlab_per_limit = float(fields[-3]), float(fields[-2])  # then "(scenarios)"
+    row = next(line for line in out.splitlines() if line.startswith(f"{case} "))
+    fields = row.split("(")[0].split()  # before "(the scenarios)"
+    gearlab_per_plain, gearlab_per_limit = float(fields[-2]), float(fields[-1])
     assert 0 < gearlab_per_plain and 0 < gearlab_per_limit < 1  # no network beats the machine's limit
     assert "matmul" in out and "conv1d" in out
-    ms_per_step, fixed_ms, speed = float(fields[-6]), float(fields[-5]), float(fields[-4])
+    ms_per_step, fixed_ms, speed = float(fields[-5]), float(fields[-4]), float(fields[-3])
     assert 0 < fixed_ms < ms_per_step and speed > 0  # a batch of 2 costs more than 1/20 and less than all of 40's
 
 
@@ -51,5 +54,5 @@ def test_a_step_splits_into_its_fixed_cost_and_a_cost_per_sample():
     """Steps of 2.0 + 0.1 * batch ms: 2.2 ms at batch 2 and 6.0 at 40 give back both terms."""
     bench = _benchmark()
     assert bench.SMALL == 2
-    fixed, per_sample = bench.split(6.0e-3, 2.2e-3, 40)
+    fixed, per_sample = bench.split(6.0e-3, 2.2e-3, 40, 2)
     assert abs(fixed - 2.0e-3) < 1e-12 and abs(per_sample - 0.1e-3) < 1e-12
