@@ -101,9 +101,13 @@ class ProgressView:
             if not self.started:
                 self.progress.start()
                 self.started = True
-            self.tasks[event.stage] = self.progress.add_task(
-                self.labels[event.stage], total=event.total or None, pace=self.paces[event.stage]
-            )
+            label, total, pace = self.labels[event.stage], event.total or None, self.paces[event.stage]
+            if event.stage in self.tasks:  # met again (each benchmark trial's diagnosis): its bar starts over
+                self.progress.reset(
+                    self.tasks[event.stage], total=total, completed=event.done, description=label, pace=pace
+                )
+            else:
+                self.tasks[event.stage] = self.progress.add_task(label, total=total, pace=pace)
         elif event.kind == "advance" and event.stage in self.tasks:
             self.progress.update(self.tasks[event.stage], completed=event.done, total=event.total or None)
         elif event.kind == "unit" and self.started:

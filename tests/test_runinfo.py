@@ -222,6 +222,22 @@ def test_progress_bars_show_counts_rate_eta_and_the_unit_in_progress():
         assert not view.units
 
 
+def test_a_stage_met_again_starts_its_bar_over_instead_of_adding_one():
+    """A transfer benchmark's trials each run a diagnosis ('gap before', 'gap round 1', ...): a bar per
+    stage name, started over by each trial, not a pile of finished bars from the trials before."""
+    from gearlab.terminal import ProgressView
+
+    out = io.StringIO()
+    console = Console(file=out, force_terminal=True, width=140, color_system=None)
+    with ProgressView(console) as view:
+        for trial in (1, 2):
+            view.handle(Event("stage", stage="gap round 1", total=13, message=f"gap: round 1 of trial {trial}"))
+            view.handle(Event("advance", stage="gap round 1", done=13 if trial == 1 else 2, total=13))
+        (task,) = view.progress.tasks
+        assert (task.description, task.completed, task.total) == ("gap: round 1 of trial 2", 2, 13)
+        assert task.fields["pace"] is view.paces["gap round 1"] and task.fields["pace"].done == 2
+
+
 def test_the_end_of_a_run_prints_the_verdict_and_markdown_tables_as_rich_tables():
     from gearlab.terminal import print_results
 
