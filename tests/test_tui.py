@@ -2,7 +2,8 @@
 
 Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios,
 except in the tests of what the TUI starts, not of the run (`stub_engine`), and in the every-kind
-runs, whose child replays a run the real engine made once in this session (`replayed`).
+runs and the run-end notification, whose child replays a run the real engine made once in this
+session (`replayed`).
 """
 
 from __future__ import annotations
@@ -880,7 +881,7 @@ def test_two_marked_runs_are_compared_and_escape_closes_the_comparison(finished_
     drive(GearlabApp(folder), script, size)
 
 
-def test_keys_panel_form_palette_and_notification(kinds_folder):
+def test_keys_panel_form_palette_and_notification(kinds_folder, replayed, tmp_path):
     from gearlab.tui.screens import KeysScreen, RunOptionsScreen
 
     async def script(pilot):
@@ -915,8 +916,9 @@ def test_keys_panel_form_palette_and_notification(kinds_folder):
         assert "--quick" in given and given[given.index("--executor") + 1] == "local"
         assert given[given.index("--out") + 1] == str(Path.cwd() / "runs")
         del app.follow
-        # a run's end is notified
-        await run_to_the_end(pilot, "stiff.toml")
+        # a run's end is notified (the engine's stiff.toml run replayed: the TUI's notice is what is
+        # tested; the real child's runs are test_run_fills_the_table_then_opens_the_results's and the others')
+        await run_to_the_end(pilot, "stiff.toml", then=(tmp_path / "go").touch)
         assert any("finished" in n.message for n in app._notifications)
 
     drive(GearlabApp(Path("scenarios")), script)
