@@ -4,6 +4,7 @@ gap's "before" report count their steps, and a tiny run's stages each give a tot
 
 from __future__ import annotations
 
+import re
 import time
 from types import SimpleNamespace
 
@@ -150,3 +151,24 @@ def test_a_diagnosis_inside_a_unit_counts_its_steps_with_an_eta_on_the_units_lin
         "gap: round 1, fitting 4 effects: 1 of 4, ETA 1:30",
         "gap: round 1, fitting 4 effects: 4 of 4",
     ]
+
+
+def test_a_gap_rounds_fits_say_for_how_long_they_have_run_beside_the_bar(monkeypatch):
+    """A fit of a diagnosis's round takes 14-27 s on a busy machine; a transfer benchmark's trial sat
+    silent that long between two steps of the round: a line beside the bar now says for how long."""
+    from gearlab import events as ev
+    from gearlab.gap.diagnose import run_fits
+
+    monkeypatch.setattr(ev, "STANDING_S", 0.0)  # at once, not after 3 s: the test waits a second only
+    told: list[Event] = []
+
+    def slow_map(work, tasks, advance):
+        time.sleep(1.6)
+        return [work(t) for t in tasks]
+
+    run = SimpleNamespace(on_event=told.append, executor=SimpleNamespace(map=slow_map))
+    assert run_fits(run, "gap round 1", lambda t: 2 * t, [1, 2], None) == [2, 4]
+    said = [e.message for e in told]
+    assert {(e.kind, e.stage) for e in told} == {("unit", "gap round 1")} and len(said) >= 3
+    assert said[0] == "fitting" and said[-1] == ""  # said at once, gone when the fits end
+    assert all(re.fullmatch(r"fitting \(\d s\)", m) for m in said[1:-1])  # each second in between

@@ -77,7 +77,7 @@ import numpy as np
 from ..data.chain import Chain
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
-from ..events import Event, stages_to_unit
+from ..events import Event, stages_to_unit, standing
 from ..executors import LocalExecutor
 from ..registry import get_registry
 from .conclusion import (
@@ -280,7 +280,7 @@ def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
         run.on_event(Event("advance", stage="gap profile", done=done, total=len(tasks)))
 
     out = list(fitted)
-    for i, res in enumerate(run.executor.map(profile_effect, tasks, advance)):
+    for i, res in enumerate(run_fits(run, "gap profile", profile_effect, tasks, advance)):
         entry = accepted[i]
         if res["params"] != entry["params"]:
             out[i] = run.spec(entry["name"], res["params"])
@@ -320,6 +320,14 @@ class _Run:
         return self.judged(effects + (self.spec(fit["name"], fit["params"]),) + extra)
 
 
+def run_fits(run: _Run, stage: str, work, tasks: list, advance) -> list:
+    """run.executor.map(work, tasks, advance) with a line beside *stage*'s bar that says for how
+    long the fits have run once it stood 3 s: a fit takes 14-27 s on a busy machine, which a
+    transfer benchmark's trial spent silent between two steps of its round (issue 41)."""
+    with standing(run.on_event, stage, "fitting"):
+        return run.executor.map(work, tasks, advance)
+
+
 def greedy_round(
     run: _Run, r: int, remaining: list[str], accepted: list[dict], fitted: tuple
 ) -> tuple[list[dict], tuple, dict]:
@@ -356,7 +364,7 @@ def greedy_round(
         done += 1
         on_event(Event("advance", stage=f"gap round {r}", done=done, total=len(tasks)))
 
-    fits = run.executor.map(fit_effect, tasks, advance)
+    fits = run_fits(run, f"gap round {r}", fit_effect, tasks, advance)
     baseline = next((f for f in fits if f["name"] is None), None)
     fits = fine_fits(run, r, sorted((f for f in fits if f["name"] is not None), key=lambda f: f["score"]), tasks)
     if baseline is not None and baseline["score"] < gap_now:
@@ -424,7 +432,7 @@ def fine_fits(run: _Run, r: int, fits: list[dict], tasks: list[tuple]) -> list[d
 
     tasks = [by_name[f["name"]] + (f["params"],) for f in again]
     out = {id(f): f for f in fits}
-    for coarse, fine in zip(again, run.executor.map(fit_effect, tasks, advance)):
+    for coarse, fine in zip(again, run_fits(run, stage, fit_effect, tasks, advance)):
         if fine["score"] < coarse["score"]:
             fine.update(
                 evaluations=fine["evaluations"] + coarse["evaluations"], seconds=fine["seconds"] + coarse["seconds"]
@@ -613,7 +621,7 @@ def joint_refit(run: _Run, r: int, accepted: list[dict], fitted: tuple, info: di
     task = (run.search, name, others, run.target, run.settings, seed, noise is not None, run.rows)
     message = f"gap: round {r}: {name} fitted again next to the others"
     run.on_event(Event("stage", stage=f"gap joint {r}", total=1, message=message))
-    res = run.executor.map(fit_effect, [task], lambda *_: None)[0]
+    res = run_fits(run, f"gap joint {r}", fit_effect, [task], lambda *_: None)[0]
     run.on_event(Event("advance", stage=f"gap joint {r}", done=1, total=1))
     info["joint_refit"] = {"name": name, "score_before": score, "score": res["score"], "params": res["params"]}
     if not res["score"] < score:
