@@ -252,3 +252,23 @@ def test_the_report_says_the_verdict_the_run_printed():
     table = ranking_md(base["ranking"], base["effects"])
     assert "parameters (round-1 fit, alone)" in table and "accepted (final fit)" in table
     assert "| order = 5, f_c = 550 |" in table and "round 1, 100.0 %; order = 8 |" in table
+
+
+def test_records_whose_speed_the_mesh_lines_gave_are_told_a_whole_tooth_off(clean):
+    # Outside user (issue 39): a 14/39 mixer's HDF5 takes without a tacho, described with 15 teeth: the
+    # speed found from the mesh lines was 42 Hz (630 Hz / 15), the source set to it, and revolutions cut
+    # at 42 Hz showed mesh order 15: 'unexplained', the tooth count unsaid. Here a 24-tooth pinion's
+    # record at 40 Hz described with 25 teeth reads at 38.4 Hz.
+    from gearlab.data.chain import Chain
+    from gearlab.gap.structure import traded_teeth
+
+    chain = Chain(fs=4096 * 38.4, speed=38.4, speed_from_mesh=True, described_speed=SPEED)
+    settings = Settings(candidates=CANDIDATES, **FAST)
+    result = diagnose(SOURCE.with_(speed_hz=38.4), clean, settings, chain=chain)
+    assert result["verdict"] == "structure differs" and result["effects"] == []
+    assert result["difference"].startswith(
+        "speed 38.4 Hz found from the mesh lines (no tacho), 40 Hz expected: the record's mesh at 960 Hz is a "
+        "25-tooth pinion's at 38.4 Hz or a 24-tooth pinion's at 40 Hz"
+    )
+    # a motor's slip off its nameplate, no whole tooth's share, is no structure
+    assert traded_teeth(39.0, 40.0, 25) is None and traded_teeth(38.4, 40.0, 25) == 24

@@ -54,6 +54,8 @@ class Chain:
                for every simulated set against *reference* (the target's synchronous average)
     speed_from_mesh: no tacho: the speed was found from a gearbox description's mesh lines, so only
                speed x pinion teeth is measured
+    described_speed: the description's speed (Hz) where the source was set to the speed found
+               (measured records): a wrong tooth count moves the speed found, not the mesh order
     """
 
     fs: float
@@ -63,6 +65,7 @@ class Chain:
     offset: float | None = None
     reference: np.ndarray | None = field(default=None, compare=False, repr=False)
     speed_from_mesh: bool = False
+    described_speed: float | None = None
 
     @property
     def samples_per_rev(self) -> float:

@@ -284,7 +284,7 @@ def speed_line(target_speed: float, source_speed: float, z1: int | None = None) 
         return None
     if z1 is not None:
         teeth = z1 * target_speed / source_speed
-        if abs(teeth - round(teeth)) <= 0.05 and round(teeth) >= MIN_TEETH:
+        if traded_teeth(target_speed, source_speed, z1) is not None:
             return (
                 f"speed {target_speed:.4g} Hz found from the mesh lines (no tacho), {source_speed:.4g} Hz expected: "
                 f"the record's mesh at {z1 * target_speed:.4g} Hz is a {z1}-tooth pinion's at {target_speed:.4g} Hz "
@@ -295,6 +295,16 @@ def speed_line(target_speed: float, source_speed: float, z1: int | None = None) 
         f"speed {target_speed:.4g} Hz {'found from the mesh lines (no tacho)' if z1 else 'measured'}, "
         f"{source_speed:.4g} Hz expected: the source simulates {source_speed:.4g} Hz (set its speed_hz to the record's)"
     )
+
+
+def traded_teeth(target_speed: float, source_speed: float, z1: int) -> int | None:
+    """The other whole tooth count whose pinion at *source_speed* meshes where a *z1*-tooth one does at
+    *target_speed* (beyond SPEED_TOL), or None."""
+    teeth = z1 * target_speed / source_speed
+    whole = round(teeth)
+    if abs(target_speed / source_speed - 1.0) <= SPEED_TOL or abs(teeth - whole) > 0.05 or whole < MIN_TEETH:
+        return None
+    return whole
 
 
 def level_factor(target: np.ndarray, source: np.ndarray) -> float:
@@ -370,6 +380,14 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
         line = speed_line(chain.speed, record["speed_hz"]["source"], pair.Z1 if chain.speed_from_mesh else None)
         if line:
             return "structure differs", line, record
+        # records whose speed the description's mesh lines gave, the source set to it: revolutions cut
+        # at that speed show the described mesh order whatever the teeth (a 14-tooth pinion at 45 Hz
+        # described with 15 read at 42 Hz, 'unexplained'); a speed off the described one by a whole
+        # tooth's share is told, a motor's slip (no whole tooth) is not
+        if chain.speed_from_mesh and chain.described_speed:
+            record["speed_hz"]["described"] = chain.described_speed
+            if traded_teeth(chain.speed, chain.described_speed, pair.Z1) is not None:
+                return "structure differs", speed_line(chain.speed, chain.described_speed, pair.Z1), record
     record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, settings.max_order, later_combs(pair))
     if mesh["differs"]:
         return "structure differs", mesh_line(mesh, pair.Z1), record

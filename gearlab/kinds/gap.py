@@ -373,7 +373,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if not spec.target.units_known:  # what fits values in volts, and values in m/s² already
                 record_notes.append(units_warning(spec.target.target.vibration, target_X))
             # start fractions not kept (drawn uniformly)
-            chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh)
+            from ..data.builder import operating_point
+
+            described = operating_point(spec.source)[0] if from_mesh else None
+            chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh, described_speed=described)
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))
