@@ -9,6 +9,35 @@ from gearlab.registry import get_registry
 
 ROOT = Path(__file__).resolve().parents[1]
 
+# The test files of most CPU first (seconds in the README's suite at 0a03914, 2 workers): with
+# `--dist loadfile` a file runs whole on one worker, handed out in collection order once xdist's own
+# order (most tests first) is off. By test count, heavy files of few tests came last: there
+# test_your_gearbox.py (2 tests, 15 s) kept one worker busy 28 s after the other had ended (load 6).
+HEAVY_FIRST = (
+    "test_tui.py",  # 94 s
+    "test_gap_diagnose.py",  # 73 s
+    "test_inspect.py",  # 53 s
+    "test_tui_edges.py",  # 51 s (27 s at b2f7515, before four of its tests failed)
+    "test_protocol.py",  # 36 s
+    "test_crash_safety.py",  # 26 s
+    "test_fuzz.py",  # 24 s
+    "test_detection.py",  # 21 s
+    "test_verdict.py",  # 17 s
+    "test_inspect_simulated.py",  # 16 s
+    "test_your_gearbox.py",  # 15 s
+    "test_user_gearbox_e2e.py",  # 14 s
+)
+
+
+def pytest_configure(config):
+    if getattr(config.option, "loadscopereorder", False):
+        config.option.loadscopereorder = False  # xdist hands files out in the order below
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {name: i for i, name in enumerate(HEAVY_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(HEAVY_FIRST)))  # stable: the rest as collected
+
 
 @pytest.fixture
 def cli(capsys, monkeypatch):
