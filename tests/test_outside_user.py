@@ -308,3 +308,23 @@ def test_a_pinion_that_interferes_is_told_the_keys_the_simulator_takes(tmp_path)
     for key in ("addendum = 0.9", 'pressure_angle = "22.5 deg"'):  # the remedies named are simulable
         path.write_text(description(stage(14, 39).replace("[[stages]]\n", f"[[stages]]\n{key}\n"), speed="45 Hz"))
         assert resolve_gearbox(str(path)).stages[0].pinion.z == 14
+
+
+def test_a_later_pinion_a_tooth_off_is_told_though_its_order_is_a_sideband():
+    # A 26/73 + 33/59 reducer (tacho) described with a 32-tooth second pinion: its mesh order 26 x 32/73
+    # = 11.397 is the real mesh's (11.753) first sideband by the intermediate shaft (0.356 lower), so
+    # 'the target holds a line there' passed it and the gap ended 'unexplained'. A line there that is
+    # a sideband of a stronger mesh, by the pinion's own shaft, is no mesh.
+    points, rng = 4096, np.random.default_rng(5)
+    theta = 2 * np.pi * np.arange(80 * points) / points
+    x, o = np.zeros(theta.size), 1.0
+    for z1, z2 in ((26, 73), (33, 59)):
+        mod = 1 + 0.1 * np.cos(o * theta) + 0.05 * np.cos(2 * o * theta) + 0.08 * np.cos(o * z1 / z2 * theta)
+        for h in (1, 2, 3):
+            x += 0.8 / h * mod * np.cos(h * o * z1 * theta + h)
+        o *= z1 / z2
+    record = (x + rng.normal(0, 0.05, x.size)).reshape(80, points)
+    source = record[:20] + rng.normal(0, 0.05, (20, points))  # the source's own reading is not used here
+    assert later_stages(record, source, described_pair((26, 73), (33, 59)))["line"] is None
+    wrong = later_stages(record, source, described_pair((26, 73), (32, 59)))
+    assert wrong["line"].startswith("stage 2: mesh order 11.75 measured, 11.4 expected: the source simulates a 32")
