@@ -33,7 +33,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import tempfile
 from collections import defaultdict
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -42,25 +41,7 @@ import numpy as np
 
 KINDS = ("chip", "crack", "broken_tip", "spall", "pit")
 SECONDS = 4.0
-TWO = """[gearbox]
-name = "two"
-[operation]
-speed = "25 Hz"
-load = "40 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 21, bore = "20 mm" }
-wheel = { z = 63, bore = "20 mm" }
-[[stages]]
-module = "3 mm"
-face_width = "20 mm"
-pinion = { z = 24, bore = "20 mm" }
-wheel = { z = 56, bore = "20 mm" }
-[sensor]
-near = "input"
-direction = "x"
-"""
+TWO = Path(__file__).resolve().parents[1] / "examples" / "gearboxes" / "reducer_21_63_24_56.toml"
 # per gearbox: its damaged gears (placement word, gear name), record rate, simulation rate, speeds
 BOXES = {
     "phm09": {
@@ -92,10 +73,7 @@ WATCHED = "input pinion 32T (stage 1)"  # the gear phm09_chip.toml's source faul
 def _description(box: str) -> str:
     if box == "phm09":
         return "phm09"
-    path = Path(tempfile.gettempdir()) / "gearlab_localisation_two.toml"
-    if not path.exists() or path.read_text() != TWO:
-        path.write_text(TWO)
-    return str(path)
+    return str(TWO)
 
 
 def trial(args: tuple[str, int, int]) -> list[dict]:

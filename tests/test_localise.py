@@ -11,6 +11,7 @@ a coprime pair that needs the per-shaft fallback.
 
 import math
 from fractions import Fraction
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -400,25 +401,7 @@ def test_a_narrow_event_names_the_finer_gear_under_the_width_z():
     assert named.count("intermediate gear 50T (stage 1)") >= 3, named
 
 
-TWO = """[gearbox]
-name = "two"
-[operation]
-speed = "25 Hz"
-load = "40 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 21, bore = "20 mm" }
-wheel = { z = 63, bore = "20 mm" }
-[[stages]]
-module = "3 mm"
-face_width = "20 mm"
-pinion = { z = 24, bore = "20 mm" }
-wheel = { z = 56, bore = "20 mm" }
-[sensor]
-near = "input"
-direction = "x"
-"""
+TWO = Path(__file__).resolve().parents[1] / "examples" / "gearboxes" / "reducer_21_63_24_56.toml"
 
 
 @pytest.mark.parametrize(("kind", "speed"), [("spall", 25.0), ("crack", 30.0)])
@@ -432,14 +415,12 @@ def test_a_stage_2_pinion_fault_on_a_21_63_24_56_train_is_named_the_24t_pinion(t
     from gearlab.kinds.detection_which_gear import call_of
     from gearlab.signals import cut_revolutions
 
-    box = tmp_path / "two.toml"
-    box.write_text(TWO)
-    table = order_table(resolve_gearbox(str(box)))
+    table = order_table(resolve_gearbox(str(TWO)))
 
     def take(faults, s):
         rec = simulated_record(
             faults,
-            gearbox=str(box),
+            gearbox=str(TWO),
             speed_hz=speed,
             revolutions=4 * speed,
             snr_db=25.0,
