@@ -328,3 +328,19 @@ def test_a_later_pinion_a_tooth_off_is_told_though_its_order_is_a_sideband():
     assert later_stages(record, source, described_pair((26, 73), (33, 59)))["line"] is None
     wrong = later_stages(record, source, described_pair((26, 73), (32, 59)))
     assert wrong["line"].startswith("stage 2: mesh order 11.75 measured, 11.4 expected: the source simulates a 32")
+
+
+def test_a_later_pinion_whose_order_reads_as_described_is_told_by_the_louder_mesh_beside_it():
+    # A 27/88 + 22/65 hoist (36-ppr encoder) described with a 21-tooth second pinion: the history laid
+    # end to end read stage 2 at the described 6.443 (the real 6.75's sideband by the intermediate
+    # shaft, 34 dB weaker), so the gap ended 'unexplained'. A line 20 dB louder one to three pinion
+    # shaft orders away, on no other mesh's harmonic, is the real mesh.
+    from gearlab.gap.structure import _outshone
+    from gearlab.gearbox.speed import Lines
+
+    stage = type("Stage", (), {"pinion_shaft_order": 27 / 88})()
+    lines = Lines(np.array([6.443, 6.75, 27.0]), np.array([0.02, 1.05, 2.0]), np.array([30.0, 64.0, 64.0]))
+    assert _outshone(lines, 27 * 21 / 88, stage, 0.002, [27.0]) == pytest.approx(6.75)
+    # the right description (6.75) with its weaker sidebands, and a louder line on another stage's mesh: none
+    assert _outshone(lines, 6.75, stage, 0.002, [27.0]) is None
+    assert _outshone(lines, 6.443, stage, 0.002, [6.75]) is None
