@@ -919,6 +919,7 @@ def test_keys_panel_form_palette_and_notification(kinds_folder, replayed, tmp_pa
         # a run's end is notified (the engine's stiff.toml run replayed: the TUI's notice is what is
         # tested; the real child's runs are test_run_fills_the_table_then_opens_the_results's and the others')
         await run_to_the_end(pilot, "stiff.toml", then=(tmp_path / "go").touch)
+        await pilot.pause()  # the notice is a message the app handles after the status it checks
         assert any("finished" in n.message for n in app._notifications)
 
     drive(GearlabApp(Path("scenarios")), script)
