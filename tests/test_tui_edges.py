@@ -24,7 +24,7 @@ from textual.command import CommandPalette
 from textual.geometry import Region
 from textual.widgets import LoadingIndicator, ProgressBar, Static, TabbedContent, Tree
 
-from gearlab import terminal
+from gearlab import events, terminal
 from gearlab.charts import Chart, Curve
 from gearlab.events import Event
 from gearlab.tui import GearlabApp, progress
@@ -68,11 +68,12 @@ def words(text: str) -> str:
 
 @pytest.fixture
 def clock(monkeypatch):
-    """A clock the stage bars read (the terminal's Pace and the TUI's bars), moved by hand."""
+    """A clock the stage bars read (the Pace of gearlab.events, the terminal's and the TUI's bars),
+    moved by hand."""
     now = SimpleNamespace(t=1000.0)
     fake = SimpleNamespace(monotonic=lambda: now.t)
-    monkeypatch.setattr(progress, "time", fake)
-    monkeypatch.setattr(terminal, "time", fake)
+    for module in (events, progress, terminal):
+        monkeypatch.setattr(module, "time", fake)
     return now
 
 
