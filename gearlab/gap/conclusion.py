@@ -134,6 +134,7 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         within_noise=within,
         corrected_effects=[[name, [[k, v] for k, v in params]] for name, params in fitted],
         seconds=time.perf_counter() - started,
+        profile_seconds=dict(run.profile_seconds),
     )
     # A gap the test sees whose whole RMS effect lies within the noise width: no effect can be credited
     # with removing more than the width (within_noise), so none is named -- the gap is below what the

@@ -70,7 +70,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -289,8 +289,11 @@ def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
             intervals=res["intervals"],
             determined=res["determined"],
             combinations=res["combinations"],
-            profile={k: res[k] for k in ("score", "score_fit", "noise", "evaluations", "seconds")},
+            profile={k: res[k] for k in ("score", "score_fit", "noise", "evaluations")},
         )
+        # the wall time stays out of the effect: the effects must read the same whether the
+        # profiles ran here or in workers (test_parallel_fits_give_the_serial_result)
+        run.profile_seconds[entry["name"]] = res["seconds"]
     return tuple(out)
 
 
@@ -310,6 +313,7 @@ class _Run:
     on_event: Callable[[Event], None]
     gap0: float  # the plain source's score on the search rows
     judged0: float  # ... and on the judging rows
+    profile_seconds: dict = field(default_factory=dict)  # wall time of each accepted effect's profile
 
     def spec(self, name: str, params: dict) -> tuple:
         return get_registry().get("effect", name).spec(params)
