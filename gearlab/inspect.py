@@ -13,9 +13,8 @@
                                                  measured mesh (z = M / o)
          ─► TSA per shaft, verdict                "the description matches this recording" or what differs
 
-Tolerances (docs/gearbox.md): a line matches a mesh order M within 2 bins + 1e-3 M (speed drift smears high
-orders); a sideband spacing matches a shaft order o within 0.5 bin / j + 1e-3 o for the j-th sideband (2 bins / j
-under 16 bins apart). Without a tacho the speed comes from the mesh lines (gearbox.speed.speed_from_mesh).
+The description's orders are tested in gearlab.gearbox.match (its tolerances there). Without a tacho the speed
+comes from the mesh lines (gearbox.speed.speed_from_mesh).
 """
 
 from __future__ import annotations
@@ -41,31 +40,15 @@ from .data.recordings import (
 )
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
-from .gearbox.speed import (
-    DRIFT,
-    EVIDENCE,
-    MAX_HARMONIC,
-    SPAN,
-    THRESHOLD_DB,
-    Lines,
-    carrier,
-    find_lines,
-    follow_speed,
-)
+from .gearbox.match import check_description, unchecked
+from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
 
 TWO_PI = 2.0 * np.pi
-WINDOW = 0.3  # sidebands are searched within ±0.3 o of where the description puts them
-UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
 MAX_TSA_POINTS = 1 << 15
 UPSAMPLE = 8  # the record's rate is raised this much before order tracking (upsampled)
 MAX_UPSAMPLED = 1 << 24  # samples: a longer record is raised less
-# A sideband spacing's tolerance, bins over the furthest sideband j: sidebands SEPARATED bins apart or
-# more are refined to a small part of a bin (outside records: z within 0.016 teeth; at 2 bins a 71-tooth
-# wheel described as 70 passed); closer ones keep 2 bins (a 0.6 s simulation put a comb 0.1 order off).
-SIDEBAND_BINS, SEPARATED = 0.5, 16
-FAMILY_MARGIN = 0.1  # another harmonic family than the described one must hold 10 % more of the lines' power
 
 
 @dataclass(frozen=True)
@@ -112,9 +95,14 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     contents, fmt = read_contents(path, list(roles), roles)
     scale = (options.gain or 1.0) / (options.sensitivity or 1.0)  # both positive when given
     units = f"value x {scale:g} (gain / sensitivity)"
-    if options.unit is not None:
-        declared = {"unit": contents.units.get(vibration), "declared": options.unit, "flag": lambda key: f"--{key}"}
-        scale, units = channel_scale(str(vibration), options.sensitivity, options.gain, str(path), **declared)
+    declared = {"unit": contents.units.get(vibration), "declared": options.unit, "flag": lambda key: f"--{key}"}
+    integer = vibration in contents.steps or np.asarray(contents.found[vibration]).dtype.kind in "iu"
+    try:  # the unit the name or file says, read as a scenario reads it: an HDF5 'vib_g' was shown in g, unsaid
+        scale, units = channel_scale(str(vibration), options.sensitivity, options.gain, str(path), integer, **declared)
+    except GearlabInputError as refused:  # any column can be inspected: as stored, and why not in m/s²
+        if options.unit is not None:
+            raise
+        units = f"value x {scale:g}, not m/s² ({str(refused).split('; ', 1)[-1]})"
     vib = series(contents.found[vibration], vibration, "vibration", path) * scale
     fs, fs_source = sampling_rate(contents, options.fs, vib.size, path)
     tacho = None
@@ -235,296 +223,6 @@ def order_spectrum(rec: Recording, speed: Speed, fine: tuple | None = None):
     return orders, amp, revs.shape[0], points
 
 
-def _tol_mesh(order: float, bin_: float) -> float:
-    return 2 * bin_ + DRIFT * order
-
-
-def comb(
-    lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset(), rival: float | None = None
-) -> tuple | None:
-    """(spacing, tolerance, count, {line: |j|}, score) of the sideband family of a shaft around the
-    mesh line *mesh*.
-
-    Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
-    (j = 1, 2, 3, within ±30 % of the described o, and nearer o than the stage's other shaft's
-    order *rival*: that spacing is the other shaft's evidence; nor 2, 3, 1/2 or 1/3 rival off o: the
-    comb of the one seen in the other's every 2nd or 3rd line, as a train of three shows from its
-    meshes' tones with the stages on both shafts of its middle one) is scored by the amplitudes of
-    the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
-    least-squares fit through its lines, so a 57- and a 58-tooth wheel are told apart once
-    0.5 bin / 3 < o / 57 (sidebands 16 bins apart or more; else 2 bins)."""
-    m = float(lines.at[mesh])
-    near = np.flatnonzero((np.abs(lines.at - m) <= 3.9 * o) & (np.arange(lines.at.size) != mesh))
-    near = np.array([q for q in near if q not in exclude], dtype=int)
-    if near.size == 0:
-        return None
-    d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 1 / 2, 1 / 3)
-
-    def allowed(c: float) -> bool:
-        nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= 0.01 * c for n in nths)
-        return 0.7 * o <= c <= 1.3 * o and not nth and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
-
-    best = None
-    for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
-        hits = []
-        for j in (-3, -2, -1, 1, 2, 3):
-            q = int(np.argmin(np.abs(d - j * c)))
-            if abs(d[q] - j * c) <= 2 * bin_ + DRIFT * abs(j) * c:
-                hits.append((j, q))
-        if not any(abs(j) == 1 for j, _ in hits):
-            continue
-        score = sum(a[q] for _, q in hits)
-        if best is None or score > best[0] * 1.01 or (score >= best[0] * 0.99 and abs(c - o) < abs(best[1] - o)):
-            best = (score, c, hits)
-    if best is None:
-        return None
-    score, _, hits = best
-    js = np.array([j for j, _ in hits], dtype=float)
-    ds = np.array([d[q] for _, q in hits])
-    ws = np.array([a[q] for _, q in hits])
-    spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
-    jmax = int(max(abs(js)))
-    bins = SIDEBAND_BINS if spacing >= SEPARATED * bin_ else 2.0
-    tolerance = bins * bin_ / jmax + DRIFT * spacing
-    return spacing, tolerance, len(hits), {int(near[q]): abs(j) for j, q in hits}, score
-
-
-def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expected: float) -> tuple | None:
-    """(mesh order, index of its strongest harmonic, the orders of its lines) of the harmonic family
-    among a stage's lines, or None: a mesh's power can sit at harmonics 4-11 with its fundamental
-    under the threshold (the B-6-ch5 source: orders 100, 175, 225, no line at 25). The lines: the
-    strongest carriers off the other stages' mesh harmonics (*others*), by their share of power.
-    The candidates: each line / h (h up to MAX_HARMONIC) of whole teeth (6-1000) on the pinion's
-    shaft holding two lines or more, refitted over its harmonics (M = Σ p h L / Σ p h²), scored by
-    their power less what so dense a comb holds by chance (2 tol / M): a subharmonic M / k holds
-    what M holds and loses, so the best is the gcd. The description's order is the prior: another
-    family must hold FAMILY_MARGIN more of the power (even harmonics dominating are no gear of
-    twice the teeth)."""
-    top = [
-        q
-        for q in range(min(EVIDENCE, lines.at.size))
-        if carrier(lines, q, span, others) == q and not any(abs(lines.at[q] - o) <= t for o, t in others)
-    ]
-    if not top:
-        return None
-    x, power = lines.at[top], lines.amp[top] ** 2
-    power = power / power.sum()
-    tol = 2 * bin_ + DRIFT * x
-
-    def fit(m: float, slack: np.ndarray) -> tuple[float, np.ndarray]:
-        h = np.maximum(1.0, np.round(x / m))
-        hit = np.abs(x - h * m) <= slack
-        if hit.any():
-            m = float(np.sum(power[hit] * h[hit] * x[hit]) / np.sum(power[hit] * h[hit] ** 2))
-        return m, np.abs(x - np.maximum(1.0, np.round(x / m)) * m) <= tol
-
-    def scored(m: float, hit: np.ndarray) -> tuple:
-        strongest = top[int(np.argmax(np.where(hit, lines.amp[top], -np.inf)))]
-        return float(np.sum(power * (hit - 2 * tol / m))), m, strongest, x[hit]
-
-    m, hit = fit(expected, tol)
-    prior = scored(m, hit) if hit.any() else None
-    best = None
-    for i in range(x.size):
-        for h in range(1, MAX_HARMONIC + 1):
-            m, hit = fit(x[i] / h, tol + tol[i] * x / x[i])
-            z = m / o_p
-            if hit.sum() < 2 or not 6 <= z <= 1000 or abs(z - round(z)) * o_p > _tol_mesh(m, bin_):
-                continue
-            candidate = scored(m, hit)
-            if best is None or candidate[0] > best[0]:
-                best = candidate
-    if best is None or (prior is not None and best[0] < prior[0] + FAMILY_MARGIN):
-        return None if prior is None else prior[1:]
-    return best[1:]
-
-
-def harmonic_comb(lines: Lines, candidates: list[float], bin_: float, theirs) -> tuple[int, float] | None:
-    """(index of the strongest line, mesh order refitted over its harmonics) of the candidate mesh
-    order the lines bear out, lines on another stage's harmonics (*theirs*) left out, or None. The
-    first candidate is the description's M; another, M + j o (a tooth count off by j), is taken when
-    its line is the stronger over the floor at each of the first three harmonics where either has
-    one (two at least) and its harmonics hold more power: a real mesh's sidebands can outgrow its
-    line at one harmonic (PHM 2009, 40 Hz, low load: 124 over 128) but not at its first ones."""
-    keep = np.array([not any(abs(a - o) <= t for o, t in theirs) for a in lines.at], dtype=bool)
-
-    def comb(c: float) -> tuple[np.ndarray, list, float]:
-        db, found = np.full(3, -np.inf), []
-        for h in range(1, MAX_HARMONIC + 1):
-            inside = np.flatnonzero(keep & (np.abs(lines.at - h * c) <= 2 * bin_ + DRIFT * h * c))
-            if inside.size:
-                q = int(inside[np.argmax(lines.db[inside])])
-                found.append((h, q))
-                if h <= 3:
-                    db[h - 1] = lines.db[q]
-        return db, found, float(sum(lines.amp[q] ** 2 for _, q in found))
-
-    first, found, held = comb(candidates[0])
-    for c in candidates[1:]:
-        db, hits, power = comb(c)
-        seen = np.isfinite(db) | np.isfinite(first)
-        if seen.sum() >= 2 and np.all(db[seen] > first[seen]) and power > held:
-            first, found, held = db, hits, power
-    if not found:
-        return None
-    h, q = np.array([f[0] for f in found], dtype=float), np.array([f[1] for f in found])
-    w = lines.amp[q] ** 2
-    return int(q[np.argmax(w)]), float(np.sum(w * h * lines.at[q]) / np.sum(w * h * h))
-
-
-def families(
-    lines: Lines, mesh: int, orders: tuple[float, float], bin_: float, known=(False, False), exclude=frozenset()
-) -> list:
-    """The combs of a stage's two shafts around its carrier. A line both combs claim (the third
-    sideband of a slow wheel on the first of its pinion's shaft) goes to the comb it is the nearer
-    sideband of (|j| the smaller: a first sideband is the likelier), on a tie to the comb of a
-    shaft whose order is known already (the tacho's, or measured at the stage before), else to the
-    stronger comb; a comb that lost lines is fitted again without them."""
-    found = [comb(lines, mesh, o, bin_, exclude, rival) for o, rival in (orders, orders[::-1])]
-    if all(found) and found[0][3].keys() & found[1][3].keys():
-        rank = [(known[k], found[k][4]) for k in (0, 1)]
-        lost: list[set] = [set(), set()]
-        for q in found[0][3].keys() & found[1][3].keys():
-            j0, j1 = found[0][3][q], found[1][3][q]
-            keeper = 0 if (j0 < j1 or (j0 == j1 and rank[0] >= rank[1])) else 1
-            lost[1 - keeper].add(q)
-        for k in (0, 1):
-            if lost[k]:
-                found[k] = comb(lines, mesh, orders[k], bin_, exclude | lost[k], orders[1 - k])
-    return found
-
-
-def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool) -> dict:
-    """Every stage's mesh order and every shaft's order tested against the lines (module doc).
-
-    Stages are taken input first: a shaft's order measured at one stage (the wheel's sidebands)
-    is the pinion shaft's order of the next, so a wrong tooth count upstream is not blamed on a
-    later stage."""
-    table = order_table(box)
-    bin_ = 1.0 / revolutions
-    explained = table.lines()
-
-    def is_explained(x: float) -> bool:
-        if any(abs(x - o) <= _tol_mesh(o, bin_) for _, o in explained):
-            return True
-        # any mesh harmonic (a mesh's power can sit at harmonics 4-11) and its sidebands j <= 3
-        for t in table.stages:
-            m = float(t.mesh)
-            for o in (0.0, float(t.pinion_shaft_order), float(t.wheel_shaft_order)):
-                for off in {0.0, o, -o, 2 * o, -2 * o, 3 * o, -3 * o}:
-                    h = max(1.0, round((x - off) / m))
-                    if abs(x - h * m - off) <= _tol_mesh(h * m + off, bin_):
-                        return True
-        return False
-
-    measured_shaft: dict[int, tuple[float, float, str]] = {}  # shaft -> (order, tolerance, source)
-    if tacho_on_input:
-        measured_shaft[0] = (1.0, 0.0, "tacho")
-    stages, differences, shaft_notes, named_shafts = [], [], {}, set()
-    for k, s in enumerate(table.stages):
-        expected = float(s.mesh)
-        o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
-        span = SPAN * float(max(s.pinion_shaft_order, s.wheel_shaft_order))
-        others = [
-            (h * float(t.mesh), _tol_mesh(h * float(t.mesh), bin_))
-            for t in table.stages
-            if t is not s
-            for h in (1, 2, 3)
-        ]
-        entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
-        # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
-        theirs = [
-            (h * float(t.mesh), _tol_mesh(h * float(t.mesh), bin_))
-            for t in table.stages
-            if t is not s
-            for h in range(1, MAX_HARMONIC + 1)
-            if abs(h * float(t.mesh) / expected - round(h * float(t.mesh) / expected)) > 1e-9
-        ]
-        family = mesh_family(lines, o_p, bin_, span, theirs, expected)
-        i = None
-        if lines.near(expected, _tol_mesh(expected, bin_)) is not None:
-            # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)?
-            found = harmonic_comb(lines, [expected] + [expected + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
-            if found is not None:
-                i, measured = found
-        if family is not None and (i is None or abs(measured - expected) <= _tol_mesh(expected, bin_)):
-            # no line at M, or one at M that is the 2nd or 3rd harmonic of a family holding more of
-            # the power (a description of twice or three times the teeth): the family's order
-            ratio = expected / family[0]
-            # ... with two lines of its own at least, off M's harmonics (one line at M / 2 is a tone)
-            own = [x for x in family[2] if abs(x / expected - round(x / expected)) * expected > _tol_mesh(x, bin_)]
-            divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= _tol_mesh(expected, bin_)
-            if i is None or (divisor and len(own) >= 2):
-                measured, i = family[:2]
-        matched = i is not None and abs(measured - expected) <= _tol_mesh(expected, bin_)
-        entry["matched"] = bool(matched)
-        if i is None:
-            differences.append(
-                f"stage {s.index}: no line at mesh order {expected:.4g} (a {s.pinion_teeth}-tooth pinion)"
-            )
-            stages.append(entry)
-            continue
-        if not matched:
-            differences.append(
-                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected "
-                f"(a {measured / o_p:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth})"
-            )
-        entry.update(measured_order=measured, error_orders=measured - expected, amplitude=float(lines.amp[i]))
-        entry["db_over_floor"] = float(lines.db[i])
-        combs = families(
-            lines,
-            i,
-            tuple(
-                measured_shaft.get(q, (float(o),))[0]
-                for q, o in ((k, s.pinion_shaft_order), (k + 1, s.wheel_shaft_order))
-            ),
-            bin_,
-            (k in measured_shaft, k + 1 in measured_shaft),
-            # other stages' mesh harmonics are no sidebands of this one
-            frozenset(q for q in range(lines.at.size) if any(abs(lines.at[q] - o) <= t for o, t in others)),
-        )
-        for (key, role, shaft_k, described), found in zip(
-            (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
-        ):
-            if shaft_k not in measured_shaft:
-                if found is None:
-                    continue
-                measured_shaft[shaft_k] = (found[0], found[1], f"{found[2]} sideband(s) of M{s.index}")
-            o_seen, tol, _ = measured_shaft[shaft_k]
-            z = measured / o_seen
-            spread = z * tol / o_seen
-            entry[f"{key}_seen"], entry[f"{key}_resolution"] = z, spread
-            if abs(z - described) > max(0.5, spread):
-                named_shafts.add(shaft_k)
-                if role == "pinion" and not matched and round(z) == round(measured / o_p):
-                    continue  # the mesh message has said it
-                differences.append(
-                    f"stage {s.index}: the {role} on the {table.shafts[shaft_k]} shaft shows {z:.1f} ± {spread:.1f} "
-                    f"teeth (mesh order {measured:.4g} / shaft order {o_seen:.4g}), {described} described"
-                )
-        stages.append(entry)
-
-    shafts = []
-    for k, (name, o) in enumerate(zip(table.shafts, table.shaft_orders)):
-        o = float(o)
-        entry = {"shaft": name, "expected_order": o}
-        if k in measured_shaft:
-            seen, tol, source = measured_shaft[k]
-            entry.update(measured_order=seen, tolerance=tol, source=source, matched=bool(abs(seen - o) <= tol))
-            if not entry["matched"]:
-                shaft_notes[k] = f"{name} shaft: order {seen:.4g} measured ({source}), {o:.4g} expected"
-        else:
-            entry.update(measured_order=None, source="not seen (no sidebands of this shaft)", matched=None)
-        shafts.append(entry)
-    differences += [text for k, text in shaft_notes.items() if k not in named_shafts]
-    unexplained = [
-        {"order": float(lines.at[q]), "amplitude": float(lines.amp[q]), "db_over_floor": float(lines.db[q])}
-        for q in range(lines.at.size)
-        if not is_explained(lines.at[q]) and 20 * math.log10(lines.amp[q] / lines.amp[0]) >= UNEXPLAINED_DB
-    ][:8]
-    return {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
-
-
 def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | None = None) -> list[dict]:
     """TSA of the record over each shaft's own revolutions: revolutions averaged, RMS, its strongest
     orders (*fine*: the record upsampled, :func:`upsampled`)."""
@@ -559,27 +257,6 @@ def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | N
     return out
 
 
-def unchecked(check: dict, box: Gearbox, speed_found: bool) -> list[str]:
-    """What a match does not vouch for: a shaft whose order no sideband shows (a healthy mesh
-    need not modulate), and, with the speed found from the mesh lines the description predicts
-    (*speed_found*), the input shaft's tooth counts: any pinion count fits at some speed."""
-    unseen = [s["shaft"] for s in check["shafts"] if s["measured_order"] is None]
-    out = []
-    if box.shafts[0] in unseen:
-        unseen.remove(box.shafts[0])
-        if speed_found:
-            out.append(
-                "the speed was found from the mesh lines the description predicts and no sideband shows the input "
-                "shaft's order, so the pinion's tooth count fits at some speed; give a tacho or --speed to check it"
-            )
-    if unseen:
-        out.append(
-            f"no sideband shows the order of the {', '.join(unseen)} shaft{'s' if len(unseen) > 1 else ''}, so a "
-            "wheel on it is checked only through a later stage's mesh order, if any"
-        )
-    return out
-
-
 def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> dict:
     """Everything `gearlab inspect` shows, as plain numbers (the TSA curves as arrays)."""
     rec = read_record(path, options)
@@ -599,6 +276,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         "samples": int(rec.signal.size),
         "duration_s": rec.signal.size / rec.fs,
         "rms": float(np.std(rec.signal)),
+        "units": rec.units,
         "speed": speed.describe(),
         "revolutions": revolutions,
         "order_resolution": 1.0 / revolutions,
@@ -652,6 +330,7 @@ def render(report: dict, console, width: int = 100) -> None:
         f"{escape(', '.join(map(str, report['channels'])))}; vibration {escape(repr(report['vibration']))}"
         # repr before escape: repr doubles escape's backslash, and '[m/s²]' would be read as markup
         + (f", tacho {escape(repr(report['tacho']))}" if report["tacho"] else "")
+        + f"; values: {escape(report['units'])}"
     )
     console.print(
         f"speed {sp['mean_hz']:.5g} Hz ({sp['mean_hz'] * 60:.5g} rpm) {escape(sp['source'])}; "

@@ -3,7 +3,7 @@ any effect is searched, and a difference ends the diagnosis with one line that s
 
 * **Tooth count.** The target's order spectrum (its revolutions one after another, as `gearlab
   inspect` reads a record: gearlab.signals.spectrum, lines by gearlab.gearbox.speed.find_lines and
-  the description's mesh order tested by gearlab.inspect.check_description) against the source's
+  the description's mesh order tested by gearlab.gearbox.match.check_description) against the source's
   gear pair: mesh harmonics h Z1 with their sidebands (j <= SIDEBANDS, either shaft). The strongest
   lines of a gear record are often high mesh harmonics (B-6-ch5: order 250, ten times its mesh
   order), so the line at Z1 alone decides nothing: the target differs when most of the power of
@@ -95,8 +95,8 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
     lines' power off the source's comb), 'lines', 'inspect' (check_description's stage), 'differs'}.
     *later*: the later stages of a multi-stage source, (mesh order, (its shafts' orders)) each, whose
     combs are the source's too (a second mesh as strong as the first is no other pinion)."""
+    from ..gearbox.match import check_description, tol_mesh
     from ..gearbox.speed import THRESHOLD_DB, find_lines
-    from ..inspect import _tol_mesh, check_description
     from ..signals import spectrum
 
     n, points = target.shape
@@ -120,7 +120,7 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
     }
     if x.size < 2:  # one line is a comb of itself: nothing to tell
         return out
-    tol = np.array([_tol_mesh(v, 1.0 / n) for v in x])
+    tol = np.array([tol_mesh(v, 1.0 / n) for v in x])
     on = _on_comb(x, z1, (1.0, z1 / z2), tol)
     for mesh, shaft_orders in later:
         on |= _on_comb(x, mesh, shaft_orders, tol)
@@ -207,7 +207,7 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     mesh of no whole input order: against the description's): the stage differs when the target's
     reading moves off that and the target holds no line there. {'stages': [{stage, expected, source,
     target}], 'line': the one line of the first difference, or None}."""
-    from ..inspect import _tol_mesh, check_description
+    from ..gearbox.match import check_description, tol_mesh
 
     box = _PairDescription.train(pair)
     out: dict = {"stages": [], "line": None}
@@ -237,9 +237,9 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
         if reference is None or entry["target"] is None or out["line"] is not None:
             continue
         lines, n, _ = read["target"]
-        tol = _tol_mesh(reference, 1.0 / n)
+        tol = tol_mesh(reference, 1.0 / n)
         if whole:
-            tol = max(tol, _tol_mesh(reference, 1.0 / read["source"][1]))
+            tol = max(tol, tol_mesh(reference, 1.0 / read["source"][1]))
         st = table.stages[k]
         others = [float(t.mesh) for q, t in enumerate(table.stages) if q != k]
         louder = _outshone(lines, reference, st, tol, others)
