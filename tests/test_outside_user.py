@@ -344,3 +344,33 @@ def test_a_later_pinion_whose_order_reads_as_described_is_told_by_the_louder_mes
     # the right description (6.75) with its weaker sidebands, and a louder line on another stage's mesh: none
     assert _outshone(lines, 6.75, stage, 0.002, [27.0]) is None
     assert _outshone(lines, 6.443, stage, 0.002, [6.75]) is None
+
+
+def test_inspect_reads_and_says_the_unit_a_channel_s_name_or_file_gives(tmp_path):
+    # A mixer's HDF5 takes, dataset 'vib_g' (attribute unit = 'g'): inspect printed its TSA rms in g with
+    # no unit (0.157), while a scenario's [target] reads the same channel in m/s² (1.54); an int16 WAV
+    # given a sensitivity and no gain was shown as m/s² at an assumed 1 V full scale, which gap refuses
+    import h5py
+    import scipy.io.wavfile
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    fs, f = 8192.0, 30.0
+    theta = 2 * np.pi * f * np.arange(int(4 * fs)) / fs
+    x = _train([(29, 86)], theta, np.random.default_rng(3))
+    with h5py.File(tmp_path / "mix.h5", "w") as h:
+        g = h.create_group("measurement")
+        g.attrs["sample_rate"] = fs
+        g.create_dataset("vib_g", data=x / 9.80665).attrs["unit"] = "g"
+    report = inspect_record(str(tmp_path / "mix.h5"), None, InspectOptions(vibration="vib_g", speed_hz=f))
+    assert report["rms"] == pytest.approx(np.std(x), rel=1e-6)
+    assert report["units"] == "m/s² = value x 9.80665 (channel 'vib_g' in g)"
+    scipy.io.wavfile.write(tmp_path / "take.wav", int(fs), np.round(x / 9.80665 * 0.5 / 5 * 32767).astype(np.int16))
+    options = InspectOptions(speed_hz=f, sensitivity=0.5 / 9.80665)
+    assert inspect_record(str(tmp_path / "take.wav"), None, options)["units"].startswith(
+        "value x 19.6133, not m/s² (channel '0' holds integer counts, so the sensitivity needs the volts per count"
+    )
+    with_gain = inspect_record(
+        str(tmp_path / "take.wav"), None, InspectOptions(speed_hz=f, sensitivity=0.5 / 9.80665, gain=5.0)
+    )
+    assert with_gain["rms"] == pytest.approx(np.std(x), rel=1e-3)
