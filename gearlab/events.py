@@ -302,19 +302,27 @@ class UnitProgress:
 
 
 @contextmanager
-def standing(on_event: EventSink, name: str, text: str) -> Iterator[None]:
+def standing(on_event: EventSink, name: str, text: str | Callable[[], str]) -> Iterator[None]:
     """A step of the run's own process that cannot count (importing torch: 2-5 s on a busy machine) as
     a unit's line under the bars, 'name: text', that says for how long each second once it stood
-    STANDING_S, as a unit's own line does (UnitProgress); the line goes when the step ends."""
+    STANDING_S, as a unit's own line does (UnitProgress); the line goes when the step ends. *text* may
+    be a call, asked again each second: a count the step's own stages cannot give as steps (the gap
+    fits' score evaluations, gearlab.gap.tally)."""
     done = threading.Event()
-    on_event(Event("unit", stage=name, message=text))
+    say = text if callable(text) else lambda: text
+    said = say()
+    on_event(Event("unit", stage=name, message=said))
 
     def keep() -> None:
+        nonlocal said
         began = time.monotonic()
         while not done.wait(1.0):
-            stood = time.monotonic() - began
+            stood, line = time.monotonic() - began, say()
             if stood >= STANDING_S:
-                on_event(Event("unit", stage=name, message=f"{text} ({stood:.0f} s)"))
+                on_event(Event("unit", stage=name, message=f"{line} ({stood:.0f} s)"))
+            elif line != said:
+                on_event(Event("unit", stage=name, message=line))
+            said = line
 
     keeper = threading.Thread(target=keep, daemon=True)
     keeper.start()

@@ -172,3 +172,70 @@ def test_a_gap_rounds_fits_say_for_how_long_they_have_run_beside_the_bar(monkeyp
     assert {(e.kind, e.stage) for e in told} == {("unit", "gap round 1")} and len(said) >= 3
     assert said[0] == "fitting" and said[-1] == ""  # said at once, gone when the fits end
     assert all(re.fullmatch(r"fitting \(\d s\)", m) for m in said[1:-1])  # each second in between
+
+
+def test_a_gap_rounds_fits_count_their_score_evaluations_on_the_line_beside_the_bar(monkeypatch):
+    """The line said 'fitting (12 s)' alone through 14-27 s fits: it now counts the fits' score
+    evaluations (every Scorer.score calls gearlab.gap.tally.counted) and their rate."""
+    from gearlab import events as ev
+    from gearlab.gap import tally
+    from gearlab.gap.diagnose import run_fits
+
+    monkeypatch.setattr(ev, "STANDING_S", 0.0)
+    monkeypatch.setattr(tally, "WRITE_EVERY", 0.0)
+    told: list[Event] = []
+
+    def work(n):
+        for _ in range(n):
+            tally.counted()
+            time.sleep(0.12)
+        return n
+
+    run = SimpleNamespace(on_event=told.append, executor=SimpleNamespace(map=lambda w, tasks, _: [w(t) for t in tasks]))
+    assert run_fits(run, "gap round 1", work, [6, 8], None) == [6, 8]
+    said = [e.message for e in told]
+    counts = [re.fullmatch(r"fitting: (\d+) evaluations, \d+\.\d/s \(\d s\)", m) for m in said[1:-1]]
+    assert said[0] == "fitting" and said[-1] == "" and counts and all(counts), said
+    seen = [int(m.group(1)) for m in counts]
+    assert seen == sorted(seen) and 0 < seen[0] < 14 and seen[-1] <= 14
+
+
+def evaluations(n: int) -> int:
+    """A fit's stand-in in a worker process: n score evaluations."""
+    from gearlab.gap.tally import counted
+
+    for _ in range(n):
+        counted()
+    return n
+
+
+def test_the_fits_evaluations_are_counted_across_worker_processes(tmp_path):
+    """The fits run in the local pool's workers: each writes its count to a file of its own, which
+    the run's process sums (gearlab.gap.tally); without, the workers' counts never reach the line."""
+    from gearlab.executors import LocalExecutor
+    from gearlab.gap.tally import Tallied, evaluations_in
+
+    with LocalExecutor(2) as pool:
+        assert pool.map(Tallied(evaluations, str(tmp_path)), [5, 7, 9]) == [5, 7, 9]
+    assert evaluations_in(str(tmp_path)) == 21 and len(list(tmp_path.glob("*.n"))) == 3
+
+
+def test_the_gap_before_stage_loads_scikit_learn_under_a_line_of_its_own(monkeypatch):
+    """scikit-learn's import (2.5-4.2 s on a busy machine) stood silent inside the classifier-AUC
+    step of 'gap before': it now comes first, under its own line, gone when it ends."""
+    import gearlab.gap.diagnose as d
+    from gearlab.data.builder import build_dataset
+    from gearlab.data.spec import dataset_preset
+    from gearlab.gap.views import healthy_rows
+
+    monkeypatch.setattr(d, "classifier_loaded", lambda: False)  # as in a fresh process
+    source = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
+    target = healthy_rows(build_dataset(source.with_(seed=5)))
+    told: list[Event] = []
+    settings = d.Settings(candidates=("sensor_noise",), healthy=16, bootstrap=5, permutations=19, budget=4)
+    d.diagnose(source, target, settings, on_event=told.append)
+    before = [(e.kind, e.done, e.message) for e in told if e.stage == "gap before"]
+    loading = before.index(("unit", 0, "loading scikit-learn"))
+    after = next(i for i in range(loading, len(before)) if before[i][0] != "unit")
+    assert before[loading - 1][:2] == ("advance", 1) and before[after][:2] == ("advance", 2)
+    assert before[after - 1] == ("unit", 0, "")  # gone before the report's first part ends

@@ -33,6 +33,7 @@ from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..signals.indicators import band_limited
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
+from .tally import counted
 from .views import (
     RECORD_MIN_BLOCKS,
     BandPlan,
@@ -439,6 +440,7 @@ class Scorer:
         return record_view(source_X).features
 
     def score(self, source_X: np.ndarray) -> float:
+        counted()  # for the line of the stage whose fits run (gearlab.gap.tally)
         Fs, Ft, _ = self.features(source_X)
         Rs = self.record(source_X)
         return self.mismatch(Fs, Ft) + (self.mismatch(Rs, self.target_record) if Rs is not None else 0.0)

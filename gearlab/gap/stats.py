@@ -59,8 +59,10 @@ P, and P/2 above the first mesh order plus its sidebands. Everything is in
 
 from __future__ import annotations
 
+import importlib
 import math
 import numbers
+import sys
 from collections.abc import Callable
 
 import numpy as np
@@ -209,6 +211,26 @@ def _sklearn_at_least(major: int, minor: int) -> bool:
 
     parts = sklearn.__version__.split(".")
     return (int(parts[0]), int("".join(ch for ch in parts[1] if ch.isdigit()) or 0)) >= (major, minor)
+
+
+CLASSIFIER_MODULES = (
+    "sklearn.linear_model",
+    "sklearn.metrics",
+    "sklearn.model_selection",
+    "sklearn.pipeline",
+    "sklearn.preprocessing",
+)
+
+
+def classifier_loaded() -> bool:
+    """Whether :func:`classifier_auc`'s scikit-learn is imported: its import takes 2.5-4.2 s on a busy
+    machine, which a caller with a progress line does first under a line of its own (load_classifier)."""
+    return all(name in sys.modules for name in CLASSIFIER_MODULES)
+
+
+def load_classifier() -> None:
+    for name in CLASSIFIER_MODULES:
+        importlib.import_module(name)
 
 
 def classifier_auc(source: np.ndarray, target: np.ndarray, seed: int = 0, folds: int = 5) -> float:
