@@ -44,6 +44,7 @@ from ..executors import LocalExecutor
 from ..physics.faults import place_fault
 from ..registry import get_registry
 from ..signals import Standardiser, resample_revolutions, steady_start, tsa
+from ..signals.shaft import shaft_revolutions
 from . import placement
 from .placement import parse_fault_key, shaft_names
 from .realise import REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
@@ -275,6 +276,8 @@ class RowsTask(NamedTuple):
     speed_hz: float = 0.0
     reference_rms: float = 0.0  # RMS of the clean healthy revolution
     starts: tuple = ()  # per sample, the revolution of its clean cycle its record starts at (realise.record)
+    shaft: tuple = ()  # (p, q): rows of the shaft turning p/q per input turn (DatasetSpec.unit_shaft)
+    offsets: tuple = ()  # per sample, the input revolution of the simulation its clean row starts at
 
 
 def noisy_rows(task: tuple) -> np.ndarray:
@@ -290,7 +293,9 @@ def noisy_rows(task: tuple) -> np.ndarray:
     for i, (row, seed) in enumerate(zip(task.clean, task.seeds)):
         revs = row.reshape(-1, POINTS)  # one revolution, or a slower gear's period or a mesh cycle of them
         start = task.starts[i] if task.starts else 0
-        if task.noise_kind is None and not chain:  # clean: the TSA of J revolutions differs only over a period
+        if task.shaft:
+            kept = shaft_row(task, revs, start, task.offsets[i] if task.offsets else 0, chain, noise, seed)
+        elif task.noise_kind is None and not chain:  # clean: the TSA of J revolutions differs only over a period
             kept = revs[start] if len(revs) == 1 or not task.use_tsa else tsa(record(revs, task.revolutions, start))
         else:
             j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
@@ -310,6 +315,29 @@ def noisy_rows(task: tuple) -> np.ndarray:
     return out
 
 
+def shaft_row(task: RowsTask, revs: np.ndarray, start: int, offset: int, chain, noise, seed) -> np.ndarray:
+    """A row of the shaft turning p/q per input turn (task.shaft): enough consecutive input
+    revolutions of the clean cycle *revs* from *start* realised as one record (signal effects,
+    noise), then cut on that shaft's angle (signals.shaft) from its first whole turn: its first
+    revolution, or the TSA of J. The shaft is at angle 0 where the simulation starts (the tacho's
+    zero), so it is at p/q x (offset + start) turns where the row starts."""
+    ratio = Fraction(*task.shaft)
+    j = task.revolutions if task.use_tsa else 1
+    count = math.ceil((j + 1) / ratio) + 1  # input revolutions that hold j whole turns of the shaft
+    realised = realise(
+        record(revs, count, start),
+        chain,
+        noise,
+        Seeds.of_row(seed),
+        fs=POINTS * task.speed_hz,
+        speed_hz=task.speed_hz,
+        reference_rms=task.reference_rms,
+    )
+    phase = float((ratio * (offset + start)) % 1)
+    turns = shaft_revolutions(realised, float(ratio), phase)[:j]
+    return turns.mean(axis=0) if task.use_tsa else turns[0]
+
+
 def row_tasks(
     spec: DatasetSpec,
     n: int,
@@ -318,6 +346,7 @@ def row_tasks(
     speed: float,
     reference_rms: float,
     period_of: Callable[[int], int] = lambda i: 1,
+    offset_of: Callable[[int], int] = lambda i: 0,
 ) -> list[RowsTask]:
     """The row tasks of *spec*'s *n* samples, CHUNK samples a task: *clean_of(idx)* gives the clean
     revolutions of samples idx, each sample's row seed is row_seed(spec, i) (gearlab.data.realise),
@@ -342,6 +371,8 @@ def row_tasks(
                 speed,
                 reference_rms,
                 starts,
+                spec.unit_shaft,
+                tuple(offset_of(i) for i in idx) if spec.unit_shaft else (),
             )
         )
     return tasks
@@ -472,7 +503,20 @@ def build_dataset(
         name = source[i][0][0]
         return 1 if name is None else periods[name]
 
-    chunks = row_tasks(spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms, period_of)
+    def offset_of(i: int) -> int:
+        """The input revolution of its simulation at which sample i's clean row starts: where its
+        tooth comes into mesh (period_samples), 0 for a healthy row; a twin, as its fault's row."""
+        (name, _), t = source[i]
+        if name is None:
+            return 0
+        on = classes[name]
+        turns = Fraction(1)
+        for pair in pairs[: on.stage - 1]:
+            turns *= Fraction(pair.Z1, pair.Z2)
+        order = turns * pairs[on.stage - 1].Z1  # the gear's teeth that mesh per input turn (the stage's mesh order)
+        return math.floor((on.teeth[t] - 1) / order)
+
+    chunks = row_tasks(spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms, period_of, offset_of)
     on_event(Event("stage", stage="samples", total=len(chunks), message=f"{spec.name}: {n} samples"))
     done = 0
     X = np.empty((n, POINTS), dtype=np.float32)

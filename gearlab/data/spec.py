@@ -70,6 +70,10 @@ class DatasetSpec:
     # noise draws): the dataset's healthy twin, whose row i a fault row i differs from by the fault
     # alone (builder.build_dataset; the detectors' templates on a train of a long cycle)
     healthy_twin: bool = False
+    # (p, q): every row is a revolution (or TSA) of the shaft turning p/q times per input turn, not
+    # of the input shaft (builder.noisy_rows; the detection kind's units of a watched gear on a
+    # slower shaft: detection_records.unit_shaft); (): the input shaft
+    unit_shaft: tuple[int, ...] = ()
 
     def canonical(self) -> dict:
         d = asdict(self)
@@ -79,6 +83,8 @@ class DatasetSpec:
             d.pop("effects")  # so every dataset without effects keeps the key it had before effects existed
         if not self.healthy_twin:
             d.pop("healthy_twin")  # likewise for every dataset that is no twin
+        if not self.unit_shaft:
+            d.pop("unit_shaft")  # likewise for every dataset of input-shaft rows
         return d
 
     def key(self) -> str:

@@ -35,15 +35,18 @@ Each condition has its own history: standardisation
 any sample of the revolution), the methods' calibration and thresholds. A condition with test
 records but no history is refused.
 
-Units scored: every revolution (``revolution``) and the TSA of consecutive blocks of
-``b`` revolutions (``record<b>``). The threshold of a method and unit is fixed on the
-method's scores of the history's units of that kind (record-level history units: TSAs of
-sliding windows), for a unit of a *new* record: ``threshold = "records"`` (default) the
-``1 - false_alarm`` predictive quantile of a one-way random-effects model, record effect plus
-within-record spread (``record_effects``); ``"pooled"`` the quantile of a Gumbel law fitted by
-its quartiles to the pooled units (blind to take-to-take variation). With ``seeds`` > 1 every
-network is trained that many times (repetitions 0 …); the method's score is the median over
-its members of each member's score standardised by its own history model, thresholded alike.
+Units scored: every revolution (``revolution``) and the TSA of consecutive blocks of ``b``
+revolutions (``record<b>``), of the shaft that carries the watched gear (the source's faulty
+gear; detection_records.unit_shaft): the input shaft's, or a slower shaft's cut on its angle
+(the input's times its turns per input turn), for the history, test and source alike. The
+threshold of a method and unit is fixed on the method's scores of the history's units of that
+kind (record-level history units: TSAs of sliding windows), for a unit of a *new* record:
+``threshold = "records"`` (default) the ``1 - false_alarm`` predictive quantile of a one-way
+random-effects model, record effect plus within-record spread (``record_effects``); ``"pooled"``
+the quantile of a Gumbel law fitted by its quartiles to the pooled units (blind to take-to-take
+variation). With ``seeds`` > 1 every network is trained that many times (repetitions 0 …); the
+method's score is the median over its members of each member's score standardised by its own
+history model, thresholded alike.
 
 Output: results.jsonl (one record per condition x source x method: the history and test scores,
 thresholds under both rules, the history model; an ensemble's members one record per seed besides),
@@ -105,6 +108,8 @@ from .detection_records import (
     source_for,
     synchronous_input,
     trained_on,
+    unit_mesh_orders,
+    unit_shaft,
 )
 from .detection_scoring import score as score  # the kind's `gearlab score` (engine.score_recordings)
 from .detection_scoring import score_trends, store_scoring
@@ -211,7 +216,7 @@ def build(scenario: Scenario) -> Spec:
                 f"{location(path, 'classical', 'indicators')}: unknown indicator "
                 f"{shown(name)}{did_you_mean(str(name), INDICATORS)}; known: {', '.join(INDICATORS)}"
             )
-    orders = c.mesh_orders or [pair.Z1]
+    orders = c.mesh_orders or unit_mesh_orders(source, unit_shaft(source))
     if not all(isinstance(o, int) and not isinstance(o, bool) and 1 <= o <= 1000 for o in orders):
         raise GearlabInputError(
             f"{location(path, 'classical', 'mesh_orders')}: expected whole orders 1 … 1000, got {shown(orders)}"
@@ -340,7 +345,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol, d = spec.protocol, spec.detection
     with executor_for(scenario) as executor:
-        conditions = read_target(spec.target, d.blocks, on_event, f"{scenario.path}: [target] key 'files'")
+        # the units are revolutions of the watched gear's shaft (input: as ever)
+        shaft = unit_shaft(spec.source)
+        if shaft is not None:
+            on_event(Event("log", message=f"units: revolutions and TSAs of {shaft.said()}"))
+        conditions = read_target(spec.target, d.blocks, on_event, f"{scenario.path}: [target] key 'files'", shaft)
         folds = {c: folds_of(d.history_fit, cond, c, scenario.path) for c, cond in conditions.items()}
         for c, cond in conditions.items():
             band = f"no shaft order above {cond['max_order']} (the records' band)"
@@ -350,7 +359,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         if spec.corrected is not None:
             variants[spec.corrected_label] = spec.corrected
         specs = {
-            (c, v): source_for(source, cond, d.source_speed)
+            (c, v): source_for(source, cond, d.source_speed, shaft)
             for c, cond in conditions.items()
             for v, source in variants.items()
         }
@@ -381,7 +390,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     f"the source training set of '{s.name}'"
                 )
         for c, cond in conditions.items():
-            if not cond["tacho"]:  # records whose angle starts where they do: into the source's frame
+            # records whose angle starts where they do (no tacho, or a shaft the input tacho does not
+            # mark): into the source's frame
+            if not cond["unit_tacho"]:
                 turn = register_to_source(cond, sources[specs[(c, "")]])
                 on_event(Event("log", message=f"{c}: turned by {turn} samples into the source's frame (no tacho)"))
         on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
@@ -392,9 +403,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             for indicator in spec.classical.indicators:
                 if f"{name}/{indicator}" not in records:
                     run.append(classical_record(indicator, name, cond, spec.classical, rules[name]))
-        later = asynchronous_orders(spec.source)  # a later mesh of no whole input order: out of every input
+        later = asynchronous_orders(spec.source, shaft)  # a mesh of no whole order of the units' shaft: out
         shown = {
-            c: synchronous_input(learned_input(d.input, d.points, spec.classical, cond["max_order"]), later)
+            c: synchronous_input(learned_input(d.input, d.points, spec.classical, cond["unit_max_order"]), later)
             for c, cond in conditions.items()
         }
         splits = {
@@ -491,6 +502,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     # tacho in samples of the revolution (correlation; read_target)
                     "start_marks": v["shifts"],
                     "tacho": v["tacho"],
+                    "unit_shaft": v["unit_shaft"],  # the shaft whose revolutions (and TSAs) are the units
                     "max_order": v["max_order"],  # the records' band: no higher order reaches a learned method
                     "source": v["source"],
                     "sources": v["sources"],

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
@@ -21,6 +22,7 @@ from ..parts.measured import ROLES, Target, TargetFile
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.indicators import band_limited, difference_signal
+from ..signals.shaft import shaft_revolutions
 from . import record_effects
 from .detection_settings import Classical
 
@@ -30,6 +32,70 @@ HISTORY_STRIDES = 10
 MIN_HISTORY_UNITS = 8
 # Records without a 'condition' whose speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
+
+
+@dataclass(frozen=True)
+class UnitShaft:
+    """The shaft whose revolutions the detection's units are (unit_shaft): its name, its turns per
+    input turn, and the watched gear on it."""
+
+    name: str
+    ratio: Fraction
+    gear: str
+
+    def revolutions(self, revs: np.ndarray, max_order: float | None = None) -> np.ndarray:
+        """This shaft's complete revolutions from a record's consecutive input revolutions *revs*
+        (no input order above *max_order*: signals.shaft)."""
+        return shaft_revolutions(revs, float(self.ratio), 0.0, revs.shape[-1], max_order)
+
+    def said(self) -> str:
+        return f"the {self.name} shaft ({self.gear}; {float(self.ratio):.4g} turns per input turn)"
+
+
+def unit_shaft(source: DatasetSpec) -> UnitShaft | None:
+    """The shaft carrying the watched gear -- the gear the source's fault classes sit on -- when it
+    is not the input shaft: a once-per-turn event of a slower shaft lands at another input angle
+    every input revolution and an input TSA averages it away, so the units are that shaft's
+    revolutions and TSAs (history, test and source alike). None: the input shaft (every unit as
+    before), also when the faults sit on gears of more than one shaft."""
+    from ..data.placement import gear_name, shaft_names, train_pairs
+
+    classes = source.fault_classes().values()
+    on = {(c.stage, c.gear) for c in classes}
+    shafts = {stage - (gear == "pinion") for stage, gear in on}  # shaft index: input 0
+    if len(shafts) != 1 or shafts == {0}:
+        return None
+    (index,) = shafts
+    model, _, _ = source.check_model()
+    pairs = train_pairs(model, source.preset)
+    ratio = Fraction(1)
+    for pair in pairs[:index]:
+        ratio *= Fraction(pair.Z1, pair.Z2)
+    names = shaft_names(source.preset, len(pairs))
+    gears = ", ".join(dict.fromkeys(gear_name(stage, gear, names) for stage, gear in sorted(on)))
+    return UnitShaft(names[index], ratio, gears)
+
+
+def unit_mesh_orders(source: DatasetSpec, shaft: UnitShaft | None) -> list[int]:
+    """The default [classical] mesh_orders of the units' shaft: the input pinion's teeth on the input
+    shaft; on another, the watched gear's teeth first, then every mesh whose order on that shaft is
+    whole (the other gear of the shaft, the meshes of the shafts beside it)."""
+    _, pair, _ = source.check_model()
+    if shaft is None:
+        return [pair.Z1]
+    from ..data.placement import train_pairs
+
+    model, _, _ = source.check_model()
+    pairs = train_pairs(model, source.preset)
+    first = [c for c in source.fault_classes().values()][0]
+    watched = pairs[first.stage - 1].Z1 if first.gear == "pinion" else pairs[first.stage - 1].Z2
+    turns, orders = Fraction(1), [watched]
+    for p in pairs:
+        order = turns * p.Z1 / shaft.ratio
+        if order.denominator == 1 and int(order) not in orders:
+            orders.append(int(order))
+        turns *= Fraction(p.Z1, p.Z2)
+    return orders
 
 
 def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str, str]:
@@ -103,10 +169,15 @@ def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
     return out
 
 
-def read_target(target: Target, blocks, on_event, where: str = "[target] key 'files'") -> dict[str, dict]:
+def read_target(
+    target: Target, blocks, on_event, where: str = "[target] key 'files'", shaft: UnitShaft | None = None
+) -> dict[str, dict]:
     """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
     read, standardised against its condition's history and aligned to its first history record.
-    Only the records' signals are used here (no label)."""
+    With a *shaft* (unit_shaft) the revolutions are that shaft's (cut from the record's input
+    revolutions; cond["raw"] keeps those for the localisation), aligned by correlation: the input
+    tacho's mark is no fixed angle of a slower shaft. Only the records' signals are used here (no
+    label)."""
     conditions: dict[str, dict] = {}
     on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
     records = {}
@@ -138,15 +209,25 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
         cond["max_order"] = min(
             Chain(fs=records[f.path].fs, speed=speeds[f.path]).max_order for f, _ in cond["history"]
         )
+        # the same band in the units' shaft orders (what the learned methods see: learned_input)
+        cond["unit_max_order"] = cond["max_order"] if shaft is None else int(cond["max_order"] / shaft.ratio)
+        if shaft is not None:  # the units: that shaft's revolutions, in the records' band
+            for role in ROLES:
+                cond[role] = [(f, shaft.revolutions(r, cond["max_order"])) for f, r in cond[role]]
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
         cond["shifts"], cond["tacho"] = {}, target.tacho is not None
         cond["marks"] = target.pulses_per_rev if target.tacho is not None else 1  # localisation turns to a mark
+        # the shaft the units are revolutions of, and whether their angle is a tacho's (else turned
+        # into the source's frame: detection.run, register_to_source)
+        cond["unit_shaft"] = "input" if shaft is None else shaft.name
+        cond["unit_tacho"] = cond["tacho"] and shaft is None
+        tacho = target.tacho if shaft is None else None
         for role in ROLES:
             turned = []
             for f, revs in cond[role]:
-                shift, revs = aligned(reference, standardiser.apply(revs), target.tacho, target.pulses_per_rev)
+                shift, revs = aligned(reference, standardiser.apply(revs), tacho, target.pulses_per_rev)
                 cond["shifts"][f.path] = shift
                 turned.append((f, revs))
             cond[role] = turned
@@ -161,12 +242,20 @@ def read_target(target: Target, blocks, on_event, where: str = "[target] key 'fi
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
                 longest = max(len(r) for _, r in cond["history"])
+                on = "" if shaft is None else f" {shaft.name}-shaft"
                 raise GearlabInputError(
                     f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
-                    f"(its longest record has {longest} revolutions); expected at least "
+                    f"(its longest record has {longest}{on} revolutions); expected at least "
                     f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
                 )
         cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
+        for f, r in cond["test"]:
+            short = [b for b in blocks if len(r) < b]
+            if short and shaft is not None:  # a record of no unit of a kind: nothing to score it by
+                raise GearlabInputError(
+                    f"{where}: {f.path} gives {len(r)} {shaft.name}-shaft revolutions, fewer than record{short[0]}'s "
+                    f"{short[0]}; expected a longer record, or shorter [detection] key 'blocks'"
+                )
     return conditions
 
 
@@ -193,16 +282,17 @@ def register_to_source(cond: dict, source) -> int:
     return turn
 
 
-def asynchronous_orders(source: DatasetSpec) -> tuple[float, ...]:
+def asynchronous_orders(source: DatasetSpec, shaft: UnitShaft | None = None) -> tuple[float, ...]:
     """The mesh orders of the *source*'s train that are no whole input order (17/59 then 26/83:
     its later mesh at 442/59 = 7.49), in input orders; () for a single-stage train and where every
-    later mesh is whole (the PHM 2009 rig's 16)."""
+    later mesh is whole (the PHM 2009 rig's 16). With a *shaft*, those of no whole order of that
+    shaft, in its orders."""
     from ..data.placement import train_pairs
 
     model, _, _ = source.check_model()
     turns, out = Fraction(1), []
     for pair in train_pairs(model, source.preset):
-        order = turns * pair.Z1
+        order = turns * pair.Z1 / (1 if shaft is None else shaft.ratio)
         if order.denominator > 1:
             out.append(float(order))
         turns *= Fraction(pair.Z1, pair.Z2)
@@ -281,9 +371,13 @@ def synchronous_input(seen, later: tuple):
     return lambda X: seen(without_asynchronous(X, later))
 
 
-def source_for(source: DatasetSpec, cond: dict, how: str) -> DatasetSpec:
+def source_for(source: DatasetSpec, cond: dict, how: str, shaft: UnitShaft | None = None) -> DatasetSpec:
     """The source simulated at the condition's speed (the median of its history records' speeds,
-    to 1 Hz), or as given."""
+    to 1 Hz), or as given; with a *shaft*, its rows that shaft's revolutions (DatasetSpec.unit_shaft)."""
+    if shaft is not None:
+        on = f" ({shaft.name} shaft)"
+        ratio = (shaft.ratio.numerator, shaft.ratio.denominator)
+        source = source.with_(unit_shaft=ratio, name=source.name + on, domain=source.name + on)
     if how == "source":
         return source
     speed = float(round(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])))

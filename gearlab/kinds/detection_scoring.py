@@ -17,6 +17,7 @@ from ..parts import scoring
 from ..parts.measured import TargetFile
 from ..runs import RunDir
 from ..signals import Standardiser
+from ..signals.shaft import shaft_revolutions
 from . import record_effects
 from .detection_classical import classical_record
 from .detection_records import (
@@ -27,6 +28,7 @@ from .detection_records import (
     longest_tsa,
     synchronous_input,
     unit_sets,
+    unit_shaft,
     unit_window,
 )
 from .detection_settings import Spec, stored_classical
@@ -62,7 +64,9 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         "input": d.input,
         "input_version": INPUT_VERSION,
         # the later mesh orders the learned methods never see (detection_records.asynchronous_orders)
-        "later_orders": list(asynchronous_orders(spec.source)),
+        "later_orders": list(asynchronous_orders(spec.source, unit_shaft(spec.source))),
+        # the units' shaft, turning p/q per input turn (detection_records.unit_shaft); absent: the input
+        **({} if (shaft := unit_shaft(spec.source)) is None else {"unit_shaft": [shaft.name, *_ratio(shaft)]}),
         "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(spec.classical).items()},
         "conditions": {},
     }
@@ -79,9 +83,14 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
             "file": file,
             "speed_hz": float(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])),
             "max_order": cond["max_order"],
+            "unit_max_order": cond["unit_max_order"],
             "history": [[f.path, len(r)] for f, r in cond["history"]],
         }
     run.write_json(scoring.SCORING_FILE, out)
+
+
+def _ratio(shaft) -> list[int]:
+    return [shaft.ratio.numerator, shaft.ratio.denominator]
 
 
 def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[TargetFile, np.ndarray]]) -> dict:
@@ -94,6 +103,8 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
     keys = meta["target"]
     reference, tacho, ppr = arrays["reference"], keys["tacho"], keys["pulses_per_rev"]
+    if "unit_shaft" in meta:  # a slower shaft's revolutions: turned by correlation, as the run's were
+        tacho = None
     test = [(f, aligned(reference, standardiser.apply(revs), tacho, ppr)[1]) for f, revs in records]
     blocks = meta["blocks"]
     per_record = [unit_sets(r, blocks, True) for _, r in history]
@@ -101,6 +112,7 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
         "history": history,
         "test": test,
         "max_order": c["max_order"],
+        "unit_max_order": c.get("unit_max_order", c["max_order"]),
         "history_units": {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]},
         "history_records": {
             u: [(len(s[u]), record_effects.independent_units(len(s[u]), *unit_window(u))) for s in per_record]
@@ -224,7 +236,11 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
         name = _condition_of(meta, str(file), rec.speed_hz, condition)
         on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}"))
         found[str(file)] = (rec.speed_hz, rec.angle_source)
-        cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), rec.revolutions))
+        revs = rec.revolutions
+        if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
+            _, p, q = meta["unit_shaft"]
+            revs = shaft_revolutions(revs, p / q, 0.0, revs.shape[-1], meta["conditions"][name]["max_order"])
+        cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
         raw.setdefault(name, []).append((str(file), rec.revolutions, rec.transient_revolutions))
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
@@ -235,7 +251,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
         cond = _scoring_condition(run, meta, name, records)
         rule = Rule(meta["threshold"], meta["false_alarm"], cond["history_records"])
         shown = synchronous_input(
-            learned_input(meta["input"], meta["points"], classical, cond["max_order"]),
+            learned_input(meta["input"], meta["points"], classical, cond["unit_max_order"]),
             tuple(meta.get("later_orders", ())),
         )
         seen = {p: {u: shown(X) for u, X in units.items()} for p, units in cond["test_units"].items()}

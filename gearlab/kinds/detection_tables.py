@@ -52,6 +52,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         return np.concatenate(neg or [np.empty(0)]), np.concatenate(pos or [np.empty(0)])
 
     rows = []
+    # the shaft whose revolutions the units are, per condition (detection_records.unit_shaft)
+    shafts = {c: v.get("unit_shaft", "input") for c, v in (run.read_json("conditions.json") or {}).items()}
     for r in records:
         for u in r["history_scores"]:
             thr = thresholds[r["unit"]][u]
@@ -84,6 +86,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                     # detection and false alarms (%) at each threshold rule's threshold
                     "by_rule": {rule: {"detection": d, "false_alarm": f} for rule, (d, f) in other.items()},
                     "member_auc": [auc(*split(by_unit[m], u)) for m in r.get("members", [])],
+                    "shaft": shafts.get(r["condition"], "input"),
                 }
             )
     order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}
@@ -191,6 +194,7 @@ def table_md(rows: list[dict]) -> str:
         out.append(
             f"Condition {c}: ROC AUC of each method's test scores, and the test's positive (det %) and negative "
             "(FA %) units called at the threshold fixed on the history, per unit kind"
+            + ("" if first.get("shaft", "input") == "input" else f" (units: the {first['shaft']} shaft's revolutions)")
             + (
                 "; scores that are not numbers (no AUC, '–'): " + ", ".join(f"{m} {n}" for m, n in broken.items() if n)
                 if any(broken.values())
