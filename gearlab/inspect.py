@@ -40,7 +40,7 @@ from .data.recordings import (
 )
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
-from .gearbox.match import check_description, unchecked
+from .gearbox.match import check_description, tol_mesh, unchecked
 from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
@@ -295,6 +295,10 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         report["order_table"] = order_table(box).describe(speed.mean_hz)
         report["check"] = check = check_description(lines, box, revolutions, on_input)
         differences = check["differences"]
+        if on_input and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses"):
+            ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
+            ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
+            differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
         report["matches"] = not differences
         check["unchecked"] = unchecked(check, box, rec.tacho is None and speed.declared_hz is None)
         report["verdict"] = (
@@ -307,6 +311,39 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
 
 
 def json_ready(report: dict) -> dict:
+def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
+    """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at
+    f M and the input shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86
+    mixer's 2-pulse keyphasor read as 1: mesh at 14.5, and its 2nd harmonic at 29 passed as the mesh)
+    or k (fewer: mesh at 58, its harmonics all on M's, 'matches'). The line at f M stronger than at
+    M tells it, with the shaft's line at f stronger than at 1 or a speed 1 / f times the described
+    (*ratio*): a mesh whose power sits at its harmonics (no line at M) keeps its shaft at 1."""
+
+    def amp(x: float) -> float:
+        i = lines.near(x, tol_mesh(x, bin_))
+        return 0.0 if i is None else float(lines.amp[i])
+
+    first = check["stages"][0]
+    m = first["expected_order"]
+    unexplained = [u["order"] for u in check["unexplained"]]
+    for k in (2, 3, 4):
+        for f, marks in ((1 / k, ppr * k), (k, ppr / k)):
+            at_mesh, at_shaft = amp(f * m), amp(f)
+            described = ratio is not None and abs(ratio * f - 1) < 0.05
+            if marks != int(marks) or at_mesh <= amp(m) or (at_shaft <= amp(1.0) and not described):
+                continue
+            if f < 1 and not any(abs(u - f * m) <= tol_mesh(f * m, bin_) for u in unexplained):
+                continue  # another stage's mesh
+            return [
+                f"stage 1: the {first['z1']}-tooth pinion's mesh shows at order {f * m:.4g}, not {m:.4g}"
+                + (f", the input shaft at {f:.3g}" if at_shaft > amp(1.0) else "")
+                + (f", the speed {1 / f:.3g} x the described" if described else "")
+                + f": the tacho gives {int(marks)} pulse(s) per revolution, not {ppr}? "
+                f"(--pulses-per-rev {int(marks)}, key 'pulses_per_rev' in a scenario)"
+            ]
+    return []
+
+
     """The report without its arrays (the spectrum, the TSA curves): what --json prints."""
     out = {k: v for k, v in report.items() if k != "spectrum"}
     out["tsa"] = [{k: v for k, v in t.items() if k != "tsa"} for t in report["tsa"]]

@@ -374,3 +374,26 @@ def test_inspect_reads_and_says_the_unit_a_channel_s_name_or_file_gives(tmp_path
         str(tmp_path / "take.wav"), None, InspectOptions(speed_hz=f, sensitivity=0.5 / 9.80665, gain=5.0)
     )
     assert with_gain["rms"] == pytest.approx(np.std(x), rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    "said, told", [(1, "the tacho gives 2 pulse(s) per revolution, not 1?"), (2, None), (4, "not 4?")]
+)
+def test_inspect_tells_a_tacho_read_with_the_wrong_marks_per_turn(tmp_path, said, told):
+    # A 29/86 mixer's 2-pulse keyphasor read as 1 pulse a turn: the mesh sat at order 14.5 and its 2nd
+    # harmonic at 29 passed as the mesh ('matches' at 40 Hz, twice the speed); read as 4, the mesh at
+    # 58 passed as 29 with its even harmonics, at half the speed
+    from test_inspect import described, synthesise
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    fs, f = 8192.0, 20.0
+    x, _, _ = synthesise(((29, 86),), speed=f, fs=fs, revs=200, seed=5)
+    theta = 2 * np.pi * f * np.arange(x.size) / fs
+    np.savez(tmp_path / "rec.npz", acc=x, key=np.where((2 * theta) % (2 * np.pi) < 0.4, 5.0, 0.0), fs=fs)
+    options = InspectOptions(vibration="acc", tacho="key", pulses_per_rev=said)
+    report = inspect_record(str(tmp_path / "rec.npz"), described((29, 86), speed="20 Hz"), options)
+    if told is None:
+        assert report["matches"], report["verdict"]
+    else:
+        assert not report["matches"] and told in report["verdict"], report["verdict"]
