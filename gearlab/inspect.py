@@ -310,7 +310,6 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
     return report
 
 
-def json_ready(report: dict) -> dict:
 def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
     """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at
     f M and the input shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86
@@ -344,6 +343,7 @@ def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None)
     return []
 
 
+def json_ready(report: dict) -> dict:
     """The report without its arrays (the spectrum, the TSA curves): what --json prints."""
     out = {k: v for k, v in report.items() if k != "spectrum"}
     out["tsa"] = [{k: v for k, v in t.items() if k != "tsa"} for t in report["tsa"]]
