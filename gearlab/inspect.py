@@ -300,7 +300,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
         report["matches"] = not differences
-        check["unchecked"] = unchecked(check, box, rec.tacho is None and speed.declared_hz is None)
+        found = rec.tacho is None and speed.declared_hz is None
+        check["unchecked"] = unchecked(check, box, speed.mean_hz if found else None)
         report["verdict"] = (
             f"the description {box.name!r} differs: " + "; ".join(differences)
             if differences

@@ -17,10 +17,11 @@ from gearlab.gearbox import order_table, parse_gearbox
 from gearlab.inspect import InspectOptions, inspect_record
 
 
-def synthesise(stages, speed=25.0, fs=5000.0, revs=600, noise=0.3, seed=0, swing=0.0):
+def synthesise(stages, speed=25.0, fs=5000.0, revs=600, noise=0.3, seed=0, swing=0.0, pinion=1.0):
     """A gearbox vibration: every mesh with its harmonics 1-3, amplitude-modulated by both of its
     shafts (sidebands j = 1-3), shaft lines, white noise; a once-per-revolution tacho. *swing*: a
-    slow relative speed swing (a motor's, at 0.5 Hz)."""
+    slow relative speed swing (a motor's, at 0.5 Hz). *pinion*: the pinion shafts' modulation and
+    the input shaft's line, times this (0: a mesh no pinion shaft modulates)."""
     rng = np.random.default_rng(seed)
     n = int(revs / speed * fs)
     t = np.arange(n) / fs
@@ -33,16 +34,16 @@ def synthesise(stages, speed=25.0, fs=5000.0, revs=600, noise=0.3, seed=0, swing
         mesh, op, ow = orders[k] * stages[k][0], orders[k], orders[k + 1]
         mod = (
             1
-            + 0.25 * np.cos(op * theta + 0.3)
-            + 0.1 * np.cos(2 * op * theta)
+            + pinion * 0.25 * np.cos(op * theta + 0.3)
+            + pinion * 0.1 * np.cos(2 * op * theta)
             + 0.2 * np.cos(ow * theta + 1.1)
             + 0.08 * np.cos(2 * ow * theta + 0.5)
             + 0.04 * np.cos(3 * ow * theta)
         )
         for h in (1, 2, 3):
             x += (0.7**k / h) * mod * np.cos(h * mesh * theta + rng.uniform(0, 6))
-    for o in orders:
-        x += 0.15 * np.cos(o * theta + rng.uniform(0, 6))
+    for k, o in enumerate(orders):
+        x += (pinion if k == 0 else 1.0) * 0.15 * np.cos(o * theta + rng.uniform(0, 6))
     x += rng.normal(0, noise, n)
     tacho = np.where((theta % (2 * np.pi)) < 0.4, 5.0, 0.0)
     return x, tacho, fs

@@ -213,25 +213,23 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
     if tacho_on_input:
         measured_shaft[0] = (1.0, 0.0, "tacho")
     stages, differences, shaft_notes, named_shafts = [], [], {}, set()
+    implied: dict[int, float] = {}  # shaft -> its order as the measured mesh before it and the wheel make it
+    wrong: list[int] = []  # the stages whose own tooth counts differ
+    unresolved = []  # tooth counts the sidebands cannot tell from the next one (too few revolutions)
+    moved: dict[int, float] = {}  # stage -> its mesh order measured where it differs from the described one
     for k, s in enumerate(table.stages):
+        said = len(differences)
         expected = float(s.mesh)
         o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
         span = SPAN * float(max(s.pinion_shaft_order, s.wheel_shaft_order))
-        others = [
-            (h * float(t.mesh), tol_mesh(h * float(t.mesh), bin_))
-            for t in table.stages
-            if t is not s
-            for h in (1, 2, 3)
-        ]
+        # the other stages' mesh orders: an earlier one that differs where it was measured (a wrong
+        # first pinion moved stage 1's lines off its described order, and stage 2 took them)
+        meshes = [moved.get(q, float(t.mesh)) for q, t in enumerate(table.stages) if q != k]
+        others = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in (1, 2, 3)]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
         # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
-        theirs = [
-            (h * float(t.mesh), tol_mesh(h * float(t.mesh), bin_))
-            for t in table.stages
-            if t is not s
-            for h in range(1, MAX_HARMONIC + 1)
-            if abs(h * float(t.mesh) / expected - round(h * float(t.mesh) / expected)) > 1e-9
-        ]
+        shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
+        theirs = [(x, t) for x, t in shared if abs(x / expected - round(x / expected)) > 1e-9]
         family = mesh_family(lines, o_p, bin_, span, theirs, expected)
         i = None
         if lines.near(expected, tol_mesh(expected, bin_)) is not None:
@@ -254,13 +252,29 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
             differences.append(
                 f"stage {s.index}: no line at mesh order {expected:.4g} (a {s.pinion_teeth}-tooth pinion)"
             )
+            wrong.append(s.index)
             stages.append(entry)
             continue
+        # the pinion shaft's order as measured (its sidebands, a tacho), else as the stage before's
+        # measured mesh and described wheel make it: a later stage is judged against that, so a wrong
+        # count upstream is named once, where it is, and the stages after it as its consequence
+        o_ref = measured_shaft[k][0] if k in measured_shaft else implied.get(k, o_p)
+        implied[k + 1] = measured / s.wheel_teeth
         if not matched:
+            moved[k] = measured
+        consequence = not matched and wrong and abs(measured / o_ref - s.pinion_teeth) <= 0.5
+        if consequence:
+            differences.append(
+                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected, as follows from "
+                f"{_following(wrong)} (the {s.pinion_teeth}-tooth pinion as described, on the "
+                f"{s.pinion_shaft} shaft at order {o_ref:.4g})"
+            )
+        elif not matched:
             differences.append(
                 f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected "
-                f"(a {measured / o_p:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth})"
+                f"(a {measured / o_ref:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth})"
             )
+        i = own_line(lines, i, measured, bin_, shared)
         entry.update(measured_order=measured, error_orders=measured - expected, amplitude=float(lines.amp[i]))
         entry["db_over_floor"] = float(lines.db[i])
         combs = families(
@@ -286,6 +300,17 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
             z = measured / o_seen
             spread = z * tol / o_seen
             entry[f"{key}_seen"], entry[f"{key}_resolution"] = z, spread
+            if spread >= 0.5 and abs(z - described) <= spread:
+                need = revolutions_needed(z, o_seen, tol, revolutions)
+                unresolved.append(
+                    f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft ({z:.1f} ± {spread:.1f} "
+                    f"from its sidebands: {revolutions} input revolutions, "
+                    + (
+                        f"need {need} to tell {described} from {described - 1} or {described + 1})"
+                        if need
+                        else "too many teeth to tell from its sidebands)"
+                    )
+                )
             if abs(z - described) > max(0.5, spread):
                 named_shafts.add(shaft_k)
                 if role == "pinion" and not matched and round(z) == round(measured / o_p):
@@ -294,6 +319,8 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
                     f"stage {s.index}: the {role} on the {table.shafts[shaft_k]} shaft shows {z:.1f} ± {spread:.1f} "
                     f"teeth (mesh order {measured:.4g} / shaft order {o_seen:.4g}), {described} described"
                 )
+        if len(differences) > said + bool(consequence):
+            wrong.append(s.index)
         stages.append(entry)
 
     shafts = []
@@ -305,6 +332,9 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
             entry.update(measured_order=seen, tolerance=tol, source=source, matched=bool(abs(seen - o) <= tol))
             if not entry["matched"]:
                 shaft_notes[k] = f"{name} shaft: order {seen:.4g} measured ({source}), {o:.4g} expected"
+                upstream = [q for q in wrong if q <= k]
+                if upstream and abs(seen - implied.get(k, -1.0)) <= tol + bin_:
+                    shaft_notes[k] += f", as follows from {_following(upstream)}"
         else:
             entry.update(measured_order=None, source="not seen (no sidebands of this shaft)", matched=None)
         shafts.append(entry)
@@ -314,22 +344,74 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
         for q in range(lines.at.size)
         if not is_explained(lines.at[q]) and 20 * math.log10(lines.amp[q] / lines.amp[0]) >= UNEXPLAINED_DB
     ][:8]
-    return {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
+    out = {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
+    return out | {"unresolved": unresolved}
 
 
-def unchecked(check: dict, box: Gearbox, speed_found: bool) -> list[str]:
+def _following(stages: list[int]) -> str:
+    if len(stages) == 1:
+        return f"stage {stages[0]}'s difference"
+    return f"stages {', '.join(map(str, stages[:-1]))} and {stages[-1]}'s differences"
+
+
+def own_line(lines: Lines, i: int, measured: float, bin_: float, shared) -> int:
+    """The line a stage's sidebands are read around: *i*, the strongest of its mesh harmonics, unless
+    another stage's mesh harmonic (*shared*: (order, tolerance)) holds it too, then the strongest
+    harmonic of *measured* that is its own. A 27/88 + 22/65 train's stage-2 mesh 6.75 has its 4th
+    harmonic on stage 1's mesh 27: read around 27, stage 1's sidebands, the output shaft's order was
+    never seen and a 66-tooth output wheel passed."""
+
+    def theirs(x: float) -> bool:
+        return any(abs(x - o) <= t for o, t in shared)
+
+    if not theirs(float(lines.at[i])):
+        return i
+    h = np.maximum(1.0, np.round(lines.at / measured))
+    own = [
+        q
+        for q in np.flatnonzero(np.abs(lines.at - h * measured) <= 2 * bin_ + DRIFT * lines.at)
+        if not theirs(float(lines.at[q]))
+    ]
+    return int(max(own, key=lambda q: lines.amp[q])) if own else i
+
+
+def revolutions_needed(z: float, o: float, tol: float, revolutions: int) -> int | None:
+    """The input revolutions at which a shaft order *o* measured to ±*tol* over *revolutions* tells a
+    *z*-tooth gear from one of z ± 1 (z ± 0.5 teeth), or None: a comb's tolerance is b bins / its
+    furthest sideband + DRIFT o (comb), b = SIDEBAND_BINS at SEPARATED bins apart or more, else 2."""
+    room = 0.5 * o / z - DRIFT * o  # the tolerance a half tooth allows
+    spent = (tol - DRIFT * o) * revolutions  # b / jmax, in orders x revolutions
+    if room <= 0 or spent <= 0:
+        return None
+    b = SIDEBAND_BINS if o * revolutions >= SEPARATED else 2.0
+    per_bin = spent / b  # 1 / jmax
+    need = SIDEBAND_BINS * per_bin / room
+    if need * o < SEPARATED:  # that few revolutions put the sidebands under SEPARATED bins apart
+        need = min(2.0 * per_bin / room, SEPARATED / o)
+    return math.ceil(need * 1.01)
+
+
+def unchecked(check: dict, box: Gearbox, speed_found: float | None) -> list[str]:
     """What a match does not vouch for: a shaft whose order no sideband shows (a healthy mesh
-    need not modulate), and, with the speed found from the mesh lines the description predicts
-    (*speed_found*), the input shaft's tooth counts: any pinion count fits at some speed."""
+    need not modulate), a tooth count its sidebands cannot tell from the next over so few
+    revolutions, and, with the speed found from the mesh lines the description predicts
+    (*speed_found*, Hz), the input shaft's tooth counts: any pinion count fits at some speed, as the
+    gap diagnosis says it (gearlab.gap.structure.speed_line)."""
     unseen = [s["shaft"] for s in check["shafts"] if s["measured_order"] is None]
     out = []
     if box.shafts[0] in unseen:
         unseen.remove(box.shafts[0])
         if speed_found:
+            z1 = box.stages[0].pinion.z
+            mesh_hz = z1 * speed_found
+            others = " or ".join(f"a {z}-tooth pinion's at {mesh_hz / z:.4g} Hz" for z in (z1 - 1, z1 + 1))
             out.append(
-                "the speed was found from the mesh lines the description predicts and no sideband shows the input "
-                "shaft's order, so the pinion's tooth count fits at some speed; give a tacho or --speed to check it"
+                f"the speed ({speed_found:.4g} Hz) was found from the mesh lines the description predicts and no "
+                f"sideband shows the input shaft's order: the mesh at {mesh_hz:.4g} Hz is a {z1}-tooth pinion's at "
+                f"{speed_found:.4g} Hz, or {others}; give a tacho or the speed (--speed, [operation] speed) to check "
+                "the pinion's tooth count"
             )
+    out += check.get("unresolved", [])
     if unseen:
         out.append(
             f"no sideband shows the order of the {', '.join(unseen)} shaft{'s' if len(unseen) > 1 else ''}, so a "
