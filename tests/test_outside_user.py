@@ -397,3 +397,16 @@ def test_inspect_tells_a_tacho_read_with_the_wrong_marks_per_turn(tmp_path, said
         assert report["matches"], report["verdict"]
     else:
         assert not report["matches"] and told in report["verdict"], report["verdict"]
+
+
+def test_the_auc_table_says_its_false_alarms_count_other_damage():
+    # A 17/55 pump's run with a broken-wheel take ('broken55') beside the watched pinion's chip: the
+    # table gave FA 50 % at record30 and the verdict '100 / 0 %', unsaid why (the verdict counts a
+    # record localised on another gear as neither, the table counts it as a false alarm)
+    from gearlab.kinds.detection_tables import table_md
+
+    row = {"condition": "35 Hz", "unit": "record30", "method": "na4", "auc": 1.0, "detection": 100.0}
+    row |= {"false_alarm": 50.0, "n_positive": 13, "n_negative": 26}
+    three = table_md([{**row, "called_by_label": {"broken55": 100.0, "fault": 100.0, "healthy": 0.0}}])
+    assert "FA % counts the units of every label but the positive one (labels: 'broken55', 'fault', 'healthy')" in three
+    assert "other damage included" not in table_md([{**row, "called_by_label": {"fault": 100.0, "healthy": 0.0}}])

@@ -191,9 +191,18 @@ def table_md(rows: list[dict]) -> str:
         for r in rows:
             if r["condition"] == c:
                 broken[r["method"]] += r.get("non_finite", 0)
+        labels = dict.fromkeys(k for r in rows if r["condition"] == c for k in r.get("called_by_label") or {})
         out.append(
             f"Condition {c}: ROC AUC of each method's test scores, and the test's positive (det %) and negative "
             "(FA %) units called at the threshold fixed on the history, per unit kind"
+            # a 17/55 pump's broken-wheel take made FA 50 % here beside the verdict's 0 %: say which counts
+            + (
+                "; FA % counts the units of every label but the positive one (labels: "
+                f"{', '.join(map(repr, labels))}), other damage included: the verdict counts a unit of a record "
+                "localised on another gear as neither (the 'watched / other' table)"
+                if len(labels) > 2
+                else ""
+            )
             + ("" if first.get("shaft", "input") == "input" else f" (units: the {first['shaft']} shaft's revolutions)")
             + (
                 "; scores that are not numbers (no AUC, '–'): " + ", ".join(f"{m} {n}" for m, n in broken.items() if n)
