@@ -105,9 +105,11 @@ from .detection_records import (
     longest_tsa,
     read_target,
     register_to_source,
+    shaft_symmetry,
     source_for,
     synchronous_input,
     trained_on,
+    turned_faults,
     unit_mesh_orders,
     unit_shaft,
 )
@@ -422,6 +424,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 s, (Xs, ys, Xv, yv) = specs[(c, v)], splits[(c, v)]
                 Ts = each_draw(shown[c], source_split(twins[s], protocol, draws[s])[0])
                 detector_splits[(c, v)] = (signature_rows(Xs, ys, Ts), ys, Xv, yv)
+        if shaft is not None and (g := shaft_symmetry(spec.source, shaft)) > 1:
+            # the detectors' shapes at every angle the turn into the source's frame may put the damage
+            turns = f"the detectors' shapes turned by each 1/{g} of a turn of the {shaft.name} shaft"
+            on_event(Event("log", message=turns))
+            for key, (Xs, ys, Xv, yv) in detector_splits.items():
+                detector_splits[key] = (*turned_faults(Xs, ys, g), Xv, yv)
         # the units every training of a condition scores, as the learned methods see them (made once)
         units_seen = {
             c: (

@@ -98,6 +98,34 @@ def unit_mesh_orders(source: DatasetSpec, shaft: UnitShaft | None) -> list[int]:
     return orders
 
 
+def shaft_symmetry(source: DatasetSpec, shaft: UnitShaft) -> int:
+    """g: the turns by 1/g of a revolution of the units' shaft that leave its synchronous healthy
+    signal as it is -- g the greatest common divisor of the meshes whole on that shaft
+    (unit_mesh_orders: 65 for a 27/88 + 22/65 hoist's output shaft, meshes 65 and 260; 1 for a
+    26/73 + 33/59 reducer's intermediate one, 73 and 33). Turning a record into the source's
+    frame by its healthy mean revolution knows its angle to 1/g turn only."""
+    return math.gcd(*unit_mesh_orders(source, shaft))
+
+
+def turned_faults(X: np.ndarray, y: np.ndarray, g: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fault rows of (*X*, *y*) (rows, or rows of draws) also turned by every k/g of a
+    revolution, k = 1 ... g - 1 (an exact band-limited turn: the rows are periodic), appended: a
+    detector's shapes then hold the damage at every angle the turn into the source's frame may
+    put a record's (shaft_symmetry), where simulating every tooth of a gear on a slower shaft
+    (which the two-stage models simulate one by one) costs a simulation a tooth."""
+    faults = np.asarray(X)[np.asarray(y) != 0]
+    if g <= 1 or not len(faults):
+        return X, y
+    n = faults.shape[-1]
+    F = np.fft.rfft(faults, axis=-1)
+    orders = np.arange(F.shape[-1])
+    turned = [
+        np.fft.irfft(F * np.exp(-2j * np.pi * orders * k / g), n=n, axis=-1).astype(faults.dtype) for k in range(1, g)
+    ]
+    ones = np.ones(len(faults) * (g - 1), dtype=np.asarray(y).dtype)
+    return np.concatenate([X, *turned]), np.concatenate([y, ones])
+
+
 def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str, str]:
     """{file path: condition}: the file's own 'condition', else its speed group. History records
     without one are grouped by speed -- the tacho's, declared, or found from the mesh orders -- (a
