@@ -410,3 +410,16 @@ def test_the_auc_table_says_its_false_alarms_count_other_damage():
     three = table_md([{**row, "called_by_label": {"broken55": 100.0, "fault": 100.0, "healthy": 0.0}}])
     assert "FA % counts the units of every label but the positive one (labels: 'broken55', 'fault', 'healthy')" in three
     assert "other damage included" not in table_md([{**row, "called_by_label": {"fault": 100.0, "healthy": 0.0}}])
+
+
+def test_a_tooth_defined_up_to_a_tooth_or_less_is_said_to_hold_for_the_take_alone():
+    # A 19/71 + 28/47 reducer's broken output tooth was reported 'tooth 13 of 47 (up to 0.0140845-tooth
+    # steps between takes)', a 17/55 pump's wheel '46 of 55 (up to 1-tooth steps ...)': read as a
+    # precise count, while the shaft stands at any of 3337 (55) angles at a take's first tacho mark
+    from gearlab.signals.localise import tooth_words
+
+    assert tooth_words({"tooth": 13, "of": 47, "step": 47 / 3337}) == (
+        "13 of 47 (in this take only: the first tacho mark finds the shaft at any of 3337 angles)"
+    )
+    assert tooth_words({"tooth": 46, "of": 55, "step": 1.0}).endswith("at any of 55 angles)")
+    assert tooth_words({"tooth": 17, "of": 96, "step": 32.0}) == "17 of 96 (up to 32-tooth steps between takes)"

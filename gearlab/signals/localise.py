@@ -595,7 +595,13 @@ def turned(revolutions: np.ndarray, reference: np.ndarray, marks: int) -> tuple[
 
 
 def tooth_words(t: dict) -> str:
-    """ "17 of 96", with the step it is defined up to on a shaft of no whole input order."""
+    """ "17 of 96", with the step it is defined up to on a shaft of no whole input order. A step of a
+    tooth or less defines nothing across takes: a 19/71 + 28/47 output gear's read 'up to
+    0.0140845-tooth steps', as if finer than a tooth, where the first mark finds it at any of 3337 angles."""
+    if "step" in t and t["step"] <= 1:
+        angles = round(t["of"] / t["step"])
+        where = f"the first tacho mark finds the shaft at any of {angles} angles"
+        return f"{t['tooth']} of {t['of']} (in this take only: {where})"
     return f"{t['tooth']} of {t['of']}" + (f" (up to {t['step']:g}-tooth steps between takes)" if "step" in t else "")
 
 
