@@ -141,6 +141,14 @@ def test_units_of_the_input_shaft_are_as_before():
 
 
 def test_output_gear_damage_is_detected_on_the_output_shafts_units(slow_box, gearlab):
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection_records import shaft_symmetry, unit_shaft
+
+    source = load_scenario(str(slow_box / "detect.toml")).spec.source
+    shaft = unit_shaft(source)
+    assert (shaft.name, shaft.ratio) == ("output", Fraction(4, 15))
+    # every other tooth simulated: the 1/25 turns are there already; one tooth: its shapes are turned
+    assert shaft_symmetry(source, shaft) == 1 and shaft_symmetry(source.with_(teeth=(1,)), shaft) == 25
     code, out = gearlab(slow_box, "run", "detect.toml", "--quick")
     assert code == 0, out
     run = slow_box / re.findall(r"^run directory: (.+)$", out, re.M)[-1].strip()

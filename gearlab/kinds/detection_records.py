@@ -103,8 +103,17 @@ def shaft_symmetry(source: DatasetSpec, shaft: UnitShaft) -> int:
     signal as it is -- g the greatest common divisor of the meshes whole on that shaft
     (unit_mesh_orders: 65 for a 27/88 + 22/65 hoist's output shaft, meshes 65 and 260; 1 for a
     26/73 + 33/59 reducer's intermediate one, 73 and 33). Turning a record into the source's
-    frame by its healthy mean revolution knows its angle to 1/g turn only."""
-    return math.gcd(*unit_mesh_orders(source, shaft))
+    frame by its healthy mean revolution knows its angle to 1/g turn only. 1 also when the
+    source's teeth already hold every such turn of each other (each tooth's and those Z/g teeth
+    on: every tooth, or every other tooth of the tests' 50T gear with g = 25), where more shapes
+    of one place only raise the healthy revolutions' best correlation."""
+    g = math.gcd(*unit_mesh_orders(source, shaft))
+    for c in source.fault_classes().values():
+        z = c.pair.Z1 if c.gear == "pinion" else c.pair.Z2
+        teeth = set(c.teeth)
+        if any((t - 1 + z // g) % z + 1 not in teeth for t in teeth):
+            return g
+    return 1
 
 
 def turned_faults(X: np.ndarray, y: np.ndarray, g: int) -> tuple[np.ndarray, np.ndarray]:
