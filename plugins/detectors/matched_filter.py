@@ -6,6 +6,8 @@ target's healthy reference lines up with a simulated fault response better than 
 healthy history's revolutions do (``gearlab.learn.detectors``). Unsupervised, the 120
 target training revolutions are taken as the healthy history (the thesis's assumption at
 k = 0); supervised, the labelled healthy ones are, and the labelled faults add their shapes.
+The residual leaves out the reference's healthy lines (its strong mesh orders, which a take's
+speed or load moves more than its TSAs' noise; gearlab.learn.detectors.healthy_lines).
 
 ``limiter`` (0 off by default, 1 on, 2 auto; scenarios may give the names): a soft limiter on the
 residual before the correlation, the locally optimal statistic in impulsive noise; ``auto``
