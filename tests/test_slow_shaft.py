@@ -160,6 +160,16 @@ def test_output_gear_damage_is_detected_on_the_output_shafts_units(slow_box, gea
     ((_, cond),) = summary["conditions"].items()
     assert cond["unit_shaft"] == "output"
     assert "(units: the output shaft's revolutions)" in (run / "table.md").read_text()
+    # gearlab score cuts a new record on the same shaft: the run's own scores of the chipped take again
+    code, out = gearlab(slow_box, "score", str(run), "test_chip.csv", "--json")
+    assert code == 0, out
+    (scored,) = [s for s in json.loads(out) if s["method"] == "matched_filter" and s["unit"] == "record10"]
+    made = next(
+        json.loads(line)
+        for line in (run / "results.jsonl").read_text().splitlines()
+        if json.loads(line)["method"] == "matched_filter"
+    )["test_scores"]["test_chip.csv"]["record10"]
+    assert scored["units"] == len(made) and scored["median_score"] == pytest.approx(np.median(made), abs=1e-6)
 
 
 def test_a_record_too_short_for_a_block_of_the_slow_shaft_is_one_line(slow_box, gearlab):
