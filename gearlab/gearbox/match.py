@@ -300,13 +300,13 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
             z = measured / o_seen
             spread = z * tol / o_seen
             entry[f"{key}_seen"], entry[f"{key}_resolution"] = z, spread
-            if spread >= 0.5 and abs(z - described) <= spread:
+            if spread >= 1.0 and abs(z - described) <= spread:  # a tooth more or less would pass too
                 need = revolutions_needed(z, o_seen, tol, revolutions)
                 unresolved.append(
                     f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft ({z:.1f} ± {spread:.1f} "
                     f"from its sidebands: {revolutions} input revolutions, "
                     + (
-                        f"need {need} to tell {described} from {described - 1} or {described + 1})"
+                        f"need {need} to tell a tooth more or less)"
                         if need
                         else "too many teeth to tell from its sidebands)"
                     )
@@ -377,9 +377,9 @@ def own_line(lines: Lines, i: int, measured: float, bin_: float, shared) -> int:
 
 def revolutions_needed(z: float, o: float, tol: float, revolutions: int) -> int | None:
     """The input revolutions at which a shaft order *o* measured to ±*tol* over *revolutions* tells a
-    *z*-tooth gear from one of z ± 1 (z ± 0.5 teeth), or None: a comb's tolerance is b bins / its
+    *z*-tooth gear from one of z ± 1 (z within ± 1 tooth), or None: a comb's tolerance is b bins / its
     furthest sideband + DRIFT o (comb), b = SIDEBAND_BINS at SEPARATED bins apart or more, else 2."""
-    room = 0.5 * o / z - DRIFT * o  # the tolerance a half tooth allows
+    room = o / z - DRIFT * o  # the tolerance a tooth allows
     spent = (tol - DRIFT * o) * revolutions  # b / jmax, in orders x revolutions
     if room <= 0 or spent <= 0:
         return None
