@@ -391,13 +391,27 @@ def test_snapshot_keys_panel(snap_compare, folder, size):
     assert snap_compare(GearlabApp(Path("scenarios")), press=["question_mark"], terminal_size=size)
 
 
-@pytest.mark.parametrize("size", SIZES)
-def test_snapshot_results_of_a_stiffness_run(snap_compare, folder, tmp_path, size):
+@pytest.fixture(scope="module")
+def quick_stiff_run(tmp_path_factory):
+    """A quick run of stiff.toml, made once for the two sizes' snapshots (the same scenario gives
+    the same run), laid out as the `folder` fixture lays out a test's: (base, its run directory)."""
     from gearlab.engine import run_scenario
 
-    run = run_scenario(folder / "stiff.toml", quick=True).path
-    fixed = run.parent / "20260101-000000-000000"  # the timestamp is on screen: a fixed one
-    run.rename(fixed)
+    base = tmp_path_factory.mktemp("quick_stiff")
+    (base / "scenarios").mkdir()
+    (base / "scenarios" / "stiff.toml").write_text(STIFFNESS.replace("{runs}", str(base / "runs")))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
+        return base, run_scenario(base / "scenarios" / "stiff.toml", quick=True).path
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_snapshot_results_of_a_stiffness_run(snap_compare, folder, tmp_path, quick_stiff_run, size):
+    base, made = quick_stiff_run
+    fixed = tmp_path / "runs" / "stiff" / "20260101-000000-000000"  # the timestamp is on screen: a fixed one
+    shutil.copytree(made, fixed)
+    for name in ("scenario.toml", "scenario.original.toml", "run.json"):  # as if run from this test's folder
+        (fixed / name).write_text((fixed / name).read_text().replace(str(base), str(tmp_path)))
 
     async def before(pilot):
         node = node_named(pilot.app, "stiff.toml")
