@@ -456,9 +456,8 @@ def make_kinds_folder(base: Path) -> Path:
     folder = base / "scenarios"
     shutil.copytree(KINDS_DIR, folder)
     (folder / "stiff.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
-    (folder / "transfer.toml").write_text(
-        TRANSFER.replace("{runs}", "runs").replace("repetitions = 2", "repetitions = 1")
-    )
+    # both repetitions: the run is also finished_runs's, whose verdict needs a method ahead (one ties)
+    (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", "runs"))
     detection_scenario(base, methods=("source_only", "matched_filter"))  # scenarios/det.toml, records in data/
     return folder
 
@@ -811,23 +810,25 @@ def test_at_80x24_the_footer_the_sidebar_and_the_tables_fit(repo_scenarios):
 
 
 @pytest.fixture(scope="module")
-def finished_runs(tmp_path_factory, kinds_cache, kind_streams):
-    """Two finished runs of the tiny transfer scenario (their datasets those of the every-kind
-    runs) and the every-kind run of the tiny gap scenario. The second transfer run is a copy of
-    the first under a later time stamp: the same scenario and seeds give the same records
-    (tests/test_crash_safety.py), and these tests check the TUI's view of two runs, not the engine."""
-    from gearlab.engine import run_scenario
-
+def finished_runs(tmp_path_factory, kind_streams):
+    """Two finished runs of the tiny transfer scenario and the run of the tiny gap scenario, all three
+    the every-kind runs (kind_streams): the transfer run twice, under two time stamps, as if run from
+    this folder. The same scenario and seeds give the same records (tests/test_crash_safety.py), and
+    these tests check the TUI's view of two runs, not the engine."""
     base = tmp_path_factory.mktemp("finished_tui")
     folder = base / "scenarios"
     shutil.copytree(KINDS_DIR, folder)
     (folder / "transfer.toml").write_text(TRANSFER.replace("{runs}", str(base / "runs")))
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(kinds_cache))
-        first = run_scenario(folder / "transfer.toml").path
-    second = first.with_name(f"{first.name[:-6]}{int(first.name[-6:]) + 1:06d}")
-    shutil.copytree(first, second)
-    return folder, [first, second], Path(kind_streams["tgap.toml"][0])
+    made = Path(kind_streams["transfer.toml"][0])
+    runs = []
+    for later in (0, 1):
+        run = base / "runs" / made.parent.name / f"{made.name[:-6]}{int(made.name[-6:]) + later:06d}"
+        shutil.copytree(made, run)
+        for name in ("scenario.toml", "scenario.original.toml"):
+            (run / name).write_text((run / name).read_text().replace('dir = "runs"', f'dir = "{base / "runs"}"'))
+        (run / "run.json").write_text((run / "run.json").read_text().replace(str(made.parents[2]), str(base)))
+        runs.append(run)
+    return folder, runs, Path(kind_streams["tgap.toml"][0])
 
 
 @pytest.mark.parametrize("size", SIZES)
