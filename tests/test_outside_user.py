@@ -423,3 +423,31 @@ def test_a_tooth_defined_up_to_a_tooth_or_less_is_said_to_hold_for_the_take_alon
     )
     assert tooth_words({"tooth": 46, "of": 55, "step": 1.0}).endswith("at any of 55 angles)")
     assert tooth_words({"tooth": 17, "of": 96, "step": 32.0}) == "17 of 96 (up to 32-tooth steps between takes)"
+
+
+def test_the_gap_tells_a_tacho_read_with_fewer_marks_per_turn_than_it_gives():
+    # A 29/86 mixer's 2-pulse keyphasor given as pulses_per_rev = 1: the target's revolutions were
+    # half turns (mesh at 14.5, its 2nd harmonic on the source's 29), too few lines off the source's
+    # comb for another gear's family, so the structure check passed and the effects were fitted
+    from gearlab.gap.structure import mesh_check, mesh_line
+
+    points, rng = 4096, np.random.default_rng(2)
+    theta = 2 * np.pi * np.arange(80 * points) / points
+    half = _train([(29, 86)], theta / 2, rng).reshape(80, points)
+    check = mesh_check(half, 29, 86)
+    assert check["differs"] and check["marks"] == 2
+    assert "the tacho gives 2 x the pulses per revolution it was read with?" in mesh_line(check, 29)
+    assert not mesh_check(_train([(29, 86)], theta, rng).reshape(80, points), 29, 86)["differs"]
+
+
+def test_the_gap_tells_a_wheel_a_tooth_off():
+    # A 29/86 mixer described with an 85-tooth wheel: inspect said 'the wheel on the output shaft
+    # shows 86.0 ± 0.2 teeth', the gap's structure check (mesh orders only) passed and fitted effects
+    from gearlab.gap.structure import mesh_check, wheel_line
+
+    points, rng = 4096, np.random.default_rng(4)
+    theta = 2 * np.pi * np.arange(200 * points) / points
+    rows = _train([(29, 86)], theta, rng).reshape(200, points)
+    line = wheel_line(mesh_check(rows, 29, 85), 85)
+    assert line is not None and line.startswith("the wheel shows 86.0 ± ") and "85 expected" in line
+    assert wheel_line(mesh_check(rows, 29, 86), 86) is None
