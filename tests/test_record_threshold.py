@@ -78,3 +78,7 @@ def test_healthy_lines_are_the_references_strong_orders_over_the_residuals_floor
     assert set(np.flatnonzero(lines)) == set(LINES), np.flatnonzero(lines)
     quiet = np.random.default_rng(1).standard_normal((40, L))
     assert not healthy_lines(np.median(quiet, axis=0), quiet - np.median(quiet, axis=0)).any()
+    # a noise-free history (a simulation's): no floor to hold a line against, every order kept (its
+    # templates would all be left out: gearlab.notebook's detector_scores example scored 0)
+    clean = np.stack([healthy(0.0)] * 9)
+    assert not healthy_lines(clean[0], clean - clean[0]).any()
