@@ -84,3 +84,27 @@ def test_a_pinion_whose_speed_came_from_its_mesh_lines_is_said_to_trade_with_the
     # the speed declared, the tooth count is checked
     report = inspect_record(str(path), described((18, 44), speed="38 Hz"), InspectOptions(vibration="acc"))
     assert "stage 1: mesh order 17 measured, 18 expected (a 17-tooth pinion" in report["verdict"], report["verdict"]
+
+
+def test_a_declared_speed_the_mesh_lines_do_not_confirm_is_no_match(tmp_path):
+    # A 29/102 simulated record (no tacho) described with 27 teeth at its declared 19.81 Hz 'matched':
+    # the declared speed was kept ('the mesh lines fit 21.35 Hz better'), and at it a weak line at
+    # order 27 passed as the mesh. Here a 31/74 mesh whose power sits at its 2nd harmonic, and a weak
+    # tone at order 29 of the declared 23.9 Hz, described with 29 teeth.
+    fs, rng = 8192.0, np.random.default_rng(5)
+    theta = 2 * np.pi * 24.0 * np.arange(int(120 / 24.0 * fs)) / fs
+    mod = 1 + 0.2 * np.cos(31 / 74 * theta + 1.1)
+    x = mod * (0.1 * np.cos(31 * theta) + np.cos(62 * theta + 1) + 0.3 * np.cos(93 * theta + 2))
+    notes = set()
+    for tone in (0.05, 0.1, 0.2):
+        path = tmp_path / f"tone{tone}.npz"
+        np.savez(path, acc=x + tone * np.cos(29 * 23.9 / 24 * theta) + rng.normal(0, 0.2, x.size), fs=fs)
+        wrong = inspect_record(str(path), described((29, 74), speed="23.9 Hz"), InspectOptions("acc"))
+        said = "the description 'box' differs: speed 23.9 Hz declared, but "
+        assert wrong["verdict"].startswith(said), wrong["verdict"]
+        notes.add(wrong["verdict"][len(said) :].split(" of ")[0].split(" (")[0])
+        assert wrong["verdict"].endswith("the speed or a tooth count differs"), wrong["verdict"]
+        right = inspect_record(str(path), described((31, 74), speed="23.9 Hz"), InspectOptions("acc"))
+        assert right["matches"], right["verdict"]
+    # both of the speed search's notes: no mesh line near the declared speed, or another speed fits better
+    assert notes == {"no line within ±1%", "the mesh lines fit 25.66 Hz"}, notes
