@@ -10,7 +10,10 @@ on one shaft, read at 66 666.67 Hz, 30-50 Hz) and a described train of other tee
 record with damage on each of the four gears (stage-1 pinion and wheel, stage-2 pinion and wheel):
 a chip, crack, broken tip, spall or pit at ladder step 12-20 on a random tooth. Every record is cut
 from its tacho (signals.cut_revolutions) and localised against the history
-(gearlab.signals.localise), orders up to 90 % of the records' Nyquist order.
+(gearlab.signals.localise), orders up to 90 % of the records' Nyquist order. Which of the
+intermediate shaft's two gears: by the description's simulated tooth-fault events at the trial's
+speed (gearlab.data.which_templates; --which width: the event's width alone); --effects simulates
+the records (not the templates) with other effects: a structure other than the simulator's.
 
 Per case it prints: the records flagged (a shaft over its history threshold); of those, the damaged
 gear named first (alone), its shaft named with both its gears (the intermediate shaft's two gears
@@ -76,7 +79,7 @@ def _description(box: str) -> str:
     return str(TWO)
 
 
-def trial(args: tuple[str, int, int]) -> list[dict]:
+def trial(args: tuple) -> list[dict]:
     import warnings
 
     from gearlab.data.simulated import simulated_record
@@ -85,7 +88,7 @@ def trial(args: tuple[str, int, int]) -> list[dict]:
     from gearlab.signals import localise as L
 
     warnings.filterwarnings("ignore", message=".*steps per period.*")
-    box, seed, index = args
+    box, seed, index, which, effects = args
     spec = BOXES[box]
     rng = np.random.default_rng([seed, index] if box == "phm09" else [seed, index, 2])
     speed = float(rng.choice(spec["speeds"]))
@@ -106,6 +109,7 @@ def trial(args: tuple[str, int, int]) -> list[dict]:
             snr_db=snr,
             seed=int(next(seeds)),
             fs=spec["fs"],
+            effects=list(effects),
             **extra,
         )
         cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
@@ -115,6 +119,11 @@ def trial(args: tuple[str, int, int]) -> list[dict]:
     history = [record() for _ in range(2)]
     top = min(0.9 * spec["fs"] / 2 / speed, 0.45 * history[0][0].shape[1])
     hist = L.history([r for r, _ in history], table, first_revolutions=[f for _, f in history], max_order=top)
+    templates = None
+    if which == "simulated":  # the description's own simulator, without the records' effects
+        from gearlab.data.which_templates import simulated_templates
+
+        templates = simulated_templates(table, speed, spec["fs"], gearbox=extra.get("gearbox"), sim_fs=spec["sim_fs"])
     cases = [("healthy", None, None)]
     for word, name in spec["gears"]:
         z = int(name.split("T (")[0].split()[-1])
@@ -128,7 +137,7 @@ def trial(args: tuple[str, int, int]) -> list[dict]:
     out = []
     for word, name, fault in cases:
         revs, first = record([fault] if fault else [])
-        res = L.localise(revs, hist, table, first_revolution=first)
+        res = L.localise(revs, hist, table, first_revolution=first, templates=templates)
         row = {"box": box, "trial": index, "speed": speed, "snr": snr, "case": word, "gear": name, "fault": fault}
         row.update(named=res.named, shaft=res.named_shaft)
         ev = next((e for e in res.ranking if e.shaft == res.named_shaft), None)
@@ -194,18 +203,34 @@ def main(argv=None) -> None:
     p.add_argument("--seed", type=int, default=1000, help="below 1000: development; from 1000: reported figures")
     p.add_argument("--box", action="append", choices=sorted(BOXES), help="gearbox (default: both)")
     p.add_argument("--workers", type=int, default=1, choices=(1, 2))
+    p.add_argument(
+        "--which",
+        choices=("simulated", "width"),
+        default="simulated",
+        help="which of a shaft's two gears: by"
+        " the description's simulated events (the default), or by the event's width alone",
+    )
+    p.add_argument(
+        "--effects",
+        default="[]",
+        help="JSON list of effect tables the records (not the templates) are"
+        ' simulated with: a structure other than the simulator\'s, e.g. \'[{"name": "bearing_stiffness"}]\'',
+    )
     p.add_argument("--rows", help="write every record's row (its evidence) to this JSON file")
     args = p.parse_args(argv)
     every = []
     kind = "development" if args.seed < 1000 else "fresh"
     for box in args.box or sorted(BOXES):
-        jobs = [(box, args.seed, i) for i in range(args.trials)]
+        jobs = [(box, args.seed, i, args.which, json.loads(args.effects)) for i in range(args.trials)]
         if args.workers > 1:
             with ProcessPoolExecutor(args.workers) as pool:
                 rows = [r for rs in pool.map(trial, jobs) for r in rs]
         else:
             rows = [r for job in jobs for r in trial(job)]
-        print(f"\nlocalisation on simulated {box} records: {args.trials} trials, seed {args.seed} ({kind})")
+        print(
+            f"\nlocalisation on simulated {box} records: {args.trials} trials, seed {args.seed} ({kind}), which gear"
+            f" by {args.which}, records' effects {args.effects}"
+        )
         report(rows, box)
         every += rows
     if args.rows:

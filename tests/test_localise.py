@@ -441,3 +441,47 @@ def test_a_stage_2_pinion_fault_on_a_21_63_24_56_train_is_named_the_24t_pinion(t
     assert found["named"] == pinion and ev["which"] == pinion, found["summary"]
     assert 0.1 < ev["stage_evidence"]["u"] <= 0.35  # the band the shaft was named with both gears in
     assert call_of(found, ["intermediate gear 63T (stage 1)"]).startswith("other damage: " + pinion)
+
+
+def test_simulated_events_name_a_24t_pinion_chip_the_width_leaves_undecided():
+    """Simulate and compare (signals.which_template): a chip on the 24T pinion of a 21/63 + 24/56
+    train's intermediate shaft reads as wide as a 63T tooth's event could (the width rule: both); the
+    description's simulated chip, spall and crack on each gear at the record's speed (without its load,
+    noise or tooth) fit the pinion's clearly better, and the pinion is named alone."""
+    from gearlab.data.simulated import simulated_record
+    from gearlab.data.which_templates import simulated_templates
+    from gearlab.gearbox import order_table, resolve_gearbox
+    from gearlab.signals import cut_revolutions
+
+    table = order_table(resolve_gearbox(str(TWO)))
+    speed = 25.0
+
+    def take(faults, s):
+        rec = simulated_record(
+            faults,
+            gearbox=str(TWO),
+            speed_hz=speed,
+            load_nm=10.5,
+            revolutions=4 * speed,
+            snr_db=25.0,
+            seed=s,
+            fs=20_000.0,
+            sim_fs=60_000.0,
+        )
+        cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
+        return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+
+    hist = [take([], 201), take([], 202)]
+    revs, first = take([{"name": "chip", "gear": "intermediate pinion", "tooth": 20, "step": 18}], 203)
+    top = min(0.9 * 10_000 / speed, 0.45 * hist[0][0].shape[1])
+    h = L.history([r for r, _ in hist], table, first_revolutions=[f for _, f in hist], max_order=top)
+    pinion = "intermediate pinion 24T (stage 2)"
+    width = L.localise(revs, h, table, first_revolution=first)
+    assert width.named != pinion, width.summary()  # what the event's width says
+    templates = simulated_templates(table, speed, 20_000.0, gearbox=str(TWO), sim_fs=60_000.0)
+    found = L.localise(revs, h, table, first_revolution=first, templates=templates).describe()
+    ev = next(s for s in found["shafts"] if s["shaft"] == "intermediate")
+    assert found["named"] == pinion and ev["which"] == pinion, found["summary"]
+    fits = ev["stage_evidence"]["simulated fit"]
+    assert fits[pinion] > fits["intermediate gear 63T (stage 1)"] + 0.1, fits
+    assert "simulated event's fit" in found["summary"]

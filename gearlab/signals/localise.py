@@ -31,31 +31,21 @@ z of the history's own records, each left out of its reference in turn, and at l
 Gaussian quantile at the false-alarm rate shared out among the shafts. No shaft over its
 threshold: nothing localised.
 
-Which gear on a shaft. A shaft carrying two gears (stage k's wheel, stage k+1's pinion) is named by
-the length of the fault's event (:func:`which_gear`): a tooth fault lasts while its tooth is in
-mesh, about a pitch of its own gear, so the event of the finer gear (more teeth) is shorter. The
-shaft's exclusive orders from 1/2 to 4 times the finer gear's tooth count (WIDTH_BAND), each
-weighted by its new share as for the tooth, give an envelope whose RMS width w about its peak is
-read in pitches of the finer gear. u = log w / log(Z_fine / Z_coarse) names the finer gear up to
-U_FINE, the coarser above U_COARSE; both (as the shaft) between, or when the tooth counts differ by
-less than MIN_RATIO, or more than WIDTH_LOW of the excess lies below half the finer gear's tooth
-order (a low mode's ring then sets the width), or z < WIDTH_Z and the event reads wide (noise widens
-an event, so a narrow one stands: of flagged records at z < 10 on development seeds, 0 of 26 pinion
-faults read narrow, 14 of 23 wheel faults did). Rig simulator and a 21/63 + 24/56 train,
-development seeds 0 and 300 (40 trials each): u of the wheel (96T, 63T) 10-90 % -0.33 … 0.32 and
--0.25 … 0.07, of the pinion (48T, 24T) 0.06 … 0.63 and -0.04 … 0.58. The width follows the
-structure's modes as well as the teeth, and a pit or spall lasts a part of its tooth's pitch only,
-so the ranges overlap. "Both" is no safe answer: a scenario watching either gear counts it as its
-own fault. The band 0 … 0.1 (0 … 0.35 before) named, of flagged records on those seeds, wheel /
-pinion faults right 61 / 78 % on the rig (56 / 44 before), 90 / 58 % on the other train (78 / 15),
-wrong (the shaft's other gear, or another shaft) 7 / 0 % and 5 / 13 % (0 / 0 and 2 / 13). Tried
-and dropped (development seeds): the fault's energy near each stage's mesh harmonics (McFadden's narrow band
-about each mesh), on the 21/63 + 24/56 train the larger about the wheel's mesh in 16-28 % of wheel
-and 35-62 % of pinion faults (on the rig every stage-1 mesh harmonic is a stage-2 one): a tooth's
-loss of stiffness is a force pulse near order zero, filtered by the structure, not a modulation of
-its mesh; nor the residual's phase coherence with each mesh's healthy harmonics, tooth by tooth
-(z 1-5 where the event's z was 10 to 10^5); the share of the event's energy within half a pitch
-and the envelope's width over other windows add little to u.
+Which gear on a shaft. Given the gearbox description's simulated events (*templates*, from a layer
+that may simulate: gearlab.data.which_templates), a two-gear shaft's gear is the one whose simulated
+tooth-fault event fits the record's clearly better (signals.which_template: a stage-1 wheel's and a
+stage-2 pinion's force pulse reach the sensor through different modes). Without them, by the length
+of the event (:func:`which_gear`): a tooth fault lasts while its tooth is in mesh, about a pitch of
+its own gear, so the finer gear's (more teeth) is shorter. The shaft's exclusive orders from 1/2 to
+4 times the finer gear's tooth count (WIDTH_BAND), each weighted by its new share as for the tooth,
+give an envelope whose RMS width w about its peak is read in pitches of the finer gear. u = log w /
+log(Z_fine / Z_coarse) names the finer gear up to U_FINE, the coarser above U_COARSE; both (as the
+shaft) between, or when the tooth counts differ by less than MIN_RATIO, or more than WIDTH_LOW of
+the excess lies below half the finer gear's tooth order (a low mode's ring sets the width), or z <
+WIDTH_Z and the event reads wide (noise widens an event, never narrows it). The width follows the
+structure's modes as well as the teeth, and a pit or spall lasts a part of its pitch, so the two
+gears. u overlap (figures, and what was tried and dropped: docs/real_data.md and `git log` of this
+file). "Both" is no safe answer: a scenario watching either gear counts it as its own fault.
 
 Tooth. The named shaft's orders, each weighted by the share of its power that is new
 (clip(Δ / |X̄|², 0, 1)), form the shaft's residual; the peak of its envelope's energy over one
@@ -95,6 +85,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
+from .which_template import fit_words, which_by_template
 
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
@@ -611,6 +602,7 @@ def which_line(evidence: dict, which: str | None) -> str:
     if not evidence:
         return ""
     width = f"event width {evidence['width']:.2f} {evidence['event width']}, " if "width" in evidence else ""
+    width += fit_words(evidence)
     expected = " / ".join(f"{g.split(' (')[0]} ~{v:.2f}" for g, v in evidence["expected"].items())
     if which:
         return f"; {width}expected {expected}"
@@ -757,8 +749,10 @@ def history(
     return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference)
 
 
-def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0) -> Localisation:
-    """Rank the shafts of *table* by the localised change *revolutions* carry against *hist*."""
+def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0, templates=None) -> Localisation:
+    """Rank the shafts of *table* by the localised change *revolutions* carry against *hist*. *templates*:
+    a function of the layout giving each two-gear shaft's simulated events (signals.which_template);
+    None: the gear is named by the event's width."""
     lay = hist.layout
     m, revolutions = turned(check_array(revolutions, "revolutions", min_ndim=2), hist.reference, hist.marks)
     rec = content(revolutions, lay, first_revolution)
@@ -772,6 +766,9 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
         flagged = zs > hist.thresholds[s]
         on = gears[name]
         which, dens = (None, {}) if len(on) == 1 or not flagged else which_gear(rec, hist.spread, lay, s, on, zs)
+        if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
+            by, fits = which_by_template(rec, hist.spread, lay, _harmonics(lay, s, excl[:, s]), on, templates(lay))
+            which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
         out.append(
             ShaftEvidence(
                 name,

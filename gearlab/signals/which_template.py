@@ -1,0 +1,90 @@
+"""Which gear on a two-gear shaft, by simulate and compare: the record's event against each gear's
+simulated event.
+
+A tooth fault is a force pulse near order zero at its mesh, filtered by the structure on its way to
+the sensor (gearlab.signals.localise, "Which gear on a shaft"). A stage-1 wheel's and a stage-2
+pinion's mesh load different degrees of freedom, so the same pulse reaches the sensor through
+different modes: the event's *shape* tells the two apart where its width alone often cannot. The
+caller (a layer that may simulate: gearlab.data.which_templates) simulates the healthy train and a
+tooth fault on each candidate gear at the record's speed and passes, per gear, the templates: the
+fault's synchronous mean less the healthy one at the layout's orders (a few fault kinds each). Here,
+numpy only: the record's residual on the shaft's exclusive orders (each order's mean weighted by
+the share of its power that is new, as for the tooth) is compared with each template by normalised
+cross-correlation maximised over every shift of the shaft's angle (the tooth placed is not the
+tooth found), its best over the gear's kinds is the gear's fit; the gear whose fit exceeds the
+other's by MARGIN is named, else both (None).
+
+The templates are only as right as the simulator's structure: records simulated with bearings 2x
+stiffer or 0.3-0.5x as stiff as the templates' were named on the wrong gear of the two in up to 2/3
+of cases (the width rule too: it follows the modes as well). So where the history's mesh harmonics
+spread about the simulated healthy train's by over STRUCTURE_DB (structure_gap) the events are not
+used and the width decides; the gap diagnosis's corrected description is what to simulate from.
+Figures: docs/real_data.md ("Which gear").
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+MARGIN = 0.05  # fit of one gear over the other's below which both stay named
+STRUCTURE_DB = 5.0  # spread of the healthy mesh harmonics about the simulator's over which its events are not used
+
+
+def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
+    """The record's residual at the orders *sel*: each mean weighted by the share of its power that is new."""
+    X = rec.mean[sel]
+    return np.clip((rec.power[sel] - ref.power[sel]) / np.maximum(np.abs(X) ** 2, 1e-300), 0, 1) * X
+
+
+def fit(R: np.ndarray, D: np.ndarray, m: np.ndarray) -> float:
+    """Normalised cross-correlation of two spectra at harmonics *m*, maximised over every circular
+    shift of the shaft's angle: 1 for the same event anywhere in the turn."""
+    norm = float(np.linalg.norm(R) * np.linalg.norm(D))
+    if m.size == 0 or norm <= 0:
+        return 0.0
+    size = int(2 ** math.ceil(math.log2(2 * int(m.max()) + 2)))
+    a, b = np.zeros(size, complex), np.zeros(size, complex)
+    a[m], b[m] = R, D
+    return float(np.abs(np.fft.ifft(a * np.conj(b))).max() * size / norm)
+
+
+def structure_gap(ref, lay, healthy: np.ndarray) -> float:
+    """Spread (dB) of the history's mesh-harmonic powers about the simulated healthy train's, less
+    their mean difference (the load and the sensor's gain are not known to the simulation)."""
+    sel = lay.carrier & (ref.power > 0) & (np.abs(healthy) > 0)
+    if sel.sum() < 3:
+        return math.inf
+    return float(np.std(10 * np.log10(ref.power[sel] / np.abs(healthy[sel]) ** 2)))
+
+
+def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], gears, templates: dict):
+    """(the gear whose simulated event fits the record's clearly better, or None: both; the fits).
+    *harmonics*: the shaft's exclusive orders and their harmonic numbers of the shaft (localise._harmonics);
+    *templates*: {"healthy": the simulated healthy mean, "gears": {gear name: [template, ...]}}.
+    False instead of a gear: the simulator's structure differs from the history's (structure_gap
+    over STRUCTURE_DB), its events are not used."""
+    gap = structure_gap(ref, lay, templates["healthy"])
+    ev = {"structure gap dB": gap}
+    if gap > STRUCTURE_DB:
+        return False, {**ev, "not used": f"the simulated mesh harmonics differ from the history's by {gap:.1f} dB"}
+    sel, m = harmonics
+    R = residual(rec, ref, sel)
+    fits = {g.name: max((fit(R, t[sel], m) for t in templates["gears"].get(g.name, ())), default=0.0) for g in gears}
+    (best, a), (_, b) = sorted(fits.items(), key=lambda kv: -kv[1])
+    ev.update({"simulated fit": fits, "margin": MARGIN})
+    if a - b <= MARGIN:
+        return None, {**ev, "undecided": f"the simulated events fit alike ({a:.2f} / {b:.2f})"}
+    return next(g for g in gears if g.name == best), ev
+
+
+def fit_words(evidence: dict) -> str:
+    """The simulated events' evidence in words, for localise.which_line ("" without it)."""
+    if "simulated fit" in evidence:
+        return (
+            "simulated event's fit "
+            + " / ".join(f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["simulated fit"].items())
+            + ", "
+        )
+    return f"simulated events not used ({evidence['not used']}), " if "not used" in evidence else ""
