@@ -451,3 +451,19 @@ def test_the_gap_tells_a_wheel_a_tooth_off():
     line = wheel_line(mesh_check(rows, 29, 85), 85)
     assert line is not None and line.startswith("the wheel shows 86.0 ± ") and "85 expected" in line
     assert wheel_line(mesh_check(rows, 29, 86), 86) is None
+
+
+def test_a_speed_two_stages_read_apart_says_a_tooth_count_may_differ():
+    # A 19/71 + 28/47 reducer's int16 WAVs without a tacho, described with a 70-tooth first wheel: the
+    # gap refused them, 'the speed is ambiguous ... 24.95 Hz (as 2xM1) or 24.59 Hz (as 1xM2) ...;
+    # expected a declared speed': the two stages' meshes read two speeds because a tooth count differs
+    from test_inspect import described, synthesise
+
+    from gearlab.gearbox.speed import speed_from_mesh
+
+    x, _, fs = synthesise(((19, 71), (28, 47)), speed=25.0, fs=12000.0, revs=300, seed=7)
+    with pytest.raises(GearlabInputError, match=r"or the description's tooth counts of stages 1 to 2 differ"):
+        speed_from_mesh(x, fs, described((19, 70), (28, 47), speed="25 Hz"), None, "h1.wav")
+    assert speed_from_mesh(x, fs, described((19, 71), (28, 47), speed="25 Hz"), None, "h1.wav")[0] == pytest.approx(
+        25.0, rel=1e-3
+    )

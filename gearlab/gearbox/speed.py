@@ -170,7 +170,7 @@ def speed_from_mesh(
                 evidence, _, _, stages = explain(f, tol)
                 if not stages:
                     continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
-                hypotheses.append((float(np.sum(weight * evidence)), f, f"{fmt_hz(x[i])} as {h}×M{s.index}"))
+                hypotheses.append((float(np.sum(weight * evidence)), f, f"{fmt_hz(x[i])} as {h}×M{s.index}", s.index))
     if declared is not None:
         # the declared speed, refined by the best hypothesis near it, unless the lines fit another speed
         # much better: a few weak lines always fit within ±1 % as some harmonic, and a wrong tooth count
@@ -196,10 +196,19 @@ def speed_from_mesh(
     for other in hypotheses:
         ratio = max(best[1] / other[1], other[1] / best[1])  # a multiple is the same family, not another speed
         if other[0] >= AMBIGUOUS * best[0] and abs(ratio - round(ratio)) > SPEED_AGREE * ratio:
+            # two stages' meshes reading two speeds: a tooth count between them may be wrong (a 19/71 +
+            # 28/47 reducer described with a 70-tooth wheel was told only to declare its speed)
+            stages = best[3] != other[3]
             raise AmbiguousSpeed(
                 f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
                 f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared "
-                "speed (e.g. '25 Hz') or a tacho channel",
+                "speed (e.g. '25 Hz') or a tacho channel"
+                + (
+                    f" (or the description's tooth counts of stages {min(best[3], other[3])} to "
+                    f"{max(best[3], other[3])} differ from the gearbox's: gearlab inspect at the speed names them)"
+                    if stages
+                    else ""
+                ),
                 [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
             )
     return best[1], f"from the mesh lines ({best[2]})", None
