@@ -167,3 +167,22 @@ def test_a_run_whose_learned_methods_saw_another_input_is_refused(tmp_path, monk
             S.score(run, [])
         line = str(found.value)
         assert refused in line and "run the scenario again" in line and "\n" not in line, line
+
+
+def test_a_crossed_run_scores_a_record_as_it_scored_it_itself(cli, tmp_path, cache):
+    """history_fit = "crossed": score loads every fold's trained model (each from its own unit's
+    file; the second fold's was looked for under the first's standardising models) and calls the
+    units of a test record of the run as the run called them."""
+    path = scenario(tmp_path, methods=("source_only",), detection='history_fit = "crossed"')
+    out = run(cli, path, tmp_path / "runs")
+    code, stdout, err = cli("score", out, tmp_path / "data" / "f1.zip", "--json")
+    assert code == 0, err
+    rows = {r["unit"]: r for r in json.loads(stdout) if r["method"] == "source_only"}
+    assert set(rows) == {"revolution", "record5", "record10"}
+    import csv
+
+    with (out / "scores.csv").open() as f:
+        own = [r for r in csv.DictReader(f) if r["method"] == "source_only" and r["file"].endswith("f1.zip")]
+    for unit, r in rows.items():
+        mine = [x for x in own if x["unit"] == unit]
+        assert r["units"] == len(mine) and r["called"] == sum(x["decision"] == "1" for x in mine), (unit, r)

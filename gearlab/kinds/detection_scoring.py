@@ -185,8 +185,8 @@ def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: 
             fold = by_unit[name]
             keep = [i for i in range(len(record["folds"])) if i != k]
             scored = raw(name)
-            models = {u: rule.model(u, fold["history_scores"][u], keep=keep) for u in fold["history_scores"]}
-            parts.append({p: {u: models[u].standardised(s) for u, s in units.items()} for p, units in scored.items()})
+            fitted = {u: rule.model(u, fold["history_scores"][u], keep=keep) for u in fold["history_scores"]}
+            parts.append({p: {u: fitted[u].standardised(s) for u, s in units.items()} for p, units in scored.items()})
         return {p: {u: np.mean([q[p][u] for q in parts], axis=0) for u in seen[p]} for p in seen}
     return raw(record["unit"])
 
