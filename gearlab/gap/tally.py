@@ -12,11 +12,12 @@ cluster) cannot reach the folder and is not counted (the line says the time alon
 
 from __future__ import annotations
 
-import os
 import time
 import uuid
 from collections.abc import Callable
 from pathlib import Path
+
+from ..files import atomic_write
 
 WRITE_EVERY = 0.5  # s between two writes of one fit's count
 
@@ -30,10 +31,8 @@ class _Count:
     def write(self) -> None:
         if self.file is None:
             return
-        part = self.file.with_suffix(".part")
         try:  # written whole, then renamed: the reader never sees half a number
-            part.write_text(str(self.n))
-            os.replace(part, self.file)
+            atomic_write(self.file, str(self.n))
         except OSError:  # the folder is not reachable from here (another machine): count no more
             self.file = None
         self.written = time.monotonic()
