@@ -16,9 +16,10 @@ other's by MARGIN is named, else both (None).
 
 The templates are only as right as the simulator's structure: records simulated with bearings 2x
 stiffer or 0.3-0.5x as stiff as the templates' were named on the wrong gear of the two in up to 2/3
-of cases (the width rule too: it follows the modes as well). So where the history's mesh harmonics
-spread about the simulated healthy train's by over STRUCTURE_DB (structure_gap) the events are not
-used and the width decides; the gap diagnosis's corrected description is what to simulate from.
+of cases (the width rule in up to 1/3: it follows the modes too), 4-8 of 14-19 with the gate below.
+So where the history's mesh harmonics spread about the simulated healthy train's by over
+STRUCTURE_DB (structure_gap) the events are not used and the width decides; the gap diagnosis's
+corrected description is what to simulate from.
 Figures: docs/real_data.md ("Which gear").
 """
 
