@@ -89,6 +89,20 @@ def module_cache(tmp_path_factory):
         yield path
 
 
+@pytest.fixture
+def gearlab(cli, monkeypatch, module_cache):
+    """`gearlab ARGS` run from a folder, as a user types it there: (exit code, stdout + stderr), the
+    datasets in the module's one cache (its runs often simulate the same source: once)."""
+    monkeypatch.setenv("COLUMNS", "250")
+
+    def run(folder, *args):
+        monkeypatch.chdir(folder)
+        code, out, err = cli(*args)
+        return code, out + err
+
+    return run
+
+
 @pytest.fixture(scope="session", autouse=True)
 def one_torch_thread():
     """Tiny networks gain nothing from threads, and on a busy machine threads spin against each other:

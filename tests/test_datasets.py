@@ -328,6 +328,7 @@ VARIATIONS = {
     "seed": 1,
     "fs": 250e3,
     "healthy_twin": True,
+    "unit_shaft": (1, 3),
 }
 
 

@@ -99,25 +99,6 @@ def slow_box(tmp_path_factory):
     return folder
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    """One dataset cache for the module: the runs with and without a tacho simulate the same source."""
-    return tmp_path_factory.mktemp("cache")
-
-
-@pytest.fixture
-def gearlab(cli, monkeypatch, cache):
-    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
-    monkeypatch.setenv("COLUMNS", "250")
-
-    def run(folder, *args):
-        monkeypatch.chdir(folder)
-        code, out, err = cli(*args)
-        return code, out + err
-
-    return run
-
-
 def test_an_event_once_per_turn_of_a_slow_shaft_survives_its_tsa_not_the_inputs():
     """A dip once per turn of a shaft turning 26/73 of the input (a 26/73 reducer's intermediate shaft)
     at the shaft's angle 0.3: the input TSA of 30 revolutions holds a tenth of it, the shaft's TSA all

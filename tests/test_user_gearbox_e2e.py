@@ -205,27 +205,6 @@ def two_stage(tmp_path_factory):
     return rig_folder(tmp_path_factory.mktemp("reducer"), "box.toml", TWO_STAGE, 20_000.0, writers, files)
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    """One dataset cache for the module: the tacho and the tacho-less detection simulate the same
-    source (its key is its content), once."""
-    return tmp_path_factory.mktemp("cache")
-
-
-@pytest.fixture
-def gearlab(cli, monkeypatch, cache):
-    """`gearlab ARGS` in a folder: (exit code, stdout + stderr)."""
-    monkeypatch.setenv("GEARLAB_CACHE", str(cache))
-    monkeypatch.setenv("COLUMNS", "250")
-
-    def run(folder, *args):
-        monkeypatch.chdir(folder)
-        code, out, err = cli(*args)
-        return code, out + err
-
-    return run
-
-
 def inspected(gearlab, folder, *args) -> dict:
     code, out = gearlab(folder, "inspect", *args, "--json")
     assert code == 0, out
