@@ -300,19 +300,25 @@ def noisy_rows(task: tuple) -> np.ndarray:
         else:
             j = task.revolutions if task.use_tsa else 1  # the first of J revolutions is the same either way
             # J consecutive revolutions of one record, sampled at POINTS x speed
-            realised = realise(
-                record(revs, j, start),
-                chain,
-                noise,
-                Seeds.of_row(seed),
-                fs=POINTS * task.speed_hz,
-                speed_hz=task.speed_hz,
-                reference_rms=task.reference_rms,
-                average=task.use_tsa,
-            )
+            realised = _realised(task, record(revs, j, start), chain, noise, seed, average=task.use_tsa)
             kept = realised if task.use_tsa else realised[0]
         out[i] = (kept - mean) / std  # eq. 2.112 / 4.6; TSA of standardised = standardised TSA
     return out
+
+
+def _realised(task: RowsTask, revolutions: np.ndarray, chain, noise, seed, average: bool = False) -> np.ndarray:
+    """Consecutive revolutions of a row's record realised at the task's speed (data.realise)."""
+    fs = POINTS * task.speed_hz
+    return realise(
+        revolutions,
+        chain,
+        noise,
+        Seeds.of_row(seed),
+        fs=fs,
+        speed_hz=task.speed_hz,
+        reference_rms=task.reference_rms,
+        average=average,
+    )
 
 
 def shaft_row(task: RowsTask, revs: np.ndarray, start: int, offset: int, chain, noise, seed) -> np.ndarray:
@@ -324,15 +330,7 @@ def shaft_row(task: RowsTask, revs: np.ndarray, start: int, offset: int, chain, 
     ratio = Fraction(*task.shaft)
     j = task.revolutions if task.use_tsa else 1
     count = math.ceil((j + 1) / ratio) + 1  # input revolutions that hold j whole turns of the shaft
-    realised = realise(
-        record(revs, count, start),
-        chain,
-        noise,
-        Seeds.of_row(seed),
-        fs=POINTS * task.speed_hz,
-        speed_hz=task.speed_hz,
-        reference_rms=task.reference_rms,
-    )
+    realised = _realised(task, record(revs, count, start), chain, noise, seed)
     phase = float((ratio * (offset + start)) % 1)
     turns = shaft_revolutions(realised, float(ratio), phase)[:j]
     return turns.mean(axis=0) if task.use_tsa else turns[0]
