@@ -43,8 +43,10 @@ def _cell(x) -> str:
 def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
     """*row* with its detection and false alarms counted as a user acts on them once the damaged gear is
     named (gearlab.kinds.detection_which_gear): a unit of a record whose change lies on another gear
-    is other damage, neither a detection nor a false alarm of the watched gear. The row as it is
-    when the run localised nothing."""
+    is other damage, neither a detection nor a false alarm of the watched gear: its units leave the
+    false alarms' count and their denominator alike (counted in, an other-damage take not flagged
+    diluted a healthy take's false alarms: 4 % said for 8 %). The row as it is when the run
+    localised nothing."""
     calls = (summary.get("which_gear") or {}).get("calls") or []
     call = next(
         (
@@ -58,7 +60,8 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
         return row
     positive = (summary.get("target") or {}).get("positive", "fault")
     negative = [k for k in call["units"] if k != positive and call["watched"].get(k) is not None]
-    n = sum(call["units"][k] for k in negative)
+    judged = call.get("judged", call["units"])  # a summary from before 'judged': every unit counted
+    n = sum(judged[k] for k in negative)
     false_alarm = sum(call["watched"][k] * call["units"][k] for k in negative) / n if n else row["false_alarm"]
     return {**row, "detection": call["watched"].get(positive, row["detection"]), "false_alarm": false_alarm}
 

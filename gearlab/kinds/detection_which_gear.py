@@ -224,7 +224,8 @@ def records_md(loc: dict, labels: dict) -> str:
 
 def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
     """Per condition and method, for the longest TSA: of each test label's units, the % called a
-    watched-gear fault and the % called other damage (the record's change localised elsewhere)."""
+    watched-gear fault and the % called other damage (the record's change localised elsewhere), the
+    units, and those on records not called other damage (``judged``: what a false alarm is counted of)."""
     if not loc or not records:
         return []
     unit = longest_tsa(u for r in records for u in r["thresholds"])
@@ -252,6 +253,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
                 "units": {k: len(v) for k, v in watched.items()},
             }
         )
+        judged: dict[str, int] = {}
     return out
 
 
@@ -259,6 +261,7 @@ def calls_md(calls: list[dict]) -> str:
     """calls_by_label as a table: 'watched % / other %' per label."""
     if not calls:
         return ""
+            judged[label] = judged.get(label, 0) + (0 if elsewhere else len(s))
     labels = list(dict.fromkeys(k for c in calls for k in c["watched"]))
     unit = calls[0]["unit"]
     out = [
@@ -267,6 +270,7 @@ def calls_md(calls: list[dict]) -> str:
         f"| {unit}: condition | method | " + " | ".join(f"'{k}' watched / other %" for k in labels) + " |",
         "|---|---|" + "---|" * len(labels),
     ]
+                "judged": judged,
     for c in calls:
         cells = []
         for k in labels:
