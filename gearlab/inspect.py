@@ -464,9 +464,10 @@ def render(report: dict, console, width: int = 100) -> None:
 # --- which gear: localisation against healthy history records ----------------------------------------
 
 
-def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple[np.ndarray, int, float, int]:
+def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple:
     """(complete input revolutions at the pipeline's points, the first one's number from the angle's
-    zero modulo the train period, the Nyquist order, the tacho's marks per turn) of one file as read."""
+    zero modulo the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate) of
+    one file as read."""
     from .signals import POINTS
 
     rec = read_record(path, options)
@@ -478,25 +479,29 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
     kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
     on_input = (options.tacho_shaft or box.sensor.tacho) == "input"
     marks = (options.pulses_per_rev or box.sensor.pulses_per_rev) if kind == "pulses" and on_input else 1
-    return revs, first, rec.fs / (2 * speed.mean_hz), marks
+    return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs
 
 
 def localisation(path: str, history: list[str], box: Gearbox, options: InspectOptions) -> dict:
     """Which shaft and gear the record's synchronous average carries a localised change on, against
     healthy *history* records of the same gearbox read with the same options
-    (gearlab.signals.localise; orders up to 90 % of the lowest Nyquist order among them)."""
+    (gearlab.signals.localise; orders up to 90 % of the lowest Nyquist order among them). A shaft's
+    two gears: by the description's simulated events at the record's speed and rate
+    (data.which_templates), where the history's mesh harmonics agree with the simulation's."""
+    from .data.which_templates import record_templates
     from .signals import POINTS
     from .signals import localise as L
 
     if not history:
         raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
     table = order_table(box)
-    revs, first, nyquist, _ = _input_revolutions(path, box, options)
+    revs, first, nyquist, _, speed, fs = _input_revolutions(path, box, options)
     past = [_input_revolutions(p, box, options) for p in history]
-    top = min(0.9 * min([nyquist] + [n for _, _, n, _ in past]), 0.45 * POINTS)
-    firsts, marks = [f for _, f, _, _ in past], max(k for *_, k in past)
+    top = min(0.9 * min([nyquist] + [n for _, _, n, *_ in past]), 0.45 * POINTS)
+    firsts, marks = [f for _, f, *_ in past], max(k for *_, k, _, _ in past)
     hist = L.history([r for r, *_ in past], table, first_revolutions=firsts, max_order=top, marks=marks)
-    out = L.localise(revs, hist, table, first_revolution=first).describe()
+    templates = record_templates(table, box.source, speed.mean_hz, fs)
+    out = L.localise(revs, hist, table, first_revolution=first, templates=templates).describe()
     out["history"] = list(history)
     return out
 

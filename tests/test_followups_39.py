@@ -50,7 +50,7 @@ def test_score_says_other_damage_with_its_evidence_in_80_columns(cli, tmp_path, 
         is signals.localise's; here what score makes of it)."""
         out = {}
         for recs in records.values():
-            for path, _, _ in recs:
+            for path, *_ in recs:
                 other = path.endswith("wheel.zip")
                 out[path] = {
                     "named": WHEEL if other else None,

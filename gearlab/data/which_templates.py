@@ -11,9 +11,13 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..errors import GearlabInputError
+
 KINDS = ("chip", "spall", "crack")  # the event's shape differs by kind: the best fit of the three counts
 STEP = 16  # a mid ladder step: the shape, not the size, is compared
 PERIODS = 3  # grand periods simulated (noise-free: the mean of a few is exact)
+SIM_FS = 60_000.0  # a description's model integrated at least this fast: a logger's rate is too low for stiff modes
+SPEED_DIGITS = 3  # a record's speed to 3 significant digits: takes at 30.01 and 30.02 Hz share one simulation
 
 
 def placement_word(gear) -> str:
@@ -36,7 +40,7 @@ def _revolutions(gearbox, speed_hz: float, fs: float, sim_fs, revolutions: int, 
 def simulated_templates(table, speed_hz: float, fs: float, *, gearbox: str | None = None, sim_fs: float | None = None):
     """A function of a localisation layout giving {"healthy": the healthy mean, "gears": {gear name:
     [template per fault kind]}} for every gear on a two-gear shaft of *table* (localise's
-    *templates*). *gearbox*: the description (None: the PHM 2009 rig's preset)."""
+    *templates*), or {"not simulated": why}. *gearbox*: the description (None: the PHM 2009 rig's preset)."""
     from ..signals import localise as L
 
     gears = [g for on in L.gears_of(table).values() if len(on) == 2 for g in on]
@@ -50,10 +54,48 @@ def simulated_templates(table, speed_hz: float, fs: float, *, gearbox: str | Non
                 r = r[: (r.shape[0] // period) * period]
             return L.content(r, lay, first).mean
 
-        healthy = mean(None)
+        try:
+            healthy = mean(None)
+        except GearlabInputError as exc:  # e.g. a description without a load to simulate at: the width decides
+            return {"not simulated": str(exc)}
         return {
             "healthy": healthy,
             "gears": {g.name: [mean((placement_word(g), k)) - healthy for k in KINDS] for g in gears},
         }
 
     return at
+
+
+def two_gear_shafts(table) -> bool:
+    """Whether *table* has a shaft carrying two gears (the only shafts the templates tell apart)."""
+    from ..signals import localise as L
+
+    return any(len(on) == 2 for on in L.gears_of(table).values())
+
+
+def simulated_as(description: str) -> str | None:
+    """simulated_record's *gearbox* for a description named as a dataset's preset (a reference
+    'gearbox:NAME#HASH': simulated as the source simulates it; the rig's model preset 'phm09') or as
+    a Gearbox's source (its file); None: the PHM 2009 rig's preset, which the rig's scenarios
+    simulate (the built-in description phm09, `--gearbox phm09`, names the same gearbox)."""
+    from pathlib import Path
+
+    from ..gearbox import builtin_gearboxes
+    from ..gearbox.simulation import PREFIX
+
+    if description.startswith(PREFIX):
+        return description.removeprefix(PREFIX).rpartition("#")[0]
+    rig = builtin_gearboxes()["phm09"]
+    return None if description == "phm09" or Path(description).resolve() == rig.resolve() else description
+
+
+def record_templates(table, description: str, speed_hz: float, fs: float):
+    """simulated_templates for a record at *speed_hz* and *fs* of the gearbox *description*
+    (simulated_as); None where *table* has no two-gear shaft (nothing to simulate: the width rule is
+    not needed either). The simulation runs only when localise asks (a two-gear shaft flagged)."""
+    if not two_gear_shafts(table):
+        return None
+    speed = float(f"{float(speed_hz):.{SPEED_DIGITS}g}")
+    gearbox = simulated_as(description)
+    sim_fs = None if gearbox is None else max(float(fs), SIM_FS)
+    return simulated_templates(table, speed, float(fs), gearbox=gearbox, sim_fs=sim_fs)

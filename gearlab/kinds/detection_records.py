@@ -227,6 +227,7 @@ def read_target(
         cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}, "speed_from": {}})
         cond[f.role].append((f, records[f.path].revolutions))
         cond["speeds"][f.path] = speeds[f.path]
+        cond.setdefault("fs", {})[f.path] = records[f.path].fs  # the rate the which-gear templates are read at
         # how the record's shaft angle was found: its tacho, a declared speed, the mesh orders
         cond["speed_from"][f.path] = records[f.path].angle_source
         on_event(Event("log", message=f"{f.path}: {speeds[f.path]:.3f} Hz, from {records[f.path].angle_source}"))

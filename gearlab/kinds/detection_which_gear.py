@@ -12,10 +12,15 @@ units then means:
     the record's change named on a watched gear, or on the shaft of    a watched-gear fault
     one with both its gears (which of the two undecided)
     named on another gear (another shaft's, or the other of a shaft's  other damage: <that gear>
-    two, told apart by the length of its event)
+    two, told apart by the simulated events)
     nothing localised                                                  a watched-gear fault (no
                                                                        evidence of where it lies)
 
+A shaft's two gears are told apart by the description's simulated tooth-fault events at each
+record's speed and rate (gearlab.data.which_templates, the same in `gearlab score`), simulated as the
+source is: a structure other than the gearbox's misnames them, so the description to give is the gap
+diagnosis's corrected one; where the history's mesh harmonics differ from the simulation's, and for a
+source without a description, by the event's width (signals.localise, "Which gear on a shaft").
 The localisation uses the records' signals only; the labels come in with the tables (summarise).
 """
 
@@ -24,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.spec import DatasetSpec
+from ..data.which_templates import record_templates
 from ..errors import GearlabInputError
 from ..signals import POINTS
 from ..signals import localise as L
@@ -129,8 +135,11 @@ def localise_target(source: DatasetSpec, conditions: dict, histories: dict | Non
             histories[name] = hist
         for f, _ in cond["test"]:
             revs, first = raw[f.path]
+            templates = _templates(
+                table, source.preset, cond.get("speeds", {}).get(f.path), cond.get("fs", {}).get(f.path)
+            )
             try:
-                found = L.localise(revs, hist, table, first_revolution=first).describe()
+                found = L.localise(revs, hist, table, first_revolution=first, templates=templates).describe()
             except GearlabInputError as exc:
                 found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
             out["records"][f.path] = {"condition": name, **found, "call": call_of(found, watched)}
@@ -153,9 +162,16 @@ def store_localisation(run, source: DatasetSpec, conditions: dict) -> None:
     run.write_json("localisation.json", found)
 
 
+def _templates(table, preset: str, speed_hz: float | None, fs: float | None):
+    """The description's simulated events for a record at *speed_hz* and *fs* (None: the width rule)."""
+    return None if speed_hz is None or fs is None else record_templates(table, preset, speed_hz, fs)
+
+
 def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
-    """{path: {"named", "summary", "call", "evidence"}} of new records ({condition: [(path, revolutions, first)]})
-    localised with the run's stored histories (store_localisation); {} for a run without them."""
+    """{path: {"named", "summary", "call", "evidence"}} of new records ({condition: [(path, revolutions,
+    first, speed, rate)]}) localised with the run's stored histories (store_localisation) and the
+    description's simulated events at each record's speed, as the run localised its own; {} for a run
+    without them."""
     from ..gearbox import order_table
     from ..parts import scoring
 
@@ -170,9 +186,10 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
         if state is None:
             continue
         hist = L.History.restored(scoring.load_arrays(run.file("scoring", state)), table)
-        for path, revs, first in recs:
+        for path, revs, first, speed, fs in recs:
+            templates = _templates(table, meta["preset"], speed, fs)
             try:
-                found = L.localise(revs, hist, table, first_revolution=first).describe()
+                found = L.localise(revs, hist, table, first_revolution=first, templates=templates).describe()
             except GearlabInputError as exc:
                 found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
             out[path] = {
@@ -236,6 +253,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
         thr = r["thresholds"][unit]
         watched: dict[str, list[int]] = {}
         other: dict[str, list[int]] = {}
+        judged: dict[str, int] = {}
         for path, units in r["test_scores"].items():
             s = np.asarray(units[unit], dtype=np.float64)
             flagged = s > thr
@@ -243,6 +261,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
             label = labels[path]
             watched.setdefault(label, []).extend((flagged & ~elsewhere).astype(int).tolist())
             other.setdefault(label, []).extend((flagged & elsewhere).astype(int).tolist())
+            judged[label] = judged.get(label, 0) + (0 if elsewhere else len(s))
         out.append(
             {
                 "condition": r["condition"],
@@ -251,9 +270,9 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
                 "watched": {k: 100.0 * float(np.mean(v)) if v else None for k, v in watched.items()},
                 "other": {k: 100.0 * float(np.mean(v)) if v else None for k, v in other.items()},
                 "units": {k: len(v) for k, v in watched.items()},
+                "judged": judged,
             }
         )
-        judged: dict[str, int] = {}
     return out
 
 
@@ -261,7 +280,6 @@ def calls_md(calls: list[dict]) -> str:
     """calls_by_label as a table: 'watched % / other %' per label."""
     if not calls:
         return ""
-            judged[label] = judged.get(label, 0) + (0 if elsewhere else len(s))
     labels = list(dict.fromkeys(k for c in calls for k in c["watched"]))
     unit = calls[0]["unit"]
     out = [
@@ -270,7 +288,6 @@ def calls_md(calls: list[dict]) -> str:
         f"| {unit}: condition | method | " + " | ".join(f"'{k}' watched / other %" for k in labels) + " |",
         "|---|---|" + "---|" * len(labels),
     ]
-                "judged": judged,
     for c in calls:
         cells = []
         for k in labels:

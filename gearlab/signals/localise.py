@@ -85,7 +85,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
-from .which_template import fit_words, which_by_template
+from .which_template import RULE_SIMULATED, RULE_WIDTH, fit_words, which_by_template
 
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
@@ -604,9 +604,10 @@ def which_line(evidence: dict, which: str | None) -> str:
     width = f"event width {evidence['width']:.2f} {evidence['event width']}, " if "width" in evidence else ""
     width += fit_words(evidence)
     expected = " / ".join(f"{g.split(' (')[0]} ~{v:.2f}" for g, v in evidence["expected"].items())
+    rule = evidence.get("rule", RULE_WIDTH)  # evidence stored before the rule was said: the width's
     if which:
-        return f"; {width}expected {expected}"
-    return f"; which of the two: undecided ({width}expected {expected}; {evidence['undecided']})"
+        return f"; named {rule} ({width}expected {expected})"
+    return f"; which of the two: undecided {rule} ({width}expected {expected}; {evidence['undecided']})"
 
 
 def threshold_floor(shafts: int, false_alarm: float = FALSE_ALARM) -> float:
@@ -769,6 +770,9 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
             by, fits = which_by_template(rec, hist.spread, lay, _harmonics(lay, s, excl[:, s]), on, templates(lay))
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
+            dens["rule"] = RULE_WIDTH if by is False else RULE_SIMULATED
+        elif dens:  # the width's evidence
+            dens["rule"] = RULE_WIDTH
         out.append(
             ShaftEvidence(
                 name,

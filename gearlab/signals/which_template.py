@@ -31,6 +31,8 @@ import numpy as np
 
 MARGIN = 0.05  # fit of one gear over the other's below which both stay named
 STRUCTURE_DB = 5.0  # spread of the healthy mesh harmonics about the simulator's over which its events are not used
+# which rule named (or left undecided) a two-gear shaft's gear, as localise's report says it
+RULE_SIMULATED, RULE_WIDTH = "by the simulated events", "by the event's width"
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -66,6 +68,8 @@ def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], g
     *templates*: {"healthy": the simulated healthy mean, "gears": {gear name: [template, ...]}}.
     False instead of a gear: the simulator's structure differs from the history's (structure_gap
     over STRUCTURE_DB), its events are not used."""
+    if "healthy" not in templates:  # the description could not be simulated: said, and the width decides
+        return False, {"not used": f"not simulated: {templates['not simulated']}"}
     gap = structure_gap(ref, lay, templates["healthy"])
     ev = {"structure gap dB": gap}
     if gap > STRUCTURE_DB:
