@@ -410,26 +410,13 @@ def test_a_stage_2_pinion_fault_on_a_21_63_24_56_train_is_named_the_24t_pinion(t
     event reads wider than the 63T wheel's (0.1 < u <= 0.35), is named alone (before: 'intermediate
     shaft: 63T gear (stage 1) or 24T pinion (stage 2)', a fault of the 63T for a scenario watching
     it); a scenario watching the 63T calls it other damage."""
-    from gearlab.data.simulated import simulated_record
     from gearlab.gearbox import order_table, resolve_gearbox
     from gearlab.kinds.detection_which_gear import call_of
-    from gearlab.signals import cut_revolutions
 
     table = order_table(resolve_gearbox(str(TWO)))
 
     def take(faults, s):
-        rec = simulated_record(
-            faults,
-            gearbox=str(TWO),
-            speed_hz=speed,
-            revolutions=4 * speed,
-            snr_db=25.0,
-            seed=s,
-            fs=20_000.0,
-            sim_fs=60_000.0,
-        )
-        cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
-        return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+        return two_stage_take(faults, s, speed)
 
     hist = [take([], 101), take([], 102)]
     revs, first = take([{"name": kind, "gear": "intermediate pinion", "tooth": 7, "step": 20}], 103)
@@ -448,28 +435,14 @@ def test_simulated_events_name_a_24t_pinion_chip_the_width_leaves_undecided():
     train's intermediate shaft reads as wide as a 63T tooth's event could (the width rule: both); the
     description's simulated chip, spall and crack on each gear at the record's speed (without its load,
     noise or tooth) fit the pinion's clearly better, and the pinion is named alone."""
-    from gearlab.data.simulated import simulated_record
     from gearlab.data.which_templates import simulated_templates
     from gearlab.gearbox import order_table, resolve_gearbox
-    from gearlab.signals import cut_revolutions
 
     table = order_table(resolve_gearbox(str(TWO)))
     speed = 25.0
 
     def take(faults, s):
-        rec = simulated_record(
-            faults,
-            gearbox=str(TWO),
-            speed_hz=speed,
-            load_nm=10.5,
-            revolutions=4 * speed,
-            snr_db=25.0,
-            seed=s,
-            fs=20_000.0,
-            sim_fs=60_000.0,
-        )
-        cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
-        return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+        return two_stage_take(faults, s, speed, load_nm=10.5)
 
     hist = [take([], 201), take([], 202)]
     revs, first = take([{"name": "chip", "gear": "intermediate pinion", "tooth": 20, "step": 18}], 203)
@@ -485,3 +458,24 @@ def test_simulated_events_name_a_24t_pinion_chip_the_width_leaves_undecided():
     fits = ev["stage_evidence"]["simulated fit"]
     assert fits[pinion] > fits["intermediate gear 63T (stage 1)"] + 0.1, fits
     assert "simulated event's fit" in found["summary"]
+
+
+def two_stage_take(faults, seed: int, speed: float, **options):
+    """(revolutions, first revolution of the train's cycle) of a 4 s take of the 21/63 + 24/56 train
+    (TWO) simulated at 60 kHz, read at 20 kHz with its tacho, 25 dB of noise."""
+    from gearlab.data.simulated import simulated_record
+    from gearlab.signals import cut_revolutions
+
+    rec = simulated_record(
+        faults,
+        gearbox=str(TWO),
+        speed_hz=speed,
+        revolutions=4 * speed,
+        snr_db=25.0,
+        seed=seed,
+        fs=20_000.0,
+        sim_fs=60_000.0,
+        **options,
+    )
+    cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
+    return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
