@@ -546,7 +546,9 @@ def test_cache_keys_without_effects_are_unchanged_and_effects_are_part_of_the_ke
         for label in ("name", "domain", "effects", "healthy_twin", "unit_shaft"):
             d.pop(label)
         text = json.dumps({"spec": d, "physics": PHYSICS_VERSION}, sort_keys=True)
-        assert spec.key() == hashlib.sha256(text.encode()).hexdigest()[:24]  # the key before effects, twins and shaft units
+        assert (
+            spec.key() == hashlib.sha256(text.encode()).hexdigest()[:24]
+        )  # the key before effects, twins and shaft units
     spec = dataset_preset("B-6-ch5")
     noise = effect_spec("sensor_noise", kind="laplace", snr_db=0)
     with_noise = spec.with_(effects=(noise,))
