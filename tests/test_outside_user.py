@@ -440,6 +440,26 @@ def test_the_gap_tells_a_tacho_read_with_fewer_marks_per_turn_than_it_gives():
     assert not mesh_check(_train([(29, 86)], theta, rng).reshape(80, points), 29, 86)["differs"]
 
 
+@pytest.mark.parametrize("k", [2, 3, 4])
+def test_the_gap_tells_a_tacho_read_with_more_marks_per_turn_than_it_gives(k):
+    # A 29/86 mixer's 1-pulse tacho given as pulses_per_rev = k: each revolution is k turns, the mesh
+    # at k x 29 with its lines on every kth harmonic alone, all on the source's comb: the structure
+    # check passed and the effects were fitted (inspect told it, the gap did not)
+    from gearlab.gap.structure import mesh_check, mesh_line
+
+    points, rng = 4096, np.random.default_rng(3)
+    theta = 2 * np.pi * np.arange(80 * points) / points
+    check = mesh_check(_train([(29, 86)], k * theta, rng).reshape(80, points), 29, 86)
+    assert check["differs"] and check["measured"] == k * 29, check
+    assert f"the tacho gives 1/{k} of the pulses per revolution it was read with?" in mesh_line(check, 29)
+    assert not mesh_check(_train([(29, 86)], theta, rng).reshape(80, points), 29, 86)["differs"]
+    # the right marks with only the mesh's kth and 2kth harmonics showing (a resonance), no line at 29:
+    # their sidebands one input-shaft order apart tell the record is read as it is
+    mod = 1 + 0.2 * np.cos(theta) + 0.1 * np.cos(29 / 86 * theta + 1.0)
+    right = mod * (np.cos(k * 29 * theta) + 0.3 * np.cos(2 * k * 29 * theta)) + rng.normal(0, 0.05, theta.size)
+    assert not mesh_check(right.reshape(80, points), 29, 86)["differs"]
+
+
 def test_the_gap_tells_a_wheel_a_tooth_off():
     # A 29/86 mixer described with an 85-tooth wheel: inspect said 'the wheel on the output shaft
     # shows 86.0 ± 0.2 teeth', the gap's structure check (mesh orders only) passed and fitted effects

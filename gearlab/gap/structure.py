@@ -89,6 +89,13 @@ def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.n
     return np.any(np.abs(x[:, None] - h * z - offsets[None, :]) <= tol[:, None], axis=1)
 
 
+def _comb_distance(x: np.ndarray, z: float, offsets: list[float]) -> np.ndarray:
+    """Each order of *x*'s distance to the nearest h z + offset (h >= 1)."""
+    off = np.asarray(offsets, dtype=np.float64)
+    h = np.maximum(1, np.round((x[:, None] - off[None, :]) / z))
+    return np.abs(x[:, None] - h * z - off[None, :]).min(axis=1)
+
+
 def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = ()) -> dict:
     """The target's mesh order against the source's Z1 (module doc): {'expected', 'measured' (the
     target's mesh order, or None when its lines do not show one), 'off_comb' (share of the strongest
@@ -141,6 +148,24 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
         hit = _on_comb(x, z1 / k, (), tol)
         if not on[first] and abs(x[first] - z1 / k) <= tol[first] and hit.sum() >= 2:
             out.update(measured=z1 / k, differs=True, marks=k)
+            return out
+    # read with k times the marks a turn it gives, a revolution is k turns and every order k times
+    # its own: the mesh's lines sit on the comb's multiples of k alone, all on the source's comb (a
+    # 29/86 mixer's 1-pulse tacho read as 2: 58, 116, 174, nothing at 29 or 87; 'unexplained'). The
+    # strongest line at k Z1 and no mesh harmonic h Z1 of another h tell it; a record showing its
+    # mesh's fundamental, or its input-shaft sidebands at other than k apart, is read as it is (a
+    # resonance can raise the mesh's kth harmonic over the first; it leaves the +-1 sidebands)
+    bare = _on_comb(x, z1, (), tol)
+    for k in (2, 3, 4):
+        hit = _on_comb(x, k * z1, (), tol)
+        # a line nearer a sideband j (not a multiple of k) than to one the k-turn reading also has
+        d_odd = _comb_distance(x, k * z1, [s * j for j in range(1, SIDEBANDS + 1) if j % k for s in (-1, 1)])
+        d_even = _comb_distance(
+            x, k * z1, [0.0] + [s * j * o for o in (k, k * z1 / z2) for j in (1, 2, 3) for s in (-1, 1)]
+        )
+        odd = (d_odd <= tol) & (d_odd < d_even)
+        if abs(x[first] - k * z1) <= tol[first] and hit.sum() >= 2 and not (bare & ~hit).any() and not odd.any():
+            out.update(measured=k * z1, differs=True, marks=1 / k)
             return out
     pools = ([~on] if out["off_comb"] >= OFF_COMB else []) + ([~on_mesh] if out["on_mesh"] < ON_MESH else [])
     if not pools:
@@ -321,11 +346,17 @@ def mesh_line(check: dict, z1: int) -> str:
             + ")"
         )
     line = f"mesh order {m:.1f} measured, {z1} expected: the source simulates a {z1}-tooth pinion"
-    if check.get("marks"):
+    if check.get("marks", 1) > 1:
         k = check["marks"]
         return line + (
             f" (the target's mesh at 1/{k} of its order, with its harmonics: the tacho gives {k} x the pulses "
             "per revolution it was read with? [target] pulses_per_rev)"
+        )
+    if check.get("marks"):
+        k = round(1 / check["marks"])
+        return line + (
+            f" (the target's mesh at {k} x its order, its lines on every {k}th harmonic alone: the tacho gives "
+            f"1/{k} of the pulses per revolution it was read with? [target] pulses_per_rev)"
         )
     if whole:
         return line + f" (the target's shows {round(m)} teeth)"
