@@ -193,8 +193,8 @@ wheel = { z = 57, bore = "30 mm", material = "bronze" }
     assert box.stages[0].module == pytest.approx(1.99898e-3)
     assert box.stages[0].wheel.material.E == 110e9
     assert box.shafts == ("input", "output")
-    with pytest.raises(GearlabInputError, match=r"\[\[stages\]\] #1.wheel key 'material'.*one material"):
-        gear_pairs(box)
+    (pair,) = gear_pairs(box)  # each gear its own material (tests/test_profile_shift.py)
+    assert (pair.pinion.E, pair.gear.E, pair.gear.nu) == (200e9, 110e9, 0.34)
 
 
 def test_a_different_bore_per_gear_reaches_each_gears_fillet():
@@ -224,7 +224,7 @@ def test_speeds_in_any_unit(value, hz):
 BAD = [
     (
         {"stages": [stage(12, 40)]},
-        r"box.toml: \[\[stages\]\] #1.pinion key 'z': 12 teeth at x = 0 are undercut.*x ≥ 0.131",
+        r"box.toml: \[\[stages\]\] #1.pinion key 'z': 12 teeth at x = 0 are undercut.*'x' ≥ 0.131",
     ),
     ({"stages": [stage(14, 200)]}, r"#1.pinion key 'z': the wheel's tip meets the pinion below its base circle"),
     (
@@ -268,14 +268,12 @@ def test_bad_descriptions_are_one_line_naming_the_key(data, message):
     assert "\n" not in str(info.value)
 
 
-def test_a_profile_shift_is_described_but_no_gear_pair_is_derived_yet():
+def test_a_profile_shift_is_described_and_its_gear_pair_derived():
     box = described(stage(12, 40, pinion={"x": 0.3}, wheel={"x": -0.3}))
     assert order_table(box).stages[0].mesh == 12
     assert stage_geometry(box.stages[0]).a_w == pytest.approx(52e-3)  # x1 + x2 = 0: a_w = a
-    with pytest.raises(
-        GearlabInputError, match=r"#1.pinion key 'x': the mesh-stiffness model .* without profile shift"
-    ):
-        gear_pairs(box)
+    (pair,) = gear_pairs(box)
+    assert (pair.x1, pair.x2, pair.centre_distance) == (0.3, -0.3, pytest.approx(52e-3))
 
 
 def test_a_shifted_centre_distance_is_accepted_with_the_matching_shift_sum():

@@ -202,7 +202,6 @@ def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkey
         (RIG20.replace('speed = "25 Hz"\n', ""), {}, r"\[operation\] key 'speed': missing"),
         (RIG20.replace('load = "10 N*m"\n', ""), {}, r"\[operation\] key 'load': missing"),
         (RIG20, {"model_preset": "luo2019"}, r"key 'model_preset': the 'gearbox' description gives"),
-        (RIG20.replace("z = 20,", "z = 20, x = 0.3,"), {}, r"\[\[stages\]\] #1\.pinion key 'x': the mesh-stiffness"),
     ],
 )
 def test_what_the_simulator_cannot_take_is_one_line(tmp_path, text, given, expected):

@@ -292,11 +292,12 @@ def test_a_two_stage_record_against_a_one_stage_source_names_both_meshes():
 
 def test_a_pinion_that_interferes_is_told_the_keys_the_simulator_takes(tmp_path):
     # A 14/39 mixer (20 deg): 'expected more pinion teeth, a positive profile shift or a shorter
-    # addendum'. Given x = 0.3 it was inspected, then refused by gap and detection (the simulator takes
+    # addendum'. Given x = 0.3 it was inspected, then refused by gap and detection (the simulator took
     # no profile shift); the keys that make it simulable ('addendum', 'pressure_angle') went unnamed.
+    # The stiffness model now takes a profile shift, so x is a remedy like the others.
     from gearboxes import description, stage
 
-    from gearlab.gearbox import resolve_gearbox
+    from gearlab.gearbox import gear_pairs, resolve_gearbox
 
     path = tmp_path / "mixer.toml"
     path.write_text(description(stage(14, 39), speed="45 Hz"))
@@ -304,10 +305,16 @@ def test_a_pinion_that_interferes_is_told_the_keys_the_simulator_takes(tmp_path)
         resolve_gearbox(str(path))
     text = str(error.value)
     assert "key 'z': the wheel's tip meets the pinion" in text and "shorter 'addendum' (h_a* = 1)" in text
-    assert "larger 'pressure_angle' (α = 20 deg)" in text and "x (inspect only" in text
-    for key in ("addendum = 0.9", 'pressure_angle = "22.5 deg"'):  # the remedies named are simulable
-        path.write_text(description(stage(14, 39).replace("[[stages]]\n", f"[[stages]]\n{key}\n"), speed="45 Hz"))
-        assert resolve_gearbox(str(path)).stages[0].pinion.z == 14
+    assert "larger 'pressure_angle' (α = 20 deg)" in text and "profile shift 'x' of the pinion" in text
+    assert "inspect only" not in text
+    shifted = stage(14, 39).replace("z = 14,", "z = 14, x = 0.3,")
+    remedies = [
+        stage(14, 39).replace("[[stages]]\n", f"[[stages]]\n{key}\n")
+        for key in ("addendum = 0.9", 'pressure_angle = "22.5 deg"')
+    ]
+    for text in [*remedies, shifted]:  # the remedies named are simulable
+        path.write_text(description(text, speed="45 Hz"))
+        assert gear_pairs(resolve_gearbox(str(path)))[0].Z1 == 14
 
 
 def test_a_later_pinion_a_tooth_off_is_told_though_its_order_is_a_sideband():

@@ -230,7 +230,7 @@ def lumped_assembly(dofs, pair: GearPair, v: Mapping[str, float], input_dof: str
     spring("yf", None, v.get("k_yf", 0.0), v.get("c_yf", 0.0))
     spring("theta11", "theta12", v.get("k_c", 0.0), v.get("c_c", 0.0))
     spring("theta21", "theta22", v.get("k_c", 0.0), v.get("c_c", 0.0))
-    a0 = pair.pressure_angle
+    a0 = pair.working_pressure_angle  # the line of action: alpha_0, or alpha_w for shifted gears
     P = np.array(
         [math.sin(a0), math.cos(a0), 0.0, pair.pinion.R_b, -math.sin(a0), -math.cos(a0), -pair.gear.R_b, 0.0, 0.0, 0.0]
     )  # eq. 2.104

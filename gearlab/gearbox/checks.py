@@ -24,31 +24,12 @@ import math
 from dataclasses import dataclass
 
 from ..errors import GearlabInputError
+from ..physics.geometry import inverse_involute, involute
 
-# What a remedy by profile shift leaves out: a 14-tooth pinion told to take x = 0.3 could be inspected
-# but never simulated (description.py refuses x != 0 for a gear pair)
-_NO_SHIFT = "the simulator's mesh stiffness takes no profile shift yet"
 # Slack on the practical undercut limit: at 20 deg and x = 0 it admits z = 14 (x_min' = 0.015).
 _UNDERCUT_SLACK = 0.02
 # A described centre distance agrees with a_w within this share of the module (or 10 µm).
 _CENTRE_TOLERANCE = 0.02
-
-
-def involute(angle: float) -> float:
-    return math.tan(angle) - angle
-
-
-def inverse_involute(value: float) -> float:
-    """α with inv α = value (Newton from a cube-root start; converges in a few steps below 60 deg)."""
-    if value <= 0:
-        return 0.0
-    a = (3.0 * value) ** (1.0 / 3.0)
-    for _ in range(50):
-        step = (involute(a) - value) / math.tan(a) ** 2  # d inv α / dα = tan²α
-        a -= step
-        if abs(step) < 1e-15:
-            break
-    return a
 
 
 @dataclass(frozen=True)
@@ -128,7 +109,7 @@ def check_stage(stage) -> StageGeometry:
             raise GearlabInputError(
                 f"{gear.where} key 'z': {gear.z} teeth at x = {gear.x:g} are undercut (α = "
                 f"{math.degrees(alpha):g} deg, h_a* = {stage.addendum:g}): the tool cuts into the active flank; "
-                f"expected a profile shift x ≥ {x_min:.3f} (inspect only: {_NO_SHIFT}), more teeth, or a larger "
+                f"expected a profile shift 'x' ≥ {x_min:.3f}, more teeth, or a larger "
                 "'pressure_angle' or shorter 'addendum' of the stage"
             )
     if stage.centre_distance is not None:
@@ -170,7 +151,7 @@ def check_stage(stage) -> StageGeometry:
                 f"{gear.where} key 'z': the {other}'s tip meets the {role} {where} (interference: contact starts "
                 f"{_mm(start)} from T on the line of action, the involute at {_mm(limit)}); expected more {role} "
                 f"teeth, a shorter 'addendum' (h_a* = {stage.addendum:g}) or a larger 'pressure_angle' (α = "
-                f"{math.degrees(alpha):g} deg) of the stage, or a positive profile shift x (inspect only: {_NO_SHIFT})"
+                f"{math.degrees(alpha):g} deg) of the stage, or a positive profile shift 'x' of the {role}"
             )
     if g.contact_ratio < 1.0:
         raise GearlabInputError(

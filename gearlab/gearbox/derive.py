@@ -5,12 +5,13 @@ wheel = gear 2), so the stiffness engine and every fault plugin work on it uncha
 
     Z1, Z2 = z;  module = m;  pressure_angle = α;  face_width = min(b1, b2) (the contact width)
     addendum = h_a*;  clearance = h_f* - h_a*;  tool_tip_radius = ρ_fP*;  hub_radius = d_bore / 2
-    E, nu = the gears' common material
+    x1, x2 = each gear's profile shift x;  E, nu = the pinion's material;  E2, nu2 = the wheel's
+    (given only when it differs, so a one-material stage is the same GearPair as before)
 
-The PEM geometry of thesis 2.1 has no profile shift and one material for both teeth (the
-Hertz term of eq. 2.94 assumes it): a stage outside that is refused here, naming the key,
-while the order table and `gearlab inspect` still take it. Different bores are kept: the
-fillet term (eq. 2.46) of each gear uses its own hub radius.
+The stiffness model takes profile-shifted gears (tip and root circles, tooth thickness, the
+working pressure angle α_w and centre distance a_w; gearlab/physics/geometry.py) and a material
+per gear (each tooth's energies with its own E, ν; the Hertz term of eq. 2.94 with both). Different
+bores are kept: the fillet term (eq. 2.46) of each gear uses its own hub radius.
 """
 
 from __future__ import annotations
@@ -50,20 +51,8 @@ def pair_name(box, stage) -> str:
 
 def gear_pair(box, stage) -> GearPair:
     """The GearPair of one stage of the description *box* (see the module doc)."""
-    for gear in (stage.pinion, stage.wheel):
-        if gear.x != 0:
-            raise GearlabInputError(
-                f"{gear.where} key 'x': the mesh-stiffness model (thesis 2.1) is written for gears without "
-                f"profile shift; x = {gear.x:g} is kept for the order table and inspect, but no gear pair can be "
-                "derived from it yet"
-            )
     p, w = stage.pinion.material, stage.wheel.material
-    if (p.E, p.nu) != (w.E, w.nu):
-        raise GearlabInputError(
-            f"{stage.wheel.where} key 'material': the mesh-stiffness model (eq. 2.94) takes one material for both "
-            f"gears; the pinion has E = {p.E / 1e9:g} GPa, nu = {p.nu:g} and the wheel E = {w.E / 1e9:g} GPa, "
-            f"nu = {w.nu:g}"
-        )
+    two_materials = (p.E, p.nu) != (w.E, w.nu)
     values = dict(
         Z1=stage.pinion.z,
         Z2=stage.wheel.z,
@@ -77,6 +66,10 @@ def gear_pair(box, stage) -> GearPair:
         clearance=stage.dedendum - stage.addendum,
         tool_tip_radius=stage.tool_tip_radius,
         name=pair_name(box, stage),
+        x1=stage.pinion.x,
+        x2=stage.wheel.x,
+        E2=w.E if two_materials else None,
+        nu2=w.nu if two_materials else None,
     )
     try:
         if stage.wheel.bore == stage.pinion.bore:

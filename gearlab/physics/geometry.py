@@ -4,6 +4,18 @@ Symbols follow the thesis: Z teeth, m module, alpha_0 pressure angle, R_b base r
 R_r root radius, alpha_2 half tooth angle on the base circle, alpha_3 / alpha_4, alpha_5 the
 angles where the tooth meets the root circle, d_1 the straight root region, theta_d and
 theta_s the double- and single-contact durations in pinion angle. SI units throughout.
+
+Profile shift (ISO 21771): gear i is cut with the rack x_i m further out, so
+
+    R_a = R_p + (h_a* + x) m,   R_r = R_p - (h_a* + c* - x) m,
+    alpha_2 = pi/(2Z) + 2 x tan(alpha_0)/Z + inv(alpha_0)      (eq. 2.9; s = m (pi/2 + 2 x tan alpha_0)),
+
+and the pair meshes at the working pressure angle and centre distance
+
+    inv(alpha_w) = inv(alpha_0) + 2 (x1 + x2) tan(alpha_0)/(Z1 + Z2),   a_w = a cos(alpha_0)/cos(alpha_w),
+
+which replace alpha_0 and a in the contact start of eq. 2.7 / 2.49. With x1 = x2 = 0 every
+expression is the thesis's, float for float. Each gear carries its own material (E, nu).
 """
 
 from __future__ import annotations
@@ -19,9 +31,23 @@ def involute(angle: float) -> float:
     return math.tan(angle) - angle
 
 
+def inverse_involute(value: float) -> float:
+    """alpha with inv(alpha) = value (Newton from a cube-root start; a few steps below 60 deg)."""
+    if value <= 0:
+        return 0.0
+    a = (3.0 * value) ** (1.0 / 3.0)
+    for _ in range(50):
+        step = (involute(a) - value) / math.tan(a) ** 2  # d inv(alpha) / d alpha = tan^2(alpha)
+        a -= step
+        if abs(step) < 1e-15:
+            break
+    return a
+
+
 @dataclass(frozen=True)
 class Gear:
-    """Derived geometry of one gear of the pair (i = 1 pinion, i = 2 driven gear)."""
+    """Derived geometry of one gear of the pair (i = 1 pinion, i = 2 driven gear): profile shift
+    coefficient x (ISO 21771) and the gear's own material E (Pa), nu (None: geometry only)."""
 
     Z: int
     module: float
@@ -30,6 +56,9 @@ class Gear:
     clearance: float  # c
     hub_radius: float  # R_h
     tool_tip_radius: float  # r_c, dimensionless (Sainsot et al. 2004)
+    x: float = 0.0  # profile shift coefficient
+    E: float | None = None
+    nu: float | None = None
 
     @property
     def R_p(self) -> float:
@@ -40,16 +69,18 @@ class Gear:
         return self.R_p * math.cos(self.pressure_angle)
 
     @property
-    def R_r(self) -> float:  # eq. 2.11
-        return self.R_p - (self.addendum + self.clearance) * self.module
+    def R_r(self) -> float:  # eq. 2.11 with the shift: R_p - (h_f* - x) m
+        return self.R_p - (self.addendum + self.clearance - self.x) * self.module
 
     @property
-    def R_a(self) -> float:
-        return self.R_p + self.addendum * self.module
+    def R_a(self) -> float:  # R_p + (h_a* + x) m (no tip shortening)
+        return self.R_p + (self.addendum + self.x) * self.module
 
     @property
-    def alpha_2(self) -> float:  # eq. 2.9
-        return math.pi / (2 * self.Z) + involute(self.pressure_angle)
+    def alpha_2(self) -> float:  # eq. 2.9 with the shift's 2 x tan(alpha_0)/Z
+        return (
+            math.pi / (2 * self.Z) + 2 * self.x * math.tan(self.pressure_angle) / self.Z + involute(self.pressure_angle)
+        )
 
     @property
     def root_below_base(self) -> bool:
@@ -116,7 +147,10 @@ class Gear:
         return float(self.x_of(self.alpha_tip))
 
     @property
-    def theta_f(self) -> float:  # eq. 2.45
+    def theta_f(self) -> float:
+        """Eq. 2.45, the same for any x: the shifted rack's half space on the rolling line is
+        x m tan(alpha_0) wider and its tip line (h - x) m deeper, so the half width at the root
+        circle, R_p theta_f, is pi m/4 + h m tan(alpha_0) (+ the tool-tip terms) whatever x is."""
         a0, ha, rc = self.pressure_angle, self.addendum, self.tool_tip_radius
         return (math.pi / 2 + 2 * math.tan(a0) * (ha - rc) + 2 * rc / math.cos(a0)) / self.Z
 
@@ -141,6 +175,10 @@ class GearPair:
     clearance: float = 0.25
     tool_tip_radius: float = 0.2
     name: str = ""
+    x1: float = 0.0  # profile shift coefficients (ISO 21771) of the pinion and the gear
+    x2: float = 0.0
+    E2: float | None = None  # the gear's material; None: the pinion's (E, nu)
+    nu2: float | None = None
     pinion: Gear = field(init=False, repr=False, compare=False)
     gear: Gear = field(init=False, repr=False, compare=False)
 
@@ -149,8 +187,10 @@ class GearPair:
         # one rack (module, pressure angle, addendum, clearance, tool tip) and one hub for both gears
         shared = ("module", "pressure_angle", "addendum", "clearance", "hub_radius", "tool_tip_radius")
         common = {name: getattr(self, name) for name in shared}
-        object.__setattr__(self, "pinion", Gear(Z=self.Z1, **common))
-        object.__setattr__(self, "gear", Gear(Z=self.Z2, **common))
+        E2 = self.E if self.E2 is None else self.E2
+        nu2 = self.nu if self.nu2 is None else self.nu2
+        object.__setattr__(self, "pinion", Gear(Z=self.Z1, x=self.x1, E=self.E, nu=self.nu, **common))
+        object.__setattr__(self, "gear", Gear(Z=self.Z2, x=self.x2, E=E2, nu=nu2, **common))
         self._check_mesh()
 
     def _check(self) -> None:
@@ -176,8 +216,14 @@ class GearPair:
             raise GearlabInputError(
                 f"{where}: pressure_angle must lie between 0 and 45 deg, got {math.degrees(self.pressure_angle):g} deg"
             )
-        if not (0 <= self.nu < 0.5):
-            raise GearlabInputError(f"{where}: Poisson's ratio nu must lie in [0, 0.5), got {self.nu!r}")
+        for label, nu in (("nu", self.nu), ("nu2", self.nu2)):
+            if nu is not None and not (0 <= nu < 0.5):
+                raise GearlabInputError(f"{where}: Poisson's ratio {label} must lie in [0, 0.5), got {nu!r}")
+        if self.E2 is not None and not (self.E2 > 0 and math.isfinite(self.E2)):
+            raise GearlabInputError(f"{where}: E2 must be a positive number, got {self.E2!r}")
+        for label, x in (("x1", self.x1), ("x2", self.x2)):
+            if not (isinstance(x, (int, float)) and -1.0 <= x <= 2.0):
+                raise GearlabInputError(f"{where}: profile shift {label} must lie in [-1, 2], got {x!r}")
         if not (0 <= self.clearance < 1 and 0 <= self.tool_tip_radius < self.addendum):
             raise GearlabInputError(f"{where}: clearance must lie in [0, 1) and tool_tip_radius in [0, addendum)")
 
@@ -188,6 +234,18 @@ class GearPair:
                 raise GearlabInputError(
                     f"{where}: hub_radius {self.hub_radius * 1e3:g} mm must be smaller than the {label} root radius "
                     f"{g.R_r * 1e3:.4g} mm"
+                )
+        for (label, g), other in zip((("pinion", self.pinion), ("gear", self.gear)), (self.gear, self.pinion)):
+            if g.half_thickness(g.alpha_tip) <= 0:
+                raise GearlabInputError(
+                    f"{where}: the {label} teeth are pointed at x = {g.x:g} (no thickness left at the tip circle "
+                    f"{g.R_a * 1e3:.4g} mm); use a smaller profile shift or addendum"
+                )
+            clearance = self.centre_distance - other.R_a - g.R_r
+            if clearance < -1e-12 * self.centre_distance:
+                raise GearlabInputError(
+                    f"{where}: the mating tip reaches the {label} root circle (tip clearance {clearance * 1e3:.3g} mm "
+                    f"at a_w = {self.centre_distance * 1e3:.5g} mm); shorten the addendum or the profile shifts"
                 )
         if self.roll_start_pinion <= 0 or self.roll_end_gear <= 0:
             raise GearlabInputError(
@@ -202,15 +260,38 @@ class GearPair:
     # --- meshing (eq. 2.7, 2.8, 2.49-2.51) ----------------------------------------------
 
     @property
+    def working_pressure_angle(self) -> float:
+        """alpha_w: inv(alpha_w) = inv(alpha_0) + 2 (x1 + x2) tan(alpha_0)/(Z1 + Z2) (ISO 21771);
+        alpha_0 itself when x1 + x2 = 0."""
+        x_sum = self.x1 + self.x2
+        if x_sum == 0:
+            return self.pressure_angle
+        a0 = self.pressure_angle
+        return inverse_involute(involute(a0) + 2 * x_sum * math.tan(a0) / (self.Z1 + self.Z2))
+
+    @property
     def centre_distance(self) -> float:
-        return self.pinion.R_p + self.gear.R_p
+        """a_w = a cos(alpha_0)/cos(alpha_w), a = R_p1 + R_p2 the reference centre distance."""
+        a = self.pinion.R_p + self.gear.R_p
+        if self.x1 + self.x2 == 0:
+            return a
+        return a * math.cos(self.pressure_angle) / math.cos(self.working_pressure_angle)
+
+    @property
+    def line_of_action(self) -> float:
+        """T1 T2 = a_w sin(alpha_w): the line of action between the base-circle tangent points."""
+        return self.centre_distance * math.sin(self.working_pressure_angle)
 
     @property
     def roll_start_pinion(self) -> float:
-        """tan of the pinion's pressure angle where contact starts (gear tip on the line of action)."""
+        """tan of the pinion's pressure angle where contact starts (gear tip on the line of action):
+        the triangle O1 O2 A, with the angle alpha_a2 - alpha_w at O2 and a_w between the centres;
+        -1 when A lies at or beyond T1 (interference)."""
         g, a = self.gear, self.centre_distance
+        if self.line_of_action - math.sqrt(g.R_a**2 - g.R_b**2) <= 0:
+            return -1.0
         alpha_a2 = math.acos(g.R_b / g.R_a)
-        r_start = math.sqrt(g.R_a**2 + a**2 - 2 * g.R_a * a * math.cos(alpha_a2 - self.pressure_angle))
+        r_start = math.sqrt(g.R_a**2 + a**2 - 2 * g.R_a * a * math.cos(alpha_a2 - self.working_pressure_angle))
         if r_start <= self.pinion.R_b:
             return -1.0
         return math.sqrt((r_start / self.pinion.R_b) ** 2 - 1.0)
@@ -256,7 +337,8 @@ class GearPair:
 
     def seen_from(self, gear: str) -> GearPair:
         """The pair with *gear* ("pinion" or "wheel") as gear 1: the pair itself, or the same mesh
-        with the roles of the two gears exchanged (Z1 <-> Z2, each gear keeping its own hub).
+        with the roles of the two gears exchanged (Z1 <-> Z2, each gear keeping its own hub, profile
+        shift and material).
 
         A fault plugin works on gear 1 of the pair it is given (its section, its geometry checks,
         its ladder); on the wheel it is given this view. The mesh is the same, so its path of
@@ -274,8 +356,13 @@ class GearPair:
             ("hub_radius", self.gear.hub_radius),
             ("pinion", self.gear),
             ("gear", self.pinion),
+            ("x1", self.x2),
+            ("x2", self.x1),
         ):
             object.__setattr__(view, name, value)
+        if self.E2 is not None or self.nu2 is not None:  # two materials: each gear keeps its own
+            for name, value in (("E", self.gear.E), ("nu", self.gear.nu), ("E2", self.E), ("nu2", self.nu)):
+                object.__setattr__(view, name, value)
         if hasattr(view, "wheel_hub_radius"):  # a pair whose gears sit on different bores
             object.__setattr__(view, "wheel_hub_radius", self.pinion.hub_radius)
         return view
@@ -293,6 +380,12 @@ class GearPair:
             "R_r1_m": p.R_r,
             "R_b2_m": g.R_b,
             "R_r2_m": g.R_r,
+            "x1": self.x1,
+            "x2": self.x2,
+            "E1_Pa": p.E,
+            "E2_Pa": g.E,
+            "working_pressure_angle_rad": self.working_pressure_angle,
+            "centre_distance_m": self.centre_distance,
             "theta_d_rad": self.theta_d,
             "theta_s_rad": self.theta_s,
             "contact_ratio": self.contact_ratio,

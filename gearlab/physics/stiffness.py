@@ -10,7 +10,8 @@ force angle alpha_1 the bending moment per unit force is cos(alpha_1)(d - x) - s
 
 and 1/k_a, 1/k_s need only int_0^d 1/A_x dx. These cumulative integrals are built once
 per tooth section, so a whole meshing arc costs one pass over the section plus an
-interpolation per angle. In the healthy case this is exactly eq. 2.21-2.25 / 2.34-2.38
+interpolation per angle. E and nu are those of the tooth's own gear (two materials: the Hertz
+term combines both, hertz_compliance). In the healthy case this is exactly eq. 2.21-2.25 / 2.34-2.38
 after the change of variable x(alpha); for faulted sections it is eq. 2.88-2.93.
 """
 
@@ -115,10 +116,19 @@ def fillet_compliance(gear: Gear, alpha1: np.ndarray, E: float, face_width: floa
     return np.cos(alpha1) ** 2 / (E * face_width) * (L * u_over_S**2 + M * u_over_S + P * (1 + Q * np.tan(alpha1) ** 2))
 
 
-def hertz_compliance(E: float, nu: float, contact_width: np.ndarray) -> np.ndarray:
-    """1/k_h of eq. 2.94 with the effective contact width at the contact point."""
+def hertz_compliance(
+    E: float, nu: float, contact_width: np.ndarray, E2: float | None = None, nu2: float | None = None
+) -> np.ndarray:
+    """1/k_h of eq. 2.94 with the effective contact width L at the contact point. Two materials:
+    k_h = pi L / (2 [(1 - nu1^2)/E1 + (1 - nu2^2)/E2]) (two cylinders in line contact), which is
+    eq. 2.94's pi E L / (4 (1 - nu^2)) when (E2, nu2) = (E1, nu1)."""
+    width = np.maximum(contact_width, 1e-300)
     with np.errstate(divide="ignore"):
-        return np.where(contact_width > 0, 4 * (1 - nu**2) / (np.pi * E * np.maximum(contact_width, 1e-300)), np.inf)
+        if E2 is None or (E2, nu2) == (E, nu):
+            compliance = 4 * (1 - nu**2) / (np.pi * E * width)
+        else:
+            compliance = 2 * ((1 - nu**2) / E + (1 - nu2**2) / E2) / (np.pi * width)
+        return np.where(contact_width > 0, compliance, np.inf)
 
 
 def tooth_pair_compliances(
@@ -143,14 +153,15 @@ def tooth_pair_compliances(
     ):
         if integrals is None:
             integrals = SectionIntegrals(section, start=0.0 if options.root_region else section.d_1)
-        for name, value in beam_compliances(g, integrals, alpha1, pair.E, pair.nu).items():
+        for name, value in beam_compliances(g, integrals, alpha1, g.E, g.nu).items():  # each tooth its material
             out[name + suffix] = value
         out["fillet" + suffix] = (
-            fillet_compliance(g, alpha1, pair.E, section.face_width) if options.fillet else np.zeros_like(phi)
+            fillet_compliance(g, alpha1, g.E, section.face_width) if options.fillet else np.zeros_like(phi)
         )
         d, _ = contact_geometry(g, alpha1)
         widths.append(np.interp(d, section.x, section.L))
-    out["hertz"] = hertz_compliance(pair.E, pair.nu, np.minimum(*widths))
+    p, g = pair.pinion, pair.gear
+    out["hertz"] = hertz_compliance(p.E, p.nu, np.minimum(*widths), g.E, g.nu)
     out["total"] = sum(out.values())
     return out
 

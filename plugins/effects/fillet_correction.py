@@ -41,9 +41,9 @@ class FilletCorrection(Effect):
         loaded = in_mesh & (k > 0)
         double = loaded.sum(axis=0) >= 2
         p = phi[loaded & double]
-        fillet = fillet_compliance(pair.pinion, pair.alpha1_pinion(p), pair.E, pair.face_width) + fillet_compliance(
-            pair.gear, pair.alpha1_gear(p), pair.E, pair.face_width
-        )
+        fillet = fillet_compliance(
+            pair.pinion, pair.alpha1_pinion(p), pair.pinion.E, pair.face_width
+        ) + fillet_compliance(pair.gear, pair.alpha1_gear(p), pair.gear.E, pair.face_width)  # each gear's own E
         corrected = k.copy()
         corrected[loaded & double] = 1.0 / (1.0 / k[loaded & double] + lam * fillet)
         # as a change to the current table, so it composes with any other table effect

@@ -60,7 +60,7 @@ class ToothFriction(Effect):
         def forces(x):
             force, torque1, torque2 = friction_pattern(x, mu_f)
             scale = x.load / x.load_nm  # the load share follows a load ripple
-            a0 = x.pair.pressure_angle
+            a0 = x.pair.working_pressure_angle  # the line of action (alpha_w for shifted gears)
             across = x.vector({"x1": math.cos(a0), "y1": -math.sin(a0), "x2": -math.cos(a0), "y2": math.sin(a0)})
             return [
                 (across, scale * x.at_angle(force)),

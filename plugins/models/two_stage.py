@@ -155,7 +155,7 @@ def train_assembly(pairs, v) -> Assembly:
     for k, pair in enumerate(pairs, start=1):
         d, w = blocks[k - 1], blocks[k]  # the driving pinion's block and the driven wheel's
         (d_theta, d_mass, _), (w_theta, w_mass, _) = _block_params(d), _block_params(w)
-        s, c = math.sin(pair.pressure_angle), math.cos(pair.pressure_angle)
+        s, c = math.sin(pair.working_pressure_angle), math.cos(pair.working_pressure_angle)  # alpha_w: shifted gears
         cy = c if k % 2 else -c  # s_k of the module doc: stage 2's line of action mirrored
         P = np.zeros(n)
         for dof, value in (
