@@ -250,7 +250,7 @@ class GearPair:
         if self.roll_start_pinion <= 0 or self.roll_end_gear <= 0:
             raise GearlabInputError(
                 f"{where}: the teeth interfere (contact below the base circle); "
-                "use more teeth or a larger pressure angle"
+                "use more teeth, a larger pressure angle or a positive profile shift"
             )
         if not (1.0 <= self.contact_ratio < 2.0):
             raise GearlabInputError(
