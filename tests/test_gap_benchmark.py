@@ -13,6 +13,7 @@ import inspect
 import json
 import math
 import pickle
+import re
 import struct
 
 import numpy as np
@@ -405,7 +406,8 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     def stand_in(
         source, target_X, settings, candidates, chain=None, max_order=0
     ):  # names the first candidate when the target is noisy
-        return fake_result([candidates[0]], 10.0, 2.0, params={candidates[0]: {"snr_db": 5.0}})
+        result = fake_result([candidates[0]], 10.0, 2.0, params={candidates[0]: {"snr_db": 5.0}})
+        return {**result, "evaluations": 20 + len(candidates)}  # 23 on three candidates, 22 when one is withheld
 
     monkeypatch.setattr(bench, "_diagnose", stand_in)
     path = write_scenario(tiny(4))
@@ -431,6 +433,10 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     assert names[:3] == ["answers.json", "calibration.json", "diagnosis.json"] and len(names) == 4
     assert names[3] in ("target.npz", "target.wav")
     assert "top-1" in out
+    # what each trial's diagnosis cost, in its log line, and in all (issue 41: no total anywhere)
+    assert summary["evaluations"] == {"total": 3 * 23 + 22, "trials": 4, "median": 23.0}
+    assert re.search(r"trial 003 \(withheld\): .*; 22 score evaluations, \d+ s", out + err), out + err
+    assert "score evaluations of the diagnoses: 91 over 4 trials (median 23 a trial)" in out
     if chromium():  # the report as a reader gets it (issue 41: a browser test covers every kind)
         check_report(run_dir / "report.html", tmp_path / "browser")
     # resume: nothing left to do, nothing recomputed

@@ -237,6 +237,7 @@ def test_parallel_fits_give_the_serial_result():
     serial = diagnose(B6, target, settings)
     parallel = diagnose(B6, target, settings, executor=LocalExecutor(2))
     assert serial["effects"] == parallel["effects"] and serial["ranking"] == parallel["ranking"]
+    assert serial["evaluations"] == parallel["evaluations"] > 0  # the workers' counts summed (gearlab.gap.tally)
 
 
 def test_no_extra_effect_is_credited_with_a_better_refit_of_the_first():

@@ -8,6 +8,7 @@ search. One test runs the real diagnosis on a tiny scenario."""
 from __future__ import annotations
 
 import json
+import re
 import sys
 import types
 from dataclasses import replace
@@ -121,6 +122,7 @@ def fake_module(calls: list) -> types.ModuleType:
             "unexplained": False,
             "corrected_effects": [["sensor_noise", [["kind", "laplace"], ["snr_db", 0.5]]]],
             "settings": {"budget": settings.budget},
+            "evaluations": 1234,
         }
 
     def corrected_source(source, result):
@@ -269,6 +271,9 @@ def test_summary_lines(finished):
     run, _ = finished
     lines = gap.summary_lines(RunDir.open(run))
     assert lines[0].startswith("gap before") and any("sensor_noise" in line for line in lines)
+    # what the diagnosis cost (issue 41: its total of score evaluations was given nowhere)
+    assert json.loads((run / "summary.json").read_text())["evaluations"] == 1234
+    assert lines[1].endswith("; verdict: explained; 1234 score evaluations"), lines[1]
 
 
 def test_resume_skips_finished_units(finished, tiny, cli, calls):
@@ -433,6 +438,8 @@ def test_real_diagnosis_tiny(tiny, cli):
     assert "accuracy" not in summary
     assert summary["gap_before"] >= 0 and isinstance(summary["unexplained"], bool)
     assert [r["name"] for r in summary["ranking"]] == ["sensor_noise"]
+    n = summary["evaluations"]  # the log's line and the summary's say the same count
+    assert n > 0 and re.search(rf"gap: {n} score evaluations in \d+ s", out + err) and f"; {n} score evaluations" in out
 
 
 def test_the_summary_says_which_parameters_are_not_identifiable_and_what_the_data_pin():

@@ -239,3 +239,64 @@ def test_the_gap_before_stage_loads_scikit_learn_under_a_line_of_its_own(monkeyp
     after = next(i for i in range(loading, len(before)) if before[i][0] != "unit")
     assert before[loading - 1][:2] == ("advance", 1) and before[after][:2] == ("advance", 2)
     assert before[after - 1] == ("unit", 0, "")  # gone before the report's first part ends
+
+
+def test_a_diagnosis_inside_a_unit_shows_its_fits_evaluations_on_the_units_line(monkeypatch):
+    """Inside a benchmark trial (stages_to_unit) the fits' line ('fitting: 577 evaluations, 5.8/s
+    (99 s)', events.standing beside the stage's bar when the run diagnoses) was dropped: the unit's
+    line showed the stage's count alone through minutes of fits. It now follows the count, and goes
+    when the fits end."""
+    from gearlab import events as ev
+    from gearlab.gap import tally
+    from gearlab.gap.diagnose import run_fits
+
+    monkeypatch.setattr(ev, "STANDING_S", 0.0)
+    monkeypatch.setattr(tally, "WRITE_EVERY", 0.0)
+
+    def work(n):
+        for _ in range(n):
+            tally.counted()
+            time.sleep(0.12)
+        return n
+
+    run = SimpleNamespace(
+        on_event=ev.stages_to_unit, executor=SimpleNamespace(map=lambda w, tasks, _: [w(t) for t in tasks])
+    )
+    said: list[str] = []
+    with ev.saying(said.append):
+        ev.stages_to_unit(Event("stage", stage="gap round 1", total=2, message="gap: round 1, fitting 2 effects"))
+        assert run_fits(run, "gap round 1", work, [6, 8], None) == [6, 8]
+        ev.stages_to_unit(Event("advance", stage="gap round 1", done=2, total=2))
+    head = "gap: round 1, fitting 2 effects: 0 of 2"
+    assert said[:2] == [head, f"{head}; fitting"] and said[-2:] == [head, "gap: round 1, fitting 2 effects: 2 of 2"]
+    counts = [
+        re.fullmatch(re.escape(head) + r"; fitting: (\d+) evaluations, \d+\.\d/s \(\d s\)", m) for m in said[2:-2]
+    ]
+    assert counts and all(counts), said
+    seen = [int(m.group(1)) for m in counts]
+    assert seen == sorted(seen) and 0 < seen[0] < 14 and seen[-1] <= 14
+
+
+def test_a_diagnosis_gives_its_total_of_score_evaluations(monkeypatch):
+    """No total of a diagnosis's score evaluations was given anywhere (its fits' line counted them
+    while they ran): the result holds it, every Scorer.score of the diagnosis and its fits, and a log
+    line says it (the gap kind's log, a transfer benchmark's; a gap benchmark trial records it)."""
+    import gearlab.gap.diagnose as d
+    from gearlab.data.builder import build_dataset
+    from gearlab.data.spec import dataset_preset
+    from gearlab.effects import effect_spec
+    from gearlab.gap.views import healthy_rows
+
+    calls = []
+    score = d.Scorer.score
+    monkeypatch.setattr(d.Scorer, "score", lambda self, X: calls.append(1) or score(self, X))
+    source = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
+    noisy = source.with_(effects=(effect_spec("sensor_noise", kind="laplace", snr_db=5),), seed=11)
+    told: list[Event] = []
+    settings = d.Settings(
+        candidates=("sensor_noise",), max_effects=1, healthy=16, bootstrap=20, permutations=99, budget=4
+    )
+    result = d.diagnose(source, healthy_rows(build_dataset(noisy)), settings, on_event=told.append)
+    assert result["effects"] and result["evaluations"] == len(calls) > 20  # the fits' included
+    logs = [e.message for e in told if e.kind == "log"]
+    assert logs[-1] == f"gap: {len(calls)} score evaluations in {result['seconds']:.0f} s"

@@ -177,11 +177,12 @@ def corrected(tmp_path_factory):
             "unexplained": False,
             "effects": effects,
             "corrected_effects": FITTED,
+            "evaluations": 57,
         }
 
     # the histories the training units and the bounds are given (one worker: in this process)
     train_unit, bayes_bound = tb.train_unit, tb.bayes_bound
-    histories: dict[str, list] = {"units": [], "bounds": []}
+    histories: dict[str, list] = {"units": [], "bounds": [], "logs": []}
 
     def unit(task):
         histories["units"].append((task[2][0].name, task[7]))
@@ -199,7 +200,10 @@ def corrected(tmp_path_factory):
         mp.setattr("gearlab.gap.diagnose.diagnose", diagnose)
         mp.setattr(tb, "train_unit", unit)
         mp.setattr(tb, "bayes_bound", bound)
-        run = run_scenario(path, out=base / "runs").path
+        logs = histories["logs"].append
+        run = run_scenario(
+            path, out=base / "runs", on_event=lambda e: logs(e.message) if e.kind == "log" else None
+        ).path
     return run, calls, base / "cache", histories
 
 
@@ -239,6 +243,16 @@ def test_the_correction_fits_on_the_history_alone(corrected, monkeypatch):
         scored = [r for r in records if r.get("trial") == name and "n_test" in r]
         assert len(scored) == 2 * 2 * 3  # two sources x two repetitions x three methods
         assert {r["n_test"] for r in scored} == {len(target.X) - protocol.target_train}
+
+
+def test_each_trials_correction_says_its_score_evaluations(corrected):
+    """Issue 41: a diagnosis's total of score evaluations was given nowhere; a trial's correction
+    record keeps it and its log line says it."""
+    run, _, _, histories = corrected
+    records = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines()]
+    assert {r["evaluations"] for r in records if r["unit"].endswith("/correction")} == {57}
+    said = [m for m in histories["logs"] if "the diagnosis of its history" in m]
+    assert len(said) == 2 and all(": gap 10 -> 1 (57 score evaluations, " in m for m in said), said
 
 
 def test_both_sources_reported_per_trial_and_in_distribution(corrected):

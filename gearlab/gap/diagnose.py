@@ -81,6 +81,7 @@ from ..errors import GearlabInputError
 from ..events import Event, stages_to_unit, standing
 from ..executors import LocalExecutor
 from ..registry import get_registry
+from . import tally
 from .conclusion import (
     MIN_SHARE,
     NAMED_SHARE,
@@ -116,7 +117,7 @@ def diagnose(
     (gearlab.data.chain.Chain): every source set is made through it (pipeline parity), its tacho
     offset fitted to the target's synchronous average unless the chain fixes it.
     """
-    started = time.perf_counter()
+    started, first = time.perf_counter(), tally.so_far()
     candidates = check_settings(settings)
     target, chain, rows, settings, pair, search, fresh = _prepared(source, target_X, settings, chain)
     executor = executor or LocalExecutor(1)
@@ -176,7 +177,8 @@ def diagnose(
     )
     if verdict is not None:
         on_event(Event("log", message=f"gap: {verdict}: {line}"))
-        return {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}
+        result = {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}
+        return evaluated(result, first, on_event)
 
     run = _Run(
         scorer,
@@ -232,7 +234,16 @@ def diagnose(
         significant = another_round(before, check)
     if accepted:
         fitted = profiled(run, accepted, fitted)
-    return conclusion(run, result, before, accepted, fitted, started)
+    return evaluated(conclusion(run, result, before, accepted, fitted, started), first, on_event)
+
+
+def evaluated(result: dict, first: int, on_event: Callable[[Event], None]) -> dict:
+    """*result* with its score evaluations (``evaluations``: the diagnosis's, its fits' in every worker
+    included, since gearlab.gap.tally.so_far was *first*), and a log line that says them: a diagnosis
+    told its fits' count while they ran, and no total anywhere (issue 41)."""
+    result["evaluations"] = tally.so_far() - first
+    on_event(Event("log", message=f"gap: {result['evaluations']} score evaluations in {result['seconds']:.0f} s"))
+    return result
 
 
 def diagnose_dataset(
@@ -341,8 +352,11 @@ def run_fits(run: _Run, stage: str, work, tasks: list, advance) -> list:
             n = evaluations_in(folder)
             return f"fitting: {n} evaluations, {n / max(time.monotonic() - began, 1e-9):.1f}/s" if n else "fitting"
 
-        with standing(run.on_event, stage, line):
-            return run.executor.map(Tallied(work, folder), tasks, advance)
+        try:
+            with standing(run.on_event, stage, line):
+                return run.executor.map(Tallied(work, folder), tasks, advance)
+        finally:
+            tally.fits_ended(folder)  # the diagnosis's total (evaluated)
 
 
 def greedy_round(

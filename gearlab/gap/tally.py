@@ -8,6 +8,9 @@ a small file of its own in a folder the stage made; the stage's line sums the fo
 (:func:`evaluations_in`). The files are what crosses from a worker process to the run's process:
 the local pool's workers and an in-process fit write the same way; a fit on another machine (a Ray
 cluster) cannot reach the folder and is not counted (the line says the time alone).
+
+A diagnosis's total (:func:`so_far`, read at its start and end) is its own process's evaluations
+outside the fits and, as each batch of fits ends (:func:`fits_ended`), the sum of its folder.
 """
 
 from __future__ import annotations
@@ -23,10 +26,12 @@ WRITE_EVERY = 0.5  # s between two writes of one fit's count
 
 
 class _Count:
-    """This process's fit in progress: its evaluations, and where they are written (None: nowhere)."""
+    """This process's fit in progress: its evaluations, and where they are written (None: nowhere);
+    the evaluations made outside a fit, and those of the fits that ended (summed from their folders)."""
 
     def __init__(self):
         self.n, self.file, self.written = 0, None, 0.0
+        self.inside, self.outside, self.fitted = False, 0, 0
 
     def write(self) -> None:
         if self.file is None:
@@ -43,6 +48,9 @@ _count = _Count()
 
 def counted() -> None:
     """One score evaluation of the fit in progress (nothing is written outside :class:`Tallied`)."""
+    if not _count.inside:
+        _count.outside += 1
+        return
     _count.n += 1
     if _count.file is not None and time.monotonic() - _count.written >= WRITE_EVERY:
         _count.write()
@@ -56,12 +64,12 @@ class Tallied:
         self.work, self.folder = work, folder
 
     def __call__(self, task):
-        _count.n, _count.file = 0, Path(self.folder) / f"{uuid.uuid4().hex}.n"
+        _count.n, _count.file, _count.inside = 0, Path(self.folder) / f"{uuid.uuid4().hex}.n", True
         try:
             return self.work(task)
         finally:
             _count.write()
-            _count.file = None
+            _count.file, _count.inside = None, False
 
 
 def evaluations_in(folder: str) -> int:
@@ -73,3 +81,16 @@ def evaluations_in(folder: str) -> int:
         except (OSError, ValueError):  # a file replaced while read: counted at the next look
             pass
     return total
+
+
+def fits_ended(folder: str) -> int:
+    """A batch of fits ended: their evaluations (*folder*'s sum) join this process's total."""
+    n = evaluations_in(folder)
+    _count.fitted += n
+    return n
+
+
+def so_far() -> int:
+    """This process's score evaluations so far: outside the fits, and the fits' that ended
+    (:func:`fits_ended`). A diagnosis's total is the difference between its end and its start."""
+    return _count.outside + _count.fitted

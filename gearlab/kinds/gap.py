@@ -71,7 +71,7 @@ from .gap_inputs import (
     units_declared,
     units_warning,
 )
-from .gap_tables import accuracy_md, params_text, percent, ranking_md, tables_md, views_md
+from .gap_tables import accuracy_md, evaluations_text, params_text, percent, ranking_md, tables_md, views_md
 from .gap_verdict import gap_lines
 
 _DATASET = Table(DATASET_TABLE.keys, required=True)
@@ -621,6 +621,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "verdict": verdict_text(result),
         "dropped": dropped_text(result) if result.get("dropped_effects") else None,
         "explained_share": result.get("explained_share"),
+        "evaluations": result.get("evaluations"),  # the diagnosis's score evaluations, its fits' included
         "chain": result.get("chain"),
         "structure": result.get("structure"),  # speed, mesh order and level measured before any effect
         "significant_before": result["significant_before"],
@@ -667,7 +668,7 @@ def summary_lines(run: RunDir) -> list[str]:
         f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "
         f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
         f"effects: {names or 'none'}; "
-        f"verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}",
+        f"verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}{evaluations_text(s)}",
     ]
     for e in s["effects"]:
         for c in e.get("combinations", []):

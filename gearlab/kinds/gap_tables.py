@@ -8,6 +8,12 @@ def _interval(iv) -> str:
     return f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else ""
 
 
+def evaluations_text(summary: dict) -> str:
+    """'; 1094 score evaluations': what the diagnosis cost (nothing from a summary before the count)."""
+    n = summary.get("evaluations")
+    return "" if n is None else f"; {n} score evaluations"
+
+
 def percent(x) -> str:
     return f"{100 * x:.1f} %" if x is not None else ""
 

@@ -266,6 +266,7 @@ def correction(spec: Spec, name: str, source_spec: DatasetSpec, target, history,
         "withheld": correction_withheld(result),  # why the corrected rows use the plain source ('' : they do not)
         "effects": [{k: e.get(k) for k in ("name", "params", "share_removed")} for e in result["effects"]],
         "corrected_effects": result["corrected_effects"],
+        "evaluations": result.get("evaluations"),  # its score evaluations, its fits' included
         "seconds": round(time.perf_counter() - started, 1),
     }
 
@@ -318,10 +319,12 @@ def correction_line(record: dict) -> str:
     from ..gap.diagnose import correction_withheld
 
     fitted = ", ".join(e["name"] for e in record["effects"]) or "no effect"
+    n = record.get("evaluations")  # (a record from before the count: its time alone)
+    cost = "" if n is None else f"{n} score evaluations, "
     out = ", ".join(f"{e['name']} ({e['why']})" for e in record.get("left_out", ()))
     return (
         f"{record['trial']}: the diagnosis of its history ({record['rows']} healthy rows) fits {fitted}: "
-        f"gap {record['gap_before']:.4g} -> {record['gap_after']:.4g} ({record['seconds']:.0f} s)"
+        f"gap {record['gap_before']:.4g} -> {record['gap_after']:.4g} ({cost}{record['seconds']:.0f} s)"
         + (f"; left out of the corrected source: {out}" if out else "")
         + (f"; {withheld}" if (withheld := correction_withheld(record)) else "")
     )

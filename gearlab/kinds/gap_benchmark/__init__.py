@@ -172,7 +172,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             nonlocal finished
             run.append(record)
             finished += 1
-            on_event(Event("log", message=f"{record['unit']} ({record['kind']}): {_verdict(record)}"))
+            on_event(Event("log", message=f"{record['unit']} ({record['kind']}): {_verdict(record)}{_cost(record)}"))
             on_event(Event("record", stage="trials", record=record))
             on_event(Event("advance", stage="trials", done=finished, total=total))
 
@@ -188,6 +188,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         ]
         executor.map(bench.trial_task, tasks, on_done=record_done)
         summarise(scenario, run, elapsed=time.perf_counter() - started)
+
+
+def _cost(r: dict) -> str:
+    """'; 1094 score evaluations, 99 s': what a trial cost, its diagnosis's score evaluations and the
+    trial's time (a record from before the count says its time alone)."""
+    n = r.get("evaluations")
+    return f"; {'' if n is None else f'{n} score evaluations, '}{r.get('seconds', 0):.0f} s"
 
 
 def _verdict(r: dict) -> str:
@@ -225,6 +232,8 @@ def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> 
         **bench.summarise(records, spec.library),
     }
     summary["trial_seconds"] = float(sum(r.get("seconds", 0.0) for r in records))  # summed over trials (all workers)
+    counts = [r["evaluations"] for r in records if r.get("evaluations") is not None]  # (older records: none)
+    summary["evaluations"] = {"total": sum(counts), "trials": len(counts), "median": bench._median(counts)}
     summary["elapsed_seconds"] = elapsed  # wall time of this session of the run (a resumed run: since resuming)
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(summary))
@@ -338,6 +347,16 @@ def summary_lines(run: RunDir) -> list[str]:
         f"({mark[met['out_of_library_unexplained']]}, target 80 %)",
         f"when the right effect was named first: explained {_pct(s.get('explained_when_identified'))}, "
         f"further effects the target lacks named too {_pct(s.get('extra_names_when_identified'))}",
+    ] + evaluations_lines(s.get("evaluations"))
+
+
+def evaluations_lines(counts: dict | None) -> list[str]:
+    """What the trials' diagnoses cost in score evaluations (none from a summary before the count)."""
+    if not counts or not counts["trials"]:
+        return []
+    return [
+        f"score evaluations of the diagnoses: {counts['total']} over {counts['trials']} trials "
+        f"(median {counts['median']:.0f} a trial)"
     ]
 
 

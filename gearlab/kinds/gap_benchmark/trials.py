@@ -555,6 +555,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
         "shrink": shrink,
         "verdict": result.get("verdict"),
         "explained_share": result.get("explained_share"),
+        "evaluations": result.get("evaluations"),  # the diagnosis's score evaluations, its fits' included
         "acquisition": answers.get("acquisition"),
         "top1": None,
         "top3": None,
