@@ -137,6 +137,27 @@ def test_two_materials_reduce_to_one_as_e2_tends_to_e1():
     )
 
 
+@pytest.mark.parametrize("z1, z2, x1, x2", [(16, 48, 0.5, 0.3), (14, 39, 0.4, 0.1), (16, 48, 0.5, -0.5)])
+def test_a_shifted_two_material_tooth_pair_matches_direct_quadrature(z1, z2, x1, x2):
+    from pem_reference import tooth_compliance  # thesis eq. 2.21-2.46 in alpha, one angle at a time
+
+    pair = GearPair(Z1=z1, Z2=z2, x1=x1, x2=x2, **BASE, **CAST_IRON)
+    phi = np.linspace(0.0, pair.theta_t, 13)[1:-1]
+    ours = MeshStiffnessModel(pair).tooth_pair_stiffness(phi)
+    p, g, L = pair.pinion, pair.gear, pair.face_width
+    hertz = 2 * ((1 - p.nu**2) / p.E + (1 - g.nu**2) / g.E) / (math.pi * L)
+    reference = [
+        1
+        / (
+            hertz
+            + tooth_compliance(p, pair.alpha1_pinion(f), p.E, p.nu, L)
+            + tooth_compliance(g, pair.alpha1_gear(f), g.E, g.nu, L)
+        )
+        for f in phi
+    ]
+    assert np.max(np.abs(ours / np.array(reference) - 1)) < 1e-4
+
+
 def test_the_wheel_view_keeps_each_gears_shift_and_material():
     pair = GearPair(Z1=16, Z2=48, x1=0.4, x2=-0.1, **BASE, **CAST_IRON)
     view = pair.seen_from("wheel")
