@@ -5,13 +5,17 @@ Exit codes: 0 success, 2 bad input (one clear line on stderr, no traceback), 1 i
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 import time
 import traceback
 import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from inspect import Parameter, Signature, signature
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, get_type_hints
 
 import typer
 from rich.console import Console
@@ -391,26 +395,49 @@ Device = Annotated[
 Events = Annotated[bool, typer.Option(help="progress as JSON lines on stdout (for front-ends such as the TUI)")]
 
 
+@dataclass(frozen=True)
+class Running:
+    """The options of every command that runs a scenario, declared once (runs_a_scenario)."""
+
+    out: Out = None
+    resume: Resume = None
+    quick: Quick = False
+    executor: Executor = None
+    ray_address: RayAddress = None
+    device: Device = None
+    events: Events = False
+
+
+def runs_a_scenario(command: Callable[..., None]) -> Callable[..., None]:
+    """*command* with the Running options after its own, in the signature typer reads; *command*
+    gets them gathered as its last parameter, `how` (a Running)."""
+    own = [p for p in signature(command, eval_str=True).parameters.values() if p.name != "how"]
+    hints = get_type_hints(Running, include_extras=True)  # the typer.Option of each
+    shared = [
+        Parameter(f.name, Parameter.KEYWORD_ONLY, default=f.default, annotation=hints[f.name]) for f in fields(Running)
+    ]
+
+    @functools.wraps(command)
+    def with_options(**given) -> None:
+        command(**{p.name: given[p.name] for p in own}, how=Running(**{f.name: given[f.name] for f in fields(Running)}))
+
+    with_options.__signature__ = Signature(own + shared, return_annotation=None)
+    with_options.__annotations__ = {p.name: p.annotation for p in own + shared}
+    return with_options
+
+
 @app.command()
-def run(
-    scenario: Annotated[Path | None, typer.Argument(help="scenario TOML file")] = None,
-    out: Out = None,
-    resume: Resume = None,
-    quick: Quick = False,
-    executor: Executor = None,
-    ray_address: RayAddress = None,
-    device: Device = None,
-    events: Events = False,
-) -> None:
+@runs_a_scenario
+def run(scenario: Annotated[Path | None, typer.Argument(help="scenario TOML file")] = None, *, how: Running) -> None:
     """Run a scenario headless; prints `run directory: PATH` as its last line.
 
     Progress goes to stderr: bars on a terminal, one log line per step otherwise.
 
     Example: gearlab run scenarios/quick.toml --quick (then: gearlab run --resume RUN_DIR)
     """
-    if scenario is None and resume is None:
+    if scenario is None and how.resume is None:
         raise GearlabInputError("give a SCENARIO file, or --resume RUN_DIR")
-    _run(scenario, out, resume, quick, _execution(executor, ray_address, device), events)
+    _run(scenario, how, {})
 
 
 def _execution(executor: str | None, ray_address: str | None, device: str | None) -> dict:
@@ -432,10 +459,11 @@ class Interrupted(Exception):
         self.run_path = run_path
 
 
-def _run(
-    scenario: Path | None, out: Path | None, resume: Path | None, quick: bool, overrides: dict, events: bool
-) -> None:
-    """Run the engine, drawing its events as progress bars (or printing them as JSON lines)."""
+def _run(scenario: Path | None, how: Running, overrides: dict) -> None:
+    """Run the engine, drawing its events as progress bars (or printing them as JSON lines); *overrides*
+    ({table: {key: value}}) beside the [execution] keys of *how*."""
+    out, resume, quick, events = how.out, how.resume, how.quick, how.events
+    overrides = {**_execution(how.executor, how.ray_address, how.device), **overrides}
     if not events and err_console.is_terminal:  # the engine's imports take seconds before its first event
         err_console.print(f"gearlab: starting {scenario or resume}", style="dim", markup=False, highlight=False)
     from .engine import run_scenario, scenario_of
@@ -479,19 +507,15 @@ BENCHMARK = "gap_benchmark.toml"
 
 
 @app.command()
+@runs_a_scenario
 def gap(
     scenario: Annotated[str, typer.Argument(help="a gap scenario file (kind = \"gap\"), or 'benchmark'")],
     trials: Annotated[int | None, typer.Option(help="benchmark: number of trials (default: the scenario's)")] = None,
     seed: Annotated[
         int | None, typer.Option(help="benchmark: seed of the hidden draws (default: the scenario's)")
     ] = None,
-    out: Out = None,
-    resume: Resume = None,
-    quick: Quick = False,
-    executor: Executor = None,
-    ray_address: RayAddress = None,
-    device: Device = None,
-    events: Events = False,
+    *,
+    how: Running,
 ) -> None:
     """Diagnose the sim-to-real gap of a scenario, or run the blind benchmark of the diagnosis.
 
@@ -502,7 +526,7 @@ def gap(
     from .engine import load_scenario
     from .kinds import GAP_COMMAND_KINDS, SCENARIO_KINDS
 
-    overrides = _execution(executor, ray_address, device)
+    overrides: dict = {}
     given = _benchmark_keys(trials, seed)
     if scenario == "benchmark":
         path = _shipped_scenario(BENCHMARK, "gap_benchmark")
@@ -525,7 +549,7 @@ def gap(
                 f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
                 f'"{kind}" (run it with `gearlab run`)'
             )
-    _run(None if resume else path, out, resume, quick, overrides, events)
+    _run(None if how.resume else path, how, overrides)
 
 
 def _benchmark_keys(trials: int | None, seed: int | None) -> dict:
@@ -546,6 +570,7 @@ def _shipped_scenario(name: str, kind: str) -> Path:
 
 
 @app.command("transfer-benchmark")
+@runs_a_scenario
 def transfer_benchmark(
     trials: Annotated[int | None, typer.Option(help="number of random targets (default: the scenario's)")] = None,
     seed: Annotated[
@@ -554,13 +579,8 @@ def transfer_benchmark(
     only: Annotated[
         list[int] | None, typer.Option(help="run trial I alone (repeatable), drawn as in the full run")
     ] = None,
-    out: Out = None,
-    resume: Resume = None,
-    quick: Quick = False,
-    executor: Executor = None,
-    ray_address: RayAddress = None,
-    device: Device = None,
-    events: Events = False,
+    *,
+    how: Running,
 ) -> None:
     """Run gearlab's frozen recipe on random unseen targets, each beside its Bayes bound.
 
@@ -568,11 +588,11 @@ def transfer_benchmark(
 
     Example: gearlab transfer-benchmark --trials 24 --seed 1000; one trial again: --trials 24 --seed 3 --only 9
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    overrides = {**_execution(executor, ray_address, device), **_benchmark_keys(trials, seed)}
+    overrides = _benchmark_keys(trials, seed)
     if only:
         overrides.setdefault("benchmark", {})["only"] = list(only)
-    path = None if resume else _shipped_scenario("transfer_benchmark.toml", "transfer_benchmark")
-    _run(path, out, resume, quick, overrides, events)
+    path = None if how.resume else _shipped_scenario("transfer_benchmark.toml", "transfer_benchmark")
+    _run(path, how, overrides)
 
 
 @app.command()
