@@ -92,7 +92,8 @@ def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON l
 
 STIFFNESS_HELP = """Time-varying mesh stiffness of a gear-pair preset over one pinion revolution.
 
-Faults (repeat --fault for several, on the same or different teeth):
+Faults (repeat --fault for several, on the same or different teeth; KIND@wheel:TOOTH... on a wheel
+tooth; on both gears the TVMS spans the hunting-tooth period, lcm(Z1, Z2) meshes):
 
   KIND@TOOTH=STEP            a step of the preset's ladder (Tables 2.5/2.6), 1 = healthy .. 20 = worst
 
@@ -140,6 +141,8 @@ def stiffness(
         f"{pair.name}: Z1={pair.Z1}, Z2={pair.Z2}, contact ratio {pair.contact_ratio:.4f}; "
         f"TVMS mean {ms.k.mean():.5g} N/m, min {ms.k.min():.5g}, max {ms.k.max():.5g} ({elapsed * 1e3:.1f} ms)"
     )
+    if ms.gear == "both":
+        console.print(f"  both gears faulted: the hunting-tooth period, {pair.Z1 / ms.turns:.0f} meshes in the table")
     for p in placed:
         shown = ", ".join(
             prm.show(p.params[prm.name]) if prm.unit else f"{p.params[prm.name]}" for prm in p.fault.params
@@ -151,21 +154,18 @@ def stiffness(
     if plot is not None:
         from .plots import tvms_figure
 
-        curves = [("healthy", ms.theta, model.mesh_stiffness((), points).k)] if placed else []
+        curves = [("healthy", ms.theta, model.healthy(points, ms.gear))] if placed else []  # on the table's grid
         label = " + ".join(p.label for p in placed) or "healthy"
         tvms_figure(curves + [(label, ms.theta, ms.k)], f"TVMS of {pair.name}: {label}", plot)
         console.print(f"wrote {plot}")
 
 
 def _placed_faults(pair, options: list[str] | None) -> list:
-    """The --fault options (KIND@TOOTH=STEP or KIND@TOOTH:NAME=VALUE,...) placed on *pair*."""
-    from .physics.faults import parse_fault_option, place_fault
+    """The --fault options (KIND@[GEAR:]TOOTH=STEP or KIND@[GEAR:]TOOTH:NAME=VALUE,...) placed on *pair*."""
+    from .physics.faults import place_fault_option
     from .registry import get_registry
 
-    return [
-        place_fault(get_registry(), pair, *parse_fault_option(text), where=f"--fault {text!r}")
-        for text in options or []
-    ]
+    return [place_fault_option(get_registry(), pair, text, f"--fault {text!r}") for text in options or []]
 
 
 def _check_folders(*paths: Path | None) -> None:

@@ -143,7 +143,7 @@ def simulate_signals(
     (['gear_x', 'gear_y', 'pinion_x', 'pinion_y'], 10001, 40.0, ['crack@1'])
     """
     from .gearbox.simulation import simulate_command
-    from .physics.faults import parse_fault_option, place_fault
+    from .physics.faults import place_fault_option
     from .registry import get_registry
 
     model, preset, speed, load = simulate_command(
@@ -151,9 +151,7 @@ def simulate_signals(
     )
     sim = simulator(model, preset, fs=fs, flag=flag)
     where = flag("fault")
-    placed = [
-        place_fault(get_registry(), sim.pair, *parse_fault_option(text), where=f"{where} {text!r}") for text in faults
-    ]
+    placed = [place_fault_option(get_registry(), sim.pair, text, f"{where} {text!r}") for text in faults]
     return sim.run(placed, speed, load, duration)
 
 
@@ -309,12 +307,13 @@ def inspect_recording(
 ) -> dict:
     """What ``gearlab inspect`` shows of a recording, as a dict: rate, duration, channels, the speed
     (from the tacho, a declared *speed* or the mesh lines of *gearbox*), the order spectrum's lines
-    and the TSA of each shaft; with a *gearbox*, whether the description matches (``matches``,
-    ``verdict``); with *history* (healthy records of the same gearbox) and a *gearbox*, which shaft
-    and gear carry a localised change (``localisation``). The arrays (``spectrum``, each ``tsa``) are
-    kept. *options*: ``vibration``, ``tacho``, ``tacho_kind`` (auto, angle, pulses),
-    ``pulses_per_rev``, ``tacho_shaft``, ``speed``, ``fs``, ``sensitivity``, ``gain``, ``unit``, as
-    inspect_options checks them; *flag* names a keyword in an error (the CLI passes its options).
+    and the TSA of each shaft; with a *gearbox*, whether the description matches (``matches``; None
+    where the pinion's tooth count cannot be confirmed without a tacho or the speed; ``verdict``); with
+    *history* (healthy records of the same gearbox) and a *gearbox*, which shaft and gear carry a
+    localised change (``localisation``). The arrays (``spectrum``, each ``tsa``) are kept. *options*:
+    ``vibration``, ``tacho``, ``tacho_kind`` (auto, angle, pulses), ``pulses_per_rev``, ``tacho_shaft``,
+    ``speed``, ``fs``, ``sensitivity``, ``gain``, ``unit``, as inspect_options checks them; *flag* names
+    a keyword in an error (the CLI passes its options).
 
     >>> import numpy as np
     >>> t = np.arange(40_000) / 20e3

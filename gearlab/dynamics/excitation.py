@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..physics.geometry import GearPair
-from ..physics.stiffness import MeshStiffness, MeshStiffnessModel
+from ..physics.stiffness import MeshStiffness, MeshStiffnessModel, table_slots
 
 # An extra generalised force, evaluated once every excitation effect has acted:
 # f(exc) -> (vector over exc.dofs, series over exc.t), or a list of such pairs.
@@ -111,9 +111,10 @@ class Excitation:
         return self.vector({"theta11": 1.0, "theta12": 1.0, "theta21": ratio, "theta22": ratio})
 
     def tooth_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per tooth n = 1..Z of the table's gear (the pinion, Z = Z1, or a faulted wheel, Z = Z2) on the
-        TVMS grid: its pair's local mesh angle phi (pinion rad since its contact began), whether it is in
-        mesh, and its pair stiffness k_n (faults included), each (Z, points).
+        """Per tooth n = 1..Z of the table's gear (the pinion, Z = Z1, or a faulted wheel, Z = Z2; with
+        faults on both gears per mesh n of the hunting period, Z = lcm(Z1, Z2)) on the TVMS grid: its
+        pair's local mesh angle phi (pinion rad since its contact began), whether it is in mesh, and its
+        pair stiffness k_n (faults included), each (Z, points).
 
         Pinion tooth n meshes for (n-1) 2 pi/Z1 <= theta < (n-1) 2 pi/Z1 + theta_t (eq. 2.51-2.54), wheel
         tooth n for (n-1) 2 pi/Z2 <= theta_2 < (n-1) 2 pi/Z2 + theta_t Z1/Z2; the local angle is formed in
@@ -122,17 +123,18 @@ class Excitation:
         """
         pair, points = self.pair, len(self.tvms.theta)
         Z1 = pair.Z1
-        Z = Z1 if self.tvms.gear == "pinion" else pair.Z2
+        Z = table_slots(pair, self.tvms.gear)
         j = np.arange(points, dtype=np.int64)[None, :]
         n = np.arange(Z, dtype=np.int64)[:, None]
         phi = 2 * np.pi * np.mod(j * Z - n * points, points * Z) / (points * Z1)
         in_mesh = phi < pair.theta_t
         k = np.zeros(phi.shape)
         k[in_mesh] = self.stiffness.tooth_pair_stiffness(phi[in_mesh])  # all teeth healthy, one pass
-        for tooth in sorted({f.tooth for f in self.faults}):
-            on = [f for f in self.faults if f.tooth == tooth]
-            row = in_mesh[tooth - 1]
-            k[tooth - 1, row] = self.stiffness.tooth_pair_stiffness(phi[tooth - 1, row], on)
+        faulted = sorted({slot for f in self.faults for slot in range(f.tooth, Z + 1, _teeth(pair, f.gear))})
+        for slot in faulted:  # a table's row: a tooth of its gear, or a mesh of the hunting period (BOTH)
+            on = [f for f in self.faults if (slot - f.tooth) % _teeth(pair, f.gear) == 0]
+            row = in_mesh[slot - 1]
+            k[slot - 1, row] = self.stiffness.tooth_pair_stiffness(phi[slot - 1, row], on)
         return phi, in_mesh, k
 
     def at_angle(self, table: np.ndarray) -> np.ndarray:
@@ -155,3 +157,7 @@ class Excitation:
             for vector, series in out if isinstance(out, list) else [out]:
                 terms.append((np.asarray(vector, dtype=float), np.asarray(series, dtype=float)))
         return terms
+
+
+def _teeth(pair, gear: str) -> int:
+    return pair.Z1 if gear == "pinion" else pair.Z2

@@ -27,7 +27,8 @@ import numba
 import numpy as np
 
 from ..errors import GearlabInputError
-from ..physics.stiffness import MeshStiffnessModel, PlacedFault
+from ..physics import stiffness
+from ..physics.stiffness import BOTH, MeshStiffnessModel, PlacedFault, table_gear, table_slots
 from .excitation import Excitation
 from .model import CHANNEL_DOFS, MESH_DAMPING_MODELS, DynamicModel, mesh_damping_ratio
 
@@ -320,6 +321,7 @@ class Simulator:
         where = f"model '{self.model.name}', preset '{self.preset}'"
         speed, load, channels = self._operating_point(speed_hz, load_nm, duration, channels, where)
         staged = self.faults_by_stage(faults, where)
+        self.check_hunting(staged, where)
         start = time.perf_counter()
         steps = int(round(duration * self.fs))
         t = np.arange(steps + 1) / self.fs
@@ -415,6 +417,27 @@ class Simulator:
         pair, turns = (self.pair, 1.0) if stage == 1 else (self.meshes[stage - 2].pair, self.meshes[stage - 2].ratio)
         return turns if gear == "pinion" else turns * pair.Z1 / pair.Z2
 
+    def table_turns(self, stage: int, faults: Sequence[PlacedFault]) -> float:
+        """Revolutions per input revolution of the TVMS table of *stage* with *faults*: its faulted
+        gear's (gear_turns), or with faults on both its gears the hunting-tooth period's (its pinion's
+        times Z1/lcm(Z1, Z2))."""
+        gear = table_gear(faults)
+        if gear != BOTH:
+            return self.gear_turns(stage, gear)
+        pair = self.pair if stage == 1 else self.meshes[stage - 2].pair
+        return self.gear_turns(stage, "pinion") * pair.Z1 / table_slots(pair, gear)
+
+    def check_hunting(self, staged: Sequence[Sequence[PlacedFault]], where: str) -> None:
+        """Refuse faults on both gears of a stage whose train repeats only after more than
+        MAX_HUNTING_TURNS input revolutions (one line: the faults, the stage, the period)."""
+        for stage, on in enumerate(staged, start=1):
+            if table_gear(on) == BOTH and (period := self.period(on)) > stiffness.MAX_HUNTING_TURNS:
+                raise GearlabInputError(
+                    f"{where}: faults {', '.join(f.label for f in on)} on both gears of stage {stage} repeat only "
+                    f"after {period} input revolutions (the hunting-tooth period); at most "
+                    f"{stiffness.MAX_HUNTING_TURNS}: put the damage on one gear"
+                )
+
     def period(self, faults: Sequence[PlacedFault] = ()) -> int:
         """Input revolutions after which the steady response repeats: 1 healthy or with pinion faults on
         stage 1 (every further mesh repeats within one input turn in the built-in models), else the
@@ -426,8 +449,7 @@ class Simulator:
     def _grid(pair, faults: Sequence[PlacedFault]) -> int:
         """Points of a TVMS table over one revolution of the faulted gear on a pitch-aligned grid of
         TVMS_POINTS per pinion revolution's worth of mesh periods (the same points per mesh period)."""
-        Z = pair.Z2 if faults and faults[0].gear == "wheel" else pair.Z1
-        return Z * math.ceil(TVMS_POINTS / pair.Z1)
+        return table_slots(pair, table_gear(faults)) * math.ceil(TVMS_POINTS / pair.Z1)
 
     def mesh_table(self, i: int, faults: Sequence[PlacedFault], points: int):
         """The TVMS of further mesh *i* (faults included) over one revolution of its faulted gear."""
@@ -438,8 +460,8 @@ class Simulator:
     ):
         """The TVMS over one revolution of the faulted gear (the pinion when none is) and k(t) at the
         nominal angle, whose input-shaft phase is *phase*: (table, table index per step or None, k(t))."""
-        if faults and faults[0].gear == "wheel":
-            turns = self.pair.Z1 / self.pair.Z2
+        if table_gear(faults) != "pinion":
+            turns = self.table_turns(1, faults)
             shaft = 2 * np.pi * speed * (np.arange(steps + 1) / self.fs)  # the nominal input angle, unwrapped
             return self._table_series(self.stiffness, faults, turns, shaft, per_rev)
         if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
@@ -527,11 +549,11 @@ class Simulator:
 
     def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None, faults=()) -> np.ndarray:
         """k(t) of further mesh *i* with the input shaft at angle *shaft*: its pinion turns at ratio x the
-        input; with *faults* (on one of its gears) its table spans a revolution of the faulted gear, read at
+        input; with *faults* its table spans a revolution of the faulted gear (both: the hunting period), read at
         that gear's angle. Exact table entries when that revolution is a whole number of steps (nominal
         speed), else interpolated on a pitch-aligned grid."""
         mesh, model = self.meshes[i], self.mesh_models[i]
-        turns = self.gear_turns(i + 2, faults[0].gear) if faults else mesh.ratio
+        turns = self.table_turns(i + 2, faults) if faults else mesh.ratio
         return self._table_series(model, faults, turns, shaft, per_rev)[2]
 
     def _excite(self, effects, tvms, index, t, speed, load):

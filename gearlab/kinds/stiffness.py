@@ -109,10 +109,10 @@ def build(scenario: Scenario) -> Spec:
                 raise GearlabInputError(
                     f"{here}: expected a table {{kind = ..., tooth = ..., step = ...}} or with params"
                 )
-            unknown = set(f) - {"kind", "tooth", "step", "params"}
+            unknown = set(f) - {"kind", "tooth", "step", "params", "gear"}
             if unknown:
                 raise GearlabInputError(
-                    f"{here}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, tooth, step, params"
+                    f"{here}: unknown key(s) {', '.join(sorted(unknown))}; expected kind, tooth, step, params, gear"
                 )
             # the types place_fault relies on (a list as 'kind' cannot even be looked up)
             if not isinstance(f["kind"], str):
@@ -121,7 +121,10 @@ def build(scenario: Scenario) -> Spec:
                 raise GearlabInputError(f"{here} key 'tooth': expected a tooth number, got {f['tooth']!r}")
             if not isinstance(f.get("params", {}), dict):
                 raise GearlabInputError(f"{here} key 'params': expected a table of parameters, got {f['params']!r}")
-            placed.append(place_fault(registry, pair, f["kind"], f["tooth"], f.get("step"), f.get("params"), here))
+            gear = f.get("gear", "pinion")  # pinion and wheel faults in one case: the hunting-tooth period
+            placed.append(
+                place_fault(registry, pair, f["kind"], f["tooth"], f.get("step"), f.get("params"), here, gear=gear)
+            )
         cases.append(Case(case.name, tuple(placed)))
     names = [c.name for c in cases]
     if len(set(names)) != len(names):

@@ -17,6 +17,7 @@ written for the pinion serves any gear of any stage unchanged.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from typing import ClassVar
 
@@ -166,6 +167,17 @@ def place_fault(
 FAULT_SYNTAX = "KIND@TOOTH=STEP (ladder step 1..20, 1 = healthy) or KIND@TOOTH:NAME=VALUE,... (explicit, with units)"
 
 
+def place_fault_option(registry, pair: GearPair, text: str, where: str) -> PlacedFault:
+    """A --fault option placed on *pair*: KIND@TOOTH..., a pinion tooth, or KIND@GEAR:TOOTH... (GEAR
+    pinion or wheel, as PlacedFault.label writes it: 'chip@wheel:5=12')."""
+    kind, at, rest = text.partition("@")
+    on = re.fullmatch(r"\s*(pinion|wheel)\s*:(.*)", rest, re.S) if at else None
+    gear = on.group(1) if on else "pinion"
+    return place_fault(
+        registry, pair, *parse_fault_option(f"{kind}@{on.group(2)}" if on else text), where=where, gear=gear
+    )
+
+
 def parse_fault_option(text: str) -> tuple[str, int, int | None, dict[str, str] | None]:
     """Parse 'crack@5=12' or 'crack@5:q0=2 mm,q2=1.5mm,nu=80 deg' into (kind, tooth, step, params)."""
     bad = GearlabInputError(f"--fault {text!r}: expected {FAULT_SYNTAX}")
@@ -194,5 +206,7 @@ def parse_fault_option(text: str) -> tuple[str, int, int | None, dict[str, str] 
     try:
         tooth = int(tooth_text.strip())
     except ValueError:
-        raise GearlabInputError(f"--fault {text!r}: TOOTH must be a pinion tooth number") from None
+        raise GearlabInputError(
+            f"--fault {text!r}: TOOTH must be a tooth number (KIND@TOOTH on the pinion, KIND@wheel:TOOTH on the wheel)"
+        ) from None
     return kind, tooth, step, params

@@ -18,6 +18,7 @@ after the change of variable x(alpha); for faulted sections it is eq. 2.88-2.93.
 from __future__ import annotations
 
 import io
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -167,6 +168,23 @@ def tooth_pair_compliances(
 
 
 GEARS = ("pinion", "wheel")  # gear 1 (the driver) and gear 2 of a pair
+BOTH = "both"  # a TVMS table of a pair with faults on both gears: the hunting-tooth period
+# Input revolutions a TVMS with faults on both gears of a pair may take to repeat (its table, and a
+# simulation of its whole period, grow with it); the dataset builder's placement.MAX_PERIOD likewise.
+MAX_HUNTING_TURNS = 1000
+
+
+def table_slots(pair: GearPair, gear: str) -> int:
+    """Mesh periods in a TVMS table of *gear*: Z1 (pinion), Z2 (wheel) or lcm(Z1, Z2) (BOTH, the
+    hunting-tooth period: mesh n engages pinion tooth n mod Z1 and wheel tooth n mod Z2)."""
+    return pair.Z1 if gear == "pinion" else pair.Z2 if gear == "wheel" else math.lcm(pair.Z1, pair.Z2)
+
+
+def table_gear(faults: Sequence) -> str:
+    """The gear a TVMS table with *faults* (of one pair) spans: the faulted gear, the pinion when none
+    is, BOTH when both are faulted."""
+    gears = {f.gear for f in faults}
+    return BOTH if len(gears) > 1 else gears.pop() if gears else "pinion"
 
 
 def gear_label(stage: int, gear: str) -> str:
@@ -194,8 +212,9 @@ class PlacedFault:
 
 @dataclass(frozen=True)
 class MeshStiffness:
-    """TVMS k(theta) over one revolution of *gear* (the faulted gear; the pinion when healthy),
-    theta = 2 pi j / n its angle."""
+    """TVMS k(theta) over one revolution of *gear* (the faulted gear; the pinion when healthy), theta =
+    2 pi j / n its angle; *gear* BOTH (faults on both gears): over the hunting-tooth period, theta
+    the pinion angle over lcm(Z1, Z2)/Z1 turns scaled to 2 pi."""
 
     theta: np.ndarray
     k: np.ndarray
@@ -209,8 +228,9 @@ class MeshStiffness:
 
     @property
     def turns(self) -> float:
-        """Revolutions of the table's gear per pinion revolution: 1, or Z1/Z2 for the wheel."""
-        return 1.0 if self.gear == "pinion" else self.pair.Z1 / self.pair.Z2
+        """Revolutions of the table per pinion revolution: 1, Z1/Z2 for the wheel, Z1/lcm(Z1, Z2) for
+        faults on both gears (the table spans the hunting-tooth period)."""
+        return 1.0 if self.gear == "pinion" else self.pair.Z1 / table_slots(self.pair, self.gear)
 
     def csv_text(self) -> str:
         """The table as CSV, theta_rad,k_N_per_m to 10 significant digits: `gearlab stiffness
@@ -282,30 +302,36 @@ class MeshStiffnessModel:
         theta_2 = (Z1/Z2) theta_1 (R_b1 theta_1 = R_b2 theta_2 along the line of action), so wheel
         tooth m is in mesh for (m-1) 2 pi/Z2 <= theta_2 < (m-1) 2 pi/Z2 + (Z1/Z2) theta_t, where its
         pair's pinion angle since contact began is (Z2/Z1)(theta_2 - (m-1) 2 pi/Z2). Faults on both
-        gears of a pair repeat only over the hunting period and are refused. The healthy TVMS is
-        computed once per grid; a fault only replaces its own tooth's contribution.
+        gears: the hunting-tooth period, L = lcm(Z1, Z2) mesh periods (L/Z1 pinion turns); mesh n
+        (0-based) engages pinion tooth n mod Z1 + 1 and wheel tooth n mod Z2 + 1, and its pair has
+        both teeth's faulted sections. The healthy TVMS is computed once per grid; a fault only
+        replaces its own tooth pairs' contributions.
         """
-        gears = {placed.gear for placed in faults}
-        if len(gears) > 1:
-            labels = ", ".join(placed.label for placed in faults)
-            raise GearlabInputError(
-                f"faults {labels}: faults on both gears of one pair are not supported (their TVMS repeats only "
-                "over the hunting-tooth period); put them on one gear"
-            )
-        gear = gears.pop() if gears else "pinion"
-        if gear not in GEARS:
-            raise GearlabInputError(f"fault {faults[0].label}: gear must be one of {', '.join(GEARS)}, got {gear!r}")
-        Z = self.pair.Z1 if gear == "pinion" else self.pair.Z2
-        by_tooth: dict[int, list[PlacedFault]] = {}
+        gear = table_gear(faults)
         for placed in faults:
+            if placed.gear not in GEARS:
+                raise GearlabInputError(
+                    f"fault {placed.label}: gear must be one of {', '.join(GEARS)}, got {placed.gear!r}"
+                )
+            Z = self.pair.Z1 if placed.gear == "pinion" else self.pair.Z2
             if not 1 <= placed.tooth <= Z:
                 raise GearlabInputError(f"fault {placed.label}: tooth must lie in 1..{Z}, got {placed.tooth}")
-            by_tooth.setdefault(placed.tooth, []).append(placed)
+        slots = table_slots(self.pair, gear)
+        if slots // self.pair.Z1 > MAX_HUNTING_TURNS:
+            raise GearlabInputError(
+                f"faults {', '.join(f.label for f in faults)}: on both gears of {self.pair.name} the TVMS repeats only "
+                f"after {slots} meshes = {slots // self.pair.Z1} pinion turns; at most {MAX_HUNTING_TURNS}"
+            )
+        by_slot: dict[int, list[PlacedFault]] = {}
+        for placed in faults:  # the table's mesh periods (1-based) that engage the faulted tooth
+            Z = self.pair.Z1 if placed.gear == "pinion" else self.pair.Z2
+            for slot in range(placed.tooth, slots + 1, Z):
+                by_slot.setdefault(slot, []).append(placed)
         theta, healthy = self._healthy(points, gear)
         k = healthy.copy()
-        for tooth, tooth_faults in by_tooth.items():
-            phi, in_mesh = self._arc(points, [tooth], gear)
-            k[in_mesh[0]] += self.tooth_pair_stiffness(phi, tooth_faults) - self.tooth_pair_stiffness(phi)
+        for slot, slot_faults in by_slot.items():
+            phi, in_mesh = self._arc(points, [slot], gear)
+            k[in_mesh[0]] += self.tooth_pair_stiffness(phi, slot_faults) - self.tooth_pair_stiffness(phi)
         return MeshStiffness(theta=theta, k=k, pair=self.pair, faults=tuple(faults), gear=gear)
 
     def _arc(self, points: int, teeth: Sequence[int], gear: str = "pinion") -> tuple[np.ndarray, np.ndarray]:
@@ -318,18 +344,21 @@ class MeshStiffnessModel:
         same side of a grid point for every tooth.
         """
         Z1 = self.pair.Z1
-        Z = Z1 if gear == "pinion" else self.pair.Z2
+        Z = table_slots(self.pair, gear)
         j = np.arange(points, dtype=np.int64)[None, :]
         n = np.asarray(teeth, dtype=np.int64)[:, None]
         local = 2 * np.pi * np.mod(j * Z - (n - 1) * points, points * Z) / (points * Z1)
         in_mesh = local < self.pair.theta_t
         return local[in_mesh], in_mesh
 
+    def healthy(self, points: int, gear: str = "pinion") -> np.ndarray:
+        """The healthy TVMS on the grid of a *gear* table (table_slots) of *points* points."""
+        return self._healthy(points, gear)[1]
+
     def _healthy(self, points: int, gear: str = "pinion") -> tuple[np.ndarray, np.ndarray]:
         def make() -> tuple[np.ndarray, np.ndarray]:
             theta = 2 * np.pi * np.arange(points) / points
-            Z = self.pair.Z1 if gear == "pinion" else self.pair.Z2
-            phi, in_mesh = self._arc(points, range(1, Z + 1), gear)
+            phi, in_mesh = self._arc(points, range(1, table_slots(self.pair, gear) + 1), gear)
             per_tooth = np.zeros(in_mesh.shape)
             per_tooth[in_mesh] = self.tooth_pair_stiffness(phi)  # all healthy teeth in one pass
             return theta, per_tooth.sum(axis=0)
