@@ -40,7 +40,7 @@ from .data.recordings import (
 )
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
-from .gearbox.match import check_description, tol_mesh, unchecked
+from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
@@ -308,14 +308,21 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
                 + ("" if "differs" in n else ": the speed or a tooth count differs")
                 for n in speed.notes
             ]
-        report["matches"] = not differences
-        found = rec.tacho is None and speed.declared_hz is None
-        check["unchecked"] = unchecked(check, box, speed.mean_hz if found else None)
+        found = speed.mean_hz if rec.tacho is None and speed.declared_hz is None else None
+        check["unchecked"] = unchecked(check, box, found)
+        # no speed: the pinion's tooth count is not confirmed, 'matches' neither true nor false (None)
+        pinion = None if differences else pinion_unconfirmed(check, box, found)
+        report["matches"] = None if pinion else not differences
+        rest = [u for u in check["unchecked"] if u != pinion]
         report["verdict"] = (
             f"the description {box.name!r} differs: " + "; ".join(differences)
             if differences
-            else f"the description {box.name!r} matches this recording"
-            + (f"; not checked: {'; '.join(check['unchecked'])}" if check["unchecked"] else "")
+            else (
+                f"the description {box.name!r} cannot be confirmed without a tacho or the speed: {pinion}"
+                if pinion
+                else f"the description {box.name!r} matches this recording"
+            )
+            + (f"; not checked: {'; '.join(rest)}" if rest else "")
         )
     return report
 
@@ -457,7 +464,7 @@ def render(report: dict, console, width: int = 100) -> None:
         )
     console.print(t)
     if "verdict" in report:
-        colour = "green" if report["matches"] else "red"
+        colour = {True: "green", None: "yellow"}.get(report["matches"], "red")
         console.print(f"[bold {colour}]{escape(report['verdict'])}[/bold {colour}]")
 
 

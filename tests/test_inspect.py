@@ -220,6 +220,29 @@ def test_the_command_in_the_terminal_and_as_json(tmp_path, cli):
     assert code == 0 and "check" not in json.loads(out), err
 
 
+def test_without_a_speed_a_pinion_no_sideband_shows_is_not_confirmed(tmp_path, cli):
+    """Issue 39: no tacho, no speed and no sideband of the input shaft: a 20-tooth pinion at 25 Hz
+    meshes at 500 Hz as a 25-tooth one at 20 Hz does, and either description read 'matches': true
+    (the ambiguity a 'not checked' note only). 'matches' is now null, and the verdict says that the
+    tooth count cannot be confirmed and what to give; a tacho or a speed settles it."""
+    path = record(tmp_path, ((20, 57),), revs=300, pinion=0.0)  # no pinion shaft modulation, no input line
+    for z1, hz in ((20, 25.0), (25, 20.0)):
+        report, errors, _ = check(path, described((z1, 57)), tacho=False, speed=hz)
+        assert max(errors) < 0.05 and abs(report["speed"]["mean_hz"] - hz) < 0.1, report["speed"]
+        assert report["matches"] is None, report["verdict"]
+        verdict = report["verdict"]
+        assert verdict.startswith("the description 'box' cannot be confirmed without a tacho or the speed: ")
+        assert f"the mesh at 500 Hz is a {z1}-tooth pinion's at {hz:g} Hz" in verdict and "--speed" in verdict
+    assert check(path, described((20, 57)), tacho=True)[0]["matches"] is True
+    assert check(path, described((20, 57)), tacho=False, speed_hz=25.0)[0]["matches"] is True
+    wrong = check(path, described((25, 57)), tacho=False, speed_hz=25.0)[0]
+    assert wrong["matches"] is False and "mesh order 20 measured, 25 expected" in wrong["verdict"], wrong["verdict"]
+    box = tmp_path / "box.toml"
+    box.write_text(description(stage(20, 57, bores=("1 cm", "1 cm"))))
+    code, out, err = cli("inspect", path, "--gearbox", box, "--vibration", "acc", "--json")
+    assert code == 0 and json.loads(out)["matches"] is None, err  # null in the JSON
+
+
 @pytest.mark.parametrize(
     "args, message",
     [

@@ -73,8 +73,10 @@ def test_the_b6_source_shows_meng2020s_mesh_order(cli, b6_source):
     # no tacho and no declared speed: found from the mesh lines (refused as ambiguous before)
     report = inspect_record(str(path.with_suffix(".npz")), one_stage(25, 30), InspectOptions(vibration="acc_ms2"))
     assert abs(report["speed"]["mean_hz"] / speed - 1) < SPEED_TOL, report["speed"]
-    assert abs(report["check"]["stages"][0]["measured_order"] - 25) < ORDER_TOL and report["matches"]
-    # what the match does not vouch for: no sideband shows a shaft's order in a healthy simulation
+    assert abs(report["check"]["stages"][0]["measured_order"] - 25) < ORDER_TOL
+    # what the match cannot vouch for: no sideband shows the input shaft's order in a healthy simulation,
+    # so without a speed the pinion's tooth count is not confirmed ('matches' null, issue 39)
+    assert report["matches"] is None and "cannot be confirmed without a tacho or the speed" in report["verdict"]
     assert any("input shaft's order" in note for note in report["check"]["unchecked"]), report["verdict"]
 
 
@@ -120,7 +122,8 @@ def test_a_described_gearbox_simulated_and_inspected(tmp_path, stages):
         for read in report["check"]["stages"]:
             assert abs(read["measured_order"] - read["expected_order"]) < ORDER_TOL, (label, report["verdict"])
         assert abs(report["speed"]["mean_hz"] / speed - 1) < SPEED_TOL, (label, report["speed"])
-        assert report["matches"], (label, report["verdict"])
+        # found from the mesh lines, no sideband of the input shaft: the pinion's count unconfirmed (issue 39)
+        assert report["matches"] is (None if label == "found" else True), (label, report["verdict"])
 
 
 PHM09 = ROOT.parent / "shared" / "data" / "phm09"

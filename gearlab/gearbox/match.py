@@ -392,29 +392,35 @@ def revolutions_needed(z: float, o: float, tol: float, revolutions: int) -> int 
 
 
 def unchecked(check: dict, box: Gearbox, speed_found: float | None) -> list[str]:
-    """What a match does not vouch for: a shaft whose order no sideband shows (a healthy mesh
-    need not modulate), a tooth count its sidebands cannot tell from the next over so few
-    revolutions, and, with the speed found from the mesh lines the description predicts
-    (*speed_found*, Hz), the input shaft's tooth counts: any pinion count fits at some speed, as the
-    gap diagnosis says it (gearlab.gap.structure.speed_line)."""
-    unseen = [s["shaft"] for s in check["shafts"] if s["measured_order"] is None]
-    out = []
-    if box.shafts[0] in unseen:
-        unseen.remove(box.shafts[0])
-        if speed_found:
-            z1 = box.stages[0].pinion.z
-            mesh_hz = z1 * speed_found
-            others = " or ".join(f"a {z}-tooth pinion's at {mesh_hz / z:.4g} Hz" for z in (z1 - 1, z1 + 1))
-            out.append(
-                f"the speed ({speed_found:.4g} Hz) was found from the mesh lines the description predicts and no "
-                f"sideband shows the input shaft's order: the mesh at {mesh_hz:.4g} Hz is a {z1}-tooth pinion's at "
-                f"{speed_found:.4g} Hz, or {others}; give a tacho or the speed (--speed, [operation] speed) to check "
-                "the pinion's tooth count"
-            )
-    out += check.get("unresolved", [])
+    """What a match does not vouch for: the input pinion's tooth count without a speed
+    (:func:`pinion_unconfirmed`), a shaft whose order no sideband shows (a healthy mesh need not
+    modulate), a tooth count its sidebands cannot tell from the next over so few revolutions."""
+    unseen = [s["shaft"] for s in check["shafts"] if s["measured_order"] is None and s["shaft"] != box.shafts[0]]
+    pinion = pinion_unconfirmed(check, box, speed_found)
+    out = ([pinion] if pinion else []) + check.get("unresolved", [])
     if unseen:
         out.append(
             f"no sideband shows the order of the {', '.join(unseen)} shaft{'s' if len(unseen) > 1 else ''}, so a "
             "wheel on it is checked only through a later stage's mesh order, if any"
         )
     return out
+
+
+def pinion_unconfirmed(check: dict, box: Gearbox, speed_found: float | None) -> str | None:
+    """Why the input pinion's tooth count cannot be confirmed, or None: with the speed found from the
+    mesh lines the description predicts (*speed_found*, Hz; None: a tacho or a declared speed gave it)
+    and no sideband showing the input shaft's order, any pinion count fits at some speed (a 20-tooth
+    pinion at 25 Hz meshes at 500 Hz as a 25-tooth one at 20 Hz does), as the gap diagnosis says it
+    (gearlab.gap.structure.speed_line)."""
+    seen = next(s["measured_order"] for s in check["shafts"] if s["shaft"] == box.shafts[0])
+    if not speed_found or seen is not None:
+        return None
+    z1 = box.stages[0].pinion.z
+    mesh_hz = z1 * speed_found
+    others = " or ".join(f"a {z}-tooth pinion's at {mesh_hz / z:.4g} Hz" for z in (z1 - 1, z1 + 1))
+    return (
+        f"the speed ({speed_found:.4g} Hz) was found from the mesh lines the description predicts and no "
+        f"sideband shows the input shaft's order: the mesh at {mesh_hz:.4g} Hz is a {z1}-tooth pinion's at "
+        f"{speed_found:.4g} Hz, or {others}; give a tacho or the speed (--speed, [operation] speed) to check "
+        "the pinion's tooth count"
+    )
