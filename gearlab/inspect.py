@@ -41,6 +41,7 @@ from .data.recordings import (
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
 from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
+from .gearbox.orders import TachoShaft
 from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
@@ -143,7 +144,7 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
     shaft = options.tacho_shaft or (box.sensor.tacho if box else "input")
     ratio = 1.0
     if box is not None:
-        ratio = float(order_table(box).shaft_orders[box.shaft_index(shaft, "--tacho-shaft")])
+        ratio = float(TachoShaft.of(box, shaft, "--tacho-shaft").turns)
     ppr = options.pulses_per_rev or (box.sensor.pulses_per_rev if box else 1)
     where = f"{rec.path}: tacho '{rec.tacho_name}'"
     if kind == "angle":
@@ -484,8 +485,8 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
     first = math.ceil(speed.angle[0] / TWO_PI) % order_table(box).train_period
     # the tacho marks a take may start at (localisation turns each take to the first history take's)
     kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
-    on_input = (options.tacho_shaft or box.sensor.tacho) == "input"
-    marks = (options.pulses_per_rev or box.sensor.pulses_per_rev) if kind == "pulses" and on_input else 1
+    shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
+    marks = shaft.marks(options.pulses_per_rev or box.sensor.pulses_per_rev if kind == "pulses" else 1) if kind else 1
     return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs
 
 

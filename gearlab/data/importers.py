@@ -98,7 +98,9 @@ class MeasuredSpec:
                  "m/s^2", "g", "V" or "mV"); None: not given
     pulses_per_rev: marks per revolution of a pulse tacho
     gearbox:     a gearbox description (file or built-in name): without a tacho, the speed is found
-                 from its mesh lines (to ±1 % of speed_hz when that is given too)
+                 from its mesh lines (to ±1 % of speed_hz when that is given too); with one, the
+                 shaft the tacho reads ([sensor] tacho) turns the tacho's angle into the input's
+    tacho_shaft: the shaft the tacho reads, one of the description's (default: its [sensor] tacho)
     """
 
     name: str
@@ -118,6 +120,7 @@ class MeasuredSpec:
     pulses_per_rev: int = 1
     gearbox: str | None = None
     unit: str | None = None
+    tacho_shaft: str | None = None
 
     def canonical(self) -> dict:
         """The options that shape the data: not the name (a label) nor where the file lies (nor the
@@ -131,6 +134,7 @@ class MeasuredSpec:
             ("pulses_per_rev", 1),
             ("gearbox", None),
             ("unit", None),
+            ("tacho_shaft", None),
         ):
             if d[key] == default:
                 d.pop(key)
@@ -187,10 +191,17 @@ class MeasuredSpec:
                 raise GearlabInputError(f"{where}: '{label}' must be a non-empty text, got {value!r}")
         if "\0" in self.path:
             raise GearlabInputError(f"{where}: 'path' contains a NUL character")
-        if self.tacho is not None and (self.speed_hz is not None or self.gearbox is not None):
+        if self.tacho is not None and self.speed_hz is not None:
             raise GearlabInputError(
                 f"{where}: give either a tacho channel (tacho = ...) or a nominal shaft speed (speed = ...) or a "
                 "gearbox description to find it from (gearbox = ...) to know the shaft angle, got both"
+            )
+        if self.tacho_shaft is not None and (
+            self.tacho is None or self.gearbox is None and self.tacho_shaft != "input"
+        ):
+            raise GearlabInputError(
+                f"{where}: tacho_shaft {self.tacho_shaft!r}: expected a tacho channel (tacho = ...) and a gearbox "
+                "description (gearbox = ...) whose shafts it names"
             )
         if self.tacho is None and self.speed_hz is None and self.gearbox is None:
             raise GearlabInputError(
@@ -406,8 +417,18 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
         from ..gearbox import resolve_gearbox
 
         box = resolve_gearbox(spec.gearbox)
+    shaft = None  # with a description: its [sensor] tacho, unless the spec names the shaft
+    if spec.tacho_shaft is not None and box is not None:
+        from ..gearbox.orders import TachoShaft
+
+        shaft = TachoShaft.of(box, spec.tacho_shaft, f"{path}: tacho_shaft")
     source, angle, how = shaft_angle(
-        rec, kind=spec.tacho_kind, pulses_per_rev=spec.pulses_per_rev, speed_hz=spec.speed_hz, gearbox=box
+        rec,
+        kind=spec.tacho_kind,
+        pulses_per_rev=spec.pulses_per_rev,
+        speed_hz=spec.speed_hz,
+        gearbox=box,
+        tacho_shaft=shaft,
     )
     starts = _revolution_bounds(angle, fs, how, path)
     labels = None if per_sample is None else _revolution_labels(per_sample, starts, spec, path)

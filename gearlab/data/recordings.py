@@ -556,16 +556,6 @@ def read_recording(
 # --- the shaft angle and the revolutions ---------------------------------------------------
 
 
-def _tacho_ratio(gearbox, path) -> float:
-    """Turns of the shaft the description's tacho reads per input turn (1 without a description)."""
-    if gearbox is None:
-        return 1.0
-    from ..gearbox.orders import order_table
-
-    index = gearbox.shaft_index(gearbox.sensor.tacho, f"{path}: [sensor] key 'tacho'")
-    return float(order_table(gearbox).shaft_orders[index])
-
-
 def shaft_angle(
     rec: Recording,
     *,
@@ -573,6 +563,7 @@ def shaft_angle(
     pulses_per_rev: int = 1,
     speed_hz: float | None = None,
     gearbox=None,
+    tacho_shaft=None,
 ) -> tuple[dict, np.ndarray, str]:
     """(cut_revolutions' angle argument, the continuous angle it computes from it, a description).
 
@@ -580,9 +571,10 @@ def shaft_angle(
     j-th rising edge at 2πj/N); without one: the declared speed, or -- with a gearbox description
     and no speed, or to refine a declared one to ±1 % -- the speed its mesh lines show, followed
     through the record on a mesh harmonic's phase (follow_speed; constant where it follows none;
-    refused when ambiguous). The angle is computed here with the very
-    functions cut_revolutions applies to the same argument, so revolution boundaries found here
-    (for labels) are exactly those of the revolutions it cuts.
+    refused when ambiguous). A tacho on another shaft (*tacho_shaft*, a gearbox.orders.TachoShaft,
+    else the *gearbox*'s [sensor] tacho): its angle / its turns is the input's. The angle is computed
+    here with the very functions cut_revolutions applies to the same argument, so revolution
+    boundaries found here (for labels) are exactly those of the revolutions it cuts.
     """
     from ..signals import angle_from_pulses, angle_from_speed, unwrap_tacho
 
@@ -614,11 +606,14 @@ def shaft_angle(
             )
         return {"speed_hz": float(speed_hz)}, angle_from_speed(n, fs, speed_hz), f"{how} {fmt_hz(speed_hz)}"
     name = rec.tacho_name
-    ratio = _tacho_ratio(gearbox, path)
-    if ratio != 1.0:  # a tacho on a slower or faster shaft: its angle / ratio is the input shaft's
+    if tacho_shaft is None and gearbox is not None:  # the description's [sensor] tacho
+        from ..gearbox.orders import TachoShaft
+
+        tacho_shaft = TachoShaft.of(gearbox, gearbox.sensor.tacho, f"{path}: [sensor] key 'tacho'")
+    if tacho_shaft is not None and tacho_shaft.turns != 1:  # a slower or faster shaft: angle / turns is the input's
         source, angle, how = shaft_angle(rec, kind=kind, pulses_per_rev=pulses_per_rev)
-        angle = angle / ratio
-        return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"{how} on the {gearbox.sensor.tacho} shaft"
+        angle = angle / float(tacho_shaft.turns)
+        return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"{how} on the {tacho_shaft.name} shaft"
     found_kind = kind if kind != "auto" else ("pulses" if pulses_per_rev > 1 else tacho_kind(rec.tacho))
     detected = ", detected" if kind == "auto" and pulses_per_rev == 1 else ""
     if found_kind == "angle":
@@ -689,9 +684,10 @@ def cut_recording(
     points: int | None = None,
     transient: str = "none",
     where: str = "",
+    tacho_shaft=None,
 ) -> CutRecording:
-    """Read a record (read_recording), find the shaft angle (shaft_angle) and cut its complete
-    revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
+    """Read a record (read_recording), find the input's angle (shaft_angle; *tacho_shaft* a TachoShaft) and
+    cut its complete revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
     from ..signals import POINTS, cut_revolutions
 
     rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
@@ -701,7 +697,9 @@ def cut_recording(
             f"{path}: vibration column {_one_line_repr(rec.vibration)}: all {raw.size} values equal {raw[0]:g}; "
             "expected a measured vibration (a constant column: a wrong column, or a sensor not connected)"
         )
-    source, angle, how = shaft_angle(rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox)
+    source, angle, how = shaft_angle(
+        rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox, tacho_shaft=tacho_shaft
+    )
     turns = (angle[-1] - angle[0]) / TWO_PI
     if turns < 2:
         raise GearlabInputError(

@@ -119,3 +119,30 @@ def order_table(box) -> OrderTable:
         orders.append(o * Fraction(z1, z2))
     period = math.lcm(*(o.denominator for o in orders))
     return OrderTable(tuple(box.shafts), tuple(orders), tuple(stages), period)
+
+
+@dataclass(frozen=True)
+class TachoShaft:
+    """The shaft a tacho reads, turning a/b times per input turn: the tacho's angle / (a/b) is the
+    input's, a continuous phase, b/a input turns a tacho turn whether whole or not."""
+
+    name: str
+    a: int = 1
+    b: int = 1
+
+    @classmethod
+    def of(cls, box, name: str, where: str) -> TachoShaft:
+        """Shaft *name* of the description *box*; a one-line error naming *where* and the shafts known."""
+        turns = order_table(box).shaft_orders[box.shaft_index(name, where)]
+        return cls(name, turns.numerator, turns.denominator)
+
+    @property
+    def turns(self) -> Fraction:
+        return Fraction(self.a, self.b)
+
+    def marks(self, pulses_per_rev: int = 1) -> int:
+        """M: a record's input angle at its first tacho mark is known to 1/M of a turn. With N marks per
+        turn, the j-th mark finds the input j b / (a N) turns on: M = N a / gcd(b, N). N on the input;
+        1 for one mark of a shaft turning once in b whole input turns; 16 for a 16/49 stage's output
+        (49/16 input turns a mark); a shaft angle reads as N = 1."""
+        return pulses_per_rev * self.a // math.gcd(self.b, pulses_per_rev)

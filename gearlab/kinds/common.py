@@ -18,6 +18,7 @@ from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
 from ..params import did_you_mean
+from ..parts.measured import tacho_shaft_of
 from ..registry import get_registry
 from ..scenario import Scenario, Table, keys_of, location, plain_name
 from ..settings import from_inline, setting
@@ -104,12 +105,19 @@ MEASURED = {
         "doc": "measured data: a tacho channel (shaft angle or pulses; name or 0-based column); or give "
         "'speed' or 'gearbox'",
     },
+    "tacho_shaft": {
+        "types": str,
+        "default": "",
+        "doc": "measured data: the shaft the tacho reads, a shaft of the gearbox description (the [source]'s, "
+        "or this table's 'gearbox'), e.g. 'output' (default: its [sensor] tacho, else the input); its angle "
+        "over that shaft's turns per input turn is the input's",
+    },
     "pulses_per_rev": {
         "types": int,
         "default": 1,
         "low": 1,
         "high": 10_000,
-        "doc": "measured data: tacho pulses per input-shaft revolution",
+        "doc": "measured data: tacho pulses per revolution of the shaft it reads",
     },
     "speed": {
         "types": (int, float, str),
@@ -132,7 +140,8 @@ MEASURED = {
         "types": str,
         "default": "",
         "doc": "a gearbox description (file relative to the scenario, or a built-in name): of measured data "
-        "without a tacho, the mesh orders each record's speed is found from; without 'file' or 'files', "
+        "without a tacho, the mesh orders each record's speed is found from (with one, the shafts "
+        "'tacho_shaft' names); without 'file' or 'files', "
         "the simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and "
         "sizes)",
     },
@@ -184,6 +193,7 @@ class DatasetEntry:
     file: str = measured("file")
     vibration: int | str = measured("vibration")
     tacho: int | str = measured("tacho")
+    tacho_shaft: str = measured("tacho_shaft")
     pulses_per_rev: int = measured("pulses_per_rev")
     gearbox: str = measured("gearbox")
     labels: str = setting(str, "", doc="measured data: an optional label channel")
@@ -238,7 +248,18 @@ class SourceEntry(DatasetEntry):
     preset: str = setting(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
 
-_NOT_SIMULATED = ("file", "vibration", "tacho", "labels", "sensitivity", "unit", "gain", "class_names", "transient")
+_NOT_SIMULATED = (
+    "file",
+    "vibration",
+    "tacho",
+    "tacho_shaft",
+    "labels",
+    "sensitivity",
+    "unit",
+    "gain",
+    "class_names",
+    "transient",
+)
 SOURCE_KEYS = keys_of(SourceEntry, tuple(k for k in DATASET_TABLE.keys if k not in _NOT_SIMULATED))
 
 
@@ -248,7 +269,7 @@ MAX_SAMPLES = 10**6
 
 
 # keys of a measured 'file' entry that mean nothing to a simulated preset
-MEASURED_ONLY = ("vibration", "tacho", "labels", "sensitivity", "unit", "gain", "pulses_per_rev")
+MEASURED_ONLY = ("vibration", "tacho", "tacho_shaft", "labels", "sensitivity", "unit", "gain", "pulses_per_rev")
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
@@ -397,9 +418,13 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     units = units_of(entry, where)
     channels = {key: entry[key] for key in ("vibration", "tacho", "labels")}
     check_recording(path, where, channels, fs=fs, **units)
-    gearbox = None
-    if entry.get("gearbox"):
+    gearbox = box = None
+    if entry.get("gearbox"):  # with a tacho, the description names the shaft it reads
+        from ..gearbox import resolve_gearbox
+
         gearbox = gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)
+        box = resolve_gearbox(gearbox)
+    shaft = tacho_shaft_of(entry.get("tacho_shaft") or "", entry["tacho"], box, where, "'gearbox'")
     names = entry["class_names"]
     if not names or not all(isinstance(n, str) for n in names):
         raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
@@ -415,6 +440,7 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
         transient=entry["transient"],
         pulses_per_rev=entry.get("pulses_per_rev") or 1,
         gearbox=gearbox,
+        tacho_shaft=None if shaft is None else shaft.name,
         **units,
     )
     spec.check(where)

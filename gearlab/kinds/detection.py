@@ -136,7 +136,7 @@ from .detection_units import (
     train_unit,
     unit_name,
 )
-from .detection_which_gear import store_localisation
+from .detection_which_gear import gearbox_of, store_localisation
 
 TABLES = {
     "source": Table(DATASET_TABLE.keys, required=True),
@@ -210,7 +210,7 @@ def build(scenario: Scenario) -> Spec:
     entry = with_source_gearbox(t["target"], t["source"])
     if entry["gearbox"]:  # resolved and loaded now: a bad description fails validate
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], location(path, "target", "gearbox"), scenario.base)}
-    target = target_spec(entry, location(path, "target"), scenario.base)
+    target = target_spec(entry, location(path, "target"), scenario.base, box=gearbox_of(source))
     c = typed(Classical, t["classical"])
     for name in c.indicators:
         if name not in INDICATORS:

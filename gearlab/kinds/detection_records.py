@@ -161,10 +161,11 @@ def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str
 
 
 def aligned(reference: np.ndarray, revs: np.ndarray, tacho, pulses_per_rev: int) -> tuple[int, np.ndarray]:
-    """(turn, *revs* turned into register with *reference*): with a tacho, by one of its N marks
-    (textzip.align_to); without one (the angle from a speed, zero at the record's first sample) by
-    any whole sample of the revolution, the turn whose mean revolution correlates best with
-    *reference* -- align_to's correlation at every sample at once (one inverse FFT)."""
+    """(turn, *revs* turned into register with *reference*): with a tacho, by one of the N input angles
+    its first mark may find (*pulses_per_rev*: Target.marks; textzip.align_to); without one (the
+    angle from a speed, zero at the record's first sample) by any whole sample of the revolution,
+    the turn whose mean revolution correlates best with *reference* -- align_to's correlation at
+    every sample at once (one inverse FFT)."""
     if tacho is not None:
         return align_to(reference, revs, pulses_per_rev)
     n = reference.shape[-1]
@@ -256,7 +257,7 @@ def read_target(
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
         cond["shifts"], cond["tacho"] = {}, target.tacho is not None
-        cond["marks"] = target.pulses_per_rev if target.tacho is not None else 1  # localisation turns to a mark
+        cond["marks"] = target.marks if target.tacho is not None else 1  # localisation turns to a mark
         # the shaft the units are revolutions of, and whether their angle is a tacho's (else turned
         # into the source's frame: detection.run, register_to_source)
         cond["unit_shaft"] = "input" if shaft is None else shaft.name
@@ -265,7 +266,7 @@ def read_target(
         for role in ROLES:
             turned = []
             for f, revs in cond[role]:
-                shift, revs = aligned(reference, standardiser.apply(revs), tacho, target.pulses_per_rev)
+                shift, revs = aligned(reference, standardiser.apply(revs), tacho, target.marks)
                 cond["shifts"][f.path] = shift
                 turned.append((f, revs))
             cond[role] = turned

@@ -11,6 +11,7 @@ import numpy as np
 from ..data.recordings import cut_recording
 from ..errors import GearlabInputError
 from ..events import Event
+from ..gearbox.orders import TachoShaft
 from ..learn.protocol import fault_score
 from ..params import did_you_mean
 from ..parts import scoring
@@ -56,7 +57,9 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
             k: getattr(target, k)
             for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
             + ("speed_hz", "gearbox", "unit")
-        },
+        }
+        # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)
+        | ({} if target.tacho_shaft is None else {"tacho_shaft": asdict(target.tacho_shaft)}),
         "blocks": list(d.blocks),
         "threshold": d.threshold,
         "false_alarm": d.false_alarm,
@@ -102,7 +105,7 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
     keys = meta["target"]
-    reference, tacho, ppr = arrays["reference"], keys["tacho"], keys["pulses_per_rev"]
+    reference, tacho, ppr = arrays["reference"], keys["tacho"], _tacho_shaft(keys).marks(keys["pulses_per_rev"])
     if "unit_shaft" in meta:  # a slower shaft's revolutions: turned by correlation, as the run's were
         tacho = None
     test = [(f, aligned(reference, standardiser.apply(revs), tacho, ppr)[1]) for f, revs in records]
@@ -191,12 +194,19 @@ def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: 
     return raw(record["unit"])
 
 
+def _tacho_shaft(keys: dict) -> TachoShaft:
+    """The shaft the run's tacho read (absent: the input)."""
+    return TachoShaft(**(keys.get("tacho_shaft") or {"name": "input"}))
+
+
 def reading_keys(meta: dict, condition: str | None) -> dict:
     """cut_recording's keys for a new record, as the run read its target: its tacho; or without
     one the run's declared speed and description (the speed from its mesh orders). A run whose
     speeds were declared per file only gives a new record the speed of its condition's history:
     the condition asked (--condition), or the run's only one."""
     keys = dict(meta["target"])
+    if "tacho_shaft" in keys:
+        keys["tacho_shaft"] = _tacho_shaft(keys)
     gearbox = keys.pop("gearbox", None)  # a run from before the target could go without a tacho has none
     if gearbox:
         from ..gearbox import resolve_gearbox

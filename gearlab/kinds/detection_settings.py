@@ -70,6 +70,7 @@ class TargetRecords:
 
     vibration: int | str = measured("vibration")
     tacho: int | str = measured("tacho")
+    tacho_shaft: str = measured("tacho_shaft")
     pulses_per_rev: int = measured("pulses_per_rev")
     speed: float | str | None = measured("speed")
     gearbox: str = measured("gearbox")

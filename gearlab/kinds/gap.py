@@ -61,6 +61,7 @@ from .common import (
     sized,
     with_source_gearbox,
 )
+from .detection_which_gear import gearbox_of
 from .gap_inputs import (
     Records,
     TargetEntry,
@@ -128,7 +129,8 @@ def build(scenario: Scenario) -> Spec:
     # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
     base = scenario.base or path.parent
     source = simulated_spec(t["source"], location(path, "source"), base)
-    target = target_of(with_source_gearbox(t["target"], t["source"], undeclared=True), location(path, "target"), base)
+    entry = with_source_gearbox(t["target"], t["source"], undeclared=True)
+    target = target_of(entry, location(path, "target"), base, gearbox_of(source))  # the source's tacho shafts
     _, pair, _ = source.check_model(location(path, "source"))
     check_sampling(source, pair.Z1, location(path, "source"))
     if isinstance(target, DatasetSpec):
@@ -185,12 +187,11 @@ def build(scenario: Scenario) -> Spec:
     return Spec(source, target, settings, protocol, bool(a["enabled"]))
 
 
-def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Records:
-    """The [target]: measured records ('files'), or a dataset entry (a preset, or one 'file')."""
+def target_of(entry: dict, where: str, base, box=None) -> DatasetSpec | MeasuredSpec | Records:
+    """The [target]: measured records ('files'; *box*: their tacho's shafts), or a dataset entry (a preset, 'file')."""
     if not entry["files"]:
-        for key in ("pulses_per_rev",):
-            if entry[key] != getattr(TargetEntry(), key):
-                raise GearlabInputError(f"{where} key '{key}': belongs to measured records ('files')")
+        if entry["pulses_per_rev"] != TargetEntry().pulses_per_rev:
+            raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to measured records ('files')")
         for key in ("vibration", "tacho"):
             if not isinstance(entry[key], str):
                 raise GearlabInputError(
@@ -206,7 +207,7 @@ def target_of(entry: dict, where: str, base) -> DatasetSpec | MeasuredSpec | Rec
     # speed (parts.measured.target_spec refuses none of the three; the description resolved and loaded now)
     if entry["gearbox"]:
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)}
-    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",))
+    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",), box=box)
     return Records(entry["name"] or "measured records", target, units_declared(target))
 
 

@@ -55,8 +55,9 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh).
     Records of different speeds are different operating conditions: refused. Every record is turned
     into register with the first (detection_records.aligned, as the detection kind does): with a tacho
-    by m/N of a turn (one of its N marks), without one by any whole sample of the revolution (each
-    record's angle is zero at its first sample), so the set has one synchronous average."""
+    by m/N of a turn (one of its N marks, or on another shaft the N input angles they may find:
+    Target.marks), without one by any whole sample of the revolution (each record's angle is zero at
+    its first sample), so the set has one synchronous average."""
     from .detection_records import aligned
 
     t = records.target
@@ -67,7 +68,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         rec = t.read(f)
         revs = rec.revolutions
         if rows:
-            _, revs = aligned(rows[0].mean(axis=0), revs, t.tacho, t.pulses_per_rev)
+            _, revs = aligned(rows[0].mean(axis=0), revs, t.tacho, t.marks)
         rows.append(revs)
         speeds[f.path], found[f.path] = rec.speed_hz, rec.angle_source
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))

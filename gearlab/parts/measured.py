@@ -5,12 +5,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..data.recordings import channel_key, check_measured_file, check_recording, cut_recording, only_vibration
 from ..data.textzip import parse_sensitivity
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
 from ..units import to_si
+
+if TYPE_CHECKING:
+    from ..gearbox.orders import TachoShaft
 
 ROLES = ("history", "test")
 # 'file' as in every kind's measured entry; 'speed' a record's own declared speed (no tacho); 'path',
@@ -42,6 +46,12 @@ class Target:
     speed_hz: float | None = None  # declared input-shaft speed of every record without a tacho
     gearbox: str | None = None  # a description (file or built-in name): the speed from its mesh orders
     unit: str | None = None  # the vibration's unit where its name and file say none (recordings.UNITS)
+    tacho_shaft: TachoShaft | None = None  # a tacho on another shaft than the input (None: the input)
+
+    @property
+    def marks(self) -> int:
+        """The tacho marks a record's input angle may start at, 1/marks of a turn apart (TachoShaft.marks)."""
+        return self.pulses_per_rev if self.tacho_shaft is None else self.tacho_shaft.marks(self.pulses_per_rev)
 
     def read(self, file: TargetFile):
         """One of the target's records, read through the one import path (any format) with its
@@ -62,7 +72,31 @@ class Target:
             transient=self.transient,
             speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
             gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
+            tacho_shaft=self.tacho_shaft,
         )
+
+
+def tacho_shaft_of(name: str, tacho, box, where: str, described: str) -> TachoShaft | None:
+    """The shaft a measured entry's tacho reads: *name* (its 'tacho_shaft'; "" when not given), else
+    the description *box*'s [sensor] tacho; None: the input (or a shaft as fast), read as ever.
+    One line naming *where*'s key for a tacho_shaft without a tacho, another shaft without a
+    description (*described*: the key that gives one), or a shaft the description lacks."""
+    from ..gearbox.orders import TachoShaft
+
+    at = f"{where} key 'tacho_shaft'"
+    if tacho in (None, ""):
+        if name:
+            raise GearlabInputError(f"{at}: belongs to a tacho; no 'tacho' is given")
+        return None
+    if box is None:
+        if name not in ("", "input"):
+            raise GearlabInputError(
+                f"{at}: {shown(name)} is a shaft of a gearbox description, and none is given; expected {described} "
+                "(its shafts and tooth counts give that shaft's turns per input turn) or tacho_shaft = 'input'"
+            )
+        return None
+    shaft = TachoShaft.of(box, name or box.sensor.tacho, at if name else f"{box.source}: [sensor] key 'tacho'")
+    return None if shaft.turns == 1 else shaft
 
 
 def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
@@ -123,13 +157,14 @@ def speed_of(value, where: str) -> float:
     return speed
 
 
-def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
+def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target:
     """The [target] of measured records: the keys of every measured entry (vibration, tacho,
     pulses_per_rev, sensitivity, unit, gain, fs; without a tacho, speed or gearbox: the description,
     a path as the caller resolved it) and the files, each checked against its header
     (recordings.check_recording: its channels, a sampling rate, units) before any work. *t* was
     checked as kinds.common.MEASURED declares its keys (bounds, choices, column indices) when the
-    table was read; here the values become SI."""
+    table was read; here the values become SI. *box*: the [source]'s gearbox description, whose
+    shafts 'tacho_shaft' (default: its [sensor] tacho) names."""
     fs = None if t.get("fs") is None else to_si(t["fs"], "Hz", f"{where} key 'fs'")
     vibration = channel_key(t["vibration"])
     tacho = None if t["tacho"] in (None, "") else channel_key(t["tacho"])
@@ -180,6 +215,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
             gain=gain,
             unit=unit,
         )
+    shaft = tacho_shaft_of(t.get("tacho_shaft") or "", tacho, box, where, "[source] key 'gearbox'")
     return Target(
         vibration,
         tacho,
@@ -193,4 +229,5 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES) -> Target:
         speed,
         gearbox,
         unit,
+        shaft,
     )
