@@ -137,3 +137,68 @@ def test_a_simulation_shows_a_pinion_rate_and_a_wheel_rate_train():
     for ch in ("pinion_y", "gear_y"):  # the response differs from either single fault's
         b = runs["b"].channels[ch]
         assert min(np.abs(b - runs[k].channels[ch]).max() for k in "pw") > 1e-3 * np.abs(b).max()
+
+
+# --- a dataset's class on both gears ---------------------------------------------------------------
+
+
+def test_a_dataset_class_joins_a_pinion_and_a_wheel_fault():
+    from gearlab.data.placement import canonical_faults, shaft_names
+
+    shafts = shaft_names("phm09", 2)
+    faults = {"chip@wheel+spall": [20], "chip@idler pinion+chip@output gear": [18]}
+    assert canonical_faults(faults, shafts, "[[datasets]]") == (
+        ("spall+chip@wheel", (20,)),  # the pinion's first
+        ("chip@s2-pinion+chip@s2-wheel", (18,)),
+    )
+    for bad in ("chip+crack", "chip+chip@s2-wheel", "chip+chip@wheel+pit", "+chip@wheel"):
+        with pytest.raises(GearlabInputError, match=r"'\+' joins a fault on a stage's pinion and one on its wheel"):
+            canonical_faults({bad: [20]}, shafts, "[[datasets]]")
+
+
+def test_a_two_gear_class_s_period_and_its_bound(monkeypatch):
+    from gearlab.data import placement
+    from gearlab.data.spec import dataset_preset
+
+    spec = dataset_preset("phm09-30").with_(faults=(("chip@s2-pinion+chip@s2-wheel", (20,)),), teeth=(2,), healthy=1)
+    (on,) = spec.fault_classes().values()
+    assert (on.name, on.stage, on.gear, on.mates) == ("chip", 2, "pinion", (("chip", 2, "wheel"),))
+    assert on.period == 15  # 48/80 at 1/3 input order: lcm 240 meshes = 5 idler-pinion turns = 15 input turns
+    monkeypatch.setattr(placement, "MAX_PERIOD", 10)
+    with pytest.raises(GearlabInputError, match=r"fault 'chip@s2-pinion\+chip@s2-wheel' .* only after 15 input") as e:
+        spec.fault_classes()
+    assert "\n" not in str(e.value)
+
+
+def test_a_two_gear_sample_puts_pinion_tooth_n_with_the_wheel_tooth_n_it_meets(monkeypatch):
+    """meng2020 (25/30): pinion tooth n and wheel tooth n (mesh n - 1), one simulation turned by whole
+    pitches for tooth 4: the same rows as simulating tooth 4 itself."""
+    from gearlab.data import builder
+    from gearlab.data.spec import POINTS
+
+    calls, steady = [], builder.steady_response
+
+    def spy(sim, faults, *args, **kw):
+        calls.append([f.label for f in faults])
+        return steady(sim, faults, *args, **kw)
+
+    monkeypatch.setattr(builder, "steady_response", spy)
+    fs = builder.whole_steps_rate(200e3, 40.0, 25)
+    task = builder.SimTask("six_dof", "meng2020", fs, 40.0, 20.0, "gear_y", "chip+chip@wheel", 20, (3, 4), (), 3)
+    rows = builder.simulate_unit(tuple(task))
+    assert calls == [["chip@3", "chip@wheel:3"]] and rows.shape == (2, 6 * POINTS)  # 6 input turns: 150 meshes
+    direct = builder.simulate_unit(tuple(task._replace(teeth=(4,), tooth=4)))
+    assert calls[-1] == ["chip@4", "chip@wheel:4"]
+    assert np.abs(direct[0] - rows[1]).max() < 1e-9 * np.abs(rows[1]).max()
+
+
+def test_a_simulated_record_with_both_gears_and_the_bound(monkeypatch):
+    from gearlab.data import placement
+    from gearlab.data.simulated import simulated_record
+
+    both = [{"name": "chip", "tooth": 3, "step": 20}, {"name": "chip", "gear": "idler gear", "tooth": 5, "step": 20}]
+    assert simulated_record(both, speed_hz=30.0, load_nm=20.0, revolutions=2, seed=1).period == 3  # 32/96
+    stage2 = [{**f, "gear": g} for f, g in zip(both, ("idler pinion", "output gear"))]
+    monkeypatch.setattr(placement, "MAX_PERIOD", 10)  # each gear alone: 3 and 5 turns; both: lcm 240 meshes, 15
+    with pytest.raises(GearlabInputError, match=r"damage chip@s2-pinion:3, chip@s2-wheel:5 repeats only after 15"):
+        simulated_record(stage2, speed_hz=30.0, load_nm=20.0, revolutions=2, seed=1)

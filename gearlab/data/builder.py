@@ -46,7 +46,7 @@ from ..registry import get_registry
 from ..signals import Standardiser, resample_revolutions, steady_start, tsa
 from ..signals.shaft import shaft_revolutions
 from . import placement
-from .placement import parse_fault_key, shaft_names
+from .placement import fault_parts, shaft_names
 from .realise import REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
 from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
@@ -201,10 +201,11 @@ def simulate_unit(task: tuple) -> np.ndarray:
         sim = _configured_simulator(config, task.fs)
         excitation, channel = chain.at("excitation"), config.channel
     faults = []
-    if task.fault is not None:
-        name, stage, gear = parse_fault_key(task.fault, shaft_names(task.preset, sim.stages), f"model '{task.model}'")
-        pair = sim.pair if stage == 1 else sim.meshes[stage - 2].pair
-        faults = [place_fault(get_registry(), pair, name, task.tooth, step=task.step, gear=gear, stage=stage)]
+    if task.fault is not None:  # one fault, or a pinion's and the wheel tooth's it meets (tooth n: mesh n - 1)
+        for name, stage, gear in fault_parts(task.fault, shaft_names(task.preset, sim.stages), f"model '{task.model}'"):
+            pair = sim.pair if stage == 1 else sim.meshes[stage - 2].pair
+            tooth = task.tooth if gear == "pinion" or not faults else (task.tooth - 1) % pair.Z2 + 1
+            faults.append(place_fault(get_registry(), pair, name, tooth, step=task.step, gear=gear, stage=stage))
     periodic, angle = steady_response(sim, faults, task.speed, task.load, channel, excitation, whole_cycle=True)
     if angle is not None and tuple(task.teeth) != (task.tooth,):
         raise RuntimeError("an excitation effect moved the shaft angle but does not declare breaks_symmetry")
@@ -495,7 +496,7 @@ def build_dataset(
 
     # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in
     pairs = placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'") if classes else ()
-    periods = {name: placement.gear_period(pairs, on.stage, on.gear) for name, on in classes.items()}
+    periods = {key: math.lcm(*(placement.gear_period(pairs, *p[1:]) for p in on.parts)) for key, on in classes.items()}
 
     def period_of(i: int) -> int:
         name = source[i][0][0]

@@ -135,6 +135,26 @@ def parse_fault_key(key: str, shafts: tuple[str, ...], where: str) -> tuple[str,
     return name.strip(), stage, gear
 
 
+def fault_parts(key: str, shafts: tuple[str, ...], where: str) -> tuple[tuple[str, int, str], ...]:
+    """(plugin name, stage, gear) of each fault of a class key: one (parse_fault_key), or two joined by
+    '+' on the pinion and the wheel of one stage, pinion first ("chip+chip@wheel": pinion tooth n and
+    the wheel tooth n it meets, the TVMS over the hunting-tooth period)."""
+    if "+" not in key:
+        return (parse_fault_key(key, shafts, where),)
+    parts = [parse_fault_key(part.strip(), shafts, where) for part in key.split("+")]
+    if (
+        len(parts) != 2
+        or not all(name for name, _, _ in parts)
+        or len({(s, g) for _, s, g in parts}) != 2
+        or (parts[0][1] != parts[1][1])
+    ):
+        raise GearlabInputError(
+            f"{where}, fault '{key}': '+' joins a fault on a stage's pinion and one on its wheel, "
+            "e.g. 'chip+chip@wheel' or 'chip@s2-pinion+spall@s2-wheel'"
+        )
+    return tuple(sorted(parts, key=lambda part: part[2] != "pinion"))
+
+
 def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[str, tuple[int, ...]], ...]:
     """A scenario's `faults`, ``{chip = [18, 20], "chip@output gear" = [20]}`` or a list of tables
     ``[{name = "chip", gear = "wheel", stage = 2, steps = [20]}]``, as (class key, ladder steps)
@@ -165,8 +185,7 @@ def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[st
     for key, steps, what in items:
         if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
             raise GearlabInputError(f"{what}, got {shown(steps)}")
-        name, stage, gear = parse_fault_key(key, shafts, where)
-        canonical = fault_key(name, stage, gear)
+        canonical = "+".join(fault_key(*part) for part in fault_parts(key, shafts, where))
         if canonical in out:
             raise GearlabInputError(f"{where}: fault '{canonical}' is listed twice")
         out[canonical] = tuple(steps)
@@ -175,7 +194,8 @@ def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[st
 
 @dataclass(frozen=True)
 class FaultClass:
-    """A dataset's fault class: its plugin on one gear of the train, and the teeth it is put on."""
+    """A dataset's fault class: its plugin on one gear of the train, and the teeth it is put on; a
+    class of two faults ('+', fault_parts): the pinion's here, the wheel's in *mates*."""
 
     key: str
     name: str  # the fault plugin
@@ -184,6 +204,11 @@ class FaultClass:
     teeth: tuple[int, ...]
     pair: object  # the stage's GearPair (pinion = its gear 1)
     period: int = 1  # input revolutions after which the train with this damage repeats
+    mates: tuple = ()  # (plugin, stage, gear) of the wheel's fault of a two-gear class
+
+    @property
+    def parts(self) -> tuple[tuple[str, int, str], ...]:
+        return ((self.name, self.stage, self.gear), *self.mates)
 
 
 # Input revolutions a steady response may take to repeat: damage on the output gear of a train of
@@ -239,7 +264,8 @@ def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, Fa
     shafts = shaft_names(preset, len(pairs))
     out = {}
     for key, _ in faults:
-        name, stage, gear = parse_fault_key(key, shafts, where)
+        parts = fault_parts(key, shafts, where)
+        name, stage, gear = parts[0]
         pair = pairs[stage - 1]
         Z = pair.Z1 if gear == "pinion" else pair.Z2
         chosen = tuple(range(1, Z + 1)) if teeth is None else tuple(teeth)
@@ -247,7 +273,8 @@ def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, Fa
             if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= Z:
                 on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{key}')"
                 raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{Z}{on}")
-        period = train_period(pairs, stage, gear)
-        check_period(period, f"fault '{key}' on the {gear_name(stage, gear, shafts)}", where)
-        out[key] = FaultClass(key, name, stage, gear, chosen, pair, period)
+        period = math.lcm(*(train_period(pairs, s, g) for _, s, g in parts))
+        on = " and the ".join(gear_name(s, g, shafts) for _, s, g in parts)
+        check_period(period, f"fault '{key}' on the {on}", where)
+        out[key] = FaultClass(key, name, stage, gear, chosen, pair, period, parts[1:])
     return out

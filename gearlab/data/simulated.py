@@ -246,6 +246,9 @@ def simulated_record(
     pairs = (sim.pair, *(m.pair for m in sim.meshes))
     for f in placed:
         check_period(train_period(pairs, f.stage, f.gear), f"damage {f.label}", where)
+    if len({(f.stage, f.gear) for f in placed}) > 1:  # several gears (both of a pair: the hunting period)
+        both = math.lcm(*(train_period(pairs, f.stage, f.gear) for f in placed))
+        check_period(both, f"damage {', '.join(f.label for f in placed)}", where)
     shafts = shaft_names(preset, sim.stages)
     # the whole cycle: a later mesh of no whole input order repeats only after mesh_cycle turns
     clean, moved = steady_response(sim, placed, speed_hz, load_nm, channel, excitation, whole_cycle=True)

@@ -144,7 +144,8 @@ class DatasetSpec:
                 if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= pair.Z1:
                     raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{pair.Z1}")
         for c in classes.values():
-            registry.get("fault", c.name, where)
+            for name, _, _ in c.parts:
+                registry.get("fault", name, where)
         return model, pair, teeth
 
     def fault_classes(self, where: str = ""):
