@@ -300,11 +300,13 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
-        if not differences and rec.tacho is None and speed.source == "declared":
+        if rec.tacho is None and speed.source == "declared":
             # a declared speed the mesh lines do not confirm (gearbox.speed's note: no mesh line within
             # ±1 %, or another speed fits them better): read at it, a weak line can pass as the described
-            # mesh (a 29/102 record described with 27 teeth at 19.81 Hz 'matched')
-            differences += [
+            # mesh (a 29/102 record described with 27 teeth at 19.81 Hz 'matched'), and what else is read
+            # there comes after it (a 19/58 + 25/67 fan described with 18 teeth was told 'stage 2: no
+            # line at mesh order 7.759', the first stage's smeared mesh unsaid)
+            differences[:0] = [
                 f"speed {fmt_hz(speed.declared_hz)} declared, but {n}"
                 + ("" if "differs" in n else ": the speed or a tooth count differs")
                 for n in speed.notes

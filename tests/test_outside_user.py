@@ -1,6 +1,8 @@
 """Gearboxes and recordings made outside the project, run as a user would (issue 39, "How it will be
 checked"): the findings of such a run, each fixed and kept fixed here on small generated inputs."""
 
+import re
+
 import numpy as np
 import pytest
 from gearboxes import described_pair
@@ -494,3 +496,36 @@ def test_a_speed_two_stages_read_apart_says_a_tooth_count_may_differ():
     assert speed_from_mesh(x, fs, described((19, 71), (28, 47), speed="25 Hz"), None, "h1.wav")[0] == pytest.approx(
         25.0, rel=1e-3
     )
+
+
+def test_a_declared_speed_the_pinion_s_mesh_does_not_confirm_comes_first_and_names_the_pinion(tmp_path):
+    # A 19/58 + 25/67 fan reducer without a tacho (its speed swinging 0.2 % over 11 s), described with an
+    # 18-tooth input pinion at its declared 35 Hz: inspect said 'stage 2: no line at mesh order 7.759 (a
+    # 25-tooth pinion); input shaft: order 1.002 measured' (or 'the pinion shows 18.8 teeth (mesh order
+    # 18.01 ...)', a noise line), the speed search's note ('no line within +-1 %') dropped beside them
+    # and the first stage's mesh, smeared at the constant speed, unsaid
+    from test_inspect import described, synthesise
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    fs = 4096.0
+    t = np.arange(int(25 * fs)) / fs
+    theta = 2 * np.pi * np.cumsum(35.0 * (1 + 0.002 * np.sin(2 * np.pi * t / 11))) / fs
+    np.savez(tmp_path / "fan.npz", acc=_train([(19, 58), (25, 67)], theta, np.random.default_rng(0)), fs=fs)
+    x, _, _ = synthesise(((19, 58), (25, 67)), speed=35.0, fs=fs, revs=300, swing=0.002)
+    np.savez(tmp_path / "fan2.npz", acc=x, fs=fs)
+    head = "the description 'box' differs: speed 35 Hz declared, but no line within ±1% of a mesh frequency at this"
+    for name in ("fan.npz", "fan2.npz"):
+        path = str(tmp_path / name)
+        wrong = inspect_record(path, described((18, 58), (25, 67), speed="35 Hz"), InspectOptions("acc"))
+        said = wrong["verdict"].split("; ")[0]
+        assert said.startswith(head) and "(the lines fit 36.9" in said, said
+        assert said.endswith("the speed or a tooth count differs"), said
+        right = inspect_record(path, described((19, 58), (25, 67), speed="35 Hz"), InspectOptions("acc"))
+        assert right["matches"], right["verdict"]
+    # where the best fit is the first stage's mesh, its order at the declared speed names the pinion
+    assert re.search(
+        r"the lines fit 36\.9\d Hz \(.* as 1×M1\): at 35 Hz, .* is mesh order 19\.0\d: "
+        r"a 19-tooth pinion on the input shaft\? described 18\)",
+        said,
+    ), said

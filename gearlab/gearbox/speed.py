@@ -170,21 +170,33 @@ def speed_from_mesh(
                 evidence, _, _, stages = explain(f, tol)
                 if not stages:
                     continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
-                hypotheses.append((float(np.sum(weight * evidence)), f, f"{fmt_hz(x[i])} as {h}×M{s.index}", s.index))
+                hypotheses.append(
+                    (float(np.sum(weight * evidence)), f, f"{fmt_hz(x[i])} as {h}×M{s.index}", s.index, x[i] / h)
+                )
     if declared is not None:
         # the declared speed, refined by the best hypothesis near it, unless the lines fit another speed
         # much better: a few weak lines always fit within ±1 % as some harmonic, and a wrong tooth count
         # is then read at the declared speed (inspect: "mesh order 23 measured, 24 expected")
         near = [h for h in hypotheses if abs(h[1] / declared - 1) <= DECLARED_RANGE]
+        overall = max(hypotheses, key=lambda h: h[0]) if hypotheses else None
         if not near:
-            return declared, "declared", f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at this speed"
-        best, overall = max(near, key=lambda h: h[0]), max(hypotheses, key=lambda h: h[0])
+            return (
+                declared,
+                "declared",
+                f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at this speed"
+                + (
+                    f" (the lines fit {fmt_hz(overall[1])} ({overall[2]}){at_declared(overall, declared, box)})"
+                    if overall
+                    else ""
+                ),
+            )
+        best = max(near, key=lambda h: h[0])
         if best[0] < AMBIGUOUS * overall[0]:
             return (
                 declared,
                 "declared",
-                f"the mesh lines fit {fmt_hz(overall[1])} ({overall[2]}) better than the declared speed: the speed or "
-                "a tooth count differs",
+                f"the mesh lines fit {fmt_hz(overall[1])} ({overall[2]}) better than the declared speed"
+                f"{at_declared(overall, declared, box, ' (')}: the speed or a tooth count differs",
             )
         return best[1], f"from the mesh lines ({best[2]}), declared {fmt_hz(declared)}", None
     if not hypotheses:
@@ -212,6 +224,26 @@ def speed_from_mesh(
                 [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
             )
     return best[1], f"from the mesh lines ({best[2]})", None
+
+
+def at_declared(hypothesis: tuple, declared: float, box: Gearbox, lead: str = ": ") -> str:
+    """What a first-stage mesh line that fits another speed means at the *declared* one: its order
+    there, the pinion's tooth count when that order is the one whole number within the declared
+    speed's ±1 % (an 18-tooth pinion described for a 19-tooth one, read at a declared 35 Hz: 'no line
+    within ±1 %' and the pinion unsaid, its smeared mesh line among 'lines the description does not
+    explain'); '' for a later stage's line (its order also holds the wheels' counts)."""
+    if hypothesis[3] != 1:
+        return ""
+    order = hypothesis[4] / declared
+    z = round(order)
+    said = box.stages[0].pinion.z
+    if z == said or abs(order - z) > DECLARED_RANGE * order or DECLARED_RANGE * order >= 0.5:
+        return ""
+    close = ")" if lead == " (" else ""
+    return (
+        f"{lead}at {fmt_hz(declared)}, {fmt_hz(hypothesis[4])} is mesh order {order:.4g}: a {z}-tooth pinion on the "
+        f"{box.shafts[0]} shaft? described {said}{close}"
+    )
 
 
 TRACK_CUTOFF = 0.45  # the angle's deviation is kept below this share (to 1.5 x) of the slowest shaft's frequency
