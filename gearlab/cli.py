@@ -147,16 +147,17 @@ def stiffness(
         shown = ", ".join(
             prm.show(p.params[prm.name]) if prm.unit else f"{p.params[prm.name]}" for prm in p.fault.params
         )
-        console.print(f"  {p.label}: RFA {p.fault.rfa(p.params, pair):.4f}  ({shown})")
+        console.print(f"  {p.label}: RFA {p.fault.rfa(p.params, pair.seen_from(p.gear)):.4f}  ({shown})")
     if csv is not None:
         atomic_write(csv, ms.csv_text())
         console.print(f"wrote {csv}")
     if plot is not None:
         from .plots import tvms_figure
 
-        curves = [("healthy", ms.theta, model.healthy(points, ms.gear))] if placed else []  # on the table's grid
+        x = ms.theta / ms.turns  # the pinion angle over the table (a wheel turn, the hunting-tooth period)
+        curves = [("healthy", x, model.healthy(points, ms.gear))] if placed else []  # on the table's grid
         label = " + ".join(p.label for p in placed) or "healthy"
-        tvms_figure(curves + [(label, ms.theta, ms.k)], f"TVMS of {pair.name}: {label}", plot)
+        tvms_figure(curves + [(label, x, ms.k)], f"TVMS of {pair.name}: {label}", plot)
         console.print(f"wrote {plot}")
 
 

@@ -202,3 +202,36 @@ def test_a_simulated_record_with_both_gears_and_the_bound(monkeypatch):
     monkeypatch.setattr(placement, "MAX_PERIOD", 10)  # each gear alone: 3 and 5 turns; both: lcm 240 meshes, 15
     with pytest.raises(GearlabInputError, match=r"damage chip@s2-pinion:3, chip@s2-wheel:5 repeats only after 15"):
         simulated_record(stage2, speed_hz=30.0, load_nm=20.0, revolutions=2, seed=1)
+
+
+STIFFNESS_SCENARIO = """\
+[scenario]
+name = "st"
+kind = "stiffness"
+
+[stiffness]
+pair = "luo2019"
+points = 768
+
+[[cases]]
+name = "both"
+faults = [{ kind = "chip", tooth = 3, step = 18 }, { kind = "crack", tooth = 19, step = 18, gear = "wheel" }]
+"""
+
+
+def test_a_stiffness_scenario_case_on_both_gears(run_scenario):
+    """The stiffness kind's `gear` key: the case's table spans the hunting period (48 meshes of 16/48); each
+    fault's RFA is its own gear's (the wheel's crack against the wheel tooth, as its ladder is)."""
+    import json
+
+    from gearlab.kinds.stiffness import read_csv
+
+    run = run_scenario(STIFFNESS_SCENARIO)
+    theta, k = read_csv(run / "cases" / "both.csv")
+    reg, pair = get_registry(), gear_pair("luo2019")
+    faults = [place_fault(reg, pair, "chip", 3, step=18), place_fault(reg, pair, "crack", 19, step=18, gear="wheel")]
+    assert np.allclose(k, MeshStiffnessModel(pair).mesh_stiffness(faults, 768).k, rtol=1e-9)
+    (record,) = [json.loads(line) for line in (run / "results.jsonl").read_text().splitlines() if '"both"' in line]
+    crack = faults[1]
+    assert record["faults"][1]["gear"] == "wheel" and "gear" not in record["faults"][0]
+    assert record["faults"][1]["rfa"] == pytest.approx(crack.fault.rfa(crack.params, pair.seen_from("wheel")))

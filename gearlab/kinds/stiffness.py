@@ -17,7 +17,7 @@ from ..errors import GearlabInputError
 from ..events import Event, figures_ahead, report_begins
 from ..physics.faults import LADDER_STEPS, place_fault
 from ..physics.presets import PAIR_PRESETS, gear_pair
-from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions
+from ..physics.stiffness import MeshStiffnessModel, PlacedFault, StiffnessOptions, table_gear, table_slots
 from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location, plain_name
@@ -170,11 +170,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                         "kind": p.fault.name,
                         "tooth": p.tooth,
                         "params": p.params,
-                        "rfa": p.fault.rfa(p.params, spec.pair),
+                        "rfa": p.fault.rfa(p.params, spec.pair.seen_from(p.gear)),
+                        **({} if p.gear == "pinion" else {"gear": p.gear}),
                     }
                     for p in case.faults
                 ],
-                "rfa": max((p.fault.rfa(p.params, spec.pair) for p in case.faults), default=0.0),
+                "rfa": max((p.fault.rfa(p.params, spec.pair.seen_from(p.gear)) for p in case.faults), default=0.0),
                 "mean_N_per_m": float(ms.k.mean()),
                 "min_N_per_m": float(ms.k.min()),
                 "max_N_per_m": float(ms.k.max()),
@@ -245,7 +246,11 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         )
     other = [c for c in spec.cases if not c.fault]
     curves = [(c.name, *read_csv(run.file("cases", f"{c.name}.csv"))) for c in other]
-    tvms_figure(curves, f"TVMS over one pinion revolution, {pair.name}", run.figures / "tvms_cases.png")
+    # a wheel's or both gears' table spans more than a pinion turn: drawn against the pinion angle
+    slots = [table_slots(pair, table_gear(c.faults)) for c in other]
+    curves = [(n, theta if z == pair.Z1 else theta * z / pair.Z1, k) for (n, theta, k), z in zip(curves, slots)]
+    over = "one pinion revolution" if set(slots) <= {pair.Z1} else f"{max(slots) / pair.Z1:g} pinion revolutions"
+    tvms_figure(curves, f"TVMS over {over}, {pair.name}", run.figures / "tvms_cases.png")
 
 
 def _sweep(spec: Spec, records: dict[str, dict]) -> dict[str, dict[str, dict]]:
