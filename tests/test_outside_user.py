@@ -529,3 +529,31 @@ def test_a_declared_speed_the_pinion_s_mesh_does_not_confirm_comes_first_and_nam
         r"a 19-tooth pinion on the input shaft\? described 18\)",
         said,
     ), said
+
+
+def test_the_gap_s_history_is_turned_into_register_as_one_signal_per_record():
+    # A 19/58 + 25/67 fan's TSV records without a tacho: the gap called its right description 'structure
+    # differs: the wheel shows 50.1 teeth, 58 expected'. Each record after the first was turned into
+    # register row by row (np.roll), which cut the second stage's mesh (order 8.19, no whole order) at
+    # every row's turn: lines at 8.19 + k for every k, on which the wheel's sidebands were read
+    from gearlab.gap.structure import _lines
+    from gearlab.kinds.detection_records import aligned
+    from gearlab.kinds.gap_inputs import continued
+
+    points, rng, m2 = 4096, np.random.default_rng(1), 19 * 25 / 58
+    first = _train([(19, 58), (25, 67)], 2 * np.pi * np.arange(200 * points) / points, rng).reshape(200, points)
+    theta = 2 * np.pi * (np.arange(200 * points) + 1234) / points  # a record starting 1234 samples on
+    second = _train([(19, 58), (25, 67)], theta, rng).reshape(200, points)
+    turn, rolled = aligned(first.mean(axis=0), second, None, 1)
+
+    def between(rows):  # lines a whole order off the second mesh
+        at = _lines(np.concatenate([first, rows]), 0).at
+        return [a for a in at if any(abs(a - m2 - k) < 0.01 for k in (-2, -1, 1, 2, 3))]
+
+    assert len(between(rolled)) >= 3  # what the gap read before
+    assert between(continued(second, turn)) == []
+    assert continued(second, turn).shape == (199, points)
+    # a tacho's mark of three a turn: a third of a turn, in between the samples
+    x = np.cos(2 * np.pi * m2 * np.arange(50 * points) / points)
+    want = np.cos(2 * np.pi * m2 * (np.arange(49 * points) + points / 3) / points).reshape(49, points)
+    assert np.abs(continued(x.reshape(50, points), points / 3) - want)[5:-5].max() < 1e-4
