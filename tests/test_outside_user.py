@@ -5,7 +5,7 @@ import re
 
 import numpy as np
 import pytest
-from gearboxes import described_pair
+from gearboxes import described_pair, description, stage
 
 from gearlab.errors import GearlabInputError
 from gearlab.gap.structure import later_stages
@@ -557,3 +557,32 @@ def test_the_gap_s_history_is_turned_into_register_as_one_signal_per_record():
     x = np.cos(2 * np.pi * m2 * np.arange(50 * points) / points)
     want = np.cos(2 * np.pi * m2 * (np.arange(49 * points) + points / 3) / points).reshape(49, points)
     assert np.abs(continued(x.reshape(50, points), points / 3) - want)[5:-5].max() < 1e-4
+
+
+def test_the_gap_ends_when_no_history_record_s_mesh_lines_confirm_the_declared_speed(tmp_path):
+    # The 19/58 + 25/67 fan's records without a tacho, described with an 18-tooth input pinion at its
+    # declared 35 Hz: the importer kept the declared speed and dropped the speed search's note, the records
+    # were cut at it (their mesh smeared by the speed's drift) and the gap fitted effects: 'unexplained'
+    from dataclasses import asdict
+
+    from gearlab.kinds.gap import target_of
+    from gearlab.kinds.gap_inputs import TargetEntry, read_history
+
+    fs, files = 4096.0, []
+    for i in range(2):
+        t = np.arange(int(15 * fs)) / fs
+        theta = 2 * np.pi * np.cumsum(35.0 * (1 + 0.002 * np.sin(2 * np.pi * t / 11 + i))) / fs
+        np.savez(tmp_path / f"fan{i}.npz", acc_ms2=_train([(19, 58), (25, 67)], theta, np.random.default_rng(i)), fs=fs)
+        files.append({"file": f"fan{i}.npz", "role": "history", "label": "healthy"})
+    for z1 in (18, 19):
+        (tmp_path / f"fan{z1}.toml").write_text(description(stage(z1, 58), stage(25, 67), name="fan", speed="35 Hz"))
+    entry = {**asdict(TargetEntry()), "vibration": "acc_ms2", "files": files, "gearbox": "fan18.toml", "speed": "35 Hz"}
+    with pytest.raises(GearlabInputError) as told:
+        read_history(target_of(entry, "s.toml: [target]", tmp_path), lambda e: None)
+    line = str(told.value)
+    assert "\n" not in line and line.startswith("[target] key 'speed': 35 Hz declared, but no history record's mesh"), (
+        line
+    )
+    assert "which" not in line and "gearlab inspect fan0.npz --gearbox ... says what differs" in line, line
+    right = read_history(target_of({**entry, "gearbox": "fan19.toml"}, "s.toml: [target]", tmp_path), lambda e: None)
+    assert "the mesh lines do not confirm" not in right[2][-1], right[2][-1]

@@ -556,6 +556,9 @@ def read_recording(
 # --- the shaft angle and the revolutions ---------------------------------------------------
 
 
+UNCONFIRMED = "which the mesh lines do not confirm"  # a declared speed that a description's mesh lines contradict
+
+
 def shaft_angle(
     rec: Recording,
     *,
@@ -587,7 +590,7 @@ def shaft_angle(
             # a real record's speed always swings a little (0.3 %: every mesh line smeared over its
             # sidebands, the TSA's mesh harmonic lost); followed on a mesh harmonic's phase, the
             # revolutions are cut where the shaft turns, as from a tacho
-            theta, speed_hz, found, _ = follow_speed(
+            theta, speed_hz, found, note = follow_speed(
                 rec.signal, fs, gearbox, speed_hz, f"{path}: vibration channel '{rec.vibration}'"
             )
             if theta is not None:
@@ -599,6 +602,9 @@ def shaft_angle(
                     f"speed followed on the mesh phase ({found}; {gearbox.name}), mean {fmt_hz(speed_hz)}",
                 )
             how = f"constant speed {found} ({gearbox.name})"
+            if note and found == "declared":  # (a pinion's tooth count off: the gap fitted effects, no word)
+                how = f"{how} {fmt_hz(speed_hz)}, {UNCONFIRMED}: {note}"
+                return {"speed_hz": float(speed_hz)}, angle_from_speed(n, fs, speed_hz), how
         if speed_hz is None:
             raise GearlabInputError(
                 f"{path}: no tacho and no speed: expected a tacho channel, a speed (e.g. '25 Hz'), or a gearbox "

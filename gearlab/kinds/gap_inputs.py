@@ -13,6 +13,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
+from ..signals.checks import fmt_hz
 from .common import DatasetEntry, measured
 
 # History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
@@ -76,6 +77,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     Target.marks), without one by any whole sample of the revolution (each record's angle is zero at
     its first sample), so the set has one synchronous average; the record shifted as one signal
     (continued), so that what is not periodic in the input turn stays continuous."""
+    from ..data.recordings import UNCONFIRMED
     from .detection_records import aligned
 
     t = records.target
@@ -91,6 +93,15 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         rows.append(revs)
         speeds[f.path], found[f.path] = rec.speed_hz, rec.angle_source
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
+    if all(UNCONFIRMED in how for how in found.values()):
+        # the description's mesh lines are nowhere near the declared speed: read at it, the records' lines
+        # are smeared and fitted effects, 'unexplained' (a 19/58 + 25/67 fan described with 18 teeth)
+        path, how = next(iter(found.items()))
+        raise GearlabInputError(
+            f"[target] key 'speed': {fmt_hz(speeds[path])} declared, but no history record's mesh lines confirm it "
+            f"({path}: {how.split(f'{UNCONFIRMED}: ')[-1]}); expected the records' speed and tooth counts: gearlab "
+            f"inspect {path} --gearbox ... says what differs"
+        )
     low, high = min(speeds.values()), max(speeds.values())
     if high > low * (1 + SPEED_SPREAD):
         shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
