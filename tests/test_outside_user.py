@@ -586,3 +586,22 @@ def test_the_gap_ends_when_no_history_record_s_mesh_lines_confirm_the_declared_s
     assert "which" not in line and "gearlab inspect fan0.npz --gearbox ... says what differs" in line, line
     right = read_history(target_of({**entry, "gearbox": "fan19.toml"}, "s.toml: [target]", tmp_path), lambda e: None)
     assert "the mesh lines do not confirm" not in right[2][-1], right[2][-1]
+
+
+@pytest.mark.parametrize(
+    "key, value, said",
+    [
+        ("module", 2.5, "'module': 2.5 is outside [0.1 mm, 100 mm] (a bare number is in m; expected e.g. '2.5 mm')"),
+        ("pressure_angle", 20, "20 is outside [10 deg, 35 deg] (a bare number is in rad; expected e.g. '20 deg')"),
+        ("addendum", 3, "'addendum': 3 is outside [0.5, 1.5]"),
+    ],
+)
+def test_a_bare_number_out_of_bounds_is_told_its_si_unit(key, value, said):
+    # 'module = 2.5' (meant in mm) was told '2.5 is outside [0.1 mm, 100 mm]', 'pressure_angle = 20'
+    # (degrees) '20 is outside [10 deg, 35 deg]': the number read in m and rad, which the line did not say
+    from gearlab.gearbox.description import parse_gearbox
+
+    stage = {"module": "2 mm", "face_width": "20 mm", "pinion": {"z": 27}, "wheel": {"z": 74}, key: value}
+    with pytest.raises(GearlabInputError) as told:
+        parse_gearbox({"stages": [stage]}, "box.toml")
+    assert str(told.value).endswith(said), str(told.value)

@@ -233,7 +233,10 @@ class _Table:
         else:
             value = to_si(raw, p.unit, where)
         if not p.low <= value <= p.high:
-            raise GearlabInputError(f"{where}: {shown(raw)} is outside [{p.show(p.low)}, {p.show(p.high)}]")
+            # a bare number is SI ('module = 2.5' is 2.5 m, 'pressure_angle = 20' is 20 rad): say so
+            bare = p.unit and not isinstance(raw, str) and p.show(p.low) != f"{p.low:g} {p.unit}"
+            said = f" (a bare number is in {p.unit}; expected e.g. '{raw} {p.display_unit}')" if bare else ""
+            raise GearlabInputError(f"{where}: {shown(raw)} is outside [{p.show(p.low)}, {p.show(p.high)}]{said}")
         return value
 
     def required(self, p: Param, default: float | None = None) -> float:
