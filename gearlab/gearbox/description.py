@@ -87,10 +87,15 @@ DYNAMICS = (
 FITTED = {
     "motor_inertia": "drive_inertias",
     "load_inertia": "drive_inertias",
+    "coupling_stiffness": "drive_inertias",
+    "coupling_damping": "drive_inertias",
     "bearing_stiffness": "bearing_stiffness",
+    "bearing_damping": "bearing_stiffness",
     "casing_mass": "casing_path",
     "mounting_stiffness_x": "casing_path",
     "mounting_stiffness_y": "casing_path",
+    "mounting_damping_x": "casing_path",
+    "mounting_damping_y": "casing_path",
     "mesh_damping_ratio": "mesh_damping",
 }
 SHAFT_KEYS = (

@@ -7,11 +7,11 @@ and thresholded from the source and the history alone; the test records come in 
 the method's model and threshold are fixed, and their labels only when the figures are made.
 
     [source]              a dataset preset with overrides (as in [[datasets]]), healthy + faults
-    [corrected]           effects (as in [[datasets]]) that make the corrected simulator (e.g. what
-                          `gearlab gap` fitted), tsa (revolutions averaged per sample), draws (noise
-                          draws of each sample, one at random per batch row), history_units (what of
-                          the history its methods train on), label: every method is trained on both
-                          sources, the corrected one's rows "<method> (<label>)"
+    [corrected]           effects (as in [[datasets]]) and gearbox (a description in place of the [source]'s)
+                          that make the corrected simulator (what `gearlab gap` fitted), tsa (revolutions
+                          averaged per sample), draws (noise draws of each sample, one at random per batch
+                          row), history_units (what of the history its methods train on), label: every method
+                          is trained on both sources, the corrected one's rows "<method> (<label>)"
     [target]              vibration, tacho (or without one: speed and/or gearbox), pulses_per_rev,
                           sensitivity, fs, positive, files = [
                             { file, role = "history" | "test", label, condition, speed (optional) }, ...]
@@ -70,6 +70,7 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, shown
 from ..events import Event
+from ..gearbox.simulation import label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, each_draw, shared_state
 from ..learn.schedule import two_phases
@@ -300,8 +301,8 @@ def corrected_spec(
     cor: Corrected, source_entry: dict, where: str, base: Path, source: DatasetSpec
 ) -> DatasetSpec | None:
     """The [source] (its table *source_entry*, its spec *source*) with the [corrected] effects after
-    its own (None: no effects given)."""
-    if not cor.effects:
+    its own and its gearbox description in place of the [source]'s (None: neither given)."""
+    if not cor.effects and not cor.gearbox:
         return None
     label = cor.label
     if not label or not all(ch.isalnum() or ch in "-_" for ch in label):
@@ -309,6 +310,8 @@ def corrected_spec(
             f"{where} key 'label': expected a short name of letters, digits, - or _, got {shown(label)}"
         )
     entry = {**source_entry, "effects": list(source_entry.get("effects") or []) + list(cor.effects)}
+    if cor.gearbox:
+        entry["gearbox"] = corrected_gearbox(cor.gearbox, source_entry, f"{where} key 'gearbox'", base, source)
     if cor.tsa:  # noise drawn on every revolution, then averaged as a record unit is
         entry.update(tsa=True, revolutions=cor.tsa)
     spec = simulated_spec(entry, where, base)
@@ -321,13 +324,37 @@ def corrected_spec(
     return spec.with_(name=name, domain=name)
 
 
+def corrected_gearbox(gearbox: str, source_entry: dict, where: str, base: Path, source: DatasetSpec) -> str:
+    """The [corrected] gearbox description, checked to describe the [source]'s gears (a gap run's
+    gearbox_corrected.toml of its description: the tooth counts the same, the values fitted)."""
+    from ..gearbox import resolve_gearbox
+
+    if not source_entry.get("gearbox"):
+        raise GearlabInputError(
+            f"{where}: the [source] simulates no gearbox description; the corrected one replaces its "
+            "description (give [source] gearbox = ...)"
+        )
+    path = gearbox_name(gearbox, where, base)
+    teeth = [(s.pinion.z, s.wheel.z) for s in resolve_gearbox(path).stages]
+    plain = [(s.pinion.z, s.wheel.z) for s in referenced(source.preset).stages]
+    if teeth != plain:
+        raise GearlabInputError(
+            f"{where}: {shown(gearbox)} has the tooth counts {teeth}, the [source]'s description {plain}; "
+            "expected the same gears (a gap run's gearbox_corrected.toml of the [source]'s description)"
+        )
+    return path
+
+
 def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     files = spec.target.files
     n_hist = sum(f.role == "history" for f in files)
     names = [m.adapter for m in spec.protocol.methods] + list(spec.classical.indicators)
     if spec.corrected is not None:
-        extra = ", ".join(name for name, _ in spec.corrected.effects[len(spec.source.effects) :])
+        extra = [name for name, _ in spec.corrected.effects[len(spec.source.effects) :]]
+        if spec.corrected.preset != spec.source.preset:  # its own gearbox description
+            extra.insert(0, Path(label(spec.corrected.preset)).name)
+        extra = ", ".join(extra)
         names += [f"{m.adapter} ({spec.corrected_label}: + {extra})" for m in spec.protocol.methods]
     return (
         f"{sized(spec.source)} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "

@@ -34,9 +34,16 @@ UNIT_THRESHOLD = {"threshold": RECIPE.threshold, "false_alarm": RECIPE.false_ala
 
 @dataclass(frozen=True, kw_only=True)
 class Corrected:
-    """[corrected]: the corrected source (the [source] with the effects a gap diagnosis found)."""
+    """[corrected]: the corrected source (the [source] with the effects a gap diagnosis found, its
+    gearbox description with the values it fitted)."""
 
     effects: list = setting(list, [], doc="effects added to the [source]'s: the corrected simulator (none: plain only)")
+    gearbox: str = setting(
+        str,
+        "",
+        doc="a gearbox description in place of the [source]'s in the corrected simulator: a gap run's "
+        "gearbox_corrected.toml (its fitted values); the same gears, relative to the scenario",
+    )
     label: str = setting(str, "corrected", doc="the corrected source's name in the method rows")
     tsa: int = setting(
         int,

@@ -7,15 +7,14 @@
     [accuracy]    enabled, methods (DA baselines, detectors), repetitions and training settings (k = 0)
     [network]     name (fast | cnn3), dropout
 
-Units of work (one record each in results.jsonl, so --resume redoes none of them):
-``diagnosis`` (where / which / how far, gearlab.gap.diagnose.diagnose on the target's healthy
-revolutions alone), then per repetition the downstream accuracy: a source-only model trained
-on the uncorrected source, one trained on the corrected source (the fitted effects added),
-each detector (matched_filter) with the fault shapes of either source, and each DA method on
-the uncorrected source, all scored on the target test set.
+Units of work (one record each in results.jsonl, so --resume redoes none of them): ``diagnosis`` (where /
+which / how far, gearlab.gap.diagnose.diagnose on the target's healthy revolutions alone), then per repetition
+the downstream accuracy: a source-only model trained on the uncorrected source, one trained on the corrected
+source (the fitted effects added), each detector (matched_filter) with the fault shapes of either source, and
+each DA method on the uncorrected source, all scored on the target test set.
 
-Output: summary.json (effects, gap before/after, per-view gaps, two-sample statistics,
-ranking, accuracy), table.md (per-view gap, effect ranking, accuracy), figures and report.html.
+Output: summary.json (effects, gap before/after, per-view gaps, two-sample statistics, ranking, accuracy),
+table.md, figures, report.html; gearbox_corrected.toml, a description's fitted values (gearlab.gap.corrected).
 """
 
 from __future__ import annotations
@@ -34,6 +33,7 @@ from ..effects import default_candidates
 from ..errors import GearlabInputError
 from ..events import Event, report_begins
 from ..gap.conclusion import verdict_text  # the kind's log line, summary and report say one verdict
+from ..gap.corrected import write_corrected
 from ..gap.diagnose import Settings
 from ..gearbox.simulation import defaults, is_reference, referenced
 from ..learn.config import NetworkSettings
@@ -95,8 +95,6 @@ class Accuracy:
 
 
 UNCORRECTED, CORRECTED = "uncorrected", "corrected"
-
-
 TABLES = {
     "source": _DATASET,
     "target": Table(keys_of(TargetEntry), required=True),
@@ -644,6 +642,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         },
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
+        "corrected_description": write_corrected(spec.source, result, run),  # its structural values, written
         "settings": result.get("settings", asdict(spec.settings)),
         "notes": notes + list(result.get("notes", [])) + list(result["before"].get("notes", [])),
     }
@@ -670,6 +669,7 @@ def summary_lines(run: RunDir) -> list[str]:
         f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
         f"effects: {names or 'none'}; "
         f"verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}{evaluations_text(s)}",
+        *([f"corrected description: {s['corrected_description']}"] if s.get("corrected_description") else []),
     ]
     for e in s["effects"]:
         for c in e.get("combinations", []):

@@ -71,6 +71,8 @@ def gap_lines(summary: Mapping) -> list[str]:
     told = [f"{m} {u['mean']:.1f} -> {c['mean']:.1f} %" for m, u, c in pairs if c is not None]
     if told:
         lines.append("Target fault detection at k = 0, uncorrected -> corrected simulator: " + ", ".join(told) + ".")
+    if summary.get("corrected_description"):  # the fitted values of the gearbox, written into its description
+        lines.append(f"corrected description: {summary['corrected_description']}")
     return lines
 
 
