@@ -296,7 +296,10 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         report["order_table"] = order_table(box).describe(speed.mean_hz)
         report["check"] = check = check_description(lines, box, revolutions, on_input)
         differences = check["differences"]
-        if on_input and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses"):
+        elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
+        if elsewhere:
+            differences[:0] = [elsewhere]
+        elif on_input and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses"):
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
@@ -328,6 +331,27 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             + (f"; not checked: {'; '.join(rest)}" if rest else "")
         )
     return report
+
+
+def _tacho_elsewhere(lines, box: Gearbox, read: str, speed: Speed, revolutions: int) -> str | None:
+    """A tacho on another shaft of the description than the one it was read as (match.tacho_elsewhere
+    on the strongest lines, as the gap's structure check reads them), in one line, or None."""
+    from .gearbox.match import MIN_TEETH, STRONGEST, tacho_elsewhere, tacho_shaft_words
+
+    keep = lines.at >= MIN_TEETH - 0.5
+    x, amp = lines.at[keep][:STRONGEST], lines.amp[keep][:STRONGEST]
+    tol = np.array([tol_mesh(v, 1.0 / revolutions) for v in x])
+    ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
+    table = order_table(box)
+    found = tacho_elsewhere(x, amp**2, tol, table, box.shaft_index(read, "--tacho-shaft"), ratio)
+    if found is None:
+        return None
+    name, f = found
+    m = float(table.stages[0].mesh)
+    return (
+        f"stage 1: mesh order {f * m:.4g} measured, {m:.4g} expected ({tacho_shaft_words(name, f, read)} "
+        f"--tacho-shaft {name}, key 'tacho_shaft' in a scenario)"
+    )
 
 
 def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import described_pair, description, stage
 
 from gearlab.errors import GearlabInputError
 from gearlab.gearbox import load_gearbox
@@ -246,3 +246,137 @@ def _scores(path: Path) -> dict:
             key = (r["method"], r["unit"])  # every file's units, in the file's order
             out.setdefault(key, []).append(float(r["score"]))
     return {k: np.array(v) for k, v in out.items()}
+
+
+def _train(stages, f: float, n=60, points=4096, seed=0, harmonics=(1, 2, 3), wheel=0.2) -> np.ndarray:
+    """Rows (n, points) of a train of *stages* ((z1, z2), input first) read at a tacho whose revolutions
+    are *f* input turns each (1: the input's, read as such; 3: a 16/48 output tacho read as the input):
+    each mesh's *harmonics*, modulated by its pinion's shaft (0.3) and its wheel's (*wheel*), noise."""
+    from gearlab.gap.structure import _PairDescription
+    from gearlab.gearbox import order_table
+
+    table = order_table(_PairDescription.train(described_pair(*stages)))
+    theta = 2 * np.pi * f * np.arange(n * points) / points
+    x = np.zeros(theta.size)
+    for k, s in enumerate(table.stages):
+        mod = (
+            1
+            + 0.3 * np.cos(float(s.pinion_shaft_order) * theta)
+            + wheel * np.cos(float(s.wheel_shaft_order) * theta + 1)
+        )
+        x += sum(np.cos(h * float(s.mesh) * theta + h + k) / h for h in harmonics) * mod / (k + 1)
+    return (x + np.random.default_rng(seed).normal(0, 0.05, theta.size)).reshape(n, points)
+
+
+def _check(rows, stages, read="input", ratio=None):
+    """The gap's structure check of *rows* against *stages*, its tacho read as shaft *read*, at the
+    speed read over the described *ratio* (None: no described speed)."""
+    from gearlab.data.chain import Chain
+    from gearlab.gap.structure import _tacho_read, later_combs, mesh_check
+
+    pair = described_pair(*stages)
+    chain = Chain(fs=1.0, speed=25.0 * (ratio or 1.0), described_speed=25.0 if ratio else None, tacho_shaft=read)
+    return mesh_check(rows, pair.Z1, pair.Z2, 0, later_combs(pair), _tacho_read(chain, pair))
+
+
+TRAINS = {1: [(16, 48)], 2: [(20, 50), (22, 33)], 3: [(19, 58), (25, 67), (21, 44)]}
+
+
+@pytest.mark.parametrize("count", [1, 2, 3])
+def test_the_gap_names_the_shaft_a_tacho_reads_when_read_as_another(count):
+    """A tacho on another shaft than the one it is read as (no [target] tacho_shaft, the description's
+    [sensor] tacho the input): every order reads f = o_read / o_shaft times its own (16/48's output: the
+    mesh at 48, all on the 16-tooth comb, so the check passed and sensor noise 'partly explained' it).
+    The structure check names the shaft and the key, at the speed 1/f of the described one; the right
+    reading (f = 1) passes at every such speed ratio."""
+    from gearlab.gap.structure import _PairDescription, mesh_line
+    from gearlab.gearbox import order_table
+
+    stages = TRAINS[count]
+    box = _PairDescription.train(described_pair(*stages))
+    orders = dict(zip(box.shafts, (float(o) for o in order_table(box).shaft_orders)))
+    for name, o in orders.items():
+        if name == "input":
+            continue
+        check = _check(_train(stages, 1 / o), stages, ratio=o)
+        assert check["differs"] and check["shaft"] == name, (name, check)
+        assert check["measured"] == pytest.approx(stages[0][0] / o)
+        line = mesh_line(check, stages[0][0])
+        assert line.startswith(f"mesh order {stages[0][0] / o:.1f} measured, {stages[0][0]} expected: ")
+        assert line.endswith(f"the tacho reads the {name} shaft? give [target] tacho_shaft = '{name}')")
+        # the input's tacho given as this shaft's (a wrong tacho_shaft): the input named, where the
+        # mesh's 2nd harmonic lies above order 6 (a slower shaft's reading leaves no gear's lines)
+        if 2 * o * stages[0][0] >= 6:
+            wrong = _check(_train(stages, o), stages, read=name, ratio=1 / o)
+            assert wrong["differs"] and wrong["shaft"] == "input", (name, wrong)
+        # the right reading, whatever the speed read against the described
+        for ratio in (None, 1.0, o, 1 / o):
+            assert not _check(_train(stages, 1.0), stages, ratio=ratio)["differs"], (name, ratio)
+    one = _check(_train(stages, 1 / orders["output"]), stages, ratio=None)  # no described speed
+    assert one["differs"] and one["shaft"] == "output"
+
+
+def test_a_mesh_at_a_multiple_of_the_pinion_s_order_is_decided_by_its_sidebands():
+    """16/48: 48 = 3 x 16. A right reading whose mesh shows only its 3rd and 6th harmonics (a
+    resonance) at a speed read 1/3 of the described: its wheel's sidebands 1/3 apart tell it is read
+    as it is; the output's tacho read as the input (the mesh at 48 and 96 too, the output's sidebands 1
+    apart and the input's 3) is called; the right reading without a wheel sideband (input sidebands 1
+    apart, as the output's are in the other reading) is the output's only at the speed an output tacho
+    reads (at the described speed it reads as a tacho of 1/3 the pulses: spectrally the same)."""
+    stages = [(16, 48)]
+    right = _train(stages, 1.0, harmonics=(3, 6), wheel=0.3)
+    assert not _check(right, stages, ratio=1 / 3)["differs"]
+    assert not _check(right, stages)["differs"]
+    check = _check(_train(stages, 3.0), stages, ratio=1 / 3)
+    assert check["differs"] and check["shaft"] == "output" and check["measured"] == 48
+    bare = _train(stages, 1.0, harmonics=(3, 6), wheel=0.0)
+    assert _check(bare, stages, ratio=1 / 3)["shaft"] == "output"
+    assert _check(bare, stages, ratio=1.0).get("shaft") is None
+
+
+def test_inspect_names_the_shaft_an_output_tacho_reads(tmp_path, cli):
+    """rig16 ([sensor] tacho = 'input') and a record whose tacho pulses once per output turn: inspect
+    said 'matches' (the mesh at 48, its lines all on the 16-tooth comb); now the shaft and the option.
+    With --tacho-shaft output, and the input tacho's record, it matches."""
+    for name, turns in (("out", Fraction(1, 3)), ("in", Fraction(1))):
+        record(tmp_path / f"{name}.csv", turns, seconds=2.4, orders=(16, 32, 48), wobble=0.0)
+    base = ["inspect", "--gearbox", RIG16, "--vibration", "acc_V", "--tacho", "tacho_V", "--json"]
+    verdicts = {}
+    for name, extra in (("out", []), ("out", ["--tacho-shaft", "output"]), ("in", [])):
+        code, out, err = cli(*base[:1], tmp_path / f"{name}.csv", *base[1:], *extra)
+        assert code == 0, err
+        verdicts[name, bool(extra)] = json.loads(out)["verdict"]
+    assert verdicts["out", False].startswith(
+        "the description 'rig16' differs: stage 1: mesh order 48 measured, 16 expected (every order reads 3 x its "
+        "own, as when a tacho on the output shaft is read as on the input: the tacho reads the output shaft? "
+        "--tacho-shaft output"
+    ), verdicts
+    assert "matches" in verdicts["out", True] and "matches" in verdicts["in", False], verdicts
+
+
+def test_every_kind_takes_the_description_s_pulses_per_rev_by_default(tmp_path, write_scenario):
+    """[sensor] pulses_per_rev of the description (the [source]'s, or a dataset entry's 'gearbox') is
+    the default of the gap's, the detection's and a dataset entry's 'pulses_per_rev', as it is
+    inspect's; the key given wins (1 included). Before, these kinds read 1 by default."""
+    from gearlab.engine import load_scenario
+
+    (tmp_path / "rig16.toml").write_text(RIG16.read_text() + "pulses_per_rev = 2\n")
+    for name in ("h0", "h1", "t0", "t1"):
+        record(tmp_path / f"{name}.csv", Fraction(1), seconds=0.3)
+    gap = DETECT.format(name="g", folder=".", shaft="{key}").replace('kind = "detection"', 'kind = "gap"')
+    gap = gap.split("[detection]")[0].replace("teeth = [1, 2]\nfaults = { chip = [20] }\nhealthy = 6\n", "")
+    gap = gap.replace('  { file = "./t0.csv", role = "test", label = "healthy" },\n', "")
+    gap = (
+        gap.replace('  { file = "./t1.csv", role = "test", label = "fault" },\n', "") + "[accuracy]\nenabled = false\n"
+    )
+    dataset = '[scenario]\nname = "d"\nkind = "dataset"\n[[datasets]]\nfile = "h0.csv"\nvibration = "acc_V"\n'
+    dataset += 'tacho = "tacho_V"\ngearbox = "rig16.toml"\nsensitivity = "100 mV/g"\n{key}\n'
+    detect = DETECT.format(name="d", folder=".", shaft="{key}")
+    for key, pulses in (("", 2), ("pulses_per_rev = 1", 1), ("pulses_per_rev = 3", 3)):
+        specs = {
+            k: load_scenario(write_scenario(t.replace("{key}", key), f"{k}.toml")).spec
+            for k, t in (("gap", gap), ("detect", detect), ("dataset", dataset))
+        }
+        assert specs["gap"].target.target.pulses_per_rev == pulses, key
+        assert specs["detect"].target.pulses_per_rev == pulses, key
+        assert specs["dataset"][0].pulses_per_rev == pulses, key

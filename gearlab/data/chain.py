@@ -54,8 +54,10 @@ class Chain:
                for every simulated set against *reference* (the target's synchronous average)
     speed_from_mesh: no tacho: the speed was found from a gearbox description's mesh lines, so only
                speed x pinion teeth is measured
-    described_speed: the description's speed (Hz) where the source was set to the speed found
-               (measured records): a wrong tooth count moves the speed found, not the mesh order
+    described_speed: the description's speed (Hz) where the source was set to the speed of
+               measured records (found from the mesh lines: a wrong tooth count moves the speed
+               found, not the mesh order; a tacho's: read on another shaft, the speed is a ratio off)
+    tacho_shaft: the shaft a measured target's tacho was read as (None: no tacho)
     """
 
     fs: float
@@ -66,6 +68,7 @@ class Chain:
     reference: np.ndarray | None = field(default=None, compare=False, repr=False)
     speed_from_mesh: bool = False
     described_speed: float | None = None
+    tacho_shaft: str | None = None
 
     @property
     def samples_per_rev(self) -> float:

@@ -26,19 +26,17 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
+
 # A target whose strongest lines (STRONGEST, above order MIN_TEETH) hold at least this share of their
 # power off the source's comb of mesh harmonics and sidebands may be another gearbox (then those lines
 # hold a comb of their own, FAMILY): a 20-tooth record against B-6-ch5's 25 teeth holds 58 % there
 # (its 200 and 300 lie on both combs), a 26- or 24-tooth one 100 %, a right one 0-5 % (a 0.5-ratio
-# interference tone beside it: 4-5 %).
-OFF_COMB = 0.25
-STRONGEST = 8
-MIN_TEETH = 6  # a pinion of fewer teeth is no gear (inspect's bound too)
+# interference tone beside it: 4-5 %); or when less than ON_MESH of that power lies on the source's
+# mesh harmonics themselves (the rest on their sidebands): a right record's mesh harmonics hold most
+# of it (B-6-ch5, the PHM 2009 records against phm09; see mesh_check). The shares and counts are
+# gearlab.gearbox.match's (a pinion of fewer than MIN_TEETH teeth is no gear: inspect's bound too).
 SIDEBANDS = 3
-# ... or when less than this share of that power lies on the source's mesh harmonics themselves (the
-# rest on their sidebands): a right record's mesh harmonics hold most of it (B-6-ch5, the PHM 2009
-# records against phm09; see mesh_check)
-ON_MESH = 0.25
 FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 # The source simulates another speed when a measured target's differs by more than this (one rig at
 # one setting drifts by well under 1 %; gearlab.kinds.gap_inputs.SPEED_SPREAD).
@@ -96,12 +94,14 @@ def _comb_distance(x: np.ndarray, z: float, offsets: list[float]) -> np.ndarray:
     return np.abs(x[:, None] - h * z - off[None, :]).min(axis=1)
 
 
-def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = ()) -> dict:
+def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = (), tacho=None) -> dict:
     """The target's mesh order against the source's Z1 (module doc): {'expected', 'measured' (the
     target's mesh order, or None when its lines do not show one), 'off_comb' (share of the strongest
     lines' power off the source's comb), 'lines', 'inspect' (check_description's stage), 'differs'}.
     *later*: the later stages of a multi-stage source, (mesh order, (its shafts' orders)) each, whose
-    combs are the source's too (a second mesh as strong as the first is no other pinion)."""
+    combs are the source's too (a second mesh as strong as the first is no other pinion). *tacho*:
+    (the source's order table, the shaft the target's tacho was read as, the target's speed over the
+    described): a tacho on another shaft (match.tacho_elsewhere) is told first."""
     from ..gearbox.match import check_description, tol_mesh
     from ..gearbox.speed import THRESHOLD_DB, find_lines
     from ..signals import spectrum
@@ -140,6 +140,14 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
     for mesh, _ in later:
         on_mesh |= _on_comb(x, mesh, (), tol)
     out["on_mesh"] = float(power[on_mesh].sum() / power.sum())
+    # a tacho on another shaft read as this one: every order f times its own (a 16/48 output tacho
+    # read as the input: the mesh at 48, all on the comb, 'partly explained' by sensor noise)
+    elsewhere = None if tacho is None else tacho_elsewhere(x, power, tol, *tacho)
+    if elsewhere is not None:
+        table, read, _ = tacho
+        out.update(measured=elsewhere[1] * z1, differs=True, shaft=elsewhere[0], factor=elsewhere[1])
+        out["read_as"] = str(table.shafts[read])
+        return out
     # a tacho of k marks a turn read as one scales every order by 1 / k: the strongest line, off the
     # comb, at Z1 / k with its harmonics (a 29/86 mixer's 2-pulse keyphasor read as one: 14.5, 29 on
     # the comb, 43.5; too few off it for another gear's family, so the fits ran: 'unexplained')
@@ -164,6 +172,12 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
             x, k * z1, [0.0] + [s * j * o for o in (k, k * z1 / z2) for j in (1, 2, 3) for s in (-1, 1)]
         )
         odd = (d_odd <= tol) & (d_odd < d_even)
+        # ... nor a line on the source's comb off the k-turn reading's (16/48 read right, its mesh at 48
+        # and 96 alone: its wheel's sidebands 1/3 apart; the input's 1 apart are the k-turn wheel's)
+        read_k = _on_comb(x, k * z1, (k, k * z1 / z2), tol)
+        for mesh, shaft_orders in later:
+            read_k |= _on_comb(x, k * mesh, tuple(k * o for o in shaft_orders), tol)
+        odd |= on & ~read_k
         if abs(x[first] - k * z1) <= tol[first] and hit.sum() >= 2 and not (bare & ~hit).any() and not odd.any():
             out.update(measured=k * z1, differs=True, marks=1 / k)
             return out
@@ -346,6 +360,9 @@ def mesh_line(check: dict, z1: int) -> str:
             + ")"
         )
     line = f"mesh order {m:.1f} measured, {z1} expected: the source simulates a {z1}-tooth pinion"
+    if check.get("shaft"):
+        words = tacho_shaft_words(check["shaft"], check["factor"], check["read_as"])
+        return line + f" ({words} give [target] tacho_shaft = '{check['shaft']}')"
     if check.get("marks", 1) > 1:
         k = check["marks"]
         return line + (
@@ -466,6 +483,19 @@ def stopped(result: dict, before: dict, verdict: str, line: str) -> dict:
     return result
 
 
+def _tacho_read(chain, pair) -> tuple | None:
+    """mesh_check's *tacho* of a measured target read at a tacho (Chain.tacho_shaft), else None."""
+    if chain is None or not chain.tacho_shaft:
+        return None
+    from ..gearbox import order_table
+
+    box = _PairDescription.train(pair)
+    if chain.tacho_shaft not in box.shafts:
+        return None
+    ratio = chain.speed / chain.described_speed if chain.described_speed else None
+    return order_table(box), box.shafts.index(chain.tacho_shaft), ratio
+
+
 def first_difference(source, target, pair, settings, rows, fresh, plain, before, chain) -> tuple:
     """(verdict, its one line, what was measured) of the first thing no effect changes that differs
     between the *source* and the *target* -- its speed (a measured target's chain), its tooth count,
@@ -490,7 +520,9 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
             record["speed_hz"]["described"] = chain.described_speed
             if traded_teeth(chain.speed, chain.described_speed, pair.Z1) is not None:
                 return "structure differs", speed_line(chain.speed, chain.described_speed, pair.Z1), record
-    record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, settings.max_order, later_combs(pair))
+    record["mesh"] = mesh = mesh_check(
+        target, pair.Z1, pair.Z2, settings.max_order, later_combs(pair), _tacho_read(chain, pair)
+    )
     if mesh["differs"]:
         return "structure differs", mesh_line(mesh, pair.Z1), record
     # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described

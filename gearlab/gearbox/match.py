@@ -424,3 +424,72 @@ def pinion_unconfirmed(check: dict, box: Gearbox, speed_found: float | None) -> 
         f"{speed_found:.4g} Hz, or {others}; give a tacho or the speed (--speed, [operation] speed) to check "
         "the pinion's tooth count"
     )
+
+
+# A record's strongest lines (STRONGEST, from order MIN_TEETH - 0.5) off a comb by this share of their
+# power, or on its mesh harmonics by less than ON_MESH, do not show that comb (gearlab.gap.structure's
+# tooth-count check reads them alike)
+OFF_COMB, ON_MESH, STRONGEST, MIN_TEETH = 0.25, 0.25, 8, 6
+# A tacho read as another shaft's reads the speed 1 / f of the true one: within this of the described
+TACHO_SPEED_TOL = 0.05
+
+
+def on_table(x: np.ndarray, table, f: float, tol: np.ndarray, sidebands: int = 3) -> np.ndarray:
+    """Which orders *x* lie on a mesh harmonic of a stage of *table* x *f* (h >= 1) or one of its
+    sidebands j <= *sidebands* of either shaft (x *f*): the description's comb as a record shows it
+    when each of its orders reads *f* times its own."""
+    hit = np.zeros(x.size, dtype=bool)
+    for s in table.stages:
+        m = f * float(s.mesh)
+        shafts = (float(s.pinion_shaft_order), float(s.wheel_shaft_order))
+        off = np.array([0.0] + [g * j * f * o for o in shafts for j in range(1, sidebands + 1) for g in (-1, 1)])
+        h = np.maximum(1, np.round((x[:, None] - off[None, :]) / m))
+        hit |= np.any(np.abs(x[:, None] - h * m - off[None, :]) <= tol[:, None], axis=1)
+    return hit
+
+
+def tacho_elsewhere(x, power, tol, table, read: int, ratio: float | None) -> tuple[str, float] | None:
+    """(shaft, f) when a record's tacho reads another shaft of the description than shaft *read*, the
+    one it was read as, else None. The tacho's turns are then that shaft's, not shaft *read*'s: every
+    order reads f = o_read / o_shaft times its own (a 16/48 output tacho read as the input: mesh at
+    48, the input at 3, the output at 1). *x*, *power*, *tol*: the record's strongest lines (orders,
+    power, tolerance). The shaft is named when its comb (the table's orders x f) holds the lines as
+    a right record's holds them (OFF_COMB, ON_MESH, two mesh harmonics), no line lies on the
+    description's comb and off that one (a 16-tooth pinion's 16, 32 or its wheel's sidebands 1/3
+    apart: a right reading whose mesh shows only every third harmonic, with the input's sidebands
+    one apart, which the output's make too), and the speed read is 1 / f of the described (*ratio*:
+    read / described, within TACHO_SPEED_TOL); without a described speed, the description's comb must
+    not hold the lines, or a line must lie on the shaft's comb alone, or the strongest line is its mesh."""
+    if x.size < 2:
+        return None
+    total = float(power.sum())
+    right = on_table(x, table, 1.0, tol)
+    fails = power[~right].sum() / total >= OFF_COMB or power[on_table(x, table, 1.0, tol, 0)].sum() / total < ON_MESH
+    first = int(np.argmax(power))
+    o_read = float(table.shaft_orders[read])
+    for name, o in zip(table.shafts, table.shaft_orders):
+        f = o_read / float(o)
+        if abs(f - 1.0) < 1e-9:
+            continue
+        on, mesh = on_table(x, table, f, tol), on_table(x, table, f, tol, 0)
+        if power[~on].sum() / total >= OFF_COMB or power[mesh].sum() / total < ON_MESH or mesh.sum() < 2:
+            continue
+        if (right & ~on).any():
+            continue
+        if ratio is not None:
+            called = abs(ratio * f - 1.0) <= TACHO_SPEED_TOL
+        else:
+            m1 = f * float(table.stages[0].mesh)
+            called = fails or bool((on & ~right).any()) or abs(x[first] - m1) <= tol[first]
+        if called:
+            return str(name), f
+    return None
+
+
+def tacho_shaft_words(name: str, f: float, read: str) -> str:
+    """What a tacho_elsewhere call says: the orders' factor, and the shaft to name."""
+    shown = f"{f:.4g}" if f >= 1 else f"1/{1 / f:.4g}"
+    return (
+        f"every order reads {shown} x its own, as when a tacho on the {name} shaft is read as on the {read}: "
+        f"the tacho reads the {name} shaft?"
+    )

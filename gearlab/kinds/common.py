@@ -18,7 +18,7 @@ from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
 from ..params import did_you_mean
-from ..parts.measured import tacho_shaft_of
+from ..parts.measured import pulses_of, tacho_shaft_of
 from ..registry import get_registry
 from ..scenario import Scenario, Table, keys_of, location, plain_name
 from ..settings import from_inline, setting
@@ -114,10 +114,11 @@ MEASURED = {
     },
     "pulses_per_rev": {
         "types": int,
-        "default": 1,
+        "default": None,
         "low": 1,
         "high": 10_000,
-        "doc": "measured data: tacho pulses per revolution of the shaft it reads",
+        "doc": "measured data: tacho pulses per revolution of the shaft it reads (default: the gearbox "
+        "description's [sensor] pulses_per_rev, else 1)",
     },
     "speed": {
         "types": (int, float, str),
@@ -438,7 +439,7 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
         labels=entry["labels"] or None,
         class_names=tuple(names),
         transient=entry["transient"],
-        pulses_per_rev=entry.get("pulses_per_rev") or 1,
+        pulses_per_rev=pulses_of(entry.get("pulses_per_rev"), entry["tacho"], box),
         gearbox=gearbox,
         tacho_shaft=None if shaft is None else shaft.name,
         **units,

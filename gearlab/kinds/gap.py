@@ -188,7 +188,7 @@ def build(scenario: Scenario) -> Spec:
 def target_of(entry: dict, where: str, base, box=None) -> DatasetSpec | MeasuredSpec | Records:
     """The [target]: measured records ('files'; *box*: their tacho's shafts), or a dataset entry (a preset, 'file')."""
     if not entry["files"]:
-        if entry["pulses_per_rev"] != TargetEntry().pulses_per_rev:
+        if entry["pulses_per_rev"] not in (None, 1):
             raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to measured records ('files')")
         for key in ("vibration", "tacho"):
             if not isinstance(entry[key], str):
@@ -374,8 +374,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             # start fractions not kept (drawn uniformly)
             from ..data.builder import operating_point
 
-            described = operating_point(spec.source)[0] if from_mesh else None
-            chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh, described_speed=described)
+            described, shaft = operating_point(spec.source)[0], spec.target.target.read_as
+            chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh, described_speed=described, tacho_shaft=shaft)
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))

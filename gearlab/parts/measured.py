@@ -53,6 +53,11 @@ class Target:
         """The tacho marks a record's input angle may start at, 1/marks of a turn apart (TachoShaft.marks)."""
         return self.pulses_per_rev if self.tacho_shaft is None else self.tacho_shaft.marks(self.pulses_per_rev)
 
+    @property
+    def read_as(self) -> str | None:
+        """The shaft the tacho is read as (the gap's Chain.tacho_shaft); None: no tacho."""
+        return None if self.tacho is None else self.tacho_shaft.name if self.tacho_shaft else "input"
+
     def read(self, file: TargetFile):
         """One of the target's records, read through the one import path (any format) with its
         channels, tacho and units: its revolutions (recordings.cut_recording). Without a tacho, the
@@ -97,6 +102,14 @@ def tacho_shaft_of(name: str, tacho, box, where: str, described: str) -> TachoSh
         return None
     shaft = TachoShaft.of(box, name or box.sensor.tacho, at if name else f"{box.source}: [sensor] key 'tacho'")
     return None if shaft.turns == 1 else shaft
+
+
+def pulses_of(given: int | None, tacho, box) -> int:
+    """A measured entry's tacho marks per turn: *given* (its 'pulses_per_rev'), else the description
+    *box*'s [sensor] pulses_per_rev (as tacho_shaft_of takes its [sensor] tacho), else 1."""
+    if given is not None:
+        return int(given)
+    return int(box.sensor.pulses_per_rev) if box is not None and tacho not in (None, "") else 1
 
 
 def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
@@ -186,7 +199,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
                 f"({', '.join(found)}); expected the vibration channel's name"
             )
         vibration = found[0]
-    if tacho is None and t["pulses_per_rev"] != 1:
+    if tacho is None and t["pulses_per_rev"] not in (None, 1):
         raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
     for i, f in enumerate(files):
         declared = f.speed_hz if f.speed_hz is not None else speed
@@ -219,7 +232,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
     return Target(
         vibration,
         tacho,
-        t["pulses_per_rev"],
+        pulses_of(t["pulses_per_rev"], tacho, box),
         sensitivity,
         fs,
         t["transient"],
