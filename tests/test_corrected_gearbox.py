@@ -163,12 +163,14 @@ gearbox = "rig.toml"
 teeth = [1]
 faults = { chip = [20] }
 healthy = 12
+fs = 40000
 
 [target]
 gearbox = "rig.toml"
 teeth = [1]
 faults = { chip = [20] }
 healthy = 12
+fs = 40000
 effects = [{ name = "bearing_stiffness", k_factor = 0.5 }]
 
 [diagnosis]
@@ -186,17 +188,15 @@ enabled = false
 )
 
 
+@pytest.mark.filterwarnings("ignore:.*gives fewer than 10 steps")  # 40 kHz: a cheap target
 def test_a_gap_run_of_a_description_writes_the_corrected_description(tmp_path, module_cache):
     from test_gap_kind import fake_module
-
-    from gearlab.gap.stats import gap_report
 
     module = fake_module([])
     plain = module.diagnose
 
     def diagnose(source, target_X, settings, **kw):
         out = plain(source, target_X, settings, **kw)
-        out["before"] = out["after"] = gap_report(target_X, target_X, pair=(16, 48), bootstrap=10, permutations=20)
         out["corrected_effects"] = [BEARING, NOISE]
         return out
 
