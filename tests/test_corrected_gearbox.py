@@ -128,7 +128,10 @@ def test_the_users_units_and_what_stays_in_the_corrected_effects(tmp_path):
     constant = ["mesh_damping", [["model", "constant"], ["zeta", 0.05]]]
     text, said = corrected_description(source, result(BEARING, constant, NOISE), "r/1")
     assert said == FILE
-    assert 'bearing_stiffness = "82000 kN/m"  # gap run r/1: bearing_stiffness k_factor = 0.41 x 2e8 N/m' in text
+    assert (
+        'bearing_stiffness = "82000 kN/m"  # gap run r/1: bearing_stiffness k_factor = 0.41 x 2e8 N/m '
+        '(was "2e5 kN/m"; catalogue)'
+    ) in text.splitlines()
     assert "mesh_damping_ratio" not in text and "'constant' damping model has no description key" in text
     assert text.splitlines().count("[dynamics]") == 1
     for effects in ((NOISE,), (constant, NOISE), ()):

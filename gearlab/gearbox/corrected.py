@@ -2,10 +2,10 @@
 gearbox_corrected.toml (gearlab.gap.corrected; docs/your_gearbox.md step 4).
 
 The user's file stays line for line: a set key's line in [dynamics] is replaced by
-``key = "VALUE UNIT"  # COMMENT``, a key not written yet is added after the table's last key (a
-[dynamics] table is added at the end when there is none), and *head* and *tail* comment lines go
-before and after it. A value is written in the unit the user wrote that key in, else in the key's
-SI unit (DYNAMICS), to 6 significant digits: read back, it is the value to 5e-7.
+``key = "VALUE UNIT"  # COMMENT (was OLD; the user's comment)``, a key not written yet is added after
+the table's last key (a [dynamics] table is added at the end when there is none), and *head* and
+*tail* comment lines go before and after it. A value is written in the unit the user wrote that key
+in, else in the key's SI unit (DYNAMICS), to 6 significant digits: read back, it is the value to 5e-7.
 """
 
 from __future__ import annotations
@@ -67,7 +67,9 @@ def with_dynamics(text: str, values: dict[str, str], comments: dict[str, str], h
         if key:
             last = i
             if key.group(1) in left:
-                lines[i] = f"{key.group(1)} = {left.pop(key.group(1))}  # {comments[key.group(1)]}"
+                value, _, note = lines[i].split("=", 1)[1].partition("#")  # the user's value and comment, kept
+                was = f" (was {value.strip()}{f'; {note.strip()}' if note.strip() else ''})"
+                lines[i] = f"{key.group(1)} = {left.pop(key.group(1))}  # {comments[key.group(1)]}{was}"
     added = [f"{key} = {value}  # {comments[key]}" for key, value in left.items()]
     lines[last + 1 : last + 1] = added
     return "\n".join([*head, *lines, *tail]) + "\n"
