@@ -6,7 +6,8 @@ output shaft's angle it comes back to one angle every unit.
 
 The takes are gearlab's simulation of a 20/30 + 20/50 reducer (tacho on the input) with a chip on
 tooth 7 of the 50T output gear, step 12, at 25 dB: the records and the source are one simulator,
-so the only question is which shaft the units follow."""
+so the only question is which shaft the units follow. No test here reads the report's figures
+(no_figures: 1-2 s of CPU a run, matplotlib's layout and PNGs)."""
 
 from __future__ import annotations
 
@@ -130,7 +131,7 @@ def test_units_of_the_input_shaft_are_as_before():
     assert spec.with_(unit_shaft=(1, 5)).key() != spec.key()
 
 
-def test_output_gear_damage_is_detected_on_the_output_shafts_units(slow_box, gearlab):
+def test_output_gear_damage_is_detected_on_the_output_shafts_units(slow_box, gearlab, no_figures):
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import shaft_symmetry, unit_shaft
 
@@ -188,7 +189,7 @@ def test_the_detectors_shapes_are_turned_by_each_turn_the_frame_cannot_tell():
     assert turned_faults(X, y, 1)[0] is X
 
 
-def test_without_a_tacho_the_output_shafts_units_come_from_the_mesh_lines(slow_box, gearlab):
+def test_without_a_tacho_the_output_shafts_units_come_from_the_mesh_lines(slow_box, gearlab, no_figures):
     code, out = gearlab(slow_box, "run", "detect_nt.toml", "--quick")
     assert code == 0, out
     run = slow_box / re.findall(r"^run directory: (.+)$", out, re.M)[-1].strip()
