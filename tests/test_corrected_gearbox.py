@@ -136,6 +136,10 @@ def test_the_users_units_and_what_stays_in_the_corrected_effects(tmp_path):
     assert text.splitlines().count("[dynamics]") == 1
     for effects in ((NOISE,), (constant, NOISE), ()):
         assert corrected_description(source, result(*effects), "r/1") == (None, None)
+    # a [source] model without the motor and load (six_dof): the drive's fit cannot go into its description
+    meng = DatasetSpec("m", "six_dof", reference(str(MENG)), "pinion_y")
+    text, said = corrected_description(meng, result(DRIVE), "r/1")
+    assert text is None and said.startswith("not written: model 'six_dof'") and "theta11" in said
     # a preset source (no description) writes nothing
     assert corrected_description(DatasetSpec("B", "six_dof", "meng2020", "pinion_y"), result(BEARING), "r/1") == (
         None,

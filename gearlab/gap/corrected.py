@@ -105,7 +105,10 @@ def corrected_description(source: DatasetSpec, result: dict, run_name: str) -> t
     new_box = parse_gearbox(tomllib.loads(text), box.source)
     problem = _differs(source, box, new_box, tuple(written))
     if problem:
-        return None, f"not written: the corrected description would simulate another model ({problem})"
+        return None, (
+            f"not written: model '{source.model}' of the corrected description would not simulate as the fit "
+            f"did ({problem}); give the fitted effects as [corrected] effects"
+        )
     return text, FILE
 
 
