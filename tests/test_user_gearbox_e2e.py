@@ -240,7 +240,7 @@ def test_scenarios_are_short(one_stage, two_stage):
             assert len(path.read_text().splitlines()) < 30, path.name
 
 
-def test_one_stage_from_recordings_to_scoring(one_stage, gearlab):
+def test_one_stage_from_recordings_to_scoring(one_stage, gearlab, no_figures):
     folder, takes = one_stage
     for scenario in ("gap.toml", "detect.toml"):
         code, out = gearlab(folder, "validate", scenario)
@@ -274,7 +274,7 @@ def test_one_stage_from_recordings_to_scoring(one_stage, gearlab):
     assert fm4 and all(r["decision"] == "fault" for r in fm4), fm4
 
 
-def test_one_stage_detection_and_scoring_without_a_tacho(one_stage, gearlab):
+def test_one_stage_detection_and_scoring_without_a_tacho(one_stage, gearlab, no_figures):
     """The HDF5 takes have no tacho: each record's speed is found from the description's mesh orders,
     the records are aligned by correlation and turned into the source's frame, and the chip is found
     as from the CSV with its tacho; `gearlab score` reads next week's take the same way."""
@@ -316,7 +316,7 @@ def test_one_stage_detection_and_scoring_without_a_tacho(one_stage, gearlab):
 
 
 @pytest.mark.slow
-def test_two_stage_from_recordings_to_scoring(two_stage, gearlab):
+def test_two_stage_from_recordings_to_scoring(two_stage, gearlab, no_figures):
     folder, takes = two_stage
     for scenario in ("gap.toml", "gap_nt.toml", "detect.toml", "detect_nt.toml"):
         code, out = gearlab(folder, "validate", scenario)
