@@ -2,6 +2,7 @@
 checked"): the findings of such a run, each fixed and kept fixed here on small generated inputs."""
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -626,3 +627,23 @@ def test_the_gap_s_best_candidate_is_not_said_to_remove_alone_what_the_noise_bes
     alone = " ".join(gap_lines({**summary, "ranking": ranking[::-1]}))
     assert "(the best candidate, sensor_noise, removes 97.2 % alone)" in alone, alone
     assert "best candidate" not in " ".join(gap_lines({**summary, "ranking": []}))
+
+
+@pytest.mark.parametrize(
+    "faults, said",
+    [
+        ({"chip": [16, 18, 25]}, "s.toml: [source] key 'faults': fault 'chip' step 25 is outside 1..20"),
+        ({"chipp": [16]}, "s.toml: [source] key 'faults': unknown fault 'chipp' (did you mean 'chip'?)"),
+    ],
+)
+def test_a_wrong_fault_or_step_names_the_faults_key(faults, said):
+    # '[source]: fault 'chip' step 25 is outside 1..20', '[source]: unknown fault 'chipp'': the key unsaid
+    from gearlab.data.spec import DatasetSpec
+    from gearlab.gearbox.simulation import reference
+
+    meng = reference(str(Path(__file__).parents[1] / "gearlab/gearbox/presets/meng2020.toml"))
+    spec = DatasetSpec("m", "six_dof", meng, "pinion_y", faults=tuple((k, tuple(v)) for k, v in faults.items()))
+    with pytest.raises(GearlabInputError) as told:
+        spec.check("s.toml: [source]")
+        spec.check_model("s.toml: [source]")
+    assert str(told.value).startswith(said), str(told.value)

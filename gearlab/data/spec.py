@@ -103,7 +103,9 @@ class DatasetSpec:
         for name, steps in self.faults:
             for s in steps:
                 if isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= LADDER_STEPS:
-                    raise GearlabInputError(f"{where}: fault '{name}' step {s!r} is outside 1..{LADDER_STEPS}")
+                    raise GearlabInputError(
+                        f"{where} key 'faults': fault '{name}' step {s!r} is outside 1..{LADDER_STEPS}"
+                    )
         for label, value, low in (
             ("duplicates", self.duplicates, 1),
             ("healthy", self.healthy, 0),
@@ -145,7 +147,7 @@ class DatasetSpec:
                     raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{pair.Z1}")
         for c in classes.values():
             for name, _, _ in c.parts:
-                registry.get("fault", name, where)
+                registry.get("fault", name, f"{where} key 'faults'")  # (a scenario's '[source]: unknown fault')
         return model, pair, teeth
 
     def fault_classes(self, where: str = ""):
