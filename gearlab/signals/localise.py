@@ -591,8 +591,7 @@ def tooth_words(t: dict) -> str:
     0.0140845-tooth steps', as if finer than a tooth, where the first mark finds it at any of 3337 angles."""
     if "step" in t and t["step"] <= 1:
         angles = round(t["of"] / t["step"])
-        # a take starts at its first tacho mark, or without a tacho at its first sample (a 19/58 + 25/67
-        # fan's records without one were told of 'the first tacho mark')
+        # a take starts at its first tacho mark, or without a tacho at its first sample
         where = f"a take starts with the shaft at any of {angles} angles"
         return f"{t['tooth']} of {t['of']} (in this take only: {where})"
     return f"{t['tooth']} of {t['of']}" + (f" (up to {t['step']:g}-tooth steps between takes)" if "step" in t else "")
