@@ -420,7 +420,14 @@ def by_unit(run: Path) -> dict[str, dict]:
     return {r["unit"]: r for r in map(json.loads, lines_of(run))}
 
 
-def test_two_workers_give_the_records_of_one(finished, tiny_toml):
+@pytest.fixture
+def no_transfer_figures(monkeypatch) -> None:
+    """A transfer run's figures not drawn (gearlab.plots.transfer_figures), for a test that reads
+    only its records, summary and tables; test_summary_table_and_report reads the figures of `finished`."""
+    monkeypatch.setattr("gearlab.plots.transfer_figures", lambda *args: None)
+
+
+def test_two_workers_give_the_records_of_one(finished, tiny_toml, no_transfer_figures):
     tiny_toml.write_text(TINY.replace("workers = 1", "workers = 2"))
     parallel = by_unit(run_scenario(tiny_toml, out=tiny_toml.parent / "runs").path)
     assert parallel == by_unit(finished)
@@ -473,7 +480,9 @@ def test_summary_table_and_report(finished, cli):
     assert "finetune (supervised, variant=classifier)" in html and "data:image/png;base64," in html
 
 
-def test_killed_run_resumes_without_losing_or_repeating_a_unit(finished, tiny_toml, cli, monkeypatch):
+def test_killed_run_resumes_without_losing_or_repeating_a_unit(
+    finished, tiny_toml, cli, monkeypatch, no_transfer_figures
+):
     # Killed inside the first calibrated unit, after its priming was saved; then a record cut
     # short mid-write, as a kill leaves it.
     with monkeypatch.context() as mp:
