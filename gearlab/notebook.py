@@ -269,8 +269,8 @@ def inspect_options(
     '--pulses-per-rev' for 'pulses_per_rev')."""
     from .data.importers import TACHO_KINDS
     from .data.textzip import parse_sensitivity
-    from .gearbox import speed_hz
     from .inspect import InspectOptions
+    from .parts.measured import speed_of
 
     kind, ppr = tacho_kind, pulses_per_rev
     if kind not in TACHO_KINDS:
@@ -289,7 +289,7 @@ def inspect_options(
         tacho_kind=kind,
         pulses_per_rev=ppr,
         tacho_shaft=tacho_shaft,
-        speed_hz=None if speed is None else speed_hz(speed, flag("speed")),
+        speed_hz=None if speed is None else speed_of(speed, flag("speed")),  # as [target] key 'speed'
         fs=rate,
         sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, flag("sensitivity")),
         gain=volts,

@@ -21,6 +21,7 @@ The geometry is checked (gearlab.gearbox.checks) as soon as it is read.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -197,8 +198,19 @@ def speed_hz(value, where: str) -> float:
     else:
         value = to_si(value, "Hz", where)
     if not 0 < value <= 1e5:
-        raise GearlabInputError(f"{where}: expected a positive shaft speed up to 100 kHz, e.g. '25 Hz', got {value:g}")
+        raise GearlabInputError(
+            f"{where}: expected a positive shaft speed up to 100 kHz, e.g. '25 Hz', got {value:g}{bare_speed(value)}"
+        )
     return value
+
+
+def bare_speed(value) -> str:
+    """What an out-of-bounds speed's message adds when the speed was a bare number (read as Hz:
+    '2100' meant in rpm is 2100 turns a second)."""
+    bare = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if isinstance(value, str):
+        bare = re.fullmatch(r"\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*", value) is not None
+    return " (a bare number is in Hz; expected a speed with its unit, e.g. '35 Hz' or '2100 rpm')" if bare else ""
 
 
 class _Table:

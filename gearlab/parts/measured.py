@@ -162,11 +162,13 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
 
 def speed_of(value, where: str) -> float:
     """A declared input-shaft speed ('25 Hz', '1500 rpm'; a number: Hz) in revolutions per second."""
-    from ..gearbox.description import speed_hz  # rpm is 1/60 Hz there, not pint's 2π/60 rad/s
+    from ..gearbox.description import bare_speed, speed_hz  # rpm is 1/60 Hz there, not pint's 2π/60 rad/s
 
     speed = speed_hz(value, where)
     if speed > 1e3:
-        raise GearlabInputError(f"{where}: expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got {shown(value)}")
+        raise GearlabInputError(
+            f"{where}: expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got {shown(value)}{bare_speed(value)}"
+        )
     return speed
 
 
