@@ -33,3 +33,32 @@ def test_a_bare_speed_meant_in_rpm_is_refused_alike_by_inspect_and_the_scenario_
     code, _, err = cli("inspect", path, "--speed", "2100")
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert err.startswith("error: --speed: ") and "'2100 rpm'" in err
+
+
+def test_the_gaps_stop_for_an_unconfirmed_speed_names_the_scenario_file(tmp_path):
+    """A declared speed that no history record's mesh lines confirm stops the gap with a line naming
+    the scenario file, table and key, as the gap's other refusals do (the records read by stand-ins:
+    the line is the test's subject, not the mesh lines)."""
+    from dataclasses import replace
+    from types import SimpleNamespace
+
+    from gearlab.data.recordings import UNCONFIRMED
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.gap_inputs import read_history
+
+    t = np.arange(4000) / 4000.0
+    np.savetxt(tmp_path / "h.csv", np.c_[np.sin(2 * np.pi * 400 * t)], header="acc", comments="# fs = 4000\n")
+    path = tmp_path / "gap.toml"
+    path.write_text(
+        '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\npreset = "phm09-30"\n\n'
+        '[target]\nvibration = "acc"\nspeed = "35 Hz"\n'
+        'files = [{ path = "h.csv", role = "history", label = "healthy" }]\n'
+    )
+    records = load_scenario(path).spec.target
+    assert records.where == f"{path}: [target]"
+    file = SimpleNamespace(path="h.csv", role="history")
+    read = SimpleNamespace(revolutions=np.zeros((3, 8)), speed_hz=35.0, angle_source=f"declared, {UNCONFIRMED}: x")
+    stub = SimpleNamespace(files=(file,), tacho=None, marks=1, read=lambda f: read)
+    with pytest.raises(GearlabInputError) as said:
+        read_history(replace(records, target=stub), lambda event: None)
+    assert str(said.value).startswith(f"{path}: [target] key 'speed': 35 Hz declared, but no history record")

@@ -206,7 +206,7 @@ def target_of(entry: dict, where: str, base, box=None) -> DatasetSpec | Measured
     if entry["gearbox"]:
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)}
     target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",), box=box)
-    return Records(entry["name"] or "measured records", target, units_declared(target))
+    return Records(entry["name"] or "measured records", target, units_declared(target), where)
 
 
 def candidates(names, where: str) -> tuple[str, ...]:

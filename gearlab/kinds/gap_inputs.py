@@ -44,6 +44,7 @@ class Records:
     # a sensitivity was given, or the vibration channel's name says its unit (else the values are
     # taken as m/s², with a warning: units_warning)
     units_known: bool = True
+    where: str = "[target]"  # the scenario file and table, for the messages of reading the records
 
     @property
     def history(self):
@@ -98,7 +99,8 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         # are smeared and fitted effects, 'unexplained' (a 19/58 + 25/67 fan described with 18 teeth)
         path, how = next(iter(found.items()))
         raise GearlabInputError(
-            f"[target] key 'speed': {fmt_hz(speeds[path])} declared, but no history record's mesh lines confirm it "
+            f"{records.where} key 'speed': {fmt_hz(speeds[path])} declared, but no history record's mesh lines "
+            "confirm it "
             f"({path}: {how.split(f'{UNCONFIRMED}: ')[-1]}); expected the records' speed and tooth counts: gearlab "
             f"inspect {path} --gearbox ... says what differs"
         )
@@ -106,7 +108,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     if high > low * (1 + SPEED_SPREAD):
         shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
         raise GearlabInputError(
-            f"[target] key 'files': the history records run at different speeds ({shown}); "
+            f"{records.where} key 'files': the history records run at different speeds ({shown}); "
             "the gap is diagnosed for one operating condition: give one speed's records"
         )
     skipped = len(t.files) - len(files)
