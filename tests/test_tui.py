@@ -9,6 +9,7 @@ session (`replayed`).
 from __future__ import annotations
 
 import asyncio
+import base64
 import json
 import shutil
 import time
@@ -511,6 +512,24 @@ sys.stdout.write(Path(lines).read_text().replace(written, into))
 """
 
 
+ONE_PIXEL_PNG = base64.b64decode(
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
+)
+
+
+def unrendered(fig, path, dpi=120, **options):
+    """gearlab.plots.save without the rendering: each figure is still built, written (one pixel) and
+    counted in the run's 'report' stage, so the events the TUI follows are the engine's; rendering
+    was a third of the every-kind runs' CPU, and these tests read no figure's pixels."""
+    from gearlab import plots
+
+    path = plots._target(path)
+    plots.plt.close(fig)
+    plots.write_file(path, ONE_PIXEL_PNG)
+    plots.figure_written(path.name)
+    return path
+
+
 @pytest.fixture(scope="module")
 def kind_streams(tmp_path_factory, kinds_cache):
     """{scenario file: (its run directory, that directory as the events write it, the file of the
@@ -525,6 +544,7 @@ def kind_streams(tmp_path_factory, kinds_cache):
     streams = {}
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(kinds_cache))
+        mp.setattr("gearlab.plots.save", unrendered)
         mp.chdir(base)
         folder = make_kinds_folder(base)
         for name in dict(EVERY_KIND):
