@@ -294,6 +294,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         on_input = rec.tacho is not None and tacho_shaft == box.shafts[0]
         report["gearbox"] = box.name
         report["order_table"] = order_table(box).describe(speed.mean_hz)
+        report["gears"] = gears(box)
         report["check"] = check = check_description(lines, box, revolutions, on_input)
         differences = check["differences"]
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
@@ -387,6 +388,17 @@ def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None)
     return []
 
 
+def gears(box: Gearbox) -> list[dict]:
+    """The description's gears by the names a scenario's 'faults' key takes ("chip@input pinion")."""
+    from .data.placement import gear_name
+
+    return [
+        {"name": gear_name(st.index, g, box.shafts), "stage": st.index, "gear": g, "teeth": getattr(st, g).z}
+        for st in box.stages
+        for g in ("pinion", "wheel")
+    ]
+
+
 def json_ready(report: dict) -> dict:
     """The report without its arrays (the spectrum, the TSA curves): what --json prints."""
     out = {k: v for k, v in report.items() if k != "spectrum"}
@@ -441,6 +453,10 @@ def render(report: dict, console, width: int = 100) -> None:
     plotext.xlabel("input-shaft order")
     console.print(Text.from_ansi(plotext.build()))
 
+    if "gears" in report:
+        named = ", ".join(f"{g['name']} {g['teeth']}T (stage {g['stage']})" for g in report["gears"])
+        first = report["gears"][0]["name"]
+        console.print(escape(f'gears, as a scenario\'s faults key names them (e.g. "chip@{first}"): {named}'))
     if "check" in report:
         check = report["check"]
         t = Table(title=f"gearbox {report['gearbox']!r}: mesh orders")

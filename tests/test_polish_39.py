@@ -62,3 +62,32 @@ def test_the_gaps_stop_for_an_unconfirmed_speed_names_the_scenario_file(tmp_path
     with pytest.raises(GearlabInputError) as said:
         read_history(replace(records, target=stub), lambda event: None)
     assert str(said.value).startswith(f"{path}: [target] key 'speed': 35 Hz declared, but no history record")
+
+
+def test_inspect_with_a_gearbox_names_its_gears_as_a_faults_key_takes_them(tmp_path, cli):
+    """docs/your_gearbox.md: faults go on a gear 'as inspect names it'; inspect --gearbox says those names."""
+    import json
+
+    from gearlab.data.placement import resolve_gear
+    from gearlab.gearbox import resolve_gearbox
+
+    fs, speed = 20000.0, 30.0
+    t = np.arange(int(2 * fs)) / fs
+    theta = 2 * np.pi * speed * t
+    acc = np.sin(32 * theta) + 0.3 * np.sin(32 * 48 / 80 * theta) + 0.01 * np.sin(7 * t)
+    tacho = (np.mod(theta, 2 * np.pi) < 0.5).astype(float)
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.c_[acc, tacho], delimiter=",", header="acc_ms2,tacho", comments=f"# fs = {fs:g}\n")
+    args = ("inspect", path, "--gearbox", "phm09", "--vibration", "acc_ms2", "--tacho", "tacho")
+    code, out, err = cli(*args, "--json")
+    assert code == 0, err
+    gears = json.loads(out)["gears"]
+    names = ["input pinion", "idler gear", "idler pinion", "output gear"]
+    assert [(g["name"], g["teeth"]) for g in gears] == list(zip(names, (32, 96, 48, 80)))
+    shafts = resolve_gearbox("phm09").shafts
+    assert [resolve_gear(g["name"], None, shafts, "w") for g in gears] == [(g["stage"], g["gear"]) for g in gears]
+    code, out, err = cli(*args)
+    assert code == 0, err
+    said = " ".join(out.split())
+    assert 'faults key names them (e.g. "chip@input pinion"): input pinion 32T (stage 1), idler gear 96T' in said
+    assert "output gear 80T (stage 2)" in said
