@@ -7,7 +7,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from ..errors import GearlabInputError
 from ..signals import spectrum
@@ -50,6 +49,8 @@ class Lines:
 def find_lines(axis: np.ndarray, amp: np.ndarray, threshold_db: float, low: float, high: float) -> Lines:
     """Peaks of a spectrum standing *threshold_db* over its running median, refined to a fraction
     of a bin (parabola through the log amplitude of the peak bin and its neighbours)."""
+    from scipy import ndimage  # here: checking a scenario imports this module, and no scipy.ndimage
+
     floor = ndimage.median_filter(amp, size=min(FLOOR_BINS, amp.size | 1), mode="nearest")
     floor = np.maximum(floor, 1e-300)
     peak = (ndimage.maximum_filter(amp, size=PEAK_BINS, mode="nearest") == amp) & (
