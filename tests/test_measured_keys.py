@@ -10,7 +10,6 @@ from gearlab.kinds import SCENARIO_KINDS
 from gearlab.kinds.common import MEASURED
 from gearlab.scenario import validate_table
 
-
 # Tables whose key of a measured key's name means something else: detection's [corrected] gearbox is
 # the corrected simulator's description (a gap run's gearbox_corrected.toml), read no recording.
 NOT_MEASURED = {("detection", "corrected")}
