@@ -539,7 +539,7 @@ def test_the_gap_s_history_is_turned_into_register_as_one_signal_per_record():
     # every row's turn: lines at 8.19 + k for every k, on which the wheel's sidebands were read
     from gearlab.gap.structure import _lines
     from gearlab.kinds.detection_records import aligned
-    from gearlab.kinds.gap_inputs import continued
+    from gearlab.signals.angle import continued
 
     points, rng, m2 = 4096, np.random.default_rng(1), 19 * 25 / 58
     first = _train([(19, 58), (25, 67)], 2 * np.pi * np.arange(200 * points) / points, rng).reshape(200, points)

@@ -378,7 +378,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         shaft = unit_shaft(spec.source)
         if shaft is not None:
             on_event(Event("log", message=f"units: revolutions and TSAs of {shaft.said()}"))
-        conditions = read_target(spec.target, d.blocks, on_event, f"{scenario.path}: [target] key 'files'", shaft)
+        where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
+        conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous)
         folds = {c: folds_of(d.history_fit, cond, c, scenario.path) for c, cond in conditions.items()}
         for c, cond in conditions.items():
             band = f"no shaft order above {cond['max_order']} (the records' band)"

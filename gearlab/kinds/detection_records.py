@@ -21,6 +21,7 @@ from ..learn.protocol import Protocol
 from ..parts.measured import ROLES, Target, TargetFile
 from ..scenario import location
 from ..signals import Standardiser
+from ..signals.angle import continued
 from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions
 from . import record_effects
@@ -160,17 +161,26 @@ def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str
     return out
 
 
-def aligned(reference: np.ndarray, revs: np.ndarray, tacho, pulses_per_rev: int) -> tuple[int, np.ndarray]:
+def aligned(
+    reference: np.ndarray, revs: np.ndarray, tacho, pulses_per_rev: int, continuous: bool = False
+) -> tuple[int, np.ndarray]:
     """(turn, *revs* turned into register with *reference*): with a tacho, by one of the N input angles
     its first mark may find (*pulses_per_rev*: Target.marks; textzip.align_to); without one (the
     angle from a speed, zero at the record's first sample) by any whole sample of the revolution,
     the turn whose mean revolution correlates best with *reference* -- align_to's correlation at
-    every sample at once (one inverse FFT)."""
+    every sample at once (one inverse FFT). Each row is turned on itself, which is the same for what
+    repeats every input turn; *continuous* (a train whose later mesh is no whole order of the units'
+    shaft: asynchronous_orders) advances the record as one signal instead (signals.angle.continued,
+    its last revolution given up), so that mesh runs on from row to row rather than being cut at
+    every row's turn, where without_asynchronous's fit of it could not take it out."""
     if tacho is not None:
-        return align_to(reference, revs, pulses_per_rev)
+        turn, turned = align_to(reference, revs, pulses_per_rev)
+        return turn, continued(revs, turn * revs.shape[-1] / pulses_per_rev) if continuous else turned
     n = reference.shape[-1]
     corr = np.fft.irfft(np.conj(np.fft.rfft(reference)) * np.fft.rfft(np.mean(np.atleast_2d(revs), axis=0)), n=n)
     turn = int(np.argmax(corr))
+    if continuous:
+        return turn, continued(revs, turn)
     return turn, np.roll(revs, -turn, axis=-1)  # x(θ) -> x(θ + 2π turn / n), as align_to turns
 
 
@@ -208,14 +218,19 @@ def unit_sets(revs: np.ndarray, blocks, history: bool) -> dict[str, np.ndarray]:
 
 
 def read_target(
-    target: Target, blocks, on_event, where: str = "[target] key 'files'", shaft: UnitShaft | None = None
+    target: Target,
+    blocks,
+    on_event,
+    where: str = "[target] key 'files'",
+    shaft: UnitShaft | None = None,
+    continuous: bool = False,
 ) -> dict[str, dict]:
     """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
     read, standardised against its condition's history and aligned to its first history record.
     With a *shaft* (unit_shaft) the revolutions are that shaft's (cut from the record's input
     revolutions; cond["raw"] keeps those for the localisation), aligned by correlation: the input
-    tacho's mark is no fixed angle of a slower shaft. Only the records' signals are used here (no
-    label)."""
+    tacho's mark is no fixed angle of a slower shaft; *continuous*: each record shifted as one signal
+    (aligned). Only the records' signals are used here (no label)."""
     conditions: dict[str, dict] = {}
     on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
     records = {}
@@ -263,21 +278,17 @@ def read_target(
         cond["unit_shaft"] = "input" if shaft is None else shaft.name
         cond["unit_tacho"] = cond["tacho"] and shaft is None
         tacho = target.tacho if shaft is None else None
+        cond["continuous"], cond["blocks"] = continuous, tuple(blocks)
+        if continuous and not cond["unit_tacho"]:  # register_to_source shifts them again, by both turns
+            cond["standardised"] = {f.path: standardiser.apply(r) for role in ROLES for f, r in cond[role]}
         for role in ROLES:
             turned = []
             for f, revs in cond[role]:
-                shift, revs = aligned(reference, standardiser.apply(revs), tacho, target.marks)
+                shift, revs = aligned(reference, standardiser.apply(revs), tacho, target.marks, continuous)
                 cond["shifts"][f.path] = shift
                 turned.append((f, revs))
             cond[role] = turned
-        per_record = [unit_sets(r, blocks, True) for _, r in cond["history"]]
-        cond["history_units"] = {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]}
-        # which history units come from which record (in order), and how many are independent:
-        # the threshold models the record-to-record variation (record_effects)
-        cond["history_records"] = {
-            u: [(len(s[u]), record_effects.independent_units(len(s[u]), *unit_window(u))) for s in per_record]
-            for u in per_record[0]
-        }
+        _units(cond)
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
                 longest = max(len(r) for _, r in cond["history"])
@@ -287,7 +298,6 @@ def read_target(
                     f"(its longest record has {longest}{on} revolutions); expected at least "
                     f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
                 )
-        cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
         for f, r in cond["test"]:
             short = [b for b in blocks if len(r) < b]
             if short and shaft is not None:  # a record of no unit of a kind: nothing to score it by
@@ -298,13 +308,28 @@ def read_target(
     return conditions
 
 
+def _units(cond: dict) -> None:
+    """cond's history and test units, from its aligned records."""
+    blocks = cond["blocks"]
+    per_record = [unit_sets(r, blocks, True) for _, r in cond["history"]]
+    cond["history_units"] = {u: np.concatenate([s[u] for s in per_record]) for u in per_record[0]}
+    # which history units come from which record (in order), and how many are independent:
+    # the threshold models the record-to-record variation (record_effects)
+    cond["history_records"] = {
+        u: [(len(s[u]), record_effects.independent_units(len(s[u]), *unit_window(u))) for s in per_record]
+        for u in per_record[0]
+    }
+    cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
+
+
 def register_to_source(cond: dict, source) -> int:
     """Without a tacho, a record's angle is zero where it starts, a place in the gears' turn the
     simulator knows nothing of, while the learned methods learned the simulated fault shapes in the
     source's frame (the chip at its angle within the mesh cycle). The condition -- its reference,
     every record and unit alike -- is turned by the whole-sample turn whose history mean revolution
     correlates best with the *source*'s healthy mean revolution; returns that turn (samples). With
-    a tacho the records keep the frame of its mark."""
+    a tacho the records keep the frame of its mark. A *continuous* condition's records are shifted
+    again from where they were read, each as one signal, by the sum of both turns (aligned)."""
     healthy = np.asarray(source.X)[np.asarray(source.fault) == 0].mean(axis=0)
     points = cond["reference"].size
     turn, _ = aligned(healthy, cond["reference"], None, 1)
@@ -313,11 +338,17 @@ def register_to_source(cond: dict, source) -> int:
         return np.roll(x, -turn, axis=-1)  # x(θ) -> x(θ + 2π turn / points), as align_to turns
 
     cond["reference"] = turned(cond["reference"])
+    cond["shifts"] = {p: (m + turn) % points for p, m in cond["shifts"].items()}
+    if cond.get("continuous"):
+        for role in ROLES:
+            cond[role] = [(f, continued(cond["standardised"][f.path], cond["shifts"][f.path])) for f, _ in cond[role]]
+        del cond["standardised"]  # read once
+        _units(cond)
+        return turn
     for role in ROLES:
         cond[role] = [(f, turned(r)) for f, r in cond[role]]
     cond["history_units"] = {u: turned(x) for u, x in cond["history_units"].items()}
     cond["test_units"] = {p: {u: turned(x) for u, x in units.items()} for p, units in cond["test_units"].items()}
-    cond["shifts"] = {p: (m + turn) % points for p, m in cond["shifts"].items()}
     return turn
 
 

@@ -38,11 +38,16 @@ from .detection_which_gear import decision_of, is_other, localise_scored
 
 # What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
 # its models and thresholds hold for that input only. 1: a later mesh of no whole input order zeroed
-# at the whole orders beside its harmonics (1c8fae6); 2: fitted out of each revolution (d9a4d9b).
+# at the whole orders beside its harmonics (1c8fae6); 2: fitted out of each revolution (d9a4d9b);
+# 3: and each record shifted into register as one signal, not row by row (aligned, continuous).
 # Bump it with every change of what they see.
-INPUT_VERSION = 2
+INPUT_VERSION = 3
 # what each version did to a later mesh of no whole input order, for the refusal's line
-LATER_INPUT = {1: "zeroed at the whole orders beside it", 2: "fitted out of each revolution"}
+LATER_INPUT = {
+    1: "zeroed at the whole orders beside it",
+    2: "fitted out of each revolution turned on itself",
+    3: "fitted out of each revolution of a record shifted as one signal",
+}
 
 
 def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
@@ -108,7 +113,8 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
     reference, tacho, ppr = arrays["reference"], keys["tacho"], _tacho_shaft(keys).marks(keys["pulses_per_rev"])
     if "unit_shaft" in meta:  # a slower shaft's revolutions: turned by correlation, as the run's were
         tacho = None
-    test = [(f, aligned(reference, standardiser.apply(revs), tacho, ppr)[1]) for f, revs in records]
+    continuous = bool(meta.get("later_orders"))  # as read_target shifted the run's records
+    test = [(f, aligned(reference, standardiser.apply(revs), tacho, ppr, continuous)[1]) for f, revs in records]
     blocks = meta["blocks"]
     per_record = [unit_sets(r, blocks, True) for _, r in history]
     return {
@@ -129,10 +135,10 @@ def _same_input(run: RunDir, meta: dict) -> None:
     """A run whose learned methods saw another input than this gearlab gives them is refused: on
     the outside-user check's gearbox E (18/67 + 29/71), a run trained on version 1's input scored
     its healthy take with version 2's 40 of 40 record10 units called by likelihood_ratio (0 of 40
-    with its own input). A run from before the key (version 1) of a train with no such mesh saw
-    what version 2 gives."""
+    with its own input). A run of an older version of a train with no such mesh saw what this one
+    gives."""
     made = meta.get("input_version", 1)
-    if made == INPUT_VERSION or (made == 1 and not meta.get("later_orders")):
+    if made == INPUT_VERSION or (made in LATER_INPUT and not meta.get("later_orders")):
         return
 
     def said(v) -> str:

@@ -51,23 +51,6 @@ class Records:
         return tuple(f for f in self.target.files if f.role == "history")
 
 
-def continued(revs: np.ndarray, shift: float) -> np.ndarray:
-    """*revs*, one record's consecutive revolutions, advanced by *shift* samples as one signal,
-    x(θ) -> x(θ + 2π shift / points), its last revolution given up. aligned turns each row on itself,
-    which is the same for what repeats every input turn but cuts, at every row's turn, what does not:
-    a later stage's mesh (a 19/58 + 25/67 fan's M2 = 8.19 read lines at 8.19 + k for every k) and a
-    slower shaft's sidebands (its wheel read 50.1 teeth, 58 expected: 'structure differs')."""
-    if not shift:
-        return revs
-    n, points = revs.shape
-    whole = int(np.floor(shift))
-    flat = revs.reshape(-1)
-    if shift - whole > 1e-9:  # a fraction of a sample, in the frequency domain (the wrap is in the row given up)
-        k = np.fft.rfftfreq(flat.size)
-        flat = np.fft.irfft(np.fft.rfft(flat) * np.exp(2j * np.pi * k * (shift - whole)), n=flat.size)
-    return flat[whole : whole + (n - 1) * points].reshape(n - 1, points).astype(revs.dtype, copy=False)
-
-
 def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float, bool]:
     """The history records' revolutions in m/s² (n, POINTS), their mean speed, notes, their sampling
     rate (the [target]'s fs, or the first record's own), and whether the speed was found from the
@@ -77,7 +60,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     by m/N of a turn (one of its N marks, or on another shaft the N input angles they may find:
     Target.marks), without one by any whole sample of the revolution (each record's angle is zero at
     its first sample), so the set has one synchronous average; the record shifted as one signal
-    (continued), so that what is not periodic in the input turn stays continuous."""
+    (signals.angle.continued), so that what is not periodic in the input turn stays continuous."""
     from ..data.recordings import UNCONFIRMED
     from .detection_records import aligned
 
@@ -89,8 +72,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         rec = t.read(f)
         revs = rec.revolutions
         if rows:
-            turn, _ = aligned(rows[0].mean(axis=0), revs, t.tacho, t.marks)
-            revs = continued(revs, turn if t.tacho is None else turn * revs.shape[1] / t.marks)
+            _, revs = aligned(rows[0].mean(axis=0), revs, t.tacho, t.marks, continuous=True)
         rows.append(revs)
         speeds[f.path], found[f.path] = rec.speed_hz, rec.angle_source
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))

@@ -117,3 +117,21 @@ def angle_from_pulses(pulses: np.ndarray, fs: float) -> np.ndarray:
     theta[before] = TWO_PI * (t[before] - edges[0]) / (edges[1] - edges[0])
     theta[after] = theta_edges[-1] + TWO_PI * (t[after] - edges[-1]) / (edges[-1] - edges[-2])
     return theta
+
+
+def continued(revs: np.ndarray, shift: float) -> np.ndarray:
+    """*revs*, one record's consecutive revolutions, advanced by *shift* samples as one signal,
+    x(θ) -> x(θ + 2π shift / points), its last revolution given up. aligned turns each row on itself,
+    which is the same for what repeats every input turn but cuts, at every row's turn, what does not:
+    a later stage's mesh (a 19/58 + 25/67 fan's M2 = 8.19 read lines at 8.19 + k for every k) and a
+    slower shaft's sidebands (its wheel read 50.1 teeth, 58 expected: 'structure differs'). *shift*
+    in [0, points). Used by the gap's history and by detection's and score's alignment."""
+    if not shift:
+        return revs
+    n, points = revs.shape
+    whole = int(np.floor(shift))
+    flat = revs.reshape(-1)
+    if shift - whole > 1e-9:  # a fraction of a sample, in the frequency domain (the wrap is in the row given up)
+        k = np.fft.rfftfreq(flat.size)
+        flat = np.fft.irfft(np.fft.rfft(flat) * np.exp(2j * np.pi * k * (shift - whole)), n=flat.size)
+    return flat[whole : whole + (n - 1) * points].reshape(n - 1, points).astype(revs.dtype, copy=False)
