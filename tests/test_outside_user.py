@@ -581,9 +581,9 @@ def test_the_gap_ends_when_no_history_record_s_mesh_lines_confirm_the_declared_s
     with pytest.raises(GearlabInputError) as told:
         read_history(target_of(entry, "s.toml: [target]", tmp_path), lambda e: None)
     line = str(told.value)
-    assert "\n" not in line and line.startswith("[target] key 'speed': 35 Hz declared, but no history record's mesh"), (
-        line
-    )
+    assert "\n" not in line and line.startswith(
+        "s.toml: [target] key 'speed': 35 Hz declared, but no history record's mesh"
+    ), line
     assert "which" not in line and "gearlab inspect fan0.npz --gearbox ... says what differs" in line, line
     right = read_history(target_of({**entry, "gearbox": "fan19.toml"}, "s.toml: [target]", tmp_path), lambda e: None)
     assert "the mesh lines do not confirm" not in right[2][-1], right[2][-1]
