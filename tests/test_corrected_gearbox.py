@@ -159,26 +159,24 @@ def test_write_corrected_writes_into_the_run_directory_only_when_there_is_someth
 
 # --- the gap kind writes it and says so -----------------------------------------------------------
 
+SIMULATED = """gearbox = "rig.toml"
+teeth = [1]
+faults = { chip = [20] }
+healthy = 12
+fs = 40000"""  # the source and the target alike, the target with the bearing fitted
+
 GAP = (
-    """\
+    f"""\
 [scenario]
 name = "rig_gap"
 kind = "gap"
 
 [source]
-gearbox = "rig.toml"
-teeth = [1]
-faults = { chip = [20] }
-healthy = 12
-fs = 40000
+{SIMULATED}
 
 [target]
-gearbox = "rig.toml"
-teeth = [1]
-faults = { chip = [20] }
-healthy = 12
-fs = 40000
-effects = [{ name = "bearing_stiffness", k_factor = 0.5 }]
+{SIMULATED}
+effects = [{{ name = "bearing_stiffness", k_factor = 0.5 }}]
 
 [diagnosis]
 candidates = ["sensor_noise", "bearing_stiffness"]
