@@ -253,6 +253,13 @@ def test_each_trials_correction_says_its_score_evaluations(corrected):
     assert {r["evaluations"] for r in records if r["unit"].endswith("/correction")} == {57}
     said = [m for m in histories["logs"] if "the diagnosis of its history" in m]
     assert len(said) == 2 and all(": gap 10 -> 1 (57 score evaluations, " in m for m in said), said
+    # the per-trial table has a column for them, the value each trial's correction record holds
+    head, _, *rows = [line.split(" | ") for line in (run / "table.md").read_text().split("\n\n")[-1].splitlines()]
+    col = head.index("evaluations")
+    assert head[col - 1] == "fitted effects" and len(rows) == 2
+    assert {r["trial"]: str(r["evaluations"]) for r in records if r["unit"].endswith("/correction")} == {
+        row[0].lstrip("| "): row[col] for row in rows
+    }
 
 
 def test_both_sources_reported_per_trial_and_in_distribution(corrected):

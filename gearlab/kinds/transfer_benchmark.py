@@ -452,7 +452,7 @@ def per_trial(records: list[dict]) -> dict[str, dict]:
         if r["unit"].endswith("/correction") and r["trial"] in out:
             out[r["trial"]]["correction"] = {
                 **{k: r[k] for k in ("effects", "gap_before", "gap_after", "unexplained")},
-                **{k: r.get(k) for k in ("verdict", "explained_share")},
+                **{k: r.get(k) for k in ("verdict", "explained_share", "evaluations")},
                 "left_out": r.get("left_out", []),
                 "withheld": correction_withheld(r),
             }
@@ -560,7 +560,7 @@ def trials_md(summary: dict) -> str:
     labels = summary["methods"]
     head = ["trial", "speed Hz", "load N m", "model", "sensor", "tone", "noise", "SNR dB", "Bayes bound"]
     corrected = summary.get("corrected")
-    head += ["fitted effects", *labels] if corrected else labels
+    head += ["fitted effects", "evaluations", *labels] if corrected else labels
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, t in summary["trials"].items():
         a = t["answers"]
@@ -574,11 +574,16 @@ def trials_md(summary: dict) -> str:
             a["noise"],
             f"{a['snr_db']:.1f}",
             _n(t["bound"]) if t["bound"] is not None else "unavailable",
-            *([fitted_text(t["correction"])] if corrected else []),
+            *([fitted_text(t["correction"]), evaluations_text(t["correction"])] if corrected else []),
             *[_n(t["accuracy"].get(label)) for label in labels],
         ]
         lines.append("| " + " | ".join(row) + " |")
     return "\n".join(lines) + "\n"
+
+
+def evaluations_text(correction: dict | None) -> str:
+    """The correction's diagnosis's score evaluations ('–': no correction, or a record before the count)."""
+    return "–" if (correction or {}).get("evaluations") is None else str(correction["evaluations"])
 
 
 def fitted_text(correction: dict | None) -> str:
