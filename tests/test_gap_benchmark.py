@@ -437,6 +437,16 @@ def test_a_tiny_benchmark_runs_into_summary_json(cli, write_scenario, tmp_path, 
     assert summary["evaluations"] == {"total": 3 * 23 + 22, "trials": 4, "median": 23.0}
     assert re.search(r"trial 003 \(withheld\): .*; 22 score evaluations, \d+ s", out + err), out + err
     assert "score evaluations of the diagnoses: 91 over 4 trials (median 23 a trial)" in out
+    # table.md: per effect, the median of the evaluations its trials' records hold; the 'all' row, the median
+    records = [json.loads(line) for line in (run_dir / "results.jsonl").read_text().splitlines()]
+    table = (run_dir / "table.md").read_text().split("\n\n")[0]
+    head, _, *rows = [[c.strip() for c in line[1:-1].split("|")] for line in table.splitlines()]
+    assert head[-1] == "median evaluations" and len(rows) == 4
+    for row in rows[:-1]:
+        hidden_in = [r for r in records if r["kind"] in bench.EFFECT_KINDS and row[0] in [h[0] for h in r["hidden"]]]
+        mine = [r["evaluations"] for r in hidden_in]
+        assert row[-1] == (f"{np.median(mine):.0f}" if mine else ""), (row, records)
+    assert rows[-1][0].startswith("**all**") and rows[-1][-1] == "23" and any(r[-1] == "23" for r in rows[:-1])
     if chromium():  # the report as a reader gets it (issue 41: a browser test covers every kind)
         check_report(run_dir / "report.html", tmp_path / "browser")
     # resume: nothing left to do, nothing recomputed

@@ -232,8 +232,7 @@ def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> 
         **bench.summarise(records, spec.library),
     }
     summary["trial_seconds"] = float(sum(r.get("seconds", 0.0) for r in records))  # summed over trials (all workers)
-    counts = [r["evaluations"] for r in records if r.get("evaluations") is not None]  # (older records: none)
-    summary["evaluations"] = {"total": sum(counts), "trials": len(counts), "median": bench._median(counts)}
+    add_evaluations(summary, records)
     summary["elapsed_seconds"] = elapsed  # wall time of this session of the run (a resumed run: since resuming)
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(summary))
@@ -248,26 +247,43 @@ def _num(v, fmt=".2f") -> str:
     return "" if v is None else format(v, fmt)
 
 
+def add_evaluations(summary: dict, records: list[dict]) -> dict:
+    """The trials' diagnoses' score evaluations: summary['evaluations'] {total, trials, median} and each
+    effect's median over the trials it was hidden in (older records, without the count: left out)."""
+    counts = [r["evaluations"] for r in records if r.get("evaluations") is not None]
+    summary["evaluations"] = {"total": sum(counts), "trials": len(counts), "median": bench._median(counts)}
+    for name, e in summary["per_effect"].items():
+        e["median_evaluations"] = bench._median(
+            r["evaluations"]
+            for r in records
+            if r["kind"] in bench.EFFECT_KINDS
+            and r.get("evaluations") is not None
+            and any(h[0] == name for h in r["hidden"])
+        )
+    return summary
+
+
 def table_md(summary: dict) -> str:
     """Per effect: trials it was hidden in, top-1/top-3, shrink, parameter error, withheld behaviour;
     then the overall line."""
     lines = [
         "| effect | trials | top-1 | top-3 | median shrink | median param error | ... on determined ones "
-        "| not identifiable | withheld | unexplained when withheld | named wrongly |",
-        "|---|" + "---|" * 10,
+        "| not identifiable | withheld | unexplained when withheld | named wrongly | median evaluations |",
+        "|---|" + "---|" * 11,
     ]
     for name, e in summary["per_effect"].items():
         lines.append(
             f"| {name} | {e['trials']} | {_pct(e['top1'])} | {_pct(e['top3'])} | {_pct(e['median_shrink'])} "
             f"| {_num(e['median_param_error'])} | {_num(e.get('median_param_error_determined'))} "
             f"| {e.get('not_identifiable', '')} | {e['withheld']} | {_pct(e['unexplained_when_withheld'])} "
-            f"| {e['named_wrongly']} |"
+            f"| {e['named_wrongly']} | {_num(e.get('median_evaluations'), '.0f')} |"
         )
     lines.append(
         f"| **all** ({summary['trials']} trials) | {sum(summary['by_kind'].get(k, 0) for k in bench.EFFECT_KINDS)} "
         f"| {_pct(summary['top1'])} | {_pct(summary['top3'])} | {_pct(summary['median_shrink'])} | "
         f"{_num(summary['median_param_error'])} | {_num(summary.get('median_param_error_determined'))} | "
-        f"| {summary['by_kind']['withheld']} | {_pct(summary['out_of_library_unexplained'])} | |"
+        f"| {summary['by_kind']['withheld']} | {_pct(summary['out_of_library_unexplained'])} | "
+        f"| {_num((summary.get('evaluations') or {}).get('median'), '.0f')} |"
     )
     lines += [
         "",
@@ -362,7 +378,8 @@ def evaluations_lines(counts: dict | None) -> list[str]:
 
 def records_table(scenario: Scenario, records: list[dict]) -> str:
     """The per-effect table of the trials finished so far (the TUI fills it as trials finish)."""
-    return table_md(bench.summarise(sorted(records, key=lambda r: r["index"]), scenario.spec.library))
+    records = sorted(records, key=lambda r: r["index"])
+    return table_md(add_evaluations(bench.summarise(records, scenario.spec.library), records))
 
 
 def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
