@@ -114,8 +114,24 @@ def speed_from_mesh(
     x, weight = lines.at[:EVIDENCE], np.minimum(lines.db[:EVIDENCE], 40.0)
     tol = np.maximum(2.5 * df, DRIFT * x)
     slowest = float(min(table.shaft_orders))
+    # explain() runs twice for every (line, stage, harmonic) tried, some 2,000 times a record: what does
+    # not depend on the speed is worked out once here (the sums and comparisons stay the same ones)
+    combs = []
+    for s in table.stages:
+        m = float(s.mesh)
+        shafts = (float(s.pinion_shaft_order), float(s.wheel_shaft_order))
+        offsets = np.unique(np.round([0.0] + [k * j * o for o in shafts for j in (1, 2, 3) for k in (-1, 1)], 12))
+        combs.append((m, offsets, int(np.flatnonzero(offsets == 0.0)[0]), np.diff(offsets), SPAN * max(shafts)))
+    # carrier(lines, q, span) == q, asked of each line q on a mesh harmonic, holds unless a line within
+    # span would be chosen over q (the first of the strongest): a stronger line, or an as strong one
+    # before q. So it holds when span < the distance to the nearest such line (inf: none)
+    dist = np.abs(lines.at[:, None] - lines.at[None, : x.size])  # [j, q] = |at[j] - at[q]| as carrier has it
+    a, b = lines.amp[:, None], lines.amp[None, : x.size]
+    before = np.arange(lines.at.size)[:, None] < np.arange(x.size)[None, :]
+    beats = (a > b) | ((a == b) & before)
+    rival = np.where(beats, dist, np.inf).min(axis=0, initial=np.inf)
 
-    def explain(f: float, slack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    def explain(f: float, slack: np.ndarray, mesh_only: bool = False) -> tuple:
         """At input speed *f*: (the evidence of each line, whether it lies on a mesh harmonic, that
         harmonic's order h M, the stages with a carrier on a mesh harmonic). A line is explained by
         a mesh harmonic h M (h up to MAX_HARMONIC: a simulated mesh can hold its power at harmonics
@@ -123,7 +139,8 @@ def speed_from_mesh(
         harmonic of a shaft; its evidence is log(1 / c), c the share of the axis around it that
         the explaining comb covers (2 slack / spacing, the sidebands' windows counted once): a
         comb dense enough to hold any line is no evidence, and a speed f / k, which explains
-        every line f does with k times the coverage, has less."""
+        every line f does with k times the coverage, has less. *mesh_only*: (whether on a mesh
+        harmonic, its order) alone, the same ones (the refit reads nothing else)."""
         evidence = np.zeros(x.size)
         on_mesh, hm = np.zeros(x.size, bool), np.zeros(x.size)
         stages = 0
@@ -131,24 +148,25 @@ def speed_from_mesh(
         def credit(near: np.ndarray, cover: np.ndarray) -> None:
             evidence[:] = np.maximum(evidence, np.where(near, np.log(1.0 / np.maximum(cover, 1e-12)), 0.0))
 
-        for s in table.stages:
-            m = float(s.mesh)
-            shafts = (float(s.pinion_shaft_order), float(s.wheel_shaft_order))
-            offsets = np.unique(np.round([0.0] + [k * j * o for o in shafts for j in (1, 2, 3) for k in (-1, 1)], 12))
+        per_f = x / f
+        for m, offsets, zero, diffs, span in combs:
             inside = x <= (MAX_HARMONIC + 0.5) * m * f  # beyond, no harmonic of this mesh is read
-            comb = np.zeros(x.size, bool)
-            for off in offsets:
-                h = np.maximum(1.0, np.round((x / f - off) / m))
-                near = (np.abs(x - (h * m + off) * f) <= slack) & inside
-                comb |= near
-                if off == 0.0:
-                    hm = np.where(near & ~on_mesh, h * m, hm)
-                    on_mesh |= near
-                    credit(near, 2 * slack / (m * f))
-                    span = SPAN * max(shafts) * f
-                    stages += any(carrier(lines, int(q), span) == q for q in np.flatnonzero(near))
-            gaps = np.diff(offsets) * f
-            credit(comb, (2 * slack + np.minimum(gaps[None, :], 2 * slack[:, None]).sum(axis=1)) / (m * f))
+            # every offset (row) at once: the nearest harmonic h M + off of each line (column)
+            offs = offsets[zero : zero + 1] if mesh_only else offsets
+            h = np.maximum(1.0, np.round((per_f - offs[:, None]) / m))
+            near = (np.abs(x - (h * m + offs[:, None]) * f) <= slack) & inside
+            row = 0 if mesh_only else zero
+            on = near[row]  # the mesh harmonics themselves (offset 0)
+            hm = np.where(on & ~on_mesh, h[row] * m, hm)
+            on_mesh |= on
+            if mesh_only:
+                continue
+            credit(on, 2 * slack / (m * f))
+            stages += bool(np.any(on & (span * f < rival)))
+            gaps = diffs * f
+            credit(near.any(axis=0), (2 * slack + np.minimum(gaps[None, :], 2 * slack[:, None]).sum(axis=1)) / (m * f))
+        if mesh_only:
+            return on_mesh, hm
         for o in table.shaft_orders:
             spacing = float(o) * f
             near = np.abs(x - np.maximum(1.0, np.round(x / spacing)) * spacing) <= slack
@@ -164,7 +182,7 @@ def speed_from_mesh(
                     break
                 # the hypothesis's own error grows with the harmonic: explained within it, refitted by
                 # least squares over the mesh harmonics (f = Σ w L hM / Σ w (hM)²), explained again
-                on_mesh, hm = explain(f, tol + tol[i] * x / x[i])[1:3]
+                on_mesh, hm = explain(f, tol + tol[i] * x / x[i], mesh_only=True)
                 if on_mesh.any():
                     w = weight[on_mesh]
                     f = float(np.sum(w * x[on_mesh] * hm[on_mesh]) / np.sum(w * hm[on_mesh] ** 2))
