@@ -252,7 +252,10 @@ BAD = [
         {"stages": [stage(20, 57)], "sensor": {"near": "inptu"}},
         r"\[sensor\] key 'near': unknown shaft 'inptu' \(did you mean 'input'\?\)",
     ),
-    ({"stages": [stage(20, 57)], "operation": {"speed": "-3 Hz"}}, r"\[operation\] key 'speed': expected a positive"),
+    (
+        {"stages": [stage(20, 57)], "operation": {"speed": "-3 Hz"}},
+        r"\[operation\] key 'speed': expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got -3$",
+    ),
     (
         {"stages": [stage(20, 57)], "dynamics": {"bearing_stiffness": "1 N/m"}},
         r"\[dynamics\] key 'bearing_stiffness': '1 N/m' is outside",

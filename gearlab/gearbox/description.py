@@ -187,21 +187,33 @@ class Gearbox:
 
 
 def speed_hz(value, where: str) -> float:
-    """A shaft speed in revolutions per second: "25 Hz", "1500 rpm", "157.08 rad/s" or a number in Hz.
+    """An input-shaft speed in revolutions per second: "25 Hz", "1500 rpm", "157.08 rad/s" or a number in Hz
+    (up to BARE_SPEED_HZ).
 
     pint keeps the 2π of a revolution ("1500 rpm" is 157 rad/s, which it calls 157 Hz), so a
     speed written with an angle (rpm, rev/min, rad/s, deg/s) is converted to revolutions per
     second; a plain frequency (Hz, 1/s) is one revolution per cycle already.
     """
+    given = value
     if isinstance(value, str) and any(u in value for u in ("rpm", "revolution", "turn", "rad", "deg")):
         value = to_si(value, "revolution/s", where)
     else:
         value = to_si(value, "Hz", where)
-    if not 0 < value <= 1e5:
+    if not 0 < value <= MAX_SPEED_HZ:
         raise GearlabInputError(
-            f"{where}: expected a positive shaft speed up to 100 kHz, e.g. '25 Hz', got {value:g}{bare_speed(value)}"
+            f"{where}: expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got {value:g}{bare_speed(given)}"
+        )
+    if bare_speed(given) and value > BARE_SPEED_HZ:  # '900' meant in rpm: 54,000 rpm as read
+        raise GearlabInputError(
+            f"{where}: a bare number is in Hz, and {value:g} Hz ({60 * value:,.0f} rpm) is no usual input-shaft "
+            f"speed; expected the unit, e.g. '{value:g} rpm' ({value / 60:.4g} Hz) or '{value:g} Hz'"
         )
     return value
+
+
+# An input shaft's speed: up to 1 kHz (60,000 rpm) in every table; a bare number (read in Hz) up to 100 Hz
+# (6,000 rpm), above which it is more likely meant in rpm ('speed = 900' read as 900 Hz passed silently)
+MAX_SPEED_HZ, BARE_SPEED_HZ = 1e3, 100.0
 
 
 def bare_speed(value) -> str:
