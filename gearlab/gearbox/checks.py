@@ -2,11 +2,13 @@
 
 For a stage of module m, pressure angle α, tooth counts z1, z2 and profile shifts x1, x2:
 
-    d = m z,  d_b = d cos α,  d_a = d + 2 m (h_a* + x),  d_f = d - 2 m (h_f* - x)    (no tip shortening)
+    d = m z,  d_b = d cos α,  d_a = d + 2 m (h_a* + x) (or as given),  d_f = d - 2 m (h_f* - x)
     inv α_w = inv α + 2 tan α (x1 + x2) / (z1 + z2),   a_w = m (z1 + z2) cos α / (2 cos α_w)
     ε_α = (√(r_a1² - r_b1²) + √(r_a2² - r_b2²) - a_w sin α_w) / (π m cos α)
 
 Checks, each a one-line error naming the key:
+
+h_a*, h_f* and d_a are each gear's where given, else the stage's.
 
 * centre distance: a given centre distance must equal a_w (the tooth counts, module and
   shifts fix it); the message says which tooth sum or shift sum would fit;
@@ -15,6 +17,8 @@ Checks, each a one-line error naming the key:
 * interference: the mating tip must meet each flank on its involute, above the form circle
   where the generating rack's straight flank ends (roll length L_F = r sin α - m (h_FfP* - x) / sin α,
   h_FfP* = h_f* - ρ_fP* (1 - sin α));
+* tip clearance: a_w - r_a of one gear - r_f of the other ≥ 0 (a shifted pair's tips may reach
+  the mating root: the message names the tip diameter or addendum that would clear it);
 * contact ratio ε_α ≥ 1; pointed teeth (tip thickness s_a ≤ 0); a bore that cuts the root circle.
 """
 
@@ -61,6 +65,29 @@ class StageGeometry:
         }
 
 
+def gear_addendum(stage, gear) -> float:
+    """h_a* of *gear*: its own, else the stage's."""
+    return stage.addendum if gear.addendum is None else gear.addendum
+
+
+def gear_dedendum(stage, gear) -> float:
+    """h_f* of *gear*: its own, else the stage's."""
+    return stage.dedendum if gear.dedendum is None else gear.dedendum
+
+
+def rack_addendum(stage, gear) -> float:
+    """h_a of the rack that cut *gear* (its tooth below the reference line: h_f* - c*): the stage's
+    h_a*, or the gear's own dedendum less the stage's clearance."""
+    return stage.addendum if gear.dedendum is None else gear.dedendum - (stage.dedendum - stage.addendum)
+
+
+def gear_tip(stage, gear) -> float:
+    """d_a of *gear*: as given, else d + 2 m (h_a* + x)."""
+    if gear.tip_diameter is not None:
+        return gear.tip_diameter
+    return stage.module * gear.z + 2 * stage.module * (gear_addendum(stage, gear) + gear.x)
+
+
 def stage_geometry(stage) -> StageGeometry:
     m, alpha = stage.module, stage.pressure_angle
     gears = (stage.pinion, stage.wheel)
@@ -71,14 +98,16 @@ def stage_geometry(stage) -> StageGeometry:
     a_w = a * math.cos(alpha) / math.cos(alpha_w)
     d = tuple(m * g.z for g in gears)
     d_b = tuple(v * math.cos(alpha) for v in d)
-    d_a = tuple(v + 2 * m * (stage.addendum + g.x) for v, g in zip(d, gears))
-    d_f = tuple(v - 2 * m * (stage.dedendum - g.x) for v, g in zip(d, gears))
+    d_a = tuple(gear_tip(stage, g) for g in gears)
+    d_f = tuple(v - 2 * m * (gear_dedendum(stage, g) - g.x) for v, g in zip(d, gears))
     tip_roll = tuple(math.sqrt(max(0.0, (ra / 2) ** 2 - (rb / 2) ** 2)) for ra, rb in zip(d_a, d_b))
     line = a_w * math.sin(alpha_w)  # T1 T2, the line of action between the base-circle tangents
     epsilon = (tip_roll[0] + tip_roll[1] - line) / (math.pi * m * math.cos(alpha))
     roll_start = (line - tip_roll[1], line - tip_roll[0])
-    h_ffp = stage.dedendum - stage.tool_tip_radius * (1 - math.sin(alpha))
-    roll_form = tuple(v / 2 * math.sin(alpha) - m * (h_ffp - g.x) / math.sin(alpha) for v, g in zip(d, gears))
+    rho = stage.tool_tip_radius * (1 - math.sin(alpha))  # h_FfP* = h_f* - ρ_fP* (1 - sin α)
+    roll_form = tuple(
+        v / 2 * math.sin(alpha) - m * (gear_dedendum(stage, g) - rho - g.x) / math.sin(alpha) for v, g in zip(d, gears)
+    )
     s_a = []
     for va, vb, g in zip(d_a, d_b, gears):
         alpha_a = math.acos(min(1.0, vb / va))
@@ -104,13 +133,15 @@ def check_stage(stage) -> StageGeometry:
     x_sum = stage.pinion.x + stage.wheel.x
     # Undercut, before the checks that an undercut tooth would fail in a less telling way.
     for _, gear in gears:
-        x_min = 5.0 / 6.0 * stage.addendum - gear.z * math.sin(alpha) ** 2 / 2
+        h_rack = rack_addendum(stage, gear)
+        x_min = 5.0 / 6.0 * h_rack - gear.z * math.sin(alpha) ** 2 / 2
         if gear.x < x_min - _UNDERCUT_SLACK:
             raise GearlabInputError(
                 f"{gear.where} key 'z': {gear.z} teeth at x = {gear.x:g} are undercut (α = "
-                f"{math.degrees(alpha):g} deg, h_a* = {stage.addendum:g}): the tool cuts into the active flank; "
+                f"{math.degrees(alpha):g} deg, h_a* = {h_rack:g}): the tool cuts into the active flank; "
                 f"expected a profile shift 'x' ≥ {x_min:.3f}, more teeth, or a larger "
                 "'pressure_angle' or shorter 'addendum' of the stage"
+                + ("" if gear.dedendum is None else f" (or a smaller 'dedendum' of this gear: {gear.dedendum:g})")
             )
     if stage.centre_distance is not None:
         tolerance = max(_CENTRE_TOLERANCE * m, 1e-5)
@@ -130,11 +161,19 @@ def check_stage(stage) -> StageGeometry:
                 f"{stage.where} key 'centre_distance': {_mm(given)} contradicts z1 = {z1}, z2 = {z2}, m = {_mm(m)}, "
                 f"x1 + x2 = {x_sum:g}, which mesh at a_w = {_mm(g.a_w)}; expected {fit}{shift}"
             )
+    for (_, gear), d_a, d_b, d_f in zip(gears, g.d_a, g.d_b, g.d_f):
+        if d_a <= max(d_b, d_f):  # only a given tip diameter can be this small
+            raise GearlabInputError(
+                f"{gear.where} key 'tip_diameter': {_mm(d_a)} lies inside the "
+                f"{'base' if d_b >= d_f else 'root'} circle ({_mm(max(d_b, d_f))}); expected a tip above both "
+                f"(d_b = {_mm(d_b)}, d_f = {_mm(d_f)})"
+            )
     for (_, gear), s_a in zip(gears, g.tip_thickness):
         if s_a <= 0:
+            key = "tip_diameter" if gear.tip_diameter is not None else "addendum" if gear.addendum is not None else "x"
             raise GearlabInputError(
-                f"{gear.where} key 'x': the teeth are pointed (tip thickness {_mm(s_a)} at x = {gear.x:g}); "
-                "expected a smaller profile shift or addendum"
+                f"{gear.where} key '{key}': the teeth are pointed (tip thickness {_mm(s_a)} at x = {gear.x:g}); "
+                "expected a smaller profile shift or addendum" + (" or tip diameter" if key == "tip_diameter" else "")
             )
     for (_, gear), d_f in zip(gears, g.d_f):
         if gear.bore >= d_f:
@@ -142,21 +181,36 @@ def check_stage(stage) -> StageGeometry:
                 f"{gear.where} key 'bore': {_mm(gear.bore)} reaches the root circle d_f = {_mm(d_f)}; "
                 "expected a bore smaller than the root diameter"
             )
+    # Tip clearance: a shifted pair's tips may reach the mating root (ISO 21771's tip shortening).
+    for (role, _), (other, mate), d_f, d_a in zip(gears, reversed(gears), g.d_f, reversed(g.d_a)):
+        clearance = g.a_w - d_a / 2 - d_f / 2
+        if clearance < -1e-12 * g.a_w:
+            fit = 2 * g.a_w - d_f
+            key = "tip_diameter" if mate.tip_diameter is not None else "addendum"
+            h_fit = (fit - m * mate.z) / (2 * m) - mate.x
+            raise GearlabInputError(
+                f"{mate.where} key '{key}': the {other}'s tip (d_a = {_mm(d_a)}) reaches the {role}'s root circle "
+                f"(d_f = {_mm(d_f)}; tip clearance {_mm(clearance)} at a_w = {_mm(g.a_w)}); expected a shortened tip: "
+                f"the {other}'s 'tip_diameter' ≤ {math.floor(fit * 1e7) / 1e4:.4f} mm or 'addendum' ≤ "
+                f"{math.floor(h_fit * 1e4) / 1e4:.4f}, or smaller shifts"
+            )
     # Interference: the mating tip must meet each flank on its involute (above the form circle).
-    for (role, gear), (other, _), start, form in zip(gears, reversed(gears), g.roll_start, g.roll_form):
+    for (role, gear), (other, mate), start, form in zip(gears, reversed(gears), g.roll_start, g.roll_form):
         limit = max(form, 0.0)
         if start < limit:
             where = "below its base circle" if start < 0 else "below the end of its involute (in the fillet)"
             raise GearlabInputError(
                 f"{gear.where} key 'z': the {other}'s tip meets the {role} {where} (interference: contact starts "
                 f"{_mm(start)} from T on the line of action, the involute at {_mm(limit)}); expected more {role} "
-                f"teeth, a shorter 'addendum' (h_a* = {stage.addendum:g}) or a larger 'pressure_angle' (α = "
-                f"{math.degrees(alpha):g} deg) of the stage, or a positive profile shift 'x' of the {role}"
+                f"teeth, a shorter 'addendum' (h_a* = {gear_addendum(stage, mate):g}) of the stage or the {other} (or "
+                f"the {other}'s 'tip_diameter'), a larger 'pressure_angle' (α = {math.degrees(alpha):g} deg) of the "
+                f"stage, or a positive profile shift 'x' of the {role}"
             )
     if g.contact_ratio < 1.0:
         raise GearlabInputError(
             f"{stage.where}: contact ratio ε_α = {g.contact_ratio:.3f} below 1 (z1 = {z1}, z2 = {z2}, "
             f"α_w = {math.degrees(g.alpha_w):.3g} deg): the next tooth pair would engage only after the last "
-            "lost contact; expected ε_α ≥ 1 (more teeth, a larger addendum or a smaller pressure angle)"
+            "lost contact; expected ε_α ≥ 1 (more teeth, a larger 'addendum' or 'tip_diameter', or a smaller "
+            "'pressure_angle')"
         )
     return g

@@ -7,6 +7,8 @@ wheel = gear 2), so the stiffness engine and every fault plugin work on it uncha
     addendum = h_a*;  clearance = h_f* - h_a*;  tool_tip_radius = ρ_fP*;  hub_radius = d_bore / 2
     x1, x2 = each gear's profile shift x;  E, nu = the pinion's material;  E2, nu2 = the wheel's
     (given only when it differs, so a one-material stage is the same GearPair as before)
+    d_a1, d_a2 = a gear's own tip (its 'tip_diameter', or d + 2 m (h_a* + x) of its own 'addendum');
+    h_f1, h_f2 = a gear's own 'dedendum' (None where the gear gives none: the stage's, as before)
 
 The stiffness model takes profile-shifted gears (tip and root circles, tooth thickness, the
 working pressure angle α_w and centre distance a_w; gearlab/physics/geometry.py) and a material
@@ -21,6 +23,7 @@ from dataclasses import dataclass
 
 from ..errors import GearlabInputError
 from ..physics.geometry import GearPair
+from .checks import gear_tip
 
 
 @dataclass(frozen=True)
@@ -70,6 +73,10 @@ def gear_pair(box, stage) -> GearPair:
         x2=stage.wheel.x,
         E2=w.E if two_materials else None,
         nu2=w.nu if two_materials else None,
+        d_a1=own_tip(stage, stage.pinion),
+        d_a2=own_tip(stage, stage.wheel),
+        h_f1=stage.pinion.dedendum,
+        h_f2=stage.wheel.dedendum,
     )
     try:
         if stage.wheel.bore == stage.pinion.bore:
@@ -77,6 +84,11 @@ def gear_pair(box, stage) -> GearPair:
         return StagePair(**values, wheel_hub_radius=stage.wheel.bore / 2)
     except GearlabInputError as exc:
         raise GearlabInputError(f"{stage.where}: {exc}") from None
+
+
+def own_tip(stage, gear) -> float | None:
+    """The tip diameter a gear gives itself (its 'tip_diameter' or 'addendum'), else None."""
+    return None if gear.tip_diameter is None and gear.addendum is None else gear_tip(stage, gear)
 
 
 def gear_pairs(box) -> tuple[GearPair, ...]:

@@ -10,7 +10,8 @@ value is one line naming the file, the table and the key (GearlabInputError, exi
     [materials.X]  E, nu, density
     [[stages]]     module m, pressure_angle α, face_width b, centre_distance a (checked),
                    addendum h_a*, dedendum h_f*, tool_tip_radius ρ_fP*
-      [stages.pinion] / [stages.wheel]   z, x (profile shift), bore, material, face_width
+      [stages.pinion] / [stages.wheel]   z, x (profile shift), bore, material, face_width,
+                   addendum, dedendum (default: the stage's), tip_diameter d_a (a shortened tip)
     [[shafts]]     name, mass, inertia (input to output; the lumped block of each shaft)
     [sensor]       near (shaft), direction, tacho (shaft), pulses_per_rev
     [dynamics]     lumped-model parameters with documented defaults (DYNAMICS)
@@ -51,8 +52,15 @@ STAGE_KEYS = (
     Param("pressure_angle", "rad", math.radians(20), math.radians(10), math.radians(35), "pressure angle α", "deg"),
     Param("face_width", "m", _NAN, 1e-4, 1.0, "face width b (common to both gears)", "mm"),
     Param("centre_distance", "m", _NAN, 1e-4, 10.0, "centre distance a (optional; checked against z, m, x)", "mm"),
-    Param("addendum", "", 1.0, 0.5, 1.5, "addendum coefficient h_a* (h_a = h_a* m)"),
-    Param("dedendum", "", 1.25, 0.75, 2.0, "dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*)"),
+    Param("addendum", "", 1.0, 0.5, 1.5, "addendum coefficient h_a* (h_a = h_a* m; per gear: default the stage's)"),
+    Param(
+        "dedendum",
+        "",
+        1.25,
+        0.75,
+        2.0,
+        "dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*; per gear: default the stage's)",
+    ),
     Param("tool_tip_radius", "", 0.2, 0.0, 0.5, "tip radius coefficient ρ_fP* of the generating rack"),
 )
 GEAR_KEYS = (
@@ -62,7 +70,9 @@ GEAR_KEYS = (
         "bore", "m", _NAN, 1e-4, 10.0, "bore diameter d_bore (the hub radius of the stiffness model is d_bore/2)", "mm"
     ),
     Param("face_width", "m", _NAN, 1e-4, 1.0, "face width of this gear (default: the stage's)", "mm"),
+    Param("tip_diameter", "m", _NAN, 1e-4, 20.0, "tip diameter d_a (default d + 2 m (h_a* + x))", "mm"),
 )
+PER_GEAR = ("addendum", "dedendum")  # stage keys a gear may set for itself (STAGE_KEYS' Params)
 MATERIAL_KEYS = (
     Param("E", "Pa", _NAN, 1e8, 1e13, "Young's modulus E", "GPa"),
     Param("nu", "", _NAN, 0.0, 0.4999, "Poisson's ratio ν"),
@@ -119,7 +129,9 @@ class Material:
 
 @dataclass(frozen=True)
 class GearSpec:
-    """One gear as described: z teeth, profile shift x, bore diameter, material, face width (SI)."""
+    """One gear as described: z teeth, profile shift x, bore diameter, material, face width (SI);
+    its own addendum and dedendum coefficients and tip diameter where given (None: the stage's,
+    and d_a = d + 2 m (h_a* + x); gearlab.gearbox.checks.gear_tip)."""
 
     z: int
     x: float
@@ -127,6 +139,9 @@ class GearSpec:
     face_width: float
     material: Material
     where: str  # file and table, for the messages of later checks
+    addendum: float | None = None
+    dedendum: float | None = None
+    tip_diameter: float | None = None
 
 
 @dataclass(frozen=True)
@@ -391,16 +406,29 @@ def _stage(data: Mapping, i: int, source: str, materials: dict[str, Material]) -
             f"{t.where('dedendum')}: h_f* = {hf:g} must exceed the addendum coefficient h_a* = {ha:g} "
             "(the tip clearance c* = h_f* - h_a* is positive)"
         )
-    gears = [_gear(t.sub(role), role, width, materials) for role in ("pinion", "wheel")]
+    gears = [_gear(t.sub(role), role, width, materials, hf - ha) for role in ("pinion", "wheel")]
     return Stage(i + 1, name, module, alpha, width, ha, hf, rho, a, *gears, where=t.where())
 
 
-def _gear(t: _Table, role: str, stage_width: float, materials: dict[str, Material]) -> GearSpec:
-    t.known([p.name for p in GEAR_KEYS] + ["material"])
+def _gear(t: _Table, role: str, stage_width: float, materials: dict[str, Material], clearance: float) -> GearSpec:
+    own = [p for p in STAGE_KEYS if p.name in PER_GEAR]
+    t.known([p.name for p in GEAR_KEYS] + [p.name for p in own] + ["material"])
     z = int(t.required(GEAR_KEYS[0]))
     x = t.param(GEAR_KEYS[1])
     bore = t.required(GEAR_KEYS[2])
     width = t.param(GEAR_KEYS[3], stage_width)
+    tip = t.param(GEAR_KEYS[4])
+    ha, hf = (t.param(p) if p.name in t.data else None for p in own)
+    if ha is not None and tip is not None:
+        raise GearlabInputError(
+            f"{t.where('tip_diameter')}: give the tip by 'addendum' or by 'tip_diameter', not both "
+            f"(d_a = d + 2 m (h_a* + x))"
+        )
+    if hf is not None and hf <= clearance:
+        raise GearlabInputError(
+            f"{t.where('dedendum')}: h_f* = {hf:g} leaves no flank below the reference circle for the stage's tip "
+            f"clearance c* = {clearance:g} (the generating rack's h_a = h_f* - c*); expected h_f* > {clearance:g}"
+        )
     material = t.data.get("material", "steel")
     if isinstance(material, Mapping):
         m = _Table(material, t.source, f"{t.name}.material")
@@ -414,7 +442,7 @@ def _gear(t: _Table, role: str, stage_width: float, materials: dict[str, Materia
             f"{did_you_mean(str(material), list(materials))}; known: {', '.join(materials)} "
             "(define others under [materials.NAME] with E, nu, density)"
         )
-    return GearSpec(z, x, bore, width, mat, t.where())
+    return GearSpec(z, x, bore, width, mat, t.where(), ha, hf, tip)
 
 
 def _shafts(data, stages: int, source: str) -> tuple[tuple[str, ...], tuple, tuple]:

@@ -16,6 +16,10 @@ and the pair meshes at the working pressure angle and centre distance
 
 which replace alpha_0 and a in the contact start of eq. 2.7 / 2.49. With x1 = x2 = 0 every
 expression is the thesis's, float for float. Each gear carries its own material (E, nu).
+
+Per gear (ISO 21771), a tip diameter d_a (a shortened or lengthened tip: R_a = d_a / 2) and a
+dedendum coefficient h_f* (R_r = R_p - (h_f* - x) m; the generating rack's h_a of eq. 2.45 is
+then h_f* - c); absent, the pair's addendum and clearance give both, float for float as before.
 """
 
 from __future__ import annotations
@@ -59,6 +63,8 @@ class Gear:
     x: float = 0.0  # profile shift coefficient
     E: float | None = None
     nu: float | None = None
+    tip_diameter: float | None = None  # d_a (m); None: d + 2 (h_a + x) m
+    dedendum: float | None = None  # h_f*; None: h_a + c
 
     @property
     def R_p(self) -> float:
@@ -70,10 +76,14 @@ class Gear:
 
     @property
     def R_r(self) -> float:  # eq. 2.11 with the shift: R_p - (h_f* - x) m
+        if self.dedendum is not None:
+            return self.R_p - (self.dedendum - self.x) * self.module
         return self.R_p - (self.addendum + self.clearance - self.x) * self.module
 
     @property
-    def R_a(self) -> float:  # R_p + (h_a* + x) m (no tip shortening)
+    def R_a(self) -> float:  # R_p + (h_a* + x) m, or d_a / 2 where the tip diameter is given
+        if self.tip_diameter is not None:
+            return 0.5 * self.tip_diameter
         return self.R_p + (self.addendum + self.x) * self.module
 
     @property
@@ -150,8 +160,11 @@ class Gear:
     def theta_f(self) -> float:
         """Eq. 2.45, the same for any x: the shifted rack's half space on the rolling line is
         x m tan(alpha_0) wider and its tip line (h - x) m deeper, so the half width at the root
-        circle, R_p theta_f, is pi m/4 + h m tan(alpha_0) (+ the tool-tip terms) whatever x is."""
-        a0, ha, rc = self.pressure_angle, self.addendum, self.tool_tip_radius
+        circle, R_p theta_f, is pi m/4 + h m tan(alpha_0) (+ the tool-tip terms) whatever x is.
+        h is the generating rack's: h_a, or h_f* - c where the gear's dedendum is given (the tip
+        diameter does not enter: a turned tip leaves the cut root as it is)."""
+        ha = self.addendum if self.dedendum is None else self.dedendum - self.clearance
+        a0, rc = self.pressure_angle, self.tool_tip_radius
         return (math.pi / 2 + 2 * math.tan(a0) * (ha - rc) + 2 * rc / math.cos(a0)) / self.Z
 
     @property
@@ -179,6 +192,10 @@ class GearPair:
     x2: float = 0.0
     E2: float | None = None  # the gear's material; None: the pinion's (E, nu)
     nu2: float | None = None
+    d_a1: float | None = None  # tip diameters (m) of the pinion and the gear; None: d + 2 (h_a + x) m
+    d_a2: float | None = None
+    h_f1: float | None = None  # dedendum coefficients h_f* of the pinion and the gear; None: h_a + c
+    h_f2: float | None = None
     pinion: Gear = field(init=False, repr=False, compare=False)
     gear: Gear = field(init=False, repr=False, compare=False)
 
@@ -189,8 +206,10 @@ class GearPair:
         common = {name: getattr(self, name) for name in shared}
         E2 = self.E if self.E2 is None else self.E2
         nu2 = self.nu if self.nu2 is None else self.nu2
-        object.__setattr__(self, "pinion", Gear(Z=self.Z1, x=self.x1, E=self.E, nu=self.nu, **common))
-        object.__setattr__(self, "gear", Gear(Z=self.Z2, x=self.x2, E=E2, nu=nu2, **common))
+        one = dict(x=self.x1, E=self.E, nu=self.nu, tip_diameter=self.d_a1, dedendum=self.h_f1)
+        two = dict(x=self.x2, E=E2, nu=nu2, tip_diameter=self.d_a2, dedendum=self.h_f2)
+        object.__setattr__(self, "pinion", Gear(Z=self.Z1, **one, **common))
+        object.__setattr__(self, "gear", Gear(Z=self.Z2, **two, **common))
         self._check_mesh()
 
     def _check(self) -> None:
@@ -224,6 +243,9 @@ class GearPair:
         for label, x in (("x1", self.x1), ("x2", self.x2)):
             if not (isinstance(x, (int, float)) and -1.0 <= x <= 2.0):
                 raise GearlabInputError(f"{where}: profile shift {label} must lie in [-1, 2], got {x!r}")
+        for label, value in (("d_a1", self.d_a1), ("d_a2", self.d_a2), ("h_f1", self.h_f1), ("h_f2", self.h_f2)):
+            if value is not None and not (isinstance(value, (int, float)) and value > 0 and math.isfinite(value)):
+                raise GearlabInputError(f"{where}: {label} must be a positive number, got {value!r}")
         if not (0 <= self.clearance < 1 and 0 <= self.tool_tip_radius < self.addendum):
             raise GearlabInputError(f"{where}: clearance must lie in [0, 1) and tool_tip_radius in [0, addendum)")
 
@@ -236,6 +258,10 @@ class GearPair:
                     f"{g.R_r * 1e3:.4g} mm"
                 )
         for (label, g), other in zip((("pinion", self.pinion), ("gear", self.gear)), (self.gear, self.pinion)):
+            if g.R_a <= max(g.R_b, g.R_r):
+                raise GearlabInputError(
+                    f"{where}: the {label} tip circle ({g.R_a * 2e3:.4g} mm) lies inside its base or root circle"
+                )
             if g.half_thickness(g.alpha_tip) <= 0:
                 raise GearlabInputError(
                     f"{where}: the {label} teeth are pointed at x = {g.x:g} (no thickness left at the tip circle "
@@ -245,7 +271,7 @@ class GearPair:
             if clearance < -1e-12 * self.centre_distance:
                 raise GearlabInputError(
                     f"{where}: the mating tip reaches the {label} root circle (tip clearance {clearance * 1e3:.3g} mm "
-                    f"at a_w = {self.centre_distance * 1e3:.5g} mm); shorten the addendum or the profile shifts"
+                    f"at a_w = {self.centre_distance * 1e3:.5g} mm); shorten the mating tip (d_a) or the profile shifts"
                 )
         if self.roll_start_pinion <= 0 or self.roll_end_gear <= 0:
             raise GearlabInputError(
@@ -358,6 +384,10 @@ class GearPair:
             ("gear", self.pinion),
             ("x1", self.x2),
             ("x2", self.x1),
+            ("d_a1", self.d_a2),
+            ("d_a2", self.d_a1),
+            ("h_f1", self.h_f2),
+            ("h_f2", self.h_f1),
         ):
             object.__setattr__(view, name, value)
         if self.E2 is not None or self.nu2 is not None:  # two materials: each gear keeps its own
