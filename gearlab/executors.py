@@ -5,6 +5,8 @@ An executor maps a picklable top-level function over a list of items and returns
 results in input order, reporting each finished item to an optional callback, so the
 results never depend on the order in which workers finish. An exception raised by the
 function reaches the caller as itself (a GearlabInputError stays a GearlabInputError).
+Its ``counts()`` carry what units count while they run (a gap fit's score evaluations) back
+from wherever they run, to say on a progress line: files on this machine, an actor on Ray.
 
 Ray is optional: it is imported only when the `ray` executor is asked for.
 """
@@ -12,16 +14,21 @@ Ray is optional: it is imported only when the `ray` executor is asked for.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import logging
 import math
 import multiprocessing
 import os
+import tempfile
+import uuid
 import weakref
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
 
 from . import PHYSICS_VERSION, __version__
 from .errors import GearlabInputError
+from .files import atomic_write
 
 EXECUTORS = ("local", "ray")
 
@@ -52,8 +59,57 @@ def _gpu_request(gpu: bool | float, resources: dict) -> float:
     return max(0.0001, math.floor(share * 1e4) / 1e4)  # Ray takes GPU shares to 4 decimals
 
 
+class Counts:
+    """What units count while they run, summed where the map was asked for: each unit reports its
+    own count under a key of its own (the latest report replaces its previous one), from whichever
+    worker runs it; ``total()`` is the sum so far. Picklable: it travels to the workers with the
+    units. A progress line's count of what no unit's end tells (a gap fit's score evaluations,
+    gearlab.gap.tally), reported at most a few times a second; a result's count comes back as
+    part of the result."""
+
+    def report(self, key: str, n: int) -> None:
+        raise NotImplementedError
+
+    def total(self) -> int:
+        raise NotImplementedError
+
+
+class FileCounts(Counts):
+    """One small file per key in *folder*, a folder of this machine: this process and the local
+    pool's workers write there, and the sum is read off the files."""
+
+    def __init__(self, folder: str):
+        self.folder = folder
+
+    def report(self, key: str, n: int) -> None:
+        atomic_write(Path(self.folder) / f"{key}.n", str(n))  # written whole: never half a number read
+
+    def total(self) -> int:
+        total = 0
+        for file in Path(self.folder).glob("*.n"):
+            try:
+                total += int(file.read_text())
+            except (OSError, ValueError):  # a file replaced while read: counted at the next look
+                pass
+        return total
+
+
+@contextlib.contextmanager
+def file_counts() -> Iterator[FileCounts]:
+    """Counts in a temporary folder of this machine's, removed at the end."""
+    with tempfile.TemporaryDirectory(prefix="gearlab-counts-") as folder:
+        yield FileCounts(folder)
+
+
+def counts_of(executor) -> contextlib.AbstractContextManager[Counts]:
+    """*executor*'s counts (Executor.counts); an executor with a ``map`` alone (a test's stand-in,
+    mapping in this process) gets this machine's files."""
+    return executor.counts() if isinstance(executor, Executor) else file_counts()
+
+
 class Executor:
-    """What every executor has: ``map`` (below, per executor) and ``close``, also as a ``with`` block."""
+    """What every executor has: ``map`` (below, per executor), ``counts`` and ``close``, also as a
+    ``with`` block."""
 
     def __enter__(self):
         return self
@@ -63,6 +119,11 @@ class Executor:
 
     def close(self) -> None:
         """Release what the executor holds between maps (nothing by default)."""
+
+    def counts(self) -> contextlib.AbstractContextManager[Counts]:
+        """A Counts for the units of the maps inside the ``with`` block: by default files in a
+        temporary folder, which this process and workers on this machine reach."""
+        return file_counts()
 
 
 class LocalExecutor(Executor):
@@ -219,6 +280,25 @@ class RayExecutor(Executor):
         import_ray()  # fail now, before any work, when Ray is not installed
         self.address = None if address in (None, "", "local") else address
         self.workers = workers
+        self._counter = None  # the actor behind counts(), started on the first
+
+    def close(self) -> None:
+        if self._counter is not None:
+            import_ray().kill(self._counter)
+            self._counter = None
+
+    @contextlib.contextmanager
+    def counts(self) -> Iterator[Counts]:
+        """Counts held by an actor of the Ray session (one per executor, no CPU of its own): a task
+        on any node of a cluster reports to it, where a file it wrote would stay on its node's disk."""
+        ray = _open_session(self.address, self.workers)
+        if self._counter is None:
+            self._counter = ray.remote(num_cpus=0)(_Counter).remote()
+        space = uuid.uuid4().hex
+        try:
+            yield RayCounts(self._counter, space)
+        finally:
+            self._counter.drop.remote(space)
 
     def map(self, fn: Callable, items: Sequence, on_done: OnDone | None = None, gpu: bool | float = False) -> list:
         _check_gpu(gpu)
@@ -244,6 +324,53 @@ class RayExecutor(Executor):
             for ref in pending:
                 ray.cancel(ref)
         return results
+
+
+class _Counter:
+    """The Ray actor behind RayCounts: each counts space's latest count per key."""
+
+    def __init__(self):
+        self.spaces: dict[str, dict[str, int]] = {}
+
+    def report(self, space: str, key: str, n: int) -> None:
+        self.spaces.setdefault(space, {})[key] = n
+
+    def total(self, space: str) -> int:
+        return sum(self.spaces.get(space, {}).values())
+
+    def drop(self, space: str) -> None:
+        self.spaces.pop(space, None)
+
+
+ANSWER_S = 0.2  # s a RayCounts.total() waits for the actor's answer
+
+
+class RayCounts(Counts):
+    """Counts of one ``counts()`` block, reported to a _Counter actor (not waited for)."""
+
+    def __init__(self, actor, space: str):
+        self.actor, self.space = actor, space
+        self._asked, self._known = None, 0
+
+    def __reduce__(self):
+        return (RayCounts, (self.actor, self.space))  # a worker reports: no question of the driver's travels
+
+    def report(self, key: str, n: int) -> None:
+        self.actor.report.remote(self.space, key, n)
+
+    def total(self) -> int:
+        """The actor's answer, waited for ANSWER_S at most (a progress line asks each second, and the
+        actor may still be starting): else the previous answer, and the question stays asked."""
+        ray = import_ray()
+        if self._asked is None:
+            self._asked = self.actor.total.remote(self.space)
+        if ray.wait([self._asked], timeout=ANSWER_S)[0]:
+            try:
+                self._known = ray.get(self._asked)
+            except ray.exceptions.RayError:  # the actor is gone: the last answer stands
+                pass
+            self._asked = None
+        return self._known
 
 
 def _call(fn: Callable, item):

@@ -6,6 +6,7 @@ The Ray tests start one local Ray instance (2 CPUs) for the whole module and ski
 why, when Ray is not installed.
 """
 
+import re
 import sys
 import time
 from pathlib import Path
@@ -247,6 +248,69 @@ def test_local_and_ray_give_the_same_records(ray_session, tmp_path, monkeypatch)
         runs[name] = records(run_scenario(path, out=tmp_path / name).path)
     assert len(runs["local-1"]) == 6
     assert runs["ray"] == runs["local-1"]
+
+
+def counting(item: tuple[int, float]) -> int:
+    """A gap fit's stand-in: n score evaluations spread over *seconds*."""
+    from gearlab.gap.tally import counted
+
+    n, seconds = item
+    for _ in range(n):
+        counted()
+        time.sleep(seconds / n)
+    return n
+
+
+class Elsewhere:
+    """A unit as another machine of a cluster runs it: a file it writes into a folder of this
+    machine's lands on its own disk (here: is dropped), never where this process reads."""
+
+    def __init__(self, fn):
+        self.fn = fn
+
+    def __call__(self, item):
+        import os
+
+        real = os.replace
+        os.replace = lambda src, dst: os.unlink(src)
+        try:
+            return self.fn(item)
+        finally:
+            os.replace = real
+
+
+class FarRay(RayExecutor):
+    """A Ray cluster whose workers share no disk with this process."""
+
+    def map(self, fn, items, on_done=None, gpu=False):
+        return super().map(Elsewhere(fn), items, on_done, gpu)
+
+
+def test_a_gap_fits_evaluations_come_back_from_ray_tasks_on_other_machines(ray_session):
+    """Issue 41: a fit's score evaluations reached the run's process through files in a temporary
+    folder of its machine's, which a cluster's other nodes do not share: the diagnosis's total missed
+    them (a transfer benchmark's correction, a gap run on Ray) and its line said 'fitting' alone. Ray
+    tasks now report to the executor's actor and return their counts with their results: the total
+    of serial fits, and a line that counts (the second batch, of 1.5 s fits: the actor is up by then)."""
+    from types import SimpleNamespace
+
+    from gearlab.gap import tally
+    from gearlab.gap.diagnose import run_fits
+
+    def fits(executor, seconds: float) -> tuple[int, list[str]]:
+        told, first = [], tally.so_far()
+        run = SimpleNamespace(on_event=told.append, executor=executor)
+        tasks = [(n, seconds) for n in (10, 20, 30, 40, 50, 60)]
+        assert run_fits(run, "gap round 1", counting, tasks, None) == [10, 20, 30, 40, 50, 60]
+        return tally.so_far() - first, [e.message for e in told]
+
+    serial, _ = fits(LocalExecutor(1), 0.0)
+    with FarRay(workers=2) as executor:
+        batches = [fits(executor, seconds) for seconds in (0.0, 1.5)]
+    assert serial == 210 and [total for total, _ in batches] == [210, 210]
+    said = batches[1][1]
+    counts = [int(m.group(1)) for m in map(re.compile(r"fitting: (\d+) evaluations, ").match, said) if m]
+    assert counts and 0 < counts[-1] <= 210, said
 
 
 def _mark_then_sleep(task):

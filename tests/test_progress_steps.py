@@ -211,13 +211,14 @@ def evaluations(n: int) -> int:
 
 def test_the_fits_evaluations_are_counted_across_worker_processes(tmp_path):
     """The fits run in the local pool's workers: each writes its count to a file of its own, which
-    the run's process sums (gearlab.gap.tally); without, the workers' counts never reach the line."""
-    from gearlab.executors import LocalExecutor
-    from gearlab.gap.tally import Tallied, evaluations_in
+    the run's process sums (gearlab.executors.FileCounts), and returns it with its result (the
+    diagnosis's total); without, the workers' counts never reach the line. (Ray: test_executors.)"""
+    from gearlab.executors import FileCounts, LocalExecutor
+    from gearlab.gap.tally import Tallied
 
     with LocalExecutor(2) as pool:
-        assert pool.map(Tallied(evaluations, str(tmp_path)), [5, 7, 9]) == [5, 7, 9]
-    assert evaluations_in(str(tmp_path)) == 21 and len(list(tmp_path.glob("*.n"))) == 3
+        assert pool.map(Tallied(evaluations, FileCounts(str(tmp_path))), [5, 7, 9]) == [(5, 5), (7, 7), (9, 9)]
+    assert FileCounts(str(tmp_path)).total() == 21 and len(list(tmp_path.glob("*.n"))) == 3
 
 
 def test_the_gap_before_stage_loads_scikit_learn_under_a_line_of_its_own(monkeypatch):

@@ -260,7 +260,7 @@ ALLOWED = {
     ("gearlab/data", None): "measured input files (read only) and the dataset cache in $GEARLAB_CACHE",
     ("gearlab/runs.py", "_digest"): "the measured input files a run reads, hashed for --resume",
     ("gearlab/settings_doc.py", "main"): "docs/settings.md in the source tree, a developer's command",
-    ("gearlab/gap/tally.py", "write"): "a fit's evaluation count, in a temporary folder the diagnosis made itself",
+    ("gearlab/executors.py", "report"): "a unit's count (a gap fit's evaluations), in a temporary folder of its own",
 }
 SAVES = {"save", "savez", "savez_compressed", "savetxt", "tofile"}
 LOADS = {"load", "loadtxt", "fromfile"}

@@ -67,7 +67,6 @@ Design, in the order the work happens:
 from __future__ import annotations
 
 import math
-import tempfile
 import time
 import warnings
 from collections.abc import Callable
@@ -79,7 +78,7 @@ from ..data.chain import Chain
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, stages_to_unit, standing
-from ..executors import LocalExecutor
+from ..executors import LocalExecutor, counts_of
 from ..registry import get_registry
 from . import tally
 from .conclusion import (
@@ -97,7 +96,7 @@ from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_remova
 from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect
 from .stats import REPORT_PARTS, classifier_loaded, load_classifier
 from .structure import first_difference, stopped
-from .tally import Tallied, evaluations_in
+from .tally import Tallied
 
 
 def diagnose(
@@ -345,18 +344,16 @@ def run_fits(run: _Run, stage: str, work, tasks: list, advance) -> list:
     score evaluations the fits have made, at what rate, and for how long once it stood 3 s: a fit
     takes 14-27 s on a busy machine, which a transfer benchmark's trial spent silent between two
     steps of its round, and then the line told the time alone (issue 41)."""
-    with tempfile.TemporaryDirectory(prefix="gearlab-fits-") as folder:
+    with counts_of(run.executor) as counts:  # reached from every worker of the executor, Ray's included
         began = time.monotonic()
 
         def line() -> str:
-            n = evaluations_in(folder)
+            n = counts.total()
             return f"fitting: {n} evaluations, {n / max(time.monotonic() - began, 1e-9):.1f}/s" if n else "fitting"
 
-        try:
-            with standing(run.on_event, stage, line):
-                return run.executor.map(Tallied(work, folder), tasks, advance)
-        finally:
-            tally.fits_ended(folder)  # the diagnosis's total (evaluated)
+        with standing(run.on_event, stage, line):
+            done = run.executor.map(Tallied(work, counts), tasks, advance)
+    return tally.fits_ended(done)  # each fit's count came back with its result: the diagnosis's total
 
 
 def greedy_round(
