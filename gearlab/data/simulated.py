@@ -178,7 +178,7 @@ def _what_to_simulate(gearbox, model, preset, channel, speed_hz, load_nm) -> tup
     model = model or model_name(box)
     channel = channel or sensor_channel(box, model, get_registry().get("model", model).channels)
     speed_hz = box.speed_hz if speed_hz is None else speed_hz
-    load_nm = box.load_nm if load_nm is None else load_nm
+    load_nm = box.torque(load_nm)  # times the description's load_level
     for key, value in (("speed", speed_hz), ("load", load_nm)):
         if value is None:
             raise GearlabInputError(

@@ -8,7 +8,9 @@ From the effects' parameters (plugins/effects): drive_inertias sets I11, I22, k_
 (motor_inertia, load_inertia, coupling_stiffness, coupling_damping); casing_path sets mf, k_xf,
 k_yf, c_xf, c_yf (casing_mass, mounting_stiffness_x/_y, mounting_damping_x/_y); mesh_damping's zeta is
 mesh_damping_ratio (its 'proportional' damping model, the simulator's; a 'constant' fit has no key);
-bearing_stiffness multiplies k_b and c_b (bearing_stiffness, bearing_damping) by k_factor and c_factor.
+bearing_stiffness multiplies k_b and c_b (bearing_stiffness, bearing_damping) by k_factor and c_factor;
+load_level's factor multiplies [operation] load_level (description.OPERATION_FITTED: the torque the
+source ran at, however given, times the factor).
 A one-stage description that states a drive value and no housing one is simulated without the housing
 (gearlab.gearbox.simulation.model_name): where that would drop the housing the source had, its
 casing_mass is written too, unchanged.
@@ -28,9 +30,9 @@ from pathlib import Path
 from ..data.spec import DatasetSpec
 from ..effects import EffectChain, config_of
 from ..errors import GearlabInputError
-from ..gearbox.corrected import number, quantity, with_dynamics
+from ..gearbox.corrected import number, quantity, with_dynamics, with_table
 from ..gearbox.derive import DYNAMICS_NAMES
-from ..gearbox.description import DYNAMICS, FITTED, parse_gearbox, read_description
+from ..gearbox.description import DYNAMICS, FITTED, LOAD_LEVEL, OPERATION_FITTED, parse_gearbox, read_description
 from ..gearbox.simulation import channel, is_reference, label, model_name, preset_of, referenced
 from ..params import resolve_params
 from ..registry import get_registry
@@ -57,7 +59,8 @@ def corrected_description(source: DatasetSpec, result: dict, run_name: str) -> t
     """(the text of gearbox_corrected.toml, what the run says of it), (None, None) where the source
     is no description or no kept effect fits one of its values."""
     effects = [(name, dict(params)) for name, params in result.get("corrected_effects") or []]
-    if not is_reference(source.preset) or not any(name in FITTED.values() for name, _ in effects):
+    fitted = set(FITTED.values()) | set(OPERATION_FITTED.values())
+    if not is_reference(source.preset) or not any(name in fitted for name, _ in effects):
         return None, None
     box = referenced(source.preset)
     before = config_of(source.model, source.preset, source.channel).params
@@ -65,7 +68,15 @@ def corrected_description(source: DatasetSpec, result: dict, run_name: str) -> t
     values: dict[str, float] = {}
     comments: dict[str, str] = {}
     written, left = [], []
+    operation: dict[str, str] = {}
     for name, params in effects:
+        if name in OPERATION_FITTED.values():
+            why = _operation(name, params, box, run_name, operation, comments)
+            if why:
+                left.append((name, params, why))
+            else:
+                written.append((name, tuple(sorted(params.items()))))
+            continue
         keys = [key for key, effect in FITTED.items() if effect == name]
         why = _not_written(name, params, mesh_model)
         new = {} if why else _values(keys, params, before)
@@ -80,7 +91,7 @@ def corrected_description(source: DatasetSpec, result: dict, run_name: str) -> t
             if value != before.get(symbol):
                 values[key], comments[key] = value, f"gap run {run_name}: {name} {_fit(key, params, before)}"
         written.append((name, tuple(sorted(params.items()))))
-    if not values:
+    if not values and not operation:
         return None, None
     raw = read_description(box.source)
     old = raw.get("dynamics") if isinstance(raw.get("dynamics"), dict) else {}
@@ -95,13 +106,13 @@ def corrected_description(source: DatasetSpec, result: dict, run_name: str) -> t
         + f" }}{f'  # {why}' if why else ''}"
         for name, params, why in left
     ]
+    what = [table for table, given in (("[dynamics]", values), ("[operation] load_level", operation)) if given]
     head = [
-        f"# {label(source.preset)} with the [dynamics] the gap diagnosis fitted "
+        f"# {label(source.preset)} with the {' and '.join(what)} the gap diagnosis fitted "
         f"(gap run {run_name}: {result.get('verdict', '')})"
     ]
-    text = with_dynamics(
-        Path(box.source).read_text(), {k: quantity(k, v, old.get(k)) for k, v in values.items()}, comments, head, tail
-    )
+    text = with_table(Path(box.source).read_text(), "operation", operation, comments)
+    text = with_dynamics(text, {k: quantity(k, v, old.get(k)) for k, v in values.items()}, comments, head, tail)
     new_box = parse_gearbox(tomllib.loads(text), box.source)
     problem = _differs(source, box, new_box, tuple(written))
     if problem:
@@ -110,6 +121,21 @@ def corrected_description(source: DatasetSpec, result: dict, run_name: str) -> t
             f"did ({problem}); give the fitted effects as [corrected] effects"
         )
     return text, FILE
+
+
+def _operation(name: str, params: dict, box, run_name: str, operation: dict, comments: dict) -> str:
+    """Set the [operation] key the effect *name* fits (into *operation*, its comment into *comments*);
+    '' when set, else why not."""
+    key = next(k for k, effect in OPERATION_FITTED.items() if effect == name)
+    factor = float(params["factor"])
+    level = box.load_level * factor
+    if not LOAD_LEVEL.low <= level <= LOAD_LEVEL.high:
+        return f"{key} = {number(level)} outside the description's bounds"
+    operation[key], torque = number(level), box.torque()
+    at = "" if torque is None else f": {number(torque)} -> {number(torque * factor)} N*m at the [operation] load"
+    was = "" if box.load_level == 1.0 else f" x {number(box.load_level)}"
+    comments[key] = f"gap run {run_name}: {name} factor = {_shown(params['factor'])}{was}{at}"
+    return ""
 
 
 def _fit(key: str, params: dict, before: dict) -> str:
@@ -168,6 +194,9 @@ def _differs(source: DatasetSpec, box, new_box, written: tuple) -> str:
             values=tuple(sorted(resolve_params(plugin.params, preset["params"], model).items())),
         )
     )
+    factor = math.prod(float(dict(p)["factor"]) for name, p in written if name in OPERATION_FITTED.values())
+    if not math.isclose(new_box.load_level, box.load_level * factor, rel_tol=1e-5):
+        return f"load_level {new_box.load_level} against {box.load_level * factor}"
     for what in ("dofs", "input_dof", "load_dof", "channel", "mesh_damping"):
         if getattr(fitted, what) != getattr(own, what):
             return f"{what} {getattr(own, what)} against {getattr(fitted, what)}"

@@ -1,7 +1,7 @@
 """A gearbox description with [dynamics] values set, as TOML text: what a gap diagnosis writes as
 gearbox_corrected.toml (gearlab.gap.corrected; docs/your_gearbox.md step 4).
 
-The user's file stays line for line: a set key's line in [dynamics] is replaced by
+The user's file stays line for line: a set key's line in [dynamics] (or [operation]: load_level) is replaced by
 ``key = "VALUE UNIT"  # COMMENT (was OLD; the user's comment)``, a key not written yet is added after
 the table's last key (a [dynamics] table is added at the end when there is none), and *head* and
 *tail* comment lines go before and after it. A value is written in the unit the user wrote that key
@@ -53,12 +53,19 @@ def quantity(key: str, value: float, written: object = None) -> str:
 def with_dynamics(text: str, values: dict[str, str], comments: dict[str, str], head=(), tail=()) -> str:
     """*text* (a description) with each [dynamics] key of *values* (TOML value text) set, the line
     ending in '# ' and its comment; *head* and *tail* lines (comments) before and after."""
+    return "\n".join([*head, *with_table(text, "dynamics", values, comments).splitlines(), *tail]) + "\n"
+
+
+def with_table(text: str, table: str, values: dict[str, str], comments: dict[str, str]) -> str:
+    """*text* with each key of *values* set in [*table*] as with_dynamics sets [dynamics]'s."""
+    if not values:
+        return text
     lines = text.splitlines()
-    start = next((i for i, line in enumerate(lines) if _table(line) == "dynamics"), None)
+    start = next((i for i, line in enumerate(lines) if _table(line) == table), None)
     if start is None:
-        if "dynamics" in tomllib.loads(text):
-            raise GearlabInputError("[dynamics] is not written as a [dynamics] table (dotted or inline keys)")
-        lines += ["", "[dynamics]"]
+        if table in tomllib.loads(text):
+            raise GearlabInputError(f"[{table}] is not written as a [{table}] table (dotted or inline keys)")
+        lines += ["", f"[{table}]"]
         start = len(lines) - 1
     end = next((i for i in range(start + 1, len(lines)) if _table(lines[i]) is not None), len(lines))
     last, left = start, dict(values)
@@ -72,7 +79,7 @@ def with_dynamics(text: str, values: dict[str, str], comments: dict[str, str], h
                 lines[i] = f"{key.group(1)} = {left.pop(key.group(1))}  # {comments[key.group(1)]}{was}"
     added = [f"{key} = {value}  # {comments[key]}" for key, value in left.items()]
     lines[last + 1 : last + 1] = added
-    return "\n".join([*head, *lines, *tail]) + "\n"
+    return "\n".join(lines) + "\n"
 
 
 def _table(line: str) -> str | None:

@@ -6,7 +6,8 @@ shaft 1 is the input, the last shaft the output. Everything is read into SI floa
 value is one line naming the file, the table and the key (GearlabInputError, exit 2).
 
     [gearbox]      name, description
-    [operation]    speed (input shaft, "25 Hz" or "1500 rpm"), load (output torque)
+    [operation]    speed (input shaft, "25 Hz" or "1500 rpm"), load (output torque),
+                   load_level (a factor on the load, however given: what a gap diagnosis fits)
     [materials.X]  E, nu, density
     [[stages]]     module m, pressure_angle α, face_width b, centre_distance a (checked),
                    addendum h_a*, dedendum h_f*, tool_tip_radius ρ_fP*
@@ -109,6 +110,15 @@ FITTED = {
     "mounting_damping_y": "casing_path",
     "mesh_damping_ratio": "mesh_damping",
 }
+LOAD_LEVEL = Param(
+    "load_level",
+    "",
+    1.0,
+    0.01,
+    100.0,
+    "factor on the output torque, the [operation] load or a scenario's 'load' (a gap run's load_level fit)",
+)
+OPERATION_FITTED = {"load_level": "load_level"}  # [operation] keys a gap-diagnosis effect may fit
 SHAFT_KEYS = (
     Param("mass", "kg", _NAN, 1e-4, 1e5, "mass of the shaft's block (its gears and the shaft; default: solid discs)"),
     Param("inertia", "kg*m^2", _NAN, 1e-9, 1e4, "polar moment of inertia of the block (default: solid discs)"),
@@ -187,6 +197,13 @@ class Gearbox:
     sensor: Sensor
     dynamics: dict[str, float] = field(default_factory=dict)
     stated: tuple[str, ...] = ()  # the [dynamics] keys the description gives (the rest are DYNAMICS defaults)
+    load_level: float = 1.0  # [operation] load_level: the simulated torque is the load times it
+
+    def torque(self, load: float | None = None) -> float | None:
+        """The output torque simulated: *load* (a scenario's) or [operation] load, times load_level;
+        None when neither is given."""
+        load = self.load_nm if load is None else load
+        return None if load is None else load * self.load_level
 
     def shaft_index(self, name: str, where: str) -> int:
         try:
@@ -352,7 +369,7 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
     shafts, shaft_mass, shaft_inertia = _shafts(data.get("shafts"), len(stages), source)
 
     op = _Table(data.get("operation", {}), source, "[operation]")
-    op.known(("speed", "load"))
+    op.known(("speed", "load", LOAD_LEVEL.name))
     speed = speed_hz(op.data["speed"], op.where("speed")) if "speed" in op.data else None
     load = None
     if "load" in op.data:
@@ -378,6 +395,7 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
         sensor,
         dynamics,
         tuple(dyn.data),
+        op.param(LOAD_LEVEL),
     )
     check_geometry(box)
     return box

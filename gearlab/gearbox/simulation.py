@@ -139,9 +139,9 @@ def preset_of(box: Gearbox, names: tuple[str, ...], stages: int, model: str = ""
         "pair": pairs[0] if stages == 1 else train_pair(*pairs),  # stage 1 carrying the next
         "params": {k: v for k, v in params.items() if k in names},
         "speed_hz": box.speed_hz,
-        "load_nm": box.load_nm,
+        "load_nm": box.torque(),
         "speeds_hz": () if box.speed_hz is None else (box.speed_hz,),
-        "loads_nm": () if box.load_nm is None else (box.load_nm,),
+        "loads_nm": () if box.load_nm is None else (box.torque(),),
     }
 
 
@@ -205,7 +205,8 @@ def simulate_command(
 ) -> tuple[str, str | None, float | None, float | None]:
     """(model, preset, speed, load) of a simulation: with a *gearbox*, the description simulated as a
     [source] gearbox is (its model unless *model*, its values, its [operation] speed and load unless
-    *speed* and *load*); else *model* and *preset* as given. *flag*: as in model_command."""
+    *speed* and *load*; the load times its load_level); else *model* and *preset* as given. *flag*: as in
+    model_command."""
     if gearbox is None:  # the model is checked where it is loaded (gearlab.notebook.simulator)
         return model, preset, speed, load
     model, ref = model_command(gearbox, model, preset, flag)
@@ -213,4 +214,4 @@ def simulate_command(
     for key, value in (("speed", speed), ("load", load)):
         if value is None and getattr(box, f"{key}_hz" if key == "speed" else f"{key}_nm") is None:
             raise GearlabInputError(f"{box.source}: [operation] key '{key}': missing; expected it there or {flag(key)}")
-    return model, ref, speed if speed is not None else box.speed_hz, load if load is not None else box.load_nm
+    return model, ref, speed if speed is not None else box.speed_hz, box.torque(load)

@@ -302,7 +302,7 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     if entry["name"]:
         changes["name"] = changes["domain"] = entry["name"]
     for key in ("speed", "load", "fs"):
-        if entry[key] is not None:
+        if entry[key] is not None and not (key == "load" and entry.get("gearbox")):  # described_spec's
             changes[{"speed": "speed_hz", "load": "load_nm", "fs": "fs"}[key]] = quantity(entry, key, where)
     if entry["faults"] is not None:  # {fault = [steps]} or [{name, gear, stage, steps}]: data.placement
         shafts = model_shafts(changes.get("model", spec.model), changes.get("preset", spec.preset), where)
@@ -335,8 +335,9 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
 def described_spec(entry: dict, where: str, base: Path, preset: DatasetSpec | None) -> DatasetSpec:
     """The simulator a 'gearbox' description implies (gearlab.gearbox.simulation): its model (or the
     entry's 'model'), its values, the channel of its [sensor] (or 'channel'), the speed and load of
-    its [operation] (or 'speed', 'load'). The faults and sizes: *preset*'s when one is named, else
-    the chapter-5 ladders (CH5_STEPS) on every pinion tooth with a quarter more healthy samples."""
+    its [operation] (or 'speed', 'load'), the load times its load_level. The faults and sizes: *preset*'s
+    when one is named, else the chapter-5 ladders (CH5_STEPS) on every pinion tooth with a quarter more
+    healthy samples."""
     from ..gearbox.simulation import channel, model_name, reference, referenced
 
     here = f"{where} key 'gearbox'"
@@ -361,6 +362,8 @@ def described_spec(entry: dict, where: str, base: Path, preset: DatasetSpec | No
                 f"(or give '{key}' here)"
             )
         operation[f"{key}_{'hz' if key == 'speed' else 'nm'}"] = value
+    given = None if entry["load"] is None else quantity(entry, "load", where)
+    operation["load_nm"] = box.torque(given)  # the load times the description's load_level
     if preset is None:
         faults = tuple((name, CH5_STEPS[name]) for name in FAULTS)
         preset = DatasetSpec(box.name, model, ref, chan, faults=faults, healthy=15 * box.stages[0].pinion.z)
