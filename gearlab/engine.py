@@ -74,8 +74,14 @@ class ProgressWatcher(threading.Thread):
         return now
 
     def stop(self) -> None:
+        """The last look, then the folder goes: empty once every unit ended (issue 41: a run left an
+        empty progress/ beside its results, as it left its .lock)."""
         self.stopped.set()
         self.join()
+        try:
+            self.folder.remove_tree()
+        except (OSError, GearlabInputError):  # a file system that refuses: the next run's start removes it
+            pass
 
 
 def _serialised(on_event: EventSink) -> EventSink:
