@@ -330,22 +330,24 @@ def standing(on_event: EventSink, name: str, text: str | Callable[[], str]) -> I
     a unit's line under the bars, 'name: text', that says for how long each second once it stood
     STANDING_S, as a unit's own line does (UnitProgress); the line goes when the step ends. *text* may
     be a call, asked again each second: a count the step's own stages cannot give as steps (the gap
-    fits' score evaluations, gearlab.gap.tally)."""
+    fits' score evaluations, gearlab.gap.tally). An empty text says nothing (no line yet)."""
     done = threading.Event()
     say = text if callable(text) else lambda: text
     said = say()
-    on_event(Event("unit", stage=name, message=said))
+    shown = bool(said)
+    if shown:
+        on_event(Event("unit", stage=name, message=said))
 
     def keep() -> None:
-        nonlocal said
+        nonlocal said, shown
         began = time.monotonic()
         while not done.wait(1.0):
             stood, line = time.monotonic() - began, say()
-            if stood >= STANDING_S:
+            if line and stood >= STANDING_S:
                 on_event(Event("unit", stage=name, message=f"{line} ({stood:.0f} s)"))
             elif line != said:
                 on_event(Event("unit", stage=name, message=line))
-            said = line
+            said, shown = line, shown or bool(line)
 
     # in this context: a unit's stages_to_unit (its ContextVars) hears the thread's lines too
     keeper = threading.Thread(target=contextvars.copy_context().run, args=(keep,), daemon=True)
@@ -355,4 +357,5 @@ def standing(on_event: EventSink, name: str, text: str | Callable[[], str]) -> I
     finally:
         done.set()
         keeper.join()
-        on_event(Event("unit", stage=name))
+        if shown:  # the line goes
+            on_event(Event("unit", stage=name))

@@ -301,3 +301,34 @@ def test_a_diagnosis_gives_its_total_of_score_evaluations(monkeypatch):
     assert result["effects"] and result["evaluations"] == len(calls) > 20  # the fits' included
     logs = [e.message for e in told if e.kind == "log"]
     assert logs[-1] == f"gap: {len(calls)} score evaluations in {result['seconds']:.0f} s"
+
+
+def test_the_simulations_bar_says_what_it_waits_for_before_its_first_step(monkeypatch):
+    """A run's first simulation starts the workers, imports and compiles (13 s at load 6 on 2 cores):
+    the bar stood at 0 of 13, 'ETA after the first step', with no sign why. Once that has stood
+    STANDING_S a line says so beside the bar, gone at the first step; a quicker first step, none."""
+    from collections import OrderedDict
+
+    from gearlab import events as ev
+    from gearlab.data import builder
+    from gearlab.data.spec import dataset_preset
+
+    real = builder.simulate_unit
+
+    def slow(task):
+        time.sleep(1.3)  # a worker's start-up
+        return real(task)
+
+    def simulated(standing_s: float) -> list[tuple]:
+        monkeypatch.setattr(ev, "STANDING_S", standing_s)
+        monkeypatch.setattr(builder, "_SIMULATED", OrderedDict())  # simulated afresh
+        told: list[Event] = []
+        builder.build_dataset(dataset_preset("B-6-ch5").with_(faults=(), healthy=8), on_event=told.append)
+        return [(e.kind, e.done, e.message) for e in told if e.stage == "simulate"]
+
+    monkeypatch.setattr(builder, "simulate_unit", slow)
+    seen = simulated(0.5)
+    line = "the first one starts up: imports, compiled loops"
+    assert seen[0] == ("stage", 0, "B-6-ch5: 1 simulations") and seen[-2:] == [("unit", 0, ""), ("advance", 1, "")]
+    assert seen[1:-2] and all(re.fullmatch(re.escape(line) + r" \(\d s\)", m) for _, _, m in seen[1:-2]), seen
+    assert [k for k, _, _ in simulated(1000.0)] == ["stage", "advance"]  # no line flashes by
