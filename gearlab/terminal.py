@@ -196,18 +196,34 @@ def markdown_tables(text: str) -> list[tuple[str, list[str], list[list[str]]]] |
     return found or None
 
 
-def rich_table(caption: str, header: list[str], rows: list[list[str]]) -> Table:
+def rich_table(caption: str, header: list[str], rows: list[list[str]], console: Console | None = None) -> Table:
+    """The table; on *console*'s terminal too narrow for its words (a transfer run's eight method
+    columns cut 'matched_filt|er' and '(unsupervise|d)' at 120 columns: issue 41), turned, its
+    columns as rows (one row a method, one column a k), when that keeps every word whole."""
     table = Table(title=Text(caption.rstrip(":"), style="bold") if caption else None, title_justify="left")
     for i, name in enumerate(header):
         table.add_column(Text(name), justify="left" if i == 0 else "right", overflow="fold")
     for row in rows:
         table.add_row(*(Text(cell) for cell in row[: len(header)]), *([""] * (len(header) - len(row))))
-    return table
+    if console is None or not console.is_terminal or _narrowest(console, table) <= console.width:
+        return table
+    full = [list(row[: len(header)]) + [""] * (len(header) - len(row)) for row in rows]
+    turned = rich_table(
+        caption,
+        [f"{header[0]} →", *(row[0] for row in full)],
+        [[name, *(row[i] for row in full)] for i, name in enumerate(header) if i],
+    )
+    return turned if _narrowest(console, turned) <= console.width else table
 
 
-def results(lines: Iterable[str]) -> list:
+def _narrowest(console: Console, table: Table) -> int:
+    """The width *table* needs to keep its longest words whole."""
+    return Measurement.get(console, console.options.update_width(10_000), table).minimum
+
+
+def results(lines: Iterable[str], console: Console | None = None) -> list:
     """The summary lines of a run as things to print: a Markdown table (with the line before
-    it, its caption) as a rich table, every other line as plain text."""
+    it, its caption) as a rich table (fitted to *console*: rich_table), every other line as plain text."""
     shown: list = []
     pending: str | None = None  # a line that may be the caption of the table that follows
     for line in lines:
@@ -223,7 +239,7 @@ def results(lines: Iterable[str]) -> list:
             if pending is not None:
                 shown.append(Text(pending))
                 pending = None
-            shown.append(rich_table(caption, header, rows))
+            shown.append(rich_table(caption, header, rows, console))
     if pending is not None:
         shown.append(Text(pending))
     return shown
@@ -231,13 +247,14 @@ def results(lines: Iterable[str]) -> list:
 
 def print_results(console: Console, verdict: list[str], summary: list[str]) -> None:
     """The verdict first, then the run's tables and lines. A table wider than the terminal
-    folds its cells; off a terminal (a log, a pipe) it keeps its natural width."""
+    folds its cells (turned, where only so its words stay whole); off a terminal (a log, a pipe)
+    it keeps its natural width."""
     if verdict:
         console.print(Text("Verdict", style="bold underline"))
         for line in verdict:
             console.print(Text(f"• {line}"))
         console.print()
-    for item in results(summary):
+    for item in results(summary, console):
         print_table(console, item) if isinstance(item, Table) else console.print(item)
 
 

@@ -251,6 +251,33 @@ def test_the_end_of_a_run_prints_the_verdict_and_markdown_tables_as_rich_tables(
     assert "|---|" not in text and text.rstrip().endswith("done")
 
 
+def test_a_table_too_narrow_for_its_words_on_a_terminal_is_turned():
+    """At 120 columns a transfer run's eight columns cut 'matched_filt|er' and '(unsupervise|d)' (issue
+    41): turned, a row per method, every word whole; a wide terminal, a log or a pipe keep the layout."""
+    from gearlab.terminal import print_results
+
+    methods = [f"{m} (unsupervised)" for m in ("source_only", "mmd", "dann", "matched_filter", "likelihood_ratio")]
+    methods += ["target_only (supervised)", "Bayes bound (target's own shapes and noise law, best threshold)"]
+    values = {"0": [f"{50 + i}.00 ± 0.{i}" for i in range(7)], "4": [f"{60 + i}.00 ± 1.{i}" for i in range(7)]}
+    table = f"| k (target fault samples) | {' | '.join(methods)} |\n|{'---|' * 8}\n"
+    table += "".join(f"| {k} | {' | '.join(v)} |\n" for k, v in values.items())
+
+    def shown(width: int, terminal: bool = True) -> list[str]:
+        out = io.StringIO()
+        console = Console(file=out, width=width, force_terminal=terminal, color_system=None)
+        print_results(console, [], ["accuracy [%] (Table 5.4 layout):", table])
+        return out.getvalue().splitlines()
+
+    narrow = shown(120)
+    assert max(len(line) for line in narrow) <= 120
+    for i, method in enumerate(methods):  # a row: the method whole, its value at each k
+        (row,) = [line for line in narrow if f"│ {method} " in line]
+        assert values["0"][i] in row and values["4"][i] in row and row.index(values["0"][i]) < row.index(values["4"][i])
+    for lines in (shown(400), shown(120, terminal=False)):  # room for every word, or no width at all
+        (row,) = [line for line in lines if line.startswith("│ 0 ")]
+        assert all(v in row for v in values["0"]), lines
+
+
 # ----------------------------------------------------------------------------- CLI conventions
 
 
