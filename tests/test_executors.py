@@ -313,6 +313,36 @@ def test_a_gap_fits_evaluations_come_back_from_ray_tasks_on_other_machines(ray_s
     assert counts and 0 < counts[-1] <= 210, said
 
 
+@pytest.mark.slow
+def test_a_real_diagnosis_on_ray_counts_what_it_counts_serially(ray_session):
+    """A gap diagnosis whose fits run on Ray tasks that share no disk with this process (a transfer
+    benchmark's correction, a gap run on a cluster): the same total of score evaluations as serial
+    fits, the same effects. (Development check, B-6-ch5 against sensor noise 5 dB, seed 11: 200 and
+    200; 5 before the counts came back by Ray, the driver's own evaluations alone.)"""
+    from gearlab.data.builder import build_dataset
+    from gearlab.data.spec import dataset_preset
+    from gearlab.effects import effect_spec
+    from gearlab.gap.diagnose import Settings, diagnose
+    from gearlab.gap.views import healthy_rows
+
+    source = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
+    noisy = source.with_(effects=(effect_spec("sensor_noise", kind="laplace", snr_db=5),), seed=11)
+    target = healthy_rows(build_dataset(noisy))
+    settings = Settings(
+        candidates=("sensor_noise", "interference_tone", "mesh_damping"),
+        max_effects=1,
+        healthy=16,
+        bootstrap=20,
+        permutations=99,
+        budget=4,
+        seed=0,
+    )
+    serial = diagnose(source, target, settings)
+    with FarRay(workers=2) as executor:
+        far = diagnose(source, target, settings, executor=executor)
+    assert far["effects"] == serial["effects"] and far["evaluations"] == serial["evaluations"] > 20
+
+
 def _mark_then_sleep(task):
     """Unit 0 fails at once; the others mark that they started, sleep, and mark that they ended."""
     folder, i = task
