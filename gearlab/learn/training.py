@@ -241,13 +241,18 @@ def fit_adaptation(
             if yt_t is not None:
                 loss = loss + ce(net.classifier(z_t), yt_t[t])
             pairs = _aligned(z_s, z_t, ys_t[s], yt_t[t] if yt_t is not None else None, alignment)
-            for a, b in pairs:
-                loss = loss + adapter.domain_loss(a, b, modules, lam, params)
+            terms = [adapter.domain_terms(a, b, modules, lam, params) for a, b in pairs]
+            for term, _ in terms:
+                loss = loss + term
             _step(opt, weights, loss)
             total += loss.detach().double()
             # The epoch's discrepancy is measured on the latent batches it trained on: every
-            # training sample once, with no extra pass through the network.
-            discrepancy += sum(adapter.discrepancy(a.detach(), b.detach(), modules, params) for a, b in pairs)
+            # training sample once, with no extra pass through the network (and, where the
+            # adapter gave it with its loss, no second computation of it).
+            discrepancy += sum(
+                adapter.discrepancy(a.detach(), b.detach(), modules, params) if gap is None else gap
+                for (a, b), (_, gap) in zip(pairs, terms)
+            )
             batches += 1
         history.train_loss.append(total.item())
         history.lam.append(lam)

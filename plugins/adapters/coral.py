@@ -27,6 +27,13 @@ class Coral(Adapter):
 
         return lam * coral_loss(z_s, z_t)
 
+    def domain_terms(self, z_s, z_t, modules, lam, params=None):
+        """The loss and, from the same CORAL value, the batch's discrepancy (computed once)."""
+        from gearlab.api import coral_loss
+
+        value = coral_loss(z_s, z_t)
+        return lam * value, float(value.detach())
+
     def discrepancy(self, z_s, z_t, modules, params=None) -> float:
         import torch
 

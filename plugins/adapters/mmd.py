@@ -31,6 +31,13 @@ class MMD(Adapter):
         scale = float(self.values(params)["bandwidth_scale"])
         return lam * mmd2(z_s, z_t, scale=scale)
 
+    def domain_terms(self, z_s, z_t, modules, lam, params=None):
+        """The loss and, from the same MMD² value, the batch's discrepancy (computed once)."""
+        from gearlab.api import mmd2
+
+        value = mmd2(z_s, z_t, scale=float(self.values(params)["bandwidth_scale"]))
+        return lam * value, float(value.detach())
+
     def discrepancy(self, z_s, z_t, modules, params=None) -> float:
         import torch
 
