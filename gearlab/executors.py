@@ -283,9 +283,10 @@ class RayExecutor(Executor):
         self._counter = None  # the actor behind counts(), started on the first
 
     def close(self) -> None:
-        if self._counter is not None:
-            import_ray().kill(self._counter)
-            self._counter = None
+        ray = import_ray()
+        if self._counter is not None and ray.is_initialized():  # (a session shut down took it along)
+            ray.kill(self._counter)
+        self._counter = None
 
     @contextlib.contextmanager
     def counts(self) -> Iterator[Counts]:
