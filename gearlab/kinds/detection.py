@@ -72,8 +72,8 @@ from ..errors import GearlabInputError, shown
 from ..events import Event
 from ..gearbox.simulation import label, referenced
 from ..learn.config import Calibration, check_length
-from ..learn.protocol import Method, Protocol, each_draw, shared_state
-from ..learn.schedule import two_phases
+from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
+from ..learn.schedule import longest_first, two_phases
 from ..params import did_you_mean
 from ..parts import training
 from ..parts.measured import target_spec
@@ -489,9 +489,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("log", message=f"{record['unit']} trained"))
             on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
+        # the joint trainings first (a corrected source's draws before a plain one), then the
+        # source-only and target trainings, the detectors last
         for phase in phases:
             tasks = []
-            for c, v, m, seed, k in phase:
+            for c, v, m, seed, k in longest_first(
+                phase, lambda u: (domain_adapting(u[2].adapter), not u[2].is_detector, bool(u[1]))
+            ):
                 cond = conditions[c]
                 states = run.file("states", folders[(c, v)])
                 tasks.append(
