@@ -14,6 +14,7 @@ counted while streaming, so an archive that lies about its size is stopped at th
 from __future__ import annotations
 
 import os
+import re
 import zipfile
 from collections.abc import Sequence
 from contextlib import contextmanager
@@ -122,6 +123,21 @@ def _resolve(columns, header: list[str] | None, width: int, where: str) -> list[
     return out
 
 
+_BLANK_LINE = re.compile(rb"\n[ \t\r\f\v]*\n")  # a blank line between two others
+
+
+def _rows(body: bytes) -> int:
+    """The lines of *body* that hold more than blanks: its lines, counted in C, where none is blank
+    (a record's block); else line by line. A line ending in "\r\n" (a Windows text, the PHM 2009
+    records) is one line: bytes.split() takes the "\r" for a blank."""
+    text = body.strip()  # blank lines at either end hold no row
+    if not text:
+        return 0
+    if _BLANK_LINE.search(text) is None:
+        return text.count(b"\n") + 1
+    return sum(1 for line in body.split(b"\n") if line.strip())
+
+
 def _bad_line(block: bytes, first_line: int, width: int, where: str) -> GearlabInputError:
     """The error for the first line of *block* that is not *width* numbers (slow path)."""
     for offset, line in enumerate(block.split(b"\n")):
@@ -183,7 +199,7 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
             lines_here = block.count(b"\n") + (0 if block.endswith(b"\n") else 1)
             if not width:
                 delimiter = _delimiter(block)
-            if b"#" in block or b"\r" in block or not width:
+            if b"#" in block or block.count(b"\r") != block.count(b"\r\n") or not width:
                 kept = []
                 for line in block.split(b"\n"):
                     tokens = _blanks(line, delimiter).split()
@@ -206,7 +222,7 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                     values = np.array(body.split(), dtype=np.float64)
                 except ValueError:
                     raise _bad_line(_blanks(block, delimiter), line_no, width, where) from None
-                rows = sum(1 for line in body.split(b"\n") if line.strip())
+                rows = _rows(body)
                 if values.size != rows * width:
                     raise _bad_line(_blanks(block, delimiter), line_no, width, where)
                 parts.append(values.reshape(rows, width)[:, picked].copy())
