@@ -282,6 +282,10 @@ class RayExecutor(Executor):
         self.workers = workers
         self._counter = None  # the actor behind counts(), started on the first
 
+    def open(self) -> None:
+        """Start the local Ray instance, or connect to the cluster, now (else at the first map)."""
+        _open_session(self.address, self.workers)
+
     def close(self) -> None:
         ray = import_ray()
         if self._counter is not None and ray.is_initialized():  # (a session shut down took it along)

@@ -217,6 +217,38 @@ def test_the_scenario_address_reaches_the_ray_executor(tmp_path, monkeypatch):
     assert executor_for(load_scenario(path)).address is None
 
 
+def test_a_ray_run_opens_its_session_as_a_stage_of_its_own(tmp_path, monkeypatch):
+    """Starting a local Ray instance (15-30 s on 2 busy cores) passed under the kind's first bar, at 0
+    and with no word of Ray (issue 41): it is a stage of its own, before the kind's first."""
+    from gearlab.engine import run_scenario
+    from gearlab.events import Event
+    from gearlab.kinds import transfer as kind
+
+    opened, told = [], []
+    monkeypatch.setattr(executors, "import_ray", lambda: None)  # no session is opened here
+    monkeypatch.setattr(executors, "_open_session", lambda address, workers: opened.append((address, workers)))
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+
+    def first_stage(scenario, run, on_event):
+        on_event(Event("stage", stage="datasets", total=2, message="datasets"))
+        raise GearlabInputError("enough")  # before any unit: no run directory is left
+
+    monkeypatch.setattr(kind, "run", first_stage)
+    path = tmp_path / "tiny.toml"
+    cases = [("", "starting a local instance"), ('\naddress = "far:6379"', "connecting to the cluster at far:6379")]
+    for execution, where in cases:
+        path.write_text(TINY.replace("[execution]", f'[execution]\nexecutor = "ray"{execution}'))
+        told.clear()
+        with pytest.raises(GearlabInputError, match="enough"):
+            run_scenario(path, out=tmp_path / "runs", on_event=told.append)
+        stages = [(e.kind, e.stage, e.done, e.message) for e in told if e.kind in ("stage", "advance")]
+        ray = [("stage", "ray", 0, f"Ray: {where}"), ("advance", "ray", 1, "")]
+        assert stages == ray + [("stage", "datasets", 0, "datasets")]
+        lines = [e.message for e in told if e.kind == "unit" and e.stage == "ray"]
+        assert lines == ["waiting for Ray to answer", ""]  # after 3 s, for how long
+    assert opened == [(None, 1), ("far:6379", 1)]
+
+
 def test_one_ray_session_per_process(ray_session):
     assert executors._open_session(None, 2) is ray_session  # reused, not started again
     with pytest.raises(GearlabInputError, match="already uses the Ray cluster 'local'"):
