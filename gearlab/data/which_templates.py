@@ -1,11 +1,14 @@
 """The simulated events gearlab.signals.which_template compares a record's with: per gear of a
 two-gear shaft, the synchronous mean of a tooth fault on it less the healthy one, simulated from the
 gearbox description at the record's speed (noise-free; the description's load: the record's is not
-known). Simulated once per (description, speed, rate, fault) in this process (functools cache);
-each template is read at the caller's layout."""
+known), with the effects of the simulator it stands for (a detection scenario's [corrected] one: the
+gap diagnosis's fitted structure, which the events' shapes follow). Simulated once per (description,
+effects, speed, rate, fault) in this process (functools cache); each template is read at the caller's
+layout."""
 
 from __future__ import annotations
 
+import json
 import math
 from functools import lru_cache
 
@@ -26,21 +29,28 @@ def placement_word(gear) -> str:
 
 
 @lru_cache(maxsize=64)
-def _revolutions(gearbox, speed_hz: float, fs: float, sim_fs, revolutions: int, fault) -> tuple[np.ndarray, int]:
+def _revolutions(
+    gearbox, speed_hz: float, fs: float, sim_fs, revolutions: int, fault, effects: str = "[]"
+) -> tuple[np.ndarray, int]:
     from ..signals import cut_revolutions
     from .simulated import simulated_record
 
     faults = [] if fault is None else [{"name": fault[1], "gear": fault[0], "tooth": 1, "step": STEP}]
     extra = {} if gearbox is None else {"gearbox": gearbox, "sim_fs": sim_fs}
+    extra["effects"] = json.loads(effects)  # a JSON list of effect tables: hashable for the cache
     rec = simulated_record(faults, speed_hz=speed_hz, revolutions=revolutions + 2, snr_db=None, seed=7, fs=fs, **extra)
     cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
     return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
 
 
-def simulated_templates(table, speed_hz: float, fs: float, *, gearbox: str | None = None, sim_fs: float | None = None):
+def simulated_templates(
+    table, speed_hz: float, fs: float, *, gearbox: str | None = None, sim_fs: float | None = None, effects=()
+):
     """A function of a localisation layout giving {"healthy": the healthy mean, "gears": {gear name:
     [template per fault kind]}} for every gear on a two-gear shaft of *table* (localise's
-    *templates*), or {"not simulated": why}. *gearbox*: the description (None: the PHM 2009 rig's preset)."""
+    *templates*), or {"not simulated": why}. *gearbox*: the description (None: the PHM 2009 rig's preset);
+    *effects*: effect tables ({"name": ..., parameter: SI value}) the records are simulated with."""
+    tables = json.dumps(list(effects), sort_keys=True)
     from ..signals import localise as L
 
     gears = [g for on in L.gears_of(table).values() if len(on) == 2 for g in on]
@@ -49,7 +59,7 @@ def simulated_templates(table, speed_hz: float, fs: float, *, gearbox: str | Non
 
     def at(lay) -> dict:
         def mean(fault):
-            r, first = _revolutions(gearbox, float(speed_hz), float(fs), sim_fs, revs, fault)
+            r, first = _revolutions(gearbox, float(speed_hz), float(fs), sim_fs, revs, fault, tables)
             if lay.mode == "grand":
                 r = r[: (r.shape[0] // period) * period]
             return L.content(r, lay, first).mean
@@ -89,13 +99,19 @@ def simulated_as(description: str) -> str | None:
     return None if description == "phm09" or Path(description).resolve() == rig.resolve() else description
 
 
-def record_templates(table, description: str, speed_hz: float, fs: float):
+def effect_tables(effects) -> list[dict]:
+    """A DatasetSpec's effects ((name, ((parameter, SI value), ...)), ...) as simulated_record's tables."""
+    return [{"name": name, **dict(params)} for name, params in effects]
+
+
+def record_templates(table, description: str, speed_hz: float, fs: float, effects=()):
     """simulated_templates for a record at *speed_hz* and *fs* of the gearbox *description*
-    (simulated_as); None where *table* has no two-gear shaft (nothing to simulate: the width rule is
-    not needed either). The simulation runs only when localise asks (a two-gear shaft flagged)."""
+    (simulated_as) with *effects* (effect tables); None where *table* has no two-gear shaft (nothing to
+    simulate: the width rule is not needed either). The simulation runs only when localise asks (a
+    two-gear shaft flagged)."""
     if not two_gear_shafts(table):
         return None
     speed = float(f"{float(speed_hz):.{SPEED_DIGITS}g}")
     gearbox = simulated_as(description)
     sim_fs = None if gearbox is None else max(float(fs), SIM_FS)
-    return simulated_templates(table, speed, float(fs), gearbox=gearbox, sim_fs=sim_fs)
+    return simulated_templates(table, speed, float(fs), gearbox=gearbox, sim_fs=sim_fs, effects=effects)

@@ -528,7 +528,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
         # which gear each test record's change is on, from the raw records (before any score is made)
-        store_localisation(run, spec.source, conditions)
+        store_localisation(run, spec.source, conditions, spec.corrected)  # events: the corrected simulator
         run.write_json(
             "conditions.json",
             {

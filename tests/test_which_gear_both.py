@@ -1,0 +1,86 @@
+"""Which gear with damage on both gears of a pair (a source class "chip+chip@wheel", or a record whose
+pinion and wheel are both damaged): detection watches both gears of such a class, and a record
+localised on a watched gear and on another gear is called the watched gear's fault and other damage
+too (gearlab.kinds.detection_which_gear). Simulated PHM 2009 rig records, a few seconds each."""
+
+import pytest
+
+from gearlab.data.simulated import simulated_record
+from gearlab.data.spec import dataset_preset
+from gearlab.gearbox import order_table
+from gearlab.kinds import detection_which_gear as D
+from gearlab.parts.measured import TargetFile
+from gearlab.signals import cut_revolutions
+
+SPEED = 40.0
+PINION, IDLER_GEAR = "input pinion 32T (stage 1)", "idler gear 96T (stage 1)"
+BOTH = [
+    {"name": "chip", "gear": "input pinion", "tooth": 9, "step": 20},
+    {"name": "chip", "gear": "idler gear", "tooth": 40, "step": 20},
+]
+
+
+def raw(faults, seed):
+    rec = simulated_record(faults, speed_hz=SPEED, revolutions=90, snr_db=30.0, seed=seed)
+    return cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none").revolutions, 0
+
+
+@pytest.fixture(scope="module")
+def target():
+    files = {
+        "h1": ("history", "healthy", [], 1),
+        "h2": ("history", "healthy", [], 2),
+        "both": ("test", "both", BOTH, 3),
+        "pinion": ("test", "fault", BOTH[:1], 4),
+        "wheel": ("test", "wheel", BOTH[1:], 5),
+    }
+    tf = {p: TargetFile(p, p, role, label, "40 Hz") for p, (role, label, _, _) in files.items()}
+    cond = {
+        "history": [(tf["h1"], None), (tf["h2"], None)],
+        "test": [(tf[p], None) for p in ("both", "pinion", "wheel")],
+        "raw": {p: raw(faults, seed) for p, (_, _, faults, seed) in files.items()},
+        "max_order": int(0.9 * 66666.67 / 2 / SPEED),
+    }
+    return {"40 Hz": cond}, {p: label for p, (_, label, _, _) in files.items()}
+
+
+def test_a_class_on_both_gears_of_a_pair_watches_both():
+    source = dataset_preset("phm09-30").with_(faults=(("chip+chip@wheel", (20,)),), teeth=(2,), healthy=1)
+    table = order_table(D.gearbox_of(source))
+    assert D.watched_gears(source, table) == [PINION, IDLER_GEAR]
+    assert D.watched_gears(dataset_preset("phm09-30"), table) == [PINION]
+
+
+def test_a_record_damaged_on_the_watched_gear_and_another_is_called_both(target):
+    conditions, labels = target
+    loc = D.localise_target(dataset_preset("phm09-30"), conditions)  # watches the input pinion only
+    both = loc["records"]["both"]
+    flagged = [s["shaft"] for s in D.flagged_shafts(both)]
+    assert sorted(flagged) == ["idler", "input"], both["summary"]
+    idler = next(s for s in both["shafts"] if s["shaft"] == "idler")
+    assert both["call"] == f"{D.WATCHED}: {PINION}{D.ALSO}{idler['gear']}"
+    assert loc["records"]["pinion"]["call"] == f"{D.WATCHED}: {PINION}"
+    assert D.is_other(loc["records"]["wheel"]["call"]), loc["records"]["wheel"]["summary"]
+    assert D.decision_of(True, both["call"]) == "fault"  # the watched gear's fault, as counted in the verdict
+    record = {
+        "condition": "40 Hz",
+        "method": "flags everything",
+        "thresholds": {"revolution": 0.0, "record30": 0.0},
+        "test_scores": {p: {"revolution": [1.0] * 4, "record30": [1.0, 1.0]} for p in ("both", "pinion", "wheel")},
+    }
+    (called,) = D.calls_by_label(loc, [record], labels)
+    assert called["watched"] == {"both": 100.0, "fault": 100.0, "wheel": 0.0}
+    assert called["other"] == {"both": 100.0, "fault": 0.0, "wheel": 100.0}  # both: in both columns
+    assert called["judged"] == {"both": 2, "fault": 2, "wheel": 0}
+    text = D.records_md(loc, labels)
+    second = idler["gear"] if both["named_shaft"] == "input" else PINION
+    assert f"| 40 Hz | both | both | {both['named']}; {second} |" in text
+
+
+def test_a_class_on_both_gears_calls_either_gear_its_own(target):
+    conditions, _ = target
+    source = dataset_preset("phm09-30").with_(faults=(("chip+chip@wheel", (20,)),), teeth=(2,), healthy=1)
+    loc = D.localise_target(source, conditions)
+    calls = {p: r["call"] for p, r in loc["records"].items()}
+    assert all(c.startswith(D.WATCHED) and D.ALSO not in c for c in calls.values()), calls
+    assert IDLER_GEAR in calls["wheel"] or "96T gear" in calls["wheel"], calls
