@@ -40,7 +40,13 @@ weights (21-22 against 16-18 ms for 3); torch.compile
 products of windows (3.76 against 3.43 ms for the layers); its stride-2 convolutions as batched
 products (1.41 against 1.87 ms at batch 2, 4.77 against 4.30 at 40); oneDNN off (5.77 against
 4.95 ms); batch normalisation or the `shapes` mixture by hand-written gradients; one flat buffer
-for the optimiser and the clipping (0.06 ms of a step).
+for the optimiser and the clipping (0.06 ms of a step). For the joint step's batch of 80 (CPU time,
+load ~10): the stride-2 convolutions as one product of channels-last windows 1.10 and 1.59 against
+1.19 and 1.79 ms forward + backward (0.3 ms of a 10 ms step, gradients apart by rounding), as
+broadcast products, conv2d or a 1 x 1 convolution of windows slower; their backward's input
+gradient by conv_transpose1d or weight gradient by a product of windows 0.35-0.48 against
+0.36-0.53 ms (oneDNN's own). Of a 10.8 ms `fast+coral` step in a run (fit_adaptation's, with
+draws): embedding 3.2, backward 4.8, the epoch's validation 0.9 a step, the rest under 0.4 each.
 
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
