@@ -344,7 +344,9 @@ def _tacho_elsewhere(lines, box: Gearbox, read: str, speed: Speed, revolutions: 
     tol = np.array([tol_mesh(v, 1.0 / revolutions) for v in x])
     ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
     table = order_table(box)
-    found = tacho_elsewhere(x, amp**2, tol, table, box.shaft_index(read, "--tacho-shaft"), ratio)
+    below = lines.at[~keep]  # for a faster shaft than the one read (its meshes read at low orders)
+    low = (below, lines.amp[~keep] ** 2, np.array([tol_mesh(v, 1.0 / revolutions) for v in below]))
+    found = tacho_elsewhere(x, amp**2, tol, table, box.shaft_index(read, "--tacho-shaft"), ratio, low)
     if found is None:
         return None
     name, f = found

@@ -94,14 +94,18 @@ def _comb_distance(x: np.ndarray, z: float, offsets: list[float]) -> np.ndarray:
     return np.abs(x[:, None] - h * z - off[None, :]).min(axis=1)
 
 
-def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = (), tacho=None) -> dict:
+def mesh_check(
+    target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = (), tacho=None, on_input: bool = True
+) -> dict:
     """The target's mesh order against the source's Z1 (module doc): {'expected', 'measured' (the
     target's mesh order, or None when its lines do not show one), 'off_comb' (share of the strongest
     lines' power off the source's comb), 'lines', 'inspect' (check_description's stage), 'differs'}.
     *later*: the later stages of a multi-stage source, (mesh order, (its shafts' orders)) each, whose
     combs are the source's too (a second mesh as strong as the first is no other pinion). *tacho*:
     (the source's order table, the shaft the target's tacho was read as, the target's speed over the
-    described): a tacho on another shaft (match.tacho_elsewhere) is told first."""
+    described): a tacho on another shaft (match.tacho_elsewhere) is told first. *on_input*: the
+    revolutions are the input shaft's turns (its order is 1, not read off its sidebands: a tacho there,
+    or a simulation); a tacho on another shaft makes them its turns times the described ratio."""
     from ..gearbox.match import check_description, tol_mesh
     from ..gearbox.speed import THRESHOLD_DB, find_lines
     from ..signals import spectrum
@@ -110,13 +114,17 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
     orders, amp = spectrum(np.asarray(target, dtype=np.float64).reshape(-1), points)
     top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
     lines = find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
-    check = check_description(lines, _PairDescription.of(z1, z2), n, True)
+    check = check_description(lines, _PairDescription.of(z1, z2), n, on_input)
     # ranked by the spectrum at the line's bin: the parabola's height overshoots where a noise-free
     # record's neighbouring bins are rounding (a line at order 1808 ranked above the mesh harmonics)
     x = lines.at[lines.at >= MIN_TEETH - 0.5]
     power = amp[np.clip(np.round(x / (orders[1] - orders[0])).astype(int), 0, amp.size - 1)] ** 2
     keep = np.argsort(-power, kind="stable")[:STRONGEST]
     x, power = x[keep], power[keep]
+    below = lines.at[lines.at < MIN_TEETH - 0.5]  # for a tacho on a faster shaft (tacho_elsewhere's low)
+    low_power = amp[np.clip(np.round(below / (orders[1] - orders[0])).astype(int), 0, amp.size - 1)] ** 2
+    ranked = np.argsort(-low_power, kind="stable")
+    low = (below[ranked], low_power[ranked], np.array([tol_mesh(v, 1.0 / n) for v in below[ranked]]))
     out = {
         "expected": float(z1),
         "measured": None,
@@ -142,7 +150,7 @@ def mesh_check(target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: 
     out["on_mesh"] = float(power[on_mesh].sum() / power.sum())
     # a tacho on another shaft read as this one: every order f times its own (a 16/48 output tacho
     # read as the input: the mesh at 48, all on the comb, 'partly explained' by sensor noise)
-    elsewhere = None if tacho is None else tacho_elsewhere(x, power, tol, *tacho)
+    elsewhere = None if tacho is None else tacho_elsewhere(x, power, tol, *tacho, low)
     if elsewhere is not None:
         table, read, _ = tacho
         out.update(measured=elsewhere[1] * z1, differs=True, shaft=elsewhere[0], factor=elsewhere[1])
@@ -253,8 +261,9 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     check_description on each). A later stage's mesh is often weak, or held by its harmonics, so it
     is not tested against the description's order but against the source's reading of itself (a
     mesh of no whole input order: against the description's): the stage differs when the target's
-    reading moves off that and the target holds no line there. {'stages': [{stage, expected, source,
-    target}], 'line': the one line of the first difference, or None}."""
+    reading moves off that and the target holds no line there (no *source*: against the described
+    order). {'stages': [{stage, expected, source, target}], 'line': the one line of the first
+    difference, or None}."""
     from ..gearbox.match import check_description, tol_mesh
 
     box = _PairDescription.train(pair)
@@ -266,10 +275,11 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     table = order_table(box)
     read = {}
     for name, rows in (("target", target), ("source", source)):
-        lines = _lines(rows, max_order)
-        read[name] = (lines, rows.shape[0], check_description(lines, box, rows.shape[0], True)["stages"])
+        if rows is not None:  # no source: a measured target read against the description alone
+            lines = _lines(rows, max_order)
+            read[name] = (lines, rows.shape[0], check_description(lines, box, rows.shape[0], True)["stages"])
     for k in range(1, len(box.stages)):
-        t, s = read["target"][2][k], read["source"][2][k]
+        t, s = read["target"][2][k], read["source"][2][k] if source is not None else {}
         entry = {
             "stage": k + 1,
             "expected": float(table.stages[k].mesh),
@@ -280,7 +290,7 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
         # A mesh of no whole input order is held by the source at one phase (its revolutions are one
         # steady period each, builder.steady_response): laid end to end they show whole orders only,
         # so its reading of itself says nothing and the target is read against the described order.
-        whole = abs(entry["expected"] - round(entry["expected"])) < 1e-6
+        whole = abs(entry["expected"] - round(entry["expected"])) < 1e-6 and source is not None
         reference = entry["source"] if whole else entry["expected"]
         if reference is None or entry["target"] is None or out["line"] is not None:
             continue
@@ -304,6 +314,12 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
             f"{float(st.pinion_shaft_order):.4g} (the target's mesh is {seen:.1f} such teeth: a tooth count of "
             f"stage {k + 1}, or a wheel upstream, differs)"
         )
+    # a later wheel: its shaft's sidebands of its mesh, as for the first (wheel_line); the last wheel's
+    # count shows nowhere else (a 17/44 + 21/53 reducer described with 52 teeth passed the gap and detection)
+    for k in range(1, len(box.stages)):
+        line = None if out["line"] else wheel_line({"inspect": read["target"][2][k]}, table.stages[k].wheel_teeth)
+        if line:
+            out["line"] = f"stage {k + 1}: {line}"
     return out
 
 
@@ -383,15 +399,18 @@ def mesh_line(check: dict, z1: int) -> str:
     )
 
 
-def wheel_line(mesh: dict, z2: int) -> str | None:
-    """The one line of a wheel's tooth-count difference (mesh_check's reading of its shaft's
-    sidebands, more than half a tooth and its resolution off *z2*), or None."""
-    seen, spread = mesh["inspect"].get("z2_seen"), mesh["inspect"].get("z2_resolution") or 0.0
-    if seen is None or abs(seen - z2) <= max(0.5, spread):
+def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
+    """The one line of a wheel's (or the *role* 'pinion''s) tooth-count difference (mesh_check's
+    reading of its shaft's sidebands, more than half a tooth and its resolution off *z2*), or None."""
+    key = "z1" if role == "pinion" else "z2"
+    seen, spread = mesh["inspect"].get(f"{key}_seen"), mesh["inspect"].get(f"{key}_resolution") or 0.0
+    # read around the described mesh only: a later stage's (the PHM 2009 rig's 48T idler pinion meshing
+    # at order 16, read as stage 1's 32/96 by a one-stage reading) gave '47.7 teeth' for the 96T wheel
+    if seen is None or not mesh["inspect"].get("matched") or abs(seen - z2) <= max(0.5, spread):
         return None
     return (
-        f"the wheel shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh), {z2} expected: the "
-        f"source simulates a {z2}-tooth wheel"
+        f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh), {z2} expected: the "
+        f"source simulates a {z2}-tooth {role}"
     )
 
 
@@ -496,6 +515,43 @@ def _tacho_read(chain, pair) -> tuple | None:
     return order_table(box), box.shafts.index(chain.tacho_shaft), ratio
 
 
+def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> str | None:
+    """The one line of the first tooth-count difference between *pair*'s train and the target's
+    revolutions (*target*, input-shaft revolutions at uniform angle, read up to *max_order*), or None;
+    what was measured goes into *record*. After a speed found from the mesh lines that a whole tooth
+    explains as well, in turn: the first stage's mesh (mesh_check: its tacho's shaft and marks too),
+    its wheel, the later stages (against *plain*'s reading of itself, the source's healthy rows; None:
+    against the description's orders). The gap diagnosis's structure check (first_difference) and the
+    detection kind's check of its history records (gearlab.kinds.detection_records.check_structure)."""
+    # records whose speed the description's mesh lines gave, the source set to it: revolutions cut
+    # at that speed show the described mesh order whatever the teeth (a 14-tooth pinion at 45 Hz
+    # described with 15 read at 42 Hz, 'unexplained'); a speed off the described one by a whole
+    # tooth's share is told, a motor's slip (no whole tooth) is not
+    if chain is not None and chain.speed_from_mesh and chain.described_speed:
+        record.setdefault("speed_hz", {"target": chain.speed})["described"] = chain.described_speed
+        if traded_teeth(chain.speed, chain.described_speed, pair.Z1) is not None:
+            return speed_line(chain.speed, chain.described_speed, pair.Z1)
+    # a tacho on another shaft than the input, or a speed found from the mesh lines: the input's order is
+    # read off its sidebands, as inspect reads it (a 23/61 fan's output tacho, described 24/61: the mesh
+    # at 24 by the described ratio, the input's sidebands 24/23 apart; inspect said '23.0 teeth', detection
+    # ran; a 17/44 + 21/53 reducer without a tacho described with 18 teeth: the speed found 17/18 of its own)
+    input_shaft = _PairDescription.train(pair).shafts[0]
+    on_input = chain is None or (chain.tacho_shaft or (None if chain.speed_from_mesh else input_shaft)) == input_shaft
+    tacho = _tacho_read(chain, pair)
+    record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
+    if mesh["differs"]:
+        return mesh_line(mesh, pair.Z1)
+    # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described
+    # with an 85-tooth wheel: inspect said '86.0 ± 0.2 teeth', the gap fitted effects, 'unexplained')
+    line = (None if on_input else wheel_line(mesh, pair.Z1, "pinion")) or wheel_line(mesh, pair.Z2)
+    if line:
+        return line
+    later = later_stages(target, plain, pair, max_order)
+    if later["stages"]:
+        record["later_stages"] = later["stages"]
+    return later["line"]
+
+
 def first_difference(source, target, pair, settings, rows, fresh, plain, before, chain) -> tuple:
     """(verdict, its one line, what was measured) of the first thing no effect changes that differs
     between the *source* and the *target* -- its speed (a measured target's chain), its tooth count,
@@ -512,29 +568,9 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
         line = speed_line(chain.speed, record["speed_hz"]["source"], pair.Z1 if chain.speed_from_mesh else None)
         if line:
             return "structure differs", line, record
-        # records whose speed the description's mesh lines gave, the source set to it: revolutions cut
-        # at that speed show the described mesh order whatever the teeth (a 14-tooth pinion at 45 Hz
-        # described with 15 read at 42 Hz, 'unexplained'); a speed off the described one by a whole
-        # tooth's share is told, a motor's slip (no whole tooth) is not
-        if chain.speed_from_mesh and chain.described_speed:
-            record["speed_hz"]["described"] = chain.described_speed
-            if traded_teeth(chain.speed, chain.described_speed, pair.Z1) is not None:
-                return "structure differs", speed_line(chain.speed, chain.described_speed, pair.Z1), record
-    record["mesh"] = mesh = mesh_check(
-        target, pair.Z1, pair.Z2, settings.max_order, later_combs(pair), _tacho_read(chain, pair)
-    )
-    if mesh["differs"]:
-        return "structure differs", mesh_line(mesh, pair.Z1), record
-    # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described
-    # with an 85-tooth wheel: inspect said '86.0 ± 0.2 teeth', the gap fitted effects, 'unexplained')
-    line = wheel_line(mesh, pair.Z2)
+    line = structure_line(target, pair, settings.max_order, chain, plain, record)
     if line:
         return "structure differs", line, record
-    later = later_stages(target, plain, pair, settings.max_order)
-    if later["stages"]:
-        record["later_stages"] = later["stages"]
-    if later["line"]:
-        return "structure differs", later["line"], record
     if not gap_seen(before):
         return None, None, record
     c = level_factor(target, plain)

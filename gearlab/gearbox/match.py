@@ -448,39 +448,48 @@ def on_table(x: np.ndarray, table, f: float, tol: np.ndarray, sidebands: int = 3
     return hit
 
 
-def tacho_elsewhere(x, power, tol, table, read: int, ratio: float | None) -> tuple[str, float] | None:
+def tacho_elsewhere(x, power, tol, table, read: int, ratio: float | None, low=None) -> tuple[str, float] | None:
     """(shaft, f) when a record's tacho reads another shaft of the description than shaft *read*, the
     one it was read as, else None. The tacho's turns are then that shaft's, not shaft *read*'s: every
     order reads f = o_read / o_shaft times its own (a 16/48 output tacho read as the input: mesh at
     48, the input at 3, the output at 1). *x*, *power*, *tol*: the record's strongest lines (orders,
-    power, tolerance). The shaft is named when its comb (the table's orders x f) holds the lines as
+    power, tolerance) from order MIN_TEETH - 0.5; *low*: the same of the lines under it, strongest
+    first, or None: a faster shaft (f < 1) is judged on the strongest lines from (MIN_TEETH - 0.5) f, its
+    meshes' lines as its orders read them (an input tacho read as a 17/44 + 21/53 train's output: mesh
+    1 at 2.6, 5.2, 7.8; only 7.8 over order 5.5, and no word of the tacho). The shaft is named when
+    its comb (the table's orders x f) holds the lines as
     a right record's holds them (OFF_COMB, ON_MESH, two mesh harmonics), no line lies on the
     description's comb and off that one (a 16-tooth pinion's 16, 32 or its wheel's sidebands 1/3
     apart: a right reading whose mesh shows only every third harmonic, with the input's sidebands
     one apart, which the output's make too), and the speed read is 1 / f of the described (*ratio*:
     read / described, within TACHO_SPEED_TOL); without a described speed, the description's comb must
     not hold the lines, or a line must lie on the shaft's comb alone, or the strongest line is its mesh."""
-    if x.size < 2:
-        return None
-    total = float(power.sum())
-    right = on_table(x, table, 1.0, tol)
-    fails = power[~right].sum() / total >= OFF_COMB or power[on_table(x, table, 1.0, tol, 0)].sum() / total < ON_MESH
-    first = int(np.argmax(power))
     o_read = float(table.shaft_orders[read])
     for name, o in zip(table.shafts, table.shaft_orders):
         f = o_read / float(o)
         if abs(f - 1.0) < 1e-9:
             continue
-        on, mesh = on_table(x, table, f, tol), on_table(x, table, f, tol, 0)
-        if power[~on].sum() / total >= OFF_COMB or power[mesh].sum() / total < ON_MESH or mesh.sum() < 2:
+        xs, ps, ts = x, power, tol
+        if f < 1 and low is not None:  # the strongest lines down to this shaft's reading of MIN_TEETH
+            keep = low[0] >= (MIN_TEETH - 0.5) * f
+            xs, ps, ts = (np.concatenate([a, b[keep]]) for a, b in zip((x, power, tol), low))
+            top = np.argsort(-ps, kind="stable")[:STRONGEST]
+            xs, ps, ts = xs[top], ps[top], ts[top]
+        if xs.size < 2:
+            continue
+        total = float(ps.sum())
+        right = on_table(xs, table, 1.0, ts)
+        on, mesh = on_table(xs, table, f, ts), on_table(xs, table, f, ts, 0)
+        if ps[~on].sum() / total >= OFF_COMB or ps[mesh].sum() / total < ON_MESH or mesh.sum() < 2:
             continue
         if (right & ~on).any():
             continue
         if ratio is not None:
             called = abs(ratio * f - 1.0) <= TACHO_SPEED_TOL
         else:
-            m1 = f * float(table.stages[0].mesh)
-            called = fails or bool((on & ~right).any()) or abs(x[first] - m1) <= tol[first]
+            fails = ps[~right].sum() / total >= OFF_COMB or ps[on_table(xs, table, 1.0, ts, 0)].sum() / total < ON_MESH
+            first, m1 = int(np.argmax(ps)), f * float(table.stages[0].mesh)
+            called = fails or bool((on & ~right).any()) or abs(xs[first] - m1) <= ts[first]
         if called:
             return str(name), f
     return None

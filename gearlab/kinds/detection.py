@@ -100,6 +100,7 @@ from .detection_figures import captions, roc_charts
 from .detection_figures import draw as draw_figures
 from .detection_records import (
     asynchronous_orders,
+    check_structure,
     folds_of,
     history_training_rows,
     learned_input,
@@ -380,6 +381,12 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("log", message=f"units: revolutions and TSAs of {shaft.said()}"))
         where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
         conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous)
+        # a description (the user's) the history contradicts ends the run; a built-in preset's rig is told
+        said = "gearbox" if "gearbox" in (scenario.raw.get("source") or {}) else "preset"
+        if differs := check_structure(spec.source, spec.target, conditions, scenario.where("source", said)):
+            if said == "gearbox":
+                raise GearlabInputError(differs)
+            on_event(Event("log", message=f"warning: {differs}"))
         folds = {c: folds_of(d.history_fit, cond, c, scenario.path) for c, cond in conditions.items()}
         for c, cond in conditions.items():
             band = f"no shaft order above {cond['max_order']} (the records' band)"

@@ -487,3 +487,41 @@ def trained_on(cond: dict, fold: int | None) -> dict:
     if fold is None:
         return cond
     return {**cond, "history": [h for i, h in enumerate(cond["history"]) if i != fold]}
+
+
+def check_structure(source: DatasetSpec, target: Target, conditions: dict, where: str) -> str | None:
+    """Each condition's history against the [source]'s gear train, before any work: the gap
+    diagnosis's structure check (gearlab.gap.structure.structure_line) on its records' input
+    revolutions laid end to end, each turned into register with the first (as the gap reads its
+    history). The one line of the first tooth count, tacho shaft or marks per turn the records
+    contradict, or None: methods trained on a simulator of another gearbox score nothing of this one
+    (a 23/61 description of a 24/61 fan's records gave a report, and no word of the difference)."""
+    from ..data.builder import operating_point
+    from ..gap.structure import structure_line
+    from ..gap.views import gear_pair_of
+
+    pair, described = gear_pair_of(source), operating_point(source)[0]
+    from_mesh = target.tacho is None and bool(target.gearbox) and target.speed_hz is None
+    for name, cond in conditions.items():
+        rows = []
+        for f, _ in cond["history"]:
+            revs = cond["raw"][f.path][0]
+            if rows:
+                _, revs = aligned(rows[0].mean(axis=0), revs, target.tacho, target.marks, continuous=True)
+            rows.append(revs)
+        first = cond["history"][0][0].path
+        speed = float(np.average([cond["speeds"][f.path] for f, _ in cond["history"]], weights=[len(r) for r in rows]))
+        chain = Chain(
+            fs=cond["fs"][first],
+            speed=speed,
+            speed_from_mesh=from_mesh and all(f.speed_hz is None for f, _ in cond["history"]),
+            described_speed=described,
+            tacho_shaft=target.read_as,
+        )
+        line = structure_line(np.concatenate(rows).astype(np.float64), pair, cond["max_order"], chain, None, {})
+        if line:
+            return (
+                f"{where}: the history of condition '{name}' differs from the [source]'s gearbox: {line}; "
+                f"expected the records' gearbox (gearlab inspect {first} --gearbox ... says what differs)"
+            )
+    return None
