@@ -451,6 +451,24 @@ def test_steady_state_is_periodic(name):
         assert rel(revs[first], revs[first - 1]) > 1e-6
 
 
+def test_a_longer_run_continues_a_shorter_one_with_the_same_floats():
+    """steady_response lengthens a run that has not settled: the longer run continues the shorter
+    one (Simulator.run's *after*) and must equal a run from the start bit for bit; a shorter run of
+    another call (another speed) is not continued."""
+    m = MODELS["six_dof"]
+    sim = sim_at("six_dof", m["speed"])
+    fault = [place_fault(REG, sim.pair, "crack", 5, step=10)]
+    args = (fault, m["speed"], m["load"])
+    short = sim.run(*args, duration=2 / m["speed"], channels=[m["channel"]])
+    whole = sim.run(*args, duration=5 / m["speed"], channels=[m["channel"]])
+    went_on = sim.run(*args, duration=5 / m["speed"], channels=[m["channel"]], after=short)
+    assert np.array_equal(went_on.channels[m["channel"]], whole.channels[m["channel"]])
+    assert all(np.array_equal(a, b) for a, b in zip(went_on.state, whole.state))
+    other = sim.run(fault, m["speed"] * 1.25, m["load"], duration=2 / m["speed"], channels=[m["channel"]])
+    again = sim.run(*args, duration=5 / m["speed"], channels=[m["channel"]], after=other)
+    assert np.array_equal(again.channels[m["channel"]], whole.channels[m["channel"]])
+
+
 # --- the rank-one solver against a plain Newmark ------------------------------------------
 
 

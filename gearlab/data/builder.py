@@ -125,8 +125,11 @@ def steady_response(
         )
     per_block = per_rev * cycle
     blocks, most = (8, 256) if cycle == period else (3, 12)  # a long cycle: few blocks (the transient is in the first)
+    result = None
     while True:
-        result = sim.run(faults, speed, load, duration=blocks * cycle / speed, channels=[channel], effects=effects)
+        # a longer run continues the shorter one (the same floats as a run from the start: Simulator.run)
+        duration = blocks * cycle / speed
+        result = sim.run(faults, speed, load, duration=duration, channels=[channel], effects=effects, after=result)
         x = result.channels[channel][: blocks * per_block].reshape(blocks, per_block)
         try:
             first = steady_start(x, rtol=STEADY_RTOL)

@@ -309,11 +309,16 @@ class Simulator:
         duration: float = 0.4,
         channels: Sequence[str] | None = None,
         effects: Sequence = (),
+        after: Simulation | None = None,
     ) -> Simulation:
         """Integrate from the static equilibrium for *duration* seconds.
 
         *effects*: excitation-level effects as (Effect, resolved params) pairs (gearlab.effects.EffectChain.at),
         applied in order to the nominal excitation (fixed speed, constant load) before the loop.
+        *after*: a shorter run of this very call (the same faults, operating point and channels): its
+        steps are kept and the loop continues from its final state, the same floats as a run from
+        the start (every series is a function of the step alone). Only without effects on one
+        mesh; else, or when *after* does not fit, the whole run is integrated.
 
         The stages: check the operating point, the mesh stiffness k(t) along the nominal shaft
         angle, the excitation effects, the static equilibrium, the Newmark loop, the result.
@@ -342,8 +347,15 @@ class Simulator:
         F, (u, v, a) = self._equilibrium(load, k_mean, means)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
         out = np.empty((steps + 1, len(out_idx)))
-        failed = self._newmark(k, forces, angle, t, speed, per_rev, F, (u, v, a), out_idx, out, staged[1:])
+        done = self._continued(after, faults, speed, load, channels, steps, effects)
+        if done:
+            out[: done + 1] = np.column_stack([after.channels[ch] for ch in channels])
+            u, v, a = (x.copy() for x in after.state)
+        failed = self._newmark(
+            k[done:], forces, angle, t[done:], speed, per_rev, F, (u, v, a), out_idx, out[done:], staged[1:]
+        )
         if failed >= 0:
+            failed += done
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise SimulationError(
                 f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
@@ -366,6 +378,17 @@ class Simulator:
             state=(u, v, a),
             angle=angle,
         )
+
+    def _continued(self, after, faults, speed: float, load: float, channels, steps: int, effects) -> int:
+        """The steps of *after* that a run of *steps* keeps (:meth:`run`): 0 unless it is a shorter run
+        of the same call on a one-mesh model without effects."""
+        if after is None or effects or self.meshes or after.angle is not None:
+            return 0
+        same = (after.speed_hz, after.load_nm, after.fs, tuple(after.faults)) == (speed, load, self.fs, tuple(faults))
+        done = len(after.t) - 1
+        if not same or list(after.channels) != list(channels) or not 0 < done < steps or len(after.state) != 3:
+            return 0
+        return done
 
     def _operating_point(
         self, speed_hz: float | None, load_nm: float | None, duration: float, channels: Sequence[str] | None, where: str
