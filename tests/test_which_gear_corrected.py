@@ -75,3 +75,66 @@ def test_the_events_come_from_the_corrected_simulator(condition, tmp_path):
     revs, first = condition["raw"]["chip"]
     scored = D.localise_scored(run, {"25 Hz": [("new", revs, first, SPEED, FS)]})["new"]
     assert scored["named"] == PINION, scored["summary"]
+
+
+FAN = """[gearbox]
+name = "fan"
+[operation]
+speed = "35 Hz"
+load = "40 N*m"
+[[stages]]
+module = "2 mm"
+face_width = "20 mm"
+pinion = { z = 19, bore = "20 mm" }
+wheel = { z = 58, bore = "20 mm" }
+[[stages]]
+module = "3 mm"
+face_width = "20 mm"
+pinion = { z = 25, bore = "20 mm" }
+wheel = { z = 67, bore = "20 mm" }
+[sensor]
+near = "input"
+direction = "x"
+"""
+
+
+def test_a_train_of_a_long_grand_period_simulates_a_few_slow_shaft_turns(tmp_path, monkeypatch):
+    """19/58 + 25/67: the grand period is 3,886 input turns; per-shaft TSAs need a few turns of the
+    slowest shaft (the output's 0.122 order: 66 input turns), not three grand periods (11,658 turns,
+    382 MB a record): the same events within 1e-3."""
+    from gearlab.data import which_templates as W
+    from gearlab.gearbox import order_table, resolve_gearbox
+    from gearlab.signals import POINTS
+    from gearlab.signals import localise as L
+
+    box = tmp_path / "fan.toml"
+    box.write_text(FAN)
+    table = order_table(resolve_gearbox(str(box)))
+    lay = L.layout(table, POINTS, 140, max_order=200)
+    assert lay.mode == "shafts"
+    asked, simulate = [], W._revolutions
+
+    def spy(*args):
+        asked.append(args[4])
+        return simulate(*args)
+
+    monkeypatch.setattr(W, "_revolutions", spy)
+    events = W.simulated_templates(table, 35.0, 20_000.0, gearbox=str(box), sim_fs=60_000.0)(lay)
+    assert set(asked) == {66} and len(asked) == 7  # healthy, and 3 kinds on each of the 58T and 25T
+    healthy, chip = (
+        _mean(simulate(str(box), 35.0, 20_000.0, 60_000.0, 4 * 66, fault, "[]"), lay)
+        for fault in (None, ("intermediate pinion", "chip"))
+    )
+    # what the events are read at: the two-gear shaft's orders (its fit) and the mesh harmonics (the gate)
+    on = lay.source == lay.shafts.index("intermediate")
+    template = events["gears"]["intermediate pinion 25T (stage 2)"][0]
+    assert abs(template[on] - (chip - healthy)[on]).max() < 1e-4 * abs(template[on]).max()
+    at = lay.carrier
+    assert abs(events["healthy"][at] - healthy[at]).max() < 1e-2 * abs(healthy[at]).max()
+
+
+def _mean(simulated, lay):
+    from gearlab.signals import localise as L
+
+    revolutions, first = simulated
+    return L.content(revolutions, lay, first).mean

@@ -19,6 +19,10 @@ from ..errors import GearlabInputError
 KINDS = ("chip", "spall", "crack")  # the event's shape differs by kind: the best fit of the three counts
 STEP = 16  # a mid ladder step: the shape, not the size, is compared
 PERIODS = 3  # grand periods simulated (noise-free: the mean of a few is exact)
+# turns of the slowest shaft simulated for a layout of per-shaft TSAs (a train whose grand period is
+# long: 3 of the 19/58 + 25/67 fan's are 11,658 input turns, 382 MB and 36 s per event; 8 output turns
+# are 66, the means within 3e-5 of them)
+SHAFT_TURNS = 8
 SIM_FS = 60_000.0  # a description's model integrated at least this fast: a logger's rate is too low for stiff modes
 SPEED_DIGITS = 3  # a record's speed to 3 significant digits: takes at 30.01 and 30.02 Hz share one simulation
 
@@ -55,9 +59,12 @@ def simulated_templates(
 
     gears = [g for on in L.gears_of(table).values() if len(on) == 2 for g in on]
     period = int(table.train_period)
-    revs = max(PERIODS * period, 12)
+    slowest = min(float(o) for o in table.shaft_orders)
 
     def at(lay) -> dict:
+        # grand periods for a grand-period layout; else a few turns of the slowest shaft
+        revs = max(PERIODS * period if lay.mode == "grand" else math.ceil(SHAFT_TURNS / slowest), 12)
+
         def mean(fault):
             r, first = _revolutions(gearbox, float(speed_hz), float(fs), sim_fs, revs, fault, tables)
             if lay.mode == "grand":
