@@ -497,12 +497,15 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("advance", stage="runs", done=finished, total=len(todo)))
 
         # the joint trainings first (a corrected source's draws before a plain one), then the
-        # source-only and target trainings, the detectors last
+        # source-only and target trainings, the detectors last in their order (their records,
+        # appended as they end, give the order of the report's rows)
+        def cost(u: tuple) -> tuple:
+            joint = domain_adapting(u[2].adapter)
+            return joint, not u[2].is_detector, joint and bool(u[1])
+
         for phase in phases:
             tasks = []
-            for c, v, m, seed, k in longest_first(
-                phase, lambda u: (domain_adapting(u[2].adapter), not u[2].is_detector, bool(u[1]))
-            ):
+            for c, v, m, seed, k in longest_first(phase, cost):
                 cond = conditions[c]
                 states = run.file("states", folders[(c, v)])
                 tasks.append(
