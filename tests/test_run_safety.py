@@ -264,7 +264,7 @@ ALLOWED = {
 }
 SAVES = {"save", "savez", "savez_compressed", "savetxt", "tofile"}
 LOADS = {"load", "loadtxt", "fromfile"}
-NOT_FILES = {"RunDir", "webbrowser"}  # X.open(...) that opens no file of the package's choosing
+NOT_FILES = {"RunDir", "webbrowser", "executor"}  # X.open(...) that opens no file (executor: a Ray session)
 
 
 def _in_memory(node: ast.AST, buffers: set[str]) -> bool:
