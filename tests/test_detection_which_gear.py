@@ -6,19 +6,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from which_gear_takes import rig_condition
 
 from gearlab.data.simulated import simulated_record
 from gearlab.data.spec import dataset_preset
 from gearlab.kinds import detection_which_gear as D
-from gearlab.parts.measured import TargetFile
-from gearlab.signals import cut_revolutions
 
 SPEED = 40.0
-
-
-def raw(faults, seed):
-    rec = simulated_record(faults, speed_hz=SPEED, revolutions=80, snr_db=30.0, seed=seed)
-    return cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none").revolutions, 0
 
 
 @pytest.fixture(scope="module")
@@ -30,15 +24,9 @@ def target():
         "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
         "ok": ("test", "healthy", [], 5),
     }
-    tf = {p: TargetFile(p, p, role, label, "40 Hz") for p, (role, label, _, _) in files.items()}
-    cond = {
-        "history": [(tf["h1"], None), (tf["h2"], None)],
-        "test": [(tf[p], None) for p in ("wheel", "pinion", "ok")],
-        "raw": {p: raw(faults, seed) for p, (_, _, faults, seed) in files.items()},
-        "max_order": int(0.9 * 66666.67 / 2 / SPEED),
-    }
+    cond, labels = rig_condition(files, SPEED, revolutions=80)
     source = dataset_preset("phm09-30")
-    return source, {"40 Hz": cond}, {p: label for p, (_, label, _, _) in files.items()}
+    return source, {"40 Hz": cond}, labels
 
 
 def test_the_watched_gear_is_the_sources_faulty_one(target):

@@ -4,13 +4,11 @@ localised on a watched gear and on another gear is called the watched gear's fau
 too (gearlab.kinds.detection_which_gear). Simulated PHM 2009 rig records, a few seconds each."""
 
 import pytest
+from which_gear_takes import rig_condition
 
-from gearlab.data.simulated import simulated_record
 from gearlab.data.spec import dataset_preset
 from gearlab.gearbox import order_table
 from gearlab.kinds import detection_which_gear as D
-from gearlab.parts.measured import TargetFile
-from gearlab.signals import cut_revolutions
 
 SPEED = 40.0
 PINION, IDLER_GEAR = "input pinion 32T (stage 1)", "idler gear 96T (stage 1)"
@@ -18,11 +16,6 @@ BOTH = [
     {"name": "chip", "gear": "input pinion", "tooth": 9, "step": 20},
     {"name": "chip", "gear": "idler gear", "tooth": 40, "step": 20},
 ]
-
-
-def raw(faults, seed):
-    rec = simulated_record(faults, speed_hz=SPEED, revolutions=90, snr_db=30.0, seed=seed)
-    return cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none").revolutions, 0
 
 
 @pytest.fixture(scope="module")
@@ -34,14 +27,8 @@ def target():
         "pinion": ("test", "fault", BOTH[:1], 4),
         "wheel": ("test", "wheel", BOTH[1:], 5),
     }
-    tf = {p: TargetFile(p, p, role, label, "40 Hz") for p, (role, label, _, _) in files.items()}
-    cond = {
-        "history": [(tf["h1"], None), (tf["h2"], None)],
-        "test": [(tf[p], None) for p in ("both", "pinion", "wheel")],
-        "raw": {p: raw(faults, seed) for p, (_, _, faults, seed) in files.items()},
-        "max_order": int(0.9 * 66666.67 / 2 / SPEED),
-    }
-    return {"40 Hz": cond}, {p: label for p, (_, label, _, _) in files.items()}
+    cond, labels = rig_condition(files, SPEED, revolutions=90)
+    return {"40 Hz": cond}, labels
 
 
 def test_a_class_on_both_gears_of_a_pair_watches_both():

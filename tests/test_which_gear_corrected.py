@@ -4,16 +4,14 @@ not from the [source]'s description alone, and `gearlab score` alike (localisati
 Records of the 21/63 + 24/56 reducer with bearings 0.3 times as stiff as its description's, a chip on
 the intermediate shaft's 24T pinion."""
 
-import math
-from pathlib import Path
-
 import pytest
+from which_gear_takes import REDUCER as TWO
+from which_gear_takes import reducer_take
 
 from gearlab.kinds import detection_which_gear as D
 from gearlab.parts.measured import TargetFile
 from gearlab.runs import RunDir
 
-TWO = Path(__file__).resolve().parents[1] / "examples" / "gearboxes" / "reducer_21_63_24_56.toml"
 SPEED, FS = 25.0, 20_000.0
 PINION = "intermediate pinion 24T (stage 2)"
 SOFT = (("bearing_stiffness", (("k_factor", 0.3), ("c_factor", 1.0))),)
@@ -22,25 +20,10 @@ CHIP = [{"name": "chip", "gear": "intermediate pinion", "tooth": 20, "step": 18}
 
 @pytest.fixture(scope="module")
 def condition():
-    from gearlab.data.simulated import simulated_record
-    from gearlab.signals import cut_revolutions
-
     raw = {}
     for name, faults, seed in (("h1", [], 301), ("h2", [], 302), ("chip", CHIP, 303)):
-        rec = simulated_record(
-            faults,
-            gearbox=str(TWO),
-            speed_hz=SPEED,
-            load_nm=10.5,
-            revolutions=4 * SPEED,
-            snr_db=25.0,
-            seed=seed,
-            fs=FS,
-            sim_fs=60_000.0,
-            effects=[{"name": "bearing_stiffness", "k_factor": 0.3}],
-        )
-        cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
-        raw[name] = (cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0)
+        _, revolutions, first = reducer_take(faults, seed, SPEED, FS, [{"name": "bearing_stiffness", "k_factor": 0.3}])
+        raw[name] = (revolutions, first)
     tf = {p: TargetFile(p, p, "history" if p != "chip" else "test", "", "25 Hz") for p in raw}
     return {
         "history": [(tf["h1"], None), (tf["h2"], None)],

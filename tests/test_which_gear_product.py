@@ -5,17 +5,16 @@ does, and say which rule named it. A 21/63 + 24/56 train's 24T stage-2 pinion ch
 leaves the intermediate shaft undecided (as in test_localise)."""
 
 import json
-import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from which_gear_takes import REDUCER as TWO
+from which_gear_takes import reducer_take
 
 from gearlab.kinds import detection_which_gear as D
 from gearlab.parts.measured import TargetFile
 from gearlab.runs import RunDir
 
-TWO = Path(__file__).resolve().parents[1] / "examples" / "gearboxes" / "reducer_21_63_24_56.toml"
 SPEED, FS = 25.0, 20_000.0
 PINION, WHEEL = "intermediate pinion 24T (stage 2)", "intermediate gear 63T (stage 1)"
 CHIP = [{"name": "chip", "gear": "intermediate pinion", "tooth": 20, "step": 18}]
@@ -24,27 +23,13 @@ CHIP = [{"name": "chip", "gear": "intermediate pinion", "tooth": 20, "step": 18}
 @pytest.fixture(scope="module")
 def takes(tmp_path_factory):
     """{name: (file, revolutions, first revolution)}: two healthy takes and the chipped one."""
-    from gearlab.data.simulated import simulated_record
-    from gearlab.signals import cut_revolutions
-
     where = tmp_path_factory.mktemp("which")
     out = {}
     for name, faults, seed in (("h1", [], 201), ("h2", [], 202), ("chip", CHIP, 203)):
-        rec = simulated_record(
-            faults,
-            gearbox=str(TWO),
-            speed_hz=SPEED,
-            load_nm=10.5,
-            revolutions=4 * SPEED,
-            snr_db=25.0,
-            seed=seed,
-            fs=FS,
-            sim_fs=60_000.0,
-        )
+        rec, revolutions, first = reducer_take(faults, seed, SPEED, FS)
         path = where / f"{name}.npz"
         np.savez(path, acc=rec.vibration, tacho=rec.tacho, fs=rec.fs)
-        cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
-        out[name] = (str(path), cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0)
+        out[name] = (str(path), revolutions, first)
     return out
 
 

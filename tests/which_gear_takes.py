@@ -1,0 +1,57 @@
+"""Simulated takes for the which-gear tests (gearlab.kinds.detection_which_gear): records of the
+PHM 2009 rig and of the 21/63 + 24/56 reducer, cut into revolutions as the detection kind cuts them,
+and the detection kind's condition of a few such records."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+REDUCER = Path(__file__).resolve().parents[1] / "examples" / "gearboxes" / "reducer_21_63_24_56.toml"
+RIG_FS = 66666.67  # the PHM 2009 rig's sampling rate (simulated_record's default)
+
+
+def cut(rec):
+    """The take *rec*'s revolutions by its tacho, no transient dropped."""
+    from gearlab.signals import cut_revolutions
+
+    return cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none").revolutions
+
+
+def reducer_take(faults, seed, speed, fs, effects=()):
+    """A take of 4 s of the reducer at *speed* Hz and 10.5 N*m, 25 dB SNR, sampled at *fs* (simulated at
+    60 kHz) with *effects*: (record, revolutions, index of its first whole revolution in the grand period)."""
+    from gearlab.data.simulated import simulated_record
+
+    rec = simulated_record(
+        faults,
+        gearbox=str(REDUCER),
+        speed_hz=speed,
+        load_nm=10.5,
+        revolutions=4 * speed,
+        snr_db=25.0,
+        seed=seed,
+        fs=fs,
+        sim_fs=60_000.0,
+        effects=effects,
+    )
+    return rec, cut(rec), (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+
+
+def rig_condition(files: dict, speed: float, revolutions: int):
+    """The detection kind's condition of simulated PHM 2009 rig takes *files* {name: (role, label, faults,
+    seed)} ("history" or "test") of *revolutions* at *speed* Hz, 30 dB SNR; and the labels by name."""
+    from gearlab.data.simulated import simulated_record
+    from gearlab.parts.measured import TargetFile
+
+    tf = {p: TargetFile(p, p, role, label, f"{speed:g} Hz") for p, (role, label, _, _) in files.items()}
+    raw = {}
+    for p, (_, _, faults, seed) in files.items():
+        raw[p] = (cut(simulated_record(faults, speed_hz=speed, revolutions=revolutions, snr_db=30.0, seed=seed)), 0)
+    cond = {
+        "history": [(tf[p], None) for p, (role, *_) in files.items() if role == "history"],
+        "test": [(tf[p], None) for p, (role, *_) in files.items() if role == "test"],
+        "raw": raw,
+        "max_order": int(0.9 * RIG_FS / 2 / speed),
+    }
+    return cond, {p: label for p, (_, label, _, _) in files.items()}
