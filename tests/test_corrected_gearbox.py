@@ -12,7 +12,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from tiny import EXECUTION, run_once
+from tiny import rig_gap_run
 
 from gearlab.data.builder import _configured_simulator, steady_revolution
 from gearlab.data.spec import DatasetSpec
@@ -159,55 +159,11 @@ def test_write_corrected_writes_into_the_run_directory_only_when_there_is_someth
 
 # --- the gap kind writes it and says so -----------------------------------------------------------
 
-SIMULATED = """gearbox = "rig.toml"
-teeth = [1]
-faults = { chip = [20] }
-healthy = 12
-fs = 40000"""  # the source and the target alike, the target with the bearing fitted
-
-GAP = (
-    f"""\
-[scenario]
-name = "rig_gap"
-kind = "gap"
-
-[source]
-{SIMULATED}
-
-[target]
-{SIMULATED}
-effects = [{{ name = "bearing_stiffness", k_factor = 0.5 }}]
-
-[diagnosis]
-candidates = ["sensor_noise", "bearing_stiffness"]
-budget = 2
-healthy = 10
-bootstrap = 10
-permutations = 20
-
-[accuracy]
-enabled = false
-
-"""
-    + EXECUTION
-)
-
 
 @pytest.mark.filterwarnings("ignore:.*gives fewer than 10 steps")  # 40 kHz: a cheap target
 def test_a_gap_run_of_a_description_writes_the_corrected_description(tmp_path, module_cache):
-    from test_gap_kind import fake_module
-
-    module = fake_module([])
-    plain = module.diagnose
-
-    def diagnose(source, target_X, settings, **kw):
-        out = plain(source, target_X, settings, **kw)
-        out["corrected_effects"] = [BEARING, NOISE]
-        return out
-
-    module.diagnose = diagnose
-    shutil.copy(RIG16, tmp_path / "rig.toml")
-    run = run_once(tmp_path, "gap.toml", GAP, module_cache, {"gearlab.gap.diagnose": module})
+    bearing = 'effects = [{ name = "bearing_stiffness", k_factor = 0.5 }]'  # the target with the bearing fitted
+    run = rig_gap_run(tmp_path, module_cache, RIG16, bearing, "bearing_stiffness", [BEARING, NOISE])
     summary = json.loads((run / "summary.json").read_text())
     assert summary["corrected_description"] == FILE
     box = load_gearbox(run / FILE)

@@ -9,12 +9,11 @@ simulates the load times the level; the written description simulates as the sou
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
-from tiny import EXECUTION, run_once
+from tiny import rig_gap_run
 
 from gearlab.data.simulated import simulated_record
 from gearlab.errors import GearlabInputError
@@ -108,54 +107,9 @@ def test_with_a_dynamics_fit_both_tables_are_written(tmp_path):
     assert text.index("[operation]") < text.index("load_level = 1.5") < text.index("[[stages]]")
 
 
-SIMULATED = """gearbox = "rig.toml"
-teeth = [1]
-faults = { chip = [20] }
-healthy = 12
-fs = 40000"""
-
-GAP = (
-    f"""\
-[scenario]
-name = "rig_gap"
-kind = "gap"
-
-[source]
-{SIMULATED}
-
-[target]
-{SIMULATED}
-load = "10.5 N*m"
-
-[diagnosis]
-candidates = ["sensor_noise", "load_level"]
-budget = 2
-healthy = 10
-bootstrap = 10
-permutations = 20
-
-[accuracy]
-enabled = false
-
-"""
-    + EXECUTION
-)
-
-
 def test_a_gap_run_whose_load_is_off_writes_the_corrected_load(tmp_path, module_cache):
-    from test_gap_kind import fake_module
-
-    module = fake_module([])
-    plain = module.diagnose
-
-    def diagnose(source, target_X, settings, **kw):  # a stand-in diagnosis: the load found 1.5 x the source's
-        out = plain(source, target_X, settings, **kw)
-        out["corrected_effects"] = [LOAD, NOISE]
-        return out
-
-    module.diagnose = diagnose
-    shutil.copy(RIG16, tmp_path / "rig.toml")
-    run = run_once(tmp_path, "gap.toml", GAP, module_cache, {"gearlab.gap.diagnose": module})
+    # a stand-in diagnosis: the load found 1.5 x the source's
+    run = rig_gap_run(tmp_path, module_cache, RIG16, 'load = "10.5 N*m"', "load_level", [LOAD, NOISE])
     assert json.loads((run / "summary.json").read_text())["corrected_description"] == FILE
     box = load_gearbox(run / FILE)
     assert (box.load_nm, box.load_level, box.torque()) == (7.0, 1.5, 10.5)  # the target's 10.5 N*m

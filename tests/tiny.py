@@ -136,3 +136,34 @@ def records(run: Path) -> dict[str, dict]:
         r = json.loads(line)
         out[r["unit"]] = {k: v for k, v in r.items() if "seconds" not in k and "time" not in k}
     return out
+
+
+RIG_DOMAIN = """gearbox = "rig.toml"
+teeth = [1]
+faults = { chip = [20] }
+healthy = 12
+fs = 40000"""  # 40 kHz: a cheap target, source and target alike
+
+
+def rig_gap_run(folder: Path, cache: Path, rig: Path, target: str, candidate: str, corrected: list) -> Path:
+    """The run directory of a gap run "rig_gap" of the description *rig* (copied to folder/rig.toml): its
+    [target] the [source] plus the line *target*, diagnosing sensor_noise and *candidate* by a stand-in
+    diagnosis (test_gap_kind.fake_module) that reports the *corrected* effects."""
+    import shutil
+
+    from test_gap_kind import fake_module
+
+    module = fake_module([])
+    plain = module.diagnose
+
+    def diagnose(source, target_X, settings, **kw):
+        return {**plain(source, target_X, settings, **kw), "corrected_effects": corrected}
+
+    module.diagnose = diagnose
+    shutil.copy(rig, folder / "rig.toml")
+    text = (
+        f'[scenario]\nname = "rig_gap"\nkind = "gap"\n\n[source]\n{RIG_DOMAIN}\n\n[target]\n{RIG_DOMAIN}\n{target}\n\n'
+        f'[diagnosis]\ncandidates = ["sensor_noise", "{candidate}"]\nbudget = 2\nhealthy = 10\nbootstrap = 10\n'
+        f"permutations = 20\n\n[accuracy]\nenabled = false\n\n{EXECUTION}"
+    )
+    return run_once(folder, "gap.toml", text, cache, {"gearlab.gap.diagnose": module})
