@@ -16,6 +16,7 @@ from typing import Any
 from .confined import Confined
 from .errors import GearlabInputError
 from .events import PROGRESS, Event, EventSink, ignore_events, standing, telling_figures
+from .executors import UnitLines
 from .files import cannot_write, write_problem
 from .kinds import SCENARIO_KINDS
 from .kinds.common import executor_for
@@ -37,11 +38,13 @@ from .scenario import (
 
 class ProgressWatcher(threading.Thread):
     """Turns the progress/ folder into events: Event('unit', stage=unit, message=text) when a
-    unit reports, and with an empty message when its file goes (the unit ended)."""
+    unit reports, and with an empty message when its file goes (the unit ended). The lines of
+    units that report elsewhere (``elsewhere``: a Ray run's, Executor.unit_lines) count alike."""
 
     def __init__(self, run: RunDir, on_event: EventSink, every: float = 0.5):
         super().__init__(daemon=True)
         self.folder, self.on_event, self.every = run.file(PROGRESS), on_event, every
+        self.elsewhere: UnitLines | None = None
         self.stopped = threading.Event()
         try:
             self.folder.remove_tree()  # left by a killed run
@@ -52,11 +55,11 @@ class ProgressWatcher(threading.Thread):
         shown: dict[str, str] = {}
         while not self.stopped.wait(self.every):
             shown = self.scan(shown)
-        self.scan(shown)  # a last look: a unit that ended since the previous one still says so
+        self.scan(shown, final=True)  # a last look: a unit that ended since the previous one still says so
 
-    def scan(self, shown: dict[str, str]) -> dict[str, str]:
+    def scan(self, shown: dict[str, str], final: bool = False) -> dict[str, str]:
         """Send the reports that changed since *shown* and the ends of the units gone; the
-        reports now shown."""
+        reports now shown. *final*: the last look waits for the lines from elsewhere."""
         now = {}
         try:
             reports = self.folder.files("*.txt")
@@ -67,6 +70,9 @@ class ProgressWatcher(threading.Thread):
                 now[path.stem.replace("__", "/")] = path.read_bytes(limit=1 << 16).decode(errors="replace")
             except (OSError, GearlabInputError):  # it went between the listing and the read
                 continue
+        elsewhere = self.elsewhere
+        if elsewhere is not None:
+            now.update(elsewhere(final))
         for unit, text in now.items():
             if shown.get(unit) != text:
                 self.on_event(Event("unit", stage=unit, message=text))
@@ -79,6 +85,8 @@ class ProgressWatcher(threading.Thread):
         empty progress/ beside its results, as it left its .lock)."""
         self.stopped.set()
         self.join()
+        if self.elsewhere is not None:
+            self.elsewhere.close()
         try:
             self.folder.remove_tree()
         except (OSError, GearlabInputError):  # a file system that refuses: the next run's start removes it
@@ -179,7 +187,7 @@ def run_scenario(
         watcher.start()
         status = "failed"
         try:
-            _ray_opened(scenario, on_event)
+            watcher.elsewhere = _ray_opened(scenario, on_event, str(run.path))
             with telling_figures(on_event) as finish:
                 SCENARIO_KINDS[scenario.kind].run(scenario, run, on_event)
                 write_report(run)
@@ -216,18 +224,21 @@ def run_scenario(
     return run
 
 
-def _ray_opened(scenario: Scenario, on_event: EventSink) -> None:
+def _ray_opened(scenario: Scenario, on_event: EventSink, space: str) -> UnitLines | None:
     """A Ray run starts its local instance (15-30 s on 2 busy cores) or connects to its cluster as a
     stage of its own, before the kind's first: that time passed under the first bar, at 0 and with
-    no word of Ray (issue 41). The kind's executor then finds the session open (one per process)."""
+    no word of Ray (issue 41). The kind's executor then finds the session open (one per process).
+    Returns where the run's units report their lines on Ray (the session's board), read by the
+    watcher: a cluster's nodes share no progress/ folder with this process."""
     if scenario.tables["execution"]["executor"] != "ray":
-        return
+        return None
     executor = executor_for(scenario)
     where = f"connecting to the cluster at {executor.address}" if executor.address else "starting a local instance"
     on_event(Event("stage", stage="ray", total=1, message=f"Ray: {where}"))
     with standing(on_event, "ray", "waiting for Ray to answer"):  # says for how long after 3 s
         executor.open()
     on_event(Event("advance", stage="ray", done=1, total=1))
+    return executor.unit_lines(space)
 
 
 def _trained_on(run: RunDir) -> str | None:

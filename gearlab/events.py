@@ -1,8 +1,9 @@
 """Progress events: what a run tells its front-end (the CLI's bars, the TUI's widgets).
 
 A run sends :class:`Event` objects to one callback (an :data:`EventSink`); a unit running in
-another process or on a cluster node reports through a small file (:class:`UnitProgress`)
-that the run engine watches (gearlab.engine.ProgressWatcher). Low level: the data builder,
+another process reports through a small file (:class:`UnitProgress`) that the run engine
+watches (gearlab.engine.ProgressWatcher), a unit on a Ray cluster's node through the board its
+executor gives it (:func:`units_report_to`: the nodes share no disk). Low level: the data builder,
 the gap diagnosis and the learners send events without knowing the engine.
 """
 
@@ -264,11 +265,39 @@ def telling_figures(on_event: EventSink) -> Iterator[Callable[[], None]]:
 STANDING_S = 3.0  # a unit's line that stood this long says for how long, each second
 
 
+class Board:
+    """Where units report their lines when not through the run directory's progress/ folder (a Ray
+    cluster's nodes share no disk with the driver: gearlab.executors gives its tasks an actor's
+    board). *space* tells runs apart: the run directory's path as the unit was given it."""
+
+    def say(self, space: str, unit: str, text: str) -> None:
+        raise NotImplementedError
+
+    def end(self, space: str, unit: str) -> None:
+        """The unit ended: its line goes (returns once the board holds that, so that a driver that
+        learns of the unit's end after this does not still see its line)."""
+        raise NotImplementedError
+
+
+_board: ContextVar[Board | None] = ContextVar("board", default=None)
+
+
+@contextmanager
+def units_report_to(board: Board | None) -> Iterator[None]:
+    """The UnitProgress opened inside report to *board* (None: to files, the default)."""
+    token = _board.set(board)
+    try:
+        yield
+    finally:
+        _board.reset(token)
+
+
 class UnitProgress:
     """What a unit in progress reports ('epoch 120, validation accuracy 88 %'), written to a
-    small file in the run directory's progress/ folder, from whichever process or cluster node
-    runs the unit; the engine watches the folder (ProgressWatcher) and sends 'unit' events.
-    Use as a context manager: the file goes when the unit ends.
+    small file in the run directory's progress/ folder, from whichever process runs the unit;
+    the engine watches the folder (ProgressWatcher) and sends 'unit' events. A unit that runs
+    where units report to a board (:func:`units_report_to`: a Ray task) says it there instead.
+    Use as a context manager: the file (or the board's line) goes when the unit ends.
 
     While it is open a thread keeps the file current: a report that came within *every* of the
     last write is written when that time is up (it was dropped before, and the line showed an
@@ -278,6 +307,7 @@ class UnitProgress:
 
     def __init__(self, run_path: Path, unit: str, every: float = 0.5):
         self.file = Confined(run_path, (PROGRESS, unit.replace("/", "__") + ".txt"))
+        self.board, self.space, self.unit = _board.get(), str(run_path), unit
         self.every, self.last = every, -every
         self.text, self.since, self.shown = "", 0.0, ""
         self.lock = threading.Lock()
@@ -296,7 +326,10 @@ class UnitProgress:
                 self._write(text)
 
     def _write(self, text: str) -> None:
-        self.file.write(text)
+        if self.board is None:
+            self.file.write(text)
+        else:
+            self.board.say(self.space, self.unit, text)
         self.last, self.shown = time.monotonic(), text
 
     def _keep(self) -> None:
@@ -321,7 +354,10 @@ class UnitProgress:
         self.closed.set()
         if self.keeper is not None:
             self.keeper.join()
-        self.file.unlink()
+        if self.board is None:
+            self.file.unlink()
+        elif self.shown:
+            self.board.end(self.space, self.unit)
 
 
 @contextmanager

@@ -6,7 +6,10 @@ results in input order, reporting each finished item to an optional callback, so
 results never depend on the order in which workers finish. An exception raised by the
 function reaches the caller as itself (a GearlabInputError stays a GearlabInputError).
 Its ``counts()`` carry what units count while they run (a gap fit's score evaluations) back
-from wherever they run, to say on a progress line: files on this machine, an actor on Ray.
+from wherever they run, to say on a progress line: files on this machine, an actor on Ray. So
+does ``unit_lines()`` with the units' own progress lines (gearlab.events.UnitProgress): on this
+machine they are files in the run directory's progress/ folder, which the engine watches; Ray's
+tasks report them to an actor of the session (a cluster's nodes share no disk with the driver).
 
 Ray is optional: it is imported only when the `ray` executor is asked for.
 """
@@ -28,6 +31,7 @@ from pathlib import Path
 
 from . import PHYSICS_VERSION, __version__
 from .errors import GearlabInputError
+from .events import Board, units_report_to
 from .files import atomic_write
 
 EXECUTORS = ("local", "ray")
@@ -108,8 +112,8 @@ def counts_of(executor) -> contextlib.AbstractContextManager[Counts]:
 
 
 class Executor:
-    """What every executor has: ``map`` (below, per executor), ``counts`` and ``close``, also as a
-    ``with`` block."""
+    """What every executor has: ``map`` (below, per executor), ``counts``, ``unit_lines`` and
+    ``close``, also as a ``with`` block."""
 
     def __enter__(self):
         return self
@@ -124,6 +128,23 @@ class Executor:
         """A Counts for the units of the maps inside the ``with`` block: by default files in a
         temporary folder, which this process and workers on this machine reach."""
         return file_counts()
+
+    def unit_lines(self, space: str) -> UnitLines | None:
+        """The progress lines of the units in progress of the run whose directory is *space*, where
+        they do not come through its progress/ folder: None here (this machine's workers write the
+        folder, and the engine watches it)."""
+        return None
+
+
+class UnitLines:
+    """The lines of a run's units in progress, as the driver reads them ({unit: line}; a unit gone
+    has ended); ``close`` forgets the run's lines once it ended."""
+
+    def __call__(self, final: bool = False) -> dict[str, str]:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
 
 
 class LocalExecutor(Executor):
@@ -191,7 +212,7 @@ RAY_MISSING = "executor 'ray' needs the optional extra: pip install 'gearlab[ray
 
 # One Ray session per process: the address it was opened with (None until opened) and
 # whether this module started it (then it also shuts it down at exit).
-_session: dict = {"address": None, "started": False}
+_session: dict = {"address": None, "started": False, "board": None}
 
 
 def import_ray():
@@ -246,7 +267,15 @@ def _close_session() -> None:
         import ray
 
         ray.shutdown()
-        _session.update(address=None, started=False)
+        _session.update(address=None, started=False, board=None)
+
+
+def _board(ray):
+    """The session's board of unit lines (a _Lines actor, no CPU of its own), started on first use;
+    one for every executor of the session, so that the engine's reader and the kind's tasks meet."""
+    if _session["board"] is None:
+        _session["board"] = ray.remote(num_cpus=0)(_Lines).remote()
+    return _session["board"]
 
 
 def _gearlab_version() -> str:
@@ -292,6 +321,10 @@ class RayExecutor(Executor):
             ray.kill(self._counter)
         self._counter = None
 
+    def unit_lines(self, space: str) -> UnitLines:
+        """The lines the session's tasks report to its board (RayBoard) for the run at *space*."""
+        return RayLines(_board(_open_session(self.address, self.workers)), space)
+
     @contextlib.contextmanager
     def counts(self) -> Iterator[Counts]:
         """Counts held by an actor of the Ray session (one per executor, no CPU of its own): a task
@@ -312,7 +345,8 @@ class RayExecutor(Executor):
             return []
         ray = _open_session(self.address, self.workers)
         task = ray.remote(_call).options(num_cpus=1, num_gpus=_gpu_request(gpu, ray.cluster_resources()))
-        refs = [task.remote(fn, item) for item in items]
+        board = _board(ray)  # the units' progress lines: a node's files would stay on its disk
+        refs = [task.remote(fn, item, board) for item in items]
         index = {ref: i for i, ref in enumerate(refs)}
         results: list = [None] * len(items)
         pending = list(refs)
@@ -378,10 +412,77 @@ class RayCounts(Counts):
         return self._known
 
 
-def _call(fn: Callable, item):
+class _Lines:
+    """The Ray actor behind RayBoard and RayLines: each run's (space's) latest line per unit."""
+
+    def __init__(self):
+        self.spaces: dict[str, dict[str, str]] = {}
+
+    def say(self, space: str, unit: str, text: str) -> None:
+        self.spaces.setdefault(space, {})[unit] = text
+
+    def end(self, space: str, unit: str) -> None:
+        self.spaces.get(space, {}).pop(unit, None)
+
+    def lines(self, space: str) -> dict[str, str]:
+        return dict(self.spaces.get(space, {}))
+
+    def drop(self, space: str) -> None:
+        self.spaces.pop(space, None)
+
+
+ENDED_S = 5.0  # s a unit's end waits for the board to hold it (a round trip: milliseconds)
+
+
+class RayBoard(Board):
+    """A Ray task's units report their lines to the session's _Lines actor (not waited for, but
+    in order: one caller's calls to an actor run in the order made); a unit's end is waited for."""
+
+    def __init__(self, actor):
+        self.actor = actor
+
+    def say(self, space: str, unit: str, text: str) -> None:
+        self.actor.say.remote(space, unit, text)
+
+    def end(self, space: str, unit: str) -> None:
+        ray = import_ray()
+        ray.wait([self.actor.end.remote(space, unit)], timeout=ENDED_S)
+
+
+class RayLines(UnitLines):
+    """The driver's reader of one run's lines on the board: the actor's answer, waited for
+    ANSWER_S at most (the watcher asks twice a second), else the previous answer while the
+    question stays asked; the final look asks afresh (a question asked before the last units ended
+    would still show them) and waits for the answer (ENDED_S)."""
+
+    def __init__(self, actor, space: str):
+        self.actor, self.space = actor, space
+        self._asked, self._known = None, {}
+
+    def __call__(self, final: bool = False) -> dict[str, str]:
+        ray = import_ray()
+        if self._asked is None or final:
+            self._asked = self.actor.lines.remote(self.space)
+        if ray.wait([self._asked], timeout=ENDED_S if final else ANSWER_S)[0]:
+            try:
+                self._known = ray.get(self._asked)
+            except ray.exceptions.RayError:  # the session is gone: the last answer stands
+                pass
+            self._asked = None
+        return self._known
+
+    def close(self) -> None:
+        ray = import_ray()
+        if ray.is_initialized() and _session["board"] is self.actor:  # (a session shut down took it along)
+            self.actor.drop.remote(self.space)
+
+
+def _call(fn: Callable, item, board=None):
     """The Ray task: `fn` travels as an argument, so any picklable callable works (ray.remote
-    itself takes only Python functions), as with the local process pool."""
-    return fn(item)
+    itself takes only Python functions), as with the local process pool. Its units report their
+    progress lines to *board* (the session's _Lines actor), not to files."""
+    with units_report_to(None if board is None else RayBoard(board)):
+        return fn(item)
 
 
 def _get(ray, ref):

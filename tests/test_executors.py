@@ -227,6 +227,7 @@ def test_a_ray_run_opens_its_session_as_a_stage_of_its_own(tmp_path, monkeypatch
     opened, told = [], []
     monkeypatch.setattr(executors, "import_ray", lambda: None)  # no session is opened here
     monkeypatch.setattr(executors, "_open_session", lambda address, workers: opened.append((address, workers)))
+    monkeypatch.setattr(RayExecutor, "unit_lines", lambda self, space: None)  # no session: no board
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
 
     def first_stage(scenario, run, on_event):
@@ -261,25 +262,144 @@ def test_one_ray_session_per_process(ray_session):
 TINY = transfer(BASELINES_AND_MMD)
 
 
-def test_local_and_ray_give_the_same_records(ray_session, tmp_path, monkeypatch):
-    """One worker and Ray: the same units, the same numbers. The Ray run builds its datasets itself
-    (its own cache), so simulation units run on Ray too. (Two local workers against one:
+def holding_epochs(said):
+    """UnitProgress.__call__ that holds a unit's first epoch line 1.2 s: written within 0.5 s (a unit
+    writes at most that often), it then stands longer than the watcher's look and an actor's answer
+    however fast the machine trains: the driver sees every training's epoch line."""
+
+    def say(self, text):
+        said(self, text)
+        if text.startswith("epoch ") and not getattr(self, "held", False):
+            self.held = True
+            time.sleep(1.2)
+
+    return say
+
+
+class ProgressElsewhere:
+    """A unit as another machine of a cluster runs it, as far as progress goes: what it writes into
+    the run directory's progress/ folder lands on its own node's disk (here: is dropped), never
+    where the driver's ProgressWatcher reads. (Its other files, the dataset cache and the shared
+    states, are kept: this simulates the progress folder alone.) Its first epoch line is held."""
+
+    def __init__(self, fn):
+        self.fn = fn
+
+    def __call__(self, item):
+        from gearlab.confined import Confined
+        from gearlab.events import PROGRESS, UnitProgress
+
+        real = Confined.write, Confined.unlink, UnitProgress.__call__
+
+        def write(self, data):
+            return None if self.parts[:1] == (PROGRESS,) else real[0](self, data)
+
+        def unlink(self, missing_ok=True):
+            return None if self.parts[:1] == (PROGRESS,) else real[1](self, missing_ok)
+
+        Confined.write, Confined.unlink, UnitProgress.__call__ = write, unlink, holding_epochs(real[2])
+        try:
+            return self.fn(item)
+        finally:
+            Confined.write, Confined.unlink, UnitProgress.__call__ = real
+
+
+class FarProgressRay(RayExecutor):
+    """A Ray cluster whose workers share no progress/ folder with this process."""
+
+    def map(self, fn, items, on_done=None, gpu=False):
+        return super().map(ProgressElsewhere(fn), items, on_done, gpu)
+
+
+@pytest.fixture(scope="module")
+def tiny_runs(ray_session, tmp_path_factory):
+    """The tiny transfer scenario run with one local worker and on Ray tasks that share no progress/
+    folder with this process: {executor: (records, events)}. The Ray run builds its datasets itself
+    (its own cache), so simulation units run on Ray too. The engine's watcher looks every 0.05 s, and
+    a unit's first epoch line is held (holding_epochs), so that the driver sees it wherever it ran."""
+    from functools import partial
+
+    from gearlab import engine
+    from gearlab.events import UnitProgress
+
+    tmp_path = tmp_path_factory.mktemp("tiny_runs")
+    runs = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.delenv("RAY_ADDRESS", raising=False)
+        mp.setattr(executors, "RayExecutor", FarProgressRay)
+        mp.setattr(engine, "ProgressWatcher", partial(engine.ProgressWatcher, every=0.05))
+        mp.setattr(UnitProgress, "__call__", holding_epochs(UnitProgress.__call__))  # this process's units
+        for name, cache, execution in [
+            ("local-1", "cache", "workers = 1"),
+            ("ray", "ray-cache", 'executor = "ray"\nworkers = 2'),
+        ]:
+            mp.setenv("GEARLAB_CACHE", str(tmp_path / cache))
+            path = tmp_path / f"{name}.toml"
+            path.write_text(TINY.replace("workers = 1", execution))
+            told = []
+            run = engine.run_scenario(path, out=tmp_path / name, on_event=told.append)
+            runs[name] = records(run.path), told
+    return runs
+
+
+def test_local_and_ray_give_the_same_records(tiny_runs):
+    """One worker and Ray: the same units, the same numbers. (Two local workers against one:
     test_protocol.test_two_workers_give_the_records_of_one, on twice the units; here it paid a
     second pool's imports for the same check.)"""
-    from gearlab.engine import run_scenario
+    assert len(tiny_runs["local-1"][0]) == 6
+    assert tiny_runs["ray"][0] == tiny_runs["local-1"][0]
 
-    monkeypatch.delenv("RAY_ADDRESS", raising=False)
-    runs = {}
-    for name, cache, execution in [
-        ("local-1", "cache", "workers = 1"),
-        ("ray", "ray-cache", 'executor = "ray"\nworkers = 2'),
-    ]:
-        monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / cache))
-        path = tmp_path / f"{name}.toml"
-        path.write_text(TINY.replace("workers = 1", execution))
-        runs[name] = records(run_scenario(path, out=tmp_path / name).path)
-    assert len(runs["local-1"]) == 6
-    assert runs["ray"] == runs["local-1"]
+
+def test_units_on_other_machines_show_their_progress_at_the_driver(tiny_runs):
+    """Issue 41: a unit reported its progress through a file in the run directory's progress/ folder,
+    which a cluster's other nodes do not share: a cluster run showed no training's line. On Ray the
+    lines come back through an actor of the session: the trainings show their epochs as in the
+    local run, and each unit's line goes when it ends."""
+    trained = {}
+    for name, (recorded, told) in tiny_runs.items():
+        lines: dict[str, list[str]] = {}
+        for event in told:
+            if event.kind == "unit" and event.stage in recorded:
+                lines.setdefault(event.stage, []).append(event.message)
+        assert all(said[-1] == "" and all(said[:-1]) for said in lines.values()), (name, lines)
+        trained[name] = {unit for unit, said in lines.items() if any(m.startswith("epoch ") for m in said)}
+    assert len(trained["local-1"]) >= 3 and trained["ray"] == trained["local-1"], trained
+
+
+def trial(task: tuple) -> int:
+    """A gap-benchmark trial's stand-in: a stage of 3 steps 0.6 s apart, on the trial's line."""
+    from gearlab.events import Event, stages_to_unit
+
+    stages_to_unit(Event("stage", stage="fits", total=3, message="gap: round 1, fitting 3 effects"))
+    for n in range(1, 4):
+        time.sleep(0.6)
+        stages_to_unit(Event("advance", stage="fits", done=n, total=3))
+    return task[1]
+
+
+def test_a_trials_line_on_another_machine_counts_with_its_eta_at_the_driver(ray_session, tmp_path):
+    """A benchmark trial on a cluster's node (told_unit, as gearlab.kinds.gap_benchmark's trial_task):
+    its line, with its count and ETA, reaches the driver's watcher as a local trial's file does."""
+    from gearlab.engine import ProgressWatcher
+    from gearlab.events import told_unit
+    from gearlab.runs import RunDir
+
+    told = []
+    watcher = ProgressWatcher(RunDir(tmp_path), told.append, every=0.05)
+    executor = FarProgressRay(workers=2)
+    watcher.elsewhere = executor.unit_lines(str(tmp_path))
+    watcher.start()
+    try:
+        told_trial = told_unit(lambda task: (task[0], f"trial_{task[1]:03d}"))(trial)
+        assert executor.map(told_trial, [(tmp_path, i) for i in range(2)]) == [0, 1]
+    finally:
+        watcher.stop()
+    lines: dict[str, list[str]] = {}
+    for event in told:
+        lines.setdefault(event.stage, []).append(event.message)
+    assert set(lines) == {"trial_000", "trial_001"}
+    counted = re.compile(r"gap: round 1, fitting 3 effects: [12] of 3, ETA 0:0\d")
+    assert all(said[-1] == "" and any(map(counted.fullmatch, said)) for said in lines.values()), lines
 
 
 def counting(item: tuple[int, float]) -> int:
