@@ -10,6 +10,7 @@ layers below it, never from a layer above, and the import graph has no cycle. Im
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -122,7 +123,11 @@ def imports_of(module: str) -> list[tuple[str, int, bool]]:
     return found
 
 
-GRAPH = {module: imports_of(module) for module in MODULES}
+@functools.cache
+def graph() -> dict[str, list[tuple[str, int, bool]]]:
+    """Every module's imports (imports_of), parsed on first use: at module level every pytest worker
+    paid it at collection (1.4 s of CPU), the one that runs this file alone needs it."""
+    return {module: imports_of(module) for module in MODULES}
 
 
 def test_every_module_has_a_layer():
@@ -134,7 +139,7 @@ def test_no_module_imports_from_a_layer_above_its_own():
     upward = [
         f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {m} ({LAYERS[layer_of(m)][0]}) imports {t} "
         f"({LAYERS[layer_of(t)][0]})"
-        for m, edges in GRAPH.items()
+        for m, edges in graph().items()
         for t, line, _ in edges
         if layer_of(t) > layer_of(m)
     ]
@@ -142,7 +147,7 @@ def test_no_module_imports_from_a_layer_above_its_own():
 
 
 def test_the_import_graph_has_no_cycle():
-    edges = {m: sorted({t for t, _, _ in e}) for m, e in GRAPH.items()}
+    edges = {m: sorted({t for t, _, _ in e}) for m, e in graph().items()}
     state: dict[str, int] = {}  # 1: on the current path, 2: done
     path: list[str] = []
 
@@ -166,8 +171,8 @@ def test_the_import_graph_has_no_cycle():
 def test_the_check_sees_function_level_imports_and_orders_the_layers():
     # the test itself: a function-level import is an edge, and the layers order them
     # (adapters import the torch losses inside their methods: start-up time)
-    assert ("gearlab.learn.losses", True) not in {(t, top) for t, _, top in GRAPH["gearlab.learn.adapters"]}
-    assert any(t == "gearlab.learn.losses" and not top for t, _, top in GRAPH["gearlab.learn.adapters"])
+    assert ("gearlab.learn.losses", True) not in {(t, top) for t, _, top in graph()["gearlab.learn.adapters"]}
+    assert any(t == "gearlab.learn.losses" and not top for t, _, top in graph()["gearlab.learn.adapters"])
     assert layer_of("gearlab.dynamics.newmark") < layer_of("gearlab.effects") < layer_of("gearlab.engine")
     assert layer_of("gearlab.kinds.gap") == layer_of("gearlab.kinds")
 
@@ -187,7 +192,7 @@ def test_no_scenario_kind_imports_another():
     # (gearlab.kinds itself) names every kind
     crossing = [
         f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {m} imports the kind {kind_of(t)}"
-        for m, edges in GRAPH.items()
+        for m, edges in graph().items()
         if m.startswith("gearlab.kinds.")
         for t, line, _ in edges
         if kind_of(t) is not None and kind_of(t) != kind_of(m)
@@ -238,7 +243,7 @@ def kind_names_in(module: str) -> list[str]:
     found += sorted(
         {
             f"{path.relative_to(PACKAGE.parent)}:{line}: imports the kind {t}"
-            for t, line, _ in GRAPH[module]
+            for t, line, _ in graph()[module]
             if any(t == k or t.startswith(k + ".") for k in kind_modules)
         }
     )
