@@ -72,7 +72,10 @@ class ProgressWatcher(threading.Thread):
                 continue
         elsewhere = self.elsewhere
         if elsewhere is not None:
-            now.update(elsewhere(final))
+            try:
+                now.update(elsewhere(final))
+            except Exception:  # a Ray session that broke: the run's own error says so; its lines go
+                self.elsewhere = None
         for unit, text in now.items():
             if shown.get(unit) != text:
                 self.on_event(Event("unit", stage=unit, message=text))
@@ -85,8 +88,11 @@ class ProgressWatcher(threading.Thread):
         empty progress/ beside its results, as it left its .lock)."""
         self.stopped.set()
         self.join()
-        if self.elsewhere is not None:
-            self.elsewhere.close()
+        try:
+            if self.elsewhere is not None:
+                self.elsewhere.close()
+        except Exception:  # (as in scan) never in the way of the run's own end or error
+            pass
         try:
             self.folder.remove_tree()
         except (OSError, GearlabInputError):  # a file system that refuses: the next run's start removes it

@@ -272,10 +272,12 @@ def _close_session() -> None:
 
 def _board(ray):
     """The session's board of unit lines (a _Lines actor, no CPU of its own), started on first use;
-    one for every executor of the session, so that the engine's reader and the kind's tasks meet."""
-    if _session["board"] is None:
-        _session["board"] = ray.remote(num_cpus=0)(_Lines).remote()
-    return _session["board"]
+    one for every executor of the session, so that the engine's reader and the kind's tasks meet.
+    Kept with the session's job: a session someone else opened, closed and opened again gets its own."""
+    job = ray.get_runtime_context().get_job_id()
+    if _session["board"] is None or _session["board"][0] != job:
+        _session["board"] = (job, ray.remote(num_cpus=0)(_Lines).remote())
+    return _session["board"][1]
 
 
 def _gearlab_version() -> str:
@@ -473,7 +475,7 @@ class RayLines(UnitLines):
 
     def close(self) -> None:
         ray = import_ray()
-        if ray.is_initialized() and _session["board"] is self.actor:  # (a session shut down took it along)
+        if ray.is_initialized() and (_session["board"] or (None, None))[1] is self.actor:  # else gone with it
             self.actor.drop.remote(self.space)
 
 

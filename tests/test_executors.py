@@ -402,6 +402,56 @@ def test_a_trials_line_on_another_machine_counts_with_its_eta_at_the_driver(ray_
     assert all(said[-1] == "" and any(map(counted.fullmatch, said)) for said in lines.values()), lines
 
 
+def test_a_session_opened_again_gets_a_board_of_its_own(monkeypatch):
+    """A Ray session someone else opened (a notebook's), closed and opened again: the units' board
+    of the old one is gone with it, so the new session's tasks get a new one (not a dead handle)."""
+    from types import SimpleNamespace
+
+    jobs, made = iter(["01000000", "01000000", "02000000"]), []
+
+    class Remote:
+        def remote(self):
+            made.append(object())
+            return made[-1]
+
+    fake = SimpleNamespace(
+        get_runtime_context=lambda: SimpleNamespace(get_job_id=lambda: next(jobs)),
+        remote=lambda **options: lambda cls: Remote(),
+    )
+    monkeypatch.setitem(executors._session, "board", None)
+    first, again, reopened = (executors._board(fake) for _ in range(3))
+    assert first is again is made[0] and reopened is made[1]
+
+
+def test_a_watcher_whose_lines_from_elsewhere_fail_ends_quietly(tmp_path):
+    """A Ray session that broke mid-run: the run's own error says so; the watcher's reader of its
+    units' lines drops them (their ends sent) and its stop raises nothing in the way."""
+    from gearlab.engine import ProgressWatcher
+    from gearlab.executors import UnitLines
+    from gearlab.runs import RunDir
+
+    class Broken(UnitLines):
+        calls = 0
+
+        def __call__(self, final=False):
+            Broken.calls += 1
+            if Broken.calls > 1:
+                raise RuntimeError("the Ray session is gone")
+            return {"rep0/k0/mmd-unsup": "epoch 3"}
+
+        def close(self):
+            raise RuntimeError("the Ray session is gone")
+
+    told = []
+    watcher = ProgressWatcher(RunDir(tmp_path), told.append, every=3600.0)
+    watcher.elsewhere = Broken()
+    shown = watcher.scan({})
+    watcher.scan(shown)
+    watcher.start()
+    watcher.stop()
+    assert [(e.stage, e.message) for e in told] == [("rep0/k0/mmd-unsup", "epoch 3"), ("rep0/k0/mmd-unsup", "")]
+
+
 def counting(item: tuple[int, float]) -> int:
     """A gap fit's stand-in: n score evaluations spread over *seconds*."""
     from gearlab.gap.tally import counted
