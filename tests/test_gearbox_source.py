@@ -138,19 +138,18 @@ def test_a_two_stage_description_of_fractional_mesh_order_settles_over_its_cycle
     assert orders[1 + np.argmax(amp[1:])] % 21 == 0
 
 
-def test_a_cycle_too_long_to_simulate_is_one_line(tmp_path, monkeypatch):
+def test_a_cycle_too_long_to_simulate_whole_is_a_stretch(tmp_path, monkeypatch):
     """A healthy train repeats only after its meshes' cycle (rig2s: 53 turns; a wheel of over MAX_PERIOD
-    teeth would take hours): beyond the limit, one line rather than an endless simulation."""
+    teeth would take hours): beyond the limit, a stretch of steady turns (tests/test_long_period_trains.py)."""
     from gearlab.data import placement
 
     (tmp_path / "rig2s.toml").write_text(RIG2S)
     monkeypatch.setattr(placement, "MAX_PERIOD", 50)
-    with pytest.raises(GearlabInputError, match="repeats only after 53 input revolutions"):
-        source(tmp_path, gearbox="rig2s.toml", faults={"chip": [20]})  # a fault's: at validate (data.placement)
-    spec = source(tmp_path, gearbox="rig2s.toml", faults={}, healthy=1)  # healthy only: when it is built
-    with pytest.raises(GearlabInputError, match="repeats only every 53 input revolutions") as info:
-        build_dataset(spec)
-    assert "\n" not in str(info.value)
+    source(tmp_path, gearbox="rig2s.toml", faults={"chip": [20]})  # a fault's: validates (data.placement)
+    data = build_dataset(source(tmp_path, gearbox="rig2s.toml", faults={}, healthy=2))
+    assert data.X.shape == (2, 4096) and np.isfinite(data.X).all()
+    orders, amp = spectrum(data.X[0].astype(float), 4096)
+    assert orders[1 + np.argmax(amp[1:])] % 21 == 0
 
 
 def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkeypatch):

@@ -237,7 +237,8 @@ def test_validate_takes_a_three_stage_detection_scenario(cli, tmp_path, whole, c
     code, out, err = cli("validate", str(tmp_path / "det.toml"))
     assert code == 0, err
     assert "methods: matched_filter" in out
-    # on the co-prime train the output gear repeats only after 2451 x 71 ... turns: refused, one line
-    (tmp_path / "bad.toml").write_text(DETECTION.format(box=coprime, fault="chip@output gear"))
-    code, out, err = cli("validate", str(tmp_path / "bad.toml"))
-    assert code == 2 and "on the output gear repeats only after" in err and len(err.strip().splitlines()) == 1
+    # on the co-prime train the output gear repeats only after 2451 x 71 ... turns: a stretch of steady
+    # turns is simulated (tests/test_long_period_trains.py), so it validates too
+    (tmp_path / "long.toml").write_text(DETECTION.format(box=coprime, fault="chip@output gear"))
+    code, out, err = cli("validate", str(tmp_path / "long.toml"))
+    assert code == 0 and "methods: matched_filter" in out, err

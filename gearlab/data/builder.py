@@ -14,7 +14,9 @@ Structure exploited (docs/physics.md, Builder):
 * A later mesh of no whole input order (a description's 17/59 then 26/83) repeats only after a
   cycle of mesh_cycle input revolutions, at another phase in each: a unit then holds the whole
   cycle, and each sample's revolutions are consecutive ones of it from a revolution drawn per
-  sample (gearlab.data.realise, "A train's cycle"), as in a recording.
+  sample (gearlab.data.realise, "A train's cycle"), as in a recording. A train repeating only after
+  more than placement.MAX_PERIOD turns (hunting-tooth pairs: 19/47 + 23/59 + 29/71, 2773) holds a
+  stretch of steady revolutions instead, each record cut within it (steady_stretch, stretch_start).
 * Noise and TSA are added per sample from the sample's own seeded generator, in chunks,
   so memory stays bounded and results do not depend on the worker count.
 
@@ -50,7 +52,7 @@ from ..signals import Standardiser, resample_revolutions, steady_start, tsa
 from ..signals.shaft import shaft_revolutions
 from . import placement
 from .placement import fault_parts, shaft_names
-from .realise import REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
+from .realise import CYCLE_STREAM, REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
 from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
 if TYPE_CHECKING:
@@ -158,6 +160,95 @@ def mesh_cycle(sim: Simulator) -> int:
     return math.lcm(1, *(order.denominator for order in orders))
 
 
+# --- a long train: a stretch of steady revolutions, not its whole period ------------------------------
+#
+# A train whose steady response repeats only after more than placement.MAX_PERIOD input turns (the
+# meshes of a 19/47 + 23/59 + 29/71 train: 2773; damage on the output gear of 19/71 + 28/47: 3337)
+# needs no such period: the simulator reads each mesh's TVMS at its own gear's angle. A unit then
+# holds a stretch of consecutive steady revolutions from a tacho zero, after the start-up transient
+# has died away (settle_revolutions: a duration, not a comparison of periods), and each record is
+# cut from the stretch without wrapping (stretch_start).
+STRETCH = 64  # revolutions of a long train's stretch beyond the longest record it serves (at least as many)
+SETTLE_SAFETY = 2.0  # the slowest mode's decay to STEADY_RTOL, this many times over
+
+
+def train_cycle(sim: Simulator, faults) -> int:
+    """Input revolutions after which the train with *faults* repeats, from the tooth counts exactly
+    (lcm of mesh_cycle and the faulted gears' periods; placement.train_period)."""
+    pairs = (sim.pair, *(m.pair for m in sim.meshes))
+    periods = (placement.train_period(pairs, f.stage, f.gear) for f in faults)
+    return math.lcm(placement.mesh_cycle_of(pairs), *periods)
+
+
+def settle_revolutions(sim: Simulator, speed: float) -> int:
+    """Whole input revolutions after which the start-up transient has decayed to STEADY_RTOL of its
+    size, SETTLE_SAFETY times over: the slowest decay rate among the model's modes (the state matrix
+    at every mesh's mean stiffness and damping). 23 revolutions for the 19/47 + 23/59 + 29/71 train at
+    40 Hz (its slowest mode, 439 Hz, decays at 48.8 1/s)."""
+    n = len(sim.dofs)
+    K, C = sim.Kc.copy(), sim.Cc.copy()
+    for P, k, mu in ((sim.P, sim.k_mean, sim.mu), *zip(sim.mesh_P, sim.mesh_means, sim.mesh_mu)):
+        K, C = K + k * np.outer(P, P), C + mu * k * np.outer(P, P)
+    Minv = np.linalg.inv(sim.M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
+    decay = float(-np.linalg.eigvals(A).real.max())
+    if not decay > 0:
+        raise GearlabInputError(f"model '{sim.model.name}': a mode is undamped, so its response never settles")
+    return math.ceil(SETTLE_SAFETY * math.log(1 / STEADY_RTOL) / decay * speed)
+
+
+def steady_stretch(
+    sim: Simulator, faults, speed: float, load: float, channel: str, effects, revolutions: int
+) -> tuple[np.ndarray, np.ndarray | None, int]:
+    """*revolutions* consecutive steady input revolutions of *channel* from a tacho zero, with the
+    sample that ends them (revolutions x per_rev + 1 samples), settle_revolutions after the start;
+    the shaft angle over them from 0 when an effect moved it (else None); and that settle count."""
+    per_rev = int(round(sim.fs / speed))
+    settle = settle_revolutions(sim, speed)
+    result = sim.run(faults, speed, load, duration=(settle + revolutions) / speed, channels=[channel], effects=effects)
+    lo, hi = settle * per_rev, (settle + revolutions) * per_rev + 1
+    angle = None if result.angle is None else result.angle[lo:hi] - 2 * np.pi * settle
+    return result.channels[channel][lo:hi].copy(), angle, settle
+
+
+def stretch_row(x: np.ndarray, revolutions: int, angle: np.ndarray | None = None) -> np.ndarray:
+    """A stretch of steady_stretch as one row of revolutions x POINTS angles."""
+    per_rev = (len(x) - 1) // revolutions
+    theta = 2 * np.pi * np.arange(len(x)) / per_rev if angle is None else angle - angle[0]
+    theta[-1] = max(theta[-1], 2 * np.pi * revolutions)  # the last revolution whole, up to rounding
+    return resample_revolutions(x, theta, POINTS, count=revolutions).reshape(-1)
+
+
+def stretch_start(seed: int, i: int, revolutions: int, count: int, hits=None) -> int:
+    """The revolution of a long train's stretch of *revolutions* at which record *i* of a dataset
+    seeded *seed* starts, leaving *count* revolutions after it (no wrap): drawn as realise's
+    first_revolution draws (its stream), among *hits* (the revolutions in which a damaged tooth
+    meshes) where given and any fits."""
+    last = max(revolutions - count, 0)
+    choices = [k for k in (hits or ()) if 0 <= k <= last] or range(last + 1)
+    if len(choices) <= 1:
+        return choices[0]
+    return int(choices[int(np.random.default_rng([seed, i, CYCLE_STREAM]).integers(len(choices)))])
+
+
+def tooth_revolutions(pairs, stage: int, gear: str, tooth: int, first: int, revolutions: int) -> list[int]:
+    """The revolutions first .. first + revolutions - 1 (counted from the tacho zero at which every
+    gear starts) in which *tooth* of (stage, gear) comes into mesh: tooth n of a gear of Z teeth
+    meshing at input order q meets at (n - 1 + m Z) / q input turns."""
+    turns = Fraction(1)
+    for pair in pairs[: stage - 1]:
+        turns *= Fraction(pair.Z1, pair.Z2)
+    pair = pairs[stage - 1]
+    q, Z = turns * pair.Z1, (pair.Z1 if gear == "pinion" else pair.Z2)
+    m = max(0, math.ceil(first * q / Z - (tooth - 1) / Z) - 1)
+    out = []
+    while (k := math.floor((tooth - 1 + m * Z) / q)) < first + revolutions:
+        if k >= first:
+            out.append(k - first)
+        m += 1
+    return out
+
+
 def angle_samples(periodic: np.ndarray, points: int = POINTS, angle: np.ndarray | None = None) -> np.ndarray:
     """Resample one periodic revolution (time samples from a tacho zero) to *points* angles.
 
@@ -187,6 +278,7 @@ class SimTask(NamedTuple):
     teeth: tuple[int, ...]
     effects: tuple = ()  # the dataset's effects (canonical); the model and excitation ones act here
     tooth: int = 1  # the tooth carrying the fault; the rows of the other teeth are its shifts
+    stretch: int = 0  # a long train's revolutions per row (0: its whole cycle, or STRETCH x 2 when that is long)
 
 
 def simulate_unit(task: tuple) -> np.ndarray:
@@ -206,12 +298,25 @@ def simulate_unit(task: tuple) -> np.ndarray:
         config = chain.model_config(config_of(task.model, task.preset, task.channel))
         sim = _configured_simulator(config, task.fs)
         excitation, channel = chain.at("excitation"), config.channel
-    faults = []
-    if task.fault is not None:  # one fault, or a pinion's and the wheel tooth's it meets (tooth n: mesh n - 1)
+
+    def placed(on: int) -> list:
+        faults = []
+        if task.fault is None:
+            return faults
         for name, stage, gear in fault_parts(task.fault, shaft_names(task.preset, sim.stages), f"model '{task.model}'"):
             pair = sim.pair if stage == 1 else sim.meshes[stage - 2].pair
-            tooth = task.tooth if gear == "pinion" or not faults else (task.tooth - 1) % pair.Z2 + 1
+            tooth = on if gear == "pinion" or not faults else (on - 1) % pair.Z2 + 1  # the wheel tooth it meets
             faults.append(place_fault(get_registry(), pair, name, tooth, step=task.step, gear=gear, stage=stage))
+        return faults
+
+    faults = placed(task.tooth)  # one fault, or a pinion's and the wheel tooth's it meets (tooth n: mesh n - 1)
+    stretch = task.stretch or (2 * STRETCH if train_cycle(sim, faults) > placement.MAX_PERIOD else 0)
+    if stretch:  # a long train: each tooth simulated itself, from the same tacho zero (no symmetry assumed)
+        rows = []
+        for n in task.teeth:
+            x, angle, _ = steady_stretch(sim, placed(n), task.speed, task.load, channel, excitation, stretch)
+            rows.append(stretch_row(x, stretch, angle))
+        return np.stack(rows)
     periodic, angle = steady_response(sim, faults, task.speed, task.load, channel, excitation, whole_cycle=True)
     if angle is not None and tuple(task.teeth) != (task.tooth,):
         raise RuntimeError("an excitation effect moved the shaft angle but does not declare breaks_symmetry")
@@ -352,16 +457,21 @@ def row_tasks(
     reference_rms: float,
     period_of: Callable[[int], int] = lambda i: 1,
     offset_of: Callable[[int], int] = lambda i: 0,
+    starts_of: Callable[[int], int] | None = None,
 ) -> list[RowsTask]:
     """The row tasks of *spec*'s *n* samples, CHUNK samples a task: *clean_of(idx)* gives the clean
     revolutions of samples idx, each sample's row seed is row_seed(spec, i) (gearlab.data.realise),
     *reference* the domain's (mean, std); sample i's record starts at realise.first_revolution of its
-    clean cycle, a whole number of *period_of(i)* (its damaged gear's period) in."""
+    clean cycle, a whole number of *period_of(i)* (its damaged gear's period) in; or, for a long
+    train's stretches, at *starts_of(i)*."""
     kind, snr = (spec.noise.kind, spec.noise.snr_db) if spec.noise else (None, 0.0)
     tasks = []
     for idx in (range(lo, min(n, lo + CHUNK)) for lo in range(0, n, CHUNK)):
         clean = clean_of(idx)
-        starts = tuple(first_revolution(spec.seed, i, row.size // POINTS, period_of(i)) for i, row in zip(idx, clean))
+        starts = tuple(
+            first_revolution(spec.seed, i, row.size // POINTS, period_of(i)) if starts_of is None else starts_of(i)
+            for i, row in zip(idx, clean)
+        )
         seeds = [row_seed(spec, i) for i in idx]
         tasks.append(
             RowsTask(
@@ -400,6 +510,32 @@ def healthy_reference(spec: DatasetSpec, healthy: np.ndarray, speed: float, refe
         reference_rms=reference_rms,
     )
     return Standardiser.fit(realised)
+
+
+def record_span(spec: DatasetSpec) -> int:
+    """Consecutive input revolutions one record of *spec* takes (noisy_rows, shaft_row)."""
+    j = spec.revolutions if spec.tsa else 1
+    if not spec.unit_shaft:
+        return j
+    return math.ceil((j + 1) / Fraction(*spec.unit_shaft)) + 1
+
+
+def stretch_of(spec: DatasetSpec, pairs, classes) -> int:
+    """0 when *spec*'s train with every class's damage repeats within placement.MAX_PERIOD input
+    turns (its rows: whole cycles), else the revolutions of each unit's stretch: STRETCH more than
+    the longest record (and the healthy reference's 64) takes."""
+    cycle = math.lcm(placement.mesh_cycle_of(pairs), *(on.period for on in classes.values()))
+    if cycle <= placement.MAX_PERIOD:
+        return 0
+    return max(record_span(spec), 64) + STRETCH
+
+
+def _unit_simulator(task: SimTask) -> Simulator:
+    """The simulator simulate_unit makes for *task*."""
+    if not task.effects:
+        return _simulator(task.model, task.preset, task.fs)
+    config = EffectChain.load(task.effects).model_config(config_of(task.model, task.preset, task.channel))
+    return _configured_simulator(config, task.fs)
 
 
 def _first_simulation() -> Callable[[], str]:
@@ -443,8 +579,10 @@ def build_dataset(
     # a simulation sees the model- and excitation-level effects only (the signal-level ones act on
     # its rows, below), so datasets that differ in those alone share it (_SIMULATED)
     mechanical = tuple(e for e in spec.effects if registry.get("effect", e[0]).level != "signal")
+    pairs = placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'")
+    stretch = stretch_of(spec, pairs, classes)  # 0, or a long train's revolutions per row (every unit's)
     tasks = [
-        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, mechanical, n)
+        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, mechanical, n, stretch)
         for (f, s), n, rows in units
     ]
     todo = [task for task in dict.fromkeys(tasks) if task not in _SIMULATED]
@@ -519,7 +657,6 @@ def build_dataset(
         return np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
 
     # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in
-    pairs = placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'") if classes else ()
     periods = {key: math.lcm(*(placement.gear_period(pairs, *p[1:]) for p in on.parts)) for key, on in classes.items()}
 
     def period_of(i: int) -> int:
@@ -539,7 +676,25 @@ def build_dataset(
         order = turns * pairs[on.stage - 1].Z1  # the gear's teeth that mesh per input turn (the stage's mesh order)
         return math.floor((on.teeth[t] - 1) / order)
 
-    chunks = row_tasks(spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms, period_of, offset_of)
+    offsets, starts_of = offset_of, None
+    if stretch:  # a long train's rows: stretches from settle revolutions in, each record within its stretch
+        settle = settle_revolutions(_unit_simulator(tasks[0]), speed)
+        count = record_span(spec)
+
+        def offsets(i: int) -> int:
+            return settle
+
+        def starts_of(i: int) -> int:
+            (name, _), t = source[i]
+            hits = None
+            if name is not None:
+                on = classes[name]
+                hits = tooth_revolutions(pairs, on.stage, on.gear, on.teeth[t], settle, stretch)
+            return stretch_start(spec.seed, i, stretch, count, hits)
+
+    chunks = row_tasks(
+        spec, n, clean_of, (reference.mean, reference.std), speed, reference_rms, period_of, offsets, starts_of
+    )
     on_event(Event("stage", stage="samples", total=len(chunks), message=f"{spec.name}: {n} samples"))
     done = 0
     X = np.empty((n, POINTS), dtype=np.float32)

@@ -211,8 +211,9 @@ class FaultClass:
         return ((self.name, self.stage, self.gear), *self.mates)
 
 
-# Input revolutions a steady response may take to repeat: damage on the output gear of a train of
-# co-prime tooth counts (21/53 then 29/61) repeats only after 3233 turns, minutes of simulation.
+# Input revolutions of a steady response simulated whole (its period): damage on the output gear of a
+# train of co-prime tooth counts (21/53 then 29/61) repeats only after 3233 turns, minutes of simulation;
+# a train repeating after more is simulated as a stretch of steady revolutions (builder.steady_stretch).
 MAX_PERIOD = 1000
 
 
@@ -249,23 +250,6 @@ def mesh_cycle_of(pairs) -> int:
     return cycle
 
 
-def check_period(period: int, what: str, where: str, pairs=None) -> None:
-    """Refuse a steady simulation of damage that repeats after more than MAX_PERIOD input turns; when
-    the train's meshes alone take that long (*pairs* given), no gear is the way out: say so."""
-    cycle = mesh_cycle_of(pairs) if pairs is not None and period > MAX_PERIOD else 1
-    if cycle > MAX_PERIOD:  # a 19/47 + 23/59 + 29/71 mixer: every gear's damage 2773 turns
-        raise GearlabInputError(
-            f"{where}: {what} repeats only after {period} input revolutions: the train's meshes alone repeat only "
-            f"after {cycle} (its tooth counts share no factor), so no gear's damage can be simulated steadily (at "
-            f"most {MAX_PERIOD}): such a train is not simulated yet (gearlab inspect reads its records)"
-        )
-    if period > MAX_PERIOD:
-        raise GearlabInputError(
-            f"{where}: {what} repeats only after {period} input revolutions (the train's tooth counts share "
-            f"no factor); a steady simulation takes at most {MAX_PERIOD}: put the damage on another gear"
-        )
-
-
 def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, FaultClass]:
     """Each class key of a dataset's *faults* resolved on *model*/*preset*: its gear, and its teeth:
     *teeth* (each checked against that gear) or, when None, every tooth of that gear."""
@@ -283,7 +267,5 @@ def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, Fa
                 on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{key}')"
                 raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{Z}{on}")
         period = math.lcm(*(train_period(pairs, s, g) for _, s, g in parts))
-        on = " and the ".join(gear_name(s, g, shafts) for _, s, g in parts)
-        check_period(period, f"fault '{key}' on the {on}", where, pairs)
         out[key] = FaultClass(key, name, stage, gear, chosen, pair, period, parts[1:])
     return out

@@ -25,6 +25,9 @@ starts anywhere in the gears' turns; it is read at the logger's sampling instant
 Fourier series (components at or above fs/2 left out, as a logger's anti-alias filter does) and
 a cubic spline on it 8 times oversampled. Then the signal-level effects and the sensor noise, as
 every dataset's J revolutions get them (gearlab.data.realise; seeds [seed, 1] and [seed, 2]).
+A train whose period exceeds placement.MAX_PERIOD input turns (19/47 + 23/59 + 29/71: 2773) is
+simulated for the record's own turns after its transient has decayed (builder.steady_stretch), read
+through a raised-cosine anti-alias filter (0.9 to 1 x fs/2); its start is counted from the gears' zero.
 """
 
 from __future__ import annotations
@@ -43,8 +46,17 @@ from ..physics.faults import place_fault
 from ..physics.stiffness import PlacedFault
 from ..registry import get_registry
 from ..signals import NOISE_KINDS
-from .builder import _configured_simulator, _simulator, mesh_cycle, steady_response, whole_steps_rate
-from .placement import check_period, gear_name, gear_of, shaft_names, train_period
+from . import placement
+from .builder import (
+    _configured_simulator,
+    _simulator,
+    mesh_cycle,
+    steady_response,
+    steady_stretch,
+    train_cycle,
+    whole_steps_rate,
+)
+from .placement import gear_name, gear_of, shaft_names
 from .realise import Seeds, realise
 from .spec import PHM09_FS, NoiseSpec
 
@@ -52,6 +64,8 @@ TACHO_V = 5.0  # the tacho's high level, V (a TTL key-phasor)
 TACHO_DUTY = 0.05  # share of a revolution the pulse is high
 OVERSAMPLE = 8  # spline grid per simulated step: interpolation error ~1e-4 at the logger's Nyquist
 PLACEMENT_KEYS = ("name", "gear", "stage", "tooth", "step", "params")
+TAPER = 0.9  # a long train's record: the anti-alias filter's pass band, of fs/2 (_stretch_at)
+STRETCH_MARGIN = 2  # input revolutions simulated before and after a long train's record (_stretch_at)
 
 
 @dataclass(frozen=True)
@@ -141,6 +155,41 @@ def _periodic_at(x: np.ndarray, fs_sim: float, fs: float, times: np.ndarray) -> 
     grid = np.arange(n * OVERSAMPLE + 1) * (period / (n * OVERSAMPLE))
     spline = CubicSpline(grid, np.append(fine, fine[0]), bc_type="periodic")
     return spline(np.mod(times, period))
+
+
+def _stretch_at(x: np.ndarray, fs_sim: float, fs: float, times: np.ndarray) -> np.ndarray:
+    """A stretch *x* at fs_sim (not periodic) at *times* (s from its first sample): a logger's
+    anti-alias filter (raised-cosine from TAPER x fs/2 to fs/2, none above) on its spectrum, then a
+    cubic spline at OVERSAMPLE points per cycle of fs/2 at least. The filter's reach (a few
+    hundred fine steps) wraps round the stretch's ends: STRETCH_MARGIN revolutions there are not read."""
+    from scipy.interpolate import CubicSpline
+
+    over = max(1, math.ceil(OVERSAMPLE * fs / fs_sim))
+    spectrum = np.fft.rfft(x)
+    f = np.arange(spectrum.size) * fs_sim / x.size
+    lo, hi = TAPER * fs / 2, fs / 2
+    spectrum *= np.where(f <= lo, 1.0, np.where(f >= hi, 0.0, 0.5 + 0.5 * np.cos(np.pi * (f - lo) / (hi - lo))))
+    fine = np.fft.irfft(spectrum, x.size * over) * over
+    return CubicSpline(np.arange(fine.size) / (fs_sim * over), fine)(times)
+
+
+def _stretch_record(sim, placed, speed_hz, load_nm, channel, excitation, rng, revolutions, fs, n):
+    """A long train's record (builder.steady_stretch): its grand period, the start in it (input turns
+    from the zero at which every gear starts: the settle revolutions, a margin and a draw within a
+    turn of the slowest shaft), the vibration, the input angle, and the stretch when it is healthy."""
+    speeds = [sim.gear_turns(s, g) for s in range(1, sim.stages + 1) for g in ("pinion", "wheel")]
+    offset = float(rng.uniform(0.0, 1.0 / min(speeds)))  # anywhere in the slowest shaft's turn
+    count = math.ceil(offset + revolutions) + 2 * STRETCH_MARGIN
+    x, moved, settle = steady_stretch(sim, placed, speed_hz, load_nm, channel, excitation, count)
+    fs_sim = sim.fs
+    times = (STRETCH_MARGIN + offset) / speed_hz + np.arange(n) / fs
+    vibration = _stretch_at(x, fs_sim, fs, times)
+    start = settle + STRETCH_MARGIN + offset
+    angle = 2 * np.pi * speed_hz * (start / speed_hz + np.arange(n) / fs)
+    if moved is not None:  # an excitation effect moved the shaft: its deviation from the nominal
+        nominal = 2 * np.pi * np.arange(moved.size) / (fs_sim / speed_hz)
+        angle = angle + np.interp(times * fs_sim, np.arange(moved.size), moved - nominal)
+    return train_cycle(sim, placed), start, vibration, angle, None if placed else x
 
 
 def tacho_pulses(angle: np.ndarray, step: float) -> np.ndarray:
@@ -243,31 +292,35 @@ def simulated_record(
                 f"{where}: model '{model}' has no channel '{channel}'; its channels: {', '.join(base.channels)}"
             )
     placed = place(list(faults), sim, preset)
-    pairs = (sim.pair, *(m.pair for m in sim.meshes))
-    for f in placed:
-        check_period(train_period(pairs, f.stage, f.gear), f"damage {f.label}", where)
-    if len({(f.stage, f.gear) for f in placed}) > 1:  # several gears (both of a pair: the hunting period)
-        both = math.lcm(*(train_period(pairs, f.stage, f.gear) for f in placed))
-        check_period(both, f"damage {', '.join(f.label for f in placed)}", where)
     shafts = shaft_names(preset, sim.stages)
-    # the whole cycle: a later mesh of no whole input order repeats only after mesh_cycle turns
-    clean, moved = steady_response(sim, placed, speed_hz, load_nm, channel, excitation, whole_cycle=True)
-    period = math.lcm(sim.period(placed), mesh_cycle(sim))
     rng = np.random.default_rng([seed, 0])
-    start = float(rng.uniform(0.0, period))  # input turns into the clean period at the first sample
     n = int(math.ceil(revolutions * fs / speed_hz))
-    times = (start / speed_hz) + np.arange(n) / fs
-    vibration = _periodic_at(clean, fs_sim, fs, times)
-    angle = 2 * np.pi * speed_hz * times
-    if moved is not None:  # an excitation effect moved the shaft: its (periodic) deviation from the nominal
-        nominal = 2 * np.pi * np.arange(moved.size) / (fs_sim / speed_hz)
-        deviation = np.interp(np.mod(times, period / speed_hz) * fs_sim, np.arange(moved.size), moved - nominal)
-        angle = angle + deviation
+    long = train_cycle(sim, placed) > placement.MAX_PERIOD
+    if long:  # a long train: a stretch of steady revolutions, not its period
+        period, start, vibration, angle, healthy = _stretch_record(
+            sim, placed, speed_hz, load_nm, channel, excitation, rng, revolutions, fs, n
+        )
+    else:
+        # the whole cycle: a later mesh of no whole input order repeats only after mesh_cycle turns
+        clean, moved = steady_response(sim, placed, speed_hz, load_nm, channel, excitation, whole_cycle=True)
+        period = math.lcm(sim.period(placed), mesh_cycle(sim))
+        start = float(rng.uniform(0.0, period))  # input turns into the clean period at the first sample
+        times = (start / speed_hz) + np.arange(n) / fs
+        vibration = _periodic_at(clean, fs_sim, fs, times)
+        angle = 2 * np.pi * speed_hz * times
+        if moved is not None:  # an excitation effect moved the shaft: its (periodic) deviation from the nominal
+            nominal = 2 * np.pi * np.arange(moved.size) / (fs_sim / speed_hz)
+            deviation = np.interp(np.mod(times, period / speed_hz) * fs_sim, np.arange(moved.size), moved - nominal)
+            angle = angle + deviation
+        healthy = None
     angle = angle - 2 * np.pi * math.floor(angle[0] / (2 * np.pi))  # the first sample in [0, 2π)
     signal = EffectChain(chain.at("signal"))
     rms = 0.0  # the signal effects' reference: the clean healthy signal's RMS (a simulation: only when needed)
     if signal:
-        healthy, _ = steady_response(sim, [], speed_hz, load_nm, channel, excitation)
+        if healthy is None and long:
+            healthy = steady_stretch(sim, [], speed_hz, load_nm, channel, excitation, 64)[0]
+        elif healthy is None:
+            healthy, _ = steady_response(sim, [], speed_hz, load_nm, channel, excitation)
         rms = float(np.sqrt(np.mean(healthy**2)))
     noise = None if snr_db is None else NoiseSpec(noise_kind, snr_db)
     vibration = realise(

@@ -451,13 +451,16 @@ class Simulator:
         return self.gear_turns(stage, "pinion") * pair.Z1 / table_slots(pair, gear)
 
     def check_hunting(self, staged: Sequence[Sequence[PlacedFault]], where: str) -> None:
-        """Refuse faults on both gears of a stage whose train repeats only after more than
-        MAX_HUNTING_TURNS input revolutions (one line: the faults, the stage, the period)."""
+        """Refuse faults on both gears of a stage whose TVMS table (the hunting-tooth period, read at
+        its own angle: table_turns) spans more than MAX_HUNTING_TURNS turns of that stage's pinion
+        (one line: the faults, the stage, the period). The train's own period does not matter."""
         for stage, on in enumerate(staged, start=1):
-            if table_gear(on) == BOTH and (period := self.period(on)) > stiffness.MAX_HUNTING_TURNS:
+            pair = self.pair if stage == 1 else self.meshes[stage - 2].pair
+            if table_gear(on) == BOTH and (turns := table_slots(pair, BOTH) // pair.Z1) > stiffness.MAX_HUNTING_TURNS:
+                its = "input revolutions" if stage == 1 else f"turns of the stage {stage} pinion"
                 raise GearlabInputError(
                     f"{where}: faults {', '.join(f.label for f in on)} on both gears of stage {stage} repeat only "
-                    f"after {period} input revolutions (the hunting-tooth period); at most "
+                    f"after {turns} {its} (the hunting-tooth period); at most "
                     f"{stiffness.MAX_HUNTING_TURNS}: put the damage on one gear"
                 )
 

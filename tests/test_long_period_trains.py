@@ -1,0 +1,131 @@
+"""Trains of hunting-tooth pairs, whose steady response repeats only after more than MAX_PERIOD input
+turns, simulate (issue 39, outside-user round 7): a 19/47 + 23/59 + 29/71 train (its meshes alone
+repeat after 2773 turns) and damage on the output gear of a 19/71 + 28/47 train (3337 turns) were
+refused ('can't be simulated'). The simulator reads each mesh's TVMS at its own gear's angle, so such
+a train needs no grand period: a stretch of steady revolutions after the start-up transient has
+decayed (a duration from the model's slowest mode), its records cut within it (builder.steady_stretch)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from gearboxes import description, stage
+
+from gearlab.data import builder
+from gearlab.data.simulated import simulated_record
+from gearlab.gearbox.simulation import reference
+from gearlab.kinds.common import DATASET_TABLE, dataset_spec
+from gearlab.signals import resample_revolutions
+
+MIXER = description(
+    stage(19, 47),
+    stage(23, 59, module="2.5 mm"),
+    stage(29, 71, module="3 mm"),
+    name="mixer",
+    speed="40 Hz",
+    load="60 N*m",
+)
+N_TRAIN = description(stage(19, 71), stage(28, 47, module="2.5 mm"), name="n", speed="40 Hz", load="60 N*m")
+SHAFT3 = 19 * 23 / (47 * 59)  # the stage-3 pinion's shaft order
+MESHES = (19.0, 19 * 23 / 47, 29 * SHAFT3)  # 19, 9.298, 4.570 input orders
+
+
+def _order_power(x: np.ndarray, angle: np.ndarray, revolutions: int) -> np.ndarray:
+    """Hann-windowed power spectrum of *revolutions* whole input turns of *x*: bin b is order b / revolutions."""
+    revs = resample_revolutions(x, angle, 256, count=revolutions).reshape(-1)
+    w = np.hanning(revs.size)
+    return np.abs(np.fft.rfft(revs * w)) ** 2
+
+
+def _on_grid(power: np.ndarray, order: float, revolutions: int) -> float:
+    """Share of *power* within two bins (the Hann window's main lobe) of the multiples of *order*."""
+    b = np.arange(power.size)
+    grid = np.abs(b / (order * revolutions) - np.round(b / (order * revolutions))) * order * revolutions <= 2
+    return float(power[grid].sum() / power.sum())
+
+
+def test_a_three_stage_hunting_train_with_a_stage_3_fault_simulates_seconds_with_its_orders(tmp_path):
+    (tmp_path / "mixer.toml").write_text(MIXER)
+    R, fs = 100, 12_800.0  # 2.55 s at 40 Hz: 100 whole turns and a little
+    common = dict(gearbox=str(tmp_path / "mixer.toml"), revolutions=R + 2, fs=fs, sim_fs=200_000, seed=1)
+    chip = [{"name": "chip", "gear": "intermediate 2 pinion", "tooth": 3, "step": 20}]
+    faulty, healthy = simulated_record(chip, **common), simulated_record([], **common)
+    assert faulty.vibration.size == math.ceil((R + 2) / 40.0 * fs) and faulty.gears == ("intermediate 2 pinion",)
+    assert faulty.period == healthy.period == 2773 and faulty.start == healthy.start  # the same seed: the same stretch
+    # every stage's mesh: its strongest harmonic (of 6) a line at h x its order, 60 dB over its surroundings
+    power = _order_power(healthy.vibration, healthy.angle, R)
+    for mesh in MESHES:
+        lines = []
+        for h in range(1, 7):
+            b = round(h * mesh * R)
+            around = power[b - 30 : b + 31]
+            lines.append((power[b - 1 : b + 2].max() / np.median(around), int(np.argmax(around)) - 30))
+        top, where = max(lines)
+        assert top > 1e6 and abs(where) <= 1, (mesh, lines)
+    # the chip on the stage-3 pinion: what it adds lies on that shaft's orders (sidebands of every mesh
+    # harmonic h x 4.570 +- k x 0.158), not on another shaft's
+    added = _order_power(faulty.vibration - healthy.vibration, faulty.angle, R)
+    assert np.std(faulty.vibration - healthy.vibration) > 0.01 * np.std(healthy.vibration)
+    assert _on_grid(added, SHAFT3, R) > 0.95 and _on_grid(added, 19 / 47, R) < 0.5
+    for h in (5, 6):
+        for k in (-2, -1, 1, 2):
+            b = round((h * MESHES[2] + k * SHAFT3) * R)
+            assert added[b - 1 : b + 2].max() > 1e4 * np.median(added), (h, k)
+
+
+def test_the_settle_duration_leaves_the_steady_response(tmp_path):
+    # 19/71 + 28/47 healthy repeats after 71 turns: its whole-cycle steady response (settled by periods)
+    # against a stretch settled by duration (the slowest mode's decay to 1e-6, twice over)
+    (tmp_path / "n.toml").write_text(N_TRAIN)
+    fs = builder.whole_steps_rate(200e3, 40.0, 19)
+    task = builder.SimTask(
+        "two_stage", reference(str(tmp_path / "n.toml")), fs, 40.0, 60.0, "casing_x", None, None, (1,)
+    )
+    cycle = builder.simulate_unit(tuple(task))[0].reshape(71, -1)
+    stretch = builder.simulate_unit(tuple(task._replace(stretch=80)))[0].reshape(80, -1)
+    settle = builder.settle_revolutions(builder._simulator(task.model, task.preset, fs), 40.0)
+    assert settle == 16
+    same = cycle[(settle + np.arange(80)) % 71]  # the stretch starts settle turns from the gears' zero
+    assert np.abs(stretch - same).max() < 1e-9 * np.abs(cycle).max()
+
+
+def test_a_dataset_of_the_hunting_train_puts_its_records_where_the_damaged_tooth_meshes(tmp_path):
+    (tmp_path / "mixer.toml").write_text(MIXER)
+    entry = {k: key.default for k, key in DATASET_TABLE.keys.items()}
+    given = dict(gearbox="mixer.toml", faults={"chip@output gear": [20]}, teeth=[3], healthy=3, revolutions=4)
+    spec = dataset_spec({**entry, **given}, "s.toml: [source]", Path(tmp_path))
+    assert spec.fault_classes()["chip@s3-wheel"].period == 196883  # the output gear turns 12673/196883 a turn
+    data, twin = builder.build_dataset(spec), builder.build_dataset(spec.with_(healthy_twin=True))
+    assert data.X.shape == (4, 4096) and np.isfinite(data.X).all() and list(data.label) == [0, 0, 0, 1]
+    assert np.array_equal(data.X[:3], twin.X[:3])
+    # the fault's record starts in a revolution where output-gear tooth 3 meshes: its first revolution
+    # holds the chip's impact, against its healthy twin (the same revolution of the healthy stretch)
+    assert np.abs(data.X[3] - twin.X[3]).max() > 0.2 * np.abs(twin.X[3]).max()
+    pairs = builder.placement.train_pairs(spec.check_model()[0], spec.preset)
+    hits = builder.tooth_revolutions(pairs, 3, "wheel", 3, 23, 200)
+    q = 19 * 23 * 29 / (47 * 59)  # output-gear teeth meshing per input turn
+    assert hits == [math.floor((2 + m * 71) / q) - 23 for m in range(50) if 23 <= (2 + m * 71) / q < 223]
+
+
+def test_a_dataset_run_of_the_hunting_train_ends(tmp_path, run_scenario, monkeypatch):
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mixer.toml").write_text(MIXER)
+    run = run_scenario(
+        '[scenario]\nname = "m"\nkind = "dataset"\n[[datasets]]\ngearbox = "mixer.toml"\nfaults = {}\nhealthy = 4\n'
+    )
+    assert (run / "report.html").exists()
+
+
+@pytest.mark.parametrize("gear", ["output gear", "intermediate gear"])
+def test_damage_past_the_period_on_a_two_stage_train_simulates(tmp_path, gear):
+    # 19/71 + 28/47: the output gear's damage repeats after 3337 turns (refused), the intermediate gear's
+    # after 71 (simulated whole, as before)
+    (tmp_path / "n.toml").write_text(N_TRAIN)
+    chip = [{"name": "chip", "gear": gear, "tooth": 2, "step": 20}]
+    rec = simulated_record(chip, gearbox=str(tmp_path / "n.toml"), revolutions=30, fs=12_800, sim_fs=200_000, seed=2)
+    assert rec.period == {"output gear": 3337, "intermediate gear": 71}[gear] and np.isfinite(rec.vibration).all()
+    assert 0 <= rec.start < rec.period and rec.angle[0] < 2 * np.pi
