@@ -196,7 +196,9 @@ batch = 4
 """
 
 
-def test_detection_and_score_read_an_output_tacho_as_the_input_one(tmp_path, cli, run_scenario, monkeypatch):
+def test_detection_and_score_read_an_output_tacho_as_the_input_one(
+    tmp_path, cli, run_scenario, monkeypatch, no_figures
+):
     """The same 16/48 records at a steady speed, their tacho once per input turn or once per output
     turn (every third input turn, [target] tacho_shaft = "output"): the same speed, every (method,
     unit)'s AUC, detected and false-alarm figures, the same scores within 0.2 % of their range, and
