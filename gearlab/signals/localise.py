@@ -16,53 +16,48 @@ sidebands (the regular content a difference signal removes). An input-pinion chi
 the idler's turn too -- three equal impulses per idler revolution -- but only at idler orders
 multiple of 3, so it is not read as idler content.
 
-Evidence. Per order, the synchronous power of the record S(q) = |X̄(q)|² − n(q) (the mean's
-noise n = the spread of the grand periods about their mean over their number, smoothed over
-neighbouring orders) is compared with the healthy history's, Δ(q) = S(q) − S_h(q). A fault on
-shaft s adds a level L_s, about flat across a band, at every order synchronous with s: so in each
-band of orders the mean Δ of each class (the set of shafts an order is synchronous with) is
-Σ_{s in class} L_s, solved for the L_s by weighted least squares (on the rig: L_idler from the
-idler-exclusive orders, L_output from the output-exclusive ones, L_input from the shared orders
-less both). Weights are 1 / the null variance of Δ(q): the record's noise, plus the history's
-record-to-record spread of that order's power (no order carries a line's natural variation as
-evidence). The bands combine as independent estimates into z_s = L_s / sd(L_s) per shaft; the
-shafts rank by z. A shaft is flagged above a threshold fixed on the history alone: the largest
-z of the history's own records, each left out of its reference in turn, and at least the
-Gaussian quantile at the false-alarm rate shared out among the shafts. No shaft over its
-threshold: nothing localised.
+Evidence. Per order, the synchronous power S(q) = |X̄(q)|² − n(q) (n: the scatter of the averaged
+periods about their mean over their number, smoothed over neighbouring orders) is compared with
+the healthy history's, Δ(q) = S(q) − S_h(q). The history's units are blocks of one length (half the
+shortest record under 4 records). Where the grand period does not fit (Fallback) another shaft's
+lines leak into a shaft's average by an amount set by the length averaged, so a record's S is
+there the mean over its blocks of that length (a healthy 24/79 + 27/72 take read whole against
+half-record units: input z 5-6; in blocks 0 ± 1, development seeds). A fault on shaft s adds a level
+L_s, about flat across a band, at every order synchronous with s: in each band of orders the mean Δ
+of each class (the set of shafts an order is synchronous with) is Σ_{s in class} L_s, solved for
+the L_s by weighted least squares (on the rig: L_idler from the idler-exclusive orders, L_output
+from the output-exclusive ones, L_input from the shared orders less both). Weights are 1 / the null
+variance of Δ(q): the record's noise, plus the history's unit-to-unit spread of that order's power.
+The bands combine into z_s = L_s / sd(L_s); the shafts rank by z. A shaft is flagged above a
+threshold fixed on the history alone: the largest z of its records, each left out of the reference
+in turn, at least the Gaussian quantile at the false-alarm rate shared among the shafts.
 
 Which gear on a shaft. Given the gearbox description's simulated events (*templates*, from a layer
-that may simulate: gearlab.data.which_templates), a two-gear shaft's gear is the one whose simulated
-tooth-fault event fits the record's clearly better (signals.which_template: a stage-1 wheel's and a
-stage-2 pinion's force pulse reach the sensor through different modes). Without them, by the length
-of the event (:func:`which_gear`): a tooth fault lasts while its tooth is in mesh, about a pitch of
-its own gear, so the finer gear's (more teeth) is shorter. The shaft's exclusive orders from 1/2 to
-4 times the finer gear's tooth count (WIDTH_BAND), each weighted by its new share as for the tooth,
-give an envelope whose RMS width w about its peak is read in pitches of the finer gear. u = log w /
-log(Z_fine / Z_coarse) names the finer gear up to U_FINE, the coarser above U_COARSE; both (as the
-shaft) between, or when the tooth counts differ by less than MIN_RATIO, or more than WIDTH_LOW of
-the excess lies below half the finer gear's tooth order (a low mode's ring sets the width), or z <
-WIDTH_Z and the event reads wide (noise widens an event, never narrows it). The width follows the
-structure's modes as well as the teeth, and a pit or spall lasts a part of its pitch, so the two
-gears. u overlap (figures, and what was tried and dropped: docs/real_data.md and `git log` of this
-file). "Both" is no safe answer: a scenario watching either gear counts it as its own fault.
+that may simulate: gearlab.data.which_templates), a two-gear shaft's gear is the one whose
+simulated tooth-fault event fits the record's clearly better (signals.which_template: a stage-1
+wheel's and a stage-2 pinion's force pulse reach the sensor through different modes). Without them,
+by the length of the event (which_template.which_by_width): a tooth fault lasts while its tooth is
+in mesh, about a pitch of its own gear, so the finer gear's (more teeth) is shorter. The shaft's
+own orders (those no faster shaft shares) from 1/2 to 4 times the finer gear's tooth count
+(WIDTH_BAND), each weighted by its new share as for the tooth, give an envelope whose RMS width w
+about its peak is read in pitches of the finer gear. u = log w / log(Z_fine / Z_coarse) names the
+finer gear up to U_FINE, the coarser above U_COARSE; both (as the shaft) between, or when the tooth
+counts differ by less than MIN_RATIO, or more than WIDTH_LOW of the excess lies below half the
+finer gear's tooth order (a low mode's ring sets the width), or z < WIDTH_Z and the event reads
+wide (noise widens an event, never narrows it). The width follows the structure's modes as well as
+the teeth, and a pit or spall lasts a part of its pitch, so the two gears' u overlap. "Both" is no
+safe answer: a scenario watching either gear counts it as its own.
 
-Tooth. The named shaft's orders, each weighted by the share of its power that is new
-(clip(Δ / |X̄|², 0, 1)), form the shaft's residual; the peak of its envelope's energy over one
-pitch (within one tooth's event the envelope itself follows the carrier's waveform), in that
-shaft's angle o_s θ (θ the record's continuous input angle, zero at its first tacho mark),
-divided by the tooth pitch 2π/z, is the tooth index of each gear on the shaft (tooth n spans
-pitches n − 1 … n from the shaft's zero). A tacho of N marks per turn starts each take's
-revolutions at any one of them, so a take is first advanced by the m/N turn (m = 0 … N − 1, a
-continuous cut: its first m/N turn dropped) whose mean revolution correlates best with the first
-history record's (:func:`turned`): every take, and every later one scored against the saved
-history, counts from the mark the first history record starts at. One mark: nothing moves. On a
-shaft of order a/b (b > 1: the idler's 1/3) the count is defined only up to steps of z/b teeth (32
-of the idler's 96): a take's first mark finds that shaft at any of b angles, and nothing tells
-which -- the healthy simulated records hold no content of the slow shafts' own orders to align
-their grand periods by (tried: the take's grand-period mean against the first history record's,
-right for 7 of 120 takes on development seeds). The tooth says so ("step"). A strike's ring moves
-the peak later by its decay time: on a slow shaft's fine-pitched gear, by a pitch or more.
+Tooth. The named shaft's orders, each weighted by the share of its power that is new (clip(Δ /
+|X̄|², 0, 1)), form its residual; the peak of its envelope's energy over one pitch, in the shaft's
+angle o_s θ (θ the continuous input angle, zero at the first tacho mark) over the pitch 2π/z, is
+the tooth of each gear on the shaft (tooth n spans pitches n − 1 … n). A tacho of N marks per turn
+starts a take at any of them: a take is first advanced by the m/N turn whose mean revolution
+correlates best with the first history record's (:func:`turned`), so every take counts from that
+record's mark. On a shaft of order a/b (b > 1: the idler's 1/3) the count is defined only up to
+steps of z/b teeth: a take's first mark finds that shaft at any of b angles, and nothing tells
+which (the take's grand-period mean against the first record's: right for 7 of 120 takes,
+development seeds). The tooth says so ("step"). A strike's ring moves the peak later by its decay.
 
 Fallback. When the record holds fewer than *min_periods* grand periods (tooth counts with few
 common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
@@ -85,22 +80,29 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
-from .which_template import RULE_SIMULATED, RULE_WIDTH, fit_words, which_by_template
+from .which_template import (  # noqa: F401 (the width's settings: read by tests and docs as localise's)
+    MIN_RATIO,
+    RULE_SIMULATED,
+    RULE_WIDTH,
+    U_COARSE,
+    U_FINE,
+    WIDTH_BAND,
+    WIDTH_LOW,
+    WIDTH_Z,
+    envelope,
+    fit_words,
+    which_by_template,
+    which_by_width,
+)
 
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
-    """scipy's moving mean, imported on first use: scipy.ndimage costs 0.4 s that `gearlab
-    validate` and `--help` (which import the detection kind, not run it) need not pay."""
+    """scipy's moving mean, imported on first use (0.4 s `gearlab validate` and `--help` need not pay)."""
     from scipy.ndimage import uniform_filter1d as moving_mean
 
     return moving_mean(x, size=size, mode=mode)
 
 
-WIDTH_BAND = (0.5, 4.0)  # orders read for the event's width, in the finer gear's tooth counts
-U_FINE, U_COARSE = 0.0, 0.1  # log width / log tooth ratio naming the finer (<=), the coarser (>) gear
-MIN_RATIO = 1.3  # tooth ratio of a shaft's two gears below which their events are too alike
-WIDTH_Z = 10.0  # z of the shaft under which the width is too noisy to name one gear
-WIDTH_LOW = 0.3  # share of the excess below half the finer gear's tooth order: a low mode's ring
 MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
 SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
 FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
@@ -278,14 +280,15 @@ class Content:
     """One unit (a record, or a piece of a history record) at a layout's orders.
 
     mean: complex mean amplitude per order; noise: the noise power of that mean; power: the
-    synchronous power |mean|² − noise; periods: the averages behind it (grand periods, or the
-    fewest shaft revolutions)."""
+    synchronous power |mean|² − noise, or its mean over *blocks* of the record;
+    periods: the averages behind it (grand periods, or the fewest shaft revolutions)."""
 
     mean: np.ndarray
     noise: np.ndarray
     power: np.ndarray
     periods: int
     first_revolution: int
+    blocks: int = 1
 
 
 def _averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, np.ndarray]:
@@ -299,11 +302,13 @@ def _averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, 
     return mean, noise
 
 
-def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0) -> Content:
+def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0, block: int | None = None) -> Content:
     """The synchronous content of consecutive input *revolutions* (R, points) at *lay*'s orders.
 
     *first_revolution*: the input revolution revolutions[0] is, counted from the angle's zero (the
-    first tacho mark): the slower shafts' angles, and so the tooth index, are measured from there."""
+    first tacho mark): the slower shafts' angles, and so the tooth index, are measured from there.
+    *block*: the power is the mean of the record's whole blocks of that many revolutions (the
+    history's units: see the module's docstring, "Evidence"); the mean is the whole record's."""
     revs = check_array(revolutions, "revolutions", min_ndim=2)
     if revs.ndim != 2 or revs.shape[1] != lay.points:
         raise GearlabInputError(
@@ -342,6 +347,11 @@ def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0) -> 
             m, v = _averaged(np.interp(at, np.arange(y.size), y), int(lay.index[sel].max()), 3)
             mean[sel], noise[sel] = m[lay.index[sel]], v[lay.index[sel]]
             periods = n if periods is None else min(periods, n)
+    if block and R > block:
+        parts = [content(revs[i : i + block], lay, first_revolution + i) for i in range(0, R - block + 1, block)]
+        power = np.mean([u.power for u in parts], axis=0)
+        noise = np.mean([u.noise for u in parts], axis=0) / len(parts)
+        return Content(mean, noise, power, int(periods), first_revolution, len(parts))
     return Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution)
 
 
@@ -363,22 +373,20 @@ def _smooth(x: np.ndarray) -> np.ndarray:
     return uniform_filter1d(x, size=WEIGHT_SMOOTH, mode="nearest")
 
 
-def _estimate_var(power: np.ndarray, noise: np.ndarray) -> np.ndarray:
-    """Variance of |X̄|² − n about |μ|² = *power* for a complex Gaussian mean of noise power n."""
-    return noise**2 + 2 * np.maximum(power, 0) * noise
+def _estimate_var(power: np.ndarray, noise: np.ndarray, blocks: int = 1) -> np.ndarray:
+    """Variance of Content.power about |μ|² = *power*: |X̄|² − n of complex Gaussian block means of noise
+    power B n (n = *noise* of the whole mean), averaged over B = *blocks*."""
+    return blocks * noise**2 + 2 * np.maximum(power, 0) * noise
 
 
 def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
     """The units' mean power and, at the orders where it is a line, its spread beyond noise.
 
-    The weights of the evidence (_null_var) are built from what is fixed here, never from one
-    order's own noisy estimate: a weight that rises where an order's power or spread happened to
-    come out low picks the orders where Δ = S − S_h comes out high, and biases every class mean up.
-    So the noise enters smoothed over many orders, and an order's power and spread only where the
-    history holds a line there (KAPPA times the noise of its mean: so high that noise alone almost
-    never passes, since an order let in by a noise peak gets less weight exactly where Δ comes out
-    low; at 4 the slow shafts' z on healthy simulated records came out 0.3-0.6 high, at 8 within
-    0.15, development seeds); elsewhere Δ is noise alone.
+    The weights of the evidence (_null_var) never follow one order's own noisy estimate (a weight
+    that rises where an order's power happened to come out low picks the orders where Δ comes out
+    high, and biases every class mean up): the noise enters smoothed over many orders, an order's
+    power and spread only where the history holds a line (KAPPA times the noise of its mean; at 4
+    the slow shafts' healthy z came out 0.3-0.6 high, at 8 within 0.15, development seeds).
     *evidence*: the orders read as evidence (not the mesh harmonics), whose lines give the common
     relative spread."""
     if len(units) < 2:
@@ -445,7 +453,7 @@ def _null_var(rec: Content, ref: Spread) -> np.ndarray:
     noisy estimate, the record's noise included)."""
     lines = np.where(ref.line, ref.power, 0.0)
     return (
-        _estimate_var(lines, _smooth(rec.noise))
+        _estimate_var(lines, _smooth(rec.noise), rec.blocks)
         + ref.between * (1 + 1 / ref.units)
         + _estimate_var(lines, ref.unit_noise) / ref.units
     )
@@ -493,52 +501,6 @@ def _harmonics(lay: Layout, shaft: int, sel: np.ndarray) -> tuple[np.ndarray, np
     return sel, lay.index[sel]
 
 
-def _envelope(rec: Content, ref: Spread, sel: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
-    """The shaft's residual envelope at *size* points per turn: its harmonics *m* (orders *sel*) each
-    weighted by the share of its power that is new (clip(Δ / |X̄|², 0, 1))."""
-    X = rec.mean[sel]
-    gain = np.clip((rec.power[sel] - ref.power[sel]) / np.maximum(np.abs(X) ** 2, 1e-300), 0, 1)
-    spec = np.zeros(size, complex)
-    np.add.at(spec, m, gain * X)
-    return np.abs(np.fft.ifft(spec)) ** 2  # analytic: positive orders only
-
-
-def which_gear(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], z: float):
-    """(the gear of a two-gear shaft the event's length names, or None: both; the evidence). See the
-    module's docstring, "Which gear on a shaft"."""
-    fine, coarse = sorted(gears, key=lambda g: -g.teeth)
-    ratio = fine.teeth / coarse.teeth
-    expect = {fine.name: ratio**-0.2, coarse.name: ratio**0.4}
-    ev: dict = {"event width": f"pitches of the {fine.teeth}T {fine.role}", "expected": expect}
-    sel, m = _harmonics(lay, shaft, lay.sync[:, shaft] & (lay.sync.sum(axis=1) == 1) & ~lay.carrier)
-    excess = np.clip(rec.power[sel] - ref.power[sel], 0, None)
-    upto = m <= WIDTH_BAND[1] * fine.teeth
-    low = float(excess[upto & (m < fine.teeth / 2)].sum() / max(excess[upto].sum(), 1e-300))
-    keep = upto & (m >= WIDTH_BAND[0] * fine.teeth)
-    sel[np.flatnonzero(sel)[~keep]] = False
-    m, excess = m[keep], excess[keep]
-    if ratio < MIN_RATIO:
-        return None, {**ev, "undecided": f"tooth counts {fine.teeth} and {coarse.teeth} too alike"}
-    if m.size < 3 or not excess.any():
-        return None, {**ev, "undecided": "no new power in the shaft's orders"}
-    size = int(2 ** math.ceil(math.log2(16 * WIDTH_BAND[1] * fine.teeth)))
-    env = _envelope(rec, ref, sel, m, size)
-    d = ((np.arange(size) - int(np.argmax(env)) + size // 2) % size - size // 2) / size * fine.teeth
-    near = np.abs(d) <= 4  # within 4 pitches of the peak, above the envelope's floor
-    e = np.clip(env[near] - np.median(env), 0, None)
-    w = math.sqrt(float(np.sum(e * d[near] ** 2) / max(float(e.sum()), 1e-300)))
-    u = math.log(max(w, 1e-9)) / math.log(ratio)
-    centre = float(np.sum(excess * m) / max(excess.sum(), 1e-300)) / fine.teeth
-    ev.update({"width": w, "u": u, "low-order share": low, "centre": centre})
-    if z < WIDTH_Z and u > U_FINE:  # noise widens an event, never narrows it: a narrow one stands
-        return None, {**ev, "undecided": f"z {z:.1f} under {WIDTH_Z:g}: the width is too noisy"}
-    if low > WIDTH_LOW:
-        return None, {**ev, "undecided": f"{low:.0%} of the excess below order {fine.teeth / 2:g}: a low mode rings"}
-    if U_FINE < u <= U_COARSE:
-        return None, {**ev, "undecided": f"width between the two gears' ({U_FINE:g} < u <= {U_COARSE:g})"}
-    return (fine if u <= U_FINE else coarse), ev
-
-
 def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear]) -> dict:
     """Peak of the shaft's residual envelope in the shaft's angle, in tooth pitches of each gear on it."""
     sel, m = _harmonics(lay, shaft, lay.sync[:, shaft] & ~lay.carrier)
@@ -547,7 +509,7 @@ def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[
     if not sel.any():
         return {}
     size = int(2 ** math.ceil(math.log2(8 * max(int(m.max()), max(g.teeth for g in gears)) + 1)))
-    env = _envelope(rec, ref, sel, m, size)
+    env = envelope(rec, ref, sel, m, size)
     # the energy over one pitch of the finer gear: inside a one-tooth event the envelope follows
     # the carrier's waveform, whose own peak may lie anywhere in the mesh cycle
     width = max(1, int(round(size / max(g.teeth for g in gears))))
@@ -567,10 +529,8 @@ def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[
 
 def turned(revolutions: np.ndarray, reference: np.ndarray, marks: int) -> tuple[int, np.ndarray]:
     """(m, *revolutions* advanced by m/*marks* of a turn): m = 0 … marks − 1, the advance whose mean
-    revolution correlates best with *reference* (a mean revolution at the same points).
-
-    The record is cut again m/marks of a turn later, continuously (the slower shafts' turns stay
-    whole), one revolution shorter when m > 0; an advance rounds to the nearest point."""
+    revolution correlates best with *reference*; cut again m/marks of a turn later, continuously,
+    one revolution shorter when m > 0; an advance rounds to the nearest point."""
     revs = np.asarray(revolutions)
     if marks <= 1:
         return 0, revs
@@ -586,9 +546,8 @@ def turned(revolutions: np.ndarray, reference: np.ndarray, marks: int) -> tuple[
 
 
 def tooth_words(t: dict) -> str:
-    """ "17 of 96", with the step it is defined up to on a shaft of no whole input order. A step of a
-    tooth or less defines nothing across takes: a 19/71 + 28/47 output gear's read 'up to
-    0.0140845-tooth steps', as if finer than a tooth, where the first mark finds it at any of 3337 angles."""
+    """ "17 of 96", with the step it is defined up to on a shaft of no whole input order; a step of a
+    tooth or less defines nothing across takes (a 19/71 + 28/47 output gear: any of 3337 angles)."""
     if "step" in t and t["step"] <= 1:
         angles = round(t["of"] / t["step"])
         # a take starts at its first tacho mark, or without a tacho at its first sample
@@ -657,6 +616,7 @@ class History:
     args: dict = field(default_factory=dict)  # layout()'s arguments: the layout is remade from them
     marks: int = 1  # tacho marks per turn: each take is turned to *reference* (see turned)
     reference: np.ndarray | None = None  # the first history record's mean revolution
+    block: int | None = None  # revolutions of a unit: a record's power is read in blocks of as many
 
     def state(self) -> dict[str, np.ndarray]:
         """Plain arrays (np.savez) from which :meth:`restored` remakes this history, records unread."""
@@ -673,6 +633,7 @@ class History:
             "args": np.array(json.dumps(self.args)),
             "marks": np.array(self.marks),
             "reference": np.zeros(0) if self.reference is None else self.reference,
+            "block": np.array(self.block or 0),
         }
 
     @staticmethod
@@ -689,17 +650,17 @@ class History:
         # a history saved before takes were turned to a mark (no "marks"): one mark, nothing turned
         marks = int(state["marks"]) if "marks" in state else 1
         reference = state["reference"] if marks > 1 else None
-        return History(lay, sp, state["thresholds"], state["left_out_z"], str(state["note"]), args, marks, reference)
+        block = int(state["block"]) if "block" in state else None  # saved before blocks: the whole record
+        return History(
+            lay, sp, state["thresholds"], state["left_out_z"], str(state["note"]), args, marks, reference, block or None
+        )
 
 
-def _units(revs: np.ndarray, first: int, lay: Layout, pieces: int) -> list[Content]:
-    """*revs* as *pieces* consecutive units (each a whole number of grand periods in grand mode)."""
-    R = revs.shape[0]
-    step = lay.period if lay.mode == "grand" else 1
-    size = (R // pieces) // step * step
-    if pieces == 1 or size < 2 * step:
+def _units(revs: np.ndarray, first: int, lay: Layout, block: int) -> list[Content]:
+    """*revs* as consecutive units of *block* revolutions (the whole record when shorter)."""
+    if revs.shape[0] < block:
         return [content(revs, lay, first)]
-    return [content(revs[i * size : (i + 1) * size], lay, first + i * size) for i in range(pieces)]
+    return [content(revs[i : i + block], lay, first + i) for i in range(0, revs.shape[0] - block + 1, block)]
 
 
 def history(
@@ -714,8 +675,9 @@ def history(
 ) -> History:
     """Read a healthy history: *records* of consecutive input revolutions (R_i, points) of one gearbox.
 
-    Units: each record, or each half of one when the history holds fewer than 4 records (two units
-    at least are needed for a spread). Thresholds: per shaft, the largest z of a history record
+    Units: blocks of the shortest record's length, or of half of it when the history holds fewer
+    than 4 records (two units at least are needed for a spread), a whole number of grand periods in
+    grand mode; every record gives as many as it holds. Thresholds: per shaft, the largest z of a history record
     against the units of the others (left out in turn), and at least the Gaussian quantile at
     *false_alarm* / the number of shafts. *revolutions* (default: the shortest record) fixes the
     layout's mode; *options* go to :func:`layout`. *marks*: the tacho's marks per turn, each record
@@ -730,8 +692,12 @@ def history(
     shortest = min(r.shape[0] for r in revs)
     args = {"points": int(revs[0].shape[1]), "revolutions": int(revolutions or shortest), **options}
     lay = layout(table, **args)
-    pieces = 1 if len(revs) >= 4 else 2
-    units = [_units(r, f, lay, pieces) for r, f in zip(revs, firsts)]
+    step = lay.period if lay.mode == "grand" else 1
+    block = (shortest // (1 if len(revs) >= 4 else 2)) // step * step
+    block = block if block >= 2 * step else shortest
+    # the record read in blocks where other shafts' lines leak by the length (shafts mode; Evidence)
+    read = block if lay.mode == "shafts" else None
+    units = [_units(r, f, lay, block) for r, f in zip(revs, firsts)]
     flat = [u for us in units for u in us]
     ref = spread(flat, ~lay.carrier)
     floor = threshold_floor(len(lay.shafts), false_alarm)
@@ -740,7 +706,7 @@ def history(
         rest = [u for j, us in enumerate(units) if j != i for u in us]
         if len(rest) < 2:
             continue
-        level, sd = shaft_levels(content(r, lay, firsts[i]), spread(rest, ~lay.carrier), lay)
+        level, sd = shaft_levels(content(r, lay, firsts[i], read), spread(rest, ~lay.carrier), lay)
         loo.append(level / sd)
     loo = np.array(loo).reshape(-1, len(lay.shafts))
     thr = np.maximum(floor, np.nanmax(loo, axis=0)) if loo.size else np.full(len(lay.shafts), floor)
@@ -748,7 +714,7 @@ def history(
         f"{len(revs)} history record(s) in {len(flat)} units; thresholds: the largest left-out z, at least "
         f"{floor:.2f} (false alarm {false_alarm:g} shared by {len(lay.shafts)} shafts)"
     )
-    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference)
+    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference, read)
 
 
 def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0, templates=None) -> Localisation:
@@ -757,19 +723,24 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
     None: the gear is named by the event's width."""
     lay = hist.layout
     m, revolutions = turned(check_array(revolutions, "revolutions", min_ndim=2), hist.reference, hist.marks)
-    rec = content(revolutions, lay, first_revolution)
+    rec = content(revolutions, lay, first_revolution, hist.block)
     level, sd = shaft_levels(rec, hist.spread, lay)
     z = level / sd
     gears = gears_of(table)
     excl = lay.sync & ((lay.sync.sum(axis=1) == 1) & ~lay.carrier)[:, None]
+    # a shaft's own orders, for its gear: those no faster shaft shares (the exclusive ones, and those
+    # shared with a slower shaft alone: 22/36 + 21/63 leaves the intermediate shaft no exclusive order)
+    faster = np.array([[b > a for b in lay.shaft_orders] for a in lay.shaft_orders])
+    own = lay.sync & ~lay.carrier[:, None] & ~np.stack([(lay.sync & f).any(axis=1) for f in faster], axis=1)
     out = []
     for s, name in enumerate(lay.shafts):
         zs = float(z[s]) if np.isfinite(z[s]) else -math.inf
         flagged = zs > hist.thresholds[s]
         on = gears[name]
-        which, dens = (None, {}) if len(on) == 1 or not flagged else which_gear(rec, hist.spread, lay, s, on, zs)
+        harmonics = _harmonics(lay, s, own[:, s])
+        which, dens = (None, {}) if len(on) == 1 or not flagged else which_by_width(rec, hist.spread, harmonics, on, zs)
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
-            by, fits = which_by_template(rec, hist.spread, lay, _harmonics(lay, s, excl[:, s]), on, templates(lay))
+            by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay))
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
             dens["rule"] = RULE_WIDTH if by is False else RULE_SIMULATED
         elif dens:  # the width's evidence

@@ -8,7 +8,7 @@ different modes: the event's *shape* tells the two apart where its width alone o
 caller (a layer that may simulate: gearlab.data.which_templates) simulates the healthy train and a
 tooth fault on each candidate gear at the record's speed and passes, per gear, the templates: the
 fault's synchronous mean less the healthy one at the layout's orders (a few fault kinds each). Here,
-numpy only: the record's residual on the shaft's exclusive orders (each order's mean weighted by
+numpy only: the record's residual on the shaft's own orders (each order's mean weighted by
 the share of its power that is new, as for the tooth) is compared with each template by normalised
 cross-correlation maximised over every shift of the shaft's angle (the tooth placed is not the
 tooth found), its best over the gear's kinds is the gear's fit; the gear whose fit exceeds the
@@ -29,6 +29,11 @@ import math
 
 import numpy as np
 
+WIDTH_BAND = (0.5, 4.0)  # orders read for the event's width, in the finer gear's tooth counts
+U_FINE, U_COARSE = 0.0, 0.1  # log width / log tooth ratio naming the finer (<=), the coarser (>) gear
+MIN_RATIO = 1.3  # tooth ratio of a shaft's two gears below which their events are too alike
+WIDTH_Z = 10.0  # z of the shaft under which the width is too noisy to name one gear
+WIDTH_LOW = 0.3  # share of the excess below half the finer gear's tooth order: a low mode's ring
 MARGIN = 0.05  # fit of one gear over the other's below which both stay named
 STRUCTURE_DB = 5.0  # spread of the healthy mesh harmonics about the simulator's over which its events are not used
 # which rule named (or left undecided) a two-gear shaft's gear, as localise's report says it
@@ -64,7 +69,7 @@ def structure_gap(ref, lay, healthy: np.ndarray) -> float:
 
 def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], gears, templates: dict):
     """(the gear whose simulated event fits the record's clearly better, or None: both; the fits).
-    *harmonics*: the shaft's exclusive orders and their harmonic numbers of the shaft (localise._harmonics);
+    *harmonics*: the shaft's own orders and their harmonic numbers of the shaft (localise._harmonics);
     *templates*: {"healthy": the simulated healthy mean, "gears": {gear name: [template, ...]}}.
     False instead of a gear: the simulator's structure differs from the history's (structure_gap
     over STRUCTURE_DB), its events are not used."""
@@ -93,3 +98,51 @@ def fit_words(evidence: dict) -> str:
             + ", "
         )
     return f"simulated events not used ({evidence['not used']}), " if "not used" in evidence else ""
+
+
+def envelope(rec, ref, sel: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
+    """The shaft's residual envelope at *size* points per turn: its harmonics *m* (orders *sel*) each
+    weighted by the share of its power that is new (clip(Δ / |X̄|², 0, 1))."""
+    X = rec.mean[sel]
+    gain = np.clip((rec.power[sel] - ref.power[sel]) / np.maximum(np.abs(X) ** 2, 1e-300), 0, 1)
+    spec = np.zeros(size, complex)
+    np.add.at(spec, m, gain * X)
+    return np.abs(np.fft.ifft(spec)) ** 2  # analytic: positive orders only
+
+
+def which_by_width(rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z: float):
+    """(the gear of a two-gear shaft the event's length names, or None: both; the evidence) from the
+    shaft's own orders and their harmonic numbers (*harmonics*). See gearlab.signals.localise's
+    docstring, "Which gear on a shaft"."""
+    fine, coarse = sorted(gears, key=lambda g: -g.teeth)
+    ratio = fine.teeth / coarse.teeth
+    expect = {fine.name: ratio**-0.2, coarse.name: ratio**0.4}
+    ev: dict = {"event width": f"pitches of the {fine.teeth}T {fine.role}", "expected": expect}
+    sel, m = harmonics
+    sel = sel.copy()
+    excess = np.clip(rec.power[sel] - ref.power[sel], 0, None)
+    upto = m <= WIDTH_BAND[1] * fine.teeth
+    low = float(excess[upto & (m < fine.teeth / 2)].sum() / max(excess[upto].sum(), 1e-300))
+    keep = upto & (m >= WIDTH_BAND[0] * fine.teeth)
+    sel[np.flatnonzero(sel)[~keep]] = False
+    m, excess = m[keep], excess[keep]
+    if ratio < MIN_RATIO:
+        return None, {**ev, "undecided": f"tooth counts {fine.teeth} and {coarse.teeth} too alike"}
+    if m.size < 3 or not excess.any():
+        return None, {**ev, "undecided": "no new power in the shaft's orders"}
+    size = int(2 ** math.ceil(math.log2(16 * WIDTH_BAND[1] * fine.teeth)))
+    env = envelope(rec, ref, sel, m, size)
+    d = ((np.arange(size) - int(np.argmax(env)) + size // 2) % size - size // 2) / size * fine.teeth
+    near = np.abs(d) <= 4  # within 4 pitches of the peak, above the envelope's floor
+    e = np.clip(env[near] - np.median(env), 0, None)
+    w = math.sqrt(float(np.sum(e * d[near] ** 2) / max(float(e.sum()), 1e-300)))
+    u = math.log(max(w, 1e-9)) / math.log(ratio)
+    centre = float(np.sum(excess * m) / max(excess.sum(), 1e-300)) / fine.teeth
+    ev.update({"width": w, "u": u, "low-order share": low, "centre": centre})
+    if z < WIDTH_Z and u > U_FINE:  # noise widens an event, never narrows it: a narrow one stands
+        return None, {**ev, "undecided": f"z {z:.1f} under {WIDTH_Z:g}: the width is too noisy"}
+    if low > WIDTH_LOW:
+        return None, {**ev, "undecided": f"{low:.0%} of the excess below order {fine.teeth / 2:g}: a low mode rings"}
+    if U_FINE < u <= U_COARSE:
+        return None, {**ev, "undecided": f"width between the two gears' ({U_FINE:g} < u <= {U_COARSE:g})"}
+    return (fine if u <= U_FINE else coarse), ev
