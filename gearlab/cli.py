@@ -206,10 +206,10 @@ def inspect(
     vibration: Annotated[str | None, typer.Option(help="vibration channel (default: the only one)")] = None,
     tacho: Annotated[str | None, typer.Option(help="tacho channel: pulses or the shaft angle in rad")] = None,
     tacho_kind: Annotated[str, typer.Option(help="auto, angle or pulses")] = "auto",
-    pulses_per_rev: Annotated[int | None, typer.Option(help="tacho pulses per revolution (default 1)")] = None,
-    tacho_shaft: Annotated[str | None, typer.Option(help="the shaft the tacho reads (default: the input)")] = None,
+    pulses_per_rev: Annotated[int | None, typer.Option(help="pulses per turn (default: [sensor], else 1)")] = None,
+    tacho_shaft: Annotated[str | None, typer.Option(help="the tacho's shaft (default: [sensor], else input)")] = None,
     speed: Annotated[
-        str | None, typer.Option(help="input-shaft speed without a tacho, e.g. '25 Hz', '1500 rpm'")
+        str | None, typer.Option(help="nominal input-shaft speed without a tacho, e.g. '25 Hz', '1500 rpm'")
     ] = None,
     fs: Annotated[str | None, typer.Option(help="sampling rate when the file has none, e.g. '20 kHz'")] = None,
     sensitivity: Annotated[str | None, typer.Option(help="sensor sensitivity, e.g. '10 mV/g'")] = None,

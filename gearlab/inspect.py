@@ -42,7 +42,7 @@ from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
 from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
-from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed
+from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed, nominal_line
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
 
@@ -289,6 +289,15 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         "spectrum": (orders, amp),
         "tsa": shaft_tsa(rec, speed, box, fine),
     }
+    # a description's (or --speed's) speed is nominal: the measured one beside it, as information
+    nominal, said = (options.speed_hz, "--speed") if options.speed_hz else (box and box.speed_hz, "[operation] speed")
+    if nominal and speed.source != "declared":
+        report["speed"]["nominal"] = {
+            "hz": nominal,
+            "given": said,
+            "percent": 100 * (speed.mean_hz / nominal - 1),
+            "line": nominal_line(speed.mean_hz, nominal, said),
+        }
     if box is not None:
         tacho_shaft = options.tacho_shaft or box.sensor.tacho
         on_input = rec.tacho is not None and tacho_shaft == box.shafts[0]
@@ -300,7 +309,9 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         if elsewhere:
             differences[:0] = [elsewhere]
-        elif on_input and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses"):
+        elif rec.tacho is not None and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses"):
+            # on any shaft: a wrong count of marks scales every order alike (a two-stage reducer's intermediate
+            # tacho of 2 marks a turn read as 1 'matched': its mesh harmonics on every described order)
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
@@ -391,14 +402,38 @@ def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None)
 
 
 def gears(box: Gearbox) -> list[dict]:
-    """The description's gears by the names a scenario's 'faults' key takes ("chip@input pinion")."""
+    """The description's gears by the names a scenario's 'faults' key takes ("chip@input pinion"), with
+    their tip diameter d_a and the tip keys a gear gives itself ('tip': addendum, dedendum, tip_diameter)."""
     from .data.placement import gear_name
+    from .gearbox.checks import gear_tip
 
-    return [
-        {"name": gear_name(st.index, g, box.shafts), "stage": st.index, "gear": g, "teeth": getattr(st, g).z}
-        for st in box.stages
-        for g in ("pinion", "wheel")
-    ]
+    out = []
+    for st in box.stages:
+        for g in ("pinion", "wheel"):
+            spec = getattr(st, g)
+            own = {k: getattr(spec, k) for k in ("addendum", "dedendum") if getattr(spec, k) is not None}
+            if spec.tip_diameter is not None:
+                own["tip_diameter_mm"] = round(spec.tip_diameter * 1e3, 6)
+            out.append(
+                {
+                    "name": gear_name(st.index, g, box.shafts),
+                    "stage": st.index,
+                    "gear": g,
+                    "teeth": spec.z,
+                    "tip_diameter_mm": gear_tip(st, spec) * 1e3,
+                    "tip": own,
+                }
+            )
+    return out
+
+
+def _tip_words(gear: dict) -> str:
+    """'; h_a* = 0.8, d_a = 191.5 mm' for a gear with a tip of its own, else ''."""
+    own = gear.get("tip") or {}
+    words = [f"{sym} = {own[k]:g}" for k, sym in (("addendum", "h_a*"), ("dedendum", "h_f*")) if k in own]
+    if own:
+        words.append(f"d_a = {gear['tip_diameter_mm']:.4g} mm")
+    return "; " + ", ".join(words) if words else ""
 
 
 def json_ready(report: dict) -> dict:
@@ -432,6 +467,8 @@ def render(report: dict, console, width: int = 100) -> None:
         f"{sp['min_hz']:.5g} .. {sp['max_hz']:.5g} Hz (variation {sp['variation_percent']:.3g} %); "
         f"{report['revolutions']} input revolutions, order resolution {report['order_resolution']:.3g}"
     )
+    if "nominal" in sp:
+        console.print(f"[dim]{escape(sp['nominal']['line'])}[/dim]")
     for note in sp["notes"]:
         console.print(f"[yellow]note:[/yellow] {escape(note)}")
     orders, amp = report["spectrum"]
@@ -456,7 +493,7 @@ def render(report: dict, console, width: int = 100) -> None:
     console.print(Text.from_ansi(plotext.build()))
 
     if "gears" in report:
-        named = ", ".join(f"{g['name']} {g['teeth']}T (stage {g['stage']})" for g in report["gears"])
+        named = ", ".join(f"{g['name']} {g['teeth']}T (stage {g['stage']}{_tip_words(g)})" for g in report["gears"])
         first = report["gears"][0]["name"]
         console.print(escape(f'gears, as a scenario\'s faults key names them (e.g. "chip@{first}"): {named}'))
     if "check" in report:

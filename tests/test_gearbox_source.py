@@ -110,7 +110,8 @@ def test_the_defaults_a_description_leaves_are_the_ones_its_model_uses():
     from gearlab.registry import get_registry
 
     names = get_registry().get("model", "eight_dof").param_names()
-    assert defaults(resolve_gearbox("meng2020"), names) == []  # its housing keys are unused by eight_dof
+    # its housing keys are unused by eight_dof; load_level ([operation], the gap's load_level effect) is
+    assert defaults(resolve_gearbox("meng2020"), names) == ["load_level (fit: load_level)"]
     names = get_registry().get("model", "ten_dof").param_names()
     assert "casing_mass (fit: casing_path)" in defaults(resolve_gearbox("meng2020"), names)
 

@@ -155,6 +155,11 @@ def fault_parts(key: str, shafts: tuple[str, ...], where: str) -> tuple[tuple[st
     return tuple(sorted(parts, key=lambda part: part[2] != "pinion"))
 
 
+def fault_words(parts, shafts: tuple[str, ...]) -> str:
+    """A class key in the words a user writes it ("chip@output gear"), not its canonical form ("chip@s2-wheel")."""
+    return "+".join(f"{name}@{gear_name(stage, gear, shafts)}" for name, stage, gear in parts)
+
+
 def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[str, tuple[int, ...]], ...]:
     """A scenario's `faults`, ``{chip = [18, 20], "chip@output gear" = [20]}`` or a list of tables
     ``[{name = "chip", gear = "wheel", stage = 2, steps = [20]}]``, as (class key, ladder steps)
@@ -185,9 +190,10 @@ def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[st
     for key, steps, what in items:
         if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
             raise GearlabInputError(f"{what}, got {shown(steps)}")
-        canonical = "+".join(fault_key(*part) for part in fault_parts(key, shafts, where))
+        parts = fault_parts(key, shafts, where)
+        canonical = "+".join(fault_key(*part) for part in parts)
         if canonical in out:
-            raise GearlabInputError(f"{where}: fault '{canonical}' is listed twice")
+            raise GearlabInputError(f"{where}: fault '{fault_words(parts, shafts)}' is listed twice")
         out[canonical] = tuple(steps)
     return tuple(out.items())
 
@@ -264,7 +270,8 @@ def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, Fa
         chosen = tuple(range(1, Z + 1)) if teeth is None else tuple(teeth)
         for n in chosen:
             if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= Z:
-                on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{key}')"
+                words = fault_words(parts, shafts)
+                on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{words}')"
                 raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{Z}{on}")
         period = math.lcm(*(train_period(pairs, s, g) for _, s, g in parts))
         out[key] = FaultClass(key, name, stage, gear, chosen, pair, period, parts[1:])

@@ -196,7 +196,7 @@ class Gearbox:
     load_nm: float | None  # output torque
     sensor: Sensor
     dynamics: dict[str, float] = field(default_factory=dict)
-    stated: tuple[str, ...] = ()  # the [dynamics] keys the description gives (the rest are DYNAMICS defaults)
+    stated: tuple[str, ...] = ()  # the [dynamics] keys (and [operation] load_level) the description gives
     load_level: float = 1.0  # [operation] load_level: the simulated torque is the load times it
 
     def torque(self, load: float | None = None) -> float | None:
@@ -394,7 +394,7 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
         load,
         sensor,
         dynamics,
-        tuple(dyn.data),
+        tuple(dyn.data) + ((LOAD_LEVEL.name,) if LOAD_LEVEL.name in op.data else ()),
         op.param(LOAD_LEVEL),
     )
     check_geometry(box)

@@ -35,7 +35,7 @@ from pathlib import Path
 
 from ..errors import GearlabInputError
 from .derive import DYNAMICS_NAMES, MODELS, gear_pairs, lumped_params, train_pair
-from .description import FITTED, Gearbox
+from .description import FITTED, LOAD_LEVEL, OPERATION_FITTED, Gearbox
 
 PREFIX = "gearbox:"
 HOUSING = ("casing_mass", "mounting_stiffness_x", "mounting_stiffness_y", "mounting_damping_x", "mounting_damping_y")
@@ -121,6 +121,8 @@ def defaults(box: Gearbox, names: tuple[str, ...]) -> list[str]:
     leaves to solid discs."""
     used = [key for key in box.dynamics if key not in box.stated and DYNAMICS_NAMES[key] in names]
     out = [f"{key}{f' (fit: {FITTED[key]})' if key in FITTED else ''}" for key in used]
+    if LOAD_LEVEL.name not in box.stated:  # [operation] load_level: the gap's load_level effect fits it
+        out.append(f"{LOAD_LEVEL.name} (fit: {OPERATION_FITTED[LOAD_LEVEL.name]})")
     discs = [name for name, m, j in zip(box.shafts, box.shaft_mass, box.shaft_inertia) if m is None or j is None]
     return out + ([f"the {', '.join(discs)} shaft blocks (solid discs)"] if discs else [])
 

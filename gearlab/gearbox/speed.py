@@ -18,6 +18,11 @@ THRESHOLD_DB = 15.0  # a line stands this far over the running median of the spe
 FLOOR_BINS = 201  # width of the running median (bins)
 PEAK_BINS = 7  # a line is the largest value within ±3 bins (Hann sidelobes are not lines)
 DECLARED_RANGE = 0.01  # a declared speed is trusted to ±1 %
+# A declared speed is nominal: a motor under load runs below it (an induction motor's slip, up to some 6 %:
+# a 4-pole motor's 1500 rpm is 1476 rpm at its rated load), a drive's setting above it. A speed further
+# than DECLARED_RANGE but within NOMINAL_RANGE is taken from the mesh lines only where the shaft sidebands
+# confirm it (sidebands_confirm): a mesh line alone cannot tell a slipping motor from another tooth count.
+NOMINAL_RANGE = 0.06
 AMBIGUOUS = 0.9  # a second speed hypothesis explaining ≥ 90 % of the best one's power is ambiguous
 SPEED_AGREE = 0.005  # two hypotheses within 0.5 % are the same speed
 DRIFT = 1e-3  # relative smear of an order by speed drift
@@ -97,9 +102,10 @@ def speed_from_mesh(
     description's mesh lines: each strong line tried as a mesh harmonic (1-MAX_HARMONIC) of each
     stage; a hypothesis must put a mesh harmonic on a carrier, and is scored by the stages it finds
     and the lines it explains; of those explaining as much (TIE) the fastest, the harmonic family's
-    fundamental. A *declared* speed limits the search to ±1 % (and is kept, with a note, when no
-    line fits); with none, two hypotheses at speeds that are not multiples of each other and
-    explain nearly as much are refused as ambiguous. *where*: the file and channel, for the messages."""
+    fundamental. A *declared* speed is nominal: the search is limited to ±1 % of it, or to ±6 % where
+    the input pinion's sidebands confirm the speed (NOMINAL_RANGE; the declared speed is kept, with a
+    note, when no line fits); with none, two hypotheses at speeds that are not multiples of each other
+    and explain nearly as much are refused as ambiguous. *where*: the file and channel, for the messages."""
     n = signal.size
     table = order_table(box)
     freq, amp = spectrum(signal, fs)
@@ -197,6 +203,13 @@ def speed_from_mesh(
         # much better: a few weak lines always fit within ±1 % as some harmonic, and a wrong tooth count
         # is then read at the declared speed (inspect: "mesh order 23 measured, 24 expected")
         near = [h for h in hypotheses if abs(h[1] / declared - 1) <= DECLARED_RANGE]
+        slipped = [h for h in hypotheses if DECLARED_RANGE < abs(h[1] / declared - 1) <= NOMINAL_RANGE]
+        # the input pinion's sidebands, whichever stage's mesh gave the speed: a later stage's mesh and
+        # pinion shaft both scale with the input's speed times stage 1's described ratio, and agree at a
+        # speed a wrong input pinion's count makes (19/58 + 25/67 described 18/58: 36.95 Hz, not 35)
+        for h in sorted(slipped, key=lambda h: -h[0])[:4]:  # the best few: each looks at every carrier
+            if sidebands_confirm(lines, h[1], table.stages[0], df):
+                near.append(h)
         overall = max(hypotheses, key=lambda h: h[0]) if hypotheses else None
         if not near:
             return (
@@ -204,7 +217,8 @@ def speed_from_mesh(
                 "declared",
                 f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at this speed"
                 + (
-                    f" (the lines fit {fmt_hz(overall[1])} ({overall[2]}){at_declared(overall, declared, box)})"
+                    f" (the lines fit {fmt_hz(overall[1])} ({overall[2]})"
+                    f"{at_declared(overall, declared, box) or by_sidebands(overall, lines, table, df, box)})"
                     if overall
                     else ""
                 ),
@@ -243,6 +257,79 @@ def speed_from_mesh(
                 [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
             )
     return best[1], f"from the mesh lines ({best[2]})", None
+
+
+SIDEBANDS_SHOW = "its sidebands show"
+SIDEBAND_WINDOW = 0.15  # a pinion shaft's sideband is looked for within ±15 % of its spacing at the speed tried
+TEETH_AGREE = 0.3  # the sidebands confirm a speed where they put the pinion's teeth within ±0.3 of its count
+
+
+def sidebands_confirm(lines: Lines, f: float, stage, df: float) -> bool:
+    """Whether the sidebands of *stage*'s mesh at input speed *f* put its pinion's teeth within
+    TEETH_AGREE of the described count (sideband_teeth)."""
+    seen = sideband_teeth(lines, f, stage, df)
+    return seen is not None and abs(seen - stage.pinion_teeth) <= TEETH_AGREE
+
+
+def sideband_teeth(lines: Lines, f: float, stage, df: float) -> float | None:
+    """The teeth of *stage*'s pinion (gearbox.orders.StageOrders) that its sidebands show at the input
+    speed *f* (Hz), or None (no sideband): around each mesh harmonic h M f on a line (the carrier, at
+    c Hz), the strongest line within ±SIDEBAND_WINDOW of c ± the pinion shaft's frequency is its
+    sideband, d Hz from c; the pinion's teeth are c / (h d) whatever the speed (their median). A
+    34-tooth pinion at 24.6 Hz and a 33-tooth one at 25.36 Hz mesh at the same 836.4 Hz; only the
+    sidebands, 24.6 or 25.36 Hz apart, tell them apart."""
+    shaft = float(stage.pinion_shaft_order) * f
+    mesh = float(stage.mesh) * f
+    top = float(lines.at.max(initial=0.0))
+    seen = []
+    for h in range(1, MAX_HARMONIC + 1):
+        if h * mesh + (1 + SIDEBAND_WINDOW) * shaft > top:
+            break
+        c = lines.near(h * mesh, max(2.5 * df, DRIFT * h * mesh))
+        if c is None:
+            continue
+        carrier = float(lines.at[c])
+        for sign in (-1.0, 1.0):
+            inside = np.flatnonzero(np.abs(lines.at - (carrier + sign * shaft)) <= SIDEBAND_WINDOW * shaft)
+            if inside.size:
+                q = inside[np.argmax(lines.amp[inside])]
+                seen.append(carrier / (h * abs(float(lines.at[q]) - carrier)))
+    return float(np.median(seen)) if seen else None
+
+
+def by_sidebands(hypothesis: tuple, lines: Lines, table, df: float, box: Gearbox) -> str:
+    """A first-stage mesh line that fits another speed than the declared one, whose sidebands put the
+    pinion at a whole count of teeth other than the described: ': its sidebands show a 33-tooth pinion
+    (at 25.35 Hz)? described 34' (a 33-tooth pinion at 25.35 Hz meshes where a 34-tooth one at 24.6 Hz
+    does: a slip of the described speed's motor, unless the sidebands say otherwise); else ''."""
+    if hypothesis[3] != 1:
+        return ""
+    seen = sideband_teeth(lines, hypothesis[1], table.stages[0], df)
+    said = box.stages[0].pinion.z
+    if seen is None or abs(seen - round(seen)) > TEETH_AGREE or round(seen) in (said, 0):
+        return ""
+    z = round(seen)
+    return (
+        f": {SIDEBANDS_SHOW} a {z}-tooth pinion on the {box.shafts[0]} shaft (at {fmt_hz(hypothesis[4] / z)})? "
+        f"described {said}"
+    )
+
+
+def nominal_line(measured: float, nominal: float, said: str) -> str:
+    """The measured speed against a description's (or a --speed's) nominal one, *said* where it was
+    given: information, never a mismatch (a tooth count, a tacho's shaft or its marks are what differ)."""
+    d = measured / nominal - 1.0
+    if abs(d) <= 0.002:
+        how = "as described"
+    elif -NOMINAL_RANGE <= d < 0:
+        how = "slip under load"
+    elif 0 < d <= NOMINAL_RANGE:
+        how = "a light load or the drive's setting"
+    else:
+        how = "another operating point than the description's: a run simulates the measured speed"
+    shown = f"{100 * d:+.0f}" if abs(d) >= 0.1 else f"{100 * d:+.2g}"
+    rpm = f"speed {measured * 60:.0f} rpm ({fmt_hz(measured)}) measured, {nominal * 60:.0f} rpm nominal ({said})"
+    return f"{rpm}: {shown} %, {how}"
 
 
 def at_declared(hypothesis: tuple, declared: float, box: Gearbox, lead: str = ": ") -> str:
@@ -313,7 +400,7 @@ def _followed(signal, fine, up, fs, box, declared, where, threshold_db, f, how, 
         if theta is None:
             break
         mean = (theta[-1] - theta[0]) * fs / (2 * np.pi * (n - 1))
-        if declared is not None and abs(mean / declared - 1) > DECLARED_RANGE:
+        if declared is not None and abs(mean / declared - 1) > NOMINAL_RANGE:
             break  # the phase followed another line than the declared speed's mesh
         fine_theta = np.interp(np.arange(fine.size) / up, np.arange(n), theta)
         even = np.interp(np.linspace(theta[0], theta[-1], n), fine_theta, fine)
@@ -324,6 +411,8 @@ def _followed(signal, fine, up, fs, box, declared, where, threshold_db, f, how, 
         if how2 != "declared" and abs(f2 / mean - 1) <= SPEED_AGREE:
             return theta, mean, how2 + ", followed on a mesh harmonic's phase", note2
         if how2 == "declared":
+            if note2 and SIDEBANDS_SHOW in note2 and SIDEBANDS_SHOW not in (note or ""):
+                note = note2  # at uniform angle a speed's swing no longer splits the sidebands (a 0.1 % swing did)
             break
         f = f2
     return None, f, how, note
