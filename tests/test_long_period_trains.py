@@ -129,3 +129,28 @@ def test_damage_past_the_period_on_a_two_stage_train_simulates(tmp_path, gear):
     rec = simulated_record(chip, gearbox=str(tmp_path / "n.toml"), revolutions=30, fs=12_800, sim_fs=200_000, seed=2)
     assert rec.period == {"output gear": 3337, "intermediate gear": 71}[gear] and np.isfinite(rec.vibration).all()
     assert 0 <= rec.start < rec.period and rec.angle[0] < 2 * np.pi
+
+
+def test_a_record_from_a_stretch_is_the_steady_response_at_its_start(tmp_path, monkeypatch):
+    # 19/71 + 28/47 healthy (71 turns) made from a stretch (the limit lowered) against its whole steady
+    # cycle read at the record's start (counted from the gears' zero, as a whole period's record is)
+    # through the same anti-alias filter: the settle, the margins and the start's bookkeeping
+    from scipy.interpolate import CubicSpline
+
+    from gearlab.data import placement
+    from gearlab.data.simulated import anti_alias
+
+    tmp = tmp_path
+    (tmp / "n.toml").write_text(N_TRAIN)
+    monkeypatch.setattr(placement, "MAX_PERIOD", 10)
+    rec = simulated_record([], gearbox=str(tmp / "n.toml"), revolutions=20, fs=20_000, sim_fs=200_000, seed=3)
+    monkeypatch.setattr(placement, "MAX_PERIOD", 1000)
+    fs_sim = builder.whole_steps_rate(200e3, 40.0, 19)
+    sim = builder._simulator("two_stage", reference(str(tmp / "n.toml")), fs_sim)
+    clean, _ = builder.steady_response(sim, [], 40.0, 60.0, rec.channel, (), whole_cycle=True)
+    n = clean.size
+    fine = np.fft.irfft(np.fft.rfft(clean) * anti_alias(np.arange(n // 2 + 1) * fs_sim / n, 20_000), 8 * n) * 8
+    spline = CubicSpline(np.arange(8 * n + 1) / (8 * fs_sim), np.append(fine, fine[0]), bc_type="periodic")
+    times = rec.start / 40.0 + np.arange(rec.vibration.size) / 20_000
+    steady = spline(np.mod(times, n / fs_sim))
+    assert rec.period == 71 and np.abs(rec.vibration - steady).max() < 1e-5 * np.abs(steady).max()

@@ -157,18 +157,22 @@ def _periodic_at(x: np.ndarray, fs_sim: float, fs: float, times: np.ndarray) -> 
     return spline(np.mod(times, period))
 
 
+def anti_alias(f: np.ndarray, fs: float) -> np.ndarray:
+    """A long train's record: the logger's anti-alias filter's gain at frequencies *f* (Hz), 1 up to
+    TAPER x fs/2, a raised cosine down to 0 at fs/2."""
+    lo, hi = TAPER * fs / 2, fs / 2
+    return np.where(f <= lo, 1.0, np.where(f >= hi, 0.0, 0.5 + 0.5 * np.cos(np.pi * (f - lo) / (hi - lo))))
+
+
 def _stretch_at(x: np.ndarray, fs_sim: float, fs: float, times: np.ndarray) -> np.ndarray:
     """A stretch *x* at fs_sim (not periodic) at *times* (s from its first sample): a logger's
-    anti-alias filter (raised-cosine from TAPER x fs/2 to fs/2, none above) on its spectrum, then a
-    cubic spline at OVERSAMPLE points per cycle of fs/2 at least. The filter's reach (a few
-    hundred fine steps) wraps round the stretch's ends: STRETCH_MARGIN revolutions there are not read."""
+    anti-alias filter (anti_alias) on its spectrum, then a cubic spline at OVERSAMPLE points per
+    cycle of fs/2 at least. The filter's reach (a few hundred fine steps) wraps round the stretch's
+    ends: STRETCH_MARGIN revolutions there are not read."""
     from scipy.interpolate import CubicSpline
 
     over = max(1, math.ceil(OVERSAMPLE * fs / fs_sim))
-    spectrum = np.fft.rfft(x)
-    f = np.arange(spectrum.size) * fs_sim / x.size
-    lo, hi = TAPER * fs / 2, fs / 2
-    spectrum *= np.where(f <= lo, 1.0, np.where(f >= hi, 0.0, 0.5 + 0.5 * np.cos(np.pi * (f - lo) / (hi - lo))))
+    spectrum = np.fft.rfft(x) * anti_alias(np.arange(x.size // 2 + 1) * fs_sim / x.size, fs)
     fine = np.fft.irfft(spectrum, x.size * over) * over
     return CubicSpline(np.arange(fine.size) / (fs_sim * over), fine)(times)
 
