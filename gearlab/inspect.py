@@ -427,6 +427,18 @@ def gears(box: Gearbox) -> list[dict]:
     return out
 
 
+def _hunting_words(table: dict) -> str:
+    """The order table's tooth-pair periods in one line: each stage's, and the whole train's."""
+    stages = []
+    for s in table["stages"]:
+        g = s["assembly_phase_factor"]
+        why = "a hunting tooth pair" if g == 1 else f"common factor {g}: {g} assembly phases"
+        turns = s["hunting_tooth_input_revolutions"]
+        stages.append(f"stage {s['stage']} ({s['z1']}/{s['z2']}) every {turns:.6g} input turns ({why})")
+    period = table["train_period_input_revolutions"]
+    return f"a tooth pair meets again: {'; '.join(stages)}; every shaft back in phase every {period} input turns"
+
+
 def _tip_words(gear: dict) -> str:
     """'; h_a* = 0.8, d_a = 191.5 mm' for a gear with a tip of its own, else ''."""
     own = gear.get("tip") or {}
@@ -496,6 +508,8 @@ def render(report: dict, console, width: int = 100) -> None:
         named = ", ".join(f"{g['name']} {g['teeth']}T (stage {g['stage']}{_tip_words(g)})" for g in report["gears"])
         first = report["gears"][0]["name"]
         console.print(escape(f'gears, as a scenario\'s faults key names them (e.g. "chip@{first}"): {named}'))
+    if "order_table" in report:
+        console.print(escape(_hunting_words(report["order_table"])))
     if "check" in report:
         check = report["check"]
         t = Table(title=f"gearbox {report['gearbox']!r}: mesh orders")

@@ -153,6 +153,8 @@ def test_inspect_shows_each_gear_s_own_tip(tmp_path):
     text = console.export_text()
     assert "input pinion 34T (stage 1; d_a = 89.5 mm)" in text, text
     assert "output gear 75T (stage 1; h_a* = 0.8, d_a = 191.5 mm)" in text, text
+    # and the order table's tooth-pair period (34/75: a hunting pair, 75 turns), only in --json before
+    assert "a tooth pair meets again: stage 1 (34/75) every 75 input turns (a hunting tooth pair)" in text, text
 
 
 def test_the_defaults_list_names_the_load_level(tmp_path):
