@@ -13,15 +13,18 @@ from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.learn.bounds import best_accuracy, detection_at, gain, likelihood_ratio
 from gearlab.learn.calibration import (
+    RECIPE,
     THESIS,
     Calibrated,
     Calibration,
+    Inputs,
     calibrate,
     draw_noise,
     noise_law,
     prepare,
 )
 from gearlab.learn.networks import build_network
+from gearlab.learn.path import IDENTITY
 from gearlab.learn.training import _aligned
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -297,3 +300,46 @@ def test_matched_filter_limiter_by_name_and_its_effect_in_impulsive_noise():
         with torch.no_grad():
             scores[limiter] = d.score(torch.as_tensor(X[test])).numpy()
     assert best_accuracy(scores["on"], y[test]) > best_accuracy(scores["off"], y[test]) + 10
+
+
+@pytest.mark.parametrize("law", ["gaussian", "laplace", "student_t"])
+def test_noise_drawn_in_place_is_the_formulas_to_the_bit(law):
+    """draw_noise and augment work in place on the fresh draw (issue 42: a calibrated training draws
+    a batch's noise every step): the same floats as the laws' formulas written out of place."""
+    shape, rms = (6, 512), 0.37
+
+    def reference(g: torch.Generator) -> torch.Tensor:
+        if law == "gaussian":
+            return torch.randn(shape, generator=g)
+        u = torch.rand(shape, generator=g).clamp(1e-7, 1.0 - 1e-7)
+        if law == "laplace":
+            return -torch.sign(u - 0.5) * torch.log1p(-2.0 * (u - 0.5).abs())
+        return torch.randn(shape, generator=g) / torch.sqrt(-torch.log(u))
+
+    assert torch.equal(
+        draw_noise(law, shape, torch.Generator().manual_seed(3)), reference(torch.Generator().manual_seed(3))
+    )
+    x = torch.randn(shape, generator=torch.Generator().manual_seed(9))
+    n = reference(torch.Generator().manual_seed(5))
+    expected = x + n * (rms / n.pow(2).mean(dim=-1, keepdim=True).sqrt().clamp_min(1e-12))
+    inputs = Inputs(RECIPE, None, None, IDENTITY, noise_law=law, noise_rms=rms)
+    before = x.clone()
+    assert torch.equal(inputs.augment(x, torch.Generator().manual_seed(5)), expected)
+    assert torch.equal(x, before)  # the batch itself is left as it was
+
+
+def test_float32_laplace_likelihood_ratios_are_those_of_float64():
+    """A detector's float32 Laplace ratios sum |r| - |r - t| over the samples (the compiled loop),
+    not ||r||_1 - cdist: at Experiment B's size that form's cancellation put them 0.014 off the
+    float64 figures (issue 42)."""
+    from gearlab.learn.bounds import shape_llr
+
+    rng = np.random.default_rng(0)
+    R = torch.as_tensor(rng.normal(size=(64, 4096)), dtype=torch.float32)
+    T = torch.as_tensor(0.3 * rng.normal(size=(40, 4096)), dtype=torch.float32)
+    one = torch.ones(64)
+    exact = shape_llr(R.double(), T.double(), one.double(), "laplace")
+    assert (shape_llr(R, T, one, "laplace").double() - exact).abs().max() < 1e-3
+    with torch.no_grad():  # float64 keeps its precision on the compiled path
+        cdist = R.double().abs().sum(1, keepdim=True) - torch.cdist(R.double(), T.double(), p=1.0)
+    assert torch.allclose(exact, cdist, rtol=0, atol=1e-9)

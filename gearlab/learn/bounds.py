@@ -63,6 +63,8 @@ def shape_llr(R: torch.Tensor, shapes: torch.Tensor, scale: torch.Tensor, kind: 
 
     s = scale[:, None]
     if kind == "laplace":
+        if _compiled(R, shapes):
+            return _laplace_gains(R, shapes) / s
         return (R.abs().sum(1, keepdim=True) - torch.cdist(R, shapes, p=1.0)) / s
     if kind == "gaussian":
         return (2.0 * R @ shapes.T - (shapes**2).sum(1)[None]) / (2.0 * s**2)
@@ -71,6 +73,42 @@ def shape_llr(R: torch.Tensor, shapes: torch.Tensor, scale: torch.Tensor, kind: 
         r, si = R[i : i + chunk, None, :], s[i : i + chunk, :, None]
         out.append((_log_density(r - shapes[None], si, kind) - _log_density(r, si, kind)).sum(-1))
     return torch.cat(out)
+
+
+def _compiled(R: torch.Tensor, shapes: torch.Tensor) -> bool:
+    """Whether the Laplace distances go to the compiled loop: CPU rows and shapes of one floating
+    precision, no gradient wanted through them (a detector's scores, the bound; a training's
+    whole-revolution templates keep torch's path)."""
+    import torch  # start-up time, as above
+
+    wants_grad = torch.is_grad_enabled() and (R.requires_grad or shapes.requires_grad)
+    return (
+        not wants_grad
+        and R.device.type == "cpu"
+        and shapes.device.type == "cpu"
+        and R.dtype == shapes.dtype
+        and R.dtype in (torch.float32, torch.float64)
+        and R.dim() == 2
+        and shapes.dim() == 2
+        and R.shape[1] == shapes.shape[1]
+    )
+
+
+def _laplace_gains(R: torch.Tensor, shapes: torch.Tensor) -> torch.Tensor:
+    """``(rows, J)``: sum_n |r_n| - |r_n - t_j,n|, each shape over the whole row, by the `shapes`
+    network's compiled loop (gearlab.learn.kernels.laplace_gain, one window from sample 0). The
+    ||r||_1 - cdist form cancels two sums of thousands of terms: at Experiment B's detector's size
+    (555 rows x 270 shapes of 4096, random) its float32 gains were up to 0.014 off the float64
+    ones (of up to 227), the loop's sums of differences 1.4e-5; in 0.14 s of CPU against cdist's
+    0.55 (float64: 0.09 against 0.57, the same to 7e-13)."""
+    import torch  # start-up time, as above
+
+    from . import kernels  # numba: loaded when first needed (start-up time)
+
+    r, t = R.detach().contiguous(), shapes.detach().contiguous()
+    out = torch.empty(len(r), len(t), dtype=r.dtype)
+    kernels.laplace_gain(r.numpy(), t.numpy(), np.zeros(len(t), dtype=np.int64), out.numpy())
+    return out
 
 
 def lower_median(x: torch.Tensor) -> torch.Tensor:

