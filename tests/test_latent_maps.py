@@ -46,3 +46,26 @@ def test_calibrated_latent_features_share_the_targets_scale():
     assert np.isfinite(zs) and zs < 100 * zt, (zs, zt)  # 1.4e13 against 60 before the fix
     points, collapsed = latent_projection(np.concatenate([latent["source"], latent["target"]]))
     assert points is not None, collapsed
+
+
+def test_only_the_kept_repetition_embeds_its_training_rows(monkeypatch):
+    """The latent features (two passes through the network) are made for the repetition whose maps
+    a run keeps, not for every unit (issue 42); the source validation accuracy is the kept epoch's,
+    the figure a fresh pass gives."""
+    from gearlab.learn import protocol as P
+    from gearlab.learn import training as T
+
+    rng = np.random.default_rng(1)
+    source, target = revolutions(20, 30, rng, noise=0.0), revolutions(12, 28, rng, noise=0.3, gain=1.3)
+    mmd = training.method({"adapter": "mmd", "supervised": False, "params": {}}, "test")
+    tiny = protocol(
+        [mmd], ks=(0,), repetitions=2, baseline_epochs=2, max_epochs=2, network="shapes", calibration=replace(RECIPE)
+    )
+    embedded, embed = [], T.embed
+    monkeypatch.setattr(T, "embed", lambda *a, **kw: embedded.append(1) or embed(*a, **kw))
+    records = {rep: run_unit(tiny, source, target, rep, 0, mmd, StateStore(None)) for rep in (0, 1)}
+    assert P.LATENT_REPETITION == 0 and "_latent" in records[0] and "_latent" not in records[1]
+    assert len(embedded) == 2  # source and target rows of repetition 0 only
+    for record in records.values():
+        kept = record["history"]["val_acc"][record["history"]["best_epoch"]]
+        assert record["source_val_accuracy"] == 100.0 * kept

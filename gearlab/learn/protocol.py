@@ -43,6 +43,7 @@ from .runner import run_unit as held_out
 KS = (0, 1, 2, 4, 8, 16)
 TARGET_DRAW = 1  # seeds the repetition's target orders apart from its source split
 HISTORY_DRAW = 2  # seeds a history fixed across repetitions (history_of) apart from both
+LATENT_REPETITION = 0  # the repetition whose latent features a run keeps (Figure 5.9's maps)
 ADAM_LR = 1e-3  # TensorFlow's default, which the thesis's Adam runs used (Table 5.3)
 
 
@@ -331,8 +332,9 @@ def run_unit(
         Xt = target.X[s.target_train]
         yt = target.fault[s.target_train].astype(np.int64)
         made = train_method(
-            protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch, core=target.X[s.history_core]
-        )
+            protocol, method, (Xs, ys), val, (Xt, yt), rep, k, states, device, on_epoch, core=target.X[s.history_core],
+            latent=rep == LATENT_REPETITION,
+        )  # fmt: skip
         return val, *made
 
     def score(fitted, test: np.ndarray, device) -> dict:
@@ -416,9 +418,13 @@ def train_method(
     device,
     on_epoch=None,
     core: np.ndarray | None = None,
+    latent: bool = False,
 ):
     """The model a method makes from the training arrays (no target test data here). *core*:
     the target training rows the repetition's priming is calibrated on (default: all of them).
+    *latent*: an adapted network's latent features of its training rows go with it (`_latent`,
+    for the maps of `LATENT_REPETITION`; two passes through the network a unit, which every
+    other repetition's and every detection unit's training made for nothing).
     The source's X may be (n, D, L), D noise draws of each sample: the networks train on a draw
     at random per row and batch (training._rows); the calibration, a network's input length and
     the latent maps take the first draw; a detector is built from each sample's mean over its draws."""
@@ -426,7 +432,7 @@ def train_method(
 
     from .calibration import history_law, prepare
     from .networks import matched_start, use_law
-    from .training import accuracy, embed, fit_adaptation, fit_supervised
+    from .training import accuracy, fit_adaptation, fit_supervised
 
     registry = get_registry()
     params = dict(method.params)
@@ -544,7 +550,6 @@ def train_method(
         return _calibrated(net, inputs, Xt, yt, source_val, device), history, extra
     modules = adapter.extra_modules(net.latent_dim, params)
     take = generator(protocol.seed, rep, k, 3).permutation(len(Xs))[: len(Xt)]
-    Xs_in = inputs.source(Xs[take])
     history = fit_adaptation(
         net,
         adapter,
@@ -563,6 +568,26 @@ def train_method(
         alignment=protocol.calibration.alignment,
         on_epoch=on_epoch,
     )
+    model = _calibrated(net, inputs, Xt, yt if method.supervised else None, source_val, device)
+    extra = {
+        "latent_dim": int(net.latent_dim),
+        # the kept epoch's own figure: the network is that epoch's (training.fit_adaptation keeps
+        # one after the ramp), scored on the same rows, so the same number without another pass
+        "source_val_accuracy": 100.0
+        * (history.val_acc[history.best_epoch] if history.best_epoch >= 0 else accuracy(net, *source_val, device)),
+    }
+    if latent:
+        extra["_latent"] = latent_features(net, inputs.source(Xs[take]), Xt_in, ys[take], yt, augment, seed, device)
+    return model, history, extra
+
+
+def latent_features(net, Xs_in, Xt_in, ys, yt, augment, seed: int, device) -> dict:
+    """An adapted network's latent features of its source and target training rows, with their
+    labels (the maps mark the classes too)."""
+    import torch  # start-up time
+
+    from .training import embed
+
     if augment is not None:
         # the source as training showed it: with the target's noise (drawn once, as the validation
         # set's). A noise-free source residual has a noise scale of ~0, so the `shapes` network's
@@ -570,22 +595,12 @@ def train_method(
         # every map a line (issue 41)
         Xs_in = augment(torch.as_tensor(Xs_in), torch.Generator().manual_seed(seed + 1)).numpy()
     with torch.no_grad():
-        latent = {
+        return {
             "source": embed(net, Xs_in, device).cpu().numpy(),
             "target": embed(net, Xt_in, device).cpu().numpy(),
-            "source_label": ys[take],
+            "source_label": ys,
             "target_label": yt,
-        }  # the maps mark the classes too
-    model = _calibrated(net, inputs, Xt, yt if method.supervised else None, source_val, device)
-    return (
-        model,
-        history,
-        {
-            "latent_dim": int(net.latent_dim),
-            "_latent": latent,
-            "source_val_accuracy": 100.0 * accuracy(net, *source_val, device),
-        },
-    )
+        }
 
 
 def each_draw(f: Callable, X: np.ndarray) -> np.ndarray:
