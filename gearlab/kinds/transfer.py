@@ -33,10 +33,11 @@ from ..learn.protocol import (
     Protocol,
     check,
     check_data,
+    domain_adapting,
     shared_state,
     unit_key,
 )
-from ..learn.schedule import two_phases
+from ..learn.schedule import longest_first, two_phases
 from ..parts.bound import BOUND, STEPS, bayes_bound
 from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training, method, train_unit
 from ..runs import RunDir
@@ -184,8 +185,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             state = shared_state(m, rep, k, protocol)
             return None if state is None else run.file("states", f"{state}.pt")
 
-        phases = two_phases(pending, state_file)
-        first = phases[0]
+        phases = schedule(pending, state_file, protocol)
+        first = [u for u in phases[0] if state_file(u) is not None]  # the shared states' makers
         if first:
             on_event(
                 Event(
@@ -229,6 +230,25 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         summarise(scenario, run)
 
 
+def schedule(pending: list, state_file, protocol: Protocol) -> tuple[list, list]:
+    """The two phases of *pending* (learn.schedule.two_phases): phase 1 the units that make the
+    shared states, in their order, and behind them every unit that needs none (target_only, the
+    detectors), so that a worker done with its share of the primings takes those instead of
+    standing until the last priming ends; phase 2 the units that load a state. Each phase's added
+    units go longest first (the joint trainings, then the other trainings, the detectors last),
+    so that short units fill in at the end. Results do not depend on the order: each unit is
+    seeded by itself."""
+
+    def cost(unit: tuple) -> tuple:
+        _, _, m = unit
+        return domain_adapting(m.adapter), not m.is_detector
+
+    makers, rest = two_phases(pending, state_file)
+    free = [u for u in rest if state_file(u) is None]
+    loading = [u for u in rest if state_file(u) is not None]
+    return makers + longest_first(free, cost), longest_first(loading, cost)
+
+
 def save_latent(run: RunDir, unit: str, latent: dict) -> None:
     buf = io.BytesIO()
     np.savez(buf, **latent)
@@ -245,6 +265,7 @@ def table(records: list[dict], protocol: Protocol, measure: str = "accuracy") ->
     """{method label: {k: {mean, std, n}}}: a measure (%) of the records over the repetitions,
     target test accuracy by default (records written before a measure existed are left out)."""
     out: dict[str, dict[str, dict]] = {}
+    records = sorted(records, key=lambda r: r.get("rep", 0))  # the same sums whatever order units ended in
     for m in columns(protocol):
         out[m.label] = {}
         for k in protocol.ks:
