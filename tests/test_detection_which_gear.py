@@ -70,7 +70,7 @@ def test_a_source_without_a_gearbox_description_localises_nothing():
     assert D.localise_target(source, {}) is None
 
 
-def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, monkeypatch):
+def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, monkeypatch, no_figures):
     """The detection kind end to end on simulated rig records (source: the rig simulator with a
     chipped input pinion, as phm09_chip's): localisation.json names each test record's gear,
     table.md and report.html carry the which-gear tables, and a flag on the record with a cracked

@@ -39,7 +39,7 @@ def cache(tmp_path, monkeypatch):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
 
 
-def test_score_says_other_damage_with_its_evidence_in_80_columns(cli, tmp_path, cache, monkeypatch):
+def test_score_says_other_damage_with_its_evidence_in_80_columns(cli, tmp_path, cache, monkeypatch, no_figures):
     out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
     record(tmp_path / "new_ok.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
     record(tmp_path / "wheel.zip", revolutions=40, chip=4.0, seed=12, phase=1.1)

@@ -20,7 +20,7 @@ def cache(tmp_path, monkeypatch):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
 
 
-def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, cache, monkeypatch):
+def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, cache, monkeypatch, no_figures):
     files = [*FILES, ("h4", "history", "healthy", 0.0)]
     path = scenario(tmp_path, files=files, methods=("source_only", "matched_filter"), detection="seeds = 2\n")
     out = run(cli, path, tmp_path / "runs")
@@ -64,7 +64,7 @@ def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, c
     assert (out / "figures" / "score_trend.png").is_file() and "score_trend" in (out / "report.html").read_text()
 
 
-def test_score_refuses_a_run_that_is_not_a_detection_run_and_a_record_of_no_condition(cli, tmp_path, cache):
+def test_score_refuses_a_run_that_is_not_a_detection_run_and_a_record_of_no_condition(cli, tmp_path, cache, no_figures):
     path = scenario(tmp_path, methods=("matched_filter",))
     out = run(cli, path, tmp_path / "runs")
     fast = tmp_path / "fast.zip"
@@ -169,7 +169,7 @@ def test_a_run_whose_learned_methods_saw_another_input_is_refused(tmp_path, monk
         assert refused in line and "run the scenario again" in line and "\n" not in line, line
 
 
-def test_a_crossed_run_scores_a_record_as_it_scored_it_itself(cli, tmp_path, cache):
+def test_a_crossed_run_scores_a_record_as_it_scored_it_itself(cli, tmp_path, cache, no_figures):
     """history_fit = "crossed": score loads every fold's trained model (each from its own unit's
     file; the second fold's was looked for under the first's standardising models) and calls the
     units of a test record of the run as the run called them."""
