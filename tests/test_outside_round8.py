@@ -55,6 +55,12 @@ def test_a_nominal_motor_speed_is_measured_and_a_slip_is_no_mismatch(tmp_path):
     wrong = inspect_record(_record(tmp_path / "z33.npz", 33, 75, 25.35), box, InspectOptions(vibration="acc_ms2"))
     assert wrong["matches"] is False, wrong["verdict"]
     assert "33-tooth pinion" in wrong["verdict"], wrong["verdict"]
+    # a slipping motor's pinion of another count is named by its sidebands, not by its order at the nominal
+    # speed: a 33-tooth pinion at 1455 rpm (-3 %) was told 'at 25 Hz, 799.9 Hz is mesh order 31.99: a 32-tooth'
+    slow = inspect_record(_record(tmp_path / "z33s.npz", 33, 75, 24.25), box, InspectOptions(vibration="acc_ms2"))
+    first = slow["verdict"].split("; ")[0]
+    assert slow["matches"] is False and "its sidebands show a 33-tooth pinion" in first, slow["verdict"]
+    assert "32-tooth" not in first, first
     # far from the nominal speed with every order in place: another operating point, told, no mismatch
     fast = inspect_record(_record(tmp_path / "fast.npz", 34, 75, 29.0, ppr=1), box, InspectOptions("acc_ms2", "tach"))
     assert fast["matches"], fast["verdict"]

@@ -4,6 +4,7 @@ Used by the importer (gearlab.data.recordings) and by `gearlab inspect`."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -218,7 +219,7 @@ def speed_from_mesh(
                 f"no line within ±{DECLARED_RANGE:.0%} of a mesh frequency at this speed"
                 + (
                     f" (the lines fit {fmt_hz(overall[1])} ({overall[2]})"
-                    f"{at_declared(overall, declared, box) or by_sidebands(overall, lines, table, df, box)})"
+                    f"{teeth_said(overall, declared, box, lines, table, df)})"
                     if overall
                     else ""
                 ),
@@ -313,6 +314,19 @@ def by_sidebands(hypothesis: tuple, lines: Lines, table, df: float, box: Gearbox
         f": {SIDEBANDS_SHOW} a {z}-tooth pinion on the {box.shafts[0]} shaft (at {fmt_hz(hypothesis[4] / z)})? "
         f"described {said}"
     )
+
+
+def teeth_said(hypothesis: tuple, declared: float, box: Gearbox, lines: Lines, table, df: float) -> str:
+    """The pinion's tooth count a first-stage mesh line off the declared speed suggests: at_declared's
+    (its order at the declared speed) unless the sidebands show another count (by_sidebands): the declared
+    speed is nominal (a 33-tooth pinion at 1455 rpm, described 34 at 1500 rpm, was told 'a 32-tooth
+    pinion' by its order at 1500 rpm; its sidebands show 33)."""
+    at = at_declared(hypothesis, declared, box)
+    seen = by_sidebands(hypothesis, lines, table, df, box)
+    teeth = [re.search(r"a (\d+)-tooth pinion", t) for t in (at, seen)]
+    if seen and (not at or teeth[0].group(1) != teeth[1].group(1)):
+        return seen
+    return at
 
 
 def nominal_line(measured: float, nominal: float, said: str) -> str:
