@@ -95,7 +95,7 @@ SCENARIO = '[scenario]\nname = "g"\nkind = "dataset"\n\n[[datasets]]\npreset = "
         ('{ "chip@s3-wheel" = [20] }', "fault 'chip@s3-wheel' key 'stage': expected a stage number in 1..2"),
         (
             '[{ name = "chip", gear = "wheel", steps = [20] }, { name = "chip", gear = "idler gear", steps = [1] }]',
-            "fault 'chip@wheel' is listed twice",
+            "fault 'chip@idler gear' is listed twice",
         ),
         ('[{ name = "chip", wheel = 3, steps = [20] }]', "unknown key 'wheel'"),
         ('"chip"', "key 'faults'"),
