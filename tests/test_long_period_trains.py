@@ -154,3 +154,57 @@ def test_a_record_from_a_stretch_is_the_steady_response_at_its_start(tmp_path, m
     times = rec.start / 40.0 + np.arange(rec.vibration.size) / 20_000
     steady = spline(np.mod(times, n / fs_sim))
     assert rec.period == 71 and np.abs(rec.vibration - steady).max() < 1e-5 * np.abs(steady).max()
+
+
+def _n_train_spec(tmp_path, **given):
+    (tmp_path / "n.toml").write_text(N_TRAIN)
+    entry = {k: key.default for k, key in DATASET_TABLE.keys.items()}
+    spec = dataset_spec({**entry, "gearbox": "n.toml", "faults": {}, **given}, "s.toml: [source]", Path(tmp_path))
+    return spec.with_(noise=None)
+
+
+def test_the_gap_source_rows_of_a_long_train_are_never_cut_across_its_stretch_end(tmp_path, monkeypatch):
+    # 19/71 + 28/47 healthy (71 turns) as a long train (the limit lowered): its 128-turn stretch is no
+    # period, so a TSA of 32 turns starting in its last 31 was joined end to start, a step no gearbox
+    # makes (4 of these 12 rows at f759420, 9-15 % of the peak off any steady TSA). The gap's source
+    # rows are the builder's healthy rows bit for bit (each record within the stretch), and each is
+    # the TSA of the steady response's own 32 turns.
+    from gearlab.data import placement
+    from gearlab.gap.scoring import source_rows
+    from gearlab.gap.views import healthy_rows
+
+    spec = _n_train_spec(tmp_path, healthy=12, revolutions=32, tsa=True, seed=7)
+    monkeypatch.setattr(placement, "MAX_PERIOD", 10)
+    rows = source_rows(spec)
+    assert np.array_equal(rows, healthy_rows(builder.build_dataset(spec)))
+    monkeypatch.setattr(placement, "MAX_PERIOD", 1000)
+    fs = builder.whole_steps_rate(spec.fs, 40.0, 19)
+    task = builder.SimTask(spec.model, spec.preset, fs, 40.0, 60.0, spec.channel, None, None, (1,))
+    cycle = builder.simulate_unit(tuple(task))[0].reshape(71, -1)  # the whole steady cycle
+    settle = builder.settle_revolutions(builder._simulator(task.model, task.preset, fs), 40.0)
+    for i, row in enumerate(rows):
+        start = builder.stretch_start(spec.seed, i, 128, 32)
+        steady = cycle[(settle + start + np.arange(32)) % 71].mean(axis=0)
+        assert np.abs(row - steady).max() < 1e-5 * np.abs(steady).max(), i
+
+
+def test_consecutive_gap_source_rows_past_a_long_train_s_stretch_are_a_longer_stretch_s(tmp_path, monkeypatch):
+    # [diagnosis] healthy = 140 consecutive rows through a measured target's chain: the rows past the
+    # 128-turn stretch were its first turns again (joined end to start: rows 126-139 off by up to 52 %
+    # of the peak at f759420). Now the stretch is simulated as long as the record (140 rows and their
+    # two neighbours): the rows equal those cut from a longer stretch (150 turns) through the chain.
+    from gearlab.data import placement
+    from gearlab.data.chain import Chain
+    from gearlab.gap import scoring
+
+    spec = _n_train_spec(tmp_path, healthy=140, seed=7)
+    monkeypatch.setattr(placement, "MAX_PERIOD", 10)
+    chain = Chain(fs=40.0 * 300.5, speed=40.0, fractions=(0.0, 0.25, 0.5), offset=0.0)
+    rows = scoring.source_rows(spec, 0, chain, True)
+    fs = builder.whole_steps_rate(spec.fs, 40.0, 19)
+    task = builder.SimTask(spec.model, spec.preset, fs, 40.0, 60.0, spec.channel, None, None, (1,), (), 1, 150)
+    longer = builder.simulate_unit(tuple(task))[0]
+    rms = float(np.sqrt(np.mean(longer[: 142 * 4096] ** 2)))
+    truth = scoring.measured_rows(spec.with_(seed=8), longer, 40.0, rms, chain, 19, True)
+    assert rows.shape == truth.shape == (140, truth.shape[1])
+    assert np.abs(rows - truth).max() < 1e-6 * np.abs(truth).max()

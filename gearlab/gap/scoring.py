@@ -13,13 +13,19 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..data import placement
 from ..data.builder import (
     SimTask,
+    _unit_simulator,
     healthy_reference,
     noisy_rows,
     operating_point,
+    record_span,
     row_tasks,
+    settle_revolutions,
     simulate_unit,
+    stretch_of,
+    stretch_start,
     whole_steps_rate,
 )
 from ..data.chain import Chain, fit_offset, sampled, tracked
@@ -211,17 +217,32 @@ def _by_level(effects) -> tuple:
 
 @functools.lru_cache(maxsize=64)
 def _clean_revolution(
-    model: str, preset: str, fs: float, speed: float, load: float, channel: str, effects: tuple
+    model: str, preset: str, fs: float, speed: float, load: float, channel: str, effects: tuple, turns: int = 0
 ) -> np.ndarray:
     """The steady healthy revolution (POINTS,) under the model- and excitation-level *effects*; a
-    later mesh's cycle of them (R x POINTS,) where it is no whole input order (builder.mesh_cycle).
+    later mesh's cycle of them (R x POINTS,) where it is no whole input order (builder.mesh_cycle);
+    a long train's stretch of *turns* steady revolutions (source_turns; 0: the builder's default).
 
     Cached per process: a signal-level candidate only transforms this revolution, so its
     whole fit costs one simulation. It is the builder's own simulation unit for the healthy
     case on tooth 1, the row build_dataset uses for its healthy samples and reference.
     """
-    task = SimTask(model, preset, fs, speed, load, channel, None, None, (1,), effects, 1)
-    return simulate_unit(tuple(task))[0]
+    return simulate_unit(tuple(_healthy_task(model, preset, fs, speed, load, channel, effects, turns)))[0]
+
+
+def _healthy_task(model, preset, fs, speed, load, channel, effects, turns: int = 0) -> SimTask:
+    return SimTask(model, preset, fs, speed, load, channel, None, None, (1,), effects, 1, turns)
+
+
+def source_turns(spec: DatasetSpec, model, record: bool = False) -> int:
+    """0 for a train whose healthy response repeats within placement.MAX_PERIOD input turns (its
+    whole cycle is simulated, the rows read it as periodic); for a long train, the revolutions of
+    the stretch its rows need, so that none is cut across the stretch's end (a stretch is not
+    periodic: joined end to start it holds a step no gearbox makes): the builder's (stretch_of:
+    every record starts within it), and for *record* (consecutive rows of one record through a
+    chain) the healthy rows and their two neighbours."""
+    turns = stretch_of(spec, placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'"), {})
+    return max(turns, spec.healthy + 2) if turns and record else turns
 
 
 def _reference(spec: DatasetSpec, clean: np.ndarray, speed: float, reference_rms: float) -> tuple[float, float]:
@@ -251,16 +272,25 @@ def source_rows(
     *consecutive* (with a chain): as consecutive revolutions of one record.
     """
     registry = get_registry()
-    _, pair, _ = spec.check_model()
+    model, pair, _ = spec.check_model()
     speed, load = operating_point(spec)
     fs = whole_steps_rate(spec.fs, speed, pair.Z1)
     physics = tuple(e for e in spec.effects if registry.get("effect", e[0]).level != "signal")
-    clean = _clean_revolution(spec.model, spec.preset, fs, speed, load, spec.channel, physics)
+    turns = source_turns(spec, model, chain is not None and consecutive)
+    clean = _clean_revolution(spec.model, spec.preset, fs, speed, load, spec.channel, physics, turns)
     reference_rms = float(np.sqrt(np.mean(clean**2)))
     if chain is not None:
         rows = measured_rows(spec, clean, speed, reference_rms, chain, pair.Z1, consecutive)
         return band_limited(rows, max_order=max_order)
     mean, std = _reference(spec, clean, speed, reference_rms)
+    placed = {}
+    if turns:  # a long train: each record within the stretch, from where build_dataset starts it
+        span = record_span(spec)
+        placed["starts_of"] = lambda i: stretch_start(spec.seed, i, turns, span)
+        if spec.unit_shaft:  # the shaft's phase counts the settle turns before the stretch
+            task = _healthy_task(spec.model, spec.preset, fs, speed, load, spec.channel, physics, turns)
+            settle = settle_revolutions(_unit_simulator(task), speed)
+            placed["offset_of"] = lambda i: settle
     tasks = row_tasks(
         spec,
         spec.healthy,
@@ -268,6 +298,7 @@ def source_rows(
         (mean, std),
         speed,
         reference_rms,
+        **placed,
     )
     out = np.concatenate([noisy_rows(tuple(task)) for task in tasks] or [np.empty((0, POINTS), np.float32)])
     return band_limited(out.astype(np.float64) * std + mean, max_order=max_order)
