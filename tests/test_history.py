@@ -37,3 +37,25 @@ def test_the_false_alarm_rate_asked_holds_on_new_healthy_scores():
     for p in (0.99, 0.9):
         rates = [np.mean(new > history_threshold(gumbel_scores(120, seed), p)) for seed in range(200)]
         assert np.mean(rates) == pytest.approx(1 - p, rel=0.35)
+
+
+def test_the_noise_law_is_read_without_scipy_stats():
+    """A history's kurtosis is scipy.stats.kurtosis's figure to the bit, and reading it loads no
+    scipy.stats (1.8 s of every worker that calibrated a unit; issue 42)."""
+    import subprocess
+    import sys
+
+    from scipy.stats import kurtosis as scipy_kurtosis
+
+    from gearlab.learn.history import kurtosis
+
+    rng = np.random.default_rng(0)
+    for x in (rng.normal(size=(40, 512)), 3.0 * rng.laplace(size=(9, 77)) + 2.0, rng.standard_t(2, size=999)):
+        assert kurtosis(x) == float(scipy_kurtosis(x.ravel(), fisher=False))
+    assert np.isnan(kurtosis(np.ones(10)))
+    code = (
+        "import sys, numpy as np; from gearlab.learn.history import noise_law; "
+        "print(noise_law(np.random.default_rng(1).laplace(size=(20, 256))), 'scipy.stats' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["laplace", "False"]
