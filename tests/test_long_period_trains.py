@@ -208,3 +208,24 @@ def test_consecutive_gap_source_rows_past_a_long_train_s_stretch_are_a_longer_st
     truth = scoring.measured_rows(spec.with_(seed=8), longer, 40.0, rms, chain, 19, True)
     assert rows.shape == truth.shape == (140, truth.shape[1])
     assert np.abs(rows - truth).max() < 1e-6 * np.abs(truth).max()
+
+
+def test_the_hunting_bound_names_the_gears_as_the_description_does(tmp_path, monkeypatch):
+    # damage on both gears of stage 2 past the hunting bound: the line said "faults chip@s2-pinion:3,
+    # chip@s2-wheel:5", labels the user never wrote; now the gears as the description names its shafts
+    from gearlab.errors import GearlabInputError
+    from gearlab.physics import stiffness
+
+    shafts = "".join(f'[[shafts]]\nname = "{name}"\n' for name in ("motor", "layshaft", "drum"))
+    (tmp_path / "n.toml").write_text(N_TRAIN + shafts)
+    both = [
+        {"name": "chip", "gear": "layshaft pinion", "tooth": 3, "step": 20},
+        {"name": "chip", "gear": "drum gear", "tooth": 5, "step": 20},
+    ]
+    monkeypatch.setattr(stiffness, "MAX_HUNTING_TURNS", 10)  # 28/47: lcm 1316 meshes, 47 pinion turns
+    with pytest.raises(GearlabInputError) as e:
+        simulated_record(both, gearbox=str(tmp_path / "n.toml"), revolutions=2, fs=12_800, sim_fs=200_000, seed=1)
+    said = str(e.value)
+    assert "'chip@layshaft pinion' (tooth 3) and 'chip@drum gear' (tooth 5) on both gears of stage 2" in said
+    assert "after 47 turns of the stage 2 pinion, the layshaft pinion" in said
+    assert "s2-" not in said and "\n" not in said

@@ -16,7 +16,6 @@ output) are understood on every model. A bad value is one line naming the key.
 
 from __future__ import annotations
 
-import functools
 import math
 import re
 from collections.abc import Mapping
@@ -24,28 +23,13 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from ..errors import GearlabInputError, shown
-from ..gearbox import builtin_gearboxes, resolve_gearbox
-from ..gearbox.description import SHAFT_NAMES
-from ..gearbox.simulation import is_reference, referenced
+from ..gearbox.description import SHAFT_NAMES, gear_name
+from ..gearbox.simulation import shaft_names
 from ..params import did_you_mean
 from ..physics.stiffness import GEARS, gear_label
 from ..registry import get_registry
 
 WHEEL_WORDS = ("gear", "wheel")  # "output gear" and "output wheel" name the same gear
-
-
-@functools.lru_cache(maxsize=64)
-def shaft_names(preset: str, stages: int) -> tuple[str, ...]:
-    """The shafts of a model preset, input first: its gearbox description's names when the preset
-    is one (a built-in description or a gearbox reference), else the default names."""
-    box = None
-    if is_reference(preset):
-        box = referenced(preset)
-    elif preset in builtin_gearboxes():
-        box = resolve_gearbox(preset)
-    if box is not None and len(box.shafts) == stages + 1:
-        return tuple(box.shafts)
-    return SHAFT_NAMES[stages] if stages in SHAFT_NAMES else tuple(f"shaft {i + 1}" for i in range(stages + 1))
 
 
 def model_shafts(model: str, preset: str, where: str = "") -> tuple[str, ...]:
@@ -64,11 +48,6 @@ def gear_words(shafts: tuple[str, ...]) -> dict[str, tuple[int, str]]:
             for word in WHEEL_WORDS:
                 out[f"{names[k]} {word}"] = (k, "wheel")
     return out
-
-
-def gear_name(stage: int, gear: str, shafts: tuple[str, ...]) -> str:
-    """The words for a gear: "input pinion", "output gear", "idler gear", ..."""
-    return f"{shafts[stage - 1]} pinion" if gear == "pinion" else f"{shafts[stage]} gear"
 
 
 def resolve_gear(gear, stage, shafts: tuple[str, ...], where: str) -> tuple[int, str]:

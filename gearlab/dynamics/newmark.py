@@ -27,6 +27,8 @@ import numba
 import numpy as np
 
 from ..errors import GearlabInputError
+from ..gearbox.description import gear_name
+from ..gearbox.simulation import shaft_names
 from ..physics import stiffness
 from ..physics.stiffness import BOTH, MeshStiffnessModel, PlacedFault, table_gear, table_slots
 from .excitation import Excitation
@@ -453,13 +455,18 @@ class Simulator:
     def check_hunting(self, staged: Sequence[Sequence[PlacedFault]], where: str) -> None:
         """Refuse faults on both gears of a stage whose TVMS table (the hunting-tooth period, read at
         its own angle: table_turns) spans more than MAX_HUNTING_TURNS turns of that stage's pinion
-        (one line: the faults, the stage, the period). The train's own period does not matter."""
+        (one line: the faults, on the gears as the description names them, the stage, the period).
+        The train's own period does not matter."""
         for stage, on in enumerate(staged, start=1):
             pair = self.pair if stage == 1 else self.meshes[stage - 2].pair
             if table_gear(on) == BOTH and (turns := table_slots(pair, BOTH) // pair.Z1) > stiffness.MAX_HUNTING_TURNS:
-                its = "input revolutions" if stage == 1 else f"turns of the stage {stage} pinion"
+                shafts = shaft_names(self.preset, self.stages)
+                named = (f"'{f.fault.name}@{gear_name(stage, f.gear, shafts)}' (tooth {f.tooth})" for f in on)
+                faults = " and ".join(named)
+                pinion = gear_name(stage, "pinion", shafts)
+                its = "input revolutions" if stage == 1 else f"turns of the stage {stage} pinion, the {pinion}"
                 raise GearlabInputError(
-                    f"{where}: faults {', '.join(f.label for f in on)} on both gears of stage {stage} repeat only "
+                    f"{where}: faults {faults} on both gears of stage {stage} repeat only "
                     f"after {turns} {its} (the hunting-tooth period); at most "
                     f"{stiffness.MAX_HUNTING_TURNS}: put the damage on one gear"
                 )

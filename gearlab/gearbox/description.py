@@ -41,6 +41,11 @@ SHAFT_NAMES = {
 }
 
 
+def gear_name(stage: int, gear: str, shafts: tuple[str, ...]) -> str:
+    """The words for a gear: "input pinion", "output gear", "idler gear", ..."""
+    return f"{shafts[stage - 1]} pinion" if gear == "pinion" else f"{shafts[stage]} gear"
+
+
 # --- declared keys ---------------------------------------------------------------------------
 #
 # Param carries name, SI unit, default, bounds, doc and the unit shown to people; FITTED names

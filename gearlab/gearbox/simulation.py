@@ -35,7 +35,7 @@ from pathlib import Path
 
 from ..errors import GearlabInputError
 from .derive import DYNAMICS_NAMES, MODELS, gear_pairs, lumped_params, train_pair
-from .description import FITTED, LOAD_LEVEL, OPERATION_FITTED, Gearbox
+from .description import FITTED, LOAD_LEVEL, OPERATION_FITTED, SHAFT_NAMES, Gearbox
 
 PREFIX = "gearbox:"
 HOUSING = ("casing_mass", "mounting_stiffness_x", "mounting_stiffness_y", "mounting_damping_x", "mounting_damping_y")
@@ -74,6 +74,22 @@ def referenced(ref: str) -> Gearbox:
             f"{now}); run the scenario again"
         )
     return box
+
+
+@functools.lru_cache(maxsize=64)
+def shaft_names(preset: str, stages: int) -> tuple[str, ...]:
+    """The shafts of a model preset, input first: its gearbox description's names when the preset
+    is one (a built-in description or a gearbox reference), else the default names."""
+    from . import builtin_gearboxes, resolve_gearbox
+
+    box = None
+    if is_reference(preset):
+        box = referenced(preset)
+    elif preset in builtin_gearboxes():
+        box = resolve_gearbox(preset)
+    if box is not None and len(box.shafts) == stages + 1:
+        return tuple(box.shafts)
+    return SHAFT_NAMES[stages] if stages in SHAFT_NAMES else tuple(f"shaft {i + 1}" for i in range(stages + 1))
 
 
 def label(preset: str) -> str:
