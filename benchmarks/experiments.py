@@ -13,7 +13,11 @@
    memory is compared with the data they hold and with CEILING.
 
 Memory is the peak of the summed RSS of gearlab's process and its workers (Linux /proc),
-which counts pages shared between them once per process: an upper bound.
+which counts pages shared between them once per process: an upper bound. CPU is the CPU seconds
+(user + system) of the same process tree, each process's last sample summed (a pool's workers are
+not children that `time` would count); on a machine other work shares, CPU / cores is the wall a
+run would take on that many free cores, less its serial parts (issue 42's estimate: Experiment B,
+2 cores).
 """
 
 from __future__ import annotations
@@ -30,12 +34,13 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 GIB = 2**30
+TICKS = os.sysconf("SC_CLK_TCK")  # /proc's CPU times are in these
 CEILING = 4 * GIB  # chapter-4 datasets: a quarter of a 16 GiB laptop, whatever the data size
 CH4 = [f"A-casing_{kind}-{noise}" for noise in ("gaussian", "laplace", "student_t") for kind in ("noise", "TSA")]
 
 
-def tree_rss(pid: int) -> int:
-    """Resident bytes of *pid* and all its descendants (0 once it has gone)."""
+def tree(pid: int) -> list[int]:
+    """*pid* and all its descendants."""
     children: dict[int, list[int]] = {}
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
@@ -44,22 +49,34 @@ def tree_rss(pid: int) -> int:
             except (OSError, IndexError, ValueError):
                 continue
             children.setdefault(ppid, []).append(int(entry.name))
-    total, stack = 0, [pid]
+    found, stack = [], [pid]
     while stack:
         p = stack.pop()
+        found.append(p)
         stack += children.get(p, [])
+    return found
+
+
+def tree_rss(pid: int, cpu: dict[int, float] | None = None) -> int:
+    """Resident bytes of *pid* and all its descendants (0 once it has gone); *cpu*, when given,
+    gets each one's CPU seconds so far."""
+    total = 0
+    for p in tree(pid):
         try:
             for line in Path(f"/proc/{p}/status").read_text().splitlines():
                 if line.startswith("VmRSS:"):
                     total += int(line.split()[1]) * 1024
-        except OSError:
+            if cpu is not None:
+                fields = Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()
+                cpu[p] = (int(fields[11]) + int(fields[12])) / TICKS  # utime + stime
+        except (OSError, IndexError, ValueError):
             pass
     return total
 
 
-def measured(command: list[str], env: dict) -> tuple[float, int, int]:
-    """(wall seconds, peak tree RSS in bytes, exit code) of *command*."""
-    peak = 0
+def measured(command: list[str], env: dict) -> tuple[float, int, int, float]:
+    """(wall seconds, peak tree RSS in bytes, exit code, CPU seconds of the tree) of *command*."""
+    peak, cpu = 0, {}
     started = time.perf_counter()
     child = subprocess.Popen(command, env=env, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     done = threading.Event()
@@ -67,7 +84,7 @@ def measured(command: list[str], env: dict) -> tuple[float, int, int]:
     def sample():
         nonlocal peak
         while not done.wait(0.2):
-            peak = max(peak, tree_rss(child.pid))
+            peak = max(peak, tree_rss(child.pid, cpu))
 
     sampler = threading.Thread(target=sample, daemon=True)
     sampler.start()
@@ -76,7 +93,7 @@ def measured(command: list[str], env: dict) -> tuple[float, int, int]:
     sampler.join()
     if child.returncode:
         print(err.strip().splitlines()[-1] if err.strip() else "(no message)", file=sys.stderr)
-    return time.perf_counter() - started, peak, child.returncode
+    return time.perf_counter() - started, peak, child.returncode, sum(cpu.values())
 
 
 def gearlab(*args: str) -> list[str]:
@@ -97,19 +114,20 @@ def transfer(names: list[str], quick: bool, tmp: Path, keep: Path | None) -> Non
         env = {**os.environ, "GEARLAB_CACHE": str(tmp / f"cache-{name}")}  # datasets cold
         out = keep or tmp / "runs"
         args = ["run", str(ROOT / "scenarios" / f"{name}.toml"), "--out", str(out)] + (["--quick"] if quick else [])
-        seconds, peak, code = measured(gearlab(*args), env)
+        seconds, peak, code, cpu = measured(gearlab(*args), env)
         runs = sorted((out / name).iterdir()) if (out / name).exists() else []
         state = complete(runs[-1]) if code == 0 and runs else f"FAILED (exit {code})"
-        rows.append((name, seconds, peak, state))
+        rows.append((name, seconds, peak, cpu, state))
         if code == 0 and runs:
             tables.append(f"\n{name} ({runs[-1]}):\n{(runs[-1] / 'table.md').read_text()}")
     first = rows[0][1]
     print(f"\ntransfer scenarios{' (--quick)' if quick else ''}, datasets cold, {os.cpu_count()} cores:")
-    print(f"  {'scenario':10s} {'wall':>10s} {'/ first':>8s} {'/ 45 min':>9s} {'peak RSS':>10s}  table")
-    for name, seconds, peak, state in rows:
+    head = f"{'wall':>10s} {'/ first':>8s} {'/ 45 min':>9s} {'CPU':>8s} {'CPU / 2':>8s} {'peak RSS':>10s}"
+    print(f"  {'scenario':10s} {head}  table")
+    for name, seconds, peak, cpu, state in rows:
         print(
             f"  {name:10s} {seconds / 60:8.1f} min {seconds / first:7.2f}x {seconds / 2700:8.2f}x "
-            f"{peak / GIB:7.2f} GiB  {state}"
+            f"{cpu:7.0f}s {cpu / 2:7.0f}s {peak / GIB:7.2f} GiB  {state}"
         )
     print("".join(tables), end="")
 
@@ -121,7 +139,7 @@ def ch4_memory(tmp: Path) -> None:
         + "".join(f'[[datasets]]\npreset = "{p}"\n\n' for p in CH4)
     )
     env = {**os.environ, "GEARLAB_CACHE": str(tmp / "cache-ch4")}
-    seconds, peak, code = measured(gearlab("run", str(scenario), "--out", str(tmp / "runs")), env)
+    seconds, peak, code, _ = measured(gearlab("run", str(scenario), "--out", str(tmp / "runs")), env)
     if code:
         print(f"chapter-4 datasets: FAILED (exit {code})")
         return
