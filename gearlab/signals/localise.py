@@ -289,6 +289,7 @@ class Content:
     periods: int
     first_revolution: int
     blocks: int = 1
+    source: np.ndarray | None = None  # the layout's source of each order: noise is smoothed within one TSA
 
 
 def _averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, np.ndarray]:
@@ -351,8 +352,8 @@ def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0, blo
         parts = [content(revs[i : i + block], lay, first_revolution + i) for i in range(0, R - block + 1, block)]
         power = np.mean([u.power for u in parts], axis=0)
         noise = np.mean([u.noise for u in parts], axis=0) / len(parts)
-        return Content(mean, noise, power, int(periods), first_revolution, len(parts))
-    return Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution)
+        return Content(mean, noise, power, int(periods), first_revolution, len(parts), lay.source)
+    return Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution, 1, lay.source)
 
 
 # --- the history --------------------------------------------------------------------------------------
@@ -369,8 +370,14 @@ class Spread:
     units: int
 
 
-def _smooth(x: np.ndarray) -> np.ndarray:
-    return uniform_filter1d(x, size=WEIGHT_SMOOTH, mode="nearest")
+def _smooth(x: np.ndarray, source: np.ndarray | None = None) -> np.ndarray:
+    """*x* smoothed over WEIGHT_SMOOTH orders of one average (*source*): a slow shaft's TSA, resampled
+    by linear interpolation, holds a third of the input TSA's noise near the top order."""
+    out = np.empty_like(x)
+    for s in np.unique(source) if source is not None else [None]:
+        at = slice(None) if s is None else source == s
+        out[at] = uniform_filter1d(x[at], size=WEIGHT_SMOOTH, mode="nearest")
+    return out
 
 
 def _estimate_var(power: np.ndarray, noise: np.ndarray, blocks: int = 1) -> np.ndarray:
@@ -393,7 +400,7 @@ def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
         raise GearlabInputError(f"the history holds {len(units)} unit; expected at least 2 to measure its spread")
     P = np.stack([u.power for u in units])
     mean = P.mean(axis=0)
-    noise = np.mean([_smooth(u.noise) for u in units], axis=0)
+    noise = np.mean([_smooth(u.noise, u.source) for u in units], axis=0)
     line = mean > KAPPA * noise / math.sqrt(len(units))
     nv = np.mean([_estimate_var(mean, u.noise) for u in units], axis=0)
     b = np.maximum(P.var(axis=0, ddof=1) - nv, 0.0)
@@ -453,7 +460,7 @@ def _null_var(rec: Content, ref: Spread) -> np.ndarray:
     noisy estimate, the record's noise included)."""
     lines = np.where(ref.line, ref.power, 0.0)
     return (
-        _estimate_var(lines, _smooth(rec.noise), rec.blocks)
+        _estimate_var(lines, _smooth(rec.noise, rec.source), rec.blocks)
         + ref.between * (1 + 1 / ref.units)
         + _estimate_var(lines, ref.unit_noise) / ref.units
     )
