@@ -672,7 +672,7 @@ def compare(
     """
     import tempfile
 
-    from .compare import compare_html, compare_lines, compare_markdown, load_runs
+    from .compare import compare_html, compare_lines, load_runs, print_tables
     from .files import atomic_write
 
     runs = load_runs(run_dirs)
@@ -681,7 +681,7 @@ def compare(
     for line in compare_lines(runs):
         console.print(line, markup=False, highlight=False)
     _print_scenario_differences(run_dirs)
-    console.print(compare_markdown(runs).rstrip(), markup=False, highlight=False)
+    print_tables(console, runs)  # the figures: rich tables, as at the end of a run
     if html is not None:
         with tempfile.TemporaryDirectory() as figures:  # the PNGs are inlined, then go
             atomic_write(html, compare_html(runs, Path(figures)))

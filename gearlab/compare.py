@@ -88,6 +88,20 @@ def compare_markdown(runs: list[Compared]) -> str:
     return "\n\n".join(parts) + "\n"
 
 
+def print_tables(console, runs: list[Compared]) -> None:
+    """compare_markdown's tables as rich tables on *console* (terminal.rich_table, as at the end
+    of a run: turned on a terminal too narrow for their words; a log or a pipe gets them drawn at
+    their natural width), the kind's side-by-side table under its title."""
+    from .terminal import markdown_tables, print_table, rich_table
+
+    joined = _side_by_side(runs)
+    text = joined[1] if joined is not None else compare_markdown(runs)
+    blocks = [markdown_tables(block) or [] for block in text.split("\n\n")]  # apart: it skips blank lines
+    for i, (caption, header, rows) in enumerate(table for found in blocks for table in found):
+        title = caption or (joined[0] if joined is not None and i == 0 else "")
+        print_table(console, rich_table(title, header, rows, console))
+
+
 def compare_charts(runs: list[Compared]) -> list[Chart]:
     """Each chart the kind draws for the first run, with the same chart of every other run
     overlaid (curves named 'A: label'); bar charts join their categories."""

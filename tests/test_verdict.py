@@ -358,10 +358,21 @@ def test_compare_cli_prints_the_tables_side_by_side_and_writes_a_page(runs, cli,
     code, out, err = cli("compare", a, b, "--html", tmp_path / "cmp.html")
     assert code == 0, err
     assert out.splitlines()[0].startswith(f"A: tiny {a.name}") and out.splitlines()[1].startswith(f"B: tiny {b.name}")
-    assert "| method | k | A | B | B − A |" in out
+    # the figures as a rich table (drawn at its natural width off a terminal), not raw Markdown:
+    # its title, its header, and every row of the Markdown table (each method and k, both runs'
+    # values, B − A) whole in one drawn row
+    from gearlab.compare import compare_markdown, load_runs
+
+    assert "| method |" not in out and "Target test accuracy (%) of each run" in out
+    table = out.split("Target test accuracy (%) of each run")[1].splitlines()
+    drawn = [[c.strip() for c in line.strip("│┃ ").split(line[0])] for line in table if line[:1] in "│┃"]
+    assert drawn[0] == ["method", "k", "A", "B", "B − A"]
+    wanted = [
+        [c.strip() for c in line.strip("| ").split("|")] for line in compare_markdown(load_runs([a, b])).splitlines()
+    ]
+    assert len(wanted) > 4 and drawn[1:] == wanted[2:]
     # the same scenario and seed: the same numbers, so every difference is zero
-    diffs = [line.split("|")[-2].strip() for line in out.splitlines() if line.startswith("| source_only")]
-    assert diffs == ["+0.00", "+0.00"]
+    assert [row[-1] for row in drawn if row[0].startswith("source_only")] == ["+0.00", "+0.00"]
     page = (tmp_path / "cmp.html").read_text()
     assert page.count("<img") == 1 and "(runs A, B)" in page and "src='http" not in page
 
@@ -387,6 +398,12 @@ def test_compare_of_gap_runs_overlays_their_bars(runs, cli):
         "B: after",
     ]
     assert "| A: view |" in compare_markdown(both) and "| B: view |" in compare_markdown(both)
+    # in the terminal each run's tables are drawn apart, each under its own header (not run together)
+    code, out, err = cli("compare", runs["gap"], runs["gap"])
+    assert code == 0, err
+    heads = re.findall(r"^┃ ([AB]: [^┃]*?) +┃", out, re.M)
+    assert heads == [f"{run}: {name}" for run in "AB" for name in ("view", "effect", "model (k = 0)")]
+    assert "│ ---" not in out and "|---" not in out
 
 
 # ----------------------------------------------------------------------------- CLI niceties
