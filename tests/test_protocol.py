@@ -730,3 +730,21 @@ def test_shapes_scores_its_templates_in_the_history_noise_law(law):
     )
     laws = {m.law for m in model.modules() if isinstance(m, ShapeLikelihood)}
     assert laws == {law}
+
+
+def test_a_worker_reads_each_dataset_once(finished, tiny_toml, no_transfer_figures, monkeypatch):
+    """A process's units share its two datasets, read from the cache once (issue 42: each unit read
+    and checked both again, 30 ms of CPU each time), read-only; the records are the same."""
+    from types import SimpleNamespace
+
+    from gearlab.data import cache
+
+    loads = []
+    spy = lambda *a, **kw: loads.append(a[0].name) or cache.load(*a, **kw)  # noqa: E731
+    monkeypatch.setattr(training, "_LOADED", {})
+    monkeypatch.setattr(training, "cache", SimpleNamespace(load=spy, entry_key=cache.entry_key, ARRAYS=cache.ARRAYS))
+    run_scenario(tiny_toml, out=tiny_toml.parent / "runs")
+    (run,) = (tiny_toml.parent / "runs" / "tiny").iterdir()
+    assert by_unit(run) == by_unit(finished)
+    assert sorted(loads) == ["B-6-ch5", "B-8-ch5"]  # the units' reads, for 16 units
+    assert all(not d.X.flags.writeable for _, d in training._LOADED.values())
