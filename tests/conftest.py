@@ -1,3 +1,4 @@
+import base64
 import sys
 from pathlib import Path
 
@@ -168,6 +169,31 @@ def no_figures(monkeypatch) -> None:
     from detection_scenario import without_figures
 
     without_figures(monkeypatch)
+
+
+ONE_PIXEL_PNG = base64.b64decode(
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
+)
+
+
+def unrendered(fig, path, dpi=120, **options):
+    """gearlab.plots.save without the rendering: each figure is still built, written (one pixel) and
+    counted in the run's 'report' stage, so a run's files and events are the engine's; rendering
+    was a third of the every-kind runs' CPU (test_tui), for tests that read no figure's pixels."""
+    from gearlab import plots
+
+    path = plots._target(path)
+    plots.plt.close(fig)
+    plots.write_file(path, ONE_PIXEL_PNG)
+    plots.figure_written(path.name)
+    return path
+
+
+@pytest.fixture
+def unrendered_figures(monkeypatch) -> None:
+    """A run's figures built and written as one pixel, not rendered (unrendered): for a test that
+    reads no figure's pixels (a detection run's are also built: no_figures leaves them out)."""
+    monkeypatch.setattr("gearlab.plots.save", unrendered)
 
 
 @pytest.fixture

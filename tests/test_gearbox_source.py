@@ -153,7 +153,7 @@ def test_a_cycle_too_long_to_simulate_whole_is_a_stretch(tmp_path, monkeypatch):
     assert orders[1 + np.argmax(amp[1:])] % 21 == 0
 
 
-def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkeypatch):
+def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkeypatch, unrendered_figures):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     (tmp_path / "rig20.toml").write_text(RIG20)

@@ -158,7 +158,9 @@ def make_npz(folder: Path) -> Path:
 # ----------------------------------------------------------------------------- 2. resume with relative files
 
 
-def test_resume_finds_a_relative_file_and_refuses_a_changed_one(tmp_path, record_file, cache_env, monkeypatch):
+def test_resume_finds_a_relative_file_and_refuses_a_changed_one(
+    tmp_path, record_file, cache_env, monkeypatch, unrendered_figures
+):
     data = tmp_path / "data"
     data.mkdir()
     (data / "rec.npz").write_bytes(record_file.read_bytes())
@@ -230,7 +232,7 @@ def test_full_disk_is_one_line_and_leaves_a_resumable_run_or_none(tmp_path, reco
         assert not [p for p in small.rglob("*") if p.is_file()]
 
 
-def test_read_only_cache_falls_back_with_a_warning(tmp_path, record_file, tmpfs, monkeypatch):
+def test_read_only_cache_falls_back_with_a_warning(tmp_path, record_file, tmpfs, monkeypatch, unrendered_figures):
     ro = tmpfs("ro", "ro,size=64k")
     monkeypatch.setattr(cache, "_FALLBACK", [])
     monkeypatch.setenv("GEARLAB_CACHE", str(ro))

@@ -6,7 +6,7 @@ import json
 import numpy as np
 
 
-def test_dataset_scenario_imports_a_measured_file(cli, run_scenario, tmp_path, monkeypatch):
+def test_dataset_scenario_imports_a_measured_file(cli, run_scenario, tmp_path, monkeypatch, unrendered_figures):
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     code, _, err = cli(
         "simulate", "--model", "six_dof", "--preset", "meng2020", "--duration", "0.3", "--out", tmp_path / "rec.npz"

@@ -349,7 +349,7 @@ def test_run_writes_records_summary_tables_and_figures(cli, write_scenario, tmp_
     assert "TSA accuracy" in out  # summary_lines
 
 
-def test_resume_skips_finished_units(cli, write_scenario, tmp_path, fake_builder, monkeypatch):
+def test_resume_skips_finished_units(cli, write_scenario, tmp_path, fake_builder, monkeypatch, unrendered_figures):
     code, out, err = cli("run", write_scenario(tiny(noises='["laplace"]')), "--out", tmp_path / "runs")
     assert code == 0, err
     run = run_dir(out)

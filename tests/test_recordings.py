@@ -246,7 +246,9 @@ def test_an_edited_gearbox_description_is_not_served_from_the_cache(tmp_path, mo
     assert not cached and again.meta["speed_hz"] == pytest.approx(SPEED / 2, rel=1e-4)
 
 
-def test_a_run_is_not_resumed_against_an_edited_gearbox_description(cli, run_scenario, tmp_path, monkeypatch):
+def test_a_run_is_not_resumed_against_an_edited_gearbox_description(
+    cli, run_scenario, tmp_path, monkeypatch, unrendered_figures
+):
     """Its finished units were computed at the speed the old description gave: like a changed
     measured file, a changed description refuses the resume."""
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))

@@ -33,7 +33,7 @@ def test_bad_execution_options_are_refused_like_bad_scenario_keys(cli, scenario,
     assert not (tmp_path / "runs").exists()
 
 
-def test_options_reach_the_resolved_scenario_and_a_resume_may_change_them(cli, scenario, tmp_path):
+def test_options_reach_the_resolved_scenario_and_a_resume_may_change_them(cli, scenario, tmp_path, unrendered_figures):
     code, out, err = cli("run", scenario, "--executor", "local", "--device", "cpu", "--out", tmp_path / "runs")
     assert code == 0, err
     run = Path(out.strip().splitlines()[-1].removeprefix("run directory: "))
@@ -156,7 +156,7 @@ device = "cpu"
     )
 
 
-def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache):
+def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache, unrendered_figures):
     monkeypatch.setenv("GEARLAB_CACHE", str(domains_cache))
     path = tmp_path / "t.toml"
     # the unit must outlast a few of the watcher's half-second looks: 200 epochs of the cheap

@@ -51,7 +51,7 @@ def test_run_json_says_who_ran_what_where_and_when(finished):
     assert not (run / LOCK_FILE).exists()  # no stale lock
 
 
-def test_a_resume_adds_a_session_and_sums_the_working_time(finished, cli, tmp_path):
+def test_a_resume_adds_a_session_and_sums_the_working_time(finished, cli, tmp_path, unrendered_figures):
     import shutil
 
     base, run, _ = finished

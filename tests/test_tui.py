@@ -9,13 +9,13 @@ session (`replayed`).
 from __future__ import annotations
 
 import asyncio
-import base64
 import json
 import shutil
 import time
 from pathlib import Path
 
 import pytest
+from conftest import unrendered
 from test_detection import scenario as detection_scenario
 from textual.widgets import DataTable, Static, TabbedContent, Tree
 from tiny import transfer
@@ -403,6 +403,7 @@ def quick_stiff_run(tmp_path_factory):
     (base / "scenarios" / "stiff.toml").write_text(STIFFNESS.replace("{runs}", str(base / "runs")))
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("GEARLAB_CACHE", str(base / "cache"))
+        mp.setattr("gearlab.plots.save", unrendered)  # the snapshots show no figure's pixels
         return base, run_scenario(base / "scenarios" / "stiff.toml", quick=True).path
 
 
@@ -510,24 +511,6 @@ Path(into).parent.mkdir(parents=True, exist_ok=True)
 shutil.copytree(made, into)
 sys.stdout.write(Path(lines).read_text().replace(written, into))
 """
-
-
-ONE_PIXEL_PNG = base64.b64decode(
-    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
-)
-
-
-def unrendered(fig, path, dpi=120, **options):
-    """gearlab.plots.save without the rendering: each figure is still built, written (one pixel) and
-    counted in the run's 'report' stage, so the events the TUI follows are the engine's; rendering
-    was a third of the every-kind runs' CPU, and these tests read no figure's pixels."""
-    from gearlab import plots
-
-    path = plots._target(path)
-    plots.plt.close(fig)
-    plots.write_file(path, ONE_PIXEL_PNG)
-    plots.figure_written(path.name)
-    return path
 
 
 @pytest.fixture(scope="module")
@@ -759,7 +742,9 @@ def test_u_resumes_only_the_highlighted_run(two_with_runs, stub_engine, tmp_path
 
 
 @pytest.mark.parametrize("size", SIZES)
-def test_runs_are_found_where_gearlab_run_puts_them_whatever_the_folder(tmp_path, monkeypatch, cli, size):
+def test_runs_are_found_where_gearlab_run_puts_them_whatever_the_folder(
+    tmp_path, monkeypatch, cli, size, unrendered_figures
+):
     """`gearlab tui /elsewhere/scenarios` started in a project folder: a scenario's relative
     [output] dir is taken from that folder, as `gearlab run` there takes it, for the runs the
     TUI starts and for those it lists."""

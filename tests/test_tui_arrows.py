@@ -5,7 +5,7 @@ import asyncio
 from pathlib import Path
 
 import pytest
-from conftest import ROOT
+from conftest import ROOT, unrendered
 from textual.widgets import Tree
 
 from gearlab.tui import GearlabApp
@@ -24,7 +24,9 @@ def folder(tmp_path_factory):
     text = (ROOT / "scenarios" / "stiffness_verification.toml").read_text()
     text = text.split("[output]")[0] + f'\n[output]\ndir = "{base / "runs"}"\n'
     (sc / "stiff.toml").write_text(text)
-    run_scenario(sc / "stiff.toml", quick=True)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("gearlab.plots.save", unrendered)  # these tests show no figure's pixels
+        run_scenario(sc / "stiff.toml", quick=True)
     return sc
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
-from conftest import ROOT
+from conftest import ROOT, unrendered
 from textual.app import App
 from textual.command import CommandPalette
 from textual.geometry import Region
@@ -343,7 +343,9 @@ def made_runs(tmp_path_factory):
     base = tmp_path_factory.mktemp("edges")
     source = base / "stiff.toml"
     source.write_text(stiff_text())
-    return [run_scenario(source, out=base / "made", quick=True).path] * 2
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("gearlab.plots.save", unrendered)  # these tests show no figure's pixels
+        return [run_scenario(source, out=base / "made", quick=True).path] * 2
 
 
 @pytest.fixture
