@@ -582,7 +582,7 @@ healthy = 2
 """
 
 
-def test_dataset_scenario_with_effects_validates_and_runs(cli, write_scenario, tmp_path, cache):
+def test_dataset_scenario_with_effects_validates_and_runs(cli, write_scenario, tmp_path, cache, unrendered_figures):
     effects = (
         'effects = [{name = "sensor_noise", kind = "laplace", snr_db = 0}, {name = "drive_inertias"}, '
         '{name = "shaft_eccentricity", e = "10 um"}]'

@@ -92,7 +92,7 @@ def diagnosed(heavy, tmp_path, monkeypatch, candidates: str) -> dict:
     return json.loads((run / "summary.json").read_text())
 
 
-def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch):
+def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch, unrendered_figures):
     s = diagnosed(heavy, tmp_path, monkeypatch, '"load_level", "sensor_noise"')
     names_found = [e["name"] for e in s["effects"]]
     assert "load_level" in names_found
@@ -104,7 +104,7 @@ def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch)
     assert any("history record(s) at 30.000 Hz" in n for n in s["notes"])
 
 
-def test_a_wrong_mechanism_leaves_the_gap_unexplained(heavy, tmp_path, monkeypatch):
+def test_a_wrong_mechanism_leaves_the_gap_unexplained(heavy, tmp_path, monkeypatch, unrendered_figures):
     """Only an effect that cannot scale the gear vibration is offered: the gap beyond the noise stays."""
     assert diagnosed(heavy, tmp_path, monkeypatch, '"sensor_offset", "sensor_noise"')["unexplained"]
 
