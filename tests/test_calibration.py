@@ -343,3 +343,21 @@ def test_float32_laplace_likelihood_ratios_are_those_of_float64():
     with torch.no_grad():  # float64 keeps its precision on the compiled path
         cdist = R.double().abs().sum(1, keepdim=True) - torch.cdist(R.double(), T.double(), p=1.0)
     assert torch.allclose(exact, cdist, rtol=0, atol=1e-9)
+
+
+def test_a_process_calibrates_the_same_arrays_once():
+    """Every calibrated method of a repetition and k asks for the same calibration: the second ask
+    of equal arrays (not the same objects) gets the first's, read-only; other arrays their own."""
+    Xs, ys, _, _ = revolutions(40, 20, 3.0, "gaussian", seed=5, healthy_level=2.0)
+    Xt, _, _, _ = revolutions(30, 0, 0.0, "laplace", seed=6, healthy_level=1.0)
+    settings = Calibration(residual=True, source_noise="auto")
+    first = prepare(settings, Xs, ys, Xt, None)
+    assert prepare(settings, Xs.copy(), ys.copy(), Xt.copy(), None) is first
+    assert not first.target_reference.flags.writeable and not first.source_reference.flags.writeable
+    other = prepare(settings, Xs, ys, Xt[:-1], None)
+    assert other is not first and other.noise_law == first.noise_law
+    assert prepare(replace_settings(settings), Xs, ys, Xt, None) is not first
+
+
+def replace_settings(settings: Calibration) -> Calibration:
+    return dataclasses.replace(settings, source_noise="laplace")
