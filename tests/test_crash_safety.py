@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import unrendered
 from test_protocol import TINY, UNITS
 from tiny import bare_dataset, run_once, stiffness
 
@@ -168,15 +169,20 @@ def assert_cache_whole(cache_dir: Path) -> None:
 
 @pytest.fixture(scope="module")
 def tiny_reference(tmp_path_factory):
-    """The tiny transfer scenario run without interruption, with a cache of its own."""
-    return run_once(tmp_path_factory.mktemp("reference"), "tiny.toml", TINY_ONCE)
+    """The tiny transfer scenario run without interruption, with a cache of its own (its figures
+    unrendered: the runs are compared by their records and tables)."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("gearlab.plots.save", unrendered)
+        return run_once(tmp_path_factory.mktemp("reference"), "tiny.toml", TINY_ONCE)
 
 
 @pytest.fixture(scope="module")
 def stiffness_reference(tmp_path_factory):
     base = tmp_path_factory.mktemp("reference")
     (base / "stiff.toml").write_text(STIFFNESS)
-    return run_scenario(base / "stiff.toml", out=base / "runs").path
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("gearlab.plots.save", unrendered)  # compared by summary, records and cases
+        return run_scenario(base / "stiff.toml", out=base / "runs").path
 
 
 # ----------------------------------------------------------------------------- the lock
