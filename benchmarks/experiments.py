@@ -5,9 +5,10 @@
 1. Each transfer scenario (default: scenarios/expA.toml and scenarios/expB.toml) is run as
    `gearlab run` in a child process with an empty dataset cache (datasets cold, every method,
    every repetition), timed, and its process tree's resident memory sampled every 0.2 s.
-   Issue 4's target for Experiment B: <= 45 min on 2 cores. The tables are checked to be
-   complete (every method x k cell holds 5 repetitions) and printed; --keep DIR keeps the
-   run directories (report, results) under DIR.
+   Issue 4's target for Experiment B: <= 45 min on 2 cores; issue 42's: <= 5 min (CPU / 2 plus
+   the main process's serial share, below: 515 s of CPU, 15.8 in the main process, at 7a7a5e8).
+   The tables are checked to be complete (every method x k cell holds 5 repetitions) and
+   printed; --keep DIR keeps the run directories (report, results) under DIR.
 2. With --ch4-memory: the six chapter-4 datasets (Table 4.1 sizes: 12 800 revolutions each,
    noisy and TSA over J = 60, three noise types) are built cold the same way; their peak
    memory is compared with the data they hold and with CEILING.
