@@ -57,7 +57,7 @@ from .readers import READERS, Contents, check_size
 from .readers.base import _listing, _one_line, _one_line_repr
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
-from .readers.headers import HEADERS, Header
+from .readers.headers import HEADERS, Header, time_hint
 
 TWO_PI = 2.0 * np.pi
 
@@ -270,9 +270,8 @@ def sampling_rate(contents: Contents, given: float | None, n: int, path: str) ->
     from_file = file_rate(contents, n, path)
     if from_file is None:
         if given is None:
-            raise GearlabInputError(
-                f"{path}: no sampling rate: the file has no 'fs'/time and none was given (--fs / fs = ...)"
-            )
+            hint = time_hint(path) or " (--fs / fs = ...)"
+            raise GearlabInputError(f"{path}: no sampling rate: the file has no 'fs'/time and none was given{hint}")
         return float(given), "given"
     fs, tol, where = from_file
     if given is not None:
@@ -790,7 +789,7 @@ def check_recording(
     if not header.rate and fs is None:
         raise GearlabInputError(
             f"{where} key 'fs': missing; {path} carries no sampling rate (no 'fs' field, no time column such as "
-            "time, t, time_s or 'Time [s]'); expected the rate, e.g. fs = '51.2 kHz'"
+            "time, t, time_s or 'Time [s]')" + (time_hint(path) or "; expected the rate, e.g. fs = '51.2 kHz'")
         )
     vibration = channels.get("vibration")
     if vibration not in (None, ""):

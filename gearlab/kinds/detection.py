@@ -112,6 +112,7 @@ from .detection_records import (
     synchronous_input,
     trained_on,
     turned_faults,
+    unaligned_why,
     unit_mesh_orders,
     unit_shaft,
 )
@@ -431,7 +432,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             # mark): into the source's frame
             if not cond["unit_tacho"]:
                 turn = register_to_source(cond, sources[specs[(c, "")]])
-                on_event(Event("log", message=f"{c}: turned by {turn} samples into the source's frame (no tacho)"))
+                why = unaligned_why(spec.target, cond["unit_shaft"])
+                on_event(Event("log", message=f"{c}: turned by {turn} samples into the source's frame ({why})"))
         on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
         bounds = {key: source_bound(s, sources[s], protocol, draws[s], executor, on_event) for key, s in specs.items()}
         records = {r["unit"]: r for r in run.records()}

@@ -139,9 +139,9 @@ def turned_faults(X: np.ndarray, y: np.ndarray, g: int) -> tuple[np.ndarray, np.
 def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str, str]:
     """{file path: condition}: the file's own 'condition', else its speed group. History records
     without one are grouped by speed -- the tacho's, declared, or found from the mesh orders -- (a
-    group spans SPEED_GROUP of its slowest record's speed; named by its median to 1 Hz); a test
-    record joins the group of nearest speed, or one of its own (which has no history) when none lies
-    within SPEED_GROUP of it."""
+    group spans SPEED_GROUP of its slowest record's speed; named by its median, as measured: speed_name);
+    a test record joins the group of nearest speed, or one of its own (which has no history) when none
+    lies within SPEED_GROUP of it."""
     out = {f.path: f.condition for f in files if f.condition}
     groups: list[list[float]] = []
     for v in sorted(speeds[f.path] for f in files if not f.condition and f.role == "history"):
@@ -157,8 +157,17 @@ def conditions_of(files: list[TargetFile], speeds: dict[str, float]) -> dict[str
         near = min(range(len(centres)), key=lambda i: abs(centres[i] - v)) if centres else None
         if near is not None and abs(centres[near] - v) <= SPEED_GROUP * centres[near]:
             v = centres[near]
-        out[f.path] = f"{v:.0f} Hz"
+        out[f.path] = speed_name(v)
     return out
+
+
+def speed_name(hz: float) -> str:
+    """A condition's name from its measured speed: to 1 Hz where that is within 0.5 % of it ('30 Hz'),
+    else to 0.1 Hz or 0.01 Hz: a 1500 rpm motor slipping to 24.6 Hz is '24.6 Hz', not its nominal '25 Hz'."""
+    for digits in (0, 1):
+        if abs(round(hz, digits) - hz) <= 0.005 * hz:
+            return f"{hz:.{digits}f} Hz"
+    return f"{hz:.2f} Hz"
 
 
 def aligned(
@@ -320,6 +329,17 @@ def _units(cond: dict) -> None:
         for u in per_record[0]
     }
     cond["test_units"] = {f.path: unit_sets(r, blocks, False) for f, r in cond["test"]}
+
+
+def unaligned_why(target: Target, unit_shaft: str) -> str:
+    """Why a condition's records were aligned by correlation, not by a tacho mark (register_to_source),
+    as the log says it: no tacho, or one whose marks are not what the units start at (a shaft's)."""
+    if target.tacho is None:
+        return "no tacho"
+    return (
+        f"tacho {target.tacho!r} on the {target.read_as} shaft, {target.pulses_per_rev} marks per turn; the units, "
+        f"{unit_shaft}-shaft revolutions, are aligned by correlation, not by its marks"
+    )
 
 
 def register_to_source(cond: dict, source) -> int:

@@ -248,10 +248,12 @@ def records_md(conditions: dict | None) -> str:
         "| condition | file | role | speed Hz | speed from | turned by |",
         "|---|---|---|---|---|---|",
     ]
-    tacho = True
+    tacho, by_marks = True, True
     for c, v in conditions.items():
         tacho = tacho and v.get("tacho", True)
-        turn = "{} marks" if v.get("tacho", True) else "{} samples"
+        by_marks = by_marks and v.get("unit_shaft", "input") == "input"
+        # by the tacho's marks only where the units are input revolutions (read_target's unit_tacho)
+        turn = "{} marks" if v.get("tacho", True) and v.get("unit_shaft", "input") == "input" else "{} samples"
         for role in ("history", "test"):
             for path in v[role]:
                 how = v.get("speed_from", {}).get(path, "tacho")
@@ -264,6 +266,12 @@ def records_md(conditions: dict | None) -> str:
             "revolution at any whole-sample turn, then together into the frame of the source's healthy mean "
             "revolution, in which the learned methods learned the fault's shape; the tooth a localisation "
             "names is counted from the record's first sample, a relative index, not a tooth number on the gear."
+        )
+    elif not by_marks:
+        out.append(
+            "\nThe units are revolutions of another shaft than the input: the tacho gives each record's speed and "
+            "angle, and the records are aligned by the correlation of their mean revolution (a turn in samples), "
+            "not by its marks."
         )
     return "\n".join(out) + "\n"
 

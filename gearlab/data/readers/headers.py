@@ -4,6 +4,7 @@ field or a time vector), which channels hold integers."""
 
 from __future__ import annotations
 
+import csv
 import struct
 import zipfile
 from dataclasses import dataclass, field
@@ -173,3 +174,43 @@ HEADERS = {
     "WAV": _wav_header,
     "MATLAB": _mat_header,
 }
+
+
+def time_hint(path, rows: int = 2000) -> str:
+    """For a headerless text record whose column 0 rises by a constant step (as a time column
+    does), a clause saying so and how to give the rate ('' otherwise): its first *rows* read."""
+    from ...signals.checks import fmt_hz
+    from .base import _column
+    from .csv import delimiter_of, is_header, split_rows
+    from .text import _open_text
+
+    lines: list[str] = []
+    try:
+        with _open_text(Path(path)) as (stream, _):
+            for line in stream:
+                if b"\x00" in line:  # a binary format (NPZ, HDF5, WAV, MATLAB): no text columns
+                    return ""
+                text = line.decode("utf-8-sig", "replace").strip()
+                if text and not text.startswith("#"):
+                    lines.append(text)
+                if len(lines) >= rows:
+                    break
+    except (GearlabInputError, OSError):
+        return ""
+    try:
+        table = split_rows(lines, delimiter_of(lines[0])) if lines else []
+    except csv.Error:
+        return ""
+    if len(table) < 3 or is_header(table[0]) or any(not row for row in table):
+        return ""
+    t = _column([row[0] for row in table])
+    if t.dtype.kind != "f" or not np.all(np.diff(t) > 0):
+        return ""
+    step = (t[-1] - t[0]) / (t.size - 1)
+    if np.max(np.abs(t - t[0] - step * np.arange(t.size))) > step / 2:  # printed rounding, not a constant step
+        return ""
+    rate = fmt_hz(1 / step)
+    return (
+        f"; its column 0 rises by a constant {step:.6g} a row, as a time column in seconds does: expected "
+        f"fs = '{rate}' (--fs '{rate}'), or a header row of column names, column 0's 'time_s'"
+    )
