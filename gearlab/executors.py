@@ -386,6 +386,22 @@ class _Counter:
 ANSWER_S = 0.2  # s a RayCounts.total() waits for the actor's answer
 
 
+def _answer(reader, method, timeout: float, afresh: bool = False):
+    """A driver-side reader's (RayCounts, RayLines) answer from its actor's `method` for its space,
+    waited for `timeout` s at most: else the previous answer, and the question stays asked (asked
+    again when `afresh`). An actor gone with its session leaves the last answer standing."""
+    ray = import_ray()
+    if reader._asked is None or afresh:
+        reader._asked = method.remote(reader.space)
+    if ray.wait([reader._asked], timeout=timeout)[0]:
+        try:
+            reader._known = ray.get(reader._asked)
+        except ray.exceptions.RayError:
+            pass
+        reader._asked = None
+    return reader._known
+
+
 class RayCounts(Counts):
     """Counts of one ``counts()`` block, reported to a _Counter actor (not waited for)."""
 
@@ -402,16 +418,7 @@ class RayCounts(Counts):
     def total(self) -> int:
         """The actor's answer, waited for ANSWER_S at most (a progress line asks each second, and the
         actor may still be starting): else the previous answer, and the question stays asked."""
-        ray = import_ray()
-        if self._asked is None:
-            self._asked = self.actor.total.remote(self.space)
-        if ray.wait([self._asked], timeout=ANSWER_S)[0]:
-            try:
-                self._known = ray.get(self._asked)
-            except ray.exceptions.RayError:  # the actor is gone: the last answer stands
-                pass
-            self._asked = None
-        return self._known
+        return _answer(self, self.actor.total, ANSWER_S)
 
 
 class _Lines:
@@ -462,16 +469,7 @@ class RayLines(UnitLines):
         self._asked, self._known = None, {}
 
     def __call__(self, final: bool = False) -> dict[str, str]:
-        ray = import_ray()
-        if self._asked is None or final:
-            self._asked = self.actor.lines.remote(self.space)
-        if ray.wait([self._asked], timeout=ENDED_S if final else ANSWER_S)[0]:
-            try:
-                self._known = ray.get(self._asked)
-            except ray.exceptions.RayError:  # the session is gone: the last answer stands
-                pass
-            self._asked = None
-        return self._known
+        return _answer(self, self.actor.lines, ENDED_S if final else ANSWER_S, afresh=final)
 
     def close(self) -> None:
         ray = import_ray()
