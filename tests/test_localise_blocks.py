@@ -9,54 +9,21 @@ other shafts' lines leak into a shaft's average by an amount set by the length a
 few dozen seconds of simulation.
 """
 
-import math
-
 import numpy as np
 import pytest
+from which_gear_takes import gearbox_take, two_stage_text
 
 from gearlab.signals import localise as L
 
 pytestmark = pytest.mark.slow
 
 SPEED = 25.0
-TEXT = """[gearbox]
-name = "blocks"
-[operation]
-speed = "25 Hz"
-load = "20 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 24, bore = "20 mm" }
-wheel = { z = 79, bore = "20 mm" }
-[[stages]]
-module = "3 mm"
-face_width = "20 mm"
-pinion = { z = 27, bore = "20 mm" }
-wheel = { z = 72, bore = "20 mm" }
-[sensor]
-near = "input"
-direction = "x"
-"""
+TEXT = two_stage_text("blocks", "25 Hz", "20 N*m", (24, 79, 27, 72))
 
 
 def take(where, faults, seed: int, load: float):
-    from gearlab.data.simulated import simulated_record
-    from gearlab.signals import cut_revolutions
-
-    rec = simulated_record(
-        faults,
-        gearbox=where,
-        speed_hz=SPEED,
-        load_nm=load,
-        revolutions=4 * SPEED,
-        snr_db=20.0,
-        seed=seed,
-        fs=20_000.0,
-        sim_fs=60_000.0,
-    )
-    cut = cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none")
-    return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+    _, revolutions, first = gearbox_take(where, faults, seed, SPEED, snr_db=20.0, load_nm=load)
+    return revolutions, first
 
 
 @pytest.fixture(scope="module")
@@ -110,12 +77,7 @@ def test_a_shaft_without_exclusive_orders_names_its_gear_by_the_orders_no_faster
 
     where = str(tmp_path / "reducer_22_36_21_63.toml")
     with open(where, "w") as f:
-        f.write(
-            TEXT.replace("z = 24,", "z = 22,")
-            .replace("z = 79,", "z = 36,")
-            .replace("z = 27,", "z = 21,")
-            .replace("z = 72,", "z = 63,")
-        )
+        f.write(two_stage_text("blocks", "25 Hz", "20 N*m", (22, 36, 21, 63)))
     table = order_table(resolve_gearbox(where))
     hist = [take(where, [], 400 + i, 20.0 + i) for i in range(2)]
     top = min(0.9 * 10_000 / SPEED, 0.45 * hist[0][0].shape[1])

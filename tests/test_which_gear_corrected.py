@@ -6,7 +6,7 @@ the intermediate shaft's 24T pinion."""
 
 import pytest
 from which_gear_takes import REDUCER as TWO
-from which_gear_takes import reducer_take
+from which_gear_takes import reducer_take, two_stage_text
 
 from gearlab.kinds import detection_which_gear as D
 from gearlab.parts.measured import TargetFile
@@ -60,25 +60,7 @@ def test_the_events_come_from_the_corrected_simulator(condition, tmp_path):
     assert scored["named"] == PINION, scored["summary"]
 
 
-FAN = """[gearbox]
-name = "fan"
-[operation]
-speed = "35 Hz"
-load = "40 N*m"
-[[stages]]
-module = "2 mm"
-face_width = "20 mm"
-pinion = { z = 19, bore = "20 mm" }
-wheel = { z = 58, bore = "20 mm" }
-[[stages]]
-module = "3 mm"
-face_width = "20 mm"
-pinion = { z = 25, bore = "20 mm" }
-wheel = { z = 67, bore = "20 mm" }
-[sensor]
-near = "input"
-direction = "x"
-"""
+FAN = two_stage_text("fan", "35 Hz", "40 N*m", (19, 58, 25, 67))
 
 
 def test_a_train_of_a_long_grand_period_simulates_a_few_slow_shaft_turns(tmp_path, monkeypatch):

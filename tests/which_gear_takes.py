@@ -18,24 +18,54 @@ def cut(rec):
     return cut_revolutions(rec.vibration, rec.fs, pulses=rec.tacho, transient="none").revolutions
 
 
-def reducer_take(faults, seed, speed, fs, effects=()):
-    """A take of 4 s of the reducer at *speed* Hz and 10.5 N*m, 25 dB SNR, sampled at *fs* (simulated at
-    60 kHz) with *effects*: (record, revolutions, index of its first whole revolution in the grand period)."""
+def gearbox_take(gearbox, faults, seed, speed, *, snr_db, fs=20_000.0, **options):
+    """A take of 4 s of the described *gearbox* at *speed* Hz, *snr_db* of noise, sampled at *fs*
+    (simulated at 60 kHz), *options* passed on (load_nm, effects): (record, revolutions, index of its
+    first whole revolution in the grand period)."""
     from gearlab.data.simulated import simulated_record
 
     rec = simulated_record(
         faults,
-        gearbox=str(REDUCER),
+        gearbox=str(gearbox),
         speed_hz=speed,
-        load_nm=10.5,
         revolutions=4 * speed,
-        snr_db=25.0,
+        snr_db=snr_db,
         seed=seed,
         fs=fs,
         sim_fs=60_000.0,
-        effects=effects,
+        **options,
     )
     return rec, cut(rec), (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
+
+
+def reducer_take(faults, seed, speed, fs, effects=()):
+    """A take of the reducer at 10.5 N*m, 25 dB SNR (gearbox_take)."""
+    return gearbox_take(REDUCER, faults, seed, speed, snr_db=25.0, fs=fs, load_nm=10.5, effects=effects)
+
+
+def two_stage_text(name: str, speed: str, load: str, teeth: tuple[int, int, int, int]) -> str:
+    """A two-stage description (modules 2 and 3 mm, 20 mm faces and bores, the sensor near the input)
+    of tooth counts *teeth* (stage-1 pinion, wheel, stage-2 pinion, wheel)."""
+    z1, z2, z3, z4 = teeth
+    return f"""[gearbox]
+name = "{name}"
+[operation]
+speed = "{speed}"
+load = "{load}"
+[[stages]]
+module = "2 mm"
+face_width = "20 mm"
+pinion = {{ z = {z1}, bore = "20 mm" }}
+wheel = {{ z = {z2}, bore = "20 mm" }}
+[[stages]]
+module = "3 mm"
+face_width = "20 mm"
+pinion = {{ z = {z3}, bore = "20 mm" }}
+wheel = {{ z = {z4}, bore = "20 mm" }}
+[sensor]
+near = "input"
+direction = "x"
+"""
 
 
 def rig_condition(files: dict, speed: float, revolutions: int):
