@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from which_gear_takes import rig_condition
+from which_gear_takes import HISTORY, flags_everything, rig_condition
 
 from gearlab.data.simulated import simulated_record
 from gearlab.data.spec import dataset_preset
@@ -18,8 +18,7 @@ SPEED = 40.0
 @pytest.fixture(scope="module")
 def target():
     files = {
-        "h1": ("history", "healthy", [], 1),
-        "h2": ("history", "healthy", [], 2),
+        **HISTORY,
         "wheel": ("test", "broken output tooth", [{"name": "crack", "gear": "output gear", "tooth": 3, "step": 20}], 3),
         "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
         "ok": ("test", "healthy", [], 5),
@@ -48,12 +47,7 @@ def test_a_flag_on_damage_elsewhere_is_other_damage(target):
         "ok": "nothing localised",
     }, {p: r["summary"] for p, r in loc["records"].items()}
     # a method that flags every unit of every test record: the output gear's flags are other damage
-    record = {
-        "condition": "40 Hz",
-        "method": "flags everything",
-        "thresholds": {"revolution": 0.0, "record30": 0.0},
-        "test_scores": {p: {"revolution": [1.0] * 4, "record30": [1.0, 1.0]} for p in ("wheel", "pinion", "ok")},
-    }
+    record = flags_everything(("wheel", "pinion", "ok"))
     (called,) = D.calls_by_label(loc, [record], labels)
     assert called["unit"] == "record30"
     assert called["watched"] == {"broken output tooth": 0.0, "fault": 100.0, "healthy": 100.0}
@@ -83,8 +77,7 @@ def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, mo
     data = tmp_path / "data"
     data.mkdir()
     files = {
-        "h1": ("history", "healthy", [], 1),
-        "h2": ("history", "healthy", [], 2),
+        **HISTORY,
         "wheel": ("test", "output gear", [{"name": "crack", "gear": "output gear", "tooth": 3, "step": 20}], 3),
         "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
         "ok": ("test", "healthy", [], 5),

@@ -4,7 +4,7 @@ localised on a watched gear and on another gear is called the watched gear's fau
 too (gearlab.kinds.detection_which_gear). Simulated PHM 2009 rig records, a few seconds each."""
 
 import pytest
-from which_gear_takes import rig_condition
+from which_gear_takes import HISTORY, flags_everything, rig_condition
 
 from gearlab.data.spec import dataset_preset
 from gearlab.gearbox import order_table
@@ -21,8 +21,7 @@ BOTH = [
 @pytest.fixture(scope="module")
 def target():
     files = {
-        "h1": ("history", "healthy", [], 1),
-        "h2": ("history", "healthy", [], 2),
+        **HISTORY,
         "both": ("test", "both", BOTH, 3),
         "pinion": ("test", "fault", BOTH[:1], 4),
         "wheel": ("test", "wheel", BOTH[1:], 5),
@@ -49,12 +48,7 @@ def test_a_record_damaged_on_the_watched_gear_and_another_is_called_both(target)
     assert loc["records"]["pinion"]["call"] == f"{D.WATCHED}: {PINION}"
     assert D.is_other(loc["records"]["wheel"]["call"]), loc["records"]["wheel"]["summary"]
     assert D.decision_of(True, both["call"]) == "fault"  # the watched gear's fault, as counted in the verdict
-    record = {
-        "condition": "40 Hz",
-        "method": "flags everything",
-        "thresholds": {"revolution": 0.0, "record30": 0.0},
-        "test_scores": {p: {"revolution": [1.0] * 4, "record30": [1.0, 1.0]} for p in ("both", "pinion", "wheel")},
-    }
+    record = flags_everything(("both", "pinion", "wheel"))
     (called,) = D.calls_by_label(loc, [record], labels)
     assert called["watched"] == {"both": 100.0, "fault": 100.0, "wheel": 0.0}
     assert called["other"] == {"both": 100.0, "fault": 0.0, "wheel": 100.0}  # both: in both columns

@@ -85,3 +85,20 @@ def rig_condition(files: dict, speed: float, revolutions: int):
         "max_order": int(0.9 * RIG_FS / 2 / speed),
     }
     return cond, {p: label for p, (_, label, _, _) in files.items()}
+
+
+HISTORY = {
+    "h1": ("history", "healthy", [], 1),
+    "h2": ("history", "healthy", [], 2),
+}  # rig_condition's two healthy takes
+
+
+def flags_everything(records, condition: str = "40 Hz") -> dict:
+    """A detection record of a method that flags every unit of the test *records* (revolution and
+    record30 units, threshold 0): what the which-gear calls then count is the localisation alone."""
+    return {
+        "condition": condition,
+        "method": "flags everything",
+        "thresholds": {"revolution": 0.0, "record30": 0.0},
+        "test_scores": {p: {"revolution": [1.0] * 4, "record30": [1.0, 1.0]} for p in records},
+    }
