@@ -105,10 +105,14 @@ def _laplace_gains(R: torch.Tensor, shapes: torch.Tensor) -> torch.Tensor:
 
     from . import kernels  # numba: loaded when first needed (start-up time)
 
-    r, t = R.detach().contiguous(), shapes.detach().contiguous()
+    # rows padded to a multiple of four: the loop sums four rows a pass and a lone row in another
+    # order (fastmath), so a row's gain would depend on the rows scored with it (the bound scores
+    # its rows a tenth at a time and must give the scores of all at once)
+    r, t = R.detach(), shapes.detach().contiguous()
+    r = torch.cat([r, r.new_zeros((-len(r) % 4, r.shape[1]))]).contiguous()
     out = torch.empty(len(r), len(t), dtype=r.dtype)
     kernels.laplace_gain(r.numpy(), t.numpy(), np.zeros(len(t), dtype=np.int64), out.numpy())
-    return out
+    return out[: len(R)]
 
 
 def lower_median(x: torch.Tensor) -> torch.Tensor:
