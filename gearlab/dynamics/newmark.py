@@ -39,6 +39,21 @@ DEFAULT_FS = 200e3
 TVMS_POINTS = 8192
 _CHECK_EVERY = 2048
 _LIMIT = 1e3  # m or rad: no gearbox DOF gets anywhere near this
+# Series that depend only on (fs, steps, speed) or (steps, table period), read-only: a gap search makes
+# a simulator per parameter set it tries and runs hundreds at one speed. At most _MEMO_BYTES, least
+# recently used out first.
+_MEMO: dict = {}
+_MEMO_BYTES = 1 << 27
+_STIFFNESS: dict = {}  # MeshStiffnessModel per gear pair (its healthy sections: 4 ms a simulator)
+
+
+def _stiffness_model(pair) -> MeshStiffnessModel:
+    """The TVMS builder of *pair*, made once per process (it keeps no state a run changes)."""
+    if pair not in _STIFFNESS:
+        if len(_STIFFNESS) >= 64:
+            _STIFFNESS.pop(next(iter(_STIFFNESS)))
+        _STIFFNESS[pair] = MeshStiffnessModel(pair)
+    return _STIFFNESS[pair]
 
 
 class SimulationError(GearlabInputError):
@@ -212,7 +227,7 @@ class Simulator:
             )
         self.model, self.preset, self.fs = model, preset, float(fs)
         self.pair, self.values = model.resolve(preset, overrides, where)
-        self.stiffness = MeshStiffnessModel(self.pair)
+        self.stiffness = _stiffness_model(self.pair)
         self.k_mean = self.stiffness.mesh_stiffness(points=TVMS_POINTS).mean
         self.mu = mesh_damping_ratio(self.values, self.k_mean)
         asm = model.assemble(self.pair, self.values)
@@ -225,7 +240,7 @@ class Simulator:
         self.rigid = asm.rigid
         # Further meshes of a multi-stage model (Assembly.meshes): each its own TVMS, mean and damping ratio.
         self.meshes = tuple(asm.meshes)
-        self.mesh_models = tuple(MeshStiffnessModel(m.pair) for m in self.meshes)
+        self.mesh_models = tuple(_stiffness_model(m.pair) for m in self.meshes)
         self.mesh_means = tuple(sm.mesh_stiffness(points=TVMS_POINTS).mean for sm in self.mesh_models)
         self.mesh_mu = [mesh_damping_ratio(self.values, km, m.masses) for km, m in zip(self.mesh_means, self.meshes)]
         self.mesh_P = tuple(m.P[free] for m in self.meshes)
@@ -331,8 +346,7 @@ class Simulator:
         self.check_hunting(staged, where)
         start = time.perf_counter()
         steps = int(round(duration * self.fs))
-        t = np.arange(steps + 1) / self.fs
-        phase = np.mod(2 * np.pi * speed * t, 2 * np.pi)  # nominal pinion angle: fixed input speed
+        t, shaft, phase, tacho = self._time_base(steps, speed)
         per_rev = self.fs / speed
         tvms, index, k = self._nominal_stiffness(staged[0], phase, per_rev, steps, speed)
         k_mean = tvms.mean
@@ -341,6 +355,7 @@ class Simulator:
             k, k_mean, forces, angle = self._excite(effects, tvms, index, t, speed, load)
             if angle is not None:
                 phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
+                tacho = np.where(phase >= np.pi, phase - 2 * np.pi, phase)
         # a faulted further mesh: the static start at its own mean, as stage 1's (the healthy ones as before)
         means = tuple(
             self.mesh_table(i, on, self._grid(self.mesh_models[i].pair, on)).mean if on else km
@@ -363,7 +378,6 @@ class Simulator:
                 f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
                 f"(NaN or overflow) near t = {failed / self.fs:.4g} s; check the model parameters and the time step"
             )
-        tacho = np.where(phase >= np.pi, phase - 2 * np.pi, phase)
         wall = time.perf_counter() - start
         return Simulation(
             model=self.model.name,
@@ -371,8 +385,8 @@ class Simulator:
             speed_hz=speed,
             load_nm=load,
             fs=self.fs,
-            t=t,
-            tacho=tacho,
+            t=t.copy(),
+            tacho=np.array(tacho),  # the memo's are read-only
             tvms=k,
             channels={ch: out[:, j] for j, ch in enumerate(channels)},
             wall_s=wall,
@@ -380,6 +394,41 @@ class Simulator:
             state=(u, v, a),
             angle=angle,
         )
+
+    @staticmethod
+    def _memoised(key: tuple, make):
+        """make() (a tuple of arrays, made read-only), kept in _MEMO: the time base and table indices
+        of a diagnosis' hundreds of runs at one speed are made once."""
+        hit = _MEMO.pop(key, None)
+        if hit is None:
+            hit = make()
+            for x in hit:
+                x.setflags(write=False)
+        _MEMO[key] = hit  # the most recently used last
+        while sum(x.nbytes for entry in _MEMO.values() for x in entry) > _MEMO_BYTES:
+            _MEMO.pop(next(iter(_MEMO)))
+        return hit
+
+    def _time_base(self, steps: int, speed: float) -> tuple[np.ndarray, ...]:
+        """t, the nominal input-shaft angle (fixed speed, unwrapped), its phase in [0, 2 pi) and the
+        tacho (the phase in [-pi, pi)) of *steps* steps at *speed*: read-only, memoised."""
+        (t,) = self._memoised(("t", self.fs, steps), lambda: (np.arange(steps + 1) / self.fs,))
+
+        def make():
+            shaft = 2 * np.pi * speed * t
+            phase = np.mod(shaft, 2 * np.pi)
+            return shaft, phase, np.where(phase >= np.pi, phase - 2 * np.pi, phase)
+
+        return (t, *self._memoised(("angle", self.fs, steps, speed), make))
+
+    def _index(self, n: int, period: int) -> np.ndarray:
+        """The table index of *n* steps on a table of *period* entries, one entry a step: read-only, memoised."""
+        return self._memoised(("index", n, period), lambda: (np.arange(n) % period,))[0]
+
+    @staticmethod
+    def _repeat(k: np.ndarray, index: np.ndarray, period: int) -> np.ndarray:
+        """k[index] for index = _index(n, period): the same floats, the table repeated (no gather)."""
+        return np.resize(k, len(index)) if len(k) == period else k[index]
 
     def _continued(self, after, faults, speed: float, load: float, channels, steps: int, effects) -> int:
         """The steps of *after* that a run of *steps* keeps (:meth:`run`): 0 unless it is a shorter run
@@ -495,14 +544,14 @@ class Simulator:
         nominal angle, whose input-shaft phase is *phase*: (table, table index per step or None, k(t))."""
         if table_gear(faults) != "pinion":
             turns = self.table_turns(1, faults)
-            shaft = 2 * np.pi * speed * (np.arange(steps + 1) / self.fs)  # the nominal input angle, unwrapped
+            shaft = self._time_base(steps, speed)[1]  # the nominal input angle, unwrapped
             return self._table_series(self.stiffness, faults, turns, shaft, per_rev)
         if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
             # A whole number of steps per revolution: the TVMS on exactly those angles, no
             # interpolation, so a fault on tooth n sees exactly the shifted TVMS of tooth 1.
             tvms = self.stiffness.mesh_stiffness(faults, points=round(per_rev))
-            index = np.arange(steps + 1) % round(per_rev)
-            return tvms, index, tvms.k[index]
+            index = self._index(steps + 1, round(per_rev))
+            return tvms, index, self._repeat(tvms.k, index, round(per_rev))
         points = self.pair.Z1 * math.ceil(TVMS_POINTS / self.pair.Z1)  # pitch-aligned grid
         tvms = self.stiffness.mesh_stiffness(faults, points=points)
         return tvms, None, np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
@@ -515,8 +564,8 @@ class Simulator:
             steps_per_turn = per_rev / turns
             if abs(steps_per_turn - round(steps_per_turn)) < 1e-9 * steps_per_turn:
                 table = model.mesh_stiffness(faults, points=round(steps_per_turn))
-                index = np.arange(len(shaft)) % round(steps_per_turn)
-                return table, index, table.k[index]
+                index = self._index(len(shaft), round(steps_per_turn))
+                return table, index, self._repeat(table.k, index, round(steps_per_turn))
         table = model.mesh_stiffness(faults, points=self._grid(model.pair, faults))
         k = np.interp(
             np.mod(turns * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi), np.append(table.k, table.k[0])
@@ -560,7 +609,10 @@ class Simulator:
         GB, g = self._forcing(forces) if forces else (np.zeros((n, 0)), np.zeros((steps, 0)))
         if self.meshes:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
-            shaft = 2 * np.pi * speed * t if angle is None else angle
+            if angle is not None:
+                shaft = angle
+            else:  # the run's own time base (from t = 0) is memoised
+                shaft = self._time_base(steps, speed)[1] if t[0] == 0 else 2 * np.pi * speed * t
             on = list(mesh_faults) + [()] * (len(self.meshes) - len(mesh_faults))
             k_all = np.column_stack(
                 [k]
