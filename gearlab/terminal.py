@@ -11,10 +11,11 @@ import re
 import time
 from collections.abc import Iterable
 
+from rich.cells import cell_len
 from rich.console import Console
 from rich.measure import Measurement
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, Task, TextColumn, TimeElapsedColumn
-from rich.table import Table
+from rich.table import Column, Table
 from rich.text import Text
 
 from .events import Pace, clock
@@ -40,14 +41,61 @@ class PaceColumn(ProgressColumn):
 
 
 class StageOnly(ProgressColumn):
-    """A column drawn for stages only: a unit's line shows its text alone."""
+    """A column drawn for stages only, never wrapped (a count, a time, an ETA)."""
 
     def __init__(self, column: ProgressColumn):
-        super().__init__()
+        super().__init__(table_column=Column(no_wrap=True))
         self.column = column
 
     def render(self, task: Task):
         return Text("") if task.fields.get("unit") else self.column.render(task)
+
+
+class LabelColumn(TextColumn):
+    """A stage's label, folded at its words within max_width cells (set by Bars as it draws)."""
+
+    def __init__(self):
+        super().__init__("{task.description}")
+        self.max_width: int | None = None
+
+    def get_table_column(self) -> Column:
+        return Column(overflow="fold", max_width=self.max_width)
+
+
+class Bars(Progress):
+    """The stages' bars in one table, each unit's line under it, cut to one line. A unit's line
+    in the bars' table set the width of their label column: at 80 columns quick.toml's 'rep0/k0/
+    source_only-unsup: source model, epoch 46 of 60, ...' left no room for any bar, count or ETA,
+    and at 120 the elapsed time read '0:00:…' and the ETA wrapped (issue 41). The counts, elapsed
+    time and ETA keep their width; the bar gives way first (40 down to 6 cells), then the labels,
+    which fold at their words."""
+
+    def get_renderables(self):
+        yield _Board(self)
+
+
+class _Board:
+    """What Bars draws, measured at the width it is drawn in."""
+
+    def __init__(self, progress: Bars):
+        self.progress = progress
+
+    def __rich_console__(self, console, options):
+        p = self.progress
+        label, bar, *tail = p.columns
+        stages = [t for t in p.tasks if t.visible and not t.fields.get("unit")]
+        if stages:
+            gaps = len(p.columns) - 1
+            right = sum(max(cell_len(column(t).plain) for t in stages) for column in tail)
+            labels = max(cell_len(str(t.description)) for t in stages)
+            bar.column.bar_width = min(40, max(6, options.max_width - labels - right - gaps - 1))
+            label.max_width = max(10, options.max_width - right - gaps - 1 - bar.column.bar_width)
+            yield p.make_tasks_table(stages)
+        for task in p.tasks:
+            if task.visible and task.fields.get("unit"):
+                line = Text(task.description) if isinstance(task.description, str) else task.description.copy()
+                line.no_wrap, line.overflow = True, "ellipsis"
+                yield line
 
 
 class ProgressView:
@@ -59,8 +107,8 @@ class ProgressView:
 
     def __init__(self, console: Console):
         self.console = console
-        self.progress = Progress(
-            TextColumn("{task.description}"),
+        self.progress = Bars(
+            LabelColumn(),
             StageOnly(BarColumn()),
             StageOnly(MofNCompleteColumn()),
             StageOnly(TimeElapsedColumn()),
