@@ -25,8 +25,8 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError
-from ..events import Event, UnitProgress, report_begins
-from ..learn.bounds import class_bound
+from ..events import Event, UnitProgress, report_begins, standing
+from ..learn.bounds import class_bound, class_bound_steps
 from ..learn.config import NetworkSettings
 from ..learn.noise_study import (
     VARIANTS,
@@ -274,11 +274,22 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None, on_event=lambda e: None) -> list:
     """The accuracy (%) on each run's test part of the Bayes classifier with the true shapes
     (gearlab.learn.bounds.class_bound): the most any network can reach on *data*. Needs the
-    dataset's noise-free twin (built, or found in the cache)."""
+    dataset's noise-free twin (built, or found in the cache). A stage of its own: the twin, torch,
+    then each class and block of rows (a Student-t set takes minutes; it was one log line: issue 41)."""
+    label = np.asarray(data.label, dtype=np.int64)
+    stage, steps = f"bound {spec.name}", 2 + class_bound_steps(label)
+
+    def step(done: int) -> None:
+        on_event(Event("advance", stage=stage, done=done, total=steps))
+
+    on_event(Event("stage", stage=stage, total=steps, message=f"Bayes bound of {spec.name}"))
     on_event(Event("log", message=f"the Bayes bound of {spec.name}: its noise-free twin and the class likelihoods"))
     clean, _ = load_or_build(spec.with_(noise=None), executor, on_event)
-    label = np.asarray(data.label, dtype=np.int64)
-    pred = class_bound(data.X, clean.X, label, noise_law(spec))
+    step(1)
+    with standing(on_event, stage, "loading torch for the class likelihoods"):
+        import torch  # noqa: F401 (class_bound would load it within its first step)
+    step(2)
+    pred = class_bound(data.X, clean.X, label, noise_law(spec), on_step=lambda done: step(2 + done))
     tests = [split(label, protocol, r).test for r in range(protocol.runs)]
     return [100.0 * float((pred[t] == label[t]).mean()) for t in tests]
 

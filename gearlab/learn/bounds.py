@@ -221,7 +221,14 @@ def detection_at(score: np.ndarray, y: np.ndarray, false_alarm: float) -> float:
     return float(100.0 * (score[y == 1] > threshold).mean())
 
 
-def class_bound(X: np.ndarray, clean: np.ndarray, label: np.ndarray, kind: str, chunk: int = 256) -> np.ndarray:
+def class_bound_steps(label: np.ndarray, chunk: int = 256) -> int:
+    """The steps class_bound says through its *on_step*: one per class and block of *chunk* rows."""
+    return len(np.unique(label)) * -(-len(label) // chunk)
+
+
+def class_bound(
+    X: np.ndarray, clean: np.ndarray, label: np.ndarray, kind: str, chunk: int = 256, on_step=lambda done: None
+) -> np.ndarray:
     """The predicted class of each row of *X* by the Bayes classifier that knows the true
     shapes: *clean* is the noise-free twin of *X* (row i the same revolution without noise),
     *label* the classes. The chapter-4 model (thesis 4.1.1, eq. 4.3-4.5): a row is
@@ -233,7 +240,8 @@ def class_bound(X: np.ndarray, clean: np.ndarray, label: np.ndarray, kind: str, 
     It knows every shape and the noise law, so its accuracy is a bound, not a method's.
     Student-t has no distance form and is summed elementwise: a chapter-4 dataset takes
     minutes (Gaussian and Laplace seconds).
-    Rows are taken *chunk* at a time, so memory stays near the two arrays given."""
+    Rows are taken *chunk* at a time, so memory stays near the two arrays given; *on_step(done)*
+    after each class and block of rows (class_bound_steps in all)."""
     if kind not in NOISE_LAWS:
         raise GearlabInputError(f"unknown noise kind '{kind}'; known: {', '.join(NOISE_LAWS)}")
     import torch  # start-up time, as above
@@ -268,6 +276,7 @@ def class_bound(X: np.ndarray, clean: np.ndarray, label: np.ndarray, kind: str, 
             else:  # Student-t: no distance form
                 ll = _elementwise(x, S, scale, kind)
             log_post[r, j] = torch.logsumexp(ll - norm, dim=1) - math.log(len(S))
+            on_step(j * len(rows) + r.start // chunk + 1)
         log_post[:, j] += math.log((label == c).mean())
     return classes[log_post.argmax(dim=1).numpy()]
 
