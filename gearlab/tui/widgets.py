@@ -4,6 +4,7 @@ The Progress tab's stage bars are in gearlab.tui.progress."""
 from __future__ import annotations
 
 import math
+import re
 import textwrap
 
 import plotext
@@ -60,6 +61,14 @@ def markdown_tables(text: str) -> list[list[list[str]]]:
     return tables
 
 
+def cell(text: str) -> Text:
+    """A table cell as data (never markup), Markdown's **bold** (the gap benchmark's 'all' row) in bold."""
+    shown = Text()
+    for i, part in enumerate(re.split(r"\*\*(.+?)\*\*", text)):
+        shown.append(part, style="bold" if i % 2 else "")
+    return shown
+
+
 class ResultTable(DataTable):
     """A kind's results tables (markdown), redrawn whole as records arrive: the first table's
     header heads the columns, a later table's header is a bold row."""
@@ -94,7 +103,7 @@ class ResultTable(DataTable):
                 self.add_row(*([""] * width))
                 self.add_row(*(Text(c, style="bold") for c in table[0] + [""] * (width - len(table[0]))))
             for row in table[1:]:  # cells are data, not markup
-                self.add_row(*(Text(c) for c in row + [""] * (width - len(row))))
+                self.add_row(*(cell(c) for c in row + [""] * (width - len(row))))
 
 
 class ChartView(Static):
