@@ -245,12 +245,10 @@ def transfer_figures(run_path: Target, records: list[dict], table: dict, ks) -> 
             ax.set_xlabel("epoch")
             ax.set_ylabel("accuracy (%)")
             ax2.set_ylabel("discrepancy, λ (1)")
-            # one legend for both axes, outside the plot: inside it hid the curves
-            lines = ax.get_legend_handles_labels()
-            lines2 = ax2.get_legend_handles_labels()
-            ax.legend(
-                lines[0] + lines2[0], lines[1] + lines2[1], fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0)
-            )
+        # one legend for every plot and both axes, under them: inside a plot it hid the curves, beside
+        # one (at 1.08 of its width) it lay over the right axis's label and tick labels
+        (h1, l1), (h2, l2) = ax.get_legend_handles_labels(), ax2.get_legend_handles_labels()
+        fig.legend(h1 + h2, l1 + l2, loc="outside lower center", ncols=3, fontsize=8)
         save(fig, figures / "training_curves.png")
 
     # confusion matrices at the smallest k, summed over repetitions (Figure 5.8)
