@@ -56,11 +56,8 @@ def unit_name(
 def train_unit(task: tuple) -> dict:
     """One method at one condition (one seed of it), in this process or a worker: trained on the
     source and the history's training revolutions, then its scores of the history units (for the
-    threshold) and, only now, of the test units."""
-    import torch
-
-    from ..learn.training import pick_device  # here, not at the top: start-up time
-
+    threshold) and, only now, of the test units. It says what it does from its start: torch takes
+    seconds to load in a fresh worker (issue 41)."""
     (
         protocol,
         method,
@@ -77,16 +74,22 @@ def train_unit(task: tuple) -> dict:
         whiten,
     ) = task
     started = time.perf_counter()
-    torch.set_num_threads(1)
-    device = pick_device(protocol.device)
     unit = unit_name(condition, method, seed, variant, fold)
-    point = aligned_to_a_point(protocol, method, Xs, ys)
-    # Against a single point the domain discrepancy falls by a few per cent every 25 epochs for as
-    # long as the training lasts: the stopping rule's "it has
-    # stopped moving" never holds, and no epoch after the ramp is nearer convergence than the
-    # ramp's end. Such a training ends there, at the first epoch its kept model may come from.
-    trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
     with UnitProgress(states.root, unit) as progress:
+        progress("starting: importing torch")
+        import torch
+
+        from ..learn.training import pick_device  # here, not at the top: start-up time
+
+        torch.set_num_threads(1)
+        device = pick_device(protocol.device)
+        point = aligned_to_a_point(protocol, method, Xs, ys)
+        # Against a single point the domain discrepancy falls by a few per cent every 25 epochs for as
+        # long as the training lasts: the stopping rule's "it has
+        # stopped moving" never holds, and no epoch after the ramp is nearer convergence than the
+        # ramp's end. Such a training ends there, at the first epoch its kept model may come from.
+        trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
+        progress("starting: training")
 
         def report(epoch: int, history, what: str = "") -> None:
             progress(what or f"epoch {epoch + 1}")  # what: a shared state's training (the priming)

@@ -296,19 +296,24 @@ def bayes_bound(data, spec: DatasetSpec, protocol: NoiseProtocol, executor=None,
 
 def train_unit(task: tuple) -> dict:
     """One training run, in this process or a worker, on one torch thread (as the transfer
-    kind's units: a result does not depend on how many run side by side)."""
-    import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
-
+    kind's units: a result does not depend on how many run side by side). It says what it does
+    from its start: torch and the dataset take seconds in a fresh worker (issue 41)."""
     protocol, dataset_spec_, path, twin, twin_path, noise, r, variant, run_path = task
-    torch.set_num_threads(1)
     unit = unit_name(noise, r, variant)
     with UnitProgress(run_path, unit) as progress:
+        progress("starting: importing torch")
+        import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+
+        torch.set_num_threads(1)
 
         def report(epoch: int, history) -> None:
             progress(f"epoch {epoch + 1}, validation accuracy {100 * history.val_acc[-1]:.1f} %")
 
+        progress("starting: reading the dataset")
+        data = cache.load(dataset_spec_, path)
         clean = cache.load(twin, twin_path) if twin is not None else None
-        result = run_unit(protocol, cache.load(dataset_spec_, path), r, on_epoch=report, twin=clean)
+        progress("starting: training")
+        result = run_unit(protocol, data, r, on_epoch=report, twin=clean)
     return {"unit": unit, "noise": noise, "variant": variant, **result}
 
 
