@@ -11,6 +11,16 @@ def _pct(x: float) -> str:
     return f"{100 * x:.1f} %"
 
 
+def _at_chance(summary: Mapping, when: str) -> str:
+    """Why a p under alpha is not a significant gap: the classifier's AUC, the other half of the
+    test (gearlab.gap.conclusion.gap_seen), lies within chance."""
+    p, auc = summary.get(f"p_{when}"), summary.get(f"auc_{when}")
+    alpha = (summary.get("settings") or {}).get("alpha", 0.05)
+    if p is None or auc is None or summary.get(f"significant_{when}") or p >= alpha:
+        return ""
+    return f"; the classifier's AUC {auc:.2f} is within chance"
+
+
 def gap_lines(summary: Mapping) -> list[str]:
     views = summary.get("views") or {}
     before, after = summary.get("gap_before"), summary.get("gap_after")
@@ -33,7 +43,7 @@ def gap_lines(summary: Mapping) -> list[str]:
     after_text = (
         f"gap {before:.4g} -> {after:.4g}, {_pct(shrink)} removed; "
         f"{'still significant' if summary.get('significant_after') else 'no longer significant'} "
-        f"(p = {summary.get('p_after', float('nan')):.3g})"
+        f"(p = {summary.get('p_after', float('nan')):.3g}{_at_chance(summary, 'after')})"
     )
     if effects:
         named = ", ".join(
