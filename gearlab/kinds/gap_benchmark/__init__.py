@@ -243,6 +243,14 @@ def _pct(v) -> str:
     return "" if v is None else f"{100 * v:.0f} %"
 
 
+def _null_trials(summary: dict) -> str:
+    """'75 % (by format: csv 100 %, wav 50 %)', or 'none run' (it read ' (by format: )': issue 41)."""
+    if summary.get("null_correct") is None:
+        return "none run"
+    formats = ", ".join(f"{k} {_pct(v)}" for k, v in (summary.get("null_correct_by_format") or {}).items())
+    return _pct(summary["null_correct"]) + (f" (by format: {formats})" if formats else "")
+
+
 def _num(v, fmt=".2f") -> str:
     return "" if v is None else format(v, fmt)
 
@@ -287,9 +295,7 @@ def table_md(summary: dict) -> str:
     )
     lines += [
         "",
-        f"null trials with no significant gap: {_pct(summary['null_correct'])} (by format: "
-        + ", ".join(f"{k} {_pct(v)}" for k, v in (summary.get("null_correct_by_format") or {}).items())
-        + "); "
+        f"null trials with no significant gap: {_null_trials(summary)}; "
         f"right effect first and explained (or partly, with >= 50 % of the gap): "
         f"{_pct(summary.get('explained_or_partly_when_identified'))}",
         "",
