@@ -42,7 +42,18 @@ from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
 from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
-from .gearbox.speed import THRESHOLD_DB, find_lines, follow_speed, nominal_line
+from .gearbox.speed import (
+    NOMINAL_RANGE,
+    SPEED_AGREE,
+    TEETH_AGREE,
+    THRESHOLD_DB,
+    Lines,
+    find_lines,
+    follow_speed,
+    mesh_angle,
+    nominal_line,
+    sideband_teeth,
+)
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
 
@@ -124,6 +135,7 @@ class Speed:
     per_revolution_hz: np.ndarray  # speed of each complete revolution (or of each revolution-long stretch)
     declared_hz: float | None = None
     notes: list[str] = field(default_factory=list)
+    settled: bool = False  # a declared speed the mesh lines do not confirm, replaced by the sidebands' speed
 
     def describe(self) -> dict:
         s = self.per_revolution_hz
@@ -258,14 +270,107 @@ def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | N
     return out
 
 
-def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> dict:
-    """Everything `gearlab inspect` shows, as plain numbers (the TSA curves as arrays)."""
-    rec = read_record(path, options)
-    speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+@dataclass
+class Reading:
+    """The record read at uniform input angle at one speed: its order spectrum and the lines in it."""
+
+    fine: tuple  # (signal, input angle) upsampled
+    orders: np.ndarray
+    amp: np.ndarray
+    revolutions: int
+    points: int
+    top: float  # the highest order read (90 % of the Nyquist order)
+    lines: Lines
+
+
+def read_orders(rec: Recording, speed: Speed, threshold_db: float) -> Reading:
     fine = upsampled(rec, speed)
     orders, amp, revolutions, points = order_spectrum(rec, speed, fine)
     top = min(points / 2, rec.fs / (2 * speed.mean_hz)) * 0.9
-    lines = find_lines(orders, amp, options.threshold_db, 1.5 / revolutions, top)
+    lines = find_lines(orders, amp, threshold_db, 1.5 / revolutions, top)
+    return Reading(fine, orders, amp, revolutions, points, top, lines)
+
+
+def unconfirmed(rec: Recording, box: Gearbox | None, speed: Speed) -> bool:
+    """Whether *speed* is a declared one the mesh lines of a record without a tacho do not confirm."""
+    return box is not None and rec.tacho is None and speed.source == "declared" and bool(speed.notes)
+
+
+def settle_speed(
+    rec: Recording, box: Gearbox | None, options: InspectOptions, speed: Speed | None = None
+) -> tuple[Speed, Reading, str | None]:
+    """(the speed inspect reads every order at, the record read at it, None; or, where no speed can be
+    confirmed, the declared one, the record read at it and one line saying so). Without a tacho a declared
+    speed the mesh lines do not confirm (gearbox.speed's note) is replaced by the speed the input pinion's
+    sidebands show: their spacing is the input shaft's frequency whatever the speed read at, so the carrier
+    over that spacing is the pinion's count z (gearbox.speed.sideband_teeth, within TEETH_AGREE of a whole
+    number) and the speed is the mesh line's frequency / z, followed on the mesh's phase (a 33-tooth
+    pinion at 1455 rpm, described 34 at 1500 rpm, was read at 1500 rpm in every row: 'mesh order 32
+    measured, a 32-tooth pinion'). With no such sideband, any count fits at some speed within the nominal
+    range, the declared one too (a 20-tooth pinion at a declared 25 Hz, described 25): the rows are read
+    at the declared speed, said not confirmed, and the line names the counts and speeds the mesh line allows.
+    *speed*: the tacho's or the speed search's, where already found."""
+    if speed is None:
+        speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+    reading = read_orders(rec, speed, options.threshold_db)
+    if not unconfirmed(rec, box, speed):
+        return speed, reading, None
+    first = check_description(reading.lines, box, reading.revolutions, False)["stages"][0]
+    if "measured_order" not in first:
+        return speed, reading, _no_speed_line(None, speed.mean_hz)
+    f0, lines, stage = speed.mean_hz, reading.lines, order_table(box).stages[0]
+    mesh_hz = first["measured_order"] * f0
+    # the sidebands where the speed search looks for them (its note's 'its sidebands show'): within
+    # ±SIDEBAND_WINDOW of the pinion shaft's line at the speed that makes the line the described pinion's
+    # mesh (a wheel's 2nd sideband, 0.77 orders off a 17-tooth mesh, is no input shaft's)
+    in_hz = Lines(lines.at * f0, lines.amp, lines.db)  # read at a constant speed: order x speed is Hz
+    z = sideband_teeth(in_hz, mesh_hz / stage.pinion_teeth, stage, f0 / reading.revolutions)
+    if z is None or abs(z - round(z)) > TEETH_AGREE or round(z) < 1:
+        return speed, reading, _no_speed_line(mesh_hz, f0)
+    count, described = round(z), box.stages[0].pinion.z
+    f = mesh_hz / count
+    # the stage-1 mesh's phase, followed as the described pinion's at the speed that puts it on the line
+    theta = mesh_angle(rec.signal, rec.fs, box, mesh_hz / described)
+    if theta is not None:
+        theta = theta * described / count
+        mean = (theta[-1] - theta[0]) * rec.fs / (TWO_PI * (theta.size - 1))
+        theta = theta if abs(mean / f - 1) <= SPEED_AGREE else None
+    if theta is None:
+        theta, per_rev = TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
+    else:
+        f, per_rev = mean, rec.fs / np.diff(revolution_starts(theta - theta[0]))
+    how = (
+        f"from the input pinion's sidebands (a {count}-tooth pinion meshing at {fmt_hz(mesh_hz)}), the declared "
+        f"{fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
+    )
+    settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=True)
+    return settled, read_orders(rec, settled, options.threshold_db), None
+
+
+def _no_speed_line(mesh_hz: float | None, declared: float) -> str:
+    """No speed confirmed, in the words the verdict's speed line takes after the speed search's note: the
+    pinion counts and speeds (within the nominal range of the *declared* one) the mesh line allows."""
+    words, tells = "no sideband of the input shaft confirms a speed", "a tacho or the measured speed, --speed, tells"
+    mesh = mesh_hz or 0.0
+    low, high = mesh / (declared * (1 + NOMINAL_RANGE)), mesh / (declared * (1 - NOMINAL_RANGE))
+    counts = [z for z in range(math.ceil(low), int(high) + 1) if z >= 1]
+    if not counts:
+        return f"{words} ({tells})"
+    said = [f"a {z}-tooth pinion's at {fmt_hz(mesh_hz / z)}" for z in counts]
+    if len(said) <= 4:
+        allowed = said[0] if len(said) == 1 else ", ".join(said[:-1]) + " or " + said[-1]
+    else:
+        allowed = f"any pinion's from {counts[0]} teeth at {fmt_hz(mesh_hz / counts[0])} to {counts[-1]} at "
+        allowed += fmt_hz(mesh_hz / counts[-1])
+    return f"{words}: the mesh at {fmt_hz(mesh_hz)} is {allowed} ({tells} which)"
+
+
+def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> dict:
+    """Everything `gearlab inspect` shows, as plain numbers (the TSA curves as arrays)."""
+    rec = read_record(path, options)
+    speed, reading, no_speed = settle_speed(rec, box, options)
+    fine, orders, amp, top = reading.fine, reading.orders, reading.amp, reading.top
+    revolutions, lines = reading.revolutions, reading.lines
     report = {
         "file": rec.path,
         "format": rec.format,
@@ -304,7 +409,13 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         report["gearbox"] = box.name
         report["order_table"] = order_table(box).describe(speed.mean_hz)
         report["gears"] = gears(box)
-        report["check"] = check = check_description(lines, box, revolutions, on_input)
+        # the speed every row below is read at, and where it came from (a declared one the lines do not
+        # confirm: said so, with the counts and speeds the mesh line allows, *no_speed*)
+        at = {"speed_hz": speed.mean_hz, "speed_source": speed.source}
+        if no_speed:
+            at.update(speed_source=f"declared, not confirmed: {no_speed}", speed_confirmed=False)
+        read_on = None if rec.tacho is None else box.shaft_index(tacho_shaft, "--tacho-shaft")
+        report["check"] = check = at | check_description(lines, box, revolutions, on_input, read_on)
         differences = check["differences"]
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         if elsewhere:
@@ -315,17 +426,16 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
-        if rec.tacho is None and speed.source == "declared":
+        if differences and (speed.settled or no_speed):  # the speed the rows after the speed's line read at
+            said = "the speed the input pinion's sidebands show" if speed.settled else "declared, not confirmed"
+            differences[0] = f"at {fmt_hz(speed.mean_hz)} ({said}): {differences[0]}"
+        if rec.tacho is None and (speed.source == "declared" or speed.settled):
             # a declared speed the mesh lines do not confirm (gearbox.speed's note: no mesh line within
             # ±1 %, or another speed fits them better): read at it, a weak line can pass as the described
             # mesh (a 29/102 record described with 27 teeth at 19.81 Hz 'matched'), and what else is read
             # there comes after it (a 19/58 + 25/67 fan described with 18 teeth was told 'stage 2: no
             # line at mesh order 7.759', the first stage's smeared mesh unsaid)
-            differences[:0] = [
-                f"speed {fmt_hz(speed.declared_hz)} declared, but {n}"
-                + ("" if "differs" in n else ": the speed or a tooth count differs")
-                for n in speed.notes
-            ]
+            differences[:0] = [_speed_line(speed.declared_hz, n, no_speed) for n in speed.notes]
         found = speed.mean_hz if rec.tacho is None and speed.declared_hz is None else None
         check["unchecked"] = unchecked(check, box, found)
         # no speed: the pinion's tooth count is not confirmed, 'matches' neither true nor false (None)
@@ -343,6 +453,17 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             + (f"; not checked: {'; '.join(rest)}" if rest else "")
         )
     return report
+
+
+SPEED_OR_TEETH = ": the speed or a tooth count differs"
+
+
+def _speed_line(declared: float, note: str, no_speed: str | None) -> str:
+    """The verdict's line for a declared speed the mesh lines do not confirm (*note*: the speed search's),
+    with *no_speed* (no sideband confirms a speed: _no_speed_line) before its end."""
+    body = note[: -len(SPEED_OR_TEETH)] if note.endswith(SPEED_OR_TEETH) else note
+    end = "" if "differs" in body else SPEED_OR_TEETH
+    return f"speed {fmt_hz(declared)} declared, but {body}" + (f"; {no_speed}" if no_speed else "") + end
 
 
 def _tacho_elsewhere(lines, box: Gearbox, read: str, speed: Speed, revolutions: int) -> str | None:
@@ -486,6 +607,9 @@ def render(report: dict, console, width: int = 100) -> None:
     orders, amp = report["spectrum"]
     top = report["max_order"]
     marks = []
+    check = report.get("check", {})
+    at = f" at {fmt_hz(check['speed_hz'])}" if check.get("speed_hz") else ""
+    at += " (declared, not confirmed)" if check.get("speed_confirmed") is False else ""
     if "check" in report:
         marks = [s["expected_order"] for s in report["check"]["stages"]]
         # to the third mesh harmonic, or further where the strongest lines are (harmonics 4-10 of a mesh)
@@ -500,7 +624,7 @@ def render(report: dict, console, width: int = 100) -> None:
     plotext.plot(x.tolist(), y.tolist(), marker="braille")
     for m in marks:
         plotext.vline(m, "red")
-    plotext.title("order spectrum (dB); red: the description's mesh orders")
+    plotext.title(f"order spectrum (dB){at}; red: the description's mesh orders")
     plotext.xlabel("input-shaft order")
     console.print(Text.from_ansi(plotext.build()))
 
@@ -510,9 +634,10 @@ def render(report: dict, console, width: int = 100) -> None:
         console.print(escape(f'gears, as a scenario\'s faults key names them (e.g. "chip@{first}"): {named}'))
     if "order_table" in report:
         console.print(escape(_hunting_words(report["order_table"])))
-    if "check" in report:
-        check = report["check"]
-        t = Table(title=f"gearbox {report['gearbox']!r}: mesh orders")
+    if check.get("speed_confirmed") is False:
+        console.print(f"[yellow]speed {escape(check['speed_source'])}[/yellow]")
+    if check:
+        t = Table(title=f"gearbox {report['gearbox']!r}: mesh orders{at}")
         for col in ("stage", "z1/z2", "expected", "measured", "error", "dB over floor", "z seen", "status"):
             t.add_column(col)
         for s in check["stages"]:
@@ -528,7 +653,7 @@ def render(report: dict, console, width: int = 100) -> None:
                 "[green]ok[/green]" if s["matched"] else "[red]differs[/red]",
             )
         console.print(t)
-        t = Table(title="shaft orders")
+        t = Table(title=f"shaft orders{at}")
         for col in ("shaft", "expected", "measured", "from", "status"):
             t.add_column(col)
         for s in check["shafts"]:
@@ -544,7 +669,7 @@ def render(report: dict, console, width: int = 100) -> None:
                     for u in check["unexplained"]
                 )
             )
-    t = Table(title="time-synchronous average per shaft")
+    t = Table(title=f"time-synchronous average per shaft{at}")
     for col in ("shaft", "revolutions", "TSA rms", "share of signal rms", "strongest orders"):
         t.add_column(col)
     for s in report["tsa"]:
@@ -575,6 +700,8 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
 
     rec = read_record(path, options)
     speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+    if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
+        speed = settle_speed(rec, box, options, speed)[0]
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
         revs = resample_revolutions(rec.signal, speed.angle, points=POINTS)
     first = math.ceil(speed.angle[0] / TWO_PI) % order_table(box).train_period
