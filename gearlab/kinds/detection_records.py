@@ -461,16 +461,34 @@ def synchronous_input(seen, later: tuple):
     return lambda X: seen(without_asynchronous(X, later))
 
 
+# The source's speed, as a condition's history measured it, is kept to this step (Hz): one dataset (one
+# cache key) for equal takes, and what the simulation holds in Hz (a mesh line, a resonance, a sensor's band)
+# within a small part of a bin of the record's: 0.0005 Hz off at most, 0.016 Hz at a 33-tooth mesh, a tenth
+# of a 6.6 s record's bin, 2e-5 of any order (to 1 Hz, a 1455 rpm motor's 24.25 Hz history was simulated at
+# 24 Hz: its mesh line 55 bins off; to 0.01 Hz up to 1.1). A tacho's history keeps 1 Hz (SOURCE_STEP_TACHO):
+# its conditions' datasets and figures (PHM 2009) as they were.
+SOURCE_STEP, SOURCE_STEP_TACHO = 0.001, 1.0
+
+
+def source_speed(cond: dict) -> float:
+    """The speed a condition's source is simulated at: the median of its history records' speeds, to
+    SOURCE_STEP (to SOURCE_STEP_TACHO where a tacho measured them)."""
+    step = SOURCE_STEP_TACHO if cond.get("tacho", True) else SOURCE_STEP
+    median = float(np.median([cond["speeds"][f.path] for f, _ in cond["history"]]))
+    return float(round(round(median / step) * step, 6))
+
+
 def source_for(source: DatasetSpec, cond: dict, how: str, shaft: UnitShaft | None = None) -> DatasetSpec:
-    """The source simulated at the condition's speed (the median of its history records' speeds,
-    to 1 Hz), or as given; with a *shaft*, its rows that shaft's revolutions (DatasetSpec.unit_shaft)."""
+    """The source simulated at the condition's speed (source_speed: the median of its history records'
+    speeds, to 0.001 Hz; to 1 Hz from a tacho), or as given; with a *shaft*, its rows that shaft's
+    revolutions (DatasetSpec.unit_shaft)."""
     if shaft is not None:
         on = f" ({shaft.name} shaft)"
         ratio = (shaft.ratio.numerator, shaft.ratio.denominator)
         source = source.with_(unit_shaft=ratio, name=source.name + on, domain=source.name + on)
     if how == "source":
         return source
-    speed = float(round(np.median([cond["speeds"][f.path] for f, _ in cond["history"]])))
+    speed = source_speed(cond)
     return source.with_(speed_hz=speed, name=f"{source.name}@{speed:g}Hz", domain=f"{source.name}@{speed:g}Hz")
 
 

@@ -174,7 +174,7 @@ class Detection:
         "records",
         choices=SOURCE_SPEEDS,
         doc="'records': the source simulated at each condition's history speed "
-        "(to 1 Hz); 'source': at the [source]'s own speed",
+        "(to 0.001 Hz; to 1 Hz from a tacho); 'source': at the [source]'s own speed",
     )
 
 
