@@ -658,7 +658,7 @@ def runs(
     if not found:
         console.print(f"no runs under {directory}", markup=False, highlight=False)
         return
-    print_table(console, runs_table(found))
+    print_table(console, runs_table(found, console))
 
 
 @app.command()

@@ -218,7 +218,8 @@ def run_status(run, meta: dict) -> str:
 
 def headline(run, kind: str) -> str:
     """The run's headline figure: what its kind says (an optional `headline(run)` of the
-    kind contract), else the first sentence of its verdict, else the first summary line."""
+    kind contract), else the first sentence of its verdict that is not an introduction (ending in
+    ':'), else the first summary line."""
     from .kinds import SCENARIO_KINDS
 
     module = SCENARIO_KINDS.get(kind)
@@ -234,8 +235,9 @@ def headline(run, kind: str) -> str:
             lines = [line for line in module.summary_lines(run) if not line.lstrip().startswith("|")]
     except Exception:  # noqa: BLE001 - a damaged or older summary: the listing goes on
         lines = []
-    text = next((line for line in lines if line), "")
-    text = " ".join(text.split())
+    # an introduction to the lines that follow (a detection verdict's 'At record10 (...):') is no finding
+    text = next((line for line in lines if line and not line.rstrip().endswith(":")), "")
+    text = " ".join((text or next((line for line in lines if line), "")).split())
     return text if len(text) <= 90 else text[:89] + "…"
 
 
