@@ -414,7 +414,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         at = {"speed_hz": speed.mean_hz, "speed_source": speed.source}
         if no_speed:
             at.update(speed_source=f"declared, not confirmed: {no_speed}", speed_confirmed=False)
-        report["check"] = check = at | check_description(lines, box, revolutions, on_input)
+        read_on = None if rec.tacho is None else box.shaft_index(tacho_shaft, "--tacho-shaft")
+        report["check"] = check = at | check_description(lines, box, revolutions, on_input, read_on)
         differences = check["differences"]
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         if elsewhere:

@@ -109,7 +109,7 @@ def test_gap_history_records_without_a_tacho(tmp_path, keys):
     (tmp_path / "box.toml").write_text(BOX)
     entry = {**asdict(TargetEntry()), "vibration": "acc_ms2", "files": _records(tmp_path, "acc_ms2"), **keys}
     records = target_of(entry, "s.toml: [target]", tmp_path)
-    X, speed, notes, fs, from_mesh = read_history(records, lambda e: None)
+    X, speed, notes, fs, from_mesh, _ = read_history(records, lambda e: None)
     # 29 + 28 revolutions: the second record, shifted into register as one signal, gives up its last
     assert speed == pytest.approx(16.0, rel=1e-3) and fs == FS and X.shape == (57, 4096)
     mesh = "speed followed on the mesh phase (from the mesh lines (512 Hz as 1×M1); box32), mean 16 Hz"

@@ -114,7 +114,7 @@ def mesh_check(
     orders, amp = spectrum(np.asarray(target, dtype=np.float64).reshape(-1), points)
     top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
     lines = find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
-    check = check_description(lines, _PairDescription.of(z1, z2), n, on_input)
+    check = check_description(lines, _PairDescription.of(z1, z2), n, on_input, None if tacho is None else tacho[1])
     # ranked by the spectrum at the line's bin: the parabola's height overshoots where a noise-free
     # record's neighbouring bins are rounding (a line at order 1808 ranked above the mesh harmonics)
     x = lines.at[lines.at >= MIN_TEETH - 0.5]
@@ -406,7 +406,10 @@ def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
     seen, spread = mesh["inspect"].get(f"{key}_seen"), mesh["inspect"].get(f"{key}_resolution") or 0.0
     # read around the described mesh only: a later stage's (the PHM 2009 rig's 48T idler pinion meshing
     # at order 16, read as stage 1's 32/96 by a one-stage reading) gave '47.7 teeth' for the 96T wheel
-    if seen is None or not mesh["inspect"].get("matched") or abs(seen - z2) <= max(0.5, spread):
+    # ... or around the mesh found a wheel sideband or two off it, the pinion as described (an output
+    # tacho read through a first wheel one tooth off: the mesh at M + M / z2)
+    near = mesh["inspect"].get("matched") or mesh["inspect"].get("pinion_as_described")
+    if seen is None or not near or abs(seen - z2) <= max(0.5, spread):
         return None
     return (
         f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh), {z2} expected: the "
@@ -541,6 +544,13 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
     if mesh["differs"]:
         return mesh_line(mesh, pair.Z1)
+    # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
+    # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
+    takes = chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
+    if takes:
+        k = int(np.argmax(takes))
+        target = target[sum(takes[:k]) : sum(takes[: k + 1])]
+        mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
     # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described
     # with an 85-tooth wheel: inspect said '86.0 ± 0.2 teeth', the gap fitted effects, 'unexplained')
     line = (None if on_input else wheel_line(mesh, pair.Z1, "pinion")) or wheel_line(mesh, pair.Z2)

@@ -186,8 +186,13 @@ def families(
     return found
 
 
-def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool) -> dict:
-    """Every stage's mesh order and every shaft's order tested against the lines (module doc).
+def check_description(
+    lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool, tacho_shaft: int | None = None
+) -> dict:
+    """Every stage's mesh order and every shaft's order tested against the lines (module doc). A tacho
+    on another shaft (*tacho_shaft*, its index) gives that shaft's order: the revolutions are its turns
+    over the described ratio (a 23/61 fan's output tacho: its sidebands read 0.3812, 'the wheel shows
+    60.3 ± 0.2 teeth, 61 described' of the right description).
 
     Stages are taken input first: a shaft's order measured at one stage (the wheel's sidebands)
     is the pinion shaft's order of the next, so a wrong tooth count upstream is not blamed on a
@@ -212,6 +217,8 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
     measured_shaft: dict[int, tuple[float, float, str]] = {}  # shaft -> (order, tolerance, source)
     if tacho_on_input:
         measured_shaft[0] = (1.0, 0.0, "tacho")
+    elif tacho_shaft is not None and 0 < tacho_shaft < len(table.shafts):
+        measured_shaft[tacho_shaft] = (float(table.shaft_orders[tacho_shaft]), 0.0, "tacho")
     stages, differences, shaft_notes, named_shafts = [], [], {}, set()
     implied: dict[int, float] = {}  # shaft -> its order as the measured mesh before it and the wheel make it
     wrong: list[int] = []  # the stages whose own tooth counts differ
@@ -233,8 +240,12 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
         family = mesh_family(lines, o_p, bin_, span, theirs, expected)
         i = None
         if lines.near(expected, tol_mesh(expected, bin_)) is not None:
-            # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)?
-            found = harmonic_comb(lines, [expected] + [expected + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
+            # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)? o: the
+            # pinion's shaft, or the wheel's (a tacho on the output read through a first wheel one tooth
+            # off puts the mesh at M + M / z2, its wheel sideband on M: a 38/89 + 49/95 mixer 'matched')
+            o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
+            offsets = [j * o for o in (o_p, o_w) for j in (-3, -2, -1, 1, 2, 3)]
+            found = harmonic_comb(lines, [expected] + [expected + d for d in offsets], bin_, theirs)
             if found is not None:
                 i, measured = found
         if family is not None and (i is None or abs(measured - expected) <= tol_mesh(expected, bin_)):
@@ -268,6 +279,15 @@ def check_description(lines: Lines, box: Gearbox, revolutions: int, tacho_on_inp
                 f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected, as follows from "
                 f"{_following(wrong)} (the {s.pinion_teeth}-tooth pinion as described, on the "
                 f"{s.pinion_shaft} shaft at order {o_ref:.4g})"
+            )
+        elif not matched and round(measured / o_ref) == s.pinion_teeth:
+            # the pinion as described on a shaft the speed read makes slower or faster than it turns
+            entry["pinion_as_described"] = True
+            differences.append(
+                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected: the "
+                f"{s.pinion_teeth}-tooth pinion as described, its {s.pinion_shaft} shaft turning "
+                f"{100 * (measured / expected - 1):+.1f} % off the speed read (a tooth count between it and the "
+                "tacho's shaft, or the tacho, differs)"
             )
         elif not matched:
             differences.append(

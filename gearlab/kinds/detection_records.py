@@ -555,6 +555,7 @@ def check_structure(source: DatasetSpec, target: Target, conditions: dict, where
             speed_from_mesh=from_mesh and all(f.speed_hz is None for f, _ in cond["history"]),
             described_speed=described,
             tacho_shaft=target.read_as,
+            takes=tuple(len(r) for r in rows),
         )
         line = structure_line(np.concatenate(rows).astype(np.float64), pair, cond["max_order"], chain, None, {})
         if line:

@@ -356,7 +356,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         records = isinstance(spec.target, Records)
         settings = spec.settings
         if records:  # measured records: the history's revolutions; the source runs at their speed
-            target_X, speed, record_notes, fs, from_mesh = read_history(spec.target, on_event)
+            target_X, speed, record_notes, fs, from_mesh, ts = read_history(spec.target, on_event)  # ts: per record
             check_points(
                 fs / speed,
                 z1,
@@ -375,7 +375,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             from ..data.builder import operating_point
 
             described, shaft = operating_point(spec.source)[0], spec.target.target.read_as
-            chain = Chain(fs=fs, speed=speed, speed_from_mesh=from_mesh, described_speed=described, tacho_shaft=shaft)
+            chain = Chain(fs, speed, speed_from_mesh=from_mesh, described_speed=described, tacho_shaft=shaft, takes=ts)
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))

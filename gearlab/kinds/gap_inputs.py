@@ -51,10 +51,11 @@ class Records:
         return tuple(f for f in self.target.files if f.role == "history")
 
 
-def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float, bool]:
+def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float, bool, tuple[int, ...]]:
     """The history records' revolutions in m/s² (n, POINTS), their mean speed, notes, their sampling
-    rate (the [target]'s fs, or the first record's own), and whether the speed was found from the
-    description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh).
+    rate (the [target]'s fs, or the first record's own), whether the speed was found from the
+    description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh),
+    and each record's count of revolutions (Chain.takes).
     Records of different speeds are different operating conditions: refused. Every record is turned
     into register with the first (detection_records.aligned, as the detection kind does): with a tacho
     by m/N of a turn (one of its N marks, or on another shaft the N input angles they may find:
@@ -105,7 +106,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         "the source simulates that speed"
     )
     from_mesh = t.tacho is None and bool(t.gearbox) and t.speed_hz is None and all(f.speed_hz is None for f in files)
-    return X, speed, notes, t.fs or rec.fs, from_mesh
+    return X, speed, notes, t.fs or rec.fs, from_mesh, tuple(len(r) for r in rows)
 
 
 def units_warning(channel, X: np.ndarray) -> str:
