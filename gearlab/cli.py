@@ -206,8 +206,8 @@ def inspect(
     vibration: Annotated[str | None, typer.Option(help="vibration channel (default: the only one)")] = None,
     tacho: Annotated[str | None, typer.Option(help="tacho channel: pulses or the shaft angle in rad")] = None,
     tacho_kind: Annotated[str, typer.Option(help="auto, angle or pulses")] = "auto",
-    pulses_per_rev: Annotated[int | None, typer.Option(help="pulses per turn (default: [sensor], else 1)")] = None,
-    tacho_shaft: Annotated[str | None, typer.Option(help="the tacho's shaft (default: [sensor], else input)")] = None,
+    pulses_per_rev: Annotated[int | None, typer.Option(help="pulses per turn (default: \\[sensor], else 1)")] = None,
+    tacho_shaft: Annotated[str | None, typer.Option(help="the tacho's shaft (default: \\[sensor], else input)")] = None,
     speed: Annotated[
         str | None, typer.Option(help="nominal input-shaft speed without a tacho, e.g. '25 Hz', '1500 rpm'")
     ] = None,

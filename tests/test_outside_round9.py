@@ -55,6 +55,44 @@ def test_an_output_tacho_and_a_first_wheel_one_tooth_off_is_a_mismatch(tmp_path)
     assert line is not None and "the wheel shows 89.0" in line and "88 expected" in line, line
 
 
+def test_validate_names_a_given_rate_the_file_s_header_contradicts(tmp_path, cli):
+    # `fs = "50 kHz"` in [target] for a WAV at 48 kHz and an HDF5 file whose 'fs' attribute says 100 kHz:
+    # validate said OK (the header was read for its channels and whether it had a rate, not the rate), the
+    # run stopped at reading the data, its line without the table and key.
+    import h5py
+    import scipy.io.wavfile
+
+    box = description(stage(49, 81, module="1.5 mm"), name="p", speed="60 Hz", load="20 N*m")
+    (tmp_path / "box.toml").write_text(box)
+    for stem in "ab":
+        scipy.io.wavfile.write(tmp_path / f"{stem}.wav", 48000, (np.sin(np.arange(9600) * 0.3) * 9e3).astype(np.int16))
+        with h5py.File(tmp_path / f"{stem}.h5", "w") as h:
+            h.create_dataset("rec/acc", data=np.sin(np.arange(9600) * 0.3)).attrs["unit"] = "m/s^2"
+            h["rec"].attrs["fs"] = 100000.0
+    wav = 'vibration = "0"\ngain = "5 V"\nsensitivity = "100 mV/g"'
+    for name, keys, rate in (("a.wav", wav, "48 kHz"), ("a.h5", 'vibration = "acc"', "100 kHz")):
+        (tmp_path / "d.toml").write_text(
+            '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+            f'[target]\n{keys}\nspeed = "60 Hz"\nfs = "50 kHz"\nfiles = [{{ file = "{name}", role = "history", '
+            f'label = "healthy" }}, {{ file = "b{name[1:]}", role = "test", label = "fault" }}]\n'
+        )
+        code, out, err = cli("validate", tmp_path / "d.toml")
+        assert code == 2 and len(err.strip().splitlines()) == 1, (out, err)
+        assert "[target]" in err and "key 'fs'" in err and name in err and rate in err, err
+        text = (tmp_path / "d.toml").read_text()
+        (tmp_path / "d.toml").write_text(text.replace('fs = "50 kHz"\n', f'fs = "{rate}"\n'))
+        code, out, err = cli("validate", tmp_path / "d.toml")
+        assert code == 0, err
+
+
+def test_inspect_s_help_says_where_the_marks_and_the_tacho_s_shaft_default_from(cli):
+    # `gearlab inspect --help` printed 'pulses per turn (default: , else 1)' and 'the tacho's shaft (default: ,
+    # else input)': rich took the help's '[sensor]' for markup and dropped it.
+    code, out, _ = cli("inspect", "--help")
+    assert code == 0 and "default: ," not in out, out
+    assert "(default: [sensor]" in " ".join(out.replace("│", " ").split()), out
+
+
 def test_history_takes_laid_end_to_end_are_read_for_a_slow_shaft_one_take_at_a_time():
     # A 13/81 fan's three healthy takes of 228 turns (8 s each, no tacho), each turned into register with
     # the first on the input shaft: the output shaft's phase jumps where two takes meet, and read over

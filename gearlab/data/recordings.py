@@ -775,6 +775,7 @@ def check_recording(
     the scenario's *unit*) are given. *where*: the scenario's table ("s.toml: [datasets] #1");
     every error is one line that names it, the key and the file."""
     header = read_header(path)
+    header.check_rate(fs, where, path)
     for key, value in channels.items():
         if value is None or value == "":
             continue

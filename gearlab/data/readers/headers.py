@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import is_rate_or_time
+from .base import _RATE_NAMES, is_rate_or_time
 
 
 @dataclass(frozen=True)
@@ -28,6 +28,19 @@ class Header:
     indexed: bool = False  # channels may be named by 0-based column index (text formats)
     units: dict[str, str] = field(default_factory=dict)  # a unit a channel states (Contents.units)
     nested: bool = False  # channels are paths ("group/acc"), found by their last part alone too
+    stated: tuple[float, str] | None = None  # the rate the header states (Hz) and where: a WAV's, an attribute
+
+    def check_rate(self, fs: float | None, where: str, path) -> None:
+        """A rate given (*fs*, Hz) that the header's own contradicts: one line naming *where*'s 'fs'
+        (a WAV at 48 kHz or an HDF5 'fs' attribute against `fs = "50 kHz"`: validate said OK)."""
+        if fs is None or self.stated is None or abs(fs - self.stated[0]) <= 1e-6 * self.stated[0]:
+            return
+        from ...signals.checks import fmt_hz
+
+        raise GearlabInputError(
+            f"{where} key 'fs': {fmt_hz(fs)} given, but {path} says {fmt_hz(self.stated[0])} ({self.stated[1]}); "
+            "expected the file's own rate, or no 'fs'"
+        )
 
     def find(self, name: str) -> bool:
         if name in self.channels or self.resolve(name) in self.channels:
@@ -123,7 +136,12 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
             parts = n.split("/")[:-1]
             groups.update("/".join(parts[: i + 1]) for i in range(len(parts)))
         rate = rate or any(is_rate_or_time(k) for g in groups for k in f[g].attrs)
-    return Header(fmt, names, rate, frozenset(integer), units=units, nested=True)
+        stated = None
+        for n in ["/", *sorted(groups), *names]:
+            for k, v in f[n].attrs.items():
+                if str(k).lower() in _RATE_NAMES and np.size(v) == 1 and np.asarray(v).dtype.kind in "iuf":
+                    stated = stated or (float(np.asarray(v).item()), f"attribute {k!r} of {n!r}")
+    return Header(fmt, names, rate, frozenset(integer), units=units, nested=True, stated=stated)
 
 
 def _wav_header(path: Path) -> Header:
@@ -140,12 +158,12 @@ def _wav_header(path: Path) -> Header:
             kind, size = head[:4], struct.unpack(order + "I", head[4:])[0]
             if kind == b"fmt ":
                 body = f.read(min(size, 64))
-                tag, channels, _rate = struct.unpack(order + "HHI", body[:8])
+                tag, channels, rate = struct.unpack(order + "HHI", body[:8])
                 names = [str(i) for i in range(channels)]
                 if tag == 0xFFFE and len(body) >= 26:  # the extensible format's own sub-format tag
                     tag = struct.unpack(order + "H", body[24:26])[0]
                 integer = frozenset(names) if tag == 1 else frozenset()  # 1: PCM (3: IEEE float)
-                return Header("WAV", names, True, integer, indexed=True)
+                return Header("WAV", names, True, integer, indexed=True, stated=(float(rate), "the WAV header"))
             f.seek(size + (size & 1), 1)
     raise ValueError("no 'fmt ' chunk in its header")
 
