@@ -156,6 +156,19 @@ def compare_lines(runs: list[Compared]) -> list[str]:
     return lines
 
 
+def differences_text(runs: list[Compared]) -> str:
+    """The scenario keys whose values differ, on one line ('scenario differences: diagnosis.budget
+    A 2, B 3; ...'), or that the scenarios are the same: what `gearlab compare` prints as a table,
+    for its page and the TUI's comparison (they showed the figures' differences only: issue 41)."""
+    from .runinfo import scenario_differences
+
+    rows = scenario_differences([c.run.path for c in runs])
+    if not rows:
+        return "scenarios: the same (apart from their names)"
+    said = (f"{key} " + ", ".join(f"{c.letter} {v}" for c, v in zip(runs, values)) for key, values in rows)
+    return "scenario differences: " + "; ".join(said)
+
+
 def compare_html(runs: list[Compared], figures: Path) -> str:
     """A self-contained page: the runs, the table side by side, the overlaid charts (PNG,
     inlined) and each run's verdict. *figures*: a folder for the PNGs while they are drawn."""
@@ -169,6 +182,7 @@ def compare_html(runs: list[Compared], figures: Path) -> str:
         "<ul>",
         *(f"<li>{html.escape(t)}</li>" for t in lines[: len(runs)]),
         "</ul>",
+        f"<p id='differences'>{html.escape(differences_text(runs))}</p>",
     ]
     verdicts = lines[len(runs) :]
     if verdicts:

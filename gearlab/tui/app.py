@@ -30,7 +30,7 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
-from ..compare import compare_charts, compare_lines, compare_markdown, load_runs
+from ..compare import compare_charts, compare_lines, compare_markdown, differences_text, load_runs
 from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
 from ..events import Event
@@ -564,7 +564,9 @@ class GearlabApp(App):
         self.query_one("#results-status", Static).update(
             Text.assemble(("comparison ", "bold"), f"of {len(runs)} {runs[0].kind} runs; escape closes it")
         )
-        self.query_one("#verdict", Static).update(Text("\n".join(compare_lines(runs))))
+        lines = compare_lines(runs)  # which run is which, what differs in their scenarios, their verdicts
+        lines.insert(len(runs), differences_text(runs))
+        self.query_one("#verdict", Static).update(Text("\n".join(lines)))
         self.query_one("#verdict", Static).display = True
         self.query_one("#results-table", ResultTable).show_markdown(compare_markdown(runs))
         self.query_one("#results-lines", Static).update("")
