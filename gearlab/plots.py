@@ -150,11 +150,11 @@ def dataset_signals(dataset, path: Path, tooth: int = 5) -> Path:
         row[0].set_ylabel(f"{name}\n(standardised, 1)")
         row[0].set_xlabel("input-shaft angle (deg)")
         row[1].set_xlabel("shaft order (per revolution)")
-        row[1].set_ylabel("amplitude (standardised, 1)")
+        row[1].set_ylabel("amplitude\n(standardised, 1)")  # on one line it ran into the title
         for ax in row:
             ax.grid(alpha=0.3)
-            if any(e[0] == c for e in examples):
-                ax.legend(fontsize=7, loc="upper right")
+        if any(e[0] == c for e in examples):  # one legend a row, beside it: inside, it lay over the curves
+            row[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     spec = dataset.spec
     origin = (
         f"{spec.model} ({preset_label(spec.preset)}), {spec.channel}"
