@@ -253,15 +253,35 @@ def rich_table(caption: str, header: list[str], rows: list[list[str]], console: 
         table.add_column(Text(name), justify="left" if i == 0 else "right", overflow="fold")
     for row in rows:
         table.add_row(*(Text(cell) for cell in row[: len(header)]), *([""] * (len(header) - len(row))))
-    if console is None or not console.is_terminal or _narrowest(console, table) <= console.width:
+    if console is None or not console.is_terminal:
         return table
+    if _narrowest(console, table) <= console.width:
+        return _fitted(table, [header, *rows], console.width)
     full = [list(row[: len(header)]) + [""] * (len(header) - len(row)) for row in rows]
-    turned = rich_table(
-        caption,
-        [f"{header[0]} →", *(row[0] for row in full)],
-        [[name, *(row[i] for row in full)] for i, name in enumerate(header) if i],
-    )
-    return turned if _narrowest(console, turned) <= console.width else table
+    turned_header = [f"{header[0]} →", *(row[0] for row in full)]
+    turned_rows = [[name, *(row[i] for row in full)] for i, name in enumerate(header) if i]
+    turned = rich_table(caption, turned_header, turned_rows)
+    if _narrowest(console, turned) <= console.width:
+        return _fitted(turned, [turned_header, *turned_rows], console.width)
+    return table
+
+
+def _fitted(table: Table, lines: list[list[str]], width: int) -> Table:
+    """*table* with widths that keep every word whole within *width* cells, where its natural width
+    is more: each column its longest word, the room left shared in proportion to what each lacks
+    of its natural width. Rich gave like widths and cut words ('matched_fil|ter', '../data/f1|.zip'
+    in a detection run's tables at 100 columns: issue 41)."""
+    cells = [[str(c) for c in line] + [""] * (len(table.columns) - len(line)) for line in lines]
+    columns = list(zip(*cells))
+    least = [max((cell_len(w) for c in col for w in c.split()), default=1) for col in columns]
+    most = [max(max((cell_len(c) for c in col), default=1), 1) for col in columns]
+    frame = 3 * len(columns) + 1  # a border and a space either side of each column
+    if sum(most) + frame <= width or sum(least) + frame > width:
+        return table
+    spare, lack = width - frame - sum(least), [m - n for m, n in zip(most, least)]
+    for column, n, short in zip(table.columns, least, lack):
+        column.width = n + (spare * short) // max(sum(lack), 1)
+    return table
 
 
 def _narrowest(console: Console, table: Table) -> int:

@@ -46,3 +46,23 @@ def test_each_bar_keeps_its_count_elapsed_time_and_eta_on_its_line(width, unit):
         assert "epoch 46 of 60" in said
     if width == 120:  # room for the labels: whole, on one line
         assert any(line.startswith(PRIMING) for line in lines), lines
+
+
+def test_a_table_narrower_than_its_text_wraps_its_cells_at_their_words():
+    """A detection run's 'Which gear' table at 100 columns: rich gave its eight columns like widths and
+    cut words: 'matched_fil|ter', '../data/f1|.zip', 'watched-gea|r fault'. When every column can hold
+    its longest word, each gets that, and the room left goes to the columns that need it."""
+    from gearlab.terminal import print_results
+
+    header = ["condition", "file", "label", "localised on", "z / threshold per shaft", "tooth", "which gear"]
+    header += ["a flag is"]
+    cells = ["16 Hz", "../data/f1.zip", "fault", "input pinion 25T (stage 1)", "input 78.9/2.6, output -1.6/2.6"]
+    cells += ["2 of 25", "–", "watched-gear fault: input pinion 25T (stage 1)"]
+    table = "| " + " | ".join(header) + " |\n|" + "---|" * len(header) + "\n| " + " | ".join(cells) + " |\n"
+    console = Console(file=io.StringIO(), width=100, force_terminal=True, color_system=None)
+    print_results(console, [], ["Which gear:", table])
+    text = console.file.getvalue()
+    assert all(len(line) <= 100 for line in text.splitlines())
+    words = {word for cell in header + cells for word in cell.split()}
+    drawn = set(re.findall(r"[^\s│┃]+", text))
+    assert words <= drawn, words - drawn
