@@ -44,6 +44,7 @@ from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unch
 from .gearbox.orders import TachoShaft
 from .gearbox.speed import (
     NOMINAL_RANGE,
+    SIDEBAND_WINDOW,
     SPEED_AGREE,
     TEETH_AGREE,
     THRESHOLD_DB,
@@ -315,19 +316,12 @@ def settle_speed(
     reading = read_orders(rec, speed, options.threshold_db)
     if not unconfirmed(rec, box, speed):
         return speed, reading, None
-    first = check_description(reading.lines, box, reading.revolutions, False)["stages"][0]
-    if "measured_order" not in first:
-        return speed, reading, _no_speed_line(None, speed.mean_hz)
     f0, lines, stage = speed.mean_hz, reading.lines, order_table(box).stages[0]
-    mesh_hz = first["measured_order"] * f0
-    # the sidebands where the speed search looks for them (its note's 'its sidebands show'): within
-    # ±SIDEBAND_WINDOW of the pinion shaft's line at the speed that makes the line the described pinion's
-    # mesh (a wheel's 2nd sideband, 0.77 orders off a 17-tooth mesh, is no input shaft's)
     in_hz = Lines(lines.at * f0, lines.amp, lines.db)  # read at a constant speed: order x speed is Hz
-    z = sideband_teeth(in_hz, mesh_hz / stage.pinion_teeth, stage, f0 / reading.revolutions)
-    if z is None or abs(z - round(z)) > TEETH_AGREE or round(z) < 1:
+    mesh_hz, z = _sideband_count(in_hz, stage, f0, f0 / reading.revolutions)
+    if z is None:
         return speed, reading, _no_speed_line(mesh_hz, f0)
-    count, described = round(z), box.stages[0].pinion.z
+    count, described = z, stage.pinion_teeth
     f = mesh_hz / count
     # the stage-1 mesh's phase, followed as the described pinion's at the speed that puts it on the line
     theta = mesh_angle(rec.signal, rec.fs, box, mesh_hz / described)
@@ -345,6 +339,28 @@ def settle_speed(
     )
     settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=True)
     return settled, read_orders(rec, settled, options.threshold_db), None
+
+
+def _sideband_count(lines: Lines, stage, declared: float, df: float) -> tuple[float | None, int | None]:
+    """(the first stage's mesh line, Hz; the pinion's tooth count its sidebands show, or None) of a record
+    read at the *declared* speed, its *lines* in Hz (bin *df*): each line, strongest first, where the
+    described pinion's mesh could lie (within ±SIDEBAND_WINDOW of its count at the declared speed), is tried
+    as that mesh; the sidebands where the speed search looks for them (gearbox.speed.sideband_teeth) must
+    put the pinion at a whole count (±TEETH_AGREE) and the speed, the line over it, within the nominal range
+    (a 40-tooth mesh's 3rd subharmonic, read as the mesh of a 41-tooth one, made a 37-tooth pinion at 8.8 Hz).
+    The mesh line alone (the strongest such) where no sideband shows a count."""
+    said, first = stage.pinion_teeth, None
+    for q in np.argsort(-lines.amp):
+        at = float(lines.at[q])
+        if abs(at / (declared * said) - 1) > SIDEBAND_WINDOW:
+            continue
+        first = at if first is None else first
+        seen = sideband_teeth(lines, at / said, stage, df)
+        if seen is None or abs(seen - round(seen)) > TEETH_AGREE or round(seen) < 1:
+            continue
+        if abs(at / round(seen) / declared - 1) <= NOMINAL_RANGE:
+            return at, round(seen)
+    return first, None
 
 
 def _no_speed_line(mesh_hz: float | None, declared: float) -> str:

@@ -53,6 +53,19 @@ def test_a_slipping_motor_s_other_pinion_is_read_at_the_sidebands_speed_in_every
     assert said["check"]["speed_hz"] == pytest.approx(24.25, rel=0.001)
 
 
+@pytest.mark.parametrize("z1, z2, said, f", [(28, 85, 27, 24.63), (40, 111, 41, 24.42)])
+def test_a_pinion_mesh_off_its_described_order_is_read_at_the_sidebands_speed(tmp_path, z1, z2, said, f):
+    # A pinion one tooth off on a slipping motor puts the mesh between whole orders at the nominal speed
+    # (28 teeth at 24.63 Hz: order 27.58 at 25 Hz): the rows read 'stage 1: no line at mesh order 27'
+    # at 25 Hz even where the first line named the 28-tooth pinion from its sidebands (a 40-tooth mesh's
+    # 3rd subharmonic, taken for the mesh, once made a 37-tooth pinion at 8.8 Hz)
+    box = _box(tmp_path, said, z2, "1500 rpm")
+    report = inspect_record(_record(tmp_path / "r.npz", z1, z2, f), box, InspectOptions(vibration="acc_ms2"))
+    assert report["speed"]["mean_hz"] == pytest.approx(f, rel=1e-4), report["speed"]
+    assert report["check"]["stages"][0]["measured_order"] == pytest.approx(z1, abs=0.01)
+    assert f"stage 1: mesh order {z1} measured, {said} expected (a {z1}-tooth pinion" in report["verdict"]
+
+
 def test_no_speed_confirmed_is_said_in_one_line_and_the_rows_say_the_speed_they_read_at(tmp_path, cli):
     # The same 33-tooth pinion at 1455 rpm with no sideband of the input shaft: nothing tells a 33-tooth
     # pinion at 24.25 Hz from a 32-tooth one at 25 Hz or a 34-tooth one at 23.5 Hz. Inspect read the lines
