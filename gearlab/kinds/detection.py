@@ -96,7 +96,7 @@ from .common import (
     with_source_gearbox,
 )
 from .detection_classical import classical_record
-from .detection_figures import captions, roc_charts
+from .detection_figures import captions, drawing_in, roc_charts
 from .detection_figures import draw as draw_figures
 from .detection_records import (
     asynchronous_orders,
@@ -568,7 +568,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         )
         store_scoring(run, spec, conditions)
         summarise(scenario, run)
-        draw_figures(run)
+        with drawing_in(executor):  # the figures side by side in the run's pool
+            draw_figures(run)
 
 
 def summary_lines(run: RunDir) -> list[str]:
