@@ -318,11 +318,19 @@ def settle_speed(
         return speed, reading, None
     f0, lines, stage = speed.mean_hz, reading.lines, order_table(box).stages[0]
     in_hz = Lines(lines.at * f0, lines.amp, lines.db)  # read at a constant speed: order x speed is Hz
-    mesh_hz, z = _sideband_count(in_hz, stage, f0, f0 / reading.revolutions)
-    if z is None:
-        return speed, reading, _no_speed_line(mesh_hz, f0)
-    count, described = z, stage.pinion_teeth
-    f = mesh_hz / count
+    mesh_hz, counts = _sideband_counts(in_hz, stage, f0, f0 / reading.revolutions)
+    for line, count in counts[:3]:
+        if (found := _read_at_count(rec, box, options, speed, line, count)) is not None:
+            return found + (None,)
+    return speed, reading, _no_speed_line(mesh_hz, f0, bool(counts))
+
+
+def _read_at_count(rec: Recording, box: Gearbox, options: InspectOptions, speed: Speed, mesh_hz: float, count: int):
+    """(the speed at which *mesh_hz* is a *count*-tooth input pinion's mesh, followed on its phase; the record
+    read at it), or None where, read at it, the mesh is not at the count's whole order or the input
+    shaft's sidebands not at order 1 (a line split by a swinging speed, read at the declared one, gave 29
+    for a 28-tooth pinion: mesh order 28.97, the input at 1.034)."""
+    described, f = box.stages[0].pinion.z, mesh_hz / count
     # the stage-1 mesh's phase, followed as the described pinion's at the speed that puts it on the line
     theta = mesh_angle(rec.signal, rec.fs, box, mesh_hz / described)
     if theta is not None:
@@ -338,18 +346,22 @@ def settle_speed(
         f"{fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
     )
     settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=True)
-    return settled, read_orders(rec, settled, options.threshold_db), None
+    at = read_orders(rec, settled, options.threshold_db)
+    first = check_description(at.lines, box, at.revolutions, False)["stages"][0]
+    off_mesh = abs(first.get("measured_order", -1.0) - count) > tol_mesh(count, 1.0 / at.revolutions)
+    off_shaft = abs(first.get("z1_seen", float(count)) - count) > max(TEETH_AGREE, first.get("z1_resolution", 0.0))
+    return None if off_mesh or off_shaft else (settled, at)
 
 
-def _sideband_count(lines: Lines, stage, declared: float, df: float) -> tuple[float | None, int | None]:
-    """(the first stage's mesh line, Hz; the pinion's tooth count its sidebands show, or None) of a record
-    read at the *declared* speed, its *lines* in Hz (bin *df*): each line, strongest first, where the
-    described pinion's mesh could lie (within ±SIDEBAND_WINDOW of its count at the declared speed), is tried
-    as that mesh; the sidebands where the speed search looks for them (gearbox.speed.sideband_teeth) must
-    put the pinion at a whole count (±TEETH_AGREE) and the speed, the line over it, within the nominal range
-    (a 40-tooth mesh's 3rd subharmonic, read as the mesh of a 41-tooth one, made a 37-tooth pinion at 8.8 Hz).
-    The mesh line alone (the strongest such) where no sideband shows a count."""
-    said, first = stage.pinion_teeth, None
+def _sideband_counts(lines: Lines, stage, declared: float, df: float) -> tuple[float | None, list[tuple]]:
+    """(the first stage's mesh line, Hz, or None; [(a line, the pinion's tooth count its sidebands show)])
+    of a record read at the *declared* speed, its *lines* in Hz (bin *df*): each line, strongest first,
+    where the described pinion's mesh could lie (within ±SIDEBAND_WINDOW of its count at the declared
+    speed), tried as that mesh; the sidebands where the speed search looks for them (gearbox.speed.
+    sideband_teeth) must put the pinion at a whole count (±TEETH_AGREE) and the speed, the line over it,
+    within the nominal range (a 40-tooth mesh's 3rd subharmonic, read as the mesh of a 41-tooth one, made
+    a 37-tooth pinion at 8.8 Hz). The mesh line: the strongest such."""
+    said, first, found = stage.pinion_teeth, None, []
     for q in np.argsort(-lines.amp):
         at = float(lines.at[q])
         if abs(at / (declared * said) - 1) > SIDEBAND_WINDOW:
@@ -359,14 +371,18 @@ def _sideband_count(lines: Lines, stage, declared: float, df: float) -> tuple[fl
         if seen is None or abs(seen - round(seen)) > TEETH_AGREE or round(seen) < 1:
             continue
         if abs(at / round(seen) / declared - 1) <= NOMINAL_RANGE:
-            return at, round(seen)
-    return first, None
+            found.append((at, round(seen)))
+    return first, found
 
 
-def _no_speed_line(mesh_hz: float | None, declared: float) -> str:
+def _no_speed_line(mesh_hz: float | None, declared: float, seen: bool = False) -> str:
     """No speed confirmed, in the words the verdict's speed line takes after the speed search's note: the
-    pinion counts and speeds (within the nominal range of the *declared* one) the mesh line allows."""
-    words, tells = "no sideband of the input shaft confirms a speed", "a tacho or the measured speed, --speed, tells"
+    pinion counts and speeds (within the nominal range of the *declared* one) the mesh line allows; *seen*:
+    sidebands showed a count, but the rows read at its speed did not bear it out."""
+    words = "no sideband of the input shaft confirms a speed"
+    if seen:
+        words = "the input shaft's sidebands confirm no speed (read at the one they show, the orders are off)"
+    tells = "a tacho or the measured speed, --speed, tells"
     mesh = mesh_hz or 0.0
     low, high = mesh / (declared * (1 + NOMINAL_RANGE)), mesh / (declared * (1 - NOMINAL_RANGE))
     counts = [z for z in range(math.ceil(low), int(high) + 1) if z >= 1]

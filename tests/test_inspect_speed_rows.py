@@ -66,6 +66,17 @@ def test_a_pinion_mesh_off_its_described_order_is_read_at_the_sidebands_speed(tm
     assert f"stage 1: mesh order {z1} measured, {said} expected (a {z1}-tooth pinion" in report["verdict"]
 
 
+def test_a_count_the_rows_read_at_its_speed_do_not_bear_out_confirms_no_speed(tmp_path):
+    # 28/93 at 24.3 Hz described 29: a mesh line split by the speed's swing, read at the nominal speed, gave
+    # the sidebands 29 teeth and the rows were read at 23.50 Hz (3.3 % off: mesh order 28.97, the input shaft
+    # at 1.034). Read at a count's speed, its mesh must sit at that whole order and the input at order 1
+    box = _box(tmp_path, 29, 93, "1500 rpm")
+    report = inspect_record(_record(tmp_path / "r.npz", 28, 93, 24.3003, seed=4205), box, InspectOptions("acc_ms2"))
+    speed, check = report["speed"]["mean_hz"], report["check"]
+    assert check.get("speed_confirmed") is False or speed == pytest.approx(24.3003, rel=1e-4), (speed, check)
+    assert "a 28-tooth pinion's at 24.31 Hz" in report["verdict"] or speed == pytest.approx(24.3003, rel=1e-4)
+
+
 def test_no_speed_confirmed_is_said_in_one_line_and_the_rows_say_the_speed_they_read_at(tmp_path, cli):
     # The same 33-tooth pinion at 1455 rpm with no sideband of the input shaft: nothing tells a 33-tooth
     # pinion at 24.25 Hz from a 32-tooth one at 25 Hz or a 34-tooth one at 23.5 Hz. Inspect read the lines
