@@ -17,7 +17,9 @@ from gearlab.parts.bound import bayes_bound
 from gearlab.parts.training import method
 from gearlab.registry import get_registry
 
-pytestmark = pytest.mark.usefixtures("one_torch_thread")
+# module_cache: the bound's twin datasets in the module's cache, not the user's (the one test file
+# that wrote into ~/.cache/gearlab: 16 entries a run)
+pytestmark = pytest.mark.usefixtures("one_torch_thread", "module_cache")
 
 COMMON = dict(teeth=(1, 2, 3), faults=(("crack", (13,)),), healthy=30)
 DETECTORS = tuple(
