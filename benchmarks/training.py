@@ -47,6 +47,11 @@ broadcast products, conv2d or a 1 x 1 convolution of windows slower; their backw
 gradient by conv_transpose1d or weight gradient by a product of windows 0.35-0.48 against
 0.36-0.53 ms (oneDNN's own). Of a 10.8 ms `fast+coral` step in a run (fit_adaptation's, with
 draws): embedding 3.2, backward 4.8, the epoch's validation 0.9 a step, the rest under 0.4 each.
+Also not adopted (CPU time, load 4-10): `fast`'s first layer as one product of its 16-sample blocks
+and a sum of 4 shifted slices (no 4-fold copy of windows; K = 16 products) 7.2-8.0 against 2.5-2.9 ms
+forward + backward at batch 80; the validation set made tensors once and passed in inference mode
+1.72 against 1.89 ms an epoch, with a joint step's rows gathered straight into one batch (no cat)
+and its labels by index_select: a phm09-shaped unit's CPU unchanged within noise (3 pairs, +-5 %).
 
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
