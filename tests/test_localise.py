@@ -486,3 +486,23 @@ def test_healthy_records_against_two_records_in_per_shaft_averages_localise_noth
                 flagged += res.named is not None
                 z.append(next(e.z for e in res.ranking if e.shaft == "input"))
     assert flagged <= 4 and np.mean(z) < 1.0, (flagged, np.round(z, 1))
+
+
+def test_a_slower_shafts_own_tsa_holds_the_records_noise_not_the_faster_shafts_lines():
+    """Per-shaft TSAs: a faster shaft's lines, at no whole order of a slower shaft, leaked into its average
+    and its turn-to-turn scatter (the noise its evidence is weighed by): on 24/79 + 27/72 the output's
+    noise at its orders came out up to 2336 times that of the record's noise alone. Each shaft's TSA now
+    averages the record less the faster shafts' averages."""
+    for teeth in (((24, 79), (27, 72)), ((22, 36), (21, 63)), ((20, 50), (25, 35))):
+        table = train(*teeth)
+        lay = L.layout(table, POINTS, 100)
+        assert lay.mode == "shafts"
+        lines = L.content(record(table, 100, np.random.default_rng(0)), lay)
+        alone = L.content(0.3 * np.random.default_rng(1).standard_normal((100, POINTS)), lay)
+        for s, shaft in enumerate(table.shafts[1:], start=1):
+            ratio = lines.noise[lay.source == s] / alone.noise[lay.source == s]
+            assert ratio.max() < 4 and np.median(ratio) < 1.1, (
+                teeth,
+                shaft,
+                np.round(np.percentile(ratio, [50, 90, 100]), 2),
+            )

@@ -63,7 +63,9 @@ Fallback. When the record holds fewer than *min_periods* grand periods (tooth co
 common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
 is taken instead, the record resampled at that shaft's angle, and an absolute order x = m o_s of
 shaft s's TSA is synchronous with shaft r when x / o_r is whole: the same classes, each order read
-from the TSA of the fastest shaft it is synchronous with. The result says which was used.
+from the TSA of the fastest shaft it is synchronous with. The result says which was used. A shaft's
+TSA averages the record less the faster shafts' averages (their lines, at no whole order of it, leak
+into its average and its turn-to-turn scatter: see SWEEPS).
 
 Everything is numpy: no torch, nothing from the layers above.
 """
@@ -80,6 +82,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
+from .shaft import averaged, shaft_averages, uniform_filter1d
 from .which_template import (  # noqa: F401 (the width's settings: read by tests and docs as localise's)
     MIN_RATIO,
     RULE_SIMULATED,
@@ -95,14 +98,10 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     which_by_width,
 )
 
-
-def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
-    """scipy's moving mean, imported on first use (0.4 s `gearlab validate` and `--help` need not pay)."""
-    from scipy.ndimage import uniform_filter1d as moving_mean
-
-    return moving_mean(x, size=size, mode=mode)
-
-
+# Fallback: each shaft's TSA of the record less the faster shafts' averages (one pass, fastest first). Two
+# passes (less every other shaft's) flagged the input on a slower gear's crack: its lines at orders the
+# input shares are then weighed by their own noise (development, tests/test_localise_blocks.py)
+SWEEPS = 1
 MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
 SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
 FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
@@ -292,24 +291,17 @@ class Content:
     source: np.ndarray | None = None  # the layout's source of each order: noise is smoothed within one TSA
 
 
-def _averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, np.ndarray]:
-    """(mean amplitude spectrum, noise power of the mean) of equal segments, bins 0 … top."""
-    n, length = segments.shape
-    Y = np.fft.rfft(segments, axis=1)[:, : top + 1] * (2.0 / length)
-    mean = Y.mean(axis=0)
-    scatter = np.sum(np.abs(Y - mean) ** 2, axis=0) / max(n - 1, 1)
-    # one bin's scatter from a few segments is rough: the noise varies slowly across orders
-    noise = uniform_filter1d(scatter, size=max(1, smooth), mode="nearest") / n
-    return mean, noise
-
-
-def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0, block: int | None = None) -> Content:
+def content(
+    revolutions: np.ndarray, lay: Layout, first_revolution: int = 0, block: int | None = None, sweeps: int = SWEEPS
+) -> Content:
     """The synchronous content of consecutive input *revolutions* (R, points) at *lay*'s orders.
 
     *first_revolution*: the input revolution revolutions[0] is, counted from the angle's zero (the
     first tacho mark): the slower shafts' angles, and so the tooth index, are measured from there.
     *block*: the power is the mean of the record's whole blocks of that many revolutions (the
-    history's units: see the module's docstring, "Evidence"); the mean is the whole record's."""
+    history's units: see the module's docstring, "Evidence"); the mean is the whole record's. *sweeps*:
+    per-shaft TSAs of the record less the other shafts' averages so far (Fallback; 1: the faster
+    shafts'), 0: of the record itself (a noise-free simulation's difference from the healthy one)."""
     revs = check_array(revolutions, "revolutions", min_ndim=2)
     if revs.ndim != 2 or revs.shape[1] != lay.points:
         raise GearlabInputError(
@@ -325,29 +317,11 @@ def content(revolutions: np.ndarray, lay: Layout, first_revolution: int = 0, blo
         n = R // P
         if n < 2:
             raise GearlabInputError(f"{R} revolutions hold {n} grand period of {P}; expected at least 2")
-        m, v = _averaged(y[: n * P * pts].reshape(n, P * pts), int(lay.index.max()), P)
+        m, v = averaged(y[: n * P * pts].reshape(n, P * pts), int(lay.index.max()), P)
         mean[:], noise[:] = m[lay.index], v[lay.index]
         periods = n
     else:
-        periods = None
-        for s, o in enumerate(lay.shaft_orders):
-            sel = lay.source == s
-            if not sel.any():
-                continue
-            per = pts / float(o)  # input-angle samples per turn of shaft s
-            size = int(2 ** math.ceil(math.log2(per)))
-            j0 = math.ceil(first_revolution * o)
-            n = math.floor((first_revolution + R) * o + 1e-9) - j0
-            if n < 2:
-                raise GearlabInputError(
-                    f"{R} input revolutions hold {max(n, 0)} complete turns of the {lay.shafts[s]} shaft; "
-                    "expected at least 2"
-                )
-            turns = j0 + np.arange(n)[:, None] + np.arange(size)[None, :] / size
-            at = np.clip((turns / float(o) - first_revolution) * pts, 0, y.size - 1)
-            m, v = _averaged(np.interp(at, np.arange(y.size), y), int(lay.index[sel].max()), 3)
-            mean[sel], noise[sel] = m[lay.index[sel]], v[lay.index[sel]]
-            periods = n if periods is None else min(periods, n)
+        mean, noise, periods = shaft_averages(y, lay, first_revolution, R, sweeps)
     if block and R > block:
         parts = [content(revs[i : i + block], lay, first_revolution + i) for i in range(0, R - block + 1, block)]
         power = np.mean([u.power for u in parts], axis=0)

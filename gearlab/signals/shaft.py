@@ -9,7 +9,8 @@ shaft, where the shaft's TSA keeps it. The input revolutions given are one recor
 contiguous in angle (as cut_revolutions and the dataset builder make them), so their samples are
 the record on an even grid of input angle; the shaft's revolutions are that grid read at
 *points* even angles of each of its complete turns. Orders of the shaft above points / 2 are
-removed first (the grid holds 1/r times more of them), so that they do not alias."""
+removed first (the grid holds 1/r times more of them), so that they do not alias. And each shaft's own
+TSA of a record, its orders' mean and noise, for gearlab.signals.localise (its "Fallback")."""
 
 from __future__ import annotations
 
@@ -48,3 +49,65 @@ def shaft_revolutions(
         return np.empty((0, points))
     turns = first + np.arange(count)[:, None] + np.arange(points)[None, :] / points
     return np.interp((turns - phase) / ratio * P, np.arange(n, dtype=np.float64), x)
+
+
+def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
+    """scipy's moving mean, imported on first use (0.4 s `gearlab validate` and `--help` need not pay)."""
+    from scipy.ndimage import uniform_filter1d as moving_mean
+
+    return moving_mean(x, size=size, mode=mode)
+
+
+def averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, np.ndarray]:
+    """(mean amplitude spectrum, noise power of the mean) of equal segments, bins 0 … top."""
+    n, length = segments.shape
+    Y = np.fft.rfft(segments, axis=1)[:, : top + 1] * (2.0 / length)
+    mean = Y.mean(axis=0)
+    scatter = np.sum(np.abs(Y - mean) ** 2, axis=0) / max(n - 1, 1)
+    # one bin's scatter from a few segments is rough: the noise varies slowly across orders
+    noise = uniform_filter1d(scatter, size=max(1, smooth), mode="nearest") / n
+    return mean, noise
+
+
+def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """(mean, noise, fewest turns) of each shaft's own TSA at the orders read from it (*lay*: a
+    gearlab.signals.localise.Layout in per-shaft mode; *y*: R consecutive input revolutions, flat), of the
+    record less the other shafts' averages (a slower one's less the orders read from this), fastest first,
+    *sweeps* times over (0: each shaft's TSA of the record itself)."""
+    pts = lay.points
+    mean, noise = np.zeros(lay.orders.size, complex), np.zeros(lay.orders.size)
+    shafts = sorted((s for s in range(len(lay.shafts)) if (lay.source == s).any()), key=lambda s: -lay.shaft_orders[s])
+    cut, waves, periods = {}, {}, None
+    for s in shafts:
+        o = lay.shaft_orders[s]
+        size = int(2 ** math.ceil(math.log2(pts / float(o))))  # at least the input samples of a turn
+        j0 = math.ceil(first * o)
+        n = math.floor((first + R) * o + 1e-9) - j0
+        if n < 2:
+            raise GearlabInputError(
+                f"{R} input revolutions hold {max(n, 0)} complete turns of the {lay.shafts[s]} shaft; "
+                "expected at least 2"
+            )
+        turns = j0 + np.arange(n)[:, None] + np.arange(size)[None, :] / size
+        at = np.clip((turns / float(o) - first) * pts, 0, y.size - 1)
+        cut[s] = (at, ((first + np.arange(y.size) / pts) * float(o)) % 1 * size)  # samples, phase
+        periods = n if periods is None else min(periods, n)
+    for sweep in range(max(sweeps, 1)):
+        for s in shafts:
+            left = y
+            for r, wave in waves.items() if sweeps else ():
+                if r == s:
+                    continue
+                spec = np.fft.rfft(wave)
+                if lay.shaft_orders[r] < lay.shaft_orders[s]:  # a slower r: less its orders read from s
+                    spec[:: (lay.shaft_orders[r] / lay.shaft_orders[s]).denominator] = 0.0
+                # read at the record's samples from a grid 8 times finer (linear interpolation's error)
+                fine = np.fft.irfft(spec, n=8 * wave.size) * 8
+                left = left - np.interp(cut[r][1] * 8, np.arange(fine.size + 1), np.append(fine, fine[0]))
+            segments = np.interp(cut[s][0], np.arange(y.size), left)
+            waves[s] = segments.mean(axis=0)
+            if sweep == max(sweeps, 1) - 1:
+                sel = lay.source == s
+                m, v = averaged(segments, int(lay.index[sel].max()), 3)
+                mean[sel], noise[sel] = m[lay.index[sel]], v[lay.index[sel]]
+    return mean, noise, int(periods)
