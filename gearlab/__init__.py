@@ -14,7 +14,7 @@ Its names are resolved on first use (PEP 562 ``__getattr__``; they live in gearl
 __version__ = "0.1.0"
 
 # Bumped whenever a change alters simulated numbers; part of every dataset cache key.
-PHYSICS_VERSION = "1"
+PHYSICS_VERSION = "2"
 
 # The notebook API: name -> the module that holds it, imported on first access (start-up time)
 _API = dict.fromkeys(

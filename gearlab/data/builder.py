@@ -49,6 +49,7 @@ from ..executors import LocalExecutor
 from ..physics.faults import place_fault
 from ..registry import get_registry
 from ..signals import Standardiser, resample_revolutions, steady_start, tsa
+from ..signals.angle import TWO_PI
 from ..signals.shaft import shaft_revolutions
 from . import placement
 from .placement import fault_parts, shaft_names
@@ -357,6 +358,10 @@ def turned(periodic: np.ndarray, revolutions: int, shift: int, angle=None, first
         moved = np.concatenate([angle[first * per_rev :], angle[: first * per_rev] + 2 * np.pi * revolutions])
         theta = np.append(moved - moved[0], 2 * np.pi * revolutions)
     theta[-1] = 2 * np.pi * revolutions  # exactly the revolutions' turns
+    # ... which the cut must count as whole: 2π·15 / 2π is 14.999999999999998 (11, 15, 22, 30 ...
+    # turns), and the cycle lost its last revolution (a TSA wrapping it jumped the slower shafts)
+    while math.floor(theta[-1] / TWO_PI) < revolutions:
+        theta[-1] = np.nextafter(theta[-1], np.inf)
     return resample_revolutions(np.append(x, x[0]), theta, POINTS).reshape(-1)
 
 
