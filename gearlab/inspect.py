@@ -42,9 +42,14 @@ from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
 from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
+from .gearbox.pinion_count import (
+    alternatives_words,
+    no_speed_line,
+    pinion_evidence,
+    shaft_line_count,
+    sideband_counts,
+)
 from .gearbox.speed import (
-    NOMINAL_RANGE,
-    SIDEBAND_WINDOW,
     SPEED_AGREE,
     TEETH_AGREE,
     THRESHOLD_DB,
@@ -53,7 +58,6 @@ from .gearbox.speed import (
     follow_speed,
     mesh_angle,
     nominal_line,
-    sideband_teeth,
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
@@ -137,6 +141,7 @@ class Speed:
     declared_hz: float | None = None
     notes: list[str] = field(default_factory=list)
     settled: bool = False  # a declared speed the mesh lines do not confirm, replaced by the sidebands' speed
+    others: list = field(default_factory=list)  # [(z, Hz)]: other pinion counts the mesh line allows (no tacho)
 
     def describe(self) -> dict:
         s = self.per_revolution_hz
@@ -315,14 +320,38 @@ def settle_speed(
         speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
     reading = read_orders(rec, speed, options.threshold_db)
     if not unconfirmed(rec, box, speed):
-        return speed, reading, None
+        return _by_input_lines(rec, box, options, speed, reading) + (None,)
     f0, lines, stage = speed.mean_hz, reading.lines, order_table(box).stages[0]
     in_hz = Lines(lines.at * f0, lines.amp, lines.db)  # read at a constant speed: order x speed is Hz
-    mesh_hz, counts = _sideband_counts(in_hz, stage, f0, f0 / reading.revolutions)
+    mesh_hz, counts = sideband_counts(in_hz, stage, f0, f0 / reading.revolutions)
+    said, df = box.stages[0].pinion.z, f0 / reading.revolutions
+    if not counts and mesh_hz and (z := shaft_line_count(in_hz, mesh_hz, f0, df, order_table(box), said)):
+        counts = [(mesh_hz, z)]  # no sideband, but a line at one allowed count's shaft frequency
     for line, count in counts[:3]:
         if (found := _read_at_count(rec, box, options, speed, line, count)) is not None:
+            if count == said:  # the described count, at a speed its shaft's line shows
+                how = f"from the mesh line at {fmt_hz(line)} and the input shaft's line"
+                found[0].source, found[0].settled, found[0].notes = how, False, []
             return found + (None,)
-    return speed, reading, _no_speed_line(mesh_hz, f0, bool(counts))
+    return speed, reading, no_speed_line(mesh_hz, f0, bool(counts))
+
+
+def _by_input_lines(rec: Recording, box: Gearbox | None, options: InspectOptions, speed: Speed, reading: Reading):
+    """(speed, reading) of a record without a tacho whose speed the mesh lines gave: where the input shaft's
+    lines (sidebands, shaft line) show another pinion count, read at its speed (26 teeth at 24.09 Hz mesh
+    where 25 at 25.06 Hz do: the search took the nominal speed's); where they show none, the other counts
+    the mesh line allows within the nominal range are kept on the speed (speed.others): ambiguous."""
+    if box is None or rec.tacho is not None or not speed.declared_hz:
+        return speed, reading
+    said, table = box.stages[0].pinion.z, order_table(box)
+    mesh_hz, seen, others = pinion_evidence(
+        reading.lines, speed.mean_hz, reading.revolutions, table, said, speed.declared_hz
+    )
+    if seen is None:
+        speed.others = others
+    elif seen != said and (found := _read_at_count(rec, box, options, speed, mesh_hz, seen)) is not None:
+        return found
+    return speed, reading
 
 
 def _read_at_count(rec: Recording, box: Gearbox, options: InspectOptions, speed: Speed, mesh_hz: float, count: int):
@@ -341,60 +370,16 @@ def _read_at_count(rec: Recording, box: Gearbox, options: InspectOptions, speed:
         theta, per_rev = TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
     else:
         f, per_rev = mean, rec.fs / np.diff(revolution_starts(theta - theta[0]))
-    how = (
-        f"from the input pinion's sidebands (a {count}-tooth pinion meshing at {fmt_hz(mesh_hz)}), the declared "
-        f"{fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
-    )
+    why = f"the declared {fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
+    if speed.source != "declared":  # the search's speed fitted the described count's mesh, not the shaft's lines
+        why = f"not the {fmt_hz(speed.mean_hz)} a {described}-tooth pinion would turn at"
+    how = f"from the input pinion's sidebands (a {count}-tooth pinion meshing at {fmt_hz(mesh_hz)}), {why}"
     settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=True)
     at = read_orders(rec, settled, options.threshold_db)
     first = check_description(at.lines, box, at.revolutions, False)["stages"][0]
     off_mesh = abs(first.get("measured_order", -1.0) - count) > tol_mesh(count, 1.0 / at.revolutions)
     off_shaft = abs(first.get("z1_seen", float(count)) - count) > max(TEETH_AGREE, first.get("z1_resolution", 0.0))
     return None if off_mesh or off_shaft else (settled, at)
-
-
-def _sideband_counts(lines: Lines, stage, declared: float, df: float) -> tuple[float | None, list[tuple]]:
-    """(the first stage's mesh line, Hz, or None; [(a line, the pinion's tooth count its sidebands show)])
-    of a record read at the *declared* speed, its *lines* in Hz (bin *df*): each line, strongest first,
-    where the described pinion's mesh could lie (within ±SIDEBAND_WINDOW of its count at the declared
-    speed), tried as that mesh; the sidebands where the speed search looks for them (gearbox.speed.
-    sideband_teeth) must put the pinion at a whole count (±TEETH_AGREE) and the speed, the line over it,
-    within the nominal range (a 40-tooth mesh's 3rd subharmonic, read as the mesh of a 41-tooth one, made
-    a 37-tooth pinion at 8.8 Hz). The mesh line: the strongest such."""
-    said, first, found = stage.pinion_teeth, None, []
-    for q in np.argsort(-lines.amp):
-        at = float(lines.at[q])
-        if abs(at / (declared * said) - 1) > SIDEBAND_WINDOW:
-            continue
-        first = at if first is None else first
-        seen = sideband_teeth(lines, at / said, stage, df)
-        if seen is None or abs(seen - round(seen)) > TEETH_AGREE or round(seen) < 1:
-            continue
-        if abs(at / round(seen) / declared - 1) <= NOMINAL_RANGE:
-            found.append((at, round(seen)))
-    return first, found
-
-
-def _no_speed_line(mesh_hz: float | None, declared: float, seen: bool = False) -> str:
-    """No speed confirmed, in the words the verdict's speed line takes after the speed search's note: the
-    pinion counts and speeds (within the nominal range of the *declared* one) the mesh line allows; *seen*:
-    sidebands showed a count, but the rows read at its speed did not bear it out."""
-    words = "no sideband of the input shaft confirms a speed"
-    if seen:
-        words = "the input shaft's sidebands confirm no speed (read at the one they show, the orders are off)"
-    tells = "a tacho or the measured speed, --speed, tells"
-    mesh = mesh_hz or 0.0
-    low, high = mesh / (declared * (1 + NOMINAL_RANGE)), mesh / (declared * (1 - NOMINAL_RANGE))
-    counts = [z for z in range(math.ceil(low), int(high) + 1) if z >= 1]
-    if not counts:
-        return f"{words} ({tells})"
-    said = [f"a {z}-tooth pinion's at {fmt_hz(mesh_hz / z)}" for z in counts]
-    if len(said) <= 4:
-        allowed = said[0] if len(said) == 1 else ", ".join(said[:-1]) + " or " + said[-1]
-    else:
-        allowed = f"any pinion's from {counts[0]} teeth at {fmt_hz(mesh_hz / counts[0])} to {counts[-1]} at "
-        allowed += fmt_hz(mesh_hz / counts[-1])
-    return f"{words}: the mesh at {fmt_hz(mesh_hz)} is {allowed} ({tells} which)"
 
 
 def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> dict:
@@ -473,16 +458,20 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         # no speed: the pinion's tooth count is not confirmed, 'matches' neither true nor false (None)
         pinion = None if differences else pinion_unconfirmed(check, box, found)
         report["matches"] = None if pinion else not differences
-        rest = [u for u in check["unchecked"] if u != pinion]
+        # no tacho, no input-shaft line: other counts at other speeds in the nominal range give the same mesh
+        check["ambiguous"] = [{"pinion_teeth": z, "speed_hz": hz} for z, hz in speed.others]
+        name, rest = box.name, [u for u in check["unchecked"] if u != pinion]
+        if pinion:
+            head = f"the description {name!r} cannot be confirmed without a tacho or the speed: {pinion}"
+        elif speed.others:
+            head = f"the description {name!r} is consistent with this recording if the input turns at "
+            head += f"{fmt_hz(speed.mean_hz)}: {alternatives_words(speed.others)}"
+        else:
+            head = f"the description {name!r} matches this recording"
         report["verdict"] = (
-            f"the description {box.name!r} differs: " + "; ".join(differences)
+            f"the description {name!r} differs: " + "; ".join(differences)
             if differences
-            else (
-                f"the description {box.name!r} cannot be confirmed without a tacho or the speed: {pinion}"
-                if pinion
-                else f"the description {box.name!r} matches this recording"
-            )
-            + (f"; not checked: {'; '.join(rest)}" if rest else "")
+            else head + (f"; not checked: {'; '.join(rest)}" if rest else "")
         )
     return report
 
@@ -717,7 +706,8 @@ def render(report: dict, console, width: int = 100) -> None:
         )
     console.print(t)
     if "verdict" in report:
-        colour = {True: "green", None: "yellow"}.get(report["matches"], "red")
+        said = None if check.get("ambiguous") and report["matches"] else report["matches"]  # 'consistent if'
+        colour = {True: "green", None: "yellow"}.get(said, "red")
         console.print(f"[bold {colour}]{escape(report['verdict'])}[/bold {colour}]")
 
 
