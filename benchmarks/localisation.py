@@ -118,6 +118,16 @@ def _description(box: str) -> str:
 
 
 def trial(args: tuple) -> list[dict]:
+    """One trial's rows; a random train's description file is removed when the trial ends."""
+    made = []
+    try:
+        return _trial(args, made)
+    finally:
+        for path in made:
+            Path(path).unlink(missing_ok=True)
+
+
+def _trial(args: tuple, made: list) -> list[dict]:
     import warnings
 
     from gearlab.data.simulated import simulated_record
@@ -133,6 +143,7 @@ def trial(args: tuple) -> list[dict]:
     load = float(rng.uniform(5.0, 40.0))
     snr = float(rng.uniform(10.0, 30.0))
     where, gears = (_description(box), spec["gears"]) if box != "random" else random_train(rng)
+    made += [where] if box == "random" else []
     table = order_table(resolve_gearbox(where))
     seeds = iter(rng.integers(0, 2**31, size=16))
     extra = {} if box == "phm09" else {"gearbox": where, "sim_fs": spec["sim_fs"]}
