@@ -30,3 +30,16 @@ def described_pair(*stages):
     for z1, z2 in reversed(stages):
         pair = SimpleNamespace(Z1=z1, Z2=z2, next_stage=pair)
     return pair
+
+
+# a 20/30 + 20/50 reducer, tacho on the input: the slower-shaft tests' gearbox (test_slow_shaft*)
+SLOW_BOX = description(
+    stage(20, 30, "2 mm", "15 mm", ("15 mm", "20 mm")),
+    stage(20, 50, "2.5 mm", "20 mm", ("20 mm", "30 mm")),
+    name="slowbox",
+    speed="30 Hz",
+    load="15 N*m",
+    near="input",
+    direction="x",
+    tacho="input",
+)

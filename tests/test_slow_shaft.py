@@ -17,20 +17,10 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import SLOW_BOX as BOX
 
 from gearlab.data.simulated import simulated_record
 
-BOX = description(
-    stage(20, 30, "2 mm", "15 mm", ("15 mm", "20 mm")),
-    stage(20, 50, "2.5 mm", "20 mm", ("20 mm", "30 mm")),
-    name="slowbox",
-    speed="30 Hz",
-    load="15 N*m",
-    near="input",
-    direction="x",
-    tacho="input",
-)
 # name: (chip step on the output gear's tooth 7 or None, seed, input revolutions)
 TAKES = {
     "hist1": (None, 1, 200),

@@ -14,7 +14,7 @@ output gear's record10 units at AUC 0.52-0.55; likelihood_ratio and matched_filt
 from __future__ import annotations
 
 import numpy as np
-from gearboxes import description, stage
+from gearboxes import SLOW_BOX as BOX
 
 from gearlab.data.builder import turned
 from gearlab.data.spec import POINTS
@@ -30,16 +30,6 @@ def test_a_cycle_of_any_number_of_turns_keeps_all_of_them():
         assert out.size == revolutions * POINTS, (revolutions, out.size / POINTS)
 
 
-BOX = description(
-    stage(20, 30, "2 mm", "15 mm", ("15 mm", "20 mm")),
-    stage(20, 50, "2.5 mm", "20 mm", ("20 mm", "30 mm")),
-    name="slowbox",
-    speed="30 Hz",
-    load="15 N*m",
-    near="input",
-    direction="x",
-    tacho="input",
-)
 SCENARIO = """\
 [scenario]
 name = "slow_rows"
