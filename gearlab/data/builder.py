@@ -171,6 +171,10 @@ def mesh_cycle(sim: Simulator) -> int:
 # cut from the stretch without wrapping (stretch_start).
 STRETCH = 64  # revolutions of a long train's stretch beyond the longest record it serves (at least as many)
 SETTLE_SAFETY = 2.0  # the slowest mode's decay to STEADY_RTOL, this many times over
+# Steps of a settle at most: a run holds ~91 bytes a step (a 15-DOF three-stage model), so a stretch's
+# run stays within 0.8 GB plus its own revolutions'. A casing on 1 N s/m mounts settles in ~846,000
+# turns (R's gap profile: a worker at 21.9 GB); such a model is refused before it is simulated.
+SETTLE_STEPS = 1 << 23
 
 
 def train_cycle(sim: Simulator, faults) -> int:
@@ -195,7 +199,14 @@ def settle_revolutions(sim: Simulator, speed: float) -> int:
     decay = float(-np.linalg.eigvals(A).real.max())
     if not decay > 0:
         raise GearlabInputError(f"model '{sim.model.name}': a mode is undamped, so its response never settles")
-    return math.ceil(SETTLE_SAFETY * math.log(1 / STEADY_RTOL) / decay * speed)
+    settle = math.ceil(SETTLE_SAFETY * math.log(1 / STEADY_RTOL) / decay * speed)
+    if settle * round(sim.fs / speed) > SETTLE_STEPS:
+        raise GearlabInputError(
+            f"model '{sim.model.name}': its slowest mode decays at {decay:.3g} 1/s, so the start-up transient "
+            f"would settle only after {settle} input revolutions; a settle of at most {SETTLE_STEPS} steps "
+            f"({SETTLE_STEPS // round(sim.fs / speed)} revolutions at {sim.fs:g} Hz) is simulated"
+        )
+    return settle
 
 
 def steady_stretch(

@@ -124,14 +124,15 @@ def _local(space, evaluate, u0: np.ndarray, choice: tuple, free: list[int], eval
 
 def _intervals(space, history: list[dict], best: dict, noise: float) -> dict:
     """Per numeric parameter: the bracket of every evaluated value within *noise* of the best
-    score, out to the nearest evaluated value outside it on each side (or the bound); a whole
-    number's is the values within it."""
+    score, out to the nearest evaluated value outside it on each side (or the bound; a refused
+    point, scored inf, bounds nothing); a whole number's is the values within it."""
     out = {}
     threshold = best["score"] + noise
     for e in space.numbers:
         name = e["name"]
         inside = [h["params"][name] for h in history if h["score"] <= threshold]
-        outside = [h["params"][name] for h in history if h["score"] > threshold]
+        # a point scored inf was refused (the simulator cannot take it): no evidence either way
+        outside = [h["params"][name] for h in history if threshold < h["score"] < math.inf]
         lo_in, hi_in = min(inside), max(inside)
         if e["integer"]:
             # Whole numbers: the values outside were evaluated and are worse; nothing lies between

@@ -1,0 +1,80 @@
+"""The gap diagnosis on an outside user's three-stage and wrong-count boxes (issue 39 item 4): a
+profile point whose start-up transient takes hours to decay is refused before it is simulated (a
+three-stage gap run's profile grew one worker to 21.9 GB), and such a refused point is no evidence
+for or against a parameter value."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import pytest
+from gearboxes import description, stage
+
+from gearlab.data import builder
+from gearlab.errors import GearlabInputError
+from gearlab.gap import identify
+from gearlab.gearbox.simulation import reference
+from gearlab.registry import get_registry
+
+# a three-stage train of hunting-tooth pairs: its meshes repeat only after 2773 input turns, so a
+# dataset's unit is a stretch of steady turns after the start-up transient (builder.steady_stretch)
+HUNTING = description(
+    stage(19, 47), stage(23, 59, module="2.5 mm"), stage(29, 71, module="3 mm"), name="h", speed="15 Hz", load="60 N*m"
+)
+
+
+def test_a_lightly_damped_casing_on_a_long_train_is_refused_before_its_settle_is_simulated(tmp_path, monkeypatch):
+    # outside box R (38/87 + 49/93 + 69/91) profiled its casing path towards c_yf = 1 N s/m: the slowest
+    # mode then decays at ~5e-4 1/s, a settle of 846,281 input turns; one profile point asked the
+    # simulator for ~400 M steps (91 bytes each) and the worker died at 21.9 GB resident
+    from gearlab.dynamics.newmark import Simulator
+
+    (tmp_path / "h.toml").write_text(HUNTING)
+    casing = get_registry().get("effect", "casing_path")
+    effects = (casing.spec({"mf": 1000.0, "k_xf": 1e5, "k_yf": 1e5, "c_xf": 1.0, "c_yf": 1.0}),)
+    fs = builder.whole_steps_rate(10_000, 15.0, 19)
+    box = reference(str(tmp_path / "h.toml"))
+    task = builder.SimTask("three_stage", box, fs, 15.0, 60.0, "pinion_x", None, None, (1,), effects)
+    asked = []
+
+    def counted(self, faults=(), speed_hz=None, load_nm=None, duration=0.4, **kw):
+        asked.append(int(round(duration * self.fs)))
+        if asked[-1] > 1 << 24:  # never allocated: the test stops it first
+            raise MemoryError(f"{asked[-1]} steps asked")
+        return original(self, faults, speed_hz, load_nm, duration, **kw)
+
+    original = Simulator.run
+    monkeypatch.setattr(Simulator, "run", counted)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        with pytest.raises(GearlabInputError, match="settle") as refused:
+            builder.simulate_unit(tuple(task))
+    per_rev = round(fs / 15.0)
+    assert asked == []  # refused before the simulator is asked for any step
+    assert "1/s" in str(refused.value) and f"{builder.SETTLE_STEPS}" in str(refused.value)
+    # the bound: a stretch's run holds at most SETTLE_STEPS + its own revolutions' steps (~91 bytes a
+    # step on this 15-DOF model: 0.8 GB for the settle at most); the default casing settles well inside
+    plain = tuple(task._replace(effects=(casing.spec({}),)))
+    builder.simulate_unit(plain)
+    assert len(asked) == 1 and asked[0] <= builder.SETTLE_STEPS + 2 * builder.STRETCH * per_rev
+
+
+def test_a_refused_profile_point_is_no_evidence_against_its_value():
+    # a profile point the simulator refuses scores inf; counted as a worse score it closed the
+    # interval on its side, and a parameter the data leave free read "determined"
+    class Space:
+        numbers = [{"name": "c", "low": 1.0, "high": 1e6, "integer": False, "log": True}]
+
+        def unit(self, e, x):
+            return (math.log(x) - math.log(e["low"])) / (math.log(e["high"]) - math.log(e["low"]))
+
+    flat = [{"params": {"c": c}, "score": 1.0} for c in (1e3, 2e3, 5e3)]
+    refused = [{"params": {"c": c}, "score": math.inf} for c in (10.0, 1e5)]
+    history = flat + refused
+    intervals = identify._intervals(Space(), history, flat[0], noise=0.5)
+    assert intervals["c"] == [1.0, 1e6]
+    assert not identify.determined(Space(), intervals)["c"]["determined"]
+    # a finite worse score still closes it
+    worse = [{"params": {"c": c}, "score": 9.0} for c in (10.0, 1e5)]
+    assert identify._intervals(Space(), flat + worse, flat[0], noise=0.5)["c"] == [10.0, 1e5]
