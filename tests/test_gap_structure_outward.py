@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import warnings
 
+import numpy as np
 import pytest
 from gearboxes import description, stage
 
@@ -78,3 +79,44 @@ def test_a_refused_profile_point_is_no_evidence_against_its_value():
     # a finite worse score still closes it
     worse = [{"params": {"c": c}, "score": 9.0} for c in (10.0, 1e5)]
     assert identify._intervals(Space(), flat + worse, flat[0], noise=0.5)["c"] == [10.0, 1e5]
+
+
+def _q_rows(described: tuple, seed: int = 1) -> tuple:
+    """Outside box Q (38/89 + 49/95, tacho on the output) as the gap reads it against *described*: input
+    revolutions cut at the tacho's angle over the described ratio; and the chain that says so."""
+    from test_outside_round9 import _train
+
+    from gearlab.data.chain import Chain
+
+    f, points, train = 30.0, 1024, ((38, 89), (49, 95))
+    ratio = 38 / 89 * 49 / 95
+    said = math.prod(z1 / z2 for z1, z2 in described)
+    cut = 2 * math.pi * np.arange(300 * points) / points * said / ratio
+    chain = Chain(fs=points * f * ratio / said, speed=f * ratio / said, tacho_shaft="output")
+    return _train(cut, train, seed=seed).reshape(300, points), chain
+
+
+@pytest.mark.parametrize(
+    "described, named, evidence",
+    [
+        # Q described with a 48-tooth later pinion for its 49: the input's speed, the output tacho's times
+        # the described ratio, reads 2 % slow, so stage 1's mesh sat at 37.2: 'mesh order 37.2 measured, 38
+        # expected ... not a whole number of teeth', the stage that differs unnamed
+        (((38, 89), (48, 95)), "stage 2 pinion: 49 teeth fit the recording, 48 described", "the pinion shows 49.0"),
+        # its first wheel 88 for 89: stage 2 passes, stage 1's mesh at 89 intermediate-shaft orders
+        (((38, 88), (49, 95)), "stage 1 wheel: 89 teeth fit the recording, 88 described", "the wheel shows 89.0"),
+        # its last wheel 94 for 95: the gear on the tacho's own shaft
+        (((38, 89), (49, 94)), "stage 2 wheel: 95 teeth fit the recording, 94 described", "the wheel shows 95.0"),
+    ],
+)
+def test_an_output_tacho_s_mismatch_names_the_gear_read_outward_from_the_tacho(described, named, evidence):
+    from gearboxes import described_pair
+
+    from gearlab.gap.structure import structure_line
+
+    rows, chain = _q_rows(described)
+    line = structure_line(rows, described_pair(*described), 400, chain, None, {})
+    assert line is not None and line.startswith(named), line
+    assert evidence in line and "read outward from the tacho on the output shaft" in line, line
+    right, chain = _q_rows(((38, 89), (49, 95)))
+    assert structure_line(right, described_pair((38, 89), (49, 95)), 400, chain, None, {}) is None

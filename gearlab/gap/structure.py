@@ -542,6 +542,10 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     on_input = chain is None or (chain.tacho_shaft or (None if chain.speed_from_mesh else input_shaft)) == input_shaft
     tacho = _tacho_read(chain, pair)
     record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
+    if mesh.get("shaft") or mesh.get("marks"):  # the tacho itself read wrong: no shaft's speed is known
+        return mesh_line(mesh, pair.Z1)
+    if tacho is not None and tacho[1] > 0 and (line := outward_line(target, pair, max_order, tacho[1], record)):
+        return line
     if mesh["differs"]:
         return mesh_line(mesh, pair.Z1)
     # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
@@ -560,6 +564,55 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     if later["stages"]:
         record["later_stages"] = later["stages"]
     return later["line"]
+
+
+def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:
+    """The one line of the first gear, read outward from the tacho's shaft (index *tacho*, after the
+    input), whose tooth count the target's revolutions contradict, or None. The stages are read as inspect
+    reads them (gearbox.match.check_description with the tacho's shaft); a stage's mesh, in orders of
+    its shaft nearer the tacho, is that gear's count while every gear between is as described, and the
+    far gear's count is its shaft's sidebands of the mesh. A wrong gear puts every stage beyond it off
+    (Q, 38/89 + 49/95 with an output tacho, described with a 48-tooth later pinion: the input read 2 %
+    slow, stage 1's mesh at 37.2, 'mesh order 37.2 measured, 38 expected', the pinion unnamed); the
+    nearest stage first, the input's side after the output's at one distance."""
+    from ..gearbox import order_table
+    from ..gearbox.match import check_description
+
+    box = _PairDescription.train(pair)
+    table = order_table(box)
+    stages = check_description(_lines(target, max_order), box, target.shape[0], False, tacho)["stages"]
+    found = []
+    for side in (range(tacho + 1, len(stages) + 1), range(tacho, 0, -1)):  # stage numbers, outward
+        for k in side:
+            entry, s = stages[k - 1], table.stages[k - 1]
+            wheel_near = k <= tacho  # the stage's wheel on the tacho's side of it
+            near = k if wheel_near else k - 1
+            gears = [("wheel", s.wheel_teeth, "z2"), ("pinion", s.pinion_teeth, "z1")][:: 1 if wheel_near else -1]
+            if entry.get("measured_order") is None:  # no line where the near gear would mesh: beyond here unread
+                break
+            z = entry["measured_order"] / float(table.shaft_orders[near])
+            role, said, _ = gears[0]
+            if not entry["matched"] and round(z) != said:
+                why = f"the stage-{k} mesh at {z:.1f} orders of the {table.shafts[near]} shaft"
+                found.append((abs(near - tacho), k, role, z, said, f"the {role} shows {z:.1f} teeth ({why})"))
+                break
+            role, said, key = gears[1]
+            seen, spread = entry.get(f"{key}_seen"), entry.get(f"{key}_resolution") or 0.0
+            if seen is None:  # the far shaft's order not seen: the stages beyond are read at its described one
+                continue
+            if abs(seen - said) > max(0.5, spread):
+                evidence = f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh)"
+                found.append((abs(near - tacho), k, role, seen, said, evidence))
+                break
+    if not found:
+        return None
+    _, k, role, z, said, evidence = min(found, key=lambda f: f[:2])
+    record["outward"] = {"stage": k, "gear": role, "seen": float(z), "described": int(said)}
+    count = f"{round(z)}" if abs(z - round(z)) <= 0.25 else f"{z:.1f}"
+    return (
+        f"stage {k} {role}: {count} teeth fit the recording, {said} described; read outward from the tacho on the "
+        f"{table.shafts[tacho]} shaft, {evidence}, {said} expected"
+    )
 
 
 def first_difference(source, target, pair, settings, rows, fresh, plain, before, chain) -> tuple:
