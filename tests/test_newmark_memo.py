@@ -66,3 +66,18 @@ def test_a_gear_pair_s_tvms_builder_is_shared_and_another_pair_gets_its_own():
     two = Simulator(registry.get("model", "two_stage"), "phm09")
     assert a.stiffness is b.stiffness and two.stiffness is not a.stiffness
     assert two.stiffness.pair == two.pair and two.mesh_models[0].pair == two.meshes[0].pair
+
+
+def test_a_shorter_run_s_time_base_is_the_start_of_the_longest_one_s():
+    # builder.steady_response runs 8, 32, 128 then 512 revolutions: one time base and one table index
+    # are kept, the shorter runs' their first entries (at 200 kHz the four overflowed the memo's
+    # budget together and were made again at every run of a gap search)
+    sim = Simulator(get_registry().get("model", "six_dof"), "meng2020")
+    short = sim._time_base(2000, 30.0)
+    longest = sim._time_base(8000, 30.0)
+    again = sim._time_base(2000, 30.0)
+    for s, long_ in zip(again, longest, strict=True):
+        assert np.shares_memory(s, long_) and np.array_equal(s, long_[:2001])
+    assert all(np.array_equal(a, b) for a, b in zip(short, again, strict=True))
+    index = sim._index(8001, 100)
+    assert np.shares_memory(sim._index(2001, 100), index)

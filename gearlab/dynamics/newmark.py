@@ -396,34 +396,44 @@ class Simulator:
         )
 
     @staticmethod
-    def _memoised(key: tuple, make):
+    def _memoised(key: tuple, make, length: int | None = None):
         """make() (a tuple of arrays, made read-only), kept in _MEMO: the time base and table indices
-        of a diagnosis' hundreds of runs at one speed are made once."""
-        hit = _MEMO.pop(key, None)
-        if hit is None:
-            hit = make()
-            for x in hit:
+        of a diagnosis' hundreds of runs at one speed are made once. With *length*, *key* names series
+        that are elementwise functions of the step, make(length) their first *length* entries: the
+        longest made is kept and a shorter one is its first entries (views: the same floats). A steady
+        simulation's runs of 8, 32, 128 and 512 revolutions (builder.steady_response) keep one series,
+        not four that together overflow _MEMO_BYTES and are made again at every simulator's run."""
+        entry = _MEMO.pop(key, None)
+        if entry is None or (length is not None and len(entry[0][0]) < length):
+            made = make() if length is None else make(length)
+            for x in made:
                 x.setflags(write=False)
-        _MEMO[key] = hit  # the most recently used last
-        while sum(x.nbytes for entry in _MEMO.values() for x in entry) > _MEMO_BYTES:
+            entry = (made, {})  # the arrays; their prefixes by length, each made once
+        _MEMO[key] = entry  # the most recently used last
+        while sum(x.nbytes for kept, _ in _MEMO.values() for x in kept) > _MEMO_BYTES:
             _MEMO.pop(next(iter(_MEMO)))
-        return hit
+        if length is None:
+            return entry[0]
+        views = entry[1]
+        if length not in views:
+            views[length] = tuple(x[:length] for x in entry[0])
+        return views[length]
 
     def _time_base(self, steps: int, speed: float) -> tuple[np.ndarray, ...]:
         """t, the nominal input-shaft angle (fixed speed, unwrapped), its phase in [0, 2 pi) and the
         tacho (the phase in [-pi, pi)) of *steps* steps at *speed*: read-only, memoised."""
-        (t,) = self._memoised(("t", self.fs, steps), lambda: (np.arange(steps + 1) / self.fs,))
+        (t,) = self._memoised(("t", self.fs), lambda n: (np.arange(n) / self.fs,), steps + 1)
 
-        def make():
+        def make(n):  # n == len(t)
             shaft = 2 * np.pi * speed * t
             phase = np.mod(shaft, 2 * np.pi)
             return shaft, phase, np.where(phase >= np.pi, phase - 2 * np.pi, phase)
 
-        return (t, *self._memoised(("angle", self.fs, steps, speed), make))
+        return (t, *self._memoised(("angle", self.fs, speed), make, steps + 1))
 
     def _index(self, n: int, period: int) -> np.ndarray:
         """The table index of *n* steps on a table of *period* entries, one entry a step: read-only, memoised."""
-        return self._memoised(("index", n, period), lambda: (np.arange(n) % period,))[0]
+        return self._memoised(("index", period), lambda size: (np.arange(size) % period,), n)[0]
 
     @staticmethod
     def _repeat(k: np.ndarray, index: np.ndarray, period: int) -> np.ndarray:
