@@ -19,8 +19,8 @@ Formats (by extension) and where the sampling rate comes from:
                   or none (columns "0", "1", …); '#' comment lines; the rate from a time column
                   (time, t, time_s, 'Time [s]', 'time (ms)', …: see time_scale) or a comment
                   '# fs = 51200'
-    .txt / .dat   blank-separated text, plain or one text file in a .zip (gearlab.data.textzip:
-    .zip          streamed, for records of many megabytes); a header row or none
+    .txt / .dat   blank-separated text, plain, gzipped (.gz) or one text file in a .zip
+    .zip / .gz    (gearlab.data.textzip: streamed, for records of many megabytes); a header row or none
     .npz          arrays by name, loaded without pickle; rate from a scalar 'fs' or a time array
     .h5 / .hdf5   datasets by path ("group/acc"); rate from an attribute 'fs' on the channel,
                   else from an 'fs' attribute or 'fs'/time dataset in its group, or the
@@ -68,6 +68,7 @@ FORMATS = {
     ".txt": "text",
     ".dat": "text",
     ".zip": "zipped text",
+    ".gz": "zipped text",
     ".npz": "NPZ",
     ".h5": "HDF5",
     ".hdf5": "HDF5",

@@ -29,11 +29,12 @@ class Header:
     units: dict[str, str] = field(default_factory=dict)  # a unit a channel states (Contents.units)
     nested: bool = False  # channels are paths ("group/acc"), found by their last part alone too
     stated: tuple[float, str] | None = None  # the rate the header states (Hz) and where: a WAV's, an attribute
+    stated_within: float = 1e-6  # relative: a rate read off a text's printed times is known to their digits
 
     def check_rate(self, fs: float | None, where: str, path) -> None:
         """A rate given (*fs*, Hz) that the header's own contradicts: one line naming *where*'s 'fs'
         (a WAV at 48 kHz or an HDF5 'fs' attribute against `fs = "50 kHz"`: validate said OK)."""
-        if fs is None or self.stated is None or abs(fs - self.stated[0]) <= 1e-6 * self.stated[0]:
+        if fs is None or self.stated is None or abs(fs - self.stated[0]) <= self.stated_within * self.stated[0]:
             return
         from ...signals.checks import fmt_hz
 
@@ -69,7 +70,7 @@ def _csv_header(path: Path) -> Header:
             if stripped.startswith("#"):
                 match = _COMMENT_FIELD.match(stripped)
                 if match:
-                    fields.append(match.group(1))
+                    fields.append((match.group(1), match.group(2)))
                 continue
             if not stripped:
                 continue
@@ -84,13 +85,45 @@ def _csv_header(path: Path) -> Header:
                     "row of column names, then rows of numbers"
                 )
             names = names if names is not None else header_names(None, len(row))
+            stated = _stated_rate(f, line, names, [(k, v) for k, v in fields if k.lower() in _RATE_NAMES])
             break
         else:
             raise GearlabInputError(
                 f"{path}: no rows of numbers; expected a header row of column names (or none), then numbers"
             )
-    every = [*names, *fields]
-    return Header("CSV", every, any(is_rate_or_time(n) for n in every), indexed=True)
+    every = [*names, *(k for k, _ in fields)]
+    rate = any(is_rate_or_time(n) for n in every)
+    return Header("CSV", every, rate, indexed=True, stated=stated[0], stated_within=stated[1])
+
+
+def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
+    """(the rate a CSV states (Hz, where) or None, how closely): a '# fs = ...' line's, else its time
+    column's over the first rows (*first*, then up to 2,000 more of *lines*), known to the digits its times
+    are printed with (a 25.6 kHz record's times in ms to 1e-4 ms: 1e-5 of the rate over 2,000 rows)."""
+    from .base import _column, time_scale
+    from .csv import delimiter_of, split_rows
+
+    for key, value in rates:
+        try:
+            return (float(value), f"its '# {key}' line"), 1e-6
+        except ValueError:
+            return None, 1e-6
+    column = next((j for j, n in enumerate(names) if time_scale(n) is not None), None)
+    if column is None:
+        return None, 1e-6
+    texts = [first, *(line for _, line in zip(range(2000), lines) if line.strip() and not line.startswith("#"))]
+    rows = split_rows(texts, delimiter_of(first))
+    fields = [row[column] for row in rows if len(row) > column]
+    t = _column(fields)
+    if t.dtype.kind != "f" or t.size < 3 or not np.all(np.diff(t) > 0):
+        return None, 1e-6
+    span = t[-1] - t[0]
+    step = span / (t.size - 1)
+    if np.max(np.abs(t - t[0] - step * np.arange(t.size))) > step / 2:  # not a uniform clock
+        return None, 1e-6
+    digits = max(len(f.partition(".")[2].partition("e")[0].partition("E")[0]) for f in fields)
+    where = f"its time column {names[column]!r}, first {t.size} rows"
+    return (1.0 / (step * time_scale(names[column])), where), max(1e-6, 2 * 10.0**-digits / span)
 
 
 def _text_header(path: Path, fmt: str) -> Header:

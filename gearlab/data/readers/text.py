@@ -1,5 +1,5 @@
-"""Delimited text, plain (.txt, .dat) or one text file in a .zip (the PHM 2009 gearbox records,
-a zipped CSV export): one row per sample, columns separated by blanks, commas, semicolons (their
+"""Delimited text, plain (.txt, .dat), gzipped (.gz) or one text file in a .zip (the PHM 2009 gearbox
+records, a zipped CSV export): one row per sample, columns separated by blanks, commas, semicolons (their
 numbers may carry decimal commas) or tabs, as the first data line shows; a header row of names or
 none.
 
@@ -13,6 +13,7 @@ counted while streaming, so an archive that lies about its size is stopped at th
 
 from __future__ import annotations
 
+import gzip
 import os
 import re
 import zipfile
@@ -36,8 +37,15 @@ CHUNK_BYTES = 1 << 18
 
 @contextmanager
 def _open_text(path: Path):
-    """A binary stream of the record's text: the one text member of a .zip, or the file."""
+    """A binary stream of the record's text: the one text member of a .zip, a .gz's text, or the file."""
     try:
+        if path.suffix.lower() == ".gz":
+            with path.open("rb") as raw:  # its size as the gzip trailer declares it (mod 4 GiB)
+                raw.seek(max(0, os.fstat(raw.fileno()).st_size - 4))
+                check_size(path, "the text (as the gzip declares it)", int.from_bytes(raw.read(4), "little"))
+            with gzip.open(path, "rb") as f:
+                yield f, str(path)
+            return
         if path.suffix.lower() != ".zip":
             with path.open("rb") as f:
                 check_size(path, "the text", os.fstat(f.fileno()).st_size)
@@ -63,6 +71,8 @@ def _open_text(path: Path):
         raise GearlabInputError(f"{path}: is a directory; expected a measured record") from None
     except zipfile.BadZipFile as exc:
         raise GearlabInputError(f"{path}: not a readable zip archive ({exc})") from None
+    except gzip.BadGzipFile as exc:
+        raise GearlabInputError(f"{path}: not a readable gzip file ({exc})") from None
     except (OSError, EOFError, zipfile.LargeZipFile, NotImplementedError, RuntimeError) as exc:
         # a truncated archive, an encrypted member, an unsupported compression
         raise GearlabInputError(f"{path}: cannot read ({exc})") from None

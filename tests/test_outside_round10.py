@@ -1,0 +1,71 @@
+"""Outside-user check of issue 39, round 10 (gearboxes and recordings made outside the project by an
+independent generator, described as a user would from docs/your_gearbox.md)."""
+
+from __future__ import annotations
+
+import gzip
+
+import numpy as np
+
+from gearlab.data.recordings import read_contents
+
+
+def test_gzipped_text_is_read_as_zipped_text_is(tmp_path, cli):
+    # A logger's day file, tab-separated without a header and gzipped (B_next_week.txt.gz, a 31/77 + 23/58
+    # reducer): "unknown file type '.gz'", where the same text in a .zip was read.
+    rows = np.column_stack([np.sin(np.arange(4000) * 0.37), (np.arange(4000) % 40 < 8) * 4.8])
+    body = "".join(f"{a:.6f}\t{b:.3f}\n" for a, b in rows)
+    for day in ("day", "next"):
+        with gzip.open(tmp_path / f"{day}.txt.gz", "wt") as f:
+            f.write(body)
+    contents, fmt = read_contents(tmp_path / "day.txt.gz", ["0", "1"])
+    assert fmt == "zipped text"
+    assert np.allclose(np.asarray(contents.found["0"], float), rows[:, 0], atol=1e-6)
+    # validate reads its header (the columns) without the data; a column it lacks is one line, exit 2
+    box = '[gearbox]\nname = "b"\n[operation]\nspeed = "20 Hz"\nload = "50 N*m"\n'
+    box += '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
+    box += 'pinion = { z = 31, bore = "20 mm" }\nwheel = { z = 77, bore = "30 mm" }\n'
+    (tmp_path / "b.toml").write_text(box)
+    for column, code in (("0", 0), ("2", 2)):
+        (tmp_path / "d.toml").write_text(
+            '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "b.toml"\nfaults = { chip = [20] }\n'
+            f'[target]\nvibration = "{column}"\ntacho = "1"\nfs = "12 kHz"\nunit = "g"\nfiles = [{{ file = '
+            '"day.txt.gz", role = "history", label = "healthy" }, { file = "next.txt.gz", role = "test", label = '
+            '"fault" }]\n'
+        )
+        got, out, err = cli("validate", tmp_path / "d.toml")
+        assert got == code, (out, err)
+        if code:
+            assert len(err.strip().splitlines()) == 1 and "day.txt.gz" in err and "'2'" in err, err
+
+
+def test_validate_names_a_given_rate_a_csv_time_column_contradicts(tmp_path, cli):
+    # A ';' CSV with decimal commas and a time column 'Zeit [ms]' at 25.6 kHz (times printed to 1e-4 ms),
+    # and fs = "20 kHz" in [target]: validate said OK (the header named the time column, its rate was not
+    # read), the run stopped at reading the data. The same for a '# fs = ...' line.
+    fs, n = 25600.0, 3000
+    t_ms = np.arange(n) / fs * 1e3
+    x = np.sin(np.arange(n) * 0.21)
+    rows = "".join(f"{a:.4f};{b:.5f}\n".replace(".", ",") for a, b in zip(t_ms, x))
+    (tmp_path / "a.csv").write_text("Zeit [ms];Beschleunigung [m/s^2]\n" + rows)
+    (tmp_path / "b.csv").write_text("Zeit [ms];Beschleunigung [m/s^2]\n" + rows)
+    (tmp_path / "c.csv").write_text("# fs = 25600\nacc_ms2\n" + "".join(f"{b:.5f}\n" for b in x))
+    (tmp_path / "d.csv").write_text("# fs = 25600\nacc_ms2\n" + "".join(f"{b:.5f}\n" for b in x))
+    box = '[gearbox]\nname = "a"\n[operation]\nspeed = "48 Hz"\nload = "40 N*m"\n'
+    box += '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
+    box += 'pinion = { z = 27, bore = "25 mm" }\nwheel = { z = 73, bore = "40 mm" }\n'
+    (tmp_path / "box.toml").write_text(box)
+    for first, second, vib in (("a.csv", "b.csv", "Beschleunigung [m/s^2]"), ("c.csv", "d.csv", "acc_ms2")):
+        for rate, code in (("25.6 kHz", 0), ("20 kHz", 2), (None, 0)):
+            given = f'fs = "{rate}"\n' if rate else ""
+            (tmp_path / "s.toml").write_text(
+                '[scenario]\nname = "s"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+                f'[target]\nvibration = "{vib}"\nspeed = "48 Hz"\n{given}files = [{{ file = "{first}", role = '
+                f'"history", label = "healthy" }}, {{ file = "{second}", role = "test", label = "fault" }}]\n'
+            )
+            got, out, err = cli("validate", tmp_path / "s.toml")
+            assert got == code, (first, rate, out, err)
+            if code:
+                line = err.strip()
+                assert len(line.splitlines()) == 1 and "[target] key 'fs'" in line and first in line, line
+                assert "25.6 kHz" in line, line
