@@ -120,3 +120,46 @@ def test_an_output_tacho_s_mismatch_names_the_gear_read_outward_from_the_tacho(d
     assert evidence in line and "read outward from the tacho on the output shaft" in line, line
     right, chain = _q_rows(((38, 89), (49, 95)))
     assert structure_line(right, described_pair((38, 89), (49, 95)), 400, chain, None, {}) is None
+
+
+def _mesh_rows(z1: int, z2: int, input_sidebands: bool, seed: int = 104) -> np.ndarray:
+    """300 turns of a one-stage z1/z2 record at uniform input angle (the mesh's harmonics 1-3 modulated by
+    the output shaft and, with *input_sidebands*, the input's), as the gap reads it at the speed it found."""
+    theta = 2 * np.pi * np.arange(300 * 1024) / 1024
+    mod = 1 + 0.1 * np.cos(z1 / z2 * theta + 1.0) + (0.2 * np.cos(theta + 0.3) if input_sidebands else 0.0)
+    x = sum(a * mod * np.cos(h * z1 * theta + 0.6 * h) for h, a in ((1, 1.0), (2, 0.4), (3, 0.2)))
+    return (x + np.random.default_rng(seed).normal(0, 0.05, x.size)).reshape(300, 1024)
+
+
+def test_a_count_the_mesh_line_alone_gives_is_ambiguous_in_the_gap_s_verdict_as_in_inspect():
+    # 36/137 described at a nominal 1500 rpm, no tacho, the speed found from the mesh lines (25.22 Hz): a
+    # 37-tooth pinion at 24.53 Hz meshes at the same line, and with no line of the input shaft inspect says
+    # 'consistent ... if the input turns at 25.22 Hz' (check.ambiguous); the gap's structure check passed
+    # and its verdict said 'explained' or 'no significant gap', plainly
+    from gearboxes import described_pair
+
+    from gearlab.data.chain import Chain
+    from gearlab.gap import structure
+    from gearlab.gap.conclusion import verdict_text
+
+    pair = described_pair((36, 137))
+    chain = Chain(fs=1024 * 25.2236, speed=25.2236, speed_from_mesh=True, described_speed=25.0)
+    bare = _mesh_rows(36, 137, input_sidebands=False)
+    assert structure.structure_line(bare, pair, 400, chain, None, {}) is None  # the structure itself passes
+    found = structure.count_ambiguity(bare, pair, 400, chain)
+    assert found is not None and {35, 37} <= {z for z, _ in found["others"]}, found
+    assert dict(found["others"])[37] == pytest.approx(25.2236 * 36 / 37, rel=1e-3)
+    line = found["line"]
+    assert line.startswith("the input pinion's tooth count is ambiguous: the description holds if the input turns at")
+    assert (
+        "a 37-tooth pinion at 24.54 Hz" in line
+        and "a tacho or the measured speed ([target] speed) would decide" in line
+    )
+    result = {"verdict": "explained", "unexplained": False, "structure": {"ambiguous": found}}
+    said = verdict_text(result)
+    assert said.startswith("explained; the input pinion's tooth count is ambiguous") and "\n" not in said, said
+    # the input shaft's sidebands tell the count: no ambiguity; a tacho or a speed given: none asked
+    assert structure.count_ambiguity(_mesh_rows(36, 137, input_sidebands=True), pair, 400, chain) is None
+    given = Chain(fs=1024 * 25.2236, speed=25.2236, speed_from_mesh=False, described_speed=25.0)
+    assert structure.count_ambiguity(bare, pair, 400, given) is None
+    assert verdict_text({**result, "structure": {}}) == "explained"

@@ -57,6 +57,9 @@ def verdict_text(result: dict) -> str:
     verdict = result.get("verdict") or ("unexplained" if result["unexplained"] else "explained")
     if result.get("difference"):
         return f"{verdict}: {result['difference']}"
+    ambiguous = (result.get("structure") or {}).get("ambiguous")
+    if ambiguous:  # the structure passed at the speed read only: never a plain verdict (inspect's 'consistent if')
+        return f"{verdict_text({**result, 'structure': None})}; {ambiguous['line']}"
     if verdict == "partly explained" and result.get("explained_share") is not None:
         return f"partly explained ({100 * result['explained_share']:.0f} % of the gap)"
     if verdict == "explained" and result.get("within_noise") and result.get("significant_after"):

@@ -174,6 +174,8 @@ def diagnose(
     verdict, line, result["structure"] = first_difference(
         source, target, pair, settings, rows, fresh, plain, before, chain
     )
+    if ambiguous := result["structure"].get("ambiguous"):  # the verdict says it too (conclusion.verdict_text)
+        on_event(Event("log", message=f"gap: {ambiguous['line']}"))
     if verdict is not None:
         on_event(Event("log", message=f"gap: {verdict}: {line}"))
         result = {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}

@@ -615,6 +615,31 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     )
 
 
+def count_ambiguity(target, pair, max_order: int, chain) -> dict | None:
+    """Where the target's speed came from the description's mesh lines (no tacho, no speed given) and no
+    line of the input shaft tells the pinion's count, the other counts the mesh line allows at speeds
+    within the nominal range, as inspect decides it (gearbox.pinion_count.pinion_evidence: inspect's
+    check.ambiguous): {'speed_hz', 'others': [(teeth, Hz)], 'line'}, else None. A structure that passes
+    then holds only if the input turns at the speed read (a 37-tooth pinion at 24.53 Hz meshes where the
+    described 36 at 25.22 Hz do)."""
+    if chain is None or not chain.speed_from_mesh or not chain.described_speed:
+        return None
+    from ..gearbox import order_table
+    from ..gearbox.pinion_count import alternatives_words, pinion_evidence
+    from ..signals.checks import fmt_hz
+
+    table = order_table(_PairDescription.train(pair))
+    lines = _lines(target, max_order)
+    _, seen, others = pinion_evidence(lines, chain.speed, target.shape[0], table, int(pair.Z1), chain.described_speed)
+    if seen is not None or not others:
+        return None
+    line = (
+        f"the input pinion's tooth count is ambiguous: the description holds if the input turns at "
+        f"{fmt_hz(chain.speed)}; {alternatives_words(others, '[target] speed')}"
+    )
+    return {"speed_hz": chain.speed, "others": [[int(z), float(hz)] for z, hz in others], "line": line}
+
+
 def first_difference(source, target, pair, settings, rows, fresh, plain, before, chain) -> tuple:
     """(verdict, its one line, what was measured) of the first thing no effect changes that differs
     between the *source* and the *target* -- its speed (a measured target's chain), its tooth count,
@@ -634,6 +659,8 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
     line = structure_line(target, pair, settings.max_order, chain, plain, record)
     if line:
         return "structure differs", line, record
+    if ambiguous := count_ambiguity(target, pair, settings.max_order, chain):
+        record["ambiguous"] = ambiguous  # the diagnosis goes on; its verdict says it (conclusion.verdict_text)
     if not gap_seen(before):
         return None, None, record
     c = level_factor(target, plain)

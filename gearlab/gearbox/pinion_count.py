@@ -68,11 +68,12 @@ def shaft_line_count(in_hz: Lines, mesh_hz: float, declared: float, df: float, t
     return shaft[0] if len(shaft) == 1 else None
 
 
-def alternatives_words(others: list[tuple]) -> str:
-    """'a 26-tooth pinion at 24.09 Hz gives the same line' for the other counts a mesh line allows."""
+def alternatives_words(others: list[tuple], speed_key: str = "--speed") -> str:
+    """'a 26-tooth pinion at 24.09 Hz gives the same line' for the other counts a mesh line allows; *speed_key*:
+    where the measured speed is given (inspect's option; a scenario's key)."""
     said = [f"a {z}-tooth pinion at {fmt_hz(hz)}" for z, hz in others]
     named = said[0] if len(said) == 1 else ", ".join(said[:-1]) + " or " + said[-1]
-    return f"{named} gives the same mesh line; a tacho or the measured speed (--speed) would decide"
+    return f"{named} gives the same mesh line; a tacho or the measured speed ({speed_key}) would decide"
 
 
 def no_speed_line(mesh_hz: float | None, declared: float, seen: bool = False) -> str:
