@@ -10,7 +10,8 @@ on one shaft, read at 66 666.67 Hz, 30-50 Hz) and a described train of other tee
 record with damage on each of the four gears (stage-1 pinion and wheel, stage-2 pinion and wheel):
 a chip, crack, broken tip, spall or pit at ladder step 12-20 on a random tooth. Every record is cut
 from its tacho (signals.cut_revolutions) and localised against the history
-(gearlab.signals.localise), orders up to 90 % of the records' Nyquist order. Which of the
+(gearlab.data.which_gear: the decision inspect --history, detection and score make; orders up to
+90 % of the history records' Nyquist order). Which of the
 intermediate shaft's two gears: by the description's simulated tooth-fault events at the trial's
 speed (gearlab.data.which_templates; --which width: the event's width alone); --effects simulates
 the records (not the templates) with other effects: a structure other than the simulator's.
@@ -130,10 +131,10 @@ def trial(args: tuple) -> list[dict]:
 def _trial(args: tuple, made: list) -> list[dict]:
     import warnings
 
+    from gearlab.data import which_gear as W
     from gearlab.data.simulated import simulated_record
     from gearlab.gearbox import order_table, resolve_gearbox
     from gearlab.signals import cut_revolutions
-    from gearlab.signals import localise as L
 
     warnings.filterwarnings("ignore", message=".*steps per period.*")
     box, seed, index, which, effects = args
@@ -165,14 +166,10 @@ def _trial(args: tuple, made: list) -> list[dict]:
         # the first complete revolution starts at the first tacho edge: the input turn after the start
         return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
 
-    history = [record() for _ in range(2)]
-    top = min(0.9 * spec["fs"] / 2 / speed, 0.45 * history[0][0].shape[1])
-    hist = L.history([r for r, _ in history], table, first_revolutions=[f for _, f in history], max_order=top)
-    templates = None
-    if which == "simulated":  # the description's own simulator, without the records' effects
-        from gearlab.data.which_templates import simulated_templates
-
-        templates = simulated_templates(table, speed, spec["fs"], gearbox=extra.get("gearbox"), sim_fs=spec["sim_fs"])
+    history = [W.Take(r, f, speed, spec["fs"]) for r, f in (record() for _ in range(2))]
+    hist = W.history_of(history, table)  # as inspect --history, a detection run and score read it
+    # the description's own simulator, without the records' effects; or the event's width alone
+    made = W.events(where) if which == "simulated" else None
     cases = [("healthy", None, None)]
     for word, name in gears:
         z = int(name.split("T (")[0].split()[-1])
@@ -186,19 +183,23 @@ def _trial(args: tuple, made: list) -> list[dict]:
     out = []
     for word, name, fault in cases:
         revs, first = record([fault] if fault else [])
-        res = L.localise(revs, hist, table, first_revolution=first, templates=templates)
+        res = W.which_gear(W.Take(revs, first, speed, spec["fs"]), hist, table, made)  # the product's decision
         row = {"box": box, "trial": index, "speed": speed, "snr": snr, "case": word, "gear": name, "fault": fault}
         shaft = word.split()[0]  # the shaft's other gear, watched by another scenario (report)
         row["other"] = [n for w, n in gears if w != word and w.split()[0] == shaft and name is not None]
-        row.update(named=res.named, shaft=res.named_shaft, z={e.shaft: [e.z, e.threshold] for e in res.ranking})
-        ev = next((e for e in res.ranking if e.shaft == res.named_shaft), None)
+        row.update(
+            named=res["named"],
+            shaft=res["named_shaft"],
+            z={e["shaft"]: [e["z"], e["threshold"]] for e in res["shafts"]},
+        )
+        ev = next((e for e in res["shafts"] if e["shaft"] == res["named_shaft"]), None)
         if ev is not None:
-            row["right"] = res.named == name
-            row["both"] = ev.which is None and len(ev.gears) == 2 and name in ev.gears
+            row["right"] = res["named"] == name
+            row["both"] = ev["which"] is None and len(ev["gears"]) == 2 and name in ev["gears"]
             row["wrong"] = not (row["right"] or row["both"])
-            row["evidence"] = ev.stage_evidence
-            if name in ev.tooth:
-                t = ev.tooth[name]
+            row["evidence"] = ev["stage_evidence"]
+            if name in ev["tooth"]:
+                t = ev["tooth"][name]
                 row["tooth_off"] = (t["pitches"] - (fault["tooth"] - 0.5) + t["of"] / 2) % t["of"] - t["of"] / 2
         out.append(row)
     return out

@@ -61,6 +61,7 @@ from .gearbox.speed import (
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
 from .signals.checks import fmt_hz
+from .signals.pipeline import first_complete
 
 TWO_PI = 2.0 * np.pi
 MAX_TSA_POINTS = 1 << 15
@@ -726,7 +727,7 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
         speed = settle_speed(rec, box, options, speed)[0]
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
         revs = resample_revolutions(rec.signal, speed.angle, points=POINTS)
-    first = math.ceil(speed.angle[0] / TWO_PI) % order_table(box).train_period
+    first = first_complete(speed.angle)  # as a detection's or score's take counts it (CutRecording)
     # the tacho marks a take may start at (localisation turns each take to the first history take's)
     kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
     shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
@@ -736,24 +737,20 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
 
 def localisation(path: str, history: list[str], box: Gearbox, options: InspectOptions) -> dict:
     """Which shaft and gear the record's synchronous average carries a localised change on, against
-    healthy *history* records of the same gearbox read with the same options
-    (gearlab.signals.localise; orders up to 90 % of the lowest Nyquist order among them). A shaft's
-    two gears: by the description's simulated events at the record's speed and rate
-    (data.which_templates), where the history's mesh harmonics agree with the simulation's."""
-    from .data.which_templates import record_templates
-    from .signals import POINTS
-    from .signals import localise as L
+    healthy *history* records of the same gearbox read with the same options: data.which_gear's one
+    decision, as a detection run and `gearlab score` make it (orders up to those every history record
+    holds; a shaft's two gears by the description's simulated events at the record's speed and rate,
+    where the history's mesh harmonics agree with the simulation's)."""
+    from .data import which_gear as W
 
     if not history:
         raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
     table = order_table(box)
-    revs, first, nyquist, _, speed, fs = _input_revolutions(path, box, options)
+    revs, first, _, _, speed, fs = _input_revolutions(path, box, options)
     past = [_input_revolutions(p, box, options) for p in history]
-    top = min(0.9 * min([nyquist] + [n for _, _, n, *_ in past]), 0.45 * POINTS)
-    firsts, marks = [f for _, f, *_ in past], max(k for *_, k, _, _ in past)
-    hist = L.history([r for r, *_ in past], table, first_revolutions=firsts, max_order=top, marks=marks)
-    templates = record_templates(table, box.source, speed.mean_hz, fs)
-    out = L.localise(revs, hist, table, first_revolution=first, templates=templates).describe()
+    takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
+    hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past))
+    out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
     out["history"] = list(history)
     return out
 

@@ -8,6 +8,7 @@ import pytest
 from which_gear_takes import REDUCER as TWO
 from which_gear_takes import reducer_take, two_stage_text
 
+from gearlab.data.which_gear import Take
 from gearlab.kinds import detection_which_gear as D
 from gearlab.parts.measured import TargetFile
 from gearlab.runs import RunDir
@@ -56,7 +57,7 @@ def test_the_events_come_from_the_corrected_simulator(condition, tmp_path):
     found = loc["records"]["chip"]
     assert found["named"] == PINION and "named by the simulated events" in found["summary"], found["summary"]
     revs, first = condition["raw"]["chip"]
-    scored = D.localise_scored(run, {"25 Hz": [("new", revs, first, SPEED, FS)]})["new"]
+    scored = D.localise_scored(run, {"25 Hz": [("new", Take(revs, first, SPEED, FS))]})["new"]
     assert scored["named"] == PINION, scored["summary"]
 
 

@@ -11,6 +11,7 @@ import pytest
 from which_gear_takes import REDUCER as TWO
 from which_gear_takes import reducer_take
 
+from gearlab.data.which_gear import Take
 from gearlab.kinds import detection_which_gear as D
 from gearlab.parts.measured import TargetFile
 from gearlab.runs import RunDir
@@ -83,7 +84,7 @@ def test_the_detection_kind_and_score_name_the_pinion_as_other_damage(takes, tmp
     assert found["call"] == f"other damage: {PINION}"  # the run watches the 21T input pinion
     assert "named by the simulated events" in found["summary"]
     _, revs, first = takes["chip"]
-    scored = D.localise_scored(run, {"25 Hz": [("new", revs, first, SPEED, FS)]})["new"]
+    scored = D.localise_scored(run, {"25 Hz": [("new", Take(revs, first, SPEED, FS))]})["new"]
     assert scored["named"] == PINION and scored["call"] == found["call"], scored["summary"]
     # a record whose speed or rate the condition does not give: the event's width, said
     cond.pop("fs")

@@ -51,7 +51,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..params import did_you_mean
-from ..signals import check_signal
+from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz
 from .readers import READERS, Contents, check_size
 from .readers.base import _listing, _one_line, _one_line_repr
@@ -619,7 +619,8 @@ def shaft_angle(
     if tacho_shaft is not None and tacho_shaft.turns != 1:  # a slower or faster shaft: angle / turns is the input's
         source, angle, how = shaft_angle(rec, kind=kind, pulses_per_rev=pulses_per_rev)
         angle = angle / float(tacho_shaft.turns)
-        return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"{how} on the {tacho_shaft.name} shaft"
+        cut = unwrap_tacho(wrap(angle))  # the angle it returns keeps the turns from the tacho's zero (numbers)
+        return {"tacho": wrap(angle)}, cut + (angle[0] - cut[0]), f"{how} on the {tacho_shaft.name} shaft"
     found_kind = kind if kind != "auto" else ("pulses" if pulses_per_rev > 1 else tacho_kind(rec.tacho))
     detected = ", detected" if kind == "auto" and pulses_per_rev == 1 else ""
     if found_kind == "angle":
@@ -673,6 +674,7 @@ class CutRecording:
     transient_revolutions: int
     angle_source: str = ""
     warnings: tuple[str, ...] = ()
+    first_revolution: int = 0  # revolutions[0]'s number from the angle's zero (first_complete)
 
 
 def cut_recording(
@@ -717,15 +719,10 @@ def cut_recording(
     start, warning = 0, None
     if transient == "stats":
         start, _, warning = steady_start(cut.revolutions, f"{path}: vibration column {_one_line_repr(rec.vibration)}")
+    revs, warns = cut.revolutions[start:], () if warning is None else (warning,)
+    first = first_complete(angle) + int(start)  # revolutions' numbers from the angle's zero: for localisation
     return CutRecording(
-        str(path),
-        cut.revolutions[start:],
-        float(cut.speed_hz),
-        float(rec.fs),
-        int(raw.size),
-        int(start),
-        how,
-        () if warning is None else (warning,),
+        str(path), revs, float(cut.speed_hz), float(rec.fs), int(raw.size), int(start), how, warns, first
     )
 
 

@@ -258,8 +258,8 @@ def read_target(
         on_event(Event("log", message=f"{f.path}: {speeds[f.path]:.3f} Hz, from {records[f.path].angle_source}"))
         # as cut, before standardising and aligning (which rotate each revolution): what
         # localisation reads (detection_which_gear), with the first revolution's number from the tacho
-        # mark (without a tacho, from the record's first sample)
-        cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].transient_revolutions)
+        # mark (on its own shaft; without a tacho, from the record's first sample)
+        cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].first_revolution)
     for name, cond in conditions.items():
         if not cond["history"]:
             files = ", ".join(f.path for f, _ in cond["test"])

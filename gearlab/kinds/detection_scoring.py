@@ -9,6 +9,7 @@ from dataclasses import asdict
 import numpy as np
 
 from ..data.recordings import cut_recording
+from ..data.which_gear import Take
 from ..errors import GearlabInputError
 from ..events import Event
 from ..gearbox.orders import TachoShaft
@@ -257,7 +258,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
             _, p, q = meta["unit_shaft"]
             revs = shaft_revolutions(revs, p / q, 0.0, revs.shape[-1], meta["conditions"][name]["max_order"])
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
-        raw.setdefault(name, []).append((str(file), rec.revolutions, rec.transient_revolutions, rec.speed_hz, rec.fs))
+        raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
     by_unit = {r["unit"]: r for r in run.records()}

@@ -35,8 +35,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data import which_gear as W
 from ..data.spec import DatasetSpec
-from ..data.which_templates import effect_tables, record_templates
+from ..data.which_templates import effect_tables
 from ..errors import GearlabInputError
 from ..signals import POINTS
 from ..signals import localise as L
@@ -158,7 +159,7 @@ def localise_target(
     sim = source if simulator is None or gearbox_of(simulator) is None else simulator
     out = {"gearbox": box.name, "preset": source.preset, "watched": watched, "conditions": {}, "records": {}}
     # what the events are simulated from (localise_scored simulates them alike)
-    out["events"] = {"preset": sim.preset, "effects": effect_tables(sim.effects)}
+    made = out["events"] = W.events(sim.preset, effect_tables(sim.effects))
     # where a tooth index counts from: the tacho mark, or without a tacho the record's first sample
     tacho = all(cond.get("tacho", True) for cond in conditions.values())
     marks = max(cond.get("marks", 1) for cond in conditions.values())
@@ -168,13 +169,11 @@ def localise_target(
         else "each record's first sample (no tacho: a relative index)"
     )
     for name, cond in conditions.items():
-        raw = cond["raw"]
-        history = [raw[f.path] for f, _ in cond["history"]]
+        takes = {f.path: _take(cond, f.path) for role in ("history", "test") for f, _ in cond[role]}
         top = min(float(cond["max_order"]), 0.45 * POINTS)
         try:  # records too short for a spread or a band without every shaft's orders: said, not fatal
-            firsts = [k for _, k in history]
             marks = cond.get("marks", 1)  # each take turned to the first history record's tacho mark
-            hist = L.history([r for r, _ in history], table, first_revolutions=firsts, max_order=top, marks=marks)
+            hist = W.history_of([takes[f.path] for f, _ in cond["history"]], table, marks, top)
         except GearlabInputError as exc:
             out["conditions"][name] = {"history": [f.path for f, _ in cond["history"]], "note": f"not localised: {exc}"}
             continue
@@ -186,14 +185,8 @@ def localise_target(
         if histories is not None:
             histories[name] = hist
         for f, _ in cond["test"]:
-            revs, first = raw[f.path]
-            templates = _templates(
-                table, out["events"], cond.get("speeds", {}).get(f.path), cond.get("fs", {}).get(f.path)
-            )
-            try:
-                found = L.localise(revs, hist, table, first_revolution=first, templates=templates).describe()
-            except GearlabInputError as exc:
-                found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+            take = takes[f.path]
+            found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
             out["records"][f.path] = {"condition": name, **found, "call": call_of(found, watched)}
     return out
 
@@ -215,19 +208,18 @@ def store_localisation(run, source: DatasetSpec, conditions: dict, simulator: Da
     run.write_json("localisation.json", found)
 
 
-def _templates(table, events: dict, speed_hz: float | None, fs: float | None):
-    """The simulated events (*events*: localisation.json's "events", the description and its effects)
-    for a record at *speed_hz* and *fs* (None: the width rule)."""
-    if speed_hz is None or fs is None:
-        return None
-    return record_templates(table, events["preset"], speed_hz, fs, events["effects"])
+def _take(cond: dict, path: str) -> W.Take:
+    """A record of a condition (detection_records.read_target: cond["raw"] its revolutions as cut and the
+    first one's number from the angle's zero, its speed and rate) as data.which_gear localises it."""
+    revs, first = cond["raw"][path]
+    return W.Take(revs, int(first), cond.get("speeds", {}).get(path), cond.get("fs", {}).get(path))
 
 
 def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
-    """{path: {"named", "summary", "call", "evidence"}} of new records ({condition: [(path, revolutions,
-    first, speed, rate)]}) localised with the run's stored histories (store_localisation) and the
-    description's simulated events at each record's speed, as the run localised its own; {} for a run
-    without them."""
+    """{path: {"named", "summary", "call", "evidence"}} of new records ({condition: [(path,
+    data.which_gear.Take)]}) localised with the run's stored histories (store_localisation) and the
+    description's simulated events at each record's speed, as the run localised its own
+    (data.which_gear.which_gear); {} for a run without them."""
     from ..gearbox import order_table
     from ..parts import scoring
 
@@ -242,13 +234,10 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
         if state is None:
             continue
         hist = L.History.restored(scoring.load_arrays(run.file("scoring", state)), table)
-        for path, revs, first, speed, fs in recs:
-            # a run stored before the events' simulator was said: the source's description, no effects
-            templates = _templates(table, meta.get("events", {"preset": meta["preset"], "effects": []}), speed, fs)
-            try:
-                found = L.localise(revs, hist, table, first_revolution=first, templates=templates).describe()
-            except GearlabInputError as exc:
-                found = {"named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+        # a run stored before the events' simulator was said: the source's description, no effects
+        made = meta.get("events", W.events(meta["preset"]))
+        for path, take in recs:
+            found = W.which_gear(take, hist, table, made)
             out[path] = {
                 "named": found["named"],
                 "summary": found["summary"],

@@ -90,13 +90,19 @@ def revolution_starts(angle: np.ndarray, offset: float = 0.0) -> np.ndarray:
     return np.interp(levels, a, np.arange(a.size, dtype=np.float64))
 
 
+def first_complete(angle: np.ndarray, offset: float = 0.0) -> int:
+    """The first complete revolution's k of a continuous *angle* (rad): revolution k spans [offset + 2πk,
+    offset + 2π(k+1)), counted from the angle's zero (a record's revolutions' numbers: localisation)."""
+    return math.ceil((float(angle[0]) - offset) / TWO_PI)
+
+
 def _complete_revolutions(a: np.ndarray, offset: float) -> tuple[int, int]:
     """(k0, R): the first complete revolution's k and the number of complete revolutions.
 
     Revolution k spans [offset + 2πk, offset + 2π(k+1)); it is complete when both its
     start and its end crossing lie inside the record.
     """
-    k0 = math.ceil((a[0] - offset) / TWO_PI)
+    k0 = first_complete(a, offset)
     k_end = math.floor((a[-1] - offset) / TWO_PI)
     count = k_end - k0
     if count < 1:

@@ -1,0 +1,94 @@
+"""Which gear: the one decision `gearlab inspect --history`, the detection kind and `gearlab score` make.
+
+Each of them reads its records (cut into complete input revolutions, not standardised) and hands
+them here as takes: the history read once (history_of: its band of orders, each take's first
+revolution counted from the input angle's zero, turned to the first take's tacho mark), and each
+record localised against it (which_gear: signals.localise, a two-gear shaft's gear by the
+description's simulated events at the record's speed and rate, data.which_templates). What a
+flag then means to a scenario that watches a gear is the detection kind's (its call); which gear
+carries the change is decided here only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from ..signals import POINTS
+from ..signals import localise as L
+from .chain import Chain
+from .which_templates import record_templates
+
+
+@dataclass(frozen=True)
+class Take:
+    """One record as localised: its complete input revolutions (R, points) as cut, the first one's number
+    counted from the input angle's zero (recordings.CutRecording.first_revolution; any whole number),
+    its mean speed and its sampling rate."""
+
+    revolutions: np.ndarray
+    first: int
+    speed_hz: float
+    fs: float
+
+    @classmethod
+    def of(cls, rec) -> Take:
+        """The take of a recordings.CutRecording."""
+        return cls(rec.revolutions, int(rec.first_revolution), float(rec.speed_hz), float(rec.fs))
+
+
+def band(takes: list[Take]) -> float:
+    """The highest input order localised: the one every take holds (data.chain.Chain.max_order, where the
+    acquisition's anti-alias filter leaves data, as the detection kind reads its conditions), within the
+    revolutions' points."""
+    return float(min(min(Chain(fs=t.fs, speed=t.speed_hz).max_order for t in takes), 0.45 * POINTS))
+
+
+def history_of(takes: list[Take], table, marks: int = 1, max_order: float | None = None) -> L.History:
+    """The healthy history *takes* of the gearbox of order table *table* read for localisation, orders up
+    to *max_order* (default: band(takes)); *marks*: the tacho's marks per input turn (a take is turned
+    to the first take's)."""
+    if not takes:
+        raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
+    period = int(table.train_period)
+    return L.history(
+        [t.revolutions for t in takes],
+        table,
+        first_revolutions=[t.first % period for t in takes],
+        max_order=band(takes) if max_order is None else max_order,
+        marks=marks,
+    )
+
+
+def events(description: str, effects=()) -> dict:
+    """What a two-gear shaft's tooth-fault events are simulated from: the description (a dataset preset
+    'gearbox:NAME#HASH', a description file or the rig's 'phm09': which_templates.simulated_as) and
+    *effects* (effect tables: a [corrected] simulator's)."""
+    return {"preset": description, "effects": list(effects)}
+
+
+def templates_for(table, made: dict | None, take: Take):
+    """The simulated events (events()) for a record at *take*'s speed and rate; None: by the width."""
+    if made is None:
+        return None
+    return record_templates(table, made["preset"], take.speed_hz, take.fs, made["effects"])
+
+
+def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
+    """*take* localised against *hist* (signals.localise.Localisation.describe()): the shafts ranked by
+    their z, the gear named first (or None) with its evidence; a two-gear shaft's gear by the events
+    *made* simulates (events(); None: by the event's width). A record that cannot be read against the
+    history is said so ("not localised: ..."), not fatal."""
+    try:
+        found = L.localise(
+            take.revolutions,
+            hist,
+            table,
+            first_revolution=take.first % int(table.train_period),
+            templates=templates_for(table, made, take),
+        )
+    except GearlabInputError as exc:
+        return {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+    return found.describe()
