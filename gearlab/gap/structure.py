@@ -544,16 +544,16 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
     if mesh.get("shaft") or mesh.get("marks"):  # the tacho itself read wrong: no shaft's speed is known
         return mesh_line(mesh, pair.Z1)
-    if tacho is not None and tacho[1] > 0 and (line := outward_line(target, pair, max_order, tacho[1], record)):
-        return line
-    if mesh["differs"]:
-        return mesh_line(mesh, pair.Z1)
     # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
     # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
     takes = chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
+    one = target[sum(takes[: (k := int(np.argmax(takes)))]) : sum(takes[: k + 1])] if takes else target
+    if tacho is not None and tacho[1] > 0 and (line := outward_line(one, pair, max_order, tacho[1], record)):
+        return line
+    if mesh["differs"]:
+        return mesh_line(mesh, pair.Z1)
     if takes:
-        k = int(np.argmax(takes))
-        target = target[sum(takes[:k]) : sum(takes[: k + 1])]
+        target = one
         mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
     # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described
     # with an 85-tooth wheel: inspect said '86.0 ± 0.2 teeth', the gap fitted effects, 'unexplained')
