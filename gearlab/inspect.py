@@ -725,9 +725,11 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
     speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
     if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
         speed = settle_speed(rec, box, options, speed)[0]
+    # without a tacho the angle is zero at the first sample, as a detection's or score's take has it
+    angle = speed.angle if rec.tacho is not None else speed.angle - speed.angle[0]
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
-        revs = resample_revolutions(rec.signal, speed.angle, points=POINTS)
-    first = first_complete(speed.angle)  # as a detection's or score's take counts it (CutRecording)
+        revs = resample_revolutions(rec.signal, angle, points=POINTS)
+    first = first_complete(angle)  # numbered as a detection's or score's take (recordings.CutRecording)
     # the tacho marks a take may start at (localisation turns each take to the first history take's)
     kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
     shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
