@@ -366,6 +366,7 @@ def at_declared(hypothesis: tuple, declared: float, box: Gearbox, lead: str = ":
     )
 
 
+TRACK_SHARE = 0.01  # the harmonic followed holds at least this share of the strongest first-stage harmonic's power
 TRACK_CUTOFF = 0.45  # the angle's deviation is kept below this share (to 1.5 x) of the slowest shaft's frequency
 UPSAMPLE = 8  # before reading a record at uniform angle (linear interpolation at 8x the rate: no false lines)
 
@@ -448,18 +449,29 @@ def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float) -> np.ndar
     freq = np.fft.fftfreq(n, 1 / fs)
     cutoff = TRACK_CUTOFF * float(min(table.shaft_orders)) * f
     every = np.array([h * float(s.mesh) * f for s in table.stages for h in range(1, MAX_HARMONIC + 1)])
-    best = None
+    best, strongest = None, None
     for h in range(1, MAX_HARMONIC + 1):
         c = h * float(table.stages[0].mesh) * f
+        if c + 2 * cutoff >= fs / 2:
+            break
+        power = float(np.sum(np.abs(spec[np.abs(freq - c) <= cutoff]) ** 2))
+        order = h * float(table.stages[0].mesh)
+        if strongest is None or power > strongest[0]:
+            strongest = (power, c, 2 * cutoff, order)
         others = np.abs(every - c)
         half = 0.5 * float(others[others > 1e-9 * c].min(initial=c))
         if c + half >= fs / 2 or half < 2 * cutoff:
             continue
-        power = float(np.sum(np.abs(spec[np.abs(freq - c) <= cutoff]) ** 2))
         if best is None or power > best[0]:
-            best = (power, c, half, h * float(table.stages[0].mesh))
+            best = (power, c, half, order)
     if best is None:
         return None
+    # a harmonic far weaker than the mesh's strongest is the record's noise: followed, it wobbles the angle
+    # (a description's third stage 0.07 orders off put its 4th harmonic beside M1 and the next 4: the 8th,
+    # 10^-5 of M1's power, was followed and split every line in three); the strongest is followed then, in
+    # the narrowest band the swing allows
+    if best[0] < TRACK_SHARE * strongest[0]:
+        best = strongest
     _, c, half, order = best
     t = np.arange(n) / fs
     analytic = np.fft.ifft(np.where(np.abs(freq - c) <= half, 2 * spec, 0))
