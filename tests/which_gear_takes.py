@@ -20,8 +20,9 @@ def cut(rec):
 
 def gearbox_take(gearbox, faults, seed, speed, *, snr_db, fs=20_000.0, **options):
     """A take of 4 s of the described *gearbox* at *speed* Hz, *snr_db* of noise, sampled at *fs*
-    (simulated at 60 kHz), *options* passed on (load_nm, effects): (record, revolutions, index of its
-    first whole revolution in the grand period)."""
+    (simulated at 60 kHz, or at the simulator's own step where its stiffest mode needs more), *options*
+    passed on (load_nm, effects, own_step): (record, revolutions, index of its first whole revolution
+    in the grand period)."""
     from gearlab.data.simulated import simulated_record
 
     rec = simulated_record(
@@ -38,9 +39,9 @@ def gearbox_take(gearbox, faults, seed, speed, *, snr_db, fs=20_000.0, **options
     return rec, cut(rec), (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
 
 
-def reducer_take(faults, seed, speed, fs, effects=()):
+def reducer_take(faults, seed, speed, fs, effects=(), **options):
     """A take of the reducer at 10.5 N*m, 25 dB SNR (gearbox_take)."""
-    return gearbox_take(REDUCER, faults, seed, speed, snr_db=25.0, fs=fs, load_nm=10.5, effects=effects)
+    return gearbox_take(REDUCER, faults, seed, speed, snr_db=25.0, fs=fs, load_nm=10.5, effects=effects, **options)
 
 
 def two_stage_text(name: str, speed: str, load: str, teeth: tuple[int, int, int, int]) -> str:

@@ -69,19 +69,22 @@ def whole_steps_rate(fs: float, speed_hz: float, Z1: int) -> float:
 
 
 @functools.lru_cache(maxsize=8)
-def _simulator(model: str, preset: str, fs: float) -> Simulator:
+def _simulator(model: str, preset: str, fs: float, warn_step: bool = True) -> Simulator:
     from ..dynamics.newmark import Simulator  # here, not at the top: start-up time (numba)
 
-    return Simulator(get_registry().get("model", model), preset, fs)
+    return Simulator(get_registry().get("model", model), preset, fs, warn_step=warn_step)
 
 
 @functools.lru_cache(maxsize=8)
-def _configured_simulator(config: ModelConfig, fs: float) -> Simulator:
+def _configured_simulator(config: ModelConfig, fs: float, warn_step: bool = True) -> Simulator:
     """The simulator of a configuration made by model-level effects (cached per worker process)."""
     from ..dynamics.newmark import Simulator  # start-up time
 
     model = model_of(config)
-    return Simulator(model, config.preset, fs, overrides=config.overrides(model), mesh_damping=config.mesh_damping)
+    overrides = config.overrides(model)
+    return Simulator(
+        model, config.preset, fs, overrides=overrides, mesh_damping=config.mesh_damping, warn_step=warn_step
+    )
 
 
 def operating_point(spec: DatasetSpec) -> tuple[float, float]:

@@ -256,6 +256,7 @@ def simulated_record(
     channel: str | None = None,
     gearbox: str | None = None,
     sim_fs: float | None = None,
+    own_step: bool = True,
 ) -> SimulatedRecord:
     """A record of *revolutions* input turns at *fs* of *channel* of *model*/*preset* at *speed_hz* and
     *load_nm*, with *faults* (placement tables or PlacedFaults), *effects* (scenario tables, e.g.
@@ -266,7 +267,10 @@ def simulated_record(
     (gearlab.gearbox.simulation): its model, its [sensor]'s channel, its [operation] speed and load
     unless given. Else the PHM 2009 rig (two_stage, phm09, casing_x, 30 Hz, 20 N m). *sim_fs*: the
     model's integration rate (default *fs*); a logger's rate is often too low for a stiff mesh's
-    natural frequencies, so a description's record is simulated faster and read at *fs*."""
+    natural frequencies, so a description's record is simulated faster and read at *fs*. The simulator
+    picks its own step: the rate is raised where lower to 10 steps per period of the model's highest
+    natural frequency (Simulator.fs_floor), no warning a user cannot act on; *own_step* False keeps
+    the caller's rate (and its warning)."""
     where = "simulated record"
     model, preset, channel, speed_hz, load_nm = _what_to_simulate(gearbox, model, preset, channel, speed_hz, load_nm)
     for key, value, low in (
@@ -286,11 +290,19 @@ def simulated_record(
     base = registry.get("model", model, where)
     pair, _ = base.resolve(preset, where=where)
     fs_sim = whole_steps_rate(fs if sim_fs is None else max(sim_fs, fs), speed_hz, pair.Z1)
+    config = chain.model_config(config_of(model, preset, channel, where), where) if chain else None
+
+    def simulator(rate: float, warn: bool):
+        return _configured_simulator(config, rate, warn) if chain else _simulator(model, preset, rate, warn)
+
+    sim = simulator(fs_sim, not own_step)
+    if own_step and sim.fs < sim.fs_floor:  # the record is read at fs: whole steps per tooth pitch
+        sim = simulator(whole_steps_rate(sim.fs_floor, speed_hz, pair.Z1), False)
+        fs_sim = sim.fs
     if chain:
-        config = chain.model_config(config_of(model, preset, channel, where), where)
-        sim, excitation, channel = _configured_simulator(config, fs_sim), chain.at("excitation"), config.channel
+        excitation, channel = chain.at("excitation"), config.channel
     else:
-        sim, excitation = _simulator(model, preset, fs_sim), ()
+        excitation = ()
         if channel not in base.channels:
             raise GearlabInputError(
                 f"{where}: model '{model}' has no channel '{channel}'; its channels: {', '.join(base.channels)}"

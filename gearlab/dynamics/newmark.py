@@ -215,7 +215,10 @@ class Simulator:
         beta1: float = BETA1,
         beta2: float = BETA2,
         mesh_damping: str = "proportional",
+        warn_step: bool = True,
     ):
+        """*warn_step*: warn when *fs* gives fewer than 10 steps per period of the highest natural
+        frequency (fs_floor); a caller that picks its own rate from fs_floor passes False."""
         where = f"model '{model.name}', preset '{preset}'"
         if not (math.isfinite(fs) and fs > 0):
             raise GearlabInputError(f"{where}: sampling rate fs must be a positive number of Hz, got {fs!r}")
@@ -268,7 +271,7 @@ class Simulator:
             self.Pm = np.ascontiguousarray(np.vstack([self.P, *self.mesh_P]))
             self.Wm = np.ascontiguousarray(G @ self.Pm.T)
             self.PW = np.ascontiguousarray(self.Pm @ self.Wm)
-        self._check_step(where)
+        self._check_step(where, warn_step)
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -309,12 +312,13 @@ class Simulator:
         lam = eigh(K, M, eigvals_only=True)
         return np.sqrt(np.clip(lam, 0.0, None)) / (2 * np.pi)
 
-    def _check_step(self, where: str) -> None:
+    def _check_step(self, where: str, warn: bool) -> None:
         top = float(self.natural_frequencies(k=self.stiffness.mesh_stiffness(points=TVMS_POINTS).k.max()).max())
-        if self.fs < 10 * top:
+        self.fs_floor = 10 * top  # the lowest rate with 10 steps per period of the stiffest mode
+        if warn and self.fs < self.fs_floor:
             warnings.warn(
                 f"{where}: fs = {self.fs:g} Hz gives fewer than 10 steps per period of the highest natural "
-                f"frequency ({top:.0f} Hz); results will be inaccurate",
+                f"frequency ({top:.0f} Hz); results will be inaccurate; expected fs >= {math.ceil(self.fs_floor)} Hz",
                 stacklevel=3,
             )
 
