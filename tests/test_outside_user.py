@@ -215,7 +215,7 @@ def test_gap_records_without_tacho_or_speed_take_the_source_description(tmp_path
     # A 14/39 mixer in HDF5 without a tacho and no speed declared: docs/your_gearbox.md says the gap's
     # [target] needs 'nothing but the description', yet validate refused it ("key 'tacho': missing;
     # ... no tacho, speed or gearbox"). The [source] description is the same gearbox: its mesh lines
-    # give each record's speed. (A detection's [target] names its 'gearbox', as the guide says.)
+    # give each record's speed (a detection's [target] too: test_user_small_39).
     import h5py
     from gearboxes import description, stage
 

@@ -374,10 +374,10 @@ def test_two_stage_from_recordings_to_scoring(two_stage, gearlab, no_figures):
             ('"100 mV/g"', '"100 mV/s"'),
             "gap.toml: [target] key 'sensitivity': '100 mV/s' has the wrong dimension",
         ),
-        (  # no tacho, no speed and no description: nothing gives the shaft angle
+        (  # no tacho: the [source]'s description gives the speed; a [target] one it contradicts is refused
             "detect_nt.toml",
-            ('gearbox = "rig.toml"\nfiles', "files"),
-            "detect_nt.toml: [target] key 'tacho': missing; hist1.h5 has no tacho, speed or gearbox",
+            ('gearbox = "rig.toml"\nfiles', 'gearbox = "phm09"\nfiles'),
+            "detect_nt.toml: [target] key 'gearbox': 'phm09' describes 32/96 + 48/80, 30 Hz, the [source]'s",
         ),
         (  # a tacho gives the speed: a declared one beside it is refused
             "detect.toml",

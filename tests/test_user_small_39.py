@@ -53,3 +53,88 @@ def test_a_too_coarse_step_names_the_rate_to_set():
         sim = Simulator(get_registry().get("model", "ten_dof"), "luo2019", fs=20e3)
     assert f"expected fs >= {math.ceil(sim.fs_floor)} Hz" in str(caught[0].message)
     assert 40e3 < sim.fs_floor < 60e3  # 10 x the casing/bearing mode of Table 2.3, ~5 kHz
+
+
+# --- (2) without a tacho, the target's speed comes from the [source]'s description in both kinds ----------
+
+
+def _takes(folder, names=("h1.csv", "h2.csv", "t1.csv")):
+    """Takes as a logger writes them (time and one accelerometer column, 10 kHz): validate reads their header."""
+    t = np.arange(256) / 10e3
+    for name in names:
+        np.savetxt(
+            folder / name,
+            np.column_stack([t, np.sin(2 * np.pi * 600 * t)]),
+            delimiter=",",
+            header="time_s,acc",
+            comments="",
+        )
+
+
+DETECTION = """[scenario]
+name = "d39"
+kind = "detection"
+[source]
+gearbox = "box.toml"
+faults = {{ "chip@input pinion" = [16, 18] }}
+healthy = 8
+[target]
+{target}vibration = "acc"
+sensitivity = "10 mV/(m/s^2)"
+files = [
+  {{ file = "h1.csv", role = "history", label = "healthy" }},
+  {{ file = "h2.csv", role = "history", label = "healthy" }},
+  {{ file = "t1.csv", role = "test", label = "fault" }},
+]
+[[methods]]
+adapter = "matched_filter"
+"""
+
+GAP = """[scenario]
+name = "g39"
+kind = "gap"
+[source]
+gearbox = "box.toml"
+[target]
+{target}vibration = "acc"
+sensitivity = "10 mV/(m/s^2)"
+files = [{{ file = "h1.csv", role = "history", label = "healthy" }}]
+[accuracy]
+enabled = false
+"""
+
+BOX = description(stage(20, 31), name="box", speed="30 Hz", load="30 N*m", near="input", direction="x")
+
+
+@pytest.fixture
+def folder(tmp_path):
+    (tmp_path / "box.toml").write_text(BOX)
+    _takes(tmp_path)
+    return tmp_path
+
+
+@pytest.mark.parametrize("kind", [DETECTION, GAP])
+def test_without_a_tacho_both_kinds_take_the_speed_from_the_source_description(cli, folder, kind):
+    path = folder / "s.toml"
+    path.write_text(kind.format(target=""))  # no tacho, no speed, no [target] gearbox: the [source]'s
+    code, out, err = cli("validate", path)
+    assert code == 0, err  # detection was: "[target] key 'tacho': missing; ... no tacho, speed or gearbox"
+
+
+@pytest.mark.parametrize("kind", [DETECTION, GAP])
+def test_a_target_gearbox_the_source_description_contradicts_is_one_line(cli, folder, kind):
+    (folder / "other.toml").write_text(description(stage(21, 31), name="other", speed="30 Hz", load="30 N*m"))
+    (folder / "copy.toml").write_text(BOX)
+    path = folder / "s.toml"
+    for same in ("box.toml", "copy.toml"):  # the same gearbox twice, or a copy of it: accepted
+        path.write_text(kind.format(target=f'gearbox = "{same}"\n'))
+        code, out, err = cli("validate", path)
+        assert code == 0, err
+    path.write_text(kind.format(target='gearbox = "other.toml"\n'))
+    code, out, err = cli("validate", path)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "[target] key 'gearbox'" in err and "21/31" in err and "20/31" in err and "[source]" in err, err
+    (folder / "fast.toml").write_text(description(stage(20, 31), name="fast", speed="35 Hz", load="30 N*m"))
+    path.write_text(kind.format(target='gearbox = "fast.toml"\n'))
+    code, out, err = cli("validate", path)
+    assert code == 2 and "35 Hz" in err and "30 Hz" in err, err

@@ -5,6 +5,7 @@ protocol. The kind contract itself is gearlab.kinds.contract.ScenarioKind."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -142,7 +143,8 @@ MEASURED = {
         "default": "",
         "doc": "a gearbox description (file relative to the scenario, or a built-in name): of measured data "
         "without a tacho, the mesh orders each record's speed is found from (with one, the shafts "
-        "'tacho_shaft' names); without 'file' or 'files', "
+        "'tacho_shaft' names; a [target]'s default: the [source]'s, whose tooth counts and speed it must "
+        "have); without 'file' or 'files', "
         "the simulator (its model, values, channel, speed, load; 'preset' then gives only the faults and "
         "sizes)",
     },
@@ -466,23 +468,45 @@ def gearbox_name(value: str, where: str, base: Path) -> str:
     return value
 
 
-def with_source_gearbox(target: dict, source: dict, undeclared: bool = False) -> dict:
+def with_source_gearbox(target: dict, source: dict, where: str, base: Path) -> dict:
     """The [target] table of measured records without a tacho, given the [source]'s gearbox
     description when it names none: the same gearbox, whose mesh lines refine a declared speed (a
     motor's nameplate 2400 rpm ran at 39.96-40.05 Hz: read at 40 Hz flat, 400 revolutions slipped a
-    fifth of a turn and every TSA lost its mesh) and follow it through each record. *undeclared*:
-    with no speed declared either, the description gives it (the gap's [target] needs nothing but
-    the [source]'s description, docs/your_gearbox.md step 3)."""
+    fifth of a turn and every TSA lost its mesh) and follow it through each record; with no speed
+    declared either, the description gives it. The gap and detection kinds alike: a user writes the
+    gearbox once, in [source] (docs/your_gearbox.md step 3). A [target] gearbox the [source]'s
+    contradicts (tooth counts, speed) is refused in one line (*where*: the [target] table)."""
+    if target.get("gearbox") and source.get("gearbox"):
+        _same_gearbox(target["gearbox"], source["gearbox"], f"{where} key 'gearbox'", base)
     files = target.get("files") or []
     declared = target.get("speed") is not None or any(isinstance(f, dict) and "speed" in f for f in files)
     if (
-        (declared or (undeclared and files))
+        (declared or files)
         and target.get("tacho") in ("", None)
         and not target.get("gearbox")
         and source.get("gearbox")
     ):
         return {**target, "gearbox": source["gearbox"]}
     return target
+
+
+def _same_gearbox(target: str, source: str, where: str, base: Path) -> None:
+    """A [target] gearbox with the [source]'s tooth counts and speed; else one line naming both."""
+    from ..gearbox import resolve_gearbox
+
+    ours, theirs = (resolve_gearbox(gearbox_name(g, where, base)) for g in (target, source))
+
+    def facts(box) -> tuple[str, str]:
+        speed = "no speed" if box.speed_hz is None else f"{box.speed_hz:g} Hz"
+        return " + ".join(f"{s.pinion.z}/{s.wheel.z}" for s in box.stages), speed
+
+    speeds = (ours.speed_hz, theirs.speed_hz)
+    if facts(ours)[0] != facts(theirs)[0] or None not in speeds and not math.isclose(*speeds, rel_tol=1e-9):
+        raise GearlabInputError(
+            f"{where}: {shown(target)} describes {', '.join(facts(ours))}, the [source]'s {shown(source)} "
+            f"{', '.join(facts(theirs))}; expected one gearbox: leave [target] gearbox out (the [source]'s "
+            "is used) and give the records' speed as [target] 'speed'"
+        )
 
 
 def units_of(entry: dict, where: str) -> dict:

@@ -12,7 +12,7 @@ the method's model and threshold are fixed, and their labels only when the figur
                           averaged per sample), draws (noise draws of each sample, one at random per batch
                           row), history_units (what of the history its methods train on), label: every method
                           is trained on both sources, the corrected one's rows "<method> (<label>)"
-    [target]              vibration, tacho (or without one: speed and/or gearbox), pulses_per_rev,
+    [target]              vibration, tacho (or without one: speed, or the [source]'s gearbox), pulses_per_rev,
                           sensitivity, fs, positive, files = [
                             { file, role = "history" | "test", label, condition, speed (optional) }, ...]
     [[methods]]           adapters (as in a transfer scenario); none listed: every registered
@@ -210,7 +210,7 @@ def build(scenario: Scenario) -> Spec:
             f"{location(path, 'source')}: the source needs healthy and faulty revolutions (has {sizes})"
         )
     _, pair, _ = source.check_model(location(path, "source"))
-    entry = with_source_gearbox(t["target"], t["source"])
+    entry = with_source_gearbox(t["target"], t["source"], location(path, "target"), scenario.base)
     if entry["gearbox"]:  # resolved and loaded now: a bad description fails validate
         entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], location(path, "target", "gearbox"), scenario.base)}
     target = target_spec(entry, location(path, "target"), scenario.base, box=gearbox_of(source))

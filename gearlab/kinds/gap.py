@@ -127,7 +127,7 @@ def build(scenario: Scenario) -> Spec:
     # file paths are relative to the scenario's own folder (a run's copy keeps it as scenario.base)
     base = scenario.base or path.parent
     source = simulated_spec(t["source"], location(path, "source"), base)
-    entry = with_source_gearbox(t["target"], t["source"], undeclared=True)
+    entry = with_source_gearbox(t["target"], t["source"], location(path, "target"), base)
     target = target_of(entry, location(path, "target"), base, gearbox_of(source))  # the source's tacho shafts
     _, pair, _ = source.check_model(location(path, "source"))
     check_sampling(source, pair.Z1, location(path, "source"))
