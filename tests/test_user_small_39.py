@@ -138,3 +138,21 @@ def test_a_target_gearbox_the_source_description_contradicts_is_one_line(cli, fo
     path.write_text(kind.format(target='gearbox = "fast.toml"\n'))
     code, out, err = cli("validate", path)
     assert code == 2 and "35 Hz" in err and "30 Hz" in err, err
+
+
+# --- (3) a gap scenario's validate line counts what the diagnosis uses ----------------------------
+
+
+def test_a_gap_validate_line_says_what_its_numbers_are(cli, folder):
+    path = folder / "s.toml"
+    path.write_text(GAP.format(target=""))
+    code, out, err = cli("validate", path)
+    assert code == 0, err
+    # was "gap of box (540 samples: 300 healthy, 240 fault) -> measured records (measured): ...": the
+    # source's fault classes, which a diagnosis without [accuracy] never simulates, and no word of the records
+    assert "gap of box (simulated) -> 1 measured history record:" in out, out
+    assert "samples" not in out and "40 source healthy revolutions per evaluation" in out, out
+    path.write_text(GAP.format(target="").replace("enabled = false", "enabled = true"))
+    code, out, err = cli("validate", path)
+    assert code == 0, err
+    assert "trained on the simulated box (540 samples: 300 healthy, 240 fault)" in out, out

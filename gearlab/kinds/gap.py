@@ -256,15 +256,15 @@ def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     s = spec.settings
     n = len(s.candidates) or len(default_candidates(get_registry()))
-    line = (
-        f"gap of {sized(spec.source)} -> {sized(spec.target)}: {n} candidate effects x budget "
-        f"{s.budget}, up to {s.max_effects} greedy rounds, {s.healthy} source healthy revolutions "
-        "per evaluation"
-    )
+    records = len(spec.target.history) if isinstance(spec.target, Records) else 0  # measured: no classes
+    target = f"{records} measured history record{'s' * (records != 1)}" if records else sized(spec.target)
+    line = f"gap of {spec.source.name} (simulated) -> {target}: {n} candidate effects x budget {s.budget}, up to "
+    line += f"{s.max_effects} greedy rounds, {s.healthy} source healthy revolutions per evaluation"
     if spec.accuracy:
         p = spec.protocol
         columns = [label_of(variant, m) for variant, m in accuracy_columns(p)]
         line += f"; accuracy: {len(columns)} models x {p.repetitions} repetitions ({', '.join(columns)})"
+        line += f", trained on the simulated {sized(spec.source)}"
     return line
 
 
