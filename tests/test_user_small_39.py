@@ -156,3 +156,23 @@ def test_a_gap_validate_line_says_what_its_numbers_are(cli, folder):
     code, out, err = cli("validate", path)
     assert code == 0, err
     assert "trained on the simulated box (540 samples: 300 healthy, 240 fault)" in out, out
+
+
+# --- (4) the undercut error names its criterion -------------------------------------------------------
+
+
+def test_the_undercut_error_names_the_practical_criterion_and_the_textbook_limit(tmp_path):
+    from gearlab.errors import GearlabInputError
+    from gearlab.gearbox import load_gearbox
+
+    path = tmp_path / "fan.toml"
+    path.write_text(description(stage(13, 81), name="fan", speed="29 Hz", load="30 N*m"))
+    with pytest.raises(GearlabInputError) as info:
+        load_gearbox(path)
+    line = str(info.value)
+    # 13 teeth at 20 deg: 5/6 - 13 sin²20°/2 = 0.073 (slight undercut below the active flank accepted);
+    # no undercut at all, the textbook's 1 - 13 sin²20°/2 = 0.240: the user is told which is asked and why
+    assert "[[stages]] #1.pinion key 'z': 13 teeth at x = 0 are undercut into the active flank" in line, line
+    assert "x ≥ 5/6 h_a* - z sin²α/2" in line and "DIN 3960" in line, line
+    assert "no undercut at all: x ≥ h_a* - z sin²α/2 = 0.240" in line and "'x' ≥ 0.073" in line, line
+    assert len(line.splitlines()) == 1

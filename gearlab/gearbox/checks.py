@@ -13,7 +13,9 @@ h_a*, h_f* and d_a are each gear's where given, else the stage's.
 * centre distance: a given centre distance must equal a_w (the tooth counts, module and
   shifts fix it); the message says which tooth sum or shift sum would fit;
 * undercut: x ≥ (5/6) h_a* - z sin²α / 2 (the practical limit of DIN 3960 / Niemann: slight
-  undercut that stays off the active flank is accepted, z ≥ 14 at 20 deg and x = 0);
+  undercut below the active flank is accepted, z ≥ 14 at 20 deg and x = 0; the interference check
+  then asks that the mate's tip meets the involute). The textbook's limit of no undercut at all,
+  x ≥ h_a* - z sin²α / 2, would refuse pinions that run well; the error names both;
 * interference: the mating tip must meet each flank on its involute, above the form circle
   where the generating rack's straight flank ends (roll length L_F = r sin α - m (h_FfP* - x) / sin α,
   h_FfP* = h_f* - ρ_fP* (1 - sin α));
@@ -137,8 +139,10 @@ def check_stage(stage) -> StageGeometry:
         x_min = 5.0 / 6.0 * h_rack - gear.z * math.sin(alpha) ** 2 / 2
         if gear.x < x_min - _UNDERCUT_SLACK:
             raise GearlabInputError(
-                f"{gear.where} key 'z': {gear.z} teeth at x = {gear.x:g} are undercut (α = "
-                f"{math.degrees(alpha):g} deg, h_a* = {h_rack:g}): the tool cuts into the active flank; "
+                f"{gear.where} key 'z': {gear.z} teeth at x = {gear.x:g} are undercut into the active flank (α = "
+                f"{math.degrees(alpha):g} deg, h_a* = {h_rack:g}; the practical limit x ≥ 5/6 h_a* - z sin²α/2 of "
+                "DIN 3960 / Niemann, which accepts a slight undercut below the flank the mate's tip reaches; no "
+                f"undercut at all: x ≥ h_a* - z sin²α/2 = {x_min + h_rack / 6:.3f}); "
                 f"expected a profile shift 'x' ≥ {x_min:.3f}, more teeth, or a larger "
                 "'pressure_angle' or shorter 'addendum' of the stage"
                 + ("" if gear.dedendum is None else f" (or a smaller 'dedendum' of this gear: {gear.dedendum:g})")
