@@ -30,7 +30,9 @@ FENCE = re.compile(r"^```python\n(.*?)^```$", re.M | re.S)
 
 
 @pytest.fixture
-def workdir(tmp_path, monkeypatch):
+def workdir(tmp_path, monkeypatch, unrendered_figures):
+    """A fresh folder and cache; the runs' figures written unrendered (these tests read what the
+    API returns and prints, no figure's pixels: test_cli and test_verdict read those)."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     return tmp_path

@@ -521,8 +521,9 @@ def test_killed_run_resumes_without_losing_or_repeating_a_unit(
     assert (run / "table.md").read_text() == (finished / "table.md").read_text()
 
 
-def test_last_line_of_a_run_is_the_run_directory(finished, tiny_toml, cli, monkeypatch):
-    # A finished run resumed: nothing left to train, the outputs rewritten.
+def test_last_line_of_a_run_is_the_run_directory(finished, tiny_toml, cli, monkeypatch, unrendered_figures):
+    # A finished run resumed: nothing left to train, the outputs rewritten (the figures unrendered:
+    # test_summary_table_and_report reads the figures of `finished`).
     monkeypatch.setattr(training, "run_unit", lambda *a, **kw: pytest.fail("a finished unit ran again"))
     code, out, err = cli("run", tiny_toml, "--resume", finished)
     assert code == 0, err

@@ -78,7 +78,8 @@ def run_cli(cli, tmp_path, monkeypatch):
     return run
 
 
-def test_the_guide_runs_start_to_finish(run_cli, tmp_path):
+def test_the_guide_runs_start_to_finish(run_cli, tmp_path, unrendered_figures):
+    # the figures written unrendered: the guide shows printed lines and files, no figure's pixels
     run_dir = None
     for kind, what, expected in steps():
         if kind == "file":
