@@ -40,7 +40,7 @@ from .data.recordings import (
 )
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
-from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
+from .gearbox.match import check_description, outward_first, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
 from .gearbox.pinion_count import (
     alternatives_words,
@@ -434,7 +434,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             at.update(speed_source=f"declared, not confirmed: {no_speed}", speed_confirmed=False)
         read_on = None if rec.tacho is None else box.shaft_index(tacho_shaft, "--tacho-shaft")
         report["check"] = check = at | check_description(lines, box, revolutions, on_input, read_on)
-        differences = check["differences"]
+        differences, listed = check["differences"], len(check["differences"])
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         if elsewhere:
             differences[:0] = [elsewhere]
@@ -444,6 +444,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
+        if read_on and len(differences) == listed:  # the tacho read as said: its shaft's gears first, then outward
+            check["outward"] = outward_first(differences, check["stages"], box, read_on)
         if differences and (speed.settled or no_speed):  # the speed the rows after the speed's line read at
             said = "the speed the input pinion's sidebands show" if speed.settled else "declared, not confirmed"
             differences[0] = f"at {fmt_hz(speed.mean_hz)} ({said}): {differences[0]}"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import gzip
 
 import numpy as np
+import pytest
 
 from gearlab.data.recordings import read_contents
 
@@ -107,3 +108,40 @@ def test_a_wrong_later_stage_does_not_make_inspect_follow_the_record_s_noise(tmp
     assert report["matches"] is False
     assert "67.0" in report["verdict"] and "66 described" in report["verdict"], report["verdict"]
     assert "stage 1" not in report["verdict"], report["verdict"]
+
+
+def test_an_output_tacho_and_a_later_pinion_one_tooth_off_names_the_pinion_first(tmp_path):
+    # A 31/77 + 23/58 reducer, its tacho on the output (2 marks a turn), described with a 24T second pinion:
+    # the input's speed, the tacho's times the described ratio, read 4.2 % slow; inspect said 'stage 1: no
+    # line at mesh order 31 (a 31-tooth pinion); stage 2: the pinion ... shows 23.0 teeth, 24 described':
+    # stage 1 blamed first, as if a second difference. Read outward from the tacho, as the gap reads it.
+    from gearlab.gearbox import load_gearbox
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    fs, f, stages = 12000.0, 20.2, ((31, 77), (23, 58))
+    t = np.arange(int(6 * fs)) / fs
+    theta = 2 * np.pi * f * t
+    x, o = np.zeros_like(t), 1.0
+    for s, (z1, z2) in enumerate(stages):
+        mod = 1 + 0.15 * np.cos(o * theta + s) + 0.1 * np.cos(o * z1 / z2 * theta + 2 * s)
+        x += sum(w * mod * np.cos(h * z1 * o * theta + h) for h, w in ((1, 1.0), (2, 0.4), (3, 0.2)))
+        o *= z1 / z2
+    tach = np.where((2 * o * theta) % (2 * np.pi) < 2.0, 4.8, 0.1)
+    x = x + np.random.default_rng(5).normal(0, 0.05, t.size)
+    np.savez(tmp_path / "b.npz", acc_ms2=x, tach=tach, fs=fs)
+    box = '[gearbox]\nname = "b24"\n[operation]\nspeed = "1200 rpm"\nload = "150 N*m"\n'
+    for (z1, z2), m in zip(((31, 77), (24, 58)), ("1.5 mm", "2.5 mm")):
+        box += f'[[stages]]\nmodule = "{m}"\nface_width = "20 mm"\npinion = {{ z = {z1}, bore = "20 mm" }}\n'
+        box += f'wheel = {{ z = {z2}, bore = "30 mm" }}\n'
+    (tmp_path / "b24.toml").write_text(box + '[sensor]\ntacho = "output"\npulses_per_rev = 2\n')
+    report = inspect_record(
+        str(tmp_path / "b.npz"), load_gearbox(tmp_path / "b24.toml"), InspectOptions("acc_ms2", "tach")
+    )
+    verdict = report["verdict"]
+    assert report["matches"] is False
+    first = verdict.split(": ", 1)[1]
+    assert first.startswith("stage 2: the pinion on the intermediate shaft shows 23.0"), verdict
+    assert "24 described" in first.split(";")[0], verdict
+    assert "stage 1: no line at mesh order 31 (a 31-tooth pinion), as follows from stage 2's difference" in verdict
+    outward = {"stage": 2, "gear": "pinion", "seen": pytest.approx(23, abs=0.3), "described": 24}
+    assert report["check"]["outward"] == outward

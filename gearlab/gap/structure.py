@@ -575,44 +575,15 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     (Q, 38/89 + 49/95 with an output tacho, described with a 48-tooth later pinion: the input read 2 %
     slow, stage 1's mesh at 37.2, 'mesh order 37.2 measured, 38 expected', the pinion unnamed); the
     nearest stage first, the input's side after the output's at one distance."""
-    from ..gearbox import order_table
-    from ..gearbox.match import check_description
+    from ..gearbox.match import check_description, outward
 
     box = _PairDescription.train(pair)
-    table = order_table(box)
     stages = check_description(_lines(target, max_order), box, target.shape[0], False, tacho)["stages"]
-    found = []
-    for side in (range(tacho + 1, len(stages) + 1), range(tacho, 0, -1)):  # stage numbers, outward
-        for k in side:
-            entry, s = stages[k - 1], table.stages[k - 1]
-            wheel_near = k <= tacho  # the stage's wheel on the tacho's side of it
-            near = k if wheel_near else k - 1
-            gears = [("wheel", s.wheel_teeth, "z2"), ("pinion", s.pinion_teeth, "z1")][:: 1 if wheel_near else -1]
-            if entry.get("measured_order") is None:  # no line where the near gear would mesh: beyond here unread
-                break
-            z = entry["measured_order"] / float(table.shaft_orders[near])
-            role, said, _ = gears[0]
-            if not entry["matched"] and round(z) != said:
-                why = f"the stage-{k} mesh at {z:.1f} orders of the {table.shafts[near]} shaft"
-                found.append((abs(near - tacho), k, role, z, said, f"the {role} shows {z:.1f} teeth ({why})"))
-                break
-            role, said, key = gears[1]
-            seen, spread = entry.get(f"{key}_seen"), entry.get(f"{key}_resolution") or 0.0
-            if seen is None:  # the far shaft's order not seen: the stages beyond are read at its described one
-                continue
-            if abs(seen - said) > max(0.5, spread):
-                evidence = f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh)"
-                found.append((abs(near - tacho), k, role, seen, said, evidence))
-                break
-    if not found:
+    found = outward(stages, box, tacho)
+    if found is None:
         return None
-    _, k, role, z, said, evidence = min(found, key=lambda f: f[:2])
-    record["outward"] = {"stage": k, "gear": role, "seen": float(z), "described": int(said)}
-    count = f"{round(z)}" if abs(z - round(z)) <= 0.25 else f"{z:.1f}"
-    return (
-        f"stage {k} {role}: {count} teeth fit the recording, {said} described; read outward from the tacho on the "
-        f"{table.shafts[tacho]} shaft, {evidence}, {said} expected"
-    )
+    record["outward"], line = found
+    return line
 
 
 def count_ambiguity(target, pair, max_order: int, chain) -> dict | None:

@@ -12,6 +12,7 @@ under 16 bins apart).
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -366,6 +367,77 @@ def check_description(
     ][:8]
     out = {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
     return out | {"unresolved": unresolved}
+
+
+def outward(stages: list[dict], box: Gearbox, tacho: int) -> tuple[dict, str] | None:
+    """The first gear, read outward from the tacho's shaft (index *tacho*, after the input), whose tooth
+    count check_description's *stages* (read with that tacho) contradict: ({stage, gear, seen, described},
+    its line), or None. A stage's mesh, in orders of its shaft nearer the tacho, is that gear's count while
+    every gear between is as described; the far gear's count is its shaft's sidebands of the mesh. A wrong
+    gear puts every stage beyond it off (Q, 38/89 + 49/95 with an output tacho, described with a 48-tooth
+    later pinion: the input read 2 % slow, stage 1's mesh at 37.2); the nearest stage first, the input's
+    side after the output's at one distance. The gap's structure check and inspect both read it."""
+    table = order_table(box)
+    found = []
+    for side in (range(tacho + 1, len(stages) + 1), range(tacho, 0, -1)):  # stage numbers, outward
+        for k in side:
+            entry, s = stages[k - 1], table.stages[k - 1]
+            wheel_near = k <= tacho  # the stage's wheel on the tacho's side of it
+            near = k if wheel_near else k - 1
+            gears = [("wheel", s.wheel_teeth, "z2"), ("pinion", s.pinion_teeth, "z1")][:: 1 if wheel_near else -1]
+            if entry.get("measured_order") is None:  # no line where the near gear would mesh: beyond here unread
+                break
+            z = entry["measured_order"] / float(table.shaft_orders[near])
+            role, said, _ = gears[0]
+            if not entry["matched"] and round(z) != said:
+                why = f"the stage-{k} mesh at {z:.1f} orders of the {table.shafts[near]} shaft"
+                found.append((abs(near - tacho), k, role, z, said, f"the {role} shows {z:.1f} teeth ({why})"))
+                break
+            role, said, key = gears[1]
+            seen, spread = entry.get(f"{key}_seen"), entry.get(f"{key}_resolution") or 0.0
+            if seen is None:  # the far shaft's order not seen: the stages beyond are read at its described one
+                continue
+            if abs(seen - said) > max(0.5, spread):
+                evidence = f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh)"
+                found.append((abs(near - tacho), k, role, seen, said, evidence))
+                break
+    if not found:
+        return None
+    _, k, role, z, said, evidence = min(found, key=lambda f: f[:2])
+    count = f"{round(z)}" if abs(z - round(z)) <= 0.25 else f"{z:.1f}"
+    line = (
+        f"stage {k} {role}: {count} teeth fit the recording, {said} described; read outward from the tacho on the "
+        f"{table.shafts[tacho]} shaft, {evidence}, {said} expected"
+    )
+    return {"stage": k, "gear": role, "seen": float(z), "described": int(said)}, line
+
+
+def outward_first(differences: list[str], stages: list[dict], box: Gearbox, tacho: int) -> dict | None:
+    """*differences* (check_description's, read with a tacho on shaft *tacho* after the input) led by the
+    stage the outward reading (outward) finds, in place: its own items first (else outward's line), the
+    stages beyond it (farther from the tacho, read at a speed its difference moved) marked as following
+    from it. A 31/77 + 23/58 reducer with an output tacho, described with a 24-tooth second pinion, was
+    told 'stage 1: no line at mesh order 31' first, as if a second difference. Returns the outward record,
+    or None (unchanged)."""
+    found = outward(stages, box, tacho) if differences else None
+    if found is None:
+        return None
+    k = found[0]["stage"]
+
+    def distance(j: int) -> int:
+        return abs((j if j <= tacho else j - 1) - tacho)
+
+    def stage_of(text: str) -> int | None:
+        return int(text.split(":", 1)[0].removeprefix("stage ")) if re.match(r"stage \d+:", text) else None
+
+    own = [t for t in differences if stage_of(t) == k] or [found[1]]
+    rest = []
+    for text in (t for t in differences if stage_of(t) != k):
+        j = stage_of(text)
+        beyond = j is not None and distance(j) > distance(k) and "as follows from" not in text
+        rest.append(f"{text}, as follows from stage {k}'s difference (read at the speed it moves)" if beyond else text)
+    differences[:] = own + rest
+    return found[0]
 
 
 def _following(stages: list[int]) -> str:
