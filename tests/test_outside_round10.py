@@ -145,3 +145,27 @@ def test_an_output_tacho_and_a_later_pinion_one_tooth_off_names_the_pinion_first
     assert "stage 1: no line at mesh order 31 (a 31-tooth pinion), as follows from stage 2's difference" in verdict
     outward = {"stage": 2, "gear": "pinion", "seen": pytest.approx(23, abs=0.3), "described": 24}
     assert report["check"]["outward"] == outward
+
+
+def test_validate_names_the_table_of_a_file_whose_header_cannot_be_read(tmp_path, cli):
+    # A zip of two text files among a scenario's records: validate's line named the archive alone
+    # ("two.zip: expected a zip archive of exactly one text file, found 2"), not the table or key.
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "two.zip", "w") as z:
+        z.writestr("a.txt", "1\t2\n3\t4\n")
+        z.writestr("b.txt", "1\t2\n")
+    (tmp_path / "one.txt").write_text("".join(f"{np.sin(i):.4f}\t0\n" for i in range(3000)))
+    box = '[gearbox]\nname = "b"\n[operation]\nspeed = "20 Hz"\nload = "50 N*m"\n'
+    box += '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
+    box += 'pinion = { z = 31, bore = "20 mm" }\nwheel = { z = 77, bore = "30 mm" }\n'
+    (tmp_path / "b.toml").write_text(box)
+    (tmp_path / "d.toml").write_text(
+        '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "b.toml"\nfaults = { chip = [20] }\n'
+        '[target]\nvibration = "0"\ntacho = "1"\nfs = "12 kHz"\nunit = "g"\nfiles = [{ file = "one.txt", role = '
+        '"history", label = "healthy" }, { file = "two.zip", role = "test", label = "fault" }]\n'
+    )
+    code, out, err = cli("validate", tmp_path / "d.toml")
+    line = err.strip()
+    assert code == 2 and len(line.splitlines()) == 1, (out, err)
+    assert "d.toml: [target]" in line and "two.zip" in line and "exactly one text file, found 2" in line, line

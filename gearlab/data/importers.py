@@ -60,7 +60,7 @@ TWO_PI = 2.0 * np.pi
 # "periodic" (steady_start) compares waveforms and needs a noise-free simulation: not offered.
 IMPORT_TRANSIENTS = ("stats", "none")
 # Bumped whenever the importer's output for the same file and options changes (cache keys).
-IMPORTER_VERSION = "2"  # 2: units from channel names, the steady-start warning
+IMPORTER_VERSION = "3"  # 2: units from channel names, the steady-start warning; 3: no-tacho speed not followed on noise
 # Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
 # cannot even be unwrapped).
 _MIN_SAMPLES_PER_REV = 2

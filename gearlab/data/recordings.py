@@ -772,7 +772,10 @@ def check_recording(
     sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale, with
     the scenario's *unit*) are given. *where*: the scenario's table ("s.toml: [datasets] #1");
     every error is one line that names it, the key and the file."""
-    header = read_header(path)
+    try:
+        header = read_header(path)
+    except GearlabInputError as exc:  # a file its reader refuses (a zip of two texts): named where it is listed
+        raise GearlabInputError(f"{where} key 'file': {exc}") from None
     header.check_rate(fs, where, path)
     for key, value in channels.items():
         if value is None or value == "":
