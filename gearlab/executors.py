@@ -23,6 +23,7 @@ import math
 import multiprocessing
 import os
 import tempfile
+import threading
 import uuid
 import weakref
 from collections.abc import Callable, Iterator, Sequence
@@ -204,6 +205,52 @@ class LocalExecutor(Executor):
             self._stop()  # Ctrl-C, or a unit failed: stop now instead of waiting for every queued unit
             raise
         return results
+
+
+class Aside(threading.Thread):
+    """Steps of this process that no unit waits for, run in order in a thread of their own while the
+    pool's units run (detection: the classical indicators, the sources' bounds, the localisation,
+    22 s of the main process's CPU that stood before and after phm09_chip's trainings with one core
+    idle). With one BLAS thread, set here in the caller's thread before any step starts (not while
+    another thread is inside a BLAS call) until ``close()``: a worker is busy on each core, and
+    OpenBLAS's second thread spins (phm09_chip's classical indicators took 15 s of CPU with two,
+    5.7 with one; the same numbers). ``ready(name)``: the step has ended; ``get(name)``: its value,
+    waited for (its error raised)."""
+
+    def __init__(self, steps: dict[str, Callable]):
+        from threadpoolctl import threadpool_limits  # (start-up time)
+
+        super().__init__(daemon=True, name="gearlab-aside")  # a cancelled run does not wait for it
+        self.steps, self.values, self.error = steps, {}, None
+        self.ended = {name: threading.Event() for name in steps}
+        self.blas = threadpool_limits(1, user_api="blas")
+        self.start()
+
+    def run(self) -> None:
+        try:
+            for name, step in self.steps.items():
+                self.values[name] = step()
+                self.ended[name].set()
+        except BaseException as exc:  # raised where its value is asked for
+            self.error = exc
+        finally:
+            for ended in self.ended.values():
+                ended.set()
+
+    def ready(self, name: str) -> bool:
+        return self.ended[name].is_set()
+
+    def get(self, name: str):
+        self.ended[name].wait()
+        if name not in self.values:
+            raise self.error
+        return self.values[name]
+
+    def close(self) -> None:
+        """Every step ended: the BLAS threads of before (a run that fails keeps one: no step may be
+        inside a BLAS call when they change)."""
+        self.join()
+        self.blas.restore_original_limits()
 
 
 # ----------------------------------------------------------------------------- Ray

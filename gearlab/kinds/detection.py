@@ -69,7 +69,8 @@ from pathlib import Path
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, shown
-from ..events import Event
+from ..events import Event, ignore_events
+from ..executors import Aside
 from ..gearbox.simulation import label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
@@ -132,6 +133,8 @@ from .detection_units import (
     crossed_record,
     ensemble_record,
     healthy_twin,
+    noise_effects,
+    noise_free_twin,
     seeds_of,
     signature_rows,
     source_bound,
@@ -381,7 +384,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         if shaft is not None:
             on_event(Event("log", message=f"units: revolutions and TSAs of {shaft.said()}"))
         where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
-        conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous)
+        conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous, executor)
         # a description (the user's) the history contradicts ends the run; a built-in preset's rig is told
         said = "gearbox" if "gearbox" in (scenario.raw.get("source") or {}) else "preset"
         if differs := check_structure(spec.source, spec.target, conditions, scenario.where("source", said)):
@@ -435,13 +438,41 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 why = unaligned_why(spec.target, cond["unit_shaft"])
                 on_event(Event("log", message=f"{c}: turned by {turn} samples into the source's frame ({why})"))
         on_event(Event("log", message="the sources' bounds: their noise-free twins and likelihood ratios"))
-        bounds = {key: source_bound(s, sources[s], protocol, draws[s], executor, on_event) for key, s in specs.items()}
+        for s in built:  # the twins the bounds read, built by the pool now (the bounds are made aside)
+            if len(noise_effects(s)) == 1:
+                load_or_build(noise_free_twin(s, draws[s]), executor, on_event)
         records = {r["unit"]: r for r in run.records()}
         rules = {c: Rule(d.threshold, d.false_alarm, cond["history_records"]) for c, cond in conditions.items()}
-        for name, cond in conditions.items():
-            for indicator in spec.classical.indicators:
-                if f"{name}/{indicator}" not in records:
-                    run.append(classical_record(indicator, name, cond, spec.classical, rules[name]))
+        classical = [(i, c) for c in conditions for i in spec.classical.indicators if f"{c}/{i}" not in records]
+        # what this process makes that no training waits for: made while the pool trains (Aside)
+        aside = Aside(
+            {
+                "classical": lambda: [
+                    classical_record(i, c, conditions[c], spec.classical, rules[c]) for i, c in classical
+                ],
+                "bounds": lambda: {
+                    k: source_bound(s, sources[s], protocol, draws[s], None, ignore_events) for k, s in specs.items()
+                },
+                # which gear each test record's change is on, from the raw records (no score is made here)
+                "localisation": lambda: store_localisation(run, spec.source, conditions, spec.corrected),
+            }
+        )
+        held: list[dict] = []  # trainings' records that ended before the classical ones were appended
+        in_order = [False]  # the classical records appended
+
+        def append_in_order(record: dict | None = None, wait: bool = False) -> None:
+            """results.jsonl in the order of a run that made them first (table.md's rows follow it)."""
+            held.extend([record] if record is not None else [])
+            if not in_order[0]:
+                if not (wait or aside.ready("classical")):
+                    return
+                for r in aside.get("classical"):
+                    run.append(r)
+                in_order[0] = True
+            for r in held:
+                run.append(r)
+            held.clear()
+
         later = asynchronous_orders(spec.source, shaft)  # a mesh of no whole order of the units' shaft: out
         shown = {
             c: synchronous_input(learned_input(d.input, d.points, spec.classical, cond["unit_max_order"]), later)
@@ -492,7 +523,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         def record_done(_: int, record: dict) -> None:
             nonlocal finished
-            run.append(record)
+            append_in_order(record)
             records[record["unit"]] = record
             finished += 1
             on_event(Event("log", message=f"{record['unit']} trained"))
@@ -505,30 +536,38 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             joint = domain_adapting(u[2].adapter)
             return joint, not u[2].is_detector, joint and bool(u[1])
 
-        for phase in phases:
-            tasks = []
-            for c, v, m, seed, k in longest_first(phase, cost):
-                cond = conditions[c]
-                states = run.file("states", folders[(c, v)])
-                tasks.append(
-                    (
-                        protocol,
-                        m,
-                        v,
-                        c,
-                        seed,
-                        k,
-                        (detector_splits if m.is_detector else splits)[(c, v)],
-                        shown[c](
-                            history_training_rows(trained_on(cond, k), protocol, c, spec.corrected_history if v else 0)
-                        ),
-                        *units_seen[c],
-                        states,
-                        rules[c],
-                        bool(later),  # the detectors whiten their rows (gearlab.learn.whiten)
+        try:
+            for phase in phases:
+                tasks = []
+                for c, v, m, seed, k in longest_first(phase, cost):
+                    cond = conditions[c]
+                    states = run.file("states", folders[(c, v)])
+                    tasks.append(
+                        (
+                            protocol,
+                            m,
+                            v,
+                            c,
+                            seed,
+                            k,
+                            (detector_splits if m.is_detector else splits)[(c, v)],
+                            shown[c](
+                                history_training_rows(
+                                    trained_on(cond, k), protocol, c, spec.corrected_history if v else 0
+                                )
+                            ),
+                            *units_seen[c],
+                            states,
+                            rules[c],
+                            bool(later),  # the detectors whiten their rows (gearlab.learn.whiten)
+                        )
                     )
-                )
-            executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+                executor.map(train_unit, tasks, on_done=record_done, gpu=protocol.device != "cpu")
+        except BaseException:  # what ended stays for --resume, where the order lets it
+            append_in_order()
+            raise
+        append_in_order(wait=True)
+        bounds = aside.get("bounds")
         for (c, v, m), seeds in members.items():
             for seed in seeds if folds[c] != (None,) else ():  # a training's folds make its record
                 name = unit_name(c, m, seed, v)
@@ -539,8 +578,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if seeds != (None,) and unit_name(c, m, None, v) not in records:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
                 run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
-        # which gear each test record's change is on, from the raw records (before any score is made)
-        store_localisation(run, spec.source, conditions, spec.corrected)  # events: the corrected simulator
+        aside.get("localisation")  # (localisation.json written aside)
+        aside.close()
         run.write_json(
             "conditions.json",
             {

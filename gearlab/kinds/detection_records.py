@@ -17,6 +17,7 @@ from ..data.spec import DatasetSpec
 from ..data.textzip import align_to
 from ..errors import GearlabInputError
 from ..events import Event
+from ..executors import LocalExecutor
 from ..learn.protocol import Protocol
 from ..parts.measured import ROLES, Target, TargetFile
 from ..scenario import location
@@ -233,19 +234,27 @@ def read_target(
     where: str = "[target] key 'files'",
     shaft: UnitShaft | None = None,
     continuous: bool = False,
+    executor=None,
 ) -> dict[str, dict]:
     """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
     read, standardised against its condition's history and aligned to its first history record.
     With a *shaft* (unit_shaft) the revolutions are that shaft's (cut from the record's input
     revolutions; cond["raw"] keeps those for the localisation), aligned by correlation: the input
     tacho's mark is no fixed angle of a slower shaft; *continuous*: each record shifted as one signal
-    (aligned). Only the records' signals are used here (no label)."""
+    (aligned). Only the records' signals are used here (no label). *executor*: a local pool reads the
+    records side by side (phm09_chip: 24 records, 6.8 s of CPU in this process, a core idle)."""
     conditions: dict[str, dict] = {}
-    on_event(Event("stage", stage="records", total=len(target.files), message="measured records"))
-    records = {}
-    for i, f in enumerate(target.files):
-        records[f.path] = target.read(f)
-        on_event(Event("advance", stage="records", done=i + 1, total=len(target.files)))
+    total = len(target.files)
+    on_event(Event("stage", stage="records", total=total, message="measured records"))
+    done = iter(range(1, total + 1))
+
+    def read(_: int, record) -> None:
+        on_event(Event("advance", stage="records", done=next(done), total=total))
+
+    # this machine's pool only (a Ray cluster's nodes may not see the files); else in this process
+    pool = executor if isinstance(executor, LocalExecutor) else LocalExecutor(1)
+    got = pool.map(target.read, target.files, on_done=read)
+    records = {f.path: r for f, r in zip(target.files, got)}
     speeds = {p: r.speed_hz for p, r in records.items()}
     named = conditions_of(list(target.files), speeds)
     for f in target.files:
