@@ -76,8 +76,8 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
 ):
     """[corrected] draws = 3: the corrected source holds three noise draws of each sample; its
     networks are handed them as (n, 3, L), split by sample (no draw of a held-out sample is trained
-    on), and a batch row is always a draw of its own sample; its detector's templates are each
-    sample's mean over its draws;
+    on), and a batch row is always a draw of its own sample; its detector's shapes are the
+    samples' noise-free twins;
     the held-out counts are samples, not draws. The plain source keeps one draw."""
     import torch
 
@@ -124,8 +124,9 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
     trained = X.reshape(-1, X.shape[-1])
     assert all(np.abs(trained - v).max(axis=1).min() > 1e-3 for v in V)  # held-out samples: no draw trained on
     assert rows and 0 in rows  # batches took other draws than the first
-    ((drawn, _),) = [(X, V) for adapter, X, V in handed if adapter == "matched_filter" and X.ndim == 3]
-    assert any(np.allclose(t, drawn.mean(axis=1), atol=1e-6) for t in templates)  # the mean of the draws
+    # its detector: one row a sample, the noise-free twin's (test_corrected_detector_shapes), not the draws' mean
+    assert [D.ndim for adapter, D, _ in handed if adapter == "matched_filter"] == [2, 2]
+    assert not any(t.shape == X[:, 0].shape and np.allclose(t, X.mean(axis=1), atol=1e-6) for t in templates)
     records = [json.loads(line) for line in (run_dir / "results.jsonl").read_text().splitlines()]
     (noisy,) = [r for r in records if r["method"] == "source_only (noisy)" and r.get("seed") is None]
     (plain,) = [r for r in records if r["method"] == "source_only" and r.get("seed") is None]

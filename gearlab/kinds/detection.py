@@ -486,11 +486,17 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             for c, v in specs
         }
         detector_splits = dict(splits)
+        # a source with sensor noise (the corrected one): its detectors' shapes from its noise-free twin
+        quiet = {s: noise_free_twin(s, draws[s]) for s in built if noise_effects(s)}
+        for c, v in specs:
+            if (s := specs[(c, v)]) in quiet:
+                Xs, ys, _, _ = source_split(load_or_build(quiet[s], executor, on_event)[0], protocol)
+                detector_splits[(c, v)] = (shown[c](Xs), ys, *splits[(c, v)][2:])
         if later:  # the detectors' shapes: each fault row less its healthy twin (signature_rows)
-            twins = {s: load_or_build(healthy_twin(s), executor, on_event)[0] for s in built}
+            twins = {s: load_or_build(healthy_twin(quiet.get(s, s)), executor, on_event)[0] for s in built}
             for c, v in specs:
-                s, (Xs, ys, Xv, yv) = specs[(c, v)], splits[(c, v)]
-                Ts = each_draw(shown[c], source_split(twins[s], protocol, draws[s])[0])
+                s, (Xs, ys, Xv, yv) = specs[(c, v)], detector_splits[(c, v)]
+                Ts = each_draw(shown[c], source_split(twins[s], protocol, 1 if s in quiet else draws[s])[0])
                 detector_splits[(c, v)] = (signature_rows(Xs, ys, Ts), ys, Xv, yv)
         if shaft is not None and (g := shaft_symmetry(spec.source, shaft)) > 1:
             # the detectors' shapes at every angle the turn into the source's frame may put the damage
