@@ -163,3 +163,28 @@ def test_a_count_the_mesh_line_alone_gives_is_ambiguous_in_the_gap_s_verdict_as_
     given = Chain(fs=1024 * 25.2236, speed=25.2236, speed_from_mesh=False, described_speed=25.0)
     assert structure.count_ambiguity(bare, pair, 400, given) is None
     assert verdict_text({**result, "structure": {}}) == "explained"
+
+
+def test_a_measured_dataset_target_without_a_described_speed_in_its_chain_is_checked_for_ambiguity(monkeypatch):
+    # a gap target given as a measured dataset ([target] file = ..., gearbox = ...: the two-stage reducer of
+    # test_user_gearbox_e2e's gap_nt.toml): its chain comes from the importer's meta, with no described speed,
+    # so the check was skipped and the verdict read 'explained' where inspect said 'consistent if ... 30 Hz'.
+    # The description's speed is then the source's.
+    from types import SimpleNamespace
+
+    from gearboxes import described_pair
+
+    from gearlab.data import builder
+    from gearlab.data.chain import Chain
+    from gearlab.gap import structure
+
+    monkeypatch.setattr(builder, "operating_point", lambda source: (25.0, 60.0))
+    chain = Chain(fs=1024 * 25.2236, speed=25.2236, speed_from_mesh=True)  # as chain_of(meta) makes it
+    settings = SimpleNamespace(max_order=400)
+    before = {"significant": False, "alpha": 0.05}  # no significant gap: nothing after the structure
+    bare = _mesh_rows(36, 137, input_sidebands=False)
+    verdict, line, record = structure.first_difference(
+        None, bare, described_pair((36, 137)), settings, None, None, None, before, chain
+    )
+    assert verdict is None and line is None, line
+    assert "ambiguous" in record and 37 in dict(record["ambiguous"]["others"]), record

@@ -586,14 +586,16 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     return line
 
 
-def count_ambiguity(target, pair, max_order: int, chain) -> dict | None:
+def count_ambiguity(target, pair, max_order: int, chain, declared: float | None = None) -> dict | None:
     """Where the target's speed came from the description's mesh lines (no tacho, no speed given) and no
     line of the input shaft tells the pinion's count, the other counts the mesh line allows at speeds
     within the nominal range, as inspect decides it (gearbox.pinion_count.pinion_evidence: inspect's
     check.ambiguous): {'speed_hz', 'others': [(teeth, Hz)], 'line'}, else None. A structure that passes
     then holds only if the input turns at the speed read (a 37-tooth pinion at 24.53 Hz meshes where the
-    described 36 at 25.22 Hz do)."""
-    if chain is None or not chain.speed_from_mesh or not chain.described_speed:
+    described 36 at 25.22 Hz do). *declared*: the description's speed where the chain holds none (a measured
+    dataset's chain, data.chain.chain_of)."""
+    declared = (chain and chain.described_speed) or declared
+    if chain is None or not chain.speed_from_mesh or not declared:
         return None
     from ..gearbox import order_table
     from ..gearbox.pinion_count import alternatives_words, pinion_evidence
@@ -601,7 +603,7 @@ def count_ambiguity(target, pair, max_order: int, chain) -> dict | None:
 
     table = order_table(_PairDescription.train(pair))
     lines = _lines(target, max_order)
-    _, seen, others = pinion_evidence(lines, chain.speed, target.shape[0], table, int(pair.Z1), chain.described_speed)
+    _, seen, others = pinion_evidence(lines, chain.speed, target.shape[0], table, int(pair.Z1), declared)
     if seen is not None or not others:
         return None
     line = (
@@ -630,7 +632,8 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
     line = structure_line(target, pair, settings.max_order, chain, plain, record)
     if line:
         return "structure differs", line, record
-    if ambiguous := count_ambiguity(target, pair, settings.max_order, chain):
+    declared = record.get("speed_hz", {}).get("source")  # a measured dataset's chain holds no described speed
+    if ambiguous := count_ambiguity(target, pair, settings.max_order, chain, declared):
         record["ambiguous"] = ambiguous  # the diagnosis goes on; its verdict says it (conclusion.verdict_text)
     if not gap_seen(before):
         return None, None, record
