@@ -769,9 +769,8 @@ def check_recording(
 ) -> Header:
     """Check what a scenario says of a measured file against its header alone (read_header): every
     channel in *channels* ({key: channel}, e.g. {"vibration": "acc_V", "tacho": 2}) is there, a
-    sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale, with
-    the scenario's *unit*) are given. *where*: the scenario's table ("s.toml: [datasets] #1");
-    every error is one line that names it, the key and the file."""
+    sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale, with the
+    scenario's *unit*) are given; each error one line naming *where* ("s.toml: [datasets] #1"), key, file."""
     try:
         header = read_header(path)
     except GearlabInputError as exc:  # a file its reader refuses (a zip of two texts): named where it is listed
