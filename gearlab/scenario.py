@@ -178,7 +178,7 @@ def _type_name(types) -> str:
     return " or ".join(names.get(t, t.__name__) for t in types)
 
 
-def _check_type(value, types, where):
+def check_type(value, types, where):
     types = types if isinstance(types, tuple) else (types,)
     ok = isinstance(value, types) and not (isinstance(value, bool) and bool not in types)
     if float in types and isinstance(value, int) and not isinstance(value, bool):
@@ -208,7 +208,7 @@ def validate_table(path, name: str, table: Table, data: Mapping, index: int | No
             out[key] = spec.default
             continue
         value = data[key]
-        _check_type(value, spec.types, where)
+        check_type(value, spec.types, where)
         out[key] = spec.check(value, where) if spec.check else value
     return out
 

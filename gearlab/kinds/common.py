@@ -19,10 +19,10 @@ from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
 from ..params import did_you_mean
-from ..parts.measured import pulses_of, tacho_shaft_of
+from ..parts.measured import ACQUISITION, pulses_of, tacho_shaft_of
 from ..registry import get_registry
-from ..scenario import Scenario, Table, keys_of, location, plain_name
-from ..settings import from_inline, setting
+from ..scenario import Scenario, Table, check_type, keys_of, location, plain_name
+from ..settings import from_inline, in_bounds, setting
 from ..units import to_si
 
 # --- the keys of a measured recording, declared once ---------------------------------------------
@@ -76,6 +76,19 @@ def _gain(value, where: str):
     return value
 
 
+def _files(value, where: str):
+    """A 'files' list: each entry's own acquisition keys (parts.measured.ACQUISITION) checked as this
+    table declares the [target]'s (MEASURED: types, bounds, choices), one line naming the entry."""
+    for i, entry in enumerate(value):
+        for key in ACQUISITION:
+            if isinstance(entry, dict) and key in entry:
+                at = f"{where} entry {i + 1} key '{key}'"
+                meta = setting(**MEASURED[key]).metadata["setting"]
+                check_type(entry[key], meta.types, at)
+                in_bounds(meta, entry[key], at)
+    return value
+
+
 TRANSIENTS = ("stats", "none")
 _SAME = object()  # measured(): the declared default
 
@@ -89,8 +102,10 @@ MEASURED = {
     "files": {
         "types": list,
         "default": [],
+        "check": _files,
         "doc": "measured records, each {file, role = 'history' | 'test', label, condition, speed (the last "
-        "two optional)}, relative to the scenario; a gap diagnosis reads the history (healthy, one speed)",
+        "two optional)}, relative to the scenario; a gap diagnosis reads the history (healthy, one speed); "
+        "an entry may give its own vibration, tacho, pulses_per_rev, sensitivity, gain, unit or fs",
     },
     "vibration": {
         "types": (int, str),

@@ -132,11 +132,12 @@ def units_declared(target: Target) -> bool:
     recordings.channel_scale)."""
     from ..data.recordings import channel_key, name_unit, named, read_header
 
-    if target.sensitivity is not None or target.unit is not None:
-        return True
     first = next(f for f in target.files if f.role == "history")
+    keys = target.keys_of(first)  # its own keys, else the [target]'s
+    if keys["sensitivity"] is not None or keys["unit"] is not None:
+        return True
     header = read_header(first.resolved)
-    name = channel_key(target.vibration)
+    name = channel_key(keys["vibration"])
     name = named(name, header.channels) if header.indexed else name
     said = name_unit(name) or (name_unit(f"[{header.units[name]}]") if name in header.units else None)
     return said is not None and said[0] == "acceleration"

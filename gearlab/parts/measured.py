@@ -3,6 +3,7 @@ and test files; gap: the history alone), each file with its role, label and oper
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -17,9 +18,12 @@ if TYPE_CHECKING:
     from ..gearbox.orders import TachoShaft
 
 ROLES = ("history", "test")
+# The acquisition keys a 'files' entry may give for its file alone (the [target]'s own, checked as
+# kinds.common.MEASURED declares them): a CSV history with column 'acc', HDF5 tests with dataset 'vib'
+ACQUISITION = ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "unit", "fs")
 # 'file' as in every kind's measured entry; 'speed' a record's own declared speed (no tacho); 'path',
 # the file's name before, is read the same
-FILE_KEYS = ("file", "role", "label", "condition", "speed", "path")
+FILE_KEYS = ("file", "role", "label", "condition", "speed", *ACQUISITION, "path")
 
 
 @dataclass(frozen=True)
@@ -30,6 +34,9 @@ class TargetFile:
     label: str
     condition: str  # "" until known (the record's speed)
     speed_hz: float | None = None  # declared for this record alone (no tacho)
+    # its own acquisition keys, (name, value as Target holds it) in ACQUISITION's order: the
+    # [target]'s are read where it gives none (Target.keys_of); part of the record's identity
+    keys: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -48,10 +55,17 @@ class Target:
     unit: str | None = None  # the vibration's unit where its name and file say none (recordings.UNITS)
     tacho_shaft: TachoShaft | None = None  # a tacho on another shaft than the input (None: the input)
 
+    def keys_of(self, file: TargetFile) -> dict:
+        """The acquisition keys *file* is read with: its own, else the target's."""
+        return {k: getattr(self, k) for k in ACQUISITION} | dict(file.keys)
+
     @property
     def marks(self) -> int:
-        """The tacho marks a record's input angle may start at, 1/marks of a turn apart (TachoShaft.marks)."""
-        return self.pulses_per_rev if self.tacho_shaft is None else self.tacho_shaft.marks(self.pulses_per_rev)
+        """The tacho marks a record's input angle may start at, 1/marks of a turn apart (TachoShaft.marks);
+        files of other pulses per turn: the marks of them all."""
+        pulses = {self.pulses_per_rev} | {self.keys_of(f)["pulses_per_rev"] for f in self.files}
+        marks = [p if self.tacho_shaft is None else self.tacho_shaft.marks(p) for p in sorted(pulses)]
+        return math.lcm(*marks)
 
     @property
     def read_as(self) -> str | None:
@@ -67,13 +81,7 @@ class Target:
 
         return cut_recording(
             file.resolved,
-            vibration=self.vibration,
-            tacho=self.tacho,
-            pulses_per_rev=self.pulses_per_rev,
-            sensitivity=self.sensitivity,
-            gain=self.gain,
-            unit=self.unit,
-            fs=self.fs,
+            **self.keys_of(file),
             transient=self.transient,
             speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
             gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
@@ -145,7 +153,8 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
         path = Path(f["file"])
         resolved = path if path.is_absolute() else base / path
         check_measured_file(resolved, f"{at} key 'file'")
-        out.append(TargetFile(f["file"], str(resolved), f["role"], f["label"], condition, speed))
+        keys = tuple(acquisition(f, at, [k for k in ACQUISITION if k in f]).items())
+        out.append(TargetFile(f["file"], str(resolved), f["role"], f["label"], condition, speed, keys))
     seen = {}
     for i, f in enumerate(out):
         if seen.setdefault(f.resolved, i) != i:
@@ -158,6 +167,28 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
                 + " file"
             )
     return tuple(out)
+
+
+def acquisition(t: dict, where: str, keys=ACQUISITION) -> dict:
+    """The acquisition *keys* of a [target] table or a 'files' entry *t* (checked as
+    kinds.common.MEASURED declares them) as Target holds them: channels as the readers name them,
+    quantities in SI, None where not given."""
+    return {key: held(key, t.get(key), f"{where} key '{key}'") for key in keys}
+
+
+def held(key: str, value, where: str):
+    """An acquisition key's *value* as Target holds it (None: not given); *where* names it."""
+    if key == "vibration":
+        return channel_key(value)
+    if value is None or value == "":
+        return None
+    if key == "tacho":
+        return channel_key(value)
+    if key == "pulses_per_rev":
+        return int(value)
+    if key == "sensitivity":
+        return parse_sensitivity(value, where)
+    return value if key == "unit" else to_si(value, {"gain": "V", "fs": "Hz"}[key], where)
 
 
 def speed_of(value, where: str) -> float:
@@ -180,21 +211,22 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
     checked as kinds.common.MEASURED declares its keys (bounds, choices, column indices) when the
     table was read; here the values become SI. *box*: the [source]'s gearbox description, whose
     shafts 'tacho_shaft' (default: its [sensor] tacho) names."""
-    fs = None if t.get("fs") is None else to_si(t["fs"], "Hz", f"{where} key 'fs'")
-    vibration = channel_key(t["vibration"])
-    tacho = None if t["tacho"] in (None, "") else channel_key(t["tacho"])
+    keys = acquisition(t, where)
+    vibration, tacho = keys["vibration"], keys["tacho"]
     if vibration == tacho:
         raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
     speed = None if t.get("speed") is None else speed_of(t["speed"], f"{where} key 'speed'")
     gearbox = t.get("gearbox") or None
-    sensitivity = None
-    if t.get("sensitivity") is not None:
-        sensitivity = parse_sensitivity(t["sensitivity"], f"{where} key 'sensitivity'")
-    gain = None if t.get("gain") is None else to_si(t["gain"], "V", f"{where} key 'gain'")
-    unit = t.get("unit") or None
     files = target_files(t["files"], f"{where} key 'files'", base, need)
-    if vibration == "":  # as inspect takes it: each file's one channel besides the tacho and time
-        found = sorted({only_vibration(f.resolved, tacho, where) for f in files})
+    if vibration == "" and any("vibration" not in dict(f.keys) for f in files):
+        # as inspect takes it: each file's one channel besides the tacho and time
+        found = sorted(
+            {
+                only_vibration(f.resolved, dict(f.keys).get("tacho", tacho), where)
+                for f in files
+                if "vibration" not in dict(f.keys)
+            }
+        )
         if len(found) > 1:
             raise GearlabInputError(
                 f"{where} key 'vibration': missing, and the files' one signal channels differ "
@@ -204,6 +236,17 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
     if tacho is None and t["pulses_per_rev"] not in (None, 1):
         raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
     for i, f in enumerate(files):
+        own = dict(f.keys)
+        at = f"{where} key 'files' entry {i + 1}"
+        if "tacho" in own and (own["tacho"] is None) != (tacho is None):
+            raise GearlabInputError(
+                f"{at} key 'tacho': a file's tacho names the [target]'s tacho channel in that file; expected "
+                + ("none, as the [target] gives none" if tacho is None else f"a channel, as the [target]'s {tacho!r}")
+            )
+        if own.get("pulses_per_rev") is not None and tacho is None:
+            raise GearlabInputError(f"{at} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
+        if own and own.get("vibration", vibration) == own.get("tacho", tacho):
+            raise GearlabInputError(f"{at} key 'vibration': the same column as the tacho ({own.get('tacho', tacho)!r})")
         declared = f.speed_hz if f.speed_hz is not None else speed
         # the shaft angle comes from one of them (recordings.shaft_angle): a tacho, or a speed
         # declared or found from the description's mesh orders
@@ -221,28 +264,29 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
                 "from; expected a tacho channel, a 'speed' (e.g. '25 Hz') or a 'gearbox' description whose "
                 "mesh orders give the speed"
             )
+        merged = {**keys, "vibration": vibration, **own}
         check_recording(
             f.resolved,
-            where,
-            {"vibration": vibration, "tacho": tacho},
-            fs=fs,
-            sensitivity=sensitivity,
-            gain=gain,
-            unit=unit,
+            at if own else where,
+            {"vibration": merged["vibration"], "tacho": merged["tacho"]},
+            fs=merged["fs"],
+            sensitivity=merged["sensitivity"],
+            gain=merged["gain"],
+            unit=merged["unit"],
         )
     shaft = tacho_shaft_of(t.get("tacho_shaft") or "", tacho, box, where, "[source] key 'gearbox'")
     return Target(
         vibration,
         tacho,
         pulses_of(t["pulses_per_rev"], tacho, box),
-        sensitivity,
-        fs,
+        keys["sensitivity"],
+        keys["fs"],
         t["transient"],
         t["positive"],
         files,
-        gain,
+        keys["gain"],
         speed,
         gearbox,
-        unit,
+        keys["unit"],
         shaft,
     )

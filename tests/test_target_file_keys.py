@@ -1,0 +1,143 @@
+"""A [target] 'files' entry may give its own acquisition keys (vibration, tacho, pulses_per_rev,
+sensitivity, gain, unit, fs): a history in CSV (column 'acc') and test files in HDF5 (dataset 'vib')
+or WAV (channel 0) in one detection scenario (issue 39 item 2: the same keys everywhere)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import h5py
+import numpy as np
+import pytest
+from scipy.io import wavfile
+
+from gearlab.errors import GearlabInputError
+from gearlab.parts.measured import target_spec
+
+FS, SPEED = 6400.0, 25.0
+BOX = (
+    '[gearbox]\nname = "b"\n[operation]\nspeed = "25 Hz"\nload = "40 N*m"\n'
+    '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
+    'pinion = { z = 21, bore = "20 mm" }\nwheel = { z = 53, bore = "30 mm" }\n'
+)
+
+
+def _signal(seconds: float = 2.0) -> np.ndarray:
+    t = np.arange(int(FS * seconds)) / FS
+    return 3.0 * np.sin(2 * np.pi * 21 * SPEED * t) + 0.5 * np.sin(2 * np.pi * SPEED * t)
+
+
+def _takes(folder):
+    x = _signal()
+    # the history: a CSV whose column 'acc' is in g (no unit in its name), its rate in a '# fs' line
+    (folder / "h.csv").write_text(f"# fs = {FS:g}\nacc\n" + "".join(f"{v / 9.80665:.7f}\n" for v in x))
+    # a test file: HDF5, dataset 'vib' in m/s², 0.5 V per file unit read at 50 mV/(m/s^2) (scale 10)
+    with h5py.File(folder / "t.h5", "w") as f:
+        f.create_dataset("vib", data=x / 10.0).attrs["fs"] = FS
+    # another: a mono float WAV in m/s², channel 0, rate from its header
+    wavfile.write(folder / "t.wav", int(FS), x.astype(np.float32))
+    (folder / "box.toml").write_text(BOX)
+
+
+FILES = (
+    '{ file = "h.csv", role = "history", label = "healthy" }, '
+    '{ file = "t.h5", role = "test", label = "fault", vibration = "vib", unit = "", gain = "0.5 V", '
+    'sensitivity = "50 mV/(m/s^2)" }, '
+    '{ file = "t.wav", role = "test", label = "healthy", vibration = 0, unit = "m/s^2"%s }'
+)
+
+
+def _scenario(folder, extra: str = "") -> str:
+    text = (
+        '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+        '[target]\nvibration = "acc"\nunit = "g"\nspeed = "25 Hz"\nfiles = [' + FILES % extra + "]\n"
+    )
+    (folder / "d.toml").write_text(text)
+    return folder / "d.toml"
+
+
+def _target(folder, **changes):
+    files = [
+        {"file": "h.csv", "role": "history", "label": "healthy"},
+        {
+            "file": "t.h5",
+            "role": "test",
+            "label": "fault",
+            "vibration": "vib",
+            "unit": "",
+            "gain": "0.5 V",
+            "sensitivity": "50 mV/(m/s^2)",
+        },
+        {"file": "t.wav", "role": "test", "label": "healthy", "vibration": 0, "unit": "m/s^2", **changes},
+    ]
+    t = {
+        "vibration": "acc",
+        "tacho": "",
+        "tacho_shaft": "",
+        "pulses_per_rev": None,
+        "fs": None,
+        "speed": "25 Hz",
+        "gearbox": "",
+        "sensitivity": None,
+        "gain": None,
+        "unit": "g",
+        "transient": "none",
+        "positive": "fault",
+        "files": files,
+    }
+    return target_spec(t, "d.toml: [target]", folder)
+
+
+def test_validate_accepts_per_file_channels_and_units(tmp_path, cli):
+    _takes(tmp_path)
+    got, out, err = cli("validate", _scenario(tmp_path))
+    assert got == 0, (out, err)
+
+
+def test_each_file_is_read_with_its_own_keys(tmp_path):
+    _takes(tmp_path)
+    target = _target(tmp_path)
+    revs = [target.read(f).revolutions for f in target.files]
+    reference = revs[0].mean(axis=0)
+    rms = float(np.sqrt(np.mean(reference**2)))
+    assert rms > 2.0  # 3 m/s² and 0.5 m/s² lines: the CSV's g read as m/s²
+    for r in revs[1:]:  # the HDF5 scaled by gain / sensitivity, the WAV in m/s²: the same record
+        assert np.sqrt(np.mean((r.mean(axis=0) - reference) ** 2)) < 0.01 * rms
+
+
+@pytest.mark.parametrize(
+    "extra, key",
+    [
+        (', fs = "-3 Hz"', "fs"),
+        (', unit = "furlong"', "unit"),
+        (', gain = "-1 V"', "gain"),
+        (", pulses_per_rev = 0", "pulses_per_rev"),
+        (', sensitivity = "fast"', "sensitivity"),
+        (", vibration = -1", "vibration"),
+        (', tacho = "tach"', "tacho"),
+        (', colour = "red"', "colour"),
+    ],
+)
+def test_a_bad_per_file_key_is_one_line_naming_the_entry_and_key(tmp_path, cli, extra, key):
+    _takes(tmp_path)
+    text = _scenario(tmp_path, extra).read_text()
+    if key == "vibration":  # the WAV entry's own channel replaced by a bad one
+        text = text.replace("vibration = 0, unit", "unit")
+    if key == "unit":  # the WAV entry's own unit replaced by a bad one
+        text = text.replace(', unit = "m/s^2", unit', ", unit")
+    (tmp_path / "d.toml").write_text(text)
+    got, out, err = cli("validate", tmp_path / "d.toml")
+    assert got == 2, (out, err)
+    line = err.strip()
+    assert len(line.splitlines()) == 1, line
+    assert "[target] key 'files' entry 3" in line and f"'{key}'" in line, line
+
+
+def test_per_file_values_are_part_of_the_records_identity(tmp_path):
+    _takes(tmp_path)
+    one, two = _target(tmp_path), _target(tmp_path, unit="g")
+    assert one != two and hash(one) != hash(two)
+    assert dataclasses.asdict(one) != dataclasses.asdict(two)
+    assert dataclasses.asdict(one)["files"][2]["keys"] != dataclasses.asdict(two)["files"][2]["keys"]
+    with pytest.raises(GearlabInputError, match="entry 3 key 'unit'"):  # read with the file's own keys
+        _target(tmp_path, gain="2 V")
