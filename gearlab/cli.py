@@ -617,6 +617,7 @@ def score(
         str | None, typer.Option(help="the run's condition to score them in (default: the nearest speed)")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print the rows as JSON")] = False,
+    key: Annotated[list[str], typer.Option(help="the files' vibration=, tacho=, fs=, unit=, sensitivity=, gain=")] = [],  # noqa: B006
 ) -> None:
     """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
 
@@ -627,7 +628,7 @@ def score(
     from .notebook import score_recordings
     from .terminal import score_tables
 
-    rows = score_recordings(run_dir, files, condition)
+    rows = score_recordings(run_dir, files, condition, given=dict(k.partition("=")[::2] for k in key))
     if as_json:
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
         return

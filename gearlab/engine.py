@@ -293,7 +293,11 @@ def write_report(run: RunDir) -> Path:
 
 
 def score_recordings(
-    run: RunDir, files: list[Path], condition: str | None = None, on_event: EventSink = ignore_events
+    run: RunDir,
+    files: list[Path],
+    condition: str | None = None,
+    on_event: EventSink = ignore_events,
+    given: dict | None = None,
 ) -> list[dict]:
     """New recordings scored by a finished run's trained methods and thresholds (`gearlab score`):
     the run's kind must offer scoring (a `score` function: the detection kind); the rows are
@@ -307,6 +311,6 @@ def score_recordings(
                 + (f"a {kind} run keeps no trained methods to score with" if kind else "not a finished run")
                 + "; expected a finished detection run"
             )
-        rows = scorer(run, files, condition, on_event)
+        rows = scorer(run, files, condition, on_event, given)  # given: the new files' own channel keys
         write_report(run)
     return rows

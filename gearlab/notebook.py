@@ -576,11 +576,16 @@ def run_verdict(run: RunDir | str | Path) -> list[str]:
 
 
 def score_recordings(
-    run: RunDir | str | Path, files: Sequence[str | Path], condition: str | None = None, on_event=None
+    run: RunDir | str | Path,
+    files: Sequence[str | Path],
+    condition: str | None = None,
+    on_event=None,
+    given: dict | None = None,
 ) -> list[dict]:
     """New recordings scored by a finished detection run's trained methods at its thresholds, nothing
     trained again, as ``gearlab score RUN_DIR FILE...`` does (docs/your_gearbox.md): the files are
-    read with the run's ``[target]`` keys, in the *condition* of nearest speed unless named. One row
+    read with the run's ``[target]`` keys (*given*: the files' own, e.g. ``{"vibration": "vib"}``,
+    as a ``files`` entry gives them), in the *condition* of nearest speed unless named. One row
     per file, method and unit: ``units``, ``called`` (over the threshold), ``median_score``,
     ``threshold``, ``decision``, and which gear the change lies on (``localised``, ``evidence``).
     The rows are appended to the run's scoring history, whose trend its report shows.
@@ -627,4 +632,4 @@ def score_recordings(
     from .runs import RunDir
 
     run = run if isinstance(run, RunDir) else RunDir.open(Path(run))
-    return score(run, [Path(f) for f in files], condition, on_event or ignore_events)
+    return score(run, [Path(f) for f in files], condition, on_event or ignore_events, given)

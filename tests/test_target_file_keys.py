@@ -141,3 +141,27 @@ def test_per_file_values_are_part_of_the_records_identity(tmp_path):
     assert dataclasses.asdict(one)["files"][2]["keys"] != dataclasses.asdict(two)["files"][2]["keys"]
     with pytest.raises(GearlabInputError, match="entry 3 key 'unit'"):  # read with the file's own keys
         _target(tmp_path, gain="2 V")
+
+
+def test_score_reads_new_files_with_their_own_keys():
+    """gearlab score --key vibration=vib ...: a new file's own channel keys over the run's [target] keys
+    (detection_scoring.reading_keys), as a 'files' entry gives them; a bad one is one line."""
+    from gearlab.kinds.detection_scoring import reading_keys
+
+    target = {"vibration": "acc", "tacho": "tach", "pulses_per_rev": 1, "fs": None, "sensitivity": 0.0102, "gain": None}
+    meta = {"target": target, "unit": None, "conditions": {"25 Hz": {"speed_hz": 25.0}}}
+    given = {"vibration": "vib", "tacho": "pulses", "fs": "25.6 kHz", "sensitivity": "100 mV/g", "unit": "V"}
+    keys = reading_keys(meta, None, given)
+    assert (keys["vibration"], keys["tacho"], keys["fs"], keys["unit"]) == ("vib", "pulses", 25600.0, "V")
+    assert keys["sensitivity"] == pytest.approx(0.1 / 9.80665)
+    assert reading_keys(meta, None, {"vibration": "0"})["vibration"] == "0"  # a WAV's or headerless column
+    assert reading_keys(meta, None)["vibration"] == "acc"
+    for bad, match in (
+        ({"vib": "x"}, r"^--key vib=x: expected KEY=VALUE, .*did you mean 'vibration'"),
+        ({"fs": "fast"}, r"^--key fs"),
+        ({"unit": "furlong"}, r"^--key unit: 'furlong' is not one of"),
+    ):
+        with pytest.raises(GearlabInputError, match=match):
+            reading_keys(meta, None, bad)
+    with pytest.raises(GearlabInputError, match=r"^--key tacho: the run read its records without a tacho"):
+        reading_keys({**meta, "target": {**target, "tacho": None, "speed_hz": 25.0}}, None, {"tacho": "t"})

@@ -16,11 +16,13 @@ from ..gearbox.orders import TachoShaft
 from ..learn.protocol import fault_score
 from ..params import did_you_mean
 from ..parts import scoring
-from ..parts.measured import TargetFile
+from ..parts.measured import TargetFile, held
 from ..runs import RunDir
+from ..settings import in_bounds, setting
 from ..signals import Standardiser
 from ..signals.shaft import shaft_revolutions
 from . import record_effects
+from .common import MEASURED
 from .detection_classical import classical_record
 from .detection_records import (
     SPEED_GROUP,
@@ -206,12 +208,31 @@ def _tacho_shaft(keys: dict) -> TachoShaft:
     return TachoShaft(**(keys.get("tacho_shaft") or {"name": "input"}))
 
 
-def reading_keys(meta: dict, condition: str | None) -> dict:
+# what gearlab score --key may give of new files (parts.measured.ACQUISITION but the tacho's marks)
+SCORE_KEYS = ("vibration", "tacho", "fs", "unit", "sensitivity", "gain")
+
+
+def reading_keys(meta: dict, condition: str | None, given: dict | None = None) -> dict:
     """cut_recording's keys for a new record, as the run read its target: its tacho; or without
     one the run's declared speed and description (the speed from its mesh orders). A run whose
     speeds were declared per file only gives a new record the speed of its condition's history:
-    the condition asked (--condition), or the run's only one."""
+    the condition asked (--condition), or the run's only one. *given*: acquisition keys of the new
+    files ({'vibration': 'vib', 'fs': '25.6 kHz'}: gearlab score's --key, as a [target] 'files'
+    entry gives them) over the run's [target] keys."""
     keys = dict(meta["target"])
+    for key, value in (given or {}).items():
+        at = f"--key {key}"
+        if key not in SCORE_KEYS or value == "":
+            raise GearlabInputError(
+                f"{at}={value}: expected KEY=VALUE, KEY one of {', '.join(SCORE_KEYS)}{did_you_mean(key, SCORE_KEYS)}"
+            )
+        if key == "tacho" and keys["tacho"] is None:
+            raise GearlabInputError(
+                f"{at}: the run read its records without a tacho (their speed declared or from the mesh orders); "
+                "expected no tacho (the new records are read as the run's were)"
+            )
+        in_bounds(setting(**MEASURED[key]).metadata["setting"], value, at)  # as the [target]'s are checked
+        keys[key] = held(key, value, at)
     if "tacho_shaft" in keys:
         keys["tacho_shaft"] = _tacho_shaft(keys)
     gearbox = keys.pop("gearbox", None)  # a run from before the target could go without a tacho has none
@@ -232,7 +253,9 @@ def reading_keys(meta: dict, condition: str | None) -> dict:
     return keys
 
 
-def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: None) -> list[dict]:
+def score(
+    run: RunDir, files, condition: str | None = None, on_event=lambda e: None, given: dict | None = None
+) -> list[dict]:
     """New recordings scored by a finished run's trained methods at its thresholds, nothing trained
     again: one row per file, method and unit kind (its units' scores, how many are called, the
     threshold and the record's decision: the majority of its units called, a fault -- or "other
@@ -246,7 +269,7 @@ def score(run: RunDir, files, condition: str | None = None, on_event=lambda e: N
             "score kept its models); expected a finished run: run the scenario again"
         )
     _same_input(run, meta)
-    keys = reading_keys(meta, condition)
+    keys = reading_keys(meta, condition, given)
     cut, raw, found = {}, {}, {}
     for i, file in enumerate(files):
         rec = cut_recording(str(file), **keys)
