@@ -165,3 +165,31 @@ def test_score_reads_new_files_with_their_own_keys():
             reading_keys(meta, None, bad)
     with pytest.raises(GearlabInputError, match=r"^--key tacho: the run read its records without a tacho"):
         reading_keys({**meta, "target": {**target, "tacho": None, "speed_hz": 25.0}}, None, {"tacho": "t"})
+
+
+def test_the_gap_reads_a_history_at_its_file_s_own_rate(tmp_path):
+    """A gap's history read at the rate its 'files' entry gives (the [target]'s 'fs' for the others):
+    read_history's rate is the file's, not the [target]'s."""
+    from gearlab.kinds.gap_inputs import Records, read_history
+
+    _takes(tmp_path)
+    x = _signal()
+    (tmp_path / "bare.csv").write_text("acc\n" + "".join(f"{v / 9.80665:.7f}\n" for v in x))  # no rate in it
+    t = {
+        "vibration": "acc",
+        "tacho": "",
+        "tacho_shaft": "",
+        "pulses_per_rev": None,
+        "fs": "1 kHz",
+        "speed": "25 Hz",
+        "gearbox": "",
+        "sensitivity": None,
+        "gain": None,
+        "unit": "g",
+        "transient": "none",
+        "positive": "fault",
+        "files": [{"file": "bare.csv", "role": "history", "label": "healthy", "fs": "6.4 kHz"}],
+    }
+    target = target_spec(t, "g.toml: [target]", tmp_path, need=("history",))
+    X, speed, _, fs, *_ = read_history(Records("g", target), lambda e: None)
+    assert fs == FS and speed == pytest.approx(SPEED)

@@ -53,7 +53,7 @@ class Records:
 
 def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float, bool, tuple[int, ...]]:
     """The history records' revolutions in m/s² (n, POINTS), their mean speed, notes, their sampling
-    rate (the [target]'s fs, or the first record's own), whether the speed was found from the
+    rate (a file's 'fs', else the [target]'s, else the record's own), whether the speed was found from the
     description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh),
     and each record's count of revolutions (Chain.takes).
     Records of different speeds are different operating conditions: refused. Every record is turned
@@ -106,7 +106,7 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
         "the source simulates that speed"
     )
     from_mesh = t.tacho is None and bool(t.gearbox) and t.speed_hz is None and all(f.speed_hz is None for f in files)
-    return X, speed, notes, t.fs or rec.fs, from_mesh, tuple(len(r) for r in rows)
+    return X, speed, notes, t.keys_of(f)["fs"] or rec.fs, from_mesh, tuple(len(r) for r in rows)
 
 
 def units_warning(channel, X: np.ndarray) -> str:
