@@ -65,7 +65,8 @@ is taken instead, the record resampled at that shaft's angle, and an absolute or
 shaft s's TSA is synchronous with shaft r when x / o_r is whole: the same classes, each order read
 from the TSA of the fastest shaft it is synchronous with. The result says which was used. A shaft's
 TSA averages the record less the faster shafts' averages (their lines, at no whole order of it, leak
-into its average and its turn-to-turn scatter: see SWEEPS).
+into its average and its turn-to-turn scatter: see SWEEPS); its noise is the scatter of its turns less
+every other shaft's average, plus what those leave in its mean (signals.shaft.shaft_averages).
 
 Everything is numpy: no torch, nothing from the layers above.
 """

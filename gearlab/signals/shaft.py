@@ -73,7 +73,14 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
     """(mean, noise, fewest turns) of each shaft's own TSA at the orders read from it (*lay*: a
     gearlab.signals.localise.Layout in per-shaft mode; *y*: R consecutive input revolutions, flat), of the
     record less the other shafts' averages (a slower one's less the orders read from this), fastest first,
-    *sweeps* times over (0: each shaft's TSA of the record itself)."""
+    *sweeps* times over (0: each shaft's TSA of the record itself).
+
+    The noise of a mean (sweeps > 0): the turn-to-turn scatter of the record less every other shaft's
+    average, plus the power of what those averages leave in the mean (|mean - that record's mean|²).
+    Another shaft's lines, at no whole order of this one, scatter its turns far more than they stay in
+    its mean: read as scatter, a 38/87 + 49/93 + 69/91 box's later meshes hid an input-pinion chip
+    (z 1.7 against a threshold of 2.8); left out of the noise, a slower gear's crack flagged the input
+    (tests/test_localise_blocks.py)."""
     pts = lay.points
     mean, noise = np.zeros(lay.orders.size, complex), np.zeros(lay.orders.size)
     shafts = sorted((s for s in range(len(lay.shafts)) if (lay.source == s).any()), key=lambda s: -lay.shaft_orders[s])
@@ -92,22 +99,31 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
         at = np.clip((turns / float(o) - first) * pts, 0, y.size - 1)
         cut[s] = (at, ((first + np.arange(y.size) / pts) * float(o)) % 1 * size)  # samples, phase
         periods = n if periods is None else min(periods, n)
+
+    def less_others(s: int) -> np.ndarray:
+        """Shaft s's turns of the record less the other shafts' averages so far."""
+        left = y
+        for r, wave in waves.items():
+            if r == s:
+                continue
+            spec = np.fft.rfft(wave)
+            if lay.shaft_orders[r] < lay.shaft_orders[s]:  # a slower r: less its orders read from s
+                spec[:: (lay.shaft_orders[r] / lay.shaft_orders[s]).denominator] = 0.0
+            # read at the record's samples from a grid 8 times finer (linear interpolation's error)
+            fine = np.fft.irfft(spec, n=8 * wave.size) * 8
+            left = left - np.interp(cut[r][1] * 8, np.arange(fine.size + 1), np.append(fine, fine[0]))
+        return np.interp(cut[s][0], np.arange(y.size), left)
+
     for sweep in range(max(sweeps, 1)):
         for s in shafts:
-            left = y
-            for r, wave in waves.items() if sweeps else ():
-                if r == s:
-                    continue
-                spec = np.fft.rfft(wave)
-                if lay.shaft_orders[r] < lay.shaft_orders[s]:  # a slower r: less its orders read from s
-                    spec[:: (lay.shaft_orders[r] / lay.shaft_orders[s]).denominator] = 0.0
-                # read at the record's samples from a grid 8 times finer (linear interpolation's error)
-                fine = np.fft.irfft(spec, n=8 * wave.size) * 8
-                left = left - np.interp(cut[r][1] * 8, np.arange(fine.size + 1), np.append(fine, fine[0]))
-            segments = np.interp(cut[s][0], np.arange(y.size), left)
+            segments = less_others(s) if sweeps else np.interp(cut[s][0], np.arange(y.size), y)
             waves[s] = segments.mean(axis=0)
             if sweep == max(sweeps, 1) - 1:
                 sel = lay.source == s
                 m, v = averaged(segments, int(lay.index[sel].max()), 3)
                 mean[sel], noise[sel] = m[lay.index[sel]], v[lay.index[sel]]
+    for s in shafts if sweeps and len(shafts) > 1 else ():  # each mean's noise: see the docstring
+        sel = lay.source == s
+        m, v = averaged(less_others(s), int(lay.index[sel].max()), 3)
+        noise[sel] = v[lay.index[sel]] + np.abs(mean[sel] - m[lay.index[sel]]) ** 2
     return mean, noise, int(periods)
