@@ -753,7 +753,9 @@ def localisation(path: str, history: list[str], box: Gearbox, options: InspectOp
     revs, first, _, _, speed, fs = _input_revolutions(path, box, options)
     past = [_input_revolutions(p, box, options) for p in history]
     takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
-    hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past))
+    tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
+    pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
+    hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
     out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
     out["history"] = list(history)
     return out

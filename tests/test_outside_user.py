@@ -428,10 +428,12 @@ def test_a_tooth_defined_up_to_a_tooth_or_less_is_said_to_hold_for_the_take_alon
     # precise count, while the shaft stands at any of 3337 (55) angles at a take's first tacho mark
     from gearlab.signals.localise import tooth_words
 
-    assert tooth_words({"tooth": 13, "of": 47, "step": 47 / 3337}) == (
-        "13 of 47 (in this take only: a take starts with the shaft at any of 3337 angles)"
+    # (then said as 'any of 3337 angles', a number no one can act on: said plainly, test_which_gear_words)
+    assert tooth_words({"tooth": 13, "of": 47, "step": 47 / 3337, "tacho": True}) == (
+        "13 of 47 (in this take only: the tooth is not fixed across takes; this shaft's angle relative to the "
+        "tacho is not known)"
     )
-    assert tooth_words({"tooth": 46, "of": 55, "step": 1.0}).endswith("at any of 55 angles)")
+    assert tooth_words({"tooth": 46, "of": 55, "step": 1.0}).endswith("at a take's start is not known)")
     assert tooth_words({"tooth": 17, "of": 96, "step": 32.0}) == "17 of 96 (up to 32-tooth steps between takes)"
 
 

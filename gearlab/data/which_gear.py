@@ -46,10 +46,13 @@ def band(takes: list[Take]) -> float:
     return float(min(min(Chain(fs=t.fs, speed=t.speed_hz).max_order for t in takes), 0.45 * POINTS))
 
 
-def history_of(takes: list[Take], table, marks: int = 1, max_order: float | None = None) -> L.History:
+def history_of(
+    takes: list[Take], table, marks: int = 1, max_order: float | None = None, tacho: str = "", pulses: int = 1
+) -> L.History:
     """The healthy history *takes* of the gearbox of order table *table* read for localisation, orders up
     to *max_order* (default: band(takes)); *marks*: the tacho's marks per input turn (a take is turned
-    to the first take's)."""
+    to the first take's); *tacho*: the shaft the tacho reads ("": none), *pulses*: its marks per turn
+    (the tacho's own shaft counts its teeth from its mark)."""
     if not takes:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
     period = int(table.train_period)
@@ -59,6 +62,8 @@ def history_of(takes: list[Take], table, marks: int = 1, max_order: float | None
         first_revolutions=[t.first % period for t in takes],
         max_order=band(takes) if max_order is None else max_order,
         marks=marks,
+        tacho=tacho,
+        pulses=pulses,
     )
 
 

@@ -291,6 +291,8 @@ def read_target(
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
         cond["shifts"], cond["tacho"] = {}, target.tacho is not None
         cond["marks"] = target.marks if target.tacho is not None else 1  # localisation turns to a mark
+        pulses = max(target.keys_of(f)["pulses_per_rev"] for f in target.files)  # (which gear: one mark a turn?)
+        cond["tacho_shaft"], cond["pulses"] = target.read_as or "", max(pulses, target.pulses_per_rev)
         # the shaft the units are revolutions of, and whether their angle is a tacho's (else turned
         # into the source's frame: detection.run, register_to_source)
         cond["unit_shaft"] = "input" if shaft is None else shaft.name

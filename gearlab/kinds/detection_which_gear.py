@@ -173,7 +173,8 @@ def localise_target(
         top = min(float(cond["max_order"]), 0.45 * POINTS)
         try:  # records too short for a spread or a band without every shaft's orders: said, not fatal
             marks = cond.get("marks", 1)  # each take turned to the first history record's tacho mark
-            hist = W.history_of([takes[f.path] for f, _ in cond["history"]], table, marks, top)
+            shaft = (cond.get("tacho_shaft", ""), cond.get("pulses", 1))  # where a tooth counts from the mark
+            hist = W.history_of([takes[f.path] for f, _ in cond["history"]], table, marks, top, *shaft)
         except GearlabInputError as exc:
             out["conditions"][name] = {"history": [f.path for f, _ in cond["history"]], "note": f"not localised: {exc}"}
             continue

@@ -57,7 +57,9 @@ correlates best with the first history record's (:func:`turned`), so every take 
 record's mark. On a shaft of order a/b (b > 1: the idler's 1/3) the count is defined only up to
 steps of z/b teeth: a take's first mark finds that shaft at any of b angles, and nothing tells
 which (the take's grand-period mean against the first record's: right for 7 of 120 takes,
-development seeds). The tooth says so ("step"). A strike's ring moves the peak later by its decay.
+development seeds). The tooth says so ("step"); a step of a tooth or less fixes nothing across takes, said
+plainly. The tacho's own shaft at one mark a turn is fixed to its mark: its tooth counts from it ("mark",
+the take's turn added back). A strike's ring moves the peak later by its decay.
 
 Fallback. When the record holds fewer than *min_periods* grand periods (tooth counts with few
 common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
@@ -483,11 +485,16 @@ def _harmonics(lay: Layout, shaft: int, sel: np.ndarray) -> tuple[np.ndarray, np
     return sel, lay.index[sel]
 
 
-def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear]) -> dict:
-    """Peak of the shaft's residual envelope in the shaft's angle, in tooth pitches of each gear on it."""
+def tooth_index(
+    rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], turn: Fraction | None = None, tacho=False
+) -> dict:
+    """Peak of the shaft's residual envelope in the shaft's angle, in tooth pitches of each gear on it.
+    *turn*: the take's advance (m/marks, :func:`turned`) where this is the tacho's own shaft (one mark
+    per turn: its angle from the mark is known, so is the tooth); *tacho*: the history has a tacho."""
     sel, m = _harmonics(lay, shaft, lay.sync[:, shaft] & ~lay.carrier)
     o = lay.shaft_orders[shaft]
     offset = 2 * math.pi * float((o * rec.first_revolution) % 1) if lay.mode == "grand" else 0.0
+    offset += 0.0 if turn is None or o == 1 else 2 * math.pi * float((o * turn) % 1)  # the input's: the first record's
     if not sel.any():
         return {}
     size = int(2 ** math.ceil(math.log2(8 * max(int(m.max()), max(g.teeth for g in gears)) + 1)))
@@ -504,8 +511,10 @@ def tooth_index(rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[
     for g in gears:
         pitches = angle / (2 * math.pi / g.teeth)
         out[g.name] = {"pitches": pitches, "tooth": int(math.floor(pitches)) % g.teeth + 1, "of": g.teeth}
-        if o.denominator > 1:  # see the module's docstring, "Tooth": defined up to steps of z / b
-            out[g.name]["step"] = g.teeth / o.denominator
+        if turn is not None:
+            out[g.name]["mark"] = True
+        elif o.denominator > 1:  # see the module's docstring, "Tooth": defined up to steps of z / b
+            out[g.name] |= {"step": g.teeth / o.denominator, "tacho": bool(tacho)}
     return out
 
 
@@ -527,14 +536,20 @@ def turned(revolutions: np.ndarray, reference: np.ndarray, marks: int) -> tuple[
     return m, flat[: (flat.size // pts) * pts].reshape(-1, pts)
 
 
+THIS_TAKE = "in this take only: the tooth is not fixed across takes"  # a step of a tooth or less (tooth_words)
+FROM_MARK = "counted from the tacho's mark on this shaft"  # the tacho's own shaft at one mark a turn
+
+
 def tooth_words(t: dict) -> str:
     """ "17 of 96", with the step it is defined up to on a shaft of no whole input order; a step of a
-    tooth or less defines nothing across takes (a 19/71 + 28/47 output gear: any of 3337 angles)."""
+    tooth or less defines nothing across takes (a 19/71 + 28/47 output gear: any of 3337 angles, a
+    number no one can act on: said plainly); on the tacho's own shaft, fixed to its mark."""
+    if t.get("mark"):
+        return f"{t['tooth']} of {t['of']} ({FROM_MARK})"
     if "step" in t and t["step"] <= 1:
-        angles = round(t["of"] / t["step"])
         # a take starts at its first tacho mark, or without a tacho at its first sample
-        where = f"a take starts with the shaft at any of {angles} angles"
-        return f"{t['tooth']} of {t['of']} (in this take only: {where})"
+        known = "relative to the tacho" if t.get("tacho") else "at a take's start"
+        return f"{t['tooth']} of {t['of']} ({THIS_TAKE}; this shaft's angle {known} is not known)"
     return f"{t['tooth']} of {t['of']}" + (f" (up to {t['step']:g}-tooth steps between takes)" if "step" in t else "")
 
 
@@ -599,6 +614,8 @@ class History:
     marks: int = 1  # tacho marks per turn: each take is turned to *reference* (see turned)
     reference: np.ndarray | None = None  # the first history record's mean revolution
     block: int | None = None  # revolutions of a unit: a record's power is read in blocks of as many
+    tacho: str = ""  # the shaft the tacho reads ("": none, or not said)
+    pulses: int = 1  # its marks per turn
 
     def state(self) -> dict[str, np.ndarray]:
         """Plain arrays (np.savez) from which :meth:`restored` remakes this history, records unread."""
@@ -616,6 +633,8 @@ class History:
             "marks": np.array(self.marks),
             "reference": np.zeros(0) if self.reference is None else self.reference,
             "block": np.array(self.block or 0),
+            "tacho": np.array(self.tacho),
+            "pulses": np.array(self.pulses),
         }
 
     @staticmethod
@@ -633,9 +652,9 @@ class History:
         marks = int(state["marks"]) if "marks" in state else 1
         reference = state["reference"] if marks > 1 else None
         block = int(state["block"]) if "block" in state else None  # saved before blocks: the whole record
-        return History(
-            lay, sp, state["thresholds"], state["left_out_z"], str(state["note"]), args, marks, reference, block or None
-        )
+        tacho = (str(state["tacho"]), int(state["pulses"])) if "tacho" in state else ("", 1)  # saved before: not said
+        kept = (state["thresholds"], state["left_out_z"], str(state["note"]), args, marks, reference, block or None)
+        return History(lay, sp, *kept, *tacho)
 
 
 def _units(revs: np.ndarray, first: int, lay: Layout, block: int) -> list[Content]:
@@ -643,6 +662,13 @@ def _units(revs: np.ndarray, first: int, lay: Layout, block: int) -> list[Conten
     if revs.shape[0] < block:
         return [content(revs, lay, first)]
     return [content(revs[i : i + block], lay, first + i) for i in range(0, revs.shape[0] - block + 1, block)]
+
+
+def _mark(hist: History, shaft: str, m: int) -> tuple[Fraction | None, bool]:
+    """tooth_index's (turn, tacho) for *shaft* of a take advanced *m*/marks: the tacho's own shaft at one mark
+    per turn (or the input at any) counts its teeth from the mark."""
+    own = shaft == hist.tacho and (hist.pulses == 1 or shaft == hist.layout.shafts[0])
+    return (Fraction(m, hist.marks) if own else None), bool(hist.tacho)
 
 
 def history(
@@ -653,6 +679,8 @@ def history(
     false_alarm: float = FALSE_ALARM,
     revolutions: int | None = None,
     marks: int = 1,
+    tacho: str = "",
+    pulses: int = 1,
     **options,
 ) -> History:
     """Read a healthy history: *records* of consecutive input revolutions (R_i, points) of one gearbox.
@@ -663,7 +691,8 @@ def history(
     against the units of the others (left out in turn), and at least the Gaussian quantile at
     *false_alarm* / the number of shafts. *revolutions* (default: the shortest record) fixes the
     layout's mode; *options* go to :func:`layout`. *marks*: the tacho's marks per turn, each record
-    turned to the first's mark (:func:`turned`)."""
+    turned to the first's mark (:func:`turned`); *tacho*: the shaft the tacho reads ("": none), *pulses* its marks
+    per turn."""
     if not records:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
     revs = [check_array(r, f"history record {i}", min_ndim=2) for i, r in enumerate(records)]
@@ -696,7 +725,7 @@ def history(
         f"{len(revs)} history record(s) in {len(flat)} units; thresholds: the largest left-out z, at least "
         f"{floor:.2f} (false alarm {false_alarm:g} shared by {len(lay.shafts)} shafts)"
     )
-    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference, read)
+    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference, read, tacho, pulses)
 
 
 def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0, templates=None) -> Localisation:
@@ -740,7 +769,7 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
                 shaft_label(name, on) if which is None else which.name,
                 None if which is None else which.name,
                 dens,
-                tooth_index(rec, hist.spread, lay, s, on) if flagged else {},
+                tooth_index(rec, hist.spread, lay, s, on, *_mark(hist, name, m)) if flagged else {},
             )
         )
     ranking = tuple(sorted(out, key=lambda e: -e.z))
