@@ -176,6 +176,8 @@ def diagnose(
     )
     if ambiguous := result["structure"].get("ambiguous"):  # the verdict says it too (conclusion.verdict_text)
         on_event(Event("log", message=f"gap: {ambiguous['line']}"))
+    if unchecked := result["structure"].get("unchecked"):  # the report's structure line too (gap_verdict)
+        on_event(Event("log", message=f"gap: {unchecked['line']}"))
     if verdict is not None:
         on_event(Event("log", message=f"gap: {verdict}: {line}"))
         result = {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}

@@ -132,6 +132,8 @@ def mesh_check(
         "lines": [float(v) for v in x],
         "inspect": check["stages"][0],
         "differs": False,
+        # tooth counts its sidebands cannot tell from the next one over these revolutions (inspect's 'not checked')
+        "unresolved": check["unresolved"],
     }
     if x.size < 2:  # one line is a comb of itself: nothing to tell
         return out
@@ -277,7 +279,10 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     for name, rows in (("target", target), ("source", source)):
         if rows is not None:  # no source: a measured target read against the description alone
             lines = _lines(rows, max_order)
-            read[name] = (lines, rows.shape[0], check_description(lines, box, rows.shape[0], True)["stages"])
+            check = check_description(lines, box, rows.shape[0], True)
+            read[name] = (lines, rows.shape[0], check["stages"])
+            if name == "target":  # every stage's, named by its shafts as inspect names them
+                out["unresolved"] = check["unresolved"]
     for k in range(1, len(box.stages)):
         t, s = read["target"][2][k], read["source"][2][k] if source is not None else {}
         entry = {
@@ -521,11 +526,12 @@ def _tacho_read(chain, pair) -> tuple | None:
 def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> str | None:
     """The one line of the first tooth-count difference between *pair*'s train and the target's
     revolutions (*target*, input-shaft revolutions at uniform angle, read up to *max_order*), or None;
-    what was measured goes into *record*. After a speed found from the mesh lines that a whole tooth
-    explains as well, in turn: the first stage's mesh (mesh_check: its tacho's shaft and marks too),
-    its wheel, the later stages (against *plain*'s reading of itself, the source's healthy rows; None:
-    against the description's orders). The gap diagnosis's structure check (first_difference) and the
-    detection kind's check of its history records (gearlab.kinds.detection_records.check_structure)."""
+    what was measured goes into *record* (a count too few turns tell: its 'unchecked'). After a speed
+    found from the mesh lines that a whole tooth explains as well, in turn: the first stage's mesh
+    (mesh_check: its tacho's shaft and marks too), its wheel, the later stages (against *plain*'s
+    reading of itself, the source's healthy rows; None: against the description's orders). The gap
+    diagnosis's structure check (first_difference) and the detection kind's check of its history
+    records (gearlab.kinds.detection_records.check_structure)."""
     # records whose speed the description's mesh lines gave, the source set to it: revolutions cut
     # at that speed show the described mesh order whatever the teeth (a 14-tooth pinion at 45 Hz
     # described with 15 read at 42 Hz, 'unexplained'); a speed off the described one by a whole
@@ -563,7 +569,27 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     later = later_stages(target, plain, pair, max_order)
     if later["stages"]:
         record["later_stages"] = later["stages"]
-    return later["line"]
+    if later["line"]:
+        return later["line"]
+    # what passed unchecked: a tooth count its sidebands cannot tell from the next one over these revolutions,
+    # as inspect says it (gearbox.match.check_description's 'unresolved'; D, 43/89 described with 88 teeth,
+    # three records of ~52 turns: inspect 'not checked ... need 103', the gap 'unexplained', the wheel unsaid)
+    if unresolved := later.get("unresolved", mesh["unresolved"]):
+        record["unchecked"] = unchecked_record(unresolved, takes)
+    return None
+
+
+def unchecked_record(unresolved: list[str], takes: tuple = ()) -> dict:
+    """{'items': inspect's 'not checked' reasons, 'line': the structure's one line}: the structure passed,
+    but not every tooth count was told from the next one. *takes*: the records' revolutions laid end to
+    end (a slower shaft is read within the longest alone)."""
+    line = "structure not fully checked: " + "; ".join(unresolved)
+    if takes:
+        line += (
+            f", read within one record (the longest of {len(takes)}: records laid end to end are in register "
+            "on the input shaft only)"
+        )
+    return {"items": list(unresolved), "line": line}
 
 
 def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:

@@ -38,7 +38,7 @@ def gap_lines(summary: Mapping) -> list[str]:
     effects = summary.get("effects") or []
     said = summary.get("verdict") or ""  # the run's own verdict, as its log line said it (gearlab.gap.conclusion)
     if said.startswith(("structure differs", "level differs")):  # ended before any effect was searched
-        return [*lines, f"{said[0].upper()}{said[1:]}; no effect was searched."]
+        return [*lines, f"{said[0].upper()}{said[1:]}; no effect was searched.", *_unchecked(summary)]
     shrink = summary.get("shrink", 0.0)
     after_text = (
         f"gap {before:.4g} -> {after:.4g}, {_pct(shrink)} removed; "
@@ -72,6 +72,7 @@ def gap_lines(summary: Mapping) -> list[str]:
         )
         if summary.get("dropped"):  # the search accepted them; the progress line said so
             lines.append(f"Effects {summary['dropped']}: stand-ins for an effect outside the library.")
+    lines += _unchecked(summary)  # the verdict holds for the structure as far as it was checked
     lines += _alone_versus_credited(summary)
     acc = summary.get("accuracy") or {}
     pairs = [
@@ -85,6 +86,16 @@ def gap_lines(summary: Mapping) -> list[str]:
     if summary.get("corrected_description"):  # the fitted values of the gearbox, written into its description
         lines.append(f"corrected description: {summary['corrected_description']}")
     return lines
+
+
+def _unchecked(summary: Mapping) -> list[str]:
+    """The structure line of a check that passed with a tooth count it could not tell from the next one
+    (gearlab.gap.structure.unchecked_record: inspect's 'not checked'), after the verdict it qualifies."""
+    unchecked = (summary.get("structure") or {}).get("unchecked")
+    if not unchecked:
+        return []
+    line = unchecked["line"]
+    return [f"{line[0].upper()}{line[1:]}."]
 
 
 def beside(ranking: list) -> str:
