@@ -70,12 +70,17 @@ def _target(folder, **changes):
         },
         {"file": "t.wav", "role": "test", "label": "healthy", "vibration": 0, "unit": "m/s^2", **changes},
     ]
-    t = {
+    return target_spec(_target_table(files), "d.toml: [target]", folder)
+
+
+def _target_table(files, fs=None) -> dict:
+    """A [target] table as the scenario reader leaves it: acc in g at a declared 25 Hz, no tacho."""
+    return {
         "vibration": "acc",
         "tacho": "",
         "tacho_shaft": "",
         "pulses_per_rev": None,
-        "fs": None,
+        "fs": fs,
         "speed": "25 Hz",
         "gearbox": "",
         "sensitivity": None,
@@ -85,7 +90,6 @@ def _target(folder, **changes):
         "positive": "fault",
         "files": files,
     }
-    return target_spec(t, "d.toml: [target]", folder)
 
 
 def test_validate_accepts_per_file_channels_and_units(tmp_path, cli):
@@ -175,21 +179,7 @@ def test_the_gap_reads_a_history_at_its_file_s_own_rate(tmp_path):
     _takes(tmp_path)
     x = _signal()
     (tmp_path / "bare.csv").write_text("acc\n" + "".join(f"{v / 9.80665:.7f}\n" for v in x))  # no rate in it
-    t = {
-        "vibration": "acc",
-        "tacho": "",
-        "tacho_shaft": "",
-        "pulses_per_rev": None,
-        "fs": "1 kHz",
-        "speed": "25 Hz",
-        "gearbox": "",
-        "sensitivity": None,
-        "gain": None,
-        "unit": "g",
-        "transient": "none",
-        "positive": "fault",
-        "files": [{"file": "bare.csv", "role": "history", "label": "healthy", "fs": "6.4 kHz"}],
-    }
+    t = _target_table([{"file": "bare.csv", "role": "history", "label": "healthy", "fs": "6.4 kHz"}], fs="1 kHz")
     target = target_spec(t, "g.toml: [target]", tmp_path, need=("history",))
     X, speed, _, fs, *_ = read_history(Records("g", target), lambda e: None)
     assert fs == FS and speed == pytest.approx(SPEED)
