@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
+
 
 def stage(z1, z2, module="2 mm", width="20 mm", bores=("20 mm", "20 mm")) -> str:
     """One [[stages]] table: pinion z1 and wheel z2 of *module* and face *width*, on *bores*."""
@@ -43,3 +45,29 @@ SLOW_BOX = description(
     direction="x",
     tacho="input",
 )
+
+
+def shaft_orders(teeth) -> list[float]:
+    """Each shaft's turns per input turn of a train of (pinion, wheel) tooth counts, input first."""
+    orders = [1.0]
+    for z1, z2 in teeth:
+        orders.append(orders[-1] * z1 / z2)
+    return orders
+
+
+def mesh_train(theta, teeth, rng, fault, *, noise, level, bump, width, second, third, phase):
+    """A train's vibration written by hand (not simulated by gearlab) at input angle *theta*: white
+    noise (*noise*), then each stage's mesh harmonics (amplitudes *level*, x *second*, x *third*; 0.7 less
+    a stage) amplitude-modulated at its shafts' orders; a *fault* (stage, "pinion" | "wheel", tooth
+    counted from the shafts' common zero) lifts its mesh by *bump* for about *width* of a pitch."""
+    orders = shaft_orders(teeth)
+    x = rng.normal(0.0, noise, theta.size)
+    for s, (z1, z2) in enumerate(teeth):
+        lift = 1 + 0.15 * np.cos(orders[s] * theta + s) + 0.1 * np.cos(orders[s + 1] * theta + 2 * s)
+        if fault is not None and fault[0] == s:
+            o, z = (orders[s], z1) if fault[1] == "pinion" else (orders[s + 1], z2)
+            off = np.angle(np.exp(1j * (o * theta - 2 * np.pi * (fault[2] - 0.5) / z)))
+            lift = lift * (1 + bump * np.exp(-0.5 * (off / (width * 2 * np.pi / z)) ** 2))
+        for h, w in ((1, 1.0), (2, second), (3, third)):
+            x += level * 0.7**s * w * lift * np.cos(h * z1 * orders[s] * theta + phase * h + s)
+    return x

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import description, mesh_train, stage
 
 TEETH = ((37, 86), (47, 91), (67, 89))  # tooth counts no other test uses
 FS, SPEED, SECONDS = 12_800.0, 15.0, 8.0
@@ -26,18 +26,9 @@ def revolutions(fault, seed, slip):
     t = np.arange(int(SECONDS * FS)) / FS
     f = SPEED * (1 - slip) * (1 + 0.002 * np.sin(2 * np.pi * 0.4 * t + seed))
     theta = 2 * np.pi * np.cumsum(f) / FS
-    orders = [1.0]
-    for z1, z2 in TEETH:
-        orders.append(orders[-1] * z1 / z2)
-    x = rng.normal(0.0, 0.25, t.size)
-    for s, (z1, z2) in enumerate(TEETH):
-        lift = 1 + 0.15 * np.cos(orders[s] * theta + s) + 0.1 * np.cos(orders[s + 1] * theta + 2 * s)
-        if fault is not None and fault[0] == s:
-            o, z = (orders[s], z1) if fault[1] == "pinion" else (orders[s + 1], z2)
-            off = np.angle(np.exp(1j * (o * theta - 2 * np.pi * (fault[2] - 0.5) / z)))
-            lift = lift * (1 + 0.6 * np.exp(-0.5 * (off / (0.6 * 2 * np.pi / z)) ** 2))
-        for h, w in ((1, 1.0), (2, 0.45), (3, 0.2)):
-            x += 4.0 * 0.7**s * w * lift * np.cos(h * z1 * orders[s] * theta + 0.7 * h + s)
+    x = mesh_train(
+        theta, TEETH, rng, fault, noise=0.25, level=4.0, bump=0.6, width=0.6, second=0.45, third=0.2, phase=0.7
+    )
     cut = cut_revolutions(x, FS, tacho=np.angle(np.exp(1j * theta)), transient="none")
     return Take(cut.revolutions, 0, float(cut.speed_hz), FS)
 

@@ -13,7 +13,7 @@ import json
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import description, mesh_train, shaft_orders, stage
 
 from gearlab.gearbox import order_table, resolve_gearbox
 
@@ -28,20 +28,12 @@ def take(path, fault, seed, slip):
     rng = np.random.default_rng(seed)
     t = np.arange(int(SECONDS * FS)) / FS
     f = SPEED * (1 - slip) * (1 + 0.002 * np.sin(2 * np.pi * 0.4 * t + seed))
-    orders = [1.0]
-    for z1, z2 in TEETH:
-        orders.append(orders[-1] * z1 / z2)
+    orders = shaft_orders(TEETH)
     # every shaft at its zero at theta = 0, a third of an output turn after the record starts
     theta = 2 * np.pi * np.cumsum(f) / FS - 2 * np.pi * (1 / 3) / orders[-1]
-    x = rng.normal(0.0, 0.3, t.size)
-    for s, (z1, z2) in enumerate(TEETH):
-        lift = 1 + 0.15 * np.cos(orders[s] * theta + s) + 0.1 * np.cos(orders[s + 1] * theta + 2 * s)
-        if fault is not None and fault[0] == s:
-            o, z = (orders[s], z1) if fault[1] == "pinion" else (orders[s + 1], z2)
-            off = np.angle(np.exp(1j * (o * theta - 2 * np.pi * (fault[2] - 0.5) / z)))
-            lift = lift * (1 + 0.8 * np.exp(-0.5 * (off / (0.5 * 2 * np.pi / z)) ** 2))
-        for h, w in ((1, 1.0), (2, 0.5), (3, 0.25)):
-            x += 3.0 * 0.7**s * w * lift * np.cos(h * z1 * orders[s] * theta + 0.5 * h + s)
+    x = mesh_train(
+        theta, TEETH, rng, fault, noise=0.3, level=3.0, bump=0.8, width=0.5, second=0.5, third=0.25, phase=0.5
+    )
     tacho = np.where((orders[-1] * theta) % (2 * np.pi) < 0.3, 5.0, 0.0)
     np.savez(path, acc=x, tacho=tacho, fs=FS)
     return str(path)
