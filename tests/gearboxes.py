@@ -71,3 +71,14 @@ def mesh_train(theta, teeth, rng, fault, *, noise, level, bump, width, second, t
         for h, w in ((1, 1.0), (2, second), (3, third)):
             x += level * 0.7**s * w * lift * np.cos(h * z1 * orders[s] * theta + phase * h + s)
     return x
+
+
+# the end of a detection scenario's text (a format string): two history takes, a fault take, one method
+TWO_HISTORIES_ONE_TEST = """files = [
+  {{ file = "h1.csv", role = "history", label = "healthy" }},
+  {{ file = "h2.csv", role = "history", label = "healthy" }},
+  {{ file = "t1.csv", role = "test", label = "fault" }},
+]
+[[methods]]
+adapter = "matched_filter"
+"""

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 import scipy.linalg
-from gearboxes import description, stage
+from gearboxes import TWO_HISTORIES_ONE_TEST, description, stage
 
 from gearlab.data.builder import build_dataset
 from gearlab.data.placement import parse_fault_key
@@ -207,7 +207,8 @@ def test_the_builder_puts_faults_on_the_gears_of_a_three_stage_train(whole):
     assert len({row.tobytes() for row in data.X}) == 3
 
 
-DETECTION = """[scenario]
+DETECTION = (
+    """[scenario]
 name = "three"
 kind = "detection"
 [source]
@@ -218,14 +219,9 @@ healthy = 8
 vibration = "acc_V"
 tacho = "tacho_V"
 sensitivity = "10 mV/g"
-files = [
-  {{ file = "h1.csv", role = "history", label = "healthy" }},
-  {{ file = "h2.csv", role = "history", label = "healthy" }},
-  {{ file = "t1.csv", role = "test", label = "fault" }},
-]
-[[methods]]
-adapter = "matched_filter"
 """
+    + TWO_HISTORIES_ONE_TEST
+)
 
 
 def test_validate_takes_a_three_stage_detection_scenario(cli, tmp_path, whole, coprime):

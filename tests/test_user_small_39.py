@@ -9,7 +9,7 @@ import warnings
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import TWO_HISTORIES_ONE_TEST, description, stage
 
 # a 20/31 pinion pair whose stiffest mode is ~16 kHz: 10 steps per period need ~162 kHz
 STIFF = description(
@@ -71,7 +71,8 @@ def _takes(folder, names=("h1.csv", "h2.csv", "t1.csv")):
         )
 
 
-DETECTION = """[scenario]
+DETECTION = (
+    """[scenario]
 name = "d39"
 kind = "detection"
 [source]
@@ -81,14 +82,9 @@ healthy = 8
 [target]
 {target}vibration = "acc"
 sensitivity = "10 mV/(m/s^2)"
-files = [
-  {{ file = "h1.csv", role = "history", label = "healthy" }},
-  {{ file = "h2.csv", role = "history", label = "healthy" }},
-  {{ file = "t1.csv", role = "test", label = "fault" }},
-]
-[[methods]]
-adapter = "matched_filter"
 """
+    + TWO_HISTORIES_ONE_TEST
+)
 
 GAP = """[scenario]
 name = "g39"
