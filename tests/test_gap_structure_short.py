@@ -70,7 +70,9 @@ def test_records_long_enough_tell_the_wheel():
     rows, chain = records((300,))
     record: dict = {}
     line = structure_line(rows, described_pair((Z1, 88)), 400, chain, None, record)
-    assert line is not None and line.startswith("the wheel shows 89.0"), line
+    # read outward from the input's tacho, as an output tacho's line reads (issue 39: one wording)
+    assert line is not None and line.startswith("stage 1 wheel: 89 teeth fit the recording, 88 described"), line
+    assert "the wheel shows 89.0" in line, line
     right: dict = {}
     assert structure_line(rows, described_pair((Z1, Z2)), 400, chain, None, right) is None
     assert "unchecked" not in right, right["unchecked"]

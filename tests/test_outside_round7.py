@@ -180,7 +180,12 @@ def test_a_train_whose_meshes_alone_repeat_late_validates_with_damage_on_every_g
         # of the shaft's, the mesh reads order 18 as described, the input's sidebands 18/17 apart
         (((18, 44), (21, 53)), 18 / 17, dict(speed_from_mesh=True), "the pinion shows 17.0 ± 0.0 teeth"),
         # a tacho on the input, the last wheel described with 52 teeth: only its shaft's sidebands tell
-        (((17, 44), (21, 52)), 1.0, dict(tacho_shaft="input"), "stage 2: the wheel shows 53.0 ± "),
+        (
+            ((17, 44), (21, 52)),
+            1.0,
+            dict(tacho_shaft="input"),
+            "stage 2 wheel: 53 teeth fit the recording, 52 described; read outward from the tacho on the input shaft",
+        ),
     ],
 )
 def test_the_structure_check_reads_the_input_pinion_without_a_tacho_and_the_last_wheel(stages, read, chain, said):

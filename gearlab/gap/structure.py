@@ -554,7 +554,9 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
     takes = chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
     one = target[sum(takes[: (k := int(np.argmax(takes)))]) : sum(takes[: k + 1])] if takes else target
-    if tacho is not None and tacho[1] > 0 and (line := outward_line(one, pair, max_order, tacho[1], record)):
+    # any tacho's shaft, the input's too (a 38/89 + 48/95 described for 49/95 read 'stage 2: mesh order 20.92
+    # measured ... or a wheel upstream, differs' with an input tacho, 'stage 2 pinion: 49 teeth fit' with an output one)
+    if tacho is not None and (line := outward_line(one, pair, max_order, tacho[1], record)):
         return line
     if mesh["differs"]:
         return mesh_line(mesh, pair.Z1)
@@ -593,8 +595,8 @@ def unchecked_record(unresolved: list[str], takes: tuple = ()) -> dict:
 
 
 def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:
-    """The one line of the first gear, read outward from the tacho's shaft (index *tacho*, after the
-    input), whose tooth count the target's revolutions contradict, or None. The stages are read as inspect
+    """The one line of the first gear, read outward from the tacho's shaft (index *tacho*; 0, the input,
+    alike), whose tooth count the target's revolutions contradict, or None. The stages are read as inspect
     reads them (gearbox.match.check_description with the tacho's shaft); a stage's mesh, in orders of
     its shaft nearer the tacho, is that gear's count while every gear between is as described, and the
     far gear's count is its shaft's sidebands of the mesh. A wrong gear puts every stage beyond it off
@@ -604,7 +606,7 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     from ..gearbox.match import check_description, outward
 
     box = _PairDescription.train(pair)
-    stages = check_description(_lines(target, max_order), box, target.shape[0], False, tacho)["stages"]
+    stages = check_description(_lines(target, max_order), box, target.shape[0], tacho == 0, tacho)["stages"]
     found = outward(stages, box, tacho)
     if found is None:
         return None

@@ -1,0 +1,68 @@
+"""Issue 39's leftovers of the last session: the gap's structure line read outward from a tacho on
+any shaft, inspect's caveats carried into the gap's verdict, summary.json's structure reading, the
+no-tacho input pinion's tooth caveat, records with and without a tacho in one target, and `gearlab
+score` reading new files with the run's own test-file keys."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from gearboxes import described_pair
+from test_outside_round9 import _train
+
+TWO = ((38, 89), (49, 95))
+THREE = ((19, 47), (23, 59), (29, 71))
+
+
+def _rows(train, described, tacho: str, n: int = 600, points: int = 512) -> tuple:
+    """*train*'s input revolutions as the gap cuts them against *described* with the tacho on the input
+    or the output (the output tacho's angle times the described ratio), and the chain that says so."""
+    from gearlab.data.chain import Chain
+
+    f, ratio, said = 30.0, math.prod(a / b for a, b in train), math.prod(a / b for a, b in described)
+    scale = 1.0 if tacho == "input" else said / ratio
+    cut = 2 * np.pi * np.arange(n * points) / points * scale
+    chain = Chain(fs=points * f / scale, speed=f / scale, tacho_shaft=tacho)
+    return _train(cut, train, seed=1).reshape(n, points), chain
+
+
+def _one_off(train, k: int, gear: str) -> tuple:
+    described = [list(s) for s in train]
+    described[k][gear == "wheel"] -= 1
+    return tuple(map(tuple, described))
+
+
+@pytest.mark.parametrize("tacho", ["input", "output"])
+@pytest.mark.parametrize(
+    "train, k, gear",
+    [(TWO, k, g) for k in range(2) for g in ("pinion", "wheel")]
+    + [(THREE, k, g) for k in range(3) for g in ("pinion", "wheel")],
+)
+def test_a_tooth_count_one_off_reads_alike_whichever_shaft_carries_the_tacho(train, k, gear, tacho):
+    # a 38/89 + 48/95 described for 49/95 with the tacho on the input read 'stage 2: mesh order 20.92
+    # measured, 20.49 expected: ... (the target's mesh is 49.0 such teeth: a tooth count of stage 2, or a
+    # wheel upstream, differs)' where the output tacho's line said 'stage 2 pinion: 49 teeth fit the
+    # recording, 48 described'; a first pinion one off with an input tacho read 'mesh orders 38 and 20.92
+    # measured ... another gear train', stage 1 unnamed
+    from gearlab.gap.structure import structure_line
+
+    described = _one_off(train, k, gear)
+    rows, chain = _rows(train, described, tacho)
+    line = structure_line(rows, described_pair(*described), 200, chain, None, {})
+    true, said = train[k][gear == "wheel"], described[k][gear == "wheel"]
+    head = f"stage {k + 1} {gear}: {true} teeth fit the recording, {said} described; read outward from the tacho on "
+    assert line is not None and line.startswith(head + f"the {tacho} shaft"), line
+    assert f"the {gear} shows {true}.0" in line and "wheel upstream" not in line, line
+
+
+@pytest.mark.parametrize("tacho", ["input", "output"])
+@pytest.mark.parametrize("train", [TWO, THREE])
+def test_the_right_counts_pass_whichever_shaft_carries_the_tacho(train, tacho):
+    from gearlab.gap.structure import structure_line
+
+    rows, chain = _rows(train, train, tacho)
+    record: dict = {}
+    assert structure_line(rows, described_pair(*train), 200, chain, None, record) is None
+    assert "unchecked" not in record, record
