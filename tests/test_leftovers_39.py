@@ -66,3 +66,32 @@ def test_the_right_counts_pass_whichever_shaft_carries_the_tacho(train, tacho):
     record: dict = {}
     assert structure_line(rows, described_pair(*train), 200, chain, None, record) is None
     assert "unchecked" not in record, record
+
+
+def test_a_shaft_no_sideband_shows_is_said_in_the_gap_s_verdict_as_inspect_says_it():
+    # a 38/89 + 49/95 record whose intermediate shaft modulates neither mesh: inspect said 'no sideband shows
+    # the order of the intermediate shaft, so a wheel on it is checked only through a later stage's mesh
+    # order, if any'; the gap's structure passed with nothing said (summary.json, CLI and report alike)
+    from gearlab.data.chain import Chain
+    from gearlab.gap.structure import _lines, _PairDescription, structure_line
+    from gearlab.gearbox.match import check_description, unchecked
+    from gearlab.kinds.gap_verdict import gap_lines
+
+    n, points, o = 300, 512, 38 / 89
+    theta = 2 * np.pi * np.arange(n * points) / points
+    x = (1 + 0.15 * np.cos(theta + 0.4)) * np.cos(38 * theta)
+    x = x + 0.7 * (1 + 0.1 * np.cos(o * 49 / 95 * theta + 1.0)) * np.cos(49 * o * theta + 1.0)
+    rows = (x + np.random.default_rng(1).normal(0, 0.06, x.size)).reshape(n, points)
+    pair, record = described_pair(*TWO), {}
+    assert (
+        structure_line(rows, pair, 200, Chain(fs=points * 30.0, speed=30.0, tacho_shaft="input"), None, record) is None
+    )
+    box = _PairDescription.train(pair)
+    inspected = unchecked(check_description(_lines(rows, 200), box, n, True, 0), box, None)
+    said = "no sideband shows the order of the intermediate shaft, so a wheel on it is checked only through a later"
+    assert any(u.startswith(said) for u in inspected), inspected  # inspect's caveat ...
+    assert record["unchecked"]["items"] == inspected, record  # ... is the gap's, word for word
+    summary = {"gap_before": 12.0, "gap_after": 12.0, "p_before": 0.4, "p_after": 0.4, "views": {"mesh": {}}}
+    summary |= {"verdict": "no significant gap", "effects": [], "structure": record}
+    lines = gap_lines(summary)
+    assert any(line.startswith("Structure not fully checked: " + said) for line in lines), lines

@@ -281,8 +281,6 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
             lines = _lines(rows, max_order)
             check = check_description(lines, box, rows.shape[0], True)
             read[name] = (lines, rows.shape[0], check["stages"])
-            if name == "target":  # every stage's, named by its shafts as inspect names them
-                out["unresolved"] = check["unresolved"]
     for k in range(1, len(box.stages)):
         t, s = read["target"][2][k], read["source"][2][k] if source is not None else {}
         entry = {
@@ -573,12 +571,24 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
         record["later_stages"] = later["stages"]
     if later["line"]:
         return later["line"]
-    # what passed unchecked: a tooth count its sidebands cannot tell from the next one over these revolutions,
-    # as inspect says it (gearbox.match.check_description's 'unresolved'; D, 43/89 described with 88 teeth,
-    # three records of ~52 turns: inspect 'not checked ... need 103', the gap 'unexplained', the wheel unsaid)
-    if unresolved := later.get("unresolved", mesh["unresolved"]):
+    # what passed unchecked, as inspect says it (gearbox.match.unchecked on check_description read as inspect
+    # reads the record): a tooth count its sidebands cannot tell from the next one over these revolutions (D,
+    # 43/89 described with 88 teeth, three records of ~52 turns: inspect 'not checked ... need 103', the gap
+    # 'unexplained', the wheel unsaid), a shaft whose order no sideband shows (its wheel checked only through a
+    # later mesh: inspect said so, the gap's verdict did not)
+    if unresolved := _inspect_unchecked(target, pair, max_order, on_input, tacho):
         record["unchecked"] = unchecked_record(unresolved, takes)
     return None
+
+
+def _inspect_unchecked(target, pair, max_order: int, on_input: bool, tacho) -> list[str]:
+    """gearbox.match.unchecked of *target*'s revolutions read against *pair*'s train as inspect reads a record
+    (the input's order 1 where *on_input*, a tacho's shaft index from *tacho*: _tacho_read), no speed found."""
+    from ..gearbox.match import check_description, unchecked
+
+    box = _PairDescription.train(pair)
+    read = check_description(_lines(target, max_order), box, target.shape[0], on_input, tacho and tacho[1])
+    return unchecked(read, box, None)
 
 
 def unchecked_record(unresolved: list[str], takes: tuple = ()) -> dict:
