@@ -95,3 +95,30 @@ def test_a_shaft_no_sideband_shows_is_said_in_the_gap_s_verdict_as_inspect_says_
     summary |= {"verdict": "no significant gap", "effects": [], "structure": record}
     lines = gap_lines(summary)
     assert any(line.startswith("Structure not fully checked: " + said) for line in lines), lines
+
+
+@pytest.mark.parametrize("turns", [(52, 52, 53), (150, 150, 160)])
+def test_the_structure_s_mesh_record_is_the_reading_the_line_was_decided_on(turns):
+    # three takes of a 43/89 record (input tacho) described with 88 teeth: the line reads the wheel within the
+    # longest take ('89.0 ± 1.8 ... need 103'), but summary.json's structure.mesh (first_difference's record,
+    # written as it is) showed the takes laid end to end, their output shafts out of register: 88.2 ± 0.7,
+    # as if the wrong description held
+    import re
+
+    from test_gap_structure_short import Z1, records
+
+    from gearlab.gap.structure import structure_line
+
+    rows, chain = records(turns)
+    record: dict = {}
+    line = structure_line(rows, described_pair((Z1, 88)), 400, chain, None, record)
+    said = line or record["unchecked"]["line"]
+    z, spread = map(float, re.search(r"(\d+\.\d) ± (\d+\.\d)", said).groups())
+    mesh = record["mesh"]
+    assert mesh["read_on"] == "the longest of 3 records" and mesh["revolutions"] == max(turns), mesh
+    assert round(mesh["inspect"]["z2_seen"], 1) == z == 89.0, (mesh["inspect"], said)
+    assert round(mesh["inspect"]["z2_resolution"], 1) == spread, (mesh["inspect"], said)
+    one, chain = records((max(turns),))
+    record = {}
+    structure_line(one, described_pair((Z1, 89)), 400, chain, None, record)
+    assert record["mesh"]["read_on"] == "all revolutions" and record["mesh"]["revolutions"] == max(turns)

@@ -545,22 +545,27 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     input_shaft = _PairDescription.train(pair).shafts[0]
     on_input = chain is None or (chain.tacho_shaft or (None if chain.speed_from_mesh else input_shaft)) == input_shaft
     tacho = _tacho_read(chain, pair)
-    record["mesh"] = mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
-    if mesh.get("shaft") or mesh.get("marks"):  # the tacho itself read wrong: no shaft's speed is known
-        return mesh_line(mesh, pair.Z1)
+    takes = chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
+    whole = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
+    # record['mesh'] is the reading the line (or the pass) was decided on, 'read_on' says which
+    laid = {"read_on": "records laid end to end" if takes else "all revolutions", "revolutions": len(target)}
+    record["mesh"] = whole | laid
+    if whole.get("shaft") or whole.get("marks"):  # the tacho itself read wrong: no shaft's speed is known
+        return mesh_line(whole, pair.Z1)
     # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
     # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
-    takes = chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
     one = target[sum(takes[: (k := int(np.argmax(takes)))]) : sum(takes[: k + 1])] if takes else target
+    mesh = mesh_check(one, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input) if takes else whole
+    if takes:  # summary.json showed the records laid end to end (89.4 ± 0.7) where the line read 89.0 ± 1.8
+        record["mesh"] = mesh | {"read_on": f"the longest of {len(takes)} records", "revolutions": len(one)}
     # any tacho's shaft, the input's too (a 38/89 + 48/95 described for 49/95 read 'stage 2: mesh order 20.92
     # measured ... or a wheel upstream, differs' with an input tacho, 'stage 2 pinion: 49 teeth fit' with an output one)
     if tacho is not None and (line := outward_line(one, pair, max_order, tacho[1], record)):
         return line
-    if mesh["differs"]:
-        return mesh_line(mesh, pair.Z1)
-    if takes:
-        target = one
-        mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
+    if whole["differs"]:  # the input's mesh: records laid end to end are in register on its shaft
+        record["mesh"] = whole | laid
+        return mesh_line(whole, pair.Z1)
+    target = one
     # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described
     # with an 85-tooth wheel: inspect said '86.0 ± 0.2 teeth', the gap fitted effects, 'unexplained')
     line = (None if on_input else wheel_line(mesh, pair.Z1, "pinion")) or wheel_line(mesh, pair.Z2)
