@@ -16,7 +16,7 @@ from tiny import BASELINES_AND_MMD, records, transfer
 
 from gearlab import executors
 from gearlab.errors import GearlabInputError
-from gearlab.executors import LocalExecutor, RayExecutor, make_executor, ray_address
+from gearlab.executors import LocalExecutor, RayExecutor, Shared, make_executor, ray_address, unshared
 
 # Only light imports at the top: local worker processes import this module to find the mapped
 # functions, and gearlab's runs and kinds pull in torch (seconds per worker).
@@ -117,6 +117,63 @@ def test_a_failing_callback_stops_the_map(executor):
 
     with pytest.raises(RuntimeError, match="cancelled"):
         executor.map(square, range(4), stop)
+
+
+def read_shared(item) -> tuple[int, float]:
+    """What a unit reads of its Shared arrays."""
+    i, shared = item
+    X, rows = unshared(shared)
+    return i, float(X.sum()) + float(rows["r"].sum())
+
+
+def sum_then_spoil(item) -> tuple[int, float]:
+    """What a unit reads of its Shared arrays; then it writes over them (no other unit may see that;
+    on Ray its arrays are read-only)."""
+    seen = read_shared(item)
+    X, rows = unshared(item[1])
+    X[:] = -1.0
+    rows["r"][:] = -1
+    return seen
+
+
+def a_shared_value():
+    import numpy as np
+
+    X = np.linspace(0.0, 1.0, 1_000_000)  # 8 MB
+    return Shared((X, {"r": np.arange(1000)})), float(X.sum()) + float(np.arange(1000).sum())
+
+
+def test_a_shared_value_reaches_every_unit_as_itself(executor):
+    shared, total = a_shared_value()
+    assert executor.map(read_shared, [(i, shared) for i in range(3)]) == [(i, total) for i in range(3)]
+
+
+def test_the_local_pool_sends_a_shared_value_once_and_each_unit_has_its_own(monkeypatch, tmp_path):
+    """Issue 42 (phm09_chip): a value every unit took (a condition's training arrays) travelled in each
+    unit's pickle, 3.45 GB through the pool's pipes for 112 units. Shared, it is written once to a file
+    of the pool's, which its workers map: the queue carries a few hundred bytes a unit. A unit may still
+    change its arrays (copy-on-write): the next unit on its worker reads the values, as with a copy.
+    The file goes with the pool."""
+    import multiprocessing.queues as queues
+
+    sent = []
+    real = queues._ForkingPickler.dumps
+
+    def dumps(obj, protocol=None):
+        data = real(obj, protocol)
+        sent.append(len(data))
+        return data
+
+    monkeypatch.setattr(queues._ForkingPickler, "dumps", dumps)
+    monkeypatch.setattr(executors.tempfile, "tempdir", str(tmp_path))
+    shared, total = a_shared_value()
+    with LocalExecutor(2) as pool:
+        results = pool.map(sum_then_spoil, [(i, shared) for i in range(6)])
+        assert [p.name for p in tmp_path.iterdir()] == [pool._folder.rsplit("/", 1)[1]]
+    assert results == [(i, total) for i in range(6)]  # (6 units on 2 workers: 4 followed a spoiling one)
+    assert 0 < sum(sent) < 100_000  # 6 x 8 MB before
+    assert not list(tmp_path.iterdir())
+    assert unshared(shared)[0][0] == 0.0  # the caller's own value untouched
 
 
 def test_ray_tasks_that_want_a_gpu_get_a_share_of_one(ray_session):

@@ -70,7 +70,7 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, shown
 from ..events import Event, ignore_events
-from ..executors import Aside
+from ..executors import Aside, Shared
 from ..gearbox.simulation import label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
@@ -507,11 +507,22 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         # the units every training of a condition scores, as the learned methods see them (made once)
         units_seen = {
             c: (
-                {u: shown[c](X) for u, X in cond["history_units"].items()},
-                {p: {u: shown[c](X) for u, X in units.items()} for p, units in cond["test_units"].items()},
+                Shared({u: shown[c](X) for u, X in cond["history_units"].items()}),
+                Shared({p: {u: shown[c](X) for u, X in units.items()} for p, units in cond["test_units"].items()}),
             )
             for c, cond in conditions.items()
         }
+        # what many trainings take goes to a local pool's workers once (executors.Shared), not in each unit
+        shared_splits = {key: Shared(split) for key, split in splits.items()}
+        shared_detector_splits = {key: Shared(split) for key, split in detector_splits.items()}
+        rows: dict[tuple, Shared] = {}  # a condition's history rows a training takes, by fold and source
+
+        def history_rows(c: str, k: int | None, v: str) -> Shared:
+            if (c, k, v) not in rows:
+                taken = trained_on(conditions[c], k), protocol, c, spec.corrected_history if v else 0
+                rows[(c, k, v)] = Shared(shown[c](history_training_rows(*taken)))
+            return rows[(c, k, v)]
+
         members = {(c, v, m): seeds_of(m, d.seeds) for c in conditions for v in variants for m in protocol.methods}
         todo = [(c, v, m, seed, k) for (c, v, m), seeds in members.items() for seed in seeds for k in folds[c]]
         pending = [(c, v, m, seed, k) for c, v, m, seed, k in todo if unit_name(c, m, seed, v, k) not in records]
@@ -546,7 +557,6 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             for phase in phases:
                 tasks = []
                 for c, v, m, seed, k in longest_first(phase, cost):
-                    cond = conditions[c]
                     states = run.file("states", folders[(c, v)])
                     tasks.append(
                         (
@@ -556,12 +566,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                             c,
                             seed,
                             k,
-                            (detector_splits if m.is_detector else splits)[(c, v)],
-                            shown[c](
-                                history_training_rows(
-                                    trained_on(cond, k), protocol, c, spec.corrected_history if v else 0
-                                )
-                            ),
+                            (shared_detector_splits if m.is_detector else shared_splits)[(c, v)],
+                            history_rows(c, k, v),
                             *units_seen[c],
                             states,
                             rules[c],

@@ -15,6 +15,7 @@ from ..confined import Confined
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..events import UnitProgress
+from ..executors import unshared
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
 from ..learn.bounds import bayes_scores
 from ..learn.history import gumbel_quantile
@@ -65,7 +66,7 @@ def train_unit(task: tuple) -> dict:
         condition,
         seed,
         fold,
-        (Xs, ys, Xv, yv),
+        split,
         train,
         history_units,
         test_units,
@@ -74,6 +75,8 @@ def train_unit(task: tuple) -> dict:
         whiten,
     ) = task
     started = time.perf_counter()
+    Xs, ys, Xv, yv = unshared(split)  # (a local pool's workers read what every unit takes once: Shared)
+    train, history_units, test_units = unshared(train), unshared(history_units), unshared(test_units)
     unit = unit_name(condition, method, seed, variant, fold)
     with UnitProgress(states.root, unit) as progress:
         progress("starting: importing torch")
