@@ -122,3 +122,24 @@ def test_the_structure_s_mesh_record_is_the_reading_the_line_was_decided_on(turn
     record = {}
     structure_line(one, described_pair((Z1, 89)), 400, chain, None, record)
     assert record["mesh"]["read_on"] == "all revolutions" and record["mesh"]["revolutions"] == max(turns)
+
+
+def test_without_a_tacho_the_input_pinion_s_tooth_says_it_holds_in_this_take_only(tmp_path):
+    # no tacho: a take's angle zero is its first sample, so no gear's tooth is fixed across takes; the slower
+    # shafts said so (6c7d616), the input pinion read "tooth 16 of 19" plainly, a number no one can act on
+    from gearboxes import description, stage
+    from test_which_gear_parity import TEETH, take
+
+    from gearlab.gearbox import resolve_gearbox
+    from gearlab.inspect import InspectOptions, localisation
+    from gearlab.signals.localise import THIS_TAKE
+
+    (tmp_path / "b.toml").write_text(description(*(stage(*z) for z in TEETH), name="nt", speed="20 Hz", near="input"))
+    history = [str(take(tmp_path / f"h{k}.npz", None, 11 + k, 0.010 + 0.002 * k)) for k in range(3)]
+    damaged = take(tmp_path / "in.npz", (0, "pinion", 7), 15, 0.013)
+    box = resolve_gearbox(str(tmp_path / "b.toml"))
+    found = localisation(str(damaged), history, box, InspectOptions(vibration="acc"))
+    assert found["named"] == "input pinion 19T (stage 1)", found["summary"]
+    tooth = next(s for s in found["shafts"] if s["shaft"] == "input")["tooth"]["input pinion 19T (stage 1)"]
+    said = f"tooth {tooth['tooth']} of 19 ({THIS_TAKE}; this shaft's angle at a take's start is not known)"
+    assert said in found["summary"], found["summary"]

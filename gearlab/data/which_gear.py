@@ -47,11 +47,12 @@ def band(takes: list[Take]) -> float:
 
 
 def history_of(
-    takes: list[Take], table, marks: int = 1, max_order: float | None = None, tacho: str = "", pulses: int = 1
+    takes: list[Take], table, marks: int = 1, max_order: float | None = None, tacho: str | None = None, pulses: int = 1
 ) -> L.History:
     """The healthy history *takes* of the gearbox of order table *table* read for localisation, orders up
     to *max_order* (default: band(takes)); *marks*: the tacho's marks per input turn (a take is turned
-    to the first take's); *tacho*: the shaft the tacho reads ("": none), *pulses*: its marks per turn
+    to the first take's); *tacho*: the shaft the tacho reads ("": none, a take's zero its first sample, so no
+    tooth is fixed across takes; None: not said, the takes share a zero), *pulses*: its marks per turn
     (the tacho's own shaft counts its teeth from its mark)."""
     if not takes:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
@@ -62,8 +63,9 @@ def history_of(
         first_revolutions=[t.first % period for t in takes],
         max_order=band(takes) if max_order is None else max_order,
         marks=marks,
-        tacho=tacho,
+        tacho=tacho or "",
         pulses=pulses,
+        free=tacho == "",
     )
 
 

@@ -486,11 +486,12 @@ def _harmonics(lay: Layout, shaft: int, sel: np.ndarray) -> tuple[np.ndarray, np
 
 
 def tooth_index(
-    rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], turn: Fraction | None = None, tacho=False
+    rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], turn=None, tacho=False, free=False
 ) -> dict:
     """Peak of the shaft's residual envelope in the shaft's angle, in tooth pitches of each gear on it.
     *turn*: the take's advance (m/marks, :func:`turned`) where this is the tacho's own shaft (one mark
-    per turn: its angle from the mark is known, so is the tooth); *tacho*: the history has a tacho."""
+    per turn: its angle from the mark is known, so is the tooth); *tacho*: the history has a tacho;
+    *free*: it has none, a take's zero is its first sample (History.free)."""
     sel, m = _harmonics(lay, shaft, lay.sync[:, shaft] & ~lay.carrier)
     o = lay.shaft_orders[shaft]
     offset = 2 * math.pi * float((o * rec.first_revolution) % 1) if lay.mode == "grand" else 0.0
@@ -513,6 +514,8 @@ def tooth_index(
         out[g.name] = {"pitches": pitches, "tooth": int(math.floor(pitches)) % g.teeth + 1, "of": g.teeth}
         if turn is not None:
             out[g.name]["mark"] = True
+        elif free:  # a take's zero is its first sample: no shaft's angle there is known, the input's neither
+            out[g.name] |= {"free": True, "tacho": False}
         elif o.denominator > 1:  # see the module's docstring, "Tooth": defined up to steps of z / b
             out[g.name] |= {"step": g.teeth / o.denominator, "tacho": bool(tacho)}
     return out
@@ -543,10 +546,11 @@ FROM_MARK = "counted from the tacho's mark on this shaft"  # the tacho's own sha
 def tooth_words(t: dict) -> str:
     """ "17 of 96", with the step it is defined up to on a shaft of no whole input order; a step of a
     tooth or less defines nothing across takes (a 19/71 + 28/47 output gear: any of 3337 angles, a
-    number no one can act on: said plainly); on the tacho's own shaft, fixed to its mark."""
+    number no one can act on: said plainly), as is any tooth without a tacho ("free"); on the tacho's own
+    shaft, fixed to its mark."""
     if t.get("mark"):
         return f"{t['tooth']} of {t['of']} ({FROM_MARK})"
-    if "step" in t and t["step"] <= 1:
+    if t.get("free") or ("step" in t and t["step"] <= 1):
         # a take starts at its first tacho mark, or without a tacho at its first sample
         known = "relative to the tacho" if t.get("tacho") else "at a take's start"
         return f"{t['tooth']} of {t['of']} ({THIS_TAKE}; this shaft's angle {known} is not known)"
@@ -616,6 +620,7 @@ class History:
     block: int | None = None  # revolutions of a unit: a record's power is read in blocks of as many
     tacho: str = ""  # the shaft the tacho reads ("": none, or not said)
     pulses: int = 1  # its marks per turn
+    free: bool = False  # no tacho: a take's zero is its first sample, no gear's tooth is fixed across takes
 
     def state(self) -> dict[str, np.ndarray]:
         """Plain arrays (np.savez) from which :meth:`restored` remakes this history, records unread."""
@@ -635,6 +640,7 @@ class History:
             "block": np.array(self.block or 0),
             "tacho": np.array(self.tacho),
             "pulses": np.array(self.pulses),
+            "free": np.array(self.free),
         }
 
     @staticmethod
@@ -654,7 +660,7 @@ class History:
         block = int(state["block"]) if "block" in state else None  # saved before blocks: the whole record
         tacho = (str(state["tacho"]), int(state["pulses"])) if "tacho" in state else ("", 1)  # saved before: not said
         kept = (state["thresholds"], state["left_out_z"], str(state["note"]), args, marks, reference, block or None)
-        return History(lay, sp, *kept, *tacho)
+        return History(lay, sp, *kept, *tacho, bool(state["free"]) if "free" in state else False)
 
 
 def _units(revs: np.ndarray, first: int, lay: Layout, block: int) -> list[Content]:
@@ -664,11 +670,11 @@ def _units(revs: np.ndarray, first: int, lay: Layout, block: int) -> list[Conten
     return [content(revs[i : i + block], lay, first + i) for i in range(0, revs.shape[0] - block + 1, block)]
 
 
-def _mark(hist: History, shaft: str, m: int) -> tuple[Fraction | None, bool]:
-    """tooth_index's (turn, tacho) for *shaft* of a take advanced *m*/marks: the tacho's own shaft at one mark
-    per turn (or the input at any) counts its teeth from the mark."""
+def _mark(hist: History, shaft: str, m: int) -> tuple[Fraction | None, bool, bool]:
+    """tooth_index's (turn, tacho, free) for *shaft* of a take advanced *m*/marks: the tacho's own shaft at one
+    mark per turn (or the input at any) counts its teeth from the mark."""
     own = shaft == hist.tacho and (hist.pulses == 1 or shaft == hist.layout.shafts[0])
-    return (Fraction(m, hist.marks) if own else None), bool(hist.tacho)
+    return (Fraction(m, hist.marks) if own else None), bool(hist.tacho), hist.free
 
 
 def history(
@@ -681,6 +687,7 @@ def history(
     marks: int = 1,
     tacho: str = "",
     pulses: int = 1,
+    free: bool = False,
     **options,
 ) -> History:
     """Read a healthy history: *records* of consecutive input revolutions (R_i, points) of one gearbox.
@@ -692,7 +699,7 @@ def history(
     *false_alarm* / the number of shafts. *revolutions* (default: the shortest record) fixes the
     layout's mode; *options* go to :func:`layout`. *marks*: the tacho's marks per turn, each record
     turned to the first's mark (:func:`turned`); *tacho*: the shaft the tacho reads ("": none), *pulses* its marks
-    per turn."""
+    per turn; *free*: no tacho, each record's zero its first sample (no tooth is fixed across takes)."""
     if not records:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
     revs = [check_array(r, f"history record {i}", min_ndim=2) for i, r in enumerate(records)]
@@ -725,7 +732,7 @@ def history(
         f"{len(revs)} history record(s) in {len(flat)} units; thresholds: the largest left-out z, at least "
         f"{floor:.2f} (false alarm {false_alarm:g} shared by {len(lay.shafts)} shafts)"
     )
-    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference, read, tacho, pulses)
+    return History(lay, ref, np.asarray(thr, float), loo, note, args, marks, reference, read, tacho, pulses, free)
 
 
 def localise(revolutions: np.ndarray, hist: History, table, first_revolution: int = 0, templates=None) -> Localisation:
