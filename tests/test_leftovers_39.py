@@ -143,3 +143,48 @@ def test_without_a_tacho_the_input_pinion_s_tooth_says_it_holds_in_this_take_onl
     tooth = next(s for s in found["shafts"] if s["shaft"] == "input")["tooth"]["input pinion 19T (stage 1)"]
     said = f"tooth {tooth['tooth']} of 19 ({THIS_TAKE}; this shaft's angle at a take's start is not known)"
     assert said in found["summary"], found["summary"]
+
+
+def _h5(path, chip: float, seed: int) -> None:
+    """A textrecords record as an HDF5 file: datasets 'vib' (V) and 'tach' (V), its rate an attribute."""
+    import h5py
+    from textrecords import FS, SENSITIVITY, signals
+
+    vib, tacho = signals(revolutions=40, chip=chip, seed=seed, phase=0.7 * seed)
+    with h5py.File(path, "w") as f:
+        f.create_dataset("vib", data=vib * SENSITIVITY).attrs["fs"] = FS
+        f.create_dataset("tach", data=tacho)
+
+
+def test_score_reads_a_new_file_with_the_keys_of_the_run_s_files_of_its_format(cli, tmp_path, monkeypatch):
+    # history in zipped text (channel 0, tacho column 2), tests in HDF5 ('vib', 'tach': their entries' own keys);
+    # `gearlab score RUN next.h5` read it with the [target]'s keys: "no channel 0", unless --key was given again
+    import json
+
+    from detection_scenario import run, scenario, without_figures
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    without_figures(monkeypatch)
+    files = [("h1", "history", "healthy", 0.0), ("h2", "history", "healthy", 0.0)]
+    path = scenario(tmp_path, files=files, methods=("matched_filter",))
+    tests = [("t_ok", "healthy", 0.0, 2), ("t_f1", "fault", 4.0, 3), ("t_f2", "fault", 4.0, 4)]
+    entries = ""
+    for name, label, chip, seed in tests:
+        _h5(tmp_path / "data" / f"{name}.h5", chip, seed)
+        own = 'vibration = "vib", tacho = "tach"'
+        entries += f'  {{ path = "../data/{name}.h5", role = "test", label = "{label}", {own} }},\n'
+    text = path.read_text().replace('label = "healthy" },\n]', 'label = "healthy" },\n' + entries + "]")
+    path.write_text(text)
+    out = run(cli, path, tmp_path / "runs")
+    _h5(tmp_path / "next_ok.h5", 0.0, 11)
+    _h5(tmp_path / "next_chip.h5", 4.0, 12)
+    code, stdout, err = cli("score", out, tmp_path / "next_ok.h5", tmp_path / "next_chip.h5", "--json")
+    assert code == 0, err
+    by = {(r["file"].rsplit("/", 1)[-1], r["method"], r["unit"]): r["decision"] for r in json.loads(stdout)}
+    assert by[("next_chip.h5", "fm4", "record10")] == "fault", by
+    assert by[("next_ok.h5", "fm4", "record10")] == "healthy", by
+    # a file in the history's format is read with the [target]'s keys; --key still overrides the remembered ones
+    code, _, err = cli("score", out, tmp_path / "data" / "h1.zip")
+    assert code == 0, err
+    code, _, err = cli("score", out, tmp_path / "next_ok.h5", "--key", "vibration=nothing")
+    assert code == 2 and "nothing" in err, err

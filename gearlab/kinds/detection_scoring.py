@@ -5,6 +5,7 @@ its thresholds with nothing trained again (score), and the trend of what was sco
 from __future__ import annotations
 
 from dataclasses import asdict
+from pathlib import Path
 
 import numpy as np
 
@@ -68,6 +69,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         }
         # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)
         | ({} if target.tacho_shaft is None else {"tacho_shaft": asdict(target.tacho_shaft)}),
+        "file_keys": file_keys(target.files),  # a new file in a test file's format: read with its keys
         "blocks": list(d.blocks),
         "threshold": d.threshold,
         "false_alarm": d.false_alarm,
@@ -98,6 +100,34 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
             "history": [[f.path, len(r)] for f, r in cond["history"]],
         }
     run.write_json(scoring.SCORING_FILE, out)
+
+
+def file_format(path: str) -> str:
+    """A file's format as gearlab score matches a new file to the run's: its suffix in lower case, with the
+    one before it where the last is a compression's (.txt.gz)."""
+    suffixes = [s.lower() for s in Path(path).suffixes]
+    return "".join(suffixes[-2:] if suffixes[-1:] in ([".gz"], [".zip"], [".bz2"]) else suffixes[-1:])
+
+
+def file_keys(files) -> dict:
+    """The run's files' own acquisition keys (a [target] 'files' entry's, as Target holds them), for
+    gearlab score: 'formats', {format: keys} where every file of that format gives the same ({}: the
+    [target]'s), and 'tests', the test files' where they all agree."""
+    by: dict[str, list[dict]] = {}
+    for f in files:
+        by.setdefault(file_format(f.path), []).append(dict(f.keys))
+    tests = [dict(f.keys) for f in files if f.role == "test"]
+    return {
+        "formats": {e: ks[0] for e, ks in by.items() if all(k == ks[0] for k in ks)},
+        "tests": tests[0] if tests and all(k == tests[0] for k in tests) else {},
+    }
+
+
+def remembered(meta: dict, file: str) -> dict:
+    """The acquisition keys the run's own files of *file*'s format were read with (file_keys): that
+    format's, else the test files' where they agree, else none (the [target]'s)."""
+    kept = meta.get("file_keys") or {}
+    return kept.get("formats", {}).get(file_format(file), kept.get("tests") or {})
 
 
 def _ratio(shaft) -> list[int]:
@@ -212,14 +242,15 @@ def _tacho_shaft(keys: dict) -> TachoShaft:
 SCORE_KEYS = ("vibration", "tacho", "fs", "unit", "sensitivity", "gain")
 
 
-def reading_keys(meta: dict, condition: str | None, given: dict | None = None) -> dict:
+def reading_keys(meta: dict, condition: str | None, given: dict | None = None, file: str = "") -> dict:
     """cut_recording's keys for a new record, as the run read its target: its tacho; or without
     one the run's declared speed and description (the speed from its mesh orders). A run whose
     speeds were declared per file only gives a new record the speed of its condition's history:
     the condition asked (--condition), or the run's only one. *given*: acquisition keys of the new
     files ({'vibration': 'vib', 'fs': '25.6 kHz'}: gearlab score's --key, as a [target] 'files'
-    entry gives them) over the run's [target] keys."""
-    keys = dict(meta["target"])
+    entry gives them) over those the run's files of *file*'s format were read with (remembered), over
+    the run's [target] keys."""
+    keys = dict(meta["target"]) | remembered(meta, file)
     for key, value in (given or {}).items():
         at = f"--key {key}"
         if key not in SCORE_KEYS or value == "":
@@ -269,12 +300,14 @@ def score(
             "score kept its models); expected a finished run: run the scenario again"
         )
     _same_input(run, meta)
-    keys = reading_keys(meta, condition, given)
+    reading_keys(meta, condition, given)  # a bad --key or a missing condition: refused before any file is read
     cut, raw, found = {}, {}, {}
     for i, file in enumerate(files):
-        rec = cut_recording(str(file), **keys)
+        rec = cut_recording(str(file), **reading_keys(meta, condition, given, str(file)))
         name = _condition_of(meta, str(file), rec.speed_hz, condition)
-        on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}"))
+        own = {k: v for k, v in remembered(meta, str(file)).items() if k not in (given or {})}
+        said = f"; read with the run's {file_format(str(file))} files' keys" if own else ""
+        on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}{said}"))
         found[str(file)] = (rec.speed_hz, rec.angle_source)
         revs = rec.revolutions
         if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
