@@ -327,7 +327,7 @@ class UnitProgress:
 
     def _write(self, text: str) -> None:
         if self.board is None:
-            self.file.write(text)
+            self.file.write(text, durable=False)  # a line of the moment, not a result
         else:
             self.board.say(self.space, self.unit, text)
         self.last, self.shown = time.monotonic(), text

@@ -348,8 +348,8 @@ class ProgressElsewhere:
 
         real = Confined.write, Confined.unlink, UnitProgress.__call__
 
-        def write(self, data):
-            return None if self.parts[:1] == (PROGRESS,) else real[0](self, data)
+        def write(self, data, **options):
+            return None if self.parts[:1] == (PROGRESS,) else real[0](self, data, **options)
 
         def unlink(self, missing_ok=True):
             return None if self.parts[:1] == (PROGRESS,) else real[1](self, missing_ok)

@@ -74,6 +74,23 @@ def test_a_units_line_that_stands_says_for_how_long(tmp_path, monkeypatch):
     assert not (tmp_path / "progress").exists() or not list((tmp_path / "progress").iterdir())
 
 
+def test_a_units_line_is_written_unsynced_and_a_result_synced(tmp_path, monkeypatch):
+    """Issue 42: a unit's training thread writes its line a few times a second, and each write was
+    synced to disk (14 ms on a busy disk): 1.0-1.7 % of a unit's time on 40 ms epochs, 0.4 % unsynced.
+    A line of the moment, gone when the unit ends, needs no sync; a result written whole still has one."""
+    from gearlab import confined
+
+    synced: list[int] = []
+    monkeypatch.setattr(confined.os, "fsync", synced.append)
+    with UnitProgress(tmp_path, "rep0/k0/mmd-unsup", every=0.0) as progress:
+        for epoch in range(5):
+            progress(f"epoch {epoch + 1}")
+        assert (tmp_path / "progress" / "rep0__k0__mmd-unsup.txt").read_text() == "epoch 5"
+    assert synced == []
+    confined.Confined(tmp_path, ("table.md",)).write("a result")
+    assert len(synced) == 1
+
+
 def test_the_gap_report_tells_each_of_its_parts():
     from gearlab.gap.stats import REPORT_PARTS, gap_report
 
