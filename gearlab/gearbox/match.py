@@ -54,7 +54,10 @@ def comb(
     d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 1 / 2, 1 / 3)
 
     def allowed(c: float) -> bool:
-        nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= 0.01 * c for n in nths)
+        # within 1 % of n x rival, or of the comb's own resolution where finer: a 54/107 stage's input comb
+        # (0.981 of the input's order as a 53-tooth description reads it) sits 0.9 % from 2 x the output's
+        near = min(0.01 * c, (SIDEBAND_BINS if c >= SEPARATED * bin_ else 2.0) * bin_ + DRIFT * c)
+        nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= near for n in nths)
         return 0.7 * o <= c <= 1.3 * o and not nth and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
 
     best = None
@@ -360,6 +363,12 @@ def check_description(
             entry.update(measured_order=None, source="not seen (no sidebands of this shaft)", matched=None)
         shafts.append(entry)
     differences += [text for k, text in shaft_notes.items() if k not in named_shafts]
+    if tacho_shaft is not None and 0 < tacho_shaft < len(table.shafts) and 0 not in measured_shaft:  # no mesh tells it
+        unresolved.append(
+            f"the tooth count of the pinion on the input shaft (no sideband shows the input shaft's order, and "
+            f"the tacho reads the {table.shafts[tacho_shaft]} shaft: every mesh order is read through the gears "
+            "after it)"
+        )
     unexplained = [
         {"order": float(lines.at[q]), "amplitude": float(lines.amp[q]), "db_over_floor": float(lines.db[q])}
         for q in range(lines.at.size)

@@ -208,9 +208,15 @@ def speed_from_mesh(
         # the input pinion's sidebands, whichever stage's mesh gave the speed: a later stage's mesh and
         # pinion shaft both scale with the input's speed times stage 1's described ratio, and agree at a
         # speed a wrong input pinion's count makes (19/58 + 25/67 described 18/58: 36.95 Hz, not 35)
-        for h in sorted(slipped, key=lambda h: -h[0])[:4]:  # the best few: each looks at every carrier
-            if sidebands_confirm(lines, h[1], table.stages[0], df):
-                near.append(h)
+        # the best few speeds (each looks at every carrier), one hypothesis a speed: a later stage's harmonics
+        # all read one speed where its count is off (68/103 + 82/99 described 68/104 at +1.6 %: four at 12.31
+        # Hz hid stage 1's, 12.19 Hz, which its pinion's sidebands confirm)
+        distinct: list = []
+        for h in sorted(slipped, key=lambda h: -h[0]):
+            if len(distinct) < 4 and all(abs(h[1] / d[1] - 1) > SPEED_AGREE for d in distinct):
+                distinct.append(h)
+        confirmed = [h for h in distinct if sidebands_confirm(lines, h[1], table.stages[0], df)]
+        near += confirmed
         overall = max(hypotheses, key=lambda h: h[0]) if hypotheses else None
         if not near:
             return (
@@ -225,7 +231,9 @@ def speed_from_mesh(
                 ),
             )
         best = max(near, key=lambda h: h[0])
-        if best[0] < AMBIGUOUS * overall[0]:
+        # a speed the input pinion's sidebands confirm outweighs a better fit they do not, beyond ±1 %
+        unconfirmed = overall not in confirmed and abs(overall[1] / declared - 1) > DECLARED_RANGE
+        if best[0] < AMBIGUOUS * overall[0] and not (best in confirmed and unconfirmed):
             return (
                 declared,
                 "declared",

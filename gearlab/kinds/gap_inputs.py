@@ -138,7 +138,7 @@ def units_declared(target: Target) -> bool:
         return True
     header = read_header(first.resolved)
     name = channel_key(keys["vibration"])
-    name = named(name, header.channels) if header.indexed else name
+    name = named(name, header.channels) if header.indexed else header.resolve(name)  # HDF5 'acc': 'rec/acc'
     said = name_unit(name) or (name_unit(f"[{header.units[name]}]") if name in header.units else None)
     return said is not None and said[0] == "acceleration"
 

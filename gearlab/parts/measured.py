@@ -3,6 +3,7 @@ and test files; gap: the history alone), each file with its role, label and oper
 
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -169,6 +170,22 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
     return tuple(out)
 
 
+def positive_label(files: tuple[TargetFile, ...], positive: str, where: str) -> None:
+    """One line when no test file carries the *positive* label and one carries a near spelling of it
+    ('faulty', 'Fault'): every test record was scored as a negative, the report's AUC undefined."""
+    if not any(f.role == "test" for f in files) or any(f.label == positive for f in files if f.role == "test"):
+        return
+    for i, f in enumerate(files):
+        low, want = f.label.lower(), positive.lower()
+        near = low.startswith(want) or low.endswith(want) or difflib.SequenceMatcher(None, low, want).ratio() >= 0.8
+        if f.role == "test" and near:
+            raise GearlabInputError(
+                f"{where} key 'files' entry {i + 1} key 'label': {f.label!r} is not the positive label {positive!r} "
+                f"([target] key 'positive'), and no test file has {positive!r}; expected label = {positive!r} on "
+                f"the records with the fault to find (or positive = {f.label!r})"
+            )
+
+
 def acquisition(t: dict, where: str, keys=ACQUISITION) -> dict:
     """The acquisition *keys* of a [target] table or a 'files' entry *t* (checked as
     kinds.common.MEASURED declares them) as Target holds them: channels as the readers name them,
@@ -274,6 +291,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
             gain=merged["gain"],
             unit=merged["unit"],
         )
+    positive_label(files, t.get("positive") or "fault", where)
     shaft = tacho_shaft_of(t.get("tacho_shaft") or "", tacho, box, where, "[source] key 'gearbox'")
     return Target(
         vibration,

@@ -16,12 +16,16 @@ from ...errors import GearlabInputError
 _RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate")  # compared lower-case: fs, Fs, FS
 
 # A time channel by any of its common names, with its unit if the name says one: t, time, time_s,
-# "Time [s]", "t (ms)", timestamp, Zeit, ... (seconds unless the name says ms or us)
+# "Time [s]", "t (ms)", "t/s", "Time, s", timestamp, Zeit, "Relative Time (s)", "rel. Zeit [ms]",
+# LabVIEW's X_Value, ... (seconds unless the name says ms or us; not "Absolute Time": a clock's text)
 _TIME_NAME = re.compile(
-    r"^(?:t|time|times|timestamp|zeit|temps|tiempo|elapsed)"
-    r"(?:\s*[_\-.]?\s*[\[(]?\s*(s|sec|secs|second|seconds|ms|msec|us|µs|μs)\s*[\])]?)?$"
+    r"^(?:(?:relative|rel\.?|elapsed|measurement|meas\.?|recording|acquisition|acq\.?)[\s_\-.]*)?"
+    r"(?:t|time|times|timestamp|time[\s_\-]stamp|zeit|zeitstempel|temps|tiempo|tempo|elapsed|x_value)"
+    r"(?:\s*(?:[_\-.,/]|in\b)?\s*[\[(]?\s*(s|sec|secs|second|seconds|ms|msec|msecs|milliseconds?|us|usec|µs|μs"
+    r"|microseconds?)\s*[\])]?)?$"
 )
-_TIME_UNITS = {"ms": 1e-3, "msec": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+_TIME_UNITS = {"ms": 1e-3, "msec": 1e-3, "msecs": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3}
+_TIME_UNITS |= {"us": 1e-6, "usec": 1e-6, "µs": 1e-6, "μs": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6}
 
 
 def time_scale(name: str) -> float | None:

@@ -178,12 +178,14 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
 
 
 def _wav_header(path: Path) -> Header:
-    """Channels, rate and sample format from the RIFF 'fmt ' chunk."""
+    """Channels, rate and sample format from the RIFF 'fmt ' chunk; a 'data' chunk the file cuts short
+    (a copy stopped early: scipy read what was there, or failed on half a frame) is refused here."""
+    header = None
     with path.open("rb") as f:
         riff = f.read(12)
         if len(riff) < 12 or riff[:4] not in (b"RIFF", b"RIFX") or riff[8:12] != b"WAVE":
             raise ValueError("no RIFF/WAVE header")
-        order = "<" if riff[:4] == b"RIFF" else ">"
+        order, total = "<" if riff[:4] == b"RIFF" else ">", path.stat().st_size
         for _ in range(1000):
             head = f.read(8)
             if len(head) < 8:
@@ -196,8 +198,20 @@ def _wav_header(path: Path) -> Header:
                 if tag == 0xFFFE and len(body) >= 26:  # the extensible format's own sub-format tag
                     tag = struct.unpack(order + "H", body[24:26])[0]
                 integer = frozenset(names) if tag == 1 else frozenset()  # 1: PCM (3: IEEE float)
-                return Header("WAV", names, True, integer, indexed=True, stated=(float(rate), "the WAV header"))
+                header = Header("WAV", names, True, integer, indexed=True, stated=(float(rate), "the WAV header"))
+                f.seek(size + (size & 1) - len(body), 1)
+                continue
+            if kind == b"data" and header is not None:
+                held = total - f.tell()
+                if 0 < size < 0xFFFFFFFF and size > held:  # 0 / 2^32 - 1: a stream's writer left it open
+                    raise ValueError(
+                        f"its data chunk declares {size:,} bytes and the file holds {held:,} after it (a truncated "
+                        "file?); expected the whole recording"
+                    )
+                return header
             f.seek(size + (size & 1), 1)
+    if header is not None:
+        return header
     raise ValueError("no 'fmt ' chunk in its header")
 
 

@@ -24,6 +24,10 @@ def _read_wav(path: Path, names: Sequence[str]) -> Contents:
             raise ValueError(
                 "its header declares 0 channels or 0 bytes per sample; expected at least one channel of samples"
             ) from None
+        except ValueError as exc:  # numpy cannot shape a last, partial frame into channels
+            if "reshape" not in str(exc):
+                raise
+            raise ValueError("its data ends inside a sample frame (a truncated file?); expected whole frames") from None
     for w in caught:
         # scipy reads what is there of a truncated file and only warns: refuse, never half a record.
         if "EOF" in str(w.message):
