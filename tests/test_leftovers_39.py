@@ -188,3 +188,45 @@ def test_score_reads_a_new_file_with_the_keys_of_the_run_s_files_of_its_format(c
     assert code == 0, err
     code, _, err = cli("score", out, tmp_path / "next_ok.h5", "--key", "vibration=nothing")
     assert code == 2 and "nothing" in err, err
+
+
+@pytest.mark.parametrize("without", ["history", "test"])
+def test_records_with_and_without_a_tacho_run_in_one_detection_target(cli, tmp_path, monkeypatch, without):
+    # a history logged without a tacho and tests with one (or the reverse): "[target] key 'files' entry 1 key
+    # 'tacho': a file's tacho names the [target]'s tacho channel in that file; expected a channel", exit 2.
+    # Each record is now cut at its own tacho's angle, or at the declared speed, and all are aligned as
+    # records without a tacho are (by correlation with the first history record's mean revolution)
+    import json
+
+    from detection_scenario import FILES, run, scenario, without_figures
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    without_figures(monkeypatch)
+    path = scenario(tmp_path, methods=("matched_filter",))
+    text = path.read_text().replace('fs = "', 'speed = "16 Hz"\nfs = "')  # for the records without a tacho
+    for name, role, _, _ in FILES:
+        if role == without:
+            text = text.replace(f'{name}.zip", role', f'{name}.zip", tacho = "", role')
+    path.write_text(text)
+    out = run(cli, path, tmp_path / "runs")
+    rows = json.loads((out / "summary.json").read_text())["rows"]
+    fm4 = next(r for r in rows if r["method"] == "fm4" and r["unit"] == "record10")
+    assert fm4["auc"] == 1.0, fm4
+    table = (out / "table.md").read_text()  # each record's speed from its own tacho or the declared speed
+    assert "| nominal speed 16 Hz |" in table and "| tacho '2' (10 pulses per revolution) |" in table, table
+    scoring = json.loads((out / "scoring.json").read_text())
+    assert scoring["tacho_records"] == "some"
+    code, stdout, err = cli("score", out, tmp_path / "data" / "f1.zip", "--json")  # aligned as the run's were
+    assert code == 0, err
+    assert {r["decision"] for r in json.loads(stdout) if (r["method"], r["unit"]) == ("fm4", "record10")} == {"fault"}
+    # the gap compares one acquisition chain: a history of both is one line, exit 2
+    gap = tmp_path / "scenarios" / "gap.toml"
+    gap.write_text(
+        '[scenario]\nname = "g"\nkind = "gap"\n[source]\npreset = "B-6-ch5"\n[target]\nvibration = 0\ntacho = "2"\n'
+        'pulses_per_rev = 10\nsensitivity = "10 mV/g"\nfs = "8192 Hz"\nspeed = "16 Hz"\nfiles = [\n'
+        '  { path = "../data/h1.zip", role = "history", label = "healthy" },\n'
+        '  { path = "../data/h2.zip", role = "history", label = "healthy", tacho = "" },\n]\n'
+    )
+    code, _, err = cli("validate", gap)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "h1.zip has a tacho, ../data/h2.zip none; the gap compares one acquisition chain" in err, err

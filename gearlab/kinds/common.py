@@ -495,9 +495,14 @@ def with_source_gearbox(target: dict, source: dict, where: str, base: Path) -> d
         _same_gearbox(target["gearbox"], source["gearbox"], f"{where} key 'gearbox'", base)
     files = target.get("files") or []
     declared = target.get("speed") is not None or any(isinstance(f, dict) and "speed" in f for f in files)
+    # a record without a tacho: the [target]'s none, or a file's own tacho = "" (records with one may mix)
+    lacks = [
+        (f.get("tacho", target.get("tacho")) if isinstance(f, dict) else target.get("tacho")) in ("", None)
+        for f in files
+    ]
     if (
         (declared or files)
-        and target.get("tacho") in ("", None)
+        and (any(lacks) if files else target.get("tacho") in ("", None))
         and not target.get("gearbox")
         and source.get("gearbox")
     ):

@@ -289,15 +289,19 @@ def read_target(
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
-        cond["shifts"], cond["tacho"] = {}, target.tacho is not None
-        cond["marks"] = target.marks if target.tacho is not None else 1  # localisation turns to a mark
+        # records aligned by the tacho's marks when every one has a tacho (else as records without one are)
+        cond["shifts"], cond["tacho"] = {}, target.tacho_all
+        cond["marks"] = target.marks if target.tacho_all else 1  # localisation turns to a mark
         pulses = max(target.keys_of(f)["pulses_per_rev"] for f in target.files)  # (which gear: one mark a turn?)
-        cond["tacho_shaft"], cond["pulses"] = target.read_as or "", max(pulses, target.pulses_per_rev)
+        cond["tacho_shaft"], cond["pulses"] = (
+            ((target.read_as or "input") if target.tacho_all else ""),
+            max(pulses, target.pulses_per_rev),
+        )
         # the shaft the units are revolutions of, and whether their angle is a tacho's (else turned
         # into the source's frame: detection.run, register_to_source)
         cond["unit_shaft"] = "input" if shaft is None else shaft.name
         cond["unit_tacho"] = cond["tacho"] and shaft is None
-        tacho = target.tacho if shaft is None else None
+        tacho = True if cond["unit_tacho"] else None  # aligned()'s flag: by the marks
         cond["continuous"], cond["blocks"] = continuous, tuple(blocks)
         if continuous and not cond["unit_tacho"]:  # register_to_source shifts them again, by both turns
             cond["standardised"] = {f.path: standardiser.apply(r) for role in ROLES for f, r in cond[role]}
@@ -345,8 +349,8 @@ def _units(cond: dict) -> None:
 def unaligned_why(target: Target, unit_shaft: str) -> str:
     """Why a condition's records were aligned by correlation, not by a tacho mark (register_to_source),
     as the log says it: no tacho, or one whose marks are not what the units start at (a shaft's)."""
-    if target.tacho is None:
-        return "no tacho"
+    if target.tacho is None or not target.tacho_all:
+        return "no tacho" if target.tacho is None else "records without a tacho among them"
     return (
         f"tacho {target.tacho!r} on the {target.read_as} shaft, {target.pulses_per_rev} marks per turn; the units, "
         f"{unit_shaft}-shaft revolutions, are aligned by correlation, not by its marks"
@@ -550,13 +554,15 @@ def check_structure(source: DatasetSpec, target: Target, conditions: dict, where
     from ..gap.views import gear_pair_of
 
     pair, described = gear_pair_of(source), operating_point(source)[0]
-    from_mesh = target.tacho is None and bool(target.gearbox) and target.speed_hz is None
     for name, cond in conditions.items():
         rows = []
+        # a history read with tachos (with or without one on the test records) aligns by their marks
+        marked = all(target.keys_of(f)["tacho"] is not None for f, _ in cond["history"])
+        from_mesh = not marked and bool(target.gearbox) and target.speed_hz is None
         for f, _ in cond["history"]:
             revs = cond["raw"][f.path][0]
             if rows:
-                _, revs = aligned(rows[0].mean(axis=0), revs, target.tacho, target.marks, continuous=True)
+                _, revs = aligned(rows[0].mean(axis=0), revs, marked or None, target.marks, continuous=True)
             rows.append(revs)
         first = cond["history"][0][0].path
         speed = float(np.average([cond["speeds"][f.path] for f, _ in cond["history"]], weights=[len(r) for r in rows]))
@@ -565,7 +571,7 @@ def check_structure(source: DatasetSpec, target: Target, conditions: dict, where
             speed=speed,
             speed_from_mesh=from_mesh and all(f.speed_hz is None for f, _ in cond["history"]),
             described_speed=described,
-            tacho_shaft=target.read_as,
+            tacho_shaft=(target.read_as or "input") if marked else None,
             takes=tuple(len(r) for r in rows),
         )
         line = structure_line(np.concatenate(rows).astype(np.float64), pair, cond["max_order"], chain, None, {})

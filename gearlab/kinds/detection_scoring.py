@@ -70,6 +70,8 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)
         | ({} if target.tacho_shaft is None else {"tacho_shaft": asdict(target.tacho_shaft)}),
         "file_keys": file_keys(target.files),  # a new file in a test file's format: read with its keys
+        # which records had a tacho: "all" aligned by its marks, else as records without one
+        "tacho_records": tacho_records(target),
         "blocks": list(d.blocks),
         "threshold": d.threshold,
         "false_alarm": d.false_alarm,
@@ -123,6 +125,17 @@ def file_keys(files) -> dict:
     }
 
 
+def tacho_records(target) -> str:
+    """Which of *target*'s records were read with a tacho: "all", "some" or "none"."""
+    has = {target.keys_of(f)["tacho"] is not None for f in target.files}
+    return "all" if has == {True} else "some" if len(has) > 1 else "none"
+
+
+def _tacho_records(meta: dict) -> str:
+    """tacho_records of a run (one saved before: its [target]'s tacho said it)."""
+    return meta.get("tacho_records") or ("none" if meta["target"]["tacho"] is None else "all")
+
+
 def remembered(meta: dict, file: str) -> dict:
     """The acquisition keys the run's own files of *file*'s format were read with (file_keys): that
     format's, else the test files' where they agree, else none (the [target]'s)."""
@@ -143,7 +156,8 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
     keys = meta["target"]
-    reference, tacho, ppr = arrays["reference"], keys["tacho"], _tacho_shaft(keys).marks(keys["pulses_per_rev"])
+    reference, ppr = arrays["reference"], _tacho_shaft(keys).marks(keys["pulses_per_rev"])
+    tacho = True if _tacho_records(meta) == "all" else None  # aligned by its marks (aligned()'s flag)
     if "unit_shaft" in meta:  # a slower shaft's revolutions: turned by correlation, as the run's were
         tacho = None
     continuous = bool(meta.get("later_orders"))  # as read_target shifted the run's records
@@ -257,7 +271,7 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
             raise GearlabInputError(
                 f"{at}={value}: expected KEY=VALUE, KEY one of {', '.join(SCORE_KEYS)}{did_you_mean(key, SCORE_KEYS)}"
             )
-        if key == "tacho" and keys["tacho"] is None:
+        if key == "tacho" and _tacho_records(meta) == "none":
             raise GearlabInputError(
                 f"{at}: the run read its records without a tacho (their speed declared or from the mesh orders); "
                 "expected no tacho (the new records are read as the run's were)"

@@ -69,6 +69,12 @@ class Target:
         return math.lcm(*marks)
 
     @property
+    def tacho_all(self) -> bool:
+        """Every record is read with a tacho: its marks align them (else, a record or more without one, all
+        are aligned as records without a tacho are, each cut at its own tacho's angle or declared speed)."""
+        return all(self.keys_of(f)["tacho"] is not None for f in self.files)
+
+    @property
     def read_as(self) -> str | None:
         """The shaft the tacho is read as (the gap's Chain.tacho_shaft); None: no tacho."""
         return None if self.tacho is None else self.tacho_shaft.name if self.tacho_shaft else "input"
@@ -252,30 +258,36 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         vibration = found[0]
     if tacho is None and t["pulses_per_rev"] not in (None, 1):
         raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
-    for i, f in enumerate(files):
+    # a file's own tacho (or tacho = "": none) over the [target]'s: records with and without one may mix,
+    # each cut at its own tacho's angle or at its declared (or mesh-found) speed
+    tachos = [dict(f.keys).get("tacho", tacho) for f in files]
+    if len({q is None for q in tachos}) > 1 and "test" not in need:  # the gap: one acquisition chain
+        with_one = next(f.path for f, q in zip(files, tachos) if q is not None)
+        without = next(f.path for f, q in zip(files, tachos) if q is None)
+        raise GearlabInputError(
+            f"{where} key 'files': {with_one} has a tacho, {without} none; the gap compares one acquisition chain "
+            'with the simulator: expected history records all with a tacho or all without (tacho = "" on a file)'
+        )
+    for i, (f, ftacho) in enumerate(zip(files, tachos)):
         own = dict(f.keys)
         at = f"{where} key 'files' entry {i + 1}"
-        if "tacho" in own and (own["tacho"] is None) != (tacho is None):
-            raise GearlabInputError(
-                f"{at} key 'tacho': a file's tacho names the [target]'s tacho channel in that file; expected "
-                + ("none, as the [target] gives none" if tacho is None else f"a channel, as the [target]'s {tacho!r}")
-            )
-        if own.get("pulses_per_rev") is not None and tacho is None:
+        if own.get("pulses_per_rev") is not None and ftacho is None:
             raise GearlabInputError(f"{at} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
-        if own and own.get("vibration", vibration) == own.get("tacho", tacho):
-            raise GearlabInputError(f"{at} key 'vibration': the same column as the tacho ({own.get('tacho', tacho)!r})")
+        if own and ftacho is not None and own.get("vibration", vibration) == ftacho:
+            raise GearlabInputError(f"{at} key 'vibration': the same column as the tacho ({ftacho!r})")
         declared = f.speed_hz if f.speed_hz is not None else speed
         # the shaft angle comes from one of them (recordings.shaft_angle): a tacho, or a speed
-        # declared or found from the description's mesh orders
-        if tacho is not None and (declared is not None or gearbox):
+        # declared or found from the description's mesh orders; a [target] speed or gearbox is for the
+        # files without a tacho, refused where every file has one
+        if ftacho is not None and (f.speed_hz is not None or (None not in tachos and (speed is not None or gearbox))):
             at = f"{where} key " + (
-                "'speed'" if speed is not None else "'gearbox'" if gearbox else f"'files' entry {i + 1} key 'speed'"
+                f"'files' entry {i + 1} key 'speed'" if f.speed_hz is not None else "'speed'" if speed else "'gearbox'"
             )
             raise GearlabInputError(
-                f"{at}: {f.path} has a tacho ({t['tacho']!r}), which gives its speed; expected a tacho, or "
+                f"{at}: {f.path} has a tacho ({ftacho!r}), which gives its speed; expected a tacho, or "
                 "without one a 'speed' (e.g. '25 Hz') or a 'gearbox' description, not both"
             )
-        if tacho is None and declared is None and not gearbox:
+        if ftacho is None and declared is None and not gearbox:
             raise GearlabInputError(
                 f"{where} key 'tacho': missing; {f.path} has no tacho, speed or gearbox to know its shaft angle "
                 "from; expected a tacho channel, a 'speed' (e.g. '25 Hz') or a 'gearbox' description whose "
