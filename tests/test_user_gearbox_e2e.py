@@ -262,6 +262,8 @@ def test_one_stage_from_recordings_to_scoring(one_stage, gearlab, no_figures):
     summary = json.loads((folder / run_dir(out) / "summary.json").read_text())
     ((name, params),) = summary["corrected_effects"]
     assert name == "sensor_noise" and abs(dict(params)["snr_db"] - SNR_DB) < 1.5
+    # the structure's mesh reading is the one its check decided on: within the longer of the two takes
+    assert summary["structure"]["mesh"]["read_on"] == "the longest of 2 records", summary["structure"]["mesh"]
     # detection, then next week's chipped take scored with the run's thresholds
     code, out = gearlab(folder, "run", "detect.toml", "--quick")
     assert code == 0, out
