@@ -134,8 +134,8 @@ def test_the_three_mesh_orders_are_in_the_casing_spectrum(sim, monkeypatch):
     # the third mesh's line is its stiffness's: held at its mean, the line goes, the first mesh's stays
     series = sim._mesh_series
 
-    def held(i, shaft, per_rev):
-        return np.full(len(shaft), sim.mesh_means[1]) if i == 1 else series(i, shaft, per_rev)
+    def held(i, shaft, per_rev, *faults, **start):
+        return np.full(len(shaft), sim.mesh_means[1]) if i == 1 else series(i, shaft, per_rev, *faults, **start)
 
     monkeypatch.setattr(sim, "_mesh_series", held)
     _, flat = _spectrum(sim)

@@ -174,9 +174,9 @@ def mesh_cycle(sim: Simulator) -> int:
 # cut from the stretch without wrapping (stretch_start).
 STRETCH = 64  # revolutions of a long train's stretch beyond the longest record it serves (at least as many)
 SETTLE_SAFETY = 2.0  # the slowest mode's decay to STEADY_RTOL, this many times over
-# Steps of a settle at most: a run holds ~91 bytes a step (a 15-DOF three-stage model), so a stretch's
-# run stays within 0.8 GB plus its own revolutions'. A casing on 1 N s/m mounts settles in ~846,000
-# turns (R's gap profile: a worker at 21.9 GB); such a model is refused before it is simulated.
+# Steps of a stretch's lead at most (lead_revolutions): a run holds ~91 bytes a step (a 15-DOF
+# three-stage model), so a stretch's run stays within 0.8 GB plus its own revolutions'. Such a model is
+# refused before it is simulated (R's gap profile ran a 1 N s/m casing's 846,000-turn settle: 21.9 GB).
 SETTLE_STEPS = 1 << 23
 
 
@@ -188,28 +188,63 @@ def train_cycle(sim: Simulator, faults) -> int:
     return math.lcm(placement.mesh_cycle_of(pairs), *periods)
 
 
+def _modes(sim: Simulator) -> tuple[np.ndarray, np.ndarray]:
+    """The decay rate of every mode (the state matrix's eigenvalues at every mesh's mean stiffness and
+    damping) and its share of strain energy in the meshes (sum_i k_i |P_i v|^2 / v^H K v, v its
+    displacements): 1 for a mode that is all mesh, ~0 for a casing bouncing on its mounts."""
+    n = len(sim.dofs)
+    K, C = sim.Kc.copy(), sim.Cc.copy()
+    meshes = ((sim.P, sim.k_mean, sim.mu), *zip(sim.mesh_P, sim.mesh_means, sim.mesh_mu))
+    for P, k, mu in meshes:
+        K, C = K + k * np.outer(P, P), C + mu * k * np.outer(P, P)
+    Minv = np.linalg.inv(sim.M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
+    lam, V = np.linalg.eig(A)
+    v = V[:n]
+    strain = np.einsum("ij,ik,kj->j", v.conj(), K, v).real
+    mesh = sum(k * np.abs(P @ v) ** 2 for P, k, _ in meshes)
+    return -lam.real, np.clip(mesh / np.maximum(strain, np.finfo(float).tiny), 0.0, 1.0)
+
+
 def settle_revolutions(sim: Simulator, speed: float) -> int:
     """Whole input revolutions after which the start-up transient has decayed to STEADY_RTOL of its
     size, SETTLE_SAFETY times over: the slowest decay rate among the model's modes (the state matrix
     at every mesh's mean stiffness and damping). 23 revolutions for the 19/47 + 23/59 + 29/71 train at
-    40 Hz (its slowest mode, 439 Hz, decays at 48.8 1/s)."""
-    n = len(sim.dofs)
-    K, C = sim.Kc.copy(), sim.Cc.copy()
-    for P, k, mu in ((sim.P, sim.k_mean, sim.mu), *zip(sim.mesh_P, sim.mesh_means, sim.mesh_mu)):
-        K, C = K + k * np.outer(P, P), C + mu * k * np.outer(P, P)
-    Minv = np.linalg.inv(sim.M)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
-    decay = float(-np.linalg.eigvals(A).real.max())
+    40 Hz (its slowest mode, 439 Hz, decays at 48.8 1/s). A long train's stretch starts this many
+    turns from the gears' zero (steady_stretch): which turns of its meshes' grand cycle it shows."""
+    decay = float(_modes(sim)[0].min())
     if not decay > 0:
         raise GearlabInputError(f"model '{sim.model.name}': a mode is undamped, so its response never settles")
-    settle = math.ceil(SETTLE_SAFETY * math.log(1 / STEADY_RTOL) / decay * speed)
-    if settle * round(sim.fs / speed) > SETTLE_STEPS:
+    return math.ceil(SETTLE_SAFETY * math.log(1 / STEADY_RTOL) / decay * speed)
+
+
+def lead_revolutions(sim: Simulator, speed: float) -> int:
+    """Whole input revolutions a stretch's run starts before the stretch (from the static equilibrium
+    there): every mode's start-up transient decayed to STEADY_RTOL, SETTLE_SAFETY times over, from a
+    size of sqrt of its mesh strain-energy share (_modes), not 1. The start is the static equilibrium
+    under the load at the mean stiffnesses; what sets a mode moving is the meshes' stiffness
+    fluctuation, which reaches a mode through the mesh deflection it makes. An estimate, not a bound:
+    outside box R's casing bouncing on soft mounts (13.7 Hz at 1.6 1/s, share 1.7e-11; 31.6 Hz at
+    0.8 1/s, 7.2e-9) showed transients 120 and 85 times under it in its casing_x and casing_y channels
+    (3.4e-8, 1e-6 of the response); a two-stage 19/71 + 28/47's slowest mode (70 1/s, share 1.1e-4)
+    3 times over it, which the safety factor covers (1.4e-10 left after its 11-turn lead). R's box:
+    163 turns, not the 506 a full-size transient takes (settle_revolutions).
+
+    Refused (one line) when that lead is over SETTLE_STEPS steps: a run holds ~91 bytes a step (a
+    15-DOF three-stage model)."""
+    decay, share = _modes(sim)
+    if not decay.min() > 0:
+        raise GearlabInputError(f"model '{sim.model.name}': a mode is undamped, so its response never settles")
+    size = np.maximum(np.sqrt(share), STEADY_RTOL)  # a mode below STEADY_RTOL needs no lead of its own
+    slowest = int(np.argmax(np.log(size / STEADY_RTOL) / decay))
+    lead = math.ceil(SETTLE_SAFETY * float(np.max(np.log(size / STEADY_RTOL) / decay)) * speed)
+    if lead * round(sim.fs / speed) > SETTLE_STEPS:
         raise GearlabInputError(
-            f"model '{sim.model.name}': its slowest mode decays at {decay:.3g} 1/s, so the start-up transient "
-            f"would settle only after {settle} input revolutions; a settle of at most {SETTLE_STEPS} steps "
-            f"({SETTLE_STEPS // round(sim.fs / speed)} revolutions at {sim.fs:g} Hz) is simulated"
+            f"model '{sim.model.name}': its mode decaying at {decay[slowest]:.3g} 1/s settles only after {lead} "
+            f"input revolutions; a settle of at most {SETTLE_STEPS} steps ({SETTLE_STEPS // round(sim.fs / speed)} "
+            f"revolutions at {sim.fs:g} Hz) is simulated"
         )
-    return settle
+    return max(lead, 1)
 
 
 def steady_stretch(
@@ -217,11 +252,22 @@ def steady_stretch(
 ) -> tuple[np.ndarray, np.ndarray | None, int]:
     """*revolutions* consecutive steady input revolutions of *channel* from a tacho zero, with the
     sample that ends them (revolutions x per_rev + 1 samples), settle_revolutions after the start;
-    the shaft angle over them from 0 when an effect moved it (else None); and that settle count."""
+    the shaft angle over them from 0 when an effect moved it (else None); and that settle count.
+    The run starts lead_revolutions before the stretch, every series at its own absolute step
+    (Simulator.run's start): the same steady turns as a run from the start, without its long settle."""
     per_rev = int(round(sim.fs / speed))
     settle = settle_revolutions(sim, speed)
-    result = sim.run(faults, speed, load, duration=(settle + revolutions) / speed, channels=[channel], effects=effects)
-    lo, hi = settle * per_rev, (settle + revolutions) * per_rev + 1
+    lead = min(lead_revolutions(sim, speed), settle)
+    result = sim.run(
+        faults,
+        speed,
+        load,
+        duration=(lead + revolutions) / speed,
+        channels=[channel],
+        effects=effects,
+        start=(settle - lead) * per_rev,
+    )
+    lo, hi = lead * per_rev, (lead + revolutions) * per_rev + 1
     angle = None if result.angle is None else result.angle[lo:hi] - 2 * np.pi * settle
     return result.channels[channel][lo:hi].copy(), angle, settle
 
@@ -231,6 +277,8 @@ def stretch_row(x: np.ndarray, revolutions: int, angle: np.ndarray | None = None
     per_rev = (len(x) - 1) // revolutions
     theta = 2 * np.pi * np.arange(len(x)) / per_rev if angle is None else angle - angle[0]
     theta[-1] = max(theta[-1], 2 * np.pi * revolutions)  # the last revolution whole, up to rounding
+    while math.floor(theta[-1] / TWO_PI) < revolutions:  # 2π·22 / 2π is 21.999999999999996 (turned)
+        theta[-1] = np.nextafter(theta[-1], np.inf)
     return resample_revolutions(x, theta, POINTS, count=revolutions).reshape(-1)
 
 

@@ -331,6 +331,7 @@ class Simulator:
         channels: Sequence[str] | None = None,
         effects: Sequence = (),
         after: Simulation | None = None,
+        start: int = 0,
     ) -> Simulation:
         """Integrate from the static equilibrium for *duration* seconds.
 
@@ -340,6 +341,9 @@ class Simulator:
         steps are kept and the loop continues from its final state, the same floats as a run from
         the start (every series is a function of the step alone). Only without effects on one
         mesh; else, or when *after* does not fit, the whole run is integrated.
+        *start*: the step the run begins at (from the static equilibrium there), t = start / fs: every
+        series (mesh stiffnesses, tacho, effects) is read at its own absolute step, so once its start-up
+        transient has died away such a run is the steady response of a run from t = 0 at those steps.
 
         The stages: check the operating point, the mesh stiffness k(t) along the nominal shaft
         angle, the excitation effects, the static equilibrium, the Newmark loop, the result.
@@ -348,11 +352,11 @@ class Simulator:
         speed, load, channels = self._operating_point(speed_hz, load_nm, duration, channels, where)
         staged = self.faults_by_stage(faults, where)
         self.check_hunting(staged, where)
-        start = time.perf_counter()
+        began = time.perf_counter()
         steps = int(round(duration * self.fs))
-        t, shaft, phase, tacho = self._time_base(steps, speed)
+        t, shaft, phase, tacho = self._time_base(steps, speed, start)
         per_rev = self.fs / speed
-        tvms, index, k = self._nominal_stiffness(staged[0], phase, per_rev, steps, speed)
+        tvms, index, k = self._nominal_stiffness(staged[0], phase, per_rev, steps, speed, start)
         k_mean = tvms.mean
         forces, angle = [], None
         if effects:
@@ -368,21 +372,21 @@ class Simulator:
         F, (u, v, a) = self._equilibrium(load, k_mean, means)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
         out = np.empty((steps + 1, len(out_idx)))
-        done = self._continued(after, faults, speed, load, channels, steps, effects)
+        done = 0 if start else self._continued(after, faults, speed, load, channels, steps, effects)
         if done:
             out[: done + 1] = np.column_stack([after.channels[ch] for ch in channels])
             u, v, a = (x.copy() for x in after.state)
         failed = self._newmark(
-            k[done:], forces, angle, t[done:], speed, per_rev, F, (u, v, a), out_idx, out[done:], staged[1:]
+            k[done:], forces, angle, t[done:], speed, per_rev, F, (u, v, a), out_idx, out[done:], staged[1:], start
         )
         if failed >= 0:
-            failed += done
+            failed += done + start
             labels = ", ".join(f.label for f in faults) or "healthy"
             raise SimulationError(
                 f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
                 f"(NaN or overflow) near t = {failed / self.fs:.4g} s; check the model parameters and the time step"
             )
-        wall = time.perf_counter() - start
+        wall = time.perf_counter() - began
         return Simulation(
             model=self.model.name,
             preset=self.preset,
@@ -423,26 +427,31 @@ class Simulator:
             views[length] = tuple(x[:length] for x in entry[0])
         return views[length]
 
-    def _time_base(self, steps: int, speed: float) -> tuple[np.ndarray, ...]:
+    def _time_base(self, steps: int, speed: float, start: int = 0) -> tuple[np.ndarray, ...]:
         """t, the nominal input-shaft angle (fixed speed, unwrapped), its phase in [0, 2 pi) and the
-        tacho (the phase in [-pi, pi)) of *steps* steps at *speed*: read-only, memoised."""
-        (t,) = self._memoised(("t", self.fs), lambda n: (np.arange(n) / self.fs,), steps + 1)
+        tacho (the phase in [-pi, pi)) of *steps* steps at *speed* from step *start*: read-only, memoised
+        (the same floats as the steps of a run from 0: the integer step over fs)."""
+        (t,) = self._memoised(("t", self.fs, start), lambda n: ((np.arange(n) + start) / self.fs,), steps + 1)
 
         def make(n):  # n == len(t)
             shaft = 2 * np.pi * speed * t
             phase = np.mod(shaft, 2 * np.pi)
             return shaft, phase, np.where(phase >= np.pi, phase - 2 * np.pi, phase)
 
-        return (t, *self._memoised(("angle", self.fs, speed), make, steps + 1))
+        return (t, *self._memoised(("angle", self.fs, speed, start), make, steps + 1))
 
-    def _index(self, n: int, period: int) -> np.ndarray:
-        """The table index of *n* steps on a table of *period* entries, one entry a step: read-only, memoised."""
-        return self._memoised(("index", period), lambda size: (np.arange(size) % period,), n)[0]
+    def _index(self, n: int, period: int, start: int = 0) -> np.ndarray:
+        """The table index of *n* steps from step *start* on a table of *period* entries, one entry a
+        step: read-only, memoised."""
+        first = start % period
+        return self._memoised(("index", period, first), lambda size: ((np.arange(size) + first) % period,), n)[0]
 
     @staticmethod
     def _repeat(k: np.ndarray, index: np.ndarray, period: int) -> np.ndarray:
-        """k[index] for index = _index(n, period): the same floats, the table repeated (no gather)."""
-        return np.resize(k, len(index)) if len(k) == period else k[index]
+        """k[index] for index = _index(n, period, start): the same floats, the table repeated (no gather)."""
+        if len(k) != period:
+            return k[index]
+        return np.resize(k, len(index)) if index[0] == 0 else np.resize(np.roll(k, -int(index[0])), len(index))
 
     def _continued(self, after, faults, speed: float, load: float, channels, steps: int, effects) -> int:
         """The steps of *after* that a run of *steps* keeps (:meth:`run`): 0 unless it is a shorter run
@@ -552,33 +561,41 @@ class Simulator:
         return self.mesh_models[i].mesh_stiffness(faults, points=points)
 
     def _nominal_stiffness(
-        self, faults: Sequence[PlacedFault], phase: np.ndarray, per_rev: float, steps: int, speed: float = 0.0
+        self,
+        faults: Sequence[PlacedFault],
+        phase: np.ndarray,
+        per_rev: float,
+        steps: int,
+        speed: float = 0.0,
+        start: int = 0,
     ):
         """The TVMS over one revolution of the faulted gear (the pinion when none is) and k(t) at the
-        nominal angle, whose input-shaft phase is *phase*: (table, table index per step or None, k(t))."""
+        nominal angle, whose input-shaft phase is *phase*, from step *start*: (table, table index per
+        step or None, k(t))."""
         if table_gear(faults) != "pinion":
             turns = self.table_turns(1, faults)
-            shaft = self._time_base(steps, speed)[1]  # the nominal input angle, unwrapped
-            return self._table_series(self.stiffness, faults, turns, shaft, per_rev)
+            shaft = self._time_base(steps, speed, start)[1]  # the nominal input angle, unwrapped
+            return self._table_series(self.stiffness, faults, turns, shaft, per_rev, start)
         if abs(per_rev - round(per_rev)) < 1e-9 * per_rev:
             # A whole number of steps per revolution: the TVMS on exactly those angles, no
             # interpolation, so a fault on tooth n sees exactly the shifted TVMS of tooth 1.
             tvms = self.stiffness.mesh_stiffness(faults, points=round(per_rev))
-            index = self._index(steps + 1, round(per_rev))
+            index = self._index(steps + 1, round(per_rev), start)
             return tvms, index, self._repeat(tvms.k, index, round(per_rev))
         points = self.pair.Z1 * math.ceil(TVMS_POINTS / self.pair.Z1)  # pitch-aligned grid
         tvms = self.stiffness.mesh_stiffness(faults, points=points)
         return tvms, None, np.interp(phase, np.append(tvms.theta, 2 * np.pi), np.append(tvms.k, tvms.k[0]))
 
-    def _table_series(self, model, faults, turns: float, shaft: np.ndarray, per_rev: float | None):
+    def _table_series(self, model, faults, turns: float, shaft: np.ndarray, per_rev: float | None, start: int = 0):
         """A mesh's TVMS over one revolution of its table's gear, which turns *turns* times per input
-        turn, and k(t) at input angle *shaft*: exact table entries when that gear's revolution is a
-        whole number of steps (nominal speed), else interpolated. (table, index or None, k(t))."""
+        turn, and k(t) at input angle *shaft* (its first step *start*): exact table entries when that
+        gear's revolution is a whole number of steps (nominal speed), else interpolated. (table, index
+        or None, k(t))."""
         if per_rev is not None:
             steps_per_turn = per_rev / turns
             if abs(steps_per_turn - round(steps_per_turn)) < 1e-9 * steps_per_turn:
                 table = model.mesh_stiffness(faults, points=round(steps_per_turn))
-                index = self._index(len(shaft), round(steps_per_turn))
+                index = self._index(len(shaft), round(steps_per_turn), start)
                 return table, index, self._repeat(table.k, index, round(steps_per_turn))
         table = model.mesh_stiffness(faults, points=self._grid(model.pair, faults))
         k = np.interp(
@@ -611,10 +628,11 @@ class Simulator:
         out_idx: np.ndarray,
         out: np.ndarray,
         mesh_faults: Sequence[Sequence[PlacedFault]] = (),
+        first: int = 0,
     ) -> int:
         """The time loop (one of two compiled integrators: one mesh, several meshes; either with extra
         forces); fills *out* and updates *start* (u, v, a) in place. The step it diverged at, or -1.
-        *mesh_faults*: the faults on each further mesh (stage 2 first)."""
+        *mesh_faults*: the faults on each further mesh (stage 2 first); *first*: the step of t[0]."""
         steps = len(t) - 1
         G_F = self.G @ F
         # the arguments every integrator ends with: Newmark constants, step, state (updated in place), output
@@ -625,13 +643,16 @@ class Simulator:
             # further meshes: k_i at their pinions' angles, ratio_i x the input angle
             if angle is not None:
                 shaft = angle
-            else:  # the run's own time base (from t = 0) is memoised
-                shaft = self._time_base(steps, speed)[1] if t[0] == 0 else 2 * np.pi * speed * t
+            else:  # the run's own time base (from its start) is memoised
+                own = round(t[0] * self.fs) == first
+                shaft = self._time_base(steps, speed, first)[1] if own else 2 * np.pi * speed * t
             on = list(mesh_faults) + [()] * (len(self.meshes) - len(mesh_faults))
             k_all = np.column_stack(
                 [k]
                 + [
-                    self._mesh_series(i, shaft, per_rev if angle is None else None, *([on[i]] if on[i] else []))
+                    self._mesh_series(
+                        i, shaft, per_rev if angle is None else None, *([on[i]] if on[i] else []), start=first
+                    )
                     for i in range(len(self.meshes))
                 ]
             )
@@ -646,14 +667,14 @@ class Simulator:
         g = np.ascontiguousarray(np.stack([series for _, series in forces], axis=1)[1:])
         return np.ascontiguousarray(self.G @ B), g
 
-    def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None, faults=()) -> np.ndarray:
+    def _mesh_series(self, i: int, shaft: np.ndarray, per_rev: float | None, faults=(), start: int = 0) -> np.ndarray:
         """k(t) of further mesh *i* with the input shaft at angle *shaft*: its pinion turns at ratio x the
         input; with *faults* its table spans a revolution of the faulted gear (both: the hunting period), read at
         that gear's angle. Exact table entries when that revolution is a whole number of steps (nominal
         speed), else interpolated on a pitch-aligned grid."""
         mesh, model = self.meshes[i], self.mesh_models[i]
         turns = self.table_turns(i + 2, faults) if faults else mesh.ratio
-        return self._table_series(model, faults, turns, shaft, per_rev)[2]
+        return self._table_series(model, faults, turns, shaft, per_rev, start)[2]
 
     def _excite(self, effects, tvms, index, t, speed, load):
         """Apply excitation-level effects to the nominal excitation: (k(t), mean k, forces, moved angle or None)."""
