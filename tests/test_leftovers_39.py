@@ -230,3 +230,21 @@ def test_records_with_and_without_a_tacho_run_in_one_detection_target(cli, tmp_p
     code, _, err = cli("validate", gap)
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert "h1.zip has a tacho, ../data/h2.zip none; the gap compares one acquisition chain" in err, err
+
+
+def test_a_last_wheel_no_sideband_shows_is_said_unchecked_not_checked_through_a_later_mesh():
+    # a one-stage box's output shaft without sidebands read "so a wheel on it is checked only through a later
+    # stage's mesh order, if any": there is none (the guide's 16/48 gap run said it after 'explained')
+    from gearlab.data.chain import Chain
+    from gearlab.gap.structure import structure_line
+
+    n, points = 300, 512
+    theta = 2 * np.pi * np.arange(n * points) / points
+    x = (1 + 0.15 * np.cos(theta + 0.4)) * np.cos(38 * theta) + 0.3 * np.cos(76 * theta + 1.0)
+    rows = (x + np.random.default_rng(2).normal(0, 0.06, x.size)).reshape(n, points)
+    record: dict = {}
+    chain = Chain(fs=points * 30.0, speed=30.0, tacho_shaft="input")
+    assert structure_line(rows, described_pair((38, 89)), 200, chain, None, record) is None
+    said = "no sideband shows the order of the output shaft, so the tooth count of its 89-tooth wheel is not checked"
+    assert said in record["unchecked"]["items"], record["unchecked"]
+    assert "later stage" not in record["unchecked"]["line"], record["unchecked"]

@@ -499,10 +499,16 @@ def unchecked(check: dict, box: Gearbox, speed_found: float | None) -> list[str]
     unseen = [s["shaft"] for s in check["shafts"] if s["measured_order"] is None and s["shaft"] != box.shafts[0]]
     pinion = pinion_unconfirmed(check, box, speed_found)
     out = ([pinion] if pinion else []) + check.get("unresolved", [])
-    if unseen:
+    between = [s for s in unseen if s != box.shafts[-1]]  # a later stage's pinion on it: that mesh tells the wheel
+    if between:
         out.append(
-            f"no sideband shows the order of the {', '.join(unseen)} shaft{'s' if len(unseen) > 1 else ''}, so a "
-            "wheel on it is checked only through a later stage's mesh order, if any"
+            f"no sideband shows the order of the {', '.join(between)} shaft{'s' if len(between) > 1 else ''}, so a "
+            "wheel on it is checked only through a later stage's mesh order"
+        )
+    if box.shafts[-1] in unseen:  # the last wheel: nothing after it (a one-stage box's 48T wheel 'if any')
+        out.append(
+            f"no sideband shows the order of the {box.shafts[-1]} shaft, so the tooth count of its "
+            f"{box.stages[-1].wheel.z}-tooth wheel is not checked"
         )
     return out
 
