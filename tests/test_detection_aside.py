@@ -96,6 +96,26 @@ def test_the_classical_indicators_are_made_while_the_trainings_run_and_come_firs
     assert all("source_bound" in c for c in conditions.values())
 
 
+def test_a_presets_structure_check_is_made_aside_and_its_warning_still_told(cli, tmp_path, cache, monkeypatch):
+    """A built-in preset's rig checked against the history (check_structure: 4.4 s of phm09_chip's main
+    thread while both workers stood idle) is checked in the aside thread while the trainings run; what
+    it finds is still told (a user's own description is still checked before any work: it refuses)."""
+    import gearlab.kinds.detection as D
+
+    without_figures(monkeypatch)
+    checked = []
+
+    def check(*args):
+        checked.append(threading.current_thread().name)
+        return "the history of condition 'c': the rig's pinion shows 21 teeth, 20 expected"
+
+    monkeypatch.setattr(D, "check_structure", check)
+    code, out, err = cli("run", scenario(tmp_path, methods=("matched_filter",)), "--out", tmp_path / "runs")
+    assert code == 0, err
+    assert checked == ["gearlab-aside"]
+    assert "warning: the history of condition 'c': the rig's pinion shows 21 teeth" in out + err
+
+
 def test_a_local_pool_reads_the_records_and_reads_them_alike(tmp_path):
     from gearlab.engine import load_scenario
     from gearlab.kinds.detection_records import read_target
