@@ -205,3 +205,28 @@ def test_a_later_stage_s_lines_do_not_hide_the_speed_the_input_pinion_s_sideband
     verdict = report["verdict"]
     assert verdict.split(": ", 1)[1].startswith("stage 1: the wheel on the intermediate shaft shows 103.0"), verdict
     assert "69-tooth" not in verdict and "83-tooth" not in verdict, verdict
+
+
+def test_what_only_the_data_shows_is_named_where_the_file_is_listed(tmp_path):
+    # A CSV with a ragged row 7,000 lines in (or a NaN, a word, a time that jumps back): validate cannot
+    # see it; the run stopped with 'ragged.csv: line 7001 has 4 fields ...', no table or key.
+    import pytest
+
+    from gearlab.errors import GearlabInputError
+    from gearlab.parts.measured import target_spec
+
+    rows = [f"{i / 20000:.6f},{np.sin(i * 0.3):.5f}" for i in range(9000)]
+    (tmp_path / "good.csv").write_text("time_s,acc_ms2\n" + "\n".join(rows) + "\n")
+    rows[7000] += ",9.9"
+    (tmp_path / "ragged.csv").write_text("time_s,acc_ms2\n" + "\n".join(rows) + "\n")
+    table = {"vibration": "acc_ms2", "tacho": None, "pulses_per_rev": None, "speed": "25 Hz"}
+    table |= {"transient": "stats", "positive": "fault", "sensitivity": None, "gain": None, "unit": None, "fs": None}
+    table["files"] = [
+        {"file": "good.csv", "role": "history", "label": "healthy"},
+        {"file": "ragged.csv", "role": "test", "label": "fault"},
+    ]
+    target = target_spec(table, "s.toml: [target]", tmp_path)
+    with pytest.raises(GearlabInputError) as err:
+        target.read(target.files[1])
+    line = str(err.value)
+    assert line.startswith("[target] key 'files' entry 2 key 'file': ") and "ragged.csv: line 7002" in line, line

@@ -86,14 +86,20 @@ class Target:
         description's mesh orders show (refining a declared one to ±1 %: recordings.shaft_angle)."""
         from ..gearbox import resolve_gearbox
 
-        return cut_recording(
-            file.resolved,
-            **self.keys_of(file),
-            transient=self.transient,
-            speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
-            gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
-            tacho_shaft=self.tacho_shaft,
-        )
+        try:
+            return cut_recording(
+                file.resolved,
+                **self.keys_of(file),
+                transient=self.transient,
+                speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
+                gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
+                tacho_shaft=self.tacho_shaft,
+            )
+        except GearlabInputError as exc:  # what the data shows (a ragged row, a NaN): named where it is listed
+            if exc.args and isinstance(exc.args[0], str) and "[target]" not in exc.args[0]:
+                at = f"[target] key 'files' entry {self.files.index(file) + 1} key 'file'"
+                exc.args = (f"{at}: {exc.args[0]}", *exc.args[1:])
+            raise
 
 
 def tacho_shaft_of(name: str, tacho, box, where: str, described: str) -> TachoShaft | None:
