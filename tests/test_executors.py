@@ -176,6 +176,24 @@ def test_the_local_pool_sends_a_shared_value_once_and_each_unit_has_its_own(monk
     assert unshared(shared)[0][0] == 0.0  # the caller's own value untouched
 
 
+def module_loaded(name: str) -> bool:
+    time.sleep(0.2)  # both workers take a share
+    return name in sys.modules
+
+
+def test_a_warmed_local_pool_has_loaded_the_modules_before_its_units_ask():
+    """Issue 42: each worker's first training imported torch and scipy.stats (2.7 s of CPU) while
+    the run's process had left both idle preparing the trainings; warm() has them loaded meanwhile."""
+    with LocalExecutor(2) as pool:
+        assert not any(pool.map(module_loaded, ["tabnanny"] * 4))
+    with LocalExecutor(2) as pool:
+        pool.warm(("tabnanny",))
+        assert any(pool.map(module_loaded, ["tabnanny"] * 4))
+    with LocalExecutor(1) as one:
+        one.warm(("tabnanny",))
+        assert one._pool is None  # one worker: the units run in this process
+
+
 def test_ray_tasks_that_want_a_gpu_get_a_share_of_one(ray_session):
     """One GPU and two CPUs: each training task takes half the GPU, so two still run at once."""
     executor = RayExecutor(workers=2)

@@ -70,7 +70,7 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, shown
 from ..events import Event, ignore_events
-from ..executors import Aside, Shared
+from ..executors import Aside, Executor, Shared
 from ..gearbox.simulation import label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
@@ -385,6 +385,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             on_event(Event("log", message=f"units: revolutions and TSAs of {shaft.said()}"))
         where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
         conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous, executor)
+        if isinstance(executor, Executor):  # what the trainings load first, loaded while they are prepared
+            executor.warm(("torch", "scipy.stats", "gearlab.learn.protocol", __package__ + ".detection_units"))
         # a description (the user's) the history contradicts ends the run, before any work; a built-in
         # preset's rig is told, checked aside while the pool trains (4.4 s of phm09_chip's main thread
         # with both workers idle)
