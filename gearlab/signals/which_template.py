@@ -60,8 +60,10 @@ def fit(R: np.ndarray, D: np.ndarray, m: np.ndarray) -> float:
 
 def structure_gap(ref, lay, healthy: np.ndarray) -> float:
     """Spread (dB) of the history's mesh-harmonic powers about the simulated healthy train's, less
-    their mean difference (the load and the sensor's gain are not known to the simulation)."""
-    sel = lay.carrier & (ref.power > 0) & (np.abs(healthy) > 0)
+    their mean difference (the load and the sensor's gain are not known to the simulation), over the
+    harmonics that are lines of the history (localise.Spread.line): a harmonic the noise buries says
+    nothing of the structure (13.5 dB of noise: 5.3-5.7 dB over every harmonic, 0.6-0.8 over the lines)."""
+    sel = lay.carrier & ref.line & (ref.power > 0) & (np.abs(healthy) > 0)
     if sel.sum() < 3:
         return math.inf
     return float(np.std(10 * np.log10(ref.power[sel] / np.abs(healthy[sel]) ** 2)))
