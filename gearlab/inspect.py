@@ -31,6 +31,7 @@ from .data.recordings import (
     channel_scale,
     is_rate_or_time,
     name_unit,
+    not_time,
     prefixed,
     read_contents,
     same_length,
@@ -111,6 +112,7 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     if options.tacho is not None:
         roles.setdefault(options.tacho, "tacho")
     contents, fmt = read_contents(path, list(roles), roles)
+    not_time((vibration, options.tacho), contents.available, path, f"{path}: --vibration/--tacho")
     scale = (options.gain or 1.0) / (options.sensitivity or 1.0)  # both positive when given
     units = f"value x {scale:g} (gain / sensitivity)"
     declared = {"unit": contents.units.get(vibration), "declared": options.unit, "flag": lambda key: f"--{key}"}

@@ -6,6 +6,7 @@ from __future__ import annotations
 import struct
 
 import numpy as np
+import pytest
 
 from gearlab.data.recordings import read_contents
 
@@ -210,7 +211,6 @@ def test_a_later_stage_s_lines_do_not_hide_the_speed_the_input_pinion_s_sideband
 def test_what_only_the_data_shows_is_named_where_the_file_is_listed(tmp_path):
     # A CSV with a ragged row 7,000 lines in (or a NaN, a word, a time that jumps back): validate cannot
     # see it; the run stopped with 'ragged.csv: line 7001 has 4 fields ...', no table or key.
-    import pytest
 
     from gearlab.errors import GearlabInputError
     from gearlab.parts.measured import target_spec
@@ -230,3 +230,25 @@ def test_what_only_the_data_shows_is_named_where_the_file_is_listed(tmp_path):
         target.read(target.files[1])
     line = str(err.value)
     assert line.startswith("[target] key 'files' entry 2 key 'file': ") and "ragged.csv: line 7002" in line, line
+
+
+def test_a_column_index_that_lands_on_the_time_column_is_refused(tmp_path, cli):
+    # K's history CSV (time, vibration, tacho) and its test WAVs (vibration, tacho) read with --vibration 0
+    # --tacho 1 as the WAVs are: the CSV's time ramp was taken as the vibration and its acceleration as a
+    # tacho of 65 Hz ('nothing localised', z -34 on the chipped wheel); a scenario the same.
+    from gearlab.errors import GearlabInputError
+    from gearlab.inspect import InspectOptions, read_record
+
+    _csv(tmp_path / "a.csv", 48000.0, 3000, "Relative Time (s)")
+    _csv(tmp_path / "b.csv", 48000.0, 3000, "Relative Time (s)")
+    with pytest.raises(GearlabInputError, match=r"'0' is a.csv's time or rate column 'Relative Time \(s\)'"):
+        read_record(str(tmp_path / "a.csv"), InspectOptions("0", "2", sensitivity=0.0102))
+    assert abs(read_record(str(tmp_path / "a.csv"), InspectOptions("1", "2", sensitivity=0.0102)).fs - 48e3) < 0.1
+    (tmp_path / "k.toml").write_text(BOX_K.format(z=54))
+    files = '[{ file = "a.csv", role = "history", label = "healthy" }, '
+    files += '{ file = "b.csv", role = "test", label = "fault" }]'
+    (tmp_path / "s.toml").write_text(_scenario(files, 'vibration = "0"\ntacho = "2"\nsensitivity = "100 mV/g"'))
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    line = err.strip()
+    assert code == 2 and len(line.splitlines()) == 1, (out, err)
+    assert "[target] key 'vibration'" in line and "time or rate column 'Relative Time (s)'" in line, line

@@ -54,7 +54,7 @@ from ..params import did_you_mean
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz
 from .readers import READERS, Contents, check_size
-from .readers.base import _listing, _one_line, _one_line_repr
+from .readers.base import _listing, _one_line, _one_line_repr, not_time
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
@@ -515,9 +515,8 @@ def read_recording(
     extra: Sequence[tuple[str, str]] = (),
     where: str = "",
 ) -> Recording:
-    """The vibration in m/s² (channel_scale; *unit*: the scenario's 'unit' key), the tacho and the
-    rate of one file; *extra*: (name, role) of other channels to return as stored (a labels channel).
-    *where*: the scenario table the keys come from, for the errors on units (default: the file)."""
+    """The vibration in m/s² (channel_scale; *unit*: the scenario's 'unit' key), the tacho and the rate of one file;
+    *extra*: (name, role) of other channels as stored; *where*: the scenario table of the keys (default: the file)."""
     path = str(path)
     vibration, tacho = channel_key(vibration), channel_key(tacho) if tacho is not None else None
     roles = {vibration: "vibration"}
@@ -525,6 +524,7 @@ def read_recording(
         if name is not None:
             roles.setdefault(channel_key(name), role)
     contents, fmt = read_contents(path, list(roles), roles)
+    not_time((vibration, tacho), contents.available, path, where or path)
     raw = np.asarray(contents.found[vibration])
     # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
     step = contents.steps.get(vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
@@ -767,10 +767,9 @@ def check_recording(
     gain: float | None = None,
     unit: str | None = None,
 ) -> Header:
-    """Check what a scenario says of a measured file against its header alone (read_header): every
-    channel in *channels* ({key: channel}, e.g. {"vibration": "acc_V", "tacho": 2}) is there, a
-    sampling rate is known (the file's or *fs*), and the vibration's units (channel_scale, with the
-    scenario's *unit*) are given; each error one line naming *where* ("s.toml: [datasets] #1"), key, file."""
+    """Check what a scenario says of a measured file against its header alone (read_header): every channel in
+    *channels* ({key: channel}, e.g. {"vibration": "acc_V", "tacho": 2}) is there and no time column, a rate is known
+    (the file's or *fs*), the vibration's units given (channel_scale); each error one line naming *where*, key, file."""
     try:
         header = read_header(path)
     except GearlabInputError as exc:  # a file its reader refuses (a zip of two texts): named where it is listed
@@ -787,6 +786,7 @@ def check_recording(
                 f"{did_you_mean(str(name), [str(c) for c in header.channels])}; the file has: "
                 f"{_listing(header.channels)}{index}"
             )
+        not_time((header.resolve(name),), header.channels, path, f"{where} key '{key}'")
     if not header.rate and fs is None:
         raise GearlabInputError(
             f"{where} key 'fs': missing; {path} carries no sampling rate (no 'fs' field, no time column such as "

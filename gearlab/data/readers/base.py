@@ -8,6 +8,7 @@ import os
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -39,6 +40,22 @@ def time_scale(name: str) -> float | None:
 def is_rate_or_time(name: str) -> bool:
     """Whether a channel name is a sampling-rate field or a time vector (no signal channel)."""
     return str(name).lower() in _RATE_NAMES or time_scale(name) is not None
+
+
+def not_time(names, columns, path, where: str) -> None:
+    """One line when a channel asked for (*names*: names or 0-based column indices, None skipped) is the
+    file's time or rate column (a header CSV's column '0' is its time column: K's 'Relative Time (s)'
+    was read as the vibration, and its acceleration, column '1', as a tacho of 65 Hz)."""
+    columns = [str(c) for c in columns]
+    for name in (str(n) for n in names if n is not None):
+        indexed = name not in columns and name.strip().isdigit() and int(name) < len(columns)
+        column = columns[int(name)] if indexed else name
+        if is_rate_or_time(column):
+            signals = ", ".join(repr(c) for c in columns if not is_rate_or_time(c))
+            raise GearlabInputError(
+                f"{where}: {name!r} is {Path(str(path)).name}'s time or rate column {column!r}"
+                f"{f' (column {name} counts it)' if indexed else ''}; expected a signal channel: {signals}"
+            )
 
 
 # Most megabytes a measured file, and each channel as stored (decoded), may hold; the import
