@@ -4,14 +4,26 @@ type as PATH, TEXT, INTEGER, FLOAT (a repeatable option: its element's type); no
 flag (--quick/--no-quick takes no value).
 
 `conventional(app)` makes every command of a Typer app (those added later included) use them.
+
+A path, text or flag given on the command line is taken as it is (`Path(value)`, the text, the
+bool) without the Pydantic adapter Typer >= 0.2x builds for each parameter: that adapter's import
+was 0.15 s of CPU of `gearlab validate` (issue 42). Any other type or value goes to Typer's own
+coercion, which gives the same result for these.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any, get_args, get_origin
 
 import typer
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
+
+try:  # Typer >= 0.2x coerces each value through a Pydantic adapter (typer._coercion)
+    from typer._coercion import RuntimeParam, build_runtime_param
+    from typer._param_types import coerce_cli_path
+except ImportError:  # an older Typer: click's own types, no Pydantic; nothing to take over
+    RuntimeParam = None
 
 HELP_NAMES = ["-h", "--help"]
 
@@ -31,7 +43,54 @@ def _type_name(param) -> str:
     return _CLICK_NAMES.get(getattr(annotation, "__name__", ""), "TEXT")
 
 
+_PLAIN = object()  # not a plain value: Typer's own coercion decides
+
+
+def _plain_value(descriptor, value, param, ctx):
+    """*value* as Typer's adapter would give it, where that is the value itself (a flag's
+    bool, a text's str) or `Path(value)` then Typer's own checks of a path; else _PLAIN."""
+    annotation, info = descriptor.annotation, descriptor.parameter_info
+    if descriptor.file_annotation is not None or getattr(info, "parser", None) is not None:
+        return _PLAIN
+    if annotation is bool and isinstance(value, bool):
+        return value
+    if annotation is str and type(value) is str:
+        return value
+    if annotation is Path and getattr(info, "path_type", None) is None and isinstance(value, (str, Path)):
+        return coerce_cli_path(Path(value), info, path_type=Path, param=param, ctx=ctx)
+    return _PLAIN
+
+
+if RuntimeParam is not None:
+
+    class _PlainFirst(RuntimeParam):
+        """A parameter's coercion: plain values here, the rest by Typer's adapter (built on first need)."""
+
+        def __init__(self, descriptor) -> None:
+            super().__init__(parameter_info=descriptor.parameter_info, annotation=descriptor.annotation)
+            object.__setattr__(self, "descriptor", descriptor)
+            object.__setattr__(self, "full", None)
+
+        def _coerce_value(self, value, param, ctx):
+            plain = _plain_value(self.descriptor, value, param, ctx)
+            if plain is not _PLAIN:
+                return plain
+            if self.full is None:
+                object.__setattr__(self, "full", build_runtime_param(self.descriptor))
+            return self.full._coerce_value(value, param=param, ctx=ctx)
+
+
+def _plain_first(param):
+    """A parameter's get_runtime_param: plain values first (_PlainFirst)."""
+    if param._runtime_param is None:
+        param._runtime_param = _PlainFirst(param.type_descriptor)
+    return param._runtime_param
+
+
 class ConventionalArgument(TyperArgument):
+    if RuntimeParam is not None:
+        get_runtime_param = _plain_first
+
     def display_type_rich(self, ctx) -> str | None:
         return _type_name(self)
 
@@ -41,6 +100,9 @@ class ConventionalArgument(TyperArgument):
 
 
 class ConventionalOption(TyperOption):
+    if RuntimeParam is not None:
+        get_runtime_param = _plain_first
+
     def display_type_rich(self, ctx) -> str | None:
         if self.is_bool_flag or self.is_flag:
             return None

@@ -1,6 +1,8 @@
 """Start-up: checking a scenario, `--help` and the TUI's first screen load no torch, no numba
 (the simulator's kernels), no scipy.stats or scipy.ndimage, sklearn or matplotlib (issue 42; docs/architecture.md:
-the modules that need them import them inside the functions that train, simulate or draw).
+the modules that need them import them inside the functions that train, simulate or draw), and no
+pydantic (Typer's coercion of a path, text or flag: gearlab.cliconv); the TUI's first screen loads
+no plotext, webbrowser or run comparison and fills no plugin table on its hidden tab.
 
 Each case runs in a fresh interpreter and reads its sys.modules afterwards, so what the rest of
 the suite imported does not hide an import."""
@@ -12,7 +14,7 @@ import sys
 import pytest
 from conftest import ROOT
 
-HEAVY = ("torch", "numba", "scipy.stats", "scipy.ndimage", "sklearn", "matplotlib")
+HEAVY = ("torch", "numba", "scipy.stats", "scipy.ndimage", "sklearn", "matplotlib", "pydantic")
 
 CASES = {
     # the README's command: `gearlab validate scenarios/quick.toml`
@@ -56,10 +58,17 @@ async def first_screen():
         no_rig = not Path("../shared/data/phm09").is_dir()  # the PHM 2009 scenarios' records, where present
         bad = [e.path for e in app.entries if not e.ok and not (no_rig and Path(e.path).name.startswith("phm09"))]
         assert app.entries and not bad, bad
+        assert not app.query_one("#plugin-table").row_count  # filled when its tab is first shown
+        later = [m for m in ("plotext", "webbrowser", "gearlab.compare") if m in sys.modules]
+        assert not later, later  # what only a chart, a report opened in a browser or a comparison needs
 
 asyncio.run(first_screen())
 """,
 }
+
+
+# `gearlab validate --help`, `gearlab run --help`: a command's own options are coerced too
+CASES["command help"] = CASES["help"].replace('"--help"', '"validate", "--help"')
 
 
 @pytest.mark.parametrize("case", list(CASES))
@@ -72,6 +81,45 @@ def test_start_up_loads_no_heavy_module(case):
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-3000:]
     assert json.loads(done.stdout.strip().splitlines()[-1]) == [], f"{case} imported them"
+
+
+def test_plain_values_are_coerced_as_typer_coerces_them(tmp_path):
+    """gearlab.cliconv takes a path, a text or a flag's bool as it is, Typer's Pydantic adapter
+    left unbuilt; each gives what Typer's own coercion gives, errors included, for every
+    parameter of every command, and any other value goes to Typer's coercion."""
+    typer_coercion = pytest.importorskip("typer._coercion")
+    from typer.main import get_command
+
+    from gearlab.cli import app
+    from gearlab.cliconv import _PlainFirst
+
+    group = get_command(app)
+    file = tmp_path / "a.toml"
+    file.write_text("")
+    values = ["scenarios/quick.toml", str(file), str(tmp_path), "no/such/file", "", "-", "x y", True, False, "3"]
+    seen = set()
+    for name, command in [("", group), *group.commands.items()]:
+        ctx = command.context_class(command)
+        for param in command.get_params(ctx):  # those Typer adds (--install-completion) included
+            descriptor = getattr(param, "type_descriptor", None)
+            if descriptor is None:
+                continue
+            plain = param.get_runtime_param()
+            assert isinstance(plain, _PlainFirst), (name, param.name)
+            full = typer_coercion.build_runtime_param(descriptor)
+            for value in values:
+                got, want = _outcome(plain, value, param, ctx), _outcome(full, value, param, ctx)
+                assert got == want, (name, param.name, value, got, want)
+            seen.add(getattr(descriptor.annotation, "__name__", str(descriptor.annotation)))
+    assert {"Path", "str", "bool", "int"} <= seen, seen  # the plain types and one that goes to Typer
+
+
+def _outcome(runtime, value, param, ctx):
+    try:
+        result = runtime.coerce(value, param=param, ctx=ctx)
+        return ("ok", type(result).__name__, result)
+    except Exception as exc:  # noqa: BLE001 - the error is the outcome compared
+        return ("error", type(exc).__name__, str(exc))
 
 
 def test_the_torch_free_network_settings_match_the_networks():

@@ -16,7 +16,6 @@ import json
 import os
 import signal
 import sys
-import webbrowser
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -30,7 +29,6 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
-from ..compare import compare_charts, compare_lines, compare_markdown, differences_text, load_runs
 from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
 from ..events import Event
@@ -532,6 +530,8 @@ class GearlabApp(App):
         if report is None or not report.is_file():
             self.notify("highlight a finished run (its report.html) first", severity="warning")
             return
+        import webbrowser  # on first use: not at the first screen's start (issue 42)
+
         if not webbrowser.open(report.resolve().as_uri()):
             self.notify(f"no web browser found; the report is {report}", severity="warning")
         else:
@@ -555,6 +555,8 @@ class GearlabApp(App):
         if len(paths) < 2:
             self.notify("mark two or more runs with m (in the tree), then C compares them", severity="warning")
             return
+        from ..compare import compare_charts, compare_lines, compare_markdown, differences_text, load_runs
+
         try:
             runs = load_runs(paths)
         except GearlabInputError as exc:

@@ -7,7 +7,6 @@ import math
 import re
 import textwrap
 
-import plotext
 from rich.console import Console
 from rich.text import Text
 from textual.binding import Binding
@@ -143,6 +142,8 @@ class ChartView(Static):
         return self.drawn[1]
 
     def _draw(self, chart: Chart, curves, head: str, width: int) -> Text:
+        import plotext  # on the first chart: not at the TUI's start (issue 42)
+
         plotext.clf()
         plotext.limitsize(False, False)  # the widget's size, not the terminal's (a test has none)
         plotext.plotsize(width, self.PLOT_HEIGHT)
@@ -161,6 +162,8 @@ class ChartView(Static):
 
     @staticmethod
     def _lines(chart: Chart, curves) -> None:
+        import plotext
+
         for i, curve in enumerate(curves):
             x, y = [float(v) for v in curve.x], [float(v) for v in curve.y]
             color = COLORS[i % len(COLORS)]
@@ -179,6 +182,8 @@ class ChartView(Static):
         names = [str(n) for n in chart.categories]
         values = [[float(v) for v in c.y] for c in curves]
         label = chart.ylabel
+        import plotext
+
         positive = [v for row in values for v in row if v > 0]
         if positive and min(v for row in values for v in row) >= 0 and max(positive) > 1e3 * min(positive):
             # values over many decades (a noise gap beside a mesh gap): bars of their logarithm,
