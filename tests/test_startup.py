@@ -49,7 +49,12 @@ except SystemExit as e:
     "tui": """
 import asyncio
 from pathlib import Path
+from rich.syntax import Syntax
 from gearlab.tui.app import GearlabApp
+
+drawn = []  # the scenario's TOML is drawn once per width (two: the scroll bar comes), not per layout pass
+_get_syntax = Syntax._get_syntax
+Syntax._get_syntax = lambda self, console, opts: drawn.append(opts.max_width) or _get_syntax(self, console, opts)
 
 async def first_screen():
     app = GearlabApp("scenarios")
@@ -61,6 +66,7 @@ async def first_screen():
         assert not app.query_one("#plugin-table").row_count  # filled when its tab is first shown
         later = [m for m in ("plotext", "webbrowser", "gearlab.compare") if m in sys.modules]
         assert not later, later  # what only a chart, a report opened in a browser or a comparison needs
+        assert len(drawn) == len(set(drawn)), drawn
 
 asyncio.run(first_screen())
 """,

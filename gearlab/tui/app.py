@@ -20,7 +20,6 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from rich.markup import escape
-from rich.syntax import Syntax
 from rich.text import Text
 from textual import work
 from textual.app import App, ComposeResult, SystemCommand
@@ -40,7 +39,7 @@ from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, 
 from .plugins import PluginsPane
 from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
-from .widgets import BrowserTree, ChartView, ResultTable
+from .widgets import BrowserTree, ChartView, ResultTable, TomlSyntax
 
 # Below this many columns the sidebar folds away while a run or results are on show.
 NARROW = 100
@@ -286,7 +285,7 @@ class GearlabApp(App):
             status.update(Text.assemble(("✗ invalid  ", "bold red"), entry.error))
             line = error_line(text, entry.error)
             marked = {line} if line else set()
-        toml.update(Syntax(text, "toml", line_numbers=True, highlight_lines=marked, word_wrap=True))
+        toml.update(TomlSyntax(text, highlight_lines=marked))
         if switch:
             self.switch_to("scenario")
 
