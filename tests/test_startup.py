@@ -64,7 +64,7 @@ async def first_screen():
         bad = [e.path for e in app.entries if not e.ok and not (no_rig and Path(e.path).name.startswith("phm09"))]
         assert app.entries and not bad, bad
         assert not app.query_one("#plugin-table").row_count  # filled when its tab is first shown
-        later = [m for m in ("plotext", "webbrowser", "gearlab.compare") if m in sys.modules]
+        later = [m for m in ("plotext", "webbrowser", "gearlab.compare", "gearlab.terminal") if m in sys.modules]
         assert not later, later  # what only a chart, a report opened in a browser or a comparison needs
         assert len(drawn) == len(set(drawn)), drawn
 

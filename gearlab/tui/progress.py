@@ -1,9 +1,10 @@
 """The Progress tab's stages: a line per stage with a bar, its counts, rate and ETA.
 
 Drawn from the run's 'stage' and 'advance' events with the terminal's own Pace and clock
-(gearlab.terminal), so the TUI and `gearlab run` say the same numbers. Nothing here moves by
-itself: the clock ticks once a second while a run is in progress and stops with it, and a
-stage that cannot count its steps says so in words instead of drawing an animated bar.
+(gearlab.events, those gearlab.terminal draws with), so the TUI and `gearlab run` say the
+same numbers. Nothing here moves by itself: the clock ticks once a second while a run is in
+progress and stops with it, and a stage that cannot count its steps says so in words instead
+of drawing an animated bar.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import Static
 
-from ..terminal import Pace, clock
+from ..events import Pace, clock  # not through gearlab.terminal: its rich.progress is not needed here
 
 BAR = 24  # cells of a stage's bar
 
