@@ -20,6 +20,7 @@ from typing import Annotated, get_type_hints
 import typer
 from rich.console import Console
 from rich.markup import escape
+from rich.table import Table
 
 from .cliconv import HELP_NAMES, ConventionalGroup, conventional
 from .errors import GearlabInputError
@@ -78,8 +79,6 @@ def plugins(as_json: Annotated[bool, typer.Option("--json", help="print a JSON l
         problems = [{"package": p.package, "plugin": p.plugin, "problem": p.message} for p in registry.problems]
         typer.echo(json.dumps(rows + [{"kind": "problem", **p} for p in problems], indent=1))
         return
-    from rich.table import Table
-
     table = Table(title="gearlab plugins")
     for col in ("kind", "name", "package", "parameters (unit, default, bounds)"):
         table.add_column(col)
@@ -701,8 +700,6 @@ def _print_scenario_differences(run_dirs: list[Path]) -> None:
     if not rows:
         console.print("scenarios: the same (apart from their names)", markup=False, highlight=False)
         return
-    from rich.table import Table
-
     table = Table(title=Text("scenario differences", style="bold"), title_justify="left")
     table.add_column("key")
     for i in range(len(run_dirs)):
