@@ -38,7 +38,7 @@ HEAVY_FIRST = (
 def pytest_configure(config):
     if getattr(config.option, "loadscopereorder", False):
         config.option.loadscopereorder = False  # xdist hands files out in the order below
-    try:  # one full collection at the session's end, not pytest's five (see gc_at_the_end)
+    try:  # one full collection at the session's end, not pytest's five (GC_AT_THE_END)
         from _pytest.unraisableexception import gc_collect_iterations_key
     except ImportError:  # another pytest: its own number
         return
