@@ -112,7 +112,8 @@ def test_gap_history_records_without_a_tacho(tmp_path, keys):
     X, speed, notes, fs, from_mesh, _ = read_history(records, lambda e: None)
     # 29 + 28 revolutions: the second record, shifted into register as one signal, gives up its last
     assert speed == pytest.approx(16.0, rel=1e-3) and fs == FS and X.shape == (57, 4096)
-    mesh = "speed followed on the mesh phase (from the mesh lines (512 Hz as 1×M1); box32), mean 16 Hz"
+    # the description's [operation] speed is the prior, as inspect takes it (gearbox.speed.follow_speed)
+    mesh = "speed followed on the mesh phase (from the mesh lines (512 Hz as 1×M1), declared 16 Hz; box32), mean 16 Hz"
     how = "nominal speed 16 Hz" if "speed" in keys else mesh
     assert how in notes[-1] and "(tacho)" not in notes[-1] and from_mesh == ("gearbox" in keys)
     # the second record, started 2.1 rad later, is turned into register with the first at a whole

@@ -60,7 +60,9 @@ TWO_PI = 2.0 * np.pi
 # "periodic" (steady_start) compares waveforms and needs a noise-free simulation: not offered.
 IMPORT_TRANSIENTS = ("stats", "none")
 # Bumped whenever the importer's output for the same file and options changes (cache keys).
-IMPORTER_VERSION = "3"  # 2: units from channel names, the steady-start warning; 3: no-tacho speed not followed on noise
+# 2: units from channel names, the steady-start warning; 3: no-tacho speed not followed on noise; 4: a no-tacho
+# record's speed read near the description's [operation] speed first, as inspect reads it
+IMPORTER_VERSION = "4"
 # Fewest samples a revolution may span (a wrapped angle advancing by π or more per sample
 # cannot even be unwrapped).
 _MIN_SAMPLES_PER_REV = 2

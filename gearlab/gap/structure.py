@@ -562,6 +562,13 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     # measured ... or a wheel upstream, differs' with an input tacho, 'stage 2 pinion: 49 teeth fit' with an output one)
     if tacho is not None and (line := outward_line(one, pair, max_order, tacho[1], record)):
         return line
+    # no tacho, the input's mesh where described: the stages as inspect reads such a record (its shaft's order
+    # not 1 by fiat), outward from the input; a later gear one tooth off is that gear, not another mesh order
+    # (68/103 + 82/99 described 68/104: 'mesh order 54.1 measured, 68 expected ... 20.4 % off', inspect named
+    # the 103-tooth wheel)
+    no_tacho = chain is not None and not chain.tacho_shaft  # a declared speed's too: refined on the mesh lines
+    if no_tacho and (line := _no_tacho_line(one, pair, max_order, record)):
+        return line
     if whole["differs"]:  # the input's mesh: records laid end to end are in register on its shaft
         record["mesh"] = whole | laid
         return mesh_line(whole, pair.Z1)
@@ -623,6 +630,22 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     box = _PairDescription.train(pair)
     stages = check_description(_lines(target, max_order), box, target.shape[0], tacho == 0, tacho)["stages"]
     found = outward(stages, box, tacho)
+    if found is None:
+        return None
+    record["outward"], line = found
+    return line
+
+
+def _no_tacho_line(target, pair, max_order: int, record: dict) -> str | None:
+    """outward_line of a multi-stage train's record without a tacho, read as inspect reads one (no shaft's
+    order given), from the input shaft, when inspect finds the first mesh where described; else None."""
+    from ..gearbox.match import check_description, outward
+
+    box = _PairDescription.train(pair)
+    stages = check_description(_lines(target, max_order), box, target.shape[0], False, None)["stages"]
+    if len(stages) < 2 or not stages[0].get("matched"):
+        return None
+    found = outward(stages, box, 0, "the input shaft (no tacho: its speed from the mesh lines)")
     if found is None:
         return None
     record["outward"], line = found

@@ -378,14 +378,15 @@ def check_description(
     return out | {"unresolved": unresolved}
 
 
-def outward(stages: list[dict], box: Gearbox, tacho: int) -> tuple[dict, str] | None:
+def outward(stages: list[dict], box: Gearbox, tacho: int, origin: str = "") -> tuple[dict, str] | None:
     """The first gear, read outward from the tacho's shaft (index *tacho*, after the input), whose tooth
     count check_description's *stages* (read with that tacho) contradict: ({stage, gear, seen, described},
     its line), or None. A stage's mesh, in orders of its shaft nearer the tacho, is that gear's count while
     every gear between is as described; the far gear's count is its shaft's sidebands of the mesh. A wrong
     gear puts every stage beyond it off (Q, 38/89 + 49/95 with an output tacho, described with a 48-tooth
     later pinion: the input read 2 % slow, stage 1's mesh at 37.2); the nearest stage first, the input's
-    side after the output's at one distance. The gap's structure check and inspect both read it."""
+    side after the output's at one distance. The gap's structure check and inspect both read it. *origin*:
+    what the reading starts from, where no tacho gives it (default: the tacho on its shaft)."""
     table = order_table(box)
     found = []
     for side in (range(tacho + 1, len(stages) + 1), range(tacho, 0, -1)):  # stage numbers, outward
@@ -415,8 +416,8 @@ def outward(stages: list[dict], box: Gearbox, tacho: int) -> tuple[dict, str] | 
     _, k, role, z, said, evidence = min(found, key=lambda f: f[:2])
     count = f"{round(z)}" if abs(z - round(z)) <= 0.25 else f"{z:.1f}"
     line = (
-        f"stage {k} {role}: {count} teeth fit the recording, {said} described; read outward from the tacho on the "
-        f"{table.shafts[tacho]} shaft, {evidence}, {said} expected"
+        f"stage {k} {role}: {count} teeth fit the recording, {said} described; read outward from "
+        f"{origin or f'the tacho on the {table.shafts[tacho]} shaft'}, {evidence}, {said} expected"
     )
     return {"stage": k, "gear": role, "seen": float(z), "described": int(said)}, line
 
