@@ -85,7 +85,7 @@ def test_both_mesh_orders_are_in_the_casing_spectrum(healthy):
 
 def test_the_16x_order_comes_from_the_second_mesh(sim, healthy, monkeypatch):
     """With a constant stage-2 stiffness (its mean) the odd multiples of 16 vanish; the 32T mesh stays."""
-    monkeypatch.setattr(sim, "_mesh_series", lambda i, shaft, per_rev: np.full(len(shaft), sim.mesh_means[i]))
+    monkeypatch.setattr(sim, "_mesh_series", lambda i, shaft, per_rev, start=0: np.full(len(shaft), sim.mesh_means[i]))
     flat = amplitudes(steady_revolution(sim, [], SPEED, LOAD, "casing_x"))
     a = amplitudes(healthy)
     assert flat[16] < 1e-6 * a[16] and flat[48] < 1e-6 * a[48]
