@@ -218,10 +218,8 @@ def inspect(
         str | None,
         typer.Option(help="vibration unit where its name and file say none: m/s^2, g, V, mV (+ --sensitivity)"),
     ] = None,
-    history: Annotated[
-        list[Path] | None,
-        typer.Option(help="healthy records of the same gearbox (repeat the option): localise the change (--gearbox)"),
-    ] = None,
+    history: Annotated[list[Path] | None, typer.Option(help="healthy records to localise the change against")] = None,
+    history_key: Annotated[list[str] | None, typer.Option(help="a history file's own key: [FILE:]KEY=VALUE")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
 ) -> None:
     """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts); with --history, which shaft and gear carry a localised change against those healthy records.
@@ -232,8 +230,8 @@ def inspect(
     from .notebook import inspect_recording
 
     # the recording's options are inspect_recording's keywords, by name (its checks name them by flag)
-    options = {k: v for k, v in ctx.params.items() if k not in ("file", "history", "as_json")}
-    report = inspect_recording(file, history=history or (), flag=_option, **options)
+    options = {k: v for k, v in ctx.params.items() if k not in ("file", "history", "history_key", "as_json")}
+    report = inspect_recording(file, history=history or (), history_keys=history_key, flag=_option, **options)
     if as_json:
         typer.echo(json.dumps(json_ready(report)))
         return

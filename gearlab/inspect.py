@@ -741,9 +741,10 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
     return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs
 
 
-def localisation(path: str, history: list[str], box: Gearbox, options: InspectOptions) -> dict:
+def localisation(path: str, history: list, box: Gearbox, options: InspectOptions) -> dict:
     """Which shaft and gear the record's synchronous average carries a localised change on, against
-    healthy *history* records of the same gearbox read with the same options: data.which_gear's one
+    healthy *history* records of the same gearbox, each a path read with the record's *options* or a
+    (path, its own InspectOptions) pair: data.which_gear's one
     decision, as a detection run and `gearlab score` make it (orders up to those every history record
     holds; a shaft's two gears by the description's simulated events at the record's speed and rate,
     where the history's mesh harmonics agree with the simulation's)."""
@@ -753,13 +754,24 @@ def localisation(path: str, history: list[str], box: Gearbox, options: InspectOp
         raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
     table = order_table(box)
     revs, first, _, _, speed, fs = _input_revolutions(path, box, options)
-    past = [_input_revolutions(p, box, options) for p in history]
+    read = [(h, options) if isinstance(h, str) else h for h in history]
+    past = []
+    for p, o in read:
+        try:
+            past.append(_input_revolutions(p, box, o))
+        except GearlabInputError as exc:
+            if o is not options:  # read with its own keys
+                raise
+            name = p.replace("\\", "/").rsplit("/", 1)[-1]
+            raise GearlabInputError(
+                f"{exc} (a history file read with the record's keys; its own: --history-key '{name}:vibration=NAME')"
+            ) from None
     takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
     tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
     pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
     hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
     out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
-    out["history"] = list(history)
+    out["history"] = [p for p, _ in read]
     return out
 
 

@@ -302,6 +302,7 @@ def inspect_recording(
     gearbox: Gearbox | str | Path | None = None,
     *,
     history: Sequence[str | Path] = (),
+    history_keys: Mapping[str, Mapping[str, str]] | Sequence[str] | None = None,
     flag=lambda key: key,
     **options,
 ) -> dict:
@@ -313,7 +314,10 @@ def inspect_recording(
     localised change (``localisation``). The arrays (``spectrum``, each ``tsa``) are kept. *options*:
     ``vibration``, ``tacho``, ``tacho_kind`` (auto, angle, pulses), ``pulses_per_rev``, ``tacho_shaft``,
     ``speed``, ``fs``, ``sensitivity``, ``gain``, ``unit``, as inspect_options checks them; *flag* names
-    a keyword in an error (the CLI passes its options).
+    a keyword in an error (the CLI passes its options). A history file is read with the same options but
+    for *history_keys*: {"": {key: value}} for every history file, {file name: {key: value}} for one (a
+    history logged in another format than the record, or in several, keeps each file's own channels), or
+    the texts KEY=VALUE, FILE:KEY=VALUE of `gearlab inspect --history-key`.
 
     >>> import numpy as np
     >>> t = np.arange(40_000) / 20e3
@@ -333,10 +337,67 @@ def inspect_recording(
         raise GearlabInputError(
             f"{flag('history')}: localising needs the gearbox's shafts and teeth; give {flag('gearbox')} too"
         )
+    if history_keys and not isinstance(history_keys, Mapping):
+        history_keys = parse_history_keys(history_keys, flag)
+    if history_keys and not history:
+        raise GearlabInputError(f"{flag('history_key')}: keys of {flag('history')} files; expected those files too")
     report = inspect_record(str(path), box, checked)
     if history:
-        report["localisation"] = localisation(str(path), [str(h) for h in history], box, checked)
+        read = _history_options([str(h) for h in history], history_keys or {}, options, flag)
+        report["localisation"] = localisation(str(path), read, box, checked)
     return report
+
+
+HISTORY_KEYS = ("vibration", "tacho", "tacho_kind", "pulses_per_rev", "tacho_shaft", "speed", "fs", "sensitivity")
+HISTORY_KEYS += ("gain", "unit")
+
+
+def _history_options(history: list[str], keys: Mapping[str, Mapping[str, str]], options: dict, flag) -> list:
+    """[(history file, InspectOptions)]: the record's *options* with *keys*' "" entry over them, then the
+    entry of the file's name (as given or its base name); a key or file name *keys* names wrongly: one line."""
+    names = {n for h in history for n in (h, Path(h).name)}
+    for name, table in keys.items():
+        where = flag("history_key") + (f" '{name}:...'" if name else "")
+        if name and name not in names:
+            listed = ", ".join(Path(h).name for h in history)
+            raise GearlabInputError(f"{where}: '{name}' is not a --history file; expected one of: {listed}")
+        for key in table:
+            if key not in HISTORY_KEYS:
+                raise GearlabInputError(
+                    f"{where}: unknown key {key!r}; expected KEY=VALUE, KEY one of {', '.join(HISTORY_KEYS)}"
+                )
+    out: list = []
+    for h in history:
+        own = {**keys.get("", {}), **keys.get(Path(h).name, {}), **keys.get(h, {})}
+        if not own:  # read as the record is
+            out.append(h)
+            continue
+        given = {**options, **own}
+        if isinstance(given.get("pulses_per_rev"), str):
+            text = given["pulses_per_rev"]
+            if not text.strip().isdigit():
+                raise GearlabInputError(
+                    f"{flag('history_key')} '{h}': pulses_per_rev = {text!r}; expected a whole number"
+                )
+            given["pulses_per_rev"] = int(text)
+        given = {k: (None if v == "" and k != "tacho_kind" else v) for k, v in given.items()}
+        out.append((h, inspect_options(flag=lambda key, h=h: f"{flag('history_key')} '{Path(h).name}:{key}'", **given)))
+    return out
+
+
+def parse_history_keys(texts: Sequence[str], flag=lambda key: key) -> dict[str, dict[str, str]]:
+    """`--history-key` texts, KEY=VALUE (every history file) or FILE:KEY=VALUE (that file), as
+    inspect_recording's *history_keys*."""
+    out: dict[str, dict[str, str]] = {}
+    for text in texts:
+        left, eq, value = text.partition("=")
+        name, _, key = left.rpartition(":")
+        if not eq or not key.strip():
+            raise GearlabInputError(
+                f"{flag('history_key')} {text!r}: expected KEY=VALUE or FILE:KEY=VALUE, e.g. vibration=acc_V"
+            )
+        out.setdefault(name.strip(), {})[key.strip()] = value.strip()
+    return out
 
 
 # --- the gap between a simulator and a target ------------------------------------------------------

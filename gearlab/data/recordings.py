@@ -786,7 +786,7 @@ def check_recording(
                 f"{did_you_mean(str(name), [str(c) for c in header.channels])}; the file has: "
                 f"{_listing(header.channels)}{index}"
             )
-        not_time((header.resolve(name),), header.channels, path, f"{where} key '{key}'")
+        header.check_channel(header.resolve(name), f"{where} key '{key}'", path)  # no time column, a series
     if not header.rate and fs is None:
         raise GearlabInputError(
             f"{where} key 'fs': missing; {path} carries no sampling rate (no 'fs' field, no time column such as "

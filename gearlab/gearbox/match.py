@@ -85,7 +85,9 @@ def comb(
     return spacing, tolerance, len(hits), {int(near[q]): abs(j) for j, q in hits}, score
 
 
-def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expected: float) -> tuple | None:
+def mesh_family(
+    lines: Lines, o_p: float, bin_: float, span: float, others, expected: float, o_w: float | None = None
+) -> tuple | None:
     """(mesh order, index of its strongest harmonic, the orders of its lines) of the harmonic family
     among a stage's lines, or None: a mesh's power can sit at harmonics 4-11 with its fundamental
     under the threshold (the B-6-ch5 source: orders 100, 175, 225, no line at 25). The lines: the
@@ -95,7 +97,9 @@ def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expe
     their power less what so dense a comb holds by chance (2 tol / M): a subharmonic M / k holds
     what M holds and loses, so the best is the gcd. The description's order is the prior: another
     family must hold FAMILY_MARGIN more of the power (even harmonics dominating are no gear of
-    twice the teeth)."""
+    twice the teeth). *o_w*: the wheel shaft's order where a tacho gives it: whole teeth on it count too
+    (111/157 + 115/173 with an output tacho, described with a 172-tooth last wheel: the intermediate shaft
+    read 0.6 % slow, stage 2's own family at 115.67 pinion teeth was refused and stage 1's, 158, taken)."""
     top = [
         q
         for q in range(min(EVIDENCE, lines.at.size))
@@ -124,8 +128,10 @@ def mesh_family(lines: Lines, o_p: float, bin_: float, span: float, others, expe
     for i in range(x.size):
         for h in range(1, MAX_HARMONIC + 1):
             m, hit = fit(x[i] / h, tol + tol[i] * x / x[i])
-            z = m / o_p
-            if hit.sum() < 2 or not 6 <= z <= 1000 or abs(z - round(z)) * o_p > tol_mesh(m, bin_):
+            whole = [
+                o for o in (o_p, o_w) if o and 6 <= m / o <= 1000 and abs(m / o - round(m / o)) * o <= tol_mesh(m, bin_)
+            ]
+            if hit.sum() < 2 or not whole:
                 continue
             candidate = scored(m, hit)
             if best is None or candidate[0] > best[0]:
@@ -241,7 +247,8 @@ def check_description(
         # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
         shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
         theirs = [(x, t) for x, t in shared if abs(x / expected - round(x / expected)) > 1e-9]
-        family = mesh_family(lines, o_p, bin_, span, theirs, expected)
+        o_tacho = measured_shaft[k + 1][0] if measured_shaft.get(k + 1, (0, 0, ""))[2] == "tacho" else None
+        family = mesh_family(lines, o_p, bin_, span, theirs, expected, o_tacho)
         i = None
         if lines.near(expected, tol_mesh(expected, bin_)) is not None:
             # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)? o: the
@@ -440,12 +447,28 @@ def outward_first(differences: list[str], stages: list[dict], box: Gearbox, tach
     def stage_of(text: str) -> int | None:
         return int(text.split(":", 1)[0].removeprefix("stage ")) if re.match(r"stage \d+:", text) else None
 
-    own = [t for t in differences if stage_of(t) == k] or [found[1]]
+    # its own items but those check_description reads as following from another stage (read inward from the
+    # input: a 111/157 + 115/173 box with an output tacho, described with a 172-tooth wheel, was told first
+    # 'stage 2: mesh order 81.78 measured, 81.31 expected, as follows from stage 1's difference')
+    role = found[0]["gear"]
+
+    def other_gear(text: str) -> bool:  # a count guessed for the stage's other gear than the one outward found
+        guess = re.search(r"\(an? \d+-tooth (pinion|wheel)\b", text)
+        return guess is not None and guess.group(1) != role
+
+    own = [t for t in differences if stage_of(t) == k and "as follows from" not in t and not other_gear(t)]
+    own = own or [found[1]]
     rest = []
     for text in (t for t in differences if stage_of(t) != k):
         j = stage_of(text)
-        beyond = j is not None and distance(j) > distance(k) and "as follows from" not in text
-        rest.append(f"{text}, as follows from stage {k}'s difference (read at the speed it moves)" if beyond else text)
+        if j is None or distance(j) <= distance(k):
+            rest.append(text)
+            continue
+        # beyond it: read at the speed its difference moves, so no other count is guessed there (the same box
+        # was also told 'stage 1: ... (a 112-tooth pinion on the input shaft? described 111)')
+        text = re.sub(r" \(an? \d+-tooth [^()]*\? described \d+\)", "", text)
+        text = re.sub(r", as follows from stages? [^']*'s differences?( \([^()]*\))?", "", text)
+        rest.append(f"{text}, as follows from stage {k}'s difference (read at the speed it moves)")
     differences[:] = own + rest
     return found[0]
 

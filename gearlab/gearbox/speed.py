@@ -231,9 +231,25 @@ def speed_from_mesh(
                 ),
             )
         best = max(near, key=lambda h: h[0])
+        swapped = False
+        if (
+            best not in confirmed
+            and len(table.stages) > 1
+            and not sidebands_confirm(lines, best[1], table.stages[0], df)
+        ):
+            # within ±1 % too: a later stage whose described count is off by one reads a speed 0.9 % away
+            # (111/157 + 115/173 at +1.2 %, described with a 116-tooth second pinion: stage 2's lines read
+            # 40.13 Hz, which leaves stage 1's mesh unexplained; the input pinion's sidebands confirm 40.48)
+            sure = [h for h in confirmed if h is not best] or [
+                h
+                for h in sorted(near, key=lambda h: -h[0])[:4]
+                if abs(h[1] / best[1] - 1) > SPEED_AGREE and sidebands_confirm(lines, h[1], table.stages[0], df)
+            ]
+            if sure:
+                best, swapped = max(sure, key=lambda h: h[0]), overall not in sure
         # a speed the input pinion's sidebands confirm outweighs a better fit they do not, beyond ±1 %
         unconfirmed = overall not in confirmed and abs(overall[1] / declared - 1) > DECLARED_RANGE
-        if best[0] < AMBIGUOUS * overall[0] and not (best in confirmed and unconfirmed):
+        if best[0] < AMBIGUOUS * overall[0] and not (best in confirmed and unconfirmed) and not swapped:
             return (
                 declared,
                 "declared",

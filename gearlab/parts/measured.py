@@ -76,8 +76,9 @@ class Target:
 
     @property
     def read_as(self) -> str | None:
-        """The shaft the tacho is read as (the gap's Chain.tacho_shaft); None: no tacho."""
-        return None if self.tacho is None else self.tacho_shaft.name if self.tacho_shaft else "input"
+        """The shaft the tacho is read as (the gap's Chain.tacho_shaft); None: not every record has one (each
+        file's own tacho counts: a history of per-file tachos was read 'no tacho: its speed from the mesh lines')."""
+        return None if not self.tacho_all else self.tacho_shaft.name if self.tacho_shaft else "input"
 
     def read(self, file: TargetFile):
         """One of the target's records, read through the one import path (any format) with its

@@ -5,6 +5,8 @@ field or a time vector), which channels hold integers."""
 from __future__ import annotations
 
 import csv
+import math
+import re
 import struct
 import zipfile
 from dataclasses import dataclass, field
@@ -13,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, is_rate_or_time
+from .base import _RATE_NAMES, is_rate_or_time, not_time
 
 
 @dataclass(frozen=True)
@@ -30,10 +32,13 @@ class Header:
     nested: bool = False  # channels are paths ("group/acc"), found by their last part alone too
     stated: tuple[float, str] | None = None  # the rate the header states (Hz) and where: a WAV's, an attribute
     stated_within: float = 1e-6  # relative: a rate read off a text's printed times is known to their digits
+    shapes: dict[str, tuple] = field(default_factory=dict)  # each array's shape, where the header gives it
 
     def check_rate(self, fs: float | None, where: str, path) -> None:
         """A rate given (*fs*, Hz) that the header's own contradicts: one line naming *where*'s 'fs'
-        (a WAV at 48 kHz or an HDF5 'fs' attribute against `fs = "50 kHz"`: validate said OK)."""
+        (a WAV at 48 kHz or an HDF5 'fs' attribute against `fs = "50 kHz"`: validate said OK); none given,
+        one the header holds that cannot be a rate (check_rates)."""
+        self.check_rates(fs, where, path)
         if fs is None or self.stated is None or abs(fs - self.stated[0]) <= self.stated_within * self.stated[0]:
             return
         from ...signals.checks import fmt_hz
@@ -42,6 +47,34 @@ class Header:
             f"{where} key 'fs': {fmt_hz(fs)} given, but {path} says {fmt_hz(self.stated[0])} ({self.stated[1]}); "
             "expected the file's own rate, or no 'fs'"
         )
+
+    def check_channel(self, name: str, where: str, path) -> None:
+        """A channel that is the time or rate column (not_time), or that the header shows is no series (an HDF5
+        (N, 2) array, a single value): one line naming *where*."""
+        not_time((name,), self.channels, path, where)
+        shape = self.shapes.get(name)
+        if shape is not None and (sum(n > 1 for n in shape) > 1 or math.prod(shape) <= 1):
+            held = "a single value" if math.prod(shape) <= 1 else f"an array of shape {shape}"
+            raise GearlabInputError(
+                f"{where}: {path}'s '{name}' holds {held}; expected one channel over time (a 1-D array)"
+            )
+
+    def check_rates(self, fs: float | None, where: str, path) -> None:
+        """A rate the header holds that cannot be one (an 'fs' of several values, 0 Hz), where no *fs* given
+        replaces it: one line naming *where*'s 'fs' (validate said OK; the run refused it)."""
+        if fs is not None:
+            return
+        for name, shape in self.shapes.items():
+            if name.rsplit("/", 1)[-1].lower() in _RATE_NAMES and math.prod(shape) != 1:
+                raise GearlabInputError(
+                    f"{where} key 'fs': {path}'s rate field {name!r} holds {math.prod(shape)} values; expected one "
+                    "rate in Hz (or fs = '...' here)"
+                )
+        if self.stated is not None and not self.stated[0] > 0:
+            raise GearlabInputError(
+                f"{where} key 'fs': {path} states a rate of {self.stated[0]:g} Hz ({self.stated[1]}); expected a "
+                "positive rate in Hz (or fs = '...' here)"
+            )
 
     def find(self, name: str) -> bool:
         if name in self.channels or self.resolve(name) in self.channels:
@@ -128,15 +161,21 @@ def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
 
 def _text_header(path: Path, fmt: str) -> Header:
     from .csv import header_names
-    from .text import first_row
+    from .text import comment_fields, first_row
 
     header, width = first_row(path)
     names = header_names(header, width)
-    return Header(fmt, names, any(is_rate_or_time(n) for n in names), indexed=True)
+    fields = {k: v for k, v in comment_fields(path).items() if k not in names}
+    rates = [(k, v) for k, v in fields.items() if k.lower() in _RATE_NAMES]
+    stated = None
+    if rates and isinstance(rates[0][1], (int, float)):
+        stated = (float(rates[0][1]), f"its '# {rates[0][0]}' line")
+    every = [*names, *fields]
+    return Header(fmt, every, any(is_rate_or_time(n) for n in every), indexed=True, stated=stated)
 
 
 def _npz_header(path: Path) -> Header:
-    names, integer = [], set()
+    names, integer, shapes = [], set(), {}
     with zipfile.ZipFile(path) as archive:
         for info in archive.infolist():
             if not info.filename.endswith(".npy"):
@@ -146,10 +185,11 @@ def _npz_header(path: Path) -> Header:
             with archive.open(info) as f:
                 version = np.lib.format.read_magic(f)
                 read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-                _, _, dtype = read(f, max_header_size=10_000)
+                shape, _, dtype = read(f, max_header_size=10_000)
+            shapes[name] = tuple(shape)
             if dtype.kind in "iu":
                 integer.add(name)
-    return Header("NPZ", names, any(is_rate_or_time(n) for n in names), frozenset(integer))
+    return Header("NPZ", names, any(is_rate_or_time(n) for n in names), frozenset(integer), shapes=shapes)
 
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
@@ -174,7 +214,12 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
             for k, v in f[n].attrs.items():
                 if str(k).lower() in _RATE_NAMES and np.size(v) == 1 and np.asarray(v).dtype.kind in "iuf":
                     stated = stated or (float(np.asarray(v).item()), f"attribute {k!r} of {n!r}")
-    return Header(fmt, names, rate, frozenset(integer), units=units, nested=True, stated=stated)
+        shapes = {n: tuple(f[n].shape) for n in names}
+    return Header(fmt, names, rate, frozenset(integer), units=units, nested=True, stated=stated, shapes=shapes)
+
+
+WAV_CODINGS = (1, 3)  # PCM, IEEE float: what the WAV reader (scipy) decodes
+WAV_CODINGS_SEEN = {2: "Microsoft ADPCM", 6: "A-law", 7: "mu-law", 17: "IMA ADPCM", 85: "MP3"}
 
 
 def _wav_header(path: Path) -> Header:
@@ -197,6 +242,11 @@ def _wav_header(path: Path) -> Header:
                 names = [str(i) for i in range(channels)]
                 if tag == 0xFFFE and len(body) >= 26:  # the extensible format's own sub-format tag
                     tag = struct.unpack(order + "H", body[24:26])[0]
+                if tag not in WAV_CODINGS:  # a compressed coding (ADPCM, mu-law, MP3...): the reader has none
+                    raise ValueError(
+                        f"its samples are coded as {WAV_CODINGS_SEEN.get(tag, f'format tag {tag}')}; expected PCM "
+                        "(integer) or IEEE float samples (convert it, e.g. to a 24-bit PCM WAV)"
+                    )
                 integer = frozenset(names) if tag == 1 else frozenset()  # 1: PCM (3: IEEE float)
                 header = Header("WAV", names, True, integer, indexed=True, stated=(float(rate), "the WAV header"))
                 f.seek(size + (size & 1) - len(body), 1)
@@ -241,6 +291,9 @@ HEADERS = {
 }
 
 
+INDEX_NAME = re.compile(r"(?i)^(sample|samples|sample ?(#|no\.?|nr\.?|number|index)|index|idx|n|no\.?|nr\.?|#|point)$")
+
+
 def time_hint(path, rows: int = 2000) -> str:
     """For a headerless text record whose column 0 rises by a constant step (as a time column
     does), a clause saying so and how to give the rate ('' otherwise): its first *rows* read."""
@@ -266,13 +319,24 @@ def time_hint(path, rows: int = 2000) -> str:
         table = split_rows(lines, delimiter_of(lines[0])) if lines else []
     except csv.Error:
         return ""
-    if len(table) < 3 or is_header(table[0]) or any(not row for row in table):
+    if len(table) < 3 or any(not row for row in table):
         return ""
-    t = _column([row[0] for row in table])
-    if t.dtype.kind != "f" or not np.all(np.diff(t) > 0):
+    named = is_header(table[0])
+    if named and not INDEX_NAME.match(table[0][0].strip()):
+        return ""
+    t = _column([row[0] for row in table[named:]])
+    if t.dtype.kind != "f" or t.size < 2 or not np.all(np.diff(t) > 0):
         return ""
     step = (t[-1] - t[0]) / (t.size - 1)
     if np.max(np.abs(t - t[0] - step * np.arange(t.size))) > step / 2:  # printed rounding, not a constant step
+        return ""
+    if step == 1 and t[0] == round(t[0]):  # 0, 1, 2, ...: the samples counted, which says no rate
+        column = f"'{table[0][0].strip()}'" if named else "0"
+        return (
+            f"; its column {column} counts the samples ({t[0]:.0f}, {t[0] + 1:.0f}, {t[0] + 2:.0f}, ...), not the "
+            "time: expected the rate the logger sampled at, e.g. fs = '51.2 kHz' (--fs '51.2 kHz')"
+        )
+    if named:
         return ""
     rate = fmt_hz(1 / step)
     return (

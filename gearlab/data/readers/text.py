@@ -274,10 +274,31 @@ def first_row(path) -> tuple[list[str] | None, int]:
     raise GearlabInputError(f"{where}: no rows of numbers; expected one row per sample, columns separated by blanks")
 
 
+def comment_fields(path) -> dict[str, object]:
+    """The '# key = value' lines above a text record's first row ('# fs = 48000' gives a field 'fs'), as a
+    CSV's are read."""
+    from .base import _scalar
+    from .csv import _COMMENT_FIELD
+
+    fields: dict[str, object] = {}
+    with _open_text(Path(path)) as (stream, _):
+        for line in stream:
+            text = line.decode("utf-8-sig", "replace").strip()
+            if not text:
+                continue
+            if not text.startswith("#"):
+                break
+            match = _COMMENT_FIELD.match(text)
+            if match:
+                fields[match.group(1)] = _scalar(match.group(2))
+    return fields
+
+
 def _read_text(path: Path, names: Sequence[str]) -> Contents:
-    """The asked-for columns (by header name or 0-based index) and any time column."""
+    """The asked-for columns (by header name or 0-based index), any time column and '# key = value' lines."""
     header, width = first_row(path)
     columns = header_names(header, width)
+    fields = {k: v for k, v in comment_fields(path).items() if k not in columns}
     wanted = [n for n in dict.fromkeys(names) if column_index(n, columns) is not None]
     wanted += [c for c in columns if time_scale(c) is not None and c not in wanted]
     found = {}
@@ -285,4 +306,6 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
         read, _, _ = read_columns(path, [column_index(n, columns) for n in wanted])
         found = {n: read[column_index(n, columns)] for n in wanted}
     asked = [n for n in wanted if n not in columns]
-    return _keyed([*columns, *asked], lambda n: found[n], names, listed=columns)
+    return _keyed(
+        [*columns, *fields, *asked], lambda n: found[n] if n in found else fields[n], names, [*columns, *fields]
+    )
