@@ -227,6 +227,47 @@ def test_chart_legends_are_under_the_plot(size, bars):
     asyncio.run(main())
 
 
+def test_a_chart_is_drawn_again_only_for_new_content_heading_or_width(monkeypatch):
+    """A run opened again gives a new Chart of the same numbers: drawn once (plotext takes up to
+    0.3 s a chart; test_tui_edges drew 26 of its 45 charts twice); any float, label, heading or
+    width changed draws anew."""
+    from gearlab.tui import widgets
+
+    monkeypatch.setattr(widgets, "DRAWN", type(widgets.DRAWN)())
+    drawn = []
+    real = ChartView._draw
+
+    def counted(self, chart, curves, head, width):
+        drawn.append((head, width))
+        return real(self, chart, curves, head, width)
+
+    monkeypatch.setattr(ChartView, "_draw", counted)
+
+    def chart(y=(1.0, 3.0, 2.0), label="a", title="t"):
+        return Chart(title, "x", "y", (Curve(label, [0, 1, 2], list(y)), Curve("b", [0, 1, 2], [2, 2, 2])))
+
+    def render(chart, place="", width=60):
+        class Sized(ChartView):
+            size = Region(0, 0, width, 20).size
+
+        view = Sized()
+        view.chart, view.place = chart, place
+        return view.render()
+
+    first = render(chart())
+    assert render(chart()) is first and drawn == [("t", 60)]  # the same numbers in another Chart: kept
+    others = [chart(y=(1.0, 3.0, 2.0 + 1e-12)), chart(label="c"), chart(title="u")]
+    for n, other in enumerate(others, start=2):
+        render(other)
+        assert len(drawn) == n  # one float, a label, the title: drawn anew
+    render(chart(), place="chart 2/3")
+    render(chart(), width=80)
+    assert drawn[-2:] == [("chart 2/3: t", 60), ("t", 80)]
+    assert render(chart(label="c")).plain and len(drawn) == 6
+    widgets.DRAWN.clear()
+    assert render(chart()).plain == first.plain and len(drawn) == 7
+
+
 # ----------------------------------------------------------------------------- plugins
 
 

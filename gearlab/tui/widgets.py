@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 import re
 import textwrap
+from collections import OrderedDict
 
+import numpy as np
 from rich.console import Console
 from rich.syntax import Syntax
 from rich.text import Text
@@ -125,6 +127,25 @@ class TomlSyntax(Syntax):
         yield from self._drawn[key]
 
 
+# The charts drawn last, by what they show (drawn_key), heading and width: a run opened again, or a
+# width seen before, is not drawn again (issue 42: test_tui_edges drew 26 of its 45 charts a second
+# time, 2.5 of its 4.2 s of plotext).
+DRAWN: OrderedDict[tuple, Text] = OrderedDict()
+DRAWN_KEPT = 32
+
+
+def drawn_key(chart: Chart, curves) -> tuple:
+    """What ChartView._draw reads of *chart* and its drawable *curves*: their floats as bytes."""
+
+    def floats(values) -> bytes | None:
+        return None if values is None else np.asarray([float(v) for v in values]).tobytes()
+
+    ticks = None if chart.xticks is None else repr(list(chart.xticks))  # plotext's labels: as given
+    names = None if chart.categories is None else tuple(str(n) for n in chart.categories)
+    lines = tuple((c.label, floats(c.x), floats(c.y), floats(c.err)) for c in curves)
+    return chart.title, chart.xlabel, chart.ylabel, ticks, names, lines
+
+
 class ChartView(Static):
     """One chart drawn with plotext to the widget's width, its legend under the plot (plotext
     draws its own over the curves' top left corner, hiding them); `notes` say what could not
@@ -155,11 +176,23 @@ class ChartView(Static):
             return Text(f"{head}: " + ("; ".join(chart.notes) or "nothing to draw yet"), style="dim")
         width = max(self.size.width, 20)
         # plotext takes a tenth of a second or more for a long curve, and Textual renders a
-        # widget of auto height for its layout and again to draw it: drawn once per chart and width
+        # widget of auto height for its layout and again to draw it: drawn once per chart and width,
+        # and a chart of the same content at a width seen before not again (DRAWN)
         key = (id(chart), self.place, width)
         if self.drawn is None or self.drawn[0] != key:
-            self.drawn = (key, self._draw(chart, curves, head, width), chart)
+            self.drawn = (key, self._drawn(chart, curves, head, width), chart)
         return self.drawn[1]
+
+    def _drawn(self, chart: Chart, curves, head: str, width: int) -> Text:
+        key = (drawn_key(chart, curves), head, width, self.PLOT_HEIGHT)
+        drawing = DRAWN.get(key)
+        if drawing is None:
+            drawing = DRAWN[key] = self._draw(chart, curves, head, width)
+            while len(DRAWN) > DRAWN_KEPT:
+                DRAWN.popitem(last=False)
+        else:
+            DRAWN.move_to_end(key)
+        return drawing
 
     def _draw(self, chart: Chart, curves, head: str, width: int) -> Text:
         import plotext  # on the first chart: not at the TUI's start (issue 42)
