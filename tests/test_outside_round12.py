@@ -203,3 +203,34 @@ def test_a_history_of_per_file_tachos_is_read_as_a_tacho_on_its_shaft(tmp_path):
         {"file": "b.csv", "role": "history", "label": "healthy", "vibration": "vib", "tacho": "pulse"},
     ]
     assert target_spec(table, "s.toml: [target]", tmp_path, need=("history",)).read_as == "input"
+
+
+def test_a_file_takes_no_sensitivity_of_the_target_with_an_empty_one(tmp_path, cli):
+    # S's history in volts at 100 mV/g ([target] sensitivity), a test file from another logger in m/s² (an HDF5
+    # 'unit' attribute): 'tacho = ""' un-sets the target's tacho on a file, but 'sensitivity = ""' was refused
+    # ("cannot read '' as a quantity") and without it the m/s² file was refused ('an acceleration already').
+    import h5py
+
+    from gearlab.parts.measured import target_spec
+
+    x = np.sin(np.arange(4000) * 0.3)
+    (tmp_path / "h.csv").write_text("time_s,acc_V\n" + "".join(f"{i / 8000:.6f},{v:.5f}\n" for i, v in enumerate(x)))
+    with h5py.File(tmp_path / "t.h5", "w") as f:
+        f.create_dataset("vib", data=x).attrs["unit"] = "m/s^2"
+        f.attrs["fs"] = 8000.0
+    (tmp_path / "k.toml").write_text(description(stage(105, 143, "1 mm", "12 mm"), speed="25 Hz", load="30 N*m"))
+    files = '[{ file = "h.csv", role = "history", label = "healthy" }, '
+    files += '{ file = "t.h5", role = "test", label = "fault", vibration = "vib", sensitivity = "" }]'
+    text = '[scenario]\nname = "s"\nkind = "detection"\n[source]\ngearbox = "k.toml"\nfaults = { chip = [20] }\n'
+    text += f'[target]\nvibration = "acc_V"\nsensitivity = "100 mV/g"\nspeed = "25 Hz"\nfiles = {files}\n'
+    (tmp_path / "s.toml").write_text(text)
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 0, (out, err)
+    table = {"vibration": "acc_V", "tacho": None, "pulses_per_rev": None, "speed": "25 Hz", "transient": "stats"}
+    table |= {"positive": "fault", "sensitivity": "100 mV/g", "gain": None, "unit": None, "fs": None}
+    table["files"] = [
+        {"file": "h.csv", "role": "history", "label": "healthy"},
+        {"file": "t.h5", "role": "test", "label": "fault", "vibration": "vib", "sensitivity": ""},
+    ]
+    target = target_spec(table, "s.toml: [target]", tmp_path)
+    assert target.keys_of(target.files[1])["sensitivity"] is None and target.keys_of(target.files[0])["sensitivity"]
