@@ -138,8 +138,9 @@ def speed_from_mesh(
     beats = (a > b) | ((a == b) & before)
     rival = np.where(beats, dist, np.inf).min(axis=0, initial=np.inf)
 
-    def explain(f: float, slack: np.ndarray, mesh_only: bool = False) -> tuple:
-        """At input speed *f*: (the evidence of each line, whether it lies on a mesh harmonic, that
+    def explain(f: np.ndarray, slack: np.ndarray, mesh_only: bool = False) -> tuple:
+        """At each input speed f[k] (one row k a hypothesis, all at once: the same sums and comparisons
+        as one at a time): (the evidence of each line, whether it lies on a mesh harmonic, that
         harmonic's order h M, the stages with a carrier on a mesh harmonic). A line is explained by
         a mesh harmonic h M (h up to MAX_HARMONIC: a simulated mesh can hold its power at harmonics
         4-11 with no line at M), by a sideband h M ± j o (j ≤ 3, either shaft of the stage) or by a
@@ -147,31 +148,35 @@ def speed_from_mesh(
         the explaining comb covers (2 slack / spacing, the sidebands' windows counted once): a
         comb dense enough to hold any line is no evidence, and a speed f / k, which explains
         every line f does with k times the coverage, has less. *mesh_only*: (whether on a mesh
-        harmonic, its order) alone, the same ones (the refit reads nothing else)."""
-        evidence = np.zeros(x.size)
-        on_mesh, hm = np.zeros(x.size, bool), np.zeros(x.size)
-        stages = 0
+        harmonic, its order) alone, the same ones (the refit reads nothing else). *slack*: per
+        line, or per hypothesis and line."""
+        f = f[:, None]
+        slack = np.broadcast_to(slack, (f.shape[0], x.size))
+        evidence = np.zeros(slack.shape)
+        on_mesh, hm = np.zeros(slack.shape, bool), np.zeros(slack.shape)
+        stages = np.zeros(f.shape[0], int)
 
         def credit(near: np.ndarray, cover: np.ndarray) -> None:
-            evidence[:] = np.maximum(evidence, np.where(near, np.log(1.0 / np.maximum(cover, 1e-12)), 0.0))
+            np.maximum(evidence, np.where(near, np.log(1.0 / np.maximum(cover, 1e-12)), 0.0), out=evidence)
 
         per_f = x / f
         for m, offsets, zero, diffs, span in combs:
             inside = x <= (MAX_HARMONIC + 0.5) * m * f  # beyond, no harmonic of this mesh is read
-            # every offset (row) at once: the nearest harmonic h M + off of each line (column)
+            # every offset (axis 1) at once: the nearest harmonic h M + off of each line (axis 2)
             offs = offsets[zero : zero + 1] if mesh_only else offsets
-            h = np.maximum(1.0, np.round((per_f - offs[:, None]) / m))
-            near = (np.abs(x - (h * m + offs[:, None]) * f) <= slack) & inside
+            h = np.maximum(1.0, np.round((per_f[:, None, :] - offs[:, None]) / m))
+            near = (np.abs(x - (h * m + offs[:, None]) * f[:, :, None]) <= slack[:, None, :]) & inside[:, None, :]
             row = 0 if mesh_only else zero
-            on = near[row]  # the mesh harmonics themselves (offset 0)
-            hm = np.where(on & ~on_mesh, h[row] * m, hm)
+            on = near[:, row]  # the mesh harmonics themselves (offset 0)
+            hm = np.where(on & ~on_mesh, h[:, row] * m, hm)
             on_mesh |= on
             if mesh_only:
                 continue
             credit(on, 2 * slack / (m * f))
-            stages += bool(np.any(on & (span * f < rival)))
+            stages += np.any(on & (span * f < rival), axis=1)
             gaps = diffs * f
-            credit(near.any(axis=0), (2 * slack + np.minimum(gaps[None, :], 2 * slack[:, None]).sum(axis=1)) / (m * f))
+            sidebands = np.minimum(gaps[:, None, :], 2 * slack[:, :, None]).sum(axis=2)
+            credit(near.any(axis=1), (2 * slack + sidebands) / (m * f))
         if mesh_only:
             return on_mesh, hm
         for o in table.shaft_orders:
@@ -180,25 +185,32 @@ def speed_from_mesh(
             credit(near, 2 * slack / spacing)
         return evidence, on_mesh, hm, stages
 
-    hypotheses = []
+    tried = []  # (line, stage, harmonic, speed) of each hypothesis
     for i in range(min(12, x.size)):
         for s in table.stages:
             for h in range(1, MAX_HARMONIC + 1):
                 f = x[i] / (h * float(s.mesh))
                 if f * slowest < 2 * df:  # a shaft line the record cannot resolve: higher h only lower f
                     break
-                # the hypothesis's own error grows with the harmonic: explained within it, refitted by
-                # least squares over the mesh harmonics (f = Σ w L hM / Σ w (hM)²), explained again
-                on_mesh, hm = explain(f, tol + tol[i] * x / x[i], mesh_only=True)
-                if on_mesh.any():
-                    w = weight[on_mesh]
-                    f = float(np.sum(w * x[on_mesh] * hm[on_mesh]) / np.sum(w * hm[on_mesh] ** 2))
-                evidence, _, _, stages = explain(f, tol)
-                if not stages:
-                    continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
-                hypotheses.append(
-                    (float(np.sum(weight * evidence)), f, f"{fmt_hz(x[i])} as {h}×M{s.index}", s.index, x[i] / h)
-                )
+                tried.append((i, s, h, f))
+    hypotheses = []
+    if tried:
+        # the hypothesis's own error grows with the harmonic: explained within it, refitted by least
+        # squares over the mesh harmonics (f = Σ w L hM / Σ w (hM)²), explained again
+        at = np.array([i for i, _, _, _ in tried])
+        speeds = [f for _, _, _, f in tried]
+        on_mesh, hm = explain(np.array(speeds), tol + tol[at][:, None] * x / x[at][:, None], mesh_only=True)
+        for k in np.flatnonzero(on_mesh.any(axis=1)):
+            w, on = weight[on_mesh[k]], on_mesh[k]
+            speeds[k] = float(np.sum(w * x[on] * hm[k][on]) / np.sum(w * hm[k][on] ** 2))
+        evidence, _, _, stages = explain(np.array(speeds), tol)
+        for k, (i, s, h, _) in enumerate(tried):
+            if not stages[k]:
+                continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
+            hypotheses.append(
+                (float(np.sum(weight * evidence[k])), speeds[k], f"{fmt_hz(x[i])} as {h}×M{s.index}", s.index, x[i] / h)
+            )
+
     if declared is not None:
         # the declared speed, refined by the best hypothesis near it, unless the lines fit another speed
         # much better: a few weak lines always fit within ±1 % as some harmonic, and a wrong tooth count
