@@ -116,6 +116,7 @@ from .detection_records import (
     unaligned_why,
     unit_mesh_orders,
     unit_shaft,
+    watched_teeth,
 )
 from .detection_scoring import score as score  # the kind's `gearlab score` (engine.score_recordings)
 from .detection_scoring import score_trends, store_scoring
@@ -204,9 +205,11 @@ def methods_of(entries: list[dict], where: str) -> tuple[Method, ...]:
 def build(scenario: Scenario) -> Spec:
     t = scenario.tables
     path = scenario.path
-    source = simulated_spec(t["source"], location(path, "source"), scenario.base)
+    written = scenario.raw.get("source") or {}  # a user's box: its watched gear's teeth sized (watched_teeth)
+    source = watched_teeth(simulated_spec(t["source"], location(path, "source"), scenario.base), written)
     cor = typed(Corrected, t["corrected"])
     corrected = corrected_spec(cor, t["source"], location(path, "corrected"), scenario.base, source)
+    corrected = corrected if corrected is None else watched_teeth(corrected, written)
     sizes = class_sizes(source, location(path, "source"))
     if not sizes["healthy"] or sum(sizes.values()) == sizes["healthy"]:
         raise GearlabInputError(
@@ -383,6 +386,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         shaft = unit_shaft(spec.source)
         if shaft is not None:
             on_event(Event("log", message=f"units: revolutions and TSAs of {shaft.said()}"))
+        if spec.source.teeth is not None and "teeth" not in (scenario.raw.get("source") or {}):
+            teeth = ", ".join(map(str, spec.source.teeth))
+            on_event(Event("log", message=f"the watched gear simulated on teeth {teeth} (watched_teeth)"))
         where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
         conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous, executor)
         if isinstance(executor, Executor):  # what the trainings load first, loaded while they are prepared

@@ -47,11 +47,44 @@ class UnitShaft:
 
     def revolutions(self, revs: np.ndarray, max_order: float | None = None) -> np.ndarray:
         """This shaft's complete revolutions from a record's consecutive input revolutions *revs*
-        (no input order above *max_order*: signals.shaft)."""
-        return shaft_revolutions(revs, float(self.ratio), 0.0, revs.shape[-1], max_order)
+        (no input order above *max_order*: signals.shaft), the input shaft's own content out first
+        (without_input_shaft)."""
+        return unit_revolutions(revs, self.ratio.numerator, self.ratio.denominator, max_order)
 
     def said(self) -> str:
         return f"the {self.name} shaft ({self.gear}; {float(self.ratio):.4g} turns per input turn)"
+
+
+# Fewest revolutions of the units' shaft a record needs for the input shaft's own content to be taken
+# out of it (without_input_shaft): the input TSA then holds that shaft's content at 1/30 or less.
+OTHER_SHAFT_TURNS = 30
+
+
+def without_input_shaft(revs: np.ndarray, p: int, q: int) -> np.ndarray:
+    """A record's consecutive input revolutions *revs* less what their average (the input TSA) holds at
+    the input orders that are no whole order of a shaft turning p/q per input turn (p, q coprime: the
+    input orders that are no multiple of p): the input shaft's own runout and mesh sidebands, which
+    that shaft's TSA averages away only over many of its turns. A 54/107 reducer's output shaft
+    (development box K) sees the input's second order at 1.981 of its own: a TSA of 30 output turns
+    keeps it at 0.57 of a cycle of drift, the healthy record30 units' residual rms 0.162 m/s^2 where
+    the chip's signature is 0.038 (FM4 of healthy and chipped units 5.5-7.2 alike); with it taken out,
+    0.071, and the chipped units' kurtosis 7-40 against the healthy 4.4-5.3 (generator truth angles,
+    12 takes each). The mesh harmonics (whole orders of both shafts) and the units' shaft's own
+    content stay; a record of fewer than OTHER_SHAFT_TURNS turns of that shaft is left as it is."""
+    if p == q or len(revs) * p < OTHER_SHAFT_TURNS * q:
+        return revs
+    F = np.fft.rfft(np.asarray(revs, dtype=np.float64).mean(axis=0))
+    F[np.arange(len(F)) % p == 0] = 0.0
+    return (revs - np.fft.irfft(F, n=revs.shape[-1])).astype(revs.dtype)
+
+
+def unit_revolutions(revs: np.ndarray, p: int, q: int, max_order: float | None, input_out: bool = True) -> np.ndarray:
+    """The revolutions of a shaft turning p/q per input turn from a record's consecutive input
+    revolutions *revs* (signals.shaft), with the input shaft's own content taken out first
+    (*input_out*: without_input_shaft; a run made before it: False, as `gearlab score` reads it)."""
+    if input_out:
+        revs = without_input_shaft(revs, p, q)
+    return shaft_revolutions(revs, p / q, 0.0, revs.shape[-1], max_order)
 
 
 def unit_shaft(source: DatasetSpec) -> UnitShaft | None:
@@ -76,6 +109,45 @@ def unit_shaft(source: DatasetSpec) -> UnitShaft | None:
     names = shaft_names(source.preset, len(pairs))
     gears = ", ".join(dict.fromkeys(gear_name(stage, gear, names) for stage, gear in sorted(on)))
     return UnitShaft(names[index], ratio, gears)
+
+
+# A user's gearbox whose watched gear, a later stage's pinion, the simulator takes tooth by tooth: the
+# teeth simulated when the [source] names none (watched_teeth).
+WATCHED_TEETH = 6
+
+
+def watched_teeth(source: DatasetSpec, written: dict) -> DatasetSpec:
+    """*source* (a [source] table *written* as the user wrote it) with WATCHED_TEETH teeth of its watched
+    gear spread around it, each sample WATCHED_TEETH-fold fewer teeth's times as many duplicates, when
+    the source simulates a gearbox description, its watched gear a later stage's pinion that the model
+    takes one tooth at a time (no tooth-shift symmetry), and the table gives neither 'teeth' nor
+    'duplicates'; else *source*. In the rows data.builder makes of such a pinion every tooth's chip
+    lies at one place of its shaft's revolution, the healthy lines in phase with the healthy rows: on a
+    68/103 + 82/99 reducer's 82T intermediate pinion (development box L) six teeth's rows less the
+    healthy median agree at cosine 0.987-0.988 (best turn: none), so 82 teeth x 3 sizes, 247
+    simulations (57 min at --quick on 2 cores), made one shape 82 times. Kept whole: a wheel's teeth
+    and the input pinion's, whose damage the rows put at each tooth's own angle (the same box's 103T
+    intermediate wheel: tooth 40 at 39/103 of a turn; a one-stage box's wheel alike), and a shaft whose
+    meshes share a divisor g > 1 (shaft_symmetry turns the detectors' shapes by 1/g for the teeth
+    simulated)."""
+    if not written.get("gearbox") or "teeth" in written or "duplicates" in written or not source.faults:
+        return source
+    from ..data.placement import train_pairs
+
+    model, _, _ = source.check_model()
+    if not (source.effect_chain().breaks_symmetry or getattr(model, "breaks_symmetry", False)):
+        return source  # one simulation a size serves every tooth
+    classes = list(source.fault_classes().values())
+    if {(c.stage > 1, c.gear) for c in classes} != {(True, "pinion")} or len({c.stage for c in classes}) != 1:
+        return source
+    shaft = unit_shaft(source)
+    if shaft is None or math.gcd(*unit_mesh_orders(source, shaft)) > 1:
+        return source
+    z = train_pairs(model, source.preset)[classes[0].stage - 1].Z1
+    if z <= WATCHED_TEETH:
+        return source
+    teeth = tuple(1 + (k * z) // WATCHED_TEETH for k in range(WATCHED_TEETH))
+    return source.with_(teeth=teeth, duplicates=source.duplicates * math.ceil(z / WATCHED_TEETH))
 
 
 def unit_mesh_orders(source: DatasetSpec, shaft: UnitShaft | None) -> list[int]:

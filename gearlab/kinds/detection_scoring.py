@@ -21,7 +21,6 @@ from ..parts.measured import TargetFile, held
 from ..runs import RunDir
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.shaft import shaft_revolutions
 from . import record_effects
 from .common import MEASURED
 from .detection_classical import classical_record
@@ -32,6 +31,7 @@ from .detection_records import (
     learned_input,
     longest_tsa,
     synchronous_input,
+    unit_revolutions,
     unit_sets,
     unit_shaft,
     unit_window,
@@ -81,7 +81,9 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         # the later mesh orders the learned methods never see (detection_records.asynchronous_orders)
         "later_orders": list(asynchronous_orders(spec.source, unit_shaft(spec.source))),
         # the units' shaft, turning p/q per input turn (detection_records.unit_shaft); absent: the input
+        # (cut with the input shaft's own content out first: detection_records.without_input_shaft)
         **({} if (shaft := unit_shaft(spec.source)) is None else {"unit_shaft": [shaft.name, *_ratio(shaft)]}),
+        **({} if shaft is None else {"input_shaft_out": True}),
         "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(spec.classical).items()},
         "conditions": {},
     }
@@ -326,7 +328,8 @@ def score(
         revs = rec.revolutions
         if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
             _, p, q = meta["unit_shaft"]
-            revs = shaft_revolutions(revs, p / q, 0.0, revs.shape[-1], meta["conditions"][name]["max_order"])
+            band = meta["conditions"][name]["max_order"]
+            revs = unit_revolutions(revs, p, q, band, meta.get("input_shaft_out", False))
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
         raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
