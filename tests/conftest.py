@@ -1,5 +1,6 @@
 import base64
 import gc
+import os
 import sys
 from pathlib import Path
 
@@ -60,6 +61,7 @@ def pytest_collection(session):
     Objects the tests make are collected as before, the whole heap less often (FULL_COLLECTION_EVERY)."""
     gc.disable()
     try:
+        rewrite_ahead(session)
         yield
     finally:
         gc.enable()
@@ -67,6 +69,37 @@ def pytest_collection(session):
         gc.freeze()
         _, middle, _ = gc.get_threshold()
         gc.set_threshold(YOUNG_COLLECTION_AFTER, middle, FULL_COLLECTION_EVERY)
+
+
+def rewrite_ahead(session) -> None:
+    """In a fresh clone each xdist worker rewrote the asserts of every test file it imports (pytest
+    keeps the result in tests/__pycache__ only for the next run): 6 s of CPU per worker, twice on 2
+    cores. Worker gw0 collects from the first file as usual; every other worker first rewrites the
+    files from the last one backwards into that cache, without importing them, until it meets one
+    already there (gw0 got that far), then collects reading the cache. Nothing is done where no
+    cache is written (PYTHONDONTWRITEBYTECODE, --assert=plain), outside xdist, or with another
+    pytest (its internals differ): collection is then as before."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    config = session.config
+    if worker == "gw0" or sys.dont_write_bytecode or config.getoption("assertmode", "plain") != "rewrite":
+        return
+    try:
+        from _pytest.assertion import rewrite
+
+        state = config.stash[rewrite.assertstate_key]
+        files = []
+        for arg in config.args:
+            path = Path(arg.split("::")[0]).resolve()
+            files += sorted(path.glob("test_*.py")) if path.is_dir() else [path] if path.suffix == ".py" else []
+        for fn in reversed(files):
+            cache = rewrite.get_cache_dir(fn)
+            pyc = cache / (fn.name[:-3] + rewrite.PYC_TAIL)
+            if not rewrite.try_makedirs(cache) or rewrite._read_pyc(fn, pyc, state.trace) is not None:
+                return
+            source_stat, co = rewrite._rewrite_test(fn, config)
+            rewrite._write_pyc(state, co, source_stat, pyc)
+    except Exception:  # noqa: BLE001 - a head start only: never a reason to fail the run
+        return
 
 
 # A full (oldest-generation) collection after every 100 collections of the middle one, not Python's

@@ -1,0 +1,55 @@
+"""The suite's own start (tests/conftest.py): in a fresh clone a second xdist worker rewrites the
+test files' asserts into pytest's cache from the last file back, so that each file is rewritten
+once, not once per worker (issue 42)."""
+
+from __future__ import annotations
+
+import sys
+import types
+from types import SimpleNamespace
+
+import conftest
+import pytest
+from _pytest.assertion import rewrite
+
+
+class Args:
+    """The running pytest's config, collecting *args* instead."""
+
+    def __init__(self, config, args):
+        self._config, self.args = config, args
+
+    def __getattr__(self, name):
+        return getattr(self._config, name)
+
+
+def cached(folder) -> list[str]:
+    return sorted(p.name.split(".")[0] for p in (folder / "__pycache__").glob(f"*{rewrite.PYC_TAIL}"))
+
+
+@pytest.mark.parametrize("worker, ahead", [("gw1", ["test_c", "test_d"]), ("gw0", [])])
+def test_a_second_worker_rewrites_from_the_last_file_back_to_one_already_cached(
+    request, tmp_path, monkeypatch, worker, ahead
+):
+    if request.config.getoption("assertmode") != "rewrite":
+        pytest.skip("asserts are not rewritten in this run")
+    for name in "abcd":
+        (tmp_path / f"test_{name}.py").write_text(f"def test_{name}():\n    assert {name!r} * 2 == {name * 2!r}\n")
+    monkeypatch.setattr(sys, "dont_write_bytecode", False)
+    monkeypatch.setenv("PYTEST_XDIST_WORKER", worker)
+    config = Args(request.config, [str(tmp_path)])
+    state = config.stash[rewrite.assertstate_key]
+    # gw0 got as far as test_b: the worker writes test_d, then test_c, and stops there
+    rewrite.try_makedirs(tmp_path / "__pycache__")
+    stat, code = rewrite._rewrite_test(tmp_path / "test_b.py", config)
+    rewrite._write_pyc(state, code, stat, tmp_path / "__pycache__" / f"test_b{rewrite.PYC_TAIL}")
+    conftest.rewrite_ahead(SimpleNamespace(config=config))
+    assert cached(tmp_path) == sorted(["test_b", *ahead])
+    for name in ahead:  # what pytest reads later: the asserts rewritten (a failure explains itself)
+        code = rewrite._read_pyc(tmp_path / f"{name}.py", tmp_path / "__pycache__" / f"{name}{rewrite.PYC_TAIL}")
+        (test,) = [c for c in code.co_consts if isinstance(c, types.CodeType)]
+        assert any(v.startswith("@py_assert") for v in test.co_varnames)
+    monkeypatch.setattr(sys, "dont_write_bytecode", True)  # PYTHONDONTWRITEBYTECODE: nothing written
+    (tmp_path / "test_e.py").write_text("def test_e():\n    assert True\n")
+    conftest.rewrite_ahead(SimpleNamespace(config=config))
+    assert "test_e" not in cached(tmp_path)
