@@ -234,3 +234,24 @@ def test_a_file_takes_no_sensitivity_of_the_target_with_an_empty_one(tmp_path, c
     ]
     target = target_spec(table, "s.toml: [target]", tmp_path)
     assert target.keys_of(target.files[1])["sensitivity"] is None and target.keys_of(target.files[0])["sensitivity"]
+
+
+def test_a_row_of_units_under_the_names_is_read_as_the_channels_units(tmp_path, cli):
+    # a logger's export: the names, then a row of units ('[s];[m/s²];[V]'), then numbers: validate and the run
+    # said "its first data row (line 2) holds no number"; the units row now gives each channel's unit
+    from gearlab.data.recordings import read_recording
+
+    x = np.sin(np.arange(4000) * 0.3)
+    rows = "".join(f"{i / 8000:.6f};{v:.5f};{(i % 320 < 30) * 5.0:.1f}\n".replace(".", ",") for i, v in enumerate(x))
+    (tmp_path / "a.csv").write_text("Zeit;Beschl.;Drehzahl\n[s];[m/s²];[V]\n" + rows)
+    rec = read_recording(tmp_path / "a.csv", "Beschl.", "Drehzahl")
+    assert rec.fs == 8000.0 and abs(rec.signal[1] - np.sin(0.3)) < 1e-4, (rec.fs, rec.signal[:2])
+    (tmp_path / "k.toml").write_text(description(stage(105, 143, "1 mm", "12 mm"), speed="25 Hz", load="30 N*m"))
+    text = '[scenario]\nname = "s"\nkind = "gap"\n[source]\ngearbox = "k.toml"\n[target]\nvibration = "Beschl."\n'
+    for extra, code in (("", 0), ('sensitivity = "100 mV/g"\n', 2)):
+        files = 'files = [{ file = "a.csv", role = "history", label = "healthy" }]\n'
+        (tmp_path / "s.toml").write_text(text + 'tacho = "Drehzahl"\n' + extra + files)
+        got, out, err = cli("validate", tmp_path / "s.toml")
+        assert got == code, (extra, out, err)
+        if code:
+            assert "acceleration already" in err and "'m/s²'" in err, err

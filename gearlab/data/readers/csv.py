@@ -17,6 +17,22 @@ _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
 
 
+# a field of a units row under the header, as loggers export one ('s', 'V', 'm/s²', '[g]', '(mV)')
+_UNIT_FIELD = re.compile(r"^[\[(]?\s*[A-Za-zµμ°%/²³^*·.\-\d ]{0,12}\s*[\])]?$")
+
+
+def units_row(row: list[str], names: list[str]) -> dict[str, str] | None:
+    """{column: unit} of a row of units under the header (no number in it, every field a short unit, one at
+    least), or None: a logger's export ('Time,accel,probe' then 's,V,V') was refused as 'its first data row
+    holds no number'."""
+    fields = [f.strip() for f in row]
+    if len(fields) != len(names) or not any(fields):
+        return None
+    if any(_column([f]).dtype.kind == "f" or not _UNIT_FIELD.match(f) for f in fields):
+        return None
+    return {n: f.strip("[]() ") for n, f in zip(names, fields) if f.strip("[]() ")}
+
+
 def delimiter_of(line: str) -> str | None:
     """The field separator of a delimited line: ';' (whose fields may carry decimal commas), tab,
     ',', or None for blanks."""
@@ -74,10 +90,11 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     delimiter = delimiter_of(lines[0][1])
     rows = split_rows([line for _, line in lines], delimiter)
     header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
+    units = units_row(rows[1], header) if header is not None and len(rows) > 1 else None
     if header is None:
         data, data_lines = rows, lines
     else:
-        data, data_lines = rows[1:], lines[1:]
+        data, data_lines = rows[1 + bool(units) :], lines[1 + bool(units) :]
     width = len(rows[0])
     if header is not None and len(set(header)) != len(header):
         twice = next(h for h in header if header.count(h) > 1)
@@ -106,4 +123,6 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
 
     # an index asked for ("0", "2") is found as that column, under the name it was asked by
     asked = [n for n in names if n not in columns and n not in fields and column_index(n, columns) is not None]
-    return _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])
+    contents = _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])
+    contents.units.update(units or {})
+    return contents

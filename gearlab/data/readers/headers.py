@@ -94,9 +94,9 @@ class Header:
 
 def _csv_header(path: Path) -> Header:
     from .base import _column
-    from .csv import _COMMENT_FIELD, delimiter_of, header_names, is_header, split_rows
+    from .csv import _COMMENT_FIELD, delimiter_of, header_names, is_header, split_rows, units_row
 
-    fields, names, number = [], None, 0
+    fields, names, number, units = [], None, 0, None
     with path.open(encoding="utf-8-sig", errors="replace") as f:
         for number, line in enumerate(f, start=1):
             stripped = line.strip()
@@ -111,6 +111,8 @@ def _csv_header(path: Path) -> Header:
             if names is None and is_header(row):
                 names = header_names(row, len(row))  # quoted only once a row of numbers follows
                 continue
+            if names is not None and units is None and (units := units_row(row, names)) is not None:
+                continue  # a logger's row of units under the names ('s', 'V', 'm/s²')
             if not any(_column(row[j : j + 1]).dtype.kind == "f" for j in range(len(row))):
                 # not a measured record (a system file reached through a link?): nothing of it is quoted
                 raise GearlabInputError(
@@ -126,7 +128,7 @@ def _csv_header(path: Path) -> Header:
             )
     every = [*names, *(k for k, _ in fields)]
     rate = any(is_rate_or_time(n) for n in every)
-    return Header("CSV", every, rate, indexed=True, stated=stated[0], stated_within=stated[1])
+    return Header("CSV", every, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units or {})
 
 
 def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
