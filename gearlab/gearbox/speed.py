@@ -121,7 +121,7 @@ def speed_from_mesh(
     x, weight = lines.at[:EVIDENCE], np.minimum(lines.db[:EVIDENCE], 40.0)
     tol = np.maximum(2.5 * df, DRIFT * x)
     slowest = float(min(table.shaft_orders))
-    # explain() runs twice for every (line, stage, harmonic) tried, some 2,000 times a record: what does
+    # explain() reads every (line, stage, harmonic) tried at once, some 1,000 a record, twice: what does
     # not depend on the speed is worked out once here (the sums and comparisons stay the same ones)
     combs = []
     for s in table.stages:
