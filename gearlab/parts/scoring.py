@@ -92,8 +92,10 @@ def load_model(folder: Confined, unit: str):
 
 
 def save_arrays(target: Confined, **arrays) -> None:
+    """*arrays* as an uncompressed npz: a history's noisy floats deflate by ~8 % at 0.16 s of CPU per
+    4 MB (50 times the write's own); load_arrays reads older, compressed ones as well."""
     buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
+    np.savez(buf, **arrays)
     target.write(buf.getvalue())
 
 
