@@ -183,3 +183,35 @@ def test_the_gap_reads_a_history_at_its_file_s_own_rate(tmp_path):
     target = target_spec(t, "g.toml: [target]", tmp_path, need=("history",))
     X, speed, _, fs, *_ = read_history(Records("g", target), lambda e: None)
     assert fs == FS and speed == pytest.approx(SPEED)
+
+
+def test_score_reads_a_file_of_a_new_format_with_the_keys_whose_channels_it_has(tmp_path):
+    """Outside round 12 (issue 39): a run of a CSV history (the [target]'s 'accel', 'probe') and WAV tests
+    (channels '0', '1', gain 2 V) scored a .mat file with the WAV tests' keys: "no vibration channel '0'",
+    no word of --key. A file of a format the run had none of is read with the first remembered keys whose
+    channels its header holds (its values at no other file's gain), else one line says what was tried."""
+    from scipy.io import savemat
+
+    from gearlab.kinds.detection_scoring import reading_keys
+
+    target = {"vibration": "accel", "tacho": "probe", "pulses_per_rev": 44, "fs": None, "sensitivity": 0.0102}
+    target |= {"gain": None, "unit": None}
+    wav = {"vibration": "0", "tacho": "1", "gain": 2.0}
+    meta = {"target": target, "unit": None, "conditions": {"25 Hz": {"speed_hz": 25.0}}, "tacho_records": "all"}
+    meta["file_keys"] = {"formats": {".csv": {}, ".wav": wav, ".zip": {}}, "tests": wav}
+    x = _signal()
+    wavfile.write(tmp_path / "t.wav", int(FS), np.stack([x, x], axis=1).astype(np.float32))
+    savemat(tmp_path / "same.mat", {"accel": x, "probe": x, "fs": FS})
+    keys = reading_keys(meta, None, None, str(tmp_path / "same.mat"))
+    assert (keys["vibration"], keys["tacho"], keys["gain"]) == ("accel", "probe", None)
+    assert reading_keys(meta, None, None, str(tmp_path / "t.wav"))["vibration"] == "0"  # its format's own
+    savemat(tmp_path / "other.mat", {"accel_V": x, "probe_V": x, "fs": FS})
+    with pytest.raises(GearlabInputError) as err:
+        reading_keys(meta, None, None, str(tmp_path / "other.mat"))
+    said = str(err.value)
+    assert "\n" not in said and said.startswith(f"{tmp_path / 'other.mat'}: ")
+    for part in ("'0'", "'1'", "'accel'", "'probe'", "accel_V", "probe_V", "--key vibration=NAME --key tacho=NAME"):
+        assert part in said, said
+    given = {"vibration": "accel_V", "tacho": "probe_V"}
+    keys = reading_keys(meta, None, given, str(tmp_path / "other.mat"))
+    assert (keys["vibration"], keys["tacho"], keys["gain"]) == ("accel_V", "probe_V", None)  # not the WAVs' gain

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.recordings import cut_recording
+from ..data.recordings import channel_key, channel_listing, cut_recording, read_header
 from ..data.which_gear import Take
 from ..errors import GearlabInputError
 from ..events import Event
@@ -138,11 +138,38 @@ def _tacho_records(meta: dict) -> str:
     return meta.get("tacho_records") or ("none" if meta["target"]["tacho"] is None else "all")
 
 
-def remembered(meta: dict, file: str) -> dict:
-    """The acquisition keys the run's own files of *file*'s format were read with (file_keys): that
-    format's, else the test files' where they agree, else none (the [target]'s)."""
+def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, str]:
+    """The acquisition keys the run's own files read a new *file* with (file_keys), the first whose
+    vibration and tacho channels (--key's over them) its header holds: its format's files', or for a
+    format the run had none of, the test files' (where they agree), each other format's, the [target]'s
+    (only the [target]'s when --key names the vibration: no other file's gain or unit on it); a file
+    none fits: one line naming the channels tried, the file's and --key. (keys, whose they are)."""
     kept = meta.get("file_keys") or {}
-    return kept.get("formats", {}).get(file_format(file), kept.get("tests") or {})
+    formats, fmt = kept.get("formats", {}), file_format(file) if file else ""
+    if not file:
+        return formats.get(fmt, kept.get("tests") or {}), ""
+    tried = [(formats[fmt], f"the run's {fmt} files'")] if fmt in formats else []
+    if "vibration" in (given or {}):
+        tried.append(({}, "the [target]'s"))
+    else:
+        tried += [(kept.get("tests") or {}, "the run's test files'")]
+        tried += [(k, f"the run's {e} files'") for e, k in formats.items()]
+        tried.append(({}, "the [target]'s"))
+    header = read_header(file)
+    said: dict[str, list[str]] = {}
+    for keys, whose in tried:
+        channels = meta["target"] | keys | (given or {})
+        names = {k: channel_key(channels[k]) for k in ("vibration", "tacho") if channels.get(k) not in (None, "")}
+        if not header.channels or all(header.find(n) for n in names.values()):
+            return keys, whose
+        said.setdefault(", ".join(f"{k} '{n}'" for k, n in names.items()), []).append(whose)
+    asked = " --key tacho=NAME" if _tacho_records(meta) != "none" else ""
+    raise GearlabInputError(
+        f"{file}: the run's channel keys are not in it: tried "
+        + "; ".join(f"{k} ({', '.join(dict.fromkeys(w))})" for k, w in said.items())
+        + f"; the file has: {channel_listing(header.channels)}; expected its channels: gearlab score RUN FILE "
+        f"--key vibration=NAME{asked}"
+    )
 
 
 def _ratio(shaft) -> list[int]:
@@ -266,7 +293,7 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
     files ({'vibration': 'vib', 'fs': '25.6 kHz'}: gearlab score's --key, as a [target] 'files'
     entry gives them) over those the run's files of *file*'s format were read with (remembered), over
     the run's [target] keys."""
-    keys = dict(meta["target"]) | remembered(meta, file)
+    keys = dict(meta["target"]) | remembered(meta, file, given)[0]
     for key, value in (given or {}).items():
         at = f"--key {key}"
         if key not in SCORE_KEYS or value == "":
@@ -321,8 +348,8 @@ def score(
     for i, file in enumerate(files):
         rec = cut_recording(str(file), **reading_keys(meta, condition, given, str(file)))
         name = _condition_of(meta, str(file), rec.speed_hz, condition)
-        own = {k: v for k, v in remembered(meta, str(file)).items() if k not in (given or {})}
-        said = f"; read with the run's {file_format(str(file))} files' keys" if own else ""
+        own, whose = remembered(meta, str(file), given)
+        said = f"; read with {whose} keys" if {k for k in own if k not in (given or {})} else ""
         on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}{said}"))
         found[str(file)] = (rec.speed_hz, rec.angle_source)
         revs = rec.revolutions
