@@ -53,6 +53,10 @@ forward + backward at batch 80; the validation set made tensors once and passed 
 1.72 against 1.89 ms an epoch, with a joint step's rows gathered straight into one batch (no cat)
 and its labels by index_select: a phm09-shaped unit's CPU unchanged within noise (3 pairs, +-5 %).
 
+Adopted: `fast` with frozen normalisation (every joint step, every evaluation) as one autograd
+function of window products (gearlab/learn/fast_frozen.py): fast+coral 10.4-10.8 -> 9.2-9.4 ms a
+step, 0.13-0.14 -> 0.16-0.17 of the limit (side by side, load ~9, results apart by rounding).
+
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
 On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the

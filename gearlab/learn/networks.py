@@ -105,6 +105,7 @@ from torch import nn
 from gearlab.errors import GearlabInputError
 from gearlab.params import did_you_mean
 
+from . import fast_frozen
 from .bounds import lower_median, noise_scale, shape_llr
 from .config import DEFAULT_DROPOUT, DEFAULT_LENGTH, DEFAULT_NETWORK, NetworkSettings  # noqa: F401 (re-exported)
 
@@ -144,6 +145,8 @@ class Network(nn.Module):
             raise GearlabInputError(
                 f"network '{self.name}': built for signals of {self.length} samples, got {x.shape[-1]}"
             )
+        if self.name == "fast" and (frozen := fast_frozen.features(fast_parts(self.features), x)) is not None:
+            return frozen  # its batch normalisation frozen: one autograd function (learn/fast_frozen.py)
         return self.features(x)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -291,6 +294,25 @@ def fast(n_classes: int, dropout: float, length: int) -> Network:
     )
     classifier = nn.Sequential(nn.Linear(64, 64), nn.ReLU(), nn.Dropout(dropout), nn.Linear(64, n_classes))
     return Network("fast", features, classifier, 64, n_classes, length, fixed_length=False)
+
+
+def fast_parts(layers: nn.Module) -> tuple | None:
+    """(conv1, norm1, conv2, norm2, conv3, norm3) of *layers* when they are fast()'s feature
+    extractor with its settings (learn/fast_frozen.py computes it from them), else None."""
+    kinds = (AsChannels, WindowConv1d, nn.BatchNorm1d, nn.ReLU, MaxPool2, nn.Conv1d, nn.BatchNorm1d, nn.ReLU)
+    kinds += (nn.Conv1d, nn.BatchNorm1d, nn.ReLU, nn.AdaptiveAvgPool1d, nn.Flatten)
+    if not isinstance(layers, nn.Sequential) or len(layers) != len(kinds):
+        return None
+    if any(type(layer) is not kind for layer, kind in zip(layers, kinds)) or layers[11].output_size not in (1, (1,)):
+        return None
+    (c1, n1), (c2, n2), (c3, n3) = (layers[1], layers[2]), (layers[5], layers[6]), (layers[8], layers[9])
+    if c1.in_channels != 1 or c1.padding_mode != "zeros" or not (n1.affine and n2.affine and n3.affine):
+        return None
+    if any(c.bias is not None or c.groups != 1 or c.dilation != (1,) for c in (c1, c2, c3)):
+        return None
+    if any(c.kernel_size != (3,) or c.stride != (2,) or c.padding != (1,) for c in (c2, c3)):
+        return None
+    return c1, n1, c2, n2, c3, n3
 
 
 class RobustLimiter(nn.Module):

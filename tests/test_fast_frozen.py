@@ -1,0 +1,93 @@
+"""`fast` with frozen batch normalisation runs as one autograd function (gearlab.learn.fast_frozen):
+the same latent features and gradients as its modules to rounding, and the modules wherever it
+does not apply."""
+
+import numpy as np
+import pytest
+import torch
+from torch.nn import functional as F
+
+from gearlab.learn import fast_frozen
+from gearlab.learn.networks import build_network, fast_parts
+from gearlab.learn.training import fit_adaptation, train_mode
+from gearlab.registry import METHODS, get_registry
+
+
+def primed(length: int, seed: int = 0):
+    """A `fast` network whose normalisations hold statistics of their own (not 0 and 1) and
+    weights and biases away from 1 and 0, then frozen as a joint training freezes them."""
+    torch.manual_seed(seed)
+    net = build_network("fast", 2, length=length, seed=seed)
+    with torch.no_grad():
+        for _ in range(3):
+            net(torch.randn(16, length) * 3 + 1)
+        for layer in net.features:
+            if isinstance(layer, torch.nn.BatchNorm1d):
+                layer.weight.uniform_(0.5, 1.5)
+                layer.bias.uniform_(-0.5, 0.5)
+    train_mode(net, freeze_norm=True)
+    return net
+
+
+def latent_and_grads(net, x, y, modules: bool):
+    net.zero_grad(set_to_none=True)
+    torch.manual_seed(1)  # the classifier's dropout draws alike
+    z = net.features(x) if modules else net.embed(x)
+    F.cross_entropy(net.classifier(z), y).backward()
+    return z.detach(), {n: p.grad.clone() for n, p in net.named_parameters()}
+
+
+@pytest.mark.parametrize("length,batch", [(2048, 80), (4096, 40), (2048, 2), (100, 3)])
+def test_frozen_fast_equals_its_modules(length, batch):
+    net = primed(length)
+    x, y = torch.randn(batch, length), torch.randint(0, 2, (batch,))
+    z, grads = latent_and_grads(net, x, y, modules=False)
+    assert net.embed(x).grad_fn.name() == "_FrozenBackward"  # one node: the fused path ran
+    z0, grads0 = latent_and_grads(net, x, y, modules=True)
+    assert torch.allclose(z, z0, rtol=0, atol=1e-6 * z0.abs().max())
+    for name, g0 in grads0.items():
+        assert torch.allclose(grads[name], g0, rtol=0, atol=2e-5 * g0.abs().max()), name
+    net.eval()
+    with torch.no_grad():
+        assert torch.allclose(net.embed(x), net.features(x), rtol=0, atol=1e-6 * z0.abs().max())
+        assert net.embed(x[:, None, :]).shape == (batch, 64)  # (B, 1, L) as (B, L)
+
+
+def test_modules_where_the_function_does_not_apply():
+    net = primed(2048)
+    x = torch.randn(8, 2048)
+    net.train()  # normalisation in training mode: batch statistics, running ones updated
+    assert fast_frozen.features(fast_parts(net.features), x) is None
+    train_mode(net, freeze_norm=True)
+    assert fast_frozen.features(fast_parts(net.features), x.double()) is None
+    assert fast_frozen.features(fast_parts(net.features), x.clone().requires_grad_()) is None
+    odd = primed(120)  # a first map of 7: MaxPool2's ceil-mode tail
+    assert fast_frozen.features(fast_parts(odd.features), torch.randn(4, 120)) is None
+    assert torch.equal(odd.embed(torch.randn(4, 120, generator=torch.Generator().manual_seed(0))),
+                       odd.features(torch.randn(4, 120, generator=torch.Generator().manual_seed(0))))  # fmt: skip
+    cnn = build_network("cnn3", 2, length=256, seed=0).eval()
+    assert fast_parts(cnn.features) is None
+
+
+def test_a_joint_training_stays_within_rounding_of_the_modules(monkeypatch):
+    """CORAL's joint training on the function and on the modules: the same course to rounding over
+    a few epochs (the rounding grows as any training's does, never as a wrong gradient would)."""
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((80, 512)).astype(np.float32)
+    y = (np.arange(80) % 2).astype(np.int64)
+    X[y == 1, 100:140] += 2.0
+    target = rng.standard_normal((80, 512)).astype(np.float32)
+    plugin = get_registry().get(METHODS, "coral", "test")
+    params = plugin.resolve({}, "test")
+    losses = {}
+    for path in ("function", "modules"):
+        if path == "modules":
+            monkeypatch.setattr(fast_frozen, "features", lambda *a: None)
+        net = primed(512)
+        history = fit_adaptation(
+            net, plugin, plugin.extra_modules(net.latent_dim, params), (X, y), (X[:20], y[:20]), (target, None),
+            rng=np.random.default_rng(0), device=torch.device("cpu"), batch=20, min_epochs=5, max_epochs=5,
+            params=params,
+        )  # fmt: skip
+        losses[path] = np.array(history.train_loss)
+    assert np.allclose(losses["function"], losses["modules"], rtol=1e-4)
