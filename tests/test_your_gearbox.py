@@ -108,3 +108,41 @@ def test_the_guide_runs_start_to_finish(run_cli, tmp_path, unrendered_figures):
     fm4 = [h for h in history if h["method"] == "fm4" and h["unit"] == "record10"]
     assert fm4 and all(h["decision"] == "fault" for h in fm4)
     assert (tmp_path / run_dir / "report.html").is_file()
+
+
+def test_what_the_guide_says_of_load_a_box_without_a_tacho_and_a_float_wav_in_g_holds(cli, tmp_path):
+    """Outside round 12 (issue 39 item 8): the guide was silent on whether `[operation] load` is needed,
+    how to describe a box without a tacho, and how to describe a float WAV in g whose full scale is not
+    1 g (`unit = "g"` refuses a gain). What it now says is what gearlab does."""
+    import numpy as np
+    from scipy.io import wavfile
+
+    from gearlab.data.recordings import read_recording
+
+    text = " ".join(GUIDE.read_text().split())
+    files = {n: t for k, n, t in steps() if k == "file"}
+    box, gap = files["rig16.toml"], files["gap.toml"]
+    # load: needed to simulate (validate names it in one line), not to inspect
+    assert "`speed` and `load` are needed to simulate (gap, detection: validate names a missing one)" in text
+    (tmp_path / "rig16.toml").write_text("".join(x for x in box.splitlines(True) if not x.startswith("load")))
+    (tmp_path / "gap.toml").write_text(gap)
+    (tmp_path / "rec").mkdir()
+    for name in ("history1", "history2"):  # validate reads their headers only
+        rows = "".join(f"{k / 20000:.5f},0.01,0.0\n" for k in range(64))
+        (tmp_path / "rec" / f"{name}.csv").write_text("time_s,acc_V,tacho_V\n" + rows)
+    code, _, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 2 and "[operation] key 'load': missing" in err and len(err.strip().splitlines()) == 1, err
+    # no tacho: leave out `tacho` (description) and the [target]'s tacho; validate takes it
+    assert "No tacho: leave out `tacho` and `pulses_per_rev`" in text
+    (tmp_path / "rig16.toml").write_text("".join(x for x in box.splitlines(True) if not x.startswith("tacho")))
+    (tmp_path / "gap.toml").write_text("".join(x for x in gap.splitlines(True) if not x.startswith("tacho")))
+    code, out, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 0, err
+    # a float WAV in g at a full scale of 5 g, read with the guide's keys: the accelerations, to float32's precision
+    said = 'a float WAV in g at a full scale of 5 g: `--gain "5 V" --sensitivity "1 V/g"`'
+    assert said in text
+    fs, g = 8000, 9.80665
+    a = 30.0 * np.sin(2 * np.pi * 400 * np.arange(fs) / fs)  # m/s², peaks of 3 g
+    wavfile.write(tmp_path / "g5.wav", fs, (a / g / 5.0).astype(np.float32))
+    got = read_recording(tmp_path / "g5.wav", "0", gain=5.0, sensitivity=1.0 / g)
+    assert np.max(np.abs(got.signal - a)) < 1e-6 * 30.0
