@@ -146,3 +146,19 @@ def test_what_the_guide_says_of_load_a_box_without_a_tacho_and_a_float_wav_in_g_
     wavfile.write(tmp_path / "g5.wav", fs, (a / g / 5.0).astype(np.float32))
     got = read_recording(tmp_path / "g5.wav", "0", gain=5.0, sensitivity=1.0 / g)
     assert np.max(np.abs(got.signal - a)) < 1e-6 * 30.0
+
+
+def test_a_gain_on_values_in_g_is_refused_with_the_guide_s_way_to_scale_them(tmp_path):
+    """unit = "g" with a gain (a float WAV whose full scale is 5 g) said "expected no gain" and no more:
+    the line now names the keys the guide gives for it."""
+    import numpy as np
+    from scipy.io import wavfile
+
+    from gearlab.data.recordings import read_recording
+    from gearlab.errors import GearlabInputError
+
+    wavfile.write(tmp_path / "g5.wav", 8000, np.zeros(800, dtype=np.float32))
+    with pytest.raises(GearlabInputError) as err:
+        read_recording(tmp_path / "g5.wav", "0", gain=5.0, unit="g")
+    said = str(err.value)
+    assert "expected no gain" in said and "full scale of N g: no unit, gain = 'N V', sensitivity = '1 V/g'" in said

@@ -415,12 +415,11 @@ def channel_scale(
     declared: str | None = None,
     flag=None,
 ) -> tuple[float, str]:
-    """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the
-    channel's name -- or else the *unit* the file states for it (an HDF5 'units' attribute), or else
-    the scenario's 'unit' key (*declared*, which neither may contradict) -- says of its unit (volts
-    need a sensitivity, m/s² or g must not have one; mV are volts / 1000). *where*: the scenario
-    table, for the one-line errors that name its key (or *flag*(key): a command's option); *integer*:
-    the channel holds integer counts (a sensitivity then needs a gain)."""
+    """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the channel's name -- or else
+    the *unit* the file states for it (an HDF5 'units' attribute), or else the scenario's 'unit' key (*declared*, which
+    neither may contradict) -- says of its unit (volts need a sensitivity, m/s² or g must not have one; mV are volts /
+    1000). *where*: the scenario table, for the one-line errors that name its key (or *flag*(key): a command's option);
+    *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
 
     def at(key: str) -> str:
         return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
@@ -446,8 +445,9 @@ def channel_scale(
         for key, value in (("sensitivity", sensitivity), ("gain", gain)):
             if value is not None and declared is not None:  # which of the two is wrong, only the user knows
                 raise GearlabInputError(
-                    f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected "
-                    f"no {key} (values in volts: unit = 'V' or 'mV' with the sensitivity)"
+                    f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected no {key} "
+                    "(values in volts: unit = 'V' or 'mV' with the sensitivity; values in g at a full scale of N g: "
+                    "no unit, gain = 'N V', sensitivity = '1 V/g')"
                 )
             if value is not None:
                 raise GearlabInputError(
