@@ -2,7 +2,7 @@
 TSA rows of that shaft (the PHM 2009 recipe, `tsa` noisy revolutions averaged as a record unit is).
 
 A fault on the 50T output gear of a 20/30 + 20/50 reducer repeats every 15 input turns. Its steady
-cycle was cut to 14 revolutions (builder.turned: 2π·15 / 2π floors to 14.999999999999998 turns, so
+cycle was cut to 14 revolutions (rows.turned: 2π·15 / 2π floors to 14.999999999999998 turns, so
 the last revolution was not "complete"; cycles of 11, 15, 22, 30 ... turns), and a TSA of 10 output
 revolutions (43 input turns) wrapped that cut cycle: the output shaft's angle jumped at each wrap
 and the damage was smeared over the turn. On takes simulated by gearlab itself (dev seeds 101-109,
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from gearboxes import SLOW_BOX as BOX
 
-from gearlab.data.builder import turned
+from gearlab.data.rows import turned
 from gearlab.data.spec import POINTS
 
 

@@ -6,7 +6,7 @@ Structure exploited (docs/physics.md, Builder):
   on the input pinion), so one steady revolution per simulation is the whole clean signal.
   A fault on a slower gear repeats once per turn of its shaft (3 input turns for the PHM
   2009 rig's idler, 5 for its output gear): a sample's J revolutions then follow that
-  period from the revolution in which the damaged tooth meshes (period_samples).
+  period from the revolution in which the damaged tooth meshes (period_turn).
 * Tooth-shift symmetry: the steady response to a fault on tooth n is the tooth-1 response
   shifted by (n - 1)/Z1 of a revolution. The integration rate is rounded up to a whole
   number of steps per tooth pitch, so the shift is an exact whole-sample rotation of the
@@ -54,6 +54,7 @@ from ..signals.shaft import shaft_revolutions
 from . import placement
 from .placement import fault_parts, shaft_names
 from .realise import CYCLE_STREAM, REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
+from .rows import TurnedRows, entries, made
 from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
 if TYPE_CHECKING:
@@ -342,12 +343,14 @@ class SimTask(NamedTuple):
     effects: tuple = ()  # the dataset's effects (canonical); the model and excitation ones act here
     tooth: int = 1  # the tooth carrying the fault; the rows of the other teeth are its shifts
     stretch: int = 0  # a long train's revolutions per row (0: its whole cycle, or STRETCH x 2 when that is long)
+    lazy: bool = False  # a cycle's rows as TurnedRows (made when a sample reads them: build_dataset), not stacked
 
 
-def simulate_unit(task: tuple) -> np.ndarray:
+def simulate_unit(task: tuple) -> np.ndarray | TurnedRows:
     """Steady revolutions (len(teeth), R x POINTS) of one fault case on every requested tooth: R the
     revolutions after which the train repeats (1; a slower damaged gear's period; a later mesh's
-    cycle), from the revolution in which the tooth meshes.
+    cycle), from the revolution in which the tooth meshes. With task.lazy, R > 1 rows come as the
+    cycle they are made from (data.rows.TurnedRows) where that is smaller.
 
     Without a symmetry-breaking effect the fault sits on *tooth* and every requested tooth
     is an exact whole-sample rotation of that revolution (tooth-shift symmetry).
@@ -386,54 +389,40 @@ def simulate_unit(task: tuple) -> np.ndarray:
     cycle = math.lcm(sim.period(faults), mesh_cycle(sim))
     if cycle > 1:
         if faults:
-            return np.stack([period_samples(sim, faults[0], periodic, cycle, n, task.tooth, angle) for n in task.teeth])
-        per_tooth = len(periodic) // cycle // sim.pair.Z1
-        return np.stack([turned(periodic, cycle, (n - task.tooth) * per_tooth, angle) for n in task.teeth])
+            turns = [period_turn(sim, faults[0], len(periodic), cycle, n, task.tooth) for n in task.teeth]
+        else:
+            turns = [((n - task.tooth) * (len(periodic) // cycle // sim.pair.Z1), 0) for n in task.teeth]
+        rows = TurnedRows(periodic, cycle, angle, turns)
+        # made when read where the cycle is the smaller (every tooth's rows from one cycle): a row of
+        # one tooth (every tooth simulated) at a slow speed has fewer points than its time samples
+        return rows if task.lazy and rows.nbytes < len(rows) * rows.row_size * 8 else rows.stacked()
     per_tooth = len(periodic) // sim.pair.Z1  # whole by construction of fs
     return np.stack([angle_samples(np.roll(periodic, (n - task.tooth) * per_tooth), angle=angle) for n in task.teeth])
 
 
-def period_samples(sim: Simulator, fault, periodic: np.ndarray, period: int, n: int, tooth: int, angle=None):
-    """The *period* steady input revolutions of a fault on a slower gear (or a later mesh's cycle, a
-    whole number of its periods) as one row of period x POINTS angles, starting with the revolution
-    in which its tooth *n* comes into mesh (a sample's first revolution shows the damage; its J
-    revolutions follow the gears' turns). *periodic* holds the fault on *tooth*: on a one-stage
+def period_turn(sim: Simulator, fault, length: int, period: int, n: int, tooth: int) -> tuple[int, int]:
+    """How the *period* steady input revolutions (*length* time samples) of a fault on a slower gear
+    (or a later mesh's cycle, a whole number of its periods) are turned (data.rows.turned) into the
+    row of tooth *n*: (the shift in samples, the revolution it starts at), starting with the
+    revolution in which tooth *n* comes into mesh (a sample's first revolution shows the damage; its
+    J revolutions follow the gears' turns). The simulation holds the fault on *tooth*: on a one-stage
     train tooth n's response is it turned by n - tooth pitches (the tooth-shift symmetry; else n is
     *tooth*). Tooth n of a gear meshing at input order q comes into mesh (n - 1)/q input turns after
     tooth 1, which mesh at the period's start."""
-    per_rev = len(periodic) // period
+    per_rev = length // period
     pair = sim.pair if fault.stage == 1 else sim.meshes[fault.stage - 2].pair
     order = Fraction(sim.gear_turns(fault.stage, fault.gear) * (pair.Z1 if fault.gear == "pinion" else pair.Z2))
     first = math.floor((n - 1) / order.limit_denominator(10_000))  # the input revolution tooth n meshes in
-    return turned(periodic, period, (n - tooth) * (per_rev // sim.pair.Z1), angle, first)
-
-
-def turned(periodic: np.ndarray, revolutions: int, shift: int, angle=None, first: int = 0) -> np.ndarray:
-    """*revolutions* steady input revolutions (time samples from a tacho zero) turned by *shift*
-    samples and started at revolution *first*, as one row of revolutions x POINTS angles (order
-    tracking at the moved *angle*, when an effect moved it; then *shift* is 0)."""
-    per_rev = len(periodic) // revolutions
-    x = np.roll(periodic, shift - first * per_rev)
-    if angle is None:
-        theta = 2 * np.pi * np.arange(len(x) + 1) / per_rev
-    else:  # the moved angle over the revolutions, from revolution *first* on
-        moved = np.concatenate([angle[first * per_rev :], angle[: first * per_rev] + 2 * np.pi * revolutions])
-        theta = np.append(moved - moved[0], 2 * np.pi * revolutions)
-    theta[-1] = 2 * np.pi * revolutions  # exactly the revolutions' turns
-    # ... which the cut must count as whole: 2π·15 / 2π is 14.999999999999998 (11, 15, 22, 30 ...
-    # turns), and the cycle lost its last revolution (a TSA wrapping it jumped the slower shafts)
-    while math.floor(theta[-1] / TWO_PI) < revolutions:
-        theta[-1] = np.nextafter(theta[-1], np.inf)
-    return resample_revolutions(np.append(x, x[0]), theta, POINTS).reshape(-1)
+    return (n - tooth) * (per_rev // sim.pair.Z1), first
 
 
 # The simulations this process made, newest last: a run that builds a source, its corrected
 # variant and that one's noise-free twin (signal-level effects apart) simulates the rig once.
-_SIMULATED: OrderedDict[SimTask, np.ndarray] = OrderedDict()
+_SIMULATED: OrderedDict[SimTask, np.ndarray | TurnedRows] = OrderedDict()
 KEEP_SIMULATED = 256 * 2**20  # bytes: a two-stage run's 161 revolutions a speed are 5 MB
 
 
-def _remember(task: SimTask, rows: np.ndarray) -> None:
+def _remember(task: SimTask, rows: np.ndarray | TurnedRows) -> None:
     rows.setflags(write=False)  # shared by the datasets that reuse it
     _SIMULATED[task] = rows
     kept = sum(r.nbytes for r in _SIMULATED.values())
@@ -469,8 +458,9 @@ def noisy_rows(task: tuple) -> np.ndarray:
     chain = EffectChain(signal)
     noise = None if task.noise_kind is None else NoiseSpec(task.noise_kind, task.snr_db)  # its seed is in task.seeds
     out = np.empty((len(task.clean), POINTS), dtype=np.float32)
+    last: dict = {}  # the Row made last (data.rows)
     for i, (row, seed) in enumerate(zip(task.clean, task.seeds)):
-        revs = row.reshape(-1, POINTS)  # one revolution, or a slower gear's period or a mesh cycle of them
+        revs = made(row, last).reshape(-1, POINTS)  # one revolution, or a slower gear's period or a mesh cycle of them
         start = task.starts[i] if task.starts else 0
         if task.shaft:
             kept = shaft_row(task, revs, start, task.offsets[i] if task.offsets else 0, chain, noise, seed)
@@ -649,7 +639,7 @@ def build_dataset(
     pairs = placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'")
     stretch = stretch_of(spec, pairs, classes)  # 0, or a long train's revolutions per row (every unit's)
     tasks = [
-        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, mechanical, n, stretch)
+        SimTask(spec.model, spec.preset, fs, speed, load, spec.channel, f, s, rows, mechanical, n, stretch, True)
         for (f, s), n, rows in units
     ]
     todo = [task for task in dict.fromkeys(tasks) if task not in _SIMULATED]
@@ -676,10 +666,9 @@ def build_dataset(
         if todo:
             first.enter_context(standing(on_event, "simulate", _first_simulation()))
         fresh = dict(zip(todo, executor.map(simulate_unit, todo, advance("simulate", len(todo)))))
-    base: dict = {}
+    base: dict = {}  # each case's rows, teeth in order: arrays, or Rows a sample's task makes (data.rows)
     for (case, _, _), task in zip(units, tasks):
-        rows = fresh[task] if task in fresh else _SIMULATED[task]
-        base[case] = rows if case not in base else np.concatenate([base[case], rows])  # teeth in order
+        base.setdefault(case, []).extend(entries(fresh[task] if task in fresh else _SIMULATED[task]))
     for task, rows in fresh.items():
         _remember(task, rows)
 
@@ -699,7 +688,7 @@ def build_dataset(
                     source.append(((name, step), t_index))
 
     # 3. the domain's healthy reference (eq. 2.112, 4.6)
-    reference_row = base[(None, None)][0]
+    reference_row = made(base[(None, None)][0])
     reference_rms = float(np.sqrt(np.mean(reference_row**2)))
     reference = healthy_reference(spec, reference_row, speed, reference_rms)
 
@@ -721,7 +710,9 @@ def build_dataset(
 
     def clean_of(idx: range):
         rows = [base[src[0]][src[1]] for src in (twin_of(i) if spec.healthy_twin else source[i] for i in idx)]
-        return np.stack(rows) if len({r.size for r in rows}) == 1 else rows  # rows of 1 or a period's revolutions
+        if len({r.size for r in rows}) == 1 and all(isinstance(r, np.ndarray) for r in rows):
+            return np.stack(rows)
+        return rows  # rows of 1 or a period's revolutions; Rows made in the task
 
     # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in
     periods = {key: math.lcm(*(placement.gear_period(pairs, *p[1:]) for p in on.parts)) for key, on in classes.items()}
@@ -732,7 +723,7 @@ def build_dataset(
 
     def offset_of(i: int) -> int:
         """The input revolution of its simulation at which sample i's clean row starts: where its
-        tooth comes into mesh (period_samples), 0 for a healthy row; a twin, as its fault's row."""
+        tooth comes into mesh (period_turn), 0 for a healthy row; a twin, as its fault's row."""
         (name, _), t = source[i]
         if name is None:
             return 0

@@ -79,7 +79,7 @@ def row_seed(spec, i: int) -> list[int]:
 def first_revolution(seed: int, i: int, revolutions: int, period: int = 1) -> int:
     """The revolution of a steady cycle of *revolutions* at which record *i* of a dataset seeded *seed*
     starts (module docstring): a whole number of *period*s in (the period of its damaged gear, so its
-    first revolution holds the damaged tooth, builder.period_samples), drawn from
+    first revolution holds the damaged tooth, builder.period_turn), drawn from
     ``default_rng([seed, i, CYCLE_STREAM])``; 0, no draw, when the cycle is one period. Not seeded by
     the noise: a dataset and the same spec without noise cut the same revolutions (a twin of fewer
     samples, one per run of draws, detection_units.noise_free_twin, does not: its bound is then
