@@ -431,11 +431,13 @@ def test_a_stage_2_pinion_fault_on_a_21_63_24_56_train_is_named_the_24t_pinion(t
     assert call_of(found, ["intermediate gear 63T (stage 1)"]).startswith("other damage: " + pinion)
 
 
-def test_simulated_events_name_a_24t_pinion_chip_the_width_leaves_undecided():
+def test_simulated_events_name_a_24t_pinion_chip_the_width_names_it_too():
     """Simulate and compare (signals.which_template): a chip on the 24T pinion of a 21/63 + 24/56
-    train's intermediate shaft reads as wide as a 63T tooth's event could (the width rule: both); the
-    description's simulated chip, spall and crack on each gear at the record's speed (without its load,
-    noise or tooth) fit the pinion's clearly better, and the pinion is named alone."""
+    train's intermediate shaft; the description's simulated chip, spall and crack on each gear at the
+    record's speed (without its load, noise or tooth) fit the pinion's clearly better, and the pinion is
+    named alone. The width rule names it as well since the evidence is read in each order's null sds
+    (signals.evidence: z 13.0 > WIDTH_Z; before, z under WIDTH_Z and an event as wide as a 63T tooth's
+    could be: both)."""
     from gearlab.data.which_templates import simulated_templates
     from gearlab.gearbox import order_table, resolve_gearbox
 
@@ -451,7 +453,7 @@ def test_simulated_events_name_a_24t_pinion_chip_the_width_leaves_undecided():
     h = L.history([r for r, _ in hist], table, first_revolutions=[f for _, f in hist], max_order=top)
     pinion = "intermediate pinion 24T (stage 2)"
     width = L.localise(revs, h, table, first_revolution=first)
-    assert width.named != pinion, width.summary()  # what the event's width says
+    assert width.named == pinion and width.ranking[0].z > L.WIDTH_Z, width.summary()  # what the width says
     templates = simulated_templates(table, speed, 20_000.0, gearbox=str(TWO), sim_fs=60_000.0)
     found = L.localise(revs, h, table, first_revolution=first, templates=templates).describe()
     ev = next(s for s in found["shafts"] if s["shaft"] == "intermediate")

@@ -22,15 +22,16 @@ the healthy history's, Δ(q) = S(q) − S_h(q). The history's units are blocks o
 shortest record under 4 records). Where the grand period does not fit (Fallback) another shaft's
 lines leak into a shaft's average by an amount set by the length averaged, so a record's S is
 there the mean over its blocks of that length (a healthy 24/79 + 27/72 take read whole against
-half-record units: input z 5-6; in blocks 0 ± 1, development seeds). A fault on shaft s adds a level
-L_s, about flat across a band, at every order synchronous with s: in each band of orders the mean Δ
-of each class (the set of shafts an order is synchronous with) is Σ_{s in class} L_s, solved for
-the L_s by weighted least squares (on the rig: L_idler from the idler-exclusive orders, L_output
-from the output-exclusive ones, L_input from the shared orders less both). Weights are 1 / the null
-variance of Δ(q): the record's noise, plus the history's unit-to-unit spread of that order's power.
-The bands combine into z_s = L_s / sd(L_s); the shafts rank by z. A shaft is flagged above a
-threshold fixed on the history alone: the largest z of its records, each left out of the reference
-in turn, at least the Gaussian quantile at the false-alarm rate shared among the shafts.
+half-record units: input z 5-6; in blocks 0 ± 1, development seeds). Each order's Δ is read in sds
+of its null spread (signals.evidence: the fault's excess is largest where that spread is; at the
+history's lines after the take's common line gain). A fault on shaft s adds a level L_s, about flat
+across a band in those units, at every order synchronous with s: in each band of orders the mean of
+each class (the set of shafts an order is synchronous with) is Σ_{s in class} L_s, solved by least
+squares (on the rig: L_idler from the idler-exclusive orders, L_output from the output-exclusive
+ones, L_input from the shared orders less both). The bands combine into z_s = L_s / sd(L_s); the
+shafts rank by z. A shaft is flagged above a threshold fixed on the history alone: the largest z of
+its records, each left out of the reference in turn, at least the Gaussian quantile at the false-alarm
+rate shared among the shafts.
 
 Which gear on a shaft. Given the gearbox description's simulated events (*templates*, from a layer
 that may simulate: gearlab.data.which_templates), a two-gear shaft's gear is the one whose
@@ -85,6 +86,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
+from .evidence import KAPPA, WEIGHT_SMOOTH, Spread, _null_var, shaft_levels, spread  # noqa: F401 (read as localise's)
 from .shaft import averaged, shaft_averages, uniform_filter1d
 from .which_template import (  # noqa: F401 (the width's settings: read by tests and docs as localise's)
     MIN_RATIO,
@@ -108,8 +110,6 @@ SWEEPS = 1
 MIN_PERIODS = 4  # grand periods a record must hold for the grand-period average
 SIDEBANDS = 1  # sidebands of each mesh harmonic left out with it (its regular content)
 FALSE_ALARM = 0.01  # the Gaussian floor of the thresholds, shared out among the shafts
-WEIGHT_SMOOTH = 101  # orders over which noise powers are smoothed for the weights (spread)
-KAPPA = 8.0  # a history line: mean power this many noise sds of its mean over zero (see spread)
 
 
 # --- the train: shafts, gears, orders ------------------------------------------------------------
@@ -336,59 +336,6 @@ def content(
 # --- the history --------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Spread:
-    """The history's per-order synchronous power and its record-to-record spread."""
-
-    power: np.ndarray  # S_h: mean synchronous power of the units
-    line: np.ndarray  # bool: S_h significant (KAPPA sd of its noise); elsewhere only noise
-    between: np.ndarray  # variance of a line's power from unit to unit beyond its noise
-    unit_noise: np.ndarray  # noise power of a unit's mean, smoothed over WEIGHT_SMOOTH orders
-    units: int
-
-
-def _smooth(x: np.ndarray, source: np.ndarray | None = None) -> np.ndarray:
-    """*x* smoothed over WEIGHT_SMOOTH orders of one average (*source*): a slow shaft's TSA, resampled
-    by linear interpolation, holds a third of the input TSA's noise near the top order."""
-    out = np.empty_like(x)
-    for s in np.unique(source) if source is not None else [None]:
-        at = slice(None) if s is None else source == s
-        out[at] = uniform_filter1d(x[at], size=WEIGHT_SMOOTH, mode="nearest")
-    return out
-
-
-def _estimate_var(power: np.ndarray, noise: np.ndarray, blocks: int = 1) -> np.ndarray:
-    """Variance of Content.power about |μ|² = *power*: |X̄|² − n of complex Gaussian block means of noise
-    power B n (n = *noise* of the whole mean), averaged over B = *blocks*."""
-    return blocks * noise**2 + 2 * np.maximum(power, 0) * noise
-
-
-def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
-    """The units' mean power and, at the orders where it is a line, its spread beyond noise.
-
-    The weights of the evidence (_null_var) never follow one order's own noisy estimate (a weight
-    that rises where an order's power happened to come out low picks the orders where Δ comes out
-    high, and biases every class mean up): the noise enters smoothed over many orders, an order's
-    power and spread only where the history holds a line (KAPPA times the noise of its mean; at 4
-    the slow shafts' healthy z came out 0.3-0.6 high, at 8 within 0.15, development seeds).
-    *evidence*: the orders read as evidence (not the mesh harmonics), whose lines give the common
-    relative spread."""
-    if len(units) < 2:
-        raise GearlabInputError(f"the history holds {len(units)} unit; expected at least 2 to measure its spread")
-    P = np.stack([u.power for u in units])
-    mean = P.mean(axis=0)
-    noise = np.mean([_smooth(u.noise, u.source) for u in units], axis=0)
-    line = mean > KAPPA * noise / math.sqrt(len(units))
-    nv = np.mean([_estimate_var(mean, u.noise) for u in units], axis=0)
-    b = np.maximum(P.var(axis=0, ddof=1) - nv, 0.0)
-    # two or three units give each order's spread with one or two degrees of freedom: a line
-    # whose units happen to agree must still be allowed its share of the common relative spread
-    strong = (mean > 10 * np.sqrt(nv)) & (True if evidence is None else evidence)
-    alpha2 = float(np.median(b[strong] / mean[strong] ** 2)) if strong.sum() >= 5 else 0.0
-    between = np.where(line, np.maximum(b, alpha2 * np.maximum(mean, 0) ** 2), 0.0)
-    return Spread(mean, line, between, noise, len(units))
-
-
 # --- the evidence ------------------------------------------------------------------------------------
 
 
@@ -404,7 +351,7 @@ def shaft_label(shaft: str, gears: list[Gear]) -> str:
 class ShaftEvidence:
     shaft: str
     gears: tuple[str, ...]
-    level: float  # L_s: the excess synchronous power per order (signal units² per order)
+    level: float  # L_s: the excess synchronous power per order, in null sds of an order's Δ (signals.evidence)
     sd: float
     z: float
     threshold: float
@@ -430,51 +377,6 @@ class ShaftEvidence:
             "stage_evidence": self.stage_evidence,
             "tooth": self.tooth,
         }
-
-
-def _null_var(rec: Content, ref: Spread) -> np.ndarray:
-    """Variance of Δ = S − S_h under the history (see spread: nothing in it follows one order's own
-    noisy estimate, the record's noise included)."""
-    lines = np.where(ref.line, ref.power, 0.0)
-    return (
-        _estimate_var(lines, _smooth(rec.noise, rec.source), rec.blocks)
-        + ref.between * (1 + 1 / ref.units)
-        + _estimate_var(lines, ref.unit_noise) / ref.units
-    )
-
-
-def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """(L_s, sd(L_s)) per shaft: band by band weighted least squares over the order classes."""
-    delta = rec.power - ref.power
-    w = 1.0 / np.maximum(_null_var(rec, ref), 1e-300)
-    k = len(lay.shafts)
-    code = lay.sync @ (1 << np.arange(k))
-    num, info = np.zeros(k), np.zeros(k)
-    edges = np.arange(lay.min_order, lay.max_order + lay.band, lay.band)
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        inb = (lay.orders >= lo) & (lay.orders < hi) & ~lay.carrier
-        classes = np.unique(code[inb])
-        if classes.size < k:
-            continue
-        A, d, wc = [], [], []
-        for c in classes:
-            sel = inb & (code == c)
-            A.append([(int(c) >> s) & 1 for s in range(k)])
-            wc.append(w[sel].sum())
-            d.append(float(np.sum(w[sel] * delta[sel]) / wc[-1]))
-        A, d, wc = np.array(A, float), np.array(d), np.array(wc)
-        F = A.T @ (A * wc[:, None])
-        if np.linalg.matrix_rank(F) < k:
-            continue
-        cov = np.linalg.inv(F)
-        L = cov @ (A.T @ (wc * d))
-        var = np.diag(cov)
-        num += L / var
-        info += 1 / var
-    if not info.any():
-        raise GearlabInputError("no band of orders holds every shaft's class of orders: nothing to localise with")
-    info = np.where(info > 0, info, np.nan)
-    return num / info, 1 / np.sqrt(info)
 
 
 def _harmonics(lay: Layout, shaft: int, sel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -631,6 +533,7 @@ class History:
             "between": sp.between,
             "unit_noise": sp.unit_noise,
             "units": np.array(sp.units),
+            "excess": sp.excess,
             "thresholds": self.thresholds,
             "left_out_z": self.left_out_z,
             "note": np.array(self.note),
@@ -653,7 +556,8 @@ class History:
                 f"a saved localisation history holds {state['power'].size} orders, the gearbox's layout "
                 f"{lay.orders.size}: saved for another gearbox description"
             )
-        sp = Spread(state["power"], state["line"], state["between"], state["unit_noise"], int(state["units"]))
+        excess = state["excess"] if "excess" in state else np.zeros(0)  # saved before: the noise model alone
+        sp = Spread(state["power"], state["line"], state["between"], state["unit_noise"], int(state["units"]), excess)
         # a history saved before takes were turned to a mark (no "marks"): one mark, nothing turned
         marks = int(state["marks"]) if "marks" in state else 1
         reference = state["reference"] if marks > 1 else None

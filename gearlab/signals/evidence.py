@@ -1,0 +1,154 @@
+"""Which gear, the evidence (signals.localise, "Evidence"): the healthy history's spread of synchronous
+power per order, the null variance of a record's difference from it, and each shaft's level.
+
+A record's Δ(q) = S(q) − S_h(q) is read in sds of its null spread (the record's noise, plus the
+history's unit-to-unit spread of that order's power): a fault's event reaches the sensor through the
+structure, so its excess is largest where the train's lines and resonances are, as is that spread, and
+Δ weighted by 1 / the null variance read it at quiet orders it hardly reaches (a 67T fault of a
+three-stage box placed on the slower 62T, a 24T pinion's chip on the input shaft). Two nuisances the
+history's units do not show are taken out first. At the history's lines a take's load scales every
+line alike, and two takes give that change with one degree of freedom (units cut from one take agree
+with each other): the record's lines are compared with the history's times their median ratio
+(healthy takes 15-19 % off two takes agreeing within 3-6 % named the intermediate shaft of three random
+trains at z 3.9-7.1, development seed 11). Off the lines a slow shaft's average holds the other shafts'
+leaks, a scatter beyond its noise model (z² 1.66 at the intermediate TSA's orders, 1.19 at the
+output's, seed 11): the units' scatter over that model, pooled over neighbouring orders, scales it.
+
+Everything is numpy: no torch, nothing from the layers above.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from .shaft import uniform_filter1d
+
+if TYPE_CHECKING:  # localise imports this module
+    from .localise import Content, Layout
+
+WEIGHT_SMOOTH = 101  # orders over which noise powers and spreads are pooled (spread)
+KAPPA = 8.0  # a history line: mean power this many noise sds of its mean over zero (see spread)
+GAIN_LINES = 3  # lines a take's common line gain is read from (fewer: none removed)
+
+
+@dataclass(frozen=True)
+class Spread:
+    """The history's per-order synchronous power and its record-to-record spread."""
+
+    power: np.ndarray  # S_h: mean synchronous power of the units
+    line: np.ndarray  # bool: S_h significant (KAPPA sd of its noise); elsewhere only noise
+    between: np.ndarray  # variance of a line's power from unit to unit beyond its noise
+    unit_noise: np.ndarray  # noise power of a unit's mean, smoothed over WEIGHT_SMOOTH orders
+    units: int
+    # off the lines, the units' scatter of power over its noise model, pooled over WEIGHT_SMOOTH orders of
+    # one average (empty: a history saved before it was kept; the noise model alone)
+    excess: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def _smooth(x: np.ndarray, source: np.ndarray | None = None, mask: np.ndarray | None = None) -> np.ndarray:
+    """*x* smoothed over WEIGHT_SMOOTH orders of one average (*source*): a slow shaft's TSA, resampled
+    by linear interpolation, holds a third of the input TSA's noise near the top order. *mask*: the mean
+    of the orders it holds in each window."""
+    out = np.empty_like(x)
+    for s in np.unique(source) if source is not None else [None]:
+        at = slice(None) if s is None else source == s
+        if mask is None:
+            out[at] = uniform_filter1d(x[at], size=WEIGHT_SMOOTH, mode="nearest")
+            continue
+        num = uniform_filter1d(np.where(mask[at], x[at], 0.0), size=WEIGHT_SMOOTH, mode="nearest")
+        out[at] = num / np.maximum(uniform_filter1d(mask[at].astype(float), size=WEIGHT_SMOOTH, mode="nearest"), 1e-12)
+    return out
+
+
+def _estimate_var(power: np.ndarray, noise: np.ndarray, blocks: int = 1) -> np.ndarray:
+    """Variance of Content.power about |μ|² = *power*: |X̄|² − n of complex Gaussian block means of noise
+    power B n (n = *noise* of the whole mean), averaged over B = *blocks*."""
+    return blocks * noise**2 + 2 * np.maximum(power, 0) * noise
+
+
+def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
+    """The units' mean power and, at the orders where it is a line, its spread beyond noise.
+
+    The weights of the evidence (_null_var) never follow one order's own noisy estimate (a weight
+    that rises where an order's power happened to come out low picks the orders where Δ comes out
+    high, and biases every class mean up): the noise enters smoothed over many orders, an order's
+    power and spread only where the history holds a line (KAPPA times the noise of its mean; at 4
+    the slow shafts' healthy z came out 0.3-0.6 high, at 8 within 0.15, development seeds); off the
+    lines the units' scatter over its noise model, pooled over neighbouring orders.
+    *evidence*: the orders read as evidence (not the mesh harmonics), whose lines give the common
+    relative spread."""
+    if len(units) < 2:
+        raise GearlabInputError(f"the history holds {len(units)} unit; expected at least 2 to measure its spread")
+    P = np.stack([u.power for u in units])
+    mean = P.mean(axis=0)
+    noise = np.mean([_smooth(u.noise, u.source) for u in units], axis=0)
+    line = mean > KAPPA * noise / math.sqrt(len(units))
+    nv = np.mean([_estimate_var(mean, u.noise) for u in units], axis=0)
+    b = np.maximum(P.var(axis=0, ddof=1) - nv, 0.0)
+    # two or three units give each order's spread with one or two degrees of freedom: a line
+    # whose units happen to agree must still be allowed its share of the common relative spread
+    strong = (mean > 10 * np.sqrt(nv)) & (True if evidence is None else evidence)
+    alpha2 = float(np.median(b[strong] / mean[strong] ** 2)) if strong.sum() >= 5 else 0.0
+    between = np.where(line, np.maximum(b, alpha2 * np.maximum(mean, 0) ** 2), 0.0)
+    model = np.mean([_estimate_var(np.zeros_like(mean), _smooth(u.noise, u.source)) for u in units], axis=0)
+    excess = _smooth(P.var(axis=0, ddof=1) / np.maximum(model, 1e-300), units[0].source, ~line)
+    return Spread(mean, line, between, noise, len(units), excess)
+
+
+def _null_var(rec: Content, ref: Spread) -> np.ndarray:
+    """Variance of Δ = S − S_h under the history (see spread: nothing in it follows one order's own
+    noisy estimate, the record's noise included); off the lines times the units' pooled excess scatter."""
+    lines = np.where(ref.line, ref.power, 0.0)
+    model = (
+        _estimate_var(lines, _smooth(rec.noise, rec.source), rec.blocks)
+        + ref.between * (1 + 1 / ref.units)
+        + _estimate_var(lines, ref.unit_noise) / ref.units
+    )
+    if ref.excess.size != model.size:  # a history saved before the pooled scatter was kept
+        return model
+    return np.where(ref.line, model, model * np.maximum(ref.excess, 1.0))
+
+
+def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """(L_s, sd(L_s)) per shaft, L_s in null sds of Δ: each order's Δ (at a line, from the history's
+    line times the lines' median ratio) divided by its null sd, band by band least squares over the
+    order classes (the module's docstring)."""
+    delta = rec.power - ref.power
+    lines = ref.line & ~lay.carrier
+    if lines.sum() >= GAIN_LINES:  # the take's common gain of the lines (its load)
+        gain = float(np.median(rec.power[lines] / ref.power[lines]))
+        delta = np.where(lines, rec.power - gain * ref.power, delta)
+    z = delta / np.sqrt(np.maximum(_null_var(rec, ref), 1e-300))
+    k = len(lay.shafts)
+    code = lay.sync @ (1 << np.arange(k))
+    num, info = np.zeros(k), np.zeros(k)
+    edges = np.arange(lay.min_order, lay.max_order + lay.band, lay.band)
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        inb = (lay.orders >= lo) & (lay.orders < hi) & ~lay.carrier
+        classes = np.unique(code[inb])
+        if classes.size < k:
+            continue
+        A, d, wc = [], [], []
+        for c in classes:
+            sel = inb & (code == c)
+            A.append([(int(c) >> s) & 1 for s in range(k)])
+            wc.append(float(sel.sum()))  # each order's z has unit variance: a class's mean has 1 / its count
+            d.append(float(z[sel].mean()))
+        A, d, wc = np.array(A, float), np.array(d), np.array(wc)
+        F = A.T @ (A * wc[:, None])
+        if np.linalg.matrix_rank(F) < k:
+            continue
+        cov = np.linalg.inv(F)
+        L = cov @ (A.T @ (wc * d))
+        var = np.diag(cov)
+        num += L / var
+        info += 1 / var
+    if not info.any():
+        raise GearlabInputError("no band of orders holds every shaft's class of orders: nothing to localise with")
+    info = np.where(info > 0, info, np.nan)
+    return num / info, 1 / np.sqrt(info)
