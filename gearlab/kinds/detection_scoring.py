@@ -35,6 +35,7 @@ from .detection_records import (
     unit_sets,
     unit_shaft,
     unit_window,
+    without_spikes,
 )
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
@@ -84,6 +85,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         # (cut with the input shaft's own content out first: detection_records.without_input_shaft)
         **({} if (shaft := unit_shaft(spec.source)) is None else {"unit_shaft": [shaft.name, *_ratio(shaft)]}),
         **({} if shaft is None else {"input_shaft_out": True}),
+        "spikes_out": True,  # a record's isolated spikes bridged before it is cut (without_spikes)
         "classical": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(spec.classical).items()},
         "conditions": {},
     }
@@ -353,6 +355,9 @@ def score(
         on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}{said}"))
         found[str(file)] = (rec.speed_hz, rec.angle_source)
         revs = rec.revolutions
+        if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
+            turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
+            revs = without_spikes(revs, rec.fs, rec.speed_hz, turns)
         if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
             _, p, q = meta["unit_shaft"]
             band = meta["conditions"][name]["max_order"]
