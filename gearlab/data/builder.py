@@ -50,7 +50,7 @@ from ..physics.faults import place_fault
 from ..registry import get_registry
 from ..signals import Standardiser, resample_revolutions, steady_start, tsa
 from ..signals.angle import TWO_PI
-from ..signals.shaft import shaft_revolutions
+from ..signals.shaft import shaft_revolutions, without_input_orders
 from . import placement
 from .placement import fault_parts, shaft_names
 from .realise import CYCLE_STREAM, REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
@@ -499,6 +499,8 @@ def shaft_row(task: RowsTask, revs: np.ndarray, start: int, offset: int, chain, 
     ratio = Fraction(*task.shaft)
     j = task.revolutions if task.use_tsa else 1
     count = math.ceil((j + 1) / ratio) + 1  # input revolutions that hold j whole turns of the shaft
+    if len(revs) % ratio.denominator == 0:  # whole turns of the shaft: as a record's units (signals.shaft)
+        revs = without_input_orders(revs, ratio.numerator)
     realised = _realised(task, record(revs, count, start), chain, noise, seed)
     phase = float((ratio * (offset + start)) % 1)
     turns = shaft_revolutions(realised, float(ratio), phase)[:j]
@@ -714,8 +716,13 @@ def build_dataset(
             return np.stack(rows)
         return rows  # rows of 1 or a period's revolutions; Rows made in the task
 
-    # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in
+    # a sample of damage on a slower gear starts where its tooth meshes: a whole number of the gear's periods in;
+    # cut on that gear's own shaft (unit_shaft) each turn holds every tooth at its angle: any revolution, as a
+    # healthy row (where it meshes, a later stage's pinion's rows all at one: test_builder_later_stage_teeth)
     periods = {key: math.lcm(*(placement.gear_period(pairs, *p[1:]) for p in on.parts)) for key, on in classes.items()}
+    shaft = {Fraction(*spec.unit_shaft)} if spec.unit_shaft else None
+    turns = {k: {placement.gear_turns(pairs, *g[1:]) for g in on.parts} for k, on in classes.items()}
+    periods.update({k: 1 for k in classes if turns[k] == shaft})
 
     def period_of(i: int) -> int:
         name = source[i][0][0]

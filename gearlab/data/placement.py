@@ -215,13 +215,18 @@ def train_period(pairs, stage: int, gear: str) -> int:
     return math.lcm(*periods)
 
 
-def gear_period(pairs, stage: int, gear: str) -> int:
-    """Input revolutions after which the gear (stage, gear) has turned a whole number of times: 1 for the
-    input pinion, 3 for the PHM 2009 rig's 96T idler gear (Simulator.period of damage on it)."""
+def gear_turns(pairs, stage: int, gear: str) -> Fraction:
+    """Turns of the gear (stage, gear) per input turn: 1 for the input pinion, 1/3 for the PHM 2009 rig's idler."""
     turns = Fraction(1)
     for pair in pairs[: stage - 1]:
         turns *= Fraction(pair.Z1, pair.Z2)
-    return (turns * (Fraction(pairs[stage - 1].Z1, pairs[stage - 1].Z2) if gear == "wheel" else 1)).denominator
+    return turns * (Fraction(pairs[stage - 1].Z1, pairs[stage - 1].Z2) if gear == "wheel" else 1)
+
+
+def gear_period(pairs, stage: int, gear: str) -> int:
+    """Input revolutions after which the gear (stage, gear) has turned a whole number of times: 1 for the
+    input pinion, 3 for the PHM 2009 rig's 96T idler gear (Simulator.period of damage on it)."""
+    return gear_turns(pairs, stage, gear).denominator
 
 
 def mesh_cycle_of(pairs) -> int:

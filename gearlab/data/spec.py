@@ -85,6 +85,8 @@ class DatasetSpec:
             d.pop("healthy_twin")  # likewise for every dataset that is no twin
         if not self.unit_shaft:
             d.pop("unit_shaft")  # likewise for every dataset of input-shaft rows
+        else:  # 2: fault rows start anywhere in the cycle, input orders out, the cut 4 x denser (shaft_row)
+            d["shaft_rows"] = 2
         return d
 
     def key(self) -> str:
