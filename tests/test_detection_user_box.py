@@ -126,3 +126,6 @@ def test_a_change_that_comes_back_every_turn_is_not_bridged(tmp_path):
     assert np.array_equal(without_spikes(thrice, 8000.0, 15.0), thrice)
     thrice[52, 700], thrice[52, 200] = 0.0, 12.0  # two at one angle by chance, one at another: a sensor's
     assert np.abs(without_spikes(thrice, 8000.0, 15.0)).max() < 2.0
+    rings = once.copy()
+    rings[17, 696:705] = 12.0 * np.cos(np.arange(-4, 5) * 0.6)  # a knock ringing through the mounting
+    assert np.array_equal(without_spikes(rings, 8000.0, 15.0), rings)
