@@ -185,15 +185,13 @@ def watched_teeth(source: DatasetSpec, written: dict) -> DatasetSpec:
     gear spread around it, each sample WATCHED_TEETH-fold fewer teeth's times as many duplicates, when
     the source simulates a gearbox description, its watched gear a later stage's pinion that the model
     takes one tooth at a time (no tooth-shift symmetry), and the table gives neither 'teeth' nor
-    'duplicates'; else *source*. In the rows data.builder makes of such a pinion every tooth's chip
-    lies at one place of its shaft's revolution, the healthy lines in phase with the healthy rows: on a
-    68/103 + 82/99 reducer's 82T intermediate pinion (development box L) six teeth's rows less the
-    healthy median agree at cosine 0.987-0.988 (best turn: none), so 82 teeth x 3 sizes, 247
-    simulations (57 min at --quick on 2 cores), made one shape 82 times. Kept whole: a wheel's teeth
-    and the input pinion's, whose damage the rows put at each tooth's own angle (the same box's 103T
-    intermediate wheel: tooth 40 at 39/103 of a turn; a one-stage box's wheel alike), and a shaft whose
-    meshes share a divisor g > 1 (shaft_symmetry turns the detectors' shapes by 1/g for the teeth
-    simulated)."""
+    'duplicates'; else *source*. A cost bound, not a symmetry: each tooth's chip sits at its own angle
+    of its shaft's revolution (data.builder's shaft rows, 5c7e946), so the rows hold WATCHED_TEETH
+    angles of the gear, each its own simulation; every tooth of a 68/103 + 82/99 reducer's 82T
+    intermediate pinion would be 82 x 3 sizes, 247 simulations (57 min at --quick on 2 cores), these
+    19. How much detection loses against every tooth is not measured. Kept whole: a wheel's teeth and
+    the input pinion's, and a shaft whose meshes share a divisor g > 1 (shaft_symmetry turns the
+    detectors' shapes by 1/g for the teeth simulated)."""
     if not written.get("gearbox") or "teeth" in written or "duplicates" in written or not source.faults:
         return source
     from ..data.placement import train_pairs
