@@ -34,6 +34,30 @@ def described_pair(*stages):
     return pair
 
 
+def two_file_detection(name: str, source: str) -> str:
+    """A detection scenario on box.toml whose [source] holds *source* (TOML lines), read against a
+    history a.csv and a test b.csv of columns acc and tacho (test_slow_shaft_learned, test_dataset_memory)."""
+    return f"""\
+[scenario]
+name = "{name}"
+kind = "detection"
+
+[source]
+gearbox = "box.toml"
+{source}
+[target]
+vibration = "acc"
+tacho = "tacho"
+files = [
+  {{ file = "a.csv", role = "history", label = "healthy" }},
+  {{ file = "b.csv", role = "test", label = "healthy" }},
+]
+
+[protocol]
+batch = 2
+"""
+
+
 # a 20/30 + 20/50 reducer, tacho on the input: the slower-shaft tests' gearbox (test_slow_shaft*)
 SLOW_BOX = description(
     stage(20, 30, "2 mm", "15 mm", ("15 mm", "20 mm")),

@@ -22,25 +22,10 @@ from gearlab.data import builder
 from gearlab.data.spec import POINTS
 from gearlab.kinds.common import DATASET_TABLE, dataset_spec
 
-TWO = description(
-    stage(17, 31, "2 mm", "15 mm", ("15 mm", "20 mm")),
-    stage(17, 29, "2.5 mm", "20 mm", ("20 mm", "30 mm")),
-    name="b2",
-    speed="20 Hz",
-    load="50 N*m",
-    near="input",
-    direction="x",
-    tacho="input",
-)
-ONE = description(
-    stage(17, 31, "2 mm", "15 mm", ("15 mm", "20 mm")),
-    name="b1",
-    speed="20 Hz",
-    load="50 N*m",
-    near="input",
-    direction="x",
-    tacho="input",
-)
+STAGE_1 = stage(17, 31, "2 mm", "15 mm", ("15 mm", "20 mm"))
+AT = dict(speed="20 Hz", load="50 N*m", near="input", direction="x", tacho="input")
+TWO = description(STAGE_1, stage(17, 29, "2.5 mm", "20 mm", ("20 mm", "30 mm")), name="b2", **AT)
+ONE = description(STAGE_1, name="b1", **AT)
 TEETH = (1, 2, 3, 4, 5)
 # 100 kHz, not the 175 kHz the stiffest mode asks for: the rows' geometry, not their accuracy, is tested
 pytestmark = pytest.mark.filterwarnings("ignore:.*fewer than 10 steps")

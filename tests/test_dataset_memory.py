@@ -15,7 +15,7 @@ import tracemalloc
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import description, stage, two_file_detection
 
 from gearlab.data import builder
 from gearlab.data.rows import Row, TurnedRows, entries, made
@@ -24,27 +24,7 @@ from gearlab.executors import LocalExecutor
 
 Z1, Z2 = 19, 31  # coprime: damage on the wheel repeats every 31 input turns
 
-SCENARIO = """\
-[scenario]
-name = "memory"
-kind = "detection"
-
-[source]
-gearbox = "box.toml"
-faults = { "chip@output gear" = [16, 20] }
-healthy = 4
-
-[target]
-vibration = "acc"
-tacho = "tacho"
-files = [
-  { file = "a.csv", role = "history", label = "healthy" },
-  { file = "b.csv", role = "test", label = "healthy" },
-]
-
-[protocol]
-batch = 2
-"""
+SCENARIO = two_file_detection("memory", 'faults = { "chip@output gear" = [16, 20] }\nhealthy = 4\n')
 
 
 @pytest.fixture

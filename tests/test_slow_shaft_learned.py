@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 from gearboxes import SLOW_BOX as BOX
+from gearboxes import two_file_detection
 
 from gearlab.data.rows import turned
 from gearlab.data.spec import POINTS
@@ -30,28 +31,7 @@ def test_a_cycle_of_any_number_of_turns_keeps_all_of_them():
         assert out.size == revolutions * POINTS, (revolutions, out.size / POINTS)
 
 
-SCENARIO = """\
-[scenario]
-name = "slow_rows"
-kind = "detection"
-
-[source]
-gearbox = "box.toml"
-faults = { "chip@output gear" = [12] }
-teeth = [1, 7, 13]
-healthy = 2
-
-[target]
-vibration = "acc"
-tacho = "tacho"
-files = [
-  { file = "a.csv", role = "history", label = "healthy" },
-  { file = "b.csv", role = "test", label = "healthy" },
-]
-
-[protocol]
-batch = 2
-"""
+SCENARIO = two_file_detection("slow_rows", 'faults = { "chip@output gear" = [12] }\nteeth = [1, 7, 13]\nhealthy = 2\n')
 
 
 def test_an_output_gear_chip_keeps_its_shape_in_the_tsa_of_output_revolutions(tmp_path):
