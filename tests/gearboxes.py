@@ -37,25 +37,12 @@ def described_pair(*stages):
 def two_file_detection(name: str, source: str) -> str:
     """A detection scenario on box.toml whose [source] holds *source* (TOML lines), read against a
     history a.csv and a test b.csv of columns acc and tacho (test_slow_shaft_learned, test_dataset_memory)."""
-    return f"""\
-[scenario]
-name = "{name}"
-kind = "detection"
-
-[source]
-gearbox = "box.toml"
-{source}
-[target]
-vibration = "acc"
-tacho = "tacho"
-files = [
-  {{ file = "a.csv", role = "history", label = "healthy" }},
-  {{ file = "b.csv", role = "test", label = "healthy" }},
-]
-
-[protocol]
-batch = 2
-"""
+    files = ", ".join(
+        f'{{ file = "{f}", role = "{r}", label = "healthy" }}' for f, r in (("a.csv", "history"), ("b.csv", "test"))
+    )
+    target = f'[target]\nvibration = "acc"\ntacho = "tacho"\nfiles = [{files}]\n'
+    head = f'[scenario]\nname = "{name}"\nkind = "detection"\n\n[source]\ngearbox = "box.toml"\n'
+    return f"{head}{source}\n{target}\n[protocol]\nbatch = 2\n"
 
 
 # a 20/30 + 20/50 reducer, tacho on the input: the slower-shaft tests' gearbox (test_slow_shaft*)
