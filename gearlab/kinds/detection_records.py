@@ -24,7 +24,7 @@ from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
 from ..signals.indicators import band_limited, difference_signal
-from ..signals.shaft import shaft_revolutions
+from ..signals.shaft import shaft_revolutions, without_input_orders
 from . import record_effects
 from .detection_settings import Classical
 
@@ -73,9 +73,7 @@ def without_input_shaft(revs: np.ndarray, p: int, q: int) -> np.ndarray:
     content stay; a record of fewer than OTHER_SHAFT_TURNS turns of that shaft is left as it is."""
     if p == q or len(revs) * p < OTHER_SHAFT_TURNS * q:
         return revs
-    F = np.fft.rfft(np.asarray(revs, dtype=np.float64).mean(axis=0))
-    F[np.arange(len(F)) % p == 0] = 0.0
-    return (revs - np.fft.irfft(F, n=revs.shape[-1])).astype(revs.dtype)
+    return without_input_orders(revs, p).astype(revs.dtype)
 
 
 def unit_revolutions(revs: np.ndarray, p: int, q: int, max_order: float | None, input_out: bool = True) -> np.ndarray:
