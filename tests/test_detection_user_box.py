@@ -112,7 +112,7 @@ def test_a_sensor_s_isolated_spikes_do_not_set_the_history_s_units(tmp_path):
 
 def test_a_change_that_comes_back_every_turn_is_not_bridged(tmp_path):
     # a tooth's pulse as high as the spikes but once a turn is the gearbox's: left whole
-    from gearlab.kinds.detection_records import without_spikes
+    from gearlab.signals.spikes import without_spikes
 
     revs = 0.3 * np.random.default_rng(3).standard_normal((60, 1024))
     revs[:, 400] += 12.0

@@ -21,6 +21,7 @@ from ..parts.measured import TargetFile, held
 from ..runs import RunDir
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
+from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
 from .detection_classical import classical_record
@@ -35,7 +36,6 @@ from .detection_records import (
     unit_sets,
     unit_shaft,
     unit_window,
-    without_spikes,
 )
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
