@@ -197,7 +197,8 @@ def read_recording(
     unit: str | None = None,
 ) -> Recording:
     """One measured file as it is (docs/recordings.md: .csv, .txt, .zip, .npz, .h5, .wav, .mat): the
-    vibration in m/s² (through *sensitivity*, e.g. ``"100 mV/g"``, and *gain*, volts per file unit;
+    vibration in m/s² (through *sensitivity*, e.g. ``"100 mV/g"``, and *gain*, volts per file unit, or without a
+    sensitivity g per volt or per file unit, e.g. ``"50 g"``, a WAV's full scale;
     *unit*, ``"g"``, ``"m/s^2"``, ``"V"`` or ``"mV"``, where the channel's name and file say none),
     the tacho as stored and the sampling rate (the file's, or *fs*, e.g. ``"20 kHz"``).
 
@@ -210,17 +211,10 @@ def read_recording(
     (20000.0, 20000, 9.807)
     """
     from .data.recordings import read_recording as read
-    from .data.textzip import parse_sensitivity
+    from .data.textzip import calibration
 
-    return read(
-        path,
-        vibration,
-        tacho,
-        fs=_si(fs, "Hz", "fs"),
-        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, "sensitivity"),
-        gain=_si(gain, "V", "gain"),
-        unit=_unit(unit, "unit"),
-    )
+    chain = calibration({"sensitivity": sensitivity, "gain": gain}, lambda key: key)
+    return read(path, vibration, tacho, fs=_si(fs, "Hz", "fs"), **chain, unit=_unit(unit, "unit"))
 
 
 def _unit(value: str | None, where: str) -> str | None:
@@ -268,7 +262,7 @@ def inspect_options(
     options are), checked once: a wrong value is one line naming *flag(key)* (the CLI passes
     '--pulses-per-rev' for 'pulses_per_rev')."""
     from .data.importers import TACHO_KINDS
-    from .data.textzip import parse_sensitivity
+    from .data.textzip import calibration
     from .inspect import InspectOptions
     from .parts.measured import speed_of
 
@@ -280,9 +274,7 @@ def inspect_options(
     rate = _si(fs, "Hz", flag("fs"))
     if rate is not None and not 0 < rate <= 1e7:
         raise GearlabInputError(f"{flag('fs')}: expected a sampling rate in (0, 10 MHz], got {fs!r}")
-    volts = _si(gain, "V", flag("gain"))
-    if volts is not None and not volts > 0:
-        raise GearlabInputError(f"{flag('gain')}: expected a positive number of volts per file unit, got {gain!r}")
+    chain = calibration({"sensitivity": sensitivity, "gain": gain}, flag)
     return InspectOptions(
         vibration=vibration,
         tacho=tacho,
@@ -291,8 +283,7 @@ def inspect_options(
         tacho_shaft=tacho_shaft,
         speed_hz=None if speed is None else speed_of(speed, flag("speed")),  # as [target] key 'speed'
         fs=rate,
-        sensitivity=None if sensitivity is None else parse_sensitivity(sensitivity, flag("sensitivity")),
-        gain=volts,
+        **chain,
         unit=_unit(unit, flag("unit")),
     )
 

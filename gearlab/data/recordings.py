@@ -1,8 +1,7 @@
 """The one import path of a measured recording, for every kind: the file, its channels, their
 roles and units, the sampling rate and the shaft angle (docs/real_data.md).
 
-    file ─► named channels + rate fields          read_contents: one small reader per format
-                                                  (gearlab.data.readers)
+    file ─► named channels + rate fields          read_contents: one small reader per format (data.readers)
          ─► vibration in m/s², tacho, rate         read_recording: units from the sensitivity, the
                                                   gain and what a column's name says ('acc_V'),
                                                   else the file or the scenario's 'unit' key
@@ -19,8 +18,7 @@ Formats (by extension) and where the sampling rate comes from:
                   or none (columns "0", "1", …); '#' comment lines; the rate from a time column
                   (time, t, time_s, 'Time [s]', 'time (ms)', …: see time_scale) or a comment
                   '# fs = 51200'
-    .txt / .dat   blank-separated text, plain, gzipped (.gz) or one text file in a .zip
-    .zip / .gz    (gearlab.data.textzip: streamed, for records of many megabytes); a header row or none
+    .txt .dat .gz .zip  blank-separated text: plain, gzipped, or one file zipped (streamed); a header row or none
     .npz          arrays by name, loaded without pickle; rate from a scalar 'fs' or a time array
     .h5 / .hdf5   datasets by path ("group/acc"); rate from an attribute 'fs' on the channel,
                   else from an 'fs' attribute or 'fs'/time dataset in its group, or the
@@ -417,9 +415,9 @@ def channel_scale(
 ) -> tuple[float, str]:
     """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the channel's name -- or else
     the *unit* the file states for it (an HDF5 'units' attribute), or else the scenario's 'unit' key (*declared*, which
-    neither may contradict) -- says of its unit (volts need a sensitivity, m/s² or g must not have one; mV are volts /
-    1000). *where*: the scenario table, for the one-line errors that name its key (or *flag*(key): a command's option);
-    *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
+    neither may contradict) -- says of its unit (volts, and a gain in volts, need a sensitivity; m/s² or g have none;
+    mV are volts / 1000). *where*: the scenario table, for the one-line errors naming its key (or *flag*(key): a
+    command's option); *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
 
     def at(key: str) -> str:
         return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
@@ -442,7 +440,7 @@ def channel_scale(
             "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
         )
     if said is not None and said[0] == "acceleration":
-        for key, value in (("sensitivity", sensitivity), ("gain", gain)):
+        for key, value in (("gain", gain), ("sensitivity", sensitivity)):  # a gain in g is read as both
             if value is not None and declared is not None:  # which of the two is wrong, only the user knows
                 raise GearlabInputError(
                     f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected no {key} "
@@ -464,9 +462,12 @@ def channel_scale(
     volts = gain if gain is not None else (said[2] if said is not None else 1.0)
     if sensitivity is None and gain is None:
         return 1.0, "unknown (no sensitivity or gain given: the values are taken as m/s²)"
-    return volts / (1.0 if sensitivity is None else sensitivity), (
-        f"m/s² = value x {volts:g} V / sensitivity {1.0 if sensitivity is None else sensitivity:g} V/(m/s²)"
-    )
+    if sensitivity is None:  # volts, not m/s²
+        raise GearlabInputError(
+            f"{at('gain')}: {gain:g} V per file unit gives volts; expected a sensitivity too (e.g. '100 mV/g'), or "
+            "the gain in g per volt (e.g. '10 g/V') or in g per file unit (a full scale, e.g. '50 g')"
+        )
+    return volts / sensitivity, f"m/s² = value x {volts / sensitivity:.6g} ({volts:g} V / {sensitivity:.6g} V per m/s²)"
 
 
 # --- a recording ---------------------------------------------------------------------------
@@ -478,8 +479,7 @@ def channel_key(value) -> str:
 
 
 def named(name: str, columns: list[str]) -> str:
-    """The header name of a column asked for by its 0-based index ("1"), else *name* (what its
-    unit is read from)."""
+    """The header name of a column asked for by its 0-based index ("1"), else *name* (what its unit is read from)."""
     if name not in columns and str(name).strip().isdigit() and int(name) < len(columns):
         return columns[int(name)]
     return name

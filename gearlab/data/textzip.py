@@ -41,7 +41,7 @@ from ..units import to_si
 from .readers.text import read_columns as read_columns  # its home before the one import path
 from .recordings import CutRecording, cut_recording
 
-__all__ = ["TextRecord", "align_to", "parse_sensitivity", "read_columns", "read_record"]
+__all__ = ["TextRecord", "align_to", "calibration", "parse_sensitivity", "read_columns", "read_record"]
 
 STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer sensitivities (ISO 80000-3)
 # V per m/s²: accelerometers span 0.01 mV/g (shock) to 10 V/g (seismic); outside it, a unit is wrong
@@ -56,15 +56,14 @@ _GRAVITY = re.compile(r"(?<![\w.])g(?![\w])")
 
 
 def parse_sensitivity(value, where: str) -> float:
-    """An accelerometer sensitivity ("10 mV/g", "1.02 mV/(m/s^2)", or a number in V/(m/s²))
-    as volts per m/s²."""
+    """An accelerometer sensitivity ("10 mV/g", "1.02 mV/(m/s^2)", its inverse "10 g/V", or a number in
+    V/(m/s²)) as volts per m/s²."""
     written = value if isinstance(value, str) else None  # messages quote the user's text
-    if isinstance(value, str):
-        value = _GRAVITY.sub("g_n", value)
     try:
-        s = to_si(value, "V*s^2/m", where, as_written=written)
+        number, unit = _quantity(value, ("V*s^2/m", "m/s^2/V"), where)
     except GearlabInputError as exc:
         raise GearlabInputError(f"{exc} (volts per acceleration, e.g. '10 mV/g'; g is standard gravity)") from None
+    s = number if unit == "V*s^2/m" or not number > 0 else 1.0 / number
     if not s > 0:
         raise GearlabInputError(f"{where}: expected a positive sensitivity such as '10 mV/g', got {shown(value)}")
     if not SENSITIVITY_RANGE[0] <= s <= SENSITIVITY_RANGE[1]:
@@ -75,6 +74,71 @@ def parse_sensitivity(value, where: str) -> float:
             "e.g. '100 mV/g'"
         )
     return s
+
+
+def _quantity(value, units: tuple[str, ...], where: str) -> tuple[float, str]:
+    """(value in SI, which of *units* it has): the first unit whose dimension the text has; a bare
+    number is in units[0]. Else the error of units[0] (the form most people write)."""
+    written = value if isinstance(value, str) else None
+    text = _GRAVITY.sub("g_n", value) if isinstance(value, str) else value
+    first = None
+    for unit in units:
+        try:
+            return to_si(text, unit, where, as_written=written), unit
+        except GearlabInputError as exc:
+            first = first or exc
+    raise first
+
+
+# A gain by its dimension: volts per file unit (beside a sensitivity), an acceleration per volt (a
+# sensitivity's inverse) or an acceleration per file unit (a WAV's full scale, "50 g"; counts of "1 mg").
+GAIN_UNITS = ("V", "m/s^2/V", "m/s^2")
+CALIBRATION = ("sensitivity", "gain")
+
+
+def gain_quantity(value, where: str) -> tuple[float, str]:
+    """(positive SI value, which of GAIN_UNITS) of a 'gain', else one line naming *where*."""
+    try:
+        number, unit = _quantity(value, GAIN_UNITS, where)
+    except GearlabInputError:
+        raise GearlabInputError(
+            f"{where}: cannot read {shown(value)} as a gain; expected volts per file unit with a sensitivity "
+            "(e.g. '0.3 mV'), or an acceleration per volt (e.g. '10 g/V') or per file unit (a full scale, e.g. "
+            "'50 g'); g is standard gravity"
+        ) from None
+    if not number > 0:
+        raise GearlabInputError(
+            f"{where}: expected a positive number of volts per file unit such as '0.3 mV', or of g per volt or per "
+            f"file unit such as '50 g'; got {shown(value)} (expected a positive voltage or acceleration)"
+        )
+    return number, unit
+
+
+def calibration(given: dict, at) -> dict:
+    """'sensitivity' (V per m/s²) and 'gain' (V per file unit) from the keys *given* of them (None or
+    "": not given), as the readers take them (recordings.channel_scale: m/s² = value x gain /
+    sensitivity): a gain in g per volt is a sensitivity; a gain in g per file unit is that file unit
+    read as 1 V at the sensitivity 1/gain, so that both set every reading of a file alike. *at(key)*
+    names a key in the one-line errors; a gain in g beside a sensitivity is one."""
+    values = {key: None if given.get(key) in (None, "") else given[key] for key in CALIBRATION if key in given}
+    out = dict(values)
+    if values.get("sensitivity") is not None:
+        out["sensitivity"] = parse_sensitivity(values["sensitivity"], at("sensitivity"))
+    if values.get("gain") is None:
+        return out
+    number, unit = gain_quantity(values["gain"], at("gain"))
+    if unit == "V":
+        return out | {"gain": number}
+    if values.get("sensitivity") is not None:
+        per = "volt" if unit == "m/s^2/V" else "file unit"
+        raise GearlabInputError(
+            f"{at('gain')}: {shown(values['gain'])} is an acceleration per {per}, which the sensitivity "
+            f"{shown(values['sensitivity'])} would scale again; expected no sensitivity (or a gain in volts, "
+            "e.g. '2 V')"
+        )
+    if unit == "m/s^2/V":
+        return {"sensitivity": parse_sensitivity(values["gain"], at("gain")), "gain": None}
+    return {"sensitivity": 1.0 / number, "gain": 1.0}
 
 
 # --- a record ----------------------------------------------------------------------------

@@ -13,7 +13,7 @@ from ..data.importers import MeasuredSpec
 from ..data.placement import canonical_faults, model_shafts
 from ..data.recordings import UNITS, channel_key, check_measured_file, check_recording, only_vibration
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
-from ..data.textzip import parse_sensitivity
+from ..data.textzip import CALIBRATION, calibration, gain_quantity, parse_sensitivity
 from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
@@ -61,18 +61,8 @@ def _sensitivity(value, where: str):
     return value
 
 
-def gain_si(value, where: str) -> float:
-    """A gain (volts per file unit, e.g. '0.3 mV') in V."""
-    gain = to_si(value, "V", where)
-    if not gain > 0:
-        raise GearlabInputError(
-            f"{where}: expected a positive voltage per file unit such as '0.3 mV', got {shown(value)}"
-        )
-    return gain
-
-
 def _gain(value, where: str):
-    gain_si(value, where)
+    gain_quantity(value, where)
     return value
 
 
@@ -169,8 +159,8 @@ MEASURED = {
         "default": None,
         "unit": "V*s^2/m",
         "check": _sensitivity,
-        "doc": "measured data: sensor sensitivity, e.g. '10 mV/g' (a number: V per m/s²); without it or "
-        "'gain' the units are unknown",
+        "doc": "measured data: sensor sensitivity, e.g. '10 mV/g' or '10 g/V' (a number: V per m/s²); without it "
+        "or 'gain' the units are unknown",
     },
     "unit": {
         "types": str,
@@ -184,7 +174,8 @@ MEASURED = {
         "default": None,
         "unit": "V",
         "check": _gain,
-        "doc": "measured data: volts per file unit, e.g. '0.3 mV' per count of an integer record (WAV: at full scale)",
+        "doc": "measured data: volts per file unit with a 'sensitivity', e.g. '0.3 mV' per count of an integer "
+        "record (WAV: at full scale); or, without one, g per volt ('10 g/V') or per file unit ('50 g' at full scale)",
     },
     "transient": {
         "types": str,
@@ -534,11 +525,8 @@ def units_of(entry: dict, where: str) -> dict:
     """sensitivity (V per m/s²), gain (V per file unit) and unit (one of UNITS) of a measured 'file'
     entry, as given."""
     out = {"unit": entry["unit"]} if entry.get("unit") else {}
-    if entry.get("sensitivity") is not None:
-        out["sensitivity"] = parse_sensitivity(entry["sensitivity"], f"{where} key 'sensitivity'")
-    if entry.get("gain") is not None:
-        out["gain"] = gain_si(entry["gain"], f"{where} key 'gain'")
-    return out
+    given = calibration({k: entry.get(k) for k in CALIBRATION}, lambda k: f"{where} key '{k}'")
+    return out | {k: v for k, v in given.items() if v is not None}
 
 
 def noise_spec(table: dict, where: str, defaults: NoiseSpec | None = None) -> NoiseSpec | None:

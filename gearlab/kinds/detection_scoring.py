@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.recordings import channel_key, channel_listing, cut_recording, read_header
+from ..data.textzip import CALIBRATION, calibration
 from ..data.which_gear import Take
 from ..errors import GearlabInputError
 from ..events import Event
@@ -308,7 +309,9 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
                 "expected no tacho (the new records are read as the run's were)"
             )
         in_bounds(setting(**MEASURED[key]).metadata["setting"], value, at)  # as the [target]'s are checked
-        keys[key] = held(key, value, at)
+        if key not in CALIBRATION:
+            keys[key] = held(key, value, at)
+    keys |= calibration({k: v for k, v in (given or {}).items() if k in CALIBRATION}, lambda k: f"--key {k}")
     if "tacho_shaft" in keys:
         keys["tacho_shaft"] = _tacho_shaft(keys)
     gearbox = keys.pop("gearbox", None)  # a run from before the target could go without a tacho has none

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..data.recordings import channel_key, check_measured_file, check_recording, cut_recording, only_vibration
-from ..data.textzip import parse_sensitivity
+from ..data.textzip import CALIBRATION, calibration
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
 from ..units import to_si
@@ -203,7 +203,8 @@ def acquisition(t: dict, where: str, keys=ACQUISITION) -> dict:
     """The acquisition *keys* of a [target] table or a 'files' entry *t* (checked as
     kinds.common.MEASURED declares them) as Target holds them: channels as the readers name them,
     quantities in SI, None where not given."""
-    return {key: held(key, t.get(key), f"{where} key '{key}'") for key in keys}
+    out = {key: held(key, t.get(key), f"{where} key '{key}'") for key in keys if key not in CALIBRATION}
+    return out | calibration({k: t.get(k) for k in CALIBRATION if k in keys}, lambda k: f"{where} key '{k}'")
 
 
 def held(key: str, value, where: str):
@@ -216,9 +217,7 @@ def held(key: str, value, where: str):
         return channel_key(value)
     if key == "pulses_per_rev":
         return int(value)
-    if key == "sensitivity":
-        return parse_sensitivity(value, where)
-    return value if key == "unit" else to_si(value, {"gain": "V", "fs": "Hz"}[key], where)
+    return value if key == "unit" else to_si(value, "Hz", where)  # fs ('sensitivity' and 'gain': calibration)
 
 
 def speed_of(value, where: str) -> float:
