@@ -39,7 +39,6 @@ anything is read (GEARLAB_MAX_RECORD_MB, gearlab.data.readers.base).
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -51,6 +50,10 @@ from ..errors import GearlabInputError
 from ..params import did_you_mean
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz
+from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
+from .channel_units import UNITS as UNITS
+from .channel_units import channel_scale as channel_scale
+from .channel_units import name_unit as name_unit  # what a channel's name says of its unit
 from .readers import READERS, Contents, check_size
 from .readers.base import _listing, _one_line, _one_line_repr, not_time
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
@@ -375,100 +378,6 @@ def angle_tacho(tacho: np.ndarray) -> np.ndarray:
 
 
 # --- units -------------------------------------------------------------------------------
-
-STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer units and sensitivities (ISO 80000-3)
-# A unit at the end of a channel's name, after a separator or in brackets: acc_V, "acc [mV]",
-# acc_ms2, "acc (m/s^2)", acc_g. Volts are case-sensitive (a 'v' ends many words).
-_VOLT_NAME = re.compile(r"(?:^|[_\s\-.(\[])(m?V)[)\]]?$")
-_ACCELERATION_NAME = re.compile(r"(?:[_\s\-.(\[])(m/s\^?2|m/s²|m/s/s|ms2|mps2|g)[)\]]?$", re.IGNORECASE)
-
-
-def name_unit(name: str) -> tuple[str, str, float] | None:
-    """(quantity, unit, SI factor) a channel's name declares: ("voltage", "mV", 1e-3),
-    ("acceleration", "g", 9.80665), ...; None when it says none."""
-    text = " ".join(str(name).split())
-    match = _VOLT_NAME.search(text)
-    if match:
-        unit = match.group(1)
-        return "voltage", unit, 1e-3 if unit == "mV" else 1.0
-    match = _ACCELERATION_NAME.search(text)
-    if match:
-        unit = match.group(1)
-        return "acceleration", unit, STANDARD_GRAVITY if unit.lower() == "g" else 1.0
-    return None
-
-
-# What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
-# (a headerless text column): the quantity and factor are name_unit's, as if the name ended in it.
-UNITS = ("m/s^2", "m/s²", "g", "V", "mV")
-
-
-def channel_scale(
-    name: str,
-    sensitivity: float | None,
-    gain: float | None,
-    where: str,
-    integer: bool = False,
-    unit: str | None = None,
-    declared: str | None = None,
-    flag=None,
-) -> tuple[float, str]:
-    """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the channel's name -- or else
-    the *unit* the file states for it (an HDF5 'units' attribute), or else the scenario's 'unit' key (*declared*, which
-    neither may contradict) -- says of its unit (volts, and a gain in volts, need a sensitivity; m/s² or g have none;
-    mV are volts / 1000). *where*: the scenario table, for the one-line errors naming its key (or *flag*(key): a
-    command's option); *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
-
-    def at(key: str) -> str:
-        return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
-
-    said, says = name_unit(name), "as its name says"
-    if said is None and unit is not None:
-        said, says = name_unit(f"[{unit}]"), f"as the file's unit '{unit}' says"
-    if declared is not None:
-        given = name_unit(f"[{declared}]")
-        if said is not None and (said[0], said[2]) != (given[0], given[2]):  # m/s^2 and ms2 agree
-            raise GearlabInputError(
-                f"{at('unit')}: '{declared}' contradicts channel '{name}', which is in {said[1]} ({says}); "
-                f"expected no unit (or '{said[1]}')"
-            )
-        if said is None:
-            said, says = given, "as " + (flag("unit") if flag else "key 'unit'") + " says"
-    if said is not None and said[0] == "voltage" and sensitivity is None:
-        raise GearlabInputError(
-            f"{at('sensitivity')}: missing; channel '{name}' is in volts ({said[1]}, {says}); "
-            "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
-        )
-    if said is not None and said[0] == "acceleration":
-        for key, value in (("gain", gain), ("sensitivity", sensitivity)):  # a gain in g is read as both
-            if value is not None and declared is not None:  # which of the two is wrong, only the user knows
-                raise GearlabInputError(
-                    f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected no {key} "
-                    "(values in volts: unit = 'V' or 'mV' with the sensitivity; values in g at a full scale of N g: "
-                    "no unit, gain = 'N V', sensitivity = '1 V/g')"
-                )
-            if value is not None:
-                raise GearlabInputError(
-                    f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key}"
-                )
-        if said[2] == 1.0:
-            return 1.0, f"m/s² (channel '{name}')"
-        return said[2], f"m/s² = value x {said[2]:g} (channel '{name}' in {said[1]})"
-    if integer and sensitivity is not None and gain is None:
-        raise GearlabInputError(
-            f"{at('gain')}: missing; channel '{name}' holds integer counts, so the sensitivity needs the "
-            "volts per count (a WAV file's: the volts at full scale), e.g. gain = '0.3 mV'"
-        )
-    volts = gain if gain is not None else (said[2] if said is not None else 1.0)
-    if sensitivity is None and gain is None:
-        return 1.0, "unknown (no sensitivity or gain given: the values are taken as m/s²)"
-    if sensitivity is None:  # volts, not m/s²
-        raise GearlabInputError(
-            f"{at('gain')}: {gain:g} V per file unit gives volts; expected a sensitivity too (e.g. '100 mV/g'), or "
-            "the gain in g per volt (e.g. '10 g/V') or in g per file unit (a full scale, e.g. '50 g')"
-        )
-    return volts / sensitivity, f"m/s² = value x {volts / sensitivity:.6g} ({volts:g} V / {sensitivity:.6g} V per m/s²)"
-
 
 # --- a recording ---------------------------------------------------------------------------
 

@@ -38,12 +38,12 @@ import numpy as np
 from ..errors import GearlabInputError, shown
 from ..signals import POINTS
 from ..units import to_si
+from .channel_units import STANDARD_GRAVITY
 from .readers.text import read_columns as read_columns  # its home before the one import path
 from .recordings import CutRecording, cut_recording
 
 __all__ = ["TextRecord", "align_to", "calibration", "parse_sensitivity", "read_columns", "read_record"]
 
-STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer sensitivities (ISO 80000-3)
 # V per m/s²: accelerometers span 0.01 mV/g (shock) to 10 V/g (seismic); outside it, a unit is wrong
 SENSITIVITY_RANGE = (1e-5 / STANDARD_GRAVITY, 10.0 / STANDARD_GRAVITY)
 TWO_PI = 2.0 * np.pi

@@ -1,0 +1,122 @@
+"""What a vibration channel's values are in: the unit its name ends in ('acc_V', 'acc [mg]') or its file
+states (an HDF5 'units' attribute, a CSV row of units), or a scenario's 'unit' key, with the sensitivity and
+gain (data.textzip.calibration), as the factor to m/s² and a line saying how (channel_scale)."""
+
+from __future__ import annotations
+
+import re
+
+from ..errors import GearlabInputError
+from ..units import to_si
+
+STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer units and sensitivities (ISO 80000-3)
+# A unit at the end of a channel's name, after a separator or in brackets: acc_V, "acc [mV]",
+# acc_ms2, "acc (m/s^2)", acc_g, acc_mg. Volts are case-sensitive (a 'v' ends many words).
+_VOLT_NAME = re.compile(r"(?:^|[_\s\-.(\[])([mµu]?V)[)\]]?$")
+_ACCELERATION_NAME = re.compile(r"(?:[_\s\-.(\[])(m/s\^?2|m/s²|m/s/s|ms2|mps2|m?g)[)\]]?$", re.IGNORECASE)
+# g in a unit is standard gravity, never the gram: '50 g' (a full scale: one file unit is 50 g), 'mg', 'G'
+_METRES_PER_S2 = ("m/s^2", "m/s²", "m/s/s", "ms2", "mps2", "m/s2")
+_G_UNIT = re.compile(r"(?P<number>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)?\s*(?P<prefix>[mµu]?)(?:g|g_n|gn)", re.IGNORECASE)
+
+
+def name_unit(name: str) -> tuple[str, str, float] | None:
+    """(quantity, unit, SI factor) a channel's name declares: ("voltage", "mV", 1e-3),
+    ("acceleration", "g", 9.80665), ...; None when it says none."""
+    text = " ".join(str(name).split())
+    match = _VOLT_NAME.search(text) or _ACCELERATION_NAME.search(text)
+    return None if match is None else unit_scale(match.group(1))
+
+
+def unit_scale(text: str) -> tuple[str, str, float] | None:
+    """(quantity, unit, SI per file unit) of a unit a file states for a channel (an HDF5 'units' attribute, a
+    CSV row of units) or a name ends in: "voltage" or "acceleration", its prefix and number read ('uV', 'mg',
+    'cm/s^2', '50 g'); None for a unit of another quantity or none gearlab reads ('counts', 'EU', 'Pa')."""
+    unit = " ".join(str(text).split()).strip("[]() ")
+    g = _G_UNIT.fullmatch(unit)
+    if g:
+        prefix = {"": 1.0, "m": 1e-3}.get(g["prefix"].lower(), 1e-6)
+        return "acceleration", unit, float(g["number"] or 1.0) * prefix * STANDARD_GRAVITY
+    if unit.lower() in _METRES_PER_S2:  # as names write it (ms2 is not ms², m/s2 not m per s2)
+        return "acceleration", unit, 1.0
+    if not re.search(r"[A-Za-zµ]", unit):
+        return None
+    for quantity, si in (("voltage", "V"), ("acceleration", "m/s^2")):
+        try:
+            return quantity, unit, to_si(unit.replace("²", "^2"), si, "")
+        except GearlabInputError:
+            continue
+    return None
+
+
+# What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
+# (a headerless text column): the quantity and factor are name_unit's, as if the name ended in it.
+UNITS = ("m/s^2", "m/s²", "g", "V", "mV")
+
+
+def channel_scale(
+    name: str,
+    sensitivity: float | None,
+    gain: float | None,
+    where: str,
+    integer: bool = False,
+    unit: str | None = None,
+    declared: str | None = None,
+    flag=None,
+) -> tuple[float, str]:
+    """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the channel's name -- or else
+    the *unit* the file states for it (an HDF5 'units' attribute), or else the scenario's 'unit' key (*declared*, which
+    neither may contradict) -- says of its unit (volts, and a gain in volts, need a sensitivity; m/s² or g have none;
+    mV are volts / 1000). *where*: the scenario table, for the one-line errors naming its key (or *flag*(key): a
+    command's option); *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
+
+    def at(key: str) -> str:
+        return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
+
+    said, says = name_unit(name), "as its name says"
+    if said is None and unit is not None:
+        said, says = unit_scale(unit), f"as the file's unit '{unit}' says"
+    if declared is not None:
+        given = name_unit(f"[{declared}]")
+        if said is not None and (said[0], said[2]) != (given[0], given[2]):  # m/s^2 and ms2 agree
+            raise GearlabInputError(
+                f"{at('unit')}: '{declared}' contradicts channel '{name}', which is in {said[1]} ({says}); "
+                f"expected no unit (or '{said[1]}')"
+            )
+        if said is None:
+            said, says = given, "as " + (flag("unit") if flag else "key 'unit'") + " says"
+    if said is not None and said[0] == "voltage" and sensitivity is None:
+        raise GearlabInputError(
+            f"{at('sensitivity')}: missing; channel '{name}' is in volts ({said[1]}, {says}); "
+            "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
+        )
+    if said is not None and said[0] == "acceleration":
+        for key, value in (("gain", gain), ("sensitivity", sensitivity)):  # a gain in g is read as both
+            if value is not None and declared is not None:  # which of the two is wrong, only the user knows
+                raise GearlabInputError(
+                    f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected no {key} "
+                    "(values in volts: unit = 'V' or 'mV' with the sensitivity; values in g at a full scale of N g: "
+                    "no unit, gain = 'N V', sensitivity = '1 V/g')"
+                )
+            if value is not None:
+                raise GearlabInputError(
+                    f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key}"
+                )
+        if said[2] == 1.0:
+            return 1.0, f"m/s² (channel '{name}')"
+        scale = f": one file unit is {said[1]}" if said[1][:1].isdigit() else ""  # '50 g', a full scale
+        return said[2], f"m/s² = value x {said[2]:g} (channel '{name}' in {said[1]}{scale})"
+    if integer and sensitivity is not None and gain is None:
+        raise GearlabInputError(
+            f"{at('gain')}: missing; channel '{name}' holds integer counts, so the sensitivity needs the "
+            "volts per count (a WAV file's: the volts at full scale), e.g. gain = '0.3 mV'"
+        )
+    volts = gain if gain is not None else (said[2] if said is not None else 1.0)
+    if sensitivity is None and gain is None:
+        unread = f"the file's unit '{unit}' is not read; " if unit is not None and said is None else ""
+        return 1.0, f"unknown ({unread}no sensitivity or gain given: the values are taken as m/s²)"
+    if sensitivity is None:  # volts, not m/s²
+        raise GearlabInputError(
+            f"{at('gain')}: {gain:g} V per file unit gives volts; expected a sensitivity too (e.g. '100 mV/g'), or "
+            "the gain in g per volt (e.g. '10 g/V') or in g per file unit (a full scale, e.g. '50 g')"
+        )
+    return volts / sensitivity, f"m/s² = value x {volts / sensitivity:.6g} ({volts:g} V / {sensitivity:.6g} V per m/s²)"
