@@ -33,6 +33,7 @@ from .data.recordings import (
     name_unit,
     not_time,
     prefixed,
+    pulses_without_tacho,
     read_contents,
     same_length,
     sampling_rate,
@@ -91,6 +92,8 @@ class InspectOptions:
 def read_record(path: str, options: InspectOptions) -> Recording:
     """The record as *options* name it: unlike read_recording, the vibration is scaled by the given gain /
     sensitivity alone (no unit read from a channel's name: any column can be inspected), or by a --unit."""
+    if options.pulses_per_rev is not None and options.tacho is None:
+        raise pulses_without_tacho(path, "--pulses-per-rev", lambda c: f"--tacho {c}", "--tacho")
     listing, fmt = read_contents(path, [])
     channels = [c for c in listing.available if not is_rate_or_time(str(c))]
     vibration = options.vibration
@@ -188,9 +191,8 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
 
 
 def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -> Speed:
-    """The input speed of a record without a tacho: declared, refined by the mesh lines; or
-    found from the mesh lines alone; then followed through the record on the phase of a mesh
-    harmonic (gearlab.gearbox.speed.follow_speed)."""
+    """The input speed of a record without a tacho: declared, refined by the mesh lines; or found from the mesh
+    lines alone; then followed through the record on the phase of a mesh harmonic (gearbox.speed.follow_speed)."""
     declared = options.speed_hz or (box.speed_hz if box else None)
     n = rec.signal.size
     if box is None:
@@ -218,11 +220,11 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
 
 
 def upsampled(rec: Recording, speed: Speed) -> tuple[np.ndarray, np.ndarray]:
-    """(signal, input angle) band-limited interpolated UPSAMPLE times (fewer for a long record), for
-    the linear interpolation at uniform angle: on the record's own samples it leaves an image of a
-    line at ν cycles per sample at 1 - ν, about (ν / (1 - ν))² below it (the B-6-ch5 source at 500
-    samples per revolution: order 175 imaged at 187, 10 dB down, listed as a line the description
-    does not explain); at 8 times the rate the images fall under the threshold."""
+    """(signal, input angle) band-limited interpolated UPSAMPLE times (fewer for a long record), for the linear
+    interpolation at uniform angle: on the record's own samples it leaves an image of a line at ν cycles per
+    sample at 1 - ν, about (ν / (1 - ν))² below it (the B-6-ch5 source at 500 samples per revolution: order 175
+    imaged at 187, 10 dB down, listed as a line the description does not explain); at 8 times the rate the
+    images fall under the threshold."""
     from scipy.signal import resample_poly
 
     up = int(max(1, min(UPSAMPLE, MAX_UPSAMPLED // max(rec.signal.size, 1))))
@@ -516,12 +518,12 @@ def _tacho_elsewhere(lines, box: Gearbox, read: str, speed: Speed, revolutions: 
 
 
 def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
-    """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at
-    f M and the input shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86
-    mixer's 2-pulse keyphasor read as 1: mesh at 14.5, and its 2nd harmonic at 29 passed as the mesh)
-    or k (fewer: mesh at 58, its harmonics all on M's, 'matches'). The line at f M stronger than at
-    M tells it, with the shaft's line at f stronger than at 1 or a speed 1 / f times the described
-    (*ratio*): a mesh whose power sits at its harmonics (no line at M) keeps its shaft at 1."""
+    """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at f M and the input
+    shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86 mixer's 2-pulse keyphasor read as 1: mesh
+    at 14.5, and its 2nd harmonic at 29 passed as the mesh) or k (fewer: mesh at 58, its harmonics all on M's,
+    'matches'). The line at f M stronger than at M tells it, with the shaft's line at f stronger than at 1 or a
+    speed 1 / f times the described (*ratio*): a mesh whose power sits at its harmonics (no line at M) keeps its
+    shaft at 1."""
 
     def amp(x: float) -> float:
         i = lines.near(x, tol_mesh(x, bin_))
@@ -720,9 +722,8 @@ def render(report: dict, console, width: int = 100) -> None:
 
 
 def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple:
-    """(complete input revolutions at the pipeline's points, the first one's number from the angle's
-    zero modulo the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate) of
-    one file as read."""
+    """(complete input revolutions at the pipeline's points, the first one's number from the angle's zero modulo
+    the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate) of one file as read."""
     from .signals import POINTS
 
     rec = read_record(path, options)
@@ -742,12 +743,11 @@ def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tupl
 
 
 def localisation(path: str, history: list, box: Gearbox, options: InspectOptions) -> dict:
-    """Which shaft and gear the record's synchronous average carries a localised change on, against
-    healthy *history* records of the same gearbox, each a path read with the record's *options* or a
-    (path, its own InspectOptions) pair: data.which_gear's one
-    decision, as a detection run and `gearlab score` make it (orders up to those every history record
-    holds; a shaft's two gears by the description's simulated events at the record's speed and rate,
-    where the history's mesh harmonics agree with the simulation's)."""
+    """Which shaft and gear the record's synchronous average carries a localised change on, against healthy
+    *history* records of the same gearbox, each a path read with the record's *options* or a (path, its own
+    InspectOptions) pair: data.which_gear's one decision, as a detection run and `gearlab score` make it (orders
+    up to those every history record holds; a shaft's two gears by the description's simulated events at the
+    record's speed and rate, where the history's mesh harmonics agree with the simulation's)."""
     from .data import which_gear as W
 
     if not history:

@@ -39,6 +39,7 @@ anything is read (GEARLAB_MAX_RECORD_MB, gearlab.data.readers.base).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -648,6 +649,22 @@ def read_header(path) -> Header:
         raise
     except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file
         raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
+
+
+# A channel name a tacho often has (tacho_V, Tach, keyphasor, once-per-rev, pulses, trigger, encoder, rpm)
+_TACHO_NAME = re.compile(r"tach|key\s*pha|once|pulse|trig|encoder|rpm", re.IGNORECASE)
+
+
+def pulses_without_tacho(path, at: str, tacho_is, key: str = "'tacho'") -> GearlabInputError:
+    """The one-line error of a tacho's marks per turn given where no tacho is: *at* names the key; a channel of
+    *path* whose name looks like a tacho's is named as *tacho_is*(name) says to give it (none is taken unasked);
+    *key*: the tacho's key or option."""
+    try:
+        looks = [c for c in read_header(path).channels if _TACHO_NAME.search(str(c))]
+    except GearlabInputError:  # the file's own error comes where it is read
+        looks = []
+    hint = f" ({path} has channel '{looks[0]}': {tacho_is(looks[0])}?)" if looks else ""
+    return GearlabInputError(f"{at}: belongs to a tacho; no {key} is given{hint}")
 
 
 def only_vibration(path, tacho, where: str) -> str:

@@ -11,7 +11,14 @@ from pathlib import Path
 
 from ..data.importers import MeasuredSpec
 from ..data.placement import canonical_faults, model_shafts
-from ..data.recordings import UNITS, channel_key, check_measured_file, check_recording, only_vibration
+from ..data.recordings import (
+    UNITS,
+    channel_key,
+    check_measured_file,
+    check_recording,
+    only_vibration,
+    pulses_without_tacho,
+)
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import CALIBRATION, calibration, gain_quantity, parse_sensitivity
 from ..effects import effects_from_tables
@@ -426,6 +433,9 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     check_measured_file(path, f"{where} key 'file'")
     if entry["vibration"] == "":  # as inspect takes it: the file's one channel besides the tacho and time
         entry = {**entry, "vibration": only_vibration(path, entry["tacho"], where)}
+    # a tacho's marks per turn where no tacho is (1: what runs wrote back when 1 was the default)
+    if entry["tacho"] == "" and entry.get("pulses_per_rev") not in (None, 1):
+        raise pulses_without_tacho(path, f"{where} key 'pulses_per_rev'", lambda c: f"tacho = '{c}'")
     speed = quantity(entry, "speed", where) if entry["speed"] is not None else None
     fs = quantity(entry, "fs", where) if entry["fs"] is not None else None
     units = units_of(entry, where)

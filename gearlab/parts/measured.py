@@ -9,7 +9,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..data.recordings import channel_key, check_measured_file, check_recording, cut_recording, only_vibration
+from ..data.recordings import (
+    channel_key,
+    check_measured_file,
+    check_recording,
+    cut_recording,
+    only_vibration,
+    pulses_without_tacho,
+)
 from ..data.textzip import CALIBRATION, calibration
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
@@ -263,7 +270,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
             )
         vibration = found[0]
     if tacho is None and t["pulses_per_rev"] not in (None, 1):
-        raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
+        raise pulses_without_tacho(files[0].resolved, f"{where} key 'pulses_per_rev'", lambda c: f"tacho = '{c}'")
     # a file's own tacho (or tacho = "": none) over the [target]'s: records with and without one may mix,
     # each cut at its own tacho's angle or at its declared (or mesh-found) speed
     tachos = [dict(f.keys).get("tacho", tacho) for f in files]
@@ -278,7 +285,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         own = dict(f.keys)
         at = f"{where} key 'files' entry {i + 1}"
         if own.get("pulses_per_rev") is not None and ftacho is None:
-            raise GearlabInputError(f"{at} key 'pulses_per_rev': belongs to a tacho; no 'tacho' is given")
+            raise pulses_without_tacho(f.resolved, f"{at} key 'pulses_per_rev'", lambda c: f"tacho = '{c}'")
         if own and ftacho is not None and own.get("vibration", vibration) == ftacho:
             raise GearlabInputError(f"{at} key 'vibration': the same column as the tacho ({ftacho!r})")
         declared = f.speed_hz if f.speed_hz is not None else speed
