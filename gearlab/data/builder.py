@@ -136,15 +136,22 @@ def steady_response(
     while True:
         # a longer run continues the shorter one (the same floats as a run from the start: Simulator.run)
         duration = blocks * cycle / speed
-        result = sim.run(faults, speed, load, duration=duration, channels=[channel], effects=effects, after=result)
-        x = result.channels[channel][: blocks * per_block].reshape(blocks, per_block)
+        if effects:
+            result = sim.run(faults, speed, load, duration=duration, channels=[channel], effects=effects, after=result)
+            x = result.channels[channel][(blocks - 2) * per_block : blocks * per_block]
+        else:  # only the last two blocks are held (Simulator.tail): what the check and the rows read
+            result = sim.tail(faults, speed, load, channel, duration, (blocks - 2) * per_block, after=result)
+            x = result.x[: 2 * per_block]
+        # steady when the second-to-last block is within STEADY_RTOL of the last (steady_start's first
+        # steady block is then at most blocks - 2; it compares each block with the last alone)
+        x = x.reshape(2, per_block)
         try:
-            first = steady_start(x, rtol=STEADY_RTOL)
+            steady = steady_start(x, rtol=STEADY_RTOL) == 0
         except GearlabInputError:
-            first = blocks
-        if first <= blocks - 2:
+            steady = False
+        if steady:
             angle, kept = None, cycle if whole_cycle else period
-            if result.angle is not None:
+            if effects and result.angle is not None:
                 angle = result.angle[blocks * per_block - kept * per_rev : blocks * per_block] - 2 * np.pi * (
                     blocks * cycle - kept
                 )
@@ -259,16 +266,11 @@ def steady_stretch(
     per_rev = int(round(sim.fs / speed))
     settle = settle_revolutions(sim, speed)
     lead = min(lead_revolutions(sim, speed), settle)
-    result = sim.run(
-        faults,
-        speed,
-        load,
-        duration=(lead + revolutions) / speed,
-        channels=[channel],
-        effects=effects,
-        start=(settle - lead) * per_rev,
-    )
+    duration, start = (lead + revolutions) / speed, (settle - lead) * per_rev
     lo, hi = lead * per_rev, (lead + revolutions) * per_rev + 1
+    if not effects:  # the stretch alone is held (Simulator.tail), not the lead's series
+        return sim.tail(faults, speed, load, channel, duration, lo, start=start).x[: hi - lo].copy(), None, settle
+    result = sim.run(faults, speed, load, duration=duration, channels=[channel], effects=effects, start=start)
     angle = None if result.angle is None else result.angle[lo:hi] - 2 * np.pi * settle
     return result.channels[channel][lo:hi].copy(), angle, settle
 

@@ -38,6 +38,7 @@ BETA1, BETA2 = 0.5, 2.25
 DEFAULT_FS = 200e3
 TVMS_POINTS = 8192
 _CHECK_EVERY = 2048
+CHUNK = 512 * _CHECK_EVERY  # steps Simulator.tail integrates at once (~8 MB a series); whole checks' spans
 _LIMIT = 1e3  # m or rad: no gearbox DOF gets anywhere near this
 # Series that depend only on (fs, steps, speed) or (steps, table period), read-only: a gap search makes
 # a simulator per parameter set it tries and runs hundreds at one speed. At most _MEMO_BYTES, least
@@ -202,6 +203,16 @@ class Simulation:
     angle: np.ndarray | None = field(default=None, repr=False)  # continuous input-shaft angle when effects moved it
 
 
+@dataclass
+class Tail:
+    """The last samples of one channel of a run (Simulator.tail) and where the run ended."""
+
+    x: np.ndarray  # the channel at steps steps + 1 - len(x) .. steps (Simulator.tail's since on)
+    steps: int  # steps integrated from the run's start
+    state: tuple  # (u, v, a) after the last step, to continue from
+    call: tuple  # (faults, speed, load, channel, start): what a continuation repeats
+
+
 class Simulator:
     """One model on one preset at one sampling rate: everything that does not depend on the
     faults or the operating point is prepared once (sections, healthy TVMS, K_hat_c^-1)."""
@@ -364,12 +375,7 @@ class Simulator:
             if angle is not None:
                 phase = np.mod(angle, 2 * np.pi)  # the tacho follows the moved shaft
                 tacho = np.where(phase >= np.pi, phase - 2 * np.pi, phase)
-        # a faulted further mesh: the static start at its own mean, as stage 1's (the healthy ones as before)
-        means = tuple(
-            self.mesh_table(i, on, self._grid(self.mesh_models[i].pair, on)).mean if on else km
-            for i, (on, km) in enumerate(zip(staged[1:], self.mesh_means))
-        )
-        F, (u, v, a) = self._equilibrium(load, k_mean, means)
+        F, (u, v, a) = self._static_start(staged, load, k_mean)
         out_idx = np.array([self.dofs.index(CHANNEL_DOFS[ch]) for ch in channels], dtype=np.int64)
         out = np.empty((steps + 1, len(out_idx)))
         done = 0 if start else self._continued(after, faults, speed, load, channels, steps, effects)
@@ -380,12 +386,7 @@ class Simulator:
             k[done:], forces, angle, t[done:], speed, per_rev, F, (u, v, a), out_idx, out[done:], staged[1:], start
         )
         if failed >= 0:
-            failed += done + start
-            labels = ", ".join(f.label for f in faults) or "healthy"
-            raise SimulationError(
-                f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
-                f"(NaN or overflow) near t = {failed / self.fs:.4g} s; check the model parameters and the time step"
-            )
+            raise self._diverged(where, faults, speed, load, failed + done + start)
         wall = time.perf_counter() - began
         return Simulation(
             model=self.model.name,
@@ -401,6 +402,62 @@ class Simulator:
             faults=tuple(faults),
             state=(u, v, a),
             angle=angle,
+        )
+
+    def tail(
+        self,
+        faults,
+        speed_hz: float,
+        load_nm: float,
+        channel: str,
+        duration: float,
+        since: int,
+        after: Tail | None = None,
+        start: int = 0,
+    ) -> Tail:
+        """The samples of *channel* from step *since* on of ``run(faults, speed_hz, load_nm, duration,
+        [channel], start=start)`` without effects (steps counted from *start*), float for float, integrated
+        CHUNK steps at a time: no series of the whole run (time base, stiffness, response: ~73 bytes a
+        step, 0.64 GB for 1144 turns of a 143T wheel's cycle) is held, only the samples kept. *after*: a
+        shorter tail of this very call, continued from its state (every series is a function of the step
+        alone: the same floats as a run from the start, on several meshes too)."""
+        where = f"model '{self.model.name}', preset '{self.preset}'"
+        speed, load, _ = self._operating_point(speed_hz, load_nm, duration, [channel], where)
+        staged = self.faults_by_stage(faults, where)
+        self.check_hunting(staged, where)
+        steps, per_rev = int(round(duration * self.fs)), self.fs / speed
+        call = (tuple(faults), speed, load, channel, start)
+        out_idx = np.array([self.dofs.index(CHANNEL_DOFS[channel])], dtype=np.int64)
+        lo = min(max(since, 0), steps)  # the step of kept[0]
+        kept = np.empty(steps + 1 - lo)
+        state = None
+        have = 0 if after is None else after.steps + 1 - lo  # samples of the window *after* holds
+        if after is not None and after.call == call and after.steps < steps and have <= len(after.x):
+            state = tuple(x.copy() for x in after.state)
+            kept[: max(have, 0)] = after.x[len(after.x) - max(have, 0) :]
+        first, F = after.steps if state is not None else 0, None
+        while F is None or first < steps:  # (a run of no step: its start)
+            n = min(CHUNK, steps - first)
+            t, _, phase, _ = self._time_base(n, speed, start + first)
+            tvms, _, k = self._nominal_stiffness(staged[0], phase, per_rev, n, speed, start + first)
+            if F is None:
+                F, static = self._static_start(staged, load, tvms.mean)
+                state = static if state is None else state
+            out = np.empty((n + 1, 1))
+            failed = self._newmark(k, [], None, t, speed, per_rev, F, state, out_idx, out, staged[1:], start + first)
+            if failed >= 0:
+                raise self._diverged(where, faults, speed, load, failed + start + first)
+            if first + n >= lo:  # out[i] is step first + i
+                i = max(lo - first, 0)
+                kept[first + i - lo : first + n + 1 - lo] = out[i:, 0]
+            first += n
+        return Tail(kept, steps, state, call)
+
+    def _diverged(self, where: str, faults, speed: float, load: float, step: int) -> SimulationError:
+        labels = ", ".join(f.label for f in faults) or "healthy"
+        return SimulationError(
+            f"{where} ({labels}, {speed:g} Hz, {load:g} N*m, fs {self.fs:g} Hz): the response diverged "
+            f"(NaN or overflow) near t = {step / self.fs:.4g} s; check the model parameters and the time step"
         )
 
     @staticmethod
@@ -602,6 +659,15 @@ class Simulator:
             np.mod(turns * shaft, 2 * np.pi), np.append(table.theta, 2 * np.pi), np.append(table.k, table.k[0])
         )
         return table, None, k
+
+    def _static_start(self, staged, load: float, k_mean: float) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """_equilibrium of a run with faults *staged* (faults_by_stage): a faulted further mesh at its own
+        mean stiffness, as stage 1's at *k_mean* (the healthy ones at theirs)."""
+        means = tuple(
+            self.mesh_table(i, on, self._grid(self.mesh_models[i].pair, on)).mean if on else km
+            for i, (on, km) in enumerate(zip(staged[1:], self.mesh_means))
+        )
+        return self._equilibrium(load, k_mean, means)
 
     def _equilibrium(
         self, load: float, k_mean: float, mesh_means: Sequence[float] | None = None
