@@ -211,8 +211,15 @@ def check_stage(stage) -> StageGeometry:
                 f"stage, or a positive profile shift 'x' of the {role}"
             )
     if g.contact_ratio < 1.0:
+        # a gear whose own tip_diameter or addendum shortened its tip below the stage's: that key; else the stage
+        short = [
+            (gear, "tip_diameter" if gear.tip_diameter is not None else "addendum")
+            for (_, gear), d_a in zip(gears, g.d_a)
+            if d_a < m * gear.z + 2 * m * (stage.addendum + gear.x) - 1e-12
+        ]
+        where = f"{short[0][0].where} key '{short[0][1]}'" if short else stage.where
         raise GearlabInputError(
-            f"{stage.where}: contact ratio ε_α = {g.contact_ratio:.3f} below 1 (z1 = {z1}, z2 = {z2}, "
+            f"{where}: contact ratio ε_α = {g.contact_ratio:.3f} below 1 (z1 = {z1}, z2 = {z2}, "
             f"α_w = {math.degrees(g.alpha_w):.3g} deg): the next tooth pair would engage only after the last "
             "lost contact; expected ε_α ≥ 1 (more teeth, a larger 'addendum' or 'tip_diameter', or a smaller "
             "'pressure_angle')"
