@@ -25,6 +25,9 @@ UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the 
 # more are refined to a small part of a bin (outside records: z within 0.016 teeth; at 2 bins a 71-tooth
 # wheel described as 70 passed); closer ones keep 2 bins (a 0.6 s simulation put a comb 0.1 order off).
 SIDEBAND_BINS, SEPARATED = 0.5, 16
+# A comb's line further than this off the spacing fitted through its lines is another's (dropped, the worst
+# first, and the comb fitted again); half a bin dropped true lines of a 150-turn record, whose neighbours move them
+CONSISTENT_BINS = 1.0
 FAMILY_MARGIN = 0.1  # another harmonic family than the described one must hold 10 % more of the lines' power
 
 
@@ -60,6 +63,19 @@ def comb(
         nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= near for n in nths)
         return 0.7 * o <= c <= 1.3 * o and not nth and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
 
+    def fitted(hits: list) -> tuple[float, list]:
+        """The spacing fitted through *hits* and the hits it keeps: a line further off the fitted comb than
+        CONSISTENT_BINS (once separated) is another's and goes, the worst first (lines where two shafts'
+        sidebands combine, 1 - 0.337 off a 28/83 mesh, took the intermediate's comb as its ±2nd, 0.5 % off)."""
+        while True:
+            js, ds, ws = (np.array(v, dtype=float) for v in zip(*((j, d[q], a[q]) for j, q in hits)))
+            spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
+            bins = CONSISTENT_BINS if spacing >= SEPARATED * bin_ else 2.0
+            off = np.abs(ds - js * spacing) - (bins * bin_ + DRIFT * np.abs(js) * spacing)
+            if off.max() <= 0 or len(hits) == 1:
+                return spacing, hits
+            hits = hits[: int(np.argmax(off))] + hits[int(np.argmax(off)) + 1 :]
+
     best = None
     for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
         hits = []
@@ -69,17 +85,16 @@ def comb(
                 hits.append((j, q))
         if not any(abs(j) == 1 for j, _ in hits):
             continue
+        spacing, hits = fitted(hits)
+        if not any(abs(j) == 1 for j, _ in hits):
+            continue
         score = sum(a[q] for _, q in hits)
         if best is None or score > best[0] * 1.01 or (score >= best[0] * 0.99 and abs(c - o) < abs(best[1] - o)):
-            best = (score, c, hits)
+            best = (score, c, hits, spacing)
     if best is None:
         return None
-    score, _, hits = best
-    js = np.array([j for j, _ in hits], dtype=float)
-    ds = np.array([d[q] for _, q in hits])
-    ws = np.array([a[q] for _, q in hits])
-    spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
-    jmax = int(max(abs(js)))
+    score, _, hits, spacing = best
+    jmax = max(abs(j) for j, _ in hits)
     bins = SIDEBAND_BINS if spacing >= SEPARATED * bin_ else 2.0
     tolerance = bins * bin_ / jmax + DRIFT * spacing
     return spacing, tolerance, len(hits), {int(near[q]): abs(j) for j, q in hits}, score
@@ -196,6 +211,38 @@ def families(
     return found
 
 
+def others_lines(lines: Lines, table, k: int, moved: dict, measured_shaft: dict, bin_: float) -> frozenset:
+    """The lines the other stages' structure explains, no sidebands of stage *k*'s: any harmonic of their
+    meshes (off stage k's own) and its sidebands j <= 3 of their shafts that stage k does not carry (a
+    22/63 last stage's 6th harmonic, 1.2 below a 15/47 first mesh, and its sidebands read as the input
+    shaft's comb: 'the pinion shows 12.5 teeth'). A shaft both carry is left: its sidebands are both."""
+    expected = float(table.stages[k].mesh)
+    at, carrier = [], []
+    for q, t in enumerate(table.stages):
+        if q == k:
+            continue
+        m = moved.get(q, float(t.mesh))
+        offsets = [0.0] + [
+            j * measured_shaft.get(shaft, (float(table.shaft_orders[shaft]),))[0]
+            for shaft in (q, q + 1)
+            if shaft not in (k, k + 1)
+            for j in (-3, -2, -1, 1, 2, 3)
+        ]
+        for h in range(1, MAX_HARMONIC + 1):
+            if abs(h * m / expected - round(h * m / expected)) > 1e-9:  # on stage k's own harmonic: both
+                at += [h * m + off for off in offsets]
+                carrier += [off == 0.0 for off in offsets]
+    if not at:
+        return frozenset()
+    at = np.array(at)
+    # a carrier within tol_mesh; a sideband within 2 bins and a tenth of the drift allowance: at DRIFT's 1e-3 of
+    # order 14 a 15/47 input comb's own -1 line (14.000) fell within 0.019 of a later stage's sideband
+    # (13.8004 + 0.2091), the comb lost it and another won
+    tol = np.where(carrier, tol_mesh(at, bin_), 2 * bin_ + 0.1 * DRIFT * at)
+    near = np.abs(lines.at[:, None] - at[None, :]) <= tol[None, :]
+    return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
+
+
 def check_description(
     lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool, tacho_shaft: int | None = None
 ) -> dict:
@@ -242,7 +289,6 @@ def check_description(
         # the other stages' mesh orders: an earlier one that differs where it was measured (a wrong
         # first pinion moved stage 1's lines off its described order, and stage 2 took them)
         meshes = [moved.get(q, float(t.mesh)) for q, t in enumerate(table.stages) if q != k]
-        others = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in (1, 2, 3)]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
         # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
         shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
@@ -317,8 +363,7 @@ def check_description(
             ),
             bin_,
             (k in measured_shaft, k + 1 in measured_shaft),
-            # other stages' mesh harmonics are no sidebands of this one
-            frozenset(q for q in range(lines.at.size) if any(abs(lines.at[q] - o) <= t for o, t in others)),
+            others_lines(lines, table, k, moved, measured_shaft, bin_),
         )
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
