@@ -3,7 +3,7 @@ spread) against the pooled quantile, on scores drawn from a known model."""
 
 import numpy as np
 import pytest
-from scipy.stats import norm
+from scipy.stats import norm, t
 
 from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
 
@@ -19,8 +19,10 @@ def test_the_variance_components_are_recovered():
     assert m.unit_sd == pytest.approx(0.5, rel=0.02)
     assert m.mean == pytest.approx(5.0, abs=0.3)
     assert m.records == 400
-    # the threshold is the predictive quantile: mean + z sqrt(record² + unit² + se²)
-    assert m.threshold == pytest.approx(m.mean + norm.ppf(0.99) * m.predictive_sd)
+    # the threshold is the predictive quantile: mean + t sqrt(record² + unit² + se²), t of the
+    # predictive variance's Satterthwaite degrees of freedom (here, many records: near the normal one)
+    assert m.threshold == pytest.approx(m.mean + t.ppf(0.99, m.dof) * m.predictive_sd)
+    assert 399 < m.dof < 600 and t.ppf(0.99, m.dof) == pytest.approx(norm.ppf(0.99), rel=0.01)
     assert m.predictive_sd == pytest.approx(np.hypot(2.0, 0.5), rel=0.1)
 
 
@@ -41,6 +43,23 @@ def test_a_new_records_false_alarms_are_as_asked_where_the_units_own_spread_is_n
     assert np.mean(within) > 3 * np.mean(ours)
 
 
+def test_three_records_false_alarms_are_as_asked_the_normal_quantile_let_through_half_as_many_again():
+    """Issue 39: histories of three takes, whose take effect is twice the unit spread, estimate it on
+    two degrees of freedom; the predictive quantile is Student-t's of the predictive variance's
+    Satterthwaite degrees of freedom. A new take's healthy units exceed it about as often as asked
+    (5 %); the normal quantile of the same variances let 9.1 % through (before the t quantile)."""
+    rng = np.random.default_rng(11)
+    fa, models = [], []
+    for _ in range(2000):
+        history = records(rng, 3, 40, record_sd=1.0, unit_sd=0.5)
+        new = records(rng, 1, 40, record_sd=1.0, unit_sd=0.5)[0]
+        models.append(fit(history, 0.95))
+        fa.append(np.mean(new > models[-1].threshold))
+    assert 0.04 < np.mean(fa) < 0.07, np.mean(fa)
+    # the means' two degrees of freedom, and some of the within-record part's
+    assert 2.0 <= np.median([m.dof for m in models]) < 4.0
+
+
 def test_no_record_effect_gives_the_within_record_quantile():
     rng = np.random.default_rng(3)
     history = [rng.standard_normal(2000) for _ in range(5)]  # records differ only by chance
@@ -55,7 +74,8 @@ def test_one_record_cannot_tell_its_record_effect():
     m = fit([g], 0.99)
     assert m.record_sd is None and m.records == 1
     sd = g.std(ddof=1)
-    assert m.threshold == pytest.approx(g.mean() + norm.ppf(0.99) * sd * np.sqrt(1 + 1 / 400))
+    assert m.dof == 399  # the within-record variance's
+    assert m.threshold == pytest.approx(g.mean() + t.ppf(0.99, 399) * sd * np.sqrt(1 + 1 / 400))
 
 
 def test_overlapping_windows_count_as_fewer_independent_units():

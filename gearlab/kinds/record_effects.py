@@ -20,17 +20,27 @@ mu the mean of the record means. A new record's unit is y = mu + a_new + e_new, 
 only to within Var(mu_hat) = sum_r (sigma_a^2 + sigma_e^2 / m_r) / R^2, so the threshold that
 lets a share alpha of healthy units of a new record through is the predictive quantile
 
-    t = mu_hat + z_(1 - alpha) * sqrt(sigma_a^2 + sigma_e^2 + Var(mu_hat)).
+    t = mu_hat + t_(nu, 1 - alpha) * sqrt(sigma_a^2 + sigma_e^2 + Var(mu_hat)),
+
+a Student-t quantile, not the normal one, because the variances are estimated: with R records
+sigma_a^2 rests on R - 1 degrees of freedom. The predictive variance is the linear combination
+(1 + 1/R) S_b + (1 - mean 1/m_r) sigma_e^2 of the record means' variance S_b (R - 1 degrees of
+freedom) and sigma_e^2 (the within-record ones), and nu its Satterthwaite degrees of freedom
+(Satterthwaite 1946; Hahn & Meeker, *Statistical Intervals*, ch. 12 for the same interval). With
+three records whose effect is twice the unit spread, the normal quantile let 9 % of a new record's
+units through where 5 % was asked, the t quantile 6 % (`tests/test_record_effects.py`); with
+many records the two agree.
 
 m_r counts the record's *independent* units: sliding TSA windows of b revolutions moved by s
 overlap, and only about (n - 1) s / b + 1 of n such windows are independent. For the same
 reason their sum of squares about the record's mean has fewer degrees of freedom than n - 1
 (``overlap_dof``); sigma_e^2 divides by those, so it is the variance of a unit of a new record.
 
-The quantile is a plug-in (the variances as estimated, a Gaussian law): with R records the
-record variance rests on R - 1 degrees of freedom, so with two records it is a rough figure —
-honest about take-to-take variation where pooling ignores it, but no tolerance bound. With a
-single history record sigma_a^2 cannot be estimated and is taken as 0 (``record_sd`` None).
+With two records the record variance rests on one degree of freedom and the estimate is often
+below the within-record part of the means' spread (taken as 0, nu then the within-record ones):
+a rough figure, honest about take-to-take variation where pooling ignores it, but no tolerance
+bound. With a single history record sigma_a^2 cannot be estimated and is taken as 0
+(``record_sd`` None).
 Only the history's scores enter: nothing here sees a test record.
 """
 
@@ -51,6 +61,7 @@ class RecordEffects:
     mean_se: float  # sqrt(Var(mu_hat))
     records: int
     threshold: float
+    dof: float = float("inf")  # the predictive variance's degrees of freedom (Satterthwaite)
 
     @property
     def predictive_sd(self) -> float:
@@ -89,10 +100,10 @@ def overlap_dof(n_units: int, block: int = 1, stride: int = 1) -> float:
     return float(n_units - np.sum(rho * pairs) / n_units)
 
 
-def moments(groups, independent=None, dofs=None) -> tuple[np.ndarray, float, np.ndarray, float | None]:
+def moments(groups, independent=None, dofs=None) -> tuple[np.ndarray, float, np.ndarray, float | None, float]:
     """(record means, sigma_e^2, independent units per record, the unbiased method-of-moments
-    estimate of sigma_a^2 — not truncated at 0; None for one record) of *groups*, as `fit` takes
-    them (records without units left out)."""
+    estimate of sigma_a^2 — not truncated at 0; None for one record —, the degrees of freedom of
+    sigma_e^2) of *groups*, as `fit` takes them (records without units left out)."""
     groups = [np.asarray(g, dtype=np.float64).ravel() for g in groups]
     keep = [i for i, g in enumerate(groups) if len(g)]
     if not keep:
@@ -105,36 +116,48 @@ def moments(groups, independent=None, dofs=None) -> tuple[np.ndarray, float, np.
     within = sum(float(np.sum((g - g.mean()) ** 2)) for g in groups) / dof if dof > 0 else 0.0
     # E[var(record means)] = sigma_a^2 + mean(sigma_e^2 / m_r)
     record_var = float(means.var(ddof=1)) - float(np.mean(within / m)) if len(groups) >= 2 else None
-    return means, within, m, record_var
+    return means, within, m, record_var, float(dof)
 
 
-def fit(groups, p: float, independent=None, dofs=None, record_var: float | None = None) -> RecordEffects:
+def fit(groups, p: float, independent=None, dofs=None) -> RecordEffects:
     """The model of *groups* (one array of unit scores per history record, in any order) and
-    its *p* predictive quantile for a unit of a new record; *independent*: each record's number
-    of independent units (default: its number of units); *dofs*: each record's degrees of
-    freedom of its within-record sum of squares (default n − 1; sliding windows: overlap_dof);
-    *record_var*: sigma_a^2 when known from elsewhere (`pooled_record_ratio`), else estimated
-    from these records."""
-    means, within, m, estimate = moments(groups, independent, dofs)
+    its *p* predictive quantile for a unit of a new record (Student-t, `predictive_dof`);
+    *independent*: each record's number of independent units (default: its number of units);
+    *dofs*: each record's degrees of freedom of its within-record sum of squares (default n − 1;
+    sliding windows: overlap_dof)."""
+    means, within, m, estimate, within_dof = moments(groups, independent, dofs)
     R = len(means)
-    mu = float(means.mean())
-    if record_var is not None:
-        record_var = max(0.0, float(record_var))
-        record_sd = float(np.sqrt(record_var))
-    elif R >= 2:
-        record_var = max(0.0, estimate)
-        record_sd = float(np.sqrt(record_var))
-    else:
-        record_var, record_sd = 0.0, None
+    record_var = max(0.0, estimate) if estimate is not None else 0.0
     mean_var = float(np.sum(record_var + within / m)) / R**2
     sd = np.sqrt(record_var + within + mean_var)
-    from scipy.stats import norm  # here, not at the top: start-up time (scipy.stats takes ~1 s)
+    nu = predictive_dof(means, within, m, within_dof, record_var > 0)
+    from scipy.stats import t as student  # here, not at the top: start-up time (scipy.stats takes ~1 s)
 
     return RecordEffects(
-        mean=mu,
-        record_sd=record_sd,
+        mean=float(means.mean()),
+        record_sd=None if estimate is None else float(np.sqrt(record_var)),
         unit_sd=float(np.sqrt(within)),
         mean_se=float(np.sqrt(mean_var)),
         records=R,
-        threshold=float(mu + norm.ppf(p) * sd),
+        threshold=float(means.mean() + student.ppf(p, nu) * sd),
+        dof=nu,
     )
+
+
+def predictive_dof(means: np.ndarray, within: float, m: np.ndarray, within_dof: float, estimated: bool) -> float:
+    """Satterthwaite's degrees of freedom of the predictive variance sigma_a^2 + sigma_e^2 + Var(mu_hat).
+    With sigma_a^2 *estimated* (above 0) it is (1 + 1/R) S_b + (1 - mean 1/m_r) sigma_e^2, S_b the
+    variance of the R record *means* (R - 1 degrees of freedom) and sigma_e^2 = *within* (*within_dof*);
+    else sigma_e^2 (1 + mean(1/m_r) / R), of sigma_e^2's degrees of freedom (inf where none: the
+    normal quantile)."""
+    R = len(means)
+    if estimated:
+        parts = [
+            ((1.0 + 1.0 / R) * float(means.var(ddof=1)), R - 1.0),
+            (within * (1.0 - float(np.mean(1.0 / m))), within_dof),
+        ]
+    else:
+        parts = [(within * (1.0 + float(np.mean(1.0 / m)) / R), within_dof)]
+    total = sum(v for v, _ in parts)
+    spread = sum(v**2 / d for v, d in parts if d > 0)
+    return float(total**2 / spread) if spread > 0 else float("inf")
