@@ -62,3 +62,25 @@ def test_a_later_stage_harmonic_near_the_first_mesh_is_no_sideband_of_it(tmp_pat
     report = _inspect(tmp_path, C, {"acc": x, "key": key, "fs": 51200.0}, "49 Hz", sensor, " x = 0.25,")
     assert report["matches"] is True, report["verdict"]
     assert abs(report["check"]["shafts"][0]["measured_order"] - 1) < 2e-3, report["check"]["shafts"][0]
+
+
+def test_a_time_column_written_to_six_digits_is_read_at_its_written_resolution(tmp_path, cli):
+    # B's test take as a logger writes it: 'Time [s]' to 6 significant digits (7.99972 s: 10 µs, 0.4 periods at
+    # 40 kHz) was refused, --fs given or not: 'sample 319991 is 0.4 sampling periods off the uniform grid of
+    # 40 kHz (a gap or jitter)'. Times within half their written resolution of the grid are uniform times.
+    fs = 40000.0
+    x, _ = _train(B, 40.0, fs, 2.0, (1.0, 1.0), ((1.0, 0.4), (1.0, 0.4)))
+    rows = "".join(f"{t:.6g},{v:.5f}\n" for t, v in zip(np.arange(x.size) / fs, x))
+    (tmp_path / "take.csv").write_text("Time [s],acc [m/s^2]\n" + rows)
+    (tmp_path / "box.toml").write_text(description(*(stage(a, b) for a, b in B), name="b", speed="40 Hz", load="1 N*m"))
+    code, out, err = cli("inspect", tmp_path / "take.csv", "--gearbox", tmp_path / "box.toml", "--json")
+    assert code == 0, err
+    import json
+
+    report = json.loads(out)
+    assert abs(report["fs_hz"] / fs - 1) < 1e-5 and report["matches"] is True, (report["fs_hz"], report["verdict"])
+    # a gap is still one: a sample dropped at 1.5 s
+    dropped = "".join(r for i, r in enumerate(rows.splitlines(True)) if i != 60000)
+    (tmp_path / "gap.csv").write_text("Time [s],acc [m/s^2]\n" + dropped)
+    code, _, err = cli("inspect", tmp_path / "gap.csv", "--gearbox", tmp_path / "box.toml")
+    assert code == 2 and "not uniformly sampled" in err, err

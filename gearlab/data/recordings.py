@@ -202,6 +202,16 @@ def rate_value(value, where: str, path: str) -> float:
     return fs
 
 
+def _written_resolution(t: np.ndarray) -> np.ndarray:
+    """Each time's decimal step as written (1e-5 for 7.99972, 1e-6 for 2.5e-05: six significant digits),
+    0 where finer than 1e-12 s."""
+    step = np.zeros(t.size)
+    for digits in range(12, -1, -1):  # the coarsest step a time is a whole multiple of
+        scaled = t * 10.0**digits
+        step[np.abs(scaled - np.round(scaled)) <= 1e-6 * np.maximum(1.0, np.abs(scaled))] = 10.0**-digits
+    return step
+
+
 def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float]:
     """(fs, relative uncertainty) from a time vector in seconds, checked to be uniform.
 
@@ -230,21 +240,26 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
         )
     span = float(t[-1] - t[0])
     dt = span / (t.size - 1)
-    uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt)
+    deviation = np.abs(t - (t[0] + dt * np.arange(t.size)))
+    # times written to fewer digits than the rate needs (7.99972 s, 10 µs: 0.4 periods at 40 kHz) stand within
+    # half their written resolution of the grid, besides the jitter allowed
+    written = np.zeros(t.size)
+    if np.any(np.abs(steps - dt) > _TIME_JITTER * dt) or np.any(deviation > _TIME_JITTER * dt):
+        written = _written_resolution(t)
+    uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt + (written[1:] + written[:-1]) / 2)
     if uneven.size:  # a gap, a repeated block, a clock jump: name the first
         i = int(uneven[0])
         raise GearlabInputError(
             f"{path}: {where} is not uniformly sampled: the step between samples {i} and {i + 1} is "
             f"{steps[i]:.6g} s, {steps[i] / dt:.3g} times the mean step {dt:.6g} s; expected uniform sampling"
         )
-    deviation = np.abs(t - (t[0] + dt * np.arange(t.size)))
-    worst = int(np.argmax(deviation))
-    if deviation[worst] > _TIME_JITTER * dt:  # steps each fine but drifting
+    worst = int(np.argmax(deviation - written / 2))
+    if deviation[worst] > _TIME_JITTER * dt + written[worst] / 2:  # steps each fine but drifting
         raise GearlabInputError(
             f"{path}: {where} is not uniformly sampled: sample {worst} is {deviation[worst] / dt:.3g} sampling "
             f"periods off the uniform grid of {fmt_hz(1 / dt)} (a gap or jitter); expected uniform sampling"
         )
-    return (t.size - 1) / span, 2.0 * float(deviation[worst]) / span
+    return (t.size - 1) / span, 2.0 * float(deviation.max()) / span
 
 
 def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
