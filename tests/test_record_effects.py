@@ -60,6 +60,13 @@ def test_three_records_false_alarms_are_as_asked_the_normal_quantile_let_through
     assert 2.0 <= np.median([m.dof for m in models]) < 4.0
 
 
+def test_two_records_keep_the_normal_quantile_of_their_variances():
+    """sigma_a^2 of two records rests on one degree of freedom, whose t quantile (31.8 at 99 %) would
+    call nothing: the normal quantile of the same variances (a rough figure)."""
+    m = fit([np.array([1.0, 1.2, 0.8]), np.array([3.0, 3.3, 2.7])], 0.99)
+    assert m.dof == np.inf and m.threshold == pytest.approx(m.mean + norm.ppf(0.99) * m.predictive_sd)
+
+
 def test_no_record_effect_gives_the_within_record_quantile():
     rng = np.random.default_rng(3)
     history = [rng.standard_normal(2000) for _ in range(5)]  # records differ only by chance
