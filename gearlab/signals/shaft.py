@@ -48,13 +48,23 @@ def shaft_revolutions(
         top = min(top, float(max_order) + 0.5)
     spectrum = np.fft.rfft(x)
     spectrum[int(math.ceil(min(top, P / 2) * R)) :] = 0.0  # bin k: input order k / R
-    x = np.fft.irfft(spectrum, n=n * UPSAMPLE) * UPSAMPLE  # band-limited, UPSAMPLE x denser (module doc)
     first = math.ceil(phase - 1e-12)
     count = math.floor(phase + ratio * (n - 1) / P + 1e-12) - first
     if count < 1:
         return np.empty((0, points))
     turns = first + np.arange(count)[:, None] + np.arange(points)[None, :] / points
-    return np.interp((turns - phase) / ratio * P * UPSAMPLE, np.arange(n * UPSAMPLE, dtype=np.float64), x)
+    return read_at(spectrum, n, (turns - phase) / ratio * P)
+
+
+def read_at(spectrum: np.ndarray, n: int, at: np.ndarray, up: int = UPSAMPLE, periodic: bool = False) -> np.ndarray:
+    """The n samples whose rfft is *spectrum* read at fractional sample positions *at*: linearly between the
+    samples of their band-limited interpolation *up* times denser (module doc). Read on the samples themselves,
+    a line at ν cycles a sample leaves an image at 1 - ν about (ν / (1 - ν))² below it; *up* times denser, about
+    (ν / (up - ν))². *periodic*: position n is sample 0 again (one turn's wave)."""
+    fine = np.fft.irfft(spectrum, n=n * up) * up
+    if periodic:
+        return np.interp(at * up, np.arange(fine.size + 1), np.append(fine, fine[0]))
+    return np.interp(at * up, np.arange(fine.size, dtype=np.float64), fine)
 
 
 def without_input_orders(revs: np.ndarray, p: int) -> np.ndarray:
@@ -67,6 +77,19 @@ def without_input_orders(revs: np.ndarray, p: int) -> np.ndarray:
     F = np.fft.rfft(np.asarray(revs, dtype=np.float64).mean(axis=0))
     F[np.arange(len(F)) % p == 0] = 0.0
     return revs - np.fft.irfft(F, n=revs.shape[-1])
+
+
+def on_turns(y: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Consecutive input revolutions *y* (flat) read at a shaft's grid *at* (sample positions): the samples
+    themselves where the grid falls on them (the input shaft), else read_at's band-limited reading. Linear
+    interpolation between y's own samples left images (size o - P) + k input orders away from a line at k
+    (a shaft of o input turns cut into `size` points a turn), which every turn repeats where o = 1/q: the
+    PHM 2009 rig's idler (o = 1/3) read its 3rd mesh harmonic's image 43 dB below it, a 1/7 shaft's lands
+    at 585 + k; 4 x denser: below -72 dB (tests/test_shaft_reading.py)."""
+    whole = np.round(at)
+    if np.array_equal(at, whole):
+        return y[whole.astype(np.int64)]
+    return read_at(np.fft.rfft(y), y.size, at)
 
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
@@ -127,14 +150,12 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
             spec = np.fft.rfft(wave)
             if lay.shaft_orders[r] < lay.shaft_orders[s]:  # a slower r: less its orders read from s
                 spec[:: (lay.shaft_orders[r] / lay.shaft_orders[s]).denominator] = 0.0
-            # read at the record's samples from a grid 8 times finer (linear interpolation's error)
-            fine = np.fft.irfft(spec, n=8 * wave.size) * 8
-            left = left - np.interp(cut[r][1] * 8, np.arange(fine.size + 1), np.append(fine, fine[0]))
-        return np.interp(cut[s][0], np.arange(y.size), left)
+            left = left - read_at(spec, wave.size, cut[r][1], 8, periodic=True)  # at the record's samples
+        return on_turns(left, cut[s][0])
 
     for sweep in range(max(sweeps, 1)):
         for s in shafts:
-            segments = less_others(s) if sweeps else np.interp(cut[s][0], np.arange(y.size), y)
+            segments = less_others(s) if sweeps else on_turns(y, cut[s][0])
             waves[s] = segments.mean(axis=0)
             if sweep == max(sweeps, 1) - 1:
                 sel = lay.source == s
