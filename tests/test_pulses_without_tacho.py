@@ -23,38 +23,36 @@ def _record(tmp_path: Path, with_tacho: bool) -> Path:
     return tmp_path / "r.npz"
 
 
-@pytest.mark.parametrize("with_tacho", [False, True], ids=["no tacho channel", "a tacho channel not named"])
-def test_a_dataset_s_pulses_per_rev_without_a_tacho_is_one_line(tmp_path, cli, with_tacho):
+def _refused(cli, *args) -> str:
+    code, _, err = cli(*args)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    return err.strip()
+
+
+DATASET = '[[datasets]]\nfile = "r.npz"\nvibration = "acc"\nspeed = "25 Hz"\npulses_per_rev = 4\ntransient = "none"\n'
+TARGET = '[source]\npreset = "B-6-ch5"\n[target]\nvibration = "acc"\nspeed = "25 Hz"\npulses_per_rev = 4\n'
+TARGET += 'files = [{ file = "r.npz", role = "history", label = "healthy" }]\n[accuracy]\nenabled = false\n'
+
+
+@pytest.mark.parametrize(
+    ("kind", "body", "key", "with_tacho"),
+    [
+        ("dataset", DATASET, "[[datasets]] #1 key 'pulses_per_rev'", False),
+        ("dataset", DATASET, "[[datasets]] #1 key 'pulses_per_rev'", True),
+        ("gap", TARGET, "[target] key 'pulses_per_rev'", True),
+    ],
+    ids=["dataset, no tacho channel", "dataset, a tacho channel not named", "gap target"],
+)
+def test_pulses_per_rev_without_a_tacho_is_one_line(tmp_path, cli, kind, body, key, with_tacho):
     _record(tmp_path, with_tacho)
     path = tmp_path / "s.toml"
-    path.write_text(
-        '[scenario]\nname = "d"\nkind = "dataset"\n[[datasets]]\nfile = "r.npz"\nvibration = "acc"\n'
-        'speed = "25 Hz"\npulses_per_rev = 4\ntransient = "none"\n'
-    )
-    code, _, err = cli("validate", path)
-    line = err.strip()
-    assert code == 2 and len(line.splitlines()) == 1, err
-    assert "[[datasets]] #1 key 'pulses_per_rev'" in line and "no 'tacho'" in line, line
+    path.write_text(f'[scenario]\nname = "d"\nkind = "{kind}"\n{body}')
+    line = _refused(cli, "validate", path)
+    assert f"{key}: belongs to a tacho; no 'tacho' is given" in line, line
     assert ("tacho = 'tacho_V'" in line) == with_tacho, line
-
-
-def test_a_target_s_pulses_per_rev_names_the_file_s_tacho_channel(tmp_path, cli):
-    _record(tmp_path, True)
-    path = tmp_path / "g.toml"
-    path.write_text(
-        '[scenario]\nname = "u"\nkind = "gap"\n[source]\npreset = "B-6-ch5"\n[target]\nvibration = "acc"\n'
-        'speed = "25 Hz"\npulses_per_rev = 4\nfiles = [{ file = "r.npz", role = "history", label = "healthy" }]\n'
-        "[accuracy]\nenabled = false\n"
-    )
-    code, _, err = cli("validate", path)
-    line = err.strip()
-    assert code == 2 and len(line.splitlines()) == 1, err
-    assert "[target] key 'pulses_per_rev'" in line and "tacho = 'tacho_V'" in line, line
 
 
 def test_inspect_s_pulses_per_rev_without_tacho_is_one_line(tmp_path, cli):
     path = _record(tmp_path, True)
-    code, _, err = cli("inspect", path, "--vibration", "acc", "--speed", "25 Hz", "--pulses-per-rev", "4")
-    line = err.strip()
-    assert code == 2 and len(line.splitlines()) == 1, err
+    line = _refused(cli, "inspect", path, "--vibration", "acc", "--speed", "25 Hz", "--pulses-per-rev", "4")
     assert "--pulses-per-rev" in line and "--tacho tacho_V" in line, line
