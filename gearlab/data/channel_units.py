@@ -95,7 +95,7 @@ def channel_scale(
                 raise GearlabInputError(
                     f"{at('unit')}: '{declared}' says channel '{name}' is an acceleration already; expected no {key} "
                     "(values in volts: unit = 'V' or 'mV' with the sensitivity; values in g at a full scale of N g: "
-                    "no unit, gain = 'N V', sensitivity = '1 V/g')"
+                    "no unit, gain = 'N g')"
                 )
             if value is not None:
                 raise GearlabInputError(
