@@ -119,3 +119,9 @@ def test_inspect_takes_the_same_forms():
         assert opts.gain / opts.sensitivity == pytest.approx(50 * G)
     opts = inspect_options(gain="10 g/V")
     assert opts.gain is None and 1 / opts.sensitivity == pytest.approx(10 * G)
+
+
+@pytest.mark.parametrize(("keys", "said"), [({"gain": "50 g"}, "50 g a file unit"), ({"gain": "10 g/V"}, "100 mV/g")])
+def test_the_line_saying_how_values_became_m_s2_speaks_in_g(tmp_path, keys, said):
+    path, _ = _file(tmp_path, "fifty_g_float_wav")
+    assert said in gearlab.read_recording(path, "0", **keys).units

@@ -119,4 +119,6 @@ def channel_scale(
             f"{at('gain')}: {gain:g} V per file unit gives volts; expected a sensitivity too (e.g. '100 mV/g'), or "
             "the gain in g per volt (e.g. '10 g/V') or in g per file unit (a full scale, e.g. '50 g')"
         )
-    return volts / sensitivity, f"m/s² = value x {volts / sensitivity:.6g} ({volts:g} V / {sensitivity:.6g} V per m/s²)"
+    scale, per_g = volts / sensitivity, f"{sensitivity * STANDARD_GRAVITY * 1e3:.6g} mV/g"
+    # in g too, as a scenario gives them: a gain of '50 g' reads '50 g a file unit'
+    return scale, f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit ({volts:g} V / {per_g})"
