@@ -57,8 +57,9 @@ def unit_name(
 def train_unit(task: tuple) -> dict:
     """One method at one condition (one seed of it), in this process or a worker: trained on the
     source and the history's training revolutions, then its scores of the history units (for the
-    threshold) and, only now, of the test units. It says what it does from its start: torch takes
-    seconds to load in a fresh worker (issue 41)."""
+    threshold; a detector handed *left_out*, the history rows without each record in turn: each
+    record's units scored by the detector made without it) and, only now, of the test units. It
+    says what it does from its start: torch takes seconds to load in a fresh worker (issue 41)."""
     (
         protocol,
         method,
@@ -73,6 +74,7 @@ def train_unit(task: tuple) -> dict:
         states,
         rule,
         whiten,
+        left_out,
     ) = task
     started = time.perf_counter()
     Xs, ys, Xv, yv = unshared(split)  # (a local pool's workers read what every unit takes once: Shared)
@@ -97,26 +99,34 @@ def train_unit(task: tuple) -> dict:
         def report(epoch: int, history, what: str = "") -> None:
             progress(what or f"epoch {epoch + 1}")  # what: a shared state's training (the priming)
 
-        model, history, _ = chapter5.train_method(
-            trained,
-            method,
-            (Xs, ys),
-            (Xv[:, 0] if Xv.ndim == 3 else Xv, yv),  # one draw decides when to stop: an epoch's cost
-            (train, np.zeros(len(train), dtype=np.int64)),
-            seed or 0,  # the repetition: its own torch seed and draws
-            0,
-            StateStore(states),
-            device,
-            report,
-        )
-    if whiten and method.is_detector:
-        # a detector sees every row through the whitening filter of its own history rows' residuals
-        # (gearlab.learn.whiten: their coloured leftover ranked single healthy revolutions); the
-        # filter is kept in the model, so the units below and `gearlab score`'s pass through it too
-        from ..learn.whiten import whitened, whitening_of
+        def made(rows: np.ndarray):
+            model, history, _ = chapter5.train_method(
+                trained,
+                method,
+                (Xs, ys),
+                (Xv[:, 0] if Xv.ndim == 3 else Xv, yv),  # one draw decides when to stop: an epoch's cost
+                (rows, np.zeros(len(rows), dtype=np.int64)),
+                seed or 0,  # the repetition: its own torch seed and draws
+                0,
+                StateStore(states),
+                device,
+                report,
+            )
+            if whiten and method.is_detector:
+                # a detector sees every row through the whitening filter of its own history rows' residuals
+                # (gearlab.learn.whiten: their coloured leftover ranked single healthy revolutions); the
+                # filter is kept in the model, so the units below and `gearlab score`'s pass through it too
+                from ..learn.whiten import whitened, whitening_of
 
-        false_alarm = get_registry().get("detector", method.adapter).values(dict(method.params))["false_alarm"]
-        model = whitened(model.to("cpu"), whitening_of(train), train, float(false_alarm)).to(device)
+                params = dict(method.params)
+                false_alarm = get_registry().get("detector", method.adapter).values(params)["false_alarm"]
+                model = whitened(model.to("cpu"), whitening_of(rows), rows, float(false_alarm)).to(device)
+            return model, history
+
+        model, history = made(train)
+        if left_out is not None:
+            progress("scoring each history record by the detector made without it")
+            others = [made(unshared(rows))[0] for rows in left_out]
     # what a network learned of the simulator, from training data only: its scores of the source's
     # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
     # healthy). A detector is built in the target's frame (the history's reference, the path to
@@ -124,7 +134,17 @@ def train_unit(task: tuple) -> dict:
     held_out = None if method.is_detector else fault_score(model, Xv.reshape(-1, Xv.shape[-1]), device)
     y_held = np.repeat(yv, len(held_out) // len(yv)) if held_out is not None else yv
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
-    hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
+    if left_out is None:
+        hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
+    else:  # each history record's units scored by the detector made without that record, its statistic
+        # less the full detector's threshold (as the test units' are), not less its own
+        def shifted(m, X_k: np.ndarray) -> np.ndarray:
+            return fault_score(m, X_k, device) + float(m.threshold) - float(model.threshold)
+
+        hist = {
+            u: np.concatenate([shifted(m, X_k) for m, X_k in zip(others, rule.groups(u, X))])
+            for u, X in history_units.items()
+        }
     fixed = rule.decide(hist)
     test = {path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()}
     # kept, so that `gearlab score` scores new records with it without training again
@@ -176,9 +196,10 @@ class Rule:
     records: dict
 
     def groups(self, u: str, scores) -> list[np.ndarray]:
-        """The history's *scores* of unit kind *u*, one array per history record."""
+        """The history's *scores* (or units, rows) of unit kind *u*, one array per history record."""
         counts = [n for n, _ in self.records[u]]
-        return np.split(np.asarray(scores, dtype=np.float64), np.cumsum(counts)[:-1])
+        scores = np.asarray(scores)
+        return np.split(scores if scores.ndim > 1 else scores.astype(np.float64), np.cumsum(counts)[:-1])
 
     def model(self, u: str, scores, keep=None) -> record_effects.RecordEffects:
         """The random-effects model (record effect + within-record spread) of the history's *scores*

@@ -1,0 +1,99 @@
+"""Issue 39: a detector's threshold from a history of few takes. A detector is made of the history
+itself (its reference the history's median revolution, its noise level the history's), so a history
+take scores nearer it than a new take of the same gearbox does; with three takes, the threshold set on
+those scores let a new healthy take's units through far more often than asked. Each history take is
+now scored by the detector made without it (detection_units.train_unit's *left_out*)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gearlab.confined import Confined
+from gearlab.kinds import record_effects
+from gearlab.kinds.detection_records import tsa_units
+from gearlab.kinds.detection_units import Rule, train_unit
+from gearlab.learn.protocol import Method, Protocol
+
+L = 512  # samples per revolution
+THETA = 2 * np.pi * np.arange(L) / L
+TEETH = 37
+BLOCK, STRIDE = 10, 1  # record10: the history's sliding windows (detection_records.unit_window)
+
+
+def take(rng, revolutions: int = 40, chip: float = 0.0) -> np.ndarray:
+    """A take of a one-stage box: its own mounting gain, path phase and size of each mesh harmonic
+    and noise level (what differs between takes), a chip's ring on one tooth when *chip*."""
+    gain, phase, size = np.exp(rng.normal(0, 0.15)), rng.normal(0, 0.3, 3), np.exp(rng.normal(0, 0.15, 3))
+    lift = 1 + 0.1 * np.cos(THETA + 0.3)  # the pinion's runout: sidebands about each harmonic
+    mesh = enumerate(zip((1, 0.5, 0.25), size, phase))
+    x = gain * lift * sum(a * s * np.cos((h + 1) * TEETH * THETA + p) for h, (a, s, p) in mesh)
+    # what the take's mounting passes of the box's broadband synchronous content: its own at each order
+    orders = np.arange(50, 200)
+    x = x + 0.03 * np.cos(orders[:, None] * THETA + rng.uniform(0, 2 * np.pi, (orders.size, 1))).sum(axis=0)
+    since = np.angle(np.exp(1j * (THETA - 2 * np.pi * 11.5 / TEETH)))  # tooth 11
+    x = x + chip * np.where(since > 0, np.exp(-since * TEETH / 2.0), 0.0) * np.sin(120 * since)
+    noise = 0.5 * np.exp(rng.normal(0, 0.25))
+    return x + rng.normal(0, noise, (revolutions, L))
+
+
+def source() -> tuple[np.ndarray, np.ndarray]:
+    """The simulator's rows: the nominal healthy revolution, and the chip's ring on every tooth."""
+    healthy = sum(a * np.cos((h + 1) * TEETH * THETA) for h, a in enumerate((1, 0.5, 0.25)))
+    chips = []
+    for tooth in range(TEETH):
+        since = np.angle(np.exp(1j * (THETA - 2 * np.pi * (tooth + 0.5) / TEETH)))
+        chips.append(healthy + np.where(since > 0, np.exp(-since * TEETH / 2.0), 0.0) * np.sin(120 * since))
+    return np.array([healthy] * 20 + chips), np.array([0] * 20 + [1] * TEETH)
+
+
+def called(seed: int, tmp_path, left_out: bool) -> tuple[float, float]:
+    """(share of new healthy takes' record10 units called, of chipped takes') by matched_filter at 1 %
+    asked, thresholded on three history takes."""
+    rng = np.random.default_rng([seed, 39])
+    history = [take(rng) for _ in range(3)]
+    tests = {f"h{i}": take(rng) for i in range(4)} | {f"f{i}": take(rng, chip=6.0) for i in range(2)}
+    units = [tsa_units(h, BLOCK, STRIDE) for h in history]
+    rule = Rule(
+        "records",
+        0.01,
+        {"record10": [(len(u), record_effects.independent_units(len(u), BLOCK, STRIDE)) for u in units]},
+    )
+    Xs, ys = source()
+    rows = [np.concatenate([h for j, h in enumerate(history) if j != k]) for k in range(3)]
+    task = (
+        Protocol(methods=(Method("matched_filter", False),)),
+        Method("matched_filter", False),
+        "",
+        "c",
+        None,
+        None,
+        (Xs, ys, Xs[:4], ys[:4]),
+        np.concatenate(history),
+        {"record10": np.concatenate(units)},
+        {p: {"record10": tsa_units(x, BLOCK)} for p, x in tests.items()},
+        Confined(tmp_path, ("states",)),
+        rule,
+        False,
+        tuple(rows) if left_out else None,
+    )
+    record = train_unit(task)
+    threshold = record["thresholds"]["record10"]
+    share = {
+        k: np.mean(
+            [np.mean(np.asarray(s["record10"]) > threshold) for p, s in record["test_scores"].items() if p[0] == k]
+        )
+        for k in "hf"
+    }
+    return share["h"], share["f"]
+
+
+def test_each_history_take_scored_without_itself_lets_a_new_takes_units_through_about_as_asked(tmp_path):
+    """Eight boxes of three history takes, four new healthy takes and two chipped ones: scored by the
+    detector made on all three, the history's takes let 20 % of the new healthy takes' record10 units
+    through (1 % asked); each take scored by the detector made without it, none (the chips: 7 of 8 boxes'
+    every unit)."""
+    now = np.array([called(seed, tmp_path, left_out=True) for seed in range(8)])
+    before = np.array([called(seed, tmp_path, left_out=False) for seed in range(8)])
+    assert now[:, 0].mean() <= 0.02, now
+    assert now[:, 1].mean() >= 0.75, now
+    assert before[:, 0].mean() >= 0.1, before  # what the threshold was set on before: the takes themselves
