@@ -125,3 +125,19 @@ def test_inspect_takes_the_same_forms():
 def test_the_line_saying_how_values_became_m_s2_speaks_in_g(tmp_path, keys, said):
     path, _ = _file(tmp_path, "fifty_g_float_wav")
     assert said in gearlab.read_recording(path, "0", **keys).units
+
+
+def test_score_takes_a_gain_in_g_over_the_run_s_sensitivity():
+    """`gearlab score --key gain=...` on a run read at 100 mV/g: a gain in g replaces the run's sensitivity (a
+    file in g at a full scale), a gain in volts keeps it; a gain in g beside --key sensitivity is one line."""
+    from gearlab.errors import GearlabInputError
+    from gearlab.kinds.detection_scoring import reading_keys
+
+    target = {"vibration": "acc", "tacho": "tach", "pulses_per_rev": 1, "sensitivity": 0.1 / G, "gain": None}
+    run = {"target": target, "conditions": {"25 Hz": {"speed_hz": 25.0}}}
+    full = reading_keys(run, None, {"gain": "50 g"})
+    assert full["gain"] / full["sensitivity"] == pytest.approx(50 * G)
+    volts = reading_keys(run, None, {"gain": "2 V"})
+    assert volts["gain"] / volts["sensitivity"] == pytest.approx(20 * G)
+    with pytest.raises(GearlabInputError, match=r"^--key gain: '50 g' is an acceleration per file unit"):
+        reading_keys(run, None, {"gain": "50 g", "sensitivity": "100 mV/g"})
