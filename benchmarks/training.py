@@ -55,7 +55,11 @@ and its labels by index_select: a phm09-shaped unit's CPU unchanged within noise
 
 Adopted: `fast` with frozen normalisation (every joint step, every evaluation) as one autograd
 function of window products (gearlab/learn/fast_frozen.py): fast+coral 10.4-10.8 -> 9.2-9.4 ms a
-step, 0.13-0.14 -> 0.16-0.17 of the limit (side by side, load ~9, results apart by rounding).
+step, 0.13-0.14 -> 0.16-0.17 of the limit (side by side, load ~9, results apart by rounding). The
+same function for normalisation in training mode (primings, supervised baselines): fast 4.0-4.4 ->
+3.3-3.7 ms a step, 0.076-0.081 -> 0.098-0.111 of the limit (CPU time, side by side, load ~11; its
+statistics in two passes: torch's own kernel for channels-last rows took as long and sums them in
+float32 one after the other, 2e-6 from float64's).
 
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
@@ -121,7 +125,10 @@ def flops_per_sample(net: nn.Module, length: int, device: torch.device) -> dict[
             hooks.append(module.register_forward_hook(layer("matmul")))
         elif isinstance(module, ShapeLikelihood):
             counts["matmul"] += 6 * module.weight.numel()
-    net.train()(torch.randn(2, length, device=device))  # two samples: batch normalisation needs them
+    # through the modules (Network.embed may run `fast` as one function, which no hook sees); two
+    # samples: batch normalisation needs them
+    net.train()
+    net.classifier(net.features(torch.randn(2, length, device=device)))
     for hook in hooks:
         hook.remove()
     return counts

@@ -1,6 +1,8 @@
-"""`fast` with frozen batch normalisation runs as one autograd function (gearlab.learn.fast_frozen):
-the same latent features and gradients as its modules to rounding, and the modules wherever it
-does not apply."""
+"""`fast` with frozen or training batch normalisation runs as one autograd function
+(gearlab.learn.fast_frozen): the same latent features, gradients and running statistics as its
+modules to rounding, and the modules wherever it does not apply."""
+
+import copy
 
 import numpy as np
 import pytest
@@ -9,13 +11,14 @@ from torch.nn import functional as F
 
 from gearlab.learn import fast_frozen
 from gearlab.learn.networks import build_network, fast_parts
-from gearlab.learn.training import fit_adaptation, train_mode
+from gearlab.learn.training import fit_adaptation, fit_supervised, train_mode
 from gearlab.registry import METHODS, get_registry
 
 
-def primed(length: int, seed: int = 0):
+def primed(length: int, seed: int = 0, freeze: bool = True):
     """A `fast` network whose normalisations hold statistics of their own (not 0 and 1) and
-    weights and biases away from 1 and 0, then frozen as a joint training freezes them."""
+    weights and biases away from 1 and 0, then frozen as a joint training freezes them (or left
+    training, as a priming trains it)."""
     torch.manual_seed(seed)
     net = build_network("fast", 2, length=length, seed=seed)
     with torch.no_grad():
@@ -25,28 +28,37 @@ def primed(length: int, seed: int = 0):
             if isinstance(layer, torch.nn.BatchNorm1d):
                 layer.weight.uniform_(0.5, 1.5)
                 layer.bias.uniform_(-0.5, 0.5)
-    train_mode(net, freeze_norm=True)
+    train_mode(net, freeze_norm=freeze)
     return net
 
 
 def latent_and_grads(net, x, y, modules: bool):
+    """The latent features of *x*, every weight's gradient and the buffers after one step, by the
+    function or by the modules, from the same state (the network's buffers restored after)."""
+    before = copy.deepcopy(net.state_dict())
     net.zero_grad(set_to_none=True)
     torch.manual_seed(1)  # the classifier's dropout draws alike
     z = net.features(x) if modules else net.embed(x)
     F.cross_entropy(net.classifier(z), y).backward()
-    return z.detach(), {n: p.grad.clone() for n, p in net.named_parameters()}
+    buffers = {n: b.clone() for n, b in net.named_buffers()}
+    net.load_state_dict(before)
+    return z.detach(), {n: p.grad.clone() for n, p in net.named_parameters()}, buffers
 
 
+@pytest.mark.parametrize("freeze", [True, False], ids=["frozen", "training"])
 @pytest.mark.parametrize("length,batch", [(2048, 80), (4096, 40), (2048, 2), (100, 3)])
-def test_frozen_fast_equals_its_modules(length, batch):
-    net = primed(length)
-    x, y = torch.randn(batch, length), torch.randint(0, 2, (batch,))
-    z, grads = latent_and_grads(net, x, y, modules=False)
+def test_fast_equals_its_modules(length, batch, freeze):
+    net = primed(length, freeze=freeze)
+    x, y = torch.randn(batch, length) * 2 + 0.5, torch.randint(0, 2, (batch,))
+    z, grads, buffers = latent_and_grads(net, x, y, modules=False)
+    z0, grads0, buffers0 = latent_and_grads(net, x, y, modules=True)
     assert net.embed(x).grad_fn.name() == "_FrozenBackward"  # one node: the fused path ran
-    z0, grads0 = latent_and_grads(net, x, y, modules=True)
     assert torch.allclose(z, z0, rtol=0, atol=1e-6 * z0.abs().max())
     for name, g0 in grads0.items():
         assert torch.allclose(grads[name], g0, rtol=0, atol=2e-5 * g0.abs().max()), name
+    for name, b0 in buffers0.items():  # training: the running statistics updated alike; frozen: kept
+        assert torch.allclose(buffers[name].double(), b0.double(), rtol=0, atol=1e-6 * b0.abs().max()), name
+    assert any(not torch.equal(b0, net.state_dict()[n]) for n, b0 in buffers0.items()) != freeze
     net.eval()
     with torch.no_grad():
         assert torch.allclose(net.embed(x), net.features(x), rtol=0, atol=1e-6 * z0.abs().max())
@@ -56,11 +68,20 @@ def test_frozen_fast_equals_its_modules(length, batch):
 def test_modules_where_the_function_does_not_apply():
     net = primed(2048)
     x = torch.randn(8, 2048)
-    net.train()  # normalisation in training mode: batch statistics, running ones updated
+    net.features[6].train()  # one normalisation training, the others frozen
     assert fast_frozen.features(fast_parts(net.features), x) is None
+    net.train()
+    net.features[6].momentum = None  # a cumulative average of the batches' statistics
+    assert fast_frozen.features(fast_parts(net.features), x) is None
+    net.features[6].momentum = 0.1
+    assert fast_frozen.features(fast_parts(net.features), x) is not None
+    short = primed(64, freeze=False)  # one value per channel in the third map: torch refuses it
+    assert fast_frozen.features(fast_parts(short.features), torch.randn(1, 64)) is None
+    assert fast_frozen.features(fast_parts(short.features), torch.randn(2, 64)) is not None
     train_mode(net, freeze_norm=True)
     assert fast_frozen.features(fast_parts(net.features), x.double()) is None
     assert fast_frozen.features(fast_parts(net.features), x.clone().requires_grad_()) is None
+    assert fast_frozen.features(fast_parts(net.features), x.to("meta")) is None  # CPU only: CUDA keeps the modules
     odd = primed(120)  # a first map of 7: MaxPool2's ceil-mode tail
     assert fast_frozen.features(fast_parts(odd.features), torch.randn(4, 120)) is None
     assert torch.equal(odd.embed(torch.randn(4, 120, generator=torch.Generator().manual_seed(0))),
@@ -91,3 +112,24 @@ def test_a_joint_training_stays_within_rounding_of_the_modules(monkeypatch):
         )  # fmt: skip
         losses[path] = np.array(history.train_loss)
     assert np.allclose(losses["function"], losses["modules"], rtol=1e-4)
+
+
+def test_a_priming_stays_within_rounding_of_the_modules(monkeypatch):
+    """A supervised training (batch normalisation in training mode) on the function and on the
+    modules: the same losses to rounding over a few epochs, the same running statistics."""
+    rng = np.random.default_rng(1)
+    X = rng.standard_normal((80, 512)).astype(np.float32)
+    y = (np.arange(80) % 2).astype(np.int64)
+    X[y == 1, 100:140] += 2.0
+    losses, states = {}, {}
+    for path in ("function", "modules"):
+        if path == "modules":
+            monkeypatch.setattr(fast_frozen, "features", lambda *a: None)
+        net = build_network("fast", 2, length=512, seed=0)
+        torch.manual_seed(0)  # the classifier's dropout draws alike
+        history = fit_supervised(net, X, y, rng=np.random.default_rng(0), device=torch.device("cpu"), epochs=5,
+                                 batch=20, val=None)  # fmt: skip
+        losses[path], states[path] = np.array(history.train_loss), net.state_dict()
+    assert np.allclose(losses["function"], losses["modules"], rtol=1e-4)
+    for name, value in states["modules"].items():
+        assert torch.allclose(states["function"][name].double(), value.double(), rtol=0, atol=1e-4 * value.abs().max())

@@ -1,16 +1,19 @@
-"""`fast`'s feature extractor with frozen batch normalisation as one autograd function.
+"""`fast`'s feature extractor as one autograd function, its batch normalisation frozen or training.
 
 A joint (domain-adaptation) training, a fine-tuning and every evaluation run `fast` with its
 batch normalisation frozen (``training.train_mode(net, freeze_norm=True)``, or ``eval()``): each
-normalisation is then a fixed affine map per channel. phm09_chip's trainings are nearly all such
-steps. Through the modules a step is dozens of operators on maps of 80 x 16 x 128 values at
-most, and oneDNN's stride-2 convolutions and their gradients at these sizes run at a third to a
-quarter of the machine's matrix-product speed. Here the same network is 3 matrix products
-forward and 5 backward on channels-last windows (each convolution a product of its windows), the
-normalisations multiply-adds, ReLU and the pair maximum one pass, the gradients written by hand:
-the same function and gradients, the sums in another order (rounding: 1e-7 to 1e-5 of each
-gradient's largest element, tests/test_fast_frozen.py). Batch normalisation in training mode (a
-priming, a supervised baseline), another layout of layers, device or shape keep the modules.
+normalisation is then a fixed affine map per channel. A priming and a supervised baseline train
+it with the batch's own statistics (training mode), the running ones updated as BatchNorm1d does.
+Through the modules a step is dozens of operators on maps of 80 x 16 x 128 values at most, and
+oneDNN's stride-2 convolutions and their gradients at these sizes run at a third to a quarter of
+the machine's matrix-product speed. Here the same network is 3 matrix products forward and 5
+backward on channels-last windows (each convolution a product of its windows), the
+normalisations multiply-adds (in training mode with each channel's mean and variance over the
+batch's rows and their gradient terms), ReLU and the pair maximum one pass, the gradients written
+by hand: the same function, gradients and running statistics, the sums in another order
+(rounding: 1e-7 to 1e-5 of each gradient's largest element, tests/test_fast_frozen.py). Another
+layout of layers, normalisations in mixed modes or without running statistics, a device or shape
+keep the modules.
 """
 
 from __future__ import annotations
@@ -21,25 +24,29 @@ from torch.nn import functional as F
 
 def features(parts: tuple | None, x: torch.Tensor) -> torch.Tensor | None:
     """`fast`'s feature extractor of *x* by _Frozen, its *parts* (conv1, norm1, conv2, norm2,
-    conv3, norm3: networks.fast_parts) with every batch normalisation in evaluation mode; None
-    where it does not apply (no parts: another layout of layers; normalisation training, a signal
-    whose first map has an odd length, an input that needs a gradient, a device other than the
-    CPU, another dtype)."""
+    conv3, norm3: networks.fast_parts) with every batch normalisation in evaluation mode, or every
+    one in training mode (the running statistics updated); None where it does not apply (no parts:
+    another layout of layers; normalisations in mixed modes, without running statistics or with a
+    cumulative average (momentum None); a signal whose first map has an odd length, a training
+    batch of one value per channel, an input that needs a gradient, a device other than the CPU,
+    another dtype)."""
     if x.dim() == 3 and x.shape[1] == 1:
         x = x[:, 0]
     if parts is None or x.dim() != 2 or x.device.type != "cpu" or x.dtype != torch.float32 or x.requires_grad:
         return None
-    if any(n.training or n.running_mean is None for n in parts[1::2]):
+    norms = parts[1::2]
+    training = norms[0].training
+    if any(n.training != training or n.running_mean is None or n.momentum is None for n in norms):
         return None
     conv1 = parts[0]
     (size,), (stride,), (pad,) = conv1.kernel_size, conv1.stride, conv1.padding
     first = (x.shape[1] + 2 * pad - size) // stride + 1
-    if first < 2 or first % 2:
-        return None
+    if first < 2 or first % 2 or (training and len(x) * _lengths(first)[1] < 2):
+        return None  # (torch refuses to normalise one value per channel by its own statistics)
     c1, n1, c2, n2, c3, n3 = parts
     return _Frozen.apply(
         x, c1.weight, n1.weight, n1.bias, c2.weight, n2.weight, n2.bias, c3.weight, n3.weight, n3.bias,
-        (n1, n2, n3), (size, stride, pad),
+        (n1, n2, n3), (size, stride, pad), training,
     )  # fmt: skip
 
 
@@ -67,60 +74,99 @@ def _as_matrix(weight: torch.Tensor) -> torch.Tensor:
     return weight.permute(0, 2, 1).reshape(weight.shape[0], -1)
 
 
+def _lengths(first: int) -> tuple[int, int]:
+    """The lengths of the second and third maps after a first map of *first* (even) values: the
+    pair maximum halves it, each stride-2 convolution (size 3, padding 1) halves it rounding up."""
+    l2 = (first // 2 - 1) // 2 + 1
+    return l2, (l2 - 1) // 2 + 1
+
+
 class _Frozen(torch.autograd.Function):
     @staticmethod
-    def forward(ctx, x, w1, g1, b1, w2, g2, b2, w3, g3, b3, norms, geometry):
+    def forward(ctx, x, w1, g1, b1, w2, g2, b2, w3, g3, b3, norms, geometry, training):
         size, stride, pad = geometry
         b = x.shape[0]
-        inv = [torch.rsqrt(n.running_var + n.eps) for n in norms]
-        means = [n.running_mean for n in norms]
-        scale = [g * i for g, i in zip((g1, g2, g3), inv)]
-        shift = [beta - m * s for beta, m, s in zip((b1, b2, b3), means, scale)]
         win = F.pad(x, (pad, pad)).unfold(1, size, stride)  # (B, L1, size): a view
         l1 = win.shape[1]
+        l2, l3 = _lengths(l1)
         win = win.reshape(b * l1, size)  # the copy networks.WindowConv1d's product makes too
         h1 = win @ w1[:, 0].T  # (B * L1, C1), channels last
-        z1 = torch.addcmul(shift[0], h1, scale[0]).view(b, l1 // 2, 2, -1)
+        z1, n1 = _Norm.of(h1, norms[0], g1, b1, training)
+        z1 = z1.view(b, l1 // 2, 2, -1)
         pair = z1[:, :, 0] - z1[:, :, 1]  # > 0: the first of a pair is the maximum (MaxPool2)
         p = torch.maximum(z1[:, :, 0], z1[:, :, 1]).clamp_(min=0)  # the pair maximum of ReLU's output
-        l2 = (l1 // 2 - 1) // 2 + 1
         col2 = _windows(p, l2)
         h2 = col2 @ _as_matrix(w2).T
-        r2 = torch.addcmul(shift[1], h2, scale[1]).clamp_(min=0)
-        l3 = (l2 - 1) // 2 + 1
+        r2, n2 = _Norm.of(h2, norms[1], g2, b2, training)
+        r2 = r2.clamp_(min=0)
         col3 = _windows(r2.view(b, l2, -1), l3)
         h3 = col3 @ _as_matrix(w3).T
-        r3 = torch.addcmul(shift[2], h3, scale[2]).clamp_(min=0)
-        ctx.save_for_backward(win, h1, pair, p, col2, h2, r2, col3, h3, r3, w2, w3, *scale, *means, *inv)
-        ctx.sizes = (b, l1, l2, l3)
+        r3, n3 = _Norm.of(h3, norms[2], g3, b3, training)
+        r3 = r3.clamp_(min=0)
+        ctx.save_for_backward(win, h1, pair, p, col2, h2, r2, col3, h3, r3, w2, w3)
+        ctx.sizes, ctx.norms = (b, l1, l2, l3), (n1, n2, n3)
         return r3.view(b, l3, -1).mean(1)
 
     @staticmethod
     def backward(ctx, grad):
-        win, h1, pair, p, col2, h2, r2, col3, h3, r3, w2, w3, *rest = ctx.saved_tensors
-        scale, means, inv = rest[0:3], rest[3:6], rest[6:9]
+        win, h1, pair, p, col2, h2, r2, col3, h3, r3, w2, w3 = ctx.saved_tensors
+        n1, n2, n3 = ctx.norms
         b, l1, l2, l3 = ctx.sizes
         relu = torch.ops.aten.threshold_backward
         g = relu((grad / l3)[:, None, :].expand(b, l3, -1), r3.view(b, l3, -1), 0.0).view(b * l3, -1)
-        d3 = _normalised(g, h3, scale[2], means[2], inv[2])
-        g = g * scale[2]
+        g, d3 = n3.backward(g, h3)
         dw3 = (g.T @ col3).view(w3.shape[0], 3, -1).permute(0, 2, 1)
         g = relu(_unwindows(g @ _as_matrix(w3), b, l3, l2).reshape(b * l2, -1), r2, 0.0)
-        d2 = _normalised(g, h2, scale[1], means[1], inv[1])
-        g = g * scale[1]
+        g, d2 = n2.backward(g, h2)
         dw2 = (g.T @ col2).view(w2.shape[0], 3, -1).permute(0, 2, 1)
         g = relu(_unwindows(g @ _as_matrix(w2), b, l2, l1 // 2), p, 0.0)  # (B, L1 / 2, C1)
         out = torch.empty(b, l1 // 2, 2, g.shape[-1])
         first = relu(g, pair, 0.0)
         out[:, :, 0] = first
         torch.sub(g, first, out=out[:, :, 1])
-        g = out.view(b * l1, -1)
-        d1 = _normalised(g, h1, scale[0], means[0], inv[0])
-        dw1 = ((g * scale[0]).T @ win)[:, None, :]
-        return None, dw1, *d1, dw2, *d2, dw3, *d3, None, None
+        g, d1 = n1.backward(out.view(b * l1, -1), h1)
+        dw1 = (g.T @ win)[:, None, :]
+        return None, dw1, *d1, dw2, *d2, dw3, *d3, None, None, None
 
 
-def _normalised(grad: torch.Tensor, h: torch.Tensor, scale, mean, inv) -> tuple[torch.Tensor, torch.Tensor]:
-    """The gradients of a frozen normalisation's weight and bias: sum of grad * (h - mean) * inv
-    and sum of grad over the rows."""
-    return ((h - mean) * grad).sum(0) * inv, grad.sum(0)
+class _Norm:
+    """One batch normalisation of rows (N, C) per channel: its statistics (mean, inv = 1 / sqrt(var
+    + eps)) and scale = weight * inv, for the gradients (backward)."""
+
+    def __init__(self, mean: torch.Tensor, inv: torch.Tensor, weight: torch.Tensor, training: bool):
+        self.mean, self.inv, self.scale, self.training = mean, inv, weight * inv, training
+
+    @staticmethod
+    def of(h: torch.Tensor, norm, weight: torch.Tensor, bias: torch.Tensor, training: bool) -> tuple:
+        """(z, _Norm) of the rows *h*: z = h * scale + shift per channel, by the running statistics
+        of *norm* (frozen), or in *training* by the rows' own mean and (biased) variance, the running
+        ones updated by *norm*'s momentum with the unbiased variance, as BatchNorm1d does. The
+        variance in two passes: torch's kernel for rows (N, C) sums them in float32 one after the
+        other (mean and variance 2e-6 from float64's at 5120 rows, where its kernel for the modules'
+        (B, C, L) is at 1e-7, and so is this), var_mean takes ten times as long."""
+        if training:
+            n = len(h)
+            mean = h.sum(0) / n
+            centred = h - mean
+            var = (centred * centred).sum(0) / n
+            norm.running_mean.lerp_(mean, norm.momentum)
+            norm.running_var.lerp_(var * (n / (n - 1)), norm.momentum)
+            norm.num_batches_tracked.add_(1)
+        else:
+            mean, var = norm.running_mean, norm.running_var
+        out = _Norm(mean, torch.rsqrt(var + norm.eps), weight, training)
+        return torch.addcmul(bias - mean * out.scale, h, out.scale), out
+
+    def backward(self, grad: torch.Tensor, h: torch.Tensor) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
+        """The gradient of the rows *h* whose output got *grad*, and those of the normalisation's
+        weight and bias: the sums of grad * (h - mean) * inv and of grad over the rows. In training
+        the mean and the variance are the rows' own, and their gradient takes from each row's the
+        rows' mean gradient and the part along h - mean: scale * (grad - (d_bias + (h - mean) *
+        inv * d_weight) / N)."""
+        d_weight, d_bias = ((h - self.mean) * grad).sum(0) * self.inv, grad.sum(0)
+        if not self.training:
+            return grad * self.scale, (d_weight, d_bias)
+        n = len(h)
+        along = self.scale * self.inv * d_weight / n
+        level = self.mean * along - self.scale * d_bias / n
+        return torch.addcmul(torch.addcmul(level, grad, self.scale), h, -along), (d_weight, d_bias)

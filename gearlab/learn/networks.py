@@ -145,8 +145,8 @@ class Network(nn.Module):
             raise GearlabInputError(
                 f"network '{self.name}': built for signals of {self.length} samples, got {x.shape[-1]}"
             )
-        if self.name == "fast" and (frozen := fast_frozen.features(fast_parts(self.features), x)) is not None:
-            return frozen  # its batch normalisation frozen: one autograd function (learn/fast_frozen.py)
+        if self.name == "fast" and (fused := fast_frozen.features(fast_parts(self.features), x)) is not None:
+            return fused  # one autograd function, normalisation frozen or training (learn/fast_frozen.py)
         return self.features(x)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
