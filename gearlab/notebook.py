@@ -262,7 +262,7 @@ def inspect_options(
     options are), checked once: a wrong value is one line naming *flag(key)* (the CLI passes
     '--pulses-per-rev' for 'pulses_per_rev')."""
     from .data.importers import TACHO_KINDS
-    from .data.textzip import calibration
+    from .data.textzip import calibration, gain_quantity
     from .inspect import InspectOptions
     from .parts.measured import speed_of
 
@@ -274,6 +274,8 @@ def inspect_options(
     rate = _si(fs, "Hz", flag("fs"))
     if rate is not None and not 0 < rate <= 1e7:
         raise GearlabInputError(f"{flag('fs')}: expected a sampling rate in (0, 10 MHz], got {fs!r}")
+    if gain is not None and not gain_quantity(gain, flag("gain"))[0] > 0:
+        raise GearlabInputError(f"{flag('gain')}: expected a positive number of volts per file unit, got {gain!r}")
     chain = calibration({"sensitivity": sensitivity, "gain": gain}, flag)
     return InspectOptions(
         vibration=vibration,

@@ -97,7 +97,7 @@ CALIBRATION = ("sensitivity", "gain")
 
 
 def gain_quantity(value, where: str) -> tuple[float, str]:
-    """(positive SI value, which of GAIN_UNITS) of a 'gain', else one line naming *where*."""
+    """(SI value, which of GAIN_UNITS) of a 'gain', else one line naming *where* (calibration: positive)."""
     try:
         number, unit = _quantity(value, GAIN_UNITS, where)
     except GearlabInputError:
@@ -106,11 +106,6 @@ def gain_quantity(value, where: str) -> tuple[float, str]:
             "(e.g. '0.3 mV'), or an acceleration per volt (e.g. '10 g/V') or per file unit (a full scale, e.g. "
             "'50 g'); g is standard gravity"
         ) from None
-    if not number > 0:
-        raise GearlabInputError(
-            f"{where}: expected a positive number of volts per file unit such as '0.3 mV', or of g per volt or per "
-            f"file unit such as '50 g'; got {shown(value)} (expected a positive voltage or acceleration)"
-        )
     return number, unit
 
 
@@ -127,6 +122,11 @@ def calibration(given: dict, at) -> dict:
     if values.get("gain") is None:
         return out
     number, unit = gain_quantity(values["gain"], at("gain"))
+    if not number > 0:
+        raise GearlabInputError(
+            f"{at('gain')}: expected a positive voltage per file unit such as '0.3 mV', got {shown(values['gain'])} "
+            "(or a positive acceleration per volt or per file unit, e.g. '50 g')"
+        )
     if unit == "V":
         return out | {"gain": number}
     if values.get("sensitivity") is not None:

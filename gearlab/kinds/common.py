@@ -20,7 +20,7 @@ from ..data.recordings import (
     pulses_without_tacho,
 )
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
-from ..data.textzip import CALIBRATION, calibration, gain_quantity, parse_sensitivity
+from ..data.textzip import CALIBRATION, calibration, parse_sensitivity
 from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
@@ -69,7 +69,7 @@ def _sensitivity(value, where: str):
 
 
 def _gain(value, where: str):
-    gain_quantity(value, where)
+    calibration({"gain": value}, lambda _: where)
     return value
 
 
