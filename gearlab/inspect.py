@@ -107,9 +107,9 @@ def read_record(path: str, options: InspectOptions) -> Recording:
         vibration = left[0]
     said = name_unit(str(vibration))
     if said is not None and said[0] == "acceleration" and options.sensitivity is not None:
+        flag = "--gain" if options.gain is not None else "--sensitivity"  # a gain in g is read as both (calibration)
         raise GearlabInputError(  # the values would come out 1 / sensitivity too large, unsaid
-            f"{path}: --sensitivity: channel '{vibration}' is an acceleration already ({said[1]}, as its name "
-            "says); expected no --sensitivity"
+            f"{path}: {flag}: channel '{vibration}' is an acceleration ({said[1]}: its name); expected no {flag}"
         )
     roles = {vibration: "vibration"}
     if options.tacho is not None:

@@ -141,3 +141,9 @@ def test_score_takes_a_gain_in_g_over_the_run_s_sensitivity():
     assert volts["gain"] / volts["sensitivity"] == pytest.approx(20 * G)
     with pytest.raises(GearlabInputError, match=r"^--key gain: '50 g' is an acceleration per file unit"):
         reading_keys(run, None, {"gain": "50 g", "sensitivity": "100 mV/g"})
+
+
+def test_inspect_names_the_gain_in_g_given_on_a_channel_in_g(tmp_path, cli):
+    np.savez(tmp_path / "g.npz", acc_g=ACC / G, fs=float(FS))
+    code, _, err = cli("inspect", tmp_path / "g.npz", "--vibration", "acc_g", "--speed", "25 Hz", "--gain", "50 g")
+    assert code == 2 and "--gain: channel 'acc_g' is an acceleration (g: its name); expected no --gain" in err, err
