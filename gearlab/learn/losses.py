@@ -29,23 +29,22 @@ def pairwise_sq_dists(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     return d.clamp_min(0.0)
 
 
-def _median_of(d_xx: torch.Tensor, d_yy: torch.Tensor, d_xy: torch.Tensor) -> float:
-    """Median of the pooled pairwise distances, given the squared-distance blocks; 1 if undefined."""
+def _pooled_median(d: torch.Tensor) -> float:
+    """Median of the pairwise distances of a pooled sample x ∪ y, given its squared-distance
+    matrix: its upper triangle holds each pair once (within x, within y and across); 1 if
+    undefined."""
     with torch.no_grad():
-        m, n = d_xx.shape[0], d_yy.shape[0]
-        iu_x = torch.triu_indices(m, m, offset=1, device=d_xx.device)
-        iu_y = torch.triu_indices(n, n, offset=1, device=d_yy.device)
-        pooled = torch.cat([d_xx[iu_x[0], iu_x[1]], d_yy[iu_y[0], iu_y[1]], d_xy.reshape(-1)])
-        if pooled.numel() == 0:
+        upper = torch.triu_indices(len(d), len(d), offset=1, device=d.device)
+        if upper.shape[1] == 0:
             return 1.0
-        median = float(pooled.median().sqrt())
+        median = float(d[upper[0], upper[1]].median().sqrt())
     return median if median > 0.0 and math.isfinite(median) else 1.0
 
 
 def median_distance(x: torch.Tensor, y: torch.Tensor) -> float:
     """Median pairwise distance within the pooled sample x ∪ y (the median heuristic); 1 if undefined."""
-    x, y = _flat(x).detach(), _flat(y).detach()
-    return _median_of(pairwise_sq_dists(x, x), pairwise_sq_dists(y, y), pairwise_sq_dists(x, y))
+    z = torch.cat([_flat(x), _flat(y)]).detach()
+    return _pooled_median(pairwise_sq_dists(z, z))
 
 
 def mmd2(
@@ -60,13 +59,20 @@ def mmd2(
     (a multi-bandwidth kernel is still characteristic). By default σ = *scale* × the median
     pairwise distance of the pooled sample × (0.25, 0.5, 1, 2, 4); the bandwidths carry no
     gradient. M and N may differ (eq. 5.9); with M = N this is eq. 5.10.
+
+    Computed on the pooled sample at once: its squared distances (M + N)², every bandwidth's
+    kernel from them in one call, and eq. 5.9 as the quadratic form wᵀKw with w = 1/M on x's rows
+    and -1/N on y's (the three means of the equation, the cross term twice). The pooled matrix's
+    upper triangle holds the distances the median heuristic pools (within x, within y, across).
     """
     x, y = _flat(x), _flat(y)
-    if x.shape[0] == 0 or y.shape[0] == 0:
+    m, n = x.shape[0], y.shape[0]
+    if m == 0 or n == 0:
         raise ValueError("mmd2 needs at least one sample from each domain")
-    d_xx, d_yy, d_xy = pairwise_sq_dists(x, x), pairwise_sq_dists(y, y), pairwise_sq_dists(x, y)
+    z = torch.cat([x, y])
+    d = pairwise_sq_dists(z, z)
     if bandwidths is None:
-        median = _median_of(d_xx, d_yy, d_xy)
+        median = _pooled_median(d)
         sigmas = [scale * median * s for s in MMD_SCALES]
     elif isinstance(bandwidths, (int, float)):
         sigmas = [float(bandwidths)]
@@ -74,16 +80,11 @@ def mmd2(
         sigmas = [float(s) for s in bandwidths]
     if not sigmas or min(sigmas) <= 0.0:
         raise ValueError(f"bandwidths must be positive, got {sigmas}")
-    total = x.new_zeros(())
-    for sigma in sigmas:
-        gamma = 1.0 / (2.0 * sigma * sigma)
-        total = (
-            total
-            + torch.exp(-gamma * d_xx).mean()
-            + torch.exp(-gamma * d_yy).mean()
-            - 2.0 * torch.exp(-gamma * d_xy).mean()
-        )
-    return total
+    gamma = torch.tensor([-1.0 / (2.0 * s * s) for s in sigmas], dtype=d.dtype, device=d.device)
+    kernel = torch.exp(gamma[:, None, None] * d).sum(0)
+    w = torch.cat([torch.full((m,), 1.0 / m, dtype=d.dtype, device=d.device),
+                   torch.full((n,), -1.0 / n, dtype=d.dtype, device=d.device)])  # fmt: skip
+    return w @ kernel @ w
 
 
 def coral_loss(x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
