@@ -84,3 +84,18 @@ def test_a_time_column_written_to_six_digits_is_read_at_its_written_resolution(t
     (tmp_path / "gap.csv").write_text("Time [s],acc [m/s^2]\n" + dropped)
     code, _, err = cli("inspect", tmp_path / "gap.csv", "--gearbox", tmp_path / "box.toml")
     assert code == 2 and "not uniformly sampled" in err, err
+
+
+def test_the_gap_reads_a_three_stage_trains_first_mesh_without_the_later_stages_lines(tmp_path):
+    # C's gap: the structure check reads the first stage alone (a one-stage pair) from the history's revolutions,
+    # where the later stages' harmonics and sidebands were the input's comb: 'structure differs: the pinion shows
+    # 12.5 ± 0.0 teeth (its shaft's sidebands of the mesh), 15 expected: the source simulates a 15-tooth pinion'
+    from gearlab.gap.structure import mesh_check
+
+    f0, points = 49.0, 1024
+    x, _ = _train(C, f0, f0 * points, 8.0, (0.15, 0.5, 1.0), ((1, 0.5, 0.3), (1, 0.5, 0.3), 0.6 ** np.arange(10)))
+    rows = x[: x.size // points * points].reshape(-1, points)
+    o1, o2, o3 = 15 / 47, 15 / 47 * 19 / 58, 15 / 47 * 19 / 58 * 22 / 63
+    later = ((19 * o1, (o1, o2)), (22 * o2, (o2, o3)))
+    read = mesh_check(rows, 15, 47, 0, later, None, on_input=False)["inspect"]
+    assert abs(read["z1_seen"] - 15) < 0.5, read

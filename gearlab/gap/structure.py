@@ -114,7 +114,11 @@ def mesh_check(
     orders, amp = spectrum(np.asarray(target, dtype=np.float64).reshape(-1), points)
     top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
     lines = find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
-    check = check_description(lines, _PairDescription.of(z1, z2), n, on_input, None if tacho is None else tacho[1])
+    # the later stages' lines are no sidebands of the first (their shafts but the first wheel's)
+    beyond = [(mesh, shafts[1:] if i == 0 else shafts) for i, (mesh, shafts) in enumerate(later)]
+    check = check_description(
+        lines, _PairDescription.of(z1, z2), n, on_input, None if tacho is None else tacho[1], beyond
+    )
     # ranked by the spectrum at the line's bin: the parabola's height overshoots where a noise-free
     # record's neighbouring bins are rounding (a line at order 1808 ranked above the mesh harmonics)
     x = lines.at[lines.at >= MIN_TEETH - 0.5]

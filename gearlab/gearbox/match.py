@@ -211,25 +211,17 @@ def families(
     return found
 
 
-def others_lines(lines: Lines, table, k: int, moved: dict, measured_shaft: dict, bin_: float) -> frozenset:
-    """The lines the other stages' structure explains, no sidebands of stage *k*'s: any harmonic of their
-    meshes (off stage k's own) and its sidebands j <= 3 of their shafts that stage k does not carry (a
-    22/63 last stage's 6th harmonic, 1.2 below a 15/47 first mesh, and its sidebands read as the input
-    shaft's comb: 'the pinion shows 12.5 teeth'). A shaft both carry is left: its sidebands are both."""
-    expected = float(table.stages[k].mesh)
+def others_lines(lines: Lines, expected: float, others, bin_: float) -> frozenset:
+    """The lines other stages' structure explains, no sidebands of a stage of mesh order *expected*: any
+    harmonic of their meshes (off its own) and its sidebands j <= 3 of their shafts it does not carry
+    (*others*: (mesh order, those shafts' orders) each). A 22/63 last stage's 6th harmonic, 1.2 below a
+    15/47 first mesh, and its sidebands read as the input shaft's comb: 'the pinion shows 12.5 teeth'.
+    A shaft both carry is left out: its sidebands are both stages'."""
     at, carrier = [], []
-    for q, t in enumerate(table.stages):
-        if q == k:
-            continue
-        m = moved.get(q, float(t.mesh))
-        offsets = [0.0] + [
-            j * measured_shaft.get(shaft, (float(table.shaft_orders[shaft]),))[0]
-            for shaft in (q, q + 1)
-            if shaft not in (k, k + 1)
-            for j in (-3, -2, -1, 1, 2, 3)
-        ]
+    for m, shaft_orders in others:
+        offsets = [0.0] + [j * o for o in shaft_orders for j in (-3, -2, -1, 1, 2, 3)]
         for h in range(1, MAX_HARMONIC + 1):
-            if abs(h * m / expected - round(h * m / expected)) > 1e-9:  # on stage k's own harmonic: both
+            if abs(h * m / expected - round(h * m / expected)) > 1e-9:  # on the stage's own harmonic: both
                 at += [h * m + off for off in offsets]
                 carrier += [off == 0.0 for off in offsets]
     if not at:
@@ -243,8 +235,21 @@ def others_lines(lines: Lines, table, k: int, moved: dict, measured_shaft: dict,
     return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
 
 
+def other_stages(table, k: int, moved: dict, measured_shaft: dict) -> list:
+    """(mesh order, orders of its shafts stage *k* does not carry) of every other stage of *table*, as
+    measured where it was (an earlier stage's moved mesh, a shaft's sidebands or tacho)."""
+    return [
+        (
+            moved.get(q, float(t.mesh)),
+            [measured_shaft.get(i, (float(table.shaft_orders[i]),))[0] for i in (q, q + 1) if i not in (k, k + 1)],
+        )
+        for q, t in enumerate(table.stages)
+        if q != k
+    ]
+
+
 def check_description(
-    lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool, tacho_shaft: int | None = None
+    lines: Lines, box: Gearbox, revolutions: int, tacho_on_input: bool, tacho_shaft: int | None = None, beyond=()
 ) -> dict:
     """Every stage's mesh order and every shaft's order tested against the lines (module doc). A tacho
     on another shaft (*tacho_shaft*, its index) gives that shaft's order: the revolutions are its turns
@@ -253,7 +258,8 @@ def check_description(
 
     Stages are taken input first: a shaft's order measured at one stage (the wheel's sidebands)
     is the pinion shaft's order of the next, so a wrong tooth count upstream is not blamed on a
-    later stage."""
+    later stage. *beyond*: stages of the train the description leaves out (a simulator's later stages
+    where its first is read alone), as other_stages gives them: their lines are no sidebands of it."""
     table = order_table(box)
     bin_ = 1.0 / revolutions
     explained = table.lines()
@@ -363,7 +369,7 @@ def check_description(
             ),
             bin_,
             (k in measured_shaft, k + 1 in measured_shaft),
-            others_lines(lines, table, k, moved, measured_shaft, bin_),
+            others_lines(lines, expected, [*beyond, *other_stages(table, k, moved, measured_shaft)], bin_),
         )
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
