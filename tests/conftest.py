@@ -217,6 +217,23 @@ def no_flush_to_disk():
 
 
 @pytest.fixture(scope="session", autouse=True)
+def pilot_settles_in_short_slices():
+    """Textual's pilot waits after every key and pause until the app is idle: it sleeps a slice and
+    stops once the process used under a twentieth of it (textual._wait), the slice 20 ms, at least
+    one per call and two per key, while the test's core stays idle. The same rule in PILOT_SLICE:
+    the TUI test files left a core idle 20.6 -> 9.5 s (test_tui_edges + test_tui_arrows, side by side)."""
+    from textual import _wait
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_wait, "SLEEP_GRANULARITY", PILOT_SLICE)
+        mp.setattr(_wait, "SLEEP_IDLE", PILOT_SLICE / 20)
+        yield
+
+
+PILOT_SLICE = 0.005  # s; textual's own is 0.02
+
+
+@pytest.fixture(scope="session", autouse=True)
 def one_local_worker_unless_asked():
     """A scenario run in a test's process that leaves [execution] workers at 0 (all cores) runs its
     units in that process, as `workers = 1` does: `pytest -n` already gives each core a test file,

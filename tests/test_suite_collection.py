@@ -1,10 +1,12 @@
 """The suite's own start (tests/conftest.py): in a fresh clone a second xdist worker rewrites the
 test files' asserts into pytest's cache from the last file back, so that each file is rewritten
-once, not once per worker (issue 42)."""
+once, not once per worker; Textual's pilot waits for the app's idle in short slices (issue 42)."""
 
 from __future__ import annotations
 
+import asyncio
 import sys
+import time
 import types
 from types import SimpleNamespace
 
@@ -53,3 +55,16 @@ def test_a_second_worker_rewrites_from_the_last_file_back_to_one_already_cached(
     (tmp_path / "test_e.py").write_text("def test_e():\n    assert True\n")
     conftest.rewrite_ahead(SimpleNamespace(config=config))
     assert "test_e" not in cached(tmp_path)
+
+
+def test_the_pilot_waits_for_an_idle_app_in_short_slices():
+    """Each key a TUI test presses waits for idle at least twice (textual._wait.wait_for_idle, a slice
+    of sleep each, the core idle meanwhile): in the tests a slice is conftest.PILOT_SLICE, not 20 ms."""
+    from textual._wait import wait_for_idle
+
+    def waited() -> float:
+        start = time.monotonic()
+        asyncio.run(wait_for_idle(0))
+        return time.monotonic() - start
+
+    assert min(waited() for _ in range(5)) < 0.02  # the best of five: a busy machine wakes a sleeper late
