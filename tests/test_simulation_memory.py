@@ -59,3 +59,15 @@ def test_a_slow_gear_s_steady_cycle_holds_its_last_blocks_not_the_run(small_chun
         tracemalloc.stop()
     assert len(x) * 8 == block
     assert peak < 8 * block, f"{peak / block:.1f} blocks held at once"
+
+
+def test_a_long_tail_keeps_its_first_chunk_s_series_alone(monkeypatch):
+    """The series memo (bounded by _MEMO_BYTES) keeps the time base and table indices of a tail's first
+    chunk, which the next run at that speed reads again; the later chunks' are made and dropped, not
+    kept until the memo overflows (9 chunks of ~40 MB for a 143T wheel's cycle: 120 MB more a worker)."""
+    monkeypatch.setattr(newmark, "CHUNK", 3 * newmark._CHECK_EVERY, raising=False)
+    monkeypatch.setattr(newmark, "_MEMO", {})
+    sim = builder._simulator("six_dof", "meng2020", 200e3)
+    sim.tail((), 25.0, 10.0, "gear_y", 0.2, 0)  # 40,000 steps: 7 chunks
+    starts = {key[-1] for key in newmark._MEMO if key[0] in ("t", "angle")}
+    assert starts == {0}, sorted(starts)

@@ -16,6 +16,7 @@ beta2 = 2.25, i.e. Newmark's gamma = beta1 and beta = beta2 / 2 (docs/physics.md
 
 from __future__ import annotations
 
+import contextvars
 import math
 import time
 import warnings
@@ -45,6 +46,9 @@ _LIMIT = 1e3  # m or rad: no gearbox DOF gets anywhere near this
 # recently used out first.
 _MEMO: dict = {}
 _MEMO_BYTES = 1 << 27
+# Set while Simulator.tail makes a long run's series after its first chunk: made, not kept (a 143T wheel's
+# 1144 turns are 9 chunks of ~40 MB of series that no run reads again before the memo drops them).
+_UNKEPT = contextvars.ContextVar("unkept", default=False)
 _STIFFNESS: dict = {}  # MeshStiffnessModel per gear pair (its healthy sections: 4 ms a simulator)
 
 
@@ -437,14 +441,18 @@ class Simulator:
             kept[: max(have, 0)] = after.x[len(after.x) - max(have, 0) :]
         first, F = after.steps if state is not None else 0, None
         while F is None or first < steps:  # (a run of no step: its start)
-            n = min(CHUNK, steps - first)
-            t, _, phase, _ = self._time_base(n, speed, start + first)
-            tvms, _, k = self._nominal_stiffness(staged[0], phase, per_rev, n, speed, start + first)
-            if F is None:
-                F, static = self._static_start(staged, load, tvms.mean)
-                state = static if state is None else state
-            out = np.empty((n + 1, 1))
-            failed = self._newmark(k, [], None, t, speed, per_rev, F, state, out_idx, out, staged[1:], start + first)
+            n, later = min(CHUNK, steps - first), _UNKEPT.set(F is not None)
+            try:
+                t, _, phase, _ = self._time_base(n, speed, start + first)
+                tvms, _, k = self._nominal_stiffness(staged[0], phase, per_rev, n, speed, start + first)
+                if F is None:
+                    F, static = self._static_start(staged, load, tvms.mean)
+                    state = static if state is None else state
+                out = np.empty((n + 1, 1))
+                at = start + first
+                failed = self._newmark(k, [], None, t, speed, per_rev, F, state, out_idx, out, staged[1:], at)
+            finally:
+                _UNKEPT.reset(later)
             if failed >= 0:
                 raise self._diverged(where, faults, speed, load, failed + start + first)
             if first + n >= lo:  # out[i] is step first + i
@@ -467,7 +475,13 @@ class Simulator:
         that are elementwise functions of the step, make(length) their first *length* entries: the
         longest made is kept and a shorter one is its first entries (views: the same floats). A steady
         simulation's runs of 8, 32, 128 and 512 revolutions (builder.steady_response) keep one series,
-        not four that together overflow _MEMO_BYTES and are made again at every simulator's run."""
+        not four that together overflow _MEMO_BYTES and are made again at every simulator's run. Under
+        _UNKEPT (a long tail's later chunks) made and not kept."""
+        if _UNKEPT.get():
+            made = make() if length is None else make(length)
+            for x in made:
+                x.setflags(write=False)
+            return made
         entry = _MEMO.pop(key, None)
         if entry is None or (length is not None and len(entry[0][0]) < length):
             made = make() if length is None else make(length)
