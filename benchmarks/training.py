@@ -7,9 +7,9 @@ limit, measured side by side in one run.
 For each default network (`shapes`: scenarios/quick.toml, expB.toml, transfer_benchmark.toml;
 `fast`: scenarios/phm09_chip.toml, 2048 points) at its scenario's batch (40) with its optimiser
 (Adam, the priming and the baselines) and loss (cross-entropy), and for `fast` in the joint step
-of the calibrated methods (`fast+coral`: a source and a target batch embedded together, SGD,
-cross-entropy plus the CORAL loss; phm09_chip's coral, mmd and dann units took 2,650 of its
-units' 2,737 s at 5e2310c, source_only 72), three figures, alternated round by round so that
+of the calibrated methods (`fast+coral`, `fast+mmd`: a source and a target batch embedded
+together, SGD, cross-entropy plus the CORAL or the MMD loss; phm09_chip's coral, mmd and dann units
+took 2,650 of its units' 2,737 s at 5e2310c, source_only 72), three figures, alternated round by round so that
 all see the same machine load, the median of the rounds printed (a joint step's samples are its
 source and target rows):
 
@@ -59,7 +59,15 @@ step, 0.13-0.14 -> 0.16-0.17 of the limit (side by side, load ~9, results apart 
 same function for normalisation in training mode (primings, supervised baselines): fast 4.0-4.4 ->
 3.3-3.7 ms a step, 0.076-0.081 -> 0.098-0.111 of the limit (CPU time, side by side, load ~11; its
 statistics in two passes: torch's own kernel for channels-last rows took as long and sums them in
-float32 one after the other, 2e-6 from float64's).
+float32 one after the other, 2e-6 from float64's). MMD's pooled kernel (gearlab/learn/losses.py):
+its loss forward + backward 0.97 -> 0.40 ms, an mmd epoch of a phm09-shaped training 25.2 -> 20.9 ms.
+
+Where a joint step's time goes now (CPU time, 40+40 x 2048, load ~10): `fast` forward + backward as
+the function 4.0 ms, of which its 8 matrix products 1.3 ms at 75-92 GFLOP/s (the matmul peak; the
+limit's conv1d peak is 170); the rest of the function (window copies, normalisations, ReLU and pair
+gradients, ~60 operator calls) ~2 ms; outside it ~0.8 ms (classifier, losses, clipping, optimiser,
+rows). Not adopted: CORAL's gradient written out (one node: 0.26 -> 0.18 ms of a ~5 ms step), MMD's
+(0.39 -> 0.31 ms), the first layer's windows copied into a reused buffer (4.04 vs 4.19 ms).
 
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
@@ -88,7 +96,8 @@ from gearlab.registry import METHODS, get_registry
 CASES = (
     ("shapes", "shapes", 4096, 40, None, "quick, expB, transfer_benchmark"),
     ("fast", "fast", 2048, 40, None, "phm09_chip"),
-    ("fast+coral", "fast", 2048, 40, "coral", "phm09_chip's coral, mmd, dann"),
+    ("fast+coral", "fast", 2048, 40, "coral", "phm09_chip's coral, dann"),
+    ("fast+mmd", "fast", 2048, 40, "mmd", "phm09_chip's mmd"),
 )
 CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}  # cpu: this process's CPU seconds
 clock = CLOCKS["wall"]
@@ -231,7 +240,9 @@ def main() -> None:
         help="wall time, or this process's CPU time (steadier where other work shares the cores)",
     )
     parser.add_argument(
-        "--networks", default=",".join(c[0] for c in CASES), help="comma-separated, of: shapes, fast, fast+coral"
+        "--networks",
+        default=",".join(c[0] for c in CASES),
+        help="comma-separated, of: " + ", ".join(c[0] for c in CASES),
     )
     args = parser.parse_args()
     global clock

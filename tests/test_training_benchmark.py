@@ -30,7 +30,7 @@ def test_fast_flops_per_sample_are_counted_by_hand():
     assert counts["matmul"] == 2 * (64 * 64 + 64 * 2) * 3
 
 
-@pytest.mark.parametrize("case", ["fast", "fast+coral"])
+@pytest.mark.parametrize("case", ["fast", "fast+coral", "fast+mmd"])
 def test_a_tiny_run_prints_the_ratios(monkeypatch, capsys, case):
     """A supervised and a joint step (the calibrated methods', most of phm09_chip's training)."""
     bench = _benchmark()
