@@ -111,9 +111,9 @@ def read_record(path: str, options: InspectOptions) -> Recording:
         raise GearlabInputError(  # the values would come out 1 / sensitivity too large, unsaid
             f"{path}: {flag}: channel '{vibration}' is an acceleration ({said[1]}: its name); expected no {flag}"
         )
-    roles = {vibration: "vibration"}
-    if options.tacho is not None:
-        roles.setdefault(options.tacho, "tacho")
+    if options.tacho == vibration:  # as a scenario's [target] is refused (parts.measured.target_spec)
+        raise GearlabInputError(f"{path}: --tacho: the same column as the vibration ({vibration!r}); expected another")
+    roles = {vibration: "vibration", **({} if options.tacho is None else {options.tacho: "tacho"})}
     contents, fmt = read_contents(path, list(roles), roles)
     not_time((vibration, options.tacho), contents.available, path, f"{path}: --vibration/--tacho")
     scale = (options.gain or 1.0) / (options.sensitivity or 1.0)  # both positive when given

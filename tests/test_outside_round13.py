@@ -99,3 +99,12 @@ def test_the_gap_reads_a_three_stage_trains_first_mesh_without_the_later_stages_
     later = ((19 * o1, (o1, o2)), (22 * o2, (o2, o3)))
     read = mesh_check(rows, 15, 47, 0, later, None, on_input=False)["inspect"]
     assert abs(read["z1_seen"] - 15) < 0.5, read
+
+
+def test_inspect_refuses_a_tacho_that_is_the_vibration_channel_as_a_scenario_does(tmp_path, cli):
+    # `gearlab inspect take.npz --vibration acc --tacho acc` read the vibration's zero crossings as pulses: 'speed
+    # 417.29 Hz (25038 rpm) ... +943 %', then 'no line at mesh order 28'; validate refuses the same [target] keys
+    x, _ = _train(B, 40.0, 8000.0, 1.0, (1.0, 1.0), ((1.0,), (1.0,)))
+    np.savez(tmp_path / "take.npz", acc=x, fs=8000.0)
+    code, out, err = cli("inspect", tmp_path / "take.npz", "--vibration", "acc", "--tacho", "acc")
+    assert code == 2 and err.count("\n") == 1 and "--tacho: the same column as the vibration ('acc')" in err, err
