@@ -108,3 +108,19 @@ def test_inspect_refuses_a_tacho_that_is_the_vibration_channel_as_a_scenario_doe
     np.savez(tmp_path / "take.npz", acc=x, fs=8000.0)
     code, out, err = cli("inspect", tmp_path / "take.npz", "--vibration", "acc", "--tacho", "acc")
     assert code == 2 and err.count("\n") == 1 and "--tacho: the same column as the vibration ('acc')" in err, err
+
+
+def test_a_tacho_edge_at_the_records_first_samples_is_no_revolution():
+    # A's int16 WAV take: its tacho channel rose from 0 V at sample 0 into a pulse already under way, an edge 0.79
+    # turn before the first real one: 'speed 21.787 .. 27.824 Hz (variation 27.4 %)' on a shaft steady to 1.7 %,
+    # the mean 0.14 % fast, and the angle's zero (the tooth count's origin) on that edge
+    from gearlab.signals import angle_from_pulses
+
+    fs, f0 = 25600.0, 22.0
+    turns = f0 * np.arange(int(fs * 2)) / fs + 0.2  # the record starts 0.2 turn in, inside the pulse (0-0.3)
+    pulses = np.where(turns % 1.0 < 0.3, 5.0, 0.0)
+    pulses[:3] = [0.0, 2.0, 4.0]  # the channel rising from 0 V: an edge 0.8 turn before the first real one
+    theta = angle_from_pulses(pulses, fs)
+    speed = (theta[-1] - theta[0]) / (2 * np.pi) * fs / (theta.size - 1)
+    assert abs(speed / f0 - 1) < 1e-3, speed
+    assert abs(theta[int(0.8 / f0 * fs)]) < 0.05  # the first real edge is the angle's zero

@@ -18,6 +18,10 @@ from .checks import check_int, check_positive, check_real, check_signal, fmt_hz
 
 TWO_PI = 2.0 * np.pi
 
+# A first pulse interval under this share of the next ones' median is no turn (angle_from_pulses): a shaft's
+# speed moves a few percent over a record, not 10 % in one turn (a record starting inside a pulse, its channel
+# rising from 0 V: a first "turn" anywhere from 0 to 1 of the next ones; dropped, a real edge loses one turn)
+FIRST_PULSE = 0.9
 # Slack for a wrapped tacho that touches both ends of its interval ([-π, π] after rounding).
 _WRAP_SLACK = 1e-6
 
@@ -102,6 +106,10 @@ def angle_from_pulses(pulses: np.ndarray, fs: float) -> np.ndarray:
     i = crossings[np.searchsorted(crossings, switches, side="right") - 1]
     edges = i + (mid - v[i]) / (v[i + 1] - v[i])
 
+    # a first "pulse" much shorter than the next ones is the record's start, not a turn: a pulse already
+    # rising (or a channel settling) at sample 0 made an edge there, a 27 % short first revolution
+    if edges.size >= 3 and edges[1] - edges[0] < FIRST_PULSE * np.median(np.diff(edges[1:10])):
+        edges = edges[1:]
     if edges.size < 2:
         raise GearlabInputError(
             f"pulse train has {edges.size} rising edge(s) in {v.size} samples "
