@@ -46,8 +46,11 @@ finer gear up to U_FINE, the coarser above U_COARSE; both (as the shaft) between
 counts differ by less than MIN_RATIO, or more than WIDTH_LOW of the excess lies below half the
 finer gear's tooth order (a low mode's ring sets the width), or z < WIDTH_Z and the event reads
 wide (noise widens an event, never narrows it). The width follows the structure's modes as well as
-the teeth, and a pit or spall lasts a part of its pitch, so the two gears' u overlap. "Both" is no
-safe answer: a scenario watching either gear counts it as its own.
+the teeth, and a pit or spall lasts a part of its pitch, so the two gears' u overlap. The event's
+mesh phase (which_template.mesh_phases: its content about each gear's mesh line, at its peak, against
+that line; in phase for the damaged gear's own mesh) names the gear of counts under MIN_RATIO where
+one leads by PHASE_MARGIN and the other is not in anti-phase. "Both" is no safe answer: a scenario
+watching either gear counts it as its own.
 
 Tooth. The named shaft's orders, each weighted by the share of its power that is new (clip(Δ /
 |X̄|², 0, 1)), form its residual; the peak of its envelope's energy over one pitch, in the shaft's
@@ -99,6 +102,8 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     WIDTH_Z,
     envelope,
     fit_words,
+    mesh_phases,
+    phase_words,
     which_by_template,
     which_by_width,
 )
@@ -465,7 +470,7 @@ def which_line(evidence: dict, which: str | None) -> str:
     if not evidence:
         return ""
     width = f"event width {evidence['width']:.2f} {evidence['event width']}, " if "width" in evidence else ""
-    width += fit_words(evidence)
+    width += phase_words(evidence) + fit_words(evidence)
     expected = " / ".join(f"{g.split(' (')[0]} ~{v:.2f}" for g, v in evidence["expected"].items())
     rule = evidence.get("rule", RULE_WIDTH)  # evidence stored before the rule was said: the width's
     if which:
@@ -660,13 +665,16 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
         flagged = zs > hist.thresholds[s]
         on = gears[name]
         harmonics = _harmonics(lay, s, own[:, s])
-        which, dens = (None, {}) if len(on) == 1 or not flagged else which_by_width(rec, hist.spread, harmonics, on, zs)
+        which, dens = None, {}
+        if len(on) == 2 and flagged:
+            phases = mesh_phases(rec, hist.spread, lay, s, harmonics, on)
+            which, dens = which_by_width(rec, hist.spread, harmonics, on, zs, phases)
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
             by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay))
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
-            dens["rule"] = RULE_WIDTH if by is False else RULE_SIMULATED
-        elif dens:  # the width's evidence
-            dens["rule"] = RULE_WIDTH
+            dens["rule"] = dens.get("rule", RULE_WIDTH) if by is False else RULE_SIMULATED
+        elif dens:  # the width's evidence, or the mesh phase's where it named the gear
+            dens.setdefault("rule", RULE_WIDTH)
         out.append(
             ShaftEvidence(
                 name,

@@ -31,13 +31,19 @@ import numpy as np
 
 WIDTH_BAND = (0.5, 4.0)  # orders read for the event's width, in the finer gear's tooth counts
 U_FINE, U_COARSE = 0.0, 0.1  # log width / log tooth ratio naming the finer (<=), the coarser (>) gear
-MIN_RATIO = 1.3  # tooth ratio of a shaft's two gears below which their events are too alike
+MIN_RATIO = 1.3  # tooth ratio of a shaft's two gears below which their widths are too alike (the phase decides)
 WIDTH_Z = 10.0  # z of the shaft under which the width is too noisy to name one gear
 WIDTH_LOW = 0.3  # share of the excess below half the finer gear's tooth order: a low mode's ring
 MARGIN = 0.05  # fit of one gear over the other's below which both stay named
 STRUCTURE_DB = 5.0  # spread of the healthy mesh harmonics about the simulator's over which its events are not used
+PHASE_BAND = 0.2  # orders about a gear's mesh line read for the event's phase there, in that gear's tooth counts
+PHASE_MARGIN = 0.3  # cos of the mesh phase of one gear over the other's that names it (counts under MIN_RATIO)
+# cos under which the other gear's line is read in anti-phase: an event that lowers its own mesh (a hand-written
+# dip, tests/test_localise.py) would otherwise name the other gear; both are named instead
+PHASE_ANTI = -0.5
 # which rule named (or left undecided) a two-gear shaft's gear, as localise's report says it
 RULE_SIMULATED, RULE_WIDTH = "by the simulated events", "by the event's width"
+RULE_PHASE = "by the event's mesh phase"
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -102,6 +108,14 @@ def fit_words(evidence: dict) -> str:
     return f"simulated events not used ({evidence['not used']}), " if "not used" in evidence else ""
 
 
+def phase_words(evidence: dict) -> str:
+    """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them)."""
+    if "mesh phase" not in evidence:
+        return ""
+    said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["mesh phase"].items())
+    return "mesh phase cos " + " / ".join(said) + ", "
+
+
 def envelope(rec, ref, sel: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
     """The shaft's residual envelope at *size* points per turn: its harmonics *m* (orders *sel*) each
     weighted by the share of its power that is new (clip(Δ / |X̄|², 0, 1))."""
@@ -112,14 +126,57 @@ def envelope(rec, ref, sel: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
     return np.abs(np.fft.ifft(spec)) ** 2  # analytic: positive orders only
 
 
-def which_by_width(rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z: float):
+def mesh_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarray], gears) -> dict:
+    """{gear name: cos ψ} for the gears of a two-gear shaft ({}: not read). ψ: the phase of the event's
+    content within PHASE_BAND of the gear's mesh line (its tooth count in the shaft's harmonics),
+    demodulated at the event's peak, against the record's own mesh line there. A tooth that meshes
+    softer deepens its own mesh's cycle while in mesh: in phase with that line (ψ near 0), whatever
+    the structure, as both pass it at one frequency; the other mesh's line stands at any angle to the
+    event (which tooth). No simulation: the description's tooth counts suffice."""
+    sel, m = harmonics
+    if m.size < 3:
+        return {}
+    R = residual(rec, ref, sel)
+    size = int(2 ** math.ceil(math.log2(8 * int(m.max()) + 1)))
+    peak = 2 * math.pi * int(np.argmax(envelope(rec, ref, sel, m, size))) / size
+    out = {}
+    for g in gears:
+        x = g.teeth * float(lay.shaft_orders[shaft])
+        line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
+        near = np.abs(m - g.teeth) <= PHASE_BAND * g.teeth
+        if line.size == 0 or near.sum() < 3 or abs(rec.mean[line[0]]) == 0:
+            return {}
+        event = np.sum(R[near] * np.exp(1j * (m[near] - g.teeth) * peak))
+        if event == 0:
+            return {}
+        out[g.name] = math.cos(float(np.angle(event / rec.mean[line[0]])))
+    return out
+
+
+def _by_phase(phases: dict, gears):
+    """(the gear whose mesh phase leads the other's by PHASE_MARGIN, the other's not under PHASE_ANTI, or
+    None; the lead)."""
+    if len(phases) != 2:
+        return None, 0.0
+    (a, pa), (_, pb) = sorted(phases.items(), key=lambda kv: -kv[1])
+    clear = pa - pb > PHASE_MARGIN and pb >= PHASE_ANTI
+    return (next(g for g in gears if g.name == a) if clear else None), pa - pb
+
+
+def which_by_width(rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z: float, phases: dict | None = None):
     """(the gear of a two-gear shaft the event's length names, or None: both; the evidence) from the
-    shaft's own orders and their harmonic numbers (*harmonics*). See gearlab.signals.localise's
+    shaft's own orders and their harmonic numbers (*harmonics*); *phases*: mesh_phases, which name the
+    gear of tooth counts under MIN_RATIO. See gearlab.signals.localise's
     docstring, "Which gear on a shaft"."""
     fine, coarse = sorted(gears, key=lambda g: -g.teeth)
     ratio = fine.teeth / coarse.teeth
     expect = {fine.name: ratio**-0.2, coarse.name: ratio**0.4}
     ev: dict = {"event width": f"pitches of the {fine.teeth}T {fine.role}", "expected": expect}
+    by, lead = _by_phase(phases or {}, gears)
+    if phases:
+        ev["mesh phase"] = phases
+    if ratio < MIN_RATIO and by is not None:
+        return by, {**ev, "rule": RULE_PHASE}
     sel, m = harmonics
     sel = sel.copy()
     excess = np.clip(rec.power[sel] - ref.power[sel], 0, None)
@@ -129,7 +186,8 @@ def which_by_width(rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z:
     sel[np.flatnonzero(sel)[~keep]] = False
     m, excess = m[keep], excess[keep]
     if ratio < MIN_RATIO:
-        return None, {**ev, "undecided": f"tooth counts {fine.teeth} and {coarse.teeth} too alike"}
+        said = f" and the mesh phases not clear (lead {lead:.2f})" if phases else ""
+        return None, {**ev, "undecided": f"tooth counts {fine.teeth} and {coarse.teeth} too alike{said}"}
     if m.size < 3 or not excess.any():
         return None, {**ev, "undecided": "no new power in the shaft's orders"}
     size = int(2 ** math.ceil(math.log2(16 * WIDTH_BAND[1] * fine.teeth)))
