@@ -15,10 +15,11 @@ from its tacho (signals.cut_revolutions) and localised against the history
 intermediate shaft's two gears: by the description's simulated tooth-fault events at the trial's
 speed (gearlab.data.which_templates; --which width: the event's width alone); --effects simulates
 the records (not the templates) with other effects: a structure other than the simulator's.
-Box "random": per trial a train of random tooth counts (random_train: the 21/63 + 24/56
-description with pinions of 17-31 teeth, ratios 1.6-3.6, grand period up to 120 input turns, 20-30
-Hz), so most records hold too few grand periods and each shaft's own TSA is read (localise,
-"Fallback"), and some a stage-2 ratio that leaves the intermediate shaft no exclusive order.
+Box "close": the 21/63 + 24/56 description as 31/109 + 85/127, the intermediate shaft's two gears 1.28
+apart in tooth count (under the width's MIN_RATIO). Box "random": per trial a train of random tooth
+counts (random_train: the 21/63 + 24/56 description with pinions of 17-31 teeth, ratios 1.6-3.6, grand
+period up to 120 input turns, 20-30 Hz), so most records hold too few grand periods and each shaft's
+own TSA is read (localise, "Fallback"), and some a stage-2 ratio that leaves the intermediate shaft no exclusive order.
 
 Per case it prints: the records flagged (a shaft over its history threshold); of those, the damaged
 gear named first (alone), its shaft named with both its gears (the intermediate shaft's two gears
@@ -41,6 +42,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 from collections import defaultdict
 from concurrent.futures import ProcessPoolExecutor
@@ -77,6 +79,16 @@ BOXES = {
     },
 }
 BOXES["random"] = {**BOXES["two"], "gears": (), "speeds": (20.0, 25.0, 30.0)}
+CLOSE = (31, 109, 85, 127)  # box "close": the intermediate shaft's 109T wheel and 85T pinion, 1.28 apart
+BOXES["close"] = {
+    **BOXES["two"],
+    "gears": (
+        ("input pinion", "input pinion 31T (stage 1)"),
+        ("intermediate gear", "intermediate gear 109T (stage 1)"),
+        ("intermediate pinion", "intermediate pinion 85T (stage 2)"),
+        ("output gear", "output gear 127T (stage 2)"),
+    ),
+}
 WATCHED = "input pinion 32T (stage 1)"  # the gear phm09_chip.toml's source faults
 RANDOM_PERIOD = 120  # the random trains' longest grand period (input turns; a 4 s record holds 80-120)
 
@@ -85,7 +97,6 @@ def random_train(rng) -> tuple[str, tuple]:
     """A two-stage train of random tooth counts (pinions 17-31, ratios 1.6-3.6, every shaft's gears
     told apart by at least 1.3 in tooth count), its grand period at most RANDOM_PERIOD input turns:
     (the description, written to a scratch file, and the box's gears)."""
-    import tempfile
     from fractions import Fraction
 
     while True:
@@ -96,12 +107,21 @@ def random_train(rng) -> tuple[str, tuple]:
         period = math.lcm(Fraction(z[0], z[1]).denominator, out.denominator)
         if period <= RANDOM_PERIOD and max(z[1], z[2]) / min(z[1], z[2]) >= 1.3:
             break
+    return written(z)
+
+
+def written(z) -> tuple[str, tuple]:
+    """The 21/63 + 24/56 description with tooth counts *z* (pinion, wheel, pinion, wheel), written to a
+    scratch file, and the box's gears."""
+    import tempfile
+
     text = TWO.read_text().split("[[stages]]")
     for k in (1, 2):
         p, w = z[2 * k - 2], z[2 * k - 1]
         text[k] = re.sub(r"pinion = \{ z = \d+", f"pinion = {{ z = {p}", text[k])
         text[k] = re.sub(r"wheel = \{ z = \d+", f"wheel = {{ z = {w}", text[k])
-    path = Path(tempfile.gettempdir()) / f"localisation_{'_'.join(map(str, z))}.toml"
+    # one file per process: two workers' trials of one box must not remove each other's
+    path = Path(tempfile.gettempdir()) / f"localisation_{os.getpid()}_{'_'.join(map(str, z))}.toml"
     path.write_text("[[stages]]".join(text))
     gears = (
         ("input pinion", f"input pinion {z[0]}T (stage 1)"),
@@ -143,8 +163,10 @@ def _trial(args: tuple, made: list) -> list[dict]:
     speed = float(rng.choice(spec["speeds"]))
     load = float(rng.uniform(5.0, 40.0))
     snr = float(rng.uniform(10.0, 30.0))
-    where, gears = (_description(box), spec["gears"]) if box != "random" else random_train(rng)
-    made += [where] if box == "random" else []
+    where, gears = {"random": lambda: random_train(rng), "close": lambda: written(CLOSE)}.get(
+        box, lambda: (_description(box), spec["gears"])
+    )()
+    made += [where] if box in ("random", "close") else []
     table = order_table(resolve_gearbox(where))
     seeds = iter(rng.integers(0, 2**31, size=16))
     extra = {} if box == "phm09" else {"gearbox": where, "sim_fs": spec["sim_fs"]}
