@@ -125,8 +125,7 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
     assert all(np.abs(trained - v).max(axis=1).min() > 1e-3 for v in V)  # held-out samples: no draw trained on
     assert rows and 0 in rows  # batches took other draws than the first
     # its detector: one row a sample, the noise-free twin's (test_corrected_detector_shapes), not the draws' mean
-    # (each source's detector made on the whole history and once without each of its two records)
-    assert [D.ndim for adapter, D, _ in handed if adapter == "matched_filter"] == [2] * 6
+    assert [D.ndim for adapter, D, _ in handed if adapter == "matched_filter"] == [2, 2]
     assert not any(t.shape == X[:, 0].shape and np.allclose(t, X.mean(axis=1), atol=1e-6) for t in templates)
     records = [json.loads(line) for line in (run_dir / "results.jsonl").read_text().splitlines()]
     (noisy,) = [r for r in records if r["method"] == "source_only (noisy)" and r.get("seed") is None]
