@@ -43,14 +43,22 @@ def test_a_lightly_damped_casing_on_a_long_train_runs_its_lead_only_and_a_long_l
     task = builder.SimTask("three_stage", box, fs, 15.0, 60.0, "pinion_x", None, None, (1,), effects)
     asked = []
 
-    def counted(self, faults=(), speed_hz=None, load_nm=None, duration=0.4, **kw):
-        asked.append(int(round(duration * self.fs)))
-        if asked[-1] > 1 << 24:  # never allocated: the test stops it first
-            raise MemoryError(f"{asked[-1]} steps asked")
-        return original(self, faults, speed_hz, load_nm, duration, **kw)
+    def asks(steps: int) -> None:
+        asked.append(steps)
+        if steps > 1 << 24:  # never integrated: the test stops it first
+            raise MemoryError(f"{steps} steps asked")
 
-    original = Simulator.run
-    monkeypatch.setattr(Simulator, "run", counted)
+    def counted_run(self, faults=(), speed_hz=None, load_nm=None, duration=0.4, **kw):
+        asks(int(round(duration * self.fs)))
+        return run(self, faults, speed_hz, load_nm, duration, **kw)
+
+    def counted_tail(self, faults, speed_hz, load_nm, channel, duration, *args, **kw):
+        asks(int(round(duration * self.fs)))  # a tail integrates every step from its start, keeps the last
+        return tail(self, faults, speed_hz, load_nm, channel, duration, *args, **kw)
+
+    run, tail = Simulator.run, Simulator.tail
+    monkeypatch.setattr(Simulator, "run", counted_run)
+    monkeypatch.setattr(Simulator, "tail", counted_tail)
     per_rev = round(fs / 15.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
