@@ -74,13 +74,18 @@ def test_a_lightly_damped_casing_s_stretch_is_the_long_run_s_in_a_fraction_of_it
     long = long[settle * per_rev : (settle + turns) * per_rev + 1]
 
     asked = []
-    original = Simulator.run
+    run, tail = Simulator.run, Simulator.tail
 
-    def counted(self, *args, duration=0.4, **kw):
+    def counted_run(self, *args, duration=0.4, **kw):
         asked.append(int(round(duration * self.fs)))
-        return original(self, *args, duration=duration, **kw)
+        return run(self, *args, duration=duration, **kw)
 
-    monkeypatch.setattr(Simulator, "run", counted)
+    def counted_tail(self, faults, speed_hz, load_nm, channel, duration, *args, **kw):
+        asked.append(int(round(duration * self.fs)))  # a tail integrates every step from its start
+        return tail(self, faults, speed_hz, load_nm, channel, duration, *args, **kw)
+
+    monkeypatch.setattr(Simulator, "run", counted_run)
+    monkeypatch.setattr(Simulator, "tail", counted_tail)
     x, _, at = builder.steady_stretch(sim, (), 15.0, 60.0, channel, (), turns)
     assert at == settle  # the same turns of the meshes' cycle
     assert np.abs(x - long).max() < 1e-7 * np.abs(long).max()

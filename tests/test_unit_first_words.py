@@ -42,7 +42,7 @@ def test_a_detection_unit_says_it_is_starting_before_torch_and_its_training(monk
     rows = np.zeros((2, 8))
     task = (SimpleNamespace(device="cpu"), method, "", "16 Hz", None, None, (rows, None, rows, None), rows, {}, {})
     with pytest.raises(Stop):
-        detection_units.train_unit((*task, SimpleNamespace(root=tmp_path), None, False))
+        detection_units.train_unit((*task, SimpleNamespace(root=tmp_path), None, False, None))  # no left_out
     assert said[:2] == ["open 16 Hz/mmd-unsup", "starting: importing torch"]
 
 
