@@ -110,7 +110,10 @@ def test_no_shift_and_one_material_give_the_numbers_of_before():
     for name, mean in before.items():
         pair = gear_pair(name)
         assert (pair.x1, pair.x2, pair.working_pressure_angle) == (0.0, 0.0, pair.pressure_angle)
-        assert MeshStiffnessModel(pair).mesh_stiffness().mean == mean
+        # to the last bits: numpy's sin/cos differ by one ulp with the CPU's SIMD (AVX-512 or not:
+        # NPY_DISABLE_CPU_FEATURES="AVX512_ICL X86_V4" gives meng2020's ...77, AVX-512 ...78); any change
+        # of the maths moves the mean by far more than 4 ulp
+        assert abs(MeshStiffnessModel(pair).mesh_stiffness().mean - mean) <= 4 * np.spacing(mean)
     shifted_zero = GearPair(Z1=16, Z2=48, x1=0.0, x2=0.0, E2=None, **BASE)
     assert np.array_equal(
         MeshStiffnessModel(shifted_zero).mesh_stiffness().k,
