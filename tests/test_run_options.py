@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 import pytest
@@ -158,10 +159,21 @@ device = "cpu"
 
 def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache, unrendered_figures):
     monkeypatch.setenv("GEARLAB_CACHE", str(domains_cache))
+    from gearlab.events import UnitProgress
+
+    # the epoch line must stand through a few of the watcher's half-second looks on any machine:
+    # 200 epochs of `fast` took 1.5 s on one machine and under the watcher's period on CI's (no
+    # epoch line was seen), so the first epoch's report stands 1.5 s here, whatever the speed
+    said = UnitProgress.__call__
+
+    def standing_epoch(self, text: str) -> None:
+        said(self, text)
+        if text.split(",")[0] == "epoch 1":
+            time.sleep(1.5)
+
+    monkeypatch.setattr(UnitProgress, "__call__", standing_epoch)
     path = tmp_path / "t.toml"
-    # the unit must outlast a few of the watcher's half-second looks: 200 epochs of the cheap
-    # `fast` network take 1.5 s or more (`shapes`, the default, took 40 s for 400)
-    path.write_text(mmd_run(ks=[0], repetitions=1, epochs=200, workers=1))
+    path.write_text(mmd_run(ks=[0], repetitions=1, epochs=5, workers=1))
     code, out, err = cli("run", path, "--events", "--out", tmp_path / "runs")
     assert code == 0, err
     units = [json.loads(line) for line in out.splitlines() if line.startswith("{") and '"unit"' in line]
