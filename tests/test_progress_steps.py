@@ -5,13 +5,63 @@ gap's "before" report count their steps, and a tiny run's stages each give a tot
 from __future__ import annotations
 
 import re
+import threading
 import time
 from types import SimpleNamespace
 
 import numpy as np
 from tiny import transfer
 
+from gearlab import events as ev
 from gearlab.events import REPORT, Event, UnitProgress, figure_written, figures_ahead, telling_figures
+
+
+def until(condition, what: str) -> None:
+    """Wait (real time) until *condition* holds: a minute is a hung thread's bound, not a speed."""
+    end = time.monotonic() + 60.0
+    while not condition():
+        assert time.monotonic() < end, f"waited a minute for {what}"
+        time.sleep(0.002)
+
+
+class Clock:
+    """time.monotonic of the *modules* as the test sets it (from 0): the seconds a line says it stood
+    are the test's, whatever the machine's speed."""
+
+    def __init__(self, monkeypatch, *modules):
+        self.now = 0.0
+        fake = SimpleNamespace(**{**vars(time), "monotonic": lambda: self.now})
+        for module in modules:
+            monkeypatch.setattr(module, "time", fake)
+
+
+class Looks:
+    """The looks of events.standing's keeper, one each time the test asks for one (not one a second of
+    real time): what a line says at each look follows the test's steps, never how soon a loaded
+    machine wakes a thread."""
+
+    def __init__(self, monkeypatch):
+        self.cv = threading.Condition()
+        self.asked = self.made = 0
+        self.looking = False
+        monkeypatch.setattr(ev, "_next_look", self.next)
+
+    def next(self, done: threading.Event) -> bool:  # the keeper thread, before each look
+        with self.cv:
+            if self.looking:  # the look asked before is made
+                self.made, self.looking = self.made + 1, False
+                self.cv.notify_all()
+            while self.made == self.asked and not done.is_set():
+                self.cv.wait(0.01)
+            self.looking = not done.is_set()
+            return done.is_set()
+
+    def look(self) -> None:
+        """One look of the keeper, waited for."""
+        with self.cv:
+            self.asked += 1
+            self.cv.notify_all()
+            assert self.cv.wait_for(lambda: self.made >= self.asked, timeout=60.0), "the keeper made no look"
 
 
 def told(events: list[Event]) -> list[tuple]:
@@ -57,16 +107,17 @@ def test_a_units_line_that_stands_says_for_how_long(tmp_path, monkeypatch):
     """A step that cannot count (importing torch in a fresh worker: 10 s at load 9) is not silent: its
     line is rewritten each second once it has stood STANDING_S; a report that came too soon after
     the last write is written once its time is up, not dropped."""
-    from gearlab import events
-
-    monkeypatch.setattr(events, "STANDING_S", 0.3)
+    monkeypatch.setattr(ev, "STANDING_S", 0.3)
+    clock = Clock(monkeypatch, ev)
     written: list[str] = []
     write = UnitProgress._write
     monkeypatch.setattr(UnitProgress, "_write", lambda self, text: (written.append(text), write(self, text)))
     with UnitProgress(tmp_path, "rep0/k0/mmd-unsup", every=0.05) as progress:
         progress("starting: importing torch")
-        progress("starting: reading dataset 1 of 2 (source)")  # within 0.05 s of the last write
-        time.sleep(1.6)
+        progress("starting: reading dataset 1 of 2 (source)")  # within 0.05 s of the last write (the clock stands)
+        until(lambda: len(written) >= 2, "the report that came too soon")
+        clock.now = 1.0
+        until(lambda: len(written) >= 3, "the line that stood 1 s")
     assert written[0] == "starting: importing torch"
     assert written[1] == "starting: reading dataset 1 of 2 (source)"
     standing = [t for t in written[2:] if t.startswith("starting: reading dataset 1 of 2 (source) (")]
@@ -139,12 +190,13 @@ def test_the_bounds_scores_in_tenths_are_its_scores_at_once():
 def test_a_step_of_the_runs_own_process_that_cannot_count_says_for_how_long(monkeypatch):
     """The Bayes bound's first step loads torch in the run's process (5 s at load 11): a line under
     the bars that says for how long, gone when the step ends."""
-    from gearlab import events
-
-    monkeypatch.setattr(events, "STANDING_S", 0.5)
+    monkeypatch.setattr(ev, "STANDING_S", 0.5)
+    clock, looks = Clock(monkeypatch, ev), Looks(monkeypatch)
     said: list[Event] = []
-    with events.standing(said.append, "bound", "loading torch"):
-        time.sleep(2.3)
+    with ev.standing(said.append, "bound", "loading torch"):
+        looks.look()  # at 0 s: under STANDING_S, nothing new to say
+        for clock.now in (1.0, 2.0):
+            looks.look()
     messages = [e.message for e in said]
     assert messages[0] == "loading torch" and messages[-1] == ""
     assert {"loading torch (1 s)", "loading torch (2 s)"} <= set(messages) and {e.stage for e in said} == {"bound"}
@@ -153,8 +205,6 @@ def test_a_step_of_the_runs_own_process_that_cannot_count_says_for_how_long(monk
 def test_a_diagnosis_inside_a_unit_counts_its_steps_with_an_eta_on_the_units_line(monkeypatch):
     """A benchmark trial's diagnosis (stages_to_unit, minutes inside one unit) showed each stage's
     name alone: its steps now count on the unit's line, with an ETA after the first one."""
-    from gearlab import events as ev
-
     now = iter([100.0, 130.0, 131.0, 132.0])  # the stage starts at 100 s, its first of 4 steps ends at 130 s
     monkeypatch.setattr(ev, "time", SimpleNamespace(monotonic=lambda: next(now)))
     said: list[str] = []
@@ -173,14 +223,15 @@ def test_a_diagnosis_inside_a_unit_counts_its_steps_with_an_eta_on_the_units_lin
 def test_a_gap_rounds_fits_say_for_how_long_they_have_run_beside_the_bar(monkeypatch):
     """A fit of a diagnosis's round takes 14-27 s on a busy machine; a transfer benchmark's trial sat
     silent that long between two steps of the round: a line beside the bar now says for how long."""
-    from gearlab import events as ev
     from gearlab.gap.diagnose import run_fits
 
-    monkeypatch.setattr(ev, "STANDING_S", 0.0)  # at once, not after 3 s: the test waits a second only
+    monkeypatch.setattr(ev, "STANDING_S", 0.0)  # at once, not after 3 s
+    clock, looks = Clock(monkeypatch, ev), Looks(monkeypatch)
     told: list[Event] = []
 
     def slow_map(work, tasks, advance):
-        time.sleep(1.6)
+        for clock.now in (0.0, 1.0):  # a look at 0 s and one a second later
+            looks.look()
         return [work(t) for t in tasks]
 
     run = SimpleNamespace(on_event=told.append, executor=SimpleNamespace(map=slow_map))
@@ -194,18 +245,18 @@ def test_a_gap_rounds_fits_say_for_how_long_they_have_run_beside_the_bar(monkeyp
 def test_a_gap_rounds_fits_count_their_score_evaluations_on_the_line_beside_the_bar(monkeypatch):
     """The line said 'fitting (12 s)' alone through 14-27 s fits: it now counts the fits' score
     evaluations (every Scorer.score calls gearlab.gap.tally.counted) and their rate."""
-    from gearlab import events as ev
     from gearlab.gap import tally
     from gearlab.gap.diagnose import run_fits
 
     monkeypatch.setattr(ev, "STANDING_S", 0.0)
     monkeypatch.setattr(tally, "WRITE_EVERY", 0.0)
+    looks = Looks(monkeypatch)
     told: list[Event] = []
 
     def work(n):
         for _ in range(n):
             tally.counted()
-            time.sleep(0.12)
+            looks.look()  # the line looked at after each evaluation
         return n
 
     run = SimpleNamespace(on_event=told.append, executor=SimpleNamespace(map=lambda w, tasks, _: [w(t) for t in tasks]))
@@ -264,17 +315,17 @@ def test_a_diagnosis_inside_a_unit_shows_its_fits_evaluations_on_the_units_line(
     (99 s)', events.standing beside the stage's bar when the run diagnoses) was dropped: the unit's
     line showed the stage's count alone through minutes of fits. It now follows the count, and goes
     when the fits end."""
-    from gearlab import events as ev
     from gearlab.gap import tally
     from gearlab.gap.diagnose import run_fits
 
     monkeypatch.setattr(ev, "STANDING_S", 0.0)
     monkeypatch.setattr(tally, "WRITE_EVERY", 0.0)
+    looks = Looks(monkeypatch)
 
     def work(n):
         for _ in range(n):
             tally.counted()
-            time.sleep(0.12)
+            looks.look()  # the line looked at after each evaluation
         return n
 
     run = SimpleNamespace(
@@ -326,14 +377,15 @@ def test_the_simulations_bar_says_what_it_waits_for_before_its_first_step(monkey
     STANDING_S a line says so beside the bar, gone at the first step; a quicker first step, none."""
     from collections import OrderedDict
 
-    from gearlab import events as ev
     from gearlab.data import builder
     from gearlab.data.spec import dataset_preset
 
     real = builder.simulate_unit
+    clock, looks = Clock(monkeypatch, ev, builder), Looks(monkeypatch)
 
     def slow(task):
-        time.sleep(1.3)  # a worker's start-up
+        clock.now += 1.0  # a worker's start-up, looked at after a second
+        looks.look()
         return real(task)
 
     def simulated(standing_s: float) -> list[tuple]:
