@@ -61,14 +61,12 @@ from .gearbox.speed import (
     mesh_angle,
     nominal_line,
 )
-from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho
+from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.pipeline import first_complete
 
 TWO_PI = 2.0 * np.pi
 MAX_TSA_POINTS = 1 << 15
-UPSAMPLE = 8  # the record's rate is raised this much before order tracking (upsampled)
-MAX_UPSAMPLED = 1 << 24  # samples: a longer record is raised less
 
 
 @dataclass(frozen=True)
@@ -219,25 +217,9 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
 # --- the order spectrum and the description's orders ----------------------------------------------
 
 
-def upsampled(rec: Recording, speed: Speed) -> tuple[np.ndarray, np.ndarray]:
-    """(signal, input angle) band-limited interpolated UPSAMPLE times (fewer for a long record), for the linear
-    interpolation at uniform angle: on the record's own samples it leaves an image of a line at ν cycles per
-    sample at 1 - ν, about (ν / (1 - ν))² below it (the B-6-ch5 source at 500 samples per revolution: order 175
-    imaged at 187, 10 dB down, listed as a line the description does not explain); at 8 times the rate the
-    images fall under the threshold."""
-    from scipy.signal import resample_poly
-
-    up = int(max(1, min(UPSAMPLE, MAX_UPSAMPLED // max(rec.signal.size, 1))))
-    if up == 1:
-        return rec.signal, speed.angle
-    signal = resample_poly(rec.signal, up, 1)[: (rec.signal.size - 1) * up + 1]  # none past the last sample
-    angle = np.interp(np.arange(signal.size) / up, np.arange(speed.angle.size), speed.angle)
-    return signal, angle
-
-
 def order_spectrum(rec: Recording, speed: Speed, fine: tuple | None = None):
     """(orders, amplitude, revolutions, points per revolution) of the record at uniform input angle
-    (*fine*: the record upsampled, :func:`upsampled`)."""
+    (*fine*: the record and its angle upsampled, :func:`upsampled`)."""
     signal, angle = fine or (rec.signal, speed.angle)
     per_rev = rec.fs / speed.mean_hz
     points = int(min(1 << 14, max(64, 2 ** math.ceil(math.log2(per_rev)))))
@@ -249,7 +231,7 @@ def order_spectrum(rec: Recording, speed: Speed, fine: tuple | None = None):
 
 def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | None = None) -> list[dict]:
     """TSA of the record over each shaft's own revolutions: revolutions averaged, RMS, its strongest
-    orders (*fine*: the record upsampled, :func:`upsampled`)."""
+    orders (*fine*: the record and its angle upsampled, :func:`upsampled`)."""
     signal, angle = fine or (rec.signal, speed.angle)
     if box is None:
         names, orders = ("input",), (1.0,)
@@ -295,7 +277,8 @@ class Reading:
 
 
 def read_orders(rec: Recording, speed: Speed, threshold_db: float) -> Reading:
-    fine = upsampled(rec, speed)
+    up = upsampled(rec.signal)
+    fine = (up.signal, up.at(speed.angle))
     orders, amp, revolutions, points = order_spectrum(rec, speed, fine)
     top = min(points / 2, rec.fs / (2 * speed.mean_hz)) * 0.9
     lines = find_lines(orders, amp, threshold_db, 1.5 / revolutions, top)

@@ -25,6 +25,7 @@ from .pipeline import (
     revolution_starts,
     steady_start,
     steady_start_stats,
+    upsampled,
 )
 from .spectra import order_spectrum, spectrum
 from .standardise import Standardiser, StandardiserAccumulator
@@ -51,4 +52,5 @@ __all__ = [
     "steady_start_stats",
     "tsa",
     "unwrap_tacho",
+    "upsampled",
 ]

@@ -164,6 +164,42 @@ def resample_revolutions(
     return np.interp(theta, a, x)
 
 
+UPSAMPLE = 8  # a record's rate is raised this much before it is read at uniform angle (Upsampled)
+MAX_UPSAMPLED = 1 << 24  # samples: a longer record is raised less
+
+
+@dataclass(frozen=True)
+class Upsampled:
+    """A record band-limited interpolated *up* times (:func:`upsampled`): *signal* holds (n - 1) up + 1
+    samples, sample i at the record's sample position i / up."""
+
+    signal: np.ndarray
+    up: int
+
+    def at(self, values: np.ndarray) -> np.ndarray:
+        """*values* given per sample of the record (its angle), linearly interpolated at the upsampled samples."""
+        values = np.asarray(values)
+        if self.up == 1:
+            return values
+        return np.interp(np.arange(self.signal.size) / self.up, np.arange(values.size), values)
+
+
+def upsampled(signal: np.ndarray) -> Upsampled:
+    """*signal* band-limited interpolated UPSAMPLE times (fewer where that passes MAX_UPSAMPLED samples), for
+    the linear interpolation of a reading at uniform angle: on the record's own samples it leaves an image of a
+    line at ν cycles per sample at 1 - ν, about (ν / (1 - ν))² below it (the B-6-ch5 source at 500 samples per
+    revolution: order 175 imaged at 187, 10 dB down, listed as a line the description does not explain); at 8
+    times the rate the images fall under inspect's line threshold. Used by `gearlab inspect` and by the speed
+    of a record without a tacho (gearlab.gearbox.speed.follow_speed)."""
+    from scipy.signal import resample_poly
+
+    n = signal.size
+    up = int(max(1, min(UPSAMPLE, MAX_UPSAMPLED // max(n, 1))))
+    if up == 1:
+        return Upsampled(signal, 1)
+    return Upsampled(resample_poly(signal, up, 1)[: (n - 1) * up + 1], up)  # none past the last sample
+
+
 # --- transient detection ----------------------------------------------------------------
 
 
