@@ -131,6 +131,7 @@ from .detection_settings import (
 )
 from .detection_tables import labels_md, learned_md, summarise, table_md
 from .detection_units import (
+    LEFT_OUT,
     Rule,
     crossed_record,
     ensemble_record,
@@ -547,7 +548,8 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             likelihood_ratio's false alarms at 40 Hz low rose 10 -> 100 %, matched_filter's detection fell
             100 -> 0-17 %."""
             n = len(conditions[c]["history"])
-            return tuple(history_rows(c, j, v) for j in range(n)) if m.is_detector and k is None and n > 2 else None
+            out = m.is_detector and k is None and n >= LEFT_OUT
+            return tuple(history_rows(c, j, v) for j in range(n)) if out else None
 
         members = {(c, v, m): seeds_of(m, d.seeds) for c in conditions for v in variants for m in protocol.methods}
         todo = [(c, v, m, seed, k) for (c, v, m), seeds in members.items() for seed in seeds for k in folds[c]]
