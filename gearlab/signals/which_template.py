@@ -109,8 +109,9 @@ def fit_words(evidence: dict) -> str:
 
 
 def phase_words(evidence: dict) -> str:
-    """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them)."""
-    if "mesh phase" not in evidence:
+    """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them, or where the
+    simulated events decided, not the phase)."""
+    if "mesh phase" not in evidence or evidence.get("rule") == RULE_SIMULATED:
         return ""
     said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["mesh phase"].items())
     return "mesh phase cos " + " / ".join(said) + ", "
@@ -172,7 +173,8 @@ def which_by_width(rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z:
     ratio = fine.teeth / coarse.teeth
     expect = {fine.name: ratio**-0.2, coarse.name: ratio**0.4}
     ev: dict = {"event width": f"pitches of the {fine.teeth}T {fine.role}", "expected": expect}
-    by, lead = _by_phase(phases or {}, gears)
+    phases = (phases or {}) if ratio < MIN_RATIO else {}  # the width tells gears further apart: no phase read
+    by, lead = _by_phase(phases, gears)
     if phases:
         ev["mesh phase"] = phases
     if ratio < MIN_RATIO and by is not None:
