@@ -45,7 +45,10 @@ from .gearbox import Gearbox, order_table
 from .gearbox.match import check_description, outward_first, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
 from .gearbox.pinion_count import (
+    EVERY_STAGE,
+    SIDEBANDS,
     alternatives_words,
+    every_stage_count,
     no_speed_line,
     pinion_evidence,
     shaft_line_count,
@@ -144,7 +147,7 @@ class Speed:
     per_revolution_hz: np.ndarray  # speed of each complete revolution (or of each revolution-long stretch)
     declared_hz: float | None = None
     notes: list[str] = field(default_factory=list)
-    settled: bool = False  # a declared speed the mesh lines do not confirm, replaced by the sidebands' speed
+    settled: str = ""  # what replaced a declared speed the mesh lines do not confirm (the input pinion's sidebands)
     others: list = field(default_factory=list)  # [(z, Hz)]: other pinion counts the mesh line allows (no tacho)
 
     def describe(self) -> dict:
@@ -300,10 +303,7 @@ def settle_speed(
     over that spacing is the pinion's count z (gearbox.speed.sideband_teeth, within TEETH_AGREE of a whole
     number) and the speed is the mesh line's frequency / z, followed on the mesh's phase (a 33-tooth
     pinion at 1455 rpm, described 34 at 1500 rpm, was read at 1500 rpm in every row: 'mesh order 32
-    measured, a 32-tooth pinion'). With no such sideband, any count fits at some speed within the nominal
-    range, the declared one too (a 20-tooth pinion at a declared 25 Hz, described 25): the rows are read
-    at the declared speed, said not confirmed, and the line names the counts and speeds the mesh line allows.
-    *speed*: the tacho's or the speed search's, where already found."""
+    measured, a 32-tooth pinion'), else the count every stage's lines show (every_stage_count), else not confirmed."""
     if speed is None:
         speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
     reading = read_orders(rec, speed, options.threshold_db)
@@ -315,11 +315,13 @@ def settle_speed(
     said, df = box.stages[0].pinion.z, f0 / reading.revolutions
     if not counts and mesh_hz and (z := shaft_line_count(in_hz, mesh_hz, f0, df, order_table(box), said)):
         counts = [(mesh_hz, z)]  # no sideband, but a line at one allowed count's shaft frequency
-    for line, count in counts[:3]:
-        if (found := _read_at_count(rec, box, options, speed, line, count)) is not None:
+    found = every_stage_count(lines, order_table(box), said, df / f0)  # at its line, or at the declared speed
+    every = [(y * f0, z, EVERY_STAGE) for x, z in found for y in (x, z)]
+    for line, count, *by in [*counts[:3], *every]:
+        if (found := _read_at_count(rec, box, options, speed, line, count, *by)) is not None:
             if count == said:  # the described count, at a speed its shaft's line shows
                 how = f"from the mesh line at {fmt_hz(line)} and the input shaft's line"
-                found[0].source, found[0].settled, found[0].notes = how, False, []
+                found[0].source, found[0].settled, found[0].notes = how, "", []
             return found + (None,)
     return speed, reading, no_speed_line(mesh_hz, f0, bool(counts))
 
@@ -342,7 +344,7 @@ def _by_input_lines(rec: Recording, box: Gearbox | None, options: InspectOptions
     return speed, reading
 
 
-def _read_at_count(rec: Recording, box: Gearbox, options: InspectOptions, speed: Speed, mesh_hz: float, count: int):
+def _read_at_count(rec, box: Gearbox, options, speed: Speed, mesh_hz: float, count: int, by: str = SIDEBANDS):
     """(the speed at which *mesh_hz* is a *count*-tooth input pinion's mesh, followed on its phase; the record
     read at it), or None where, read at it, the mesh is not at the count's whole order or the input
     shaft's sidebands not at order 1 (a line split by a swinging speed, read at the declared one, gave 29
@@ -361,8 +363,8 @@ def _read_at_count(rec: Recording, box: Gearbox, options: InspectOptions, speed:
     why = f"the declared {fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
     if speed.source != "declared":  # the search's speed fitted the described count's mesh, not the shaft's lines
         why = f"not the {fmt_hz(speed.mean_hz)} a {described}-tooth pinion would turn at"
-    how = f"from the input pinion's sidebands (a {count}-tooth pinion meshing at {fmt_hz(mesh_hz)}), {why}"
-    settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=True)
+    how = f"from {by} (a {count}-tooth pinion meshing at {fmt_hz(mesh_hz)}), {why}"
+    settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=by)
     at = read_orders(rec, settled, options.threshold_db)
     first = check_description(at.lines, box, at.revolutions, False)["stages"][0]
     off_mesh = abs(first.get("measured_order", -1.0) - count) > tol_mesh(count, 1.0 / at.revolutions)
@@ -434,7 +436,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         if read_on and len(differences) == listed:  # the tacho read as said: its shaft's gears first, then outward
             check["outward"] = outward_first(differences, check["stages"], box, read_on)
         if differences and (speed.settled or no_speed):  # the speed the rows after the speed's line read at
-            said = "the speed the input pinion's sidebands show" if speed.settled else "declared, not confirmed"
+            said = f"the speed {speed.settled} show" if speed.settled else "declared, not confirmed"
             differences[0] = f"at {fmt_hz(speed.mean_hz)} ({said}): {differences[0]}"
         if rec.tacho is None and (speed.source == "declared" or speed.settled):
             # a declared speed the mesh lines do not confirm (gearbox.speed's note: no mesh line within

@@ -235,13 +235,26 @@ def others_lines(lines: Lines, expected: float, others, bin_: float) -> frozense
     return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
 
 
+def lead(table, q: int, moved: dict) -> float:
+    """What the nearest stage before shaft or stage *q* whose mesh moved (*moved*: stage -> its measured
+    order) moves the orders after it by: every later shaft turns at that measured mesh over the described
+    wheels (a 15-tooth input pinion described 16 puts stage 2 of 19/58 at 6.064, not 6.468)."""
+    p = max((i for i in moved if i < q), default=None)
+    return 1.0 if p is None else moved[p] / float(table.stages[p].mesh)
+
+
 def other_stages(table, k: int, moved: dict, measured_shaft: dict) -> list:
     """(mesh order, orders of its shafts stage *k* does not carry) of every other stage of *table*, as
-    measured where it was (an earlier stage's moved mesh, a shaft's sidebands or tacho)."""
+    measured where it was (an earlier stage's moved mesh, a shaft's sidebands or tacho), else as a moved
+    mesh before it makes it (lead)."""
     return [
         (
-            moved.get(q, float(t.mesh)),
-            [measured_shaft.get(i, (float(table.shaft_orders[i]),))[0] for i in (q, q + 1) if i not in (k, k + 1)],
+            moved.get(q, float(t.mesh) * lead(table, q, moved)),
+            [
+                measured_shaft.get(i, (float(table.shaft_orders[i]) * lead(table, i, moved),))[0]
+                for i in (q, q + 1)
+                if i not in (k, k + 1)
+            ],
         )
         for q, t in enumerate(table.stages)
         if q != k
@@ -290,36 +303,43 @@ def check_description(
     for k, s in enumerate(table.stages):
         said = len(differences)
         expected = float(s.mesh)
+        look = expected * lead(table, k, moved)  # looked for where a moved mesh before it puts it
         o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
         span = SPAN * float(max(s.pinion_shaft_order, s.wheel_shaft_order))
         # the other stages' mesh orders: an earlier one that differs where it was measured (a wrong
         # first pinion moved stage 1's lines off its described order, and stage 2 took them)
-        meshes = [moved.get(q, float(t.mesh)) for q, t in enumerate(table.stages) if q != k]
+        meshes = [moved.get(q, float(t.mesh) * lead(table, q, moved)) for q, t in enumerate(table.stages) if q != k]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
         # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
         shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
-        theirs = [(x, t) for x, t in shared if abs(x / expected - round(x / expected)) > 1e-9]
+        theirs = [(x, t) for x, t in shared if abs(x / look - round(x / look)) > 1e-9]
         o_tacho = measured_shaft[k + 1][0] if measured_shaft.get(k + 1, (0, 0, ""))[2] == "tacho" else None
-        family = mesh_family(lines, o_p, bin_, span, theirs, expected, o_tacho)
+        family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho)
         i = None
-        if lines.near(expected, tol_mesh(expected, bin_)) is not None:
+        if lines.near(look, tol_mesh(look, bin_)) is not None:
             # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)? o: the
             # pinion's shaft, or the wheel's (a tacho on the output read through a first wheel one tooth
             # off puts the mesh at M + M / z2, its wheel sideband on M: a 38/89 + 49/95 mixer 'matched')
             o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
             offsets = [j * o for o in (o_p, o_w) for j in (-3, -2, -1, 1, 2, 3)]
-            found = harmonic_comb(lines, [expected] + [expected + d for d in offsets], bin_, theirs)
+            found = harmonic_comb(lines, [look] + [look + d for d in offsets], bin_, theirs)
             if found is not None:
                 i, measured = found
-        if family is not None and (i is None or abs(measured - expected) <= tol_mesh(expected, bin_)):
+        if family is not None and (i is None or abs(measured - look) <= tol_mesh(look, bin_)):
             # no line at M, or one at M that is the 2nd or 3rd harmonic of a family holding more of
             # the power (a description of twice or three times the teeth): the family's order
-            ratio = expected / family[0]
+            ratio = look / family[0]
             # ... with two lines of its own at least, off M's harmonics (one line at M / 2 is a tone)
-            own = [x for x in family[2] if abs(x / expected - round(x / expected)) * expected > tol_mesh(x, bin_)]
-            divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= tol_mesh(expected, bin_)
+            own = [x for x in family[2] if abs(x / look - round(x / look)) * look > tol_mesh(x, bin_)]
+            divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= tol_mesh(look, bin_)
             if i is None or (divisor and len(own) >= 2):
                 measured, i = family[:2]
+        if i is None and family is None:
+            # no line at M, nor a family: a count off by j puts the mesh at M + j o (a 15-tooth input pinion
+            # described 16, its shaft unmodulated: no sideband at 16 led the search there)
+            found = harmonic_comb(lines, [look] + [look + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
+            if found is not None and abs(found[1] - look) > tol_mesh(look, bin_):
+                i, measured = found
         matched = i is not None and abs(measured - expected) <= tol_mesh(expected, bin_)
         entry["matched"] = bool(matched)
         if i is None:

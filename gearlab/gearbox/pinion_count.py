@@ -13,8 +13,8 @@ import math
 import numpy as np
 
 from ..signals.checks import fmt_hz
-from .match import tol_mesh
-from .speed import DRIFT, NOMINAL_RANGE, SIDEBAND_WINDOW, TEETH_AGREE, Lines, sideband_teeth
+from .match import MIN_TEETH, tol_mesh
+from .speed import DECLARED_RANGE, DRIFT, NOMINAL_RANGE, SIDEBAND_WINDOW, TEETH_AGREE, Lines, sideband_teeth
 
 
 def allowed_counts(mesh_hz: float, declared: float) -> list[int]:
@@ -116,3 +116,42 @@ def sideband_counts(lines: Lines, stage, declared: float, df: float) -> tuple[fl
         if abs(at / round(seen) / declared - 1) <= NOMINAL_RANGE:
             found.append((at, round(seen)))
     return first, found
+
+
+SIDEBANDS = "the input pinion's sidebands"  # inspect's words for what gave a pinion's count: sideband_counts
+EVERY_STAGE = "the mesh lines of every stage"  # every_stage_count
+
+
+def every_stage_count(lines: Lines, table, said: int, bin_: float) -> list[tuple[float, int]]:
+    """[(the first mesh's line, in orders; the input pinion's count)]: the count other than *said* whose mesh
+    orders, the described ones scaled by count / *said* (every later shaft turns at the first mesh over the
+    described wheels), put a line (*lines*, in orders of a declared speed, bin *bin_*, trusted to
+    ±DECLARED_RANGE) at a mesh harmonic (1-4) of every stage of a train of two or more, holding OUTWEIGH times
+    the amplitude *said*'s orders find and any other count's; [] else (one stage: a line alone, the speed or
+    the count, is at_declared's). A 15/47 + 19/58 + 22/63 box described with 16 teeth, no tacho, its sensor on
+    the output: 'an 18-tooth pinion at 49.51 Hz' was read off stage 2's 3rd harmonic, 891 Hz; its lines at
+    49 Hz are orders 15, 6.064 and 2.3 (weak lines within 1 % of 16, 6.468 and 2.453 too)."""
+
+    def line(order: float) -> tuple[float, float] | None:  # (the fundamental its line puts the mesh at, amplitude)
+        got = []
+        for h in range(1, 5):
+            i = lines.near(h * order, max(tol_mesh(h * order, bin_), DECLARED_RANGE * h * order))
+            if i is not None:
+                got.append((float(lines.at[i]) / h, float(lines.amp[i])))
+        return max(got, key=lambda g: g[1]) if got else None
+
+    def every(z: int) -> tuple[float, float]:  # (the first mesh, the amplitude found; 0 where a stage has none)
+        found = [line(float(s.mesh) * z / said) for s in table.stages]
+        return (found[0][0], sum(a for _, a in found)) if all(found) else (0.0, sum(g[1] for g in found if g))
+
+    if len(table.stages) < 2:
+        return []
+    low, high = max(MIN_TEETH, round(0.75 * said)), round(1.34 * said)
+    fits = sorted(((every(z), z) for z in range(low, high + 1)), key=lambda f: -f[0][1])
+    (first, score), z = fits[0]
+    if z == said or not first or any(f[0][1] * OUTWEIGH > score for f in fits[1:] if f[1] == said or f[0][0]):
+        return []
+    return [(first, z)]
+
+
+OUTWEIGH = 3.0  # a count every stage's lines show holds 3 times the amplitude of the described (or another)

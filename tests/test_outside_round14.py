@@ -1,0 +1,48 @@
+"""Outside-user check of issue 39, round 14 (gearboxes 27/89, 22/69 + 25/74 and 14/53 + 18/59 + 23/67 with
+recordings made outside the project: a parametric mesh stiffness with tooth spacing errors, a load varying once per
+output turn, a speed in two plateaus, two accelerometers, ICP drift and clipping), described as a user would from
+docs/your_gearbox.md. The records here are small stand-ins written by hand, not simulated by gearlab."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_outside_round13 import C, _inspect
+
+
+def _steps(teeth, f0, fs, seconds, levels, harmonics, step=0.006, am=0.2, seed=1):
+    """A vibration of the train *teeth* whose input speed steps by *step* half-way (two plateaus joined by a
+    1.5 s cosine): per stage a mesh stiffness switching between single and double contact (its harmonics
+    *harmonics*, scaled by *levels*) times a load varying once per output turn, modulated by its pinion's shaft
+    (*am*), and noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * fs)) / fs
+    rise = np.clip((t - seconds / 2) / 1.5, 0, 1)
+    f = f0 * (1 - step / 2 + step * 0.5 * (1 - np.cos(np.pi * rise)))
+    shafts = [2 * np.pi * np.cumsum(f) / fs]
+    for z1, z2 in teeth:
+        shafts.append(shafts[-1] * z1 / z2)
+    load = 1 + 0.12 * np.sin(shafts[-1] + 0.3)
+    x = np.zeros(t.size)
+    for k, (z1, _) in enumerate(teeth):
+        mod = 1 + am * np.sin(shafts[k] + 0.5) + 0.1 * np.sin(shafts[k + 1] + 2.0)
+        for h, a in enumerate(harmonics[k], 1):
+            x += levels[k] * a * load * mod * np.cos(h * z1 * shafts[k] + 0.7 * h)
+    return x + rng.normal(0, 0.02, t.size)
+
+
+@pytest.mark.parametrize("am", [0.2, 0.0])
+def test_a_first_pinion_described_one_tooth_more_is_named_without_a_tacho(tmp_path, am):
+    # C (15/47 + 19/58 + 22/63, no tacho, its sensor on the output) described with a 16-tooth input pinion: no line
+    # within 1 % of 49 Hz's mesh orders, and the verdict blamed 'an 18-tooth pinion at 49.51 Hz', stage 2's 3rd
+    # harmonic (891 Hz). At 49 Hz every stage's line sits where a 15-tooth pinion puts it (15, 6.064, 2.3), whether
+    # the input shaft's sidebands show it (am) or not
+    x = _steps(C, 49.0, 51200.0, 8.0, (0.1, 0.5, 1.0), ((1, 0.5), (1, 0.4, 0.8), 0.6 ** np.arange(6)), am=am)
+    described = ((16, 47), *C[1:])
+    report = _inspect(tmp_path, described, {"acc": x, "fs": 51200.0}, "49 Hz")
+    assert report["matches"] is False, report["verdict"]
+    assert "a 15-tooth pinion on the input shaft? described 16" in report["verdict"], report["verdict"]
+    assert "18-tooth" not in report["verdict"], report["verdict"]
+    stages = report["check"]["stages"]
+    assert [round(s["measured_order"], 2) for s in stages] == [15.0, 6.06, 2.3], stages
+    assert abs(report["speed"]["mean_hz"] / 49.0 - 1) < 2e-3, report["speed"]
