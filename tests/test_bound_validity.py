@@ -69,3 +69,31 @@ def test_a_non_synchronous_tone_makes_the_bound_unavailable(source):
     assert max(methods.values()) > 95.0  # what the wrong number would have been beaten by
     # a synchronous effect keeps the bound: its twin is still one healthy revolution
     assert twin_problem(build_dataset(target_with(effect_spec("speed_fluctuation")).with_(noise=None))) is None
+
+
+def test_the_bound_at_the_methods_operating_point_thresholds_on_the_training_rows_alone(source):
+    """`accuracy_at_rule`: the Bayes detector thresholded as the unsupervised methods are (the
+    history rule at the scenario's false-alarm rate, on its scores of the target training rows), so
+    a method's distance to the bound splits into the operating point's part and its model's. No
+    higher than the best threshold; a test row's score moves nothing of it."""
+    from dataclasses import replace
+
+    from gearlab.learn.bounds import bayes_scores
+    from gearlab.learn.history import history_threshold
+    from gearlab.learn.protocol import split
+
+    spec = target_with()
+    target = build_dataset(spec)
+    clean = build_dataset(spec.with_(noise=None))
+    scores = bayes_scores(target.X, target.X[target.fault == 0], clean, "laplace")
+    for rate in (0.01, 0.3):
+        protocol = replace(PROTOCOL, calibration=replace(PROTOCOL.calibration, false_alarm=rate))
+        bound = bayes_bound(spec, source, target, protocol)
+        expected = []
+        for rep in (0, 1):
+            s = split(protocol, source, target, rep, 0)
+            rule = history_threshold(scores[s.target_train], 1.0 - rate)
+            y = target.fault[s.target_test]
+            expected.append(100.0 * np.mean((scores[s.target_test] > rule) == (y == 1)))
+        assert bound["accuracy_at_rule"]["0"]["mean"] == pytest.approx(np.mean(expected))
+        assert bound["accuracy_at_rule"]["0"]["mean"] <= bound["accuracy"]["0"]["mean"]

@@ -145,6 +145,8 @@ def test_a_tiny_benchmark_runs_end_to_end(tiny):
         assert (t["bound"] is None) == bool(t["unavailable"])  # a number, or why there is none
         if t["answers"]["tone"]:
             assert t["bound"] is None  # a tone lies outside the bound's model
+        if t["bound"] is not None:  # the bound at the methods' threshold rule: never above the best threshold's
+            assert 0.0 <= t["bound_at_rule"] <= t["bound"]
         for acc in t["accuracy"].values():
             assert 0.0 <= acc <= 100.0
     for label, m in summary["per_method"].items():
@@ -152,6 +154,11 @@ def test_a_tiny_benchmark_runs_end_to_end(tiny):
             np.median([t["accuracy"][label] for t in summary["trials"].values()])
         )
     assert set(summary["domain_gain"]) == {"source_only (unsupervised)", "mmd (unsupervised)"}
+    bounded = [t for t in summary["trials"].values() if t["bound"] is not None]
+    for label, m in summary["per_method"].items():  # the distance to the bound at the rule, beside the bound's
+        gaps = [t["bound_at_rule"] - t["accuracy"][label] for t in bounded]
+        assert m["median_gap_rule"] == (pytest.approx(np.median(gaps)) if gaps else None)
+    assert "| at the rule |" in (run / "table.md").read_text()
     lines = SCENARIO_KINDS["transfer_benchmark"].summary_lines(RunDir.open(run))
     assert lines[0].startswith("selection rule") and "seed 3 (development)" in lines[0]
     assert (run / "figures" / "transfer_benchmark.png").exists() and "<img" in (run / "report.html").read_text()

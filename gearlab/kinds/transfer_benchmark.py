@@ -444,6 +444,8 @@ def per_trial(records: list[dict]) -> dict[str, dict]:
             out[r["trial"]] = {
                 "answers": r["answers"],
                 "bound": bound["accuracy"]["0"]["mean"] if "accuracy" in bound else None,
+                # the bound at the methods' operating point (parts.bound; None: a record from before it)
+                "bound_at_rule": bound["accuracy_at_rule"]["0"]["mean"] if "accuracy_at_rule" in bound else None,
                 "unavailable": bound.get("unavailable") or ("" if bound else "the target has no noise"),
                 "correction": None,
                 "accuracy": {},
@@ -467,11 +469,17 @@ def per_trial(records: list[dict]) -> dict[str, dict]:
 
 def per_method(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
     """Per method over the trials: median and 10th percentile of the accuracy, and over the trials
-    with a bound the median distance to it and the share within CLOSE points."""
+    with a bound the median distance to it and the share within CLOSE points; the same to the bound
+    at the methods' operating point (`_rule`: what of the distance is the model's, not the threshold's)."""
     out = {}
     for label in labels:
         acc = [t["accuracy"][label] for t in trials_.values() if label in t["accuracy"]]
         gaps = [t["bound"] - t["accuracy"][label] for t in trials_.values() if label in t["accuracy"] and t["bound"]]
+        rule = [
+            t["bound_at_rule"] - t["accuracy"][label]
+            for t in trials_.values()
+            if label in t["accuracy"] and t.get("bound_at_rule") is not None
+        ]
         out[label] = {
             "trials": len(acc),
             "median": float(np.median(acc)) if acc else None,
@@ -479,6 +487,8 @@ def per_method(trials_: dict[str, dict], labels: list[str]) -> dict[str, dict]:
             "median_gap": float(np.median(gaps)) if gaps else None,
             "within_close": float(np.mean(np.asarray(gaps) <= CLOSE)) if gaps else None,
             "bounded_trials": len(gaps),
+            "median_gap_rule": float(np.median(rule)) if rule else None,
+            "within_close_rule": float(np.mean(np.asarray(rule) <= CLOSE)) if rule else None,
         }
     return out
 
@@ -558,7 +568,7 @@ def _n(x, digits: int = 1) -> str:
 
 def trials_md(summary: dict) -> str:
     labels = summary["methods"]
-    head = ["trial", "speed Hz", "load N m", "model", "sensor", "tone", "noise", "SNR dB", "Bayes bound"]
+    head = ["trial", "speed Hz", "load N m", "model", "sensor", "tone", "noise", "SNR dB", "Bayes bound", "at the rule"]
     corrected = summary.get("corrected")
     head += ["fitted effects", "evaluations", *labels] if corrected else labels
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -574,6 +584,7 @@ def trials_md(summary: dict) -> str:
             a["noise"],
             f"{a['snr_db']:.1f}",
             _n(t["bound"]) if t["bound"] is not None else "unavailable",
+            _n(t.get("bound_at_rule")),
             *([fitted_text(t["correction"]), evaluations_text(t["correction"])] if corrected else []),
             *[_n(t["accuracy"].get(label)) for label in labels],
         ]
@@ -603,11 +614,15 @@ def fitted_text(correction: dict | None) -> str:
 
 def methods_md(summary: dict) -> str:
     head = ["method", "median accuracy %", "10th percentile %", "median points below the bound", "within 5 points"]
+    head += ["below the bound at the rule", "within 5 of it"]  # the Bayes detector at the methods' threshold rule
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for label in summary.get("methods") or summary["per_method"]:
         m = summary["per_method"][label]
         within = f"{100 * m['within_close']:.0f} % of {m['bounded_trials']}" if m["within_close"] is not None else "–"
-        lines.append(f"| {label} | {_n(m['median'])} | {_n(m['p10'])} | {_n(m['median_gap'])} | {within} |")
+        rule = m.get("within_close_rule")  # (a summary from before the rule's bound: –)
+        rule = "–" if rule is None else f"{100 * rule:.0f} %"
+        cells = [_n(m["median"]), _n(m["p10"]), _n(m["median_gap"]), within, _n(m.get("median_gap_rule")), rule]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
