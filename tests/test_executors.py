@@ -345,18 +345,31 @@ def test_one_ray_session_per_process(ray_session):
 TINY = transfer(BASELINES_AND_MMD)
 
 
-def holding_epochs(said):
-    """UnitProgress.__call__ that holds a unit's first epoch line 1.2 s: written within 0.5 s (a unit
-    writes at most that often), it then stands longer than the watcher's look and an actor's answer
-    however fast the machine trains: the driver sees every training's epoch line."""
+def holding_epochs(said, seen: Path | None):
+    """UnitProgress.__call__ that holds a unit's first epoch line until the driver has seen it (it
+    marks that in the folder *seen*, SeenEpochs): however fast the machine trains, the driver sees
+    every training's epoch line. No folder: nothing is held."""
 
     def say(self, text):
         said(self, text)
-        if text.startswith("epoch ") and not getattr(self, "held", False):
+        if seen is not None and text.startswith("epoch ") and not getattr(self, "held", False):
             self.held = True
-            time.sleep(1.2)
+            assert waited_for(seen, self.unit.replace("/", "__")), f"the driver never saw {self.unit}'s epochs"
 
     return say
+
+
+class SeenEpochs:
+    """The driver's sink that marks in *folder* each unit whose epoch line it was told (holding_epochs)."""
+
+    def __init__(self, told: list, folder: Path):
+        self.told, self.folder = told, folder
+        folder.mkdir()
+
+    def __call__(self, event) -> None:
+        self.told.append(event)
+        if event.kind == "unit" and event.message.startswith("epoch "):
+            (self.folder / event.stage.replace("/", "__")).touch()
 
 
 class ProgressElsewhere:
@@ -365,8 +378,8 @@ class ProgressElsewhere:
     where the driver's ProgressWatcher reads. (Its other files, the dataset cache and the shared
     states, are kept: this simulates the progress folder alone.) Its first epoch line is held."""
 
-    def __init__(self, fn):
-        self.fn = fn
+    def __init__(self, fn, seen: Path | None):
+        self.fn, self.seen = fn, seen
 
     def __call__(self, item):
         from gearlab.confined import Confined
@@ -380,7 +393,7 @@ class ProgressElsewhere:
         def unlink(self, missing_ok=True):
             return None if self.parts[:1] == (PROGRESS,) else real[1](self, missing_ok)
 
-        Confined.write, Confined.unlink, UnitProgress.__call__ = write, unlink, holding_epochs(real[2])
+        Confined.write, Confined.unlink, UnitProgress.__call__ = write, unlink, holding_epochs(real[2], self.seen)
         try:
             return self.fn(item)
         finally:
@@ -388,10 +401,13 @@ class ProgressElsewhere:
 
 
 class FarProgressRay(RayExecutor):
-    """A Ray cluster whose workers share no progress/ folder with this process."""
+    """A Ray cluster whose workers share no progress/ folder with this process; *seen*: the driver's
+    marks of the epoch lines it saw (holding_epochs)."""
+
+    seen: Path | None = None
 
     def map(self, fn, items, on_done=None, gpu=False):
-        return super().map(ProgressElsewhere(fn), items, on_done, gpu)
+        return super().map(ProgressElsewhere(fn, self.seen), items, on_done, gpu)
 
 
 @pytest.fixture(scope="module")
@@ -399,7 +415,7 @@ def tiny_runs(ray_session, tmp_path_factory):
     """The tiny transfer scenario run with one local worker and on Ray tasks that share no progress/
     folder with this process: {executor: (records, events)}. The Ray run builds its datasets itself
     (its own cache), so simulation units run on Ray too. The engine's watcher looks every 0.05 s, and
-    a unit's first epoch line is held (holding_epochs), so that the driver sees it wherever it ran."""
+    a unit's first epoch line is held until the driver saw it (holding_epochs), wherever it ran."""
     from functools import partial
 
     from gearlab import engine
@@ -411,7 +427,7 @@ def tiny_runs(ray_session, tmp_path_factory):
         mp.delenv("RAY_ADDRESS", raising=False)
         mp.setattr(executors, "RayExecutor", FarProgressRay)
         mp.setattr(engine, "ProgressWatcher", partial(engine.ProgressWatcher, every=0.05))
-        mp.setattr(UnitProgress, "__call__", holding_epochs(UnitProgress.__call__))  # this process's units
+        said = UnitProgress.__call__
         for name, cache, execution in [
             ("local-1", "cache", "workers = 1"),
             ("ray", "ray-cache", 'executor = "ray"\nworkers = 2'),
@@ -419,8 +435,10 @@ def tiny_runs(ray_session, tmp_path_factory):
             mp.setenv("GEARLAB_CACHE", str(tmp_path / cache))
             path = tmp_path / f"{name}.toml"
             path.write_text(TINY.replace("workers = 1", execution))
-            told = []
-            run = engine.run_scenario(path, out=tmp_path / name, on_event=told.append)
+            told, seen = [], tmp_path / f"seen-{name}"
+            mp.setattr(FarProgressRay, "seen", seen)
+            mp.setattr(UnitProgress, "__call__", holding_epochs(said, seen))  # this process's units
+            run = engine.run_scenario(path, out=tmp_path / name, on_event=SeenEpochs(told, seen))
             runs[name] = records(run.path), told
     return runs
 
@@ -450,14 +468,17 @@ def test_units_on_other_machines_show_their_progress_at_the_driver(tiny_runs):
 
 
 def trial(task: tuple) -> int:
-    """A gap-benchmark trial's stand-in: a stage of 3 steps 0.6 s apart, on the trial's line."""
+    """A gap-benchmark trial's stand-in: a stage of 3 steps on the trial's line; after its first step
+    it runs on until the driver has seen that step counted (the driver marks it in the task's folder)."""
     from gearlab.events import Event, stages_to_unit
 
+    folder, i = task
     stages_to_unit(Event("stage", stage="fits", total=3, message="gap: round 1, fitting 3 effects"))
     for n in range(1, 4):
-        time.sleep(0.6)
         stages_to_unit(Event("advance", stage="fits", done=n, total=3))
-    return task[1]
+        if n == 1:
+            assert waited_for(Path(folder), f"seen-{i}"), "the driver never saw the trial's count"
+    return i
 
 
 def test_a_trials_line_on_another_machine_counts_with_its_eta_at_the_driver(ray_session, tmp_path):
@@ -467,8 +488,15 @@ def test_a_trials_line_on_another_machine_counts_with_its_eta_at_the_driver(ray_
     from gearlab.events import told_unit
     from gearlab.runs import RunDir
 
+    counted = re.compile(r"gap: round 1, fitting 3 effects: [12] of 3, ETA 0:0\d")
     told = []
-    watcher = ProgressWatcher(RunDir(tmp_path), told.append, every=0.05)
+
+    def tell(event) -> None:
+        told.append(event)
+        if counted.fullmatch(event.message):
+            (tmp_path / f"seen-{int(event.stage[-3:])}").touch()
+
+    watcher = ProgressWatcher(RunDir(tmp_path), tell, every=0.05)
     executor = FarProgressRay(workers=2)
     watcher.elsewhere = executor.unit_lines(str(tmp_path))
     watcher.start()
@@ -481,7 +509,6 @@ def test_a_trials_line_on_another_machine_counts_with_its_eta_at_the_driver(ray_
     for event in told:
         lines.setdefault(event.stage, []).append(event.message)
     assert set(lines) == {"trial_000", "trial_001"}
-    counted = re.compile(r"gap: round 1, fitting 3 effects: [12] of 3, ETA 0:0\d")
     assert all(said[-1] == "" and any(map(counted.fullmatch, said)) for said in lines.values()), lines
 
 
@@ -535,14 +562,24 @@ def test_a_watcher_whose_lines_from_elsewhere_fail_ends_quietly(tmp_path):
     assert [(e.stage, e.message) for e in told] == [("rep0/k0/mmd-unsup", "epoch 3"), ("rep0/k0/mmd-unsup", "")]
 
 
-def counting(item: tuple[int, float]) -> int:
-    """A gap fit's stand-in: n score evaluations spread over *seconds*."""
+def counting(item: tuple[int, Path | None]) -> int:
+    """A gap fit's stand-in: n score evaluations; with *seen* (a folder), it then runs until the
+    driver's line has counted evaluations (the driver marks that there)."""
+    from gearlab.gap import tally
     from gearlab.gap.tally import counted
 
-    n, seconds = item
-    for _ in range(n):
-        counted()
-        time.sleep(seconds / n)
+    n, seen = item
+    if seen is None:
+        for _ in range(n):
+            counted()
+        return n
+    every, tally.WRITE_EVERY = tally.WRITE_EVERY, 0.0  # each evaluation reported: all come within 0.5 s
+    try:
+        for _ in range(n):
+            counted()
+        assert waited_for(seen, "counted"), "the driver's line never counted the evaluations"
+    finally:
+        tally.WRITE_EVERY = every
     return n
 
 
@@ -571,30 +608,41 @@ class FarRay(RayExecutor):
         return super().map(Elsewhere(fn), items, on_done, gpu)
 
 
-def test_a_gap_fits_evaluations_come_back_from_ray_tasks_on_other_machines(ray_session):
+def test_a_gap_fits_evaluations_come_back_from_ray_tasks_on_other_machines(ray_session, tmp_path):
     """Issue 41: a fit's score evaluations reached the run's process through files in a temporary
     folder of its machine's, which a cluster's other nodes do not share: the diagnosis's total missed
     them (a transfer benchmark's correction, a gap run on Ray) and its line said 'fitting' alone. Ray
     tasks now report to the executor's actor and return their counts with their results: the total
-    of serial fits, and a line that counts (the second batch, of 1.5 s fits: the actor is up by then)."""
+    of serial fits, and a line that counts (the second batch's fits run until the driver's line has
+    counted: the line is looked at each 0.05 s here, not each second)."""
     from types import SimpleNamespace
 
+    from gearlab import events
     from gearlab.gap import tally
     from gearlab.gap.diagnose import run_fits
 
-    def fits(executor, seconds: float) -> tuple[int, list[str]]:
+    counted = re.compile(r"fitting: (\d+) evaluations, ")
+
+    def fits(executor, seen: Path | None) -> tuple[int, list[str]]:
         told, first = [], tally.so_far()
-        run = SimpleNamespace(on_event=told.append, executor=executor)
-        tasks = [(n, seconds) for n in (10, 20, 30, 40, 50, 60)]
+
+        def tell(event) -> None:
+            told.append(event)
+            if seen is not None and counted.match(event.message):
+                (seen / "counted").touch()
+
+        run = SimpleNamespace(on_event=tell, executor=executor)
+        tasks = [(n, seen) for n in (10, 20, 30, 40, 50, 60)]
         assert run_fits(run, "gap round 1", counting, tasks, None) == [10, 20, 30, 40, 50, 60]
         return tally.so_far() - first, [e.message for e in told]
 
-    serial, _ = fits(LocalExecutor(1), 0.0)
-    with FarRay(workers=2) as executor:
-        batches = [fits(executor, seconds) for seconds in (0.0, 1.5)]
+    serial, _ = fits(LocalExecutor(1), None)
+    with pytest.MonkeyPatch.context() as mp, FarRay(workers=2) as executor:
+        mp.setattr(events, "_next_look", lambda done: done.wait(0.05))
+        batches = [fits(executor, seen) for seen in (None, tmp_path)]
     assert serial == 210 and [total for total, _ in batches] == [210, 210]
     said = batches[1][1]
-    counts = [int(m.group(1)) for m in map(re.compile(r"fitting: (\d+) evaluations, ").match, said) if m]
+    counts = [int(m.group(1)) for m in map(counted.match, said) if m]
     assert counts and 0 < counts[-1] <= 210, said
 
 
@@ -628,30 +676,54 @@ def test_a_real_diagnosis_on_ray_counts_what_it_counts_serially(ray_session):
     assert far["effects"] == serial["effects"] and far["evaluations"] == serial["evaluations"] > 20
 
 
-def _mark_then_sleep(task):
-    """Unit 0 fails at once; the others mark that they started, sleep, and mark that they ended."""
+def waited_for(path: Path, pattern: str) -> bool:
+    """Whether a file matching *pattern* came into *path* within a minute (a hung test's bound)."""
+    deadline = time.monotonic() + 60.0
+    while not any(path.glob(pattern)):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
+def _mark_then_wait(task):
+    """Unit 0 fails once another unit runs beside it; the others mark that they started (with their
+    process id) and run until stopped: a minute, never told to end, then they mark that they ended."""
+    import os
+
     folder, i = task
     if i == 0:
-        # fail only once another unit runs beside it (a fixed sleep raced the worker's start on a
-        # loaded machine); 10 s at most, then fail anyway
-        for _ in range(200):
-            if any(Path(folder).glob("started-*")):
-                break
-            time.sleep(0.05)
+        waited_for(Path(folder), "started-*")
         raise GearlabInputError("unit 0 is bad")
-    (Path(folder) / f"started-{i}").touch()
-    time.sleep(3)
+    (Path(folder) / f"started-{i}").write_text(str(os.getpid()))
+    waited_for(Path(folder), "never")
     (Path(folder) / f"ended-{i}").touch()
     return i
 
 
+def gone(pid: int) -> bool:
+    """Whether process *pid* ended within a minute."""
+    import os
+
+    deadline = time.monotonic() + 60.0
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.01)
+    return False
+
+
 def test_a_failed_unit_stops_the_local_pool_at_once(tmp_path):
-    """No queued unit starts after a failure (or a Ctrl-C), and the running ones are stopped."""
+    """No queued unit starts after a failure (or a Ctrl-C), and the running ones are stopped: their
+    processes end, where unstopped they would run on (a minute) and mark that they ended."""
     with pytest.raises(GearlabInputError, match="unit 0 is bad"):
-        LocalExecutor(2).map(_mark_then_sleep, [(tmp_path, i) for i in range(5)])
-    time.sleep(4)  # longer than a unit: an unstopped one would have ended by now
+        LocalExecutor(2).map(_mark_then_wait, [(tmp_path, i) for i in range(5)])
+    started = list(tmp_path.glob("started-*"))
+    assert started and all(gone(int(p.read_text())) for p in started)
     marks = sorted(p.name for p in tmp_path.iterdir())
-    assert any(m.startswith("started") for m in marks) and not any(m.startswith("ended") for m in marks)
+    assert not any(m.startswith("ended") for m in marks)
     assert len(marks) < 3  # the queued units were dropped (the worker freed by unit 0 may take one)
 
 
