@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import threading
 import time
 from pathlib import Path
 
@@ -70,11 +71,17 @@ def test_gap_benchmark_checks_its_overrides(cli, tmp_path, monkeypatch):
     assert not (tmp_path / "runs").exists()
 
 
+def told(events: list, count: int) -> None:
+    """Wait until *events* holds *count* events (a minute: a hung watcher's bound, not a speed)."""
+    deadline = time.monotonic() + 60.0
+    while len(events) < count:
+        assert time.monotonic() < deadline, f"the watcher told {events} in a minute, not {count} events"
+        time.sleep(0.005)
+
+
 def test_units_in_progress_become_unit_events(tmp_path):
     """A unit reports through a file in the run directory (so any worker process or cluster node
     can); the engine's watcher turns it into 'unit' events, and an empty one when it ends."""
-    import time
-
     from gearlab.engine import ProgressWatcher
     from gearlab.events import UnitProgress
     from gearlab.runs import RunDir
@@ -84,10 +91,10 @@ def test_units_in_progress_become_unit_events(tmp_path):
     watcher.start()
     with UnitProgress(tmp_path, "rep0/k4/mmd-unsup", every=0.0) as progress:
         progress("epoch 1")
-        time.sleep(0.3)
+        told(events, 1)
         progress("epoch 2")
-        time.sleep(0.3)
-    time.sleep(0.3)
+        told(events, 2)
+    told(events, 3)  # the watcher's own look, before the stop's last one
     watcher.stop()
     seen = [(e.kind, e.stage, e.message) for e in events]
     assert seen == [
@@ -101,23 +108,33 @@ def test_units_in_progress_become_unit_events(tmp_path):
 def test_a_unit_that_ends_just_before_the_run_stops_is_still_reported_ended(tmp_path):
     """The watcher looks every few tenths of a second; a unit whose file goes between its last
     look and the end of the run gets its 'ended' event from a last look at stop."""
-    import time
+    import threading
 
     from gearlab.engine import ProgressWatcher
     from gearlab.events import UnitProgress
     from gearlab.runs import RunDir
 
+    class Stopped(threading.Event):
+        """The watcher's stop, which notes when the watcher waits for it an hour (no look till then)."""
+
+        def __init__(self):
+            super().__init__()
+            self.hour = threading.Event()
+
+        def wait(self, timeout=None):
+            if timeout == 3600.0:
+                self.hour.set()
+            return super().wait(timeout)
+
     events = []
     watcher = ProgressWatcher(RunDir(tmp_path), events.append, every=0.05)
+    watcher.stopped = Stopped()
     watcher.start()
     with UnitProgress(tmp_path, "rep0/k0/mmd-unsup", every=0.0) as progress:
         progress("epoch 1")
-        for _ in range(200):
-            if events:
-                break
-            time.sleep(0.05)
+        told(events, 1)
         watcher.every = 3600.0  # the next look only at stop
-        time.sleep(0.2)
+        assert watcher.stopped.hour.wait(60.0)  # its look in flight made (whenever its thread woke)
     watcher.stop()
     assert [e.message for e in events] == ["epoch 1", ""]
 
@@ -159,19 +176,27 @@ device = "cpu"
 
 def test_transfer_units_report_their_epochs(cli, tmp_path, monkeypatch, domains_cache, unrendered_figures):
     monkeypatch.setenv("GEARLAB_CACHE", str(domains_cache))
+    from gearlab.engine import ProgressWatcher
     from gearlab.events import UnitProgress
 
-    # the epoch line must stand through a few of the watcher's half-second looks on any machine:
-    # 200 epochs of `fast` took 1.5 s on one machine and under the watcher's period on CI's (no
-    # epoch line was seen), so the first epoch's report stands 1.5 s here, whatever the speed
-    said = UnitProgress.__call__
+    # the epoch line must stand until the watcher has looked at it, on any machine: 200 epochs of
+    # `fast` took 1.5 s on one machine and under the watcher's half-second period on CI's (no epoch
+    # line was seen), and 1.5 s of standing is a guess too: the first epoch's report stands until seen
+    said, scan, seen = UnitProgress.__call__, ProgressWatcher.scan, threading.Event()
 
     def standing_epoch(self, text: str) -> None:
         said(self, text)
         if text.split(",")[0] == "epoch 1":
-            time.sleep(1.5)
+            assert seen.wait(60.0), "the watcher never saw the epoch line"
+
+    def looking(self, shown, final=False):
+        now = scan(self, shown, final)
+        if any(text.startswith("epoch ") for text in now.values()):
+            seen.set()
+        return now
 
     monkeypatch.setattr(UnitProgress, "__call__", standing_epoch)
+    monkeypatch.setattr(ProgressWatcher, "scan", looking)
     path = tmp_path / "t.toml"
     path.write_text(mmd_run(ks=[0], repetitions=1, epochs=5, workers=1))
     code, out, err = cli("run", path, "--events", "--out", tmp_path / "runs")
