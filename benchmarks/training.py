@@ -25,12 +25,36 @@ source and target rows):
   a sign, a product and a sum for the templates' gradient: 6 FLOPs a sample and template
   element) against the matmul peak (a CPU issues those as many vector operations per cycle as
   fused multiply-adds). Normalisation, activations, pooling and the optimiser are not counted,
-  so the limit is optimistic: a ratio gearlab / limit of 1 cannot be reached.
+  so the limit is optimistic: a ratio gearlab / limit of 1 cannot be reached;
+* roof: the roofline of the same network, each layer (every module without children:
+  normalisations, activations and pooling too) at the slower of its FLOPs at their peak and its
+  bytes at a copy's bandwidth measured in the same round: the maps into and out of the layer
+  forward, the gradients of both and its saved input backward (the input's gradient only where
+  it needs one), its weights read twice and their gradient written once a step (divided among
+  the step's samples), 4 bytes a value; a view moves nothing. `roof/s` takes the bandwidth of
+  4 MiB buffers (beyond a core's L2, within the L3: a step's maps at batch 40-80 are 0.3-0.7 MB
+  each, 3-6 MB saved for the backward), `dram/s` that of 64 MiB ones (every map from memory).
 
 Where the distance to the limit lies: gearlab is timed at batch 2 as well (`SMALL`, the same
 steps), and a step's time taken as a + b * batch through the two: `step ms` is a, the cost of a
 step whatever its batch (operator dispatch, the autograd engine, the optimiser, Python), `GF/s`
 the counted FLOPs per sample over b, the speed of the work that grows with the batch.
+
+Below the table, each row's distance to the roof split in two: a step's time as fixed + batch x
+per sample (the same two timings), against batch x the roof's per sample; `with the fixed cost
+alone` is the ratio gearlab / roof were the per-sample part at the roof (the fixed cost the only
+loss), `with the cost per sample alone` the other way round. One thread, this machine (AMD EPYC
+family 26, AVX-512; 2 cores shared with other work, load 8-11, CPU clock, 6 runs, min-max): conv1d
+150-180 GFLOP/s (oneDNN), matmul 89-97 (MKL and numpy's OpenBLAS alike run their AVX2 kernels on this
+CPU: half the rate), copies 27-34 GB/s (memory) and 88-105 (cache). `fast` moves 292 KB a sample, its
+roof 74-99 k samples/s (FLOP limit 91-126 k, dram 50-71 k); gearlab/roof 0.107-0.129 (median 0.113)
+for `fast`, 0.118-0.169 (0.141) fast+coral, 0.138-0.155 (0.145) fast+mmd, 0.085-0.116 (0.106)
+`shapes` (77 KB: its roof is its FLOPs). The fixed cost alone holds them to 0.18-0.22 (fast),
+0.26-0.34 (joint), 0.20-0.36 (shapes): 1.5-2.7 ms a step, ~770 operator calls in `fast`'s step at
+batch 40 and ~880 in a joint one, each ~1-2 us of dispatch whatever its size; the cost per sample
+alone to 0.17-0.27 (43-65 us a sample against 10-13 at the roof: the products at MKL's AVX2 rate,
+the normalisations' and pair maxima's passes over maps in the caches), so no batch reaches 0.33.
+Within 3x of the roof needs both, the fixed cost and the cost per sample, cut by 1.5-2x.
 
 Measured against these steps on one thread and not adopted (no gain beyond the load's noise, or
 a loss): 3 or 8 units' `fast` as one network of grouped convolutions (16.4-16.9 against
@@ -69,6 +93,20 @@ gradients, ~60 operator calls) ~2 ms; outside it ~0.8 ms (classifier, losses, cl
 rows). Not adopted: CORAL's gradient written out (one node: 0.26 -> 0.18 ms of a ~5 ms step), MMD's
 (0.39 -> 0.31 ms), the first layer's windows copied into a reused buffer (4.04 vs 4.19 ms).
 
+Also not adopted (CPU time of the function + classifier + cross-entropy backward, the variant
+alternated with the shipped one in one process, 25 rounds, min, 4 runs, load 4-11): the convolutions by
+oneDNN at its AVX-512 rate (conv2d of height 1 on channels-last maps, no window copies; input and weight
+gradients by convolution_backward; the first layer's weight gradient a product of windows, oneDNN's 3x
+slower) 1.94-3.39 against 1.72-2.85 ms at batch 40 (training), 2.68-4.24 against 2.85-4.13 at 80
+(frozen): 0-20 % slower, and 600-1,500 page faults a step where glibc's allocator returns its memory;
+only the first layer's forward by oneDNN (alone 98 against 184 us at 40) 4.1 against 2.4 ms a step;
+the windows' input gradient as two products and one shifted sum (no scatter; gradients bit for bit
+equal) 2.84-3.32 against 3.04-3.57 ms at 40, 4.01-5.29 against 3.91-4.93 at 80: within the noise;
+glibc's allocator told to keep its memory (mallopt): a training faults 0.1-3 times a step (0-0.06
+ms of system time) without it. The first layer as a product of its windows without copying them
+(an as_strided view of the padded signals, rows 16 values apart): BLAS needs a row stride of at
+least the row's 64 values, so torch copies it all the same.
+
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
 On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the
@@ -105,6 +143,10 @@ JOINT_LR = 0.003  # fit_adaptation's SGD learning rate (Table 5.3)
 SMALL = 2  # the second batch of gearlab's timing: a step's fixed cost and its per-sample speed
 MATMUL = 512  # n of the n x n matrix product: large enough to be compute-bound
 CONV = (8, 64, 64, 5, 1024)  # batch, channels in and out, kernel, length of the friendly conv1d
+# bytes of each buffer of the bandwidths' copies: 64 MiB, beyond the caches (memory: twice the
+# L3 of a 32 MiB one), and 4 MiB, beyond a core's L2 and within the L3, as a step's maps are (cache)
+STREAM, CACHE = 1 << 26, 1 << 22
+COPIES = 16  # copies of CACHE bytes timed at once (one takes ~0.1 ms)
 
 
 def synchronize(device: torch.device) -> None:
@@ -116,31 +158,73 @@ def flops_per_sample(net: nn.Module, length: int, device: torch.device) -> dict[
     """Forward + backward FLOPs of one sample (see the module's docstring), by the peak they are
     held against: ``{"conv": ..., "matmul": ...}``."""
     counts = {"conv": 0.0, "matmul": 0.0}
+    for kind, flops, _ in layer_costs(net, length, device, batch=2):
+        if kind:
+            counts[kind] += flops
+    return counts
+
+
+def layer_costs(net: nn.Module, length: int, device: torch.device, batch: int) -> list[tuple[str, float, float]]:
+    """Per layer (module without children) of one sample's forward + backward at *batch*: the peak
+    its FLOPs are held against ("conv", "matmul", or "" for none counted), its FLOPs and its bytes
+    (see the module's docstring: the maps in and out of it forward, the gradients of both and its
+    saved input backward, the weights and their gradient once a step; a view, 0)."""
+    costs: list[tuple[str, float, float]] = []
     hooks = []
 
-    def layer(kind: str) -> Callable:
-        def hook(module, inputs, output):
-            x = inputs[0]
+    def hook(module, inputs, output):
+        x = inputs[0]
+        kind, flops = "", 0.0
+        if isinstance(module, (nn.Conv1d, nn.Linear)):
+            kind = "conv" if isinstance(module, nn.Conv1d) else "matmul"
             macs = output.numel() // len(output) * (module.weight[0].numel())
             # forward, the weights' gradient, and the input's when it needs one
-            counts[kind] += 2 * macs * (3 if x.requires_grad else 2)
-
-        return hook
+            flops = 2 * macs * (3 if x.requires_grad else 2)
+        elif isinstance(module, ShapeLikelihood):
+            kind, flops = "matmul", 6 * module.weight.numel()
+        if output.untyped_storage().data_ptr() == x.untyped_storage().data_ptr():
+            costs.append((kind, flops, 0.0))  # a view: nothing moves
+            return
+        maps = 2 * (x.numel() + output.numel()) / len(x) + (x.numel() / len(x) if x.requires_grad else 0)
+        weights = 3 * sum(p.numel() for p in module.parameters(recurse=False)) / batch
+        costs.append((kind, flops, 4.0 * (maps + weights)))
 
     for module in net.modules():
-        if isinstance(module, nn.Conv1d):
-            hooks.append(module.register_forward_hook(layer("conv")))
-        elif isinstance(module, nn.Linear):
-            hooks.append(module.register_forward_hook(layer("matmul")))
-        elif isinstance(module, ShapeLikelihood):
-            counts["matmul"] += 6 * module.weight.numel()
+        if not any(True for _ in module.children()):
+            hooks.append(module.register_forward_hook(hook))
     # through the modules (Network.embed may run `fast` as one function, which no hook sees); two
     # samples: batch normalisation needs them
     net.train()
     net.classifier(net.features(torch.randn(2, length, device=device)))
-    for hook in hooks:
-        hook.remove()
-    return counts
+    for h in hooks:
+        h.remove()
+    return costs
+
+
+def bandwidth(device: torch.device, size: int) -> float:
+    """Bytes per second of copies between two buffers of *size* bytes, read and written (STREAM's
+    copy), the best of three times `COPIES`."""
+    if size not in _buffers or _buffers[size][0].device != device:
+        _buffers[size] = torch.ones(2, size // 4, device=device).unbind(0)
+    src, dst = _buffers[size]
+    times = []
+    for _ in range(3):
+        synchronize(device)
+        t = clock()
+        for _ in range(max(1, COPIES * CACHE // size)):
+            dst.copy_(src)
+        synchronize(device)
+        times.append((clock() - t) / max(1, COPIES * CACHE // size))
+    return 2 * size / min(times)
+
+
+_buffers: dict[int, tuple[torch.Tensor, torch.Tensor]] = {}
+
+
+def roofline(costs: list[tuple[str, float, float]], peak: dict[str, float], bw: float) -> float:
+    """Seconds of one sample at the roofline: each layer at the slower of its FLOPs at its peak and
+    its bytes at the memory bandwidth *bw*."""
+    return sum(max(flops / peak[kind] if kind else 0.0, moved / bw) for kind, flops, moved in costs)
 
 
 def peaks(device: torch.device) -> dict[str, float]:
@@ -272,9 +356,11 @@ def main() -> None:
             weights = list(plain_net.parameters()) + list(s["plain_modules"].parameters())
             s["opt"] = torch.optim.SGD(weights, lr=JOINT_LR)
         s["rows"] = batch * (1 if adapter is None else 2)  # through the network in a step
-        s["flops"] = flops_per_sample(network(name, length, device), length, device)
-        s["times"] = {"gearlab": [], "plain": [], "limit": [], "small": []}
-    peak_rounds: dict[str, list[float]] = {"matmul": [], "conv": []}
+        s["costs"] = layer_costs(network(name, length, device), length, device, s["rows"])
+        s["flops"] = {k: sum(f for kind, f, _ in s["costs"] if kind == k) for k in ("conv", "matmul")}
+        s["bytes"] = sum(moved for _, _, moved in s["costs"])
+        s["times"] = {"gearlab": [], "plain": [], "limit": [], "roof": [], "dram": [], "small": []}
+    peak_rounds: dict[str, list[float]] = {"matmul": [], "conv": [], "memory": [], "cache": []}
     for _ in range(args.rounds):  # alternated: a load that comes and goes hits every figure alike
         for row, _, _, batch, _, _ in cases:
             s = setups[row]
@@ -285,39 +371,71 @@ def main() -> None:
             s["times"]["small"].append(small / (samples * SMALL // batch))
             s["times"]["plain"].append(plain_run(s, batch, epochs) / samples)
             peak = peaks(device)
-            for kind in peak_rounds:
-                peak_rounds[kind].append(peak[kind])
+            bw = {"memory": bandwidth(device, STREAM), "cache": bandwidth(device, CACHE)}
+            for kind, value in (*peak.items(), *bw.items()):
+                peak_rounds[kind].append(value)
             s["times"]["limit"].append(sum(s["flops"][kind] / peak[kind] for kind in peak))
-    matmul, conv = (statistics.median(peak_rounds[k]) for k in ("matmul", "conv"))
+            s["times"]["roof"].append(roofline(s["costs"], peak, bw["cache"]))
+            s["times"]["dram"].append(roofline(s["costs"], peak, bw["memory"]))
+    matmul, conv, memory, cache = (statistics.median(peak_rounds[k]) for k in peak_rounds)
     load = f", load average {os.getloadavg()[0]:.1f}" if hasattr(os, "getloadavg") else ""
     print(
         f"training throughput on {args.device}, {args.threads} torch thread(s) of {os.cpu_count()} CPUs{load}; "
         f"{args.clock} clock, median of {args.rounds} alternated rounds of {args.steps} steps"
     )
-    print(f"peaks at {args.threads} thread(s): matmul {matmul / 1e9:.1f} GFLOP/s, conv1d {conv / 1e9:.1f} GFLOP/s")
+    print(
+        f"peaks at {args.threads} thread(s): matmul {matmul / 1e9:.1f} GFLOP/s, conv1d {conv / 1e9:.1f} GFLOP/s, "
+        f"copy bandwidth {memory / 1e9:.1f} GB/s (memory), {cache / 1e9:.1f} GB/s ({CACHE >> 20} MiB buffers: cache)"
+    )
     header = (
-        f"{'network':10s} {'input':>14s} {'MFLOP/sa':>8s} {'gearlab/s':>9s} {'plain/s':>9s} {'limit/s':>9s} "
-        f"{'gl/core':>8s} {'ms/step':>7s} {'step ms':>7s} {'GF/s':>5s} {'gearlab/plain':>13s} {'gearlab/limit':>13s}"
+        f"{'network':10s} {'input':>14s} {'MFLOP/sa':>8s} {'KB/sa':>5s} {'gearlab/s':>9s} {'plain/s':>9s} "
+        f"{'limit/s':>9s} {'roof/s':>9s} {'dram/s':>9s} {'gl/core':>8s} {'ms/step':>7s} {'step ms':>7s} {'GF/s':>5s} "
+        f"{'gearlab/plain':>13s} {'gearlab/limit':>13s} {'gearlab/roof':>12s}"
     )
     print(header)
     for row, _, length, batch, adapter, where in cases:
         s = setups[row]
         rate = {k: 1.0 / statistics.median(v) for k, v in s["times"].items()}
-        rows, small_rows = s["rows"], s["rows"] * SMALL // batch
-        fixed, per_sample = split(rows / rate["gearlab"], small_rows / rate["small"], rows, small_rows)
+        rows = s["rows"]
+        fixed, per_sample, _ = distance(s, batch)
         flops = sum(s["flops"].values())
         shape = f"{batch} x {length}" if adapter is None else f"{batch}+{batch} x {length}"
         print(
-            f"{row:10s} {shape:>14s} {flops / 1e6:8.2f} {rate['gearlab']:9.0f} "
-            f"{rate['plain']:9.0f} {rate['limit']:9.0f} {rate['gearlab'] / args.threads:8.0f} "
+            f"{row:10s} {shape:>14s} {flops / 1e6:8.2f} {s['bytes'] / 1e3:5.0f} {rate['gearlab']:9.0f} "
+            f"{rate['plain']:9.0f} {rate['limit']:9.0f} {rate['roof']:9.0f} {rate['dram']:9.0f} "
+            f"{rate['gearlab'] / args.threads:8.0f} "
             f"{1e3 * rows / rate['gearlab']:7.2f} {1e3 * fixed:7.2f} {flops / per_sample / 1e9:5.1f} "
-            f"{rate['gearlab'] / rate['plain']:13.2f} {rate['gearlab'] / rate['limit']:13.3f}   ({where})"
+            f"{rate['gearlab'] / rate['plain']:13.2f} {rate['gearlab'] / rate['limit']:13.3f} "
+            f"{rate['gearlab'] / rate['roof']:12.3f}   ({where})"
         )
-    print("(samples/s; gl/core = gearlab's per thread; the limit counts convolutions, dense layers and templates only)")
+    print(
+        "(samples/s; gl/core = gearlab's per thread; the limit counts convolutions, dense layers and templates only; "
+        "roof / dram: each layer at the slower of its FLOPs and its KB at the cache's / memory's bandwidth)"
+    )
     print(
         f"(step ms: a step's cost whatever its batch, GF/s: the counted FLOPs' speed in the rest, from gearlab at "
         f"batch {SMALL} and at the network's)"
     )
+    _buffers.clear()  # the bandwidths' 136 MB
+    print("where the distance to the roof lies (a step = its fixed cost + batch x its cost per sample):")
+    for row, _, _, batch, _, _ in cases:
+        s = setups[row]
+        fixed, per_sample, roof = distance(s, batch)
+        rows = s["rows"]
+        print(
+            f"  {row}: a step {1e3 * (fixed + rows * per_sample):.2f} ms = {1e3 * fixed:.2f} + {rows} x "
+            f"{1e6 * per_sample:.1f} us, at the roof {rows} x {1e6 * roof:.1f} us; gearlab/roof with the fixed "
+            f"cost alone {rows * roof / (fixed + rows * roof):.2f}, with the cost per sample alone "
+            f"{roof / per_sample:.2f}"
+        )
+
+
+def distance(s: dict, batch: int) -> tuple[float, float, float]:
+    """Of the case *s* (medians of its rounds): a step's fixed seconds and seconds per sample
+    (split), and a sample's seconds at the roof."""
+    median = {k: statistics.median(v) for k, v in s["times"].items()}
+    rows, small_rows = s["rows"], s["rows"] * SMALL // batch
+    return (*split(rows * median["gearlab"], small_rows * median["small"], rows, small_rows), median["roof"])
 
 
 def split(step: float, small_step: float, rows: int, small_rows: int) -> tuple[float, float]:

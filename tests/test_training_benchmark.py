@@ -41,13 +41,20 @@ def test_a_tiny_run_prints_the_ratios(monkeypatch, capsys, case):
     finally:
         torch.set_num_threads(threads)
     out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if line.startswith(f"{case} "))
-    fields = row.split("(")[0].split()  # before "(the scenarios)"
-    gearlab_per_plain, gearlab_per_limit = float(fields[-2]), float(fields[-1])
-    assert 0 < gearlab_per_plain and 0 < gearlab_per_limit < 1  # no network beats the machine's limit
-    assert "matmul" in out and "conv1d" in out
-    ms_per_step, fixed_ms, speed = float(fields[-5]), float(fields[-4]), float(fields[-3])
-    assert 0 < fixed_ms < ms_per_step and speed > 0  # a batch of 2 costs more than 1/20 and less than all of 40's
+    lines = out.splitlines()
+    header = next(line for line in lines if line.startswith("network ")).replace("step ms", "step_ms")
+    names = header.split()[2:]  # after network and input, whose values hold spaces
+    row = next(line for line in lines if line.startswith(f"{case} "))
+    value = dict(zip(names, map(float, row.split("(")[0].split()[-len(names) :])))  # before "(the scenarios)"
+    assert 0 < value["gearlab/plain"] and 0 < value["gearlab/limit"] < 1  # no network beats the machine's limit
+    # the roof holds each layer to its bytes as well as its FLOPs: never above the FLOP limit, and lower
+    # where the bytes move at the memory's bandwidth than at the cache's (to the noise of one round)
+    assert value["roof/s"] <= value["limit/s"] * (1 + 1e-9) and value["dram/s"] <= value["roof/s"] * 1.5
+    assert 0 < value["gearlab/roof"] < 1 and value["KB/sa"] > 0
+    assert "matmul" in out and "conv1d" in out and "GB/s (memory)" in out
+    # a batch of 2 costs more than 1/20 and less than all of 40's
+    assert 0 < value["step_ms"] < value["ms/step"] and value["GF/s"] > 0
+    assert any(line.startswith(f"  {case}: a step ") for line in lines)  # where the distance lies
 
 
 def test_a_step_splits_into_its_fixed_cost_and_a_cost_per_sample():
@@ -56,3 +63,22 @@ def test_a_step_splits_into_its_fixed_cost_and_a_cost_per_sample():
     assert bench.SMALL == 2
     fixed, per_sample = bench.split(6.0e-3, 2.2e-3, 40, 2)
     assert abs(fixed - 2.0e-3) < 1e-12 and abs(per_sample - 0.1e-3) < 1e-12
+
+
+def test_the_roof_takes_each_layer_at_the_slower_of_its_flops_and_its_bytes():
+    """2 GFLOP at 1 GFLOP/s moving 1 GB at 1 GB/s: 2 s; a layer of no counted FLOPs moving 2 GB: 2 s."""
+    bench = _benchmark()
+    assert bench.roofline([("conv", 2e9, 1e9), ("", 0.0, 2e9)], {"conv": 1e9, "matmul": 5e9}, 1e9) == 4.0
+
+
+def test_fast_bytes_per_sample_are_counted_by_hand():
+    """`fast`'s first convolution at batch 40: the signal (2048) and its map (16 x 128) forward, the
+    map's gradient and the saved signal backward (the signal needs no gradient), its 16 x 64 weights
+    read, read again and their gradient written once a step; AsChannels, a view, moves nothing."""
+    bench = _benchmark()
+    net = bench.network("fast", 2048, torch.device("cpu"))
+    costs = bench.layer_costs(net, 2048, torch.device("cpu"), batch=40)
+    assert costs[0] == ("", 0.0, 0.0)  # AsChannels
+    kind, flops, moved = costs[1]
+    assert kind == "conv" and flops == 2 * 16 * 128 * 64 * 2
+    assert moved == 4.0 * (2 * (2048 + 16 * 128) + 3 * 16 * 64 / 40)
