@@ -96,9 +96,9 @@ def _dataset(where: str, entry: Mapping[str, Any]) -> Dataset:
 def simulate(preset: str | DatasetSpec, **keys) -> Dataset:
     """A simulated dataset: a preset (``B-6-ch5``, ``A-pinion``, ...; docs/scenarios.md) with the keys
     of a scenario's ``[[datasets]]`` entry (docs/settings.md: ``teeth``, ``faults``, ``healthy``,
-    ``noise``, ``speed``, ``effects``, ...), or a DatasetSpec as it is. Built once, then read from the
-    dataset cache (``GEARLAB_CACHE``). ``X`` holds one standardised revolution (4096 points) a row,
-    ``label`` its class (0 healthy), ``fault`` 0/1.
+    ``speed``, ``effects``, the noise a ``sensor_noise`` among them, ...), or a DatasetSpec as it is.
+    Built once, then read from the dataset cache (``GEARLAB_CACHE``). ``X`` holds one standardised
+    revolution (4096 points) a row, ``label`` its class (0 healthy), ``fault`` 0/1.
 
     >>> data = gearlab.simulate("B-6-ch5", teeth=[1, 2], faults={"crack": [13]}, healthy=8)
     >>> data.X.shape, data.spec.class_names, int(data.fault.sum())
@@ -419,7 +419,7 @@ def diagnose_gap(source: str | DatasetSpec | Dataset, target: Dataset, **setting
     keys (docs/settings.md: ``candidates``, ``budget``, ``max_effects``, ``healthy``, ...).
 
     >>> target = gearlab.simulate("B-6-ch5", teeth=[1], faults={"crack": [13]}, healthy=30,
-    ...                           noise={"kind": "laplace", "snr_db": 10, "seed": 1})
+    ...                           effects=[{"name": "sensor_noise", "kind": "laplace", "snr_db": 10, "seed": 1}])
     >>> result = gearlab.diagnose_gap("B-6-ch5", target, candidates=["sensor_noise"], budget=4,
     ...                               max_effects=1, healthy=20, bootstrap=20, permutations=50)
     >>> result["verdict"], [(e["name"], e["params"]["kind"]) for e in result["effects"]]
@@ -482,7 +482,7 @@ def fit_detector(
 
     >>> source = gearlab.simulate("B-6-ch5", teeth=[1, 2, 3], faults={"crack": [13]}, healthy=9)
     >>> target = gearlab.simulate("B-8-ch5", teeth=[1, 2, 3], faults={"crack": [13]}, healthy=40,
-    ...                           noise={"kind": "laplace", "snr_db": 0, "seed": 1})
+    ...                           effects=[{"name": "sensor_noise", "kind": "laplace", "snr_db": 0, "seed": 1}])
     >>> history = target.X[target.fault == 0][:30]                # healthy revolutions, no labels used
     >>> detector = gearlab.fit_detector("likelihood_ratio", source, history, false_alarm=0.05)
     >>> type(detector).__name__

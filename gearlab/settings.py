@@ -1,7 +1,7 @@
 """Settings declared once: a dataclass field carries its type, unit, bounds, default, --quick
 limit and doc, and everything else is derived from it — the scenario keys and their checks
 (gearlab.scenario.keys_of), the --quick shrinking (:func:`shrunk`), the checks of an inline
-table such as ``noise = {kind = "laplace", snr_db = 0}`` (:func:`from_inline`) and the
+table such as a dataset's noise ``{kind = "laplace", snr_db = 0, seed = 1}`` (:func:`from_inline`) and the
 reference tables of docs/settings.md (gearlab.settings_doc, through the scenario keys).
 
     @dataclass(frozen=True)

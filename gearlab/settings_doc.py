@@ -17,10 +17,9 @@ import json
 import sys
 from pathlib import Path
 
-from .data.spec import NoiseSpec
 from .files import atomic_write
 from .kinds import SCENARIO_KINDS
-from .scenario import EXECUTION_TABLE, OUTPUT_TABLE, SCENARIO_TABLE, Key, Table, keys_of
+from .scenario import EXECUTION_TABLE, OUTPUT_TABLE, SCENARIO_TABLE, Key, Table
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "settings.md"
 
@@ -89,13 +88,11 @@ def _title(name: str, table: Table) -> str:
 
 
 def tables() -> list[tuple[str, list[tuple[str, Table]]]]:
-    """(section, [(table name, Table)]) in the page's order: the tables every kind has, the inline
-    noise table, then each kind's own."""
+    """(section, [(table name, Table)]) in the page's order: the tables every kind has, then each
+    kind's own."""
     common = [("scenario", SCENARIO_TABLE), ("output", OUTPUT_TABLE), ("execution", EXECUTION_TABLE)]
-    noise = [("noise", Table(keys_of(NoiseSpec)))]
     return [
         ("Every kind", common),
-        ("Inline `noise = {...}` of a dataset table", noise),
         *((f'kind = "{kind}"', list(module.TABLES.items())) for kind, module in SCENARIO_KINDS.items()),
     ]
 
@@ -109,7 +106,7 @@ def reference() -> str:
         kind = section.split('"')[1] if section.startswith("kind") else ""
         for name, table in entries:
             rows = {key: row(key, spec) for key, spec in table.keys.items()}
-            title = _title(name, table) if name != "noise" else ""
+            title = _title(name, table)
             base, shared = None, 0
             for label, earlier in written:
                 same = sum(1 for k, r in rows.items() if earlier.get(k) == r)
@@ -123,8 +120,8 @@ def reference() -> str:
                 tail = ", and these (other or new):\n\n" + _HEAD + "\n" + "\n".join(new) + "\n" if new else ".\n"
                 out.append(f"{title}\n{said}{tail}")
             else:  # a heading may run straight into its table
-                out.append((f"{title}\n" if title else "") + _HEAD + "\n" + "\n".join(rows.values()) + "\n")
-            shown = "noise = {...}" if name == "noise" else f"[[{name}]]" if table.array else f"[{name}]"
+                out.append(f"{title}\n" + _HEAD + "\n" + "\n".join(rows.values()) + "\n")
+            shown = f"[[{name}]]" if table.array else f"[{name}]"
             written.append((f"`{shown}` ({kind})" if kind else f"`{shown}`", rows))
     return "\n".join(out)
 

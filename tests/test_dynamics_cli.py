@@ -276,14 +276,20 @@ SCENARIO = '[scenario]\nname = "d"\nkind = "dataset"\n\n[[datasets]]\n'
     [
         ('preset = "B-6-ch4"\n', "unknown dataset preset 'B-6-ch4' (did you mean 'B-6-ch5'?)"),
         ('preset = "B-6-ch5"\nhealty = 3\n', "key 'healty': unknown key (did you mean 'healthy'?)"),
-        ('preset = "B-6-ch5"\nnoise = { kind = "laplace" }\n', "key 'noise': expected {kind ="),
-        ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = "loud" }\n', "snr_db must be a finite number of dB"),
         (
-            'preset = "B-6-ch5"\nnoise = { kind = "gaussain", snr_db = 0 }\n',
-            "unknown noise kind 'gaussain' (did you mean 'gaussian'?)",
+            'preset = "B-6-ch5"\nnoise = { kind = "laplace" }\n',
+            "key 'noise': a recording's noise is an effect: effects = [{ name = \"sensor_noise\"",
         ),
-        ('preset = "B-6-ch5"\nnoise = { kind = "laplace", snr_db = 0, colour = "pink" }\n', "unknown key(s) colour"),
-        ('preset = "B-6-ch5"\nnoise = "laplace"\n', "key 'noise': expected a table"),
+        (
+            'preset = "B-6-ch5"\neffects = [{ name = "sensor_noise", snr_db = "loud", seed = 1 }]\n',
+            "parameter 'snr_db'",
+        ),
+        (
+            'preset = "B-6-ch5"\neffects = [{ name = "sensor_noise", kind = "gaussain", seed = 1 }]\n',
+            "'gaussain' is not one of gaussian, laplace, student_t (did you mean 'gaussian'?)",
+        ),
+        ('preset = "B-6-ch5"\neffects = [{ name = "sensor_noise", seed = 1, colour = "pink" }]\n', "colour"),
+        ('preset = "B-6-ch5"\neffects = "laplace"\n', "key 'effects': expected a list"),
         ('preset = "B-6-ch5"\nfaults = { crack = [21] }\n', "step 21 is outside 1..20"),
         ('preset = "B-6-ch5"\nfaults = { crack = "top" }\n', "'crack' must map to a list of ladder steps"),
         ('preset = "B-6-ch5"\ntsa = true\n', "TSA needs revolutions >= 2"),

@@ -144,7 +144,7 @@ def real_scenarios() -> dict[str, dict]:
             "revolutions": 4,
             "speed": "25 Hz",
             "faults": {"crack": [5, 10], "pit": [20]},
-            "noise": {"snr_db": 3, "seed": 1},
+            "effects": [{"name": "sensor_noise", "snr_db": 3, "seed": 1}],
         },
         "protocol": {"runs": 2, "batch": 8, "epochs": 3},
     }
@@ -557,7 +557,7 @@ def test_inputs_found_by_fuzzing_are_refused_clearly(scenario_file, case):
 
 def test_an_snr_beyond_any_float_is_refused(scenario_file):
     doc = copy.deepcopy(REAL["dataset_B.toml"])
-    doc["datasets"][3]["noise"]["snr_db"] = 10**400
+    doc["datasets"][3]["effects"][0]["snr_db"] = 10**400
     scenario_file.write_bytes(toml_bytes(doc))
     with pytest.raises(GearlabInputError, match="snr_db"):
         load_scenario(scenario_file)

@@ -335,8 +335,8 @@ def test_partial_run_tables_and_charts(finished, tiny):
             'candidates = ["sensor_noise", 3]',
             "[diagnosis] key 'candidates'",
         ),
-        ("healthy = 14\nnoise", "healthy = 0\nnoise", "[target] key 'healthy'"),
-        ("healthy = 14\nnoise", "healthy = 5\nnoise", "[target] key 'healthy'"),
+        ("healthy = 14\neffects", "healthy = 0\neffects", "[target] key 'healthy'"),
+        ("healthy = 14\neffects", "healthy = 5\neffects", "[target] key 'healthy'"),
         ("budget = 2", "budget = 0", "[diagnosis] key 'budget'"),
         ("target_train = 10", "target_train = 6", "[accuracy] key 'target_train'"),  # a history too short
         ("healthy = 10\nbootstrap", "healthy = 3\nbootstrap", "[diagnosis] key 'healthy'"),
@@ -344,16 +344,16 @@ def test_partial_run_tables_and_charts(finished, tiny):
         ('methods = ["mmd", "matched_filter"]', 'methods = ["mdd"]', "[accuracy] key 'methods'"),
         ('methods = ["mmd", "matched_filter"]', 'methods = ["finetune"]', "[accuracy] key 'methods'"),
         (
-            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
-            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }\nfs = "2 kHz"',
+            'effects = [{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }]',
+            'effects = [{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }]\nfs = "2 kHz"',
             "[target] key 'fs'",
         ),
         ('preset = "B-8-ch5"', 'preset = "A-casing-ch5"\nchannel = "casing_x"', "[target] key 'preset'"),
-        ("healthy = 14\nnoise", 'healthy = 14\neffects = [{name = "sensor_noise", snr_db = 500}]\nnoise', "[target]"),
+        ("snr_db = 0.0, seed = 1 }]", "snr_db = 500, seed = 1 }]", "[target] key 'effects' #1 (sensor_noise)"),
         # a measured file names its channel as text: an index (a records' column) is refused with the fix
         (
             'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 14\n'
-            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'effects = [{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }]',
             'file = "rec.wav"\nvibration = 0\nspeed = "40 Hz"',
             "[target] key 'vibration'",
         ),
@@ -382,7 +382,7 @@ def test_measured_target_with_too_few_revolutions_leaves_no_run(tiny, cli, calls
     tiny.write_text(
         TINY.replace(
             'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 14\n'
-            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'effects = [{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }]',
             'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"',
         )
     )
@@ -405,7 +405,7 @@ def test_a_measured_target_goes_with_its_chain_and_its_units(tiny, cli, calls, u
     tiny.write_text(
         TINY.replace(
             'preset = "B-8-ch5"\nteeth = [1, 2, 3]\nfaults = { crack = [13] }\nhealthy = 14\n'
-            'noise = { kind = "laplace", snr_db = 0.0, seed = 1 }',
+            'effects = [{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }]',
             'file = "rec.npz"\nvibration = "acc"\nspeed = "40 Hz"\ntransient = "none"\n' + units,
         ).replace("[accuracy]\n", "[accuracy]\nenabled = false\n")
     )

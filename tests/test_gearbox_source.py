@@ -167,7 +167,7 @@ def test_a_user_gearbox_runs_a_dataset_and_a_gap_diagnosis(cli, tmp_path, monkey
         '[scenario]\nname = "own_gap"\nkind = "gap"\n'
         '[source]\ngearbox = "rig20.toml"\nfaults = {}\nhealthy = 24\n'
         '[target]\ngearbox = "rig20.toml"\nfaults = {}\nhealthy = 24\n'
-        'noise = { kind = "gaussian", snr_db = 20, seed = 3 }\n'
+        'effects = [{ name = "sensor_noise", kind = "gaussian", snr_db = 20, seed = 3 }]\n'
         '[diagnosis]\ncandidates = ["sensor_noise"]\nbudget = 4\nhealthy = 24\nbootstrap = 50\npermutations = 50\n'
         "[accuracy]\nenabled = false\n"
     )

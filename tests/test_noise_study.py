@@ -446,8 +446,8 @@ def test_the_hybrid_scenario_is_the_same_study_with_the_simulator_s_shapes():
         (tiny().replace("runs = 2", "runs = 0"), "[protocol] key 'runs'", "outside"),
         (tiny().replace("runs = 2", "runs = 2\nstart = 'fault'"), "[protocol] key 'start'", "did you mean 'faults'"),
         (
-            tiny().replace("teeth = [1, 2]", "teeth = [1, 2]\nnoise = { kind = 'laplace', snr_db = 0 }"),
-            "[dataset] key 'noise'",
+            tiny().replace("teeth = [1, 2]", "teeth = [1, 2]\neffects = [{ name = 'sensor_noise', kind = 'laplace' }]"),
+            "[dataset] key 'effects'",
             "the noise kind comes from [study]",
         ),
         (

@@ -1,8 +1,8 @@
 """The one realisation of simulated revolutions (gearlab.data.realise): signal effects in the chain's
 order, then the dataset's noise after every one of them, then the TSA; seeds that depend on the row
 alone (not on the worker or chunk); and the builder and a simulated record realised by it with the
-documented seeds. Also why a dataset's ``noise = {}`` and the ``sensor_noise`` effect are two
-declarations: the same noise, at another place and from other seeds."""
+documented seeds. Also why a ``sensor_noise`` with a seed (the dataset's noise) and one without are
+kept apart: the same noise, at another place and from other seeds."""
 
 from __future__ import annotations
 
@@ -133,9 +133,9 @@ def test_parts_split_the_signal_effects_in_their_order():
 
 
 def test_the_datasets_noise_and_sensor_noise_are_the_same_noise_from_other_seeds():
-    """``noise = {gaussian, 6 dB}`` and a lone ``sensor_noise`` (gaussian, 6 dB) put noise of exactly
-    the same SNR on every revolution (one add_noise), but from other generators: the declarations
-    are kept apart (docs/settings.md, the dataset keys) so that every noisy dataset keeps its draws."""
+    """A ``sensor_noise`` (gaussian, 6 dB) with a seed (the dataset's noise) and one without put noise of
+    exactly the same SNR on every revolution (one add_noise), but from other generators: the two are
+    kept apart (kinds.common.effects_and_noise) so that every noisy dataset keeps its draws."""
     base = dataset_preset("B-6-ch5").with_(faults=(), healthy=3, seed=1)
     clean = build_dataset(base)
     declared = build_dataset(base.with_(noise=NoiseSpec("gaussian", 6.0, 0)))

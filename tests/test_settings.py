@@ -42,7 +42,9 @@ def test_the_reference_has_every_table_of_every_kind(tmp_path):
     # a declared setting brings its bounds, unit and --quick limit
     assert "| `budget` | int | 16 |  | [1, 10000] | ≤ 4 | source simulations per effect fit" in text
     assert "| `speed` | number or str |  | Hz |  |  | input-shaft speed" in text
-    assert "| `snr_db` | float | required | dB |" in text
+    assert "| `load` | number or str |  | N*m |" in text
+    # the one noise declaration: the sensor_noise in `effects`, no `noise` key in any table
+    assert "{name = 'sensor_noise', kind = 'laplace', snr_db = 0, seed = 1}" in text and "| `noise` |" not in text
     # a stale page is found, and the generator rewrites it
     stale = tmp_path / "settings.md"
     stale.write_text(text.replace("≤ 4", "≤ 5"))

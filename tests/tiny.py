@@ -22,7 +22,7 @@ preset = "B-8-ch5"
 teeth = [1, 2, 3]
 faults = {{ crack = [13] }}
 healthy = {healthy}
-noise = {{ kind = "laplace", snr_db = 0.0, seed = 1 }}
+effects = [{{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }}]
 """
 
 # The training keys of a tiny protocol ([protocol] of a transfer scenario, [accuracy] of a gap one).

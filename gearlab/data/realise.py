@@ -7,7 +7,7 @@ and a simulated record (gearlab.data.simulated) alike.
     domain (fs = POINTS x speed) or a record's samples in time (fs = its rate)
       ─► the signal-level effects, in the chain's order (by level, then as given: a sensor_noise
          listed before a sensor_lowpass is filtered by it), each from its own generator
-      ─► the dataset's noise (a scenario's ``noise = {kind, snr_db, seed}``), every row at the SNR
+      ─► the dataset's noise (a scenario's ``sensor_noise`` with a ``seed``), every row at the SNR
          of its own RMS (eq. 4.1-4.5), after every effect
       ─► the TSA of the J rows (eq. 4.7), when asked
 
@@ -36,10 +36,11 @@ a row is made in. The callers' schemes, kept as they were (every figure made bef
   the noise effects from [t, EFFECT_STREAM], the dataset's noise from [t, 5];
 * a simulated record, seed s: the effects from [s, 1], the noise from [s, 2].
 
-The dataset's noise and the ``sensor_noise`` effect add the same noise (gearlab.signals.add_noise);
-they differ in where they act and what seeds them: the dataset's noise last, after every effect,
-from its own seed (what chapter 4's noise study sweeps and the Bayes bound assumes); the effect at
-its place among the signal effects, from the effects' streams (what the gap diagnosis fits).
+A scenario declares a recording's noise one way, the ``sensor_noise`` effect, and it adds one noise
+(gearlab.signals.add_noise). With a ``seed`` it is the dataset's noise (a NoiseSpec): last, after
+every effect, from its own seed (what chapter 4's noise study sweeps and the Bayes bound assumes);
+without one it stays an effect, at its place among the signal effects, from the effects' streams
+(what the gap diagnosis fits). The two are kept apart so that every dataset keeps its draws.
 """
 
 from __future__ import annotations

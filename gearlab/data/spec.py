@@ -29,8 +29,9 @@ FAULTS = ("crack", "chip", "spall", "pit")
 
 @dataclass(frozen=True)
 class NoiseSpec:
-    """A dataset's measurement noise: a scenario's ``noise = {kind = "laplace", snr_db = 0, seed = 1}``
-    (read by gearlab.settings.from_inline; the kind is checked by DatasetSpec.check)."""
+    """A dataset's measurement noise, drawn from its own seed after every effect: what a scenario's
+    ``effects = [{name = "sensor_noise", kind = "laplace", snr_db = 0, seed = 1}]`` declares (a
+    sensor_noise with a seed; gearlab.kinds.common.effects_and_noise, checked by settings.from_inline)."""
 
     kind: str = setting(str, choices=NOISE_KINDS, doc="noise distribution (thesis 4.1)")
     snr_db: float = setting(

@@ -6,6 +6,7 @@ protocol. The kind contract itself is gearlab.kinds.contract.ScenarioKind."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -237,25 +238,26 @@ class DatasetEntry:
     duplicates: int | None = setting(int, None, low=1, doc="samples per fault, ladder step and tooth")
     healthy: int | None = setting(int, None, low=0, doc="healthy samples")
     revolutions: int | None = setting(int, None, low=1, doc="J noisy revolutions per sample (TSA averages them)")
-    noise: dict | None = setting(
-        dict,
-        None,
-        doc="the dataset's noise {kind = 'laplace', snr_db = 0, seed = 0}, added after every effect from its "
-        "own seed; an empty table removes it. The sensor_noise effect adds the same noise at its place among "
-        "the effects (a later sensor_lowpass filters it), from the effects' seeds: what a gap diagnosis fits",
-    )
     tsa: bool | None = setting(bool, None, doc="a sample is the synchronous average of its J revolutions")
     seed: int | None = setting(int, None, low=0, high=2**32 - 1, doc="seeds the dataset's noise and effect draws")
     fs: float | str | None = measured("fs")
     effects: list | None = setting(
         list,
         None,
-        doc="unmodelled effects, e.g. [{name = 'sensor_noise', kind = 'laplace', "
-        "snr_db = 0}, {name = 'drive_inertias'}] (gearlab plugins lists them)",
+        doc="unmodelled effects, the recording's noise among them, e.g. [{name = 'drive_inertias'}, "
+        "{name = 'sensor_noise', kind = 'laplace', snr_db = 0, seed = 1}] (gearlab plugins lists them); "
+        "they replace the preset's, its noise too. A sensor_noise with a seed is drawn from that seed "
+        "after every other effect (list it last); without one, at its place from the effects' streams",
     )
 
 
-DATASET_TABLE = Table(keys_of(DatasetEntry), array=True, required=True)
+# The one declaration of a recording's noise is this effect; a table's older noise key says so
+NOISE_EFFECT = "sensor_noise"
+NOISE_MOVED = {
+    "noise": 'a recording\'s noise is an effect: effects = [{ name = "sensor_noise", kind = "laplace", '
+    "snr_db = 0.0, seed = 1 }] (with a seed it is drawn from it after every other effect; docs/scenarios.md)"
+}
+DATASET_TABLE = Table(keys_of(DatasetEntry), array=True, required=True, moved=NOISE_MOVED)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -332,10 +334,8 @@ def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredS
     for key in ("duplicates", "healthy", "revolutions", "tsa", "seed"):
         if entry[key] is not None:
             changes[key] = entry[key]
-    if entry["noise"] is not None:
-        changes["noise"] = noise_spec(entry["noise"], f"{where} key 'noise'")
     if entry.get("effects") is not None:
-        changes["effects"] = effects_from_tables(entry["effects"], f"{where} key 'effects'")
+        changes["effects"], changes["noise"] = effects_and_noise(entry["effects"], f"{where} key 'effects'")
     spec = spec.with_(**changes)
     spec.check(where)
     spec.check_model(where)  # model, preset, channel, faults and teeth: refused before any work
@@ -537,6 +537,37 @@ def units_of(entry: dict, where: str) -> dict:
     out = {"unit": entry["unit"]} if entry.get("unit") else {}
     given = calibration({k: entry.get(k) for k in CALIBRATION}, lambda k: f"{where} key '{k}'")
     return out | {k: v for k, v in given.items() if v is not None}
+
+
+def effects_and_noise(entries, where: str) -> tuple[tuple, NoiseSpec | None]:
+    """A dataset's ``effects`` list: its effects (canonical, gearlab.effects), and the dataset's noise
+    a ``sensor_noise`` with a ``seed`` declares (None without one). Such a noise is drawn from its own
+    seed after every other effect (data.realise), so it must be the last signal effect listed; a
+    ``sensor_noise`` without a seed stays an effect, drawn at its place from the effects' streams."""
+    given = list(entries) if isinstance(entries, list) else []
+    seeded = [
+        i for i, e in enumerate(given) if isinstance(e, Mapping) and e.get("name") == NOISE_EFFECT and "seed" in e
+    ]
+    plain = [{k: v for k, v in e.items() if k != "seed"} if i in seeded else e for i, e in enumerate(given)]
+    effects = effects_from_tables(plain if isinstance(entries, list) else entries, where)
+    if not seeded:
+        return effects, None
+    here = f"{where} #{seeded[-1] + 1} ({NOISE_EFFECT})"
+    if len(seeded) > 1:
+        raise GearlabInputError(
+            f"{here}: one sensor_noise has a seed (the dataset's noise, after every effect); "
+            f"#{seeded[0] + 1} has one already (without a seed it is drawn at its place)"
+        )
+    registry = get_registry()
+    later = [e["name"] for e in plain[seeded[0] + 1 :] if registry.get("effect", e["name"]).level == "signal"]
+    if later:
+        raise GearlabInputError(
+            f"{here}: with a seed the noise is drawn after every other effect; list it after '{later[0]}' "
+            "(or give it no seed: it then acts at its place, from the effects' streams)"
+        )
+    params = dict(effects[-1][1])  # the last signal effect in the chain's order (effects_from_tables)
+    noise = noise_spec({"kind": params["kind"], "snr_db": params["snr_db"], "seed": given[seeded[0]]["seed"]}, here)
+    return effects[:-1], noise
 
 
 def noise_spec(table: dict, where: str, defaults: NoiseSpec | None = None) -> NoiseSpec | None:

@@ -148,7 +148,7 @@ from .detection_units import (
 from .detection_which_gear import gearbox_of, store_localisation
 
 TABLES = {
-    "source": Table(DATASET_TABLE.keys, required=True),
+    "source": Table(DATASET_TABLE.keys, required=True, moved=DATASET_TABLE.moved),
     "corrected": Table(keys_of(Corrected)),
     "target": Table(keys_of(TargetRecords), required=True),
     "network": NETWORK,

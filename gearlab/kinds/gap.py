@@ -75,7 +75,7 @@ from .gap_inputs import (
 from .gap_tables import accuracy_md, evaluations_text, params_text, percent, ranking_md, tables_md, views_md
 from .gap_verdict import gap_lines
 
-_DATASET = Table(DATASET_TABLE.keys, required=True)
+_DATASET = Table(DATASET_TABLE.keys, required=True, moved=DATASET_TABLE.moved)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -97,7 +97,7 @@ class Accuracy:
 UNCORRECTED, CORRECTED = "uncorrected", "corrected"
 TABLES = {
     "source": _DATASET,
-    "target": Table(keys_of(TargetEntry), required=True),
+    "target": Table(keys_of(TargetEntry), required=True, moved=DATASET_TABLE.moved),
     # declared once, on gearlab.gap.scoring.Settings: keys, checks, --quick limits and docs
     "diagnosis": Table(keys_of(Settings)),
     "accuracy": Table({**keys_of(Accuracy), **TRAINING}),

@@ -3,7 +3,7 @@
     [study]      noises: which noise types; each gives a noisy and a TSA dataset
                  (presets A-casing_noise-<noise> and A-casing_TSA-<noise>, Table 4.1)
     [dataset]    overrides applied to both presets alike (teeth, duplicates, healthy,
-                 revolutions, faults, noise = {snr_db, seed}, ...)
+                 revolutions, faults, effects = [{name = "sensor_noise", snr_db, seed}], ...)
     [network]    name (fast | cnn3), dropout
     [protocol]   runs, test_fraction, val_fraction, batch, lr, epochs, patience, seed
 
@@ -46,6 +46,7 @@ from ..settings import setting
 from ..signals import NOISE_KINDS
 from .common import (
     DATASET_TABLE,
+    NOISE_EFFECT,
     DatasetEntry,
     class_sizes,
     dataset_spec,
@@ -88,12 +89,18 @@ class Study:
 class StudyDataset(DatasetEntry):
     """[dataset]: the keys of _OVERRIDES and the noise's level (its kind is what the study varies)."""
 
-    noise: dict | None = setting(dict, None, doc="{snr_db = 0, seed = 0}; the kind comes from [study] noises")
+    effects: list | None = setting(
+        list, None, doc="[{name = 'sensor_noise', snr_db = 0, seed = 0}]: the noise; its kind comes from [study] noises"
+    )
 
 
+STUDY_NOISE = f'effects = [{{ name = "{NOISE_EFFECT}", snr_db = 0.0, seed = 0 }}]'
 TABLES = {
     "study": Table(keys_of(Study)),
-    "dataset": Table(keys_of(StudyDataset, (*_OVERRIDES, "noise"))),
+    "dataset": Table(
+        keys_of(StudyDataset, (*_OVERRIDES, "effects")),
+        moved={"noise": f"the study's noise is an effect: {STUDY_NOISE} (its kind comes from [study] noises)"},
+    ),
     "network": Table(keys_of(NetworkSettings, name=NoiseProtocol.network, dropout=NoiseProtocol.dropout)),
     "protocol": Table(keys_of(NoiseProtocol)),
 }
@@ -160,13 +167,17 @@ def _dataset(scenario: Scenario, noise: str, variant: str) -> DatasetSpec:
     overrides = scenario.tables["dataset"]
     where = location(scenario.path, "dataset")
     name = preset_name(noise, variant)
-    user_noise = overrides["noise"] or {}
-    if "kind" in user_noise:
+    here, tables = f"{where} key 'effects'", overrides["effects"]
+    one = isinstance(tables, list) and len(tables) == 1 and isinstance(tables[0], dict)
+    if tables is not None and not (one and tables[0].get("name") == NOISE_EFFECT):
         raise GearlabInputError(
-            f"{where} key 'noise': the noise kind comes from [study] key 'noises'; give only snr_db and seed"
+            f"{here}: a noise study's one effect is its noise, {STUDY_NOISE} (its kind comes from [study] noises)"
         )
+    user_noise = {k: v for k, v in (tables or [{}])[0].items() if k != "name"}
+    if "kind" in user_noise:
+        raise GearlabInputError(f"{here}: the noise kind comes from [study] key 'noises'; give only snr_db and seed")
     # the preset's noise (its kind is the study's), the snr_db and seed given changed
-    noise_of = noise_spec({"kind": noise, **user_noise}, f"{where} key 'noise'", dataset_preset(name).noise)
+    noise_of = noise_spec({"kind": noise, **user_noise}, f"{here} #1 ({NOISE_EFFECT})", dataset_preset(name).noise)
     entry = {k: key.default for k, key in DATASET_TABLE.keys.items()}
     entry.update({k: overrides[k] for k in _OVERRIDES})
     entry.update(preset=name)

@@ -54,7 +54,7 @@ class Shots:
     ks: list = setting(list, list(KS), doc="numbers of target fault samples in the target training set")
 
 
-_DATASET = Table(DATASET_TABLE.keys, required=True)
+_DATASET = Table(DATASET_TABLE.keys, required=True, moved=DATASET_TABLE.moved)
 TABLES = {
     "source": _DATASET,
     "target": _DATASET,

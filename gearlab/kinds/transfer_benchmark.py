@@ -113,7 +113,7 @@ class Correction:
 
 TABLES = {
     "benchmark": Table(keys_of(Benchmark)),
-    "source": Table(SOURCE_KEYS),  # common.SourceEntry
+    "source": Table(SOURCE_KEYS, moved=DATASET_TABLE.moved),  # common.SourceEntry
     "network": NETWORK,
     "methods": Table(keys_of(UnsupervisedMethod), array=True, required=True),
     "protocol": Table({**keys_of(Protocol, ("repetitions",)), **TRAINING, **CALIBRATION, **keys_of(Correction)}),

@@ -9,10 +9,12 @@ Each revolution of the record is scaled to its own RMS, exactly as gearlab.signa
 does for the thesis's datasets, so TSA over the J revolutions averages it down.
 
 Bounds. SNR from -20 dB (noise ten times the signal RMS: beyond the 0 dB stress test of
-chapter 4) to 80 dB (noise 1e-4 of the signal: a laboratory sensor, practically clean), the
-bounds of a dataset's ``noise = {kind, snr_db, seed}`` too (gearlab.signals.SNR_DB_RANGE): the
-effect is that noise at its place among the signal effects, drawn from the effects' streams.
-Default 10 dB: a usable industrial measurement, milder than the thesis's 0 dB.
+chapter 4) to 80 dB (noise 1e-4 of the signal: a laboratory sensor, practically clean)
+(gearlab.signals.SNR_DB_RANGE). Default 10 dB: a usable industrial measurement, milder than the
+thesis's 0 dB. The one way a scenario declares a recording's noise: in a dataset table's
+``effects`` with a ``seed``, it is the dataset's noise, drawn from that seed after every other
+effect (gearlab.kinds.common.effects_and_noise); without one, at its place among the signal
+effects, drawn from the effects' streams (what a gap diagnosis fits).
 """
 
 from gearlab.api import NOISE_KINDS, SNR_DB_RANGE, Effect, Param, add_noise, hookimpl

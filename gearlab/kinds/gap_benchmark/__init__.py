@@ -33,7 +33,7 @@ from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Scenario, Table, keys_of, location
 from ...settings import quick_limits, setting, typed
-from ..common import SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title
+from ..common import NOISE_MOVED, SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title
 from . import trials as bench
 
 MAX_TRIALS = 10000
@@ -74,7 +74,7 @@ class Benchmark:
 
 TABLES = {
     "benchmark": Table(keys_of(Benchmark)),
-    "source": Table(SOURCE_KEYS),
+    "source": Table(SOURCE_KEYS, moved=NOISE_MOVED),
     # the diagnosis's own settings, declared once on gearlab.gap.scoring.Settings
     "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
 }
@@ -112,7 +112,7 @@ def build(scenario: Scenario) -> Spec:
         raise GearlabInputError(f"{where}: needs at least 2 effects (pairs and withheld trials), got {len(library)}")
     entry = asdict(typed(SourceEntry, t["source"]))
     source = dataset_spec(entry, location(path, "source"), path.parent)
-    noise = source.noise if "noise" in scenario.raw.get("source", {}) else bench.BASE_NOISE
+    noise = source.noise if "effects" in scenario.raw.get("source", {}) else bench.BASE_NOISE  # its own, or none
     source = source.with_(faults=(), healthy=t["search"]["healthy"], noise=noise)
     source.check(location(path, "source"))
     library = tuple(library)
