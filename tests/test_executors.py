@@ -32,16 +32,24 @@ def square(x: int) -> int:
     return x * x
 
 
+def waited_for(path: Path, pattern: str) -> bool:
+    """Whether a file matching *pattern* came into *path* within a minute (a hung test's bound)."""
+    deadline = time.monotonic() + 60.0
+    while not any(path.glob(pattern)):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
 def first_is_slow(marks: Path | None, x: int) -> int:
     """Item 0 finishes after another one: on_done sees the finishing order, the results keep the input
-    order. With *marks* (two workers or more) item 0 waits for another item's mark, not for a fixed time
-    that a loaded machine's second worker may not start within (one minute at most)."""
+    order. With *marks* (two workers or more) item 0 runs until the caller's on_done has heard of
+    another item (it marks that in *marks*), not for a fixed time that a loaded machine's second
+    worker may not start within, nor until another item merely started (its result may come after
+    item 0's). A minute at most."""
     if x == 0 and marks is not None:
-        deadline = time.monotonic() + 60.0
-        while not any(marks.iterdir()) and time.monotonic() < deadline:
-            time.sleep(0.01)
-    elif marks is not None:
-        (marks / str(x)).touch()
+        waited_for(marks, "heard-*")
     return x * x
 
 
@@ -92,7 +100,12 @@ def executor(request):
 def test_results_keep_the_input_order_and_every_item_is_reported_once(executor, tmp_path):
     seen = []
     marks = tmp_path if executor.workers != 1 else None
-    results = executor.map(functools.partial(first_is_slow, marks), range(5), lambda i, r: seen.append((i, r)))
+
+    def heard(i: int, result: int) -> None:
+        seen.append((i, result))
+        (tmp_path / f"heard-{i}").touch()
+
+    results = executor.map(functools.partial(first_is_slow, marks), range(5), heard)
     assert results == [0, 1, 4, 9, 16]
     assert sorted(seen) == [(i, i * i) for i in range(5)]
     if executor.workers != 1:
@@ -674,16 +687,6 @@ def test_a_real_diagnosis_on_ray_counts_what_it_counts_serially(ray_session):
     with FarRay(workers=2) as executor:
         far = diagnose(source, target, settings, executor=executor)
     assert far["effects"] == serial["effects"] and far["evaluations"] == serial["evaluations"] > 20
-
-
-def waited_for(path: Path, pattern: str) -> bool:
-    """Whether a file matching *pattern* came into *path* within a minute (a hung test's bound)."""
-    deadline = time.monotonic() + 60.0
-    while not any(path.glob(pattern)):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
 
 
 def _mark_then_wait(task):
