@@ -539,14 +539,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             return rows[(c, k, v)]
 
         def left_out(c: str, v: str, m, k: int | None) -> tuple | None:
-            """A detector made on all the history (k None) of three or more records: the history rows without
-            each record in turn, for the detectors that score that record (detection_units.train_unit). A
-            detector is the history's own median and noise level, so a history record scores nearer it than
-            a new one (3-take development boxes: matched_filter let 6.9 % of a new take's record30 units
-            through at 1 % asked, 0.8 % scored without their own take). Not with two: each detector of one
-            take is another statistic (its path and scale fitted to that take); on the PHM 2009 rig
-            likelihood_ratio's false alarms at 40 Hz low rose 10 -> 100 %, matched_filter's detection fell
-            100 -> 0-17 %."""
+            """A detector made on all the history (k None) of LEFT_OUT records or more: the history rows
+            without each record in turn, on which the detector that scores that record is referenced
+            (its median and noise level: detectors.referenced_on, detection_units.train_unit). A
+            detector's reference is the history's median revolution, so a history record scores nearer
+            it than a new one. Not with two: each reference would be one take."""
             n = len(conditions[c]["history"])
             out = m.is_detector and k is None and n >= LEFT_OUT
             return tuple(history_rows(c, j, v) for j in range(n)) if out else None

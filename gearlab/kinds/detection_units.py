@@ -64,7 +64,7 @@ def train_unit(task: tuple) -> dict:
     """One method at one condition (one seed of it), in this process or a worker: trained on the
     source and the history's training revolutions, then its scores of the history units (for the
     threshold; a detector handed *left_out*, the history rows without each record in turn: each
-    record's units scored by the detector made without it) and, only now, of the test units. It
+    record's units scored by the detector referenced without it) and, only now, of the test units. It
     says what it does from its start: torch takes seconds to load in a fresh worker (issue 41)."""
     (
         protocol,
@@ -130,9 +130,11 @@ def train_unit(task: tuple) -> dict:
             return model, history
 
         model, history = made(train)
-        if left_out is not None:
-            progress("scoring each history record by the detector made without it")
-            others = [made(unshared(rows))[0] for rows in left_out]
+        if left_out is not None:  # the whole detector referenced on the history without each record in turn
+            from ..learn.detectors import referenced_on
+
+            others = [referenced_on(model, unshared(rows)) for rows in left_out]
+            left_out = None if any(m is None for m in others) else others  # a plugin's own: in-sample
     # what a network learned of the simulator, from training data only: its scores of the source's
     # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
     # healthy). A detector is built in the target's frame (the history's reference, the path to
@@ -142,13 +144,9 @@ def train_unit(task: tuple) -> dict:
     # the model is fixed: the history's units fix the thresholds, then the test units are scored
     if left_out is None:
         hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
-    else:  # each history record's units scored by the detector made without that record, its statistic
-        # less the full detector's threshold (as the test units' are), not less its own
-        def shifted(m, X_k: np.ndarray) -> np.ndarray:
-            return fault_score(m, X_k, device) + float(m.threshold) - float(model.threshold)
-
+    else:  # each history record's units scored by the detector referenced without it
         hist = {
-            u: np.concatenate([shifted(m, X_k) for m, X_k in zip(others, rule.groups(u, X))])
+            u: np.concatenate([fault_score(m, X_k, device) for m, X_k in zip(left_out, rule.groups(u, X))])
             for u, X in history_units.items()
         }
     fixed = rule.decide(hist)
