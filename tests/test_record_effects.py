@@ -119,3 +119,24 @@ def test_overlapping_windows_sum_of_squares_has_fewer_degrees_of_freedom():
     # the variance of one window's mean of independent revolutions is 1/block
     assert np.mean(ss) / overlap_dof(m, block, stride) == pytest.approx(1 / block, rel=0.05)
     assert np.mean(ss) / (m - 1) < 0.3 / block  # n − 1 would call it less than a third of that
+
+
+def test_a_size_whose_take_effect_is_a_factor_is_modelled_on_the_log_scale():
+    """Issue 39: NA4's take effect is a factor (a take's gain and noise level multiply it), so its spread
+    over takes is skewed. Histories of 8 takes of a size exp(a + e) (take effect twice the unit spread):
+    the model on the raw scale let 5.2 % of a new take's units through where 1 % was asked, on
+    log(score - floor) 1.3 %. Two takes keep the raw scale (the figures of before)."""
+    rng = np.random.default_rng(5)
+    raw, logged = [], []
+    for _ in range(1000):
+        history = [np.exp(x) for x in records(rng, 8, 40, record_sd=1.0, unit_sd=0.5, mean=0.0)]
+        new = np.exp(records(rng, 1, 40, record_sd=1.0, unit_sd=0.5, mean=0.0)[0])
+        raw.append(np.mean(new > fit(history, 0.99).threshold))
+        logged.append(np.mean(new > fit(history, 0.99, floor=0.0).threshold))
+    assert np.mean(raw) > 0.02, np.mean(raw)
+    assert 0.005 < np.mean(logged) < 0.015, np.mean(logged)
+    two = [np.exp(x) for x in records(rng, 2, 40, record_sd=1.0, unit_sd=0.5, mean=0.0)]
+    assert fit(two, 0.99, floor=0.0) == fit(two, 0.99)
+    m = fit([h + 3.0 for h in history], 0.99, floor=3.0)  # a floor other than 0: the same model, shifted
+    assert m.floor == 3.0 and m.threshold == pytest.approx(3.0 + fit(history, 0.99, floor=0.0).threshold)
+    assert m.standardised([m.threshold]) == pytest.approx([t.ppf(0.99, m.dof)])

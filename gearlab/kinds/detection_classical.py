@@ -122,7 +122,8 @@ def classical_record(name: str, condition: str, cond: dict, classical: Classical
         # above 0
         fixed = rule.decide({u: h[:, 0] for u, h in held.items()})
     else:
-        fixed = rule.decide(hist)  # fixed before any test unit is scored
+        # fixed before any test unit is scored; NA4 is a size (a take's gain and noise level multiply it)
+        fixed = rule.decide(hist, 0.0 if name == "na4" else None)
     extra = {}
     if name == "pinion_sync":
         fixed["thresholds"] = {u: max(t, 0.0) for u, t in fixed["thresholds"].items()}

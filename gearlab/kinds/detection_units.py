@@ -205,9 +205,10 @@ class Rule:
         scores = np.asarray(scores)
         return np.split(scores if scores.ndim > 1 else scores.astype(np.float64), np.cumsum(counts)[:-1])
 
-    def model(self, u: str, scores, keep=None) -> record_effects.RecordEffects:
+    def model(self, u: str, scores, keep=None, floor: float | None = None) -> record_effects.RecordEffects:
         """The random-effects model (record effect + within-record spread) of the history's *scores*
-        of unit kind *u*, over the records *keep* (default: all)."""
+        of unit kind *u*, over the records *keep* (default: all); *floor*: the scores are sizes above it
+        (record_effects.fit)."""
         groups = self.groups(u, scores)
         keep = range(len(groups)) if keep is None else keep
         return record_effects.fit(
@@ -215,16 +216,18 @@ class Rule:
             1.0 - self.false_alarm,
             [self.records[u][i][1] for i in keep],
             [record_effects.overlap_dof(self.records[u][i][0], *unit_window(u)) for i in keep],
+            floor,
         )
 
-    def models(self, history_scores: dict) -> dict[str, record_effects.RecordEffects]:
+    def models(self, history_scores: dict, floor: float | None = None) -> dict[str, record_effects.RecordEffects]:
         """{unit: the random-effects model of its scores}."""
-        return {u: self.model(u, s) for u, s in history_scores.items()}
+        return {u: self.model(u, s, floor=floor) for u, s in history_scores.items()}
 
-    def decide(self, history_scores: dict) -> dict:
+    def decide(self, history_scores: dict, floor: float | None = None) -> dict:
         """The record's "thresholds" (by this rule), the history models and both rules' thresholds
-        (so a run shows what the other rule would have called)."""
-        models = self.models(history_scores)
+        (so a run shows what the other rule would have called); *floor*: the scores are sizes above it
+        (NA4), modelled on the log scale (record_effects.fit)."""
+        models = self.models(history_scores, floor)
         by_rule = {
             "records": {u: m.threshold for u, m in models.items()},
             # the 1 - false_alarm quantile of the Gumbel law fitted by its quartiles to the pooled
