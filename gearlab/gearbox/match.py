@@ -43,9 +43,11 @@ def comb(
 
     Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
     (j = 1, 2, 3, within ±30 % of the described o, and nearer o than the stage's other shaft's
-    order *rival*: that spacing is the other shaft's evidence; nor 2, 3, 1/2 or 1/3 rival off o: the
+    order *rival*: that spacing is the other shaft's evidence; nor 2-6, 1/2 or 1/3 rival off o: the
     comb of the one seen in the other's every 2nd or 3rd line, as a train of three shows from its
-    meshes' tones with the stages on both shafts of its middle one) is scored by the amplitudes of
+    meshes' tones with the stages on both shafts of its middle one, or a harmonic of the other's: a cracked
+    tooth on a 14/53 wheel's shaft rings its 4th, 1.057, read as the input's: '13.2 teeth, 14 described')
+    is scored by the amplitudes of
     the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
     least-squares fit through its lines, so a 57- and a 58-tooth wheel are told apart once
     0.5 bin / 3 < o / 57 (sidebands 16 bins apart or more; else 2 bins)."""
@@ -54,7 +56,7 @@ def comb(
     near = np.array([q for q in near if q not in exclude], dtype=int)
     if near.size == 0:
         return None
-    d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 1 / 2, 1 / 3)
+    d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 4, 5, 6, 1 / 2, 1 / 3)
 
     def allowed(c: float) -> bool:
         # within 1 % of n x rival, or of the comb's own resolution where finer: a 54/107 stage's input comb
