@@ -40,8 +40,8 @@ revolutions (``record<b>``), of the shaft that carries the watched gear (the sou
 gear; detection_records.unit_shaft): the input shaft's, or a slower shaft's cut on its angle
 (the input's times its turns per input turn), for the history, test and source alike. The
 threshold of a method and unit is fixed on the method's scores of the history's units of that
-kind (record-level history units: TSAs of sliding windows; a detector's, of three or more history
-records, each record's by the detector made without it), for a unit of a *new* record:
+kind (record-level history units: TSAs of sliding windows; of three or more history records, each
+record's against the reference made without it, a detector's or a classical indicator's), for a unit of a *new* record:
 ``threshold = "records"`` (default) the ``1 - false_alarm`` predictive quantile (Student-t) of a one-way
 random-effects model, record effect plus within-record spread (``record_effects``); ``"pooled"``
 the quantile of a Gumbel law fitted by its quartiles to the pooled units (blind to take-to-take
