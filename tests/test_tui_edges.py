@@ -547,9 +547,15 @@ def test_the_docs_finer_key_points_palette_escape_order_o_on_the_shown_run_and_q
     async def palette(pilot, command: str) -> None:
         await pilot.press("ctrl+p")
         await pilot.pause()
-        assert isinstance(pilot.app.screen, CommandPalette)
+        screen = pilot.app.screen
+        assert isinstance(screen, CommandPalette)
         await pilot.press(*command)
-        await pilot.pause(0.3)  # the palette searches in the background
+        await pilot.pause()
+        # the palette searches in the background: until its searches ended (not a pause hoped long enough)
+        for _ in range(6000):  # a minute at most
+            if not any(w.node is screen and not w.is_finished for w in pilot.app.workers):
+                break
+            await pilot.pause(0.01)
         await pilot.press("down", "enter")
         await pilot.pause()
 
