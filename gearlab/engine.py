@@ -19,7 +19,7 @@ from .events import PROGRESS, Event, EventSink, ignore_events, standing, telling
 from .executors import UnitLines
 from .files import cannot_write, write_problem
 from .kinds import SCENARIO_KINDS
-from .kinds.common import executor_for
+from .kinds.common import executor_for, stored_forms
 from .report import build_report
 from .runinfo import Session
 from .runs import RunDir, check_inputs
@@ -123,6 +123,8 @@ def load_scenario(
     source = path if isinstance(path, Confined) else Path(path)
     path = source.path if isinstance(source, Confined) else source
     data = read_toml(source)
+    if isinstance(source, Confined):  # a run's copy: made, perhaps, before a key moved
+        data = stored_forms(data)
     for table, values in (overrides or {}).items():
         if not isinstance(data.get(table, {}), dict):
             raise GearlabInputError(f"{location(path, table)}: expected a table, to set {', '.join(values)} in")
@@ -273,7 +275,7 @@ def _resumed_scenario(
     scenario = load_scenario(
         scenario_path or run.scenario_file(), overrides, base=None if scenario_path else run.base()
     )
-    if not run.started_with(scenario):
+    if not run.started_with(scenario, stored_forms):
         raise GearlabInputError(
             f"{scenario.path}: differs from the scenario the run in {run.path} was started "
             "with; resume without SCENARIO (the run keeps a copy) or start a new run"

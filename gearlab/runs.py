@@ -220,11 +220,12 @@ class RunDir:
     def scenario_path(self) -> Path:
         return self.scenario_file().path
 
-    def started_with(self, scenario: Scenario) -> bool:
+    def started_with(self, scenario: Scenario, stored_forms=lambda tables: tables) -> bool:
         """Whether *scenario* resolves to the tables this run was started with (a resume with
-        another would mix its units with those finished)."""
+        another would mix its units with those finished); *stored_forms*: the stored tables read
+        as the keys are now (kinds.common.stored_forms)."""
         # [execution] says where units run, not what they compute: a run may resume elsewhere
-        stored = tomllib.loads(self.file("scenario.toml").read_text())
+        stored = stored_forms(tomllib.loads(self.file("scenario.toml").read_text()))
         stored.pop("execution", None)
         given = {table: values for table, values in scenario.tables.items() if table != "execution"}
         return stored == tomllib.loads(tomli_w.dumps(_tomlable(given)))

@@ -428,7 +428,7 @@ def test_errors_never_quote_a_system_file_reached_through_a_link(tmp_path, cache
     "where,value,fact",
     [
         (("protocol", "max_epochs"), 10**20, "key 'max_epochs': 100000000000000000000 is outside [1, 100000]"),
-        (("target", "noise", "seed"), 10**30, "seed must be a whole number in [0, 4294967295]"),
+        (("target", "effects", 0, "seed"), 10**30, "seed must be a whole number in [0, 4294967295]"),
         (("source", "fs"), 1e300, "key 'fs': 1e+300 is outside (0 Hz, 10 MHz]"),
         (("source", "speed"), "1 MHz", "key 'speed': '1 MHz' is outside (0 Hz, 1 kHz]"),
     ],

@@ -6,6 +6,7 @@ declared it, one line naming the file, the table, the key and the form to use; t
 the datasets (and cache keys) the older one gave."""
 
 import dataclasses
+from pathlib import Path
 
 import pytest
 from conftest import ROOT
@@ -139,3 +140,32 @@ def test_the_noise_is_added_in_one_place():
                 callers.setdefault(call, []).append(str(path.relative_to(ROOT)))
     assert callers["add_noise("] == ["gearlab/data/realise.py", "plugins/effects/sensor_noise.py"]
     assert callers[".apply_signal("] == ["gearlab/data/realise.py", "gearlab/effects.py"]
+
+
+def test_a_run_made_with_the_older_key_is_read_and_resumed_as_it_was_made(cli, write_scenario, tmp_path):
+    """A run directory whose copies of the scenario hold `noise = {...}` (made before the one
+    declaration): read as the seeded sensor_noise (the same spec and cache key), resumed as started."""
+    import tomllib
+
+    import tomli_w
+
+    from gearlab.engine import scenario_of
+    from gearlab.runs import RunDir
+
+    text = '[scenario]\nname = "d"\nkind = "dataset"\n\n[[datasets]]\npreset = "B-8-ch5"\nteeth = [1]\n'
+    path = write_scenario(text + f"faults = {{ crack = [13] }}\nhealthy = 2\neffects = [{ONE}]\n")
+    code, out, err = cli("run", path, "--out", tmp_path / "runs")
+    assert code == 0, err
+    run = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
+    made = scenario_of(RunDir.open(run)).spec[0]
+    for name in ("scenario.original.toml", "scenario.toml"):  # as such a run wrote them
+        data = tomllib.loads((run / name).read_text())
+        entry = data["datasets"][0]
+        (seeded,) = entry.pop("effects")
+        entry["noise"] = {k: v for k, v in seeded.items() if k != "name"}
+        (run / name).write_text(tomli_w.dumps(data))
+    assert "noise" in (run / "scenario.toml").read_text()
+    read = scenario_of(RunDir.open(run)).spec[0]
+    assert read == made and read.noise == NoiseSpec("laplace", 0.0, 1) and read.key() == made.key()
+    code, out, err = cli("run", "--resume", run)
+    assert code == 0, err

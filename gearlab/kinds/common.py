@@ -539,6 +539,33 @@ def units_of(entry: dict, where: str) -> dict:
     return out | {k: v for k, v in given.items() if v is not None}
 
 
+def stored_forms(data: dict) -> dict:
+    """A run directory's copy of its scenario read as the tables are now: a dataset table's
+    ``noise = {kind, snr_db, seed}`` of a run made before the one noise declaration becomes the
+    sensor_noise with that seed (seed 0 where none was given), listed after the table's effects; an
+    empty one, ``effects = []`` where none were given. The same dataset spec, so the same cache key:
+    such a run is compared, shown and resumed as it was made."""
+    out = {}
+    for name, table in data.items():
+        entries = table if isinstance(table, list) else [table]
+        if all(isinstance(e, dict) for e in entries) and any(isinstance(e.get("noise"), dict) for e in entries):
+            entries = [_stored_noise(e) for e in entries]
+            table = entries if isinstance(table, list) else entries[0]
+        out[name] = table
+    return out
+
+
+def _stored_noise(entry: dict) -> dict:
+    if not isinstance(entry.get("noise"), dict):
+        return entry
+    out = {k: v for k, v in entry.items() if k != "noise"}
+    noise = entry["noise"]
+    effects = list(out.get("effects") or [])
+    if noise:
+        effects.append({"name": NOISE_EFFECT, **noise, "seed": noise.get("seed", 0)})
+    return out | {"effects": effects}
+
+
 def effects_and_noise(entries, where: str) -> tuple[tuple, NoiseSpec | None]:
     """A dataset's ``effects`` list: its effects (canonical, gearlab.effects), and the dataset's noise
     a ``sensor_noise`` with a ``seed`` declares (None without one). Such a noise is drawn from its own
