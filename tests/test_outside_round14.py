@@ -72,3 +72,26 @@ def test_a_harmonic_of_the_wheel_shaft_is_no_comb_of_the_input_shaft(tmp_path):
     report = inspect_record(str(tmp_path / "r.npz"), load_gearbox(tmp_path / "box.toml"), InspectOptions("acc"))
     assert report["matches"] is True, report["verdict"]
     assert "13.2" not in report["verdict"], report["verdict"]
+
+
+def test_a_gap_history_whose_speeds_the_mesh_lines_gave_points_to_the_tooth_counts(tmp_path, cli):
+    # C described with 15 teeth for 14, no tacho: each history take's speed, read off the wrong description's mesh
+    # lines, came out elsewhere (32.70, 32.66, 33.39 Hz for takes at 35 Hz), and the gap refused 'records at
+    # different speeds' only. Speeds the mesh lines gave also say a tooth count may differ (here two takes that do
+    # run at two speeds, 29.5 and 31.5 Hz: the refusal is the same, with the tooth counts as the other reading)
+    teeth = ((22, 69), (25, 74))
+    box = description(*(stage(a, b) for a, b in teeth), name="b", speed="30 Hz", load="30 N*m")
+    (tmp_path / "box.toml").write_text(box)
+    files = []
+    for k, f0 in enumerate((29.5, 31.5)):
+        x = _steps(teeth, f0, 20000.0, 3.0, (1.0, 1.0), ((1, 0.5), (1, 0.5)), step=0.0, seed=k)
+        np.savez(tmp_path / f"h{k}.npz", acc=x, fs=20000.0)
+        files.append(f'{{ file = "h{k}.npz", role = "history", label = "healthy" }}')
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\ngearbox = "box.toml"\n\n[target]\nvibration = "acc"\n'
+        f'unit = "m/s^2"\nfiles = [{", ".join(files)}]\n\n[diagnosis]\ncandidates = ["sensor_noise"]\n\n'
+        "[accuracy]\nenabled = false\n"
+    )
+    code, out, err = cli("run", tmp_path / "gap.toml", "--quick")
+    assert code == 2, out + err
+    assert "different speeds" in err and "a tooth count differs: gearlab inspect" in err, err

@@ -90,9 +90,16 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     low, high = min(speeds.values()), max(speeds.values())
     if high > low * (1 + SPEED_SPREAD):
         shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
+        mesh = all("mesh lines" in how for how in found.values())  # no tacho: the speeds the description's lines show
         raise GearlabInputError(
             f"{records.where} key 'files': the history records run at different speeds ({shown}); "
             "the gap is diagnosed for one operating condition: give one speed's records"
+            + (
+                f" (or, read off the description's mesh lines, a tooth count differs: gearlab inspect "
+                f"{next(iter(speeds))} --gearbox ... says what)"
+                if mesh
+                else ""
+            )
         )
     skipped = len(t.files) - len(files)
     if skipped:
