@@ -108,7 +108,8 @@ def channel_scale(
     if integer and sensitivity is not None and gain is None:
         raise GearlabInputError(
             f"{at('gain')}: missing; channel '{name}' holds integer counts, so the sensitivity needs the "
-            "volts per count (a WAV file's: the volts at full scale), e.g. gain = '0.3 mV'"
+            "volts per count (a WAV file's: the volts at its full scale, e.g. gain = '10 V'; an integer array's: "
+            "e.g. gain = '0.3 mV')"
         )
     volts = gain if gain is not None else (said[2] if said is not None else 1.0)
     if sensitivity is None and gain is None:
