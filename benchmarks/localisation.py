@@ -16,9 +16,10 @@ intermediate shaft's two gears: by the description's simulated tooth-fault event
 speed (gearlab.data.which_templates; --which width: the event's width alone); --effects simulates
 the records (not the templates) with other effects: a structure other than the simulator's.
 Box "close": the 21/63 + 24/56 description as 31/109 + 85/127, the intermediate shaft's two gears 1.28
-apart in tooth count (under the width's MIN_RATIO). Box "random": per trial a train of random tooth
-counts (random_train: the 21/63 + 24/56 description with pinions of 17-31 teeth, ratios 1.6-3.6, grand
-period up to 120 input turns, 20-30 Hz), so most records hold too few grand periods and each shaft's
+apart in tooth count (under the width's MIN_RATIO): its mesh-phase rule is what --which width measures (by
+default the simulated events decide, the records' structure being the simulator's). Box "random": per trial a
+train of random tooth counts (random_train: the 21/63 + 24/56 description with pinions of 17-31 teeth, ratios
+1.6-3.6, grand period up to 120 input turns, 20-30 Hz), so most records hold too few grand periods and each shaft's
 own TSA is read (localise, "Fallback"), and some a stage-2 ratio that leaves the intermediate shaft no exclusive order.
 
 Per case it prints: the records flagged (a shaft over its history threshold); of those, the damaged
