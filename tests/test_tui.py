@@ -1,6 +1,7 @@
 """The Textual TUI, driven with keys through Textual's pilot, and snapshots of its main screens.
 
-Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios,
+Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios
+(cancel/resume's holds its third and later units until the cancel, held_units),
 except in the tests of what the TUI starts, not of the run (`stub_engine`), and in the every-kind
 runs and the run-end notification, whose child replays a run the real engine made once in this
 session (`replayed`).
@@ -65,7 +66,7 @@ adapter = "source_only"
 [[methods]]
 adapter = "mmd"
 """,
-        repetitions=2,  # 8 units: cancel/resume stops after the second and resumes the rest
+        repetitions=2,  # 8 units: cancel/resume stops after the second (the others held) and resumes the rest
         max_epochs=40,
     )
     + '[output]\ndir = "{runs}"\n'
@@ -233,7 +234,39 @@ def transfer_folder(folder, tmp_path):
     return folder
 
 
-def test_cancel_keeps_finished_units_and_resume_completes_the_run(transfer_folder, tmp_path):
+HELD = """\
+import sys, time
+from pathlib import Path
+import gearlab.kinds.transfer as transfer
+from gearlab.cli import main
+gate, sys.argv = Path(sys.argv[1]), ["gearlab", *sys.argv[2:]]
+train, started, deadline = transfer.train_unit, [], time.monotonic() + 60  # a hung test's bound
+def held(task):
+    started.append(task)
+    while len(started) > 2 and not gate.exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return train(task)
+transfer.train_unit = held
+main()
+"""
+
+
+@pytest.fixture
+def held_units(monkeypatch, tmp_path):
+    """The TUI's child is the real engine, whose third and later transfer units (one worker: in
+    its own process) wait until the file returned exists: a cancel lands after exactly two
+    finished units, however fast the machine trains the others."""
+    gate, real = tmp_path / "let-go", asyncio.create_subprocess_exec
+
+    async def stand_in(program, *args, **kwargs):
+        assert args[:2] == ("-m", "gearlab"), args
+        return await real(program, "-c", HELD, str(gate), *args[2:], **kwargs)
+
+    monkeypatch.setattr(asyncio, "create_subprocess_exec", stand_in)
+    return gate
+
+
+def test_cancel_keeps_finished_units_and_resume_completes_the_run(transfer_folder, held_units, tmp_path):
     total = 2 * 2 * 2
 
     async def script(pilot):
@@ -245,10 +278,11 @@ def test_cancel_keeps_finished_units_and_resume_completes_the_run(transfer_folde
         assert live and live[0][0] == "0"  # the Table 5.4 layout gains rows as units finish
         await pilot.press("c")
         await until(pilot, lambda: app.process is None, 30)
+        held_units.touch()  # the cancelled run's units are let go: the resumed run trains freely
         assert "cancelled" in text_of(app, "#run-status")
         (run,) = (tmp_path / "runs" / "tiny").iterdir()
         kept = RunDir(run).records()
-        assert 2 <= len(kept) < total and not (run / "summary.json").exists()
+        assert len(kept) == 2 < total and not (run / "summary.json").exists()
         # the cancelled run opens in the results view, then resumes
         tree = app.query_one("#browser", Tree)
         node = next(n for n in tree.root.children if "tiny" in str(n.label))
