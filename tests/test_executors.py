@@ -7,6 +7,7 @@ why, when Ray is not installed.
 """
 
 import functools
+import os
 import re
 import sys
 import time
@@ -197,19 +198,30 @@ def test_the_local_pool_sends_a_shared_value_once_and_each_unit_has_its_own(monk
     assert unshared(shared)[0][0] == 0.0  # the caller's own value untouched
 
 
-def module_loaded(name: str) -> bool:
-    time.sleep(0.2)  # both workers take a share
+def module_loaded(marks: Path, name: str) -> bool:
+    """Whether *name* was loaded in this worker, once both workers took an item (each marks its
+    process in *marks*; a minute at most): one worker cannot take every item while the other
+    still runs its warm-ups (a worker that took both, then was descheduled)."""
+    (marks / str(os.getpid())).touch()
+    deadline = time.monotonic() + 60.0
+    while len(list(marks.iterdir())) < 2 and time.monotonic() < deadline:
+        time.sleep(0.01)
     return name in sys.modules
 
 
-def test_a_warmed_local_pool_has_loaded_the_modules_before_its_units_ask():
+def test_a_warmed_local_pool_has_loaded_the_modules_before_its_units_ask(tmp_path):
     """Issue 42: each worker's first training imported torch and scipy.stats (2.7 s of CPU) while
-    the run's process had left both idle preparing the trainings; warm() has them loaded meanwhile."""
+    the run's process had left both idle preparing the trainings; warm() has them loaded meanwhile.
+    Both warm-ups are queued before the items, so a worker that took one has it loaded before its
+    first item, and each worker takes an item (module_loaded)."""
+    cold, warmed = tmp_path / "cold", tmp_path / "warmed"
     with LocalExecutor(2) as pool:
-        assert not any(pool.map(module_loaded, ["tabnanny"] * 4))
+        cold.mkdir()
+        assert not any(pool.map(functools.partial(module_loaded, cold), ["tabnanny"] * 4))
     with LocalExecutor(2) as pool:
         pool.warm(("tabnanny",))
-        assert any(pool.map(module_loaded, ["tabnanny"] * 4))
+        warmed.mkdir()
+        assert any(pool.map(functools.partial(module_loaded, warmed), ["tabnanny"] * 4))
     with LocalExecutor(1) as one:
         one.warm(("tabnanny",))
         assert one._pool is None  # one worker: the units run in this process
