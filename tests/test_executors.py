@@ -703,14 +703,16 @@ def test_a_real_diagnosis_on_ray_counts_what_it_counts_serially(ray_session):
 
 def _mark_then_wait(task):
     """Unit 0 fails once another unit runs beside it; the others mark that they started (with their
-    process id) and run until stopped: a minute, never told to end, then they mark that they ended."""
+    process id, whole once seen: unit 0's failure stops them at once, maybe inside the write) and run
+    until stopped: a minute, never told to end, then they mark that they ended."""
     import os
 
     folder, i = task
     if i == 0:
         waited_for(Path(folder), "started-*")
         raise GearlabInputError("unit 0 is bad")
-    (Path(folder) / f"started-{i}").write_text(str(os.getpid()))
+    (Path(folder) / f"writing-{i}").write_text(str(os.getpid()))
+    (Path(folder) / f"writing-{i}").rename(Path(folder) / f"started-{i}")
     waited_for(Path(folder), "never")
     (Path(folder) / f"ended-{i}").touch()
     return i
