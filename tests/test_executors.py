@@ -198,14 +198,20 @@ def test_the_local_pool_sends_a_shared_value_once_and_each_unit_has_its_own(monk
     assert unshared(shared)[0][0] == 0.0  # the caller's own value untouched
 
 
-def module_loaded(marks: Path, name: str) -> bool:
-    """Whether *name* was loaded in this worker, once both workers took an item (each marks its
-    process in *marks*; a minute at most): one worker cannot take every item while the other
-    still runs its warm-ups (a worker that took both, then was descheduled)."""
+def both_workers_took_one(marks: Path) -> None:
+    """Mark this worker's process in *marks*, then wait until two workers have (a minute at most):
+    an item of a two-worker map that calls this runs on each worker, however the machine schedules."""
     (marks / str(os.getpid())).touch()
     deadline = time.monotonic() + 60.0
     while len(list(marks.iterdir())) < 2 and time.monotonic() < deadline:
         time.sleep(0.01)
+
+
+def module_loaded(marks: Path, name: str) -> bool:
+    """Whether *name* was loaded in this worker, once both workers took an item: one worker cannot
+    take every item while the other still runs its warm-ups (a worker that took both, then was
+    descheduled)."""
+    both_workers_took_one(marks)
     return name in sys.modules
 
 
@@ -744,26 +750,29 @@ def test_a_failed_unit_stops_the_local_pool_at_once(tmp_path):
     assert len(marks) < 3  # the queued units were dropped (the worker freed by unit 0 may take one)
 
 
-def worker_pid(x: int) -> int:
-    import os
-
-    time.sleep(0.2)  # long enough that both workers take a share
+def worker_pid(marks: Path, x: int) -> int:
+    both_workers_took_one(marks)
     return os.getpid()
 
 
-def test_the_local_pool_is_kept_across_maps_and_closed_at_the_end():
+def test_the_local_pool_is_kept_across_maps_and_closed_at_the_end(tmp_path):
     """A run maps several times (datasets, then training): the workers started for the first map
     serve the next ones (their imports and compiled loops are paid once), and leaving the
     ``with`` block stops them. A failed map replaces the pool for the next one."""
+
+    def pids(name: str) -> set[int]:
+        (tmp_path / name).mkdir()
+        return set(executor.map(functools.partial(worker_pid, tmp_path / name), range(4)))
+
     with LocalExecutor(2) as executor:
-        first = set(executor.map(worker_pid, range(4)))
+        first = pids("first")
         processes = list(executor._pool._processes.values())
-        second = set(executor.map(worker_pid, range(4)))
+        second = pids("second")
         workers = {p.pid for p in processes}
-        assert first | second <= workers and len(workers) <= 2
+        assert first == second == workers and len(workers) == 2
         assert {p.pid for p in executor._pool._processes.values()} == workers
         with pytest.raises(ZeroDivisionError):
             executor.map(divide, [1, 0, 2])
-        assert set(executor.map(worker_pid, range(4))).isdisjoint(workers)
+        assert pids("after").isdisjoint(workers)
     assert executor._pool is None
     assert not any(p.is_alive() for p in processes)
