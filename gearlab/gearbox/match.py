@@ -308,6 +308,11 @@ def check_description(
         look = expected * lead(table, k, moved)  # looked for where a moved mesh before it puts it
         o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
         span = SPAN * float(max(s.pinion_shaft_order, s.wheel_shaft_order))
+        # a tacho on a later shaft reads the pinion's shaft through the described gears after it: a pinion count
+        # off leaves the mesh on M (its shaft read as fast), another count moves it by no whole tooth, so M + j o_p
+        # is no count's (a 22/69 + 25/74 box, output tacho, described with 24 for 25: stage 1's load sideband at
+        # 21.02, beside its mesh at 21.12, was read as a 21-tooth pinion's, and stage 2 told 'shows 18.7 teeth')
+        behind = int(tacho_shaft is not None and tacho_shaft > k)
         # the other stages' mesh orders: an earlier one that differs where it was measured (a wrong
         # first pinion moved stage 1's lines off its described order, and stage 2 took them)
         meshes = [moved.get(q, float(t.mesh) * lead(table, q, moved)) for q, t in enumerate(table.stages) if q != k]
@@ -323,7 +328,7 @@ def check_description(
             # pinion's shaft, or the wheel's (a tacho on the output read through a first wheel one tooth
             # off puts the mesh at M + M / z2, its wheel sideband on M: a 38/89 + 49/95 mixer 'matched')
             o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
-            offsets = [j * o for o in (o_p, o_w) for j in (-3, -2, -1, 1, 2, 3)]
+            offsets = [j * o for o in (o_p, o_w)[behind:] for j in (-3, -2, -1, 1, 2, 3)]
             found = harmonic_comb(lines, [look] + [look + d for d in offsets], bin_, theirs)
             if found is not None:
                 i, measured = found
@@ -336,7 +341,7 @@ def check_description(
             divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= tol_mesh(look, bin_)
             if i is None or (divisor and len(own) >= 2):
                 measured, i = family[:2]
-        if i is None and family is None:
+        if i is None and family is None and not behind:
             # no line at M, nor a family: a count off by j puts the mesh at M + j o (a 15-tooth input pinion
             # described 16, its shaft unmodulated: no sideband at 16 led the search there)
             found = harmonic_comb(lines, [look] + [look + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
