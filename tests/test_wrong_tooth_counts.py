@@ -40,3 +40,18 @@ def test_a_later_pinion_one_tooth_short_behind_an_output_tacho_is_named(tmp_path
     assert report["matches"] is False, report["verdict"]
     assert "the pinion on the intermediate shaft shows 25.0" in report["verdict"], report["verdict"]
     assert "18.7" not in report["verdict"], report["verdict"]
+
+
+def test_a_pinion_count_whose_sideband_outgrows_its_mesh_line_at_one_harmonic_is_its_family():
+    # Round 14's C (14/53 + ...) described with 15 teeth, read at the speed the input pinion's sidebands show (35.03
+    # Hz): the 14-tooth mesh's first sideband (13, 41 dB over the floor) outgrew its line (14, 36 dB), but not its
+    # 2nd and 3rd harmonics (28, 42). Both counts outgrow the described 15; 13 came first and 14, weaker at one
+    # harmonic, was refused: the rows said 'no line at mesh order 15' under a verdict naming the 14-tooth pinion
+    from gearlab.gearbox.match import harmonic_comb
+    from gearlab.gearbox.speed import Lines
+
+    at = np.array([13.0, 14.0, 15.0, 25.969, 28.0, 42.0, 12.0, 17.0])
+    db = np.array([40.7, 36.1, 32.1, 24.0, 27.8, 22.4, 16.3, 17.0])
+    lines = Lines(at, 10 ** (db / 20), db)
+    found = harmonic_comb(lines, [15.0] + [15.0 + j for j in (-3, -2, -1, 1, 2, 3)], 1 / 314, [])
+    assert found is not None and abs(found[1] - 14.0) < 1e-6, found

@@ -164,7 +164,8 @@ def harmonic_comb(lines: Lines, candidates: list[float], bin_: float, theirs) ->
     first candidate is the description's M; another, M + j o (a tooth count off by j), is taken when
     its line is the stronger over the floor at each of the first three harmonics where either has
     one (two at least) and its harmonics hold more power: a real mesh's sidebands can outgrow its
-    line at one harmonic (PHM 2009, 40 Hz, low load: 124 over 128) but not at its first ones."""
+    line at one harmonic (PHM 2009, 40 Hz, low load: 124 over 128) but not at its first ones. Of such
+    counts, the one stronger at more of the first three harmonics than another."""
     keep = np.array([not any(abs(a - o) <= t for o, t in theirs) for a in lines.at], dtype=bool)
 
     def comb(c: float) -> tuple[np.ndarray, list, float]:
@@ -178,12 +179,21 @@ def harmonic_comb(lines: Lines, candidates: list[float], bin_: float, theirs) ->
                     db[h - 1] = lines.db[q]
         return db, found, float(sum(lines.amp[q] ** 2 for _, q in found))
 
-    first, found, held = comb(candidates[0])
+    def margin(db: np.ndarray, other: np.ndarray) -> int:  # harmonics 1-3 *db* is the stronger at, less those it is not
+        seen = np.isfinite(db) | np.isfinite(other)
+        return int(np.sum(db[seen] > other[seen]) - np.sum(db[seen] <= other[seen]))
+
+    described, found, held = comb(candidates[0])
+    best, least = described, held
     for c in candidates[1:]:
         db, hits, power = comb(c)
-        seen = np.isfinite(db) | np.isfinite(first)
-        if seen.sum() >= 2 and np.all(db[seen] > first[seen]) and power > held:
-            first, found, held = db, hits, power
+        seen = np.isfinite(db) | np.isfinite(described)
+        if seen.sum() < 2 or not np.all(db[seen] > described[seen]) or power <= least:
+            continue
+        # of two counts that both outgrow the described one, the one stronger at more of the first harmonics: a
+        # 14-tooth pinion's 1st sideband (13, 41 dB) outgrew its mesh line (14, 36 dB), but not its 2nd and 3rd
+        if best is described or margin(db, best) > 0 or (margin(db, best) == 0 and power > held):
+            best, found, held = db, hits, power
     if not found:
         return None
     h, q = np.array([f[0] for f in found], dtype=float), np.array([f[1] for f in found])
