@@ -255,15 +255,15 @@ def lead(table, q: int, moved: dict) -> float:
     return 1.0 if p is None else moved[p] / float(table.stages[p].mesh)
 
 
-def other_stages(table, k: int, moved: dict, measured_shaft: dict) -> list:
+def other_stages(table, k: int, moved: dict, measured_shaft: dict, leads: bool = True) -> list:
     """(mesh order, orders of its shafts stage *k* does not carry) of every other stage of *table*, as
     measured where it was (an earlier stage's moved mesh, a shaft's sidebands or tacho), else as a moved
     mesh before it makes it (lead)."""
     return [
         (
-            moved.get(q, float(t.mesh) * lead(table, q, moved)),
+            moved.get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0)),
             [
-                measured_shaft.get(i, (float(table.shaft_orders[i]) * lead(table, i, moved),))[0]
+                measured_shaft.get(i, (float(table.shaft_orders[i]) * (lead(table, i, moved) if leads else 1.0),))[0]
                 for i in (q, q + 1)
                 if i not in (k, k + 1)
             ],
@@ -288,6 +288,10 @@ def check_description(
     table = order_table(box)
     bin_ = 1.0 / revolutions
     explained = table.lines()
+    # a moved mesh moves the stages after it only where the orders are the input's (no tacho, or one on the
+    # input): a tacho on a later shaft anchors the stages near it (a 46-for-47 first wheel read through an
+    # output tacho put stage 3 at '144.4 teeth')
+    leads = tacho_shaft is None or tacho_shaft == 0
 
     def is_explained(x: float) -> bool:
         if any(abs(x - o) <= tol_mesh(o, bin_) for _, o in explained):
@@ -315,7 +319,7 @@ def check_description(
     for k, s in enumerate(table.stages):
         said = len(differences)
         expected = float(s.mesh)
-        look = expected * lead(table, k, moved)  # looked for where a moved mesh before it puts it
+        look = expected * (lead(table, k, moved) if leads else 1.0)  # looked for where a moved mesh before it puts it
         o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
         span = SPAN * float(max(s.pinion_shaft_order, s.wheel_shaft_order))
         # a tacho on a later shaft reads the pinion's shaft through the described gears after it: a pinion count
@@ -325,7 +329,11 @@ def check_description(
         behind = int(tacho_shaft is not None and tacho_shaft > k)
         # the other stages' mesh orders: an earlier one that differs where it was measured (a wrong
         # first pinion moved stage 1's lines off its described order, and stage 2 took them)
-        meshes = [moved.get(q, float(t.mesh) * lead(table, q, moved)) for q, t in enumerate(table.stages) if q != k]
+        meshes = [
+            moved.get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0))
+            for q, t in enumerate(table.stages)
+            if q != k
+        ]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
         # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
         shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
@@ -406,7 +414,7 @@ def check_description(
             ),
             bin_,
             (k in measured_shaft, k + 1 in measured_shaft),
-            others_lines(lines, expected, [*beyond, *other_stages(table, k, moved, measured_shaft)], bin_),
+            others_lines(lines, expected, [*beyond, *other_stages(table, k, moved, measured_shaft, leads)], bin_),
         )
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
