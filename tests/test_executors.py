@@ -711,8 +711,6 @@ def _mark_then_wait(task):
     """Unit 0 fails once another unit runs beside it; the others mark that they started (with their
     process id, whole once seen: unit 0's failure stops them at once, maybe inside the write) and run
     until stopped: a minute, never told to end, then they mark that they ended."""
-    import os
-
     folder, i = task
     if i == 0:
         waited_for(Path(folder), "started-*")
@@ -726,8 +724,6 @@ def _mark_then_wait(task):
 
 def gone(pid: int) -> bool:
     """Whether process *pid* ended within a minute."""
-    import os
-
     deadline = time.monotonic() + 60.0
     while time.monotonic() < deadline:
         try:
