@@ -76,6 +76,20 @@ def referenced(ref: str) -> Gearbox:
     return box
 
 
+def gearbox_of(source) -> Gearbox | None:
+    """The gearbox description a simulated source (a DatasetSpec, or its preset string) simulates: a
+    built-in one named by the preset, or a description it references; None: a model preset, no
+    shafts to localise on."""
+    from . import builtin_gearboxes, resolve_gearbox
+
+    preset = source if isinstance(source, str) else source.preset
+    if is_reference(preset):
+        return referenced(preset)
+    if preset in builtin_gearboxes():
+        return resolve_gearbox(preset)
+    return None
+
+
 @functools.lru_cache(maxsize=64)
 def shaft_names(preset: str, stages: int) -> tuple[str, ...]:
     """The shafts of a model preset, input first: its gearbox description's names when the preset

@@ -72,7 +72,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, shown
 from ..events import Event, ignore_events
 from ..executors import Aside, Executor, Shared
-from ..gearbox.simulation import label, referenced
+from ..gearbox.simulation import gearbox_of, label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
 from ..learn.schedule import longest_first, two_phases
@@ -145,7 +145,7 @@ from .detection_units import (
     train_unit,
     unit_name,
 )
-from .detection_which_gear import gearbox_of, store_localisation
+from .detection_which_gear import store_localisation
 
 TABLES = {
     "source": Table(DATASET_TABLE.keys, required=True, moved=DATASET_TABLE.moved),

@@ -14,12 +14,11 @@ import numpy as np
 
 from ..data.chain import Chain
 from ..data.spec import DatasetSpec
-from ..data.textzip import align_to
 from ..errors import GearlabInputError
 from ..events import Event
 from ..executors import LocalExecutor
 from ..learn.protocol import Protocol
-from ..parts.measured import ROLES, Target, TargetFile
+from ..parts.measured import ROLES, Target, TargetFile, aligned
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
@@ -238,29 +237,6 @@ def speed_name(hz: float) -> str:
         if abs(round(hz, digits) - hz) <= 0.005 * hz:
             return f"{hz:.{digits}f} Hz"
     return f"{hz:.2f} Hz"
-
-
-def aligned(
-    reference: np.ndarray, revs: np.ndarray, tacho, pulses_per_rev: int, continuous: bool = False
-) -> tuple[int, np.ndarray]:
-    """(turn, *revs* turned into register with *reference*): with a tacho, by one of the N input angles
-    its first mark may find (*pulses_per_rev*: Target.marks; textzip.align_to); without one (the
-    angle from a speed, zero at the record's first sample) by any whole sample of the revolution,
-    the turn whose mean revolution correlates best with *reference* -- align_to's correlation at
-    every sample at once (one inverse FFT). Each row is turned on itself, which is the same for what
-    repeats every input turn; *continuous* (a train whose later mesh is no whole order of the units'
-    shaft: asynchronous_orders) advances the record as one signal instead (signals.angle.continued,
-    its last revolution given up), so that mesh runs on from row to row rather than being cut at
-    every row's turn, where without_asynchronous's fit of it could not take it out."""
-    if tacho is not None:
-        turn, turned = align_to(reference, revs, pulses_per_rev)
-        return turn, continued(revs, turn * revs.shape[-1] / pulses_per_rev) if continuous else turned
-    n = reference.shape[-1]
-    corr = np.fft.irfft(np.conj(np.fft.rfft(reference)) * np.fft.rfft(np.mean(np.atleast_2d(revs), axis=0)), n=n)
-    turn = int(np.argmax(corr))
-    if continuous:
-        return turn, continued(revs, turn)
-    return turn, np.roll(revs, -turn, axis=-1)  # x(θ) -> x(θ + 2π turn / n), as align_to turns
 
 
 def tsa_units(revs: np.ndarray, block: int, stride: int | None = None) -> np.ndarray:

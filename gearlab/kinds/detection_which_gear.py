@@ -39,25 +39,12 @@ from ..data import which_gear as W
 from ..data.spec import DatasetSpec
 from ..data.which_templates import effect_tables
 from ..errors import GearlabInputError
+from ..gearbox.simulation import gearbox_of
 from ..signals import POINTS
 from ..signals import localise as L
 from .detection_records import longest_tsa
 
 WATCHED, OTHER, NOT_LOCALISED = "watched-gear fault", "other damage", "nothing localised"
-
-
-def gearbox_of(source: DatasetSpec | str):
-    """The gearbox description the source (or a model preset) simulates: a built-in one named by the
-    preset, or a description it references; None: no shafts to localise on."""
-    from ..gearbox import builtin_gearboxes, resolve_gearbox
-    from ..gearbox.simulation import is_reference, referenced
-
-    preset = source if isinstance(source, str) else source.preset
-    if is_reference(preset):
-        return referenced(preset)
-    if preset in builtin_gearboxes():
-        return resolve_gearbox(preset)
-    return None
 
 
 def watched_gears(source: DatasetSpec, table) -> list[str]:

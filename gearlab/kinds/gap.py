@@ -35,7 +35,7 @@ from ..events import Event, report_begins
 from ..gap.conclusion import verdict_text  # the kind's log line, summary and report say one verdict
 from ..gap.corrected import write_corrected
 from ..gap.diagnose import Settings
-from ..gearbox.simulation import defaults, is_reference, referenced
+from ..gearbox.simulation import defaults, gearbox_of, is_reference, referenced
 from ..learn.config import NetworkSettings
 from ..learn.protocol import Counts, Method, Protocol, check, check_data, domain_adapting, history_of, shared_state
 from ..learn.schedule import two_phases
@@ -61,7 +61,6 @@ from .common import (
     sized,
     with_source_gearbox,
 )
-from .detection_which_gear import gearbox_of
 from .gap_inputs import (
     Records,
     TargetEntry,

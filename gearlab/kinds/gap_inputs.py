@@ -57,13 +57,13 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh),
     and each record's count of revolutions (Chain.takes).
     Records of different speeds are different operating conditions: refused. Every record is turned
-    into register with the first (detection_records.aligned, as the detection kind does): with a tacho
+    into register with the first (parts.measured.aligned, as the detection kind does): with a tacho
     by m/N of a turn (one of its N marks, or on another shaft the N input angles they may find:
     Target.marks), without one by any whole sample of the revolution (each record's angle is zero at
     its first sample), so the set has one synchronous average; the record shifted as one signal
     (signals.angle.continued), so that what is not periodic in the input turn stays continuous."""
     from ..data.recordings import UNCONFIRMED
-    from .detection_records import aligned
+    from ..parts.measured import aligned
 
     t = records.target
     rows, speeds, found, notes = [], {}, {}, []

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from ..data.recordings import (
     channel_key,
     check_measured_file,
@@ -17,9 +19,10 @@ from ..data.recordings import (
     only_vibration,
     pulses_without_tacho,
 )
-from ..data.textzip import CALIBRATION, calibration
+from ..data.textzip import CALIBRATION, align_to, calibration
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
+from ..signals.angle import continued
 from ..units import to_si
 
 if TYPE_CHECKING:
@@ -333,3 +336,26 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         keys["unit"],
         shaft,
     )
+
+
+def aligned(
+    reference: np.ndarray, revs: np.ndarray, tacho, pulses_per_rev: int, continuous: bool = False
+) -> tuple[int, np.ndarray]:
+    """(turn, *revs* turned into register with *reference*): with a tacho, by one of the N input angles
+    its first mark may find (*pulses_per_rev*: Target.marks; textzip.align_to); without one (the
+    angle from a speed, zero at the record's first sample) by any whole sample of the revolution,
+    the turn whose mean revolution correlates best with *reference* -- align_to's correlation at
+    every sample at once (one inverse FFT). Each row is turned on itself, which is the same for what
+    repeats every input turn; *continuous* (a train whose later mesh is no whole order of the units'
+    shaft: asynchronous_orders) advances the record as one signal instead (signals.angle.continued,
+    its last revolution given up), so that mesh runs on from row to row rather than being cut at
+    every row's turn, where without_asynchronous's fit of it could not take it out."""
+    if tacho is not None:
+        turn, turned = align_to(reference, revs, pulses_per_rev)
+        return turn, continued(revs, turn * revs.shape[-1] / pulses_per_rev) if continuous else turned
+    n = reference.shape[-1]
+    corr = np.fft.irfft(np.conj(np.fft.rfft(reference)) * np.fft.rfft(np.mean(np.atleast_2d(revs), axis=0)), n=n)
+    turn = int(np.argmax(corr))
+    if continuous:
+        return turn, continued(revs, turn)
+    return turn, np.roll(revs, -turn, axis=-1)  # x(θ) -> x(θ + 2π turn / n), as align_to turns
