@@ -528,7 +528,7 @@ def gap(
     overrides: dict = {}
     given = _benchmark_keys(trials, seed)
     if scenario == "benchmark":
-        path = _shipped_scenario(BENCHMARK, "gap_benchmark")
+        path = _shipped_scenario(BENCHMARK)
         overrides.update(given)
     else:
         path = Path(scenario)
@@ -557,14 +557,14 @@ def _benchmark_keys(trials: int | None, seed: int | None) -> dict:
     return {"benchmark": given} if given else {}
 
 
-def _shipped_scenario(name: str, kind: str) -> Path:
+def _shipped_scenario(name: str) -> Path:
     """scenarios/*name* of the current folder, else of the gearlab source tree."""
     for folder in (Path("scenarios"), Path(__file__).resolve().parents[1] / "scenarios"):
         if (folder / name).is_file():
             return folder / name
     raise GearlabInputError(
         f"scenarios/{name} not found in the current folder nor in the gearlab source tree; "
-        f"run `gearlab run` on a {kind} scenario file instead"
+        "give `gearlab run` a scenario file of its kind instead"
     )
 
 
@@ -590,7 +590,7 @@ def transfer_benchmark(
     overrides = _benchmark_keys(trials, seed)
     if only:
         overrides.setdefault("benchmark", {})["only"] = list(only)
-    path = None if how.resume else _shipped_scenario("transfer_benchmark.toml", "transfer_benchmark")
+    path = None if how.resume else _shipped_scenario("transfer_benchmark.toml")
     _run(path, how, overrides)
 
 

@@ -90,3 +90,6 @@ SCENARIO_KINDS: Mapping[str, ScenarioKind] = _Kinds(
 # The kinds `gearlab gap FILE` runs, the gap's diagnosis and its benchmark (`gearlab run` runs every
 # kind): the command's own kinds are named here, with the registry, not in the CLI.
 GAP_COMMAND_KINDS: tuple[str, ...] = ("gap", "gap_benchmark")
+# The command that sets a kind's OVERRIDES from its options (`gearlab gap FILE --trials N --seed S`,
+# gap_benchmark's): the TUI's run form calls it where a kind has them.
+OVERRIDES_COMMAND = "gap"

@@ -31,7 +31,7 @@ from textual.widgets import Footer, RichLog, Static, TabbedContent, TabPane, Tre
 from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
 from ..events import Event
-from ..kinds import SCENARIO_KINDS
+from ..kinds import OVERRIDES_COMMAND, SCENARIO_KINDS
 from ..runs import RunDir
 from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
@@ -322,11 +322,12 @@ class GearlabApp(App):
         return None
 
     def _run_args(self, entry: ScenarioEntry, options: RunOptions) -> list[str]:
-        """The command line of a run: `gearlab run FILE` (`gearlab gap FILE` for a benchmark
-        given trials or seed), into the folder where the tree looks for its runs."""
+        """The command line of a run: `gearlab run FILE` (the command that sets a kind's OVERRIDES,
+        kinds.OVERRIDES_COMMAND, for a benchmark given trials or seed), into the folder where the tree
+        looks for its runs."""
         args = ["run", str(entry.path)]
         if options.trials is not None or options.seed is not None:
-            args = ["gap", str(entry.path)]
+            args = [OVERRIDES_COMMAND, str(entry.path)]
             args += ["--trials", str(options.trials)] if options.trials is not None else []
             args += ["--seed", str(options.seed)] if options.seed is not None else []
         args += ["--out", str(runs_base(entry.scenario, self.cwd))]
