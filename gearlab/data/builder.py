@@ -232,10 +232,10 @@ def lead_revolutions(sim: Simulator, speed: float) -> int:
     size of sqrt of its mesh strain-energy share (_modes), not 1. The start is the static equilibrium
     under the load at the mean stiffnesses; what sets a mode moving is the meshes' stiffness
     fluctuation, which reaches a mode through the mesh deflection it makes. An estimate, not a bound:
-    outside box R's casing bouncing on soft mounts (13.7 Hz at 1.6 1/s, share 1.7e-11; 31.6 Hz at
+    a development box's casing bouncing on soft mounts (13.7 Hz at 1.6 1/s, share 1.7e-11; 31.6 Hz at
     0.8 1/s, 7.2e-9) showed transients 120 and 85 times under it in its casing_x and casing_y channels
     (3.4e-8, 1e-6 of the response); a two-stage 19/71 + 28/47's slowest mode (70 1/s, share 1.1e-4)
-    3 times over it, which the safety factor covers (1.4e-10 left after its 11-turn lead). R's box:
+    3 times over it, which the safety factor covers (1.4e-10 left after its 11-turn lead). The soft-mounted box:
     163 turns, not the 506 a full-size transient takes (settle_revolutions).
 
     Refused (one line) when that lead is over SETTLE_STEPS steps: a run holds ~91 bytes a step (a

@@ -241,7 +241,7 @@ def source_turns(spec: DatasetSpec, model, record: bool = False) -> int:
     periodic: joined end to start it holds a step no gearbox makes): the builder's (stretch_of:
     every record starts within it), and for *record* (consecutive rows of one record through a
     chain) the healthy rows and their two neighbours, all it reads (measured_rows; the noise's
-    reference RMS over them: on outside box R's 22 turns -0.005 dB from the 128's)."""
+    reference RMS over them: on a development box's 22 turns -0.005 dB from the 128's)."""
     turns = stretch_of(spec, placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'"), {})
     return spec.healthy + 2 if turns and record else turns
 

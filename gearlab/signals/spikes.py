@@ -30,8 +30,8 @@ def without_spikes(revs: np.ndarray, fs: float, speed_hz: float, turns_per_input
     record at the run's ends -- when such runs number fewer than one every SPIKE_TURNS turns of the
     units' shaft (*turns_per_input* turns an input turn) and no three lie within SPIKE_SAME
     samples' angle of one shaft's turn; a change that comes back at one angle of a shaft (a
-    tooth's) is left whole. Box S of outside round 12 (105/143, 16 kHz) holds 4 saturated samples a
-    take at 25-28 deviations (the rest within 1.6; beside them 0-1.4): in the history they set the
+    tooth's) is left whole. A development box of 105/143 teeth recorded at 16 kHz holds 4 saturated
+    samples a take at 25-28 deviations (the rest within 1.6; beside them 0-1.4): in the history they set the
     thresholds (fm4 record30 582 for the chipped take's 104-159; matched_filter 0.318 for
     0.19-0.23), so record30 found 0-33 % of the chip's units at AUC 1.0."""
     x = np.asarray(revs, dtype=np.float64).ravel()
