@@ -353,3 +353,47 @@ def test_no_code_comment_or_doc_points_into_a_development_round():
     assert not hits, "a development round named (say what was found, at HEAD):\n" + "\n".join(hits)
     assert ROUND_STORY.search("Box S of outside round 12") and ROUND_STORY.search("Issue 19, sixteenth round")
     assert not ROUND_STORY.search("the first round's effect") and not ROUND_STORY.search("gap: round 1, fitting")
+
+
+def calls_of(names: set[str]) -> dict[str, list[str]]:
+    """{module or plugin file: ['line: name', ...]} of every call of a function or method named in
+    *names*, in gearlab and the built-in plugins."""
+    root = PACKAGE.parent
+    found: dict[str, list[str]] = {}
+    for path in sorted([*PACKAGE.rglob("*.py"), *(root / "plugins").rglob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call):
+                f = node.func
+                name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else None
+                if name in names:
+                    found.setdefault(str(path.relative_to(root)), []).append(f"{node.lineno}: {name}")
+    return found
+
+
+def test_one_realisation_of_a_simulated_signal():
+    # the builder, the gap diagnosis, the gap benchmark and a simulated record all realise their rows
+    # through gearlab.data.realise.realise (signal effects, then the dataset's noise); nothing else
+    # applies a chain's signal effects or adds a noise (the chain's own loop and the sensor_noise
+    # effect aside)
+    found = calls_of({"apply_signal", "add_noise"})
+    allowed = {"gearlab/data/realise.py", "gearlab/effects.py", "plugins/effects/sensor_noise.py"}
+    assert set(found) <= allowed, {f: c for f, c in found.items() if f not in allowed}
+    assert "gearlab/data/realise.py" in found
+    users = set(calls_of({"realise"}))
+    callers = ("data/builder.py", "data/simulated.py", "gap/scoring.py", "kinds/gap_benchmark/trials.py")
+    assert {f"gearlab/{f}" for f in callers} <= users
+
+
+def test_one_way_to_declare_a_setting():
+    # a setting is a gearlab.settings.Setting: a settings dataclass's field (settings.setting) or a
+    # plugin's parameter (params.Param, a Setting with a name); a scenario table's Key is made from
+    # the dataclass (scenario.keys_of), never written by hand
+    made = calls_of({"Key", "Setting"})
+    assert {f: len(c) for f, c in made.items()} == {"gearlab/scenario.py": 1, "gearlab/settings.py": 1}, made
+
+
+def test_benchmarks_holds_only_what_the_readme_names():
+    root = PACKAGE.parent
+    readme = (root / "README.md").read_text()
+    unnamed = [p.name for p in sorted((root / "benchmarks").glob("*.py")) if f"benchmarks/{p.name}" not in readme]
+    assert not unnamed, f"benchmarks/ files the README does not name (a research script leaves the tree): {unnamed}"
