@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ...errors import GearlabInputError
-from .base import Contents, _column, _keyed, _scalar
+from .base import _RATE_NAMES, Contents, _column, _keyed, _scalar
 
 _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
 # a field that is a number written with a decimal comma (a semicolon-separated European export)
@@ -31,6 +31,49 @@ def units_row(row: list[str], names: list[str]) -> dict[str, str] | None:
     if any(_column([f]).dtype.kind == "f" or not _UNIT_FIELD.match(f) for f in fields):
         return None
     return {n: f.strip("[]() ") for n, f in zip(names, fields) if f.strip("[]() ")}
+
+
+# a line of a logger's preamble above the table: 'Sample rate: 25600 Hz', 'Sampling Rate (kHz) = 25.6'
+_PREAMBLE_FIELD = re.compile(r"^([A-Za-z][\w .\-]*?)\s*(?:[\[(]\s*([^\])]*?)\s*[\])])?\s*[:=]\s*(.*?)\s*$")
+_PREAMBLE_VALUE = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-zµμ/]*)$")
+_RATE_UNITS = {"": 1.0, "hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "1/s": 1.0, "ks/s": 1e3}
+_INTERVAL_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+_INTERVAL_NAMES = ("dt", "delta_t", "sample_interval", "sampling_interval", "sample_period", "sampling_period")
+
+
+def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
+    """(how many of *lines* (non-blank, no '#') are a logger's preamble above the table, the fields it states).
+
+    A preamble line has none of the table's separators (',', ';', tab) where a later line has one (a title,
+    'Date: ...'), or is 'key: value' / 'key = value' above a blank-separated table. A rate ('Sample rate:
+    25600 Hz', 'Sampling Rate (kHz): 25.6') becomes the field 'sample_rate' in Hz, as does a sample
+    interval ('dt: 39.0625 us'); other keys (a device, a date) are no channels and are left out."""
+    delimited = next((i for i, line in enumerate(lines[:100]) if delimiter_of(line) is not None), None)
+    fields: dict[str, object] = {}
+    count = 0
+    for i, line in enumerate(lines[:100]):
+        match = _PREAMBLE_FIELD.match(line.strip())
+        if (
+            delimiter_of(line) is not None
+            or (delimited is None and match is None)
+            or (delimited is not None and i >= delimited)
+        ):
+            break
+        count = i + 1
+        if match is None:
+            continue  # a title line
+        key = "_".join(match.group(1).lower().split()).replace("-", "_")
+        unit = (match.group(2) or "").strip()
+        value = _PREAMBLE_VALUE.match(match.group(3))
+        if value is not None:
+            unit = (unit or value.group(2)).lower()
+            number = float(value.group(1))
+            if key in _RATE_NAMES and unit in _RATE_UNITS:
+                fields["sample_rate"] = number * _RATE_UNITS[unit]
+                continue
+            if key in _INTERVAL_NAMES and unit in _INTERVAL_UNITS and number > 0:
+                fields["sample_rate"] = 1.0 / (number * _INTERVAL_UNITS[unit])
+    return count, fields
 
 
 def delimiter_of(line: str) -> str | None:
@@ -85,6 +128,9 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
                 fields[match.group(1)] = _scalar(match.group(2))
             continue
         lines.append((number, line))
+    skipped, stated = preamble([line for _, line in lines])
+    fields.update(stated)
+    lines = lines[skipped:]
     if not lines:
         raise GearlabInputError(f"{path}: no rows; expected a header row of column names (or none), then numbers")
     delimiter = delimiter_of(lines[0][1])

@@ -5,6 +5,7 @@ field or a time vector), which channels hold integers."""
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 import re
 import struct
@@ -94,12 +95,19 @@ class Header:
 
 def _csv_header(path: Path) -> Header:
     from .base import _column
-    from .csv import _COMMENT_FIELD, delimiter_of, header_names, is_header, split_rows, units_row
+    from .csv import _COMMENT_FIELD, delimiter_of, header_names, is_header, preamble, split_rows, units_row
 
     fields, names, number, units = [], None, 0, None
-    with path.open(encoding="utf-8-sig", errors="replace") as f:
+    with path.open(encoding="utf-8-sig", errors="replace") as stream:
+        ahead = list(itertools.islice(stream, 200))  # a logger's preamble lies within its first lines
+        skipped, stated_fields = preamble([line for line in ahead if line.strip() and not line.strip().startswith("#")])
+        fields += [(k, v) for k, v in stated_fields.items()]
+        f = itertools.chain(ahead, stream)
         for number, line in enumerate(f, start=1):
             stripped = line.strip()
+            if skipped and stripped and not stripped.startswith("#"):
+                skipped -= 1
+                continue
             if stripped.startswith("#"):
                 match = _COMMENT_FIELD.match(stripped)
                 if match:

@@ -1,0 +1,39 @@
+"""Outside-user check of issue 39, round 15: recordings as other tools export them, read as
+docs/your_gearbox.md says (small files written here, not simulated by gearlab)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gearlab.data.recordings import read_header, read_recording
+
+
+def _table(n=2000, fs=25600.0):
+    t = np.arange(n) / fs
+    acc = np.sin(2 * np.pi * 450.0 * t)
+    tacho = 5.0 * (np.mod(t * 23.4, 1.0) < 0.5)
+    return t, acc, tacho
+
+
+@pytest.mark.parametrize(
+    "preamble, fs",
+    [
+        ("Device: NI-9234\nSample rate: 25600 Hz\nDate: 2026-11-30 10:12\n\n", 25600.0),
+        ("Measurement export\nSampling Rate (kHz): 25.6\nOperator = J. Smith\n", 25600.0),
+        ("Sample interval: 39.0625 us\n", 25600.0),
+    ],
+)
+def test_a_csv_after_a_loggers_preamble_is_read_with_its_rate(tmp_path, preamble, fs):
+    # a DAQ's export: lines of 'key: value' (and a title) above the table, no '#'. The file was refused with
+    # 'line 2 has 4 fields but the header has 2' (the preamble's first line taken as the header)
+    t, acc, tacho = _table()
+    rows = "\n".join(f"{a:.6f},{k:.3f}" for a, k in zip(acc, tacho))
+    path = tmp_path / "export.csv"
+    path.write_text(preamble + "acc_ms2,tacho_V\n" + rows + "\n")
+    header = read_header(path)
+    assert {"acc_ms2", "tacho_V"} <= set(header.channels) and header.rate
+    assert header.stated is not None and header.stated[0] == pytest.approx(fs)
+    rec = read_recording(path, "acc_ms2", "tacho_V")
+    assert rec.fs == pytest.approx(fs)
+    assert np.allclose(rec.signal, np.round(acc, 6)) and rec.tacho.size == acc.size
