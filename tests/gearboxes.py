@@ -45,16 +45,16 @@ def two_file_detection(name: str, source: str) -> str:
     return f"{head}{source}\n{target}\n[protocol]\nbatch = 2\n"
 
 
+# the load and sensor of the two-stage reducers of the slower-shaft and train-cycle tests
+REDUCER = dict(load="15 N*m", near="input", direction="x")
 # a 20/30 + 20/50 reducer, tacho on the input: the slower-shaft tests' gearbox (test_slow_shaft*)
 SLOW_BOX = description(
     stage(20, 30, "2 mm", "15 mm", ("15 mm", "20 mm")),
     stage(20, 50, "2.5 mm", "20 mm", ("20 mm", "30 mm")),
     name="slowbox",
     speed="30 Hz",
-    load="15 N*m",
-    near="input",
-    direction="x",
     tacho="input",
+    **REDUCER,
 )
 
 

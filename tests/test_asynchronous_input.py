@@ -6,7 +6,7 @@ unchanged."""
 import numpy as np
 import pytest
 import torch
-from gearboxes import description, stage
+from gearboxes import REDUCER, description, stage
 
 from gearlab.data.spec import DATASET_PRESETS, DatasetSpec
 from gearlab.gearbox import resolve_gearbox
@@ -34,9 +34,7 @@ def test_the_non_whole_mesh_orders_of_a_train(tmp_path):
             stage(26, 83, "2.5 mm", "25 mm", ("25 mm", "35 mm")),
             name="fan",
             speed="35 Hz",
-            load="15 N*m",
-            near="input",
-            direction="x",
+            **REDUCER,
         )
     )
     box = resolve_gearbox(str(path))

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import REDUCER, description, stage
 
 from gearlab.data.builder import (
     _simulator,
@@ -30,9 +30,7 @@ BOX = description(
     stage(23, 71, "2.5 mm", "25 mm", ("25 mm", "35 mm")),
     name="reducer",
     speed="35 Hz",
-    load="15 N*m",
-    near="input",
-    direction="x",
+    **REDUCER,
 )
 ROWS = 48
 
