@@ -397,3 +397,15 @@ def test_benchmarks_holds_only_what_the_readme_names():
     readme = (root / "README.md").read_text()
     unnamed = [p.name for p in sorted((root / "benchmarks").glob("*.py")) if f"benchmarks/{p.name}" not in readme]
     assert not unnamed, f"benchmarks/ files the README does not name (a research script leaves the tree): {unnamed}"
+
+
+DOCS_LINES = 4000  # docs/ in all: each page answers a user's or a contributor's question (issue 38)
+
+
+def test_the_docs_stay_within_their_line_budget():
+    pages = sorted((PACKAGE.parent / "docs").glob("*.md"))
+    lines = {p.name: len(p.read_text().splitlines()) for p in pages}
+    assert pages and sum(lines.values()) <= DOCS_LINES, (
+        f"docs/ is {sum(lines.values())} lines, over {DOCS_LINES}: say it in fewer "
+        + str(sorted(lines.items(), key=lambda kv: -kv[1])[:5])
+    )
