@@ -76,6 +76,8 @@ SCALES = ("unit", "history")  # the noise scale of a scored revolution: its own,
 LIMIT = 0.7  # soft limit of the residual, in robust noise scales (issue measurement: best near 0.7)
 LINES = 100.0  # a healthy line: the reference's power over the history residuals' floor there (20 dB)
 FLOOR_ORDERS = 8  # the residuals' floor at an order: their median power over this many orders either side
+MIXTURES = ("shapes", "sizes")  # likelihood_ratio's mixture: the path's shapes, or each at `SIZES` and both signs
+SIZES = (0.25, 0.5, 1.0, 2.0, 4.0)  # times the size the path gives: a target's fault may be 4 times off either way
 
 
 class TemplateDetector(nn.Module):
@@ -257,7 +259,13 @@ class LikelihoodDetector(nn.Module):
 
 
 def likelihood_statistic(
-    Xs: np.ndarray, ys: np.ndarray, Xt: np.ndarray, yt: np.ndarray | None, path: str = "fir", scale: str = "unit"
+    Xs: np.ndarray,
+    ys: np.ndarray,
+    Xt: np.ndarray,
+    yt: np.ndarray | None,
+    path: str = "fir",
+    scale: str = "unit",
+    mixture: str = "shapes",
 ) -> LikelihoodDetector:
     """The likelihood-ratio detector of the source's fault shapes on the target's healthy
     history, its threshold not set yet (as `template_statistic`'s): reference h = the history's
@@ -270,10 +278,18 @@ def likelihood_statistic(
     residual; ``history``: the median of the healthy history revolutions' scales, the same
     under both hypotheses. Where a fault raises the whole residual rather than adding a sparse
     shape (the PHM 2009 chip: its units' own scale alone ranks them first), the unit's own
-    scale reads the fault's energy as noise and ranks the faults low (docs/real_data.md)."""
+    scale reads the fault's energy as noise and ranks the faults low (docs/real_data.md).
+    *mixture* ``sizes``: the fault's size and sign are unknown too, each shape enters the mixture
+    at every size of `SIZES` and both signs, equally weighted (a model mismatch the path does not
+    see, such as the bearings' stiffness, scales a fault's response apart from the healthy
+    mesh's or turns it over: docs/results.md §5)."""
     if scale not in SCALES:
         raise ValueError(f"scale must be one of {SCALES}, got {scale!r}")
+    if mixture not in MIXTURES:
+        raise ValueError(f"mixture must be one of {MIXTURES}, got {mixture!r}")
     Xt, healthy_t, reference, shapes = _shapes("likelihood_ratio", Xs, ys, Xt, yt, path)
+    if mixture == "sizes":
+        shapes = np.concatenate([sign * size * shapes for sign in (1.0, -1.0) for size in SIZES])
     kind = noise_law(Xt[healthy_t] - reference)
     fixed = 0.0
     if scale == "history":
@@ -283,10 +299,11 @@ def likelihood_statistic(
 
 
 def likelihood_detector(
-    Xs, ys, Xt, yt, false_alarm: float, path: str = "fir", scale: str = "unit"
+    Xs, ys, Xt, yt, false_alarm: float, path: str = "fir", scale: str = "unit", mixture: str = "shapes"
 ) -> LikelihoodDetector:
     """`likelihood_statistic` thresholded on the healthy history at *false_alarm*."""
-    return Detector.thresholded(likelihood_statistic(Xs, ys, Xt, yt, path, scale), (Xt, yt), false_alarm)
+    statistic = likelihood_statistic(Xs, ys, Xt, yt, path, scale, mixture)
+    return Detector.thresholded(statistic, (Xt, yt), false_alarm)
 
 
 def referenced_on(model: nn.Module, rows: np.ndarray) -> nn.Module | None:

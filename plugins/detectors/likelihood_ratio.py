@@ -16,6 +16,7 @@ from __future__ import annotations
 from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, hookimpl
 
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
+MIXTURES = ("shapes", "sizes")  # gearlab.learn.detectors.MIXTURES
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
@@ -38,14 +39,26 @@ class LikelihoodRatio(Detector):
             "noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)",
             integer=True,
         ),
+        Param(
+            "mixture",
+            "",
+            0,
+            0,
+            len(MIXTURES) - 1,
+            "the mixture: 0 = shapes (each as the path brings it), 1 = sizes (each also at 1/4 to 4 times that "
+            "size, either sign)",
+            integer=True,
+        ),
     )
-    choices = {"path": PATHS, "scale": SCALES}
+    choices = {"path": PATHS, "scale": SCALES, "mixture": MIXTURES}
 
     def statistic(self, source, target, params=None):
         from gearlab.api import likelihood_statistic
 
         values = self.named(params)
-        return likelihood_statistic(*source, *target, path=values["path"], scale=values["scale"])
+        return likelihood_statistic(
+            *source, *target, path=values["path"], scale=values["scale"], mixture=values["mixture"]
+        )
 
 
 @hookimpl
