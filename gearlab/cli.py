@@ -544,8 +544,9 @@ def gap(
         elif given:
             raise GearlabInputError("--trials and --seed belong to `gearlab gap benchmark` (or a gap_benchmark file)")
         elif kind not in GAP_COMMAND_KINDS:
+            expected = " or ".join(f'"{k}"' for k in GAP_COMMAND_KINDS)
             raise GearlabInputError(
-                f"{path}: [scenario] key 'kind': expected \"gap\" for `gearlab gap`, got "
+                f"{path}: [scenario] key 'kind': expected {expected} for `gearlab gap`, got "
                 f'"{kind}" (run it with `gearlab run`)'
             )
     _run(None if how.resume else path, how, overrides)

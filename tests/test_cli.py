@@ -186,3 +186,11 @@ def test_a_file_without_a_rate_gets_it_from_the_scenario_not_from_run(cli, tmp_p
     scenario.write_text(entry + 'fs = "10 kHz"\ntransient = "none"\n')
     code, out, err = cli("validate", scenario)
     assert code == 0 and "OK" in out, err
+
+
+def test_gap_refuses_a_scenario_of_another_kind_naming_the_kinds_it_runs(cli):
+    """`gearlab gap FILE` runs the kinds the registry gives it (kinds.GAP_COMMAND_KINDS: the diagnosis
+    and its benchmark); another kind's file is one line, exit 2, naming each of them."""
+    code, _, err = cli("gap", ROOT / "scenarios" / "quick.toml")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert 'key \'kind\': expected "gap" or "gap_benchmark" for `gearlab gap`, got "transfer"' in err, err
