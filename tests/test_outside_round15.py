@@ -37,3 +37,33 @@ def test_a_csv_after_a_loggers_preamble_is_read_with_its_rate(tmp_path, preamble
     rec = read_recording(path, "acc_ms2", "tacho_V")
     assert rec.fs == pytest.approx(fs)
     assert np.allclose(rec.signal, np.round(acc, 6)) and rec.tacho.size == acc.size
+
+
+def test_score_reads_a_file_with_the_keys_of_the_run_file_of_its_format_whose_channels_it_has(tmp_path):
+    # D's run: CSV takes of two kinds, a logger's (header 'Beschleunigung', the [target]'s keys) and headerless ones
+    # (their own vibration = "1", fs, unit). gearlab score of a headerless take said 'the run's channel keys are not in
+    # it: tried vibration 'Beschleunigung', tacho 'Drehzahlgeber'': a format's keys were kept only where all its files
+    # agreed
+    from types import SimpleNamespace
+
+    from gearlab.kinds.detection_scoring import file_keys, remembered
+
+    own = {"vibration": "1", "tacho": "2", "fs": "25.6 kHz", "unit": "m/s^2"}
+    files = [
+        SimpleNamespace(path="rec/h1.csv", role="history", keys=own),
+        SimpleNamespace(path="rec/h2.csv", role="history", keys={}),
+        SimpleNamespace(path="rec/t1.csv", role="test", keys={}),
+        SimpleNamespace(path="rec/t2.csv", role="test", keys=own),
+    ]
+    meta = {"target": {"vibration": "Beschleunigung", "tacho": "Drehzahlgeber"}, "file_keys": file_keys(files)}
+    t, acc, tacho = _table()
+    headerless = tmp_path / "next.csv"
+    headerless.write_text("\n".join(f"{a:.7f},{b:.6f},{k:.3f}" for a, b, k in zip(t, acc, tacho)) + "\n")
+    logger = tmp_path / "next_logger.csv"
+    logger.write_text(
+        "Zeit;Beschleunigung;Drehzahlgeber\n"
+        + "\n".join(f"{a:.7f};{b:.6f};{k:.3f}" for a, b, k in zip(t, acc, tacho)).replace(".", ",")
+        + "\n"
+    )
+    assert remembered(meta, str(headerless))[0] == own
+    assert remembered(meta, str(logger))[0] == {}

@@ -119,13 +119,15 @@ def file_format(path: str) -> str:
 def file_keys(files) -> dict:
     """The run's files' own acquisition keys (a [target] 'files' entry's, as Target holds them), for
     gearlab score: 'formats', {format: keys} where every file of that format gives the same ({}: the
-    [target]'s), and 'tests', the test files' where they all agree."""
+    [target]'s), 'sets', {format: each distinct keys of its files, in order} (a logger's CSVs beside
+    headerless ones), and 'tests', the test files' where they all agree."""
     by: dict[str, list[dict]] = {}
     for f in files:
         by.setdefault(file_format(f.path), []).append(dict(f.keys))
     tests = [dict(f.keys) for f in files if f.role == "test"]
     return {
         "formats": {e: ks[0] for e, ks in by.items() if all(k == ks[0] for k in ks)},
+        "sets": {e: [k for i, k in enumerate(ks) if k not in ks[:i]] for e, ks in by.items()},
         "tests": tests[0] if tests and all(k == tests[0] for k in tests) else {},
     }
 
@@ -143,8 +145,9 @@ def _tacho_records(meta: dict) -> str:
 
 def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, str]:
     """The acquisition keys the run's own files read a new *file* with (file_keys), the first whose
-    vibration and tacho channels (--key's over them) its header holds: its format's files', or for a
-    format the run had none of, the test files' (where they agree), each other format's, the [target]'s
+    vibration and tacho channels (--key's over them) its header holds: its format's files' (each set of keys
+    its files were read with, where they differ), or for a format the run had none of, the test files'
+    (where they agree), each other format's, the [target]'s
     (only the [target]'s when --key names the vibration: no other file's gain or unit on it); a file
     none fits: one line naming the channels tried, the file's and --key. (keys, whose they are)."""
     kept = meta.get("file_keys") or {}
@@ -152,6 +155,8 @@ def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, 
     if not file:
         return formats.get(fmt, kept.get("tests") or {}), ""
     tried = [(formats[fmt], f"the run's {fmt} files'")] if fmt in formats else []
+    if fmt not in formats:
+        tried += [(k, f"the run's {fmt} files'") for k in kept.get("sets", {}).get(fmt, [])]
     if "vibration" in (given or {}):
         tried.append(({}, "the [target]'s"))
     else:
@@ -160,11 +165,12 @@ def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, 
         tried.append(({}, "the [target]'s"))
     header = read_header(file)
     said: dict[str, list[str]] = {}
-    for keys, whose in tried:
+    named = [(keys, whose) for keys, whose in tried if _fits(header, meta["target"] | keys | (given or {}), False)]
+    for keys, whose in named + tried:  # a set naming the file's channels before one counting its columns
         channels = meta["target"] | keys | (given or {})
-        names = {k: channel_key(channels[k]) for k in ("vibration", "tacho") if channels.get(k) not in (None, "")}
-        if not header.channels or all(header.find(n) for n in names.values()):
+        if _fits(header, channels, True):
             return keys, whose
+        names = _channel_names(channels)
         said.setdefault(", ".join(f"{k} '{n}'" for k, n in names.items()), []).append(whose)
     asked = " --key tacho=NAME" if _tacho_records(meta) != "none" else ""
     raise GearlabInputError(
@@ -173,6 +179,18 @@ def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, 
         + f"; the file has: {channel_listing(header.channels)}; expected its channels: gearlab score RUN FILE "
         f"--key vibration=NAME{asked}"
     )
+
+
+def _channel_names(channels: dict) -> dict:
+    return {k: channel_key(channels[k]) for k in ("vibration", "tacho") if channels.get(k) not in (None, "")}
+
+
+def _fits(header, channels: dict, indexed: bool) -> bool:
+    """Whether *header* holds the vibration and tacho *channels* name, by name (or, *indexed*, by column index)."""
+    names = _channel_names(channels).values()
+    if indexed:
+        return not header.channels or all(header.find(n) for n in names)
+    return bool(header.channels) and all(header.resolve(n) in header.channels for n in names)
 
 
 def _ratio(shaft) -> list[int]:
