@@ -409,3 +409,17 @@ def test_the_docs_stay_within_their_line_budget():
         f"docs/ is {sum(lines.values())} lines, over {DOCS_LINES}: say it in fewer "
         + str(sorted(lines.items(), key=lambda kv: -kv[1])[:5])
     )
+
+
+def test_one_false_alarm_rate_and_one_threshold_rule_per_kind():
+    # a kind's scenario sets the false-alarm rate and the threshold rule in one table each: a
+    # detection scenario's [detection] (its [protocol] refuses them, naming where they moved), a
+    # transfer scenario's [protocol] (issue 38 item 3: three false_alarm knobs and two threshold keys
+    # in one scenario before)
+    from gearlab.kinds import SCENARIO_KINDS
+
+    for name, kind in SCENARIO_KINDS.items():
+        for key in ("false_alarm", "threshold"):
+            tables = [t for t, table in kind.TABLES.items() if key in table.keys]
+            assert len(tables) <= 1, f"kind {name}: '{key}' in {tables}"
+    assert "threshold" in (SCENARIO_KINDS["detection"].TABLES["protocol"].moved or {})
