@@ -67,3 +67,27 @@ def test_score_reads_a_file_with_the_keys_of_the_run_file_of_its_format_whose_ch
     )
     assert remembered(meta, str(headerless))[0] == own
     assert remembered(meta, str(logger))[0] == {}
+
+
+@pytest.mark.parametrize("fmt", ["mat", "npz", "h5"])
+def test_a_sample_interval_dt_gives_the_rate(tmp_path, fmt):
+    # a logger that stores the sample interval, not the rate (MATLAB's dt, an HDF5 group's 'dt' attribute): 'no
+    # sampling rate: the file has no 'fs'/time and none was given'
+    import h5py
+    import scipy.io
+
+    t, acc, tacho = _table()
+    path = tmp_path / f"take.{fmt}"
+    if fmt == "mat":
+        scipy.io.savemat(path, {"dt": 1 / 25600.0, "acc": acc, "tacho": tacho})
+    elif fmt == "npz":
+        np.savez(path, dt=np.float64(1 / 25600.0), acc=acc, tacho=tacho)
+    else:
+        with h5py.File(path, "w") as f:
+            g = f.create_group("daq")
+            g.attrs["dt"] = 1 / 25600.0
+            g["acc"], g["tacho"] = acc, tacho
+    assert read_header(path).rate
+    rec = read_recording(path, "acc", "tacho", unit="m/s^2")
+    assert rec.fs == pytest.approx(25600.0) and "dt" in rec.fs_source
+    assert "dt" not in rec.channels

@@ -15,6 +15,8 @@ import numpy as np
 from ...errors import GearlabInputError
 
 _RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate")  # compared lower-case: fs, Fs, FS
+# a sample interval in seconds, which a logger may store instead of the rate (MATLAB's dt): its reciprocal is one
+_INTERVAL_NAMES = ("dt", "delta_t", "sample_interval", "sampling_interval", "sample_period", "sampling_period")
 
 # A time channel by any of its common names, with its unit if the name says one: t, time, time_s,
 # "Time [s]", "t (ms)", "t/s", "Time, s", timestamp, Zeit, "Relative Time (s)", "rel. Zeit [ms]",
@@ -39,7 +41,16 @@ def time_scale(name: str) -> float | None:
 
 def is_rate_or_time(name: str) -> bool:
     """Whether a channel name is a sampling-rate field or a time vector (no signal channel)."""
-    return str(name).lower() in _RATE_NAMES or time_scale(name) is not None
+    return str(name).lower() in (*_RATE_NAMES, *_INTERVAL_NAMES) or time_scale(name) is not None
+
+
+def interval_rate(where: str, value: np.ndarray) -> tuple[str, np.ndarray]:
+    """(where, the rate in Hz) of a sample interval field (_INTERVAL_NAMES) in seconds; a value that is not one
+    positive number is passed on as it is, for the rate's check to refuse naming the field."""
+    arr = np.asarray(value)
+    if arr.size == 1 and arr.dtype.kind in "iuf" and float(arr.item()) > 0:
+        return f"{where} (1 / sample interval)", np.asarray(1.0 / float(arr.item()))
+    return where, value
 
 
 def not_time(names, columns, path, where: str) -> None:
@@ -143,6 +154,8 @@ def _keyed(available: Iterable[str], get, names: Sequence[str], listed: Iterable
     for n in shown:
         if n.lower() in _RATE_NAMES:
             contents.rates.append((f"'{n}'", _normalise(get(n))))
+        elif n.lower() in _INTERVAL_NAMES:
+            contents.rates.append(interval_rate(f"'{n}'", _normalise(get(n))))
         elif time_scale(n) is not None:
             contents.times.append(_time_field(f"time '{n}'", _normalise(get(n)), time_scale(n)))
     return contents

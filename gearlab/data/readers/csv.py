@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, Contents, _column, _keyed, _scalar
+from .base import _INTERVAL_NAMES, _RATE_NAMES, Contents, _column, _keyed, _scalar
 
 _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
 # a field that is a number written with a decimal comma (a semicolon-separated European export)
@@ -38,7 +38,6 @@ _PREAMBLE_FIELD = re.compile(r"^([A-Za-z][\w .\-]*?)\s*(?:[\[(]\s*([^\])]*?)\s*[
 _PREAMBLE_VALUE = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-zµμ/]*)$")
 _RATE_UNITS = {"": 1.0, "hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "1/s": 1.0, "ks/s": 1e3}
 _INTERVAL_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
-_INTERVAL_NAMES = ("dt", "delta_t", "sample_interval", "sampling_interval", "sample_period", "sampling_period")
 
 
 def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:

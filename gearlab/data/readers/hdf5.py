@@ -10,7 +10,17 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, Contents, _normalise, _time_field, check_size, stated_unit, time_scale
+from .base import (
+    _INTERVAL_NAMES,
+    _RATE_NAMES,
+    Contents,
+    _normalise,
+    _time_field,
+    check_size,
+    interval_rate,
+    stated_unit,
+    time_scale,
+)
 
 
 def _h5py():
@@ -60,6 +70,11 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
             for key, value in node.attrs.items()
             if key.lower() in _RATE_NAMES
         ]
+        rates += [
+            interval_rate(f"attribute '{key}' of '{node.name}'", _normalise(value))
+            for key, value in node.attrs.items()
+            if key.lower() in _INTERVAL_NAMES
+        ]
         times = []
         if is_group:
             for key in node:
@@ -68,6 +83,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                 child = node.get(key)
                 if isinstance(child, h5py.Dataset) and key.lower() in _RATE_NAMES:
                     rates.append((f"dataset '{child.name}'", read(child)))
+                elif isinstance(child, h5py.Dataset) and key.lower() in _INTERVAL_NAMES:
+                    rates.append(interval_rate(f"dataset '{child.name}'", read(child)))
                 elif isinstance(child, h5py.Dataset) and time_scale(key) is not None:
                     times.append(_time_field(f"time dataset '{child.name}'", read(child), time_scale(key)))
         return rates, times

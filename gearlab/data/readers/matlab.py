@@ -10,7 +10,18 @@ import zlib
 from collections.abc import Sequence
 from pathlib import Path
 
-from .base import _RATE_NAMES, Contents, _keyed, _normalise, _time_field, is_rate_or_time, max_record_bytes, time_scale
+from .base import (
+    _INTERVAL_NAMES,
+    _RATE_NAMES,
+    Contents,
+    _keyed,
+    _normalise,
+    _time_field,
+    interval_rate,
+    is_rate_or_time,
+    max_record_bytes,
+    time_scale,
+)
 from .hdf5 import _read_hdf5, leaf_match
 
 
@@ -83,6 +94,8 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
             continue
         if leaf.lower() in _RATE_NAMES:
             contents.rates.append((f"'{full}'", _normalise(get(full))))
+        elif leaf.lower() in _INTERVAL_NAMES:
+            contents.rates.append(interval_rate(f"'{full}'", _normalise(get(full))))
         elif time_scale(leaf) is not None:
             contents.times.append(_time_field(f"time '{full}'", _normalise(get(full)), time_scale(leaf)))
     return contents
