@@ -55,3 +55,28 @@ def test_a_pinion_count_whose_sideband_outgrows_its_mesh_line_at_one_harmonic_is
     lines = Lines(at, 10 ** (db / 20), db)
     found = harmonic_comb(lines, [15.0] + [15.0 + j for j in (-3, -2, -1, 1, 2, 3)], 1 / 314, [])
     assert found is not None and abs(found[1] - 14.0) < 1e-6, found
+
+
+def test_a_first_mesh_a_wrong_later_description_puts_a_harmonic_on_is_still_the_first_stage_s(tmp_path):
+    # Round 14's C (14/53 + 18/59 + 23/67, no tacho) described with 17 for 18, read at its speed (the lines below, in
+    # orders, dB over the floor): the described last mesh, 1.7506, puts its 8th, 16th and 24th harmonics 0.0045,
+    # 0.009 and 0.013 orders off the first mesh's 14, 28 and 42, so those lines were the last stage's and left out of
+    # stage 1's comb; stage 2's real 3rd and 6th harmonics (14.264, 28.528: 18 = 17 + 1 teeth put them on the first
+    # mesh's wheel sidebands) then read as the first mesh, 'stage 1: the pinion on the input shaft shows 11.1 teeth'
+    from gearboxes import description, stage
+
+    from gearlab.gearbox import load_gearbox
+    from gearlab.gearbox.match import check_description
+    from gearlab.gearbox.speed import Lines
+
+    at = np.array([1.8535, 4.7547, 14.0, 14.2641, 27.9994, 28.5278, 41.9989, 42.7912, 1.0, 0.2642])
+    db = np.array([61.1, 51.6, 35.8, 34.4, 28.5, 32.1, 22.4, 20.0, 53.2, 42.8])
+    box = description(*(stage(a, b) for a, b in ((14, 53), (17, 59), (23, 67))), name="c", speed="35 Hz")
+    (tmp_path / "c.toml").write_text(box.replace("z = 14,", "z = 14, x = 0.3,"))
+    order = np.argsort(-db)
+    check = check_description(
+        Lines(at[order], 10 ** (db[order] / 20), db[order]), load_gearbox(tmp_path / "c.toml"), 314, False
+    )
+    first = check["stages"][0]
+    assert first["matched"] and abs(first["measured_order"] - 14.0) < 1e-3, first
+    assert "18-tooth pinion on the intermediate 1 shaft? described 17" in " ".join(check["differences"]), check

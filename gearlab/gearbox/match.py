@@ -335,9 +335,11 @@ def check_description(
             if q != k
         ]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
-        # lines on the other stages' mesh harmonics are theirs (unless on this one's too)
+        # lines on the other stages' mesh harmonics are theirs, unless within a line's tolerance of this one's too:
+        # a wrong later description can put a harmonic there (14/53 + 17/59 + 23/67 for 18: the described last
+        # mesh's 8th at 14.0045), and the first mesh left out of its own comb let stage 2's 3rd (14.264) take it
         shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
-        theirs = [(x, t) for x, t in shared if abs(x / look - round(x / look)) > 1e-9]
+        theirs = [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
         o_tacho = measured_shaft[k + 1][0] if measured_shaft.get(k + 1, (0, 0, ""))[2] == "tacho" else None
         family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho)
         i = None
