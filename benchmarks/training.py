@@ -2,7 +2,7 @@
 limit, measured side by side in one run.
 
     python benchmarks/training.py [--rounds N] [--steps S] [--threads T] [--clock wall|cpu]
-                                  [--device cpu|cuda] [--networks shapes,fast]
+                                  [--device cpu|cuda] [--networks shapes,fast] [--compile MODES]
 
 For each default network (`shapes`: scenarios/quick.toml, expB.toml, transfer_benchmark.toml;
 `fast`: scenarios/phm09_chip.toml, 2048 points) at its scenario's batch (40) with its optimiser
@@ -59,8 +59,7 @@ Within 3x of the roof needs both, the fixed cost and the cost per sample, cut by
 Measured against these steps on one thread and not adopted (no gain beyond the load's noise, or
 a loss): 3 or 8 units' `fast` as one network of grouped convolutions (16.4-16.9 against
 17.1-19.2 ms for 3 steps, 42.6-44.8 against 42.5-47.0 for 8) or torch.func.vmap over stacked
-weights (21-22 against 16-18 ms for 3); torch.compile
-(106 s to compile, 7.5 against 5.5 ms a step); `fast` channels-last with its convolutions as
+weights (21-22 against 16-18 ms for 3); `fast` channels-last with its convolutions as
 products of windows (3.76 against 3.43 ms for the layers); its stride-2 convolutions as batched
 products (1.41 against 1.87 ms at batch 2, 4.77 against 4.30 at 40); oneDNN off (5.77 against
 4.95 ms); batch normalisation or the `shapes` mixture by hand-written gradients; one flat buffer
@@ -107,6 +106,29 @@ ms of system time) without it. The first layer as a product of its windows witho
 (an as_strided view of the padded signals, rows 16 values apart): BLAS needs a row stride of at
 least the row's 64 values, so torch copies it all the same.
 
+A compiled step (`--compile MODES`: the plain loop with the network's modules compiled by
+torch.compile in each mode, in the same alternated rounds; `compile s` is the first epoch's wall
+clock: the first compilation in the process includes dynamo's and inductor's imports, 4.5 s, and
+later ones reuse the kernels it left in inductor's cache). Not adopted: CPU clock, load 6-9, 7
+rounds, 2 runs, cold caches: compiled/gearlab `fast` 0.59-0.73, `shapes` 0.65-0.79, default and
+max-autotune-no-cudagraphs alike, so never repaid; 12-86 s to compile. The modules, since gearlab's
+forward breaks dynamo's graph at `fast`'s autograd function (its backward writes into strided
+views): compiled as it is, only the classifier is (3.44 against 3.21 ms a step). That function's
+forward and backward written again as pure tensor functions and compiled by inductor (the pointwise
+passes fused, the products left to MKL; gradients 1e-6 of their largest from the shipped ones), 3
+runs (2 default, 1 max-autotune-no-cudagraphs): 2.75-3.00 against 2.92-3.18 ms a step (6 %), 38-61 s to
+compile cold, 7 s warm, again for each batch shape a worker meets (full and last batches, the joint
+steps' 80 rows, evaluation's 256): 0.2 ms a step against 7-38 s a shape, for a second copy of the
+function to keep equal to the first and a C++ compiler in every install. torch.jit.trace + freeze of
+`fast`'s evaluation (batch normalisation folded into the convolutions): 3.76 against the modules'
+4.91 ms a batch of 256 (the shipped function's as long), after 3.1 s to trace and freeze, again for
+each epoch's weights (torch.compile of it 3.45 ms, 63 s).
+On an NVIDIA H200 (torch 2.11, 5 rounds, 2 runs, the compiled loops in one; `--networks shapes,fast`:
+the adapters' plugins were not installed there): gearlab `fast` 3.3-4.0 ms a step, all of it fixed
+cost (10-12 k samples/s, gearlab/plain 0.89-1.05), `shapes` 17.5-21.1 ms (1.9-2.3 k samples/s,
+slower than one CPU core: its templates' torch path loops over their offsets); compiled (default,
+max-autotune-no-cudagraphs, reduce-overhead) `fast` 0.83-0.88 of gearlab, `shapes` 0.67-1.07.
+
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
 On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the
@@ -116,6 +138,7 @@ wall clock: the figures then hold for a free core. About 30 s with the defaults.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import time
@@ -283,11 +306,13 @@ def gearlab_run(s: dict, rows: int, batch: int, epochs: int, device: torch.devic
     return clock() - t
 
 
-def plain_run(s: dict, batch: int, epochs: int) -> float:
+def plain_run(s: dict, batch: int, epochs: int, loop: tuple | None = None) -> float:
     """Seconds of the plainest loop over the case *s* for *epochs* (tensors already on the device):
     a joint step embeds a source and a target batch together and adds the adapter's loss at full
-    weight."""
-    net, opt, X, y, X_target = s["plain"], s["opt"], s["Xt"], s["yt"], s["Xt_target"]
+    weight. *loop*: (network, optimiser, forward) of a supervised case's compiled loop, where
+    forward stands for the network's."""
+    net, opt, forward = loop or (s["plain"], s["opt"], s["plain"])
+    X, y, X_target = s["Xt"], s["yt"], s["Xt_target"]
     loss_fn = nn.CrossEntropyLoss()
     net.train()
     synchronize(X.device)
@@ -298,7 +323,7 @@ def plain_run(s: dict, batch: int, epochs: int) -> float:
             idx = order[i : i + batch]
             opt.zero_grad()
             if s["adapter"] is None:
-                loss = loss_fn(net(X[idx]), y[idx])
+                loss = loss_fn(forward(X[idx]), y[idx])
             else:
                 z = net.embed(torch.cat([X[idx], X_target[idx]]))
                 z_s, z_t = z[: len(idx)], z[len(idx) :]
@@ -309,6 +334,35 @@ def plain_run(s: dict, batch: int, epochs: int) -> float:
             opt.step()
     synchronize(X.device)
     return clock() - t
+
+
+def compiled_loop(name: str, length: int, mode: str, device: torch.device) -> tuple:
+    """(network, Adam, forward) of *name* with its modules compiled by torch.compile in *mode*, one
+    shape (the loop's batches are all full). The modules, not gearlab's forward: on the CPU that runs
+    `fast` as one autograd function dynamo cannot trace (a graph break: its backward writes into
+    strided views), so only the classifier would be compiled."""
+    net = network(name, length, device)
+    model = nn.Sequential(net.features, net.classifier)
+    return net, torch.optim.Adam(net.parameters(), lr=1e-3), torch.compile(model, mode=mode, dynamic=False)
+
+
+def compile_first(s: dict, batch: int, mode: str) -> float | str:
+    """Wall seconds of the compiled loop's first epoch in *mode* (the compilation: inductor runs its
+    C++ compiler in other processes, which a CPU clock would not see), or the first line of why it
+    failed (no C++ compiler, say): the benchmark goes on without that loop."""
+    t = time.perf_counter()
+    try:
+        plain_run(s, batch, 1, s["compiled"][mode])
+    except Exception as error:  # torch.compile compiles on the first call, and fails there
+        del s["compiled"][mode]
+        return f"failed: {type(error).__name__}: {str(error).strip().splitlines()[0] if str(error).strip() else ''}"
+    return time.perf_counter() - t
+
+
+def repaid_after(compile_s: float, step: float, compiled_step: float) -> float:
+    """Steps after which a compilation of *compile_s* seconds is repaid by a step of *compiled_step*
+    seconds against *step*; inf where the compiled step is no faster."""
+    return compile_s / (step - compiled_step) if compiled_step < step else math.inf
 
 
 def main() -> None:
@@ -327,6 +381,12 @@ def main() -> None:
         "--networks",
         default=",".join(c[0] for c in CASES),
         help="comma-separated, of: " + ", ".join(c[0] for c in CASES),
+    )
+    parser.add_argument(
+        "--compile",
+        default="",
+        help="comma-separated torch.compile modes (default, max-autotune-no-cudagraphs, reduce-overhead): "
+        "the supervised networks' plain loop compiled in each, beside the others",
     )
     args = parser.parse_args()
     global clock
@@ -360,6 +420,10 @@ def main() -> None:
         s["flops"] = {k: sum(f for kind, f, _ in s["costs"] if kind == k) for k in ("conv", "matmul")}
         s["bytes"] = sum(moved for _, _, moved in s["costs"])
         s["times"] = {"gearlab": [], "plain": [], "limit": [], "roof": [], "dram": [], "small": []}
+        modes = [m for m in args.compile.split(",") if m] if adapter is None else []
+        s["compiled"] = {mode: compiled_loop(name, length, mode, device) for mode in modes}
+        s["compile_s"] = {mode: compile_first(s, batch, mode) for mode in modes}
+        s["times"].update({f"compiled {mode}": [] for mode in s["compiled"]})
     peak_rounds: dict[str, list[float]] = {"matmul": [], "conv": [], "memory": [], "cache": []}
     for _ in range(args.rounds):  # alternated: a load that comes and goes hits every figure alike
         for row, _, _, batch, _, _ in cases:
@@ -370,6 +434,8 @@ def main() -> None:
             small = gearlab_run(s, per_epoch * SMALL, SMALL, epochs, device)
             s["times"]["small"].append(small / (samples * SMALL // batch))
             s["times"]["plain"].append(plain_run(s, batch, epochs) / samples)
+            for mode, loop in s["compiled"].items():
+                s["times"][f"compiled {mode}"].append(plain_run(s, batch, epochs, loop) / samples)
             peak = peaks(device)
             bw = {"memory": bandwidth(device, STREAM), "cache": bandwidth(device, CACHE)}
             for kind, value in (*peak.items(), *bw.items()):
@@ -427,6 +493,38 @@ def main() -> None:
             f"{1e6 * per_sample:.1f} us, at the roof {rows} x {1e6 * roof:.1f} us; gearlab/roof with the fixed "
             f"cost alone {rows * roof / (fixed + rows * roof):.2f}, with the cost per sample alone "
             f"{roof / per_sample:.2f}"
+        )
+    compiled_table(setups, cases)
+
+
+def compiled_table(setups: dict, cases: list) -> None:
+    """The compiled loops (--compile) beside gearlab's step: compile seconds (wall, the first epoch),
+    samples/s, and the steps that repay the compilation."""
+    rows = [(row, mode) for row, *_ in cases for mode in setups[row]["compile_s"]]
+    if not rows:
+        return
+    print(
+        "torch.compile of the network's modules in the plain loop (compile s: its first epoch, wall clock; "
+        "repaid after: the steps whose saving against gearlab's step pays the compilation):"
+    )
+    print(
+        f"  {'network':10s} {'mode':28s} {'compile s':>9s} {'compiled/s':>10s} {'ms/step':>7s} "
+        f"{'compiled/gearlab':>16s} {'compiled/plain':>14s} {'compiled/roof':>13s} {'repaid after':>12s}"
+    )
+    for row, mode in rows:
+        s, batch = setups[row], next(c[3] for c in cases if c[0] == row)
+        compile_s = s["compile_s"][mode]
+        if isinstance(compile_s, str):
+            print(f"  {row:10s} {mode:28s} {compile_s}")
+            continue
+        median = {k: statistics.median(v) for k, v in s["times"].items()}
+        compiled = median[f"compiled {mode}"]
+        repaid = repaid_after(compile_s, batch * median["gearlab"], batch * compiled)
+        print(
+            f"  {row:10s} {mode:28s} {compile_s:9.1f} {1 / compiled:10.0f} {1e3 * batch * compiled:7.2f} "
+            f"{median['gearlab'] / compiled:16.2f} {median['plain'] / compiled:14.2f} "
+            f"{median['roof'] / compiled:13.3f} "
+            f"{'never' if math.isinf(repaid) else f'{repaid:.0f} steps':>12s}"
         )
 
 

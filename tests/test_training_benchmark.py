@@ -82,3 +82,55 @@ def test_fast_bytes_per_sample_are_counted_by_hand():
     kind, flops, moved = costs[1]
     assert kind == "conv" and flops == 2 * 16 * 128 * 64 * 2
     assert moved == 4.0 * (2 * (2048 + 16 * 128) + 3 * 16 * 64 / 40)
+
+
+def _compiled_run(monkeypatch, capsys, compile_fn) -> str:
+    """A tiny run of `fast` with --compile default, torch.compile replaced by *compile_fn*."""
+    bench = _benchmark()
+    monkeypatch.setattr(bench.torch, "compile", compile_fn)
+    threads = torch.get_num_threads()
+    argv = ["training.py", "--rounds", "1", "--steps", "1", "--networks", "fast", "--compile", "default"]
+    monkeypatch.setattr(sys, "argv", argv)
+    try:
+        bench.main()
+    finally:
+        torch.set_num_threads(threads)
+    return capsys.readouterr().out
+
+
+def test_a_compiled_loop_is_timed_beside_gearlab(monkeypatch, capsys):
+    """--compile adds the plain loop with the network's modules compiled (here a stand-in that
+    returns them as they are), its compile seconds and the steps that repay them."""
+    out = _compiled_run(monkeypatch, capsys, lambda model, mode, dynamic: model)
+    lines = out.splitlines()
+    header = next(line for line in lines if line.strip().startswith("network ") and "compiled/gearlab" in line)
+    names = header.replace("compile s", "compile_s").replace("repaid after", "repaid_after").split()
+    row = next(line for line in lines if line.split()[:2] == ["fast", "default"])
+    value = dict(zip(names[2:-1], map(float, row.split()[2:8])))
+    assert value["compile_s"] >= 0 and value["compiled/s"] > 0 and value["ms/step"] > 0
+    assert value["compiled/gearlab"] > 0 and 0 < value["compiled/roof"] < 1
+    assert row.endswith(" steps") or row.endswith("never")
+    assert any(line.startswith("fast ") for line in lines)  # the main table as before
+
+
+def test_a_compilation_that_fails_leaves_the_rest_of_the_run(monkeypatch, capsys):
+    """Without a C++ compiler inductor fails at the first call: the row says why in one line and
+    the benchmark goes on."""
+
+    def compile_fn(model, mode, dynamic):
+        def fails(x):
+            raise RuntimeError("no C++ compiler found\nmore detail")
+
+        return fails
+
+    out = _compiled_run(monkeypatch, capsys, compile_fn)
+    row = next(line for line in out.splitlines() if line.split()[:2] == ["fast", "default"])
+    assert row.split(None, 2)[2] == "failed: RuntimeError: no C++ compiler found"
+    assert any(line.startswith("fast ") and "(phm09_chip)" in line for line in out.splitlines())
+
+
+def test_a_compilation_is_repaid_by_the_steps_it_saves():
+    """10 s of compilation saving 1 ms a step: 10,000 steps; a compiled step no faster: never."""
+    bench = _benchmark()
+    assert bench.repaid_after(10.0, 3e-3, 2e-3) == pytest.approx(10_000)
+    assert bench.repaid_after(10.0, 2e-3, 2e-3) == float("inf")
