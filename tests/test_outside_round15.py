@@ -91,3 +91,20 @@ def test_a_sample_interval_dt_gives_the_rate(tmp_path, fmt):
     rec = read_recording(path, "acc", "tacho", unit="m/s^2")
     assert rec.fs == pytest.approx(25600.0) and "dt" in rec.fs_source
     assert "dt" not in rec.channels
+
+
+def test_a_time_column_of_iso_timestamps_gives_the_rate(tmp_path):
+    # a logger's clock times ('2026-11-30T10:00:00.000039'): 'time 'timestamp' must hold numbers (seconds), got
+    # dtype <U26'
+    import datetime
+
+    t, acc, tacho = _table()
+    t0 = datetime.datetime(2026, 11, 30, 10, 0, 0)
+    stamps = [(t0 + datetime.timedelta(seconds=float(s))).isoformat(timespec="microseconds") for s in t]
+    path = tmp_path / "clock.csv"
+    path.write_text(
+        "timestamp,acc_ms2,tacho_V\n" + "\n".join(f"{s},{a:.6f},{k:.3f}" for s, a, k in zip(stamps, acc, tacho))
+    )
+    rec = read_recording(path, "acc_ms2", "tacho_V")
+    assert rec.fs == pytest.approx(25600.0, rel=1e-3)
+

@@ -212,6 +212,18 @@ def _written_resolution(t: np.ndarray) -> np.ndarray:
     return step
 
 
+def _clock_seconds(arr: np.ndarray) -> np.ndarray:
+    """Text times that are ISO 8601 clock times ('2026-11-30T10:00:00.000039', a logger's timestamps) as seconds
+    from the first, to the microsecond; any other array as it is."""
+    if arr.dtype.kind not in "USO" or arr.size < 2:
+        return arr
+    try:
+        clock = np.array([str(v).strip() for v in arr.ravel()], dtype="datetime64[us]")
+    except ValueError:
+        return arr
+    return (clock - clock[0]).astype(np.int64) * 1e-6
+
+
 def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float]:
     """(fs, relative uncertainty) from a time vector in seconds, checked to be uniform.
 
@@ -220,9 +232,12 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     (rounded to a few digits in a CSV file), so its uncertainty, 2·max deviation / span,
     widens the agreement asked of a given fs.
     """
-    arr = np.asarray(value)
+    arr = _clock_seconds(np.asarray(value))
     if arr.dtype.kind not in "biuf":
-        raise GearlabInputError(f"{path}: {where} must hold numbers (seconds), got dtype {arr.dtype}")
+        first = next((str(v) for v in arr.ravel()[:1]), "")
+        raise GearlabInputError(
+            f"{path}: {where} must hold times in seconds or ISO 8601 clock times, got {_one_line_repr(first)}"
+        )
     with prefixed(path):
         t = check_signal(np.squeeze(arr) if arr.ndim > 1 else arr, where)
     if n is not None and t.size != n:
