@@ -108,3 +108,17 @@ def test_a_time_column_of_iso_timestamps_gives_the_rate(tmp_path):
     rec = read_recording(path, "acc_ms2", "tacho_V")
     assert rec.fs == pytest.approx(25600.0, rel=1e-3)
 
+
+def test_a_record_with_dropped_samples_says_where_and_what_to_do(tmp_path):
+    # a logger that lost 50 ms: the line named the step only; it now says how many samples are missing and what to do
+    t, acc, tacho = _table(4000)
+    keep = np.ones(t.size, bool)
+    keep[2000:2128] = False
+    path = tmp_path / "gap.csv"
+    path.write_text("time_s,acc_ms2\n" + "\n".join(f"{a:.7f},{b:.6f}" for a, b in zip(t[keep], acc[keep])))
+    from gearlab.errors import GearlabInputError
+
+    with pytest.raises(GearlabInputError) as err:
+        read_recording(path, "acc_ms2")
+    text = str(err.value)
+    assert "\n" not in text and "about 128 samples missing" in text and "split the record" in text, text

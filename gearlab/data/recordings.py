@@ -264,9 +264,13 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt + (written[1:] + written[:-1]) / 2)
     if uneven.size:  # a gap, a repeated block, a clock jump: name the first
         i = int(uneven[0])
+        usual = float(np.mean(np.delete(steps, uneven))) if uneven.size < steps.size else dt
+        lost = round(steps[i] / usual) - 1
+        missing = f" (about {lost} samples missing at {t[i + 1]:.6g} s)" if lost >= 1 else ""
         raise GearlabInputError(
             f"{path}: {where} is not uniformly sampled: the step between samples {i} and {i + 1} is "
-            f"{steps[i]:.6g} s, {steps[i] / dt:.3g} times the mean step {dt:.6g} s; expected uniform sampling"
+            f"{steps[i]:.6g} s, {steps[i] / usual:.3g} times the usual step {usual:.6g} s{missing}; expected uniform "
+            "sampling: split the record at the gap, each part a file of its own"
         )
     worst = int(np.argmax(deviation - written / 2))
     if deviation[worst] > _TIME_JITTER * dt + written[worst] / 2:  # steps each fine but drifting
