@@ -122,3 +122,33 @@ def test_a_record_with_dropped_samples_says_where_and_what_to_do(tmp_path):
         read_recording(path, "acc_ms2")
     text = str(err.value)
     assert "\n" not in text and "about 128 samples missing" in text and "split the record" in text, text
+
+
+@pytest.mark.parametrize("fmt", ["mat", "npz", "h5"])
+def test_a_column_of_a_matrix_of_channels_is_a_channel(tmp_path, fmt):
+    # a logger's one matrix of channels (MATLAB 'data', N x 2, beside 'fs'): 'vibration channel 'data' has shape
+    # (2000, 2); expected one channel over time', with no way to name a column; now 'data[0]', 'data[1]'
+    import h5py
+    import scipy.io
+
+    from gearlab.data.recordings import check_recording
+
+    t, acc, tacho = _table()
+    data = np.column_stack([acc, tacho])
+    path = tmp_path / f"take.{fmt}"
+    if fmt == "mat":
+        scipy.io.savemat(path, {"data": data, "fs": 25600.0})
+    elif fmt == "npz":
+        np.savez(path, data=data.T, fs=25600.0)  # channels first: the shorter axis is the channels'
+    else:
+        with h5py.File(path, "w") as f:
+            f["data"] = data
+            f["data"].attrs["fs"] = 25600.0
+    check_recording(path, "[target]", {"vibration": "data[0]", "tacho": "data[1]"}, unit="m/s^2")
+    rec = read_recording(path, "data[0]", "data[1]", unit="m/s^2")
+    assert rec.fs == pytest.approx(25600.0)
+    assert np.allclose(rec.signal, acc) and np.allclose(rec.tacho, tacho)
+    from gearlab.errors import GearlabInputError
+
+    with pytest.raises(GearlabInputError, match=r"data\[2\]"):
+        read_recording(path, "data[2]", unit="m/s^2")

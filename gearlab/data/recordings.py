@@ -56,7 +56,7 @@ from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
 from .channel_units import name_unit as name_unit  # what a channel's name says of its unit
 from .readers import READERS, Contents, check_size
-from .readers.base import _listing, _one_line, _one_line_repr, not_time
+from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix_column, not_time
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
@@ -157,14 +157,20 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
     path = Path(path)
     fmt = format_of(path)
     check_size(path, "the file", path.stat().st_size)
+    columns = {n: c for n in names if (c := matrix_column(n)) is not None}  # 'data[1]': a matrix's column
     try:
-        contents = READERS[fmt](path, names)
+        contents = READERS[fmt](path, list(dict.fromkeys(columns[n][0] if n in columns else n for n in names)))
     except GearlabInputError:
         raise
     except MemoryError:
         raise GearlabInputError(f"cannot read {path} as {fmt}: not enough memory for what it declares") from None
     except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file
         raise GearlabInputError(f"cannot read {path} as {fmt}: {_one_line(exc)}") from None
+    for name, (matrix, index) in columns.items():
+        if matrix in contents.found and name not in contents.found:
+            contents.found[name] = column_of(contents.found[matrix], index, name, path)
+            if matrix in contents.units:
+                contents.units[name] = contents.units[matrix]
     for name in names:
         if name not in contents.found:
             role = f"{roles[name]} " if roles and name in roles else ""
@@ -352,7 +358,10 @@ def series(raw, name: str, role: str, path: str) -> np.ndarray:
     if arr.ndim == 0:
         raise GearlabInputError(f"{path}: {what} holds a single value; expected a time series, one value per sample")
     if arr.ndim > 1:
-        raise GearlabInputError(f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)")
+        raise GearlabInputError(
+            f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)"
+            + (f", e.g. one of its columns: '{name}[0]' … '{name}[{min(arr.shape) - 1}]'" if arr.ndim == 2 else "")
+        )
     with prefixed(path):
         return check_signal(arr, what)
 

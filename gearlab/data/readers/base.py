@@ -44,6 +44,26 @@ def is_rate_or_time(name: str) -> bool:
     return str(name).lower() in (*_RATE_NAMES, *_INTERVAL_NAMES) or time_scale(name) is not None
 
 
+_MATRIX_COLUMN = re.compile(r"^(.+)\[(\d+)\]$")
+
+
+def matrix_column(name) -> tuple[str, int] | None:
+    """(array, index) of a channel named as one column of a matrix of channels ('data[1]': a logger's N x k
+    'data'), or None."""
+    match = _MATRIX_COLUMN.match(str(name))
+    return (match.group(1), int(match.group(2))) if match else None
+
+
+def column_of(matrix: np.ndarray, index: int, name: str, path) -> np.ndarray:
+    """Channel *index* of a 2-D *matrix* of channels (along its shorter axis: N x k or k x N); one line where there
+    is no such channel."""
+    arr = np.asarray(matrix)
+    if arr.ndim != 2 or index >= min(arr.shape):
+        held = f"shape {arr.shape}" if arr.ndim != 2 else f"{min(arr.shape)} channels (0 … {min(arr.shape) - 1})"
+        raise GearlabInputError(f"{path}: no channel {name!r}: its array holds {held}; expected a column of a matrix")
+    return arr[:, index] if arr.shape[0] >= arr.shape[1] else arr[index, :]
+
+
 def interval_rate(where: str, value: np.ndarray) -> tuple[str, np.ndarray]:
     """(where, the rate in Hz) of a sample interval field (_INTERVAL_NAMES) in seconds; a value that is not one
     positive number is passed on as it is, for the rate's check to refuse naming the field."""

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, is_rate_or_time, not_time
+from .base import _RATE_NAMES, is_rate_or_time, matrix_column, not_time
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,7 @@ class Header:
             held = "a single value" if math.prod(shape) <= 1 else f"an array of shape {shape}"
             raise GearlabInputError(
                 f"{where}: {path}'s '{name}' holds {held}; expected one channel over time (a 1-D array)"
+                + (f", e.g. one of its columns: '{name}[0]' … '{name}[{min(shape) - 1}]'" if len(shape) == 2 else "")
             )
 
     def check_rates(self, fs: float | None, where: str, path) -> None:
@@ -80,6 +81,9 @@ class Header:
     def find(self, name: str) -> bool:
         if name in self.channels or self.resolve(name) in self.channels:
             return True
+        if (column := matrix_column(name)) is not None and self.find(column[0]):
+            shape = self.shapes.get(self.resolve(column[0]))  # where the header gives it: a matrix with that column
+            return shape is None or (len(shape) == 2 and column[1] < min(shape))
         return self.indexed and str(name).strip().isdigit() and int(name) < len(self.channels)
 
     def resolve(self, name: str) -> str:
