@@ -152,3 +152,22 @@ def test_a_column_of_a_matrix_of_channels_is_a_channel(tmp_path, fmt):
 
     with pytest.raises(GearlabInputError, match=r"data\[2\]"):
         read_recording(path, "data[2]", unit="m/s^2")
+
+
+def test_a_speed_channel_given_as_the_tacho_is_named_as_such(tmp_path):
+    # a logger's speed channel in rpm ('speed_rpm', 1400 rpm rising 5 %) given as --tacho: 'pulse train has 1 rising
+    # edge(s) ... at least 2 once-per-revolution pulses are needed', as though the pulses were too few
+    from gearlab.data.recordings import shaft_angle
+    from gearlab.errors import GearlabInputError
+
+    t, acc, _ = _table(25600)
+    rpm = 1400 * (1 + 0.05 * t / t[-1]) + np.random.default_rng(1).normal(0, 2, t.size)
+    path = tmp_path / "speed.csv"
+    path.write_text(
+        "time_s,acc_ms2,speed_rpm\n" + "\n".join(f"{a:.7f},{b:.6f},{c:.2f}" for a, b, c in zip(t, acc, rpm))
+    )
+    rec = read_recording(path, "acc_ms2", "speed_rpm")
+    with pytest.raises(GearlabInputError) as err:
+        shaft_angle(rec)
+    text = str(err.value)
+    assert "a speed channel?" in text and "'1435 rpm'" in text and "\n" not in text, text

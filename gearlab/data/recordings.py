@@ -512,6 +512,19 @@ def read_recording(
 UNCONFIRMED = "which the mesh lines do not confirm"  # a declared speed that a description's mesh lines contradict
 
 
+def speed_channel_note(x: np.ndarray) -> str | None:
+    """Why a tacho gave no revolutions, where it holds a positive level varying less than 30 % but varying (a speed
+    channel in rpm or Hz; a pulse train swings between its low and high level, a stuck one is flat), else None."""
+    lo, mid, hi = np.percentile(x, [1, 50, 99])
+    if not (lo > 0 and 0 < hi - lo < 0.3 * mid):
+        return None
+    return (
+        f"it holds a steady level ({mid:.4g} ± {(hi - lo) / 2:.2g}), neither pulses nor a shaft angle: a speed "
+        f"channel? expected a tacho's pulses or the shaft angle; give the speed instead (--speed / speed = "
+        f"'{mid:.4g} rpm', if in rpm) or no tacho: the mesh lines give the speed"
+    )
+
+
 def shaft_angle(
     rec: Recording,
     *,
@@ -582,8 +595,14 @@ def shaft_angle(
             return {"tacho": wrapped}, unwrap_tacho(wrapped), f"tacho '{name}' (shaft angle{detected})"
     # angle_from_pulses fails only for want of edges: a tacho that never completes a revolution.
     what = "a once-per-revolution pulse train" if pulses_per_rev == 1 else f"{pulses_per_rev} pulses per revolution"
-    with prefixed(f"{path}: tacho '{name}' never completes a revolution (read as {what}{detected})"):
-        angle = angle_from_pulses(rec.tacho, fs)
+    where = f"{path}: tacho '{name}' never completes a revolution (read as {what}{detected})"
+    try:
+        with prefixed(where):
+            angle = angle_from_pulses(rec.tacho, fs)
+    except GearlabInputError:
+        if (note := speed_channel_note(rec.tacho)) is None:
+            raise
+        raise GearlabInputError(f"{where}: {note}") from None
     if pulses_per_rev == 1:
         return {"pulses": rec.tacho}, angle, f"tacho '{name}' (once-per-revolution pulses{detected})"
     angle = angle / pulses_per_rev
