@@ -404,7 +404,7 @@ def test_shapes_local_templates_are_the_whole_revolution_likelihood_exactly(law)
 @pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
 def test_shapes_compiled_laplace_scores_and_gradients_are_torch_s(dtype):
     """The compiled loops (LaplaceGain, taken for a CPU input that needs no gradient) give the
-    per-window torch.cdist path's scores and template gradients, wrapping windows included."""
+    gathered windows' torch path's scores and template gradients, wrapping windows included."""
     import numpy as np
 
     from gearlab.learn.networks import LaplaceGain, ShapeLikelihood
@@ -429,6 +429,32 @@ def test_shapes_compiled_laplace_scores_and_gradients_are_torch_s(dtype):
     assert torch.allclose(scores[0], scores[1], rtol=tol, atol=tol * scores[1].abs().max())
     assert torch.allclose(grads[0], grads[1], rtol=tol, atol=tol)
     assert grads[0].abs().sum() > 0
+
+
+def test_shapes_torch_laplace_path_takes_as_many_operators_for_any_number_of_windows():
+    """Where the compiled loops do not serve (a GPU; here an input that needs a gradient), a
+    `shapes` layer's Laplace scores take the same few operators whether its templates sit in 2
+    windows or 32: no loop over the windows, whose operators and device synchronisations each
+    made a CUDA step 10 times a CPU core's."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    from gearlab.learn.networks import ShapeLikelihood
+
+    class Count(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            self.calls = getattr(self, "calls", 0) + 1
+            return func(*args, **(kwargs or {}))
+
+    counts = []
+    for windows in (2, 32):
+        layer = ShapeLikelihood(64, 512, law="laplace", width=64)  # windows 16 samples apart
+        with torch.no_grad():
+            layer.offset.copy_(torch.arange(64) % windows * 16)
+        r = torch.randn(4, 512, requires_grad=True)
+        with Count() as count:
+            layer(r)
+        counts.append(count.calls)
+    assert counts[0] == counts[1] < 40
 
 
 @pytest.mark.parametrize("length", [2048, 2050, 256])
