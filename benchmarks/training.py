@@ -123,12 +123,13 @@ function to keep equal to the first and a C++ compiler in every install. torch.j
 `fast`'s evaluation (batch normalisation folded into the convolutions): 3.76 against the modules'
 4.91 ms a batch of 256 (the shipped function's as long), after 3.1 s to trace and freeze, again for
 each epoch's weights (torch.compile of it 3.45 ms, 63 s).
-On an NVIDIA H200 (torch 2.11, 5 rounds, 3 runs, the compiled loops in one): gearlab `fast` 3.3-4.0
-ms a step, fast+coral 6.1, fast+mmd 5.6, nearly all of it fixed cost (gearlab/plain 0.84-1.05),
-`shapes` 17.5-21.1 ms (1.9-2.3 k samples/s, slower than one CPU core: its templates' torch path
-loops over their offsets); compiled (default, max-autotune-no-cudagraphs, reduce-overhead) `fast`
-0.83-0.88 of gearlab, `shapes` 0.67-1.07. There scenarios/quick.toml took 53.0 s on CUDA against
-21.4 s on the machine's CPU, every figure of its summary.json equal to the CPU's (and this one's).
+On an NVIDIA H200 (torch 2.11, 5 rounds, 4 runs, the compiled loops in one): gearlab `fast` 3.3-4.0
+ms a step, fast+coral 6.1, fast+mmd 5.6, nearly all of it fixed cost (gearlab/plain 0.84-1.05);
+`shapes` 2.29 ms (gearlab/plain 0.93), 17.5-21.1 before its templates' windows were gathered in one
+pass (networks._laplace_windows; a loop over their offsets before); compiled (default,
+max-autotune-no-cudagraphs, reduce-overhead) `fast` 0.83-0.88 of gearlab, `shapes` 0.67-1.07 (of the
+looping path). There scenarios/quick.toml takes 32.0 s on CUDA (53.0 with the loop) against 21.4 s
+on the machine's CPU, every figure of its summary.json equal to the CPU's (and this one's).
 
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
