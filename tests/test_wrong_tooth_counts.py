@@ -80,3 +80,24 @@ def test_a_first_mesh_a_wrong_later_description_puts_a_harmonic_on_is_still_the_
     first = check["stages"][0]
     assert first["matched"] and abs(first["measured_order"] - 14.0) < 1e-3, first
     assert "18-tooth pinion on the intermediate 1 shaft? described 17" in " ".join(check["differences"]), check
+
+
+def test_a_later_pinion_one_tooth_short_leaves_the_first_stage_s_sidebands_alone(tmp_path):
+    # 14/53 + 18/59 + 23/67, no tacho, described with 17 for 18: stage 2's real mesh (4.755 = 4.491 + 0.264) puts its
+    # 3rd harmonic on the first mesh's wheel sideband (14.264 = 14 + 14/53), where the description puts no line of
+    # stage 2, so the first stage's comb read it with its load sidebands: 'stage 1: the wheel on the intermediate 1
+    # shaft shows 48.0 teeth (shaft order 0.2917)', the pinion of stage 2 '15.4 teeth'
+    from gearboxes import description, stage
+    from test_outside_round14 import _steps
+
+    from gearlab.gearbox import load_gearbox
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    fs, teeth = 8000.0, ((14, 53), (18, 59), (23, 67))
+    x = _steps(teeth, 35.0, fs, 9.0, (0.4, 1.2, 1.9), ((1, 0.5, 0.3),) * 3, step=0.0)
+    box = description(*(stage(a, b) for a, b in ((14, 53), (17, 59), (23, 67))), name="c", speed="35 Hz")
+    (tmp_path / "c.toml").write_text(box.replace("z = 14,", "z = 14, x = 0.3,"))
+    np.savez(tmp_path / "r.npz", fs=fs, acc=x)
+    report = inspect_record(str(tmp_path / "r.npz"), load_gearbox(tmp_path / "c.toml"), InspectOptions("acc"))
+    assert "mesh order 4.755 measured, 4.491 expected (a 18-tooth pinion" in report["verdict"], report["verdict"]
+    assert "stage 1" not in report["verdict"], report["verdict"]

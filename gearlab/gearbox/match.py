@@ -255,13 +255,13 @@ def lead(table, q: int, moved: dict) -> float:
     return 1.0 if p is None else moved[p] / float(table.stages[p].mesh)
 
 
-def other_stages(table, k: int, moved: dict, measured_shaft: dict, leads: bool = True) -> list:
+def other_stages(table, k: int, moved: dict, measured_shaft: dict, leads: bool = True, ahead=None) -> list:
     """(mesh order, orders of its shafts stage *k* does not carry) of every other stage of *table*, as
-    measured where it was (an earlier stage's moved mesh, a shaft's sidebands or tacho), else as a moved
-    mesh before it makes it (lead)."""
+    measured where it was (an earlier stage's moved mesh, a later one's located *ahead*, a shaft's sidebands or
+    tacho), else as a moved mesh before it makes it (lead)."""
     return [
         (
-            moved.get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0)),
+            moved.get(q, (ahead or {}).get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0))),
             [
                 measured_shaft.get(i, (float(table.shaft_orders[i]) * (lead(table, i, moved) if leads else 1.0),))[0]
                 for i in (q, q + 1)
@@ -271,6 +271,42 @@ def other_stages(table, k: int, moved: dict, measured_shaft: dict, leads: bool =
         for q, t in enumerate(table.stages)
         if q != k
     ]
+
+
+def harmonics(meshes: list[float], bin_: float) -> list[tuple[float, float]]:
+    """(order, tolerance) of every harmonic (1-MAX_HARMONIC) of the mesh orders *meshes*."""
+    return [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
+
+
+def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float, float]]:
+    """Those of the other stages' harmonics *shared* not within their tolerance of a harmonic of the mesh *look*: a
+    line there is both stages' (a wrong later description can put a harmonic on the first mesh: 14/53 + 17/59 +
+    23/67 for 18 puts the last mesh's 8th at 14.0045, and the first mesh, left out of its own comb, let stage 2's
+    3rd, 14.264, take it)."""
+    return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
+
+
+def located_ahead(lines: Lines, table, bin_: float, tacho_shaft: int | None) -> dict:
+    """{stage: its mesh order} of a later stage whose mesh the lines put a whole tooth off the described order (M + j o,
+    either shaft's o as described; harmonic_comb), and of the stages after it, before any stage is read: an earlier
+    stage's combs leave a later stage's lines out where they are, not where a wrong description puts them (14/53 +
+    18/59 + 23/67 described with 17 for 18: stage 2's 3rd harmonic, 14.264, sits on the first mesh's wheel sideband,
+    and read as one with its load sidebands it gave the intermediate shaft 0.2917 and 'the wheel shows 48.0 teeth')."""
+    for k, s in enumerate(table.stages):
+        m = float(s.mesh)
+        if tacho_shaft is not None and tacho_shaft > k:
+            continue  # behind a tacho on a later shaft no count moves the mesh by a whole tooth (check_description)
+        theirs = off_own(harmonics([float(t.mesh) for q, t in enumerate(table.stages) if q != k], bin_), m)
+        offsets = [j * float(o) for o in (s.pinion_shaft_order, s.wheel_shaft_order) for j in (-3, -2, -1, 1, 2, 3)]
+        got = harmonic_comb(lines, [m] + [m + d for d in offsets], bin_, theirs)
+        if got is not None and abs(got[1] - m) > tol_mesh(m, bin_):
+            # the first such stage, after stages where described: a moved mesh moves every later one by no whole
+            # tooth (a 22/69 + 25/74 described with 23 for 22, no tacho, read with a later line at M + j o as stage
+            # 2's, was told 'a 24-tooth pinion on the intermediate shaft'); they turn at it over the described
+            # wheels (lead), where the orders are the input's
+            after = {q: float(t.mesh) * got[1] / m for q, t in enumerate(table.stages) if q > k}
+            return ({k: got[1]} | (after if tacho_shaft in (None, 0) else {})) if k else {}
+    return {}
 
 
 def check_description(
@@ -316,6 +352,7 @@ def check_description(
     wrong: list[int] = []  # the stages whose own tooth counts differ
     unresolved = []  # tooth counts the sidebands cannot tell from the next one (too few revolutions)
     moved: dict[int, float] = {}  # stage -> its mesh order measured where it differs from the described one
+    ahead = located_ahead(lines, table, bin_, tacho_shaft)  # the later meshes where the lines put them
     for k, s in enumerate(table.stages):
         said = len(differences)
         expected = float(s.mesh)
@@ -330,16 +367,14 @@ def check_description(
         # the other stages' mesh orders: an earlier one that differs where it was measured (a wrong
         # first pinion moved stage 1's lines off its described order, and stage 2 took them)
         meshes = [
-            moved.get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0))
+            moved.get(q, ahead.get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0)))
             for q, t in enumerate(table.stages)
             if q != k
         ]
         entry = {"stage": s.index, "expected_order": expected, "z1": s.pinion_teeth, "z2": s.wheel_teeth}
-        # lines on the other stages' mesh harmonics are theirs, unless within a line's tolerance of this one's too:
-        # a wrong later description can put a harmonic there (14/53 + 17/59 + 23/67 for 18: the described last
-        # mesh's 8th at 14.0045), and the first mesh left out of its own comb let stage 2's 3rd (14.264) take it
-        shared = [(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1)]
-        theirs = [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
+        # lines on the other stages' mesh harmonics are theirs, unless on this one's too (off_own)
+        shared = harmonics(meshes, bin_)
+        theirs = off_own(shared, look)
         o_tacho = measured_shaft[k + 1][0] if measured_shaft.get(k + 1, (0, 0, ""))[2] == "tacho" else None
         family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho)
         i = None
@@ -416,7 +451,9 @@ def check_description(
             ),
             bin_,
             (k in measured_shaft, k + 1 in measured_shaft),
-            others_lines(lines, expected, [*beyond, *other_stages(table, k, moved, measured_shaft, leads)], bin_),
+            others_lines(
+                lines, expected, [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)], bin_
+            ),
         )
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
