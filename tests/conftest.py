@@ -293,7 +293,7 @@ def unrendered(fig, path, dpi=120, **options):
     was a third of the every-kind runs' CPU (test_tui), for tests that read no figure's pixels."""
     from gearlab import plots
 
-    path = plots._target(path)
+    path = plots.target(path)
     plots.plt.close(fig)
     plots.write_file(path, ONE_PIXEL_PNG)
     plots.figure_written(path.name)

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from gearlab import plots
+from gearlab.kinds import transfer_figures
 
 
 def test_the_training_curves_legend_covers_no_axis_label_or_curve(tmp_path, monkeypatch):
@@ -30,7 +31,7 @@ def test_the_training_curves_legend_covers_no_axis_label_or_curve(tmp_path, monk
         for m in ("mmd (unsupervised)", "dann (unsupervised)")
     ]
     table = {m: {"4": {"mean": 88.3, "std": 0.0}} for m in ("mmd (unsupervised)", "dann (unsupervised)")}
-    plots.transfer_figures(tmp_path, records, table, [4])
+    transfer_figures.draw(tmp_path, records, table, [4])
     fig = kept["training_curves.png"]
     renderer = FigureCanvasAgg(fig).get_renderer()
     fig.draw(renderer)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from tiny import bare_dataset, protocol
 
+from gearlab.kinds.transfer_figures import latent_projection
 from gearlab.learn.calibration import RECIPE
 from gearlab.learn.protocol import StateStore, run_unit
 from gearlab.parts import training
-from gearlab.plots import latent_projection
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 

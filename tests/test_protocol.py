@@ -422,9 +422,9 @@ def by_unit(run: Path) -> dict[str, dict]:
 
 @pytest.fixture
 def no_transfer_figures(monkeypatch) -> None:
-    """A transfer run's figures not drawn (gearlab.plots.transfer_figures), for a test that reads
+    """A transfer run's figures not drawn (gearlab.kinds.transfer_figures.draw), for a test that reads
     only its records, summary and tables; test_summary_table_and_report reads the figures of `finished`."""
-    monkeypatch.setattr("gearlab.plots.transfer_figures", lambda *args: None)
+    monkeypatch.setattr("gearlab.kinds.transfer_figures.draw", lambda *args: None)
 
 
 def test_two_workers_give_the_records_of_one(finished, tiny_toml, no_transfer_figures):

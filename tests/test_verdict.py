@@ -566,7 +566,7 @@ def test_a_latent_map_of_collapsed_features_is_not_drawn():
     lines; such a panel now says the features collapse, and spread features keep their map."""
     import numpy as np
 
-    from gearlab.plots import latent_projection
+    from gearlab.kinds.transfer_figures import latent_projection
 
     rng = np.random.default_rng(0)
     spread = rng.normal(size=(40, 8))
@@ -638,11 +638,12 @@ def test_confusion_matrix_numbers_stand_out_of_their_cells(tmp_path, monkeypatch
     are all large (a method calling half the runs one class, half the other: 255 255 / 300 300)
     no longer draws its smallest counts in white on a white cell."""
     from gearlab import plots
+    from gearlab.kinds import transfer_figures
 
     figures = []
     monkeypatch.setattr(plots, "save", lambda fig, path, **o: figures.append(fig))
     records = [{"method": "m", "k": 0, "rep": 0, "confusion": [[255, 255], [300, 300]], "accuracy": 50.0}]
-    plots.transfer_figures(tmp_path, records, {"m": {"0": cell(50.0)}}, [0])
+    transfer_figures.draw(tmp_path, records, {"m": {"0": cell(50.0)}}, [0])
     (ax,) = [a for fig in figures for a in fig.axes if a.images]
     image = ax.images[0]
     for text in ax.texts:
@@ -658,7 +659,7 @@ def test_the_latent_projection_runs_on_one_blas_thread(monkeypatch):
     import numpy as np
     from threadpoolctl import threadpool_info
 
-    from gearlab.plots import latent_projection
+    from gearlab.kinds.transfer_figures import latent_projection
 
     threads = []
     svd = np.linalg.svd

@@ -356,9 +356,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_text("table.md", table_md(tab, protocol.ks, list(tab)) + measures_md(summary, protocol.ks))
     run.write_text("table.csv", table_csv(tab, protocol.ks))
     report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
-    from ..plots import transfer_figures  # here, not at the top: start-up time (matplotlib)
+    from .transfer_figures import draw  # here, not at the top: start-up time (matplotlib)
 
-    transfer_figures(run.file(), records, tab, protocol.ks)
+    draw(run.file(), records, tab, protocol.ks)
 
 
 def summary_lines(run: RunDir) -> list[str]:
