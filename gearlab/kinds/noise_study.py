@@ -452,9 +452,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_text("table.md", table_md(res, bound))
     run.write_text("table.csv", table_csv(res, bound))
     report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
-    from ..plots import noise_study_figures  # here, not at the top: start-up time (matplotlib)
+    from .noise_study_figures import draw  # here, not at the top: start-up time (matplotlib)
 
-    noise_study_figures(run.figures, res)
+    draw(run.figures, res)
 
 
 def summary_lines(run: RunDir) -> list[str]:
