@@ -651,9 +651,9 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
     run.write_json("summary.json", summary)
     run.write_text("table.md", tables_md(summary))
     report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
-    from ..plots import gap_figures
+    from .gap_figures import draw  # here, not at the top: start-up time (matplotlib)
 
-    gap_figures(run.figures, summary)
+    draw(run.figures, summary)
 
 
 def summary_lines(run: RunDir) -> list[str]:
