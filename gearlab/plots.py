@@ -186,23 +186,6 @@ def recording_signals(charts, title: str, path: Path) -> Path:
     return save(fig, path)
 
 
-def score_trend(charts, path: Path) -> Path:
-    """The scoring history's trends (gearlab.kinds.detection_scoring.score_trends): per condition, each
-    method's score of the records scored in turn, less its threshold (above the line: called)."""
-    fig, axes = plt.subplots(len(charts), 1, figsize=(10, 3.2 * len(charts)), squeeze=False, layout="constrained")
-    for ax, chart in zip(axes[:, 0], charts):
-        for curve in chart.curves:
-            ax.plot(curve.x, curve.y, marker="o", ms=3, lw=0.8, label=curve.label)
-        ax.axhline(0.0, color="k", lw=0.8, ls="--")
-        ax.set_title(chart.title, fontsize=9)
-        ax.set_xlabel(chart.xlabel)
-        ax.set_ylabel(chart.ylabel)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle("gearlab score: the scored records' trend per method")
-    return save(fig, path)
-
-
 def chart_figure(chart, path: Path) -> Path:
     """A gearlab.charts.Chart as a PNG (the comparison page draws the TUI's charts so):
     lines with ± bands, or horizontal bars for named categories."""

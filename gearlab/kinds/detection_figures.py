@@ -352,3 +352,22 @@ def _roc_figure(charts: list[Chart], summary: dict):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     return fig
+
+
+def score_trend(charts, path: Path) -> Path:
+    """The scoring history's trends (detection_scoring.score_trends; `gearlab score`): per condition,
+    each method's score of the records scored in turn, less its threshold (above the line: called)."""
+    from .. import plots  # here, not at the top: start-up time (matplotlib)
+
+    fig, axes = plots.plt.subplots(len(charts), 1, figsize=(10, 3.2 * len(charts)), squeeze=False, layout="constrained")
+    for ax, chart in zip(axes[:, 0], charts):
+        for curve in chart.curves:
+            ax.plot(curve.x, curve.y, marker="o", ms=3, lw=0.8, label=curve.label)
+        ax.axhline(0.0, color="k", lw=0.8, ls="--")
+        ax.set_title(chart.title, fontsize=9)
+        ax.set_xlabel(chart.xlabel)
+        ax.set_ylabel(chart.ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle("gearlab score: the scored records' trend per method")
+    return plots.save(fig, path)

@@ -436,7 +436,7 @@ def score(
     scoring.append_history(run, rows)
     trends = score_trends(run)
     if trends:
-        from ..plots import score_trend  # here, not at the top: start-up time (matplotlib)
+        from .detection_figures import score_trend
 
         score_trend(trends, run.file("figures", "score_trend.png"))
     return rows
