@@ -223,7 +223,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_text("table.csv", _table_csv(sweep))
 
     report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
-    from ..plots import ladder_grid, rfa_curves, tvms_figure  # here, not at the top: start-up time (matplotlib)
+    from ..plots import tvms_figure  # here, not at the top: start-up time (matplotlib)
+    from .stiffness_figures import ladder_grid, rfa_curves
 
     pitch = 360.0 / pair.Z1
     lo = (spec.tooth - 2) * pitch
