@@ -290,6 +290,40 @@ def test_front_ends_do_not_switch_on_kind_names():
     assert any(f.endswith("the kind name 'gap_benchmark'") for f in registry)  # GAP_COMMAND_KINDS: a plain string
 
 
+def kind_owning(name: str, doc: str) -> str | None:
+    """The kind a function belongs to by its *name* (a kind's name among its words: gap_figures) or
+    its docstring *doc* (one of a kind's modules named, 'kind `gap`', 'the detection kind'), else None."""
+    from gearlab.kinds import SCENARIO_KINDS
+
+    words = name.strip("_").split("_")
+    for kind in sorted(SCENARIO_KINDS, key=len, reverse=True):
+        n = len(kind.split("_"))
+        if any(words[i : i + n] == kind.split("_") for i in range(len(words))):
+            return kind
+    modules = [kind_of(f"gearlab.kinds.{m}") or "" for m in re.findall(r"kinds\.(\w+)", doc)]
+    said = [a or b for a, b in re.findall(r"\bkind\W{0,2}(\w+)|(\w+)\W{0,2} kind\b", doc)]
+    named = [m.rpartition(".")[2] for m in modules if m] + [k for k in said if k in SCENARIO_KINDS]
+    return named[0] if named else None
+
+
+def test_plots_holds_no_kinds_figures():
+    """gearlab.plots holds the shared drawing (save, generic charts); each kind's own figures live on
+    its side (gearlab.kinds.<kind>_figures), reached through the kind (issue 38)."""
+    path = MODULES["gearlab.plots"]
+    owned = [
+        f"{path.relative_to(PACKAGE.parent)}:{node.lineno}: {node.name} is the {kind} kind's"
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef))
+        and (kind := kind_owning(node.name, ast.get_docstring(node) or ""))
+    ]
+    assert not owned, "a kind's figures in gearlab.plots (move them to the kind):\n" + "\n".join(owned)
+    # the check sees them: by name, by a kind's module in the docstring, by 'kind `gap`'
+    assert kind_owning("noise_study_figures", "") == "noise_study" and kind_owning("dataset_signals", "") == "dataset"
+    assert kind_owning("score_trend", "The trends (gearlab.kinds.detection_scoring.score_trends)") == "detection"
+    assert kind_owning("figures", "The gap diagnosis (kind `gap`): per-view gap") == "gap"
+    assert kind_owning("chart_figure", "A gearlab.charts.Chart as a PNG") is None
+
+
 def test_plugins_import_gearlab_only_through_the_public_api():
     root = PACKAGE.parent
     private = []

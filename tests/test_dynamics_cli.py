@@ -174,14 +174,14 @@ def test_run_dataset_b_quick_then_from_cache(cli, tmp_path, monkeypatch, cache):
     assert (run / "results.jsonl").read_text().count("\n") == 4
 
     # again: everything comes from the cache (figures are redrawn; stub them, they were checked above)
-    import gearlab.plots
+    import gearlab.kinds.dataset_figures
     from gearlab.confined import write_file
 
     def stub(dataset, path):
         write_file(path, b"stub")  # a file of the run directory (a Confined), as plots.save writes it
         return path
 
-    monkeypatch.setattr(gearlab.plots, "dataset_signals", stub)
+    monkeypatch.setattr(gearlab.kinds.dataset_figures, "dataset_signals", stub)
     code, out2, err = cli("run", DATASET_B, "--quick", "--out", tmp_path / "runs")
     assert code == 0, err
     for name, d in summary["datasets"].items():

@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from gearlab import plots
-from gearlab.kinds import transfer_figures
+from gearlab.kinds import dataset_figures, transfer_figures
 
 
 def test_the_training_curves_legend_covers_no_axis_label_or_curve(tmp_path, monkeypatch):
@@ -55,7 +55,7 @@ def test_the_dataset_figures_legends_and_labels_cover_no_curve_title_or_label(mo
 
     kept = []
     monkeypatch.setattr(plots, "save", lambda fig, path, **o: kept.append(fig))
-    plots.dataset_signals(synthetic(small_spec(teeth=(5,))), Path("signals.png"))
+    dataset_figures.dataset_signals(synthetic(small_spec(teeth=(5,))), Path("signals.png"))
     (fig,) = kept
     renderer = FigureCanvasAgg(fig).get_renderer()
     fig.draw(renderer)

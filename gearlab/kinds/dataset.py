@@ -106,7 +106,7 @@ def table_md(summary: dict) -> str:
 
 
 def figures(dataset, run: RunDir) -> None:
-    from ..plots import dataset_signals, recording_signals  # here, not at the top: start-up time (matplotlib)
+    from .dataset_figures import dataset_signals, recording_signals  # here, not at the top: start-up time (matplotlib)
 
     target = run.file("figures", f"signals_{dataset.spec.name}.png")
     if unlabelled(dataset):
