@@ -117,7 +117,7 @@ def test_gap_history_records_without_a_tacho(tmp_path, keys):
     how = "nominal speed 16 Hz" if "speed" in keys else mesh
     assert how in notes[-1] and "(tacho)" not in notes[-1] and from_mesh == ("gearbox" in keys)
     # the second record, started 2.1 rad later, is turned into register with the first at a whole
-    # sample (detection_records.aligned): one synchronous average (unturned, the mesh tone's means
+    # sample (parts.measured.aligned): one synchronous average (unturned, the mesh tone's means
     # correlate at cos(32 x 2.1) = -0.33)
     assert np.corrcoef(X[:29].mean(axis=0), X[29:].mean(axis=0))[0, 1] > 0.95
 
