@@ -171,3 +171,16 @@ def test_a_speed_channel_given_as_the_tacho_is_named_as_such(tmp_path):
         shaft_angle(rec)
     text = str(err.value)
     assert "a speed channel?" in text and "'1435 rpm'" in text and "\n" not in text, text
+
+
+def test_a_text_export_after_a_loggers_preamble_is_read_with_its_rate(tmp_path):
+    # the same preamble above a tab-separated .txt (the streamed text reader): 'its first data row (line 2) holds no
+    # number'
+    t, acc, tacho = _table()
+    path = tmp_path / "export.txt"
+    rows = "\n".join(f"{a:.7f}\t{b:.6f}\t{k:.3f}" for a, b, k in zip(t, acc, tacho))
+    path.write_text("Device: NI-9234\nSample rate: 25600 Hz\n\ntime_s\tacc_ms2\ttacho_V\n" + rows + "\n")
+    header = read_header(path)
+    assert {"acc_ms2", "tacho_V"} <= set(header.channels) and header.stated[0] == pytest.approx(25600.0)
+    rec = read_recording(path, "acc_ms2", "tacho_V")
+    assert rec.fs == pytest.approx(25600.0) and np.allclose(rec.signal, np.round(acc, 6))

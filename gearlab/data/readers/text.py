@@ -25,7 +25,7 @@ import numpy as np
 
 from ...errors import GearlabInputError, shown
 from .base import Contents, _keyed, check_size, max_record_bytes, time_scale
-from .csv import column_index, delimiter_of, header_names, split_rows
+from .csv import column_index, delimiter_of, header_names, preamble, split_rows
 
 # Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
 # a block's tokens (about 60 bytes each as Python objects) stay a few tens of MB.
@@ -78,6 +78,19 @@ def _open_text(path: Path):
         raise GearlabInputError(f"{path}: cannot read ({exc})") from None
 
 
+def _preamble(path: Path) -> tuple[int, dict[str, object]]:
+    """(lines of a logger's preamble above the table, the rate it states): csv.preamble over the first lines."""
+    with _open_text(path) as (stream, _):
+        lines = []
+        for raw in stream:
+            text = raw.decode("utf-8-sig", "replace")
+            if text.strip() and not text.lstrip().startswith("#"):
+                lines.append(text)
+            if len(lines) >= 100:
+                break
+    return preamble(lines)
+
+
 def _is_number(token: bytes) -> bool:
     try:
         float(token)
@@ -102,10 +115,13 @@ def _fields(line: bytes, delimiter: str | None) -> list[str]:
     return split_rows([text], delimiter)[0] if delimiter else text.split()
 
 
-def _delimiter(block: bytes) -> str | None:
-    """The separator the first data line of *block* uses (None: blanks)."""
+def _delimiter(block: bytes, skip: int = 0) -> str | None:
+    """The separator the first data line of *block* after *skip* preamble lines uses (None: blanks)."""
     for line in block.split(b"\n"):
         if line.strip() and not line.lstrip().startswith(b"#"):
+            if skip:
+                skip -= 1
+                continue
             return delimiter_of(line.decode("utf-8", "replace"))
     return None
 
@@ -180,6 +196,7 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
     width = 0
     picked: list[int] = []
     delimiter: str | None = None
+    skip = _preamble(path)[0]  # a logger's lines above the table
     limit = max_record_bytes()
     text_bytes, kept_bytes = 0, 0  # of text read and of columns kept, against the limit
     with _open_text(path) as (stream, where):
@@ -208,12 +225,15 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                 rest = b""
             lines_here = block.count(b"\n") + (0 if block.endswith(b"\n") else 1)
             if not width:
-                delimiter = _delimiter(block)
+                delimiter = _delimiter(block, skip)
             if b"#" in block or block.count(b"\r") != block.count(b"\r\n") or not width:
                 kept = []
                 for line in block.split(b"\n"):
                     tokens = _blanks(line, delimiter).split()
                     if not tokens or tokens[0].startswith(b"#"):
+                        continue
+                    if skip:
+                        skip -= 1
                         continue
                     if not width:  # the first data line: a header, or the first row
                         if not all(_is_number(t) for t in tokens):
@@ -255,9 +275,13 @@ def first_row(path) -> tuple[list[str] | None, int]:
     without reading the rest."""
     path = Path(path)
     header = None
+    skip = _preamble(path)[0]  # a logger's lines above the table
     with _open_text(path) as (stream, where):
         delimiter = None
         for number, line in enumerate(stream, start=1):
+            if skip and line.strip() and not line.lstrip().startswith(b"#"):
+                skip -= 1
+                continue
             if header is None and line.strip() and not line.lstrip().startswith(b"#"):
                 delimiter = delimiter_of(line.decode("utf-8", "replace"))
             tokens = _blanks(line, delimiter).split()
@@ -280,11 +304,14 @@ def comment_fields(path) -> dict[str, object]:
     from .base import _scalar
     from .csv import _COMMENT_FIELD
 
-    fields: dict[str, object] = {}
+    skip, fields = _preamble(Path(path))  # a logger's preamble states a rate too
     with _open_text(Path(path)) as (stream, _):
         for line in stream:
             text = line.decode("utf-8-sig", "replace").strip()
             if not text:
+                continue
+            if not text.startswith("#") and skip:
+                skip -= 1
                 continue
             if not text.startswith("#"):
                 break
