@@ -51,9 +51,13 @@ def test_the_events_come_from_the_corrected_simulator(condition, tmp_path):
     plain = D.localise_target(_source(), {"25 Hz": condition})
     assert plain["events"] == {"preset": _source().preset, "effects": []}
     found = plain["records"]["chip"]
-    # the description's own events: not used (its mesh harmonics 6.0 dB off the history's), the width
-    # undecided at z 2.8; the corrected simulator's: the pinion's fits 0.58 against the wheel's 0.48
-    assert found["named"] != PINION, found["summary"]  # the description's own events: not the pinion
+    # the description's own events: not used (its mesh harmonics 6.8 dB off the history's), the width
+    # undecided; the event's two mesh harmonics name the pinion (24T -1.00, -0.87; 63T -0.05, 1.00; before
+    # the phase was read for counts this far apart: both); the corrected simulator's: the pinion's fits 0.58
+    # against the wheel's 0.48
+    said = found["summary"]
+    assert "simulated events not used" in said and "named by the simulated events" not in said, said
+    assert found["named"] == PINION and "named by the event's mesh phase" in said, said
     run = RunDir(tmp_path)
     D.store_localisation(run, _source(), {"25 Hz": condition}, _source().with_(effects=SOFT))
     loc = run.read_json("localisation.json")

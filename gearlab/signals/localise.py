@@ -49,7 +49,9 @@ wide (noise widens an event, never narrows it). The width follows the structure'
 the teeth, and a pit or spall lasts a part of its pitch, so the two gears' u overlap. The event's
 mesh phase (which_template.mesh_phases: its content about each gear's mesh line, at its peak, against
 that line; in phase for the damaged gear's own mesh) names the gear of counts under MIN_RATIO where
-one leads by PHASE_MARGIN and the other is not in anti-phase. "Both" is no safe answer: a scenario
+one leads by PHASE_MARGIN and the other is not in anti-phase; of counts further apart that the width leaves
+undecided, the one gear whose event stands with its mesh line, or against it, at the 1st and 2nd harmonic
+alike (which_template._by_phases_alike: a tooth lifts or lowers its own mesh). "Both" is no safe answer: a scenario
 watching either gear counts it as its own.
 
 Tooth. The named shaft's orders, each weighted by the share of its power that is new (clip(Δ /
@@ -104,6 +106,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     fit_words,
     mesh_phases,
     phase_words,
+    two_harmonic_phases,
     which_by_template,
     which_by_width,
 )
@@ -668,7 +671,8 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
         which, dens = None, {}
         if len(on) == 2 and flagged:
             phases = mesh_phases(rec, hist.spread, lay, s, harmonics, on)
-            which, dens = which_by_width(rec, hist.spread, harmonics, on, zs, phases)
+            both = two_harmonic_phases(rec, hist.spread, lay, s, harmonics, on)
+            which, dens = which_by_width(rec, hist.spread, harmonics, on, zs, phases, both)
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
             by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay))
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})

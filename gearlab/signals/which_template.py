@@ -41,6 +41,12 @@ PHASE_MARGIN = 0.3  # cos of the mesh phase of one gear over the other's that na
 # cos under which the other gear's line is read in anti-phase: an event that lowers its own mesh (a hand-written
 # dip, tests/test_localise.py) would otherwise name the other gear; both are named instead
 PHASE_ANTI = -0.5
+# Where the width leaves far-apart counts undecided (a low mode rings, a weak event): the damaged tooth lifts or
+# lowers its own mesh, so the event stands at that line's phase or against it at its 1st and 2nd harmonics alike
+# (|cos| >= PHASE_ALIKE, one sign); the other mesh's two lines at random angles pass as well in ~30 % (both named).
+# Development (a generator written outside gearlab, 22/69 + 25/74 and 14/53 + 18/59 + 23/67 boxes): a crack's
+# event stood at cos -0.7..-0.95 on both of its own lines, a spall's at +0.86..+1.00, the other gear's at random
+PHASE_ALIKE = 0.35
 # which rule named (or left undecided) a two-gear shaft's gear, as localise's report says it
 RULE_SIMULATED, RULE_WIDTH = "by the simulated events", "by the event's width"
 RULE_PHASE = "by the event's mesh phase"
@@ -111,7 +117,12 @@ def fit_words(evidence: dict) -> str:
 def phase_words(evidence: dict) -> str:
     """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them, or where the
     simulated events decided, not the phase)."""
-    if "mesh phase" not in evidence or evidence.get("rule") == RULE_SIMULATED:
+    if evidence.get("rule") == RULE_SIMULATED:
+        return ""
+    if "mesh phases" in evidence:  # two harmonics (_by_phases_alike)
+        said = (f"{g.split(' (')[0]} {a:.2f}, {b:.2f}" for g, (a, b) in evidence["mesh phases"].items())
+        return "mesh phase cos at 1st, 2nd harmonic " + " / ".join(said) + ", "
+    if "mesh phase" not in evidence:
         return ""
     said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["mesh phase"].items())
     return "mesh phase cos " + " / ".join(said) + ", "
@@ -127,13 +138,14 @@ def envelope(rec, ref, sel: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
     return np.abs(np.fft.ifft(spec)) ** 2  # analytic: positive orders only
 
 
-def mesh_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarray], gears) -> dict:
+def mesh_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarray], gears, harmonic: int = 1) -> dict:
     """{gear name: cos ψ} for the gears of a two-gear shaft ({}: not read). ψ: the phase of the event's
-    content within PHASE_BAND of the gear's mesh line (its tooth count in the shaft's harmonics),
-    demodulated at the event's peak, against the record's own mesh line there. A tooth that meshes
-    softer deepens its own mesh's cycle while in mesh: in phase with that line (ψ near 0), whatever
-    the structure, as both pass it at one frequency; the other mesh's line stands at any angle to the
-    event (which tooth). No simulation: the description's tooth counts suffice."""
+    content within PHASE_BAND of the gear's mesh line (its tooth count in the shaft's harmonics; *harmonic*
+    times it: that harmonic of the mesh), demodulated at the event's peak, against the record's own line
+    there. A tooth that meshes softer deepens its own mesh's cycle while in mesh: in phase with that line
+    (ψ near 0; a stiffness lost, against it), whatever the structure, as both pass it at one frequency; the
+    other mesh's line stands at any angle to the event (which tooth). No simulation: the description's
+    tooth counts suffice."""
     sel, m = harmonics
     if m.size < 3:
         return {}
@@ -142,16 +154,30 @@ def mesh_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarr
     peak = 2 * math.pi * int(np.argmax(envelope(rec, ref, sel, m, size))) / size
     out = {}
     for g in gears:
-        x = g.teeth * float(lay.shaft_orders[shaft])
+        z = harmonic * g.teeth
+        x = z * float(lay.shaft_orders[shaft])
         line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
-        near = np.abs(m - g.teeth) <= PHASE_BAND * g.teeth
+        near = np.abs(m - z) <= PHASE_BAND * g.teeth
         if line.size == 0 or near.sum() < 3 or abs(rec.mean[line[0]]) == 0:
             return {}
-        event = np.sum(R[near] * np.exp(1j * (m[near] - g.teeth) * peak))
+        event = np.sum(R[near] * np.exp(1j * (m[near] - z) * peak))
         if event == 0:
             return {}
         out[g.name] = math.cos(float(np.angle(event / rec.mean[line[0]])))
     return out
+
+
+def two_harmonic_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarray], gears) -> dict:
+    """{gear name: [cos ψ at its mesh's 1st harmonic, at its 2nd]} (mesh_phases; {}: either not read)."""
+    first, second = (mesh_phases(rec, ref, lay, shaft, harmonics, gears, h) for h in (1, 2))
+    return {g: [first[g], second[g]] for g in first} if first and second else {}
+
+
+def _by_phases_alike(phases: dict, gears):
+    """The one gear whose two mesh harmonics' cos share a sign, each at least PHASE_ALIKE (None: neither, or both)."""
+    alike = [g for g in gears if g.name in phases and min(map(abs, phases[g.name])) >= PHASE_ALIKE]
+    alike = [g for g in alike if phases[g.name][0] * phases[g.name][1] > 0]
+    return alike[0] if len(alike) == 1 else None
 
 
 def _by_phase(phases: dict, gears):
@@ -164,11 +190,27 @@ def _by_phase(phases: dict, gears):
     return (next(g for g in gears if g.name == a) if clear else None), pa - pb
 
 
-def which_by_width(rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z: float, phases: dict | None = None):
+def which_by_width(
+    rec, ref, harmonics: tuple[np.ndarray, np.ndarray], gears, z: float, phases: dict | None = None, both=None
+):
     """(the gear of a two-gear shaft the event's length names, or None: both; the evidence) from the
     shaft's own orders and their harmonic numbers (*harmonics*); *phases*: mesh_phases, which name the
-    gear of tooth counts under MIN_RATIO. See gearlab.signals.localise's
-    docstring, "Which gear on a shaft"."""
+    gear of tooth counts under MIN_RATIO; *both*: two_harmonic_phases, which name the gear of counts
+    further apart where the width does not (_by_phases_alike). See gearlab.signals.localise's docstring,
+    "Which gear on a shaft"."""
+    which, ev = _width(rec, ref, harmonics, gears, z, phases)
+    ratio = max(g.teeth for g in gears) / min(g.teeth for g in gears)
+    if which is not None or not both or ratio < MIN_RATIO:  # counts too alike: the 1st harmonic's lead (_by_phase)
+        return which, ev
+    said = " / ".join(f"{g.split(' (')[0]} {a:.2f}, {b:.2f}" for g, (a, b) in both.items())
+    by = _by_phases_alike(both, gears)
+    if by is None:
+        why = f"{ev['undecided']}; mesh phase cos at 1st, 2nd harmonic {said}: not one alike"
+        return None, {**ev, "undecided": why}
+    return by, {**{k: v for k, v in ev.items() if k != "undecided"}, "mesh phases": both, "rule": RULE_PHASE}
+
+
+def _width(rec, ref, harmonics, gears, z: float, phases: dict | None):
     fine, coarse = sorted(gears, key=lambda g: -g.teeth)
     ratio = fine.teeth / coarse.teeth
     expect = {fine.name: ratio**-0.2, coarse.name: ratio**0.4}
