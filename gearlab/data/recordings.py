@@ -484,10 +484,6 @@ def read_recording(
     name = named(vibration, contents.available)
     scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name), declared=unit)
     vib = series(raw, vibration, "vibration", path) * scale
-    offset = float(vib.mean())
-    if abs(offset) > np.std(vib):  # an accelerometer reads no DC: a mean above the vibration is its electronics'
-        vib = vib - offset
-        units = f"{units}; DC offset {offset:.3g} m/s² removed (an accelerometer reads none)"
     rate, fs_source = sampling_rate(contents, fs, vib.size, path)
     tacho_values = None
     if tacho is not None:
