@@ -72,6 +72,8 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
                 continue
             if key in _INTERVAL_NAMES and unit in _INTERVAL_UNITS and number > 0:
                 fields["sample_rate"] = 1.0 / (number * _INTERVAL_UNITS[unit])
+    if count == len(lines):  # no table after it: no preamble (a system file of 'name:value' lines is no record)
+        return 0, {}
     return count, fields
 
 
