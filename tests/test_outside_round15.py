@@ -184,3 +184,15 @@ def test_a_text_export_after_a_loggers_preamble_is_read_with_its_rate(tmp_path):
     assert {"acc_ms2", "tacho_V"} <= set(header.channels) and header.stated[0] == pytest.approx(25600.0)
     rec = read_recording(path, "acc_ms2", "tacho_V")
     assert rec.fs == pytest.approx(25600.0) and np.allclose(rec.signal, np.round(acc, 6))
+
+
+def test_a_trailing_separator_makes_no_channel(tmp_path):
+    # a spreadsheet's export ends every line with ',': the channels read 'acc_ms2, tacho_V, ' (an empty name)
+    t, acc, tacho = _table()
+    path = tmp_path / "trailing.csv"
+    path.write_text(
+        "time_s,acc_ms2,tacho_V,\n" + "\n".join(f"{a:.7f},{b:.6f},{k:.3f}," for a, b, k in zip(t, acc, tacho))
+    )
+    assert read_header(path).channels == ["time_s", "acc_ms2", "tacho_V"]
+    rec = read_recording(path, "acc_ms2", "tacho_V")
+    assert rec.channels == ["acc_ms2", "tacho_V"] and rec.fs == pytest.approx(25600.0)

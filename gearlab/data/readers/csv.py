@@ -143,6 +143,10 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     else:
         data, data_lines = rows[1 + bool(units) :], lines[1 + bool(units) :]
     width = len(rows[0])
+    if rows[0][-1] == "" and all(row[-1:] == [""] for row in data):  # every line ends in the separator
+        header = header[:-1] if header is not None else None
+        data = [row[:-1] for row in data]
+        width -= 1
     if header is not None and len(set(header)) != len(header):
         twice = next(h for h in header if header.count(h) > 1)
         raise GearlabInputError(f"{path}: column '{twice}' appears twice in the header; expected distinct names")

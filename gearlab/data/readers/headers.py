@@ -131,6 +131,9 @@ def _csv_header(path: Path) -> Header:
                     f"{path}: its first data row (line {number}) holds no number; expected a header "
                     "row of column names, then rows of numbers"
                 )
+            if row[-1:] == [""]:  # every line ends in the separator (a spreadsheet's export): no channel
+                names = names[:-1] if names is not None and names[-1:] == [""] else names
+                row = row[:-1]
             names = names if names is not None else header_names(None, len(row))
             stated = _stated_rate(f, line, names, [(k, v) for k, v in fields if k.lower() in _RATE_NAMES])
             break
