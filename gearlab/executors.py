@@ -29,9 +29,11 @@ import multiprocessing
 import os
 import pickle
 import shutil
+import sys
 import tempfile
 import threading
 import uuid
+import warnings
 import weakref
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -235,6 +237,16 @@ class _Unpacker(pickle.Unpickler):
         return self.read[key]
 
 
+def warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A worker's warnings as the command line's (gearlab.cli._warning_line): one line on stderr,
+    without Python's category, file and source-line echo."""
+    sys.stderr.write(f"warning: {message}\n")
+
+
+def _worker_started() -> None:
+    warnings.showwarning = warning_line
+
+
 def _imported(modules: tuple[str, ...]) -> None:
     import importlib
 
@@ -306,7 +318,7 @@ class LocalExecutor(Executor):
             # forkserver: children start from a clean process (no inherited threads from torch or
             # BLAS). Workers are started as units are submitted, never more than there are units.
             context = multiprocessing.get_context("forkserver" if os.name == "posix" else "spawn")
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context, initializer=_worker_started)
             weakref.finalize(self, self._pool.shutdown)  # an executor dropped without close()
 
     def warm(self, modules: Sequence[str]) -> None:
