@@ -44,6 +44,7 @@ from .views import (
     RECORD_MIN_BLOCKS,
     BandPlan,
     gear_ratio,
+    offset_removed,
     order_views_of_power,
     power_of_spectrum,
     record_blocks,
@@ -378,7 +379,7 @@ class Rows:
     consecutive: bool = False
 
     def __call__(self, spec: DatasetSpec) -> np.ndarray:
-        return source_rows(spec, self.max_order, self.chain, self.consecutive)
+        return offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive))
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
@@ -574,7 +575,9 @@ def _prepared(source: DatasetSpec, target_X, settings: Settings, chain: Chain | 
     offset fitted per set against the target's average unless fixed), how rows are made, the
     settings ('consecutive' resolved), the gear pair and the source as the search and the reports
     simulate it."""
+    # each record without its mean (views.offset_removed), as Rows makes the source's rows
     target = band_limited(check_target(target_X), max_order=settings.max_order)
+    target = offset_removed(target, chain.takes if chain is not None else ())
     if chain is not None and chain.offset is None:
         chain = replace(chain, reference=target.mean(axis=0))
     if settings.consecutive == "auto":  # a measured record's rows are its consecutive revolutions

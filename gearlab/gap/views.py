@@ -113,6 +113,24 @@ def check_revolutions(X, name: str = "revolutions") -> np.ndarray:
     return arr
 
 
+def offset_removed(X, takes: tuple[int, ...] = ()) -> np.ndarray:
+    """*X* (n, P) with each record's mean removed: *takes* counts the rows of each record laid end
+    to end (gearlab.data.chain.Chain.takes; () or counts that do not add up to n: one record).
+
+    An accelerometer measures no constant acceleration, so a record's mean is its electronics' (a
+    DC-coupled sensor bias, an ADC offset), not vibration; a simulation has none. The diagnosis
+    compares source and target rows each without it, so an offset makes no gap (its waveform view's
+    mean, RMS and crest factor read it otherwise) and the simulated side, whose mean is ~0, stays."""
+    X = check_revolutions(X)
+    counts = list(takes) if len(takes) and sum(takes) == len(X) else [len(X)]
+    out = X.copy()
+    start = 0
+    for count in counts:
+        out[start : start + count] -= X[start : start + count].mean()
+        start += count
+    return out
+
+
 def healthy_rows(dataset, physical: bool = True, name: str = "") -> np.ndarray:
     """The healthy rows (label 0) of a gearlab Dataset, float64 (n, P).
 

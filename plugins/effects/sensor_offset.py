@@ -4,7 +4,8 @@ Physical mismatch. A piezoelectric accelerometer cannot measure a constant accel
 record may carry a constant: the sensor's bias voltage or an amplifier offset left in by a
 DC-coupled acquisition, which the sensitivity then turns into m/s² (on the PHM 2009 rig's
 input-side channel, about 0.4 V, i.e. some 40 m/s²). It is not vibration, and a simulation has
-none; the waveform statistics that include the mean (mean, RMS, crest factor) see it.
+none. The gap diagnosis compares each record without its mean (gearlab.gap.views.offset_removed),
+so there this effect changes nothing; a simulated dataset may still carry it.
 
 Realisation. The offset is added to every sample of the record (after every other effect).
 
