@@ -259,13 +259,7 @@ class LikelihoodDetector(nn.Module):
 
 
 def likelihood_statistic(
-    Xs: np.ndarray,
-    ys: np.ndarray,
-    Xt: np.ndarray,
-    yt: np.ndarray | None,
-    path: str = "fir",
-    scale: str = "unit",
-    mixture: str = "shapes",
+    Xs, ys, Xt, yt: np.ndarray | None, path: str = "fir", scale: str = "unit", mixture: str = "shapes"
 ) -> LikelihoodDetector:
     """The likelihood-ratio detector of the source's fault shapes on the target's healthy
     history, its threshold not set yet (as `template_statistic`'s): reference h = the history's

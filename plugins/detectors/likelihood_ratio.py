@@ -17,6 +17,7 @@ from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, h
 
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 MIXTURES = ("shapes", "sizes")  # gearlab.learn.detectors.MIXTURES
+MIXTURE_DOC = "the mixture: 0 = shapes (each as the path brings it), 1 = sizes (also 1/4-4 times that, either sign)"
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
@@ -39,16 +40,7 @@ class LikelihoodRatio(Detector):
             "noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)",
             integer=True,
         ),
-        Param(
-            "mixture",
-            "",
-            0,
-            0,
-            len(MIXTURES) - 1,
-            "the mixture: 0 = shapes (each as the path brings it), 1 = sizes (each also at 1/4 to 4 times that "
-            "size, either sign)",
-            integer=True,
-        ),
+        Param("mixture", "", 0, 0, len(MIXTURES) - 1, MIXTURE_DOC, integer=True),
     )
     choices = {"path": PATHS, "scale": SCALES, "mixture": MIXTURES}
 
