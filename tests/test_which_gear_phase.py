@@ -47,14 +47,14 @@ def test_far_apart_counts_the_width_leaves_undecided_are_named_by_two_mesh_harmo
     (22/69 + 25/74, 14/53 + 18/59 + 23/67) were. The event stands at its own mesh's phase at the 1st and
     2nd harmonic alike (22T 1.00, 1.00; 71T -0.25, 0.12): the 22T is named; on one take the 71T's lines
     stand alike by chance too (-0.40, -0.71): both stay named, never the wrong gear. A 71T tooth lowering its
-    mesh (a stiffness lost) stands against both of its lines (-1.00, -1.00; the 22T's at 0.59, -0.94): the
-    71T is named, never the 22T (by the width where it decides)."""
+    mesh (a stiffness lost) is named by the width on one take; on two the width reads it between the gears,
+    where the phase does not decide (test below): both, never the 22T."""
     pinion = localised(tmp_path, FAR, (1, "pinion", 12), bump=0.3, **FAR_OPTIONS)
     wheel = localised(tmp_path, FAR, (0, "wheel", 30), bump=-0.3, **FAR_OPTIONS)
     assert pinion[None]["named"] is None and wheel[None]["named"] is None
     pinion_22 = "intermediate pinion 22T (stage 2)"
     assert _calls(pinion) == [pinion_22, pinion_22, None], [pinion[s]["summary"] for s in (5, 6, 7)]
-    assert _calls(wheel) == ["intermediate gear 71T (stage 1)"] * 3, [wheel[s]["summary"] for s in (5, 6, 7)]
+    assert _calls(wheel) == ["intermediate gear 71T (stage 1)", None, None], [wheel[s]["summary"] for s in (5, 6, 7)]
     for seed in (5, 6):
         said = pinion[seed]["summary"]
         assert "by the event's mesh phase" in said and "mesh phase cos at 1st, 2nd harmonic" in said, said
@@ -67,3 +67,21 @@ def test_the_mesh_phase_is_not_said_where_the_simulated_events_decided():
     ev = {"mesh phase": {"a (stage 1)": 0.9, "b (stage 2)": -0.2}, "simulated fit": {"a (stage 1)": 0.8}}
     assert T.phase_words({**ev, "rule": T.RULE_PHASE}) == "mesh phase cos a 0.90 / b -0.20, "
     assert T.phase_words({**ev, "rule": T.RULE_SIMULATED}) == ""
+
+
+def test_an_event_the_width_reads_between_the_gears_is_not_named_by_the_phase(monkeypatch):
+    """The simulated 24/79 + 27/72 reducer's 27T pinion fault (tests/test_localise_blocks, z 13,419): the width
+    read 'between the two gears', the 79T's lines stood alike (0.98, 0.99; the 27T's 0.11, 0.39) and the
+    phase named the 79T wheel: a wrong gear. The phase decides only where the width abstained (a low mode
+    rings, or z under WIDTH_Z); between, both stay named."""
+    from gearlab.signals import localise as L
+    from gearlab.signals import which_template as T
+
+    wheel, pinion = L.Gear("intermediate", 1, "wheel", 79), L.Gear("intermediate", 2, "pinion", 27)
+    both = {wheel.name: [0.98, 0.99], pinion.name: [0.11, 0.39]}
+    between = {"undecided": "width between the two gears' (0 < u <= 0.1)", "u": 0.05, "low-order share": 0.1}
+    monkeypatch.setattr(T, "_width", lambda *a: (None, dict(between)))
+    assert T.which_by_width(None, None, None, [wheel, pinion], 13419.0, {}, both)[0] is None
+    rings = {**between, "low-order share": 0.6}  # the width abstained: the phase names the 79T
+    monkeypatch.setattr(T, "_width", lambda *a: (None, dict(rings)))
+    assert T.which_by_width(None, None, None, [wheel, pinion], 13419.0, {}, both)[0] == wheel
