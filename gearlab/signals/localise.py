@@ -49,9 +49,10 @@ wide (noise widens an event, never narrows it). The width follows the structure'
 the teeth, and a pit or spall lasts a part of its pitch, so the two gears' u overlap. The event's
 mesh phase (which_template.mesh_phases: its content about each gear's mesh line, at its peak, against
 that line; in phase for the damaged gear's own mesh) names the gear of counts under MIN_RATIO where
-one leads by PHASE_MARGIN and the other is not in anti-phase; of counts further apart that the width leaves
-undecided, the one gear whose event stands with its mesh line, or against it, at the 1st and 2nd harmonic
-alike (which_template._by_phases_alike: a tooth lifts or lowers its own mesh). "Both" is no safe answer: a scenario
+one leads by PHASE_MARGIN and the other is not in anti-phase; of counts further apart where the width abstains
+(a low mode rings, z < WIDTH_Z), the one gear whose event stands with its mesh line, or against it, at the
+1st and 2nd harmonic alike (which_template._by_phases_alike: a tooth lifts or lowers its own mesh). "Both" is
+no safe answer: a scenario
 watching either gear counts it as its own.
 
 Tooth. The named shaft's orders, each weighted by the share of its power that is new (clip(Δ /
