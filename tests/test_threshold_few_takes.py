@@ -92,13 +92,13 @@ def called(seed: int, tmp_path, left_out: bool) -> tuple[float, float]:
 def test_each_history_take_scored_without_itself_lets_a_new_takes_units_through_about_as_asked(tmp_path):
     """Eight boxes of three history takes, four new healthy takes and two chipped ones: scored by the
     detector made on all three, the history's takes let 20 % of the new healthy takes' record10 units
-    through (1 % asked; 6 % at the variances' pivotal quantile, record_effects); each take scored by the
-    detector made without it, none (the chips: 7 of 8 boxes' every unit)."""
+    through (1 % asked); each take scored by the detector made without it, none (the chips: 7 of 8 boxes'
+    every unit)."""
     now = np.array([called(seed, tmp_path, left_out=True) for seed in range(8)])
     before = np.array([called(seed, tmp_path, left_out=False) for seed in range(8)])
     assert now[:, 0].mean() <= 0.02, now
     assert now[:, 1].mean() >= 0.75, now
-    assert before[:, 0].mean() >= 0.05, before  # what the threshold was set on before: the takes themselves
+    assert before[:, 0].mean() >= 0.1, before  # what the threshold was set on before: the takes themselves
 
 
 def test_a_history_take_is_scored_by_the_whole_detector_referenced_on_the_other_takes(tmp_path, monkeypatch):

@@ -20,19 +20,16 @@ mu the mean of the record means. A new record's unit is y = mu + a_new + e_new, 
 only to within Var(mu_hat) = sum_r (sigma_a^2 + sigma_e^2 / m_r) / R^2, so the threshold that
 lets a share alpha of healthy units of a new record through is the predictive quantile
 
-    P(y > t) = alpha,    y ~ N(mu_hat, sigma_a^2 + sigma_e^2 + Var(mu_hat)),
+    t = mu_hat + t_(nu, 1 - alpha) * sqrt(sigma_a^2 + sigma_e^2 + Var(mu_hat)),
 
-with the variances estimated: with R records sigma_a^2 rests on R - 1 degrees of freedom. The
-threshold is that quantile averaged over the generalised pivotal quantities of the variances
-(Weerahandi 1993; Krishnamoorthy & Mathew, *Statistical Tolerance Regions*, 2009, ch. 6, the one-way
-random model): S_b, the variance of the R record means, gives sigma_a^2 + mean(1/m_r) sigma_e^2 as
-(R - 1) S_b / U_1, U_1 ~ chi^2_(R-1), and sigma_e^2 is nu_e sigma_e^2 / U_2 (`pivotal_quantile`). With
-a large take effect it is Student-t's of R - 1 degrees of freedom; with none, near the normal one.
-Student-t at the Satterthwaite degrees of freedom of the same variance (Satterthwaite 1946), the rule
-before, let 2.1 % of a new record's units through where 1 % was asked, three records whose effect is
-three times the unit spread (`tests/test_record_effects.py`): its degrees of freedom rise exactly
-where the three means happen to lie close, and those histories call most; the pivots 0.8 %.
-``dof`` keeps that Satterthwaite figure: how many degrees of freedom the predictive spread rests on.
+a Student-t quantile, not the normal one, because the variances are estimated: with R records
+sigma_a^2 rests on R - 1 degrees of freedom. The predictive variance is the linear combination
+(1 + 1/R) S_b + (1 - mean 1/m_r) sigma_e^2 of the record means' variance S_b (R - 1 degrees of
+freedom) and sigma_e^2 (the within-record ones), and nu its Satterthwaite degrees of freedom
+(Satterthwaite 1946; Hahn & Meeker, *Statistical Intervals*, ch. 12 for the same interval). With
+three records whose effect is twice the unit spread, the normal quantile let 9 % of a new record's
+units through where 5 % was asked, the t quantile 6 % (`tests/test_record_effects.py`); with
+many records the two agree.
 
 m_r counts the record's *independent* units: sliding TSA windows of b revolutions moved by s
 overlap, and only about (n - 1) s / b + 1 of n such windows are independent. For the same
@@ -58,7 +55,6 @@ Only the history's scores enter: nothing here sees a test record.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -144,8 +140,7 @@ def logged(scores, floor: float | None) -> np.ndarray:
 
 def fit(groups, p: float, independent=None, dofs=None, floor: float | None = None) -> RecordEffects:
     """The model of *groups* (one array of unit scores per history record, in any order) and
-    its *p* predictive quantile for a unit of a new record (three records or more: `pivotal_quantile`;
-    two: the normal one; one: Student-t of the within-record degrees of freedom);
+    its *p* predictive quantile for a unit of a new record (Student-t, `predictive_dof`);
     *independent*: each record's number of independent units (default: its number of units);
     *dofs*: each record's degrees of freedom of its within-record sum of squares (default n − 1;
     sliding windows: overlap_dof); *floor*: the scores are sizes above it, modelled on the log scale
@@ -163,10 +158,7 @@ def fit(groups, p: float, independent=None, dofs=None, floor: float | None = Non
     nu = predictive_dof(means, within, m, within_dof, record_var > 0) if R != 2 else float("inf")
     from scipy.stats import t as student  # here, not at the top: start-up time (scipy.stats takes ~1 s)
 
-    if R >= 3:
-        threshold = pivotal_quantile(means, within, m, within_dof, p)
-    else:
-        threshold = float(means.mean() + student.ppf(p, nu) * sd)
+    threshold = float(means.mean() + student.ppf(p, nu) * sd)
     return RecordEffects(
         mean=float(means.mean()),
         record_sd=None if estimate is None else float(np.sqrt(record_var)),
@@ -177,48 +169,6 @@ def fit(groups, p: float, independent=None, dofs=None, floor: float | None = Non
         dof=nu,
         floor=floor,
     )
-
-
-PIVOTS = 1000  # strata of each variance's pivotal quantity (Latin hypercube: one history, one threshold)
-
-
-@functools.cache
-def _strata(paired: bool = False) -> np.ndarray:
-    """The midpoints of `PIVOTS` equal-probability strata, in order or (*paired*) in a fixed permutation."""
-    strata = (np.arange(PIVOTS) + 0.5) / PIVOTS
-    return np.random.default_rng(0).permutation(strata) if paired else strata
-
-
-def pivotal_quantile(means: np.ndarray, within: float, m: np.ndarray, within_dof: float, p: float) -> float:
-    """The *p* quantile of a new record's unit, from R >= 2 record *means* and the within-record variance
-    *within* (*within_dof* degrees of freedom; *m*: independent units per record), averaged over the
-    generalised pivotal quantities of the model's variances (module docstring): G_b = (R - 1) S_b / U_1
-    for sigma_a^2 + c sigma_e^2 (c = mean 1/m_r), G_e = nu_e sigma_e^2 / U_2, G_a = max(0, G_b - c G_e);
-    mu_hat's own pivot is normal, so a new unit is N(mu_hat, G_b / R + G_a + G_e) given them, and the
-    threshold the t with that law's mean P(y > t) = 1 - p. U_1 and U_2 at the midpoints of `PIVOTS`
-    equal-probability strata, paired by a fixed permutation (deterministic, and no tail draw left to
-    chance: the t's tail is U_1's small values)."""
-    from scipy.optimize import brentq
-    from scipy.special import chdtri, ndtr
-
-    R = len(means)
-    u1 = chdtri(R - 1, 1.0 - _strata())
-    known = not (np.isfinite(within_dof) and within_dof > 0)  # no within-record degrees of freedom
-    u2 = 1.0 if known else chdtri(within_dof, 1.0 - _strata(paired=True)) / within_dof
-    g_e = within / u2
-    g_b = (R - 1) * float(means.var(ddof=1)) / u1
-    g_a = np.maximum(0.0, g_b - float(np.mean(1.0 / m)) * g_e)
-    sd = np.sqrt(g_b / R + g_a + g_e)
-    mean = float(means.mean())
-    if not np.any(sd > 0):
-        return mean
-    sd = np.maximum(sd, 1e-12 * float(np.max(sd)))
-
-    def over(t: float) -> float:
-        return float(np.mean(ndtr((mean - t) / sd))) - (1.0 - p)
-
-    hi = mean + 40.0 * float(np.max(sd))
-    return float(brentq(over, mean, hi, xtol=1e-12 * (hi - mean), rtol=1e-12))
 
 
 def predictive_dof(means: np.ndarray, within: float, m: np.ndarray, within_dof: float, estimated: bool) -> float:
