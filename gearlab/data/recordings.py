@@ -767,6 +767,11 @@ def check_recording(
         if value is None or value == "":
             continue
         name = channel_key(value)
+        column = matrix_column(name)
+        if column is not None and not header.find(name) and header.find(column[0]):
+            raise GearlabInputError(
+                f"{where} key '{key}': {path} has no channel {_one_line_repr(name)}: {header.not_a_column(name)}"
+            )
         if not header.find(name) and header.channels:
             index = " (or a 0-based column index)" if header.indexed else ""
             raise GearlabInputError(

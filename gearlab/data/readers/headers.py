@@ -82,9 +82,23 @@ class Header:
         if name in self.channels or self.resolve(name) in self.channels:
             return True
         if (column := matrix_column(name)) is not None and self.find(column[0]):
-            shape = self.shapes.get(self.resolve(column[0]))  # where the header gives it: a matrix with that column
-            return shape is None or (len(shape) == 2 and column[1] < min(shape))
+            return self.not_a_column(name) is None
         return self.indexed and str(name).strip().isdigit() and int(name) < len(self.channels)
+
+    def not_a_column(self, name: str) -> str | None:
+        """Why *name*, a channel named as a matrix's column ('data[2]') of a channel the file has, is none,
+        from the header's shapes ('its 'data' holds 2 channels ...; expected ...'), or None where it is one
+        (or the header gives no shape: the run decides)."""
+        array, index = matrix_column(name)
+        shape = self.shapes.get(self.resolve(array))
+        if shape is None and self.indexed:  # a text column, a WAV channel: one series each
+            return f"'{array}' is one column, not a matrix of channels; expected '{array}'"
+        if shape is None or (len(shape) == 2 and index < min(shape)):
+            return None
+        if len(shape) != 2:
+            return f"'{array}' holds an array of shape {shape}, not a matrix of channels (N x k)"
+        last = min(shape) - 1
+        return f"'{array}' holds {last + 1} channels; expected '{array}[0]' … '{array}[{last}]'"
 
     def resolve(self, name: str) -> str:
         """The channel as the file names it: a nested file's "acc" is its one "group/acc"."""
@@ -291,10 +305,13 @@ def _mat_header(path: Path) -> Header:
         if 0 in f.read(4):  # v4: no header to list; the run reads it
             return Header("MATLAB", [], True)
     fields: list[str] = []
-    names = [n for n in _mat5_variables(path.read_bytes(), lambda name: False, fields) if n and not n.startswith("__")]
+    shapes: dict[str, tuple] = {}
+    every = _mat5_variables(path.read_bytes(), lambda name: False, fields, shapes)
+    names = [n for n in every if n and not n.startswith("__")]
     names += fields  # a scalar struct's fields, by path
     rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
-    return Header("MATLAB", names, rate, nested=bool(fields))
+    shapes = {n: tuple(shape) for n, shape in shapes.items() if n in names}
+    return Header("MATLAB", names, rate, nested=bool(fields), shapes=shapes)
 
 
 HEADERS = {

@@ -120,9 +120,10 @@ class _Mat5Layout:
     """Walks MATLAB v5 elements: tag (type, size) then data padded to 8 bytes, or a small data
     element (size and type in one word, up to 4 bytes of data in the next)."""
 
-    def __init__(self, order: str, fields: list | None = None):
+    def __init__(self, order: str, fields: list | None = None, shapes: dict | None = None):
         self.order = order
         self.fields = fields  # collects "var/field" paths of scalar structs' numeric and text fields
+        self.shapes = shapes  # collects numeric variables' and such fields' dimensions, by name or path
 
     def element(self, buf: memoryview, pos: int, end: int) -> tuple[int, memoryview, int]:
         """(type, data, position after it) of the element at *pos*; it must end by *end*."""
@@ -179,6 +180,8 @@ class _Mat5Layout:
             raise ValueError("a matrix without a valid name")
         name = bytes(raw).decode("latin1")
         here = name if path is None else path
+        if self.shapes is not None and mclass in _MX_NUMERIC and here and (depth == 0 or path is not None):
+            self.shapes[here] = sizes
         scalar_struct = mclass == _MX_STRUCT and count == 1 and self.fields is not None
         if not read(name) and not scalar_struct:
             return name  # scipy reads no more of a variable it is not asked for
@@ -232,13 +235,14 @@ def _inflate(data, at: int) -> bytes:
     return out
 
 
-def _mat5_variables(data: bytes, read, fields: list | None = None) -> list[str]:
+def _mat5_variables(data: bytes, read, fields: list | None = None, shapes: dict | None = None) -> list[str]:
     """Names of the variables of a MATLAB v5 file, after checking their layout: every
     variable's header, and in full those for which read(name) is true. *fields*: a list that
-    collects the field paths of scalar structs ("rec/acc"), walked in full."""
+    collects the field paths of scalar structs ("rec/acc"), walked in full; *shapes*: a dict that
+    collects the numeric ones' dimensions, as MATLAB stores them (a vector is 1 x N or N x 1)."""
     if len(data) < 128 or data[126:128] not in (b"IM", b"MI"):
         raise ValueError("no MATLAB 5 header (128 bytes ending in 'IM' or 'MI')")
-    layout = _Mat5Layout("<" if data[126:128] == b"IM" else ">", fields)
+    layout = _Mat5Layout("<" if data[126:128] == b"IM" else ">", fields, shapes)
     data = memoryview(data)  # slices without copies of the arrays
     names = []
     pos = 128
