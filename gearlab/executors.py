@@ -239,7 +239,8 @@ class _Unpacker(pickle.Unpickler):
 
 def warning_line(message, category, filename, lineno, file=None, line=None) -> None:
     """A worker's warnings as the command line's (gearlab.cli._warning_line): one line on stderr,
-    without Python's category, file and source-line echo."""
+    without Python's category, file and source-line echo (in the worker for what no unit raised, in
+    the parent for the units' own, each message once)."""
     sys.stderr.write(f"warning: {message}\n")
 
 
@@ -254,9 +255,19 @@ def _imported(modules: tuple[str, ...]) -> None:
         importlib.import_module(module)
 
 
-def _unpacked(fn: Callable, item: bytes):
-    """A worker's call: the item unpickled, its Shared values read from their files."""
-    return fn(_Unpacker(io.BytesIO(item)).load())
+def _unpacked(fn: Callable, item: bytes) -> tuple[object, list[str]]:
+    """A worker's call: the item unpickled, its Shared values read from their files. Returns (its result,
+    the messages of the warnings it raised), for the parent to show each message once a run: shown here,
+    each worker showed the same warning (the simulator's step warning at a record's rate) once per worker.
+    A unit that fails shows its warnings here, before its error reaches the parent."""
+    with warnings.catch_warnings(record=True) as raised:
+        try:
+            result = fn(_Unpacker(io.BytesIO(item)).load())
+        except BaseException:
+            for w in raised:
+                warning_line(w.message, w.category, w.filename, w.lineno)
+            raise
+    return result, list(dict.fromkeys(str(w.message) for w in raised))
 
 
 class LocalExecutor(Executor):
@@ -276,6 +287,7 @@ class LocalExecutor(Executor):
         self._pool: ProcessPoolExecutor | None = None
         self._folder: str | None = None  # the Shared values' files
         self._files: dict[int, tuple[Shared, tuple]] = {}  # id -> (the value, kept alive; its file)
+        self._warned: set[str] = set()  # the workers' warnings shown so far (one executor a run)
 
     def close(self) -> None:
         if self._pool is not None:
@@ -349,7 +361,11 @@ class LocalExecutor(Executor):
             futures = {self._pool.submit(_unpacked, fn, self._packed(item)): i for i, item in enumerate(items)}
             for future in as_completed(futures):
                 i = futures[future]
-                results[i] = future.result()
+                results[i], raised = future.result()
+                for message in raised:
+                    if message not in self._warned:
+                        self._warned.add(message)
+                        warning_line(message, None, None, None)
                 if on_done:
                     on_done(i, results[i])
         except BaseException:

@@ -20,3 +20,20 @@ def test_a_workers_warning_is_one_line():
     lines = [line for line in err.splitlines() if line.strip()]
     assert lines and all(line == f"warning: {MESSAGE}" for line in lines), err
     assert "UserWarning" not in err
+
+
+ONCE = f"""
+import functools, warnings
+from gearlab.executors import LocalExecutor
+with LocalExecutor(2) as pool:
+    pool.map(functools.partial(warnings.warn, {MESSAGE!r}, UserWarning), range(6))
+    pool.map(functools.partial(warnings.warn, "another message", UserWarning), range(4))
+    pool.map(functools.partial(warnings.warn, {MESSAGE!r}, UserWarning), range(4))  # the same run: not again
+"""
+
+
+def test_a_warning_every_worker_raises_is_shown_once_a_run():
+    # the simulator's step warning was printed once in each worker (two lines for 2 workers, 16 for 16 cores)
+    err = subprocess.run([sys.executable, "-c", ONCE], capture_output=True, text=True, check=True).stderr
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert lines == [f"warning: {MESSAGE}", "warning: another message"], err
