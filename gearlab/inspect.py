@@ -331,14 +331,18 @@ def _by_input_lines(rec: Recording, box: Gearbox | None, options: InspectOptions
     lines (sidebands, shaft line) show another pinion count, read at its speed (26 teeth at 24.09 Hz mesh
     where 25 at 25.06 Hz do: the search took the nominal speed's); where they show none, the other counts
     the mesh line allows within the nominal range are kept on the speed (speed.others): ambiguous."""
-    if box is None or rec.tacho is not None or not speed.declared_hz:
+    if box is None or rec.tacho is not None:
         return speed, reading
     said, table = box.stages[0].pinion.z, order_table(box)
+    # no speed declared: the counts looked at are those within the nominal range of the speed found (the mesh
+    # lines scale alike for every input pinion count, so the search's speed is the described count's), and only
+    # a count the input shaft's lines show is acted on (a 17/53 + 22/67 + 29/83 box described with 18 teeth was
+    # read at 33.06 Hz, 'the pinion shows 17.0 teeth'; its input turns at 35 Hz)
     mesh_hz, seen, others = pinion_evidence(
-        reading.lines, speed.mean_hz, reading.revolutions, table, said, speed.declared_hz
+        reading.lines, speed.mean_hz, reading.revolutions, table, said, speed.declared_hz or speed.mean_hz
     )
     if seen is None:
-        speed.others = others
+        speed.others = others if speed.declared_hz else []
     elif seen != said and (found := _read_at_count(rec, box, options, speed, mesh_hz, seen)) is not None:
         return found
     return speed, reading
@@ -360,9 +364,10 @@ def _read_at_count(rec, box: Gearbox, options, speed: Speed, mesh_hz: float, cou
         theta, per_rev = TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
     else:
         f, per_rev = mean, rec.fs / np.diff(revolution_starts(theta - theta[0]))
-    why = f"the declared {fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
-    if speed.source != "declared":  # the search's speed fitted the described count's mesh, not the shaft's lines
-        why = f"not the {fmt_hz(speed.mean_hz)} a {described}-tooth pinion would turn at"
+    # the search's speed fitted the described count's mesh, not the shaft's lines
+    why = f"not the {fmt_hz(speed.mean_hz)} a {described}-tooth pinion would turn at"
+    if speed.source == "declared":
+        why = f"the declared {fmt_hz(speed.declared_hz)} not confirmed by the mesh lines"
     how = f"from {by} (a {count}-tooth pinion meshing at {fmt_hz(mesh_hz)}), {why}"
     settled = Speed(f, how, theta, per_rev, speed.declared_hz, list(speed.notes), settled=by)
     at = read_orders(rec, settled, options.threshold_db)
@@ -435,7 +440,9 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
         if read_on and len(differences) == listed:  # the tacho read as said: its shaft's gears first, then outward
             check["outward"] = outward_first(differences, check["stages"], box, read_on)
-        if differences and (speed.settled or no_speed):  # the speed the rows after the speed's line read at
+        # the speed the rows after the speed's line read at, where it is not the declared one (none declared:
+        # the speed found, as every row of such a record)
+        if differences and ((speed.settled and speed.declared_hz) or no_speed):
             said = f"the speed {speed.settled} show" if speed.settled else "declared, not confirmed"
             differences[0] = f"at {fmt_hz(speed.mean_hz)} ({said}): {differences[0]}"
         if rec.tacho is None and (speed.source == "declared" or speed.settled):

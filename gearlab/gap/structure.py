@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
+from ..gearbox.speed import TEETH_AGREE
 
 # A target whose strongest lines (STRONGEST, above order MIN_TEETH) hold at least this share of their
 # power off the source's comb of mesh harmonics and sidebands may be another gearbox (then those lines
@@ -540,8 +541,8 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     # tooth's share is told, a motor's slip (no whole tooth) is not
     if chain is not None and chain.speed_from_mesh and chain.described_speed:
         record.setdefault("speed_hz", {"target": chain.speed})["described"] = chain.described_speed
-        if traded_teeth(chain.speed, chain.described_speed, pair.Z1) is not None:
-            return speed_line(chain.speed, chain.described_speed, pair.Z1)
+        if (teeth := traded_teeth(chain.speed, chain.described_speed, pair.Z1)) is not None:
+            return _traded_line(target, pair, max_order, chain, teeth, record)
     # a tacho on another shaft than the input, or a speed found from the mesh lines: the input's order is
     # read off its sidebands, as inspect reads it (a 23/61 fan's output tacho, described 24/61: the mesh
     # at 24 by the described ratio, the input's sidebands 24/23 apart; inspect said '23.0 teeth', detection
@@ -595,6 +596,24 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     if unresolved := _inspect_unchecked(target, pair, max_order, on_input, tacho):
         record["unchecked"] = unchecked_record(unresolved, takes)
     return None
+
+
+def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict) -> str:
+    """The line of a speed found from the mesh lines a whole tooth's share off the described one: the input
+    pinion's sidebands decide between the described count at the speed found and *teeth* at the described
+    speed, as inspect decides it (their spacing is the input shaft's turn, whatever the speed read); where
+    they show neither, speed_line's either-or. A 17/53 + 22/67 + 29/83 box described with 18 teeth, no tacho:
+    every stage's mesh where 18 puts it at 33.06 Hz, the input's sidebands 17 teeth apart at 35 Hz."""
+    mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), None, False)["inspect"]
+    seen, spread = mesh.get("z1_seen"), mesh.get("z1_resolution") or 0.0
+    if seen is None or abs(seen - teeth) > max(TEETH_AGREE, spread):
+        return speed_line(chain.speed, chain.described_speed, pair.Z1)
+    record["outward"] = {"stage": 1, "gear": "pinion", "seen": float(seen), "described": int(pair.Z1)}
+    return (
+        f"mesh order {teeth} measured, {pair.Z1} expected (stage 1): the input pinion's sidebands show "
+        f"{seen:.1f} ± {spread:.1f} teeth, the input at {chain.described_speed:.4g} Hz (no tacho: the mesh lines "
+        f"read {chain.speed:.4g} Hz for a {pair.Z1}-tooth pinion); every later mesh follows from it"
+    )
 
 
 def _inspect_unchecked(target, pair, max_order: int, on_input: bool, tacho) -> list[str]:

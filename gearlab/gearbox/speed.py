@@ -208,16 +208,21 @@ def speed_from_mesh(
         for k, (i, s, h, _) in enumerate(tried):
             if not stages[k]:
                 continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
-            hypotheses.append(
-                (float(np.sum(weight * evidence[k])), speeds[k], f"{fmt_hz(x[i])} as {h}×M{s.index}", s.index, x[i] / h)
-            )
+            # (evidence, speed, words, the stage, its mesh fundamental in Hz, the stages with a carrier on a mesh)
+            said = f"{fmt_hz(x[i])} as {h}×M{s.index}"
+            hypotheses.append((float(np.sum(weight * evidence[k])), speeds[k], said, s.index, x[i] / h, int(stages[k])))
 
     if declared is not None:
         # the declared speed, refined by the best hypothesis near it, unless the lines fit another speed
         # much better: a few weak lines always fit within ±1 % as some harmonic, and a wrong tooth count
         # is then read at the declared speed (inspect: "mesh order 23 measured, 24 expected")
-        near = [h for h in hypotheses if abs(h[1] / declared - 1) <= DECLARED_RANGE]
-        slipped = [h for h in hypotheses if DECLARED_RANGE < abs(h[1] / declared - 1) <= NOMINAL_RANGE]
+        # every stage's mesh at once: a speed whose lines another speed explains on more stages, with as much
+        # evidence, is no reading (a 17/53 + 22/67 + 29/83 box described with 18 teeth at a declared 35 Hz:
+        # 2x M1, 1.19 kHz, read as 11x M3 at 33.45 Hz, its sidebands spuriously 17.9 teeth; at 33.06 Hz every
+        # stage's mesh is on a line, as the 18-tooth description puts it for a 17-tooth pinion at 35 Hz)
+        kept = [h for h in hypotheses if not any(g[5] > h[5] and g[0] >= h[0] for g in hypotheses)]
+        near = [h for h in kept if abs(h[1] / declared - 1) <= DECLARED_RANGE]
+        slipped = [h for h in kept if DECLARED_RANGE < abs(h[1] / declared - 1) <= NOMINAL_RANGE]
         # the input pinion's sidebands, whichever stage's mesh gave the speed: a later stage's mesh and
         # pinion shaft both scale with the input's speed times stage 1's described ratio, and agree at a
         # speed a wrong input pinion's count makes (19/58 + 25/67 described 18/58: 36.95 Hz, not 35)
