@@ -4,6 +4,7 @@ Used by the importer (gearlab.data.recordings) and by `gearlab inspect`."""
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -431,8 +432,14 @@ def follow_speed(
         if got[2] != "declared":
             return got
     fine = upsampled(signal)  # read at uniform angle 8 times denser: no false lines
+    # a speed ramp smears every line over its sweep: the first look is at the record read along the speed's
+    # course from its own spectra (speed_course), where the lines stand narrow at the mean speed
+    first = signal
+    if (course := speed_course(signal, fs)) is not None:
+        u = np.cumsum(course) - course[0]
+        first = np.interp(np.linspace(u[0], u[-1], signal.size), fine.at(u), fine.signal)
     try:
-        f, how, note = speed_from_mesh(signal, fs, box, declared, where, threshold_db)
+        f, how, note = speed_from_mesh(first, fs, box, declared, where, threshold_db)
     except AmbiguousSpeed as exc:
         # smeared lines can fit several speeds: the one whose mesh phase, followed, leaves lines that
         # fit that speed and no other is the speed (several such: still ambiguous)
@@ -518,11 +525,71 @@ def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float) -> np.ndar
         best = strongest
     _, c, half, order = best
     t = np.arange(n) / fs
+    # a speed ramp moves the line further than the band (2 % at 1.9 kHz is 38 Hz; a band of ±2.6 Hz followed a
+    # sixth of it): the record's own spectra over time give the speed's course (speed_course), and the line is
+    # followed on the record with that course taken out, which leaves it narrow at c
+    chirp = np.zeros(n)
+    course = speed_course(signal, fs)
+    if course is not None and c * float(np.ptp(course)) > half:
+        chirp = 2 * np.pi * c * np.cumsum(course - 1.0) / fs
+        spec = np.fft.fft(np.fft.ifft(np.where(freq > 0, 2 * spec, 0)) * np.exp(-1j * chirp))
     analytic = np.fft.ifft(np.where(np.abs(freq - c) <= half, 2 * spec, 0))
-    phase = np.unwrap(np.angle(analytic * np.exp(-2j * np.pi * c * t)))  # slow: the deviation from c
+    phase = np.unwrap(np.angle(analytic * np.exp(-2j * np.pi * c * t)))  # slow: the deviation from c (and chirp)
     line = np.polyval(np.polyfit(t, phase, 1), t)
     wiggle = np.concatenate([phase - line, (phase - line)[::-1]])  # mirrored: no jump where the FFT wraps
     # flat to the cutoff, a cosine down to 1.5 times it (a sharp edge rings: lines at ± the cutoff)
     edge = np.clip((np.abs(np.fft.fftfreq(wiggle.size, 1 / fs)) - cutoff) / (0.5 * cutoff), 0.0, 1.0)
     smooth = np.fft.ifft(np.fft.fft(wiggle) * 0.5 * (1 + np.cos(np.pi * edge))).real[:n]
-    return (2 * np.pi * c * t + line + smooth) / order
+    # the course's phase is added after the smoothing: a mirrored parabola's kinks would ring through the low-pass
+    return (2 * np.pi * c * t + line + smooth + chirp) / order
+
+
+COURSE_WINDOWS = 15  # the record's spectra over time: half-overlapping windows, an eighth of it each
+COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean
+COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
+COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
+
+
+def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
+    """The speed per sample over its mean (a smooth course, mean 1) of a record without a tacho, from its own
+    spectra: each window's spectrum (lines over the running median, on a log-frequency axis, where a speed
+    change is a shift) correlated with the middle window's, every line of every stage at once; a quadratic
+    through the windows' ratios; None where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
+    the mesh harmonic's band was narrower than its sweep."""
+    from scipy import ndimage
+
+    n = signal.size
+    size = n // 8
+    if size < 256:
+        return None
+    starts = np.linspace(0, n - size, COURSE_WINDOWS).astype(int)
+    nfft = 1 << int(math.ceil(math.log2(2 * size)))
+    freq = np.fft.rfftfreq(nfft, 1 / fs)
+    low, high = max(20 * fs / size, 1.0), 0.45 * fs
+    if high <= low * 1.5:
+        return None
+    axis = np.exp(np.arange(math.log(low), math.log(high), COURSE_STEP))
+    window = np.hanning(size)
+    rows = []
+    for a in starts:
+        amp = np.abs(np.fft.rfft(signal[a : a + size] * window, nfft))
+        floor = ndimage.median_filter(amp, size=min(FLOOR_BINS, amp.size | 1), mode="nearest")
+        lifted = np.clip(np.log(np.maximum(amp, 1e-300) / np.maximum(floor, 1e-300)), 0.0, None)
+        rows.append(np.interp(axis, freq, lifted))
+    rows = np.array(rows)
+    rows -= rows.mean(axis=1, keepdims=True)
+    ref = rows[COURSE_WINDOWS // 2]
+    reach = int(math.log(1 + COURSE_SPAN) / COURSE_STEP)
+    m = 1 << int(math.ceil(math.log2(2 * axis.size)))
+    cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(ref, m)), m)
+    lags = np.concatenate([cross[:, -reach:], cross[:, : reach + 1]], axis=1)  # lag -reach .. reach
+    k = np.clip(np.argmax(lags, axis=1), 1, 2 * reach - 1)
+    l, c, r = (lags[np.arange(k.size), k + d] for d in (-1, 0, 1))
+    denom = l - 2 * c + r
+    shift = k - reach + np.where(denom < 0, 0.5 * (l - r) / np.where(denom < 0, denom, -1), 0.0)
+    ratio = np.exp(shift * COURSE_STEP)
+    centre = (starts + size / 2) / fs
+    t = np.arange(n) / fs
+    course = np.polyval(np.polyfit(centre, ratio, 2), t)
+    course /= course.mean()
+    return course if float(np.ptp(course)) >= COURSE_MIN else None
