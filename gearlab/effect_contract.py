@@ -103,6 +103,10 @@ class Effect:
     # artefact of one acquisition (a DC offset). "Every registered effect" (default_candidates)
     # leaves these out, so the library a diagnosis tries by default stays the mechanisms.
     opt_in: ClassVar[bool] = False
+    # True for an effect that adds only a constant to the record (a DC offset): the gap diagnosis compares
+    # each record without its mean (gearlab.gap.views.offset_removed), where it changes nothing, so no
+    # diagnosis takes it as a candidate; a simulated dataset may still carry it.
+    mean_only: ClassVar[bool] = False
     params: ClassVar[tuple[Param, ...]] = ()
     options: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     log_scale: ClassVar[frozenset[str]] = frozenset()

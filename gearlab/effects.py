@@ -26,8 +26,24 @@ from .registry import get_registry
 
 
 def default_candidates(registry) -> list[str]:
-    """The effects a diagnosis tries when none are named: every registered one but the opt-in ones."""
-    return [name for name in registry.names("effect") if not getattr(registry.get("effect", name), "opt_in", False)]
+    """The effects a diagnosis tries when none are named: every registered one but the opt-in ones and
+    those a diagnosis cannot see (mean_only)."""
+    return [
+        name
+        for name in registry.names("effect")
+        if not any(getattr(registry.get("effect", name), flag, False) for flag in ("opt_in", "mean_only"))
+    ]
+
+
+def check_candidate(registry, name: str, where: str) -> None:
+    """*name* is an effect a gap diagnosis can fit: registered (else "did you mean", the known list), and
+    not one that adds only a constant, which the diagnosis's mean-removed records cannot show (mean_only)."""
+    if getattr(registry.get("effect", name, where), "mean_only", False):
+        raise GearlabInputError(
+            f"{where}: '{name}' adds only a constant to the record, and the diagnosis compares each record "
+            f"without its mean, so it would change nothing; expected an effect that changes the vibration "
+            f"('{name}' is for simulated datasets)"
+        )
 
 
 def config_of(model: str, preset: str, channel: str, where: str = "", registry=None) -> ModelConfig:

@@ -106,7 +106,7 @@ def test_model_updating_finds_the_unpublished_load(heavy, tmp_path, monkeypatch,
 
 def test_a_wrong_mechanism_leaves_the_gap_unexplained(heavy, tmp_path, monkeypatch, unrendered_figures):
     """Only an effect that cannot scale the gear vibration is offered: the gap beyond the noise stays."""
-    assert diagnosed(heavy, tmp_path, monkeypatch, '"sensor_offset", "sensor_noise"')["unexplained"]
+    assert diagnosed(heavy, tmp_path, monkeypatch, '"interference_tone", "sensor_noise"')["unexplained"]
 
 
 def test_records_of_two_speeds_are_refused(heavy, tmp_path, monkeypatch):

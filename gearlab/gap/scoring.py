@@ -32,7 +32,7 @@ from ..data.chain import Chain, fit_offset, sampled, tracked
 from ..data.realise import Seeds, first_revolution, parts, realise, row_seed
 from ..data.realise import record as cycle_record
 from ..data.spec import POINTS, DatasetSpec
-from ..effects import LEVELS, EffectChain, default_candidates
+from ..effects import LEVELS, EffectChain, check_candidate, default_candidates
 from ..errors import GearlabInputError
 from ..memo import SharedArrays
 from ..registry import get_registry
@@ -83,7 +83,7 @@ class Settings:
         (list, tuple),
         (),
         doc="effect names to try (gearlab plugins lists them); [] = every registered effect "
-        "but the opt-in ones (load_level, sensor_offset)",
+        "but the opt-in ones (load_level) and those that add only a constant (sensor_offset)",
     )
     budget: int = setting(
         int, 16, low=1, high=10_000, quick=4, doc="source simulations per effect fit (the search budget)"
@@ -161,7 +161,7 @@ def check_settings(settings: Settings) -> tuple[str, ...]:
     for i, name in enumerate(names, start=1):
         if not isinstance(name, str):
             raise GearlabInputError(f"gap diagnosis: candidate #{i} must be an effect name, got {name!r}")
-        registry.get("effect", name, f"gap diagnosis: candidate #{i}")  # unknown: "did you mean", known list
+        check_candidate(registry, name, f"gap diagnosis: candidate #{i}")
     if len(set(names)) != len(names):
         raise GearlabInputError(f"gap diagnosis: candidates repeat a name: {', '.join(names)}")
     if settings.reference == "noise" and NUISANCE not in names:

@@ -29,7 +29,7 @@ from ..data.cache import load_or_build
 from ..data.chain import PASSBAND, Chain, chain_of
 from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
-from ..effects import default_candidates
+from ..effects import check_candidate, default_candidates
 from ..errors import GearlabInputError
 from ..events import Event, report_begins
 from ..gap.conclusion import verdict_text  # the kind's log line, summary and report say one verdict
@@ -216,7 +216,7 @@ def candidates(names, where: str) -> tuple[str, ...]:
     for i, name in enumerate(names):
         if not isinstance(name, str):
             raise GearlabInputError(f"{where}: entry {i + 1} must be an effect name, got {type(name).__name__}")
-        registry.get("effect", name, f"{where} entry {i + 1}")  # unknown: did you mean, the known list
+        check_candidate(registry, name, f"{where} entry {i + 1}")
         if name in out:
             raise GearlabInputError(f"{where}: '{name}' is listed twice")
         out.append(name)
