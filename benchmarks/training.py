@@ -85,6 +85,14 @@ statistics in two passes: torch's own kernel for channels-last rows took as long
 float32 one after the other, 2e-6 from float64's). MMD's pooled kernel (gearlab/learn/losses.py):
 its loss forward + backward 0.97 -> 0.40 ms, an mmd epoch of a phm09-shaped training 25.2 -> 20.9 ms.
 
+The products of that function by oneDNN's inner product (fast_frozen.product): MKL's matrix product
+runs its AVX2 kernels on this AMD CPU (103-112 GFLOP/s at 512 x 512, one thread) and oneDNN its
+AVX-512 ones (228-245); `fast`'s 8 products 593 -> 418 us at batch 40, 1,180 -> 775 at 80 (min of
+7); a step, in one process alternated with MKL's (CPU time, load 2-4, 4 runs): fast 1.91-2.25 ->
+1.79-2.14 ms, fast+coral 4.67 -> 4.29, fast+mmd 5.07 -> 4.95. The limit's matrix-product peak is
+the faster of the two since (`shapes`' templates are held against it: its gearlab/limit 0.15 -> 0.07
+for the same speed; `fast`'s limit and roof are its convolutions' and keep their figures).
+
 Where a joint step's time goes now (CPU time, 40+40 x 2048, load ~10): `fast` forward + backward as
 the function 4.0 ms, of which its 8 matrix products 1.3 ms at 75-92 GFLOP/s (the matmul peak; the
 limit's conv1d peak is 170); the rest of the function (window copies, normalisations, ReLU and pair
@@ -150,6 +158,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from gearlab.learn import fast_frozen
 from gearlab.learn.networks import ShapeLikelihood, build_network, matched_start
 from gearlab.learn.training import fit_adaptation, fit_supervised
 from gearlab.registry import METHODS, get_registry
@@ -253,7 +262,8 @@ def roofline(costs: list[tuple[str, float, float]], peak: dict[str, float], bw: 
 
 
 def peaks(device: torch.device) -> dict[str, float]:
-    """FLOP/s of an n x n matrix product and of a friendly conv1d, the best of three each."""
+    """FLOP/s of an n x n matrix product (torch's, or on a CPU oneDNN's inner product where faster) and
+    of a friendly conv1d, the best of three each."""
     a, b = torch.randn(MATMUL, MATMUL, device=device), torch.randn(MATMUL, MATMUL, device=device)
     n, c_in, c_out, k, length = CONV
     x, w = torch.randn(n, c_in, length, device=device), torch.randn(c_out, c_in, k, device=device)
@@ -270,8 +280,11 @@ def peaks(device: torch.device) -> dict[str, float]:
             times.append(clock() - t)
         return flops / min(times)
 
+    products = [lambda: a @ b]
+    if device.type == "cpu":  # and oneDNN's, which gearlab's `fast` uses (fast_frozen.product)
+        products.append(lambda: fast_frozen.product(a, b))
     return {
-        "matmul": best(lambda: a @ b, 2 * MATMUL**3),
+        "matmul": max(best(f, 2 * MATMUL**3) for f in products),
         "conv": best(lambda: torch.nn.functional.conv1d(x, w), conv_flops),
     }
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 from torch.nn import functional as F
+from torch.utils._python_dispatch import TorchDispatchMode
 
 from gearlab.learn import fast_frozen
 from gearlab.learn.networks import build_network, fast_parts
@@ -133,3 +134,42 @@ def test_a_priming_stays_within_rounding_of_the_modules(monkeypatch):
     assert np.allclose(losses["function"], losses["modules"], rtol=1e-4)
     for name, value in states["modules"].items():
         assert torch.allclose(states["function"][name].double(), value.double(), rtol=0, atol=1e-4 * value.abs().max())
+
+
+class _Ops(TorchDispatchMode):
+    """The operators a computation calls, by name."""
+
+    def __init__(self):
+        super().__init__()
+        self.names: list[str] = []
+
+    def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+        self.names.append(str(func.overloadpacket))
+        return func(*args, **(kwargs or {}))
+
+
+@pytest.mark.skipif(fast_frozen._INNER is None, reason="this torch has no oneDNN inner product")
+@pytest.mark.parametrize("freeze", [True, False], ids=["frozen", "training"])
+def test_the_products_run_by_onednn(freeze):
+    """The function's 3 products forward and 5 backward are oneDNN's inner product, not torch's
+    matrix product (MKL's AVX2 kernels on a CPU MKL does not take for Intel's)."""
+    net = primed(2048, freeze=freeze)
+    x, y = torch.randn(40, 2048), torch.randint(0, 2, (40,))
+    with _Ops() as ops:
+        F.cross_entropy(net.classifier(net.embed(x)), y).backward()
+    z = net.embed(x).detach().requires_grad_()
+    with _Ops() as classifier:  # the dense layers alone: addmm forward, mm for their gradients
+        F.cross_entropy(net.classifier(z), y).backward()
+    assert ops.names.count("mkldnn._linear_pointwise") == 8
+    assert ops.names.count("aten.mm") == classifier.names.count("aten.mm")
+
+
+@pytest.mark.parametrize("m,k,n", [(5120, 64, 16), (16, 5120, 64), (640, 96, 64), (64, 640, 96), (3, 5, 2)])
+def test_a_product_of_views_is_the_product(m, k, n):
+    """product() of plain and transposed views (the windows, their gradients' transposes) equals the
+    product in float64 to float32's rounding of a sum of k terms."""
+    a, b = torch.randn(m, k), torch.randn(k, n)
+    for left, right in ((a, b), (a.T.contiguous().T, b), (a, b.T.contiguous().T)):
+        exact = left.double() @ right.double()
+        scale = (left.double().abs() @ right.double().abs()).max()
+        assert torch.allclose(fast_frozen.product(left, right).double(), exact, rtol=0, atol=1e-6 * k**0.5 * scale)
