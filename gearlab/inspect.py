@@ -63,6 +63,7 @@ from .gearbox.speed import (
     follow_speed,
     mesh_angle,
     nominal_line,
+    speed_course,
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
@@ -208,13 +209,24 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
         rec.signal, rec.fs, box, declared, f"{rec.path}: vibration '{rec.vibration}'", options.threshold_db
     )
     if theta is None:
-        speed = Speed(f, how, TWO_PI * f * np.arange(n) / rec.fs, np.zeros(0), declared)
+        speed = Speed(f, how, *_along_course(rec, f), declared)
     else:
         starts = revolution_starts(theta - theta[0])
         speed = Speed(f, how, theta, rec.fs / np.diff(starts), declared)
     if note:
         speed.notes.append(note)
     return speed
+
+
+def _along_course(rec: Recording, f: float) -> tuple[np.ndarray, np.ndarray]:
+    """(input angle per sample, speed per revolution) at the mean speed *f* where no mesh phase was followed: along
+    the speed's course from the record's own spectra (gearbox.speed.speed_course), else constant. A ramp read at a
+    constant speed smears every line: a 2 % ramp's input sidebands were lost, 'no sideband confirms a speed'."""
+    course = speed_course(rec.signal, rec.fs)
+    if course is None:
+        return TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
+    theta = TWO_PI * f * (np.cumsum(course) - course[0]) / rec.fs
+    return theta, rec.fs / np.diff(revolution_starts(theta))
 
 
 # --- the order spectrum and the description's orders ----------------------------------------------
@@ -361,7 +373,7 @@ def _read_at_count(rec, box: Gearbox, options, speed: Speed, mesh_hz: float, cou
         mean = (theta[-1] - theta[0]) * rec.fs / (TWO_PI * (theta.size - 1))
         theta = theta if abs(mean / f - 1) <= SPEED_AGREE else None
     if theta is None:
-        theta, per_rev = TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
+        theta, per_rev = _along_course(rec, f)
     else:
         f, per_rev = mean, rec.fs / np.diff(revolution_starts(theta - theta[0]))
     # the search's speed fitted the described count's mesh, not the shaft's lines
