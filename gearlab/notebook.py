@@ -186,6 +186,12 @@ def _si(value, unit: str, where: str) -> float | None:
     return None if value is None else to_si(value, unit, where)
 
 
+def _rate(value, where: str) -> float | None:
+    from .units import rate_hz
+
+    return None if value is None else rate_hz(value, where)
+
+
 def read_recording(
     path: str | Path,
     vibration: str | int,
@@ -214,7 +220,7 @@ def read_recording(
     from .data.textzip import calibration
 
     chain = calibration({"sensitivity": sensitivity, "gain": gain}, lambda key: key)
-    return read(path, vibration, tacho, fs=_si(fs, "Hz", "fs"), **chain, unit=_unit(unit, "unit"))
+    return read(path, vibration, tacho, fs=_rate(fs, "fs"), **chain, unit=_unit(unit, "unit"))
 
 
 def _unit(value: str | None, where: str) -> str | None:
@@ -271,7 +277,7 @@ def inspect_options(
         raise GearlabInputError(f"{flag('tacho_kind')}: {kind!r} is not one of {', '.join(TACHO_KINDS)}")
     if ppr is not None and not 1 <= ppr <= 10_000:
         raise GearlabInputError(f"{flag('pulses_per_rev')}: expected 1 .. 10000, got {ppr}")
-    rate = _si(fs, "Hz", flag("fs"))
+    rate = _rate(fs, flag("fs"))
     if rate is not None and not 0 < rate <= 1e7:
         raise GearlabInputError(f"{flag('fs')}: expected a sampling rate in (0, 10 MHz], got {fs!r}")
     if gain is not None and not gain_quantity(gain, flag("gain"))[0] > 0:

@@ -99,6 +99,26 @@ def to_si(value: object, unit: str, where: str, *, as_written: str | None = None
     return number
 
 
+# A sampling rate's units: a data sheet's samples per second ('51.2 kS/s', 'Sa/s'; pint's S is the siemens)
+# are hertz; one with an angle (rpm, rad/s, deg/s, turns, cycles) is a shaft's speed, which pint reads in
+# radians ('6400 rpm' as 670 Hz), never a sampling rate.
+_SAMPLES_PER_SECOND = re.compile(r"(?<![A-Za-z])([kMG]?)(?:S|Sa)/s\b")
+_ANGULAR = re.compile(r"rpm|rev|turn|rad|deg|cycle|°", re.IGNORECASE)
+
+
+def rate_hz(value: object, where: str) -> float:
+    """A sampling rate in Hz (to_si): 'S/s' read as Hz; a unit with an angle refused in one line naming
+    *where*."""
+    if not isinstance(value, str):
+        return to_si(value, "Hz", where)
+    if _ANGULAR.search(value):
+        raise GearlabInputError(
+            f"{where}: {shown(value)} is a rotational speed, not a sampling rate; expected samples per second "
+            "in Hz, e.g. '51.2 kHz' or '51.2 kS/s'"
+        )
+    return to_si(_SAMPLES_PER_SECOND.sub(r"\1Hz", value), "Hz", where, as_written=value)
+
+
 # What a quantity's text may hold, checked before pint evaluates it: pint computes powers
 # exactly, so "9**9**9 Hz" would never return. Units need only small powers (m^2, s**-1).
 _MAX_TEXT = 100

@@ -105,7 +105,7 @@ def prefixed(prefix: str):
 
 
 def file_problem(path: Path) -> str | None:
-    """Why *path* cannot be read as a measured file ('no such file', 'is not a file', a name
+    """Why *path* cannot be read as a measured file ('no such file', 'is not a file', 'is empty', a name
     too long, a NUL in it), or None when it is a file. Every kind checks its measured files
     so when a scenario is loaded: `gearlab validate` finds them all."""
     try:
@@ -114,7 +114,13 @@ def file_problem(path: Path) -> str | None:
         return f"cannot be a measured record: {getattr(exc, 'strerror', None) or exc}"
     if not exists:
         return "no such file"
-    return None if is_file else "is not a file"
+    if not is_file:
+        return "is not a file"
+    try:
+        empty = path.stat().st_size == 0
+    except OSError as exc:
+        return f"cannot be a measured record: {exc.strerror or exc}"
+    return "is empty (0 bytes)" if empty else None  # a copy or export that wrote nothing: no reader's own words
 
 
 def check_measured_file(path: Path, where: str = "", expected: str = "") -> None:

@@ -31,7 +31,7 @@ from ..parts.measured import ACQUISITION, pulses_of, tacho_shaft_of
 from ..registry import get_registry
 from ..scenario import Scenario, Table, check_type, keys_of, location, plain_name
 from ..settings import from_inline, in_bounds, setting
-from ..units import to_si
+from ..units import rate_hz, to_si
 
 # --- the keys of a measured recording, declared once ---------------------------------------------
 # Every table that reads a recording ([[datasets]] and the [source]'s 'file', the gap's and the
@@ -149,7 +149,8 @@ MEASURED = {
         "default": None,
         "unit": "Hz",
         "check": _quantity_of("fs"),
-        "doc": "sampling rate in (0, 10 MHz], e.g. '200 kHz': a simulation's integration rate; of measured "
+        "doc": "sampling rate in (0, 10 MHz], e.g. '200 kHz' or '51.2 kS/s' (an angle's unit, rpm or rad/s, is "
+        "refused: a shaft's speed): a simulation's integration rate; of measured "
         "data, when a file carries none",
     },
     "gearbox": {
@@ -401,7 +402,7 @@ def quantity(entry: dict, key: str, where: str) -> float:
 
 def _quantity(given, key: str, where: str) -> float:
     unit, high, said = QUANTITIES[key]
-    value = to_si(given, unit, where)
+    value = rate_hz(given, where) if key == "fs" else to_si(given, unit, where)
     if key == "speed" and 0 < value < 1e5:  # '1500 rpm' is 25 turns a second, not pint's 157 (rad/s)
         from ..gearbox.description import speed_hz
 

@@ -23,7 +23,7 @@ from ..data.textzip import CALIBRATION, align_to, calibration
 from ..errors import GearlabInputError, shown
 from ..params import did_you_mean
 from ..signals.angle import continued
-from ..units import to_si
+from ..units import rate_hz
 
 if TYPE_CHECKING:
     from ..gearbox.orders import TachoShaft
@@ -227,7 +227,7 @@ def held(key: str, value, where: str):
         return channel_key(value)
     if key == "pulses_per_rev":
         return int(value)
-    return value if key == "unit" else to_si(value, "Hz", where)  # fs ('sensitivity' and 'gain': calibration)
+    return value if key == "unit" else rate_hz(value, where)  # fs ('sensitivity' and 'gain': calibration)
 
 
 def speed_of(value, where: str) -> float:
