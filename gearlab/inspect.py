@@ -219,9 +219,8 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
 
 
 def _along_course(rec: Recording, f: float) -> tuple[np.ndarray, np.ndarray]:
-    """(input angle per sample, speed per revolution) at the mean speed *f* where no mesh phase was followed: along
-    the speed's course from the record's own spectra (gearbox.speed.speed_course), else constant. A ramp read at a
-    constant speed smears every line: a 2 % ramp's input sidebands were lost, 'no sideband confirms a speed'."""
+    """(input angle per sample, speed per revolution) at the mean speed *f*, no mesh phase followed: along the speed's
+    course (gearbox.speed.speed_course), else constant (read constant, a 2 % ramp's input sidebands were lost)."""
     course = speed_course(rec.signal, rec.fs)
     if course is None:
         return TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
@@ -346,10 +345,9 @@ def _by_input_lines(rec: Recording, box: Gearbox | None, options: InspectOptions
     if box is None or rec.tacho is not None:
         return speed, reading
     said, table = box.stages[0].pinion.z, order_table(box)
-    # no speed declared: the counts looked at are those within the nominal range of the speed found (the mesh
-    # lines scale alike for every input pinion count, so the search's speed is the described count's), and only
-    # a count the input shaft's lines show is acted on (a 17/53 + 22/67 + 29/83 box described with 18 teeth was
-    # read at 33.06 Hz, 'the pinion shows 17.0 teeth'; its input turns at 35 Hz)
+    # no speed declared: the counts within the nominal range of the speed found (the search's, the described count's),
+    # only one the input shaft's lines show acted on (17/53 + 22/67 + 29/83 described with 18 teeth: read at 33.06 Hz,
+    # 'the pinion shows 17.0 teeth'; its input turns at 35 Hz)
     mesh_hz, seen, others = pinion_evidence(
         reading.lines, speed.mean_hz, reading.revolutions, table, said, speed.declared_hz or speed.mean_hz
     )
@@ -452,8 +450,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
         if read_on and len(differences) == listed:  # the tacho read as said: its shaft's gears first, then outward
             check["outward"] = outward_first(differences, check["stages"], box, read_on)
-        # the speed the rows after the speed's line read at, where it is not the declared one (none declared:
-        # the speed found, as every row of such a record)
+        # the speed the rows after the speed's line read at, where not the declared one (none declared: the speed found)
         if differences and ((speed.settled and speed.declared_hz) or no_speed):
             said = f"the speed {speed.settled} show" if speed.settled else "declared, not confirmed"
             differences[0] = f"at {fmt_hz(speed.mean_hz)} ({said}): {differences[0]}"
