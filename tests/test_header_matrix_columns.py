@@ -32,6 +32,9 @@ def _write(tmp_path, fmt):
     elif fmt == "mat-compressed":
         path = tmp_path / "take.mat"
         scipy.io.savemat(path, {"data": data, "fs": FS}, do_compression=True)
+    elif fmt == "mat4":  # MATLAB v4: its variables' 20-byte headers give the shapes too
+        path = tmp_path / "take.mat"
+        scipy.io.savemat(path, {"data": data, "fs": FS}, format="4")
     elif fmt == "npz":
         np.savez(path, data=data.T, fs=FS)
     else:
@@ -49,7 +52,7 @@ def _refusal(path, channel) -> str:
     return text
 
 
-@pytest.mark.parametrize("fmt", ["mat", "mat-struct", "mat-compressed", "npz", "h5"])
+@pytest.mark.parametrize("fmt", ["mat", "mat-struct", "mat-compressed", "mat4", "npz", "h5"])
 def test_a_column_out_of_range_fails_at_validate_time(tmp_path, fmt):
     path = _write(tmp_path, fmt)
     check_recording(path, "s.toml: [target]", {"vibration": "data[0]", "tacho": "data[1]"}, unit="m/s^2")
@@ -63,6 +66,17 @@ def test_a_mat_matrix_named_whole_fails_at_validate_time(tmp_path):
     # as an HDF5 (N, 2) dataset already did: 'holds an array of shape ...; expected one channel over time'
     text = _refusal(_write(tmp_path, "mat"), "data")
     assert "shape (2000, 2)" in text and "'data[0]'" in text, text
+
+
+def test_a_mat4_file_lists_its_variables_and_a_cut_one_is_refused(tmp_path):
+    # a v4 file's header listed nothing (every name passed validate; the run then refused it)
+    path = _write(tmp_path, "mat4")
+    check_recording(path, "s.toml: [target]", {"vibration": "data[0]"}, unit="m/s^2")
+    text = _refusal(path, "acc")
+    assert "no channel 'acc'" in text and "data, fs" in text, text
+    path.write_bytes(path.read_bytes()[:20_000])  # a copy stopped early: 'data' declares 64,000 bytes
+    with pytest.raises(GearlabInputError, match=r"key 'file': cannot read .* past the end of the file"):
+        check_recording(path, "s.toml: [target]", {"vibration": "data[0]"}, unit="m/s^2")
 
 
 def test_a_column_of_a_csv_column_fails_at_validate_time(tmp_path):

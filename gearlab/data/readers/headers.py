@@ -302,8 +302,8 @@ def _mat_header(path: Path) -> Header:
     if _is_mat73(path):
         return _hdf5_header(path, "MATLAB")
     with path.open("rb") as f:
-        if 0 in f.read(4):  # v4: no header to list; the run reads it
-            return Header("MATLAB", [], True)
+        if 0 in f.read(4):  # v4 (how scipy tells it from v5)
+            return _mat4_header(path)
     fields: list[str] = []
     shapes: dict[str, tuple] = {}
     every = _mat5_variables(path.read_bytes(), lambda name: False, fields, shapes)
@@ -312,6 +312,38 @@ def _mat_header(path: Path) -> Header:
     rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
     shapes = {n: tuple(shape) for n, shape in shapes.items() if n in names}
     return Header("MATLAB", names, rate, nested=bool(fields), shapes=shapes)
+
+
+_MAT4_BYTES = {0: 8, 1: 4, 2: 4, 3: 2, 4: 2, 5: 1}  # the precision digit P: double, single, int32, int16, uint16, uint8
+
+
+def _mat4_header(path: Path) -> Header:
+    """A MATLAB v4 file's variables and their shapes: each variable's 20-byte header and name read, its
+    data skipped (its size follows from the header); the byte order as scipy guesses it (the first
+    variable's type word, 0 to 5000, read little-endian or not)."""
+    names, shapes, total = [], {}, path.stat().st_size
+    with path.open("rb") as f:
+        order = "<" if 0 <= struct.unpack("<i", f.read(4))[0] <= 5000 else ">"
+        f.seek(0)
+        while head := f.read(20):
+            at = f.tell() - len(head)
+            if len(head) < 20:
+                raise ValueError(f"{len(head)} stray bytes at the end")
+            mopt, rows, cols, imagf, namlen = struct.unpack(order + "5i", head)
+            precision, kind = mopt // 10 % 10, mopt % 10
+            if not 0 <= mopt <= 5000 or mopt // 100 % 10 or precision not in _MAT4_BYTES or min(rows, cols) < 0:
+                raise ValueError(f"no MATLAB 4 variable header at byte {at}")
+            if not 0 < namlen <= 1024:
+                raise ValueError(f"a variable name of {namlen} bytes at byte {at}")
+            name = f.read(namlen).split(b"\0", 1)[0].decode("latin1")
+            size = rows * cols * _MAT4_BYTES[precision] * (2 if imagf == 1 else 1)
+            if f.tell() + size > total:
+                raise ValueError(f"variable '{name}' declares {size:,} bytes, past the end of the file")
+            f.seek(size, 1)
+            names.append(name)
+            if kind == 0:  # a full numeric matrix (1: text, 2: sparse)
+                shapes[name] = (rows, cols)
+    return Header("MATLAB", names, any(is_rate_or_time(n) for n in names), shapes=shapes)
 
 
 HEADERS = {
