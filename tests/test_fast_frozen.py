@@ -151,8 +151,8 @@ class _Ops(TorchDispatchMode):
 @pytest.mark.skipif(fast_frozen._INNER is None, reason="this torch has no oneDNN inner product")
 @pytest.mark.parametrize("freeze", [True, False], ids=["frozen", "training"])
 def test_the_products_run_by_onednn(freeze):
-    """The function's 3 products forward and 5 backward are oneDNN's inner product, not torch's
-    matrix product (MKL's AVX2 kernels on a CPU MKL does not take for Intel's)."""
+    """The function's 3 products forward and 5 backward at batch 40 are oneDNN's inner product, not
+    torch's matrix product (MKL's AVX2 kernels on a CPU MKL does not take for Intel's)."""
     net = primed(2048, freeze=freeze)
     x, y = torch.randn(40, 2048), torch.randint(0, 2, (40,))
     with _Ops() as ops:
@@ -162,6 +162,9 @@ def test_the_products_run_by_onednn(freeze):
         F.cross_entropy(net.classifier(z), y).backward()
     assert ops.names.count("mkldnn._linear_pointwise") == 8
     assert ops.names.count("aten.mm") == classifier.names.count("aten.mm")
+    with _Ops() as small:  # batch 2: products of under INNER_MIN multiply-adds, where oneDNN's call costs more
+        F.cross_entropy(net.classifier(net.embed(x[:2])), y[:2]).backward()
+    assert "mkldnn._linear_pointwise" not in small.names
 
 
 @pytest.mark.parametrize("m,k,n", [(5120, 64, 16), (16, 5120, 64), (640, 96, 64), (64, 640, 96), (3, 5, 2)])

@@ -81,12 +81,19 @@ def _inner_product() -> object | None:
 _INNER = _inner_product()
 
 
+INNER_MIN = 1 << 20  # multiply-adds of the smallest product worth oneDNN's ~10 us a call (MKL's ~2.5)
+
+
 def product(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     """a @ b of float32 CPU matrices (either may be a transposed view) by oneDNN's inner product,
-    where torch has it: on an AMD CPU with AVX-512 MKL's matrix product runs its AVX2 kernels (103
-    GFLOP/s at 512 x 512 on one thread, oneDNN 245), so `fast`'s 8 products at batch 40 take 0.42
-    against 0.59 ms and a training step 5 % less (the sums in another order: rounding)."""
-    return a @ b if _INNER is None else _INNER(a, b.T, None, "none", [], "")
+    where torch has it and the product has INNER_MIN multiply-adds or more: on an AMD CPU with
+    AVX-512 MKL's matrix product runs its AVX2 kernels (103 GFLOP/s at 512 x 512 on one thread,
+    oneDNN 245), so `fast`'s 8 products at batch 40 take 0.42 against 0.59 ms and a training step
+    5 % less (the sums in another order: rounding); oneDNN's fixed cost a call is the larger, so a
+    small product (batch 2: 0.3 M) stays MKL's."""
+    if _INNER is None or a.shape[0] * a.shape[1] * b.shape[1] < INNER_MIN:
+        return a @ b
+    return _INNER(a, b.T, None, "none", [], "")
 
 
 def _as_matrix(weight: torch.Tensor) -> torch.Tensor:
