@@ -244,8 +244,22 @@ def warning_line(message, category, filename, lineno, file=None, line=None) -> N
     sys.stderr.write(f"warning: {message}\n")
 
 
+_raised: list[str] | None = None  # in a worker: the warnings' messages of the unit it runs (None: none runs)
+
+
+def _worker_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A worker's showwarning: a unit's warning kept for the parent, which shows each message once a run
+    (shown here, each worker showed it: the simulator's step warning at a record's rate once per worker);
+    any other shown here (warning_line). The filters stay the worker's own: a module a unit imports keeps
+    the ones it sets (a catch_warnings per unit would undo them)."""
+    if _raised is None:
+        warning_line(message, category, filename, lineno)
+    else:
+        _raised.append(str(message))
+
+
 def _worker_started() -> None:
-    warnings.showwarning = warning_line
+    warnings.showwarning = _worker_warning
 
 
 def _imported(modules: tuple[str, ...]) -> None:
@@ -257,17 +271,19 @@ def _imported(modules: tuple[str, ...]) -> None:
 
 def _unpacked(fn: Callable, item: bytes) -> tuple[object, list[str]]:
     """A worker's call: the item unpickled, its Shared values read from their files. Returns (its result,
-    the messages of the warnings it raised), for the parent to show each message once a run: shown here,
-    each worker showed the same warning (the simulator's step warning at a record's rate) once per worker.
-    A unit that fails shows its warnings here, before its error reaches the parent."""
-    with warnings.catch_warnings(record=True) as raised:
-        try:
-            result = fn(_Unpacker(io.BytesIO(item)).load())
-        except BaseException:
-            for w in raised:
-                warning_line(w.message, w.category, w.filename, w.lineno)
-            raise
-    return result, list(dict.fromkeys(str(w.message) for w in raised))
+    the messages of the warnings it raised, each once); a unit that fails shows its own here, before its
+    error reaches the parent."""
+    global _raised
+    _raised = []
+    try:
+        result = fn(_Unpacker(io.BytesIO(item)).load())
+    except BaseException:
+        for message in dict.fromkeys(_raised):
+            warning_line(message, None, None, None)
+        raise
+    finally:
+        raised, _raised = _raised, None
+    return result, list(dict.fromkeys(raised))
 
 
 class LocalExecutor(Executor):

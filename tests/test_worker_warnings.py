@@ -3,6 +3,7 @@
 at a record's rate, printed so in each process-pool worker). Run in a process of its own: a pool's
 forkserver started earlier in the test session writes to the stderr it was started with."""
 
+import os
 import subprocess
 import sys
 
@@ -37,3 +38,30 @@ def test_a_warning_every_worker_raises_is_shown_once_a_run():
     err = subprocess.run([sys.executable, "-c", ONCE], capture_output=True, text=True, check=True).stderr
     lines = [line for line in err.splitlines() if line.strip()]
     assert lines == [f"warning: {MESSAGE}", "warning: another message"], err
+
+
+UNITS = """
+import warnings
+
+_imported = False
+
+
+def unit(i):
+    global _imported
+    if not _imported:  # as a module a unit imports first sets its filters, once a process
+        warnings.filterwarnings("ignore", message="quiet")
+        _imported = True
+    warnings.warn("quiet", UserWarning)
+    warnings.warn("loud", UserWarning)
+"""
+
+
+def test_a_filter_set_in_a_unit_stays_for_the_next_units(tmp_path):
+    # recorded per unit under catch_warnings, the filter a unit's import set was undone after it, and the
+    # warnings it silences showed from the next units on
+    (tmp_path / "units_module.py").write_text(UNITS)
+    code = "from gearlab.executors import LocalExecutor\nimport units_module\n"
+    code += "with LocalExecutor(2) as pool:\n    pool.map(units_module.unit, range(8))\n"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])}
+    err = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env).stderr
+    assert [line for line in err.splitlines() if line.strip()] == ["warning: loud"], err
