@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from which_gear_takes import HISTORY, flags_everything, rig_condition
+from which_gear_takes import HISTORY, RIG_TESTS, flags_everything, rig_condition
 
 from gearlab.data.simulated import simulated_record
 from gearlab.data.spec import dataset_preset
@@ -17,12 +17,7 @@ SPEED = 40.0
 
 @pytest.fixture(scope="module")
 def target():
-    files = {
-        **HISTORY,
-        "wheel": ("test", "broken output tooth", [{"name": "crack", "gear": "output gear", "tooth": 3, "step": 20}], 3),
-        "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
-        "ok": ("test", "healthy", [], 5),
-    }
+    files = {**HISTORY, **RIG_TESTS}
     cond, labels = rig_condition(files, SPEED, revolutions=80)
     source = dataset_preset("phm09-30")
     return source, {"40 Hz": cond}, labels
@@ -44,7 +39,7 @@ def test_a_flag_on_damage_elsewhere_is_other_damage(target):
     assert calls == {
         "wheel": "other damage: output gear 80T (stage 2)",
         "pinion": "watched-gear fault: input pinion 32T (stage 1)",
-        "ok": "nothing localised",
+        "ok": "watched-gear fault (not localised)",
     }, {p: r["summary"] for p, r in loc["records"].items()}
     # a method that flags every unit of every test record: the output gear's flags are other damage
     record = flags_everything(("wheel", "pinion", "ok"))
@@ -121,4 +116,4 @@ def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, mo
     scored = {(Path(r["file"]).stem, r["method"], r["unit"]): r for r in json.loads(out)}
     assert {r["localised"] for k, r in scored.items() if k[0] == "wheel"} == {"output gear 80T (stage 2)"}
     assert {r["call"] for k, r in scored.items() if k[0] == "wheel"} == {"other damage: output gear 80T (stage 2)"}
-    assert {r["call"] for k, r in scored.items() if k[0] == "ok"} == {"nothing localised"}
+    assert {r["call"] for k, r in scored.items() if k[0] == "ok"} == {"watched-gear fault (not localised)"}

@@ -93,6 +93,12 @@ HISTORY = {
     "h2": ("history", "healthy", [], 2),
 }  # rig_condition's two healthy takes
 
+RIG_TESTS = {
+    "wheel": ("test", "broken output tooth", [{"name": "crack", "gear": "output gear", "tooth": 3, "step": 20}], 3),
+    "pinion": ("test", "fault", [{"name": "crack", "gear": "input pinion", "tooth": 9, "step": 20}], 4),
+    "ok": ("test", "healthy", [], 5),
+}  # rig_condition's test takes: an output-gear crack, an input-pinion crack (the watched gear), healthy
+
 
 def flags_everything(records, condition: str = "40 Hz") -> dict:
     """A detection record of a method that flags every unit of the test *records* (revolution and

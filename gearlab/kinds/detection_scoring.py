@@ -430,6 +430,7 @@ def score(
                             "localised": where.get("named"),
                             "call": where.get("call"),
                             "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth
+                            "nonsync": where.get("nonsync"),  # the residual's z, threshold, strike order
                             "scores": [float(x) for x in s],
                         }
                     )

@@ -13,8 +13,10 @@ units then means:
     one with both its gears (which of the two undecided)
     named on another gear (another shaft's, or the other of a shaft's  other damage: <that gear>
     two, told apart by the simulated events)
-    nothing localised                                                  a watched-gear fault (no
-                                                                       evidence of where it lies)
+    nothing localised, the non-synchronous residual changed            other damage: non-synchronous
+    (signals.nonsync: beyond its history's threshold)                  (bearing-like), at order X.XX
+    nothing localised, no non-synchronous change                       a watched-gear fault (not
+                                                                       localised: no evidence of where)
     a watched gear's shaft and another shaft over their thresholds     a watched-gear fault; also
     (a pinion and its wheel both damaged)                              other damage: <that gear>
 
@@ -28,6 +30,11 @@ scenario's [corrected] simulator is where it has one (its description and effect
 fitted structure), else as the source: a structure other than the gearbox's misnames them; where the
 history's mesh harmonics differ from the simulation's, and for a source without a description, by the
 event's width (signals.localise, "Which gear on a shaft").
+A change no shaft's synchronous average carries is no gear's: a bearing's strikes come at a rate
+that is no shaft's order, and slip, so the detectors may flag them while no shaft's TSA changed. The
+record less every shaft's synchronous average (signals.nonsync) is read against the history's: a line
+of its envelope beyond the history's threshold is other damage at that strike order, never the
+watched gear's. Only where neither is found is a flag the watched gear's, said as not localised.
 The localisation uses the records' signals only; the labels come in with the tables (summarise).
 """
 
@@ -42,9 +49,12 @@ from ..errors import GearlabInputError
 from ..gearbox.simulation import gearbox_of
 from ..signals import POINTS
 from ..signals import localise as L
+from ..signals import nonsync as NS
 from .detection_records import longest_tsa
 
-WATCHED, OTHER, NOT_LOCALISED = "watched-gear fault", "other damage", "nothing localised"
+WATCHED, OTHER = "watched-gear fault", "other damage"
+NOT_LOCALISED = f"{WATCHED} (not localised)"  # a flag with no evidence of where: counted as the watched gear's
+NON_SYNC = "non-synchronous (bearing-like)"
 
 
 def watched_gears(source: DatasetSpec, table) -> list[str]:
@@ -81,13 +91,18 @@ def flagged_shafts(found: dict) -> list[dict]:
     ]
 
 
-def call_of(found: dict, watched: list[str]) -> str:
-    """What a flag on a record means, from its localisation (Localisation.describe()): a watched-gear
+def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str:
+    """What a flag on a record means, from its localisation (Localisation.describe()) and its
+    non-synchronous change (signals.nonsync.NonSync.describe(); None: not read): a watched-gear
     fault where any shaft over its threshold names a watched gear, with the other gears flagged beside
     it ("watched-gear fault: input pinion 32T (stage 1); also other damage: idler gear 96T (stage 1)");
-    else other damage, every flagged gear named."""
+    else other damage, every flagged gear named; nothing localised, other damage where the
+    non-synchronous residual changed ("other damage: non-synchronous (bearing-like), at order 3.57"),
+    else the watched gear's, not localised."""
     shafts = flagged_shafts(found)
     if not shafts:
+        if nonsync and nonsync["changed"]:
+            return f"{OTHER}: {NON_SYNC}, at order {nonsync['order']:.2f}"
         return NOT_LOCALISED
     mine, others = [], []
     for ev in shafts:
@@ -119,12 +134,39 @@ def decision_of(called: bool, call: str | None) -> str:
     return call if is_other(call) else "fault"
 
 
-def evidence(found: dict) -> str:
+def evidence(found: dict, nonsync: dict | None = None) -> str:
     """The localisation's evidence in a line: each shaft's z of its localised change over its
-    threshold, strongest first, and the tooth of the named shaft's gears."""
+    threshold, strongest first, the tooth of the named shaft's gears, and the non-synchronous
+    residual's z over its threshold with its strike order."""
     z = ", ".join(f"{s['shaft']} z {s['z']:.1f}/{s['threshold']:.1f}" for s in found["shafts"])
     tooth = _tooth(found)
-    return z + ("" if tooth == "–" else f"; tooth {tooth}") + _which(found)
+    return z + ("" if tooth == "–" else f"; tooth {tooth}") + _which(found) + "; " + nonsync_words(nonsync)
+
+
+def nonsync_words(ns: dict | None) -> str:
+    """A record's non-synchronous change (signals.nonsync) in words: z over the threshold, the order."""
+    if not ns:
+        return "non-synchronous: not read"
+    return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f} at order {ns['order']:.2f}"
+
+
+def nonsync_history(revolutions: list, table) -> NS.NonSyncHistory | None:
+    """The history of the non-synchronous residual (signals.nonsync) of the history takes' revolutions;
+    None where they are too short for it (the call then rests on the shafts alone)."""
+    try:
+        return NS.history(revolutions, table)
+    except GearlabInputError:
+        return None
+
+
+def nonsync_of(revolutions, hist: NS.NonSyncHistory | None, table) -> dict | None:
+    """A take's non-synchronous change against *hist* (NonSync.describe()); None: not read."""
+    if hist is None:
+        return None
+    try:
+        return NS.nonsync(revolutions, hist, table).describe()
+    except GearlabInputError:
+        return None
 
 
 def localise_target(
@@ -133,7 +175,8 @@ def localise_target(
     """Every test record of every condition localised against the condition's history records
     (conditions as detection_records.read_target makes them, with each record's raw revolutions in
     cond["raw"]); None when the source simulates no gearbox description. *histories*, when given,
-    receives each condition's signals.localise.History (what `gearlab score` localises with).
+    receives each condition's (signals.localise.History, signals.nonsync.NonSyncHistory or None): what
+    `gearlab score` localises with.
     *simulator*: the spec whose description and effects the which-gear events are simulated from (the
     scenario's [corrected] one: the gap diagnosis's fitted structure); None: the source's."""
     box = gearbox_of(source)
@@ -170,12 +213,15 @@ def localise_target(
             "thresholds": dict(zip(hist.layout.shafts, map(float, hist.thresholds))),
             "note": hist.note,
         }
+        quiet = nonsync_history([takes[f.path].revolutions for f, _ in cond["history"]], table)
+        out["conditions"][name]["nonsync_threshold"] = None if quiet is None else quiet.threshold
         if histories is not None:
-            histories[name] = hist
+            histories[name] = (hist, quiet)
         for f, _ in cond["test"]:
             take = takes[f.path]
             found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
-            out["records"][f.path] = {"condition": name, **found, "call": call_of(found, watched)}
+            ns = nonsync_of(take.revolutions, quiet, table)
+            out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call_of(found, watched, ns)}
     return out
 
 
@@ -189,9 +235,9 @@ def store_localisation(run, source: DatasetSpec, conditions: dict, simulator: Da
     found = localise_target(source, conditions, histories, simulator)
     if found is None:
         return
-    for i, (name, hist) in enumerate(histories.items()):
+    for i, (name, (hist, quiet)) in enumerate(histories.items()):
         file = f"localisation{i}.npz"
-        scoring.save_arrays(run.file("scoring", file), **hist.state())
+        scoring.save_arrays(run.file("scoring", file), **hist.state(), **(quiet.state() if quiet else {}))
         found["conditions"][name]["state"] = file
     run.write_json("localisation.json", found)
 
@@ -204,7 +250,7 @@ def _take(cond: dict, path: str) -> W.Take:
 
 
 def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
-    """{path: {"named", "summary", "call", "evidence"}} of new records ({condition: [(path,
+    """{path: {"named", "summary", "nonsync", "call", "evidence"}} of new records ({condition: [(path,
     data.which_gear.Take)]}) localised with the run's stored histories (store_localisation) and the
     description's simulated events at each record's speed, as the run localised its own
     (data.which_gear.which_gear); {} for a run without them."""
@@ -221,16 +267,20 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
         state = meta["conditions"].get(name, {}).get("state")
         if state is None:
             continue
-        hist = L.History.restored(scoring.load_arrays(run.file("scoring", state)), table)
+        arrays = scoring.load_arrays(run.file("scoring", state))
+        hist = L.History.restored(arrays, table)
+        quiet = NS.NonSyncHistory.restored(arrays)  # None: a run stored before the residual was read
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:
             found = W.which_gear(take, hist, table, made)
+            ns = nonsync_of(take.revolutions, quiet, table)
             out[path] = {
                 "named": found["named"],
                 "summary": found["summary"],
-                "call": call_of(found, meta["watched"]),
-                "evidence": evidence(found),
+                "nonsync": ns,
+                "call": call_of(found, meta["watched"], ns),
+                "evidence": evidence(found, ns),
             }
     return out
 
@@ -253,25 +303,33 @@ def _which(found: dict) -> str:
 
 def records_md(loc: dict, labels: dict) -> str:
     """Per test record: its label, the gear its change is localised on with the evidence (each
-    shaft's z against its threshold, the tooth), and what a flag on it means."""
+    shaft's z against its threshold, the tooth, the non-synchronous residual's z against its threshold
+    and its strike order), and what a flag on it means."""
     if not loc or not loc["records"]:
         return ""
     out = [
         f"\nWhich gear (each test record against its condition's history; watched: {', '.join(loc['watched'])}; "
         "z of each shaft's localised change over its threshold; the tooth counted from "
         f"{loc.get('tooth_from', 'the first tacho mark')}; a flag on a record whose change lies on another gear "
-        "is other damage; which of a shaft's two gears: the length of the fault's event)\n",
-        "| condition | file | label | localised on | z / threshold per shaft | tooth | which gear | a flag is |",
-        "|---|---|---|---|---|---|---|---|",
+        "is other damage; which of a shaft's two gears: the length of the fault's event; non-synchronous: the "
+        "envelope of the record less every shaft's synchronous average, z / threshold at its strike order in "
+        "input orders, a change there without a localised one is other damage)\n",
+        "| condition | file | label | localised on | z / threshold per shaft | tooth | which gear | non-synchronous "
+        "z / threshold (order) | a flag is |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for path, r in loc["records"].items():
         z = ", ".join(f"{s['shaft']} {s['z']:.1f}/{s['threshold']:.1f}" for s in r["shafts"])
         on = "; ".join(e["gear"] for e in flagged_shafts(r))  # every gear over its threshold, the named first
         out.append(
             f"| {r['condition']} | {path} | {labels.get(path, '')} | {on or 'nothing'} | {z} | "
-            f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {r['call']} |"
+            f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {_nonsync_cell(r.get('nonsync'))} | {r['call']} |"
         )
     return "\n".join(out) + "\n"
+
+
+def _nonsync_cell(ns: dict | None) -> str:
+    return "–" if not ns else f"{ns['z']:.1f}/{ns['threshold']:.1f} ({ns['order']:.2f})"
 
 
 def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
@@ -343,7 +401,10 @@ def which_gear_summary(loc: dict | None, records: list[dict], labels: dict) -> d
     return {
         "gearbox": loc["gearbox"],
         "watched": loc["watched"],
-        "records": {p: {k: r[k] for k in ("condition", "named", "summary", "call")} for p, r in loc["records"].items()},
+        "records": {
+            p: {k: r.get(k) for k in ("condition", "named", "summary", "nonsync", "call")}
+            for p, r in loc["records"].items()
+        },
         "calls": calls,
         "md": records_md(loc, labels) + calls_md(calls),
     }

@@ -1,0 +1,241 @@
+"""Non-synchronous change: what a record holds that no shaft's synchronous average carries.
+
+A localised gear fault strikes once per turn of its shaft, so it lives at that shaft's orders and the
+shafts' time-synchronous averages (TSAs) carry it (gearlab.signals.localise). A rolling-element
+bearing's defect strikes at a rate that is no whole order of any shaft (an outer race's ball-pass
+order, about 0.4 n_b turns of its shaft's speed, 3.57 for 9 balls) and slips a percent or two from
+strike to strike: the TSAs average it away. It is left in the *residual*: the record less every
+shaft's synchronous average.
+
+Residual. The record, read in the input angle (R consecutive input revolutions of `points` samples),
+is cut to a whole number of the train's grand periods (after P input turns every shaft is back at its
+start angle: gearlab.gearbox.orders.OrderTable.train_period) where it holds GRAND of them; then each
+shaft's orders m o_s fall on whole bins of the record's spectrum (bin k: input order k / R), and a
+shaft's TSA over the record is those bins: the residual is the record with every bin at a multiple of
+a shaft's order set to zero. A record of fewer grand periods (tooth counts with few common factors) is
+read whole and each shaft order's nearest bin and its neighbours (LEAK) are removed.
+
+Evidence. The residual's squared envelope (|analytic signal|²), over its mean (a level in units of the
+residual's own power, so a louder take's noise does not read as a change), is read in blocks of
+BLOCK input revolutions (spectral resolution 1 / BLOCK orders) from LOW to HIGH input orders, each
+bin's power summed with its neighbours (a slipping strike's line spreads over a few bins) and read as
+its logarithm (a block's power is skewed, its log nearly Gaussian: healthy rig records' largest z
+2.9-4.5 against thresholds of 4.7-7.2, 36 records on 12 histories of 2; as powers 4.6-6.5 against 6.3,
+10 records on one, development seeds). A record's
+bins are the mean over its n blocks; against the healthy history's blocks, each bin's excess is read
+in sds of the mean of n history blocks, z(f) = (E(f) − μ_h(f)) √n / σ_h(f), σ_h pooled over SMOOTH
+neighbouring bins. The record's z is its largest. The strike order named is the lowest whose first
+HARMONICS harmonics' z sum within LOWEST of the most (the strongest line is often a harmonic, where the
+ring lies), read finer on the whole residual's envelope spectrum. The threshold is fixed on the history
+alone, as the shafts' are: the largest z of its records, each read against the others, and at least the
+Gaussian quantile at FALSE_ALARM shared among the bins.
+A gear fault is synchronous: the residual does not carry it (a simulated cracked tooth left z under
+the threshold, tests/test_nonsync.py); a bearing's strikes put a line at their order and its
+harmonics.
+
+Everything is numpy: no torch, nothing from the layers above.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from statistics import NormalDist
+
+import numpy as np
+
+from ..errors import GearlabInputError
+from .shaft import uniform_filter1d
+
+GRAND = 2  # grand periods a record must hold to be cut to them (else read whole, LEAK bins removed)
+LEAK = 1  # bins on either side of a shaft order's nearest bin removed where the record is read whole
+BLOCK = 16  # input revolutions per block of the envelope spectrum (resolution 1/16 order)
+LOW, HIGH = 0.3, 40.0  # input orders of the envelope spectrum searched for a non-synchronous line
+FUNDAMENTAL = 10.0  # the highest strike order named (cage to inner-race orders, a few shaft orders)
+HARMONICS = 4  # harmonics of a strike order whose z are summed to name it
+LOWEST = 0.7  # the strike order named: the lowest whose harmonics' z sum to this share of the most
+OWN = 0.25  # ... whose own line's z is at least this share of the largest (not a half of the strike order)
+LINE = 8  # bins on either side whose median z a line's z is read over (half an order)
+SLOW = 4  # harmonics of a slower shaft's order left out of the search (its rotation's modulation)
+SUM = 1  # bins on either side summed with each bin (a slipping strike's line spreads)
+SMOOTH = 9  # bins over which the history's sd is pooled
+BETWEEN = 101  # bins over which the history records' spread beyond their blocks' noise is pooled
+FALSE_ALARM = 0.01  # the Gaussian floor of the threshold, shared out among the bins searched
+
+
+def residual(revs: np.ndarray, shaft_orders, period: int) -> np.ndarray:
+    """The record *revs* (R consecutive input revolutions, flat in input angle) less every shaft's
+    synchronous average (module doc): flat, of R' ≤ R whole revolutions; *shaft_orders*: each shaft's
+    turns per input turn (Fractions); *period*: the train's grand period in input revolutions."""
+    revs = np.atleast_2d(np.asarray(revs, dtype=np.float64))
+    R, P = revs.shape
+    whole = R // period * period if R >= GRAND * period else R
+    y = revs[:whole].reshape(-1)
+    X = np.fft.rfft(y - y.mean())
+    k = np.arange(X.size)
+    for o in shaft_orders:
+        step = Fraction(o) * whole  # bins between the shaft's orders
+        if step.denominator == 1:
+            X[k % int(step) == 0] = 0.0
+            continue
+        at = np.round(np.arange(0, X.size / float(step) + 1) * float(step)).astype(np.int64)
+        for d in range(-LEAK, LEAK + 1):
+            X[np.clip(at + d, 0, X.size - 1)] = 0.0
+    return np.fft.irfft(X, n=y.size)
+
+
+def envelope_blocks(r: np.ndarray, points: int) -> np.ndarray:
+    """(blocks, bins) the squared envelope's power spectrum of each BLOCK-revolution block of the
+    residual *r* over its mean, each bin summed with SUM neighbours, bins LOW … HIGH input orders."""
+    from scipy.signal import hilbert
+
+    n = BLOCK * points
+    count = r.size // n
+    if count < 1:
+        raise GearlabInputError(
+            f"non-synchronous residual: {r.size // points} input revolutions; expected at least {BLOCK}"
+        )
+    out = []
+    for b in range(count):
+        e = np.abs(hilbert(r[b * n : (b + 1) * n])) ** 2
+        E = np.abs(np.fft.rfft(e - e.mean()) / (e.mean() * e.size)) ** 2
+        out.append(np.log(np.maximum(uniform_filter1d(E, size=2 * SUM + 1, mode="nearest"), 1e-300)))
+    lo, hi = int(math.ceil(LOW * BLOCK)), int(HIGH * BLOCK)
+    return np.asarray(out)[:, lo : hi + 1]
+
+
+def orders_of_bins(bins: int) -> np.ndarray:
+    """The input order of each bin envelope_blocks keeps."""
+    return (int(math.ceil(LOW * BLOCK)) + np.arange(bins)) / BLOCK
+
+
+@dataclass(frozen=True)
+class NonSyncHistory:
+    """The healthy history's envelope-spectrum blocks (one array per record) and the threshold on z."""
+
+    blocks: tuple[np.ndarray, ...]
+    threshold: float
+
+    def state(self) -> dict:
+        """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
+        return {
+            "nonsync_sizes": np.array([len(b) for b in self.blocks]),
+            "nonsync_blocks": np.concatenate(self.blocks),
+            "nonsync_threshold": np.array(self.threshold),
+        }
+
+    @classmethod
+    def restored(cls, state: dict) -> NonSyncHistory | None:
+        """The history state() saved; None for a state saved without it."""
+        if "nonsync_blocks" not in state:
+            return None
+        cuts = np.cumsum(np.asarray(state["nonsync_sizes"]))[:-1]
+        return cls(tuple(np.split(np.asarray(state["nonsync_blocks"]), cuts)), float(state["nonsync_threshold"]))
+
+
+@dataclass(frozen=True)
+class NonSync:
+    """A record's non-synchronous change: z of its strongest envelope line over the history, the
+    strike order named (input orders) and the history's threshold on z."""
+
+    z: float
+    order: float
+    threshold: float
+
+    @property
+    def changed(self) -> bool:
+        return self.z > self.threshold
+
+    def describe(self) -> dict:
+        return {"z": self.z, "order": self.order, "threshold": self.threshold, "changed": self.changed}
+
+
+def synchronous_bins(table, bins: int) -> np.ndarray:
+    """bool per bin envelope_blocks keeps: within SUM bins of an order a shaft's rotation modulates the
+    residual at: every multiple of a shaft turning at least once a turn and of each mesh, the first SLOW
+    of a slower shaft's (an eccentric gear's load, turn by turn, modulates the mesh's random part: the
+    PHM 2009 eccentric idler's records read z 8-19 at 1/3 order against healthy ones)."""
+    f = orders_of_bins(bins)
+    lines = [float(st.mesh) for st in table.stages] + [float(o) for o in table.shaft_orders if o >= 1]
+    at = [k * o for o in lines for k in range(1, int(HIGH / o) + 2)]
+    at += [k * float(o) for o in table.shaft_orders if o < 1 for k in range(1, SLOW + 1)]
+    near = np.abs(f[:, None] - np.asarray(at)[None, :]).min(axis=1)
+    return near <= (SUM + 0.5) / BLOCK
+
+
+def _z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndarray) -> tuple[float, float]:
+    """(largest line z, the strike order) of a record's envelope blocks against the reference records'
+    blocks (module doc: the noise of the mean, plus the records' spread beyond it), off
+    the *synchronous* bins. A bin's z less the median z of the LINE bins on either side: a line stands out
+    of its neighbours, where a record whose whole envelope changed (another build of the same rig,
+    loaded otherwise) lifts them all. The strike order: the lowest f0 ≤ FUNDAMENTAL whose HARMONICS
+    harmonics' line z (clipped at 0) sum within LOWEST of the most (a strike's line is often strongest at a
+    harmonic, where the resonance it rings lies; its double holds its even harmonics only, its half half of
+    them) with a line of its own OWN of the largest, read at that line's peak."""
+    every = np.concatenate(reference)
+    within = np.concatenate([r - r.mean(axis=0) for r in reference])
+    var = uniform_filter1d(np.sum(within**2, axis=0) / max(len(every) - len(reference), 1), size=SMOOTH, mode="nearest")
+    between = np.zeros_like(var)
+    if len(reference) > 1:  # the records' means scatter beyond their blocks' noise: pooled over BETWEEN bins
+        means = np.array([r.mean(axis=0) for r in reference])
+        beyond = means.var(axis=0, ddof=1) - var * np.mean([1.0 / len(r) for r in reference])
+        between = np.clip(uniform_filter1d(beyond, size=BETWEEN, mode="nearest"), 0.0, None)
+    noise = var / len(blocks) + between
+    z = (blocks.mean(axis=0) - every.mean(axis=0)) / np.sqrt(np.maximum(noise, 1e-300))
+    from scipy.ndimage import median_filter
+
+    z = np.where(synchronous, 0.0, z - median_filter(z, size=2 * LINE + 1, mode="nearest"))
+    lo = int(math.ceil(LOW * BLOCK))
+    f0 = np.arange(lo, int(FUNDAMENTAL * BLOCK) + 1)  # candidate orders in bins (order * BLOCK)
+    pos = np.round(f0[:, None] * np.arange(1, HARMONICS + 1)[None, :]).astype(np.int64) - lo
+    held = pos < z.size
+    zh = np.where(held, np.clip(z[np.clip(pos, 0, z.size - 1)], 0.0, None), 0.0)
+    total = zh.sum(axis=1)
+    own = np.array([z[max(i - 1, 0) : i + 2].max() if i < z.size else 0.0 for i in f0 - lo])
+    named = (total >= LOWEST * total.max()) & (own >= OWN * z.max())  # a line of its own, and its harmonics
+    best = int(f0[np.flatnonzero(named)[0]] if named.any() else f0[np.argmax(total)]) - lo
+    # the fundamental's own peak within a bin or two of the candidate (a slipping line's harmonics spread)
+    near = np.arange(max(best - 2, 0), min(best + 3, z.size))
+    return float(z.max()), float((lo + near[np.argmax(z[near])]) / BLOCK)
+
+
+def refined(r: np.ndarray, points: int, order: float) -> float:
+    """*order* read finer: the power centroid of the whole residual's squared-envelope spectrum (resolution
+    1 / its revolutions) within a bin of the blocks' spectrum of it, over that window's median."""
+    from scipy.signal import hilbert
+
+    e = np.abs(hilbert(r)) ** 2
+    E = np.abs(np.fft.rfft(e - e.mean())) ** 2
+    revs = r.size / points
+    k = np.arange(int((order - 1.0 / BLOCK) * revs), int((order + 1.0 / BLOCK) * revs) + 2)
+    k = k[(k > 0) & (k < E.size)]
+    w = np.clip(E[k] - np.median(E[k]), 0.0, None)
+    return float(np.sum(w * k) / np.sum(w) / revs) if w.sum() > 0 else order
+
+
+def history(takes: list[np.ndarray], table) -> NonSyncHistory:
+    """The healthy history of *takes* (each (R, points) consecutive input revolutions) of the gearbox of
+    order table *table* (gearlab.gearbox.orders.OrderTable)."""
+    blocks = tuple(envelope_blocks(residual(t, table.shaft_orders, table.train_period), np.shape(t)[-1]) for t in takes)
+    if sum(len(b) for b in blocks) < 3:
+        raise GearlabInputError(
+            f"non-synchronous residual: the history holds {sum(len(b) for b in blocks)} blocks of {BLOCK} "
+            "input revolutions; expected at least 3"
+        )
+    sync = synchronous_bins(table, blocks[0].shape[1])
+    floor = NormalDist().inv_cdf(1.0 - FALSE_ALARM / int((~sync).sum()))
+    left_out = []
+    for i, b in enumerate(blocks):
+        rest = [x for j, x in enumerate(blocks) if j != i]
+        if rest and sum(len(x) for x in rest) >= 2:
+            left_out.append(_z(b, rest, sync)[0])
+    return NonSyncHistory(blocks, max([floor, *left_out]))
+
+
+def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
+    """*take* (R, points) read against the history *hist* of the gearbox of order table *table*."""
+    r = residual(take, table.shaft_orders, table.train_period)
+    blocks = envelope_blocks(r, np.shape(take)[-1])
+    z, order = _z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
+    return NonSync(z, refined(r, np.shape(take)[-1], order), hist.threshold)
