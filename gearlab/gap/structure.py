@@ -425,19 +425,21 @@ def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
     )
 
 
-def speed_line(target_speed: float, source_speed: float, z1: int | None = None) -> str | None:
+def speed_line(target_speed: float, source_speed: float, z1: int | None = None, teeth: int | None = None) -> str | None:
     """The one line of a speed difference, or None within SPEED_TOL. *z1*: the source's pinion teeth
     when the target's speed was found from the mesh lines (no tacho): the record then measures only
-    speed x teeth, and another tooth count at the source's speed may explain it as well."""
+    speed x teeth, and another tooth count (*teeth*, else traded_teeth's) at the source's speed may
+    explain it as well."""
     if abs(target_speed / source_speed - 1.0) <= SPEED_TOL:
         return None
     if z1 is not None:
-        teeth = z1 * target_speed / source_speed
-        if traded_teeth(target_speed, source_speed, z1) is not None:
+        teeth = teeth or traded_teeth(target_speed, source_speed, z1)
+        if teeth is not None:
+            mesh = z1 * target_speed
             return (
                 f"speed {target_speed:.4g} Hz found from the mesh lines (no tacho), {source_speed:.4g} Hz expected: "
-                f"the record's mesh at {z1 * target_speed:.4g} Hz is a {z1}-tooth pinion's at {target_speed:.4g} Hz "
-                f"or a {round(teeth)}-tooth pinion's at {source_speed:.4g} Hz: check the tooth count, or give the "
+                f"the record's mesh at {mesh:.4g} Hz is a {z1}-tooth pinion's at {target_speed:.4g} Hz "
+                f"or a {teeth}-tooth pinion's at {mesh / teeth:.4g} Hz: check the tooth count, or give the "
                 "record's speed or a tacho"
             )
     return (
@@ -454,6 +456,22 @@ def traded_teeth(target_speed: float, source_speed: float, z1: int) -> int | Non
     if abs(target_speed / source_speed - 1.0) <= SPEED_TOL or abs(teeth - whole) > 0.05 or whole < MIN_TEETH:
         return None
     return whole
+
+
+def _beyond_slip(target_speed: float, described_speed: float, z1: int) -> int | None:
+    """The whole pinion count whose speed, at the mesh the target's speed puts a *z1*-tooth pinion's, lies within a
+    motor's slip or a drive's setting of the *described_speed* (speed.NOMINAL_RANGE; of two, the nearer), where
+    the target's speed lies beyond it; else None. A nominal speed is no exact one: traded_teeth's whole count
+    missed a 13/39 + 19/42 box described with 14 teeth at 37.9 Hz (it runs at 37.48): its mesh lines read 34.8
+    Hz, 14 x 34.8 / 37.9 = 12.85 teeth; within 6 % of 37.9 Hz only 13 teeth mesh there."""
+    from ..gearbox.pinion_count import allowed_counts
+    from ..gearbox.speed import NOMINAL_RANGE
+
+    if abs(target_speed / described_speed - 1.0) <= NOMINAL_RANGE:
+        return None
+    mesh = z1 * target_speed
+    counts = [z for z in allowed_counts(mesh, described_speed) if z != z1 and z >= MIN_TEETH]
+    return min(counts, key=lambda z: abs(mesh / z / described_speed - 1.0), default=None)
 
 
 def level_factor(target: np.ndarray, source: np.ndarray) -> float:
@@ -543,6 +561,8 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
         record.setdefault("speed_hz", {"target": chain.speed})["described"] = chain.described_speed
         if (teeth := traded_teeth(chain.speed, chain.described_speed, pair.Z1)) is not None:
             return _traded_line(target, pair, max_order, chain, teeth, record)
+        if (teeth := _beyond_slip(chain.speed, chain.described_speed, pair.Z1)) is not None:
+            return _traded_line(target, pair, max_order, chain, teeth, record)
     # a tacho on another shaft than the input, or a speed found from the mesh lines: the input's order is
     # read off its sidebands, as inspect reads it (a 23/61 fan's output tacho, described 24/61: the mesh
     # at 24 by the described ratio, the input's sidebands 24/23 apart; inspect said '23.0 teeth', detection
@@ -607,12 +627,12 @@ def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict) 
     mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), None, False)["inspect"]
     seen, spread = mesh.get("z1_seen"), mesh.get("z1_resolution") or 0.0
     if seen is None or abs(seen - teeth) > max(TEETH_AGREE, spread):
-        return speed_line(chain.speed, chain.described_speed, pair.Z1)
+        return speed_line(chain.speed, chain.described_speed, pair.Z1, teeth)
     record["outward"] = {"stage": 1, "gear": "pinion", "seen": float(seen), "described": int(pair.Z1)}
     return (
         f"mesh order {teeth} measured, {pair.Z1} expected (stage 1): the input pinion's sidebands show "
-        f"{seen:.1f} ± {spread:.1f} teeth, the input at {chain.described_speed:.4g} Hz (no tacho: the mesh lines "
-        f"read {chain.speed:.4g} Hz for a {pair.Z1}-tooth pinion); every later mesh follows from it"
+        f"{seen:.1f} ± {spread:.1f} teeth, the input at {pair.Z1 * chain.speed / teeth:.4g} Hz (no tacho: the mesh "
+        f"lines read {chain.speed:.4g} Hz for a {pair.Z1}-tooth pinion); every later mesh follows from it"
     )
 
 
