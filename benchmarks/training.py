@@ -89,7 +89,9 @@ The products of that function by oneDNN's inner product (fast_frozen.product): M
 runs its AVX2 kernels on this AMD CPU (103-112 GFLOP/s at 512 x 512, one thread) and oneDNN its
 AVX-512 ones (228-245); `fast`'s 8 products 593 -> 418 us at batch 40, 1,180 -> 775 at 80 (min of
 7); a step, in one process alternated with MKL's (CPU time, load 2-4, 4 runs): fast 1.91-2.25 ->
-1.79-2.14 ms, fast+coral 4.67 -> 4.29, fast+mmd 5.07 -> 4.95. The limit's matrix-product peak is
+1.79-2.14 ms, fast+coral 4.67 -> 4.29, fast+mmd 5.07 -> 4.95. oneDNN's call costs ~10 us whatever
+its size (MKL's 2.5-7 for these products at batch 2), so products under 2^20 multiply-adds stay
+MKL's (fast_frozen.INNER_MIN; a step at batch 2 1.09 ms with all 8 by oneDNN, 0.75). The limit's matrix-product peak is
 the faster of the two since (`shapes`' templates are held against it: its gearlab/limit 0.15 -> 0.07
 for the same speed; `fast`'s limit and roof are its convolutions' and keep their figures).
 
