@@ -47,7 +47,7 @@ from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
-from ..events import Event, figures_ahead, report_begins
+from ..events import Event, report_begins
 from ..gap.scoring import Settings as Diagnosis
 from ..gap.scoring import check_settings
 from ..learn.bounds import twin_problem
@@ -559,7 +559,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     }
     run.write_json("summary.json", summary)
     run.write_text("table.md", tables_md(summary))
-    figure(run, summary)
+    report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
+    from .transfer_benchmark_figures import draw  # here, not at the top: start-up time (matplotlib)
+
+    draw(run.figures, summary, CLOSE)
 
 
 def _n(x, digits: int = 1) -> str:
@@ -697,7 +700,8 @@ def charts(scenario: Scenario, run: RunDir) -> list[Chart]:
     return [Chart("target test accuracy per random target", "trial", "accuracy (%)", tuple(curves))]
 
 
-# report.html's captions of the figures drawn below: {file stem: (the thesis figure it repeats or "", what it shows)}
+# report.html's captions of the figures (kinds.transfer_benchmark_figures): {file stem: (the thesis
+# figure it repeats or "", what it shows)}
 CAPTIONS = {
     "transfer_benchmark": (
         "",
@@ -705,53 +709,6 @@ CAPTIONS = {
         "bound, and its distance to the bound over the trials that have one (dotted: 5 points).",
     )
 }
-
-
-def figure(run: RunDir, summary: dict) -> None:
-    """Accuracy per trial (methods and bound) and each method's distance to the bound (PNG)."""
-    report_begins()  # the run's 'report' stage, before matplotlib loads (seconds)
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..plots import save
-
-    figures_ahead(1)  # the run's 'report' stage counts i of n
-    names = list(summary["trials"])
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
-    x = np.arange(len(names))
-    plain = [label for label in summary["methods"] if "corrected source" not in label]
-    for label in summary["methods"]:
-        # a method on the corrected source: its plain row's colour, an open square
-        corrected = label not in plain
-        i = plain.index(label.replace(", corrected source", "")) if corrected else plain.index(label)
-        style = {"marker": "s", "mfc": "none"} if corrected else {"marker": "o"}
-        y = [summary["trials"][n]["accuracy"].get(label, np.nan) for n in names]
-        axes[0].plot(x, y, ls="none", ms=4, color=f"C{i}", label=label, **style)
-    bound = [summary["trials"][n]["bound"] for n in names]
-    axes[0].plot(x, [np.nan if b is None else b for b in bound], "k_", ms=12, label=BOUND)
-    axes[0].set_xticks(x, [n.removeprefix("trial") for n in names], fontsize=7)
-    axes[0].set_xlabel("trial")
-    axes[0].set_ylabel("target test accuracy (%)")
-    axes[0].set_title("accuracy per random target")
-    gaps = [
-        [
-            t["bound"] - t["accuracy"][label]
-            for t in summary["trials"].values()
-            if t["bound"] is not None and label in t["accuracy"]
-        ]
-        for label in summary["methods"]
-    ]
-    ticks = [label.split(" ")[0] + (" corr." if "corrected source" in label else "") for label in summary["methods"]]
-    axes[1].boxplot([g or [np.nan] for g in gaps], tick_labels=ticks)
-    axes[1].tick_params(axis="x", labelrotation=45, labelsize=7)
-    axes[1].axhline(CLOSE, color="k", ls=":", lw=0.8)
-    axes[1].set_ylabel("points below the Bayes bound")
-    axes[1].set_title("distance to the bound, trials with a bound")
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=4, fontsize=8)
-    fig.tight_layout(rect=(0, 0.17, 1, 1))
-    save(fig, run.figures / "transfer_benchmark.png", dpi=90, bbox_inches=None)
 
 
 def verdict_lines(summary: dict, records: list[dict]) -> list[str]:

@@ -236,7 +236,9 @@ def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> 
     summary["elapsed_seconds"] = elapsed  # wall time of this session of the run (a resumed run: since resuming)
     run.write_json("summary.json", summary)
     run.write_text("table.md", table_md(summary))
-    figures(run, summary, records)
+    from ..gap_benchmark_figures import draw  # here, not at the top: start-up time (matplotlib)
+
+    draw(run.figures, summary, records)
 
 
 def _pct(v) -> str:
@@ -307,49 +309,14 @@ def table_md(summary: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-# report.html's captions of the figures drawn below: {file stem: (the thesis figure it repeats or "", what it shows)}
+# report.html's captions of the figures (kinds.gap_benchmark_figures): {file stem: (the thesis figure
+# it repeats or "", what it shows)}
 CAPTIONS = {
     "gap_benchmark": (
         "",
         "The blind benchmark: gap before and after per trial, and how often each hidden effect is named first.",
     )
 }
-
-
-def figures(run: RunDir, summary: dict, records: list[dict]) -> None:
-    """Per-effect identification and the gap before/after of every trial (PNG for report.html)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ...plots import save
-
-    names = list(summary["per_effect"])
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
-    x = np.arange(len(names))
-    for offset, key, label in ((-0.2, "top1", "top-1"), (0.2, "top3", "top-3")):
-        axes[0].bar(x + offset, [100 * (summary["per_effect"][n][key] or 0) for n in names], 0.4, label=label)
-    axes[0].set_xticks(x, names, rotation=60, ha="right", fontsize=8)
-    axes[0].set_ylabel("identified (%)")
-    axes[0].set_title("identification per hidden effect")
-    axes[0].legend()
-    colours = {"single": "C0", "pair": "C1", "null": "C2", "withheld": "C3", "suborder": "C4"}
-    for kind, colour in colours.items():
-        mine = [r for r in records if r["kind"] == kind and r["gap_before"] > 0 and r["gap_after"] == r["gap_after"]]
-        axes[1].scatter(
-            [r["gap_before"] for r in mine], [max(r["gap_after"], 1e-3) for r in mine], c=colour, label=kind, s=18
-        )
-    axes[1].set_xscale("log")
-    axes[1].set_yscale("log")
-    lims = axes[1].get_xlim()
-    axes[1].plot(lims, lims, "k:", lw=0.8)
-    axes[1].set_xlabel("gap before")
-    axes[1].set_ylabel("gap after (corrected source)")
-    axes[1].set_title("gap before / after, per trial")
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
-    save(fig, run.figures / "gap_benchmark.png", dpi=90, bbox_inches=None)
 
 
 def summary_lines(run: RunDir) -> list[str]:
