@@ -345,9 +345,8 @@ def _by_input_lines(rec: Recording, box: Gearbox | None, options: InspectOptions
     if box is None or rec.tacho is not None:
         return speed, reading
     said, table = box.stages[0].pinion.z, order_table(box)
-    # no speed declared: the counts within the nominal range of the speed found (the search's, the described count's),
-    # only one the input shaft's lines show acted on (17/53 + 22/67 + 29/83 described with 18 teeth: read at 33.06 Hz,
-    # 'the pinion shows 17.0 teeth'; its input turns at 35 Hz)
+    # no speed declared: the counts within the nominal range of the speed found, only one the input shaft's lines show
+    # acted on (17/53 + 22/67 + 29/83 described 18: read at 33.06 Hz, 'shows 17.0 teeth'; the input turns at 35 Hz)
     mesh_hz, seen, others = pinion_evidence(
         reading.lines, speed.mean_hz, reading.revolutions, table, said, speed.declared_hz or speed.mean_hz
     )

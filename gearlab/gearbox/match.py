@@ -35,6 +35,19 @@ def tol_mesh(order: float, bin_: float) -> float:
     return 2 * bin_ + DRIFT * order
 
 
+def mixed(d: float, o: float, rival: float | None, bin_: float) -> bool:
+    """Whether the offset *d* from a mesh line is the two shafts' intermodulation a rival +- b o (a, b = 1-3) and
+    not a sideband j o: within CONSISTENT_BINS of such a product and further from every j o than from it. A mesh
+    modulated by both its shafts carries o_p - o_w (a 22/68 + 18/70 box: 0.2403 beside the output's 3rd, 0.2496,
+    2.2 bins apart at 235 turns), and the output's comb took it as its 3rd: 'the wheel shows 71.4 teeth'."""
+    if rival is None:
+        return False
+    tol = CONSISTENT_BINS * bin_ + DRIFT * abs(d)
+    pure = min(abs(abs(d) - j * o) for j in (1, 2, 3))
+    mix = min(abs(abs(d) - abs(a * rival + s * b * o)) for a in (1, 2, 3) for b in (1, 2, 3) for s in (-1, 1))
+    return mix <= tol and pure > max(tol, mix)
+
+
 def comb(
     lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset(), rival: float | None = None
 ) -> tuple | None:
@@ -53,7 +66,7 @@ def comb(
     0.5 bin / 3 < o / 57 (sidebands 16 bins apart or more; else 2 bins)."""
     m = float(lines.at[mesh])
     near = np.flatnonzero((np.abs(lines.at - m) <= 3.9 * o) & (np.arange(lines.at.size) != mesh))
-    near = np.array([q for q in near if q not in exclude], dtype=int)
+    near = np.array([q for q in near if q not in exclude and not mixed(lines.at[q] - m, o, rival, bin_)], dtype=int)
     if near.size == 0:
         return None
     d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 4, 5, 6, 1 / 2, 1 / 3)
@@ -466,8 +479,10 @@ def check_description(
             z = measured / o_seen
             spread = z * tol / o_seen
             entry[f"{key}_seen"], entry[f"{key}_resolution"] = z, spread
-            if spread >= 1.0 and abs(z - described) <= spread:  # a tooth more or less would pass too
-                need = revolutions_needed(z, o_seen, tol, revolutions)
+            # a tooth more or less would pass too, or the reading lies nearer another count within its spread (a
+            # 22/68 + 18/70 box's wheel read 70.04 ± 0.97 passed as 71)
+            if abs(z - described) <= spread and (spread >= 1.0 or abs(z - described) >= 0.5):
+                need = revolutions_needed(z, o_seen, tol, revolutions, 1.0 if spread >= 1.0 else 0.5)
                 unresolved.append(
                     f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft ({z:.1f} ± {spread:.1f} "
                     f"from its sidebands: {revolutions} input revolutions, "
@@ -635,11 +650,12 @@ def own_line(lines: Lines, i: int, measured: float, bin_: float, shared) -> int:
     return int(max(own, key=lambda q: lines.amp[q])) if own else i
 
 
-def revolutions_needed(z: float, o: float, tol: float, revolutions: int) -> int | None:
+def revolutions_needed(z: float, o: float, tol: float, revolutions: int, teeth: float = 1.0) -> int | None:
     """The input revolutions at which a shaft order *o* measured to ±*tol* over *revolutions* tells a
-    *z*-tooth gear from one of z ± 1 (z within ± 1 tooth), or None: a comb's tolerance is b bins / its
-    furthest sideband + DRIFT o (comb), b = SIDEBAND_BINS at SEPARATED bins apart or more, else 2."""
-    room = o / z - DRIFT * o  # the tolerance a tooth allows
+    *z*-tooth gear from one of z ± 1 (z within ± *teeth*: 1, or a half where z lies between two counts), or None:
+    a comb's tolerance is b bins / its furthest sideband + DRIFT o (comb), b = SIDEBAND_BINS at SEPARATED bins
+    apart or more, else 2."""
+    room = teeth * o / z - DRIFT * o  # the tolerance *teeth* allow
     spent = (tol - DRIFT * o) * revolutions  # b / jmax, in orders x revolutions
     if room <= 0 or spent <= 0:
         return None
