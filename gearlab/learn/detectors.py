@@ -69,7 +69,7 @@ from gearlab.errors import GearlabInputError
 
 from .bounds import noise_scale, shape_llr
 from .detector_contract import Detector
-from .history import gumbel_fit, noise_law
+from .history import noise_law
 from .path import fit_path
 
 SCALES = ("unit", "history")  # the noise scale of a scored revolution: its own, or the healthy history's
@@ -241,10 +241,6 @@ class LikelihoodDetector(nn.Module):
         self.register_buffer("shapes", torch.as_tensor(shapes, dtype=torch.float32))
         self.register_buffer("threshold", torch.tensor(float(threshold)))
         self.register_buffer("scale", torch.tensor(float(scale)))
-        # mixture "sizes": each size-and-sign group's Gumbel (mu, beta) on the history (`standardised`);
-        # empty: one mixture over every shape
-        self.register_buffer("centre", torch.zeros(0))
-        self.register_buffer("spread", torch.zeros(0))
         self.kind = kind
         self.latent_dim = len(shapes)
 
@@ -254,43 +250,12 @@ class LikelihoodDetector(nn.Module):
         scale = noise_scale(r, self.kind) if self.scale <= 0 else self.scale.expand(len(r))
         return shape_llr(r, self.shapes, scale, self.kind)
 
-    def groups(self, x: torch.Tensor) -> torch.Tensor:
-        """``(B, G)``: the mixture log-likelihood ratio of each of the G equal groups of shapes (one
-        group where no group is standardised)."""
-        llr = self.embed(x)
-        size = llr.shape[1] // max(self._buffers.get("centre", torch.zeros(0)).numel(), 1)
-        return torch.logsumexp(llr.reshape(len(llr), -1, size), dim=2) - math.log(size)
-
     def score(self, x: torch.Tensor) -> torch.Tensor:
-        """The mixture's log-likelihood ratio; with the groups standardised, the largest of theirs,
-        each in its own Gumbel units (`standardised`)."""
-        groups = self.groups(x)
-        if self._buffers.get("centre") is None or not self.centre.numel():
-            return groups[:, 0]
-        return ((groups - self.centre) / self.spread).amax(dim=1)
+        return torch.logsumexp(self.embed(x), dim=1) - math.log(self.latent_dim)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         s = self.score(x) - self.threshold
         return torch.stack([torch.zeros_like(s), s], dim=1)
-
-
-def standardised(detector: LikelihoodDetector, history: np.ndarray, groups: int) -> LikelihoodDetector:
-    """*detector* scoring the largest of its *groups* equal groups' mixture ratios, each less its
-    Gumbel centre over its spread on the *history* rows (gearlab.learn.history.gumbel_fit). Why:
-    a group's ratio grows with its size (at 4 times the path's size its spread on a healthy
-    history is many times that at 1/4), so one mixture over every size has its quartiles from the
-    small sizes and its upper tail from the large ones, and the Gumbel the history threshold fits
-    to the quartiles lets 2-7 % through at 1 % asked (synthetic Laplace, 6 histories; a Gumbel fitted
-    to 2,000 healthy rows' quartiles: 0.65, their 99th percentile 1.41). Each group alone is
-    Gumbel-like, and a largest of Gumbel variables of one spread is one again (the law of maxima is
-    max-stable), so the history threshold holds for the standardised largest."""
-    with torch.no_grad():
-        detector.centre = torch.zeros(groups)  # sets the group count `groups` reads
-        scores = detector.groups(torch.as_tensor(history, dtype=torch.float32)).numpy().astype(np.float64)
-    mu, beta = gumbel_fit(scores, axis=0)
-    detector.centre = torch.as_tensor(mu, dtype=torch.float32)
-    detector.spread = torch.as_tensor(np.maximum(beta, 1e-12), dtype=torch.float32)
-    return detector
 
 
 def likelihood_statistic(
@@ -308,11 +273,10 @@ def likelihood_statistic(
     under both hypotheses. Where a fault raises the whole residual rather than adding a sparse
     shape (the PHM 2009 chip: its units' own scale alone ranks them first), the unit's own
     scale reads the fault's energy as noise and ranks the faults low (docs/real_data.md).
-    *mixture* ``sizes``: the fault's size and sign are unknown too, each shape enters at every
-    size of `SIZES` and both signs (a model mismatch the path does not see, such as the bearings'
-    stiffness, scales a fault's response apart from the healthy mesh's or turns it over:
-    docs/results.md §5), the score the largest of the size-and-sign groups' mixtures, each
-    standardised on the history (`standardised`)."""
+    *mixture* ``sizes``: the fault's size and sign are unknown too, each shape enters the mixture
+    at every size of `SIZES` and both signs, equally weighted (a model mismatch the path does not
+    see, such as the bearings' stiffness, scales a fault's response apart from the healthy
+    mesh's or turns it over: docs/results.md §5)."""
     if scale not in SCALES:
         raise ValueError(f"scale must be one of {SCALES}, got {scale!r}")
     if mixture not in MIXTURES:
@@ -325,10 +289,7 @@ def likelihood_statistic(
     if scale == "history":
         residuals = torch.as_tensor(Xt[healthy_t] - reference, dtype=torch.float32)
         fixed = float(noise_scale(residuals, kind).median())
-    detector = LikelihoodDetector(reference, shapes, kind, threshold=0.0, scale=fixed)
-    if mixture == "sizes":
-        return standardised(detector, Xt[healthy_t], 2 * len(SIZES))
-    return detector
+    return LikelihoodDetector(reference, shapes, kind, threshold=0.0, scale=fixed)
 
 
 def likelihood_detector(

@@ -15,17 +15,12 @@ NOISE_LAWS = ("gaussian", "laplace", "student_t")  # the thesis's noise laws (4.
 _KURTOSIS_SPLITS = (4.5, 12.0)
 
 
-def gumbel_fit(scores: np.ndarray, axis: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(mu, beta) of the Gumbel law (of maxima) F(s) = exp(-exp(-(s - mu) / beta)) whose quartiles
-    are those of *scores* (along *axis*)."""
-    q1, q3 = np.quantile(scores, [0.25, 0.75], axis=axis)
-    beta = (q3 - q1) / (np.log(np.log(4.0)) - np.log(np.log(4.0 / 3.0)))
-    return q1 + beta * np.log(np.log(4.0)), beta
-
-
 def gumbel_quantile(scores: np.ndarray, p: float) -> float:
-    """The *p* quantile of `gumbel_fit`'s law of *scores*: mu - beta ln(-ln p)."""
-    mu, beta = gumbel_fit(scores)
+    """The *p* quantile of the Gumbel law (of maxima) whose quartiles are those of *scores*:
+    F(s) = exp(-exp(-(s - mu) / beta)), so the q quantile is mu - beta ln(-ln q)."""
+    q1, q3 = np.quantile(scores, [0.25, 0.75])
+    beta = (q3 - q1) / (np.log(np.log(4.0)) - np.log(np.log(4.0 / 3.0)))
+    mu = q1 + beta * np.log(np.log(4.0))
     return float(mu - beta * np.log(-np.log(p)))
 
 
