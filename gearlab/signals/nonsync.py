@@ -27,8 +27,11 @@ in sds of the mean of n history blocks, z(f) = (E(f) − μ_h(f)) √n / σ_h(f)
 neighbouring bins. The record's z is its largest. The strike order named is the lowest whose first
 HARMONICS harmonics' z sum within LOWEST of the most (the strongest line is often a harmonic, where the
 ring lies), read finer on the whole residual's envelope spectrum. The threshold is fixed on the history
-alone, as the shafts' are: the largest z of its records, each read against the others, and at least the
-Gaussian quantile at FALSE_ALARM shared among the bins.
+alone, as the shafts' are, for the maximum over the bins: the Gaussian quantile at FALSE_ALARM shared
+among the bins (Bonferroni) times the sd of the history records' line z, each read against the others
+(the records' spread beyond their blocks' noise), and at least the largest of those z (healthy rig
+records over it: 8 of 200 with the bare quantile as the floor, 1 of 200 so; 40 histories of 2,
+development seeds 300-339).
 A gear fault is synchronous: the residual does not carry it (a simulated cracked tooth left z under
 the threshold, tests/test_nonsync.py); a bearing's strikes put a line at their order and its
 harmonics.
@@ -164,15 +167,11 @@ def synchronous_bins(table, bins: int) -> np.ndarray:
     return near <= (SUM + 0.5) / BLOCK
 
 
-def _z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndarray) -> tuple[float, float]:
-    """(largest line z, the strike order) of a record's envelope blocks against the reference records'
-    blocks (module doc: the noise of the mean, plus the records' spread beyond it), off
-    the *synchronous* bins. A bin's z less the median z of the LINE bins on either side: a line stands out
-    of its neighbours, where a record whose whole envelope changed (another build of the same rig,
-    loaded otherwise) lifts them all. The strike order: the lowest f0 ≤ FUNDAMENTAL whose HARMONICS
-    harmonics' line z (clipped at 0) sum within LOWEST of the most (a strike's line is often strongest at a
-    harmonic, where the resonance it rings lies; its double holds its even harmonics only, its half half of
-    them) with a line of its own OWN of the largest, read at that line's peak."""
+def line_z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndarray) -> np.ndarray:
+    """Each bin's line z of a record's envelope blocks against the reference records' blocks (module doc:
+    the noise of the mean, plus the records' spread beyond it), 0 on the *synchronous* bins: a bin's z
+    less the median z of the LINE bins on either side (a line stands out of its neighbours, where a record
+    whose whole envelope changed, another build of the same rig loaded otherwise, lifts them all)."""
     every = np.concatenate(reference)
     within = np.concatenate([r - r.mean(axis=0) for r in reference])
     var = uniform_filter1d(np.sum(within**2, axis=0) / max(len(every) - len(reference), 1), size=SMOOTH, mode="nearest")
@@ -185,7 +184,16 @@ def _z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndarray)
     z = (blocks.mean(axis=0) - every.mean(axis=0)) / np.sqrt(np.maximum(noise, 1e-300))
     from scipy.ndimage import median_filter
 
-    z = np.where(synchronous, 0.0, z - median_filter(z, size=2 * LINE + 1, mode="nearest"))
+    return np.where(synchronous, 0.0, z - median_filter(z, size=2 * LINE + 1, mode="nearest"))
+
+
+def _z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndarray) -> tuple[float, float]:
+    """(largest line z, the strike order) of a record's envelope blocks against the reference records'
+    blocks (line_z). The strike order: the lowest f0 ≤ FUNDAMENTAL whose HARMONICS
+    harmonics' line z (clipped at 0) sum within LOWEST of the most (a strike's line is often strongest at a
+    harmonic, where the resonance it rings lies; its double holds its even harmonics only, its half half of
+    them) with a line of its own OWN of the largest, read at that line's peak."""
+    z = line_z(blocks, reference, synchronous)
     lo = int(math.ceil(LOW * BLOCK))
     f0 = np.arange(lo, int(FUNDAMENTAL * BLOCK) + 1)  # candidate orders in bins (order * BLOCK)
     pos = np.round(f0[:, None] * np.arange(1, HARMONICS + 1)[None, :]).astype(np.int64) - lo
@@ -224,13 +232,18 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
             "input revolutions; expected at least 3"
         )
     sync = synchronous_bins(table, blocks[0].shape[1])
+    # the record's z is a maximum over the bins searched: its threshold is the family's, the Gaussian
+    # quantile at FALSE_ALARM shared among them (Bonferroni), in units of the spread of the history's own
+    # line z, each record against the others (it carries the records' spread beyond their blocks' noise,
+    # which the pooled sd underrates on a history of few records), and at least their largest
     floor = NormalDist().inv_cdf(1.0 - FALSE_ALARM / int((~sync).sum()))
     left_out = []
     for i, b in enumerate(blocks):
         rest = [x for j, x in enumerate(blocks) if j != i]
         if rest and sum(len(x) for x in rest) >= 2:
-            left_out.append(_z(b, rest, sync)[0])
-    return NonSyncHistory(blocks, max([floor, *left_out]))
+            left_out.append(line_z(b, rest, sync)[~sync])
+    spread = max(float(np.std(np.concatenate(left_out))), 1.0) if left_out else 1.0
+    return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]))
 
 
 def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
