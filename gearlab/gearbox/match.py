@@ -236,27 +236,37 @@ def families(
     return found
 
 
-def others_lines(lines: Lines, expected: float, others, bin_: float) -> frozenset:
+def others_lines(lines: Lines, expected: float, others, bin_: float, own=None) -> frozenset:
     """The lines other stages' structure explains, no sidebands of a stage of mesh order *expected*: any
     harmonic of their meshes (off its own) and its sidebands j <= 3 of their shafts it does not carry
-    (*others*: (mesh order, those shafts' orders) each). A 22/63 last stage's 6th harmonic, 1.2 below a
-    15/47 first mesh, and its sidebands read as the input shaft's comb: 'the pinion shows 12.5 teeth'.
-    A shaft both carry is left out: its sidebands are both stages'."""
-    at, carrier = [], []
-    for m, shaft_orders in others:
-        offsets = [0.0] + [j * o for o in shaft_orders for j in (-3, -2, -1, 1, 2, 3)]
+    (*others*: (mesh order, those shafts' orders[, the shared shaft's order]) each). A 22/63 last stage's 6th
+    harmonic, 1.2 below a 15/47 first mesh, and its sidebands read as the input shaft's comb: 'the pinion shows
+    12.5 teeth'. A shaft both carry is left out: its sidebands are both stages'. Its products with the other
+    stage's own shaft, a o_shared +- b o (a, b = 1-3), are that stage's only (19/48 + 25/94 + 17/48: stage 2's
+    2 M2 + o1 + o2 lies at M1 + 1.293 and the input's comb read 'the pinion shows 14.7 teeth'), save a line on
+    one of the stage's own sidebands (*own*: its mesh line, its shafts' orders), which the products, 36 a
+    harmonic, pass near by chance (a 15/56 + 13/33 wheel read 33.0 teeth, 34 described, lost its comb)."""
+    at, kind, js = [], [], (-3, -2, -1, 1, 2, 3)  # kind: 0 a carrier, 1 a sideband, 2 a product of two shafts
+    for m, shaft_orders, *shared in others:
+        offsets = [(0.0, 0)] + [(j * o, 1) for o in shaft_orders for j in js]
+        if shared and len(shared[0]) == 1 and len(shaft_orders) == 1:
+            offsets += [(a * shared[0][0] + b * shaft_orders[0], 2) for a in js for b in js]
         for h in range(1, MAX_HARMONIC + 1):
             if abs(h * m / expected - round(h * m / expected)) > 1e-9:  # on the stage's own harmonic: both
-                at += [h * m + off for off in offsets]
-                carrier += [off == 0.0 for off in offsets]
+                at += [h * m + off for off, _ in offsets]
+                kind += [k for _, k in offsets]
     if not at:
         return frozenset()
-    at = np.array(at)
+    at, kind = np.array(at), np.array(kind)
     # a carrier within tol_mesh; a sideband within 2 bins and a tenth of the drift allowance: at DRIFT's 1e-3 of
     # order 14 a 15/47 input comb's own -1 line (14.000) fell within 0.019 of a later stage's sideband
     # (13.8004 + 0.2091), the comb lost it and another won
-    tol = np.where(carrier, tol_mesh(at, bin_), 2 * bin_ + 0.1 * DRIFT * at)
+    tol = np.where(kind == 0, tol_mesh(at, bin_), 2 * bin_ + 0.1 * DRIFT * at)
     near = np.abs(lines.at[:, None] - at[None, :]) <= tol[None, :]
+    if own is not None:
+        sidebands = np.array([own[0] + j * o for o in own[1] for j in js])
+        on_own = np.abs(lines.at[:, None] - sidebands[None, :]) <= 2 * bin_ + 0.1 * DRIFT * sidebands[None, :]
+        near[:, kind == 2] &= ~on_own.any(axis=1)[:, None]
     return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
 
 
@@ -269,17 +279,18 @@ def lead(table, q: int, moved: dict) -> float:
 
 
 def other_stages(table, k: int, moved: dict, measured_shaft: dict, leads: bool = True, ahead=None) -> list:
-    """(mesh order, orders of its shafts stage *k* does not carry) of every other stage of *table*, as
-    measured where it was (an earlier stage's moved mesh, a later one's located *ahead*, a shaft's sidebands or
-    tacho), else as a moved mesh before it makes it (lead)."""
+    """(mesh order, orders of its shafts stage *k* does not carry, those it does) of every other stage of
+    *table*, as measured where it was (an earlier stage's moved mesh, a later one's located *ahead*, a shaft's
+    sidebands or tacho), else as a moved mesh before it makes it (lead)."""
+
+    def order(i: int) -> float:
+        return measured_shaft.get(i, (float(table.shaft_orders[i]) * (lead(table, i, moved) if leads else 1.0),))[0]
+
     return [
         (
             moved.get(q, (ahead or {}).get(q, float(t.mesh) * (lead(table, q, moved) if leads else 1.0))),
-            [
-                measured_shaft.get(i, (float(table.shaft_orders[i]) * (lead(table, i, moved) if leads else 1.0),))[0]
-                for i in (q, q + 1)
-                if i not in (k, k + 1)
-            ],
+            [order(i) for i in (q, q + 1) if i not in (k, k + 1)],
+            [order(i) for i in (q, q + 1) if i in (k, k + 1)],
         )
         for q, t in enumerate(table.stages)
         if q != k
@@ -455,18 +466,17 @@ def check_description(
         i = own_line(lines, i, measured, bin_, shared)
         entry.update(measured_order=measured, error_orders=measured - expected, amplitude=float(lines.amp[i]))
         entry["db_over_floor"] = float(lines.db[i])
+        own = tuple(
+            measured_shaft.get(q, (float(o),))[0] for q, o in ((k, s.pinion_shaft_order), (k + 1, s.wheel_shaft_order))
+        )
+        others = [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)]
         combs = families(
             lines,
             i,
-            tuple(
-                measured_shaft.get(q, (float(o),))[0]
-                for q, o in ((k, s.pinion_shaft_order), (k + 1, s.wheel_shaft_order))
-            ),
+            own,
             bin_,
             (k in measured_shaft, k + 1 in measured_shaft),
-            others_lines(
-                lines, expected, [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)], bin_
-            ),
+            others_lines(lines, expected, others, bin_, (float(lines.at[i]), own)),
         )
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
