@@ -364,7 +364,7 @@ def _read_at_count(rec, box: Gearbox, options, speed: Speed, mesh_hz: float, cou
     for a 28-tooth pinion: mesh order 28.97, the input at 1.034)."""
     described, f = box.stages[0].pinion.z, mesh_hz / count
     # the stage-1 mesh's phase, followed as the described pinion's at the speed that puts it on the line
-    theta = mesh_angle(rec.signal, rec.fs, box, mesh_hz / described)
+    theta = mesh_angle(rec.signal, rec.fs, box, mesh_hz / described, speed_course(rec.signal, rec.fs))
     if theta is not None:
         theta = theta * described / count
         mean = (theta[-1] - theta[0]) * rec.fs / (TWO_PI * (theta.size - 1))
