@@ -226,7 +226,8 @@ def inspect(
 
     Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho --history healthy1.csv --history healthy2.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .inspect import json_ready, render, render_localisation
+    from .inspect import json_ready, render
+    from .inspect_history import render_localisation
     from .notebook import inspect_recording
 
     # the recording's options are inspect_recording's keywords, by name (its checks name them by flag)

@@ -67,7 +67,6 @@ from .gearbox.speed import (
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
-from .signals.pipeline import first_complete
 
 TWO_PI = 2.0 * np.pi
 MAX_TSA_POINTS = 1 << 15
@@ -228,6 +227,11 @@ def _along_course(rec: Recording, f: float) -> tuple[np.ndarray, np.ndarray]:
     return theta, rec.fs / np.diff(revolution_starts(theta))
 
 
+def measured_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -> Speed:
+    """The input speed from the tacho, else declared or found from the mesh lines (_found_speed)."""
+    return _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+
+
 # --- the order spectrum and the description's orders ----------------------------------------------
 
 
@@ -316,7 +320,7 @@ def settle_speed(
     pinion at 1455 rpm, described 34 at 1500 rpm, was read at 1500 rpm in every row: 'mesh order 32
     measured, a 32-tooth pinion'), else the count every stage's lines show (every_stage_count), else not confirmed."""
     if speed is None:
-        speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
+        speed = measured_speed(rec, box, options)
     reading = read_orders(rec, speed, options.threshold_db)
     if not unconfirmed(rec, box, speed):
         return _by_input_lines(rec, box, options, speed, reading) + (None,)
@@ -716,85 +720,3 @@ def render(report: dict, console, width: int = 100) -> None:
         said = None if check.get("ambiguous") and report["matches"] else report["matches"]  # 'consistent if'
         colour = {True: "green", None: "yellow"}.get(said, "red")
         console.print(f"[bold {colour}]{escape(report['verdict'])}[/bold {colour}]")
-
-
-# --- which gear: localisation against healthy history records ----------------------------------------
-
-
-def _input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple:
-    """(complete input revolutions at the pipeline's points, the first one's number from the angle's zero modulo
-    the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate) of one file as read."""
-    from .signals import POINTS
-
-    rec = read_record(path, options)
-    speed = _tacho_speed(rec, box, options) if rec.tacho is not None else _found_speed(rec, box, options)
-    if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
-        speed = settle_speed(rec, box, options, speed)[0]
-    # without a tacho the angle is zero at the first sample, as a detection's or score's take has it
-    angle = speed.angle if rec.tacho is not None else speed.angle - speed.angle[0]
-    with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
-        revs = resample_revolutions(rec.signal, angle, points=POINTS)
-    first = first_complete(angle)  # numbered as a detection's or score's take (recordings.CutRecording)
-    # the tacho marks a take may start at (localisation turns each take to the first history take's)
-    kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
-    shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
-    marks = shaft.marks(options.pulses_per_rev or box.sensor.pulses_per_rev if kind == "pulses" else 1) if kind else 1
-    return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs
-
-
-def localisation(path: str, history: list, box: Gearbox, options: InspectOptions) -> dict:
-    """Which shaft and gear the record's synchronous average carries a localised change on, against healthy
-    *history* records of the same gearbox, each a path read with the record's *options* or a (path, its own
-    InspectOptions) pair: data.which_gear's one decision, as a detection run and `gearlab score` make it (orders
-    up to those every history record holds; a shaft's two gears by the description's simulated events at the
-    record's speed and rate, where the history's mesh harmonics agree with the simulation's)."""
-    from .data import which_gear as W
-
-    if not history:
-        raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
-    table = order_table(box)
-    revs, first, _, _, speed, fs = _input_revolutions(path, box, options)
-    read = [(h, options) if isinstance(h, str) else h for h in history]
-    past = []
-    for p, o in read:
-        try:
-            past.append(_input_revolutions(p, box, o))
-        except GearlabInputError as exc:
-            if o is not options:  # read with its own keys
-                raise
-            name = p.replace("\\", "/").rsplit("/", 1)[-1]
-            raise GearlabInputError(
-                f"{exc} (a history file read with the record's keys; its own: --history-key '{name}:vibration=NAME')"
-            ) from None
-    takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
-    tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
-    pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
-    hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
-    out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
-    out["history"] = [p for p, _ in read]
-    return out
-
-
-def render_localisation(loc: dict, console) -> None:
-    """The per-shaft evidence of `gearlab inspect --history` in the terminal."""
-    from rich.markup import escape
-    from rich.table import Table
-
-    t = Table(title="which gear: localised change per shaft (against the history)")
-    for col in ("shaft", "gears", "z", "threshold", "flagged", "tooth (peak, pitches)"):
-        t.add_column(col)
-    for s in loc["shafts"]:
-        found = [v for k, v in s["tooth"].items() if k != "angle_deg"]
-        teeth = "; ".join(f"{v['tooth']} of {v['of']} ({v['pitches']:.1f})" for v in found)
-        t.add_row(
-            s["shaft"],
-            escape(", ".join(s["gears"])),
-            f"{s['z']:.2f}",
-            f"{s['threshold']:.2f}",
-            "[red]yes[/red]" if s["flagged"] else "no",
-            teeth or "-",
-        )
-    console.print(t)
-    console.print(f"[dim]{escape(loc['method'])}[/dim]")
-    colour = "yellow" if loc["named"] else "green"
-    console.print(f"[bold {colour}]{escape(loc['summary'])}[/bold {colour}]")

@@ -326,7 +326,8 @@ def inspect_recording(
     >>> report["revolutions"], round(report["lines"][0]["order"], 2), report["matches"]
     (48, 16.0, True)
     """
-    from .inspect import inspect_record, localisation
+    from .inspect import inspect_record
+    from .inspect_history import localisation
 
     checked = inspect_options(flag=flag, **options)
     box = None if gearbox is None else gearbox if hasattr(gearbox, "stages") else load_gearbox(gearbox)

@@ -131,7 +131,8 @@ def test_without_a_tacho_the_input_pinion_s_tooth_says_it_holds_in_this_take_onl
     from test_which_gear_parity import TEETH, take
 
     from gearlab.gearbox import resolve_gearbox
-    from gearlab.inspect import InspectOptions, localisation
+    from gearlab.inspect import InspectOptions
+    from gearlab.inspect_history import localisation
     from gearlab.signals.localise import THIS_TAKE
 
     (tmp_path / "b.toml").write_text(description(*(stage(*z) for z in TEETH), name="nt", speed="20 Hz", near="input"))

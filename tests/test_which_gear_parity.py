@@ -183,14 +183,15 @@ def test_a_tooth_of_the_tacho_shaft_is_counted_from_its_own_mark(box, detected):
 def test_a_take_counts_its_first_revolution_from_the_tacho_shafts_mark(box):
     # recordings.cut_recording (the detection kind's and score's reader) and inspect count alike
     from gearlab.data.recordings import cut_recording
-    from gearlab.inspect import InspectOptions, _input_revolutions
+    from gearlab.inspect import InspectOptions
+    from gearlab.inspect_history import input_revolutions
 
     target = _target(box)
     box_ = resolve_gearbox(box["box"])
     period = order_table(box_).train_period
     for name in ("h1", "output"):
         rec = cut_recording(box[name], vibration="acc", tacho="tacho", tacho_shaft=target.tacho_shaft)
-        revs, first, *_ = _input_revolutions(box[name], box_, InspectOptions(vibration="acc", tacho="tacho"))
+        revs, first, *_ = input_revolutions(box[name], box_, InspectOptions(vibration="acc", tacho="tacho"))
         assert rec.first_revolution % period == first % period
         assert rec.first_revolution < 0  # the first whole input turn starts before the output's first mark
         assert np.allclose(rec.revolutions, revs, rtol=1e-9, atol=1e-9)

@@ -46,7 +46,8 @@ def box(tmp_path_factory):
 
 
 def _inspected(box, name) -> dict:
-    from gearlab.inspect import InspectOptions, localisation
+    from gearlab.inspect import InspectOptions
+    from gearlab.inspect_history import localisation
 
     options = InspectOptions(vibration="acc", tacho="tacho")
     return localisation(box[name], [box[h] for h in ("h1", "h2", "h3")], resolve_gearbox(box["box"]), options)

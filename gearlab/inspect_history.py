@@ -1,0 +1,94 @@
+"""`gearlab inspect --history`: which shaft and gear a record's change lies on, against healthy records
+of the same gearbox.
+
+    record, history files ─► complete input revolutions     each file read as inspect reads it (tacho or
+                                                             found speed), cut as a detection's take is
+                          ─► localised change per shaft      data.which_gear: the one decision a detection
+                                                             run and `gearlab score` make
+"""
+
+from __future__ import annotations
+
+from .data import which_gear as W
+from .data.recordings import prefixed, tacho_kind
+from .errors import GearlabInputError
+from .gearbox import Gearbox, order_table
+from .gearbox.orders import TachoShaft
+from .inspect import InspectOptions, measured_speed, read_record, settle_speed, unconfirmed
+from .signals import POINTS, resample_revolutions
+from .signals.pipeline import first_complete
+
+
+def input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple:
+    """(complete input revolutions at the pipeline's points, the first one's number from the angle's zero modulo
+    the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate) of one file as read."""
+    rec = read_record(path, options)
+    speed = measured_speed(rec, box, options)
+    if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
+        speed = settle_speed(rec, box, options, speed)[0]
+    # without a tacho the angle is zero at the first sample, as a detection's or score's take has it
+    angle = speed.angle if rec.tacho is not None else speed.angle - speed.angle[0]
+    with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
+        revs = resample_revolutions(rec.signal, angle, points=POINTS)
+    first = first_complete(angle)  # numbered as a detection's or score's take (recordings.CutRecording)
+    # the tacho marks a take may start at (localisation turns each take to the first history take's)
+    kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
+    shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
+    marks = shaft.marks(options.pulses_per_rev or box.sensor.pulses_per_rev if kind == "pulses" else 1) if kind else 1
+    return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs
+
+
+def localisation(path: str, history: list, box: Gearbox, options: InspectOptions) -> dict:
+    """Which shaft and gear the record's synchronous average carries a localised change on, against healthy
+    *history* records of the same gearbox, each a path read with the record's *options* or a (path, its own
+    InspectOptions) pair: data.which_gear's one decision, as a detection run and `gearlab score` make it (orders
+    up to those every history record holds; a shaft's two gears by the description's simulated events at the
+    record's speed and rate, where the history's mesh harmonics agree with the simulation's)."""
+    if not history:
+        raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
+    table = order_table(box)
+    revs, first, _, _, speed, fs = input_revolutions(path, box, options)
+    read = [(h, options) if isinstance(h, str) else h for h in history]
+    past = []
+    for p, o in read:
+        try:
+            past.append(input_revolutions(p, box, o))
+        except GearlabInputError as exc:
+            if o is not options:  # read with its own keys
+                raise
+            name = p.replace("\\", "/").rsplit("/", 1)[-1]
+            raise GearlabInputError(
+                f"{exc} (a history file read with the record's keys; its own: --history-key '{name}:vibration=NAME')"
+            ) from None
+    takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
+    tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
+    pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
+    hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
+    out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
+    out["history"] = [p for p, _ in read]
+    return out
+
+
+def render_localisation(loc: dict, console) -> None:
+    """The per-shaft evidence of `gearlab inspect --history` in the terminal."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    t = Table(title="which gear: localised change per shaft (against the history)")
+    for col in ("shaft", "gears", "z", "threshold", "flagged", "tooth (peak, pitches)"):
+        t.add_column(col)
+    for s in loc["shafts"]:
+        found = [v for k, v in s["tooth"].items() if k != "angle_deg"]
+        teeth = "; ".join(f"{v['tooth']} of {v['of']} ({v['pitches']:.1f})" for v in found)
+        t.add_row(
+            s["shaft"],
+            escape(", ".join(s["gears"])),
+            f"{s['z']:.2f}",
+            f"{s['threshold']:.2f}",
+            "[red]yes[/red]" if s["flagged"] else "no",
+            teeth or "-",
+        )
+    console.print(t)
+    console.print(f"[dim]{escape(loc['method'])}[/dim]")
+    colour = "yellow" if loc["named"] else "green"
+    console.print(f"[bold {colour}]{escape(loc['summary'])}[/bold {colour}]")
