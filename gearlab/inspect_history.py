@@ -5,9 +5,16 @@ of the same gearbox.
                                                              found speed), cut as a detection's take is
                           ─► localised change per shaft      data.which_gear: the one decision a detection
                                                              run and `gearlab score` make
+                          ─► non-synchronous change          signals.nonsync: the record less every shaft's
+                                                             synchronous average, its envelope's lines
+                                                             against the history's, as a detection run reads it
+                          ─► the call                        a gear named, else other damage where the
+                                                             residual changed (bearing-like), else no change
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from .data import which_gear as W
 from .data.recordings import prefixed, tacho_kind
@@ -16,6 +23,7 @@ from .gearbox import Gearbox, order_table
 from .gearbox.orders import TachoShaft
 from .inspect import InspectOptions, measured_speed, read_record, settle_speed, unconfirmed
 from .signals import POINTS, resample_revolutions
+from .signals import nonsync as NS
 from .signals.pipeline import first_complete
 
 
@@ -66,7 +74,44 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
     out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
     out["history"] = [p for p, _ in read]
+    out["nonsync"] = nonsync_lines(revs, [r for r, *_ in past], table, speed.mean_hz)
+    out["call"] = call_of(out, out["nonsync"])
     return out
+
+
+LINES = 5  # the strongest non-synchronous envelope lines shown
+NON_SYNC = "other damage: non-synchronous (bearing-like), at order"  # as a detection run calls it
+
+
+def nonsync_lines(revs, history: list, table, speed_hz: float) -> dict:
+    """The record's non-synchronous change against the *history* takes' (signals.nonsync, as a detection run
+    reads it: z of its strongest envelope line, the strike order named, the history's threshold) with the
+    LINES strongest lines' orders and z, strongest first; where the takes are too short for it, why not."""
+    try:
+        hist = NS.history(history, table)
+        found = NS.nonsync(revs, hist, table)
+    except GearlabInputError as exc:
+        return {"note": f"not read: {exc}"}
+    r = NS.residual(revs, table.shaft_orders, table.train_period)
+    blocks = NS.envelope_blocks(r, revs.shape[-1])
+    z = NS.line_z(blocks, list(hist.blocks), NS.synchronous_bins(table, blocks.shape[1]))
+    orders = NS.orders_of_bins(z.size)
+    inner = np.r_[False, (z[1:-1] >= z[:-2]) & (z[1:-1] > z[2:]), False]  # each line's peak bin
+    peaks = sorted(np.flatnonzero(inner | (z == z.max())), key=lambda i: -z[i])[:LINES]
+    lines = [{"order": float(orders[i]), "hz": float(orders[i] * speed_hz), "z": float(z[i])} for i in peaks]
+    return found.describe() | {"hz": found.order * speed_hz, "lines": lines}
+
+
+def call_of(loc: dict, ns: dict) -> str:
+    """What the record's change is, by the rule a detection run calls a flag with (its watched gear aside): a
+    gear (or shaft) the synchronous averages name; else other damage where the non-synchronous residual
+    changed; else no change."""
+    if loc["named"]:
+        return f"localised change: {loc['named']}"
+    if ns.get("changed"):
+        return f"{NON_SYNC} {ns['order']:.2f}"
+    why = "; non-synchronous " + ns["note"] if "note" in ns else ", no non-synchronous line over its threshold"
+    return f"no change against the history: nothing localised{why}"
 
 
 def render_localisation(loc: dict, console) -> None:
@@ -92,3 +137,19 @@ def render_localisation(loc: dict, console) -> None:
     console.print(f"[dim]{escape(loc['method'])}[/dim]")
     colour = "yellow" if loc["named"] else "green"
     console.print(f"[bold {colour}]{escape(loc['summary'])}[/bold {colour}]")
+    ns = loc["nonsync"]
+    if "lines" in ns:
+        t = Table(
+            title="non-synchronous envelope lines: the record less every shaft's synchronous average, against the "
+            f"history's (threshold z {ns['threshold']:.2f}; strike order {ns['order']:.2f}, {ns['hz']:.4g} Hz)"
+        )
+        for col in ("input order", "Hz", "z", "over the threshold"):
+            t.add_column(col)
+        for x in ns["lines"]:
+            over = x["z"] > ns["threshold"]
+            t.add_row(f"{x['order']:.2f}", f"{x['hz']:.4g}", f"{x['z']:.2f}", "[red]yes[/red]" if over else "no")
+        console.print(t)
+    else:
+        console.print(f"[dim]non-synchronous: {escape(ns['note'])}[/dim]")
+    colour = "green" if loc["call"].startswith("no change") else "yellow"
+    console.print(f"[bold {colour}]call: {escape(loc['call'])}[/bold {colour}]")

@@ -310,7 +310,8 @@ def inspect_recording(
     and the TSA of each shaft; with a *gearbox*, whether the description matches (``matches``; None
     where the pinion's tooth count cannot be confirmed without a tacho or the speed; ``verdict``); with
     *history* (healthy records of the same gearbox) and a *gearbox*, which shaft and gear carry a
-    localised change (``localisation``). The arrays (``spectrum``, each ``tsa``) are kept. *options*:
+    localised change, else a non-synchronous one, and the call (``localisation``). The arrays (``spectrum``,
+    each ``tsa``) are kept. *options*:
     ``vibration``, ``tacho``, ``tacho_kind`` (auto, angle, pulses), ``pulses_per_rev``, ``tacho_shaft``,
     ``speed``, ``fs``, ``sensitivity``, ``gain``, ``unit``, as inspect_options checks them; *flag* names
     a keyword in an error (the CLI passes its options). A history file is read with the same options but
