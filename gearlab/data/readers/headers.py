@@ -297,16 +297,14 @@ def _wav_header(path: Path) -> Header:
 
 
 def _mat_header(path: Path) -> Header:
-    from .matlab import _is_mat73, _mat5_variables
+    from .matlab import _is_mat73, mat5_header
 
     if _is_mat73(path):
         return _hdf5_header(path, "MATLAB")
     with path.open("rb") as f:
         if 0 in f.read(4):  # v4 (how scipy tells it from v5)
             return _mat4_header(path)
-    fields: list[str] = []
-    shapes: dict[str, tuple] = {}
-    every = _mat5_variables(path.read_bytes(), lambda name: False, fields, shapes)
+    every, fields, shapes = mat5_header(path)  # the elements' headers: the data seeked past, never read
     names = [n for n in every if n and not n.startswith("__")]
     names += fields  # a scalar struct's fields, by path
     rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)

@@ -228,11 +228,15 @@ def _inflate(data, at: int) -> bytes:
     inflater = zlib.decompressobj()
     out = inflater.decompress(data, limit + 1)
     if len(out) > limit:
-        raise ValueError(
-            f"the compressed variable at byte {at} inflates to more than the limit of "
-            f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)"
-        )
+        raise _beyond(at, limit)
     return out
+
+
+def _beyond(at: int, limit: int) -> ValueError:
+    return ValueError(
+        f"the compressed variable at byte {at} inflates to more than the limit of "
+        f"{limit / 2**20:,.0f} MB for a measured record (set GEARLAB_MAX_RECORD_MB to allow more)"
+    )
 
 
 def _mat5_variables(data: bytes, read, fields: list | None = None, shapes: dict | None = None) -> list[str]:
@@ -262,3 +266,196 @@ def _mat5_variables(data: bytes, read, fields: list | None = None, shapes: dict 
             raise ValueError(f"a variable of element type {kind}, expected a matrix")
         names.append(layout.body(body, 0, read))
     return names
+
+
+# --- MATLAB v5 header, its data unread (`gearlab validate`) ----------------------------------------
+# The same layout as _Mat5Layout walks, read from the file as it goes: each element's tag gives its size,
+# so the data are seeked past; a compressed variable is inflated only as far as its header (a scalar
+# struct's: through its fields, streamed and dropped, never held). A 1 GB record is not read to be listed.
+
+
+class _Stream:
+    """One variable's bytes, read forward on demand: the file's, or their inflation (*compressed*)."""
+
+    CHUNK = 1 << 16
+
+    def __init__(self, f, start: int, size: int, compressed: bool):
+        f.seek(start)
+        self.f, self.left, self.at, self.start = f, size, 0, start
+        self.inflater = zlib.decompressobj() if compressed else None
+        self.pending = bytearray()
+
+    def _inflate_more(self) -> None:
+        tail = self.inflater.unconsumed_tail
+        if not tail and self.left:
+            tail = self.f.read(min(self.CHUNK, self.left))
+            self.left -= len(tail)
+        out = self.inflater.decompress(tail, self.CHUNK)  # no input: what the inflater still holds
+        if not out and (self.inflater.eof or not tail):
+            raise ValueError(f"the compressed variable at byte {self.start - 8} ends within an element")
+        self.pending += out
+        if self.at + len(self.pending) > (limit := max_record_bytes()):  # as the reader refuses it (_inflate)
+            raise _beyond(self.start - 8, limit)
+
+    def read(self, n: int) -> bytes:
+        if self.inflater is None:
+            if n > self.left:
+                raise ValueError(f"an element at byte {self.start + self.at} runs past the end of the variable")
+            self.left -= n
+            self.at += n
+            return self.f.read(n)
+        while len(self.pending) < n:
+            self._inflate_more()
+        out = bytes(self.pending[:n])
+        del self.pending[:n]
+        self.at += n
+        return out
+
+    def skip(self, n: int) -> None:
+        if self.inflater is None:
+            if n > self.left:
+                raise ValueError(f"an element at byte {self.start + self.at} runs past the end of the variable")
+            self.f.seek(n, 1)
+            self.left -= n
+            self.at += n
+            return
+        while n > 0:
+            if not self.pending:
+                self._inflate_more()
+            step = min(n, len(self.pending))
+            del self.pending[:step]
+            self.at += step
+            n -= step
+
+
+class _Mat5Header:
+    """A v5 file's variables, their shapes and a scalar struct's field paths, from the elements' tags
+    (the header _Mat5Layout checks, read as _Mat5Layout.body does for a variable not asked for)."""
+
+    def __init__(self, order: str):
+        self.order, self.fields, self.shapes = order, [], {}
+
+    def tag(self, s: _Stream, end: int) -> tuple[int, int, bytes | None]:
+        """(type, size, the data of a small element or None) of the element at the stream's position."""
+        if s.at + 8 > end:
+            raise ValueError(f"an element at byte {s.at} runs past the end of the variable")
+        raw = s.read(8)
+        first, size = struct.unpack(self.order + "II", raw)
+        if first >> 16:  # a small data element: its data in the tag's second word
+            if first >> 16 > 4:
+                raise ValueError(f"a small data element of {first >> 16} bytes at byte {s.at - 8}")
+            return first & 0xFFFF, first >> 16, raw[4 : 4 + (first >> 16)]
+        if s.at + size > end:
+            raise ValueError(f"an element of {size} bytes at byte {s.at - 8} runs past the end of the variable")
+        return first, size, None
+
+    def element(self, s: _Stream, end: int, most: int) -> tuple[int, bytes]:
+        """(type, data) of a header element (flags, dimensions, names) of at most *most* bytes."""
+        kind, size, small = self.tag(s, end)
+        if small is not None:
+            return kind, small
+        if size > most:
+            raise ValueError(f"a header element of {size:,} bytes at byte {s.at - 8}; expected at most {most:,}")
+        data = s.read(size)
+        s.skip(min(end, s.at + (-size) % 8) - s.at)
+        return kind, data
+
+    def skip(self, s: _Stream, end: int, types: frozenset = _MI_DATA) -> int:
+        """Past a data element (its type checked, its data unread); its type."""
+        kind, size, small = self.tag(s, end)
+        if kind not in types:
+            raise ValueError(f"a data element of type {kind}, which MATLAB does not use there")
+        if small is None:
+            s.skip(min(end, s.at + (size + 7) // 8 * 8) - s.at)
+        return kind
+
+    def body(self, s: _Stream, end: int, depth: int, path: str | None = None) -> str:
+        """A matrix's flags, dimensions and name (its shape kept where numeric), a scalar struct's fields
+        walked (their paths kept); the stream left within the matrix. Returns the name."""
+        if depth > _MAT_MAX_DEPTH:
+            raise ValueError(f"cells or structs nested more than {_MAT_MAX_DEPTH} deep")
+        kind, flags = self.element(s, end, 8)
+        if kind != _MI_UINT32 or len(flags) != 8:
+            raise ValueError("a matrix without its array flags")
+        word = struct.unpack(self.order + "I", flags[:4])[0]
+        mclass, is_complex, count = word & 0xFF, bool(word >> 11 & 1), 0
+        if mclass != _MX_OPAQUE:
+            kind, dims = self.element(s, end, 4 * 32)
+            if kind not in (_MI_INT32, _MI_UINT32) or len(dims) % 4 or not 2 <= len(dims) // 4 <= 32:
+                raise ValueError("a matrix without valid dimensions")
+            sizes = struct.unpack(self.order + f"{len(dims) // 4}i", dims)
+            if min(sizes) < 0:
+                raise ValueError(f"a matrix of negative size {sizes}")
+            count = math.prod(sizes)
+        kind, raw = self.element(s, end, 1 << 16)
+        if kind not in _MI_TEXT:
+            raise ValueError("a matrix without a valid name")
+        name = raw.decode("latin1")
+        here = name if path is None else path
+        if mclass in _MX_NUMERIC and here and (depth == 0 or path is not None):
+            self.shapes[here] = sizes
+        scalar_struct = mclass == _MX_STRUCT and count == 1
+        if depth == 0 and not scalar_struct:
+            return name  # a variable's data: unread
+        if path is not None and mclass in (*_MX_NUMERIC, _MX_CHAR):
+            self.fields.append(path)
+        if mclass in _MX_NUMERIC:
+            for _ in range(2 if is_complex else 1):  # real part, imaginary part
+                self.skip(s, end)
+        elif mclass == _MX_CHAR:
+            self.skip(s, end)
+        elif scalar_struct:
+            kind, length = self.element(s, end, 4)
+            if kind not in (_MI_INT32, _MI_UINT32) or len(length) != 4:
+                raise ValueError("a struct without the length of its field names")
+            length = struct.unpack(self.order + "i", length)[0]
+            kind, names = self.element(s, end, 1 << 20)
+            if kind not in _MI_TEXT or length <= 0:
+                raise ValueError("a struct without valid field names")
+            for i in range(0, len(names) - length + 1, length):
+                key = names[i : i + length].split(b"\0", 1)[0].decode("latin1")
+                self.field(s, end, depth + 1, f"{here}/{key}" if here else None)
+        elif mclass not in (_MX_SPARSE, _MX_CELL, _MX_STRUCT, _MX_OBJECT):  # as _Mat5Layout refuses a field
+            raise ValueError(
+                f"variable '{name}' is a MATLAB {('function handle' if mclass == 16 else 'object')}, "
+                "not numbers or text"
+            )
+        return name
+
+    def field(self, s: _Stream, end: int, depth: int, path: str | None) -> None:
+        """A scalar struct's field (a matrix element): its header read where it has a *path*, then passed."""
+        kind, size, small = self.tag(s, end)
+        if kind != _MI_MATRIX or small is not None:
+            raise ValueError(f"a cell or field of element type {kind}, expected a matrix")
+        after = min(end, s.at + (size + 7) // 8 * 8)
+        if size and path is not None:  # an empty matrix has no body at all
+            self.body(s, s.at + size, depth, path)
+        s.skip(after - s.at)
+
+
+def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple]]:
+    """(variable names, a scalar struct's field paths "rec/acc", numeric variables' and fields' shapes) of a
+    MATLAB v5 file, as _mat5_variables lists them, from its elements' headers alone."""
+    total = path.stat().st_size
+    with path.open("rb") as f:
+        head = f.read(128)
+        if len(head) < 128 or head[126:128] not in (b"IM", b"MI"):
+            raise ValueError("no MATLAB 5 header (128 bytes ending in 'IM' or 'MI')")
+        walk = _Mat5Header("<" if head[126:128] == b"IM" else ">")
+        names, pos = [], 128
+        while pos < total:
+            if pos + 8 > total:
+                raise ValueError(f"{total - pos} stray bytes at the end")
+            f.seek(pos)
+            kind, size = struct.unpack(walk.order + "II", f.read(8))
+            start, pos = pos + 8, pos + 8 + size  # variables follow each other unpadded
+            if size == 0 or pos > total:
+                raise ValueError(f"a variable of {size} bytes at byte {start - 8} of {total}")
+            s, end = _Stream(f, start, size, kind == _MI_COMPRESSED), size
+            if kind == _MI_COMPRESSED:
+                kind, inner, small = walk.tag(s, math.inf)
+                end = s.at + inner
+            if kind != _MI_MATRIX:
+                raise ValueError(f"a variable of element type {kind}, expected a matrix")
+            names.append(walk.body(s, end, 0))
+    return names, walk.fields, walk.shapes
