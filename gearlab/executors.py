@@ -269,14 +269,13 @@ def _imported(modules: tuple[str, ...]) -> None:
         importlib.import_module(module)
 
 
-def _unpacked(fn: Callable, item: bytes) -> tuple[object, list[str]]:
-    """A worker's call: the item unpickled, its Shared values read from their files. Returns (its result,
-    the messages of the warnings it raised, each once); a unit that fails shows its own here, before its
-    error reaches the parent."""
+def _warnings_kept(unit: Callable[[], object]) -> tuple[object, list[str]]:
+    """A worker's unit run: (its result, the messages of the warnings it raised, each once), the parent
+    shows them (_show_once); a unit that fails shows its own here, before its error reaches the parent."""
     global _raised
     _raised = []
     try:
-        result = fn(_Unpacker(io.BytesIO(item)).load())
+        result = unit()
     except BaseException:
         for message in dict.fromkeys(_raised):
             warning_line(message, None, None, None)
@@ -284,6 +283,19 @@ def _unpacked(fn: Callable, item: bytes) -> tuple[object, list[str]]:
     finally:
         raised, _raised = _raised, None
     return result, list(dict.fromkeys(raised))
+
+
+def _show_once(raised: list[str], shown: set[str]) -> None:
+    """The messages of a unit's warnings not *shown* yet this run (one executor a run), each as one line."""
+    for message in raised:
+        if message not in shown:
+            shown.add(message)
+            warning_line(message, None, None, None)
+
+
+def _unpacked(fn: Callable, item: bytes) -> tuple[object, list[str]]:
+    """A worker's call: the item unpickled, its Shared values read from their files (_warnings_kept)."""
+    return _warnings_kept(lambda: fn(_Unpacker(io.BytesIO(item)).load()))
 
 
 class LocalExecutor(Executor):
@@ -378,10 +390,7 @@ class LocalExecutor(Executor):
             for future in as_completed(futures):
                 i = futures[future]
                 results[i], raised = future.result()
-                for message in raised:
-                    if message not in self._warned:
-                        self._warned.add(message)
-                        warning_line(message, None, None, None)
+                _show_once(raised, self._warned)
                 if on_done:
                     on_done(i, results[i])
         except BaseException:
@@ -542,6 +551,7 @@ class RayExecutor(Executor):
         self.address = None if address in (None, "", "local") else address
         self.workers = workers
         self._counter = None  # the actor behind counts(), started on the first
+        self._warned: set[str] = set()  # the tasks' warnings shown so far (one executor a run)
 
     def open(self) -> None:
         """Start the local Ray instance, or connect to the cluster, now (else at the first map)."""
@@ -587,7 +597,8 @@ class RayExecutor(Executor):
                 done, pending = ray.wait(pending, num_returns=1)
                 for ref in done:
                     i = index[ref]
-                    results[i] = _get(ray, ref)
+                    results[i], raised = _get(ray, ref)
+                    _show_once(raised, self._warned)
                     if on_done:
                         on_done(i, results[i])
         finally:
@@ -707,12 +718,16 @@ class RayLines(UnitLines):
             self.actor.drop.remote(self.space)
 
 
-def _call(fn: Callable, item, board=None):
+def _call(fn: Callable, item, board=None) -> tuple[object, list[str]]:
     """The Ray task: `fn` travels as an argument, so any picklable callable works (ray.remote
     itself takes only Python functions), as with the local process pool. Its units report their
-    progress lines to *board* (the session's _Lines actor), not to files."""
+    progress lines to *board* (the session's _Lines actor), not to files. Its warnings come back
+    with its result, as a pool worker's do (_warnings_kept): the session keeps the workers' output
+    from the driver (log_to_driver), and a warning each worker raised would show once per worker."""
+    if warnings.showwarning is not _worker_warning:  # a Ray worker serves many tasks: set once a process
+        _worker_started()
     with units_report_to(None if board is None else RayBoard(board)):
-        return fn(item)
+        return _warnings_kept(lambda: fn(item))
 
 
 def _get(ray, ref):

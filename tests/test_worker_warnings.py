@@ -7,6 +7,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 MESSAGE = "fs = 200368 Hz gives fewer than 10 steps per period; results will be inaccurate"
 POOL = f"""
 import functools, warnings
@@ -65,3 +67,93 @@ def test_a_filter_set_in_a_unit_stays_for_the_next_units(tmp_path):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])}
     err = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env).stderr
     assert [line for line in err.splitlines() if line.strip()] == ["warning: loud"], err
+
+
+class _FakeRay:
+    """What RayExecutor.map asks of Ray, each task run here at once (its warnings kept as a worker's)."""
+
+    class exceptions:  # noqa: N801 (as ray.exceptions)
+        class RayError(Exception):
+            pass
+
+        class RayTaskError(RayError):
+            pass
+
+    def remote(self, fn):
+        return _FakeTask(fn)
+
+    def options(self, **_):
+        return self
+
+    def cluster_resources(self):
+        return {"CPU": 2.0}
+
+    def wait(self, pending, num_returns=1):
+        return pending[:num_returns], pending[num_returns:]
+
+    def get(self, ref):
+        return ref.value
+
+    def cancel(self, ref):
+        pass
+
+    def is_initialized(self):
+        return True
+
+
+class _FakeTask:
+    def __init__(self, fn):
+        self.fn = fn
+
+    def options(self, **_):
+        return self
+
+    def remote(self, *args):
+        return _FakeRef(self.fn(*args))
+
+
+class _FakeRef:
+    def __init__(self, value):
+        self.value = value
+
+
+def test_the_ray_executor_shows_each_task_warning_once_a_run(monkeypatch, capsys):
+    # the session keeps the Ray workers' output from the driver (log_to_driver = False): a task's warning
+    # was shown nowhere; shown by each worker, once per worker
+    import functools
+    import warnings
+
+    from gearlab import executors
+
+    fake = _FakeRay()
+    monkeypatch.setattr(executors, "import_ray", lambda: fake)
+    monkeypatch.setattr(executors, "_open_session", lambda address, workers: fake)
+    monkeypatch.setattr(executors, "_board", lambda ray: None)
+    with warnings.catch_warnings():  # the showwarning a task sets (once a worker) is undone after the test
+        warnings.simplefilter("always")  # every unit raises it, as each of many workers would
+        with executors.RayExecutor(workers=2) as ray_pool:
+            assert ray_pool.map(functools.partial(warnings.warn, MESSAGE, UserWarning), range(6)) == [None] * 6
+            ray_pool.map(functools.partial(warnings.warn, "another message", UserWarning), range(4))
+            ray_pool.map(functools.partial(warnings.warn, MESSAGE, UserWarning), range(4))  # the same run: not again
+            assert ray_pool.map(abs, [-2, 3]) == [2, 3]  # results as before
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert lines == [f"warning: {MESSAGE}", "warning: another message"], lines
+
+
+RAY = f"""
+import functools, warnings
+from gearlab.executors import RayExecutor
+with RayExecutor(workers=2) as pool:
+    pool.map(functools.partial(warnings.warn, {MESSAGE!r}, UserWarning), range(6))
+    pool.map(functools.partial(warnings.warn, "another message", UserWarning), range(4))
+    pool.map(functools.partial(warnings.warn, {MESSAGE!r}, UserWarning), range(4))
+"""
+
+
+@pytest.mark.slow  # 15 s, 10 of them Ray starting (load 3); the fake above checks the same path in 0.1 s
+def test_a_local_ray_instance_shows_each_task_warning_once_a_run():
+    pytest.importorskip("ray")
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}  # a local instance of its own
+    err = subprocess.run([sys.executable, "-c", RAY], capture_output=True, text=True, check=True, env=env).stderr
+    lines = [line for line in err.splitlines() if MESSAGE in line or "another message" in line]
+    assert lines == [f"warning: {MESSAGE}", "warning: another message"], err
