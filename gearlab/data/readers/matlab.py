@@ -116,6 +116,30 @@ _MX_NUMERIC = range(6, 16)  # double, single, int8 … uint64
 _MAT_MAX_DEPTH = 32  # cells in cells, structs in structs
 
 
+def _array_flags(order: str, kind: int, flags) -> tuple[int, bool]:
+    """(class, complex) of a matrix's array-flags element."""
+    if kind != _MI_UINT32 or len(flags) != 8:
+        raise ValueError("a matrix without its array flags")
+    word = struct.unpack_from(order + "I", flags)[0]
+    return word & 0xFF, bool(word >> 11 & 1)
+
+
+def _dimensions(order: str, kind: int, dims) -> tuple[tuple, int]:
+    """(sizes, element count) of a matrix's dimensions element."""
+    if kind not in (_MI_INT32, _MI_UINT32) or len(dims) % 4 or not 2 <= len(dims) // 4 <= 32:
+        raise ValueError("a matrix without valid dimensions")
+    sizes = struct.unpack(order + f"{len(dims) // 4}i", dims)
+    if min(sizes) < 0:
+        raise ValueError(f"a matrix of negative size {sizes}")
+    return sizes, math.prod(sizes)
+
+
+def _name(kind: int, raw) -> str:
+    if kind not in _MI_TEXT:
+        raise ValueError("a matrix without a valid name")
+    return bytes(raw).decode("latin1")
+
+
 class _Mat5Layout:
     """Walks MATLAB v5 elements: tag (type, size) then data padded to 8 bytes, or a small data
     element (size and type in one word, up to 4 bytes of data in the next)."""
@@ -162,23 +186,13 @@ class _Mat5Layout:
             raise ValueError(f"cells or structs nested more than {_MAT_MAX_DEPTH} deep")
         end = len(body)
         kind, flags, pos = self.element(body, 0, end)
-        if kind != _MI_UINT32 or len(flags) != 8:
-            raise ValueError("a matrix without its array flags")
-        word = struct.unpack_from(self.order + "I", flags)[0]
-        mclass, is_complex = word & 0xFF, bool(word >> 11 & 1)
+        mclass, is_complex = _array_flags(self.order, kind, flags)
         count = 0
         if mclass != _MX_OPAQUE:  # objects of classdef classes carry no dimensions
             kind, dims, pos = self.element(body, pos, end)
-            if kind not in (_MI_INT32, _MI_UINT32) or len(dims) % 4 or not 2 <= len(dims) // 4 <= 32:
-                raise ValueError("a matrix without valid dimensions")
-            sizes = struct.unpack(self.order + f"{len(dims) // 4}i", dims)
-            if min(sizes) < 0:
-                raise ValueError(f"a matrix of negative size {sizes}")
-            count = math.prod(sizes)
+            sizes, count = _dimensions(self.order, kind, dims)
         kind, raw, pos = self.element(body, pos, end)
-        if kind not in _MI_TEXT:
-            raise ValueError("a matrix without a valid name")
-        name = bytes(raw).decode("latin1")
+        name = _name(kind, raw)
         here = name if path is None else path
         if self.shapes is not None and mclass in _MX_NUMERIC and here and (depth == 0 or path is not None):
             self.shapes[here] = sizes
@@ -375,22 +389,13 @@ class _Mat5Header:
         if depth > _MAT_MAX_DEPTH:
             raise ValueError(f"cells or structs nested more than {_MAT_MAX_DEPTH} deep")
         kind, flags = self.element(s, end, 8)
-        if kind != _MI_UINT32 or len(flags) != 8:
-            raise ValueError("a matrix without its array flags")
-        word = struct.unpack(self.order + "I", flags[:4])[0]
-        mclass, is_complex, count = word & 0xFF, bool(word >> 11 & 1), 0
-        if mclass != _MX_OPAQUE:
+        mclass, is_complex = _array_flags(self.order, kind, flags)
+        count = 0
+        if mclass != _MX_OPAQUE:  # objects of classdef classes carry no dimensions
             kind, dims = self.element(s, end, 4 * 32)
-            if kind not in (_MI_INT32, _MI_UINT32) or len(dims) % 4 or not 2 <= len(dims) // 4 <= 32:
-                raise ValueError("a matrix without valid dimensions")
-            sizes = struct.unpack(self.order + f"{len(dims) // 4}i", dims)
-            if min(sizes) < 0:
-                raise ValueError(f"a matrix of negative size {sizes}")
-            count = math.prod(sizes)
+            sizes, count = _dimensions(self.order, kind, dims)
         kind, raw = self.element(s, end, 1 << 16)
-        if kind not in _MI_TEXT:
-            raise ValueError("a matrix without a valid name")
-        name = raw.decode("latin1")
+        name = _name(kind, raw)
         here = name if path is None else path
         if mclass in _MX_NUMERIC and here and (depth == 0 or path is not None):
             self.shapes[here] = sizes
