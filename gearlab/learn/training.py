@@ -161,7 +161,7 @@ def fit_supervised(
             opt.zero_grad()
             loss = loss_fn(net(xb), yt.index_select(0, index))
             _step(opt, params, loss)
-            total += loss.detach().double() * len(idx)
+            total.add_(loss.detach(), alpha=len(idx))  # in float64: the same sum as loss.double() * len(idx)
         history.train_loss.append(total.item() / len(X))
         if val is not None:
             acc = accuracy(net, *val, device)
@@ -174,6 +174,7 @@ def fit_supervised(
                 break
         if on_epoch:
             on_epoch(epoch, history)
+    _release(opt)
     return _keep_best(net, history, best_state)
 
 
@@ -288,6 +289,7 @@ def fit_adaptation(
                 break
         if on_epoch:
             on_epoch(epoch, history)
+    _release(opt)
     return _keep_best(net, history, best_state)
 
 
@@ -323,23 +325,44 @@ def _optimizer(name: str, params: list, lr: float):
 
 
 class _Fused:
-    """torch.optim's Adam / SGD with fused=True, bit for bit: the same kernels (torch._fused_adam_,
-    torch._fused_sgd_) on the same state, with torch's defaults (betas 0.9/0.999, eps 1e-8, no
-    weight decay, no momentum), a parameter without a gradient left out of a step as torch does.
+    """torch.optim's Adam / SGD with fused=True: the same kernels (torch._fused_adam_,
+    torch._fused_sgd_) with torch's defaults (betas 0.9/0.999, eps 1e-8, no weight decay, no
+    momentum), a parameter without a gradient left out of a step as torch does.
     Not torch.optim itself: its Optimizer imports torch._dynamo on first use (torch 2.13:
     add_param_group and step are dynamo-disabled), 1.6-3.7 s in every process that trains, for
-    a compiler gearlab never uses (tests/test_training_optimizer.py holds both points)."""
+    a compiler gearlab never uses (tests/test_training_optimizer.py holds both points).
+
+    The parameters are made views of one flat tensor (_Flat): while every one of them has a
+    gradient, the clipping and the step are then a handful of operator calls on one vector
+    (the gradients gathered into one by a single copy), where per parameter each costs an
+    operator call or more (a `fast` step's 13 parameters: 0.1 of its fixed cost). The update is
+    Adam's, element by element; the kernel's vector and scalar passes round a moment differently
+    (1 ulp), so the numbers equal torch's fused Adam on the flat vector bit for bit, and its
+    per-parameter call to rounding. A step where a parameter has no gradient leaves the flat
+    path for good: the moments stay (views of the flat ones), each parameter gets its step count."""
 
     def __init__(self, name: str, params: list, lr: float):
         self.adam, self.params, self.lr = name == "adam", list(params), lr
         self.state: dict[torch.nn.Parameter, tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = {}
+        self.flat = _Flat.of(self.params, self.adam)
 
     def zero_grad(self) -> None:
         for p in self.params:
             p.grad = None
 
+    def flat_grad(self) -> torch.Tensor | None:
+        """Every parameter's gradient in one vector (a copy), where the flat path holds; else None."""
+        return self.flat.grad(self.params) if self.flat is not None else None
+
     @torch.no_grad()
-    def step(self) -> None:
+    def step(self, grad: torch.Tensor | None = None) -> None:
+        """One update from the parameters' gradients, or from *grad*, their flat_grad (clipped)."""
+        if self.flat is not None:
+            grad = grad if grad is not None else self.flat.grad(self.params)
+            if grad is not None:
+                self.flat.step(grad, self.lr)
+                return
+            self._leave_flat()
         groups: dict[tuple, list[torch.Tensor]] = {}
         for p in self.params:
             if p.grad is not None:
@@ -347,18 +370,12 @@ class _Fused:
         for params in groups.values():
             grads = [p.grad for p in params]
             if not self.adam:
-                torch._fused_sgd_(
-                    params, grads, [], weight_decay=0.0, momentum=0.0, lr=self.lr, dampening=0.0,
-                    nesterov=False, maximize=False, is_first_step=False,
-                )  # fmt: skip
+                _sgd(params, grads, self.lr)
                 continue
             state = [self.state.get(p) or self._new(p) for p in params]
             steps = [s[0] for s in state]
             torch._foreach_add_(steps, 1)
-            torch._fused_adam_(
-                params, grads, [s[1] for s in state], [s[2] for s in state], [], steps, amsgrad=False,
-                lr=self.lr, beta1=0.9, beta2=0.999, weight_decay=0.0, eps=1e-8, maximize=False,
-            )  # fmt: skip
+            _adam(params, grads, [s[1] for s in state], [s[2] for s in state], steps, self.lr)
 
     def _new(self, p: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """A parameter's step count (float32, on its device, as torch keeps it for fused), first
@@ -366,6 +383,101 @@ class _Fused:
         step = torch.zeros((), dtype=torch.float32, device=p.device)
         self.state[p] = (step, torch.zeros_like(p), torch.zeros_like(p))
         return self.state[p]
+
+    def release(self) -> None:
+        """Each parameter in its own memory again (its value kept), as the network had it: a model
+        saved whole then holds its own weights only, not the flat vector's other parameters."""
+        if self.flat is None:
+            return
+        self._leave_flat()
+        for p in self.params:
+            p.data = p.data.clone()
+
+    def _leave_flat(self) -> None:
+        """Per parameter from here on: its moments views of the flat ones, its own step count."""
+        if self.flat.moments is not None:
+            first, second = (self.flat.views(m, self.params) for m in self.flat.moments)
+            for p, m, v in zip(self.params, first, second):
+                self.state[p] = (self.flat.count.clone(), m, v)
+        self.flat = None
+
+
+class _Flat:
+    """The parameters as views of one flat vector on their device (their values kept), each from
+    a multiple of ALIGN elements (the memory alignment torch's allocator gives a tensor of its
+    own, which a matrix product's rounding can depend on), with a vector of their gradients and
+    Adam's moments and step count."""
+
+    def __init__(self, params: list, adam: bool):
+        self.spans, end = [], 0
+        for p in params:
+            self.spans.append((end, p.numel()))
+            end += -(-p.numel() // ALIGN) * ALIGN
+        self.vector = torch.zeros(end, dtype=params[0].dtype, device=params[0].device)
+        for p, view in zip(params, self.views(self.vector, params)):
+            view.copy_(p.detach())
+            p.data = view
+        self.where = [p.data_ptr() for p in params]
+        self.gradient = torch.zeros_like(self.vector)  # between the spans zeros, which no step moves
+        self.grads = self.views(self.gradient, params)
+        self.count = torch.zeros((), dtype=torch.float32, device=self.vector.device)
+        self.moments = (torch.zeros_like(self.vector), torch.zeros_like(self.vector)) if adam else None
+
+    def views(self, vector: torch.Tensor, params: list) -> list[torch.Tensor]:
+        return [vector[start : start + n].view_as(p) for (start, n), p in zip(self.spans, params)]
+
+    @staticmethod
+    def of(params: list, adam: bool) -> _Flat | None:
+        """For FLAT_MIN or more distinct dense floating parameters of one device and dtype, which
+        torch has fused kernels for; else None."""
+        if len(params) < FLAT_MIN or len({id(p) for p in params}) < len(params):
+            return None
+        first = params[0]
+        if first.device.type not in ("cpu", "cuda") or not first.is_floating_point():
+            return None
+        if any(p.device != first.device or p.dtype != first.dtype or p.layout != torch.strided for p in params):
+            return None
+        return _Flat(params, adam)
+
+    def grad(self, params: list) -> torch.Tensor | None:
+        """The gradients as one vector (copied in, one call), where every parameter has one and
+        still lies in the vector (a later `to` or a second optimiser moves them: the flat step
+        would miss them)."""
+        grads = [p.grad for p in params]
+        if any(g is None for g in grads) or [p.data_ptr() for p in params] != self.where:
+            return None
+        torch._foreach_copy_(self.grads, grads)
+        return self.gradient
+
+    def step(self, grad: torch.Tensor, lr: float) -> None:
+        if self.moments is None:
+            _sgd([self.vector], [grad], lr)
+            return
+        self.count.add_(1)
+        _adam([self.vector], [grad], [self.moments[0]], [self.moments[1]], [self.count], lr)
+
+
+ALIGN = 16  # elements: 64 bytes of float32, as torch's CPU allocator aligns a tensor
+FLAT_MIN = 3  # parameters from which the flat path pays its gradients' copy (`shapes`' 2 do not)
+
+
+def _sgd(params: list, grads: list, lr: float) -> None:
+    torch._fused_sgd_(
+        params, grads, [], weight_decay=0.0, momentum=0.0, lr=lr, dampening=0.0,
+        nesterov=False, maximize=False, is_first_step=False,
+    )  # fmt: skip
+
+
+def _adam(params: list, grads: list, first: list, second: list, steps: list, lr: float) -> None:
+    torch._fused_adam_(
+        params, grads, first, second, [], steps, amsgrad=False,
+        lr=lr, beta1=0.9, beta2=0.999, weight_decay=0.0, eps=1e-8, maximize=False,
+    )  # fmt: skip
+
+
+def _release(opt) -> None:
+    if isinstance(opt, _Fused):
+        opt.release()
 
 
 def _zero(device) -> torch.Tensor:
@@ -379,11 +491,25 @@ def _step(opt, params: list, loss: torch.Tensor) -> None:
     it, so its numbers do not change (its gradients are scaled by exactly 1). The adversarial
     game of DANN sometimes does: in a full Experiment A run one unit of 330 jumped from a loss of
     0.65 to 36 in its third step (gradient norm 1.6e3) and, when lambda reached 1, to 5e20 and
-    NaN, which left a network that called everything healthy. The norms are taken in one call
-    for all parameters (foreach; torch's default on a CPU is one call each), the same numbers."""
+    NaN, which left a network that called everything healthy. On a CPU, with the optimiser's flat
+    vector of gradients (_Fused.flat_grad), one norm decides; near the limit, or not finite,
+    torch's clipping of the parameters' gradients (_clip) scales them, and the step takes them.
+    On another device _clip, whose comparison stays on the device (no synchronisation)."""
     loss.backward()
+    grad = opt.flat_grad() if isinstance(opt, _Fused) and params[0].device.type == "cpu" else None
+    if grad is not None and not _clipped(grad):
+        opt.step(grad)
+        return
     _clip(params)
     opt.step()
+
+
+def _clipped(grad: torch.Tensor) -> bool:
+    """Whether torch's clipping could scale the gradients of norm |grad|: one norm of the flat
+    vector, where the parameters' norms and their norm differ from it by rounding (1e-7), so
+    below MAX_GRAD_NORM by 1e-4 of it the factor is >= 1 either way."""
+    norm = float(torch.linalg.vector_norm(grad, 2.0))
+    return not norm < MAX_GRAD_NORM * (1.0 - 1e-4)
 
 
 def _clip(params: list) -> None:
