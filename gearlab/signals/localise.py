@@ -677,7 +677,7 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
             by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay))
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
-            dens["rule"] = dens.get("rule", RULE_WIDTH) if by is False else RULE_SIMULATED
+            dens["rule"] = dens.get("rule", RULE_WIDTH) if by is False else fits.get("rule", RULE_SIMULATED)
         elif dens:  # the width's evidence, or the mesh phase's where it named the gear
             dens.setdefault("rule", RULE_WIDTH)
         out.append(

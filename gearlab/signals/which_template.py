@@ -16,10 +16,11 @@ other's by MARGIN is named, else both (None).
 
 The templates are only as right as the simulator's structure: records simulated with bearings 2x
 stiffer or 0.3-0.5x as stiff as the templates' were named on the wrong gear of the two in up to 2/3
-of cases (the width rule in up to 1/3: it follows the modes too), 4-8 of 14-19 with the gate below.
-So where the history's mesh harmonics spread about the simulated healthy train's by over
-STRUCTURE_DB (structure_gap) the events are not used and the width decides; the gap diagnosis's
-corrected description is what to simulate from.
+of cases (the width rule in up to 1/3: it follows the modes too). So where the history's mesh
+harmonics spread about the simulated healthy train's by over SHAPE_DB (structure_gap) the whole shape
+is not compared: the event's phases about its own gear's mesh harmonics are, which the fault and the
+mesh set and the structure leaves (reference_phase_match); the gap diagnosis's corrected description
+is still what to simulate from.
 Figures: docs/real_data.md ("Which gear").
 """
 
@@ -35,7 +36,12 @@ MIN_RATIO = 1.3  # tooth ratio of a shaft's two gears below which their widths a
 WIDTH_Z = 10.0  # z of the shaft under which the width is too noisy to name one gear
 WIDTH_LOW = 0.3  # share of the excess below half the finer gear's tooth order: a low mode's ring
 MARGIN = 0.05  # fit of one gear over the other's below which both stay named
-STRUCTURE_DB = 5.0  # spread of the healthy mesh harmonics about the simulator's over which its events are not used
+# spread (dB) of the history's mesh harmonics about the simulated healthy train's over which the events' whole
+# shape is not compared, only their phases about each gear's own mesh (reference_phase_match). Development
+# (benchmarks/localisation.py, two-stage box, seed 21): the simulator's own structure under noise 0.3-0.7 dB;
+# bearings 0.5x as stiff 4.0-4.9 dB, there the whole shape named the 24T pinion's faults the 63T wheel's in 4
+# of 10, the right gear in none; bearings 2x as stiff 5.1-6.7 dB
+SHAPE_DB = 2.0
 PHASE_BAND = 0.2  # orders about a gear's mesh line read for the event's phase there, in that gear's tooth counts
 PHASE_MARGIN = 0.3  # cos of the mesh phase of one gear over the other's that names it (counts under MIN_RATIO)
 # cos under which the other gear's line is read in anti-phase: an event that lowers its own mesh (a hand-written
@@ -50,6 +56,10 @@ PHASE_ALIKE = 0.35
 # which rule named (or left undecided) a two-gear shaft's gear, as localise's report says it
 RULE_SIMULATED, RULE_WIDTH = "by the simulated events", "by the event's width"
 RULE_PHASE = "by the event's mesh phase"
+RULE_REFERENCE = "by the mesh phases of the simulated events"
+REFERENCE_HARMONICS = 6  # harmonics of each gear's mesh whose phases are compared with the simulated events'
+REFERENCE_HALF = 0.2  # orders about each mesh harmonic read, in the coarser gear's tooth counts (at least 2)
+REFERENCE_MARGIN = 0.15  # mean cos of one gear over the other's below which both stay named
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -85,14 +95,17 @@ def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], g
     """(the gear whose simulated event fits the record's clearly better, or None: both; the fits).
     *harmonics*: the shaft's own orders and their harmonic numbers of the shaft (localise._harmonics);
     *templates*: {"healthy": the simulated healthy mean, "gears": {gear name: [template, ...]}}.
-    False instead of a gear: the simulator's structure differs from the history's (structure_gap
-    over STRUCTURE_DB), its events are not used."""
+    Where the simulator's structure differs from the history's (structure_gap over SHAPE_DB) the events'
+    phases at their own mesh are compared instead (reference_phase_match). False instead of a gear: the
+    events are not used (not simulated, too few clear lines to compare the structures, no phase read)."""
     if "healthy" not in templates:  # the description could not be simulated: said, and the width decides
         return False, {"not used": f"not simulated: {templates['not simulated']}"}
     gap = structure_gap(ref, lay, templates["healthy"])
     ev = {"structure gap dB": gap}
-    if gap > STRUCTURE_DB:
-        return False, {**ev, "not used": f"the simulated mesh harmonics differ from the history's by {gap:.1f} dB"}
+    if not math.isfinite(gap):
+        return False, {**ev, "not used": "too few of the history's mesh harmonics stand clear of its noise"}
+    if gap > SHAPE_DB:  # another structure: the phases at each gear's own mesh, not the whole shape
+        return _by_reference_phases(rec, ref, lay, harmonics, gears, templates, ev)
     sel, m = harmonics
     R = residual(rec, ref, sel)
     fits = {g.name: max((fit(R, t[sel], m) for t in templates["gears"].get(g.name, ())), default=0.0) for g in gears}
@@ -103,8 +116,24 @@ def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], g
     return next(g for g in gears if g.name == best), ev
 
 
+def _by_reference_phases(rec, ref, lay, harmonics, gears, templates: dict, ev: dict):
+    """which_by_template's answer where the structure differs (gap over SHAPE_DB): reference_phase_match."""
+    match = reference_phase_match(rec, ref, lay, lay.shafts.index(gears[0].shaft), harmonics, gears, templates)
+    said = f"the simulated mesh harmonics differ from the history's by {ev['structure gap dB']:.1f} dB"
+    if not match:
+        return False, {**ev, "not used": f"{said}; the event's phases at the mesh harmonics not read"}
+    ev = {**ev, "own-mesh phase match": match, "rule": RULE_REFERENCE}
+    (best, a), (_, b) = sorted(match.items(), key=lambda kv: -kv[1])
+    if a - b <= REFERENCE_MARGIN:
+        return None, {**ev, "undecided": f"{said}; the phases at each gear's own mesh match alike ({a:.2f} / {b:.2f})"}
+    return next(g for g in gears if g.name == best), ev
+
+
 def fit_words(evidence: dict) -> str:
     """The simulated events' evidence in words, for localise.which_line ("" without it)."""
+    if "own-mesh phase match" in evidence:
+        said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["own-mesh phase match"].items())
+        return "own-mesh phases matched to the simulated events' (mean cos) " + " / ".join(said) + ", "
     if "simulated fit" in evidence:
         return (
             "simulated event's fit "
@@ -117,7 +146,7 @@ def fit_words(evidence: dict) -> str:
 def phase_words(evidence: dict) -> str:
     """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them, or where the
     simulated events decided, not the phase)."""
-    if evidence.get("rule") == RULE_SIMULATED:
+    if evidence.get("rule") in (RULE_SIMULATED, RULE_REFERENCE):
         return ""
     if "mesh phases" in evidence:  # two harmonics (_by_phases_alike)
         said = (f"{g.split(' (')[0]} {a:.2f}, {b:.2f}" for g, (a, b) in evidence["mesh phases"].items())
@@ -138,6 +167,27 @@ def envelope(rec, ref, sel: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
     return np.abs(np.fft.ifft(spec)) ** 2  # analytic: positive orders only
 
 
+def _peak(X: np.ndarray, m: np.ndarray) -> float:
+    """The shaft's angle (rad) at which the residual *X* at harmonics *m* peaks (envelope())."""
+    size = int(2 ** math.ceil(math.log2(8 * int(m.max()) + 1)))
+    spec = np.zeros(size, complex)
+    np.add.at(spec, m, X)
+    return 2 * math.pi * int(np.argmax(np.abs(np.fft.ifft(spec)))) / size
+
+
+def _phasor(X, m, peak: float, lines: np.ndarray, lay, shaft: int, z: int, half: float, least: int):
+    """exp(iψ) of the event *X* (at harmonics *m*) within *half* orders of the shaft's harmonic *z* (a
+    mesh line), demodulated at *peak*, against the line *lines* holds there; None where it is not read
+    (no line at the layout's orders, fewer than *least* orders about it, no content)."""
+    x = z * float(lay.shaft_orders[shaft])
+    line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
+    near = np.abs(m - z) <= half
+    if line.size == 0 or near.sum() < least or abs(lines[line[0]]) == 0:
+        return None
+    event = np.sum(X[near] * np.exp(1j * (m[near] - z) * peak)) / lines[line[0]]
+    return None if event == 0 else event / abs(event)
+
+
 def mesh_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarray], gears, harmonic: int = 1) -> dict:
     """{gear name: cos ψ} for the gears of a two-gear shaft ({}: not read). ψ: the phase of the event's
     content within PHASE_BAND of the gear's mesh line (its tooth count in the shaft's harmonics; *harmonic*
@@ -150,20 +200,50 @@ def mesh_phases(rec, ref, lay, shaft: int, harmonics: tuple[np.ndarray, np.ndarr
     if m.size < 3:
         return {}
     R = residual(rec, ref, sel)
-    size = int(2 ** math.ceil(math.log2(8 * int(m.max()) + 1)))
-    peak = 2 * math.pi * int(np.argmax(envelope(rec, ref, sel, m, size))) / size
+    peak = _peak(R, m)
     out = {}
     for g in gears:
-        z = harmonic * g.teeth
-        x = z * float(lay.shaft_orders[shaft])
-        line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
-        near = np.abs(m - z) <= PHASE_BAND * g.teeth
-        if line.size == 0 or near.sum() < 3 or abs(rec.mean[line[0]]) == 0:
+        p = _phasor(R, m, peak, rec.mean, lay, shaft, harmonic * g.teeth, PHASE_BAND * g.teeth, 3)
+        if p is None:
             return {}
-        event = np.sum(R[near] * np.exp(1j * (m[near] - z) * peak))
-        if event == 0:
+        out[g.name] = float(p.real)
+    return out
+
+
+def own_mesh_phasors(X, lines, lay, shaft: int, m: np.ndarray, gear, half: float) -> np.ndarray:
+    """exp(iψ_h) of the event *X* about its gear's mesh harmonics h = 1 … REFERENCE_HARMONICS (_phasor;
+    nan: not read), demodulated at the event's own peak."""
+    peak = _peak(X, m)
+    out = [_phasor(X, m, peak, lines, lay, shaft, h * gear.teeth, half, 2) for h in range(1, REFERENCE_HARMONICS + 1)]
+    return np.array([np.nan if p is None else p for p in out], complex)
+
+
+def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates: dict) -> dict:
+    """{gear name: the mean cos between the record's event phases about the gear's own mesh harmonics and
+    those of the gear's simulated event (own_mesh_phasors), the best over its fault kinds} ({}: fewer than
+    two harmonics read for a gear). A tooth fault changes its own mesh while in mesh, so about that mesh's
+    harmonics h Z the event stands at a phase to the line set by the fault and the mesh: the same for every
+    tooth (h Z 2π n / Z is whole turns), and the same through another structure, whose response turns a line
+    and the orders within REFERENCE_HALF of it alike; about the other gear's mesh the phase moves with the
+    tooth. So the sequence over h is compared, not the whole shape, which follows the structure's modes."""
+    sel, m = harmonics
+    if m.size < 3:
+        return {}
+    half = max(2.0, REFERENCE_HALF * min(g.teeth for g in gears))
+    R = residual(rec, ref, sel)
+    out = {}
+    for g in gears:
+        mine = own_mesh_phasors(R, rec.mean, lay, shaft, m, g, half)
+        best = None
+        for t in templates["gears"].get(g.name, ()):
+            sim = own_mesh_phasors(t[sel], templates["healthy"], lay, shaft, m, g, half)
+            ok = ~np.isnan(mine) & ~np.isnan(sim)
+            if ok.sum() >= 2:
+                cos = float(np.mean(np.real(mine[ok] * np.conj(sim[ok]))))
+                best = cos if best is None else max(best, cos)
+        if best is None:
             return {}
-        out[g.name] = math.cos(float(np.angle(event / rec.mean[line[0]])))
+        out[g.name] = best
     return out
 
 
