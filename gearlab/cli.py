@@ -221,24 +221,22 @@ def inspect(
     history: Annotated[list[Path] | None, typer.Option(help="healthy records to localise the change against")] = None,
     history_key: Annotated[list[str] | None, typer.Option(help="a history file's own key: [FILE:]KEY=VALUE")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+    report_dir: Annotated[
+        Path | None, typer.Option("--report", help="also write DIR/report.html and its figures (PNG)")
+    ] = None,
 ) -> None:
     """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts); with --history, which shaft and gear carry a localised change against those healthy records, else whether a non-synchronous (bearing-like) envelope line passes their threshold.
 
     Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho --history healthy1.csv --history healthy2.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .inspect import json_ready, render
-    from .inspect_history import render_localisation
+    from .inspect_report import show
     from .notebook import inspect_recording
 
     # the recording's options are inspect_recording's keywords, by name (its checks name them by flag)
-    options = {k: v for k, v in ctx.params.items() if k not in ("file", "history", "history_key", "as_json")}
+    outputs = ("file", "history", "history_key", "as_json", "report_dir")
+    options = {k: v for k, v in ctx.params.items() if k not in outputs}
     report = inspect_recording(file, history=history or (), history_keys=history_key, flag=_option, **options)
-    if as_json:
-        typer.echo(json.dumps(json_ready(report)))
-        return
-    render(report, console)
-    if history:
-        render_localisation(report["localisation"], console)
+    show(report, console, as_json, report_dir)
 
 
 @app.command()

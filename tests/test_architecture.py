@@ -45,7 +45,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
     ("shared kind parts", ("gearlab.parts",)),
     ("scenario kinds", ("gearlab.kinds",)),
-    ("verdict and report", ("gearlab.verdict", "gearlab.report", "gearlab.runinfo")),
+    ("verdict and report", ("gearlab.verdict", "gearlab.report", "gearlab.runinfo", "gearlab.inspect_report")),
     ("run engine", ("gearlab.engine",)),
     (
         "front-ends and the plugin API",

@@ -69,3 +69,15 @@ def test_a_healthy_take_reads_no_non_synchronous_change(files):
     ns = loc["nonsync"]
     assert not ns["changed"] and ns["z"] <= ns["threshold"], ns
     assert not loc["call"].startswith("other damage"), loc["call"]
+
+
+def test_inspect_report_html_and_png_show_the_lines_and_the_call(files, tmp_path):
+    loc = json.loads(_inspect(files, "bearing", "--json", "--report", str(tmp_path / "out")))["localisation"]
+    ns, folder = loc["nonsync"], tmp_path / "out"
+    html = (folder / "report.html").read_text()
+    assert "non-synchronous envelope lines" in html and f"call: {loc['call']}" in html
+    for x in ns["lines"]:
+        assert f"<td>{x['order']:.2f}</td>" in html and f"<td>{x['z']:.2f}</td>" in html
+    assert f"threshold z {ns['threshold']:.2f}" in html
+    for png in ("order_spectrum.png", "nonsync_lines.png"):
+        assert f'src="{png}"' in html and (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
