@@ -63,17 +63,25 @@ HISTORY = ("h1", "h2", "h3")
 
 
 def inspected(box, name, tacho=True) -> dict:
+    """`gearlab inspect --json` of the record *name* against the history: its localisation (read-only),
+    inspected once a module (two tests read the output take's with the tacho)."""
     from typer.testing import CliRunner
 
     from gearlab.cli import app
 
-    args = ["inspect", box[name], "--gearbox", box["box"], "--vibration", "acc", "--json"]
-    args += ["--tacho", "tacho"] if tacho else []
-    for h in HISTORY:
-        args += ["--history", box[h]]
-    out = CliRunner().invoke(app, args)
-    assert out.exit_code == 0, out.output
-    return json.loads(out.stdout)["localisation"]
+    key = (box[name], tacho)
+    if key not in INSPECTED:
+        args = ["inspect", box[name], "--gearbox", box["box"], "--vibration", "acc", "--json"]
+        args += ["--tacho", "tacho"] if tacho else []
+        for h in HISTORY:
+            args += ["--history", box[h]]
+        out = CliRunner().invoke(app, args)
+        assert out.exit_code == 0, out.output
+        INSPECTED[key] = json.loads(out.stdout)["localisation"]
+    return INSPECTED[key]
+
+
+INSPECTED: dict = {}  # (record path, tacho) -> inspected's localisation
 
 
 def _target(box, tacho=True):
