@@ -81,3 +81,18 @@ def test_inspect_report_html_and_png_show_the_lines_and_the_call(files, tmp_path
     assert f"threshold z {ns['threshold']:.2f}" in html
     for png in ("order_spectrum.png", "nonsync_lines.png"):
         assert f'src="{png}"' in html and (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_takes_too_short_for_the_residual_say_so_in_the_call():
+    from gearlab.data.spec import dataset_preset
+    from gearlab.gearbox import order_table
+    from gearlab.inspect_history import call_of, nonsync_lines
+    from gearlab.kinds.detection_which_gear import gearbox_of
+
+    table = order_table(gearbox_of(dataset_preset("phm09-30")))
+    take = np.random.default_rng(0).standard_normal((10, 512))  # 10 turns: under one 16-turn block
+    ns = nonsync_lines(take, [take, take], table, SPEED)
+    assert "z" not in ns and ns["note"].startswith("not read: non-synchronous residual: 10 input revolutions"), ns
+    call = call_of({"named": None}, ns)
+    assert call == f"no change against the history: nothing localised; non-synchronous {ns['note']}", call
+    assert call_of({"named": "input pinion 32T (stage 1)"}, ns) == "localised change: input pinion 32T (stage 1)"
