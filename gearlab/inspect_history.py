@@ -80,7 +80,6 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
 
 
 LINES = 5  # the strongest non-synchronous envelope lines shown
-NON_SYNC = "other damage: non-synchronous (bearing-like), at order"  # as a detection run calls it
 
 
 def nonsync_lines(revs, history: list, table, speed_hz: float) -> dict:
@@ -109,7 +108,7 @@ def call_of(loc: dict, ns: dict) -> str:
     if loc["named"]:
         return f"localised change: {loc['named']}"
     if ns.get("changed"):
-        return f"{NON_SYNC} {ns['order']:.2f}"
+        return NS.call(ns["order"])
     why = "; non-synchronous " + ns["note"] if "note" in ns else ", no non-synchronous line over its threshold"
     return f"no change against the history: nothing localised{why}"
 

@@ -54,7 +54,6 @@ from .detection_records import longest_tsa
 
 WATCHED, OTHER = "watched-gear fault", "other damage"
 NOT_LOCALISED = f"{WATCHED} (not localised)"  # a flag with no evidence of where: counted as the watched gear's
-NON_SYNC = "non-synchronous (bearing-like)"
 
 
 def watched_gears(source: DatasetSpec, table) -> list[str]:
@@ -102,7 +101,7 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str
     shafts = flagged_shafts(found)
     if not shafts:
         if nonsync and nonsync["changed"]:
-            return f"{OTHER}: {NON_SYNC}, at order {nonsync['order']:.2f}"
+            return NS.call(nonsync["order"])
         return NOT_LOCALISED
     mine, others = [], []
     for ev in shafts:

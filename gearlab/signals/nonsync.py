@@ -67,6 +67,11 @@ BETWEEN = 101  # bins over which the history records' spread beyond their blocks
 FALSE_ALARM = 0.01  # the Gaussian floor of the threshold, shared out among the bins searched
 
 
+def call(order: float) -> str:
+    """How a detection run, `gearlab score` and `gearlab inspect --history` name a non-synchronous change."""
+    return f"other damage: non-synchronous (bearing-like), at order {order:.2f}"
+
+
 def residual(revs: np.ndarray, shaft_orders, period: int) -> np.ndarray:
     """The record *revs* (R consecutive input revolutions, flat in input angle) less every shaft's
     synchronous average (module doc): flat, of R' ≤ R whole revolutions; *shaft_orders*: each shaft's
