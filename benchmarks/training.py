@@ -62,13 +62,12 @@ a loss): 3 or 8 units' `fast` as one network of grouped convolutions (16.4-16.9 
 weights (21-22 against 16-18 ms for 3); `fast` channels-last with its convolutions as
 products of windows (3.76 against 3.43 ms for the layers); its stride-2 convolutions as batched
 products (1.41 against 1.87 ms at batch 2, 4.77 against 4.30 at 40); oneDNN off (5.77 against
-4.95 ms); batch normalisation or the `shapes` mixture by hand-written gradients; one flat buffer
-for the optimiser and the clipping (0.06 ms of a step). For the joint step's batch of 80 (CPU time,
-load ~10): the stride-2 convolutions as one product of channels-last windows 1.10 and 1.59 against
-1.19 and 1.79 ms forward + backward (0.3 ms of a 10 ms step, gradients apart by rounding), as
-broadcast products, conv2d or a 1 x 1 convolution of windows slower; their backward's input
-gradient by conv_transpose1d or weight gradient by a product of windows 0.35-0.48 against
-0.36-0.53 ms (oneDNN's own). Of a 10.8 ms `fast+coral` step in a run (fit_adaptation's, with
+4.95 ms); batch normalisation or the `shapes` mixture by hand-written gradients. For the joint
+step's batch of 80 (CPU time, load ~10): the stride-2 convolutions as one product of channels-last
+windows 1.10 and 1.59 against 1.19 and 1.79 ms forward + backward (0.3 ms of a 10 ms step, gradients
+apart by rounding), as broadcast products, conv2d or a 1 x 1 convolution of windows slower; their
+backward's input gradient by conv_transpose1d or weight gradient by a product of windows 0.35-0.48
+against 0.36-0.53 ms (oneDNN's own). Of a 10.8 ms `fast+coral` step in a run (fit_adaptation's, with
 draws): embedding 3.2, backward 4.8, the epoch's validation 0.9 a step, the rest under 0.4 each.
 Also not adopted (CPU time, load 4-10): `fast`'s first layer as one product of its 16-sample blocks
 and a sum of 4 shifted slices (no 4-fold copy of windows; K = 16 products) 7.2-8.0 against 2.5-2.9 ms
@@ -115,6 +114,32 @@ glibc's allocator told to keep its memory (mallopt): a training faults 0.1-3 tim
 ms of system time) without it. The first layer as a product of its windows without copying them
 (an as_strided view of the padded signals, rows 16 values apart): BLAS needs a row stride of at
 least the row's 64 values, so torch copies it all the same.
+
+Adopted: the optimiser's parameters as views of one flat vector (gearlab.learn.training._Flat): the
+clipping's norm and fused Adam / SGD once on it, where for `fast`'s 13 parameters torch's foreach
+kernels issued ~145 calls within (13 norms and their stack, 13 step-count copies and reads); `shapes`' 2
+keep the per-parameter path. In-process A/B (CPU time, load 8-10): fast 1.71 -> 1.49 ms a step at batch
+2, 3.78 -> 3.49 at 40, fast+coral 5.41 -> 5.38. This benchmark alternated with 81c1d4a's (3 pairs,
+--rounds 15 --clock cpu, load 6.6-13.5): gearlab/roof fast 0.104-0.112 -> 0.114-0.120, fast+coral
+0.145-0.151 -> 0.150-0.154, fast+mmd 0.136-0.147 -> 0.143-0.152, shapes 0.049-0.052 -> 0.052-0.053 (its
+path unchanged); `fast`'s fixed cost 1.53-1.79 -> 1.22-1.69 ms, gearlab/plain 1.08-1.10 -> 1.12-1.18.
+What is left of it: ~250 operator calls a step from Python at ~2-3 us each (at batch 2: the
+normalisations' 93 forward and backward, the window gradients' scatter 34, the function's other ~65, the
+classifier's autograd nodes and parameters' 30); and its cost per sample alone (52 against 10 us at the
+roof, 32 against 9.2 at load 1) holds `fast` to 0.19-0.29 of the roof: 0.33 needs both cut (at load 1,
+the fixed cost halved and the cost per sample cut 1.9x: 0.43 ms + 40 x 17 us = 40 x 9.2 us / 0.33).
+
+`shapes` (gearlab/roof 0.05-0.07): its roof holds 3 FLOPs a sample and template element (|r - t|
+summed) against the matrix product's peak, which counts a fused multiply-add as 2 FLOPs; its loops
+issue a vector operation or more per FLOP, so half that roof at most is reachable. A step at batch 40
+(CPU time, load ~10, min of 7): the template loops 0.68 ms (forward 0.40 at 39 GFLOP/s counted, backward
+0.28 at 57), each revolution's noise scale (the median of |r|: no gradient, not counted) 0.40, the
+mixture's logsumexp and the cross-entropy 0.37, the rest ~1 ms (the autograd engine, the templates'
+scaling by SHAPE_STEP over their 131 k weights forward and back, the circular padding, Adam 0.06).
+The largest lever is the work beyond the counted arithmetic (the noise scale and the mixture: 0.77 ms,
+more than the loops), the noise scale first: a function of the revolution alone, computed again at
+every step of every epoch. Not adopted: the loops' sum of |r|
+taken once per row (prefix sums) instead of once per template, 0.90x (367 against 406 us).
 
 A compiled step (`--compile MODES`: the plain loop with the network's modules compiled by
 torch.compile in each mode, in the same alternated rounds; `compile s` is the first epoch's wall
