@@ -127,7 +127,14 @@ What is left of it: ~250 operator calls a step from Python at ~2-3 us each (at b
 normalisations' 93 forward and backward, the window gradients' scatter 34, the function's other ~65, the
 classifier's autograd nodes and parameters' 30); and its cost per sample alone (52 against 10 us at the
 roof, 32 against 9.2 at load 1) holds `fast` to 0.19-0.29 of the roof: 0.33 needs both cut (at load 1,
-the fixed cost halved and the cost per sample cut 1.9x: 0.43 ms + 40 x 17 us = 40 x 9.2 us / 0.33).
+the fixed cost halved and the cost per sample cut 1.9x: 0.43 ms + 40 x 17 us = 40 x 9.2 us / 0.33). Not
+adopted: the gradients left in a flat vector by autograd (each parameter's grad a view of it, one zero_
+a step; autograd then adds into it, 13 adds, and a parameter without a gradient would take a step): the
+one copy they replace takes 5 us; the function's running statistics by three foreach calls for all three
+normalisations, its rows less their mean kept for the backward and the window gradients' scatter as pair
+copies (fewer operator calls; gradients and statistics bit for bit): fast 1.46 against 1.46 ms a step at
+batch 2, 3.45 against 3.40 at 40, fast+coral 5.11 against 5.20 (in-process A/B, CPU time, load ~10), no
+gain.
 
 `shapes` (gearlab/roof 0.05-0.07): its roof holds 3 FLOPs a sample and template element (|r - t|
 summed) against the matrix product's peak, which counts a fused multiply-add as 2 FLOPs; its loops
