@@ -49,7 +49,11 @@ def test_clipping_gives_torchs_gradients(scale):
 def test_batch_rows_are_the_indexed_rows():
     X = torch.randn(10, 3, 8)
     index = torch.tensor([4, 0, 9, 4])
-    np.testing.assert_array_equal(_rows(X[:, 0], index, None), X[:, 0][index])
+    rows, flat = _rows(X[:, 0], index, None)
+    np.testing.assert_array_equal(rows, X[:, 0][index])
+    np.testing.assert_array_equal(flat, index)
     rng = np.random.default_rng(5)
     pick = torch.as_tensor(np.random.default_rng(5).integers(3, size=4))
-    np.testing.assert_array_equal(_rows(X, index, rng), X[index, pick])
+    rows, flat = _rows(X, index, rng)
+    np.testing.assert_array_equal(rows, X[index, pick])
+    np.testing.assert_array_equal(flat, 3 * index + pick)  # where they lie among the (n x D, L) rows

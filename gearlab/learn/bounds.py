@@ -136,10 +136,15 @@ def lower_median(x: torch.Tensor) -> torch.Tensor:
     return torch.from_numpy(np.partition(x.numpy(), middle, axis=-1)[..., middle : middle + 1])
 
 
-def noise_scale(R: torch.Tensor, kind: str) -> torch.Tensor:
+def abs_median(R: torch.Tensor) -> torch.Tensor:
+    """``(rows,)``: each row's lower median of |r|, the statistic `noise_scale` reads."""
+    return lower_median(R.abs())[:, 0]
+
+
+def noise_scale(R: torch.Tensor, kind: str, median: torch.Tensor | None = None) -> torch.Tensor:
     """Each residual row's noise scale from its median absolute value, which the few samples a
-    fault touches barely move."""
-    return (lower_median(R.abs())[:, 0] / _MEDIAN_ABS[kind]).clamp_min(1e-12)
+    fault touches barely move; *median*: the rows' `abs_median`, where the caller holds it."""
+    return ((abs_median(R) if median is None else median) / _MEDIAN_ABS[kind]).clamp_min(1e-12)
 
 
 def likelihood_ratio(X: np.ndarray, healthy: np.ndarray, shapes: np.ndarray, kind: str) -> np.ndarray:

@@ -106,7 +106,7 @@ from gearlab.errors import GearlabInputError
 from gearlab.params import did_you_mean
 
 from . import fast_frozen
-from .bounds import lower_median, noise_scale, shape_llr
+from .bounds import abs_median, lower_median, noise_scale, shape_llr
 from .config import DEFAULT_DROPOUT, DEFAULT_LENGTH, DEFAULT_NETWORK, NetworkSettings  # noqa: F401 (re-exported)
 
 
@@ -151,6 +151,31 @@ class Network(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.classifier(self.embed(x))
+
+    def row_state(self, X: torch.Tensor, chunk: int = 1024) -> torch.Tensor | None:
+        """``(n,)``: what the network computes from each input row of *X* (n, L) alone, with no
+        weight (`shapes`: each revolution's median |r|, its noise scale's), or None where it
+        computes nothing such. A training loop that feeds the same rows epoch after epoch computes
+        it once and gives each batch its rows' share (`give_rows`): the same numbers, once."""
+        layer = self._row_layer()
+        if layer is None:
+            return None
+        with torch.no_grad():
+            return torch.cat([abs_median(rows.reshape(len(rows), -1)) for rows in X.split(chunk)])
+
+    def give_rows(self, state: torch.Tensor) -> None:
+        """The next forward's rows' `row_state` (NaN for a row not known: computed then), for that
+        forward only."""
+        layer = self._row_layer()
+        if layer is not None:
+            layer.known = state
+
+    def _row_layer(self) -> ShapeLikelihood | None:
+        """The layer that reads the input rows as they are (the `shapes` network's templates)."""
+        f = self.features
+        if isinstance(f, nn.Sequential) and len(f) == 2 and isinstance(f[0], AsChannels):
+            return f[1] if isinstance(f[1], ShapeLikelihood) else None
+        return None
 
     def describe(self) -> dict:
         return {
@@ -475,6 +500,7 @@ class ShapeLikelihood(nn.Module):
         # until a start places them, the windows tile the revolution
         self.register_buffer("offset", (torch.arange(n_shapes) * self.stride) % length)
         self.law = law
+        self.known: torch.Tensor | None = None  # the next forward's rows' median |r| (Network.give_rows)
 
     @property
     def shapes(self) -> torch.Tensor:
@@ -499,7 +525,8 @@ class ShapeLikelihood(nn.Module):
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         r = x.reshape(len(x), -1)
         with torch.no_grad():  # the scale is the noise's, not a feature to learn
-            b = noise_scale(r, self.law)
+            known, self.known = self.known, None
+            b = noise_scale(r, self.law, _medians(r, known))
         if self.width == self.length:
             return shape_llr(r, self.shapes, b, self.law)
         padded = torch.cat([r, r[:, : self.width]], dim=1)  # circular windows
@@ -516,6 +543,20 @@ class ShapeLikelihood(nn.Module):
 
     def extra_repr(self) -> str:
         return f"{len(self.weight)} templates of {self.width} samples, {self.law} noise"
+
+
+def _medians(r: torch.Tensor, known: torch.Tensor | None) -> torch.Tensor | None:
+    """The rows' median |r|: *known*'s, those it lacks (NaN) computed; None where nothing is known."""
+    if known is None:
+        return None
+    if known.shape != (len(r),):
+        raise ValueError(f"given {tuple(known.shape)} row medians for a batch of {len(r)} rows")
+    missing = torch.isnan(known)
+    if not bool(missing.any()):
+        return known
+    out = known.clone()
+    out[missing] = abs_median(r[missing])
+    return out
 
 
 class ShapeMixture(nn.Module):

@@ -91,16 +91,40 @@ def train_mode(net: nn.Module, freeze_norm: bool = False) -> None:
                 layer.eval()
 
 
-def _rows(X: torch.Tensor, index: torch.Tensor, draws: np.random.Generator | None) -> torch.Tensor:
-    """Training rows *index* of X: (n, L), or (n, D, L) holding D noise draws of each sample, of
-    which each row takes one at random. A noisy source drawn once is learned by heart, noise and
-    all (a few hundred samples against 4096 values each); fresh draws leave only the signal to
-    learn (the PHM 2009 corrected source: docs/real_data.md). index_select, not X[index]: the
-    same rows in a fifth to a tenth of the time on a CPU (advanced indexing's general path)."""
-    if X.ndim == 2:
-        return X.index_select(0, index)
-    pick = torch.as_tensor(draws.integers(X.shape[1], size=len(index)), device=X.device)
-    return X.flatten(0, 1).index_select(0, index * X.shape[1] + pick)
+def _rows(X: torch.Tensor, index: torch.Tensor, draws: np.random.Generator | None) -> tuple[torch.Tensor, torch.Tensor]:
+    """Training rows *index* of X and where they lie among `_flat(X)`'s rows: X (n, L), or
+    (n, D, L) holding D noise draws of each sample, of which each row takes one at random. A noisy
+    source drawn once is learned by heart, noise and all (a few hundred samples against 4096 values
+    each); fresh draws leave only the signal to learn (the PHM 2009 corrected source:
+    docs/real_data.md). index_select, not X[index]: the same rows in a fifth to a tenth of the time
+    on a CPU (advanced indexing's general path)."""
+    if X.ndim == 3:
+        pick = torch.as_tensor(draws.integers(X.shape[1], size=len(index)), device=X.device)
+        index = index * X.shape[1] + pick
+    return _flat(X).index_select(0, index), index
+
+
+def _flat(X: torch.Tensor) -> torch.Tensor:
+    return X.flatten(0, 1) if X.ndim == 3 else X
+
+
+def _row_state(net: nn.Module, X: torch.Tensor, augment: Callable | None) -> torch.Tensor | None:
+    """The network's `row_state` of every row X can give (`_rows`), computed once, or None: a
+    network without one, or rows that *augment* changes at every step."""
+    state = getattr(net, "row_state", None)
+    return None if state is None or augment is not None else state(_flat(X))
+
+
+def _give(net: nn.Module, parts: list[tuple[torch.Tensor | None, torch.Tensor]]) -> None:
+    """Tell *net* the `row_state` of the next batch, made of (state, flat index) *parts* in order
+    (NaN for a part whose state is None: the network computes those)."""
+    known = [state for state, _ in parts if state is not None]
+    if not known:
+        return
+    given = [
+        state.index_select(0, i) if state is not None else known[0].new_full((len(i),), math.nan) for state, i in parts
+    ]
+    net.give_rows(torch.cat(given) if len(given) > 1 else given[0])
 
 
 def _draws(X: np.ndarray, rng: np.random.Generator) -> np.random.Generator | None:
@@ -149,6 +173,7 @@ def fit_supervised(
     Xt, yt = _tensor(X, device), _labels(y, device)
     generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
     draws = _draws(X, rng)
+    state = _row_state(net, Xt, augment)
     history, best_state, best = History(), None, -math.inf
     chance = _chance(val)
     for epoch in range(epochs):
@@ -156,8 +181,9 @@ def fit_supervised(
         total = _zero(device)
         for idx in _batches(len(X), batch, rng):
             index = torch.as_tensor(idx, device=device)
-            xb = _rows(Xt, index, draws)
+            xb, flat = _rows(Xt, index, draws)
             xb = augment(xb, generator) if augment else xb
+            _give(net, [(state, flat)])
             opt.zero_grad()
             loss = loss_fn(net(xb), yt.index_select(0, index))
             _step(opt, params, loss)
@@ -244,6 +270,7 @@ def fit_adaptation(
     history = History()
     generator = _generator(rng) if augment else None  # drawn only then: the thesis path stays as it was
     draws = _draws(Xs, rng)
+    states = _row_state(net, Xs_t, augment), _row_state(net, Xt_t, None)
     best_key, best_state = None, None
     for epoch in range(max_epochs):
         lam = adapter.lambda_schedule(epoch * RAMP_EPOCHS / min_epochs, params)  # the ramp ends at min_epochs
@@ -254,10 +281,12 @@ def fit_adaptation(
             m = min(len(s_idx), len(t_idx))
             s = torch.as_tensor(s_idx[:m], device=device)
             t = torch.as_tensor(t_idx[:m], device=device)
-            xs = _rows(Xs_t, s, draws)
+            xs, s_flat = _rows(Xs_t, s, draws)
             xs = augment(xs, generator) if augment else xs
+            xt, t_flat = _rows(Xt_t, t, None)
+            _give(net, [(states[0], s_flat), (states[1], t_flat)])
             opt.zero_grad()
-            z = net.embed(torch.cat([xs, _rows(Xt_t, t, None)]))
+            z = net.embed(torch.cat([xs, xt]))
             z_s, z_t = z[:m], z[m:]
             loss = ce(net.classifier(z_s), ys_t[s])
             if yt_t is not None:
