@@ -485,19 +485,26 @@ def test_the_gap_tells_a_wheel_a_tooth_off():
     assert wheel_line(mesh_check(rows, 29, 86), 86) is None
 
 
-def test_a_speed_two_stages_read_apart_says_a_tooth_count_may_differ():
+def test_a_speed_two_stages_read_apart_is_the_one_the_input_pinion_s_sidebands_show(tmp_path):
     # A 19/71 + 28/47 reducer's int16 WAVs without a tacho, described with a 70-tooth first wheel: the
     # gap refused them, 'the speed is ambiguous ... 24.95 Hz (as 2xM1) or 24.59 Hz (as 1xM2) ...;
-    # expected a declared speed': the two stages' meshes read two speeds because a tooth count differs
+    # expected a declared speed': the two stages' meshes read two speeds because a tooth count differs.
+    # The input pinion's sidebands show its 19 teeth at 25 Hz alone: that speed, and the wheel named there
     from test_inspect import described, synthesise
 
     from gearlab.gearbox.speed import speed_from_mesh
+    from gearlab.inspect import InspectOptions, inspect_record
 
     x, _, fs = synthesise(((19, 71), (28, 47)), speed=25.0, fs=12000.0, revs=300, seed=7)
-    with pytest.raises(GearlabInputError, match=r"or the description's tooth counts of stages 1 to 2 differ"):
-        speed_from_mesh(x, fs, described((19, 70), (28, 47), speed="25 Hz"), None, "h1.wav")
+    f, how, _ = speed_from_mesh(x, fs, described((19, 70), (28, 47), speed="25 Hz"), None, "h1.wav")
+    assert f == pytest.approx(25.0, rel=1e-3) and "the input pinion's sidebands confirm it" in how, (f, how)
     assert speed_from_mesh(x, fs, described((19, 71), (28, 47), speed="25 Hz"), None, "h1.wav")[0] == pytest.approx(
         25.0, rel=1e-3
+    )
+    np.savez(tmp_path / "r.npz", fs=fs, acc=x)
+    report = inspect_record(str(tmp_path / "r.npz"), described((19, 70), (28, 47)), InspectOptions("acc"))
+    assert report["verdict"].startswith(
+        "the description 'box' differs: stage 1: the wheel on the intermediate shaft shows 71.0"
     )
 
 

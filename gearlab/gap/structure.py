@@ -559,10 +559,15 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     # tooth's share is told, a motor's slip (no whole tooth) is not
     if chain is not None and chain.speed_from_mesh and chain.described_speed:
         record.setdefault("speed_hz", {"target": chain.speed})["described"] = chain.described_speed
-        if (teeth := traded_teeth(chain.speed, chain.described_speed, pair.Z1)) is not None:
-            return _traded_line(target, pair, max_order, chain, teeth, record)
-        if (teeth := _beyond_slip(chain.speed, chain.described_speed, pair.Z1)) is not None:
-            return _traded_line(target, pair, max_order, chain, teeth, record)
+        # ... or, within a motor's slip and off by no whole tooth's share (the described speed is nominal: a 29-tooth
+        # pinion at 35.18 Hz described with 28 at 35.8 Hz reads 36.44 Hz, 28.5 teeth at 35.8 Hz), another count the
+        # input shaft's own lines show at the speed found, as inspect reads them (wheel_line's reading of the input's
+        # comb said 'the pinion shows 39.5 teeth')
+        shown = _input_count(_longest(target, chain), pair, max_order, chain, chain.described_speed)[1]
+        teeth = traded_teeth(chain.speed, chain.described_speed, pair.Z1)
+        teeth = teeth or _beyond_slip(chain.speed, chain.described_speed, pair.Z1)
+        if teeth is not None or shown not in (None, pair.Z1):
+            return _traded_line(target, pair, max_order, chain, teeth or shown, record, shown)
     # a tacho on another shaft than the input, or a speed found from the mesh lines: the input's order is
     # read off its sidebands, as inspect reads it (a 23/61 fan's output tacho, described 24/61: the mesh
     # at 24 by the described ratio, the input's sidebands 24/23 apart; inspect said '23.0 teeth', detection
@@ -570,7 +575,7 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     input_shaft = _PairDescription.train(pair).shafts[0]
     on_input = chain is None or (chain.tacho_shaft or (None if chain.speed_from_mesh else input_shaft)) == input_shaft
     tacho = _tacho_read(chain, pair)
-    takes = chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
+    takes = _takes(target, chain)
     whole = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
     # record['mesh'] is the reading the line (or the pass) was decided on, 'read_on' says which
     laid = {"read_on": "records laid end to end" if takes else "all revolutions", "revolutions": len(target)}
@@ -579,7 +584,7 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
         return mesh_line(whole, pair.Z1)
     # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
     # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
-    one = target[sum(takes[: (k := int(np.argmax(takes)))]) : sum(takes[: k + 1])] if takes else target
+    one = _longest(target, chain)
     mesh = mesh_check(one, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input) if takes else whole
     if takes:  # summary.json showed the records laid end to end (89.4 ± 0.7) where the line read 89.0 ± 1.8
         record["mesh"] = mesh | {"read_on": f"the longest of {len(takes)} records", "revolutions": len(one)}
@@ -618,21 +623,49 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     return None
 
 
-def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict) -> str:
+def _takes(target, chain) -> tuple:
+    """The revolutions of each record laid end to end in *target* (chain.takes), or () for one record."""
+    return chain.takes if chain is not None and len(chain.takes) > 1 and sum(chain.takes) == len(target) else ()
+
+
+def _longest(target, chain):
+    """The longest record's revolutions of *target*: a shaft other than the one the revolutions were cut on is
+    in register within one record only."""
+    takes = _takes(target, chain)
+    return target[sum(takes[: (k := int(np.argmax(takes)))]) : sum(takes[: k + 1])] if takes else target
+
+
+def _input_count(target, pair, max_order: int, chain, declared: float) -> tuple:
+    """gearbox.pinion_count.pinion_evidence of *target*'s revolutions read at the speed found from the mesh lines
+    (*chain*.speed), as inspect reads a record without a tacho: (the first mesh's line in Hz, the pinion count the
+    input shaft's own lines show or None, [(z, Hz)] of the other counts the line allows near *declared*)."""
+    from ..gearbox import order_table
+    from ..gearbox.pinion_count import pinion_evidence
+
+    table = order_table(_PairDescription.train(pair))
+    return pinion_evidence(_lines(target, max_order), chain.speed, target.shape[0], table, int(pair.Z1), declared)
+
+
+def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict, shown: int | None = None) -> str:
     """The line of a speed found from the mesh lines a whole tooth's share off the described one: the input
     pinion's sidebands decide between the described count at the speed found and *teeth* at the described
     speed, as inspect decides it (their spacing is the input shaft's turn, whatever the speed read); where
     they show neither, speed_line's either-or. A 17/53 + 22/67 + 29/83 box described with 18 teeth, no tacho:
-    every stage's mesh where 18 puts it at 33.06 Hz, the input's sidebands 17 teeth apart at 35 Hz."""
+    every stage's mesh where 18 puts it at 33.06 Hz, the input's sidebands 17 teeth apart at 35 Hz. *shown*:
+    the count the input shaft's lines show read as inspect reads them (_input_count), where the comb of
+    mesh_check's reading shows none or another."""
     mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), None, False)["inspect"]
     seen, spread = mesh.get("z1_seen"), mesh.get("z1_resolution") or 0.0
     if seen is None or abs(seen - teeth) > max(TEETH_AGREE, spread):
-        return speed_line(chain.speed, chain.described_speed, pair.Z1, teeth)
+        if shown != teeth:
+            return speed_line(chain.speed, chain.described_speed, pair.Z1, teeth)
+        seen, spread = float(teeth), 0.0
     record["outward"] = {"stage": 1, "gear": "pinion", "seen": float(seen), "described": int(pair.Z1)}
+    shows = f"pinion's sidebands show {seen:.1f} ± {spread:.1f}" if spread else f"shaft's own lines show {teeth}"
     return (
-        f"mesh order {teeth} measured, {pair.Z1} expected (stage 1): the input pinion's sidebands show "
-        f"{seen:.1f} ± {spread:.1f} teeth, the input at {pair.Z1 * chain.speed / teeth:.4g} Hz (no tacho: the mesh "
-        f"lines read {chain.speed:.4g} Hz for a {pair.Z1}-tooth pinion); every later mesh follows from it"
+        f"mesh order {teeth} measured, {pair.Z1} expected (stage 1): the input {shows} teeth, the input at "
+        f"{pair.Z1 * chain.speed / teeth:.4g} Hz (no tacho: the mesh lines read {chain.speed:.4g} Hz for a "
+        f"{pair.Z1}-tooth pinion); every later mesh follows from it"
     )
 
 
@@ -706,13 +739,10 @@ def count_ambiguity(target, pair, max_order: int, chain, declared: float | None 
     declared = (chain and chain.described_speed) or declared
     if chain is None or not chain.speed_from_mesh or not declared:
         return None
-    from ..gearbox import order_table
-    from ..gearbox.pinion_count import alternatives_words, pinion_evidence
+    from ..gearbox.pinion_count import alternatives_words
     from ..signals.checks import fmt_hz
 
-    table = order_table(_PairDescription.train(pair))
-    lines = _lines(target, max_order)
-    _, seen, others = pinion_evidence(lines, chain.speed, target.shape[0], table, int(pair.Z1), declared)
+    _, seen, others = _input_count(target, pair, max_order, chain, declared)
     if seen is not None or not others:
         return None
     line = (

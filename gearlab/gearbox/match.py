@@ -2,11 +2,8 @@
 every stage's mesh order (the carrier at M, or the fundamental of the harmonic family the lines hold)
 and each shaft's order from the sidebands around the measured mesh (z = M / o). `gearlab inspect`
 reads a record's lines with it, the gap diagnosis's structure check (gearlab.gap.structure) a
-target's and a source's.
-
-Tolerances: a line matches a mesh order M within 2 bins + 1e-3 M (speed drift smears high orders); a
-sideband spacing matches a shaft order o within 0.5 bin / j + 1e-3 o for the j-th sideband (2 bins / j
-under 16 bins apart).
+target's and a source's. The sideband combs and the tolerances of lines and spacings:
+gearlab.gearbox.sideband_combs.
 """
 
 from __future__ import annotations
@@ -18,101 +15,11 @@ import numpy as np
 
 from .description import Gearbox
 from .orders import order_table
+from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, others_lines, tol_mesh
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
 UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
-# A sideband spacing's tolerance, bins over the furthest sideband j: sidebands SEPARATED bins apart or
-# more are refined to a small part of a bin (outside records: z within 0.016 teeth; at 2 bins a 71-tooth
-# wheel described as 70 passed); closer ones keep 2 bins (a 0.6 s simulation put a comb 0.1 order off).
-SIDEBAND_BINS, SEPARATED = 0.5, 16
-# A comb's line further than this off the spacing fitted through its lines is another's (dropped, the worst
-# first, and the comb fitted again); half a bin dropped true lines of a 150-turn record, whose neighbours move them
-CONSISTENT_BINS = 1.0
 FAMILY_MARGIN = 0.1  # another harmonic family than the described one must hold 10 % more of the lines' power
-
-
-def tol_mesh(order: float, bin_: float) -> float:
-    return 2 * bin_ + DRIFT * order
-
-
-def mixed(d: float, o: float, rival: float | None, bin_: float) -> bool:
-    """Whether the offset *d* from a mesh line is the two shafts' intermodulation a rival +- b o (a, b = 1-3) and
-    not a sideband j o: within CONSISTENT_BINS of such a product and further from every j o than from it. A mesh
-    modulated by both its shafts carries o_p - o_w (a 22/68 + 18/70 box: 0.2403 beside the output's 3rd, 0.2496,
-    2.2 bins apart at 235 turns), and the output's comb took it as its 3rd: 'the wheel shows 71.4 teeth'."""
-    if rival is None:
-        return False
-    tol = CONSISTENT_BINS * bin_ + DRIFT * abs(d)
-    pure = min(abs(abs(d) - j * o) for j in (1, 2, 3))
-    mix = min(abs(abs(d) - abs(a * rival + s * b * o)) for a in (1, 2, 3) for b in (1, 2, 3) for s in (-1, 1))
-    return mix <= tol and pure > max(tol, mix)
-
-
-def comb(
-    lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset(), rival: float | None = None
-) -> tuple | None:
-    """(spacing, tolerance, count, {line: |j|}, score) of the sideband family of a shaft around the
-    mesh line *mesh*.
-
-    Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
-    (j = 1, 2, 3, within ±30 % of the described o, and nearer o than the stage's other shaft's
-    order *rival*: that spacing is the other shaft's evidence; nor 2-6, 1/2 or 1/3 rival off o: the
-    comb of the one seen in the other's every 2nd or 3rd line, as a train of three shows from its
-    meshes' tones with the stages on both shafts of its middle one, or a harmonic of the other's: a cracked
-    tooth on a 14/53 wheel's shaft rings its 4th, 1.057, read as the input's: '13.2 teeth, 14 described')
-    is scored by the amplitudes of
-    the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
-    least-squares fit through its lines, so a 57- and a 58-tooth wheel are told apart once
-    0.5 bin / 3 < o / 57 (sidebands 16 bins apart or more; else 2 bins)."""
-    m = float(lines.at[mesh])
-    near = np.flatnonzero((np.abs(lines.at - m) <= 3.9 * o) & (np.arange(lines.at.size) != mesh))
-    near = np.array([q for q in near if q not in exclude and not mixed(lines.at[q] - m, o, rival, bin_)], dtype=int)
-    if near.size == 0:
-        return None
-    d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 4, 5, 6, 1 / 2, 1 / 3)
-
-    def allowed(c: float) -> bool:
-        # within 1 % of n x rival, or of the comb's own resolution where finer: a 54/107 stage's input comb
-        # (0.981 of the input's order as a 53-tooth description reads it) sits 0.9 % from 2 x the output's
-        near = min(0.01 * c, (SIDEBAND_BINS if c >= SEPARATED * bin_ else 2.0) * bin_ + DRIFT * c)
-        nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= near for n in nths)
-        return 0.7 * o <= c <= 1.3 * o and not nth and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
-
-    def fitted(hits: list) -> tuple[float, list]:
-        """The spacing fitted through *hits* and the hits it keeps: a line further off the fitted comb than
-        CONSISTENT_BINS (once separated) is another's and goes, the worst first (lines where two shafts'
-        sidebands combine, 1 - 0.337 off a 28/83 mesh, took the intermediate's comb as its ±2nd, 0.5 % off)."""
-        while True:
-            js, ds, ws = (np.array(v, dtype=float) for v in zip(*((j, d[q], a[q]) for j, q in hits)))
-            spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
-            bins = CONSISTENT_BINS if spacing >= SEPARATED * bin_ else 2.0
-            off = np.abs(ds - js * spacing) - (bins * bin_ + DRIFT * np.abs(js) * spacing)
-            if off.max() <= 0 or len(hits) == 1:
-                return spacing, hits
-            hits = hits[: int(np.argmax(off))] + hits[int(np.argmax(off)) + 1 :]
-
-    best = None
-    for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
-        hits = []
-        for j in (-3, -2, -1, 1, 2, 3):
-            q = int(np.argmin(np.abs(d - j * c)))
-            if abs(d[q] - j * c) <= 2 * bin_ + DRIFT * abs(j) * c:
-                hits.append((j, q))
-        if not any(abs(j) == 1 for j, _ in hits):
-            continue
-        spacing, hits = fitted(hits)
-        if not any(abs(j) == 1 for j, _ in hits):
-            continue
-        score = sum(a[q] for _, q in hits)
-        if best is None or score > best[0] * 1.01 or (score >= best[0] * 0.99 and abs(c - o) < abs(best[1] - o)):
-            best = (score, c, hits, spacing)
-    if best is None:
-        return None
-    score, _, hits, spacing = best
-    jmax = max(abs(j) for j, _ in hits)
-    bins = SIDEBAND_BINS if spacing >= SEPARATED * bin_ else 2.0
-    tolerance = bins * bin_ / jmax + DRIFT * spacing
-    return spacing, tolerance, len(hits), {int(near[q]): abs(j) for j, q in hits}, score
 
 
 def mesh_family(
@@ -212,62 +119,6 @@ def harmonic_comb(lines: Lines, candidates: list[float], bin_: float, theirs) ->
     h, q = np.array([f[0] for f in found], dtype=float), np.array([f[1] for f in found])
     w = lines.amp[q] ** 2
     return int(q[np.argmax(w)]), float(np.sum(w * h * lines.at[q]) / np.sum(w * h * h))
-
-
-def families(
-    lines: Lines, mesh: int, orders: tuple[float, float], bin_: float, known=(False, False), exclude=frozenset()
-) -> list:
-    """The combs of a stage's two shafts around its carrier. A line both combs claim (the third
-    sideband of a slow wheel on the first of its pinion's shaft) goes to the comb it is the nearer
-    sideband of (|j| the smaller: a first sideband is the likelier), on a tie to the comb of a
-    shaft whose order is known already (the tacho's, or measured at the stage before), else to the
-    stronger comb; a comb that lost lines is fitted again without them."""
-    found = [comb(lines, mesh, o, bin_, exclude, rival) for o, rival in (orders, orders[::-1])]
-    if all(found) and found[0][3].keys() & found[1][3].keys():
-        rank = [(known[k], found[k][4]) for k in (0, 1)]
-        lost: list[set] = [set(), set()]
-        for q in found[0][3].keys() & found[1][3].keys():
-            j0, j1 = found[0][3][q], found[1][3][q]
-            keeper = 0 if (j0 < j1 or (j0 == j1 and rank[0] >= rank[1])) else 1
-            lost[1 - keeper].add(q)
-        for k in (0, 1):
-            if lost[k]:
-                found[k] = comb(lines, mesh, orders[k], bin_, exclude | lost[k], orders[1 - k])
-    return found
-
-
-def others_lines(lines: Lines, expected: float, others, bin_: float, own=None) -> frozenset:
-    """The lines other stages' structure explains, no sidebands of a stage of mesh order *expected*: any
-    harmonic of their meshes (off its own) and its sidebands j <= 3 of their shafts it does not carry
-    (*others*: (mesh order, those shafts' orders[, the shared shaft's order]) each). A 22/63 last stage's 6th
-    harmonic, 1.2 below a 15/47 first mesh, and its sidebands read as the input shaft's comb: 'the pinion shows
-    12.5 teeth'. A shaft both carry is left out: its sidebands are both stages'. Its products with the other
-    stage's own shaft, a o_shared +- b o (a, b = 1-3), are that stage's only (19/48 + 25/94 + 17/48: stage 2's
-    2 M2 + o1 + o2 lies at M1 + 1.293 and the input's comb read 'the pinion shows 14.7 teeth'), save a line on
-    one of the stage's own sidebands (*own*: its mesh line, its shafts' orders), which the products, 36 a
-    harmonic, pass near by chance (a 15/56 + 13/33 wheel read 33.0 teeth, 34 described, lost its comb)."""
-    at, kind, js = [], [], (-3, -2, -1, 1, 2, 3)  # kind: 0 a carrier, 1 a sideband, 2 a product of two shafts
-    for m, shaft_orders, *shared in others:
-        offsets = [(0.0, 0)] + [(j * o, 1) for o in shaft_orders for j in js]
-        if shared and len(shared[0]) == 1 and len(shaft_orders) == 1:
-            offsets += [(a * shared[0][0] + b * shaft_orders[0], 2) for a in js for b in js]
-        for h in range(1, MAX_HARMONIC + 1):
-            if abs(h * m / expected - round(h * m / expected)) > 1e-9:  # on the stage's own harmonic: both
-                at += [h * m + off for off, _ in offsets]
-                kind += [k for _, k in offsets]
-    if not at:
-        return frozenset()
-    at, kind = np.array(at), np.array(kind)
-    # a carrier within tol_mesh; a sideband within 2 bins and a tenth of the drift allowance: at DRIFT's 1e-3 of
-    # order 14 a 15/47 input comb's own -1 line (14.000) fell within 0.019 of a later stage's sideband
-    # (13.8004 + 0.2091), the comb lost it and another won
-    tol = np.where(kind == 0, tol_mesh(at, bin_), 2 * bin_ + 0.1 * DRIFT * at)
-    near = np.abs(lines.at[:, None] - at[None, :]) <= tol[None, :]
-    if own is not None:
-        sidebands = np.array([own[0] + j * o for o in own[1] for j in js])
-        on_own = np.abs(lines.at[:, None] - sidebands[None, :]) <= 2 * bin_ + 0.1 * DRIFT * sidebands[None, :]
-        near[:, kind == 2] &= ~on_own.any(axis=1)[:, None]
-    return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
 
 
 def lead(table, q: int, moved: dict) -> float:

@@ -16,6 +16,8 @@ from ..signals.checks import fmt_hz
 from .match import MIN_TEETH, tol_mesh
 from .speed import DECLARED_RANGE, DRIFT, NOMINAL_RANGE, SIDEBAND_WINDOW, TEETH_AGREE, Lines, sideband_teeth
 
+SHAFT_HARMONICS = 3  # a shaft's sidebands of a mesh, and its own harmonics, are read to the 3rd (as its combs are)
+
 
 def allowed_counts(mesh_hz: float, declared: float) -> list[int]:
     """The whole pinion counts whose speed, *mesh_hz* / z, lies within the nominal range of *declared*."""
@@ -34,7 +36,7 @@ def pinion_evidence(lines: Lines, f0: float, revolutions: int, table, said: int,
     if i is None:
         return None, None, []
     mesh_hz, df = float(lines.at[i] * f0), f0 * bin_
-    in_hz = _other_shafts_out(Lines(lines.at * f0, lines.amp, lines.db), mesh_hz, table, said, declared, df)
+    in_hz = _other_shafts_out(Lines(lines.at * f0, lines.amp, lines.db), mesh_hz, table, said, df)
     counts = allowed_counts(mesh_hz, declared)
     others = [(z, mesh_hz / z) for z in counts if z != said]
     seen = sideband_teeth(in_hz, mesh_hz / said, table.stages[0], df)
@@ -43,16 +45,17 @@ def pinion_evidence(lines: Lines, f0: float, revolutions: int, table, said: int,
     return mesh_hz, shaft_line_count(in_hz, mesh_hz, declared, df), others
 
 
-def _other_shafts_out(lines: Lines, mesh_hz: float, table, said: int, declared: float, df: float) -> Lines:
-    """*lines* (Hz, at uniform angle: order x mean speed, bin *df*) without those a harmonic of a later
-    shaft's frequency from a mesh harmonic (or from 0 Hz) explains to half a bin (a refined line sits a small
-    share of a bin from its frequency; a 33/131 pinion's sideband 1.2 bins from the wheel's 4th harmonic is the
-    pinion's), up to the highest input speed looked at. The later shafts turn at (their order / the described
-    count *said*) x the first mesh *mesh_hz* whatever the pinion's count."""
+def _other_shafts_out(lines: Lines, mesh_hz: float, table, said: int, df: float) -> Lines:
+    """*lines* (Hz, at uniform angle: order x mean speed, bin *df*) without those a later shaft's sideband of a
+    mesh harmonic (or its harmonic from 0 Hz), j <= SHAFT_HARMONICS, explains to half a bin (a refined line sits
+    a small share of a bin from its frequency; a 33/131 pinion's sideband 1.2 bins from the wheel's 4th harmonic
+    is the pinion's). The later shafts turn at (their order / the described count *said*) x the first mesh
+    *mesh_hz* whatever the pinion's count. Beyond j = 3 a slow shaft's comb covers any line: a 29/109 + 21/81 +
+    29/114 box's output at 0.617 Hz put its 57th within half a bin of the input's sideband at 35.18 Hz."""
     d = np.abs(lines.at - np.round(lines.at / mesh_hz) * mesh_hz)
     keep = np.ones(lines.at.size, bool)
+    k = np.arange(1, SHAFT_HARMONICS + 1)
     for fo in (float(o) * mesh_hz / said for o in table.shaft_orders[1:]):
-        k = np.arange(1, int((1 + SIDEBAND_WINDOW) * (1 + NOMINAL_RANGE) * declared / fo) + 2)
         keep &= np.abs(d[:, None] - k[None, :] * fo).min(axis=1) > 0.5 * df
     return Lines(lines.at[keep], lines.amp[keep], lines.db[keep])
 
@@ -62,7 +65,7 @@ def shaft_line_count(in_hz: Lines, mesh_hz: float, declared: float, df: float, t
     mesh_hz / z (*in_hz*: lines in Hz, bin *df*), or None (none, or several); with *table* and the described
     count *said*, the lines later shafts explain left out first."""
     if table is not None:
-        in_hz = _other_shafts_out(in_hz, mesh_hz, table, said, declared, df)
+        in_hz = _other_shafts_out(in_hz, mesh_hz, table, said, df)
     counts = allowed_counts(mesh_hz, declared)
     shaft = [z for z in counts if in_hz.near(mesh_hz / z, max(2.5 * df, DRIFT * mesh_hz / z)) is not None]
     return shaft[0] if len(shaft) == 1 else None

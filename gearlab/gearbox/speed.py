@@ -282,28 +282,51 @@ def speed_from_mesh(
             "speed; expected a tacho channel or a declared speed (e.g. '25 Hz')"
         )
     best = max(hypotheses, key=lambda h: h[0])
-    for other in hypotheses:
-        ratio = max(best[1] / other[1], other[1] / best[1])  # a multiple is the same family, not another speed
-        if other[0] >= AMBIGUOUS * best[0] and abs(ratio - round(ratio)) > SPEED_AGREE * ratio:
-            # two stages' meshes reading two speeds: a tooth count between them may be wrong (a 19/71 +
-            # 28/47 reducer described with a 70-tooth wheel was told only to declare its speed)
-            stages = best[3] != other[3]
-            raise AmbiguousSpeed(
-                f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
-                f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared "
-                "speed (e.g. '25 Hz') or a tacho channel"
-                + (
-                    f" (or the description's tooth counts of stages {min(best[3], other[3])} to "
-                    f"{max(best[3], other[3])} differ from the gearbox's: gearlab inspect at the speed names them)"
-                    if stages
-                    else ""
-                ),
-                [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
-            )
+
+    def rivals(best: tuple) -> list:
+        """The hypotheses at another speed, no multiple of *best*'s (that is its family), explaining about as much."""
+        ratio = [max(best[1] / h[1], h[1] / best[1]) for h in hypotheses]
+        return [
+            h for h, r in zip(hypotheses, ratio) if h[0] >= AMBIGUOUS * best[0] and abs(r - round(r)) > SPEED_AGREE * r
+        ]
+
+    if contested := rivals(best):
+        # of such speeds, the one alone whose input pinion's sidebands show the described count to a tenth of a bin of
+        # their spacing (EXACT_BINS; their spacing is the input's turn whatever stage gave the speed): a later gear a
+        # tooth off reads its stages at another speed than the first mesh's (a 14/34 + 17/42 + 26/97 box described
+        # with an 18-tooth second pinion: 21.11 Hz from stage 2's 2nd harmonic, its stage-1 'sidebands' 13.83 teeth,
+        # against 22.35 Hz from stage 1's mesh, 14.0005, was refused as ambiguous)
+        stage, z = table.stages[0], table.stages[0].pinion_teeth
+
+        def exact(h: tuple) -> bool:
+            seen = sideband_teeth(lines, h[1], stage, df)
+            return seen is not None and abs(seen - z) <= z * EXACT_BINS * df / h[1]
+
+        sure = [h for h in [best, *contested] if exact(h)]
+        top = max(sure, key=lambda h: h[0]) if sure else None
+        if top is not None and not any(exact(h) for h in rivals(top)):
+            return top[1], f"from the mesh lines ({top[2]}; the input pinion's sidebands confirm it)", None
+        # two stages' meshes reading two speeds: a tooth count between them may be wrong (a 19/71 +
+        # 28/47 reducer described with a 70-tooth wheel was told only to declare its speed)
+        other = contested[0]
+        stages = best[3] != other[3]
+        raise AmbiguousSpeed(
+            f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
+            f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared "
+            "speed (e.g. '25 Hz') or a tacho channel"
+            + (
+                f" (or the description's tooth counts of stages {min(best[3], other[3])} to "
+                f"{max(best[3], other[3])} differ from the gearbox's: gearlab inspect at the speed names them)"
+                if stages
+                else ""
+            ),
+            [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
+        )
     return best[1], f"from the mesh lines ({best[2]})", None
 
 
 SIDEBANDS_SHOW = "its sidebands show"
+EXACT_BINS = 0.1  # a refined line lies within a small share of a bin of its frequency (sidebands 30-45 dB up)
 SIDEBAND_WINDOW = 0.15  # a pinion shaft's sideband is looked for within ±15 % of its spacing at the speed tried
 TEETH_AGREE = 0.3  # the sidebands confirm a speed where they put the pinion's teeth within ±0.3 of its count
 
