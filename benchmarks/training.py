@@ -143,9 +143,14 @@ issue a vector operation or more per FLOP, so half that roof at most is reachabl
 0.28 at 57), each revolution's noise scale (the median of |r|: no gradient, not counted) 0.40, the
 mixture's logsumexp and the cross-entropy 0.37, the rest ~1 ms (the autograd engine, the templates'
 scaling by SHAPE_STEP over their 131 k weights forward and back, the circular padding, Adam 0.06).
-The largest lever is the work beyond the counted arithmetic (the noise scale and the mixture: 0.77 ms,
-more than the loops), the noise scale first: a function of the revolution alone, computed again at
-every step of every epoch. Not adopted: the loops' sum of |r|
+The noise scale, a function of the revolution alone, is now computed once a training for the rows
+it trains on (Network.row_state; rows fresh noise changes at each step excepted): 0.053-0.056 ->
+0.057-0.060 of the roof side by side (3 pairs, --rounds 5, CPU clock, load ~7), the same numbers.
+At quick.toml's 5 classes (1,024 templates, against this benchmark's 256) a step is ~9 ms and the
+mixture's logsumexp over (40, 1,025, 5), a strided reduction, ~3.0 ms of it forward + backward; as
+exp(z - max) times the members' weights (a (40 x 1,025) x (1,025 x 5) product) 0.35 ms, logits
+apart by 1e-6 (rounding) and in need of a per-class maximum (a class far below the best one
+underflows): not adopted here, it changes every training's numbers. Not adopted: the loops' sum of |r|
 taken once per row (prefix sums) instead of once per template, 0.90x (367 against 406 us).
 
 A compiled step (`--compile MODES`: the plain loop with the network's modules compiled by
