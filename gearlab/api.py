@@ -2,7 +2,7 @@
 import from gearlab. A plugin imports from here and nowhere else in gearlab, so gearlab's
 modules can move without breaking plugins (docs/plugins.md, docs/architecture.md).
 
-    from gearlab.api import Effect, Param, hookimpl
+    from gearlab.api import Effect, hookimpl, setting
 
     @hookimpl
     def gearlab_effects():
@@ -25,15 +25,15 @@ from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring,
 from .effect_contract import Effect, SignalContext
 from .errors import GearlabInputError
 from .gearbox.simulation import DescribedPresets
-from .learn.adapters import SCHEDULE_PARAMS, Adapter
-from .learn.detector_contract import FALSE_ALARM_PARAM, PATH_PARAM, Detector
+from .learn.adapters import Adapter, ScheduleParams
+from .learn.detector_contract import Detector, DetectorParams, path_setting
 from .learn.path import PATHS
-from .params import Param
 from .physics.faults import Fault, region, scaled_ladder
 from .physics.presets import gear_pair
 from .physics.sections import healthy_section
 from .physics.stiffness import fillet_compliance
 from .registry import hookimpl
+from .settings import NoParams, declared, setting, setting_of
 from .signals import NOISE_KINDS, SNR_DB_RANGE, add_noise
 
 # name -> module, imported on first access (torch)
@@ -50,11 +50,8 @@ _LAZY = {
 
 __all__ = [
     "DOF_ORDER",
-    "FALSE_ALARM_PARAM",
     "NOISE_KINDS",
     "PATHS",
-    "PATH_PARAM",
-    "SCHEDULE_PARAMS",
     "SNR_DB_RANGE",
     "Adapter",
     "Assembly",
@@ -67,9 +64,15 @@ __all__ = [
     "GearlabInputError",
     "Mesh",
     "ModelConfig",
-    "Param",
+    "NoParams",
+    "ScheduleParams",
+    "DetectorParams",
     "SignalContext",
     "add_noise",
+    "declared",
+    "path_setting",
+    "setting",
+    "setting_of",
     "add_spring",
     "drive_dofs",
     "fillet_compliance",

@@ -54,7 +54,8 @@ import numpy as np
 from .dynamics.config import ModelConfig
 from .dynamics.excitation import Excitation
 from .errors import GearlabInputError
-from .params import Param, did_you_mean, plugin_description, refuse_unknown, resolve_params
+from .params import did_you_mean, refuse_unknown
+from .settings import NoParams, declared, plugin_description, resolve_params
 
 LEVELS = ("model", "excitation", "signal")
 HOOKS = {"model": "apply_model", "excitation": "apply_excitation", "signal": "apply_signal"}
@@ -86,7 +87,7 @@ class Effect:
     """An unmodelled effect: override the hook of its level (``HOOKS[level]``) and nothing else; the
     hook it overrides is its ``level`` (a class may name it too, and then must override that one).
 
-    Parameters: ``params`` are bounded numbers with SI units (gearlab.params.Param) — what a
+    Parameters: ``params`` is a settings dataclass of bounded numbers with SI units (gearlab.settings.setting) — what a
     diagnosis fits by bounded search; ``log_scale`` names those best searched on a log
     scale; ``options`` are categorical parameters, name -> choices (the first is the
     default), which a search enumerates.
@@ -107,7 +108,7 @@ class Effect:
     # each record without its mean (gearlab.gap.views.offset_removed), where it changes nothing, so no
     # diagnosis takes it as a candidate; a simulated dataset may still carry it.
     mean_only: ClassVar[bool] = False
-    params: ClassVar[tuple[Param, ...]] = ()
+    params: ClassVar[type] = NoParams
     options: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     log_scale: ClassVar[frozenset[str]] = frozenset()
 
@@ -146,7 +147,7 @@ class Effect:
     def resolve(self, given: Mapping[str, object], where: str = "") -> dict:
         """Defaults filled, units parsed, bounds and choices checked: {param: SI value or choice}."""
         where = where or f"effect '{self.name}'"
-        refuse_unknown(given, [p.name for p in self.params] + list(self.options), where)
+        refuse_unknown(given, [*declared(self.params), *self.options], where)
         values: dict = resolve_params(self.params, {k: v for k, v in given.items() if k not in self.options}, where)
         for key, choices in self.options.items():
             value = given.get(key, choices[0])
@@ -168,15 +169,15 @@ class Effect:
         """The search space: one entry per parameter (bounds, scale) and per option (choices)."""
         out = [
             {
-                "name": p.name,
+                "name": name,
                 "unit": p.unit,
                 "low": p.low,
                 "high": p.high,
-                "default": p.default,
+                "default": default,
                 "integer": p.integer,
-                "log": p.name in self.log_scale,
+                "log": name in self.log_scale,
             }
-            for p in self.params
+            for name, (p, default) in declared(self.params).items()
         ]
         out += [{"name": k, "choices": list(v), "default": v[0]} for k, v in self.options.items()]
         return out

@@ -29,7 +29,8 @@ import pluggy
 
 from .effect_contract import hook_problem
 from .errors import UnknownPluginError
-from .params import Param, did_you_mean
+from .params import did_you_mean
+from .settings import describe_params, params_problem
 from .units import display
 
 PROJECT = "gearlab"
@@ -146,7 +147,7 @@ class Registry:
                     "name": name,
                     "package": self.packages[(kind, name)],
                     "doc": info.get("doc", getattr(obj, "doc", "")),
-                    "params": info.get("params", [p.describe() for p in obj.params]),
+                    "params": info.get("params", describe_params(obj.params)),
                 }
                 if kind == "effect":  # where it acts, and whether the builder may use the tooth shift
                     row["level"] = getattr(obj, "level", "")
@@ -160,15 +161,9 @@ def _contract_problem(kind: str, obj) -> str:
     name = getattr(obj, "name", None)
     if not isinstance(name, str) or not _NAME.match(name):
         return f"{kind} plugin {obj!r} has no valid name (expected lower-case letters, digits and '_')"
-    params = getattr(obj, "params", None)
-    if not isinstance(params, tuple) or not all(isinstance(p, Param) for p in params):
-        return f"{kind} '{name}': params must be a tuple of gearlab.params.Param"
-    for p in params:
-        if not (p.low <= p.default <= p.high):
-            return (
-                f"{kind} '{name}': parameter '{p.name}' default {p.default!r} "
-                f"lies outside its bounds [{p.low}, {p.high}]"
-            )
+    problem = params_problem(getattr(obj, "params", None))
+    if problem:
+        return f"{kind} '{name}': {problem}"
     missing = [attr for attr in REQUIRED[kind] if not callable(getattr(obj, attr, None))]
     if missing:
         return f"{kind} '{name}' lacks {', '.join(missing)}"

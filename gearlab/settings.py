@@ -2,7 +2,13 @@
 limit and doc, and everything else is derived from it — the scenario keys and their checks
 (gearlab.scenario.keys_of), the --quick shrinking (:func:`shrunk`), the checks of an inline
 table such as a dataset's noise ``{kind = "laplace", snr_db = 0, seed = 1}`` (:func:`from_inline`) and the
-reference tables of docs/settings.md (gearlab.settings_doc, through the scenario keys).
+reference tables of docs/settings.md (gearlab.settings_doc, through the scenario keys). A
+plugin's parameters are such a dataclass too (its ``params``; :func:`resolve_params`,
+:func:`describe_params`), numbers in SI with the unit shown to people:
+
+    @dataclass(frozen=True)
+    class CrackParams:
+        q0: float = setting(float, 0.0, low=0.0, high=0.05, unit="m", display_unit="mm", doc="crack depth")
 
     @dataclass(frozen=True)
     class NoiseSpec:
@@ -12,19 +18,21 @@ reference tables of docs/settings.md (gearlab.settings_doc, through the scenario
 A field without a default (``setting(types, ...)`` alone) is required. Every scenario table is
 declared so (``kw_only=True`` where a required key follows one with a default): a kind's
 ``Table(keys_of(cls))`` and, in build(), ``typed(cls, table)``. Base layer: imports nothing of
-gearlab but the errors and the did-you-mean helper.
+gearlab but the errors, the units and the did-you-mean helper.
 """
 
 from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from .errors import GearlabInputError, shown
-from .params import Setting, did_you_mean
+from .params import Setting, did_you_mean, refuse_unknown
+from .units import to_si
 
 # Most epochs any training key may ask for (the thesis trains for at most 800): beyond it a
 # value is a mistake that would hold a run for years.
@@ -46,10 +54,12 @@ def setting(
     choices: Iterable[str] = (),
     quick: Any = None,
     check: Callable[[Any, str], Any] | None = None,
+    display_unit: str = "",
 ) -> Any:
     """A dataclass field declared with everything the scenario, --quick and the docs need. A list
-    or table default is copied for each instance (a dataclass refuses a shared mutable default)."""
-    meta = Setting(types, low, high, unit, doc, tuple(choices), quick, check)
+    or table default is copied for each instance (a dataclass refuses a shared mutable default).
+    *unit* is the SI unit values are stored in, *display_unit* the one shown to people."""
+    meta = Setting(types, low, high, unit, doc, tuple(choices), quick, check, display_unit)
     if isinstance(default, (list, dict)):
         return dataclasses.field(default_factory=lambda: copy.deepcopy(default), metadata={"setting": meta})
     return dataclasses.field(default=default, metadata={"setting": meta})
@@ -62,6 +72,87 @@ def _default(f: dataclasses.Field):
 def declared(cls) -> dict[str, tuple[Setting, Any]]:
     """{field: (its Setting, its default or MISSING)} of the fields of *cls* declared with setting()."""
     return {f.name: (f.metadata["setting"], _default(f)) for f in dataclasses.fields(cls) if "setting" in f.metadata}
+
+
+def setting_of(cls, name: str) -> Setting:
+    """The Setting of field *name* of *cls* (a plugin's bounds where its code needs them)."""
+    return declared(cls)[name][0]
+
+
+@functools.cache
+def subset(cls, names: tuple[str, ...]):
+    """A settings dataclass of the fields *names* of *cls*, in that order (a plugin that takes
+    some of a shared list, such as a lumped model's parameters)."""
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    return dataclasses.make_dataclass(
+        cls.__name__,
+        [(n, fields[n].type, dataclasses.field(default=fields[n].default, metadata=fields[n].metadata)) for n in names],
+        frozen=True,
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class NoParams:
+    """The parameters of a plugin that takes none."""
+
+
+def params_problem(cls) -> str:
+    """What is wrong with a plugin's ``params`` ('' when nothing): a dataclass whose every field
+    is a number declared with setting(), its default within its bounds."""
+    if not (isinstance(cls, type) and dataclasses.is_dataclass(cls)):
+        return "params must be a dataclass of fields declared with gearlab.api.setting"
+    for f in dataclasses.fields(cls):
+        meta, default = f.metadata.get("setting"), _default(f)
+        if meta is None or not _number(meta.types) or meta.low is None or meta.high is None:
+            return f"parameter '{f.name}' must be declared with setting(float or int, default, low=, high=, ...)"
+        if not (meta.low <= default <= meta.high):
+            return f"parameter '{f.name}' default {default!r} lies outside its bounds [{meta.low}, {meta.high}]"
+    return ""
+
+
+def describe_params(cls) -> list[dict]:
+    """Each parameter of *cls* as a plain table (the registry's describe, the TUI, `gearlab plugins`)."""
+    return [
+        {
+            "name": name,
+            "unit": meta.unit,
+            "display_unit": meta.display_unit or meta.unit,
+            "default": default,
+            "low": meta.low,
+            "high": meta.high,
+            "integer": meta.integer,
+            "doc": meta.doc,
+        }
+        for name, (meta, default) in declared(cls).items()
+    ]
+
+
+def plugin_description(plugin, **more) -> dict:
+    """What every plugin's describe() holds (its doc, its parameters), and *more* of its kind's."""
+    return {"doc": plugin.doc, "params": describe_params(plugin.params), **more}
+
+
+def resolve_params(cls, given: Mapping[str, object], where: str) -> dict[str, float]:
+    """The parameters of the settings dataclass *cls* from *given* (a scenario's table): defaults
+    filled, units parsed to SI, names, whole numbers and bounds checked. {name: SI value}."""
+    schema = declared(cls)
+    if not isinstance(given, Mapping):
+        raise GearlabInputError(f"{where}: expected a table of parameters {{name = value, ...}}, got {given!r}")
+    refuse_unknown(given, list(schema), where)
+    values: dict[str, float] = {}
+    for name, (meta, default) in schema.items():
+        here = f"{where}, parameter '{name}'"
+        value = to_si(given[name], meta.unit, here) if name in given else default
+        if meta.integer:
+            if value != int(value):
+                raise GearlabInputError(f"{here}: expected a whole number, got {value:g}")
+            value = int(value)
+        if not (meta.low <= value <= meta.high):
+            raise GearlabInputError(
+                f"{here}: {meta.show(value)} is outside [{meta.show(meta.low)}, {meta.show(meta.high)}]"
+            )
+        values[name] = value
+    return values
 
 
 def typed(cls, values: Mapping):

@@ -21,6 +21,7 @@ from gearlab.learn.losses import (
 )
 from gearlab.learn.networks import build_network
 from gearlab.registry import Registry
+from gearlab.settings import declared
 
 # The entry points are registered in pyproject.toml separately; import the modules directly.
 PLUGINS = ["source_only", "target_only", "mmd", "dann", "coral", "finetune"]
@@ -310,19 +311,19 @@ def test_plugin_contract(name):
     registry = Registry()
     registry.add("adapter", obj, "gearlab", name)
     assert not registry.problems and registry.names("adapter") == [name]
-    assert isinstance(obj.params, tuple)
-    for p in obj.params:
-        assert p.unit == "" and p.low <= p.default <= p.high
+    schema = declared(obj.params)
+    for p, default in schema.values():
+        assert p.unit == "" and p.low <= default <= p.high
     assert obj.calibrated is CALIBRATED[name]
     assert obj.supervision and set(obj.supervision) <= set(SUPERVISIONS)
     assert obj.train_on in TRAIN_ON and obj.optimizer in ("adam", "sgd")
     info = obj.describe()
     assert {"doc", "params", "calibrated", "supervision"} <= set(info)
     assert info["doc"] and info["calibrated"] is obj.calibrated
-    assert [p["name"] for p in info["params"]] == [p.name for p in obj.params]
+    assert [p["name"] for p in info["params"]] == list(schema)
     for method in ("extra_modules", "domain_loss", "discrepancy", "lambda_schedule", "trainable", "resolve"):
         assert callable(getattr(obj, method))
-    assert obj.resolve() == {p.name: p.default for p in obj.params}
+    assert obj.resolve() == {name: default for name, (_, default) in schema.items()}
 
 
 def test_supervision_and_training_regimes():

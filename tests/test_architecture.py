@@ -419,11 +419,16 @@ def test_one_realisation_of_a_simulated_signal():
 
 
 def test_one_way_to_declare_a_setting():
-    # a setting is a gearlab.settings.Setting: a settings dataclass's field (settings.setting) or a
-    # plugin's parameter (params.Param, a Setting with a name); a scenario table's Key is made from
-    # the dataclass (scenario.keys_of), never written by hand
+    # a setting is a gearlab.settings.Setting, made by settings.setting as a settings dataclass's
+    # field: a scenario table's key, a plugin's parameter (its params dataclass), a gearbox
+    # description's key; a scenario table's Key is made from the dataclass (scenario.keys_of), never
+    # written by hand, and no other spelling (the positional Param records of before) is left
     made = calls_of({"Key", "Setting"})
     assert {f: len(c) for f, c in made.items()} == {"gearlab/scenario.py": 1, "gearlab/settings.py": 1}, made
+    root = PACKAGE.parent
+    sources = [*PACKAGE.rglob("*.py"), *(root / "plugins").rglob("*.py"), *(root / "examples").rglob("*.py")]
+    spelt = [str(p.relative_to(root)) for p in sources if re.search(r"\bParam\(", p.read_text())]
+    assert not spelt, f"Param( in {spelt}: declare a plugin's parameters with gearlab.api.setting"
 
 
 def test_benchmarks_holds_only_what_the_readme_names():

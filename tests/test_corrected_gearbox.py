@@ -21,6 +21,7 @@ from gearlab.gap.corrected import FILE, corrected_description, write_corrected
 from gearlab.gearbox import load_gearbox
 from gearlab.gearbox.simulation import channel, model_name, reference
 from gearlab.registry import get_registry
+from gearlab.settings import declared
 
 ROOT = Path(__file__).resolve().parents[1]
 RIG16 = ROOT / "examples" / "your_gearbox" / "rig16.toml"
@@ -231,5 +232,5 @@ def test_every_fitted_key_is_an_effect_parameter_or_a_factor_on_one():
 
     assert set(FITTED) == DYNAMICS_KEYS
     for key, name in FITTED.items():
-        params = {p.name for p in get_registry().get("effect", name).params}
+        params = set(declared(get_registry().get("effect", name).params))
         assert DYNAMICS_NAMES[key] in params or FACTORS.get(DYNAMICS_NAMES[key]) in params, key

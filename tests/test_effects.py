@@ -16,6 +16,7 @@ import json
 import math
 import sys
 import types
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,9 +38,9 @@ from gearlab.dynamics.excitation import Excitation
 from gearlab.effect_contract import HOOKS, Effect, SignalContext
 from gearlab.effects import EffectChain, config_of, effect_spec, effects_from_tables, model_of
 from gearlab.errors import GearlabInputError, UnknownPluginError
-from gearlab.params import Param
 from gearlab.physics.faults import place_fault
 from gearlab.registry import get_registry, hookimpl, load_registry
+from gearlab.settings import declared, setting
 from gearlab.signals import NOISE_KINDS, order_spectrum
 from gearlab_plugins.effects.sensor_bandwidth import frequency_response
 from gearlab_plugins.effects.tooth_friction import friction_pattern
@@ -125,7 +126,8 @@ def test_all_builtin_effects_are_registered_with_level_symmetry_and_a_physical_d
         assert REG.packages[("effect", name)] == "gearlab"
         assert (effect.level, effect.breaks_symmetry) == (level, breaks), name
         assert getattr(type(effect), HOOKS[level]) is not getattr(Effect, HOOKS[level]), name  # its level's hook
-        assert effect.params and all(p.low <= p.default <= p.high for p in effect.params)
+        schema = declared(effect.params)
+        assert schema and all(p.low <= default <= p.high for p, default in schema.values())
         module = sys.modules[type(effect).__module__].__doc__
         assert "Physical mismatch" in module and "Bounds" in module, name  # what it models and why its bounds
         assert (rows[name]["level"], rows[name]["breaks_symmetry"]) == (level, breaks)  # gearlab plugins shows them
@@ -163,11 +165,16 @@ class _EntryPoint:
         return self._module
 
 
+@dataclass(frozen=True)
+class RatioParams:
+    ratio: float = setting(float, 0.1, low=0.0, high=1.0, doc="level")
+
+
 class Hum(Effect):
     name = "hum"
     doc = "mains hum"
     level = "signal"
-    params = (Param("ratio", "", 0.1, 0.0, 1.0, "level"),)
+    params = RatioParams
 
     def apply_signal(self, x, params, ctx):
         return x + params["ratio"] * ctx.reference_rms * np.sin(2 * np.pi * 50.0 * ctx.time(x.size).reshape(x.shape))
@@ -190,7 +197,7 @@ class BadSymmetry(Hum):
 
 class Hiss(Effect):  # names no level: the one hook it overrides is its level
     name = "hiss"
-    params = (Param("ratio", "", 0.1, 0.0, 1.0, "level"),)
+    params = RatioParams
 
     def apply_signal(self, x, params, ctx):
         return x + params["ratio"] * ctx.rng.standard_normal(x.shape)
@@ -241,12 +248,12 @@ def test_no_model_effect_defaults_to_a_target_preset():
 
     LUO2019, MENG2020 = REG.get("model", "ten_dof").preset("luo2019"), REG.get("model", "eight_dof").preset("meng2020")
     for name in ("drive_inertias", "casing_path"):
-        for p in REG.get("effect", name).params:
-            assert all(p.default != preset["params"].get(p.name) for preset in (LUO2019, MENG2020)), (name, p.name)
+        for key, (_, default) in declared(REG.get("effect", name).params).items():
+            assert all(default != preset["params"].get(key) for preset in (LUO2019, MENG2020)), (name, key)
     # a search starts from the source: a six_dof source has no drive (the defaults), a ten_dof source
     # has its own, which the search starts from
     drive = REG.get("effect", "drive_inertias")
-    assert Space(drive, dataset_preset("B-6-ch5")).defaults == {p.name: p.default for p in drive.params}
+    assert Space(drive, dataset_preset("B-6-ch5")).defaults == {k: d for k, (_, d) in declared(drive.params).items()}
     assert Space(drive, dataset_preset("A-pinion-ch5")).defaults == {
         k: LUO2019["params"][k] for k in ("I11", "I22", "k_c", "c_c")
     }

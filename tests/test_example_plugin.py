@@ -86,6 +86,7 @@ def wear(site):
     """The installed module's fault object, loaded from its file (no change to sys.path)."""
     spec = importlib.util.spec_from_file_location("gearlab_wear_under_test", site / "gearlab_wear" / "wear.py")
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # as an import does: a dataclass looks its module up there
     spec.loader.exec_module(module)
     (fault,) = module.gearlab_faults()
     return fault
@@ -264,9 +265,9 @@ def fake_distribution(site: Path, dist: str, module: str, code: str) -> None:
 
 
 FAULT_HEAD = """
-from gearlab.params import Param
-from gearlab.physics.faults import Fault
-from gearlab.registry import hookimpl
+from dataclasses import dataclass
+
+from gearlab.api import Fault, NoParams, hookimpl, setting
 """
 
 
@@ -280,9 +281,14 @@ def broken_site(tmp_path_factory) -> Path:
         "bad_schema",
         FAULT_HEAD
         + """
+@dataclass(frozen=True)
+class BumpParams:
+    height: float = setting(float, 2e-3, low=0.0, high=1e-3, unit="m", display_unit="mm", doc="above its bound")
+
+
 class Bump(Fault):
     name = "bump"
-    params = (Param("height", "m", 2e-3, 0.0, 1e-3, "default above its upper bound", "mm"),)
+    params = BumpParams
 
     def apply(self, section, params, pair):
         return section
@@ -304,7 +310,7 @@ def gearlab_faults():
         + """
 class Impostor(Fault):
     name = "crack"
-    params = ()
+    params = NoParams
 
     def apply(self, section, params, pair):
         raise RuntimeError("the impostor crack was used")

@@ -26,6 +26,7 @@ from gearlab.effects import default_candidates
 from gearlab.gap.views import healthy_rows
 from gearlab.kinds.gap_benchmark import trials as bench
 from gearlab.registry import get_registry
+from gearlab.settings import declared
 
 LIBRARY = tuple(default_candidates(get_registry()))  # the shipped library: every effect but the opt-in ones
 SOURCE = dataset_preset("B-6-ch5").with_(faults=(), healthy=12, noise=bench.BASE_NOISE)
@@ -109,7 +110,7 @@ def test_the_diagnosis_never_receives_the_generators_choices(kind, tmp_path, mon
     # ... and no hidden parameter value appears anywhere in what it received
     payload = pickle.dumps((source, settings, candidates, chain, max_order)) + X.tobytes()
     hidden_values = [v for _, params in trial.hidden for _, v in params if isinstance(v, float) and v != 0.0]
-    defaults = {p.default for e in LIBRARY for p in get_registry().get("effect", e).params}
+    defaults = {d for e in LIBRARY for _, d in declared(get_registry().get("effect", e).params).values()}
     drawn = [v for v in hidden_values if v not in defaults]  # a default is no secret (nor drawn)
     assert drawn
     for v in drawn:

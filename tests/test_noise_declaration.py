@@ -15,6 +15,7 @@ import gearlab
 from gearlab.data.spec import DatasetSpec, NoiseSpec, dataset_preset
 from gearlab.errors import GearlabInputError
 from gearlab.registry import get_registry
+from gearlab.settings import setting_of
 from gearlab.signals import NOISE_KINDS, SNR_DB_RANGE
 
 ONE = '{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }'
@@ -38,7 +39,7 @@ def _one_line(cli, path) -> str:
 def test_the_noise_table_and_the_effect_declare_the_same_kinds_and_bounds():
     fields = {f.name: f.metadata["setting"] for f in dataclasses.fields(NoiseSpec)}
     effect = get_registry().get("effect", "sensor_noise")
-    (snr,) = [p for p in effect.params if p.name == "snr_db"]
+    snr = setting_of(effect.params, "snr_db")
     assert (fields["snr_db"].low, fields["snr_db"].high) == (snr.low, snr.high) == SNR_DB_RANGE
     assert tuple(fields["kind"].choices) == tuple(effect.options["kind"]) == NOISE_KINDS
 

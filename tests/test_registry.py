@@ -1,14 +1,16 @@
 """The pluggy registry: built-in faults, entry-point loading, broken and clashing plugins."""
 
+import dataclasses
 import importlib.metadata
 import types
+from dataclasses import dataclass
 
 import pytest
 
 from gearlab.errors import GearlabInputError, UnknownPluginError
-from gearlab.params import Param
 from gearlab.physics.faults import Fault
 from gearlab.registry import get_registry, hookimpl, load_registry
+from gearlab.settings import NoParams, declared, setting
 
 BUILTIN_FAULTS = ["broken_tip", "chip", "crack", "pit", "spall"]
 
@@ -50,10 +52,15 @@ def builtin_entry_points():
     return [ep for ep in importlib.metadata.entry_points(group="gearlab") if ep.dist.name == "gearlab"]
 
 
+@dataclass(frozen=True)
+class WearParams:
+    depth: float = setting(float, 0.0, low=0.0, high=1e-3, unit="m", display_unit="um", doc="wear depth")
+
+
 class Wear(Fault):
     name = "wear"
     doc = "uniform wear"
-    params = (Param("depth", "m", 0.0, 0.0, 1e-3, "wear depth", "um"),)
+    params = WearParams
 
     def apply(self, section, params, pair):
         h = section.h - params["depth"]  # both flanks worn: A and I follow h (eq. 2.18, 2.19)
@@ -67,9 +74,19 @@ class FakeCrack(Wear):
     name = "crack"
 
 
-class ListParams(Wear):
-    name = "listparams"
-    params = [Param("depth", "m", 0.0, 0.0, 1e-3, "wear depth", "um")]
+class PlainParams(Wear):
+    name = "plainparams"
+    params = type("PlainParams", (), {"depth": 0.0})  # not a dataclass
+
+
+@dataclass(frozen=True)
+class UndeclaredParams:
+    depth: float = 0.0  # a plain field, no setting()
+
+
+class Undeclared(Wear):
+    name = "undeclared"
+    params = UndeclaredParams
 
 
 class NotParams(Wear):
@@ -80,7 +97,7 @@ class NotParams(Wear):
 class NoApply:
     name = "noapply"
     doc = ""
-    params = ()
+    params = NoParams
 
     def ladder_endpoints(self, pair):
         return {}, {}
@@ -95,9 +112,14 @@ class NoApply:
         return [{}] * steps
 
 
+@dataclass(frozen=True)
+class BadDefaultParams:
+    depth: float = setting(float, 2.0, low=0.0, high=1e-3, unit="m", display_unit="um", doc="wear depth")
+
+
 class BadDefault(Wear):
     name = "baddefault"
-    params = (Param("depth", "m", 2.0, 0.0, 1e-3, "wear depth", "um"),)
+    params = BadDefaultParams
 
 
 # --- the built-in registry -------------------------------------------------------------------
@@ -111,7 +133,7 @@ def test_builtin_faults_are_registered_by_gearlab():
         assert registry.packages[("fault", name)] == "gearlab"
         fault = registry.get("fault", name)
         assert fault.name == name
-        assert isinstance(fault.params, tuple) and all(isinstance(p, Param) for p in fault.params)
+        assert dataclasses.is_dataclass(fault.params) and declared(fault.params)
     rows = [row for row in registry.describe() if row["kind"] == "fault"]
     assert [row["name"] for row in rows] == BUILTIN_FAULTS
     assert all(row["package"] == "gearlab" and row["params"] for row in rows)
@@ -254,12 +276,13 @@ def test_adapters_and_detectors_share_one_namespace_and_one_lookup():
 @pytest.mark.parametrize(
     "obj, message",
     [
-        (ListParams(), "params must be a tuple of gearlab.params.Param"),
-        (NotParams(), "params must be a tuple of gearlab.params.Param"),
+        (PlainParams(), "params must be a dataclass of fields declared with gearlab.api.setting"),
+        (NotParams(), "params must be a dataclass of fields declared with gearlab.api.setting"),
+        (Undeclared(), "parameter 'depth' must be declared with setting(float or int"),
         (NoApply(), "lacks apply"),
         (BadDefault(), "default 2.0 lies outside its bounds"),
     ],
-    ids=["list-params", "str-params", "no-apply", "bad-default"],
+    ids=["plain-class-params", "str-params", "undeclared-field", "no-apply", "bad-default"],
 )
 def test_bad_schema_is_reported(obj, message):
     good = Wear()

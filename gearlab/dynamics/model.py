@@ -26,9 +26,10 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..gearbox.simulation import is_reference, preset_of_reference
-from ..params import Param, did_you_mean, plugin_description, resolve_params
+from ..params import did_you_mean
 from ..physics.geometry import GearPair
 from ..physics.presets import gear_pair
+from ..settings import plugin_description, resolve_params, setting, subset
 
 DOF_ORDER = ("x1", "y1", "theta11", "theta12", "x2", "y2", "theta21", "theta22", "xf", "yf")
 CHANNEL_DOFS = {
@@ -52,32 +53,44 @@ def drive_dofs(dofs) -> tuple[str, str]:
     return ("theta11" if "theta11" in dofs else "theta12"), ("theta22" if "theta22" in dofs else "theta21")
 
 
-# Every parameter a lumped gearbox model can take; a model declares the ones it uses.
-LUMPED_PARAMS = {
-    p.name: p
-    for p in (
-        Param("m1", "kg", 1.0, 1e-6, 1e4, "mass of the pinion block (gear, shaft, bearings)"),
-        Param("m2", "kg", 1.0, 1e-6, 1e4, "mass of the gear block"),
-        Param("mf", "kg", 10.0, 1e-6, 1e5, "mass of the gearbox casing"),
-        Param("I11", "kg*m^2", 1e-2, 1e-9, 1e3, "mass moment of inertia of the motor"),
-        Param("I12", "kg*m^2", 1e-4, 1e-9, 1e3, "mass moment of inertia of the pinion block"),
-        Param("I21", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the gear block"),
-        Param("I22", "kg*m^2", 1e-2, 1e-9, 1e3, "mass moment of inertia of the load"),
-        Param("m3", "kg", 1.0, 1e-6, 1e4, "mass of the output block of a two- or three-stage model"),
-        Param("I31", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the output gear block"),
-        Param("m4", "kg", 1.0, 1e-6, 1e4, "mass of the second intermediate block of a three-stage model"),
-        Param("I41", "kg*m^2", 1e-3, 1e-9, 1e3, "mass moment of inertia of the second intermediate block"),
-        Param("k_b", "N/m", 1e8, 1e3, 1e12, "bearing stiffness, x and y of both shafts"),
-        Param("c_b", "N*s/m", 1e3, 0.0, 1e8, "bearing damping, x and y of both shafts"),
-        Param("k_c", "N*m/rad", 1e3, 0.0, 1e9, "coupling stiffness motor-pinion and gear-load"),
-        Param("c_c", "N*m*s/rad", 10.0, 0.0, 1e6, "coupling damping"),
-        Param("k_xf", "N/m", 2e8, 1e3, 1e12, "casing mounting stiffness, x"),
-        Param("k_yf", "N/m", 2e8, 1e3, 1e12, "casing mounting stiffness, y"),
-        Param("c_xf", "N*s/m", 2e3, 0.0, 1e8, "casing mounting damping, x"),
-        Param("c_yf", "N*s/m", 2e3, 0.0, 1e8, "casing mounting damping, y"),
-        Param("zeta", "", 0.07, 0.0, 1.0, "mesh damping ratio (eq. 2.107)"),
+@dataclass(frozen=True)
+class LumpedParams:
+    """Every parameter a lumped gearbox model can take; a model declares the ones it uses."""
+
+    m1: float = setting(
+        float, 1.0, low=1e-6, high=1e4, unit="kg", doc="mass of the pinion block (gear, shaft, bearings)"
     )
-}
+    m2: float = setting(float, 1.0, low=1e-6, high=1e4, unit="kg", doc="mass of the gear block")
+    mf: float = setting(float, 10.0, low=1e-6, high=1e5, unit="kg", doc="mass of the gearbox casing")
+    I11: float = setting(float, 1e-2, low=1e-9, high=1e3, unit="kg*m^2", doc="mass moment of inertia of the motor")
+    I12: float = setting(
+        float, 1e-4, low=1e-9, high=1e3, unit="kg*m^2", doc="mass moment of inertia of the pinion block"
+    )
+    I21: float = setting(float, 1e-3, low=1e-9, high=1e3, unit="kg*m^2", doc="mass moment of inertia of the gear block")
+    I22: float = setting(float, 1e-2, low=1e-9, high=1e3, unit="kg*m^2", doc="mass moment of inertia of the load")
+    m3: float = setting(
+        float, 1.0, low=1e-6, high=1e4, unit="kg", doc="mass of the output block of a two- or three-stage model"
+    )
+    I31: float = setting(
+        float, 1e-3, low=1e-9, high=1e3, unit="kg*m^2", doc="mass moment of inertia of the output gear block"
+    )
+    m4: float = setting(
+        float, 1.0, low=1e-6, high=1e4, unit="kg", doc="mass of the second intermediate block of a three-stage model"
+    )
+    I41: float = setting(
+        float, 1e-3, low=1e-9, high=1e3, unit="kg*m^2", doc="mass moment of inertia of the second intermediate block"
+    )
+    k_b: float = setting(float, 1e8, low=1e3, high=1e12, unit="N/m", doc="bearing stiffness, x and y of both shafts")
+    c_b: float = setting(float, 1e3, low=0.0, high=1e8, unit="N*s/m", doc="bearing damping, x and y of both shafts")
+    k_c: float = setting(
+        float, 1e3, low=0.0, high=1e9, unit="N*m/rad", doc="coupling stiffness motor-pinion and gear-load"
+    )
+    c_c: float = setting(float, 10.0, low=0.0, high=1e6, unit="N*m*s/rad", doc="coupling damping")
+    k_xf: float = setting(float, 2e8, low=1e3, high=1e12, unit="N/m", doc="casing mounting stiffness, x")
+    k_yf: float = setting(float, 2e8, low=1e3, high=1e12, unit="N/m", doc="casing mounting stiffness, y")
+    c_xf: float = setting(float, 2e3, low=0.0, high=1e8, unit="N*s/m", doc="casing mounting damping, x")
+    c_yf: float = setting(float, 2e3, low=0.0, high=1e8, unit="N*s/m", doc="casing mounting damping, y")
+    zeta: float = setting(float, 0.07, low=0.0, high=1.0, doc="mesh damping ratio (eq. 2.107)")
 
 
 @dataclass(frozen=True)
@@ -127,8 +140,9 @@ class DynamicModel:
     stages: ClassVar[int] = 1
 
     @property
-    def params(self) -> tuple[Param, ...]:
-        return tuple(LUMPED_PARAMS[name] for name in self.param_names())
+    def params(self) -> type:
+        """The settings dataclass of the parameters it uses (param_names)."""
+        return subset(LumpedParams, tuple(self.param_names()))
 
     def param_names(self) -> tuple[str, ...]:
         names = ["m1", "m2", "I12", "I21", "k_b", "c_b", "zeta"]

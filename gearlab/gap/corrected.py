@@ -32,14 +32,22 @@ from ..effects import EffectChain, config_of
 from ..errors import GearlabInputError
 from ..gearbox.corrected import number, quantity, with_dynamics, with_table
 from ..gearbox.derive import DYNAMICS_NAMES
-from ..gearbox.description import DYNAMICS, FITTED, LOAD_LEVEL, OPERATION_FITTED, parse_gearbox, read_description
+from ..gearbox.description import (
+    DYNAMICS,
+    FITTED,
+    LOAD_LEVEL,
+    OPERATION_FITTED,
+    OPERATION_KEYS,
+    parse_gearbox,
+    read_description,
+)
 from ..gearbox.simulation import channel, is_reference, label, model_name, preset_of, referenced
-from ..params import resolve_params
 from ..registry import get_registry
+from ..settings import resolve_params
 
 FILE = "gearbox_corrected.toml"
 FACTORS = {"k_b": "k_factor", "c_b": "c_factor"}  # bearing_stiffness: factors on the model's values
-_BOUNDS = {p.name: p for p in DYNAMICS}
+_BOUNDS = {name: p for name, (p, _) in DYNAMICS.items()}
 
 
 def write_corrected(source: DatasetSpec, result: dict, run) -> str | None:
@@ -129,7 +137,8 @@ def _operation(name: str, params: dict, box, run_name: str, operation: dict, com
     key = next(k for k, effect in OPERATION_FITTED.items() if effect == name)
     factor = float(params["factor"])
     level = box.load_level * factor
-    if not LOAD_LEVEL.low <= level <= LOAD_LEVEL.high:
+    bounds = OPERATION_KEYS[LOAD_LEVEL][0]
+    if not bounds.low <= level <= bounds.high:
         return f"{key} = {number(level)} outside the description's bounds"
     operation[key], torque = number(level), box.torque()
     at = "" if torque is None else f": {number(torque)} -> {number(torque * factor)} N*m at the [operation] load"

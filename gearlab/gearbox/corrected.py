@@ -17,7 +17,7 @@ from ..errors import GearlabInputError
 from ..units import to_si
 from .description import DYNAMICS
 
-_UNITS = {p.name: p.unit for p in DYNAMICS}
+_UNITS = {name: p.unit for name, (p, _) in DYNAMICS.items()}
 _HEADER = re.compile(r"^\s*\[\[?\s*([^\]]*?)\s*\]\]?\s*(#.*)?$")  # a [table] or [[array]] line
 _KEY = re.compile(r"^\s*([A-Za-z0-9_-]+)\s*=")
 _WRITTEN = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*(.*?)\s*$")  # "200 kN/m" -> "kN/m"

@@ -30,7 +30,8 @@ from pathlib import Path
 
 from ..errors import GearlabInputError, shown
 from ..files import toml_tables
-from ..params import Param, did_you_mean
+from ..params import did_you_mean
+from ..settings import declared, setting
 from ..units import to_si
 
 MAX_STAGES = 3  # series trains of 1 to 3 spur meshes; helical and planetary stages come later
@@ -48,59 +49,190 @@ def gear_name(stage: int, gear: str, shafts: tuple[str, ...]) -> str:
 
 # --- declared keys ---------------------------------------------------------------------------
 #
-# Param carries name, SI unit, default, bounds, doc and the unit shown to people; FITTED names
-# the gap-diagnosis effect (plugins/effects) that may fit a value from measured data.
+# Each table's keys are a settings dataclass (gearlab.settings): SI unit, default, bounds, doc and
+# the unit shown to people; NaN is "no default" (required, or optional where the code says so).
+# FITTED names the gap-diagnosis effect (plugins/effects) that may fit a value from measured data.
 
-_NAN = math.nan  # a required key's "default"
+_NAN = math.nan
 
-STAGE_KEYS = (
-    Param("module", "m", _NAN, 1e-4, 0.1, "module m (ISO 21771 m_n)", "mm"),
-    Param("pressure_angle", "rad", math.radians(20), math.radians(10), math.radians(35), "pressure angle α", "deg"),
-    Param("face_width", "m", _NAN, 1e-4, 1.0, "face width b (common to both gears)", "mm"),
-    Param("centre_distance", "m", _NAN, 1e-4, 10.0, "centre distance a (optional; checked against z, m, x)", "mm"),
-    Param("addendum", "", 1.0, 0.5, 1.5, "addendum coefficient h_a* (h_a = h_a* m; per gear: default the stage's)"),
-    Param(
-        "dedendum",
-        "",
+
+@dataclass(frozen=True)
+class StageKeys:
+    """A [[stages]] table's keys."""
+
+    module: float = setting(
+        float, _NAN, low=1e-4, high=0.1, unit="m", display_unit="mm", doc="module m (ISO 21771 m_n)"
+    )
+    pressure_angle: float = setting(
+        float,
+        math.radians(20),
+        low=math.radians(10),
+        high=math.radians(35),
+        unit="rad",
+        display_unit="deg",
+        doc="pressure angle α",
+    )
+    face_width: float = setting(
+        float, _NAN, low=1e-4, high=1.0, unit="m", display_unit="mm", doc="face width b (common to both gears)"
+    )
+    centre_distance: float = setting(
+        float,
+        _NAN,
+        low=1e-4,
+        high=10.0,
+        unit="m",
+        display_unit="mm",
+        doc="centre distance a (optional; checked against z, m, x)",
+    )
+    addendum: float = setting(
+        float, 1.0, low=0.5, high=1.5, doc="addendum coefficient h_a* (h_a = h_a* m; per gear: default the stage's)"
+    )
+    dedendum: float = setting(
+        float,
         1.25,
-        0.75,
-        2.0,
-        "dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*; per gear: default the stage's)",
-    ),
-    Param("tool_tip_radius", "", 0.2, 0.0, 0.5, "tip radius coefficient ρ_fP* of the generating rack"),
-)
-GEAR_KEYS = (
-    Param("z", "", _NAN, 6, 10_000, "number of teeth z", integer=True),
-    Param("x", "", 0.0, -1.0, 2.0, "profile shift coefficient x"),
-    Param(
-        "bore", "m", _NAN, 1e-4, 10.0, "bore diameter d_bore (the hub radius of the stiffness model is d_bore/2)", "mm"
-    ),
-    Param("face_width", "m", _NAN, 1e-4, 1.0, "face width of this gear (default: the stage's)", "mm"),
-    Param("tip_diameter", "m", _NAN, 1e-4, 20.0, "tip diameter d_a (default d + 2 m (h_a* + x))", "mm"),
-)
-PER_GEAR = ("addendum", "dedendum")  # stage keys a gear may set for itself (STAGE_KEYS' Params)
-MATERIAL_KEYS = (
-    Param("E", "Pa", _NAN, 1e8, 1e13, "Young's modulus E", "GPa"),
-    Param("nu", "", _NAN, 0.0, 0.4999, "Poisson's ratio ν"),
-    Param("density", "kg/m^3", 7850.0, 100.0, 30_000.0, "density ρ"),
-)
+        low=0.75,
+        high=2.0,
+        doc="dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*; per gear: default the stage's)",
+    )
+    tool_tip_radius: float = setting(
+        float, 0.2, low=0.0, high=0.5, doc="tip radius coefficient ρ_fP* of the generating rack"
+    )
+
+
+@dataclass(frozen=True)
+class GearKeys:
+    """A stage's pinion or wheel table's keys."""
+
+    z: int = setting(int, _NAN, low=6, high=10_000, doc="number of teeth z")
+    x: float = setting(float, 0.0, low=-1.0, high=2.0, doc="profile shift coefficient x")
+    bore: float = setting(
+        float,
+        _NAN,
+        low=1e-4,
+        high=10.0,
+        unit="m",
+        display_unit="mm",
+        doc="bore diameter d_bore (the hub radius of the stiffness model is d_bore/2)",
+    )
+    face_width: float = setting(
+        float,
+        _NAN,
+        low=1e-4,
+        high=1.0,
+        unit="m",
+        display_unit="mm",
+        doc="face width of this gear (default: the stage's)",
+    )
+    tip_diameter: float = setting(
+        float,
+        _NAN,
+        low=1e-4,
+        high=20.0,
+        unit="m",
+        display_unit="mm",
+        doc="tip diameter d_a (default d + 2 m (h_a* + x))",
+    )
+
+
+PER_GEAR = ("addendum", "dedendum")  # stage keys a gear may set for itself
+
+
+@dataclass(frozen=True)
+class MaterialKeys:
+    """A [materials] entry's keys."""
+
+    E: float = setting(float, _NAN, low=1e8, high=1e13, unit="Pa", display_unit="GPa", doc="Young's modulus E")
+    nu: float = setting(float, _NAN, low=0.0, high=0.4999, doc="Poisson's ratio ν")
+    density: float = setting(float, 7850.0, low=100.0, high=30_000.0, unit="kg/m^3", doc="density ρ")
+
+
 STEEL = {"E": 200e9, "nu": 0.3, "density": 7850.0}  # the thesis's steel (Tables 2.3, 2.4)
 
-# Lumped-model parameters (thesis Tables 2.3/2.4, eq. 2.96-2.107), one value for the gearbox.
-DYNAMICS = (
-    Param("motor_inertia", "kg*m^2", 0.0043, 1e-7, 1e3, "I11, the motor's rotor (Table 2.4)"),
-    Param("load_inertia", "kg*m^2", 0.0045, 1e-7, 1e3, "I22, the load's rotor (Table 2.4)"),
-    Param("coupling_stiffness", "N*m/rad", 1e4, 1.0, 1e9, "k_c, torsional stiffness of each coupling"),
-    Param("coupling_damping", "N*m*s/rad", 10.0, 0.0, 1e6, "c_c, torsional damping of each coupling"),
-    Param("bearing_stiffness", "N/m", 1e8, 1e5, 1e11, "k_b, radial stiffness of each shaft's bearings"),
-    Param("bearing_damping", "N*s/m", 2e3, 0.0, 1e7, "c_b, radial damping of each shaft's bearings"),
-    Param("casing_mass", "kg", 10.0, 0.1, 1e5, "m_f, the casing block"),
-    Param("mounting_stiffness_x", "N/m", 2e8, 1e5, 1e11, "k_xf, the casing's mounts along x"),
-    Param("mounting_stiffness_y", "N/m", 2e8, 1e5, 1e11, "k_yf, the casing's mounts along y"),
-    Param("mounting_damping_x", "N*s/m", 2e3, 0.0, 1e7, "c_xf, the casing's mounts along x"),
-    Param("mounting_damping_y", "N*s/m", 2e3, 0.0, 1e7, "c_yf, the casing's mounts along y"),
-    Param("mesh_damping_ratio", "", 0.07, 0.0, 0.5, "ζ of eq. 2.107, the mesh damping ratio"),
+
+@dataclass(frozen=True)
+class DynamicsKeys:
+    """[dynamics]: the lumped-model parameters (thesis Tables 2.3/2.4, eq. 2.96-2.107), one value for the gearbox."""
+
+    motor_inertia: float = setting(
+        float, 0.0043, low=1e-7, high=1e3, unit="kg*m^2", doc="I11, the motor's rotor (Table 2.4)"
+    )
+    load_inertia: float = setting(
+        float, 0.0045, low=1e-7, high=1e3, unit="kg*m^2", doc="I22, the load's rotor (Table 2.4)"
+    )
+    coupling_stiffness: float = setting(
+        float, 1e4, low=1.0, high=1e9, unit="N*m/rad", doc="k_c, torsional stiffness of each coupling"
+    )
+    coupling_damping: float = setting(
+        float, 10.0, low=0.0, high=1e6, unit="N*m*s/rad", doc="c_c, torsional damping of each coupling"
+    )
+    bearing_stiffness: float = setting(
+        float, 1e8, low=1e5, high=1e11, unit="N/m", doc="k_b, radial stiffness of each shaft's bearings"
+    )
+    bearing_damping: float = setting(
+        float, 2e3, low=0.0, high=1e7, unit="N*s/m", doc="c_b, radial damping of each shaft's bearings"
+    )
+    casing_mass: float = setting(float, 10.0, low=0.1, high=1e5, unit="kg", doc="m_f, the casing block")
+    mounting_stiffness_x: float = setting(
+        float, 2e8, low=1e5, high=1e11, unit="N/m", doc="k_xf, the casing's mounts along x"
+    )
+    mounting_stiffness_y: float = setting(
+        float, 2e8, low=1e5, high=1e11, unit="N/m", doc="k_yf, the casing's mounts along y"
+    )
+    mounting_damping_x: float = setting(
+        float, 2e3, low=0.0, high=1e7, unit="N*s/m", doc="c_xf, the casing's mounts along x"
+    )
+    mounting_damping_y: float = setting(
+        float, 2e3, low=0.0, high=1e7, unit="N*s/m", doc="c_yf, the casing's mounts along y"
+    )
+    mesh_damping_ratio: float = setting(float, 0.07, low=0.0, high=0.5, doc="ζ of eq. 2.107, the mesh damping ratio")
+
+
+@dataclass(frozen=True)
+class OperationKeys:
+    """The [operation] key a gap-diagnosis effect may fit."""
+
+    load_level: float = setting(
+        float,
+        1.0,
+        low=0.01,
+        high=100.0,
+        doc="factor on the output torque, the [operation] load or a scenario's 'load' (a gap run's load_level fit)",
+    )
+
+
+@dataclass(frozen=True)
+class ShaftKeys:
+    """A [shafts] entry's keys."""
+
+    mass: float = setting(
+        float,
+        _NAN,
+        low=1e-4,
+        high=1e5,
+        unit="kg",
+        doc="mass of the shaft's block (its gears and the shaft; default: solid discs)",
+    )
+    inertia: float = setting(
+        float,
+        _NAN,
+        low=1e-9,
+        high=1e4,
+        unit="kg*m^2",
+        doc="polar moment of inertia of the block (default: solid discs)",
+    )
+
+
+@dataclass(frozen=True)
+class TachoKeys:
+    """The [sensor] tacho's keys."""
+
+    pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="tacho pulses per revolution")
+
+
+STAGE_KEYS, GEAR_KEYS, MATERIAL_KEYS, DYNAMICS, OPERATION_KEYS, SHAFT_KEYS, TACHO_KEYS = (
+    declared(c) for c in (StageKeys, GearKeys, MaterialKeys, DynamicsKeys, OperationKeys, ShaftKeys, TachoKeys)
 )
+LOAD_LEVEL = "load_level"
 FITTED = {
     "motor_inertia": "drive_inertias",
     "load_inertia": "drive_inertias",
@@ -115,19 +247,7 @@ FITTED = {
     "mounting_damping_y": "casing_path",
     "mesh_damping_ratio": "mesh_damping",
 }
-LOAD_LEVEL = Param(
-    "load_level",
-    "",
-    1.0,
-    0.01,
-    100.0,
-    "factor on the output torque, the [operation] load or a scenario's 'load' (a gap run's load_level fit)",
-)
-OPERATION_FITTED = {"load_level": "load_level"}  # [operation] keys a gap-diagnosis effect may fit
-SHAFT_KEYS = (
-    Param("mass", "kg", _NAN, 1e-4, 1e5, "mass of the shaft's block (its gears and the shaft; default: solid discs)"),
-    Param("inertia", "kg*m^2", _NAN, 1e-9, 1e4, "polar moment of inertia of the block (default: solid discs)"),
-)
+OPERATION_FITTED = {LOAD_LEVEL: "load_level"}  # [operation] keys a gap-diagnosis effect may fit
 SENSOR_DIRECTIONS = ("x", "y", "radial", "axial")
 
 
@@ -282,16 +402,18 @@ class _Table:
                     f"{self.where(key)}: unknown key{did_you_mean(str(key), keys)}; known keys: {', '.join(keys)}"
                 )
 
-    def param(self, p: Param, default: float | None = None) -> float | None:
-        """The value of *p* in SI, checked against its bounds; *default* (or p.default) when absent,
-        None when absent and optional (default NaN and none given)."""
-        if p.name not in self.data:
-            value = p.default if default is None else default
+    def param(self, keys: Mapping, name: str, default: float | None = None) -> float | None:
+        """The value of key *name* of *keys* (a table's declared keys) in SI, checked against its
+        bounds; *default* (or the declared one) when absent, None when absent and optional (default
+        NaN and none given)."""
+        p, declared_default = keys[name]
+        if name not in self.data:
+            value = declared_default if default is None else default
             if isinstance(value, float) and math.isnan(value):
                 return None
             return value
-        where = self.where(p.name)
-        raw = self.data[p.name]
+        where = self.where(name)
+        raw = self.data[name]
         if p.integer:
             if isinstance(raw, bool) or not isinstance(raw, int):
                 raise GearlabInputError(f"{where}: expected a whole number, got {shown(raw)}")
@@ -305,11 +427,12 @@ class _Table:
             raise GearlabInputError(f"{where}: {shown(raw)} is outside [{p.show(p.low)}, {p.show(p.high)}]{said}")
         return value
 
-    def required(self, p: Param, default: float | None = None) -> float:
-        value = self.param(p, default)
+    def required(self, keys: Mapping, name: str, default: float | None = None) -> float:
+        value = self.param(keys, name, default)
         if value is None:
+            p = keys[name][0]
             raise GearlabInputError(
-                f"{self.where(p.name)}: missing; expected {p.doc}" + (f" in {p.display_unit}" if p.display_unit else "")
+                f"{self.where(name)}: missing; expected {p.doc}" + (f" in {p.display_unit}" if p.display_unit else "")
             )
         return value
 
@@ -374,7 +497,7 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
     shafts, shaft_mass, shaft_inertia = _shafts(data.get("shafts"), len(stages), source)
 
     op = _Table(data.get("operation", {}), source, "[operation]")
-    op.known(("speed", "load", LOAD_LEVEL.name))
+    op.known(("speed", "load", LOAD_LEVEL))
     speed = speed_hz(op.data["speed"], op.where("speed")) if "speed" in op.data else None
     load = None
     if "load" in op.data:
@@ -384,8 +507,8 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
 
     sensor = _sensor(data.get("sensor", {}), source, shafts)
     dyn = _Table(data.get("dynamics", {}), source, "[dynamics]")
-    dyn.known(p.name for p in DYNAMICS)
-    dynamics = {p.name: dyn.param(p) for p in DYNAMICS}
+    dyn.known(DYNAMICS)
+    dynamics = {name: dyn.param(DYNAMICS, name) for name in DYNAMICS}
 
     box = Gearbox(
         name,
@@ -399,8 +522,8 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
         load,
         sensor,
         dynamics,
-        tuple(dyn.data) + ((LOAD_LEVEL.name,) if LOAD_LEVEL.name in op.data else ()),
-        op.param(LOAD_LEVEL),
+        tuple(dyn.data) + ((LOAD_LEVEL,) if LOAD_LEVEL in op.data else ()),
+        op.param(OPERATION_KEYS, LOAD_LEVEL),
     )
     check_geometry(box)
     return box
@@ -411,19 +534,19 @@ def _materials(data, source: str) -> dict[str, Material]:
     out = {"steel": Material("steel", **STEEL)}
     for key, value in table.data.items():
         t = _Table(value, source, f"[materials.{key}]")
-        t.known(p.name for p in MATERIAL_KEYS)
-        E, nu, density = (t.required(p) for p in MATERIAL_KEYS)
+        t.known(MATERIAL_KEYS)
+        E, nu, density = (t.required(MATERIAL_KEYS, name) for name in MATERIAL_KEYS)
         out[str(key)] = Material(str(key), E, nu, density)
     return out
 
 
 def _stage(data: Mapping, i: int, source: str, materials: dict[str, Material]) -> Stage:
     t = _Table(data, source, f"[[stages]] #{i + 1}")
-    t.known([p.name for p in STAGE_KEYS] + ["name", "pinion", "wheel"])
+    t.known([*STAGE_KEYS, "name", "pinion", "wheel"])
     name = t.text("name", "")
-    module, alpha, width, a, ha, hf, rho = (t.param(p) for p in STAGE_KEYS)
-    module = t.required(STAGE_KEYS[0])
-    width = t.required(STAGE_KEYS[2])
+    module, alpha, width, a, ha, hf, rho = (t.param(STAGE_KEYS, name) for name in STAGE_KEYS)
+    module = t.required(STAGE_KEYS, "module")
+    width = t.required(STAGE_KEYS, "face_width")
     if hf <= ha:
         raise GearlabInputError(
             f"{t.where('dedendum')}: h_f* = {hf:g} must exceed the addendum coefficient h_a* = {ha:g} "
@@ -434,14 +557,13 @@ def _stage(data: Mapping, i: int, source: str, materials: dict[str, Material]) -
 
 
 def _gear(t: _Table, role: str, stage_width: float, materials: dict[str, Material], clearance: float) -> GearSpec:
-    own = [p for p in STAGE_KEYS if p.name in PER_GEAR]
-    t.known([p.name for p in GEAR_KEYS] + [p.name for p in own] + ["material"])
-    z = int(t.required(GEAR_KEYS[0]))
-    x = t.param(GEAR_KEYS[1])
-    bore = t.required(GEAR_KEYS[2])
-    width = t.param(GEAR_KEYS[3], stage_width)
-    tip = t.param(GEAR_KEYS[4])
-    ha, hf = (t.param(p) if p.name in t.data else None for p in own)
+    t.known([*GEAR_KEYS, *PER_GEAR, "material"])
+    z = int(t.required(GEAR_KEYS, "z"))
+    x = t.param(GEAR_KEYS, "x")
+    bore = t.required(GEAR_KEYS, "bore")
+    width = t.param(GEAR_KEYS, "face_width", stage_width)
+    tip = t.param(GEAR_KEYS, "tip_diameter")
+    ha, hf = (t.param(STAGE_KEYS, name) if name in t.data else None for name in PER_GEAR)
     if ha is not None and tip is not None:
         raise GearlabInputError(
             f"{t.where('tip_diameter')}: give the tip by 'addendum' or by 'tip_diameter', not both "
@@ -455,8 +577,8 @@ def _gear(t: _Table, role: str, stage_width: float, materials: dict[str, Materia
     material = t.data.get("material", "steel")
     if isinstance(material, Mapping):
         m = _Table(material, t.source, f"{t.name}.material")
-        m.known(p.name for p in MATERIAL_KEYS)
-        mat = Material(f"{t.name}.material", *(m.required(p) for p in MATERIAL_KEYS))
+        m.known(MATERIAL_KEYS)
+        mat = Material(f"{t.name}.material", *(m.required(MATERIAL_KEYS, name) for name in MATERIAL_KEYS))
     elif isinstance(material, str) and material in materials:
         mat = materials[material]
     else:
@@ -480,13 +602,13 @@ def _shafts(data, stages: int, source: str) -> tuple[tuple[str, ...], tuple, tup
     out, mass, inertia = [], [], []
     for i, item in enumerate(data):
         t = _Table(item, source, f"[[shafts]] #{i + 1}")
-        t.known(["name"] + [p.name for p in SHAFT_KEYS])
+        t.known(["name", *SHAFT_KEYS])
         name = t.text("name", names[i])
         if not name or name in out:
             raise GearlabInputError(f"{t.where('name')}: expected a distinct non-empty shaft name, got {shown(name)}")
         out.append(name)
-        mass.append(t.param(SHAFT_KEYS[0]))
-        inertia.append(t.param(SHAFT_KEYS[1]))
+        mass.append(t.param(SHAFT_KEYS, "mass"))
+        inertia.append(t.param(SHAFT_KEYS, "inertia"))
     return tuple(out), tuple(mass), tuple(inertia)
 
 
@@ -507,5 +629,5 @@ def _sensor(data, source: str, shafts: tuple[str, ...]) -> Sensor:
         raise GearlabInputError(
             f"{t.where('direction')}: {shown(direction)} is not one of {', '.join(SENSOR_DIRECTIONS)}"
         )
-    ppr = t.param(Param("pulses_per_rev", "", 1, 1, 10_000, "tacho pulses per revolution", integer=True))
+    ppr = t.param(TACHO_KEYS, "pulses_per_rev")
     return Sensor(values["near"], direction, values["tacho"], int(ppr))

@@ -151,8 +151,8 @@ def defaults(box: Gearbox, names: tuple[str, ...]) -> list[str]:
     leaves to solid discs."""
     used = [key for key in box.dynamics if key not in box.stated and DYNAMICS_NAMES[key] in names]
     out = [f"{key}{f' (fit: {FITTED[key]})' if key in FITTED else ''}" for key in used]
-    if LOAD_LEVEL.name not in box.stated:  # [operation] load_level: the gap's load_level effect fits it
-        out.append(f"{LOAD_LEVEL.name} (fit: {OPERATION_FITTED[LOAD_LEVEL.name]})")
+    if LOAD_LEVEL not in box.stated:  # [operation] load_level: the gap's load_level effect fits it
+        out.append(f"{LOAD_LEVEL} (fit: {OPERATION_FITTED[LOAD_LEVEL]})")
     discs = [name for name, m, j in zip(box.shafts, box.shaft_mass, box.shaft_inertia) if m is None or j is None]
     return out + ([f"the {', '.join(discs)} shaft blocks (solid discs)"] if discs else [])
 

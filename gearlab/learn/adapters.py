@@ -35,10 +35,12 @@ the plugins import torch inside the methods that use it, which only run while tr
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from gearlab.errors import GearlabInputError
-from gearlab.params import Param, did_you_mean, plugin_description, resolve_params
+from gearlab.params import did_you_mean
+from gearlab.settings import NoParams, declared, plugin_description, resolve_params, setting
 
 if TYPE_CHECKING:  # for the annotations only; see the module docstring
     import torch
@@ -52,19 +54,18 @@ LAMBDA_STEP = 0.05
 LAMBDA_EVERY = 25
 LAMBDA_MAX = 1.0
 
-SCHEDULE_PARAMS = (
-    Param("lambda_step", "", LAMBDA_STEP, 0.0, 1.0, "increase of the domain-loss weight λ at each step (Table 5.3)"),
-    Param(
-        "lambda_every",
-        "",
-        LAMBDA_EVERY,
-        1,
-        10_000,
-        "epochs of joint training between λ steps (Table 5.3)",
-        integer=True,
-    ),
-    Param("lambda_max", "", LAMBDA_MAX, 0.0, 10.0, "largest domain-loss weight λ (Table 5.3)"),
-)
+
+@dataclass(frozen=True)
+class ScheduleParams:
+    """The λ schedule of a domain-loss adapter (Table 5.3); such an adapter's parameters extend it."""
+
+    lambda_step: float = setting(
+        float, LAMBDA_STEP, low=0.0, high=1.0, doc="increase of the domain-loss weight λ at each step (Table 5.3)"
+    )
+    lambda_every: int = setting(
+        int, LAMBDA_EVERY, low=1, high=10_000, doc="epochs of joint training between λ steps (Table 5.3)"
+    )
+    lambda_max: float = setting(float, LAMBDA_MAX, low=0.0, high=10.0, doc="largest domain-loss weight λ (Table 5.3)")
 
 
 # ----------------------------------------------------------------------------- schedule
@@ -89,7 +90,7 @@ class MethodPlugin:
     kind: str = ""  # its registry kind, for messages
     name: str = ""
     doc: str = ""
-    params: tuple[Param, ...] = ()
+    params: type = NoParams  # a settings dataclass (gearlab.settings)
     supervision: tuple[str, ...] = SUPERVISIONS
     choices: dict[str, tuple[str, ...]] = {}  # parameter -> names of its codes 0, 1, ... (scenarios may give either)
 
@@ -114,7 +115,7 @@ class MethodPlugin:
         return resolve_params(self.params, self.coerce(given or {}, where), where)
 
     def values(self, params: Mapping[str, object] | None) -> dict:
-        values = {p.name: p.default for p in self.params}
+        values = {name: default for name, (_, default) in declared(self.params).items()}
         values.update(params or {})
         return values
 
@@ -212,7 +213,7 @@ __all__ = [
     "LAMBDA_EVERY",
     "LAMBDA_MAX",
     "LAMBDA_STEP",
-    "SCHEDULE_PARAMS",
+    "ScheduleParams",
     "SUPERVISIONS",
     "TRAIN_ON",
     "Adapter",

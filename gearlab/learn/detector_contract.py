@@ -28,11 +28,12 @@ This module does not import torch (the registry imports every plugin on every co
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gearlab.params import Param, plugin_description
+from gearlab.settings import plugin_description, setting
 
 from .adapters import MethodPlugin
 from .path import PATHS
@@ -40,20 +41,27 @@ from .path import PATHS
 if TYPE_CHECKING:  # for the annotations only; see the module docstring
     from torch import nn
 
-# Every detector's threshold: the share of the target's healthy history let through
-FALSE_ALARM_PARAM = Param(
-    "false_alarm", "", 0.01, 1e-6, 0.5, "share of the target's healthy history allowed above the threshold"
-)
-# ... and how the simulated shapes reach the target (gearlab.learn.path); scenarios may give the names
-PATH_PARAM = Param(
-    "path",
-    "",
-    PATHS.index("fir"),
-    0,
-    len(PATHS) - 1,
-    "simulated shapes to the target: 0 = gain, 1 = fir (filter fitted between the healthy references)",
-    integer=True,
-)
+
+@dataclass(frozen=True)
+class DetectorParams:
+    """Every detector's threshold: the share of the target's healthy history let through. A
+    detector's parameters extend it."""
+
+    false_alarm: float = setting(
+        float, 0.01, low=1e-6, high=0.5, doc="share of the target's healthy history allowed above the threshold"
+    )
+
+
+def path_setting():
+    """A detector's parameter ``path``: how the simulated shapes reach the target (gearlab.learn.path);
+    scenarios may give the names."""
+    return setting(
+        int,
+        PATHS.index("fir"),
+        low=0,
+        high=len(PATHS) - 1,
+        doc="simulated shapes to the target: 0 = gain, 1 = fir (filter fitted between the healthy references)",
+    )
 
 
 class Detector(MethodPlugin):
@@ -61,7 +69,7 @@ class Detector(MethodPlugin):
     target's healthy history, scores rows, thresholded on that history at ``false_alarm``."""
 
     kind = "detector"
-    params: tuple[Param, ...] = (FALSE_ALARM_PARAM,)
+    params: type = DetectorParams
 
     def statistic(self, source, target, params: Mapping | None = None) -> nn.Module:
         """The unthresholded model of the training arrays *source* = (X, y) and *target* =
@@ -101,4 +109,4 @@ class Detector(MethodPlugin):
         return plugin_description(self, supervision=list(self.supervision))
 
 
-__all__ = ["FALSE_ALARM_PARAM", "PATH_PARAM", "Detector"]
+__all__ = ["Detector", "DetectorParams", "path_setting"]

@@ -24,7 +24,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import GearlabInputError
-from ..params import Param, plugin_description, resolve_params
+from ..settings import declared, plugin_description, resolve_params
 from .geometry import GearPair
 from .sections import ToothSection, healthy_section
 from .stiffness import GEARS, PlacedFault
@@ -35,7 +35,7 @@ LADDER_STEPS = 20
 class Fault:
     name: ClassVar[str]
     doc: ClassVar[str] = ""
-    params: ClassVar[tuple[Param, ...]]
+    params: ClassVar[type]  # a settings dataclass (gearlab.settings)
 
     # --- to implement ---------------------------------------------------------------
     def apply(self, section: ToothSection, params: Mapping[str, float], pair: GearPair) -> ToothSection:
@@ -68,10 +68,10 @@ class Fault:
         for i in range(steps):
             w = i / (steps - 1)
             values = {}
-            for p in self.params:
-                lo, hi = low[p.name], high[p.name]
+            for name, (p, _) in declared(self.params).items():
+                lo, hi = low[name], high[name]
                 v = hi if i == steps - 1 else lo + w * (hi - lo)  # exact endpoints
-                values[p.name] = int(round(v)) if p.integer else v
+                values[name] = int(round(v)) if p.integer else v
             out.append(values)
         return out
 

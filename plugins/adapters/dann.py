@@ -17,19 +17,25 @@ domain classifier is reduced to guessing).
 
 from __future__ import annotations
 
-from gearlab.api import SCHEDULE_PARAMS, Adapter, Param, hookimpl
+from dataclasses import dataclass
+
+from gearlab.api import Adapter, ScheduleParams, hookimpl, setting
 
 # torch is imported inside the methods: the registry imports this module on every gearlab
 # command, and only training needs torch.
 
 
+@dataclass(frozen=True)
+class DANNParams(ScheduleParams):
+    """DANN's parameters: the λ schedule's and its domain classifier's."""
+
+    hidden: int = setting(int, 64, low=1, high=4096, doc="width of the domain classifier's hidden layer")
+
+
 class DANN(Adapter):
     name = "dann"
     doc = "DANN: domain classifier on the latent features behind a gradient reversal layer (eq. 5.16-5.23)."
-    params = (
-        Param("hidden", "", 64, 1, 4096, "width of the domain classifier's hidden layer", integer=True),
-        *SCHEDULE_PARAMS,
-    )
+    params = DANNParams
     calibrated = True
     supervision = ("unsupervised", "supervised")
     train_on = "joint"

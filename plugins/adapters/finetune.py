@@ -16,10 +16,20 @@ those of the source.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 
-from gearlab.api import Adapter, Param, hookimpl
+from gearlab.api import Adapter, hookimpl, setting
 
 VARIANTS = ("all", "classifier", "last")
+
+
+@dataclass(frozen=True)
+class FinetuneParams:
+    """Finetune's parameters."""
+
+    variant: int = setting(
+        int, 0, low=0, high=len(VARIANTS) - 1, doc="layers retrained on the target: 0 = all, 1 = classifier, 2 = last"
+    )
 
 
 class Finetune(Adapter):
@@ -28,17 +38,7 @@ class Finetune(Adapter):
         "Fine-tuning (Han et al. 2019b): prime on the source, retrain all layers, the classifier or the last layer "
         "on the labelled target."
     )
-    params = (
-        Param(
-            "variant",
-            "",
-            0,
-            0,
-            len(VARIANTS) - 1,
-            "layers retrained on the target: 0 = all, 1 = classifier, 2 = last",
-            integer=True,
-        ),
-    )
+    params = FinetuneParams
     calibrated = True
     supervision = ("supervised",)
     train_on = "target"

@@ -13,7 +13,9 @@ shapes' sizes; it is exact where the simulator is (a corrected simulator, docs/g
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, hookimpl
+from dataclasses import dataclass
+
+from gearlab.api import PATHS, Detector, DetectorParams, hookimpl, path_setting, setting
 
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 MIXTURES = ("shapes", "sizes")  # gearlab.learn.detectors.MIXTURES
@@ -22,26 +24,28 @@ MIXTURE_DOC = "the mixture: 0 = shapes (each as the path brings it), 1 = sizes (
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
 
+@dataclass(frozen=True)
+class LikelihoodRatioParams(DetectorParams):
+    """LikelihoodRatio's parameters (false_alarm, DetectorParams', first)."""
+
+    path: int = path_setting()
+    scale: int = setting(
+        int,
+        0,
+        low=0,
+        high=len(SCALES) - 1,
+        doc="noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)",
+    )
+    mixture: int = setting(int, 0, low=0, high=len(MIXTURES) - 1, doc=MIXTURE_DOC)
+
+
 class LikelihoodRatio(Detector):
     name = "likelihood_ratio"
     doc = (
         "Physics-template detector: mixture likelihood ratio of the simulated fault shapes in the history's noise "
         "law, thresholded on the healthy history (no network)."
     )
-    params = (
-        FALSE_ALARM_PARAM,
-        PATH_PARAM,
-        Param(
-            "scale",
-            "",
-            0,
-            0,
-            len(SCALES) - 1,
-            "noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)",
-            integer=True,
-        ),
-        Param("mixture", "", 0, 0, len(MIXTURES) - 1, MIXTURE_DOC, integer=True),
-    )
+    params = LikelihoodRatioParams
     choices = {"path": PATHS, "scale": SCALES, "mixture": MIXTURES}
 
     def statistic(self, source, target, params=None):

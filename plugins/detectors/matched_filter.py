@@ -21,12 +21,36 @@ shapes miss pushes below the healthy revolutions'; gearlab.learn.detectors).
 
 from __future__ import annotations
 
-from gearlab.api import FALSE_ALARM_PARAM, PATH_PARAM, PATHS, Detector, Param, hookimpl
+from dataclasses import dataclass
+
+from gearlab.api import PATHS, Detector, DetectorParams, hookimpl, path_setting, setting
 
 LIMITERS = ("off", "on", "auto")
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
+
+
+@dataclass(frozen=True)
+class MatchedFilterParams(DetectorParams):
+    """MatchedFilter's parameters (false_alarm, DetectorParams', first)."""
+
+    limiter: int = setting(
+        int,
+        0,
+        low=0,
+        high=2,
+        doc="soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in impulsive noise)",
+    )
+    path: int = path_setting()
+    scale: int = setting(
+        int,
+        1,
+        low=0,
+        high=len(SCALES) - 1,
+        doc="noise level of a correlation: 0 = unit (the revolution's own residual norm: cosine), 1 = history "
+        "(the healthy history's median)",
+    )
 
 
 class MatchedFilter(Detector):
@@ -36,29 +60,7 @@ class MatchedFilter(Detector):
         "reference and the simulated fault responses over the history's noise level, thresholded on the healthy "
         "history (no network)."
     )
-    params = (
-        FALSE_ALARM_PARAM,
-        Param(
-            "limiter",
-            "",
-            0,
-            0,
-            2,
-            "soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in impulsive noise)",
-            integer=True,
-        ),
-        PATH_PARAM,
-        Param(
-            "scale",
-            "",
-            1,
-            0,
-            len(SCALES) - 1,
-            "noise level of a correlation: 0 = unit (the revolution's own residual norm: cosine), 1 = history "
-            "(the healthy history's median)",
-            integer=True,
-        ),
-    )
+    params = MatchedFilterParams
     choices = {"limiter": LIMITERS, "path": PATHS, "scale": SCALES}
 
     def statistic(self, source, target, params=None):

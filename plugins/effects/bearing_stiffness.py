@@ -16,16 +16,23 @@ clearance and housing compliance. Defaults: k_factor 0.5 (real supports are usua
 than the bearing alone, the housing being in series), c_factor 1.
 """
 
-from gearlab.api import Effect, Param, hookimpl
+from dataclasses import dataclass
+
+from gearlab.api import Effect, hookimpl, setting
+
+
+@dataclass(frozen=True)
+class BearingStiffnessParams:
+    """BearingStiffness's parameters."""
+
+    k_factor: float = setting(float, 0.5, low=0.1, high=10.0, doc="factor on the bearing stiffness k_b")
+    c_factor: float = setting(float, 1.0, low=0.1, high=10.0, doc="factor on the bearing damping c_b")
 
 
 class BearingStiffness(Effect):
     name = "bearing_stiffness"
     doc = "bearing stiffness and damping multiplied by mismatch factors"
-    params = (
-        Param("k_factor", "", 0.5, 0.1, 10.0, "factor on the bearing stiffness k_b"),
-        Param("c_factor", "", 1.0, 0.1, 10.0, "factor on the bearing damping c_b"),
-    )
+    params = BearingStiffnessParams
     log_scale = frozenset({"k_factor", "c_factor"})
 
     def apply_model(self, config, params):

@@ -22,15 +22,24 @@ Bounds. lambda from 0 (the thesis's model) to 1 (the neighbour's load doubles th
 deflection: the upper limit of equal load sharing on a shared foundation). Default 0.25.
 """
 
-from gearlab.api import Effect, Param, fillet_compliance, hookimpl
+from dataclasses import dataclass
+
+from gearlab.api import Effect, fillet_compliance, hookimpl, setting
+
+
+@dataclass(frozen=True)
+class FilletCorrectionParams:
+    """FilletCorrection's parameters."""
+
+    lam: float = setting(
+        float, 0.25, low=0.0, high=1.0, doc="extra fillet compliance in double contact, as a fraction of the pair's own"
+    )
 
 
 class FilletCorrection(Effect):
     name = "fillet_correction"
     doc = "softer fillet foundation while two tooth pairs are loaded (double-contact overestimate of eq. 2.41-2.46)"
-    params = (
-        Param("lam", "", 0.25, 0.0, 1.0, "extra fillet compliance in double contact, as a fraction of the pair's own"),
-    )
+    params = FilletCorrectionParams
 
     def apply_excitation(self, exc, params):
         lam = params["lam"]

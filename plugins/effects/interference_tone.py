@@ -20,21 +20,33 @@ gearbox). Defaults: 24.75 Hz, a 4-pole induction motor on 50 Hz mains at 1 % sli
 ratio of 0.5.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from gearlab.api import Effect, GearlabInputError, Param, hookimpl
+from gearlab.api import Effect, GearlabInputError, hookimpl, setting, setting_of
 
 RATIO_LADDER = (0.5, 0.7, 1.4, 2.0)  # the guessed level's neighbours tried at the record's frequency
 ZOOM = 201  # points of the zoomed record spectrum over two record bins around its peak
 
 
+@dataclass(frozen=True)
+class InterferenceToneParams:
+    """InterferenceTone's parameters."""
+
+    frequency: float = setting(
+        float, 24.75, low=1.0, high=2e4, unit="Hz", doc="frequency of the interfering machine's line"
+    )
+    ratio: float = setting(float, 0.5, low=0.0, high=10.0, doc="tone RMS / RMS of the domain's healthy signal")
+
+
+FREQUENCY, RATIO = (setting_of(InterferenceToneParams, name) for name in ("frequency", "ratio"))
+
+
 class InterferenceTone(Effect):
     name = "interference_tone"
     doc = "non-synchronous sinusoid from a nearby machine, level relative to the healthy signal RMS"
-    params = (
-        Param("frequency", "Hz", 24.75, 1.0, 2e4, "frequency of the interfering machine's line"),
-        Param("ratio", "", 0.5, 0.0, 10.0, "tone RMS / RMS of the domain's healthy signal"),
-    )
+    params = InterferenceToneParams
     log_scale = frozenset({"frequency"})
     # The record's line and its least-squares level pin frequency and level to a few tenths of a
     # percent of their ranges (the level is read against the band-limited record's RMS, which lacks
@@ -66,7 +78,7 @@ class InterferenceTone(Effect):
         window = np.hanning(n)
         power = np.mean(np.abs(np.fft.rfft(residual * window, n=pad * n, axis=1)) ** 2, axis=0)
         f = np.fft.rfftfreq(pad * n, d=1.0 / (n * speed_hz))
-        keep = (f >= self.params[0].low) & (f <= min(self.params[0].high, 0.45 * n * speed_hz))
+        keep = (f >= FREQUENCY.low) & (f <= min(FREQUENCY.high, 0.45 * n * speed_hz))
         if not keep.any():
             return []
         peak = float(f[keep][np.argmax(power[keep])])
@@ -76,7 +88,7 @@ class InterferenceTone(Effect):
         coef, *_ = np.linalg.lstsq(basis, residual.T, rcond=None)
         tone = float(np.mean(np.sum((basis @ coef) ** 2, axis=0)) / n)
         rest = max(float(np.mean(X**2)) - tone, 1e-300)
-        ratio = min(float(np.sqrt(tone / rest)), self.params[1].high)
+        ratio = min(float(np.sqrt(tone / rest)), RATIO.high)
         guesses = [{"frequency": peak, "ratio": ratio}]
         # The rows read as one record, one revolution after another: when they are consecutive
         # revolutions of a measured record, its spectrum resolves speed / rows, so a line below one
@@ -90,7 +102,7 @@ class InterferenceTone(Effect):
         tapered = record * np.hanning(record.size)
         long = np.abs(np.fft.rfft(tapered, n=2 * record.size)) ** 2
         fl = np.fft.rfftfreq(2 * record.size, d=1.0 / fs)
-        keep = (fl >= self.params[0].low) & (fl <= min(self.params[0].high, 0.45 * fs))
+        keep = (fl >= FREQUENCY.low) & (fl <= min(FREQUENCY.high, 0.45 * fs))
         fine = float(fl[keep][np.argmax(long[keep])])
         # Zoomed to 1/ZOOM of a record bin around that peak: a search against consecutive rows
         # scores a line below one order by the record's own lines (gearlab.gap.views.record_view),
@@ -100,14 +112,14 @@ class InterferenceTone(Effect):
         from scipy.signal import zoom_fft  # here, not at the top: start-up time (every command loads plugins)
 
         bin_hz = fs / record.size
-        lo, hi = max(fine - bin_hz, self.params[0].low), fine + bin_hz
+        lo, hi = max(fine - bin_hz, FREQUENCY.low), fine + bin_hz
         zoom = np.abs(zoom_fft(tapered, [lo, hi], m=ZOOM, fs=fs, endpoint=True)) ** 2
         fine = float(np.linspace(lo, hi, ZOOM)[np.argmax(zoom)])
         t = np.arange(record.size) / fs
         basis = np.stack([np.sin(2 * np.pi * fine * t), np.cos(2 * np.pi * fine * t)], axis=1)
         coef, *_ = np.linalg.lstsq(basis, record, rcond=None)
         line = 0.5 * float(coef @ coef)  # the line's mean square
-        level = min(float(np.sqrt(line / max(float(np.mean(X**2)) - line, 1e-300))), self.params[1].high)
+        level = min(float(np.sqrt(line / max(float(np.mean(X**2)) - line, 1e-300))), RATIO.high)
         # Independent rows (each its own tone phase) hold no coherent line across the record: their
         # record level reads about 1/sqrt(rows) of the line's, and the one-revolution level stands.
         if level >= 0.5 * ratio:
@@ -119,9 +131,7 @@ class InterferenceTone(Effect):
         # the right frequency a level 40 % off scored like a tone at twice the frequency (a 179 Hz
         # tone next to a 4.9 kHz resonance came back at 357 Hz). The record's frequency is tried at
         # levels RATIO_LADDER times the reading too.
-        guesses += [
-            {"frequency": fine, "ratio": min(ratio * k, self.params[1].high)} for k in RATIO_LADDER if ratio * k > 0
-        ]
+        guesses += [{"frequency": fine, "ratio": min(ratio * k, RATIO.high)} for k in RATIO_LADDER if ratio * k > 0]
         return guesses
 
 

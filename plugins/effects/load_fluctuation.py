@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from gearlab.api import hookimpl
+from gearlab.api import hookimpl, setting_of
 from gearlab_plugins.effects.speed_fluctuation import GUESS_PHASES, ShaftRipple, sideband_ripple
 
 
@@ -40,11 +40,12 @@ class LoadFluctuation(ShaftRipple):
         """The ripple's order and amplitude from the mesh sidebands (sideband_ripple of
         speed_fluctuation): the mesh harmonics scale with the load, so the sidebands' modulation
         index is the load's ripple eps; tried at each of speed_fluctuation's GUESS_PHASES."""
-        found = sideband_ripple(target_X, int(self.params[1].high))
+        found = sideband_ripple(target_X, int(setting_of(self.params, "order").high))
         if found is None:
             return []
         order, eps = found
-        eps = min(max(eps, self.params[0].low), self.params[0].high)
+        amplitude = setting_of(self.params, "amplitude")
+        eps = min(max(eps, amplitude.low), amplitude.high)
         return [{"order": order, "amplitude": eps, "phase": phase} for phase in GUESS_PHASES]
 
 

@@ -16,16 +16,27 @@ Bounds. -1000 to 1000 m/s² (±10 V at 10 mV/g: the whole input range of a usual
 Default 0.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from gearlab.api import Effect, Param, hookimpl
+from gearlab.api import Effect, hookimpl, setting
+
+
+@dataclass(frozen=True)
+class SensorOffsetParams:
+    """SensorOffset's parameters."""
+
+    offset: float = setting(
+        float, 0.0, low=-1000.0, high=1000.0, unit="m/s^2", doc="constant added to the acceleration"
+    )
 
 
 class SensorOffset(Effect):
     name = "sensor_offset"
     doc = "constant (DC) offset on the measured acceleration: a sensor or amplifier bias"
     mean_only = True
-    params = (Param("offset", "m/s^2", 0.0, -1000.0, 1000.0, "constant added to the acceleration"),)
+    params = SensorOffsetParams
 
     def apply_signal(self, x, params, ctx):
         return np.asarray(x, dtype=float) + params["offset"]

@@ -21,20 +21,36 @@ from a few um (grade 4) to about 100 um (grade 11), plus bearing and shaft run-o
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from gearlab.api import Effect, Param, hookimpl
+from gearlab.api import Effect, hookimpl, setting
+
+
+@dataclass(frozen=True)
+class ShaftEccentricityParams:
+    """ShaftEccentricity's parameters."""
+
+    e: float = setting(
+        float, 20e-6, low=0.0, high=200e-6, unit="m", display_unit="um", doc="run-out (eccentricity) of the pinion"
+    )
+    phase: float = setting(
+        float,
+        0.0,
+        low=0.0,
+        high=2 * math.pi,
+        unit="rad",
+        display_unit="deg",
+        doc="angle of the run-out at the tacho zero",
+    )
 
 
 class ShaftEccentricity(Effect):
     name = "shaft_eccentricity"
     doc = "pinion run-out e: once-per-revolution transmission error along the line of action"
     breaks_symmetry = True
-    params = (
-        Param("e", "m", 20e-6, 0.0, 200e-6, "run-out (eccentricity) of the pinion", "um"),
-        Param("phase", "rad", 0.0, 0.0, 2 * math.pi, "angle of the run-out at the tacho zero", "deg"),
-    )
+    params = ShaftEccentricityParams
 
     def apply_excitation(self, exc, params):
         e, phi = params["e"], params["phase"]

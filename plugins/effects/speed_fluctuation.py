@@ -29,10 +29,11 @@ phase 0..360 deg. Default 1 % at once per revolution.
 """
 
 import math
+from dataclasses import make_dataclass
 
 import numpy as np
 
-from gearlab.api import Effect, Param, hookimpl
+from gearlab.api import Effect, hookimpl, setting, setting_of
 
 # Phases tried with a ripple's order read off the target: the sidebands' phases are in the
 # record's tacho frame, turned by an offset a guess cannot know (the diagnosis fits it per set).
@@ -88,12 +89,37 @@ class ShaftRipple(Effect):
     pitch_aliases = ("phase", "order")
 
     @staticmethod
-    def ripple_params(what: str, default: float, high: float, orders: int) -> tuple[Param, ...]:
-        """eps (relative peak of *what*, *default*, 0 .. *high*), q (1 .. *orders*) and phi."""
-        return (
-            Param("amplitude", "", default, 0.0, high, f"relative peak {what} fluctuation eps"),
-            Param("order", "", 1, 1, orders, "fluctuation frequency in input-shaft orders q", integer=True),
-            Param("phase", "rad", 0.0, 0.0, 2 * math.pi, "phase phi at the first tacho zero", "deg"),
+    def ripple_params(what: str, default: float, high: float, orders: int) -> type:
+        """The settings dataclass of eps (relative peak of *what*, *default*, 0 .. *high*), q (1 ..
+        *orders*) and phi."""
+        return make_dataclass(
+            "RippleParams",
+            [
+                (
+                    "amplitude",
+                    float,
+                    setting(float, default, low=0.0, high=high, doc=f"relative peak {what} fluctuation eps"),
+                ),
+                (
+                    "order",
+                    int,
+                    setting(int, 1, low=1, high=orders, doc="fluctuation frequency in input-shaft orders q"),
+                ),
+                (
+                    "phase",
+                    float,
+                    setting(
+                        float,
+                        0.0,
+                        low=0.0,
+                        high=2 * math.pi,
+                        unit="rad",
+                        display_unit="deg",
+                        doc="phase phi at the first tacho zero",
+                    ),
+                ),
+            ],
+            frozen=True,
         )
 
     def apply_excitation(self, exc, params):
@@ -121,7 +147,7 @@ class SpeedFluctuation(ShaftRipple):
         """The ripple's order from the mesh sidebands (:func:`sideband_ripple`), at GUESS_AMPLITUDES
         and two of GUESS_PHASES: order tracking takes the angle modulation out of the record, so
         the sidebands left (inertial torques, the dynamics) do not give eps simply."""
-        found = sideband_ripple(target_X, int(self.params[1].high))
+        found = sideband_ripple(target_X, int(setting_of(self.params, "order").high))
         if found is None:
             return []
         return [

@@ -8,10 +8,11 @@ the milder ones (thesis 2.4.3.1).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, Param, hookimpl, scaled_ladder
+from gearlab.api import Fault, GearlabInputError, hookimpl, scaled_ladder, setting
 
 _PIT_SHAPE = {"r": 80e-6, "sigma_r": 0.0, "theta": math.radians(30), "sigma_theta": 0.0, "n_total": 2000, "seed": 0}
 # Tables 2.5 / 2.6: pit shape and pitting line fixed, the number of pits growing to 2000.
@@ -39,20 +40,47 @@ def draw_pits(params) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return u[:k], np.maximum(r[:k], 0.0), np.clip(theta[:k], 1e-6, math.pi / 2)
 
 
+@dataclass(frozen=True)
+class PitParams:
+    """Pit's parameters."""
+
+    count: int = setting(int, 0, low=0, high=100000, doc="number of pits on the tooth (the first of the seeded draw)")
+    n_total: int = setting(int, 2000, low=1, high=100000, doc="size of the seeded draw the pits are taken from")
+    u: float = setting(
+        float, 4.387e-3, low=0.0, high=0.05, unit="m", display_unit="mm", doc="mean pitting line, from the tooth root"
+    )
+    sigma_u: float = setting(
+        float, 296e-6, low=0.0, high=0.05, unit="m", display_unit="um", doc="standard deviation of the pit centres"
+    )
+    r: float = setting(float, 80e-6, low=0.0, high=0.005, unit="m", display_unit="um", doc="mean sphere radius")
+    sigma_r: float = setting(
+        float, 0.0, low=0.0, high=0.005, unit="m", display_unit="um", doc="standard deviation of the radius"
+    )
+    theta: float = setting(
+        float,
+        math.radians(30),
+        low=math.radians(0.1),
+        high=math.pi / 2,
+        unit="rad",
+        display_unit="deg",
+        doc="mean contact angle",
+    )
+    sigma_theta: float = setting(
+        float,
+        0.0,
+        low=0.0,
+        high=math.pi / 2,
+        unit="rad",
+        display_unit="deg",
+        doc="standard deviation of the contact angle",
+    )
+    seed: int = setting(int, 0, low=0, high=2**32 - 1, doc="seed of the pit draw")
+
+
 class Pit(Fault):
     name = "pit"
     doc = "Distributed spherical pits (Meng et al. 2021), Gaussian location and shape, first `count` of N."
-    params = (
-        Param("count", "", 0, 0, 100000, "number of pits on the tooth (the first of the seeded draw)", integer=True),
-        Param("n_total", "", 2000, 1, 100000, "size of the seeded draw the pits are taken from", integer=True),
-        Param("u", "m", 4.387e-3, 0.0, 0.05, "mean pitting line, from the tooth root", "mm"),
-        Param("sigma_u", "m", 296e-6, 0.0, 0.05, "standard deviation of the pit centres", "um"),
-        Param("r", "m", 80e-6, 0.0, 0.005, "mean sphere radius", "um"),
-        Param("sigma_r", "m", 0.0, 0.0, 0.005, "standard deviation of the radius", "um"),
-        Param("theta", "rad", math.radians(30), math.radians(0.1), math.pi / 2, "mean contact angle", "deg"),
-        Param("sigma_theta", "rad", 0.0, 0.0, math.pi / 2, "standard deviation of the contact angle", "deg"),
-        Param("seed", "", 0, 0, 2**32 - 1, "seed of the pit draw", integer=True),
-    )
+    params = PitParams
 
     def check(self, params, pair, where):
         if params["count"] > params["n_total"]:

@@ -35,6 +35,7 @@ from ...confined import Confined
 from ...data.spec import DatasetSpec, NoiseSpec
 from ...errors import GearlabInputError
 from ...events import told_unit, unit_says
+from ...settings import declared
 
 # --- the trial mix ----------------------------------------------------------------------------
 
@@ -172,9 +173,9 @@ def draw_params(effect, rng: np.random.Generator) -> dict:
     rules = RANGES.get(effect.name)
     out: dict = {}
     if rules is None:
-        for p in effect.params:
-            scale = "int" if p.integer else ("log" if p.name in effect.log_scale and p.low > 0 else "lin")
-            out[p.name] = _draw_value(rng, (p.low, p.high, scale))
+        for name, (p, _) in declared(effect.params).items():
+            scale = "int" if p.integer else ("log" if name in effect.log_scale and p.low > 0 else "lin")
+            out[name] = _draw_value(rng, (p.low, p.high, scale))
     else:
         for name, rule in rules.items():
             out[name] = _draw_value(rng, rule)
@@ -500,7 +501,7 @@ def param_error(effect, name: str, true: float, fitted: float) -> float:
     """Error of one fitted parameter: |ln(fit/true)| for a log-scale one (the relative error when
     small), the wrapped angle difference / π for a phase (0 exact, 1 opposite), the error relative
     to the true value otherwise (to the bounds' width when the true value is 0)."""
-    p = next((q for q in effect.params if q.name == name), None)
+    p = declared(effect.params).get(name, (None,))[0]
     if p is not None and name in effect.log_scale and true > 0 and fitted > 0:
         return abs(math.log(fitted / true))
     if p is not None and p.unit == "rad" and math.isclose(p.high - p.low, 2 * math.pi):
