@@ -2,7 +2,7 @@
 import from gearlab. A plugin imports from here and nowhere else in gearlab, so gearlab's
 modules can move without breaking plugins (docs/plugins.md, docs/architecture.md).
 
-    from gearlab.api import Effect, hookimpl, setting
+    from gearlab.api import Effect, hookimpl, parameters, setting
 
     @hookimpl
     def gearlab_effects():
@@ -33,7 +33,7 @@ from .physics.presets import gear_pair
 from .physics.sections import healthy_section
 from .physics.stiffness import fillet_compliance
 from .registry import hookimpl
-from .settings import NoParams, declared, setting, setting_of
+from .settings import DEG, KHZ, MM, UM, NoParams, declared, parameters, setting, setting_of
 from .signals import NOISE_KINDS, SNR_DB_RANGE, add_noise
 
 # name -> module, imported on first access (torch)
@@ -49,6 +49,10 @@ _LAZY = {
 }
 
 __all__ = [
+    "DEG",
+    "KHZ",
+    "MM",
+    "UM",
     "DOF_ORDER",
     "NOISE_KINDS",
     "PATHS",
@@ -70,6 +74,7 @@ __all__ = [
     "SignalContext",
     "add_noise",
     "declared",
+    "parameters",
     "path_setting",
     "setting",
     "setting_of",

@@ -3,12 +3,11 @@ limit and doc, and everything else is derived from it — the scenario keys and 
 (gearlab.scenario.keys_of), the --quick shrinking (:func:`shrunk`), the checks of an inline
 table such as a dataset's noise ``{kind = "laplace", snr_db = 0, seed = 1}`` (:func:`from_inline`) and the
 reference tables of docs/settings.md (gearlab.settings_doc, through the scenario keys). A
-plugin's parameters are such a dataclass too (its ``params``; :func:`resolve_params`,
-:func:`describe_params`), numbers in SI with the unit shown to people:
+plugin's parameters are such a dataclass too (its ``params``, written in its class with
+:func:`parameters`; read by :func:`resolve_params`, :func:`describe_params`), numbers in SI with
+the unit shown to people:
 
-    @dataclass(frozen=True)
-    class CrackParams:
-        q0: float = setting(float, 0.0, low=0.0, high=0.05, unit="m", display_unit="mm", doc="crack depth")
+    params = parameters(q0=setting(float, 0.0, low=0.0, high=0.05, unit="m", display_unit="mm", doc="crack depth"))
 
     @dataclass(frozen=True)
     class NoiseSpec:
@@ -41,6 +40,14 @@ MAX_EPOCHS = 100_000
 MAX_SEED = 2**32 - 1
 # beyond this the list of units of a protocol would not fit in memory
 MAX_REPETITIONS = 1000
+
+
+# A setting's SI unit and the unit people read, where they differ: setting(..., **MM, ...) is
+# unit="m", display_unit="mm".
+MM = {"unit": "m", "display_unit": "mm"}
+UM = {"unit": "m", "display_unit": "um"}
+DEG = {"unit": "rad", "display_unit": "deg"}
+KHZ = {"unit": "Hz", "display_unit": "kHz"}
 
 
 def setting(
@@ -79,16 +86,20 @@ def setting_of(cls, name: str) -> Setting:
     return declared(cls)[name][0]
 
 
+def parameters(*bases, **fields):
+    """A plugin's parameters written in its class: the frozen settings dataclass of *fields*
+    (name=setting(float or int, ...)) after the fields of *bases* (settings dataclasses)."""
+    return dataclasses.make_dataclass(
+        "Params", [(name, f.metadata["setting"].types, f) for name, f in fields.items()], bases=bases, frozen=True
+    )
+
+
 @functools.cache
 def subset(cls, names: tuple[str, ...]):
     """A settings dataclass of the fields *names* of *cls*, in that order (a plugin that takes
     some of a shared list, such as a lumped model's parameters)."""
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    return dataclasses.make_dataclass(
-        cls.__name__,
-        [(n, fields[n].type, dataclasses.field(default=fields[n].default, metadata=fields[n].metadata)) for n in names],
-        frozen=True,
-    )
+    return parameters(**{n: dataclasses.field(default=fields[n].default, metadata=fields[n].metadata) for n in names})
 
 
 @dataclasses.dataclass(frozen=True)

@@ -86,7 +86,6 @@ def wear(site):
     """The installed module's fault object, loaded from its file (no change to sys.path)."""
     spec = importlib.util.spec_from_file_location("gearlab_wear_under_test", site / "gearlab_wear" / "wear.py")
     module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # as an import does: a dataclass looks its module up there
     spec.loader.exec_module(module)
     (fault,) = module.gearlab_faults()
     return fault
@@ -265,9 +264,7 @@ def fake_distribution(site: Path, dist: str, module: str, code: str) -> None:
 
 
 FAULT_HEAD = """
-from dataclasses import dataclass
-
-from gearlab.api import Fault, NoParams, hookimpl, setting
+from gearlab.api import MM, Fault, NoParams, hookimpl, parameters, setting
 """
 
 
@@ -281,14 +278,9 @@ def broken_site(tmp_path_factory) -> Path:
         "bad_schema",
         FAULT_HEAD
         + """
-@dataclass(frozen=True)
-class BumpParams:
-    height: float = setting(float, 2e-3, low=0.0, high=1e-3, unit="m", display_unit="mm", doc="above its bound")
-
-
 class Bump(Fault):
     name = "bump"
-    params = BumpParams
+    params = parameters(height=setting(float, 2e-3, low=0.0, high=1e-3, **MM, doc="above its bound"))
 
     def apply(self, section, params, pair):
         return section

@@ -31,7 +31,7 @@ from pathlib import Path
 from ..errors import GearlabInputError, shown
 from ..files import toml_tables
 from ..params import did_you_mean
-from ..settings import declared, setting
+from ..settings import DEG, MM, declared, setting
 from ..units import to_si
 
 MAX_STAGES = 3  # series trains of 1 to 3 spur meshes; helical and planetary stages come later
@@ -56,47 +56,31 @@ def gear_name(stage: int, gear: str, shafts: tuple[str, ...]) -> str:
 _NAN = math.nan
 
 
+DEDENDUM_DOC = "dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*; per gear: default the stage's)"
+
+
 @dataclass(frozen=True)
 class StageKeys:
     """A [[stages]] table's keys."""
 
-    module: float = setting(
-        float, _NAN, low=1e-4, high=0.1, unit="m", display_unit="mm", doc="module m (ISO 21771 m_n)"
-    )
+    module: float = setting(float, _NAN, low=1e-4, high=0.1, **MM, doc="module m (ISO 21771 m_n)")
     pressure_angle: float = setting(
-        float,
-        math.radians(20),
-        low=math.radians(10),
-        high=math.radians(35),
-        unit="rad",
-        display_unit="deg",
-        doc="pressure angle α",
+        float, math.radians(20), low=math.radians(10), high=math.radians(35), **DEG, doc="pressure angle α"
     )
-    face_width: float = setting(
-        float, _NAN, low=1e-4, high=1.0, unit="m", display_unit="mm", doc="face width b (common to both gears)"
-    )
+    face_width: float = setting(float, _NAN, low=1e-4, high=1.0, **MM, doc="face width b (common to both gears)")
     centre_distance: float = setting(
-        float,
-        _NAN,
-        low=1e-4,
-        high=10.0,
-        unit="m",
-        display_unit="mm",
-        doc="centre distance a (optional; checked against z, m, x)",
+        float, _NAN, low=1e-4, high=10.0, **MM, doc="centre distance a (optional; checked against z, m, x)"
     )
     addendum: float = setting(
         float, 1.0, low=0.5, high=1.5, doc="addendum coefficient h_a* (h_a = h_a* m; per gear: default the stage's)"
     )
-    dedendum: float = setting(
-        float,
-        1.25,
-        low=0.75,
-        high=2.0,
-        doc="dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*; per gear: default the stage's)",
-    )
+    dedendum: float = setting(float, 1.25, low=0.75, high=2.0, doc=DEDENDUM_DOC)
     tool_tip_radius: float = setting(
         float, 0.2, low=0.0, high=0.5, doc="tip radius coefficient ρ_fP* of the generating rack"
     )
+
+
+BORE_DOC = "bore diameter d_bore (the hub radius of the stiffness model is d_bore/2)"
 
 
 @dataclass(frozen=True)
@@ -105,32 +89,12 @@ class GearKeys:
 
     z: int = setting(int, _NAN, low=6, high=10_000, doc="number of teeth z")
     x: float = setting(float, 0.0, low=-1.0, high=2.0, doc="profile shift coefficient x")
-    bore: float = setting(
-        float,
-        _NAN,
-        low=1e-4,
-        high=10.0,
-        unit="m",
-        display_unit="mm",
-        doc="bore diameter d_bore (the hub radius of the stiffness model is d_bore/2)",
-    )
+    bore: float = setting(float, _NAN, low=1e-4, high=10.0, **MM, doc=BORE_DOC)
     face_width: float = setting(
-        float,
-        _NAN,
-        low=1e-4,
-        high=1.0,
-        unit="m",
-        display_unit="mm",
-        doc="face width of this gear (default: the stage's)",
+        float, _NAN, low=1e-4, high=1.0, **MM, doc="face width of this gear (default: the stage's)"
     )
     tip_diameter: float = setting(
-        float,
-        _NAN,
-        low=1e-4,
-        high=20.0,
-        unit="m",
-        display_unit="mm",
-        doc="tip diameter d_a (default d + 2 m (h_a* + x))",
+        float, _NAN, low=1e-4, high=20.0, **MM, doc="tip diameter d_a (default d + 2 m (h_a* + x))"
     )
 
 
@@ -187,39 +151,26 @@ class DynamicsKeys:
     mesh_damping_ratio: float = setting(float, 0.07, low=0.0, high=0.5, doc="ζ of eq. 2.107, the mesh damping ratio")
 
 
+LOAD_LEVEL_DOC = "factor on the output torque, the [operation] load or a scenario's 'load' (a gap run's load_level fit)"
+
+
 @dataclass(frozen=True)
 class OperationKeys:
     """The [operation] key a gap-diagnosis effect may fit."""
 
-    load_level: float = setting(
-        float,
-        1.0,
-        low=0.01,
-        high=100.0,
-        doc="factor on the output torque, the [operation] load or a scenario's 'load' (a gap run's load_level fit)",
-    )
+    load_level: float = setting(float, 1.0, low=0.01, high=100.0, doc=LOAD_LEVEL_DOC)
+
+
+MASS_DOC = "mass of the shaft's block (its gears and the shaft; default: solid discs)"
+INERTIA_DOC = "polar moment of inertia of the block (default: solid discs)"
 
 
 @dataclass(frozen=True)
 class ShaftKeys:
     """A [shafts] entry's keys."""
 
-    mass: float = setting(
-        float,
-        _NAN,
-        low=1e-4,
-        high=1e5,
-        unit="kg",
-        doc="mass of the shaft's block (its gears and the shaft; default: solid discs)",
-    )
-    inertia: float = setting(
-        float,
-        _NAN,
-        low=1e-9,
-        high=1e4,
-        unit="kg*m^2",
-        doc="polar moment of inertia of the block (default: solid discs)",
-    )
+    mass: float = setting(float, _NAN, low=1e-4, high=1e5, unit="kg", doc=MASS_DOC)
+    inertia: float = setting(float, _NAN, low=1e-9, high=1e4, unit="kg*m^2", doc=INERTIA_DOC)
 
 
 @dataclass(frozen=True)

@@ -52,16 +52,13 @@ class DetectorParams:
     )
 
 
+PATH_DOC = "simulated shapes to the target: 0 = gain, 1 = fir (filter fitted between the healthy references)"
+
+
 def path_setting():
     """A detector's parameter ``path``: how the simulated shapes reach the target (gearlab.learn.path);
     scenarios may give the names."""
-    return setting(
-        int,
-        PATHS.index("fir"),
-        low=0,
-        high=len(PATHS) - 1,
-        doc="simulated shapes to the target: 0 = gain, 1 = fir (filter fitted between the healthy references)",
-    )
+    return setting(int, PATHS.index("fir"), low=0, high=len(PATHS) - 1, doc=PATH_DOC)
 
 
 class Detector(MethodPlugin):

@@ -17,25 +17,18 @@ domain classifier is reduced to guessing).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from gearlab.api import Adapter, ScheduleParams, hookimpl, setting
+from gearlab.api import Adapter, ScheduleParams, hookimpl, parameters, setting
 
 # torch is imported inside the methods: the registry imports this module on every gearlab
 # command, and only training needs torch.
 
 
-@dataclass(frozen=True)
-class DANNParams(ScheduleParams):
-    """DANN's parameters: the λ schedule's and its domain classifier's."""
-
-    hidden: int = setting(int, 64, low=1, high=4096, doc="width of the domain classifier's hidden layer")
-
-
 class DANN(Adapter):
     name = "dann"
     doc = "DANN: domain classifier on the latent features behind a gradient reversal layer (eq. 5.16-5.23)."
-    params = DANNParams
+    params = parameters(
+        ScheduleParams, hidden=setting(int, 64, low=1, high=4096, doc="width of the domain classifier's hidden layer")
+    )
     calibrated = True
     supervision = ("unsupervised", "supervised")
     train_on = "joint"

@@ -16,20 +16,13 @@ those of the source.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 
-from gearlab.api import Adapter, hookimpl, setting
+from gearlab.api import Adapter, hookimpl, parameters, setting
 
 VARIANTS = ("all", "classifier", "last")
 
 
-@dataclass(frozen=True)
-class FinetuneParams:
-    """Finetune's parameters."""
-
-    variant: int = setting(
-        int, 0, low=0, high=len(VARIANTS) - 1, doc="layers retrained on the target: 0 = all, 1 = classifier, 2 = last"
-    )
+VARIANT_DOC = "layers retrained on the target: 0 = all, 1 = classifier, 2 = last"
 
 
 class Finetune(Adapter):
@@ -38,7 +31,7 @@ class Finetune(Adapter):
         "Fine-tuning (Han et al. 2019b): prime on the source, retrain all layers, the classifier or the last layer "
         "on the labelled target."
     )
-    params = FinetuneParams
+    params = parameters(variant=setting(int, 0, low=0, high=len(VARIANTS) - 1, doc=VARIANT_DOC))
     calibrated = True
     supervision = ("supervised",)
     train_on = "target"

@@ -7,27 +7,21 @@ only. The discrepancy used for stopping is MMD² itself (ideal 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from gearlab.api import Adapter, ScheduleParams, hookimpl, setting
+from gearlab.api import Adapter, ScheduleParams, hookimpl, parameters, setting
 
 # torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
 # module on every gearlab command, and only training needs the losses.
 
 
-@dataclass(frozen=True)
-class MMDParams(ScheduleParams):
-    """MMD's parameters: the λ schedule's and its kernel's."""
-
-    bandwidth_scale: float = setting(
-        float, 1.0, low=0.01, high=100.0, doc="factor on the median-heuristic kernel bandwidths"
-    )
-
-
 class MMD(Adapter):
     name = "mmd"
     doc = "MMD-CNN: λ·MMD² (biased, multi-bandwidth Gaussian kernel) on the latent features (eq. 5.9-5.12)."
-    params = MMDParams
+    params = parameters(
+        ScheduleParams,
+        bandwidth_scale=setting(
+            float, 1.0, low=0.01, high=100.0, doc="factor on the median-heuristic kernel bandwidths"
+        ),
+    )
     calibrated = True
     supervision = ("unsupervised", "supervised")
     train_on = "joint"

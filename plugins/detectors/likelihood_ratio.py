@@ -13,9 +13,7 @@ shapes' sizes; it is exact where the simulator is (a corrected simulator, docs/g
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from gearlab.api import PATHS, Detector, DetectorParams, hookimpl, path_setting, setting
+from gearlab.api import PATHS, Detector, DetectorParams, hookimpl, parameters, path_setting, setting
 
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
 MIXTURES = ("shapes", "sizes")  # gearlab.learn.detectors.MIXTURES
@@ -24,19 +22,7 @@ MIXTURE_DOC = "the mixture: 0 = shapes (each as the path brings it), 1 = sizes (
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
 
-@dataclass(frozen=True)
-class LikelihoodRatioParams(DetectorParams):
-    """LikelihoodRatio's parameters (false_alarm, DetectorParams', first)."""
-
-    path: int = path_setting()
-    scale: int = setting(
-        int,
-        0,
-        low=0,
-        high=len(SCALES) - 1,
-        doc="noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)",
-    )
-    mixture: int = setting(int, 0, low=0, high=len(MIXTURES) - 1, doc=MIXTURE_DOC)
+SCALE_DOC = "noise scale of a scored revolution: 0 = unit (its own), 1 = history (the healthy history's median)"
 
 
 class LikelihoodRatio(Detector):
@@ -45,7 +31,12 @@ class LikelihoodRatio(Detector):
         "Physics-template detector: mixture likelihood ratio of the simulated fault shapes in the history's noise "
         "law, thresholded on the healthy history (no network)."
     )
-    params = LikelihoodRatioParams
+    params = parameters(
+        DetectorParams,
+        path=path_setting(),
+        scale=setting(int, 0, low=0, high=len(SCALES) - 1, doc=SCALE_DOC),
+        mixture=setting(int, 0, low=0, high=len(MIXTURES) - 1, doc=MIXTURE_DOC),
+    )
     choices = {"path": PATHS, "scale": SCALES, "mixture": MIXTURES}
 
     def statistic(self, source, target, params=None):

@@ -21,36 +21,19 @@ shapes miss pushes below the healthy revolutions'; gearlab.learn.detectors).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from gearlab.api import PATHS, Detector, DetectorParams, hookimpl, path_setting, setting
+from gearlab.api import PATHS, Detector, DetectorParams, hookimpl, parameters, path_setting, setting
 
 LIMITERS = ("off", "on", "auto")
 SCALES = ("unit", "history")  # gearlab.learn.detectors.SCALES (torch is not imported here)
+SCALE_DOC = (
+    "noise level of a correlation: 0 = unit (the revolution's own residual norm: cosine), 1 = history "
+    "(the healthy history's median)"
+)
 
 # torch (via gearlab.learn.detectors) is imported inside the method: see gearlab.learn.detector_contract.
 
 
-@dataclass(frozen=True)
-class MatchedFilterParams(DetectorParams):
-    """MatchedFilter's parameters (false_alarm, DetectorParams', first)."""
-
-    limiter: int = setting(
-        int,
-        0,
-        low=0,
-        high=2,
-        doc="soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in impulsive noise)",
-    )
-    path: int = path_setting()
-    scale: int = setting(
-        int,
-        1,
-        low=0,
-        high=len(SCALES) - 1,
-        doc="noise level of a correlation: 0 = unit (the revolution's own residual norm: cosine), 1 = history "
-        "(the healthy history's median)",
-    )
+LIMITER_DOC = "soft limiter before the correlation: 0 = off, 1 = on, 2 = auto (on in impulsive noise)"
 
 
 class MatchedFilter(Detector):
@@ -60,7 +43,12 @@ class MatchedFilter(Detector):
         "reference and the simulated fault responses over the history's noise level, thresholded on the healthy "
         "history (no network)."
     )
-    params = MatchedFilterParams
+    params = parameters(
+        DetectorParams,
+        limiter=setting(int, 0, low=0, high=2, doc=LIMITER_DOC),
+        path=path_setting(),
+        scale=setting(int, 1, low=0, high=len(SCALES) - 1, doc=SCALE_DOC),
+    )
     choices = {"limiter": LIMITERS, "path": PATHS, "scale": SCALES}
 
     def statistic(self, source, target, params=None):

@@ -16,23 +16,16 @@ clearance and housing compliance. Defaults: k_factor 0.5 (real supports are usua
 than the bearing alone, the housing being in series), c_factor 1.
 """
 
-from dataclasses import dataclass
-
-from gearlab.api import Effect, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class BearingStiffnessParams:
-    """BearingStiffness's parameters."""
-
-    k_factor: float = setting(float, 0.5, low=0.1, high=10.0, doc="factor on the bearing stiffness k_b")
-    c_factor: float = setting(float, 1.0, low=0.1, high=10.0, doc="factor on the bearing damping c_b")
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 
 class BearingStiffness(Effect):
     name = "bearing_stiffness"
     doc = "bearing stiffness and damping multiplied by mismatch factors"
-    params = BearingStiffnessParams
+    params = parameters(
+        k_factor=setting(float, 0.5, low=0.1, high=10.0, doc="factor on the bearing stiffness k_b"),
+        c_factor=setting(float, 1.0, low=0.1, high=10.0, doc="factor on the bearing damping c_b"),
+    )
     log_scale = frozenset({"k_factor", "c_factor"})
 
     def apply_model(self, config, params):

@@ -37,31 +37,24 @@ budget-16 search without them lost to a damped 0.9-1.6 kHz sensor resonance twic
 its five-parameter budget, gearlab.gap.diagnose.MODEL_DIMS) its score fell 31-131 times lower.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 GUESS_MOUNTINGS = 10
 GUESS_FREQUENCIES = (30.0, 1e4)  # Hz: from below a 40 Hz shaft speed to well inside the mesh harmonics
 
 
-@dataclass(frozen=True)
-class CasingPathParams:
-    """CasingPath's parameters."""
-
-    mf: float = setting(float, 10.0, low=0.1, high=1000.0, unit="kg", doc="mass of the gearbox casing")
-    k_xf: float = setting(float, 1e8, low=1e5, high=1e11, unit="N/m", doc="casing mounting stiffness, x")
-    k_yf: float = setting(float, 1e8, low=1e5, high=1e11, unit="N/m", doc="casing mounting stiffness, y")
-    c_xf: float = setting(float, 1e3, low=1.0, high=1e6, unit="N*s/m", doc="casing mounting damping, x")
-    c_yf: float = setting(float, 1e3, low=1.0, high=1e6, unit="N*s/m", doc="casing mounting damping, y")
-
-
 class CasingPath(Effect):
     name = "casing_path"
     doc = "casing mass and mounting between the bearings and the sensor; the sensor moves to the casing"
-    params = CasingPathParams
+    params = parameters(
+        mf=setting(float, 10.0, low=0.1, high=1000.0, unit="kg", doc="mass of the gearbox casing"),
+        k_xf=setting(float, 1e8, low=1e5, high=1e11, unit="N/m", doc="casing mounting stiffness, x"),
+        k_yf=setting(float, 1e8, low=1e5, high=1e11, unit="N/m", doc="casing mounting stiffness, y"),
+        c_xf=setting(float, 1e3, low=1.0, high=1e6, unit="N*s/m", doc="casing mounting damping, x"),
+        c_yf=setting(float, 1e3, low=1.0, high=1e6, unit="N*s/m", doc="casing mounting damping, y"),
+    )
     log_scale = frozenset({"mf", "k_xf", "k_yf", "c_xf", "c_yf"})
 
     def apply_model(self, config, params):
@@ -72,7 +65,7 @@ class CasingPath(Effect):
 
     def guesses(self, target_X, speed_hz):
         """Isotropic mountings of the default mass, natural frequencies log-spaced (see the module)."""
-        mass = CasingPathParams().mf
+        mass = self.params().mf
         return [
             {"k_xf": k, "k_yf": k} for k in mass * (2 * np.pi * np.geomspace(*GUESS_FREQUENCIES, GUESS_MOUNTINGS)) ** 2
         ]

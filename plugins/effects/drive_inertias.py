@@ -23,25 +23,18 @@ the answer would be found without being identified. On a model that has the moto
 diagnosis starts from that model's own values instead (gearlab.gap.diagnose.Space).
 """
 
-from dataclasses import dataclass
-
-from gearlab.api import Effect, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class DriveInertiasParams:
-    """DriveInertias's parameters."""
-
-    I11: float = setting(float, 1e-3, low=1e-6, high=10.0, unit="kg*m^2", doc="mass moment of inertia of the motor")
-    I22: float = setting(float, 1e-3, low=1e-6, high=10.0, unit="kg*m^2", doc="mass moment of inertia of the load")
-    k_c: float = setting(float, 1e3, low=1.0, high=1e8, unit="N*m/rad", doc="torsional stiffness of both couplings")
-    c_c: float = setting(float, 1.0, low=0.0, high=1e4, unit="N*m*s/rad", doc="torsional damping of both couplings")
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 
 class DriveInertias(Effect):
     name = "drive_inertias"
     doc = "motor and load inertias with their couplings (adds theta11, theta22 when missing; six_dof -> eight_dof)"
-    params = DriveInertiasParams
+    params = parameters(
+        I11=setting(float, 1e-3, low=1e-6, high=10.0, unit="kg*m^2", doc="mass moment of inertia of the motor"),
+        I22=setting(float, 1e-3, low=1e-6, high=10.0, unit="kg*m^2", doc="mass moment of inertia of the load"),
+        k_c=setting(float, 1e3, low=1.0, high=1e8, unit="N*m/rad", doc="torsional stiffness of both couplings"),
+        c_c=setting(float, 1.0, low=0.0, high=1e4, unit="N*m*s/rad", doc="torsional damping of both couplings"),
+    )
     log_scale = frozenset({"I11", "I22", "k_c"})
 
     def apply_model(self, config, params):

@@ -22,24 +22,15 @@ Bounds. lambda from 0 (the thesis's model) to 1 (the neighbour's load doubles th
 deflection: the upper limit of equal load sharing on a shared foundation). Default 0.25.
 """
 
-from dataclasses import dataclass
+from gearlab.api import Effect, fillet_compliance, hookimpl, parameters, setting
 
-from gearlab.api import Effect, fillet_compliance, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class FilletCorrectionParams:
-    """FilletCorrection's parameters."""
-
-    lam: float = setting(
-        float, 0.25, low=0.0, high=1.0, doc="extra fillet compliance in double contact, as a fraction of the pair's own"
-    )
+LAM_DOC = "extra fillet compliance in double contact, as a fraction of the pair's own"
 
 
 class FilletCorrection(Effect):
     name = "fillet_correction"
     doc = "softer fillet foundation while two tooth pairs are loaded (double-contact overestimate of eq. 2.41-2.46)"
-    params = FilletCorrectionParams
+    params = parameters(lam=setting(float, 0.25, low=0.0, high=1.0, doc=LAM_DOC))
 
     def apply_excitation(self, exc, params):
         lam = params["lam"]

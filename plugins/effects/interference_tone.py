@@ -20,33 +20,23 @@ gearbox). Defaults: 24.75 Hz, a 4-pole induction motor on 50 Hz mains at 1 % sli
 ratio of 0.5.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Effect, GearlabInputError, hookimpl, setting, setting_of
+from gearlab.api import Effect, GearlabInputError, hookimpl, parameters, setting, setting_of
 
 RATIO_LADDER = (0.5, 0.7, 1.4, 2.0)  # the guessed level's neighbours tried at the record's frequency
 ZOOM = 201  # points of the zoomed record spectrum over two record bins around its peak
 
 
-@dataclass(frozen=True)
-class InterferenceToneParams:
-    """InterferenceTone's parameters."""
-
-    frequency: float = setting(
-        float, 24.75, low=1.0, high=2e4, unit="Hz", doc="frequency of the interfering machine's line"
-    )
-    ratio: float = setting(float, 0.5, low=0.0, high=10.0, doc="tone RMS / RMS of the domain's healthy signal")
-
-
-FREQUENCY, RATIO = (setting_of(InterferenceToneParams, name) for name in ("frequency", "ratio"))
-
-
 class InterferenceTone(Effect):
     name = "interference_tone"
     doc = "non-synchronous sinusoid from a nearby machine, level relative to the healthy signal RMS"
-    params = InterferenceToneParams
+    params = parameters(
+        frequency=setting(
+            float, 24.75, low=1.0, high=2e4, unit="Hz", doc="frequency of the interfering machine's line"
+        ),
+        ratio=setting(float, 0.5, low=0.0, high=10.0, doc="tone RMS / RMS of the domain's healthy signal"),
+    )
     log_scale = frozenset({"frequency"})
     # The record's line and its least-squares level pin frequency and level to a few tenths of a
     # percent of their ranges (the level is read against the band-limited record's RMS, which lacks
@@ -133,6 +123,9 @@ class InterferenceTone(Effect):
         # levels RATIO_LADDER times the reading too.
         guesses += [{"frequency": fine, "ratio": min(ratio * k, RATIO.high)} for k in RATIO_LADDER if ratio * k > 0]
         return guesses
+
+
+FREQUENCY, RATIO = (setting_of(InterferenceTone.params, name) for name in ("frequency", "ratio"))
 
 
 @hookimpl

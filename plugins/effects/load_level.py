@@ -16,23 +16,14 @@ rating, for the PHM 2009 rig 20 N*m at the output), so the true one lies within 
 either way; a wider range only costs the search its budget. Default 1 (the preset's torque).
 """
 
-from dataclasses import dataclass
-
-from gearlab.api import Effect, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class LoadLevelParams:
-    """LoadLevel's parameters."""
-
-    factor: float = setting(float, 1.0, low=0.2, high=5.0, doc="load torque / the preset's load torque")
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 
 class LoadLevel(Effect):
     name = "load_level"
     doc = "mean load torque multiplied by a factor (an unpublished load, fitted)"
     opt_in = True  # a quantity of the rig not published: fitted when a scenario names it
-    params = LoadLevelParams
+    params = parameters(factor=setting(float, 1.0, low=0.2, high=5.0, doc="load torque / the preset's load torque"))
     log_scale = frozenset({"factor"})
 
     def apply_excitation(self, exc, params):

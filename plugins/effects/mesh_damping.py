@@ -17,22 +17,13 @@ Bounds. zeta from 0 (undamped mesh) to 0.3 (heavily damped; literature values li
 model differs from the thesis's source models.
 """
 
-from dataclasses import dataclass
-
-from gearlab.api import Effect, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class MeshDampingParams:
-    """MeshDamping's parameters."""
-
-    zeta: float = setting(float, 0.07, low=0.0, high=0.3, doc="mesh damping ratio (eq. 2.107)")
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 
 class MeshDamping(Effect):
     name = "mesh_damping"
     doc = "mesh damping ratio zeta and model: constant c_m (eq. 2.107) or proportional to k(t) (eq. 2.108)"
-    params = MeshDampingParams
+    params = parameters(zeta=setting(float, 0.07, low=0.0, high=0.3, doc="mesh damping ratio (eq. 2.107)"))
     options = {"model": ("constant", "proportional")}
 
     def apply_model(self, config, params):

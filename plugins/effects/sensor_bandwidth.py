@@ -20,11 +20,9 @@ piezoelectric resonance, Q = 50) to 1 (over-damped). Default 5 kHz, 0.707: a 5 k
 flat low-pass, a common usable bandwidth of a magnetically mounted sensor.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting
+from gearlab.api import KHZ, Effect, hookimpl, parameters, setting
 
 
 def frequency_response(f: np.ndarray, f_n: float, zeta: float) -> np.ndarray:
@@ -42,28 +40,17 @@ def steady_state(x, fs: float, response) -> np.ndarray:
     return np.fft.irfft(np.fft.rfft(flat) * response(f), n=flat.size).reshape(record.shape)
 
 
-@dataclass(frozen=True)
-class SensorBandwidthParams:
-    """SensorBandwidth's parameters."""
-
-    f_n: float = setting(
-        float,
-        5e3,
-        low=100.0,
-        high=1e5,
-        unit="Hz",
-        display_unit="kHz",
-        doc="natural (corner) frequency of the sensor and its mounting",
-    )
-    zeta: float = setting(
-        float, 0.707, low=0.01, high=1.0, doc="damping ratio: 0.707 flat low-pass, small values a resonance peak"
-    )
-
-
 class SensorBandwidth(Effect):
     name = "sensor_bandwidth"
     doc = "second-order sensor response: low-pass (zeta ~ 0.7) or mounted resonance (small zeta) at f_n"
-    params = SensorBandwidthParams
+    params = parameters(
+        f_n=setting(
+            float, 5e3, low=100.0, high=1e5, **KHZ, doc="natural (corner) frequency of the sensor and its mounting"
+        ),
+        zeta=setting(
+            float, 0.707, low=0.01, high=1.0, doc="damping ratio: 0.707 flat low-pass, small values a resonance peak"
+        ),
+    )
     log_scale = frozenset({"f_n", "zeta"})
 
     def apply_signal(self, x, params, ctx):

@@ -18,11 +18,9 @@ Bounds. f_c from 100 Hz to 100 kHz (above the simulations' band: no effect), as 
 n from 1 to 8 poles (what acquisition front ends use). Default 5 kHz, 4 poles.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting
+from gearlab.api import KHZ, Effect, hookimpl, parameters, setting
 from gearlab_plugins.effects.sensor_bandwidth import steady_state
 
 
@@ -34,20 +32,13 @@ def frequency_response(f: np.ndarray, f_c: float, order: int) -> np.ndarray:
     return 1.0 / np.prod(s[..., None] - poles, axis=-1)
 
 
-@dataclass(frozen=True)
-class SensorLowpassParams:
-    """SensorLowpass's parameters."""
-
-    f_c: float = setting(
-        float, 5e3, low=100.0, high=1e5, unit="Hz", display_unit="kHz", doc="corner (-3 dB) frequency of the filter"
-    )
-    order: int = setting(int, 4, low=1, high=8, doc="number of poles n (roll-off -20 n dB/decade)")
-
-
 class SensorLowpass(Effect):
     name = "sensor_lowpass"
     doc = "the acquisition's anti-alias low-pass: Butterworth of order n with corner f_c"
-    params = SensorLowpassParams
+    params = parameters(
+        f_c=setting(float, 5e3, low=100.0, high=1e5, **KHZ, doc="corner (-3 dB) frequency of the filter"),
+        order=setting(int, 4, low=1, high=8, doc="number of poles n (roll-off -20 n dB/decade)"),
+    )
     log_scale = frozenset({"f_c"})
 
     def apply_signal(self, x, params, ctx):

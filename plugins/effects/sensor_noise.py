@@ -17,29 +17,16 @@ effect (gearlab.kinds.common.effects_and_noise); without one, at its place among
 effects, drawn from the effects' streams (what a gap diagnosis fits).
 """
 
-from dataclasses import dataclass
+from gearlab.api import NOISE_KINDS, SNR_DB_RANGE, Effect, add_noise, hookimpl, parameters, setting
 
-from gearlab.api import NOISE_KINDS, SNR_DB_RANGE, Effect, add_noise, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class SensorNoiseParams:
-    """SensorNoise's parameters."""
-
-    snr_db: float = setting(
-        float,
-        10.0,
-        low=SNR_DB_RANGE[0],
-        high=SNR_DB_RANGE[1],
-        doc="signal-to-noise ratio in dB, 10 log10 (RMS_s / RMS_n)^2",
-    )
+SNR_DB_DOC = "signal-to-noise ratio in dB, 10 log10 (RMS_s / RMS_n)^2"
 
 
 class SensorNoise(Effect):
     name = "sensor_noise"
     doc = "additive measurement noise (Gaussian, Laplace or Student-t nu=2) at an SNR, per revolution (eq. 4.1-4.5)"
     noise = True
-    params = SensorNoiseParams
+    params = parameters(snr_db=setting(float, 10.0, low=SNR_DB_RANGE[0], high=SNR_DB_RANGE[1], doc=SNR_DB_DOC))
     options = {"kind": NOISE_KINDS}
 
     def apply_signal(self, x, params, ctx):

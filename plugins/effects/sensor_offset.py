@@ -16,27 +16,18 @@ Bounds. -1000 to 1000 m/s² (±10 V at 10 mV/g: the whole input range of a usual
 Default 0.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class SensorOffsetParams:
-    """SensorOffset's parameters."""
-
-    offset: float = setting(
-        float, 0.0, low=-1000.0, high=1000.0, unit="m/s^2", doc="constant added to the acceleration"
-    )
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 
 class SensorOffset(Effect):
     name = "sensor_offset"
     doc = "constant (DC) offset on the measured acceleration: a sensor or amplifier bias"
     mean_only = True
-    params = SensorOffsetParams
+    params = parameters(
+        offset=setting(float, 0.0, low=-1000.0, high=1000.0, unit="m/s^2", doc="constant added to the acceleration")
+    )
 
     def apply_signal(self, x, params, ctx):
         return np.asarray(x, dtype=float) + params["offset"]

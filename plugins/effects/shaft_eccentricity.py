@@ -21,36 +21,20 @@ from a few um (grade 4) to about 100 um (grade 11), plus bearing and shaft run-o
 """
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting
-
-
-@dataclass(frozen=True)
-class ShaftEccentricityParams:
-    """ShaftEccentricity's parameters."""
-
-    e: float = setting(
-        float, 20e-6, low=0.0, high=200e-6, unit="m", display_unit="um", doc="run-out (eccentricity) of the pinion"
-    )
-    phase: float = setting(
-        float,
-        0.0,
-        low=0.0,
-        high=2 * math.pi,
-        unit="rad",
-        display_unit="deg",
-        doc="angle of the run-out at the tacho zero",
-    )
+from gearlab.api import DEG, UM, Effect, hookimpl, parameters, setting
 
 
 class ShaftEccentricity(Effect):
     name = "shaft_eccentricity"
     doc = "pinion run-out e: once-per-revolution transmission error along the line of action"
     breaks_symmetry = True
-    params = ShaftEccentricityParams
+    params = parameters(
+        e=setting(float, 20e-6, low=0.0, high=200e-6, **UM, doc="run-out (eccentricity) of the pinion"),
+        phase=setting(float, 0.0, low=0.0, high=2 * math.pi, **DEG, doc="angle of the run-out at the tacho zero"),
+    )
 
     def apply_excitation(self, exc, params):
         e, phi = params["e"], params["phase"]

@@ -29,11 +29,10 @@ phase 0..360 deg. Default 1 % at once per revolution.
 """
 
 import math
-from dataclasses import make_dataclass
 
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting, setting_of
+from gearlab.api import DEG, Effect, hookimpl, parameters, setting, setting_of
 
 # Phases tried with a ripple's order read off the target: the sidebands' phases are in the
 # record's tacho frame, turned by an offset a guess cannot know (the diagnosis fits it per set).
@@ -92,34 +91,10 @@ class ShaftRipple(Effect):
     def ripple_params(what: str, default: float, high: float, orders: int) -> type:
         """The settings dataclass of eps (relative peak of *what*, *default*, 0 .. *high*), q (1 ..
         *orders*) and phi."""
-        return make_dataclass(
-            "RippleParams",
-            [
-                (
-                    "amplitude",
-                    float,
-                    setting(float, default, low=0.0, high=high, doc=f"relative peak {what} fluctuation eps"),
-                ),
-                (
-                    "order",
-                    int,
-                    setting(int, 1, low=1, high=orders, doc="fluctuation frequency in input-shaft orders q"),
-                ),
-                (
-                    "phase",
-                    float,
-                    setting(
-                        float,
-                        0.0,
-                        low=0.0,
-                        high=2 * math.pi,
-                        unit="rad",
-                        display_unit="deg",
-                        doc="phase phi at the first tacho zero",
-                    ),
-                ),
-            ],
-            frozen=True,
+        return parameters(
+            amplitude=setting(float, default, low=0.0, high=high, doc=f"relative peak {what} fluctuation eps"),
+            order=setting(int, 1, low=1, high=orders, doc="fluctuation frequency in input-shaft orders q"),
+            phase=setting(float, 0.0, low=0.0, high=2 * math.pi, **DEG, doc="phase phi at the first tacho zero"),
         )
 
     def apply_excitation(self, exc, params):

@@ -28,11 +28,10 @@ lubrication up to ~0.3. Default 0.05.
 """
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from gearlab.api import Effect, hookimpl, setting
+from gearlab.api import Effect, hookimpl, parameters, setting
 
 
 def friction_pattern(exc, mu_f: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -48,17 +47,10 @@ def friction_pattern(exc, mu_f: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return F.sum(axis=0), -(F * pair.pinion.R_b * tan_p).sum(axis=0), (F * pair.gear.R_b * tan_g).sum(axis=0)
 
 
-@dataclass(frozen=True)
-class ToothFrictionParams:
-    """ToothFriction's parameters."""
-
-    mu_f: float = setting(float, 0.05, low=0.0, high=0.3, doc="friction coefficient between the flanks")
-
-
 class ToothFriction(Effect):
     name = "tooth_friction"
     doc = "Coulomb sliding friction mu_f across the line of action, reversing at the pitch point"
-    params = ToothFrictionParams
+    params = parameters(mu_f=setting(float, 0.05, low=0.0, high=0.3, doc="friction coefficient between the flanks"))
 
     def apply_excitation(self, exc, params):
         mu_f = params["mu_f"]

@@ -5,11 +5,9 @@ Only the effective width L(x) changes, so only the Hertzian term is affected.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, hookimpl, scaled_ladder, setting
+from gearlab.api import MM, Fault, GearlabInputError, hookimpl, parameters, scaled_ladder, setting
 
 # Tables 2.5 / 2.6: chip depth b fixed, width c growing to the full face width.
 LADDERS = {
@@ -18,22 +16,13 @@ LADDERS = {
 }
 
 
-@dataclass(frozen=True)
-class ChipParams:
-    """Chip's parameters."""
-
-    b: float = setting(
-        float, 1e-3, low=0.0, high=0.05, unit="m", display_unit="mm", doc="chip depth down the tooth face from the tip"
-    )
-    c: float = setting(
-        float, 0.0, low=0.0, high=1.0, unit="m", display_unit="mm", doc="chip width across the face at the tip"
-    )
-
-
 class Chip(Fault):
     name = "chip"
     doc = "Corner chip at the tooth tip (Tian 2004): face width lost over the top b of the tooth."
-    params = ChipParams
+    params = parameters(
+        b=setting(float, 1e-3, low=0.0, high=0.05, **MM, doc="chip depth down the tooth face from the tip"),
+        c=setting(float, 0.0, low=0.0, high=1.0, **MM, doc="chip width across the face at the tip"),
+    )
 
     def check(self, params, pair, where):
         height = pair.pinion.tooth_height

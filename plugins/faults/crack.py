@@ -7,11 +7,10 @@ zero everywhere and the tooth carries no load (thesis 2.2.1, last paragraphs).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, hookimpl, setting
+from gearlab.api import DEG, MM, Fault, GearlabInputError, hookimpl, parameters, setting
 
 
 def max_half_thickness(pair) -> float:
@@ -40,46 +39,20 @@ def mean_depth(params, face_width: float) -> float:
     return 2.0 / 3.0 * (q2 * q2 + q2 * q0 + q0 * q0) / (q2 + q0)
 
 
-@dataclass(frozen=True)
-class CrackParams:
-    """Crack's parameters."""
-
-    q0: float = setting(
-        float, 0.0, low=0.0, high=0.05, unit="m", display_unit="mm", doc="crack depth at the first tooth edge"
-    )
-    q2: float = setting(
-        float,
-        0.0,
-        low=0.0,
-        high=0.05,
-        unit="m",
-        display_unit="mm",
-        doc="crack depth at the second edge (full-width cracks only)",
-    )
-    L_c: float = setting(
-        float,
-        1.0,
-        low=0.0,
-        high=1.0,
-        unit="m",
-        display_unit="mm",
-        doc="crack extent across the face width; >= face width means full width",
-    )
-    nu: float = setting(
-        float,
-        math.pi / 2,
-        low=math.radians(1),
-        high=math.pi / 2,
-        unit="rad",
-        display_unit="deg",
-        doc="crack angle to the tooth centreline",
-    )
+L_C_DOC = "crack extent across the face width; >= face width means full width"
 
 
 class Crack(Fault):
     name = "crack"
     doc = "Root crack, parabolic across the face width (Chen & Shao 2011); full depth = broken tooth."
-    params = CrackParams
+    params = parameters(
+        q0=setting(float, 0.0, low=0.0, high=0.05, **MM, doc="crack depth at the first tooth edge"),
+        q2=setting(float, 0.0, low=0.0, high=0.05, **MM, doc="crack depth at the second edge (full-width cracks only)"),
+        L_c=setting(float, 1.0, low=0.0, high=1.0, **MM, doc=L_C_DOC),
+        nu=setting(
+            float, math.pi / 2, low=math.radians(1), high=math.pi / 2, **DEG, doc="crack angle to the tooth centreline"
+        ),
+    )
 
     def check(self, params, pair, where):
         full_width = params["L_c"] >= pair.face_width

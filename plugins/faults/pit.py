@@ -8,11 +8,10 @@ the milder ones (thesis 2.4.3.1).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, hookimpl, scaled_ladder, setting
+from gearlab.api import DEG, MM, UM, Fault, GearlabInputError, hookimpl, parameters, scaled_ladder, setting
 
 _PIT_SHAPE = {"r": 80e-6, "sigma_r": 0.0, "theta": math.radians(30), "sigma_theta": 0.0, "n_total": 2000, "seed": 0}
 # Tables 2.5 / 2.6: pit shape and pitting line fixed, the number of pits growing to 2000.
@@ -40,47 +39,24 @@ def draw_pits(params) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return u[:k], np.maximum(r[:k], 0.0), np.clip(theta[:k], 1e-6, math.pi / 2)
 
 
-@dataclass(frozen=True)
-class PitParams:
-    """Pit's parameters."""
-
-    count: int = setting(int, 0, low=0, high=100000, doc="number of pits on the tooth (the first of the seeded draw)")
-    n_total: int = setting(int, 2000, low=1, high=100000, doc="size of the seeded draw the pits are taken from")
-    u: float = setting(
-        float, 4.387e-3, low=0.0, high=0.05, unit="m", display_unit="mm", doc="mean pitting line, from the tooth root"
-    )
-    sigma_u: float = setting(
-        float, 296e-6, low=0.0, high=0.05, unit="m", display_unit="um", doc="standard deviation of the pit centres"
-    )
-    r: float = setting(float, 80e-6, low=0.0, high=0.005, unit="m", display_unit="um", doc="mean sphere radius")
-    sigma_r: float = setting(
-        float, 0.0, low=0.0, high=0.005, unit="m", display_unit="um", doc="standard deviation of the radius"
-    )
-    theta: float = setting(
-        float,
-        math.radians(30),
-        low=math.radians(0.1),
-        high=math.pi / 2,
-        unit="rad",
-        display_unit="deg",
-        doc="mean contact angle",
-    )
-    sigma_theta: float = setting(
-        float,
-        0.0,
-        low=0.0,
-        high=math.pi / 2,
-        unit="rad",
-        display_unit="deg",
-        doc="standard deviation of the contact angle",
-    )
-    seed: int = setting(int, 0, low=0, high=2**32 - 1, doc="seed of the pit draw")
-
-
 class Pit(Fault):
     name = "pit"
     doc = "Distributed spherical pits (Meng et al. 2021), Gaussian location and shape, first `count` of N."
-    params = PitParams
+    params = parameters(
+        count=setting(int, 0, low=0, high=100000, doc="number of pits on the tooth (the first of the seeded draw)"),
+        n_total=setting(int, 2000, low=1, high=100000, doc="size of the seeded draw the pits are taken from"),
+        u=setting(float, 4.387e-3, low=0.0, high=0.05, **MM, doc="mean pitting line, from the tooth root"),
+        sigma_u=setting(float, 296e-6, low=0.0, high=0.05, **UM, doc="standard deviation of the pit centres"),
+        r=setting(float, 80e-6, low=0.0, high=0.005, **UM, doc="mean sphere radius"),
+        sigma_r=setting(float, 0.0, low=0.0, high=0.005, **UM, doc="standard deviation of the radius"),
+        theta=setting(
+            float, math.radians(30), low=math.radians(0.1), high=math.pi / 2, **DEG, doc="mean contact angle"
+        ),
+        sigma_theta=setting(
+            float, 0.0, low=0.0, high=math.pi / 2, **DEG, doc="standard deviation of the contact angle"
+        ),
+        seed=setting(int, 0, low=0, high=2**32 - 1, doc="seed of the pit draw"),
+    )
 
     def check(self, params, pair, where):
         if params["count"] > params["n_total"]:

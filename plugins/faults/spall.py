@@ -2,11 +2,19 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, healthy_section, hookimpl, region, scaled_ladder, setting
+from gearlab.api import (
+    MM,
+    Fault,
+    GearlabInputError,
+    healthy_section,
+    hookimpl,
+    parameters,
+    region,
+    scaled_ladder,
+    setting,
+)
 
 # Tables 2.5 / 2.6: length, depth and start fixed, width growing.
 LADDERS = {
@@ -21,30 +29,15 @@ LADDERS = {
 }
 
 
-@dataclass(frozen=True)
-class SpallParams:
-    """Spall's parameters."""
-
-    l_s: float = setting(
-        float, 1e-3, low=0.0, high=0.05, unit="m", display_unit="mm", doc="spall length along the profile"
-    )
-    w_s: float = setting(float, 0.0, low=0.0, high=1.0, unit="m", display_unit="mm", doc="spall width across the face")
-    h_s: float = setting(float, 1e-3, low=0.0, high=0.05, unit="m", display_unit="mm", doc="spall depth into the tooth")
-    x_1: float = setting(
-        float,
-        4e-3,
-        low=0.0,
-        high=0.05,
-        unit="m",
-        display_unit="mm",
-        doc="start of the spall, measured from the tooth root",
-    )
-
-
 class Spall(Fault):
     name = "spall"
     doc = "Rectangular spall of length l_s, width w_s and depth h_s starting x_1 from the root (Chaari 2008)."
-    params = SpallParams
+    params = parameters(
+        l_s=setting(float, 1e-3, low=0.0, high=0.05, **MM, doc="spall length along the profile"),
+        w_s=setting(float, 0.0, low=0.0, high=1.0, **MM, doc="spall width across the face"),
+        h_s=setting(float, 1e-3, low=0.0, high=0.05, **MM, doc="spall depth into the tooth"),
+        x_1=setting(float, 4e-3, low=0.0, high=0.05, **MM, doc="start of the spall, measured from the tooth root"),
+    )
 
     def check(self, params, pair, where):
         height = pair.pinion.tooth_height

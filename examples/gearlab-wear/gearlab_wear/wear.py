@@ -28,11 +28,9 @@ Row for Table 2.2:  wear | depth, band_start, band_end | h_x, A_x, I_x | this mo
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from gearlab.api import Fault, GearlabInputError, healthy_section, hookimpl, region, setting
+from gearlab.api import MM, Fault, GearlabInputError, healthy_section, hookimpl, parameters, region, setting
 
 # Default band: the upper flank, inside the active profile of both thesis pairs (contact
 # starts at 0.34 d_h on the luo2019 pinion, 0.28 d_h on meng2020) and up to the tip.
@@ -48,25 +46,18 @@ def thinnest_thickness(pair, band_start: float, band_end: float) -> float:
     return float(2 * h.min())
 
 
-@dataclass(frozen=True)
-class WearParams:
-    """Wear's parameters."""
-
-    depth: float = setting(
-        float, 0.0, low=0.0, high=0.05, unit="m", display_unit="mm", doc="wear depth, normal to the loaded flank"
-    )
-    band_start: float = setting(
-        float, BAND[0], low=0.0, high=1.0, doc="start of the worn band, fraction of the tooth height from the root"
-    )
-    band_end: float = setting(
-        float, BAND[1], low=0.0, high=1.0, doc="end of the worn band, fraction of the tooth height from the root"
-    )
-
-
 class Wear(Fault):
     name = "wear"
     doc = "Uniform wear of depth `depth` on the loaded flank over a band of the tooth height (fractions from the root)."
-    params = WearParams
+    params = parameters(
+        depth=setting(float, 0.0, low=0.0, high=0.05, **MM, doc="wear depth, normal to the loaded flank"),
+        band_start=setting(
+            float, BAND[0], low=0.0, high=1.0, doc="start of the worn band, fraction of the tooth height from the root"
+        ),
+        band_end=setting(
+            float, BAND[1], low=0.0, high=1.0, doc="end of the worn band, fraction of the tooth height from the root"
+        ),
+    )
 
     def check(self, params, pair, where):
         start, end = params["band_start"], params["band_end"]
