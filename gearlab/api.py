@@ -25,7 +25,7 @@ from .dynamics.model import DOF_ORDER, Assembly, DynamicModel, Mesh, add_spring,
 from .effect_contract import Effect, SignalContext
 from .errors import GearlabInputError
 from .gearbox.simulation import DescribedPresets
-from .learn.adapters import Adapter, ScheduleParams
+from .learn.adapters import Adapter, schedule_settings
 from .learn.detector_contract import Detector, DetectorParams, path_setting
 from .learn.path import PATHS
 from .physics.faults import Fault, region, scaled_ladder
@@ -69,13 +69,13 @@ __all__ = [
     "Mesh",
     "ModelConfig",
     "NoParams",
-    "ScheduleParams",
     "DetectorParams",
     "SignalContext",
     "add_noise",
     "declared",
     "parameters",
     "path_setting",
+    "schedule_settings",
     "setting",
     "setting_of",
     "add_spring",

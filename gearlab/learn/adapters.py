@@ -35,7 +35,6 @@ the plugins import torch inside the methods that use it, which only run while tr
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from gearlab.errors import GearlabInputError
@@ -55,17 +54,18 @@ LAMBDA_EVERY = 25
 LAMBDA_MAX = 1.0
 
 
-@dataclass(frozen=True)
-class ScheduleParams:
-    """The λ schedule of a domain-loss adapter (Table 5.3); such an adapter's parameters extend it."""
-
-    lambda_step: float = setting(
-        float, LAMBDA_STEP, low=0.0, high=1.0, doc="increase of the domain-loss weight λ at each step (Table 5.3)"
-    )
-    lambda_every: int = setting(
-        int, LAMBDA_EVERY, low=1, high=10_000, doc="epochs of joint training between λ steps (Table 5.3)"
-    )
-    lambda_max: float = setting(float, LAMBDA_MAX, low=0.0, high=10.0, doc="largest domain-loss weight λ (Table 5.3)")
+def schedule_settings() -> dict:
+    """The λ schedule's parameters (Table 5.3), after a domain-loss adapter's own:
+    ``params = parameters(own=setting(...), **schedule_settings())``."""
+    return {
+        "lambda_step": setting(
+            float, LAMBDA_STEP, low=0.0, high=1.0, doc="increase of the domain-loss weight λ at each step (Table 5.3)"
+        ),
+        "lambda_every": setting(
+            int, LAMBDA_EVERY, low=1, high=10_000, doc="epochs of joint training between λ steps (Table 5.3)"
+        ),
+        "lambda_max": setting(float, LAMBDA_MAX, low=0.0, high=10.0, doc="largest domain-loss weight λ (Table 5.3)"),
+    }
 
 
 # ----------------------------------------------------------------------------- schedule
@@ -213,10 +213,10 @@ __all__ = [
     "LAMBDA_EVERY",
     "LAMBDA_MAX",
     "LAMBDA_STEP",
-    "ScheduleParams",
     "SUPERVISIONS",
     "TRAIN_ON",
     "Adapter",
     "MethodPlugin",
     "lambda_schedule",
+    "schedule_settings",
 ]

@@ -7,7 +7,7 @@ Note the 1/(4 d²) factor: on cnn3's 31 872-feature latent the loss is tiny, so 
 
 from __future__ import annotations
 
-from gearlab.api import Adapter, ScheduleParams, hookimpl
+from gearlab.api import Adapter, hookimpl, parameters, schedule_settings
 
 # torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
 # module on every gearlab command, and only training needs the losses.
@@ -16,7 +16,7 @@ from gearlab.api import Adapter, ScheduleParams, hookimpl
 class Coral(Adapter):
     name = "coral"
     doc = "Deep CORAL (Sun & Saenko 2016): λ·|C_s - C_t|²_F / (4d²) on the latent features."
-    params = ScheduleParams
+    params = parameters(**schedule_settings())
     calibrated = True
     supervision = ("unsupervised", "supervised")
     train_on = "joint"

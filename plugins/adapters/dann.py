@@ -17,7 +17,7 @@ domain classifier is reduced to guessing).
 
 from __future__ import annotations
 
-from gearlab.api import Adapter, ScheduleParams, hookimpl, parameters, setting
+from gearlab.api import Adapter, hookimpl, parameters, schedule_settings, setting
 
 # torch is imported inside the methods: the registry imports this module on every gearlab
 # command, and only training needs torch.
@@ -27,7 +27,8 @@ class DANN(Adapter):
     name = "dann"
     doc = "DANN: domain classifier on the latent features behind a gradient reversal layer (eq. 5.16-5.23)."
     params = parameters(
-        ScheduleParams, hidden=setting(int, 64, low=1, high=4096, doc="width of the domain classifier's hidden layer")
+        hidden=setting(int, 64, low=1, high=4096, doc="width of the domain classifier's hidden layer"),
+        **schedule_settings(),
     )
     calibrated = True
     supervision = ("unsupervised", "supervised")

@@ -7,7 +7,7 @@ only. The discrepancy used for stopping is MMD² itself (ideal 0).
 
 from __future__ import annotations
 
-from gearlab.api import Adapter, ScheduleParams, hookimpl, parameters, setting
+from gearlab.api import Adapter, hookimpl, parameters, schedule_settings, setting
 
 # torch (via gearlab.learn.losses) is imported inside the methods: the registry imports this
 # module on every gearlab command, and only training needs the losses.
@@ -17,10 +17,10 @@ class MMD(Adapter):
     name = "mmd"
     doc = "MMD-CNN: λ·MMD² (biased, multi-bandwidth Gaussian kernel) on the latent features (eq. 5.9-5.12)."
     params = parameters(
-        ScheduleParams,
         bandwidth_scale=setting(
             float, 1.0, low=0.01, high=100.0, doc="factor on the median-heuristic kernel bandwidths"
         ),
+        **schedule_settings(),
     )
     calibrated = True
     supervision = ("unsupervised", "supervised")
