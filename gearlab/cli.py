@@ -127,7 +127,7 @@ def stiffness(
 ) -> None:
     from .files import atomic_write
     from .physics.stiffness import MeshStiffnessModel, StiffnessOptions
-    from .settings import declared
+    from .settings import shown_values
 
     if not 64 <= points <= 1 << 20:
         raise GearlabInputError(f"--points: expected 64 .. {1 << 20}, got {points}")
@@ -145,8 +145,7 @@ def stiffness(
     if ms.gear == "both":
         console.print(f"  both gears faulted: the hunting-tooth period, {pair.Z1 / ms.turns:.0f} meshes in the table")
     for p in placed:
-        schema = declared(p.fault.params).items()
-        shown = ", ".join(prm.show(p.params[n]) if prm.unit else f"{p.params[n]}" for n, (prm, _) in schema)
+        shown = ", ".join(shown_values(p.fault.params, p.params))
         console.print(f"  {p.label}: RFA {p.fault.rfa(p.params, pair.seen_from(p.gear)):.4f}  ({shown})")
     if csv is not None:
         atomic_write(csv, ms.csv_text())

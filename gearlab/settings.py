@@ -138,6 +138,12 @@ def describe_params(cls) -> list[dict]:
     ]
 
 
+def shown_values(cls, values: Mapping) -> list[str]:
+    """Each of *values* (SI, by the fields of *cls*) as people read it: in its display unit, a bare
+    number where the setting has no unit."""
+    return [meta.show(values[name]) if meta.unit else f"{values[name]}" for name, (meta, _) in declared(cls).items()]
+
+
 def plugin_description(plugin, **more) -> dict:
     """What every plugin's describe() holds (its doc, its parameters), and *more* of its kind's."""
     return {"doc": plugin.doc, "params": describe_params(plugin.params), **more}
