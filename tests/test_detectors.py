@@ -12,6 +12,7 @@ import torch
 
 from gearlab.errors import GearlabInputError
 from gearlab.learn.detectors import likelihood_detector, template_detector
+from gearlab.settings import declared
 
 L, TEETH = 1024, 16
 t = np.arange(L)
@@ -233,7 +234,10 @@ def test_the_detector_plugins_fit_on_the_history_and_threshold_at_its_false_alar
 
     detector = get_registry().get("detector", name)
     assert isinstance(detector, Detector) and not isinstance(detector, Adapter)
-    assert detector.params[0].name == "false_alarm" and set(detector.supervision) == {"unsupervised", "supervised"}
+    assert next(iter(declared(detector.params))) == "false_alarm" and set(detector.supervision) == {
+        "unsupervised",
+        "supervised",
+    }
     assert detector.describe()["params"][0]["name"] == "false_alarm"
     library = {"matched_filter": template_detector, "likelihood_ratio": likelihood_detector}[name]
     history, _ = revolutions(120, 0, gain=2.0, noise=1.0, seed=12)

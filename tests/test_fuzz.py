@@ -39,6 +39,7 @@ from gearlab.errors import GearlabInputError
 from gearlab.kinds import SCENARIO_KINDS
 from gearlab.registry import get_registry
 from gearlab.scenario import EXECUTION_TABLE, OUTPUT_TABLE, SCENARIO_TABLE
+from gearlab.settings import declared
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = int(os.environ.get("GEARLAB_FUZZ_EXAMPLES", "0"))
@@ -301,10 +302,10 @@ NUMBERS = [
 # Every plugin parameter (fault sizes, adapter settings, model constants) and every schema key.
 PARAMS = sorted(
     {
-        p.name
+        name
         for plugins in get_registry().plugins.values()
         for plugin in plugins.values()
-        for p in getattr(plugin, "params", ())
+        for name in declared(plugin.params)
     }
 )
 QUANTITIES = ["speed", "load", "fs", "snr_db", *PARAMS]

@@ -647,7 +647,7 @@ def test_the_casing_path_search_starts_from_mountings_over_its_natural_frequenci
 
     effect = get_registry().get("effect", "casing_path")
     guesses = effect.guesses(np.zeros((4, 4096)), 40.0)
-    mass = effect.params[0].default
+    mass = effect.params().mf
     f = [np.sqrt(g["k_yf"] / mass) / (2 * np.pi) for g in guesses]
     assert len(guesses) == 10 and all(g["k_xf"] == g["k_yf"] for g in guesses)
     assert f[0] == pytest.approx(30.0) and f[-1] == pytest.approx(1e4)
