@@ -5,9 +5,12 @@ names or none (columns "0", "1", …); '#' comment lines; the rate from a time c
 from __future__ import annotations
 
 import csv
+import io
 import re
 from collections.abc import Sequence
 from pathlib import Path
+
+import numpy as np
 
 from ...errors import GearlabInputError
 from .base import _INTERVAL_NAMES, _RATE_NAMES, Contents, _column, _keyed, _scalar
@@ -95,6 +98,31 @@ def split_rows(lines: list[str], delimiter: str | None) -> list[list[str]]:
     return rows
 
 
+# a decimal comma not followed by a digit ('1,', '1,e3'): split_rows keeps such a field as text
+_BARE_COMMA = re.compile(r",(?!\d)")
+
+
+def numeric_block(lines: list[str], delimiter: str | None, width: int) -> np.ndarray | None:
+    """The rows of *lines* as float64 columns (width x rows), parsed by numpy's C reader, or None where a
+    field is not a plain number or a row's width differs: the caller then splits the rows field by field,
+    whose columns and messages are the reference. The numbers are those of split_rows and float() on the
+    same text (both correctly rounded); only unquoted lines reach here (one line is one row)."""
+    if not lines:
+        return None
+    block = "\n".join(lines)
+    if delimiter == ";" and "," in block:  # decimal commas: split_rows reads '0,25' and ',5' only
+        if _BARE_COMMA.search(block):
+            return None
+        block = block.replace(",", ".")
+    try:
+        values = np.loadtxt(io.StringIO(block), dtype=np.float64, delimiter=delimiter, comments=None, ndmin=2)
+    except ValueError:
+        return None
+    if values.shape != (len(lines), width):
+        return None
+    return np.ascontiguousarray(values.T)
+
+
 def is_header(row: list[str]) -> bool:
     """A first row is a header unless every field is a number."""
     return _column(row).dtype.kind != "f"
@@ -135,21 +163,30 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     if not lines:
         raise GearlabInputError(f"{path}: no rows; expected a header row of column names (or none), then numbers")
     delimiter = delimiter_of(lines[0][1])
-    rows = split_rows([line for _, line in lines], delimiter)
+    # without quotes (and NULs, which csv refuses) a line is a row: the first two tell the header and units
+    plain = '"' not in text and "\0" not in text
+    rows = split_rows([line for _, line in (lines[:2] if plain else lines)], delimiter)
     header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
     units = units_row(rows[1], header) if header is not None and len(rows) > 1 else None
-    if header is None:
-        data, data_lines = rows, lines
-    else:
-        data, data_lines = rows[1 + bool(units) :], lines[1 + bool(units) :]
+    data_lines = lines[1 + bool(units) :] if header is not None else lines
     width = len(rows[0])
+    numbers = None
+    if plain and rows[0][-1] != "":  # a trailing separator's empty column is the row parser's to drop
+        numbers = numeric_block([line for _, line in data_lines], delimiter, width)
+    if numbers is not None:
+        columns = header_names(header, width)
+        if header is not None and len(set(header)) != len(header):
+            _twice(path, header)
+        return _contents(columns, fields, names, lambda j: numbers[j], units)
+    if plain:
+        rows = split_rows([line for _, line in lines], delimiter)
+    data = rows[1 + bool(units) :] if header is not None else rows
     if rows[0][-1] == "" and all(row[-1:] == [""] for row in data):  # every line ends in the separator
         header = header[:-1] if header is not None else None
         data = [row[:-1] for row in data]
         width -= 1
     if header is not None and len(set(header)) != len(header):
-        twice = next(h for h in header if header.count(h) > 1)
-        raise GearlabInputError(f"{path}: column '{twice}' appears twice in the header; expected distinct names")
+        _twice(path, header)
     for (number, _), row in zip(data_lines, data):
         if len(row) != width:
             raise GearlabInputError(
@@ -164,12 +201,21 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
             f"{path}: its first data row (line {data_lines[0][0]}) holds no number; expected a header "
             "row of column names, then rows of numbers"
         )
-    columns = header_names(header, width)
+    return _contents(header_names(header, width), fields, names, lambda j: _column([row[j] for row in data]), units)
+
+
+def _twice(path: Path, header: list[str]) -> None:
+    twice = next(h for h in header if header.count(h) > 1)
+    raise GearlabInputError(f"{path}: column '{twice}' appears twice in the header; expected distinct names")
+
+
+def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str], column, units) -> Contents:
+    """The file's channels: *column(j)* gives the j-th column's values; a comment's field by its name."""
 
     def get(name: str):
         j = column_index(name, columns)
         if j is not None:
-            return _column([row[j] for row in data])
+            return column(j)
         return fields[name]
 
     # an index asked for ("0", "2") is found as that column, under the name it was asked by
