@@ -109,6 +109,8 @@ def test_decimal_commas_and_a_units_row(tmp_path):
         "a,b\n1, ,\n",
         "a b\n1_0 2\n3 4\n",  # float() reads '1_0'; numpy's C reader does not
         "1,2\n3,4\n5,6\n",
+        "# fs = 100\na,b\n\n  \n1,2\n  # a note\n3,x\n",  # comments and blank lines: the line numbers
+        "a,b\n1,2\n \t\n3\n",
     ],
 )
 def test_files_the_c_reader_refuses_read_as_before(tmp_path, body):
