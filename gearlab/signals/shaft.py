@@ -125,7 +125,7 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
     pts = lay.points
     mean, noise = np.zeros(lay.orders.size, complex), np.zeros(lay.orders.size)
     shafts = sorted((s for s in range(len(lay.shafts)) if (lay.source == s).any()), key=lambda s: -lay.shaft_orders[s])
-    cut, waves, periods = {}, {}, None
+    cut, waves, read, periods = {}, {}, {}, None
     for s in shafts:
         o = lay.shaft_orders[s]
         size = int(2 ** math.ceil(math.log2(pts / float(o))))  # at least the input samples of a turn
@@ -141,27 +141,39 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
         cut[s] = (at, ((first + np.arange(y.size) / pts) * float(o)) % 1 * size)  # samples, phase
         periods = n if periods is None else min(periods, n)
 
+    def at_samples(r: int, s: int) -> np.ndarray:
+        """Shaft r's average so far at the record's samples, as shaft s subtracts it: read once per
+        average and mask, since every other shaft of a sweep (and the noise's pass) subtracts the same."""
+        slower = lay.shaft_orders[r] < lay.shaft_orders[s]  # a slower r: less its orders read from s
+        key = (r, (lay.shaft_orders[r] / lay.shaft_orders[s]).denominator if slower else 0)
+        if key not in read:
+            spec = np.fft.rfft(waves[r])
+            if key[1]:
+                spec[:: key[1]] = 0.0
+            read[key] = read_at(spec, waves[r].size, cut[r][1], 8, periodic=True)
+        return read[key]
+
     def less_others(s: int) -> np.ndarray:
         """Shaft s's turns of the record less the other shafts' averages so far."""
         left = y
-        for r, wave in waves.items():
-            if r == s:
-                continue
-            spec = np.fft.rfft(wave)
-            if lay.shaft_orders[r] < lay.shaft_orders[s]:  # a slower r: less its orders read from s
-                spec[:: (lay.shaft_orders[r] / lay.shaft_orders[s]).denominator] = 0.0
-            left = left - read_at(spec, wave.size, cut[r][1], 8, periodic=True)  # at the record's samples
+        for r in waves:
+            if r != s:
+                left = left - at_samples(r, s)
         return on_turns(left, cut[s][0])
 
     for sweep in range(max(sweeps, 1)):
         for s in shafts:
             segments = less_others(s) if sweeps else on_turns(y, cut[s][0])
             waves[s] = segments.mean(axis=0)
+            for key in [k for k in read if k[0] == s]:  # s's readings were of its previous average
+                del read[key]
             if sweep == max(sweeps, 1) - 1:
                 sel = lay.source == s
                 m, v = averaged(segments, int(lay.index[sel].max()), 3)
                 mean[sel], noise[sel] = m[lay.index[sel]], v[lay.index[sel]]
-    for s in shafts if sweeps and len(shafts) > 1 else ():  # each mean's noise: see the docstring
+    # each mean's noise (the docstring); the last shaft's turns of the last sweep were already the record
+    # less every other shaft's final average, so its mean is their mean and its noise their scatter
+    for s in shafts[:-1] if sweeps else ():
         sel = lay.source == s
         m, v = averaged(less_others(s), int(lay.index[sel].max()), 3)
         noise[sel] = v[lay.index[sel]] + np.abs(mean[sel] - m[lay.index[sel]]) ** 2
