@@ -59,6 +59,23 @@ def test_the_gap_names_an_input_pinion_one_tooth_off_within_a_motor_s_slip_of_th
     assert "explained" not in line and record["outward"]["seen"] == 29, record
 
 
+def test_the_count_the_input_s_lines_show_comes_before_the_one_nearest_the_nominal_speed():
+    # 25/64 + 18/42 at 33.09 Hz described with 24 teeth at 32.4 Hz (found on a fresh take): the mesh lines read 34.47
+    # Hz, 6.4 % off; within 6 % of 32.4 Hz a 25-tooth pinion (33.09 Hz) and a 26-tooth one (31.82 Hz) mesh there,
+    # and the nearer, 26, went to the either-or 'a 24-tooth pinion's at 34.47 Hz or a 26-tooth pinion's at 31.82 Hz'
+    from gearlab.data.chain import Chain
+    from gearlab.gap.structure import structure_line
+
+    teeth, true = ((25, 64), (18, 42)), 33.09
+    read = true * 25 / 24
+    chain = Chain(fs=1024 * read, speed=read, speed_from_mesh=True, described_speed=32.4)
+    record: dict = {}
+    line = structure_line(
+        _rows(teeth, true, read, revolutions=260), described_pair((24, 64), (18, 42)), 400, chain, None, record
+    )
+    assert line is not None and line.startswith("mesh order 25 measured, 24 expected (stage 1)"), line
+
+
 @pytest.mark.parametrize("declared", [34.7, 35.8])
 def test_the_right_description_passes_at_a_nominal_speed_within_a_motor_s_slip(declared):
     from gearlab.data.chain import Chain

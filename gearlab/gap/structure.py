@@ -563,11 +563,13 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
         # pinion at 35.18 Hz described with 28 at 35.8 Hz reads 36.44 Hz, 28.5 teeth at 35.8 Hz), another count the
         # input shaft's own lines show at the speed found, as inspect reads them (wheel_line's reading of the input's
         # comb said 'the pinion shows 39.5 teeth')
+        # the count those lines show before the one nearest the nominal speed (25 teeth at 33.09 Hz described with 24
+        # at 32.4 Hz: 34.47 Hz read, 6.4 % off; 26 teeth at 31.82 Hz lie nearer 32.4 Hz than 25 at 33.09 Hz)
         shown = _input_count(_longest(target, chain), pair, max_order, chain, chain.described_speed)[1]
-        teeth = traded_teeth(chain.speed, chain.described_speed, pair.Z1)
+        teeth = shown if shown not in (None, pair.Z1) else traded_teeth(chain.speed, chain.described_speed, pair.Z1)
         teeth = teeth or _beyond_slip(chain.speed, chain.described_speed, pair.Z1)
-        if teeth is not None or shown not in (None, pair.Z1):
-            return _traded_line(target, pair, max_order, chain, teeth or shown, record, shown)
+        if teeth is not None:
+            return _traded_line(target, pair, max_order, chain, teeth, record, shown)
     # a tacho on another shaft than the input, or a speed found from the mesh lines: the input's order is
     # read off its sidebands, as inspect reads it (a 23/61 fan's output tacho, described 24/61: the mesh
     # at 24 by the described ratio, the input's sidebands 24/23 apart; inspect said '23.0 teeth', detection
