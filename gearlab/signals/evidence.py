@@ -6,12 +6,21 @@ history's unit-to-unit spread of that order's power): a fault's event reaches th
 structure, so its excess is largest where the train's lines and resonances are, as is that spread, and
 Δ weighted by 1 / the null variance read it at quiet orders it hardly reaches (a 67T fault of a
 three-stage box placed on the slower 62T, a 24T pinion's chip on the input shaft). Two nuisances the
-history's units do not show are taken out first. At the history's lines a take's load scales every
-line alike, and two takes give that change with one degree of freedom (units cut from one take agree
-with each other): the record's lines are compared with the history's times their median ratio
-(healthy takes 15-19 % off two takes agreeing within 3-6 % named the intermediate shaft of three random
-trains at z 3.9-7.1, development seed 11). Off the lines a slow shaft's average holds the other shafts'
-leaks, a scatter beyond its noise model (z² 1.66 at the intermediate TSA's orders, 1.19 at the
+history's units do not show are taken out first. At the history's lines a take's load scales every line
+alike, and two takes give that change with one degree of freedom (units cut from one take agree with
+each other): the record is compared with the history times its lines' median ratio (healthy takes
+15-19 % off two takes agreeing within 3-6 % named the intermediate shaft of three random trains at z
+3.9-7.1, development seed 11), and the history's terms of the null variance scale with it, never below
+their own (a 24/79 + 27/72 intermediate pinion's crack raised its shaft's lines 136 times and every
+other shaft's 2.8-8 times: its gain of 37.5 read the input's one line at z -107, and the input was
+flagged at 5.9). Off the lines a shaft's average holds the other shafts' lines' leaks, which a load
+scales alike: a heavier load's gain (up to LOAD_GAIN) applies there too (healthy 24/79 + 27/72 takes
+3-6 % over the history's load put the intermediate shaft at z 1.09 on average over four; 0.69 scaled),
+a fault's does not: it moves the lines far more, or reads them low, and a gain under 1 taken off the
+lines raises every order there (a random train's output gear fault read its intermediate lines at 0.61
+of the history's, development seed 23, and the intermediate shaft was named at z 4.5; the soft 21/63 +
+24/56 reducer's pinion chip at 0.89 raised its input shaft from z 3.27 to 4.42). Those leaks also
+scatter beyond a slow shaft's noise model (z² 1.66 at the intermediate TSA's orders, 1.19 at the
 output's, seed 11): the units' scatter over that model, pooled over neighbouring orders, scales it.
 
 Everything is numpy: no torch, nothing from the layers above.
@@ -34,6 +43,7 @@ if TYPE_CHECKING:  # localise imports this module
 WEIGHT_SMOOTH = 101  # orders over which noise powers and spreads are pooled (spread)
 KAPPA = 8.0  # a history line: mean power this many noise sds of its mean over zero (see spread)
 GAIN_LINES = 3  # lines a take's common line gain is read from (fewer: none removed)
+LOAD_GAIN = 1.25  # the largest gain of the lines a heavier load gives (healthy takes 0.88-1.07, development)
 
 
 @dataclass(frozen=True)
@@ -100,14 +110,13 @@ def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
     return Spread(mean, line, between, noise, len(units), excess)
 
 
-def _null_var(rec: Content, ref: Spread) -> np.ndarray:
-    """Variance of Δ = S − S_h under the history (see spread: nothing in it follows one order's own
-    noisy estimate, the record's noise included); off the lines times the units' pooled excess scatter."""
+def _null_var(rec: Content, ref: Spread, gain: float | np.ndarray = 1.0) -> np.ndarray:
+    """Variance of Δ = S − *gain* S_h under the history (see spread: nothing in it follows one order's own
+    noisy estimate, the record's noise included); off the lines times the units' pooled excess scatter.
+    The history's terms scale with the gain: a line's relative spread and the history mean's noise alike."""
     lines = np.where(ref.line, ref.power, 0.0)
-    model = (
-        _estimate_var(lines, _smooth(rec.noise, rec.source), rec.blocks)
-        + ref.between * (1 + 1 / ref.units)
-        + _estimate_var(lines, ref.unit_noise) / ref.units
+    model = _estimate_var(gain * lines, _smooth(rec.noise, rec.source), rec.blocks) + gain**2 * (
+        ref.between * (1 + 1 / ref.units) + _estimate_var(lines, ref.unit_noise) / ref.units
     )
     if ref.excess.size != model.size:  # a history saved before the pooled scatter was kept
         return model
@@ -115,15 +124,20 @@ def _null_var(rec: Content, ref: Spread) -> np.ndarray:
 
 
 def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """(L_s, sd(L_s)) per shaft, L_s in null sds of Δ: each order's Δ (at a line, from the history's
-    line times the lines' median ratio) divided by its null sd, band by band least squares over the
-    order classes (the module's docstring)."""
-    delta = rec.power - ref.power
+    """(L_s, sd(L_s)) per shaft, L_s in null sds of Δ: each order's Δ (from the history times the lines'
+    median ratio; off the lines only a heavier load's, up to LOAD_GAIN) divided by its null sd, band by band least
+    squares over the order classes (the module's docstring)."""
     lines = ref.line & ~lay.carrier
-    if lines.sum() >= GAIN_LINES:  # the take's common gain of the lines (its load)
-        gain = float(np.median(rec.power[lines] / ref.power[lines]))
-        delta = np.where(lines, rec.power - gain * ref.power, delta)
-    z = delta / np.sqrt(np.maximum(_null_var(rec, ref), 1e-300))
+    # the take's common gain of the lines (its load); off the lines, where a shaft's average holds the
+    # other shafts' lines' leaks, only a heavier load's: a fault moves the lines far more, and reads them
+    # low as well, and a gain under 1 taken off there raises every order (the module's docstring)
+    gain = float(np.median(rec.power[lines] / ref.power[lines])) if lines.sum() >= GAIN_LINES else 1.0
+    off = gain if 1.0 < gain <= LOAD_GAIN else 1.0
+    g = np.where(lines, gain, off)
+    # a gain under 1 never narrows the history's spread: a slower gear's fault reads a faster shaft's lines
+    # low (0.19-0.24 of the history's, random trains of development seed 23), and narrowed, they named it
+    var = _null_var(rec, ref, np.maximum(g, 1.0))
+    z = (rec.power - g * ref.power) / np.sqrt(np.maximum(var, 1e-300))
     k = len(lay.shafts)
     code = lay.sync @ (1 << np.arange(k))
     num, info = np.zeros(k), np.zeros(k)
