@@ -23,8 +23,8 @@ shortest record under 4 records). Where the grand period does not fit (Fallback)
 lines leak into a shaft's average by an amount set by the length averaged, so a record's S is
 there the mean over its blocks of that length (a healthy 24/79 + 27/72 take read whole against
 half-record units: input z 5-6; in blocks 0 ± 1, development seeds). Each order's Δ is read in sds
-of its null spread (signals.evidence: the fault's excess is largest where that spread is; at the
-history's lines after the take's common line gain). A fault on shaft s adds a level L_s, about flat
+of its null spread (signals.evidence: the fault's excess is largest where that spread is; after the
+take's common line gain, off the lines only a heavier load's). A fault on shaft s adds a level L_s, about flat
 across a band in those units, at every order synchronous with s: in each band of orders the mean of
 each class (the set of shafts an order is synchronous with) is Σ_{s in class} L_s, solved by least
 squares (on the rig: L_idler from the idler-exclusive orders, L_output from the output-exclusive
