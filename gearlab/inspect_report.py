@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .confined import write_file
 from .signals.checks import fmt_hz
 
 STYLE = "body{font-family:sans-serif;max-width:70em}table{border-collapse:collapse}"
@@ -117,7 +118,7 @@ def write_report(report: dict, folder: Path) -> Path:
     if "localisation" in report:
         parts.append(_localisation(report["localisation"], folder))
     html = f"<!doctype html><html><head><meta charset='utf-8'><title>inspect</title><style>{STYLE}</style></head>"
-    (folder / "report.html").write_text(html + "<body>" + "".join(parts) + "</body></html>", encoding="utf-8")
+    write_file(folder / "report.html", html + "<body>" + "".join(parts) + "</body></html>")
     return folder / "report.html"
 
 
