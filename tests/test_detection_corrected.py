@@ -93,12 +93,12 @@ def test_a_corrected_source_with_draws_trains_each_row_on_a_draw_of_its_own_samp
         return train_method(protocol, method, source, source_val, target, *args, **kwargs)
 
     def rows_spy(X, index, draws):
-        out = pick(X, index, draws)
+        out, flat = pick(X, index, draws)
         if X.ndim == 3:  # every row one of its own sample's draws
             own = X[index]
             assert torch.all((own == out[:, None]).all(dim=2).any(dim=1))
             rows.append(int(torch.all(own[:, 0] == out)))
-        return out
+        return out, flat
 
     templates = []
     template_statistic = api.template_statistic
