@@ -178,7 +178,7 @@ def run_scenario(
         scenario = load_scenario(scenario_path, overrides)
         if quick:  # the shrunk scenario is checked again: refused before any folder is made
             SCENARIO_KINDS[scenario.kind].quick(scenario)
-        run = RunDir.create(output_base(scenario, out), scenario, quick)
+        run = RunDir.create(output_base(scenario, out), scenario, quick, overrides)
     try:
         lock = run.lock()
     except GearlabInputError:
@@ -272,10 +272,18 @@ def _resumed_scenario(
     the results store made ready for appends. Called with the run directory locked."""
     if quick and not run.quick:
         raise GearlabInputError(f"--quick: the run in {run.path} was started without --quick; resume it without")
+    if not scenario_path:  # the run's own copy, with the keys its command line set (--seed) set again
+        started = run.meta().get("overrides", {})
+        overrides = {t: {**started.get(t, {}), **(overrides or {}).get(t, {})} for t in {*started, *(overrides or {})}}
     scenario = load_scenario(
         scenario_path or run.scenario_file(), overrides, base=None if scenario_path else run.base()
     )
     if not run.started_with(scenario, stored_forms):
+        if not scenario_path:
+            raise GearlabInputError(
+                f"{run.path}: the keys given on the command line differ from those the run was started "
+                "with; resume without them or start a new run"
+            )
         raise GearlabInputError(
             f"{scenario.path}: differs from the scenario the run in {run.path} was started "
             "with; resume without SCENARIO (the run keeps a copy) or start a new run"

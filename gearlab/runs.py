@@ -25,6 +25,7 @@ import os
 import shutil
 import stat
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -90,9 +91,12 @@ class RunDir:
         return Confined(self.path, parts)
 
     @classmethod
-    def create(cls, base: Path, scenario: Scenario, quick: bool = False) -> RunDir:
+    def create(
+        cls, base: Path, scenario: Scenario, quick: bool = False, overrides: Mapping[str, Mapping] | None = None
+    ) -> RunDir:
         """A new run directory <base>/<name>/<timestamp>[-N]; on failure (a full disk, a
-        read-only place) nothing of it is left and one line says why."""
+        read-only place) nothing of it is left and one line says why. *overrides*: the keys the
+        command line set over the scenario file (`--seed`), kept so that a resume reads them again."""
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
         parent = inside(base, scenario.name)
         try:
@@ -111,6 +115,8 @@ class RunDir:
                     "quick": quick,
                     "base": str(scenario.base.resolve()) if scenario.base else None,
                     "inputs": input_digests(scenario),
+                    # [execution] says where units run, which a resume may change
+                    "overrides": {t: dict(v) for t, v in (overrides or {}).items() if t != "execution"},
                 },
             )
             try:

@@ -46,6 +46,20 @@ def test_options_reach_the_resolved_scenario_and_a_resume_may_change_them(cli, s
     assert json.loads((run / "summary.json").read_text())["kind"] == "stiffness"
 
 
+def test_a_resume_reads_the_keys_its_start_set_on_the_command_line(scenario, tmp_path, unrendered_figures):
+    """`gearlab transfer-benchmark --seed S` sets [benchmark] over the scenario file: a resume
+    without them continues that run (it was refused as "differs from the scenario"); with other
+    values it is refused, naming the run."""
+    from gearlab.engine import run_scenario
+    from gearlab.errors import GearlabInputError
+
+    given = {"scenario": {"description": "set on the command line"}}
+    run = run_scenario(scenario, out=tmp_path / "runs", overrides=given).path
+    assert run_scenario(resume=run).path == run
+    with pytest.raises(GearlabInputError, match=str(run)):
+        run_scenario(resume=run, overrides={"scenario": {"description": "another"}})
+
+
 def test_gap_refuses_a_scenario_of_another_kind(cli, scenario):
     code, _, err = cli("gap", scenario)
     refused(code, err, str(scenario), "[scenario] key 'kind'", '"gap"', "gearlab run")
