@@ -2,7 +2,8 @@
 key (type, default, unit, bounds, --quick limit, meaning), read off the kinds' TABLES (each key a
 `gearlab.settings.setting` field of a settings dataclass, made a scenario key with its bounds and
 --quick limit by `gearlab.scenario.keys_of`). A table that repeats one printed before (the dataset
-keys of every [source], a [network]) is written as that table and what differs.
+keys of every [source], a [network]) is written as that table and what differs. Then every key of a
+gearbox description file, read off its tables' declarations (gearlab.gearbox.description.DOC_TABLES).
 
     python -m gearlab.settings_doc            # rewrite docs/settings.md
     python -m gearlab.settings_doc --check    # exit 1 when docs/settings.md is out of date
@@ -13,11 +14,14 @@ plugins, not to the scenario schema: `gearlab plugins` lists them.
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 import sys
 from pathlib import Path
 
 from .files import atomic_write
+from .gearbox.description import DOC_TABLES
 from .kinds import SCENARIO_KINDS
 from .scenario import EXECUTION_TABLE, OUTPUT_TABLE, SCENARIO_TABLE, Key, Table
 
@@ -25,10 +29,10 @@ DOC = Path(__file__).resolve().parent.parent / "docs" / "settings.md"
 
 HEADER = """# Settings reference
 
-Every key of every scenario table, generated from the declarations by `python -m
-gearlab.settings_doc` (`tests/test_settings.py` fails when this page is out of date). *unit*: what
-a plain number is read in (`'25 Hz'` is converted); *quick*: `--quick` takes at most this; an empty
-default: not set (the preset's or the kind's own value). Plugin parameters: `gearlab plugins`.
+Every key of every scenario table and of a gearbox description file, generated from the declarations by `python -m
+gearlab.settings_doc` (`tests/test_settings.py` fails when this page is out of date). *unit*: what a plain number is
+read in (`'25 Hz'` is converted); *quick*: `--quick` takes at most this; an empty default: not set (the preset's or the
+kind's own value). Plugin parameters: `gearlab plugins`.
 """
 
 _TYPES = {str: "str", int: "int", float: "float", bool: "bool", list: "list", tuple: "list", dict: "table"}
@@ -123,7 +127,46 @@ def reference() -> str:
                 out.append(f"{title}\n" + _HEAD + "\n" + "\n".join(rows.values()) + "\n")
             shown = f"[[{name}]]" if table.array else f"[{name}]"
             written.append((f"`{shown}` ({kind})" if kind else f"`{shown}`", rows))
+    out.append(gearbox_reference())
     return "\n".join(out)
+
+
+GEARBOX_HEAD = """## A gearbox description file
+
+docs/gearbox.md. Write a quantity with its unit (`"2 mm"`, `"20 deg"`): a bare number is read in the SI *unit*.
+
+| table | key | type | default | unit | bounds | meaning |
+|---|---|---|---|---|---|---|"""
+
+
+def gearbox_row(table: str, name: str, meta, default, fitted: dict[str, str]) -> str:
+    """One key of a gearbox description's *table*: default and bounds in the unit people read where it is
+    not the SI one ('20 deg')."""
+
+    def shown(value) -> str:
+        if value is dataclasses.MISSING:
+            return "required"
+        if value is None or value == "" or (isinstance(value, float) and math.isnan(value)):
+            return ""
+        if isinstance(value, str):
+            return _cell(_toml(value))
+        return meta.show(value) if meta.display_unit not in ("", meta.unit) else _num(value)
+
+    low, high = (None if v is None else shown(v) for v in (meta.low, meta.high))
+    bounds = " \\| ".join(meta.choices) if meta.choices else f"[{low}, {high}]" if low and high else ""
+    bounds = bounds or (f"≥ {low}" if low else f"≤ {high}" if high else "")
+    doc = meta.doc + (f"; a gap run fits it: `{fitted[name]}`" if name in fitted else "")
+    return f"| {table} | `{name}` | {_type(meta.types)} | {shown(default)} | {meta.unit} | {bounds} | {_cell(doc)} |"
+
+
+def gearbox_reference() -> str:
+    """The section of the gearbox description's keys (DOC_TABLES), a table's name on its first row."""
+    rows = [
+        gearbox_row(f"`{table}`" if i == 0 else "", name, meta, default, fitted)
+        for table, keys, fitted in DOC_TABLES
+        for i, (name, (meta, default)) in enumerate(keys.items())
+    ]
+    return GEARBOX_HEAD + "\n" + "\n".join(rows) + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -7,6 +7,7 @@ After changing a declaration, rewrite docs/settings.md with:
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import re
 
@@ -118,3 +119,54 @@ def test_a_table_is_read_typed_and_a_list_default_is_not_shared():
     a, b = Sweep(), Sweep()
     a.faults.append("crack")
     assert b.faults == [] and declared(Sweep)["steps"][1] == [1, 20]
+
+
+def _gearbox_rows() -> dict[str, set[str]]:
+    """{table title: its keys} as docs/settings.md's gearbox section lists them."""
+    section = settings_doc.reference().split("## A gearbox description file")[1]
+    rows, table = {}, None
+    for line in section.splitlines():
+        if m := re.match(r"\| (`[^|]*`)? *\| `(\w+)` \|", line):
+            table = m.group(1) or table
+            rows.setdefault(table.strip("`"), set()).add(m.group(2))
+    return rows
+
+
+def test_the_reference_has_every_key_a_gearbox_description_takes(tmp_path):
+    # the reader's own "unknown key; known keys: ..." of every table against the page's rows: a key
+    # the reader takes and the page misses (or the other way) fails
+    from gearlab.gearbox.description import PER_GEAR, TABLES, parse_gearbox
+
+    rows = _gearbox_rows()
+    assert {t.strip("[]").split(".")[0] for t in rows} >= set(TABLES), rows.keys()
+    gear = {"z": 20, "bore": "20 mm"}
+    box = {"stages": [{"module": "2 mm", "face_width": "20 mm", "pinion": dict(gear), "wheel": dict(gear, z=57)}]}
+    where = {
+        "[gearbox]": lambda d: d.setdefault("gearbox", {}),
+        "[operation]": lambda d: d.setdefault("operation", {}),
+        "[materials.NAME]": lambda d: d.setdefault("materials", {}).setdefault("bronze", {}),
+        "[[stages]]": lambda d: d["stages"][0],
+        "[stages.pinion], [stages.wheel]": lambda d: d["stages"][0]["pinion"],
+        "[[shafts]]": lambda d: d.setdefault("shafts", [{}, {}])[0],
+        "[sensor]": lambda d: d.setdefault("sensor", {}),
+        "[dynamics]": lambda d: d.setdefault("dynamics", {}),
+    }
+    assert set(where) == set(rows)
+    for title, table in where.items():
+        data = copy.deepcopy(box)
+        table(data)["bogus_key"] = 1
+        with pytest.raises(GearlabInputError) as err:
+            parse_gearbox(data, "my.toml")
+        known = set(str(err.value).split("known keys: ")[1].split(", "))
+        assert known == rows[title] | (set(PER_GEAR) if "pinion" in title else set()), title
+    assert "| `[[stages]]` | `module` | float | required | m | [0.1 mm, 100 mm] |" in settings_doc.reference()
+
+
+def test_the_gearbox_pages_example_is_a_description_that_loads(tmp_path):
+    from gearlab.gearbox import load_gearbox
+
+    page = (ROOT / "docs" / "gearbox.md").read_text()
+    path = tmp_path / "rig20.toml"
+    path.write_text(re.search(r"```toml\n(.*?)```", page, re.S).group(1))
+    box = load_gearbox(path)
+    assert (box.name, box.speed_hz, box.stages[0].wheel.material.name) == ("rig20", 25.0, "bronze")

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import MISSING, dataclass, field
 from pathlib import Path
 
 from ..errors import GearlabInputError, shown
@@ -50,24 +50,37 @@ def gear_name(stage: int, gear: str, shafts: tuple[str, ...]) -> str:
 # --- declared keys ---------------------------------------------------------------------------
 #
 # Each table's keys are a settings dataclass (gearlab.settings): SI unit, default, bounds, doc and
-# the unit shown to people; NaN is "no default" (required, or optional where the code says so).
+# the unit shown to people; a field without a default is required, NaN is optional with no default
+# (the code derives the value). Every key a table knows is declared, its text keys too: the reader's
+# "unknown key" lists and docs/settings.md (DOC_TABLES, gearlab.settings_doc) come from here.
 # FITTED names the gap-diagnosis effect (plugins/effects) that may fit a value from measured data.
 
 _NAN = math.nan
+# An input shaft's speed: up to 1 kHz (60,000 rpm) in every table; a bare number (read in Hz) up to 100 Hz
+# (6,000 rpm), above which it is more likely meant in rpm ('speed = 900' read as 900 Hz passed silently)
+MAX_SPEED_HZ, BARE_SPEED_HZ = 1e3, 100.0
+
+
+@dataclass(frozen=True)
+class GearboxKeys:
+    """The [gearbox] table's keys."""
+
+    name: str = setting(str, "", doc="the gearbox's name (default: the file's name without .toml)")
+    description: str = setting(str, "", doc="a line saying what it is")
 
 
 DEDENDUM_DOC = "dedendum coefficient h_f* (h_f = h_f* m; clearance c* = h_f* - h_a*; per gear: default the stage's)"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class StageKeys:
     """A [[stages]] table's keys."""
 
-    module: float = setting(float, _NAN, low=1e-4, high=0.1, **MM, doc="module m (ISO 21771 m_n)")
+    module: float = setting(float, low=1e-4, high=0.1, **MM, doc="module m (ISO 21771 m_n)")
     pressure_angle: float = setting(
         float, math.radians(20), low=math.radians(10), high=math.radians(35), **DEG, doc="pressure angle α"
     )
-    face_width: float = setting(float, _NAN, low=1e-4, high=1.0, **MM, doc="face width b (common to both gears)")
+    face_width: float = setting(float, low=1e-4, high=1.0, **MM, doc="face width b (common to both gears)")
     centre_distance: float = setting(
         float, _NAN, low=1e-4, high=10.0, **MM, doc="centre distance a (optional; checked against z, m, x)"
     )
@@ -78,35 +91,39 @@ class StageKeys:
     tool_tip_radius: float = setting(
         float, 0.2, low=0.0, high=0.5, doc="tip radius coefficient ρ_fP* of the generating rack"
     )
+    name: str = setting(str, "", doc="the gear pair's name (default: the gearbox's)")
+    pinion: dict = setting(dict, doc="gear 1, the driver on shaft k: [stages.pinion] below")
+    wheel: dict = setting(dict, doc="gear 2, driven, on shaft k + 1: [stages.wheel] below")
 
 
 BORE_DOC = "bore diameter d_bore (the hub radius of the stiffness model is d_bore/2)"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GearKeys:
-    """A stage's pinion or wheel table's keys."""
+    """A stage's pinion or wheel table's keys (and PER_GEAR, the stage's keys a gear may set)."""
 
-    z: int = setting(int, _NAN, low=6, high=10_000, doc="number of teeth z")
+    z: int = setting(int, low=6, high=10_000, doc="number of teeth z")
     x: float = setting(float, 0.0, low=-1.0, high=2.0, doc="profile shift coefficient x")
-    bore: float = setting(float, _NAN, low=1e-4, high=10.0, **MM, doc=BORE_DOC)
+    bore: float = setting(float, low=1e-4, high=10.0, **MM, doc=BORE_DOC)
     face_width: float = setting(
         float, _NAN, low=1e-4, high=1.0, **MM, doc="face width of this gear (default: the stage's)"
     )
     tip_diameter: float = setting(
         float, _NAN, low=1e-4, high=20.0, **MM, doc="tip diameter d_a (default d + 2 m (h_a* + x))"
     )
+    material: str = setting((str, dict), "steel", doc="a [materials] name, or an inline table {E, nu, density}")
 
 
 PER_GEAR = ("addendum", "dedendum")  # stage keys a gear may set for itself
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MaterialKeys:
     """A [materials] entry's keys."""
 
-    E: float = setting(float, _NAN, low=1e8, high=1e13, unit="Pa", display_unit="GPa", doc="Young's modulus E")
-    nu: float = setting(float, _NAN, low=0.0, high=0.4999, doc="Poisson's ratio ν")
+    E: float = setting(float, low=1e8, high=1e13, unit="Pa", display_unit="GPa", doc="Young's modulus E")
+    nu: float = setting(float, low=0.0, high=0.4999, doc="Poisson's ratio ν")
     density: float = setting(float, 7850.0, low=100.0, high=30_000.0, unit="kg/m^3", doc="density ρ")
 
 
@@ -154,10 +171,15 @@ class DynamicsKeys:
 LOAD_LEVEL_DOC = "factor on the output torque, the [operation] load or a scenario's 'load' (a gap run's load_level fit)"
 
 
+SPEED_DOC = "input-shaft speed in (0, 1 kHz]: '25 Hz', '1500 rpm', '157.08 rad/s' (a bare number: Hz, up to 100)"
+
+
 @dataclass(frozen=True)
 class OperationKeys:
-    """The [operation] key a gap-diagnosis effect may fit."""
+    """The [operation] table's keys (load_level: what a gap-diagnosis effect may fit)."""
 
+    speed: float = setting(float, _NAN, high=MAX_SPEED_HZ, unit="Hz", doc=SPEED_DOC)
+    load: float = setting(float, _NAN, low=0.0, high=1e7, unit="N*m", doc="output torque (default: a scenario's load)")
     load_level: float = setting(float, 1.0, low=0.01, high=100.0, doc=LOAD_LEVEL_DOC)
 
 
@@ -169,20 +191,29 @@ INERTIA_DOC = "polar moment of inertia of the block (default: solid discs)"
 class ShaftKeys:
     """A [shafts] entry's keys."""
 
+    name: str = setting(str, "", doc="the shaft's name (default: input, intermediate, output)")
     mass: float = setting(float, _NAN, low=1e-4, high=1e5, unit="kg", doc=MASS_DOC)
     inertia: float = setting(float, _NAN, low=1e-9, high=1e4, unit="kg*m^2", doc=INERTIA_DOC)
 
 
-@dataclass(frozen=True)
-class TachoKeys:
-    """The [sensor] tacho's keys."""
+SENSOR_DIRECTIONS = ("x", "y", "radial", "axial")
 
+
+@dataclass(frozen=True)
+class SensorKeys:
+    """The [sensor] table's keys."""
+
+    near: str = setting(str, "", doc="the shaft whose bearing the accelerometer sits nearest (default: the input)")
+    direction: str = setting(str, "y", choices=SENSOR_DIRECTIONS, doc="the accelerometer's direction")
+    tacho: str = setting(str, "", doc="the shaft the tacho reads (default: the input)")
     pulses_per_rev: int = setting(int, 1, low=1, high=10_000, doc="tacho pulses per revolution")
 
 
-STAGE_KEYS, GEAR_KEYS, MATERIAL_KEYS, DYNAMICS, OPERATION_KEYS, SHAFT_KEYS, TACHO_KEYS = (
-    declared(c) for c in (StageKeys, GearKeys, MaterialKeys, DynamicsKeys, OperationKeys, ShaftKeys, TachoKeys)
+GEARBOX_KEYS, STAGE_KEYS, GEAR_KEYS, MATERIAL_KEYS, DYNAMICS, OPERATION_KEYS, SHAFT_KEYS, SENSOR_KEYS = (
+    declared(c)
+    for c in (GearboxKeys, StageKeys, GearKeys, MaterialKeys, DynamicsKeys, OperationKeys, ShaftKeys, SensorKeys)
 )
+GEAR_TABLE = {**GEAR_KEYS, **{k: STAGE_KEYS[k] for k in PER_GEAR}}  # what a pinion or wheel table knows
 LOAD_LEVEL = "load_level"
 FITTED = {
     "motor_inertia": "drive_inertias",
@@ -199,7 +230,17 @@ FITTED = {
     "mesh_damping_ratio": "mesh_damping",
 }
 OPERATION_FITTED = {LOAD_LEVEL: "load_level"}  # [operation] keys a gap-diagnosis effect may fit
-SENSOR_DIRECTIONS = ("x", "y", "radial", "axial")
+# The tables as docs/settings.md lists them (gearlab.settings_doc): (table, its keys, key -> the effect fitting it)
+DOC_TABLES = (
+    ("[gearbox]", GEARBOX_KEYS, {}),
+    ("[operation]", OPERATION_KEYS, {}),  # load_level says what fits it
+    ("[materials.NAME]", MATERIAL_KEYS, {}),
+    ("[[stages]]", STAGE_KEYS, {}),
+    ("[stages.pinion], [stages.wheel]", GEAR_KEYS, {}),  # and PER_GEAR, the stage's rows say
+    ("[[shafts]]", SHAFT_KEYS, {}),
+    ("[sensor]", SENSOR_KEYS, {}),
+    ("[dynamics]", DYNAMICS, FITTED),
+)
 
 
 # --- the description -------------------------------------------------------------------------
@@ -319,11 +360,6 @@ def speed_hz(value, where: str) -> float:
     return value
 
 
-# An input shaft's speed: up to 1 kHz (60,000 rpm) in every table; a bare number (read in Hz) up to 100 Hz
-# (6,000 rpm), above which it is more likely meant in rpm ('speed = 900' read as 900 Hz passed silently)
-MAX_SPEED_HZ, BARE_SPEED_HZ = 1e3, 100.0
-
-
 def bare_speed(value) -> str:
     """What an out-of-bounds speed's message adds when the speed was a bare number (read as Hz:
     '2100' meant in rpm is 2100 turns a second)."""
@@ -355,12 +391,12 @@ class _Table:
 
     def param(self, keys: Mapping, name: str, default: float | None = None) -> float | None:
         """The value of key *name* of *keys* (a table's declared keys) in SI, checked against its
-        bounds; *default* (or the declared one) when absent, None when absent and optional (default
-        NaN and none given)."""
+        bounds; *default* (or the declared one) when absent, None when absent with no default (a
+        required key, or an optional one declared NaN, and none given)."""
         p, declared_default = keys[name]
         if name not in self.data:
             value = declared_default if default is None else default
-            if isinstance(value, float) and math.isnan(value):
+            if value is MISSING or (isinstance(value, float) and math.isnan(value)):
                 return None
             return value
         where = self.where(name)
@@ -431,7 +467,7 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
                 f"{source}: unknown table [{key}]{did_you_mean(str(key), TABLES)}; known tables: {', '.join(TABLES)}"
             )
     head = _Table(data.get("gearbox", {}), source, "[gearbox]")
-    head.known(("name", "description"))
+    head.known(GEARBOX_KEYS)
     name = head.text("name", Path(source).stem if source.endswith(".toml") else "gearbox")
     description = head.text("description", "")
 
@@ -448,13 +484,9 @@ def parse_gearbox(data: Mapping, source: str) -> Gearbox:
     shafts, shaft_mass, shaft_inertia = _shafts(data.get("shafts"), len(stages), source)
 
     op = _Table(data.get("operation", {}), source, "[operation]")
-    op.known(("speed", "load", LOAD_LEVEL))
+    op.known(OPERATION_KEYS)
     speed = speed_hz(op.data["speed"], op.where("speed")) if "speed" in op.data else None
-    load = None
-    if "load" in op.data:
-        load = to_si(op.data["load"], "N*m", op.where("load"))
-        if not 0 <= load <= 1e7:
-            raise GearlabInputError(f"{op.where('load')}: expected an output torque in [0, 1e7] N*m, got {load:g}")
+    load = op.param(OPERATION_KEYS, "load")
 
     sensor = _sensor(data.get("sensor", {}), source, shafts)
     dyn = _Table(data.get("dynamics", {}), source, "[dynamics]")
@@ -493,9 +525,10 @@ def _materials(data, source: str) -> dict[str, Material]:
 
 def _stage(data: Mapping, i: int, source: str, materials: dict[str, Material]) -> Stage:
     t = _Table(data, source, f"[[stages]] #{i + 1}")
-    t.known([*STAGE_KEYS, "name", "pinion", "wheel"])
+    t.known(STAGE_KEYS)
     name = t.text("name", "")
-    module, alpha, width, a, ha, hf, rho = (t.param(STAGE_KEYS, name) for name in STAGE_KEYS)
+    numbers = [key for key, (p, _) in STAGE_KEYS.items() if p.types in (int, float)]
+    module, alpha, width, a, ha, hf, rho = (t.param(STAGE_KEYS, key) for key in numbers)
     module = t.required(STAGE_KEYS, "module")
     width = t.required(STAGE_KEYS, "face_width")
     if hf <= ha:
@@ -508,7 +541,7 @@ def _stage(data: Mapping, i: int, source: str, materials: dict[str, Material]) -
 
 
 def _gear(t: _Table, role: str, stage_width: float, materials: dict[str, Material], clearance: float) -> GearSpec:
-    t.known([*GEAR_KEYS, *PER_GEAR, "material"])
+    t.known(GEAR_TABLE)
     z = int(t.required(GEAR_KEYS, "z"))
     x = t.param(GEAR_KEYS, "x")
     bore = t.required(GEAR_KEYS, "bore")
@@ -553,7 +586,7 @@ def _shafts(data, stages: int, source: str) -> tuple[tuple[str, ...], tuple, tup
     out, mass, inertia = [], [], []
     for i, item in enumerate(data):
         t = _Table(item, source, f"[[shafts]] #{i + 1}")
-        t.known(["name", *SHAFT_KEYS])
+        t.known(SHAFT_KEYS)
         name = t.text("name", names[i])
         if not name or name in out:
             raise GearlabInputError(f"{t.where('name')}: expected a distinct non-empty shaft name, got {shown(name)}")
@@ -565,7 +598,7 @@ def _shafts(data, stages: int, source: str) -> tuple[tuple[str, ...], tuple, tup
 
 def _sensor(data, source: str, shafts: tuple[str, ...]) -> Sensor:
     t = _Table(data, source, "[sensor]")
-    t.known(("near", "direction", "tacho", "pulses_per_rev"))
+    t.known(SENSOR_KEYS)
     values = {}
     for key in ("near", "tacho"):
         name = t.text(key, shafts[0])
@@ -580,5 +613,5 @@ def _sensor(data, source: str, shafts: tuple[str, ...]) -> Sensor:
         raise GearlabInputError(
             f"{t.where('direction')}: {shown(direction)} is not one of {', '.join(SENSOR_DIRECTIONS)}"
         )
-    ppr = t.param(TACHO_KEYS, "pulses_per_rev")
+    ppr = t.param(SENSOR_KEYS, "pulses_per_rev")
     return Sensor(values["near"], direction, values["tacho"], int(ppr))
