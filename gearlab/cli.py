@@ -531,7 +531,7 @@ def gap(
     else:
         path = Path(scenario)
         if not path.exists() and "/" not in scenario and not scenario.endswith(".toml"):
-            from .params import did_you_mean
+            from .errors import did_you_mean
 
             hint = did_you_mean(scenario, ["benchmark"])
             if hint:

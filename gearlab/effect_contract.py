@@ -53,8 +53,7 @@ import numpy as np
 
 from .dynamics.config import ModelConfig
 from .dynamics.excitation import Excitation
-from .errors import GearlabInputError
-from .params import did_you_mean, refuse_unknown
+from .errors import GearlabInputError, did_you_mean, refuse_unknown
 from .settings import NoParams, declared, plugin_description, resolve_params
 
 LEVELS = ("model", "excitation", "signal")

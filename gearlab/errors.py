@@ -1,5 +1,7 @@
-"""Errors that the CLI turns into one clear line and exit code 2."""
+"""Errors that the CLI turns into one clear line and exit code 2, and the "did you mean" of an
+unknown name."""
 
+import difflib
 import math
 import re
 
@@ -52,3 +54,17 @@ class GearlabInputError(Exception):
 
 class UnknownPluginError(GearlabInputError):
     """A plugin name that no registered plugin of that kind carries."""
+
+
+def did_you_mean(name: str, known: list[str] | tuple[str, ...]) -> str:
+    close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.5)  # 0.5: 'q1' still finds 'q0'
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def refuse_unknown(given, known: list[str] | tuple[str, ...], where: str) -> None:
+    """A one-line error for the first parameter of *given* that is not *known*: the closest known one and the list."""
+    for key in given:
+        if key not in known:
+            raise GearlabInputError(
+                f"{where}: unknown parameter '{key}'{did_you_mean(key, known)}; known: {', '.join(known) or 'none'}"
+            )

@@ -433,8 +433,8 @@ def diagnose_gap(source: str | DatasetSpec | Dataset, target: Dataset, **setting
     >>> result["verdict"], [(e["name"], e["params"]["kind"]) for e in result["effects"]]
     ('explained', [('sensor_noise', 'laplace')])
     """
+    from .errors import did_you_mean
     from .gap.diagnose import Settings, diagnose_dataset
-    from .params import did_you_mean
     from .settings import declared
 
     known = list(declared(Settings))

@@ -28,8 +28,7 @@ from dataclasses import dataclass, field
 import pluggy
 
 from .effect_contract import hook_problem
-from .errors import UnknownPluginError
-from .params import did_you_mean
+from .errors import UnknownPluginError, did_you_mean
 from .settings import describe_params, params_problem
 from .units import display
 

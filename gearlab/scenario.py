@@ -16,9 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from .confined import Confined
-from .errors import GearlabInputError, shown
+from .errors import GearlabInputError, did_you_mean, shown
 from .files import toml_tables
-from .params import did_you_mean
 from .settings import declared, in_bounds, setting
 
 _REQUIRED = object()

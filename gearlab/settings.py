@@ -17,7 +17,7 @@ the unit shown to people:
 A field without a default (``setting(types, ...)`` alone) is required. Every scenario table is
 declared so (``kw_only=True`` where a required key follows one with a default): a kind's
 ``Table(keys_of(cls))`` and, in build(), ``typed(cls, table)``. Base layer: imports nothing of
-gearlab but the errors, the units and the did-you-mean helper.
+gearlab but the errors and the units.
 """
 
 from __future__ import annotations
@@ -29,9 +29,8 @@ import math
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from .errors import GearlabInputError, shown
-from .params import Setting, did_you_mean, refuse_unknown
-from .units import to_si
+from .errors import GearlabInputError, did_you_mean, refuse_unknown, shown
+from .units import display, to_si
 
 # Most epochs any training key may ask for (the thesis trains for at most 800): beyond it a
 # value is a mistake that would hold a run for years.
@@ -40,6 +39,29 @@ MAX_EPOCHS = 100_000
 MAX_SEED = 2**32 - 1
 # beyond this the list of units of a protocol would not fit in memory
 MAX_REPETITIONS = 1000
+
+
+@dataclasses.dataclass(frozen=True)
+class Setting:
+    """What a setting declares besides its name and default (:func:`setting`). Values are stored
+    in SI (*unit*); *display_unit* is for people."""
+
+    types: type | tuple[type, ...]
+    low: float | None = None
+    high: float | None = None
+    unit: str = ""
+    doc: str = ""
+    choices: tuple[str, ...] = ()
+    quick: Any = None  # --quick: the value is at most this
+    check: Callable[[Any, str], Any] | None = None  # a check of its own: returns the value or raises
+    display_unit: str = ""  # the unit shown to people where it is not the SI *unit*
+
+    @property
+    def integer(self) -> bool:
+        return self.types is int
+
+    def show(self, value: float) -> str:
+        return display(value, self.unit, self.display_unit)
 
 
 # A setting's SI unit and the unit people read, where they differ: setting(..., **MM, ...) is

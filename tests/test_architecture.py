@@ -26,7 +26,6 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "gearlab",
             "gearlab.errors",
             "gearlab.units",
-            "gearlab.params",
             "gearlab.files",
             "gearlab.confined",
             "gearlab.events",

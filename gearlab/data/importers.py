@@ -28,8 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import PHYSICS_VERSION
-from ..errors import GearlabInputError
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean
 from ..signals import (
     POINTS,
     Standardiser,

@@ -22,10 +22,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..errors import GearlabInputError, shown
+from ..errors import GearlabInputError, did_you_mean, shown
 from ..gearbox.description import SHAFT_NAMES, gear_name
 from ..gearbox.simulation import shaft_names
-from ..params import did_you_mean
 from ..physics.stiffness import GEARS, gear_label
 from ..registry import get_registry
 

@@ -47,8 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import GearlabInputError
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities

@@ -15,8 +15,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 from .. import PHYSICS_VERSION
 from ..effects import EffectChain, check_effect_specs, config_of
-from ..errors import GearlabInputError
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean
 from ..physics.faults import LADDER_STEPS
 from ..registry import get_registry
 from ..settings import MAX_SEED, setting

@@ -24,9 +24,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import GearlabInputError
+from ..errors import GearlabInputError, did_you_mean
 from ..gearbox.simulation import is_reference, preset_of_reference
-from ..params import did_you_mean
 from ..physics.geometry import GearPair
 from ..physics.presets import gear_pair
 from ..settings import plugin_description, resolve_params, setting, subset

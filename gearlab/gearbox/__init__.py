@@ -10,8 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import GearlabInputError
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean
 from .checks import StageGeometry, check_stage, stage_geometry
 from .derive import StagePair, gear_pair, gear_pairs
 from .description import Gearbox, GearSpec, Material, Sensor, Stage, load_gearbox, parse_gearbox, speed_hz

@@ -28,9 +28,8 @@ from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field
 from pathlib import Path
 
-from ..errors import GearlabInputError, shown
+from ..errors import GearlabInputError, did_you_mean, shown
 from ..files import toml_tables
-from ..params import did_you_mean
 from ..settings import DEG, MM, declared, setting
 from ..units import to_si
 

@@ -23,10 +23,9 @@ from ..data.recordings import (
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import CALIBRATION, calibration, parse_sensitivity
 from ..effects import effects_from_tables
-from ..errors import GearlabInputError, shown
+from ..errors import GearlabInputError, did_you_mean, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
-from ..params import did_you_mean
 from ..parts.measured import ACQUISITION, pulses_of, tacho_shaft_of
 from ..registry import get_registry
 from ..scenario import Scenario, Table, check_type, keys_of, location, plain_name

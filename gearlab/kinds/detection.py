@@ -69,14 +69,13 @@ from pathlib import Path
 
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
-from ..errors import GearlabInputError, shown
+from ..errors import GearlabInputError, did_you_mean, shown
 from ..events import Event, ignore_events
 from ..executors import Aside, Executor, Shared
 from ..gearbox.simulation import gearbox_of, label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
 from ..learn.schedule import longest_first, two_phases
-from ..params import did_you_mean
 from ..parts import training
 from ..parts.measured import target_spec
 from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training

@@ -12,11 +12,10 @@ import numpy as np
 from ..data.recordings import channel_key, channel_listing, cut_recording, read_header
 from ..data.textzip import CALIBRATION, calibration
 from ..data.which_gear import Take
-from ..errors import GearlabInputError
+from ..errors import GearlabInputError, did_you_mean
 from ..events import Event
 from ..gearbox.orders import TachoShaft
 from ..learn.protocol import fault_score
-from ..params import did_you_mean
 from ..parts import scoring
 from ..parts.measured import TargetFile, held
 from ..runs import RunDir

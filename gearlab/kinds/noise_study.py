@@ -24,7 +24,7 @@ from ..charts import Chart, Curve
 from ..data import cache
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
-from ..errors import GearlabInputError
+from ..errors import GearlabInputError, did_you_mean
 from ..events import Event, UnitProgress, report_begins, standing
 from ..learn.bounds import class_bound, class_bound_steps
 from ..learn.config import NetworkSettings
@@ -39,7 +39,6 @@ from ..learn.noise_study import (
     run_unit,
     split,
 )
-from ..params import did_you_mean
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location
 from ..settings import setting

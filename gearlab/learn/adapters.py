@@ -37,8 +37,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import did_you_mean
+from gearlab.errors import GearlabInputError, did_you_mean
 from gearlab.settings import NoParams, declared, plugin_description, resolve_params, setting
 
 if TYPE_CHECKING:  # for the annotations only; see the module docstring

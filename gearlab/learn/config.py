@@ -10,8 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import GearlabInputError
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean
 from ..settings import declared, in_bounds, setting
 from .history import NOISE_LAWS
 from .path import PATHS

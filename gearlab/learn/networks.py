@@ -102,8 +102,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from gearlab.errors import GearlabInputError
-from gearlab.params import did_you_mean
+from gearlab.errors import GearlabInputError, did_you_mean
 
 from . import fast_frozen
 from .bounds import abs_median, lower_median, noise_scale, shape_llr

@@ -20,8 +20,7 @@ from ..data.recordings import (
     pulses_without_tacho,
 )
 from ..data.textzip import CALIBRATION, align_to, calibration
-from ..errors import GearlabInputError, shown
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean, shown
 from ..signals.angle import continued
 from ..units import rate_hz
 

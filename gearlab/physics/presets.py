@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ..errors import GearlabInputError
-from ..params import did_you_mean
+from ..errors import GearlabInputError, did_you_mean
 from .geometry import GearPair
 
 # Every preset is a 20 deg standard spur pair in steel (E = 200 GPa, nu = 0.3).

@@ -25,10 +25,9 @@ import numpy as np
 from ...charts import Chart, Curve
 from ...data.spec import DatasetSpec
 from ...effects import default_candidates
-from ...errors import GearlabInputError
+from ...errors import GearlabInputError, did_you_mean
 from ...events import Event
 from ...gap.diagnose import Settings
-from ...params import did_you_mean
 from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Scenario, Table, keys_of, location
