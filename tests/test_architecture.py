@@ -506,3 +506,15 @@ def test_every_kinds_build_returns_typed_specs():
     # the check sees a plain table, and lets a table of specs (the noise study's datasets) pass
     typed = dataclasses.make_dataclass("Typed", [])()
     assert _plain_table({"a": {"b": 1}}) and not _plain_table({"noisy": {"gaussian": typed}})
+
+
+def test_one_measured_file_reader():
+    # a measured file's format is parsed in gearlab/data/readers/ alone, one reader a format, reached through
+    # gearlab.data.recordings (issue 38 item 3: data/importers.py with readers/ and data/textzip.py were two paths)
+    parsers = {"loadmat", "whosmat", "loadtxt", "genfromtxt", "ZipFile", "read_columns"}
+    found = {f: {c.split(": ")[1] for c in calls} for f, calls in calls_of(parsers).items()}
+    outside = {f: names for f, names in found.items() if not f.startswith("gearlab/data/readers/")}
+    assert outside == {"gearlab/kinds/stiffness.py": {"loadtxt"}}, outside  # stiffness: its run's own CSVs
+    assert {"gearlab/data/readers/text.py", "gearlab/data/readers/matlab.py"} <= set(found)
+    h5 = [m for m, p in MODULES.items() if re.search(r"^\s*import h5py", p.read_text(), re.M)]
+    assert all(m.startswith("gearlab.data.readers.") for m in h5) and h5, h5

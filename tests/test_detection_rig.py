@@ -145,7 +145,7 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
     where a healthy record is, however strong."""
     import textrecords
 
-    from gearlab.data.textzip import read_record
+    from gearlab.data.recordings import cut_recording
     from gearlab.kinds.detection_records import tsa_units
     from gearlab.kinds.record_effects import overlap_dof
     from gearlab.signals.indicators import (
@@ -163,7 +163,8 @@ def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_pa
 
     def revolutions(name, chip=0.0, idler=0.0, bearing=0.0, seed=3):
         path = rig_record(tmp_path / f"{name}.zip", speed, seed, chip=chip, idler=idler, bearing=bearing)
-        rec = read_record(path, vibration=0, tacho=2, pulses_per_rev=PULSES, sensitivity=textrecords.SENSITIVITY, fs=fs)
+        sensitivity = textrecords.SENSITIVITY
+        rec = cut_recording(path, vibration=0, tacho=2, pulses_per_rev=PULSES, sensitivity=sensitivity, fs=fs)
         return rec.revolutions
 
     records = {

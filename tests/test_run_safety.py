@@ -27,7 +27,8 @@ from tiny import stiffness
 from gearlab import confined
 from gearlab.confined import Confined, refuse_unsafe
 from gearlab.data.importers import MeasuredSpec, import_measured, read_channels
-from gearlab.data.textzip import read_columns, read_record
+from gearlab.data.readers.text import read_columns
+from gearlab.data.recordings import cut_recording
 from gearlab.errors import GearlabInputError
 from gearlab.learn.protocol import StateStore
 from gearlab.runs import RunDir
@@ -508,7 +509,7 @@ def test_zipped_text_refuses_a_constant_vibration_as_npz_does(tmp_path):
     with zipfile.ZipFile(record, "w") as z:
         z.writestr("rec.txt", "".join(f"0.5 {p:g}\n" for p in pulses))
     with pytest.raises(GearlabInputError, match="all 40000 values equal 0.5"):
-        read_record(record, vibration=0, tacho=1, pulses_per_rev=1, sensitivity=1.0, fs=fs)
+        cut_recording(record, vibration=0, tacho=1, pulses_per_rev=1, sensitivity=1.0, fs=fs)
     np.savez(tmp_path / "rec.npz", acc=np.full(n, 0.5), fs=np.array(fs))
     with pytest.raises(GearlabInputError, match="zero variance"):
         import_measured(MeasuredSpec(name="c", path=str(tmp_path / "rec.npz"), vibration="acc", speed_hz=25.0))

@@ -1,5 +1,7 @@
-"""The zipped whitespace-separated text reader (gearlab.data.textzip): columns, sensitivity,
-N-pulse tacho, streaming; synthetic files made here, the real PHM 2009 records when present."""
+"""Zipped whitespace-separated text records (the PHM 2009 format) through the one import path
+(gearlab.data.readers.text, gearlab.data.recordings.cut_recording) and their calibration and tacho
+marks (gearlab.data.textzip): columns, sensitivity, N-pulse tacho, streaming; synthetic files made
+here, the real PHM 2009 records when present."""
 
 import tracemalloc
 import zipfile
@@ -10,7 +12,9 @@ import pytest
 from textrecords import FS, PULSES, SENSITIVITY, SPEED, record, signals, text, write_zip
 
 from gearlab.data.readers import text as text_reader
-from gearlab.data.textzip import align_to, parse_sensitivity, read_columns, read_record
+from gearlab.data.readers.text import read_columns
+from gearlab.data.recordings import cut_recording
+from gearlab.data.textzip import align_to, parse_sensitivity
 from gearlab.errors import GearlabInputError
 
 PHM09 = Path(__file__).resolve().parents[2] / "shared" / "data" / "phm09"
@@ -148,19 +152,19 @@ def test_bad_archives_and_columns_are_refused(tmp_path):
 
 def test_record_cut_with_a_ten_pulse_tacho(tmp_path):
     path = record(tmp_path / "r.zip", revolutions=20, noise=0.0)
-    rec = read_record(path, vibration=0, tacho=2, pulses_per_rev=PULSES, sensitivity=SENSITIVITY, fs=FS)
+    rec = cut_recording(path, vibration=0, tacho=2, pulses_per_rev=PULSES, sensitivity=SENSITIVITY, fs=FS)
     assert rec.speed_hz == pytest.approx(SPEED, rel=1e-3)
     assert rec.revolutions.shape == (19, 4096)  # the record starts before the first mark
     # m/s²: the mesh tone's amplitude is back to 1 after the volts are divided by the sensitivity
     spectrum = np.abs(np.fft.rfft(rec.revolutions.mean(axis=0))) * 2 / 4096
     assert spectrum[32] == pytest.approx(1.0, rel=0.02)
     # a wrong pulses_per_rev shows as a speed ten times too high: one-pulse revolutions
-    wrong = read_record(path, vibration=0, tacho=2, pulses_per_rev=1, sensitivity=SENSITIVITY, fs=FS)
+    wrong = cut_recording(path, vibration=0, tacho=2, pulses_per_rev=1, sensitivity=SENSITIVITY, fs=FS)
     assert wrong.speed_hz == pytest.approx(PULSES * SPEED, rel=1e-3)
 
 
 def test_records_starting_at_different_marks_are_aligned(tmp_path):
-    a = read_record(
+    a = cut_recording(
         record(tmp_path / "a.zip", noise=0.05, chip=3.0, seed=1),
         vibration=0,
         tacho=2,
@@ -169,7 +173,7 @@ def test_records_starting_at_different_marks_are_aligned(tmp_path):
         fs=FS,
     )
     # the same machine, the record starting 3 marks (3/10 of a turn) later
-    b = read_record(
+    b = cut_recording(
         record(tmp_path / "b.zip", noise=0.05, chip=3.0, seed=2, phase=2 * np.pi * 0.3),
         vibration=0,
         tacho=2,
@@ -187,7 +191,7 @@ def test_records_starting_at_different_marks_are_aligned(tmp_path):
 
 @pytest.mark.skipif(not PHM09.is_dir(), reason="the PHM 2009 records (../shared/data/phm09) are not here")
 def test_real_phm09_record():
-    rec = read_record(
+    rec = cut_recording(
         PHM09 / "spur2_30hz_High_1.zip",
         vibration=0,
         tacho=2,

@@ -1,32 +1,13 @@
-"""Measured records in whitespace-separated text, plain or zipped (the PHM 2009 gearbox format).
+"""A measured record's calibration and its tacho marks: what the PHM 2009 text records (one
+whitespace-separated text a record, zipped, voltages as measured, no sampling rate) need besides
+the read, which is the one import path's (gearlab.data.recordings, gearlab.data.readers.text).
 
-A data-acquisition system often writes one text file per record: one row per sample,
-columns separated by blanks, no sampling rate in the file, voltages as measured. Such a
-record reaches gearlab through three steps:
+* vibration in m/s² = volts / sensitivity: :func:`parse_sensitivity` (pint, "10 mV/g"), a gain
+  per file unit :func:`gain_quantity`, both of a table: :func:`calibration`;
+* two records of one shaft start at any of a tacho's N marks, 2πm/N apart (the j-th rising edge
+  is at θ = 2πj/N, :func:`gearlab.signals.angle_from_pulses` divided by N): :func:`align_to` finds m.
 
-    file (.zip of one text file, or the text itself)
-       ─► the asked-for columns, as float64                  read_columns (streamed, chunked)
-       ─► vibration in m/s² = volts / sensitivity            parse_sensitivity (pint, "10 mV/g")
-       ─► continuous input-shaft angle from a tacho with N pulses per revolution
-       ─► complete revolutions at 4096 angles                signals.cut_revolutions
-
-The text is read from the archive in blocks of ``CHUNK_BYTES`` and only the asked-for
-columns are kept, so a 13 MB text needs about the size of those columns (plus one block),
-never the whole text and its parsed table at once. The one memory limit of every measured
-file (``GEARLAB_MAX_RECORD_MB``, gearlab.data.readers.base) holds here too: a text (or a
-zip member) declaring more is refused before a byte is inflated, and the text read and the
-columns kept are counted while streaming, so an archive that lies about its size is
-stopped at the limit too.
-
-Columns are chosen by 0-based index (an int, or a text of digits) or by name when the
-first row is a header of names. A tacho with ``pulses_per_rev`` = N equally spaced marks
-gives a pulse every 1/N revolution: the j-th rising edge is at θ = 2πj/N
-(:func:`gearlab.signals.angle_from_pulses` divided by N). The revolutions start at the first
-mark seen in the record, which is any one of the N marks: two records of the same shaft may
-start 2πm/N apart (the chip kind aligns them, :func:`align_to`).
-
-Every bad file raises :class:`GearlabInputError` naming the file, the line or column and
-what was expected.
+Every bad value raises :class:`GearlabInputError` naming where it is and what was expected.
 """
 
 from __future__ import annotations
@@ -36,17 +17,13 @@ import re
 import numpy as np
 
 from ..errors import GearlabInputError, shown
-from ..signals import POINTS
 from ..units import to_si
 from .channel_units import STANDARD_GRAVITY
-from .readers.text import read_columns as read_columns  # its home before the one import path
-from .recordings import CutRecording, cut_recording
 
-__all__ = ["TextRecord", "align_to", "calibration", "parse_sensitivity", "read_columns", "read_record"]
+__all__ = ["align_to", "calibration", "gain_quantity", "parse_sensitivity"]
 
 # V per m/s²: accelerometers span 0.01 mV/g (shock) to 10 V/g (seismic); outside it, a unit is wrong
 SENSITIVITY_RANGE = (1e-5 / STANDARD_GRAVITY, 10.0 / STANDARD_GRAVITY)
-TWO_PI = 2.0 * np.pi
 
 
 # --- sensor sensitivity ------------------------------------------------------------------
@@ -139,37 +116,6 @@ def calibration(given: dict, at) -> dict:
     if unit == "m/s^2/V":
         return {"sensitivity": parse_sensitivity(values["gain"], at("gain")), "gain": None}
     return {"sensitivity": 1.0 / number, "gain": 1.0}
-
-
-# --- a record ----------------------------------------------------------------------------
-
-# A record cut into revolutions: the one import path's (gearlab.data.recordings.cut_recording),
-# which reads text records as every other format.
-TextRecord = CutRecording
-
-
-def read_record(
-    path,
-    *,
-    vibration,
-    tacho,
-    pulses_per_rev: int,
-    sensitivity: float | None,
-    fs: float | None,
-    points: int = POINTS,
-    transient: str = "none",
-) -> CutRecording:
-    """A record's complete revolutions in m/s², through the one import path (cut_recording)."""
-    return cut_recording(
-        path,
-        vibration=vibration,
-        tacho=tacho,
-        pulses_per_rev=pulses_per_rev,
-        sensitivity=sensitivity,
-        fs=fs,
-        points=points,
-        transient=transient,
-    )
 
 
 def align_to(reference: np.ndarray, signal: np.ndarray, marks: int) -> tuple[int, np.ndarray]:
