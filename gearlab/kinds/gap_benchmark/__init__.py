@@ -31,7 +31,7 @@ from ...gap.diagnose import Settings
 from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Scenario, Table, keys_of, location
-from ...settings import quick_limits, setting, typed
+from ...settings import setting, shrunk, typed
 from ..common import NOISE_MOVED, SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title
 from . import trials as bench
 
@@ -71,26 +71,32 @@ class Benchmark:
     )
 
 
+SEARCH = ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha")
 TABLES = {
     "benchmark": Table(keys_of(Benchmark)),
     "source": Table(SOURCE_KEYS, moved=NOISE_MOVED),
     # the diagnosis's own settings, declared once on gearlab.gap.scoring.Settings
-    "search": Table(keys_of(Settings, ("budget", "max_effects", "healthy", "bootstrap", "permutations", "alpha"))),
+    "search": Table(keys_of(Settings, SEARCH)),
 }
 OVERRIDES: tuple[str, ...] = ("trials", "seed")  # [benchmark] keys that `gearlab gap FILE` and the TUI may set
 
 
 @dataclass(frozen=True)
 class Spec:
-    """What build() checked: the source, the effect library, the drawn trials, the search settings
-    and the target revolutions. *settings* stays the plain dict (the [search] keys and the seed)
-    each trial task takes and summary.json shows."""
+    """What build() checked: the source, the effect library, the drawn trials, the diagnosis's settings
+    ([search] and the [benchmark] seed; the candidates are each trial's) and the target revolutions."""
 
     source: DatasetSpec
     library: tuple[str, ...]
     trials: list
-    settings: dict
+    settings: Settings
     revolutions: int
+
+
+def search_values(settings: Settings) -> dict:
+    """The [search] keys and the seed of *settings*: the plain dict each trial task takes (picklable, the
+    trial adds its candidates) and summary.json shows."""
+    return {name: getattr(settings, name) for name in (*SEARCH, "seed")}
 
 
 def build(scenario: Scenario) -> Spec:
@@ -126,7 +132,7 @@ def build(scenario: Scenario) -> Spec:
                 f"{location(path, 'benchmark', 'kinds')}: no trial of {b.kinds} among {b.trials} trials; "
                 "expected more trials"
             )
-    settings = {**t["search"], "seed": b.seed}
+    settings = replace(typed(Settings, t["search"]), seed=b.seed)
     return Spec(source, library, trials, settings, b.target_revolutions)
 
 
@@ -136,7 +142,7 @@ def describe(scenario: Scenario) -> str:
     mix = ", ".join(f"{c} {k}" for k, c in counts.items() if c)
     return (
         f"{len(spec.trials)} blind trials ({mix}) on {spec.source.name} ({spec.source.model}), "
-        f"{len(spec.library)} candidate effects, budget {spec.settings['budget']} per fit"
+        f"{len(spec.library)} candidate effects, budget {spec.settings.budget} per fit"
     )
 
 
@@ -144,13 +150,12 @@ def quick(scenario: Scenario) -> None:
     """Smoke run: 4 trials (one of each kind), small searches and statistics: a few minutes on 2 cores."""
     spec = scenario.spec
     n = min(len(spec.trials), 4)
-    s = spec.settings
-    settings = {**s, **{k: min(s[k], limit) for k, limit in quick_limits(Settings).items() if k in s}}
+    settings = shrunk(spec.settings)  # the --quick limits declared on Settings
     scenario.spec = replace(
         spec,
-        trials=bench.draw_trials(n, s["seed"], spec.library, spec.source),
+        trials=bench.draw_trials(n, settings.seed, spec.library, spec.source),
         settings=settings,
-        source=replace(spec.source, healthy=settings["healthy"]),
+        source=replace(spec.source, healthy=settings.healthy),
         revolutions=min(spec.revolutions, 40),
     )
 
@@ -179,7 +184,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             bench.TrialTask(
                 t,
                 spec.source,
-                spec.settings,
+                search_values(spec.settings),
                 run.file("targets", f"trial_{t.index:03d}"),
                 spec.revolutions,
             )
@@ -225,7 +230,7 @@ def summarise(scenario: Scenario, run: RunDir, elapsed: float | None = None) -> 
         "scenario": scenario.name,
         "source": asdict(spec.source),
         "library": list(spec.library),
-        "settings": spec.settings,
+        "settings": search_values(spec.settings),
         "mix": dict(bench.MIX),
         "target_revolutions": spec.revolutions,
         **bench.summarise(records, spec.library),
