@@ -224,7 +224,7 @@ def test_a_detection_scenario_takes_the_corrected_description(tmp_path, cli):
 
 
 def test_every_fitted_key_is_an_effect_parameter_or_a_factor_on_one():
-    """description.FITTED (docs/gearbox.md's *fitted by*): each key's model value is a parameter of its
+    """description.FITTED (docs/settings.md: 'a gap run fits it'): each key's model value is a parameter of its
     effect, or bearing_stiffness's factor on it (gearlab.gap.corrected.FACTORS)."""
     from gearlab.gap.corrected import FACTORS
     from gearlab.gearbox.derive import DYNAMICS_NAMES
