@@ -402,6 +402,10 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
                 f"thresholds: {r0['rule']}"
             )
         )
+        if r0.get("values"):  # how its values became m/s², and whose keys read it: a wrong unit scores as healthy
+            shown.append(
+                Text(f"values: {r0['values']}" + (f"; read with {r0['read_with']}" if r0.get("read_with") else ""))
+            )
         if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)
             where = r0.get("localised") or "nothing"
             shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))

@@ -652,6 +652,7 @@ class CutRecording:
     angle_source: str = ""
     warnings: tuple[str, ...] = ()
     first_revolution: int = 0  # revolutions[0]'s number from the angle's zero (first_complete)
+    units: str = ""  # how the values became m/s² (channel_scale): gearlab score shows it
 
 
 def cut_recording(
@@ -699,7 +700,7 @@ def cut_recording(
     revs, warns = cut.revolutions[start:], () if warning is None else (warning,)
     first = first_complete(angle) + int(start)  # revolutions' numbers from the angle's zero: for localisation
     return CutRecording(
-        str(path), revs, float(cut.speed_hz), float(rec.fs), int(raw.size), int(start), how, warns, first
+        str(path), revs, float(cut.speed_hz), float(rec.fs), int(raw.size), int(start), how, warns, first, rec.units
     )
 
 

@@ -371,9 +371,16 @@ def score(
         rec = cut_recording(str(file), **reading_keys(meta, condition, given, str(file)))
         name = _condition_of(meta, str(file), rec.speed_hz, condition)
         own, whose = remembered(meta, str(file), given)
-        said = f"; read with {whose} keys" if {k for k in own if k not in (given or {})} else ""
-        on_event(Event("log", message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}{said}"))
-        found[str(file)] = (rec.speed_hz, rec.angle_source)
+        said = f"{whose} keys" if {k for k in own if k not in (given or {})} else ""
+        on_event(
+            Event(
+                "log",
+                message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}" + (said and f"; read with {said}"),
+            )
+        )
+        # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
+        # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
+        found[str(file)] = (rec.speed_hz, rec.angle_source, said, rec.units)
         revs = rec.revolutions
         if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
             turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
@@ -426,6 +433,8 @@ def score(
                             "decision": decision_of(bool(s.size) and called > s.size / 2, where.get("call")),
                             "speed_hz": found[f.path][0],
                             "speed_from": found[f.path][1],  # the tacho, a declared speed, the mesh orders
+                            "read_with": found[f.path][2],  # whose keys read the file ("": the [target]'s, --key's)
+                            "values": found[f.path][3],  # how its values became m/s² (its units)
                             "localised": where.get("named"),
                             "call": where.get("call"),
                             "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth
