@@ -358,7 +358,7 @@ def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file")
 
     Example: gearlab validate scenarios/expB.toml
     """
-    from .engine import load_scenario
+    from .notebook import load_scenario
 
     s = load_scenario(scenario)
     console.print(f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}")
@@ -463,8 +463,8 @@ def _run(scenario: Path | None, how: Running, overrides: dict) -> None:
     overrides = {**_execution(how.executor, how.ray_address, how.device), **overrides}
     if not events and err_console.is_terminal:  # the engine's imports take seconds before its first event
         err_console.print(f"gearlab: starting {scenario or resume}", style="dim", markup=False, highlight=False)
-    from .engine import run_scenario, scenario_of
     from .kinds import SCENARIO_KINDS
+    from .notebook import load_scenario, run_scenario
 
     started: list[str] = []  # the run directory, once made: what Ctrl-C tells to resume
 
@@ -494,7 +494,7 @@ def _run(scenario: Path | None, how: Running, overrides: dict) -> None:
     from .terminal import print_results
     from .verdict import verdict_lines
 
-    kind = scenario_of(result).kind
+    kind = load_scenario(run=result).kind
     print_results(console, verdict_lines(result), SCENARIO_KINDS[kind].summary_lines(result))
     console.print(f"report: {result.path / 'report.html'}", markup=False, highlight=False)
     typer.echo(f"run directory: {result.path}")
@@ -520,8 +520,8 @@ def gap(
 
     Example: gearlab gap scenarios/gap_expB.toml --quick; gearlab gap benchmark --trials 4
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
-    from .engine import load_scenario
     from .kinds import GAP_COMMAND_KINDS, SCENARIO_KINDS
+    from .notebook import load_scenario
 
     overrides: dict = {}
     given = _benchmark_keys(trials, seed)
@@ -599,10 +599,10 @@ def report(run_dir: Annotated[Path, typer.Argument(help="a run directory")]) -> 
 
     Example: gearlab report runs/quick/20260101-120000-000000
     """
-    from .engine import write_report
-    from .runs import RunDir
+    from .notebook import open_run
+    from .report import write_report
 
-    path = write_report(RunDir.open(run_dir))
+    path = write_report(open_run(run_dir))
     console.print(f"wrote {path}")
 
 

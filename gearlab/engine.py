@@ -20,7 +20,7 @@ from .executors import UnitLines
 from .files import cannot_write, write_problem
 from .kinds import SCENARIO_KINDS
 from .kinds.common import executor_for, stored_forms
-from .report import build_report
+from .report import write_report
 from .runinfo import Session
 from .runs import RunDir, check_inputs
 from .scenario import (
@@ -151,7 +151,7 @@ def load_scenario(
 
 def scenario_of(run: RunDir) -> Scenario:
     """The scenario as *run* ran it (shrunk alike when started with --quick)."""
-    scenario = load_scenario(run.scenario_file(), base=run.base())
+    scenario = load_scenario(run.scenario_file(), run.meta().get("overrides") or None, base=run.base())
     if run.quick:
         SCENARIO_KINDS[scenario.kind].quick(scenario)
     return scenario
@@ -178,7 +178,7 @@ def run_scenario(
         scenario = load_scenario(scenario_path, overrides)
         if quick:  # the shrunk scenario is checked again: refused before any folder is made
             SCENARIO_KINDS[scenario.kind].quick(scenario)
-        run = RunDir.create(output_base(scenario, out), scenario, quick, overrides)
+        run = RunDir.create(scenario.runs_folder(out), scenario, quick, overrides)
     try:
         lock = run.lock()
     except GearlabInputError:
@@ -258,13 +258,6 @@ def _trained_on(run: RunDir) -> str | None:
     return device if isinstance(device, str) else None
 
 
-def output_base(scenario: Scenario, out: str | Path | None = None) -> Path:
-    """The folder that holds a scenario's runs (<base>/<name>/<timestamp>/): --out, else its
-    [output] dir; a relative one is taken from the current folder. The TUI looks up past runs
-    with this, so it finds them where `gearlab run` puts them."""
-    return Path(out) if out is not None else Path(scenario.tables["output"]["dir"])
-
-
 def _resumed_scenario(
     run: RunDir, scenario_path: str | Path | None, quick: bool, overrides: Mapping[str, Mapping] | None = None
 ) -> Scenario:
@@ -294,12 +287,6 @@ def _resumed_scenario(
     run.truncate_partial()
     run.remove_temporaries()
     return scenario
-
-
-def write_report(run: RunDir) -> Path:
-    html = build_report(run)
-    run.write_text("report.html", html)
-    return run.path / "report.html"
 
 
 def score_recordings(

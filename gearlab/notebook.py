@@ -573,9 +573,10 @@ def score_detector(
 # --- scenarios and runs ------------------------------------------------------------------------------
 
 
-def load_scenario(path: str | Path) -> Scenario:
+def load_scenario(path: str | Path | None = None, *, run: RunDir | str | Path | None = None) -> Scenario:
     """A scenario file read and checked as ``gearlab validate`` does (every table and key; plugin
-    names; measured files' headers): its ``kind``, ``tables`` (defaults filled) and ``spec``.
+    names; measured files' headers): its ``kind``, ``tables`` (defaults filled) and ``spec``; with
+    *run* instead, the scenario that run ran (its command line's keys set, shrunk alike if --quick).
 
     >>> Path("one.toml").write_text('[scenario]\\nname = "one"\\nkind = "dataset"\\n'
     ...                             '[[datasets]]\\npreset = "B-6-ch5"\\nhealthy = 4\\n') and None
@@ -583,21 +584,29 @@ def load_scenario(path: str | Path) -> Scenario:
     >>> scenario.kind, [spec.healthy for spec in scenario.spec]
     ('dataset', [4])
     """
+    if run is not None:
+        from .engine import scenario_of
+
+        return scenario_of(open_run(run) if isinstance(run, (str, Path)) else run)
+    if path is None:
+        raise GearlabInputError("load_scenario: give a scenario file or run=")
     from .engine import load_scenario as load
 
     return load(path)
 
 
 def run_scenario(
-    path: str | Path,
+    path: str | Path | None = None,
     *,
+    resume: str | Path | None = None,
     quick: bool = False,
     out: str | Path | None = None,
     overrides: Mapping[str, Mapping[str, Any]] | None = None,
     on_event=None,
 ) -> RunDir:
     """Run a scenario file as ``gearlab run`` does, into a new run directory under *out* (default:
-    its ``[output] dir``); *quick*: the smoke-test sizes (``--quick``); *overrides*: ``{table: {key:
+    its ``[output] dir``), or on in the run directory *resume* (its finished units kept); *quick*: the
+    smoke-test sizes (``--quick``); *overrides*: ``{table: {key:
     value}}`` replacing keys of the file; *on_event*: a callback for the progress events. Returns the
     run directory: ``.path``, ``.summary()``, ``.records()``; ``run_verdict(run)``.
 
@@ -618,7 +627,7 @@ def run_scenario(
     from .engine import run_scenario as run
     from .events import ignore_events
 
-    return run(path, quick=quick, out=out, overrides=overrides, on_event=on_event or ignore_events)
+    return run(path, resume=resume, quick=quick, out=out, overrides=overrides, on_event=on_event or ignore_events)
 
 
 def open_run(path: str | Path) -> RunDir:

@@ -170,3 +170,9 @@ def build_report(run: RunDir | Path) -> str:
         ]
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def write_report(run: RunDir) -> Path:
+    """Write report.html into *run* (as a run ends, and `gearlab report` rebuilds it)."""
+    run.write_text("report.html", build_report(run))
+    return run.path / "report.html"

@@ -165,6 +165,12 @@ class Scenario:
     def where(self, table: str, key: str | None = None, index: int | None = None) -> str:
         return location(self.path, table, key, index)
 
+    def runs_folder(self, out: str | Path | None = None) -> Path:
+        """The folder that holds this scenario's runs (<folder>/<name>/<timestamp>/): *out* (--out),
+        else its [output] dir; a relative one is taken from the current folder. The TUI looks up
+        past runs with this, so it finds them where `gearlab run` puts them."""
+        return Path(out) if out is not None else Path(self.tables["output"]["dir"])
+
 
 def location(path: Path | str, table: str, key: str | None = None, index: int | None = None) -> str:
     t = f"[[{table}]] #{index + 1}" if index is not None else f"[{table}]"

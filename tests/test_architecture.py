@@ -518,3 +518,13 @@ def test_one_measured_file_reader():
     assert {"gearlab/data/readers/text.py", "gearlab/data/readers/matlab.py"} <= set(found)
     h5 = [m for m, p in MODULES.items() if re.search(r"^\s*import h5py", p.read_text(), re.M)]
     assert all(m.startswith("gearlab.data.readers.") for m in h5) and h5, h5
+
+
+def test_the_cli_and_the_tui_are_built_on_the_notebook_api():
+    """Issue 38 item 5: `gearlab` and its TUI read scenarios, run them, resume them and read their
+    runs through gearlab.notebook (the API of docs/api.md), not around it through the engine."""
+    fronts = [m for m in MODULES if m == "gearlab.cli" or m.startswith("gearlab.tui")]
+    around = [f"{m}:{line} imports {t}" for m in fronts for t, line, _ in graph()[m] if t == "gearlab.engine"]
+    assert not around, "\n".join(around)
+    used = {t for m in fronts for t, _, _ in graph()[m]}
+    assert "gearlab.notebook" in used

@@ -28,10 +28,10 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Footer, RichLog, Static, TabbedContent, TabPane, Tree
 
-from ..engine import load_scenario, scenario_of
 from ..errors import GearlabInputError
 from ..events import Event
 from ..kinds import OVERRIDES_COMMAND, SCENARIO_KINDS
+from ..notebook import load_scenario
 from ..runs import RunDir
 from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
@@ -364,7 +364,7 @@ class GearlabApp(App):
         try:
             if resume is not None:
                 run = RunDir.open(resume)
-                self.run_scenario = scenario_of(run)
+                self.run_scenario = load_scenario(run=run)
                 self.records = run.records()
             else:
                 self.run_scenario = load_scenario(scenario_path)
@@ -487,7 +487,7 @@ class GearlabApp(App):
         verdict = self.query_one("#verdict", Static)
         try:
             rundir = RunDir.open(run.path)
-            scenario = scenario_of(rundir)
+            scenario = load_scenario(run=rundir)
             kind = SCENARIO_KINDS[scenario.kind]
             records = rundir.records()
             table.show_markdown(verdict_table(rundir) or kind.records_table(scenario, records))

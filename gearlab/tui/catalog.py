@@ -9,8 +9,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..engine import load_scenario, output_base
 from ..errors import GearlabInputError
+from ..notebook import load_scenario
 from ..runs import RunDir
 from ..scenario import Scenario
 
@@ -55,7 +55,7 @@ def scan(directory: Path, cwd: Path) -> list[ScenarioEntry]:
 def runs_base(scenario: Scenario, cwd: Path) -> Path:
     """The absolute folder `gearlab run` started in *cwd* puts *scenario*'s runs in (the
     TUI passes it as --out, so that its runs land exactly where it looks for them)."""
-    return Path(cwd) / output_base(scenario)
+    return Path(cwd) / scenario.runs_folder()
 
 
 def runs_of(scenario: Scenario, cwd: Path) -> list[RunEntry]:
