@@ -353,15 +353,33 @@ def _option(key: str) -> str:
 
 
 @app.command()
-def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file")]) -> None:
+def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file (or a gearbox description)")]) -> None:
     """Check a scenario file without running it: unknown keys, types, ranges, plugin names.
 
     Example: gearlab validate scenarios/expB.toml
     """
     from .notebook import load_scenario
 
+    if _is_gearbox(scenario):  # a description alone: checked as every kind reads it (it was 'missing table [scenario]')
+        from .gearbox import order_table, resolve_gearbox
+
+        box = resolve_gearbox(scenario)
+        stages = ", ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
+        console.print(f"OK: {scenario}: gearbox description '{box.name}', stages {stages}", markup=False)
+        return
     s = load_scenario(scenario)
     console.print(f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}")
+
+
+def _is_gearbox(path: Path) -> bool:
+    """Whether *path* is a TOML gearbox description (its [gearbox] or [[stages]], no [scenario])."""
+    import tomllib
+
+    try:
+        tables = tomllib.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False  # the scenario's reading says what is wrong
+    return "scenario" not in tables and ("stages" in tables or "gearbox" in tables)
 
 
 def describe_spec(s) -> str:
