@@ -84,7 +84,7 @@ def comb(
                 return spacing, hits
             hits = hits[: int(np.argmax(off))] + hits[int(np.argmax(off)) + 1 :]
 
-    best = None
+    candidates = []
     for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
         hits = []
         for j in (-3, -2, -1, 1, 2, 3):
@@ -94,8 +94,15 @@ def comb(
         if not any(abs(j) == 1 for j, _ in hits):
             continue
         spacing, hits = fitted(hits)
-        if not any(abs(j) == 1 for j, _ in hits):
-            continue
+        if any(abs(j) == 1 for j, _ in hits):
+            candidates.append((c, hits, spacing))
+    # a comb of one line is that line's evidence alone: where another comb has a line on each side of the carrier,
+    # it goes (a 21/65 + 34/91 box described with a 64-tooth first wheel: stage 2's 2nd harmonic, 0.969 above
+    # the first mesh and 4 x its true sidebands, was 'the input's comb': 'the pinion shows 21.7 teeth')
+    if any({-1, 1} <= {j for j, _ in hits} for _, hits, _ in candidates):
+        candidates = [k for k in candidates if len(k[1]) > 1]
+    best = None
+    for c, hits, spacing in candidates:
         score = sum(a[q] for _, q in hits)
         if best is None or score > best[0] * 1.01 or (score >= best[0] * 0.99 and abs(c - o) < abs(best[1] - o)):
             best = (score, c, hits, spacing)
