@@ -101,7 +101,8 @@ def test_a_train_of_a_long_grand_period_simulates_a_few_slow_shaft_turns(tmp_pat
 
     monkeypatch.setattr(W, "_revolutions", spy)
     events = W.simulated_templates(table, 35.0, 20_000.0, gearbox=str(box), sim_fs=60_000.0)(lay)
-    assert set(asked) == {66} and len(asked) == 7  # healthy, and 3 kinds on each of the 58T and 25T
+    # healthy, and every kind on each of the 58T and 25T
+    assert set(asked) == {66} and len(asked) == 1 + 2 * len(W.KINDS)
     healthy, chip = (
         _mean(simulate(str(box), 35.0, 20_000.0, 60_000.0, 4 * 66, fault, "[]"), lay)
         for fault in (None, ("intermediate pinion", "chip"))

@@ -57,9 +57,15 @@ PHASE_ALIKE = 0.35
 RULE_SIMULATED, RULE_WIDTH = "by the simulated events", "by the event's width"
 RULE_PHASE = "by the event's mesh phase"
 RULE_REFERENCE = "by the mesh phases of the simulated events"
-REFERENCE_HARMONICS = 6  # harmonics of each gear's mesh whose phases are compared with the simulated events'
+# harmonics of each gear's mesh whose phases are compared with the simulated events', each weighted by the record's
+# event-to-noise ratio there (s / (1 + s)): a harmonic the noise buries reads a random phase. Development
+# (benchmarks/localisation.py, seed 41, bearings 0.5x / 2x, casing path, sensor resonance; 220 flagged records of
+# the two-stage box's, the rig's and random trains' two-gear shaft), named first / both / wrong: harmonics 1-6
+# unweighted by 0.15 with 3 kinds 158/45/17, with 5 (data.which_templates.KINDS) 164/41/15; 1-8 weighted by 0.05
+# 184/17/19 (seed 42, not tuned on, 171 records: 131/28/12 -> 147/11/13); 10-12 no better (under the noise there)
+REFERENCE_HARMONICS = 8
 REFERENCE_HALF = 0.2  # orders about each mesh harmonic read, in the coarser gear's tooth counts (at least 2)
-REFERENCE_MARGIN = 0.15  # mean cos of one gear over the other's below which both stay named
+REFERENCE_MARGIN = 0.05  # weighted mean cos of one gear over the other's below which both stay named
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -218,14 +224,28 @@ def own_mesh_phasors(X, lines, lay, shaft: int, m: np.ndarray, gear, half: float
     return np.array([np.nan if p is None else p for p in out], complex)
 
 
+def own_mesh_weights(X, noise, m: np.ndarray, gear, half: float) -> np.ndarray:
+    """Per harmonic of own_mesh_phasors, s / (1 + s) of the event's power within *half* orders of it over the
+    noise power of those orders' means (*noise*): near 1 where the event stands clear, near 0 where noise sets
+    the phase."""
+    out = []
+    for h in range(1, REFERENCE_HARMONICS + 1):
+        near = np.abs(m - h * gear.teeth) <= half
+        s = float(np.sum(np.abs(X[near]) ** 2)) / max(float(np.sum(noise[near])), 1e-300)
+        out.append(s / (1 + s))
+    return np.array(out)
+
+
 def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates: dict) -> dict:
     """{gear name: the mean cos between the record's event phases about the gear's own mesh harmonics and
-    those of the gear's simulated event (own_mesh_phasors), the best over its fault kinds} ({}: fewer than
-    two harmonics read for a gear). A tooth fault changes its own mesh while in mesh, so about that mesh's
-    harmonics h Z the event stands at a phase to the line set by the fault and the mesh: the same for every
-    tooth (h Z 2π n / Z is whole turns), and the same through another structure, whose response turns a line
-    and the orders within REFERENCE_HALF of it alike; about the other gear's mesh the phase moves with the
-    tooth. So the sequence over h is compared, not the whole shape, which follows the structure's modes."""
+    those of the gear's simulated event (own_mesh_phasors), each harmonic weighted by the record's event-to-
+    noise ratio there (own_mesh_weights), the best over its fault kinds} ({}: fewer than two harmonics read for
+    a gear). A tooth fault changes its own mesh while in mesh, so about that mesh's harmonics h Z the event
+    stands at a phase to the line set by the fault and the mesh: the same for every tooth (h Z 2π n / Z is whole
+    turns), and the same through another structure, whose response turns a line and the orders within
+    REFERENCE_HALF of it alike (noise-free, bearings 0.5x: cos 0.9-1.0 to the simulator's at most harmonics);
+    about the other gear's mesh the phase moves with the tooth. So the sequence over h is compared, not the
+    whole shape, which follows the structure's modes."""
     sel, m = harmonics
     if m.size < 3:
         return {}
@@ -234,12 +254,13 @@ def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates
     out = {}
     for g in gears:
         mine = own_mesh_phasors(R, rec.mean, lay, shaft, m, g, half)
+        weight = own_mesh_weights(R, rec.noise[sel], m, g, half)
         best = None
         for t in templates["gears"].get(g.name, ()):
             sim = own_mesh_phasors(t[sel], templates["healthy"], lay, shaft, m, g, half)
             ok = ~np.isnan(mine) & ~np.isnan(sim)
-            if ok.sum() >= 2:
-                cos = float(np.mean(np.real(mine[ok] * np.conj(sim[ok]))))
+            if ok.sum() >= 2 and weight[ok].sum() > 0:
+                cos = float(np.sum(weight[ok] * np.real(mine[ok] * np.conj(sim[ok]))) / weight[ok].sum())
                 best = cos if best is None else max(best, cos)
         if best is None:
             return {}
