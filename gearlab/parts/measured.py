@@ -258,17 +258,19 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
     files = target_files(t["files"], f"{where} key 'files'", base, need)
     if vibration == "" and any("vibration" not in dict(f.keys) for f in files):
         # as inspect takes it: each file's one channel besides the tacho and time
-        found = sorted(
-            {
-                only_vibration(f.resolved, dict(f.keys).get("tacho", tacho), where)
-                for f in files
-                if "vibration" not in dict(f.keys)
-            }
-        )
+        of = {
+            f.path: only_vibration(f.resolved, dict(f.keys).get("tacho", tacho), where)
+            for f in files
+            if "vibration" not in dict(f.keys)
+        }
+        found = sorted(set(of.values()))
         if len(found) > 1:
+            # each file's own key is the way out (a logger's CSV beside a MAT file): said, with an example
+            path, name = next(iter(of.items()))
             raise GearlabInputError(
                 f"{where} key 'vibration': missing, and the files' one signal channels differ "
-                f"({', '.join(found)}); expected the vibration channel's name"
+                f"({', '.join(f'{p}: {c!r}' for p, c in of.items())}); expected the vibration channel's name, "
+                f"or each file's own ({{ file = '{path}', vibration = '{name}' }})"
             )
         vibration = found[0]
     if tacho is None and t["pulses_per_rev"] not in (None, 1):
