@@ -358,28 +358,13 @@ def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file (
 
     Example: gearlab validate scenarios/expB.toml
     """
+    from .gearbox import validated_description
     from .notebook import load_scenario
 
-    if _is_gearbox(scenario):  # a description alone: checked as every kind reads it (it was 'missing table [scenario]')
-        from .gearbox import order_table, resolve_gearbox
-
-        box = resolve_gearbox(scenario)
-        stages = ", ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
-        console.print(f"OK: {scenario}: gearbox description '{box.name}', stages {stages}", markup=False)
-        return
-    s = load_scenario(scenario)
-    console.print(f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}")
-
-
-def _is_gearbox(path: Path) -> bool:
-    """Whether *path* is a TOML gearbox description (its [gearbox] or [[stages]], no [scenario])."""
-    import tomllib
-
-    try:
-        tables = tomllib.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return False  # the scenario's reading says what is wrong
-    return "scenario" not in tables and ("stages" in tables or "gearbox" in tables)
+    if not (said := validated_description(scenario)):  # a description alone was told 'missing table [scenario]'
+        s = load_scenario(scenario)
+        said = f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}"
+    console.print(said, markup=False)
 
 
 def describe_spec(s) -> str:

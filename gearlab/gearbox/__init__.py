@@ -38,6 +38,22 @@ def resolve_gearbox(spec: str | Path) -> Gearbox:
     return load_gearbox(text)
 
 
+def validated_description(path: Path) -> str | None:
+    """`gearlab validate` of a TOML gearbox description ([gearbox] or [[stages]], no [scenario]): its OK line
+    (a mistake: resolve_gearbox's one-line error); None for any other file (a scenario)."""
+    import tomllib
+
+    try:
+        tables = tomllib.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None  # the scenario's reading says what is wrong
+    if "scenario" in tables or not ("stages" in tables or "gearbox" in tables):
+        return None
+    box = resolve_gearbox(path)
+    stages = ", ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
+    return f"OK: {path}: gearbox description '{box.name}', stages {stages}"
+
+
 __all__ = [
     "Gearbox",
     "GearSpec",
@@ -58,4 +74,5 @@ __all__ = [
     "resolve_gearbox",
     "speed_hz",
     "stage_geometry",
+    "validated_description",
 ]
