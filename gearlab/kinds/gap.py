@@ -72,7 +72,7 @@ from .gap_inputs import (
     units_warning,
 )
 from .gap_tables import accuracy_md, evaluations_text, params_text, percent, ranking_md, tables_md, views_md
-from .gap_verdict import gap_lines
+from .gap_verdict import gap_lines, headline  # noqa: F401 (headline: the kind contract's)
 
 _DATASET = Table(DATASET_TABLE.keys, required=True, moved=DATASET_TABLE.moved)
 

@@ -21,6 +21,14 @@ def _at_chance(summary: Mapping, when: str) -> str:
     return f"; the classifier's AUC {auc:.2f} is within chance"
 
 
+def headline(run) -> str:
+    """`gearlab runs`' headline of a gap run whose structure or level differs: that line, not the gap's size (a
+    25-tooth description of a 24-tooth box was listed as 'The simulator and the target differ significantly');
+    else "" (the verdict's first line)."""
+    said = str((run.read_json("summary.json") or {}).get("verdict") or "")
+    return f"{said[0].upper()}{said[1:]}" if said.startswith(("structure differs", "level differs")) else ""
+
+
 def gap_lines(summary: Mapping) -> list[str]:
     views = summary.get("views") or {}
     before, after = summary.get("gap_before"), summary.get("gap_after")
