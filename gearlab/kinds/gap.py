@@ -72,7 +72,15 @@ from .gap_inputs import (
     units_warning,
 )
 from .gap_tables import accuracy_md, evaluations_text, params_text, percent, ranking_md, tables_md, views_md
-from .gap_verdict import gap_lines, headline  # noqa: F401 (headline: the kind contract's)
+from .gap_verdict import (  # noqa: F401 (headline: the kind contract's; dropped_text, shrink_text: the tests')
+    before_after,
+    diagnosis_line,
+    dropped_rows,
+    dropped_text,
+    gap_lines,
+    headline,
+    shrink_text,
+)
 
 _DATASET = Table(DATASET_TABLE.keys, required=True, moved=DATASET_TABLE.moved)
 
@@ -514,34 +522,6 @@ def accuracy(
             run.append({"unit": "bound", **bound})
 
 
-def diagnosis_line(result: dict) -> str:
-    before, after = result["gap_before"], result["gap_after"]
-    names = ", ".join(f"{e['name']} ({100 * e['share_removed']:.0f} %)" for e in result["effects"]) or "none"
-    if result.get("dropped_effects"):  # the progress said them accepted: say why none is named
-        names += f" ({dropped_text(result)})"
-    verdict = verdict_text(result)
-    return f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed); effects: {names}; {verdict}"
-
-
-def dropped_text(result: dict) -> str:
-    """Why effects the search accepted are not named (gearlab.gap.conclusion: stand-ins)."""
-    names = ", ".join(e["name"] for e in result["dropped_effects"])
-    share, below = 100 * result["dropped_share"], 100 * result["dropped_below"]
-    # as many decimals as it takes to show the share under the level (98.7 under 99, not 99 under 99)
-    digits = next((d for d in range(4) if round(share, d) < round(below, d)), 3)
-    return (
-        f"{names} fitted, then not named: together {share:.{digits}f} % of the gap, "
-        f"under the {below:.{digits}f} % a named set removes"
-    )
-
-
-def shrink_text(before: float, after: float) -> str:
-    if before <= 0:
-        return "n/a"
-    share = 100 * (1 - after / before)
-    return f"{share:.2f} %" if 99 <= share < 100 else f"{share:.0f} %"  # 99.99 % is not 100 %
-
-
 # --- summary, tables, charts -----------------------------------------------------------------------
 
 
@@ -618,6 +598,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "unexplained": result["unexplained"],
         "verdict": verdict_text(result),
         "dropped": dropped_text(result) if result.get("dropped_effects") else None,
+        "dropped_effects": dropped_rows(result),  # their final fit, for the ranking's rows
         "explained_share": result.get("explained_share"),
         "evaluations": result.get("evaluations"),  # the diagnosis's score evaluations, its fits' included
         "chain": result.get("chain"),
@@ -663,10 +644,8 @@ def summary_lines(run: RunDir) -> list[str]:
         for e in s["effects"]
     )
     lines = [
-        f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
-        f"{'significant' if s['significant_before'] else 'not significant'}) -> after {s['gap_after']:.4g} "
-        f"(AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); {shrink_text(s['gap_before'], s['gap_after'])} removed",
-        f"effects: {names or 'none'}; "
+        before_after(s),
+        f"effects: {names or 'none'}" + (f" ({s['dropped']})" if s.get("dropped") else "") + "; "
         f"verdict: {s.get('verdict') or ('unexplained' if s['unexplained'] else 'explained')}{evaluations_text(s)}",
         *([f"corrected description: {s['corrected_description']}"] if s.get("corrected_description") else []),
     ]

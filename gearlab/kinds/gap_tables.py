@@ -54,8 +54,10 @@ def params_text(params: dict, determined: dict | None = None) -> str:
     return ", ".join((f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}") + mark(k) for k, v in params.items())
 
 
-def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
+def ranking_md(ranking: list[dict], accepted: list[dict], dropped: list[dict] | None = None) -> str:
     chosen = {e["name"]: e for e in accepted}
+    # accepted, then not named (gap_verdict.dropped_text): an empty cell read as 'never accepted'
+    gone = {e["name"]: f"round {e.get('round')}, then not named; {params_text(e['params'])}" for e in dropped or []}
     # each row's parameters are its round-1 fit (alone, its noise beside it); an accepted effect's final
     # fit, next to the others, is in the verdict and the summary's effects
     head = "| effect | share of the gap removed (round 1) | parameters (round-1 fit, alone) | accepted (final fit) |"
@@ -63,6 +65,7 @@ def ranking_md(ranking: list[dict], accepted: list[dict]) -> str:
     for r in ranking:
         e = chosen.get(r["name"])
         mark = f"round {e.get('round')}, {percent(e['share_removed'])}; {params_text(e['params'])}" if e else ""
+        mark = mark or gone.get(r["name"], "")
         lines.append(f"| {r['name']} | {percent(r['share_removed'])} | {params_text(r.get('params', {}))} | {mark} |")
     return "\n".join(lines) + "\n"
 
@@ -78,7 +81,10 @@ def accuracy_md(acc: dict, order: list[str] | None = None) -> str:
 
 def tables_md(summary: dict) -> str:
     """Three tables separated by blank lines: per-view gap, effect ranking, accuracy."""
-    parts = [views_md(summary["views"]), ranking_md(summary["ranking"], summary["effects"])]
+    parts = [
+        views_md(summary["views"]),
+        ranking_md(summary["ranking"], summary["effects"], summary.get("dropped_effects")),
+    ]
     if summary.get("accuracy"):
         parts.append(accuracy_md(summary["accuracy"]))
     return "\n".join(parts)

@@ -29,6 +29,69 @@ def headline(run) -> str:
     return f"{said[0].upper()}{said[1:]}" if said.startswith(("structure differs", "level differs")) else ""
 
 
+def diagnosis_line(result: dict) -> str:
+    """The run's log line (the CLI's): with no effect named, the simulator stays as it was, and 'gap X -> X
+    (0 % removed)' read as if nothing had helped beside 'sensor_noise ... together 98.8 % of the gap' (an outside
+    lab's 24/83 box): the gap alone then, and why nothing is named."""
+    from ..gap.conclusion import verdict_text
+
+    before, after = result["gap_before"], result["gap_after"]
+    names = ", ".join(f"{e['name']} ({100 * e['share_removed']:.0f} %)" for e in result["effects"]) or "none"
+    if result.get("dropped_effects"):  # the progress said them accepted: say why none is named
+        names += f" ({dropped_text(result)})"
+    gap = (
+        f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed)"
+        if result["effects"]
+        else (f"gap {before:.4g} (no effect named: the simulator left uncorrected)")
+    )
+    return f"{gap}; effects: {names}; {verdict_text(result)}"
+
+
+def dropped_text(result: Mapping) -> str:
+    """Why effects the search accepted are not named (gearlab.gap.conclusion: stand-ins), with their final fit."""
+    names = ", ".join(
+        e["name"] + (f" (final fit: {_params(dict(sorted(e['params'].items())))})" if e.get("params") else "")
+        for e in result["dropped_effects"]
+    )
+    share, below = 100 * result["dropped_share"], 100 * result["dropped_below"]
+    # as many decimals as it takes to show the share under the level (98.7 under 99, not 99 under 99)
+    digits = next((d for d in range(4) if round(share, d) < round(below, d)), 3)
+    return (
+        f"{names} fitted, then not named: together {share:.{digits}f} % of the gap, "
+        f"under the {below:.{digits}f} % a named set removes"
+    )
+
+
+def dropped_rows(result: Mapping) -> list[dict]:
+    """The effects accepted, then not named, as the ranking's table marks them: name, round, final fit."""
+    return [
+        {"name": e["name"], "round": e.get("round"), "params": e.get("params", {})}
+        for e in result.get("dropped_effects") or []
+    ]
+
+
+def shrink_text(before: float, after: float) -> str:
+    if before <= 0:
+        return "n/a"
+    share = 100 * (1 - after / before)
+    return f"{share:.2f} %" if 99 <= share < 100 else f"{share:.0f} %"  # 99.99 % is not 100 %
+
+
+def before_after(s: Mapping) -> str:
+    """The summary's gap line: before -> after with the share removed where an effect is named; else the gap
+    before alone (the corrected source is the source: '-> the same (0 % removed)' told nothing)."""
+    before = (
+        f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
+        f"{'significant' if s['significant_before'] else 'not significant'})"
+    )
+    if not s.get("effects"):
+        return f"{before}; no effect named: the simulator left uncorrected"
+    return (
+        f"{before} -> after {s['gap_after']:.4g} (AUC {s['auc_after']:.3f}, p = {s['p_after']:.3g}); "
+        f"{shrink_text(s['gap_before'], s['gap_after'])} removed"
+    )
+
+
 def gap_lines(summary: Mapping) -> list[str]:
     views = summary.get("views") or {}
     before, after = summary.get("gap_before"), summary.get("gap_after")
@@ -79,7 +142,10 @@ def gap_lines(summary: Mapping) -> list[str]:
             + f"{best}."
         )
         if summary.get("dropped"):  # the search accepted them; the progress line said so
-            lines.append(f"Effects {summary['dropped']}: stand-ins for an effect outside the library.")
+            lines.append(
+                f"Effects {summary['dropped']}: stand-ins for an effect outside the library; the simulator is "
+                "left uncorrected."
+            )
     lines += _unchecked(summary)  # the verdict holds for the structure as far as it was checked
     lines += _alone_versus_credited(summary)
     acc = summary.get("accuracy") or {}
