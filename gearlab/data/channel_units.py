@@ -19,6 +19,12 @@ _METRES_PER_S2 = ("m/s^2", "m/s²", "m/s/s", "ms2", "mps2", "m/s2")
 _G_UNIT = re.compile(r"(?P<number>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)?\s*(?P<prefix>[mµu]?)(?:g|g_n|gn)", re.IGNORECASE)
 
 
+class FileUnitGain(float):
+    """The gain of a full scale given as an acceleration per file unit ('50 m/s^2', '5 g'): data.textzip.calibration
+    reads that file unit as 1 V at the sensitivity 1/full scale, and this 1 V is no voltage the user gave, so
+    channel_scale's line says the full scale instead ('(1 V / 196.133 mV/g)' was told of gain = '50 m/s^2')."""
+
+
 def name_unit(name: str) -> tuple[str, str, float] | None:
     """(quantity, unit, SI factor) a channel's name declares: ("voltage", "mV", 1e-3),
     ("acceleration", "g", 9.80665), ...; None when it says none."""
@@ -121,5 +127,10 @@ def channel_scale(
             "the gain in g per volt (e.g. '10 g/V') or in g per file unit (a full scale, e.g. '50 g')"
         )
     scale, per_g = volts / sensitivity, f"{sensitivity * STANDARD_GRAVITY * 1e3:.6g} mV/g"
+    if isinstance(gain, FileUnitGain):  # no volt was given: the full scale, as the user meant it
+        return (
+            scale,
+            f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit (the gain, a full scale)",
+        )
     # in g too, as a scenario gives them: a gain of '50 g' reads '50 g a file unit'
     return scale, f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit ({volts:g} V / {per_g})"

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import GearlabInputError, shown
 from ..units import to_si
-from .channel_units import STANDARD_GRAVITY
+from .channel_units import STANDARD_GRAVITY, FileUnitGain
 
 __all__ = ["align_to", "calibration", "gain_quantity", "parse_sensitivity"]
 
@@ -115,7 +115,7 @@ def calibration(given: dict, at) -> dict:
         )
     if unit == "m/s^2/V":
         return {"sensitivity": parse_sensitivity(values["gain"], at("gain")), "gain": None}
-    return {"sensitivity": 1.0 / number, "gain": 1.0}
+    return {"sensitivity": 1.0 / number, "gain": FileUnitGain(1.0)}
 
 
 def align_to(reference: np.ndarray, signal: np.ndarray, marks: int) -> tuple[int, np.ndarray]:
