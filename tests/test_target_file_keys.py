@@ -210,7 +210,8 @@ def test_score_reads_a_file_of_a_new_format_with_the_keys_whose_channels_it_has(
         reading_keys(meta, None, None, str(tmp_path / "other.mat"))
     said = str(err.value)
     assert "\n" not in said and said.startswith(f"{tmp_path / 'other.mat'}: ")
-    for part in ("'0'", "'1'", "'accel'", "'probe'", "accel_V", "probe_V", "--key vibration=NAME --key tacho=NAME"):
+    # the WAVs' own keys are not tried on a format the run read none of: named as not applied (test_outside_v)
+    for part in (".wav files'", "'accel'", "'probe'", "accel_V", "probe_V", "--key vibration=NAME --key tacho=NAME"):
         assert part in said, said
     given = {"vibration": "accel_V", "tacho": "probe_V"}
     keys = reading_keys(meta, None, given, str(tmp_path / "other.mat"))

@@ -145,10 +145,9 @@ def _tacho_records(meta: dict) -> str:
 def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, str]:
     """The acquisition keys the run's own files read a new *file* with (file_keys), the first whose
     vibration and tacho channels (--key's over them) its header holds: its format's files' (each set of keys
-    its files were read with, where they differ), or for a format the run had none of, the test files'
-    (where they agree), each other format's, the [target]'s
-    (only the [target]'s when --key names the vibration: no other file's gain or unit on it); a file
-    none fits: one line naming the channels tried, the file's and --key. (keys, whose they are)."""
+    its files were read with, where they differ), else the [target]'s; for a format the run had none of, the
+    [target]'s alone (no other file's channels, gain or unit on it); a file none fits: one line naming the
+    channels tried, the file's and --key. (keys, whose they are)."""
     kept = meta.get("file_keys") or {}
     formats, fmt = kept.get("formats", {}), file_format(file) if file else ""
     if not file:
@@ -156,12 +155,10 @@ def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, 
     tried = [(formats[fmt], f"the run's {fmt} files'")] if fmt in formats else []
     if fmt not in formats:
         tried += [(k, f"the run's {fmt} files'") for k in kept.get("sets", {}).get(fmt, [])]
-    if "vibration" in (given or {}):
-        tried.append(({}, "the [target]'s"))
-    else:
-        tried += [(kept.get("tests") or {}, "the run's test files'")]
-        tried += [(k, f"the run's {e} files'") for e, k in formats.items()]
-        tried.append(({}, "the [target]'s"))
+    # a format the run read none of: the [target]'s keys alone, as they apply to every file; another file's own
+    # keys do not (a next-week npz in volts, read with an HDF5 test file's sensitivity = "", scored 98 x too small)
+    foreign = not tried
+    tried.append(({}, "the [target]'s"))
     header = read_header(file)
     said: dict[str, list[str]] = {}
     named = [(keys, whose) for keys, whose in tried if _fits(header, meta["target"] | keys | (given or {}), False)]
@@ -172,6 +169,14 @@ def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, 
         names = _channel_names(channels)
         said.setdefault(", ".join(f"{k} '{n}'" for k, n in names.items()), []).append(whose)
     asked = " --key tacho=NAME" if _tacho_records(meta) != "none" else ""
+    if foreign:
+        others = ", ".join(e for e, k in formats.items() if k) or "no"
+        raise GearlabInputError(
+            f"{file}: a {fmt or 'suffix-less'} file, a format the run read none of, is read with the [target]'s keys "
+            f"alone, not another file's own (the run's {others} files'): {', '.join(said)} not in it; the file has: "
+            f"{channel_listing(header.channels)}; expected its channels, and its units where the [target]'s do not "
+            f"hold: gearlab score RUN FILE --key vibration=NAME{asked} [--key sensitivity=... | gain=... | unit=...]"
+        )
     raise GearlabInputError(
         f"{file}: the run's channel keys are not in it: tried "
         + "; ".join(f"{k} ({', '.join(dict.fromkeys(w))})" for k, w in said.items())
@@ -266,6 +271,49 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
             "expected a record of a trained condition, or --condition NAME"
         )
     return near
+
+
+def _other_gearbox(meta: dict, path: str, keys: dict, speed: float) -> str | None:
+    """The line of a record whose mesh orders do not fit the run's gearbox description, as inspect reads it with
+    the run's keys at the speed of the run's nearest condition ("stage 2: mesh order 9.706 measured, 10.98
+    expected"); None where they fit or the run has no description. A 24/83 box's record scored by a 21/65 + 34/91
+    box's run (no tacho: the speed from the mesh orders) was told only 'runs at 51.78 Hz, more than 5 % from every
+    condition': its 24th order read as stage 2's 10.98th."""
+    box = keys.get("gearbox")
+    if box is None:
+        return None
+    from ..gearbox import order_table
+    from ..inspect import InspectOptions, inspect_record
+
+    near = min((c["speed_hz"] for c in meta["conditions"].values()), key=lambda f: abs(f - speed))
+    shaft = keys.get("tacho_shaft")
+    tacho = None if keys.get("tacho") in (None, "") else str(keys["tacho"])
+    options = InspectOptions(
+        vibration=None if keys.get("vibration") in (None, "") else str(keys["vibration"]),
+        tacho=tacho,
+        pulses_per_rev=keys.get("pulses_per_rev") if tacho else None,
+        tacho_shaft=None if shaft is None else shaft.name,
+        speed_hz=None if tacho else near,
+        fs=keys.get("fs"),
+        sensitivity=keys.get("sensitivity"),
+        gain=keys.get("gain"),
+        unit=keys.get("unit"),
+    )
+    try:
+        report = inspect_record(path, box, options)
+    except GearlabInputError:
+        return None  # the speed's own line then
+    if report.get("matches") is not False:
+        return None
+    said = report["check"].get("differences") or [report["verdict"]]
+    # the stages' lines ('mesh order x measured, y expected', 'no line at mesh order z'), not the speed's search
+    picked = [d for d in said if "mesh order" in d and ("measured" in d or "no line" in d)][:2] or said[:1]
+    stages = " + ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
+    return (
+        f"{path}: its lines do not fit the run's gearbox '{box.name}' ({stages}): {'; '.join(picked)}; its speed read "
+        f"as {speed:.2f} Hz is more than {SPEED_GROUP:.0%} from every condition's; expected a record of that gearbox "
+        f"(gearlab inspect {path} --gearbox DESCRIPTION says what differs)"
+    )
 
 
 def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: dict) -> dict:
@@ -368,8 +416,12 @@ def score(
     reading_keys(meta, condition, given)  # a bad --key or a missing condition: refused before any file is read
     cut, raw, found = {}, {}, {}
     for i, file in enumerate(files):
-        rec = cut_recording(str(file), **reading_keys(meta, condition, given, str(file)))
-        name = _condition_of(meta, str(file), rec.speed_hz, condition)
+        keys = reading_keys(meta, condition, given, str(file))
+        rec = cut_recording(str(file), **keys)
+        try:
+            name = _condition_of(meta, str(file), rec.speed_hz, condition)
+        except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
+            raise GearlabInputError(_other_gearbox(meta, str(file), keys, rec.speed_hz) or str(far)) from None
         own, whose = remembered(meta, str(file), given)
         said = f"{whose} keys" if {k for k in own if k not in (given or {})} else ""
         on_event(
