@@ -148,3 +148,25 @@ def test_score_reads_a_file_of_a_format_the_run_never_read_with_the_target_s_key
     assert keys["sensitivity"] == pytest.approx(0.1 / G)  # the [target]'s, not the HDF5 file's ""
     np.savez(tmp_path / "same.npz", **{"acc [V]": x, "tacho [V]": x, "fs": float(FS)})
     assert reading_keys(meta, None, None, str(tmp_path / "same.npz"))["sensitivity"] == pytest.approx(0.1 / G)
+
+
+def test_a_short_take_s_later_mesh_is_no_subharmonic_family(tmp_path):
+    # a 21/65 + 34/91 box described with a 64-tooth first wheel, a 2 s take (57 turns): the intermediate shaft read
+    # at 0.3307, stage 2's 10.985 is no whole tooth count on it, and its harmonics 1-3 were taken as 3, 6, 9 of 3.662:
+    # 'stage 2: mesh order 3.662 measured, 11.16 expected (a 11-tooth pinion ...?)'; refusing such families alone
+    # let 21.968 and a stage-1 sideband at 20.0 through, as 11 and 10 of 1.997 ('a 6-tooth pinion')
+    from test_inspect import described
+    from test_inspect_wheel_speed import _lab
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    _lab(tmp_path / "short.npz", fs=20000.0, revs=57, seed=41)
+    said = inspect_record(
+        str(tmp_path / "short.npz"), described((21, 64), (34, 91), speed="29.3 Hz"), InspectOptions("acc")
+    )
+    stage2 = [d for d in said["check"]["differences"] if d.startswith("stage 2")]
+    assert not said["matches"] and not any("-tooth pinion on the intermediate shaft?" in d for d in stage2), said[
+        "verdict"
+    ]
+    for stage in said["check"]["stages"]:
+        assert stage.get("measured_order") is None or stage["measured_order"] > 6 * 0.3, said["verdict"]

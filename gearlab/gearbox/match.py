@@ -61,18 +61,30 @@ def mesh_family(
 
     m, hit = fit(expected, tol)
     prior = scored(m, hit) if hit.any() else None
-    best = None
+    fits = []
     for i in range(x.size):
         for h in range(1, MAX_HARMONIC + 1):
             m, hit = fit(x[i] / h, tol + tol[i] * x / x[i])
             whole = [
                 o for o in (o_p, o_w) if o and 6 <= m / o <= 1000 and abs(m / o - round(m / o)) * o <= tol_mesh(m, bin_)
             ]
-            if hit.sum() < 2 or not whole:
+            if hit.sum() >= 2 and (whole or m / o_p >= 6):
+                fits.append((scored(m, hit), hit, bool(whole)))
+    # The strongest family, whole teeth or not: a family of whole teeth whose power is mostly that family's lines
+    # and which is slower is its subharmonic or borrows them; it is no mesh of its own (a 21/65 + 34/91 box described
+    # with a 64-tooth wheel, 57 turns: the intermediate shaft read at 0.3307, stage 2's 10.985 not whole on it and
+    # its harmonics 1-3 taken as 3, 6, 9 of 3.662, 'a 11-tooth pinion'; without them, 21.968 and a sideband at 20.0
+    # as 11 and 10 of 1.997)
+    free = max(fits, key=lambda f: f[0][0], default=None)
+    best = None
+    for candidate, hit, whole in fits:
+        if not whole:
+            continue
+        if free is not None and not free[2] and candidate[1] < 0.9 * free[0][1]:
+            if np.sum(power[hit & free[1]]) >= 0.5 * np.sum(power[hit]):
                 continue
-            candidate = scored(m, hit)
-            if best is None or candidate[0] > best[0]:
-                best = candidate
+        if best is None or candidate[0] > best[0]:
+            best = candidate
     if best is None or (prior is not None and best[0] < prior[0] + FAMILY_MARGIN):
         return None if prior is None else prior[1:]
     return best[1:]
