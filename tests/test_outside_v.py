@@ -47,12 +47,14 @@ def test_a_gap_whose_accepted_effect_is_not_named_does_not_say_0_percent_removed
         "auc_after": 1.0,
         "p_after": 0.005,
     }
-    said = " ".join(gap_lines(summary))
+    ranking = [{"name": "sensor_noise", "share_removed": 0.981, "params": {"snr_db": 9.9}}]
+    said = " ".join(gap_lines({**summary, "ranking": ranking}))
     assert "together 98.8 % of the gap" in said and "the simulator is left uncorrected" in said, said
+    # the ranking's 98.1 % is round 1's, on the revolutions fitted; the 98.8 % the report's gap, which names effects
+    assert "removes 98.1 % alone) in round 1's search, on the revolutions fitted" in said, said
     assert "removed" not in before_after(summary) and "no effect named" in before_after(summary)
     named = {**summary, "effects": [{"name": "sensor_noise", "share_removed": 0.995}], "gap_after": 300.0}
     assert before_after(named).endswith("99.54 % removed"), before_after(named)
-    ranking = [{"name": "sensor_noise", "share_removed": 0.982, "params": {"snr_db": 9.9}}]
     row = ranking_md(ranking, [], summary["dropped_effects"]).splitlines()[-1]
     assert row.endswith("| round 1, then not named; kind = gaussian, snr_db = 9.915 |"), row
 
