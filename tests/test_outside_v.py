@@ -101,7 +101,8 @@ def _take(path, f0, stages, fs=20000.0, seconds=6.0, seed=3):
         am = 1 + 0.15 * np.cos(inner + 0.3) + 0.1 * np.cos(outer + 1.1)
         x += sum(5.0 * a * am * np.cos(k * z1 * inner + k) for k, a in ((1, 1.0), (2, 0.45), (3, 0.2)))
         ratio *= z1 / z2
-    np.savez(path, acc=x, fs=fs)
+    tacho = np.where((theta / (2 * np.pi)) % 1.0 < 0.08, 5.0, 0.0)  # one mark a turn of the input
+    np.savez(path, acc=x, tacho=tacho, fs=fs)
     return path
 
 
@@ -172,3 +173,23 @@ def test_a_short_take_s_later_mesh_is_no_subharmonic_family(tmp_path):
     ]
     for stage in said["check"]["stages"]:
         assert stage.get("measured_order") is None or stage["measured_order"] > 6 * 0.3, said["verdict"]
+
+
+def test_score_warns_of_a_record_of_other_tooth_counts_at_a_trained_speed(tmp_path):
+    # a 25/83 box's record at the 24/83 run's own 23.7 Hz (a tacho): scored without a word, its mesh at order 25
+    from gearlab.gearbox import resolve_gearbox
+    from gearlab.kinds.detection_scoring import _other_gearbox
+
+    (tmp_path / "boxA.toml").write_text(
+        '[gearbox]\nname = "boxA"\n\n[operation]\nspeed = "23.7 Hz"\n\n[[stages]]\nmodule = "2 mm"\n'
+        'face_width = "20 mm"\npinion = { z = 24, bore = "20 mm" }\nwheel = { z = 83, bore = "35 mm" }\n'
+    )
+    box = resolve_gearbox(tmp_path / "boxA.toml")
+    meta = {"conditions": {"23.7 Hz": {"speed_hz": 23.7}}}
+    keys = {"vibration": "acc", "tacho": "tacho", "pulses_per_rev": 1, "speed_hz": None}
+    other = _take(tmp_path / "a25.npz", 23.7, [(25, 83)], fs=12800.0, seconds=8.0)
+    line = _other_gearbox(meta, str(other), keys, 23.7, far=False, box=box)
+    assert line is not None and "stage 1: mesh order 25 measured, 24 expected" in line, line
+    assert line.endswith("says what differs)") and "its scores weigh another gearbox" in line, line
+    own = _take(tmp_path / "a24.npz", 23.7, [(24, 83)], fs=12800.0, seconds=8.0)
+    assert _other_gearbox(meta, str(own), keys, 23.7, far=False, box=box) is None

@@ -15,6 +15,7 @@ from ..data.which_gear import Take
 from ..errors import GearlabInputError, did_you_mean
 from ..events import Event
 from ..gearbox.orders import TachoShaft
+from ..gearbox.simulation import gearbox_of
 from ..learn.protocol import fault_score
 from ..parts import scoring
 from ..parts.measured import TargetFile, held
@@ -273,13 +274,15 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
     return near
 
 
-def _other_gearbox(meta: dict, path: str, keys: dict, speed: float) -> str | None:
+def _other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = True, box=None) -> str | None:
     """The line of a record whose mesh orders do not fit the run's gearbox description, as inspect reads it with
     the run's keys at the speed of the run's nearest condition ("stage 2: mesh order 9.706 measured, 10.98
     expected"); None where they fit or the run has no description. A 24/83 box's record scored by a 21/65 + 34/91
     box's run (no tacho: the speed from the mesh orders) was told only 'runs at 51.78 Hz, more than 5 % from every
-    condition': its 24th order read as stage 2's 10.98th."""
-    box = keys.get("gearbox")
+    condition': its 24th order read as stage 2's 10.98th. Not *far*: the record's speed is a condition's, and
+    the line says its scores weigh another gearbox against the run's history (a warning: it is scored). *box*: the
+    run's description where its keys have none (a run with a tacho: the one its source simulates)."""
+    box = keys.get("gearbox") or box
     if box is None:
         return None
     from ..gearbox import order_table
@@ -309,10 +312,13 @@ def _other_gearbox(meta: dict, path: str, keys: dict, speed: float) -> str | Non
     # the stages' lines ('mesh order x measured, y expected', 'no line at mesh order z'), not the speed's search
     picked = [d for d in said if "mesh order" in d and ("measured" in d or "no line" in d)][:2] or said[:1]
     stages = " + ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
+    said = f"{path}: its lines do not fit the run's gearbox '{box.name}' ({stages}): {'; '.join(picked)}; "
+    inspect = f"gearlab inspect {path} --gearbox DESCRIPTION says what differs"
+    if not far:
+        return f"{said}its scores weigh another gearbox against the run's history ({inspect})"
     return (
-        f"{path}: its lines do not fit the run's gearbox '{box.name}' ({stages}): {'; '.join(picked)}; its speed read "
-        f"as {speed:.2f} Hz is more than {SPEED_GROUP:.0%} from every condition's; expected a record of that gearbox "
-        f"(gearlab inspect {path} --gearbox DESCRIPTION says what differs)"
+        f"{said}its speed read as {speed:.2f} Hz is more than {SPEED_GROUP:.0%} from every condition's; expected a "
+        f"record of that gearbox ({inspect})"
     )
 
 
@@ -415,13 +421,21 @@ def score(
     _same_input(run, meta)
     reading_keys(meta, condition, given)  # a bad --key or a missing condition: refused before any file is read
     cut, raw, found = {}, {}, {}
+    described = (run.read_json("localisation.json") or {}).get("preset")  # the source's description, if any
+    described = gearbox_of(described) if described else None
     for i, file in enumerate(files):
         keys = reading_keys(meta, condition, given, str(file))
         rec = cut_recording(str(file), **keys)
         try:
             name = _condition_of(meta, str(file), rec.speed_hz, condition)
         except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
-            raise GearlabInputError(_other_gearbox(meta, str(file), keys, rec.speed_hz) or str(far)) from None
+            raise GearlabInputError(
+                _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described) or str(far)
+            ) from None
+        # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
+        differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
+        if differs:
+            on_event(Event("log", message=f"warning: {differs}"))
         own, whose = remembered(meta, str(file), given)
         said = f"{whose} keys" if {k for k in own if k not in (given or {})} else ""
         on_event(
@@ -432,7 +446,7 @@ def score(
         )
         # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
         # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
-        found[str(file)] = (rec.speed_hz, rec.angle_source, said, rec.units)
+        found[str(file)] = (rec.speed_hz, rec.angle_source, said, rec.units, differs)
         revs = rec.revolutions
         if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
             turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
@@ -487,6 +501,7 @@ def score(
                             "speed_from": found[f.path][1],  # the tacho, a declared speed, the mesh orders
                             "read_with": found[f.path][2],  # whose keys read the file ("": the [target]'s, --key's)
                             "values": found[f.path][3],  # how its values became m/s² (its units)
+                            "gearbox": found[f.path][4],  # where its lines do not fit the run's description
                             "localised": where.get("named"),
                             "call": where.get("call"),
                             "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth
