@@ -45,8 +45,8 @@ def validated_description(path: Path) -> str | None:
 
     try:
         tables = tomllib.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return None  # the scenario's reading says what is wrong
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError):
+        return None  # the scenario's reading says what is wrong (nested too deeply, too)
     if "scenario" in tables or not ("stages" in tables or "gearbox" in tables):
         return None
     box = resolve_gearbox(path)
