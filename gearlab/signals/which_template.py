@@ -65,18 +65,7 @@ RULE_REFERENCE = "by the mesh phases of the simulated events"
 # 184/17/19 (seed 42, not tuned on, 171 records: 131/28/12 -> 147/11/13); 10-12 no better (under the noise there)
 REFERENCE_HARMONICS = 8
 REFERENCE_HALF = 0.2  # orders about each mesh harmonic read, in the coarser gear's tooth counts (at least 2)
-REFERENCE_MARGIN = 0.05  # match of one gear over the other's below which both stay named
-# A mode the structure moved near a mesh harmonic turns the line and the orders about it unlike, so the phase there
-# is not the simulator's: it shows as a jump of the history's line level against the simulated one at that harmonic
-# from the level difference at its neighbours (the gain cancels). Each harmonic's weight is exp(-(jump / this)²).
-# And the event's level over the harmonics (log of its power about each) is compared with the simulated event's,
-# their correlation times REFERENCE_LEVELS added to the phase match: the other mesh's modulation mimics an own-gear
-# phase at a few harmonics (cos +0.8), not the own fault's level profile. Development (as above, 5 kinds, 220
-# records seed 41 / 160 seed 42 through this rule), named first / both / wrong: 184/17/19 -> 192/8/20 (seed 42, not
-# tuned on: 137/10/13 -> 140/7/13); the jump alone 186/16/18, the levels alone 191/14/15; dropping or weighting the
-# harmonics by the line's own departure (not its jump from the neighbours') lost 3-30 on both seeds
-REFERENCE_JUMP_DB = 12.0
-REFERENCE_LEVELS = 0.2
+REFERENCE_MARGIN = 0.05  # weighted mean cos of one gear over the other's below which both stay named
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -150,11 +139,7 @@ def fit_words(evidence: dict) -> str:
     """The simulated events' evidence in words, for localise.which_line ("" without it)."""
     if "own-mesh phase match" in evidence:
         said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["own-mesh phase match"].items())
-        return (
-            f"own-mesh phases matched to the simulated events' (mean cos + {REFERENCE_LEVELS:g} x levels' correlation) "
-            + " / ".join(said)
-            + ", "
-        )
+        return "own-mesh phases matched to the simulated events' (mean cos) " + " / ".join(said) + ", "
     if "simulated fit" in evidence:
         return (
             "simulated event's fit "
@@ -251,45 +236,11 @@ def own_mesh_weights(X, noise, m: np.ndarray, gear, half: float) -> np.ndarray:
     return np.array(out)
 
 
-def line_jump_weights(ref, lay, shaft: int, gear, healthy: np.ndarray) -> np.ndarray:
-    """Per harmonic h = 1 … REFERENCE_HARMONICS of the gear's mesh, exp(-(j / REFERENCE_JUMP_DB)²): j (dB) how far
-    the history's line level over the simulated healthy train's there departs from the mean of that difference at
-    the neighbouring harmonics (a harmonic without a line to read takes the median difference; none: all 1)."""
-    o = float(lay.shaft_orders[shaft])
-    dev = np.full(REFERENCE_HARMONICS, np.nan)
-    for h in range(1, REFERENCE_HARMONICS + 1):
-        x = h * gear.teeth * o
-        line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
-        if line.size and ref.power[line[0]] > 0 and abs(healthy[line[0]]) > 0:
-            dev[h - 1] = 10 * np.log10(ref.power[line[0]] / abs(healthy[line[0]]) ** 2)
-    if np.isnan(dev).all():
-        return np.ones(REFERENCE_HARMONICS)
-    dev = np.nan_to_num(dev, nan=float(np.nanmedian(dev)))
-    beside = [np.mean([dev[k] for k in (i - 1, i + 1) if 0 <= k < dev.size]) for i in range(dev.size)]
-    jump = np.abs(dev - np.array(beside))
-    return np.exp(-((jump / REFERENCE_JUMP_DB) ** 2))
-
-
-def own_mesh_levels(X, m: np.ndarray, gear, half: float) -> np.ndarray:
-    """Per harmonic h = 1 … REFERENCE_HARMONICS of the gear's mesh, the log amplitude of *X* within *half* orders."""
-    out = [np.sum(np.abs(X[np.abs(m - h * gear.teeth) <= half]) ** 2) for h in range(1, REFERENCE_HARMONICS + 1)]
-    return np.log(np.sqrt(np.array(out, float)) + 1e-30)
-
-
-def _level_likeness(a: np.ndarray, b: np.ndarray) -> float:
-    """Correlation of two level profiles (own_mesh_levels; 0 where either is flat)."""
-    if np.std(a) == 0 or np.std(b) == 0:
-        return 0.0
-    return float(np.corrcoef(a, b)[0, 1])
-
-
 def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates: dict) -> dict:
     """{gear name: the mean cos between the record's event phases about the gear's own mesh harmonics and
     those of the gear's simulated event (own_mesh_phasors), each harmonic weighted by the record's event-to-
-    noise ratio there (own_mesh_weights) and by how little the structure's line level jumps there
-    (line_jump_weights), plus REFERENCE_LEVELS times the correlation of the two events' levels over those
-    harmonics (own_mesh_levels); the best over its fault kinds} ({}: fewer than two harmonics read for a gear).
-    A tooth fault changes its own mesh while in mesh, so about that mesh's harmonics h Z the event
+    noise ratio there (own_mesh_weights), the best over its fault kinds} ({}: fewer than two harmonics read for
+    a gear). A tooth fault changes its own mesh while in mesh, so about that mesh's harmonics h Z the event
     stands at a phase to the line set by the fault and the mesh: the same for every tooth (h Z 2π n / Z is whole
     turns), and the same through another structure, whose response turns a line and the orders within
     REFERENCE_HALF of it alike (noise-free, bearings 0.5x: cos 0.9-1.0 to the simulator's at most harmonics);
@@ -304,15 +255,12 @@ def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates
     for g in gears:
         mine = own_mesh_phasors(R, rec.mean, lay, shaft, m, g, half)
         weight = own_mesh_weights(R, rec.noise[sel], m, g, half)
-        weight = weight * line_jump_weights(ref, lay, shaft, g, templates["healthy"])
-        level = own_mesh_levels(R, m, g, half)
         best = None
         for t in templates["gears"].get(g.name, ()):
             sim = own_mesh_phasors(t[sel], templates["healthy"], lay, shaft, m, g, half)
             ok = ~np.isnan(mine) & ~np.isnan(sim)
             if ok.sum() >= 2 and weight[ok].sum() > 0:
                 cos = float(np.sum(weight[ok] * np.real(mine[ok] * np.conj(sim[ok]))) / weight[ok].sum())
-                cos += REFERENCE_LEVELS * _level_likeness(level, own_mesh_levels(t[sel], m, g, half))
                 best = cos if best is None else max(best, cos)
         if best is None:
             return {}
