@@ -250,7 +250,7 @@ def test_the_report_says_the_verdict_the_run_printed():
         "Structure differs: mesh order 20.0 measured, 25 expected; no effect was searched."
     )
     table = ranking_md(base["ranking"], base["effects"])
-    assert "parameters (round-1 fit, alone)" in table and "accepted (final fit)" in table
+    assert "| parameters (round-1 fit) |" in table and "accepted (final fit)" in table
     assert "| order = 5, f_c = 550 |" in table and "round 1, 100.0 %; order = 8 |" in table
 
 

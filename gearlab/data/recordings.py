@@ -562,7 +562,7 @@ def shaft_angle(
             # sidebands, the TSA's mesh harmonic lost); followed on a mesh harmonic's phase, the
             # revolutions are cut where the shaft turns, as from a tacho
             theta, speed_hz, found, note = follow_speed(
-                rec.signal, fs, gearbox, speed_hz, f"{path}: vibration channel '{rec.vibration}'"
+                rec.signal, fs, gearbox, speed_hz, f"{path}: vibration channel '{rec.vibration}'", file=str(path)
             )
             if theta is not None:
                 found = found.removesuffix(", followed on a mesh harmonic's phase")

@@ -93,9 +93,9 @@ def carrier(lines: Lines, i: int, span: float, others=()) -> int:
 class AmbiguousSpeed(GearlabInputError):
     """Two speeds explain the mesh lines about equally; *speeds*: every hypothesis, best first."""
 
-    def __init__(self, message: str, speeds: list[float]):
+    def __init__(self, message: str, speeds: list[float], head: str | None = None):
         super().__init__(message)
-        self.speeds = speeds
+        self.speeds, self.head = speeds, head or message  # head: the message without its hint
 
 
 def speed_from_mesh(
@@ -310,10 +310,13 @@ def speed_from_mesh(
         # 28/47 reducer described with a 70-tooth wheel was told only to declare its speed)
         other = contested[0]
         stages = best[3] != other[3]
-        raise AmbiguousSpeed(
+        head = (
             f"{where}: the speed is ambiguous without a tacho: {fmt_hz(best[1])} ({best[2]}) or "
             f"{fmt_hz(other[1])} ({other[2]}) explain the spectrum about equally; expected a declared "
             "speed (e.g. '25 Hz') or a tacho channel"
+        )
+        raise AmbiguousSpeed(
+            head
             + (
                 f" (or the description's tooth counts of stages {min(best[3], other[3])} to "
                 f"{max(best[3], other[3])} differ from the gearbox's: gearlab inspect at the speed names them)"
@@ -321,6 +324,7 @@ def speed_from_mesh(
                 else ""
             ),
             [h[1] for h in sorted(hypotheses, key=lambda h: -h[0])],
+            head,
         )
     return best[1], f"from the mesh lines ({best[2]})", None
 
@@ -441,7 +445,13 @@ TRACK_CUTOFF = 0.45  # the angle's deviation is kept below this share (to 1.5 x)
 
 
 def follow_speed(
-    signal: np.ndarray, fs: float, box: Gearbox, declared: float | None, where: str, threshold_db: float = THRESHOLD_DB
+    signal: np.ndarray,
+    fs: float,
+    box: Gearbox,
+    declared: float | None,
+    where: str,
+    threshold_db: float = THRESHOLD_DB,
+    file: str | None = None,
 ) -> tuple[np.ndarray | None, float, str, str | None]:
     """(input angle per sample or None, mean input speed in Hz, how it was found, a note or None)
     of a record without a tacho: the speed from the mesh lines (speed_from_mesh), followed through
@@ -449,7 +459,8 @@ def follow_speed(
     record read at that uniform angle, where a swinging speed no longer smears the lines (a 0.3 %
     swing at 15 Hz made the sidebands of a 40-tooth mesh fit a third of the declared speed). Kept
     when the two agree within SPEED_AGREE and, with a declared speed, the lines confirm it (else
-    None: the constant speed of the first look, as before)."""
+    None: the constant speed of the first look, as before). *file*: a record read against a run's
+    description (not inspect's own), whose ambiguity says the tooth counts may differ and how to see."""
     if declared is None and getattr(box, "speed_hz", None):
         # the description's [operation] speed is the prior, as in inspect: the speed the lines show near it
         # (a 68/103 + 82/99 box at +1.6 %, described 68/104: 12.31 Hz from stage 2's lines, or refused as
@@ -481,7 +492,15 @@ def follow_speed(
             if got[0] is not None and not any(abs(got[1] / g[1] - 1) <= SPEED_AGREE for g in found):
                 found.append(got)
         if len(found) != 1:
-            raise
+            if file is None:
+                raise
+            # a record of another gearbox reads so too: `gearlab score` stopped at 'the speed is ambiguous',
+            # the tooth counts unsaid (issue 39)
+            raise AmbiguousSpeed(
+                f"{exc.head} (or the record's tooth counts differ from {box.name}'s, another gearbox's: "
+                f"gearlab inspect {file} --gearbox {box.source.removeprefix('built-in ')} names them)",
+                exc.speeds,
+            ) from None
         return found[0]
     return _followed(signal, fine, course, fs, box, declared, where, threshold_db, f, how, note)
 

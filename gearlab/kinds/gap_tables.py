@@ -58,9 +58,12 @@ def ranking_md(ranking: list[dict], accepted: list[dict], dropped: list[dict] | 
     chosen = {e["name"]: e for e in accepted}
     # accepted, then not named (gap_verdict.dropped_text): an empty cell read as 'never accepted'
     gone = {e["name"]: f"round {e.get('round')}, then not named; {params_text(e['params'])}" for e in dropped or []}
-    # each row's parameters are its round-1 fit (alone, its noise beside it); an accepted effect's final
-    # fit, next to the others, is in the verdict and the summary's effects
-    head = "| effect | share of the gap removed (round 1) | parameters (round-1 fit, alone) | accepted (final fit) |"
+    # each row is its round-1 fit: with sensor noise a candidate, every other one is fitted with the noise
+    # beside it (gap.diagnose.greedy_round; 'alone' read as without it); an accepted effect's final fit,
+    # next to the others, is in the verdict and the summary's effects
+    noise = any(r["name"] == "sensor_noise" for r in ranking)  # gap.scoring.NUISANCE (this module imports nothing)
+    fit = "round-1 fit" + (", sensor noise fitted beside each other effect" if noise else "")
+    head = f"| effect | share of the gap removed (round 1) | parameters ({fit}) | accepted (final fit) |"
     lines = [head, "|---|---|---|---|"]
     for r in ranking:
         e = chosen.get(r["name"])
