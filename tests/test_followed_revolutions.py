@@ -51,8 +51,8 @@ def test_a_swinging_speed_is_followed_when_revolutions_are_cut(tmp_path, stages,
 
     # follow_speed's fallback (no mesh harmonic stands clear): the constant speed of its first look,
     # which smears the TSA's mesh (the path every kind but inspect took before)
-    def first_look(*args):
-        return (None, *follow_speed(*args)[1:])
+    def first_look(*args, **kwargs):
+        return (None, *follow_speed(*args, **kwargs)[1:])
 
     monkeypatch.setattr(speed, "follow_speed", first_look)
     constant = cut_recording(path, vibration="acc", gearbox=box)
