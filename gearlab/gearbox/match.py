@@ -185,6 +185,12 @@ def located_ahead(lines: Lines, table, bin_: float, tacho_shaft: int | None) -> 
             continue  # behind a tacho on a later shaft no count moves the mesh by a whole tooth (check_description)
         theirs = off_own(harmonics([float(t.mesh) for q, t in enumerate(table.stages) if q != k], bin_), m)
         offsets = [j * float(o) for o in (s.pinion_shaft_order, s.wheel_shaft_order) for j in (-3, -2, -1, 1, 2, 3)]
+        # an earlier wheel a tooth or three off moves this mesh by z / (z + j), no whole tooth of its own (21/65 +
+        # 34/91 described with 64, 57 turns: stage 2 at 10.985 left unplaced, its 2nd harmonic, M1 + 0.968, pulled
+        # the input's comb off its true sideband: 'the pinion on the input shaft shows 21.7 teeth')
+        offsets += [
+            m * t.wheel_teeth / (t.wheel_teeth + j) - m for t in table.stages[:k] for j in (-3, -2, -1, 1, 2, 3)
+        ]
         got = harmonic_comb(lines, [m] + [m + d for d in offsets], bin_, theirs)
         if got is not None and abs(got[1] - m) > tol_mesh(m, bin_):
             # the first such stage, after stages where described: a moved mesh moves every later one by no whole
@@ -318,8 +324,9 @@ def check_description(
             differences.append(
                 f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected: the "
                 f"{s.pinion_teeth}-tooth pinion as described, its {s.pinion_shaft} shaft turning "
-                f"{100 * (measured / expected - 1):+.1f} % off the speed read (a tooth count between it and the "
-                "tacho's shaft, or the tacho, differs)"
+                f"{100 * (measured / expected - 1):+.1f} % off the speed read ("
+                + _between(table, k, measured / expected, leads and not tacho_on_input)
+                + ")"
             )
         elif not matched:
             differences.append(
@@ -494,6 +501,20 @@ def outward_first(differences: list[str], stages: list[dict], box: Gearbox, tach
         rest.append(f"{text}, as follows from stage {k}'s difference (read at the speed it moves)")
     differences[:] = own + rest
     return found[0]
+
+
+def _between(table, k: int, ratio: float, no_tacho: bool) -> str:
+    """What puts stage *k*'s pinion shaft *ratio* off the speed read: without a tacho, the stage before's wheel where
+    a whole count does it (21/65 + 34/91 described with 64 on 57 turns, its sidebands unresolved: stage 2 at 10.985
+    was 'a tooth count between it and the tacho's shaft, or the tacho', with no tacho)."""
+    if not no_tacho:
+        return "a tooth count between it and the tacho's shaft, or the tacho, differs"
+    said = "a tooth count between it and the input shaft differs"
+    z = table.stages[k - 1].wheel_teeth / ratio if k else 0.0
+    wheel = table.stages[k - 1].wheel_teeth if k else 0
+    if k and round(z) != wheel and abs(z - round(z)) <= 0.1:
+        return f"{said}: a {round(z)}-tooth wheel on the {table.shafts[k]} shaft ({z:.2f}) puts it there, {wheel} said"
+    return said
 
 
 def _following(stages: list[int]) -> str:
