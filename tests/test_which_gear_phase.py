@@ -8,7 +8,7 @@ gearlab's simulator."""
 
 from __future__ import annotations
 
-from test_localise_noise_units import localised
+from test_localise_noise_units import localised, z_of
 
 CLOSE = ((31, 109), (85, 127))  # the intermediate shaft's 109T wheel and 85T pinion
 OPTIONS = {"fs": 16_000.0, "speed": 20.0, "seconds": 6.0, "bump": 0.3}
@@ -39,6 +39,17 @@ def test_close_tooth_counts_are_told_apart_by_the_mesh_phase(tmp_path):
 
 FAR = ((29, 71), (22, 57))  # the intermediate shaft's 71T wheel and 22T pinion, 3.2 apart
 FAR_OPTIONS = {"fs": 12_000.0, "speed": 20.0, "seconds": 6.0}
+
+
+def test_a_stage_2_pinion_fault_is_localised_on_its_shaft(tmp_path):
+    """29/71 + 22/57: a 22T pinion's damage lifts its mesh (9 input orders); before, the intermediate
+    shaft's z was 1.1-1.8 and nothing was localised (against 2.71)."""
+    found = localised(tmp_path, FAR, (1, "pinion", 12), bump=0.3, **FAR_OPTIONS)  # read once with the test below
+    for seed in (5, 6, 7):
+        f = found[seed]
+        assert f["named_shaft"] == "intermediate", f["summary"]
+        assert z_of(f, "intermediate") > 5 * max(z_of(f, s) for s in ("input", "output")), f["summary"]
+    assert found[None]["named"] is None, found[None]["summary"]
 
 
 def test_far_apart_counts_the_width_leaves_undecided_are_named_by_two_mesh_harmonics(tmp_path):
