@@ -106,3 +106,21 @@ def test_the_soft_reducer_at_its_own_step_names_the_intermediate_shaft_not_the_i
     found = W.which_gear(takes["chip"], hist, table, None)
     assert found["named_shaft"] == "intermediate", found["summary"]
     assert z_of(found, "intermediate") > 1.5 * z_of(found, "input"), found["summary"]
+
+
+def test_the_grid_reading_is_np_interp_bit_for_bit():
+    """signals.shaft.on_grid, read_at's linear step on its 4 x denser samples, is np.interp on the grid
+    0 … n-1 to the last bit: inside, on the grid points, at both ends and beyond them, in 1-D and 2-D."""
+    from gearlab.signals.shaft import on_grid
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 7, 4096, 200_001):
+        fp = rng.normal(size=n) * 10 ** rng.uniform(-5, 5)
+        for x in (
+            rng.uniform(-3, n + 3, size=20_000),
+            np.arange(n, dtype=np.float64),
+            np.arange(n) * 0.37,
+            np.array([-0.0, 0.0, n - 1.0, n - 1 + 1e-9, n + 0.5]),
+            rng.uniform(0, n, size=(7, 11)),
+        ):
+            assert np.array_equal(on_grid(x, fp), np.interp(x, np.arange(n, dtype=np.float64), fp)), (n, x[:3])

@@ -63,8 +63,24 @@ def read_at(spectrum: np.ndarray, n: int, at: np.ndarray, up: int = UPSAMPLE, pe
     (ν / (up - ν))². *periodic*: position n is sample 0 again (one turn's wave)."""
     fine = np.fft.irfft(spectrum, n=n * up) * up
     if periodic:
-        return np.interp(at * up, np.arange(fine.size + 1), np.append(fine, fine[0]))
-    return np.interp(at * up, np.arange(fine.size, dtype=np.float64), fine)
+        return on_grid(at * up, np.append(fine, fine[0]))
+    return on_grid(at * up, fine)
+
+
+def on_grid(x: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """np.interp(x, np.arange(fp.size), fp), bit for bit, for finite *x*: the grid's own spacing (1) finds
+    each interval without np.interp's search and without building the grid (half its CPU on a record's
+    4 x denser reading: the localisation tests' read_at calls spent a quarter of their time there)."""
+    last = fp.size - 1
+    j = np.clip(np.floor(x), 0, max(last - 1, 0))
+    f = x - j  # exact: j <= x < j + 1 within the grid
+    j = j.astype(np.intp)
+    out = fp[np.minimum(j + 1, last)] - fp[j]
+    out *= f  # np.interp's slope (fp[j + 1] - fp[j]) / 1.0 times (x - j), then + fp[j]
+    out += fp[j]
+    out[x <= 0] = fp[0]
+    out[x >= last] = fp[last]
+    return out
 
 
 def without_input_orders(revs: np.ndarray, p: int) -> np.ndarray:
