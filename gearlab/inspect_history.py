@@ -24,6 +24,7 @@ from .gearbox.orders import TachoShaft
 from .inspect import InspectOptions, measured_speed, read_record, settle_speed, unconfirmed
 from .signals import POINTS, resample_revolutions
 from .signals import nonsync as NS
+from .signals.localise import weakly
 from .signals.pipeline import first_complete
 
 
@@ -106,7 +107,8 @@ def call_of(loc: dict, ns: dict) -> str:
     gear (or shaft) the synchronous averages name; else other damage where the non-synchronous residual
     changed; else no change."""
     if loc["named"]:
-        return f"localised change: {loc['named']}"
+        named = next((s for s in loc.get("shafts", ()) if s["shaft"] == loc.get("named_shaft")), {})
+        return f"localised change: {loc['named']}{weakly(named)}"
     if ns.get("changed"):
         return NS.call(ns["order"])
     why = "; non-synchronous " + ns["note"] if "note" in ns else ", no non-synchronous line over its threshold"
@@ -140,7 +142,8 @@ def render_localisation(loc: dict, console) -> None:
     if "lines" in ns:
         t = Table(
             title="non-synchronous envelope lines: the record less every shaft's synchronous average, against the "
-            f"history's (threshold z {ns['threshold']:.2f}; strike order {ns['order']:.2f}, {ns['hz']:.4g} Hz)"
+            f"history's (threshold z {ns['threshold']:.2f}, {NS.PASSED}; strike order {ns['order']:.2f}, "
+            f"{ns['hz']:.4g} Hz)"
         )
         for col in ("input order", "Hz", "z", "over the threshold"):
             t.add_column(col)

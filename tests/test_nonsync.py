@@ -105,5 +105,6 @@ def test_score_reads_the_residual_against_the_runs_stored_history(target, tmp_pa
     assert scored["bearing"]["call"].startswith(NON_SYNC)
     ns = scored["bearing"]["nonsync"]
     assert scored["bearing"]["evidence"].endswith(
-        f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f} at order {ns['order']:.2f}"
+        f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f} (a healthy take passes it at false alarm 0.01) at "
+        f"order {ns['order']:.2f}"
     )

@@ -36,3 +36,64 @@ def test_a_short_take_of_a_wrong_first_wheel_invents_no_pinion_count(tmp_path):
     # the sidebands cannot tell 64 from 65 at 57 turns; stage 2's mesh, 1.5 % low, says which wheel moves it
     assert "a 65-tooth wheel on the intermediate shaft (65.0" in wrong, wrong
     assert "64 said" in wrong and "or the tacho" not in wrong, wrong
+
+
+G65, P34 = "intermediate gear 65T (stage 1)", "intermediate pinion 34T (stage 2)"
+
+
+def _found(own: float, other: float) -> dict:
+    """A localisation (signals.localise.Localisation.describe()) of box B's intermediate shaft, its 65T wheel named
+    by the own-mesh phases of the simulated events (another structure than the simulator's)."""
+    evidence = {
+        "event width": "pitches of the 65T wheel",
+        "expected": {G65: 0.878, P34: 1.296},
+        "width": 0.776,
+        "own-mesh phase match": {G65: own, P34: other},
+        "rule": "by the mesh phases of the simulated events",
+        "structure gap dB": 9.1,
+    }
+    shaft = {"shaft": "intermediate", "gears": [G65, P34], "which": G65, "gear": G65, "flagged": True, "z": 184.4}
+    quiet = {"shaft": "output", "gears": ["output gear 91T (stage 2)"], "which": None, "flagged": False, "z": 0.6}
+    return {
+        "named": G65,
+        "named_shaft": "intermediate",
+        "shafts": [shaft | {"threshold": 2.71, "tooth": {}, "stage_evidence": evidence}, quiet | {"threshold": 2.71}],
+    }
+
+
+def test_a_gear_named_by_a_weak_phase_lead_is_said_weak_alike_in_detection_score_and_inspect():
+    # 'own-mesh phases matched ... 65T 0.39 / 34T 0.08, expected 65T ~0.88 / 34T ~1.30': the widths expected read
+    # as the phases' (0.39 of 0.88), and a lead that names the wrong gear in 17-31 % of development records turned
+    # a flag on the watched 34T pinion's shaft into 'other damage: intermediate gear 65T (stage 1)' without a word
+    from gearlab.inspect_history import call_of as inspect_call
+    from gearlab.kinds.detection_which_gear import call_of, decision_of, evidence, is_other
+    from gearlab.signals.localise import which_line
+
+    weak, strong = _found(0.18, -0.01), _found(0.51, -0.15)
+    words = which_line(weak["shafts"][0]["stage_evidence"], G65)
+    assert "event width 0.78 pitches of the 65T wheel (expected intermediate gear 65T ~0.88 / " in words, words
+    assert words.endswith("; weak: a phase lead of 0.19, under 0.3 (so led, right in 69-83 %)"), words
+    assert "weak" not in which_line(strong["shafts"][0]["stage_evidence"], G65)
+    said = f"{G65}, weakly over {P34} (phase lead 0.19)"
+    detection = call_of(weak, [P34])
+    assert detection == f"other damage: {said}", detection  # the detection run's table and `gearlab score`
+    assert is_other(detection) and decision_of(True, detection) == detection  # still counted as other damage
+    assert "; weak: a phase lead of 0.19" in evidence(weak)  # score's evidence line
+    assert inspect_call(weak, {}) == f"localised change: {said}"  # inspect --history
+    assert call_of(strong, [P34]) == f"other damage: {G65}" and inspect_call(strong, {}) == f"localised change: {G65}"
+    assert call_of(weak, [G65]) == f"watched-gear fault: {said}"
+
+
+def test_a_healthy_take_over_the_non_synchronous_threshold_is_told_the_rate_it_stands_for():
+    # box A's healthy h5 take read z 5.0 against 4.7 ('other damage: non-synchronous (bearing-like), at order 1.36'):
+    # 1 of 115 healthy takes of that box over it (false alarm 0.01 per take asked), with nothing saying so
+    from gearlab.kinds.detection_which_gear import nonsync_words, records_md
+
+    over = {"z": 5.02, "threshold": 4.74, "order": 1.36, "changed": True}
+    assert nonsync_words(over) == (
+        "non-synchronous z 5.0/4.7 (a healthy take passes it at false alarm 0.01) at order 1.36"
+    ), nonsync_words(over)
+    assert nonsync_words(over | {"z": 2.2, "changed": False}) == "non-synchronous z 2.2/4.7 at order 1.36"
+    record = {"condition": "23.7 Hz", "shafts": [], "named": None, "nonsync": over, "call": "other damage: ..."}
+    table = records_md({"watched": ["input pinion 24T (stage 1)"], "records": {"h.h5": record}}, {"h.h5": "healthy"})
+    assert "(a healthy take passes it at false alarm 0.01))" in table.splitlines()[1], table

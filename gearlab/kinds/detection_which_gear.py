@@ -107,7 +107,7 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str
     for ev in shafts:
         # one gear of a two-gear shaft named by its event (ev["which"]): only that gear; both: either
         on = [ev["which"]] if ev.get("which") else ev["gears"]
-        (mine if any(g in watched for g in on) else others).append(ev["gear"])
+        (mine if any(g in watched for g in on) else others).append(ev["gear"] + L.weakly(ev))
     if mine:
         return f"{WATCHED}: {'; '.join(mine)}" + (ALSO + "; ".join(others) if others else "")
     return f"{OTHER}: {'; '.join(others)}"
@@ -146,7 +146,8 @@ def nonsync_words(ns: dict | None) -> str:
     """A record's non-synchronous change (signals.nonsync) in words: z over the threshold, the order."""
     if not ns:
         return "non-synchronous: not read"
-    return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f} at order {ns['order']:.2f}"
+    over = f" ({NS.PASSED})" if ns["z"] > ns["threshold"] else ""
+    return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f}{over} at order {ns['order']:.2f}"
 
 
 def nonsync_history(revolutions: list, table) -> NS.NonSyncHistory | None:
@@ -310,9 +311,9 @@ def records_md(loc: dict, labels: dict) -> str:
         f"\nWhich gear (each test record against its condition's history; watched: {', '.join(loc['watched'])}; "
         "z of each shaft's localised change over its threshold; the tooth counted from "
         f"{loc.get('tooth_from', 'the first tacho mark')}; a flag on a record whose change lies on another gear "
-        "is other damage; which of a shaft's two gears: the length of the fault's event; non-synchronous: the "
-        "envelope of the record less every shaft's synchronous average, z / threshold at its strike order in "
-        "input orders, a change there without a localised one is other damage)\n",
+        "is other damage; which of a shaft's two gears: the rule and its evidence; non-synchronous: the envelope of "
+        "the record less every shaft's synchronous average, z / threshold at its strike order in input orders, a "
+        f"change there without a localised one is other damage ({NS.PASSED}))\n",
         "| condition | file | label | localised on | z / threshold per shaft | tooth | which gear | non-synchronous "
         "z / threshold (order) | a flag is |",
         "|---|---|---|---|---|---|---|---|---|",

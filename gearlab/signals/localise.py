@@ -100,6 +100,8 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     RULE_WIDTH,
     U_COARSE,
     U_FINE,
+    WEAK_LEAD,
+    WEAK_RIGHT,
     WIDTH_BAND,
     WIDTH_LOW,
     WIDTH_Z,
@@ -108,6 +110,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     mesh_phases,
     phase_words,
     two_harmonic_phases,
+    weak_lead,
     which_by_template,
     which_by_width,
 )
@@ -473,13 +476,32 @@ def which_line(evidence: dict, which: str | None) -> str:
     for a one-gear shaft."""
     if not evidence:
         return ""
-    width = f"event width {evidence['width']:.2f} {evidence['event width']}, " if "width" in evidence else ""
-    width += phase_words(evidence) + fit_words(evidence)
     expected = " / ".join(f"{g.split(' (')[0]} ~{v:.2f}" for g, v in evidence["expected"].items())
+    # the widths expected beside the width read: after the phases a user read 'phases ... 0.39 / 0.08,
+    # expected ~0.88 / ~1.30' as a phase match of 0.39 where 0.88 was expected
+    read = f"{evidence['width']:.2f} " if "width" in evidence else "not read, in "
+    said = f"event width {read}{evidence['event width']} (expected {expected}), " + phase_words(evidence)
+    said = (said + fit_words(evidence)).removesuffix(", ")
     rule = evidence.get("rule", RULE_WIDTH)  # evidence stored before the rule was said: the width's
     if which:
-        return f"; named {rule} ({width}expected {expected})"
-    return f"; which of the two: undecided {rule} ({width}expected {expected}; {evidence['undecided']})"
+        lead = weak_lead(evidence)
+        weak = (
+            ""
+            if lead is None
+            else f"; weak: a phase lead of {lead:.2f}, under {WEAK_LEAD:g} (so led, right in {WEAK_RIGHT})"
+        )
+        return f"; named {rule} ({said}){weak}"
+    return f"; which of the two: undecided {rule} ({said}; {evidence['undecided']})"
+
+
+def weakly(ev: dict) -> str:
+    """ ", weakly over <the shaft's other gear> (phase lead L)" of a shaft's evidence (ShaftEvidence.describe()) whose
+    gear is named by a phase lead under WEAK_LEAD, else "": the call says it as the evidence does (an outside lab's
+    burst on a 34T pinion was 'other damage: intermediate gear 65T' at a lead of 0.21)."""
+    lead = weak_lead(ev.get("stage_evidence") or {}) if ev.get("which") else None
+    if lead is None:
+        return ""
+    return f", weakly over {' / '.join(g for g in ev['gears'] if g != ev['which'])} (phase lead {lead:.2f})"
 
 
 def threshold_floor(shafts: int, false_alarm: float = FALSE_ALARM) -> float:

@@ -65,6 +65,10 @@ SUM = 1  # bins on either side summed with each bin (a slipping strike's line sp
 SMOOTH = 9  # bins over which the history's sd is pooled
 BETWEEN = 101  # bins over which the history records' spread beyond their blocks' noise is pooled
 FALSE_ALARM = 0.01  # the Gaussian floor of the threshold, shared out among the bins searched
+# what the threshold stands for, as detection, score and inspect --history say it: box A of an outside lab (24/83,
+# 3 history takes of 10 blocks), healthy takes over it 1 of 115 (z 5.02 / 4.74; 6 histories; seeds 1-4, 31-36,
+# 1551-1590), a healthy take's per-bin z sd 1.05 against the left-out 1.15 the threshold scales by
+PASSED = f"a healthy take passes it at false alarm {FALSE_ALARM:g}"
 
 
 def call(order: float) -> str:
