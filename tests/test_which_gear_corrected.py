@@ -120,3 +120,25 @@ def _mean(simulated, lay):
 
     revolutions, first = simulated
     return L.content(revolutions, lay, first, sweeps=0).mean  # as the events are read (noise-free)
+
+
+def test_a_periodic_record_is_read_on_the_periodic_cubic_spline_of_its_dense_samples():
+    """data.simulated._periodic_at sums cubic B-splines whose coefficients it solves in the frequency domain:
+    the spline scipy's CubicSpline(bc_type="periodic") builds through the band-limited samples 8 x denser,
+    read anywhere in the period and past its end."""
+    import numpy as np
+    from scipy.interpolate import CubicSpline
+
+    from gearlab.data.simulated import OVERSAMPLE, _periodic_at
+
+    rng = np.random.default_rng(4)
+    for n, fs_sim, fs in ((997, 60_000.0, 20_000.0), (4096, 50_000.0, 12_800.0), (30, 100.0, 30.0)):
+        x = rng.normal(size=n) + 3 * np.sin(2 * np.pi * 5 * np.arange(n) / n)
+        spectrum = np.fft.rfft(x)
+        spectrum[np.arange(spectrum.size) * fs_sim / n >= fs / 2] = 0.0
+        fine = np.fft.irfft(spectrum, n * OVERSAMPLE) * OVERSAMPLE
+        period = n / fs_sim
+        grid = np.arange(n * OVERSAMPLE + 1) * (period / (n * OVERSAMPLE))
+        times = np.concatenate([rng.uniform(0, 3 * period, 2000), grid[:50], [period, 2 * period]])
+        want = CubicSpline(grid, np.append(fine, fine[0]), bc_type="periodic")(np.mod(times, period))
+        assert np.abs(_periodic_at(x, fs_sim, fs, times) - want).max() < 1e-10 * np.abs(want).max()
