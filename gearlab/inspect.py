@@ -453,6 +453,12 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
         if read_on and len(differences) == listed:  # the tacho read as said: its shaft's gears first, then outward
             check["outward"] = outward_first(differences, check["stages"], box, read_on)
+        if read_on and differences and "nominal" in report["speed"]:
+            # a later shaft's tacho gives the input's speed through the described gears: a wrong count moves it (a
+            # 17/47 + 29/66 + 23/59 description of a 67-tooth wheel read 1.5 % slow, 'slip under load')
+            said = report["speed"]["nominal"]["line"].split(" %, ")[0]
+            words = f"read from the {tacho_shaft} tacho through the described gears, whose counts differ (below)"
+            report["speed"]["nominal"]["line"] = f"{said} %, {words}"
         # the speed the rows after the speed's line read at, where not the declared one (none declared: the speed found)
         if differences and ((speed.settled and speed.declared_hz) or no_speed):
             said = f"the speed {speed.settled} show" if speed.settled else "declared, not confirmed"

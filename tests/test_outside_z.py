@@ -97,3 +97,56 @@ def test_a_healthy_take_over_the_non_synchronous_threshold_is_told_the_rate_it_s
     record = {"condition": "23.7 Hz", "shafts": [], "named": None, "nonsync": over, "call": "other damage: ..."}
     table = records_md({"watched": ["input pinion 24T (stage 1)"], "records": {"h.h5": record}}, {"h.h5": "healthy"})
     assert "(a healthy take passes it at false alarm 0.01))" in table.splitlines()[1], table
+
+
+def _three_stage(path, z=(17, 47, 29, 67, 23, 59), speed=24.0, fs=8192.0, seconds=10.0, seed=3):
+    """A three-stage reducer's take: the input drifting 1.5 % over it, each mesh's harmonics 1-3 modulated by its
+    shafts, a tacho of 3 marks a turn of the output shaft."""
+    rng = np.random.default_rng(seed)
+    n = int(fs * seconds)
+    f = speed * (1 + 0.015 * (np.arange(n) / n - 0.5))
+    shaft = [2 * np.pi * np.cumsum(f) / fs]
+    for k in range(3):
+        shaft.append(shaft[-1] * z[2 * k] / z[2 * k + 1])
+    x = rng.normal(0, 1.0, n)
+    for k, level in enumerate((4.0, 3.0, 2.0)):
+        am = 1 + 0.12 * np.cos(shaft[k] + 0.4) + 0.08 * np.cos(shaft[k + 1] + 1.3)
+        for h, a in enumerate((1.0, 0.5, 0.25), start=1):
+            x += level * a * am * np.cos(h * z[2 * k] * shaft[k] + rng.uniform(0, 6))
+    tacho = np.where((shaft[3] * 3 / (2 * np.pi)) % 1.0 < 0.1, 5.0, 0.0)
+    np.savez(path, acc=x, tacho=tacho, fs=fs)
+
+
+def _box3(wheel2=67):
+    from gearlab.gearbox.description import parse_gearbox
+
+    stages = ((17, 47), (29, wheel2), (23, 59))
+    data = {
+        "operation": {"speed": "1440 rpm"},
+        "stages": [
+            {
+                "module": "2 mm",
+                "face_width": "20 mm",
+                "pinion": {"z": a, "bore": "10 mm"},
+                "wheel": {"z": b, "bore": "10 mm"},
+            }
+            for a, b in stages
+        ],
+        "sensor": {"near": "intermediate 1", "tacho": "output", "pulses_per_rev": 3},
+    }
+    return parse_gearbox(data, "box3.toml")
+
+
+def test_a_speed_read_from_an_output_tacho_through_a_wrong_count_is_not_called_slip(tmp_path):
+    # 17/47 + 29/67 + 23/59 with a 3-mark output tacho, described with a 66-tooth stage-2 wheel: the input read 1.5 %
+    # slow through it was 'speed 1419 rpm measured, 1440 rpm nominal: -1.5 %, slip under load' above the verdict
+    _three_stage(tmp_path / "box3.npz")
+    options = InspectOptions("acc", "tacho")
+    right = inspect_record(str(tmp_path / "box3.npz"), _box3(), options)
+    assert right["verdict"] == "the description 'box3' matches this recording", right["verdict"]
+    assert abs(right["speed"]["mean_hz"] / 24.0 - 1) < 0.005  # goal: within 0.5 %, every mesh within 0.05 orders
+    assert all(abs(s["measured_order"] - s["expected_order"]) < 0.05 for s in right["check"]["stages"])
+    wrong = inspect_record(str(tmp_path / "box3.npz"), _box3(66), options)
+    assert "stage 2: the wheel on the intermediate 2 shaft shows 67.0" in wrong["verdict"], wrong["verdict"]
+    line = wrong["speed"]["nominal"]["line"]
+    assert line.endswith("-1.5 %, read from the output tacho through the described gears, whose counts differ (below)")
