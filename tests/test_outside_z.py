@@ -150,3 +150,24 @@ def test_a_speed_read_from_an_output_tacho_through_a_wrong_count_is_not_called_s
     assert "stage 2: the wheel on the intermediate 2 shaft shows 67.0" in wrong["verdict"], wrong["verdict"]
     line = wrong["speed"]["nominal"]["line"]
     assert line.endswith("-1.5 %, read from the output tacho through the described gears, whose counts differ (below)")
+
+
+def test_per_file_tachos_are_read_on_the_description_s_tacho_shaft_with_its_marks(tmp_path):
+    # the 17/47 + 29/67 + 23/59 history in three formats, each file naming its own tacho ([target] names none), the
+    # description's [sensor] tacho = 'output', pulses_per_rev = 3: the gap read each tacho as the input's, once a
+    # turn ('4.400 Hz'; 'structure differs: stage 1 pinion: 31 teeth fit the recording, 17 described'); and a
+    # [target] tacho_shaft = 'output' was refused ('belongs to a tacho; no tacho is given')
+    from gearlab.parts.measured import target_spec
+
+    table = {"vibration": "acc", "tacho": None, "pulses_per_rev": None, "speed": None, "transient": "stats"}
+    table |= {"positive": "fault", "sensitivity": None, "gain": None, "unit": "m/s^2", "fs": None}
+    (tmp_path / "a.csv").write_text("time_s,acc,tach\n0,1,0\n0.001,2,1\n")
+    (tmp_path / "b.csv").write_text("time_s,vib,pulse\n0,1,0\n0.001,2,1\n")
+    table["files"] = [
+        {"file": "a.csv", "role": "history", "label": "healthy", "vibration": "acc", "tacho": "tach"},
+        {"file": "b.csv", "role": "history", "label": "healthy", "vibration": "vib", "tacho": "pulse"},
+    ]
+    target = target_spec(table, "s.toml: [target]", tmp_path, need=("history",), box=_box3())
+    assert (target.read_as, target.pulses_per_rev) == ("output", 3), (target.read_as, target.pulses_per_rev)
+    given = target_spec(table | {"tacho_shaft": "output"}, "s.toml: [target]", tmp_path, ("history",), _box3())
+    assert given.read_as == "output"

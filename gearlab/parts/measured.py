@@ -321,11 +321,14 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
             unit=merged["unit"],
         )
     positive_label(files, t.get("positive") or "fault", where)
-    shaft = tacho_shaft_of(t.get("tacho_shaft") or "", tacho, box, where, "[source] key 'gearbox'")
+    # the files' own tachos count: each file naming its tacho left the description's [sensor] tacho and marks
+    # unread (a 3-mark output tacho read as the input's once a turn: 4.4 Hz, 'a 31-tooth pinion')
+    some = tacho if tacho is not None else next((q for q in tachos if q is not None), None)
+    shaft = tacho_shaft_of(t.get("tacho_shaft") or "", some, box, where, "[source] key 'gearbox'")
     return Target(
         vibration,
         tacho,
-        pulses_of(t["pulses_per_rev"], tacho, box),
+        pulses_of(t["pulses_per_rev"], some, box),
         keys["sensitivity"],
         keys["fs"],
         t["transient"],
