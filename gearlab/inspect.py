@@ -457,7 +457,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             # a later shaft's tacho gives the input's speed through the described gears: a wrong count moves it (a
             # 17/47 + 29/66 + 23/59 description of a 67-tooth wheel read 1.5 % slow, 'slip under load')
             said = report["speed"]["nominal"]["line"].split(" %, ")[0]
-            words = f"read from the {tacho_shaft} tacho through the described gears, whose counts differ (below)"
+            words = f"read from the {tacho_shaft} tacho through the described gears and marks: what differs (below) "
+            words += "moves it"
             report["speed"]["nominal"]["line"] = f"{said} %, {words}"
         # the speed the rows after the speed's line read at, where not the declared one (none declared: the speed found)
         if differences and ((speed.settled and speed.declared_hz) or no_speed):
@@ -542,11 +543,13 @@ def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None)
     first = check["stages"][0]
     m = first["expected_order"]
     unexplained = [u["order"] for u in check["unexplained"]]
-    for k in (2, 3, 4):
-        for f, marks in ((1 / k, ppr * k), (k, ppr / k)):
+    # any count of marks up to 8 (a 3-mark output tacho described with 2: every order at 2/3 of its own, 'the wheel
+    # on the output shaft shows 10.9 teeth'), the nearest the described count first
+    for marks in sorted((q for q in range(1, 9) if q != ppr), key=lambda q: (abs(math.log(q / ppr)), q)):
+        for f in (ppr / marks,):
             at_mesh, at_shaft = amp(f * m), amp(f)
             described = ratio is not None and abs(ratio * f - 1) < 0.05
-            if marks != int(marks) or at_mesh <= amp(m) or (at_shaft <= amp(1.0) and not described):
+            if at_mesh <= amp(m) or (at_shaft <= amp(1.0) and not described):
                 continue
             if f < 1 and not any(abs(u - f * m) <= tol_mesh(f * m, bin_) for u in unexplained):
                 continue  # another stage's mesh

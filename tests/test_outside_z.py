@@ -117,7 +117,7 @@ def _three_stage(path, z=(17, 47, 29, 67, 23, 59), speed=24.0, fs=8192.0, second
     np.savez(path, acc=x, tacho=tacho, fs=fs)
 
 
-def _box3(wheel2=67):
+def _box3(wheel2=67, marks=3):
     from gearlab.gearbox.description import parse_gearbox
 
     stages = ((17, 47), (29, wheel2), (23, 59))
@@ -132,7 +132,7 @@ def _box3(wheel2=67):
             }
             for a, b in stages
         ],
-        "sensor": {"near": "intermediate 1", "tacho": "output", "pulses_per_rev": 3},
+        "sensor": {"near": "intermediate 1", "tacho": "output", "pulses_per_rev": marks},
     }
     return parse_gearbox(data, "box3.toml")
 
@@ -149,7 +149,9 @@ def test_a_speed_read_from_an_output_tacho_through_a_wrong_count_is_not_called_s
     wrong = inspect_record(str(tmp_path / "box3.npz"), _box3(66), options)
     assert "stage 2: the wheel on the intermediate 2 shaft shows 67.0" in wrong["verdict"], wrong["verdict"]
     line = wrong["speed"]["nominal"]["line"]
-    assert line.endswith("-1.5 %, read from the output tacho through the described gears, whose counts differ (below)")
+    assert line.endswith(
+        "-1.5 %, read from the output tacho through the described gears and marks: what differs (below) moves it"
+    )
 
 
 def test_per_file_tachos_are_read_on_the_description_s_tacho_shaft_with_its_marks(tmp_path):
@@ -171,3 +173,14 @@ def test_per_file_tachos_are_read_on_the_description_s_tacho_shaft_with_its_mark
     assert (target.read_as, target.pulses_per_rev) == ("output", 3), (target.read_as, target.pulses_per_rev)
     given = target_spec(table | {"tacho_shaft": "output"}, "s.toml: [target]", tmp_path, ("history",), _box3())
     assert given.read_as == "output"
+
+
+def test_a_tacho_of_3_marks_described_with_2_is_named(tmp_path):
+    # every order at 2/3 of its own: 'stage 3: the wheel on the output shaft shows 10.9 teeth, 59 described'; the
+    # marks were tried as k or 1/k times the described count only
+    _three_stage(tmp_path / "box3.npz")
+    wrong = inspect_record(str(tmp_path / "box3.npz"), _box3(marks=2), InspectOptions("acc", "tacho"))["verdict"]
+    assert wrong.startswith(
+        "the description 'box3' differs: stage 1: the 17-tooth pinion's mesh shows at order 11.33"
+    ), wrong
+    assert "the tacho gives 3 pulse(s) per revolution, not 2? (--pulses-per-rev 3" in wrong, wrong
