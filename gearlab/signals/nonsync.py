@@ -165,12 +165,23 @@ class NonSync:
 
 def synchronous_bins(table, bins: int) -> np.ndarray:
     """bool per bin envelope_blocks keeps: within SUM bins of an order a shaft's rotation modulates the
-    residual at: every multiple of a shaft turning at least once a turn and of each mesh, the first SLOW
-    of a slower shaft's (an eccentric gear's load, turn by turn, modulates the mesh's random part: the
-    PHM 2009 eccentric idler's records read z 8-19 at 1/3 order against healthy ones)."""
+    residual at: every multiple of a shaft turning at least once a turn and of each mesh, two meshes' beats
+    (harmonics 1-3), the first SLOW of a slower shaft's (an eccentric gear's load, turn by turn, modulates the
+    mesh's random part: the PHM 2009 eccentric idler's records read z 8-19 at 1/3 order against healthy ones)."""
     f = orders_of_bins(bins)
-    lines = [float(st.mesh) for st in table.stages] + [float(o) for o in table.shaft_orders if o >= 1]
+    meshes = [float(st.mesh) for st in table.stages]
+    lines = meshes + [float(o) for o in table.shaft_orders if o >= 1]
     at = [k * o for o in lines for k in range(1, int(HIGH / o) + 2)]
+    # two meshes beat: where a record holds no whole grand period their lines leak past the bins removed, and the
+    # envelope shows a Mi - b Mj (a 17/47 + 29/67 + 23/59 reducer's healthy take: z 5.3 at 6.89 = M2 - M3 and
+    # 3.29 = M2 - 2 M3, threshold 4.1; the rig's 32 and 16 beat on 16's multiples)
+    at += [
+        abs(a * mi - b * mj)
+        for i, mi in enumerate(meshes)
+        for mj in meshes[i + 1 :]
+        for a in (1, 2, 3)
+        for b in (1, 2, 3)
+    ]
     at += [k * float(o) for o in table.shaft_orders if o < 1 for k in range(1, SLOW + 1)]
     near = np.abs(f[:, None] - np.asarray(at)[None, :]).min(axis=1)
     return near <= (SUM + 0.5) / BLOCK
