@@ -51,6 +51,7 @@ def _found(own: float, other: float) -> dict:
         "own-mesh phase match": {G65: own, P34: other},
         "rule": "by the mesh phases of the simulated events",
         "structure gap dB": 9.1,
+        "undecided": "",  # as a decided shaft's evidence holds it
     }
     shaft = {"shaft": "intermediate", "gears": [G65, P34], "which": G65, "gear": G65, "flagged": True, "z": 184.4}
     quiet = {"shaft": "output", "gears": ["output gear 91T (stage 2)"], "which": None, "flagged": False, "z": 0.6}

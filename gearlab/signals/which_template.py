@@ -144,7 +144,7 @@ def _by_reference_phases(rec, ref, lay, harmonics, gears, templates: dict, ev: d
 def weak_lead(evidence: dict) -> float | None:
     """The lead of the named gear's own-mesh phase match over the other's where under WEAK_LEAD, else None."""
     match = sorted(evidence.get("own-mesh phase match", {}).values(), reverse=True)
-    if evidence.get("rule") != RULE_REFERENCE or "undecided" in evidence or len(match) < 2:
+    if evidence.get("rule") != RULE_REFERENCE or evidence.get("undecided") or len(match) < 2:  # "": decided
         return None
     return match[0] - match[1] if match[0] - match[1] < WEAK_LEAD else None
 
