@@ -33,6 +33,15 @@ HEAVY_FIRST = (
     "test_your_gearbox.py",  # 15 s
     "test_user_gearbox_e2e.py",  # 14 s
     "test_tacho_shaft.py",  # 15 s of CPU in one process at 17d49c4
+    # last in collection order, and heavy: handed out near the end they kept one worker busy alone
+    # (the README's suite at 83bd07c, 2 workers: gw0 ended on test_which_gear_corrected + _phase, 33 s)
+    "test_which_gear_parity.py",  # 21 s of CPU at 83bd07c
+    "test_which_gear_phase.py",  # 19 s (with the 29/71 + 22/57 pinion test moved in)
+    "test_leftovers_39.py",  # 12 s
+    "test_localise_noise_units.py",  # 11 s
+    "test_which_gear_corrected.py",  # 10 s
+    "test_which_gear_words.py",  # 9 s
+    "test_localise_three_stages.py",  # 9 s
 )
 
 
