@@ -174,6 +174,11 @@ def test_per_file_tachos_are_read_on_the_description_s_tacho_shaft_with_its_mark
     assert (target.read_as, target.pulses_per_rev) == ("output", 3), (target.read_as, target.pulses_per_rev)
     given = target_spec(table | {"tacho_shaft": "output"}, "s.toml: [target]", tmp_path, ("history",), _box3())
     assert given.read_as == "output"
+    # and a detection's log: '24 Hz: turned by 1833 samples into the source's frame (no tacho)'
+    from gearlab.kinds.detection_records import unaligned_why
+
+    why = unaligned_why(target, "intermediate 1")
+    assert why.startswith("tacho 'pulse', 'tach' on the output shaft, 3 marks per turn; the units, intermediate 1"), why
 
 
 def test_a_tacho_of_3_marks_described_with_2_is_named(tmp_path):

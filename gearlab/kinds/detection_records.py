@@ -395,11 +395,13 @@ def _units(cond: dict) -> None:
 def unaligned_why(target: Target, unit_shaft: str) -> str:
     """Why a condition's records were aligned by correlation, not by a tacho mark (register_to_source),
     as the log says it: no tacho, or one whose marks are not what the units start at (a shaft's)."""
-    if target.tacho is None or not target.tacho_all:
-        return "no tacho" if target.tacho is None else "records without a tacho among them"
+    # each file's own tacho counts (a history whose files each name theirs was logged 'no tacho')
+    tachos = sorted({t for t in [target.tacho, *(target.keys_of(f)["tacho"] for f in target.files)] if t is not None})
+    if not tachos or not target.tacho_all:
+        return "records without a tacho among them" if tachos else "no tacho"
     return (
-        f"tacho {target.tacho!r} on the {target.read_as} shaft, {target.pulses_per_rev} marks per turn; the units, "
-        f"{unit_shaft}-shaft revolutions, are aligned by correlation, not by its marks"
+        f"tacho {', '.join(map(repr, tachos))} on the {target.read_as} shaft, {target.pulses_per_rev} marks per turn; "
+        f"the units, {unit_shaft}-shaft revolutions, are aligned by correlation, not by its marks"
     )
 
 
