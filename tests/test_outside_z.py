@@ -208,3 +208,19 @@ def test_two_meshes_beating_in_a_take_of_no_whole_grand_period_are_no_bearing(tm
     history = NS.history(takes[:3], table)
     found = [NS.nonsync(take, history, table) for take in takes[3:]]
     assert not any(f.changed for f in found), found  # before: z 4.87, 2.58, 5.45 against 5.38
+
+
+def test_the_gap_names_a_tacho_of_3_marks_read_as_2(tmp_path):
+    # the gap's structure check tried k or 1/k times the marks read: 'structure differs: stage 3 wheel: 11 teeth fit
+    # the recording, 59 described' where inspect names the marks
+    from gearlab.gap.structure import mesh_check, mesh_line
+    from gearlab.inspect_history import input_revolutions
+
+    _three_stage(tmp_path / "box3.npz")
+    revs = input_revolutions(str(tmp_path / "box3.npz"), _box3(marks=2), InspectOptions("acc", "tacho"))[0]
+    check = mesh_check(revs, 17, 47, 1500, (), None, True)
+    assert check["marks"] == 1.5, check
+    assert mesh_line(check, 17).endswith(
+        "(the target's mesh at 0.667 of its order, with its harmonics: the tacho gives 3/2 x the pulses per revolution "
+        "it was read with? [target] pulses_per_rev)"
+    ), mesh_line(check, 17)

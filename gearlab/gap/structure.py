@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from fractions import Fraction
 
 import numpy as np
 
@@ -167,7 +168,8 @@ def mesh_check(
     # comb, at Z1 / k with its harmonics (a 29/86 mixer's 2-pulse keyphasor read as one: 14.5, 29 on
     # the comb, 43.5; too few off it for another gear's family, so the fits ran: 'unexplained')
     first = int(np.argmax(power))
-    for k in (2, 3, 4):
+    # ... or q marks read as p of them, q / p not whole (a 3-mark output tacho described with 2: every order at 2/3)
+    for k in (2, 3, 4, *map(float, sorted({Fraction(q, p) for p in (2, 3, 4) for q in range(p + 1, 4 * p) if q % p}))):
         hit = _on_comb(x, z1 / k, (), tol)
         if not on[first] and abs(x[first] - z1 / k) <= tol[first] and hit.sum() >= 2:
             out.update(measured=z1 / k, differs=True, marks=k)
@@ -388,9 +390,10 @@ def mesh_line(check: dict, z1: int) -> str:
         words = tacho_shaft_words(check["shaft"], check["factor"], check["read_as"])
         return line + f" ({words} give [target] tacho_shaft = '{check['shaft']}')"
     if check.get("marks", 1) > 1:
-        k = check["marks"]
+        k = Fraction(check["marks"]).limit_denominator(4)
+        at = f"1/{k}" if k.denominator == 1 else f"{float(1 / k):.3g}"
         return line + (
-            f" (the target's mesh at 1/{k} of its order, with its harmonics: the tacho gives {k} x the pulses "
+            f" (the target's mesh at {at} of its order, with its harmonics: the tacho gives {k} x the pulses "
             "per revolution it was read with? [target] pulses_per_rev)"
         )
     if check.get("marks"):
