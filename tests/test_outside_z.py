@@ -1,6 +1,7 @@
-"""An outside user's leftovers (issue 39, "How it will be checked", round Z): box B, a 21/65 + 34/91 reducer
-without a tacho, described with a 64-tooth first wheel on a short take; which gear on a shaft carrying two
-gears at weak evidence; a healthy take over the non-synchronous threshold. The records are small stand-ins
+"""An outside user's leftovers (issue 39, "How it will be checked"): box B, a 21/65 + 34/91 reducer without a
+tacho, described with a 64-tooth first wheel on a short take; which gear on a shaft carrying two gears at weak
+evidence; a healthy take over the non-synchronous threshold; a three-stage 17/47 + 29/67 + 23/59 reducer with a
+3-mark output tacho (its speed, its marks, per-file tachos, its meshes' beats). The records are small stand-ins
 written here with numpy, not simulated by gearlab."""
 
 from __future__ import annotations
