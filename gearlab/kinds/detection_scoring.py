@@ -520,8 +520,9 @@ def score(
 
 def score_trends(run: RunDir) -> list:
     """Per condition and method: the median score of each scored record's longest TSA units, in the
-    order they were scored, beside the threshold (gearlab.parts.scoring's history); the title names
-    the scored records a method called other damage (on a gear the run does not watch)."""
+    order they were scored, less the threshold, over the method's largest (gearlab.parts.scoring's
+    history); the title names each point's file and the records a method called other damage (on a
+    gear the run does not watch)."""
     from ..charts import Chart, Curve
 
     rows = scoring.read_history(run)
@@ -529,11 +530,17 @@ def score_trends(run: RunDir) -> list:
     out = []
     for c in dict.fromkeys(r["condition"] for r in rows):
         picked = [r for r in rows if r["condition"] == c and r["unit"] == unit and r["median_score"] is not None]
-        curves, other = [], {}
+        curves, other, files, tops = [], {}, [], []
         for m in dict.fromkeys(r["method"] for r in picked):
             mine = [r for r in picked if r["method"] == m]
+            files = files if len(files) >= len(mine) else [Path(r["file"]).name for r in mine]
             x = list(range(1, len(mine) + 1))
-            curves.append(Curve(m, x, [r["median_score"] - r["threshold"] for r in mine]))
+            y = [r["median_score"] - r["threshold"] for r in mine]
+            # each method's margin over its largest: a likelihood ratio's hundreds flattened a matched
+            # filter's 0.1 onto the line, its crossing unseen (outside check D); the sign, the call, stays
+            top = max(abs(v) for v in y) or 1.0
+            curves.append(Curve(m, x, [v / top for v in y]))
+            tops.append(f"{m} {top:.3g}")
             for i, r in enumerate(mine, 1):
                 if is_other(r["decision"]):
                     other.setdefault(r["decision"], set()).add(i)
@@ -541,13 +548,17 @@ def score_trends(run: RunDir) -> list:
             f"; records {', '.join(map(str, sorted(n)))}: {d}" if len(n) > 1 else f"; record {min(n)}: {d}"
             for d, n in other.items()
         )
+        named = [f"{i} {f}" for i, f in enumerate(files, 1)]  # which take each point is, in the TUI too
+        named = named if len(named) <= 12 else [*named[:5], "...", *named[-5:]]
         if curves:
             out.append(
                 Chart(
-                    f"{c}: scored records, {unit} (median score less the threshold: above 0 is called){said}",
+                    f"{c}: scored records, {unit} (median score less the threshold, over each method's largest: "
+                    f"above 0 is called){said}\nrecords: {', '.join(named)}; largest: {', '.join(tops)}",
                     "record scored (in order)",
-                    "score - threshold",
+                    "(score - threshold) / largest",
                     tuple(curves),
+                    xticks=list(range(1, len(files) + 1)) if len(files) <= 20 else None,
                 )
             )
     return out
