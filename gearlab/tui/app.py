@@ -35,7 +35,7 @@ from ..notebook import load_scenario
 from ..runs import RunDir
 from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
-from .catalog import RunEntry, ScenarioEntry, error_line, run_entry, runs_base, scan
+from .catalog import RunEntry, ScenarioEntry, Validated, error_line, run_entry, runs_base, scan
 from .plugins import PluginsPane
 from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
@@ -121,6 +121,7 @@ class GearlabApp(App):
         # as `gearlab run` started here would (catalog.runs_base).
         self.cwd = Path.cwd()
         self.entries: list[ScenarioEntry] = []
+        self.validated = Validated()  # each scenario validated once per state of its files
         self.opened: RunEntry | None = None  # the run whose results are on show
         self.marked: list[Path] = []  # runs marked for comparison, in marking order
         self.comparing: list[Path] = []  # the runs of the comparison on show
@@ -194,7 +195,7 @@ class GearlabApp(App):
             tree.root.add_leaf(Text(f"no such directory: {self.directory}", style="red"))
             self.entries = []
             return
-        self.entries = scan(self.directory, self.cwd)
+        self.entries = scan(self.directory, self.cwd, self.validated)
         if not self.entries:
             tree.root.add_leaf(Text("no scenario files (*.toml) here", style="dim"))
         target = None
@@ -487,7 +488,7 @@ class GearlabApp(App):
         verdict = self.query_one("#verdict", Static)
         try:
             rundir = RunDir.open(run.path)
-            scenario = load_scenario(run=rundir)
+            scenario = self.validated.of_run(rundir)
             kind = SCENARIO_KINDS[scenario.kind]
             records = rundir.records()
             table.show_markdown(verdict_table(rundir) or kind.records_table(scenario, records))
@@ -647,6 +648,7 @@ class GearlabApp(App):
                 return
 
     def _validate(self, entry: ScenarioEntry) -> None:
+        self.validated.forget(entry.path)  # asked for: read afresh, whatever the files' times say
         try:
             s = load_scenario(entry.path)
         except GearlabInputError as exc:

@@ -6,6 +6,7 @@ Nothing here draws; the app turns these entries into tree nodes and views.
 from __future__ import annotations
 
 import re
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,14 +35,85 @@ class RunEntry:
     finished: bool  # the run ended and wrote its summary (else cancelled, killed or running)
 
 
-def scan(directory: Path, cwd: Path) -> list[ScenarioEntry]:
-    """Every *.toml under *directory*, validated, with the runs found under its output dir
-    (a relative one taken from *cwd*, the folder the TUI starts its runs in)."""
+def _stamp(path: Path) -> tuple | None:
+    """A file's state as validation reads it: (modification time, size), None when it is missing."""
+    try:
+        found = path.stat()
+    except OSError:
+        return None
+    return (found.st_mtime_ns, found.st_size)
+
+
+def _named_files(path: Path, base: Path) -> list[Path]:
+    """The files a scenario's strings name (a gearbox description, a measured record), absolute or
+    from *base*: an edit of one changes the scenario's validation as much as an edit of the file."""
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    found, todo = [], [data]
+    while todo:
+        item = todo.pop()
+        if isinstance(item, dict):
+            todo.extend(item.values())
+        elif isinstance(item, list):
+            todo.extend(item)
+        elif isinstance(item, str) and 0 < len(item) < 4096 and "\n" not in item:
+            named = base / item.split("#", 1)[0]
+            if named.is_file():
+                found.append(named)
+    return found
+
+
+class Validated:
+    """Scenario files validated once per state of the files they are read from (their own and the
+    files their strings name: path, modification time, size): a stiffness scenario's validation
+    builds its fault ladders (0.07 s each), and the tree asked for it again on every rescan and every
+    highlight of one of its runs, so moving through the tree waited for it. An edited file is
+    validated again; `Validate` in the command palette always reads the file afresh (forget)."""
+
+    def __init__(self):
+        self._seen: dict[tuple, tuple[tuple, Scenario | None, Exception | None]] = {}
+
+    def _load(self, key: tuple, files: list[Path], load) -> Scenario:
+        state = tuple(_stamp(f) for f in files)
+        seen = self._seen.get(key)
+        if seen is None or seen[0] != state:
+            try:
+                seen = (state, load(), None)
+            except Exception as exc:  # noqa: BLE001 - kept to raise again for the same files
+                seen = (state, None, exc)
+            self._seen[key] = seen
+        if seen[2] is not None:
+            raise seen[2]
+        return seen[1]
+
+    def scenario(self, path: Path) -> Scenario:
+        """load_scenario(path), read again only when a file it reads changed."""
+        path = Path(path)
+        files = [path, *_named_files(path, path.parent)]
+        return self._load(("file", path), files, lambda: load_scenario(path))
+
+    def of_run(self, run: RunDir) -> Scenario:
+        """The scenario *run* ran (load_scenario(run=...)), read again only when its files changed."""
+        files = [run.path / name for name in ("scenario.toml", "scenario.original.toml", "run.json")]
+        files += _named_files(run.scenario_path(), run.base() or run.path)
+        return self._load(("run", run.path), files, lambda: load_scenario(run=run))
+
+    def forget(self, path: Path) -> None:
+        self._seen.pop(("file", Path(path)), None)
+
+
+def scan(directory: Path, cwd: Path, validated: Validated | None = None) -> list[ScenarioEntry]:
+    """Every *.toml under *directory*, validated (by *validated*, once per state of its files),
+    with the runs found under its output dir (a relative one taken from *cwd*, the folder the
+    TUI starts its runs in)."""
+    validated = validated or Validated()
     entries = []
     for path in sorted(Path(directory).rglob("*.toml")):
         entry = ScenarioEntry(path)
         try:
-            entry.scenario = load_scenario(path)
+            entry.scenario = validated.scenario(path)
         except GearlabInputError as exc:
             entry.error = str(exc)
         except Exception as exc:  # noqa: BLE001 - a browser must list every file, whatever is wrong with it
