@@ -55,6 +55,8 @@ from .gearbox.pinion_count import (
     sideband_counts,
 )
 from .gearbox.speed import (
+    DECLARED_RANGE,
+    NOMINAL_RANGE,
     SPEED_AGREE,
     TEETH_AGREE,
     THRESHOLD_DB,
@@ -338,7 +340,29 @@ def settle_speed(
                 how = f"from the mesh line at {fmt_hz(line)} and the input shaft's line"
                 found[0].source, found[0].settled, found[0].notes = how, "", []
             return found + (None,)
-    return speed, reading, no_speed_line(mesh_hz, f0, bool(counts))
+    return speed, reading, _elsewhere(in_hz, order_table(box), f0, df) or no_speed_line(mesh_hz, f0, bool(counts))
+
+
+def _elsewhere(in_hz: Lines, table, declared: float, df: float) -> str | None:
+    """Where every described mesh and its 2nd harmonic has a line at one speed far from the *declared*
+    one (lines *in_hz*, bin *df*), that speed in one line: a 27/61 + 18/49 box at 41 Hz described at 28 Hz
+    was told 'the mesh at 652.4 Hz is a 22-tooth pinion's at 29.65 Hz, ...' (its 2nd M2 near the declared
+    M1), when the description is right and only the speed is not (outside check D). None: no such speed."""
+    meshes = [float(s.mesh) for s in table.stages]
+    strong = in_hz.at[np.argsort(-in_hz.amp)[:8]]
+    hm = np.array([h * m for m in meshes for h in (1, 2)])
+    for f in sorted({float(x / (h * m)) for x in strong for m in meshes for h in (1, 2)}):
+        found = [in_hz.near(x * f, max(2.5 * df, 0.002 * f * max(meshes))) for x in hm]
+        # one stage: a speed within the nominal range may be a pinion a few teeth off (the lines' own words)
+        far = NOMINAL_RANGE if len(meshes) == 1 else 2 * DECLARED_RANGE
+        if abs(f / declared - 1) > far and None not in found:
+            at = in_hz.at[np.array(found)]
+            f = float(np.sum(at * hm) / np.sum(hm * hm))  # every line's least-squares speed
+            return (
+                f"every described mesh has its lines at {fmt_hz(f)} (and its 2nd harmonic): the record runs "
+                f"at {fmt_hz(f)}, not {fmt_hz(declared)}? (--speed '{fmt_hz(f)}'; a scenario's [target] speed)"
+            )
+    return None
 
 
 def _by_input_lines(rec: Recording, box: Gearbox | None, options: InspectOptions, speed: Speed, reading: Reading):

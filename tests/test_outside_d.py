@@ -5,6 +5,8 @@ rows here are small stand-ins written by hand, not scored or simulated by gearla
 
 from __future__ import annotations
 
+import numpy as np
+
 
 def _scored(file: str, method: str, margin: float, threshold: float = 1.0) -> dict:
     """One row of a run's scoring history (gearlab.parts.scoring) as `gearlab score` appends it."""
@@ -38,3 +40,38 @@ def test_the_score_trend_names_each_take_and_shows_every_method_s_crossing(monke
     mf = next(c for c in trend.curves if c.label == "matched_filter")
     assert mf.y[0] < 0 < mf.y[1] and max(abs(v) for v in mf.y) == 1.0  # the crossing, at its own scale
     assert "matched_filter 0.092" in trend.title and "likelihood_ratio 601" in trend.title  # the scale said
+
+
+def _box_q(path, speed=41.0, fs=8192.0, seconds=6.0, seed=1601):
+    """Box Q, 27/61 + 18/49 without a tacho: each mesh's harmonics 1-3 modulated by both its shafts, the
+    speed wobbling 0.2 %, white noise (m/s^2)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * fs)) / fs
+    theta = 2 * np.pi * np.cumsum(speed * (1 + 0.002 * np.sin(2 * np.pi * 0.31 * t))) / fs
+    shaft = [theta, theta * 27 / 61, theta * 27 / 61 * 18 / 49]
+    x = rng.normal(0, 0.5, t.size)
+    for k, (z, level) in enumerate(((27, 4.0), (18, 3.0))):
+        am = 1 + 0.2 * np.cos(shaft[k] + 0.4) + 0.12 * np.cos(shaft[k + 1] + 2.0)
+        for h, a in enumerate((1.0, 0.5, 0.25), start=1):
+            x += level * a * am * np.cos(h * z * shaft[k] + rng.uniform(0, 6))
+    np.savez(path, acc=x, fs=fs)
+
+
+def test_a_take_at_another_speed_than_described_is_told_its_speed_not_a_pinion_count(tmp_path):
+    # box Q's 41 Hz take, inspected with the description's [operation] speed = "28 Hz" and no --speed: 'the mesh
+    # at 652.4 Hz is a 22-tooth pinion's at 29.65 Hz, a 23-tooth ... or a 24-tooth ...: the speed or a tooth
+    # count differs' (652.4 Hz: stage 2's 2nd harmonic at 41 Hz), where every described mesh has its lines
+    from test_inspect import described
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    _box_q(tmp_path / "q41.npz")
+    box = described((27, 61), (18, 49), speed="28 Hz")
+    verdict = inspect_record(str(tmp_path / "q41.npz"), box, InspectOptions("acc"))["verdict"]
+    assert "tooth pinion's at" not in verdict, verdict
+    said = verdict.split("every described mesh has its lines at ")[1]
+    assert abs(float(said.split(" Hz")[0]) / 41.0 - 1) < 0.005, verdict  # within the ±1 % a declared speed refines
+    assert "--speed '" in said, verdict
+    # at the speed it names, the description matches
+    right = inspect_record(str(tmp_path / "q41.npz"), box, InspectOptions("acc", speed_hz=float(said.split(" Hz")[0])))
+    assert right["verdict"] == "the description 'box' matches this recording", right["verdict"]
