@@ -337,12 +337,18 @@ def content(
         periods = n
     else:
         mean, noise, periods = shaft_averages(y, lay, first_revolution, R, sweeps)
+    whole = Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution, 1, lay.source)
     if block and R > block:
-        parts = [content(revs[i : i + block], lay, first_revolution + i) for i in range(0, R - block + 1, block)]
-        power = np.mean([u.power for u in parts], axis=0)
-        noise = np.mean([u.noise for u in parts], axis=0) / len(parts)
-        return Content(mean, noise, power, int(periods), first_revolution, len(parts), lay.source)
-    return Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution, 1, lay.source)
+        return in_blocks(whole, _units(revs, first_revolution, lay, block))
+    return whole
+
+
+def in_blocks(whole: Content, parts: list[Content]) -> Content:
+    """A record's content read in blocks (content's *block*): the whole record's mean, its blocks' power and
+    noise (history() has the blocks already, as its units: each a shaft_averages of a 4 x denser reading)."""
+    power = np.mean([u.power for u in parts], axis=0)
+    noise = np.mean([u.noise for u in parts], axis=0) / len(parts)
+    return Content(whole.mean, noise, power, whole.periods, whole.first_revolution, len(parts), whole.source)
 
 
 # --- the history --------------------------------------------------------------------------------------
@@ -659,7 +665,10 @@ def history(
         rest = [u for j, us in enumerate(units) if j != i for u in us]
         if len(rest) < 2:
             continue
-        level, sd = shaft_levels(content(r, lay, firsts[i], read), spread(rest, ~lay.carrier), lay)
+        # content(r, lay, firsts[i], read): its blocks are its units, read above
+        whole = content(r, lay, firsts[i])
+        rec = in_blocks(whole, units[i]) if read and r.shape[0] > read else whole
+        level, sd = shaft_levels(rec, spread(rest, ~lay.carrier), lay)
         loo.append(level / sd)
     loo = np.array(loo).reshape(-1, len(lay.shafts))
     thr = np.maximum(floor, np.nanmax(loo, axis=0)) if loo.size else np.full(len(lay.shafts), floor)

@@ -1,0 +1,50 @@
+"""The shaft averages' transforms (signals.shaft.shaft_averages: a record's spectrum and its reading 4 x
+denser, for each shaft) are taken once per piece of record a history reads: its left-out check reads each
+record in the blocks that are already its units (localise.history), not a second time. Against the
+computation it replaced, kept here as the reference (content(record, block) for each record left out):
+the same thresholds and left-out z, bit for bit, with one shaft_averages per unit and per whole record."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gearlab.gearbox import order_table, resolve_gearbox
+from gearlab.signals import localise as L
+
+BOX = Path(__file__).resolve().parents[1] / "examples" / "gearboxes" / "reducer_21_63_24_56.toml"
+
+
+def reference_left_out_z(records, firsts, hist, table) -> np.ndarray:
+    """history()'s left-out z as it was computed: each record's content read in blocks again."""
+    lay, block = hist.layout, hist.block
+    units = [L._units(r, f, lay, block) for r, f in zip(records, firsts)]
+    z = []
+    for i, r in enumerate(records):
+        rest = [u for j, us in enumerate(units) if j != i for u in us]
+        level, sd = L.shaft_levels(L.content(r, lay, firsts[i], block), L.spread(rest, ~lay.carrier), lay)
+        z.append(level / sd)
+    return np.array(z).reshape(-1, len(lay.shafts))
+
+
+def test_a_history_reads_each_block_once_and_decides_as_before(monkeypatch):
+    table = order_table(resolve_gearbox(BOX))
+    rng = np.random.default_rng(4)
+    u = np.arange(512) / 512
+    records = [rng.standard_normal((R, 512)) + np.cos(2 * np.pi * 21 * u) for R in (40, 44, 50)]
+    firsts = [0, 3, 5]
+    calls = []
+    real = L.shaft_averages
+
+    def counted(y, *args):
+        calls.append(y.size)
+        return real(y, *args)
+
+    monkeypatch.setattr(L, "shaft_averages", counted)
+    hist = L.history(records, table, first_revolutions=firsts)
+    assert hist.layout.mode == "shafts" and hist.block == 20
+    units = sum(r.shape[0] // 20 for r in records)  # 2 + 2 + 2 blocks, then each record whole
+    assert sorted(calls) == sorted([20 * 512] * units + [r.size for r in records])  # was 6 + 3 + 6 again
+    np.testing.assert_array_equal(hist.left_out_z, reference_left_out_z(records, firsts, hist, table))
+    assert np.all(hist.thresholds >= np.nanmax(hist.left_out_z, axis=0))
