@@ -48,13 +48,11 @@ def _box_q(path, speed=41.0, fs=8192.0, seconds=6.0, seed=1601):
     rng = np.random.default_rng(seed)
     t = np.arange(int(seconds * fs)) / fs
     theta = 2 * np.pi * np.cumsum(speed * (1 + 0.002 * np.sin(2 * np.pi * 0.31 * t))) / fs
-    shaft = [theta, theta * 27 / 61, theta * 27 / 61 * 18 / 49]
-    x = rng.normal(0, 0.5, t.size)
-    for k, (z, level) in enumerate(((27, 4.0), (18, 3.0))):
-        am = 1 + 0.2 * np.cos(shaft[k] + 0.4) + 0.12 * np.cos(shaft[k + 1] + 2.0)
-        for h, a in enumerate((1.0, 0.5, 0.25), start=1):
-            x += level * a * am * np.cos(h * z * shaft[k] + rng.uniform(0, 6))
-    np.savez(path, acc=x, fs=fs)
+    inter, out = theta * 27 / 61, theta * 27 / 61 * 18 / 49
+    h = np.arange(1, 4)[:, None]
+    stage1 = 4.0 * (1 + 0.2 * np.cos(theta + 0.4) + 0.12 * np.cos(inter + 2.0)) * (np.cos(h * 27 * theta) / h).sum(0)
+    stage2 = 3.0 * (1 + 0.2 * np.cos(inter) + 0.12 * np.cos(out + 1.0)) * (np.sin(h * 18 * inter) / h).sum(0)
+    np.savez(path, acc=stage1 + stage2 + rng.normal(0, 0.5, t.size), fs=fs)
 
 
 def test_a_take_at_another_speed_than_described_is_told_its_speed_not_a_pinion_count(tmp_path):
