@@ -700,6 +700,7 @@ def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
         "score_trend": (
             "",
             "gearlab score: per condition, each method's median score of each scored record's longest TSA "
-            "units less its threshold, in the order the records were scored (above 0: called).",
+            "units less its threshold, over the method's largest, in the order the records were scored (above 0: "
+            "called; each panel's title names the records and each method's largest).",
         ),
     }
