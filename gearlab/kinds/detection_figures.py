@@ -364,6 +364,11 @@ def score_trend(charts, path: Path) -> Path:
         for curve in chart.curves:
             ax.plot(curve.x, curve.y, marker="o", ms=3, lw=0.8, label=curve.label)
         ax.axhline(0.0, color="k", lw=0.8, ls="--")
+        # the records scored in turn: whole-number ticks, as the TUI's (matplotlib's own: 1.2, 1.4, ... for two)
+        if chart.xticks is not None:
+            ax.set_xticks(list(chart.xticks))
+        else:
+            ax.xaxis.set_major_locator(plots.plt.MaxNLocator(integer=True))
         ax.set_title(chart.title, fontsize=9)
         ax.set_xlabel(chart.xlabel)
         ax.set_ylabel(chart.ylabel)

@@ -509,6 +509,9 @@ def score(
                             "scores": [float(x) for x in s],
                         }
                     )
+    # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend
+    given = {str(f): i for i, f in enumerate(files)}
+    rows.sort(key=lambda r: given[r["file"]])
     scoring.append_history(run, rows)
     trends = score_trends(run)
     if trends:
