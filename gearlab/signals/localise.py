@@ -82,8 +82,11 @@ Everything is numpy: no torch, nothing from the layers above.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from fractions import Fraction
 from statistics import NormalDist
@@ -323,6 +326,35 @@ def content(
             f"revolutions of shape {revs.shape}: expected (revolutions, {lay.points}) consecutive input revolutions"
         )
     first_revolution = check_int(first_revolution, "first revolution", minimum=0)
+    record = hashlib.blake2b(np.ascontiguousarray(revs), digest_size=20)
+    record.update(repr((revs.shape, revs.dtype.str)).encode())
+    read = hashlib.blake2b(repr((lay.mode, lay.period, lay.points, lay.shaft_orders, lay.shafts)).encode())
+    for part in (lay.orders, lay.source, lay.index):  # what a content reads of its layout
+        read.update(np.ascontiguousarray(part).tobytes())
+    key = (record.digest(), read.digest(), first_revolution, block, sweeps)
+    with _READ_LOCK:
+        if key in _READ:
+            _READ.move_to_end(key)
+            return _READ[key]
+    found = _content(revs, lay, first_revolution, block, sweeps)
+    with _READ_LOCK:
+        _READ[key] = found
+        while len(_READ) > READ_KEPT:
+            _READ.popitem(last=False)
+    return found
+
+
+# The contents last read, by record and layout (their digests), first revolution, block and sweeps: a
+# detection reads its target take for its stored localisation and again for its score, and inspect
+# --history builds one history twice; each read is a record's rfft, 4 x denser irfft and reading per shaft
+# (signals.shaft.shaft_averages), and the same data gives the same content (not to be changed in place).
+READ_KEPT = 64
+_READ: OrderedDict = OrderedDict()
+_READ_LOCK = threading.Lock()
+
+
+def _content(revs: np.ndarray, lay: Layout, first_revolution: int, block: int | None, sweeps: int) -> Content:
+    """content() of checked *revs*, read afresh."""
     R, pts = revs.shape
     y = revs.reshape(-1)
     mean = np.zeros(lay.orders.size, complex)
