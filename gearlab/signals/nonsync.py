@@ -52,7 +52,9 @@ from ..errors import GearlabInputError
 from .shaft import uniform_filter1d
 
 GRAND = 2  # grand periods a record must hold to be cut to them (else read whole, LEAK bins removed)
-LEAK = 1  # bins on either side of a shaft order's nearest bin removed where the record is read whole
+LEAK = 2  # bins on either side of a shaft order's nearest bin removed where the record is read whole (a mesh
+# line between bins leaks past 1: box Q's healthy takes, 27/61 + 18/49 read whole, z 6.5-7.1 over 4.1 at LEAK 1 and
+# the bins of 2592186, 5.0-6.0 at 2; with beats moved by a shaft order (synchronous_bins) 4.2-5.1 at 1, 2.4-3.3 at 2)
 BLOCK = 16  # input revolutions per block of the envelope spectrum (resolution 1/16 order)
 LOW, HIGH = 0.3, 40.0  # input orders of the envelope spectrum searched for a non-synchronous line
 FUNDAMENTAL = 10.0  # the highest strike order named (cage to inner-race orders, a few shaft orders)
@@ -60,6 +62,7 @@ HARMONICS = 4  # harmonics of a strike order whose z are summed to name it
 LOWEST = 0.7  # the strike order named: the lowest whose harmonics' z sum to this share of the most
 OWN = 0.25  # ... whose own line's z is at least this share of the largest (not a half of the strike order)
 LINE = 8  # bins on either side whose median z a line's z is read over (half an order)
+BEAT = 4  # the most mesh harmonics (a + b) of a beat a Mi - b Mj moved by a shaft order left out of the search
 SLOW = 4  # harmonics of a slower shaft's order left out of the search (its rotation's modulation)
 SUM = 1  # bins on either side summed with each bin (a slipping strike's line spreads)
 SMOOTH = 9  # bins over which the history's sd is pooled
@@ -166,22 +169,27 @@ class NonSync:
 def synchronous_bins(table, bins: int) -> np.ndarray:
     """bool per bin envelope_blocks keeps: within SUM bins of an order a shaft's rotation modulates the
     residual at: every multiple of a shaft turning at least once a turn and of each mesh, two meshes' beats
-    (harmonics 1-3), the first SLOW of a slower shaft's (an eccentric gear's load, turn by turn, modulates the
-    mesh's random part: the PHM 2009 eccentric idler's records read z 8-19 at 1/3 order against healthy ones)."""
+    (harmonics 1-3) and their first sidebands, the first SLOW of a slower shaft's (an eccentric gear's load, turn
+    by turn, modulates the mesh's random part: the PHM 2009 eccentric idler's records read z 8-19 at 1/3 order
+    against healthy ones)."""
     f = orders_of_bins(bins)
     meshes = [float(st.mesh) for st in table.stages]
     lines = meshes + [float(o) for o in table.shaft_orders if o >= 1]
     at = [k * o for o in lines for k in range(1, int(HIGH / o) + 2)]
-    # two meshes beat: where a record holds no whole grand period their lines leak past the bins removed, and the
-    # envelope shows a Mi - b Mj (a 17/47 + 29/67 + 23/59 reducer's healthy take: z 5.3 at 6.89 = M2 - M3 and
-    # 3.29 = M2 - 2 M3, threshold 4.1; the rig's 32 and 16 beat on 16's multiples)
-    at += [
-        abs(a * mi - b * mj)
-        for i, mi in enumerate(meshes)
-        for mj in meshes[i + 1 :]
-        for a in (1, 2, 3)
-        for b in (1, 2, 3)
-    ]
+    # where a record holds no whole grand period the meshes' lines leak past the bins removed and the residual's
+    # envelope shows their differences: a Mi - b Mj + c o_s, points of the lattice the shaft orders span, so
+    # synchronous with the grand period. Of bounded complexity, so a bearing's order stays searched: two meshes'
+    # beats (harmonics 1-3), and, moved by one sideband of a shaft either mesh turns (c = +-1), those of a + b <= 4
+    # and each mesh's harmonics 1-4 (b = 0). A 17/47 + 29/67 + 23/59 reducer's healthy take read z 5.3 at
+    # 6.89 = M2 - M3 and 3.29 = M2 - 2 M3 (threshold 4.1); box Q, 27/61 + 18/49, healthy at 28 Hz, z 6.5-7.1 at
+    # 3.54 = M1 - 3 M2 + o_2 (0.443), then 5.1 at 7.80 = M2 - o_3; the rig's 32 and 16 beat on 16's multiples
+    pairs = [(i, j) for i in range(len(meshes)) for j in range(i, len(meshes))]
+    for i, j in pairs:
+        sides = [c * float(table.shaft_orders[s]) for s in {i, i + 1, j, j + 1} for c in (-1, 1)]
+        for a in range(1, 5):
+            for b in range(1, 4) if j > i else (0,):
+                beat = abs(a * meshes[i] - b * meshes[j])
+                at += ([beat] if a <= 3 and b >= 1 else []) + ([abs(beat + d) for d in sides] if a + b <= BEAT else [])
     at += [k * float(o) for o in table.shaft_orders if o < 1 for k in range(1, SLOW + 1)]
     near = np.abs(f[:, None] - np.asarray(at)[None, :]).min(axis=1)
     return near <= (SUM + 0.5) / BLOCK
