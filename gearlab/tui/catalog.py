@@ -105,12 +105,14 @@ class Validated:
 
 
 def scan(directory: Path, cwd: Path, validated: Validated | None = None) -> list[ScenarioEntry]:
-    """Every *.toml under *directory*, validated (by *validated*, once per state of its files),
-    with the runs found under its output dir (a relative one taken from *cwd*, the folder the
-    TUI starts its runs in)."""
+    """Every *.toml under *directory* but a run's copies (in_run), validated (by *validated*, once per
+    state of its files), with the runs found under its output dir (a relative one taken from *cwd*, the
+    folder the TUI starts its runs in)."""
     validated = validated or Validated()
     entries = []
     for path in sorted(Path(directory).rglob("*.toml")):
+        if in_run(path, Path(directory)):
+            continue
         entry = ScenarioEntry(path)
         try:
             entry.scenario = validated.scenario(path)
@@ -122,6 +124,19 @@ def scan(directory: Path, cwd: Path, validated: Validated | None = None) -> list
             entry.runs = runs_of(entry.scenario, cwd)
         entries.append(entry)
     return entries
+
+
+def in_run(path: Path, directory: Path) -> bool:
+    """Whether *path* lies in a run directory (one holding run.json) below *directory*: a run's
+    scenario.toml and scenario.original.toml are that run, listed under its scenario (runs_of), not
+    scenarios of their own (`gearlab tui .` in a project listed two per run under runs/). The TUI
+    opened on a run directory itself still lists them."""
+    for folder in path.parents:
+        if folder == directory or directory not in folder.parents:
+            return False
+        if (folder / "run.json").is_file():
+            return True
+    return False
 
 
 def runs_base(scenario: Scenario, cwd: Path) -> Path:
