@@ -32,6 +32,9 @@ class Chart:
     # Named categories (views, effects, methods): the curves' y are bars, one per category in
     # this order (their x are ignored); a front-end labels the bars with these names.
     categories: Sequence[str] | None = None
+    # Horizontal reference lines drawn across the plot and kept in view (a score trend's threshold at 0:
+    # above it a record is called; the report's PNG draws it, the TUI's chart drew none)
+    hlines: Sequence[float] = ()
 
 
 def dataset_examples(dataset, tooth: int = 5, per_class: int = 3) -> list[tuple[int, str, int]]:

@@ -562,6 +562,7 @@ def score_trends(run: RunDir) -> list:
                     "(score - threshold) / largest",
                     tuple(curves),
                     xticks=list(range(1, len(files) + 1)) if len(files) <= 20 else None,
+                    hlines=(0.0,),
                 )
             )
     return out

@@ -143,7 +143,7 @@ def drawn_key(chart: Chart, curves) -> tuple:
     ticks = None if chart.xticks is None else repr(list(chart.xticks))  # plotext's labels: as given
     names = None if chart.categories is None else tuple(str(n) for n in chart.categories)
     lines = tuple((c.label, floats(c.x), floats(c.y), floats(c.err)) for c in curves)
-    return chart.title, chart.xlabel, chart.ylabel, ticks, names, lines
+    return chart.title, chart.xlabel, chart.ylabel, ticks, names, lines, tuple(float(h) for h in chart.hlines)
 
 
 class ChartView(Static):
@@ -223,6 +223,20 @@ class ChartView(Static):
             plotext.plot(x, y, marker="braille", color=color)  # no label: the legend goes under the plot
             if curve.err is not None:
                 plotext.error(x, y, yerr=[float(v) for v in curve.err], color=color)
+        if chart.hlines:
+            # plotext scales to the curves alone: a trend all above its threshold hid the line
+            ys = [
+                float(v) + s * float(e)
+                for c in curves
+                for v, e in zip(c.y, [0] * len(c.y) if c.err is None else c.err)
+                for s in (-1, 1)
+            ]
+            ys += [float(h) for h in chart.hlines]
+            low, high = min(ys), max(ys)
+            pad = 0.05 * (high - low) or 0.5
+            plotext.ylim(low - pad, high + pad)
+            for h in chart.hlines:
+                plotext.hline(float(h), "gray")
         if chart.xticks is not None:
             plotext.xticks(list(chart.xticks))
         plotext.xlabel(chart.xlabel)
