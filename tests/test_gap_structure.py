@@ -180,8 +180,8 @@ def test_a_speed_found_from_the_mesh_lines_names_the_tooth_count_it_trades_with(
     # no tacho: only speed x teeth is measured, so a 19-tooth pinion at 28 Hz reads as 20 teeth at 26.6 Hz
     assert speed_line(26.6, 28.0, 20) == (
         "speed 26.6 Hz found from the mesh lines (no tacho), 28 Hz expected: the record's mesh at 532 Hz is a "
-        "20-tooth pinion's at 26.6 Hz or a 19-tooth pinion's at 28 Hz: check the tooth count, or give the "
-        "record's speed or a tacho"
+        "20-tooth pinion's at 26.6 Hz or a 19-tooth pinion's at 28 Hz: ambiguous (the input shaft's own lines tell "
+        "neither): declare the records' speed ([target] speed) or give a tacho, and the diagnosis names what differs"
     )
     assert speed_line(27.0, 28.0, 20).startswith("speed 27 Hz found from the mesh lines (no tacho), 28 Hz expected")
     assert speed_line(27.9, 28.0, 20) is None

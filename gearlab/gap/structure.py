@@ -439,11 +439,13 @@ def speed_line(target_speed: float, source_speed: float, z1: int | None = None, 
         teeth = teeth or traded_teeth(target_speed, source_speed, z1)
         if teeth is not None:
             mesh = z1 * target_speed
+            # what the user does about it: the input shaft's own lines told neither reading (_traded_line)
             return (
                 f"speed {target_speed:.4g} Hz found from the mesh lines (no tacho), {source_speed:.4g} Hz expected: "
                 f"the record's mesh at {mesh:.4g} Hz is a {z1}-tooth pinion's at {target_speed:.4g} Hz "
-                f"or a {teeth}-tooth pinion's at {mesh / teeth:.4g} Hz: check the tooth count, or give the "
-                "record's speed or a tacho"
+                f"or a {teeth}-tooth pinion's at {mesh / teeth:.4g} Hz: ambiguous (the input shaft's own lines "
+                "tell neither): declare the records' speed ([target] speed) or give a tacho, and the diagnosis names "
+                "what differs"
             )
     return (
         f"speed {target_speed:.4g} Hz {'found from the mesh lines (no tacho)' if z1 else 'measured'}, "

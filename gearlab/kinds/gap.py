@@ -363,7 +363,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         records = isinstance(spec.target, Records)
         settings = spec.settings
         if records:  # measured records: the history's revolutions; the source runs at their speed
-            target_X, speed, record_notes, fs, from_mesh, ts = read_history(spec.target, on_event)  # ts: per record
+            from ..data.builder import operating_point
+
+            described, shaft = operating_point(spec.source)[0], spec.target.target.read_as
+            target_X, speed, record_notes, fs, from_mesh, ts = read_history(spec.target, on_event, (described, z1))
             check_points(
                 fs / speed,
                 z1,
@@ -379,9 +382,6 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if not spec.target.units_known:  # what fits values in volts, and values in m/s² already
                 record_notes.append(units_warning(spec.target.target.vibration, target_X))
             # start fractions not kept (drawn uniformly)
-            from ..data.builder import operating_point
-
-            described, shaft = operating_point(spec.source)[0], spec.target.target.read_as
             chain = Chain(fs, speed, speed_from_mesh=from_mesh, described_speed=described, tacho_shaft=shaft, takes=ts)
             note = "; ".join(record_notes)
         else:

@@ -51,11 +51,14 @@ class Records:
         return tuple(f for f in self.target.files if f.role == "history")
 
 
-def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[str], float, bool, tuple[int, ...]]:
+def read_history(
+    records: Records, on_event, described: tuple = (None, None)
+) -> tuple[np.ndarray, float, list[str], float, bool, tuple[int, ...]]:
     """The history records' revolutions in m/s² (n, POINTS), their mean speed, notes, their sampling
     rate (a file's 'fs', else the [target]'s, else the record's own), whether the speed was found from the
     description's mesh lines alone (no tacho, no declared speed: data.chain.Chain.speed_from_mesh),
-    and each record's count of revolutions (Chain.takes).
+    and each record's count of revolutions (Chain.takes). *described*: the source's speed and pinion teeth,
+    for what the note says of a speed found from the mesh lines (mesh_speed_note).
     Records of different speeds are different operating conditions: refused. Every record is turned
     into register with the first (parts.measured.aligned, as the detection kind does): with a tacho
     by m/N of a turn (one of its N marks, or on another shaft the N input angles they may find:
@@ -108,12 +111,30 @@ def read_history(records: Records, on_event) -> tuple[np.ndarray, float, list[st
     speed = float(np.average(list(speeds.values()), weights=[len(r) for r in rows]))
     # how the speed was found: the tacho, a declared speed, or the description's mesh lines (each its own)
     how = "; ".join(dict.fromkeys(found.values()))
-    notes.append(
-        f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz ({how}); "
-        "the source simulates that speed"
-    )
     from_mesh = t.tacho is None and bool(t.gearbox) and t.speed_hz is None and all(f.speed_hz is None for f in files)
+    said = mesh_speed_note(speed, *described) if from_mesh else "the source simulates that speed"
+    notes.append(f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz ({how}); {said}")
     return X, speed, notes, t.keys_of(f)["fs"] or rec.fs, from_mesh, tuple(len(r) for r in rows)
+
+
+def mesh_speed_note(target_speed: float, described: float | None, z1: int | None) -> str:
+    """What the gap's note says of the speed the source is run at, *target_speed* read off the description's
+    mesh lines (no tacho, no declared speed): speed x teeth only, so a speed a whole tooth's share off the
+    *described* one is as well another count of a *z1*-tooth pinion, as the structure check's verdict says
+    (gap.structure.speed_line; box Q at 41 Hz described at 28 Hz: the note said 'the source simulates that
+    speed', the verdict 'or a 40-tooth pinion at 27.67 Hz'). The count is the verdict's to name."""
+    from ..gap.structure import SPEED_TOL, _beyond_slip, traded_teeth
+
+    teeth = None
+    if described and z1 and abs(target_speed / described - 1.0) > SPEED_TOL:
+        teeth = traded_teeth(target_speed, described, z1) or _beyond_slip(target_speed, described, z1)
+    if teeth is None:
+        return "the source simulates that speed"
+    return (
+        f"the source simulates that speed, right if the pinion has the described {z1} teeth: without a tacho the "
+        f"mesh lines give speed x teeth only, and another pinion at the described {described:.4g} Hz meshes there "
+        "too: declare the records' speed ([target] speed) to tell"
+    )
 
 
 def units_warning(channel, X: np.ndarray) -> str:
