@@ -20,10 +20,14 @@ def _table(table: str, **keys) -> str:
     return f"[{table}]\n{given}" if given else ""
 
 
-def description(*stages, name=None, speed=None, load=None, near=None, direction=None, tacho=None) -> str:
-    """A description's text: [gearbox], [operation], the *stages* (stage() texts), [sensor]."""
+def description(*stages, name=None, speed=None, load=None, near=None, direction=None, tacho=None, marks=None) -> str:
+    """A description's text: [gearbox], [operation], the *stages* (stage() texts), [sensor] (*marks*: the
+    tacho's pulses_per_rev, a count written unquoted)."""
     head = _table("gearbox", name=name) + _table("operation", speed=speed, load=load)
-    return head + "".join(stages) + _table("sensor", near=near, direction=direction, tacho=tacho)
+    sensor = _table("sensor", near=near, direction=direction, tacho=tacho)
+    if marks is not None:
+        sensor = (sensor or "[sensor]\n") + f"pulses_per_rev = {marks}\n"
+    return head + "".join(stages) + sensor
 
 
 def described_pair(*stages):

@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 from detection_scenario import run, scenario
+from gearboxes import description, stage
 from textrecords import record
 
 
@@ -83,24 +84,14 @@ def _box_q_take(path, seed: int, speed: float = 28.0, fs: float = 8192.0, second
     return path
 
 
-BOX_Q = """[gearbox]
-name = "boxQ"
-[operation]
-speed = "28 Hz"
-[[stages]]
-module = "2 mm"
-face_width = "18 mm"
-pinion = { z = 27, bore = "20 mm" }
-wheel = { z = 61, bore = "25 mm" }
-[[stages]]
-module = "3 mm"
-face_width = "25 mm"
-pinion = { z = 18, bore = "25 mm" }
-wheel = { z = 49, bore = "35 mm" }
-[sensor]
-near = "output"
-direction = "x"
-"""
+BOX_Q = description(
+    stage(27, 61, width="18 mm", bores=("20 mm", "25 mm")),
+    stage(18, 49, module="3 mm", width="25 mm", bores=("25 mm", "35 mm")),
+    name="boxQ",
+    speed="28 Hz",
+    near="output",
+    direction="x",
+)
 
 
 def test_a_healthy_take_of_a_two_stage_box_read_whole_is_not_called_bearing_like(cli, tmp_path):

@@ -6,7 +6,10 @@ written here with numpy, not simulated by gearlab."""
 
 from __future__ import annotations
 
+import tomllib
+
 import numpy as np
+from gearboxes import description, stage
 from test_inspect import described
 from test_inspect_wheel_speed import _lab
 
@@ -109,21 +112,9 @@ def _three_stage(path, z=(17, 47, 29, 67, 23, 59), speed=24.0, fs=8192.0, second
 def _box3(wheel2=67, marks=3):
     from gearlab.gearbox.description import parse_gearbox
 
-    stages = ((17, 47), (29, wheel2), (23, 59))
-    data = {
-        "operation": {"speed": "1440 rpm"},
-        "stages": [
-            {
-                "module": "2 mm",
-                "face_width": "20 mm",
-                "pinion": {"z": a, "bore": "10 mm"},
-                "wheel": {"z": b, "bore": "10 mm"},
-            }
-            for a, b in stages
-        ],
-        "sensor": {"near": "intermediate 1", "tacho": "output", "pulses_per_rev": marks},
-    }
-    return parse_gearbox(data, "box3.toml")
+    stages = (stage(a, b, bores=("10 mm", "10 mm")) for a, b in ((17, 47), (29, wheel2), (23, 59)))
+    text = description(*stages, speed="1440 rpm", near="intermediate 1", tacho="output", marks=marks)
+    return parse_gearbox(tomllib.loads(text), "box3.toml")
 
 
 def test_a_speed_read_from_an_output_tacho_through_a_wrong_count_is_not_called_slip(tmp_path):
