@@ -188,20 +188,27 @@ def test_inspect_history_reads_each_history_file_with_its_own_keys(tmp_path, cli
     assert code == 2 and "'h3.csv' is not a --history file" in err, err
 
 
-def test_a_history_of_per_file_tachos_is_read_as_a_tacho_on_its_shaft(tmp_path):
-    # T's history in three formats, each file with its own vibration and tacho keys ([target] names none): the gap
-    # read it as having no tacho and said 'stage 2 pinion: 115 teeth fit ... read outward from the input shaft (no
-    # tacho: its speed from the mesh lines)'
-    from gearlab.parts.measured import target_spec
-
+def per_file_tachos(tmp_path, unit: str) -> dict:
+    """A [target] table whose two history files (a.csv, b.csv, written here) each name their own vibration and
+    tacho columns, the [target] naming no tacho."""
     table = {"vibration": "acc", "tacho": None, "pulses_per_rev": None, "speed": None, "transient": "stats"}
-    table |= {"positive": "fault", "sensitivity": None, "gain": None, "unit": "g", "fs": None}
+    table |= {"positive": "fault", "sensitivity": None, "gain": None, "unit": unit, "fs": None}
     (tmp_path / "a.csv").write_text("time_s,acc,tach\n0,1,0\n0.001,2,1\n")
     (tmp_path / "b.csv").write_text("time_s,vib,pulse\n0,1,0\n0.001,2,1\n")
     table["files"] = [
         {"file": "a.csv", "role": "history", "label": "healthy", "vibration": "acc", "tacho": "tach"},
         {"file": "b.csv", "role": "history", "label": "healthy", "vibration": "vib", "tacho": "pulse"},
     ]
+    return table
+
+
+def test_a_history_of_per_file_tachos_is_read_as_a_tacho_on_its_shaft(tmp_path):
+    # T's history in three formats, each file with its own vibration and tacho keys ([target] names none): the gap
+    # read it as having no tacho and said 'stage 2 pinion: 115 teeth fit ... read outward from the input shaft (no
+    # tacho: its speed from the mesh lines)'
+    from gearlab.parts.measured import target_spec
+
+    table = per_file_tachos(tmp_path, "g")
     assert target_spec(table, "s.toml: [target]", tmp_path, need=("history",)).read_as == "input"
 
 

@@ -5,6 +5,7 @@ run never read. The records here are small stand-ins written by hand, not simula
 from __future__ import annotations
 
 import numpy as np
+from gearboxes import description, stage
 from scipy.io import wavfile
 
 import gearlab
@@ -70,24 +71,12 @@ def test_a_gain_given_as_a_full_scale_in_m_s2_is_said_as_such(tmp_path):
     assert "(2 V / 100 mV/g)" in volts.units, volts.units
 
 
-BOX_B = """[gearbox]
-name = "boxB"
-
-[operation]
-speed = "29.3 Hz"
-
-[[stages]]
-module = "2.5 mm"
-face_width = "20 mm"
-pinion = { z = 21, bore = "20 mm" }
-wheel = { z = 65, bore = "30 mm" }
-
-[[stages]]
-module = "3 mm"
-face_width = "25 mm"
-pinion = { z = 34, bore = "30 mm" }
-wheel = { z = 91, bore = "45 mm" }
-"""
+BOX_B = description(
+    stage(21, 65, module="2.5 mm", bores=("20 mm", "30 mm")),
+    stage(34, 91, module="3 mm", width="25 mm", bores=("30 mm", "45 mm")),
+    name="boxB",
+    speed="29.3 Hz",
+)
 
 
 def _take(path, f0, stages, fs=20000.0, seconds=6.0, seed=3):
@@ -171,8 +160,8 @@ def test_a_short_take_s_later_mesh_is_no_subharmonic_family(tmp_path):
     assert not said["matches"] and not any("-tooth pinion on the intermediate shaft?" in d for d in stage2), said[
         "verdict"
     ]
-    for stage in said["check"]["stages"]:
-        assert stage.get("measured_order") is None or stage["measured_order"] > 6 * 0.3, said["verdict"]
+    for row in said["check"]["stages"]:
+        assert row.get("measured_order") is None or row["measured_order"] > 6 * 0.3, said["verdict"]
 
 
 def test_score_warns_of_a_record_of_other_tooth_counts_at_a_trained_speed(tmp_path):

@@ -12,6 +12,7 @@ import numpy as np
 from gearboxes import description, stage
 from test_inspect import described
 from test_inspect_wheel_speed import _lab
+from test_outside_round12 import per_file_tachos
 
 from gearlab.inspect import InspectOptions, inspect_record
 
@@ -141,14 +142,7 @@ def test_per_file_tachos_are_read_on_the_description_s_tacho_shaft_with_its_mark
     # [target] tacho_shaft = 'output' was refused ('belongs to a tacho; no tacho is given')
     from gearlab.parts.measured import target_spec
 
-    table = {"vibration": "acc", "tacho": None, "pulses_per_rev": None, "speed": None, "transient": "stats"}
-    table |= {"positive": "fault", "sensitivity": None, "gain": None, "unit": "m/s^2", "fs": None}
-    (tmp_path / "a.csv").write_text("time_s,acc,tach\n0,1,0\n0.001,2,1\n")
-    (tmp_path / "b.csv").write_text("time_s,vib,pulse\n0,1,0\n0.001,2,1\n")
-    table["files"] = [
-        {"file": "a.csv", "role": "history", "label": "healthy", "vibration": "acc", "tacho": "tach"},
-        {"file": "b.csv", "role": "history", "label": "healthy", "vibration": "vib", "tacho": "pulse"},
-    ]
+    table = per_file_tachos(tmp_path, "m/s^2")
     target = target_spec(table, "s.toml: [target]", tmp_path, need=("history",), box=_box3())
     assert (target.read_as, target.pulses_per_rev) == ("output", 3), (target.read_as, target.pulses_per_rev)
     given = target_spec(table | {"tacho_shaft": "output"}, "s.toml: [target]", tmp_path, ("history",), _box3())
