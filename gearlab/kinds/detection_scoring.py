@@ -370,7 +370,9 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
     keys = dict(meta["target"]) | remembered(meta, file, given)[0]
     for key, value in (given or {}).items():
         at = f"--key {key}"
-        if key not in SCORE_KEYS or value == "":
+        # "" takes none of the run's (gain, sensitivity, unit, fs), as a [target] files entry's "" does: a next-week
+        # npz in g beside a [target] gain in volts had no way to drop it ('expected KEY=VALUE ... did you mean gain')
+        if key not in SCORE_KEYS or (value == "" and key in ("vibration", "tacho")):
             raise GearlabInputError(
                 f"{at}={value}: expected KEY=VALUE, KEY one of {', '.join(SCORE_KEYS)}{did_you_mean(key, SCORE_KEYS)}"
             )
@@ -379,7 +381,8 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
                 f"{at}: the run read its records without a tacho (their speed declared or from the mesh orders); "
                 "expected no tacho (the new records are read as the run's were)"
             )
-        in_bounds(setting(**MEASURED[key]).metadata["setting"], value, at)  # as the [target]'s are checked
+        if value != "":
+            in_bounds(setting(**MEASURED[key]).metadata["setting"], value, at)  # as the [target]'s are checked
         if key not in CALIBRATION:
             keys[key] = held(key, value, at)
     keys |= calibration({k: v for k, v in (given or {}).items() if k in CALIBRATION}, lambda k: f"--key {k}")

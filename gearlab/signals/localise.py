@@ -65,8 +65,9 @@ record's mark. On a shaft of order a/b (b > 1: the idler's 1/3) the count is def
 steps of z/b teeth: a take's first mark finds that shaft at any of b angles, and nothing tells
 which (the take's grand-period mean against the first record's: right for 7 of 120 takes,
 development seeds). The tooth says so ("step"); a step of a tooth or less fixes nothing across takes, said
-plainly. The tacho's own shaft at one mark a turn is fixed to its mark: its tooth counts from it ("mark",
-the take's turn added back). A strike's ring moves the peak later by its decay.
+plainly. The tacho's own shaft is fixed to its mark: its tooth counts from it ("mark", the take's turn
+added back), at N marks a turn up to steps of z/N (alike marks: "step"). A strike's ring moves the peak
+later by its decay.
 
 Fallback. When the record holds fewer than *min_periods* grand periods (tooth counts with few
 common factors: 17/43 turns the output 17 times in 43 input revolutions), each shaft's own TSA
@@ -438,12 +439,13 @@ def _harmonics(lay: Layout, shaft: int, sel: np.ndarray) -> tuple[np.ndarray, np
 
 
 def tooth_index(
-    rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], turn=None, tacho=False, free=False
+    rec: Content, ref: Spread, lay: Layout, shaft: int, gears: list[Gear], turn=None, tacho=False, free=False, pulses=1
 ) -> dict:
     """Peak of the shaft's residual envelope in the shaft's angle, in tooth pitches of each gear on it.
     *turn*: the take's advance (m/marks, :func:`turned`) where this is the tacho's own shaft (one mark
     per turn: its angle from the mark is known, so is the tooth); *tacho*: the history has a tacho;
-    *free*: it has none, a take's zero is its first sample (History.free)."""
+    *free*: it has none, a take's zero is its first sample (History.free); *pulses*: the marks a turn of this
+    shaft's own tacho, alike (its tooth is known up to steps of z / pulses)."""
     sel, m = _harmonics(lay, shaft, lay.sync[:, shaft] & ~lay.carrier)
     o = lay.shaft_orders[shaft]
     offset = 2 * math.pi * float((o * rec.first_revolution) % 1) if lay.mode == "grand" else 0.0
@@ -465,7 +467,7 @@ def tooth_index(
         pitches = angle / (2 * math.pi / g.teeth)
         out[g.name] = {"pitches": pitches, "tooth": int(math.floor(pitches)) % g.teeth + 1, "of": g.teeth}
         if turn is not None:
-            out[g.name]["mark"] = True
+            out[g.name] |= {"mark": True} | ({"step": g.teeth / pulses, "tacho": True} if pulses > 1 else {})
         elif free:  # a take's zero is its first sample: no shaft's angle there is known, the input's neither
             out[g.name] |= {"free": True, "tacho": False}
         elif o.denominator > 1:  # see the module's docstring, "Tooth": defined up to steps of z / b
@@ -500,8 +502,9 @@ def tooth_words(t: dict) -> str:
     tooth or less defines nothing across takes (a 19/71 + 28/47 output gear: any of 3337 angles, a
     number no one can act on: said plainly), as is any tooth without a tacho ("free"); on the tacho's own
     shaft, fixed to its mark."""
-    if t.get("mark"):
-        return f"{t['tooth']} of {t['of']} ({FROM_MARK})"
+    if t.get("mark") and t.get("step", 2) > 1:
+        steps = f", up to {t['step']:g}-tooth steps between takes: its marks are alike" if "step" in t else ""
+        return f"{t['tooth']} of {t['of']} ({FROM_MARK}{steps})"
     if t.get("free") or ("step" in t and t["step"] <= 1):
         # a take starts at its first tacho mark, or without a tacho at its first sample
         known = "relative to the tacho" if t.get("tacho") else "at a take's start"
@@ -643,11 +646,15 @@ def _units(revs: np.ndarray, first: int, lay: Layout, block: int) -> list[Conten
     return [content(revs[i : i + block], lay, first + i) for i in range(0, revs.shape[0] - block + 1, block)]
 
 
-def _mark(hist: History, shaft: str, m: int) -> tuple[Fraction | None, bool, bool]:
-    """tooth_index's (turn, tacho, free) for *shaft* of a take advanced *m*/marks: the tacho's own shaft at one
-    mark per turn (or the input at any) counts its teeth from the mark."""
-    own = shaft == hist.tacho and (hist.pulses == 1 or shaft == hist.layout.shafts[0])
-    return (Fraction(m, hist.marks) if own else None), bool(hist.tacho), hist.free
+def _mark(hist: History, shaft: str, m: int) -> tuple[Fraction | None, bool, bool, int]:
+    """tooth_index's (turn, tacho, free, pulses) for *shaft* of a take advanced *m*/marks: the tacho's own shaft
+    counts its teeth from the mark (at N marks a turn, not the input, up to steps of z / N)."""
+    # the tacho's own shaft at N marks a turn too (not the input): its turn added back, its tooth then known up to
+    # steps of z / N (a 4-mark tacho on a 25/52 + 16/81 box's intermediate shaft: a 52T crack read 3.55 and 30.55
+    # pitches from the mark in two takes, said 'not fixed across takes'; turned back, 3.55 and 42.55: 13-tooth steps)
+    own = shaft == hist.tacho
+    pulses = hist.pulses if own and shaft != hist.layout.shafts[0] else 1
+    return (Fraction(m, hist.marks) if own else None), bool(hist.tacho), hist.free, pulses
 
 
 def history(

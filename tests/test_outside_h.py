@@ -1,0 +1,94 @@
+"""An outside user's fourth look (issue 39, "How it will be checked"; helper H): a 31/73 box driven from its 73T
+wheel and a 25/52 + 16/81 box with a 4-mark tacho on its intermediate shaft, recorded as csv with ';' and decimal
+commas, int24 WAV in volts, HDF5 and npz in g. The recordings are made here, small, by plain numpy."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from gearboxes import description, stage
+
+BOX_B = description(
+    stage(25, 52),
+    stage(16, 81, module="3 mm", bores=("30 mm", "45 mm")),
+    name="boxB",
+    speed="25 Hz",
+    near="intermediate",
+    tacho="intermediate",
+    marks=4,
+)
+
+
+def _box_b_take(path, seed, crack=0.0, seconds=6.0, fs=10240.0):
+    """A 25/52 + 16/81 take at 25 Hz (in g): both meshes' harmonics, their amplitude and phase modulated at both shafts'
+    rates (the gearbox's phases, not the take's), a crack on the 52T wheel (a dip and a phase step of stage 1's mesh
+    over ~1.2 pitches once per intermediate turn, at 2 rad of its angle), noise; a tacho of 4 alike marks a turn on
+    the intermediate shaft. Each take starts at a random angle, so at any of the 4 marks."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(fs * seconds)) / fs
+    th = 2 * np.pi * 25.0 * t * (1 + 0.0015 * np.sin(2 * np.pi * 0.37 * t)) + rng.uniform(0, 2 * np.pi)
+    thm, tho = th * 25 / 52, th * 25 / 52 * 16 / 81
+    window = np.exp(-0.5 * (((thm - 2.0 + np.pi) % (2 * np.pi) - np.pi) / (1.2 * np.pi / 52)) ** 2)
+
+    def mesh(angle, z, a, b, dip=0.0, step=0.0):
+        fixed = np.random.default_rng(z).uniform(0, 6, 7)  # the gearbox's own phases
+        am = (1 + 0.15 * np.cos(a + fixed[0]) + 0.1 * np.cos(b + fixed[1])) * (1 - dip * window)
+        pm = 0.05 * np.sin(a + fixed[2]) + 0.04 * np.sin(b + fixed[3]) + step * window
+        return sum(c * am * np.cos(k * (z * angle + pm) + fixed[3 + k]) for k, c in enumerate((1.0, 0.45, 0.2), 1))
+
+    x = 0.6 * mesh(th, 25, th, thm, 0.25 * crack, 0.35 * crack) + 0.9 * mesh(thm, 16, thm, tho)
+    x = x + 0.05 * np.cos(th) + 0.06 * np.cos(thm + 2) + rng.normal(0, 0.05, t.size)
+    tacho = np.where((4 * thm / 2 / np.pi) % 1 < 0.1, 5.0, 0.0)
+    np.savez(path, acc_top=x.astype("f4"), tacho=tacho.astype("f4"), fs=fs)
+    return path
+
+
+def test_score_key_empty_drops_the_run_s_gain_and_sensitivity(tmp_path):
+    # a run whose [target] read int24 WAVs in volts (gain = "5 V", sensitivity 100 mV/g) scores a next-week npz in
+    # g: `--key gain=` was refused ('expected KEY=VALUE ... did you mean gain'), and `--key unit=g` alone with
+    # 'expected no gain': no way to drop the run's gain, as a [target] files entry's gain = "" does
+    from gearlab.kinds.detection_scoring import reading_keys
+
+    np.savez(tmp_path / "week1.npz", acc_top=np.zeros(512, "f4"), tacho=np.zeros(512, "f4"), fs=10240.0)
+    target = {"fs": None, "gain": 5.0, "gearbox": None, "pulses_per_rev": 4, "sensitivity": 0.0102, "speed_hz": None}
+    target |= {"tacho": "2", "tacho_shaft": {"a": 25, "b": 52, "name": "intermediate"}, "transient": "none"}
+    meta = {"target": target | {"unit": None, "vibration": "0"}, "conditions": {"25 Hz": {"speed_hz": 25.0}}}
+    meta["file_keys"] = {"formats": {".wav": {}}, "sets": {".wav": [{}]}, "tests": {}}
+    given = {"vibration": "acc_top", "tacho": "tacho", "gain": "", "sensitivity": "", "unit": "g"}
+    keys = reading_keys(meta, None, given, str(tmp_path / "week1.npz"))
+    assert keys["gain"] is None and keys["sensitivity"] is None and keys["unit"] == "g", keys
+    # a channel still needs a name
+    import pytest
+
+    from gearlab.errors import GearlabInputError
+
+    with pytest.raises(GearlabInputError, match="--key vibration="):
+        reading_keys(meta, None, given | {"vibration": ""}, str(tmp_path / "week1.npz"))
+
+
+def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(cli, tmp_path, monkeypatch):
+    # box B's 52T crack, tacho (4 marks a turn) on the intermediate shaft: inspect --history said 'tooth 4 of 52 (in
+    # this take only: the tooth is not fixed across takes; this shaft's angle relative to the tacho is not known)'
+    # and read 3.55 and 30.55 pitches in two takes (the take's turn to the first history take's not added back). Now
+    # counted from the mark, the same tooth up to 13-tooth steps (52 / 4), and said so
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "boxB.toml").write_text(BOX_B)
+    history = [_box_b_take(tmp_path / f"h{seed}.npz", seed) for seed in (51, 52, 53)]
+    pitches = []
+    for seed in (54, 56):
+        take = _box_b_take(tmp_path / f"c{seed}.npz", seed, crack=1.0)
+        args = ["inspect", take, "--gearbox", tmp_path / "boxB.toml", "--vibration", "acc_top", "--tacho", "tacho"]
+        code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)], "--json")
+        assert code == 0, err
+        shaft = json.loads(stdout)["localisation"]["shafts"][0]
+        assert shaft["shaft"] == "intermediate" and shaft["flagged"], shaft
+        tooth = shaft["tooth"]["intermediate gear 52T (stage 1)"]
+        assert tooth.get("mark") and tooth["step"] == 13, tooth
+        pitches.append(tooth["pitches"])
+    steps = (pitches[1] - pitches[0]) / 13
+    assert abs(steps - round(steps)) < 0.1, pitches  # the crack sits at 2 rad: 16.55 pitches from a mark
+    assert abs(((pitches[0] - 16.55) / 13) - round((pitches[0] - 16.55) / 13)) < 0.1, pitches
+    code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)])
+    assert "-tooth steps between takes: its marks are alike" in stdout, stdout[-1500:]
+    assert "angle relative to the tacho is not known" not in stdout
