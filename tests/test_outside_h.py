@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from gearboxes import description, stage
 
 BOX_B = description(
@@ -59,8 +60,6 @@ def test_score_key_empty_drops_the_run_s_gain_and_sensitivity(tmp_path):
     keys = reading_keys(meta, None, given, str(tmp_path / "week1.npz"))
     assert keys["gain"] is None and keys["sensitivity"] is None and keys["unit"] == "g", keys
     # a channel still needs a name
-    import pytest
-
     from gearlab.errors import GearlabInputError
 
     with pytest.raises(GearlabInputError, match="--key vibration="):
@@ -92,3 +91,32 @@ def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(cli,
     code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)])
     assert "-tooth steps between takes: its marks are alike" in stdout, stdout[-1500:]
     assert "angle relative to the tacho is not known" not in stdout
+
+
+def _run_up_csv(path, f0, f1, seconds=8.0, fs=8192.0):
+    """A 31/73 box driven from its 73T wheel, its speed rising f0 -> f1 over the take: ';' separated, decimal commas,
+    a jittery time column, two accelerometers in g and a 1-mark tacho on the input (73T) shaft."""
+    rng = np.random.default_rng(3)
+    t = np.arange(int(fs * seconds)) / fs
+    th = 2 * np.pi * np.cumsum(f0 + (f1 - f0) * t / seconds) / fs
+    x = np.cos(73 * th + 0.2 * np.cos(th)) + 0.3 * np.cos(146 * th) + rng.normal(0, 0.05, t.size)
+    rows = np.column_stack(
+        [t + rng.normal(0, 0.03 / fs, t.size), x, 0.5 * x, np.where(th / 2 / np.pi % 1 < 0.06, 5, 0)]
+    )
+    text = "".join(f"{a:.7f};{b:.5f};{c:.5f};{d:.1f}\n" for a, b, c, d in rows).replace(".", ",")
+    path.write_text("Zeit [s];Beschl. 1 [g];Beschl. 2 [g];Tacho [V]\n" + text)
+    return path
+
+
+def test_a_run_up_is_said_a_run_up_not_only_its_mean_speed(tmp_path):
+    # a run-up 20 -> 35 Hz with a tacho: a detection run printed 'rec/A_runup.csv: 27.499 Hz, from tacho ...', then
+    # "condition '27.5 Hz' has no history record", gearlab score 'runs at 27.50 Hz, more than 5% from every
+    # condition': nothing said that the take's speed ran from 20 to 35 Hz (inspect's tacho line alone did)
+    from gearlab.data.recordings import cut_recording
+
+    keys = {"vibration": "Beschl. 1 [g]", "tacho": "Tacho [V]"}
+    up = cut_recording(str(_run_up_csv(tmp_path / "runup.csv", 20.0, 35.0)), **keys)
+    assert up.speed_hz == pytest.approx(27.5, rel=0.01)
+    assert "20." in up.angle_source and "over the take: a run-up or coast-down?" in up.angle_source, up.angle_source
+    steady = cut_recording(str(_run_up_csv(tmp_path / "steady.csv", 20.0, 20.4)), **keys)  # a motor's 2 %: steady
+    assert "run-up" not in steady.angle_source, steady.angle_source

@@ -49,7 +49,7 @@ import numpy as np
 
 from ..errors import GearlabInputError, did_you_mean
 from ..signals import check_signal, first_complete
-from ..signals.checks import fmt_hz
+from ..signals.checks import fmt_hz, speed_varies
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
@@ -686,7 +686,7 @@ def cut_recording(
     source, angle, how = shaft_angle(
         rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox, tacho_shaft=tacho_shaft
     )
-    turns = (angle[-1] - angle[0]) / TWO_PI
+    turns, how = (angle[-1] - angle[0]) / TWO_PI, how + speed_varies(angle, rec.fs)  # a run-up said so
     if turns < 2:
         raise GearlabInputError(
             f"{path}: by {how}, the record shows {turns:.3g} revolutions in {raw.size} samples at "

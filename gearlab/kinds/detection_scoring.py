@@ -22,6 +22,7 @@ from ..parts.measured import TargetFile, held
 from ..runs import RunDir
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
+from ..signals.checks import VARIES_WORDS
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -432,8 +433,9 @@ def score(
         try:
             name = _condition_of(meta, str(file), rec.speed_hz, condition)
         except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
+            varies = f" ({rec.angle_source})" if VARIES_WORDS in rec.angle_source else ""  # a run-up: its speeds
             raise GearlabInputError(
-                _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described) or str(far)
+                _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described) or f"{far}{varies}"
             ) from None
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)

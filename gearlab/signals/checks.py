@@ -99,3 +99,24 @@ def check_int(value, name: str, minimum: int) -> int:
 def fmt_hz(f: float) -> str:
     """A frequency for people: '25.2 Hz', '200 kHz'."""
     return f"{f / 1e3:.4g} kHz" if abs(f) >= 1e3 else f"{f:.4g} Hz"
+
+
+# A record whose speed spans more than this share of its mean (its revolutions' speeds, each over a few turns) is no
+# steady record: a run-up or a coast-down, which gearlab order-tracks but groups and scores at its mean speed alone
+SPEED_VARIES = 0.05
+VARIES_WORDS = "over the take: a run-up or coast-down?"
+
+
+def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
+    """ "; 20.08 Hz .. 34.93 Hz over the take: ..." where the shaft *angle* (radians, one a sample at *fs*) turns at
+    speeds, each the mean over *smooth* turns, spanning more than SPEED_VARIES of their mean; else "". An outside
+    lab's run-up from 20 to 35 Hz was said only '27.499 Hz, from tacho ...', then 'condition 27.5 Hz has no history'."""
+    turns = np.arange(math.ceil(angle[0] / (2 * math.pi)), math.floor(angle[-1] / (2 * math.pi)) + 1)
+    if turns.size < 2 * smooth + 1:
+        return ""
+    at = np.interp(2 * math.pi * turns, angle, np.arange(angle.size) / fs)  # each whole turn's time
+    speeds = smooth / (at[smooth:] - at[:-smooth])
+    low, high = float(speeds.min()), float(speeds.max())
+    if high - low <= SPEED_VARIES * float(np.mean(speeds)):
+        return ""
+    return f"; {fmt_hz(low)} .. {fmt_hz(high)} {VARIES_WORDS} its mean speed is its condition (steady records compare)"
