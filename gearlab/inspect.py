@@ -66,6 +66,7 @@ from .gearbox.speed import (
     mesh_angle,
     nominal_line,
     speed_course,
+    speed_shift,
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
@@ -216,6 +217,10 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
         speed = Speed(f, how, theta, rec.fs / np.diff(starts), declared)
     if note:
         speed.notes.append(note)
+    if (shift := speed_shift(rec.signal, rec.fs)) is not None:  # a run-up smears every line at any one speed
+        said = f"the spectrum's lines move {100 * (shift - 1):+.0f} % from the record's first sixteenth to its last: "
+        said += "its speed varies (a run-up or coast-down?): give its tacho (--tacho) or inspect a steady take"
+        speed.notes[:] = [said] if speed.source == "declared" else [*speed.notes, said]  # no line fits: the reason
     return speed
 
 

@@ -93,7 +93,7 @@ def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(cli,
     assert "angle relative to the tacho is not known" not in stdout
 
 
-def _run_up_csv(path, f0, f1, seconds=8.0, fs=8192.0):
+def _run_up_csv(path, f0, f1, seconds=6.0, fs=12800.0):
     """A 31/73 box driven from its 73T wheel, its speed rising f0 -> f1 over the take: ';' separated, decimal commas,
     a jittery time column, two accelerometers in g and a 1-mark tacho on the input (73T) shaft."""
     rng = np.random.default_rng(3)
@@ -120,3 +120,20 @@ def test_a_run_up_is_said_a_run_up_not_only_its_mean_speed(tmp_path):
     assert "20." in up.angle_source and "over the take: a run-up or coast-down?" in up.angle_source, up.angle_source
     steady = cut_recording(str(_run_up_csv(tmp_path / "steady.csv", 20.0, 20.4)), **keys)  # a motor's 2 %: steady
     assert "run-up" not in steady.angle_source, steady.angle_source
+
+
+BOX_A = description(stage(73, 31, bores=("30 mm", "20 mm")), name="boxA", speed="20 Hz", near="input", tacho="input")
+
+
+def test_inspect_without_a_tacho_says_a_run_up_is_one(cli, tmp_path):
+    # the run-up 20 -> 35 Hz inspected without its tacho: 'note: no line within ±1% of a mesh frequency at this speed
+    # (the lines fit 0.3794 Hz (27.39 Hz as 1×M1))', a speed of 0.38 Hz; nothing said of its speed's course
+    (tmp_path / "boxA.toml").write_text(BOX_A)
+    args = ("--gearbox", tmp_path / "boxA.toml", "--vibration", "Beschl. 1 [g]")
+    code, stdout, err = cli("inspect", _run_up_csv(tmp_path / "runup.csv", 20.0, 35.0), *args)
+    assert code == 0, err
+    said = " ".join(stdout.split())
+    assert "its speed varies (a run-up or coast-down?): give its tacho (--tacho)" in said, said[-1500:]
+    assert "lines move +69 %" in said and "0.3794 Hz" not in said, said[-1500:]
+    code, stdout, err = cli("inspect", _run_up_csv(tmp_path / "steady.csv", 20.0, 20.2), *args)
+    assert code == 0 and "run-up" not in stdout and "matches this recording" in " ".join(stdout.split()), stdout
