@@ -70,6 +70,7 @@ from .gearbox.speed import (
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
+from .signals.spikes import clipped
 
 TWO_PI = 2.0 * np.pi
 MAX_TSA_POINTS = 1 << 15
@@ -447,6 +448,11 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         ],
         "spectrum": (orders, amp),
         "tsa": shaft_tsa(rec, speed, box, fine),
+        # a channel flat at its extreme: clipped at the logger's or the sensor's range (a knock over a WAV's full scale)
+        "clipped": [
+            f"{n} samples flat at {v:.4g} m/s² (clipped at the logger's or sensor's range?)"
+            for n, v in clipped(rec.signal)
+        ],
     }
     # a description's (or --speed's) speed is nominal: the measured one beside it, as information
     nominal, said = (options.speed_hz, "--speed") if options.speed_hz else (box and box.speed_hz, "[operation] speed")
@@ -672,7 +678,7 @@ def render(report: dict, console, width: int = 100) -> None:
     )
     if "nominal" in sp:
         console.print(f"[dim]{escape(sp['nominal']['line'])}[/dim]")
-    for note in sp["notes"]:
+    for note in sp["notes"] + [f"vibration {report['vibration']!r}: {c}" for c in report.get("clipped", ())]:
         console.print(f"[yellow]note:[/yellow] {escape(note)}")
     orders, amp = report["spectrum"]
     top = report["max_order"]

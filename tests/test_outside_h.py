@@ -137,3 +137,30 @@ def test_inspect_without_a_tacho_says_a_run_up_is_one(cli, tmp_path):
     assert "lines move +69 %" in said and "0.3794 Hz" not in said, said[-1500:]
     code, stdout, err = cli("inspect", _run_up_csv(tmp_path / "steady.csv", 20.0, 20.2), *args)
     assert code == 0 and "run-up" not in stdout and "matches this recording" in " ".join(stdout.split()), stdout
+
+
+def _wav24(path, x, fs, full_scale=5.0):
+    """x (volts, one channel) as a 24-bit integer WAV of *full_scale* volts: what is over it is clipped."""
+    import wave
+
+    q = np.clip(np.round(x / full_scale * (2**23 - 1)), -(2**23), 2**23 - 1).astype("<i4")
+    with wave.open(str(path), "wb") as w:
+        w.setnchannels(1), w.setsampwidth(3), w.setframerate(int(fs))
+        w.writeframes(q.view(np.uint8).reshape(-1, 4)[:, :3].tobytes())
+    return path
+
+
+def test_inspect_says_a_channel_clipped_at_its_range(cli, tmp_path):
+    # an int24 WAV in volts (100 mV/g, full scale 5 V) with a knock over its range: 4 samples at full scale, read
+    # by inspect without a word
+    (tmp_path / "boxB.toml").write_text(BOX_B)
+    x = np.load(_box_b_take(tmp_path / "b.npz", 7, seconds=3.0))["acc_top"].astype(float) * 0.1  # g -> V
+    args = ("--gearbox", tmp_path / "boxB.toml", "--gain", "5 V", "--sensitivity", "100 mV/g", "--speed", "25 Hz")
+    code, stdout, err = cli("inspect", _wav24(tmp_path / "clean.wav", x, 10240.0), *args)
+    assert code == 0 and "clipped" not in stdout, err + stdout
+    x[5000:5004] += 6.0
+    code, stdout, err = cli("inspect", _wav24(tmp_path / "knock.wav", x, 10240.0), *args, "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["clipped"] == [
+        "4 samples flat at 490.3 m/s² (clipped at the logger's or sensor's range?)"
+    ]

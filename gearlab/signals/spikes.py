@@ -71,3 +71,25 @@ def without_spikes(revs: np.ndarray, fs: float, speed_hz: float, turns_per_input
         ends_off = x[[a, b]] - typical[[a % points, b % points]]
         y[at] = typical[at % points] + np.linspace(ends_off[0], ends_off[1], len(at))
     return y.reshape(revs.shape).astype(revs.dtype)
+
+
+# A channel clipped at its logger's or sensor's range: samples flat at its largest (or smallest) value, at least
+# CLIP_SAMPLES of them, some side by side, that value CLIP_Z robust deviations (1.4826 MAD) off the median (a
+# quantised sine's peak repeats too, at ~1 deviation; a Gaussian record's largest sample is unique)
+CLIP_SAMPLES = 3
+CLIP_Z = 3.0
+
+
+def clipped(x: np.ndarray) -> list[tuple[int, float]]:
+    """[(samples, value)] of each side of *x* flat at its extreme (CLIP_SAMPLES, side by side, CLIP_Z off the
+    median); [] for none. An outside lab's int24 WAV with a knock over its 5 V full scale (4 samples) was read
+    by inspect without a word (detection bridges such spikes: without_spikes)."""
+    x = np.asarray(x, dtype=np.float64)
+    centre = float(np.median(x))
+    scale = 1.4826 * float(np.median(np.abs(x - centre)))
+    out = []
+    for value in (float(x.max()), float(x.min())):
+        at = x == value
+        if at.sum() >= CLIP_SAMPLES and np.any(at[1:] & at[:-1]) and abs(value - centre) > CLIP_Z * scale:
+            out.append((int(at.sum()), value))
+    return out
