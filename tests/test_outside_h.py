@@ -164,3 +164,27 @@ def test_inspect_says_a_channel_clipped_at_its_range(cli, tmp_path):
     assert json.loads(stdout)["clipped"] == [
         "4 samples flat at 490.3 m/s² (clipped at the logger's or sensor's range?)"
     ]
+
+
+def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
+    # the 31/73 box's healthy takes at 1.6 x the load of the history: NA4 (a size) called 50 % of the healthy
+    # record30 units, and nothing said why; the run now says each such take's level against its history's
+    from types import SimpleNamespace
+
+    from gearlab.kinds.detection_records import level_warnings
+
+    rng = np.random.default_rng(5)
+
+    def take(name, level):
+        return SimpleNamespace(path=name), level * rng.normal(0, 1, (40, 256))
+
+    cond = {
+        "history": [take(f"h{i}.csv", 1.0) for i in range(3)],
+        "test": [take("same.csv", 1.05), take("load2.csv", 1.6)],
+    }
+    lines = level_warnings(cond)
+    assert len(lines) == 1 and lines[0].startswith("load2.csv: level 1.6 x its history's (another load or gain?)"), (
+        lines
+    )
+    cond["test"] = [take("quiet.csv", 0.6)]
+    assert level_warnings(cond)[0].startswith("quiet.csv: level 0."), level_warnings(cond)

@@ -34,6 +34,25 @@ HISTORY_STRIDES = 10
 MIN_HISTORY_UNITS = 8
 # Records without a 'condition' whose speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
+# a test record whose level (rms) is more than this factor off its condition's history's median is said to be (another
+# load or gain): NA4 is a size, and called an outside lab's healthy 31/73 takes at 1.6 x the load in 50 % of their units
+LEVEL_OFF = 1.25
+
+
+def level_warnings(cond: dict) -> list[str]:
+    """A line for each test record of *cond* (its "history" and "test": (file, revolutions in m/s²)) whose rms is
+    more than LEVEL_OFF off the median of its history records' (another load, a gain left out)."""
+    rms = {f.path: float(np.sqrt(np.mean(np.square(r)))) for f, r in cond["history"] + cond["test"]}
+    typical = float(np.median([rms[f.path] for f, _ in cond["history"]]))
+    lines = []
+    for f, _ in cond["test"]:
+        ratio = rms[f.path] / typical if typical > 0 else 1.0
+        if not 1 / LEVEL_OFF <= ratio <= LEVEL_OFF:
+            lines.append(
+                f"{f.path}: level {ratio:.2g} x its history's (another load or gain?): NA4, a size, reads it as a "
+                "change; a history at that load, or its own condition (condition = ...), compares like with like"
+            )
+    return lines
 
 
 @dataclass(frozen=True)
@@ -322,6 +341,8 @@ def read_target(
                 f"{where}: condition '{name}' ({files}) has no history record; "
                 "each condition needs its own healthy history (give 'condition' to group files)"
             )
+        for line in level_warnings(cond):
+            on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter
         # leaves data (as the gap kind compares).
         cond["max_order"] = min(
