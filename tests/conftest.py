@@ -53,6 +53,20 @@ def pytest_configure(config):
     except ImportError:  # another pytest: its own number
         return
     config.stash[gc_collect_iterations_key] = GC_AT_THE_END
+    library_asserts_kept_plain(config)
+
+
+def library_asserts_kept_plain(config) -> None:
+    """pytest rewrites the asserts of every module of a distribution that declares a pytest plugin,
+    from its source: hypothesis's 73 modules, imported by the test files during collection, were
+    parsed, rewritten and compiled again in every worker (0.5 s of CPU each, side by side, collection
+    only; PYTHONDONTWRITEBYTECODE keeps no result), where their bytecode would do. Its internal
+    asserts guard hypothesis itself; the tests' own asserts are rewritten as before."""
+    hook = getattr(config.pluginmanager, "rewrite_hook", None)
+    if hook is None or not hasattr(hook, "_must_rewrite"):  # another pytest, or --assert=plain
+        return
+    hook._must_rewrite.discard("hypothesis")
+    hook._marked_for_rewrite_cache.clear()
 
 
 # pytest looks for exceptions raised in __del__ (unraisable) with five full garbage collections when
