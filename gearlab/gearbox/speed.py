@@ -221,7 +221,7 @@ def speed_from_mesh(
         # evidence, is no reading (a 17/53 + 22/67 + 29/83 box described with 18 teeth at a declared 35 Hz:
         # 2x M1, 1.19 kHz, read as 11x M3 at 33.45 Hz, its sidebands spuriously 17.9 teeth; at 33.06 Hz every
         # stage's mesh is on a line, as the 18-tooth description puts it for a 17-tooth pinion at 35 Hz)
-        kept = [h for h in hypotheses if not any(g[5] > h[5] and g[0] >= h[0] for g in hypotheses)]
+        kept = not_outdone(hypotheses)
         near = [h for h in kept if abs(h[1] / declared - 1) <= DECLARED_RANGE]
         slipped = [h for h in kept if DECLARED_RANGE < abs(h[1] / declared - 1) <= NOMINAL_RANGE]
         # the input pinion's sidebands, whichever stage's mesh gave the speed: a later stage's mesh and
@@ -333,6 +333,17 @@ SIDEBANDS_SHOW = "its sidebands show"
 EXACT_BINS = 0.1  # a refined line lies within a small share of a bin of its frequency (sidebands 30-45 dB up)
 SIDEBAND_WINDOW = 0.15  # a pinion shaft's sideband is looked for within ±15 % of its spacing at the speed tried
 TEETH_AGREE = 0.3  # the sidebands confirm a speed where they put the pinion's teeth within ±0.3 of its count
+
+
+def not_outdone(hypotheses: list) -> list:
+    """The speed hypotheses (evidence, ..., stages on a mesh) that no other explains on more stages
+    (h[5]) with as much evidence (h[0]): each against the most evidence of those on more stages, once
+    per stage count, not against every other (~700,000 pairs where a record's lines make ~840
+    hypotheses: 0.1 s a read). The same as the pairwise rule, NaN evidence included (it outdoes none)."""
+    most = {}
+    for n in {h[5] for h in hypotheses}:
+        most[n] = max((g[0] for g in hypotheses if g[5] > n and g[0] == g[0]), default=None)
+    return [h for h in hypotheses if most[h[5]] is None or not most[h[5]] >= h[0]]
 
 
 def sidebands_confirm(lines: Lines, f: float, stage, df: float) -> bool:
