@@ -188,3 +188,13 @@ def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
     )
     cond["test"] = [take("quiet.csv", 0.6)]
     assert level_warnings(cond)[0].startswith("quiet.csv: level 0."), level_warnings(cond)
+    # gearlab score said nothing either (NA4: 'fault' on the healthy take): its row holds the line, printed per file
+    from gearlab.kinds.detection_records import level_line
+    from gearlab.terminal import score_tables
+
+    row = {"file": "load2.csv", "speed_hz": 20.0, "speed_from": "tacho", "condition": "20 Hz", "rule": "records"}
+    row |= {"level": level_line(1.6), "method": "na4", "unit": "record30", "units": 12, "called": 12}
+    row |= {"median_score": 16.9, "threshold": 1.0, "decision": "fault"}
+    said = [str(t) for t in score_tables([row], "run")]
+    assert any(t.startswith("level 1.6 x its history's (another load or gain?)") for t in said), said
+    assert level_line(1.1) == ""

@@ -40,19 +40,23 @@ LEVEL_OFF = 1.25
 
 
 def level_warnings(cond: dict) -> list[str]:
-    """A line for each test record of *cond* (its "history" and "test": (file, revolutions in m/s²)) whose rms is
-    more than LEVEL_OFF off the median of its history records' (another load, a gain left out)."""
-    rms = {f.path: float(np.sqrt(np.mean(np.square(r)))) for f, r in cond["history"] + cond["test"]}
-    typical = float(np.median([rms[f.path] for f, _ in cond["history"]]))
-    lines = []
-    for f, _ in cond["test"]:
-        ratio = rms[f.path] / typical if typical > 0 else 1.0
-        if not 1 / LEVEL_OFF <= ratio <= LEVEL_OFF:
-            lines.append(
-                f"{f.path}: level {ratio:.2g} x its history's (another load or gain?): NA4, a size, reads it as a "
-                "change; a history at that load, or its own condition (condition = ...), compares like with like"
-            )
-    return lines
+    """A line (level_line) for each test record of *cond* (its "history" and "test": (file, revolutions in m/s²))
+    whose standard deviation is more than LEVEL_OFF off the median of its history records' (another load, a gain
+    left out)."""
+    std = {f.path: float(np.std(r)) for f, r in cond["history"] + cond["test"]}
+    typical = float(np.median([std[f.path] for f, _ in cond["history"]]))
+    lines = {f.path: level_line(std[f.path] / typical if typical > 0 else 1.0) for f, _ in cond["test"]}
+    return [f"{path}: {line}" for path, line in lines.items() if line]
+
+
+def level_line(ratio: float) -> str:
+    """A record's level *ratio* to its history's, in words where more than LEVEL_OFF off ("": within)."""
+    if 1 / LEVEL_OFF <= ratio <= LEVEL_OFF:
+        return ""
+    return (
+        f"level {ratio:.2g} x its history's (another load or gain?): NA4, a size, reads it as a change; "
+        "a history at that load, or its own condition (condition = ...), compares like with like"
+    )
 
 
 @dataclass(frozen=True)

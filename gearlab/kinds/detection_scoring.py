@@ -32,6 +32,7 @@ from .detection_records import (
     aligned,
     asynchronous_orders,
     learned_input,
+    level_line,
     longest_tsa,
     synchronous_input,
     unit_revolutions,
@@ -231,6 +232,7 @@ def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[T
             for u in per_record[0]
         },
         "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
+        "levels": {f.path: level_line(float(np.std(r)) / standardiser.std) for f, r in records},  # another load?
     }
 
 
@@ -507,6 +509,7 @@ def score(
                             "read_with": found[f.path][2],  # whose keys read the file ("": the [target]'s, --key's)
                             "values": found[f.path][3],  # how its values became m/s² (its units)
                             "gearbox": found[f.path][4],  # where its lines do not fit the run's description
+                            "level": cond["levels"][f.path],  # off its history's: another load (level_warnings)
                             "localised": where.get("named"),
                             "call": where.get("call"),
                             "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth
