@@ -103,6 +103,9 @@ def write_report(report: dict, folder: Path) -> Path:
         f"<p>speed {sp['mean_hz']:.5g} Hz ({sp['mean_hz'] * 60:.5g} rpm) {escape(sp['source'])}; "
         f"{sp['min_hz']:.5g} .. {sp['max_hz']:.5g} Hz; {report['revolutions']} input revolutions</p>",
     ]
+    parts += [
+        f"<p>note: vibration {escape(repr(report['vibration']))}: {escape(c)}</p>" for c in report.get("clipped", ())
+    ]
     if "verdict" in report:
         parts.append(f"<p><b>{escape(report['verdict'])}</b></p>")
     parts.append(f'<img src="{spectrum_png(report, folder / "order_spectrum.png").name}" alt="order spectrum">')

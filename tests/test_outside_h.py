@@ -164,6 +164,8 @@ def test_inspect_says_a_channel_clipped_at_its_range(cli, tmp_path):
     assert json.loads(stdout)["clipped"] == [
         "4 samples flat at 490.3 m/s² (clipped at the logger's or sensor's range?)"
     ]
+    code, stdout, err = cli("inspect", tmp_path / "knock.wav", *args, "--report", tmp_path / "report")
+    assert code == 0 and "4 samples flat at 490.3 m/s²" in (tmp_path / "report" / "report.html").read_text(), err
 
 
 def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
