@@ -110,8 +110,9 @@ def test_the_soft_reducer_at_its_own_step_names_the_intermediate_shaft_not_the_i
 
 def test_the_grid_reading_is_np_interp_bit_for_bit():
     """signals.shaft.on_grid, read_at's linear step on its 4 x denser samples, is np.interp on the grid
-    0 … n-1 to the last bit: inside, on the grid points, at both ends and beyond them, in 1-D and 2-D."""
-    from gearlab.signals.shaft import on_grid
+    0 … n-1 to the last bit: inside, on the grid points, at both ends and beyond them, in 1-D and 2-D;
+    its compiled pass (float64) and its numpy form (any other dtype) alike."""
+    from gearlab.signals.shaft import on_grid, on_grid_numpy
 
     rng = np.random.default_rng(3)
     for n in (1, 2, 7, 4096, 200_001):
@@ -120,7 +121,10 @@ def test_the_grid_reading_is_np_interp_bit_for_bit():
             rng.uniform(-3, n + 3, size=20_000),
             np.arange(n, dtype=np.float64),
             np.arange(n) * 0.37,
-            np.array([-0.0, 0.0, n - 1.0, n - 1 + 1e-9, n + 0.5]),
-            rng.uniform(0, n, size=(7, 11)),
+            np.array([-0.0, 0.0, n - 1.0, n - 1 + 1e-9, n + 0.5, -np.inf, np.inf]),
+            rng.uniform(0, n, size=(7, 22))[:, ::2],
         ):
-            assert np.array_equal(on_grid(x, fp), np.interp(x, np.arange(n, dtype=np.float64), fp)), (n, x[:3])
+            want = np.interp(x, np.arange(n, dtype=np.float64), fp)
+            for read in (on_grid, on_grid_numpy):
+                assert np.array_equal(read(x, fp).view(np.int64), want.view(np.int64)), (read, n, x[:3])
+    assert np.isnan(on_grid(np.array([np.nan, 0.5]), np.arange(3.0))[0])  # no index read past the grid
