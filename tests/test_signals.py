@@ -256,6 +256,27 @@ def test_noise_is_deterministic_given_the_seed():
     assert np.array_equal(a, b) and not np.allclose(a, c)
 
 
+@pytest.mark.parametrize("kind", NOISE_KINDS)
+def test_noise_drawn_again_is_the_draw_and_leaves_the_generator_where_the_draw_does(kind, monkeypatch):
+    """A generator in a state seen before gets the standard noise drawn then (kept, signals.noise._DRAWN):
+    the same values as a fresh draw, and the generator left where that draw leaves it, so its next draws
+    are as before; another state (the same seed, used first) draws afresh."""
+    from gearlab.signals import noise
+
+    x = np.tile(np.sin(grid()), (3, 1)) * [[1.0], [2.0], [0.5]]
+    monkeypatch.setattr(noise, "_DRAWN", noise.OrderedDict())
+    first, again, used = (np.random.default_rng([7, 1]) for _ in range(3))
+    used.uniform()
+    drawn = [add_noise(x, 3.0, kind, g) for g in (first, again, used)]
+    assert len(noise._DRAWN) == 2  # the second generator's draw was the first's
+    fresh = np.random.default_rng([7, 1])
+    standard = noise._STANDARD_NOISE[kind](fresh, x.shape)
+    assert np.array_equal(drawn[1], x + noise._rms(x) * 10 ** (-3.0 / 20) / noise._rms(standard) * standard)
+    assert np.array_equal(drawn[0], drawn[1]) and not np.allclose(drawn[2], drawn[1])
+    after = [g.standard_normal(5) for g in (first, again, fresh)]
+    assert np.array_equal(after[0], after[2]) and np.array_equal(after[1], after[2])
+
+
 @pytest.mark.parametrize("j", [4, 16, 60])
 def test_tsa_lowers_the_noise_rms_as_one_over_root_j(j):
     clean = np.tile(np.sin(25 * grid()) + 0.3 * np.cos(3 * grid()), (j, 1))

@@ -18,6 +18,8 @@ per-revolution rescaling is what makes its level comparable; its impulses remain
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
 from ..errors import GearlabInputError
@@ -40,6 +42,46 @@ def _rms(x: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean(x * x, axis=-1, keepdims=True))
 
 
+# Standard noise drawn before, by the state of the generator that drew it: (kind, shape, state) -> (noise,
+# its rows' RMS, the generator's state after the draw). A gap search adds the source's sensor noise to
+# every candidate's rows with the rows' own seeds ([seed, effect, row]): the same draws at every
+# evaluation (21,210 draws, 9.7 s of CPU, in seven test files' gap fits and detections). Given again
+# the same state a generator draws the same numbers: the kept ones are returned and the generator
+# is left where the draw leaves it, so every later draw is as before. At most _DRAWN_BYTES, least
+# recently used out first.
+_DRAWN: OrderedDict = OrderedDict()
+_DRAWN_BYTES = 1 << 26
+_drawn_size = [0]  # the bytes of the noise kept
+
+
+def _frozen(state):
+    """A bit generator's state (nested dicts of ints, strings and arrays) as a dictionary key."""
+    if isinstance(state, dict):
+        return tuple((k, _frozen(v)) for k, v in sorted(state.items()))
+    if isinstance(state, np.ndarray):
+        return (state.dtype.str, state.shape, state.tobytes())
+    return state
+
+
+def _standard_noise(kind: str, rng: np.random.Generator, shape: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """(standard noise of *kind* and *shape* drawn by *rng*, its rows' RMS), kept by the generator's state."""
+    bits = rng.bit_generator
+    key = (kind, shape, _frozen(bits.state))
+    kept = _DRAWN.get(key)
+    if kept is not None:
+        _DRAWN.move_to_end(key)
+        bits.state = kept[2]
+        return kept[0], kept[1]
+    noise = _STANDARD_NOISE[kind](rng, shape)
+    noise.flags.writeable = False
+    rms = _rms(noise)
+    _DRAWN[key] = (noise, rms, bits.state)
+    _drawn_size[0] += noise.nbytes
+    while _drawn_size[0] > _DRAWN_BYTES and len(_DRAWN) > 1:
+        _drawn_size[0] -= _DRAWN.popitem(last=False)[1][0].nbytes
+    return noise, rms
+
+
 def add_noise(x: np.ndarray, snr_db: float, kind: str, rng: np.random.Generator) -> np.ndarray:
     """x + noise, each row (last axis = time/angle) at its own SNR_dB of *snr_db* (eq. 4.1–4.5).
 
@@ -55,9 +97,9 @@ def add_noise(x: np.ndarray, snr_db: float, kind: str, rng: np.random.Generator)
         )
     s = check_array(x, "signal")
     snr_db = check_real(snr_db, "SNR (dB)")
-    noise = _STANDARD_NOISE[kind](rng, s.shape)
+    noise, rms_noise = _standard_noise(kind, rng, s.shape)
     rms_required = _rms(s) * 10.0 ** (-snr_db / 20.0)  # eq. 4.3
-    scale = rms_required / _rms(noise)  # eq. 4.4
+    scale = rms_required / rms_noise  # eq. 4.4
     return s + scale * noise  # eq. 4.5
 
 
