@@ -200,3 +200,31 @@ def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
     said = [str(t) for t in score_tables([row], "run")]
     assert any(t.startswith("level 1.6 x its history's (another load or gain?)") for t in said), said
     assert level_line(1.1) == ""
+
+
+def test_a_few_samples_clipped_at_the_range_are_bridged_as_a_spike_is(tmp_path):
+    # the 25/52 + 16/81 history's third take held a knock over its int24 WAV's 5 V (4 samples flat at full scale):
+    # left whole (a lone sample only was bridged), its units' fm4 126 set the record10 threshold at 40.4 (3.77
+    # without), and the 16T chip's takes (fm4 10.4, healthy 3) went uncalled by fm4 and na4
+    from gearlab.data.recordings import cut_recording
+    from gearlab.gearbox.orders import TachoShaft
+    from gearlab.signals.spikes import without_spikes
+
+    take = dict(np.load(_box_b_take(tmp_path / "h.npz", 3)))
+    take["acc_top"][20000:20004] = 50.0  # g: a logger's range
+    np.savez(tmp_path / "knock.npz", **take)
+    shaft = TachoShaft(name="intermediate", a=25, b=52)
+    rec = cut_recording(
+        str(tmp_path / "knock.npz"), vibration="acc_top", tacho="tacho", pulses_per_rev=4, tacho_shaft=shaft
+    )
+    bridged = without_spikes(rec.revolutions, rec.fs, rec.speed_hz)
+    assert np.abs(rec.revolutions).max() > 40 and np.abs(bridged).max() < 5, np.abs(bridged).max()
+    # a burst at one angle of a shaft every turn is the gearbox's: left whole
+    take["acc_top"][20000:20004] = take["acc_top"][20000:20004] * 0 + take["acc_top"][:4]
+    t = np.arange(take["acc_top"].size) / float(take["fs"])
+    take["acc_top"] = take["acc_top"] + 40.0 * ((25.0 * t) % 1 < 1 / 409.6)
+    np.savez(tmp_path / "tooth.npz", **take)
+    rec = cut_recording(
+        str(tmp_path / "tooth.npz"), vibration="acc_top", tacho="tacho", pulses_per_rev=4, tacho_shaft=shaft
+    )
+    assert np.array_equal(without_spikes(rec.revolutions, rec.fs, rec.speed_hz), rec.revolutions)
