@@ -190,6 +190,10 @@ def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
     )
     cond["test"] = [take("quiet.csv", 0.6)]
     assert level_warnings(cond)[0].startswith("quiet.csv: level 0."), level_warnings(cond)
+    # a history of two loads (the 25/52 + 16/81 box's, 1 and 1.5 x): NA4's threshold 259, the chip's 20-100 uncalled
+    cond = {"history": [take("h1.csv", 1.0), take("h2.csv", 1.0), take("h3.csv", 1.0), take("h4.csv", 1.5)], "test": []}
+    (said,) = level_warnings(cond)
+    assert said.startswith("the history's levels span 0.99 .. 1.5 x their median (two loads or gains?): NA4"), said
     # gearlab score said nothing either (NA4: 'fault' on the healthy take): its row holds the line, printed per file
     from gearlab.kinds.detection_records import level_line
     from gearlab.terminal import score_tables
