@@ -608,25 +608,18 @@ COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
 COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
 
 
-def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
-    """The speed per sample over its mean (a smooth course, mean 1) of a record without a tacho, from its own
-    spectra: each window's spectrum (lines over the running median, on a log-frequency axis, where a speed
-    change is a shift) correlated with the middle window's, every line of every stage at once; a quadratic
-    through the windows' ratios; None where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
-    the mesh harmonic's band was narrower than its sweep."""
+def lifted_rows(signal: np.ndarray, fs: float, starts, size: int, step: float, wide: float):
+    """(log-frequency axis, rows): each window of *size* samples from *starts*, its spectrum's lines over the
+    running median (log, clipped at 0) on a log-frequency axis of *step* (where a speed change is a shift),
+    less its mean; None where the band read (20 bins up to 0.45 fs) spans under *wide* x."""
     from scipy import ndimage
 
-    n = signal.size
-    size = n // 8
-    if size < 256:
-        return None
-    starts = np.linspace(0, n - size, COURSE_WINDOWS).astype(int)
     nfft = 1 << int(math.ceil(math.log2(2 * size)))
     freq = np.fft.rfftfreq(nfft, 1 / fs)
     low, high = max(20 * fs / size, 1.0), 0.45 * fs
-    if high <= low * 1.5:
+    if high <= low * wide:
         return None
-    axis = np.exp(np.arange(math.log(low), math.log(high), COURSE_STEP))
+    axis = np.exp(np.arange(math.log(low), math.log(high), step))
     window = np.hanning(size)
     rows = []
     for a in starts:
@@ -636,6 +629,23 @@ def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
         rows.append(np.interp(axis, freq, lifted))
     rows = np.array(rows)
     rows -= rows.mean(axis=1, keepdims=True)
+    return axis, rows
+
+
+def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
+    """The speed per sample over its mean (a smooth course, mean 1) of a record without a tacho, from its own
+    spectra: each window's spectrum (lines over the running median, on a log-frequency axis, where a speed
+    change is a shift) correlated with the middle window's, every line of every stage at once; a quadratic
+    through the windows' ratios; None where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
+    the mesh harmonic's band was narrower than its sweep."""
+    n = signal.size
+    size = n // 8
+    if size < 256:
+        return None
+    starts = np.linspace(0, n - size, COURSE_WINDOWS).astype(int)
+    if (lifted := lifted_rows(signal, fs, starts, size, COURSE_STEP, 1.5)) is None:
+        return None
+    axis, rows = lifted
     ref = rows[COURSE_WINDOWS // 2]
     reach = int(math.log(1 + COURSE_SPAN) / COURSE_STEP)
     m = 1 << int(math.ceil(math.log2(2 * axis.size)))
@@ -667,23 +677,10 @@ def speed_shift(signal: np.ndarray, fs: float) -> float | None:
     every line of every stage at once, as speed_course reads a smaller one); None within SHIFT_MIN of 1. An
     outside lab's 31/73 run-up from 20 to 35 Hz without its tacho: 'no line within ±1 % of a mesh frequency
     (the lines fit 0.3794 Hz (27.39 Hz as 1×M1))', nothing said of its speed's course; read 1.687 (1.687 true)."""
-    from scipy import ndimage
-
     size = signal.size // SHIFT_PARTS
-    if size < 256:
+    if size < 256 or (lifted := lifted_rows(signal, fs, [0, signal.size - size], size, SHIFT_STEP, 4.0)) is None:
         return None
-    nfft = 1 << int(math.ceil(math.log2(2 * size)))
-    freq = np.fft.rfftfreq(nfft, 1 / fs)
-    low, high = max(20 * fs / size, 1.0), 0.45 * fs
-    if high <= low * 4:
-        return None
-    axis = np.exp(np.arange(math.log(low), math.log(high), SHIFT_STEP))
-    rows = []
-    for a in (0, signal.size - size):
-        amp = np.abs(np.fft.rfft(signal[a : a + size] * np.hanning(size), nfft))
-        floor = np.maximum(ndimage.median_filter(amp, size=min(FLOOR_BINS, amp.size | 1), mode="nearest"), 1e-300)
-        row = np.interp(axis, freq, np.clip(np.log(np.maximum(amp, 1e-300) / floor), 0.0, None))
-        rows.append(row - row.mean())
+    axis, rows = lifted
     reach = int(math.log(1 + SHIFT_SPAN) / SHIFT_STEP)
     m = 1 << int(math.ceil(math.log2(2 * axis.size)))
     cross = np.fft.irfft(np.fft.rfft(rows[1], m) * np.conj(np.fft.rfft(rows[0], m)), m)
