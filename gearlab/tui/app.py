@@ -201,7 +201,10 @@ class GearlabApp(App):
         target = None
         for entry in self.entries:
             name = str(entry.path.relative_to(self.directory))
-            label = Text.assemble(("✓ " if entry.ok else "✗ ", "green" if entry.ok else "red"), name)
+            good = entry.ok or bool(entry.gearbox)
+            label = Text.assemble(("✓ " if good else "✗ ", "green" if good else "red"), name)
+            if entry.gearbox is not None:
+                label.append(" gearbox", style="dim")
             node = tree.root.add(label, data=entry, expand=False, allow_expand=bool(entry.runs))
             target = node if entry.path == keep else target
             for run in entry.runs:
@@ -269,7 +272,16 @@ class GearlabApp(App):
             text = entry.path.read_text()
         except (OSError, UnicodeDecodeError) as exc:
             text = f"# cannot read {entry.path}: {exc}"
-        if entry.ok:
+        if entry.gearbox:
+            status.update(
+                Text.assemble(
+                    ("✓ valid", "bold green"),
+                    f"  {entry.gearbox.removeprefix('OK: ')}\nnothing to run: a scenario's [source] "
+                    f'gearbox = "{entry.path.name}" uses it (docs/your_gearbox.md)',
+                )
+            )
+            marked = set()
+        elif entry.ok:
             s = entry.scenario
             runs = f"{len(entry.runs)} past run(s)" if entry.runs else "no past runs"
             status.update(
@@ -316,6 +328,8 @@ class GearlabApp(App):
         entry = self.scenario_of(self.highlighted())
         if self.process is not None:
             self.notify("a run is in progress; c cancels it", severity="warning")
+        elif entry is not None and entry.gearbox is not None:
+            self.notify("a gearbox description runs in a scenario ([source] gearbox = ...)", severity="warning")
         elif entry is None or not entry.ok:
             self.notify("highlight a valid scenario in the tree first", severity="warning")
         else:
@@ -491,13 +505,20 @@ class GearlabApp(App):
             scenario = self.validated.of_run(rundir)
             kind = SCENARIO_KINDS[scenario.kind]
             records = rundir.records()
-            table.show_markdown(verdict_table(rundir) or kind.records_table(scenario, records))
+            headline = verdict_table(rundir)
             self.charts = kind.charts(scenario, rundir)
             summary = kind.summary_lines(rundir) if run.finished else []
             said = verdict_lines(rundir) if run.finished else []
+            # a kind with no headline table (detection: its AUC, units-called, which-gear and learned tables)
+            # shows its summary's tables under their captions, as the terminal prints them; the records table
+            # (a detection run's 'unit | method', no numbers) stood in for them, and other_lines dropped them
+            own = headline is None and any("|" in line for line in summary)
+            table.display = not own
+            table.show_markdown("" if own else headline or kind.records_table(scenario, records))
         except (GearlabInputError, OSError, ValueError, KeyError) as exc:
             status.update(Text(f"{run.path}: cannot show this run: {exc}", style="red"))
             table.clear(columns=True)
+            table.display = True
             verdict.update("")
             lines.update("")
             self.charts = []
@@ -507,7 +528,14 @@ class GearlabApp(App):
         status.update(Text.assemble((f"{scenario.name} ", "bold"), f"({scenario.kind}), {run.path.name}: {state}"))
         verdict.update(Text(" ".join(said)))
         verdict.display = bool(said)
-        lines.update(escape("\n".join(other_lines(summary))))
+        if own:
+            from rich.console import Group
+
+            from ..terminal import results
+
+            lines.update(Group(*results(summary)))
+        else:
+            lines.update(escape("\n".join(other_lines(summary))))
         self.chart_index = 0
         self.show_chart()
         if switch:
@@ -571,6 +599,7 @@ class GearlabApp(App):
         lines.insert(len(runs), differences_text(runs))
         self.query_one("#verdict", Static).update(Text("\n".join(lines)))
         self.query_one("#verdict", Static).display = True
+        self.query_one("#results-table", ResultTable).display = True  # a detection run's view hides it
         self.query_one("#results-table", ResultTable).show_markdown(compare_markdown(runs))
         self.query_one("#results-lines", Static).update("")
         self.charts, self.chart_index = compare_charts(runs), 0
@@ -650,10 +679,15 @@ class GearlabApp(App):
     def _validate(self, entry: ScenarioEntry) -> None:
         self.validated.forget(entry.path)  # asked for: read afresh, whatever the files' times say
         try:
-            s = load_scenario(entry.path)
+            said = self.validated.description(entry.path)
+            s = load_scenario(entry.path) if said is None else None
         except GearlabInputError as exc:
             self.notify(str(exc), severity="error", title="invalid")
         else:
+            if said is not None:
+                self.notify(said, title="valid")
+                self.rescan()
+                return
             self.notify(f"OK: {s.name} ({s.kind}); {SCENARIO_KINDS[s.kind].describe(s)}", title="valid")
         self.rescan()
 

@@ -22,6 +22,8 @@ class ScenarioEntry:
     scenario: Scenario | None = None
     error: str = ""  # the validation error, file/table/key included
     runs: list[RunEntry] = field(default_factory=list)
+    # a gearbox description ([gearbox] or [[stages]], no [scenario]): validate's OK line, or "" with its error
+    gearbox: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -100,8 +102,18 @@ class Validated:
         files += _named_files(run.scenario_path(), run.base() or run.path)
         return self._load(("run", run.path), files, lambda: load_scenario(run=run))
 
+    def description(self, path: Path) -> str | None:
+        """validated_description(path): a gearbox description's OK line (its mistake raised), None for a
+        scenario; read again only when a file it reads changed."""
+        from ..gearbox import validated_description
+
+        path = Path(path)
+        files = [path, *_named_files(path, path.parent)]
+        return self._load(("gearbox", path), files, lambda: validated_description(path))
+
     def forget(self, path: Path) -> None:
         self._seen.pop(("file", Path(path)), None)
+        self._seen.pop(("gearbox", Path(path)), None)
 
 
 def scan(directory: Path, cwd: Path, validated: Validated | None = None) -> list[ScenarioEntry]:
@@ -114,6 +126,18 @@ def scan(directory: Path, cwd: Path, validated: Validated | None = None) -> list
         if in_run(path, Path(directory)):
             continue
         entry = ScenarioEntry(path)
+        # the gearbox description a user writes beside the scenarios that name it (docs/your_gearbox.md) is
+        # one, checked as `gearlab validate` checks it: it was listed as an invalid scenario, 'missing table
+        # [scenario]', in red beside the valid ones
+        try:
+            entry.gearbox = validated.description(path)
+        except GearlabInputError as exc:
+            entry.gearbox, entry.error = "", str(exc)
+        except Exception:  # noqa: BLE001 - read as a scenario below, which says what is wrong
+            entry.gearbox = None
+        if entry.gearbox is not None:
+            entries.append(entry)
+            continue
         try:
             entry.scenario = validated.scenario(path)
         except GearlabInputError as exc:

@@ -1,0 +1,104 @@
+"""An outside user's fifth look (issue 39, "How it will be checked"; helper J): the TUI in the user's own project
+folder (`gearlab tui .` beside the gearbox description, the scenarios and their runs), the learned rows of a
+detection scenario and `gearlab score` as the TUI and the report show it. The recordings are made here, small."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+from conftest import unrendered
+from gearboxes import description, stage
+from rich.console import Console
+from textual.widgets import Static
+
+from gearlab.tui import GearlabApp
+
+BOX_B = description(
+    stage(25, 52),
+    stage(16, 81, module="3 mm", bores=("30 mm", "45 mm")),
+    name="boxB",
+    speed="25 Hz",
+    load="40 N*m",
+    near="intermediate",
+    tacho="intermediate",
+    marks=4,
+)
+
+
+def shown(app, selector: str) -> str:
+    """What a Static shows, as plain text at 200 columns (a str, a Text or a Group of tables)."""
+    widget = app.query_one(selector, Static)
+    console = Console(width=200, record=True, file=open("/dev/null", "w"))  # noqa: SIM115 - record only
+    console.print(widget.content)
+    return console.export_text()
+
+
+def test_a_gearbox_description_beside_the_scenarios_is_listed_as_one(tmp_path, monkeypatch):
+    # `gearlab tui .` in a project folder holding boxB.toml (the guide's step 1) beside its scenarios listed the
+    # description in red as an invalid scenario, 'missing table [scenario] (with name, kind and description)'; a
+    # description with a mistake said the same, not its mistake
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "boxB.toml").write_text(BOX_B)
+    (tmp_path / "bad_box.toml").write_text(BOX_B.replace("pulses_per_rev = 4", "pulses_per_rev = 0"))
+
+    async def main():
+        async with GearlabApp(tmp_path).run_test(size=(160, 45)) as pilot:
+            await pilot.pause()
+            app = pilot.app
+            good, bad = (next(e for e in app.entries if e.path.name == n) for n in ("boxB.toml", "bad_box.toml"))
+            assert good.gearbox and "gearbox description 'boxB', stages 25/52, 16/81" in good.gearbox, good
+            assert "pulses_per_rev" in bad.error and "missing table" not in bad.error, bad.error
+            labels = [str(n.label) for n in app.tree.root.children]
+            assert "✓ boxB.toml gearbox" in labels and "✗ bad_box.toml gearbox" in labels, labels
+            app._move_to(good.path)
+            await pilot.pause()
+            said = shown(app, "#scenario-status")
+            assert "✓ valid" in said and "stages 25/52, 16/81" in said and "missing table" not in said, said
+            await pilot.press("r")  # nothing to run: said so, not 'highlight a valid scenario'
+            await pilot.pause()
+            assert app.process is None
+            assert "gearbox description runs in a scenario" in list(app._notifications)[-1].message
+
+    asyncio.run(main())
+
+
+@pytest.fixture(scope="module")
+def detection_run(tmp_path_factory):
+    """A finished run of the tiny detection scenario (tests/detection_scenario.py), the matched filter beside FM4
+    and NA4, from its records' folder; its figures not drawn."""
+    from detection_scenario import run_in_module, scenario
+
+    folder = tmp_path_factory.mktemp("tui_detection")
+    path = scenario(folder, methods=("matched_filter",))
+    text = path.read_text().replace("[scenario]", f'[output]\ndir = "{folder / "runs"}"\n\n[scenario]', 1)
+    path.write_text(text)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("gearlab.plots.save", unrendered)
+        mp.setenv("GEARLAB_CACHE", str(folder / "cache"))
+        run = run_in_module(path, folder / "runs", cwd=folder / "data", figures=False)
+    return path.parent, run
+
+
+def test_a_detection_run_s_results_show_its_tables_in_the_tui(detection_run):
+    # the Results tab of a finished detection run showed a table 'unit | method' (a row per condition and method,
+    # no number) and the headings of the run's tables without them: the AUC / detected / false-alarm table, the
+    # units called per label, which gear each test record's change lies on, what the learned rows learned; the
+    # terminal and report.html print them
+    folder, run = detection_run
+
+    async def main():
+        async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
+            await pilot.pause()
+            app = pilot.app
+            (entry,) = [r for e in app.entries for r in e.runs if r.path == run]
+            app.show_results(entry)
+            await pilot.pause()
+            lines = shown(app, "#results-lines")
+            assert "det %" in lines and "FA %" in lines, lines[:2000]  # the AUC table, under its caption
+            row = next(line for line in lines.splitlines() if "matched_filter" in line and "│" in line)
+            assert any(c.isdigit() for c in row), row
+            assert "called % 'fault'" in lines, lines[:3000]
+            assert not app.query_one("#results-table").display  # no 'unit | method' table in their stead
+
+    asyncio.run(main())
