@@ -471,6 +471,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 "structure": structure if said == "preset" else lambda: None,
             }
         )
+
+        def keep(r: dict) -> None:
+            """*r* into results.jsonl, and its unit to the event stream (the TUI's live table and its count of
+            finished units, which said 'finished: 0 unit(s)' of every detection run); its scores stay out."""
+            run.append(r)
+            on_event(Event("record", stage="runs", record={k: r[k] for k in ("unit", "condition", "method") if k in r}))
+
         held: list[dict] = []  # trainings' records that ended before the classical ones were appended
         in_order = [False]  # the classical records appended
 
@@ -481,10 +488,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 if not (wait or aside.ready("classical")):
                     return
                 for r in aside.get("classical"):
-                    run.append(r)
+                    keep(r)
                 in_order[0] = True
             for r in held:
-                run.append(r)
+                keep(r)
             held.clear()
 
         later = asynchronous_orders(spec.source, shaft)  # a mesh of no whole order of the units' shaft: out
@@ -611,10 +618,10 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 if name not in records:
                     group = [records[unit_name(c, m, seed, v, k)] for k in folds[c]]
                     records[name] = crossed_record(name, group, rules[c])
-                    run.append(records[name])
+                    keep(records[name])
             if seeds != (None,) and unit_name(c, m, None, v) not in records:
                 group = [records[unit_name(c, m, s, v)] for s in seeds]
-                run.append(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
+                keep(ensemble_record(unit_name(c, m, None, v), group, rules[c]))
         aside.get("localisation")  # (localisation.json written aside)
         if differs := aside.get("structure"):
             on_event(Event("log", message=f"warning: {differs}"))
@@ -628,6 +635,7 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     "speeds_hz": v["speeds"],
                     # how each record's speed (and shaft angle) was found: tacho, declared, mesh orders
                     "speed_from": v["speed_from"],
+                    "warnings": v.get("warnings", []),  # a take off its history's level (level_warnings)
                     # each record's turn into register with the history: in tacho marks, or without a
                     # tacho in samples of the revolution (correlation; read_target)
                     "start_marks": v["shifts"],
@@ -661,6 +669,7 @@ def summary_lines(run: RunDir) -> list[str]:
         *([summary["shafts_md"].strip()] if summary.get("shafts_md") else []),
         *([summary["which_gear"]["md"].strip()] if summary.get("which_gear") else []),
         *([learned_md(summary["learned"]).strip()] if summary.get("learned") else []),
+        *summary.get("warnings", []),
         # without a tacho, how each record's speed was found and what that changes (table.md has it always)
         *([summary["records_md"].strip()] if not all(c.get("tacho", True) for c in conditions.values()) else []),
     ]

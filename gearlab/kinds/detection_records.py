@@ -357,7 +357,8 @@ def read_target(
                 f"{where}: condition '{name}' ({files}) has no history record; "
                 "each condition needs its own healthy history (give 'condition' to group files)"
             )
-        for line in level_warnings(cond):
+        cond["warnings"] = level_warnings(cond)  # kept in conditions.json: the report and the TUI say them too
+        for line in cond["warnings"]:
             on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter
         # leaves data (as the gap kind compares).

@@ -140,6 +140,9 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     if conditions is not None:
         summary["conditions"] = conditions
     summary["records_md"] = records_md(conditions)
+    # what the run warned of as it read the records (a take at another load than its history: NA4 reads the size
+    # as a change), where the tables are read later: the run's log alone said it
+    summary["warnings"] = [f"warning: {line}" for v in (conditions or {}).values() for line in v.get("warnings", [])]
     run.write_json("summary.json", summary)
     which = summary["which_gear"].get("md", "")
     run.write_text(
@@ -151,7 +154,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         + which
         + learned_md(summary["learned"])
         + "\n"
-        + summary["records_md"],
+        + summary["records_md"]
+        + "".join(f"\n{line}\n" for line in summary["warnings"]),
     )
     run.write_text("table.csv", table_csv(rows))
 
