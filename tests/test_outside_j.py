@@ -161,3 +161,30 @@ def test_a_detection_run_from_the_tui_counts_its_finished_units(detection_run, m
             assert {r["method"] for r in app.records} >= {"matched_filter", "fm4", "na4"}, app.records
 
     asyncio.run(main())
+
+
+def test_a_run_up_without_a_history_is_said_a_run_up_in_the_error(cli, tmp_path, monkeypatch):
+    # the 31/73 box's run-up (20 -> 35 Hz, tacho) beside steady 20 Hz takes: the run ended 'condition '27.5 Hz'
+    # (rec/A_runup.csv) has no history record', the one line the TUI shows of a failed run (its status); the
+    # run-up words (ef681d8) were in the log lines above it only
+    from test_outside_h import BOX_A, _run_up_csv
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "boxA.toml").write_text(BOX_A.replace('speed = "20 Hz"', 'speed = "20 Hz"\nload = "30 N*m"'))
+    takes = [_run_up_csv(tmp_path / f"h{i}.csv", 20.0, 20.0) for i in (1, 2)] + [
+        _run_up_csv(tmp_path / "up.csv", 20, 35)
+    ]
+    files = ", ".join(
+        f'{{ file = "{p.name}", role = "{r}", label = "healthy" }}'
+        for p, r in zip(takes, ("history", "history", "test"))
+    )
+    (tmp_path / "det.toml").write_text(
+        '[scenario]\nname = "runup"\nkind = "detection"\n\n[source]\ngearbox = "boxA.toml"\n'
+        'faults = { "chip@output gear" = [20] }\nhealthy = 48\n\n'
+        f'[target]\nvibration = "Beschl. 1 [g]"\ntacho = "Tacho [V]"\nfiles = [{files}]\n\n'
+        '[[methods]]\nadapter = "matched_filter"\n'
+    )
+    code, _, err = cli("run", tmp_path / "det.toml", "--quick", "--out", tmp_path / "runs")
+    last = err.strip().splitlines()[-1]
+    assert code == 2 and "has no history record" in last, err[-2000:]
+    assert "up.csv (20" in last and "over the take: a run-up or coast-down?" in last, last

@@ -22,6 +22,7 @@ from ..parts.measured import ROLES, Target, TargetFile, aligned
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
+from ..signals.checks import VARIES_WORDS
 from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
@@ -59,6 +60,12 @@ def level_warnings(cond: dict) -> list[str]:
             "sets its threshold over them; a condition per load (condition = ...) compares like with like"
         )
     return said
+
+
+def varies(how: str) -> str:
+    """Of a record's speed source *how* (cut_recording's angle_source), its run-up words: ' (20.26 Hz .. 34.86 Hz
+    over the take: a run-up or coast-down? ...)', else ""."""
+    return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how else ""
 
 
 def level_line(ratio: float) -> str:
@@ -352,7 +359,8 @@ def read_target(
         cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].first_revolution)
     for name, cond in conditions.items():
         if not cond["history"]:
-            files = ", ".join(f.path for f, _ in cond["test"])
+            # a run-up's speeds said here too: the TUI shows a failed run's last line alone (gearlab score's does)
+            files = ", ".join(f.path + varies(cond["speed_from"][f.path]) for f, _ in cond["test"])
             raise GearlabInputError(
                 f"{where}: condition '{name}' ({files}) has no history record; "
                 "each condition needs its own healthy history (give 'condition' to group files)"
