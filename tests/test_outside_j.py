@@ -26,10 +26,10 @@ BOX_B = description(
 )
 
 
-def shown(app, selector: str) -> str:
-    """What a Static shows, as plain text at 200 columns (a str, a Text or a Group of tables)."""
+def shown(app, selector: str, width: int = 200) -> str:
+    """What a Static shows, as plain text at *width* columns (a str, a Text or a Group of tables)."""
     widget = app.query_one(selector, Static)
-    console = Console(width=200, record=True, file=open("/dev/null", "w"))  # noqa: SIM115 - record only
+    console = Console(width=width, record=True, file=open("/dev/null", "w"))  # noqa: SIM115 - record only
     console.print(widget.content)
     return console.export_text()
 
@@ -188,3 +188,25 @@ def test_a_run_up_without_a_history_is_said_a_run_up_in_the_error(cli, tmp_path,
     last = err.strip().splitlines()[-1]
     assert code == 2 and "has no history record" in last, err[-2000:]
     assert "up.csv (20" in last and "over the take: a run-up or coast-down?" in last, last
+
+
+def test_at_80_columns_a_wide_table_of_the_results_is_a_block_per_row(detection_run):
+    # at 80 x 24 the which-gear table (nine columns) was folded into five-cell columns: '../da|ta/f1|.zip', every
+    # word cut; now fitted as the terminal fits it (turned: a column a record), else a block per record, each column a
+    # 'name: value' line (box B's twelve takes, at 80 and at 160 columns)
+    folder, run = detection_run
+
+    async def main():
+        async with GearlabApp(folder).run_test(size=(80, 24)) as pilot:
+            await pilot.pause()
+            (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
+            pilot.app.show_results(entry)
+            await pilot.pause()
+            width = pilot.app.query_one("#results-lines").size.width
+            assert 60 < width <= 80, width
+            lines = shown(pilot.app, "#results-lines", width).splitlines()
+            # turned (a column a record) where that keeps the words whole, as the terminal does; else a block a record
+            assert any("../data/f1.zip" in line for line in lines), "\n".join(lines)
+            assert any("localised on" in line and "input pinion" in line for line in lines), "\n".join(lines)
+
+    asyncio.run(main())

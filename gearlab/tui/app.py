@@ -39,7 +39,7 @@ from .catalog import RunEntry, ScenarioEntry, Validated, error_line, run_entry, 
 from .plugins import PluginsPane
 from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen
-from .widgets import BrowserTree, ChartView, ResultTable, TomlSyntax
+from .widgets import BrowserTree, ChartView, ResultTable, TomlSyntax, summary_view
 
 # Below this many columns the sidebar folds away while a run or results are on show.
 NARROW = 100
@@ -528,12 +528,9 @@ class GearlabApp(App):
         status.update(Text.assemble((f"{scenario.name} ", "bold"), f"({scenario.kind}), {run.path.name}: {state}"))
         verdict.update(Text(" ".join(said)))
         verdict.display = bool(said)
-        if own:
-            from rich.console import Group
-
-            from ..terminal import results
-
-            lines.update(Group(*results(summary)))
+        if own:  # as wide as the results view is (the sidebar folds below NARROW columns)
+            beside = 0 if self.size.width < NARROW or self.tree.has_class("folded") else self.tree.outer_size.width
+            lines.update(summary_view(summary, self.size.width - beside - 4))
         else:
             lines.update(escape("\n".join(other_lines(summary))))
         self.chart_index = 0

@@ -325,3 +325,29 @@ class BrowserTree(Tree):
             node.collapse()
         elif node.parent is not None and not node.parent.is_root:
             self.move_cursor(node.parent)
+
+
+def summary_view(summary: list[str], width: int):
+    """A run's summary lines as the terminal prints them (terminal.results: each table under its caption, its
+    columns fitted to *width*); a table whose words cannot stay whole in *width* a block per row, its first two
+    cells, then each other column as 'name: value'. A detection run's which-gear table at 80 columns was nine
+    columns of five cells, every word and file name cut."""
+    from rich.console import Group
+    from rich.table import Table
+
+    from ..terminal import _narrowest, results
+
+    console = Console(width=max(width, 20), force_terminal=True)
+    shown = []
+    for item in results(summary, console):
+        if not isinstance(item, Table) or _narrowest(console, item) <= console.width:
+            shown.append(item)
+            continue
+        heads = [Text(c.header).plain if isinstance(c.header, str) else c.header.plain for c in item.columns]
+        cells = [[c.plain if isinstance(c, Text) else str(c) for c in column.cells] for column in item.columns]
+        if item.title:
+            shown.append(Text(item.title.plain if isinstance(item.title, Text) else str(item.title), style="bold"))
+        for row in zip(*cells):
+            shown.append(Text(" · ".join(c for c in row[:2] if c), style="bold"))
+            shown.extend(Text(f"  {h}: {c}") for h, c in zip(heads[2:], row[2:]) if c not in ("", "–"))
+    return Group(*shown)
