@@ -38,7 +38,7 @@ from ..verdict import verdict_lines, verdict_table
 from .catalog import RunEntry, ScenarioEntry, Validated, error_line, run_entry, runs_base, scan
 from .plugins import PluginsPane
 from .progress import Stages
-from .screens import KeysScreen, RunOptions, RunOptionsScreen
+from .screens import KeysScreen, RunOptions, RunOptionsScreen, ScoreScreen
 from .widgets import BrowserTree, ChartView, ResultTable, TomlSyntax, summary_view
 
 # Below this many columns the sidebar folds away while a run or results are on show.
@@ -93,6 +93,13 @@ class GearlabApp(App):
             tooltip="Compare the marked runs (two or more, one kind)",
         ),
         Binding("n", "next_chart", "Next chart", show=False, tooltip="Next chart in the Results tab"),
+        Binding(
+            "s",
+            "score",
+            "Score new recordings",
+            show=False,
+            tooltip="Score new recordings with the highlighted (else the shown) finished detection run (gearlab score)",
+        ),
         Binding("b", "toggle_sidebar", "Fold or show the sidebar", show=False),
         Binding("1", "show('scenario')", "Scenario tab", show=False),
         Binding("2", "show('run')", "Progress tab", show=False),
@@ -547,6 +554,55 @@ class GearlabApp(App):
         if self.charts:
             self.chart_index = (self.chart_index + 1) % len(self.charts)
             self.show_chart()
+
+    def action_score(self) -> None:
+        """`gearlab score RUN FILE...` with the highlighted (else the shown) finished detection run: its output in
+        the Progress tab, then the run's Results, whose last chart is the scoring trend."""
+        run = self.highlighted()
+        run = run if isinstance(run, RunEntry) else self.opened
+        if self.process is not None:
+            self.notify("a run is in progress; c cancels it", severity="warning")
+        elif run is None or not (run.path / "scoring.json").is_file():
+            self.notify("highlight a finished detection run (it keeps scoring.json) first", severity="warning")
+        else:
+
+            def chosen(typed: str | None) -> None:
+                if typed:
+                    self.scored = typed
+                    self.score(run, typed)
+
+            self.push_screen(ScoreScreen(str(self._shown(run.path)), getattr(self, "scored", "")), chosen)
+
+    @work(exclusive=True, group="run")
+    async def score(self, run: RunEntry, typed: str) -> None:
+        import shlex
+
+        log, status = self.query_one("#log", RichLog), self.query_one("#run-status", Static)
+        log.clear()
+        status.update(f"scoring with {self._shown(run.path)}; c cancels")
+        self.switch_to("run")
+        self.cancelled = False
+        self.process = await asyncio.create_subprocess_exec(
+            *(sys.executable, "-m", "gearlab", "score", str(run.path), *shlex.split(typed)),
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.STDOUT,
+            cwd=self.cwd,  # the files typed are read from the folder the TUI started in, as the shell would
+            start_new_session=True,
+        )
+        lines = []
+        async for raw in self.process.stdout:
+            lines.append(raw.decode(errors="replace").rstrip("\n"))
+            log.write(lines[-1])
+        code, self.process = await self.process.wait(), None
+        if code == 0:
+            status.update(Text(f"scored: {typed}", style="green"))
+            self.show_results(run_entry(run.path))  # the trend chart, with the new takes
+            self.chart_index = len(self.charts) - 1
+            self.show_chart()
+        else:
+            last = lines[-1] if lines else f"exit code {code}"
+            status.update(Text(f"{'cancelled' if self.cancelled else f'failed (exit {code})'}: {last}", style="red"))
+            self.notify(f"gearlab score: {last}", severity="error")
 
     def action_open_report(self) -> None:
         """Open report.html of the highlighted run (else the run on show) in the web browser."""

@@ -147,3 +147,30 @@ class RunOptionsScreen(ModalScreen[RunOptions | None]):
             trials=number("trials", 1),
             seed=number("seed", 0),
         )
+
+
+class ScoreScreen(ModalScreen[str | None]):
+    """`gearlab score RUN ...` from the TUI: the recordings and options, as typed after the run directory."""
+
+    BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
+    DEFAULT_CSS = """
+    ScoreScreen { align: center middle; }
+    ScoreScreen > VerticalScroll { width: 90; max-width: 95%; height: auto; max-height: 95%;
+                                   border: thick $primary; background: $surface; padding: 0 1; }
+    """
+
+    def __init__(self, run: str, typed: str = ""):
+        super().__init__()
+        self.run, self.typed = run, typed
+
+    def compose(self) -> ComposeResult:
+        with VerticalScroll():
+            yield Label(Text(f"gearlab score {self.run}", style="bold"))
+            yield Label("recordings and options, as after the run directory (enter scores, escape closes):")
+            yield Input(self.typed, placeholder="rec/next_week.csv --key vibration=acc_V", id="score-args")
+
+    def on_mount(self) -> None:
+        self.query_one(Input).focus()  # typed into at once
+
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        self.dismiss(event.value.strip() or None)
