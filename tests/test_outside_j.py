@@ -167,23 +167,7 @@ def test_a_run_up_without_a_history_is_said_a_run_up_in_the_error(cli, tmp_path,
     # the 31/73 box's run-up (20 -> 35 Hz, tacho) beside steady 20 Hz takes: the run ended 'condition '27.5 Hz'
     # (rec/A_runup.csv) has no history record', the one line the TUI shows of a failed run (its status); the
     # run-up words (ef681d8) were in the log lines above it only
-    from test_outside_h import BOX_A, _run_up_csv
-
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    (tmp_path / "boxA.toml").write_text(BOX_A.replace('speed = "20 Hz"', 'speed = "20 Hz"\nload = "30 N*m"'))
-    takes = [_run_up_csv(tmp_path / f"h{i}.csv", 20.0, 20.0) for i in (1, 2)] + [
-        _run_up_csv(tmp_path / "up.csv", 20, 35)
-    ]
-    files = ", ".join(
-        f'{{ file = "{p.name}", role = "{r}", label = "healthy" }}'
-        for p, r in zip(takes, ("history", "history", "test"))
-    )
-    (tmp_path / "det.toml").write_text(
-        '[scenario]\nname = "runup"\nkind = "detection"\n\n[source]\ngearbox = "boxA.toml"\n'
-        'faults = { "chip@output gear" = [20] }\nhealthy = 48\n\n'
-        f'[target]\nvibration = "Beschl. 1 [g]"\ntacho = "Tacho [V]"\nfiles = [{files}]\n\n'
-        '[[methods]]\nadapter = "matched_filter"\n'
-    )
+    _run_up_scenario(tmp_path, monkeypatch, "")
     code, _, err = cli("run", tmp_path / "det.toml", "--quick", "--out", tmp_path / "runs")
     last = err.strip().splitlines()[-1]
     assert code == 2 and "has no history record" in last, err[-2000:]
@@ -241,3 +225,39 @@ def test_s_scores_new_recordings_with_the_run_and_shows_the_trend(detection_run,
             assert "scored records" in title and "f2.zip" in title, title
 
     asyncio.run(main())
+
+
+def _run_up_scenario(tmp_path, monkeypatch, condition: str):
+    """det.toml: the 31/73 box (73T driving, tacho), two steady 20 Hz history takes and a test take running up
+    20 -> 35 Hz, given *condition* (a TOML inline key, or "")."""
+    from test_outside_h import BOX_A, _run_up_csv
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "boxA.toml").write_text(BOX_A.replace('speed = "20 Hz"', 'speed = "20 Hz"\nload = "30 N*m"'))
+    takes = [_run_up_csv(tmp_path / f"h{i}.csv", 20.0, 20.0) for i in (1, 2)] + [
+        _run_up_csv(tmp_path / "up.csv", 20, 35)
+    ]
+    files = ", ".join(
+        f'{{ file = "{p.name}", role = "{r}", label = "healthy"{condition if r == "test" else ""} }}'
+        for p, r in zip(takes, ("history", "history", "test"))
+    )
+    (tmp_path / "det.toml").write_text(
+        '[scenario]\nname = "runup"\nkind = "detection"\n\n[source]\ngearbox = "boxA.toml"\n'
+        'faults = { "chip@output gear" = [20] }\nhealthy = 48\n\n'
+        f'[target]\nvibration = "Beschl. 1 [g]"\ntacho = "Tacho [V]"\nfiles = [{files}]\n\n'
+        '[[methods]]\nadapter = "matched_filter"\n'
+    )
+    return tmp_path / "det.toml"
+
+
+def test_a_run_up_grouped_by_hand_is_warned_of_in_the_run_s_warnings(tmp_path, monkeypatch):
+    # the same run-up given condition = "20 Hz" (the guide: groups by hand) runs on; its run-up words were in its
+    # speed line alone, which the TUI's Results and the report's verdict leave out where a tacho gave the speeds
+    from gearlab.kinds.detection_records import read_target, unit_shaft
+    from gearlab.notebook import load_scenario
+
+    spec = load_scenario(_run_up_scenario(tmp_path, monkeypatch, ', condition = "20 Hz"')).spec
+    (cond,) = read_target(spec.target, spec.detection.blocks, lambda e: None, shaft=unit_shaft(spec.source)).values()
+    said = [w for w in cond["warnings"] if w.startswith("up.csv: ")]
+    assert said and " Hz .. 34.7" in said[0] and "over the take: a run-up or coast-down?" in said[0], cond["warnings"]
+    assert not any(w.startswith("h1.csv: ") or w.startswith("h2.csv: ") for w in cond["warnings"]), cond["warnings"]

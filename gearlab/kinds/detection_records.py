@@ -365,7 +365,11 @@ def read_target(
                 f"{where}: condition '{name}' ({files}) has no history record; "
                 "each condition needs its own healthy history (give 'condition' to group files)"
             )
-        cond["warnings"] = level_warnings(cond)  # kept in conditions.json: the report and the TUI say them too
+        # kept in conditions.json: the report and the TUI say them too; a run-up grouped by hand (condition = ...)
+        # is one (its speed line alone said so, and the TUI's Results show no speed line where a tacho gave them)
+        said = [(f.path, cond["speed_from"][f.path]) for f, _ in cond["history"] + cond["test"]]
+        cond["warnings"] = [f"{p}: {how.split('; ')[-1]}" for p, how in said if VARIES_WORDS in how]
+        cond["warnings"] += level_warnings(cond)
         for line in cond["warnings"]:
             on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter
