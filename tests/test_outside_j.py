@@ -261,3 +261,25 @@ def test_a_run_up_grouped_by_hand_is_warned_of_in_the_run_s_warnings(tmp_path, m
     said = [w for w in cond["warnings"] if w.startswith("up.csv: ")]
     assert said and " Hz .. 34.7" in said[0] and "over the take: a run-up or coast-down?" in said[0], cond["warnings"]
     assert not any(w.startswith("h1.csv: ") or w.startswith("h2.csv: ") for w in cond["warnings"]), cond["warnings"]
+
+
+def test_the_results_tables_are_fitted_again_when_the_sidebar_folds(detection_run):
+    # the tables were fitted once, to an estimate of the view's width made before the Results tab was shown; b (the
+    # sidebar folded or shown) left them at that width
+    folder, run = detection_run
+
+    async def main():
+        async with GearlabApp(folder).run_test(size=(120, 40)) as pilot:
+            app = pilot.app
+            await pilot.pause()
+            (entry,) = [r for e in app.entries for r in e.runs if r.path == run]
+            app.show_results(entry)
+            await pilot.pause()
+            view = app.query_one("#results-lines")
+            before = view.content_size.width
+            assert view.drawn_at == before, (view.drawn_at, before)
+            await pilot.press("b")
+            await pilot.pause()
+            assert view.content_size.width != before and view.drawn_at == view.content_size.width
+
+    asyncio.run(main())

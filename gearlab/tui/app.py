@@ -39,7 +39,7 @@ from .catalog import RunEntry, ScenarioEntry, Validated, error_line, run_entry, 
 from .plugins import PluginsPane
 from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen, ScoreScreen
-from .widgets import BrowserTree, ChartView, ResultTable, TomlSyntax, summary_view
+from .widgets import BrowserTree, ChartView, ResultTable, SummaryView, TomlSyntax
 
 # Below this many columns the sidebar folds away while a run or results are on show.
 NARROW = 100
@@ -162,7 +162,7 @@ class GearlabApp(App):
                         yield Static("", id="verdict")
                         yield ResultTable(id="results-table")
                         yield ChartView(id="chart")
-                        yield Static("", id="results-lines")
+                        yield SummaryView("", id="results-lines")
                 with TabPane("Plugins", id="plugins"):
                     yield PluginsPane()
         yield Footer()
@@ -505,7 +505,7 @@ class GearlabApp(App):
         self.opened, self.comparing = run, []
         status = self.query_one("#results-status", Static)
         table = self.query_one("#results-table", ResultTable)
-        lines = self.query_one("#results-lines", Static)
+        lines = self.query_one("#results-lines", SummaryView)
         verdict = self.query_one("#verdict", Static)
         try:
             rundir = RunDir.open(run.path)
@@ -527,7 +527,7 @@ class GearlabApp(App):
             table.clear(columns=True)
             table.display = True
             verdict.update("")
-            lines.update("")
+            lines.show(None)
             self.charts = []
             self.query_one("#chart", ChartView).show(None)
             return
@@ -535,11 +535,7 @@ class GearlabApp(App):
         status.update(Text.assemble((f"{scenario.name} ", "bold"), f"({scenario.kind}), {run.path.name}: {state}"))
         verdict.update(Text(" ".join(said)))
         verdict.display = bool(said)
-        if own:  # as wide as the results view is (the sidebar folds below NARROW columns)
-            beside = 0 if self.size.width < NARROW or self.tree.has_class("folded") else self.tree.outer_size.width
-            lines.update(summary_view(summary, self.size.width - beside - 4))
-        else:
-            lines.update(escape("\n".join(other_lines(summary))))
+        lines.show(summary if own else None, escape("\n".join(other_lines(summary))))
         self.chart_index = 0
         self.show_chart()
         if switch:
@@ -654,7 +650,7 @@ class GearlabApp(App):
         self.query_one("#verdict", Static).display = True
         self.query_one("#results-table", ResultTable).display = True  # a detection run's view hides it
         self.query_one("#results-table", ResultTable).show_markdown(compare_markdown(runs))
-        self.query_one("#results-lines", Static).update("")
+        self.query_one("#results-lines", SummaryView).show(None)
         self.charts, self.chart_index = compare_charts(runs), 0
         self.show_chart()
         self.switch_to("results")

@@ -351,3 +351,27 @@ def summary_view(summary: list[str], width: int):
             shown.append(Text(" · ".join(c for c in row[:2] if c), style="bold"))
             shown.extend(Text(f"  {h}: {c}") for h, c in zip(heads[2:], row[2:]) if c not in ("", "–"))
     return Group(*shown)
+
+
+class SummaryView(Static):
+    """A run's summary lines (summary_view), drawn again at each new width: the Results tab's is known once the tab
+    is shown, and changes as the sidebar folds (tables fitted to an estimate were cut at their right edge)."""
+
+    summary: list[str] | None = None
+    drawn_at = 0
+
+    def show(self, summary: list[str] | None, text: str = "") -> None:
+        self.summary, self.drawn_at = summary, 0
+        if summary:
+            self.draw()
+        else:
+            self.update(text)
+
+    def draw(self) -> None:
+        width = self.content_size.width or self.app.size.width - 4
+        if self.summary and width != self.drawn_at:
+            self.drawn_at = width
+            self.update(summary_view(self.summary, width))
+
+    def on_resize(self) -> None:
+        self.draw()
