@@ -8,22 +8,14 @@ import asyncio
 
 import pytest
 from conftest import unrendered
-from gearboxes import description, stage
 from rich.console import Console
+from test_outside_h import BOX_B as BOX_B_H
 from textual.widgets import Static
 
 from gearlab.tui import GearlabApp
 
-BOX_B = description(
-    stage(25, 52),
-    stage(16, 81, module="3 mm", bores=("30 mm", "45 mm")),
-    name="boxB",
-    speed="25 Hz",
-    load="40 N*m",
-    near="intermediate",
-    tacho="intermediate",
-    marks=4,
-)
+# test_outside_h's 25/52 + 16/81 box (a 4-mark tacho on its intermediate shaft), with a load to simulate
+BOX_B = BOX_B_H.replace('speed = "25 Hz"', 'speed = "25 Hz"\nload = "40 N*m"')
 
 
 def shown(app, selector: str, width: int = 200) -> str:
@@ -32,6 +24,14 @@ def shown(app, selector: str, width: int = 200) -> str:
     console = Console(width=width, record=True, file=open("/dev/null", "w"))  # noqa: SIM115 - record only
     console.print(widget.content)
     return console.export_text()
+
+
+async def results_of(pilot, run) -> None:
+    """The Results tab of *run*, as the tree lists it."""
+    await pilot.pause()
+    (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
+    pilot.app.show_results(entry)
+    await pilot.pause()
 
 
 def test_a_gearbox_description_beside_the_scenarios_is_listed_as_one(tmp_path, monkeypatch):
@@ -94,11 +94,8 @@ def test_a_detection_run_s_results_show_its_tables_in_the_tui(detection_run):
 
     async def main():
         async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
-            await pilot.pause()
             app = pilot.app
-            (entry,) = [r for e in app.entries for r in e.runs if r.path == run]
-            app.show_results(entry)
-            await pilot.pause()
+            await results_of(pilot, run)
             lines = shown(app, "#results-lines")
             assert "det %" in lines and "FA %" in lines, lines[:2000]  # the AUC table, under its caption
             row = next(line for line in lines.splitlines() if "matched_filter" in line and "│" in line)
@@ -125,10 +122,7 @@ def test_a_take_off_its_history_s_level_is_said_in_the_report_and_the_tui(detect
 
     async def main():
         async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
-            await pilot.pause()
-            (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
-            pilot.app.show_results(entry)
-            await pilot.pause()
+            await results_of(pilot, run)
             lines = shown(pilot.app, "#results-lines")
             assert "h3.zip: level 1.7 x its history's (another load or gain?)" in " ".join(lines.split()), lines[-3000:]
 
@@ -182,10 +176,7 @@ def test_at_80_columns_a_wide_table_of_the_results_is_a_block_per_row(detection_
 
     async def main():
         async with GearlabApp(folder).run_test(size=(80, 24)) as pilot:
-            await pilot.pause()
-            (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
-            pilot.app.show_results(entry)
-            await pilot.pause()
+            await results_of(pilot, run)
             width = pilot.app.query_one("#results-lines").size.width
             assert 60 < width <= 80, width
             lines = shown(pilot.app, "#results-lines", width).splitlines()
@@ -271,10 +262,7 @@ def test_the_results_tables_are_fitted_again_when_the_sidebar_folds(detection_ru
     async def main():
         async with GearlabApp(folder).run_test(size=(120, 40)) as pilot:
             app = pilot.app
-            await pilot.pause()
-            (entry,) = [r for e in app.entries for r in e.runs if r.path == run]
-            app.show_results(entry)
-            await pilot.pause()
+            await results_of(pilot, run)
             view = app.query_one("#results-lines")
             before = view.content_size.width
             assert view.drawn_at == before, (view.drawn_at, before)
