@@ -271,3 +271,27 @@ def test_the_results_tables_are_fitted_again_when_the_sidebar_folds(detection_ru
             assert view.content_size.width != before and view.drawn_at == view.content_size.width
 
     asyncio.run(main())
+
+
+def test_a_learned_row_that_learned_the_simulator_but_not_the_test_is_said_so():
+    # box B's learned rows (--quick): source_only learned the simulated chip (source AUC 1.00) and ranked the test's
+    # takes below chance (record30 AUC 0.44, revolution 0.23); the verdict named dann the best learned row and said
+    # nothing of source_only, whose 'source AUC 1.00' in the learned table reads as a success
+    from gearlab.kinds.detection_verdict import detection_lines
+
+    def row(method, auc, det, fa):
+        return {"condition": "25 Hz", "unit": "record30", "method": method, "auc": auc, "detection": det}
+
+    rows = [
+        row("source_only", 0.438, 0.0, 0.0) | {"false_alarm": 0.0},
+        row("dann", 0.725, 100.0, 50.0) | {"false_alarm": 50.0},
+        row("fm4", 0.5, 100.0, 56.0) | {"false_alarm": 56.0},
+    ]
+    rows = [r | {"n_positive": 16, "n_negative": 32} for r in rows]
+    learned = [
+        {"condition": "25 Hz", "method": m, "source_auc": 1.0, "source_units": [96, 96]}
+        for m in ("source_only", "dann")
+    ]
+    (_, line) = detection_lines({"rows": rows, "learned": learned}, "record30")
+    assert "no better than chance" in line and "source_only (source AUC 1.00, test AUC 0.44)" in line, line
+    assert "dann (source" not in line, line  # 0.72 is over chance at 16 / 32 units (0.65)

@@ -114,6 +114,23 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
                 "; did not learn the simulated fault (source AUC within chance, one-sided 5 %), so their calls "
                 "are not the simulator's teaching: " + ", ".join(blind)
             )
+        # learned the simulated fault, yet ranks the test's takes no better than chance: what it learned is not what
+        # the test holds (box B's source_only: source AUC 1.00, record30 AUC 0.44, said nothing)
+        astray = [
+            f"{r['method']} (source AUC {learned[(c, r['method'])]['source_auc']:.2f}, test AUC {r['auc']:.2f})"
+            for r in nets
+            if r["auc"] is not None
+            and learned[(c, r["method"])]["source_auc"] is not None  # a detector (built on the history) learned none
+            and r.get("n_positive")
+            and r.get("n_negative")
+            and r["auc"] <= chance_auc(r["n_negative"], r["n_positive"])
+        ]
+        if astray:
+            text += (
+                "; learned the simulated fault but rank the test's takes no better than chance (one-sided 5 %): "
+                "the simulator's fault or healthy signal is unlike this gearbox's (a gap run says where): "
+                + ", ".join(astray)
+            )
         point = [m for (cc, m), r in learned.items() if cc == c and r.get("aligned_to_a_point")]
         if point:
             text += (
