@@ -29,7 +29,7 @@ from gearlab.charts import Chart, Curve
 from gearlab.events import Event
 from gearlab.tui import GearlabApp, progress
 from gearlab.tui.progress import StageBar, Stages
-from gearlab.tui.screens import KeysScreen, RunOptionsScreen
+from gearlab.tui.screens import KeysScreen, RunOptionsScreen, ScoreScreen
 from gearlab.tui.widgets import ChartView, ResultTable
 
 SIZES = [(160, 45), (80, 24)]
@@ -484,6 +484,9 @@ def test_every_key_of_the_docs_does_what_they_say(scenarios, monkeypatch, size):
             # o opens the highlighted run's report
             await key(pilot, "o")
             assert opened == [(runs / "20260103-000000-000000" / "report.html").resolve().as_uri()]
+            # s scores with a finished detection run only: this stiffness run is refused, no form opens
+            await key(pilot, "s")
+            assert not isinstance(app.screen, ScoreScreen) and len(started) == 2
             # u resumes the highlighted unfinished run only
             await key(pilot, "u")
             assert len(started) == 2  # a finished run: refused
