@@ -349,7 +349,7 @@ def test_the_correction_is_applied_only_where_the_gap_is_explained():
     assert correction_withheld({"verdict": "unexplained", "explained_share": 0.0}) == f"{WITHHELD} (unexplained)"
 
 
-def test_the_corrected_source_keeps_the_model_and_path_effects_not_the_noise():
+def test_the_corrected_source_keeps_the_model_effects_not_the_noise():
     spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
     assert spec.correct and spec.diagnosis.budget == 16  # shipped: on, with the shipped budget
     _, source, _, _ = tb.trials(spec)[0]
