@@ -1,6 +1,7 @@
 import base64
 import gc
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -54,6 +55,20 @@ def pytest_configure(config):
         return
     config.stash[gc_collect_iterations_key] = GC_AT_THE_END
     library_asserts_kept_plain(config)
+
+
+def pytest_sessionstart(session):
+    """The suite's datasets in one folder of its own, removed at the end, unless GEARLAB_CACHE is set: a
+    run read and filled the user's cache (2.3 GB of test datasets on a developer's machine), so a second
+    run timed what a fresh machine (CI) does not have. Set by the controlling process before xdist starts
+    its workers, which inherit it and share the folder (the cache writes atomically)."""
+    if "GEARLAB_CACHE" in os.environ or hasattr(session.config, "workerinput"):
+        return
+    import tempfile
+
+    folder = tempfile.mkdtemp(prefix="gearlab-test-cache-")
+    os.environ["GEARLAB_CACHE"] = folder
+    session.config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
 
 
 def library_asserts_kept_plain(config) -> None:
