@@ -34,6 +34,15 @@ async def results_of(pilot, run) -> None:
     await pilot.pause()
 
 
+async def settled(pilot, view, turns: int = 20) -> None:
+    """Pauses until *view* is drawn at its width, at most *turns*: its Resize comes a refresh or more after the
+    layout (a scrollbar, the sidebar folded), later on a busy machine."""
+    for _ in range(turns):
+        await pilot.pause()
+        if view.drawn_at == view.content_size.width:
+            return
+
+
 def test_a_gearbox_description_beside_the_scenarios_is_listed_as_one(tmp_path, monkeypatch):
     # `gearlab tui .` in a project folder holding boxB.toml (the guide's step 1) beside its scenarios listed the
     # description in red as an invalid scenario, 'missing table [scenario] (with name, kind and description)'; a
@@ -264,10 +273,11 @@ def test_the_results_tables_are_fitted_again_when_the_sidebar_folds(detection_ru
             app = pilot.app
             await results_of(pilot, run)
             view = app.query_one("#results-lines")
+            await settled(pilot, view)
             before = view.content_size.width
             assert view.drawn_at == before, (view.drawn_at, before)
             await pilot.press("b")
-            await pilot.pause()
+            await settled(pilot, view)
             assert view.content_size.width != before and view.drawn_at == view.content_size.width
 
     asyncio.run(main())
