@@ -265,6 +265,7 @@ def test_noise_drawn_again_is_the_draw_and_leaves_the_generator_where_the_draw_d
 
     x = np.tile(np.sin(grid()), (3, 1)) * [[1.0], [2.0], [0.5]]
     monkeypatch.setattr(noise, "_DRAWN", noise.OrderedDict())
+    monkeypatch.setattr(noise, "_drawn_size", [0])  # the bytes kept: of the empty store, not of earlier tests'
     first, again, used = (np.random.default_rng([7, 1]) for _ in range(3))
     used.uniform()
     drawn = [add_noise(x, 3.0, kind, g) for g in (first, again, used)]
