@@ -1,5 +1,5 @@
-"""Panels of the gearlab TUI that open over the main screen: the key list (`?`) and the
-run-with-options form (`f`). Escape closes either."""
+"""Panels of the gearlab TUI that open over the main screen: the key list (`?`), the
+run-with-options form (`f`) and the scoring form (`s`). Escape closes each."""
 
 from __future__ import annotations
 
@@ -29,17 +29,21 @@ class RunOptions:
     seed: int | None = None
 
 
+def panel_css(screen: str, width: int, max_height: str = "95%") -> str:
+    """The look the panels share: centred over the app, a bordered scrolling column of *width* cells."""
+    return f"""
+    {screen} {{ align: center middle; }}
+    {screen} > VerticalScroll {{ width: {width}; max-width: 95%; height: auto; max-height: {max_height};
+        border: thick $primary; background: $surface; padding: 0 1; }}
+    """
+
+
 class KeysScreen(ModalScreen):
     """Every key binding of the app, those the footer leaves out included, with what each does
     in words wrapped to the panel's width (never cut: the panel scrolls when they do not fit)."""
 
     BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close")]
-    DEFAULT_CSS = """
-    KeysScreen { align: center middle; }
-    KeysScreen > VerticalScroll { width: 72; max-width: 95%; height: auto; max-height: 90%;
-                                  border: thick $primary; background: $surface; padding: 0 1; }
-    KeysScreen #keys { height: auto; }
-    """
+    DEFAULT_CSS = panel_css("KeysScreen", width=72, max_height="90%") + "KeysScreen #keys { height: auto; }"
 
     # keys that are no binding of the app: the tree's own and the palette
     TREE = (
@@ -76,14 +80,14 @@ class RunOptionsScreen(ModalScreen[RunOptions | None]):
     """A small form: quick, executor, device, and a benchmark's trials and seed."""
 
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
-    DEFAULT_CSS = """
-    RunOptionsScreen { align: center middle; }
-    RunOptionsScreen > VerticalScroll { width: 60; max-width: 95%; height: auto; max-height: 95%;
-                                        border: thick $primary; background: $surface; padding: 0 1; }
+    DEFAULT_CSS = (
+        panel_css("RunOptionsScreen", width=60)
+        + """
     RunOptionsScreen Label { margin-top: 1; }
     RunOptionsScreen Horizontal { height: auto; margin-top: 1; }
     #problem { color: $error; height: auto; }
     """
+    )
 
     def __init__(self, scenario: Scenario):
         super().__init__()
@@ -153,11 +157,7 @@ class ScoreScreen(ModalScreen[str | None]):
     """`gearlab score RUN ...` from the TUI: the recordings and options, as typed after the run directory."""
 
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
-    DEFAULT_CSS = """
-    ScoreScreen { align: center middle; }
-    ScoreScreen > VerticalScroll { width: 90; max-width: 95%; height: auto; max-height: 95%;
-                                   border: thick $primary; background: $surface; padding: 0 1; }
-    """
+    DEFAULT_CSS = panel_css("ScoreScreen", width=90)
 
     def __init__(self, run: str, typed: str = ""):
         super().__init__()
