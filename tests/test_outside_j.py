@@ -5,6 +5,7 @@ detection scenario and `gearlab score` as the TUI and the report show it. The re
 from __future__ import annotations
 
 import asyncio
+from contextlib import asynccontextmanager
 
 import pytest
 from conftest import unrendered
@@ -26,12 +27,16 @@ def shown(app, selector: str, width: int = 200) -> str:
     return console.export_text()
 
 
-async def results_of(pilot, run) -> None:
-    """The Results tab of *run*, as the tree lists it."""
-    await pilot.pause()
-    (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
-    pilot.app.show_results(entry)
-    await pilot.pause()
+@asynccontextmanager
+async def results_shown(detection_run, size: tuple[int, int] = (160, 45)):
+    """The TUI in the run's folder at *size*, the Results tab of the run as the tree lists it: its pilot."""
+    folder, run = detection_run
+    async with GearlabApp(folder).run_test(size=size) as pilot:
+        await pilot.pause()
+        (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
+        pilot.app.show_results(entry)
+        await pilot.pause()
+        yield pilot
 
 
 async def settled(pilot, view, turns: int = 20) -> None:
@@ -99,12 +104,10 @@ def test_a_detection_run_s_results_show_its_tables_in_the_tui(detection_run):
     # no number) and the headings of the run's tables without them: the AUC / detected / false-alarm table, the
     # units called per label, which gear each test record's change lies on, what the learned rows learned; the
     # terminal and report.html print them
-    folder, run = detection_run
 
     async def main():
-        async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
+        async with results_shown(detection_run) as pilot:
             app = pilot.app
-            await results_of(pilot, run)
             lines = shown(app, "#results-lines")
             assert "det %" in lines and "FA %" in lines, lines[:2000]  # the AUC table, under its caption
             row = next(line for line in lines.splitlines() if "matched_filter" in line and "│" in line)
@@ -123,15 +126,14 @@ def test_a_take_off_its_history_s_level_is_said_in_the_report_and_the_tui(detect
     # said so'
     import json
 
-    folder, run = detection_run
+    _, run = detection_run
     said = json.loads((run / "summary.json").read_text())["warnings"]
     assert any("h3.zip: level 1.7 x its history's" in line for line in said), said
     assert "h3.zip: level 1.7 x its history's" in (run / "table.md").read_text()
     assert "h3.zip: level 1.7 x its history&#x27;s" in (run / "report.html").read_text()
 
     async def main():
-        async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
-            await results_of(pilot, run)
+        async with results_shown(detection_run) as pilot:
             lines = shown(pilot.app, "#results-lines")
             assert "h3.zip: level 1.7 x its history's (another load or gain?)" in " ".join(lines.split()), lines[-3000:]
 
@@ -181,11 +183,9 @@ def test_at_80_columns_a_wide_table_of_the_results_is_a_block_per_row(detection_
     # at 80 x 24 the which-gear table (nine columns) was folded into five-cell columns: '../da|ta/f1|.zip', every
     # word cut; now fitted as the terminal fits it (turned: a column a record), else a block per record, each column a
     # 'name: value' line (box B's twelve takes, at 80 and at 160 columns)
-    folder, run = detection_run
 
     async def main():
-        async with GearlabApp(folder).run_test(size=(80, 24)) as pilot:
-            await results_of(pilot, run)
+        async with results_shown(detection_run, (80, 24)) as pilot:
             width = pilot.app.query_one("#results-lines").size.width
             assert 60 < width <= 80, width
             lines = shown(pilot.app, "#results-lines", width).splitlines()
@@ -266,12 +266,10 @@ def test_a_run_up_grouped_by_hand_is_warned_of_in_the_run_s_warnings(tmp_path, m
 def test_the_results_tables_are_fitted_again_when_the_sidebar_folds(detection_run):
     # the tables were fitted once, to an estimate of the view's width made before the Results tab was shown; b (the
     # sidebar folded or shown) left them at that width
-    folder, run = detection_run
 
     async def main():
-        async with GearlabApp(folder).run_test(size=(120, 40)) as pilot:
+        async with results_shown(detection_run, (120, 40)) as pilot:
             app = pilot.app
-            await results_of(pilot, run)
             view = app.query_one("#results-lines")
             await settled(pilot, view)
             before = view.content_size.width
