@@ -655,6 +655,16 @@ def json_ready(report: dict) -> dict:
 # --- the terminal ----------------------------------------------------------------------------------
 
 
+def _unexplained_words(line: dict, f0: float) -> str:
+    """A line the description does not explain, in Hz first where it is a strong line at no shaft's whole order (a
+    fixed frequency such as a mains hum, or a bearing's; gearbox.match.shaft_harmonic), else as the order it is."""
+    o, hz, db = line["order"], line["order"] * f0, line["db_over_floor"]
+    if line.get("not_an_order"):
+        why = "no shaft's harmonic: not a gear order (a fixed frequency such as mains, or a bearing's)"
+        return f"{hz:.5g} Hz (input order {o:.4g}, {why}; {db:.0f} dB)"
+    return f"order {o:.4g} ({hz:.5g} Hz, {db:.0f} dB)"
+
+
 def render(report: dict, console, width: int = 100) -> None:
     """The report in the terminal: tables (rich) and the order spectrum (plotext)."""
     import plotext
@@ -740,10 +750,7 @@ def render(report: dict, console, width: int = 100) -> None:
         if check["unexplained"]:
             console.print(
                 "lines the description does not explain: "
-                + ", ".join(
-                    f"order {u['order']:.4g} ({u['order'] * sp['mean_hz']:.5g} Hz, {u['db_over_floor']:.0f} dB)"
-                    for u in check["unexplained"]
-                )
+                + ", ".join(_unexplained_words(u, sp["mean_hz"]) for u in check["unexplained"])
             )
     t = Table(title=f"time-synchronous average per shaft{at}")
     for col in ("shaft", "revolutions", "TSA rms", "share of signal rms", "strongest orders"):
