@@ -88,6 +88,17 @@ def _localisation(loc: dict, folder: Path) -> str:
     return out + f"<p><b>call: {escape(loc['call'])}</b></p>"
 
 
+def _unexplained(check: dict, f0: float) -> str:
+    """The lines the description does not explain, in the terminal's words (gearlab.inspect's), or that none were."""
+    from .inspect import _unexplained_words
+
+    title = "<h3>lines the description does not explain</h3>"
+    if not check["unexplained"]:
+        return title + "<p>none found</p>"
+    items = "".join(f"<li>{escape(_unexplained_words(u, f0))}</li>" for u in check["unexplained"])
+    return title + f"<ul>{items}</ul>"
+
+
 def write_report(report: dict, folder: Path) -> Path:
     """DIR/report.html (and its PNGs) of an inspect report (gearlab.inspect.inspect_record, with its
     'localisation' where read against a history)."""
@@ -116,6 +127,7 @@ def write_report(report: dict, folder: Path) -> Path:
             for s in check["stages"]
         ]
         parts.append(_table("mesh orders", ("stage", "z1/z2", "expected", "measured", "error", "status"), rows))
+        parts.append(_unexplained(check, sp["mean_hz"]))
     tsa = [(s["shaft"], s["revolutions"], _f(s.get("rms"), ".4g"), s.get("note", "")) for s in report["tsa"]]
     parts.append(_table("time-synchronous average per shaft", ("shaft", "revolutions", "TSA rms", "note"), tsa))
     if "localisation" in report:
