@@ -402,6 +402,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
                 f"thresholds: {r0['rule']}"
             )
         )
+        if r0.get("scored_on"):  # a run-up or coast-down: its revolutions at the history's speed (detection_scoring)
+            shown.append(Text(r0["scored_on"]))
         if r0.get("gearbox"):  # a record of another gearbox than the run's description (detection_scoring)
             shown.append(Text(f"gearbox: {r0['gearbox']}"))
         if r0.get("level"):  # another load or gain than the history's: NA4 reads it as a change

@@ -49,7 +49,7 @@ import numpy as np
 
 from ..errors import GearlabInputError, did_you_mean
 from ..signals import check_signal, first_complete
-from ..signals.checks import fmt_hz, speed_varies
+from ..signals.checks import fmt_hz, revolution_speeds, speed_varies
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
@@ -653,6 +653,7 @@ class CutRecording:
     warnings: tuple[str, ...] = ()
     first_revolution: int = 0  # revolutions[0]'s number from the angle's zero (first_complete)
     units: str = ""  # how the values became m/s² (channel_scale): gearlab score shows it
+    speeds: np.ndarray | None = None  # each revolution's (Hz, input shaft): gearlab score scores a run-up's in band
 
 
 def cut_recording(
@@ -698,9 +699,9 @@ def cut_recording(
     if transient == "stats":
         start, _, warning = steady_start(cut.revolutions, f"{path}: vibration column {_one_line_repr(rec.vibration)}")
     revs, warns = cut.revolutions[start:], () if warning is None else (warning,)
-    first = first_complete(angle) + int(start)  # revolutions' numbers from the angle's zero: for localisation
+    first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
     return CutRecording(
-        str(path), revs, float(cut.speed_hz), float(rec.fs), int(raw.size), int(start), how, warns, first, rec.units
+        str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units, speeds
     )
 
 

@@ -4,7 +4,7 @@ its thresholds with nothing trained again (score), and the trend of what was sco
 
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +22,7 @@ from ..parts.measured import TargetFile, held
 from ..runs import RunDir
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.checks import VARIES_WORDS
+from ..signals.checks import SPEED_VARIES, VARIES_WORDS
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -39,6 +39,7 @@ from .detection_records import (
     unit_sets,
     unit_shaft,
     unit_window,
+    varies,
 )
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
@@ -56,6 +57,12 @@ LATER_INPUT = {
     2: "fitted out of each revolution turned on itself",
     3: "fitted out of each revolution of a record shifted as one signal",
 }
+# A take whose speed varies beyond a steady take's (speed_varies: a run-up or coast-down) is scored on its
+# revolutions within this share of its condition's history speed (scoring.json's, the median of the history records'
+# speeds: what the run kept, no label), either side: a steady take's turns span at most SPEED_VARIES of its mean, so
+# half of it either side of the history's speed is where a steady history may have run. A revolution farther off meets
+# the gearbox's resonances at other orders than the history's revolutions did.
+IN_BAND = SPEED_VARIES / 2
 
 
 def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
@@ -277,6 +284,69 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
     return near
 
 
+def _stretch(speeds: np.ndarray, centre: float) -> slice:
+    """The longest run of consecutive revolutions whose *speeds* lie within IN_BAND of *centre* (Hz): consecutive, as
+    the units' shaft, the records' alignment and localisation read a take's revolutions."""
+    inside = np.abs(speeds - centre) <= IN_BAND * centre
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(np.int8), [0]])))
+    if not edges.size:
+        return slice(0, 0)
+    k = int(np.argmax(edges[1::2] - edges[::2]))
+    return slice(int(edges[2 * k]), int(edges[2 * k + 1]))
+
+
+def in_band(meta: dict, path: str, rec, asked: str | None, far: str = "") -> tuple[str, object, str]:
+    """(condition, the part of *rec* scored, what was scored in words) of a take whose speed varies (a run-up or
+    coast-down): its longest stretch of revolutions within IN_BAND of a condition's history speed (the condition
+    *asked*, else the one of the longest), its mean speed the part's. None there: one line, *far* (why its mean
+    speed is no condition's) and how many revolutions lay in the band, and how many a unit needs."""
+    names = [_condition_of(meta, path, rec.speed_hz, asked)] if asked is not None else list(meta["conditions"])
+    stretches = {c: _stretch(rec.speeds, meta["conditions"][c]["speed_hz"]) for c in names}
+    name = max(names, key=lambda c: stretches[c].stop - stretches[c].start)
+    part, centre = stretches[name], meta["conditions"][name]["speed_hz"]
+    band = f"the history's {centre:.2f} Hz ± {IN_BAND:.1%}"
+    inside = int(np.sum(np.abs(rec.speeds - centre) <= IN_BAND * centre))
+    if part.stop == part.start:
+        raise GearlabInputError(
+            f"{far or f'{path}: its speed varies, {varies(rec.angle_source).strip()}'}; {inside} of its "
+            f"{len(rec.speeds)} revolutions at '{name}''s {band}, a unit needs 1; expected a take that runs a while at "
+            "a trained condition's speed, or --condition NAME"
+        )
+    speeds = rec.speeds[part]
+    whose = " input" if "unit_shaft" in meta else ""  # the units: another shaft's revolutions
+    said = f"scored on {part.stop - part.start} of {len(rec.speeds)}{whose} revolutions at {speeds.min():.2f} .. "
+    said += f"{speeds.max():.2f} Hz ({band}" + (
+        f"; the longest run of its {inside} there)" if inside > len(speeds) else ")"
+    )
+    return (
+        name,
+        replace(
+            rec,
+            revolutions=rec.revolutions[part],
+            speed_hz=float(np.mean(speeds)),
+            first_revolution=rec.first_revolution + part.start,
+            speeds=speeds,
+        ),
+        said,
+    )
+
+
+def _units_of_part(meta: dict, path: str, said: str, units: int) -> str:
+    """in_band's words *said* of a run-up's part that makes *units* revolutions of the units' shaft, with the unit
+    kinds it is too short for (not scored); one line where it makes none (a slower shaft's turn is longer)."""
+    shaft = f"{meta['unit_shaft'][0]}-shaft " if "unit_shaft" in meta else ""
+    if not units:
+        raise GearlabInputError(
+            f"{path}: {said}: 0 {shaft}revolutions, a unit needs 1; expected a take that runs a while at a trained "
+            "condition's speed"
+        )
+    short = [b for b in meta["blocks"] if b > units]
+    if not short:
+        return said
+    kinds = ", ".join(f"record{b}" for b in short)
+    return f"{said}; {kinds} not scored: a unit needs {', '.join(map(str, short))} {shaft}revolutions, it has {units}"
+
+
 def _other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = True, box=None) -> str | None:
     """The line of a record whose mesh orders do not fit the run's gearbox description, as inspect reads it with
     the run's keys at the speed of the run's nearest condition ("stage 2: mesh order 9.706 measured, 10.98
@@ -431,29 +501,25 @@ def score(
     described = gearbox_of(described) if described else None
     for i, file in enumerate(files):
         keys = reading_keys(meta, condition, given, str(file))
-        rec = cut_recording(str(file), **keys)
+        rec, scored_on = cut_recording(str(file), **keys), None
+        speeds = rec.speeds is not None and len(rec.speeds) == len(rec.revolutions)
         try:
             name = _condition_of(meta, str(file), rec.speed_hz, condition)
         except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
-            varies = f" ({rec.angle_source})" if VARIES_WORDS in rec.angle_source else ""  # a run-up: its speeds
-            raise GearlabInputError(
-                _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described) or f"{far}{varies}"
-            ) from None
+            other = _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
+            if other or VARIES_WORDS not in rec.angle_source or not speeds:
+                raise GearlabInputError(other or f"{far}{varies(rec.angle_source)}") from None
+            # a run-up or coast-down: its revolutions at a condition's history speed
+            name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far}{varies(rec.angle_source)}")
+        else:
+            if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
+                name, rec, scored_on = in_band(meta, str(file), rec, condition)
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
         if differs:
             on_event(Event("log", message=f"warning: {differs}"))
         own, whose = remembered(meta, str(file), given)
         said = f"{whose} keys" if {k for k in own if k not in (given or {})} else ""
-        on_event(
-            Event(
-                "log",
-                message=f"{file}: {rec.speed_hz:.3f} Hz, from {rec.angle_source}" + (said and f"; read with {said}"),
-            )
-        )
-        # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
-        # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
-        found[str(file)] = (rec.speed_hz, rec.angle_source, said, rec.units, differs)
         revs = rec.revolutions
         if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
             turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
@@ -462,6 +528,15 @@ def score(
             _, p, q = meta["unit_shaft"]
             band = meta["conditions"][name]["max_order"]
             revs = unit_revolutions(revs, p, q, band, meta.get("input_shaft_out", False))
+        if scored_on:
+            scored_on = _units_of_part(meta, str(file), scored_on, len(revs))
+        # a run-up scored in band: its speed source's words say the span, not that its mean speed is its condition
+        source = rec.angle_source.split(VARIES_WORDS)[0] + VARIES_WORDS if scored_on else rec.angle_source
+        line = f"{file}: {rec.speed_hz:.3f} Hz, from {source}" + (said and f"; read with {said}")
+        on_event(Event("log", message=line + (f"; {scored_on}" if scored_on else "")))
+        # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
+        # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
+        found[str(file)] = (rec.speed_hz, source, said, rec.units, differs, scored_on)
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
         raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
@@ -490,6 +565,9 @@ def score(
                     s = np.asarray(s, dtype=np.float64)
                     called = int(np.sum(s > thresholds[u]))
                     where = localised.get(f.path, {})
+                    decision = decision_of(bool(s.size) and called > s.size / 2, where.get("call"))
+                    if not s.size and found[f.path][5]:  # a run-up's part too short for this unit (_units_of_part)
+                        decision = "not scored"
                     rows.append(
                         {
                             "file": f.path,
@@ -503,12 +581,13 @@ def score(
                             "median_score": float(np.median(s)) if s.size else None,
                             # most units called: a fault, or other damage when the record's change lies
                             # on another gear (the detection run's which-gear rule)
-                            "decision": decision_of(bool(s.size) and called > s.size / 2, where.get("call")),
+                            "decision": decision,
                             "speed_hz": found[f.path][0],
                             "speed_from": found[f.path][1],  # the tacho, a declared speed, the mesh orders
                             "read_with": found[f.path][2],  # whose keys read the file ("": the [target]'s, --key's)
                             "values": found[f.path][3],  # how its values became m/s² (its units)
                             "gearbox": found[f.path][4],  # where its lines do not fit the run's description
+                            "scored_on": found[f.path][5],  # a run-up's revolutions at the history's speed (in_band)
                             "level": cond["levels"][f.path],  # off its history's: another load (level_warnings)
                             "localised": where.get("named"),
                             "call": where.get("call"),
@@ -541,7 +620,7 @@ def score_trends(run: RunDir) -> list:
     out = []
     for c in dict.fromkeys(r["condition"] for r in rows):
         picked = [r for r in rows if r["condition"] == c and r["unit"] == unit and r["median_score"] is not None]
-        curves, other, files, tops = [], {}, [], []
+        curves, other, files, tops, parts = [], {}, [], [], {}
         for m in dict.fromkeys(r["method"] for r in picked):
             mine = [r for r in picked if r["method"] == m]
             files = files if len(files) >= len(mine) else [Path(r["file"]).name for r in mine]
@@ -555,10 +634,16 @@ def score_trends(run: RunDir) -> list:
             for i, r in enumerate(mine, 1):
                 if is_other(r["decision"]):
                     other.setdefault(r["decision"], set()).add(i)
+                if r.get("scored_on"):  # a run-up's part: which revolutions the point is of
+                    parts[f"record {i}"] = r["scored_on"]
         said = "".join(
             f"; records {', '.join(map(str, sorted(n)))}: {d}" if len(n) > 1 else f"; record {min(n)}: {d}"
             for d, n in other.items()
         )
+        # a run-up whose part is too short for this unit: no point, said so
+        left = [r for r in rows if r["condition"] == c and r["unit"] == unit and r.get("scored_on")]
+        parts |= {Path(r["file"]).name: r["scored_on"] for r in left if r["median_score"] is None}
+        said += "".join(f"\n{k}: {w}" for k, w in parts.items())
         named = [f"{i} {f}" for i, f in enumerate(files, 1)]  # which take each point is, in the TUI too
         named = named if len(named) <= 12 else [*named[:5], "...", *named[-5:]]
         if curves:

@@ -107,14 +107,25 @@ SPEED_VARIES = 0.05
 VARIES_WORDS = "over the take: a run-up or coast-down?"
 
 
+def turn_times(angle: np.ndarray, fs: float) -> np.ndarray:
+    """The time (s) the shaft *angle* (radians, one a sample at *fs*) passes each whole turn 2πk within it, from the
+    first complete revolution's start (signals.first_complete): revolution r of a cut record lasts at[r + 1] - at[r]."""
+    turns = np.arange(math.ceil(angle[0] / (2 * math.pi)), math.floor(angle[-1] / (2 * math.pi)) + 1)
+    return np.interp(2 * math.pi * turns, angle, np.arange(angle.size) / fs)
+
+
+def revolution_speeds(angle: np.ndarray, fs: float) -> np.ndarray:
+    """Each complete revolution's mean speed (Hz) of the shaft *angle*, in the order cut_revolutions cuts them."""
+    return 1.0 / np.diff(turn_times(angle, fs))
+
+
 def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
     """ "; 20.08 Hz .. 34.93 Hz over the take: ..." where the shaft *angle* (radians, one a sample at *fs*) turns at
     speeds, each the mean over *smooth* turns, spanning more than SPEED_VARIES of their mean; else "". An outside
     lab's run-up from 20 to 35 Hz was said only '27.499 Hz, from tacho ...', then 'condition 27.5 Hz has no history'."""
-    turns = np.arange(math.ceil(angle[0] / (2 * math.pi)), math.floor(angle[-1] / (2 * math.pi)) + 1)
-    if turns.size < 2 * smooth + 1:
+    at = turn_times(angle, fs)
+    if at.size < 2 * smooth + 1:
         return ""
-    at = np.interp(2 * math.pi * turns, angle, np.arange(angle.size) / fs)  # each whole turn's time
     speeds = smooth / (at[smooth:] - at[:-smooth])
     low, high = float(speeds.min()), float(speeds.max())
     if high - low <= SPEED_VARIES * float(np.mean(speeds)):
