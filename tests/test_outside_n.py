@@ -98,7 +98,10 @@ def test_a_take_wholly_outside_the_band_is_refused_in_one_line_with_its_counts(c
     line = err.strip()
     assert code == 2 and len(line.splitlines()) == 1, err
     assert "more than 5% from every condition's history" in line and D.VARIES_WORDS in line, line
-    assert re.search(r"; 0 of its \d+ revolutions at '16 Hz''s the history's 16\.00 Hz ± 2\.5%, a unit needs 1", line)
+    assert re.search(
+        r"; 0 of its \d+ revolutions within 2\.5% of the history's 16\.00 Hz \('16 Hz'\), a unit needs 1$", line
+    )
+    assert line.count("expected") == 1 and "its mean speed is its condition" not in line, line
     code, _, err = cli("score", out, take, "--condition", "16 Hz")  # asked: the same rule
     assert code == 2 and len(err.strip().splitlines()) == 1 and "0 of its" in err, err
 

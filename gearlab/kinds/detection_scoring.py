@@ -295,6 +295,12 @@ def _stretch(speeds: np.ndarray, centre: float) -> slice:
     return slice(int(edges[2 * k]), int(edges[2 * k + 1]))
 
 
+def _span(rec) -> str:
+    """A varying take's speeds in words ('20.16 Hz .. 34.94 Hz over the take: a run-up or coast-down?'), without what
+    a detection run does with it (scored in band here, not at its mean speed)."""
+    return rec.angle_source.split("; ")[-1].split(VARIES_WORDS)[0] + VARIES_WORDS
+
+
 def in_band(meta: dict, path: str, rec, asked: str | None, far: str = "") -> tuple[str, object, str]:
     """(condition, the part of *rec* scored, what was scored in words) of a take whose speed varies (a run-up or
     coast-down): its longest stretch of revolutions within IN_BAND of a condition's history speed (the condition
@@ -307,10 +313,10 @@ def in_band(meta: dict, path: str, rec, asked: str | None, far: str = "") -> tup
     band = f"the history's {centre:.2f} Hz ± {IN_BAND:.1%}"
     inside = int(np.sum(np.abs(rec.speeds - centre) <= IN_BAND * centre))
     if part.stop == part.start:
+        said = f"; {inside} of its {len(rec.speeds)} revolutions within {IN_BAND:.1%} of the history's {centre:.2f} Hz "
         raise GearlabInputError(
-            f"{far or f'{path}: its speed varies, {varies(rec.angle_source).strip()}'}; {inside} of its "
-            f"{len(rec.speeds)} revolutions at '{name}''s {band}, a unit needs 1; expected a take that runs a while at "
-            "a trained condition's speed, or --condition NAME"
+            f"{far or f'{path}: {_span(rec)}'}{said}('{name}'), a unit needs 1"
+            + ("" if far else "; expected a take that runs a while at a trained condition's speed")
         )
     speeds = rec.speeds[part]
     whose = " input" if "unit_shaft" in meta else ""  # the units: another shaft's revolutions
@@ -510,7 +516,7 @@ def score(
             if other or VARIES_WORDS not in rec.angle_source or not speeds:
                 raise GearlabInputError(other or f"{far}{varies(rec.angle_source)}") from None
             # a run-up or coast-down: its revolutions at a condition's history speed
-            name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far}{varies(rec.angle_source)}")
+            name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far} ({_span(rec)})")
         else:
             if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
                 name, rec, scored_on = in_band(meta, str(file), rec, condition)
@@ -531,7 +537,7 @@ def score(
         if scored_on:
             scored_on = _units_of_part(meta, str(file), scored_on, len(revs))
         # a run-up scored in band: its speed source's words say the span, not that its mean speed is its condition
-        source = rec.angle_source.split(VARIES_WORDS)[0] + VARIES_WORDS if scored_on else rec.angle_source
+        source = rec.angle_source.rsplit("; ", 1)[0] + f"; {_span(rec)}" if scored_on else rec.angle_source
         line = f"{file}: {rec.speed_hz:.3f} Hz, from {source}" + (said and f"; read with {said}")
         on_event(Event("log", message=line + (f"; {scored_on}" if scored_on else "")))
         # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
