@@ -70,6 +70,7 @@ from .gearbox.speed import (
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
+from .signals.fixed_lines import fixed_on_orders
 from .signals.spikes import clipped
 
 TWO_PI = 2.0 * np.pi
@@ -476,6 +477,11 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             at.update(speed_source=f"declared, not confirmed: {no_speed}", speed_confirmed=False)
         read_on = None if rec.tacho is None else box.shaft_index(tacho_shaft, "--tacho-shaft")
         report["check"] = check = at | check_description(lines, box, revolutions, on_input, read_on)
+        # a fixed frequency on a shaft's order (box B's 50 Hz hum: its input's 2nd order at 25 Hz), or steady alike
+        take, bin_ = (rec.signal, rec.fs, speed.angle), 1.0 / revolutions
+        check["unexplained"] += fixed_on_orders(
+            check["unexplained"], lines, order_table(box), take, speed.mean_hz, bin_
+        )
         differences, listed = check["differences"], len(check["differences"])
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         if elsewhere:
@@ -577,7 +583,7 @@ def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None)
 
     first = check["stages"][0]
     m = first["expected_order"]
-    unexplained = [u["order"] for u in check["unexplained"]]
+    unexplained = [u["order"] for u in check["unexplained"] if "shaft_harmonic" not in u]  # a clock's line: no mesh
     # any count of marks up to 8 (a 3-mark output tacho described with 2: every order at 2/3 of its own, 'the wheel
     # on the output shaft shows 10.9 teeth'), the nearest the described count first
     for marks in sorted((q for q in range(1, 9) if q != ppr), key=lambda q: (abs(math.log(q / ppr)), q)):
@@ -659,6 +665,14 @@ def _unexplained_words(line: dict, f0: float) -> str:
     """A line the description does not explain, in Hz first where it is a strong line at no shaft's whole order (a
     fixed frequency such as a mains hum, or a bearing's; gearbox.match.shaft_harmonic), else as the order it is."""
     o, hz, db = line["order"], line["order"] * f0, line["db_over_floor"]
+    shaft, h = line.get("shaft_harmonic") or ("", 0)
+    nth = f"the {shaft} shaft's {({1: '1st', 2: '2nd', 3: '3rd'}).get(h, f'{h}th')} harmonic"
+    if shaft and line["not_an_order"] is None:  # fixed_on_orders: a speed too steady tells neither
+        steady = "the take's speed too steady to tell them apart; a take at another speed tells them apart"
+        return f"order {o:.4g} = {hz:.5g} Hz: {nth}, or mains at this speed ({steady}; {db:.0f} dB)"
+    if shaft:
+        why = f"on {nth}, but its phase follows the clock, not the shaft, as the speed varies: not a gear order "
+        return f"{hz:.5g} Hz (input order {o:.4g}, {why}(a fixed frequency such as mains, or a bearing's); {db:.0f} dB)"
     if line.get("not_an_order"):
         why = "no shaft's harmonic: not a gear order (a fixed frequency such as mains, or a bearing's)"
         return f"{hz:.5g} Hz (input order {o:.4g}, {why}; {db:.0f} dB)"

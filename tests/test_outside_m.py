@@ -6,9 +6,12 @@ are made here, small."""
 
 from __future__ import annotations
 
+import json
+import re
 from types import SimpleNamespace
 
 import numpy as np
+from gearboxes import description, stage
 
 from gearlab.kinds.detection_records import level_warnings
 from gearlab.kinds.detection_verdict import detection_lines
@@ -85,3 +88,60 @@ def test_without_a_spread_in_the_history_the_row_is_named_and_no_cause_is_invent
     rows["rows"][2] = _row("fm4", 1.0, 100.0, 20.0)
     line = detection_lines(rows, "record30")[1]
     assert line.startswith("25 Hz: goal met by na4;") and "miss it" not in line and "levels span" not in line
+
+
+# ----------------------------------------------------------------------------- B: a fixed frequency on a shaft's order
+
+# box B's 50 Hz hum at 25 Hz lands on the input's 2nd order: read as that shaft's harmonic, never named
+BOX_25 = description(stage(23, 61), name="box25", speed="25 Hz", near="input", tacho="input")
+
+
+def _take(path, hum=0.0, second=0.0, swing=0.002, seconds=6.0, fs=12800.0):
+    """A 23/61 box at 25 Hz (its speed swinging +-*swing* at 0.37 Hz; 0: exactly steady), its mesh at order 23, a
+    1-mark tacho on the input; a mains hum of *hum* g at 50 Hz, a line of *second* g at the input's 2nd order (an
+    unbalance's or misalignment's): both at 50 Hz at this speed."""
+    rng = np.random.default_rng(3)
+    t = np.arange(int(fs * seconds)) / fs
+    th = 2 * np.pi * np.cumsum(25.0 * (1 + swing * np.sin(2 * np.pi * 0.37 * t))) / fs
+    x = (1 + 0.1 * np.cos(th * 23 / 61)) * np.cos(23 * th) + 0.4 * np.cos(46 * th) + rng.normal(0, 0.05, t.size)
+    x = x + hum * np.sin(2 * np.pi * 50.0 * t + 0.3) + second * np.cos(2 * th + 1.0)
+    rows = np.column_stack([t, x, np.where(th / 2 / np.pi % 1 < 0.06, 5, 0)])
+    path.write_text("time_s,acc [g],tacho [V]\n" + "".join(f"{a:.7f},{b:.5f},{c:.1f}\n" for a, b, c in rows))
+    return path
+
+
+def _inspect(cli, tmp_path, **take):
+    (tmp_path / "box25.toml").write_text(BOX_25)
+    path = _take(tmp_path / "take.csv", **take)
+    args = ("--gearbox", tmp_path / "box25.toml", "--vibration", "acc [g]", "--tacho", "tacho [V]")
+    code, stdout, err = cli("inspect", path, *args)
+    assert code == 0, err
+    said = " ".join(stdout.split())
+    assert "matches this recording" in said, said[-1500:]
+    code, out, err = cli("inspect", path, *args, "--json")
+    at_2 = [u for u in json.loads(out)["check"]["unexplained"] if abs(u["order"] - 2.0) < 0.01]
+    listed = said.split("lines the description does not explain: ")[-1].split(" time-synchronous")[0]
+    return (listed if "lines the description does not explain" in said else ""), at_2
+
+
+def test_a_hum_on_the_input_s_2nd_order_is_named_where_the_speed_varies(cli, tmp_path):
+    # before: explained as the input's 2nd harmonic, not listed
+    listed, at_2 = _inspect(cli, tmp_path, hum=0.02)
+    assert "Hz (input order 2, on the input shaft's 2nd harmonic, but its phase follows the clock" in listed, listed
+    assert "not a gear order (a fixed frequency such as mains, or a bearing's)" in listed, listed
+    assert [u["not_an_order"] for u in at_2] == [True], at_2
+
+
+def test_a_2nd_order_line_without_hum_is_not_called_a_fixed_frequency(cli, tmp_path):
+    listed, at_2 = _inspect(cli, tmp_path, second=0.02)
+    assert "50" not in listed and "mains" not in listed and at_2 == [], listed
+
+
+def test_at_a_steady_speed_hum_and_2nd_order_are_said_to_be_alike(cli, tmp_path):
+    # the speed exactly steady: nothing tells a 50 Hz hum from the input's 2nd order at 25 Hz; said so, either way
+    alike = r"order 2 = 50(\.\d+)? Hz: the input shaft's 2nd harmonic, or mains at this speed \(the take's speed too "
+    alike += r"steady to tell them apart; a take at another speed tells them apart; \d+ dB\)"
+    for take in ({"hum": 0.02}, {"second": 0.02}):
+        listed, at_2 = _inspect(cli, tmp_path, swing=0.0, **take)
+        assert re.search(alike, listed) and "not a gear order" not in listed, (take, listed)
+        assert [u["not_an_order"] for u in at_2] == [None], at_2

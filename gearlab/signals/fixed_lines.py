@@ -1,0 +1,68 @@
+"""Whether a line at a shaft's order follows the shaft or the clock: a fixed frequency (a mains hum) that lands on a
+shaft's harmonic at this speed reads as that harmonic in the order spectrum; where the speed wanders within the take
+their phases part. Demodulated at order k of the shaft's angle theta, a line of that order keeps its phase, while a
+fixed one's phase turns by -(k theta - its straight-line fit): the phase's slope on that wander is 0 for an order,
+1 for a fixed frequency (gearlab.inspect names such lines; a take too steady leaves them alike)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..gearbox.match import UNEXPLAINED_FLOOR_DB, shaft_harmonic, tol_mesh
+
+# The phase is read in Hann blocks this long, half overlapping: short enough to follow a speed's swing over seconds
+# (box B's 0.37 Hz), long enough to part the line from its neighbours a few Hz away (another shaft's harmonics).
+BLOCK_S = 0.5
+# Mains, whose harmonics a steady speed cannot tell from a shaft's order: 50 and 60 Hz, their 2nd and 3rd.
+MAINS_HZ = tuple(m * hz for hz in (50.0, 60.0) for m in (1, 2, 3))
+# The slope is trusted where 0 and 1 lie this many standard errors apart (3 each side of 1/2).
+APART_SE = 6.0
+
+
+def clock_share(signal: np.ndarray, fs: float, angle: np.ndarray, order: float) -> tuple[float, float] | None:
+    """(slope, its standard error) of the line at *order* of the shaft whose angle per sample is *angle* (rad): ~0 it
+    follows the shaft, ~1 the clock; None where the two cannot be told apart (the slope's error over 1/APART_SE: a
+    steady speed, a line too weak, a take shorter than 6 blocks)."""
+    n, size = signal.size, int(BLOCK_S * fs)
+    starts = np.arange(0, n - size + 1, size // 2)
+    if starts.size < 6:
+        return None
+    t = np.arange(n) / fs
+    wander = order * angle
+    wander = wander - np.polyval(np.polyfit(t, wander, 1), t)  # its straight part: the speed's mean, a line's offset
+    window = np.hanning(size)
+    base = (signal - signal.mean()) * np.exp(-1j * order * angle)
+    phase = np.unwrap(np.angle([base[s : s + size] @ window for s in starts]))  # a block at a time: a long take's
+    drift = np.array([wander[s : s + size] @ window for s in starts]) / window.sum()  # blocks would not fit at once
+    middle = t[starts + size // 2]
+    fit = np.column_stack([np.ones(starts.size), middle - middle.mean(), -drift])
+    coef, *_ = np.linalg.lstsq(fit, phase, rcond=None)
+    rest = phase - fit @ coef
+    try:
+        error = float(np.sqrt(rest @ rest / (starts.size - 3) * np.linalg.inv(fit.T @ fit)[2, 2]))
+    except np.linalg.LinAlgError:  # no wander at all: a speed held exactly
+        return None
+    return None if not error * APART_SE <= 1.0 else (float(coef[2]), error)
+
+
+def fixed_on_orders(listed: list[dict], lines, table, take: tuple, f0: float, bin_: float) -> list[dict]:
+    """The strong lines of *lines* (gearbox.speed.Lines, input orders read at *f0* Hz, *bin_* apart) below every mesh
+    of *table* and its sidebands, at a shaft's whole order, not in *listed* (check_description's unexplained), whose
+    phase follows the clock (clock_share of *take*: signal, fs, input angle), as check_description lists a line at no
+    shaft's order ('not_an_order' True: box B's 50 Hz hum on its input's 2nd order at 25 Hz was read as that
+    harmonic); and those at a mains frequency that a steady speed leaves alike ('not_an_order' None: either). Each
+    with 'shaft_harmonic' [shaft, harmonic] and 'clock_share' (the slope, None where alike)."""
+    below = min(float(s.mesh) - 3 * max(float(s.pinion_shaft_order), float(s.wheel_shaft_order)) for s in table.stages)
+    out = []
+    for x, amp, db in zip(map(float, lines.at), lines.amp, lines.db):
+        shaft = shaft_harmonic(table, x, bin_) if db >= UNEXPLAINED_FLOOR_DB and x < below else None
+        if shaft is None or any(u["order"] == x for u in listed):
+            continue
+        read = clock_share(*take, x)
+        mains = any(abs(x * f0 - hz) <= tol_mesh(x, bin_) * f0 for hz in MAINS_HZ)
+        if (read is not None and read[0] > 0.5) or (read is None and mains):
+            h = round(x / float(table.shaft_orders[table.shafts.index(shaft)]))
+            said = {"order": x, "amplitude": float(amp), "db_over_floor": float(db)}
+            said["not_an_order"], said["clock_share"] = (None, None) if read is None else (True, read[0])
+            out.append(said | {"shaft_harmonic": [shaft, h]})
+    return out
