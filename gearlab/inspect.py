@@ -30,6 +30,7 @@ from .data.recordings import (
     channel_listing,
     channel_scale,
     is_rate_or_time,
+    level_hint,
     name_unit,
     not_time,
     prefixed,
@@ -133,6 +134,7 @@ def read_record(path: str, options: InspectOptions) -> Recording:
             raise
         units = f"value x {scale:g}, not m/s² ({str(refused).split('; ', 1)[-1]})"
     vib = series(contents.found[vibration], vibration, "vibration", path) * scale
+    units += level_hint(units, vib, "--unit mV")
     fs, fs_source = sampling_rate(contents, options.fs, vib.size, path)
     tacho = None
     if options.tacho is not None:
@@ -183,7 +185,7 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
         how = f"tacho '{rec.tacho_name}' (shaft angle) on the {shaft} shaft"
     else:
         with prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"):
-            theta = angle_from_pulses(rec.tacho, rec.fs) / ppr
+            theta = angle_from_pulses(rec.tacho, rec.fs, smooth=ratio < 1) / ppr
         how = f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution) on the {shaft} shaft"
     theta = theta / ratio  # the input shaft's angle
     turns = (theta[-1] - theta[0]) / TWO_PI

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
 from ..errors import GearlabInputError
 from ..units import to_si
 
@@ -52,6 +54,27 @@ def unit_scale(text: str) -> tuple[str, str, float] | None:
         except GearlabInputError:
             continue
     return None
+
+
+class VoltsAssumed(str):
+    """channel_scale's words where a file unit was taken as 1 V (a sensitivity given; no gain, and no unit in the
+    channel's name, the file or a 'unit' key): level_hint checks the level these values come to."""
+
+
+# An RMS over this many g, of values taken as volts, is called out: a gearbox housing's vibration is a few g at most,
+# and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid)
+VOLTS_TOO_LOUD_G = 200.0
+
+
+def level_hint(units: str, values: np.ndarray, remedy: str) -> str:
+    """'' or, where *units* took the file's values as volts (VoltsAssumed) and *values* (m/s²) come to an RMS over
+    VOLTS_TOO_LOUD_G, the words that say so and *remedy* (how to give millivolts: "--unit mV", "unit = 'mV'")."""
+    if not isinstance(units, VoltsAssumed) or values.size == 0:
+        return ""
+    rms = float(np.sqrt(np.mean(np.square(values - np.mean(values))))) / STANDARD_GRAVITY
+    if rms < VOLTS_TOO_LOUD_G:
+        return ""
+    return f"; RMS {rms:.3g} g, too loud for a gearbox: values in millivolts? {remedy}"
 
 
 # What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
@@ -133,4 +156,5 @@ def channel_scale(
             f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit (the gain, a full scale)",
         )
     # in g too, as a scenario gives them: a gain of '50 g' reads '50 g a file unit'
-    return scale, f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit ({volts:g} V / {per_g})"
+    how = f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit ({volts:g} V / {per_g})"
+    return scale, VoltsAssumed(how) if gain is None and said is None else how

@@ -8,9 +8,8 @@ roles and units, the sampling rate and the shaft angle (docs/real_data.md).
          ─► complete revolutions                   cut_recording (the detection and gap [target]);
                                                   gearlab.data.importers.import_measured (a dataset)
 
-    check_recording opens only a file's header (its channel names, rate fields and storage
-    types) and checks what a scenario says of it: `gearlab validate` finds a wrong column, a
-    missing rate or a unit mistake without reading the data.
+    check_recording opens only a file's header (its channel names, rate fields and storage types) and checks what a
+    scenario says of it: `gearlab validate` finds a wrong column, a missing rate or a unit mistake without reading it.
 
 Formats (by extension) and where the sampling rate comes from:
 
@@ -27,13 +26,12 @@ Formats (by extension) and where the sampling rate comes from:
     .mat          MATLAB v5 variables (scipy), or v7.3 (an HDF5 file, read with h5py); rate
                   from a variable 'fs' or 'Fs' or a time variable
 
-A channel is named as its file names it, or by its 0-based column index in a text file (an
-integer in a scenario, or its digits). Rate fields are 'fs' in any case (and sample_rate,
-sampling_rate); when the file carries a rate and one is given too they must agree.
+A channel is named as its file names it, or by its 0-based column index in a text file (an integer in a scenario,
+or its digits). Rate fields are 'fs' in any case (and sample_rate, sampling_rate); when the file carries a rate and one
+is given too they must agree.
 
-Every bad file raises :class:`GearlabInputError` with one line that names the file, the
-channel and what was expected; nothing is returned half-built. Sizes are checked before
-anything is read (GEARLAB_MAX_RECORD_MB, gearlab.data.readers.base).
+Every bad file raises :class:`GearlabInputError` with one line that names the file, the channel and what was expected;
+nothing is returned half-built. Sizes are checked before anything is read (GEARLAB_MAX_RECORD_MB, readers.base).
 """
 
 from __future__ import annotations
@@ -53,6 +51,7 @@ from ..signals.checks import fmt_hz, revolution_speeds, speed_varies
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
+from .channel_units import level_hint as level_hint
 from .channel_units import name_unit as name_unit  # what a channel's name says of its unit
 from .readers import READERS, Contents, check_size
 from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix_column, not_time
@@ -489,6 +488,7 @@ def read_recording(
     name = named(vibration, contents.available)
     scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name), declared=unit)
     vib = series(raw, vibration, "vibration", path) * scale
+    units += level_hint(units, vib, "unit = 'mV'")
     rate, fs_source = sampling_rate(contents, fs, vib.size, path)
     tacho_values = None
     if tacho is not None:
@@ -538,17 +538,17 @@ def shaft_angle(
     speed_hz: float | None = None,
     gearbox=None,
     tacho_shaft=None,
+    smooth: bool = False,
 ) -> tuple[dict, np.ndarray, str]:
     """(cut_revolutions' angle argument, the continuous angle it computes from it, a description).
 
-    From the tacho: a shaft angle, or a pulse train of *pulses_per_rev* marks per revolution (the
-    j-th rising edge at 2πj/N); without one: the declared speed, or -- with a gearbox description
-    and no speed, or to refine a declared one to ±1 % -- the speed its mesh lines show, followed
-    through the record on a mesh harmonic's phase (follow_speed; constant where it follows none;
-    refused when ambiguous). A tacho on another shaft (*tacho_shaft*, a gearbox.orders.TachoShaft,
-    else the *gearbox*'s [sensor] tacho): its angle / its turns is the input's. The angle is computed
-    here with the very functions cut_revolutions applies to the same argument, so revolution
-    boundaries found here (for labels) are exactly those of the revolutions it cuts.
+    From the tacho: a shaft angle, or a pulse train of *pulses_per_rev* marks per revolution (the j-th rising edge at
+    2πj/N); without one: the declared speed, or -- with a gearbox description and no speed, or to refine a declared one
+    to ±1 % -- the speed its mesh lines show, followed through the record on a mesh harmonic's phase (follow_speed;
+    constant where it follows none; refused when ambiguous). A tacho on another shaft (*tacho_shaft*, a
+    gearbox.orders.TachoShaft, else the *gearbox*'s [sensor] tacho): its angle / its turns is the input's, a slower
+    one's marks joined by a spline (*smooth*). The angle is computed here with the functions cut_revolutions applies
+    to the same argument: revolution boundaries found here (for labels) are those of the revolutions it cuts.
     """
     from ..signals import angle_from_pulses, angle_from_speed, unwrap_tacho
 
@@ -588,7 +588,7 @@ def shaft_angle(
 
         tacho_shaft = TachoShaft.of(gearbox, gearbox.sensor.tacho, f"{path}: [sensor] key 'tacho'")
     if tacho_shaft is not None and tacho_shaft.turns != 1:  # a slower or faster shaft: angle / turns is the input's
-        source, angle, how = shaft_angle(rec, kind=kind, pulses_per_rev=pulses_per_rev)
+        source, angle, how = shaft_angle(rec, kind=kind, pulses_per_rev=pulses_per_rev, smooth=tacho_shaft.turns < 1)
         angle = angle / float(tacho_shaft.turns)
         cut = unwrap_tacho(wrap(angle))  # the angle it returns keeps the turns from the tacho's zero (numbers)
         return {"tacho": wrap(angle)}, cut + (angle[0] - cut[0]), f"{how} on the {tacho_shaft.name} shaft"
@@ -603,7 +603,7 @@ def shaft_angle(
     where = f"{path}: tacho '{name}' never completes a revolution (read as {what}{detected})"
     try:
         with prefixed(where):
-            angle = angle_from_pulses(rec.tacho, fs)
+            angle = angle_from_pulses(rec.tacho, fs, smooth=smooth)
     except GearlabInputError:
         if (note := speed_channel_note(rec.tacho)) is None:
             raise
