@@ -64,6 +64,7 @@ class VoltsAssumed(str):
 # An RMS over this many g, of values taken as volts, is called out: a gearbox housing's vibration is a few g at most,
 # and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid)
 VOLTS_TOO_LOUD_G = 200.0
+TOO_LOUD = "too loud for a gearbox"  # level_hint's words, which a detection run's warnings repeat
 
 
 def level_hint(units: str, values: np.ndarray, remedy: str) -> str:
@@ -74,7 +75,7 @@ def level_hint(units: str, values: np.ndarray, remedy: str) -> str:
     rms = float(np.sqrt(np.mean(np.square(values - np.mean(values))))) / STANDARD_GRAVITY
     if rms < VOLTS_TOO_LOUD_G:
         return ""
-    return f"; RMS {rms:.3g} g, too loud for a gearbox: values in millivolts? {remedy}"
+    return f"; RMS {rms:.3g} g, {TOO_LOUD}: values in millivolts? {remedy}"
 
 
 # What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing

@@ -13,6 +13,7 @@ from fractions import Fraction
 import numpy as np
 
 from ..data.chain import Chain
+from ..data.channel_units import TOO_LOUD
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
@@ -369,7 +370,9 @@ def read_target(
         # is one (its speed line alone said so, and the TUI's Results show no speed line where a tacho gave them)
         said = [(f.path, cond["speed_from"][f.path]) for f, _ in cond["history"] + cond["test"]]
         cond["warnings"] = [f"{p}: {how.split('; ')[-1]}" for p, how in said if VARIES_WORDS in how]
-        cond["warnings"] += level_warnings(cond)
+        cond["warnings"] += level_warnings(cond)  # and each take's millivolts read as volts (channel_units.level_hint)
+        loud = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
+        cond["warnings"] += [f"{p}: {units.split('; ')[-1]}" for p, units in loud if TOO_LOUD in units]
         for line in cond["warnings"]:
             on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter
