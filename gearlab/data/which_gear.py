@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import GearlabInputError
 from ..signals import POINTS
 from ..signals import localise as L
+from ..signals import nonsync as NS
 from .chain import Chain
 from .which_templates import record_templates
 
@@ -89,6 +90,12 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
     *made* simulates (events(); None: by the event's width). A record that cannot be read against the
     history is said so ("not localised: ..."), not fatal."""
     try:
+        turns = [(float(o) * len(take.revolutions), s) for o, s in zip(table.shaft_orders, table.shafts)]
+        if hist.layout.mode == "shafts" and min(turns)[0] < NS.TURNS:  # each shaft's own average (signals.nonsync)
+            raise GearlabInputError(
+                f"too short for the which-gear check: {min(turns)[0]:.3g} {min(turns)[1]}-shaft turns "
+                f"({len(take.revolutions)} input revolutions), it needs {NS.TURNS}"
+            )
         found = L.localise(
             take.revolutions,
             hist,

@@ -137,7 +137,7 @@ def evidence(found: dict, nonsync: dict | None = None) -> str:
     """The localisation's evidence in a line: each shaft's z of its localised change over its
     threshold, strongest first, the tooth of the named shaft's gears, and the non-synchronous
     residual's z over its threshold with its strike order."""
-    z = ", ".join(f"{s['shaft']} z {s['z']:.1f}/{s['threshold']:.1f}" for s in found["shafts"])
+    z = ", ".join(f"{s['shaft']} z {s['z']:.1f}/{s['threshold']:.1f}" for s in found["shafts"]) or found["summary"]
     tooth = _tooth(found)
     return z + ("" if tooth == "–" else f"; tooth {tooth}") + _which(found) + "; " + nonsync_words(nonsync)
 
@@ -146,6 +146,8 @@ def nonsync_words(ns: dict | None) -> str:
     """A record's non-synchronous change (signals.nonsync) in words: z over the threshold, the order."""
     if not ns:
         return "non-synchronous: not read"
+    if "note" in ns:  # why it was not read (signals.nonsync.too_short)
+        return ns["note"]
     over = f" ({NS.PASSED})" if ns["z"] > ns["threshold"] else ""
     return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f}{over} at order {ns['order']:.2f}"
 
@@ -160,13 +162,14 @@ def nonsync_history(revolutions: list, table) -> NS.NonSyncHistory | None:
 
 
 def nonsync_of(revolutions, hist: NS.NonSyncHistory | None, table) -> dict | None:
-    """A take's non-synchronous change against *hist* (NonSync.describe()); None: not read."""
+    """A take's non-synchronous change against *hist* (NonSync.describe()); None: not read; a take too short
+    for it: why, unchanged ({"note", "changed"})."""
     if hist is None:
         return None
     try:
         return NS.nonsync(revolutions, hist, table).describe()
-    except GearlabInputError:
-        return None
+    except GearlabInputError as exc:
+        return {"note": str(exc), "changed": False}
 
 
 def localise_target(
@@ -329,7 +332,7 @@ def records_md(loc: dict, labels: dict) -> str:
 
 
 def _nonsync_cell(ns: dict | None) -> str:
-    return "–" if not ns else f"{ns['z']:.1f}/{ns['threshold']:.1f} ({ns['order']:.2f})"
+    return "–" if not ns or "note" in ns else f"{ns['z']:.1f}/{ns['threshold']:.1f} ({ns['order']:.2f})"
 
 
 def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:

@@ -56,6 +56,14 @@ LEAK = 2  # bins on either side of a shaft order's nearest bin removed where the
 # line between bins leaks past 1: box Q's healthy takes, 27/61 + 18/49 read whole, z 6.5-7.1 over 4.1 at LEAK 1 and
 # the bins of 2592186, 5.0-6.0 at 2; with beats moved by a shaft order (synchronous_bins) 4.2-5.1 at 1, 2.4-3.3 at 2)
 BLOCK = 16  # input revolutions per block of the envelope spectrum (resolution 1/16 order)
+# the fewest turns of the slowest shaft a record read whole (fewer than GRAND grand periods) is read with: its
+# residual loses 2 LEAK + 1 bins about each of that shaft's orders, spaced by its turns in the record, so at 5 turns
+# nothing is left (box B, 25/52 + 16/81, a steady 1.2 s take: 2.75 output turns, residual all zero, z nan; at 5.0
+# turns z 2.7-3.1 on rounding noise alone) and at 8 three-eighths of the spectrum (box B's healthy week 1 cut to 6.1
+# .. 28 output turns: z 0.3-0.8 against its threshold 4.7). The shafts' own averages (data.which_gear, shafts mode)
+# need as many: box B's healthy takes cut short named a gear in 5 of 5 windows at 2.75 output turns, 4 of 30 at 6.1,
+# 3 of 57 at 8-12 (z 2.9-3.3 over 2.7), none at 14-19 (the whole takes, 28 turns: z 0.2)
+TURNS = 8
 LOW, HIGH = 0.3, 40.0  # input orders of the envelope spectrum searched for a non-synchronous line
 FUNDAMENTAL = 10.0  # the highest strike order named (cage to inner-race orders, a few shaft orders)
 HARMONICS = 4  # harmonics of a strike order whose z are summed to name it
@@ -77,6 +85,24 @@ PASSED = f"a healthy take passes it at false alarm {FALSE_ALARM:g}"
 def call(order: float) -> str:
     """How a detection run, `gearlab score` and `gearlab inspect --history` name a non-synchronous change."""
     return f"other damage: non-synchronous (bearing-like), at order {order:.2f}"
+
+
+def too_short(revolutions: int, table) -> str | None:
+    """Why a record of *revolutions* consecutive input revolutions of the gearbox of order table *table* is too
+    short for the non-synchronous check (fewer than BLOCK, or read whole with fewer than TURNS turns of its
+    slowest shaft), in one phrase; None where it is not."""
+    if revolutions < BLOCK:
+        return f"too short for the non-synchronous check: {revolutions} input revolutions, it needs {BLOCK}"
+    if revolutions >= GRAND * table.train_period:  # cut to whole grand periods: each shaft's bins removed exactly
+        return None
+    slow = int(np.argmin([float(o) for o in table.shaft_orders]))
+    turns = float(table.shaft_orders[slow]) * revolutions
+    if turns >= TURNS:
+        return None
+    return (
+        f"too short for the non-synchronous check: {turns:.3g} {table.shafts[slow]}-shaft turns "
+        f"({revolutions} input revolutions), it needs {TURNS}"
+    )
 
 
 def residual(revs: np.ndarray, shaft_orders, period: int) -> np.ndarray:
@@ -114,6 +140,8 @@ def envelope_blocks(r: np.ndarray, points: int) -> np.ndarray:
     out = []
     for b in range(count):
         e = np.abs(hilbert(r[b * n : (b + 1) * n])) ** 2
+        if not e.mean() > 0:  # a constant record (a sensor off) leaves no residual: nothing to read, not nan
+            raise GearlabInputError("non-synchronous residual: none left (the record is constant); expected a signal")
         E = np.abs(np.fft.rfft(e - e.mean()) / (e.mean() * e.size)) ** 2
         out.append(np.log(np.maximum(uniform_filter1d(E, size=2 * SUM + 1, mode="nearest"), 1e-300)))
     lo, hi = int(math.ceil(LOW * BLOCK)), int(HIGH * BLOCK)
@@ -253,6 +281,10 @@ def refined(r: np.ndarray, points: int, order: float) -> float:
 def history(takes: list[np.ndarray], table) -> NonSyncHistory:
     """The healthy history of *takes* (each (R, points) consecutive input revolutions) of the gearbox of
     order table *table* (gearlab.gearbox.orders.OrderTable)."""
+    # fewer than BLOCK revolutions: envelope_blocks says so, as inspect --history reads it
+    short = [w for w in (too_short(len(t), table) for t in takes if len(t) >= BLOCK) if w]
+    if short:
+        raise GearlabInputError(f"the history's takes: {short[0]}")
     blocks = tuple(envelope_blocks(residual(t, table.shaft_orders, table.train_period), np.shape(t)[-1]) for t in takes)
     if sum(len(b) for b in blocks) < 3:
         raise GearlabInputError(
@@ -275,7 +307,11 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
 
 
 def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
-    """*take* (R, points) read against the history *hist* of the gearbox of order table *table*."""
+    """*take* (R, points) read against the history *hist* of the gearbox of order table *table*; a take too
+    short for it (too_short) is refused in that phrase."""
+    short = too_short(len(take), table)
+    if short:
+        raise GearlabInputError(short)
     r = residual(take, table.shaft_orders, table.train_period)
     blocks = envelope_blocks(r, np.shape(take)[-1])
     z, order = _z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
