@@ -572,7 +572,7 @@ def score(
                     called = int(np.sum(s > thresholds[u]))
                     where = localised.get(f.path, {})
                     decision = decision_of(bool(s.size) and called > s.size / 2, where.get("call"))
-                    if not s.size and found[f.path][5]:  # a run-up's part too short for this unit (_units_of_part)
+                    if not s.size:  # a take (a run-up's part: _units_of_part) too short for this unit: no 0/0 healthy
                         decision = "not scored"
                     rows.append(
                         {
@@ -622,10 +622,14 @@ def score_trends(run: RunDir) -> list:
     from ..charts import Chart, Curve
 
     rows = scoring.read_history(run)
-    unit = longest_tsa(r["unit"] for r in rows) or "revolution"
     out = []
     for c in dict.fromkeys(r["condition"] for r in rows):
-        picked = [r for r in rows if r["condition"] == c and r["unit"] == unit and r["median_score"] is not None]
+        # the longest unit kind a take of the condition was scored on: a history of takes all too short for the
+        # longest kind (record30 'not scored' on 11 output-shaft turns) drew no chart where record10 had points
+        held = [r for r in rows if r["condition"] == c]
+        longest = longest_tsa(r["unit"] for r in held) or "revolution"
+        unit = longest_tsa(r["unit"] for r in held if r["median_score"] is not None) or "revolution"
+        picked = [r for r in held if r["unit"] == unit and r["median_score"] is not None]
         curves, other, files, tops, parts = [], {}, [], [], {}
         for m in dict.fromkeys(r["method"] for r in picked):
             mine = [r for r in picked if r["method"] == m]
@@ -650,6 +654,8 @@ def score_trends(run: RunDir) -> list:
         left = [r for r in rows if r["condition"] == c and r["unit"] == unit and r.get("scored_on")]
         parts |= {Path(r["file"]).name: r["scored_on"] for r in left if r["median_score"] is None}
         said += "".join(f"\n{k}: {w}" for k, w in parts.items())
+        if longest != unit:
+            said += f"\n{longest}: not scored, every take too short for its unit ({unit} shown)"
         named = [f"{i} {f}" for i, f in enumerate(files, 1)]  # which take each point is, in the TUI too
         named = named if len(named) <= 12 else [*named[:5], "...", *named[-5:]]
         if curves:
