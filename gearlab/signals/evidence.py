@@ -123,10 +123,9 @@ def _null_var(rec: Content, ref: Spread, gain: float | np.ndarray = 1.0) -> np.n
     return np.where(ref.line, model, model * np.maximum(ref.excess, 1.0))
 
 
-def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """(L_s, sd(L_s)) per shaft, L_s in null sds of Δ: each order's Δ (from the history times the lines'
-    median ratio; off the lines only a heavier load's, up to LOAD_GAIN) divided by its null sd, band by band least
-    squares over the order classes (the module's docstring)."""
+def order_z(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
+    """Each order's Δ in sds of its null spread: from the history times the lines' median ratio (off the lines only a
+    heavier load's, up to LOAD_GAIN), over its null sd (the module's docstring)."""
     lines = ref.line & ~lay.carrier
     # the take's common gain of the lines (its load); off the lines, where a shaft's average holds the
     # other shafts' lines' leaks, only a heavier load's: a fault moves the lines far more, and reads them
@@ -137,7 +136,13 @@ def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np
     # a gain under 1 never narrows the history's spread: a slower gear's fault reads a faster shaft's lines
     # low (0.19-0.24 of the history's, random trains of development seed 23), and narrowed, they named it
     var = _null_var(rec, ref, np.maximum(g, 1.0))
-    z = (rec.power - g * ref.power) / np.sqrt(np.maximum(var, 1e-300))
+    return (rec.power - g * ref.power) / np.sqrt(np.maximum(var, 1e-300))
+
+
+def shaft_levels(rec: Content, ref: Spread, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """(L_s, sd(L_s)) per shaft, L_s in null sds of Δ: each order's z (order_z), band by band least squares over the
+    order classes (the module's docstring)."""
+    z = order_z(rec, ref, lay)
     k = len(lay.shafts)
     code = lay.sync @ (1 << np.arange(k))
     num, info = np.zeros(k), np.zeros(k)

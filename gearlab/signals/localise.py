@@ -96,7 +96,15 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from .checks import check_array, check_int
-from .evidence import KAPPA, WEIGHT_SMOOTH, Spread, _null_var, shaft_levels, spread  # noqa: F401 (read as localise's)
+from .evidence import (  # noqa: F401 (read as localise's)
+    KAPPA,
+    WEIGHT_SMOOTH,
+    Spread,
+    _null_var,
+    order_z,
+    shaft_levels,
+    spread,
+)
 from .shaft import averaged, shaft_averages, uniform_filter1d
 from .which_template import (  # noqa: F401 (the width's settings: read by tests and docs as localise's)
     MIN_RATIO,
@@ -111,6 +119,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     WIDTH_Z,
     envelope,
     fit_words,
+    mesh_combs,
     mesh_phases,
     phase_words,
     two_harmonic_phases,
@@ -745,7 +754,8 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
             both = two_harmonic_phases(rec, hist.spread, lay, s, harmonics, on)
             which, dens = which_by_width(rec, hist.spread, harmonics, on, zs, phases, both)
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
-            by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay))
+            combs = mesh_combs(order_z(rec, hist.spread, lay), harmonics, on)  # the record's own sidebands
+            by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay), combs)
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
             dens["rule"] = dens.get("rule", RULE_WIDTH) if by is False else fits.get("rule", RULE_SIMULATED)
         elif dens:  # the width's evidence, or the mesh phase's where it named the gear

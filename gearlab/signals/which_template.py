@@ -72,6 +72,23 @@ REFERENCE_MARGIN = 0.05  # weighted mean cos of one gear over the other's below 
 # 134 / 94 of 97 (95 / 97 %); the simulated events' whole shape (a matching structure) 98-100 % at any lead
 WEAK_LEAD = 0.3
 WEAK_RIGHT = "69-83 %"  # the share above, as the evidence says it
+# Where the structure differs (gap over SHAPE_DB), first the record's own sidebands, as a gear engineer reads them: a
+# local fault on a gear modulates its own mesh, so the record's excess over the history (each own order's z,
+# signals.evidence.order_z, clipped at 0) rises about that gear's mesh harmonics and falls between them: periodic in
+# the shaft's harmonics with the gear's tooth count. mesh_combs: the excess's correlation with cos(2π m / Z) at each
+# gear's Z, in sds of the same at the other whole periods from COMB_SHORTEST to COMB_SPAN times the larger count (none
+# within COMB_CLEAR of a multiple or 1/2-1/4 of either count). A gear is named at COMB_Z or more, the other's under.
+# Needs no simulator: on records whose structure and fault differ from it (an outside generator: a 25/52 + 16/81 box's
+# 16T chip as a dip and phase step of its mesh plus a strike) the phases matched neither gear's simulated kinds (cos
+# -0.3..0.25). Development: that box's 16T chip 7.9-11.6 (26 takes, seeds 601-620 and helper H's 6; the phases named
+# the 16T in 15, the 52T in 4), its 52T crack 2.6-3.3 (under: the phases decide), healthy takes up to 4.9; the
+# simulator's faults under bearings 0.5x / 2x or a casing path (268 flagged, rig, 21/63 + 24/56, random trains, seed
+# 41) at most 4.0: its events excite the structure broadly, not as sidebands, and the phases decide
+COMB_Z = 6.0
+COMB_SHORTEST = 8
+COMB_SPAN = 1.5
+COMB_CLEAR = 2  # a decoy period stands more than this many harmonics off a count's multiple or fraction
+RULE_SIDEBANDS = "by the sidebands about its own mesh"
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -103,20 +120,26 @@ def structure_gap(ref, lay, healthy: np.ndarray) -> float:
     return float(np.std(10 * np.log10(ref.power[sel] / np.abs(healthy[sel]) ** 2)))
 
 
-def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], gears, templates: dict):
+def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], gears, templates: dict, combs=None):
     """(the gear whose simulated event fits the record's clearly better, or None: both; the fits).
     *harmonics*: the shaft's own orders and their harmonic numbers of the shaft (localise._harmonics);
     *templates*: {"healthy": the simulated healthy mean, "gears": {gear name: [template, ...]}}.
     Where the simulator's structure differs from the history's (structure_gap over SHAPE_DB) the events'
     phases at their own mesh are compared instead (reference_phase_match). False instead of a gear: the
-    events are not used (not simulated, too few clear lines to compare the structures, no phase read)."""
+    events are not used (not simulated, too few clear lines to compare the structures, no phase read). *combs*:
+    mesh_combs of the record, read first where the structure differs (by_sidebands; None: not read)."""
     if "healthy" not in templates:  # the description could not be simulated: said, and the width decides
         return False, {"not used": f"not simulated: {templates['not simulated']}"}
     gap = structure_gap(ref, lay, templates["healthy"])
     ev = {"structure gap dB": gap}
     if not math.isfinite(gap):
         return False, {**ev, "not used": "too few of the history's mesh harmonics stand clear of its noise"}
-    if gap > SHAPE_DB:  # another structure: the phases at each gear's own mesh, not the whole shape
+    if gap > SHAPE_DB:  # another structure: the sidebands about each gear's own mesh, else the phases there
+        if combs:
+            ev["own-mesh sidebands"] = combs
+            by = by_sidebands(combs, gears)
+            if by is not None:
+                return by, {**ev, "rule": RULE_SIDEBANDS}
         return _by_reference_phases(rec, ref, lay, harmonics, gears, templates, ev)
     sel, m = harmonics
     R = residual(rec, ref, sel)
@@ -141,6 +164,42 @@ def _by_reference_phases(rec, ref, lay, harmonics, gears, templates: dict, ev: d
     return next(g for g in gears if g.name == best), ev
 
 
+def decoy_periods(teeth: list[int]) -> list[int]:
+    """The whole periods (shaft harmonics) mesh_combs reads a comb's null at: COMB_SHORTEST to COMB_SPAN times the
+    largest of *teeth*, none within 1 of a count's multiple (up to 4 times) or of its half, third or quarter."""
+    near = [t * k for t in teeth for k in (1, 2, 3, 4)] + [t / k for t in teeth for k in (2, 3, 4)]
+    top = int(COMB_SPAN * max(teeth))
+    return [p for p in range(COMB_SHORTEST, top + 1) if all(abs(p - n) > COMB_CLEAR for n in near)]
+
+
+def _comb(m: np.ndarray, excess: np.ndarray, period: float) -> float:
+    """Correlation of *excess* (at harmonics *m*) with cos(2π m / *period*): 1 for an excess all at its multiples."""
+    x, c = excess - excess.mean(), np.cos(2 * np.pi * m / period)
+    norm = math.sqrt(float(np.sum(x**2) * np.sum(c**2)))
+    return float(np.sum(x * c)) / norm if norm > 0 else 0.0
+
+
+def mesh_combs(z: np.ndarray, harmonics: tuple[np.ndarray, np.ndarray], gears) -> dict:
+    """{gear name: the record's excess correlation with the gear's mesh comb, in sds of the decoy periods'} ({}: not
+    read: fewer than 5 decoys, no excess). *z*: each order's z (signals.evidence.order_z); *harmonics*: the shaft's
+    own orders and their harmonic numbers (localise._harmonics)."""
+    sel, m = harmonics
+    excess = np.clip(z[sel], 0, None)
+    decoys = decoy_periods([g.teeth for g in gears])
+    if len(decoys) < 5 or m.size < 3 or not excess.any():
+        return {}
+    null = np.array([_comb(m, excess, p) for p in decoys])
+    if null.std() <= 0:
+        return {}
+    return {g.name: (_comb(m, excess, g.teeth) - float(null.mean())) / float(null.std()) for g in gears}
+
+
+def by_sidebands(combs: dict, gears):
+    """The one gear whose mesh comb (mesh_combs) reaches COMB_Z, the other's under it (None: neither, or both)."""
+    over = [g for g in gears if combs.get(g.name, -math.inf) >= COMB_Z]
+    return over[0] if len(over) == 1 else None
+
+
 def weak_lead(evidence: dict) -> float | None:
     """The lead of the named gear's own-mesh phase match over the other's where under WEAK_LEAD, else None."""
     match = sorted(evidence.get("own-mesh phase match", {}).values(), reverse=True)
@@ -151,6 +210,11 @@ def weak_lead(evidence: dict) -> float | None:
 
 def fit_words(evidence: dict) -> str:
     """The simulated events' evidence in words, for localise.which_line ("" without it)."""
+    if "own-mesh sidebands" in evidence:
+        said = " / ".join(f"{g.split(' (')[0]} {v:.1f}" for g, v in evidence["own-mesh sidebands"].items())
+        combs = f"sidebands about each gear's own mesh (sds over other periods, {COMB_Z:g} names) {said}, "
+        rest = {k: v for k, v in evidence.items() if k != "own-mesh sidebands"}
+        return combs + ("" if evidence.get("rule") == RULE_SIDEBANDS else fit_words(rest))
     if "own-mesh phase match" in evidence:
         said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["own-mesh phase match"].items())
         return "own-mesh phases matched to the simulated events' (mean cos) " + " / ".join(said) + ", "
@@ -166,7 +230,7 @@ def fit_words(evidence: dict) -> str:
 def phase_words(evidence: dict) -> str:
     """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them, or where the
     simulated events decided, not the phase)."""
-    if evidence.get("rule") in (RULE_SIMULATED, RULE_REFERENCE):
+    if evidence.get("rule") in (RULE_SIMULATED, RULE_REFERENCE, RULE_SIDEBANDS):
         return ""
     if "mesh phases" in evidence:  # two harmonics (_by_phases_alike)
         said = (f"{g.split(' (')[0]} {a:.2f}, {b:.2f}" for g, (a, b) in evidence["mesh phases"].items())
