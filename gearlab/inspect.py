@@ -72,6 +72,7 @@ from .gearbox.speed import (
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders
+from .signals.nonsync import TURNS
 from .signals.spikes import clipped
 
 TWO_PI = 2.0 * np.pi
@@ -279,6 +280,9 @@ def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | N
         avg = tsa(resample_revolutions(signal, theta, points=points))
         amp = np.abs(np.fft.rfft(avg - avg.mean())) * 2 / points
         top = np.argsort(-amp)[:3]
+        # over a few turns the other shafts' lines stay in the average (a 1 s take's output TSA of 2 turns: 'strongest
+        # orders 378, 144, 58', the input's mesh first); as few as the which-gear check refuses (signals.nonsync.TURNS)
+        few = {"note": f"{count} turns: too few to average out the other shafts ({TURNS} needed)"}
         out.append(
             {
                 "shaft": name,
@@ -288,6 +292,7 @@ def shaft_tsa(rec: Recording, speed: Speed, box: Gearbox | None, fine: tuple | N
                 "strongest_orders": [int(t) for t in top],
                 "tsa": avg,
             }
+            | (few if count < TURNS else {})
         )
     return out
 
@@ -780,7 +785,7 @@ def render(report: dict, console, width: int = 100) -> None:
             str(s["revolutions"]),
             f"{s['rms']:.4g}",
             f"{s['share_of_signal_rms']:.3f}",
-            ", ".join(map(str, s["strongest_orders"])),
+            ", ".join(map(str, s["strongest_orders"])) + (f" ({s['note']})" if "note" in s else ""),
         )
     console.print(t)
     if "verdict" in report:

@@ -114,3 +114,17 @@ def test_a_detection_run_warns_of_a_history_take_in_millivolts(cli, tmp_path):
     assert f"warning: {warned}" in said and "too loud for a gearbox: values in millivolts? unit = 'mV'" in said
     (table,) = (tmp_path / "runs").glob("mv/*/table.md")
     assert warned in table.read_text() and "h1.csv: RMS" not in table.read_text()
+
+
+def test_a_short_take_s_tsa_of_a_few_turns_is_said_too_few(cli, tmp_path):
+    # a 1 s take: its output shaft turns 5 times; before, its TSA's 'strongest orders' were listed as any other's
+    # (the 1 s take of the three-stage box: output, 2 turns, '378, 144, 58', the input's mesh first), unsaid
+    take = _take(tmp_path / "short.tsv", seconds=1.0)[0]
+    rows = {t["shaft"]: t for t in _inspect(cli, tmp_path, take, "--unit", "g")["tsa"]}
+    assert rows["output"]["revolutions"] < 8 and rows["output"]["note"] == (
+        f"{rows['output']['revolutions']} turns: too few to average out the other shafts (8 needed)"
+    ), rows["output"]
+    assert "note" not in rows["input"] and "note" not in rows["intermediate"], rows
+    args = ("--gearbox", tmp_path / "boxO.toml", "--vibration", "0", "--tacho", "1", "--fs", "25600", "--unit", "g")
+    code, out, err = cli("inspect", take, *args)
+    assert code == 0 and "too few to average out" in " ".join(out.replace("│", " ").split()), err
