@@ -128,3 +128,15 @@ def test_a_short_take_s_tsa_of_a_few_turns_is_said_too_few(cli, tmp_path):
     args = ("--gearbox", tmp_path / "boxO.toml", "--vibration", "0", "--tacho", "1", "--fs", "25600", "--unit", "g")
     code, out, err = cli("inspect", take, *args)
     assert code == 0 and "too few to average out" in " ".join(out.replace("│", " ").split()), err
+
+
+def test_the_guide_says_how_long_a_take_must_be():
+    # a 1 s take among a detection run's test files stopped it ('gives 18 intermediate 1-shaft revolutions, fewer
+    # than record30's 30'), after validate said OK; the guide named no length
+    from pathlib import Path
+
+    from gearlab.kinds.detection_settings import Detection
+
+    longest = max(Detection().blocks)
+    guide = " ".join((Path(__file__).parents[1] / "docs" / "your_gearbox.md").read_text().split())
+    assert f"A take needs {longest} turns of the watched gear's shaft (`record{longest}`" in guide
