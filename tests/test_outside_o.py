@@ -140,3 +140,25 @@ def test_the_guide_says_how_long_a_take_must_be():
     longest = max(Detection().blocks)
     guide = " ".join((Path(__file__).parents[1] / "docs" / "your_gearbox.md").read_text().split())
     assert f"A take needs {longest} turns of the watched gear's shaft (`record{longest}`" in guide
+
+
+def test_a_weak_lead_is_said_under_its_bound():
+    """A phase lead of 0.2996 read 'a phase lead of 0.30, under 0.3' (rounded): cut to 0.29 in both sayings."""
+    from gearlab.signals import localise
+    from gearlab.signals.which_template import RULE_REFERENCE, WEAK_LEAD
+
+    gears = ["intermediate gear 63T (stage 1)", "intermediate pinion 24T (stage 2)"]
+    evidence = {"rule": RULE_REFERENCE, "own-mesh phase match": {gears[0]: 0.15, gears[1]: 0.15 + 0.2996}}
+    assert localise.weak_lead(evidence) < WEAK_LEAD
+    said = localise.weakly({"which": gears[1], "gears": gears, "stage_evidence": evidence})
+    assert said == ", weakly over intermediate gear 63T (stage 1) (phase lead 0.29)"
+    assert (
+        localise.weakly(
+            {
+                "which": gears[1],
+                "gears": gears,
+                "stage_evidence": {**evidence, "own-mesh phase match": {gears[0]: 0.1, gears[1]: 0.4}},
+            }
+        )
+        == ""
+    )

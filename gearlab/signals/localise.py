@@ -119,6 +119,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     WIDTH_Z,
     envelope,
     fit_words,
+    lead_words,
     mesh_combs,
     mesh_phases,
     phase_words,
@@ -538,7 +539,7 @@ def which_line(evidence: dict, which: str | None) -> str:
         weak = (
             ""
             if lead is None
-            else f"; weak: a phase lead of {lead:.2f}, under {WEAK_LEAD:g} (so led, right in {WEAK_RIGHT})"
+            else f"; weak: a phase lead of {lead_words(lead)}, under {WEAK_LEAD:g} (so led, right in {WEAK_RIGHT})"
         )
         return f"; named {rule} ({said}){weak}"
     return f"; which of the two: undecided {rule} ({said}; {evidence['undecided']})"
@@ -551,7 +552,7 @@ def weakly(ev: dict) -> str:
     lead = weak_lead(ev.get("stage_evidence") or {}) if ev.get("which") else None
     if lead is None:
         return ""
-    return f", weakly over {' / '.join(g for g in ev['gears'] if g != ev['which'])} (phase lead {lead:.2f})"
+    return f", weakly over {' / '.join(g for g in ev['gears'] if g != ev['which'])} (phase lead {lead_words(lead)})"
 
 
 def threshold_floor(shafts: int, false_alarm: float = FALSE_ALARM) -> float:

@@ -27,6 +27,7 @@ Figures: docs/real_data.md ("Which gear").
 from __future__ import annotations
 
 import math
+from decimal import ROUND_DOWN, Decimal
 
 import numpy as np
 
@@ -206,6 +207,12 @@ def weak_lead(evidence: dict) -> float | None:
     if evidence.get("rule") != RULE_REFERENCE or evidence.get("undecided") or len(match) < 2:  # "": decided
         return None
     return match[0] - match[1] if match[0] - match[1] < WEAK_LEAD else None
+
+
+def lead_words(lead: float) -> str:
+    """A lead under WEAK_LEAD in two decimals, cut, not rounded: 0.2996 rounded read 'a phase lead of 0.30,
+    under 0.3' (an outside user's three-stage box)."""
+    return f"{Decimal(repr(lead)).quantize(Decimal('0.01'), rounding=ROUND_DOWN):.2f}"
 
 
 def fit_words(evidence: dict) -> str:
