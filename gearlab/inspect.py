@@ -71,7 +71,7 @@ from .gearbox.speed import (
 )
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
-from .signals.fixed_lines import fixed_on_orders
+from .signals.fixed_lines import fixed_on_orders, smear_merged
 from .signals.nonsync import TURNS
 from .signals.spikes import clipped
 
@@ -489,6 +489,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         check["unexplained"] += fixed_on_orders(
             check["unexplained"], lines, order_table(box), take, speed.mean_hz, bin_
         )
+        swing = report["speed"]["variation_percent"] / 100  # a line in a stronger one's smear is its skirt, not a line
+        check["unexplained"] = smear_merged(check["unexplained"], lines, swing, bin_)
         differences, listed = check["differences"], len(check["differences"])
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         if elsewhere:

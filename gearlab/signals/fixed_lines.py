@@ -66,3 +66,33 @@ def fixed_on_orders(listed: list[dict], lines, table, take: tuple, f0: float, bi
             said["not_an_order"], said["clock_share"] = (None, None) if read is None else (True, read[0])
             out.append(said | {"shaft_harmonic": [shaft, h]})
     return out
+
+
+# A line's smear in the order spectrum: a fixed frequency at order o read over a take whose speed spans (max - min) /
+# mean = *swing* covers o x swing orders, its strongest part anywhere within (a sine swing's two horns lie at the
+# ends); a mesh line read through a coarse angle (a hard-edged tacho on a slow shaft) is modulated by the angle's
+# error, at most the speed's own swing, into sidebands in pairs about it. Plus this many bins: the window's main
+# lobe, and how far a pair's two lines may sit off the mirror. Box S's hum (20/47 at 24.3 Hz, 0.43 % range) stood at
+# 180.25 and 179.79 Hz, 0.019 orders apart within 7.41 x 0.0043 = 0.032; box T's mesh 2 (445.7 Hz, output tacho,
+# 0.41 %) at 444.72 and 446.56 Hz, a pair within 9.9 x 0.0041 = 0.041 orders; its hum's 3rd at 180.22 Hz, 0.018
+# orders from mesh 3 and no line on the other side, stays a line.
+SMEAR_BINS = 2.0
+
+
+def smear_merged(listed: list[dict], lines, swing: float, bin_: float) -> list[dict]:
+    """*listed* (unexplained lines, each with 'order' and 'amplitude') less the skirts of stronger lines of *lines*
+    (gearbox.speed.Lines, every peak read) under the take's speed range *swing*: a line within a listed line's smear
+    (a fixed frequency's, listed once), or within an explained line's smear with a line on its mirror side (an order
+    line's sidebands come in pairs). Merged into the stronger line, listed or explained already."""
+    at, amp = np.asarray(lines.at, float), np.asarray(lines.amp, float)
+    near = SMEAR_BINS * bin_
+    said = [u["order"] for u in listed]
+
+    def skirt(u: dict) -> bool:
+        x = u["order"]
+        for s in np.flatnonzero((amp > u["amplitude"]) & (np.abs(at - x) <= np.maximum(at, x) * swing + near)):
+            if any(abs(at[s] - o) <= near / 4 for o in said) or np.any(np.abs(at - (2 * at[s] - x)) <= near):
+                return True
+        return False
+
+    return [u for u in listed if not skirt(u)]
