@@ -211,7 +211,7 @@ def weak_lead(evidence: dict) -> float | None:
 
 def lead_words(lead: float) -> str:
     """A lead under WEAK_LEAD in two decimals, cut, not rounded: 0.2996 rounded read 'a phase lead of 0.30,
-    under 0.3' (an outside user's three-stage box)."""
+    under 0.3' (a three-stage box's which-gear line)."""
     return f"{Decimal(repr(lead)).quantize(Decimal('0.01'), rounding=ROUND_DOWN):.2f}"
 
 
