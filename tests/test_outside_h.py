@@ -9,40 +9,9 @@ import json
 import numpy as np
 import pytest
 from gearboxes import description, stage
+from which_gear_takes import box_b_description, box_b_take
 
-BOX_B = description(
-    stage(25, 52),
-    stage(16, 81, module="3 mm", bores=("30 mm", "45 mm")),
-    name="boxB",
-    speed="25 Hz",
-    near="intermediate",
-    tacho="intermediate",
-    marks=4,
-)
-
-
-def _box_b_take(path, seed, crack=0.0, seconds=6.0, fs=10240.0):
-    """A 25/52 + 16/81 take at 25 Hz (in g): both meshes' harmonics, their amplitude and phase modulated at both shafts'
-    rates (the gearbox's phases, not the take's), a crack on the 52T wheel (a dip and a phase step of stage 1's mesh
-    over ~1.2 pitches once per intermediate turn, at 2 rad of its angle), noise; a tacho of 4 alike marks a turn on
-    the intermediate shaft. Each take starts at a random angle, so at any of the 4 marks."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(int(fs * seconds)) / fs
-    th = 2 * np.pi * 25.0 * t * (1 + 0.0015 * np.sin(2 * np.pi * 0.37 * t)) + rng.uniform(0, 2 * np.pi)
-    thm, tho = th * 25 / 52, th * 25 / 52 * 16 / 81
-    window = np.exp(-0.5 * (((thm - 2.0 + np.pi) % (2 * np.pi) - np.pi) / (1.2 * np.pi / 52)) ** 2)
-
-    def mesh(angle, z, a, b, dip=0.0, step=0.0):
-        fixed = np.random.default_rng(z).uniform(0, 6, 7)  # the gearbox's own phases
-        am = (1 + 0.15 * np.cos(a + fixed[0]) + 0.1 * np.cos(b + fixed[1])) * (1 - dip * window)
-        pm = 0.05 * np.sin(a + fixed[2]) + 0.04 * np.sin(b + fixed[3]) + step * window
-        return sum(c * am * np.cos(k * (z * angle + pm) + fixed[3 + k]) for k, c in enumerate((1.0, 0.45, 0.2), 1))
-
-    x = 0.6 * mesh(th, 25, th, thm, 0.25 * crack, 0.35 * crack) + 0.9 * mesh(thm, 16, thm, tho)
-    x = x + 0.05 * np.cos(th) + 0.06 * np.cos(thm + 2) + rng.normal(0, 0.05, t.size)
-    tacho = np.where((4 * thm / 2 / np.pi) % 1 < 0.1, 5.0, 0.0)
-    np.savez(path, acc_top=x.astype("f4"), tacho=tacho.astype("f4"), fs=fs)
-    return path
+BOX_B = box_b_description()
 
 
 def test_score_key_empty_drops_the_run_s_gain_and_sensitivity(tmp_path):
@@ -73,10 +42,10 @@ def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(cli,
     # counted from the mark, the same tooth up to 13-tooth steps (52 / 4), and said so
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     (tmp_path / "boxB.toml").write_text(BOX_B)
-    history = [_box_b_take(tmp_path / f"h{seed}.npz", seed) for seed in (51, 52, 53)]
+    history = [box_b_take(tmp_path / f"h{seed}.npz", seed, seconds=6.0) for seed in (51, 52, 53)]
     pitches = []
     for seed in (54, 56):
-        take = _box_b_take(tmp_path / f"c{seed}.npz", seed, crack=1.0)
+        take = box_b_take(tmp_path / f"c{seed}.npz", seed, seconds=6.0, crack=1.0)
         args = ["inspect", take, "--gearbox", tmp_path / "boxB.toml", "--vibration", "acc_top", "--tacho", "tacho"]
         code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)], "--json")
         assert code == 0, err
@@ -154,7 +123,7 @@ def test_inspect_says_a_channel_clipped_at_its_range(cli, tmp_path):
     # an int24 WAV in volts (100 mV/g, full scale 5 V) with a knock over its range: 4 samples at full scale, read
     # by inspect without a word
     (tmp_path / "boxB.toml").write_text(BOX_B)
-    x = np.load(_box_b_take(tmp_path / "b.npz", 7, seconds=3.0))["acc_top"].astype(float) * 0.1  # g -> V
+    x = np.load(box_b_take(tmp_path / "b.npz", 7, seconds=3.0))["acc_top"].astype(float) * 0.1  # g -> V
     args = ("--gearbox", tmp_path / "boxB.toml", "--gain", "5 V", "--sensitivity", "100 mV/g", "--speed", "25 Hz")
     code, stdout, err = cli("inspect", _wav24(tmp_path / "clean.wav", x, 10240.0), *args)
     assert code == 0 and "clipped" not in stdout, err + stdout
@@ -214,7 +183,7 @@ def test_a_few_samples_clipped_at_the_range_are_bridged_as_a_spike_is(tmp_path):
     from gearlab.gearbox.orders import TachoShaft
     from gearlab.signals.spikes import without_spikes
 
-    take = dict(np.load(_box_b_take(tmp_path / "h.npz", 3)))
+    take = dict(np.load(box_b_take(tmp_path / "h.npz", 3, seconds=6.0)))
     take["acc_top"][20000:20004] = 50.0  # g: a logger's range
     np.savez(tmp_path / "knock.npz", **take)
     shaft = TachoShaft(name="intermediate", a=25, b=52)

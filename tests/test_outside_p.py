@@ -9,61 +9,19 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from gearboxes import description, stage
-from scipy.signal import lfilter
+from which_gear_takes import box_b_description, box_b_take
 
 from gearlab.signals import which_template as T
 from gearlab.signals.localise import Gear
 
-BOX_B = description(
-    stage(25, 52),
-    stage(16, 81, module="3 mm", bores=("30 mm", "45 mm")),
-    name="boxB",
-    speed="25 Hz",
-    load="40 N*m",
-    near="intermediate",
-    tacho="intermediate",
-    marks=4,
-)
+BOX_B = box_b_description(load="40 N*m")
 WHEEL, PINION = Gear("intermediate", 1, "wheel", 52), Gear("intermediate", 2, "pinion", 16)
-
-
-def _take(path, seed, chip=0.0, seconds=8.0, fs=10240.0):
-    """A 25/52 + 16/81 take at 25 Hz (in g): both meshes' harmonics, amplitude and phase modulated at both shafts'
-    rates (the gearbox's phases, not the take's); a chip on the 16T pinion: a dip (0.45) and a phase step (0.6 rad)
-    of stage 2's mesh over ~1.2 of its pitches once per intermediate turn, and a strike ringing at 2.6 kHz; a 2.6 kHz
-    resonance, noise; a tacho of 4 alike marks a turn on the intermediate shaft."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(int(fs * seconds)) / fs
-    th = 2 * np.pi * 25.0 * t * (1 + 0.0015 * np.sin(2 * np.pi * 0.37 * t)) + rng.uniform(0, 2 * np.pi)
-    thm, tho = th * 25 / 52, th * 25 / 52 * 16 / 81
-    window = np.exp(-0.5 * (((thm - 4.0 + np.pi) % (2 * np.pi) - np.pi) / (1.2 * np.pi / 16)) ** 2)
-
-    def mesh(angle, z, a, b, dip=0.0, step=0.0):
-        fixed = np.random.default_rng(z).uniform(0, 6, 7)  # the gearbox's own phases
-        am = (1 + 0.15 * np.cos(a + fixed[0]) + 0.1 * np.cos(b + fixed[1])) * (1 - dip * window)
-        pm = 0.05 * np.sin(a + fixed[2]) + 0.04 * np.sin(b + fixed[3]) + step * window
-        return sum(c * am * np.cos(k * (z * angle + pm) + fixed[3 + k]) for k, c in enumerate((1.0, 0.45, 0.2), 1))
-
-    x = 0.6 * mesh(th, 25, th, thm) + 0.9 * mesh(thm, 16, thm, tho, 0.45 * chip, 0.6 * chip)
-    if chip:  # the strike: a 2.6 kHz ring decaying in 0.6 ms, once per intermediate turn at the chip
-        ring = np.exp(-np.arange(31) / (0.0006 * fs)) * np.sin(2 * np.pi * 2600.0 * np.arange(31) / fs)
-        turns = np.arange(np.ceil((thm[0] - 4.0) / (2 * np.pi)), np.floor((thm[-1] - 4.0) / (2 * np.pi)) + 1)
-        at = np.searchsorted(thm, 4.0 + 2 * np.pi * turns)
-        for i in at[at < t.size - 31]:
-            x[i : i + 31] += 0.5 * chip * ring
-    x = x + 0.05 * np.cos(th) + 0.06 * np.cos(thm + 2) + 0.05 * np.cos(tho + 1)
-    r, w = np.exp(-0.04 * 2 * np.pi * 2600.0 / fs), 2 * np.pi * 2600.0 / fs  # the structure's resonance
-    x = x + 0.8 * lfilter([1 - r], [1, -2 * r * np.cos(w), r * r], x) + rng.normal(0, 0.05, t.size)
-    tacho = np.where((4 * thm / 2 / np.pi) % 1 < 0.1, 5.0, 0.0)
-    np.savez(path, acc_top=x.astype("f4"), tacho=tacho.astype("f4"), fs=fs)
-    return path
 
 
 def _localised(cli, tmp_path, seed):
     (tmp_path / "boxB.toml").write_text(BOX_B)
-    history = [_take(tmp_path / f"h{s}.npz", s) for s in (61, 62, 63)]
-    take = _take(tmp_path / f"c{seed}.npz", seed, chip=1.0)
+    history = [box_b_take(tmp_path / f"h{s}.npz", s, seconds=8.0, ring=True) for s in (61, 62, 63)]
+    take = box_b_take(tmp_path / f"c{seed}.npz", seed, seconds=8.0, chip=1.0, ring=True)
     args = ["inspect", take, "--gearbox", tmp_path / "boxB.toml", "--vibration", "acc_top", "--tacho", "tacho"]
     code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)], "--json")
     assert code == 0, err

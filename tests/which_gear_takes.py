@@ -109,3 +109,55 @@ def flags_everything(records, condition: str = "40 Hz") -> dict:
         "thresholds": {"revolution": 0.0, "record30": 0.0},
         "test_scores": {p: {"revolution": [1.0] * 4, "record30": [1.0, 1.0]} for p in records},
     }
+
+
+def box_b_take(path, seed, *, seconds, fs=10240.0, crack=0.0, chip=0.0, ring=False):
+    """A take of an outside generator's 25/52 + 16/81 box at 25 Hz (in g; not gearlab's simulator), saved as npz
+    (`acc_top`, `tacho`, `fs`): both meshes' harmonics, their amplitude and phase modulated at both shafts' rates (the
+    gearbox's phases, not the take's), each take from a random angle; a tacho of 4 alike marks a turn on the
+    intermediate shaft. *crack*: the 52T wheel's, a dip and a phase step of stage 1's mesh over ~1.2 of its pitches
+    once per intermediate turn at 2 rad; *chip*: the 16T pinion's, the same of stage 2's mesh at 4 rad plus a strike
+    ringing at 2.6 kHz. *ring*: the output shaft's line, a 2.6 kHz structural resonance (chip takes have it)."""
+    import numpy as np
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(fs * seconds)) / fs
+    th = 2 * np.pi * 25.0 * t * (1 + 0.0015 * np.sin(2 * np.pi * 0.37 * t)) + rng.uniform(0, 2 * np.pi)
+    thm, tho = th * 25 / 52, th * 25 / 52 * 16 / 81
+    at, z = (4.0, 16) if ring else (2.0, 52)
+    window = np.exp(-0.5 * (((thm - at + np.pi) % (2 * np.pi) - np.pi) / (1.2 * np.pi / z)) ** 2)
+
+    def mesh(angle, z, a, b, dip=0.0, step=0.0):
+        fixed = np.random.default_rng(z).uniform(0, 6, 7)  # the gearbox's own phases
+        am = (1 + 0.15 * np.cos(a + fixed[0]) + 0.1 * np.cos(b + fixed[1])) * (1 - dip * window)
+        pm = 0.05 * np.sin(a + fixed[2]) + 0.04 * np.sin(b + fixed[3]) + step * window
+        return sum(c * am * np.cos(k * (z * angle + pm) + fixed[3 + k]) for k, c in enumerate((1.0, 0.45, 0.2), 1))
+
+    x = 0.6 * mesh(th, 25, th, thm, 0.25 * crack, 0.35 * crack) + 0.9 * mesh(thm, 16, thm, tho, 0.45 * chip, 0.6 * chip)
+    if chip:  # the strike: a 2.6 kHz ring decaying in 0.6 ms, once per intermediate turn at the chip
+        strike = np.exp(-np.arange(31) / (0.0006 * fs)) * np.sin(2 * np.pi * 2600.0 * np.arange(31) / fs)
+        turns = np.arange(np.ceil((thm[0] - at) / (2 * np.pi)), np.floor((thm[-1] - at) / (2 * np.pi)) + 1)
+        hits = np.searchsorted(thm, at + 2 * np.pi * turns)
+        for i in hits[hits < t.size - 31]:
+            x[i : i + 31] += 0.5 * chip * strike
+    x = x + 0.05 * np.cos(th) + 0.06 * np.cos(thm + 2)
+    if ring:
+        x = x + 0.05 * np.cos(tho + 1)
+        r, w = np.exp(-0.04 * 2 * np.pi * 2600.0 / fs), 2 * np.pi * 2600.0 / fs  # the structure's resonance
+        x = x + 0.8 * lfilter([1 - r], [1, -2 * r * np.cos(w), r * r], x)
+    x = x + rng.normal(0, 0.05, t.size)
+    tacho = np.where((4 * thm / 2 / np.pi) % 1 < 0.1, 5.0, 0.0)
+    np.savez(path, acc_top=x.astype("f4"), tacho=tacho.astype("f4"), fs=fs)
+    return path
+
+
+def box_b_description(load: str | None = None) -> str:
+    """box_b_take's gearbox as its user describes it: 25/52 + 16/81, the sensor near the intermediate shaft and its
+    tacho of 4 marks."""
+    from gearboxes import description, stage
+
+    stages = stage(25, 52), stage(16, 81, module="3 mm", bores=("30 mm", "45 mm"))
+    return description(
+        *stages, name="boxB", speed="25 Hz", load=load, near="intermediate", tacho="intermediate", marks=4
+    )
