@@ -109,6 +109,7 @@ from .detection_records import (
     read_target,
     register_to_source,
     shaft_symmetry,
+    short_takes,
     source_for,
     synchronous_input,
     trained_on,
@@ -259,6 +260,7 @@ def build(scenario: Scenario) -> Spec:
             f"{location(path, 'detection', 'blocks')}: expected distinct whole numbers of "
             f"revolutions >= 2, got {shown(blocks)}"
         )
+    short_takes(source, target, blocks, location(path, "target", "files"))  # a take its header says is short
     check_training(t, path)
     p = t["protocol"]
     protocol = Protocol(

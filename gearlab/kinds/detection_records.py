@@ -422,13 +422,48 @@ def read_target(
                     f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
                 )
         for f, r in cond["test"]:
-            short = [b for b in blocks if len(r) < b]
+            short = short_blocks(len(r), blocks)
             if short and shaft is not None:  # a record of no unit of a kind: nothing to score it by
                 raise GearlabInputError(
                     f"{where}: {f.path} gives {len(r)} {shaft.name}-shaft revolutions, fewer than record{short[0]}'s "
                     f"{short[0]}; expected a longer record, or shorter [detection] key 'blocks'"
                 )
     return conditions
+
+
+def short_blocks(turns: float, blocks) -> list[int]:
+    """The record-level blocks a test record of *turns* revolutions of the units' shaft cannot fill: the run
+    refuses such a record (read_target) and validate a take whose header says it is that short (short_takes)."""
+    return [b for b in blocks if turns < b]
+
+
+def short_takes(source: DatasetSpec, target: Target, blocks, where: str) -> None:
+    """Refuse a test take whose header gives its length (samples and rate: a WAV, HDF5, npz or MAT array) too short
+    for a record-level unit of the watched gear's shaft, as read_target would after reading every take; its speed the
+    take's declared, else the [target]'s, the source's or its description's [operation] speed. A header without
+    the length (a text file's) or no speed known: nothing said (validate reads no data)."""
+    from ..data.recordings import read_header
+    from ..gearbox.simulation import gearbox_of
+
+    shaft = unit_shaft(source)
+    if shaft is None:  # the run refuses none on the input shaft: a short record scores fewer units
+        return
+    box = gearbox_of(source)
+    nominal = target.speed_hz or source.speed_hz or (box.speed_hz if box is not None else None)
+    for f in target.files:
+        speed = f.speed_hz or nominal
+        if f.role != "test" or not speed:
+            continue
+        keys = target.keys_of(f)
+        seconds = read_header(f.resolved).seconds(str(keys["vibration"]), keys["fs"])
+        turns = None if seconds is None else seconds * speed * float(shaft.ratio)
+        short = [] if turns is None else short_blocks(turns, blocks)
+        if short:
+            need = max(short) / (speed * float(shaft.ratio))
+            raise GearlabInputError(
+                f"{where}: {f.path}: {seconds:.3g} s at {speed:.4g} Hz holds ~{int(turns)} turns of the {shaft.name} "
+                f"shaft; record{max(short)} needs {max(short)} (a take of >= {math.ceil(need * 10) / 10:g} s)"
+            )
 
 
 def _units(cond: dict) -> None:

@@ -10,7 +10,7 @@ import math
 import re
 import struct
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +34,16 @@ class Header:
     stated: tuple[float, str] | None = None  # the rate the header states (Hz) and where: a WAV's, an attribute
     stated_within: float = 1e-6  # relative: a rate read off a text's printed times is known to their digits
     shapes: dict[str, tuple] = field(default_factory=dict)  # each array's shape, where the header gives it
+    frames: int | None = None  # samples per channel, where the header says (a WAV's data chunk)
+
+    def seconds(self, name: str, fs: float | None) -> float | None:
+        """How long channel *name* runs, from the header alone (a WAV's frames; an HDF5, npz or MAT array's shape)
+        at *fs* (Hz, given) or the rate the header states; None where the header gives no length or rate (a
+        text file: its rows are not counted, validate reads no data)."""
+        fs = fs if fs is not None else (self.stated[0] if self.stated is not None else None)
+        shape = self.shapes.get(self.resolve(name))
+        samples = self.frames if self.frames is not None else (max(shape) if shape else None)
+        return samples / fs if samples and fs and fs > 0 else None
 
     def check_rate(self, fs: float | None, where: str, path) -> None:
         """A rate given (*fs*, Hz) that the header's own contradicts: one line naming *where*'s 'fs'
@@ -280,6 +290,7 @@ def _wav_header(path: Path) -> Header:
                     )
                 integer = frozenset(names) if tag == 1 else frozenset()  # 1: PCM (3: IEEE float)
                 header = Header("WAV", names, True, integer, indexed=True, stated=(float(rate), "the WAV header"))
+                align = struct.unpack(order + "H", body[12:14])[0] if len(body) >= 14 else 0  # bytes a frame
                 f.seek(size + (size & 1) - len(body), 1)
                 continue
             if kind == b"data" and header is not None:
@@ -289,6 +300,8 @@ def _wav_header(path: Path) -> Header:
                         f"its data chunk declares {size:,} bytes and the file holds {held:,} after it (a truncated "
                         "file?); expected the whole recording"
                     )
+                if align and 0 < size < 0xFFFFFFFF:  # a stream's open chunk says no length
+                    return replace(header, frames=size // align)
                 return header
             f.seek(size + (size & 1), 1)
     if header is not None:
