@@ -52,13 +52,16 @@ def _csv(path, seconds):
     return path.name, "acc", "tacho"
 
 
-def _validate(cli, tmp_path, test_take: tuple):
+def _validate(cli, tmp_path, test_take: tuple, declared: bool = True):
     """validate a detection scenario watching the intermediate pinion: two long WAV history takes and *test_take*
-    (its file, vibration and tacho channels)."""
+    (its file, vibration and tacho channels), *declared*: read at its declared 45 Hz without its tacho, else by its
+    tacho (its speed then read in the run)."""
     (tmp_path / "box.toml").write_text(BOX)
     takes = [(_wav(tmp_path / f"h{i}.wav", 3.0), "history") for i in (1, 2)] + [(test_take, "test")]
     listed = ",\n".join(
-        f'{{ file = "{f}", vibration = "{v}", tacho = "{t}", role = "{role}", label = "healthy" }}'
+        f'{{ file = "{f}", vibration = "{v}", '
+        + ('speed = "45 Hz"' if declared and role == "test" else f'tacho = "{t}"')
+        + f', role = "{role}", label = "healthy" }}'
         for (f, v, t), role in takes
     )
     (tmp_path / "d.toml").write_text(
@@ -84,6 +87,15 @@ def test_a_short_hdf5_take_is_refused_at_validate(cli, tmp_path):
     assert code == 2, out + err
     (line,) = err.strip().splitlines()
     assert "short.h5: 1 s at 45 Hz holds ~18 turns of the intermediate shaft; record30 needs 30" in line, line
+
+
+def test_a_short_take_read_by_its_tacho_is_warned_of(cli, tmp_path):
+    # its speed is its tacho's, read in the run: at the description's 45 Hz it is short, a faster take might not be
+    for take in (_wav(tmp_path / "short.wav", 1.0), _h5(tmp_path / "short.h5", 1.0)):
+        code, out, err = _validate(cli, tmp_path, take, declared=False)
+        assert code == 0 and out.startswith("OK"), out + err
+        assert f"{take[0]}: 1 s at 45 Hz holds ~18 turns of the intermediate shaft; record30 needs 30" in err, err
+        assert "unless it runs faster than the description's speed" in err, err
 
 
 def test_a_long_enough_take_passes(cli, tmp_path):

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -439,9 +440,11 @@ def short_blocks(turns: float, blocks) -> list[int]:
 
 def short_takes(source: DatasetSpec, target: Target, blocks, where: str) -> None:
     """Refuse a test take whose header gives its length (samples and rate: a WAV, HDF5, npz or MAT array) too short
-    for a record-level unit of the watched gear's shaft, as read_target would after reading every take; its speed the
-    take's declared, else the [target]'s, the source's or its description's [operation] speed. A header without
-    the length (a text file's) or no speed known: nothing said (validate reads no data)."""
+    for a record-level unit of the watched gear's shaft, as read_target would after reading every take, at the speed
+    the run reads it at: the take's declared, else the [target]'s (a take without a tacho). A take with a tacho (or
+    no declared speed: found from the mesh lines) at the source's or its description's [operation] speed is only
+    warned of: the run reads its own speed, and a faster take holds more turns. A header without the length (a text
+    file's) or no speed known: nothing said (validate reads no data)."""
     from ..data.recordings import read_header
     from ..gearbox.simulation import gearbox_of
 
@@ -449,20 +452,26 @@ def short_takes(source: DatasetSpec, target: Target, blocks, where: str) -> None
     if shaft is None:  # the run refuses none on the input shaft: a short record scores fewer units
         return
     box = gearbox_of(source)
-    nominal = target.speed_hz or source.speed_hz or (box.speed_hz if box is not None else None)
+    nominal = source.speed_hz or (box.speed_hz if box is not None else None)
     for f in target.files:
-        speed = f.speed_hz or nominal
+        keys = target.keys_of(f)
+        declared = None if keys.get("tacho") is not None else f.speed_hz or target.speed_hz
+        speed = declared or nominal
         if f.role != "test" or not speed:
             continue
-        keys = target.keys_of(f)
         seconds = read_header(f.resolved).seconds(str(keys["vibration"]), keys["fs"])
         turns = None if seconds is None else seconds * speed * float(shaft.ratio)
         short = [] if turns is None else short_blocks(turns, blocks)
         if short:
             need = max(short) / (speed * float(shaft.ratio))
-            raise GearlabInputError(
+            said = (
                 f"{where}: {f.path}: {seconds:.3g} s at {speed:.4g} Hz holds ~{int(turns)} turns of the {shaft.name} "
                 f"shaft; record{max(short)} needs {max(short)} (a take of >= {math.ceil(need * 10) / 10:g} s)"
+            )
+            if declared:
+                raise GearlabInputError(said)
+            warnings.warn(
+                f"{said}, unless it runs faster than the description's speed (its own is read in the run)", stacklevel=2
             )
 
 
