@@ -30,6 +30,16 @@ def description(*stages, name=None, speed=None, load=None, near=None, direction=
     return head + "".join(stages) + sensor
 
 
+def reducer_26_63_24_77(**keys) -> str:
+    """An outside user's two-stage 26/63 + 24/77 reducer at 45 Hz, the sensor near the input (*keys*: description's
+    name, load, tacho ...)."""
+    stages = (
+        stage(26, 63, bores=("25 mm", "35 mm")),
+        stage(24, 77, module="3 mm", width="30 mm", bores=("35 mm", "50 mm")),
+    )
+    return description(*stages, speed="45 Hz", near="input", **keys)
+
+
 def described_pair(*stages):
     """A simulator's pair as the gap sees it: stage 1's, carrying the next (StagePair.next_stage)."""
     pair = None

@@ -8,17 +8,10 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from gearboxes import description, stage
+from gearboxes import description, reducer_26_63_24_77, stage
 
 # the reducer's first two stages, read by a tacho on its slowest shaft (one mark every 7.8 input turns)
-BOX_O = description(
-    stage(26, 63, bores=("25 mm", "35 mm")),
-    stage(24, 77, module="3 mm", width="30 mm", bores=("35 mm", "50 mm")),
-    name="boxO",
-    speed="45 Hz",
-    near="input",
-    tacho="output",
-)
+BOX_O = reducer_26_63_24_77(name="boxO", tacho="output")
 
 
 def _take(path, swing=0.005, seconds=6.0, fs=25600.0, scale=1.0):

@@ -9,18 +9,11 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import scipy.io.wavfile
-from gearboxes import description, stage
+from gearboxes import reducer_26_63_24_77
 
 FS = 25600
 # the watched gear, the intermediate pinion, turns 26/63 x 45 = 18.6 times a second: a record30 unit needs 1.6 s
-BOX = description(
-    stage(26, 63, bores=("25 mm", "35 mm")),
-    stage(24, 77, module="3 mm", width="30 mm", bores=("35 mm", "50 mm")),
-    name="boxT",
-    speed="45 Hz",
-    load="400 N*m",
-    near="input",
-)
+BOX = reducer_26_63_24_77(name="boxT", load="400 N*m")
 
 
 def _signal(seconds: float) -> tuple[np.ndarray, np.ndarray]:
