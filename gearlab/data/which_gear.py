@@ -90,10 +90,10 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
     *made* simulates (events(); None: by the event's width). A record that cannot be read against the
     history is said so ("not localised: ..."), not fatal."""
     try:
-        turns = [(float(o) * len(take.revolutions), s) for o, s in zip(table.shaft_orders, table.shafts)]
-        if hist.layout.mode == "shafts" and min(turns)[0] < NS.TURNS:  # each shaft's own average (signals.nonsync)
+        turns, shaft = NS.slowest_turns(len(take.revolutions), table)
+        if hist.layout.mode == "shafts" and turns < NS.TURNS:  # each shaft's own average (signals.nonsync)
             raise GearlabInputError(
-                f"too short for the which-gear check: {min(turns)[0]:.3g} {min(turns)[1]}-shaft turns "
+                f"too short for the which-gear check: {turns:.3g} {shaft}-shaft turns "
                 f"({len(take.revolutions)} input revolutions), it needs {NS.TURNS}"
             )
         found = L.localise(

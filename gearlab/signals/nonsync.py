@@ -95,14 +95,20 @@ def too_short(revolutions: int, table) -> str | None:
         return f"too short for the non-synchronous check: {revolutions} input revolutions, it needs {BLOCK}"
     if revolutions >= GRAND * table.train_period:  # cut to whole grand periods: each shaft's bins removed exactly
         return None
-    slow = int(np.argmin([float(o) for o in table.shaft_orders]))
-    turns = float(table.shaft_orders[slow]) * revolutions
+    turns, shaft = slowest_turns(revolutions, table)
     if turns >= TURNS:
         return None
     return (
-        f"too short for the non-synchronous check: {turns:.3g} {table.shafts[slow]}-shaft turns "
+        f"too short for the non-synchronous check: {turns:.3g} {shaft}-shaft turns "
         f"({revolutions} input revolutions), it needs {TURNS}"
     )
+
+
+def slowest_turns(revolutions: int, table) -> tuple[float, str]:
+    """(turns, name) of the slowest shaft of order table *table* over *revolutions* input revolutions: what TURNS
+    counts, here and in the shafts' own averages (data.which_gear)."""
+    slow = int(np.argmin([float(o) for o in table.shaft_orders]))
+    return float(table.shaft_orders[slow]) * revolutions, table.shafts[slow]
 
 
 def residual(revs: np.ndarray, shaft_orders, period: int) -> np.ndarray:
