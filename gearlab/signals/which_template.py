@@ -167,7 +167,8 @@ def _by_reference_phases(rec, ref, lay, harmonics, gears, templates: dict, ev: d
 
 def decoy_periods(teeth: list[int]) -> list[int]:
     """The whole periods (shaft harmonics) mesh_combs reads a comb's null at: COMB_SHORTEST to COMB_SPAN times the
-    largest of *teeth*, none within 1 of a count's multiple (up to 4 times) or of its half, third or quarter."""
+    largest of *teeth*, none within COMB_CLEAR of a count's multiple (up to 4 times) or its half,
+    third or quarter."""
     near = [t * k for t in teeth for k in (1, 2, 3, 4)] + [t / k for t in teeth for k in (2, 3, 4)]
     top = int(COMB_SPAN * max(teeth))
     return [p for p in range(COMB_SHORTEST, top + 1) if all(abs(p - n) > COMB_CLEAR for n in near)]
