@@ -38,6 +38,21 @@ def _h5(path, seconds):
     return path.name, "acc", "tacho"
 
 
+def _stored(path, seconds):
+    """The take with its rate stored as data, a one-number 'fs' beside the channels: npz, MAT v5 / v4, HDF5."""
+    x, tacho = _signal(seconds)
+    arrays = {"acc": x, "tacho": tacho, "fs": np.array(float(FS))}
+    if path.suffix == ".npz":
+        np.savez(path, **arrays)
+    elif path.suffix == ".h5":
+        with h5py.File(path, "w") as f:
+            for k, v in arrays.items():
+                f[k] = v
+    else:
+        scipy.io.savemat(path, arrays, format="4" if path.stem.endswith("v4") else "5")
+    return path.name, "acc", "tacho"
+
+
 def _csv(path, seconds):
     x, tacho = _signal(seconds)
     t = np.arange(x.size) / FS
@@ -101,3 +116,15 @@ def test_a_csv_take_s_length_is_not_read_at_validate(cli, tmp_path):
     # a text file's header gives no length: validate reads no data, and says what it said before
     code, out, err = _validate(cli, tmp_path, _csv(tmp_path / "short.csv", 1.0))
     assert code == 0 and out.startswith("OK"), out + err
+
+
+def test_a_short_take_with_its_rate_stored_as_data_is_refused_at_validate(cli, tmp_path):
+    # before: OK for each (the header gave the array's shape but no rate: the one-number 'fs' was data, not read)
+    for name in ("short.npz", "short.mat", "short_v4.mat", "short.h5"):
+        code, out, err = _validate(cli, tmp_path, _stored(tmp_path / name, 1.0))
+        assert code == 2, name + out + err
+        (line,) = err.strip().splitlines()
+        assert f"{name}: 1 s at 45 Hz holds ~18 turns of the intermediate shaft; record30 needs 30" in line, line
+    for name in ("long.npz", "long.mat", "long_v4.mat", "long.h5"):
+        code, out, err = _validate(cli, tmp_path, _stored(tmp_path / name, 2.0))
+        assert code == 0 and out.startswith("OK"), name + out + err

@@ -216,7 +216,7 @@ def _text_header(path: Path, fmt: str) -> Header:
 
 
 def _npz_header(path: Path) -> Header:
-    names, integer, shapes = [], set(), {}
+    names, integer, shapes, numbers = [], set(), {}, {}
     with zipfile.ZipFile(path) as archive:
         for info in archive.infolist():
             if not info.filename.endswith(".npy"):
@@ -228,9 +228,12 @@ def _npz_header(path: Path) -> Header:
                 read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
                 shape, _, dtype = read(f, max_header_size=10_000)
             shapes[name] = tuple(shape)
+            numbers[name] = dtype.kind in "iuf"
             if dtype.kind in "iu":
                 integer.add(name)
-    return Header("NPZ", names, any(is_rate_or_time(n) for n in names), frozenset(integer), shapes=shapes)
+    stated = _rate_variable({n: s for n, s in shapes.items() if numbers[n]}, lambda n: np.load(path)[n])
+    rate = any(is_rate_or_time(n) for n in names)
+    return Header("NPZ", names, rate, frozenset(integer), shapes=shapes, stated=stated)
 
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
@@ -256,6 +259,7 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
                 if str(k).lower() in _RATE_NAMES and np.size(v) == 1 and np.asarray(v).dtype.kind in "iuf":
                     stated = stated or (float(np.asarray(v).item()), f"attribute {k!r} of {n!r}")
         shapes = {n: tuple(f[n].shape) for n in names}
+        stated = stated or _rate_variable(shapes, lambda n: f[n][()])
     return Header(fmt, names, rate, frozenset(integer), units=units, nested=True, stated=stated, shapes=shapes)
 
 
@@ -317,22 +321,35 @@ def _mat_header(path: Path) -> Header:
     with path.open("rb") as f:
         if 0 in f.read(4):  # v4 (how scipy tells it from v5)
             return _mat4_header(path)
-    every, fields, shapes = mat5_header(path)  # the elements' headers: the data seeked past, never read
+    every, fields, shapes, scalars = mat5_header(path)  # the elements' headers: the data seeked past, never read
     names = [n for n in every if n and not n.startswith("__")]
     names += fields  # a scalar struct's fields, by path
     rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
     shapes = {n: tuple(shape) for n, shape in shapes.items() if n in names}
-    return Header("MATLAB", names, rate, nested=bool(fields), shapes=shapes)
+    stated = _rate_variable({n: s for n, s in shapes.items() if n in scalars}, scalars.get)
+    return Header("MATLAB", names, rate, nested=bool(fields), shapes=shapes, stated=stated)
+
+
+def _rate_variable(shapes: dict[str, tuple], read) -> tuple[float, str] | None:
+    """(Hz, where) of a rate stored as data: the one number of a variable named as a rate ('fs'), read alone
+    (one number, whatever the file's size), so validate knows a take's length as the run will; None if none."""
+    for name, shape in shapes.items():
+        if name.rsplit("/", 1)[-1].lower() in _RATE_NAMES and math.prod(shape) == 1:
+            value = np.asarray(read(name))
+            if value.dtype.kind in "iuf":
+                return float(value.item()), f"its {name!r}"
+    return None
 
 
 _MAT4_BYTES = {0: 8, 1: 4, 2: 4, 3: 2, 4: 2, 5: 1}  # the precision digit P: double, single, int32, int16, uint16, uint8
+_MAT4_CODES = {0: "d", 1: "f", 2: "i", 3: "h", 4: "H", 5: "B"}  # the same, as struct's codes
 
 
 def _mat4_header(path: Path) -> Header:
     """A MATLAB v4 file's variables and their shapes: each variable's 20-byte header and name read, its
     data skipped (its size follows from the header); the byte order as scipy guesses it (the first
     variable's type word, 0 to 5000, read little-endian or not)."""
-    names, shapes, total = [], {}, path.stat().st_size
+    names, shapes, scalars, total = [], {}, {}, path.stat().st_size
     with path.open("rb") as f:
         order = "<" if 0 <= struct.unpack("<i", f.read(4))[0] <= 5000 else ">"
         f.seek(0)
@@ -350,11 +367,15 @@ def _mat4_header(path: Path) -> Header:
             size = rows * cols * _MAT4_BYTES[precision] * (2 if imagf == 1 else 1)
             if f.tell() + size > total:
                 raise ValueError(f"variable '{name}' declares {size:,} bytes, past the end of the file")
-            f.seek(size, 1)
+            if kind == 0 and rows * cols == 1 and imagf != 1:  # one number (an 'fs'): its few bytes read
+                scalars[name] = float(struct.unpack(order + _MAT4_CODES[precision], f.read(size))[0])
+            else:
+                f.seek(size, 1)
             names.append(name)
             if kind == 0:  # a full numeric matrix (1: text, 2: sparse)
                 shapes[name] = (rows, cols)
-    return Header("MATLAB", names, any(is_rate_or_time(n) for n in names), shapes=shapes)
+    stated = _rate_variable({n: s for n, s in shapes.items() if n in scalars}, scalars.get)
+    return Header("MATLAB", names, any(is_rate_or_time(n) for n in names), shapes=shapes, stated=stated)
 
 
 HEADERS = {

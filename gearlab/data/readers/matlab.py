@@ -111,6 +111,7 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
 _MI_INT8, _MI_INT32, _MI_UINT32, _MI_MATRIX, _MI_COMPRESSED, _MI_UTF8 = 1, 5, 6, 14, 15, 16
 _MI_DATA = frozenset({1, 2, 3, 4, 5, 6, 7, 9, 12, 13, 16, 17, 18})  # the types scipy has a dtype for
 _MI_TEXT = frozenset({_MI_INT8, _MI_UTF8})  # names, class names, field names
+_MI_FORMATS = {1: "b", 2: "B", 3: "h", 4: "H", 5: "i", 6: "I", 7: "f", 9: "d", 12: "q", 13: "Q"}  # struct's codes
 _MX_CELL, _MX_STRUCT, _MX_OBJECT, _MX_CHAR, _MX_SPARSE, _MX_OPAQUE = 1, 2, 3, 4, 5, 17
 _MX_NUMERIC = range(6, 16)  # double, single, int8 … uint64
 _MAT_MAX_DEPTH = 32  # cells in cells, structs in structs
@@ -348,6 +349,7 @@ class _Mat5Header:
 
     def __init__(self, order: str):
         self.order, self.fields, self.shapes = order, [], {}
+        self.scalars: dict[str, float] = {}  # one-number variables and fields (a rate stored as data): 8 bytes each
 
     def tag(self, s: _Stream, end: int) -> tuple[int, int, bytes | None]:
         """(type, size, the data of a small element or None) of the element at the stream's position."""
@@ -399,6 +401,13 @@ class _Mat5Header:
         here = name if path is None else path
         if mclass in _MX_NUMERIC and here and (depth == 0 or path is not None):
             self.shapes[here] = sizes
+            if count == 1 and not is_complex:  # its one number read, a few bytes (an 'fs')
+                kind, raw = self.element(s, end, 8)
+                code = _MI_FORMATS.get(kind)
+                if code is not None and len(raw) >= struct.calcsize(code):
+                    self.scalars[here] = float(struct.unpack_from(self.order + code, raw)[0])
+                self.fields += [] if path is None else [path]
+                return name
         scalar_struct = mclass == _MX_STRUCT and count == 1
         if depth == 0 and not scalar_struct:
             return name  # a variable's data: unread
@@ -438,9 +447,10 @@ class _Mat5Header:
         s.skip(after - s.at)
 
 
-def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple]]:
-    """(variable names, a scalar struct's field paths "rec/acc", numeric variables' and fields' shapes) of a
-    MATLAB v5 file, as _mat5_variables lists them, from its elements' headers alone."""
+def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple], dict[str, float]]:
+    """(variable names, a scalar struct's field paths "rec/acc", numeric variables' and fields' shapes, the
+    one-number ones' values) of a MATLAB v5 file, as _mat5_variables lists them, from its elements' headers alone
+    (and each one-number variable's few bytes)."""
     total = path.stat().st_size
     with path.open("rb") as f:
         head = f.read(128)
@@ -463,4 +473,4 @@ def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple]]:
             if kind != _MI_MATRIX:
                 raise ValueError(f"a variable of element type {kind}, expected a matrix")
             names.append(walk.body(s, end, 0))
-    return names, walk.fields, walk.shapes
+    return names, walk.fields, walk.shapes, walk.scalars
