@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import h5py
 import numpy as np
+import pytest
 import scipy.io.wavfile
 from gearboxes import reducer_26_63_24_77
 
@@ -128,3 +129,17 @@ def test_a_short_take_with_its_rate_stored_as_data_is_refused_at_validate(cli, t
     for name in ("long.npz", "long.mat", "long_v4.mat", "long.h5"):
         code, out, err = _validate(cli, tmp_path, _stored(tmp_path / name, 2.0))
         assert code == 0 and out.startswith("OK"), name + out + err
+
+
+def test_a_given_rate_against_one_stored_as_data_is_refused_as_the_run_refuses_it(tmp_path):
+    from gearlab.data.recordings import read_header
+    from gearlab.errors import GearlabInputError
+
+    for name in ("t.npz", "t.mat", "t_v4.mat", "t.h5"):
+        path = tmp_path / name
+        _stored(path, 0.5)
+        header = read_header(path)
+        assert header.stated[0] == FS, name
+        header.check_rate(float(FS), "d.toml: [target]", path)  # the same rate given: fine
+        with pytest.raises(GearlabInputError, match=r"d.toml: \[target\] key 'fs': 20 kHz given, but .* says 25.6 kHz"):
+            header.check_rate(20000.0, "d.toml: [target]", path)
