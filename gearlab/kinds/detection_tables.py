@@ -118,7 +118,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
         # each test record's change localised on a gear; flags on damage elsewhere (detection_which_gear)
-        "which_gear": which_gear_summary(run.read_json("localisation.json"), records, labels),
+        "which_gear": which_gear_summary(run.read_json("localisation.json"), records, labels, target.positive),
     }
     conditions = run.read_json("conditions.json")
     bound = {c: v.get("source_bound", {}) for c, v in (conditions or {}).items()}

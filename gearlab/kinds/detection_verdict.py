@@ -56,8 +56,9 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
     named (gearlab.kinds.detection_which_gear): a unit of a record whose change lies on another gear
     is other damage, neither a detection nor a false alarm of the watched gear: its units leave the
     false alarms' count and their denominator alike (counted in, an other-damage take not flagged
-    diluted a healthy take's false alarms: 4 % said for 8 %). The row as it is when the run
-    localised nothing."""
+    diluted a healthy take's false alarms: 4 % said for 8 %); its AUC over the same takes (calls_by_label's:
+    counted in, such a take flagged on every unit ranked as a healthy take's false alarms, an AUC of 0.50
+    beside 0 % false alarms). The row as it is when the run localised nothing."""
     calls = (summary.get("which_gear") or {}).get("calls") or []
     call = next(
         (
@@ -74,7 +75,27 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
     judged = call.get("judged", call["units"])  # a summary from before 'judged': every unit counted
     n = sum(judged[k] for k in negative)
     false_alarm = sum(call["watched"][k] * call["units"][k] for k in negative) / n if n else row["false_alarm"]
-    return {**row, "detection": call["watched"].get(positive, row["detection"]), "false_alarm": false_alarm}
+    judged_auc = {"auc": call["auc"]} if "auc" in call else {}  # a summary from before it: the row's
+    return {
+        **row,
+        "detection": call["watched"].get(positive, row["detection"]),
+        "false_alarm": false_alarm,
+        **judged_auc,
+    }
+
+
+def left_out(summary: Mapping, condition: str, unit: str) -> str:
+    """The takes of *condition* the AUC and false alarms at *unit* leave out as other damage (calls_by_label's
+    left_out), in words ('; left out of AUC and false alarms as other damage: b.csv (other damage: output gear
+    58T (stage 3))'), else ""."""
+    calls = (summary.get("which_gear") or {}).get("calls") or []
+    out: dict = {}
+    for c in calls:
+        if (c["condition"], c["unit"]) == (condition, unit):
+            out |= c.get("left_out") or {}
+    if not out:
+        return ""
+    return "; left out of its AUC and false alarms as other damage: " + ", ".join(f"{p} ({w})" for p, w in out.items())
 
 
 def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
@@ -158,5 +179,5 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
                 "input, a noise-free healthy revolution), so where they put a record unlike the history is "
                 "not calibrated: " + ", ".join(point)
             )
-        lines.append(text + ".")
+        lines.append(text + left_out(summary, c, unit) + ".")
     return lines

@@ -47,6 +47,7 @@ from ..data.spec import DatasetSpec
 from ..data.which_templates import effect_tables
 from ..errors import GearlabInputError
 from ..gearbox.simulation import gearbox_of
+from ..parts.roc import auc
 from ..signals import POINTS
 from ..signals import localise as L
 from ..signals import nonsync as NS
@@ -335,11 +336,13 @@ def _nonsync_cell(ns: dict | None) -> str:
     return "–" if not ns or "note" in ns else f"{ns['z']:.1f}/{ns['threshold']:.1f} ({ns['order']:.2f})"
 
 
-def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
+def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str = "fault") -> list[dict]:
     """Per condition and method, for the longest TSA: of each test label's units, the % called a
     watched-gear fault and the % called other damage (the record's change localised elsewhere; on a
     watched gear and another gear: counted in both), the units, and those on records not called other
-    damage only (``judged``: what a false alarm is counted of)."""
+    damage only (``judged``: what a false alarm is counted of); the AUC of the same units the detected
+    and false-alarm figures count (``auc``: every *positive* take's against the other labels' takes not
+    called other damage) and the takes it leaves out (``left_out``: {path: call})."""
     if not loc or not records:
         return []
     unit = longest_tsa(u for r in records for u in r["thresholds"])
@@ -351,6 +354,8 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
         watched: dict[str, list[int]] = {}
         other: dict[str, list[int]] = {}
         judged: dict[str, int] = {}
+        ranked: dict[bool, list] = {True: [], False: []}  # the positive takes' units, the judged negatives'
+        left_out: dict[str, str] = {}
         for path, units in r["test_scores"].items():
             s = np.asarray(units[unit], dtype=np.float64)
             flagged = s > thr
@@ -360,6 +365,12 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
             watched.setdefault(label, []).extend((flagged & ~elsewhere).astype(int).tolist())
             other.setdefault(label, []).extend((flagged & (elsewhere or also)).astype(int).tolist())
             judged[label] = judged.get(label, 0) + (0 if elsewhere else len(s))
+            # a negative take called other damage leaves the AUC as it leaves the false alarms (it counted as a
+            # negative there, its flags ranked as false alarms the false-alarm figure does not count)
+            if label == positive or not elsewhere:
+                ranked[label == positive].append(s)
+            else:
+                left_out[path] = call
         out.append(
             {
                 "condition": r["condition"],
@@ -369,6 +380,8 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict) -> list[dict]:
                 "other": {k: 100.0 * float(np.mean(v)) if v else None for k, v in other.items()},
                 "units": {k: len(v) for k, v in watched.items()},
                 "judged": judged,
+                "auc": auc(*(np.concatenate(ranked[k] or [np.empty(0)]) for k in (False, True))),
+                "left_out": left_out,
             }
         )
     return out
@@ -395,12 +408,13 @@ def calls_md(calls: list[dict]) -> str:
     return "\n".join(out) + "\n"
 
 
-def which_gear_summary(loc: dict | None, records: list[dict], labels: dict) -> dict:
+def which_gear_summary(loc: dict | None, records: list[dict], labels: dict, positive: str = "fault") -> dict:
     """What summary.json and table.md say of it: each test record's localisation and call, the
-    units called a watched-gear fault or other damage per method and label, and their tables."""
+    units called a watched-gear fault or other damage per method and label (*positive*: the fault's
+    label), and their tables."""
     if not loc:
         return {}
-    calls = calls_by_label(loc, records, labels)
+    calls = calls_by_label(loc, records, labels, positive)
     return {
         "gearbox": loc["gearbox"],
         "watched": loc["watched"],
