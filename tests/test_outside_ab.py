@@ -6,7 +6,13 @@ gear of a two-gear shaft on the same take (c)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
+from detection_scenario import scenario
+from test_outside_n import runup
 
+from gearlab.errors import GearlabInputError
+from gearlab.kinds import detection_scoring as D
+from gearlab.kinds.detection_records import read_target
 from gearlab.kinds.detection_verdict import detection_lines, watched_calls
 from gearlab.kinds.detection_which_gear import OTHER, WATCHED, calls_by_label
 from gearlab.parts.roc import auc
@@ -50,3 +56,56 @@ def test_the_verdicts_auc_leaves_out_the_takes_its_false_alarms_leave_out():
     # a summary from before the judged AUC: the row's, as it was
     old = {**summary, "which_gear": {"calls": [{k: v for k, v in call.items() if k not in ("auc", "left_out")}]}}
     assert watched_calls(row, old)["auc"] == raw
+
+
+def _runup_scenario(folder, role: str, start: float, end: float, seconds: float):
+    """The tiny detection scenario (tests/detection_scenario: 16 Hz takes, blocks 5 and 10) with a take running up
+    *start* -> *end* Hz over *seconds* (test_outside_n.runup) as a *role* take; its spec and the run-up's turns."""
+    from gearlab.notebook import load_scenario
+
+    (folder / "data").mkdir(exist_ok=True)
+    turns = runup(folder / "data" / "up.zip", start, end, seconds, chip_outside=4.0)
+    files = [("h1", "history", "healthy", 0.0), ("up", role, "healthy", 0.0)]
+    files.insert(1, ("h2", "test" if role == "history" else "history", "healthy", 0.0))
+    return load_scenario(scenario(folder, files=files, methods=("matched_filter",))).spec, turns
+
+
+def test_a_run_up_test_take_is_cut_to_its_revolutions_at_the_history_speed_as_score_cuts_it(tmp_path):
+    # 14 -> 19 Hz over 12 s, its mean speed 16.5 Hz within 5 % of the 16 Hz history's: before, grouped there and
+    # scored whole (all ~200 revolutions, the chipped ones outside the band too); gearlab score scored ~30 of them
+    spec, turns = _runup_scenario(tmp_path, "test", 14.0, 19.0, 12.0)
+    (name, cond), *others = read_target(spec.target, spec.detection.blocks, lambda e: None, "here").items()
+    assert not others
+    cut = dict(cond["test"])
+    (f,) = [f for f in cut if f.path.endswith("up.zip")]
+    centre = float(np.median(list(cond["speeds"][h.path] for h, _ in cond["history"])))
+    rec = spec.target.read(f)
+    _, part, words = D.in_band({"conditions": {name: {"speed_hz": centre}}}, f.path, rec, None)
+    assert len(cut[f]) == len(part.revolutions) < len(rec.revolutions) // 4, (len(cut[f]), len(rec.revolutions))
+    inside = int(np.sum(np.abs(turns - 16.0) <= D.IN_BAND * 16.0))
+    assert abs(len(cut[f]) - inside) <= 2
+    assert words.startswith(f"scored on {len(cut[f])} of {len(rec.revolutions)} revolutions at ")
+    assert cond["speed_from"][f.path].endswith(words) and D.VARIES_WORDS in cond["speed_from"][f.path]
+    assert cond["speeds"][f.path] == pytest.approx(16.0, rel=D.IN_BAND)
+    assert any(w.startswith(f"{f.path}: ") and w.endswith(words) for w in cond["warnings"]), cond["warnings"]
+    assert cond["raw"][f.path][0].shape == part.revolutions.shape  # the which-gear check reads the same part
+
+
+def test_a_run_up_too_short_at_the_history_speed_is_refused_in_one_line(tmp_path):
+    # 14 -> 19 Hz over 3 s: ~8 revolutions within 2.5 % of 16 Hz, a record10 unit needs 10
+    spec, _ = _runup_scenario(tmp_path, "test", 14.0, 19.0, 3.0)
+    with pytest.raises(GearlabInputError) as got:
+        read_target(spec.target, spec.detection.blocks, lambda e: None, "det.toml: [target] key 'files'")
+    line = str(got.value)
+    assert len(line.splitlines()) == 1 and line.startswith("det.toml: [target] key 'files': ../data/up.zip ("), line
+    assert "its longest run within 2.5% of the history's 16.00 Hz ('16 Hz') holds " in line, line
+    assert "a unit of every kind needs 10" in line and line.count("expected") == 1, line
+
+
+def test_a_run_up_in_the_history_is_refused_at_run_time_in_one_line(tmp_path, cli, monkeypatch):
+    spec, _ = _runup_scenario(tmp_path, "history", 14.0, 19.0, 6.0)
+    monkeypatch.chdir(tmp_path / "scenarios")
+    code, _, err = cli("run", tmp_path / "scenarios" / "det.toml", "--out", tmp_path / "runs")
+    last = err.strip().splitlines()[-1]
+    assert code == 2 and "[target] key 'files': ../data/up.zip (history; " in last, err[-1500:]
+    assert "a history take must run steady" in last and D.VARIES_WORDS in last, last

@@ -250,17 +250,21 @@ def _run_up_scenario(tmp_path, monkeypatch, condition: str):
     return tmp_path / "det.toml"
 
 
-def test_a_run_up_grouped_by_hand_is_warned_of_in_the_run_s_warnings(tmp_path, monkeypatch):
-    # the same run-up given condition = "20 Hz" (the guide: groups by hand) runs on; its run-up words were in its
-    # speed line alone, which the TUI's Results and the report's verdict leave out where a tacho gave the speeds
+def test_a_run_up_grouped_by_hand_is_cut_to_its_condition_s_speed_or_refused_in_one_line(tmp_path, monkeypatch):
+    # the same run-up given condition = "20 Hz" (the guide: groups by hand) ran on, scored whole; now cut to its
+    # revolutions at the 20 Hz history's speed as gearlab score cuts one (tests/test_outside_ab), here too few: one line
+    import pytest
+
+    from gearlab.errors import GearlabInputError
     from gearlab.kinds.detection_records import read_target, unit_shaft
     from gearlab.notebook import load_scenario
 
     spec = load_scenario(_run_up_scenario(tmp_path, monkeypatch, ', condition = "20 Hz"')).spec
-    (cond,) = read_target(spec.target, spec.detection.blocks, lambda e: None, shaft=unit_shaft(spec.source)).values()
-    said = [w for w in cond["warnings"] if w.startswith("up.csv: ")]
-    assert said and " Hz .. 34.7" in said[0] and "over the take: a run-up or coast-down?" in said[0], cond["warnings"]
-    assert not any(w.startswith("h1.csv: ") or w.startswith("h2.csv: ") for w in cond["warnings"]), cond["warnings"]
+    with pytest.raises(GearlabInputError) as got:
+        read_target(spec.target, spec.detection.blocks, lambda e: None, shaft=unit_shaft(spec.source))
+    said = str(got.value)
+    assert " Hz .. 34.7" in said and "over the take: a run-up or coast-down?" in said and "('20 Hz')" in said, said
+    assert len(said.splitlines()) == 1 and "h1.csv" not in said and "h2.csv" not in said, said
 
 
 def test_the_results_tables_are_fitted_again_when_the_sidebar_folds(detection_run):

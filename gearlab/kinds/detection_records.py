@@ -29,6 +29,7 @@ from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
 from . import record_effects
+from .detection_in_band import cut_run_ups, span
 from .detection_settings import Classical
 
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
@@ -346,6 +347,11 @@ def read_target(
     records = {f.path: r for f, r in zip(target.files, got)}
     speeds = {p: r.speed_hz for p, r in records.items()}
     named = conditions_of(list(target.files), speeds)
+    # a run-up or coast-down: a history one refused, a test one cut to its revolutions at a history's speed (as
+    # `gearlab score` cuts one); before, grouped and scored whole at its mean speed
+    turns = 1.0 if shaft is None else float(shaft.ratio)
+    scored_on = cut_run_ups(target.files, records, named, blocks, turns, where)
+    speeds = {p: r.speed_hz for p, r in records.items()}
     for f in target.files:
         cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}, "speed_from": {}})
         rec, turns = records[f.path], 1.0 if shaft is None else float(shaft.ratio)
@@ -354,6 +360,10 @@ def read_target(
         cond.setdefault("fs", {})[f.path] = records[f.path].fs  # the rate the which-gear templates are read at
         # how the record's shaft angle was found: its tacho, a declared speed, the mesh orders
         cond["speed_from"][f.path] = records[f.path].angle_source
+        if f.path in scored_on:  # its speeds' span, and the revolutions scored (in_band), as gearlab score says them
+            how = records[f.path].angle_source
+            cond["speed_from"][f.path] = f"{how.rsplit('; ', 1)[0]}; {span(how)}; {scored_on[f.path]}"
+            cond.setdefault("scored_on", {})[f.path] = scored_on[f.path]
         on_event(Event("log", message=f"{f.path}: {speeds[f.path]:.3f} Hz, from {records[f.path].angle_source}"))
         # as cut, before standardising and aligning (which rotate each revolution): what
         # localisation reads (detection_which_gear), with the first revolution's number from the tacho
@@ -370,7 +380,12 @@ def read_target(
         # kept in conditions.json: the report and the TUI say them too; a run-up grouped by hand (condition = ...)
         # is one (its speed line alone said so, and the TUI's Results show no speed line where a tacho gave them)
         said = [(f.path, cond["speed_from"][f.path]) for f, _ in cond["history"] + cond["test"]]
-        cond["warnings"] = [f"{p}: {how.split('; ')[-1]}" for p, how in said if VARIES_WORDS in how]
+        cut = cond.get("scored_on", {})
+        cond["warnings"] = [
+            f"{p}: {span(how)}; {cut[p]}" if p in cut else f"{p}: {how.split('; ')[-1]}"
+            for p, how in said
+            if VARIES_WORDS in how
+        ]
         cond["warnings"] += level_warnings(cond)  # and each take's millivolts read as volts (channel_units.level_hint)
         loud = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
         cond["warnings"] += [f"{p}: {units.split('; ')[-1]}" for p, units in loud if TOO_LOUD in units]

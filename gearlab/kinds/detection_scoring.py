@@ -4,7 +4,7 @@ its thresholds with nothing trained again (score), and the trend of what was sco
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -22,11 +22,13 @@ from ..parts.measured import TargetFile, held
 from ..runs import RunDir
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.checks import SPEED_VARIES, VARIES_WORDS
+from ..signals.checks import VARIES_WORDS
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
 from .detection_classical import classical_record
+from .detection_in_band import IN_BAND, span, stretch
+from .detection_in_band import in_band as shared_in_band
 from .detection_records import (
     SPEED_GROUP,
     aligned,
@@ -57,12 +59,6 @@ LATER_INPUT = {
     2: "fitted out of each revolution turned on itself",
     3: "fitted out of each revolution of a record shifted as one signal",
 }
-# A take whose speed varies beyond a steady take's (speed_varies: a run-up or coast-down) is scored on its
-# revolutions within this share of its condition's history speed (scoring.json's, the median of the history records'
-# speeds: what the run kept, no label), either side: a steady take's turns span at most SPEED_VARIES of its mean, so
-# half of it either side of the history's speed is where a steady history may have run. A revolution farther off meets
-# the gearbox's resonances at other orders than the history's revolutions did.
-IN_BAND = SPEED_VARIES / 2
 
 
 def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
@@ -284,57 +280,26 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
     return near
 
 
-def _stretch(speeds: np.ndarray, centre: float) -> slice:
-    """The longest run of consecutive revolutions whose *speeds* lie within IN_BAND of *centre* (Hz): consecutive, as
-    the units' shaft, the records' alignment and localisation read a take's revolutions."""
-    inside = np.abs(speeds - centre) <= IN_BAND * centre
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(np.int8), [0]])))
-    if not edges.size:
-        return slice(0, 0)
-    k = int(np.argmax(edges[1::2] - edges[::2]))
-    return slice(int(edges[2 * k]), int(edges[2 * k + 1]))
-
-
-def _span(rec) -> str:
-    """A varying take's speeds in words ('20.16 Hz .. 34.94 Hz over the take: a run-up or coast-down?'), without what
-    a detection run does with it (scored in band here, not at its mean speed)."""
-    return rec.angle_source.split("; ")[-1].split(VARIES_WORDS)[0] + VARIES_WORDS
+_stretch = stretch  # the shared rule's (detection_in_band: one for a detection run and for score)
 
 
 def in_band(meta: dict, path: str, rec, asked: str | None, far: str = "") -> tuple[str, object, str]:
     """(condition, the part of *rec* scored, what was scored in words) of a take whose speed varies (a run-up or
     coast-down): its longest stretch of revolutions within IN_BAND of a condition's history speed (the condition
-    *asked*, else the one of the longest), its mean speed the part's. None there: one line, *far* (why its mean
-    speed is no condition's) and how many revolutions lay in the band, and how many a unit needs."""
+    *asked*, else the one of the longest), its mean speed the part's (detection_in_band.in_band, as a detection run
+    cuts its own test takes). None there: one line, *far* (why its mean speed is no condition's) and how many
+    revolutions lay in the band, and how many a unit needs."""
     names = [_condition_of(meta, path, rec.speed_hz, asked)] if asked is not None else list(meta["conditions"])
-    stretches = {c: _stretch(rec.speeds, meta["conditions"][c]["speed_hz"]) for c in names}
-    name = max(names, key=lambda c: stretches[c].stop - stretches[c].start)
-    part, centre = stretches[name], meta["conditions"][name]["speed_hz"]
-    band = f"the history's {centre:.2f} Hz ± {IN_BAND:.1%}"
-    inside = int(np.sum(np.abs(rec.speeds - centre) <= IN_BAND * centre))
-    if part.stop == part.start:
-        said = f"; {inside} of its {len(rec.speeds)} revolutions within {IN_BAND:.1%} of the history's {centre:.2f} Hz "
+    whose = " input" if "unit_shaft" in meta else ""  # the units: another shaft's revolutions
+    got = shared_in_band(rec, {c: meta["conditions"][c]["speed_hz"] for c in names}, whose)
+    if not got.said:
+        said = f"; {got.inside} of its {len(rec.speeds)} revolutions within {IN_BAND:.1%} of the history's "
+        said += f"{got.centre:.2f} Hz ('{got.condition}'), a unit needs 1"
         raise GearlabInputError(
-            f"{far or f'{path}: {_span(rec)}'}{said}('{name}'), a unit needs 1"
+            f"{far or f'{path}: {span(rec.angle_source)}'}{said}"
             + ("" if far else "; expected a take that runs a while at a trained condition's speed")
         )
-    speeds = rec.speeds[part]
-    whose = " input" if "unit_shaft" in meta else ""  # the units: another shaft's revolutions
-    said = f"scored on {part.stop - part.start} of {len(rec.speeds)}{whose} revolutions at {speeds.min():.2f} .. "
-    said += f"{speeds.max():.2f} Hz ({band}" + (
-        f"; the longest run of its {inside} there)" if inside > len(speeds) else ")"
-    )
-    return (
-        name,
-        replace(
-            rec,
-            revolutions=rec.revolutions[part],
-            speed_hz=float(np.mean(speeds)),
-            first_revolution=rec.first_revolution + part.start,
-            speeds=speeds,
-        ),
-        said,
-    )
+    return got.condition, got.record, got.said
 
 
 def _units_of_part(meta: dict, path: str, said: str, units: int) -> str:
@@ -516,7 +481,7 @@ def score(
             if other or VARIES_WORDS not in rec.angle_source or not speeds:
                 raise GearlabInputError(other or f"{far}{varies(rec.angle_source)}") from None
             # a run-up or coast-down: its revolutions at a condition's history speed
-            name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far} ({_span(rec)})")
+            name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far} ({span(rec.angle_source)})")
         else:
             if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
                 name, rec, scored_on = in_band(meta, str(file), rec, condition)
@@ -537,7 +502,7 @@ def score(
         if scored_on:
             scored_on = _units_of_part(meta, str(file), scored_on, len(revs))
         # a run-up scored in band: its speed source's words say the span, not that its mean speed is its condition
-        source = rec.angle_source.rsplit("; ", 1)[0] + f"; {_span(rec)}" if scored_on else rec.angle_source
+        source = rec.angle_source.rsplit("; ", 1)[0] + f"; {span(rec.angle_source)}" if scored_on else rec.angle_source
         line = f"{file}: {rec.speed_hz:.3f} Hz, from {source}" + (said and f"; read with {said}")
         on_event(Event("log", message=line + (f"; {scored_on}" if scored_on else "")))
         # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
