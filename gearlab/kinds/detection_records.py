@@ -382,7 +382,7 @@ def read_target(
         said = [(f.path, cond["speed_from"][f.path]) for f, _ in cond["history"] + cond["test"]]
         cut = cond.get("scored_on", {})
         cond["warnings"] = [
-            f"{p}: {span(how)}; {cut[p]}" if p in cut else f"{p}: {how.split('; ')[-1]}"
+            f"{p}: {span(records[p].angle_source)}; {cut[p]}" if p in cut else f"{p}: {how.split('; ')[-1]}"
             for p, how in said
             if VARIES_WORDS in how
         ]
