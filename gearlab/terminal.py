@@ -392,6 +392,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     its change is localised on and the evidence, then a table that fits *width* columns (a terminal's):
     per method and unit the units called, the median score less the threshold (above 0: most units
     called) and the decision ("other damage: <gear>" when the change lies on a gear not watched)."""
+    from .kinds.detection_which_gear import is_other  # the kinds import this module: at call time
+
     shown: list = [Text(f"scored with {run_dir}", style="bold")]
     for file in dict.fromkeys(r["file"] for r in rows):
         mine = [r for r in rows if r["file"] == file]
@@ -415,6 +417,11 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
         if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)
             where = r0.get("localised") or "nothing"
             shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))
+            if is_other(r0["call"]) and not any(is_other(r["decision"]) for r in mine):
+                # a broken tooth on a gear no method watches, their units under threshold: each decision read
+                # 'healthy' (an outside user's 74T output gear at z 155 beside twelve 'healthy' rows)
+                said = f"{r0['call']}, on a gear this run does not watch: 'healthy' below is of the watched gear"
+                shown.append(Text(said, style="yellow"))
         cells = [
             [
                 r["method"],

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..signals import spectrum, upsampled
-from ..signals.checks import fmt_hz
+from ..signals.checks import SPEED_VARIES, fmt_hz
 from ..signals.pipeline import Upsampled
 from .description import Gearbox
 from .orders import order_table
@@ -414,11 +414,17 @@ def teeth_said(hypothesis: tuple, declared: float, box: Gearbox, lines: Lines, t
     return at
 
 
-def nominal_line(measured: float, nominal: float, said: str) -> str:
+def nominal_line(measured: float, nominal: float, said: str, spread: dict | None = None) -> str:
     """The measured speed against a description's (or a --speed's) nominal one, *said* where it was
-    given: information, never a mismatch (a tooth count, a tacho's shaft or its marks are what differ)."""
+    given: information, never a mismatch (a tooth count, a tacho's shaft or its marks are what differ).
+    *spread* (Speed.describe()'s min_hz, max_hz): a take whose speed spans over SPEED_VARIES of its mean is a
+    run-up or coast-down, whose mean is no operating point (a take starting with 1 s of run-up, then steady at
+    the nominal 23.7 Hz, read 1.6 % slow: 'slip under load')."""
     d = measured / nominal - 1.0
-    if abs(d) <= 0.002:
+    low, high = (spread["min_hz"], spread["max_hz"]) if spread else (measured, measured)
+    if high - low > SPEED_VARIES * measured:
+        how = f"the mean of a run-up or coast-down ({fmt_hz(low)} .. {fmt_hz(high)}), not a steady speed"
+    elif abs(d) <= 0.002:
         how = "as described"
     elif -NOMINAL_RANGE <= d < 0:
         how = "slip under load"

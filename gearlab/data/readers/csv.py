@@ -16,7 +16,7 @@ from ...errors import GearlabInputError
 from .base import _INTERVAL_NAMES, _RATE_NAMES, Contents, _column, _keyed, _scalar
 
 _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
-# a field that is a number written with a decimal comma (a semicolon-separated European export)
+# a field that is a number written with a decimal comma (a semicolon- or tab-separated European export)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
 
 
@@ -81,7 +81,7 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
 
 
 def delimiter_of(line: str) -> str | None:
-    """The field separator of a delimited line: ';' (whose fields may carry decimal commas), tab,
+    """The field separator of a delimited line: ';' or tab (whose fields may carry decimal commas),
     ',', or None for blanks."""
     for d in (";", "\t", ","):
         if d in line:
@@ -89,11 +89,38 @@ def delimiter_of(line: str) -> str | None:
     return None
 
 
+# separators whose fields may carry decimal commas: a German spreadsheet's 'Text (Tabstopp-getrennt)' export as much
+# as its semicolon CSV (a tab-separated '0,25' was refused as 'its first data row holds no number')
+DECIMAL_COMMA_SEPARATORS = (";", "\t")
+
+
+def decoded(raw: bytes) -> str:
+    """A text file's bytes as text: UTF-8 (a BOM dropped), else Windows-1252, which a Windows export (Excel's
+    'CSV (Trennzeichen-getrennt)', a European logger) writes its header in: 'Beschleunigung [m/s²]' with '²' as byte
+    0xB2 was refused as "'utf-8' codec can't decode byte 0xb2"."""
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return raw.decode("cp1252", "replace")
+
+
+def encoding_of(path: Path) -> str:
+    """The encoding decoded() reads *path*'s text in, from its first 64 kB (for a header read line by line)."""
+    with open(path, "rb") as stream:
+        head = stream.read(1 << 16)
+    try:
+        head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 3:  # not a character cut at the 64 kB boundary
+            return "cp1252"
+    return "utf-8-sig"
+
+
 def split_rows(lines: list[str], delimiter: str | None) -> list[list[str]]:
     if delimiter is None:
         return [line.split() for line in lines]
     rows = [[f.strip() for f in row] for row in csv.reader(lines, delimiter=delimiter)]
-    if delimiter == ";":  # "0,25" is a number with a decimal comma here
+    if delimiter in DECIMAL_COMMA_SEPARATORS:  # "0,25" is a number with a decimal comma here
         rows = [[f.replace(",", ".") if _DECIMAL_COMMA.match(f) else f for f in row] for row in rows]
     return rows
 
@@ -110,7 +137,7 @@ def numeric_block(lines: list[str], delimiter: str | None, width: int) -> np.nda
     if not lines:
         return None
     block = "\n".join(lines)
-    if delimiter == ";" and "," in block:  # decimal commas: split_rows reads '0,25' and ',5' only
+    if delimiter in DECIMAL_COMMA_SEPARATORS and "," in block:  # decimal commas: split_rows reads '0,25' and ',5' only
         if _BARE_COMMA.search(block):
             return None
         block = block.replace(",", ".")
@@ -144,7 +171,7 @@ def column_index(name: str, names: list[str]) -> int | None:
 
 def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     """Delimited columns with or without a header row, '#' comments ('# fs = 51200' gives a field 'fs')."""
-    text = path.read_text(encoding="utf-8-sig")  # a BOM from spreadsheet exports is dropped
+    text = decoded(path.read_bytes())  # a BOM from spreadsheet exports is dropped
     fields: dict[str, object] = {}
     # (line number, line) of every line that is not blank: one comprehension, a record has 10^5-10^6 lines
     lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1) if line and not line.isspace()]
@@ -188,7 +215,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         if len(row) != width:
             raise GearlabInputError(
                 f"{path}: line {number} has {len(row)} fields but the {'header' if header else 'first row'} has "
-                f"{width}; expected one value per column (a truncated or ragged file?)"
+                f"{width}; expected one value per column ({_RAGGED_WHY[delimiter == ',' and len(row) > width]})"
             )
     if not data:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
@@ -199,6 +226,14 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
             "row of column names, then rows of numbers"
         )
     return _contents(header_names(header, width), fields, names, lambda j: _column([row[j] for row in data]), units)
+
+
+# why a row has more or fewer fields than the header: a comma-separated row of decimal commas ('0,25,1,5') splits each
+# number in two, the first thing a European user's file meets (said before: 'a truncated or ragged file?')
+_RAGGED_WHY = {
+    False: "a truncated or ragged file?",
+    True: "decimal commas in a comma-separated file? save it with ';' or tabs between the columns",
+}
 
 
 def _twice(path: Path, header: list[str]) -> None:

@@ -123,10 +123,10 @@ class Header:
 
 def _csv_header(path: Path) -> Header:
     from .base import _column
-    from .csv import _COMMENT_FIELD, delimiter_of, header_names, is_header, preamble, split_rows, units_row
+    from .csv import _COMMENT_FIELD, delimiter_of, encoding_of, header_names, is_header, preamble, split_rows, units_row
 
     fields, names, number, units = [], None, 0, None
-    with path.open(encoding="utf-8-sig", errors="replace") as stream:
+    with path.open(encoding=encoding_of(path), errors="replace") as stream:
         ahead = list(itertools.islice(stream, 200))  # a logger's preamble lies within its first lines
         skipped, stated_fields = preamble([line for line in ahead if line.strip() and not line.strip().startswith("#")])
         fields += [(k, v) for k, v in stated_fields.items()]

@@ -25,7 +25,7 @@ import numpy as np
 
 from ...errors import GearlabInputError, shown
 from .base import Contents, _keyed, check_size, max_record_bytes, time_scale
-from .csv import column_index, delimiter_of, header_names, preamble, split_rows
+from .csv import DECIMAL_COMMA_SEPARATORS, column_index, decoded, delimiter_of, header_names, preamble, split_rows
 
 # Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
 # a block's tokens (about 60 bytes each as Python objects) stay a few tens of MB.
@@ -101,9 +101,9 @@ def _is_number(token: bytes) -> bool:
 
 def _blanks(text: bytes, delimiter: str | None) -> bytes:
     """Rows of *delimiter*-separated numbers as blank-separated ones, which numpy parses fast.
-    A semicolon's fields may hold decimal commas ("0,25"): there a comma is never a separator."""
-    if delimiter == ";":
-        return text.replace(b",", b".").replace(b";", b" ")
+    A semicolon's or tab's fields may hold decimal commas ("0,25"): there a comma is never a separator."""
+    if delimiter in DECIMAL_COMMA_SEPARATORS:
+        return text.replace(b",", b".").replace(delimiter.encode(), b" ")
     if delimiter == ",":
         return text.replace(b",", b" ")
     return text  # tabs and blanks: bytes.split() takes both
@@ -111,7 +111,7 @@ def _blanks(text: bytes, delimiter: str | None) -> bytes:
 
 def _fields(line: bytes, delimiter: str | None) -> list[str]:
     """A header line's names: delimited fields (quoted ones may hold blanks or commas), or blank-separated."""
-    text = line.decode("utf-8-sig", "replace").strip()
+    text = decoded(line).strip()
     return split_rows([text], delimiter)[0] if delimiter else text.split()
 
 
