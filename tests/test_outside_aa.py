@@ -84,6 +84,13 @@ def test_decimal_commas_in_a_comma_separated_file_are_named(cli, tmp_path):
     code, _, err = cli("inspect", path, "--gearbox", tmp_path / "box.toml", "--vibration", "Beschleunigung [g]")
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert "take.csv: line 2" in err and "decimal commas in a comma-separated file?" in err, err
+    # and at validate time, from the header and the first row (before: 'OK', the run then refused it)
+    files = '[{ file = "take.csv", role = "history", label = "healthy" }]'
+    target = f'[target]\nvibration = "Beschleunigung [g]"\ntacho = "Drehzahlgeber [V]"\nfiles = {files}\n'
+    head = '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\ngearbox = "box.toml"\n\n'
+    (tmp_path / "gap.toml").write_text(head + target + "\n[accuracy]\nenabled = false\n")
+    code, _, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 2 and "key 'file'" in err and "decimal commas in a comma-separated file?" in err, err
 
 
 @pytest.mark.parametrize("where", ["file", "group"])

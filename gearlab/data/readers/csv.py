@@ -213,10 +213,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         _twice(path, header)
     for (number, _), row in zip(data_lines, data):
         if len(row) != width:
-            raise GearlabInputError(
-                f"{path}: line {number} has {len(row)} fields but the {'header' if header else 'first row'} has "
-                f"{width}; expected one value per column ({_RAGGED_WHY[delimiter == ',' and len(row) > width]})"
-            )
+            raise ragged(path, number, len(row), width, header is not None, delimiter)
     if not data:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
     if not any(_column(data[0][j : j + 1]).dtype.kind == "f" for j in range(width)):
@@ -234,6 +231,14 @@ _RAGGED_WHY = {
     False: "a truncated or ragged file?",
     True: "decimal commas in a comma-separated file? save it with ';' or tabs between the columns",
 }
+
+
+def ragged(path: Path, number: int, fields: int, width: int, header: bool, delimiter: str | None) -> GearlabInputError:
+    """The error of a row of *fields* fields where the header (or the first row) has *width*."""
+    return GearlabInputError(
+        f"{path}: line {number} has {fields} fields but the {'header' if header else 'first row'} has "
+        f"{width}; expected one value per column ({_RAGGED_WHY[delimiter == ',' and fields > width]})"
+    )
 
 
 def _twice(path: Path, header: list[str]) -> None:

@@ -123,7 +123,17 @@ class Header:
 
 def _csv_header(path: Path) -> Header:
     from .base import _column
-    from .csv import _COMMENT_FIELD, delimiter_of, encoding_of, header_names, is_header, preamble, split_rows, units_row
+    from .csv import (
+        _COMMENT_FIELD,
+        delimiter_of,
+        encoding_of,
+        header_names,
+        is_header,
+        preamble,
+        ragged,
+        split_rows,
+        units_row,
+    )
 
     fields, names, number, units = [], None, 0, None
     with path.open(encoding=encoding_of(path), errors="replace") as stream:
@@ -158,6 +168,9 @@ def _csv_header(path: Path) -> Header:
             if row[-1:] == [""]:  # every line ends in the separator (a spreadsheet's export): no channel
                 names = names[:-1] if names is not None and names[-1:] == [""] else names
                 row = row[:-1]
+            if names is not None and len(row) > len(names) and delimiter_of(line) == ",":
+                # decimal commas in a comma-separated export split every number: the run would refuse it
+                raise ragged(path, number, len(row), len(names), True, ",")
             names = names if names is not None else header_names(None, len(row))
             stated = _stated_rate(f, line, names, [(k, v) for k, v in fields if k.lower() in _RATE_NAMES])
             break
