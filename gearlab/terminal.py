@@ -417,6 +417,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
         if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)
             where = r0.get("localised") or "nothing"
             shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))
+            if r0.get("table_call"):  # the run's own take, its table decided by an older rule (detection_scoring)
+                shown.append(Text(r0["table_call"], style="yellow"))
             if is_other(r0["call"]) and not any(is_other(r["decision"]) for r in mine):
                 # a broken tooth on a gear no method watches, their units under threshold: each decision read
                 # 'healthy' (an outside user's 74T output gear at z 155 beside twelve 'healthy' rows)

@@ -177,3 +177,13 @@ def test_detection_and_score_name_the_same_gear_of_a_two_gear_shaft_on_the_same_
         assert detected[path]["summary"] == scored[path]["summary"], (detected[path], scored[path])
         assert detected[path]["call"] == scored[path]["call"]
     assert scored[str(takes["chip"][0])]["named"] == "intermediate pinion 16T (stage 2)"
+    # the run's table decided by an older rule (box T's): score says so, as its call differs
+    assert W.stale_calls(run, scored) == {}
+    made = run.read_json("localisation.json")
+    older = "watched-gear fault: intermediate shaft: 52T gear (stage 1) or 16T pinion (stage 2)"
+    made["records"][str(takes["chip"][0])]["call"] = older
+    run.write_json("localisation.json", made)
+    ((path, line),) = W.stale_calls(run, scored).items()
+    assert path == str(takes["chip"][0]) and line.startswith(f"the run's table called it '{older}' when the run was")
+    now = scored[str(takes["chip"][0])]["call"]
+    assert line.endswith(f"calls it '{now}': run the scenario again for its table to read as score does"), line

@@ -45,7 +45,7 @@ from .detection_records import (
 )
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
-from .detection_which_gear import decision_of, is_other, localise_scored
+from .detection_which_gear import decision_of, is_other, localise_scored, stale_calls
 
 # What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
 # its models and thresholds hold for that input only. 1: a later mesh of no whole input order zeroed
@@ -512,6 +512,9 @@ def score(
         raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
+    stale = stale_calls(run, localised)  # a take of the run's own, its table decided by an older rule
+    for path, line in stale.items():
+        on_event(Event("log", message=f"warning: {path}: {line}"))
     by_unit = {r["unit"]: r for r in run.records()}
     classical = stored_classical(meta["classical"])
     rows = []
@@ -563,6 +566,7 @@ def score(
                             "localised": where.get("named"),
                             "call": where.get("call"),
                             "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth
+                            "table_call": stale.get(f.path),  # the run's own take, called otherwise in its table
                             "nonsync": where.get("nonsync"),  # the residual's z, threshold, strike order
                             "scores": [float(x) for x in s],
                         }

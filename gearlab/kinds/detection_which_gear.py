@@ -289,6 +289,30 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
     return out
 
 
+def stale_calls(run, localised: dict[str, dict]) -> dict[str, str]:
+    """{path: a line} for each of the run's own test takes (its localisation.json's records, their paths under the run's
+    base) that *localised* (localise_scored: `gearlab score` of them now) calls otherwise than the run's table did:
+    the table was decided by the which-gear rule of the day the run was made, score by today's, on the same stored
+    history (box T's 24T spall: the run's 'undecided (63T 0.17 / 24T 0.15)', made before the rule read a two-gear
+    shaft's own sidebands first, against score's '24T')."""
+    from pathlib import Path
+
+    made, base = run.read_json("localisation.json") or {}, run.base()
+    own = {}
+    for path, found in (made.get("records") or {}).items():
+        at = Path(path) if base is None or Path(path).is_absolute() else base / path
+        own[str(at.resolve())] = found.get("call")
+    out = {}
+    for path, found in localised.items():
+        was = own.get(str(Path(path).resolve()), found["call"])
+        if was != found["call"]:
+            out[path] = (
+                f"the run's table called it '{was}' when the run was made; this gearlab's which-gear rule "
+                f"calls it '{found['call']}': run the scenario again for its table to read as score does"
+            )
+    return out
+
+
 def _tooth(found: dict) -> str:
     if found["named"] is None:
         return "–"
