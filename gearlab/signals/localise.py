@@ -121,6 +121,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     fit_words,
     lead_words,
     mesh_combs,
+    mesh_contrasts,
     mesh_phases,
     phase_words,
     two_harmonic_phases,
@@ -755,8 +756,9 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
             both = two_harmonic_phases(rec, hist.spread, lay, s, harmonics, on)
             which, dens = which_by_width(rec, hist.spread, harmonics, on, zs, phases, both)
         if len(on) == 2 and flagged and templates is not None:  # simulate and compare, unless the structure differs
-            combs = mesh_combs(order_z(rec, hist.spread, lay), harmonics, on)  # the record's own sidebands
-            by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay), combs)
+            oz = order_z(rec, hist.spread, lay)  # the record's own sidebands: their comb, their contrast
+            sidebands = mesh_combs(oz, harmonics, on), mesh_contrasts(oz, harmonics, on)
+            by, fits = which_by_template(rec, hist.spread, lay, harmonics, on, templates(lay), *sidebands)
             which, dens = (which, {**dens, **fits}) if by is False else (by, {**dens, "undecided": "", **fits})
             dens["rule"] = dens.get("rule", RULE_WIDTH) if by is False else fits.get("rule", RULE_SIMULATED)
         elif dens:  # the width's evidence, or the mesh phase's where it named the gear

@@ -90,6 +90,26 @@ COMB_SHORTEST = 8
 COMB_SPAN = 1.5
 COMB_CLEAR = 2  # a decoy period stands more than this many harmonics off a count's multiple or fraction
 RULE_SIDEBANDS = "by the sidebands about its own mesh"
+# Where neither comb reaches COMB_Z: a fault whose sidebands gather about its mesh's first harmonic and fade by the
+# 3rd holds too few periods for the comb (that box's 52T crack: most excess at orders 38-59 of the intermediate
+# shaft, a decoy period of 56 fits it as well, comb 2.2-3.2). So, as an engineer compares a mesh's sidebands with
+# the orders between its harmonics (mesh_contrasts): within CONTRAST_NEAR of each of the gear's first
+# CONTRAST_HARMONICS mesh harmonics against CONTRAST_NEAR..1/2 of its count off them (orders within CONTRAST_NEAR
+# of the other gear's harmonics left out), mean excess over mean excess. A gear is named where that ratio reaches
+# CONTRAST_EACH at every one of them and CONTRAST_POOLED over all, its comb CONTRAST_COMB (the excess repeats at its
+# own period), and the other gear's pooled ratio is under CONTRAST_OTHER. Development: the 52T crack (40 takes, seeds
+# 1671-1690 and 601-620; the phases had named it in 31) least 1.84-3.54, pooled 2.77-4.33, comb 2.15-3.19, the 16T's
+# pooled 0.68-1.22; the 16T chip's 52T pooled 0.55-0.75; the simulator's faults (260 records named on a two-gear
+# shaft, bearings 0.5x / 2x, casing path, seed 41) never over all four: the nearest, a 24T crack's 50T (least 1.55,
+# comb 1.66, pooled 1.8: a mode about its 3rd harmonic) and a 24T fault's 63T (1.79, 2.32, 6.34; the 24T's 10.0)
+CONTRAST_HARMONICS = 3
+CONTRAST_NEAR = 0.25  # of the gear's tooth count: its sidebands' reach about each mesh harmonic
+CONTRAST_EACH = 1.5
+CONTRAST_POOLED = 2.5
+CONTRAST_COMB = 1.5
+CONTRAST_OTHER = 1.5
+CONTRAST_FLOOR = 1.0  # null sds: the least mean excess a ratio divides by
+RULE_CONTRAST = "by the sidebands about its own mesh harmonics"
 
 
 def residual(rec, ref, sel: np.ndarray) -> np.ndarray:
@@ -121,14 +141,17 @@ def structure_gap(ref, lay, healthy: np.ndarray) -> float:
     return float(np.std(10 * np.log10(ref.power[sel] / np.abs(healthy[sel]) ** 2)))
 
 
-def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], gears, templates: dict, combs=None):
+def which_by_template(
+    rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], gears, templates: dict, combs=None, contrasts=None
+):
     """(the gear whose simulated event fits the record's clearly better, or None: both; the fits).
     *harmonics*: the shaft's own orders and their harmonic numbers of the shaft (localise._harmonics);
     *templates*: {"healthy": the simulated healthy mean, "gears": {gear name: [template, ...]}}.
     Where the simulator's structure differs from the history's (structure_gap over SHAPE_DB) the events'
     phases at their own mesh are compared instead (reference_phase_match). False instead of a gear: the
     events are not used (not simulated, too few clear lines to compare the structures, no phase read). *combs*:
-    mesh_combs of the record, read first where the structure differs (by_sidebands; None: not read)."""
+    mesh_combs of the record, read first where the structure differs (by_sidebands; None: not read); *contrasts*: its
+    mesh_contrasts, read next (by_contrasts)."""
     if "healthy" not in templates:  # the description could not be simulated: said, and the width decides
         return False, {"not used": f"not simulated: {templates['not simulated']}"}
     gap = structure_gap(ref, lay, templates["healthy"])
@@ -141,6 +164,11 @@ def which_by_template(rec, ref, lay, harmonics: tuple[np.ndarray, np.ndarray], g
             by = by_sidebands(combs, gears)
             if by is not None:
                 return by, {**ev, "rule": RULE_SIDEBANDS}
+        if combs and contrasts:
+            ev["own-mesh sideband contrast"] = {g: min(c["each"]) for g, c in contrasts.items()}
+            by = by_contrasts(contrasts, combs, gears)
+            if by is not None:
+                return by, {**ev, "rule": RULE_CONTRAST}
         return _by_reference_phases(rec, ref, lay, harmonics, gears, templates, ev)
     sel, m = harmonics
     R = residual(rec, ref, sel)
@@ -216,6 +244,53 @@ def lead_words(lead: float) -> str:
     return f"{Decimal(repr(lead)).quantize(Decimal('0.01'), rounding=ROUND_DOWN):.2f}"
 
 
+def mesh_contrasts(z: np.ndarray, harmonics: tuple[np.ndarray, np.ndarray], gears) -> dict:
+    """{gear name: {"each": the record's mean excess within CONTRAST_NEAR of each of the gear's first
+    CONTRAST_HARMONICS mesh harmonics over that in the flanks between them (at least CONTRAST_FLOOR), "pooled": the
+    same over all of them}} ({}: fewer than two harmonics read for a gear). *z*, *harmonics*: as mesh_combs."""
+    sel, m = harmonics
+    excess = np.clip(z[sel], 0, None)
+    out = {}
+    for g in gears:
+        # the other gear's sidebands about its own harmonics are its evidence, not this gear's flanks
+        clear = np.ones(m.size, bool)
+        for o in (o for o in gears if o is not g):
+            clear &= np.abs(m - o.teeth * np.round(m / o.teeth)) > CONTRAST_NEAR * o.teeth
+        each, near_sum, flank_sum = [], 0.0, 0.0
+        for k in range(1, CONTRAST_HARMONICS + 1):
+            d = np.abs(m - k * g.teeth)
+            near = clear & (d <= CONTRAST_NEAR * g.teeth)
+            flank = clear & (d > CONTRAST_NEAR * g.teeth) & (d <= g.teeth / 2)
+            if near.sum() < 2 or flank.sum() < 2:
+                continue
+            # flanks of noise alone read as one null sd: a faint excess over none is no contrast (flagged healthy takes'
+            # quiet 52T read 2-9 unfloored, 0.1-0.5 floored)
+            a, b = float(excess[near].mean()), max(float(excess[flank].mean()), CONTRAST_FLOOR)
+            each.append(a / b)
+            near_sum, flank_sum = near_sum + a, flank_sum + b
+        if len(each) < 2:
+            return {}
+        out[g.name] = {"each": each, "pooled": near_sum / flank_sum}
+    return out
+
+
+def by_contrasts(contrasts: dict, combs: dict, gears):
+    """The one gear whose sidebands stand over its flanks by CONTRAST_EACH at each of its first mesh harmonics and
+    CONTRAST_POOLED over all, its comb at least CONTRAST_COMB, the other's pooled under CONTRAST_OTHER (None: neither,
+    or both; mesh_contrasts)."""
+
+    def named(g) -> bool:
+        return (
+            min(contrasts[g.name]["each"]) >= CONTRAST_EACH
+            and contrasts[g.name]["pooled"] >= CONTRAST_POOLED
+            and combs.get(g.name, -math.inf) >= CONTRAST_COMB
+            and all(o.name in contrasts and contrasts[o.name]["pooled"] < CONTRAST_OTHER for o in gears if o is not g)
+        )
+
+    over = [g for g in gears if g.name in contrasts and named(g)]
+    return over[0] if len(over) == 1 else None
+
+
 def fit_words(evidence: dict) -> str:
     """The simulated events' evidence in words, for localise.which_line ("" without it)."""
     if "own-mesh sidebands" in evidence:
@@ -223,6 +298,13 @@ def fit_words(evidence: dict) -> str:
         combs = f"sidebands about each gear's own mesh (sds over other periods, {COMB_Z:g} names) {said}, "
         rest = {k: v for k, v in evidence.items() if k != "own-mesh sidebands"}
         return combs + ("" if evidence.get("rule") == RULE_SIDEBANDS else fit_words(rest))
+    if "own-mesh sideband contrast" in evidence:
+        said = " / ".join(f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["own-mesh sideband contrast"].items())
+        first = f"about each gear's first {CONTRAST_HARMONICS} mesh harmonics over the orders between them"
+        bounds = f"least ratio, {CONTRAST_EACH:g} names, the other's under {CONTRAST_OTHER:g}"
+        words = f"sidebands {first} ({bounds}) {said}, "
+        rest = {k: v for k, v in evidence.items() if k != "own-mesh sideband contrast"}
+        return words + ("" if evidence.get("rule") == RULE_CONTRAST else fit_words(rest))
     if "own-mesh phase match" in evidence:
         said = (f"{g.split(' (')[0]} {v:.2f}" for g, v in evidence["own-mesh phase match"].items())
         return "own-mesh phases matched to the simulated events' (mean cos) " + " / ".join(said) + ", "
@@ -238,7 +320,7 @@ def fit_words(evidence: dict) -> str:
 def phase_words(evidence: dict) -> str:
     """The mesh phases (mesh_phases) in words, for localise.which_line ("" without them, or where the
     simulated events decided, not the phase)."""
-    if evidence.get("rule") in (RULE_SIMULATED, RULE_REFERENCE, RULE_SIDEBANDS):
+    if evidence.get("rule") in (RULE_SIMULATED, RULE_REFERENCE, RULE_SIDEBANDS, RULE_CONTRAST):
         return ""
     if "mesh phases" in evidence:  # two harmonics (_by_phases_alike)
         said = (f"{g.split(' (')[0]} {a:.2f}, {b:.2f}" for g, (a, b) in evidence["mesh phases"].items())
