@@ -374,6 +374,14 @@ def unrendered_figures(monkeypatch) -> None:
 
 
 @pytest.fixture
+def synchronous_only(monkeypatch) -> None:
+    """`gearlab inspect --history` without its non-synchronous (bearing-like) reading, said not read: for a
+    test that asserts only the synchronous localisation (which shaft, gear, tooth); the call then follows
+    the localisation alone, as inspect_history.call_of makes it."""
+    monkeypatch.setattr("gearlab.inspect_history.nonsync_lines", lambda *args: {"note": "not read: left out (test)"})
+
+
+@pytest.fixture
 def handed(monkeypatch) -> list:
     """The target rows every training of a detection test is handed (detection_scenario.training_spy)."""
     from detection_scenario import training_spy

@@ -35,7 +35,9 @@ def test_score_key_empty_drops_the_run_s_gain_and_sensitivity(tmp_path):
         reading_keys(meta, None, given | {"vibration": ""}, str(tmp_path / "week1.npz"))
 
 
-def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(cli, tmp_path, monkeypatch):
+def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(
+    cli, tmp_path, monkeypatch, synchronous_only
+):
     # box B's 52T crack, tacho (4 marks a turn) on the intermediate shaft: inspect --history said 'tooth 4 of 52 (in
     # this take only: the tooth is not fixed across takes; this shaft's angle relative to the tacho is not known)'
     # and read 3.55 and 30.55 pitches in two takes (the take's turn to the first history take's not added back). Now

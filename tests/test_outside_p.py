@@ -28,7 +28,7 @@ def _localised(cli, tmp_path, seed):
     return json.loads(stdout)["localisation"]
 
 
-def test_a_16t_chip_is_named_by_the_sidebands_about_its_own_mesh(cli, tmp_path, monkeypatch):
+def test_a_16t_chip_is_named_by_the_sidebands_about_its_own_mesh(cli, tmp_path, monkeypatch, synchronous_only):
     # red before: 'intermediate gear 52T (stage 1)' by the simulated events' phases (52T 0.30 / 16T 0.19, weak); seeds
     # 64-75 of this generator: the phases named the 52T in 9, both in 2, the 16T in 1; the sidebands the 16T in 12
     # (7.7-8.1)
