@@ -378,7 +378,12 @@ def synchronous_only(monkeypatch) -> None:
     """`gearlab inspect --history` without its non-synchronous (bearing-like) reading, said not read: for a
     test that asserts only the synchronous localisation (which shaft, gear, tooth); the call then follows
     the localisation alone, as inspect_history.call_of makes it."""
-    monkeypatch.setattr("gearlab.inspect_history.nonsync_lines", lambda *args: {"note": "not read: left out (test)"})
+    monkeypatch.setattr("gearlab.inspect_history.nonsync_lines", nonsync_not_read)
+
+
+def nonsync_not_read(*args) -> dict:
+    """inspect_history.nonsync_lines's answer where it does not read the lines (synchronous_only)."""
+    return {"note": "not read: left out (test)"}
 
 
 @pytest.fixture
