@@ -469,7 +469,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             "hz": nominal,
             "given": said,
             "percent": 100 * (speed.mean_hz / nominal - 1),
-            "line": nominal_line(speed.mean_hz, nominal, said, report["speed"]),
+            "line": nominal_line(speed.mean_hz, nominal, said, speed.per_revolution_hz),
         }
     if box is not None:
         tacho_shaft = options.tacho_shaft or box.sensor.tacho

@@ -117,8 +117,10 @@ def test_a_take_that_starts_with_a_run_up_is_not_called_slip_under_load(cli, tmp
     path = _text(tmp_path / "take.csv", seconds=4.0, runup=1.0)
     line = _inspect(cli, tmp_path, path)["speed"]["nominal"]["line"]
     assert "run-up or coast-down" in line and "slip under load" not in line, line
-    steady = {"min_hz": 23.6, "max_hz": 23.75}  # a steady take's 0.6 % swing: as before
+    steady = 23.61 + 0.08 * np.sin(np.arange(400) / 20)  # a steady take's 0.7 % swing: as before
     assert nominal_line(23.61, 23.7, "[operation] speed", steady).endswith("-0.38 %, slip under load")
+    jitter = 23.61 + 0.7 * np.resize([1, -1], 400)  # a speed followed on a mesh line, 6 % apart turn to turn
+    assert nominal_line(23.61, 23.7, "[operation] speed", jitter).endswith("slip under load")
 
 
 def test_score_says_the_damage_on_a_gear_no_method_watches(tmp_path):

@@ -414,14 +414,17 @@ def teeth_said(hypothesis: tuple, declared: float, box: Gearbox, lines: Lines, t
     return at
 
 
-def nominal_line(measured: float, nominal: float, said: str, spread: dict | None = None) -> str:
+def nominal_line(measured: float, nominal: float, said: str, per_revolution=()) -> str:
     """The measured speed against a description's (or a --speed's) nominal one, *said* where it was
     given: information, never a mismatch (a tooth count, a tacho's shaft or its marks are what differ).
-    *spread* (Speed.describe()'s min_hz, max_hz): a take whose speed spans over SPEED_VARIES of its mean is a
-    run-up or coast-down, whose mean is no operating point (a take starting with 1 s of run-up, then steady at
-    the nominal 23.7 Hz, read 1.6 % slow: 'slip under load')."""
+    *per_revolution* (Hz, each revolution's): a take whose speed, each the mean over 5 turns (as
+    signals.checks.speed_varies reads a run's), spans over SPEED_VARIES of its mean is a run-up or coast-down,
+    whose mean is no operating point (a take starting with 1 s of run-up, then steady at the nominal 23.7 Hz,
+    read 1.6 % slow: 'slip under load'); one revolution's jitter (a speed followed on a mesh line) is none."""
     d = measured / nominal - 1.0
-    low, high = (spread["min_hz"], spread["max_hz"]) if spread else (measured, measured)
+    s = np.asarray(per_revolution, dtype=float)
+    s = np.convolve(s, np.full(5, 0.2), "valid") if s.size >= 5 else np.full(1, measured)
+    low, high = float(s.min()), float(s.max())
     if high - low > SPEED_VARIES * measured:
         how = f"the mean of a run-up or coast-down ({fmt_hz(low)} .. {fmt_hz(high)}), not a steady speed"
     elif abs(d) <= 0.002:
