@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from test_outside_p import _orders  # the intermediate shaft's own orders of box B
 from which_gear_takes import box_b_description, box_b_take
 
 from gearlab.signals import which_template as T
@@ -37,15 +38,6 @@ def test_a_52t_crack_is_named_by_the_sidebands_about_its_own_mesh_harmonics(cli,
     assert ev["rule"] == T.RULE_CONTRAST and ev["own-mesh sidebands"][WHEEL.name] < T.COMB_Z, ev
     assert ev["own-mesh sideband contrast"][WHEEL.name] >= T.CONTRAST_EACH, ev
     assert "first 3 mesh harmonics over the orders between them" in found["summary"]
-
-
-def _orders(top=400):
-    """The intermediate shaft's own orders (not a mesh harmonic nor its first sideband) and their numbers."""
-    m = np.arange(1, top + 1)
-    keep = np.ones(m.size, bool)
-    for z in (16, 52):
-        keep &= np.abs(m - z * np.round(m / z)) > 1
-    return keep, m[keep]
 
 
 def test_a_mesh_whose_sidebands_alone_rise_is_named_and_not_where_both_rise():
