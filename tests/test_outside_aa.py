@@ -149,3 +149,22 @@ def test_score_says_the_damage_on_a_gear_no_method_watches(tmp_path):
     assert any(s.startswith("other damage: output gear 74T (stage 2), on a gear this run does not watch") for s in said)
     called = dict(row, called=14, median_score=3.0, decision="other damage: output gear 74T (stage 2)")
     assert not any("does not watch" in s for s in (str(getattr(x, "plain", "")) for x in score_tables([called], "R")))
+
+
+def test_an_npz_s_unit_entry_is_read(cli, tmp_path):
+    # np.savez(f, vib=x, tach=tacho, fs=fs, unit="g"): before, 'channels: vib, tach, unit; values: unknown (no
+    # sensitivity or gain given: the values are taken as m/s²)', a level 9.8 x low
+    _, x, tacho = _take()
+    np.savez(tmp_path / "take.npz", vib=x, tach=tacho, fs=FS, unit="g")
+    report = _inspect(cli, tmp_path, tmp_path / "take.npz", vibration="vib", tacho="tach")
+    assert report["units"] == "m/s² = value x 9.80665 (channel 'vib' in g)", report["units"]
+    assert report["channels"] == ["vib", "tach"], report["channels"]
+    np.savez(tmp_path / "own.npz", vib=x * G, tach=tacho, fs=FS, vib_unit="m/s^2")  # one channel's unit
+    assert _inspect(cli, tmp_path, tmp_path / "own.npz", vibration="vib", tacho="tach")["units"].startswith("m/s²")
+    # validate reads it from the header: a scenario's unit against the file's is refused there
+    files = '[{ file = "take.npz", role = "history", label = "healthy" }]'
+    target = f'[target]\nvibration = "vib"\ntacho = "tach"\nunit = "m/s^2"\nfiles = {files}\n'
+    head = '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\ngearbox = "box.toml"\n\n'
+    (tmp_path / "gap.toml").write_text(head + target + "\n[accuracy]\nenabled = false\n")
+    code, _, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 2 and "key 'unit'" in err and "which is in g (as the file's unit 'g' says)" in err, err

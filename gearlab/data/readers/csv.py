@@ -101,6 +101,8 @@ def decoded(raw: bytes) -> str:
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError:
+        if b"\0" in raw:  # no text export holds a NUL: a binary file, refused as not UTF-8 (as before)
+            raise
         return raw.decode("cp1252", "replace")
 
 
@@ -111,7 +113,7 @@ def encoding_of(path: Path) -> str:
     try:
         head.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        if exc.start < len(head) - 3:  # not a character cut at the 64 kB boundary
+        if exc.start < len(head) - 3 and b"\0" not in head:  # not a character cut at 64 kB, nor a binary file
             return "cp1252"
     return "utf-8-sig"
 

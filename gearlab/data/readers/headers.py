@@ -229,24 +229,19 @@ def _text_header(path: Path, fmt: str) -> Header:
 
 
 def _npz_header(path: Path) -> Header:
-    names, integer, shapes, numbers = [], set(), {}, {}
+    from .npz import _member_header, stated_units
+
     with zipfile.ZipFile(path) as archive:
-        for info in archive.infolist():
-            if not info.filename.endswith(".npy"):
-                continue
-            name = info.filename[:-4]
-            names.append(name)
-            with archive.open(info) as f:
-                version = np.lib.format.read_magic(f)
-                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-                shape, _, dtype = read(f, max_header_size=10_000)
-            shapes[name] = tuple(shape)
-            numbers[name] = dtype.kind in "iuf"
-            if dtype.kind in "iu":
-                integer.add(name)
+        members = [i.filename for i in archive.infolist() if i.filename.endswith(".npy")]
+        headers = {m[:-4]: _member_header(archive, m) for m in members}
+    shapes = {n: shape for n, (shape, _) in headers.items()}
+    integer = frozenset(n for n, (_, dtype) in headers.items() if dtype.kind in "iu")
+    numbers = {n: dtype.kind in "iuf" for n, (_, dtype) in headers.items()}
     stated = _rate_variable({n: s for n, s in shapes.items() if numbers[n]}, lambda n: np.load(path)[n])
+    units = stated_units(headers, lambda n: np.load(path)[n])
+    names = [n for n in headers if n not in units["texts"]]
     rate = any(is_rate_or_time(n) for n in names)
-    return Header("NPZ", names, rate, frozenset(integer), shapes=shapes, stated=stated)
+    return Header("NPZ", names, rate, integer, shapes=shapes, stated=stated, units=units["units"])
 
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:

@@ -27,15 +27,47 @@ def _read_npz(path: Path, names: Sequence[str]) -> Contents:
             check_size(path, f"array '{name}'", _npz_member_bytes(data.zip, f"{name}.npy"))
             return data[name]
 
-        return _keyed(data.files, get, names)
+        arrays = [n for n in data.files if f"{n}.npy" in data.zip.namelist()]
+        units = stated_units({n: _member_header(data.zip, f"{n}.npy") for n in arrays}, get)
+        contents = _keyed(data.files, get, names, listed=[n for n in data.files if n not in units["texts"]])
+        contents.units.update(units["units"])
+        return contents
+
+
+# The unit an NPZ states as text beside its arrays, as numpy users save one: `np.savez(f, vib=x, fs=fs, unit="g")`
+# (every channel's: the vibration's is the one read) or `vib_unit="m/s^2"` (that channel's). Before, a file saying
+# 'g' was read as m/s² ('values: unknown'), its 'unit' listed among the channels.
+_UNIT_KEYS, _UNIT_SUFFIXES = ("unit", "units"), ("_unit", "_units")
+
+
+def stated_units(headers: dict[str, tuple], get) -> dict:
+    """{"units": {channel: unit}, "texts": the unit entries} of an NPZ's arrays, by their (shape, dtype) headers;
+    *get(name)* reads an entry (only the one-value text ones are read)."""
+    texts = {n for n, (shape, dtype) in headers.items() if dtype.kind in "US" and math.prod(shape) == 1}
+    said = {n: str(np.asarray(get(n)).item()).strip() for n in texts if n.lower().endswith(_UNIT_SUFFIXES + _UNIT_KEYS)}
+    units = {}
+    for name, unit in said.items():
+        low = name.lower()
+        if low in _UNIT_KEYS:
+            units.update({n: unit for n in headers if n not in texts and n not in units})
+        else:
+            base = name[: name.rindex("_")]
+            if base in headers:
+                units[base] = unit
+    return {"units": {n: u for n, u in units.items() if u}, "texts": set(said)}
+
+
+def _member_header(archive: zipfile.ZipFile, member: str) -> tuple[tuple, np.dtype]:
+    """(shape, dtype) an NPZ member's .npy header declares, read without its data."""
+    with archive.open(member) as f:
+        version = np.lib.format.read_magic(f)
+        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, _, dtype = read_header(f, max_header_size=10_000)
+    return tuple(shape), dtype
 
 
 def _npz_member_bytes(archive: zipfile.ZipFile, member: str) -> int:
     """What an NPZ member takes once read: its .npy header's shape times its item size (what
     numpy allocates), or its declared inflated size if that is larger."""
-    info = archive.getinfo(member)
-    with archive.open(member) as f:
-        version = np.lib.format.read_magic(f)
-        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-        shape, _, dtype = read_header(f, max_header_size=10_000)
-    return max(math.prod(shape) * dtype.itemsize, info.file_size)
+    shape, dtype = _member_header(archive, member)
+    return max(math.prod(shape) * dtype.itemsize, archive.getinfo(member).file_size)
