@@ -421,7 +421,7 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
                 shown.append(Text(r0["table_call"], style="yellow"))
             if is_other(r0["call"]) and not any(is_other(r["decision"]) for r in mine):
                 # a broken tooth on a gear no method watches, their units under threshold: each decision read
-                # 'healthy' (an outside user's 74T output gear at z 155 beside twelve 'healthy' rows)
+                # 'healthy' (a 74T output gear's broken tooth at z 155 over 2.7 beside twelve 'healthy' rows)
                 said = f"{r0['call']}, on a gear this run does not watch: 'healthy' below is of the watched gear"
                 shown.append(Text(said, style="yellow"))
         cells = [

@@ -14,8 +14,8 @@ import numpy as np
 
 from ...errors import GearlabInputError
 
-# compared lower-case (fs, Fs, FS); a DAQ's HDF5 export writes 'SamplingRate' or 'SamplingFrequency' (an outside
-# user's group attribute 'SamplingRate' was 'no sampling rate: the file has no 'fs'/time')
+# compared lower-case (fs, Fs, FS); a DAQ's HDF5 export writes 'SamplingRate' or 'SamplingFrequency' (a file
+# attribute 'SamplingRate' was 'no sampling rate: the file has no 'fs'/time')
 _RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate", "samplingrate", "sampling_frequency")
 _RATE_NAMES += ("samplingfrequency", "sample_frequency", "samplefrequency")
 # a sample interval in seconds, which a logger may store instead of the rate (MATLAB's dt): its reciprocal is one
