@@ -323,6 +323,32 @@ def one_local_worker_unless_asked():
         yield
 
 
+@pytest.fixture(scope="session", autouse=True)
+def cli_command_built_once():
+    """typer builds the click command of the gearlab app anew on every call (the `cli` fixture's
+    main(), CliRunner.invoke): every command's signature and type hints read again, 10 ms of CPU a
+    call, 70 % of a `gearlab validate` in-process (227 calls in test_cli, test_hardening and five other
+    files: 2.4 s). A gearlab process builds it once; here it is built once per app and set of
+    registered commands, groups and callback (a Typer app a test makes, or one it changes, is built
+    again), and the click command, which parses each call in a fresh context, invoked as before."""
+    import typer.main
+    import typer.testing
+
+    real, built = typer.main.get_command, {}
+
+    def get_command(app):
+        key = (id(app), *map(id, app.registered_commands), None, *map(id, app.registered_groups))
+        key += (id(app.registered_callback),)
+        if key not in built:
+            built[key] = (app, real(app))  # the app held: its id stays its own
+        return built[key][1]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(typer.main, "get_command", get_command)
+        mp.setattr(typer.testing, "_get_command", get_command)
+        yield
+
+
 @pytest.fixture(scope="session")
 def registry():
     return get_registry()
