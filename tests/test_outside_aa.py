@@ -168,3 +168,15 @@ def test_an_npz_s_unit_entry_is_read(cli, tmp_path):
     (tmp_path / "gap.toml").write_text(head + target + "\n[accuracy]\nenabled = false\n")
     code, _, err = cli("validate", tmp_path / "gap.toml")
     assert code == 2 and "key 'unit'" in err and "which is in g (as the file's unit 'g' says)" in err, err
+
+
+def test_a_level_off_by_a_unit_s_factor_says_units():
+    # a next-week take saved in m/s² (a .mat), scored with the run's [target] unit 'g': before, 'level 9.5 x its
+    # history's (another load or gain?)', the unit mix-up unsaid
+    from gearlab.kinds.detection_records import level_line
+
+    assert level_line(9.5).startswith("level 9.5 x its history's (g and m/s² mixed up? check its values: line;")
+    assert "g and m/s² mixed up?" in level_line(1 / 9.9)
+    assert "V and mV mixed up?" in level_line(1040.0)
+    assert level_line(1.6).startswith("level 1.6 x its history's (another load or gain?)")
+    assert level_line(4.0).startswith("level 4 x its history's (another load or gain?)")

@@ -71,12 +71,20 @@ def varies(how: str) -> str:
     return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how else ""
 
 
+# A level off by a unit's factor is that unit misread, before any load: a take in m/s² scored with a run's 'g'
+# keys read 9.5 x its history's, said only '(another load or gain?)'. Within UNIT_NEAR of the factor.
+UNIT_FACTORS = ((9.80665, "g and m/s²"), (1000.0, "V and mV"))
+UNIT_NEAR = 1.25
+
+
 def level_line(ratio: float) -> str:
     """A record's level *ratio* to its history's, in words where more than LEVEL_OFF off ("": within)."""
     if 1 / LEVEL_OFF <= ratio <= LEVEL_OFF:
         return ""
+    units = [w for f, w in UNIT_FACTORS if abs(abs(math.log(ratio)) - math.log(f)) < math.log(UNIT_NEAR)]
+    why = f"{units[0]} mixed up? check its values: line; or another load or gain?" if units else "another load or gain?"
     return (
-        f"level {ratio:.2g} x its history's (another load or gain?): NA4, a size, reads it as a change; "
+        f"level {ratio:.2g} x its history's ({why}): NA4, a size, reads it as a change; "
         "a history at that load, or its own condition (condition = ...), compares like with like"
     )
 
