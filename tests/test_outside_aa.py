@@ -180,3 +180,15 @@ def test_a_level_off_by_a_unit_s_factor_says_units():
     assert "V and mV mixed up?" in level_line(1040.0)
     assert level_line(1.6).startswith("level 1.6 x its history's (another load or gain?)")
     assert level_line(4.0).startswith("level 4 x its history's (another load or gain?)")
+
+
+@pytest.mark.parametrize("line", ["Abtastrate: 20 kHz", "Abtastrate [Hz]: 20000", "Abtastintervall: 50 us"])
+def test_a_german_logger_s_preamble_gives_the_rate(cli, tmp_path, line):
+    # 'Messung: ...' then 'Abtastrate: 20 kHz' above a table with no time column; before: 'no sampling rate: the
+    # file has no 'fs'/time and none was given' (the English 'Sample rate: 20 kHz' was read)
+    _, x, tacho = _take()
+    body = "\n".join(f"{b:.5f};{c:.3f}".replace(".", ",") for b, c in zip(x, tacho))
+    path = tmp_path / "take.csv"
+    path.write_text(f"Messung: Getriebe 3\n{line}\nBeschleunigung [g];Drehzahlgeber [V]\n{body}\n")
+    report = _inspect(cli, tmp_path, path)
+    assert report["fs_hz"] == pytest.approx(FS), report["fs_source"]

@@ -17,9 +17,10 @@ from ...errors import GearlabInputError
 # compared lower-case (fs, Fs, FS); a DAQ's HDF5 export writes 'SamplingRate' or 'SamplingFrequency' (a file
 # attribute 'SamplingRate' was 'no sampling rate: the file has no 'fs'/time')
 _RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate", "samplingrate", "sampling_frequency")
-_RATE_NAMES += ("samplingfrequency", "sample_frequency", "samplefrequency")
+_RATE_NAMES += ("samplingfrequency", "sample_frequency", "samplefrequency", "abtastrate", "abtastfrequenz")  # German
 # a sample interval in seconds, which a logger may store instead of the rate (MATLAB's dt): its reciprocal is one
 _INTERVAL_NAMES = ("dt", "delta_t", "sample_interval", "sampling_interval", "sample_period", "sampling_period")
+_INTERVAL_NAMES += ("abtastintervall",)  # a German logger's preamble ('Abtastrate: 20 kHz' above, a rate)
 
 # A time channel by any of its common names, with its unit if the name says one: t, time, time_s,
 # "Time [s]", "t (ms)", "t/s", "Time, s", timestamp, Zeit, "Relative Time (s)", "rel. Zeit [ms]",
