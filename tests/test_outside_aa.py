@@ -192,3 +192,12 @@ def test_a_german_logger_s_preamble_gives_the_rate(cli, tmp_path, line):
     path.write_text(f"Messung: Getriebe 3\n{line}\nBeschleunigung [g];Drehzahlgeber [V]\n{body}\n")
     report = _inspect(cli, tmp_path, path)
     assert report["fs_hz"] == pytest.approx(FS), report["fs_source"]
+
+
+@pytest.mark.parametrize("unit", ["m s^-2", "ms-2", "m·s⁻²", "m/s**2"])
+def test_metres_per_second_squared_with_a_negative_power_is_a_unit(cli, tmp_path, unit):
+    # 'Beschleunigung [m s^-2]' (ISO 80000's way), '[ms-2]', Python's 'm/s**2': before, 'values: unknown (no
+    # sensitivity or gain given: the values are taken as m/s²)', while 'm/s^2' and 'm/s²' were read
+    path = _text(tmp_path / "take.csv", unit=unit)
+    report = _inspect(cli, tmp_path, path, vibration=f"Beschleunigung [{unit}]")
+    assert report["units"] == f"m/s² (channel 'Beschleunigung [{unit}]')", report["units"]

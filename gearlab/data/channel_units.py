@@ -15,9 +15,19 @@ STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer units and sensitiv
 # A unit at the end of a channel's name, after a separator or in brackets: acc_V, "acc [mV]",
 # acc_ms2, "acc (m/s^2)", acc_g, acc_mg. Volts are case-sensitive (a 'v' ends many words).
 _VOLT_NAME = re.compile(r"(?:^|[_\s\-.(\[])([mµu]?V)[)\]]?$")
-_ACCELERATION_NAME = re.compile(r"(?:[_\s\-.(\[])(m/s\^?2|m/s²|m/s/s|ms2|mps2|m?g)[)\]]?$", re.IGNORECASE)
+_ACCELERATION_NAME = re.compile(
+    r"(?:[_\s\-.(\[])(m/s\^?2|m/s²|m/s/s|m/s\*\*2|m[\s·]?s(?:\^?-2|⁻²)|ms2|mps2|m?g)[)\]]?$", re.IGNORECASE
+)
 # g in a unit is standard gravity, never the gram: '50 g' (a full scale: one file unit is 50 g), 'mg', 'G'
-_METRES_PER_S2 = ("m/s^2", "m/s²", "m/s/s", "ms2", "mps2", "m/s2")
+# ... and as ISO 80000 writes it, with a negative power: 'Beschleunigung [m s^-2]', 'a [ms-2]', 'm·s⁻²' were read as
+# no unit ('values: unknown'), as was Python's 'm/s**2'; compared without blanks or '·', '**' as '^', '⁻²' as '^-2'
+_METRES_PER_S2 = ("m/s^2", "m/s²", "m/s/s", "ms2", "mps2", "m/s2", "ms^-2", "ms-2")
+
+
+def _plain(unit: str) -> str:
+    return re.sub(r"[\s·]", "", unit.lower()).replace("**", "^").replace("⁻²", "^-2")
+
+
 _G_UNIT = re.compile(r"(?P<number>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)?\s*(?P<prefix>[mµu]?)(?:g|g_n|gn)", re.IGNORECASE)
 
 
@@ -44,7 +54,7 @@ def unit_scale(text: str) -> tuple[str, str, float] | None:
     if g:
         prefix = {"": 1.0, "m": 1e-3}.get(g["prefix"].lower(), 1e-6)
         return "acceleration", unit, float(g["number"] or 1.0) * prefix * STANDARD_GRAVITY
-    if unit.lower() in _METRES_PER_S2:  # as names write it (ms2 is not ms², m/s2 not m per s2)
+    if _plain(unit) in _METRES_PER_S2:  # as names write it (ms2 is not ms², m/s2 not m per s2)
         return "acceleration", unit, 1.0
     if not re.search(r"[A-Za-zµ]", unit):
         return None
