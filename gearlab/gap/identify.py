@@ -72,6 +72,10 @@ DETERMINED_WIDTH = 0.25
 LOCAL_STEP, LOCAL_BRACKET = 0.05, 0.1
 
 
+# The reason a parameter is not determined where --quick's limited profile ended before reaching it.
+CUT_SHORT = "not profiled (--quick)"
+
+
 class _OutOfBudget(Exception):
     pass
 
@@ -173,14 +177,17 @@ def profile(
     seed,
     prior,
     distant: bool = True,
+    evaluations: int | None = None,
 ) -> dict:
     """Profile the parameters *params* of an effect's *space* under *score* (deterministic; lower is
     better) whose noise at a point is *noise_of*; *prior*: the search's intervals (kept for whole
     numbers). *distant*: start with the second fit from distant starts (False where the search's fine
-    stage, :func:`refine`, has made it on the same score). Returns the best parameters seen (the fit,
-    or a better point), their score, the fit's score, the noise, whether the fit leaves a gap,
-    intervals, ``determined`` marks (with the reason where not) and ``combinations`` (what the data
-    determine where a parameter is not)."""
+    stage, :func:`refine`, has made it on the same score). *evaluations*: at most that many scores
+    (None: no limit; --quick's, gearlab.gap.search.quick_profile_evaluations): the profile stops
+    where they run out, and a parameter it did not reach keeps the interval its points give. Returns
+    the best parameters seen (the fit, or a better point), their score, the fit's score, the noise,
+    whether the fit leaves a gap, intervals, ``determined`` marks (with the reason where not) and
+    ``combinations`` (what the data determine where a parameter is not)."""
     u0, choice = space.point_of(params)
     history: list[dict] = []
     seen: dict = {}
@@ -191,6 +198,8 @@ def profile(
         key = tuple(sorted((k, v if isinstance(v, str) else float(v)) for k, v in params.items()))
         if key in seen:
             return seen[key]
+        if evaluations is not None and len(history) >= evaluations:
+            raise _OutOfBudget
         value = score(params)
         seen[key] = value
         history.append({"u": u.copy(), "choice": choice, "params": params, "score": value})
@@ -199,18 +208,24 @@ def profile(
     score0 = evaluate(u0)
     free = [j for j, e in enumerate(space.numbers) if not e["integer"] and e["high"] > e["low"]]
     paths: dict[int, list[dict]] = {}
+    reached: list[int] = []  # the coordinates the last pass profiled to both sides
     noise = noise_of(space.params(u0, choice))
-    if free:
-        start = _distant_starts(space, evaluate, history, u0, choice, free, seed) if distant else u0
-        for _ in range(PASSES):  # around the best point; again if the profile found a lower one
-            if not np.array_equal(start, u0):  # a new basin: a local fit of every coordinate first
-                u0 = _local(space, evaluate, start, choice, free, REFIT_EVALS * len(free))["u"].copy()
-            noise = noise_of(space.params(u0, choice))
-            paths = _profile(space, evaluate, history, u0, choice, free, noise)
-            best = min(history, key=lambda h: h["score"])
-            if best["score"] >= evaluate(u0) - noise:
-                break
-            start = best["u"].copy()
+    cut = False
+    try:
+        if free:
+            start = _distant_starts(space, evaluate, history, u0, choice, free, seed) if distant else u0
+            for _ in range(PASSES):  # around the best point; again if the profile found a lower one
+                if not np.array_equal(start, u0):  # a new basin: a local fit of every coordinate first
+                    u0 = _local(space, evaluate, start, choice, free, REFIT_EVALS * len(free))["u"].copy()
+                noise = noise_of(space.params(u0, choice))
+                paths, reached = {}, []
+                _profile(space, evaluate, history, u0, choice, free, noise, paths, reached)
+                best = min(history, key=lambda h: h["score"])
+                if best["score"] >= evaluate(u0) - noise:
+                    break
+                start = best["u"].copy()
+    except _OutOfBudget:  # --quick's evaluations ran out: what the points so far give
+        cut = True
     params0 = space.params(u0, choice)
 
     best = min(history, key=lambda h: h["score"])
@@ -228,6 +243,9 @@ def profile(
     for mark in marks.values():
         mark["reason"] = "fit leaves a gap" if gap_left else None if mark["determined"] else "profile"
         mark["determined"] = mark["determined"] and not gap_left
+    for j in free if cut and not gap_left else ():
+        if j not in reached:  # only the search's neighbourhood: it read a valley as steep (module doc)
+            marks[space.numbers[j]["name"]].update(determined=False, reason=CUT_SHORT)
     return {
         "params": _plain(best["params"]),
         "score": best["score"],
@@ -317,11 +335,11 @@ def alias_refit(space, score: Callable[[dict], float], params: dict, phase: str,
     return {"params": best, "score": value, "evaluations": len(seen)}
 
 
-def _profile(space, evaluate, history, u0, choice, free: list[int], noise: float) -> dict[int, list[dict]]:
+def _profile(space, evaluate, history, u0, choice, free: list[int], noise: float, paths: dict, reached: list) -> None:
     """Per free coordinate j: the profile points, out to each side, that fit within the noise of the
-    best score seen (the module docstring, steps 1-3)."""
+    best score seen (the module docstring, steps 1-3), added to *paths* as they come, and j to
+    *reached* once both sides are done (a profile that runs out of evaluations keeps what it made)."""
     H = _hessian(evaluate, u0, free)
-    paths: dict[int, list[dict]] = {}
     for a, j in enumerate(free):
         others = [k for k in free if k != j]
         slope = _valley(H, a)
@@ -347,7 +365,7 @@ def _profile(space, evaluate, history, u0, choice, free: list[int], noise: float
                     break
                 previous = point
                 paths.setdefault(j, []).append(point)
-    return paths
+        reached.append(j)
 
 
 def _distant_starts(space, evaluate, history, u0, choice, free: list[int], seed) -> np.ndarray:

@@ -36,6 +36,10 @@ ORDINAL_VALUES, ORDINAL_EVALS = 8, 4
 NOISE_REPLICATES = 64  # bootstrap replicates for the score noise behind the parameter intervals
 NUISANCE_SIGNAL_EVALS = 4  # SIGNAL_EVALS for signal-level candidates that carry the nuisance
 NUISANCE_WIDE, NUISANCE_LOCAL, NUISANCE_STEP = 8, 4, 6.0  # Brent iterations (first / later points), dB
+# --quick's profile: at most this many score evaluations per budget unit and per parameter and one
+# (3 x 4 x 6 = 72 for casing_path's five). Unlimited, a three-stage box's casing took 488 simulations
+# (7 of a 10-min --quick run) where its fit had taken 12 (/tmp/helperO, issue 39's outside user).
+QUICK_PROFILE_EVALS = 3
 
 
 # --- the search space of one effect ------------------------------------------------------------------
@@ -582,6 +586,14 @@ class _NoiseNuisance:
         return found[0]
 
 
+def quick_profile_evaluations(space: Space, settings: Settings) -> int | None:
+    """The most score evaluations an effect's profile may make: none under the default budget or
+    more; below it (--quick) QUICK_PROFILE_EVALS per budget unit and per parameter and one."""
+    if settings.budget >= Settings().budget:
+        return None
+    return QUICK_PROFILE_EVALS * settings.budget * (space.dims + 1)
+
+
 def profile_effect(task: tuple) -> dict:
     """Profile the *i*-th accepted effect: task = (search spec, accepted effects (canonical, the
     order they were accepted in), i, target_X, settings, seed, rows, the search's intervals), with
@@ -610,6 +622,9 @@ def profile_effect(task: tuple) -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings at odd parameters
         space = Space(effect)
-        # a search with the fine stage has made the distant starts on this score
-        out = profile(space, score, noise, dict(canonical), seed, prior, distant=not _fine(effect, space, settings))
+        # a search with the fine stage has made the distant starts on this score; --quick's limited
+        # profile spends its evaluations on the intervals, as its search keeps the coarse fit
+        most = quick_profile_evaluations(space, settings)
+        distant = not _fine(effect, space, settings) and most is None
+        out = profile(space, score, noise, dict(canonical), seed, prior, distant=distant, evaluations=most)
     return {"index": i, "name": name, **out, "seconds": time.perf_counter() - started}

@@ -49,6 +49,8 @@ def params_text(params: dict, determined: dict | None = None) -> str:
             return ""
         if determined[k].get("reason") == "fit leaves a gap":
             return " (not determined: the fit leaves a gap)"
+        if determined[k].get("reason") == "not profiled (--quick)":  # gap.identify.CUT_SHORT
+            return " (not profiled: --quick)"
         return " (not identifiable)"
 
     return ", ".join((f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}") + mark(k) for k, v in params.items())
