@@ -1,13 +1,16 @@
 """--quick's profile of the fitted parameters: a limited number of score evaluations (the profile
 ran 488 simulations for a three-stage box's casing under --quick, 7 of a 10-minute run, where its fit
-had taken 12), and no effect on a run at the default budget."""
+had taken 12), no effect on a run at the default budget, and a line whose ETA holds when the last fit
+runs alone (it said 0:34 for 5 minutes)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
 
-from gearlab.gap import search
+import pytest
+
+from gearlab.gap import search, tally
 from gearlab.gap.identify import profile
 from gearlab.gap.scoring import Settings
 from gearlab.settings import shrunk
@@ -57,3 +60,22 @@ def test_a_limit_above_what_the_profile_takes_changes_nothing():
     free = profile(space, _counted([]), lambda p: 1.0, dict(start), 0, {})
     capped = profile(space, _counted([]), lambda p: 1.0, dict(start), 0, {}, evaluations=10**6)
     assert capped == free
+
+
+def test_the_eta_holds_when_the_last_fit_runs_alone():
+    # three fits on two workers: 4 evaluations/s while two run, then 1/s for the casing alone
+    most, clock, n = 200, 0.0, 0
+    left = tally.Left(most, clock)
+    said = []
+    while n < most:
+        clock += 1.0
+        n += 4 if clock <= 20 else 1
+        said.append((clock, left.left(min(n, most), clock)))
+    end = clock
+    # after the rate dropped, within a window the ETA is that of the last fit's rate, within 10 %
+    for t, eta in said:
+        if t >= 20 + tally.RATE_WINDOW_S:
+            assert eta == pytest.approx(end - t, rel=0.10, abs=2.0)
+    # the line says the bound and the rate
+    assert "of at most 200 evaluations" in left.line(most, end) and "ETA ≤" in left.line(most, end + 1)
+    assert tally.Left(10, 0.0).line(0, 0.0) == "fitting: 0 of at most 10 evaluations"

@@ -93,7 +93,7 @@ from .conclusion import (
 )
 from .identify import _plain, alias_refit
 from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_removal, _prepared, _report, check_settings
-from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect
+from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect, quick_profile_evaluations
 from .stats import REPORT_PARTS, classifier_loaded, load_classifier
 from .structure import first_difference, stopped
 from .tally import Tallied
@@ -299,7 +299,10 @@ def profiled(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
         run.on_event(Event("advance", stage="gap profile", done=done, total=len(tasks)))
 
     out = list(fitted)
-    for i, res in enumerate(run_fits(run, "gap profile", profile_effect, tasks, advance)):
+    registry = get_registry()
+    caps = [quick_profile_evaluations(Space(registry.get("effect", e["name"])), run.settings) for e in accepted]
+    most = sum(caps) if None not in caps else None  # --quick's profiles are limited
+    for i, res in enumerate(run_fits(run, "gap profile", profile_effect, tasks, advance, most)):
         entry = accepted[i]
         if res["params"] != entry["params"]:
             out[i] = run.spec(entry["name"], res["params"])
@@ -343,16 +346,20 @@ class _Run:
         return self.judged(effects + (self.spec(fit["name"], fit["params"]),) + extra)
 
 
-def run_fits(run: _Run, stage: str, work, tasks: list, advance) -> list:
+def run_fits(run: _Run, stage: str, work, tasks: list, advance, most: int | None = None) -> list:
     """run.executor.map(work, tasks, advance) with a line beside *stage*'s bar that says how many
     score evaluations the fits have made, at what rate, and for how long once it stood 3 s: a fit
     takes 14-27 s on a busy machine, which a transfer benchmark's trial spent silent between two
-    steps of its round, and then the line told the time alone (issue 41)."""
+    steps of its round, and then the line told the time alone (issue 41). *most*: the evaluations the
+    fits make at most (--quick's profile): the line then says the time left (tally.Left)."""
     with counts_of(run.executor) as counts:  # reached from every worker of the executor, Ray's included
         began = time.monotonic()
+        left = tally.Left(most, began) if most else None
 
         def line() -> str:
             n = counts.total()
+            if left is not None:
+                return left.line(n, time.monotonic())
             return f"fitting: {n} evaluations, {n / max(time.monotonic() - began, 1e-9):.1f}/s" if n else "fitting"
 
         with standing(run.on_event, stage, line):
