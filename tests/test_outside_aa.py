@@ -201,3 +201,23 @@ def test_metres_per_second_squared_with_a_negative_power_is_a_unit(cli, tmp_path
     path = _text(tmp_path / "take.csv", unit=unit)
     report = _inspect(cli, tmp_path, path, vibration=f"Beschleunigung [{unit}]")
     assert report["units"] == f"m/s² (channel 'Beschleunigung [{unit}]')", report["units"]
+
+
+def test_an_hdf5_tacho_logged_at_a_lower_rate_is_held_to_the_vibration_s(cli, tmp_path):
+    # a DAQ's tacho counter at 10 kHz beside its 20 kHz accelerometer, each dataset with its own 'fs'; before: 'the
+    # sampling rates in the file disagree: ... gives 20 kHz, ... gives 10 kHz; expected one rate'
+    h5py = pytest.importorskip("h5py")
+    _, x, tacho = _take()
+    path = tmp_path / "take.h5"
+    with h5py.File(path, "w") as f:
+        f.create_dataset("vib/accel", data=x * G).attrs["fs"] = FS
+        f.create_dataset("speed/tacho", data=tacho[::2]).attrs["fs"] = FS / 2
+    report = _inspect(cli, tmp_path, path, vibration="accel", tacho="tacho")
+    assert report["fs_hz"] == FS and "'tacho' held from 10000 Hz" in report["fs_source"], report["fs_source"]
+    assert abs(report["speed"]["mean_hz"] / F_IN - 1) < 0.005, report["speed"]
+    with h5py.File(path, "a") as f:  # a tacho over another stretch of time than the vibration: refused as before
+        del f["speed/tacho"]
+        f.create_dataset("speed/tacho", data=tacho[::3]).attrs["fs"] = FS / 2
+    (tmp_path / "box.toml").write_text(BOX)
+    code, _, err = cli("inspect", path, "--gearbox", tmp_path / "box.toml", "--vibration", "accel", "--tacho", "tacho")
+    assert code == 2 and "the sampling rates in the file disagree" in err, err
