@@ -55,6 +55,15 @@ def _inspect(cli, tmp_path, path, vibration="Beschleunigung [g]", tacho="Drehzah
     return json.loads(out)
 
 
+def _validate_gap(cli, tmp_path, take: str, keys: str) -> tuple[int, str]:
+    """`gearlab validate` of a gap scenario on box.toml whose one history file is *take*, read with [target] *keys*."""
+    files = f'[{{ file = "{take}", role = "history", label = "healthy" }}]'
+    head = '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\ngearbox = "box.toml"\n\n'
+    (tmp_path / "gap.toml").write_text(f"{head}[target]\n{keys}\nfiles = {files}\n\n[accuracy]\nenabled = false\n")
+    code, _, err = cli("validate", tmp_path / "gap.toml")
+    return code, err
+
+
 def test_a_windows_1252_export_with_a_german_header_is_read(cli, tmp_path):
     # Excel's 'CSV (Trennzeichen-getrennt)' on a German Windows writes '²' as the byte 0xB2; before: "cannot read
     # ... as CSV: 'utf-8' codec can't decode byte 0xb2 in position 28", at validate time 'no column named'
@@ -85,11 +94,8 @@ def test_decimal_commas_in_a_comma_separated_file_are_named(cli, tmp_path):
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert "take.csv: line 2" in err and "decimal commas in a comma-separated file?" in err, err
     # and at validate time, from the header and the first row (before: 'OK', the run then refused it)
-    files = '[{ file = "take.csv", role = "history", label = "healthy" }]'
-    target = f'[target]\nvibration = "Beschleunigung [g]"\ntacho = "Drehzahlgeber [V]"\nfiles = {files}\n'
-    head = '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\ngearbox = "box.toml"\n\n'
-    (tmp_path / "gap.toml").write_text(head + target + "\n[accuracy]\nenabled = false\n")
-    code, _, err = cli("validate", tmp_path / "gap.toml")
+    keys = 'vibration = "Beschleunigung [g]"\ntacho = "Drehzahlgeber [V]"'
+    code, err = _validate_gap(cli, tmp_path, "take.csv", keys)
     assert code == 2 and "key 'file'" in err and "decimal commas in a comma-separated file?" in err, err
 
 
@@ -162,11 +168,7 @@ def test_an_npz_s_unit_entry_is_read(cli, tmp_path):
     np.savez(tmp_path / "own.npz", vib=x * G, tach=tacho, fs=FS, vib_unit="m/s^2")  # one channel's unit
     assert _inspect(cli, tmp_path, tmp_path / "own.npz", vibration="vib", tacho="tach")["units"].startswith("m/s²")
     # validate reads it from the header: a scenario's unit against the file's is refused there
-    files = '[{ file = "take.npz", role = "history", label = "healthy" }]'
-    target = f'[target]\nvibration = "vib"\ntacho = "tach"\nunit = "m/s^2"\nfiles = {files}\n'
-    head = '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\ngearbox = "box.toml"\n\n'
-    (tmp_path / "gap.toml").write_text(head + target + "\n[accuracy]\nenabled = false\n")
-    code, _, err = cli("validate", tmp_path / "gap.toml")
+    code, err = _validate_gap(cli, tmp_path, "take.npz", 'vibration = "vib"\ntacho = "tach"\nunit = "m/s^2"')
     assert code == 2 and "key 'unit'" in err and "which is in g (as the file's unit 'g' says)" in err, err
 
 
