@@ -38,7 +38,7 @@ NUISANCE_SIGNAL_EVALS = 4  # SIGNAL_EVALS for signal-level candidates that carry
 NUISANCE_WIDE, NUISANCE_LOCAL, NUISANCE_STEP = 8, 4, 6.0  # Brent iterations (first / later points), dB
 # --quick's profile: at most this many score evaluations per budget unit and per parameter and one
 # (3 x 4 x 6 = 72 for casing_path's five). Unlimited, a three-stage box's casing took 488 simulations
-# (7 of a 10-min --quick run) where its fit had taken 12 (/tmp/helperO, issue 39's outside user).
+# (7 of a 10-min --quick run) where its fit had taken 12.
 QUICK_PROFILE_EVALS = 3
 
 
