@@ -1,6 +1,7 @@
 """A run-up or coast-down in the detection kind (gearlab.kinds.detection): a test take whose speed varies is
 scored on its longest stretch of revolutions at a condition's history speed, by the run itself
-(detection_records.read_target) and by `gearlab score` (detection_scoring) alike: one rule, one set of words."""
+(detection_records.read_target) and by `gearlab score` (detection_scoring) alike: one rule, one set of words; a
+history take that runs up first is used on its longest steady stretch (the same band about that stretch's own speed)."""
 
 from __future__ import annotations
 
@@ -63,36 +64,106 @@ def in_band(rec, centres: dict[str, float], whose: str = "") -> InBand:
     if part.stop == part.start:
         return InBand(name, centre, part, inside, rec, "")
     speeds = rec.speeds[part]
-    said = f"scored on {part.stop - part.start} of {len(rec.speeds)}{whose} revolutions at {speeds.min():.2f} .. "
-    said += f"{speeds.max():.2f} Hz (the history's {centre:.2f} Hz ± {IN_BAND:.1%}" + (
+    said = f"scored on {_words(rec, part, whose)} (the history's {centre:.2f} Hz ± {IN_BAND:.1%}" + (
         f"; the longest run of its {inside} there)" if inside > len(speeds) else ")"
     )
+    return InBand(name, centre, part, inside, _cut(rec, part), said)
+
+
+def _words(rec, part: slice, whose: str) -> str:
+    """'31 of 197 revolutions at 15.60 .. 16.35 Hz': the *part* of *rec*'s revolutions a run keeps, in the words a
+    test take's score and a history take's steady part share."""
+    speeds = rec.speeds[part]
+    n = part.stop - part.start
+    return f"{n} of {len(rec.speeds)}{whose} revolutions at {speeds.min():.2f} .. {speeds.max():.2f} Hz"
+
+
+def _cut(rec, part: slice):
+    """*rec* cut to the revolutions *part*: its mean speed, first revolution and speeds the part's."""
+    speeds = rec.speeds[part]
     first = rec.first_revolution + part.start
     cut = replace(rec, revolutions=rec.revolutions[part], speed_hz=float(np.mean(speeds)), first_revolution=first)
-    return InBand(name, centre, part, inside, replace(cut, speeds=speeds), said)
+    return replace(cut, speeds=speeds)
+
+
+def steady(rec, whose: str = "") -> InBand:
+    """A history take *rec* whose speed varies (a recording that starts with a run-up) cut to its longest stretch of
+    revolutions within IN_BAND of that stretch's own median speed (stretch, as a test take's cut): its condition's
+    speed, standardiser and thresholds come from the steady part alone. Every speed the take passes (on a grid of
+    half a band) seeds a stretch, each moved to its own median until it stays (the band then centred on the part it
+    holds); the longest kept. *said*: 'used N of M revolutions at .. Hz (steady part)'; an empty part where none."""
+    speeds = rec.speeds
+    low, high = float(np.min(speeds)), float(np.max(speeds))
+    seeds = np.exp(np.arange(np.log(low), np.log(high) + IN_BAND, IN_BAND / 2)) if low > 0 else [np.median(speeds)]
+    best, centre = slice(0, 0), float(np.median(speeds))
+    for hz in seeds:
+        part = stretch(speeds, float(hz))
+        for _ in range(8):  # a few moves: the band's centre settles on the part's median
+            if part.stop == part.start:
+                break
+            hz = float(np.median(speeds[part]))
+            moved = stretch(speeds, hz)
+            if moved == part:
+                break
+            part = moved
+        if part.stop - part.start > best.stop - best.start:
+            best, centre = part, float(hz)
+    if best.stop == best.start:
+        return InBand("", centre, best, 0, rec, "")
+    said = f"used {_words(rec, best, whose)} (steady part)"
+    return InBand("", centre, best, best.stop - best.start, _cut(rec, best), said)
+
+
+def _need(blocks, turns: float) -> tuple[int, str]:
+    """(input revolutions a unit of every kind needs, their words): the longest [detection] block of the units'
+    shaft, turning *turns* per input turn."""
+    need = max(1, math.ceil(max(blocks, default=1) / turns))
+    return need, " revolutions" if turns == 1 else f" input revolutions ({max(blocks)} of the units' shaft)"
+
+
+def steady_histories(files, records: dict, blocks, turns: float, where: str) -> dict[str, str]:
+    """A detection run's history takes whose speed varies (read_target: *records* {path: CutRecording}, changed here,
+    before the takes are grouped by speed): each cut to its longest steady stretch (steady), refused in one line where
+    none holds the longest [detection] block of the units' shaft (turning *turns* per input turn) or the take has no
+    revolutions' speeds. {path: what was used in words}."""
+    need, shaft = _need(blocks, turns)
+    out = {}
+    for f in files:
+        rec = records[f.path]
+        if f.role != "history" or VARIES_WORDS not in rec.angle_source:
+            continue
+        got = steady(rec, "" if turns == 1 else " input") if rec.speeds is not None else None
+        n = 0 if got is None else got.part.stop - got.part.start
+        if n < need:
+            held = ""  # no revolutions' speeds (no tacho): no steady part can be found
+            if got is not None:
+                held = (
+                    f"; its longest stretch within {IN_BAND:.1%} of its own median speed ({got.centre:.2f} Hz) "
+                    f"holds {n} of its {len(rec.speeds)} revolutions, a unit of every kind needs {need}{shaft}"
+                )
+            raise GearlabInputError(
+                f"{where}: {f.path} (history; {span(rec.angle_source)}): a history take must run steady (its speed "
+                f"within {SPEED_VARIES:.0%}) for a unit at least: its revolutions set its condition's speed, "
+                f"standardiser and thresholds{held}; expected a history take steady for {need}{shaft} (a run-up or "
+                "coast-down as a test take, scored at a history's speed)"
+            )
+        records[f.path], out[f.path] = got.record, got.said
+    return out
 
 
 def cut_run_ups(files, records: dict, named: dict, blocks, turns: float, where: str) -> dict[str, str]:
-    """A detection run's takes whose speed varies (read_target: *records* {path: CutRecording}, *named* {path:
-    condition} as conditions_of grouped them, both changed here): a history take refused (its revolutions set its
-    condition's speed, standardiser and thresholds); a test take cut to its longest stretch at a condition's history
-    speed as `gearlab score` cuts one (in_band; its own 'condition', else every condition with a history), refused
-    where that stretch is shorter than the longest [detection] block of the units' shaft (turning *turns* per input
-    turn). {path: what was scored in words} of the test takes cut."""
-    for f in files:
-        how = records[f.path].angle_source
-        if f.role == "history" and VARIES_WORDS in how:
-            raise GearlabInputError(
-                f"{where}: {f.path} (history; {span(how)}): a history take must run steady (its speed within "
-                f"{SPEED_VARIES:.0%}): its revolutions set its condition's speed, standardiser and thresholds; "
-                "expected a steady take as history (a run-up or coast-down as a test take, scored at a history's speed)"
-            )
+    """A detection run's test takes whose speed varies (read_target: *records* {path: CutRecording}, *named* {path:
+    condition} as conditions_of grouped them, both changed here; its history takes already cut to their steady part:
+    steady_histories): each cut to its longest stretch at a condition's history speed as `gearlab score` cuts one
+    (in_band; its own 'condition', else every condition with a history), refused where that stretch is shorter than
+    the longest [detection] block of the units' shaft (turning *turns* per input turn). {path: what was scored in
+    words} of the test takes cut."""
     speeds: dict[str, list[float]] = {}
     for f in files:
         if f.role == "history":
             speeds.setdefault(named[f.path], []).append(records[f.path].speed_hz)
     centres = {c: float(np.median(v)) for c, v in speeds.items()}
-    need = max(1, math.ceil(max(blocks, default=1) / turns))  # input revolutions for a unit of every kind
+    need, shaft = _need(blocks, turns)
     out = {}
     for f in files:
         rec = records[f.path]
@@ -105,7 +176,6 @@ def cut_run_ups(files, records: dict, named: dict, blocks, turns: float, where: 
         n = got.part.stop - got.part.start
         if n < need:
             mean = "" if named[f.path] in centres else f"its mean speed {rec.speed_hz:.2f} Hz has no history record; "
-            shaft = " revolutions" if turns == 1 else f" input revolutions ({max(blocks)} of the units' shaft)"
             raise GearlabInputError(
                 f"{where}: {f.path} ({span(rec.angle_source)}): {mean}its longest run within {IN_BAND:.1%} of the "
                 f"history's {got.centre:.2f} Hz ('{got.condition}') holds {n} of its {len(rec.speeds)} revolutions "

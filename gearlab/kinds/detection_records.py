@@ -29,7 +29,7 @@ from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
 from . import record_effects
-from .detection_in_band import cut_run_ups, span
+from .detection_in_band import cut_run_ups, span, steady_histories
 from .detection_settings import Classical
 
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
@@ -353,12 +353,14 @@ def read_target(
     pool = executor if isinstance(executor, LocalExecutor) else LocalExecutor(1)
     got = pool.map(target.read, target.files, on_done=read)
     records = {f.path: r for f, r in zip(target.files, got)}
+    # a run-up or coast-down: a history one cut to its steady part before the takes are grouped by speed (a recording
+    # that starts with a run-up: its mean speed is not its steady part's), refused where none holds a unit; a test
+    # one cut to its revolutions at a history's speed (as `gearlab score` cuts one); before, scored whole
+    turns = 1.0 if shaft is None else float(shaft.ratio)
+    scored_on = steady_histories(target.files, records, blocks, turns, where)
     speeds = {p: r.speed_hz for p, r in records.items()}
     named = conditions_of(list(target.files), speeds)
-    # a run-up or coast-down: a history one refused, a test one cut to its revolutions at a history's speed (as
-    # `gearlab score` cuts one); before, grouped and scored whole at its mean speed
-    turns = 1.0 if shaft is None else float(shaft.ratio)
-    scored_on = cut_run_ups(target.files, records, named, blocks, turns, where)
+    scored_on |= cut_run_ups(target.files, records, named, blocks, turns, where)
     speeds = {p: r.speed_hz for p, r in records.items()}
     for f in target.files:
         cond = conditions.setdefault(named[f.path], {"history": [], "test": [], "speeds": {}, "speed_from": {}})
