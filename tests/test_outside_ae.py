@@ -1,5 +1,6 @@
 """Issue 39, outside users' leftovers (helper AE): a history take that starts with a run-up (a real recording often
-does) is used on its steady part, said as a test take's cut is (a)."""
+does) is used on its steady part, said as a test take's cut is (a); a scored take localised on a gear no method
+watches, which no method called, is marked in the scoring history and its trend (b)."""
 
 from __future__ import annotations
 
@@ -76,3 +77,55 @@ def test_a_history_take_too_short_once_steady_is_still_refused_in_one_line(tmp_p
     assert len(line.splitlines()) == 1 and line.startswith("det.toml: [target] key 'files': ../data/up.zip (history; ")
     assert "a history take must run steady" in line and "a unit of every kind needs 10 revolutions" in line, line
     assert line.count("expected") == 1 and "expected a history take steady for 10 revolutions" in line, line
+
+
+OUT = "other damage: output gear 74T (stage 2)"
+
+
+def _row(file: str, method: str, margin: float, call: str | None = None) -> dict:
+    """One row of a run's scoring history as `gearlab score` appends it: *margin* over a threshold of 1, and the
+    take's which-gear *call* (most units over threshold on a take called on another gear: that other damage)."""
+    decision = "healthy" if margin <= 0 else (call if call else "fault")
+    row = {"file": file, "condition": "L1", "method": method, "unit": "record30", "median_score": 1.0 + margin}
+    return row | {"threshold": 1.0, "decision": decision, "call": call}
+
+
+def test_the_trend_marks_a_take_on_an_unwatched_gear_that_no_method_called(monkeypatch):
+    # rec/nw_broken_out.h5: a 74T output gear's broken tooth (localised on it) under every method's threshold; the
+    # terminal said so under its 'healthy' rows (2b4efd1), the history and the trend did not: a healthy point
+    rows = [_row("week1.h5", m, -0.5) for m in ("fm4", "na4")]
+    rows += [_row("nw_broken_out.h5", m, -0.2, OUT) for m in ("fm4", "na4")]
+    rows += [_row("broken_called.h5", "fm4", 0.5, OUT), _row("broken_called.h5", "na4", -0.1, OUT)]
+    note = f"{OUT}, on a gear this run does not watch; no method called it"
+    assert D.unwatched(rows) == {"nw_broken_out.h5": note}  # what score keeps per take ('unwatched')
+    monkeypatch.setattr(D.scoring, "read_history", lambda run: rows)
+    (trend,) = D.score_trends(None)
+    assert f"; record 2: {note}" in trend.title and f"; record 3: {OUT}\n" in trend.title, trend.title
+    assert "record 1:" not in trend.title, trend.title
+
+
+def test_score_keeps_the_note_in_the_history_of_a_take_on_an_unwatched_gear(
+    cli, tmp_path, module_cache, monkeypatch, no_figures
+):
+    # the tiny run (matched filter and the classical rows) scoring a healthy take whose localisation names the
+    # 74T output gear (as test_followups_39 stands in for signals.localise): every decision 'healthy', the note kept
+    from test_detection import run
+    from test_followups_39 import scenario
+    from textrecords import record
+
+    from gearlab.parts import scoring
+    from gearlab.runs import RunDir
+
+    out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
+    record(tmp_path / "quiet.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
+    call = {"named": "output gear 74T (stage 2)", "summary": "", "call": OUT, "evidence": "output z 3.1/2.6"}
+    monkeypatch.setattr(
+        D, "localise_scored", lambda run_dir, records: {p: call for r in records.values() for p, *_ in r}
+    )
+    code, _, err = cli("score", out, tmp_path / "quiet.zip", "--json")
+    assert code == 0, err
+    history = scoring.read_history(RunDir.open(out))
+    assert history and all(h["decision"] == "healthy" for h in history), {h["decision"] for h in history}
+    assert {h["unwatched"] for h in history} == {f"{OUT}, on a gear this run does not watch; no method called it"}
+    (trend,) = D.score_trends(RunDir.open(out))
+    assert f"record 1: {OUT}, on a gear this run does not watch" in trend.title, trend.title

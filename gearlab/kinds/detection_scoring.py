@@ -574,6 +574,9 @@ def score(
     # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend
     given = {str(f): i for i, f in enumerate(files)}
     rows.sort(key=lambda r: given[r["file"]])
+    notes = unwatched(rows)
+    for r in rows:  # kept per take in the history: its trend point is marked (score_trends), not a plain 'healthy'
+        r["unwatched"] = notes.get(r["file"])
     scoring.append_history(run, rows)
     trends = score_trends(run)
     if trends:
@@ -583,11 +586,24 @@ def score(
     return rows
 
 
+def unwatched(rows: list[dict]) -> dict[str, str]:
+    """{file: note} of the scored takes whose change is localised on a gear no method watches (their call other
+    damage) while no method's decision called it (their units under threshold: each row 'healthy', of the watched
+    gear), as the terminal says under such a take (terminal.score_tables): the history and the trend say so too."""
+    calls: dict[str, str] = {}
+    for r in rows:
+        if is_other(r.get("call")):
+            calls.setdefault(r["file"], r["call"])
+    called = {r["file"] for r in rows if is_other(r["decision"])}
+    said = "on a gear this run does not watch; no method called it"
+    return {f: f"{c}, {said}" for f, c in calls.items() if f not in called}
+
+
 def score_trends(run: RunDir) -> list:
     """Per condition and method: the median score of each scored record's longest TSA units, in the
     order they were scored, less the threshold, over the method's largest (gearlab.parts.scoring's
-    history); the title names each point's file and the records a method called other damage (on a
-    gear the run does not watch)."""
+    history); the title names each point's file, the records a method called other damage (on a
+    gear the run does not watch) and those localised there that no method called (unwatched)."""
     from ..charts import Chart, Curve
 
     rows = scoring.read_history(run)
@@ -600,6 +616,7 @@ def score_trends(run: RunDir) -> list:
         unit = longest_tsa(r["unit"] for r in held if r["median_score"] is not None) or "revolution"
         picked = [r for r in held if r["unit"] == unit and r["median_score"] is not None]
         curves, other, files, tops, parts = [], {}, [], [], {}
+        quiet = unwatched(held)  # from the rows, so a history scored before the note was kept is marked too
         for m in dict.fromkeys(r["method"] for r in picked):
             mine = [r for r in picked if r["method"] == m]
             files = files if len(files) >= len(mine) else [Path(r["file"]).name for r in mine]
@@ -613,6 +630,8 @@ def score_trends(run: RunDir) -> list:
             for i, r in enumerate(mine, 1):
                 if is_other(r["decision"]):
                     other.setdefault(r["decision"], set()).add(i)
+                elif r["file"] in quiet:  # damage on a gear not watched, under every threshold: marked all the same
+                    other.setdefault(quiet[r["file"]], set()).add(i)
                 if r.get("scored_on"):  # a run-up's part: which revolutions the point is of
                     parts[f"record {i}"] = r["scored_on"]
         said = "".join(
