@@ -95,6 +95,8 @@ def effects_from_tables(entries, where: str, registry=None) -> tuple[EffectSpec,
     out = []
     for i, entry in enumerate(entries, start=1):
         here = f"{where} #{i}"
+        if pair_form(entry):  # a gap run's summary.json corrected_effects, copied as docs/your_gearbox.md step 4 says
+            entry = {"name": entry[0]} | {k: v for k, v in entry[1]}
         if not isinstance(entry, Mapping):
             raise GearlabInputError(
                 f'{here}: expected a table {{name = "...", ...}}, got {type(entry).__name__} {entry!r}'
@@ -110,6 +112,17 @@ def effects_from_tables(entries, where: str, registry=None) -> tuple[EffectSpec,
     # In order of level, the given order within a level: the order they act in, so that two
     # lists that act alike have one cache key (within a level the order matters: noise, then a filter).
     return tuple(spec for _, spec in sorted(out, key=lambda item: item[0]))
+
+
+def pair_form(entry) -> bool:
+    """Whether *entry* is an effect as summary.json keeps it: ``["name", [["param", value], ...]]``."""
+    return (
+        isinstance(entry, list)
+        and len(entry) == 2
+        and isinstance(entry[0], str)
+        and isinstance(entry[1], list)
+        and all(isinstance(p, list) and len(p) == 2 and isinstance(p[0], str) for p in entry[1])
+    )
 
 
 def check_effect_specs(effects, where: str) -> None:
