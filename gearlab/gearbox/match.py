@@ -178,38 +178,6 @@ def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float,
     return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
 
 
-def whole_on_both(mesh: float, other: float, spacing: float, tol: float, bin_: float) -> bool:
-    """Whether a sideband comb *spacing* (± *tol*) apart around a stage's mesh line *mesh* can be the order of
-    the shaft that stage shares with a neighbour whose mesh is measured at *other*: some whole count of this
-    stage's gear on it (mesh / spacing, within its spread or half a tooth) makes the neighbour's gear whole too
-    (count x other / mesh, within the two lines' 2 bins each). Both meshes pin the shaft's order up to whole
-    counts; a comb that fits none is another modulation. A 23/59 + 19/67 box's own simulation, 124 turns,
-    carried the mesh lines ±0.322 apart (10 Hz at 31 Hz): read as the intermediate shaft, '71 teeth fit the
-    recording, 59 described', where 71 makes the second pinion 22.86 teeth."""
-    z = mesh / spacing
-    half = max(0.5, z * tol / spacing)
-    for count in range(max(1, math.ceil(z - half)), math.floor(z + half) + 1):
-        mate = count * other / mesh
-        if abs(mate - round(mate)) <= mate * 2 * bin_ * (1 / mesh + 1 / other) and round(mate) >= 1:
-            return True
-    return False
-
-
-def neighbour_mesh(lines: Lines, x: float, own: float, window: float, bin_: float) -> float | None:
-    """The mesh order a neighbouring stage's lines put near *x* (its described or located order), from its
-    lowest harmonic h whose line is the strongest within *window* (its shafts' sidebands) and lies within a
-    mesh's tolerance of h x, off the harmonics of this stage's mesh *own*; or None. The strongest: a
-    sideband within tolerance of a moved mesh (17/60 + 20/58 described 17/61: M2 - o_out) is no mesh; a
-    harmonic: a stage's fundamental may stand under the lines' threshold (23/59 + 19/67: M2 seen at 5 M2)."""
-    for h in range(1, MAX_HARMONIC + 1):
-        if abs(h * x - max(1, round(h * x / own)) * own) <= tol_mesh(h * x, bin_):
-            continue  # on this stage's own harmonic: both
-        near = lines.near(h * x, window)
-        if near is not None and abs(float(lines.at[near]) - h * x) <= tol_mesh(h * x, bin_):
-            return float(lines.at[near]) / h
-    return None
-
-
 def located_ahead(lines: Lines, table, bin_: float, tacho_shaft: int | None) -> dict:
     """{stage: its mesh order} of a later stage whose mesh the lines put a whole tooth off the described order (M + j o,
     either shaft's o as described; harmonic_comb), and of the stages after it, before any stage is read: an earlier
@@ -390,22 +358,6 @@ def check_description(
         ):
             if shaft_k not in measured_shaft:
                 if found is None:
-                    continue
-                q = k + 1 if key == "z2" else k - 1  # the stage whose other gear shares the shaft
-                other = None  # behind a tacho on a later shaft, orders read through the described gears: no check
-                if tacho_shaft is not None and tacho_shaft > 0:
-                    pass
-                elif 0 <= q < len(table.stages) and key == "z1":
-                    other = stages[q].get("measured_order")
-                elif 0 <= q < len(table.stages) or (q == len(table.stages) and beyond):  # a 1-stage reading's next
-                    x = ahead.get(q, float(table.stages[q].mesh)) if q < len(table.stages) else float(beyond[0][0])
-                    other = neighbour_mesh(lines, x, measured, 3.5 * float(table.shaft_orders[shaft_k]), bin_)
-                if other is not None and not whole_on_both(measured, other, found[0], found[1], bin_):
-                    unresolved.append(
-                        f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft (sidebands {found[0]:.4g} "
-                        f"apart around mesh {s.index}, which no whole count of the two gears on that shaft makes "
-                        f"agree with the stage-{q + 1} mesh at {other:.4g}: a modulation, not that shaft's order)"
-                    )
                     continue
                 measured_shaft[shaft_k] = (found[0], found[1], f"{found[2]} sideband(s) of M{s.index}")
             o_seen, tol, _ = measured_shaft[shaft_k]
