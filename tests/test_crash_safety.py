@@ -95,12 +95,31 @@ def wait_until_holding(proc: subprocess.Popen, pattern: Path, timeout: float = 1
 
 
 def kill(proc: subprocess.Popen) -> None:
-    """SIGKILL to the process and every process it started."""
+    """SIGKILL to the process and every process it started, returning once all of them are gone: a worker
+    child holds the run's lock file too (inherited), and the kernel drops the flock only when the last
+    holder exits; the leader reaped first, a busy machine left a child dying (the suite, 2 workers: the
+    --resume after kill() refused once, 'another gearlab process ... is running')."""
     try:
         os.killpg(proc.pid, signal.SIGKILL)
     except ProcessLookupError:
         pass
     proc.wait()
+    for _ in range(1000):  # at most 10 s: SIGKILL cannot be caught; a zombie holds no file
+        if not _alive_in_group(proc.pid):
+            return
+        time.sleep(0.01)
+
+
+def _alive_in_group(pgid: int) -> bool:
+    """Whether a process of group *pgid* still runs (not a zombie), from /proc (Linux; elsewhere: no)."""
+    for stat in glob.glob("/proc/[0-9]*/stat"):
+        try:
+            fields = Path(stat).read_text().rsplit(")", 1)[1].split()
+        except OSError:  # ended meanwhile
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":  # state, ppid, pgrp
+            return True
+    return False
 
 
 def lines_of(run: Path) -> list[str]:
