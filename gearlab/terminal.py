@@ -392,8 +392,9 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     its change is localised on and the evidence, then a table that fits *width* columns (a terminal's):
     per method and unit the units called, the median score less the threshold (above 0: most units
     called) and the decision ("other damage: <gear>" when the change lies on a gear not watched)."""
-    from .kinds.detection_which_gear import is_other  # the kinds import this module: at call time
+    from .kinds.detection_scoring import unwatched  # the kinds import this module: at call time
 
+    quiet = unwatched(rows)  # localised on a gear no method watches, no method's decision calling it
     shown: list = [Text(f"scored with {run_dir}", style="bold")]
     for file in dict.fromkeys(r["file"] for r in rows):
         mine = [r for r in rows if r["file"] == file]
@@ -419,7 +420,7 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
             shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))
             if r0.get("table_call"):  # the run's own take, its table decided by an older rule (detection_scoring)
                 shown.append(Text(r0["table_call"], style="yellow"))
-            if is_other(r0["call"]) and not any(is_other(r["decision"]) for r in mine):
+            if file in quiet:
                 # a broken tooth on a gear no method watches, their units under threshold: each decision read
                 # 'healthy' (a 74T output gear's broken tooth at z 155 over 2.7 beside twelve 'healthy' rows)
                 said = f"{r0['call']}, on a gear this run does not watch: 'healthy' below is of the watched gear"
