@@ -72,8 +72,11 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
     tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
     pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
-    hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
-    out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
+    try:  # a history too short for it is said, as a detection run says it (detection_which_gear)
+        hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
+        out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
+    except GearlabInputError as exc:
+        out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
     out["history"] = [p for p, _ in read]
     out["nonsync"] = nonsync_lines(revs, [r for r, *_ in past], table, speed.mean_hz)
     out["call"] = call_of(out, out["nonsync"])
@@ -111,6 +114,8 @@ def call_of(loc: dict, ns: dict) -> str:
         return f"localised change: {loc['named']}{weakly(named)}"
     if ns.get("changed"):
         return NS.call(ns["order"])
+    if loc.get("summary", "").startswith("not localised: ") and "note" in ns:  # neither read: no call, not 'no change'
+        return f"not read against the history: {loc['summary'][15:]}"
     why = "; non-synchronous " + ns["note"] if "note" in ns else ", no non-synchronous line over its threshold"
     return f"no change against the history: nothing localised{why}"
 
@@ -134,8 +139,9 @@ def render_localisation(loc: dict, console) -> None:
             "[red]yes[/red]" if s["flagged"] else "no",
             teeth or "-",
         )
-    console.print(t)
-    console.print(f"[dim]{escape(loc['method'])}[/dim]")
+    if loc["shafts"]:  # none where the takes were not localised (its summary says why)
+        console.print(t)
+        console.print(f"[dim]{escape(loc['method'])}[/dim]")
     colour = "yellow" if loc["named"] else "green"
     console.print(f"[bold {colour}]{escape(loc['summary'])}[/bold {colour}]")
     ns = loc["nonsync"]

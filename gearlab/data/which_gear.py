@@ -58,6 +58,14 @@ def history_of(
     if not takes:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
     period = int(table.train_period)
+    shortest = min(len(t.revolutions) for t in takes)
+    turns, shaft = NS.slowest_turns(shortest, table)
+    if shortest // period < L.MIN_PERIODS and turns < NS.TURNS:  # each shaft's own average, as which_gear reads
+        # a take: the history's units (half takes under 4) held too few turns of a slow shaft to be read at all
+        raise GearlabInputError(
+            f"the history's takes: too short for the which-gear check: {turns:.3g} {shaft}-shaft turns "
+            f"({shortest} input revolutions), it needs {NS.TURNS}"
+        )
     return L.history(
         [t.revolutions for t in takes],
         table,
