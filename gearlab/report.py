@@ -11,6 +11,7 @@ import re
 from pathlib import Path
 
 from .kinds import SCENARIO_KINDS
+from .kinds.contract import VERDICT
 from .runs import RunDir
 from .verdict import verdict_lines, verdict_table
 
@@ -127,6 +128,8 @@ def build_report(run: RunDir | Path) -> str:
         parts += ["<section id='verdict'><h2>Verdict</h2>", *(f"<p>{html.escape(s)}</p>" for s in said), "</section>"]
     table = run.file("table.md")
     text = (verdict_table(run_path) if summary else None) or (table.read_text() if table.exists() else "")
+    if text.startswith(VERDICT):  # table.md's verdict: the section above says it
+        text = text.split("\n\n", 1)[-1]
     # a kind may write several tables, separated by blank lines (the gap kind: per-view gap,
     # effect ranking, accuracy); each is rendered on its own, numbered and titled
     if text.strip():

@@ -47,3 +47,23 @@ def test_inspect_history_on_short_takes_says_why_not_instead_of_failing(tmp_path
     history = [_take(tmp_path / f"l{i}.npz", seconds=2.7, seed=i) for i in (1, 2, 3)]
     loc = localisation(_take(tmp_path / "lr.npz", seconds=2.7, seed=7), history, box, InspectOptions("acc", "tach"))
     assert [s["shaft"] for s in loc["shafts"]] and "output" in [s["shaft"] for s in loc["shafts"]], loc["summary"]
+
+
+def test_a_detection_run_s_table_md_opens_with_its_verdict(cli, tmp_path, no_figures):
+    # docs/your_gearbox.md step 6: 'report.html and table.md of the run directory ... open with the verdict: which
+    # methods meet the goal'. table.md opened with the first condition's AUC table; the verdict was in report.html,
+    # the terminal and the TUI only. report.html says it once (its own Verdict section), not again over a table
+    from test_detection import run, scenario
+
+    from gearlab.report import build_report
+    from gearlab.verdict import verdict_lines
+
+    out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
+    said = verdict_lines(out)
+    assert said and "goal met by" in said[1], said
+    table = (out / "table.md").read_text()
+    head, rest = table.split("\n\n", 1)
+    assert head.splitlines() == [f"Verdict: {said[0]}", *(f"- {line}" for line in said[1:])], head
+    assert rest.startswith("Condition "), rest[:80]
+    html = build_report(out)
+    assert html.count(said[1].split(":")[0] + ": goal met by") == 1, "the verdict twice in report.html"

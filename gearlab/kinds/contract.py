@@ -17,6 +17,10 @@ from ..events import EventSink
 from ..runs import RunDir
 from ..scenario import Scenario, Table
 
+# how a kind's table.md may open with its verdict (a block before the first blank line): report.html, which opens
+# with its own Verdict section, leaves that block out
+VERDICT = "Verdict: "
+
 
 @runtime_checkable
 class ScenarioKind(Protocol):

@@ -15,8 +15,10 @@ from ..parts.measured import Target
 from ..parts.roc import auc
 from ..runs import RunDir
 from ..scenario import Scenario
+from .contract import VERDICT
 from .detection_records import longest_tsa
 from .detection_units import method_name
+from .detection_verdict import detection_lines
 from .detection_which_gear import which_gear_summary
 
 
@@ -147,7 +149,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     which = summary["which_gear"].get("md", "")
     run.write_text(
         "table.md",
-        table_md(rows)
+        verdict_md(summary)
+        + table_md(rows)
         + "\n"
         + labels_md(rows)
         + summary["shafts_md"]
@@ -158,6 +161,13 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         + "".join(f"\n{line}\n" for line in summary["warnings"]),
     )
     run.write_text("table.csv", table_csv(rows))
+
+
+def verdict_md(summary: dict) -> str:
+    """The verdict table.md opens with, as report.html, the terminal and the TUI open with it
+    (detection_verdict.detection_lines, docs/your_gearbox.md step 6); "" where there is none."""
+    lines = detection_lines(summary, longest_tsa(r["unit"] for r in summary["rows"]))
+    return f"{VERDICT}{lines[0]}\n" + "".join(f"- {line}\n" for line in lines[1:]) + "\n" if lines else ""
 
 
 def aligned_with(record: dict, alignment: str) -> str:
