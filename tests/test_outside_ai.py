@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from gearboxes import description, stage
 
+from gearlab.errors import GearlabInputError
 from gearlab.gearbox import load_gearbox
 from gearlab.inspect import InspectOptions
 from gearlab.inspect_history import localisation
@@ -67,3 +69,48 @@ def test_a_detection_run_s_table_md_opens_with_its_verdict(cli, tmp_path, no_fig
     assert rest.startswith("Condition "), rest[:80]
     html = build_report(out)
     assert html.count(said[1].split(":")[0] + ": goal met by") == 1, "the verdict twice in report.html"
+
+
+@pytest.mark.parametrize(
+    "where, name, value",
+    [
+        ("attribute", "fs_kHz", 25.6),
+        ("attribute", "SampleRate_kHz", 25.6),
+        ("dataset", "sampling_rate_hz", 25600.0),
+        ("dataset", "fs_Hz", 25600.0),
+        ("attribute", "dt_us", 1e6 / 25600),
+    ],
+)
+def test_an_hdf5_rate_named_with_its_unit_is_read_at_validate_and_run(tmp_path, where, name, value):
+    # an HDF5 file whose rate attribute is 'fs_kHz' (25.6): 'no sampling rate'. A rate's (or interval's) unit in its
+    # field's name is read by the rule a CSV preamble's 'Sampling Rate (kHz): 25.6' is read by
+    import h5py
+
+    from gearlab.data.recordings import check_recording, read_header, read_recording
+
+    path = tmp_path / "take.h5"
+    x = np.random.default_rng(0).standard_normal(2560)
+    with h5py.File(path, "w") as f:
+        f["acc"] = x
+        if where == "attribute":
+            f.attrs[name] = value
+        else:
+            f[name] = value
+    assert read_header(path).stated[0] == pytest.approx(25600.0), read_header(path).stated
+    check_recording(path, "s.toml: [target]", {"vibration": "acc"})  # validate: no 'no sampling rate'
+    rec = read_recording(path, "acc", None)
+    assert rec.fs == pytest.approx(25600.0) and rec.signal.size == 2560
+    # a name whose unit is no rate's is no rate field (nor a time): still 'no sampling rate'
+    with h5py.File(path, "w") as f:
+        f["acc"] = x
+        f.attrs["fs_mm"] = 25.6
+    with pytest.raises(GearlabInputError, match="no sampling rate"):
+        read_recording(path, "acc", None)
+
+
+def test_an_npz_rate_named_with_its_unit_is_read(tmp_path):
+    from gearlab.data.recordings import read_recording
+
+    path = tmp_path / "take.npz"
+    np.savez(path, acc=np.random.default_rng(0).standard_normal(2560), SampleRate_kHz=25.6)
+    assert read_recording(path, "acc", None).fs == pytest.approx(25600.0)

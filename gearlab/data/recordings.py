@@ -27,8 +27,8 @@ Formats (by extension) and where the sampling rate comes from:
                   from a variable 'fs' or 'Fs' or a time variable
 
 A channel is named as its file names it, or by its 0-based column index in a text file (an integer in a scenario,
-or its digits). Rate fields are 'fs' in any case (and sample_rate, sampling_rate); when the file carries a rate and one
-is given too they must agree.
+or its digits). Rate fields are 'fs' in any case (and sample_rate, sampling_rate; fs_kHz: readers.rates); when the file
+carries a rate and one is given too they must agree.
 
 Every bad file raises :class:`GearlabInputError` with one line that names the file, the channel and what was expected;
 nothing is returned half-built. Sizes are checked before anything is read (GEARLAB_MAX_RECORD_MB, readers.base).

@@ -14,13 +14,8 @@ import numpy as np
 
 from ...errors import GearlabInputError
 
-# compared lower-case (fs, Fs, FS); a DAQ's HDF5 export writes 'SamplingRate' or 'SamplingFrequency' (a file
-# attribute 'SamplingRate' was 'no sampling rate: the file has no 'fs'/time')
-_RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate", "samplingrate", "sampling_frequency")
-_RATE_NAMES += ("samplingfrequency", "sample_frequency", "samplefrequency", "abtastrate", "abtastfrequenz")  # German
-# a sample interval in seconds, which a logger may store instead of the rate (MATLAB's dt): its reciprocal is one
-_INTERVAL_NAMES = ("dt", "delta_t", "sample_interval", "sampling_interval", "sample_period", "sampling_period")
-_INTERVAL_NAMES += ("abtastintervall",)  # a German logger's preamble ('Abtastrate: 20 kHz' above, a rate)
+# rate and interval fields by name, their unit in the name or not ('fs', 'fs_kHz', 'dt_us'): rates.named
+from .rates import named, rate_field
 
 # A time channel by any of its common names, with its unit if the name says one: t, time, time_s,
 # "Time [s]", "t (ms)", "t/s", "Time, s", timestamp, Zeit, "Relative Time (s)", "rel. Zeit [ms]",
@@ -45,7 +40,7 @@ def time_scale(name: str) -> float | None:
 
 def is_rate_or_time(name: str) -> bool:
     """Whether a channel name is a sampling-rate field or a time vector (no signal channel)."""
-    return str(name).lower() in (*_RATE_NAMES, *_INTERVAL_NAMES) or time_scale(name) is not None
+    return named(name) is not None or time_scale(name) is not None
 
 
 _MATRIX_COLUMN = re.compile(r"^(.+)\[(\d+)\]$")
@@ -66,15 +61,6 @@ def column_of(matrix: np.ndarray, index: int, name: str, path) -> np.ndarray:
         held = f"shape {arr.shape}" if arr.ndim != 2 else f"{min(arr.shape)} channels (0 … {min(arr.shape) - 1})"
         raise GearlabInputError(f"{path}: no channel {name!r}: its array holds {held}; expected a column of a matrix")
     return arr[:, index] if arr.shape[0] >= arr.shape[1] else arr[index, :]
-
-
-def interval_rate(where: str, value: np.ndarray) -> tuple[str, np.ndarray]:
-    """(where, the rate in Hz) of a sample interval field (_INTERVAL_NAMES) in seconds; a value that is not one
-    positive number is passed on as it is, for the rate's check to refuse naming the field."""
-    arr = np.asarray(value)
-    if arr.size == 1 and arr.dtype.kind in "iuf" and float(arr.item()) > 0:
-        return f"{where} (1 / sample interval)", np.asarray(1.0 / float(arr.item()))
-    return where, value
 
 
 def not_time(names, columns, path, where: str) -> None:
@@ -176,10 +162,8 @@ def _keyed(available: Iterable[str], get, names: Sequence[str], listed: Iterable
     shown = available if listed is None else list(listed)  # what the file names (not index aliases)
     contents = Contents({n: _normalise(get(n)) for n in dict.fromkeys(names) if n in present}, shown)
     for n in shown:
-        if n.lower() in _RATE_NAMES:
-            contents.rates.append((f"'{n}'", _normalise(get(n))))
-        elif n.lower() in _INTERVAL_NAMES:
-            contents.rates.append(interval_rate(f"'{n}'", _normalise(get(n))))
+        if named(n) is not None:  # in Hz, a unit in its name read (rates.rate_field)
+            contents.rates.append(rate_field(f"'{n}'", n, _normalise(get(n))))
         elif time_scale(n) is not None:
             contents.times.append(_time_field(f"time '{n}'", _normalise(get(n)), time_scale(n)))
     return contents

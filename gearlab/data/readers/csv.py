@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _INTERVAL_NAMES, _RATE_NAMES, Contents, _column, _keyed, _scalar
+from .base import Contents, _column, _keyed, _scalar
+from .rates import in_hz, key_of, named, scale_of
 
 _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
 # a field that is a number written with a decimal comma (a semicolon- or tab-separated European export)
@@ -39,8 +40,6 @@ def units_row(row: list[str], names: list[str]) -> dict[str, str] | None:
 # a line of a logger's preamble above the table: 'Sample rate: 25600 Hz', 'Sampling Rate (kHz) = 25.6'
 _PREAMBLE_FIELD = re.compile(r"^([A-Za-z][\w .\-]*?)\s*(?:[\[(]\s*([^\])]*?)\s*[\])])?\s*[:=]\s*(.*?)\s*$")
 _PREAMBLE_VALUE = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-zµμ/]*)$")
-_RATE_UNITS = {"": 1.0, "hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "1/s": 1.0, "ks/s": 1e3}
-_INTERVAL_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
 
 
 def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
@@ -64,17 +63,14 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
         count = i + 1
         if match is None:
             continue  # a title line
-        key = "_".join(match.group(1).lower().split()).replace("-", "_")
         unit = (match.group(2) or "").strip()
         value = _PREAMBLE_VALUE.match(match.group(3))
         if value is not None:
-            unit = (unit or value.group(2)).lower()
-            number = float(value.group(1))
-            if key in _RATE_NAMES and unit in _RATE_UNITS:
-                fields["sample_rate"] = number * _RATE_UNITS[unit]
-                continue
-            if key in _INTERVAL_NAMES and unit in _INTERVAL_UNITS and number > 0:
-                fields["sample_rate"] = 1.0 / (number * _INTERVAL_UNITS[unit])
+            unit = unit or value.group(2)
+            # the one rule of a rate's unit (readers.rates): beside its name, after its value, or in its name
+            found = scale_of(key_of(match.group(1)), unit) if unit else named(match.group(1))
+            if found is not None and (rate := in_hz(found, float(value.group(1)))) is not None:
+                fields["sample_rate"] = rate
     if count == len(lines):  # no table after it: no preamble (a system file of 'name:value' lines is no record)
         return 0, {}
     return count, fields

@@ -10,17 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import (
-    _INTERVAL_NAMES,
-    _RATE_NAMES,
-    Contents,
-    _normalise,
-    _time_field,
-    check_size,
-    interval_rate,
-    stated_unit,
-    time_scale,
-)
+from .base import Contents, _normalise, _time_field, check_size, stated_unit, time_scale
+from .rates import named, rate_field
 
 
 def _h5py():
@@ -65,15 +56,10 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
     def level_fields(node, is_group: bool) -> tuple[list, list]:
         """(rates, times) defined at one node: its 'fs' attributes, and for a group its
         'fs' and 't'/'time' datasets."""
-        rates = [
-            (f"attribute '{key}' of '{node.name}'", _normalise(value))
+        rates = [  # in Hz, a unit in the name read ('fs_kHz': rates.rate_field)
+            rate_field(f"attribute '{key}' of '{node.name}'", key, _normalise(value))
             for key, value in node.attrs.items()
-            if key.lower() in _RATE_NAMES
-        ]
-        rates += [
-            interval_rate(f"attribute '{key}' of '{node.name}'", _normalise(value))
-            for key, value in node.attrs.items()
-            if key.lower() in _INTERVAL_NAMES
+            if named(key) is not None
         ]
         times = []
         if is_group:
@@ -81,10 +67,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                 if not isinstance(node.get(key, getlink=True), h5py.HardLink):
                     continue  # a link is no field of this group (an external one would open another file)
                 child = node.get(key)
-                if isinstance(child, h5py.Dataset) and key.lower() in _RATE_NAMES:
-                    rates.append((f"dataset '{child.name}'", read(child)))
-                elif isinstance(child, h5py.Dataset) and key.lower() in _INTERVAL_NAMES:
-                    rates.append(interval_rate(f"dataset '{child.name}'", read(child)))
+                if isinstance(child, h5py.Dataset) and named(key) is not None:
+                    rates.append(rate_field(f"dataset '{child.name}'", key, read(child)))
                 elif isinstance(child, h5py.Dataset) and time_scale(key) is not None:
                     times.append(_time_field(f"time dataset '{child.name}'", read(child), time_scale(key)))
         return rates, times

@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import _RATE_NAMES, is_rate_or_time, matrix_column, not_time
+from .base import is_rate_or_time, matrix_column, not_time
+from .rates import named, stated_hz
 
 
 @dataclass(frozen=True)
@@ -77,7 +78,7 @@ class Header:
         if fs is not None:
             return
         for name, shape in self.shapes.items():
-            if name.rsplit("/", 1)[-1].lower() in _RATE_NAMES and math.prod(shape) != 1:
+            if named(name.rsplit("/", 1)[-1]) is not None and math.prod(shape) != 1:
                 raise GearlabInputError(
                     f"{where} key 'fs': {path}'s rate field {name!r} holds {math.prod(shape)} values; expected one "
                     "rate in Hz (or fs = '...' here)"
@@ -172,7 +173,7 @@ def _csv_header(path: Path) -> Header:
                 # decimal commas in a comma-separated export split every number: the run would refuse it
                 raise ragged(path, number, len(row), len(names), True, ",")
             names = names if names is not None else header_names(None, len(row))
-            stated = _stated_rate(f, line, names, [(k, v) for k, v in fields if k.lower() in _RATE_NAMES])
+            stated = _stated_rate(f, line, names, _rate_fields(fields))
             break
         else:
             raise GearlabInputError(
@@ -191,10 +192,7 @@ def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
     from .csv import delimiter_of, split_rows
 
     for key, value in rates:
-        try:
-            return (float(value), f"its '# {key}' line"), 1e-6
-        except ValueError:
-            return None, 1e-6
+        return (None if value is None else (value, f"its '# {key}' line")), 1e-6
     column = next((j for j, n in enumerate(names) if time_scale(n) is not None), None)
     if column is None:
         return None, 1e-6
@@ -213,6 +211,12 @@ def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
     return (1.0 / (step * time_scale(names[column])), where), max(1e-6, 2 * 10.0**-digits / span)
 
 
+def _rate_fields(fields) -> list[tuple[str, float | None]]:
+    """(key, the rate in Hz or None where its value is no number) of a text's comment fields that are rates or
+    intervals (rates.stated_hz: '# fs = 51200', '# fs_kHz = 25.6')."""
+    return [(k, stated_hz(k, v)) for k, v in fields if named(k) is not None]
+
+
 def _text_header(path: Path, fmt: str) -> Header:
     from .csv import header_names
     from .text import comment_fields, first_row
@@ -220,10 +224,10 @@ def _text_header(path: Path, fmt: str) -> Header:
     header, width = first_row(path)
     names = header_names(header, width)
     fields = {k: v for k, v in comment_fields(path).items() if k not in names}
-    rates = [(k, v) for k, v in fields.items() if k.lower() in _RATE_NAMES]
+    rates = _rate_fields(fields.items())
     stated = None
-    if rates and isinstance(rates[0][1], (int, float)):
-        stated = (float(rates[0][1]), f"its '# {rates[0][0]}' line")
+    if rates and rates[0][1] is not None:
+        stated = (rates[0][1], f"its '# {rates[0][0]}' line")
     every = [*names, *fields]
     return Header(fmt, every, any(is_rate_or_time(n) for n in every), indexed=True, stated=stated)
 
@@ -264,8 +268,8 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
         stated = None
         for n in ["/", *sorted(groups), *names]:
             for k, v in f[n].attrs.items():
-                if str(k).lower() in _RATE_NAMES and np.size(v) == 1 and np.asarray(v).dtype.kind in "iuf":
-                    stated = stated or (float(np.asarray(v).item()), f"attribute {k!r} of {n!r}")
+                if np.asarray(v).dtype.kind in "iuf" and (hz := stated_hz(str(k), v)) is not None:
+                    stated = stated or (hz, f"attribute {k!r} of {n!r}")  # in Hz, a unit in its name read
         shapes = {n: tuple(f[n].shape) for n in names}
         stated = stated or _rate_variable(shapes, lambda n: f[n][()])
     return Header(fmt, names, rate, frozenset(integer), units=units, nested=True, stated=stated, shapes=shapes)
@@ -342,10 +346,10 @@ def _rate_variable(shapes: dict[str, tuple], read) -> tuple[float, str] | None:
     """(Hz, where) of a rate stored as data: the one number of a variable named as a rate ('fs'), read alone
     (one number, whatever the file's size), so validate knows a take's length as the run will; None if none."""
     for name, shape in shapes.items():
-        if name.rsplit("/", 1)[-1].lower() in _RATE_NAMES and math.prod(shape) == 1:
+        if named(name.rsplit("/", 1)[-1]) is not None and math.prod(shape) == 1:
             value = np.asarray(read(name))
-            if value.dtype.kind in "iuf":
-                return float(value.item()), f"its {name!r}"
+            if value.dtype.kind in "iuf" and (hz := stated_hz(name.rsplit("/", 1)[-1], value)) is not None:
+                return hz, f"its {name!r}"
     return None
 
 

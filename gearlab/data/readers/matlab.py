@@ -11,18 +11,16 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .base import (
-    _INTERVAL_NAMES,
-    _RATE_NAMES,
     Contents,
     _keyed,
     _normalise,
     _time_field,
-    interval_rate,
     is_rate_or_time,
     max_record_bytes,
     time_scale,
 )
 from .hdf5 import _read_hdf5, leaf_match
+from .rates import named, rate_field
 
 
 def _is_mat73(path: Path) -> bool:
@@ -92,10 +90,8 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         leaf = full.rsplit("/", 1)[-1]
         if full.split("/", 1)[0] not in used:
             continue
-        if leaf.lower() in _RATE_NAMES:
-            contents.rates.append((f"'{full}'", _normalise(get(full))))
-        elif leaf.lower() in _INTERVAL_NAMES:
-            contents.rates.append(interval_rate(f"'{full}'", _normalise(get(full))))
+        if named(leaf) is not None:  # in Hz, a unit in the name read (rates.rate_field)
+            contents.rates.append(rate_field(f"'{full}'", leaf, _normalise(get(full))))
         elif time_scale(leaf) is not None:
             contents.times.append(_time_field(f"time '{full}'", _normalise(get(full)), time_scale(leaf)))
     return contents
