@@ -114,3 +114,45 @@ def test_an_npz_rate_named_with_its_unit_is_read(tmp_path):
     path = tmp_path / "take.npz"
     np.savez(path, acc=np.random.default_rng(0).standard_normal(2560), SampleRate_kHz=25.6)
     assert read_recording(path, "acc", None).fs == pytest.approx(25600.0)
+
+
+def test_a_run_up_without_a_tacho_read_at_one_speed_says_so(tmp_path):
+    # 14 -> 19 Hz over 12 s without its tacho, at the declared 16 Hz: a detection run and gearlab score cut a run-up
+    # to its revolutions at the history's speed only where the angle gives each one's speed (a tacho's, or the mesh
+    # phase followed); read at one speed it was scored whole (191 'revolutions'), unsaid. Its spectra show it
+    from test_outside_n import runup
+    from textrecords import FS
+
+    from gearlab.data.recordings import cut_recording
+    from gearlab.signals.checks import VARIES_WORDS
+
+    runup(tmp_path / "up.zip", 14.0, 19.0, 12.0)
+    rec = cut_recording(str(tmp_path / "up.zip"), vibration=0, fs=FS, speed_hz=16.0)
+    whole = "(a run-up or coast-down?): read whole at one speed: no tacho shows its speed revolution by revolution"
+    assert rec.angle_source.startswith("nominal speed 16 Hz; its spectrum's lines move +3"), rec.angle_source
+    assert rec.angle_source.endswith(whole) and VARIES_WORDS not in rec.angle_source, rec.angle_source
+    # with its tacho: each revolution's speed, cut in band as before (no such words); a steady take: none
+    tacho = cut_recording(str(tmp_path / "up.zip"), vibration=0, tacho=1, pulses_per_rev=10, fs=FS)
+    assert VARIES_WORDS in tacho.angle_source and whole not in tacho.angle_source, tacho.angle_source
+    runup(tmp_path / "steady.zip", 16.0, 16.0, 8.0)
+    steady = cut_recording(str(tmp_path / "steady.zip"), vibration=0, fs=FS, speed_hz=16.0)
+    assert steady.angle_source == "nominal speed 16 Hz", steady.angle_source
+
+
+def test_a_detection_run_warns_of_a_run_up_test_take_it_reads_whole_without_a_tacho(tmp_path):
+    from detection_scenario import scenario
+    from test_outside_n import runup
+    from textrecords import PULSES
+
+    from gearlab.kinds.detection_records import read_target
+    from gearlab.notebook import load_scenario
+
+    (tmp_path / "data").mkdir()
+    runup(tmp_path / "data" / "up.zip", 14.0, 19.0, 12.0)
+    files = [("h1", "history", "healthy", 0.0), ("h2", "history", "healthy", 0.0), ("up", "test", "healthy", 0.0)]
+    path = scenario(tmp_path, files=files, methods=("matched_filter",))
+    path.write_text(path.read_text().replace(f'tacho = "2"\npulses_per_rev = {PULSES}\n', 'speed = "16 Hz"\n'))
+    spec = load_scenario(path).spec
+    ((_, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None, "here").items()
+    (warning,) = [w for w in cond["warnings"] if w.startswith("../data/up.zip")]
+    assert warning.endswith("read whole at one speed: no tacho shows its speed revolution by revolution"), warning

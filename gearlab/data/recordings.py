@@ -46,8 +46,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import GearlabInputError, did_you_mean
+from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
-from ..signals.checks import fmt_hz, revolution_speeds, speed_varies
+from ..signals.checks import fmt_hz, revolution_speeds
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
@@ -85,8 +86,7 @@ _TIME_JITTER = 0.25
 _RATE_RTOL = 1e-6
 # A wrapped angle spans one turn; measured ones may fall a little short or overshoot.
 _TURN_SLACK = 0.01
-# Share of rising steps that marks a channel as a shaft angle rather than a pulse train
-# (a pulse train is flat most of the time, an angle rises at every sample).
+# Share of rising steps that marks a channel as a shaft angle rather than a pulse train (flat most of the time)
 _RISING_SHARE = 0.9
 
 
@@ -687,7 +687,7 @@ def cut_recording(
     source, angle, how = shaft_angle(
         rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox, tacho_shaft=tacho_shaft
     )
-    turns, how = (angle[-1] - angle[0]) / TWO_PI, how + speed_varies(angle, rec.fs)  # a run-up said so
+    turns, how = (angle[-1] - angle[0]) / TWO_PI, how + varies_words(angle, rec)  # a run-up said so, tacho or not
     if turns < 2:
         raise GearlabInputError(
             f"{path}: by {how}, the record shows {turns:.3g} revolutions in {raw.size} samples at "

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..signals import spectrum, upsampled
-from ..signals.checks import SPEED_VARIES, fmt_hz
+from ..signals.checks import SPEED_VARIES, UNSEEN_WORDS, fmt_hz, speed_varies
 from ..signals.pipeline import Upsampled
 from .description import Gearbox
 from .orders import order_table
@@ -696,3 +696,22 @@ def speed_shift(signal: np.ndarray, fs: float) -> float | None:
     lags = np.concatenate([cross[-reach:], cross[: reach + 1]])  # lag -reach .. reach
     ratio = math.exp((int(np.argmax(lags)) - reach) * SHIFT_STEP)
     return ratio if abs(ratio - 1) > SHIFT_MIN else None
+
+
+def varies_words(angle: np.ndarray, rec) -> str:
+    """What signals.checks.speed_varies says of a record *rec* (data.recordings.Recording) read at the shaft *angle*;
+    where that is nothing and *rec* has no tacho, "; its spectrum's lines move +36 % from its first sixteenth to its
+    last (a run-up or coast-down?): read whole ..." where its spectra show its speed vary (speed_shift, as inspect
+    says a run-up); else "". A detection run and `gearlab score` cut a run-up to its revolutions at the history's
+    speed where its angle gives each revolution's speed (a tacho's, or the mesh phase followed); a declared or
+    constant found speed gives none: such a take was scored whole, unsaid."""
+    said = speed_varies(angle, rec.fs)
+    if said or rec.tacho is not None:
+        return said
+    shift = speed_shift(np.asarray(rec.signal, dtype=float), rec.fs)
+    if shift is None:
+        return ""
+    return (
+        f"; its spectrum's lines move {100 * (shift - 1):+.0f} % from its first sixteenth to its last (a run-up or "
+        f"coast-down?): {UNSEEN_WORDS}"
+    )

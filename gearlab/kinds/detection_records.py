@@ -24,7 +24,7 @@ from ..parts.measured import ROLES, Target, TargetFile, aligned
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
-from ..signals.checks import VARIES_WORDS
+from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS
 from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
@@ -68,7 +68,7 @@ def level_warnings(cond: dict) -> list[str]:
 def varies(how: str) -> str:
     """Of a record's speed source *how* (cut_recording's angle_source), its run-up words: ' (20.26 Hz .. 34.86 Hz
     over the take: a run-up or coast-down? ...)', else ""."""
-    return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how else ""
+    return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how or UNSEEN_WORDS in how else ""
 
 
 # A level off by a unit's factor is that unit misread, before any load: a take in m/s² scored with a run's 'g'
@@ -394,7 +394,7 @@ def read_target(
         cond["warnings"] = [
             f"{p}: {span(records[p].angle_source)}; {cut[p]}" if p in cut else f"{p}: {how.split('; ')[-1]}"
             for p, how in said
-            if VARIES_WORDS in how
+            if VARIES_WORDS in how or UNSEEN_WORDS in how  # a run-up without a tacho: read whole, warned of too
         ]
         cond["warnings"] += level_warnings(cond)  # and each take's millivolts read as volts (channel_units.level_hint)
         loud = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]

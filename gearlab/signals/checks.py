@@ -107,6 +107,10 @@ SPEED_VARIES = 0.05
 VARIES_WORDS = "over the take: a run-up or coast-down?"
 
 
+# said of a record without a tacho whose spectra show its speed vary, its angle not (gearbox.speed.varies_words)
+UNSEEN_WORDS = "read whole at one speed: no tacho shows its speed revolution by revolution"
+
+
 def turn_times(angle: np.ndarray, fs: float) -> np.ndarray:
     """The time (s) the shaft *angle* (radians, one a sample at *fs*) passes each whole turn 2πk within it, from the
     first complete revolution's start (signals.first_complete): revolution r of a cut record lasts at[r + 1] - at[r]."""
