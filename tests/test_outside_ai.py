@@ -11,7 +11,7 @@ from gearlab.gearbox import load_gearbox
 from gearlab.inspect import InspectOptions
 from gearlab.inspect_history import localisation
 
-FS, SPEED = 4096.0, 31.0
+FS, SPEED = 2048.0, 31.0
 
 
 def _take(path, seconds: float = 1.5, seed: int = 0) -> str:
@@ -46,8 +46,8 @@ def test_inspect_history_on_short_takes_says_why_not_instead_of_failing(tmp_path
     assert loc["call"].startswith("not read against the history:"), loc["call"]
     assert "\n" not in loc["call"]
     # takes of 9 output turns are read, the output shaft's evidence with the others'
-    history = [_take(tmp_path / f"l{i}.npz", seconds=2.7, seed=i) for i in (1, 2, 3)]
-    loc = localisation(_take(tmp_path / "lr.npz", seconds=2.7, seed=7), history, box, InspectOptions("acc", "tach"))
+    history = [_take(tmp_path / f"l{i}.npz", seconds=2.4, seed=i) for i in (1, 2, 3)]
+    loc = localisation(_take(tmp_path / "lr.npz", seconds=2.4, seed=7), history, box, InspectOptions("acc", "tach"))
     assert [s["shaft"] for s in loc["shafts"]] and "output" in [s["shaft"] for s in loc["shafts"]], loc["summary"]
 
 
