@@ -45,7 +45,7 @@ def test_inspect_history_on_short_takes_says_why_not_instead_of_failing(tmp_path
     assert "output-shaft turns (45 input revolutions), it needs 8" in loc["summary"], loc["summary"]
     assert loc["call"].startswith("not read against the history:"), loc["call"]
     assert "\n" not in loc["call"]
-    # takes of 9 output turns are read, the output shaft's evidence with the others'
+    # takes of 8.2 output turns are read, the output shaft's evidence with the others'
     history = [_take(tmp_path / f"l{i}.npz", seconds=2.4, seed=i) for i in (1, 2, 3)]
     loc = localisation(_take(tmp_path / "lr.npz", seconds=2.4, seed=7), history, box, InspectOptions("acc", "tach"))
     assert [s["shaft"] for s in loc["shafts"]] and "output" in [s["shaft"] for s in loc["shafts"]], loc["summary"]
