@@ -15,7 +15,7 @@ import numpy as np
 
 from .description import Gearbox
 from .orders import order_table
-from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, others_lines, tol_mesh
+from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, modulation, others_lines, tol_mesh
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
 UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
@@ -178,6 +178,12 @@ def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float,
     return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
 
 
+def at_harmonics(lines: Lines, meshes, bin_: float) -> set[int]:
+    """The lines at the harmonics (1-MAX_HARMONIC) of the mesh orders *meshes*."""
+    got = (lines.near(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1))
+    return {q for q in got if q is not None}
+
+
 def located_ahead(lines: Lines, table, bin_: float, tacho_shaft: int | None) -> dict:
     """{stage: its mesh order} of a later stage whose mesh the lines put a whole tooth off the described order (M + j o,
     either shaft's o as described; harmonic_comb), and of the stages after it, before any stage is read: an earlier
@@ -250,6 +256,7 @@ def check_description(
     wrong: list[int] = []  # the stages whose own tooth counts differ
     unresolved = []  # tooth counts the sidebands cannot tell from the next one (too few revolutions)
     moved: dict[int, float] = {}  # stage -> its mesh order measured where it differs from the described one
+    modulated: set[int] = set()  # shafts whose comb another modulation made (sideband_combs.modulation)
     ahead = located_ahead(lines, table, bin_, tacho_shaft)  # the later meshes where the lines put them
     for k, s in enumerate(table.stages):
         said = len(differences)
@@ -345,20 +352,37 @@ def check_description(
             measured_shaft.get(q, (float(o),))[0] for q, o in ((k, s.pinion_shaft_order), (k + 1, s.wheel_shaft_order))
         )
         others = [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)]
-        combs = families(
-            lines,
-            i,
-            own,
-            bin_,
-            (k in measured_shaft, k + 1 in measured_shaft),
-            others_lines(lines, expected, others, bin_, (float(lines.at[i]), own)),
-        )
+        theirs_lines = others_lines(lines, expected, others, bin_, (float(lines.at[i]), own))
+        combs = families(lines, i, own, bin_, (k in measured_shaft, k + 1 in measured_shaft), theirs_lines)
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
         ):
             if shaft_k not in measured_shaft:
                 if found is None:
                     continue
+                z = measured / found[0]
+                if abs(z - described) > max(0.5, z * found[1] / found[0]):
+                    mesh_of = {q: measured if q == k else meshes[q - (q > k)] for q in range(len(table.stages))}
+                    # ... and the train's later stages where its first is read alone (beyond: the gap's mesh_check)
+                    mesh_of |= {len(table.stages) + q: float(m) for q, (m, *_) in enumerate(beyond)}
+                    on = [mesh_of[q] for q in (shaft_k - 1, shaft_k) if q in mesh_of]  # the meshes on that shaft
+                    skip = theirs_lines | at_harmonics(lines, mesh_of.values(), bin_)
+                    orders = [
+                        float(o) * (lead(table, q, moved) if leads else 1.0) for q, o in enumerate(table.shaft_orders)
+                    ]
+                    carriers = at_harmonics(lines, on, bin_)
+                    other = modulation(lines, carriers, found, measured / described, orders, bin_, skip)
+                    if other is not None:
+                        note = (
+                            f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft (sidebands "
+                            f"{found[0]:.4g} apart around its meshes, {len(other[1])} lines, and {len(other[2])} at "
+                            f"odd multiples of half that: a modulation {found[0] / 2:.4g} apart, not that shaft's "
+                            f"order; the {described} teeth's sidebands, {measured / described:.4g} apart: "
+                            f"{len(other[0])} lines)"
+                        )
+                        unresolved += [] if shaft_k in modulated else [note]
+                        modulated.add(shaft_k)
+                        continue
                 measured_shaft[shaft_k] = (found[0], found[1], f"{found[2]} sideband(s) of M{s.index}")
             o_seen, tol, _ = measured_shaft[shaft_k]
             z = measured / o_seen

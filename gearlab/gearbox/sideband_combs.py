@@ -174,3 +174,45 @@ def others_lines(lines: Lines, expected: float, others, bin_: float, own=None) -
         closer = on_own.any(axis=1)[:, None] & (off.min(axis=1)[:, None] < np.abs(lines.at[:, None] - at[None, :]))
         near[:, kind == 1] &= ~closer[:, kind == 1]
     return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
+
+
+def sidebands_of(lines: Lines, carriers, spacing: float, rival: float, bin_: float, skip=frozenset()) -> list[int]:
+    """The lines j *spacing* (j = ±1..3) off the lines *carriers* (indices), each nearer such a sideband than one of
+    *rival* (a line both explain is the nearer's), none of them in *skip* (carriers, other stages' lines)."""
+    out: set[int] = set()
+    for c in carriers:
+        for q in np.flatnonzero(np.abs(lines.at - lines.at[c]) <= 3.5 * max(spacing, rival)):
+            d = abs(float(lines.at[q] - lines.at[c]))
+            if q in skip or q == c or d == 0.0:
+                continue
+            j = min(3, max(1, round(d / spacing)))
+            mine = abs(d - j * spacing)
+            if mine <= 2 * bin_ + DRIFT * j * spacing and mine < min(abs(d - r * rival) for r in (1, 2, 3)):
+                out.add(int(q))
+    return sorted(out)
+
+
+def modulation(lines: Lines, carriers, found: tuple, described: float, orders, bin_: float, skip=frozenset()):
+    """(the described spacing's lines, the comb's, the half spacing's) where a shaft's comb *found* (comb's tuple),
+    off its *described* spacing (the mesh over the described count), is the 2nd sideband of another modulation,
+    not the shaft's order; else None. A shaft's modulation repeats once a turn: its sidebands lie at whole
+    multiples of its order. Around the lines *carriers* (the harmonics of the meshes on that shaft), lines at odd
+    multiples of half the comb's spacing, no shaft's order (*orders*), as many and as strong as the comb's own, make
+    it a modulation repeating every other 'turn'; and the described spacing's sidebands (two lines at least) say the
+    shaft turns as described. A tacho's timing error phase-modulates every line of order k by k phi: AF's tacho (a
+    resampled angle ramp, 1.5-9 mrad at 5 and 10 Hz) put +-0.161 (5 Hz at 31 Hz) beside every line of a 23/59 +
+    19/67 box and 0.322 beside its strongest, read as '71 teeth' where 14 lines carry the 59 teeth's 2 x 0.3898; a
+    sampled TTL tacho at 33 Hz (edges +-0.5 sample, cycling at 0.2424 orders), 0.4848: 'the pinion shows 15.3
+    teeth'. A count really off keeps its comb: no half-spacing lines (19/44 + 29/67 + 25/62 read with 66 teeth)."""
+    spacing = found[0]
+    # half the spacing a shaft's order, as described or as the comb would scale every shaft (a count off on this
+    # shaft alone moves the next shaft with it: a 19/38 stage after it turns at half the comb): its 2nd sidebands
+    if any(abs(spacing / 2 - o * f) <= 2 * bin_ + DRIFT * o for o in orders for f in (1.0, spacing / described)):
+        return None
+    ours = sidebands_of(lines, carriers, described, spacing, bin_, skip)
+    theirs = sidebands_of(lines, carriers, spacing, described, bin_, skip)
+    half = [q for q in sidebands_of(lines, carriers, spacing / 2, described, bin_, skip) if q not in theirs]
+    power = [float(np.sum(lines.amp[q] ** 2)) if q else 0.0 for q in (half, theirs)]
+    if len(ours) >= 2 and len(half) >= max(2, len(theirs)) and power[0] >= power[1]:
+        return ours, theirs, half
+    return None
