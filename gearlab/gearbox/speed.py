@@ -489,9 +489,27 @@ def follow_speed(
         # (a 68/103 + 82/99 box at +1.6 %, described 68/104: 12.31 Hz from stage 2's lines, or refused as
         # 1.94 Hz (15xM1) or 12.19 Hz; inspect read 12.19 Hz, its pinion's sidebands confirm it); none
         # there (the lines do not confirm it): found from the mesh lines alone, as without one
-        got = follow_speed(signal, fs, box, box.speed_hz, where, threshold_db)
+        got = _follow_speed(signal, fs, box, box.speed_hz, where, threshold_db)
         if got[2] != "declared":
             return got
+    elif declared is not None and speed_shift(signal, fs) is not None:
+        # a take whose spectra show its speed move (a run-up or coast-down): the declared speed is the nominal one it
+        # passes, not its mean, which the lines do not confirm (14 -> 19 Hz over 12 s declared 16 Hz: its mean
+        # 16.5 Hz, unconfirmed without sidebands, was read at a constant 16 Hz, 191 'revolutions' all in band).
+        # None near it: the speed the mesh lines show along the take's course, kept where its phase is followed
+        got = _follow_speed(signal, fs, box, declared, where, threshold_db, file)
+        if got[2] == "declared":
+            try:
+                found = _follow_speed(signal, fs, box, None, where, threshold_db, file)
+            except GearlabInputError:
+                return got
+            return found if found[0] is not None else got
+        return got
+    return _follow_speed(signal, fs, box, declared, where, threshold_db, file)
+
+
+def _follow_speed(signal, fs, box, declared, where, threshold_db, file=None) -> tuple:
+    """follow_speed at the *declared* speed (or none) as given: no prior tried."""
     fine = upsampled(signal)  # read at uniform angle 8 times denser: no false lines
     # a speed ramp smears every line over its sweep: the first look is at the record read along the speed's
     # course from its own spectra (speed_course), where the lines stand narrow at the mean speed
@@ -598,9 +616,12 @@ def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float, course: np
     t = np.arange(n) / fs
     # a speed ramp moves the line further than the band (2 % at 1.9 kHz is 38 Hz; a band of ±2.6 Hz followed a
     # sixth of it): the record's own spectra over time give the speed's course (speed_course), and the line is
-    # followed on the record with that course taken out, which leaves it narrow at c
+    # followed on the record with that course taken out, which leaves it narrow at c. So too where the band holds
+    # the sweep but the low-pass does not: a line swept further than the cutoff leaves a parabola in the phase, whose
+    # mirrored kinks ring through the low-pass (a 20 -> 14 Hz coast-down over 3 s, 32 teeth: 190 Hz in a ±272 Hz
+    # band, the angle 0.6 rad off at the start, ±2.6 Hz sidebands read at half the speed)
     chirp = np.zeros(n)
-    if course is not None and c * float(np.ptp(course)) > half:
+    if course is not None and c * float(np.ptp(course)) > cutoff:
         chirp = 2 * np.pi * c * np.cumsum(course - 1.0) / fs
         spec = np.fft.fft(np.fft.ifft(np.where(freq > 0, 2 * spec, 0)) * np.exp(-1j * chirp))
     analytic = np.fft.ifft(np.where(np.abs(freq - c) <= half, 2 * spec, 0))
@@ -615,7 +636,7 @@ def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float, course: np
 
 
 COURSE_WINDOWS = 15  # the record's spectra over time: half-overlapping windows, an eighth of it each
-COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean
+COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean, or as far as speed_shift reads
 COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
 COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
 
@@ -647,8 +668,9 @@ def lifted_rows(signal: np.ndarray, fs: float, starts, size: int, step: float, w
 def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
     """The speed per sample over its mean (a smooth course, mean 1) of a record without a tacho, from its own
     spectra: each window's spectrum (lines over the running median, on a log-frequency axis, where a speed
-    change is a shift) correlated with the middle window's, every line of every stage at once; a quadratic
-    through the windows' ratios; None where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
+    change is a shift) correlated with the middle window's, every line of every stage at once, up to the shift
+    the record's ends show (speed_shift; COURSE_SPAN at least); a quadratic through the windows' ratios; None
+    where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
     the mesh harmonic's band was narrower than its sweep. Read once per record and rate (COURSES), shared
     read-only."""
     data = np.ascontiguousarray(signal)
@@ -683,7 +705,12 @@ def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
         return None
     axis, rows = lifted
     ref = rows[COURSE_WINDOWS // 2]
-    reach = int(math.log(1 + COURSE_SPAN) / COURSE_STEP)
+    # the course is looked for as far as the record's ends show its speed move (speed_shift), the whole shift each
+    # way from the middle window (twice what a steady ramp needs): a ±4 % reach read a 14 -> 19 Hz run-up as
+    # 0.94 .. 1.07 of its mean (0.85 .. 1.15 true), its mesh lines stayed smeared and the 1x shaft line was read as
+    # the mesh (0.506 Hz); a steady record's ends show no shift, its reach stays COURSE_SPAN
+    shift = speed_shift(signal, fs)
+    reach = int(max(math.log(1 + COURSE_SPAN), abs(math.log(shift or 1.0))) / COURSE_STEP)
     m = 1 << int(math.ceil(math.log2(2 * axis.size)))
     cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(ref, m)), m)
     lags = np.concatenate([cross[:, -reach:], cross[:, : reach + 1]], axis=1)  # lag -reach .. reach
