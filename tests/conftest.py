@@ -399,6 +399,41 @@ def unrendered_figures(monkeypatch) -> None:
     monkeypatch.setattr("gearlab.plots.save", unrendered)
 
 
+@pytest.fixture(scope="module", autouse=True)
+def figures_rendered_where_read(request):
+    """Every test module's figures built and written as one pixel, not rendered (unrendered), but
+    those of RENDERED, whose tests read a figure's pixels or size, draw reports in a browser or check
+    the rendering itself (a new such file goes there). Rendering in the test processes was 30 s of the
+    suite's 485 s of test CPU (-n 0), 18 s of it in 30 files of runs whose figures no test looked at
+    (test_detection, test_gap_kind, test_crash_safety, test_executors ... 51.8 -> 39.6 s of CPU).
+    Module scope: a module's shared runs (its module fixtures) are made after it. The `gearlab` child
+    processes (TUI, crash safety, subprocess tests) and the pools' workers render as for a user."""
+    if request.path.name in RENDERED:
+        yield
+        return
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("gearlab.plots.save", unrendered)
+        yield
+
+
+# every kind's figures are rendered in test_verdict (each kind's report in a browser) or the benchmark
+# and noise-study files (theirs); the others read a PNG's size, or patch plots.save around the real one
+RENDERED = frozenset(
+    {
+        "test_verdict.py",
+        "test_gap_benchmark.py",
+        "test_transfer_benchmark.py",
+        "test_noise_study.py",
+        "test_cli.py",
+        "test_dynamics_cli.py",
+        "test_detection_figures_pool.py",
+        "test_figure_legends.py",
+        "test_outside_e.py",
+        "test_hardening.py",  # a full disk: the runs' real PNGs fill it
+    }
+)
+
+
 @pytest.fixture
 def synchronous_only(monkeypatch) -> None:
     """`gearlab inspect --history` without its non-synchronous (bearing-like) reading, said not read: for a
