@@ -70,6 +70,22 @@ def test_a_run_up_without_a_tacho_is_followed_on_its_mesh_line(tmp_path, start, 
     assert abs(inside[0] - inside[1]) <= 1, inside
 
 
+def test_a_run_up_then_steady_take_is_followed_at_its_speed_not_half(tmp_path):
+    # 8 -> 16 Hz in 1 s, then 2 s steady (test_outside_ae's history take) without its tacho: read along the angle
+    # followed, its lines fit half the speed too, and the reading swung between the two: a constant 7.33 Hz, 21
+    # 'revolutions'. The speed followed is the fundamental of that family
+    speed = np.concatenate([np.linspace(8.0, 16.0, int(FS), endpoint=False), np.full(int(2 * FS), 16.0)])
+    theta = 0.4 + 2 * np.pi * np.cumsum(speed) / FS
+    vib = np.sin(32 * theta) + 0.3 * np.sin(64 * theta + 0.4) + 0.2 * np.sin(theta)
+    vib += 0.3 * np.random.default_rng(5).standard_normal(theta.size)
+    write_zip(tmp_path / "take.zip", text(vib, np.zeros(theta.size)))
+    box = load_gearbox(_box(tmp_path / "box.toml", (32, 96)))
+    rec = cut_recording(str(tmp_path / "take.zip"), vibration=0, fs=FS, gearbox=box)
+    assert rec.speed_hz == pytest.approx(speed.mean(), rel=0.005), rec.angle_source
+    assert abs(len(rec.revolutions) - 43) <= 1 and rec.angle_source.startswith("speed followed"), rec.angle_source
+    assert abs(int(np.sum(np.abs(rec.speeds / SPEED - 1) <= D.IN_BAND)) - 33) <= 1, rec.speeds
+
+
 def test_gearlab_score_cuts_a_run_up_without_a_tacho_to_the_history_s_speed(cli, tmp_path, no_figures):
     # a tiny detection run whose takes have no tacho column read (the speed from the description's mesh lines), then
     # `gearlab score` of the 14 -> 19 Hz run-up over 12 s: scored on its revolutions within 2.5 % of 16 Hz, as

@@ -564,6 +564,18 @@ def _followed(signal, fine: Upsampled, course, fs, box, declared, where, thresho
             break
         if how2 != "declared" and abs(f2 / mean - 1) <= SPEED_AGREE:
             return theta, mean, how2 + ", followed on a mesh harmonic's phase", note2
+        k = round(mean / f2)
+        if (
+            how2 != "declared"
+            and k >= 2
+            and abs(mean / (k * f2) - 1) <= SPEED_AGREE
+            and abs(f / mean - 1) <= SPEED_AGREE
+        ):
+            # read along the angle followed, the lines fit a whole fraction of its speed, one harmonic family: its
+            # fundamental, the speed followed, is the speed (speed_from_mesh's rule among a family's speeds). A run-up's
+            # angle leaves weak sidebands that a comb at half the speed explains too, and the reading swung between
+            # the two (a 32-tooth mesh, 8 -> 16 Hz in 1 s then 2 s steady: read at a constant 7.33 Hz, 21 revolutions)
+            return theta, mean, how + ", followed on a mesh harmonic's phase", note
         if how2 == "declared":
             if note2 and SIDEBANDS_SHOW in note2 and SIDEBANDS_SHOW not in (note or ""):
                 note = note2  # at uniform angle a speed's swing no longer splits the sidebands (a 0.1 % swing did)
@@ -709,8 +721,8 @@ def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
     # way from the middle window (twice what a steady ramp needs): a ±4 % reach read a 14 -> 19 Hz run-up as
     # 0.94 .. 1.07 of its mean (0.85 .. 1.15 true), its mesh lines stayed smeared and the 1x shaft line was read as
     # the mesh (0.506 Hz); a steady record's ends show no shift, its reach stays COURSE_SPAN
-    shift = speed_shift(signal, fs)
-    reach = int(max(math.log(1 + COURSE_SPAN), abs(math.log(shift or 1.0))) / COURSE_STEP)
+    moved = speed_shift(signal, fs)
+    reach = int(max(math.log(1 + COURSE_SPAN), abs(math.log(moved or 1.0))) / COURSE_STEP)
     m = 1 << int(math.ceil(math.log2(2 * axis.size)))
     cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(ref, m)), m)
     lags = np.concatenate([cross[:, -reach:], cross[:, : reach + 1]], axis=1)  # lag -reach .. reach
