@@ -186,7 +186,7 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
         how = f"tacho '{rec.tacho_name}' (shaft angle) on the {shaft} shaft"
     else:
         with prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"):
-            theta = angle_from_pulses(rec.tacho, rec.fs, smooth=ratio < 1) / ppr
+            theta = angle_from_pulses(rec.tacho, rec.fs, smooth=ratio < 1, marks=ppr) / ppr
         how = f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution) on the {shaft} shaft"
     theta = theta / ratio  # the input shaft's angle
     turns = (theta[-1] - theta[0]) / TWO_PI

@@ -603,7 +603,7 @@ def shaft_angle(
     where = f"{path}: tacho '{name}' never completes a revolution (read as {what}{detected})"
     try:
         with prefixed(where):
-            angle = angle_from_pulses(rec.tacho, fs, smooth=smooth)
+            angle = angle_from_pulses(rec.tacho, fs, smooth=smooth, marks=pulses_per_rev)
     except GearlabInputError:
         if (note := speed_channel_note(rec.tacho)) is None:
             raise
