@@ -384,7 +384,7 @@ def check_description(
                         modulated.add(shaft_k)
                         continue
                     if lone(lines, carriers, found, measured / described, bin_, skip):
-                        continue  # read as where the line stays under the threshold: no comb (sideband_combs.lone)
+                        continue  # as where its lines stay under the threshold: no comb (sideband_combs.lone)
                 measured_shaft[shaft_k] = (found[0], found[1], f"{found[2]} sideband(s) of M{s.index}")
             o_seen, tol, _ = measured_shaft[shaft_k]
             z = measured / o_seen

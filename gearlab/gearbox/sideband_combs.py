@@ -22,8 +22,8 @@ SIDEBAND_BINS, SEPARATED = 0.5, 16
 # A comb's line further than this off the spacing fitted through its lines is another's (dropped, the worst
 # first, and the comb fitted again); half a bin dropped true lines of a 150-turn record, whose neighbours move them
 CONSISTENT_BINS = 1.0
-# A comb of one line is no shaft's order where the described spacing's sidebands hold this many lines, their
-# strongest this far over it (lone): more than the lines that fall near any spacing by chance, and stronger
+# A comb of one or two lines is no shaft's order where the described spacing's sidebands hold this many lines, their
+# strongest this far over the comb's (lone): more than the lines that fall near any spacing by chance, and stronger
 LONE_LINES, LONE_DB = 3, 6.0
 
 
@@ -222,14 +222,16 @@ def modulation(lines: Lines, carriers, found: tuple, described: float, orders, b
 
 
 def lone(lines: Lines, carriers, found: tuple, described: float, bin_: float, skip=frozenset()) -> bool:
-    """Whether a shaft's comb *found* (comb's tuple) of one line is outweighed by the *described* spacing's own
-    sidebands around that shaft's meshes (*carriers*): LONE_LINES of them or more, the strongest LONE_DB over the
-    comb's line. One line near the threshold is no shaft's order: a 23/59 + 19/67 box at 43 Hz (171 turns) carries a
-    line at order 29.333 (1261 Hz, 14.4-15.3 dB over the floor, THRESHOLD_DB 15) 0.2949 under stage 2's 4th mesh
-    harmonic; which 171 turns the mark starts put it over the threshold or not, and over it it alone read 'the pinion
-    on the intermediate shaft shows 25.1 teeth', where 9 lines (22-45 dB) lie 0.3898 (19 teeth) off the meshes."""
-    if found[2] != 1:
+    """Whether a shaft's comb *found* (comb's tuple) of one or two lines is outweighed by the *described* spacing's
+    own sidebands around that shaft's meshes (*carriers*): LONE_LINES of them or more, the strongest LONE_DB over
+    the comb's. A line or two near the threshold is no shaft's order: a 23/59 + 19/67 box at 43 Hz (171 turns)
+    carries a line at order 29.333 (1261 Hz, 14.4-15.3 dB over the floor, THRESHOLD_DB 15) 0.2949 under stage 2's
+    4th mesh harmonic; which 171 turns the mark starts put it over the threshold or not, and over it it alone read
+    'the pinion on the intermediate shaft shows 25.1 teeth', where 9 lines (22-45 dB) lie 0.3898 (19 teeth) off the
+    meshes. At 37 Hz a pair 15.0 Hz either side of the first mesh (0.4058, 17 dB; on no other mesh of that shaft)
+    read 'the wheel shows 56.7 teeth', 8 lines (15-39 dB) 0.3898 off."""
+    if found[2] > 2:
         return False
     ours = sidebands_of(lines, carriers, described, found[0], bin_, skip)
-    (q,) = found[3]
-    return len(ours) >= LONE_LINES and float(np.max(lines.amp[ours])) >= float(lines.amp[q]) * 10 ** (LONE_DB / 20)
+    top = max(float(lines.amp[q]) for q in found[3])
+    return len(ours) >= LONE_LINES and float(np.max(lines.amp[ours])) >= top * 10 ** (LONE_DB / 20)
