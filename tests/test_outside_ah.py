@@ -10,18 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gearboxes import described_pair, description, stage
+from gearboxes import AF_BOX, described_pair
 
 FS, SPEED, SECONDS = 25_600.0, 31.0, 4.0
-BOX = description(
-    stage(23, 59, module="2.5 mm", bores=("25 mm", "30 mm")),
-    stage(19, 67, module="3 mm", width="25 mm", bores=("30 mm", "40 mm")),
-    name="af2359",
-    speed="31 Hz",
-    load="40 N*m",
-    near="input",
-    tacho="input",
-)
+BOX = AF_BOX
 
 
 @pytest.fixture(scope="module")

@@ -10,21 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import AF_BOX
 
 from gearlab.gearbox.sideband_combs import lone
 from gearlab.gearbox.speed import Lines
 
 FS, SPEED, SECONDS = 25_600.0, 43.0, 4.0
-BOX = description(
-    stage(23, 59, module="2.5 mm", bores=("25 mm", "30 mm")),
-    stage(19, 67, module="3 mm", width="25 mm", bores=("30 mm", "40 mm")),
-    name="af2359",
-    speed="31 Hz",
-    load="40 N*m",
-    near="input",
-    tacho="input",
-)
+BOX = AF_BOX
 # the mark's shaft angles: 0 and pi read 'matches' before, pi/2, 3 pi/4 and 5 pi/4 '25.1 teeth'
 PHASES = (0.0, np.pi / 2, 3 * np.pi / 4, 5 * np.pi / 4)
 
