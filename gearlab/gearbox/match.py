@@ -178,6 +178,13 @@ def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float,
     return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
 
 
+def borrowed(lines: Lines, m: float, bin_: float, shared) -> bool:
+    """Whether every line at a harmonic of the mesh order *m* sits on another stage's mesh harmonic (*shared*):
+    nothing of its own says a mesh turns there."""
+    on = at_harmonics(lines, [m], bin_)
+    return bool(on) and all(any(abs(lines.at[q] - o) <= t for o, t in shared) for q in on)
+
+
 def at_harmonics(lines: Lines, meshes, bin_: float) -> set[int]:
     """The lines at the harmonics (1-MAX_HARMONIC) of the mesh orders *meshes*."""
     got = (lines.near(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1))
@@ -305,6 +312,16 @@ def check_description(
             # no line at M, nor a family: a count off by j puts the mesh at M + j o (a 15-tooth input pinion
             # described 16, its shaft unmodulated: no sideband at 16 led the search there)
             found = harmonic_comb(lines, [look] + [look + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
+            if found is not None and abs(found[1] - look) > tol_mesh(look, bin_):
+                i, measured = found
+        above = harmonics([m for m in meshes if m > look], bin_)
+        if i is not None and abs(measured - look) <= tol_mesh(look, bin_) and borrowed(lines, look, bin_, above):
+            # M held only by the harmonics of a higher mesh (M a subharmonic of it, no line of its own) is no evidence
+            # of this one: M + j o with lines of its own is (36/84 + 27/69 described with 28: M2 = 12 = M1 / 3, read on
+            # 36, 72, 108 while 11.57 and its harmonics stood 58-66 dB over the floor: 'matches')
+            o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
+            offsets = [j * o for o in (o_p, o_w)[behind:] for j in (-3, -2, -1, 1, 2, 3)]
+            found = harmonic_comb(lines, [look] + [look + d for d in offsets], bin_, shared)
             if found is not None and abs(found[1] - look) > tol_mesh(look, bin_):
                 i, measured = found
         matched = i is not None and abs(measured - expected) <= tol_mesh(expected, bin_)
