@@ -40,7 +40,7 @@ def _take(seconds=3.0, runup=0.0, seed=7):
 def _text(path, sep=";", comma=False, unit="g", encoding="utf-8", **take):
     t, x, tacho = _take(**take)
     x = x * (G if unit != "g" else 1.0)
-    body = "\n".join(f"{a:.6f}{sep}{b:.5f}{sep}{c:.3f}" for a, b, c in zip(t, x, tacho))
+    body = (f"%.6f{sep}%.5f{sep}%.3f\n" * t.size % tuple(np.column_stack([t, x, tacho]).ravel().tolist()))[:-1]
     if comma:
         body = body.replace(".", ",")
     path.write_bytes((HEADER.format(unit=unit).replace(";", sep) + "\n" + body + "\n").encode(encoding))

@@ -74,7 +74,7 @@ def _run_up_csv(path, f0, f1, seconds=6.0, fs=12800.0):
     rows = np.column_stack(
         [t + rng.normal(0, 0.03 / fs, t.size), x, 0.5 * x, np.where(th / 2 / np.pi % 1 < 0.06, 5, 0)]
     )
-    text = "".join(f"{a:.7f};{b:.5f};{c:.5f};{d:.1f}\n" for a, b, c, d in rows).replace(".", ",")
+    text = ("%.7f;%.5f;%.5f;%.1f\n" * len(rows) % tuple(rows.ravel().tolist())).replace(".", ",")  # in one operation
     path.write_text("Zeit [s];Beschl. 1 [g];Beschl. 2 [g];Tacho [V]\n" + text)
     return path
 

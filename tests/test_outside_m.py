@@ -106,7 +106,7 @@ def _take(path, hum=0.0, second=0.0, swing=0.002, seconds=6.0, fs=12800.0):
     x = (1 + 0.1 * np.cos(th * 23 / 61)) * np.cos(23 * th) + 0.4 * np.cos(46 * th) + rng.normal(0, 0.05, t.size)
     x = x + hum * np.sin(2 * np.pi * 50.0 * t + 0.3) + second * np.cos(2 * th + 1.0)
     rows = np.column_stack([t, x, np.where(th / 2 / np.pi % 1 < 0.06, 5, 0)])
-    path.write_text("time_s,acc [g],tacho [V]\n" + "".join(f"{a:.7f},{b:.5f},{c:.1f}\n" for a, b, c in rows))
+    path.write_text("time_s,acc [g],tacho [V]\n" + "%.7f,%.5f,%.1f\n" * len(rows) % tuple(rows.ravel().tolist()))
     return path
 
 
