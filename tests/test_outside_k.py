@@ -24,7 +24,7 @@ def _steady_csv(path, hum=0.0, seconds=6.0, fs=12800.0):
     x = (1 + 0.1 * np.cos(tho)) * np.cos(73 * th) + 0.5 * np.cos(146 * th) + rng.normal(0, 0.05, t.size)
     x = x + hum * np.sin(2 * np.pi * 50.0 * t + 0.3) + 0.05
     rows = np.column_stack([t, x, 0.5 * x, np.where(th / 2 / np.pi % 1 < 0.06, 5, 0)])
-    text = "".join(f"{a:.7f};{b:.5f};{c:.5f};{d:.1f}\n" for a, b, c, d in rows).replace(".", ",")
+    text = ("%.7f;%.5f;%.5f;%.1f\n" * len(rows) % tuple(rows.ravel().tolist())).replace(".", ",")  # in one operation
     path.write_text("Zeit [s];Beschl. 1 [g];Beschl. 2 [g];Tacho [V]\n" + text)
     return path
 

@@ -25,7 +25,7 @@ def _steady_csv(path, hum=0.0, seconds=6.0, fs=12800.0):
     x = (1 + 0.1 * np.cos(th * 73 / 31)) * np.cos(73 * th) + 0.5 * np.cos(146 * th) + rng.normal(0, 0.05, t.size)
     x = x + hum * np.sin(2 * np.pi * 50.0 * t + 0.3) + 0.05
     rows = np.column_stack([t, x, np.where(th / 2 / np.pi % 1 < 0.06, 5, 0)])
-    path.write_text("time_s,acc [g],tacho [V]\n" + "".join(f"{a:.7f},{b:.5f},{c:.1f}\n" for a, b, c in rows))
+    path.write_text("time_s,acc [g],tacho [V]\n" + "%.7f,%.5f,%.1f\n" * len(rows) % tuple(rows.ravel().tolist()))
     return path
 
 
