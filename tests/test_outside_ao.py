@@ -66,3 +66,30 @@ def test_a_subharmonic_of_the_first_mesh_is_no_match(take, kind):
     stage2 = report["check"]["stages"][1]
     # stage 2 read at its true mesh, not on stage 1's lines
     assert abs(stage2["measured_order"] - c * a / b) < 0.01, stage2
+
+
+@pytest.mark.parametrize("first_wheel", [66, 65])
+def test_the_gap_calls_a_missing_later_mesh_the_source_holds_strong(tmp_path, first_wheel):
+    """29/66 + 22/95 at 37.81 Hz described with a 65-tooth first wheel: the target shows no line at the described
+    stage-2 mesh 9.815 (it sits at 9.667), where the source's would stand 75 dB over the floor; the gap skipped it."""
+    from gearboxes import described_pair
+    from scipy.signal import resample_poly
+
+    import gearlab
+    from gearlab.gap.structure import later_stages
+    from gearlab.signals import resample_revolutions
+
+    speed, true, described = 37.813, ((29, 66), (22, 95)), ((29, first_wheel), (22, 95))
+
+    def rows(teeth, target: bool) -> np.ndarray:
+        (tmp_path / "s.toml").write_text(text(teeth, speed))
+        sim = gearlab.simulate_signals(gearbox=tmp_path / "s.toml", duration=SECONDS + 0.25, fs=200e3, speed=speed)
+        acc = resample_poly(sim.channels["casing_x"][sim.t >= 0.2], 16, 125)[: int(SECONDS * FS)]
+        acc = acc + target * np.random.default_rng(39).standard_normal(acc.size) * acc.std() * 10 ** (-30 / 20)
+        return resample_revolutions(acc, 2 * np.pi * speed * np.arange(acc.size) / FS, points=1024)
+
+    got = later_stages(rows(true, True), rows(described, False), described_pair(*described), 400)
+    if first_wheel == 66:
+        assert got["line"] is None, got
+    else:
+        assert got["line"] and got["line"].startswith("stage 2: no line at mesh order 9.815"), got

@@ -1,22 +1,20 @@
 """Structure before effects (docs/gap.md, "Structure"): what no effect can change is checked before
 any effect is searched, and a difference ends the diagnosis with one line that says what differs.
 
-* **Tooth count.** The target's order spectrum (its revolutions one after another, as `gearlab
-  inspect` reads a record: gearlab.signals.spectrum, lines by gearlab.gearbox.speed.find_lines and
-  the description's mesh order tested by gearlab.gearbox.match.check_description) against the source's
-  gear pair: mesh harmonics h Z1 with their sidebands (j <= SIDEBANDS, either shaft). The strongest
-  lines of a gear record are often high mesh harmonics (B-6-ch5: order 250, ten times its mesh
-  order), so the line at Z1 alone decides nothing: the target differs when most of the power of
-  its strongest lines lies off the source's comb (OFF_COMB); its own mesh order is then the comb
-  that holds them (the largest, so not a divisor of it). A multi-stage source's later meshes are its
-  comb too; a comb that holds the lines through its sidebands alone (ON_MESH) is another pinion's
-  too. A later stage's mesh order is read off the target and off the source alike (later_stages).
-* **Speed.** A measured target's speed (its tacho, or the speed it was cut at) against the
-  source's: beyond SPEED_TOL the source simulates another operating point.
-* **Level.** A pure scale factor (the target is the source x c: a record without its sensitivity
-  or gain) is no effect: when the source scaled by the factor of their synchronous averages closes
-  the gap as the verdict would judge an effect's fit, the diagnosis says the level or the units
-  differ, and by how much.
+* **Tooth count.** The target's order spectrum (its revolutions one after another, as `gearlab inspect` reads a
+  record: gearlab.signals.spectrum, lines by gearlab.gearbox.speed.find_lines and the description's mesh order tested
+  by gearlab.gearbox.match.check_description) against the source's gear pair: mesh harmonics h Z1 with their sidebands
+  (j <= SIDEBANDS, either shaft). The strongest lines of a gear record are often high mesh harmonics (B-6-ch5: order
+  250, ten times its mesh order), so the line at Z1 alone decides nothing: the target differs when most of the power
+  of its strongest lines lies off the source's comb (OFF_COMB); its own mesh order is then the comb that holds them
+  (the largest, so not a divisor of it). A multi-stage source's later meshes are its comb too; a comb that holds the
+  lines through its sidebands alone (ON_MESH) is another pinion's too. A later stage's mesh order is read off the
+  target and off the source alike (later_stages).
+* **Speed.** A measured target's speed (its tacho, or the speed it was cut at) against the source's: beyond SPEED_TOL
+  the source simulates another operating point.
+* **Level.** A pure scale factor (the target is the source x c: a record without its sensitivity or gain) is no
+  effect: when the source scaled by the factor of their synchronous averages closes the gap as the verdict would judge
+  an effect's fit, the diagnosis says the level or the units differ, and by how much.
 """
 
 from __future__ import annotations
@@ -265,15 +263,15 @@ def later_combs(pair) -> tuple:
 
 
 def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 0) -> dict:
-    """Stages after the first of a multi-stage source: where the target's lines put each stage's
-    mesh order against where the source's own lines put it, both read alike (inspect's
-    check_description on each). A later stage's mesh is often weak, or held by its harmonics, so it
-    is not tested against the description's order but against the source's reading of itself (a
-    mesh of no whole input order: against the description's): the stage differs when the target's
-    reading moves off that and the target holds no line there (no *source*: against the described
-    order). {'stages': [{stage, expected, source, target}], 'line': the one line of the first
-    difference, or None}."""
-    from ..gearbox.match import check_description, tol_mesh
+    """Stages after the first of a multi-stage source: where the target's lines put each stage's mesh order against
+    where the source's own lines put it, both read alike (inspect's check_description on each). A later stage's mesh
+    is often weak, or held by its harmonics, so it is not tested against the description's order but against the
+    source's reading of itself (a mesh of no whole input order: against the description's): the stage differs when
+    the target's reading moves off that and the target holds no line there (no *source*: against the described
+    order), or when the target holds no line where the source's mesh, at its level under the first mesh, would
+    stand UNSEEN_DB over the target's floor. {'stages': [{stage, expected, source, target}], 'line': the one line
+    of the first difference, or None}."""
+    from ..gearbox.match import check_description, tol_mesh, unseen_mesh
 
     box = _PairDescription.train(pair)
     out: dict = {"stages": [], "line": None}
@@ -302,6 +300,8 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
         # so its reading of itself says nothing and the target is read against the described order.
         whole = abs(entry["expected"] - round(entry["expected"])) < 1e-6 and source is not None
         reference = entry["source"] if whole else entry["expected"]
+        if entry["target"] is None and source is not None and out["line"] is None:
+            out["line"] = unseen_mesh(k, read["target"][2], read["source"][2])  # a weak mesh in the noise: None
         if reference is None or entry["target"] is None or out["line"] is not None:
             continue
         lines, n, _ = read["target"]

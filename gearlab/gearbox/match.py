@@ -178,6 +178,27 @@ def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float,
     return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
 
 
+# A later mesh the source puts this far over the target's floor shows there (25 dB over a line's threshold): a source's
+# mesh level off the record's by less is a transfer path, more is no such mesh (AM's 29/66 + 22/95 described with 65)
+UNSEEN_DB = 40.0
+
+
+def unseen_mesh(k: int, target: list, source: list) -> str | None:
+    """The line saying stage *k*'s mesh is missing from the target where the source reads it (check_description's
+    *target* and *source* stages) at a level, under its first mesh, that would put it UNSEEN_DB over the target's
+    floor, or None."""
+    t1, s1, s = target[0], source[0], source[k]
+    if not (s.get("matched") and s1.get("amplitude") and t1.get("amplitude")):
+        return None
+    over = t1["db_over_floor"] + 20 * np.log10(s["amplitude"] / s1["amplitude"])
+    if over < UNSEEN_DB:
+        return None
+    return (
+        f"stage {k + 1}: no line at mesh order {float(s['expected_order']):.4g}, where the source's mesh would stand "
+        f"{over:.0f} dB over the target's floor (a tooth count of stage {k + 1}, or a wheel upstream, differs)"
+    )
+
+
 def borrowed(lines: Lines, m: float, bin_: float, shared) -> bool:
     """Whether every line at a harmonic of the mesh order *m* sits on another stage's mesh harmonic (*shared*):
     nothing of its own says a mesh turns there."""
