@@ -632,12 +632,12 @@ def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float, course: np
     # the sweep but the low-pass does not: a line swept further than the cutoff leaves a parabola in the phase, whose
     # mirrored kinks ring through the low-pass (a 20 -> 14 Hz coast-down over 3 s, 32 teeth: 190 Hz in a ±272 Hz
     # band, the angle 0.6 rad off at the start, ±2.6 Hz sidebands read at half the speed). That only where the
-    # ends show a run-up or coast-down (speed_shift): the quadratic course of a smaller swing, a step between two
-    # plateaus, is not its shape, and taken out inside the band it moved the line (a 0.6 % step at 49 Hz, a
-    # 15-tooth pinion read 14.99)
+    # course spans a run-up or coast-down (SHIFT_MIN, as speed_shift reads one from the record's ends): the quadratic
+    # course of a smaller swing, a step between two plateaus, is not its shape, and taken out inside the band it moved
+    # the line (a 0.6 % step at 49 Hz, a 15-tooth pinion read 14.99)
     chirp = np.zeros(n)
-    swept = 0.0 if course is None else c * float(np.ptp(course))
-    if swept > half or (swept > cutoff and speed_shift(signal, fs) is not None):
+    spread = 0.0 if course is None else float(np.ptp(course))
+    if c * spread > half or (c * spread > cutoff and spread > SHIFT_MIN):
         chirp = 2 * np.pi * c * np.cumsum(course - 1.0) / fs
         spec = np.fft.fft(np.fft.ifft(np.where(freq > 0, 2 * spec, 0)) * np.exp(-1j * chirp))
     analytic = np.fft.ifft(np.where(np.abs(freq - c) <= half, 2 * spec, 0))
