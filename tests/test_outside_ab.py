@@ -1,7 +1,7 @@
 """Issue 39, outside users' leftovers (helper AB): a run-up test take cut to its revolutions at its
 condition's history speed in a detection run as `gearlab score` cuts it (a); the verdict's AUC over the
-takes its detected and false-alarm figures count (b); the detection run and `gearlab score` name the same
-gear of a two-gear shaft on the same take (c)."""
+takes its detected and false-alarm figures count (b). The detection run and `gearlab score` naming the same
+gear of a two-gear shaft on the same take (c): tests/test_box_b_takes.py, beside the other box B takes."""
 
 from __future__ import annotations
 
@@ -111,81 +111,3 @@ def test_a_run_up_in_the_history_is_refused_at_run_time_in_one_line(tmp_path, cl
     last = err.strip().splitlines()[-1]
     assert code == 2 and "[target] key 'files': ../data/up.zip (history; " in last, err[-1500:]
     assert "a history take must run steady" in last and D.VARIES_WORDS in last, last
-
-
-def _warped(path, steady, start: float, end: float):
-    """*steady* (a box_b_take npz) read on a speed rising linearly from *start* to *end* Hz: the same gearbox running
-    up, each sample where the steady take's angle (box_b_take's: 2 pi 25 t (1 + 0.0015 sin(2 pi 0.37 t)), its slow
-    swing) reaches the run-up's."""
-    data = dict(np.load(steady))
-    fs = float(data["fs"])
-    t = np.arange(data["acc_top"].size) / fs
-    angle = 25.0 * t * (1 + 0.0015 * np.sin(2 * np.pi * 0.37 * t))  # turns
-    wanted = start * t + 0.5 * (end - start) / t[-1] * t**2
-    keep = wanted <= angle[-1]
-    at = np.interp(wanted[keep], angle, t)  # the steady take's time at each angle the run-up reaches
-    warped = {k: np.interp(at, t, data[k]).astype("f4") for k in ("acc_top", "tacho")}
-    np.savez(path, **warped, fs=fs)
-    return path
-
-
-def test_detection_and_score_name_the_same_gear_of_a_two_gear_shaft_on_the_same_take(tmp_path, monkeypatch):
-    # box T (helper O): the run's own 24T spall take said 'undecided (63T 0.17 / 24T 0.15)', gearlab score the 24T.
-    # The run was made at 55b6ebb, under the rule before 05e38fe (the record's own sidebands first), which score
-    # then applied to the run's stored history: at HEAD both read 24T, z 601.5 / 2.8 alike. One path remained
-    # apart: a run-up take, localised whole by the run, on its revolutions at the history's speed by score
-    from which_gear_takes import box_b_description, box_b_take
-
-    from gearlab.data.recordings import cut_recording
-    from gearlab.data.spec import dataset_preset
-    from gearlab.data.which_gear import Take
-    from gearlab.gearbox import resolve_gearbox
-    from gearlab.gearbox.simulation import reference
-    from gearlab.kinds import detection_which_gear as W
-    from gearlab.parts.measured import Target, TargetFile, tacho_shaft_of
-    from gearlab.runs import RunDir
-
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    box = tmp_path / "boxB.toml"
-    box.write_text(box_b_description(load="40 N*m"))
-    takes = {f"h{s}": (box_b_take(tmp_path / f"h{s}.npz", s, seconds=8.0, ring=True), "history") for s in (61, 62, 63)}
-    takes["chip"] = (box_b_take(tmp_path / "chip.npz", 64, seconds=8.0, chip=1.0, ring=True), "test")
-    steady = box_b_take(tmp_path / "steady.npz", 65, seconds=16.0, chip=1.0, ring=True)
-    takes["up"] = (_warped(tmp_path / "up.npz", steady, 23.0, 27.0), "test")
-    files = tuple(TargetFile(str(p), str(p), role, "x", "") for p, role in takes.values())
-    shaft = tacho_shaft_of("", "tacho", resolve_gearbox(str(box)), "[target]", "[source] gearbox")
-    target = Target("acc_top", "tacho", 4, None, None, "none", "fault", files, unit="g", tacho_shaft=shaft)
-    conditions = read_target(target, (10,), lambda e: None)
-    ((name, cond),) = conditions.items()
-    (tmp_path / "run").mkdir()
-    run = RunDir(tmp_path / "run")
-    W.store_localisation(run, dataset_preset("phm09-30").with_(preset=reference(str(box))), conditions)
-    detected = run.read_json("localisation.json")["records"]
-    # gearlab score's reading: the run's keys, a run-up cut by score's own in_band, localised on the stored history
-    meta = {"conditions": {name: {"speed_hz": float(np.median([cond["speeds"][f.path] for f, _ in cond["history"]]))}}}
-    keys = {"vibration": "acc_top", "tacho": "tacho", "pulses_per_rev": 4, "unit": "g", "tacho_shaft": shaft}
-    news = []
-    for key in ("chip", "up"):
-        path = str(takes[key][0])
-        rec = cut_recording(path, **keys)
-        if key == "up":
-            assert D.VARIES_WORDS in rec.angle_source and path in cond["scored_on"]
-            _, rec, words = D.in_band(meta, path, rec, None)
-            assert words == cond["scored_on"][path]
-        news.append((path, Take.of(rec)))
-    scored = W.localise_scored(run, {name: news})
-    for path, _ in news:
-        assert detected[path]["named"] == scored[path]["named"] is not None, (detected[path], scored[path])
-        assert detected[path]["summary"] == scored[path]["summary"], (detected[path], scored[path])
-        assert detected[path]["call"] == scored[path]["call"]
-    assert scored[str(takes["chip"][0])]["named"] == "intermediate pinion 16T (stage 2)"
-    # the run's table decided by an older rule (box T's): score says so, as its call differs
-    assert W.stale_calls(run, scored) == {}
-    made = run.read_json("localisation.json")
-    older = "watched-gear fault: intermediate shaft: 52T gear (stage 1) or 16T pinion (stage 2)"
-    made["records"][str(takes["chip"][0])]["call"] = older
-    run.write_json("localisation.json", made)
-    ((path, line),) = W.stale_calls(run, scored).items()
-    assert path == str(takes["chip"][0]) and line.startswith(f"the run's table called it '{older}' when the run was")
-    now = scored[str(takes["chip"][0])]["call"]
-    assert line.endswith(f"calls it '{now}': run the scenario again for its table to read as score does"), line

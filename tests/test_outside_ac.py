@@ -2,42 +2,18 @@
 generator's 25/52 + 16/81 box (helper H's), a crack on the intermediate shaft's 52T wheel made as a dip and a phase
 step of stage 1's mesh. Its excess gathers about that mesh's first harmonic and fades by the 3rd, too few periods for
 the own-mesh comb (2.2-3.2 against the decoy periods', under 6), so the simulated events' phases decided and named the
-16T pinion, or both, in 9 of 40 development takes. The recordings are made here, small, by plain numpy."""
+16T pinion, or both, in 9 of 40 development takes. Its take end to end: tests/test_box_b_takes.py
+(with helper P's, AC's and AB's box B takes, which share box B's simulated events)."""
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 from test_outside_p import _orders  # the intermediate shaft's own orders of box B
-from which_gear_takes import box_b_description, box_b_take
 
 from gearlab.signals import which_template as T
 from gearlab.signals.localise import Gear
 
-BOX_B = box_b_description(load="40 N*m")
 WHEEL, PINION = Gear("intermediate", 1, "wheel", 52), Gear("intermediate", 2, "pinion", 16)
-
-
-def test_a_52t_crack_is_named_by_the_sidebands_about_its_own_mesh_harmonics(cli, tmp_path, monkeypatch):
-    # red before: 'intermediate pinion 16T (stage 2)' by the simulated events' phases (52T 0.17 / 16T 0.29, weak);
-    # seeds 64-75 of this generator: the phases named the 52T in 9, the 16T in 1 (67), both in 2; the contrast the
-    # 52T in 12 (least ratio 2.2-3.6)
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    (tmp_path / "boxB.toml").write_text(BOX_B)
-    history = [box_b_take(tmp_path / f"h{s}.npz", s, seconds=8.0) for s in (61, 62, 63)]
-    take = box_b_take(tmp_path / "c67.npz", 67, seconds=8.0, crack=1.0)
-    args = ["inspect", take, "--gearbox", tmp_path / "boxB.toml", "--vibration", "acc_top", "--tacho", "tacho"]
-    code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)], "--json")
-    assert code == 0, err
-    found = json.loads(stdout)["localisation"]
-    shaft = found["shafts"][0]
-    assert shaft["shaft"] == "intermediate" and shaft["flagged"], shaft
-    assert found["named"] == WHEEL.name, found["summary"]
-    ev = shaft["stage_evidence"]
-    assert ev["rule"] == T.RULE_CONTRAST and ev["own-mesh sidebands"][WHEEL.name] < T.COMB_Z, ev
-    assert ev["own-mesh sideband contrast"][WHEEL.name] >= T.CONTRAST_EACH, ev
-    assert "first 3 mesh harmonics over the orders between them" in found["summary"]
 
 
 def test_a_mesh_whose_sidebands_alone_rise_is_named_and_not_where_both_rise():
