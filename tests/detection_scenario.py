@@ -72,14 +72,19 @@ def without_figures(monkeypatch) -> None:
     monkeypatch.setattr("gearlab.kinds.detection.draw_figures", lambda run: None)
 
 
-def run_in_module(path: Path, out: Path, cwd: Path | None = None, figures: bool = True) -> Path:
+def run_in_module(
+    path: Path, out: Path, cwd: Path | None = None, figures: bool = True, events: Path | None = None
+) -> Path:
     """`gearlab run` in-process as run() does, for a module's fixture (the cli fixture is a test's own),
-    from the folder *cwd* if given, without the report's figures unless *figures*."""
+    from the folder *cwd* if given, without the report's figures unless *figures*. *events*: run with
+    `--events` (as the TUI starts a run) and its event lines written there, for a TUI test to replay."""
+    import json
+
     from gearlab.cli import main
 
     stdout, stderr = io.StringIO(), io.StringIO()
     with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
-        mp.setattr(sys, "argv", ["gearlab", "run", str(path), "--out", str(out)])
+        mp.setattr(sys, "argv", ["gearlab", "run", str(path), "--out", str(out), *(["--events"] if events else [])])
         if cwd:
             mp.chdir(cwd)
         if not figures:
@@ -88,7 +93,12 @@ def run_in_module(path: Path, out: Path, cwd: Path | None = None, figures: bool 
             main()
         except SystemExit as exc:
             assert not exc.code, stderr.getvalue()
-    return Path(stdout.getvalue().strip().splitlines()[-1].split(": ", 1)[1])
+    if events is None:
+        return Path(stdout.getvalue().strip().splitlines()[-1].split(": ", 1)[1])
+    lines = stdout.getvalue().splitlines()
+    events.write_text("\n".join(lines) + "\n")
+    (made,) = [json.loads(x)["message"] for x in lines if x.startswith("{") and json.loads(x)["kind"] == "run"]
+    return Path(cwd or ".") / made
 
 
 def scores(run_dir: Path) -> list[dict]:

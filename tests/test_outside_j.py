@@ -95,7 +95,7 @@ def detection_run(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr("gearlab.plots.save", unrendered)
         mp.setenv("GEARLAB_CACHE", str(folder / "cache"))
-        run = run_in_module(path, folder / "runs", cwd=folder / "data", figures=False)
+        run = run_in_module(path, folder / "runs", cwd=folder / "data", figures=False, events=folder / "det.events")
     return path.parent, run
 
 
@@ -140,13 +140,27 @@ def test_a_take_off_its_history_s_level_is_said_in_the_report_and_the_tui(detect
     asyncio.run(main())
 
 
-def test_a_detection_run_from_the_tui_counts_its_finished_units(detection_run, monkeypatch):
+def test_a_detection_run_from_the_tui_counts_its_finished_units(detection_run, monkeypatch, tmp_path):
     # box B's learned scenario (source_only, dann beside FM4 and NA4) run from the TUI with k: four units finished
     # in its run directory, the TUI said 'finished: 0 unit(s)', its live table stayed empty and a cancel would have
-    # said '0 finished unit(s) kept': a detection run sent no record event
-    folder, _ = detection_run
+    # said '0 finished unit(s) kept': a detection run sent no record event. The TUI's child replays the event lines
+    # the engine wrote for the module's run of this scenario (detection_run, `--events` as the TUI starts it) and
+    # that run's directory (test_tui.REPLAY): the engine's events and the TUI's count of them, without a second run
+    # of the scenario in a child process (its imports, training and figures: 7 s of CPU)
+    from test_tui import REPLAY
+
+    folder, run = detection_run
     monkeypatch.chdir(folder.parent / "data")  # where the module's run was started: its records' folder
     monkeypatch.setenv("GEARLAB_CACHE", str(folder.parent / "cache"))
+    started, real, go = [], asyncio.create_subprocess_exec, tmp_path / "go"
+
+    async def replayed(program, *args, **kwargs):
+        started.append(list(args[2:]))
+        into = str(tmp_path / "runs" / run.parent.name / run.name)
+        lines = str(folder.parent / "det.events")
+        return await real(program, "-c", REPLAY, str(run), str(run), lines, into, str(go), **kwargs)
+
+    monkeypatch.setattr(asyncio, "create_subprocess_exec", replayed)
 
     async def main():
         async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
@@ -154,6 +168,7 @@ def test_a_detection_run_from_the_tui_counts_its_finished_units(detection_run, m
             await pilot.pause()
             app._move_to(folder / "det.toml")
             await pilot.pause()
+            go.touch()  # the replay starts at once
             await pilot.press("r")
             for _ in range(600):
                 await pilot.pause(0.5)
@@ -164,6 +179,7 @@ def test_a_detection_run_from_the_tui_counts_its_finished_units(detection_run, m
             units = len((app.run_path / "results.jsonl").read_text().splitlines())
             assert units > 0 and f"finished: {units} unit(s)" in status, (units, status)
             assert {r["method"] for r in app.records} >= {"matched_filter", "fm4", "na4"}, app.records
+            assert started == [["run", str(folder / "det.toml"), "--out", str(run.parent.parent), "--events"]], started
 
     asyncio.run(main())
 
