@@ -15,6 +15,7 @@ import numpy as np
 
 from .description import Gearbox
 from .orders import order_table
+from .outshone import outshone_line
 from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
@@ -488,6 +489,8 @@ def check_description(
                 | {"not_an_order": off}
             )
     unexplained = unexplained[:8]
+    if not differences and (line := outshone_line(lines, stages, table, bin_, is_explained)):
+        differences.append(line)  # a weak line read as a described mesh beside a far stronger family (outshone)
     out = {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
     return out | {"unresolved": unresolved}
 
