@@ -271,14 +271,13 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     order), or when the target holds no line where the source's mesh, at its level under the first mesh, would
     stand UNSEEN_DB over the target's floor. {'stages': [{stage, expected, source, target}], 'line': the one line
     of the first difference, or None}."""
+    from ..gearbox import order_table
     from ..gearbox.match import check_description, tol_mesh, unseen_mesh
 
     box = _PairDescription.train(pair)
     out: dict = {"stages": [], "line": None}
     if len(box.stages) < 2:
         return out
-    from ..gearbox import order_table
-
     table = order_table(box)
     read = {}
     for name, rows in (("target", target), ("source", source)):
@@ -302,12 +301,12 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
         reference = entry["source"] if whole else entry["expected"]
         if entry["target"] is None and source is not None and out["line"] is None:
             out["line"] = unseen_mesh(k, read["target"][2], read["source"][2])  # a weak mesh in the noise: None
+        if out["line"] is None and "outshone" in t:  # read on a weak line beside a far stronger family (inspect's)
+            out["line"] = t["outshone"]["line"]
         if reference is None or entry["target"] is None or out["line"] is not None:
             continue
         lines, n, _ = read["target"]
-        tol = tol_mesh(reference, 1.0 / n)
-        if whole:
-            tol = max(tol, tol_mesh(reference, 1.0 / read["source"][1]))
+        tol = max(tol_mesh(reference, 1.0 / n), tol_mesh(reference, 1.0 / read["source"][1]) if whole else 0.0)
         st = table.stages[k]
         others = [float(t.mesh) for q, t in enumerate(table.stages) if q != k]
         louder = _outshone(lines, reference, st, tol, others)

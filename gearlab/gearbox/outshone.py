@@ -72,10 +72,11 @@ def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explaine
             continue
         m, top, what = best
         db = 20 * np.log10(top / entry["amplitude"])
-        entry["outshone"] = {"order": m, "db": float(db)}
-        return (
+        line = (
             f"stage {k + 1}: the strongest lines near the described mesh order {look:.4g} stand at {m:.4g} (its "
             f"harmonics, {db:.0f} dB over the line the mesh was read on, explained by nothing described): that is "
             f"the mesh: {what}"
         )
+        entry["outshone"] = {"order": m, "db": float(db), "line": line}  # the gap's later_stages says it too
+        return line
     return None
