@@ -262,13 +262,15 @@ def check_description(
     # output tacho put stage 3 at '144.4 teeth')
     leads = tacho_shaft is None or tacho_shaft == 0
 
-    def is_explained(x: float) -> bool:
-        if any(abs(x - o) <= tol_mesh(o, bin_) for _, o in explained):
+    def is_explained(x: float, without: int | None = None) -> bool:
+        """Whether a described order explains *x*; *without*: a stage whose sidebands are left out (outshone)."""
+        own = re.compile(rf"\d*M{without + 1} [+-] ") if without is not None else None
+        if any(abs(x - o) <= tol_mesh(o, bin_) for label, o in explained if not (own and own.match(label))):
             return True
         # any mesh harmonic (a mesh's power can sit at harmonics 4-11) and its sidebands j <= 3
-        for t in table.stages:
+        for q, t in enumerate(table.stages):
             m = float(t.mesh)
-            for o in (0.0, float(t.pinion_shaft_order), float(t.wheel_shaft_order)):
+            for o in (0.0,) if q == without else (0.0, float(t.pinion_shaft_order), float(t.wheel_shaft_order)):
                 for off in {0.0, o, -o, 2 * o, -2 * o, 3 * o, -3 * o}:
                     h = max(1.0, round((x - off) / m))
                     if abs(x - h * m - off) <= tol_mesh(h * m + off, bin_):

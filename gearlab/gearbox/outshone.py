@@ -3,7 +3,12 @@ explain (gearlab.gearbox.match.check_description): a gearbox's strongest lines a
 at the described order with such a family near it is no mesh of the description; the family is the mesh and
 a tooth count differs. A 27/57 + 35/69 box described with a 56-tooth first wheel put stage 2 at 16.875: a
 line 18 dB over the floor was read as that mesh, while the real one, 16.579 (harmonics 1-3 at 48, 63 and 68 dB),
-0.3 orders off, was explained by nothing described and the verdict said 'matches'.
+0.3 orders off, was explained by nothing described and the verdict said 'matches'. Nor does a sideband of the weak
+line explain a line OUTSHONE_DB over its mirror image (unpaired): a count a tooth off puts the real mesh's harmonics on
+the described one's sidebands, on one side alone (38/69 + 22/51 described with a 23-tooth second pinion: the real
+12.116's harmonics 1-3 on the described 12.667's sidebands -1 to -3 of its pinion's shaft, 38 dB over the line it was
+read on; 32/66 + 26/62 described with 65: the real 12.606's on the output shaft's, 45 dB), while a modulation's stand
+in pairs.
 """
 
 from __future__ import annotations
@@ -14,10 +19,10 @@ from .sideband_combs import tol_mesh
 from .speed import MAX_HARMONIC, Lines
 
 # A family this much stronger than the described mesh's strongest line (its own harmonics) outshines it: on the
-# development boxes (seeds 5120-5167) the true descriptions put no family at a count's order at all, the PHM 2009
-# rig's records (its mesh lines under input-shaft sidebands) one 0.4 dB under the stage-2 mesh at most; a 37/97 +
+# development boxes (seeds 5120-5191) the true descriptions put no family at a count's order at all, the PHM 2009
+# rig's records (its mesh lines under input-shaft sidebands) one 6.5 dB over the stage-2 mesh at most; a 37/97 +
 # 28/77 box described with 96 teeth put the real stage-2 mesh 22 dB over the described order's line, 27/57 + 35/69
-# with 56 at 50 dB
+# with 56 at 50 dB. A sideband of the described mesh this much over its mirror image is unpaired (unpaired)
 OUTSHONE_DB = 12.0
 COUNTS = (-3, -2, -1, 1, 2, 3)  # the counts tried: a gear this many teeth off
 
@@ -51,31 +56,50 @@ def counts(table, k: int) -> list[tuple[float, str]]:
     return out
 
 
+def unpaired(lines: Lines, look: float, bin_: float, own: list[bool]) -> np.ndarray:
+    """Which lines, explained only as sidebands of the mesh *look* (*own*), stand OUTSHONE_DB or more over the line
+    at their mirror image across its harmonic (none counts as the floor): a mesh's modulation puts its sidebands in
+    pairs, a count a tooth off puts the real mesh on one side alone (the PHM 2009 rig's input-shaft sidebands, over
+    its stage-2 mesh lines, stand in pairs)."""
+    out = np.zeros(lines.at.size, dtype=bool)
+    for q in np.flatnonzero(own):
+        x = float(lines.at[q])
+        h = max(1.0, round(x / look))
+        mirror = lines.near(2 * h * look - x, tol_mesh(x, bin_))
+        out[q] = mirror is None or lines.amp[q] >= lines.amp[mirror] * 10 ** (OUTSHONE_DB / 20)
+    return out
+
+
 def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explained) -> str | None:
     """The line saying the first later stage read at its described mesh order (check_description's *stages*)
     is outshone: OUTSHONE_DB under a family of lines no described mesh, harmonic or sideband explains
-    (*explained*: whether an order is one) at the order one count puts it (counts), or None. The first stage's
-    mesh is left to check_description: a pinion count moves it a whole order of its shaft, which it reads."""
-    free = np.array([not explained(float(x)) for x in lines.at], dtype=bool)
+    (*explained*(order, stage): whether an order is one, that stage's sidebands left out) at the order one count puts
+    it (counts), or None. The first stage's mesh is left to check_description: a pinion count moves it a whole order
+    of its shaft, which it reads."""
     for k, entry in enumerate(stages[1:], start=1):
-        if not free.any() or not entry.get("matched") or not entry.get("amplitude"):
+        if not entry.get("matched") or not entry.get("amplitude"):
             continue
         look, best = float(entry["expected_order"]), None
+        alone = np.array([not explained(float(x)) for x in lines.at], dtype=bool)
+        free = alone | unpaired(lines, look, bin_, [not explained(float(x), k) for x in lines.at])
+        if not free.any():
+            continue
         for m, what in counts(table, k):
             got = family(lines, m, bin_, free)
             if got is None or abs(got[0] - m) > tol_mesh(m, bin_) or abs(got[0] - look) <= tol_mesh(look, bin_):
                 continue
             top = got[1]
             if top >= entry["amplitude"] * 10 ** (OUTSHONE_DB / 20) and (best is None or top > best[1]):
-                best = (got[0], top, what)
+                best = (got[0], top, what, family(lines, m, bin_, alone) is None)
         if best is None:
             continue
-        m, top, what = best
+        m, top, what, on_sidebands = best
         db = 20 * np.log10(top / entry["amplitude"])
+        but = " but as that line's sidebands, unpaired" if on_sidebands else ""
         line = (
             f"stage {k + 1}: the strongest lines near the described mesh order {look:.4g} stand at {m:.4g} (its "
-            f"harmonics, {db:.0f} dB over the line the mesh was read on, explained by nothing described): that is "
-            f"the mesh: {what}"
+            f"harmonics, {db:.0f} dB over the line the mesh was read on, explained by nothing described{but}): that "
+            f"is the mesh: {what}"
         )
         entry["outshone"] = {"order": m, "db": float(db), "line": line}  # the gap's later_stages says it too
         return line
