@@ -272,7 +272,7 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     stand UNSEEN_DB over the target's floor. {'stages': [{stage, expected, source, target}], 'line': the one line
     of the first difference, or None}."""
     from ..gearbox import order_table
-    from ..gearbox.match import check_description, tol_mesh, unseen_mesh
+    from ..gearbox.match import check_description, tol_mesh, unseen_mesh, wheel_upstream
 
     box = _PairDescription.train(pair)
     out: dict = {"stages": [], "line": None}
@@ -316,12 +316,12 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
             continue
         if louder is not None:
             entry["target"] = louder
-        seen = entry["target"] / float(st.pinion_shaft_order)
+        seen, moved = entry["target"] / float(st.pinion_shaft_order), entry["target"] / entry["expected"]
         out["line"] = (
             f"stage {k + 1}: mesh order {entry['target']:.4g} measured, {entry['expected']:.4g} expected: the source "
             f"simulates a {st.pinion_teeth}-tooth pinion on the {st.pinion_shaft} shaft turning at order "
             f"{float(st.pinion_shaft_order):.4g} (the target's mesh is {seen:.1f} such teeth: a tooth count of "
-            f"stage {k + 1}, or a wheel upstream, differs)"
+            f"stage {k + 1}, or a wheel upstream, differs{wheel_upstream(table, k, moved, seen)})"
         )
     # a later wheel: its shaft's sidebands of its mesh, as for the first (wheel_line); the last wheel's
     # count shows nowhere else (a 17/44 + 21/53 reducer described with 52 teeth passed the gap and detection)

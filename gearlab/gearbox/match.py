@@ -213,6 +213,17 @@ def at_harmonics(lines: Lines, meshes, bin_: float) -> set[int]:
     return {q for q in got if q is not None}
 
 
+def ahead_family(lines: Lines, family: tuple, m: float, bin_: float, theirs) -> tuple:
+    """*family* (mesh_family's), or the family of the mesh order *m* located_ahead found where all its lines are
+    harmonics of *m*: they are that mesh's, no mesh of their own (37/97 + 28/77 described with a 96-tooth first wheel:
+    the real 10.680's 4th and 8th harmonics, 42.72 and 85.44, taken as a 14.24 family of whole teeth, 'a 37-tooth
+    pinion on the intermediate shaft')."""
+    if not all(abs(x / m - round(x / m)) * m <= tol_mesh(x, bin_) for x in family[2]):
+        return family
+    on = [q for q in at_harmonics(lines, [m], bin_) if not any(abs(lines.at[q] - o) <= t for o, t in theirs)]
+    return (m, max(on, key=lambda q: lines.amp[q]), lines.at[on]) if on else family
+
+
 def located_ahead(lines: Lines, table, bin_: float, tacho_shaft: int | None) -> dict:
     """{stage: its mesh order} of a later stage whose mesh the lines put a whole tooth off the described order (M + j o,
     either shaft's o as described; harmonic_comb), and of the stages after it, before any stage is read: an earlier
@@ -313,6 +324,8 @@ def check_description(
         theirs = off_own(shared, look)
         o_tacho = measured_shaft[k + 1][0] if measured_shaft.get(k + 1, (0, 0, ""))[2] == "tacho" else None
         family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho)
+        if family is not None and k in ahead:
+            family = ahead_family(lines, family, ahead[k], bin_, theirs)
         i = None
         if lines.near(look, tol_mesh(look, bin_)) is not None:
             # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)? o: the
@@ -378,13 +391,17 @@ def check_description(
                 f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected: the "
                 f"{s.pinion_teeth}-tooth pinion as described, its {s.pinion_shaft} shaft turning "
                 f"{100 * (measured / expected - 1):+.1f} % off the speed read ("
-                + _between(table, k, measured / expected, leads and not tacho_on_input)
+                + _between(table, k, measured / expected, leads and not tacho_on_input, leads)
                 + ")"
             )
-        elif not matched:
+        elif not matched:  # no whole count of the pinion: a wheel upstream where a whole count of it does it
+            guess = wheel_upstream(table, k, measured / expected, measured / o_ref)[2:] if leads else ""
+            guess = (
+                guess
+                or f"a {measured / o_ref:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth}"
+            )
             differences.append(
-                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected "
-                f"(a {measured / o_ref:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth})"
+                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected ({guess})"
             )
         i = own_line(lines, i, measured, bin_, shared)
         entry.update(measured_order=measured, error_orders=measured - expected, amplitude=float(lines.amp[i]))
@@ -595,18 +612,26 @@ def outward_first(differences: list[str], stages: list[dict], box: Gearbox, tach
     return found[0]
 
 
-def _between(table, k: int, ratio: float, no_tacho: bool) -> str:
-    """What puts stage *k*'s pinion shaft *ratio* off the speed read: without a tacho, the stage before's wheel where
-    a whole count does it (21/65 + 34/91 described with 64 on 57 turns, its sidebands unresolved: stage 2 at 10.985
-    was 'a tooth count between it and the tacho's shaft, or the tacho', with no tacho)."""
-    if not no_tacho:
-        return "a tooth count between it and the tacho's shaft, or the tacho, differs"
-    said = "a tooth count between it and the input shaft differs"
+def _between(table, k: int, ratio: float, no_tacho: bool, from_input: bool = False) -> str:
+    """What puts stage *k*'s pinion shaft *ratio* off the speed read: without a tacho or with one on the input
+    (*from_input*), the stage before's wheel where a whole count does it (21/65 + 34/91 described with 64 on 57 turns,
+    its sidebands unresolved: stage 2 at 10.985 was 'a tooth count between it and the tacho's shaft, or the tacho')."""
+    said = "the input shaft differs" if no_tacho else "the tacho's shaft, or the tacho, differs"
+    return f"a tooth count between it and {said}" + (wheel_upstream(table, k, ratio) if no_tacho or from_input else "")
+
+
+def wheel_upstream(table, k: int, ratio: float, pinion: float | None = None) -> str:
+    """': a z-tooth wheel on the ... shaft puts it there' where the stage before *k*'s wheel a whole count off turns
+    stage *k*'s pinion shaft *ratio* of its described speed, and the mesh is no whole count of that pinion's teeth
+    (*pinion*: the count it shows, where known), else '' (the gap's later_stages says it too: 37/97 + 28/77 described
+    with 96 put stage 2 at '27.7 such teeth', the wheel unnamed)."""
     z = table.stages[k - 1].wheel_teeth / ratio if k else 0.0
     wheel = table.stages[k - 1].wheel_teeth if k else 0
+    if pinion is not None and abs(pinion - round(pinion)) < 0.25:
+        return ""
     if k and round(z) != wheel and abs(z - round(z)) <= 0.1:
-        return f"{said}: a {round(z)}-tooth wheel on the {table.shafts[k]} shaft ({z:.2f}) puts it there, {wheel} said"
-    return said
+        return f": a {round(z)}-tooth wheel on the {table.shafts[k]} shaft ({z:.2f}) puts it there, {wheel} said"
+    return ""
 
 
 def _following(stages: list[int]) -> str:
