@@ -347,7 +347,7 @@ def trial(args: tuple) -> dict:
             row["mesh_err"] = [
                 (st.get("measured_order", math.nan) - m) for st, m in zip(got["check"]["stages"], true_mesh)
             ]
-            row["matches"] = bool(got["matches"])
+            row["matches"] = got["matches"]  # True, False, or None: the pinion cannot be confirmed (no speed)
             row["verdict"] = got["verdict"]
         wrong, what = wrong_counts(rng, box)
         bad = folder / "wrong.toml"
@@ -357,8 +357,11 @@ def trial(args: tuple) -> dict:
         if "error" in got:
             # a refusal that names the mismatch (an ambiguous speed, no line fits) is a call-out too
             row["wrong_called"], row["wrong_verdict"] = not got["error"].startswith("CRASH"), got["error"]
+            row["wrong_unconfirmed"] = False
         else:
-            row["wrong_called"], row["wrong_verdict"] = not got["matches"], got["verdict"]
+            # None (cannot be confirmed without a speed) is no call-out: kept apart in the table
+            row["wrong_called"], row["wrong_verdict"] = got["matches"] is False, got["verdict"]
+            row["wrong_unconfirmed"] = got["matches"] is None
         last = len(box["stages"])
         # a last stage's wheel shows only in its shaft's sidebands, which a healthy simulated gear lacks
         row["wrong_unseen"] = maker == "sim" and what.startswith(f"s{last}-wheel")
@@ -386,8 +389,8 @@ def table(rows: list[dict]) -> str:
         groups[(r["source"], r["stages"], "tacho" if r["mode"] == "tacho" else "no tacho: " + r["mode"])].append(r)
     out = [
         "| maker | stages | speed from | records | errors | mesh-order error 50/90/max (orders) | within 0.05 "
-        "| speed error % 50/90/max | within 0.5 % | right matched | wrong called out (seen) "
-        "| wrong called out (last wheel) |",
+        "| speed error % 50/90/max | within 0.5 % | right: matched / cannot confirm / differs "
+        "| wrong called out (seen; cannot confirm) | wrong called out (last wheel) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for (maker, stages, mode), rs in sorted(groups.items()):
@@ -400,8 +403,9 @@ def table(rows: list[dict]) -> str:
             f"| {maker} | {stages} | {mode} | {len(rs)} | {len(rs) - len(ok)} | {quantiles(mesh)} | "
             f"{sum(abs(e) <= MESH_GOAL for e in mesh)}/{len(mesh)} | {quantiles(speed)} | "
             f"{sum(abs(e) <= 100 * SPEED_GOAL for e in speed)}/{len(speed)} | "
-            f"{sum(r['matches'] for r in ok)}/{len(ok)} | "
-            f"{sum(r['wrong_called'] for r in seen)}/{len(seen)} | "
+            f"{sum(r['matches'] is True for r in ok)} / {sum(r['matches'] is None for r in ok)} / "
+            f"{sum(r['matches'] is False for r in ok)} of {len(ok)} | "
+            f"{sum(r['wrong_called'] for r in seen)}/{len(seen)}; {sum(r['wrong_unconfirmed'] for r in seen)} | "
             f"{sum(r['wrong_called'] for r in unseen)}/{len(unseen)} |"
         )
     return "\n".join(out)
@@ -447,7 +451,7 @@ def main() -> None:
         else:
             if any(not abs(e) <= MESH_GOAL for e in r["mesh_err"]) or abs(r["speed_err"]) > SPEED_GOAL:
                 problems.append(f"mesh err {r['mesh_err']}, speed err {100 * r['speed_err']:.3f} %")
-            if not r["matches"]:
+            if r["matches"] is not True:
                 problems.append(f"right said: {r['verdict']}")
         if not r["wrong_called"] and not r["wrong_unseen"]:
             problems.append(f"wrong {r['wrong']} said: {r['wrong_verdict']}")
