@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import sys
 import types
+from pathlib import Path
 from types import SimpleNamespace
 
 import conftest
@@ -24,6 +25,11 @@ class Args:
         return getattr(self._config, name)
 
 
+def beside(file_path) -> Path:
+    """pytest's own place for a rewritten test module (no sys.pycache_prefix): its folder's __pycache__."""
+    return Path(file_path).parent / "__pycache__"
+
+
 def cached(folder) -> list[str]:
     return sorted(p.name.split(".")[0] for p in (folder / "__pycache__").glob(f"*{rewrite.PYC_TAIL}"))
 
@@ -38,6 +44,10 @@ def test_a_second_worker_rewrites_from_the_last_file_back_to_one_already_cached(
         (tmp_path / f"test_{name}.py").write_text(f"def test_{name}():\n    assert {name!r} * 2 == {name * 2!r}\n")
     monkeypatch.setattr(sys, "dont_write_bytecode", False)
     monkeypatch.setenv("PYTEST_XDIST_WORKER", worker)
+    # a session that writes no bytecode shares its rewritten modules in a folder of its own (conftest.
+    # rewritten_in_shared_folder): this test's files are cached beside them, as in a session that writes
+    monkeypatch.delenv(conftest.REWRITTEN, raising=False)
+    monkeypatch.setattr(rewrite, "get_cache_dir", beside)
     config = Args(request.config, [str(tmp_path)])
     state = config.stash[rewrite.assertstate_key]
     # gw0 got as far as test_b: the worker writes test_d, then test_c, and stops there
@@ -54,6 +64,27 @@ def test_a_second_worker_rewrites_from_the_last_file_back_to_one_already_cached(
     (tmp_path / "test_e.py").write_text("def test_e():\n    assert True\n")
     conftest.rewrite_ahead(SimpleNamespace(config=config))
     assert "test_e" not in cached(tmp_path)
+
+
+def test_without_bytecode_the_workers_rewrite_into_the_sessions_folder(request, tmp_path, monkeypatch):
+    """PYTHONDONTWRITEBYTECODE (the fresh clone the README's test command is timed in): the rewritten
+    modules go to the session's folder (conftest.REWRITTEN), gw0 writing ahead from the first file too,
+    and nothing beside the sources."""
+    if request.config.getoption("assertmode") != "rewrite":
+        pytest.skip("asserts are not rewritten in this run")
+    for name in "abc":
+        (tmp_path / f"test_{name}.py").write_text(f"def test_{name}():\n    assert {name!r} == {name!r}\n")
+    shared = tmp_path / "session"
+    monkeypatch.setattr(sys, "dont_write_bytecode", True)
+    monkeypatch.setenv(conftest.REWRITTEN, str(shared))
+    monkeypatch.setenv("PYTEST_XDIST_WORKER", "gw0")
+    monkeypatch.setattr(rewrite, "get_cache_dir", rewrite.get_cache_dir)  # put back after the test
+    conftest.rewritten_in_shared_folder()
+    conftest.rewrite_ahead(SimpleNamespace(config=Args(request.config, [str(tmp_path)])))
+    folder = rewrite.get_cache_dir(tmp_path / "test_a.py")
+    assert folder.is_relative_to(shared)
+    assert sorted(p.name.split(".")[0] for p in folder.glob(f"*{rewrite.PYC_TAIL}")) == ["test_a", "test_b", "test_c"]
+    assert not (tmp_path / "__pycache__").exists()
 
 
 def test_the_pilot_waits_for_an_idle_app_in_short_slices(monkeypatch):
