@@ -411,7 +411,9 @@ def check_description(
         )
         others = [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)]
         theirs_lines = others_lines(lines, expected, others, bin_, (float(lines.at[i]), own))
-        combs = families(lines, i, own, bin_, (k in measured_shaft, k + 1 in measured_shaft), theirs_lines)
+        # the combs leave out the shared shaft's sidebands of other meshes too; the checks of a comb below count them
+        combed = others_lines(lines, expected, others, bin_, (float(lines.at[i]), own), shared=True)
+        combs = families(lines, i, own, bin_, (k in measured_shaft, k + 1 in measured_shaft), combed)
         for (key, role, shaft_k, described), found in zip(
             (("z1", "pinion", k, s.pinion_teeth), ("z2", "wheel", k + 1, s.wheel_teeth)), combs
         ):

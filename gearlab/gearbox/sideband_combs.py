@@ -140,33 +140,41 @@ def families(
     return found
 
 
-def others_lines(lines: Lines, expected: float, others, bin_: float, own=None) -> frozenset:
-    """The lines other stages' structure explains, no sidebands of a stage of mesh order *expected*: any
-    harmonic of their meshes (off its own) and its sidebands j <= 3 of their shafts it does not carry
-    (*others*: (mesh order, those shafts' orders[, the shared shaft's order]) each). A 22/63 last stage's 6th
-    harmonic, 1.2 below a 15/47 first mesh, and its sidebands read as the input shaft's comb: 'the pinion shows
-    12.5 teeth'. A shaft both carry is left out: its sidebands are both stages'. Its products with the other
-    stage's own shaft, a o_shared +- b o (a, b = 1-3), are that stage's only (19/48 + 25/94 + 17/48: stage 2's
-    2 M2 + o1 + o2 lies at M1 + 1.293 and the input's comb read 'the pinion shows 14.7 teeth'), save a line on
-    one of the stage's own sidebands (*own*: its mesh line, its shafts' orders), which the products, 36 a
-    harmonic, pass near by chance (a 15/56 + 13/33 wheel read 33.0 teeth, 34 described, lost its comb)."""
-    at, kind, js = [], [], (-3, -2, -1, 1, 2, 3)  # kind: 0 a carrier, 1 a sideband, 2 a product of two shafts
-    for m, shaft_orders, *shared in others:
-        offsets = [(0.0, 0)] + [(j * o, 1) for o in shaft_orders for j in js]
-        if shared and len(shared[0]) == 1 and len(shaft_orders) == 1:
-            offsets += [(a * shared[0][0] + b * shaft_orders[0], 2) for a in js for b in js]
+def others_lines(lines: Lines, expected: float, others, bin_: float, own=None, shared: bool = False) -> frozenset:
+    """The lines other stages' structure explains, no sidebands of a stage of mesh order *expected*: any harmonic of
+    their meshes (off its own) and its sidebands j <= 3 of their shafts it does not carry (*others*: (mesh order,
+    those shafts' orders[, the shared shaft's order]) each). A 22/63 last stage's 6th harmonic, 1.2 below a 15/47
+    first mesh, and its sidebands read as the input shaft's comb: 'the pinion shows 12.5 teeth'. A shaft both carry
+    modulates both: with *shared* (for the combs; a comb's checks, modulation and lone, count them as that shaft's
+    evidence) its sidebands of their harmonics outside the stage's own comb of it (3.9 of its orders) are theirs
+    only where no own sideband lies within a bin of the line or nearer it (23/77 + 34/49: 2 M2 - o2 = M1 - 2.9871,
+    2.6 bins off the input's 3rd, made the input's comb 0.9968: 'input shaft: order 0.9968 measured, 1 expected').
+    Its products with the other stage's own shaft, a o_shared +- b o (a, b = 1-3), are that stage's only (19/48 +
+    25/94 + 17/48: stage 2's 2 M2 + o1 + o2 lies at M1 + 1.293 and the input's comb read 'the pinion shows 14.7
+    teeth'), save a line on one of the stage's own sidebands (*own*: its mesh line, its shafts' orders), which the
+    products, 36 a harmonic, pass near by chance (a 15/56 + 13/33 wheel read 33.0 teeth, 34 described, lost its
+    comb)."""
+    # kind: 0 a carrier, 1 a sideband, 2 a product of two shafts, 3 a sideband of the shaft both stages carry
+    at, kind, step, js = [], [], [], (-3, -2, -1, 1, 2, 3)
+    for m, shaft_orders, *both in others:
+        offsets = [(0.0, 0, 0.0)] + [(j * o, 1, 0.0) for o in shaft_orders for j in js]
+        offsets += [(j * o, 3, o) for o in (both[0] if both and shared else ()) for j in js]
+        if both and len(both[0]) == 1 and len(shaft_orders) == 1:
+            offsets += [(a * both[0][0] + b * shaft_orders[0], 2, 0.0) for a in js for b in js]
         for h in range(1, MAX_HARMONIC + 1):
             if abs(h * m / expected - round(h * m / expected)) > 1e-9:  # on the stage's own harmonic: both
-                at += [h * m + off for off, _ in offsets]
-                kind += [k for _, k in offsets]
+                at += [h * m + off for off, _, _ in offsets]
+                kind += [k for _, k, _ in offsets]
+                step += [o for _, _, o in offsets]
     if not at:
         return frozenset()
-    at, kind = np.array(at), np.array(kind)
+    at, kind, step = np.array(at), np.array(kind), np.array(step)
     # a carrier within tol_mesh; a sideband within 2 bins and a tenth of the drift allowance: at DRIFT's 1e-3 of
     # order 14 a 15/47 input comb's own -1 line (14.000) fell within 0.019 of a later stage's sideband
     # (13.8004 + 0.2091), the comb lost it and another won
     tol = np.where(kind == 0, tol_mesh(at, bin_), 2 * bin_ + 0.1 * DRIFT * at)
-    near = np.abs(lines.at[:, None] - at[None, :]) <= tol[None, :]
+    theirs = np.abs(lines.at[:, None] - at[None, :])
+    near = theirs <= tol[None, :]
     if own is not None:
         sidebands = np.array([own[0] + j * o for o in own[1] for j in js])
         off = np.abs(lines.at[:, None] - sidebands[None, :])
@@ -174,8 +182,15 @@ def others_lines(lines: Lines, expected: float, others, bin_: float, own=None) -
         near[:, kind == 2] &= ~on_own.any(axis=1)[:, None]
         # another stage's sideband that lies nearer an own one than its own place (a 19/48 + 25/94 + 17/48 box: 2 M2 +
         # 2 o_i2 = M1 + 1.0022, 0.7 bin from the input's first sideband, M1 + 1.0002; the input's comb lost it)
-        closer = on_own.any(axis=1)[:, None] & (off.min(axis=1)[:, None] < np.abs(lines.at[:, None] - at[None, :]))
+        closer = on_own.any(axis=1)[:, None] & (off.min(axis=1)[:, None] < theirs)
         near[:, kind == 1] &= ~closer[:, kind == 1]
+        within = off.min(axis=1)[:, None] <= CONSISTENT_BINS * bin_ + 0.1 * DRIFT * at[None, :]
+        near[:, kind == 3] &= ~(closer | within)[:, kind == 3]
+        # within the stage's own comb of that shaft (3.9 of its orders, as comb looks) both meshes' sidebands of it
+        # lie on one grid (M1 = z_w1 o, h M2 = h z_p2 o): the same lines (36/65 + 33/76: 2 M2 + o = M1 + 2 o)
+        near[:, (kind == 3) & (np.abs(at - own[0]) <= 3.9 * step)] = False
+    else:
+        near[:, kind == 3] = False  # no own place to weigh the shared shaft's lines against: both stages'
     return frozenset(np.flatnonzero(near.any(axis=1)).tolist())
 
 
