@@ -24,17 +24,22 @@ def text(teeth, speed: float) -> str:
 @pytest.fixture(scope="module", params=sorted(BOXES))
 def take(request, tmp_path_factory):
     """The box simulated at 200 kHz, 0.2 s settled, resampled to 25.6 kHz, 30 dB noise (AM's generator)."""
+    teeth, speed = BOXES[request.param]
+    where = tmp_path_factory.mktemp("ao")
+    return request.param, where, simulated_take(where, teeth, speed, seed=39)
+
+
+def simulated_take(where, teeth, speed: float, seed: int, seconds: float = SECONDS) -> np.ndarray:
+    """*teeth* at *speed* described in where/true.toml and simulated from it at 200 kHz, *seconds* after
+    0.2 s settled, resampled to 25.6 kHz, 30 dB of noise (AM's generator; test_outside_aq/as take theirs here too)."""
     from scipy.signal import resample_poly
 
     import gearlab
 
-    teeth, speed = BOXES[request.param]
-    where = tmp_path_factory.mktemp("ao")
     (where / "true.toml").write_text(text(teeth, speed))
-    sim = gearlab.simulate_signals(gearbox=where / "true.toml", duration=SECONDS + 0.25, fs=200e3, speed=speed)
-    acc = resample_poly(sim.channels["casing_x"][sim.t >= 0.2], 16, 125)[: int(SECONDS * FS)]
-    acc = acc + np.random.default_rng(39).standard_normal(acc.size) * acc.std() * 10 ** (-30 / 20)
-    return request.param, where, acc
+    sim = gearlab.simulate_signals(gearbox=where / "true.toml", duration=seconds + 0.25, fs=200e3, speed=speed)
+    acc = resample_poly(sim.channels["casing_x"][sim.t >= 0.2], 16, 125)[: int(seconds * FS)]
+    return acc + np.random.default_rng(seed).standard_normal(acc.size) * acc.std() * 10 ** (-30 / 20)
 
 
 def inspected(where, acc, speed: float, teeth, kind: str) -> dict:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_outside_ao import FS, inspected, text
+from test_outside_ao import FS, inspected, simulated_take
 
 SECONDS = 2.0
 BOXES = {
@@ -31,17 +31,9 @@ def wrong(name: str):
 @pytest.fixture(scope="module", params=sorted(BOXES))
 def take(request, tmp_path_factory):
     """The box simulated at 200 kHz, 0.2 s settled, resampled to 25.6 kHz, 30 dB noise (test_outside_ao's)."""
-    from scipy.signal import resample_poly
-
-    import gearlab
-
     teeth, speed = BOXES[request.param]
     where = tmp_path_factory.mktemp("as")
-    (where / "true.toml").write_text(text(teeth, speed))
-    sim = gearlab.simulate_signals(gearbox=where / "true.toml", duration=SECONDS + 0.25, fs=200e3, speed=speed)
-    acc = resample_poly(sim.channels["casing_x"][sim.t >= 0.2], 16, 125)[: int(SECONDS * FS)]
-    acc = acc + np.random.default_rng(5184).standard_normal(acc.size) * acc.std() * 10 ** (-30 / 20)
-    return request.param, where, acc
+    return request.param, where, simulated_take(where, teeth, speed, seed=5184, seconds=SECONDS)
 
 
 @pytest.mark.parametrize("kind", ["ttl", "cos"])
