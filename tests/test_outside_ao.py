@@ -42,6 +42,15 @@ def simulated_take(where, teeth, speed: float, seed: int, seconds: float = SECON
     return acc + np.random.default_rng(seed).standard_normal(acc.size) * acc.std() * 10 ** (-30 / 20)
 
 
+def true_description_matches(take, boxes: dict, kind: str) -> None:
+    """The take's own description matches, no later mesh read as outshone (test_outside_aq/as's boxes)."""
+    name, where, acc = take
+    teeth, speed = boxes[name]
+    report = inspected(where, acc, speed, teeth, kind)
+    assert report["matches"] is True, report["verdict"]
+    assert not any("outshone" in s for s in report["check"]["stages"]), report["check"]["stages"]
+
+
 def inspected(where, acc, speed: float, teeth, kind: str) -> dict:
     import gearlab
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_outside_ao import FS, inspected, simulated_take
+from test_outside_ao import FS, inspected, simulated_take, true_description_matches
 
 SECONDS = 2.0
 BOXES = {
@@ -38,11 +38,7 @@ def take(request, tmp_path_factory):
 
 @pytest.mark.parametrize("kind", ["ttl", "cos"])
 def test_the_true_description_matches(take, kind):
-    name, where, acc = take
-    teeth, speed = BOXES[name]
-    report = inspected(where, acc, speed, teeth, kind)
-    assert report["matches"] is True, report["verdict"]
-    assert not any("outshone" in s for s in report["check"]["stages"]), report["check"]["stages"]
+    true_description_matches(take, BOXES, kind)
 
 
 def test_the_count_is_called_out_at_the_real_mesh_and_the_gear_named(take):
