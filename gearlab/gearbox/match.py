@@ -16,7 +16,7 @@ import numpy as np
 from .description import Gearbox
 from .orders import order_table
 from .outshone import outshone_line
-from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh
+from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh, whole
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
 UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
@@ -443,8 +443,8 @@ def check_description(
                         unresolved += [] if shaft_k in modulated else [note]
                         modulated.add(shaft_k)
                         continue
-                    if lone(lines, carriers, found, measured / described, bin_, skip):
-                        continue  # as where its lines stay under the threshold: no comb (sideband_combs.lone)
+                    if lone(lines, carriers, found, measured / described, bin_, skip) or not whole(found, z, bin_):
+                        continue  # as where its lines stay under the threshold: no comb (sideband_combs.lone, whole)
                 measured_shaft[shaft_k] = (found[0], found[1], f"{found[2]} sideband(s) of M{s.index}")
             o_seen, tol, _ = measured_shaft[shaft_k]
             z = measured / o_seen

@@ -1,6 +1,7 @@
 """Sideband combs of a stage's shafts around its mesh line (gearbox.match reads each stage with them): the comb of
 one shaft (comb: spacing, tolerance, lines), a stage's two combs sharing no line (families), and the lines another
-stage's structure explains, no sideband of this one (others_lines, mixed).
+stage's structure explains, no sideband of this one (others_lines, mixed); a comb reading no whole tooth count is
+no shaft's (whole).
 
 Tolerances: a line matches a mesh order M within 2 bins + 1e-3 M (tol_mesh: speed drift smears high orders); a
 sideband spacing matches a shaft order o within 0.5 bin / j + 1e-3 o for the j-th sideband (2 bins / j under 16
@@ -250,3 +251,17 @@ def lone(lines: Lines, carriers, found: tuple, described: float, bin_: float, sk
     ours = sidebands_of(lines, carriers, described, found[0], bin_, skip)
     top = max(float(lines.amp[q]) for q in found[3])
     return len(ours) >= LONE_LINES and float(np.max(lines.amp[ours])) >= top * 10 ** (LONE_DB / 20)
+
+
+def whole(found: tuple, z: float, bin_: float) -> bool:
+    """Whether a shaft's comb *found* (comb's tuple), reading *z* teeth (the mesh order over its spacing), fits a
+    whole count: a shaft's sidebands lie at whole multiples of its order, and its mesh at z of them, so the spacing
+    lies within CONSISTENT_BINS / its furthest sideband (as fitted keeps a comb's lines) of M / n for a whole n. A
+    line that is no order of any shaft is no shaft's sideband: a 27/52 + 40/70 box at 38.03 Hz, simulated at
+    200 kHz, carries stage 1's 194th mesh harmonic folded about that rate (200 kHz - 194 x 1026.7 Hz = 813.4 Hz,
+    order 21.389), alone 0.6201 above stage 2's mesh (20 dB): 'the pinion on the intermediate shaft shows 33.5 ±
+    0.2 teeth, 40 described' of the true description, 1.4 bins off M / 33 and M / 34."""
+    spacing, jmax = found[0], max(found[3].values())
+    mesh, bins = z * spacing, CONSISTENT_BINS if spacing >= SEPARATED * bin_ else 2.0
+    off = min(abs(spacing - mesh / n) for n in {max(1, math.floor(z)), math.ceil(z)})
+    return off <= bins * bin_ / jmax + DRIFT * spacing
