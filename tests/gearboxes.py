@@ -61,7 +61,6 @@ def two_file_detection(name: str, source: str) -> str:
 
 # the load and sensor of the two-stage reducers of the slower-shaft and train-cycle tests
 REDUCER = dict(load="15 N*m", near="input", direction="x")
-# a 20/30 + 20/50 reducer, tacho on the input: the slower-shaft tests' gearbox (test_slow_shaft*)
 # outside user AF's 23/59 + 19/67 box at 31 Hz (tests/test_outside_ah, _ak, _al: gearlab's own simulation of it)
 AF_BOX = description(
     stage(23, 59, module="2.5 mm", bores=("25 mm", "30 mm")),
@@ -73,6 +72,7 @@ AF_BOX = description(
     tacho="input",
 )
 
+# a 20/30 + 20/50 reducer, tacho on the input: the slower-shaft tests' gearbox (test_slow_shaft*)
 SLOW_BOX = description(
     stage(20, 30, "2 mm", "15 mm", ("15 mm", "20 mm")),
     stage(20, 50, "2.5 mm", "20 mm", ("20 mm", "30 mm")),
