@@ -20,13 +20,15 @@ any effect is searched, and a difference ends the diagnosis with one line that s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
 
 from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
 from ..gearbox.speed import TEETH_AGREE
+from .structure_later import _lines, _PairDescription, later_stages, wheel_line
+from .structure_later import _outshone as _outshone  # where tests/test_outside_user reads it
 
 # A target whose strongest lines (STRONGEST, above order MIN_TEETH) hold at least this share of their
 # power off the source's comb of mesh harmonics and sidebands may be another gearbox (then those lines
@@ -43,41 +45,6 @@ FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 SPEED_TOL = 0.02
 # A scale factor within this of 1 is a calibration's tolerance, left to the effects.
 LEVEL_TOL = 0.1
-
-
-@dataclass(frozen=True)
-class _Stage:
-    index: int
-    pinion: object
-    wheel: object
-
-
-@dataclass(frozen=True)
-class _Gear:
-    z: int
-
-
-@dataclass(frozen=True)
-class _PairDescription:
-    """The source's gear pair as the one-stage description gearlab.gearbox.order_table reads."""
-
-    stages: tuple
-    shafts: tuple = ("input", "output")
-
-    @classmethod
-    def of(cls, z1: int, z2: int) -> _PairDescription:
-        return cls((_Stage(1, _Gear(int(z1)), _Gear(int(z2))),))
-
-    @classmethod
-    def train(cls, pair) -> _PairDescription:
-        """Every stage of a simulator's pair: a two-stage model's carries the next (StagePair.next_stage)."""
-        stages = []
-        while pair is not None:
-            stages.append(_Stage(len(stages) + 1, _Gear(int(pair.Z1)), _Gear(int(pair.Z2))))
-            pair = getattr(pair, "next_stage", None)
-        from ..gearbox.description import SHAFT_NAMES
-
-        return cls(tuple(stages), SHAFT_NAMES[len(stages)])
 
 
 def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.ndarray) -> np.ndarray:
@@ -243,131 +210,12 @@ def _related(a: float, b: float) -> bool:
     return abs(big / small - round(big / small)) * small <= 0.05
 
 
-def _lines(rows: np.ndarray, max_order: int):
-    """The spectral lines of revolutions *rows* (n, P) laid end to end, as `gearlab inspect` reads a record."""
-    from ..gearbox.speed import THRESHOLD_DB, find_lines
-    from ..signals import spectrum
-
-    n, points = rows.shape
-    orders, amp = spectrum(np.asarray(rows, dtype=np.float64).reshape(-1), points)
-    top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
-    return find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
-
-
 def later_combs(pair) -> tuple:
     """(mesh order, (pinion and wheel shaft orders)) of each stage after the first of *pair*'s train."""
     from ..gearbox import order_table
 
     stages = order_table(_PairDescription.train(pair)).stages[1:]
     return tuple((float(s.mesh), (float(s.pinion_shaft_order), float(s.wheel_shaft_order))) for s in stages)
-
-
-def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 0) -> dict:
-    """Stages after the first of a multi-stage source: where the target's lines put each stage's mesh order against
-    where the source's own lines put it, both read alike (inspect's check_description on each). A later stage's mesh
-    is often weak, or held by its harmonics, so it is not tested against the description's order but against the
-    source's reading of itself (a mesh of no whole input order: against the description's): the stage differs when
-    the target's reading moves off that and the target holds no line there (no *source*: against the described
-    order), or when the target holds no line where the source's mesh, at its level under the first mesh, would
-    stand UNSEEN_DB over the target's floor. {'stages': [{stage, expected, source, target}], 'line': the one line
-    of the first difference, or None}."""
-    from ..gearbox import order_table
-    from ..gearbox.match import check_description, tol_mesh, unseen_mesh, wheel_upstream
-
-    box = _PairDescription.train(pair)
-    out: dict = {"stages": [], "line": None}
-    if len(box.stages) < 2:
-        return out
-    table = order_table(box)
-    read = {}
-    for name, rows in (("target", target), ("source", source)):
-        if rows is not None:  # no source: a measured target read against the description alone
-            lines = _lines(rows, max_order)
-            check = check_description(lines, box, rows.shape[0], True)
-            read[name] = (lines, rows.shape[0], check["stages"])
-    for k in range(1, len(box.stages)):
-        t, s = read["target"][2][k], read["source"][2][k] if source is not None else {}
-        entry = {
-            "stage": k + 1,
-            "expected": float(table.stages[k].mesh),
-            "source": s.get("measured_order"),
-            "target": t.get("measured_order"),
-        }
-        out["stages"].append(entry)
-        # A mesh of no whole input order is held by the source at one phase (its revolutions are one
-        # steady period each, builder.steady_response): laid end to end they show whole orders only,
-        # so its reading of itself says nothing and the target is read against the described order.
-        whole = abs(entry["expected"] - round(entry["expected"])) < 1e-6 and source is not None
-        reference = entry["source"] if whole else entry["expected"]
-        if entry["target"] is None and source is not None and out["line"] is None:
-            out["line"] = unseen_mesh(k, read["target"][2], read["source"][2])  # a weak mesh in the noise: None
-        if out["line"] is None and "outshone" in t:  # read on a weak line beside a far stronger family (inspect's)
-            out["line"] = t["outshone"]["line"]
-        if reference is None or entry["target"] is None or out["line"] is not None:
-            continue
-        lines, n, _ = read["target"]
-        tol = max(tol_mesh(reference, 1.0 / n), tol_mesh(reference, 1.0 / read["source"][1]) if whole else 0.0)
-        st = table.stages[k]
-        others = [float(t.mesh) for q, t in enumerate(table.stages) if q != k]
-        louder = _outshone(lines, reference, st, tol, others)
-        if louder is None and (
-            abs(entry["target"] - reference) <= tol or _held(lines, reference, entry["target"], st, tol)
-        ):
-            continue
-        if louder is not None:
-            entry["target"] = louder
-        seen, moved = entry["target"] / float(st.pinion_shaft_order), entry["target"] / entry["expected"]
-        out["line"] = (
-            f"stage {k + 1}: mesh order {entry['target']:.4g} measured, {entry['expected']:.4g} expected: the source "
-            f"simulates a {st.pinion_teeth}-tooth pinion on the {st.pinion_shaft} shaft turning at order "
-            f"{float(st.pinion_shaft_order):.4g} (the target's mesh is {seen:.1f} such teeth: a tooth count of "
-            f"stage {k + 1}, or a wheel upstream, differs{wheel_upstream(table, k, moved, seen)})"
-        )
-    # a later wheel: its shaft's sidebands of its mesh, as for the first (wheel_line); the last wheel's
-    # count shows nowhere else (a 17/44 + 21/53 reducer described with 52 teeth passed the gap and detection)
-    for k in range(1, len(box.stages)):
-        line = None if out["line"] else wheel_line({"inspect": read["target"][2][k]}, table.stages[k].wheel_teeth)
-        if line:
-            out["line"] = f"stage {k + 1}: {line}"
-    return out
-
-
-def _held(lines, reference: float, measured: float, stage, tol: float) -> bool:
-    """Whether the target holds the described later mesh at *reference* itself: a line there, unless it
-    is a sideband of the stronger mesh *measured* by the pinion's shaft (a pinion j teeth off puts
-    its order on the real mesh's j-th sideband: a 26/73 + 32/59 description of a 33-tooth second
-    pinion's records, 11.397 = 11.753 - 0.356, was 'unexplained')."""
-    at = lines.near(reference, tol)
-    if at is None:
-        return False
-    o = float(stage.pinion_shaft_order)
-    real = lines.near(measured, tol)
-    sideband = any(abs(reference - measured - j * o) <= tol for j in (-3, -2, -1, 1, 2, 3))
-    return not (sideband and real is not None and lines.amp[real] > lines.amp[at])
-
-
-# A line this many times stronger than the described later mesh's, a pinion-shaft sideband away from
-# it, is the real mesh (a mesh's sidebands may outgrow its line by a few dB, not by 20)
-OUTSHONE = 10.0
-
-
-def _outshone(lines, reference: float, stage, tol: float, others: list[float]) -> float | None:
-    """The order of a line OUTSHONE x stronger than the one at the described later mesh *reference*,
-    j <= 3 of the pinion shaft's orders away and on no other stage's mesh harmonic, or None: a
-    27/88 + 21/65 description of a 22-tooth second pinion's records read its own order (6.443,
-    the real 6.75's sideband, 34 dB weaker) off the history laid end to end."""
-    at = lines.near(reference, tol)
-    if at is None:
-        return None
-    o = float(stage.pinion_shaft_order)
-    for j in (1, -1, 2, -2, 3, -3):
-        q = lines.near(reference + j * o, tol)
-        if q is None or lines.amp[q] < OUTSHONE * lines.amp[at]:
-            continue
-        x = float(lines.at[q])
-        if not any(abs(x - h * m) <= tol for m in others for h in range(1, 11)):
-            return x
-    return None
 
 
 def mesh_line(check: dict, z1: int) -> str:
@@ -406,24 +254,6 @@ def mesh_line(check: dict, z1: int) -> str:
     return line + (
         f" (not a whole number of teeth: the target's revolutions were cut at a speed {100 * abs(m / z1 - 1):.1f} % "
         "off its shaft's, or another gear meshes)"
-    )
-
-
-def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
-    """The one line of a wheel's (or the *role* 'pinion''s) tooth-count difference (mesh_check's
-    reading of its shaft's sidebands, more than half a tooth and its resolution off *z2*), or None."""
-    key = "z1" if role == "pinion" else "z2"
-    seen, spread = mesh["inspect"].get(f"{key}_seen"), mesh["inspect"].get(f"{key}_resolution") or 0.0
-    # read around the described mesh only: a later stage's (the PHM 2009 rig's 48T idler pinion meshing
-    # at order 16, read as stage 1's 32/96 by a one-stage reading) gave '47.7 teeth' for the 96T wheel
-    # ... or around the mesh found a wheel sideband or two off it, the pinion as described (an output
-    # tacho read through a first wheel one tooth off: the mesh at M + M / z2)
-    near = mesh["inspect"].get("matched") or mesh["inspect"].get("pinion_as_described")
-    if seen is None or not near or abs(seen - z2) <= max(0.5, spread):
-        return None
-    return (
-        f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh), {z2} expected: the "
-        f"source simulates a {z2}-tooth {role}"
     )
 
 

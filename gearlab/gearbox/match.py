@@ -363,10 +363,10 @@ def check_description(
                 i, measured = found
         matched = i is not None and abs(measured - expected) <= tol_mesh(expected, bin_)
         entry["matched"] = bool(matched)
-        if i is None:
-            differences.append(
-                f"stage {s.index}: no line at mesh order {expected:.4g} (a {s.pinion_teeth}-tooth pinion)"
-            )
+        if i is None:  # the gap's later_stages says it too where it has no source to weigh the mesh's level by
+            missing = f"stage {s.index}: no line at mesh order {expected:.4g} (a {s.pinion_teeth}-tooth pinion)"
+            entry["no_line"] = missing
+            differences.append(missing)
             wrong.append(s.index)
             stages.append(entry)
             continue
