@@ -1,55 +1,104 @@
-"""The gap's structure line without a source says what inspect says of the same take (issue 39, the lead's fresh box
-128 of seeds 5240-5263, a development case now). A 21/92 + 30/63 box at 42.80 Hz described with a 91-tooth first
-wheel puts stage 2 at 6.923, where the take has no line (the real mesh, 6.848, is a sideband's width off): inspect
-said 'stage 2: no line at mesh order 6.923 (a 30-tooth pinion)', while the gap's later_stages, with no source to weigh
-the mesh's level by, let a missing later mesh pass and its line read 'structure not fully checked: no sideband shows
-the order of the intermediate shaft, so a wheel on it is checked only through a later stage's mesh order'. With no
-source the gap has inspect's information, so it says inspect's line (gearlab.gap.structure_later)."""
+"""A first wheel one tooth short is called out, and named, by inspect and by the gap's structure line without a source
+(issue 39; the lead's fresh boxes 128 and 141 of seeds 5240-5263, development cases now). Both move stage 2's mesh by
+z / (z - 1), no whole order of its pinion's shaft:
+* 21/92 + 30/63 at 42.80 Hz described with 91 puts stage 2 at 6.923, where the take has no line (the real 6.848):
+  inspect said 'stage 2: no line at mesh order 6.923', and the gap, with no source to weigh the mesh's level by, let
+  the missing mesh pass: 'structure not fully checked: no sideband shows the order of the intermediate shaft'.
+* 16/52 + 34/40 at 26.72 Hz described with 51 puts stage 2 at 10.667 = 2 x 16 / 3, whose 3rd, 6th and 9th harmonics are
+  stage 1's 32, 64, 96 (the take's strongest lines): no line of its own, the real 10.4615 unsaid, both said 'matches'.
+The mesh is now looked for where a wheel upstream a tooth or three off puts it too (gearbox.outshone.counts), where
+the described one has no line or only another mesh's; outward names that wheel where the pinion's count is no whole
+one; and a later mesh with no line at all is a difference in the gap as in inspect (gearlab.gap.structure_later)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from gearboxes import shaft_orders
 from test_outside_ao import FS, inspected, simulated_take
 
-TEETH, SPEED = ((21, 92), (30, 63)), 42.802
-WRONG = ((21, 91), (30, 63))
+BOXES = {"f128": (((21, 92), (30, 63)), 42.802), "f141": (((16, 52), (34, 40)), 26.723)}
 
 
-@pytest.fixture(scope="module")
-def take(tmp_path_factory):
+def short(teeth):
+    (a, b), second = teeth
+    return (a, b - 1), second
+
+
+@pytest.fixture(scope="module", params=sorted(BOXES))
+def take(request, tmp_path_factory):
     """The box simulated at 200 kHz, 0.2 s settled, resampled to 25.6 kHz, 30 dB noise (test_outside_ao's)."""
+    teeth, speed = BOXES[request.param]
     where = tmp_path_factory.mktemp("ax")
-    return where, simulated_take(where, TEETH, SPEED, seed=5184, seconds=2.0)
+    return request.param, where, simulated_take(where, teeth, speed, seed=5184, seconds=2.0)
 
 
-def _line(acc, teeth, kind: str, record: dict) -> str | None:
+def gap_line(acc, fs: float, speed: float, teeth, kind: str, record: dict) -> str | None:
+    """The gap's structure line without a source (the detection kind's history check reads it so) on *acc*'s
+    revolutions cut at a TTL or cosine tacho on the input."""
     from gearboxes import described_pair
 
     from gearlab.data.chain import Chain
     from gearlab.gap.structure import structure_line
     from gearlab.signals import angle_from_pulses, resample_revolutions
 
-    theta = 2 * np.pi * SPEED * (0.2 + np.arange(acc.size) / FS) + 3.7
+    theta = 2 * np.pi * speed * (0.2 + np.arange(acc.size) / fs) + 3.7
     tacho = np.where(np.mod(theta, 2 * np.pi) < 0.2 * np.pi, 5.0, 0.0) if kind == "ttl" else 2.5 - 2.5 * np.cos(theta)
-    rows = resample_revolutions(acc, angle_from_pulses(tacho, FS), points=1024)
-    chain = Chain(fs=FS, speed=SPEED, tacho_shaft="input")
+    rows = resample_revolutions(acc, angle_from_pulses(tacho, fs), points=1024)
+    chain = Chain(fs=fs, speed=speed, tacho_shaft="input")
     return structure_line(rows, described_pair(*teeth), 400, chain, None, record)
 
 
 @pytest.mark.parametrize("kind", ["ttl", "cos"])
-def test_a_first_wheel_one_short_is_called_out_by_the_gap_as_by_inspect(take, kind):
-    where, acc = take
-    report = inspected(where, acc, SPEED, WRONG, kind)
-    assert report["matches"] is False and "stage 2: no line at mesh order 6.923" in report["verdict"], report["verdict"]
+def test_a_first_wheel_one_short_is_named_by_inspect_and_the_gap(take, kind):
+    name, where, acc = take
+    teeth, speed = BOXES[name]
+    wheel = f"a {teeth[0][1]}-tooth wheel on the intermediate shaft"
+    report = inspected(where, acc, speed, short(teeth), kind)
+    assert report["matches"] is False and wheel in report["verdict"], report["verdict"]
     record: dict = {}
-    line = _line(acc, WRONG, kind, record)
-    assert line is not None and line.startswith("stage 2: no line at mesh order 6.923"), (line, record)
-    assert "unchecked" not in record, record
+    line = gap_line(acc, FS, speed, short(teeth), kind, record)
+    assert line is not None and wheel in line, (line, record)
 
 
 @pytest.mark.parametrize("kind", ["ttl", "cos"])
-def test_the_true_description_passes_the_gap_and_inspect(take, kind):
-    where, acc = take
-    assert inspected(where, acc, SPEED, TEETH, kind)["matches"] is True
-    assert _line(acc, TEETH, kind, {}) is None
+def test_the_true_description_passes_inspect_and_the_gap(take, kind):
+    name, where, acc = take
+    teeth, speed = BOXES[name]
+    assert inspected(where, acc, speed, teeth, kind)["matches"] is True
+    assert gap_line(acc, FS, speed, teeth, kind, {}) is None
+
+
+def test_a_later_mesh_with_no_line_differs_in_the_gap_without_a_source_as_in_inspect(tmp_path):
+    # written by hand: a 23/74 + 31/86 box whose second stage shows nothing (its mesh, 9.635, under the floor)
+    from test_outside_ao import text
+
+    import gearlab
+
+    teeth, speed, fs = ((23, 74), (31, 86)), 25.0, FS  # 1024 samples a turn: the rows cut without interpolating
+    t = np.arange(int(2.0 * fs)) / fs
+    theta = 2 * np.pi * speed * (0.2 + t) + 3.7
+    x = sum(np.cos(h * 23 * theta + 0.4 * h) / h for h in (1, 2, 3))
+    x = x + np.random.default_rng(7).standard_normal(t.size) * 0.02
+    tacho = np.where(np.mod(theta, 2 * np.pi) < 0.2 * np.pi, 5.0, 0.0)
+    np.savez(tmp_path / "take.npz", acc=x, tacho=tacho, fs=fs)
+    (tmp_path / "gb.toml").write_text(text(teeth, speed))
+    report = gearlab.inspect_recording(tmp_path / "take.npz", tmp_path / "gb.toml", vibration="acc", tacho="tacho")
+    said = f"stage 2: no line at mesh order {31 * shaft_orders(teeth)[1]:.4g}"
+    assert report["matches"] is False and said in report["verdict"], report["verdict"]
+    record: dict = {}
+    line = gap_line(x, fs, speed, teeth, "ttl", record)
+    assert line is not None and line.startswith(said), (line, record)
+
+
+def test_a_later_mesh_missing_where_the_source_holds_it_strong_differs():
+    # the gap's rule with a source (structure_later.unseen_mesh): the source's stage-2 mesh 20 dB under its first, the
+    # target's first 60 dB over its floor: the target's would stand 40 dB over it (UNSEEN_DB); 39 dB is a transfer path
+    from gearlab.gap.structure_later import UNSEEN_DB, unseen_mesh
+
+    target = [{"amplitude": 1.0, "db_over_floor": 20.0 + UNSEEN_DB}, {"matched": False}]
+    source = [{"amplitude": 1.0}, {"matched": True, "amplitude": 0.1, "expected_order": 9.815}]
+    line = unseen_mesh(1, target, source)
+    assert line is not None and line.startswith("stage 2: no line at mesh order 9.815, where the source's mesh"), line
+    target[0]["db_over_floor"] -= 1.0
+    assert unseen_mesh(1, target, source) is None

@@ -76,6 +76,27 @@ def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
     )
 
 
+# A later mesh the source puts this far over the target's floor shows there (25 dB over a line's threshold): a source's
+# mesh level off the record's by less is a transfer path, more is no such mesh (AM's 29/66 + 22/95 described with 65)
+UNSEEN_DB = 40.0
+
+
+def unseen_mesh(k: int, target: list, source: list) -> str | None:
+    """The line saying stage *k*'s mesh is missing from the target where the source reads it (check_description's
+    *target* and *source* stages) at a level, under its first mesh, that would put it UNSEEN_DB over the target's
+    floor, or None."""
+    t1, s1, s = target[0], source[0], source[k]
+    if not (s.get("matched") and s1.get("amplitude") and t1.get("amplitude")):
+        return None
+    over = t1["db_over_floor"] + 20 * np.log10(s["amplitude"] / s1["amplitude"])
+    if over < UNSEEN_DB:
+        return None
+    return (
+        f"stage {k + 1}: no line at mesh order {float(s['expected_order']):.4g}, where the source's mesh would stand "
+        f"{over:.0f} dB over the target's floor (a tooth count of stage {k + 1}, or a wheel upstream, differs)"
+    )
+
+
 def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 0) -> dict:
     """Stages after the first of a multi-stage source: where the target's lines put each stage's mesh order against
     where the source's own lines put it, both read alike (inspect's check_description on each). A later stage's mesh
@@ -87,7 +108,7 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     target shows no line at differs as inspect says it (check_description's 'no_line'). {'stages': [{stage,
     expected, source, target}], 'line': the one line of the first difference, or None}."""
     from ..gearbox import order_table
-    from ..gearbox.match import check_description, tol_mesh, unseen_mesh, wheel_upstream
+    from ..gearbox.match import check_description, tol_mesh, wheel_upstream
 
     box = _PairDescription.train(pair)
     out: dict = {"stages": [], "line": None}

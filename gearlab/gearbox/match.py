@@ -15,7 +15,7 @@ import numpy as np
 
 from .description import Gearbox
 from .orders import order_table
-from .outshone import outshone_line
+from .outshone import counts, outshone_line
 from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh, whole
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
@@ -179,27 +179,6 @@ def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float,
     return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
 
 
-# A later mesh the source puts this far over the target's floor shows there (25 dB over a line's threshold): a source's
-# mesh level off the record's by less is a transfer path, more is no such mesh (AM's 29/66 + 22/95 described with 65)
-UNSEEN_DB = 40.0
-
-
-def unseen_mesh(k: int, target: list, source: list) -> str | None:
-    """The line saying stage *k*'s mesh is missing from the target where the source reads it (check_description's
-    *target* and *source* stages) at a level, under its first mesh, that would put it UNSEEN_DB over the target's
-    floor, or None."""
-    t1, s1, s = target[0], source[0], source[k]
-    if not (s.get("matched") and s1.get("amplitude") and t1.get("amplitude")):
-        return None
-    over = t1["db_over_floor"] + 20 * np.log10(s["amplitude"] / s1["amplitude"])
-    if over < UNSEEN_DB:
-        return None
-    return (
-        f"stage {k + 1}: no line at mesh order {float(s['expected_order']):.4g}, where the source's mesh would stand "
-        f"{over:.0f} dB over the target's floor (a tooth count of stage {k + 1}, or a wheel upstream, differs)"
-    )
-
-
 def borrowed(lines: Lines, m: float, bin_: float, shared) -> bool:
     """Whether every line at a harmonic of the mesh order *m* sits on another stage's mesh harmonic (*shared*):
     nothing of its own says a mesh turns there."""
@@ -345,10 +324,15 @@ def check_description(
             divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= tol_mesh(look, bin_)
             if i is None or (divisor and len(own) >= 2):
                 measured, i = family[:2]
+        # a wheel upstream a tooth or three off moves M by no whole order of the pinion's shaft (outshone.counts)
+        upstream = [c * look / expected for c, _ in counts(table, k)] if leads else []
         if i is None and family is None and not behind:
             # no line at M, nor a family: a count off by j puts the mesh at M + j o (a 15-tooth input pinion
-            # described 16, its shaft unmodulated: no sideband at 16 led the search there)
-            found = harmonic_comb(lines, [look] + [look + j * o_p for j in (-3, -2, -1, 1, 2, 3)], bin_, theirs)
+            # described 16, its shaft unmodulated: no sideband at 16 led the search there), a wheel upstream elsewhere
+            # (21/92 + 30/63 described with 91: 'no line at mesh order 6.923', the real 6.848 unsaid)
+            found = harmonic_comb(
+                lines, [look] + [look + j * o_p for j in (-3, -2, -1, 1, 2, 3)] + upstream, bin_, theirs
+            )
             if found is not None and abs(found[1] - look) > tol_mesh(look, bin_):
                 i, measured = found
         above = harmonics([m for m in meshes if m > look], bin_)
@@ -358,7 +342,8 @@ def check_description(
             # 36, 72, 108 while 11.57 and its harmonics stood 58-66 dB over the floor: 'matches')
             o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
             offsets = [j * o for o in (o_p, o_w)[behind:] for j in (-3, -2, -1, 1, 2, 3)]
-            found = harmonic_comb(lines, [look] + [look + d for d in offsets], bin_, shared)
+            # ... or a wheel upstream (16/52 + 34/40 described with 51: M2 = 10.667 = 2 M1 / 3, read on 32, 64, 96)
+            found = harmonic_comb(lines, [look] + [look + d for d in offsets] + upstream, bin_, shared)
             if found is not None and abs(found[1] - look) > tol_mesh(look, bin_):
                 i, measured = found
         matched = i is not None and abs(measured - expected) <= tol_mesh(expected, bin_)
@@ -550,6 +535,13 @@ def outward(stages: list[dict], box: Gearbox, tacho: int, origin: str = "") -> t
             if not entry["matched"] and round(z) != said:
                 why = f"the stage-{k} mesh at {z:.1f} orders of the {table.shafts[near]} shaft"
                 found.append((abs(near - tacho), k, role, z, said, f"the {role} shows {z:.1f} teeth ({why})"))
+                # no whole count of the pinion, a whole one of the wheel before it on its shaft: that wheel (16/52 +
+                # 34/40 described with 51: 'the pinion shows 33.3 teeth', inspect named the 52-tooth wheel)
+                ratio = entry["measured_order"] / entry["expected_order"]
+                if not wheel_near and k - 1 > tacho and (up := wheel_upstream(table, k - 1, ratio, z)):
+                    wheel, up = table.stages[k - 2].wheel_teeth, up.split(" puts it there")[0]
+                    why += f", no whole count of its pinion{up} puts it there"
+                    found[-1] = (abs(near - tacho), k - 1, "wheel", wheel / ratio, wheel, why)
                 break
             role, said, key = gears[1]
             seen, spread = entry.get(f"{key}_seen"), entry.get(f"{key}_resolution") or 0.0
