@@ -7,8 +7,10 @@ z / (z - 1), no whole order of its pinion's shaft:
 * 16/52 + 34/40 at 26.72 Hz described with 51 puts stage 2 at 10.667 = 2 x 16 / 3, whose 3rd, 6th and 9th harmonics are
   stage 1's 32, 64, 96 (the take's strongest lines): no line of its own, the real 10.4615 unsaid, both said 'matches'.
 The mesh is now looked for where a wheel upstream a tooth or three off puts it too (gearbox.outshone.counts), where
-the described one has no line or only another mesh's; outward names that wheel where the pinion's count is no whole
-one; and a later mesh with no line at all is a difference in the gap as in inspect (gearlab.gap.structure_later)."""
+the described one has no line or only another mesh's; outward (the gap's reading from the tacho) names that wheel where
+the pinion's count is no whole one (before, a later mesh stronger than the first was 'mesh order 7.0 measured, 28
+expected' of a 28/76 + 19/65 box described with 75); and a later mesh with no line at all is a difference in the gap
+as in inspect (gearlab.gap.structure_later)."""
 
 from __future__ import annotations
 
@@ -69,26 +71,45 @@ def test_the_true_description_passes_inspect_and_the_gap(take, kind):
     assert gap_line(acc, FS, speed, teeth, kind, {}) is None
 
 
-def test_a_later_mesh_with_no_line_differs_in_the_gap_without_a_source_as_in_inspect(tmp_path):
-    # written by hand: a 23/74 + 31/86 box whose second stage shows nothing (its mesh, 9.635, under the floor)
+HAND = ((23, 74), (31, 86))  # written by hand: 1024 samples a turn at 25 Hz, the rows cut without interpolating
+
+
+def hand_take(where, said, second: float) -> tuple[np.ndarray, dict]:
+    """A take of HAND written by hand, its stage-2 mesh harmonics at *second* x those of stage 1 (0: silent), and
+    inspect's report of it against the description *said*."""
     from test_outside_ao import text
 
     import gearlab
 
-    teeth, speed, fs = ((23, 74), (31, 86)), 25.0, FS  # 1024 samples a turn: the rows cut without interpolating
-    t = np.arange(int(2.0 * fs)) / fs
-    theta = 2 * np.pi * speed * (0.2 + t) + 3.7
-    x = sum(np.cos(h * 23 * theta + 0.4 * h) / h for h in (1, 2, 3))
+    t = np.arange(int(2.0 * FS)) / FS
+    theta = 2 * np.pi * 25.0 * (0.2 + t) + 3.7
+    m2 = HAND[1][0] * shaft_orders(HAND)[1]
+    x = sum(np.cos(h * 23 * theta + 0.4 * h) / h + second / h * np.cos(h * m2 * theta + 0.7 * h) for h in (1, 2, 3))
     x = x + np.random.default_rng(7).standard_normal(t.size) * 0.02
-    tacho = np.where(np.mod(theta, 2 * np.pi) < 0.2 * np.pi, 5.0, 0.0)
-    np.savez(tmp_path / "take.npz", acc=x, tacho=tacho, fs=fs)
-    (tmp_path / "gb.toml").write_text(text(teeth, speed))
-    report = gearlab.inspect_recording(tmp_path / "take.npz", tmp_path / "gb.toml", vibration="acc", tacho="tacho")
-    said = f"stage 2: no line at mesh order {31 * shaft_orders(teeth)[1]:.4g}"
+    np.savez(where / "take.npz", acc=x, tacho=np.where(np.mod(theta, 2 * np.pi) < 0.2 * np.pi, 5.0, 0.0), fs=FS)
+    (where / "gb.toml").write_text(text(said, 25.0))
+    return x, gearlab.inspect_recording(where / "take.npz", where / "gb.toml", vibration="acc", tacho="tacho")
+
+
+def test_a_later_mesh_with_no_line_differs_in_the_gap_without_a_source_as_in_inspect(tmp_path):
+    x, report = hand_take(tmp_path, HAND, 0.0)  # the second stage shows nothing (its mesh, 9.635, under the floor)
+    said = f"stage 2: no line at mesh order {31 * shaft_orders(HAND)[1]:.4g}"
     assert report["matches"] is False and said in report["verdict"], report["verdict"]
     record: dict = {}
-    line = gap_line(x, fs, speed, teeth, "ttl", record)
+    line = gap_line(x, FS, 25.0, HAND, "ttl", record)
     assert line is not None and line.startswith(said), (line, record)
+
+
+@pytest.mark.parametrize("wheel", [73, 75])
+def test_the_gap_names_the_first_wheel_where_the_later_mesh_outweighs_the_first(tmp_path, wheel):
+    # stage 2's mesh 2.5 x stage 1's: the gap's first-mesh check took the real 9.635 for another gear's and said
+    # 'mesh order 9.6 measured, 23 expected: ... not a whole number of teeth'; its pinion reads 30.6 / 31.4 teeth
+    said = ((23, wheel), HAND[1])
+    x, report = hand_take(tmp_path, said, 2.5)
+    assert report["matches"] is False and "a 74-tooth wheel on the intermediate shaft" in report["verdict"]
+    line = gap_line(x, FS, 25.0, said, "ttl", {})
+    assert line is not None and line.startswith("stage 1 wheel: 74 teeth fit the recording"), line
+    assert gap_line(x, FS, 25.0, HAND, "ttl", {}) is None
 
 
 def test_a_later_mesh_missing_where_the_source_holds_it_strong_differs():

@@ -532,13 +532,15 @@ def outward(stages: list[dict], box: Gearbox, tacho: int, origin: str = "") -> t
                 break
             z = entry["measured_order"] / float(table.shaft_orders[near])
             role, said, _ = gears[0]
-            if not entry["matched"] and round(z) != said:
+            # no whole count of the pinion, a whole one of the wheel before it on its shaft: that wheel (16/52 + 34/40
+            # described with 51: 'the pinion shows 33.3 teeth'; 28/76 + 19/65 with 75, 18.75 of its 19: unsaid)
+            ratio, up = entry["measured_order"] / entry["expected_order"], ""
+            if not entry["matched"] and not wheel_near and k - 1 > tacho:
+                up = wheel_upstream(table, k - 1, ratio, z)
+            if not entry["matched"] and (round(z) != said or up):
                 why = f"the stage-{k} mesh at {z:.1f} orders of the {table.shafts[near]} shaft"
                 found.append((abs(near - tacho), k, role, z, said, f"the {role} shows {z:.1f} teeth ({why})"))
-                # no whole count of the pinion, a whole one of the wheel before it on its shaft: that wheel (16/52 +
-                # 34/40 described with 51: 'the pinion shows 33.3 teeth', inspect named the 52-tooth wheel)
-                ratio = entry["measured_order"] / entry["expected_order"]
-                if not wheel_near and k - 1 > tacho and (up := wheel_upstream(table, k - 1, ratio, z)):
+                if up:
                     wheel, up = table.stages[k - 2].wheel_teeth, up.split(" puts it there")[0]
                     why += f", no whole count of its pinion{up} puts it there"
                     found[-1] = (abs(near - tacho), k - 1, "wheel", wheel / ratio, wheel, why)
