@@ -181,7 +181,14 @@ class Upsampled:
         values = np.asarray(values)
         if self.up == 1:
             return values
-        return np.interp(np.arange(self.signal.size) / self.up, np.arange(values.size), values)
+        x = np.arange(self.signal.size) / self.up
+        if values.dtype.kind in "fiu" and values.ndim == 1 and values.size:
+            from .grid import read_grid  # np.interp on its own grid to the bit, in half the CPU (shaft.on_grid)
+
+            out = np.empty(x.size)
+            read_grid(x, np.ascontiguousarray(values, dtype=np.float64), out)
+            return out
+        return np.interp(x, np.arange(values.size), values)
 
 
 def upsampled(signal: np.ndarray) -> Upsampled:
