@@ -14,6 +14,7 @@ import re
 import numpy as np
 
 from .description import Gearbox
+from .modulated import centre
 from .orders import order_table
 from .outshone import counts, outshone_line
 from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh, whole
@@ -346,6 +347,10 @@ def check_description(
             found = harmonic_comb(lines, [look] + [look + d for d in offsets] + upstream, bin_, shared)
             if found is not None and abs(found[1] - look) > tol_mesh(look, bin_):
                 i, measured = found
+        if i is not None and (tacho_on_input or (tacho_shaft is not None and tacho_shaft <= k)):  # gearbox.modulated
+            o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
+            hit = centre(lines, table, k, look, measured, (o_p, o_w), bin_, theirs, harmonic_comb)
+            i, measured = hit or (i, measured)
         matched = i is not None and abs(measured - expected) <= tol_mesh(expected, bin_)
         entry["matched"] = bool(matched)
         if i is None:  # the gap's later_stages says it too where it has no source to weigh the mesh's level by
