@@ -245,12 +245,44 @@ def lone(lines: Lines, carriers, found: tuple, described: float, bin_: float, sk
     4th mesh harmonic; which 171 turns the mark starts put it over the threshold or not, and over it it alone read
     'the pinion on the intermediate shaft shows 25.1 teeth', where 9 lines (22-45 dB) lie 0.3898 (19 teeth) off the
     meshes. At 37 Hz a pair 15.0 Hz either side of the first mesh (0.4058, 17 dB; on no other mesh of that shaft)
-    read 'the wheel shows 56.7 teeth', 8 lines (15-39 dB) 0.3898 off."""
-    if found[2] > 2:
+    read 'the wheel shows 56.7 teeth', 8 lines (15-39 dB) 0.3898 off.
+
+    A comb of up to three lines, one of them nearer the described spacing's sideband than its own (on_described),
+    is outweighed too where the described spacing's sidebands hold LONE_LINES or more, more than the comb's
+    spacing's, and their strongest is no weaker than its strongest."""
+    if found[2] > 3:
         return False
     ours = sidebands_of(lines, carriers, described, found[0], bin_, skip)
     top = max(float(lines.amp[q]) for q in found[3])
-    return len(ours) >= LONE_LINES and float(np.max(lines.amp[ours])) >= top * 10 ** (LONE_DB / 20)
+    if len(ours) < LONE_LINES:
+        return False
+    strongest = float(np.max(lines.amp[ours]))
+    return (found[2] <= 2 and strongest >= top * 10 ** (LONE_DB / 20)) or on_described(
+        lines, carriers, found, described, ours, bin_, skip
+    )
+
+
+def on_described(lines: Lines, carriers, found: tuple, described: float, ours: list, bin_: float, skip) -> bool:
+    """Whether a comb *found* of up to three lines reads its spacing from one line off the described comb: one of its
+    own lines is the *described* spacing's sideband (in *ours*, the described spacing's sidebands around *carriers*)
+    and on its own within CONSISTENT_BINS, and the comb's spacing holds fewer sidebands there, none stronger. A
+    sideband's spacing is read from lines on the comb within the resolution: PHM 2009's spur3 at 40 Hz, high load
+    (channel 1, 159 turns) carries the output shaft's first sideband at 16 - 0.1995 and a line 16 - 0.5856, 2.3 bins
+    off its 3rd (a line 0.0811 off the mesh with the idler's sidebands); the fit weighting the 3rd sideband nine-fold
+    read 0.1957: 'the wheel shows 81.8 teeth, 80 described', where 0.2's sidebands hold 3 lines about the meshes (16
+    and 32), to 4-5 dB over the comb's, and 0.1957's one."""
+    shared = set(found[3]) & set(ours)
+    if found[2] > 3 or not shared:
+        return False
+    # the lines both spacings take sit on the comb's own too (as fitted keeps them): only its others tell them apart
+    at = lines.at[sorted(carriers)]
+    for q in shared:
+        off = np.min(np.abs(np.abs(lines.at[q] - at) - found[3][q] * found[0]))
+        if off > CONSISTENT_BINS * bin_ + DRIFT * found[3][q] * found[0]:
+            return False
+    theirs = sidebands_of(lines, carriers, found[0], described, bin_, skip)
+    strongest = float(np.max(lines.amp[theirs])) if theirs else 0.0
+    return len(ours) > len(theirs) and float(np.max(lines.amp[ours])) >= strongest
 
 
 def whole(found: tuple, z: float, bin_: float) -> bool:
