@@ -74,4 +74,7 @@ def test_the_gap_structure_line_says_it_too(take):
     chain = Chain(fs=FS, speed=speed, tacho_shaft="input")
     assert structure_line(rows, described_pair(*BOXES[name][0]), 400, chain, None, {}) is None
     line = structure_line(rows, described_pair(*wrong(name)), 400, chain, None, {})
-    assert line is not None and f"{named(name)} on the intermediate shaft" in line, line
+    # f64's stage 2 (12.667 = 38 / 3, no line at its own first harmonics) is read at the real 12.116 directly since
+    # gearbox.shared_harmonics, and the gap's line read outward from the tacho names the pinion so (test_outside_bb)
+    read = f"{c} teeth fit the recording, {c + 1} described" if name == "f64" else "-"
+    assert line is not None and (f"{named(name)} on the intermediate shaft" in line or read in line), line

@@ -17,6 +17,7 @@ from .description import Gearbox
 from .modulated import centre
 from .orders import order_table
 from .outshone import counts, outshone_line
+from .shared_harmonics import borrowed
 from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh, whole
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
@@ -180,13 +181,6 @@ def off_own(shared: list[tuple[float, float]], look: float) -> list[tuple[float,
     return [(x, t) for x, t in shared if abs(x - max(1, round(x / look)) * look) > t]
 
 
-def borrowed(lines: Lines, m: float, bin_: float, shared) -> bool:
-    """Whether every line at a harmonic of the mesh order *m* sits on another stage's mesh harmonic (*shared*):
-    nothing of its own says a mesh turns there."""
-    on = at_harmonics(lines, [m], bin_)
-    return bool(on) and all(any(abs(lines.at[q] - o) <= t for o, t in shared) for q in on)
-
-
 def at_harmonics(lines: Lines, meshes, bin_: float) -> set[int]:
     """The lines at the harmonics (1-MAX_HARMONIC) of the mesh orders *meshes*."""
     got = (lines.near(h * m, tol_mesh(h * m, bin_)) for m in meshes for h in range(1, MAX_HARMONIC + 1))
@@ -340,7 +334,8 @@ def check_description(
         if i is not None and abs(measured - look) <= tol_mesh(look, bin_) and borrowed(lines, look, bin_, above):
             # M held only by the harmonics of a higher mesh (M a subharmonic of it, no line of its own) is no evidence
             # of this one: M + j o with lines of its own is (36/84 + 27/69 described with 28: M2 = 12 = M1 / 3, read on
-            # 36, 72, 108 while 11.57 and its harmonics stood 58-66 dB over the floor: 'matches')
+            # 36, 72, 108 while 11.57 and its harmonics stood 58-66 dB over the floor: 'matches'), nor, M a half or a
+            # third of it, one with no line at its first own harmonics (gearbox.shared_harmonics: 8 = 16 / 2)
             o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
             offsets = [j * o for o in (o_p, o_w)[behind:] for j in (-3, -2, -1, 1, 2, 3)]
             # ... or a wheel upstream (16/52 + 34/40 described with 51: M2 = 10.667 = 2 M1 / 3, read on 32, 64, 96)
