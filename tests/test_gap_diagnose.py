@@ -265,9 +265,6 @@ def test_a_close_fit_that_still_tests_significant_is_partly_explained_with_its_s
     import gearlab.gap.diagnose as d
 
     monkeypatch.setattr(d, "profiled", lambda run, accepted, fitted: fitted)
-    # The target at the source's load, known: a load fitted beside the fillet (gap/level.py; this fillet
-    # moves the level 19 %) absorbs part of what a fit 3 % off leaves, which this test is not about.
-    monkeypatch.setattr(d, "fitted_here", lambda *a: False)
     source = B6.with_(noise=NoiseSpec("gaussian", 30.0, 0))
     hidden = effect_spec("fillet_correction", lam=0.3)
     target = target_rows(B6.with_(healthy=40, effects=(hidden,), noise=NoiseSpec("gaussian", 30.0, 7), seed=3))

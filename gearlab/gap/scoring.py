@@ -38,7 +38,6 @@ from ..memo import SharedArrays
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..signals.indicators import band_limited
-from .level import factor as level_factor_of
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .tally import counted
 from .views import (
@@ -378,13 +377,9 @@ class Rows:
     max_order: int = 0
     chain: Chain | None = None
     consecutive: bool = False
-    # The target's load fitted beside every candidate (gearlab.gap.level.leveling): each set of rows
-    # scaled onto the target's synchronous average. None: the source's own load.
-    level: tuple | None = None
 
     def __call__(self, spec: DatasetSpec) -> np.ndarray:
-        X = offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive))
-        return X * level_factor_of(self.level, X) if self.level is not None else X
+        return offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive))
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
