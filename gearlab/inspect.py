@@ -491,17 +491,22 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         )
         swing = report["speed"]["variation_percent"] / 100  # a line in a stronger one's smear is its skirt, not a line
         check["unexplained"] = smear_merged(check["unexplained"], lines, swing, bin_)
-        differences, listed = check["differences"], len(check["differences"])
+        differences = check["differences"]
         elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
-        if elsewhere:
-            differences[:0] = [elsewhere]
-        elif rec.tacho is not None and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses"):
+        misread = [elsewhere] if elsewhere else []
+        pulses = rec.tacho is not None and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses")
+        if not elsewhere and pulses:
             # on any shaft: a wrong count of marks scales every order alike (a two-stage reducer's intermediate
             # tacho of 2 marks a turn read as 1 'matched': its mesh harmonics on every described order)
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
-            differences[:0] = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
-        if read_on and len(differences) == listed:  # the tacho read as said: its shaft's gears first, then outward
+            misread = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
+        if misread:
+            # every order reads f x its own: the rows read at that speed follow from it, not from the gears (a
+            # 19/47 + 29/71 reducer's output tacho read as the input's was also told 'a 115-tooth pinion on the
+            # input shaft?', its 2-mark tacho read as 1 'the wheel on the output shaft shows 98.0 teeth')
+            differences[:] = misread
+        if read_on and not misread:  # the tacho read as said: its shaft's gears first, then outward
             check["outward"] = outward_first(differences, check["stages"], box, read_on)
         if read_on and differences and "nominal" in report["speed"]:
             # a later shaft's tacho gives the input's speed through the described gears: a wrong count moves it (a

@@ -1,0 +1,69 @@
+"""A tacho read on the wrong shaft or with the wrong marks per turn (issue 39, an outside user's 19/47 +
+29/71 reducer): every order then reads f times its own, and inspect said so, but the rows read at that
+speed came after it as further differences: 'a 115-tooth pinion on the input shaft? described 19' beside
+'the tacho reads the output shaft?', 'the wheel on the output shaft shows 98.0 teeth' beside 'the tacho
+gives 2 pulse(s) per revolution, not 1?'. The tacho's line is now the only one: the rest follows from it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gearboxes import description, stage
+
+from gearlab.gearbox import load_gearbox
+from gearlab.inspect import InspectOptions, inspect_record
+
+STAGES = ((19, 47), (29, 71))
+
+
+def _record(path, tacho_shaft: int, marks: int, speed=40.0, fs=12800.0, seconds=6.0, seed=3):
+    """A 19/47 + 29/71 reducer's housing acceleration (m/s²): each stage's first three mesh harmonics,
+    amplitude- and phase-modulated at its two shafts' orders (the sidebands that tell the shafts), the
+    input drifting 1.5 %, noise; and a square-wave tacho of *marks* per turn of shaft *tacho_shaft*.
+    The path, and the input's mean speed (Hz)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * fs)) / fs
+    f = speed * (1 + 0.015 * np.sin(2 * np.pi * t / (2.3 * seconds)))
+    angles = [2 * np.pi * np.cumsum(f) / fs]
+    for z1, z2 in STAGES:
+        angles.append(angles[-1] * z1 / z2)
+    acc = rng.normal(0, 0.2, t.size)
+    for k, (z1, _) in enumerate(STAGES):
+        am = 1 + 0.15 * np.cos(angles[k]) + 0.1 * np.cos(angles[k + 1])
+        pm = 0.2 * np.cos(angles[k]) + 0.1 * np.sin(angles[k + 1])
+        for h, a in ((1, 2.0), (2, 0.8), (3, 0.35)):
+            acc += a * am * np.cos(h * (z1 * angles[k] + pm) + rng.uniform(0, 2 * np.pi))
+    tacho = np.where(np.mod(marks * angles[tacho_shaft], 2 * np.pi) < np.pi, 5.0, 0.0)
+    np.savez(path, acc_ms2=acc, tach=tacho, fs=fs)
+    return path, float(f.mean())
+
+
+@pytest.fixture(scope="module")
+def box(tmp_path_factory):
+    path = tmp_path_factory.mktemp("box") / "reducer.toml"
+    text = description(stage(*STAGES[0]), stage(*STAGES[1], module="3 mm"), name="reducer", speed="2400 rpm")
+    path.write_text(text + '[sensor]\ntacho = "input"\n')
+    return load_gearbox(path)
+
+
+def test_an_output_tacho_read_as_the_input_s_is_told_alone(tmp_path, box):
+    rec, mean_hz = _record(tmp_path / "out.npz", tacho_shaft=2, marks=1)
+    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach"))
+    assert report["matches"] is False
+    assert report["check"]["differences"] == [report["verdict"].split("differs: ", 1)[1]], report["verdict"]
+    assert "the tacho reads the output shaft? --tacho-shaft output" in report["verdict"], report["verdict"]
+    assert "-tooth pinion on the input shaft?" not in report["verdict"], report["verdict"]
+    right = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", tacho_shaft="output"))
+    assert right["matches"], right["verdict"]
+    assert right["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
+
+
+def test_a_two_mark_tacho_read_as_one_is_told_alone(tmp_path, box):
+    rec, mean_hz = _record(tmp_path / "two.npz", tacho_shaft=0, marks=2)
+    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=1))
+    assert report["matches"] is False
+    assert "the tacho gives 2 pulse(s) per revolution, not 1?" in report["verdict"], report["verdict"]
+    assert "teeth (mesh order" not in report["verdict"] and ";" not in report["verdict"], report["verdict"]
+    right = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=2))
+    assert right["matches"], right["verdict"]
+    assert right["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
