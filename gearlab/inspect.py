@@ -69,6 +69,7 @@ from .gearbox.speed import (
     speed_course,
     speed_shift,
 )
+from .inspect_tacho import shaft_and_marks
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders, smear_merged
@@ -501,6 +502,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             misread = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
+            misread = misread or shaft_and_marks(check, box, tacho_shaft, ppr, ratio, 1.0 / revolutions)
         if misread:
             # every order reads f x its own: the rows read at that speed follow from it, not from the gears (a
             # 19/47 + 29/71 reducer's output tacho read as the input's was also told 'a 115-tooth pinion on the

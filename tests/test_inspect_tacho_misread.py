@@ -2,7 +2,9 @@
 29/71 reducer): every order then reads f times its own, and inspect said so, but the rows read at that
 speed came after it as further differences: 'a 115-tooth pinion on the input shaft? described 19' beside
 'the tacho reads the output shaft?', 'the wheel on the output shaft shows 98.0 teeth' beside 'the tacho
-gives 2 pulse(s) per revolution, not 1?'. The tacho's line is now the only one: the rest follows from it."""
+gives 2 pulse(s) per revolution, not 1?'. The tacho's line is now the only one: the rest follows from it. Both
+together (its 1-mark output tacho read as the input's 2) read every order 12.11 x its own: 'a 230-tooth pinion on
+the input shaft?'; now the shaft and the marks."""
 
 from __future__ import annotations
 
@@ -65,5 +67,17 @@ def test_a_two_mark_tacho_read_as_one_is_told_alone(tmp_path, box):
     assert "the tacho gives 2 pulse(s) per revolution, not 1?" in report["verdict"], report["verdict"]
     assert "teeth (mesh order" not in report["verdict"] and ";" not in report["verdict"], report["verdict"]
     right = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=2))
+    assert right["matches"], right["verdict"]
+    assert right["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
+
+
+def test_an_output_tacho_of_one_mark_read_as_the_input_s_two_is_told_both(tmp_path, box):
+    rec, mean_hz = _record(tmp_path / "out.npz", tacho_shaft=2, marks=1)
+    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=2))
+    assert report["matches"] is False
+    said = "with 1 pulse(s) per revolution, not 2? (--tacho-shaft output --pulses-per-rev 1"
+    assert said in report["verdict"] and ";" not in report["verdict"], report["verdict"]
+    assert "every order reads 12.11 x its own" in report["verdict"], report["verdict"]
+    right = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=1, tacho_shaft="output"))
     assert right["matches"], right["verdict"]
     assert right["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
