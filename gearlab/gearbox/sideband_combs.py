@@ -5,7 +5,7 @@ no shaft's (whole).
 
 Tolerances: a line matches a mesh order M within 2 bins + 1e-3 M (tol_mesh: speed drift smears high orders); a
 sideband spacing matches a shaft order o within 0.5 bin / j + 1e-3 o for the j-th sideband (2 bins / j under 16
-bins apart).
+bins apart), or within its lines' own readings of it (d / j) where they spread wider.
 """
 
 from __future__ import annotations
@@ -78,12 +78,21 @@ def comb(
     def fitted(hits: list) -> tuple[float, list]:
         """The spacing fitted through *hits* and the hits it keeps: a line further off the fitted comb than
         CONSISTENT_BINS (once separated) is another's and goes, the worst first (lines where two shafts'
-        sidebands combine, 1 - 0.337 off a 28/83 mesh, took the intermediate's comb as its ±2nd, 0.5 % off)."""
+        sidebands combine, 1 - 0.337 off a 28/83 mesh, took the intermediate's comb as its ±2nd, 0.5 % off).
+        A line at |j| >= 2 is judged on the spacing the comb's other lines read, not on a fit it draws to itself
+        (j^2 x its amplitude): a line 2.6 bins off M - 2 o, as strong as the first sidebands (both on o), took the
+        fit 0.9 bin off o, where every line sat within a bin (a 34/58 + 22/84 box, synthetic: the first mesh's 5th
+        harmonic folded about the rate and smeared by the speed's swing; 'intermediate shaft: order 0.5832
+        measured (4 sideband(s) of M1), 0.5862 expected' of the right description)."""
         while True:
             js, ds, ws = (np.array(v, dtype=float) for v in zip(*((j, d[q], a[q]) for j, q in hits)))
-            spacing = float(np.sum(ws * js * ds) / np.sum(ws * js * js))
+            num, den = float(np.sum(ws * js * ds)), float(np.sum(ws * js * js))
+            spacing, rest = num / den, den - ws * js * js
+            judged = np.where(
+                (np.abs(js) >= 2) & (rest > 0), (num - ws * js * ds) / np.where(rest > 0, rest, 1.0), spacing
+            )
             bins = CONSISTENT_BINS if spacing >= SEPARATED * bin_ else 2.0
-            off = np.abs(ds - js * spacing) - (bins * bin_ + DRIFT * np.abs(js) * spacing)
+            off = np.abs(ds - js * judged) - (bins * bin_ + DRIFT * np.abs(js) * spacing)
             if off.max() <= 0 or len(hits) == 1:
                 return spacing, hits
             hits = hits[: int(np.argmax(off))] + hits[int(np.argmax(off)) + 1 :]
@@ -115,7 +124,11 @@ def comb(
     score, _, hits, spacing = best
     jmax = max(abs(j) for j, _ in hits)
     bins = SIDEBAND_BINS if spacing >= SEPARATED * bin_ else 2.0
-    tolerance = bins * bin_ / jmax + DRIFT * spacing
+    # the furthest sideband's resolution, and no tighter than the comb's lines agree: each reads the spacing d / j
+    # alone, and a line fitted keeps (within CONSISTENT_BINS of the others' spacing) draws the fit off theirs: a line
+    # 1.2 bins beside M - 2 o, as strong as the first sidebands, read 0.5875 where they read 0.5862 (34/58)
+    read = max(abs(float(d[q]) / j - spacing) for j, q in hits)
+    tolerance = max(bins * bin_ / jmax, read) + DRIFT * spacing
     return spacing, tolerance, len(hits), {int(near[q]): abs(j) for j, q in hits}, score
 
 
