@@ -393,17 +393,18 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             teeth = ", ".join(map(str, spec.source.teeth))
             on_event(Event("log", message=f"the watched gear simulated on teeth {teeth} (watched_teeth)"))
         where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
-        conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous, executor)
-        if isinstance(executor, Executor):  # what the trainings load first, loaded while they are prepared
-            executor.warm(("torch", "scipy.stats", "gearlab.learn.protocol", __package__ + ".detection_units"))
-        # a description (the user's) the history contradicts ends the run, before any work; a built-in
-        # preset's rig is told, checked aside while the pool trains (4.4 s of phm09_chip's main thread
-        # with both workers idle)
+        # a description (the user's) the history contradicts ends the run, before any work (and before a history
+        # too short for its units, read_target); a built-in preset's rig is told, checked aside while the pool
+        # trains (4.4 s of phm09_chip's main thread with both workers idle)
         said = "gearbox" if "gearbox" in (scenario.raw.get("source") or {}) else "preset"
 
-        def structure() -> str | None:
-            return check_structure(spec.source, spec.target, conditions, scenario.where("source", said))
+        def structure(of: dict | None = None) -> str | None:
+            return check_structure(spec.source, spec.target, of or conditions, scenario.where("source", said))
 
+        first = structure if said == "gearbox" else None
+        conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous, executor, first)
+        if isinstance(executor, Executor):  # what the trainings load first, loaded while they are prepared
+            executor.warm(("torch", "scipy.stats", "gearlab.learn.protocol", __package__ + ".detection_units"))
         if said == "gearbox" and (differs := structure()):
             raise GearlabInputError(differs)
         folds = {c: folds_of(d.history_fit, cond, c, scenario.path) for c, cond in conditions.items()}

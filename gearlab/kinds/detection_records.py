@@ -333,6 +333,7 @@ def read_target(
     shaft: UnitShaft | None = None,
     continuous: bool = False,
     executor=None,
+    structure=None,
 ) -> dict[str, dict]:
     """{condition: {"history": [(file, revolutions)], "test": [...], "speeds": {...}}}: every record
     read, standardised against its condition's history and aligned to its first history record.
@@ -340,7 +341,9 @@ def read_target(
     revolutions; cond["raw"] keeps those for the localisation), aligned by correlation: the input
     tacho's mark is no fixed angle of a slower shaft; *continuous*: each record shifted as one signal
     (aligned). Only the records' signals are used here (no label). *executor*: a local pool reads the
-    records side by side (phm09_chip: 24 records, 6.8 s of CPU in this process, a core idle)."""
+    records side by side (phm09_chip: 24 records, 6.8 s of CPU in this process, a core idle). *structure*:
+    {name: cond} -> the line of what a condition's history contradicts in the description, or None
+    (check_structure), said before a history too short for its units."""
     conditions: dict[str, dict] = {}
     total = len(target.files)
     on_event(Event("stage", stage="records", total=total, message="measured records"))
@@ -440,6 +443,10 @@ def read_target(
         _units(cond)
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles
+                # a tacho read on the wrong shaft or marks counts other turns: said as that, not as short records (a
+                # 19/47 + 29/71 reducer's output tacho read as the input's: '2 record30 units ... longer records')
+                if structure is not None and (differs := structure({name: cond})):
+                    raise GearlabInputError(differs)
                 longest = max(len(r) for _, r in cond["history"])
                 on = "" if shaft is None else f" {shaft.name}-shaft"
                 raise GearlabInputError(
