@@ -70,6 +70,11 @@ def test_millivolts_read_as_volts_are_called_out(cli, tmp_path):
     assert "0.001 V / 100 mV/g" in fixed and "too loud" not in fixed, fixed
     volts = _take(tmp_path / "v.tsv", swing=0.0, seconds=3.0, scale=0.1)[0]  # the same take in volts: nothing said
     assert "too loud" not in _inspect(cli, tmp_path, volts, "--sensitivity", "100 mV/g")["units"]
+    # a quiet box (0.08 g RMS) logged in mV reads ~80 g as volts: under the 200 g first chosen, nothing was said (an
+    # outside user's 0.19 g box read 194 g)
+    quiet = _take(tmp_path / "q.tsv", swing=0.0, seconds=3.0, scale=10.0)[0]
+    said = _inspect(cli, tmp_path, quiet, "--sensitivity", "100 mV/g")["units"]
+    assert "too loud for a gearbox: values in millivolts? --unit mV" in said, said
 
 
 def test_a_scenario_s_millivolt_column_read_as_volts_is_called_out(tmp_path):

@@ -227,3 +227,18 @@ def test_the_target_keys_are_checked_once_by_their_declaration(files, tmp_path, 
     text = text.replace("vibration = 0\n", "") if key == "vibration" else text
     code, _, err = cli("validate", write(tmp_path, text))
     assert code == 2 and len(err.strip().splitlines()) == 1 and f"[target] key '{key}': " in err and said in err, err
+
+
+@pytest.mark.parametrize("key", ["sensitivity", "gain"])
+def test_a_key_an_acceleration_channel_needs_none_of_says_how_to_drop_it(key):
+    # an outside user scoring an npz in m/s² with a run read in volts was told 'expected no sensitivity' and no more:
+    # the run's key applies to every file, and only an empty one (an entry's key = "", score's --key KEY=) drops it
+    from gearlab.data.channel_units import channel_scale
+    from gearlab.errors import GearlabInputError
+
+    given = {"sensitivity": 0.0102, "gain": None} if key == "sensitivity" else {"sensitivity": None, "gain": 2.0}
+    with pytest.raises(GearlabInputError) as caught:
+        channel_scale("acc_ms2", given["sensitivity"], given["gain"], "week1.npz")
+    line = str(caught.value)
+    assert line.startswith(f"week1.npz key '{key}': channel 'acc_ms2' is an acceleration already"), line
+    assert f'{key} = "" in this file\'s entry; gearlab score: --key {key}=)' in line and "\n" not in line, line

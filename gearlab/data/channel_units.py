@@ -72,8 +72,9 @@ class VoltsAssumed(str):
 
 
 # An RMS over this many g, of values taken as volts, is called out: a gearbox housing's vibration is a few g at most,
-# and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid)
-VOLTS_TOO_LOUD_G = 200.0
+# and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid; an
+# outside user's 0.19 g box in mV read 194 g, under the 200 g first chosen, and nothing was said)
+VOLTS_TOO_LOUD_G = 50.0
 TOO_LOUD = "too loud for a gearbox"  # level_hint's words, which a detection run's warnings repeat
 
 
@@ -138,8 +139,12 @@ def channel_scale(
                     "no unit, gain = 'N g')"
                 )
             if value is not None:
+                # a key given for every file (a scenario's [target], a run's keys for gearlab score) is dropped for
+                # one file by giving it empty: say how, or the user is stuck (an outside user's npz in m/s²)
                 raise GearlabInputError(
-                    f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key}"
+                    f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key} "
+                    f'(to drop one given for every file: {key} = "" in this file\'s entry; '
+                    f"gearlab score: --key {key}=)"
                 )
         if said[2] == 1.0:
             return 1.0, f"m/s² (channel '{name}')"
