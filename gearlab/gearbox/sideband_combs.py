@@ -32,17 +32,24 @@ def tol_mesh(order: float, bin_: float) -> float:
     return 2 * bin_ + DRIFT * order
 
 
-def mixed(d: float, o: float, rival: float | None, bin_: float) -> bool:
-    """Whether the offset *d* from a mesh line is the two shafts' intermodulation a rival +- b o (a, b = 1-3) and
-    not a sideband j o: within CONSISTENT_BINS of such a product and further from every j o than from it. A mesh
-    modulated by both its shafts carries o_p - o_w (a 22/68 + 18/70 box: 0.2403 beside the output's 3rd, 0.2496,
-    2.2 bins apart at 235 turns), and the output's comb took it as its 3rd: 'the wheel shows 71.4 teeth'."""
+def mixed(d, o: float, rival: float | None, bin_: float):
+    """Whether the offsets *d* (a float or an array) from a mesh line are the two shafts' intermodulation
+    a rival +- b o (a, b = 1-3) and not a sideband j o: within CONSISTENT_BINS of such a product and further from
+    every j o than from it. A mesh modulated by both its shafts carries o_p - o_w (a 22/68 + 18/70 box: 0.2403
+    beside the output's 3rd, 0.2496, 2.2 bins apart at 235 turns), and the output's comb took it as its 3rd: 'the
+    wheel shows 71.4 teeth'. *o* is the spacing a comb tries (comb), not the described order: with a count off the
+    described order's products are no lines' (a 29/42 box described with 44 teeth: the output's true 1st sideband,
+    0.6905, lay 1.1 bins from 2 - 2 x 29/44 and the comb lost it: 'the tooth count of its 44-tooth wheel is not
+    checked')."""
+    d = np.abs(np.asarray(d, dtype=float))
     if rival is None:
-        return False
-    tol = CONSISTENT_BINS * bin_ + DRIFT * abs(d)
-    pure = min(abs(abs(d) - j * o) for j in (1, 2, 3))
-    mix = min(abs(abs(d) - abs(a * rival + s * b * o)) for a in (1, 2, 3) for b in (1, 2, 3) for s in (-1, 1))
-    return mix <= tol and pure > max(tol, mix)
+        return np.zeros(d.shape, dtype=bool) if d.ndim else False
+    tol = CONSISTENT_BINS * bin_ + DRIFT * d
+    pure = np.min([np.abs(d - j * o) for j in (1, 2, 3)], axis=0)
+    products = [abs(a * rival + s * b * o) for a in (1, 2, 3) for b in (1, 2, 3) for s in (-1, 1)]
+    mix = np.min([np.abs(d - p) for p in products], axis=0)
+    out = (mix <= tol) & (pure > np.maximum(tol, mix))
+    return out if d.ndim else bool(out)
 
 
 def comb(
@@ -58,12 +65,15 @@ def comb(
     meshes' tones with the stages on both shafts of its middle one, or a harmonic of the other's: a cracked
     tooth on a 14/53 wheel's shaft rings its 4th, 1.057, read as the input's: '13.2 teeth, 14 described')
     is scored by the amplitudes of
-    the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c). The best comb's spacing is the
+    the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c), no product of the rival and c, and its
+    others are no products of the rival and the order its first sidebands read (mixed): the lines' spacing, not the
+    described o, which a count off moves (a 22/68 + 18/70 box's o_p - o_w, 0.2403, is 3 x 0.0801, and a product
+    of 0.0831, the order 0.0801's first sidebands read). The best comb's spacing is the
     least-squares fit through its lines, so a 57- and a 58-tooth wheel are told apart once
     0.5 bin / 3 < o / 57 (sidebands 16 bins apart or more; else 2 bins)."""
     m = float(lines.at[mesh])
     near = np.flatnonzero((np.abs(lines.at - m) <= 3.9 * o) & (np.arange(lines.at.size) != mesh))
-    near = np.array([q for q in near if q not in exclude and not mixed(lines.at[q] - m, o, rival, bin_)], dtype=int)
+    near = np.array([q for q in near if q not in exclude], dtype=int)
     if near.size == 0:
         return None
     d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 4, 5, 6, 1 / 2, 1 / 3)
@@ -97,15 +107,26 @@ def comb(
                 return spacing, hits
             hits = hits[: int(np.argmax(off))] + hits[int(np.argmax(off)) + 1 :]
 
+    def on(own: np.ndarray, c: float, js: tuple) -> list:
+        """(j, line) for the offsets *own* nearest j c (j in *js*), within 2 bins and the drift."""
+        hits = []
+        for j in js:
+            q = int(np.argmin(np.abs(own - j * c)))
+            if abs(own[q] - j * c) <= 2 * bin_ + DRIFT * abs(j) * c:
+                hits.append((j, q))
+        return hits
+
     candidates = []
     for c in {abs(v) / j for v in d for j in (1, 2, 3) if allowed(abs(v) / j)}:
-        hits = []
-        for j in (-3, -2, -1, 1, 2, 3):
-            q = int(np.argmin(np.abs(d - j * c)))
-            if abs(d[q] - j * c) <= 2 * bin_ + DRIFT * abs(j) * c:
-                hits.append((j, q))
-        if not any(abs(j) == 1 for j, _ in hits):
+        # a product of the rival and the shaft's order is no sideband of it (mixed): of c for the first sidebands,
+        # of the order they read for the others; never of the described o (29/42 described with 44 teeth: 2 - 2 x
+        # 29/44 lay 1.1 bins from the true first sideband, and no comb was left)
+        own = np.where(mixed(d, c, rival, bin_), np.inf, d)
+        hits = on(own, c, (-1, 1))
+        if not hits:
             continue
+        first = float(sum(a[q] * abs(d[q]) for _, q in hits) / sum(a[q] for _, q in hits))
+        hits += on(np.where(mixed(d, first, rival, bin_), np.inf, own), c, (-3, -2, 2, 3))
         spacing, hits = fitted(hits)
         if any(abs(j) == 1 for j, _ in hits):
             candidates.append((c, hits, spacing))
