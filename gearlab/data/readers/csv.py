@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import csv
 import io
+import operator
 import re
 from collections.abc import Sequence
+from itertools import compress, repeat
 from pathlib import Path
 
 import numpy as np
@@ -167,41 +169,55 @@ def column_index(name: str, names: list[str]) -> int | None:
     return None
 
 
+def _without(numbers: Sequence[int], lines: list[str], dropped) -> tuple[Sequence[int], list[str]]:
+    """(*numbers*, *lines*) less the lines *dropped* (a flag per line) marks."""
+    kept = list(map(operator.not_, dropped))
+    return list(compress(numbers, kept)), list(compress(lines, kept))
+
+
 def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     """Delimited columns with or without a header row, '#' comments ('# fs = 51200' gives a field 'fs')."""
     text = decoded(path.read_bytes())  # a BOM from spreadsheet exports is dropped
     fields: dict[str, object] = {}
-    # (line number, line) of every line that is not blank: one comprehension, a record has 10^5-10^6 lines
-    lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1) if line and not line.isspace()]
+    # every line that is not blank and its line number (a record has 10^5-10^6 lines): the text's own lines and
+    # a range of numbers, each line tested and dropped by C's loops (map, compress), not a pass of Python per line
+    lines = text.splitlines()
+    line_numbers = range(1, len(lines) + 1)
+    if "" in lines or any(map(str.isspace, lines)):
+        line_numbers, lines = _without(
+            line_numbers, lines, map(operator.or_, map(operator.not_, lines), map(str.isspace, lines))
+        )
     if "#" in text:
-        for _, line in lines:
+        comments = list(map(str.startswith, map(str.lstrip, lines), repeat("#")))
+        for line in compress(lines, comments):  # a field is a comment line's ('# fs = 51200')
             match = _COMMENT_FIELD.match(line.strip())
             if match:
                 fields[match.group(1)] = _scalar(match.group(2))
-        lines = [(number, line) for number, line in lines if not line.lstrip().startswith("#")]
-    skipped, stated = preamble([line for _, line in lines[:101]])  # it reads 100 lines and asks for one more
+        line_numbers, lines = _without(line_numbers, lines, comments)
+    skipped, stated = preamble(lines[:101])  # it reads 100 lines and asks for one more
     fields.update(stated)
-    lines = lines[skipped:]
+    line_numbers, lines = line_numbers[skipped:], lines[skipped:]
     if not lines:
         raise GearlabInputError(f"{path}: no rows; expected a header row of column names (or none), then numbers")
-    delimiter = delimiter_of(lines[0][1])
+    delimiter = delimiter_of(lines[0])
     # without quotes (and NULs, which csv refuses) a line is a row: the first two tell the header and units
     plain = '"' not in text and "\0" not in text
-    rows = split_rows([line for _, line in (lines[:2] if plain else lines)], delimiter)
+    rows = split_rows(lines[:2] if plain else lines, delimiter)
     header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
     units = units_row(rows[1], header) if header is not None and len(rows) > 1 else None
-    data_lines = lines[1 + bool(units) :] if header is not None else lines
+    first_data = 1 + bool(units) if header is not None else 0
+    data_lines, data_numbers = lines[first_data:], line_numbers[first_data:]
     width = len(rows[0])
     numbers = None
     if plain and rows[0][-1] != "":  # a trailing separator's empty column is the row parser's to drop
-        numbers = numeric_block([line for _, line in data_lines], delimiter, width)
+        numbers = numeric_block(data_lines, delimiter, width)
     if numbers is not None:
         columns = header_names(header, width)
         if header is not None and len(set(header)) != len(header):
             _twice(path, header)
         return _contents(columns, fields, names, lambda j: numbers[j], units)
     if plain:
-        rows = split_rows([line for _, line in lines], delimiter)
+        rows = split_rows(lines, delimiter)
     data = rows[1 + bool(units) :] if header is not None else rows
     if rows[0][-1] == "" and all(row[-1:] == [""] for row in data):  # every line ends in the separator
         header = header[:-1] if header is not None else None
@@ -209,7 +225,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         width -= 1
     if header is not None and len(set(header)) != len(header):
         _twice(path, header)
-    for (number, _), row in zip(data_lines, data):
+    for number, row in zip(data_numbers, data):
         if len(row) != width:
             raise ragged(path, number, len(row), width, header is not None, delimiter)
     if not data:
@@ -217,7 +233,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     if not any(_column(data[0][j : j + 1]).dtype.kind == "f" for j in range(width)):
         # not a measured record (a system file reached through a link?): nothing of it is quoted
         raise GearlabInputError(
-            f"{path}: its first data row (line {data_lines[0][0]}) holds no number; expected a header "
+            f"{path}: its first data row (line {data_numbers[0]}) holds no number; expected a header "
             "row of column names, then rows of numbers"
         )
     return _contents(header_names(header, width), fields, names, lambda j: _column([row[j] for row in data]), units)
