@@ -1,11 +1,14 @@
-"""`gearlab inspect --gearbox`: a pulse tacho on another shaft than the one it is read as, with another count of
-marks a turn than the one it is read with. Either alone is told by gearbox.match.tacho_elsewhere (the shaft) and
-inspect._tacho_marks (the marks); both together scale every order by their product, which neither tries: a
-19/47 + 29/71 reducer's 1-mark output tacho read as the input's 2 reads every order 12.11 x its own (6.056 x 2),
-and inspect said 'a 230-tooth pinion on the input shaft? described 19'.
+"""A pulse tacho on another shaft than the one it is read as, with another count of marks a turn than the one it
+is read with. Either alone is told by gearbox.match.tacho_elsewhere (the shaft) and inspect._tacho_marks (the
+marks); both together scale every order by their product, which neither tries: a 19/47 + 29/71 reducer's 1-mark
+output tacho read as the input's 2 reads every order 12.11 x its own (6.056 x 2), and inspect said 'a 230-tooth
+pinion on the input shaft? described 19'. `gearlab inspect --gearbox` (shaft_and_marks) and the gap's structure
+check, which the detection kind's check of its history records is (gap.structure.structure_line), read it here.
 """
 
 from __future__ import annotations
+
+from fractions import Fraction
 
 from .gearbox import Gearbox, order_table
 from .gearbox.match import TACHO_SPEED_TOL, tacho_shaft_words, tol_mesh
@@ -13,31 +16,61 @@ from .gearbox.match import TACHO_SPEED_TOL, tacho_shaft_words, tol_mesh
 MARKS = range(1, 9)  # the counts of marks a turn tried, as _tacho_marks tries them
 
 
-def shaft_and_marks(check: dict, box: Gearbox, read: str, ppr: int, ratio: float | None, bin_: float) -> list[str]:
-    """The verdict's line for a tacho of k marks a turn on shaft s read as *ppr* on shaft *read*: every order reads
-    f = (o_read / o_s) (ppr / k) times its own. Named where the speed read is 1 / f of the described (*ratio*: read /
-    described, within TACHO_SPEED_TOL) and every stage's mesh line lies at f times its order (check_description's
-    measured orders, *bin_*: the order resolution); else []. Without a described speed nothing is said: the lines
-    alone fit any shaft and count whose product is f."""
+def _ratios(ppr: int | None) -> list[Fraction]:
+    """The marks read a turn over the tacho's own: *ppr* / k for k in MARKS, or, the count read unknown (a
+    structure check given no pulses_per_rev), every p / k of two counts in MARKS."""
+    if ppr is not None:
+        return [Fraction(ppr, k) for k in MARKS]
+    return sorted({Fraction(p, k) for p in MARKS for k in MARKS}, key=lambda r: (r.denominator, r.numerator))
+
+
+def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, bin_: float) -> tuple | None:
+    """(shaft, r, f) of a tacho on shaft s with r times fewer marks a turn than read, read as *ppr* (None: not
+    known) on shaft *read*: every order reads f = (o_read / o_s) r times its own. Found where the speed read is
+    1 / f of the described (*ratio*: read / described, within TACHO_SPEED_TOL) and every stage's mesh line lies at
+    f times its order (among check_description's measured orders, *bin_*: the order resolution); else None. Without a
+    described speed nothing is found: the lines alone fit any shaft and count whose product is f. *box*: a
+    Gearbox, or anything order_table reads (the gap's _PairDescription)."""
     stages = check["stages"]
     if ratio is None or not stages or any(s.get("measured_order") is None for s in stages):
-        return []
+        return None
     table = order_table(box)
-    o_read = float(table.shaft_orders[box.shafts.index(read)])
+    o_read = float(table.shaft_orders[list(table.shafts).index(read)])
     seen = [(s["expected_order"], s["measured_order"]) for s in stages]
     for name, o in zip(table.shafts, table.shaft_orders):
-        for k in MARKS:
-            f = o_read / float(o) * ppr / k
+        for r in _ratios(ppr):
+            f = o_read / float(o) * float(r)
             # one alone is the others' to tell; a product near 1 (2 marks on a shaft turning half as fast, read as 1)
             # reads as the right one
-            alone = float(o) == o_read or k == ppr or abs(f - 1.0) <= TACHO_SPEED_TOL
+            alone = float(o) == o_read or r == 1 or abs(f - 1.0) <= TACHO_SPEED_TOL
             if alone or abs(ratio * f - 1.0) > TACHO_SPEED_TOL:
                 continue
-            if all(abs(x - f * m) <= tol_mesh(f * m, bin_) for m, x in seen):
-                m = seen[0][0]
-                return [
-                    f"stage 1: mesh order {f * m:.4g} measured, {m:.4g} expected ({tacho_shaft_words(name, f, read)} "
-                    f"with {k} pulse(s) per revolution, not {ppr}? (--tacho-shaft {name} --pulses-per-rev {k}, keys "
-                    "'tacho_shaft' and 'pulses_per_rev' in a scenario)"
-                ]
-    return []
+            # each stage's mesh among the lines read, whichever stage check_description gave it to (19 turns of the
+            # reducer above gave stage 1 the line at 142, stage 2's mesh 11.72 x 12.11, and stage 2 the line at 230)
+            if all(any(abs(x - f * m) <= tol_mesh(f * m, bin_) for _, x in seen) for m, _ in seen):
+                return str(name), r, f
+    return None
+
+
+def misread_line(found: tuple, check: dict, read: str, ppr: int | None) -> str:
+    """The one line of misread's *found*: the first stage's mesh as read, the tacho's shaft and marks, and how to
+    read it (inspect's options and a scenario's keys; without *ppr*, the marks as a share of those read)."""
+    name, r, f = found
+    m = check["stages"][0]["expected_order"]
+    line = f"stage 1: mesh order {f * m:.4g} measured, {m:.4g} expected ({tacho_shaft_words(name, f, read)} "
+    if ppr is not None:
+        k = Fraction(ppr) / r  # a whole count: _ratios' ppr / k
+        return line + (
+            f"with {k} pulse(s) per revolution, not {ppr}? (--tacho-shaft {name} --pulses-per-rev {k}, keys "
+            "'tacho_shaft' and 'pulses_per_rev' in a scenario)"
+        )
+    return line + (
+        f"with {1 / r} x the pulses per revolution it was read with? ([target] tacho_shaft = '{name}', "
+        f"pulses_per_rev x {1 / r})"
+    )
+
+
+def shaft_and_marks(check: dict, box: Gearbox, read: str, ppr: int, ratio: float | None, bin_: float) -> list[str]:
+    """inspect's verdict line for misread's tacho (module doc), or []."""
+    found = misread(check, box, read, ppr, ratio, bin_)
+    return [] if found is None else [misread_line(found, check, read, ppr)]

@@ -378,7 +378,9 @@ def _tacho_read(chain, pair) -> tuple | None:
     return order_table(box), box.shafts.index(chain.tacho_shaft), ratio
 
 
-def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> str | None:
+def structure_line(
+    target, pair, max_order: int, chain, plain, record: dict, pulses_per_rev: int | None = None
+) -> str | None:
     """The one line of the first tooth-count difference between *pair*'s train and the target's
     revolutions (*target*, input-shaft revolutions at uniform angle, read up to *max_order*), or None;
     what was measured goes into *record* (a count too few turns tell: its 'unchecked'). After a speed
@@ -386,7 +388,8 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     (mesh_check: its tacho's shaft and marks too), its wheel, the later stages (against *plain*'s
     reading of itself, the source's healthy rows; None: against the description's orders). The gap
     diagnosis's structure check (first_difference) and the detection kind's check of its history
-    records (gearlab.kinds.detection_records.check_structure)."""
+    records (gearlab.kinds.detection_records.check_structure). *pulses_per_rev*: the marks a turn the tacho was
+    read with (None: not known; a misread count is then told as a share of them)."""
     # records whose speed the description's mesh lines gave, the source set to it: revolutions cut
     # at that speed show the described mesh order whatever the teeth (a 14-tooth pinion at 45 Hz
     # described with 15 read at 42 Hz, 'unexplained'); a speed off the described one by a whole
@@ -418,6 +421,12 @@ def structure_line(target, pair, max_order: int, chain, plain, record: dict) -> 
     record["mesh"] = whole | laid
     if whole.get("shaft") or whole.get("marks"):  # the tacho itself read wrong: no shaft's speed is known
         return mesh_line(whole, pair.Z1)
+    # a tacho on another shaft with another count of marks: every order reads their product times its own, which
+    # mesh_check's shaft alone and marks alone miss (a 19/47 + 29/71 reducer's 1-mark output tacho read as the
+    # input's 2: 12.11 x, 'stage 1 pinion: 230 teeth fit the recording'); read as inspect reads it,
+    # on all revolutions as mesh_check's shaft alone, before the gears
+    if tacho is not None and (line := _misread_line(target, pair, max_order, tacho, pulses_per_rev, record)):
+        return line
     # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
     # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
     one = _longest(target, chain)
@@ -526,6 +535,24 @@ def unchecked_record(unresolved: list[str], takes: tuple = ()) -> dict:
             "on the input shaft only)"
         )
     return {"items": list(unresolved), "line": line}
+
+
+def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, record: dict) -> str | None:
+    """The one line of a tacho read on another shaft with another count of marks a turn than it gives
+    (inspect_tacho.misread on the stages as inspect reads them: check_description with the tacho's shaft), or
+    None. *tacho*: _tacho_read's; *ppr*: the marks a turn read (None: not known)."""
+    from ..gearbox.match import check_description
+    from ..inspect_tacho import misread, misread_line
+
+    box = _PairDescription.train(pair)
+    _, read, ratio = tacho
+    n = target.shape[0]
+    check = check_description(_lines(target, max_order), box, n, read == 0, read)
+    found = misread(check, box, box.shafts[read], ppr, ratio, 1.0 / n)
+    if found is None:
+        return None
+    record["tacho"] = {"shaft": found[0], "marks_read_over_given": float(found[1]), "factor": found[2]}
+    return misread_line(found, check, box.shafts[read], ppr)
 
 
 def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:

@@ -751,7 +751,10 @@ def check_structure(source: DatasetSpec, target: Target, conditions: dict, where
             tacho_shaft=(target.read_as or "input") if marked else None,
             takes=tuple(len(r) for r in rows),
         )
-        line = structure_line(np.concatenate(rows).astype(np.float64), pair, cond["max_order"], chain, None, {})
+        # the marks a turn the history was read with (one count for all: else told as a share of them)
+        pulses = {target.keys_of(f)["pulses_per_rev"] for f, _ in cond["history"]} if marked else set()
+        ppr = pulses.pop() if len(pulses) == 1 else None
+        line = structure_line(np.concatenate(rows).astype(np.float64), pair, cond["max_order"], chain, None, {}, ppr)
         if line:
             return (
                 f"{where}: the history of condition '{name}' differs from the [source]'s gearbox: {line}; "
