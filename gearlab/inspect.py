@@ -69,7 +69,7 @@ from .gearbox.speed import (
     speed_course,
     speed_shift,
 )
-from .inspect_tacho import shaft_and_marks
+from .inspect_tacho import elsewhere_line, marks_line, shaft_and_marks
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders, smear_merged
@@ -493,7 +493,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         swing = report["speed"]["variation_percent"] / 100  # a line in a stronger one's smear is its skirt, not a line
         check["unexplained"] = smear_merged(check["unexplained"], lines, swing, bin_)
         differences = check["differences"]
-        elsewhere = _tacho_elsewhere(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
+        elsewhere = elsewhere_line(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         misread = [elsewhere] if elsewhere else []
         pulses = rec.tacho is not None and (options.tacho_kind == "pulses" or tacho_kind(rec.tacho) == "pulses")
         if not elsewhere and pulses:
@@ -501,7 +501,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             # tacho of 2 marks a turn read as 1 'matched': its mesh harmonics on every described order)
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
-            misread = _tacho_marks(check, lines, ppr, 1.0 / revolutions, ratio)
+            misread = marks_line(check, lines, ppr, 1.0 / revolutions, ratio)
             misread = misread or shaft_and_marks(check, box, tacho_shaft, ppr, ratio, 1.0 / revolutions)
         if misread:
             # every order reads f x its own: the rows read at that speed follow from it, not from the gears (a
@@ -560,64 +560,6 @@ def _speed_line(declared: float, note: str, no_speed: str | None) -> str:
     body = note[: -len(SPEED_OR_TEETH)] if note.endswith(SPEED_OR_TEETH) else note
     end = "" if "differs" in body else SPEED_OR_TEETH
     return f"speed {fmt_hz(declared)} declared, but {body}" + (f"; {no_speed}" if no_speed else "") + end
-
-
-def _tacho_elsewhere(lines, box: Gearbox, read: str, speed: Speed, revolutions: int) -> str | None:
-    """A tacho on another shaft of the description than the one it was read as (match.tacho_elsewhere
-    on the strongest lines, as the gap's structure check reads them), in one line, or None."""
-    from .gearbox.match import MIN_TEETH, STRONGEST, tacho_elsewhere, tacho_shaft_words
-
-    keep = lines.at >= MIN_TEETH - 0.5
-    x, amp = lines.at[keep][:STRONGEST], lines.amp[keep][:STRONGEST]
-    tol = np.array([tol_mesh(v, 1.0 / revolutions) for v in x])
-    ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
-    table = order_table(box)
-    below = lines.at[~keep]  # for a faster shaft than the one read (its meshes read at low orders)
-    low = (below, lines.amp[~keep] ** 2, np.array([tol_mesh(v, 1.0 / revolutions) for v in below]))
-    found = tacho_elsewhere(x, amp**2, tol, table, box.shaft_index(read, "--tacho-shaft"), ratio, low)
-    if found is None:
-        return None
-    name, f = found
-    m = float(table.stages[0].mesh)
-    return (
-        f"stage 1: mesh order {f * m:.4g} measured, {m:.4g} expected ({tacho_shaft_words(name, f, read)} "
-        f"--tacho-shaft {name}, key 'tacho_shaft' in a scenario)"
-    )
-
-
-def _tacho_marks(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
-    """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at f M and the input
-    shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86 mixer's 2-pulse keyphasor read as 1: mesh
-    at 14.5, and its 2nd harmonic at 29 passed as the mesh) or k (fewer: mesh at 58, its harmonics all on M's,
-    'matches'). The line at f M stronger than at M tells it, with the shaft's line at f stronger than at 1 or a
-    speed 1 / f times the described (*ratio*): a mesh whose power sits at its harmonics (no line at M) keeps its
-    shaft at 1."""
-
-    def amp(x: float) -> float:
-        i = lines.near(x, tol_mesh(x, bin_))
-        return 0.0 if i is None else float(lines.amp[i])
-
-    first = check["stages"][0]
-    m = first["expected_order"]
-    unexplained = [u["order"] for u in check["unexplained"] if "shaft_harmonic" not in u]  # a clock's line: no mesh
-    # any count of marks up to 8 (a 3-mark output tacho described with 2: every order at 2/3 of its own, 'the wheel
-    # on the output shaft shows 10.9 teeth'), the nearest the described count first
-    for marks in sorted((q for q in range(1, 9) if q != ppr), key=lambda q: (abs(math.log(q / ppr)), q)):
-        for f in (ppr / marks,):
-            at_mesh, at_shaft = amp(f * m), amp(f)
-            described = ratio is not None and abs(ratio * f - 1) < 0.05
-            if at_mesh <= amp(m) or (at_shaft <= amp(1.0) and not described):
-                continue
-            if f < 1 and not any(abs(u - f * m) <= tol_mesh(f * m, bin_) for u in unexplained):
-                continue  # another stage's mesh
-            return [
-                f"stage 1: the {first['z1']}-tooth pinion's mesh shows at order {f * m:.4g}, not {m:.4g}"
-                + (f", the input shaft at {f:.3g}" if at_shaft > amp(1.0) else "")
-                + (f", the speed {1 / f:.3g} x the described" if described else "")
-                + f": the tacho gives {int(marks)} pulse(s) per revolution, not {ppr}? "
-                f"(--pulses-per-rev {int(marks)}, key 'pulses_per_rev' in a scenario)"
-            ]
-    return []
 
 
 def gears(box: Gearbox) -> list[dict]:

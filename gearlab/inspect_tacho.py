@@ -1,19 +1,22 @@
-"""A pulse tacho on another shaft than the one it is read as, with another count of marks a turn than the one it
-is read with. Either alone is told by gearbox.match.tacho_elsewhere (the shaft) and inspect._tacho_marks (the
-marks); both together scale every order by their product, which neither tries: a 19/47 + 29/71 reducer's 1-mark
-output tacho read as the input's 2 reads every order 12.11 x its own (6.056 x 2), and inspect said 'a 230-tooth
-pinion on the input shaft? described 19'. `gearlab inspect --gearbox` (shaft_and_marks) and the gap's structure
-check, which the detection kind's check of its history records is (gap.structure.structure_line), read it here.
+"""A pulse tacho read wrong: on another shaft than the one it is read as (elsewhere_line, on
+gearbox.match.tacho_elsewhere), with another count of marks a turn (marks_line), or both (misread,
+shaft_and_marks): both together scale every order by their product, which neither alone tries: a 19/47 + 29/71
+reducer's 1-mark output tacho read as the input's 2 reads every order 12.11 x its own (6.056 x 2), and inspect said
+'a 230-tooth pinion on the input shaft? described 19'. `gearlab inspect --gearbox` and the gap's structure check,
+which the detection kind's check of its history records is (gap.structure.structure_line), read it here.
 """
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
-from .gearbox import Gearbox, order_table
-from .gearbox.match import TACHO_SPEED_TOL, tacho_shaft_words, tol_mesh
+import numpy as np
 
-MARKS = range(1, 9)  # the counts of marks a turn tried, as _tacho_marks tries them
+from .gearbox import Gearbox, order_table
+from .gearbox.match import MIN_TEETH, STRONGEST, TACHO_SPEED_TOL, tacho_elsewhere, tacho_shaft_words, tol_mesh
+
+MARKS = range(1, 9)  # the counts of marks a turn tried, as marks_line tries them
 
 
 def _ratios(ppr: int | None) -> list[Fraction]:
@@ -74,3 +77,59 @@ def shaft_and_marks(check: dict, box: Gearbox, read: str, ppr: int, ratio: float
     """inspect's verdict line for misread's tacho (module doc), or []."""
     found = misread(check, box, read, ppr, ratio, bin_)
     return [] if found is None else [misread_line(found, check, read, ppr)]
+
+
+def elsewhere_line(lines, box: Gearbox, read: str, speed, revolutions: int) -> str | None:
+    """A tacho on another shaft of the description than the one it was read as (match.tacho_elsewhere
+    on the strongest lines, as the gap's structure check reads them), in one line, or None."""
+    keep = lines.at >= MIN_TEETH - 0.5
+    x, amp = lines.at[keep][:STRONGEST], lines.amp[keep][:STRONGEST]
+    tol = np.array([tol_mesh(v, 1.0 / revolutions) for v in x])
+    ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
+    table = order_table(box)
+    below = lines.at[~keep]  # for a faster shaft than the one read (its meshes read at low orders)
+    low = (below, lines.amp[~keep] ** 2, np.array([tol_mesh(v, 1.0 / revolutions) for v in below]))
+    found = tacho_elsewhere(x, amp**2, tol, table, box.shaft_index(read, "--tacho-shaft"), ratio, low)
+    if found is None:
+        return None
+    name, f = found
+    m = float(table.stages[0].mesh)
+    return (
+        f"stage 1: mesh order {f * m:.4g} measured, {m:.4g} expected ({tacho_shaft_words(name, f, read)} "
+        f"--tacho-shaft {name}, key 'tacho_shaft' in a scenario)"
+    )
+
+
+def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
+    """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at f M and the input
+    shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86 mixer's 2-pulse keyphasor read as 1: mesh
+    at 14.5, and its 2nd harmonic at 29 passed as the mesh) or k (fewer: mesh at 58, its harmonics all on M's,
+    'matches'). The line at f M stronger than at M tells it, with the shaft's line at f stronger than at 1 or a
+    speed 1 / f times the described (*ratio*): a mesh whose power sits at its harmonics (no line at M) keeps its
+    shaft at 1."""
+
+    def amp(x: float) -> float:
+        i = lines.near(x, tol_mesh(x, bin_))
+        return 0.0 if i is None else float(lines.amp[i])
+
+    first = check["stages"][0]
+    m = first["expected_order"]
+    unexplained = [u["order"] for u in check["unexplained"] if "shaft_harmonic" not in u]  # a clock's line: no mesh
+    # any count of marks up to 8 (a 3-mark output tacho described with 2: every order at 2/3 of its own, 'the wheel
+    # on the output shaft shows 10.9 teeth'), the nearest the described count first
+    for marks in sorted((q for q in range(1, 9) if q != ppr), key=lambda q: (abs(math.log(q / ppr)), q)):
+        for f in (ppr / marks,):
+            at_mesh, at_shaft = amp(f * m), amp(f)
+            described = ratio is not None and abs(ratio * f - 1) < 0.05
+            if at_mesh <= amp(m) or (at_shaft <= amp(1.0) and not described):
+                continue
+            if f < 1 and not any(abs(u - f * m) <= tol_mesh(f * m, bin_) for u in unexplained):
+                continue  # another stage's mesh
+            return [
+                f"stage 1: the {first['z1']}-tooth pinion's mesh shows at order {f * m:.4g}, not {m:.4g}"
+                + (f", the input shaft at {f:.3g}" if at_shaft > amp(1.0) else "")
+                + (f", the speed {1 / f:.3g} x the described" if described else "")
+                + f": the tacho gives {int(marks)} pulse(s) per revolution, not {ppr}? "
+                f"(--pulses-per-rev {int(marks)}, key 'pulses_per_rev' in a scenario)"
+            ]
+    return []

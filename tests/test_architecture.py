@@ -40,7 +40,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("plugin registry", ("gearlab.registry",)),
     ("effect chain and learning", ("gearlab.effects", "gearlab.learn")),
     ("datasets", ("gearlab.data",)),
-    ("gap diagnosis and recording inspection", ("gearlab.gap", "gearlab.inspect", "gearlab.inspect_history")),
+    (
+        "gap diagnosis and recording inspection",
+        ("gearlab.gap", "gearlab.inspect", "gearlab.inspect_history", "gearlab.inspect_tacho"),
+    ),
     ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
     ("shared kind parts", ("gearlab.parts",)),
     ("scenario kinds", ("gearlab.kinds",)),

@@ -72,8 +72,8 @@ class VoltsAssumed(str):
 
 
 # An RMS over this many g, of values taken as volts, is called out: a gearbox housing's vibration is a few g at most,
-# and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid; an
-# outside user's 0.19 g box in mV read 194 g, under the 200 g first chosen, and nothing was said)
+# and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid; a
+# 0.19 g box logged in mV reads 194 g: 50 g still leaves a factor of ten over a loud housing)
 VOLTS_TOO_LOUD_G = 50.0
 TOO_LOUD = "too loud for a gearbox"  # level_hint's words, which a detection run's warnings repeat
 
@@ -140,7 +140,7 @@ def channel_scale(
                 )
             if value is not None:
                 # a key given for every file (a scenario's [target], a run's keys for gearlab score) is dropped for
-                # one file by giving it empty: say how, or the user is stuck (an outside user's npz in m/s²)
+                # one file by giving it empty: say how, or the user is stuck (an npz in m/s² scored on a volts run)
                 raise GearlabInputError(
                     f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key} "
                     f'(to drop one given for every file: {key} = "" in this file\'s entry; '
