@@ -67,8 +67,8 @@ def test_the_gap_diagnosis_names_the_tacho_s_shaft_and_marks_not_a_tooth_count(t
     result = json.loads(summary.read_text())
     verdict = result["verdict"]
     assert verdict.startswith("structure differs: stage 1: mesh order 230.1 measured, 19 expected"), verdict
-    # the gap is given no count read (its chain holds none): the marks named as a share of those read
-    said = TACHO + "1/2 x the pulses per revolution it was read with? ([target] tacho_shaft = 'output'"
+    # the count read (the description's 2, Chain.pulses_per_rev): the marks named as a count, as inspect names them
+    said = TACHO + "1 pulse(s) per revolution, not 2? (--tacho-shaft output --pulses-per-rev 1"
     assert said in verdict, verdict
     assert "teeth" not in verdict, verdict
     assert result["structure"]["tacho"]["shaft"] == "output", result["structure"]

@@ -58,6 +58,8 @@ class Chain:
                measured records (found from the mesh lines: a wrong tooth count moves the speed
                found, not the mesh order; a tacho's: read on another shaft, the speed is a ratio off)
     tacho_shaft: the shaft a measured target's tacho was read as (None: no tacho)
+    pulses_per_rev: the marks a turn its tacho was read with, one count for every record (None: no tacho, or
+               records of other counts): the structure check names a misread count as a count, not a share
     takes:     the revolutions of each record laid end to end, in order (() = one take): a slower
                shaft's phase jumps where two records meet, so its sidebands are read within one
     """
@@ -71,6 +73,7 @@ class Chain:
     speed_from_mesh: bool = False
     described_speed: float | None = None
     tacho_shaft: str | None = None
+    pulses_per_rev: int | None = None
     takes: tuple[int, ...] = field(default=(), compare=False, repr=False)
 
     @property

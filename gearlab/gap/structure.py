@@ -631,7 +631,7 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
         line = speed_line(chain.speed, record["speed_hz"]["source"], pair.Z1 if chain.speed_from_mesh else None)
         if line:
             return "structure differs", line, record
-    line = structure_line(target, pair, settings.max_order, chain, plain, record)
+    line = structure_line(target, pair, settings.max_order, chain, plain, record, chain and chain.pulses_per_rev)
     if line:
         return "structure differs", line, record
     declared = record.get("speed_hz", {}).get("source")  # a measured dataset's chain holds no described speed

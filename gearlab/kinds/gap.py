@@ -382,7 +382,18 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             if not spec.target.units_known:  # what fits values in volts, and values in m/s² already
                 record_notes.append(units_warning(spec.target.target.vibration, target_X))
             # start fractions not kept (drawn uniformly)
-            chain = Chain(fs, speed, speed_from_mesh=from_mesh, described_speed=described, tacho_shaft=shaft, takes=ts)
+            history = [f for f in spec.target.target.files if f.role == "history"]
+            pulses = {spec.target.target.keys_of(f)["pulses_per_rev"] for f in history} if shaft else set()
+            ppr = pulses.pop() if len(pulses) == 1 else None
+            chain = Chain(
+                fs,
+                speed,
+                speed_from_mesh=from_mesh,
+                described_speed=described,
+                tacho_shaft=shaft,
+                takes=ts,
+                pulses_per_rev=ppr,
+            )
             note = "; ".join(record_notes)
         else:
             on_event(Event("stage", stage="datasets", total=1, message="target data"))
