@@ -56,9 +56,10 @@ class UnknownPluginError(GearlabInputError):
     """A plugin name that no registered plugin of that kind carries."""
 
 
-def did_you_mean(name: str, known: list[str] | tuple[str, ...]) -> str:
+def did_you_mean(name: str, known: list[str] | tuple[str, ...], named: dict[str, str] | None = None) -> str:
+    """' (did you mean 'x'?)' for the closest of *known*, said as *named* says it (an alias by its listed name)."""
     close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.5)  # 0.5: 'q1' still finds 'q0'
-    return f" (did you mean '{close[0]}'?)" if close else ""
+    return f" (did you mean '{(named or {}).get(close[0], close[0])}'?)" if close else ""
 
 
 def refuse_unknown(given, known: list[str] | tuple[str, ...], where: str) -> None:

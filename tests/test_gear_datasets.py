@@ -131,3 +131,20 @@ def test_the_period_of_damage_on_each_gear_and_the_bound_on_it():
     # stage 2 meshes 609/53 times per input turn; its wheel turns 609/3233 times
     assert [train_period(coprime, s, g) for s, g in ((1, "pinion"), (1, "wheel"), (2, "wheel"))] == [53, 53, 3233]
     assert train_period(coprime, 2, "wheel") > MAX_PERIOD  # past it: a stretch (tests/test_long_period_trains.py)
+
+
+@pytest.mark.parametrize(
+    ("gear", "shafts", "suggested"),
+    [("input wheel", ("input", "output"), "output gear"), ("outpt wheel", ("input", "idler", "output"), "output gear")],
+)
+def test_an_unknown_gear_s_suggestion_is_a_name_the_error_lists(gear, shafts, suggested):
+    # 'input wheel' of a one-stage train was told "did you mean 'output wheel'?; known: ..., output gear": an alias
+    # understood but not listed, so the user could not tell whether the suggestion was a name at all
+    from gearlab.data.placement import resolve_gear
+    from gearlab.errors import GearlabInputError
+
+    with pytest.raises(GearlabInputError) as caught:
+        resolve_gear(gear, None, shafts, "[source] key 'faults'")
+    line = str(caught.value)
+    assert f"(did you mean '{suggested}'?)" in line, line
+    assert suggested in line.split("; known: ")[1].split(", "), line

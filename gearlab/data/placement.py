@@ -66,8 +66,11 @@ def resolve_gear(gear, stage, shafts: tuple[str, ...], where: str) -> tuple[int,
     key = " ".join(gear.lower().split())
     if key not in words:
         known = ", ".join([*GEARS, *(gear_name(k, g, shafts) for k in range(1, stages + 1) for g in GEARS)])
+        # the nearest word understood, by the name the list shows ('input wheel' of a one-stage train: 'output gear',
+        # not its alias 'output wheel')
+        named = {w: gear_name(k, g, shafts) for w, (k, g) in words.items()}
         raise GearlabInputError(
-            f"{where} key 'gear': unknown gear {shown(gear)}{did_you_mean(key, list(words))}; known: {known}"
+            f"{where} key 'gear': unknown gear {shown(gear)}{did_you_mean(key, list(words), named)}; known: {known}"
         )
     found = words[key]
     if stage is not None and stage != found[0]:
