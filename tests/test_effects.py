@@ -147,7 +147,10 @@ def test_search_space_has_bounds_scales_and_choices():
         "integer": False,
         "log": True,
     }
-    assert space["c_c"]["log"] is False
+    # a coupling's damping spans 0.01-1e4 N m s/rad (the load mode's damping ratio 0.1-2 over inertias and stiffnesses
+    # of five decades): searched on a log scale as the stiffness is; a ratio of 0-0.15 stays linear
+    assert space["c_c"]["log"] is True
+    assert {p["name"]: p for p in REG.get("effect", "mesh_damping").space()}["zeta"]["log"] is False
     noise = {p["name"]: p for p in REG.get("effect", "sensor_noise").space()}
     assert noise["kind"] == {"name": "kind", "choices": list(NOISE_KINDS), "default": "gaussian"}
     assert REG.get("effect", "speed_fluctuation").space()[1]["integer"] is True

@@ -38,6 +38,7 @@ from ..memo import SharedArrays
 from ..registry import get_registry
 from ..settings import MAX_SEED, declared, in_bounds, setting
 from ..signals.indicators import band_limited
+from .level import factor as level_factor_of
 from .stats import MIN_REVOLUTIONS, SD_FLOOR, effect_sizes, gap_report, resampled_moments, view_gaps
 from .tally import counted
 from .views import (
@@ -377,9 +378,19 @@ class Rows:
     max_order: int = 0
     chain: Chain | None = None
     consecutive: bool = False
+    # The target's load (gearlab.gap.level): every set of rows scaled by *load* (a factor held), or, where
+    # the set has an effect named in *read_beside* (one that moves the level itself: a drive), by the
+    # factor read off the set (level.factor against *level*: the target's order lines and the bounds).
+    # None: the source's own load.
+    load: float | None = None
+    level: tuple | None = None
+    read_beside: frozenset = frozenset()
 
     def __call__(self, spec: DatasetSpec) -> np.ndarray:
-        return offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive))
+        X = offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive))
+        if self.level is not None and any(name in self.read_beside for name, _ in spec.effects):
+            return X * level_factor_of(self.level, X)
+        return X * self.load if self.load is not None else X
 
 
 # --- the cheap score ---------------------------------------------------------------------------------
