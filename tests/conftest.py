@@ -307,6 +307,35 @@ def one_torch_thread():
 
 
 @pytest.fixture(scope="session", autouse=True)
+def one_blas_thread():
+    """numpy's BLAS (OpenBLAS) on one thread in the test processes, as torch (one_torch_thread): by default
+    it starts a thread per core, and with `pytest -n 2` on two cores every call large enough to be split
+    waited on a thread the other worker's core was busy with, spinning meanwhile. Measured, a 24,000-point
+    dot product (signals.fixed_lines.clock_share reads 35 a take): 8 ms of CPU on two threads, 0.02 ms on
+    one; test_outside_round14 + test_localise_noise_units in one process, load ~4: 18.1 / 20.6 s of CPU
+    -> 12.9 / 13.9 s. The tests of where gearlab itself limits BLAS to one thread
+    (blas_threads_as_started) lift it. Child processes (the TUI's, crash safety's, the pools') as before."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    BLAS_STARTED.extend(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
+BLAS_STARTED: list[int] = []  # the BLAS threads this process started with (one_blas_thread)
+
+
+@pytest.fixture
+def blas_threads_as_started():
+    """numpy's BLAS threads as the process started with (one_blas_thread limits them to one): for the tests
+    that check gearlab's own limit to one thread where a step wants it, which one thread would pass anyway."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=max(BLAS_STARTED, default=None), user_api="blas"):
+        yield
+
+
+@pytest.fixture(scope="session", autouse=True)
 def no_flush_to_disk():
     """os.fsync in the test processes checks its file descriptor (os.fstat: a bad one fails alike) and
     does not wait for the disk: what it guards, a file that survives a power cut, no test can see, and a

@@ -19,7 +19,7 @@ def cache(module_cache):
     return module_cache
 
 
-def test_aside_runs_its_steps_in_order_in_a_thread_with_one_blas_thread():
+def test_aside_runs_its_steps_in_order_in_a_thread_with_one_blas_thread(blas_threads_as_started):
     from threadpoolctl import threadpool_info
 
     np.ones(3) @ np.ones(3)  # numpy's BLAS loaded

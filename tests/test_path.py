@@ -97,7 +97,7 @@ def test_medians_of_noise_are_no_reference():
         )
 
 
-def test_the_filter_is_fitted_on_one_blas_thread(monkeypatch):
+def test_the_filter_is_fitted_on_one_blas_thread(monkeypatch, blas_threads_as_started):
     """The cross-validation's small solves run on one BLAS thread (numpy's default, a thread per
     core, made a fit 4-11 times slower on busy cores) and the threads are given back afterwards."""
     from threadpoolctl import threadpool_info

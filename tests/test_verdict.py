@@ -653,7 +653,7 @@ def test_confusion_matrix_numbers_stand_out_of_their_cells(tmp_path, monkeypatch
         assert (text.get_color() == "white") == (shade < 0.5), (text.get_text(), shade)
 
 
-def test_the_latent_projection_runs_on_one_blas_thread(monkeypatch):
+def test_the_latent_projection_runs_on_one_blas_thread(monkeypatch, blas_threads_as_started):
     """Issue 41 (no stage silent): a quick run's four latent maps took 11 s of its report stage, the
     SVDs' BLAS threads contending on a busy two-core machine (0.04 s each on one thread)."""
     import numpy as np
