@@ -19,6 +19,7 @@ from gearlab.gap.views import healthy_rows, offset_removed
 
 B6 = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
 NOISE = (effect_spec("sensor_noise", kind="gaussian", snr_db=20),)
+SMALL = {"healthy": 16, "bootstrap": 20, "permutations": 99}  # a unit test's diagnosis: 16 rows, small statistics
 
 
 @pytest.fixture(autouse=True)
@@ -45,15 +46,8 @@ def test_a_drive_at_another_load_is_named_with_the_load_factor():
         build_dataset(dataset_preset("B-8-ch5").with_(faults=(), healthy=16, effects=NOISE, seed=21, load_nm=12.0))
     )
     source = B6.with_(effects=NOISE)
-    settings = Settings(
-        candidates=("drive_inertias", "bearing_stiffness", "fillet_correction"),
-        max_effects=1,
-        healthy=16,
-        bootstrap=20,
-        permutations=99,
-        budget=16,
-        seed=0,
-    )
+    candidates = ("drive_inertias", "bearing_stiffness", "fillet_correction")
+    settings = Settings(candidates=candidates, max_effects=1, budget=16, seed=0, **SMALL)
     result = diagnose(source, target, settings)
     assert [e["name"] for e in result["effects"]] == ["drive_inertias"]
     assert result["load"]["factor"] == pytest.approx(0.6, rel=0.03)
@@ -96,7 +90,7 @@ def test_on_a_pure_load_change_the_score_is_least_at_the_load():
 
     source = B6.with_(effects=NOISE)
     target_X = healthy_rows(build_dataset(source.with_(load_nm=0.6 * source.load_nm, seed=21)))
-    settings = Settings(candidates=("bearing_stiffness",), healthy=16, bootstrap=20, permutations=99)
+    settings = Settings(candidates=("bearing_stiffness",), **SMALL)
     target, _, rows, settings, pair, search, _ = _prepared(source, target_X, settings, None)
     scorer = Scorer(target, pair, settings.max_order, rows.consecutive)
     X = rows(search)

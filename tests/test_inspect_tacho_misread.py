@@ -48,27 +48,39 @@ def box(tmp_path_factory):
     return load_gearbox(path)
 
 
-def test_an_output_tacho_read_as_the_input_s_is_told_alone(tmp_path, box):
-    rec, mean_hz = _record(tmp_path / "out.npz", tacho_shaft=2, marks=1)
-    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach"))
+@pytest.mark.parametrize(
+    ("tacho_shaft", "marks", "wrong", "right", "said", "not_said"),
+    [
+        # an output tacho read as the input's: not also 'a 115-tooth pinion on the input shaft?'
+        (
+            2,
+            1,
+            {},
+            {"tacho_shaft": "output"},
+            "the tacho reads the output shaft? --tacho-shaft output",
+            "-tooth pinion",
+        ),
+        # a 2-mark tacho read as 1: not also 'the wheel on the output shaft shows 98.0 teeth'
+        (
+            0,
+            2,
+            {"pulses_per_rev": 1},
+            {"pulses_per_rev": 2},
+            "the tacho gives 2 pulse(s) per revolution, not 1?",
+            "teeth (mesh order",
+        ),
+    ],
+    ids=["shaft", "marks"],
+)
+def test_a_tacho_misread_one_way_is_told_alone(tmp_path, box, tacho_shaft, marks, wrong, right, said, not_said):
+    rec, mean_hz = _record(tmp_path / "take.npz", tacho_shaft=tacho_shaft, marks=marks)
+    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", **wrong))
     assert report["matches"] is False
     assert report["check"]["differences"] == [report["verdict"].split("differs: ", 1)[1]], report["verdict"]
-    assert "the tacho reads the output shaft? --tacho-shaft output" in report["verdict"], report["verdict"]
-    assert "-tooth pinion on the input shaft?" not in report["verdict"], report["verdict"]
-    right = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", tacho_shaft="output"))
-    assert right["matches"], right["verdict"]
-    assert right["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
-
-
-def test_a_two_mark_tacho_read_as_one_is_told_alone(tmp_path, box):
-    rec, mean_hz = _record(tmp_path / "two.npz", tacho_shaft=0, marks=2)
-    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=1))
-    assert report["matches"] is False
-    assert "the tacho gives 2 pulse(s) per revolution, not 1?" in report["verdict"], report["verdict"]
-    assert "teeth (mesh order" not in report["verdict"] and ";" not in report["verdict"], report["verdict"]
-    right = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", pulses_per_rev=2))
-    assert right["matches"], right["verdict"]
-    assert right["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
+    assert said in report["verdict"] and not_said not in report["verdict"], report["verdict"]
+    read = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", **right))
+    assert read["matches"], read["verdict"]
+    assert read["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
 
 
 def test_an_output_tacho_of_one_mark_read_as_the_input_s_two_is_told_both(tmp_path, box):
