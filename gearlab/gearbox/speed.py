@@ -532,6 +532,8 @@ def _follow_speed(signal, fs, box, declared, where, threshold_db, file=None) -> 
             got = _followed(signal, fine, course, fs, box, declared, where, threshold_db, f, "")
             if got[0] is not None and not any(abs(got[1] / g[1] - 1) <= SPEED_AGREE for g in found):
                 found.append(got)
+        if len(found) > 1:
+            found = gathered(signal, fs, fine, found, box, threshold_db)
         if len(found) != 1:
             if file is None:
                 raise
@@ -544,6 +546,37 @@ def _follow_speed(signal, fs, box, declared, where, threshold_db, file=None) -> 
             ) from None
         return found[0]
     return _followed(signal, fine, course, fs, box, declared, where, threshold_db, f, how, note)
+
+
+GATHERED_DB = 6.0  # a followed phase whose strongest line stands this far over every other's is the speed's
+
+
+def gathered(signal, fs: float, fine: Upsampled, found: list[tuple], box: Gearbox, threshold_db: float) -> list[tuple]:
+    """Of speeds of one family whose mesh phase, followed, gave a speed (_followed's), the one whose angle gathers
+    the mesh's power (its top line within GATHERED_DB of the highest: a speed k times too slow follows no swing above
+    its shafts' rates, its FM sidebands stay) and reads its own speed again (one followed on 2 M reads half); else
+    *found*. A 39/110 + 38/101 box at 41.70 Hz swinging at ~1 Hz: 41.70 (71.7 dB) or 8.340 Hz (54.7 dB) (issue 39)."""
+    fastest = max(g[1] for g in found)
+    if any(abs(fastest / g[1] - round(fastest / g[1])) > SPEED_AGREE * fastest / g[1] for g in found):
+        return found  # two families: another tooth count, not a swing, can read so
+    heights, evens = [], []
+    for g in found:
+        evens.append(np.interp(np.linspace(g[0][0], g[0][-1], signal.size), fine.at(g[0]), fine.signal))
+        freq, amp = spectrum(evens[-1], fs)
+        lines = find_lines(freq, amp, threshold_db, 2 * freq[1], 0.45 * fs)
+        heights.append(float(lines.db[0]) if lines.at.size else -np.inf)
+    kept = [k for k, h in enumerate(heights) if h > max(heights) - GATHERED_DB]
+    if len(kept) > 1:
+        own = []
+        for k in kept:
+            try:
+                f = speed_from_mesh(evens[k], fs, box, None, "", threshold_db)[0]
+            except GearlabInputError:
+                continue
+            if abs(f / found[k][1] - 1) <= SPEED_AGREE:
+                own.append(k)
+        kept = own
+    return [found[kept[0]]] if len(kept) == 1 else found
 
 
 def _followed(signal, fine: Upsampled, course, fs, box, declared, where, threshold_db, f, how, note=None) -> tuple:
