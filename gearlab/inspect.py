@@ -66,9 +66,8 @@ from .gearbox.speed import (
     follow_speed,
     mesh_angle,
     nominal_line,
-    speed_course,
-    speed_shift,
 )
+from .gearbox.speed_course import speed_course, speed_shift
 from .inspect_tacho import elsewhere_line, marks_line, shaft_and_marks
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
@@ -232,7 +231,7 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
 
 def _along_course(rec: Recording, f: float) -> tuple[np.ndarray, np.ndarray]:
     """(input angle per sample, speed per revolution) at the mean speed *f*, no mesh phase followed: along the speed's
-    course (gearbox.speed.speed_course), else constant (read constant, a 2 % ramp's input sidebands were lost)."""
+    course (gearbox.speed_course.speed_course), else constant (read constant, a 2 % ramp's input sidebands were lost)."""
     course = speed_course(rec.signal, rec.fs)
     if course is None:
         return TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)

@@ -4,24 +4,20 @@ Used by the importer (gearlab.data.recordings) and by `gearlab inspect`."""
 
 from __future__ import annotations
 
-import hashlib
-import math
 import re
-import threading
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import GearlabInputError
-from ..memo import SharedArrays
 from ..signals import spectrum, upsampled
 from ..signals.checks import SPEED_VARIES, UNSEEN_WORDS, fmt_hz, speed_varies
 from ..signals.pipeline import Upsampled
 from .description import Gearbox
 from .orders import order_table
+from .speed_course import FLOOR_BINS, SHIFT_MIN, speed_course, speed_shift
 
 THRESHOLD_DB = 15.0  # a line stands this far over the running median of the spectrum
-FLOOR_BINS = 201  # width of the running median (bins)
 PEAK_BINS = 7  # a line is the largest value within ±3 bins (Hann sidelobes are not lines)
 DECLARED_RANGE = 0.01  # a declared speed is trusted to ±1 %
 # A declared speed is nominal: a motor under load runs below it (an induction motor's slip, up to some 6 %:
@@ -682,123 +678,6 @@ def mesh_angle(signal: np.ndarray, fs: float, box: Gearbox, f: float, course: np
     smooth = np.fft.ifft(np.fft.fft(wiggle) * 0.5 * (1 + np.cos(np.pi * edge))).real[:n]
     # the course's phase is added after the smoothing: a mirrored parabola's kinks would ring through the low-pass
     return (2 * np.pi * c * t + line + smooth + chirp) / order
-
-
-COURSE_WINDOWS = 15  # the record's spectra over time: half-overlapping windows, an eighth of it each
-COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean, or as far as speed_shift reads
-COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
-COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
-
-
-def lifted_rows(signal: np.ndarray, fs: float, starts, size: int, step: float, wide: float):
-    """(log-frequency axis, rows): each window of *size* samples from *starts*, its spectrum's lines over the
-    running median (log, clipped at 0) on a log-frequency axis of *step* (where a speed change is a shift),
-    less its mean; None where the band read (20 bins up to 0.45 fs) spans under *wide* x."""
-    from scipy import ndimage
-
-    nfft = 1 << int(math.ceil(math.log2(2 * size)))
-    freq = np.fft.rfftfreq(nfft, 1 / fs)
-    low, high = max(20 * fs / size, 1.0), 0.45 * fs
-    if high <= low * wide:
-        return None
-    axis = np.exp(np.arange(math.log(low), math.log(high), step))
-    window = np.hanning(size)
-    rows = []
-    for a in starts:
-        amp = np.abs(np.fft.rfft(signal[a : a + size] * window, nfft))
-        floor = ndimage.median_filter(amp, size=min(FLOOR_BINS, amp.size | 1), mode="nearest")
-        lifted = np.clip(np.log(np.maximum(amp, 1e-300) / np.maximum(floor, 1e-300)), 0.0, None)
-        rows.append(np.interp(axis, freq, lifted))
-    rows = np.array(rows)
-    rows -= rows.mean(axis=1, keepdims=True)
-    return axis, rows
-
-
-def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
-    """The speed per sample over its mean (a smooth course, mean 1) of a record without a tacho, from its own
-    spectra: each window's spectrum (lines over the running median, on a log-frequency axis, where a speed
-    change is a shift) correlated with the middle window's, every line of every stage at once, up to the shift
-    the record's ends show (speed_shift; COURSE_SPAN at least); a quadratic through the windows' ratios; None
-    where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
-    the mesh harmonic's band was narrower than its sweep. Read once per record and rate (COURSES), shared
-    read-only."""
-    data = np.ascontiguousarray(signal)
-    key = (hashlib.blake2b(data, digest_size=20).digest(), data.shape, data.dtype.str, float(fs))
-    with _COURSES_LOCK:
-        hit = COURSES.get(key)
-        if hit is not None:
-            COURSES.move_to_end(key)
-    if hit is None:
-        course = _speed_course(signal, fs)
-        with _COURSES_LOCK:
-            hit = COURSES.get_or_make(key, lambda: () if course is None else (course,))
-    return hit[0] if hit else None
-
-
-# The speed courses last read, by record (its digest, shape and type) and rate: follow_speed reads one to
-# look at the record and again where the description's speed was no prior, inspect along it and for its
-# count check, on the same record (inspect's and the joint-mesh tests: 59 reads of 23 records, 4.6 of
-# their 31 s of CPU); a read is 17 windows' spectra, running medians and correlations.
-COURSES = SharedArrays(16)
-_COURSES_LOCK = threading.Lock()
-
-
-def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
-    """speed_course of *signal*, read afresh."""
-    n = signal.size
-    size = n // 8
-    if size < 256:
-        return None
-    starts = np.linspace(0, n - size, COURSE_WINDOWS).astype(int)
-    if (lifted := lifted_rows(signal, fs, starts, size, COURSE_STEP, 1.5)) is None:
-        return None
-    axis, rows = lifted
-    ref = rows[COURSE_WINDOWS // 2]
-    # the course is looked for as far as the record's ends show its speed move (speed_shift), the whole shift each
-    # way from the middle window (twice what a steady ramp needs): a ±4 % reach read a 14 -> 19 Hz run-up as
-    # 0.94 .. 1.07 of its mean (0.85 .. 1.15 true), its mesh lines stayed smeared and the 1x shaft line was read as
-    # the mesh (0.506 Hz); a steady record's ends show no shift, its reach stays COURSE_SPAN
-    moved = speed_shift(signal, fs)
-    reach = int(max(math.log(1 + COURSE_SPAN), abs(math.log(moved or 1.0))) / COURSE_STEP)
-    m = 1 << int(math.ceil(math.log2(2 * axis.size)))
-    cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(ref, m)), m)
-    lags = np.concatenate([cross[:, -reach:], cross[:, : reach + 1]], axis=1)  # lag -reach .. reach
-    k = np.clip(np.argmax(lags, axis=1), 1, 2 * reach - 1)
-    l, c, r = (lags[np.arange(k.size), k + d] for d in (-1, 0, 1))
-    denom = l - 2 * c + r
-    shift = k - reach + np.where(denom < 0, 0.5 * (l - r) / np.where(denom < 0, denom, -1), 0.0)
-    ratio = np.exp(shift * COURSE_STEP)
-    centre = (starts + size / 2) / fs
-    t = np.arange(n) / fs
-    course = np.polyval(np.polyfit(centre, ratio, 2), t)
-    course /= course.mean()
-    return course if float(np.ptp(course)) >= COURSE_MIN else None
-
-
-SHIFT_SPAN = 1.0  # speed_shift looks for a ratio of speeds up to 2 (a run-up from 20 to 35 Hz: 1.62 between its ends)
-SHIFT_STEP = 1e-3  # its log-frequency axis's step: 0.1 % of speed
-SHIFT_MIN = 0.05  # a shift under 5 % is a steady record's (a motor's slip, a drive's swing: speed_course reads those)
-# the windows compared, a sixteenth of the record each: over an eighth a 20 -> 35 Hz ramp smears a 73-tooth mesh's
-# lines over 137 Hz, under the running median (a mesh and its 2nd harmonic alone read 0.95; over a sixteenth 1.69)
-SHIFT_PARTS = 16
-
-
-def speed_shift(signal: np.ndarray, fs: float) -> float | None:
-    """The speed at the record's last sixteenth over its first's (a run-up: > 1, a coast-down: < 1), from the two
-    windows' spectra (lines over the running median on a log-frequency axis, where a speed change is a shift,
-    every line of every stage at once, as speed_course reads a smaller one); None within SHIFT_MIN of 1. An
-    outside lab's 31/73 run-up from 20 to 35 Hz without its tacho: 'no line within ±1 % of a mesh frequency
-    (the lines fit 0.3794 Hz (27.39 Hz as 1×M1))', nothing said of its speed's course; read 1.687 (1.687 true)."""
-    size = signal.size // SHIFT_PARTS
-    if size < 256 or (lifted := lifted_rows(signal, fs, [0, signal.size - size], size, SHIFT_STEP, 4.0)) is None:
-        return None
-    axis, rows = lifted
-    reach = int(math.log(1 + SHIFT_SPAN) / SHIFT_STEP)
-    m = 1 << int(math.ceil(math.log2(2 * axis.size)))
-    cross = np.fft.irfft(np.fft.rfft(rows[1], m) * np.conj(np.fft.rfft(rows[0], m)), m)
-    lags = np.concatenate([cross[-reach:], cross[: reach + 1]])  # lag -reach .. reach
-    ratio = math.exp((int(np.argmax(lags)) - reach) * SHIFT_STEP)
-    return ratio if abs(ratio - 1) > SHIFT_MIN else None
 
 
 def varies_words(angle: np.ndarray, rec) -> str:
