@@ -231,7 +231,7 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
 
 def _along_course(rec: Recording, f: float) -> tuple[np.ndarray, np.ndarray]:
     """(input angle per sample, speed per revolution) at the mean speed *f*, no mesh phase followed: along the speed's
-    course (gearbox.speed_course.speed_course), else constant (read constant, a 2 % ramp's input sidebands were lost)."""
+    course (gearbox.speed_course), else constant (read constant, a 2 % ramp's input sidebands were lost)."""
     course = speed_course(rec.signal, rec.fs)
     if course is None:
         return TWO_PI * f * np.arange(rec.signal.size) / rec.fs, np.zeros(0)
