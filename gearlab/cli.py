@@ -617,7 +617,7 @@ def score(
         str | None, typer.Option(help="the run's condition to score them in (default: the nearest speed)")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print the rows as JSON")] = False,
-    key: Annotated[list[str], typer.Option(help="the files' vibration=, tacho=, fs=, unit=, sensitivity=, gain=")] = [],  # noqa: B006
+    key: Annotated[list[str], typer.Option(help="KEY=VALUE: a [target] files entry's key (tacho_shaft=output)")] = [],  # noqa: B006
 ) -> None:
     """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
 

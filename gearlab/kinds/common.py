@@ -103,7 +103,7 @@ MEASURED = {
         "check": _files,
         "doc": "measured records, each {file, role = 'history' | 'test', label, condition, speed (the last "
         "two optional)}, relative to the scenario; a gap diagnosis reads the history (healthy, one speed); "
-        "an entry may give its own vibration, tacho, pulses_per_rev, sensitivity, gain, unit or fs",
+        f"an entry may give its own {', '.join(ACQUISITION[:-1])} or {ACQUISITION[-1]}",
     },
     "vibration": {
         "types": (int, str),

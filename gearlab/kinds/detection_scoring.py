@@ -4,6 +4,7 @@ its thresholds with nothing trained again (score), and the trend of what was sco
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict
 from pathlib import Path
 
@@ -18,8 +19,9 @@ from ..gearbox.orders import TachoShaft
 from ..gearbox.simulation import gearbox_of
 from ..learn.protocol import fault_score
 from ..parts import scoring
-from ..parts.measured import TargetFile, held
+from ..parts.measured import ACQUISITION, TargetFile, held
 from ..runs import RunDir
+from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
 from ..signals.checks import VARIES_WORDS
@@ -77,6 +79,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)
         | ({} if target.tacho_shaft is None else {"tacho_shaft": asdict(target.tacho_shaft)}),
         "file_keys": file_keys(target.files),  # a new file in a test file's format: read with its keys
+        "marks": target.marks,  # the input angles the run's records were aligned at (a new file's own too)
         # which records had a tacho: "all" aligned by its marks, else as records without one
         "tacho_records": tacho_records(target),
         "blocks": list(d.blocks),
@@ -128,13 +131,18 @@ def file_keys(files) -> dict:
     headerless ones), and 'tests', the test files' where they all agree."""
     by: dict[str, list[dict]] = {}
     for f in files:
-        by.setdefault(file_format(f.path), []).append(dict(f.keys))
-    tests = [dict(f.keys) for f in files if f.role == "test"]
+        by.setdefault(file_format(f.path), []).append(_plain(f.keys))
+    tests = [_plain(f.keys) for f in files if f.role == "test"]
     return {
         "formats": {e: ks[0] for e, ks in by.items() if all(k == ks[0] for k in ks)},
         "sets": {e: [k for i, k in enumerate(ks) if k not in ks[:i]] for e, ks in by.items()},
         "tests": tests[0] if tests and all(k == tests[0] for k in tests) else {},
     }
+
+
+def _plain(keys) -> dict:
+    """A file's own keys as scoring.json keeps them: a tacho_shaft (a TachoShaft) as {name, a, b}."""
+    return {k: asdict(v) if k == "tacho_shaft" and v is not None else v for k, v in dict(keys).items()}
 
 
 def tacho_records(target) -> str:
@@ -207,21 +215,28 @@ def _ratio(shaft) -> list[int]:
     return [shaft.ratio.numerator, shaft.ratio.denominator]
 
 
-def _scoring_condition(run: RunDir, meta: dict, name: str, records: list[tuple[TargetFile, np.ndarray]]) -> dict:
+def _scoring_condition(
+    run: RunDir, meta: dict, name: str, records: list[tuple[TargetFile, np.ndarray]], marks: dict | None = None
+) -> dict:
     """A condition as read_target makes it, from the stored history and the new *records*
-    (standardised and aligned as the run's records were)."""
+    (standardised and aligned as the run's records were; *marks*: {path: the input angles a record's first
+    tacho mark may find it at} where its own tacho shaft or marks a turn are not the run's)."""
     c = meta["conditions"][name]
     arrays = scoring.load_arrays(run.file("scoring", c["file"]))
     standardiser = Standardiser(*(float(v) for v in arrays["standardiser"]))
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
     keys = meta["target"]
-    reference, ppr = arrays["reference"], _tacho_shaft(keys).marks(keys["pulses_per_rev"])
+    # a run from before "marks" was kept aligned at the [target]'s marks alone
+    reference, ppr = arrays["reference"], meta.get("marks") or _tacho_shaft(keys).marks(keys["pulses_per_rev"])
     tacho = True if _tacho_records(meta) == "all" else None  # aligned by its marks (aligned()'s flag)
     if "unit_shaft" in meta:  # a slower shaft's revolutions: turned by correlation, as the run's were
         tacho = None
     continuous = bool(meta.get("later_orders"))  # as read_target shifted the run's records
-    test = [(f, aligned(reference, standardiser.apply(revs), tacho, ppr, continuous)[1]) for f, revs in records]
+    # a new file's own marks beside the run's, as the run aligned files of other marks (Target.marks): an output
+    # tacho's 2 marks on a 21/59 box find the input at 42 angles, where the run's input tacho found it at 1
+    at = {f.path: math.lcm(ppr, (marks or {}).get(f.path, ppr)) for f, _ in records}
+    test = [(f, aligned(reference, standardiser.apply(revs), tacho, at[f.path], continuous)[1]) for f, revs in records]
     blocks = meta["blocks"]
     per_record = [unit_sets(r, blocks, True) for _, r in history]
     return {
@@ -395,48 +410,77 @@ def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: 
 
 
 def _tacho_shaft(keys: dict) -> TachoShaft:
-    """The shaft the run's tacho read (absent: the input)."""
-    return TachoShaft(**(keys.get("tacho_shaft") or {"name": "input"}))
+    """The shaft the run's tacho read (absent: the input); a TachoShaft, or {name, a, b} as scoring.json keeps it."""
+    shaft = keys.get("tacho_shaft")
+    return shaft if isinstance(shaft, TachoShaft) else TachoShaft(**(shaft or {"name": "input"}))
 
 
-# what gearlab score --key may give of new files (parts.measured.ACQUISITION but the tacho's marks)
-SCORE_KEYS = ("vibration", "tacho", "fs", "unit", "sensitivity", "gain")
+def _named_shaft(name: str, box) -> TachoShaft:
+    """--key tacho_shaft's shaft of the run's description *box*; one line where it has none or no such shaft."""
+    if box is not None:
+        return TachoShaft.of(box, name, "--key tacho_shaft")
+    if name != "input":
+        raise GearlabInputError(
+            f"--key tacho_shaft={name}: a shaft of a gearbox description, and the run has none; expected "
+            "tacho_shaft=input (or a run whose [source] gives a 'gearbox' description)"
+        )
+    return TachoShaft(name)
 
 
-def reading_keys(meta: dict, condition: str | None, given: dict | None = None, file: str = "") -> dict:
+def _marks(keys: dict) -> int:
+    """The input angles a record read with *keys* (reading_keys') finds the input at its first tacho mark."""
+    return _tacho_shaft(keys).marks(keys.get("pulses_per_rev") or 1)
+
+
+def _typed(value: str, types):
+    """A --key's text as the [target]'s key takes it: a whole number for a key of integers alone."""
+    types = types if isinstance(types, tuple) else (types,)
+    whole = value.strip().lstrip("+-").isdigit()
+    return int(value) if whole and int in types and str not in types else value
+
+
+def reading_keys(meta: dict, condition: str | None, given: dict | None = None, file: str = "", box=None) -> dict:
     """cut_recording's keys for a new record, as the run read its target: its tacho; or without
     one the run's declared speed and description (the speed from its mesh orders). A run whose
     speeds were declared per file only gives a new record the speed of its condition's history:
     the condition asked (--condition), or the run's only one. *given*: acquisition keys of the new
     files ({'vibration': 'vib', 'fs': '25.6 kHz'}: gearlab score's --key, as a [target] 'files'
     entry gives them) over those the run's files of *file*'s format were read with (remembered), over
-    the run's [target] keys."""
+    the run's [target] keys: every key a 'files' entry takes (parts.measured.ACQUISITION), a tacho_shaft
+    of the run's description (*box* where its keys have none: the one its source simulates)."""
     keys = dict(meta["target"]) | remembered(meta, file, given)[0]
     for key, value in (given or {}).items():
         at = f"--key {key}"
         # "" takes none of the run's (gain, sensitivity, unit, fs), as a [target] files entry's "" does: a next-week
         # npz in g beside a [target] gain in volts had no way to drop it ('expected KEY=VALUE ... did you mean gain')
-        if key not in SCORE_KEYS or (value == "" and key in ("vibration", "tacho")):
+        if key in ("vibration", "tacho", "pulses_per_rev") and value == "":  # no value of the run to drop
+            raise GearlabInputError(f"{at}=: expected a value (without --key {key}, the run's is taken)")
+        if key not in ACQUISITION:
             raise GearlabInputError(
-                f"{at}={value}: expected KEY=VALUE, KEY one of {', '.join(SCORE_KEYS)}{did_you_mean(key, SCORE_KEYS)}"
+                f"{at}={value}: expected KEY=VALUE, KEY one of {', '.join(ACQUISITION)}{did_you_mean(key, ACQUISITION)}"
             )
-        if key == "tacho" and _tacho_records(meta) == "none":
+        if key in ("tacho", "tacho_shaft", "pulses_per_rev") and _tacho_records(meta) == "none":
             raise GearlabInputError(
                 f"{at}: the run read its records without a tacho (their speed declared or from the mesh orders); "
                 "expected no tacho (the new records are read as the run's were)"
             )
-        if value != "":
-            in_bounds(setting(**MEASURED[key]).metadata["setting"], value, at)  # as the [target]'s are checked
+        if value != "":  # as the [target]'s are checked: its type, bounds, one line each
+            declared = setting(**MEASURED[key]).metadata["setting"]
+            value = _typed(value, declared.types)
+            check_type(value, declared.types, at)
+            in_bounds(declared, value, at)
         if key not in CALIBRATION:
             keys[key] = held(key, value, at)
     keys |= calibration({k: v for k, v in (given or {}).items() if k in CALIBRATION}, lambda k: f"--key {k}")
-    if "tacho_shaft" in keys:
-        keys["tacho_shaft"] = _tacho_shaft(keys)
     gearbox = keys.pop("gearbox", None)  # a run from before the target could go without a tacho has none
     if gearbox:
         from ..gearbox import resolve_gearbox
 
         keys["gearbox"] = resolve_gearbox(gearbox)
+    if isinstance(keys.get("tacho_shaft"), str):  # --key tacho_shaft=NAME: that shaft of the run's description
+        keys["tacho_shaft"] = _named_shaft(keys["tacho_shaft"], keys.get("gearbox") or box)
+    if "tacho_shaft" in keys:
+        keys["tacho_shaft"] = _tacho_shaft(keys)
     if keys["tacho"] is None and keys.get("speed_hz") is None and not gearbox:
         names = list(meta["conditions"])
         if condition is None and len(names) > 1:
@@ -466,12 +510,14 @@ def score(
             "score kept its models); expected a finished run: run the scenario again"
         )
     _same_input(run, meta)
-    reading_keys(meta, condition, given)  # a bad --key or a missing condition: refused before any file is read
-    cut, raw, found = {}, {}, {}
     described = (run.read_json("localisation.json") or {}).get("preset")  # the source's description, if any
     described = gearbox_of(described) if described else None
+    # a bad --key or a missing condition: refused before any file is read
+    reading_keys(meta, condition, given, box=described)
+    cut, raw, found, marks = {}, {}, {}, {}
     for i, file in enumerate(files):
-        keys = reading_keys(meta, condition, given, str(file))
+        keys = reading_keys(meta, condition, given, str(file), described)
+        marks[str(file)] = _marks(keys)
         rec, scored_on = cut_recording(str(file), **keys), None
         speeds = rec.speeds is not None and len(rec.speeds) == len(rec.revolutions)
         try:
@@ -519,7 +565,7 @@ def score(
     classical = stored_classical(meta["classical"])
     rows = []
     for name, records in cut.items():
-        cond = _scoring_condition(run, meta, name, records)
+        cond = _scoring_condition(run, meta, name, records, marks)
         rule = Rule(meta["threshold"], meta["false_alarm"], cond["history_records"])
         shown = synchronous_input(
             learned_input(meta["input"], meta["points"], classical, cond["unit_max_order"]),

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -29,8 +29,9 @@ if TYPE_CHECKING:
 
 ROLES = ("history", "test")
 # The acquisition keys a 'files' entry may give for its file alone (the [target]'s own, checked as
-# kinds.common.MEASURED declares them): a CSV history with column 'acc', HDF5 tests with dataset 'vib'
-ACQUISITION = ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "unit", "fs")
+# kinds.common.MEASURED declares them): a CSV history with column 'acc', HDF5 tests with dataset 'vib'; and
+# gearlab score's --key of new files (a next-week take whose tacho was moved to the output, 2 marks a turn)
+ACQUISITION = ("vibration", "tacho", "tacho_shaft", "pulses_per_rev", "sensitivity", "gain", "unit", "fs")
 # 'file' as in every kind's measured entry; 'speed' a record's own declared speed (no tacho); 'path',
 # the file's name before, is read the same
 FILE_KEYS = ("file", "role", "label", "condition", "speed", *ACQUISITION, "path")
@@ -66,16 +67,17 @@ class Target:
     tacho_shaft: TachoShaft | None = None  # a tacho on another shaft than the input (None: the input)
 
     def keys_of(self, file: TargetFile) -> dict:
-        """The acquisition keys *file* is read with: its own, else the target's."""
+        """The acquisition keys *file* is read with: its own, else the target's ('tacho_shaft': a TachoShaft,
+        None on the input)."""
         return {k: getattr(self, k) for k in ACQUISITION} | dict(file.keys)
 
     @property
     def marks(self) -> int:
         """The tacho marks a record's input angle may start at, 1/marks of a turn apart (TachoShaft.marks);
-        files of other pulses per turn: the marks of them all."""
-        pulses = {self.pulses_per_rev} | {self.keys_of(f)["pulses_per_rev"] for f in self.files}
-        marks = [p if self.tacho_shaft is None else self.tacho_shaft.marks(p) for p in sorted(pulses)]
-        return math.lcm(*marks)
+        files of other pulses per turn or another tacho shaft: the marks of them all."""
+        read = {(self.tacho_shaft, self.pulses_per_rev)}
+        read |= {(k["tacho_shaft"], k["pulses_per_rev"]) for k in map(self.keys_of, self.files)}
+        return math.lcm(*(p if shaft is None else shaft.marks(p) for shaft, p in read))
 
     @property
     def tacho_all(self) -> bool:
@@ -86,8 +88,14 @@ class Target:
     @property
     def read_as(self) -> str | None:
         """The shaft the tacho is read as (the gap's Chain.tacho_shaft); None: not every record has one (each
-        file's own tacho counts: a history of per-file tachos was read 'no tacho: its speed from the mesh lines')."""
-        return None if not self.tacho_all else self.tacho_shaft.name if self.tacho_shaft else "input"
+        file's own tacho counts: a history of per-file tachos was read 'no tacho: its speed from the mesh lines').
+        Files' own tacho_shaft: the first history record's (the structure check and the which-gear history read
+        the history; a gap's history has one, target_spec)."""
+        if not self.tacho_all:
+            return None
+        first = next((f for f in self.files if f.role == "history"), None)
+        shaft = self.tacho_shaft if first is None else self.keys_of(first)["tacho_shaft"]
+        return shaft.name if shaft else "input"
 
     def read(self, file: TargetFile):
         """One of the target's records, read through the one import path (any format) with its
@@ -99,11 +107,10 @@ class Target:
         try:
             return cut_recording(
                 file.resolved,
-                **self.keys_of(file),
+                **self.keys_of(file),  # its tacho_shaft too
                 transient=self.transient,
                 speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
                 gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
-                tacho_shaft=self.tacho_shaft,
             )
         except GearlabInputError as exc:  # what the data shows (a ragged row, a NaN): named where it is listed
             if exc.args and isinstance(exc.args[0], str) and "[target]" not in exc.args[0]:
@@ -226,7 +233,9 @@ def held(key: str, value, where: str):
         return channel_key(value)
     if key == "pulses_per_rev":
         return int(value)
-    return value if key == "unit" else rate_hz(value, where)  # fs ('sensitivity' and 'gain': calibration)
+    # fs in Hz ('sensitivity' and 'gain': calibration); a unit, a shaft's name as given (made a TachoShaft where
+    # the description is known: target_spec's own_shafts, detection_scoring.reading_keys)
+    return value if key in ("unit", "tacho_shaft") else rate_hz(value, where)
 
 
 def speed_of(value, where: str) -> float:
@@ -325,6 +334,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
     # unread (a 3-mark output tacho read as the input's once a turn: 4.4 Hz, 'a 31-tooth pinion')
     some = tacho if tacho is not None else next((q for q in tachos if q is not None), None)
     shaft = tacho_shaft_of(t.get("tacho_shaft") or "", some, box, where, "[source] key 'gearbox'")
+    files = own_shafts(files, tachos, box, f"{where} key 'files'", shaft, "test" in need)
     return Target(
         vibration,
         tacho,
@@ -340,6 +350,32 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         keys["unit"],
         shaft,
     )
+
+
+def own_shafts(files: tuple[TargetFile, ...], tachos: list, box, where: str, shaft, mixed: bool) -> tuple:
+    """*files* with their own 'tacho_shaft' (a name, as held) made the TachoShaft of the [source]'s description
+    *box* it names (the input's too: a file's own wins over the [target]'s *shaft*), checked as the [target]'s
+    is (tacho_shaft_of: one line naming the entry); *tachos*: each file's tacho. Not *mixed* (the gap: one
+    acquisition chain), history records read on different shafts are refused."""
+    from ..gearbox.orders import TachoShaft
+
+    out = []
+    for i, (f, tacho) in enumerate(zip(files, tachos)):
+        own = dict(f.keys)
+        if "tacho_shaft" in own:
+            name = own["tacho_shaft"] or ""  # "": not the [target]'s; the description's [sensor] tacho
+            read = tacho_shaft_of(name, tacho, box, f"{where} entry {i + 1}", "[source] key 'gearbox'")
+            own["tacho_shaft"] = read or (TachoShaft(name) if name else None)
+            f = replace(f, keys=tuple((k, own[k]) for k in ACQUISITION if k in own))
+        out.append(f)
+    on = {f.path: getattr(dict(f.keys).get("tacho_shaft", shaft), "name", "input") for f in out if f.role == "history"}
+    if not mixed and len(set(on.values())) > 1:
+        (a, x), (b, y) = next((p, q) for p in on.items() for q in on.items() if p[1] != q[1])
+        raise GearlabInputError(
+            f"{where}: {a} reads its tacho on the {x} shaft, {b} on the {y}; the gap compares one acquisition chain "
+            "with the simulator: expected every history record's tacho on one shaft (tacho_shaft)"
+        )
+    return tuple(out)
 
 
 def aligned(
