@@ -29,19 +29,19 @@ OUTPUT = Fraction(21, 59)  # the output's turns per input turn
 BOX = description(stage(21, 59), name="fan2159", speed="25 Hz", load="10 N*m", near="input", tacho="input")
 
 
-def record(path: Path, turns=Fraction(1), marks=1, chip=0.0, seed=0, seconds=3.0, start=-0.1) -> Path:
-    """A record (time_s, acc_V, tacho_V) of the 21/59 box at 25 Hz: its mesh at order 21 modulated once an
-    input turn, a chip's ring once an input turn (*chip*: its level), noise of *seed*; the tacho *marks*
-    pulses a turn of the shaft turning *turns* per input turn, each rising where that shaft's angle x
+def record(path: Path, turns=Fraction(1), marks=1, chip=0.0, seed=0, seconds=3.0, start=-0.1, teeth=21, speed=SPEED):
+    """A record (time_s, acc_V, tacho_V) of the 21/59 box at 25 Hz (or a pinion of *teeth* at *speed*): its mesh
+    modulated once an input turn, a chip's ring once an input turn (*chip*: its level), noise of *seed*; the tacho
+    *marks* pulses a turn of the shaft turning *turns* per input turn, each rising where that shaft's angle x
     *marks* is 0 (the input at *start* turns at the first sample)."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(seconds * FS)) / FS
-    theta = 2 * np.pi * (SPEED * t + start)
-    acc = np.sin(21 * theta) * (1 + 0.2 * np.cos(theta)) + 0.05 * rng.standard_normal(t.size)
-    since = np.mod(theta - 1.0, 2 * np.pi) / (2 * np.pi * SPEED)
+    theta = 2 * np.pi * (speed * t + start)
+    acc = np.sin(teeth * theta) * (1 + 0.2 * np.cos(theta)) + 0.05 * rng.standard_normal(t.size)
+    since = np.mod(theta - 1.0, 2 * np.pi) / (2 * np.pi * speed)
     acc += chip * np.exp(-since * 2000.0) * np.sin(2 * np.pi * 1500.0 * since)
     shaft = np.mod(theta * float(turns) * marks + np.pi, 2 * np.pi) - np.pi
-    ramp = 4 * 2 * np.pi * SPEED * float(turns) * marks / FS  # each pulse rises over 4 samples
+    ramp = 4 * 2 * np.pi * speed * float(turns) * marks / FS  # each pulse rises over 4 samples
     tacho = 5.0 * np.clip(0.5 + shaft / ramp, 0, 1) * (shaft < 0.3)
     with path.open("w", newline="") as f:
         w = csv.writer(f)
@@ -204,7 +204,7 @@ def test_score_reads_a_take_whose_tacho_moved_to_the_output_as_the_input_s(
     take read at its own output tacho of 2 marks (its 'files' entry's tacho_shaft and pulses_per_rev), then
     next week's takes scored with --key tacho_shaft=output --key pulses_per_rev=2: each scores as the same
     signal read at the input tacho (the same decision, the median score within noise); without the keys the
-    output's pulses are read as the input's (17.8 Hz, no condition's speed), one line."""
+    output's pulses are read as the input's (17.8 Hz, no condition's speed), one line that names the keys."""
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     (tmp_path / "box.toml").write_text(BOX)
     for folder in ("in", "out"):
@@ -251,3 +251,10 @@ def test_score_reads_a_take_whose_tacho_moved_to_the_output_as_the_input_s(
     assert plain[("ok.csv", "fm4", "record5")]["decision"] == "healthy"
     code, _, err = cli("score", run, takes[0])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "17.80 Hz is more than 5%" in err, err
+    # the one shaft and count of marks at which it runs at the condition's speed, its mesh lines then the description's
+    said = "or its tacho reads the output shaft, 2 pulses per revolution: it then runs at 25.00 Hz, the speed of "
+    assert f"{said}condition '25 Hz' (gearlab score RUN FILE --key tacho_shaft=output --key pulses_per_rev=2)" in err
+    # a 23-tooth pinion's take at that speed, its input tacho read right: read so its mesh is no 21: no keys named
+    other = record(tmp_path / "other.csv", teeth=23, speed=SPEED * 42 / 59, seed=9)
+    code, _, err = cli("score", run, other)
+    assert code == 2 and "17.80 Hz is more than 5%" in err and "--key" not in err, err

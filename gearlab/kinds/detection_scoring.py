@@ -381,6 +381,43 @@ def _other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = 
     )
 
 
+def _moved_tacho(meta: dict, path: str, keys: dict, speed: float, box) -> str:
+    """'; or ...' for a take whose tacho reads another shaft or count of marks than its *keys* say, its *speed*
+    read no condition's: the one shaft of the run's description *box* (the input alone without one) and count of
+    marks a turn (1-8) at which it runs within IN_BAND of a condition's speed and, with a description, its mesh
+    lines fit it (_other_gearbox: inspect with those keys), with the --key that reads it so; "" where none or
+    several fit. A 21/59 box's 2-mark output tacho read as the input's once a turn: 17.80 Hz, not 25 Hz."""
+    if keys.get("tacho") is None:
+        return ""
+    read, pulses = _tacho_shaft(keys), keys.get("pulses_per_rev") or 1
+    shafts = [TachoShaft.of(box, name, "[sensor]") for name in box.shafts] if box is not None else [TachoShaft("input")]
+    fits = []
+    for shaft in shafts:
+        for marks in range(1, 9):
+            # the tacho's pulses a second over the input's turns: speed x pulses x read turns, as marks x shaft turns
+            true = speed * pulses * float(read.turns) / (marks * float(shaft.turns))
+            conditions = meta["conditions"].items()
+            near = [c for c, v in conditions if abs(true - v["speed_hz"]) <= IN_BAND * v["speed_hz"]]
+            if near and abs(true / speed - 1.0) > IN_BAND:
+                fits.append((shaft, marks, true, near[0]))
+    if box is not None:  # the lines of the take read so: a speed's match alone is one of ~20 tries
+        fits = [
+            f
+            for f in fits
+            if not _other_gearbox(
+                meta, path, keys | {"tacho_shaft": f[0], "pulses_per_rev": f[1]}, f[2], far=False, box=box
+            )
+        ]
+    if len(fits) != 1:
+        return ""
+    shaft, marks, true, condition = fits[0]
+    return (
+        f"; or its tacho reads the {shaft.name} shaft, {marks} pulse{'s' * (marks > 1)} per revolution: it then runs "
+        f"at {true:.2f} Hz, the speed of condition '{condition}' (gearlab score RUN FILE "
+        f"--key tacho_shaft={shaft.name} --key pulses_per_rev={marks})"
+    )
+
+
 def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: dict) -> dict:
     """{path: {unit: scores}} of a learned method's record (one training, an ensemble of seeds, or
     crossed folds) on the units *seen* ({path: {unit: X}} as the method sees them)."""
@@ -525,7 +562,8 @@ def score(
         except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
             other = _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
             if other or VARIES_WORDS not in rec.angle_source or not speeds:
-                raise GearlabInputError(other or f"{far}{varies(rec.angle_source)}") from None
+                moved = _moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
+                raise GearlabInputError((other or f"{far}{varies(rec.angle_source)}") + moved) from None
             # a run-up or coast-down: its revolutions at a condition's history speed
             name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far} ({span(rec.angle_source)})")
         else:
