@@ -52,6 +52,21 @@ def mixed(d, o: float, rival: float | None, bin_: float):
     return out if d.ndim else bool(out)
 
 
+def own_pair(hits: list, part: float) -> bool:
+    """Whether a comb's *hits* ((j, line) each) spaced *part* (1/2 or 1/3; 0: any spacing) of the stage's other
+    shaft's order hold a pair of its own lines: the sidebands +-j of a j no multiple of 1 / *part*. Every 2nd (3rd)
+    line of such a comb lies on the other shaft's comb, which alone puts them there; the lines between are this
+    shaft's only, and a shaft's modulation sets them either side of the carrier (a box of 32 and 64 teeth: the output
+    at 0.5 beside the input's 1.0; of 40 and 119, 0.3361, 0.8 % from 1/3: each described a tooth or two off, 'not
+    checked').
+    One such line alone can be another mesh's tone (a three-stage train's 19/43 + 23/57 + 29/71: a comb at half the
+    intermediate shaft's order read as the output's, '58.1 teeth, 71 described')."""
+    if not part:
+        return True
+    n, js = round(1 / part), {j for j, _ in hits}
+    return any(j % n and -j in js for j in js if j > 0)
+
+
 def comb(
     lines: Lines, mesh: int, o: float, bin_: float, exclude=frozenset(), rival: float | None = None
 ) -> tuple | None:
@@ -60,10 +75,10 @@ def comb(
 
     Every line within ±3.9 o of the carrier is an offset d; a candidate spacing c = |d| / j
     (j = 1, 2, 3, within ±30 % of the described o, and nearer o than the stage's other shaft's
-    order *rival*: that spacing is the other shaft's evidence; nor 2-6, 1/2 or 1/3 rival off o: the
-    comb of the one seen in the other's every 2nd or 3rd line, as a train of three shows from its
-    meshes' tones with the stages on both shafts of its middle one, or a harmonic of the other's: a cracked
-    tooth on a 14/53 wheel's shaft rings its 4th, 1.057, read as the input's: '13.2 teeth, 14 described')
+    order *rival*: that spacing is the other shaft's evidence; nor 2-6 rival off o: the comb of the one
+    seen in the other's every 2nd or 3rd line, or a harmonic of the other's: a cracked tooth on a 14/53
+    wheel's shaft rings its 4th, 1.057, read as the input's: '13.2 teeth, 14 described'; 1/2 or 1/3 rival
+    off o only with a pair of lines of its own, off the other's comb: own_pair)
     is scored by the amplitudes of
     the offsets at ±c, ±2c, ±3c; it must have a first sideband (±c), no product of the rival and c, and its
     others are no products of the rival and the order its first sidebands read (mixed): the lines' spacing, not the
@@ -76,14 +91,20 @@ def comb(
     near = np.array([q for q in near if q not in exclude], dtype=int)
     if near.size == 0:
         return None
-    d, a, log, nths = lines.at[near] - m, lines.amp[near], math.log, (2, 3, 4, 5, 6, 1 / 2, 1 / 3)
+    d, a, log = lines.at[near] - m, lines.amp[near], math.log
 
-    def allowed(c: float) -> bool:
+    def nth(c: float, ns) -> float:
+        """The n of *ns* whose n x rival *c* lies at, off o by over 1 %, else 0."""
         # within 1 % of n x rival, or of the comb's own resolution where finer: a 54/107 stage's input comb
         # (0.981 of the input's order as a 53-tooth description reads it) sits 0.9 % from 2 x the output's
         near = min(0.01 * c, (SIDEBAND_BINS if c >= SEPARATED * bin_ else 2.0) * bin_ + DRIFT * c)
-        nth = rival is not None and abs(c - o) > 0.01 * o and any(abs(c - n * rival) <= near for n in nths)
-        return 0.7 * o <= c <= 1.3 * o and not nth and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
+        if rival is None or abs(c - o) <= 0.01 * o:
+            return 0
+        return next((n for n in ns if abs(c - n * rival) <= near), 0)
+
+    def allowed(c: float) -> bool:
+        within = 0.7 * o <= c <= 1.3 * o and (rival is None or abs(log(c / o)) < abs(log(c / rival)))
+        return within and not nth(c, (2, 3, 4, 5, 6))
 
     def fitted(hits: list) -> tuple[float, list]:
         """The spacing fitted through *hits* and the hits it keeps: a line further off the fitted comb than
@@ -128,7 +149,7 @@ def comb(
         first = float(sum(a[q] * abs(d[q]) for _, q in hits) / sum(a[q] for _, q in hits))
         hits += on(np.where(mixed(d, first, rival, bin_), np.inf, own), c, (-3, -2, 2, 3))
         spacing, hits = fitted(hits)
-        if any(abs(j) == 1 for j, _ in hits):
+        if any(abs(j) == 1 for j, _ in hits) and own_pair(hits, nth(c, (1 / 2, 1 / 3))):
             candidates.append((c, hits, spacing))
     # a comb of one line is that line's evidence alone: where another comb has a line on each side of the carrier,
     # it goes (a 21/65 + 34/91 box described with a 64-tooth first wheel: stage 2's 2nd harmonic, 0.969 above
