@@ -333,7 +333,9 @@ class Simulator:
         if warn and self.fs < self.fs_floor:
             warnings.warn(
                 f"{where}: fs = {self.fs:g} Hz gives fewer than 10 steps per period of the highest natural "
-                f"frequency ({top:.0f} Hz); results will be inaccurate; expected fs >= {math.ceil(self.fs_floor)} Hz",
+                f"frequency ({top:.0f} Hz); results will be inaccurate; expected fs >= {math.ceil(self.fs_floor)} Hz "
+                # the model's name and preset hash alone leave a user of a scenario with no key to change
+                f'(a scenario\'s [source] fs = "{math.ceil(self.fs_floor / 1e3)} kHz"; simulate: --fs)',
                 stacklevel=3,
             )
 
