@@ -59,3 +59,74 @@ def test_three_stage_rate_warning_names_the_scenario_key(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # at the rate it names, no warning
         Simulator(model, ref, floor_khz * 1e3)
+
+
+BOX_F = """
+[gearbox]
+name = "boxf"
+
+[operation]
+speed = "1440 rpm"
+load = "60 N*m"
+
+[[stages]]
+module = "2 mm"
+face_width = "20 mm"
+pinion = { z = 21, bore = "20 mm" }
+wheel = { z = 55, bore = "30 mm" }
+
+[[stages]]
+module = "3 mm"
+face_width = "30 mm"
+pinion = { z = 34, bore = "30 mm" }
+wheel = { z = 77, bore = "45 mm" }
+
+[sensor]
+near = "output"
+tacho = "output"
+pulses_per_rev = 2
+"""
+
+DETECT_F = """
+[scenario]
+name = "boxf_chip"
+kind = "detection"
+
+[source]
+gearbox = "boxf.toml"
+faults = {{ "chip@output gear" = [16, 18, 20] }}
+healthy = 48
+{teeth}
+[target]
+vibration = "acc"
+speed = "24 Hz"
+files = [
+  {{ file = "h.csv", role = "history", label = "healthy" }},
+  {{ file = "t.csv", role = "test", label = "fault" }},
+]
+"""
+
+
+def _watched_wheel(tmp_path, teeth: str):
+    from gearlab.engine import load_scenario
+
+    (tmp_path / "boxf.toml").write_text(BOX_F)
+    for name in ("h.csv", "t.csv"):
+        (tmp_path / name).write_text("time_s,acc\n0,0\n")
+    (tmp_path / "d.toml").write_text(DETECT_F.format(teeth=teeth))
+    (fault,) = load_scenario(tmp_path / "d.toml").spec.source.fault_classes("test").values()
+    return fault
+
+
+def test_the_guide_s_cost_of_a_watched_output_wheel_and_its_way_out(tmp_path):
+    # the guide promised seconds with --quick; box F's run made 232 simulations, ETA 2 h 30 at load 7, and the
+    # guide named no way out: what docs/your_gearbox.md now says of it stands
+    from pathlib import Path
+
+    guide = " ".join((Path(__file__).parents[1] / "docs" / "your_gearbox.md").read_text().split())
+    every = _watched_wheel(tmp_path, "")
+    assert (every.period, len(every.teeth)) == (605, 77)  # 77 x 3 sizes + the healthy case: 232 simulations
+    assert "77T output gear: 232 simulations of 605 input turns" in guide
+    chosen = _watched_wheel(tmp_path, "teeth = [1, 27, 53]\n")
+    assert chosen.teeth == (1, 27, 53)  # 3 x 3 + 1: 10 simulations
+    assert "`teeth = [1, 27, 53]` in `[source]` simulates those alone (10 simulations" in guide
