@@ -507,6 +507,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             # 19/47 + 29/71 reducer's output tacho read as the input's was also told 'a 115-tooth pinion on the
             # input shaft?', its 2-mark tacho read as 1 'the wheel on the output shaft shows 98.0 teeth')
             differences[:] = misread
+            check["tacho_misread"] = True  # what differs is the tacho's reading, not the gears (score reads it so)
         if read_on and not misread:  # the tacho read as said: its shaft's gears first, then outward
             check["outward"] = outward_first(differences, check["stages"], box, read_on)
         if read_on and differences and "nominal" in report["speed"]:

@@ -31,15 +31,21 @@ def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, b
     """(shaft, r, f) of a tacho on shaft s with r times fewer marks a turn than read, read as *ppr* (None: not
     known) on shaft *read*: every order reads f = (o_read / o_s) r times its own. Found where the speed read is
     1 / f of the described (*ratio*: read / described, within TACHO_SPEED_TOL) and every stage's mesh line lies at
-    f times its order (among check_description's measured orders, *bin_*: the order resolution); else None. Without a
-    described speed nothing is found: the lines alone fit any shaft and count whose product is f. *box*: a
-    Gearbox, or anything order_table reads (the gap's _PairDescription)."""
+    f times its order (among check_description's measured orders, and its unexplained lines where a stage did not
+    match; *bin_*: the order resolution); else None. Without a described speed nothing is found: the lines alone
+    fit any shaft and count whose product is f. *box*: a Gearbox, or anything order_table reads (the gap's
+    _PairDescription)."""
     stages = check["stages"]
-    if ratio is None or not stages or any(s.get("measured_order") is None for s in stages):
+    if ratio is None or not stages:
         return None
     table = order_table(box)
     o_read = float(table.shaft_orders[list(table.shafts).index(read)])
-    seen = [(s["expected_order"], s["measured_order"]) for s in stages]
+    described = [s["expected_order"] for s in stages]
+    seen = [s["measured_order"] for s in stages if s.get("measured_order") is not None]
+    if not all(s["matched"] for s in stages):
+        # a stage given no line, or another, may have its mesh among the lines no described order explains: a 21/59
+        # box's 2-mark output tacho read as a 1-mark input's put the mesh at 29.5, and stage 1 was given no line
+        seen += [u["order"] for u in check["unexplained"]]
     for name, o in zip(table.shafts, table.shaft_orders):
         for r in _ratios(ppr):
             f = o_read / float(o) * float(r)
@@ -50,7 +56,7 @@ def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, b
                 continue
             # each stage's mesh among the lines read, whichever stage check_description gave it to (19 turns of the
             # reducer above gave stage 1 the line at 142, stage 2's mesh 11.72 x 12.11, and stage 2 the line at 230)
-            if all(any(abs(x - f * m) <= tol_mesh(f * m, bin_) for _, x in seen) for m, _ in seen):
+            if all(any(abs(x - f * m) <= tol_mesh(f * m, bin_) for x in seen) for m in described):
                 return str(name), r, f
     return None
 

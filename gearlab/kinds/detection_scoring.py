@@ -368,6 +368,10 @@ def _other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = 
     if report.get("matches") is not False:
         return None
     said = report["check"].get("differences") or [report["verdict"]]
+    if far and report["check"].get("tacho_misread"):
+        # a tacho read on another shaft or count of marks (inspect_tacho): the mesh as read, the shaft and marks
+        # left to _moved_tacho's --key words (inspect's own, its options, made the one line too long to show)
+        said = [d.split(" (", 1)[0] for d in said]
     # the stages' lines ('mesh order x measured, y expected', 'no line at mesh order z'), not the speed's search
     picked = [d for d in said if "mesh order" in d and ("measured" in d or "no line" in d)][:2] or said[:1]
     stages = " + ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
