@@ -501,7 +501,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             ppr = options.pulses_per_rev or box.sensor.pulses_per_rev
             ratio = speed.mean_hz / box.speed_hz if box.speed_hz else None
             misread = marks_line(check, lines, ppr, 1.0 / revolutions, ratio)
-            misread = misread or shaft_and_marks(check, box, tacho_shaft, ppr, ratio, 1.0 / revolutions)
+            misread = misread or shaft_and_marks(check, box, tacho_shaft, ppr, ratio, 1.0 / revolutions, lines)
         if misread:
             # every order reads f x its own: the rows read at that speed follow from it, not from the gears (a
             # 19/47 + 29/71 reducer's output tacho read as the input's was also told 'a 115-tooth pinion on the

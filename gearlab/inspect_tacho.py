@@ -27,14 +27,14 @@ def _ratios(ppr: int | None) -> list[Fraction]:
     return sorted({Fraction(p, k) for p in MARKS for k in MARKS}, key=lambda r: (r.denominator, r.numerator))
 
 
-def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, bin_: float) -> tuple | None:
+def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, bin_: float, lines=None) -> tuple | None:
     """(shaft, r, f) of a tacho on shaft s with r times fewer marks a turn than read, read as *ppr* (None: not
     known) on shaft *read*: every order reads f = (o_read / o_s) r times its own. Found where the speed read is
     1 / f of the described (*ratio*: read / described, within TACHO_SPEED_TOL) and every stage's mesh line lies at
-    f times its order (among check_description's measured orders, and its unexplained lines where a stage did not
-    match; *bin_*: the order resolution); else None. Without a described speed nothing is found: the lines alone
-    fit any shaft and count whose product is f. *box*: a Gearbox, or anything order_table reads (the gap's
-    _PairDescription)."""
+    f times its order (among check_description's measured orders; where a stage did not match, its unexplained
+    lines and the STRONGEST of *lines*, the Lines it read; *bin_*: the order resolution); else None. Without a
+    described speed nothing is found: the lines alone fit any shaft and count whose product is f. *box*: a Gearbox,
+    or anything order_table reads (the gap's _PairDescription)."""
     stages = check["stages"]
     if ratio is None or not stages:
         return None
@@ -46,6 +46,9 @@ def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, b
         # a stage given no line, or another, may have its mesh among the lines no described order explains: a 21/59
         # box's 2-mark output tacho read as a 1-mark input's put the mesh at 29.5, and stage 1 was given no line
         seen += [u["order"] for u in check["unexplained"]]
+        # ... or among the strongest, explained as another's: a 19/47 + 29/71 reducer's 2-mark output tacho put stage
+        # 2's mesh at 35.5, read as its 3rd harmonic's sideband (35.17 + 0.40), and gave it the line at 4.43
+        seen += [] if lines is None else [float(x) for x in lines.at[:STRONGEST]]
     for name, o in zip(table.shafts, table.shaft_orders):
         for r in _ratios(ppr):
             f = o_read / float(o) * float(r)
@@ -79,9 +82,11 @@ def misread_line(found: tuple, check: dict, read: str, ppr: int | None) -> str:
     )
 
 
-def shaft_and_marks(check: dict, box: Gearbox, read: str, ppr: int, ratio: float | None, bin_: float) -> list[str]:
+def shaft_and_marks(
+    check: dict, box: Gearbox, read: str, ppr: int, ratio: float | None, bin_: float, lines=None
+) -> list[str]:
     """inspect's verdict line for misread's tacho (module doc), or []."""
-    found = misread(check, box, read, ppr, ratio, bin_)
+    found = misread(check, box, read, ppr, ratio, bin_, lines)
     return [] if found is None else [misread_line(found, check, read, ppr)]
 
 

@@ -169,3 +169,55 @@ def test_a_detection_run_on_a_2_mark_output_tacho_names_it(tmp_path, cli):
     assert "[source] key 'gearbox': the history of condition" in line, line
     assert "stage 1: mesh order 29.5 measured, 21 expected" in line and BOTH in line, line
     assert "teeth" not in line, line
+
+
+def _reducer(tmp_path):
+    from test_inspect_tacho_misread import STAGES
+
+    path = tmp_path / "reducer.toml"
+    stages = stage(*STAGES[0]), stage(*STAGES[1], module="3 mm")
+    text = description(*stages, name="reducer", speed="2400 rpm", load="80 N*m")
+    path.write_text(text + '[sensor]\ntacho = "input"\n')
+    return path
+
+
+def test_a_2_mark_output_tacho_of_a_two_stage_reducer_is_named(tmp_path):
+    """A 19/47 + 29/71 reducer (tests/test_inspect_tacho_misread.py's record): every order 3.028 x its own; stage 2's
+    mesh at 35.5 was explained as its 3rd harmonic's sideband (35.17 + 0.40) and stage 2 given a line at 4.43, so both
+    stages were told ('no line at mesh order 19', 'a 11-tooth pinion on the intermediate shaft?'), not the tacho."""
+    from test_inspect_tacho_misread import _record as reducer_record
+
+    box = load_gearbox(_reducer(tmp_path))
+    rec, mean_hz = reducer_record(tmp_path / "take.npz", tacho_shaft=2, marks=2)
+    report = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach"))
+    verdict = report["verdict"]
+    assert verdict.startswith("the description 'reducer' differs: stage 1: mesh order 57.53 measured"), verdict
+    assert "every order reads 3.028 x its own" in verdict and BOTH in verdict, verdict
+    assert "no line" not in verdict and "-tooth pinion on" not in verdict and ";" not in verdict, verdict
+    read = inspect_record(str(rec), box, InspectOptions("acc_ms2", "tach", tacho_shaft="output", pulses_per_rev=2))
+    assert read["matches"], read["verdict"]
+    assert read["speed"]["mean_hz"] == pytest.approx(mean_hz, rel=0.005)
+
+
+def test_the_gap_diagnosis_of_a_two_stage_reducer_s_2_mark_output_tacho_names_it(tmp_path, cli):
+    """The same reducer's takes in the gap diagnosis: 'the target shows 2 meshes: another gear train' before."""
+    from test_inspect_tacho_misread import _record as reducer_record
+
+    _reducer(tmp_path)
+    for i, name in enumerate(("h1", "h2")):
+        reducer_record(tmp_path / f"{name}.npz", tacho_shaft=2, marks=2, seed=20 + i)
+    files = "".join(f'  {{ file = "{n}.npz", role = "history", label = "healthy" }},\n' for n in ("h1", "h2"))
+    path = tmp_path / "gap.toml"
+    path.write_text(
+        '[scenario]\nname = "bo_gap2"\nkind = "gap"\n[source]\ngearbox = "reducer.toml"\n[target]\n'
+        f'vibration = "acc_ms2"\ntacho = "tach"\nfiles = [\n{files}]\n'
+        '[diagnosis]\ncandidates = ["sensor_noise", "sensor_bandwidth", "casing_path"]\n[accuracy]\nenabled = false\n'
+    )
+    code, out, err = cli("run", path, "--out", tmp_path / "runs", "--quick")
+    assert code == 0, out + err
+    (summary,) = (tmp_path / "runs").rglob("summary.json")
+    result = json.loads(summary.read_text())
+    verdict = result["verdict"]
+    assert verdict.startswith("structure differs: stage 1: mesh order 57.53 measured, 19 expected"), verdict
+    assert BOTH in verdict and "meshes" not in verdict and "teeth" not in verdict, verdict
+    assert result["structure"]["tacho"]["factor"] == pytest.approx(3.028, abs=0.001), result["structure"]

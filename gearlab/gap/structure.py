@@ -547,8 +547,9 @@ def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, r
     box = _PairDescription.train(pair)
     _, read, ratio = tacho
     n = target.shape[0]
-    check = check_description(_lines(target, max_order), box, n, read == 0, read)
-    found = misread(check, box, box.shafts[read], ppr, ratio, 1.0 / n)
+    lines = _lines(target, max_order)
+    check = check_description(lines, box, n, read == 0, read)
+    found = misread(check, box, box.shafts[read], ppr, ratio, 1.0 / n, lines)
     if found is None:
         return None
     record["tacho"] = {"shaft": found[0], "marks_read_over_given": float(found[1]), "factor": found[2]}
