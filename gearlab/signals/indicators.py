@@ -104,7 +104,8 @@ def fm4(x: np.ndarray, mesh_orders, shaft_orders: int = 2, sidebands: int = 1) -
     """FM4 of each row of *x* (one TSA revolution per row)."""
     d = difference_signal(np.atleast_2d(x), mesh_orders, shaft_orders, sidebands)
     d = d - d.mean(axis=-1, keepdims=True)
-    return d.shape[-1] * np.sum(d**4, axis=-1) / np.maximum(np.sum(d**2, axis=-1) ** 2, 1e-300)
+    d2 = np.square(d)  # what d**2 computes; d**4 as its square, as fourth_power does
+    return d.shape[-1] * np.sum(np.square(d2), axis=-1) / np.maximum(np.sum(d2, axis=-1) ** 2, 1e-300)
 
 
 def na4_reference(history: np.ndarray, mesh_orders, shaft_orders: int = 2) -> float:
@@ -117,7 +118,13 @@ def na4(x: np.ndarray, mesh_orders, reference_variance: float, shaft_orders: int
     """NA4 of each row of *x* against the history's mean residual variance."""
     r = residual_signal(np.atleast_2d(x), mesh_orders, shaft_orders)
     r = r - r.mean(axis=-1, keepdims=True)
-    return np.mean(r**4, axis=-1) / max(reference_variance, 1e-300) ** 2
+    return np.mean(fourth_power(r), axis=-1) / max(reference_variance, 1e-300) ** 2
+
+
+def fourth_power(x: np.ndarray) -> np.ndarray:
+    """x⁴ as (x²)²: numpy's x**4 calls pow() per sample, ten times the CPU of two squares (FM4 and NA4 of a
+    detection's units spent most of their time there); within an ulp of it (two roundings, not one)."""
+    return np.square(np.square(x))
 
 
 def _edges(n: int, teeth: int) -> np.ndarray:
