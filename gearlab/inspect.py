@@ -19,6 +19,7 @@ comes from the mesh lines (gearbox.speed.speed_from_mesh).
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -528,6 +529,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             # there comes after it (a 19/58 + 25/67 fan described with 18 teeth was told 'stage 2: no
             # line at mesh order 7.759', the first stage's smeared mesh unsaid)
             differences[:0] = [_speed_line(speed.declared_hz, n, no_speed) for n in speed.notes]
+        if differences:  # a line 'not a gear order' by the described orders may be one by the measured ones
+            off_description(check, bin_)
         found = speed.mean_hz if rec.tacho is None and speed.declared_hz is None else None
         check["unchecked"] = unchecked(check, box, found)
         # no speed: the pinion's tooth count is not confirmed, 'matches' neither true nor false (None)
@@ -552,6 +555,28 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
 
 
 SPEED_OR_TEETH = ": the speed or a tooth count differs"
+
+
+def off_description(check: dict, bin_: float) -> None:
+    """Where the description differs, relabel *check*'s lines at no described shaft's harmonic (not those a clock's
+    phase named fixed): a line at a measured mesh order's harmonic +- 0-3 x a measured shaft order gets 'measured_as'
+    (a gear line, 'not_an_order' False), any other 'not_an_order' None: by the described orders alone a 21-tooth
+    pinion described 22 had its wheel's sidebands 21 +- 21/71 called 'not a gear order (... mains ...)'."""
+    meshes = [
+        (f"stage {s['stage']}'s measured mesh", s["measured_order"]) for s in check["stages"] if s.get("measured_order")
+    ]
+    shafts = [(s["shaft"], s["measured_order"] or s["expected_order"]) for s in check["shafts"]]
+    for line in check["unexplained"]:
+        if not line.get("not_an_order") or "shaft_harmonic" in line:
+            continue
+        x, tol, said = line["order"], tol_mesh(line["order"], bin_), None
+        for (mesh, m), (shaft, o), k in itertools.product([("", 0.0)] + meshes, shafts, (0, 1, -1, 2, -2, 3, -3)):
+            h = max(0, round((x - k * o) / m)) if m else 0
+            if said is None and (h or k > 0) and abs(x - h * m - k * o) <= tol:
+                nth = f"{f'{h} x ' if h > 1 else ''}{mesh} order {m:.4g}" if h else ""
+                side = f" {'+-'[k < 0]} {abs(k)} x" if h else f"{k} x"
+                said = nth + (f"{side} the {shaft} shaft's measured order {o:.4g}" if k else "")
+        line["not_an_order"], line["measured_as"] = (None, None) if said is None else (False, said)
 
 
 def _speed_line(declared: float, note: str, no_speed: str | None) -> str:
@@ -624,6 +649,12 @@ def _unexplained_words(line: dict, f0: float) -> str:
     fixed frequency such as a mains hum, or a bearing's; gearbox.match.shaft_harmonic), else as the order it is."""
     o, hz, db = line["order"], line["order"] * f0, line["db_over_floor"]
     shaft, h = line.get("shaft_harmonic") or ("", 0)
+    if line.get("measured_as"):  # the description differs: a gear line by the measured orders
+        said = f"{line['measured_as']} (a gear line at the measured orders"
+        return f"input order {o:.4g} = {said}; {hz:.5g} Hz, {db:.0f} dB)"
+    if "measured_as" in line:  # ... or none of theirs either: what it is, the description as written cannot tell
+        why = "no described shaft's harmonic: not explained by the description as written, which differs"
+        return f"{hz:.5g} Hz (input order {o:.4g}, {why}; {db:.0f} dB)"
     nth = f"the {shaft} shaft's {({1: '1st', 2: '2nd', 3: '3rd'}).get(h, f'{h}th')} harmonic"
     if shaft and line["not_an_order"] is None:  # fixed_on_orders: a speed too steady tells neither
         steady = "the take's speed too steady to tell them apart; a take at another speed tells them apart"
