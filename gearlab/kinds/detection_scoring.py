@@ -540,10 +540,10 @@ def score(
 ) -> list[dict]:
     """New recordings scored by a finished run's trained methods at its thresholds, nothing trained
     again: one row per file, method and unit kind (its units' scores, how many are called, the
-    threshold and the record's decision: the majority of its units called, a fault -- or "other
-    damage: <gear>" when the record's change is localised on a gear the run does not watch, as the
-    run's own which-gear table calls it (detection_which_gear.decision_of) -- with the localisation's
-    evidence), appended to the run's scoring history."""
+    threshold and the record's decision: more than half its units called, a fault (half, a tie such as 1
+    of 2, is healthy) -- or "other damage: <gear>" when the record's change is localised on a gear the run
+    does not watch, as the run's own which-gear table calls it (detection_which_gear.decision_of) -- with
+    the localisation's evidence), appended to the run's scoring history."""
     meta = run.read_json(scoring.SCORING_FILE)
     if meta is None:
         raise GearlabInputError(
@@ -641,8 +641,8 @@ def score(
                             "threshold": float(thresholds[u]),
                             "rule": meta["threshold"],
                             "median_score": float(np.median(s)) if s.size else None,
-                            # most units called: a fault, or other damage when the record's change lies
-                            # on another gear (the detection run's which-gear rule)
+                            # over half its units called (a tie, 1 of 2: healthy): a fault, or other damage
+                            # where the record's change lies on another gear (the detection run's which-gear rule)
                             "decision": decision,
                             "speed_hz": found[f.path][0],
                             "speed_from": found[f.path][1],  # the tacho, a declared speed, the mesh orders
