@@ -135,17 +135,22 @@ def _files(*rows) -> str:
     return "".join(entries) + "]\n"
 
 
-def test_the_gap_diagnosis_of_a_2_mark_output_tacho_names_it(tmp_path, cli):
-    target = _takes(tmp_path) + _files(("h1", "history", "healthy"), ("h2", "history", "healthy"))
+def _gap_run(tmp_path, cli, gearbox: str, target: str) -> dict:
+    """summary.json of a quick gap run of *gearbox* against the *target* table's files."""
     path = tmp_path / "gap.toml"
     path.write_text(
-        '[scenario]\nname = "bo_gap"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n' + target
+        f'[scenario]\nname = "bo_gap"\nkind = "gap"\n[source]\ngearbox = "{gearbox}"\n' + target
         + '[diagnosis]\ncandidates = ["sensor_noise", "sensor_bandwidth", "casing_path"]\n[accuracy]\nenabled = false\n'
     )  # fmt: skip
     code, out, err = cli("run", path, "--out", tmp_path / "runs", "--quick")
     assert code == 0, out + err
     (summary,) = (tmp_path / "runs").rglob("summary.json")
-    result = json.loads(summary.read_text())
+    return json.loads(summary.read_text())
+
+
+def test_the_gap_diagnosis_of_a_2_mark_output_tacho_names_it(tmp_path, cli):
+    target = _takes(tmp_path) + _files(("h1", "history", "healthy"), ("h2", "history", "healthy"))
+    result = _gap_run(tmp_path, cli, "box.toml", target)
     verdict = result["verdict"]
     assert verdict.startswith("structure differs: stage 1: mesh order 29.5 measured, 21 expected"), verdict
     assert BOTH in verdict and "teeth" not in verdict, verdict
@@ -207,16 +212,8 @@ def test_the_gap_diagnosis_of_a_two_stage_reducer_s_2_mark_output_tacho_names_it
     for i, name in enumerate(("h1", "h2")):
         reducer_record(tmp_path / f"{name}.npz", tacho_shaft=2, marks=2, seed=20 + i)
     files = "".join(f'  {{ file = "{n}.npz", role = "history", label = "healthy" }},\n' for n in ("h1", "h2"))
-    path = tmp_path / "gap.toml"
-    path.write_text(
-        '[scenario]\nname = "bo_gap2"\nkind = "gap"\n[source]\ngearbox = "reducer.toml"\n[target]\n'
-        f'vibration = "acc_ms2"\ntacho = "tach"\nfiles = [\n{files}]\n'
-        '[diagnosis]\ncandidates = ["sensor_noise", "sensor_bandwidth", "casing_path"]\n[accuracy]\nenabled = false\n'
-    )
-    code, out, err = cli("run", path, "--out", tmp_path / "runs", "--quick")
-    assert code == 0, out + err
-    (summary,) = (tmp_path / "runs").rglob("summary.json")
-    result = json.loads(summary.read_text())
+    target = f'[target]\nvibration = "acc_ms2"\ntacho = "tach"\nfiles = [\n{files}]\n'
+    result = _gap_run(tmp_path, cli, "reducer.toml", target)
     verdict = result["verdict"]
     assert verdict.startswith("structure differs: stage 1: mesh order 57.53 measured, 19 expected"), verdict
     assert BOTH in verdict and "meshes" not in verdict and "teeth" not in verdict, verdict
