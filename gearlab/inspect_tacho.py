@@ -111,6 +111,16 @@ def elsewhere_line(lines, box: Gearbox, read: str, speed, revolutions: int) -> s
     )
 
 
+def marks_words(marks: int, ppr: int, where: str = "in a scenario") -> str:
+    """A tacho on the shaft it is read as, giving *marks* a turn where *ppr* were read, and how to read it: inspect's
+    option and the key (*where*: the table that holds it; the gap's structure check, on a scenario, names [target]).
+    inspect's marks_line and the gap's mesh_line both use it: one sentence for one fault, wherever it is read."""
+    return (
+        f"the tacho gives {marks} pulse(s) per revolution, not {ppr}? (--pulses-per-rev {marks}, key 'pulses_per_rev' "
+        f"{where})"
+    )
+
+
 def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
     """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at f M and the input
     shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86 mixer's 2-pulse keyphasor read as 1: mesh
@@ -140,7 +150,6 @@ def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -
                 f"stage 1: the {first['z1']}-tooth pinion's mesh shows at order {f * m:.4g}, not {m:.4g}"
                 + (f", the input shaft at {f:.3g}" if at_shaft > amp(1.0) else "")
                 + (f", the speed {1 / f:.3g} x the described" if described else "")
-                + f": the tacho gives {int(marks)} pulse(s) per revolution, not {ppr}? "
-                f"(--pulses-per-rev {int(marks)}, key 'pulses_per_rev' in a scenario)"
+                + f": {marks_words(int(marks), ppr)}"
             ]
     return []

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
 from ..gearbox.speed import TEETH_AGREE
+from ..inspect_tacho import marks_words
 from .structure_later import _lines, _PairDescription, later_stages, wheel_line
 from .structure_later import _outshone as _outshone  # where tests/test_outside_user reads it
 
@@ -45,6 +46,7 @@ FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 SPEED_TOL = 0.02
 # A scale factor within this of 1 is a calibration's tolerance, left to the effects.
 LEVEL_TOL = 0.1
+IN_TARGET = "in the scenario's [target]"  # where the gap's records are read: their pulses_per_rev
 
 
 def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.ndarray) -> np.ndarray:
@@ -218,8 +220,10 @@ def later_combs(pair) -> tuple:
     return tuple((float(s.mesh), (float(s.pinion_shaft_order), float(s.wheel_shaft_order))) for s in stages)
 
 
-def mesh_line(check: dict, z1: int) -> str:
-    """The one line of a tooth-count difference."""
+def mesh_line(check: dict, z1: int, ppr: int | None = None) -> str:
+    """The one line of a tooth-count difference. *ppr*: the marks a turn the tacho was read with (None: not known):
+    a tacho on its shaft read with another whole count is told in inspect's words (inspect_tacho.marks_words), the
+    count it gives and the key; else as a share of those read."""
     m = check["measured"]
     whole = abs(m - round(m)) <= 0.05
     if check.get("also"):
@@ -236,18 +240,20 @@ def mesh_line(check: dict, z1: int) -> str:
     if check.get("shaft"):
         words = tacho_shaft_words(check["shaft"], check["factor"], check["read_as"])
         return line + f" ({words} give [target] tacho_shaft = '{check['shaft']}')"
-    if check.get("marks", 1) > 1:
-        k = Fraction(check["marks"]).limit_denominator(4)
-        at = f"1/{k}" if k.denominator == 1 else f"{float(1 / k):.3g}"
-        return line + (
-            f" (the target's mesh at {at} of its order, with its harmonics: the tacho gives {k} x the pulses "
-            "per revolution it was read with? [target] pulses_per_rev)"
-        )
     if check.get("marks"):
-        k = round(1 / check["marks"])
+        k = Fraction(check["marks"]).limit_denominator(4)  # marks given over read: 2 read as 1, 2; 1 read as 3, 1/3
+        if k > 1:
+            at = f"1/{k}" if k.denominator == 1 else f"{float(1 / k):.3g}"
+            seen, share = f"at {at} of its order, with its harmonics", f"{k} x"
+        else:
+            n, nth = k.denominator, {2: "2nd", 3: "3rd"}.get(k.denominator, f"{k.denominator}th")
+            seen, share = f"at {n} x its order, its lines on every {nth} harmonic alone", f"1/{n} of"
+        given = None if ppr is None else ppr * k
+        if given is not None and given.denominator == 1:  # the count read known, the one given whole: inspect's words
+            return line + f" (the target's mesh {seen}: {marks_words(int(given), ppr, IN_TARGET)})"
         return line + (
-            f" (the target's mesh at {k} x its order, its lines on every {k}th harmonic alone: the tacho gives "
-            f"1/{k} of the pulses per revolution it was read with? [target] pulses_per_rev)"
+            f" (the target's mesh {seen}: the tacho gives {share} the pulses per revolution it was read with? "
+            "[target] pulses_per_rev)"
         )
     if whole:
         return line + f" (the target's shows {round(m)} teeth)"
@@ -420,7 +426,7 @@ def structure_line(
     laid = {"read_on": "records laid end to end" if takes else "all revolutions", "revolutions": len(target)}
     record["mesh"] = whole | laid
     if whole.get("shaft") or whole.get("marks"):  # the tacho itself read wrong: no shaft's speed is known
-        return mesh_line(whole, pair.Z1)
+        return mesh_line(whole, pair.Z1, pulses_per_rev)
     # a tacho on another shaft with another count of marks: every order reads their product times its own, which
     # mesh_check's shaft alone and marks alone miss (a 19/47 + 29/71 reducer's 1-mark output tacho read as the
     # input's 2: 12.11 x, 'stage 1 pinion: 230 teeth fit the recording'); read as inspect reads it,
@@ -446,7 +452,7 @@ def structure_line(
         return line
     if whole["differs"]:  # the input's mesh: records laid end to end are in register on its shaft
         record["mesh"] = whole | laid
-        return mesh_line(whole, pair.Z1)
+        return mesh_line(whole, pair.Z1, pulses_per_rev)
     target = one
     # the wheel: its shaft's sidebands of the mesh, as inspect reads them (a 29/86 mixer described
     # with an 85-tooth wheel: inspect said '86.0 ± 0.2 teeth', the gap fitted effects, 'unexplained')
