@@ -79,12 +79,24 @@ def ray_session():
     with pytest.MonkeyPatch.context() as mp:
         mp.delenv("RAY_ADDRESS", raising=False)
         # The instance declares one GPU (Ray does not check that it exists), so that the GPU
-        # requests of training tasks are exercised on machines without one.
+        # requests of training tasks are exercised on machines without one. Its workers stay while
+        # idle: Ray ends a worker idle for 1 s, and between this module's Ray tests (local ones run
+        # in between) it ended and started 11 workers, 0.6 s of CPU each that no test's time shows.
         real_init = ray.init
-        mp.setattr(ray, "init", lambda **options: real_init(num_gpus=1, **options))
+        idle = {"idle_worker_killing_time_threshold_ms": 600_000}
+        mp.setattr(ray, "init", lambda **options: real_init(num_gpus=1, _system_config=idle, **options))
         executors._open_session(None, 2)
     yield ray
     executors._close_session()
+
+
+@pytest.fixture(scope="module")
+def two_local_workers():
+    """One pool of two workers for the map contract's tests, as a run's maps share theirs (a failed
+    map replaces it: test_the_local_pool_is_kept_across_maps_and_closed_at_the_end): a pool per test
+    started two processes each time, 0.7-1.6 s of the test's time on a busy machine."""
+    with LocalExecutor(2) as pool:
+        yield pool
 
 
 @pytest.fixture(params=["local-1", "local-2", "ray"])
@@ -92,7 +104,9 @@ def executor(request):
     if request.param == "ray":
         request.getfixturevalue("ray_session")
         return RayExecutor(workers=2)
-    return LocalExecutor(int(request.param[-1]))
+    if request.param == "local-2":
+        return request.getfixturevalue("two_local_workers")
+    return LocalExecutor(1)
 
 
 # ----------------------------------------------------------------------------- the map contract
