@@ -692,7 +692,7 @@ def two_with_runs(folder, tmp_path):
     return folder
 
 
-STUB_ENGINE = "import json, time; print(json.dumps({'kind': 'log', 'message': 'stub'}), flush=True); time.sleep(0.5)"
+STUB_ENGINE = "import json, time; print(json.dumps({'kind': 'log', 'message': 'stub'}), flush=True); time.sleep(0.05)"
 
 
 @pytest.fixture
@@ -713,7 +713,7 @@ def stub_engine(monkeypatch):
 
 
 def ended(app, started: list) -> bool:
-    """A stand-in run was started and has ended (it lives half a second: a poll may miss it)."""
+    """A stand-in run was started and has ended (it lives 50 ms: a poll may miss it)."""
     return bool(started) and text_of(app, "#run-status").startswith("finished")
 
 
