@@ -57,14 +57,17 @@ def check_signal(x, name: str = "signal") -> np.ndarray:
     return arr
 
 
-def check_array(x, name: str, min_ndim: int = 1) -> np.ndarray:
-    """A finite real float64 array of at least *min_ndim* dimensions and no empty axis."""
+def check_array(x, name: str, min_ndim: int = 1, finite: bool = True) -> np.ndarray:
+    """A finite real float64 array of at least *min_ndim* dimensions and no empty axis. *finite*=False
+    leaves the values unread: for a caller that learns they are finite from a sum it computes anyway
+    (a non-finite sum: check_finite names the value)."""
     arr = as_real_array(x, name)
     if arr.ndim < min_ndim:
         raise GearlabInputError(f"{name} must have at least {min_ndim} dimension(s), got an array of shape {arr.shape}")
     if arr.size == 0:
         raise GearlabInputError(f"{name} is empty (shape {arr.shape}); expected at least one value")
-    check_finite(arr, name)
+    if finite:
+        check_finite(arr, name)
     return arr
 
 

@@ -23,7 +23,7 @@ from collections import OrderedDict
 import numpy as np
 
 from ..errors import GearlabInputError
-from .checks import check_array, check_real
+from .checks import check_array, check_finite, check_real
 
 NOISE_KINDS = ("gaussian", "laplace", "student_t")
 # The SNRs a measurement noise may have: a dataset's noise and the sensor_noise effect alike
@@ -38,8 +38,9 @@ _STANDARD_NOISE = {
 
 
 def _rms(x: np.ndarray) -> np.ndarray:
-    """Root mean square along the last axis (time), one value per row."""
-    return np.sqrt(np.mean(x * x, axis=-1, keepdims=True))
+    """Root mean square along the last axis (time), one value per row: np.mean's sum and division (bit for
+    bit) without its Python layer (twice a call of add_noise, 28,000 calls in a gap search's tests)."""
+    return np.sqrt(np.add.reduce(x * x, axis=-1, keepdims=True) / x.shape[-1])
 
 
 # Standard noise drawn before, by the state of the generator that drew it: (kind, shape, state) -> (noise,
@@ -95,12 +96,17 @@ def add_noise(x: np.ndarray, snr_db: float, kind: str, rng: np.random.Generator)
         raise GearlabInputError(
             f"rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed)), got {type(rng).__name__}"
         )
-    s = check_array(x, "signal")
+    s = check_array(x, "signal", finite=False)
+    rms_signal = _rms(s)
+    if not np.isfinite(rms_signal).all():  # a NaN or inf in a row makes its RMS one: named here
+        check_finite(s, "signal")
     snr_db = check_real(snr_db, "SNR (dB)")
     noise, rms_noise = _standard_noise(kind, rng, s.shape)
-    rms_required = _rms(s) * 10.0 ** (-snr_db / 20.0)  # eq. 4.3
+    rms_required = rms_signal * 10.0 ** (-snr_db / 20.0)  # eq. 4.3
     scale = rms_required / rms_noise  # eq. 4.4
-    return s + scale * noise  # eq. 4.5
+    out = scale * noise  # eq. 4.5, x = s + SF n: the sum into the product's array (one record-sized array, not two)
+    out += s
+    return out
 
 
 def tsa(revolutions: np.ndarray, axis: int = -2) -> np.ndarray:
