@@ -20,6 +20,8 @@ TSA of a record, its orders' mean and noise, for gearlab.signals.localise (its "
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
 
 import numpy as np
 
@@ -27,6 +29,16 @@ from ..errors import GearlabInputError
 from .pipeline import POINTS
 
 UPSAMPLE = 4  # a record read 4 x denser before the linear interpolation (module doc)
+
+# Each shaft's cut of a record for shaft_averages (its turns' grid in record samples, the record's samples
+# in its turn's points), by (points, the shafts and their orders, first, R, record length): a localisation
+# cuts records of one layout and length again and again (tests/test_box_b_takes.py: 49 calls, 2 distinct
+# cuts), and making them was 42 ms of a 340 ms call. Read-only arrays; at most _CUTS_BYTES (a 99-revolution
+# record of three shafts: 24 MB), least recently used out first.
+_CUTS: OrderedDict = OrderedDict()
+_CUTS_BYTES = 1 << 26
+_cuts_size = [0]  # the bytes of the cuts kept
+_cuts_lock = threading.Lock()  # the TUI and the executors' threads share it
 
 
 def shaft_revolutions(
@@ -56,15 +68,25 @@ def shaft_revolutions(
     return read_at(spectrum, n, (turns - phase) / ratio * P)
 
 
-def read_at(spectrum: np.ndarray, n: int, at: np.ndarray, up: int = UPSAMPLE, periodic: bool = False) -> np.ndarray:
+def read_at(
+    spectrum: np.ndarray,
+    n: int,
+    at: np.ndarray,
+    up: int = UPSAMPLE,
+    periodic: bool = False,
+    dense: np.ndarray | None = None,
+) -> np.ndarray:
     """The n samples whose rfft is *spectrum* read at fractional sample positions *at*: linearly between the
     samples of their band-limited interpolation at least *up* times denser (module doc). Read on the samples
     themselves, a line at ν cycles a sample leaves an image at 1 - ν about (ν / (1 - ν))² below it; *up* times
     denser, about (ν / (up - ν))², no more on the denser grid of a fast length (dense_length). *periodic*: position
-    n is sample 0 again (one turn's wave)."""
+    n is sample 0 again (one turn's wave). *dense*: an array of dense_length(n up) points the interpolation is
+    made in (its values are overwritten), so that readings of one record reuse one (shaft_averages: a fresh
+    array of a long record's reading is a tenth of its time in page faults)."""
     fine = dense_length(n * up)
     scale = fine / n  # = up where n up is a fast length already (R of factors 2, 3, 5): bit for bit as before
-    wave = np.fft.irfft(spectrum, n=fine) * scale
+    wave = np.fft.irfft(spectrum, n=fine, out=dense)
+    wave *= scale  # in place: the same product, no second dense array
     if periodic:
         return on_grid(at * scale, np.append(wave, wave[0]))
     return on_grid(at * scale, wave)
@@ -122,17 +144,17 @@ def without_input_orders(revs: np.ndarray, p: int) -> np.ndarray:
     return revs - np.fft.irfft(F, n=revs.shape[-1])
 
 
-def on_turns(y: np.ndarray, at: np.ndarray) -> np.ndarray:
+def on_turns(y: np.ndarray, at: np.ndarray, dense: np.ndarray | None = None) -> np.ndarray:
     """Consecutive input revolutions *y* (flat) read at a shaft's grid *at* (sample positions): the samples
     themselves where the grid falls on them (the input shaft), else read_at's band-limited reading. Linear
     interpolation between y's own samples left images (size o - P) + k input orders away from a line at k
     (a shaft of o input turns cut into `size` points a turn), which every turn repeats where o = 1/q: the
     PHM 2009 rig's idler (o = 1/3) read its 3rd mesh harmonic's image 43 dB below it, a 1/7 shaft's lands
-    at 585 + k; 4 x denser: below -72 dB (tests/test_shaft_reading.py)."""
+    at 585 + k; 4 x denser: below -72 dB (tests/test_shaft_reading.py). *dense*: read_at's."""
     head = at.reshape(-1)[:64]  # a slower shaft's grid leaves the samples within a few points: no whole pass
     if np.array_equal(head, np.round(head)) and np.array_equal(at, whole := np.round(at)):
         return y[whole.astype(np.int64)]
-    return read_at(np.fft.rfft(y), y.size, at)
+    return read_at(np.fft.rfft(y), y.size, at, dense=dense)
 
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
@@ -153,6 +175,41 @@ def averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, n
     return mean, noise
 
 
+def _cuts(lay, shafts: list, first: int, R: int, length: int) -> tuple[dict, int]:
+    """({shaft: (its turns' grid in record samples, the record's samples in its turn's points)}, the
+    fewest complete turns) of R input revolutions from *first* (*length* samples), kept (_CUTS)."""
+    pts = lay.points
+    key = (pts, tuple((s, lay.shaft_orders[s]) for s in shafts), first, R, length)
+    with _cuts_lock:
+        if (kept := _CUTS.get(key)) is not None:
+            _CUTS.move_to_end(key)
+            return kept
+    cut, periods = {}, None
+    for s in shafts:
+        o = lay.shaft_orders[s]
+        size = int(2 ** math.ceil(math.log2(pts / float(o))))  # at least the input samples of a turn
+        j0 = math.ceil(first * o)
+        n = math.floor((first + R) * o + 1e-9) - j0
+        if n < 2:
+            raise GearlabInputError(
+                f"{R} input revolutions hold {max(n, 0)} complete turns of the {lay.shafts[s]} shaft; "
+                "expected at least 2"
+            )
+        turns = j0 + np.arange(n)[:, None] + np.arange(size)[None, :] / size
+        at = np.clip((turns / float(o) - first) * pts, 0, length - 1)
+        cut[s] = (at, ((first + np.arange(length) / pts) * float(o)) % 1 * size)  # samples, phase
+        for a in cut[s]:
+            a.flags.writeable = False
+        periods = n if periods is None else min(periods, n)
+    with _cuts_lock:
+        if key not in _CUTS:  # another thread may have made it meanwhile
+            _CUTS[key] = (cut, periods)
+            _cuts_size[0] += sum(a.nbytes for pair in cut.values() for a in pair)
+        while _cuts_size[0] > _CUTS_BYTES and len(_CUTS) > 1:
+            _cuts_size[0] -= sum(a.nbytes for pair in _CUTS.popitem(last=False)[1][0].values() for a in pair)
+    return cut, periods
+
+
 def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple[np.ndarray, np.ndarray, int]:
     """(mean, noise, fewest turns) of each shaft's own TSA at the orders read from it (*lay*: a
     gearlab.signals.localise.Layout in per-shaft mode; *y*: R consecutive input revolutions, flat), of the
@@ -165,24 +222,11 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
     its mean: read as scatter, a 38/87 + 49/93 + 69/91 box's later meshes hid an input-pinion chip
     (z 1.7 against a threshold of 2.8); left out of the noise, a slower gear's crack flagged the input
     (tests/test_localise_blocks.py)."""
-    pts = lay.points
     mean, noise = np.zeros(lay.orders.size, complex), np.zeros(lay.orders.size)
     shafts = sorted((s for s in range(len(lay.shafts)) if (lay.source == s).any()), key=lambda s: -lay.shaft_orders[s])
-    cut, waves, read, periods = {}, {}, {}, None
-    for s in shafts:
-        o = lay.shaft_orders[s]
-        size = int(2 ** math.ceil(math.log2(pts / float(o))))  # at least the input samples of a turn
-        j0 = math.ceil(first * o)
-        n = math.floor((first + R) * o + 1e-9) - j0
-        if n < 2:
-            raise GearlabInputError(
-                f"{R} input revolutions hold {max(n, 0)} complete turns of the {lay.shafts[s]} shaft; "
-                "expected at least 2"
-            )
-        turns = j0 + np.arange(n)[:, None] + np.arange(size)[None, :] / size
-        at = np.clip((turns / float(o) - first) * pts, 0, y.size - 1)
-        cut[s] = (at, ((first + np.arange(y.size) / pts) * float(o)) % 1 * size)  # samples, phase
-        periods = n if periods is None else min(periods, n)
+    cut, periods = _cuts(lay, shafts, first, R, y.size)
+    waves, read = {}, {}
+    dense = np.empty(dense_length(y.size * UPSAMPLE))  # every reading of the record's turns is made in it
 
     def at_samples(r: int, s: int) -> np.ndarray:
         """Shaft r's average so far at the record's samples, as shaft s subtracts it: read once per
@@ -200,13 +244,13 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
         """Shaft s's turns of the record less the other shafts' averages so far."""
         left = y
         for r in waves:
-            if r != s:
-                left = left - at_samples(r, s)
-        return on_turns(left, cut[s][0])
+            if r != s:  # the first difference a new array, the next ones into it (the same values)
+                left = left - at_samples(r, s) if left is y else np.subtract(left, at_samples(r, s), out=left)
+        return on_turns(left, cut[s][0], dense)
 
     for sweep in range(max(sweeps, 1)):
         for s in shafts:
-            segments = less_others(s) if sweeps else on_turns(y, cut[s][0])
+            segments = less_others(s) if sweeps else on_turns(y, cut[s][0], dense)
             waves[s] = segments.mean(axis=0)
             for key in [k for k in read if k[0] == s]:  # s's readings were of its previous average
                 del read[key]
