@@ -126,6 +126,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     phase_words,
     two_harmonic_phases,
     weak_lead,
+    weakly,
     which_by_template,
     which_by_width,
 )
@@ -544,16 +545,6 @@ def which_line(evidence: dict, which: str | None) -> str:
         )
         return f"; named {rule} ({said}){weak}"
     return f"; which of the two: undecided {rule} ({said}; {evidence['undecided']})"
-
-
-def weakly(ev: dict) -> str:
-    """ ", weakly over <the shaft's other gear> (phase lead L)" of a shaft's evidence (ShaftEvidence.describe()) whose
-    gear is named by a phase lead under WEAK_LEAD, else "": the call says it as the evidence does (an outside lab's
-    burst on a 34T pinion was 'other damage: intermediate gear 65T' at a lead of 0.21)."""
-    lead = weak_lead(ev.get("stage_evidence") or {}) if ev.get("which") else None
-    if lead is None:
-        return ""
-    return f", weakly over {' / '.join(g for g in ev['gears'] if g != ev['which'])} (phase lead {lead_words(lead)})"
 
 
 def threshold_floor(shafts: int, false_alarm: float = FALSE_ALARM) -> float:
