@@ -141,9 +141,13 @@ def _description(box: str) -> str:
 
 def trial(args: tuple) -> list[dict]:
     """One trial's rows; a random train's description file is removed when the trial ends."""
+    from gearlab.errors import GearlabInputError
+
     made = []
     try:
         return _trial(args, made)
+    except GearlabInputError as exc:  # the product refuses the trial's records (a random train's history too
+        return [{"refused": str(exc), "trial": args[2]}]  # short for the which-gear check): counted, not fatal
     finally:
         for path in made:
             Path(path).unlink(missing_ok=True)
@@ -301,10 +305,14 @@ def main(argv=None) -> None:
                 rows = [r for rs in pool.map(trial, jobs) for r in rs]
         else:
             rows = [r for job in jobs for r in trial(job)]
+        refused = [r for r in rows if "refused" in r]
+        rows = [r for r in rows if "refused" not in r]
         print(
             f"\nlocalisation on simulated {box} records: {args.trials} trials, seed {args.seed} ({kind}), which gear"
             f" by {args.which}, records' effects {args.effects}"
         )
+        for r in refused:
+            print(f"trial {r['trial']} refused by gearlab: {r['refused']}")
         report(rows, box)
         every += rows
     if args.rows:
