@@ -20,8 +20,7 @@ TSA of a record, its orders' mean and noise, for gearlab.signals.localise (its "
 from __future__ import annotations
 
 import math
-import threading
-from collections import OrderedDict
+from functools import lru_cache
 
 import numpy as np
 
@@ -29,16 +28,6 @@ from ..errors import GearlabInputError
 from .pipeline import POINTS
 
 UPSAMPLE = 4  # a record read 4 x denser before the linear interpolation (module doc)
-
-# Each shaft's cut of a record for shaft_averages (its turns' grid in record samples, the record's samples
-# in its turn's points), by (points, the shafts and their orders, first, R, record length): a localisation
-# cuts records of one layout and length again and again (tests/test_box_b_takes.py: 49 calls, 2 distinct
-# cuts), and making them was 42 ms of a 340 ms call. Read-only arrays; at most _CUTS_BYTES (a 99-revolution
-# record of three shafts: 24 MB), least recently used out first.
-_CUTS: OrderedDict = OrderedDict()
-_CUTS_BYTES = 1 << 26
-_cuts_size = [0]  # the bytes of the cuts kept
-_cuts_lock = threading.Lock()  # the TUI and the executors' threads share it
 
 
 def shaft_revolutions(
@@ -175,25 +164,22 @@ def averaged(segments: np.ndarray, top: int, smooth: int) -> tuple[np.ndarray, n
     return mean, noise
 
 
-def _cuts(lay, shafts: list, first: int, R: int, length: int) -> tuple[dict, int]:
+# Each shaft's cut of a record is kept for the next record of its layout and length: a localisation cuts such
+# records again and again (tests/test_box_b_takes.py: 49 calls, 2 distinct cuts), and making them was 42 ms of a
+# 340 ms call. A 99-revolution record of three shafts: 24 MB a cut, so few are kept.
+@lru_cache(maxsize=2)
+def _cuts(pts: int, shafts: tuple, first: int, R: int, length: int) -> tuple[dict, int]:
     """({shaft: (its turns' grid in record samples, the record's samples in its turn's points)}, the
-    fewest complete turns) of R input revolutions from *first* (*length* samples), kept (_CUTS)."""
-    pts = lay.points
-    key = (pts, tuple((s, lay.shaft_orders[s]) for s in shafts), first, R, length)
-    with _cuts_lock:
-        if (kept := _CUTS.get(key)) is not None:
-            _CUTS.move_to_end(key)
-            return kept
+    fewest complete turns) of R input revolutions from *first* (*length* samples); *shafts*: (index, order,
+    name) of each. Read-only arrays: the cut is shared by the calls that hit the cache."""
     cut, periods = {}, None
-    for s in shafts:
-        o = lay.shaft_orders[s]
+    for s, o, name in shafts:
         size = int(2 ** math.ceil(math.log2(pts / float(o))))  # at least the input samples of a turn
         j0 = math.ceil(first * o)
         n = math.floor((first + R) * o + 1e-9) - j0
         if n < 2:
             raise GearlabInputError(
-                f"{R} input revolutions hold {max(n, 0)} complete turns of the {lay.shafts[s]} shaft; "
-                "expected at least 2"
+                f"{R} input revolutions hold {max(n, 0)} complete turns of the {name} shaft; expected at least 2"
             )
         turns = j0 + np.arange(n)[:, None] + np.arange(size)[None, :] / size
         at = np.clip((turns / float(o) - first) * pts, 0, length - 1)
@@ -201,12 +187,6 @@ def _cuts(lay, shafts: list, first: int, R: int, length: int) -> tuple[dict, int
         for a in cut[s]:
             a.flags.writeable = False
         periods = n if periods is None else min(periods, n)
-    with _cuts_lock:
-        if key not in _CUTS:  # another thread may have made it meanwhile
-            _CUTS[key] = (cut, periods)
-            _cuts_size[0] += sum(a.nbytes for pair in cut.values() for a in pair)
-        while _cuts_size[0] > _CUTS_BYTES and len(_CUTS) > 1:
-            _cuts_size[0] -= sum(a.nbytes for pair in _CUTS.popitem(last=False)[1][0].values() for a in pair)
     return cut, periods
 
 
@@ -224,7 +204,7 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
     (tests/test_localise_blocks.py)."""
     mean, noise = np.zeros(lay.orders.size, complex), np.zeros(lay.orders.size)
     shafts = sorted((s for s in range(len(lay.shafts)) if (lay.source == s).any()), key=lambda s: -lay.shaft_orders[s])
-    cut, periods = _cuts(lay, shafts, first, R, y.size)
+    cut, periods = _cuts(lay.points, tuple((s, lay.shaft_orders[s], lay.shafts[s]) for s in shafts), first, R, y.size)
     waves, read = {}, {}
     dense = np.empty(dense_length(y.size * UPSAMPLE))  # every reading of the record's turns is made in it
 

@@ -20,8 +20,7 @@ gearbox). Defaults: 24.75 Hz, a 4-pole induction motor on 50 Hz mains at 1 % sli
 ratio of 0.5.
 """
 
-import threading
-from collections import OrderedDict
+from functools import lru_cache
 
 import numpy as np
 
@@ -29,15 +28,6 @@ from gearlab.api import Effect, GearlabInputError, SignalContext, hookimpl, para
 
 RATIO_LADDER = (0.5, 0.7, 1.4, 2.0)  # the guessed level's neighbours tried at the record's frequency
 ZOOM = 201  # points of the zoomed record spectrum over two record bins around its peak
-
-# The tone's wave sin(2 pi f t) of a record, by (f, t0, fs, shape): a gap search scores one record at
-# one frequency at many levels (tests/test_gap_diagnose.py: 4,837 calls, 421 distinct waves; a 64 x 4096
-# record's sine is 5.5 ms). The level multiplies the kept wave, so every value is as computed anew. At
-# most _WAVES_BYTES, least recently used out first.
-_WAVES: OrderedDict = OrderedDict()
-_WAVES_BYTES = 1 << 25
-_waves_size = [0]  # the bytes of the waves kept
-_waves_lock = threading.Lock()  # the TUI and the executors' threads share it
 
 
 class InterferenceTone(Effect):
@@ -137,24 +127,20 @@ class InterferenceTone(Effect):
 
 
 def _wave(f: float, ctx, shape: tuple) -> np.ndarray:
-    """sin(2 pi f t) at the times of a record of *shape* (read-only), kept by (f, t0, fs, shape) where
-    the context's times are SignalContext's (t0 + i / fs)."""
+    """sin(2 pi f t) at the times of a record of *shape* (read-only), kept where the context's times are
+    SignalContext's (t0 + i / fs): a gap search scores one record at one frequency at many levels
+    (tests/test_gap_diagnose.py: 4,837 calls, 421 distinct waves; a 64 x 4096 record's sine is 5.5 ms), and
+    the level multiplies the kept wave, so every value is as computed anew."""
     if type(ctx).time is not SignalContext.time:  # another time base: its own times, not kept
         return np.sin(2 * np.pi * f * ctx.time(int(np.prod(shape))).reshape(shape))
-    key = (f, ctx.t0, ctx.fs, shape)
-    with _waves_lock:
-        wave = _WAVES.get(key)
-        if wave is not None:
-            _WAVES.move_to_end(key)
-            return wave
-    wave = np.sin(2 * np.pi * f * ctx.time(int(np.prod(shape))).reshape(shape))
+    return _sine(f, ctx.t0, ctx.fs, shape)
+
+
+@lru_cache(maxsize=8)  # a 64 x 4096 record's wave: 2 MB
+def _sine(f: float, t0: float, fs: float, shape: tuple) -> np.ndarray:
+    t = t0 + np.arange(int(np.prod(shape))) / fs  # SignalContext.time's
+    wave = np.sin(2 * np.pi * f * t.reshape(shape))
     wave.flags.writeable = False
-    with _waves_lock:
-        if key not in _WAVES:  # another thread may have made it meanwhile
-            _WAVES[key] = wave
-            _waves_size[0] += wave.nbytes
-        while _waves_size[0] > _WAVES_BYTES and len(_WAVES) > 1:
-            _waves_size[0] -= _WAVES.popitem(last=False)[1].nbytes
     return wave
 
 
