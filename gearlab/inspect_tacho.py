@@ -64,18 +64,21 @@ def misread(check: dict, box, read: str, ppr: int | None, ratio: float | None, b
     return None
 
 
-def misread_line(found: tuple, check: dict, read: str, ppr: int | None) -> str:
+def misread_line(found: tuple, check: dict, read: str, ppr: int | None, table: str | None = None) -> str:
     """The one line of misread's *found*: the first stage's mesh as read, the tacho's shaft and marks, and how to
-    read it (inspect's options and a scenario's keys; without *ppr*, the marks as a share of those read)."""
+    read it (inspect's options and a scenario's keys, or with *table* the keys of the scenario table that holds the
+    records, where a run that has no such options says it; without *ppr*, the marks as a share of those read)."""
     name, r, f = found
     m = check["stages"][0]["expected_order"]
     line = f"stage 1: mesh order {f * m:.4g} measured, {m:.4g} expected ({tacho_shaft_words(name, f, read)} "
     if ppr is not None:
         k = Fraction(ppr) / r  # a whole count: _ratios' ppr / k
-        return line + (
-            f"with {k} pulse(s) per revolution, not {ppr}? (--tacho-shaft {name} --pulses-per-rev {k}, keys "
-            "'tacho_shaft' and 'pulses_per_rev' in a scenario)"
+        how = (
+            f"{table} tacho_shaft = '{name}', pulses_per_rev = {k}"
+            if table
+            else f"--tacho-shaft {name} --pulses-per-rev {k}, keys 'tacho_shaft' and 'pulses_per_rev' in a scenario"
         )
+        return line + f"with {k} pulse(s) per revolution, not {ppr}? ({how})"
     return line + (
         f"with {1 / r} x the pulses per revolution it was read with? ([target] tacho_shaft = '{name}', "
         f"pulses_per_rev x {1 / r})"
@@ -111,14 +114,13 @@ def elsewhere_line(lines, box: Gearbox, read: str, speed, revolutions: int) -> s
     )
 
 
-def marks_words(marks: int, ppr: int, where: str = "in a scenario") -> str:
+def marks_words(marks: int, ppr: int, table: str | None = None) -> str:
     """A tacho on the shaft it is read as, giving *marks* a turn where *ppr* were read, and how to read it: inspect's
-    option and the key (*where*: the table that holds it; the gap's structure check, on a scenario, names [target]).
-    inspect's marks_line and the gap's mesh_line both use it: one sentence for one fault, wherever it is read."""
-    return (
-        f"the tacho gives {marks} pulse(s) per revolution, not {ppr}? (--pulses-per-rev {marks}, key 'pulses_per_rev' "
-        f"{where})"
-    )
+    option and a scenario's key, or with *table* (the gap's structure check, run on a scenario, which has no such
+    option) that table's key. inspect's marks_line and the gap's mesh_line both use it: one sentence for one fault."""
+    how = f"--pulses-per-rev {marks}, key 'pulses_per_rev' in a scenario"
+    how = f"{table} pulses_per_rev = {marks}" if table else how
+    return f"the tacho gives {marks} pulse(s) per revolution, not {ppr}? ({how})"
 
 
 def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:

@@ -3,7 +3,8 @@ inspect` says 'the tacho gives 2 pulse(s) per revolution, not 1? (--pulses-per-r
 (gearlab.inspect_tacho.marks_words), but the gap diagnosis said only 'the tacho gives 2 x the pulses per revolution
 it was read with? [target] pulses_per_rev': neither the count the records show nor the one they were read with,
 where the scenario knows it (the history's pulses_per_rev, Chain.pulses_per_rev). The gap, and a detection run's
-check of its history, now say it in inspect's words, the key's table named. The takes: a 27/73 box at 25 Hz with
+check of its history, now say it in inspect's words, with the key and its value in [target] (a run has no
+inspect options). The takes: a 27/73 box at 25 Hz with
 a tacho on its input shaft, CSV records made with numpy (tests/test_tacho_misread_output.py's maker)."""
 
 from __future__ import annotations
@@ -28,10 +29,11 @@ def _takes(tmp_path, marks: int, read: int, names=("h1", "h2")) -> None:
         _record(tmp_path / f"{name}.csv", 27, 73, "input", marks, seconds=3.0, seed=30 + i)
 
 
-def _said(marks: int, read: int) -> str:
-    """inspect_tacho.marks_words up to where the key is held."""
+def _said(marks: int, read: int, run: bool = True) -> str:
+    """inspect_tacho.marks_words: in a run (which has no inspect options), the key and its value in [target]."""
     said = f"the tacho gives {marks} pulse(s) per revolution, not {read}? "
-    return said + f"(--pulses-per-rev {marks}, key 'pulses_per_rev"
+    inspect = f"(--pulses-per-rev {marks}, key 'pulses_per_rev'"
+    return said + (f"([target] pulses_per_rev = {marks})" if run else inspect)
 
 
 @pytest.mark.parametrize(
@@ -41,12 +43,12 @@ def test_the_gap_names_the_pulse_count_and_its_key_as_inspect_does(tmp_path, cli
     _takes(tmp_path, marks, read)
     verdict = _gap_run(tmp_path, cli, "box.toml", TARGET + _files(*HISTORY))["verdict"]
     assert verdict.startswith(f"structure differs: mesh order {measured} measured, 27 expected"), verdict
-    # the count the records show, the one read, inspect's option and the scenario's key, in [target]
-    assert verdict.endswith(_said(marks, read) + "' in the scenario's [target]))"), verdict
+    # the count the records show, the one read, and the key with its value in [target]
+    assert verdict.endswith(_said(marks, read) + ")"), verdict
     assert "x the pulses" not in verdict and "of the pulses" not in verdict, verdict
     # inspect of one of the takes says the same sentence
     report = inspect_record(str(tmp_path / "h1.csv"), load_gearbox(tmp_path / "box.toml"), _options())
-    assert _said(marks, read) + "' in a scenario)" in report["verdict"], report["verdict"]
+    assert _said(marks, read, run=False) + " in a scenario)" in report["verdict"], report["verdict"]
 
 
 def test_a_detection_run_s_history_check_names_the_pulse_count_and_its_key(tmp_path, cli):
@@ -64,4 +66,4 @@ def test_a_detection_run_s_history_check_names_the_pulse_count_and_its_key(tmp_p
     (line,) = [x for x in err.strip().splitlines() if x.startswith("error:")]
     assert "[source] key 'gearbox': the history of condition" in line, line
     assert "mesh order 13.5 measured, 27 expected" in line, line
-    assert _said(2, 1) + "' in the scenario's [target])" in line, line
+    assert _said(2, 1) + ");" in line, line

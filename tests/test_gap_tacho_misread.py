@@ -45,7 +45,8 @@ def test_a_detection_run_names_the_tacho_s_shaft_and_marks_not_a_tooth_count(tmp
     (line,) = [x for x in err.strip().splitlines() if x.startswith("error:")]
     assert "[source] key 'gearbox': the history of condition" in line, line
     # the read count known (the description's 2): the marks named as a count, as inspect names them
-    said = TACHO + "1 pulse(s) per revolution, not 2? (--tacho-shaft output --pulses-per-rev 1"
+    # a run has no inspect options: the keys of the scenario table that holds the records, with their values
+    said = TACHO + "1 pulse(s) per revolution, not 2? ([target] tacho_shaft = 'output', pulses_per_rev = 1)"
     assert said in line, line
     assert "stage 1: mesh order 230.1 measured, 19 expected" in line, line
     assert "teeth" not in line, line
@@ -68,7 +69,7 @@ def test_the_gap_diagnosis_names_the_tacho_s_shaft_and_marks_not_a_tooth_count(t
     verdict = result["verdict"]
     assert verdict.startswith("structure differs: stage 1: mesh order 230.1 measured, 19 expected"), verdict
     # the count read (the description's 2, Chain.pulses_per_rev): the marks named as a count, as inspect names them
-    said = TACHO + "1 pulse(s) per revolution, not 2? (--tacho-shaft output --pulses-per-rev 1"
+    said = TACHO + "1 pulse(s) per revolution, not 2? ([target] tacho_shaft = 'output', pulses_per_rev = 1)"
     assert said in verdict, verdict
     assert "teeth" not in verdict, verdict
     assert result["structure"]["tacho"]["shaft"] == "output", result["structure"]

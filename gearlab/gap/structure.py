@@ -46,7 +46,7 @@ FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 SPEED_TOL = 0.02
 # A scale factor within this of 1 is a calibration's tolerance, left to the effects.
 LEVEL_TOL = 0.1
-IN_TARGET = "in the scenario's [target]"  # where the gap's records are read: their pulses_per_rev
+IN_TARGET = "[target]"  # the table of the gap's records: their acquisition keys (a run has no inspect options)
 
 
 def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.ndarray) -> np.ndarray:
@@ -559,7 +559,7 @@ def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, r
     if found is None:
         return None
     record["tacho"] = {"shaft": found[0], "marks_read_over_given": float(found[1]), "factor": found[2]}
-    return misread_line(found, check, box.shafts[read], ppr)
+    return misread_line(found, check, box.shafts[read], ppr, IN_TARGET)
 
 
 def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:
