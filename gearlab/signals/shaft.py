@@ -74,6 +74,12 @@ def read_at(
     array of a long record's reading is a tenth of its time in page faults)."""
     fine = dense_length(n * up)
     scale = fine / n  # = up where n up is a fast length already (R of factors 2, 3, 5): bit for bit as before
+    if periodic and dense is None:  # made one point longer, that point sample 0 again: no copy to append it
+        closed = np.empty(fine + 1)
+        wave = np.fft.irfft(spectrum, n=fine, out=closed[:fine])
+        wave *= scale
+        closed[fine] = closed[0]
+        return on_grid(at * scale, closed)
     wave = np.fft.irfft(spectrum, n=fine, out=dense)
     wave *= scale  # in place: the same product, no second dense array
     if periodic:
