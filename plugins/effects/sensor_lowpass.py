@@ -42,7 +42,7 @@ class SensorLowpass(Effect):
     log_scale = frozenset({"f_c"})
 
     def apply_signal(self, x, params, ctx):
-        return steady_state(x, ctx.fs, lambda f: frequency_response(f, params["f_c"], params["order"]))
+        return steady_state(x, ctx.fs, frequency_response, params["f_c"], params["order"])
 
 
 @hookimpl
