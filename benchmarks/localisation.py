@@ -23,12 +23,13 @@ train of random tooth counts (random_train: the 21/63 + 24/56 description with p
 own TSA is read (localise, "Fallback"), and some a stage-2 ratio that leaves the intermediate shaft no exclusive order.
 
 Per case it prints: the records flagged (a shaft over its history threshold); of those, the damaged
-gear named first (alone), its shaft named with both its gears (the intermediate shaft's two gears
-undecided), and of all records those named on a wrong gear (another shaft, or the other gear of
-the damaged gear's shaft; for a healthy record, any gear named). For the rig, also the records
-called a fault of the input pinion that scenarios/phm09_chip.toml watches; for a gear of the
-intermediate shaft, the records a scenario watching the shaft's other gear calls its own fault
-(detection_which_gear.call_of: that gear named, or the shaft with both). The tooth found is
+gear named first (listed first: alone, or ahead of its shaft's other gear where both are named, the
+one the mesh phases favour), named alone, and its shaft named with both its gears (the intermediate
+shaft's two gears undecided), and of all records those named on a wrong gear (another shaft, or the
+other gear of the damaged gear's shaft; for a healthy record, any gear named). For the rig, also the
+records called a fault of the input pinion that scenarios/phm09_chip.toml watches; for a gear of the
+intermediate shaft, the records a scenario watching it, and one watching the shaft's other gear, call
+their own fault (detection_which_gear.call_of). The tooth found is
 scored against the tooth placed (the simulator's shafts are at their zero when the input is, so
 the record's first tacho mark gives every shaft's angle).
 
@@ -159,6 +160,7 @@ def _trial(args: tuple, made: list) -> list[dict]:
     from gearlab.data import which_gear as W
     from gearlab.data.simulated import simulated_record
     from gearlab.gearbox import order_table, resolve_gearbox
+    from gearlab.kinds import detection_which_gear as D
     from gearlab.signals import cut_revolutions
 
     warnings.filterwarnings("ignore", message=".*steps per period.*")
@@ -221,7 +223,12 @@ def _trial(args: tuple, made: list) -> list[dict]:
         )
         ev = next((e for e in res["shafts"] if e["shaft"] == res["named_shaft"]), None)
         if ev is not None:
-            row["right"] = res["named"] == name
+            row["right"] = res["named"] == name  # named alone
+            # listed first: alone, or ahead of the shaft's other gear (the gear the mesh phases favour)
+            row["first"] = name is not None and (ev["which"] or ev["gears"][0]) == name
+            # the scenarios watching the damaged gear, the shaft's other gear: a fault of theirs (call_of)
+            row["own_call"] = name is not None and D.call_of(res, [name]).startswith(D.WATCHED)
+            row["other_call"] = any(D.call_of(res, [o]).startswith(D.WATCHED) for o in row["other"])
             row["both"] = ev["which"] is None and len(ev["gears"]) == 2 and name in ev["gears"]
             row["wrong"] = not (row["right"] or row["both"])
             row["evidence"] = ev["stage_evidence"]
@@ -241,8 +248,9 @@ def report(rows: list[dict], box: str) -> None:
         return f"{a:3d} {100 * a / b:5.1f} %" if b else "  -       "
 
     print(
-        f"{'damage':20s} {'records':>7s} {'flagged':>11s} {'named 1st':>11s} {'shaft, both':>11s}"
-        f" {'wrong gear':>11s} {'called input pinion':>11s} {'tooth ±0.5':>17s} {'other gear watched':>18s}"
+        f"{'damage':20s} {'records':>7s} {'flagged':>11s} {'named 1st':>11s} {'alone':>11s} {'shaft, both':>11s}"
+        f" {'wrong gear':>11s} {'called input pinion':>11s} {'tooth ±0.5':>17s} {'own gear watched':>18s}"
+        f" {'other gear watched':>18s}"
     )
     words = ("input pinion", "intermediate gear", "intermediate pinion", "output gear")
     for case in ("healthy", *(w for w, _ in BOXES[box]["gears"]), *(words if box == "random" else ())):
@@ -251,28 +259,31 @@ def report(rows: list[dict], box: str) -> None:
             continue
         flagged = [r for r in rs if r["named"] is not None]
         wrong = [r for r in flagged if case == "healthy" or r["wrong"]]
+        first, n = sum(bool(r.get("first")) for r in flagged), len(flagged)
         right = sum(bool(r.get("right")) for r in flagged)
         both = sum(bool(r.get("both")) for r in flagged)
         watched = sum(r["named"] == WATCHED for r in rs) if box == "phm09" else None
         gaps = np.array([r["tooth_off"] for r in flagged if "tooth_off" in r])
         middle = float(np.median(gaps)) if gaps.size else 0.0
-        # a scenario watching the other gear of the damaged gear's shaft (call_of): a fault of it when
-        # that gear is named, or the shaft with both its gears
+        # the scenarios watching the damaged gear and the other gear of its shaft (call_of), of all records
         other = case != "healthy" and any(r["other"] for r in rs)
-        mine = sum(r["named"] in r["other"] or bool(r.get("both")) for r in rs) if other else None
+        mine = sum(bool(r.get("other_call")) for r in flagged) if other else None
+        own = sum(bool(r.get("own_call")) for r in flagged) if other else None
         print(
             f"{case:20s} {len(rs):7d} {pct(len(flagged), len(rs))}"
-            + (f" {pct(right, len(flagged))} {pct(both, len(flagged))}" if case != "healthy" else " " * 24)
+            + (" " * 36 if case == "healthy" else f" {pct(first, n)} {pct(right, n)} {pct(both, n)}")
             + f" {pct(len(wrong), len(rs))}"
             + (f" {pct(watched, len(rs))}" if watched is not None else " " * 12)
             + (f" {middle:+6.2f} {np.mean(np.abs(gaps - middle) < 0.5) * 100:5.1f} %" if gaps.size else " " * 15)
-            + (f" {pct(mine, len(rs)):>18s}" if mine is not None else "")
+            + (f" {pct(own, len(rs)):>18s} {pct(mine, len(rs)):>18s}" if mine is not None else "")
         )
-    print("flagged: of all records; named 1st: of the flagged, the damaged gear named alone; shaft, both: of the")
-    print("flagged, its shaft named with both its gears (which undecided); wrong gear: of all records, named on a")
+    print("flagged: of all records; named 1st: of the flagged, the damaged gear listed first (alone, or ahead of the")
+    print("other gear of its shaft: the one the mesh phases favour); alone: the damaged gear named alone; shaft, both:")
+    print("its shaft named with both its gears (which undecided); wrong gear: of all records, named on a")
     print("gear that is not the damaged one (healthy: any); called input pinion: of all records (phm09_chip's gear);")
     print("tooth: the peak's median offset from the placed tooth's middle (pitches), the share within half a pitch;")
-    print("other gear watched: of all records, called a fault of the shaft's other gear by a scenario watching it.")
+    print("own / other gear watched: of all records, called a fault of the damaged gear / the shaft's other gear by a")
+    print("scenario watching it (detection_which_gear.call_of).")
 
 
 def main(argv=None) -> None:

@@ -51,6 +51,7 @@ from ..parts.roc import auc
 from ..signals import POINTS
 from ..signals import localise as L
 from ..signals import nonsync as NS
+from ..signals import which_template as T
 from .detection_records import longest_tsa
 
 WATCHED, OTHER = "watched-gear fault", "other damage"
@@ -106,8 +107,9 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str
         return NOT_LOCALISED
     mine, others = [], []
     for ev in shafts:
-        # one gear of a two-gear shaft named by its event (ev["which"]): only that gear; both: either
-        on = [ev["which"]] if ev.get("which") else ev["gears"]
+        # one gear of a two-gear shaft named by its event: only that gear; both: either, or the first listed where the
+        # mesh phases lean (which_template.EVEN_LEAD)
+        on = T.callable_gears(ev)
         (mine if any(g in watched for g in on) else others).append(ev["gear"] + L.weakly(ev))
     if mine:
         return f"{WATCHED}: {'; '.join(mine)}" + (ALSO + "; ".join(others) if others else "")

@@ -118,6 +118,7 @@ from .which_template import (  # noqa: F401 (the width's settings: read by tests
     WIDTH_LOW,
     WIDTH_Z,
     envelope,
+    favoured_first,
     fit_words,
     lead_words,
     mesh_combs,
@@ -754,6 +755,7 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
             dens["rule"] = dens.get("rule", RULE_WIDTH) if by is False else fits.get("rule", RULE_SIMULATED)
         elif dens:  # the width's evidence, or the mesh phase's where it named the gear
             dens.setdefault("rule", RULE_WIDTH)
+        on = on if which is not None else favoured_first(on, dens)  # both named: the likelier first, where known
         out.append(
             ShaftEvidence(
                 name,

@@ -68,11 +68,12 @@ RULE_REFERENCE = "by the mesh phases of the simulated events"
 REFERENCE_HARMONICS = 8
 REFERENCE_HALF = 0.2  # orders about each mesh harmonic read, in the coarser gear's tooth counts (at least 2)
 # lead of one gear's match over the other's at or under which both stay named: the shaft with both gears, which a
-# scenario watching either calls its fault (the call says the lead). Development (benchmarks/localisation.py, 20
-# trials each of the rig, the 21/63 + 24/56 box and random trains, the records simulated with bearings 0.5x or 2x as
-# stiff, a casing path, or a sensor resonance at 3 kHz, zeta 0.05; seeds 41 + 42 / 44: 696 / 327 records of damage on
-# a two-gear shaft's gear decided by these phases): the gear leading by 0.05 or less right in 21 of 38 / 8 of 16, by
-# 0.05-0.15 in 53 of 75 / 25 of 32, by 0.15-0.3 in 115 of 130 / 64 of 70, by 0.3 or more in 436 of 453 / 203 of 209
+# scenario watching either calls its fault unless the phases lean (EVEN_LEAD; the call says the lead). Development
+# (benchmarks/localisation.py, 20 trials each of the rig, the 21/63 + 24/56 box and random trains, the records
+# simulated with bearings 0.5x or 2x as stiff, a casing path, or a sensor resonance at 3 kHz, zeta 0.05; seeds
+# 41 + 42 / 44: 696 / 327 records of damage on a two-gear shaft's gear decided by these phases): the gear leading by
+# 0.05 or less right in 21 of 38 / 8 of 16, by 0.05-0.15 in 53 of 75 / 25 of 32, by 0.15-0.3 in 115 of 130 / 64 of
+# 70, by 0.3 or more in 436 of 453 / 203 of 209
 REFERENCE_MARGIN = 0.15
 # a lead under this names the gear weakly, said so. Seeds 41 / 42 / 44 (44 not tuned on), against 0.05 (397 / 399 /
 # 377 flagged records of such damage): named first / both / wrong 341/21/35 -> 316/60/21, 353/23/23 -> 325/59/15,
@@ -82,6 +83,11 @@ REFERENCE_MARGIN = 0.15
 # 30.1, 26.5, 26.9 %. Naming under 0.3 only where the record's own-mesh combs do not stand higher for the other gear
 # split 41 + 42's leads of 0.15-0.3 into 66 of 70 right and 49 of 60, 44's into 29 of 32 and 35 of 38: no rule
 WEAK_LEAD = 0.3
+# where the phases leave both named (within FAR_DB) the gear they favour is listed first (lean; the call says "the first
+# leads by"); over this lead only its scenario calls the flag its fault (detection_which_gear.call_of), at or under it
+# the sign says little and either's does. Development (benchmarks/localisation.py as for WEAK_LEAD; seeds 41 + 42 tuned
+# / 44): the favoured gear right at leads of 0.05 or less in 21 of 38 / 8 of 16, of 0.05-0.15 in 53 of 75 / 25 of 32
+EVEN_LEAD = 0.05
 WEAK_RIGHT = "87-91 %"  # led by REFERENCE_MARGIN to WEAK_LEAD, right (seeds 41 / 42 / 44: 61/68, 54/62, 64/70)
 # structure gap (dB) over which a lead under WEAK_LEAD leaves both named: the simulated structures above read 2.0-10.2
 # dB, and there the gap left the phases' figures alike (leads 0.15-0.3 right in 90 % under 4 dB, 84-91 % at 4-8 dB,
@@ -205,7 +211,7 @@ def _by_reference_phases(rec, ref, lay, harmonics, gears, templates: dict, ev: d
         return False, {**ev, "not used": f"{said}; the event's phases at the mesh harmonics not read"}
     ev = {**ev, "own-mesh phase match": match, "rule": RULE_REFERENCE}
     (best, a), (_, b) = sorted(match.items(), key=lambda kv: -kv[1])
-    # either gear (the shaft named with both): a scenario watching either calls the flag its own
+    # the shaft named with both: either's scenario calls the flag its own, or the favoured's only (callable_gears)
     if a - b <= REFERENCE_MARGIN or (ev["structure gap dB"] > FAR_DB and a - b < WEAK_LEAD):
         why = f"{said}; the phases at each gear's own mesh lead by {lead_words(a - b)}, {_bound(ev)}"
         return None, {**ev, "undecided": why}
@@ -271,6 +277,31 @@ def undecided_lead(evidence: dict) -> float | None:
     return match[0] - match[1]
 
 
+def lean(evidence: dict) -> str | None:
+    """The gear the own-mesh phases favour where they left both gears named (undecided_lead), the structures within
+    FAR_DB (past it an outside generator's phases favoured the wrong gear in 7 of 7); else None: the description's
+    order."""
+    if undecided_lead(evidence) is None or evidence["structure gap dB"] > FAR_DB:
+        return None
+    match = evidence["own-mesh phase match"]
+    return max(match, key=match.get)
+
+
+def favoured_first(gears: list, evidence: dict) -> list:
+    """A two-gear shaft's *gears* (localise.Gear) the gear lean() names first, else as given."""
+    first = lean(evidence)
+    return sorted(gears, key=lambda g: g.name != first) if first else list(gears)
+
+
+def callable_gears(ev: dict) -> list[str]:
+    """The gears of a flagged shaft (as localise.ShaftEvidence.describe()) whose scenario calls the flag its fault: the
+    one named; both where undecided, only the one the phases favour (lean()) where it leads by over EVEN_LEAD."""
+    evidence = ev.get("stage_evidence") or {}
+    lead = undecided_lead(evidence)
+    first = ev.get("which") or (lean(evidence) if lead is not None and lead > EVEN_LEAD else None)
+    return [first] if first else list(ev["gears"])
+
+
 def weakly(ev: dict) -> str:
     """ ", weakly over <the shaft's other gear> (phase lead L)" of a shaft's evidence (as
     localise.ShaftEvidence.describe()) whose gear is named by a phase lead under WEAK_LEAD; " (undecided by the mesh
@@ -281,7 +312,10 @@ def weakly(ev: dict) -> str:
         lead = undecided_lead(evidence) if len(ev.get("gears", ())) == 2 else None
         if lead is None:
             return ""
-        return f" (undecided by the mesh phases: lead {lead_words(lead)}, {_bound(evidence)})"
+        if not lean(evidence):
+            return f" (undecided by the mesh phases: lead {lead_words(lead)}, {_bound(evidence)})"
+        even = f"not over {EVEN_LEAD:g}: either as likely" if lead <= EVEN_LEAD else _bound(evidence)
+        return f" (undecided by the mesh phases: the first leads by {lead_words(lead)}, {even})"
     lead = weak_lead(evidence)
     if lead is None:
         return ""
