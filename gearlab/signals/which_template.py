@@ -67,6 +67,7 @@ RULE_REFERENCE = "by the mesh phases of the simulated events"
 # 184/17/19 (seed 42, not tuned on, 171 records: 131/28/12 -> 147/11/13); 10-12 no better (under the noise there)
 REFERENCE_HARMONICS = 8
 REFERENCE_HALF = 0.2  # orders about each mesh harmonic read, in the coarser gear's tooth counts (at least 2)
+LINE_REACH = 4  # orders either side of a mesh line its event content is interpolated from (event_free_lines)
 # lead of one gear's match over the other's at or under which both stay named: the shaft with both gears, which a
 # scenario watching either calls its fault unless the phases lean (EVEN_LEAD; the call says the lead). Development
 # (benchmarks/localisation.py, 20 trials each of the rig, the 21/63 + 24/56 box and random trains, the records
@@ -476,6 +477,27 @@ def own_mesh_phasors(X, lines, lay, shaft: int, m: np.ndarray, gear, half: float
     return np.array([np.nan if p is None else p for p in out], complex)
 
 
+def event_free_lines(X, m: np.ndarray, lines, lay, shaft: int, gears) -> np.ndarray:
+    """*lines* (a record's means) with each of the gears' mesh harmonics h Z (h = 1 … REFERENCE_HARMONICS) less the
+    event *X*'s content there, interpolated between the nearest of its orders *m* on each side (within LINE_REACH),
+    demodulated at its peak: a strong event's own content at a mesh line turns the line it is compared with."""
+    out = np.array(lines, complex)
+    peak = _peak(X, m)
+    at = dict(zip(m.tolist(), X * np.exp(1j * m * peak)))
+    for g in gears:
+        for h in range(1, REFERENCE_HARMONICS + 1):
+            z = h * g.teeth
+            x = z * float(lay.shaft_orders[shaft])
+            line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
+            lo = next((k for k in range(z - 1, z - LINE_REACH - 1, -1) if k in at), None)
+            hi = next((k for k in range(z + 1, z + LINE_REACH + 1) if k in at), None)
+            if line.size == 0 or lo is None or hi is None:
+                continue
+            event = (at[lo] * (hi - z) + at[hi] * (z - lo)) / (hi - lo) * np.exp(-1j * z * peak)
+            out[line[0]] = out[line[0]] - event
+    return out
+
+
 def own_mesh_weights(X, noise, m: np.ndarray, gear, half: float) -> np.ndarray:
     """Per harmonic of own_mesh_phasors, s / (1 + s) of the event's power within *half* orders of it over the
     noise power of those orders' means (*noise*): near 1 where the event stands clear, near 0 where noise sets
@@ -497,15 +519,17 @@ def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates
     turns), and the same through another structure, whose response turns a line and the orders within
     REFERENCE_HALF of it alike (noise-free, bearings 0.5x: cos 0.9-1.0 to the simulator's at most harmonics);
     about the other gear's mesh the phase moves with the tooth. So the sequence over h is compared, not the
-    whole shape, which follows the structure's modes."""
+    whole shape, which follows the structure's modes. The record's lines are read less the event's own content
+    there (event_free_lines), as the simulated event's are against the simulated healthy lines."""
     sel, m = harmonics
     if m.size < 3:
         return {}
     half = max(2.0, REFERENCE_HALF * min(g.teeth for g in gears))
     R = residual(rec, ref, sel)
+    lines = event_free_lines(R, m, rec.mean, lay, shaft, gears)
     out = {}
     for g in gears:
-        mine = own_mesh_phasors(R, rec.mean, lay, shaft, m, g, half)
+        mine = own_mesh_phasors(R, lines, lay, shaft, m, g, half)
         weight = own_mesh_weights(R, rec.noise[sel], m, g, half)
         best = None
         for t in templates["gears"].get(g.name, ()):
