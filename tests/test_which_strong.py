@@ -12,9 +12,22 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from test_which_gear_reference import CARRIER, HARMONICS, LAY, PINION, SIMULATED, TEMPLATES, TOP, WHEEL, event, lines
+from test_which_gear_reference import (
+    CARRIER,
+    HARMONICS,
+    LAY,
+    ORDERS,
+    PINION,
+    SIMULATED,
+    TEMPLATES,
+    TOP,
+    WHEEL,
+    event,
+    lines,
+)
 
 from gearlab.signals import which_template as T
+from gearlab.signals.localise import Gear
 
 
 def decide(gear, tooth: int, k: float):
@@ -49,3 +62,15 @@ def test_the_event_is_taken_off_the_line_it_stands_at():
     before = np.abs(x[at]) / np.abs(healthy[at])
     after = np.abs(clean[at] - healthy[at]) / np.abs(healthy[at])
     assert before.max() > 0.3 and after.max() < 0.2 * before.max(), (before, after)
+
+
+def test_a_line_both_gears_share_loses_the_event_once():
+    # a 48T wheel and a 24T pinion on one shaft (the rig's idler: 96T and 48T): every wheel harmonic is a pinion one
+    wheel, pinion = Gear("intermediate", 1, "wheel", 48), Gear("intermediate", 2, "pinion", 24)
+    carrier = ORDERS % 24 == 0
+    lay = SimpleNamespace(orders=ORDERS.astype(float), carrier=carrier, shaft_orders=(1.0,), shafts=("intermediate",))
+    x = 1.0 / (1 + 1j * (ORDERS - 100) / 60.0)  # a smooth event, peaking at the shaft's zero
+    healthy = np.where(carrier, 5.0, 0.0).astype(complex)
+    clean = T.event_free_lines(x[~carrier], ORDERS[~carrier], healthy + x, lay, 0, [wheel, pinion])
+    at = np.flatnonzero(carrier)[:8]
+    assert np.abs(clean[at] - healthy[at]).max() < 0.01 * np.abs(x[at]).min(), clean[at] - healthy[at]

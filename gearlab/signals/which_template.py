@@ -494,7 +494,7 @@ def event_free_lines(X, m: np.ndarray, lines, lay, shaft: int, gears) -> np.ndar
             if line.size == 0 or lo is None or hi is None:
                 continue
             event = (at[lo] * (hi - z) + at[hi] * (z - lo)) / (hi - lo) * np.exp(-1j * z * peak)
-            out[line[0]] = out[line[0]] - event
+            out[line[0]] = lines[line[0]] - event  # once where the two gears' harmonics share a line (96T, 2 x 48T)
     return out
 
 
