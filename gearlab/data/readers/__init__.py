@@ -15,18 +15,17 @@ from .npz import _read_npz
 from .text import _read_text
 from .wav import _read_wav
 
-# A text's parse is kept by (reader, path, the file's digest, names, the size limit): a command reads a record's
-# file more than once (its channels listed, then read; a history's takes by the detection and again by the
-# which-gear check: 211 of 505 reads in the 20 slowest test files were of a file read before, 1.5 s of 5.1 s).
-# Keyed on the bytes, so a file written again is read again; each caller gets its own copy (read_contents adds a
-# matrix's columns to it). Kept for a text of at most KEEP_BYTES (a zip's as its member declares it): its columns at
-# most 4 x that (a value of one digit and a separator as a float64), 4 kept.
+# A text's parse is kept by (reader, path, the file's digest, names): a command reads a record's file more than once
+# (its channels listed, then read; a history's takes by the detection and again by the which-gear check: 211 of
+# 505 reads in the 20 slowest test files were of a file read before, 1.5 s of 5.1 s). Keyed on the bytes, so a file
+# written again is read again; each caller gets its own copy (read_contents adds a matrix's columns to it). Kept
+# for a text of at most KEEP_BYTES (a zip's as its member declares it): its columns at most 4 x that (a value of
+# one digit and a separator as a float64), 4 kept.
 KEEP_BYTES = 8 << 20
 
 
 @functools.lru_cache(maxsize=4)
-def _parsed(read, path: str, digest: bytes, names: tuple, limit: int) -> Contents:
-    """read(path, names) under the record size limit *limit* (GEARLAB_MAX_RECORD_MB, which the readers check)."""
+def _parsed(read, path: str, digest: bytes, names: tuple) -> Contents:
     return read(Path(path), list(names))
 
 
@@ -54,7 +53,7 @@ def _kept(read):
                 digest = hashlib.file_digest(f, lambda: hashlib.blake2b(digest_size=16)).digest()
         except OSError:
             return read(path, names)
-        return copy.deepcopy(_parsed(read, str(path), digest, tuple(names), max_record_bytes()))
+        return copy.deepcopy(_parsed(read, str(path), digest, tuple(names)))
 
     return reader
 
