@@ -56,11 +56,12 @@ TEMPLATES = {
 }
 
 
-def decide(gear: Gear, tooth: int, sign: float, structure: tuple[np.ndarray, np.ndarray]):
-    """which_by_template on a record of a fault on *gear* through *structure* (wheel's path, pinion's)."""
-    x = event(gear, tooth, sign, structure[0 if gear is WHEEL else 1])
+def decide(gear: Gear, tooth: int, sign: float, structure: tuple[np.ndarray, np.ndarray], k: float = 0.0):
+    """which_by_template on a record of a fault on *gear* through *structure* (wheel's path, pinion's); with *k*,
+    the event k times the hand-written one and added at the mesh lines too (tests/test_which_strong.py)."""
+    x = (k or 1.0) * event(gear, tooth, sign, structure[0 if gear is WHEEL else 1])
     healthy = lines(*structure)
-    mean = np.where(CARRIER, healthy, x)
+    mean = healthy + x if k else np.where(CARRIER, healthy, x)
     # noise-free but for a floor: every harmonic's event stands clear of it (own_mesh_weights near 1)
     rec = SimpleNamespace(mean=mean, power=np.abs(mean) ** 2, noise=np.full(TOP, 1e-12 * np.abs(x).max() ** 2))
     ref = SimpleNamespace(power=np.where(CARRIER, np.abs(healthy) ** 2, 1e-9 * np.abs(x).max() ** 2), line=CARRIER)

@@ -19,12 +19,11 @@ from test_which_gear_reference import (
     ORDERS,
     PINION,
     SIMULATED,
-    TEMPLATES,
-    TOP,
     WHEEL,
     event,
     lines,
 )
+from test_which_gear_reference import decide as reference_decide
 
 from gearlab.signals import which_template as T
 from gearlab.signals.localise import Gear
@@ -33,13 +32,7 @@ from gearlab.signals.localise import Gear
 def decide(gear, tooth: int, k: float):
     """which_by_template on a fault on *gear* through another structure (the simulator's paths swapped), its event *k*
     times the hand-written one, added at the mesh lines too."""
-    structure = SIMULATED[::-1]
-    x = k * event(gear, tooth, -1.0, structure[0 if gear is WHEEL else 1])
-    healthy = lines(*structure)
-    mean = healthy + x
-    rec = SimpleNamespace(mean=mean, power=np.abs(mean) ** 2, noise=np.full(TOP, 1e-12 * np.abs(x).max() ** 2))
-    ref = SimpleNamespace(power=np.where(CARRIER, np.abs(healthy) ** 2, 1e-9 * np.abs(x).max() ** 2), line=CARRIER)
-    return T.which_by_template(rec, ref, LAY, HARMONICS, [WHEEL, PINION], TEMPLATES)
+    return reference_decide(gear, tooth, -1.0, SIMULATED[::-1], k)
 
 
 @pytest.mark.parametrize("gear", [WHEEL, PINION], ids=["63T wheel", "24T pinion"])
