@@ -47,14 +47,12 @@ def _gain(response, size: int, fs: float, params: tuple) -> np.ndarray:
 
 def steady_state(x, fs: float, response, *params) -> np.ndarray:
     """The record *x* (J, P) through the filter *response(f, *params)* as its steady-state response: its
-    spectrum (the J revolutions as one record) multiplied by H(f) (shared with sensor_lowpass). The gain is
-    kept where *params* are given (a response that closes over its own values is made every call)."""
+    spectrum (the J revolutions as one record) multiplied by H(f) (shared with sensor_lowpass); the gain kept
+    up to KEPT_SIZE samples."""
     record = np.asarray(x, dtype=float)
     flat = record.reshape(-1)
-    if params and flat.size <= KEPT_SIZE:
-        gain = _gain(response, flat.size, fs, params)
-    else:
-        gain = response(np.fft.rfftfreq(flat.size, d=1.0 / fs), *params)
+    make = _gain if flat.size <= KEPT_SIZE else _gain.__wrapped__
+    gain = make(response, flat.size, fs, params)
     return np.fft.irfft(np.fft.rfft(flat) * gain, n=flat.size).reshape(record.shape)
 
 
