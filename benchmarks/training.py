@@ -4,8 +4,9 @@ limit, measured side by side in one run.
     python benchmarks/training.py [--rounds N] [--steps S] [--threads T] [--clock wall|cpu]
                                   [--device cpu|cuda] [--networks shapes,fast] [--compile MODES]
 
-For each default network (`shapes`: scenarios/quick.toml, expB.toml, transfer_benchmark.toml;
-`fast`: scenarios/phm09_chip.toml, 2048 points) at its scenario's batch (40) with its optimiser
+For each default network (`shapes`: scenarios/quick.toml, expB.toml, transfer_benchmark.toml, at 2
+classes and, as `shapes/5`, at quick.toml's 5; `fast`: scenarios/phm09_chip.toml, 2048 points) at its
+scenario's batch (40) with its optimiser
 (Adam, the priming and the baselines) and loss (cross-entropy), and for `fast` in the joint step
 of the calibrated methods (`fast+coral`, `fast+mmd`: a source and a target batch embedded
 together, SGD, cross-entropy plus the CORAL or the MMD loss; phm09_chip's coral, mmd and dann units
@@ -181,7 +182,7 @@ on the machine's CPU, every figure of its summary.json equal to the CPU's (and t
 Units of a run train one torch thread each (gearlab.parts.training.train_unit), one per core:
 samples/s per core is the 1-thread figure (T = 1, the default); with T threads it is divided by T.
 On a machine other work shares, `--clock cpu` times this process's CPU seconds instead of the
-wall clock: the figures then hold for a free core. About 30 s with the defaults.
+wall clock: the figures then hold for a free core. About 40 s with the defaults.
 """
 
 from __future__ import annotations
@@ -206,10 +207,12 @@ from gearlab.registry import METHODS, get_registry
 # where it is the default
 CASES = (
     ("shapes", "shapes", 4096, 40, None, "quick, expB, transfer_benchmark"),
+    ("shapes/5", "shapes", 4096, 40, None, "quick's 5 classes: 1,024 templates"),
     ("fast", "fast", 2048, 40, None, "phm09_chip"),
     ("fast+coral", "fast", 2048, 40, "coral", "phm09_chip's coral, dann"),
     ("fast+mmd", "fast", 2048, 40, "mmd", "phm09_chip's mmd"),
 )
+CLASSES = {"shapes/5": 5}  # a row's classes where not 2 (the mixture's cost grows with them)
 CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}  # cpu: this process's CPU seconds
 clock = CLOCKS["wall"]
 JOINT_LR = 0.003  # fit_adaptation's SGD learning rate (Table 5.3)
@@ -328,17 +331,17 @@ def peaks(device: torch.device) -> dict[str, float]:
     }
 
 
-def network(name: str, length: int, device: torch.device) -> nn.Module:
-    """*name* for 2 classes; `shapes` started on decaying bursts at random angles (as Experiment
-    B's faults), so that its templates sit in as many windows as in a run."""
-    net = build_network(name, 2, length=length, seed=0)
+def network(name: str, length: int, device: torch.device, classes: int = 2) -> nn.Module:
+    """*name* for *classes* classes; `shapes` started on decaying bursts at random angles (as
+    Experiment B's faults), 256 a fault class, so that its templates sit in as many windows as in a run."""
+    net = build_network(name, classes, length=length, seed=0)
     if name == "shapes":
         rng = np.random.default_rng(0)
-        faults = np.zeros((256, length))
+        faults = np.zeros((256 * (classes - 1), length))
         for row in faults:
             at = rng.integers(length)
             row[(at + np.arange(200)) % length] = rng.normal(size=200) * np.exp(-np.arange(200) / 40.0)
-        matched_start(net, faults, seed=0, law="laplace")
+        matched_start(net, faults, seed=0, classes=1 + np.arange(len(faults)) // 256, law="laplace")
     return net.to(device)
 
 
@@ -456,8 +459,9 @@ def main() -> None:
     epochs = -(-args.steps // per_epoch)
     for row, name, length, batch, adapter, _ in cases:
         X, X_target = rng.standard_normal((2, per_epoch * batch, length)).astype(np.float32)
-        y = rng.integers(0, 2, len(X))
-        gearlab_net, plain_net = network(name, length, device), network(name, length, device)
+        classes = CLASSES.get(row, 2)
+        y = rng.integers(0, classes, len(X))
+        gearlab_net, plain_net = (network(name, length, device, classes) for _ in range(2))
         s = setups[row] = dict(X=X, y=y, X_target=X_target, gearlab=gearlab_net, plain=plain_net, adapter=None)
         s.update(Xt=torch.as_tensor(X, device=device), yt=torch.as_tensor(y, device=device))
         s.update(Xt_target=torch.as_tensor(X_target, device=device))
@@ -470,7 +474,7 @@ def main() -> None:
             weights = list(plain_net.parameters()) + list(s["plain_modules"].parameters())
             s["opt"] = torch.optim.SGD(weights, lr=JOINT_LR)
         s["rows"] = batch * (1 if adapter is None else 2)  # through the network in a step
-        s["costs"] = layer_costs(network(name, length, device), length, device, s["rows"])
+        s["costs"] = layer_costs(network(name, length, device, classes), length, device, s["rows"])
         s["flops"] = {k: sum(f for kind, f, _ in s["costs"] if kind == k) for k in ("conv", "matmul")}
         s["bytes"] = sum(moved for _, _, moved in s["costs"])
         s["times"] = {"gearlab": [], "plain": [], "limit": [], "roof": [], "dram": [], "small": []}

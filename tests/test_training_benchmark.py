@@ -138,3 +138,14 @@ def test_a_compilation_is_repaid_by_the_steps_it_saves():
     bench = _benchmark()
     assert bench.repaid_after(10.0, 3e-3, 2e-3) == pytest.approx(10_000)
     assert bench.repaid_after(10.0, 2e-3, 2e-3) == float("inf")
+
+
+def test_shapes_is_measured_at_quick_toml_s_five_classes_too():
+    """`shapes/5`: the network of scenarios/quick.toml's 5 classes, 256 templates a fault class
+    (1,024), each of an eighth of the revolution: 6 FLOPs a sample and template element."""
+    bench = _benchmark()
+    assert "shapes/5" in [case[0] for case in bench.CASES] and bench.CLASSES["shapes/5"] == 5
+    net = bench.network("shapes", 4096, torch.device("cpu"), classes=5)
+    assert net.classifier.member.sum(0).tolist() == [1, 256, 256, 256, 256]
+    counts = bench.flops_per_sample(net, 4096, torch.device("cpu"))
+    assert counts == {"conv": 0.0, "matmul": 6.0 * 1024 * 512}
