@@ -147,12 +147,13 @@ scaling by SHAPE_STEP over their 131 k weights forward and back, the circular pa
 The noise scale, a function of the revolution alone, is now computed once a training for the rows
 it trains on (Network.row_state; rows fresh noise changes at each step excepted): 0.053-0.056 ->
 0.057-0.060 of the roof side by side (3 pairs, --rounds 5, CPU clock, load ~7), the same numbers.
-At quick.toml's 5 classes (1,024 templates, against this benchmark's 256) a step is ~9 ms and the
-mixture's logsumexp over (40, 1,025, 5), a strided reduction, ~3.0 ms of it forward + backward; as
-exp(z - max) times the members' weights (a (40 x 1,025) x (1,025 x 5) product) 0.35 ms, logits
-apart by 1e-6 (rounding) and in need of a per-class maximum (a class far below the best one
-underflows): not adopted here, it changes every training's numbers. Not adopted: the loops' sum of |r|
-taken once per row (prefix sums) instead of once per template, 0.90x (367 against 406 us).
+At quick.toml's 5 classes (`shapes/5`: 1,024 templates) the mixture's logsumexp over (40, 1,025, 5), a
+strided reduction of which 4 in 5 terms are non-members' -inf, took ~3.0 ms of a 12 ms step forward +
+backward; each class's sum over its own members (a per-class maximum by scatter_reduce, exp, index_add;
+networks.ShapeMixture) ~0.6 ms: shapes/5 12.1-12.5 -> 8.8-10.1 ms a step, gearlab/roof 0.057-0.061 ->
+0.077-0.083 (3 pairs with 4f0f8ab, --rounds 5, CPU clock, load ~4.5), logits apart by float rounding
+(quick.toml's accuracies all equal, its training losses apart by < 5e-5). Not adopted: the loops' sum
+of |r| taken once per row (prefix sums) instead of once per template, 0.90x (367 against 406 us).
 
 A compiled step (`--compile MODES`: the plain loop with the network's modules compiled by
 torch.compile in each mode, in the same alternated rounds; `compile s` is the first epoch's wall

@@ -420,6 +420,11 @@ def burst(n_classes: int, dropout: float, length: int) -> Network:
 SHAPES = 256  # templates of the `shapes` network per fault class (Experiment B's source has ~270 training faults)
 SHAPE_REACH = 8  # a `shapes` template spans an eighth of a revolution (ShapeLikelihood)
 SHAPE_STEP = 0.1  # templates learn at a tenth of the optimiser's step (docs/learning.md, section 6)
+# a mixture term below e^-50 = 2e-22 of its class's largest is taken as that (its gradient 0): it moves
+# the class's sum less than float64's rounding for up to 500 k terms, and exp of lower values, whose
+# results lie near float32's smallest normal numbers, takes a slow path (0.69 ms against 15 us for a
+# (40, 1,025) batch of terms far apart)
+MIXTURE_FLOOR = -50.0
 
 
 class LaplaceGain(torch.autograd.Function):
@@ -591,9 +596,22 @@ class ShapeMixture(nn.Module):
                 self.log_weight[mine, c] = float(log_prior[c]) - math.log(len(mine))
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:
+        # each template is one class's at most (`use`): each class's log-sum over its own members,
+        # where a logsumexp over (B, J + 1, C) did C times the work (at 5 classes 3.0 of a 9 ms step)
         z = torch.cat([torch.zeros_like(z[:, :1]), z], dim=1)
-        log_weight = self.log_weight.masked_fill(~self.member, -math.inf)
-        return torch.logsumexp(z[:, :, None] + log_weight[None], dim=1)
+        n_classes = self.log_weight.shape[1]
+        member = self.member
+        which = torch.where(member.any(1), member.to(torch.uint8).argmax(1), n_classes)  # C: in no class
+        # each template's own log weight (-inf where it has none); amax passes the gradient to it alone
+        a = z + self.log_weight.masked_fill(~member, -math.inf).amax(1)
+        at = which.expand(len(a), -1)
+        with torch.no_grad():  # per class the largest term, as logsumexp shifts (an infinite one by 0)
+            top = torch.full((len(a), n_classes + 1), -math.inf, dtype=a.dtype, device=a.device)
+            top.scatter_reduce_(1, at, a, "amax")
+            shift = top.nan_to_num(0.0, 0.0, 0.0)
+        terms = torch.exp((a - shift.gather(1, at)).clamp(min=MIXTURE_FLOOR))
+        sums = torch.zeros_like(top).index_add_(1, which, terms)
+        return (top + torch.log(sums))[:, :n_classes]
 
 
 def shapes(n_classes: int, dropout: float, length: int) -> Network:
