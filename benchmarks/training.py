@@ -152,7 +152,11 @@ strided reduction of which 4 in 5 terms are non-members' -inf, took ~3.0 ms of a
 backward; each class's sum over its own members (a per-class maximum by scatter_reduce, exp, index_add;
 networks.ShapeMixture) ~0.6 ms: shapes/5 12.1-12.5 -> 8.8-10.1 ms a step, gearlab/roof 0.057-0.061 ->
 0.077-0.083 (3 pairs with 4f0f8ab, --rounds 5, CPU clock, load ~4.5), logits apart by float rounding
-(quick.toml's accuracies all equal, its training losses apart by < 5e-5). Not adopted: the loops' sum
+(quick.toml's accuracies all equal, its training losses apart by < 5e-5). The templates' scaling by
+SHAPE_STEP done in the loops, each template as it is used (kernels.laplace_gain_scaled: no scaled copy
+of the bank forward, none of its gradient back; bit for bit the same numbers): shapes/5 8.76-9.14 ->
+8.57-8.68 ms a step (fixed cost 2.13-2.22 -> 1.80-1.84), shapes 3.21-3.34 -> 3.12-3.14 (3 pairs, CPU
+clock, load ~4.2). The circular padding's copy (20 us) is left. Not adopted: the loops' sum
 of |r| taken once per row (prefix sums) instead of once per template, 0.90x (367 against 406 us).
 
 A compiled step (`--compile MODES`: the plain loop with the network's modules compiled by

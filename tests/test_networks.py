@@ -560,3 +560,27 @@ def test_shapes_mixture_of_a_class_at_minus_infinity_is_minus_infinity():
     assert torch.allclose(out[:, :2], _plain_mixture(mixture, z.detach(), 2), rtol=1e-6, atol=0)
     nn.functional.cross_entropy(out, torch.tensor([0, 1, 0, 1])).backward()
     assert torch.isfinite(z.grad).all()
+
+
+@pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
+def test_shapes_compiled_loops_scale_the_templates_as_torch_s_product(dtype):
+    """The loops scale each stored template by SHAPE_STEP as they use it: the scores and the
+    stored templates' gradient of torch's ``weight * SHAPE_STEP`` scored at scale 1, bit for bit."""
+    from gearlab.learn.networks import SHAPE_STEP, LaplaceGain
+
+    g = torch.Generator().manual_seed(4)
+    weight = torch.randn(12, 32, generator=g, dtype=dtype, requires_grad=True)
+    offset = torch.arange(12) * 8 % 128
+    r = torch.randn(9, 128, generator=g, dtype=dtype)
+    padded, grad = torch.cat([r, r[:, :32]], dim=1), torch.randn(9, 12, generator=g, dtype=dtype)
+    results = []
+    for scaled_in_loops in (True, False):
+        weight.grad = None
+        if scaled_in_loops:
+            z = LaplaceGain.apply(padded, weight, offset, SHAPE_STEP)
+        else:
+            z = LaplaceGain.apply(padded, weight * SHAPE_STEP, offset, 1.0)
+        (z * grad).sum().backward()
+        results.append((z.detach(), weight.grad.clone()))
+    assert torch.equal(results[0][0], results[1][0]) and torch.equal(results[0][1], results[1][1])
+    assert results[0][1].abs().sum() > 0

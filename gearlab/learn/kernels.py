@@ -27,13 +27,30 @@ ROWS = 16  # rows scored together: 16 whole float64 revolutions of 4096 samples 
 def laplace_gain(padded: np.ndarray, templates: np.ndarray, offset: np.ndarray, out: np.ndarray) -> None:
     """out[b, j] = g_bj for revolutions *padded* (B, L + width: each row followed by its first
     `width` samples again, so a window that wraps round is contiguous), *templates* (J, width)."""
+    laplace_gain_scaled(padded, templates, np.ones(1, templates.dtype), offset, out)
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def laplace_gain_scaled(
+    padded: np.ndarray, templates: np.ndarray, scale: np.ndarray, offset: np.ndarray, out: np.ndarray
+) -> None:
+    """`laplace_gain` of the templates times *scale* (one value of the templates' precision: the
+    products those of torch's ``templates * scale``, bit for bit), each template scaled as it is
+    used: `ShapeLikelihood` stores its templates divided by SHAPE_STEP, and its step scaled the
+    whole bank (131 k-524 k weights) forward and its gradient back, each pass a new array."""
     rows = padded.shape[0]
     n_templates, width = templates.shape
+    s = scale[0]
+    scaled = np.empty(width, templates.dtype)
     for first in range(0, rows, ROWS):  # a block of rows stays in the cache while every template passes
         last = min(first + ROWS, rows)
         for j in range(n_templates):
             start = offset[j]
             t = templates[j]
+            if s != 1:
+                for n in range(width):  # stored, then read: the product rounded as torch's, not fused
+                    scaled[n] = t[n] * s
+                t = scaled
             b = first
             while b + 4 <= last:  # four rows a pass: each template sample loaded once for four
                 r0, r1 = padded[b, start : start + width], padded[b + 1, start : start + width]
@@ -61,11 +78,27 @@ def laplace_gain_grad(
 ) -> None:
     """out[j, n] = sum_b grad[b, j] sign(r_b,o_j+n - t_j,n): the templates' gradient given
     *grad* (B, J), the gradient of the scores g."""
+    laplace_gain_grad_scaled(padded, templates, np.ones(1, templates.dtype), offset, grad, out)
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def laplace_gain_grad_scaled(
+    padded: np.ndarray, templates: np.ndarray, scale: np.ndarray, offset: np.ndarray, grad: np.ndarray, out: np.ndarray
+) -> None:
+    """The gradient of `laplace_gain_scaled`'s scores with respect to the stored (unscaled)
+    templates: `laplace_gain_grad` of the scaled templates, times *scale* (torch's order: the sum,
+    then the product)."""
     rows = padded.shape[0]
     n_templates, width = templates.shape
+    s = scale[0]
+    scaled = np.empty(width, templates.dtype)
     for j in range(n_templates):
         start = offset[j]
         t = templates[j]
+        if s != 1:
+            for n in range(width):
+                scaled[n] = t[n] * s
+            t = scaled
         o = out[j]
         o[:] = 0
         b = 0
@@ -87,6 +120,9 @@ def laplace_gain_grad(
             r = padded[rest, start : start + width]
             for n in range(width):
                 o[n] += g * np.sign(r[n] - t[n])
+        if s != 1:
+            for n in range(width):
+                o[n] *= s
 
 
 KEY_BITS = 12  # the first pass sorts float32 keys into 2**12 buckets by their top bits

@@ -428,9 +428,11 @@ MIXTURE_FLOOR = -50.0
 
 
 class LaplaceGain(torch.autograd.Function):
-    """``(padded (B, L + width), templates (J, width), offset (J,))`` -> ``(B, J)``: each local
-    template's Laplace score before the scale, sum_n |r_n| - |r_n - t_j,n| over its window, and
-    the templates' gradient, by the compiled loops of gearlab.learn.kernels. The same numbers as
+    """``(padded (B, L + width), templates (J, width), offset (J,), scale)`` -> ``(B, J)``: each
+    local template's (times *scale*) Laplace score before the noise scale, sum_n |r_n| - |r_n - t_j,n|
+    over its window, and the stored templates' gradient, by the compiled loops of
+    gearlab.learn.kernels, which scale each template as they use it (no scaled copy of the bank
+    forward, none of its gradient back; the same products as torch's). The same numbers as
     torch's path (`_laplace_windows`) to rounding (the sums' order differs; its
     tests compare the two), at a fifth of a training step's time (benchmarks/training.py)."""
 
@@ -447,14 +449,18 @@ class LaplaceGain(torch.autograd.Function):
         )
 
     @staticmethod
-    def forward(ctx, padded: torch.Tensor, templates: torch.Tensor, offset: torch.Tensor) -> torch.Tensor:
+    def forward(
+        ctx, padded: torch.Tensor, templates: torch.Tensor, offset: torch.Tensor, scale: float = 1.0
+    ) -> torch.Tensor:
         from . import kernels  # numba: loaded when a network first scores (start-up time)
 
         p, t = padded.detach().contiguous(), templates.detach().contiguous()
         o = offset.detach().to(torch.int64).contiguous()
+        s = np.array([scale], dtype=t.numpy().dtype)  # in the templates' precision, as torch's product
         out = torch.empty(len(p), len(t), dtype=p.dtype)
-        kernels.laplace_gain(p.numpy(), t.numpy(), o.numpy(), out.numpy())
+        kernels.laplace_gain_scaled(p.numpy(), t.numpy(), s, o.numpy(), out.numpy())
         ctx.save_for_backward(p, t, o)
+        ctx.scale = s
         return out
 
     @staticmethod
@@ -463,8 +469,9 @@ class LaplaceGain(torch.autograd.Function):
 
         p, t, o = ctx.saved_tensors
         out = torch.empty_like(t)
-        kernels.laplace_gain_grad(p.numpy(), t.numpy(), o.numpy(), grad.contiguous().numpy(), out.numpy())
-        return None, out, None
+        g = grad.contiguous()
+        kernels.laplace_gain_grad_scaled(p.numpy(), t.numpy(), ctx.scale, o.numpy(), g.numpy(), out.numpy())
+        return None, out, None, None
 
 
 def _laplace_windows(padded: torch.Tensor, templates: torch.Tensor, offset: torch.Tensor) -> torch.Tensor:
@@ -534,10 +541,10 @@ class ShapeLikelihood(nn.Module):
         if self.width == self.length:
             return shape_llr(r, self.shapes, b, self.law)
         padded = torch.cat([r, r[:, : self.width]], dim=1)  # circular windows
+        if self.law == "laplace" and LaplaceGain.applies(padded, self.weight):  # the loops scale as they go
+            return LaplaceGain.apply(padded, self.weight, self.offset, SHAPE_STEP) / b[:, None]
         local = self.weight * SHAPE_STEP
         if self.law == "laplace":
-            if LaplaceGain.applies(padded, local):
-                return LaplaceGain.apply(padded, local, self.offset) / b[:, None]
             return _laplace_windows(padded, local, self.offset) / b[:, None]
         z = torch.empty(len(r), len(local), dtype=r.dtype, device=r.device)
         for start in torch.unique(self.offset).tolist():
