@@ -20,7 +20,8 @@ of cases (the width rule in up to 1/3: it follows the modes too). So where the h
 harmonics spread about the simulated healthy train's by over SHAPE_DB (structure_gap) the whole shape
 is not compared: the event's phases about its own gear's mesh harmonics are, which the fault and the
 mesh set and the structure leaves (reference_phase_match), one gear named where its match leads by over
-REFERENCE_MARGIN (by WEAK_LEAD where the structures differ by over FAR_DB), else both; the gap diagnosis's
+REFERENCE_MARGIN (by WEAK_LEAD where the structures differ by over FAR_DB), else both; a line both meshes share
+that the record's structure turns against the simulated one is not read (lines_against); the gap diagnosis's
 corrected description is still what to simulate from.
 Figures: docs/real_data.md ("Which gear").
 """
@@ -97,6 +98,15 @@ WEAK_RIGHT = "87-91 %"  # led by REFERENCE_MARGIN to WEAK_LEAD, right (seeds 41 
 # 0.55, now both in 6; its 43T wheel's, both in 2 (leads under 0.01), the 31T in 2 (0.47, 0.48). Past 12 dB no
 # simulated record tells how far the phases hold
 FAR_DB = 12.0
+# cos of the phase of a line both gears' meshes share to the simulated healthy line's (the shaft's angle offset and a
+# common phase fitted over all the gears' mesh lines) under which the line is not read (lines_against). Development
+# (benchmarks/localisation.py, the rig with bearings 2x, seeds 41, 42, 45; each record against the same record simulated
+# without effects): the idler's order 96 (the 96T's 1st mesh harmonic, the 48T's 2nd) turned the event's phase by a
+# median 128°, the other lines 7-35°, and its line stood 115-160° off the simulated; with that one line's phase from the
+# effect-free record, named first 94 of 100 flagged (as read, 80), wrong 0 (11). At 90° (cos 0); offline 90-130° read
+# alike, 60° and 150° worse. benchmarks/localisation.py, rig, the four effects, seeds 41 + 42: listed first 235 ->
+# 243 of 259 flagged, wrong 12 -> 8 (bearings 2x 53 -> 58 of 65; seed 45, 2x: 27 -> 34 of 35); random 224 -> 225 of 249
+LINE_AGAINST = 0.0
 # Where the structure differs (gap over SHAPE_DB), first the record's own sidebands, as a gear engineer reads them: a
 # local fault on a gear modulates its own mesh, so the record's excess over the history (each own order's z,
 # signals.evidence.order_z, clipped at 0) rises about that gear's mesh harmonics and falls between them: periodic in
@@ -510,6 +520,33 @@ def own_mesh_weights(X, noise, m: np.ndarray, gear, half: float) -> np.ndarray:
     return np.array(out)
 
 
+def lines_against(lines, healthy, lay, shaft: int, gears) -> list[int]:
+    """The lines both gears' meshes share (shaft harmonics h Z of each, h = 1 … REFERENCE_HARMONICS: the rig's 96T and
+    48T at 96, 192, 288, 384) whose record line (*lines*) stands over 90° off the simulated healthy line (*healthy*)
+    once the shaft's angle offset and a common phase are fitted over all the gears' mesh lines (the record's tacho mark
+    need not sit at the simulator's zero; LINE_AGAINST). Such a line is the sum of two meshes' lines, each through its
+    own dynamics and path: where the structure turns it that far from the simulator's, the mix differs and neither
+    mesh's event stands at the simulated phase to it. A line of one mesh passes with its event (the other lines'
+    phases turned 7-35° there; leaving out any line turned that far cost random trains: 1 of 34 flagged)."""
+    zs, psi = [], []
+    for z in sorted({h * g.teeth for g in gears for h in range(1, REFERENCE_HARMONICS + 1)}):
+        x = z * float(lay.shaft_orders[shaft])
+        line = np.flatnonzero(lay.carrier & (np.abs(lay.orders - x) < 1e-9 * x))
+        if line.size and abs(healthy[line[0]]) > 0 and abs(lines[line[0]]) > 0:
+            zs.append(z)
+            psi.append(lines[line[0]] / healthy[line[0]] / abs(lines[line[0]] / healthy[line[0]]))
+    if len(zs) < 3:
+        return []
+    z, psi = np.array(zs), np.array(psi)
+    step = math.gcd(*zs)
+    delta = np.linspace(0, 2 * math.pi / step, 16 * int(z.max()) // step + 16, endpoint=False)
+    fits = (psi[None, :] * np.exp(-1j * z[None, :] * delta[:, None])).sum(axis=1)
+    k = int(np.argmax(np.abs(fits)))
+    off = psi * np.exp(-1j * z * delta[k]) * np.conj(fits[k]) / abs(fits[k])
+    first, second = ({h * g.teeth for h in range(1, REFERENCE_HARMONICS + 1)} for g in gears[:2])
+    return [int(a) for a, o in zip(z, off) if o.real < LINE_AGAINST and a in first & second]
+
+
 def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates: dict) -> dict:
     """{gear name: the mean cos between the record's event phases about the gear's own mesh harmonics and
     those of the gear's simulated event (own_mesh_phasors), each harmonic weighted by the record's event-to-
@@ -520,17 +557,22 @@ def reference_phase_match(rec, ref, lay, shaft: int, harmonics, gears, templates
     REFERENCE_HALF of it alike (noise-free, bearings 0.5x: cos 0.9-1.0 to the simulator's at most harmonics);
     about the other gear's mesh the phase moves with the tooth. So the sequence over h is compared, not the
     whole shape, which follows the structure's modes. The record's lines are read less the event's own content
-    there (event_free_lines), as the simulated event's are against the simulated healthy lines."""
+    there (event_free_lines), as the simulated event's are against the simulated healthy lines; a harmonic at a line
+    both meshes share that the structure turns against the simulated one (lines_against) is left out where two
+    others are read."""
     sel, m = harmonics
     if m.size < 3:
         return {}
     half = max(2.0, REFERENCE_HALF * min(g.teeth for g in gears))
     R = residual(rec, ref, sel)
     lines = event_free_lines(R, m, rec.mean, lay, shaft, gears)
+    against = lines_against(lines, templates["healthy"], lay, shaft, gears)
     out = {}
     for g in gears:
         mine = own_mesh_phasors(R, lines, lay, shaft, m, g, half)
         weight = own_mesh_weights(R, rec.noise[sel], m, g, half)
+        kept = weight * ~np.isin(np.arange(1, REFERENCE_HARMONICS + 1) * g.teeth, against)
+        weight = kept if np.count_nonzero(kept * ~np.isnan(mine)) >= 2 else weight
         best = None
         for t in templates["gears"].get(g.name, ()):
             sim = own_mesh_phasors(t[sel], templates["healthy"], lay, shaft, m, g, half)
