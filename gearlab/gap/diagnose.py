@@ -92,7 +92,7 @@ from .conclusion import (
     verdict_text,
 )
 from .identify import _plain, alias_refit
-from .level import carried, factor, fitted_here, level_differs, level_rows, leveling, score_stands, settled, unleveled
+from .level import carried, fitted_here, free, held, level_differs, leveling, own_or, score_stands
 from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_removal, _prepared, _report, check_settings
 from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect, quick_profile_evaluations
 from .stats import REPORT_PARTS, classifier_loaded, load_classifier
@@ -121,7 +121,6 @@ def diagnose(
     candidates = check_settings(settings)
     target, chain, rows, settings, pair, search, fresh = _prepared(source, target_X, settings, chain)
     executor = executor or LocalExecutor(1)
-    scorer = Scorer(target, pair, settings.max_order, rows.consecutive)
 
     def judged(effects: tuple) -> np.ndarray:
         """The rows a fit is judged on: the report's fresh noise seeds, not the rows it was fitted to."""
@@ -184,9 +183,10 @@ def diagnose(
         result = {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}
         return evaluated(result, first, on_event)
 
-    leveled = fitted_here(source, candidates, chain) and level_differs(level := leveling(target), rows(fresh))
-    if leveled:  # the target's load read beside a drive from here on (gearlab.gap.level; judged too)
-        rows = level_rows(rows, level)
+    leveled = fitted_here(source, candidates, chain) and level_differs(leveling(target), plain)
+    if leveled:  # the target's load profiled out of every score from here on (gearlab.gap.level; judged too)
+        rows = free(rows)
+    scorer = Scorer(target, pair, settings.max_order, rows.consecutive, rows.free_load)
     run = _Run(
         scorer,
         judged,
@@ -237,45 +237,26 @@ def diagnose(
         if r > 1:
             fitted = joint_refit(run, r, accepted, fitted, round_info)
         fitted = realiased(run, r, accepted, fitted, round_info)
-        check = _report(judged(fitted), target, pair, settings, bootstrap=0)
+        check = _report(scorer.leveled(judged(fitted)), target, pair, settings, bootstrap=0)  # at its own load
         round_info["p_value_after"] = check["p_value"]
         round_info["rms_effect_after"] = rms_effect(check)
         significant = another_round(before, check) or score_stands(top, len(accepted) < settings.max_effects)
-    load, read = rows.load, []
-    if accepted and leveled:  # the load and the effects settle in turn (gearlab.gap.level)
-        fitted, read, load = settled(
-            run,
-            fitted,
-            lambda run, fitted: refit_alone(run, accepted, fitted),
-            lambda fitted: unleveled(run.rows)(run.search.with_(effects=_by_level(run.search.effects + fitted))),
-        )
-        rows = run.rows
     if accepted:
         fitted = profiled(run, accepted, fitted)
+    read = []
+    if accepted and leveled:  # the load: the factor read beside the accepted effects, held by the reports after
+        read.append(run.scorer.load_factor(run.rows(run.search.with_(effects=_by_level(run.search.effects + fitted)))))
+        rows = run.rows = held(rows, own_or(read[0]))
     result = conclusion(run, result, before, accepted, fitted, started)
     if read and result["significant_before"]:
-        # beside a drive the load is read at the effects the result keeps (an effect taken back by
-        # needed_effects was read with it: a casing path's gain, 4.3 for a drive's 0.5 on 904/10)
+        # read again beside the effects the result keeps where needed_effects took one back (an effect
+        # taken back was read with it: a casing path's gain, 4.3 for a drive's 0.5 on 904/10)
         final = _as_tuple(result["corrected_effects"])
-        if any(name in rows.read_beside for name, _ in final):
-            load = factor(level, unleveled(rows)(fresh.with_(effects=_by_level(fresh.effects + final))))
-        result = carried(result, load, read)
+        if final and final != fitted:
+            again = scorer.load_factor(free(rows)(run.search.with_(effects=_by_level(run.search.effects + final))))
+            read.append(again)
+        result = carried(result, own_or(read[-1]), read)
     return evaluated(result, first, on_event)
-
-
-def refit_alone(run: _Run, accepted: list[dict], fitted: tuple) -> tuple:
-    """The accepted effects *fitted* re-fitted alone (a later round's baseline search) on run.rows."""
-    seed = run.settings.seed + 7000
-    task = (run.search, None, fitted, run.target, run.settings, seed, False, run.rows)
-    run.on_event(
-        Event("stage", stage="gap load", total=1, message=f"gap: the effects re-fitted at load {run.rows.load:.3g}")
-    )
-    res = run_fits(run, "gap load", fit_effect, [task], lambda *_: None)[0]
-    run.on_event(Event("advance", stage="gap load", done=1, total=1))
-    fitted = _as_tuple(res["accepted"])
-    for entry, (_, params) in zip(accepted, fitted):
-        entry["params"] = _plain(dict(params))
-    return fitted
 
 
 def evaluated(result: dict, first: int, on_event: Callable[[Event], None]) -> dict:

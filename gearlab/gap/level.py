@@ -1,4 +1,4 @@
-"""The target's load level, held beside the candidates of a gap diagnosis (docs/gap.md, "The load").
+"""The target's load level, profiled out of every score of a gap diagnosis (docs/gap.md, "The load").
 
 A simulated target may run at another load torque than the source (the transfer benchmark draws
 10-30 N m against the source's 20), and in the lumped model every vibration the mesh excites grows
@@ -8,15 +8,16 @@ source's rows, exact in the linear model. Left out, a candidate was credited wit
 development target at 0.61 of the source's load with motor and load inertias, the true effects
 scored 1,387 and a fillet stand-in 220, the truth 0.45 at the true factor; the fillet was named.
 
-So the diagnosis's rounds compare a source set with a drive (an effect that moves the level itself,
-``moves_level``) at the factor that brings its synchronous-average order lines onto the target's
-(least squares, closed form: no simulation, no search parameter; gearlab.gap.scoring.Rows), every
-other set at the source's load; after the rounds the factor and the fitted effects settle in turn,
-the factor held while the effects are re-fitted (:func:`settled`). The plain source's report (before)
-and the structure check keep the source's own load. The corrected source carries the factor as the
-``load_level`` effect. Not fitted for a measured target (there a scale is the sensor's sensitivity and
-gain: gearlab.gap.structure's "level differs"), nor where the scenario names ``load_level`` itself (a
-candidate then) or the source already carries it.
+So where the target's level differs (:func:`level_differs`), the factor is a nuisance profiled out of
+every score the diagnosis takes of a source set: the search's points, the baselines, the acceptance
+tests, the profiles (gearlab.gap.scoring.Scorer.load_factor: the set scored at the factor within the
+bounds where its score is least, the rows scaled, no simulation), so every candidate gets the same
+freedom in level, a drive (which moves the level itself) no more than a bearing. The factor read
+beside the accepted effects is the load; the reports after (conclusion) hold it, and the corrected
+source carries it as the ``load_level`` effect. The plain source's report (before) and the structure
+check keep the source's own load. Not fitted for a measured target (there a scale is the sensor's
+sensitivity and gain: gearlab.gap.structure's "level differs"), nor where the scenario names
+``load_level`` itself (a candidate then) or the source already carries it.
 """
 
 from __future__ import annotations
@@ -69,8 +70,8 @@ def factor(level: tuple, X: np.ndarray) -> float:
     return min(max(math.sqrt(c2), low), high) if math.isfinite(c2) and c2 > 0 else 1.0
 
 
-# The load is fitted where the plain source's factor is this far from 1 or more, and carried where the
-# settled one is (:func:`settled`): at the source's own load
+# The load is profiled where the plain source's factor is this far from 1 or more, and held where the one
+# read beside the accepted effects is (:func:`own_or`): at the source's own load
 # (tests' targets made from the source: 0.98-1.02) a free scale beside every candidate absorbed what a
 # candidate left (a fillet 3 % off read "explained") and reordered the ranking; the transfer benchmark's
 # loads (10-30 N m against 20) mostly lie farther off.
@@ -82,80 +83,54 @@ def level_differs(level: tuple, X: np.ndarray) -> bool:
     return abs(math.log(factor(level, X))) >= math.log1p(LOAD_DIFFERS)
 
 
-def moving() -> frozenset:
-    """The registered effects that move the vibration's level themselves (``moves_level``: a drive)."""
-    registry = get_registry()
-    return frozenset(n for n in registry.names("effect") if getattr(registry.get("effect", n), "moves_level", False))
+def own_or(c: float) -> float:
+    """The load a diagnosis holds for the factor *c* read beside its effects: the source's own (1) where
+    *c* lies within LOAD_DIFFERS of it (a fillet 3 % off at the source's load read "explained" beside
+    its factor), else *c*."""
+    return 1.0 if abs(math.log(c)) < math.log1p(LOAD_DIFFERS) else c
 
 
-def level_rows(rows, level: tuple):
-    """*rows* (a Rows) for the rounds: the source's load held (factor 1), the target's read beside each set
-    with an effect that moves the level itself (:func:`moving`)."""
-    return replace(rows, load=1.0, level=level, read_beside=moving())
+def free(rows):
+    """*rows* (a gearlab.gap.scoring.Rows) for the rounds: made at the source's load, each set scored at
+    its own best load factor within the bounds (module docstring)."""
+    return replace(rows, load=None, free_load=bounds())
 
 
-def unleveled(rows):
-    """*rows* (a Rows) making the source's rows at its own load."""
-    return replace(rows, load=None, read_beside=frozenset())
+def held(rows, c: float):
+    """*rows* at the load factor *c* read beside the accepted effects: what the reports after compare."""
+    return replace(rows, load=c, free_load=None)
 
 
-# Why the factor is not read beside every candidate, and held while the effects settle. Read afresh at every
-# point of a search (closed form), it trades against the parameters: a parameter that moves the level
-# moves the factor with it, and the score sees the pair. On a development bearing target behind a 7.1 kHz
-# sensor resonance at 0.74 of the source's load (transfer benchmark 902/4) the fit so read found the
-# resonance at 6.4 kHz and the bearing at c_factor 0.23, k_factor 0.24 (true 7.1 kHz, 0.61, 0.58):
-# 155 on the search's rows, where the truth scores 0.4 and reads the true factor, 0.738. Held at the
-# plain source's factor instead, a model effect that moves the level is judged at the wrong one: a drive
-# target at 0.6 of the load (the thesis's drive alone: 0.59 of the six-DOF lines' scale; plain factor
-# 0.36) named no drive, and the close-fillet targets of tests/test_gap_diagnose.py (a fillet moving
-# the level 19 % at the source's load) named nothing. Alternated with the closed form, factor and effects
-# drifted apart (the closed form is not where the score is least: 0.54, 0.50, 0.36, 0.30 on a bearing
-# target at 0.74); the factor where the score is least makes every step of the turns lower the score.
-# At most SETTLE_ROUNDS turns, until the factor moves less than LOAD_SETTLES; none where the first lies
-# within LOAD_DIFFERS of 1 (a 3 % off fillet at the source's load, the factor free, read "explained").
-SETTLE_ROUNDS = 3
-LOAD_SETTLES = 0.005
+# Why a profile (the factor where each set's score is least), not the closed form (:func:`factor`, the
+# least squares of the order lines) beside every set: the closed form is not where the score is least
+# (0.54, 0.50, 0.36, 0.30 on a bearing target at 0.74), and read afresh at every point of a search it
+# traded against the parameters (development trial 902/4, a bearing behind a 7.1 kHz resonance at 0.74 of
+# the load: resonance at 6.4 kHz, bearing c_factor 0.23, k_factor 0.24 for 0.61, 0.58; 155 on the
+# search's rows, the truth 0.4): profiled, every point is scored at the factor where its own score is least.
+# Why every set, not only a drive's: a drive read at its own factor and the other candidates at the
+# source's load favoured the drive wherever the load differs (1327/10: drive named for a bearing, mmd
+# 52.1 on the corrected source against 73.6 on the plain); a factor fitted alone first and held took the
+# model effect's own level too (read/true 2.31/1.41 on 1327/20) and searched every candidate at it.
+# The grid (GRID_POINTS, log-spaced over the bounds) guards the bounded search against a local minimum.
+GRID_POINTS = 25
 
 
-def best_factor(score, X: np.ndarray, bounds_: tuple[float, float]) -> float:
-    """The factor c within *bounds_* at which *score*(c * X) is least (bounded search on log c): rows
-    scaled, no simulation."""
+def best_factor(score_at, bounds_: tuple[float, float]) -> float:
+    """The factor c within *bounds_* at which *score_at*(c) is least: a log-spaced grid, then a bounded
+    search on log c between the best grid point's neighbours."""
     from scipy.optimize import minimize_scalar
 
-    lo, hi = math.log(bounds_[0]), math.log(bounds_[1])
-    found = minimize_scalar(
-        lambda u: score(X * math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-4}
-    )
-    return float(math.exp(found.x))
-
-
-def settled(run, fitted: tuple, refit, plain) -> tuple[tuple, list[float], float]:
-    """The accepted effects *fitted* and the held load factor (in *run*.rows), in turn: the factor at
-    which the search's score is least with the effects held (*plain*(fitted): their search rows at the
-    source's load), then held while the effects are re-fitted (*refit*(run, fitted) -> fitted),
-    :data:`SETTLE_ROUNDS` times at most: each step lowers the score. Where the effects have one that
-    moves the level, the factor read beside them is the load. Returns (the effects, each factor found,
-    the load factor)."""
-    if any(name in run.rows.read_beside for name, _ in fitted):
-        c = factor(run.rows.level, plain(fitted))
-        return fitted, [c], c
-    read = []
-    for _ in range(SETTLE_ROUNDS):
-        c = best_factor(run.scorer.score, plain(fitted), run.rows.level[1:])
-        read.append(c)
-        if len(read) == 1 and abs(math.log(c)) < math.log1p(LOAD_DIFFERS):
-            return fitted, read, 1.0  # the source's load (LOAD_DIFFERS)
-        moved = abs(math.log(c / run.rows.load)) > math.log1p(LOAD_SETTLES)
-        run.rows = replace(run.rows, load=c)
-        if not moved:
-            break
-        fitted = refit(run, fitted)
-    return fitted, read, run.rows.load
+    grid = np.linspace(math.log(bounds_[0]), math.log(bounds_[1]), GRID_POINTS)
+    values = [score_at(math.exp(u)) for u in grid]
+    i = int(np.argmin(values))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, GRID_POINTS - 1)]
+    found = minimize_scalar(lambda u: score_at(math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-4})
+    return float(math.exp(found.x)) if found.fun <= values[i] else float(math.exp(grid[i]))
 
 
 def load_entry(c: float, read: list[float]) -> tuple[tuple, dict]:
     """The load_level effect (canonical) the corrected source carries for the factor *c*, and the
-    diagnosis's record of it (*read*: the factors :func:`settled` read)."""
+    diagnosis's record of it (*read*: the factors read beside the accepted effects, then the kept ones)."""
     return get_registry().get("effect", LOAD).spec({"factor": c}), {"factor": c, "read": read}
 
 
@@ -188,7 +163,7 @@ LOAD_STANDS = 0.005
 
 def carried(result: dict, c: float, read: list[float]) -> dict:
     """*result* (a diagnosis's conclusion) with the load factor *c* its effects were fitted beside:
-    ``load`` (*read*: what :func:`settled` read), a note, and ``load_level`` in the corrected source
+    ``load`` (*read*: the factors read), a note, and ``load_level`` in the corrected source
     where it has effects and the factor is not 1 (LOAD_STANDS)."""
     effect, result["load"] = load_entry(c, read)
     result["notes"].append(load_note(c))

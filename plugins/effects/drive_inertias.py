@@ -67,9 +67,6 @@ class DriveInertias(Effect):
 
     # The guesses come on top of the search's budget (gearlab.gap.search.fit_effect): they are its design.
     guesses_on_top = True
-    # It moves the vibration's level itself (the thesis's drive at the source's load: 0.59 of the six-DOF
-    # lines' scale), so a gap diagnosis reads the target's load factor beside it (gearlab.gap.level).
-    moves_level = True
 
     def guesses(self, target_X, speed_hz):
         """A grid in the drive's own coordinates, not read off the target (its signature is a ratio to
