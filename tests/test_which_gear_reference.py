@@ -31,21 +31,22 @@ def path(centre: float) -> np.ndarray:
     return 1.0 / (1 + 1j * (ORDERS - centre) / 25.0) + 0.05
 
 
-def event(gear: Gear, tooth: int, sign: float, response: np.ndarray) -> np.ndarray:
-    """A fault on *tooth* of *gear*: a stiffness pulse 1.5 pitches long times the mesh's deflection."""
+def event(gear: Gear, tooth: int, sign: float, response: np.ndarray, phi: dict = PHI) -> np.ndarray:
+    """A fault on *tooth* of *gear*: a stiffness pulse 1.5 pitches long times the mesh's deflection (its
+    harmonics' phases *phi*[teeth])."""
     z, at = gear.teeth, 2 * np.pi * tooth / gear.teeth
     pulse = lambda k: np.sinc(k * 1.5 / z) * np.exp(-1j * k * at)  # noqa: E731
     e = pulse(ORDERS).astype(complex)
     for h in range(1, 8):
-        e += 0.5 * DEFLECTION[h] * np.exp(1j * PHI[z][h]) * pulse(ORDERS - h * z)
+        e += 0.5 * DEFLECTION[h] * np.exp(1j * phi[z][h]) * pulse(ORDERS - h * z)
     return sign * response * e
 
 
-def lines(wheel_path: np.ndarray, pinion_path: np.ndarray) -> np.ndarray:
+def lines(wheel_path: np.ndarray, pinion_path: np.ndarray, gears: tuple = (WHEEL, PINION), phi: dict = PHI):
     out = np.zeros(TOP, complex)
-    for g, response in ((WHEEL, wheel_path), (PINION, pinion_path)):
+    for g, response in zip(gears, (wheel_path, pinion_path)):
         for h in range(1, TOP // g.teeth + 1):
-            out[h * g.teeth - 1] += 30 * DEFLECTION[h] * np.exp(1j * PHI[g.teeth][h]) * response[h * g.teeth - 1]
+            out[h * g.teeth - 1] += 30 * DEFLECTION[h] * np.exp(1j * phi[g.teeth][h]) * response[h * g.teeth - 1]
     return out
 
 

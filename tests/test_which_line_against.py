@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import test_which_gear_reference as reference
 
 from gearlab.signals import which_template as T
 from gearlab.signals.localise import Gear
@@ -22,35 +23,20 @@ LAY = SimpleNamespace(orders=ORDERS.astype(float), carrier=CARRIER, shaft_orders
 HARMONICS = (~CARRIER, ORDERS[~CARRIER])
 _rng = np.random.default_rng(3)
 PHI = {z: _rng.uniform(0, 2 * np.pi, 20) for z in (48, 24)}  # each mesh's harmonics' phases in the shaft's angle
-DEFLECTION = 0.7 ** np.arange(20)
 # the simulator's own paths, each line's level off by up to ±6 dB (a real gain: no phase), so the structures differ
 # (structure gap over SHAPE_DB) and the phases at each gear's own mesh decide
 GAINS = np.where(CARRIER, 10 ** (_rng.uniform(-6, 6, TOP) / 20), 1.0)
 
 
-def path(centre: float) -> np.ndarray:
-    return 1.0 / (1 + 1j * (ORDERS - centre) / 25.0) + 0.05
-
-
 def event(gear: Gear, tooth: int, sign: float, response: np.ndarray) -> np.ndarray:
-    """A fault on *tooth* of *gear*: a stiffness pulse 1.5 pitches long times the mesh's deflection."""
-    z, at = gear.teeth, 2 * np.pi * tooth / gear.teeth
-    pulse = lambda k: np.sinc(k * 1.5 / z) * np.exp(-1j * k * at)  # noqa: E731
-    e = pulse(ORDERS).astype(complex)
-    for h in range(1, 8):
-        e += 0.5 * DEFLECTION[h] * np.exp(1j * PHI[z][h]) * pulse(ORDERS - h * z)
-    return sign * response * e
+    return reference.event(gear, tooth, sign, response, PHI)
 
 
 def lines(wheel_path: np.ndarray, pinion_path: np.ndarray) -> np.ndarray:
-    out = np.zeros(TOP, complex)
-    for g, response in ((WHEEL, wheel_path), (PINION, pinion_path)):
-        for h in range(1, TOP // g.teeth + 1):
-            out[h * g.teeth - 1] += 30 * DEFLECTION[h] * np.exp(1j * PHI[g.teeth][h]) * response[h * g.teeth - 1]
-    return out
+    return reference.lines(wheel_path, pinion_path, (WHEEL, PINION), PHI)
 
 
-SIMULATED = (path(80.0), path(260.0))
+SIMULATED = (reference.path(80.0), reference.path(260.0))
 TEMPLATES = {
     "healthy": lines(*SIMULATED),
     "gears": {g.name: [event(g, 0, s, p) for s in (1.0, -1.0)] for g, p in zip((WHEEL, PINION), SIMULATED)},
