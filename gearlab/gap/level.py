@@ -156,17 +156,12 @@ def score_stands(fit: dict, room: bool) -> bool:
     return bool(room and noise and math.isfinite(fit["score"]) and fit["score"] > SCORE_WIDTHS * noise)
 
 
-# Within this of 1 the fitted factor is the source's own load: a target at the source's load, with its
-# model, read 0.9986-0.9992 (16 revolutions at 20 dB SNR, two noise seeds).
-LOAD_STANDS = 0.005
-
-
 def carried(result: dict, c: float, read: list[float]) -> dict:
     """*result* (a diagnosis's conclusion) with the load factor *c* its effects were fitted beside:
     ``load`` (*read*: the factors read), a note, and ``load_level`` in the corrected source
-    where it has effects and the factor is not 1 (LOAD_STANDS)."""
+    where it has effects and the factor is not 1 (the source's own: :func:`own_or` holds 1 within LOAD_DIFFERS)."""
     effect, result["load"] = load_entry(c, read)
     result["notes"].append(load_note(c))
-    if result.get("corrected_effects") and abs(math.log(c)) > math.log1p(LOAD_STANDS):
+    if result.get("corrected_effects") and c != 1.0:
         result["corrected_effects"] = [*result["corrected_effects"], [effect[0], [list(kv) for kv in effect[1]]]]
     return result
