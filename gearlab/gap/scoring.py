@@ -495,8 +495,7 @@ class Scorer:
 
     def score(self, source_X: np.ndarray) -> float:
         counted()  # for the line of the stage whose fits run (gearlab.gap.tally)
-        source_X = self.leveled(source_X)
-        Fs, Ft, _ = self.features(source_X)
+        source_X, Fs, Ft = self._leveled_features(source_X)
         Rs = self.record(source_X)
         return self.mismatch(Fs, Ft) + (self.mismatch(Rs, self.target_record) if Rs is not None else 0.0)
 
@@ -504,8 +503,7 @@ class Scorer:
         """Bootstrap replicates of :meth:`score` (rows of both sets resampled as multinomial
         counts, the scale held at the full target's): the same *seed* resamples the same row
         indices, so two sources' replicates are paired."""
-        source_X = self.leveled(source_X)
-        Fs, Ft, _ = self.features(source_X)
+        source_X, Fs, Ft = self._leveled_features(source_X)
         rng = np.random.default_rng(seed)
         out = self._replicates(Fs, Ft, replicates, rng)
         Rs = self.record(source_X)
@@ -528,17 +526,34 @@ class Scorer:
         """*source_X* at its own best load factor (:meth:`load_factor`) where the load is free, else as it is."""
         return source_X if self.free_load is None else source_X * self.load_factor(source_X)
 
+    def _leveled_features(self, source_X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(the rows at their own best load factor, as :meth:`leveled`; their features and the target's, as
+        :meth:`features`): where the load is free, the features at the factor come from those the factor
+        was found on (:meth:`_features_at`), so a score reads the rows' spectra once, not twice."""
+        if self.free_load is None:
+            Fs, Ft, _ = self.features(source_X)
+            return source_X, Fs, Ft
+        at = self._features_at(source_X)
+        c = best_factor(lambda c: self.mismatch(*at(c)), self.free_load)
+        return source_X * c, *at(c)
+
     def load_factor(self, source_X: np.ndarray) -> float:
         """The load factor c within free_load at which the score of c * *source_X* is least: the
         rows' features read once, the score of each c from them (:meth:`at_factor`)."""
         return best_factor(self.at_factor(source_X), self.free_load or level_bounds())
 
     def at_factor(self, source_X: np.ndarray) -> Callable[[float], float]:
-        """The score of c * *source_X* (without a record group) as a function of c, from the rows'
+        """The score of c * *source_X* (without a record group) as a function of c (:meth:`_features_at`;
+        tests: it equals :meth:`score` of the scaled rows)."""
+        at = self._features_at(source_X)
+        return lambda c: self.mismatch(*at(c))
+
+    def _features_at(self, source_X: np.ndarray) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+        """:meth:`features` (source's, target's) of c * *source_X* as a function of c, from the rows'
         features read once: the dB features move by 20 log10 c (their floors aside), the mean, RMS and
         peak-to-peak scale by c, the shape statistics stay; the target's residual from c times the
         source's average has, per row and sector, the energy E_tt - 2 c E_ts + c^2 E_ss. Each c then
-        costs no FFT (tests: it equals :meth:`score` of the scaled rows)."""
+        costs no FFT."""
         X = np.asarray(source_X, dtype=np.float64)
         n, P = X.shape
         F = np.fft.rfft(X, axis=1)
@@ -557,14 +572,14 @@ class Scorer:
         floor = RESIDUAL_FLOOR * self.target_power[:, None]
         scaled = np.array([name in SCALED_STATS for name in WAVEFORM_STATS], dtype=float)
 
-        def score(c: float) -> float:
+        def at(c: float) -> tuple[np.ndarray, np.ndarray]:
             energy = np.maximum(E_tt - 2.0 * c * E_ts + c * c * E_ss, floor)
             target_res = 10.0 * np.log10(energy + POWER_FLOOR)
             Fs = np.concatenate([decibels + 20.0 * math.log10(c), wave * (1.0 + scaled * (c - 1.0))], axis=1)
             Ft = np.concatenate([self.target_order, target_res, self.target_wave], axis=1)
-            return self.mismatch(Fs, Ft)
+            return Fs, Ft
 
-        return score
+        return at
 
     @functools.cached_property
     def _target_residual(self) -> tuple:
