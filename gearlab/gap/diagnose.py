@@ -233,7 +233,8 @@ def diagnose(
             entry["params"] = _plain(dict(params))
         accepted += entries
         if r == 1 and paired_here(top):
-            fitted, top = beside_signal(run, remaining, accepted, fitted, round_info, top)
+            rivals = [f for f in fits if f is not top and paired_here(f) and math.isfinite(f["score"])]
+            fitted, top = beside_signal(run, remaining, accepted, fitted, round_info, top, rivals)
         if r > 1:
             fitted = joint_refit(run, r, accepted, fitted, round_info)
         fitted = realiased(run, r, accepted, fitted, round_info)
@@ -436,27 +437,12 @@ def greedy_round(
         "round": r,
         "gap": gap_now,
         "baseline": baseline and baseline["score"],
-        "fits": [
-            {
-                k: f.get(k)
-                for k in (
-                    "name",
-                    "score",
-                    "share_removed",
-                    "share_of_remaining",
-                    "params",
-                    "evaluations",
-                    "seconds",
-                    "error",
-                    "coarse_score",
-                    "noise",
-                )
-            }
-            for f in fits
-        ],
+        "fits": [{k: f.get(k) for k in FIT_KEYS} for f in fits],
     }
     return fits, fitted, info
 
+
+FIT_KEYS = "name score share_removed share_of_remaining params evaluations seconds error coarse_score noise".split()
 
 # The round's fits (coarse searches) ranked this high get the fine stage when their effect takes it
 # (_fine: casing_path, drive_inertias): a weak coarse fit must not lose its round to a stand-in (a
@@ -506,22 +492,25 @@ def paired_here(top: dict) -> bool:
     return effect.level == "signal" and top["name"] != NUISANCE and not getattr(effect, "noise", False)
 
 
-def beside_signal(run: _Run, remaining: list[str], accepted: list[dict], fitted: tuple, info: dict, top: dict):
+def beside_signal(
+    run: _Run, remaining: list[str], accepted: list[dict], fitted: tuple, info: dict, top: dict, rivals: list[dict]
+):
     """Stage 3b of round 1, after a sensor filter won it: every model-level candidate fitted beside the
     filter (and its noise), against the filter re-fitted alone, and the best accepted as round 1's too
     when it removes its share of what the filter leaves (:func:`attribution`). A sensor filter alone
     beat a drive fitted alone on development targets with both (a drive and a 4 kHz resonance: 128 against
     the drive's 332 and more), and the drive then found in round 2 was taken back by
     conclusion.needed_effects (the report saw what the filter left within its noise width), though the
-    search's score fell 128 -> 31 with it. Returns (the accepted effects, the round's winner for the
-    stop: the pair's fit where one was accepted, else *top*); *accepted* grows in place."""
+    search's score fell 128 -> 31 with it. *rivals*: round 1's other sensor filters (:func:`filter_refit`).
+    Returns (the accepted effects, the round's winner for the stop: the pair's fit where one was accepted,
+    else *top*); *accepted* grows in place."""
     registry = get_registry()
     names = [n for n in remaining if n != top["name"] and registry.get("effect", n).level == "model"]
     if not names:
         return fitted, top
     fits, fitted, pair_info = greedy_round(run, 1, names, accepted, fitted)
     info["beside"] = pair_info
-    fits[0] = filter_refit(run, fits[0], fitted, pair_info) if math.isfinite(fits[0]["score"]) else fits[0]
+    fits[0] = filter_refit(run, fits[0], fitted, pair_info, top, rivals) if math.isfinite(fits[0]["score"]) else fits[0]
     if (
         not math.isfinite(fits[0]["score"])
         or (decision := attribution(run, 1, fits[0], None, fitted, pair_info)) is None
@@ -539,10 +528,21 @@ def beside_signal(run: _Run, remaining: list[str], accepted: list[dict], fitted:
 REFIT_BUDGET = 2
 
 
-def filter_refit(run: _Run, fit: dict, fitted: tuple, info: dict) -> dict:
-    """*fit* (the model effect that won beside round 1's filter) searched again, the filter re-fitted at every point
-    (search._SignalRefit), kept where it scores lower. Alone, the filter took part of the model's signature (902/4:
-    6.2 kHz for 7.1: the truth 318 there, 3.5 with it re-fitted); re-fitted in every search, a drive won 1327/10."""
+def filter_refit(run: _Run, fit: dict, fitted: tuple, info: dict, top: dict, rivals: list[dict]) -> dict:
+    """*fit* (the model effect that won beside round 1's filter *top*) searched again, the filter re-fitted at every
+    point (search._SignalRefit), kept where it scores lower, where *top* beat round 1's other filters (*rivals*) on
+    fresh rows (paired bootstrap, as :func:`attribution`). Alone, the filter took part of the model's signature (902/4:
+    6.2 kHz for 7.1: the truth 318 there, 3.5 re-fitted); re-fitted in every search, a drive won 1327/10."""
+
+    def alone(f: dict) -> np.ndarray:  # judging rows of round 1's fit *f*, its noise nuisance beside it
+        return run.rows_of(f, (), (run.spec(NUISANCE, f["nuisance"]["params"]),) if f.get("nuisance") else ())
+
+    for rival in rivals:
+        paired = _paired_removal(run.scorer, alone(rival), alone(top), run.settings.seed + 901)
+        if not paired["removed_low"] > 0.0:
+            info["filter_refit"] = {"name": fit["name"], "tied": rival["name"], "removed_low": paired["removed_low"]}
+            run.on_event(Event("log", message=f"gap: round 1: {top['name']} ties {rival['name']}: no second search"))
+            return fit
     refit = tuple(j for j, (name, _) in enumerate(fitted) if paired_here({"name": name}))
     settings = replace(run.settings, budget=REFIT_BUDGET * run.settings.budget)
     task = (run.search, fit["name"], fitted, run.target, settings, settings.seed + 1000, False, run.rows, None, refit)

@@ -642,7 +642,12 @@ class _SignalRefit:
     beside it the true bearing scored 318 and a softer one 121, so the search ended there (k 0.25 for
     0.58); with the resonance fitted again beside each point the truth scores 3.5, and k 0.49, c 0.90 (near
     the bearing's defaults, the search's first point) 101 for that softer bearing's 110 (gearlab.gap.diagnose's
-    filter_refit)."""
+    filter_refit). Where round 1's filter only tied another shape, re-fitted it stood for the wrong one: on 1327/7
+    (a drive behind a 4-pole low-pass at 4.8 kHz) a resonance and a 2-pole low-pass at 1.2 kHz scored 335 and 336
+    alone (a tie on fresh rows); the resonance, re-fitted beside the drive, went to 4.4 kHz (zeta 0.2), whose gain
+    over the strongest mesh lines (harmonics 4, 6 and 7, 4.4-7.7 kHz) is 2.5-3 times the 4-pole's, and the load read
+    beside it paid for that gain (0.23 for 0.69; the truth scores 0.7, that pair 62): filter_refit runs only where
+    round 1's filter beat the other filters on fresh rows."""
 
     def __init__(self, current: list, indices: tuple, rows_of: Callable[[dict, tuple], np.ndarray], scorer: Scorer):
         registry = get_registry()
