@@ -22,7 +22,7 @@ from conftest import ROOT, unrendered
 from textual.app import App
 from textual.command import CommandPalette
 from textual.geometry import Region
-from textual.widgets import LoadingIndicator, ProgressBar, Static, TabbedContent, Tree
+from textual.widgets import LoadingIndicator, ProgressBar, Static, TabbedContent, Tabs, Tree
 
 from gearlab import events, terminal
 from gearlab.charts import Chart, Curve
@@ -64,6 +64,25 @@ def table_rows(lines: list[str], columns: list[str]) -> dict[str, dict[str, str]
 
 def words(text: str) -> str:
     return " ".join(text.split())
+
+
+async def tab_underline_at_rest(pilot) -> None:
+    """Until the tabs' underline lies still under the active tab. Textual slides it there over 0.3 s
+    of wall time, begun by a 20 ms timer set at the switch; `pilot.press` waits only for animations
+    already begun, so on a loaded machine it can return before that timer fires and the underline
+    then moves between two reads of the screen (test_no_bar_moves_... failed so under pytest -n 2)."""
+    app = pilot.app
+    tabs = app.query_one("#views", TabbedContent).query_one(Tabs)
+    underline = tabs.query_one("Underline")
+    for _ in range(1000):  # 10 s at most
+        tab = tabs.active_tab
+        span = tab.virtual_region.shrink(tab.styles.gutter).column_span  # where Textual puts it
+        moving = any(app.animator.is_being_animated(underline, a) for a in ("highlight_start", "highlight_end"))
+        if (underline.highlight_start, underline.highlight_end) == span and not moving:
+            await pilot.pause()
+            return
+        await pilot.pause(0.01)
+    pytest.fail(f"the tab underline did not come to rest under {tabs.active!r} in 10 s")
 
 
 @pytest.fixture
@@ -132,7 +151,7 @@ def test_no_bar_moves_when_no_run_is_in_progress(scenarios, clock, size):
         async with GearlabApp(scenarios).run_test(size=size) as pilot:
             app = pilot.app
             await pilot.press("2")
-            await pilot.pause()
+            await tab_underline_at_rest(pilot)  # the switch's own motion ends before anything is compared
             # nothing runs: a line that says so, no bar and nothing animated
             assert "no run yet" in screen_text(app)
             assert not app.query(StageBar) and not app.query(ProgressBar) and not app.query(LoadingIndicator)
@@ -326,6 +345,9 @@ def test_names_stay_whole_or_are_cut_in_the_middle_with_the_whole_name_at_hand(s
         async with GearlabApp(scenarios).run_test(size=size) as pilot:
             app = pilot.app
             tree = app.query_one("#browser", Tree)
+            # run_test returns with the first layout still pending (drawn when Textual's 1/60 s screen timer
+            # fires): the screen read after it, not a frame that depends on whether that timer fired
+            await pilot.pause()
             drawn = screen_text(app)
             # a scenario with runs (its ▶ takes two cells) and the longest shipped name: whole
             assert "▶ ✓ stiffness_verification.toml" in drawn
