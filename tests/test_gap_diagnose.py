@@ -6,7 +6,6 @@ Kept fast: few healthy revolutions, small budgets, short candidate lists, fits i
 
 import inspect
 import json
-import warnings
 
 import numpy as np
 import pytest
@@ -35,11 +34,7 @@ B6 = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
 FAST = dict(healthy=16, bootstrap=20, permutations=99, budget=4, seed=0)
 
 
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings on odd parameters
-        yield
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the simulator's accuracy warnings on odd parameters
 
 
 def target_rows(spec):

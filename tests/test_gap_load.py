@@ -3,7 +3,6 @@
 A target at another load than the source scales every mesh vibration: left unfitted, a stand-in that
 changes the level (a softer fillet) was named for a drive (issue 37, development trial 904/10)."""
 
-import warnings
 from dataclasses import asdict
 
 import numpy as np
@@ -22,11 +21,7 @@ NOISE = (effect_spec("sensor_noise", kind="gaussian", snr_db=20),)
 SMALL = {"healthy": 16, "bootstrap": 20, "permutations": 99}  # a unit test's diagnosis: 16 rows, small statistics
 
 
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings on odd parameters
-        yield
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the simulator's accuracy warnings on odd parameters
 
 
 def test_the_load_is_a_scale_of_the_rows_and_its_factor_is_read_off_them():

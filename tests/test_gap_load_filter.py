@@ -5,8 +5,6 @@ A target like development trial 902/4 of the transfer benchmark: a bearing behin
 0.74 of the source's load (the load profiled out of every score). Fitted alone, the resonance takes part of the
 bearing's signature (6.2 kHz); held there, the bearing's search ends in another basin (k 0.25 for 0.58)."""
 
-import warnings
-
 import pytest
 
 from gearlab.data.builder import build_dataset
@@ -18,12 +16,7 @@ from gearlab.gap.scoring import Scorer, _by_level
 from gearlab.gap.search import fit_effect
 from gearlab.gap.views import healthy_rows
 
-
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings on odd parameters
-        yield
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the simulator's accuracy warnings on odd parameters
 
 
 def test_the_filter_fitted_again_beside_each_point_lets_the_bearing_search_leave_the_filters_basin():

@@ -5,8 +5,6 @@ accepted). A target like development trial 1327/7 of the transfer benchmark: a d
 resonance, which won round 1 by a hair there and was re-fitted beside the drive, took a level the load paid for
 (a resonance at 4.4 kHz, the load 0.23 for 0.69)."""
 
-import warnings
-
 import pytest
 
 from gearlab.data.builder import build_dataset
@@ -18,12 +16,7 @@ from gearlab.gap.diagnose import Settings, _prepared, _Run, filter_refit
 from gearlab.gap.scoring import Scorer, _by_level
 from gearlab.gap.views import healthy_rows
 
-
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the simulator's accuracy warnings on odd parameters
-        yield
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the simulator's accuracy warnings on odd parameters
 
 
 def test_the_second_search_runs_only_where_round_1s_filter_beats_the_other_filters_on_fresh_rows(monkeypatch):
