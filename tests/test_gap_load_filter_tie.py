@@ -47,10 +47,10 @@ def test_the_second_search_runs_only_where_round_1s_filter_beats_the_other_filte
     # a 2-pole low-pass of the resonance's shape (1327/7's round 1: 336.3 against 335.3): no second search
     twin = {"name": "sensor_lowpass", "params": {"f_c": 1243.0, "order": 2}, "nuisance": noise}
     info: dict = {}
-    assert filter_refit(run, fit, fitted, info, top, [twin]) is fit
+    assert filter_refit(run, [fit], fitted, info, top, [twin]) is fit
     assert info["filter_refit"]["tied"] == "sensor_lowpass" and searched == []
     # a low-pass the resonance beats on fresh rows (308 against 1171 here): searched again, the better fit kept
     info = {}
     far = {"name": "sensor_lowpass", "params": {"f_c": 500.0, "order": 1}, "nuisance": noise}
-    assert filter_refit(run, fit, fitted, info, top, [far])["score"] == 60.0
+    assert filter_refit(run, [fit], fitted, info, top, [far])["score"] == 60.0
     assert searched == ["gap filter"] and info["filter_refit"]["score"] == 60.0
