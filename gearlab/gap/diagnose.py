@@ -530,7 +530,7 @@ REFIT_BUDGET = 2
 def filter_refit(run: _Run, fits: list[dict], fitted: tuple, info: dict, top: dict, rivals: list[dict]) -> dict:
     """Each model effect beside round 1's filter *top* (*fits*) searched again, the filter re-fitted at each point
     (search._SignalRefit), the lowest kept below *fits[0]*, where *top* beat the other filters (*rivals*) on fresh rows.
-    Only the winner searched again, a casing path stood for a bearing behind a too sharp resonance (932/8)."""
+    Only the winner searched again, a drive stood for a bearing behind a too sharp resonance (913/2)."""
 
     def alone(f: dict) -> np.ndarray:  # judging rows of round 1's fit *f*, its noise nuisance beside it
         return run.rows_of(f, (), (run.spec(NUISANCE, f["nuisance"]["params"]),) if f.get("nuisance") else ())
