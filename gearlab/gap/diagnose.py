@@ -546,9 +546,9 @@ def filter_refit(run: _Run, fits: list[dict], fitted: tuple, info: dict, top: di
     settings = replace(run.settings, budget=REFIT_BUDGET * run.settings.budget)
     task = (run.search, None, fitted, run.target, settings, settings.seed + 1000, False, run.rows, None, refit)
     message = "gap: round 1: model effects searched again, the filter re-fitted at each point"
-    run.on_event(Event("stage", stage="gap filter", total=1, message=message))
+    run.on_event(Event("stage", stage="gap filter", total=len(again), message=message))
     done = run_fits(run, "gap filter", fit_effect, [task[:1] + (f["name"],) + task[2:] for f in again], lambda *_: None)
-    run.on_event(Event("advance", stage="gap filter", done=1, total=1))
+    run.on_event(Event("advance", stage="gap filter", done=len(again), total=len(again)))
     (best, res), scores = min(zip(again, done), key=lambda pair: pair[1]["score"]), [r["score"] for r in done]
     info["filter_refit"] = {"name": best["name"], "before": fit["score"], "score": res["score"], "scores": scores}
     if not res["score"] < fit["score"]:
