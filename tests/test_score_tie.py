@@ -4,22 +4,33 @@ fault; half (a tie) or fewer, healthy; the printout gives the count of how many 
 classical rows are set here on the scored record's own scores so that exactly half, then one more, are over."""
 
 import json
+import shutil
 
 import numpy as np
 import pytest
-from detection_scenario import run, scenario
+from detection_scenario import run_in_module, scenario
 from textrecords import record
 
 from gearlab.kinds import detection_scoring
 from gearlab.kinds.detection_which_gear import is_other
 
 
-@pytest.fixture
-def finished(cli, tmp_path, monkeypatch, no_figures):
-    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
-    out = run(cli, scenario(tmp_path, methods=("source_only",)), tmp_path / "runs")
+@pytest.fixture(scope="module")
+def made(tmp_path_factory, module_cache):
+    """The tiny detection run and the record to score, made once for the module: both tests score the same
+    record against the same run, with other thresholds (_over)."""
+    folder = tmp_path_factory.mktemp("tie")
+    out = run_in_module(scenario(folder, methods=("source_only",)), folder / "runs", figures=False)
     # 41 turns: 40 units of a revolution, 8 of 5, 4 of 10, each count even (a tie can be)
-    return out, record(tmp_path / "new.zip", revolutions=41, chip=0.0, seed=11, phase=0.3)
+    return out, record(folder / "new.zip", revolutions=41, chip=0.0, seed=11, phase=0.3)
+
+
+@pytest.fixture
+def finished(made, request):
+    """The module's run as this test's own (a copy beside it: `gearlab score` adds its scoring/ history to the
+    run it scores), and the record to score."""
+    out, new = made
+    return shutil.copytree(out, out.with_name(f"{out.name}-{request.node.name[:40]}")), new
 
 
 def _over(monkeypatch, over_half: int):
