@@ -51,7 +51,7 @@ def pytest_xdist_auto_num_workers(config):
     A worker waits with its core idle while a test's child process starts and imports gearlab, while
     Textual's pilot settles, while Ray starts its processes, while a pool's workers start. A third worker on
     2 cores runs its files in those waits, for one more collection (about 5 s of CPU): the README's command
-    in a fresh clone, 2 idle cores, alternated: pytest 265 / 267 s with two workers, 252 / 256 s with three.
+    in a fresh clone, 2 idle cores: pytest 265 / 267 s with two workers, 252 / 256 / 264 s with three.
     PYTEST_XDIST_AUTO_NUM_WORKERS (xdist's own) and `-n logical` are left to xdist."""
     if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS") or config.option.numprocesses == "logical":
         return None
