@@ -96,6 +96,9 @@ class AmbiguousSpeed(GearlabInputError):
         super().__init__(message)
         self.speeds, self.head = speeds, head or message  # head: the message without its hint
 
+    def __reduce__(self):  # raised in a worker (a run's record pool): pickled whole, not a BrokenProcessPool
+        return type(self), (str(self), self.speeds, self.head)
+
 
 def speed_from_mesh(
     signal: np.ndarray, fs: float, box: Gearbox, declared: float | None, where: str, threshold_db: float = THRESHOLD_DB
