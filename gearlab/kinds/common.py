@@ -674,3 +674,17 @@ def no_compare(runs: list[tuple]) -> tuple[str, str] | None:
 
 def no_title(summary: dict, index: int, table: str) -> str:
     return ""  # report.html titles an untitled table from its header
+
+
+def unconfirmed_speed(found: dict[str, str], speeds: dict[str, float]) -> tuple[str, str] | None:
+    """(the first record, the words) of a declared speed that no history record's mesh lines confirm (each
+    record's speed source, *found*, says UNCONFIRMED), or None: a gap diagnosis or a detection run read at it
+    compares smeared lines (a 29/73 box described as 28/73, or given its output's speed, trained and scored)."""
+    from ..data.recordings import UNCONFIRMED
+    from ..signals.checks import fmt_hz
+
+    if not found or not all(UNCONFIRMED in how for how in found.values()):
+        return None
+    path, how = next(iter(found.items()))
+    words = f"{fmt_hz(speeds[path])} declared, but no history record's mesh lines confirm it "
+    return path, words + f"({path}: {how.split(f'{UNCONFIRMED}: ')[-1]})"

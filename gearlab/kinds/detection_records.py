@@ -729,9 +729,15 @@ def check_structure(source: DatasetSpec, target: Target, conditions: dict, where
     from ..data.builder import operating_point
     from ..gap.structure import structure_line
     from ..gap.views import gear_pair_of
+    from .common import unconfirmed_speed
 
     pair, described = gear_pair_of(source), operating_point(source)[0]
     for name, cond in conditions.items():
+        said = unconfirmed_speed({f.path: cond["speed_from"][f.path] for f, _ in cond["history"]}, cond["speeds"])
+        if said:  # a declared speed read whole: the structure check below would read smeared lines at it
+            return f"{where}: the history of condition '{name}' differs from the [source]'s gearbox or its speed: " + (
+                f"{said[1]}; expected the records' speed and tooth counts (gearlab inspect {said[0]} --gearbox ...)"
+            )
         rows = []
         # a history read with tachos (with or without one on the test records) aligns by their marks
         marked = all(target.keys_of(f)["tacho"] is not None for f, _ in cond["history"])

@@ -13,8 +13,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
-from ..signals.checks import fmt_hz
-from .common import DatasetEntry, measured
+from .common import DatasetEntry, measured, unconfirmed_speed
 
 # History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
 # record are two conditions; one rig at one setting drifts by well under 1 %).
@@ -65,7 +64,6 @@ def read_history(
     Target.marks), without one by any whole sample of the revolution (each record's angle is zero at
     its first sample), so the set has one synchronous average; the record shifted as one signal
     (signals.angle.continued), so that what is not periodic in the input turn stays continuous."""
-    from ..data.recordings import UNCONFIRMED
     from ..parts.measured import aligned
 
     t = records.target
@@ -80,14 +78,13 @@ def read_history(
         rows.append(revs)
         speeds[f.path], found[f.path] = rec.speed_hz, rec.angle_source
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
-    if all(UNCONFIRMED in how for how in found.values()):
+    unconfirmed = unconfirmed_speed(found, speeds)
+    if unconfirmed:
         # the description's mesh lines are nowhere near the declared speed: read at it, the records' lines
         # are smeared and fitted effects, 'unexplained' (a 19/58 + 25/67 fan described with 18 teeth)
-        path, how = next(iter(found.items()))
+        path, words = unconfirmed
         raise GearlabInputError(
-            f"{records.where} key 'speed': {fmt_hz(speeds[path])} declared, but no history record's mesh lines "
-            "confirm it "
-            f"({path}: {how.split(f'{UNCONFIRMED}: ')[-1]}); expected the records' speed and tooth counts: gearlab "
+            f"{records.where} key 'speed': {words}; expected the records' speed and tooth counts: gearlab "
             f"inspect {path} --gearbox ... says what differs"
         )
     low, high = min(speeds.values()), max(speeds.values())
