@@ -401,7 +401,9 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
         r0 = mine[0]
         shown.append(
             Text(
-                f"{file}: {r0['speed_hz']:.3f} Hz, from {r0['speed_from']}; condition {r0['condition']}; "
+                f"{file}: {r0['speed_hz']:.3f} Hz, from {r0['speed_from']}; condition {r0['condition']}"
+                + (f" ({r0['condition_by']})" if r0.get("condition_by") else "")
+                + "; "
                 f"thresholds: {r0['rule']}"
             )
         )

@@ -295,6 +295,22 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
     return near
 
 
+def _by_level(run: RunDir, meta: dict, name: str, rec) -> tuple[str, str]:
+    """(condition, why) of a steady take: of the conditions whose history runs within IN_BAND of its speed (one
+    per load, grouped by hand), the one whose history level is nearest the take's; by speed alone a 29/73 box's
+    heavy-load history take was scored against the light load's (24.41 Hz to 24.40): NA4 6 of 6 'fault'."""
+    at = [c for c, v in meta["conditions"].items() if abs(rec.speed_hz - v["speed_hz"]) <= IN_BAND * v["speed_hz"]]
+    if len(at) < 2:
+        return name, ""
+    std = float(np.std(rec.revolutions))
+    level = {
+        c: std / float(scoring.load_arrays(run.file("scoring", meta["conditions"][c]["file"]))["standardiser"][1])
+        for c in at
+    }
+    best = min(at, key=lambda c: abs(math.log(max(level[c], 1e-12))))
+    return best, "nearest level of those at its speed: " + ", ".join(f"'{c}' {level[c]:.2f} x" for c in at)
+
+
 _stretch = stretch  # the shared rule's (detection_in_band: one for a detection run and for score)
 
 
@@ -555,7 +571,7 @@ def score(
     described = gearbox_of(described) if described else None
     # a bad --key or a missing condition: refused before any file is read
     reading_keys(meta, condition, given, box=described)
-    cut, raw, found, marks = {}, {}, {}, {}
+    cut, raw, found, marks, chosen = {}, {}, {}, {}, {}
     for i, file in enumerate(files):
         keys = reading_keys(meta, condition, given, str(file), described)
         marks[str(file)] = _marks(keys)
@@ -573,6 +589,8 @@ def score(
         else:
             if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
                 name, rec, scored_on = in_band(meta, str(file), rec, condition)
+            elif condition is None:
+                name, chosen[str(file)] = _by_level(run, meta, name, rec)
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
         if differs:
@@ -634,6 +652,7 @@ def score(
                         {
                             "file": f.path,
                             "condition": name,
+                            "condition_by": chosen.get(f.path, ""),  # of conditions at one speed: by level
                             "method": r["method"],
                             "unit": u,
                             "units": int(s.size),
