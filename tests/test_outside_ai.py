@@ -132,7 +132,7 @@ def test_a_run_up_without_a_tacho_read_at_one_speed_says_so(tmp_path):
     assert rec.angle_source.startswith("nominal speed 16 Hz; its spectrum's lines move +3"), rec.angle_source
     assert rec.angle_source.endswith(whole) and VARIES_WORDS not in rec.angle_source, rec.angle_source
     # with its tacho: each revolution's speed, cut in band as before (no such words); a steady take: none
-    tacho = cut_recording(str(tmp_path / "up.zip"), vibration=0, tacho=1, pulses_per_rev=10, fs=FS)
+    tacho = cut_recording(str(tmp_path / "up.zip"), vibration=0, tacho=2, pulses_per_rev=10, fs=FS)
     assert VARIES_WORDS in tacho.angle_source and whole not in tacho.angle_source, tacho.angle_source
     runup(tmp_path / "steady.zip", 16.0, 16.0, 8.0)
     steady = cut_recording(str(tmp_path / "steady.zip"), vibration=0, fs=FS, speed_hz=16.0)

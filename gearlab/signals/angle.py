@@ -22,6 +22,30 @@ TWO_PI = 2.0 * np.pi
 # speed moves a few percent over a record, not 10 % in one turn (a record starting inside a pulse, its channel
 # rising from 0 V: a first "turn" anywhere from 0 to 1 of the next ones; dropped, a real edge loses one turn)
 FIRST_PULSE = 0.9
+# A channel of more samples than NO_PULSES in the middle half of its range (a cosine tacho's 1/3, a noisy or ramped
+# pulse train's a few %, a vibration's 0.6-0.97) whose turns, edge to edge, differ from the one before by more than
+# IRREGULAR (median; a tacho's a few % even in a run-up) holds no pulses: a vibration channel read as the tacho
+NO_PULSES = 0.4
+IRREGULAR = 0.2
+
+
+def _pulses_or_not(v: np.ndarray, low: float, high: float, edges: np.ndarray) -> None:
+    """Refuses a 'pulse train' *v* (levels *low*, *high*; rising *edges*) that is a vibration (NO_PULSES): read
+    through its noise, a 19/62 + 23/87 box's vibration given as its tacho made 66-206 Hz of a 30 Hz shaft, said as
+    'a run-up or coast-down?' (its channels swapped)."""
+    middle = float(np.mean((v > low) & (v < high)))
+    if edges.size < 8 or middle <= NO_PULSES:
+        return
+    turns = np.diff(edges)
+    jumps = float(np.median(np.abs(np.diff(turns))) / np.median(turns))
+    if jumps > IRREGULAR:
+        raise GearlabInputError(
+            f"pulse train: {middle:.0%} of its samples lie between its low and high levels and a turn, edge to "
+            f"edge, differs from the one before by {jumps:.0%} (median): no pulses of a shaft's turn; a vibration "
+            "channel? (vibration and tacho swapped?)"
+        )
+
+
 # A sampled square pulse's edge lies anywhere between its last low and its first high sample, and the crossing
 # interpolated between those two is mid-way whatever the true time: an error uniform on ±0.5 sample, variance 1/12
 # sample² (angle_from_pulses smooths such edge times to it)
@@ -143,6 +167,7 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
             "to measure the speed"
         )
 
+    _pulses_or_not(v, low_thr, high_thr, edges)
     # most, not all: a square tacho's edge with a noisy sample mid-way now and then is still a square tacho's
     if marks == 1 and edges.size >= 4 and np.count_nonzero(quantised) > edges.size / 2:
         edges = _dequantised(edges)
