@@ -671,3 +671,38 @@ def test_the_latent_projection_runs_on_one_blas_thread(monkeypatch, blas_threads
     monkeypatch.setattr(np.linalg, "svd", spy)
     latent_projection(np.random.default_rng(0).normal(size=(40, 8)))
     assert threads and set(threads) == {1}
+
+
+def test_a_condition_without_a_test_take_is_said_so_not_compared():
+    # a heavy load's history and no test take of its own (kept for gearlab score): its rows hold no unit, and the
+    # verdict read 'goal met by no row; best learned matched_filter (AUC –, – / – %), level with the best classical
+    # fm4 (AUC –, – / – %)'
+    def row(condition, method, auc, n):
+        det = None if auc is None else 100.0
+        return {
+            "condition": condition,
+            "unit": "record30",
+            "method": method,
+            "auc": auc,
+            "detection": det,
+            "false_alarm": None if auc is None else 0.0,
+            "n_positive": n,
+            "n_negative": n,
+        }
+
+    rows = [
+        row(c, m, 1.0 if c == "light" else None, 6 if c == "light" else 0)
+        for c in ("light", "heavy")
+        for m in ("matched_filter", "fm4")
+    ]
+    lines = detection_lines(
+        {
+            "rows": rows,
+            "learned": [
+                {"condition": c, "method": "matched_filter", "source_auc": None, "source_units": [0, 0]}
+                for c in ("light", "heavy")
+            ],
+        }
+    )
+    assert lines[1].startswith("light: goal met by matched_filter, fm4; best learned matched_filter (AUC 1.00")
+    assert lines[2] == "heavy: no test take: its history's thresholds serve gearlab score."
