@@ -170,7 +170,10 @@ def canonical_faults(raw, shafts: tuple[str, ...], where: str) -> tuple[tuple[st
     out: dict[str, tuple[int, ...]] = {}
     for key, steps, what in items:
         if not isinstance(steps, list) or not all(isinstance(s, int) and not isinstance(s, bool) for s in steps):
-            raise GearlabInputError(f"{what}, got {shown(steps)}")
+            # a gear's name among the steps ("broken_tip" = ["intermediate gear", 12]): the key names the gear
+            named = [g for g in steps if isinstance(g, str)] if isinstance(steps, list) else []
+            on = f' (on a gear: "{key}@{named[0]}" = {[x for x in steps if x not in named]})' if named else ""
+            raise GearlabInputError(f"{what}, got {shown(steps)}{on}")
         parts = fault_parts(key, shafts, where)
         canonical = "+".join(fault_key(*part) for part in parts)
         if canonical in out:
