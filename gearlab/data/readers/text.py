@@ -164,11 +164,15 @@ def _rows(body: bytes) -> int:
     return sum(1 for line in body.split(b"\n") if line.strip())
 
 
-def _bad_line(block: bytes, first_line: int, width: int, where: str) -> GearlabInputError:
-    """The error for the first line of *block* that is not *width* numbers (slow path)."""
+def _bad_line(block: bytes, first_line: int, width: int, where: str, passed: int = 0) -> GearlabInputError:
+    """The error for the first line of *block* that is not *width* numbers (slow path), after its first *passed*
+    data lines (a preamble's, the header: a tab text's dropout 'n/a' on line 502 was told as line 1's 'time')."""
     for offset, line in enumerate(block.split(b"\n")):
         tokens = line.split()
         if not tokens or tokens[0].startswith(b"#"):
+            continue
+        if passed:
+            passed -= 1
             continue
         number = first_line + offset
         if len(tokens) != width:
@@ -226,6 +230,7 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
             lines_here = block.count(b"\n") + (0 if block.endswith(b"\n") else 1)
             if not width:
                 delimiter = _delimiter(block, skip)
+            passed = 0  # the block's lines above its rows (a preamble's, the header)
             if b"#" in block or block.count(b"\r") != block.count(b"\r\n") or not width:
                 kept = []
                 for line in block.split(b"\n"):
@@ -233,12 +238,12 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                     if not tokens or tokens[0].startswith(b"#"):
                         continue
                     if skip:
-                        skip -= 1
+                        skip, passed = skip - 1, passed + 1
                         continue
                     if not width:  # the first data line: a header, or the first row
                         if not all(_is_number(t) for t in tokens):
                             header = _fields(line, delimiter)
-                            width = len(header)
+                            width, passed = len(header), passed + 1
                             continue
                         width = len(tokens)
                     kept.append(_blanks(line, delimiter))
@@ -251,10 +256,10 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                 try:
                     values = np.array(body.split(), dtype=np.float64)
                 except ValueError:
-                    raise _bad_line(_blanks(block, delimiter), line_no, width, where) from None
+                    raise _bad_line(_blanks(block, delimiter), line_no, width, where, passed) from None
                 rows = _rows(body)
                 if values.size != rows * width:
-                    raise _bad_line(_blanks(block, delimiter), line_no, width, where)
+                    raise _bad_line(_blanks(block, delimiter), line_no, width, where, passed)
                 parts.append(values.reshape(rows, width)[:, picked].copy())
                 kept_bytes += parts[-1].nbytes
                 if kept_bytes > limit:  # short rows of many numbers: the columns outgrow their text
