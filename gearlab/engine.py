@@ -204,11 +204,15 @@ def run_scenario(
         except (KeyboardInterrupt, SystemExit):  # Ctrl-C, or SIGTERM (a TUI's cancel)
             status = "cancelled"
             raise
-        except GearlabInputError:
+        except GearlabInputError as exc:
             # Refused before any unit finished (e.g. by a check on the built datasets): leave no run behind.
             if resume is None and not run.records():
                 run.discard()
                 status = ""
+            # a line a data file's reading names by its table alone ("[target] key 'files' entry 1 ..."): the
+            # scenario it is a table of in front, as every other line names it
+            if exc.args and isinstance(exc.args[0], str) and exc.args[0].startswith("["):
+                exc.args = (f"{scenario.path}: {exc.args[0]}", *exc.args[1:])
             raise
         except OSError as exc:
             if write_problem(exc) is None:

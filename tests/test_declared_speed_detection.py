@@ -58,3 +58,29 @@ def test_a_declared_speed_no_history_line_confirms_stops_the_detection_run(tmp_p
     assert line.startswith(f"{where}: the history of condition ")
     assert "declared, but no history record's mesh lines confirm it (h1.txt: " in line
     assert "gearlab inspect h1.txt --gearbox" in line
+
+
+def test_a_data_file_refused_during_a_run_is_named_with_its_scenario(tmp_path, cli):
+    # a record's reading names its entry by table alone ("[target] key 'files' entry 1 key 'file': h1.txt: ..."):
+    # the run's one line had no scenario in front, where every other line names it
+    for name, seed in (("h1", 0), ("h2", 1), ("t1", 2)):
+        _box(tmp_path / f"{name}.txt", seed)
+    lines = (tmp_path / "h1.txt").read_text().splitlines()
+    lines[500] = lines[500].split("\t")[0] + "\tn/a"  # a logger's dropout, past the header validate reads
+    (tmp_path / "h1.txt").write_text("\n".join(lines) + "\n")
+    (tmp_path / "box.toml").write_text(
+        description(stage(29, 73, module="2.5 mm"), name="box", speed="1480 rpm", load="40 N*m")
+    )
+    files = ", ".join(
+        f'{{ file = "{n}.txt", role = "{r}", label = "{lab}" }}'
+        for n, r, lab in (("h1", "history", "healthy"), ("h2", "history", "healthy"), ("t1", "test", "fault"))
+    )
+    (tmp_path / "detect.toml").write_text(
+        '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+        f'[target]\nvibration = "acc_ms2"\nfiles = [{files}]\n[detection]\nblocks = [10]\n'
+    )
+    code, _, err = cli("run", tmp_path / "detect.toml", "--out", tmp_path / "runs")
+    assert code == 2, err
+    line = err.strip().splitlines()[-1]  # after the run's progress lines
+    assert line.startswith(f"error: {tmp_path / 'detect.toml'}: [target] key 'files' entry 1 key 'file': "), line
+    assert line.endswith("h1.txt: line 501 column 1: 'n/a' is not a number"), line
