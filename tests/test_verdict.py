@@ -706,3 +706,27 @@ def test_a_condition_without_a_test_take_is_said_so_not_compared():
     )
     assert lines[1].startswith("light: goal met by matched_filter, fm4; best learned matched_filter (AUC 1.00")
     assert lines[2] == "heavy: no test take: its history's thresholds serve gearlab score."
+
+
+@pytest.mark.parametrize(("factor", "said"), [(4.29, True), (0.2, True), (0.43, False), (2.5, False)])
+def test_a_level_far_off_the_simulators_that_no_scale_closes_is_said(factor, said):
+    # a 19/62 + 23/87 box given 100 mV/g for its 1 V/g chain: its lines 4.29 x the simulator's (0.43 x with the
+    # right sensitivity), sensor noise fitted at its bound, 'unexplained', and the factor in summary.json alone
+    summary = {
+        "gap_before": 2.358e4,
+        "gap_after": 2.358e4,
+        "significant_before": True,
+        "p_before": 0.005,
+        "views": {"mesh": {"share_before": 0.46}},
+        "verdict": "unexplained",
+        "unexplained": True,
+        "ranking": [{"name": "sensor_bandwidth", "share_removed": 0.79}],
+        "structure": {"level": {"factor": factor, "closes": False}},
+    }
+    level = [line for line in gap_lines(summary) if line.startswith("Level: ")]
+    assert bool(level) == said, level
+    if said:
+        assert (
+            f"stand {factor:.3g} x the simulator's" in level[0]
+            and "check the values: line of gearlab inspect" in level[0]
+        )
