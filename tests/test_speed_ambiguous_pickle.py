@@ -34,3 +34,27 @@ def test_ambiguous_speed_from_a_worker_is_the_input_error_not_a_broken_pool():
         with pytest.raises(AmbiguousSpeed, match="tooth count differs") as got:
             future.result()
     assert got.value.speeds == [8.4, 12.6]
+
+
+def test_inspects_ambiguous_speed_says_a_tooth_count_may_differ(monkeypatch):
+    # inspect's own record (no file of a run): a 29/73 box described 28/73, no speed given, read '8.425 Hz (708 Hz
+    # as 3xM1) or 12.64 Hz (2xM1) ... expected a declared speed', the count that differs unsaid; at its nominal
+    # speed inspect names it ('its sidebands show a 29-tooth pinion ... described 28')
+    import numpy as np
+    from test_inspect import described
+
+    from gearlab.gearbox import speed as S
+
+    def ambiguous(*args, **kwargs):
+        raise AmbiguousSpeed("r: the speed is ambiguous; expected a declared speed", [8.425, 12.64])
+
+    monkeypatch.setattr(S, "speed_from_mesh", ambiguous)
+    monkeypatch.setattr(S, "_followed", lambda *args: (None, 0.0, "", None))
+    signal = np.random.default_rng(0).normal(size=8192)
+    with pytest.raises(AmbiguousSpeed) as got:
+        S.follow_speed(signal, 8192.0, described((28, 73)), None, "r")
+    assert str(got.value) == (
+        "r: the speed is ambiguous; expected a declared speed (or a tooth count differs from box's: at its nominal "
+        "speed, --speed, inspect names it)"
+    )
+    assert got.value.speeds == [8.425, 12.64]

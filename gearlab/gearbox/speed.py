@@ -534,8 +534,9 @@ def _follow_speed(signal, fs, box, declared, where, threshold_db, file=None) -> 
         if len(found) > 1:
             found = gathered(signal, fs, fine, found, box, threshold_db)
         if len(found) != 1:
-            if file is None:
-                raise
+            if file is None:  # inspect's own record (a 29/73 box described 28/73: 8.4 or 12.6 Hz, the count unsaid)
+                tell = f"(or a tooth count differs from {box.name}'s: at its nominal speed, --speed, inspect names it)"
+                raise AmbiguousSpeed(f"{exc.head} {tell}", exc.speeds, exc.head) from None
             # a record of another gearbox reads so too: `gearlab score` stopped at 'the speed is ambiguous',
             # the tooth counts unsaid (issue 39)
             raise AmbiguousSpeed(
