@@ -124,6 +124,12 @@ def test_a_tip_reaching_the_mating_root_names_the_key_and_a_shortened_tip_derive
         ({"addendum": 0.9, "tip_diameter": "35 mm"}, {}, r"#1.pinion key 'tip_diameter': give the tip by 'addendum'"),
         ({}, {"addendum": 3}, r"#1.wheel key 'addendum': 3 is outside \[0.5, 1.5\]"),
         ({}, {"tip_diameter": 25}, r"#1.wheel key 'tip_diameter': 25 is outside .*a bare number is in m"),
+        # a number in quotes is as bare ('module = "2.5"' read only "'2.5' is outside [0.1 mm, 100 mm]")
+        (
+            {},
+            {"tip_diameter": "25"},
+            r"key 'tip_diameter': '25' is outside .*a bare number is in m; expected e.g. '25 mm'",
+        ),
         ({}, {"tip_diameter": "90 mm"}, r"#1.wheel key 'tip_diameter': 90 mm lies inside the root circle \(91 mm\)"),
         ({}, {"tip_diameter": "120 mm"}, r"#1.wheel key 'tip_diameter': the teeth are pointed"),
         ({"dedendum": 1.45}, {}, r"#1.pinion key 'z': 16 teeth .* undercut .*smaller 'dedendum' of this gear: 1.45"),

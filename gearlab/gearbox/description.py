@@ -408,7 +408,8 @@ class _Table:
             value = to_si(raw, p.unit, where)
         if not p.low <= value <= p.high:
             # a bare number is SI ('module = 2.5' is 2.5 m, 'pressure_angle = 20' is 20 rad): say so
-            bare = p.unit and not isinstance(raw, str) and p.show(p.low) != f"{p.low:g} {p.unit}"
+            # ... and so is a number in quotes ('module = "2.5"' read "'2.5' is outside [0.1 mm, 100 mm]")
+            bare = p.unit and _unitless(raw) and p.show(p.low) != f"{p.low:g} {p.unit}"
             said = f" (a bare number is in {p.unit}; expected e.g. '{raw} {p.display_unit}')" if bare else ""
             raise GearlabInputError(f"{where}: {shown(raw)} is outside [{p.show(p.low)}, {p.show(p.high)}]{said}")
         return value
@@ -614,3 +615,14 @@ def _sensor(data, source: str, shafts: tuple[str, ...]) -> Sensor:
         )
     ppr = t.param(SENSOR_KEYS, "pulses_per_rev")
     return Sensor(values["near"], direction, values["tacho"], int(ppr))
+
+
+def _unitless(raw) -> bool:
+    """Whether *raw* (a key's value) is a number without a unit: a TOML number, or a text of one alone."""
+    if not isinstance(raw, str):
+        return True
+    try:
+        float(raw.strip())
+    except ValueError:
+        return False
+    return True
