@@ -24,6 +24,8 @@ faults = {{ crack = [13] }}
 healthy = {healthy}
 effects = [{{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }}]
 """
+# the target's line of DOMAINS (as domains() writes it) that makes its records noisy
+TARGET_NOISE = 'effects = [{ name = "sensor_noise", kind = "laplace", snr_db = 0.0, seed = 1 }]\n'
 
 # The training keys of a tiny protocol ([protocol] of a transfer scenario, [accuracy] of a gap one).
 SCHEDULE = """\
