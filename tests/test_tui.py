@@ -3,8 +3,8 @@
 Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios
 (cancel/resume's holds its third and later units until the cancel, held_units),
 except in the tests of what the TUI starts, not of the run (`stub_engine`), and in the every-kind
-runs and the run-end notification, whose child replays a run the real engine made once in this
-session (`replayed`).
+runs, the run-end notification and the quick-run key, whose child replays a run the real engine made
+once in this session (`replayed`, `quick_stream`).
 """
 
 from __future__ import annotations
@@ -224,12 +224,21 @@ def test_run_fills_the_table_then_opens_the_results(folder):
     drive(GearlabApp(folder), script)
 
 
-def test_quick_run_key_runs_the_shrunk_scenario(folder):
+def test_quick_run_key_runs_the_shrunk_scenario(folder, quick_stream, monkeypatch, tmp_path):
+    """k starts `gearlab run FILE --quick` and draws the shrunk scenario's run: the engine's quick run of it,
+    recorded in this process and replayed by the TUI's child (quick_stream; the real child, which imported
+    gearlab again for 1.1 s of CPU, is started in test_run_fills_the_table_then_opens_the_results and, with
+    --quick, in the tests of where runs go)."""
+    started = replay(monkeypatch, quick_stream, tmp_path)
+
     async def script(pilot):
         app = pilot.app
         await select(pilot, "stiff.toml")
         await pilot.press("k")
         await until(pilot, lambda: app.process is not None)
+        (args,) = started
+        assert args[:2] == ["run", str(folder / "stiff.toml")] and "--quick" in args and args[-1] == "--events"
+        (tmp_path / "go").touch()
         await until(pilot, lambda: app.process is None)
         # --quick keeps steps 1, 10 and 20 of each ladder: 3 crack + 3 chip cases and the healthy one
         assert "finished: 7 unit(s)" in text_of(app, "#run-status")
@@ -562,48 +571,76 @@ def kind_streams(tmp_path_factory, kinds_cache):
     """{scenario file: (its run directory, that directory as the events write it, the file of the
     event lines)}: each tiny scenario of EVERY_KIND run once by the real engine, as `gearlab run
     FILE --out RUNS --events` beside the scenarios' folder, in this process (its imports already made)."""
+
+    base = tmp_path_factory.mktemp("kind_streams")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GEARLAB_CACHE", str(kinds_cache))
+        mp.setattr("gearlab.plots.save", unrendered)
+        mp.chdir(base)
+        make_kinds_folder(base)
+        # what the TUI starts (but its --out)
+        return {
+            name: recorded(base, ["run", str(Path("scenarios") / name), "--out", str(base / "runs")], name)
+            for name in dict(EVERY_KIND)
+        }
+
+
+def recorded(base: Path, args: list[str], name: str) -> tuple[str, str, Path]:
+    """`gearlab ARGS --events` run by the real engine in this process, from *base* (the caller sets the
+    folder, the cache and the figures): (its run directory, that directory as the events write it, the file
+    of the event lines, base/NAME.events)."""
     from contextlib import redirect_stdout
     from io import StringIO
 
     from gearlab.cli import main
 
-    base = tmp_path_factory.mktemp("kind_streams")
-    streams = {}
+    out = StringIO()
+    with pytest.MonkeyPatch.context() as mp, redirect_stdout(out):
+        mp.setattr("sys.argv", ["gearlab", *args, "--events"])
+        try:
+            main()
+        except SystemExit as exc:
+            assert not exc.code, f"{name}: exit {exc.code}"
+    lines = out.getvalue().splitlines()
+    (made,) = [json.loads(x)["message"] for x in lines if x.startswith("{") and json.loads(x)["kind"] == "run"]
+    (base / f"{name}.events").write_text("\n".join(lines) + "\n")
+    return str(base / made), made, base / f"{name}.events"
+
+
+@pytest.fixture(scope="module")
+def quick_stream(tmp_path_factory):
+    """{"stiff.toml": recorded's triple} of the `folder` fixture's stiff.toml run as the quick-run key starts
+    it (`gearlab run FILE --out RUNS --quick --events`), by the real engine in this process."""
+    base = tmp_path_factory.mktemp("quick_stream")
+    (base / "scenarios").mkdir()
+    (base / "scenarios" / "stiff.toml").write_text(STIFFNESS.replace("{runs}", str(base / "runs")))
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(kinds_cache))
+        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
         mp.setattr("gearlab.plots.save", unrendered)
         mp.chdir(base)
-        folder = make_kinds_folder(base)
-        for name in dict(EVERY_KIND):
-            # what the TUI starts (but its --out)
-            mp.setattr(
-                "sys.argv", ["gearlab", "run", str(Path("scenarios") / name), "--out", str(base / "runs"), "--events"]
-            )
-            out = StringIO()
-            with redirect_stdout(out):
-                try:
-                    main()
-                except SystemExit as exc:
-                    assert not exc.code, f"{name}: exit {exc.code}"
-            lines = out.getvalue().splitlines()
-            (made,) = [json.loads(x)["message"] for x in lines if x.startswith("{") and json.loads(x)["kind"] == "run"]
-            (folder.parent / f"{name}.events").write_text("\n".join(lines) + "\n")
-            streams[name] = (str(base / made), made, folder.parent / f"{name}.events")
-    return streams
+        args = ["run", str(Path("scenarios") / "stiff.toml"), "--out", str(base / "runs"), "--quick"]
+        return {"stiff.toml": recorded(base, args, "stiff.toml")}
 
 
 @pytest.fixture
 def replayed(monkeypatch, kind_streams, tmp_path):
     """The TUI's child replays the recorded run of the scenario it is asked to run (kind_streams):
     for the tests of how the TUI follows each kind's events and opens its results, not of how it
-    starts a run (the runs of test_run_fills_the_table_then_opens_the_results, the quick run,
-    cancel/resume and where runs go keep the real child); the list gets each start's arguments."""
+    starts a run (the runs of test_run_fills_the_table_then_opens_the_results, cancel/resume and
+    where runs go keep the real child); the list gets each start's arguments."""
+    return replay(monkeypatch, kind_streams, tmp_path)
+
+
+def replay(monkeypatch, streams: dict, tmp_path: Path) -> list:
+    """The TUI's child made a replay of the run of *streams* (recorded's triples by scenario file name) for
+    the file it is asked to run, into tmp_path/runs, once the file tmp_path/go exists; the list returned
+    gets each start's arguments."""
     started, real = [], asyncio.create_subprocess_exec
 
     async def stand_in(program, *args, **kwargs):
         assert args[:2] == ("-m", "gearlab"), args
         started.append(list(args[2:]))
-        made, written, lines = kind_streams[Path(args[3]).name]
+        made, written, lines = streams[Path(args[3]).name]
         into = str(tmp_path / "runs" / Path(made).parent.name / Path(made).name)
         return await real(program, "-c", REPLAY, made, written, str(lines), into, str(tmp_path / "go"), **kwargs)
 
@@ -704,7 +741,7 @@ def stub_engine(monkeypatch):
     """For tests of what the TUI runs, not of the run: the child it starts is a stand-in that
     writes one event line and ends (exit 0) instead of `python -m gearlab ...`; the list
     returned gets the gearlab arguments of each start. test_run_fills_the_table_then_opens_the_results,
-    the quick run, cancel/resume and where runs go keep the real engine."""
+    cancel/resume and where runs go keep the real engine (the quick run key's replays its run)."""
     started, real = [], asyncio.create_subprocess_exec
 
     async def stand_in(program, *args, **kwargs):
