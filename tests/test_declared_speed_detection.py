@@ -28,25 +28,32 @@ def _box(path, seed: int) -> None:
     np.savetxt(path, np.column_stack([t, x]), fmt="%.6f", delimiter="\t", header="time\tacc_ms2", comments="")
 
 
-@pytest.mark.parametrize(
-    ("z1", "declared", "differs"),
-    [(29, "1480 rpm", False), (28, "1480 rpm", True), (29, "584 rpm", True)],
-    ids=["right", "a tooth count off", "the output's speed"],
-)
-def test_a_declared_speed_no_history_line_confirms_stops_the_detection_run(tmp_path, z1, declared, differs):
+def _scenario(folder, z1: int, speed: str | None) -> None:
+    """Three takes h1, h2 (history) and t1 (test) of the 29/73 box, the box described with *z1* pinion teeth, and
+    detect.toml reading them (with [target] speed = *speed* where given)."""
     for name, seed in (("h1", 0), ("h2", 1), ("t1", 2)):
-        _box(tmp_path / f"{name}.txt", seed)
-    (tmp_path / "box.toml").write_text(
+        _box(folder / f"{name}.txt", seed)
+    (folder / "box.toml").write_text(
         description(stage(z1, 73, module="2.5 mm"), name="box", speed="1480 rpm", load="40 N*m")
     )
     files = ", ".join(
         f'{{ file = "{n}.txt", role = "{r}", label = "{lab}" }}'
         for n, r, lab in (("h1", "history", "healthy"), ("h2", "history", "healthy"), ("t1", "test", "fault"))
     )
-    (tmp_path / "detect.toml").write_text(
+    declared = f'speed = "{speed}"\n' if speed else ""
+    (folder / "detect.toml").write_text(
         '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
-        f'[target]\nvibration = "acc_ms2"\nspeed = "{declared}"\nfiles = [{files}]\n[detection]\nblocks = [10]\n'
+        f'[target]\nvibration = "acc_ms2"\n{declared}files = [{files}]\n[detection]\nblocks = [10]\n'
     )
+
+
+@pytest.mark.parametrize(
+    ("z1", "declared", "differs"),
+    [(29, "1480 rpm", False), (28, "1480 rpm", True), (29, "584 rpm", True)],
+    ids=["right", "a tooth count off", "the output's speed"],
+)
+def test_a_declared_speed_no_history_line_confirms_stops_the_detection_run(tmp_path, z1, declared, differs):
+    _scenario(tmp_path, z1, declared)
     spec = load_scenario(tmp_path / "detect.toml").spec
     conditions = read_target(spec.target, spec.detection.blocks, lambda e: None)
     where = "detect.toml: [source] key 'gearbox'"
@@ -63,22 +70,10 @@ def test_a_declared_speed_no_history_line_confirms_stops_the_detection_run(tmp_p
 def test_a_data_file_refused_during_a_run_is_named_with_its_scenario(tmp_path, cli):
     # a record's reading names its entry by table alone ("[target] key 'files' entry 1 key 'file': h1.txt: ..."):
     # the run's one line had no scenario in front, where every other line names it
-    for name, seed in (("h1", 0), ("h2", 1), ("t1", 2)):
-        _box(tmp_path / f"{name}.txt", seed)
+    _scenario(tmp_path, 29, None)
     lines = (tmp_path / "h1.txt").read_text().splitlines()
     lines[500] = lines[500].split("\t")[0] + "\tn/a"  # a logger's dropout, past the header validate reads
     (tmp_path / "h1.txt").write_text("\n".join(lines) + "\n")
-    (tmp_path / "box.toml").write_text(
-        description(stage(29, 73, module="2.5 mm"), name="box", speed="1480 rpm", load="40 N*m")
-    )
-    files = ", ".join(
-        f'{{ file = "{n}.txt", role = "{r}", label = "{lab}" }}'
-        for n, r, lab in (("h1", "history", "healthy"), ("h2", "history", "healthy"), ("t1", "test", "fault"))
-    )
-    (tmp_path / "detect.toml").write_text(
-        '[scenario]\nname = "d"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
-        f'[target]\nvibration = "acc_ms2"\nfiles = [{files}]\n[detection]\nblocks = [10]\n'
-    )
     code, _, err = cli("run", tmp_path / "detect.toml", "--out", tmp_path / "runs")
     assert code == 2, err
     line = err.strip().splitlines()[-1]  # after the run's progress lines
