@@ -108,9 +108,21 @@ def mesh_check(
         # tooth counts its sidebands cannot tell from the next one over these revolutions (inspect's 'not checked')
         "unresolved": check["unresolved"],
     }
+    tol = np.array([tol_mesh(v, 1.0 / n) for v in x], dtype=np.float64)
+    # a tacho on another shaft read as this one: every order f times its own (a 16/48 output tacho
+    # read as the input: the mesh at 48, all on the comb, 'partly explained' by sensor noise). Asked
+    # before the lines over MIN_TEETH are counted: a faster shaft's meshes may all lie under it (a
+    # 19/62 + 23/87 input tacho read as the output: every order 1/12.34 of its own, the first mesh
+    # at 1.54 and 3.08, none over 5.5), and tacho_elsewhere reads those from *low* as inspect does
+    # (the count let the gap name it on 48 kHz takes only through stray lines near order 60)
+    elsewhere = None if tacho is None else tacho_elsewhere(x, power, tol, *tacho, low)
+    if elsewhere is not None:
+        table, read, _ = tacho
+        out.update(measured=elsewhere[1] * z1, differs=True, shaft=elsewhere[0], factor=elsewhere[1])
+        out["read_as"] = str(table.shafts[read])
+        return out
     if x.size < 2:  # one line is a comb of itself: nothing to tell
         return out
-    tol = np.array([tol_mesh(v, 1.0 / n) for v in x])
     on = _on_comb(x, z1, (1.0, z1 / z2), tol)
     for mesh, shaft_orders in later:
         on |= _on_comb(x, mesh, shaft_orders, tol)
@@ -123,14 +135,6 @@ def mesh_check(
     for mesh, _ in later:
         on_mesh |= _on_comb(x, mesh, (), tol)
     out["on_mesh"] = float(power[on_mesh].sum() / power.sum())
-    # a tacho on another shaft read as this one: every order f times its own (a 16/48 output tacho
-    # read as the input: the mesh at 48, all on the comb, 'partly explained' by sensor noise)
-    elsewhere = None if tacho is None else tacho_elsewhere(x, power, tol, *tacho, low)
-    if elsewhere is not None:
-        table, read, _ = tacho
-        out.update(measured=elsewhere[1] * z1, differs=True, shaft=elsewhere[0], factor=elsewhere[1])
-        out["read_as"] = str(table.shafts[read])
-        return out
     # a tacho of k marks a turn read as one scales every order by 1 / k: the strongest line, off the
     # comb, at Z1 / k with its harmonics (a 29/86 mixer's 2-pulse keyphasor read as one: 14.5, 29 on
     # the comb, 43.5; too few off it for another gear's family, so the fits ran: 'unexplained')
