@@ -112,6 +112,7 @@ from .detection_records import (
     short_takes,
     source_for,
     synchronous_input,
+    tooth_gap,
     trained_on,
     turned_faults,
     unaligned_why,
@@ -522,7 +523,13 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                 s, (Xs, ys, Xv, yv) = specs[(c, v)], detector_splits[(c, v)]
                 Ts = each_draw(shown[c], source_split(twins[s], protocol, 1 if s in quiet else draws[s])[0])
                 detector_splits[(c, v)] = (signature_rows(Xs, ys, Ts), ys, Xv, yv)
-        if shaft is not None and (g := shaft_symmetry(spec.source, shaft)) > 1:
+        z, gap = tooth_gap(spec.source) if shaft is not None else (1, 1)
+        if gap > 1:  # the detectors' shapes on every tooth of the watched gear, the frame's 1/g turns among them
+            turns = f"the detectors' shapes turned by each pitch of the {z}T gear up to {gap - 1} (teeth not simulated)"
+            on_event(Event("log", message=turns))
+            for key, (Xs, ys, Xv, yv) in detector_splits.items():
+                detector_splits[key] = (*turned_faults(Xs, ys, z, gap), Xv, yv)
+        elif shaft is not None and (g := shaft_symmetry(spec.source, shaft)) > 1:
             # the detectors' shapes at every angle the turn into the source's frame may put the damage
             turns = f"the detectors' shapes turned by each 1/{g} of a turn of the {shaft.name} shaft"
             on_event(Event("log", message=turns))

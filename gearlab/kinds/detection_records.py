@@ -176,7 +176,7 @@ def watched_teeth(source: DatasetSpec, written: dict) -> DatasetSpec:
     of its shaft's revolution (data.builder's shaft rows, 5c7e946), so the rows hold WATCHED_TEETH
     angles of the gear, each its own simulation; every tooth of a 68/103 + 82/99 reducer's 82T
     intermediate pinion would be 82 x 3 sizes, 247 simulations (57 min at --quick on 2 cores), these
-    19. How much detection loses against every tooth is not measured. Kept whole: a wheel's teeth and
+    19 (the detectors' shapes turned by the pitches between: tooth_gap). Kept whole: a wheel's teeth and
     the input pinion's, and a shaft whose meshes share a divisor g > 1 (shaft_symmetry turns the
     detectors' shapes by 1/g for the teeth simulated)."""
     if not written.get("gearbox") or "teeth" in written or "duplicates" in written or not source.faults:
@@ -239,22 +239,39 @@ def shaft_symmetry(source: DatasetSpec, shaft: UnitShaft) -> int:
     return 1
 
 
-def turned_faults(X: np.ndarray, y: np.ndarray, g: int) -> tuple[np.ndarray, np.ndarray]:
+def tooth_gap(source: DatasetSpec) -> tuple[int, int]:
+    """(Z, d): the watched gear's teeth and the widest gap, in tooth pitches, between two of its teeth the source
+    simulates (1: every tooth). Each tooth's damage strikes at its own angle of its shaft's revolution (no
+    tooth-shift symmetry on a later shaft: watched_teeth), so a detector whose shapes hold teeth 1 and 31 of a
+    62T intermediate gear alone matched a broken tip on another tooth nowhere: [source] teeth = [1, 31], five
+    such takes, matched_filter called 10 % of their record30 units, fm4 and na4 100 % (every tooth simulated,
+    or the shapes turned by the pitches between, turned_faults: 100 %)."""
+    first = next(iter(source.fault_classes().values()))
+    z = first.pair.Z1 if first.gear == "pinion" else first.pair.Z2
+    teeth = sorted(set(first.teeth))
+    return z, max((b - a) % z or z for a, b in zip(teeth, teeth[1:] + teeth[:1]))
+
+
+def turned_faults(X: np.ndarray, y: np.ndarray, g: int, count: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The fault rows of (*X*, *y*) (rows, or rows of draws) also turned by every k/g of a
-    revolution, k = 1 ... g - 1 (an exact band-limited turn: the rows are periodic), appended: a
-    detector's shapes then hold the damage at every angle the turn into the source's frame may
-    put a record's (shaft_symmetry), where simulating every tooth of a gear on a slower shaft
-    (which the two-stage models simulate one by one) costs a simulation a tooth."""
+    revolution, k = 1 ... count - 1 (*count*: g, every turn; an exact band-limited turn: the rows
+    are periodic), appended: a detector's shapes then hold the damage at every angle the turn into
+    the source's frame may put a record's (shaft_symmetry), or on every tooth of the watched gear
+    (g its teeth, count the widest gap between those simulated: tooth_gap), where simulating every
+    tooth of a gear on a slower shaft (which the two-stage models simulate one by one) costs a
+    simulation a tooth."""
     faults = np.asarray(X)[np.asarray(y) != 0]
-    if g <= 1 or not len(faults):
+    count = g if count is None else min(count, g)
+    if count <= 1 or not len(faults):
         return X, y
     n = faults.shape[-1]
     F = np.fft.rfft(faults, axis=-1)
     orders = np.arange(F.shape[-1])
     turned = [
-        np.fft.irfft(F * np.exp(-2j * np.pi * orders * k / g), n=n, axis=-1).astype(faults.dtype) for k in range(1, g)
+        np.fft.irfft(F * np.exp(-2j * np.pi * orders * k / g), n=n, axis=-1).astype(faults.dtype)
+        for k in range(1, count)
     ]
-    ones = np.ones(len(faults) * (g - 1), dtype=np.asarray(y).dtype)
+    ones = np.ones(len(faults) * (count - 1), dtype=np.asarray(y).dtype)
     return np.concatenate([X, *turned]), np.concatenate([y, ones])
 
 
