@@ -218,12 +218,13 @@ def synchronous_bins(table, bins: int) -> np.ndarray:
     # synchronous with the grand period, whose level follows the meshes' and so the load. The lattice is dense (any
     # order lies near one of high enough harmonics), so a bearing's order stays searched only where the harmonics are
     # bounded: |a| + |b| <= BEAT, |c| <= 1, as a gear's mesh spectrum is dominated by its first harmonics; within SUM
-    # bins (the blocks' order resolution) of such a point a line is the gearbox's (of LOW-HIGH, a two-stage box's 45-49
-    # % of the bins, a three-stage one's up to 75 %). A 17/47 + 29/67 + 23/59 reducer's healthy take read z 5.3 at 6.89
-    # = M2 - M3 and 3.29 = M2 - 2 M3 (threshold 4.1); box Q, 27/61 + 18/49, healthy at 28 Hz, z 6.5-7.1 at 3.54 = M1 - 3
-    # M2 + o_2, then 5.1 at 7.80 = M2 - o_3; a 19/62 + 23/87 box's healthy take at twice its history's load, z 4.6-5.1
-    # at 8.89 = M1 - 4 M2 + o_2 (threshold 4.1), 'bearing-like' (tests/test_outside_cn); the rig's 32 and 16 beat on
-    # 16's multiples
+    # bins (the blocks' order resolution) of such a point a line is the gearbox's (of LOW-HIGH, a two-stage box's
+    # 45-49 % of the bins, a three-stage one's up to 75 %; strike orders of 1.5-10 whose first HARMONICS harmonics all
+    # lie there, so unseen: 10-12 %, 28 %, from 7-9 % and 19 % with |a| + |b| <= 4). A 17/47 + 29/67 + 23/59 reducer's
+    # healthy take read z 5.3 at 6.89 = M2 - M3 and 3.29 = M2 - 2 M3 (threshold 4.1); box Q, 27/61 + 18/49, healthy at
+    # 28 Hz, z 6.5-7.1 at 3.54 = M1 - 3 M2 + o_2, then 5.1 at 7.80 = M2 - o_3; a 19/62 + 23/87 box's healthy take at
+    # twice its history's load, z 4.6-5.1 at 8.89 = M1 - 4 M2 + o_2 (threshold 4.1), 'bearing-like'
+    # (tests/test_outside_cn); the rig's 32 and 16 beat on 16's multiples
     for i in range(len(meshes)):
         for j in range(i, len(meshes)):
             sides = [c * float(table.shaft_orders[s]) for s in {i, i + 1, j, j + 1} for c in (-1, 1)]
