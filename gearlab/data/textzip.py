@@ -28,8 +28,9 @@ SENSITIVITY_RANGE = (1e-5 / STANDARD_GRAVITY, 10.0 / STANDARD_GRAVITY)
 
 # --- sensor sensitivity ------------------------------------------------------------------
 
-# "g" in a sensitivity is standard gravity, never the gram: pint's name for it is g_n.
-_GRAVITY = re.compile(r"(?<![\w.])g(?![\w])")
+# "g" in a sensitivity or gain is standard gravity, never the gram: pint's name for it is g_n; after a digit too
+# ("5g", a data sheet's full scale) and with milli ("1 mg": counts of a milli-g), never in a word ("kg").
+_GRAVITY = re.compile(r"(?<![A-Za-z_.])(m?)g(?!\w)")
 
 
 def parse_sensitivity(value, where: str) -> float:
@@ -57,7 +58,7 @@ def _quantity(value, units: tuple[str, ...], where: str) -> tuple[float, str]:
     """(value in SI, which of *units* it has): the first unit whose dimension the text has; a bare
     number is in units[0]. Else the error of units[0] (the form most people write)."""
     written = value if isinstance(value, str) else None
-    text = _GRAVITY.sub("g_n", value) if isinstance(value, str) else value
+    text = _GRAVITY.sub(r"\1g_n", value) if isinstance(value, str) else value
     first = None
     for unit in units:
         try:
