@@ -136,7 +136,7 @@ def read_record(path: str, options: InspectOptions) -> Recording:
             raise
         units = f"value x {scale:g}, not m/s² ({str(refused).split('; ', 1)[-1]})"
     vib = series(contents.found[vibration], vibration, "vibration", path) * scale
-    units += level_hint(units, vib, "--unit mV")
+    units += level_hint(units, vib, "--unit {}")
     fs, fs_source = sampling_rate(contents, options.fs, vib.size, path)
     tacho = None
     if options.tacho is not None:

@@ -104,3 +104,41 @@ def test_a_square_tacho_of_two_marks_a_turn_sampled_at_the_vibrations_rate_is_re
     error = theta - 2 * np.pi * (turns - np.ceil(turns[0] * marks) / marks)
     error = error[5000:-5000] - error[5000:-5000].mean()
     assert np.sqrt(np.mean(error**2)) < 0.2e-3  # rad; raw edges: 1.34e-3 at 2 marks
+
+
+def _volts_take(path, fs=8192.0, seconds=3.0):
+    """A one-stage 20/47 box's take at 24.3 Hz, 0.7 g RMS, in volts at 100 mV/g, one headerless column."""
+    rng = np.random.default_rng(7)
+    t = np.arange(int(fs * seconds)) / fs
+    x = (1 + 0.05 * np.cos(2 * np.pi * 24.3 * t)) * np.cos(2 * np.pi * 486 * t) + rng.normal(0, 0.05, t.size)
+    np.savetxt(path, 0.1 * x, fmt="%.6f")
+    return path
+
+
+def test_volts_read_as_millivolts_by_the_unit_key_are_called_out(tmp_path):
+    # CP: a take in volts given unit = "mV" reads 1000 x too low (0.7 g -> 0.7 mg) and nothing said so, where the
+    # take in millivolts read as volts is called 'too loud for a gearbox'
+    from gearlab.data.recordings import read_recording
+
+    take = _volts_take(tmp_path / "v.tsv")
+    low = read_recording(take, "0", fs=8192.0, sensitivity=0.1 / G, unit="mV")
+    assert low.units.endswith("too quiet for a gearbox: values in volts? unit = 'V'"), low.units
+    right = read_recording(take, "0", fs=8192.0, sensitivity=0.1 / G, unit="V")
+    assert "too quiet" not in right.units and "too loud" not in right.units, right.units
+
+
+def test_inspect_calls_out_volts_given_as_millivolts(cli, tmp_path):
+    import json
+
+    from gearboxes import description, stage
+
+    box = tmp_path / "s.toml"
+    box.write_text(description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", near="input"))
+    take = _volts_take(tmp_path / "v.tsv")
+    args = ("--gearbox", box, "--vibration", "0", "--fs", "8192", "--sensitivity", "100 mV/g", "--json")
+    code, out, err = cli("inspect", take, *args, "--unit", "mV")
+    assert code == 0, err
+    said = json.loads(out)["units"]
+    assert "RMS 0.000" in said and "too quiet for a gearbox: values in volts? --unit V" in said, said
+    code, out, err = cli("inspect", take, *args, "--unit", "V")
+    assert code == 0 and "too quiet" not in json.loads(out)["units"], err

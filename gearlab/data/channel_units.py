@@ -4,6 +4,7 @@ gain (data.textzip.calibration), as the factor to m/s² and a line saying how (c
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
@@ -66,27 +67,46 @@ def unit_scale(text: str) -> tuple[str, str, float] | None:
     return None
 
 
-class VoltsAssumed(str):
-    """channel_scale's words where a file unit was taken as 1 V (a sensitivity given; no gain, and no unit in the
-    channel's name, the file or a 'unit' key): level_hint checks the level these values come to."""
+class VoltsRead(str):
+    """channel_scale's words where the file unit's volts are a key's to change (a sensitivity given, no gain, and no
+    unit in the channel's name or the file): taken as 1 V where no 'unit' key said one, or given as a millivolt by
+    it. level_hint checks the level these values come to; *other* is the key's other reading ('mV' or 'V')."""
+
+    other: str
 
 
-# An RMS over this many g, of values taken as volts, is called out: a gearbox housing's vibration is a few g at most,
-# and a logger's millivolts read as volts come out 1000 x too large (100 mV/g logged in mV: RMS 470 g, unsaid; a
-# 0.19 g box logged in mV reads 194 g: 50 g still leaves a factor of ten over a loud housing)
+def _volts_read(how: str, other: str) -> VoltsRead:
+    words = VoltsRead(how)
+    words.other = other
+    return words
+
+
+# A level read through volts this far off a gearbox housing's is called out, with the unit that reads it 1000 x the
+# other way. Over VOLTS_TOO_LOUD_G, of values taken as volts: a logger's millivolts read as volts come out 1000 x too
+# large (100 mV/g logged in mV: RMS 470 g, unsaid; a 0.19 g box logged in mV reads 194 g: 50 g still leaves a factor
+# of ten over a loud housing). Under MILLIVOLTS_TOO_QUIET_G, of values given as millivolts: volts read as millivolts
+# come out 1000 x too small, under a general-purpose accelerometer's own noise (0.1-0.3 mg RMS broadband) (CP's slow
+# 6 Hz box, 0.24 g at 100 mV/g given 'mV': 0.24 mg, unsaid)
 VOLTS_TOO_LOUD_G = 50.0
+MILLIVOLTS_TOO_QUIET_G = 1e-3
 TOO_LOUD = "too loud for a gearbox"  # level_hint's words, which a detection run's warnings repeat
+TOO_QUIET = "too quiet for a gearbox"
 
 
-def level_hint(units: str, values: np.ndarray, remedy: str) -> str:
-    """'' or, where *units* took the file's values as volts (VoltsAssumed) and *values* (m/s²) come to an RMS over
-    VOLTS_TOO_LOUD_G, the words that say so and *remedy* (how to give millivolts: "--unit mV", "unit = 'mV'")."""
-    if not isinstance(units, VoltsAssumed) or values.size == 0:
+def level_hint(units: str, values: np.ndarray, key: str) -> str:
+    """'' or, where *units* read the file's values through volts a key may change (VoltsRead) and *values* (m/s²)
+    come to an RMS over VOLTS_TOO_LOUD_G as volts or under MILLIVOLTS_TOO_QUIET_G as millivolts, the words that say
+    so and how to give the other unit (*key*: "--unit {}", "unit = '{}'")."""
+    if not isinstance(units, VoltsRead) or values.size == 0:
         return ""
     rms = float(np.sqrt(np.mean(np.square(values - np.mean(values))))) / STANDARD_GRAVITY
-    if rms < VOLTS_TOO_LOUD_G:
+    if units.other == "mV" and rms >= VOLTS_TOO_LOUD_G:
+        said, other = TOO_LOUD, "millivolts"
+    elif units.other == "V" and rms <= MILLIVOLTS_TOO_QUIET_G:
+        said, other = TOO_QUIET, "volts"
+    else:
         return ""
-    return f"; RMS {rms:.3g} g, {TOO_LOUD}: values in millivolts? {remedy}"
+    return f"; RMS {rms:.3g} g, {said}: values in {other}? {key.format(units.other)}"
 
 
 # What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
@@ -113,7 +133,7 @@ def channel_scale(
     def at(key: str) -> str:
         return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
 
-    said, says = name_unit(name), "as its name says"
+    said, says, keyed = name_unit(name), "as its name says", False
     if said is None and unit is not None:
         said, says = unit_scale(unit), f"as the file's unit '{unit}' says"
     if declared is not None:
@@ -124,7 +144,7 @@ def channel_scale(
                 f"expected no unit (or '{said[1]}')"
             )
         if said is None:
-            said, says = given, "as " + (flag("unit") if flag else "key 'unit'") + " says"
+            said, says, keyed = given, "as " + (flag("unit") if flag else "key 'unit'") + " says", True
     if said is not None and said[0] == "voltage" and sensitivity is None:
         raise GearlabInputError(
             f"{at('sensitivity')}: missing; channel '{name}' is in volts ({said[1]}, {says}); "
@@ -173,4 +193,8 @@ def channel_scale(
         )
     # in g too, as a scenario gives them: a gain of '50 g' reads '50 g a file unit'
     how = f"m/s² = value x {scale:.6g}, {scale / STANDARD_GRAVITY:.6g} g a file unit ({volts:g} V / {per_g})"
-    return scale, VoltsAssumed(how) if gain is None and said is None else how
+    if gain is None and said is None:
+        return scale, _volts_read(how, "mV")
+    if gain is None and keyed and math.isclose(said[2], 1e-3):  # millivolts the 'unit' key gave
+        return scale, _volts_read(how, "V")
+    return scale, how

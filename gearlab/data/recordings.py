@@ -488,7 +488,7 @@ def read_recording(
     name = named(vibration, contents.available)
     scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name), declared=unit)
     vib = series(raw, vibration, "vibration", path) * scale
-    units += level_hint(units, vib, "unit = 'mV'")
+    units += level_hint(units, vib, "unit = '{}'")
     rate, fs_source = sampling_rate(contents, fs, vib.size, path)
     tacho_values = None
     if tacho is not None:

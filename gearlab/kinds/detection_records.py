@@ -14,7 +14,7 @@ from fractions import Fraction
 import numpy as np
 
 from ..data.chain import Chain
-from ..data.channel_units import TOO_LOUD
+from ..data.channel_units import TOO_LOUD, TOO_QUIET
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
@@ -416,9 +416,10 @@ def read_target(
             for p, how in said
             if VARIES_WORDS in how or UNSEEN_WORDS in how  # a run-up without a tacho: read whole, warned of too
         ]
-        cond["warnings"] += level_warnings(cond)  # and each take's millivolts read as volts (channel_units.level_hint)
-        loud = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
-        cond["warnings"] += [f"{p}: {units.split('; ')[-1]}" for p, units in loud if TOO_LOUD in units]
+        # and each take's millivolts read as volts, or volts as millivolts (channel_units.level_hint)
+        cond["warnings"] += level_warnings(cond)
+        taken = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
+        cond["warnings"] += [f"{p}: {u.split('; ')[-1]}" for p, u in taken if TOO_LOUD in u or TOO_QUIET in u]
         for line in cond["warnings"]:
             on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter
