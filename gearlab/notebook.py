@@ -225,11 +225,9 @@ def read_recording(
 
 def _unit(value: str | None, where: str) -> str | None:
     """A 'unit' as a scenario's key takes it (recordings.UNITS), else a one-line error naming *where*."""
-    from .data.recordings import UNITS
+    from .data.channel_units import declared_unit
 
-    if value is not None and value not in UNITS:
-        raise GearlabInputError(f"{where}: {value!r} is not one of {', '.join(UNITS)}")
-    return value
+    return declared_unit(value, where)
 
 
 def import_recording(path: str | Path, vibration: str | int, **keys) -> Dataset:

@@ -142,3 +142,50 @@ def test_inspect_calls_out_volts_given_as_millivolts(cli, tmp_path):
     assert "RMS 0.000" in said and "too quiet for a gearbox: values in volts? --unit V" in said, said
     code, out, err = cli("inspect", take, *args, "--unit", "V")
     assert code == 0 and "too quiet" not in json.loads(out)["units"], err
+
+
+@pytest.mark.parametrize("written, read", [("volts", "V"), ("Volt", "V"), ("volt", "V"), ("millivolts", "mV")])
+def test_the_unit_key_reads_volts_as_they_are_spelled(cli, tmp_path, written, read):
+    # CP: unit = "volts" was refused ("'volts' is not one of m/s^2, m/s², g, V, mV") by every reader of the key
+    from gearboxes import description, stage
+
+    from gearlab import read_recording
+
+    take = _volts_take(tmp_path / "v.tsv")
+    spelled = read_recording(take, 0, fs=8192.0, sensitivity="100 mV/g", unit=written)
+    assert spelled.units == read_recording(take, 0, fs=8192.0, sensitivity="100 mV/g", unit=read).units
+    (tmp_path / "s.toml").write_text(
+        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
+    )
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "u"\nkind = "gap"\n[source]\ngearbox = "s.toml"\n[target]\nvibration = "0"\n'
+        f'fs = "8192 Hz"\nunit = "{written}"\nsensitivity = "100 mV/g"\n'
+        'files = [{ file = "v.tsv", role = "history", label = "healthy" }]\n'
+    )
+    code, out, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 0, err
+    code, out, err = cli(
+        "inspect",
+        take,
+        "--vibration",
+        "0",
+        "--fs",
+        "8192",
+        "--speed",
+        "24.3 Hz",
+        "--unit",
+        written,
+        "--sensitivity",
+        "100 mV/g",
+        "--json",
+    )
+    assert code == 0, err
+
+
+@pytest.mark.parametrize("written", ["volz", "G", "kV"])
+def test_a_unit_key_of_no_known_spelling_stays_refused(written):
+    from gearlab import read_recording
+    from gearlab.errors import GearlabInputError
+
+    with pytest.raises(GearlabInputError, match=f"unit: '{written}' is not one of m/s\\^2, m/s², g, V, mV"):
+        read_recording("missing.tsv", 0, fs=8192.0, unit=written)

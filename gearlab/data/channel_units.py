@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 
-from ..errors import GearlabInputError
+from ..errors import GearlabInputError, did_you_mean, shown
 from ..units import to_si
 
 STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer units and sensitivities (ISO 80000-3)
@@ -112,6 +112,22 @@ def level_hint(units: str, values: np.ndarray, key: str) -> str:
 # What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
 # (a headerless text column): the quantity and factor are name_unit's, as if the name ended in it.
 UNITS = ("m/s^2", "m/s²", "g", "V", "mV")
+# ... and a volt or millivolt as it is spelled out ('volts', 'Volt', 'millivolts'), compared in lower case without
+# blanks; the symbols themselves stay case-sensitive ('G' is no g, 'MV' no mV)
+_VOLTS_SPELLED = {"volt": "V", "volts": "V", "millivolt": "mV", "millivolts": "mV"}
+
+
+def declared_unit(value, where: str):
+    """A 'unit' key's *value* as UNITS writes it ('volts' -> 'V'), None or '' as given (none declared), else one line
+    naming *where*."""
+    if value in (None, "") or value in UNITS:
+        return value
+    read = _VOLTS_SPELLED.get(re.sub(r"\s", "", value).lower()) if isinstance(value, str) else None
+    if read is None:
+        raise GearlabInputError(
+            f"{where}: {shown(value)} is not one of {', '.join(UNITS)}{did_you_mean(str(value), UNITS)}"
+        )
+    return read
 
 
 def channel_scale(
@@ -137,6 +153,7 @@ def channel_scale(
     if said is None and unit is not None:
         said, says = unit_scale(unit), f"as the file's unit '{unit}' says"
     if declared is not None:
+        declared = declared_unit(declared, at("unit"))
         given = name_unit(f"[{declared}]")
         if said is not None and (said[0], said[2]) != (given[0], given[2]):  # m/s^2 and ms2 agree
             raise GearlabInputError(

@@ -38,11 +38,11 @@ from ..signals import (
 )
 from ..signals.checks import check_int, check_positive, fmt_hz
 from .chain import FRACTIONS_KEPT
+from .channel_units import declared_unit
 from .readers.base import _one_line_repr
 from .recordings import (
     FORMATS,
     TACHO_KINDS,
-    UNITS,
     check_measured_file,
     prefixed,
     read_channels,
@@ -209,8 +209,7 @@ class MeasuredSpec:
                 f"{where}: give either a tacho channel (tacho = ...) or a nominal shaft speed (speed = ...) or a "
                 "gearbox description to find it from (gearbox = ...) to know the shaft angle, got neither"
             )
-        if self.unit is not None and self.unit not in UNITS:
-            raise GearlabInputError(f"{where}: unit {self.unit!r} is not one of {', '.join(UNITS)}")
+        declared_unit(self.unit, f"{where}: unit")
         if self.tacho_kind not in TACHO_KINDS:
             raise GearlabInputError(
                 f"{where}: unknown tacho_kind '{self.tacho_kind}'{did_you_mean(str(self.tacho_kind), TACHO_KINDS)}; "

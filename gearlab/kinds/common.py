@@ -10,10 +10,10 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from ..data.channel_units import declared_unit
 from ..data.importers import MeasuredSpec
 from ..data.placement import canonical_faults, model_shafts
 from ..data.recordings import (
-    UNITS,
     channel_key,
     check_measured_file,
     check_recording,
@@ -23,7 +23,7 @@ from ..data.recordings import (
 from ..data.spec import CH5_STEPS, DATASET_PRESETS, FAULTS, POINTS, DatasetSpec, NoiseSpec, dataset_preset
 from ..data.textzip import CALIBRATION, calibration, parse_sensitivity
 from ..effects import effects_from_tables
-from ..errors import GearlabInputError, did_you_mean, shown
+from ..errors import GearlabInputError, shown
 from ..executors import make_executor
 from ..learn.protocol import Counts
 from ..parts.measured import ACQUISITION, pulses_of, tacho_shaft_of
@@ -48,11 +48,7 @@ def _column(value, where: str):
 
 def _unit(value, where: str):
     """A declared unit, or '' (none declared: what a run's resolved scenario.toml writes back)."""
-    if value and value not in UNITS:
-        raise GearlabInputError(
-            f"{where}: {shown(value)} is not one of {', '.join(UNITS)}{did_you_mean(str(value), UNITS)}"
-        )
-    return value
+    return declared_unit(value, where)
 
 
 def _quantity_of(key: str):
