@@ -189,3 +189,40 @@ def test_a_unit_key_of_no_known_spelling_stays_refused(written):
 
     with pytest.raises(GearlabInputError, match=f"unit: '{written}' is not one of m/s\\^2, m/s², g, V, mV"):
         read_recording("missing.tsv", 0, fs=8192.0, unit=written)
+
+
+def test_score_words_a_wav_s_full_scale_as_inspect_does(cli, tmp_path):
+    # CP: a float WAV's gain = "5g" (its full scale) was worded '5 g a file unit (the gain, a full scale)' by inspect
+    # and '5 g a file unit (1 V / 200 mV/g)' by gearlab score, a volt the user never gave: the run's scoring.json kept
+    # the gain as the number 1.0 and lost that it was a full scale
+    import json
+
+    from gearboxes import description, stage
+    from scipy.io import wavfile
+
+    (tmp_path / "s.toml").write_text(
+        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
+    )
+    rng, fs = np.random.default_rng(5), 8192
+    t = np.arange(fs * 4) / fs
+    for name in ("h1.wav", "h2.wav", "h3.wav", "t.wav", "new.wav"):
+        x = (1 + 0.05 * np.cos(2 * np.pi * 24.3 * t)) * np.cos(2 * np.pi * 486 * t) + rng.normal(0, 0.05, t.size)
+        wavfile.write(tmp_path / name, fs, (x / 5.0).astype(np.float32))  # in g, 5 g full scale
+    files = [("h1.wav", "history"), ("h2.wav", "history"), ("h3.wav", "history"), ("t.wav", "test")]
+    listed = ",\n".join(f'  {{ file = "{f}", role = "{r}", label = "healthy" }}' for f, r in files)
+    (tmp_path / "d.toml").write_text(
+        '[scenario]\nname = "fs"\nkind = "detection"\n[source]\ngearbox = "s.toml"\nfaults = { chip = [18] }\n'
+        f'healthy = 8\n[target]\nvibration = "0"\ngain = "5g"\nfiles = [\n{listed},\n]\n'
+        '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
+    )
+    code, out, err = cli("run", tmp_path / "d.toml", "--quick", "--out", tmp_path / "runs")
+    assert code == 0, err[-1500:]
+    (run,) = (tmp_path / "runs").glob("fs/*/")
+    code, out, err = cli("inspect", tmp_path / "new.wav", "--gain", "5g", "--speed", "24.3 Hz", "--json")
+    assert code == 0, err
+    inspected = json.loads(out)["units"]
+    assert inspected.endswith("5 g a file unit (the gain, a full scale)"), inspected
+    code, out, err = cli("score", run, tmp_path / "new.wav", "--json")
+    assert code == 0, err[-1500:]
+    scored = json.dumps(json.loads(out), ensure_ascii=False)
+    assert inspected in scored and "1 V /" not in scored, scored[-1500:]

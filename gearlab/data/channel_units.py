@@ -38,6 +38,21 @@ class FileUnitGain(float):
     channel_scale's line says the full scale instead ('(1 V / 196.133 mV/g)' was told of gain = '50 m/s^2')."""
 
 
+# JSON keeps a gain as a number: a run's scoring.json keeps a full scale's as these words, so that gearlab score reads
+# and words a file as inspect does (it said '5 g a file unit (1 V / 200 mV/g)' of gain = '5g', the 1 V no one's)
+FULL_SCALE = "full scale"
+
+
+def kept_gain(gain):
+    """*gain* as a run's scoring.json keeps it: a FileUnitGain as FULL_SCALE."""
+    return FULL_SCALE if isinstance(gain, FileUnitGain) else gain
+
+
+def read_gain(gain):
+    """A gain as a run's scoring.json kept it (kept_gain), as the readers take it."""
+    return FileUnitGain(1.0) if gain == FULL_SCALE else gain
+
+
 def name_unit(name: str) -> tuple[str, str, float] | None:
     """(quantity, unit, SI factor) a channel's name declares: ("voltage", "mV", 1e-3),
     ("acceleration", "g", 9.80665), ...; None when it says none."""

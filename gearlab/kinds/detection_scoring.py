@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..data.channel_units import kept_gain, read_gain
 from ..data.recordings import channel_key, channel_listing, cut_recording, read_header
 from ..data.textzip import CALIBRATION, calibration
 from ..data.which_gear import Take
@@ -71,11 +72,13 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
     out = {
         # cut_recording's keys; without a tacho, the declared speed and the description (a resolved path)
         # whose mesh orders give a new record's speed
-        "target": {
-            k: getattr(target, k)
-            for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
-            + ("speed_hz", "gearbox", "unit")
-        }
+        "target": _plain(
+            {
+                k: getattr(target, k)
+                for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
+                + ("speed_hz", "gearbox", "unit")
+            }
+        )
         # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)
         | ({} if target.tacho_shaft is None else {"tacho_shaft": asdict(target.tacho_shaft)}),
         "file_keys": file_keys(target.files),  # a new file in a test file's format: read with its keys
@@ -141,8 +144,10 @@ def file_keys(files) -> dict:
 
 
 def _plain(keys) -> dict:
-    """A file's own keys as scoring.json keeps them: a tacho_shaft (a TachoShaft) as {name, a, b}."""
-    return {k: asdict(v) if k == "tacho_shaft" and v is not None else v for k, v in dict(keys).items()}
+    """A file's own keys as scoring.json keeps them: a tacho_shaft (a TachoShaft) as {name, a, b}, a full scale's gain
+    as channel_units.FULL_SCALE (reading_keys reads it back)."""
+    kept = {k: asdict(v) if k == "tacho_shaft" and v is not None else v for k, v in dict(keys).items()}
+    return kept | ({"gain": kept_gain(kept["gain"])} if "gain" in kept else {})
 
 
 def tacho_records(target) -> str:
@@ -506,6 +511,7 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
     the run's [target] keys: every key a 'files' entry takes (parts.measured.ACQUISITION), a tacho_shaft
     of the run's description (*box* where its keys have none: the one its source simulates)."""
     keys = dict(meta["target"]) | remembered(meta, file, given)[0]
+    keys["gain"] = read_gain(keys.get("gain"))
     for key, value in (given or {}).items():
         at = f"--key {key}"
         # "" takes none of the run's (gain, sensitivity, unit, fs), as a [target] files entry's "" does: a next-week
