@@ -226,3 +226,28 @@ def test_score_words_a_wav_s_full_scale_as_inspect_does(cli, tmp_path):
     assert code == 0, err[-1500:]
     scored = json.dumps(json.loads(out), ensure_ascii=False)
     assert inspected in scored and "1 V /" not in scored, scored[-1500:]
+
+
+def test_a_detection_run_warns_of_a_take_in_volts_given_as_millivolts(cli, tmp_path):
+    # the warning a take in millivolts read as volts gets (test_outside_o), for the other way round: one history
+    # take's entry says unit = "mV" of its volts
+    from gearboxes import description, stage
+
+    (tmp_path / "s.toml").write_text(
+        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
+    )
+    for name in ("h1.tsv", "h2.tsv", "v.tsv", "t.tsv"):
+        _volts_take(tmp_path / name, seconds=4.0)
+    files = [("h1.tsv", "history", ""), ("h2.tsv", "history", ""), ("v.tsv", "history", ', unit = "mV"')]
+    listed = ",\n".join(f'  {{ file = "{f}", role = "{r}", label = "healthy"{u} }}' for f, r, u in files)
+    (tmp_path / "d.toml").write_text(
+        '[scenario]\nname = "v"\nkind = "detection"\n[source]\ngearbox = "s.toml"\nfaults = { chip = [18] }\n'
+        f'healthy = 8\n[target]\nvibration = 0\nfs = "8192 Hz"\nunit = "V"\nsensitivity = "100 mV/g"\nfiles = [\n'
+        f'{listed},\n  {{ file = "t.tsv", role = "test", label = "healthy" }},\n]\n'
+        '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
+    )
+    code, out, err = cli("run", tmp_path / "d.toml", "--quick", "--out", tmp_path / "runs")
+    assert code == 0, err[-1500:]
+    said = out + err
+    assert "warning: v.tsv: RMS 0.000" in said and "too quiet for a gearbox: values in volts? unit = 'V'" in said
+    assert "h1.tsv: RMS" not in said
