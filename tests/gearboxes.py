@@ -118,3 +118,26 @@ TWO_HISTORIES_ONE_TEST = """files = [
 [[methods]]
 adapter = "matched_filter"
 """
+
+
+def box_s(folder) -> None:
+    """An outside user's one-stage 20/47 box at 24.3 Hz, no tacho, the sensor near the input: *folder*/s.toml."""
+    stages = stage(20, 47, bores=("25 mm", "40 mm"))
+    (folder / "s.toml").write_text(description(stages, name="boxS", speed="24.3 Hz", load="50 N*m", near="input"))
+
+
+def box_s_take(rng, t: np.ndarray) -> np.ndarray:
+    """Box S's vibration in g at times *t*: its 486 Hz mesh (20 x 24.3 Hz), 5 % modulated by the input shaft, and
+    0.05 g of noise from *rng*."""
+    return (1 + 0.05 * np.cos(2 * np.pi * 24.3 * t)) * np.cos(2 * np.pi * 486 * t) + rng.normal(0, 0.05, t.size)
+
+
+def box_s_detection(folder, name: str, files, target: str) -> None:
+    """*folder*/d.toml: scenario *name*, matched_filter watching box S's pinion for a chip (tooth 18); *files*:
+    (file, role, extra keys) all labelled healthy; *target*: [target]'s other key lines."""
+    listed = ",\n".join(f'  {{ file = "{f}", role = "{r}", label = "healthy"{extra} }}' for f, r, extra in files)
+    (folder / "d.toml").write_text(
+        f'[scenario]\nname = "{name}"\nkind = "detection"\n[source]\ngearbox = "s.toml"\nfaults = {{ chip = [18] }}\n'
+        f"healthy = 8\n[target]\n{target}files = [\n{listed},\n]\n"
+        '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
+    )

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gearboxes import box_s, box_s_detection, box_s_take
 
 from gearlab.data.textzip import calibration, gain_quantity, parse_sensitivity
 
@@ -129,8 +130,7 @@ def _volts_take(path, fs=8192.0, seconds=3.0):
     """A one-stage 20/47 box's take at 24.3 Hz, 0.7 g RMS, in volts at 100 mV/g, one headerless column."""
     rng = np.random.default_rng(7)
     t = np.arange(int(fs * seconds)) / fs
-    x = (1 + 0.05 * np.cos(2 * np.pi * 24.3 * t)) * np.cos(2 * np.pi * 486 * t) + rng.normal(0, 0.05, t.size)
-    np.savetxt(path, 0.1 * x, fmt="%.6f")
+    np.savetxt(path, 0.1 * box_s_take(rng, t), fmt="%.6f")
     return path
 
 
@@ -216,24 +216,15 @@ def test_score_words_a_wav_s_full_scale_as_inspect_does(cli, tmp_path):
     # the gain as the number 1.0 and lost that it was a full scale
     import json
 
-    from gearboxes import description, stage
     from scipy.io import wavfile
 
-    (tmp_path / "s.toml").write_text(
-        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
-    )
+    box_s(tmp_path)
     rng, fs = np.random.default_rng(5), 8192
     t = np.arange(fs * 4) / fs
     for name in ("h1.wav", "h2.wav", "h3.wav", "t.wav", "new.wav"):
-        x = (1 + 0.05 * np.cos(2 * np.pi * 24.3 * t)) * np.cos(2 * np.pi * 486 * t) + rng.normal(0, 0.05, t.size)
-        wavfile.write(tmp_path / name, fs, (x / 5.0).astype(np.float32))  # in g, 5 g full scale
-    files = [("h1.wav", "history"), ("h2.wav", "history"), ("h3.wav", "history"), ("t.wav", "test")]
-    listed = ",\n".join(f'  {{ file = "{f}", role = "{r}", label = "healthy" }}' for f, r in files)
-    (tmp_path / "d.toml").write_text(
-        '[scenario]\nname = "fs"\nkind = "detection"\n[source]\ngearbox = "s.toml"\nfaults = { chip = [18] }\n'
-        f'healthy = 8\n[target]\nvibration = "0"\ngain = "5g"\nfiles = [\n{listed},\n]\n'
-        '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
-    )
+        wavfile.write(tmp_path / name, fs, (box_s_take(rng, t) / 5.0).astype(np.float32))  # in g, 5 g full scale
+    files = [("h1.wav", "history", ""), ("h2.wav", "history", ""), ("h3.wav", "history", ""), ("t.wav", "test", "")]
+    box_s_detection(tmp_path, "fs", files, 'vibration = "0"\ngain = "5g"\n')
     code, out, err = cli("run", tmp_path / "d.toml", "--quick", "--out", tmp_path / "runs")
     assert code == 0, err[-1500:]
     (run,) = (tmp_path / "runs").glob("fs/*/")
@@ -250,21 +241,12 @@ def test_score_words_a_wav_s_full_scale_as_inspect_does(cli, tmp_path):
 def test_a_detection_run_warns_of_a_take_in_volts_given_as_millivolts(cli, tmp_path):
     # the warning a take in millivolts read as volts gets (test_outside_o), for the other way round: one history
     # take's entry says unit = "mV" of its volts
-    from gearboxes import description, stage
-
-    (tmp_path / "s.toml").write_text(
-        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
-    )
+    box_s(tmp_path)
     for name in ("h1.tsv", "h2.tsv", "v.tsv", "t.tsv"):
         _volts_take(tmp_path / name, seconds=4.0)
     files = [("h1.tsv", "history", ""), ("h2.tsv", "history", ""), ("v.tsv", "history", ', unit = "mV"')]
-    listed = ",\n".join(f'  {{ file = "{f}", role = "{r}", label = "healthy"{u} }}' for f, r, u in files)
-    (tmp_path / "d.toml").write_text(
-        '[scenario]\nname = "v"\nkind = "detection"\n[source]\ngearbox = "s.toml"\nfaults = { chip = [18] }\n'
-        f'healthy = 8\n[target]\nvibration = 0\nfs = "8192 Hz"\nunit = "V"\nsensitivity = "100 mV/g"\nfiles = [\n'
-        f'{listed},\n  {{ file = "t.tsv", role = "test", label = "healthy" }},\n]\n'
-        '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
-    )
+    target = 'vibration = 0\nfs = "8192 Hz"\nunit = "V"\nsensitivity = "100 mV/g"\n'
+    box_s_detection(tmp_path, "v", [*files, ("t.tsv", "test", "")], target)
     code, out, err = cli("run", tmp_path / "d.toml", "--quick", "--out", tmp_path / "runs")
     assert code == 0, err[-1500:]
     said = out + err

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from gearboxes import description, reducer_26_63_24_77, stage
+from gearboxes import box_s, box_s_detection, box_s_take, reducer_26_63_24_77
 
 # the reducer's first two stages, read by a tacho on its slowest shaft (one mark every 7.8 input turns)
 BOX_O = reducer_26_63_24_77(name="boxO", tacho="output")
@@ -90,22 +90,14 @@ def test_a_scenario_s_millivolt_column_read_as_volts_is_called_out(tmp_path):
 def test_a_detection_run_warns_of_a_history_take_in_millivolts(cli, tmp_path):
     # the one-stage 20/47 box without a tacho, three history takes at 100 mV/g, one of them logged in mV: the run
     # said only 'the history's levels span 1 .. 1e+03 x their median (two loads or gains?)'
-    (tmp_path / "s.toml").write_text(
-        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
-    )
+    box_s(tmp_path)
     rng, fs = np.random.default_rng(5), 8192.0
     t = np.arange(int(fs * 4)) / fs
     for name, volts_per_g in (("h1.csv", 0.1), ("h2.csv", 0.1), ("mv.csv", 100.0), ("t.csv", 0.1)):
-        x = (1 + 0.05 * np.cos(2 * np.pi * 24.3 * t)) * np.cos(2 * np.pi * 486 * t) + rng.normal(0, 0.05, t.size)
-        rows = np.column_stack([t, volts_per_g * x])
+        rows = np.column_stack([t, volts_per_g * box_s_take(rng, t)])
         np.savetxt(tmp_path / name, rows, fmt="%.6f", delimiter=",", header="time_s,acc", comments="")
-    files = [("h1.csv", "history"), ("h2.csv", "history"), ("mv.csv", "history"), ("t.csv", "test")]
-    listed = ",\n".join(f'  {{ file = "{f}", role = "{r}", label = "healthy" }}' for f, r in files)
-    (tmp_path / "d.toml").write_text(
-        '[scenario]\nname = "mv"\nkind = "detection"\n[source]\ngearbox = "s.toml"\nfaults = { chip = [18] }\n'
-        f'healthy = 8\n[target]\nvibration = "acc"\nsensitivity = "100 mV/g"\nfiles = [\n{listed},\n]\n'
-        '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
-    )
+    files = [("h1.csv", "history", ""), ("h2.csv", "history", ""), ("mv.csv", "history", ""), ("t.csv", "test", "")]
+    box_s_detection(tmp_path, "mv", files, 'vibration = "acc"\nsensitivity = "100 mV/g"\n')
     code, out, err = cli("run", tmp_path / "d.toml", "--quick", "--out", tmp_path / "runs")
     assert code == 0, err[-1500:]
     warned, said = "mv.csv: RMS 7", out + err  # ~760 g
