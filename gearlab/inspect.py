@@ -43,6 +43,7 @@ from .data.recordings import (
     tacho_kind,
 )
 from .errors import GearlabInputError
+from .gap.stats import MIN_REVOLUTIONS
 from .gearbox import Gearbox, order_table
 from .gearbox.match import check_description, outward_first, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
@@ -362,7 +363,9 @@ def _elsewhere(in_hz: Lines, table, declared: float, df: float) -> str | None:
     """Where every described mesh and its 2nd harmonic has a line at one speed far from the *declared*
     one (lines *in_hz*, bin *df*), that speed in one line: a 27/61 + 18/49 box at 41 Hz described at 28 Hz
     was told 'the mesh at 652.4 Hz is a 22-tooth pinion's at 29.65 Hz, ...' (its 2nd M2 near the declared
-    M1), when the description is right and only the speed is not (outside check D). None: no such speed."""
+    M1), when the description is right and only the speed is not (outside check D). None: no such speed. A speed
+    of which the record holds under MIN_REVOLUTIONS turns (1/*df* s long) is none: a stepped 106/127 take's mesh
+    smeared, its output shaft's line and 2nd harmonic were a 106-tooth mesh's at 0.172 Hz, one turn a record."""
     meshes = [float(s.mesh) for s in table.stages]
     strong = in_hz.at[np.argsort(-in_hz.amp)[:8]]
     hm = np.array([h * m for m in meshes for h in (1, 2)])
@@ -371,7 +374,7 @@ def _elsewhere(in_hz: Lines, table, declared: float, df: float) -> str | None:
         found = [in_hz.near(x * f, max(2.5 * df, 0.002 * f * max(meshes))) for x in hm]
         # one stage: a speed within the nominal range may be a pinion a few teeth off (the lines' own words)
         far = NOMINAL_RANGE if len(meshes) == 1 else 2 * DECLARED_RANGE
-        if abs(f / declared - 1) > far and None not in found:
+        if abs(f / declared - 1) > far and f >= MIN_REVOLUTIONS * df and None not in found:
             at = in_hz.at[np.array(found)]
             fits.append((float(np.sum(in_hz.amp[np.array(found)])), float(np.sum(at * hm) / np.sum(hm * hm))))
     if not fits:
