@@ -20,6 +20,9 @@ COURSE_WINDOWS = 15  # the record's spectra over time: half-overlapping windows,
 COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean, or as far as speed_shift reads
 COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
 COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
+# a course whose windows lie further than this share of its span off the quadratic is a step, not a ramp (windows off
+# by 0.39-0.47 of a 1-6 % step's span; by 0.02-0.03 of a 30 % linear run-up's or coast-down's, whose lines smear)
+STEP_MISFIT = 0.1
 
 
 def lifted_rows(signal: np.ndarray, fs: float, starts, size: int, step: float, wide: float):
@@ -103,7 +106,7 @@ def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
     centre = (starts + size / 2) / fs
     t = np.arange(n) / fs
     course = np.polyval(np.polyfit(centre, ratio, 2), t)
-    if np.max(np.abs(np.interp(centre, t, course) - ratio)) > COURSE_MIN:
+    if np.max(np.abs(np.interp(centre, t, course) - ratio)) > max(COURSE_MIN, STEP_MISFIT * float(np.ptp(ratio))):
         # not a quadratic: a step between two plateaus (a 6 % step, 98/113 + 112/135: its mesh band, half-way to
         # the next mesh's 0.87 orders away, held neither plateau about the quadratic, the mean read 2.2 % low);
         # the windows' ratios joined, each end segment's slope carried on to the record's end (a run-up's ramp goes
