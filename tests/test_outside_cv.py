@@ -113,3 +113,45 @@ def test_a_linear_run_up_without_a_tacho_keeps_its_quadratic_course(tmp_path):
     smooth = np.polyval(np.polyfit(t, course, 2), t)
     assert np.max(np.abs(course - smooth)) < 1e-6  # the ramp's smooth course, not its windows joined
     assert np.max(np.abs(course - f / f.mean())[f.size // 16 : -f.size // 16]) < 0.005
+
+
+def _velocity_csv(path, header="time_s,vel [mm/s],tacho_V", units_row=None, fs=8192.0):
+    """A housing's velocity in mm/s (a velocity transducer's or a data collector's export), a tacho beside it."""
+    t = np.arange(int(fs)) / fs
+    v = 4.0 * np.sin(2 * np.pi * 27 * 20 * t)
+    rows = "\n".join(f"{a:.6f},{b:.5f},{5.0 * (np.mod(a * 27, 1) < 0.2):.1f}" for a, b in zip(t, v))
+    path.write_text(header + "\n" + (units_row + "\n" if units_row else "") + rows + "\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    "header, units_row, quantity",
+    [
+        ("time_s,vel [mm/s],tacho_V", None, "velocity"),
+        ("time_s,v (in/s),tacho_V", None, "velocity"),
+        ("time_s,vel,tacho_V", "s,mm/s,V", "velocity"),
+        ("time_s,disp [um],tacho_V", None, "displacement"),
+    ],
+)
+def test_a_velocity_or_displacement_channel_is_refused_not_read_as_acceleration(
+    tmp_path, cli, header, units_row, quantity
+):
+    # CV: a channel 'vel [mm/s]' was read as m/s² ('values: unknown (no sensitivity or gain given: the values are
+    # taken as m/s²)'), its unit in brackets passed over: inspect, gap and detection went on with a velocity
+    take = _velocity_csv(tmp_path / "v.csv", header, units_row)
+    name = header.split(",")[1]
+    # inspect shows any column as stored, and says why its values are not m/s² (line 1)
+    code, out, err = cli("inspect", take, "--vibration", name, "--tacho", "tacho_V")
+    assert code == 0, err
+    first = out.splitlines()[0]
+    assert "value x 1, not m/s²" in first and f"not a {quantity}" in first, first
+    (tmp_path / "box.toml").write_text(
+        description(stage(20, 47, bores=("25 mm", "40 mm")), name="s", speed="27 Hz", load="50 N*m", near="input")
+    )
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "u"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\n'
+        f'vibration = "{name}"\ntacho = "tacho_V"\n'
+        'files = [{ file = "v.csv", role = "history", label = "healthy" }]\n'
+    )
+    code, out, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 2 and quantity in err and "vibration" in err, (out, err)

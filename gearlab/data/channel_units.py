@@ -82,6 +82,22 @@ def unit_scale(text: str) -> tuple[str, str, float] | None:
     return None
 
 
+_BRACKETED = re.compile(r"[\[(]([^\[\]()]+)[\])]\s*$")  # a unit in brackets at a name's end: 'vel [mm/s]', 'v (in/s)'
+
+
+def _other_quantity(name: str) -> tuple[str, str] | None:
+    """(quantity, unit) where a channel's name ends in a bracketed velocity or displacement unit ('vel [mm/s]',
+    'disp [um]'); else None."""
+    match = _BRACKETED.search(str(name))
+    for quantity, si in (("velocity", "m/s"), ("displacement", "m")):
+        try:
+            if match and to_si(match.group(1).strip(), si, "") > 0:
+                return quantity, match.group(1).strip()
+        except GearlabInputError:
+            continue
+    return None
+
+
 class VoltsRead(str):
     """channel_scale's words where the file unit's volts are a key's to change (a sensitivity given, no gain, and no
     unit in the channel's name or the file): taken as 1 V where no 'unit' key said one, or given as a millivolt by
@@ -164,6 +180,12 @@ def channel_scale(
     def at(key: str) -> str:
         return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
 
+    for text, by in ((name, "as its name says"), (f"[{unit}]" if unit else "", f"as the file's unit '{unit}' says")):
+        if other := _other_quantity(text):  # a velocity read as m/s² was no gearbox's acceleration, unsaid
+            raise GearlabInputError(
+                f"{at('vibration')}: channel '{name}' ({by}); expected an acceleration (m/s², g) or an "
+                f"accelerometer's volts, not a {other[0]} in {other[1]}: record the accelerometer's own signal"
+            )
     said, says, keyed = name_unit(name), "as its name says", False
     if said is None and unit is not None:
         said, says = unit_scale(unit), f"as the file's unit '{unit}' says"
