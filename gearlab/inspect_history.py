@@ -106,12 +106,12 @@ def nonsync_lines(revs, history: list, table, speed_hz: float) -> dict:
 
 
 def call_of(loc: dict, ns: dict) -> str:
-    """What the record's change is, by the rule a detection run calls a flag with (its watched gear aside): a
-    gear (or shaft) the synchronous averages name; else other damage where the non-synchronous residual
-    changed; else no change."""
-    if loc["named"]:
-        named = next((s for s in loc.get("shafts", ()) if s["shaft"] == loc.get("named_shaft")), {})
-        return f"localised change: {loc['named']}{weakly(named)}"
+    """What the record's change is, by the rule a detection run calls a flag with (its watched gear aside): the
+    gears (or shafts) the synchronous averages name (data.which_gear.flagged_shafts); else other damage where the
+    non-synchronous residual changed; else no change."""
+    if loc["named"]:  # every shaft whose change is its own, the named first (damage on two gears: both)
+        shafts = W.flagged_shafts(loc) if loc.get("shafts") else [{"gear": loc["named"]}]
+        return "localised change: " + "; ".join(s["gear"] + weakly(s) for s in shafts)
     if ns.get("changed"):
         return NS.call(ns["order"])
     if loc.get("summary", "").startswith("not localised: ") and "note" in ns:  # neither read: no call, not 'no change'

@@ -155,3 +155,21 @@ def test_a_velocity_or_displacement_channel_is_refused_not_read_as_acceleration(
     )
     code, out, err = cli("validate", tmp_path / "gap.toml")
     assert code == 2 and quantity in err and "vibration" in err, (out, err)
+
+
+def test_inspect_names_both_gears_of_a_take_damaged_on_two_shafts_as_a_run_does():
+    # CV: a 106/127 take chipped on the pinion and the wheel (z 594 and 1039, threshold 2.58): a detection run's table
+    # named both ('output gear 127T (stage 1); input pinion 106T (stage 1)'), inspect --history's call the first alone
+    # ('call: localised change: output gear 127T (stage 1)'); a wheel's leak onto the input (z 4.8 of 1623) is none
+    from gearlab.inspect_history import call_of
+
+    def shaft(name, gear, z):
+        return {"shaft": name, "gear": gear, "gears": [gear], "z": z, "threshold": 2.58, "flagged": z > 2.58}
+
+    both = {"named": "output gear 127T (stage 1)", "named_shaft": "output", "summary": ""}
+    both["shafts"] = [shaft("output", "output gear 127T (stage 1)", 1038.6), shaft("input", "input pinion 106T", 594.2)]
+    assert call_of(both, {}) == "localised change: output gear 127T (stage 1); input pinion 106T"
+    leak = dict(
+        both, shafts=[shaft("output", "output gear 127T (stage 1)", 1622.9), shaft("input", "input pinion", 4.8)]
+    )
+    assert call_of(leak, {}) == "localised change: output gear 127T (stage 1)"

@@ -6,6 +6,7 @@ too (gearlab.kinds.detection_which_gear). Simulated PHM 2009 rig records, a few 
 import pytest
 from which_gear_takes import HISTORY, flags_everything, rig_condition
 
+from gearlab.data import which_gear as W
 from gearlab.data.spec import dataset_preset
 from gearlab.gearbox import order_table
 from gearlab.kinds import detection_which_gear as D
@@ -41,7 +42,7 @@ def test_a_record_damaged_on_the_watched_gear_and_another_is_called_both(target)
     conditions, labels = target
     loc = D.localise_target(dataset_preset("phm09-30"), conditions)  # watches the input pinion only
     both = loc["records"]["both"]
-    flagged = [s["shaft"] for s in D.flagged_shafts(both)]
+    flagged = [s["shaft"] for s in W.flagged_shafts(both)]
     assert sorted(flagged) == ["idler", "input"], both["summary"]
     idler = next(s for s in both["shafts"] if s["shaft"] == "idler")
     assert both["call"] == f"{D.WATCHED}: {PINION}{D.ALSO}{idler['gear']}"

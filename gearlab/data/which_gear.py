@@ -114,3 +114,28 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
     except GearlabInputError as exc:
         return {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
     return found.describe()
+
+
+# A shaft beside the named one carries a change of its own where its z is over SECOND_TIMES its threshold
+# and SECOND_SHARE of the named shaft's z: a strong change leaks into the other shafts' estimates (an
+# output-gear crack at z 62,474 put 142 on the input shaft: 0.2 %), and a history of two records lets
+# healthy shafts pass their thresholds (up to 2.3 times them, development seeds); a pinion chip with a
+# chip on its wheel: 93 and 66.
+SECOND_TIMES, SECOND_SHARE = 3.0, 0.05
+
+
+def flagged_shafts(found: dict) -> list[dict]:
+    """The shafts of a localisation (Localisation.describe()) whose change is the record's own, the
+    named one first: damage on two gears of different shafts (a pinion and its wheel) names both."""
+    if found["named"] is None:
+        return []
+    named = [s for s in found["shafts"] if s["shaft"] == found["named_shaft"]]
+    top = named[0]["z"]
+    return named + [
+        s
+        for s in found["shafts"]
+        if s["flagged"]
+        and s["shaft"] != found["named_shaft"]
+        and s["z"] > SECOND_TIMES * s["threshold"]
+        and s["z"] > SECOND_SHARE * top
+    ]

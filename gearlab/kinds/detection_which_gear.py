@@ -67,29 +67,6 @@ def watched_gears(source: DatasetSpec, table) -> list[str]:
 
 
 ALSO = "; also other damage: "  # a record localised on a watched gear and on another
-# A shaft beside the named one carries a change of its own where its z is over SECOND_TIMES its threshold
-# and SECOND_SHARE of the named shaft's z: a strong change leaks into the other shafts' estimates (an
-# output-gear crack at z 62,474 put 142 on the input shaft: 0.2 %), and a history of two records lets
-# healthy shafts pass their thresholds (up to 2.3 times them, development seeds); a pinion chip with a
-# chip on its wheel: 93 and 66.
-SECOND_TIMES, SECOND_SHARE = 3.0, 0.05
-
-
-def flagged_shafts(found: dict) -> list[dict]:
-    """The shafts of a localisation (Localisation.describe()) whose change is the record's own, the
-    named one first: damage on two gears of different shafts (a pinion and its wheel) names both."""
-    if found["named"] is None:
-        return []
-    named = [s for s in found["shafts"] if s["shaft"] == found["named_shaft"]]
-    top = named[0]["z"]
-    return named + [
-        s
-        for s in found["shafts"]
-        if s["flagged"]
-        and s["shaft"] != found["named_shaft"]
-        and s["z"] > SECOND_TIMES * s["threshold"]
-        and s["z"] > SECOND_SHARE * top
-    ]
 
 
 def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str:
@@ -100,7 +77,7 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str
     else other damage, every flagged gear named; nothing localised, other damage where the
     non-synchronous residual changed ("other damage: non-synchronous (bearing-like), at order 3.57"),
     else the watched gear's, not localised."""
-    shafts = flagged_shafts(found)
+    shafts = W.flagged_shafts(found)
     if not shafts:
         if nonsync and nonsync["changed"]:
             return NS.call(nonsync["order"])
@@ -350,7 +327,7 @@ def records_md(loc: dict, labels: dict) -> str:
     ]
     for path, r in loc["records"].items():
         z = ", ".join(f"{s['shaft']} {s['z']:.1f}/{s['threshold']:.1f}" for s in r["shafts"])
-        on = "; ".join(e["gear"] for e in flagged_shafts(r))  # every gear over its threshold, the named first
+        on = "; ".join(e["gear"] for e in W.flagged_shafts(r))  # every gear over its threshold, the named first
         out.append(
             f"| {r['condition']} | {path} | {labels.get(path, '')} | {on or 'nothing'} | {z} | "
             f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {_nonsync_cell(r.get('nonsync'))} | {r['call']} |"
