@@ -173,3 +173,9 @@ def test_inspect_names_both_gears_of_a_take_damaged_on_two_shafts_as_a_run_does(
         both, shafts=[shaft("output", "output gear 127T (stage 1)", 1622.9), shaft("input", "input pinion", 4.8)]
     )
     assert call_of(leak, {}) == "localised change: output gear 127T (stage 1)"
+    # gearlab score's 'which gear:' line said the first alone too (its decision's evidence held both z)
+    from gearlab.data.which_gear import named_gears
+
+    assert named_gears(both) == "output gear 127T (stage 1); input pinion 106T"
+    assert named_gears(leak) == "output gear 127T (stage 1)"
+    assert named_gears(dict(both, named=None)) is None

@@ -139,3 +139,9 @@ def flagged_shafts(found: dict) -> list[dict]:
         and s["z"] > SECOND_TIMES * s["threshold"]
         and s["z"] > SECOND_SHARE * top
     ]
+
+
+def named_gears(found: dict) -> str | None:
+    """The gears of flagged_shafts as one line, the named first ("output gear 127T (stage 1); input pinion 106T
+    (stage 1)"), or None: what `gearlab score` says a take's change lies on, as inspect's call and a run's table do."""
+    return "; ".join(s["gear"] for s in flagged_shafts(found)) or None

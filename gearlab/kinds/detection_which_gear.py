@@ -259,7 +259,7 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
             found = W.which_gear(take, hist, table, made)
             ns = nonsync_of(take.revolutions, quiet, table)
             out[path] = {
-                "named": found["named"],
+                "named": W.named_gears(found),  # damage on two shafts: both, as the run's table names them
                 "summary": found["summary"],
                 "nonsync": ns,
                 "call": call_of(found, meta["watched"], ns),
