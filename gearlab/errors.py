@@ -62,6 +62,17 @@ def did_you_mean(name: str, known: list[str] | tuple[str, ...], named: dict[str,
     return f" (did you mean '{(named or {}).get(close[0], close[0])}'?)" if close else ""
 
 
+def which_meant(name: str, available) -> str:
+    """The hint after 'no channel NAME': the paths *name* ends, where it ends several (an HDF5's run1/acc and run2/acc
+    asked as 'acc': the hint named one of them alone), else the closest name (did_you_mean)."""
+    ends = [str(c) for c in available if str(c).rsplit("/", 1)[-1] == name and str(c) != name]
+    if len(ends) > 1:
+        return (
+            f" ('{name}' ends {len(ends)} datasets' paths, {', '.join(ends[:-1])} and {ends[-1]}: give the whole path)"
+        )
+    return did_you_mean(name, [str(c) for c in available])
+
+
 def refuse_unknown(given, known: list[str] | tuple[str, ...], where: str) -> None:
     """A one-line error for the first parameter of *given* that is not *known*: the closest known one and the list."""
     for key in given:

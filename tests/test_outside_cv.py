@@ -179,3 +179,23 @@ def test_inspect_names_both_gears_of_a_take_damaged_on_two_shafts_as_a_run_does(
     assert named_gears(both) == "output gear 127T (stage 1); input pinion 106T"
     assert named_gears(leak) == "output gear 127T (stage 1)"
     assert named_gears(dict(both, named=None)) is None
+
+
+def test_a_dataset_name_that_ends_two_hdf5_paths_says_which_paths(tmp_path, cli):
+    # CV: an HDF5 with run1/acc and run2/acc, asked for 'acc' (the guide: 'an HDF5 dataset rec/acc is also acc'):
+    # 'no vibration channel 'acc' (did you mean 'run2/acc'?)', one of the two picked as the hint
+    h5py = pytest.importorskip("h5py")
+    x = np.random.default_rng(0).normal(size=4096)
+    with h5py.File(tmp_path / "two.h5", "w") as h:
+        h.create_dataset("run1/acc", data=x)
+        h.create_dataset("run2/acc", data=x)
+        h.attrs["fs"] = 4096.0
+    code, out, err = cli("inspect", tmp_path / "two.h5", "--vibration", "acc", "--speed", "20 Hz", "--unit", "m/s^2")
+    assert code == 2 and "'acc' ends 2 datasets' paths, run1/acc and run2/acc" in err and "did you mean" not in err, err
+    (tmp_path / "g.toml").write_text(
+        '[scenario]\nname = "u"\nkind = "gap"\n[source]\ngearbox = "b.toml"\n[target]\nvibration = "acc"\n'
+        'unit = "m/s^2"\nfiles = [{ file = "two.h5", role = "history", label = "healthy" }]\n'
+    )
+    (tmp_path / "b.toml").write_text(description(stage(20, 47), name="s", speed="20 Hz", load="50 N*m", near="input"))
+    code, out, err = cli("validate", tmp_path / "g.toml")
+    assert code == 2 and "key 'vibration'" in err and "run1/acc and run2/acc" in err, err

@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import GearlabInputError, did_you_mean
+from ..errors import GearlabInputError, which_meant
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz, revolution_speeds
@@ -179,7 +179,7 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
         if name not in contents.found:
             role = f"{roles[name]} " if roles and name in roles else ""
             raise GearlabInputError(
-                f"{path}: no {role}channel '{name}'{did_you_mean(name, contents.available)}; "
+                f"{path}: no {role}channel '{name}'{which_meant(name, contents.available)}; "
                 f"the file has: {_listing(contents.available)}"
             )
     return contents, fmt
@@ -783,7 +783,7 @@ def check_recording(
             index = " (or a 0-based column index)" if header.indexed else ""
             raise GearlabInputError(
                 f"{where} key '{key}': {path} has no channel {_one_line_repr(name)}"
-                f"{did_you_mean(str(name), [str(c) for c in header.channels])}; the file has: "
+                f"{which_meant(str(name), [str(c) for c in header.channels])}; the file has: "
                 f"{_listing(header.channels)}{index}"
             )
         header.check_channel(header.resolve(name), f"{where} key '{key}'", path)  # no time column, a series
