@@ -29,13 +29,14 @@ WHEEL, PINION = Gear("intermediate", 1, "wheel", 52), Gear("intermediate", 2, "p
 
 @pytest.fixture(scope="module")
 def box_b(tmp_path_factory):
-    """A folder with box B's description (boxB.toml), its ring history (h61..h63, 8 s) and the 16T chip's
-    take of seed 64 (c64, 8 s, ring), as helper P's and AB's tests made them each."""
+    """A folder with box B's description (boxB.toml), its ring history (h61..h63, 6 s) and the 16T chip's
+    take of seed 64 (c64, 6 s, ring), as helper P's and AB's tests made them each (8 s there: at 6 s the chip's
+    own-mesh sidebands read z 6.9-7.3 over seeds 64-67, 7.7-8.1 at 8 s, both over COMB_Z = 6)."""
     folder = tmp_path_factory.mktemp("boxB")
     (folder / "boxB.toml").write_text(BOX_B)
     for s in (61, 62, 63):
-        box_b_take(folder / f"h{s}.npz", s, seconds=8.0, ring=True)
-    box_b_take(folder / "c64.npz", 64, seconds=8.0, chip=1.0, ring=True)
+        box_b_take(folder / f"h{s}.npz", s, seconds=6.0, ring=True)
+    box_b_take(folder / "c64.npz", 64, seconds=6.0, chip=1.0, ring=True)
     return folder
 
 
