@@ -44,10 +44,10 @@ def test_a_four_mark_tacho_s_own_shaft_counts_its_teeth_up_to_quarter_turns(
     # counted from the mark, the same tooth up to 13-tooth steps (52 / 4), and said so
     monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
     (tmp_path / "boxB.toml").write_text(BOX_B)
-    history = [box_b_take(tmp_path / f"h{seed}.npz", seed, seconds=6.0) for seed in (51, 52, 53)]
+    history = [box_b_take(tmp_path / f"h{seed}.npz", seed, seconds=4.0) for seed in (51, 52, 53)]
     pitches = []
     for seed in (54, 56):
-        take = box_b_take(tmp_path / f"c{seed}.npz", seed, seconds=6.0, crack=1.0)
+        take = box_b_take(tmp_path / f"c{seed}.npz", seed, seconds=4.0, crack=1.0)
         args = ["inspect", take, "--gearbox", tmp_path / "boxB.toml", "--vibration", "acc_top", "--tacho", "tacho"]
         code, stdout, err = cli(*args, "--unit", "g", *[a for h in history for a in ("--history", h)], "--json")
         assert code == 0, err
