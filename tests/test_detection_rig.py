@@ -132,6 +132,45 @@ def test_the_shipped_scenario_takes_another_file_list_of_the_rig(tmp_path, monke
                 assert share == (1.0 if rec.startswith("chip") else 0.0), (indicator, rec, share)
 
 
+@pytest.mark.slow
+def test_a_threshold_from_two_history_records_lets_a_new_records_units_through_at_the_rate_asked(tmp_path, monkeypatch):
+    """Two history records and three healthy new takes of the rig at 35 and 50 Hz (two seeds each, 1 % asked):
+    each history record is scored against the other's reference (detection_classical), so its scores are what
+    a new take's are against the history's. Scored against its own reference, tooth_sync let 15 % (record10) and
+    28 % (record30) of the new takes' units through, tooth_energy 13-16 % (24 seeds)."""
+    import textrecords
+
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection_classical import classical_record
+    from gearlab.kinds.detection_records import read_target
+    from gearlab.kinds.detection_units import Rule
+
+    monkeypatch.setattr(textrecords, "FS", 66666.67)
+    shipped = (Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml").read_text()
+    start = shipped.index("files = [\n")
+    end = shipped.index("\n]", start) + 1  # the list's closing bracket stays
+    called = {}
+    for take, speed in enumerate((35.0, 50.0, 35.0, 50.0)):
+        listed = ["files = [\n"]
+        for k in range(5):
+            seed = 100 * take + k
+            vib, tacho = textrecords.signals(revolutions=45, seed=seed, phase=0.9 * seed, speed=speed)
+            path = textrecords.write_zip(tmp_path / f"t{take}_{k}.zip", textrecords.text(vib, tacho))
+            listed.append(f'  {{ path = "{path}", role = "{"history" if k < 2 else "test"}", label = "healthy" }},\n')
+        (tmp_path / "s.toml").write_text(shipped[:start] + "".join(listed) + shipped[end:])
+        spec = load_scenario(tmp_path / "s.toml").spec
+        ((name, cond),) = read_target(spec.target, spec.detection.blocks, lambda e: None).items()
+        rule = Rule(spec.detection.threshold, spec.detection.false_alarm, cond["history_records"])
+        for indicator in ("fm4", "na4", "tooth_energy", "tooth_sync", "pinion_sync"):
+            r = classical_record(indicator, name, cond, spec.classical, rule)
+            for u in ("record10", "record30"):
+                for scores in r["test_scores"].values():
+                    called.setdefault(indicator, []).extend(np.array(scores[u]) > r["thresholds"][u])
+    rates = {k: float(np.mean(v)) for k, v in called.items()}
+    assert all(len(v) == 4 * 3 * (4 + 1) for v in called.values())  # 4 record10 units and 1 record30 a take
+    assert max(rates.values()) <= 0.05, rates
+
+
 def test_an_input_pinion_chip_is_told_from_idler_shaft_and_bearing_damage(tmp_path, monkeypatch):
     """Synthetic records of the rig's layout (input pinion, idler shaft at 1/3 of its speed):
     a chipped input pinion, a chipped tooth on the idler shaft (once every 3 input revolutions,

@@ -2,8 +2,8 @@
 tooth_energy's, tooth_sync's and pinion_sync's per-window mean and spread are read off the history's
 units; a history take scored against a reference holding its own units scores nearer it than a new take
 does, and the threshold set on those scores lets a new healthy take through more often than asked. Of
-three takes or more each is scored against the reference made without it; two keep the reference of
-both (the PHM 2009 rig's thresholds: with two, each left-out reference would be one take)."""
+two takes or more each is scored against the reference made without it (with two, the other take's:
+test_detection_rig's two-record thresholds)."""
 
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ def test_a_history_take_is_scored_against_the_reference_of_the_other_takes(name,
 
     got = rule.groups("record10", np.asarray(record["history_scores"]["record10"]))
     for k in range(takes):
-        keep = [j for j in range(takes) if j != k or takes < 3]  # two takes: the reference of both
+        keep = [j for j in range(takes) if j != k]
         assert np.allclose(got[k], scored(units[k], keep), rtol=1e-9), k
     # a new take's units against the whole history's reference
     new = cond["test_units"]["t"]["record10"]

@@ -54,9 +54,10 @@ def unit_name(
     )
 
 
-# The fewest history records of which each is scored by a reference made without it (a detector's median
-# revolution, a classical indicator's): with two, each reference is one take, another statistic (on the
-# PHM 2009 rig's two builds matched_filter's detection fell 100 -> 0-17 % with detectors refitted so)
+# The fewest history records of which each is scored by a detector referenced without it (its median
+# revolution): with two, each reference is one take, another statistic (on the PHM 2009 rig's two builds
+# matched_filter's detection fell 100 -> 0-17 % with detectors refitted so). A classical indicator's reference
+# leaves the record out from two records on (detection_classical)
 LEFT_OUT = 3
 
 

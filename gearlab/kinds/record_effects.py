@@ -39,7 +39,10 @@ reason their sum of squares about the record's mean has fewer degrees of freedom
 With two records the record variance rests on one degree of freedom: its t quantile would call
 nothing (31.8 at 99 %: on the PHM 2009 rig's history of two builds, an output-shaft tooth's image in
 the input TSA went unlocalised), so there the normal quantile is kept — a rough figure, honest about
-take-to-take variation where pooling ignores it, but no tolerance bound (give three takes). With a
+take-to-take variation where pooling ignores it, but no tolerance bound (give three takes). What a
+threshold from two records needs first is history scores that are a new record's: scored against a
+reference made with them, two synthetic rig records let 13-28 % of a new take's units through where 1 %
+was asked, and the t quantile on those scores left record10's at 12-14 % (detection_classical). With a
 single history record sigma_a^2 cannot be estimated and is taken as 0 (``record_sd`` None).
 A score that is a *size* above a known floor (NA4, a fourth moment over a history's variance: a take's
 mounting gain and noise level multiply it) has a record effect that is a factor, and its spread across
