@@ -85,16 +85,15 @@ def test_edges_with_a_sample_mid_swing_keep_their_interpolated_times(kind, monke
     assert angle_error(theta, angle.angle_from_pulses(pulses, FS)) < 1e-4
 
 
-def test_a_tacho_of_several_marks_a_turn_has_each_marks_edges_smoothed_apart(monkeypatch):
-    """Several marks a turn (the PHM rig's 10): each mark's quantised edges are smoothed as their own sequence
-    (once a turn each), as a once-a-turn tacho's are; the rig's 10 were read raw when a two-record threshold was
-    too tight for the smoothed angle (test_detection_rig)."""
+def test_a_tacho_of_several_marks_a_turn_keeps_its_interpolated_edges(monkeypatch):
+    """Several marks a turn (the PHM rig's 10) follow the speed within a turn: their quantised edges are not
+    smoothed (smoothed each mark apart, the rig's eccentric-idler take at 40 Hz low load scored above its chipped
+    takes: angle_from_pulses); a once-a-turn tacho's are."""
     calls = []
     monkeypatch.setattr(angle, "_dequantised", lambda edges: calls.append(edges.size) or edges)
     theta = 2 * np.pi * 33.0 * (0.2 + np.arange(int(SECONDS * FS)) / FS)
     angle.angle_from_pulses(ttl(10 * theta), FS, marks=10)
-    assert len(calls) == 10 and all(abs(n - 132) <= 1 for n in calls), calls
-    calls.clear()
+    assert calls == []
     angle.angle_from_pulses(ttl(theta), FS)
     assert calls == [132], calls
 
