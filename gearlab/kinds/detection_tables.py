@@ -89,6 +89,8 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                     "by_rule": {rule: {"detection": d, "false_alarm": f} for rule, (d, f) in other.items()},
                     "member_auc": [auc(*split(by_unit[m], u)) for m in r.get("members", [])],
                     "shaft": shafts.get(r["condition"], "input"),
+                    # the history's random-effects model behind the threshold (the verdict's record_spread)
+                    "history_model": (r.get("history_models") or {}).get(u),
                 }
             )
     order = {c: i for i, c in enumerate(dict.fromkeys(r["condition"] for r in records))}

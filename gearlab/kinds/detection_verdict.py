@@ -1,6 +1,7 @@
 """The verdict of a detection run (gearlab.kinds.detection's verdict_lines): per condition, the
-rows that meet the record-level goal, the best learned row against the best classical one, and the
-learned rows that did not learn the simulated fault."""
+rows that meet the record-level goal, the best learned row against the best classical one, the
+learned rows that did not learn the simulated fault, and the thresholds that rest on the history's records
+differing (record_spread)."""
 
 from __future__ import annotations
 
@@ -45,6 +46,65 @@ def _spread(summary: Mapping, condition: str) -> str:
     if spread is None:
         return ""
     return f"; the run found why: {spread.split(': ')[0]}, {spread.split('; ')[-1]}"
+
+
+# A threshold rests on the history's records differing where more than half the predictive variance of a new
+# record's unit is the record effect's: sigma_a^2 (1 + 1/R) of sigma_a^2 + sigma_e^2 + Var(mu_hat) (record_effects;
+# Var(mu_hat) carries sigma_a^2 / R). Then the threshold's distance from the history's mean is mostly how far its
+# takes lie apart, not how a take's units scatter, and a faulty unit must exceed that difference to be called: the
+# PHM 2009 rig's two history builds (healthy, eccentric idler) put the classical thresholds above the chips.
+RECORD_SHARE = 0.5
+# ...and where the records differ beyond chance: with two records sigma_a^2 rests on one degree of freedom. The
+# one-way model's own test of sigma_a = 0: the record means' variance over what the within-record spread explains,
+# mean(sigma_e^2 / m_r), an F(R - 1, sigma_e^2's degrees of freedom) where there is no record effect. Two history
+# takes of textrecords' generator (40 revolutions, record10): the share alone said 3 pairs of 9 alike ones (NA4
+# 1.1-2.4x), with the test 2 (1.3x, 2.4x: F 8, 24); every pair of a take twice as noisy (NA4 5.6-9.3x).
+RECORD_LEVEL = 0.01
+
+
+def record_share(model: Mapping | None) -> float | None:
+    """The share of a new record's unit's predictive variance that the record effect makes (RECORD_SHARE), from a
+    row's history_model (record_effects.RecordEffects.as_dict); None with one history record (not estimable)."""
+    if model is None or model.get("record_sd") is None:
+        return None
+    a2, e2, r = model["record_sd"] ** 2, model["unit_sd"] ** 2, model["records"]
+    total = a2 + e2 + model["mean_se"] ** 2
+    return a2 * (1.0 + 1.0 / r) / total if total > 0 else None
+
+
+def records_differ(model: Mapping) -> bool:
+    """Whether the history's record means differ more than their units' scatter explains at RECORD_LEVEL (F test)."""
+    from scipy.stats import f  # here, not at the top: start-up time (scipy.stats takes ~1 s)
+
+    a2, r = model["record_sd"] ** 2, model["records"]
+    # Var(mu_hat) = (sigma_a^2 + mean(sigma_e^2 / m_r)) / R (record_effects.fit), so the within-record part is
+    explained = r * model["mean_se"] ** 2 - a2
+    if explained <= 0:
+        return a2 > 0
+    return float(f.sf((a2 + explained) / explained, r - 1, model.get("unit_dof", float("inf")))) < RECORD_LEVEL
+
+
+def record_spread(condition: str, at: list[Mapping]) -> str | None:
+    """The line saying which of *at*'s rows (one condition, one unit) have thresholds that rest mostly on the spread
+    between the history's records (RECORD_SHARE, RECORD_LEVEL), with sigma_a / sigma_e for each; None where none
+    does."""
+    rest = [
+        (r, r["history_model"])
+        for r in at
+        if (record_share(r.get("history_model")) or 0.0) > RECORD_SHARE and records_differ(r["history_model"])
+    ]
+    if not rest:
+        return None
+    n = rest[0][1]["records"]
+    ratios = ", ".join(
+        f"{m['record_sd'] / m['unit_sd']:.1f}x {r['method']}" if m["unit_sd"] > 0 else r["method"] for r, m in rest
+    )
+    return (
+        f"{condition}: the {n} history records differ (record spread over the within-record spread: {ratios}; "
+        f"the record effect more than {RECORD_SHARE:.0%} of a new unit's variance): these thresholds rest on that "
+        "difference, a unit must exceed it to be called; add healthy takes of this condition (role history): "
+        f"{n} records measure it on {n - 1} degree{'s' if n > 2 else ''} of freedom."
+    )
 
 
 def _cell(x) -> str:
@@ -122,6 +182,7 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
             # a load's history with no test take of its own (a 29/73 box's 'heavy' read 'goal met by no row; best
             # learned matched_filter (AUC –, – / – %), level with ... (AUC –, – / – %)')
             lines.append(f"{c}: no test take: its history's thresholds serve gearlab score.")
+            lines += [spread] if (spread := record_spread(c, at)) else []
             continue
         met = [
             r
@@ -185,4 +246,5 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
                 "not calibrated: " + ", ".join(point)
             )
         lines.append(text + left_out(summary, c, unit) + ".")
+        lines += [spread] if (spread := record_spread(c, at)) else []
     return lines

@@ -75,6 +75,7 @@ class RecordEffects:
     threshold: float
     dof: float = float("inf")  # the predictive variance's degrees of freedom (Satterthwaite)
     floor: float | None = None  # a size's floor: the model is of log(score - floor) (module docstring)
+    unit_dof: float = float("inf")  # sigma_e^2's degrees of freedom (overlap_dof's, summed over the records)
 
     @property
     def predictive_sd(self) -> float:
@@ -171,6 +172,7 @@ def fit(groups, p: float, independent=None, dofs=None, floor: float | None = Non
         threshold=threshold if floor is None else floor + float(np.exp(threshold)),
         dof=nu,
         floor=floor,
+        unit_dof=within_dof,
     )
 
 
