@@ -95,7 +95,7 @@ def nonsync_lines(revs, history: list, table, speed_hz: float) -> dict:
         found = NS.nonsync(revs, hist, table)
     except GearlabInputError as exc:
         return {"note": f"not read: {exc}"}
-    r = NS.residual(revs, table.shaft_orders, table.train_period)
+    r = NS.residual(revs, table)
     blocks = NS.envelope_blocks(r, revs.shape[-1])
     z = NS.line_z(blocks, list(hist.blocks), NS.synchronous_bins(table, blocks.shape[1]))
     orders = NS.orders_of_bins(z.size)

@@ -112,7 +112,8 @@ def test_a_healthy_take_at_a_heavier_load_is_no_bearing_damage(loaded, seed):
     # A healthy take at twice the load of a light-load history was 'other damage: non-synchronous (bearing-like)':
     # z 4.6-5.1 over 4.1, the strongest line at order 8.89 = M1 - 4 M2 + o_2 (M1 = 19, M2 = 7.048, o_2 = 0.306), a
     # beat of the two meshes' harmonics whose level follows the load (outside user CN: at 1.5 x, order 4.33). The
-    # meshes' combinations are the gearbox's (signals.nonsync.synchronous_bins): now z 2.6-3.3 under 4.0, no change;
+    # meshes' combinations are the gearbox's (signals.nonsync.synchronous_bins) and the takes read in whole periods
+    # of the meshes (nonsync.read_turns): now z 2.8-3.5 under 4.8, no change;
     # a bearing's 3.57 strikes a turn are still other damage at that order
     from gearlab.gearbox import load_gearbox
     from gearlab.inspect import InspectOptions
@@ -128,6 +129,30 @@ def test_a_healthy_take_at_a_heavier_load_is_no_bearing_damage(loaded, seed):
     ns = bearing["nonsync"]
     assert ns["changed"] and ns["z"] > 2 * ns["threshold"] and abs(ns["order"] - 3.57) < 0.02, ns
     assert bearing["call"] == f"other damage: non-synchronous (bearing-like), at order {ns['order']:.2f}"
+
+
+@pytest.mark.parametrize("turns", [240, 300, *(pytest.param(n, marks=pytest.mark.slow) for n in (200, 350, 500))])
+def test_a_healthy_takes_verdict_does_not_hinge_on_its_length(loaded, turns):
+    # The heavy take of 200-500 turns against the same 400-turn history, as localisation reads it (nonsync_lines):
+    # read whole, its second mesh (437/62 input orders) fell between bins at 240 and 300 turns (0.61, 0.52 off) and
+    # the record's ends left it in the residual; its envelope's beats read z 4.3 at 240, 5.1-6.2 at 300 (seeds 10-12,
+    # threshold 4.0), 'bearing-like', against 1.6-3.3 at 200, 350, 400, 500. Read in pieces of whole periods of the
+    # meshes (nonsync.read_turns) each mesh is removed whole: z 2.3-3.5 at every length (threshold 4.8); the bearing's
+    # strikes still read many times the threshold, at 3.57
+    from gearlab.gearbox import load_gearbox
+    from gearlab.gearbox.orders import order_table
+    from gearlab.inspect import InspectOptions
+    from gearlab.inspect_history import input_revolutions, nonsync_lines
+
+    box, history, where = loaded
+    box, options = load_gearbox(box), InspectOptions("acc", "tach")
+    past, table = [input_revolutions(h, box, options)[0] for h in history], order_table(box)
+    heavy = input_revolutions(_loaded(where / f"heavy{turns}.npz", 2.0, 11, turns=turns), box, options)[0]
+    ns = nonsync_lines(heavy, past, table, 25.0)
+    assert not ns["changed"] and ns["z"] <= ns["threshold"], ns
+    bearing = input_revolutions(_loaded(where / f"b{turns}.npz", 1.0, 11, 3.57, turns=turns), box, options)[0]
+    ns = nonsync_lines(bearing, past, table, 25.0)
+    assert ns["changed"] and ns["z"] > 2 * ns["threshold"] and abs(ns["order"] - 3.57) < 0.02, ns
 
 
 def _tipped(path, seed: int, tip: float = 0.0) -> None:

@@ -13,7 +13,8 @@ start angle: gearlab.gearbox.orders.OrderTable.train_period) where it holds GRAN
 shaft's orders m o_s fall on whole bins of the record's spectrum (bin k: input order k / R), and a
 shaft's TSA over the record is those bins: the residual is the record with every bin at a multiple of
 a shaft's order set to zero. A record of fewer grand periods (tooth counts with few common factors) is
-read whole and each shaft order's nearest bin and its neighbours (LEAK) are removed.
+read in two pieces of whole periods of its meshes, its first turns and its last (read_turns), and each shaft
+order's nearest bin and its neighbours (LEAK) are removed.
 
 Evidence. The residual's squared envelope (|analytic signal|²), over its mean (a level in units of the
 residual's own power, so a louder take's noise does not read as a change), is read in blocks of
@@ -51,7 +52,7 @@ import numpy as np
 from ..errors import GearlabInputError
 from .shaft import uniform_filter1d
 
-GRAND = 2  # grand periods a record must hold to be cut to them (else read whole, LEAK bins removed)
+GRAND = 2  # grand periods (or meshes' periods) a record must hold to be read in them (read_turns)
 LEAK = 2  # bins on either side of a shaft order's nearest bin removed where the record is read whole (a mesh
 # line between bins leaks past 1: box Q's healthy takes, 27/61 + 18/49 read whole, z 6.5-7.1 over 4.1 at LEAK 1 and
 # the bins of 2592186, 5.0-6.0 at 2; with beats moved by a shaft order (synchronous_bins) 4.2-5.1 at 1, 2.4-3.3 at 2)
@@ -111,19 +112,61 @@ def slowest_turns(revolutions: int, table) -> tuple[float, str]:
     return float(table.shaft_orders[slow]) * revolutions, table.shafts[slow]
 
 
-def residual(revs: np.ndarray, shaft_orders, period: int) -> np.ndarray:
+def read_turns(revolutions: int, table) -> int:
+    """The input revolutions of each piece of a record of *revolutions* the residual is read in, for the gearbox of
+    order table *table*: whole grand periods where it holds GRAND of them (one piece, the rest left); else whole
+    periods of the meshes (two pieces, the first turns and the last, so no turn is lost); else all of it."""
+    # A healthy gearbox's strongest lines are its meshes' harmonics (with their shafts' sidebands). Read over R turns,
+    # a mesh of order M lies at bin M R; where that is not whole (M = 437/62 of a 19/62 + 23/87 box: 0.52 off at 300
+    # turns) the record's ends cut the line, whose spectrum leaks as 1/(pi d) of its amplitude d bins away: past the
+    # LEAK bins removed, 0.13 of it at d = 2.5, and what is left is the line near the record's two ends (its Gibbs
+    # remainder). There the residual's envelope beats the meshes' harmonics, a Mi + b Mj + c o_s, at the load's level:
+    # that box's healthy take at twice its history's load, cut from 500 turns, read z 2.8-5.1 (threshold 4.0) at 200,
+    # 240, 280 and 299 turns, 1.8-2.8 at 186, 248, 310, 372, 434, 496 (whole periods of its meshes, 62 turns). So a
+    # piece is whole periods of the meshes (the turns after which the first stages' meshes are back in phase, as many
+    # stages as the record holds GRAND of, keeping TURNS of the slowest shaft): each mesh and the shafts turning
+    # whole times in it fall on whole bins, and their LEAK neighbours take what a tracked angle smears (box Q's
+    # history, no tacho, read z 4.4-4.8 at 36.75 = M1 + M2 + 4 o_2 with the whole bins alone); the rest (a slower
+    # shaft's sidebands) is weak. The bins removed: 21 % of a 399-turn take of that box (19 % read whole), box Q's
+    # 279 turns 18 % (15 %)
+    if revolutions >= GRAND * table.train_period:
+        return revolutions // table.train_period * table.train_period
+    period, cut = 1, revolutions
+    for st in table.stages:
+        period = math.lcm(period, Fraction(st.mesh).denominator)
+        keep = revolutions // period * period
+        if revolutions < GRAND * period or slowest_turns(keep, table)[0] < TURNS:
+            break
+        cut = keep
+    return cut
+
+
+def residual(revs: np.ndarray, table) -> np.ndarray:
     """The record *revs* (R consecutive input revolutions, flat in input angle) less every shaft's
-    synchronous average (module doc): flat, of R' ≤ R whole revolutions; *shaft_orders*: each shaft's
-    turns per input turn (Fractions); *period*: the train's grand period in input revolutions."""
+    synchronous average (module doc): flat, of R' ≤ R whole revolutions (R' < R only where cut to whole grand
+    periods); *table*: the gearbox's order table (gearlab.gearbox.orders.OrderTable)."""
     revs = np.atleast_2d(np.asarray(revs, dtype=np.float64))
     R, P = revs.shape
-    whole = R // period * period if R >= GRAND * period else R
-    y = revs[:whole].reshape(-1)
+    whole = read_turns(R, table)
+    if R >= GRAND * table.train_period:
+        return _less_shafts(revs[:whole], table.shaft_orders, exact=True)
+    first = _less_shafts(revs[:whole], table.shaft_orders, exact=False)
+    if whole == R:
+        return first
+    last = _less_shafts(revs[R - whole :], table.shaft_orders, exact=False)  # the turns past the first piece
+    return np.concatenate([first, last[(2 * whole - R) * P :]])
+
+
+def _less_shafts(revs: np.ndarray, shaft_orders, exact: bool) -> np.ndarray:
+    """*revs* (R', points) flat, with every bin at a shaft's order zeroed, and its LEAK neighbours where between
+    bins or not *exact* (no whole grand period: a line the tracked angle smears a little spreads past its bin)."""
+    whole = len(revs)
+    y = revs.reshape(-1)
     X = np.fft.rfft(y - y.mean())
     k = np.arange(X.size)
     for o in shaft_orders:
         step = Fraction(o) * whole  # bins between the shaft's orders
-        if step.denominator == 1:
+        if exact and step.denominator == 1:
             X[k % int(step) == 0] = 0.0
             continue
         at = np.round(np.arange(0, X.size / float(step) + 1) * float(step)).astype(np.int64)
@@ -299,7 +342,7 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
     short = [w for w in (too_short(len(t), table) for t in takes if len(t) >= BLOCK) if w]
     if short:
         raise GearlabInputError(f"the history's takes: {short[0]}")
-    blocks = tuple(envelope_blocks(residual(t, table.shaft_orders, table.train_period), np.shape(t)[-1]) for t in takes)
+    blocks = tuple(envelope_blocks(residual(t, table), np.shape(t)[-1]) for t in takes)
     if sum(len(b) for b in blocks) < 3:
         raise GearlabInputError(
             f"non-synchronous residual: the history holds {sum(len(b) for b in blocks)} blocks of {BLOCK} "
@@ -326,7 +369,7 @@ def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
     short = too_short(len(take), table)
     if short:
         raise GearlabInputError(short)
-    r = residual(take, table.shaft_orders, table.train_period)
+    r = residual(take, table)
     blocks = envelope_blocks(r, np.shape(take)[-1])
     z, order = _z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
     return NonSync(z, refined(r, np.shape(take)[-1], order), hist.threshold)
