@@ -489,22 +489,43 @@ def follow_speed(
         # 1.94 Hz (15xM1) or 12.19 Hz; inspect read 12.19 Hz, its pinion's sidebands confirm it); none
         # there (the lines do not confirm it): found from the mesh lines alone, as without one
         got = _follow_speed(signal, fs, box, box.speed_hz, where, threshold_db)
-        if got[2] != "declared":
+        # on a take whose speed moves, a reading near the prior whose phase is not followed is none (98/113 + 112/135
+        # stepping 17.5 -> 18.03 Hz: stage 2's mesh at 17.92 Hz on a sideband of stage 1's, 0.9 % high)
+        if got[2] != "declared" and (got[0] is not None or not passes(signal, fs)):
             return got
-    elif declared is not None and speed_shift(signal, fs) is not None:
-        # a take whose spectra show its speed move (a run-up or coast-down): the declared speed is the nominal one it
-        # passes, not its mean, which the lines do not confirm (14 -> 19 Hz over 12 s declared 16 Hz: its mean
-        # 16.5 Hz, unconfirmed without sidebands, was read at a constant 16 Hz, 191 'revolutions' all in band).
-        # None near it: the speed the mesh lines show along the take's course, kept where its phase is followed
+    elif declared is not None and ((ramp := speed_shift(signal, fs) is not None) or passes(signal, fs)):
+        # a take whose spectra show its speed move (a run-up or coast-down; a step or swing wider than a declared
+        # speed's trust): the declared speed is the nominal one it passes, not its mean, which the lines do not
+        # confirm (14 -> 19 Hz over 12 s declared 16 Hz: its mean 16.5 Hz, unconfirmed without sidebands, was read at
+        # a constant 16 Hz, 191 'revolutions' all in band; a 4 % step declared at its first plateau: 1.9 % low).
+        # None near it: the speed the mesh lines show along the take's course, kept where its phase is followed (a
+        # step's or swing's only where the take passes the declared speed: else the declared speed is wrong)
         got = _follow_speed(signal, fs, box, declared, where, threshold_db, file)
-        if got[2] == "declared":
+        if got[2] == "declared" or (got[0] is None and not ramp):  # as a prior's unfollowed reading, above
             try:
                 found = _follow_speed(signal, fs, box, None, where, threshold_db, file)
             except GearlabInputError:
                 return got
-            return found if found[0] is not None else got
+            return found if found[0] is not None and (ramp or passes(signal, fs, found[0], declared)) else got
         return got
     return _follow_speed(signal, fs, box, declared, where, threshold_db, file)
+
+
+def passes(signal: np.ndarray, fs: float, angle: np.ndarray | None = None, declared: float = 0.0) -> bool:
+    """Whether a record without a tacho moves its speed over more than DECLARED_RANGE (its speed_course), where a
+    declared speed may be one it passes and not its mean; with its input *angle* (rad per sample): whether the
+    speeds of its revolutions come within DECLARED_RANGE of the *declared* speed (Hz)."""
+    course = speed_course(signal, fs)
+    if course is None or float(np.ptp(course)) <= DECLARED_RANGE:
+        return False
+    if angle is None:
+        return True
+    starts = np.flatnonzero(np.diff(np.floor((angle - angle[0]) / (2 * np.pi))))
+    if starts.size < 2:
+        return False
+    speeds = fs / np.diff(starts)  # per revolution
+    low, high = float(np.min(speeds)), float(np.max(speeds))
+    return low * (1 - DECLARED_RANGE) <= declared <= high * (1 + DECLARED_RANGE)
 
 
 def _follow_speed(signal, fs, box, declared, where, threshold_db, file=None) -> tuple:
@@ -556,8 +577,10 @@ def gathered(signal, fs: float, fine: Upsampled, found: list[tuple], box: Gearbo
     the mesh's power (its top line within GATHERED_DB of the highest: a speed k times too slow follows no swing above
     its shafts' rates, its FM sidebands stay) and reads its own speed again (one followed on 2 M reads half); else
     *found*. A 39/110 + 38/101 box at 41.70 Hz swinging at ~1 Hz: 41.70 (71.7 dB) or 8.340 Hz (54.7 dB) (issue 39)."""
-    fastest = max(g[1] for g in found)
-    if any(abs(fastest / g[1] - round(fastest / g[1])) > SPEED_AGREE * fastest / g[1] for g in found):
+    # one family: every speed a whole multiple of the slowest (17.67, 35.34 and 53.01 Hz are; the fastest over each,
+    # 53.01 / 35.34 = 1.5, is not)
+    slowest = min(g[1] for g in found)
+    if any(abs(g[1] / slowest - round(g[1] / slowest)) > SPEED_AGREE * g[1] / slowest for g in found):
         return found  # two families: another tooth count, not a swing, can read so
     heights, evens = [], []
     for g in found:
@@ -567,14 +590,19 @@ def gathered(signal, fs: float, fine: Upsampled, found: list[tuple], box: Gearbo
         heights.append(float(lines.db[0]) if lines.at.size else -np.inf)
     kept = [k for k, h in enumerate(heights) if h > max(heights) - GATHERED_DB]
     if len(kept) > 1:
-        own = []
+        own, read = [], []
         for k in kept:
             try:
                 f = speed_from_mesh(evens[k], fs, box, None, "", threshold_db)[0]
             except GearlabInputError:
                 continue
+            read.append(f)
             if abs(f / found[k][1] - 1) <= SPEED_AGREE:
                 own.append(k)
+        if read and not own:
+            # every angle kept reads one speed of the family, itself followed less cleanly: that speed (98/113 +
+            # 112/135 at 17.67 Hz: its angles followed at 35.34 and 53.01 Hz, 6.3 dB over its own, both read 17.67)
+            own = [j for j, g in enumerate(found) if all(abs(f / g[1] - 1) <= SPEED_AGREE for f in read)]
         kept = own
     return [found[kept[0]]] if len(kept) == 1 else found
 

@@ -16,7 +16,12 @@ from ..memo import SharedArrays
 FLOOR_BINS = 201  # width of the running median (bins)
 
 
-COURSE_WINDOWS = 15  # the record's spectra over time: half-overlapping windows, an eighth of it each
+COURSE_PARTS = 8  # the record's spectra over time: half-overlapping windows, an eighth of it each
+# a step's course is read over windows of a 128th of the record (62 ms of 8 s: a turn at 17.5 Hz), 512 samples at
+# least: beside a 6 % step of 0.2 s the course lay 0.2-0.3 % off at most (a 64th: 0.6-0.8 %, an eighth: 3.2 %, and
+# the mesh band, ±0.43 orders, lost the line there); a ramp keeps the eighths, whose lines stand over its smear
+STEP_PARTS = 128
+STEP_WINDOW = 512
 COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean, or as far as speed_shift reads
 COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
 COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
@@ -80,37 +85,29 @@ _COURSES_LOCK = threading.Lock()
 
 def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
     """speed_course of *signal*, read afresh."""
+    from scipy import ndimage
+
     n = signal.size
-    size = n // 8
-    if size < 256:
-        return None
-    starts = np.linspace(0, n - size, COURSE_WINDOWS).astype(int)
-    if (lifted := lifted_rows(signal, fs, starts, size, COURSE_STEP, 1.5)) is None:
-        return None
-    axis, rows = lifted
-    ref = rows[COURSE_WINDOWS // 2]
     # the course is looked for as far as the record's ends show its speed move (speed_shift), the whole shift each
     # way from the middle window (twice what a steady ramp needs): a ±4 % reach read a 14 -> 19 Hz run-up as
     # 0.94 .. 1.07 of its mean (0.85 .. 1.15 true), its mesh lines stayed smeared and the 1x shaft line was read as
     # the mesh (0.506 Hz); a steady record's ends show no shift, its reach stays COURSE_SPAN
     moved = speed_shift(signal, fs)
-    reach = int(max(math.log(1 + COURSE_SPAN), abs(math.log(moved or 1.0))) / COURSE_STEP)
-    m = 1 << int(math.ceil(math.log2(2 * axis.size)))
-    cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(ref, m)), m)
-    lags = np.concatenate([cross[:, -reach:], cross[:, : reach + 1]], axis=1)  # lag -reach .. reach
-    k = np.clip(np.argmax(lags, axis=1), 1, 2 * reach - 1)
-    l, c, r = (lags[np.arange(k.size), k + d] for d in (-1, 0, 1))
-    denom = l - 2 * c + r
-    shift = k - reach + np.where(denom < 0, 0.5 * (l - r) / np.where(denom < 0, denom, -1), 0.0)
-    ratio = np.exp(shift * COURSE_STEP)
-    centre = (starts + size / 2) / fs
+    reach = max(math.log(1 + COURSE_SPAN), abs(math.log(moved or 1.0)))
+    if (read := window_ratios(signal, fs, COURSE_PARTS, reach)) is None:
+        return None
+    centre, ratio = read
     t = np.arange(n) / fs
     course = np.polyval(np.polyfit(centre, ratio, 2), t)
     if np.max(np.abs(np.interp(centre, t, course) - ratio)) > max(COURSE_MIN, STEP_MISFIT * float(np.ptp(ratio))):
         # not a quadratic: a step between two plateaus (a 6 % step, 98/113 + 112/135: its mesh band, half-way to
         # the next mesh's 0.87 orders away, held neither plateau about the quadratic, the mean read 2.2 % low);
-        # the windows' ratios joined, each end segment's slope carried on to the record's end (a run-up's ramp goes
-        # on there, a step's plateau stays flat)
+        # read again over STEP_PARTS windows (those of an eighth, joined, put the plateaus' ends up to 3.5 % off
+        # over a second beside a 6 % step), one window's outlier taken out (a running median of 3 keeps a step's
+        # edge); the windows' ratios joined, each end segment's slope carried on to the record's end (a run-up's
+        # ramp goes on there, a step's plateau stays flat)
+        if (fine := window_ratios(signal, fs, min(STEP_PARTS, n // STEP_WINDOW), reach)) is not None:
+            centre, ratio = fine[0], ndimage.median_filter(fine[1], size=3, mode="nearest")
         slope = np.diff(ratio)[[0, -1]] / np.diff(centre)[[0, -1]]
         ends = np.where(
             t < centre[0], slope[0] * (t - centre[0]), np.where(t > centre[-1], slope[1] * (t - centre[-1]), 0)
@@ -118,6 +115,30 @@ def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
         course = np.interp(t, centre, ratio) + ends
     course /= course.mean()
     return course if float(np.ptp(course)) >= COURSE_MIN else None
+
+
+def window_ratios(signal: np.ndarray, fs: float, parts: int, reach: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(window centres in s, speed over the middle window's) of 2 *parts* - 1 half-overlapping windows, a *parts*-th
+    of the record each: each window's lifted spectrum (lifted_rows) correlated with the middle one's, every line of
+    every stage at once, up to a ratio of exp(±*reach*); None where the windows are too short to read."""
+    n = signal.size
+    size = n // parts
+    if size < 256:
+        return None
+    windows = 2 * parts - 1
+    starts = np.linspace(0, n - size, windows).astype(int)
+    if (lifted := lifted_rows(signal, fs, starts, size, COURSE_STEP, 1.5)) is None:
+        return None
+    axis, rows = lifted
+    lag_reach = int(reach / COURSE_STEP)
+    m = 1 << int(math.ceil(math.log2(2 * axis.size)))
+    cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(rows[windows // 2], m)), m)
+    lags = np.concatenate([cross[:, -lag_reach:], cross[:, : lag_reach + 1]], axis=1)  # lag -reach .. reach
+    k = np.clip(np.argmax(lags, axis=1), 1, 2 * lag_reach - 1)
+    l, c, r = (lags[np.arange(k.size), k + d] for d in (-1, 0, 1))
+    denom = l - 2 * c + r
+    shift = k - lag_reach + np.where(denom < 0, 0.5 * (l - r) / np.where(denom < 0, denom, -1), 0.0)
+    return (starts + size / 2) / fs, np.exp(shift * COURSE_STEP)
 
 
 SHIFT_SPAN = 1.0  # speed_shift looks for a ratio of speeds up to 2 (a run-up from 20 to 35 Hz: 1.62 between its ends)
