@@ -106,7 +106,10 @@ def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
         # over a second beside a 6 % step), one window's outlier taken out (a running median of 3 keeps a step's
         # edge); the windows' ratios joined, each end segment's slope carried on to the record's end (a run-up's
         # ramp goes on there, a step's plateau stays flat)
-        if (fine := window_ratios(signal, fs, min(STEP_PARTS, n // STEP_WINDOW), reach)) is not None:
+        # reaching the coarse course's whole span further: the middle short window may lie on either plateau (a -5 %
+        # step read from its start was clipped at the ±4 % reach, its far plateau garbage)
+        wider = reach + math.log(float(np.max(ratio) / np.min(ratio)))
+        if (fine := window_ratios(signal, fs, min(STEP_PARTS, n // STEP_WINDOW), wider)) is not None:
             centre, ratio = fine[0], ndimage.median_filter(fine[1], size=3, mode="nearest")
         slope = np.diff(ratio)[[0, -1]] / np.diff(centre)[[0, -1]]
         ends = np.where(
