@@ -285,7 +285,7 @@ def _resumed_scenario(
             f"{scenario.path}: differs from the scenario the run in {run.path} was started "
             "with; resume without SCENARIO (the run keeps a copy) or start a new run"
         )
-    check_inputs(run)
+    check_inputs(run, scenario)
     if run.quick:
         SCENARIO_KINDS[scenario.kind].quick(scenario)
     run.truncate_partial()

@@ -1,5 +1,5 @@
 """Writing files safely: whole files by atomic rename, names kept inside a folder, one-line
-messages for a file system that refuses a write.
+messages for a file system that refuses a write; the files a scenario's glob pattern names.
 
 The bottom of gearlab's run infrastructure (see docs/architecture.md): imported by the data
 cache, the gap diagnosis, the learners and the run directory alike, so it imports nothing of
@@ -9,6 +9,7 @@ gearlab but the errors.
 from __future__ import annotations
 
 import errno
+import glob
 import os
 import tempfile
 import tomllib
@@ -113,3 +114,16 @@ def toml_tables(path: Path, read: Callable[[], bytes], missing: str, directory: 
         ) from None
     except MemoryError:
         raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None
+
+
+def matched(name: str, base: Path, where: str) -> list[str]:
+    """The files a scenario's measured-file *name* stands for: itself, or, where it holds a glob
+    pattern (*, ?, [...]; ** across folders) and is no file's own name, each file it matches, sorted
+    by name and written as the pattern is (relative to *base*, the scenario's folder, unless
+    absolute). A pattern matching no file: one line naming *where* and the pattern."""
+    if not set(name) & set("*?[") or (base / name).exists():
+        return [name]
+    found = sorted(m for m in glob.glob(name, root_dir=base, recursive=True) if (base / m).is_file())
+    if not found:
+        raise GearlabInputError(f"{where}: {name!r} matches no file")
+    return found

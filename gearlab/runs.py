@@ -33,7 +33,7 @@ import tomli_w
 
 from .confined import Confined, is_temporary, refuse_unsafe
 from .errors import GearlabInputError
-from .files import inside, write_problem
+from .files import inside, matched, write_problem
 from .scenario import Scenario
 
 RUN_FILE = "run.json"  # how the run was started (--quick), for --resume
@@ -327,9 +327,9 @@ def _remove_empty(folder: Path, created: Path) -> None:
 
 def input_paths(scenario: Scenario) -> list[Path]:
     """The measured files a scenario reads: every 'file' of its tables and each of 'files'
-    (a name, or a table with its 'path'), resolved against the scenario's folder; and each
-    'gearbox' description that is a file (not a built-in name): it decides the speed of a record
-    without a tacho and what a described source simulates."""
+    (a name, or a table with its 'path'; a glob pattern: each file it matches), resolved against
+    the scenario's folder; and each 'gearbox' description that is a file (not a built-in name): it
+    decides the speed of a record without a tacho and what a described source simulates."""
     base = Path(scenario.base or scenario.path.parent)
     found: list[Path] = []
 
@@ -338,7 +338,11 @@ def input_paths(scenario: Scenario) -> list[Path]:
             for key, value in node.items():
                 names = [value] if key == "file" else value if key == "files" and isinstance(value, list) else []
                 names = [n.get("path") if isinstance(n, dict) else n for n in names]
-                found.extend((base / name).resolve() for name in names if isinstance(name, str) and name)
+                for name in (n for n in names if isinstance(n, str) and n):
+                    try:
+                        found.extend((base / m).resolve() for m in matched(name, base, key))
+                    except GearlabInputError:  # the kind's own check says so; its digest is none
+                        found.append((base / name).resolve())
                 if key == "gearbox" and isinstance(value, str) and value and (base / value).is_file():
                     found.append((base / value).resolve())
                 walk(value)
@@ -365,9 +369,16 @@ def input_digests(scenario: Scenario) -> dict[str, str | None]:
     return {str(path): _digest(path) for path in input_paths(scenario)}
 
 
-def check_inputs(run: RunDir) -> None:
-    """Refuse to resume *run* when a measured file it read has changed or gone since it started."""
+def check_inputs(run: RunDir, scenario: Scenario) -> None:
+    """Refuse to resume *run* when a measured file it read has changed or gone since it started, or
+    when *scenario*'s glob pattern matches a file it did not read."""
     stored = run.meta().get("inputs")
+    for path in input_paths(scenario) if isinstance(stored, dict) else ():
+        if str(path) not in stored:
+            raise GearlabInputError(
+                f"{path}: a file the scenario names (a pattern's match) that the run in {run.path} did not "
+                "read; its finished units were computed without it: move it away, or start a new run"
+            )
     for path, digest in (stored if isinstance(stored, dict) else {}).items():
         now = _digest(Path(path))
         if now != digest:

@@ -77,7 +77,7 @@ from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
 from ..learn.schedule import longest_first, two_phases
 from ..parts import training
-from ..parts.measured import target_spec
+from ..parts.measured import pattern_counts, target_spec
 from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_training
 from ..registry import METHODS, get_registry
 from ..runs import RunDir
@@ -361,6 +361,7 @@ def describe(scenario: Scenario) -> str:
     spec = scenario.spec
     files = spec.target.files
     n_hist = sum(f.role == "history" for f in files)
+    matched = pattern_counts(files)
     names = [m.adapter for m in spec.protocol.methods] + list(spec.classical.indicators)
     if spec.corrected is not None:
         extra = [name for name, _ in spec.corrected.effects[len(spec.source.effects) :]]
@@ -370,7 +371,7 @@ def describe(scenario: Scenario) -> str:
         names += [f"{m.adapter} ({spec.corrected_label}: + {extra})" for m in spec.protocol.methods]
     return (
         f"{sized(spec.source)} -> {len(files)} measured records ({n_hist} history, {len(files) - n_hist} "
-        f"test); methods: {', '.join(names)}; units: revolution, "
+        f"test{'; ' * bool(matched)}{matched}); methods: {', '.join(names)}; units: revolution, "
         + ", ".join(f"record{b}" for b in spec.detection.blocks)
     )
 

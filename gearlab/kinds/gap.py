@@ -41,7 +41,7 @@ from ..learn.protocol import Counts, Method, Protocol, check, check_data, domain
 from ..learn.schedule import two_phases
 from ..parts import training
 from ..parts.bound import bayes_bound
-from ..parts.measured import target_spec
+from ..parts.measured import pattern_counts, target_spec
 from ..parts.training import TRAINING, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
@@ -265,6 +265,8 @@ def describe(scenario: Scenario) -> str:
     n = len(s.candidates) or len(default_candidates(get_registry()))
     records = len(spec.target.history) if isinstance(spec.target, Records) else 0  # measured: no classes
     target = f"{records} measured history record{'s' * (records != 1)}" if records else sized(spec.target)
+    if records and (matched := pattern_counts(spec.target.history)):
+        target += f" ({matched})"
     line = f"gap of {spec.source.name} (simulated) -> {target}: {n} candidate effects x budget {s.budget}, up to "
     line += f"{s.max_effects} greedy rounds, {s.healthy} source healthy revolutions per evaluation"
     if spec.accuracy:

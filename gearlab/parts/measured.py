@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import difflib
 import math
+from collections import Counter
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -21,6 +22,7 @@ from ..data.recordings import (
 )
 from ..data.textzip import CALIBRATION, align_to, calibration
 from ..errors import GearlabInputError, did_you_mean, shown
+from ..files import matched
 from ..signals.angle import continued
 from ..units import rate_hz
 
@@ -48,6 +50,7 @@ class TargetFile:
     # its own acquisition keys, (name, value as Target holds it) in ACQUISITION's order: the
     # [target]'s are read where it gives none (Target.keys_of); part of the record's identity
     keys: tuple = ()
+    pattern: str = ""  # the entry's glob pattern that matched it ("": named as it is)
 
 
 @dataclass(frozen=True)
@@ -151,11 +154,12 @@ def pulses_of(given: int | None, tacho, box) -> int:
 
 
 def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
-    """The [target] 'files' list: each {file, role, label, condition?}, paths relative to *base*;
-    every role in *need* must be present (the gap kind needs the history alone)."""
+    """The [target] 'files' list: each {file, role, label, condition?}, paths relative to *base*, a
+    glob pattern standing for each file it matches (files.matched); every role in *need* must be
+    present (the gap kind needs the history alone)."""
     if not files:
         raise GearlabInputError(f"{where}: expected a list of files, each {{ file, role = 'history' | 'test', label }}")
-    out = []
+    out, entry = [], []  # the records, and the entry (1-based) that gave each
     for i, f in enumerate(files):
         at = f"{where} entry {i + 1}"
         if not isinstance(f, dict):
@@ -180,15 +184,19 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
         if not isinstance(condition, str):
             raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
         speed = None if f.get("speed") is None else speed_of(f["speed"], f"{at} key 'speed'")
-        path = Path(f["file"])
-        resolved = path if path.is_absolute() else base / path
-        check_measured_file(resolved, f"{at} key 'file'")
         keys = tuple(acquisition(f, at, [k for k in ACQUISITION if k in f]).items())
-        out.append(TargetFile(f["file"], str(resolved), f["role"], f["label"], condition, speed, keys))
+        names = matched(f["file"], base, f"{at} key 'file'")
+        pattern = "" if names == [f["file"]] else f["file"]
+        for name in names:  # a pattern's files: one record each, with the entry's other keys
+            resolved = base / name  # an absolute name stays itself
+            check_measured_file(resolved, f"{at} key 'file'")
+            out.append(TargetFile(name, str(resolved), f["role"], f["label"], condition, speed, keys, pattern))
+            entry.append(i + 1)
     seen = {}
     for i, f in enumerate(out):
         if seen.setdefault(f.resolved, i) != i:
-            raise GearlabInputError(f"{where} entry {i + 1}: {f.path} is listed twice (entry {seen[f.resolved] + 1})")
+            first = entry[seen[f.resolved]]
+            raise GearlabInputError(f"{where} entry {entry[i]}: {f.path} is listed twice (entry {first})")
     for role in need:
         if not any(f.role == role for f in out):
             raise GearlabInputError(
@@ -197,6 +205,13 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
                 + " file"
             )
     return tuple(out)
+
+
+def pattern_counts(files: tuple[TargetFile, ...]) -> str:
+    """What each glob pattern of a 'files' list matched, for `gearlab validate`: "'test/*.csv': 6
+    files, ..." ("" where every file is named as it is)."""
+    counts = Counter(f.pattern for f in files if f.pattern)
+    return ", ".join(f"{p!r}: {n} file{'s' * (n != 1)}" for p, n in counts.items())
 
 
 def positive_label(files: tuple[TargetFile, ...], positive: str, where: str) -> None:
