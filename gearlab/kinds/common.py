@@ -98,7 +98,8 @@ MEASURED = {
         "default": [],
         "check": _files,
         "doc": "measured records, each {file, role = 'history' | 'test', label, condition, speed (the last "
-        "two optional)}, relative to the scenario; a gap diagnosis reads the history (healthy, one speed); "
+        "two optional)}, relative to the scenario ('file' a glob pattern: each file it matches); a gap "
+        "diagnosis reads the history (healthy, one speed); "
         f"an entry may give its own {', '.join(ACQUISITION[:-1])} or {ACQUISITION[-1]}",
     },
     "vibration": {
