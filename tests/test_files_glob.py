@@ -152,3 +152,13 @@ def test_a_resume_refuses_a_take_a_pattern_matches_that_the_run_did_not_read(fol
     _take(folder / "test" / "c.csv", 2.0)
     with pytest.raises(GearlabInputError, match=r"test/c.csv: a file the scenario names .* did not read"):
         check_inputs(run, scenario)
+
+
+def test_a_message_on_a_pattern_entry_s_key_names_the_entry_as_written(folder):
+    table = _table("history/*.csv", "test/*.csv")  # entry 1: two files; entry 2: the third and fourth
+    table["files"][1]["label"] = "faulty"
+    with pytest.raises(GearlabInputError, match=r"^w key 'files' entry 2 key 'label': 'faulty' is not the positive"):
+        target_spec(table, "w", folder)
+    table["files"][1] |= {"label": "fault", "speed": "25 Hz", "tacho": "acc"}
+    with pytest.raises(GearlabInputError, match=r"^w key 'files' entry 2 key 'vibration': the same column as the"):
+        target_spec(table, "w", folder)

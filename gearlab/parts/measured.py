@@ -51,6 +51,7 @@ class TargetFile:
     # [target]'s are read where it gives none (Target.keys_of); part of the record's identity
     keys: tuple = ()
     pattern: str = ""  # the entry's glob pattern that matched it ("": named as it is)
+    entry: int = 0  # the 'files' entry (1-based) that named it, for messages on its keys (0: none)
 
 
 @dataclass(frozen=True)
@@ -159,7 +160,7 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
     present (the gap kind needs the history alone)."""
     if not files:
         raise GearlabInputError(f"{where}: expected a list of files, each {{ file, role = 'history' | 'test', label }}")
-    out, entry = [], []  # the records, and the entry (1-based) that gave each
+    out = []
     for i, f in enumerate(files):
         at = f"{where} entry {i + 1}"
         if not isinstance(f, dict):
@@ -190,13 +191,12 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
         for name in names:  # a pattern's files: one record each, with the entry's other keys
             resolved = base / name  # an absolute name stays itself
             check_measured_file(resolved, f"{at} key 'file'")
-            out.append(TargetFile(name, str(resolved), f["role"], f["label"], condition, speed, keys, pattern))
-            entry.append(i + 1)
+            out.append(TargetFile(name, str(resolved), f["role"], f["label"], condition, speed, keys, pattern, i + 1))
     seen = {}
     for i, f in enumerate(out):
         if seen.setdefault(f.resolved, i) != i:
-            first = entry[seen[f.resolved]]
-            raise GearlabInputError(f"{where} entry {entry[i]}: {f.path} is listed twice (entry {first})")
+            first = out[seen[f.resolved]].entry
+            raise GearlabInputError(f"{where} entry {f.entry}: {f.path} is listed twice (entry {first})")
     for role in need:
         if not any(f.role == role for f in out):
             raise GearlabInputError(
@@ -219,12 +219,12 @@ def positive_label(files: tuple[TargetFile, ...], positive: str, where: str) -> 
     ('faulty', 'Fault'): every test record was scored as a negative, the report's AUC undefined."""
     if not any(f.role == "test" for f in files) or any(f.label == positive for f in files if f.role == "test"):
         return
-    for i, f in enumerate(files):
+    for f in files:
         low, want = f.label.lower(), positive.lower()
         near = low.startswith(want) or low.endswith(want) or difflib.SequenceMatcher(None, low, want).ratio() >= 0.8
         if f.role == "test" and near:
             raise GearlabInputError(
-                f"{where} key 'files' entry {i + 1} key 'label': {f.label!r} is not the positive label {positive!r} "
+                f"{where} key 'files' entry {f.entry} key 'label': {f.label!r} is not the positive label {positive!r} "
                 f"([target] key 'positive'), and no test file has {positive!r}; expected label = {positive!r} on "
                 f"the records with the fault to find (or positive = {f.label!r})"
             )
@@ -309,9 +309,9 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
             f"{where} key 'files': {with_one} has a tacho, {without} none; the gap compares one acquisition chain "
             'with the simulator: expected history records all with a tacho or all without (tacho = "" on a file)'
         )
-    for i, (f, ftacho) in enumerate(zip(files, tachos)):
+    for f, ftacho in zip(files, tachos):
         own = dict(f.keys)
-        at = f"{where} key 'files' entry {i + 1}"
+        at = f"{where} key 'files' entry {f.entry}"
         if own.get("pulses_per_rev") is not None and ftacho is None:
             raise pulses_without_tacho(f.resolved, f"{at} key 'pulses_per_rev'", lambda c: f"tacho = '{c}'")
         if own and ftacho is not None and own.get("vibration", vibration) == ftacho:
@@ -321,9 +321,8 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         # declared or found from the description's mesh orders; a [target] speed or gearbox is for the
         # files without a tacho, refused where every file has one
         if ftacho is not None and (f.speed_hz is not None or (None not in tachos and (speed is not None or gearbox))):
-            at = f"{where} key " + (
-                f"'files' entry {i + 1} key 'speed'" if f.speed_hz is not None else "'speed'" if speed else "'gearbox'"
-            )
+            own_speed = f"'files' entry {f.entry} key 'speed'"
+            at = f"{where} key " + (own_speed if f.speed_hz is not None else "'speed'" if speed else "'gearbox'")
             raise GearlabInputError(
                 f"{at}: {f.path} has a tacho ({ftacho!r}), which gives its speed; expected a tacho, or "
                 "without one a 'speed' (e.g. '25 Hz') or a 'gearbox' description, not both"
@@ -375,11 +374,11 @@ def own_shafts(files: tuple[TargetFile, ...], tachos: list, box, where: str, sha
     from ..gearbox.orders import TachoShaft
 
     out = []
-    for i, (f, tacho) in enumerate(zip(files, tachos)):
+    for f, tacho in zip(files, tachos):
         own = dict(f.keys)
         if "tacho_shaft" in own:
             name = own["tacho_shaft"] or ""  # "": not the [target]'s; the description's [sensor] tacho
-            read = tacho_shaft_of(name, tacho, box, f"{where} entry {i + 1}", "[source] key 'gearbox'")
+            read = tacho_shaft_of(name, tacho, box, f"{where} entry {f.entry}", "[source] key 'gearbox'")
             own["tacho_shaft"] = read or (TachoShaft(name) if name else None)
             f = replace(f, keys=tuple((k, own[k]) for k in ACQUISITION if k in own))
         out.append(f)
