@@ -162,3 +162,13 @@ def test_a_message_on_a_pattern_entry_s_key_names_the_entry_as_written(folder):
     table["files"][1] |= {"label": "fault", "speed": "25 Hz", "tacho": "acc"}
     with pytest.raises(GearlabInputError, match=r"^w key 'files' entry 2 key 'vibration': the same column as the"):
         target_spec(table, "w", folder)
+
+
+def test_the_tui_validates_a_scenario_again_when_a_take_joins_its_pattern_s_folder(folder):
+    from gearlab.tui.catalog import Validated
+
+    path = _detection(folder, _files("history/*.csv", "test/*.csv"))
+    validated = Validated()
+    assert len(validated.scenario(path).spec.target.files) == 4
+    _take(folder / "test" / "c.csv", 2.0)
+    assert len(validated.scenario(path).spec.target.files) == 5

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import GearlabInputError
+from ..files import matched
 from ..notebook import load_scenario
 from ..runs import RunDir
 from ..scenario import Scenario
@@ -61,9 +62,11 @@ def _named_files(path: Path, base: Path) -> list[Path]:
         elif isinstance(item, list):
             todo.extend(item)
         elif isinstance(item, str) and 0 < len(item) < 4096 and "\n" not in item:
-            named = base / item.split("#", 1)[0]
-            if named.is_file():
-                found.append(named)
+            try:  # a glob pattern's files: a take added to its folder changes the scenario too
+                names = matched(item.split("#", 1)[0], base, "")
+            except (GearlabInputError, OSError, ValueError):
+                names = []
+            found.extend(base / n for n in names if (base / n).is_file())
     return found
 
 
