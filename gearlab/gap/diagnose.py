@@ -46,6 +46,11 @@ Design, in the order the work happens:
    better fit too: an imperfect first fit leaves a residual that a flexible extra effect
    (noise, a filter, a tone) partly absorbs.
 
+   Where the target history holds a tone's line that the plain source lacks (gearlab.gap.lines), each
+   row's sinusoid at its order is taken out of the target and of every set scored while the other
+   candidates are searched (up to max_effects - 1 rounds), and the tone is fitted in a last round
+   against the whole rows.
+
    The best candidate of the round is accepted when it removes at least ``MIN_SHARE`` of
    the gap left at that round (after the baseline) *and* a paired bootstrap (the same
    resampled rows for the current and the candidate comparison) puts the removed gap above
@@ -93,6 +98,7 @@ from .conclusion import (
 )
 from .identify import _plain, alias_refit
 from .level import carried, fitted_here, free, held, level_differs, leveling, own_or, score_stands
+from .lines import TONE, masked, tone_line
 from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_removal, _prepared, _report, check_settings
 from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect, quick_profile_evaluations
 from .stats import REPORT_PARTS, classifier_loaded, load_classifier
@@ -187,61 +193,52 @@ def diagnose(
     if leveled:  # the target's load profiled out of every score from here on (gearlab.gap.level; judged too)
         rows = free(rows)
     scorer = Scorer(target, pair, settings.max_order, rows.consecutive, rows.free_load)
-    run = _Run(
-        scorer,
-        judged,
-        rows,
-        search,
-        target,
-        pair,
-        settings,
-        executor,
-        on_event,
-        gap0=scorer.score(rows(search)),  # the search's own baseline (same rows as the fits)
-        judged0=scorer.score(plain),
-    )  # the same on the judging rows
+    baselines = scorer.score(rows(search)), scorer.score(plain)  # round 1's, on the search's rows and the judging ones
+    run = _Run(scorer, judged, rows, search, target, pair, settings, executor, on_event, *baselines)
     accepted: list[dict] = []
     fitted: tuple = ()
-    significant = gap_seen(before)
-    if not significant:
-        on_event(
-            Event(
-                "log",
-                message=f"gap: no significant gap (p = {before['p_value']:.3g}, AUC "
-                f"{before['auc']:.2f}); nothing to explain",
-            )
-        )
-    for r in range(1, settings.max_effects + 1):
-        remaining = [name for name in candidates if name not in {a["name"] for a in accepted}]
-        if not significant or not remaining:
-            break
-        fits, fitted, round_info = greedy_round(run, r, remaining, accepted, fitted)
-        result["rounds"].append(round_info)
-        if r == 1:
-            result["ranking"] = [
-                {"name": f["name"], "share_removed": f["share_removed"], "params": f["params"]} for f in fits
-            ]
-        if not math.isfinite(fits[0]["score"]):
-            break
-        alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
-        top = noise_arbitration(run, r, fits[0], alone_fit, fitted, round_info)
-        decision = attribution(run, r, top, alone_fit, fitted, round_info)
-        if decision is None:
-            break
-        fitted, refit, entries = decision
-        for entry, (_, params) in zip(accepted, refit):  # the earlier effects, re-fitted next to this one
-            entry["params"] = _plain(dict(params))
-        accepted += entries
-        if r == 1 and paired_here(top):
-            rivals = [f for f in fits if f is not top and paired_here(f) and math.isfinite(f["score"])]
-            fitted, top = beside_signal(run, remaining, accepted, fitted, round_info, top, rivals)
-        if r > 1:
-            fitted = joint_refit(run, r, accepted, fitted, round_info)
-        fitted = realiased(run, r, accepted, fitted, round_info)
-        check = _report(scorer.leveled(judged(fitted)), target, pair, settings, bootstrap=0)  # at its own load
-        round_info["p_value_after"] = check["p_value"]
-        round_info["rms_effect_after"] = rms_effect(check)
-        significant = another_round(before, check) or score_stands(top, len(accepted) < settings.max_effects)
+    if not gap_seen(before):
+        message = f"no significant gap (p = {before['p_value']:.3g}, AUC {before['auc']:.2f}); nothing to explain"
+        on_event(Event("log", message=f"gap: {message}"))
+    # A tone's line (gearlab.gap.lines): taken out of every row while the others are searched, the tone fitted last
+    lined = result["tone_line"] = tone_line(target, plain, settings, candidates)
+    rest, whole = [n for n in candidates if n != TONE or not lined], run
+    phases = [(masked(run, lined), rest, settings.max_effects - 1), (run, [TONE], 1)] if lined else []
+    for run, names, rounds in phases or [(whole, rest, settings.max_effects)]:
+        significant = gap_seen(before)
+        for _ in range(rounds):
+            r = len(result["rounds"]) + 1
+            remaining = [name for name in names if name not in {a["name"] for a in accepted}]
+            if not significant or not remaining:
+                break
+            fits, fitted, round_info = greedy_round(run, r, remaining, accepted, fitted)
+            result["rounds"].append(round_info)
+            if r == 1:
+                result["ranking"] = [
+                    {"name": f["name"], "share_removed": f["share_removed"], "params": f["params"]} for f in fits
+                ]
+            if not math.isfinite(fits[0]["score"]):
+                break
+            alone_fit = next((f for f in fits if f["name"] == NUISANCE and math.isfinite(f["score"])), None)
+            top = noise_arbitration(run, r, fits[0], alone_fit, fitted, round_info)
+            decision = attribution(run, r, top, alone_fit, fitted, round_info)
+            if decision is None:
+                break
+            fitted, refit, entries = decision
+            for entry, (_, params) in zip(accepted, refit):  # the earlier effects, re-fitted next to this one
+                entry["params"] = _plain(dict(params))
+            accepted += entries
+            if r == 1 and paired_here(top):
+                rivals = [f for f in fits if f is not top and paired_here(f) and math.isfinite(f["score"])]
+                fitted, top = beside_signal(run, remaining, accepted, fitted, round_info, top, rivals)
+            if r > 1:
+                fitted = joint_refit(run, r, accepted, fitted, round_info)
+            fitted = realiased(run, r, accepted, fitted, round_info)
+            check = _report(run.scorer.leveled(run.judged(fitted)), run.target, pair, settings, bootstrap=0)
+            round_info["p_value_after"] = check["p_value"]
+            round_info["rms_effect_after"] = rms_effect(check)
+            significant = another_round(before, check) or score_stands(top, len(accepted) < settings.max_effects)
+    run = whole
     if accepted:
         fitted = profiled(run, accepted, fitted)
     read = []

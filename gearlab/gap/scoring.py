@@ -57,6 +57,7 @@ from .views import (
     record_view,
     residual_view_of_spectrum,
     waveform_view,
+    without_line,
 )
 
 ACCEPT_REPLICATES = 200  # paired bootstrap replicates for the acceptance test
@@ -389,9 +390,10 @@ class Rows:
     # scored at its own best factor within them (the search's Scorer made from these Rows profiles it).
     load: float | None = None
     free_load: tuple[float, float] | None = None
+    line: float = 0.0  # a tone's shaft order taken out of every row, as of the target's (gearlab.gap.lines; 0: none)
 
     def __call__(self, spec: DatasetSpec) -> np.ndarray:
-        X = offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive))
+        X = without_line(offset_removed(source_rows(spec, self.max_order, self.chain, self.consecutive)), self.line)
         return X * self.load if self.load is not None else X
 
 
