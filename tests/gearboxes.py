@@ -126,6 +126,16 @@ def box_s(folder) -> None:
     (folder / "s.toml").write_text(description(stages, name="boxS", speed="24.3 Hz", load="50 N*m", near="input"))
 
 
+def box_s_gap(folder, file: str, target: str) -> None:
+    """*folder*/s.toml (box_s) and *folder*/gap.toml: box S's gap run against the history take *file*;
+    *target*: [target]'s other key lines."""
+    box_s(folder)
+    (folder / "gap.toml").write_text(
+        '[scenario]\nname = "u"\nkind = "gap"\n[source]\ngearbox = "s.toml"\n[target]\n'
+        f'{target}files = [{{ file = "{file}", role = "history", label = "healthy" }}]\n'
+    )
+
+
 def box_s_take(rng, t: np.ndarray) -> np.ndarray:
     """Box S's vibration in g at times *t*: its 486 Hz mesh (20 x 24.3 Hz), 5 % modulated by the input shaft, and
     0.05 g of noise from *rng*."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gearboxes import box_s, box_s_detection, box_s_take
+from gearboxes import box_s, box_s_detection, box_s_gap, box_s_take
 
 from gearlab.data.textzip import calibration, gain_quantity, parse_sensitivity
 
@@ -166,21 +166,13 @@ def test_inspect_calls_out_volts_given_as_millivolts(cli, tmp_path):
 @pytest.mark.parametrize("written, read", [("volts", "V"), ("Volt", "V"), ("volt", "V"), ("millivolts", "mV")])
 def test_the_unit_key_reads_volts_as_they_are_spelled(cli, tmp_path, written, read):
     # CP: unit = "volts" was refused ("'volts' is not one of m/s^2, m/s², g, V, mV") by every reader of the key
-    from gearboxes import description, stage
-
     from gearlab import read_recording
 
     take = _volts_take(tmp_path / "v.tsv")
     spelled = read_recording(take, 0, fs=8192.0, sensitivity="100 mV/g", unit=written)
     assert spelled.units == read_recording(take, 0, fs=8192.0, sensitivity="100 mV/g", unit=read).units
-    (tmp_path / "s.toml").write_text(
-        description(stage(20, 47, bores=("25 mm", "40 mm")), name="boxS", speed="24.3 Hz", load="50 N*m", near="input")
-    )
-    (tmp_path / "gap.toml").write_text(
-        '[scenario]\nname = "u"\nkind = "gap"\n[source]\ngearbox = "s.toml"\n[target]\nvibration = "0"\n'
-        f'fs = "8192 Hz"\nunit = "{written}"\nsensitivity = "100 mV/g"\n'
-        'files = [{ file = "v.tsv", role = "history", label = "healthy" }]\n'
-    )
+    target = f'vibration = "0"\nfs = "8192 Hz"\nunit = "{written}"\nsensitivity = "100 mV/g"\n'
+    box_s_gap(tmp_path, "v.tsv", target)
     code, out, err = cli("validate", tmp_path / "gap.toml")
     assert code == 0, err
     code, out, err = cli(

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gearboxes import description, stage
+from gearboxes import box_s_gap, description, stage
 from test_inspect import described
 
 from gearlab.inspect import InspectOptions, inspect_record
@@ -171,14 +171,7 @@ def test_a_velocity_or_displacement_channel_is_refused_not_read_as_acceleration(
     assert code == 0, err
     first = out.splitlines()[0]
     assert "value x 1, not m/s²" in first and f"not a {quantity}" in first, first
-    (tmp_path / "box.toml").write_text(
-        description(stage(20, 47, bores=("25 mm", "40 mm")), name="s", speed="27 Hz", load="50 N*m", near="input")
-    )
-    (tmp_path / "gap.toml").write_text(
-        '[scenario]\nname = "u"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\n'
-        f'vibration = "{name}"\ntacho = "tacho_V"\n'
-        'files = [{ file = "v.csv", role = "history", label = "healthy" }]\n'
-    )
+    box_s_gap(tmp_path, "v.csv", f'vibration = "{name}"\ntacho = "tacho_V"\n')
     code, out, err = cli("validate", tmp_path / "gap.toml")
     assert code == 2 and quantity in err and "vibration" in err, (out, err)
 
