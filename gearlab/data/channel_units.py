@@ -89,9 +89,11 @@ def _other_quantity(name: str) -> tuple[str, str] | None:
     """(quantity, unit) where a channel's name ends in a bracketed velocity or displacement unit ('vel [mm/s]',
     'disp [um]'); else None."""
     match = _BRACKETED.search(str(name))
+    if not (match and any(c.isalpha() for c in match.group(1))):
+        return None  # an index ('data[1]', a MAT struct's field read by position) is no unit: a bare number is SI's
     for quantity, si in (("velocity", "m/s"), ("displacement", "m")):
         try:
-            if match and to_si(match.group(1).strip(), si, "") > 0:
+            if to_si(match.group(1).strip(), si, "") > 0:
                 return quantity, match.group(1).strip()
         except GearlabInputError:
             continue
