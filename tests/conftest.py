@@ -23,13 +23,19 @@ HEAVY_FIRST = (
     "test_inspect.py",  # 53 s
     "test_tui_edges.py",  # 51 s (27 s at b2f7515, before four of its tests failed)
     "test_executors.py",  # 62 s of wall time in one process at 17d49c4 (4 s of its own CPU: Ray and the pools')
+    "test_outside_cn.py",  # 27 s (a484985, the README's suite, 3 workers; collected late: alphabetical)
+    "test_outside_cv.py",  # 27 s
     "test_protocol.py",  # 36 s
     "test_slow_shaft.py",  # 27 s of CPU in one process at 17d49c4 (then collected near the end)
     "test_outside_user.py",  # 26 s of CPU in one process at 17d49c4
     "test_crash_safety.py",  # 26 s
     "test_fuzz.py",  # 24 s
+    "test_gap_load.py",  # 21 s (a484985)
+    "test_box_b_takes.py",  # 21 s (a484985)
     "test_detection.py",  # 21 s
     "test_verdict.py",  # 17 s
+    "test_outside_j.py",  # 13 s (a484985)
+    "test_outside_at.py",  # 12 s (a484985)
     "test_inspect_simulated.py",  # 16 s
     "test_your_gearbox.py",  # 15 s
     "test_user_gearbox_e2e.py",  # 14 s
