@@ -140,7 +140,9 @@ def window_ratios(signal: np.ndarray, fs: float, parts: int, reach: float) -> tu
         return None
     axis, rows = lifted
     lag_reach = int(reach / COURSE_STEP)
-    m = 1 << int(math.ceil(math.log2(2 * axis.size)))
+    # zero-padded to N + reach, not 2 N: a lag up to the reach wraps onto the padding alone (half the transforms of
+    # a step's 255 short windows)
+    m = 1 << int(math.ceil(math.log2(axis.size + lag_reach + 1)))
     cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(rows[windows // 2], m)), m)
     lags = np.concatenate([cross[:, -lag_reach:], cross[:, : lag_reach + 1]], axis=1)  # lag -reach .. reach
     k = np.clip(np.argmax(lags, axis=1), 1, 2 * lag_reach - 1)
