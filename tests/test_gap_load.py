@@ -19,6 +19,10 @@ from gearlab.gap.views import healthy_rows, offset_removed
 B6 = dataset_preset("B-6-ch5").with_(faults=(), healthy=16)
 NOISE = (effect_spec("sensor_noise", kind="gaussian", snr_db=20),)
 SMALL = {"healthy": 16, "bootstrap": 20, "permutations": 99}  # a unit test's diagnosis: 16 rows, small statistics
+# The round-1 searches of the drive-or-bearing tests: at 10 source simulations a fit (the default 16: 2-5 s more of
+# CPU, the drive's fine stage 55 evaluations against 257) the true effect scores 30-230x under the others', the load
+# read within 0.1 %; with the load held at the source's (level.free undone) the drive still wins the bearing target
+BUDGET = 10
 
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the simulator's accuracy warnings on odd parameters
@@ -42,7 +46,7 @@ def test_a_drive_at_another_load_is_named_with_the_load_factor():
     )
     source = B6.with_(effects=NOISE)
     candidates = ("drive_inertias", "bearing_stiffness", "fillet_correction")
-    settings = Settings(candidates=candidates, max_effects=1, budget=16, seed=0, **SMALL)
+    settings = Settings(candidates=candidates, max_effects=1, budget=BUDGET, seed=0, **SMALL)
     result = diagnose(source, target, settings)
     assert [e["name"] for e in result["effects"]] == ["drive_inertias"]
     assert result["load"]["factor"] == pytest.approx(0.6, rel=0.03)
@@ -59,9 +63,10 @@ def test_a_bearing_at_another_load_is_not_explained_by_the_drive():
     source = B6.with_(effects=NOISE)
     target = healthy_rows(build_dataset(source.with_(effects=(bearing,) + NOISE, seed=21, load_nm=28.0)))
     candidates = ("drive_inertias", "bearing_stiffness", "fillet_correction")
-    settings = Settings(candidates=candidates, max_effects=1, budget=16, seed=0, **SMALL)
+    settings = Settings(candidates=candidates, max_effects=1, budget=BUDGET, seed=0, **SMALL)
     result = diagnose(source, target, settings)
-    # main before: the drive won round 1 (49,210 against the bearing's 78,815), the load read 0.47
+    # main before: the drive won round 1 (49,210 against the bearing's 78,815), the load read 0.47; at BUDGET the
+    # bearing 1,878 against the drive's 59,686, the load 1.400 (the load unread: the drive 64,971, the bearing 127,054)
     assert result["rounds"][0]["best"] == "bearing_stiffness"
     assert [e["name"] for e in result["effects"]] == ["bearing_stiffness"]
     assert result["load"]["factor"] == pytest.approx(1.4, rel=0.03)
