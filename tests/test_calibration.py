@@ -77,7 +77,9 @@ AMPLITUDE = 3.0
 def test_likelihood_ratio_beats_energy_and_knows_its_noise_law(law):
     """The likelihood ratio with the true shapes finds weak bursts better than the residual's
     energy, and the right noise law does at least as well as the wrong one."""
-    X, y, h, pos = revolutions(400, 200, amplitude=AMPLITUDE, law=law, seed=3)
+    # 200 revolutions, 100 with a burst (400 / 200: student_t's elementwise sums 3.0 s of CPU against 1.4): right
+    # 70.0 / 76.5 / 85.5 %, energy 52.5 / 56.5 / 64.5, the wrong law 52.5 / 60.0 / 83.0 (student_t, laplace, gaussian)
+    X, y, h, pos = revolutions(200, 100, amplitude=AMPLITUDE, law=law, seed=3)
     shapes = np.stack([burst_shape(p) * AMPLITUDE for p in range(0, L - 30)])
     right = best_accuracy(likelihood_ratio(X, h, shapes, law), y)
     energy = best_accuracy(((X - h) ** 2).sum(1), y)
