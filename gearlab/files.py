@@ -127,3 +127,17 @@ def matched(name: str, base: Path, where: str) -> list[str]:
     if not found:
         raise GearlabInputError(f"{where}: {name!r} matches no file")
     return found
+
+
+def one_file(name: str, base: Path, where: str) -> str:
+    """The file a key that reads one record names (a dataset entry's, a gap's or a transfer's 'file'):
+    *name* as matched() reads it, a glob pattern only where it matches a single file. One line naming
+    *where* and the files otherwise (none: matched's)."""
+    names = matched(name, base, where)
+    if len(names) > 1:
+        listed = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+        raise GearlabInputError(
+            f"{where}: {name!r} matches {len(names)} files ({listed}); this key reads one record: expected "
+            "a name or a pattern matching one file (several records: a gap or detection [target]'s 'files')"
+        )
+    return names[0]

@@ -172,3 +172,54 @@ def test_the_tui_validates_a_scenario_again_when_a_take_joins_its_pattern_s_fold
     assert len(validated.scenario(path).spec.target.files) == 4
     _take(folder / "test" / "c.csv", 2.0)
     assert len(validated.scenario(path).spec.target.files) == 5
+
+
+def _dataset(folder, file: str, name: str = "") -> object:
+    text = '[scenario]\nname = "ds"\nkind = "dataset"\n[[datasets]]\n' + f'file = "{file}"\nvibration = "acc"\n'
+    text += 'unit = "m/s^2"\nspeed = "25 Hz"\n' + (f'name = "{name}"\n' if name else "")
+    (folder / "ds.toml").write_text(text)
+    return folder / "ds.toml"
+
+
+def _gap(folder, file: str) -> object:
+    text = (
+        '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n'
+        f'[target]\nfile = "{file}"\nvibration = "acc"\nunit = "m/s^2"\nspeed = "25 Hz"\n[accuracy]\nenabled = false\n'
+    )
+    (folder / "g.toml").write_text(text)
+    return folder / "g.toml"
+
+
+def test_a_dataset_entry_s_pattern_stands_for_a_dataset_of_each_file(folder):
+    """[[datasets]] file = pattern: one measured dataset per matched file, named by its file (before: the
+    pattern was read as a file's name, 'no such file')."""
+    specs = load_scenario(_dataset(folder, "history/*.csv")).spec
+    assert [(s.name, s.path) for s in specs] == [(n, str(folder / f"history/{n}.csv")) for n in ("take1", "take2")]
+    one = load_scenario(_dataset(folder, "test/[a].csv", name="first")).spec
+    assert [(s.name, s.path) for s in one] == [("first", str(folder / "test/a.csv"))]
+
+
+def test_a_single_file_key_reads_the_one_file_its_pattern_matches(folder):
+    """A gap [target]'s 'file' (a key of one record, as a transfer's): a pattern of one file reads it."""
+    target = load_scenario(_gap(folder, "test/[b].csv")).spec.target
+    assert target.path == str(folder / "test/b.csv")
+
+
+@pytest.mark.parametrize(
+    "make, pattern, line",
+    [
+        (_gap, "history/*.csv", "[target] key 'file': 'history/*.csv' matches 2 files (history/take1.csv, history/"),
+        (_gap, "test/*.wav", "[target] key 'file': 'test/*.wav' matches no file"),
+        (_dataset, "test/*.wav", "[[datasets]] #1 key 'file': 'test/*.wav' matches no file"),
+        (
+            lambda f, p: _dataset(f, p, name="x"),
+            "test/*.csv",
+            "[[datasets]] #1 key 'name': 'x' names one dataset, and 'test/*.csv' matches 2 files",
+        ),
+    ],
+)
+def test_a_pattern_a_single_file_key_cannot_read_is_one_line_and_exit_2(cli, folder, make, pattern, line):
+    path = make(folder, pattern)
+    code, out, err = cli("validate", path)
+    assert code == 2, out + err
+    assert len(err.splitlines()) == 1 and err.startswith(f"error: {path}: {line}"), err

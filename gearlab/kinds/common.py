@@ -25,6 +25,7 @@ from ..data.textzip import CALIBRATION, calibration, parse_sensitivity
 from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
+from ..files import one_file
 from ..learn.protocol import Counts
 from ..parts.measured import ACQUISITION, pulses_of, tacho_shaft_of
 from ..registry import get_registry
@@ -91,7 +92,7 @@ MEASURED = {
         "types": str,
         "default": "",
         "doc": "measured data: a .csv, .txt, .zip (of one text file), .npz, .h5, .wav or .mat file, relative "
-        "to the scenario",
+        "to the scenario; a glob pattern: the one file it matches ([[datasets]]: a dataset of each)",
     },
     "files": {
         "types": list,
@@ -425,8 +426,7 @@ def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
 def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     """A measured 'file' entry, checked against the file's header (its channels, rate and units:
     recordings.check_recording) so that `gearlab validate` finds a wrong name before any work."""
-    path = Path(entry["file"])
-    path = path if path.is_absolute() else base / path
+    path = base / one_file(entry["file"], base, f"{where} key 'file'")  # an absolute name stays itself
     check_measured_file(path, f"{where} key 'file'")
     if entry["vibration"] == "":  # as inspect takes it: the file's one channel besides the tacho and time
         entry = {**entry, "vibration": only_vibration(path, entry["tacho"], where)}

@@ -14,6 +14,7 @@ from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event, figures_ahead
+from ..files import matched
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
@@ -24,10 +25,19 @@ OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
 
 
 def build(scenario: Scenario) -> list[DatasetSpec | MeasuredSpec]:
-    specs = [
-        dataset_spec(entry, location(scenario.path, "datasets", index=i), scenario.base or scenario.path.parent)
-        for i, entry in enumerate(scenario.tables["datasets"])
-    ]
+    """The [[datasets]]; an entry whose 'file' is a glob pattern (files.matched) stands for one measured
+    dataset per file it matches, each named by its file."""
+    base = Path(scenario.base or scenario.path.parent)
+    specs = []
+    for i, entry in enumerate(scenario.tables["datasets"]):
+        at = location(scenario.path, "datasets", index=i)
+        names = matched(entry["file"], base, f"{at} key 'file'") if entry["file"] else [""]
+        if len(names) > 1 and entry["name"]:
+            raise GearlabInputError(
+                f"{at} key 'name': {entry['name']!r} names one dataset, and {entry['file']!r} matches {len(names)} "
+                "files; expected no 'name' (each dataset is named by its file) or an entry for each file"
+            )
+        specs.extend(dataset_spec({**entry, "file": name} if name else entry, at, base) for name in names)
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
         raise GearlabInputError(f"{scenario.path}: dataset names must be unique; give each entry a 'name'")
