@@ -456,3 +456,50 @@ def test_pinion_sync_puts_a_localised_fault_on_the_shaft_it_turns_with(tmp_path,
     rows = shafts_csv([r]).splitlines()
     assert rows[0] == "condition,file,unit,index,shaft,strength_input,strength_idler,strength_output"
     assert len(rows) == 1 + sum(len(v) for units in r["test_scores"].values() for v in units.values())
+
+
+@pytest.mark.slow
+def test_a_learned_detector_s_threshold_from_two_history_records_holds_the_rate_asked(
+    cli, tmp_path, monkeypatch, no_figures
+):
+    """The shipped scenario with synthetic rig records, ten conditions of 2 history + 6 healthy new takes + 1 chip
+    (35 and 50 Hz, 1 % asked), and matched_filter: each history record is scored by the detector referenced on
+    the other record (detection_units.LEFT_OUT), so its scores are what a new take's are. Scored by the detector
+    made of both records, its own included (three records were asked for), it let 7.9 % of the new takes' record10
+    units through, 5.0 % of their record30 units; so, 0.4 % and 0 % (the chips found in every unit either way)."""
+    import json
+
+    import textrecords
+
+    monkeypatch.setattr(textrecords, "FS", 66666.67)
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    listed = ["files = [\n"]
+    for s in range(1, 6):
+        for c, speed in enumerate((35.0, 50.0)):
+            for k in range(9):
+                seed = 1000 * s + 100 * c + k
+                chip = 4.0 if k == 8 else 0.0
+                vib, tacho = textrecords.signals(revolutions=45, chip=chip, seed=seed, phase=0.9 * seed, speed=speed)
+                path = textrecords.write_zip(tmp_path / f"r{s}_{c}_{k}.zip", textrecords.text(vib, tacho))
+                role, label = ("history" if k < 2 else "test"), ("fault" if chip else "healthy")
+                listed.append(f'  {{ file = "{path}", role = "{role}", label = "{label}", condition = "{s}/{c}" }},\n')
+    shipped = (Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml").read_text()
+    text, n = re.subn(r"files = \[\n(.*\n)*?\]", lambda _: "".join(listed) + "]", shipped)
+    text, m = re.subn(r"\n\[corrected\]\n(.*\n)*?(?=\n\[)", "\n", text)  # the plain source alone
+    text = re.sub(r"indicators = \[.*\]", 'indicators = ["fm4"]', text)
+    assert n == m == 1
+    (tmp_path / "s.toml").write_text(text + '\n[[methods]]\nadapter = "matched_filter"\n')
+    code, out, err = cli("run", tmp_path / "s.toml", "--out", tmp_path / "runs")
+    assert code == 0, err
+    run = Path(out.strip().splitlines()[-1].split(": ", 1)[1])
+    called = {}
+    for line in (run / "results.jsonl").read_text().splitlines():
+        r = json.loads(line)
+        for path, units in r["test_scores"].items() if r["adapter"] == "matched_filter" else ():
+            for u in ("record10", "record30"):
+                key = (u, path.endswith("_8.zip"))
+                called.setdefault(key, []).extend(np.array(units[u]) > r["thresholds"][u])
+    rates = {k: float(np.mean(v)) for k, v in called.items()}
+    assert len(called[("record10", False)]) == 10 * 6 * 4 and len(called[("record30", True)]) == 10
+    assert rates[("record10", True)] == rates[("record30", True)] == 1.0, rates
+    assert rates[("record10", False)] <= 0.02 and rates[("record30", False)] <= 0.02, rates

@@ -132,7 +132,6 @@ from .detection_settings import (
 )
 from .detection_tables import labels_md, learned_md, summarise, table_md
 from .detection_units import (
-    LEFT_OUT,
     Rule,
     crossed_record,
     ensemble_record,
@@ -145,6 +144,7 @@ from .detection_units import (
     source_split,
     train_unit,
     unit_name,
+    without_each,
 )
 from .detection_which_gear import store_localisation
 
@@ -556,14 +556,14 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
             return rows[(c, k, v)]
 
         def left_out(c: str, v: str, m, k: int | None) -> tuple | None:
-            """A detector made on all the history (k None) of LEFT_OUT records or more: the history rows
-            without each record in turn, on which the detector that scores that record is referenced
-            (its median and noise level: detectors.referenced_on, detection_units.train_unit). A
-            detector's reference is the history's median revolution, so a history record scores nearer
-            it than a new one. Not with two: each reference would be one take."""
-            n = len(conditions[c]["history"])
-            out = m.is_detector and k is None and n >= LEFT_OUT
-            return tuple(history_rows(c, j, v) for j in range(n)) if out else None
+            """A detector made on all the history (k None): the history rows without each record in turn
+            (without_each), on which the detector that scores that record is referenced (its median and noise
+            level: detectors.referenced_on, detection_units.train_unit). A detector's reference is the
+            history's median revolution, so a history record scores nearer it than a new one."""
+            if not m.is_detector or k is not None:
+                return None
+            made = without_each(len(conditions[c]["history"]), lambda j: history_rows(c, j, v))
+            return None if made is None else tuple(made)
 
         members = {(c, v, m): seeds_of(m, d.seeds) for c in conditions for v in variants for m in protocol.methods}
         todo = [(c, v, m, seed, k) for (c, v, m), seeds in members.items() for seed in seeds for k in folds[c]]

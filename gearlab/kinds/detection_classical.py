@@ -24,13 +24,13 @@ from ..signals.indicators import (
 from . import record_effects
 from .detection_records import unit_window
 from .detection_settings import Classical
-from .detection_units import Rule, to_lists
+from .detection_units import Rule, to_lists, without_each
 
 
 def classical_record(name: str, condition: str, cond: dict, classical: Classical, rule: Rule) -> dict:
     """A classical indicator's scores: computed on the TSA units, its reference (NA4's variance,
     tooth_energy's, tooth_sync's and pinion_sync's windows) from the history's units of the same kind
-    (a history record's own scores, of two records or more, from the others' units);
+    (a history record's own scores, of LEFT_OUT records or more, from the others' units: without_each);
     tooth_sync and pinion_sync read each unit's own revolutions (their pairs), not only their TSA.
     pinion_sync's record also names, per test unit, the shaft its localised damage turns with
     (shaft_attribution)."""
@@ -85,7 +85,7 @@ def classical_record(name: str, condition: str, cond: dict, classical: Classical
 
     records = range(len(files))
     reference = reference_of(records)
-    # each history record scored against the reference made without it, whenever there is another: a record's own
+    # each history record scored against the reference made without it (two records: the other's): a record's own
     # units pull the reference (its windows' mean and spread) towards them, so its scores are a new record's less
     # the record-to-record part the threshold is for (3-take development boxes, record30, 1 % asked: NA4 let 4.2 % of
     # a new take's units through against the whole history's variance, 1.7 % so). With two records too: synthetic
@@ -93,7 +93,7 @@ def classical_record(name: str, condition: str, cond: dict, classical: Classical
     # let tooth_sync 15 % (record10) and 28 % (record30) of the new takes' units through, tooth_energy 13-16 %; the
     # other record's reference 0.0-1.6 % (each indicator; the chip found in 100 % of units but tooth_energy's record30,
     # 79-88 %). A Student-t bound on the in-sample scores instead (record_effects) left record10 at 12-14 %.
-    without = [reference_of([j for j in records if j != i]) for i in records] if len(files) >= 2 else None
+    without = without_each(len(files), lambda i: reference_of([j for j in records if j != i]))
 
     def parts(path: str, u: str) -> np.ndarray:  # pinion_sync: (units, 1 + shafts, windows)
         return shares[path][u].reshape(-1, 1 + len(periods), orders[0])
