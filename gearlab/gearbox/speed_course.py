@@ -22,6 +22,7 @@ COURSE_PARTS = 8  # the record's spectra over time: half-overlapping windows, an
 # the mesh band, ±0.43 orders, lost the line there); a ramp keeps the eighths, whose lines stand over its smear
 STEP_PARTS = 128
 STEP_WINDOW = 512
+CROSS_ROWS = 4  # window_ratios correlates this many windows at a time (its memory, not its result)
 COURSE_SPAN = 0.04  # the speed's course is looked for within ±4 % of its mean, or as far as speed_shift reads
 COURSE_STEP = 1e-4  # the log-frequency axis's step: 0.01 % of speed
 COURSE_MIN = 2e-3  # a course that moves less than 0.2 % is no course (a steady record's windows scatter)
@@ -143,8 +144,16 @@ def window_ratios(signal: np.ndarray, fs: float, parts: int, reach: float) -> tu
     # zero-padded to N + reach, not 2 N: a lag up to the reach wraps onto the padding alone (half the transforms of
     # a step's 255 short windows)
     m = 1 << int(math.ceil(math.log2(axis.size + lag_reach + 1)))
-    cross = np.fft.irfft(np.fft.rfft(rows, m) * np.conj(np.fft.rfft(rows[windows // 2], m)), m)
-    lags = np.concatenate([cross[:, -lag_reach:], cross[:, : lag_reach + 1]], axis=1)  # lag -reach .. reach
+    middle = np.conj(np.fft.rfft(rows[windows // 2], m))
+    lags = np.empty((windows, 2 * lag_reach + 1))  # lag -reach .. reach
+    # CROSS_ROWS windows at a time: all 255 of a step's at once made three temporaries of 134 MB (m = 65536), each
+    # page-faulted afresh; each row's transforms are its own, so the lags are the same to the bit
+    for a in range(0, windows, CROSS_ROWS):
+        spec = np.fft.rfft(rows[a : a + CROSS_ROWS], m)
+        spec *= middle
+        cross = np.fft.irfft(spec, m)
+        lags[a : a + CROSS_ROWS, :lag_reach] = cross[:, -lag_reach:]
+        lags[a : a + CROSS_ROWS, lag_reach:] = cross[:, : lag_reach + 1]
     k = np.clip(np.argmax(lags, axis=1), 1, 2 * lag_reach - 1)
     l, c, r = (lags[np.arange(k.size), k + d] for d in (-1, 0, 1))
     denom = l - 2 * c + r
