@@ -92,12 +92,9 @@ def nonsync_lines(revs, history: list, table, speed_hz: float) -> dict:
     LINES strongest lines' orders and z, strongest first; where the takes are too short for it, why not."""
     try:
         hist = NS.history(history, table)
-        found = NS.nonsync(revs, hist, table)
+        found, z = NS.read_take(revs, hist, table)
     except GearlabInputError as exc:
         return {"note": f"not read: {exc}"}
-    r = NS.residual(revs, table)
-    blocks = NS.envelope_blocks(r, revs.shape[-1])
-    z = NS.line_z(blocks, list(hist.blocks), NS.synchronous_bins(table, blocks.shape[1]))
     orders = NS.orders_of_bins(z.size)
     inner = np.r_[False, (z[1:-1] >= z[:-2]) & (z[1:-1] > z[2:]), False]  # each line's peak bin
     peaks = sorted(np.flatnonzero(inner | (z == z.max())), key=lambda i: -z[i])[:LINES]

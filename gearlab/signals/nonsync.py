@@ -300,13 +300,12 @@ def line_z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndar
     return np.where(synchronous, 0.0, z - median_filter(z, size=2 * LINE + 1, mode="nearest"))
 
 
-def _z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndarray) -> tuple[float, float]:
-    """(largest line z, the strike order) of a record's envelope blocks against the reference records'
-    blocks (line_z). The strike order: the lowest f0 ≤ FUNDAMENTAL whose HARMONICS
+def _z(z: np.ndarray) -> tuple[float, float]:
+    """(largest line z, the strike order) of a record's line z (line_z of its envelope blocks against the
+    reference records'). The strike order: the lowest f0 ≤ FUNDAMENTAL whose HARMONICS
     harmonics' line z (clipped at 0) sum within LOWEST of the most (a strike's line is often strongest at a
     harmonic, where the resonance it rings lies; its double holds its even harmonics only, its half half of
     them) with a line of its own OWN of the largest, read at that line's peak."""
-    z = line_z(blocks, reference, synchronous)
     lo = int(math.ceil(LOW * BLOCK))
     f0 = np.arange(lo, int(FUNDAMENTAL * BLOCK) + 1)  # candidate orders in bins (order * BLOCK)
     pos = np.round(f0[:, None] * np.arange(1, HARMONICS + 1)[None, :]).astype(np.int64) - lo
@@ -366,10 +365,18 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
 def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
     """*take* (R, points) read against the history *hist* of the gearbox of order table *table*; a take too
     short for it (too_short) is refused in that phrase."""
+    return read_take(take, hist, table)[0]
+
+
+def read_take(take: np.ndarray, hist: NonSyncHistory, table) -> tuple[NonSync, np.ndarray]:
+    """(nonsync's reading of *take*, each bin's line z of it (line_z; bins from orders_of_bins)): the residual,
+    its envelope blocks and their z read once for both, where `inspect --history` shows the strongest lines too
+    (a take's residual is two to four FFTs of its whole length)."""
     short = too_short(len(take), table)
     if short:
         raise GearlabInputError(short)
     r = residual(take, table)
     blocks = envelope_blocks(r, np.shape(take)[-1])
-    z, order = _z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
-    return NonSync(z, refined(r, np.shape(take)[-1], order), hist.threshold)
+    lines = line_z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
+    z, order = _z(lines)
+    return NonSync(z, refined(r, np.shape(take)[-1], order), hist.threshold), lines
