@@ -42,7 +42,9 @@ Everything is numpy: no torch, nothing from the layers above.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import threading
 from dataclasses import dataclass
 from fractions import Fraction
 from statistics import NormalDist
@@ -50,6 +52,7 @@ from statistics import NormalDist
 import numpy as np
 
 from ..errors import GearlabInputError
+from ..memo import SharedArrays
 from .shaft import uniform_filter1d
 
 GRAND = 2  # grand periods (or meshes' periods) a record must hold to be read in them (read_turns)
@@ -341,7 +344,7 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
     short = [w for w in (too_short(len(t), table) for t in takes if len(t) >= BLOCK) if w]
     if short:
         raise GearlabInputError(f"the history's takes: {short[0]}")
-    blocks = tuple(envelope_blocks(residual(t, table), np.shape(t)[-1]) for t in takes)
+    blocks = tuple(take_blocks(t, table) for t in takes)
     if sum(len(b) for b in blocks) < 3:
         raise GearlabInputError(
             f"non-synchronous residual: the history holds {sum(len(b) for b in blocks)} blocks of {BLOCK} "
@@ -360,6 +363,30 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
             left_out.append(line_z(b, rest, sync)[~sync])
     spread = max(float(np.std(np.concatenate(left_out))), 1.0) if left_out else 1.0
     return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]))
+
+
+def take_blocks(take: np.ndarray, table) -> np.ndarray:
+    """envelope_blocks of a history take's residual (*take*: (R, points)), read once per take and gearbox
+    (TAKE_BLOCKS), shared read-only."""
+    data = np.ascontiguousarray(take)
+    key = (hashlib.blake2b(data, digest_size=20).digest(), data.shape, data.dtype.str, repr(table))
+    with _TAKE_BLOCKS_LOCK:
+        hit = TAKE_BLOCKS.get(key)
+        if hit is not None:
+            TAKE_BLOCKS.move_to_end(key)
+    if hit is None:
+        made = envelope_blocks(residual(take, table), np.shape(take)[-1])
+        with _TAKE_BLOCKS_LOCK:
+            hit = TAKE_BLOCKS.get_or_make(key, lambda: (made,))
+    return hit[0]
+
+
+# The history takes' envelope blocks last read, by take (its digest, shape and type) and gearbox (its order table):
+# `inspect --history` reads the history again for every take it inspects, and each of a history's takes is two to
+# four FFTs of its whole length and its blocks' envelopes (tests/test_outside_cn.py read one history of 4 takes 6
+# times: 24 residuals, 8.8 s); a take's blocks are 5 kB per 16 input revolutions (a 400-turn take's: 130 kB).
+TAKE_BLOCKS = SharedArrays(64)
+_TAKE_BLOCKS_LOCK = threading.Lock()
 
 
 def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
