@@ -385,15 +385,20 @@ def _content(revs: np.ndarray, lay: Layout, first_revolution: int, block: int | 
         mean, noise, periods = shaft_averages(y, lay, first_revolution, R, sweeps)
     whole = Content(mean, noise, np.abs(mean) ** 2 - noise, int(periods), first_revolution, 1, lay.source)
     if block and R > block:
-        return in_blocks(whole, _units(revs, first_revolution, lay, block))
+        return in_blocks(_units(revs, first_revolution, lay, block), whole)
     return whole
 
 
-def in_blocks(whole: Content, parts: list[Content]) -> Content:
-    """A record's content read in blocks (content's *block*): the whole record's mean, its blocks' power and
-    noise (history() has the blocks already, as its units: each a shaft_averages of a 4 x denser reading)."""
+def in_blocks(parts: list[Content], whole: Content | None = None) -> Content:
+    """A record's content read in blocks (content's *block*): its blocks' power and noise, and the mean and turns of
+    *whole*, the record read whole (history() has the blocks already, as its units: each a shaft_averages of a 4 x
+    denser reading). None: the blocks' mean and turns, where nothing reads them (a history record's left-out levels
+    read the power and noise alone; read whole, its records doubled the history's reading)."""
     power = np.mean([u.power for u in parts], axis=0)
     noise = np.mean([u.noise for u in parts], axis=0) / len(parts)
+    if whole is None:
+        mean, periods = np.mean([u.mean for u in parts], axis=0), sum(u.periods for u in parts)
+        return Content(mean, noise, power, periods, parts[0].first_revolution, len(parts), parts[0].source)
     return Content(whole.mean, noise, power, whole.periods, whole.first_revolution, len(parts), whole.source)
 
 
@@ -707,9 +712,8 @@ def history(
         rest = [u for j, us in enumerate(units) if j != i for u in us]
         if len(rest) < 2:
             continue
-        # content(r, lay, firsts[i], read): its blocks are its units, read above
-        whole = content(r, lay, firsts[i])
-        rec = in_blocks(whole, units[i]) if read and r.shape[0] > read else whole
+        # content(r, lay, firsts[i], read) without the whole record's mean: its blocks are its units, read above
+        rec = in_blocks(units[i]) if read and r.shape[0] > read else content(r, lay, firsts[i])
         level, sd = shaft_levels(rec, spread(rest, ~lay.carrier), lay)
         loo.append(level / sd)
     loo = np.array(loo).reshape(-1, len(lay.shafts))
