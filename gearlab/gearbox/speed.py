@@ -4,6 +4,7 @@ Used by the importer (gearlab.data.recordings) and by `gearlab inspect`."""
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -674,7 +675,10 @@ def mesh_angle(
         c = h * float(table.stages[0].mesh) * f
         if c + 2 * cutoff >= fs / 2:
             break
-        power = float(np.sum(np.abs(spec[np.abs(freq - c) <= cutoff]) ** 2))
+        # the bins within the cutoff of c, found among the few about it (c > cutoff: positive frequencies alone), not
+        # over the whole record for each of up to MAX_HARMONIC harmonics: the same bins in the same order, the same sum
+        near = slice(max(math.floor((c - cutoff) * n / fs) - 2, 0), min(math.ceil((c + cutoff) * n / fs) + 3, n))
+        power = float(np.sum(np.abs(spec[near][np.abs(freq[near] - c) <= cutoff]) ** 2))
         order = h * float(table.stages[0].mesh)
         if strongest is None or power > strongest[0]:
             strongest = (power, c, 2 * cutoff, order)
