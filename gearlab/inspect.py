@@ -75,7 +75,7 @@ from .signals import angle_from_pulses, resample_revolutions, revolution_starts,
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders, smear_merged
 from .signals.nonsync import TURNS
-from .signals.spikes import clipped
+from .signals.spikes import acquisition
 
 TWO_PI = 2.0 * np.pi
 MAX_TSA_POINTS = 1 << 15
@@ -440,6 +440,7 @@ def _read_at_count(rec, box: Gearbox, options, speed: Speed, mesh_hz: float, cou
 def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> dict:
     """Everything `gearlab inspect` shows, as plain numbers (the TSA curves as arrays)."""
     rec = read_record(path, options)
+    rec.signal, flaws = acquisition(rec.signal, rec.fs)  # read as cut_recording reads it: a drift out, said
     speed, reading, no_speed = settle_speed(rec, box, options)
     fine, orders, amp, top = reading.fine, reading.orders, reading.amp, reading.top
     revolutions, lines = reading.revolutions, reading.lines
@@ -465,11 +466,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         ],
         "spectrum": (orders, amp),
         "tsa": shaft_tsa(rec, speed, box, fine),
-        # a channel flat at its extreme: clipped at the logger's or the sensor's range (a knock over a WAV's full scale)
-        "clipped": [
-            f"{n} samples flat at {v:.4g} m/s² (clipped at the logger's or sensor's range?)"
-            for n, v in clipped(rec.signal)
-        ],
+        # clipped at the logger's or the sensor's range (a knock over a WAV's full scale), a dropout, a drift
+        "flaws": list(flaws),
     }
     # a description's (or --speed's) speed is nominal: the measured one beside it, as information
     nominal, said = (options.speed_hz, "--speed") if options.speed_hz else (box and box.speed_hz, "[operation] speed")
@@ -699,7 +697,7 @@ def render(report: dict, console, width: int = 100) -> None:
     )
     if "nominal" in sp:
         console.print(f"[dim]{escape(sp['nominal']['line'])}[/dim]")
-    for note in sp["notes"] + [f"vibration {report['vibration']!r}: {c}" for c in report.get("clipped", ())]:
+    for note in sp["notes"] + [f"vibration {report['vibration']!r}: {c}" for c in report.get("flaws", ())]:
         console.print(f"[yellow]note:[/yellow] {escape(note)}")
     orders, amp = report["spectrum"]
     top = report["max_order"]

@@ -115,7 +115,7 @@ def write_report(report: dict, folder: Path) -> Path:
         f"{sp['min_hz']:.5g} .. {sp['max_hz']:.5g} Hz; {report['revolutions']} input revolutions</p>",
     ]
     parts += [
-        f"<p>note: vibration {escape(repr(report['vibration']))}: {escape(c)}</p>" for c in report.get("clipped", ())
+        f"<p>note: vibration {escape(repr(report['vibration']))}: {escape(c)}</p>" for c in report.get("flaws", ())
     ]
     if "verdict" in report:
         parts.append(f"<p><b>{escape(report['verdict'])}</b></p>")

@@ -132,9 +132,7 @@ def test_inspect_says_a_channel_clipped_at_its_range(cli, tmp_path):
     x[5000:5004] += 6.0
     code, stdout, err = cli("inspect", _wav24(tmp_path / "knock.wav", x, 10240.0), *args, "--json")
     assert code == 0, err
-    assert json.loads(stdout)["clipped"] == [
-        "4 samples flat at 490.3 m/s² (clipped at the logger's or sensor's range?)"
-    ]
+    assert json.loads(stdout)["flaws"] == ["4 samples flat at 490.3 m/s² (clipped at the logger's or sensor's range?)"]
     code, stdout, err = cli("inspect", tmp_path / "knock.wav", *args, "--report", tmp_path / "report")
     assert code == 0 and "4 samples flat at 490.3 m/s²" in (tmp_path / "report" / "report.html").read_text(), err
 

@@ -5,14 +5,14 @@ roles and units, the sampling rate and the shaft angle (docs/real_data.md).
          ─► vibration in m/s², tacho, rate         read_recording: units from the sensitivity, the
                                                   gain and what a column's name says ('acc_V'),
                                                   else the file or the scenario's 'unit' key
-         ─► complete revolutions                   cut_recording (the detection and gap [target]);
+         ─► complete revolutions                   cut_recording (the detection and gap [target]: what the
+                                                  acquisition did said, a drifting baseline out: signals.spikes);
                                                   gearlab.data.importers.import_measured (a dataset)
 
     check_recording opens only a file's header (its channel names, rate fields and storage types) and checks what a
     scenario says of it: `gearlab validate` finds a wrong column, a missing rate or a unit mistake without reading it.
 
 Formats (by extension) and where the sampling rate comes from:
-
     .csv / .tsv   columns separated by commas, semicolons, tabs or blanks; a header row of names,
                   or none (columns "0", "1", …); '#' comment lines; the rate from a time column
                   (time, t, time_s, 'Time [s]', 'time (ms)', …: see time_scale) or a comment
@@ -49,6 +49,7 @@ from ..errors import GearlabInputError, which_meant
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz, revolution_speeds
+from ..signals.spikes import acquisition
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
@@ -425,8 +426,6 @@ def angle_tacho(tacho: np.ndarray) -> np.ndarray:
     )
 
 
-# --- units -------------------------------------------------------------------------------
-
 # --- a recording ---------------------------------------------------------------------------
 
 
@@ -678,6 +677,7 @@ def cut_recording(
     from ..signals import POINTS, cut_revolutions
 
     rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
+    rec.signal, flaws = acquisition(rec.signal, rec.fs)  # the speed from the mesh lines too, without the drift
     raw = rec.signal
     if raw.size and raw.min() == raw.max():  # a wrong column, or a sensor not connected
         raise GearlabInputError(
@@ -698,7 +698,7 @@ def cut_recording(
     start, warning = 0, None
     if transient == "stats":
         start, _, warning = steady_start(cut.revolutions, f"{path}: vibration column {_one_line_repr(rec.vibration)}")
-    revs, warns = cut.revolutions[start:], () if warning is None else (warning,)
+    revs, warns = cut.revolutions[start:], flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
     return CutRecording(
         str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units, speeds

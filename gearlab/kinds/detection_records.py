@@ -420,6 +420,7 @@ def read_target(
         cond["warnings"] += level_warnings(cond)
         taken = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
         cond["warnings"] += [f"{p}: {u.split('; ')[-1]}" for p, u in taken if TOO_LOUD in u or TOO_QUIET in u]
+        cond["warnings"] += [f"{p}: {w}" for p, _ in taken for w in records[p].warnings]  # clipped, a dropout, a drift
         for line in cond["warnings"]:
             on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter

@@ -105,3 +105,45 @@ def clipped(x: np.ndarray) -> list[tuple[int, float]]:
         if at.sum() >= CLIP_SAMPLES and np.any(at[1:] & at[:-1]) and abs(value - centre) > CLIP_Z * scale:
             out.append((int(at.sum()), value))
     return out
+
+
+# A dropout: a run of equal samples (a logger's lost packet or a loose cable, written as zeros or the last value held)
+# this long at least (DROPOUT_SAMPLES and DROPOUT_S), not at the channel's extreme (that is clipped): a vibration,
+# noisy and quantised finely, repeats a value a few samples at most
+DROPOUT_SAMPLES = 32
+DROPOUT_S = 0.002
+# A baseline off zero (a DC-coupled input: an ICP sensor's bias logged; the matched filter and the likelihood ratio
+# called a healthy take at 2.1 V over 5 mV/(m/s²) a fault) or drifting (the sensor settling, a DC-coupled input warming
+# up): a polynomial of this degree over the take whose offset or swing exceeds this share of the vibration's RMS about
+# it. A gearbox's lines, turns of each shaft within the take, barely project on it (a 2 s take of shafts at 2.9 Hz and
+# up: a swing of 0.04 RMS); a decay over 0.8 s of a 2 s take is left at 0.3 % (a cubic: 2.6 %)
+BASELINE_DEGREE = 5
+BASELINE_SHARE = 0.25
+
+
+def acquisition(x: np.ndarray, fs: float) -> tuple[np.ndarray, tuple[str, ...]]:
+    """*x* (m/s², sampled at *fs*) with a baseline off zero or drifting taken out, and what its acquisition did to it:
+    each side clipped, each dropout, the baseline. A healthy take whose ICP sensor was still settling (a 2 s take at
+    0.4 V decaying over 0.8 s, 5 mV/(m/s²)) was scored a fault by every method, its level said 6.5 x its history's
+    ('another load or gain?'); a take with 0.3 s of zeros was said to be of another gearbox and scored healthy."""
+    x = np.asarray(x, dtype=np.float64)
+    notes = [f"{n} samples flat at {v:.4g} m/s² (clipped at the logger's or sensor's range?)" for n, v in clipped(x)]
+    edges = np.flatnonzero(np.diff(x)) + 1
+    starts, ends = np.concatenate([[0], edges]), np.concatenate([edges, [x.size]])
+    long = (ends - starts) >= max(DROPOUT_SAMPLES, DROPOUT_S * fs)
+    for a, b in zip(starts[long], ends[long]):
+        if x[a] not in (x.max(), x.min()):
+            notes.append(
+                f"a dropout: {b - a} samples ({(b - a) / fs:.3g} s) flat at {x[a]:.4g} m/s² from {a / fs:.4g} s"
+            )
+    if x.size > 2 * BASELINE_DEGREE:
+        t = np.linspace(-1.0, 1.0, x.size)
+        fit = np.polynomial.legendre.legval(t, np.polynomial.legendre.legfit(t, x, BASELINE_DEGREE))
+        offset, swing, rest = float(np.mean(fit)), float(np.ptp(fit)), float(np.std(x - fit))
+        if max(abs(offset), swing) > BASELINE_SHARE * rest:
+            notes.append(
+                f"the baseline sits at {offset:.4g} m/s² and drifts by {swing:.4g} m/s² over the take (the vibration's "
+                f"RMS {rest:.4g}: a DC-coupled input, a sensor settling?): taken out"
+            )
+            x = x - fit
+    return x, tuple(notes)

@@ -1,0 +1,115 @@
+"""Outside-user check of issue 39, round 16 (helper DF): recordings made outside gearlab (numpy, here; the round's own
+boxes were a 26/101 + 31/78 reducer with an input tacho, in m/s² and in volts at 5 mV/(m/s²), and a 35/78 + 41/90 +
+47/104 one without a tacho), read as docs/your_gearbox.md says. What a logger does to a take: a DC-coupled input's
+offset, an ICP sensor settling, a dropout, clipping: said wherever a take is read, and the baseline taken out."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from detection_scenario import run_in_module, scenario
+from textrecords import FS, PULSES, signals, text, write_zip
+
+from gearlab.parts import scoring
+from gearlab.runs import RunDir
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory, module_cache):
+    """The tiny detection run (tests/detection_scenario: 16 Hz, 10 mV/g, the matched filter beside FM4 and NA4)."""
+    folder = tmp_path_factory.mktemp("df")
+    path = scenario(folder, methods=("matched_filter",))
+    return run_in_module(path, folder / "runs", figures=False), folder
+
+
+@pytest.fixture
+def quiet(monkeypatch):
+    """The trend's PNG not drawn (matplotlib)."""
+    monkeypatch.setattr("gearlab.kinds.detection_figures.score_trend", lambda charts, path: path)
+
+
+def _take(path, change=None, seed=11, chip=0.0):
+    """A 40-revolution take of the tiny run's records (m/s² written as volts at 10 mV/g), *change*d."""
+    vib, tacho = signals(revolutions=40, seed=seed, phase=0.3, chip=chip)
+    if change is not None:
+        vib = change(vib, np.arange(vib.size) / FS)
+    return write_zip(path, text(vib, tacho))
+
+
+def _decisions(stdout: str) -> dict:
+    return {(r["method"], r["unit"]): (r["decision"], r["median_score"]) for r in json.loads(stdout)}
+
+
+BIAS = 11.5 / (0.01 / 9.80665)  # an ICP sensor's 11.5 V bias, logged DC-coupled, in m/s² at 10 mV/g
+
+
+@pytest.mark.parametrize(
+    "change, said",
+    [
+        (lambda x, t: x + BIAS, "the baseline sits at 1.128e+04 m/s²"),
+        (lambda x, t: x + 40.0 * np.exp(-t / 0.8), "drifts by"),
+    ],
+)
+def test_a_baseline_off_zero_or_drifting_is_taken_out_and_said(cli, finished, quiet, change, said):
+    # DF: a healthy take logged DC-coupled (2.1 V over 5 mV/(m/s²)) was called a fault by the matched filter
+    # (+4.48 over its threshold) and the likelihood ratio (+1850), unsaid; an ICP sensor settling (0.4 V decaying over
+    # 0.8 s) by every method, its level '6.5 x its history's (another load or gain?)'. Both now score as the take
+    # without them, and say what was taken out
+    out, folder = finished
+    clean = _take(folder / "clean.zip")
+    code, stdout, err = cli("score", out, clean, "--json")
+    assert code == 0, err
+    before = _decisions(stdout)
+    changed = _take(folder / "changed.zip", change)
+    code, stdout, err = cli("score", out, changed, "--json")
+    assert code == 0, err
+    rows = json.loads(stdout)
+    assert {k: v[0] for k, v in _decisions(stdout).items()} == {k: v[0] for k, v in before.items()}
+    for key, (_, median) in _decisions(stdout).items():
+        assert median == pytest.approx(before[key][1], rel=0.02, abs=0.02), key
+    assert all(any(said in f and "taken out" in f for f in r["flaws"]) for r in rows), rows[0]["flaws"]
+    code, stdout, err = cli("score", out, changed)
+    assert code == 0 and said in " ".join(stdout.split()), stdout
+
+
+def test_a_dropout_and_a_clipped_take_are_scored_with_a_line_that_says_so(cli, finished, quiet):
+    # DF: 0.3 s of zeros in a 2 s take (a logger's lost packets) was scored 'healthy' by every method with a line
+    # saying its lines did not fit the gearbox (stage 2 read as a 26.9-tooth pinion, 31 described), the dropout unsaid;
+    # a take clipped at the logger's +-5 V was read by inspect with a note, scored without one
+    out, folder = finished
+
+    def dropout(x, t):
+        return np.where((t > 0.9) & (t < 1.2), 0.0, x)
+
+    def clipped(x, t):
+        return np.clip(x, -4.0, 4.0)  # the chip's rings over the range
+
+    clip = _take(folder / "clip.zip", clipped, chip=8.0)
+    code, stdout, err = cli("score", out, _take(folder / "gap.zip", dropout), clip)
+    assert code == 0, err
+    words = " ".join(stdout.split())
+    assert "warning: a dropout: 2458 samples (0.3 s) flat at 0 m/s² from 0.9 s" in words, words
+    assert "samples flat at 4 m/s² (clipped at the logger's or sensor's range?)" in words, words
+    history = scoring.read_history(RunDir.open(out))
+    assert any("a dropout" in f for r in history if r["file"].endswith("gap.zip") for f in r["flaws"])
+
+
+def test_inspect_reads_a_take_as_score_does_without_its_baseline(tmp_path):
+    # inspect gave the RMS of a drifting take (20.4 m/s² of a 3.0 m/s² vibration) and said nothing of the drift
+    from test_inspect import described
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    vib, tacho = signals(revolutions=40, seed=3)
+    t = np.arange(vib.size) / FS
+    np.savez(tmp_path / "a.npz", acc=vib + 30.0 + 40.0 * np.exp(-t / 0.8), tacho=tacho, fs=FS)
+    np.savez(tmp_path / "b.npz", acc=vib, tacho=tacho, fs=FS)
+    box = described((32, 96), speed="16 Hz")
+    got = {
+        n: inspect_record(str(tmp_path / f"{n}.npz"), box, InspectOptions("acc", "tacho", pulses_per_rev=PULSES))
+        for n in "ab"
+    }
+    assert got["a"]["rms"] == pytest.approx(got["b"]["rms"], rel=0.01)
+    assert got["b"]["flaws"] == [] and len(got["a"]["flaws"]) == 1 and "drifts by" in got["a"]["flaws"][0]
