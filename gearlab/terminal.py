@@ -417,6 +417,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
             shown.append(
                 Text(f"values: {r0['values']}" + (f"; read with {r0['read_with']}" if r0.get("read_with") else ""))
             )
+        if r0.get("already"):  # a take scored before, under this name or another: one point of the trend
+            shown.append(Text(r0["already"], style="yellow"))
         for flaw in r0.get("flaws") or ():  # clipped, a dropout, a drift taken out: never scored unsaid
             shown.append(Text(f"warning: {flaw}", style="yellow"))
         if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)

@@ -113,3 +113,38 @@ def test_inspect_reads_a_take_as_score_does_without_its_baseline(tmp_path):
     }
     assert got["a"]["rms"] == pytest.approx(got["b"]["rms"], rel=0.01)
     assert got["b"]["flaws"] == [] and len(got["a"]["flaws"]) == 1 and "drifts by" in got["a"]["flaws"][0]
+
+
+def test_a_take_scored_again_or_renamed_is_one_take_of_the_history(cli, finished, quiet, tmp_path):
+    # DF: `gearlab score RUN take.csv` twice, then the same file renamed week2.csv: the history held it three times
+    # and the trend drew three points ('records: 1 test_chip.csv, 2 test_chip.csv, 3 renamed_week2.csv')
+    import shutil
+
+    from gearlab.kinds.detection_scoring import score_trends
+
+    out, folder = finished
+    run = tmp_path / "run"
+    shutil.copytree(out, run)  # a run directory copied elsewhere scores as the original
+    (run / "scoring" / "history.jsonl").unlink(missing_ok=True)  # the other tests' takes
+    take = _take(folder / "week1.zip", seed=21)
+    renamed = folder / "week2.zip"
+    shutil.copyfile(take, renamed)
+    other = _take(folder / "week3.zip", seed=22)
+    said = []
+    for files in ((take,), (take,), (renamed, other), (other, other)):
+        code, stdout, err = cli("score", run, *files)
+        assert code == 0, err
+        said.append(" ".join(stdout.split()))
+    assert "not added" not in said[0]
+    assert "scored before, at " in said[1] and f"as {take}: not added to the history again" in said[1], said[1]
+    assert f"as {take}: not added to the history again" in said[2], said[2]
+    assert f"as {other}: not added to the history again" in said[3], said[3]
+    history = scoring.read_history(RunDir.open(run))
+    assert {h["file"] for h in history} == {str(take), str(other)}
+    assert len(history) == 2 * len([h for h in history if h["file"] == str(take)])
+    (chart,) = score_trends(RunDir.open(run))
+    assert "records: 1 week1.zip, 2 week3.zip;" in chart.title, chart.title
+    assert (
+        not (out / "scoring" / "history.jsonl").exists()
+        or str(take) not in (out / "scoring" / "history.jsonl").read_text()
+    )

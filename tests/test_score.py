@@ -52,7 +52,11 @@ def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, c
     # the history: appended, shown as a trend per method
     history = scoring.read_history(RunDir.open(out))
     assert len(history) == len(rows) and all("scored_at" in h for h in history)
-    code, _, err = cli("score", out, tmp_path / "new_chip.zip")
+    record(tmp_path / "week3.zip", revolutions=40, chip=4.0, seed=13, phase=0.5)
+    code, _, err = cli("score", out, tmp_path / "week3.zip")
+    assert code == 0, err
+    assert len(scoring.read_history(RunDir.open(out))) == len(rows) + len(rows) // 2
+    code, _, err = cli("score", out, tmp_path / "new_chip.zip")  # scored before: not a fourth take of the trend
     assert code == 0, err
     assert len(scoring.read_history(RunDir.open(out))) == len(rows) + len(rows) // 2
     from gearlab.kinds import SCENARIO_KINDS

@@ -619,7 +619,16 @@ def score(
         on_event(Event("log", message=line + (f"; {scored_on}" if scored_on else "")))
         # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
         # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
-        found[str(file)] = (rec.speed_hz, source, said, rec.units, differs, scored_on, rec.warnings)
+        found[str(file)] = (
+            rec.speed_hz,
+            source,
+            said,
+            rec.units,
+            differs,
+            scored_on,
+            rec.warnings,
+            scoring.digest(file),
+        )
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
         raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
@@ -676,6 +685,7 @@ def score(
                             "gearbox": found[f.path][4],  # where its lines do not fit the run's description
                             "scored_on": found[f.path][5],  # a run-up's revolutions at the history's speed (in_band)
                             "flaws": list(found[f.path][6]),  # what its acquisition did: clipped, a dropout, a drift
+                            "digest": found[f.path][7],  # its content: scored again or renamed, one take of the history
                             "level": cond["levels"][f.path],  # off its history's: another load (level_warnings)
                             "localised": where.get("named"),
                             "call": where.get("call"),

@@ -8,7 +8,7 @@ history of those scores.
       scoring/condition<i>.npz     a condition's standardiser, alignment reference and history
                                    revolutions (standardised, aligned)
       scoring/models/<key>.pt      each training's model, as trained (model_key)
-      scoring/history.jsonl        one line per scored record, method and unit: appended
+      scoring/history.jsonl        one line per scored record, method and unit: appended (once a take)
 
 Every file is reached through the run directory (gearlab.confined: no link followed). A model is
 a whole torch module saved with torch.save and loaded with weights_only=True: the unpickler
@@ -23,6 +23,7 @@ import hashlib
 import importlib
 import io
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -109,8 +110,28 @@ def load_arrays(source: Confined) -> dict[str, np.ndarray]:
         raise GearlabInputError(f"{source}: damaged ({exc}); run the scenario again") from None
 
 
+def digest(path) -> str:
+    """A file's content (sha256): a take scored again, renamed or not, is one take of the history."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def append_history(run: RunDir, rows: list[dict]) -> None:
-    """Append scored rows to the run's scoring history (one JSON line each), stamped now."""
+    """Append scored rows to the run's scoring history (one JSON line each), stamped now. A take scored before (its
+    'digest' in the history, under any name) or given twice is appended once: its rows say so ('already'). A take
+    scored twice was two points of the trend, and a renamed copy a third."""
+    before = {h["digest"]: h for h in read_history(run) if h.get("digest")}
+    first: dict[str, str] = {}
+    for r in rows:
+        if r.get("digest") is None:
+            continue
+        h, name = before.get(r["digest"]), first.setdefault(r["digest"], r["file"])
+        if h is not None:
+            r["already"] = f"scored before, at {h['scored_at']} as {h['file']}: not added to the history again"
+        elif name != r["file"]:
+            r["already"] = f"the same take as {name}: not added to the history twice"
+    rows = [r for r in rows if not r.get("already")]
+    if not rows:
+        return
     stamp = _dt.datetime.now().isoformat(timespec="seconds")
     target = run.file(*HISTORY)
     target.parent.mkdir()
