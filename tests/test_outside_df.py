@@ -148,3 +148,29 @@ def test_a_take_scored_again_or_renamed_is_one_take_of_the_history(cli, finished
         not (out / "scoring" / "history.jsonl").exists()
         or str(take) not in (out / "scoring" / "history.jsonl").read_text()
     )
+
+
+def test_the_which_gear_table_says_a_take_too_short_for_the_check_was_not_read():
+    # DF: 2 s takes of a 26/101 + 31/78 box at 28.5 Hz (5.7 output turns, the check needs 8): the detection run's
+    # table said 'localised on: nothing' beside its chipped takes (its localisation.json: 'too short for the
+    # which-gear check'), read as 'no change on any gear'
+    from gearlab.kinds.detection_which_gear import records_md
+
+    short = "too short for the which-gear check: 5.73 output-shaft turns (56 input revolutions), it needs 8"
+    loc = {
+        "watched": ["input pinion 26T (stage 1)"],
+        "records": {
+            "rec/test_chip.csv": {
+                "call": "watched-gear fault (not localised)",
+                "condition": "28.5 Hz",
+                "method": "",
+                "named": None,
+                "named_shaft": None,
+                "nonsync": {"changed": False, "note": short.replace("which-gear", "non-synchronous")},
+                "shafts": [],
+                "summary": f"not localised: {short}",
+            }
+        },
+    }
+    row = records_md(loc, {"rec/test_chip.csv": "fault"}).splitlines()[-1]
+    assert f"| fault | not read: {short} |" in row and "nothing" not in row, row

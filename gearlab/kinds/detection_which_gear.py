@@ -328,8 +328,11 @@ def records_md(loc: dict, labels: dict) -> str:
     for path, r in loc["records"].items():
         z = ", ".join(f"{s['shaft']} {s['z']:.1f}/{s['threshold']:.1f}" for s in r["shafts"])
         on = "; ".join(e["gear"] for e in W.flagged_shafts(r))  # every gear over its threshold, the named first
+        # not read (a take too short for the check): said so, not 'nothing' beside a call with no evidence
+        unread = not r["shafts"] and r.get("summary", "").startswith("not localised: ")
+        on = on or (r["summary"].replace("not localised: ", "not read: ", 1) if unread else "nothing")
         out.append(
-            f"| {r['condition']} | {path} | {labels.get(path, '')} | {on or 'nothing'} | {z} | "
+            f"| {r['condition']} | {path} | {labels.get(path, '')} | {on} | {z} | "
             f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {_nonsync_cell(r.get('nonsync'))} | {r['call']} |"
         )
     return "\n".join(out) + "\n"
