@@ -174,3 +174,29 @@ def test_the_which_gear_table_says_a_take_too_short_for_the_check_was_not_read()
     }
     row = records_md(loc, {"rec/test_chip.csv": "fault"}).splitlines()[-1]
     assert f"| fault | not read: {short} |" in row and "nothing" not in row, row
+
+
+@pytest.mark.parametrize("top, leak", [(477.71, 24.09), (399.18, 25.90)])
+def test_a_strong_change_s_leak_into_a_shaft_whose_harmonics_lie_beside_its_own_is_not_other_damage(top, leak):
+    # DF: a 35/78 + 41/90 + 47/104 box at 45 Hz without a tacho, 8 s takes, an impulse once per turn of the 104T output
+    # gear: inspect --history named the output gear (z 478 and 399, threshold 2.81) and also the intermediate 1 shaft
+    # (z 24.1 and 25.9: 5.0 and 6.5 % of the named z). That shaft turns 4.93 times an output turn: its 14th and 15th
+    # harmonics lie within a bin of the impulse comb's 69th and 74th (8 s: bins of 0.0028 input orders), and its TSA
+    # passes them. A take damaged on the output gear alone was called damaged on the 41T pinion too, a fault of a
+    # scenario watching it; damage on two gears of different shafts stands at 57-71 % of the named z (CV's 106/127:
+    # 594 of 1039; a pinion chip with a chip on its wheel: 66 of 93)
+    from gearlab.data.which_gear import named_gears
+    from gearlab.inspect_history import call_of
+
+    def shaft(name, gear, z):
+        return {"shaft": name, "gear": gear, "gears": [gear], "z": z, "threshold": 2.81, "flagged": z > 2.81}
+
+    found = {"named": "output gear 104T (stage 3)", "named_shaft": "output", "summary": ""}
+    found["shafts"] = [
+        shaft("output", "output gear 104T (stage 3)", top),
+        shaft("intermediate 1", "intermediate 1 pinion 41T (stage 2)", leak),
+    ]
+    assert named_gears(found) == "output gear 104T (stage 3)"
+    assert call_of(found, {}) == "localised change: output gear 104T (stage 3)"
+    found["shafts"][1]["z"] = 0.57 * top  # damage of its own on that shaft: named as before
+    assert named_gears(found) == "output gear 104T (stage 3); intermediate 1 pinion 41T (stage 2)"

@@ -118,10 +118,12 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
 
 # A shaft beside the named one carries a change of its own where its z is over SECOND_TIMES its threshold
 # and SECOND_SHARE of the named shaft's z: a strong change leaks into the other shafts' estimates (an
-# output-gear crack at z 62,474 put 142 on the input shaft: 0.2 %), and a history of two records lets
-# healthy shafts pass their thresholds (up to 2.3 times them, development seeds); a pinion chip with a
-# chip on its wheel: 93 and 66.
-SECOND_TIMES, SECOND_SHARE = 3.0, 0.05
+# output-gear crack at z 62,474 put 142 on the input shaft: 0.2 %; an output gear's impulse at z 478 and 399 put
+# 24.1 and 25.9 on a shaft turning 4.93 times as fast, whose 14th and 15th harmonics its TSA passes within a bin of
+# the comb's: 5.0 and 6.5 %), and a history of two records lets healthy shafts pass their thresholds (up to 2.3
+# times them, development seeds); damage on two shafts' gears: a pinion chip with a chip on its wheel 93 and 66
+# (71 %), a 106/127 pair chipped on both 1039 and 594 (57 %).
+SECOND_TIMES, SECOND_SHARE = 3.0, 0.15
 
 
 def flagged_shafts(found: dict) -> list[dict]:
