@@ -200,3 +200,19 @@ def test_a_strong_change_s_leak_into_a_shaft_whose_harmonics_lie_beside_its_own_
     assert call_of(found, {}) == "localised change: output gear 104T (stage 3)"
     found["shafts"][1]["z"] = 0.57 * top  # damage of its own on that shaft: named as before
     assert named_gears(found) == "output gear 104T (stage 3); intermediate 1 pinion 41T (stage 2)"
+
+
+def test_a_take_sampled_too_slowly_for_its_history_s_band_is_refused_in_one_line(cli, finished, quiet):
+    # DF: a healthy take at 10 kHz scored by a run whose history was at 25.6 kHz (bands of 158 and 404 input orders):
+    # the matched filter +0.0002 and the likelihood ratio +0.026 over their record30 thresholds, 1 of 2 units called,
+    # unsaid (the same take at 25.6 kHz: -0.007 and -10.5); a detection run with such a test take scored it alike
+    out, folder = finished
+    vib, tacho = signals(revolutions=40, seed=11, phase=0.3)
+    slow = write_zip(folder / "slow.zip", text(vib[::2], tacho[::2]))  # 4096 Hz: band 102 of the history's 205 orders
+    code, stdout, err = cli("score", out, slow, "--key", f"fs={FS / 2} Hz")
+    line = err.strip()
+    assert code == 2 and len(line.splitlines()) == 1 and not stdout, err
+    assert f"{slow}: sampled at 4.096 kHz, its band ends at input order " in line, line
+    assert "below the " in line and "its condition's history is read to" in line, line
+    code, _, err = cli("score", out, _take(folder / "fast_enough.zip"))
+    assert code == 0, err

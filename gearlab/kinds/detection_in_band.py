@@ -1,7 +1,8 @@
 """A run-up or coast-down in the detection kind (gearlab.kinds.detection): a test take whose speed varies is
 scored on its longest stretch of revolutions at a condition's history speed, by the run itself
 (detection_records.read_target) and by `gearlab score` (detection_scoring) alike: one rule, one set of words; a
-history take that runs up first is used on its longest steady stretch (the same band about that stretch's own speed)."""
+history take that runs up first is used on its longest steady stretch (the same band about that stretch's own speed).
+A take sampled too slowly for the orders its condition's history is read to is refused, by both alike (too_narrow)."""
 
 from __future__ import annotations
 
@@ -10,8 +11,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..data.chain import Chain
 from ..errors import GearlabInputError
-from ..signals.checks import SPEED_VARIES, VARIES_WORDS
+from ..signals.checks import SPEED_VARIES, VARIES_WORDS, fmt_hz
 
 # A take whose speed varies beyond a steady take's (speed_varies: a run-up or coast-down) is scored on its
 # revolutions within this share of its condition's history speed (the median of the history records' speeds: no
@@ -184,3 +186,24 @@ def cut_run_ups(files, records: dict, named: dict, blocks, turns: float, where: 
             )
         records[f.path], named[f.path], out[f.path] = got.record, got.condition, got.said
     return out
+
+
+# A take whose band (where its acquisition's anti-alias filter leaves data: data.chain.Chain.max_order) ends more than
+# this share below the input order its condition's history is read to is refused: the orders between hold nothing, and
+# the learned methods read that as a change (a healthy 26/101 + 31/78 take at 10 kHz against a 25.6 kHz history, band
+# 158 of 404 orders: the matched filter +0.0002 and the likelihood ratio +0.026 over their record30 thresholds, 1 of 2
+# units called; the take at 25.6 kHz -0.007 and -10.5). A take at a speed up to 5 % off its history's (one condition)
+# ends up to 5 % lower.
+BAND_SHORT = 0.1
+
+
+def too_narrow(path: str, fs: float, speed_hz: float, max_order: float, where: str) -> None:
+    """Refuse, in one line, a take of *path* at *fs* and *speed_hz* whose band ends below *max_order* (its condition's
+    history's) by over BAND_SHORT."""
+    own = Chain(fs=fs, speed=speed_hz).max_order
+    if own < (1 - BAND_SHORT) * max_order:
+        raise GearlabInputError(
+            f"{where}{path}: sampled at {fmt_hz(fs)}, its band ends at input order {own:.4g}, below the "
+            f"{max_order:.4g} its condition's history is read to (the orders between would read as a change); expected "
+            f"a rate of at least {fmt_hz(fs * max_order / own)}, or a history at this rate"
+        )

@@ -29,7 +29,7 @@ from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
 from . import record_effects
-from .detection_in_band import cut_run_ups, span, steady_histories
+from .detection_in_band import cut_run_ups, span, steady_histories, too_narrow
 from .detection_settings import Classical
 
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
@@ -428,6 +428,10 @@ def read_target(
         cond["max_order"] = min(
             Chain(fs=records[f.path].fs, speed=speeds[f.path]).max_order for f, _ in cond["history"]
         )
+        for f, _ in cond["test"]:  # sampled too slowly for that band: refused (too_narrow), as gearlab score does
+            too_narrow(
+                f.path, records[f.path].fs, speeds[f.path], cond["max_order"], f"{where} entry {f.entry} key 'file': "
+            )
         # the same band in the units' shaft orders (what the learned methods see: learned_input)
         cond["unit_max_order"] = cond["max_order"] if shaft is None else int(cond["max_order"] / shaft.ratio)
         if shaft is not None:  # the units: that shaft's revolutions, in the records' band

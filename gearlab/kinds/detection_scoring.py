@@ -30,7 +30,7 @@ from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
 from .detection_classical import classical_record
-from .detection_in_band import IN_BAND, span, stretch
+from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
 from .detection_records import (
     SPEED_GROUP,
@@ -597,6 +597,7 @@ def score(
                 name, rec, scored_on = in_band(meta, str(file), rec, condition)
             elif condition is None:
                 name, chosen[str(file)] = _by_level(run, meta, name, rec)
+        too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
         if differs:
