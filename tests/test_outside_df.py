@@ -216,3 +216,28 @@ def test_a_take_sampled_too_slowly_for_its_history_s_band_is_refused_in_one_line
     assert "below the " in line and "its condition's history is read to" in line, line
     code, _, err = cli("score", out, _take(folder / "fast_enough.zip"))
     assert code == 0, err
+
+
+def test_the_gap_diagnosis_says_what_the_acquisition_did_to_its_history(tmp_path):
+    # DF: a history take logged DC-coupled (an ICP sensor's bias) was read by the gap diagnosis without a word; its
+    # notes now say it, as a detection run's warnings and gearlab score do
+    from dataclasses import asdict
+
+    from gearlab.kinds.gap import target_of
+    from gearlab.kinds.gap_inputs import TargetEntry, read_history
+
+    files = []
+    for i in range(2):
+        vib, tacho = signals(revolutions=40, seed=30 + i)
+        np.savez(tmp_path / f"h{i}.npz", acc_ms2=vib + 25.0 * i, tacho=tacho, fs=FS)
+        files.append({"file": f"h{i}.npz", "role": "history", "label": "healthy"})
+    entry = {
+        **asdict(TargetEntry()),
+        "vibration": "acc_ms2",
+        "tacho": "tacho",
+        "pulses_per_rev": PULSES,
+        "files": files,
+    }
+    notes = read_history(target_of(entry, "s.toml: [target]", tmp_path), lambda e: None)[2]
+    said = [n for n in notes if "baseline" in n]
+    assert len(said) == 1 and said[0].startswith("h1.npz: the baseline sits at 25 m/s²"), notes

@@ -77,6 +77,7 @@ def read_history(
             _, revs = aligned(rows[0].mean(axis=0), revs, t.tacho, t.marks, continuous=True)
         rows.append(revs)
         speeds[f.path], found[f.path] = rec.speed_hz, rec.angle_source
+        notes += [f"{f.path}: {w}" for w in rec.warnings]  # clipped, a dropout, a baseline taken out
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     unconfirmed = unconfirmed_speed(found, speeds)
     if unconfirmed:
