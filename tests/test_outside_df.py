@@ -6,6 +6,7 @@ offset, an ICP sensor settling, a dropout, clipping: said wherever a take is rea
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -241,3 +242,37 @@ def test_the_gap_diagnosis_says_what_the_acquisition_did_to_its_history(tmp_path
     notes = read_history(target_of(entry, "s.toml: [target]", tmp_path), lambda e: None)[2]
     said = [n for n in notes if "baseline" in n]
     assert len(said) == 1 and said[0].startswith("h1.npz: the baseline sits at 25 m/s²"), notes
+
+
+def test_a_run_scores_after_its_project_folder_moved_or_its_description_changed(tmp_path):
+    # DF: a detection run of a description (26/101 + 31/78, '[source] gearbox = "boxa.toml"'), its project folder
+    # moved: `gearlab score RUN take.csv` stopped with '/old/folder/boxa.toml: no such gearbox description'. The run
+    # keeps the description it simulated (scoring/gearbox.toml) and reads it where the file it names is gone or changed
+    import shutil
+
+    from gearboxes import description, stage
+
+    from gearlab.errors import GearlabInputError
+    from gearlab.gearbox.simulation import gearbox_of, reference
+    from gearlab.kinds.detection_which_gear import KEPT, localisation_of
+
+    (tmp_path / "proj").mkdir()
+    box = tmp_path / "proj" / "boxa.toml"
+    box.write_text(description(stage(26, 101), stage(31, 78), name="boxa", speed="28.5 Hz"))
+    ref = reference(str(box))
+    run = tmp_path / "run"
+    (run / "scoring").mkdir(parents=True)
+    (run / "scenario.toml").write_text("")
+    (run / "localisation.json").write_text(json.dumps({"preset": ref, "events": {"preset": ref, "effects": []}}))
+    (run / Path(*KEPT)).write_bytes(box.read_bytes())
+    assert localisation_of(RunDir.open(run))["preset"] == ref  # where it was: as it was
+    shutil.move(tmp_path / "proj", tmp_path / "moved")
+    with pytest.raises(GearlabInputError, match="no such gearbox description"):
+        gearbox_of(ref)
+    for gone in ("moved", "edited"):
+        if gone == "edited":  # put back, then edited after the run
+            shutil.move(tmp_path / "moved", tmp_path / "proj")
+            box.write_text(box.read_text().replace("28.5 Hz", "30 Hz"))
+        meta = localisation_of(RunDir.open(run))
+        assert meta["preset"] != ref and meta["preset"] == meta["events"]["preset"], meta
+        assert [(s.pinion.z, s.wheel.z) for s in gearbox_of(meta["preset"]).stages] == [(26, 101), (31, 78)]

@@ -48,7 +48,7 @@ from .detection_records import (
 )
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
-from .detection_which_gear import decision_of, is_other, localise_scored, stale_calls
+from .detection_which_gear import decision_of, is_other, localisation_of, localise_scored, stale_calls
 
 # What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
 # its models and thresholds hold for that input only. 1: a later mesh of no whole input order zeroed
@@ -573,7 +573,7 @@ def score(
             "score kept its models); expected a finished run: run the scenario again"
         )
     _same_input(run, meta)
-    described = (run.read_json("localisation.json") or {}).get("preset")  # the source's description, if any
+    described = (localisation_of(run) or {}).get("preset")  # the source's description (or the run's copy), if any
     described = gearbox_of(described) if described else None
     # a bad --key or a missing condition: refused before any file is read
     reading_keys(meta, condition, given, box=described)

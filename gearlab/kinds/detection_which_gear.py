@@ -40,13 +40,15 @@ The localisation uses the records' signals only; the labels come in with the tab
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..data import which_gear as W
 from ..data.spec import DatasetSpec
 from ..data.which_templates import effect_tables
 from ..errors import GearlabInputError
-from ..gearbox.simulation import gearbox_of
+from ..gearbox.simulation import PREFIX, gearbox_of, is_reference, reference
 from ..parts.roc import auc
 from ..signals import POINTS
 from ..signals import localise as L
@@ -222,7 +224,31 @@ def store_localisation(run, source: DatasetSpec, conditions: dict, simulator: Da
         file = f"localisation{i}.npz"
         scoring.save_arrays(run.file("scoring", file), **hist.state(), **(quiet.state() if quiet else {}))
         found["conditions"][name]["state"] = file
+    if is_reference(source.preset):  # the description as simulated, for a folder moved or a description edited since
+        kept = run.file(*KEPT)
+        kept.parent.mkdir()
+        kept.write(Path(source.preset.removeprefix(PREFIX).rpartition("#")[0]).read_bytes())
     run.write_json("localisation.json", found)
+
+
+# The run's copy of the gearbox description it simulated (store_localisation, localisation_of)
+KEPT = ("scoring", "gearbox.toml")
+
+
+def localisation_of(run) -> dict | None:
+    """localisation.json, its description's reference turned to the run's copy (KEPT) where the file it names is
+    gone or changed: a project folder moved after the run stopped `gearlab score` with '/old/path/box.toml: no such
+    gearbox description'."""
+    meta = run.read_json("localisation.json")
+    if not meta or not is_reference(meta.get("preset", "")):
+        return meta
+    spec, _, digest = meta["preset"].removeprefix(PREFIX).rpartition("#")
+    kept = run.file(*KEPT)
+    if (Path(spec).is_file() and reference(spec) == meta["preset"]) or not kept.exists():
+        return meta
+    copy = f"{PREFIX}{Path(str(kept.path)).resolve()}#{digest}"
+    events = meta.get("events", W.events(meta["preset"]))
+    return {**meta, "preset": copy, "events": {**events, "preset": copy}}
 
 
 def _take(cond: dict, path: str) -> W.Take:
@@ -240,7 +266,7 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
     from ..gearbox import order_table
     from ..parts import scoring
 
-    meta = run.read_json("localisation.json")
+    meta = localisation_of(run)
     box = gearbox_of(meta["preset"]) if meta else None
     if box is None:
         return {}
