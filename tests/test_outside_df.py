@@ -276,3 +276,25 @@ def test_a_run_scores_after_its_project_folder_moved_or_its_description_changed(
         meta = localisation_of(RunDir.open(run))
         assert meta["preset"] != ref and meta["preset"] == meta["events"]["preset"], meta
         assert [(s.pinion.z, s.wheel.z) for s in gearbox_of(meta["preset"]).stages] == [(26, 101), (31, 78)]
+
+
+@pytest.mark.parametrize("fmt", ["h5", "mat"])
+def test_a_rate_field_inside_a_group_is_no_channel(tmp_path, fmt):
+    # DF: an HDF5 group (and a MATLAB v7.3 struct: its fields a group's datasets) of 'acc' and 'fs': inspect without
+    # --vibration said 'which channel is the vibration? the file has take/acc, take/fs', and listed it as a channel
+    import h5py
+
+    from gearlab.inspect import InspectOptions, inspect_record
+
+    vib, _ = signals(revolutions=40, seed=5)
+    path = tmp_path / f"take.{fmt}"
+    with h5py.File(path, "w", userblock_size=512 if fmt == "mat" else 0) as h:
+        group = h.create_group("take")
+        for name, values in (("acc", vib), ("fs", np.array([[FS]]))):
+            group.create_dataset(name, data=values.reshape(-1, 1))
+            group[name].attrs["MATLAB_class"] = np.bytes_("double")
+    if fmt == "mat":  # MATLAB's 128-byte text header in the user block
+        with path.open("r+b") as f:
+            f.write(b"MATLAB 7.3 MAT-file, HDF5 schema 1.00 .".ljust(116) + bytes(8) + b"\x00\x02IM")
+    got = inspect_record(str(path), None, InspectOptions(speed_hz=16.0))
+    assert got["vibration"] == "take/acc" and got["channels"] == ["take/acc"] and got["fs_hz"] == FS

@@ -39,8 +39,11 @@ def time_scale(name: str) -> float | None:
 
 
 def is_rate_or_time(name: str) -> bool:
-    """Whether a channel name is a sampling-rate field or a time vector (no signal channel)."""
-    return named(name) is not None or time_scale(name) is not None
+    """Whether a channel name is a sampling-rate field or a time vector (no signal channel), in a group too: an HDF5
+    group's or a MATLAB v7.3 struct's 'take/fs' was listed as a channel, and inspect of a file whose group held one
+    signal asked 'which channel is the vibration? the file has take/acc, take/fs'."""
+    leaf = str(name).rsplit("/", 1)[-1]
+    return named(leaf) is not None or time_scale(leaf) is not None
 
 
 _MATRIX_COLUMN = re.compile(r"^(.+)\[(\d+)\]$")
