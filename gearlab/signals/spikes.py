@@ -119,6 +119,7 @@ DROPOUT_S = 0.002
 # up: a swing of 0.04 RMS); a decay over 0.8 s of a 2 s take is left at 0.3 % (a cubic: 2.6 %)
 BASELINE_DEGREE = 5
 BASELINE_SHARE = 0.25
+BASELINE_BLOCKS = 4096
 
 
 def acquisition(x: np.ndarray, fs: float) -> tuple[np.ndarray, tuple[str, ...]]:
@@ -128,8 +129,9 @@ def acquisition(x: np.ndarray, fs: float) -> tuple[np.ndarray, tuple[str, ...]]:
     ('another load or gain?'); a take with 0.3 s of zeros was said to be of another gearbox and scored healthy."""
     x = np.asarray(x, dtype=np.float64)
     notes = [f"{n} samples flat at {v:.4g} m/s² (clipped at the logger's or sensor's range?)" for n, v in clipped(x)]
-    edges = np.flatnonzero(np.diff(x)) + 1
-    starts, ends = np.concatenate([[0], edges]), np.concatenate([edges, [x.size]])
+    same = np.concatenate([[0], (x[1:] == x[:-1]).astype(np.int8), [0]])  # runs of repeats: sample a + 1 .. b - 1
+    edges = np.flatnonzero(np.diff(same))
+    starts, ends = edges[::2], edges[1::2] + 1
     long = (ends - starts) >= max(DROPOUT_SAMPLES, DROPOUT_S * fs)
     for a, b in zip(starts[long], ends[long]):
         if x[a] not in (x.max(), x.min()):
@@ -137,8 +139,11 @@ def acquisition(x: np.ndarray, fs: float) -> tuple[np.ndarray, tuple[str, ...]]:
                 f"a dropout: {b - a} samples ({(b - a) / fs:.3g} s) flat at {x[a]:.4g} m/s² from {a / fs:.4g} s"
             )
     if x.size > 2 * BASELINE_DEGREE:
-        t = np.linspace(-1.0, 1.0, x.size)
-        fit = np.polynomial.legendre.legval(t, np.polynomial.legendre.legfit(t, x, BASELINE_DEGREE))
+        # fitted to the means of BASELINE_BLOCKS blocks (a 10-minute take's design matrix: 0.5 GB), read at every sample
+        cuts = np.linspace(0, x.size, min(x.size, BASELINE_BLOCKS) + 1).astype(int)
+        means, middles = np.add.reduceat(x, cuts[:-1]) / np.diff(cuts), (cuts[:-1] + cuts[1:] - 1) / 2 / (x.size - 1)
+        coef = np.polynomial.legendre.legfit(2.0 * middles - 1.0, means, BASELINE_DEGREE)
+        fit = np.polynomial.legendre.legval(np.linspace(-1.0, 1.0, x.size), coef)
         offset, swing, rest = float(np.mean(fit)), float(np.ptp(fit)), float(np.std(x - fit))
         if max(abs(offset), swing) > BASELINE_SHARE * rest:
             notes.append(
