@@ -224,10 +224,11 @@ def store_localisation(run, source: DatasetSpec, conditions: dict, simulator: Da
         file = f"localisation{i}.npz"
         scoring.save_arrays(run.file("scoring", file), **hist.state(), **(quiet.state() if quiet else {}))
         found["conditions"][name]["state"] = file
-    if is_reference(source.preset):  # the description as simulated, for a folder moved or a description edited since
-        kept = run.file(*KEPT)
+    described = source.preset.removeprefix(PREFIX).rpartition("#")[0] if is_reference(source.preset) else ""
+    if Path(described).is_absolute():  # the user's description as simulated (a built-in's name is no file), for a
+        kept = run.file(*KEPT)  # folder moved or a description edited since
         kept.parent.mkdir()
-        kept.write(Path(source.preset.removeprefix(PREFIX).rpartition("#")[0]).read_bytes())
+        kept.write(Path(described).read_bytes())
     run.write_json("localisation.json", found)
 
 
