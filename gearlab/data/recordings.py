@@ -677,13 +677,14 @@ def cut_recording(
     from ..signals import POINTS, cut_revolutions
 
     rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
-    rec.signal, flaws = acquisition(rec.signal, rec.fs)  # the speed from the mesh lines too, without the drift
     raw = rec.signal
-    if raw.size and raw.min() == raw.max():  # a wrong column, or a sensor not connected
+    if raw.size and raw.min() == raw.max():  # a wrong column, or a sensor not connected (before a baseline is out)
         raise GearlabInputError(
             f"{path}: vibration column {_one_line_repr(rec.vibration)}: all {raw.size} values equal {raw[0]:g}; "
             "expected a measured vibration (a constant column: a wrong column, or a sensor not connected)"
         )
+    rec.signal, flaws = acquisition(rec.signal, rec.fs)  # the speed from the mesh lines too, without the drift
+    raw = rec.signal
     source, angle, how = shaft_angle(
         rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox, tacho_shaft=tacho_shaft
     )
