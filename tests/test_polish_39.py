@@ -57,7 +57,9 @@ def test_the_gaps_stop_for_an_unconfirmed_speed_names_the_scenario_file(tmp_path
     records = load_scenario(path).spec.target
     assert records.where == f"{path}: [target]"
     file = SimpleNamespace(path="h.csv", role="history")
-    read = SimpleNamespace(revolutions=np.zeros((3, 8)), speed_hz=35.0, angle_source=f"declared, {UNCONFIRMED}: x")
+    read = SimpleNamespace(
+        revolutions=np.zeros((3, 8)), speed_hz=35.0, angle_source=f"declared, {UNCONFIRMED}: x", warnings=()
+    )
     stub = SimpleNamespace(files=(file,), tacho=None, marks=1, read=lambda f: read)
     with pytest.raises(GearlabInputError) as said:
         read_history(replace(records, target=stub), lambda event: None)
