@@ -116,14 +116,28 @@ def test_a_simulated_target_of_another_tooth_count_ends_in_one_line():
     assert verdict_text(result) == f"structure differs: {result['difference']}"
 
 
-def test_a_measured_file_of_a_20_tooth_pinion_ends_in_one_line(clean, tmp_path):
+def test_a_measured_file_of_a_20_tooth_pinion_ends_in_one_line(clean, tmp_path, monkeypatch):
     rows, chain, max_order = written(tmp_path / "z20", retoothed(clean, 25, 20), 4099, 30.0)
     assert chain is not None
+
+    def simulated(*args, **kwargs):
+        raise AssertionError("the source was simulated")
+
+    # the first stage's teeth are read off the record and the description: the source, another gearbox, is not
+    # simulated, for its rows nor for the tacho offset, and no gap is measured
+    monkeypatch.setattr("gearlab.gap.scoring.source_rows", simulated)
+    monkeypatch.setattr("gearlab.gap.conclusion._clean_revolution", simulated)
     result = diagnosed(rows, chain, max_order)
     assert result["verdict"] == "structure differs" and result["effects"] == []
     assert result["difference"] == (
         "mesh order 20.0 measured, 25 expected: the source simulates a 25-tooth pinion (the target's shows 20 teeth)"
     )
+    assert result["before"] is result["after"] is result["gap_before"] is result["significant_before"] is None
+    assert result["chain"]["offset_deg"] is None and result["chain"]["speed_hz"] == pytest.approx(40.0)
+    summary = {"gap_before": None, "views": {}, "verdict": verdict_text(result)}
+    assert gap_lines(summary) == [
+        f"Structure differs: {result['difference']}; no effect was searched, no gap measured."
+    ]
 
 
 def test_a_record_at_another_speed_ends_in_one_line(clean, tmp_path):

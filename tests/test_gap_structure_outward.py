@@ -199,7 +199,7 @@ def test_a_measured_dataset_target_without_a_described_speed_in_its_chain_is_che
     before = {"significant": False, "alpha": 0.05}  # no significant gap: nothing after the structure
     bare = _mesh_rows(36, 137, input_sidebands=False)
     verdict, line, record = structure.first_difference(
-        None, bare, described_pair((36, 137)), settings, None, None, None, before, chain
+        None, bare, described_pair((36, 137)), settings, None, None, None, lambda: before, chain
     )
     assert verdict is None and line is None, line
     assert "ambiguous" in record and 37 in dict(record["ambiguous"]["others"]), record

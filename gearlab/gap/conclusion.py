@@ -306,12 +306,35 @@ def verdict_of(
     return "partly explained" if share >= named else "unexplained"
 
 
-def chain_record(chain: Chain, spec: DatasetSpec, z1: int) -> dict:
+def opening_notes(settings: Settings, target: np.ndarray) -> list[str]:
+    """The diagnosis's notes on its inputs, before anything is measured."""
+    notes = []
+    default_budget = Settings().budget
+    if settings.budget < default_budget:
+        # --quick (budget 4) fits a sharp resonance's f_n or a tone's frequency on too few points:
+        # it may miss what the default search finds; say so rather than let "unexplained" stand.
+        notes.append(
+            f"search budget {settings.budget} below the default {default_budget}: needle-like "
+            "parameters (a sharp resonance's frequency, a tone's) may be missed; an 'unexplained' "
+            "or 'partly explained' verdict is final only with the default search"
+        )
+    if np.all(target == target[0]):
+        # Measured data always scatter; identical rows come from a noise-free simulation, whose
+        # TSA residual is rounding: two equal noise-free sets still differ there (docs/gap_stats.md).
+        notes.append(
+            "the target revolutions are all identical (noise-free): effect sizes rest on "
+            "numerical floors and rounding; add the sensor noise a real target has"
+        )
+    return notes
+
+
+def chain_record(chain: Chain, spec: DatasetSpec, z1: int, fit: bool = True) -> dict:
     """What the report says of a measured target's chain: rate, speed, step, start fractions and
     the tacho offset fitted against the plain source (degrees; and in tooth pitches, since a
-    healthy gear's revolution repeats every 360/Z1 degrees)."""
+    healthy gear's revolution repeats every 360/Z1 degrees). Not *fit*: the source is not simulated
+    (another gearbox's structure), a fitted offset is None."""
     offset = chain.offset
-    if offset is None and chain.reference is not None:
+    if offset is None and chain.reference is not None and fit:
         speed, _ = operating_point(spec)
         physics = tuple(e for e in spec.effects if get_registry().get("effect", e[0]).level != "signal")
         clean = _clean_revolution(

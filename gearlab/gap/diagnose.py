@@ -93,6 +93,7 @@ from .conclusion import (
     chain_record,
     conclusion,
     gap_seen,
+    opening_notes,
     rms_effect,
     verdict_text,
 )
@@ -140,46 +141,42 @@ def diagnose(
         done += 1
         on_event(Event("advance", stage="gap before", done=done, total=steps))
 
-    on_event(Event("stage", stage="gap before", total=steps, message=f"gap: {source.name} against the target"))
-    plain = judged(())
-    step()
-    if not classifier_loaded():  # its AUC is the report's third part: the import would stand silent inside it
-        with standing(on_event, "gap before", "loading scikit-learn"):
-            load_classifier()
-    before = _report(plain, target, pair, settings, on_part=step)
+    made: dict = {}  # the plain source's rows and their report, made when first asked (first_difference)
+
+    def plain_rows() -> np.ndarray:
+        if "plain" not in made:
+            on_event(Event("stage", stage="gap before", total=steps, message=f"gap: {source.name} against the target"))
+            made["plain"] = judged(())
+            step()
+        return made["plain"]
+
+    def before_report() -> dict:
+        if "before" not in made:
+            plain_rows()  # its step first, then the report's parts
+            if not classifier_loaded():  # its AUC is the report's third part: the import would stand silent inside it
+                with standing(on_event, "gap before", "loading scikit-learn"):
+                    load_classifier()
+            made["before"] = _report(made["plain"], target, pair, settings, on_part=step)
+        return made["before"]
+
     result = {
-        "before": before,
-        "gap_before": float(before["total"]["gap"]),
-        "significant_before": gap_seen(before),
         "effects": [],
         "ranking": [],
         "rounds": [],
         "settings": {**asdict(settings), "candidates": list(candidates)},
-        "notes": [],
+        "notes": opening_notes(settings, target),
     }
-    if chain is not None:
-        result["chain"] = chain_record(chain, fresh.with_(healthy=1), pair.Z1)
-    default_budget = Settings().budget
-    if settings.budget < default_budget:
-        # --quick (budget 4) fits a sharp resonance's f_n or a tone's frequency on too few points:
-        # it may miss what the default search finds; say so rather than let "unexplained" stand.
-        result["notes"].append(
-            f"search budget {settings.budget} below the default {default_budget}: needle-like "
-            "parameters (a sharp resonance's frequency, a tone's) may be missed; an 'unexplained' "
-            "or 'partly explained' verdict is final only with the default search"
-        )
-    if np.all(target == target[0]):
-        # Measured data always scatter; identical rows come from a noise-free simulation, whose
-        # TSA residual is rounding: two equal noise-free sets still differ there (docs/gap_stats.md).
-        result["notes"].append(
-            "the target revolutions are all identical (noise-free): effect sizes rest on "
-            "numerical floors and rounding; add the sensor noise a real target has"
-        )
-
-    # Structure before effects (gearlab.gap.structure): what no effect changes ends the diagnosis.
+    # Structure before effects (gearlab.gap.structure): what no effect changes ends the diagnosis. Another
+    # gearbox's gap is no measure of anything: the source is simulated only where its structure holds (or a
+    # later stage is read against its own lines), and a structure difference reports no gap (before: None).
     verdict, line, result["structure"] = first_difference(
-        source, target, pair, settings, rows, fresh, plain, before, chain
+        source, target, pair, settings, rows, fresh, plain_rows, before_report, chain
     )
+    before = None if verdict == "structure differs" else before_report()
+    gap_before = None if before is None else float(before["total"]["gap"])
+    result.update(before=before, gap_before=gap_before, significant_before=before and gap_seen(before))
+    if chain is not None:  # its tacho offset fitted against the plain source where that was simulated
+        result["chain"] = chain_record(chain, fresh.with_(healthy=1), pair.Z1, fit=before is not None)
     if ambiguous := result["structure"].get("ambiguous"):  # the verdict says it too (conclusion.verdict_text)
         on_event(Event("log", message=f"gap: {ambiguous['line']}"))
     if unchecked := result["structure"].get("unchecked"):  # the report's structure line too (gap_verdict)
@@ -189,6 +186,7 @@ def diagnose(
         result = {**stopped(result, before, verdict, line), "seconds": time.perf_counter() - started}
         return evaluated(result, first, on_event)
 
+    plain = plain_rows()
     leveled = fitted_here(source, candidates, chain) and level_differs(leveling(target), plain)
     if leveled:  # the target's load profiled out of every score from here on (gearlab.gap.level; judged too)
         rows = free(rows)

@@ -351,23 +351,24 @@ def level_differs(c: float) -> bool:
     return math.isfinite(c) and c > 0 and abs(math.log(c)) > math.log1p(LEVEL_TOL)
 
 
-def stopped(result: dict, before: dict, verdict: str, line: str) -> dict:
+def stopped(result: dict, before: dict | None, verdict: str, line: str) -> dict:
     """*result* ended before any effect search: nothing fitted, the gap as it was, the verdict and
-    its one line (``difference``)."""
+    its one line (``difference``). *before*: None where the structure differs: the source, another
+    gearbox, was not simulated, and no gap is measured (before, after and their numbers None)."""
     from .conclusion import rms_effect
 
     result.update(
         after=before,
         gap_after=result["gap_before"],
         significant_after=result["significant_before"],
-        shrink=0.0,
+        shrink=None if before is None else 0.0,
         effects=[],
         unexplained=True,
         verdict=verdict,
         difference=line,
         explained_share=None,
-        rms_effect_before=rms_effect(before),
-        rms_effect_after=rms_effect(before),
+        rms_effect_before=None if before is None else rms_effect(before),
+        rms_effect_after=None if before is None else rms_effect(before),
         within_noise=False,
         corrected_effects=[],
     )
@@ -396,7 +397,8 @@ def structure_line(
     what was measured goes into *record* (a count too few turns tell: its 'unchecked'). After a speed
     found from the mesh lines that a whole tooth explains as well, in turn: the first stage's mesh
     (mesh_check: its tacho's shaft and marks too), its wheel, the later stages (against *plain*'s
-    reading of itself, the source's healthy rows; None: against the description's orders). The gap
+    reading of itself, the source's healthy rows, or a callable that makes them, called only when a later
+    stage is read; None: against the description's orders). The gap
     diagnosis's structure check (first_difference) and the detection kind's check of its history
     records (gearlab.kinds.detection_records.check_structure). *pulses_per_rev*: the marks a turn the tacho was
     read with (None: not known; a misread count is then told as a share of them)."""
@@ -463,7 +465,7 @@ def structure_line(
     line = (None if on_input else wheel_line(mesh, pair.Z1, "pinion")) or wheel_line(mesh, pair.Z2)
     if line:
         return line
-    later = later_stages(target, plain, pair, max_order)
+    later = later_stages(target, plain() if callable(plain) else plain, pair, max_order)
     if later["stages"]:
         record["later_stages"] = later["stages"]
     if later["line"]:
@@ -629,9 +631,10 @@ def count_ambiguity(target, pair, max_order: int, chain, declared: float | None 
 def first_difference(source, target, pair, settings, rows, fresh, plain, before, chain) -> tuple:
     """(verdict, its one line, what was measured) of the first thing no effect changes that differs
     between the *source* and the *target* -- its speed (a measured target's chain), its tooth count,
-    a pure scale factor -- or (None, None, what was measured). *plain*: the plain source's rows on
-    the reports' seeds (*fresh*), *before* their report against the target, *rows* how the source's
-    rows are made."""
+    a pure scale factor -- or (None, None, what was measured). *plain*(): the plain source's rows on
+    the reports' seeds (*fresh*), *before*(): their report against the target, each made when first
+    asked (the speed and a first stage's teeth are read off the target and the description alone);
+    *rows*: how the source's rows are made."""
     from ..data.builder import operating_point
     from .conclusion import gap_seen, verdict_of, within_noise
     from .scoring import _report
@@ -648,9 +651,10 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
     declared = record.get("speed_hz", {}).get("source")  # a measured dataset's chain holds no described speed
     if ambiguous := count_ambiguity(target, pair, settings.max_order, chain, declared):
         record["ambiguous"] = ambiguous  # the diagnosis goes on; its verdict says it (conclusion.verdict_text)
+    before = before()
     if not gap_seen(before):
         return None, None, record
-    c = level_factor(target, plain)
+    c = level_factor(target, plain())
     record["level"] = {"factor": c}
     if not level_differs(c):
         return None, None, record

@@ -540,6 +540,8 @@ def accuracy(
 
 def view_rows(result: dict) -> dict[str, dict]:
     """Per view: gap and share before and after, with their bootstrap intervals."""
+    if result["before"] is None:  # a structure difference: no gap measured
+        return {}
     before, after = result["before"]["views"], result["after"]["views"]
     noise = (result.get("reference") or {}).get("views", {})  # reference = 'noise': the source with noise alone
     out = {}
@@ -586,6 +588,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         acc[bound["label"]] = bound["accuracy"]["0"]
     elif bound is not None:
         notes = [*notes, f"Bayes bound unavailable: {bound['unavailable']}"]
+    before, after = result["before"] or {}, result["after"] or {}  # None: a structure difference, no gap measured
     summary = {
         "kind": "gap",
         "scenario": scenario.name,
@@ -606,7 +609,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         ],
         "gap_before": result["gap_before"],
         "gap_after": result["gap_after"],
-        "shrink": 1 - result["gap_after"] / result["gap_before"] if result["gap_before"] > 0 else None,
+        "shrink": 1 - result["gap_after"] / result["gap_before"] if (result["gap_before"] or 0) > 0 else None,
         "reference": result.get("reference"),  # settings reference = 'noise': the source with its noise alone
         "unexplained": result["unexplained"],
         "verdict": verdict_text(result),
@@ -618,26 +621,26 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "structure": result.get("structure"),  # speed, mesh order and level measured before any effect
         "significant_before": result["significant_before"],
         "significant_after": result["significant_after"],
-        "auc_before": result["before"]["auc"],
-        "auc_after": result["after"]["auc"],
-        "p_before": result["before"]["p_value"],
-        "p_after": result["after"]["p_value"],
-        "mmd2_before": result["before"]["mmd2"],
-        "mmd2_after": result["after"]["mmd2"],
+        "auc_before": before.get("auc"),
+        "auc_after": after.get("auc"),
+        "p_before": before.get("p_value"),
+        "p_after": after.get("p_value"),
+        "mmd2_before": before.get("mmd2"),
+        "mmd2_after": after.get("mmd2"),
         "views": view_rows(result),
         # consecutive rows: the output-shaft orders (blocks of Z2/gcd revolutions), outside the shares
         "output_shaft": {
             k: ({"gap": v["gap"], "gap_interval": v.get("gap_interval"), "blocks": v.get("blocks")} if v else None)
             for k, v in (
-                ("before", result["before"].get("output_shaft")),
-                ("after", result["after"].get("output_shaft")),
+                ("before", before.get("output_shaft")),
+                ("after", after.get("output_shaft")),
             )
         },
         "ranking": result["ranking"],
         "corrected_effects": result["corrected_effects"],
         "corrected_description": write_corrected(spec.source, result, run),  # its structural values, written
         "settings": result.get("settings", asdict(spec.settings)),
-        "notes": notes + list(result.get("notes", [])) + list(result["before"].get("notes", [])),
+        "notes": notes + list(result.get("notes", [])) + list(before.get("notes", [])),
     }
     if acc:
         summary["accuracy"] = acc
@@ -680,7 +683,7 @@ def summary_lines(run: RunDir) -> list[str]:
             f"output-shaft orders (consecutive revolutions): gap {shaft['before']['gap']:.4g} -> "
             f"{after.get('gap', float('nan')):.4g}"
         )
-    lines += ["per-view gap:", views_md(s["views"]).rstrip()]
+    lines += ["per-view gap:", views_md(s["views"]).rstrip()] if s["views"] else []
     if s.get("accuracy"):
         lines += [
             "target fault-detection accuracy (k = 0):",

@@ -19,37 +19,9 @@ def draw(figures: Path, summary: Mapping) -> None:
     effect ranking (share of the gap each candidate removes alone), accuracy before/after."""
     figures = plots.target(figures)
     views = summary["views"]
-    figures_ahead(1 + bool(summary.get("ranking")) + bool(summary.get("accuracy")))
-    names = list(views)
-    x = np.arange(len(names))
-    fig, ax = plt.subplots(figsize=(9, 3.8), layout="constrained")
-    for offset, when, colour in ((-0.2, "before", "tab:red"), (0.2, "after", "tab:green")):
-        gaps = np.array([views[n][f"gap_{when}"] or 0.0 for n in names], dtype=float)
-        # asymmetric error bars from the percentile intervals, where the report has them
-        err = np.zeros((2, len(names)))
-        for i, n in enumerate(names):
-            iv = views[n].get(f"gap_{when}_interval")
-            if iv:
-                err[:, i] = max(gaps[i] - iv[0], 0.0), max(iv[1] - gaps[i], 0.0)
-        ax.bar(
-            x + offset,
-            gaps,
-            0.4,
-            yerr=err,
-            capsize=2,
-            color=colour,
-            alpha=0.8,
-            label=f"{when} (total {summary[f'gap_{when}']:.3g})",
-        )
-    ax.set_xticks(x, names, rotation=20)
-    ax.set_ylabel("gap (sum of squared effect sizes, 1)")
-    # the gap of a broad change (noise) can be orders of magnitude above the others
-    if any((views[n]["gap_before"] or 0) > 0 for n in names):
-        ax.set_yscale("symlog", linthresh=1.0)
-    ax.set_title("where the gap lies: per-view gap of the healthy revolutions, before and after correction")
-    ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=8)
-    plots.save(fig, figures / "gap_per_view.png")
+    figures_ahead(bool(views) + bool(summary.get("ranking")) + bool(summary.get("accuracy")))
+    if views:  # none: a structure difference, no gap measured
+        _per_view(figures, summary, views)
 
     ranking = summary.get("ranking") or []
     if ranking:
@@ -83,3 +55,37 @@ def draw(figures: Path, summary: Mapping) -> None:
         ax.set_title("how far: target fault detection (k = 0) before and after correcting the simulator", fontsize=9)
         ax.grid(alpha=0.3, axis="y")
         plots.save(fig, figures / "gap_accuracy.png")
+
+
+def _per_view(figures: Path, summary: Mapping, views: Mapping) -> None:
+    """Where the gap lies: per-view gap before/after, with the bootstrap intervals where the report has them."""
+    names = list(views)
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(9, 3.8), layout="constrained")
+    for offset, when, colour in ((-0.2, "before", "tab:red"), (0.2, "after", "tab:green")):
+        gaps = np.array([views[n][f"gap_{when}"] or 0.0 for n in names], dtype=float)
+        # asymmetric error bars from the percentile intervals, where the report has them
+        err = np.zeros((2, len(names)))
+        for i, n in enumerate(names):
+            iv = views[n].get(f"gap_{when}_interval")
+            if iv:
+                err[:, i] = max(gaps[i] - iv[0], 0.0), max(iv[1] - gaps[i], 0.0)
+        ax.bar(
+            x + offset,
+            gaps,
+            0.4,
+            yerr=err,
+            capsize=2,
+            color=colour,
+            alpha=0.8,
+            label=f"{when} (total {summary[f'gap_{when}']:.3g})",
+        )
+    ax.set_xticks(x, names, rotation=20)
+    ax.set_ylabel("gap (sum of squared effect sizes, 1)")
+    # the gap of a broad change (noise) can be orders of magnitude above the others
+    if any((views[n]["gap_before"] or 0) > 0 for n in names):
+        ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_title("where the gap lies: per-view gap of the healthy revolutions, before and after correction")
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8)
+    plots.save(fig, figures / "gap_per_view.png")

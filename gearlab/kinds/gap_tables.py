@@ -87,7 +87,7 @@ def accuracy_md(acc: dict, order: list[str] | None = None) -> str:
 def tables_md(summary: dict) -> str:
     """Three tables separated by blank lines: per-view gap, effect ranking, accuracy."""
     parts = [
-        views_md(summary["views"]),
+        *([views_md(summary["views"])] if summary["views"] else []),  # none: a structure difference, no gap measured
         ranking_md(summary["ranking"], summary["effects"], summary.get("dropped_effects")),
     ]
     if summary.get("accuracy"):

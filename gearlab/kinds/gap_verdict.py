@@ -29,6 +29,10 @@ def headline(run) -> str:
     return f"{said[0].upper()}{said[1:]}" if said.startswith(("structure differs", "level differs")) else ""
 
 
+# A structure difference ends the diagnosis before the source, another gearbox, is simulated (gearlab.gap.structure)
+NO_GAP = "gap not measured: the source simulates another gearbox"
+
+
 def diagnosis_line(result: dict) -> str:
     """The run's log line (the CLI's): with no effect named, the simulator stays as it was, and 'gap X -> X
     (0 % removed)' read as if nothing had helped beside 'sensor_noise ... together 98.8 % of the gap' (an outside
@@ -40,7 +44,9 @@ def diagnosis_line(result: dict) -> str:
     if result.get("dropped_effects"):  # the progress said them accepted: say why none is named
         names += f" ({dropped_text(result)})"
     gap = (
-        f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed)"
+        NO_GAP
+        if before is None
+        else f"gap {before:.4g} -> {after:.4g} ({shrink_text(before, after)} removed)"
         if result["effects"]
         else (f"gap {before:.4g} (no effect named: the simulator left uncorrected)")
     )
@@ -80,6 +86,8 @@ def shrink_text(before: float, after: float) -> str:
 def before_after(s: Mapping) -> str:
     """The summary's gap line: before -> after with the share removed where an effect is named; else the gap
     before alone (the corrected source is the source: '-> the same (0 % removed)' told nothing)."""
+    if s["gap_before"] is None:
+        return NO_GAP
     before = (
         f"gap before {s['gap_before']:.4g} (AUC {s['auc_before']:.3f}, p = {s['p_before']:.3g}, "
         f"{'significant' if s['significant_before'] else 'not significant'})"
@@ -95,6 +103,9 @@ def before_after(s: Mapping) -> str:
 def gap_lines(summary: Mapping) -> list[str]:
     views = summary.get("views") or {}
     before, after = summary.get("gap_before"), summary.get("gap_after")
+    said = summary.get("verdict") or ""  # the run's own verdict, as its log line said it (gearlab.gap.conclusion)
+    if before is None and said.startswith("structure differs"):
+        return [f"{said[0].upper()}{said[1:]}; no effect was searched, no gap measured.", *_unchecked(summary)]
     if before is None:
         return ["The diagnosis has not finished: there is nothing to judge."]
     where = sorted(views, key=lambda v: -(views[v].get("share_before") or 0.0))
@@ -107,7 +118,6 @@ def gap_lines(summary: Mapping) -> list[str]:
         + "."
     ]
     effects = summary.get("effects") or []
-    said = summary.get("verdict") or ""  # the run's own verdict, as its log line said it (gearlab.gap.conclusion)
     if said.startswith(("structure differs", "level differs")):  # ended before any effect was searched
         return [*lines, f"{said[0].upper()}{said[1:]}; no effect was searched.", *_unchecked(summary)]
     shrink = summary.get("shrink", 0.0)

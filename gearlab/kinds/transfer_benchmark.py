@@ -349,9 +349,11 @@ def correction_line(record: dict) -> str:
     n = record.get("evaluations")  # (a record from before the count: its time alone)
     cost = "" if n is None else f"{n} score evaluations, "
     out = ", ".join(f"{e['name']} ({e['why']})" for e in record.get("left_out", ()))
+    before, after = record["gap_before"], record["gap_after"]  # None: a structure difference, no gap measured
+    gap = "no gap measured" if before is None else f"gap {before:.4g} -> {after:.4g}"
     return (
         f"{record['trial']}: the diagnosis of its history ({record['rows']} healthy rows) fits {fitted}: "
-        f"gap {record['gap_before']:.4g} -> {record['gap_after']:.4g} ({cost}{record['seconds']:.0f} s)"
+        f"{gap} ({cost}{record['seconds']:.0f} s)"
         + (f"; left out of the corrected source: {out}" if out else "")
         + (f"; {withheld}" if (withheld := correction_withheld(record)) else "")
     )

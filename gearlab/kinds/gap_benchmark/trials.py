@@ -538,7 +538,7 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
     fitted = {e["name"]: e.get("params", {}) for e in result.get("effects", [])}
     marks = {e["name"]: e.get("determined", {}) for e in result.get("effects", [])}
     ranking = [e["name"] for e in result.get("ranking", [])]
-    before, after = float(result.get("gap_before", float("nan"))), float(result.get("gap_after", float("nan")))
+    before, after = (math.nan if result.get(k) is None else float(result[k]) for k in ("gap_before", "gap_after"))
     shrink = 1.0 - after / before if before > 0 and math.isfinite(after) else None
     record = {
         "kind": kind,
@@ -604,8 +604,8 @@ def score_trial(answers: Mapping, result: Mapping, registry=None, oracle: float 
         record["param_error_median"] = float(np.median(errors)) if errors else None
         record["param_error_median_determined"] = float(np.median(sure)) if sure else None
     elif kind == "null":
-        # correct: no significant gap, hence nothing named
-        record["null_correct"] = not record["significant_before"] and not accepted
+        # correct: no significant gap, hence nothing named (a structure difference measured none: not correct)
+        record["null_correct"] = result.get("significant_before") is False and not accepted
     else:
         # "unexplained" with no library effect accepted: a partly explained verdict names
         # effects that stand in for the missing one
