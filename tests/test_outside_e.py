@@ -120,3 +120,34 @@ def test_a_healthy_take_of_a_two_stage_box_read_whole_is_not_called_bearing_like
     # its bins: 4.05) on those lines, deaf to a weaker bearing; the takes read z 3.1-3.5 at 2.8-3.6
     said = [(round(ns["z"], 2), round(ns["threshold"], 2)) for ns in found]
     assert not any(ns["changed"] for ns in found) and all(ns["threshold"] < 4.5 for ns in found), said
+
+
+def test_a_bearing_striking_at_two_meshes_combination_is_named_at_its_own_order(cli, tmp_path, monkeypatch):
+    # box Q's healthy takes (above) with a bearing's strikes added at 3.541 a turn, M1 - 3 M2 + o_2 of its two
+    # meshes: with the meshes' combinations left out of the search, its own line was, and it was named at its
+    # harmonic 7.08; the takes are read in whole periods of the meshes (read_turns), where no beat stands there
+    from gearlab.data import which_gear as W
+
+    monkeypatch.setattr(W, "history_of", lambda *args, **kwargs: None)  # as above: the non-synchronous call alone
+    monkeypatch.setattr(W, "which_gear", lambda *args: {"named": None})
+    (tmp_path / "boxQ.toml").write_text(BOX_Q)
+    history = [a for seed in (1, 2, 3) for a in ("--history", _box_q_take(tmp_path / f"q{seed}.npz", seed))]
+    order = 27 - 3 * 27 * 18 / 61 + 27 / 61
+    take = np.load(_box_q_take(tmp_path / "q4.npz", 4))
+    x, fs = take["acc"].copy(), float(take["fs"])
+    rng = np.random.default_rng(9)
+    t = np.arange(int(0.004 * fs)) / fs
+    ring = np.exp(-0.05 * 2 * np.pi * 2500 * t) * np.sin(2 * np.pi * 2500 * t) * 0.6 * x.std()  # 2.5 kHz, 5 %
+    period = 1 / (order * 28.0)
+    at = rng.uniform(0, period)
+    while at < x.size / fs - t[-1]:  # each interval slips 1.5 % (a rolling element's)
+        i = int(at * fs)
+        x[i : i + t.size] += ring
+        at += period * (1 + 0.015 * rng.standard_normal())
+    np.savez(tmp_path / "bearing.npz", acc=x, fs=fs)
+    code, stdout, err = cli(
+        "inspect", tmp_path / "bearing.npz", "--gearbox", tmp_path / "boxQ.toml", "--speed", "28 Hz", *history, "--json"
+    )
+    assert code == 0, err
+    ns = json.loads(stdout)["localisation"]["nonsync"]
+    assert ns["changed"] and abs(ns["order"] - order) < 0.05, ns  # (read to 1/16 order, then refined)

@@ -74,7 +74,7 @@ HARMONICS = 4  # harmonics of a strike order whose z are summed to name it
 LOWEST = 0.7  # the strike order named: the lowest whose harmonics' z sum to this share of the most
 OWN = 0.25  # ... whose own line's z is at least this share of the largest (not a half of the strike order)
 LINE = 8  # bins on either side whose median z a line's z is read over (half an order)
-BEAT = 5  # the most mesh harmonics (|a| + |b|) of a combination a Mi + b Mj left out of the search (synchronous_bins)
+BEAT = 5  # mesh harmonics whose first sidebands are left out of the search (synchronous_bins)
 SLOW = 4  # harmonics of a slower shaft's order left out of the search (its rotation's modulation)
 SUM = 1  # bins on either side summed with each bin (a slipping strike's line spreads)
 SMOOTH = 9  # bins over which the history's sd is pooled
@@ -248,36 +248,23 @@ class NonSync:
 
 def synchronous_bins(table, bins: int) -> np.ndarray:
     """bool per bin envelope_blocks keeps: within SUM bins of an order a shaft's rotation modulates the
-    residual at: every multiple of a shaft turning at least once a turn and of each mesh, the combinations of
-    two meshes (below) and their first sidebands, the first SLOW of a slower shaft's (an eccentric gear's load,
-    turn by turn, modulates the mesh's random part: the PHM 2009 eccentric idler's records read z 8-19 at 1/3
-    order against healthy ones)."""
+    residual at: every multiple of a shaft turning at least once a turn and of each mesh, the first sidebands of
+    each mesh's first BEAT harmonics, the first SLOW of a slower shaft's (an eccentric gear's load, turn by turn,
+    modulates the mesh's random part: the PHM 2009 eccentric idler's records read z 8-19 at 1/3 order against
+    healthy ones)."""
     f = orders_of_bins(bins)
     meshes = [float(st.mesh) for st in table.stages]
     lines = meshes + [float(o) for o in table.shaft_orders if o >= 1]
     at = [k * o for o in lines for k in range(1, int(HIGH / o) + 2)]
-    # Explained by the gearbox. Where a record holds no whole grand period, the meshes' lines leak past the bins
-    # removed, and the residual's squared envelope holds the difference of every two lines it keeps: of two meshes'
-    # harmonics p Mi and q Mj (or of an intermodulation line p Mi + q Mj, which a load that couples the stages puts in
-    # the record, and a mesh harmonic), each moved by a sideband of a shaft either stage turns. So the envelope's gear
-    # lines lie at a Mi + b Mj + c o_s, sums and differences alike: points of the lattice the shaft orders span,
-    # synchronous with the grand period, whose level follows the meshes' and so the load. The lattice is dense (any
-    # order lies near one of high enough harmonics), so a bearing's order stays searched only where the harmonics are
-    # bounded: |a| + |b| <= BEAT, |c| <= 1, as a gear's mesh spectrum is dominated by its first harmonics; within SUM
-    # bins (the blocks' order resolution) of such a point a line is the gearbox's (of LOW-HIGH, a two-stage box's
-    # 45-49 % of the bins, a three-stage one's up to 75 %; strike orders of 1.5-10 whose first HARMONICS harmonics all
-    # lie there, so unseen: 10-12 %, 28 %, from 7-9 % and 19 % with |a| + |b| <= 4). A 17/47 + 29/67 + 23/59 reducer's
-    # healthy take read z 5.3 at 6.89 = M2 - M3 and 3.29 = M2 - 2 M3 (threshold 4.1); box Q, 27/61 + 18/49, healthy at
-    # 28 Hz, z 6.5-7.1 at 3.54 = M1 - 3 M2 + o_2, then 5.1 at 7.80 = M2 - o_3; a 19/62 + 23/87 box's healthy take at
-    # twice its history's load, z 4.6-5.1 at 8.89 = M1 - 4 M2 + o_2 (threshold 4.1), 'bearing-like'
-    # (tests/test_outside_cn); the rig's 32 and 16 beat on 16's multiples
-    for i in range(len(meshes)):
-        for j in range(i, len(meshes)):
-            sides = [c * float(table.shaft_orders[s]) for s in {i, i + 1, j, j + 1} for c in (-1, 1)]
-            for a in range(1, BEAT + 1):
-                for b in [b for b in range(a - BEAT, BEAT - a + 1) if b] if j > i else (0,):
-                    beat = abs(a * meshes[i] + b * meshes[j])
-                    at += [beat] + [abs(beat + d) for d in sides]
+    # Two meshes' combinations a Mi + b Mj (+- a shaft order) are searched: read in whole periods of its meshes
+    # (read_turns), a record of no whole grand period holds no beat of mesh lines leaking past the bins removed (box
+    # Q, 27/61 + 18/49, healthy at 28 Hz, read whole: z 6.5-7.1 at 3.54 = M1 - 3 M2 + o_2). Its healthy takes read z
+    # 2.92 and 2.62 with those orders left out or not, and a bearing striking 3.54 times a turn, on that lattice, is
+    # named at 3.54, where leaving them out named its harmonic 7.08: box Q searches 442 bins of 0.3-40, not 342
+    # (tests/test_outside_e)
+    for i, mesh in enumerate(meshes):
+        sides = [c * float(table.shaft_orders[s]) for s in (i, i + 1) for c in (-1, 1)]
+        at += [abs(a * mesh + d) for a in range(1, BEAT + 1) for d in (0.0, *sides)]
     at += [k * float(o) for o in table.shaft_orders if o < 1 for k in range(1, SLOW + 1)]
     near = np.abs(f[:, None] - np.asarray(at)[None, :]).min(axis=1)
     return near <= (SUM + 0.5) / BLOCK
