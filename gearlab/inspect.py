@@ -143,7 +143,19 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     if options.tacho is not None:
         tacho = series(contents.found[options.tacho], options.tacho, "tacho", path)
         same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
-    return Recording(str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho, units=units)
+    return Recording(
+        str(path),
+        fmt,
+        channels,
+        vibration,
+        vib,
+        fs,
+        fs_source,
+        options.tacho,
+        tacho,
+        units,
+        warnings=tuple(contents.warnings),
+    )
 
 
 # --- speed ------------------------------------------------------------------------------------
@@ -468,6 +480,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
         "tsa": shaft_tsa(rec, speed, box, fine),
         # clipped at the logger's or the sensor's range (a knock over a WAV's full scale), a dropout, a drift
         "flaws": list(flaws),
+        "left_out": list(rec.warnings),  # by the reader: a logger's footer under the rows
     }
     # a description's (or --speed's) speed is nominal: the measured one beside it, as information
     nominal, said = (options.speed_hz, "--speed") if options.speed_hz else (box and box.speed_hz, "[operation] speed")
@@ -697,7 +710,8 @@ def render(report: dict, console, width: int = 100) -> None:
     )
     if "nominal" in sp:
         console.print(f"[dim]{escape(sp['nominal']['line'])}[/dim]")
-    for note in sp["notes"] + [f"vibration {report['vibration']!r}: {c}" for c in report.get("flaws", ())]:
+    notes = [f"vibration {report['vibration']!r}: {c}" for c in report.get("flaws", ())]
+    for note in sp["notes"] + [f"{report['file']}: {w}" for w in report.get("left_out", ())] + notes:
         console.print(f"[yellow]note:[/yellow] {escape(note)}")
     orders, amp = report["spectrum"]
     top = report["max_order"]

@@ -114,6 +114,7 @@ def write_report(report: dict, folder: Path) -> Path:
         f"<p>speed {sp['mean_hz']:.5g} Hz ({sp['mean_hz'] * 60:.5g} rpm) {escape(sp['source'])}; "
         f"{sp['min_hz']:.5g} .. {sp['max_hz']:.5g} Hz; {report['revolutions']} input revolutions</p>",
     ]
+    parts += [f"<p>note: {escape(report['file'])}: {escape(w)}</p>" for w in report.get("left_out", ())]
     parts += [
         f"<p>note: vibration {escape(repr(report['vibration']))}: {escape(c)}</p>" for c in report.get("flaws", ())
     ]

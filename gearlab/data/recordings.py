@@ -18,6 +18,7 @@ Formats (by extension) and where the sampling rate comes from:
                   (time, t, time_s, 'Time [s]', 'time (ms)', …: see time_scale) or a comment
                   '# fs = 51200'
     .txt .dat .gz .zip  blank-separated text: plain, gzipped, or one file zipped (streamed); a header row or none
+                  (both: a logger's preamble above the table is read, its footer under the rows left out and said)
     .npz          arrays by name, loaded without pickle; rate from a scalar 'fs' or a time array
     .h5 / .hdf5   datasets by path ("group/acc"); rate from an attribute 'fs' on the channel,
                   else from an 'fs' attribute or 'fs'/time dataset in its group, or the
@@ -457,6 +458,7 @@ class Recording:
     units: str  # how the values became m/s² (channel_scale)
     step: float = 0.0  # one quantisation step in m/s² (0: floating-point data, or not read: inspect)
     extra: dict[str, np.ndarray] = field(default_factory=dict)  # other channels asked for, as stored
+    warnings: tuple[str, ...] = ()  # what the reader left out of the file (a logger's footer), said once
 
 
 def read_recording(
@@ -494,19 +496,11 @@ def read_recording(
         tacho_values = series(contents.found[tacho], tacho, "tacho", path)
         same_length(tacho_values, tacho, "tacho", vib.size, vibration, path)
     channels = [c for c in contents.available if not is_rate_or_time(str(c))]
+    asked = {channel_key(n): contents.found[channel_key(n)] for n, _ in extra if n is not None}
+    said = tuple(contents.warnings)  # what the reader left out: a logger's footer
+    step = float(step * scale)  # in m/s²
     return Recording(
-        path,
-        fmt,
-        channels,
-        vibration,
-        vib,
-        rate,
-        fs_source,
-        tacho,
-        tacho_values,
-        units,
-        float(step * scale),
-        {channel_key(n): contents.found[channel_key(n)] for n, _ in extra if n is not None},
+        path, fmt, channels, vibration, vib, rate, fs_source, tacho, tacho_values, units, step, asked, said
     )
 
 
@@ -699,7 +693,7 @@ def cut_recording(
     start, warning = 0, None
     if transient == "stats":
         start, _, warning = steady_start(cut.revolutions, f"{path}: vibration column {_one_line_repr(rec.vibration)}")
-    revs, warns = cut.revolutions[start:], flaws + (() if warning is None else (warning,))
+    revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
     return CutRecording(
         str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units, speeds

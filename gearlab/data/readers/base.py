@@ -124,6 +124,8 @@ class Contents:
     steps: dict[str, float] = field(default_factory=dict)
     # the unit a file states for a channel beside its name (an HDF5 'units' attribute: "m/s^2", "V")
     units: dict[str, str] = field(default_factory=dict)
+    # what the reader left out of the file, said once (a logger's footer under the rows: csv.footer_note)
+    warnings: list[str] = field(default_factory=list)
 
 
 def stated_unit(attrs) -> str | None:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import GearlabInputError
+from ...errors import GearlabInputError, shown
 from .base import Contents, _column, _keyed, _scalar
 from .rates import in_hz, key_of, named, scale_of
 
@@ -150,6 +150,33 @@ def numeric_block(lines: list[str], delimiter: str | None, width: int) -> np.nda
     return np.ascontiguousarray(values.T)
 
 
+def _is_text(field: str) -> bool:
+    return field != "" and _column([field]).dtype.kind != "f"
+
+
+def footer_start(lines: list[str], delimiter: str | None, width: int) -> int | None:
+    """Index in *lines* (the data lines, the first a row) of a logger's footer under the rows ('End of data',
+    'Samples: 204800'), or None: the last lines that are no row, from the first of them that starts with text. A
+    row has *width* fields, a number (or nothing) where the first row has one; a truncated row or one with a text
+    cell ('0.4,n/a') above a footer stays the row parser's to refuse, as does a text line with rows under it. Read
+    from the end: a file without a footer costs one line."""
+    numeric = [not _is_text(f) for f in split_rows(lines[:1], delimiter)[0]]
+    start = None
+    for i in range(len(lines) - 1, 0, -1):
+        fields = split_rows([lines[i]], delimiter)[0]
+        if len(fields) == width and not any(_is_text(f) for f, n in zip(fields, numeric) if n):
+            break
+        if fields and _is_text(fields[0]) and (numeric[0] or len(fields) != width):
+            start = i
+    return start
+
+
+def footer_note(number: int, line: str, after: int) -> str:
+    """The one warning of a footer left out: its first line (*number*, *line*), and how many follow it."""
+    more = f" and the {after} line{'s' if after > 1 else ''} under it" if after else ""
+    return f"line {number} {shown(line.strip())}{more}: no row of numbers (a logger's footer?); left out"
+
+
 def is_header(row: list[str]) -> bool:
     """A first row is a header unless every field is a number."""
     return _column(row).dtype.kind != "f"
@@ -208,6 +235,10 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     first_data = 1 + bool(units) if header is not None else 0
     data_lines, data_numbers = lines[first_data:], line_numbers[first_data:]
     width = len(rows[0])
+    warnings = []
+    if (cut := footer_start(data_lines, delimiter, width) if data_lines else None) is not None:
+        warnings.append(footer_note(data_numbers[cut], data_lines[cut], len(data_lines) - cut - 1))
+        data_lines, data_numbers = data_lines[:cut], data_numbers[:cut]
     numbers = None
     if plain and rows[0][-1] != "":  # a trailing separator's empty column is the row parser's to drop
         numbers = numeric_block(data_lines, delimiter, width)
@@ -215,10 +246,10 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         columns = header_names(header, width)
         if header is not None and len(set(header)) != len(header):
             _twice(path, header)
-        return _contents(columns, fields, names, lambda j: numbers[j], units)
+        return _contents(columns, fields, names, lambda j: numbers[j], units, warnings)
     if plain:
         rows = split_rows(lines, delimiter)
-    data = rows[1 + bool(units) :] if header is not None else rows
+    data = rows[first_data : first_data + len(data_lines)]
     if rows[0][-1] == "" and all(row[-1:] == [""] for row in data):  # every line ends in the separator
         header = header[:-1] if header is not None else None
         data = [row[:-1] for row in data]
@@ -236,7 +267,8 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
             f"{path}: its first data row (line {data_numbers[0]}) holds no number; expected a header "
             "row of column names, then rows of numbers"
         )
-    return _contents(header_names(header, width), fields, names, lambda j: _column([row[j] for row in data]), units)
+    column = lambda j: _column([row[j] for row in data])  # noqa: E731
+    return _contents(header_names(header, width), fields, names, column, units, warnings)
 
 
 # why a row has more or fewer fields than the header: a comma-separated row of decimal commas ('0,25,1,5') splits each
@@ -260,8 +292,9 @@ def _twice(path: Path, header: list[str]) -> None:
     raise GearlabInputError(f"{path}: column '{twice}' appears twice in the header; expected distinct names")
 
 
-def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str], column, units) -> Contents:
-    """The file's channels: *column(j)* gives the j-th column's values; a comment's field by its name."""
+def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str], column, units, warnings) -> Contents:
+    """The file's channels: *column(j)* gives the j-th column's values; a comment's field by its name; *warnings*:
+    what the reader left out (footer_note)."""
 
     def get(name: str):
         j = column_index(name, columns)
@@ -273,4 +306,5 @@ def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str
     asked = [n for n in names if n not in columns and n not in fields and column_index(n, columns) is not None]
     contents = _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])
     contents.units.update(units or {})
+    contents.warnings += warnings
     return contents

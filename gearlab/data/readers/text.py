@@ -14,6 +14,7 @@ counted while streaming, so an archive that lies about its size is stopped at th
 from __future__ import annotations
 
 import gzip
+import itertools
 import os
 import re
 import zipfile
@@ -25,7 +26,16 @@ import numpy as np
 
 from ...errors import GearlabInputError, shown
 from .base import Contents, _keyed, check_size, max_record_bytes, time_scale
-from .csv import DECIMAL_COMMA_SEPARATORS, column_index, decoded, delimiter_of, header_names, preamble, split_rows
+from .csv import (
+    DECIMAL_COMMA_SEPARATORS,
+    column_index,
+    decoded,
+    delimiter_of,
+    footer_note,
+    header_names,
+    preamble,
+    split_rows,
+)
 
 # Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
 # a block's tokens (about 60 bytes each as Python objects) stay a few tens of MB.
@@ -164,9 +174,10 @@ def _rows(body: bytes) -> int:
     return sum(1 for line in body.split(b"\n") if line.strip())
 
 
-def _bad_line(block: bytes, first_line: int, width: int, where: str, passed: int = 0) -> GearlabInputError:
-    """The error for the first line of *block* that is not *width* numbers (slow path), after its first *passed*
-    data lines (a preamble's, the header: a tab text's dropout 'n/a' on line 502 was told as line 1's 'time')."""
+def _first_bad(block: bytes, width: int, passed: int) -> tuple[int, int] | None:
+    """(line offset in *block* (blanked: _blanks), rows above it) of its first line that is not *width* numbers,
+    after its first *passed* data lines (a preamble's, the header), or None."""
+    rows = 0
     for offset, line in enumerate(block.split(b"\n")):
         tokens = line.split()
         if not tokens or tokens[0].startswith(b"#"):
@@ -174,25 +185,72 @@ def _bad_line(block: bytes, first_line: int, width: int, where: str, passed: int
         if passed:
             passed -= 1
             continue
-        number = first_line + offset
-        if len(tokens) != width:
-            return GearlabInputError(
-                f"{where}: line {number} has {len(tokens)} fields, expected {width} (as the first data line)"
-            )
-        for i, t in enumerate(tokens):
-            if not _is_number(t):
-                text = t.decode("utf-8", "replace")
-                return GearlabInputError(f"{where}: line {number} column {i}: {shown(text)} is not a number")
-    return GearlabInputError(f"{where}: unreadable numbers near line {first_line}")  # pragma: no cover
+        if len(tokens) != width or not all(map(_is_number, tokens)):
+            return offset, rows
+        rows += 1
+    return None
 
 
-def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
+def _bad_line(block: bytes, first_line: int, width: int, where: str, passed: int = 0) -> GearlabInputError:
+    """The error for the first line of *block* that is not *width* numbers (slow path), after its first *passed*
+    data lines (a preamble's, the header: a tab text's dropout 'n/a' on line 502 was told as line 1's 'time')."""
+    bad = _first_bad(block, width, passed)
+    if bad is None:  # pragma: no cover
+        return GearlabInputError(f"{where}: unreadable numbers near line {first_line}")
+    tokens, number = block.split(b"\n")[bad[0]].split(), first_line + bad[0]
+    if len(tokens) != width:
+        return GearlabInputError(
+            f"{where}: line {number} has {len(tokens)} fields, expected {width} (as the first data line)"
+        )
+    i, text = next((i, t.decode("utf-8", "replace")) for i, t in enumerate(tokens) if not _is_number(t))
+    return GearlabInputError(f"{where}: line {number} column {i}: {shown(text)} is not a number")
+
+
+def _footer(block: bytes, offset: int, width: int, delimiter: str | None, later) -> tuple[str, int] | None:
+    """(first line, lines after it) of a logger's footer starting at line *offset* of *block* (as read, not
+    blanked), or None: a footer's first line starts with text and no row of *width* numbers follows it in *block*
+    or in *later* (the text's further lines, read only here). A truncated row, or one with a text cell ('4 n/a 6'),
+    is no footer."""
+    lines = block.split(b"\n")[offset:]
+    if _is_number(_blanks(lines[0], delimiter).split()[0]):
+        return None
+    after = 0
+    for line in itertools.chain(lines[1:], later):
+        tokens = _blanks(line, delimiter).split()
+        if not tokens or tokens[0].startswith(b"#"):
+            continue
+        if len(tokens) == width and all(map(_is_number, tokens)):
+            return None
+        after += 1
+    return decoded(lines[0]).strip(), after
+
+
+def _lines(rest: bytes, stream, where: str, read: int):
+    """The lines of *rest* and what is left of *stream* (of which *read* bytes are read), against the size limit."""
+    while data := stream.read(CHUNK_BYTES):
+        read += len(data)
+        if read > max_record_bytes():
+            check_size(where, "the text read so far", read)
+        *lines, rest = (rest + data).split(b"\n")
+        yield from lines
+    yield rest
+
+
+def _rows_above(body: bytes, rows: int) -> bytes:
+    """The first *rows* lines of *body* that hold tokens (its rows above a footer)."""
+    kept = [line for line in body.split(b"\n") if line.split() and not line.lstrip().startswith(b"#")]
+    return b"\n".join(kept[:rows])
+
+
+def read_columns(path, columns, warnings: list[str] | None = None) -> tuple[dict, list[str] | None, int]:
     """The asked-for columns of a whitespace-separated text (or a .zip of one), streamed.
 
     Returns ({column as asked: float64 array}, header names or None, number of columns).
     Blank lines and lines starting with '#' are skipped; a first data line that is not all
-    numbers is the header of column names.
+    numbers is the header of column names; a logger's footer under the rows is left out, said in
+    *warnings* (csv.footer_note).
     """
+    warnings = [] if warnings is None else warnings
     path = Path(path)
     columns = list(dict.fromkeys(columns))
     parts: list[np.ndarray] = []
@@ -256,10 +314,17 @@ def read_columns(path, columns) -> tuple[dict, list[str] | None, int]:
                 try:
                     values = np.array(body.split(), dtype=np.float64)
                 except ValueError:
-                    raise _bad_line(_blanks(block, delimiter), line_no, width, where, passed) from None
+                    values = np.empty(0)
                 rows = _rows(body)
                 if values.size != rows * width:
-                    raise _bad_line(_blanks(block, delimiter), line_no, width, where, passed)
+                    bad = _first_bad(_blanks(block, delimiter), width, passed)
+                    later = _lines(rest, stream, where, text_bytes)
+                    found = None if bad is None else _footer(block, bad[0], width, delimiter, later)
+                    if found is None:
+                        raise _bad_line(_blanks(block, delimiter), line_no, width, where, passed)
+                    warnings.append(footer_note(line_no + bad[0], found[0], found[1]))
+                    rows, data = bad[1], b""  # the rows above it, the last read
+                    values = np.array(_rows_above(body, rows).split(), dtype=np.float64)
                 parts.append(values.reshape(rows, width)[:, picked].copy())
                 kept_bytes += parts[-1].nbytes
                 if kept_bytes > limit:  # short rows of many numbers: the columns outgrow their text
@@ -333,11 +398,13 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
     fields = {k: v for k, v in comment_fields(path).items() if k not in columns}
     wanted = [n for n in dict.fromkeys(names) if column_index(n, columns) is not None]
     wanted += [c for c in columns if time_scale(c) is not None and c not in wanted]
-    found = {}
+    found, warnings = {}, []
     if wanted:
-        read, _, _ = read_columns(path, [column_index(n, columns) for n in wanted])
+        read, _, _ = read_columns(path, [column_index(n, columns) for n in wanted], warnings)
         found = {n: read[column_index(n, columns)] for n in wanted}
     asked = [n for n in wanted if n not in columns]
-    return _keyed(
+    contents = _keyed(
         [*columns, *fields, *asked], lambda n: found[n] if n in found else fields[n], names, [*columns, *fields]
     )
+    contents.warnings += warnings
+    return contents

@@ -1,0 +1,96 @@
+"""A logger's footer under the rows ('End of data', 'Samples: 204800', a blank line then a note) is left out
+with one warning naming the file and its first line; a text line with rows of numbers after it stays an error
+naming the file and the line. The same for a CSV, a text and a gzipped or zipped text."""
+
+from __future__ import annotations
+
+import gzip
+import zipfile
+
+import numpy as np
+import pytest
+
+from gearlab.data.recordings import read_header, read_recording
+from gearlab.errors import GearlabInputError
+
+N = 400
+T = np.arange(N) / 1000.0
+ACC = np.sin(2 * np.pi * 37.0 * T) + 0.25 * np.cos(2 * np.pi * 5.0 * T)
+FOOTERS = {
+    "one line": ["End of data"],
+    "a total": ["Samples: 400"],
+    "blank, then two": ["", "Measurement finished", "Samples = 400"],
+    "three": ["# end", "End of data", "Total samples: 400;; 2 channels"],
+}
+
+
+def _rows(sep: str) -> list[str]:
+    decimal = "," if sep == ";" else "."  # a semicolon export writes decimal commas
+    return [f"{t:.6f}{sep}{float(a)!r}".replace(".", decimal) for t, a in zip(T, ACC)]
+
+
+def _write(path, lines: list[str]) -> None:
+    text = "\n".join(lines) + "\n"
+    if path.suffix == ".gz":
+        path.write_bytes(gzip.compress(text.encode()))
+    elif path.suffix == ".zip":
+        with zipfile.ZipFile(path, "w") as z:
+            z.writestr("take.txt", text)
+    else:
+        path.write_text(text)
+
+
+@pytest.mark.parametrize("footer", FOOTERS.values(), ids=FOOTERS.keys())
+@pytest.mark.parametrize(
+    "name, sep", [("c.csv", ","), ("s.csv", ";"), ("t.tsv", "\t"), ("b.txt", " "), ("g.gz", ","), ("z.zip", "\t")]
+)
+def test_a_footer_is_left_out_with_one_warning(tmp_path, name, sep, footer):
+    path = tmp_path / name
+    _write(path, [sep.join(["time", "acc"]), *_rows(sep), *footer])
+    header = read_header(path)  # the header alone: the footer is not its business
+    assert header.channels == ["time", "acc"]
+    rec = read_recording(path, "acc", unit="m/s^2")
+    assert rec.signal.size == N and np.allclose(rec.signal, ACC, rtol=0, atol=1e-12)
+    assert rec.fs == pytest.approx(1000.0)
+    first = next(line for line in footer if line and not line.startswith("#"))
+    assert len(rec.warnings) == 1, rec.warnings
+    said = rec.warnings[0]
+    assert f"line {footer.index(first) + N + 2}" in said and repr(first) in said and "left out" in said
+
+
+@pytest.mark.parametrize("name, sep", [("c.csv", ","), ("s.csv", ";"), ("b.txt", " "), ("g.gz", ","), ("z.zip", "\t")])
+def test_a_text_line_in_the_middle_stays_an_error(tmp_path, name, sep):
+    rows = _rows(sep)
+    path = tmp_path / name
+    _write(path, [sep.join(["time", "acc"]), *rows[:100], "Pause", *rows[100:], "End of data"])
+    with pytest.raises(GearlabInputError) as caught:
+        read_recording(path, "acc", unit="m/s^2")
+    said = str(caught.value)
+    assert str(path) in said and "line 102" in said and "\n" not in said
+
+
+@pytest.mark.parametrize("name, sep", [("c.csv", ","), ("b.txt", " ")])
+def test_a_truncated_last_row_stays_an_error(tmp_path, name, sep):
+    path = tmp_path / name
+    _write(path, [sep.join(["time", "acc", "probe"]), *(f"{r}{sep}0.5" for r in _rows(sep)), "0.4", "End of data"])
+    with pytest.raises(GearlabInputError, match=f"line {N + 2}"):
+        read_recording(path, "acc", unit="m/s^2")
+
+
+def test_no_footer_no_warning(tmp_path):
+    path = tmp_path / "c.csv"
+    _write(path, ["time,acc", *_rows(",")])
+    assert read_recording(path, "acc", unit="m/s^2").warnings == ()
+
+
+def test_the_cli_says_the_footer_once(tmp_path):
+    from typer.testing import CliRunner
+
+    from gearlab.cli import app
+
+    path = tmp_path / "c.csv"
+    _write(path, ["time,acc", *_rows(","), "End of data"])
+    result = CliRunner().invoke(app, ["inspect", str(path), "--vibration", "acc", "--speed", "10"])
+    out = result.output
+    assert result.exit_code == 0, out
+    assert out.count("'End of data'") == 1 and f"line {N + 2}" in out
