@@ -67,6 +67,7 @@ def test_a_text_line_in_the_middle_stays_an_error(tmp_path, name, sep):
         read_recording(path, "acc", unit="m/s^2")
     said = str(caught.value)
     assert str(path) in said and "line 102" in said and "\n" not in said
+    assert path.suffix != ".csv" or "a note amid the rows?" in said
 
 
 @pytest.mark.parametrize("name, sep", [("c.csv", ","), ("b.txt", " ")])
@@ -94,3 +95,33 @@ def test_the_cli_says_the_footer_once(tmp_path):
     out = result.output
     assert result.exit_code == 0, out
     assert out.count("'End of data'") == 1 and f"line {N + 2}" in out
+
+
+def test_the_cut_record_says_it_once_and_validate_takes_the_file(tmp_path, cli):
+    from gearboxes import description, stage
+
+    from gearlab.data.recordings import cut_recording
+
+    path = tmp_path / "c.csv"
+    _write(path, ["time,acc", *_rows(","), "", "End of data", "Samples: 400"])
+    cut = cut_recording(path, vibration="acc", unit="m/s^2", speed_hz=10.0)
+    assert [w for w in cut.warnings if "End of data" in w] == [
+        f"line {N + 3} 'End of data' and the 1 line under it: no row of numbers (a logger's footer?); left out"
+    ]
+    (tmp_path / "k.toml").write_text(description(stage(105, 143, "1 mm", "12 mm"), speed="10 Hz", load="30 N*m"))
+    text = '[scenario]\nname = "s"\nkind = "gap"\n[source]\ngearbox = "k.toml"\n[target]\nvibration = "acc"\n'
+    text += 'unit = "m/s^2"\nfiles = [{ file = "c.csv", role = "history", label = "healthy" }]\n'
+    (tmp_path / "s.toml").write_text(text)
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 0 and "OK" in out, (out, err)
+
+
+def test_a_dataset_keeps_the_note_in_its_meta(tmp_path):
+    from gearlab.data.importers import MeasuredSpec, import_measured
+
+    path = tmp_path / "c.csv"
+    _write(path, ["time,acc_ms2", *_rows(","), "End of data"])
+    ds = import_measured(MeasuredSpec(name="rig", path=str(path), vibration="acc_ms2", speed_hz=10.0, transient="none"))
+    assert ds.meta["warnings"] == [
+        f"{path}: line {N + 2} 'End of data': no row of numbers (a logger's footer?); left out"
+    ]

@@ -441,6 +441,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
     if revs.shape[0] != starts.size - 1:  # pragma: no cover - both follow from the same angle
         raise RuntimeError(f"importer bug: {revs.shape[0]} revolutions cut, {starts.size - 1} bounded")
     start, transient, warning = _steady_start(revs, labels, spec, path)
+    warns = [f"{path}: {w}" for w in rec.warnings] + ([warning] if warning else [])  # a footer left out, a drift
     revs = revs[start:]
     fractions = starts[start:-1][:FRACTIONS_KEPT] % 1.0  # where the kept revolutions start between samples
     count = revs.shape[0]
@@ -502,6 +503,6 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
             "start_fractions": [round(float(f), 4) for f in fractions],
             "quantum": rec.step,
             "units": rec.units,
-            **({"warnings": [warning]} if warning else {}),
+            **({"warnings": warns} if warns else {}),
         },
     )

@@ -258,7 +258,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         _twice(path, header)
     for number, row in zip(data_numbers, data):
         if len(row) != width:
-            raise ragged(path, number, len(row), width, header is not None, delimiter)
+            raise ragged(path, number, len(row), width, header is not None, delimiter, bool(row) and _is_text(row[0]))
     if not data:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
     if not any(_column(data[0][j : j + 1]).dtype.kind == "f" for j in range(width)):
@@ -279,11 +279,15 @@ _RAGGED_WHY = {
 }
 
 
-def ragged(path: Path, number: int, fields: int, width: int, header: bool, delimiter: str | None) -> GearlabInputError:
-    """The error of a row of *fields* fields where the header (or the first row) has *width*."""
+def ragged(
+    path: Path, number: int, fields: int, width: int, header: bool, delimiter: str | None, text: bool = False
+) -> GearlabInputError:
+    """The error of a row of *fields* fields where the header (or the first row) has *width*; *text*: the row
+    starts with text (a note amid the rows, where footer_start leaves out only the lines under the last row)."""
+    why = "a note amid the rows? only a footer under the last row is left out" if text else None
     return GearlabInputError(
         f"{path}: line {number} has {fields} fields but the {'header' if header else 'first row'} has "
-        f"{width}; expected one value per column ({_RAGGED_WHY[delimiter == ',' and fields > width]})"
+        f"{width}; expected one value per column ({why or _RAGGED_WHY[delimiter == ',' and fields > width]})"
     )
 
 
