@@ -125,3 +125,20 @@ def test_a_dataset_keeps_the_note_in_its_meta(tmp_path):
     assert ds.meta["warnings"] == [
         f"{path}: line {N + 2} 'End of data': no row of numbers (a logger's footer?); left out"
     ]
+
+
+@pytest.mark.parametrize("chunk", [64, 4096])
+def test_a_footer_across_the_text_readers_blocks(tmp_path, monkeypatch, chunk):
+    from gearlab.data.readers import text
+
+    monkeypatch.setattr(text, "CHUNK_BYTES", chunk)  # the footer's lines read in several blocks
+    path = tmp_path / "g.gz"
+    _write(path, ["time acc", *_rows(" "), "", "Samples 400, then:", "End of data " * 20, "# end", "Total: 400"])
+    rec = read_recording(path, "acc", unit="m/s^2")
+    assert rec.signal.size == N and rec.warnings == (
+        f"line {N + 3} 'Samples 400, then:' and the 2 lines under it: no row of numbers (a logger's footer?); left out",
+    )
+    rows = _rows(" ")
+    _write(path, ["time acc", *rows[:300], "Pause", *rows[300:], "End of data"])
+    with pytest.raises(GearlabInputError, match="line 302 has 1 fields"):
+        read_recording(path, "acc", unit="m/s^2")

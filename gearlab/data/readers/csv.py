@@ -150,7 +150,8 @@ def numeric_block(lines: list[str], delimiter: str | None, width: int) -> np.nda
     return np.ascontiguousarray(values.T)
 
 
-def _is_text(field: str) -> bool:
+def is_text(field: str) -> bool:
+    """A field that holds something and no number (a footer's 'End of data', a label)."""
     return field != "" and _column([field]).dtype.kind != "f"
 
 
@@ -160,13 +161,13 @@ def footer_start(lines: list[str], delimiter: str | None, width: int) -> int | N
     row has *width* fields, a number (or nothing) where the first row has one; a truncated row or one with a text
     cell ('0.4,n/a') above a footer stays the row parser's to refuse, as does a text line with rows under it. Read
     from the end: a file without a footer costs one line."""
-    numeric = [not _is_text(f) for f in split_rows(lines[:1], delimiter)[0]]
+    numeric = [not is_text(f) for f in split_rows(lines[:1], delimiter)[0]]
     start = None
     for i in range(len(lines) - 1, 0, -1):
         fields = split_rows([lines[i]], delimiter)[0]
-        if len(fields) == width and not any(_is_text(f) for f, n in zip(fields, numeric) if n):
+        if len(fields) == width and not any(is_text(f) for f, n in zip(fields, numeric) if n):
             break
-        if fields and _is_text(fields[0]) and (numeric[0] or len(fields) != width):
+        if fields and is_text(fields[0]) and (numeric[0] or len(fields) != width):
             start = i
     return start
 
@@ -258,7 +259,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         _twice(path, header)
     for number, row in zip(data_numbers, data):
         if len(row) != width:
-            raise ragged(path, number, len(row), width, header is not None, delimiter, bool(row) and _is_text(row[0]))
+            raise ragged(path, number, len(row), width, header is not None, delimiter, bool(row) and is_text(row[0]))
     if not data:
         raise GearlabInputError(f"{path}: has a header but no data rows; expected one row per sample")
     if not any(_column(data[0][j : j + 1]).dtype.kind == "f" for j in range(width)):

@@ -33,6 +33,7 @@ from .csv import (
     delimiter_of,
     footer_note,
     header_names,
+    is_text,
     preamble,
     split_rows,
 )
@@ -212,7 +213,7 @@ def _footer(block: bytes, offset: int, width: int, delimiter: str | None, later)
     or in *later* (the text's further lines, read only here). A truncated row, or one with a text cell ('4 n/a 6'),
     is no footer."""
     lines = block.split(b"\n")[offset:]
-    if _is_number(_blanks(lines[0], delimiter).split()[0]):
+    if not is_text(split_rows([decoded(lines[0])], delimiter)[0][0]):  # as a CSV's (csv.footer_start)
         return None
     after = 0
     for line in itertools.chain(lines[1:], later):
