@@ -1,11 +1,16 @@
 """A bounded least-recently-used cache of arrays computed once and shared read-only: the healthy
 mesh stiffness of a pair (gearlab.physics.stiffness) and the deterministic rows of a gap search's
-source set (gearlab.gap.scoring). Base layer: imports nothing of gearlab."""
+source set (gearlab.gap.scoring); what a record gives, keyed by its content (ArraysOf). Base layer: imports
+nothing of gearlab."""
 
 from __future__ import annotations
 
+import hashlib
+import threading
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
+
+import numpy as np
 
 
 class SharedArrays(OrderedDict):
@@ -28,4 +33,27 @@ class SharedArrays(OrderedDict):
                 self.popitem(last=False)
         else:
             self.move_to_end(key)
+        return hit
+
+
+class ArraysOf(SharedArrays):
+    """SharedArrays of what an input array gives, keyed by its content (digest, shape and type) and *extra*,
+    safe across threads: the arrays are made outside the lock, so a read that takes seconds holds no other
+    thread's up (two threads reading one record at once both make it; the first stored is kept)."""
+
+    def __init__(self, size: int):
+        super().__init__(size)
+        self.lock = threading.Lock()
+
+    def of(self, data: np.ndarray, extra: Hashable, make: Callable[[], tuple]) -> tuple:
+        data = np.ascontiguousarray(data)
+        key = (hashlib.blake2b(data, digest_size=20).digest(), data.shape, data.dtype.str, extra)
+        with self.lock:
+            hit = self.get(key)
+            if hit is not None:
+                self.move_to_end(key)
+        if hit is None:
+            made = make()
+            with self.lock:
+                hit = self.get_or_make(key, lambda: made)
         return hit

@@ -5,13 +5,11 @@ follow_speed and by `gearlab inspect`."""
 
 from __future__ import annotations
 
-import hashlib
 import math
-import threading
 
 import numpy as np
 
-from ..memo import SharedArrays
+from ..memo import ArraysOf
 
 FLOOR_BINS = 201  # width of the running median (bins)
 
@@ -69,16 +67,12 @@ def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
     where it moves less than COURSE_MIN. A 2 % ramp read as 0.44 % where
     the mesh harmonic's band was narrower than its sweep. Read once per record and rate (COURSES), shared
     read-only."""
-    data = np.ascontiguousarray(signal)
-    key = (hashlib.blake2b(data, digest_size=20).digest(), data.shape, data.dtype.str, float(fs))
-    with _COURSES_LOCK:
-        hit = COURSES.get(key)
-        if hit is not None:
-            COURSES.move_to_end(key)
-    if hit is None:
+
+    def made() -> tuple:
         course = _speed_course(signal, fs)
-        with _COURSES_LOCK:
-            hit = COURSES.get_or_make(key, lambda: () if course is None else (course,))
+        return () if course is None else (course,)
+
+    hit = COURSES.of(signal, float(fs), made)
     return hit[0] if hit else None
 
 
@@ -86,8 +80,7 @@ def speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:
 # look at the record and again where the description's speed was no prior, inspect along it and for its
 # count check, on the same record (inspect's and the joint-mesh tests: 59 reads of 23 records, 4.6 of
 # their 31 s of CPU); a read is 17 windows' spectra, running medians and correlations.
-COURSES = SharedArrays(16)
-_COURSES_LOCK = threading.Lock()
+COURSES = ArraysOf(16)
 
 
 def _speed_course(signal: np.ndarray, fs: float) -> np.ndarray | None:

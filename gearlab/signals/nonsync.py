@@ -42,9 +42,7 @@ Everything is numpy: no torch, nothing from the layers above.
 
 from __future__ import annotations
 
-import hashlib
 import math
-import threading
 from dataclasses import dataclass
 from fractions import Fraction
 from statistics import NormalDist
@@ -52,7 +50,7 @@ from statistics import NormalDist
 import numpy as np
 
 from ..errors import GearlabInputError
-from ..memo import SharedArrays
+from ..memo import ArraysOf
 from .shaft import uniform_filter1d
 
 GRAND = 2  # grand periods (or meshes' periods) a record must hold to be read in them (read_turns)
@@ -355,25 +353,14 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
 def take_blocks(take: np.ndarray, table) -> np.ndarray:
     """envelope_blocks of a history take's residual (*take*: (R, points)), read once per take and gearbox
     (TAKE_BLOCKS), shared read-only."""
-    data = np.ascontiguousarray(take)
-    key = (hashlib.blake2b(data, digest_size=20).digest(), data.shape, data.dtype.str, repr(table))
-    with _TAKE_BLOCKS_LOCK:
-        hit = TAKE_BLOCKS.get(key)
-        if hit is not None:
-            TAKE_BLOCKS.move_to_end(key)
-    if hit is None:
-        made = envelope_blocks(residual(take, table), np.shape(take)[-1])
-        with _TAKE_BLOCKS_LOCK:
-            hit = TAKE_BLOCKS.get_or_make(key, lambda: (made,))
-    return hit[0]
+    return TAKE_BLOCKS.of(take, repr(table), lambda: (envelope_blocks(residual(take, table), np.shape(take)[-1]),))[0]
 
 
 # The history takes' envelope blocks last read, by take (its digest, shape and type) and gearbox (its order table):
 # `inspect --history` reads the history again for every take it inspects, and each of a history's takes is two to
 # four FFTs of its whole length and its blocks' envelopes (tests/test_outside_cn.py read one history of 4 takes 6
 # times: 24 residuals, 8.8 s); a take's blocks are 5 kB per 16 input revolutions (a 400-turn take's: 130 kB).
-TAKE_BLOCKS = SharedArrays(64)
-_TAKE_BLOCKS_LOCK = threading.Lock()
+TAKE_BLOCKS = ArraysOf(64)
 
 
 def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
