@@ -248,6 +248,12 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture
+def quiet(monkeypatch):
+    """A score's trend PNG not drawn (matplotlib): its words are read from score_trends."""
+    monkeypatch.setattr("gearlab.kinds.detection_figures.score_trend", lambda charts, path: path)
+
+
+@pytest.fixture
 def cli(capsys, monkeypatch):
     """Run the gearlab command in-process: returns (exit code, stdout, stderr)."""
     from gearlab.cli import main

@@ -25,12 +25,6 @@ def finished(tmp_path_factory, module_cache):
     return run_in_module(path, folder / "runs", figures=False), folder
 
 
-@pytest.fixture
-def quiet(monkeypatch):
-    """The trend's PNG not drawn (matplotlib)."""
-    monkeypatch.setattr("gearlab.kinds.detection_figures.score_trend", lambda charts, path: path)
-
-
 def _take(path, change=None, seed=11, chip=0.0):
     """A 40-revolution take of the tiny run's records (m/s² written as volts at 10 mV/g), *change*d."""
     vib, tacho = signals(revolutions=40, seed=seed, phase=0.3, chip=chip)

@@ -51,12 +51,6 @@ def finished(tmp_path_factory, module_cache):
     return run_in_module(path, folder / "runs", figures=False), folder
 
 
-@pytest.fixture
-def quiet(monkeypatch):
-    """The trend's PNG not drawn (matplotlib): the chart's words are read from score_trends."""
-    monkeypatch.setattr("gearlab.kinds.detection_figures.score_trend", lambda charts, path: path)
-
-
 def test_a_run_up_is_scored_on_its_revolutions_at_the_history_s_speed(cli, finished, quiet):
     out, folder = finished
     take = folder / "runup.zip"

@@ -104,12 +104,6 @@ def finished(tmp_path_factory, module_cache):
     return out, folder
 
 
-@pytest.fixture
-def quiet(monkeypatch):
-    """The trend's PNG not drawn (matplotlib): the chart's words are read from score_trends."""
-    monkeypatch.setattr("gearlab.kinds.detection_figures.score_trend", lambda charts, path: path)
-
-
 def test_a_short_steady_take_is_scored_with_its_which_gear_line_saying_why(cli, finished, quiet):
     out, folder = finished
     take = record(folder / "short.zip", revolutions=13, chip=0.0, seed=31, phase=0.4)  # 12 whole revolutions
