@@ -88,12 +88,14 @@ def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explaine
             got = family(lines, m, bin_, free)
             if got is None or abs(got[0] - m) > tol_mesh(m, bin_) or abs(got[0] - look) <= tol_mesh(look, bin_):
                 continue
-            top = got[1]
-            if top >= entry["amplitude"] * 10 ** (OUTSHONE_DB / 20) and (best is None or top > best[1]):
-                best = (got[0], top, what, family(lines, m, bin_, alone) is None)
+            # the same lines may fit two counts (a 108-tooth first wheel and a 93-tooth second one of 39/109 +
+            # 44/94 + 62/101, 0.015 apart): the count putting the mesh nearest the refitted order is named
+            top, near = got[1], -abs(got[0] - m)
+            if top >= entry["amplitude"] * 10 ** (OUTSHONE_DB / 20) and (best is None or (top, near) > best[1:3]):
+                best = (got[0], top, near, what, family(lines, m, bin_, alone) is None)
         if best is None:
             continue
-        m, top, what, on_sidebands = best
+        m, top, _, what, on_sidebands = best
         db = 20 * np.log10(top / entry["amplitude"])
         but = " but as that line's sidebands, unpaired" if on_sidebands else ""
         line = (
