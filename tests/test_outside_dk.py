@@ -53,3 +53,29 @@ def test_a_stage_2_wheel_a_tooth_over_is_named_not_a_stage_1_wheel(take):
     assert "differs" in verdict, verdict
     assert "a 93-tooth wheel on the intermediate 2 shaft" in verdict, verdict
     assert "108-tooth" not in verdict, verdict
+
+
+BOX_TOML = """[gearbox]
+name = "dk3"
+[operation]
+speed = "37 Hz"
+load = "40 N*m"
+""" + "".join(
+    f'[[stages]]\nmodule = "{m} mm"\nface_width = "20 mm"\npinion = {{ z = {p}, bore = "20 mm" }}\n'
+    f'wheel = {{ z = {w}, bore = "20 mm" }}\n'
+    for m, (p, w) in zip((2, 3, 4), BOX)
+)
+
+
+@pytest.mark.parametrize("gear, teeth, said", [("input pinion", 40, "1..39"), ("output gear", 102, "1..101")])
+def test_a_tooth_past_the_gear_names_the_key_teeth(cli, tmp_path, take, gear, teeth, said):
+    # DK: 'teeth = [1, 40]' on the 39T input pinion was refused as '[source]: tooth 40 is outside 1..39': the key unsaid
+    (tmp_path / "box.toml").write_text(BOX_TOML)
+    (tmp_path / "s.toml").write_text(
+        '[scenario]\nname = "dk"\nkind = "detection"\n[source]\ngearbox = "box.toml"\n'
+        f'faults = {{ "chip@{gear}" = [20] }}\nhealthy = 48\nteeth = [1, {teeth}]\n'
+        f'[target]\nvibration = "acc"\ntacho = "tacho"\nfiles = [{{ file = "{take}", role = "history" }}]\n'
+    )
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 2, (out, err)
+    assert f"[source] key 'teeth': tooth {teeth} is outside {said}" in err and len(err.strip().splitlines()) == 1, err

@@ -261,7 +261,7 @@ def fault_classes(model, preset: str, faults, teeth, where: str) -> dict[str, Fa
             if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= Z:
                 words = fault_words(parts, shafts)
                 on = "" if (stage, gear) == (1, "pinion") else f" of the {gear_name(stage, gear, shafts)} ('{words}')"
-                raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{Z}{on}")
+                raise GearlabInputError(f"{where} key 'teeth': tooth {n!r} is outside 1..{Z}{on}")
         period = math.lcm(*(train_period(pairs, s, g) for _, s, g in parts))
         out[key] = FaultClass(key, name, stage, gear, chosen, pair, period, parts[1:])
     return out

@@ -146,7 +146,7 @@ class DatasetSpec:
         if not classes or any((c.stage, c.gear) == (1, "pinion") for c in classes.values()):
             for n in teeth:
                 if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= pair.Z1:
-                    raise GearlabInputError(f"{where}: tooth {n!r} is outside 1..{pair.Z1}")
+                    raise GearlabInputError(f"{where} key 'teeth': tooth {n!r} is outside 1..{pair.Z1}")
         for c in classes.values():
             for name, _, _ in c.parts:
                 registry.get("fault", name, f"{where} key 'faults'")  # (a scenario's '[source]: unknown fault')
