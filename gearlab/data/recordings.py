@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import GearlabInputError, which_meant
+from ..gearbox.orders import order_table
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz, revolution_speeds
@@ -608,7 +609,9 @@ def shaft_angle(
     return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"tacho '{name}' ({pulses_per_rev} pulses per revolution)"
 
 
-def steady_start(revs: np.ndarray, where: str, rtol: float | None = None) -> tuple[int, str, str | None]:
+def steady_start(
+    revs: np.ndarray, where: str, rtol: float | None = None, window: int = 1
+) -> tuple[int, str, str | None]:
     """(index of the first steady revolution, how it was found, a warning or None).
 
     A start-up transient is dropped (steady_start_stats). A level that never settles -- a steady
@@ -619,7 +622,7 @@ def steady_start(revs: np.ndarray, where: str, rtol: float | None = None) -> tup
     if revs.shape[0] < 2:
         return 0, "not judged (fewer than 2 revolutions to compare)", None
     try:
-        return steady_start_stats(revs, *(() if rtol is None else (rtol,))), "stats", None
+        return steady_start_stats(revs, *(() if rtol is None else (rtol,)), window=window), "stats", None
     except GearlabInputError as exc:
         return (
             0,
@@ -691,8 +694,10 @@ def cut_recording(
     with prefixed(f"{path}: vibration column {_one_line_repr(rec.vibration)}"):
         cut = cut_revolutions(raw, rec.fs, **source, points=points or POINTS, transient="none")
     start, warning = 0, None
-    if transient == "stats":
-        start, _, warning = steady_start(cut.revolutions, f"{path}: vibration column {_one_line_repr(rec.vibration)}")
+    if transient == "stats":  # the level over the slowest shaft's turn (steady_start_stats)
+        window = 1 if gearbox is None else math.ceil(1 / min(order_table(gearbox).shaft_orders))
+        where_ = f"{path}: vibration column {_one_line_repr(rec.vibration)}"
+        start, _, warning = steady_start(cut.revolutions, where_, window=window)
     revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
     return CutRecording(

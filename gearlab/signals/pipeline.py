@@ -262,7 +262,7 @@ def steady_start(revolutions: np.ndarray, rtol: float = 1e-3) -> int:
     return start
 
 
-def steady_start_stats(revolutions: np.ndarray, rtol: float = 0.05) -> int:
+def steady_start_stats(revolutions: np.ndarray, rtol: float = 0.05, window: int = 1) -> int:
     """Index of the first steady revolution of noisy or measured data, from per-revolution RMS.
 
     Noise makes no two revolutions alike, so instead of comparing waveforms the level is
@@ -274,11 +274,19 @@ def steady_start_stats(revolutions: np.ndarray, rtol: float = 0.05) -> int:
     Raises ("never settles") when that start lies in the second half of the record: the
     second half is the steady reference, and a level still leaving the band there means
     the record is not steady (or rtol is too tight for the noise).
+
+    With *window* > 1, RMS_j is taken over revolutions j .. j + window - 1: a slower shaft's turn
+    modulates the mesh, so a steady reducer's level swings from one input turn to the next (±10 %
+    on a 39/109 box) and holds only over that shaft's turn (at most a quarter of the record).
     """
     r = _check_revolutions(revolutions)
     rtol = check_positive(rtol, "rtol")
     rms = np.sqrt(np.mean(r**2, axis=1))
-    half = r.shape[0] // 2
+    window = max(1, min(int(window), r.shape[0] // 4))
+    if window > 1:
+        rms = np.sqrt(np.convolve(rms**2, np.ones(window) / window, mode="valid"))
+    over = f" over {window} revolutions (the slowest shaft's turn)" if window > 1 else ""
+    half = rms.size // 2
     level = float(np.median(rms[half:]))
     if level == 0.0:
         raise GearlabInputError("signal is zero throughout the second half of the record; nothing to judge")
@@ -286,8 +294,8 @@ def steady_start_stats(revolutions: np.ndarray, rtol: float = 0.05) -> int:
     if start > half:
         j = start - 1
         raise GearlabInputError(
-            f"signal never settles: revolution {j} of {r.shape[0]} has RMS {rms[j]:.4g}, outside "
-            f"{level:.4g} ± {rtol:g} (median RMS of the second half); expected a steady second half "
+            f"signal never settles: revolution {j} of {r.shape[0]} has RMS {rms[j]:.4g}{over}, outside "
+            f"{level:.4g} ± {100 * rtol:g} % (median RMS of the second half); expected a steady second half "
             "(record longer, or raise rtol for impulsive noise)"
         )
     return start
