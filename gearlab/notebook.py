@@ -701,4 +701,22 @@ def score_recordings(
     from .runs import RunDir
 
     run = run if isinstance(run, RunDir) else RunDir.open(Path(run))
-    return score(run, [Path(f) for f in files], condition, on_event or ignore_events, given)
+    return score(run, takes(files), condition, on_event or ignore_events, given)
+
+
+def takes(names: Sequence[str | Path]) -> list[Path]:
+    """The takes *names* stand for, as a [target] 'files' entry reads them: a file, a folder's records (its
+    files of a format gearlab reads, sorted by name) or a glob pattern's matches (files.matched)."""
+    from .data.recordings import FORMATS
+    from .files import matched
+
+    out = []
+    for name in map(Path, names):
+        if name.is_dir():
+            found = sorted(p for p in name.iterdir() if p.is_file() and p.suffix.lower() in FORMATS)
+            if not found:
+                raise GearlabInputError(f"{name}: a folder holding no measured record; expected {', '.join(FORMATS)}")
+            out += found
+        else:
+            out += [Path(m) for m in matched(str(name), Path("."), f"gearlab score FILE {str(name)!r}")]
+    return out

@@ -4,6 +4,8 @@ m/s^2), read as docs/your_gearbox.md says."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from test_inspect import described
@@ -96,3 +98,25 @@ def test_a_steady_take_whose_slow_shafts_modulate_its_level_is_steady(take, tmp_
     np.savez(tmp_path / "grows.npz", acc=acc * np.linspace(1, 2, acc.size), tacho=tacho, fs=fs)
     cut = cut_recording(str(tmp_path / "grows.npz"), vibration="acc", tacho="tacho", transient="stats", gearbox=box)
     assert [w for w in cut.warnings if "never settles" in w and "5 %" in w], cut.warnings
+
+
+def test_score_takes_a_folder_or_a_quoted_glob_of_takes(tmp_path, monkeypatch):
+    # DK: 'gearlab score RUN week/' said 'week: is not a file' and 'gearlab score RUN "week/day*.csv"' (a pattern
+    # the shell left alone: a cron line, a Windows prompt) 'no such file', where [target] files takes both
+    from gearlab.errors import GearlabInputError
+    from gearlab.notebook import takes
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "week").mkdir()
+    for name in ("day02.csv", "day01.csv", "day03.wav", "notes.md"):
+        (tmp_path / "week" / name).write_text("x")
+    assert takes(["week"]) == [Path("week/day01.csv"), Path("week/day02.csv"), Path("week/day03.wav")]
+    assert takes(["week/day0[12].csv", "week/day03.wav"]) == [
+        Path("week/day01.csv"),
+        Path("week/day02.csv"),
+        Path("week/day03.wav"),
+    ]
+    (tmp_path / "empty").mkdir()
+    for name, said in (("empty", "empty: a folder holding no measured record"), ("week/*.h5", "matches no file")):
+        with pytest.raises(GearlabInputError, match=said):
+            takes([name])
