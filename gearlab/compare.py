@@ -2,8 +2,8 @@
 
 Runs of one kind are compared: a transfer comparison puts each run's accuracy beside the
 others' for every method and k (with the difference to the first run) and overlays their
-accuracy-against-k curves; any other kind shows each run's tables one under the other and
-overlays the charts that the kind draws for each run (same title, curves named by run).
+accuracy-against-k curves, a detection one each run's AUC and rates per condition, method and
+unit; any other kind shows each run's tables one under the other and overlays the charts that the kind draws for each run (same title, curves named by run).
 Runs are lettered A, B, C ... in the order given.
 """
 
@@ -64,7 +64,8 @@ def load_runs(paths) -> list[Compared]:
 
 def _side_by_side(runs: list[Compared]) -> tuple[str, str] | None:
     """The kind's own table of the runs side by side and its title (its compare_table), if any."""
-    return SCENARIO_KINDS[runs[0].kind].compare_table([(c.letter, c.scenario, c.run.records()) for c in runs])
+    kind = SCENARIO_KINDS[runs[0].kind]
+    return kind.compare_table([(c.letter, c.scenario, c.run.records(), c.summary) for c in runs])
 
 
 def compare_markdown(runs: list[Compared]) -> str:

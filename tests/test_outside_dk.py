@@ -120,3 +120,23 @@ def test_score_takes_a_folder_or_a_quoted_glob_of_takes(tmp_path, monkeypatch):
     for name, said in (("empty", "empty: a folder holding no measured record"), ("week/*.h5", "matches no file")):
         with pytest.raises(GearlabInputError, match=said):
             takes([name])
+
+
+def test_compare_puts_two_detection_runs_side_by_side_per_method():
+    # DK: 'gearlab compare A B' of two detection runs of this box printed a table per run of 'unit | method' alone
+    # (the unit column holding the condition): no AUC, no rate, nothing to tell what differs per method
+    from gearlab.kinds import SCENARIO_KINDS
+
+    def row(method, unit, auc, det, fa):
+        return {"condition": "37 Hz", "method": method, "unit": unit, "auc": auc, "detection": det, "false_alarm": fa}
+
+    a = {"rows": [row("fm4", "record30", 0.9, 80.0, 5.0), row("matched_filter", "record30", 1.0, 100.0, 0.0)]}
+    b = {"rows": [row("fm4", "record30", 0.95, 90.0, None), row("dann", "record30", 0.5, 10.0, 10.0)]}
+    title, table = SCENARIO_KINDS["detection"].compare_table([("A", None, [], a), ("B", None, [], b)])
+    assert "AUC" in title
+    lines = table.splitlines()
+    assert lines[0] == "| condition | method | unit | A | B | B − A AUC |"
+    assert "| 37 Hz | fm4 | record30 | 0.900 (80 / 5) | 0.950 (90 / –) | +0.050 |" in lines
+    assert "| 37 Hz | matched_filter | record30 | 1.000 (100 / 0) |  |  |" in lines
+    assert "| 37 Hz | dann | record30 |  | 0.500 (10 / 10) |  |" in lines
+    assert SCENARIO_KINDS["detection"].compare_table([("A", None, [], {}), ("B", None, [], None)]) is None

@@ -65,7 +65,7 @@ class ScenarioKind(Protocol):
 
     def compare_table(self, runs: list[tuple]) -> tuple[str, str] | None:
         """(title, Markdown table) of several runs side by side, *runs* being (letter, scenario,
-        records) in the order compared; None: `gearlab compare` letters each run's own table."""
+        records, summary) in the order compared; None: `gearlab compare` letters each run's own table."""
 
     def table_title(self, summary: dict, index: int, table: str) -> str:
         """The title of report.html's *index*-th table (from 1, Markdown *table*) where the kind's text

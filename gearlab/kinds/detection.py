@@ -90,7 +90,6 @@ from .common import (
     device_of,
     executor_for,
     gearbox_name,
-    no_compare,
     no_title,
     simulated_spec,
     sized,
@@ -130,7 +129,7 @@ from .detection_settings import (
     Spec,
     TargetRecords,
 )
-from .detection_tables import labels_md, learned_md, summarise, table_md
+from .detection_tables import labels_md, learned_md, side_by_side, summarise, table_md
 from .detection_units import (
     Rule,
     crossed_record,
@@ -708,7 +707,7 @@ def verdict_table(summary: dict) -> str | None:
     return None  # table.md's per-condition tables say it all
 
 
-compare_table = no_compare  # each detection run's own tables, lettered
+compare_table = side_by_side  # per condition, method and unit: each run's AUC and detected / false-alarm %
 table_title = no_title  # table.md titles its tables
 
 

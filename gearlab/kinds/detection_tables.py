@@ -407,3 +407,28 @@ def table_csv(rows: list[dict]) -> str:
             ]
         )
     return buf.getvalue()
+
+
+def side_by_side(runs: list[tuple]) -> tuple[str, str] | None:
+    """(title, Markdown) of detection runs side by side (`gearlab compare`): a row per condition, method and
+    unit, a column per run (AUC, detected / false-alarm % at its history's threshold, from summary.json's rows)
+    and, for each run after the first, its AUC less A's; a method one run lacks is left blank there."""
+    cells = [
+        {(r["condition"], r["method"], r["unit"]): r for r in (summary or {}).get("rows") or []} for *_, summary in runs
+    ]
+    if not any(cells):
+        return None
+    letters = [letter for letter, *_ in runs]
+
+    def pct(x) -> str:
+        return "–" if x is None else f"{x:.0f}"
+
+    head = ["condition", "method", "unit", *letters] + [f"{letter} − {letters[0]} AUC" for letter in letters[1:]]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for key in dict.fromkeys(k for rows in cells for k in rows):
+        got = [rows.get(key) for rows in cells]
+        shown = [f"{r['auc']:.3f} ({pct(r['detection'])} / {pct(r['false_alarm'])})" if r else "" for r in got]
+        delta = [f"{r['auc'] - got[0]['auc']:+.3f}" if r and got[0] else "" for r in got[1:]]
+        lines.append("| " + " | ".join([*key, *shown, *delta]) + " |")
+    title = "Each run's ROC AUC (detected / false-alarm % at its history's threshold) per condition, method and unit"
+    return title, "\n".join(lines) + "\n"

@@ -462,11 +462,11 @@ def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:
 def compare_table(runs: list[tuple]) -> tuple[str, str] | None:
     """(title, Markdown) of transfer runs side by side: a row per method and k, a column per run
     (mean ± std) and, for each run after the first, its difference to A in points. *runs*:
-    (letter, scenario, records) in the order compared."""
-    cells = [table(records, scenario.spec.protocol) for _, scenario, records in runs]
-    letters = [letter for letter, _, _ in runs]
+    (letter, scenario, records, summary) in the order compared."""
+    cells = [table(records, scenario.spec.protocol) for _, scenario, records, _ in runs]
+    letters = [letter for letter, *_ in runs]
     methods = list(dict.fromkeys(m for tab in cells for m in tab))
-    ks = list(dict.fromkeys(k for _, scenario, _ in runs for k in scenario.spec.protocol.ks))
+    ks = list(dict.fromkeys(k for _, scenario, *_ in runs for k in scenario.spec.protocol.ks))
     head = ["method", "k", *letters] + [f"{letter} − {letters[0]}" for letter in letters[1:]]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for m in methods:
