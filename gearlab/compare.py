@@ -3,8 +3,9 @@
 Runs of one kind are compared: a transfer comparison puts each run's accuracy beside the
 others' for every method and k (with the difference to the first run) and overlays their
 accuracy-against-k curves, a detection one each run's AUC and rates per condition, method and
-unit; any other kind shows each run's tables one under the other and overlays the charts that the kind draws for each run (same title, curves named by run).
-Runs are lettered A, B, C ... in the order given.
+unit; any other kind shows each run's tables one under the other and overlays the charts that
+the kind draws for each run (same title, curves named by run). Runs are lettered A, B, C ... in
+the order given.
 """
 
 from __future__ import annotations
