@@ -527,6 +527,7 @@ RENDERED = frozenset(
         "test_hardening.py",  # a full disk: the runs' real PNGs fill it
         "test_your_gearbox.py",  # the guides end to end, as a user runs them
         "test_user_gearbox_e2e.py",
+        "test_outside_dk.py",  # the score trend's PNG size
     }
 )
 

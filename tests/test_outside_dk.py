@@ -140,3 +140,19 @@ def test_compare_puts_two_detection_runs_side_by_side_per_method():
     assert "| 37 Hz | matched_filter | record30 | 1.000 (100 / 0) |  |  |" in lines
     assert "| 37 Hz | dann | record30 |  | 0.500 (10 / 10) |  |" in lines
     assert SCENARIO_KINDS["detection"].compare_table([("A", None, [], {}), ("B", None, [], None)]) is None
+
+
+def test_the_score_trend_keeps_its_plot_width_under_a_long_title(tmp_path):
+    # DK: after 11 takes scored (each named in the title, with 'other damage' notes) score_trend.png came out
+    # 3224 x 397 px, the plot a strip in the middle of a title twice the figure's width
+    from gearlab.charts import Chart, Curve
+    from gearlab.kinds.detection_figures import score_trend
+
+    names = ", ".join(f"{i} week/day{i:02d}.csv" for i in range(1, 12))
+    title = "37 Hz: scored records; " + "record 2: other damage: non-synchronous (bearing-like), at order 5.12; " * 3
+    chart = Chart(title + "\nrecords: " + names, "record scored", "score", [Curve("fm4", list(range(11)), [0.0] * 11)])
+    from PIL import Image
+
+    with Image.open(score_trend([chart], tmp_path / "t.png")) as png:
+        width, height = png.size
+    assert width <= 10 * 120 * 1.1 and height >= 3.2 * 120 * 0.8, (width, height)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import textwrap
 from collections.abc import Iterator
 from contextvars import ContextVar
 from pathlib import Path
@@ -354,6 +355,9 @@ def _roc_figure(charts: list[Chart], summary: dict):
     return fig
 
 
+TITLE_CHARS = 160  # a line of a 9 pt title across the trend's 10 in figure
+
+
 def score_trend(charts, path: Path) -> Path:
     """The scoring history's trends (detection_scoring.score_trends; `gearlab score`): per condition,
     each method's score of the records scored in turn, less its threshold (above the line: called)."""
@@ -369,7 +373,10 @@ def score_trend(charts, path: Path) -> Path:
             ax.set_xticks(list(chart.xticks))
         else:
             ax.xaxis.set_major_locator(plots.plt.MaxNLocator(integer=True))
-        ax.set_title(chart.title, fontsize=9)
+        # the title names every take scored and each note: wrapped to the figure's width (unwrapped, a long
+        # history's title widened the PNG to 3224 px and left the plot a strip in its middle)
+        lines = chart.title.splitlines()
+        ax.set_title("\n".join(textwrap.fill(line, TITLE_CHARS) for line in lines), fontsize=9)
         ax.set_xlabel(chart.xlabel)
         ax.set_ylabel(chart.ylabel)
         ax.grid(alpha=0.3)
