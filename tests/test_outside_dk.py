@@ -57,6 +57,17 @@ def test_a_stage_2_wheel_a_tooth_over_is_named_not_a_stage_1_wheel(take):
     assert "108-tooth" not in verdict, verdict
 
 
+@pytest.mark.parametrize("described_z", [108, 110])
+def test_a_first_wheel_a_tooth_off_is_named_where_a_later_stage_differs_too(take, described_z):
+    # DK: described with a 108-tooth first wheel (109 real), stage 2 was read on its own intermediate-2 sideband
+    # (15.913, 31.8 dB; the real 15.743 stood 25 dB over it) and inspect said only 'stage 3: ... its intermediate 2
+    # shaft turning -0.9 % off the speed read (a tooth count between it and the tacho's shaft, or the tacho,
+    # differs)': the outshone check ran only where nothing else differed
+    box = described((39, described_z), *BOX[1:], speed="37 Hz")
+    verdict = inspect_record(take, box, InspectOptions("acc", tacho="tacho"))["verdict"]
+    assert "differs: stage 2:" in verdict and "a 109-tooth wheel on the intermediate 1 shaft" in verdict, verdict
+
+
 BOX_TOML = """[gearbox]
 name = "dk3"
 [operation]
