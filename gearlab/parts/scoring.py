@@ -112,7 +112,8 @@ def load_arrays(source: Confined) -> dict[str, np.ndarray]:
 
 def digest(path) -> str:
     """A file's content (sha256): a take scored again, renamed or not, is one take of the history."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    with Path(path).open("rb") as f:  # read in blocks: a take may be hundreds of MB
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def append_history(run: RunDir, rows: list[dict]) -> None:
