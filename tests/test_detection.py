@@ -478,7 +478,8 @@ def test_relative_paths_follow_the_scenario_file_and_the_run_keeps_them(plain_ru
         (lambda t: t.replace("blocks = [5, 10]", "blocks = [1]"), "key 'blocks'"),
         (
             lambda t: t.replace("target_train = 8\nbatch = 4", "target_train = 14\nbatch = 12"),
-            r"\[protocol\] key 'batch': 12 is larger than the source training set \(11 of the 12 samples",
+            r"\[protocol\] key 'batch': 12 is larger than the source training set \(11 of the 12 samples.*; "
+            r"expected batch <= 11: a smaller \[protocol\] batch, or more simulated samples \(\[source\] healthy",
         ),
         (
             lambda t: t.replace("mesh_orders = [32]", "mesh_orders = [32]\nslow_shafts = [1, 3]"),

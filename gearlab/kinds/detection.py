@@ -284,10 +284,12 @@ def build(scenario: Scenario) -> Spec:
             f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than target_train = {p['target_train']}"
         )
     n = sum(sizes.values())  # the source's samples, known from its spec: refused now, not after simulating
-    if n - max(1, round(protocol.val_fraction * n)) < p["batch"]:
+    trained = n - max(1, round(protocol.val_fraction * n))
+    if trained < p["batch"]:
         raise GearlabInputError(
             f"{location(path, 'protocol', 'batch')}: {p['batch']} is larger than the source training set "
-            f"({n - max(1, round(protocol.val_fraction * n))} of the {n} samples of '{source.name}')"
+            f"({trained} of the {n} samples of '{source.name}'); expected batch <= {trained}: a smaller [protocol] "
+            "batch, or more simulated samples ([source] healthy, faults)"
         )
     return Spec(
         source=source,
