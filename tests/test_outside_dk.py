@@ -167,3 +167,21 @@ def test_the_score_trend_keeps_its_plot_width_under_a_long_title(tmp_path):
     with Image.open(score_trend([chart], tmp_path / "t.png")) as png:
         width, height = png.size
     assert width <= 10 * 120 * 1.1 and height >= 3.2 * 120 * 0.8, (width, height)
+
+
+@pytest.mark.parametrize("described_z", [108, 110])
+def test_the_gap_names_the_first_wheel_a_tooth_off_as_inspect_does(cli, tmp_path, take, described_z):
+    # DK: with a 108-tooth first wheel described (109 real) the gap's structure line said 'stage 2 wheel: 94 teeth
+    # fit the recording, 93 described', with 110 'stage 3 pinion: 62.6 teeth', where inspect named the 109-tooth
+    # wheel: the gap read the stages outward on its own, not as inspect's check_description leads with them
+    (tmp_path / "box.toml").write_text(BOX_TOML.replace("z = 109,", f"z = {described_z},"))
+    (tmp_path / "s.toml").write_text(
+        '[scenario]\nname = "dk"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\nvibration = "acc"\n'
+        f'tacho = "tacho"\nfiles = [{{ file = "{take}", role = "history", label = "healthy" }}]\n'
+        '[diagnosis]\ncandidates = ["sensor_noise"]\n[accuracy]\nenabled = false\n'
+    )
+    code, out, err = cli("run", tmp_path / "s.toml", "--out", tmp_path / "runs", "--quick")
+    assert code == 0, err
+    said = [s for s in out.splitlines() if s.startswith("note: structure differs: ")]
+    assert len(said) == 1 and "a 109-tooth wheel on the intermediate 1 shaft" in said[0], out
+    assert f"{described_z} described" in said[0], said

@@ -568,6 +568,17 @@ def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, r
     return misread_line(found, check, box.shafts[read], ppr, IN_TARGET)
 
 
+def inspect_first(stages: list[dict]) -> tuple[dict, str] | None:
+    """(the gear, its line) check_description leads inspect's verdict with where a later stage was read on a weak
+    line beside a far stronger family (gearbox.outshone), or None: the gap names what inspect names from the same
+    lines. 39/109 + 44/93 + 62/101 described with 108 (or 110): outward read stage 2 on its own sideband and named
+    'stage 2 wheel: 94 teeth' ('stage 3 pinion: 62.6' with 110) where inspect named the 109-tooth wheel."""
+    for entry in stages:
+        if "outshone" in entry:
+            return entry["outshone"]["gear"], entry["outshone"]["line"]
+    return None
+
+
 def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:
     """The one line of the first gear, read outward from the tacho's shaft (index *tacho*; 0, the input,
     alike), whose tooth count the target's revolutions contradict, or None. The stages are read as inspect
@@ -581,7 +592,7 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
 
     box = _PairDescription.train(pair)
     stages = check_description(_lines(target, max_order), box, target.shape[0], tacho == 0, tacho)["stages"]
-    found = outward(stages, box, tacho)
+    found = inspect_first(stages) or outward(stages, box, tacho)
     if found is None:
         return None
     record["outward"], line = found
@@ -597,7 +608,8 @@ def _no_tacho_line(target, pair, max_order: int, record: dict) -> str | None:
     stages = check_description(_lines(target, max_order), box, target.shape[0], False, None)["stages"]
     if len(stages) < 2 or not stages[0].get("matched"):
         return None
-    found = outward(stages, box, 0, "the input shaft (no tacho: its speed from the mesh lines)")
+    origin = "the input shaft (no tacho: its speed from the mesh lines)"
+    found = inspect_first(stages) or outward(stages, box, 0, origin)
     if found is None:
         return None
     record["outward"], line = found

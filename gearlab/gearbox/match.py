@@ -320,7 +320,7 @@ def check_description(
             if i is None or (divisor and len(own) >= 2):
                 measured, i = family[:2]
         # a wheel upstream a tooth or three off moves M by no whole order of the pinion's shaft (outshone.counts)
-        upstream = [c * look / expected for c, _ in counts(table, k)] if leads else []
+        upstream = [c * look / expected for c, *_ in counts(table, k)] if leads else []
         if i is None and family is None and not behind:
             # no line at M, nor a family: a count off by j puts the mesh at M + j o (a 15-tooth input pinion
             # described 16, its shaft unmodulated: no sideband at 16 led the search there), a wheel upstream elsewhere

@@ -43,7 +43,7 @@ def centre(
     # a whole count of the pinion, or a wheel upstream a tooth or three off, puts the mesh there: no sideband's
     if abs(d) <= tol or abs(d / o_p - round(d / o_p)) * o_p <= tol:
         return None
-    if any(abs(measured - c * look / float(table.stages[k].mesh)) <= tol for c, _ in counts(table, k)):
+    if any(abs(measured - c * look / float(table.stages[k].mesh)) <= tol for c, *_ in counts(table, k)):
         return None
     # no count puts a mesh there, the pinion's shaft turning as the tacho reads it: a count's own mesh is the reading
     found = comb(lines, [look] + [look + j * o_p for j in COUNTS], bin_, theirs)

@@ -41,18 +41,19 @@ def family(lines: Lines, m: float, bin_: float, free: np.ndarray) -> tuple[float
     return float(np.sum(w * h[hit] * lines.at[hit]) / np.sum(w * h[hit] ** 2)), float(lines.amp[low].max())
 
 
-def counts(table, k: int) -> list[tuple[float, str]]:
-    """(mesh order, the count that puts it there) of stage *k* of *table* where its pinion, or a wheel of a
-    stage before it, is a tooth or three off the described count (COUNTS): a wheel upstream moves the mesh by
-    z / (z + j) of its order, no whole tooth of the pinion's shaft."""
+def counts(table, k: int) -> list[tuple[float, str, dict]]:
+    """(mesh order, the count that puts it there, that gear: {stage, gear, seen, described}) of stage *k* of *table*
+    where its pinion, or a wheel of a stage before it, is a tooth or three off the described count (COUNTS): a
+    wheel upstream moves the mesh by z / (z + j) of its order, no whole tooth of the pinion's shaft."""
     s, look = table.stages[k], float(table.stages[k].mesh)
-    gears = [(s.pinion_teeth, "pinion", s.pinion_shaft, 1)] + [
-        (t.wheel_teeth, "wheel", t.wheel_shaft, -1) for t in table.stages[:k]
+    gears = [(s.pinion_teeth, "pinion", s.pinion_shaft, 1, k + 1)] + [
+        (t.wheel_teeth, "wheel", t.wheel_shaft, -1, i + 1) for i, t in enumerate(table.stages[:k])
     ]
     out = []
-    for z, role, shaft, way in gears:  # a pinion's count moves its mesh with it, a wheel's against it
+    for z, role, shaft, way, n in gears:  # a pinion's count moves its mesh with it, a wheel's against it
         words = f"a {{}}-tooth {role} on the {shaft} shaft puts it there, {z} described"
-        out += [(look * ((z + j) / z) ** way, words.format(z + j)) for j in COUNTS]
+        gear = {"stage": n, "gear": role, "described": int(z)}
+        out += [(look * ((z + j) / z) ** way, words.format(z + j), gear | {"seen": float(z + j)}) for j in COUNTS]
     return out
 
 
@@ -84,7 +85,7 @@ def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explaine
         free = alone | unpaired(lines, look, bin_, [not explained(float(x), k) for x in lines.at])
         if not free.any():
             continue
-        for m, what in counts(table, k):
+        for m, what, gear in counts(table, k):
             got = family(lines, m, bin_, free)
             if got is None or abs(got[0] - m) > tol_mesh(m, bin_) or abs(got[0] - look) <= tol_mesh(look, bin_):
                 continue
@@ -92,10 +93,10 @@ def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explaine
             # 44/94 + 62/101, 0.015 apart): the count putting the mesh nearest the refitted order is named
             top, near = got[1], -abs(got[0] - m)
             if top >= entry["amplitude"] * 10 ** (OUTSHONE_DB / 20) and (best is None or (top, near) > best[1:3]):
-                best = (got[0], top, near, what, family(lines, m, bin_, alone) is None)
+                best = (got[0], top, near, what, family(lines, m, bin_, alone) is None, gear)
         if best is None:
             continue
-        m, top, _, what, on_sidebands = best
+        m, top, _, what, on_sidebands, gear = best
         db = 20 * np.log10(top / entry["amplitude"])
         but = " but as that line's sidebands, unpaired" if on_sidebands else ""
         line = (
@@ -103,6 +104,6 @@ def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explaine
             f"harmonics, {db:.0f} dB over the line the mesh was read on, explained by nothing described{but}): that "
             f"is the mesh: {what}"
         )
-        entry["outshone"] = {"order": m, "db": float(db), "line": line}  # the gap's later_stages says it too
+        entry["outshone"] = {"order": m, "db": float(db), "line": line, "gear": gear}  # the gap says it too
         return line
     return None
