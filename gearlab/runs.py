@@ -354,7 +354,8 @@ def input_paths(scenario: Scenario) -> list[Path]:
     return list(dict.fromkeys(found))
 
 
-def _digest(path: Path) -> str | None:
+def input_digest(path: Path) -> str | None:
+    """The sha256 of a measured file's content, read in blocks; None where it cannot be read."""
     try:
         with open(path, "rb") as f:
             return hashlib.file_digest(f, "sha256").hexdigest()
@@ -366,7 +367,7 @@ def input_digests(scenario: Scenario) -> dict[str, str | None]:
     """{absolute path: sha256 of its content} of the measured files a run reads, stored in
     run.json so that a resume against a changed file is refused (its finished units were
     computed from the old content)."""
-    return {str(path): _digest(path) for path in input_paths(scenario)}
+    return {str(path): input_digest(path) for path in input_paths(scenario)}
 
 
 def check_inputs(run: RunDir, scenario: Scenario) -> None:
@@ -380,7 +381,7 @@ def check_inputs(run: RunDir, scenario: Scenario) -> None:
                 "read; its finished units were computed without it: move it away, or start a new run"
             )
     for path, digest in (stored if isinstance(stored, dict) else {}).items():
-        now = _digest(Path(path))
+        now = input_digest(Path(path))
         if now != digest:
             change = "is gone" if now is None else "has changed"
             raise GearlabInputError(

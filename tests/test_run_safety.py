@@ -259,7 +259,7 @@ ALLOWED = {
     ("gearlab/files.py", None): "atomic_write, for files outside any run directory; /proc/self/status",
     ("gearlab/cli.py", None): "files the user names on the command line: --out, --csv, --plot, --html",
     ("gearlab/data", None): "measured input files (read only) and the dataset cache in $GEARLAB_CACHE",
-    ("gearlab/runs.py", "_digest"): "the measured input files a run reads, hashed for --resume",
+    ("gearlab/runs.py", "input_digest"): "measured input files, hashed: for --resume, and by gearlab score",
     ("gearlab/settings_doc.py", "main"): "docs/settings.md in the source tree, a developer's command",
     ("gearlab/executors.py", "report"): "a unit's count (a gap fit's evaluations), in a temporary folder of its own",
 }

@@ -21,7 +21,7 @@ from ..gearbox.simulation import gearbox_of
 from ..learn.protocol import fault_score
 from ..parts import scoring
 from ..parts.measured import ACQUISITION, TargetFile, held
-from ..runs import RunDir
+from ..runs import RunDir, input_digest
 from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
@@ -628,7 +628,7 @@ def score(
             differs,
             scored_on,
             rec.warnings,
-            scoring.digest(file),
+            input_digest(Path(file)),  # its content: a take scored again, renamed or not, is one take
         )
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
         raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)

@@ -23,7 +23,6 @@ import hashlib
 import importlib
 import io
 import json
-from pathlib import Path
 
 import numpy as np
 
@@ -108,12 +107,6 @@ def load_arrays(source: Confined) -> dict[str, np.ndarray]:
             return {k: data[k] for k in data.files}
     except (ValueError, OSError, EOFError) as exc:
         raise GearlabInputError(f"{source}: damaged ({exc}); run the scenario again") from None
-
-
-def digest(path) -> str:
-    """A file's content (sha256): a take scored again, renamed or not, is one take of the history."""
-    with Path(path).open("rb") as f:  # read in blocks: a take may be hundreds of MB
-        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def append_history(run: RunDir, rows: list[dict]) -> None:
