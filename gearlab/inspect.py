@@ -45,7 +45,8 @@ from .data.recordings import (
 from .errors import GearlabInputError
 from .gap.stats import MIN_REVOLUTIONS
 from .gearbox import Gearbox, order_table
-from .gearbox.match import check_description, outward_first, pinion_unconfirmed, tol_mesh, unchecked
+from .gearbox.leading import outward_first
+from .gearbox.match import check_description, pinion_unconfirmed, tol_mesh, unchecked
 from .gearbox.orders import TachoShaft
 from .gearbox.pinion_count import (
     EVERY_STAGE,
@@ -529,7 +530,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions) -> d
             differences[:] = misread
             check["tacho_misread"] = True  # what differs is the tacho's reading, not the gears (score reads it so)
         if read_on and not misread:  # the tacho read as said: its shaft's gears first, then outward
-            check["outward"] = outward_first(differences, check["stages"], box, read_on)
+            check["outward"] = outward_first(check, box, read_on)
         if read_on and differences and "nominal" in report["speed"]:
             # a later shaft's tacho gives the input's speed through the described gears: a wrong count moves it (a
             # 17/47 + 29/66 + 23/59 description of a 67-tooth wheel read 1.5 % slow, 'slip under load')

@@ -65,10 +65,21 @@ def test_a_first_wheel_a_tooth_off_is_named_where_a_later_stage_differs_too(tmp_
     # shaft turning -0.9 % off the speed read (a tooth count between it and the tacho's shaft, or the tacho,
     # differs)': the outshone check ran only where nothing else differed. Seed 1's take (and DK's hist2, hist3) read
     # the stage-2 wheel off that sideband's sidebands instead, '94.0 ± 1.0 teeth', stage 3 as following from it
+    # ... and with it the stage-2 wheel 'shows 94.1 +- 1.0 teeth' read off the sidebands of the weak line the leading
+    # line explains (seeds 1 and 8, 108): that stage's sideband readings are dropped, by the findings' fields
     take = _take(tmp_path / "h.npz", seed=seed)
     box = described((39, described_z), *BOX[1:], speed="37 Hz")
-    verdict = inspect_record(take, box, InspectOptions("acc", tacho="tacho"))["verdict"]
+    check = (got := inspect_record(take, box, InspectOptions("acc", tacho="tacho")))["check"]
+    verdict = got["verdict"]
     assert "differs: stage 2:" in verdict and "a 109-tooth wheel on the intermediate 1 shaft" in verdict, verdict
+    assert " shaft shows " not in verdict, verdict
+    lead = check["findings"][0]
+    assert (lead["kind"], lead["stage"], lead["names"]) == (
+        "outshone",
+        2,
+        {"stage": 1, "gear": "wheel", "described": described_z, "seen": 109.0},
+    ), check["findings"]
+    assert [f["text"] for f in check["findings"]] == check["differences"]
 
 
 BOX_TOML = """[gearbox]

@@ -568,17 +568,6 @@ def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, r
     return misread_line(found, check, box.shafts[read], ppr, IN_TARGET)
 
 
-def inspect_first(stages: list[dict]) -> tuple[dict, str] | None:
-    """(the gear, its line) check_description leads inspect's verdict with where a later stage was read on a weak
-    line beside a far stronger family (gearbox.outshone), or None: the gap names what inspect names from the same
-    lines. 39/109 + 44/93 + 62/101 described with 108 (or 110): outward read stage 2 on its own sideband and named
-    'stage 2 wheel: 94 teeth' ('stage 3 pinion: 62.6' with 110) where inspect named the 109-tooth wheel."""
-    for entry in stages:
-        if "outshone" in entry:
-            return entry["outshone"]["gear"], entry["outshone"]["line"]
-    return None
-
-
 def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:
     """The one line of the first gear, read outward from the tacho's shaft (index *tacho*; 0, the input,
     alike), whose tooth count the target's revolutions contradict, or None. The stages are read as inspect
@@ -588,7 +577,8 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     (Q, 38/89 + 49/95 with an output tacho, described with a 48-tooth later pinion: the input read 2 %
     slow, stage 1's mesh at 37.2, 'mesh order 37.2 measured, 38 expected', the pinion unnamed); the
     nearest stage first, the input's side after the output's at one distance."""
-    from ..gearbox.match import check_description, outward
+    from ..gearbox.leading import inspect_first, outward
+    from ..gearbox.match import check_description
 
     box = _PairDescription.train(pair)
     stages = check_description(_lines(target, max_order), box, target.shape[0], tacho == 0, tacho)["stages"]
@@ -602,7 +592,8 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
 def _no_tacho_line(target, pair, max_order: int, record: dict) -> str | None:
     """outward_line of a multi-stage train's record without a tacho, read as inspect reads one (no shaft's
     order given), from the input shaft, when inspect finds the first mesh where described; else None."""
-    from ..gearbox.match import check_description, outward
+    from ..gearbox.leading import inspect_first, outward
+    from ..gearbox.match import check_description
 
     box = _PairDescription.train(pair)
     stages = check_description(_lines(target, max_order), box, target.shape[0], False, None)["stages"]

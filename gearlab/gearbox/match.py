@@ -16,7 +16,7 @@ import numpy as np
 from .description import Gearbox
 from .modulated import centre
 from .orders import order_table
-from .outshone import counts, outshone_line
+from .outshone import counts, outshone_first, outshone_line, unnamed
 from .shared_harmonics import borrowed
 from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh, whole
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
@@ -267,7 +267,18 @@ def check_description(
         measured_shaft[0] = (1.0, 0.0, "tacho")
     elif tacho_shaft is not None and 0 < tacho_shaft < len(table.shafts):
         measured_shaft[tacho_shaft] = (float(table.shaft_orders[tacho_shaft]), 0.0, "tacho")
-    stages, differences, shaft_notes, named_shafts = [], [], {}, set()
+    stages, findings, shaft_notes, named_shafts = [], [], {}, set()
+
+    def differ(kind: str, text: str, stage=None, gear=None, guess=None, follows=(), tail: str = "") -> None:
+        """A difference, as gearbox.leading picks the verdict's first line by it: its *kind* (no_line, follows,
+        pinion_as_described, mesh_moved, sidebands, shaft, outshone), the *stage* (1-based) and *gear* read, the
+        gear a count is *guess*ed for, the stages it *follows* from; *tail*: what a reading beyond the gear
+        that leads drops (a count guessed, a stage it follows from)."""
+        follows = list(follows)
+        findings.append(
+            dict(kind=kind, stage=stage, gear=gear, guess=guess, follows=follows, text=text + tail, bare=text)
+        )
+
     implied: dict[int, float] = {}  # shaft -> its order as the measured mesh before it and the wheel make it
     wrong: list[int] = []  # the stages whose own tooth counts differ
     unresolved = []  # tooth counts the sidebands cannot tell from the next one (too few revolutions)
@@ -275,7 +286,7 @@ def check_description(
     modulated: set[int] = set()  # shafts whose comb another modulation made (sideband_combs.modulation)
     ahead = located_ahead(lines, table, bin_, tacho_shaft)  # the later meshes where the lines put them
     for k, s in enumerate(table.stages):
-        said = len(differences)
+        said = len(findings)
         expected = float(s.mesh)
         look = expected * (lead(table, k, moved) if leads else 1.0)  # looked for where a moved mesh before it puts it
         o_p = measured_shaft.get(k, (float(s.pinion_shaft_order),))[0]
@@ -351,7 +362,7 @@ def check_description(
         if i is None:  # the gap's later_stages says it too where it has no source to weigh the mesh's level by
             missing = f"stage {s.index}: no line at mesh order {expected:.4g} (a {s.pinion_teeth}-tooth pinion)"
             entry["no_line"] = missing
-            differences.append(missing)
+            differ("no_line", missing, s.index, "pinion", guess="pinion")
             wrong.append(s.index)
             stages.append(entry)
             continue
@@ -364,30 +375,36 @@ def check_description(
             moved[k] = measured
         consequence = not matched and wrong and abs(measured / o_ref - s.pinion_teeth) <= 0.5
         if consequence:
-            differences.append(
-                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected, as follows from "
-                f"{_following(wrong)} (the {s.pinion_teeth}-tooth pinion as described, on the "
-                f"{s.pinion_shaft} shaft at order {o_ref:.4g})"
+            differ(
+                "follows",
+                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected",
+                s.index,
+                follows=wrong,
+                tail=f", as follows from {_following(wrong)} (the {s.pinion_teeth}-tooth pinion as described, on the "
+                f"{s.pinion_shaft} shaft at order {o_ref:.4g})",
             )
         elif not matched and round(measured / o_ref) == s.pinion_teeth:
             # the pinion as described on a shaft the speed read makes slower or faster than it turns
             entry["pinion_as_described"] = True
-            differences.append(
+            differ(
+                "pinion_as_described",
                 f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected: the "
                 f"{s.pinion_teeth}-tooth pinion as described, its {s.pinion_shaft} shaft turning "
                 f"{100 * (measured / expected - 1):+.1f} % off the speed read ("
                 + _between(table, k, measured / expected, leads and not tacho_on_input, leads)
-                + ")"
+                + ")",
+                s.index,
+                "pinion",
             )
         elif not matched:  # no whole count of the pinion: a wheel upstream where a whole count of it does it
             guess = wheel_upstream(table, k, measured / expected, measured / o_ref)[2:] if leads else ""
+            role = "wheel" if guess else "pinion"
             guess = (
                 guess
                 or f"a {measured / o_ref:.0f}-tooth pinion on the {s.pinion_shaft} shaft? described {s.pinion_teeth}"
             )
-            differences.append(
-                f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected ({guess})"
-            )
+            said_mesh = f"stage {s.index}: mesh order {measured:.4g} measured, {expected:.4g} expected"
+            differ("mesh_moved", said_mesh, s.index, guess=role, tail=f" ({guess})")
         i = own_line(lines, i, measured, bin_, shared)
         entry.update(measured_order=measured, error_orders=measured - expected, amplitude=float(lines.amp[i]))
         entry["db_over_floor"] = float(lines.db[i])
@@ -452,11 +469,14 @@ def check_description(
                 named_shafts.add(shaft_k)
                 if role == "pinion" and not matched and round(z) == round(measured / o_p):
                     continue  # the mesh message has said it
-                differences.append(
+                differ(
+                    "sidebands",
                     f"stage {s.index}: the {role} on the {table.shafts[shaft_k]} shaft shows {z:.1f} ± {spread:.1f} "
-                    f"teeth (mesh order {measured:.4g} / shaft order {o_seen:.4g}), {described} described"
+                    f"teeth (mesh order {measured:.4g} / shaft order {o_seen:.4g}), {described} described",
+                    s.index,
+                    role,
                 )
-        if len(differences) > said + bool(consequence):
+        if len(findings) > said + bool(consequence):
             wrong.append(s.index)
         stages.append(entry)
 
@@ -468,14 +488,19 @@ def check_description(
             seen, tol, source = measured_shaft[k]
             entry.update(measured_order=seen, tolerance=tol, source=source, matched=bool(abs(seen - o) <= tol))
             if not entry["matched"]:
-                shaft_notes[k] = f"{name} shaft: order {seen:.4g} measured ({source}), {o:.4g} expected"
                 upstream = [q for q in wrong if q <= k]
-                if upstream and abs(seen - implied.get(k, -1.0)) <= tol + bin_:
-                    shaft_notes[k] += f", as follows from {_following(upstream)}"
+                upstream = upstream if upstream and abs(seen - implied.get(k, -1.0)) <= tol + bin_ else []
+                shaft_notes[k] = (
+                    f"{name} shaft: order {seen:.4g} measured ({source}), {o:.4g} expected",
+                    upstream,
+                    f", as follows from {_following(upstream)}" if upstream else "",
+                )
         else:
             entry.update(measured_order=None, source="not seen (no sidebands of this shaft)", matched=None)
         shafts.append(entry)
-    differences += [text for k, text in shaft_notes.items() if k not in named_shafts]
+    for k, (text, upstream, tail) in shaft_notes.items():
+        if k not in named_shafts:
+            differ("shaft", text, follows=upstream, tail=tail)
     if tacho_shaft is not None and 0 < tacho_shaft < len(table.shafts) and 0 not in measured_shaft:  # no mesh tells it
         unresolved.append(
             f"the tooth count of the pinion on the input shaft (no sideband shows the input shaft's order, and "
@@ -499,11 +524,11 @@ def check_description(
     # differences are later stages whose shafts turn off, no count named: 39/108 + 44/93 + 62/101 (109 real) read
     # stage 2 on its own sideband and said only that stage 3's shaft turned 0.9 % off; or, read on that sideband, a
     # later stage's wheel count off the line's sidebands, stage 3 following from it ('94.1 +- 1.0 teeth', seeds 1, 8)
-    said = ("pinion as described, its", "as follows from", " shaft shows ")
-    unnamed = all(any(w in t for w in said) and not t.startswith("stage 1: the") for t in differences)
-    if unnamed and (line := outshone_line(lines, stages, table, bin_, is_explained)):
-        differences.insert(0, line)
+    if unnamed(findings) and (line := outshone_line(lines, stages, table, bin_, is_explained)):
+        findings[:] = outshone_first(findings, stages, line)
+    differences = [f["text"] for f in findings]
     out = {"stages": stages, "shafts": shafts, "unexplained": unexplained, "differences": differences}
+    out["findings"] = findings
     return out | {"unresolved": unresolved}
 
 
@@ -515,103 +540,6 @@ def shaft_harmonic(table, x: float, bin_: float) -> str | None:
         if h >= 1 and abs(x - h * float(o)) <= tol_mesh(x, bin_):
             return name
     return None
-
-
-def outward(stages: list[dict], box: Gearbox, tacho: int, origin: str = "") -> tuple[dict, str] | None:
-    """The first gear, read outward from the tacho's shaft (index *tacho*, after the input), whose tooth
-    count check_description's *stages* (read with that tacho) contradict: ({stage, gear, seen, described},
-    its line), or None. A stage's mesh, in orders of its shaft nearer the tacho, is that gear's count while
-    every gear between is as described; the far gear's count is its shaft's sidebands of the mesh. A wrong
-    gear puts every stage beyond it off (Q, 38/89 + 49/95 with an output tacho, described with a 48-tooth
-    later pinion: the input read 2 % slow, stage 1's mesh at 37.2); the nearest stage first, the input's
-    side after the output's at one distance. The gap's structure check and inspect both read it. *origin*:
-    what the reading starts from, where no tacho gives it (default: the tacho on its shaft)."""
-    table = order_table(box)
-    found = []
-    for side in (range(tacho + 1, len(stages) + 1), range(tacho, 0, -1)):  # stage numbers, outward
-        for k in side:
-            entry, s = stages[k - 1], table.stages[k - 1]
-            wheel_near = k <= tacho  # the stage's wheel on the tacho's side of it
-            near = k if wheel_near else k - 1
-            gears = [("wheel", s.wheel_teeth, "z2"), ("pinion", s.pinion_teeth, "z1")][:: 1 if wheel_near else -1]
-            if entry.get("measured_order") is None:  # no line where the near gear would mesh: beyond here unread
-                break
-            z = entry["measured_order"] / float(table.shaft_orders[near])
-            role, said, _ = gears[0]
-            # no whole count of the pinion, a whole one of the wheel before it on its shaft: that wheel (16/52 + 34/40
-            # described with 51: 'the pinion shows 33.3 teeth'; 28/76 + 19/65 with 75, 18.75 of its 19: unsaid)
-            ratio, up = entry["measured_order"] / entry["expected_order"], ""
-            if not entry["matched"] and not wheel_near and k - 1 > tacho:
-                up = wheel_upstream(table, k - 1, ratio, z)
-            if not entry["matched"] and (round(z) != said or up):
-                why = f"the stage-{k} mesh at {z:.1f} orders of the {table.shafts[near]} shaft"
-                found.append((abs(near - tacho), k, role, z, said, f"the {role} shows {z:.1f} teeth ({why})"))
-                if up:
-                    wheel, up = table.stages[k - 2].wheel_teeth, up.split(" puts it there")[0]
-                    why += f", no whole count of its pinion{up} puts it there"
-                    found[-1] = (abs(near - tacho), k - 1, "wheel", wheel / ratio, wheel, why)
-                break
-            role, said, key = gears[1]
-            seen, spread = entry.get(f"{key}_seen"), entry.get(f"{key}_resolution") or 0.0
-            if seen is None:  # the far shaft's order not seen: the stages beyond are read at its described one
-                continue
-            if abs(seen - said) > max(0.5, spread):
-                evidence = f"the {role} shows {seen:.1f} ± {spread:.1f} teeth (its shaft's sidebands of the mesh)"
-                found.append((abs(near - tacho), k, role, seen, said, evidence))
-                break
-    if not found:
-        return None
-    _, k, role, z, said, evidence = min(found, key=lambda f: f[:2])
-    count = f"{round(z)}" if abs(z - round(z)) <= 0.25 else f"{z:.1f}"
-    line = (
-        f"stage {k} {role}: {count} teeth fit the recording, {said} described; read outward from "
-        f"{origin or f'the tacho on the {table.shafts[tacho]} shaft'}, {evidence}, {said} expected"
-    )
-    return {"stage": k, "gear": role, "seen": float(z), "described": int(said)}, line
-
-
-def outward_first(differences: list[str], stages: list[dict], box: Gearbox, tacho: int) -> dict | None:
-    """*differences* (check_description's, read with a tacho on shaft *tacho* after the input) led by the
-    stage the outward reading (outward) finds, in place: its own items first (else outward's line), the
-    stages beyond it (farther from the tacho, read at a speed its difference moved) marked as following
-    from it. A 31/77 + 23/58 reducer with an output tacho, described with a 24-tooth second pinion, was
-    told 'stage 1: no line at mesh order 31' first, as if a second difference. Returns the outward record,
-    or None (unchanged)."""
-    found = outward(stages, box, tacho) if differences else None
-    if found is None:
-        return None
-    k = found[0]["stage"]
-
-    def distance(j: int) -> int:
-        return abs((j if j <= tacho else j - 1) - tacho)
-
-    def stage_of(text: str) -> int | None:
-        return int(text.split(":", 1)[0].removeprefix("stage ")) if re.match(r"stage \d+:", text) else None
-
-    # its own items but those check_description reads as following from another stage (read inward from the
-    # input: a 111/157 + 115/173 box with an output tacho, described with a 172-tooth wheel, was told first
-    # 'stage 2: mesh order 81.78 measured, 81.31 expected, as follows from stage 1's difference')
-    role = found[0]["gear"]
-
-    def other_gear(text: str) -> bool:  # a count guessed for the stage's other gear than the one outward found
-        guess = re.search(r"\(an? \d+-tooth (pinion|wheel)\b", text)
-        return guess is not None and guess.group(1) != role
-
-    own = [t for t in differences if stage_of(t) == k and "as follows from" not in t and not other_gear(t)]
-    own = own or [found[1]]
-    rest = []
-    for text in (t for t in differences if stage_of(t) != k):
-        j = stage_of(text)
-        if j is None or distance(j) <= distance(k):
-            rest.append(text)
-            continue
-        # beyond it: read at the speed its difference moves, so no other count is guessed there (the same box
-        # was also told 'stage 1: ... (a 112-tooth pinion on the input shaft? described 111)')
-        text = re.sub(r" \(an? \d+-tooth [^()]*\? described \d+\)", "", text)
-        text = re.sub(r", as follows from stages? [^']*'s differences?( \([^()]*\))?", "", text)
-        rest.append(f"{text}, as follows from stage {k}'s difference (read at the speed it moves)")
-    differences[:] = own + rest
-    return found[0]
 
 
 def _between(table, k: int, ratio: float, no_tacho: bool, from_input: bool = False) -> str:

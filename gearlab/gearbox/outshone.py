@@ -107,3 +107,25 @@ def outshone_line(lines: Lines, stages: list[dict], table, bin_: float, explaine
         entry["outshone"] = {"order": m, "db": float(db), "line": line, "gear": gear}  # the gap says it too
         return line
     return None
+
+
+def unnamed(findings: list[dict]) -> bool:
+    """Whether check_description's *findings* name no gear the outshone check would contradict: each is a later
+    stage's sideband reading, a pinion as described on a shaft turning off, or one following from another stage
+    (39/108 + 44/93 + 62/101, 109 real: stage 2 read on its own sideband, only stage 3's shaft said to turn 0.9 %
+    off; or that stage's wheel count read off the weak line's sidebands, '94.1 +- 1.0 teeth', seeds 1 and 8)."""
+    return all(
+        f["kind"] == "pinion_as_described" or f["follows"] or (f["kind"] == "sidebands" and f["stage"] != 1)
+        for f in findings
+    )
+
+
+def outshone_first(findings: list[dict], stages: list[dict], line: str) -> list[dict]:
+    """*findings* led by the outshone stage's *line* (outshone_line set its entry's 'outshone'), less that stage's
+    tooth counts read off the sidebands of the weak line its mesh was read on: the line explains them (39/109 +
+    44/93 + 62/101 described with 108 also said 'stage 2: the wheel ... shows 94.1 +- 1.0 teeth')."""
+    entry = next(e for e in stages if "outshone" in e)
+    k = entry["stage"]
+    lead = dict(kind="outshone", stage=k, gear=None, guess=None, follows=[], text=line, bare=line)
+    lead["names"] = entry["outshone"]["gear"]
+    return [lead] + [f for f in findings if not (f["kind"] == "sidebands" and f["stage"] == k)]
