@@ -393,6 +393,7 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     per method and unit the units called, the median score less the threshold (above 0: most units
     called) and the decision ("other damage: <gear>" when the change lies on a gear not watched)."""
     from .kinds.detection_scoring import unwatched  # the kinds import this module: at call time
+    from .kinds.detection_which_gear import is_undetermined
 
     quiet = unwatched(rows)  # localised on a gear no method watches, no method's decision calling it
     shown: list = [Text(f"scored with {run_dir}", style="bold")]
@@ -422,7 +423,7 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
         for flaw in r0.get("flaws") or ():  # clipped, a dropout, a drift taken out: never scored unsaid
             shown.append(Text(f"warning: {flaw}", style="yellow"))
         if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)
-            where = r0.get("localised") or "nothing"
+            where = r0.get("localised") or ("not determined" if is_undetermined(r0["call"]) else "nothing")
             shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))
             if r0.get("table_call"):  # the run's own take, its table decided by an older rule (detection_scoring)
                 shown.append(Text(r0["table_call"], style="yellow"))

@@ -117,3 +117,22 @@ def test_a_detection_run_reports_flags_on_other_damage_as_such(cli, tmp_path, mo
     assert {r["localised"] for k, r in scored.items() if k[0] == "wheel"} == {"output gear 80T (stage 2)"}
     assert {r["call"] for k, r in scored.items() if k[0] == "wheel"} == {"other damage: output gear 80T (stage 2)"}
     assert {r["call"] for k, r in scored.items() if k[0] == "ok"} == {"watched-gear fault (not localised)"}
+
+
+def test_a_flag_on_a_take_too_short_for_the_check_is_a_fault_of_no_gear(target):
+    # DP: a 2 s take with damage on another gear than the watched one, too short for the which-gear check, was flagged
+    # and counted a fault of the watched gear ('watched-gear fault (not localised)'); its gear cannot be read: said so,
+    # and neither the watched gear's nor other damage
+    source, conditions, labels = target
+    cond = dict(conditions["40 Hz"])
+    revs, first = cond["raw"]["wheel"]
+    cond["raw"] = {**cond["raw"], "wheel": (revs[:20], first)}  # 20 input turns: 4 of the output shaft, 6 needed
+    loc = D.localise_target(source, {"40 Hz": cond})
+    assert loc["records"]["wheel"]["call"] == "fault, gear not determined: 4 turns of the output shaft, 6 needed"
+    assert loc["records"]["pinion"]["call"] == "watched-gear fault: input pinion 32T (stage 1)"
+    (called,) = D.calls_by_label(loc, [flags_everything(("wheel", "pinion", "ok"))], labels)
+    assert called["watched"]["broken output tooth"] == 0.0 and called["other"]["broken output tooth"] == 0.0
+    assert called["undetermined"] == {"broken output tooth": 100.0, "fault": 0.0, "healthy": 0.0}
+    assert "| 40 Hz | flags everything | 0 / 0 / 100 | 100 / 0 / 0 | 100 / 0 / 0 |" in D.calls_md([called])
+    assert D.decision_of(True, loc["records"]["wheel"]["call"]) == loc["records"]["wheel"]["call"]
+    assert D.decision_of(False, loc["records"]["wheel"]["call"]) == "healthy"

@@ -292,3 +292,23 @@ def test_a_rate_field_inside_a_group_is_no_channel(tmp_path, fmt):
             f.write(b"MATLAB 7.3 MAT-file, HDF5 schema 1.00 .".ljust(116) + bytes(8) + b"\x00\x02IM")
     got = inspect_record(str(path), None, InspectOptions(speed_hz=16.0))
     assert got["vibration"] == "take/acc" and got["channels"] == ["take/acc"] and got["fs_hz"] == FS
+
+
+def test_a_flagged_take_too_short_for_the_which_gear_check_is_a_fault_of_no_gear(cli, finished, quiet, tmp_path):
+    # DP: a 2 s take with damage on another gear than the watched one was called a fault at record30 and reported as
+    # the watched gear's, while the which-gear check could not read so short a take: its gear is said undetermined
+    out, _ = finished
+    vib, tacho = signals(revolutions=10, seed=12, phase=0.3, chip=4.0)  # 9 whole turns: 7.5 output turns, 10 needed
+    short = write_zip(tmp_path / "short.zip", text(vib, tacho))
+    code, stdout, err = cli("score", out, short, "--json")
+    assert code == 0, err
+    rows = json.loads(stdout)
+    said = "fault, gear not determined: 7.5 turns of the output shaft, 10 needed"
+    assert {r["call"] for r in rows} == {said}, rows
+    called = [r for r in rows if r["called"] > r["units"] / 2]
+    assert called and {r["decision"] for r in called} == {said}, rows
+    history = scoring.read_history(RunDir(Path(out)))
+    assert {r["decision"] for r in history if r["file"] == str(short) and r["called"] > r["units"] / 2} == {said}
+    code, stdout, err = cli("score", out, short)
+    assert code == 0 and "which gear: not determined (not localised: too short for the which-gear check" in stdout
+    assert "│ fault, gear not " in stdout, stdout

@@ -96,14 +96,17 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
     """*take* localised against *hist* (signals.localise.Localisation.describe()): the shafts ranked by
     their z, the gear named first (or None) with its evidence; a two-gear shaft's gear by the events
     *made* simulates (events(); None: by the event's width). A record that cannot be read against the
-    history is said so ("not localised: ..."), not fatal."""
+    history is said so ("not localised: ..."), not fatal; one too short for it carries 'unread' (its slowest
+    shaft's turns, that shaft, the turns needed)."""
+    turns, shaft = NS.slowest_turns(len(take.revolutions), table)
+    # each shaft's own average (signals.nonsync), or two grand periods (signals.localise), in turns of the slowest shaft
+    lay = hist.layout
+    need = NS.TURNS if lay.mode == "shafts" else 2 * round(lay.period * min(map(float, table.shaft_orders)))
+    if turns < need - 1e-9:  # unread: a flag on it cannot be given a gear (detection_which_gear.call_of)
+        said = f"{turns:.3g} {shaft}-shaft turns ({len(take.revolutions)} input revolutions), it needs {need}"
+        unread = {"turns": turns, "shaft": shaft, "needed": need}
+        return NOT_READ | {"summary": f"not localised: too short for the which-gear check: {said}", "unread": unread}
     try:
-        turns, shaft = NS.slowest_turns(len(take.revolutions), table)
-        if hist.layout.mode == "shafts" and turns < NS.TURNS:  # each shaft's own average (signals.nonsync)
-            raise GearlabInputError(
-                f"too short for the which-gear check: {turns:.3g} {shaft}-shaft turns "
-                f"({len(take.revolutions)} input revolutions), it needs {NS.TURNS}"
-            )
         found = L.localise(
             take.revolutions,
             hist,
@@ -112,8 +115,11 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
             templates=templates_for(table, made, take),
         )
     except GearlabInputError as exc:
-        return {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+        return NOT_READ | {"summary": f"not localised: {exc}"}
     return found.describe()
+
+
+NOT_READ = {"method": "", "named": None, "named_shaft": None, "shafts": []}  # which_gear of a record not localised
 
 
 # A shaft beside the named one carries a change of its own where its z is over SECOND_TIMES its threshold

@@ -48,7 +48,14 @@ from .detection_records import (
 )
 from .detection_settings import Spec, stored_classical
 from .detection_units import Rule
-from .detection_which_gear import decision_of, is_other, localisation_of, localise_scored, stale_calls
+from .detection_which_gear import (
+    decision_of,
+    is_other,
+    is_undetermined,
+    localisation_of,
+    localise_scored,
+    stale_calls,
+)
 
 # What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
 # its models and thresholds hold for that input only. 1: a later mesh of no whole input order zeroed
@@ -753,7 +760,7 @@ def score_trends(run: RunDir) -> list:
             curves.append(Curve(m, x, [v / top for v in y]))
             tops.append(f"{m} {top:.3g}")
             for i, r in enumerate(mine, 1):
-                if is_other(r["decision"]):
+                if is_other(r["decision"]) or is_undetermined(r["decision"]):  # no watched gear's fault
                     other.setdefault(r["decision"], set()).add(i)
                 elif r["file"] in quiet:  # damage on a gear not watched, under every threshold: marked all the same
                     other.setdefault(quiet[r["file"]], set()).add(i)

@@ -134,7 +134,10 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
     negative = [k for k in call["units"] if k != positive and call["watched"].get(k) is not None]
     judged = call.get("judged", call["units"])  # a summary from before 'judged': every unit counted
     n = sum(judged[k] for k in negative)
-    false_alarm = sum(call["watched"][k] * call["units"][k] for k in negative) / n if n else row["false_alarm"]
+    # a flag of no gear (a record too short for the which-gear check) is no detection of the watched gear, but an
+    # alarm all the same on a healthy take
+    alarms = {k: call["watched"][k] + ((call.get("undetermined") or {}).get(k) or 0.0) for k in negative}
+    false_alarm = sum(alarms[k] * call["units"][k] for k in negative) / n if n else row["false_alarm"]
     judged_auc = {"auc": call["auc"]} if "auc" in call else {}  # a summary from before it: the row's
     return {
         **row,

@@ -58,6 +58,9 @@ from .detection_records import longest_tsa
 
 WATCHED, OTHER = "watched-gear fault", "other damage"
 NOT_LOCALISED = f"{WATCHED} (not localised)"  # a flag with no evidence of where: counted as the watched gear's
+# a flag on a record too short for the which-gear check (data.which_gear's 'unread'): an alarm of no gear, not the
+# watched gear's: a 2 s take with damage on another gear, flagged, was reported as the watched gear's fault
+UNDETERMINED = "fault, gear not determined"
 
 
 def watched_gears(source: DatasetSpec, table) -> list[str]:
@@ -78,11 +81,15 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str
     it ("watched-gear fault: input pinion 32T (stage 1); also other damage: idler gear 96T (stage 1)");
     else other damage, every flagged gear named; nothing localised, other damage where the
     non-synchronous residual changed ("other damage: non-synchronous (bearing-like), at order 3.57"),
-    else the watched gear's, not localised."""
+    a record too short to be read a fault of no gear ("fault, gear not determined: 5.73 turns of the output
+    shaft, 8 needed"), else the watched gear's, not localised."""
     shafts = W.flagged_shafts(found)
     if not shafts:
         if nonsync and nonsync["changed"]:
             return NS.call(nonsync["order"])
+        if unread := found.get("unread"):
+            turns, shaft, need = unread["turns"], unread["shaft"], unread["needed"]
+            return f"{UNDETERMINED}: {turns:.3g} turns of the {shaft} shaft, {need} needed"
         return NOT_LOCALISED
     mine, others = [], []
     for ev in shafts:
@@ -100,6 +107,11 @@ def is_other(call: str | None) -> bool:
     return bool(call) and call.startswith(OTHER)
 
 
+def is_undetermined(call: str | None) -> bool:
+    """A record's call says its gear could not be read (a take too short for the which-gear check)."""
+    return bool(call) and call.startswith(UNDETERMINED)
+
+
 def is_also_other(call: str | None) -> bool:
     """A record's call names damage on another gear beside the watched one's: counted as both."""
     return bool(call) and call.startswith(WATCHED) and ALSO in call
@@ -109,10 +121,11 @@ def decision_of(called: bool, call: str | None) -> str:
     """A record's decision (`gearlab score`) from its units' majority called and its call (call_of),
     by the rule the detection run's tables count its flags with (calls_by_label): not called,
     healthy; called on a record whose change lies on another gear, that other damage ("other damage:
-    output gear 71T (stage 1)"); otherwise a fault of the watched gear (localised on it, or nowhere)."""
+    output gear 71T (stage 1)"); called on a record too short to be localised, a fault of no gear ("fault, gear not
+    determined: ..."); otherwise a fault of the watched gear (localised on it, or nowhere)."""
     if not called:
         return "healthy"
-    return call if is_other(call) else "fault"
+    return call if is_other(call) or is_undetermined(call) else "fault"
 
 
 def evidence(found: dict, nonsync: dict | None = None) -> str:
@@ -371,8 +384,9 @@ def _nonsync_cell(ns: dict | None) -> str:
 
 def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str = "fault") -> list[dict]:
     """Per condition and method, for the longest TSA: of each test label's units, the % called a
-    watched-gear fault and the % called other damage (the record's change localised elsewhere; on a
-    watched gear and another gear: counted in both), the units, and those on records not called other
+    watched-gear fault, the % called other damage (the record's change localised elsewhere; on a
+    watched gear and another gear: counted in both) and the % called a fault of no gear (``undetermined``:
+    a record too short for the which-gear check), the units, and those on records not called other
     damage only (``judged``: what a false alarm is counted of); the AUC of the same units the detected
     and false-alarm figures count (``auc``: every *positive* take's against the other labels' takes not
     called other damage) and the takes it leaves out (``left_out``: {path: call})."""
@@ -386,6 +400,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
         thr = r["thresholds"][unit]
         watched: dict[str, list[int]] = {}
         other: dict[str, list[int]] = {}
+        undetermined: dict[str, list[int]] = {}
         judged: dict[str, int] = {}
         ranked: dict[bool, list] = {True: [], False: []}  # the positive takes' units, the judged negatives'
         left_out: dict[str, str] = {}
@@ -394,8 +409,10 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
             flagged = s > thr
             call = loc["records"].get(path, {}).get("call")
             elsewhere, also = is_other(call), is_also_other(call)  # also: the watched gear's and other damage
+            unread = is_undetermined(call)
             label = labels[path]
-            watched.setdefault(label, []).extend((flagged & ~elsewhere).astype(int).tolist())
+            watched.setdefault(label, []).extend((flagged & ~elsewhere & ~unread).astype(int).tolist())
+            undetermined.setdefault(label, []).extend((flagged & unread).astype(int).tolist())
             other.setdefault(label, []).extend((flagged & (elsewhere or also)).astype(int).tolist())
             judged[label] = judged.get(label, 0) + (0 if elsewhere else len(s))
             # a negative take called other damage leaves the AUC as it leaves the false alarms (it counted as a
@@ -411,6 +428,7 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
                 "unit": unit,
                 "watched": {k: 100.0 * float(np.mean(v)) if v else None for k, v in watched.items()},
                 "other": {k: 100.0 * float(np.mean(v)) if v else None for k, v in other.items()},
+                "undetermined": {k: 100.0 * float(np.mean(v)) if v else None for k, v in undetermined.items()},
                 "units": {k: len(v) for k, v in watched.items()},
                 "judged": judged,
                 "auc": auc(*(np.concatenate(ranked[k] or [np.empty(0)]) for k in (False, True))),
@@ -421,22 +439,27 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
 
 
 def calls_md(calls: list[dict]) -> str:
-    """calls_by_label as a table: 'watched % / other %' per label."""
+    """calls_by_label as a table: 'watched % / other %' per label, '/ not determined %' beside them where a record
+    was too short for the which-gear check."""
     if not calls:
         return ""
     labels = list(dict.fromkeys(k for c in calls for k in c["watched"]))
     unit = calls[0]["unit"]
+    unread = any(v for c in calls for v in (c.get("undetermined") or {}).values())
+    head, said = ("", "")
+    if unread:
+        head, said = " / not determined", "; gear not determined: a record too short for the which-gear check"
     out = [
         f"\nUnits called (% of each test label's {unit} units): a watched-gear fault / other damage (the "
-        "record's change localised on another gear; on a watched gear and another: counted in both)\n",
-        f"| {unit}: condition | method | " + " | ".join(f"'{k}' watched / other %" for k in labels) + " |",
+        f"record's change localised on another gear; on a watched gear and another: counted in both){said}\n",
+        f"| {unit}: condition | method | " + " | ".join(f"'{k}' watched / other{head} %" for k in labels) + " |",
         "|---|---|" + "---|" * len(labels),
     ]
     for c in calls:
         cells = []
         for k in labels:
-            w, o = c["watched"].get(k), c["other"].get(k)
-            cells.append("–" if w is None else f"{w:.0f} / {o:.0f}")
+            w, o, u = c["watched"].get(k), c["other"].get(k), (c.get("undetermined") or {}).get(k)
+            cells.append("–" if w is None else f"{w:.0f} / {o:.0f}" + (f" / {u or 0:.0f}" if unread else ""))
         out.append(f"| {c['condition']} | {c['method']} | " + " | ".join(cells) + " |")
     return "\n".join(out) + "\n"
 
