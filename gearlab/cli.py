@@ -25,9 +25,8 @@ from rich.table import Table
 from .cliconv import HELP_NAMES, ConventionalGroup, conventional
 from .errors import GearlabInputError
 
-# Each command imports what it needs inside its function (start-up time): `gearlab --help`,
-# `validate` and `plugins` never load torch, numba or matplotlib. None of these imports hides
-# a cycle (tests/test_architecture.py).
+# Each command imports what it needs inside its function (start-up time): `gearlab --help`, `validate` and `plugins`
+# never load torch, numba or matplotlib. None of these imports hides a cycle (tests/test_architecture.py).
 
 app = typer.Typer(
     cls=ConventionalGroup,
@@ -358,11 +357,12 @@ def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file (
 
     Example: gearlab validate scenarios/expB.toml
     """
+    from .data.readers.headers import footers_said
     from .gearbox import validated_description
     from .notebook import load_scenario
 
     if not (said := validated_description(scenario)):  # a description alone was told 'missing table [scenario]'
-        s = load_scenario(scenario)
+        s = footers_said(lambda: load_scenario(scenario))  # a logger's footer the run's reader leaves out: said
         said = f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}"
     console.print(said, markup=False)
 

@@ -142,3 +142,28 @@ def test_a_footer_across_the_text_readers_blocks(tmp_path, monkeypatch, chunk):
     _write(path, ["time acc", *rows[:300], "Pause", *rows[300:], "End of data"])
     with pytest.raises(GearlabInputError, match="line 302 has 1 fields"):
         read_recording(path, "acc", unit="m/s^2")
+
+
+@pytest.mark.parametrize("rows", [N, 30])  # the tail (8 kB) past the rows' start, and holding the whole file
+@pytest.mark.parametrize("name, sep", [("c.csv", ","), ("s.csv", ";"), ("b.txt", " ")])
+def test_validate_warns_of_a_footer_as_the_run_s_reader_does(tmp_path, cli, name, sep, rows):
+    # DP: `gearlab validate` said OK without a word of a footer the run's reader leaves out with a warning: it reads
+    # headers only; the file's last 8 kB now say it, in the reader's words
+    from gearboxes import description, stage
+
+    from gearlab.data.readers.headers import tail_footer
+
+    path = tmp_path / name
+    _write(path, [sep.join(["time", "acc"]), *_rows(sep)[:rows], "", "End of data", "Samples: 400"])
+    said = read_recording(path, "acc", unit="m/s^2").warnings
+    assert len(said) == 1 and tail_footer(path, 2) == said[0], (said, tail_footer(path, 2))
+    (tmp_path / "k.toml").write_text(description(stage(105, 143, "1 mm", "12 mm"), speed="10 Hz", load="30 N*m"))
+    text = '[scenario]\nname = "s"\nkind = "gap"\n[source]\ngearbox = "k.toml"\n[target]\nvibration = "acc"\n'
+    text += f'unit = "m/s^2"\nfiles = [{{ file = "{name}", role = "history", label = "healthy" }}]\n'
+    (tmp_path / "s.toml").write_text(text)
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 0 and "OK" in out, (out, err)
+    assert err.splitlines() == [f"warning: {path}: {said[0]}"], err
+    _write(path, [sep.join(["time", "acc"]), *_rows(sep)[:rows]])  # no footer: no word
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 0 and "OK" in out and err == "", (out, err)

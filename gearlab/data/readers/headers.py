@@ -9,7 +9,9 @@ import itertools
 import math
 import re
 import struct
+import warnings
 import zipfile
+from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -122,6 +124,65 @@ class Header:
         return leaf_match(self.channels, str(name)) or name
 
 
+# The end of a plain text record `gearlab validate` reads for a logger's footer (its summary lines under the rows),
+# and the files whose footer it said (footers_said): the run's reader leaves one out with a warning, which validate,
+# reading headers only, gave none of
+TAIL_BYTES = 8192
+_footers: ContextVar[set | None] = ContextVar("footers", default=None)
+
+
+def footers_said(call):
+    """*call*() with each plain CSV or text record whose header it reads read at its tail too (tail_footer): a
+    footer the run's reader will leave out is warned of, once a file (`gearlab validate`)."""
+    token = _footers.set(set())
+    try:
+        return call()
+    finally:
+        _footers.reset(token)
+
+
+def _say_footer(path: Path, width: int) -> None:
+    said = _footers.get()
+    if said is None or path in said:
+        return
+    said.add(path)
+    if note := tail_footer(path, width):
+        warnings.warn(f"{path}: {note}", stacklevel=2)
+
+
+def tail_footer(path: Path, width: int) -> str | None:
+    """The warning the reader gives a logger's footer under the rows of the plain text record *path* (csv.footer_note:
+    its first line's number, the lines under it), read off its last TAIL_BYTES, or None: the rows there of *width*
+    fields, the first of them the template of the numeric columns, as csv.footer_start reads the whole file."""
+    from .csv import delimiter_of, encoding_of, footer_note, footer_start, is_text, split_rows
+
+    encoding = encoding_of(path)
+    size = path.stat().st_size
+    start = max(0, size - TAIL_BYTES)
+    with path.open("rb") as stream:
+        stream.seek(start)
+        block = stream.read()
+    if start:  # its first line may be cut
+        block = block[block.find(b"\n") + 1 :]
+        start = size - len(block)
+    lines = block.decode(encoding, errors="replace").splitlines()
+    kept = [(i, line) for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")]
+    delimiter = delimiter_of(kept[0][1]) if kept else None
+    rows = split_rows([line for _, line in kept], delimiter)
+    first = next((q for q, row in enumerate(rows) if len(row) == width and not is_text(row[0])), None)
+    if first is None:
+        return None
+    cut = footer_start([line for _, line in kept[first:]], delimiter, width)
+    if cut is None:
+        return None
+    number, line = kept[first + cut]
+    before = 0
+    with path.open("rb") as stream:  # the lines above the tail, counted where there is a footer to number
+        while start > 0 and (chunk := stream.read(min(1 << 20, start))):
+            before, start = before + chunk.count(b"\n"), start - len(chunk)
+    return footer_note(before + number + 1, line, len(kept) - first - cut - 1)
+
+
 def _csv_header(path: Path) -> Header:
     from .base import _column
     from .csv import (
@@ -181,6 +242,7 @@ def _csv_header(path: Path) -> Header:
             )
     every = [*names, *(k for k, _ in fields)]
     rate = any(is_rate_or_time(n) for n in every)
+    _say_footer(path, len(names))
     return Header("CSV", every, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units or {})
 
 
@@ -229,6 +291,8 @@ def _text_header(path: Path, fmt: str) -> Header:
     if rates and rates[0][1] is not None:
         stated = (rates[0][1], f"its '# {rates[0][0]}' line")
     every = [*names, *fields]
+    if fmt == "text":  # a zipped text's tail is no cheap read
+        _say_footer(path, width)
     return Header(fmt, every, any(is_rate_or_time(n) for n in every), indexed=True, stated=stated)
 
 
