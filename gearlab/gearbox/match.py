@@ -271,9 +271,9 @@ def check_description(
 
     def differ(kind: str, text: str, stage=None, gear=None, guess=None, follows=(), tail: str = "") -> None:
         """A difference, as gearbox.leading picks the verdict's first line by it: its *kind* (no_line, follows,
-        pinion_as_described, mesh_moved, sidebands, shaft, outshone), the *stage* (1-based) and *gear* read, the
-        gear a count is *guess*ed for, the stages it *follows* from; *tail*: what a reading beyond the gear
-        that leads drops (a count guessed, a stage it follows from)."""
+        pinion_as_described, mesh_moved, sidebands, shaft; outshone, outward: a leading line's), the *stage* and
+        *gear* read, the gear a count is *guess*ed for, the stages it *follows* from; *tail*: what a reading beyond
+        the gear that leads drops (a count guessed, a stage it follows from)."""
         follows = list(follows)
         findings.append(
             dict(kind=kind, stage=stage, gear=gear, guess=guess, follows=follows, text=text + tail, bare=text)
