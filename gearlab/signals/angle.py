@@ -55,6 +55,46 @@ QUANTISED_VARIANCE = 1.0 / 12.0
 # shaft's ('wheel shows 144.4 teeth, 116 described'). The PHM rig's 10 keep their raw edges: smoothed (each mark
 # apart, 1.0 mrad rms off the raw angle), its eccentric-idler take at 40 Hz low outscored the chips (angle_from_pulses)
 SMOOTHED_MARKS = 9
+# Marks a tacho did not give: an interval between edges within MISSED_SLACK of a whole k >= 2 times the median of the
+# MISSED_WINDOW intervals about it holds k - 1 left-out marks, where no other such interval lies within the window
+# (a pair of marks spaced 1/3 and 2/3 of a turn alternates, every interval "twice" or "half" the median). A 60-2
+# encoder (the gap of 2 left-out marks its turn's reference) read with its 58 marks spaced alike put every order
+# 60/58 low: a 37/89 box's mesh read at 36 ('a 36-tooth pinion?'), at 60 marks the gap's turn 3.4 % slow ('slip
+# under load'); a once-per-turn tacho that missed one pulse read '16.5 .. 33 Hz, a run-up or coast-down'.
+MISSED_SLACK = 0.2
+MISSED_WINDOW = 9
+
+
+def _missed_marks(edges: np.ndarray, quantised: np.ndarray, marks: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """*edges* (times, samples) with the marks the tacho left out put back, evenly within their interval; their
+    *quantised* flags (False: put back, not read); and the shift of the edges' count that starts turns at the
+    gap's end where the gaps recur every *marks* edges (a missing-mark wheel's reference), else 0. Gaps recurring
+    every P != *marks* edges are a P-mark wheel given the wrong count: refused, naming P."""
+    from scipy.ndimage import median_filter
+
+    d = np.diff(edges)
+    if d.size < MISSED_WINDOW:
+        return edges, quantised, 0
+    ratio = d / median_filter(d, size=MISSED_WINDOW, mode="nearest")
+    k = np.rint(ratio)
+    gaps = np.flatnonzero((k >= 2) & (np.abs(ratio - k) <= MISSED_SLACK))
+    if gaps.size == 0 or (gaps.size > 1 and np.diff(gaps).min() < MISSED_WINDOW):
+        return edges, quantised, 0
+    put = np.concatenate([edges[g] + d[g] * np.arange(1, k[g]) / k[g] for g in gaps])
+    at = np.concatenate([np.full(int(k[g]) - 1, g + 1) for g in gaps])
+    filled = np.insert(edges, at, put)
+    ends = gaps + 1 + np.cumsum(k[gaps] - 1).astype(int)  # the first edge read after each gap, in *filled*
+    if gaps.size < 2 or np.ptp(np.diff(ends)) != 0:
+        return filled, np.insert(quantised, at, False), 0
+    every, left = int(ends[1] - ends[0]), int(k[gaps[0]] - 1)
+    if every != marks:
+        raise GearlabInputError(
+            f"{left} mark(s) left out every {every - left} (a {every}-{left} wheel, its gap the turn's reference?): "
+            f"expected pulses_per_rev = {every}, its marks with the left-out ones ({marks} given)"
+        )
+    return filled, np.insert(quantised, at, False), int((-ends[0]) % marks)
+
+
 # Slack for a wrapped tacho that touches both ends of its interval ([-π, π] after rounding).
 _WRAP_SLACK = 1e-6
 
@@ -108,8 +148,9 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     mid-level crossing before it.
 
     Angle. The j-th edge (j = 0, 1, …) is at θ = 2πj: the shaft is at angle zero at
-    the first pulse, and between edges the angle is linear in time (constant speed within
-    one revolution). Samples before the first and after the last edge are extrapolated
+    the first pulse (a missing-mark wheel's: at its gap's end; marks left out are put back: _missed_marks),
+    and between edges the angle is linear in time (constant speed within one revolution). Samples before the
+    first and after the last edge are extrapolated
     with the speed of the neighbouring revolution.
 
     *smooth*: between edges a cubic spline through them, not a line: for a tacho on a slower shaft than
@@ -177,6 +218,7 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
         )
 
     _pulses_or_not(v, low_thr, high_thr, edges)
+    edges, quantised, shift = _missed_marks(edges, quantised, marks)
     # most, not all: a square tacho's edge with a noisy sample mid-way now and then is still a square tacho's
     if marks <= SMOOTHED_MARKS and edges.size >= 4 * marks and np.count_nonzero(quantised) > edges.size / 2:
         # each mark's edges apart: marks need not lie equally spaced, their offsets are kept
@@ -186,7 +228,7 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
         edges = smoothed if np.all(np.diff(smoothed) > 0) else edges
 
     t = np.arange(v.size, dtype=np.float64)
-    theta_edges = TWO_PI * np.arange(edges.size, dtype=np.float64)
+    theta_edges = TWO_PI * (np.arange(edges.size, dtype=np.float64) + shift)
     theta = np.interp(t, edges, theta_edges)  # linear in time between edges
     if smooth and edges.size >= 4:  # (np.interp's line where fewer edges leave no curve to fit)
         from scipy.interpolate import CubicSpline
@@ -195,7 +237,7 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
         theta[inside] = CubicSpline(edges, theta_edges)(t[inside])
     # np.interp holds the end values; extrapolate with the neighbouring revolution's speed.
     before, after = t < edges[0], t > edges[-1]
-    theta[before] = TWO_PI * (t[before] - edges[0]) / (edges[1] - edges[0])
+    theta[before] = theta_edges[0] + TWO_PI * (t[before] - edges[0]) / (edges[1] - edges[0])
     theta[after] = theta_edges[-1] + TWO_PI * (t[after] - edges[-1]) / (edges[-1] - edges[-2])
     return theta
 
