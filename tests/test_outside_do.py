@@ -12,6 +12,7 @@ from test_inspect import described
 
 from gearlab.errors import GearlabInputError
 from gearlab.inspect import InspectOptions, inspect_record
+from gearlab.kinds.detection_scoring import asked_off
 from gearlab.signals.angle import angle_from_pulses
 
 FS, F0, G = 25600.0, 33.0, 9.80665
@@ -106,3 +107,14 @@ def test_a_missed_pulse_is_put_back_not_read_as_a_turn_at_half_speed(takes):
     assert got["speed"]["variation_percent"] < 1.0, got["speed"]
     assert got["speed"]["mean_hz"] == pytest.approx(F0, rel=0.005)
     assert "matches" in got["verdict"], got["verdict"]
+
+
+def test_a_take_scored_in_a_condition_its_speed_is_far_from_says_so():
+    # next week's takes 10 % faster than the history: `gearlab score` refuses them ('more than 5% from every
+    # condition's history ... or --condition NAME'); with --condition they were scored with nothing said of the
+    # speed the thresholds were fixed at
+    meta = {"conditions": {"33 Hz": {"speed_hz": 33.0}}}
+    said = asked_off(meta, "33 Hz", 36.3)
+    assert said.startswith("--condition: +10.0 % off its history's 33.00 Hz"), said
+    assert "thresholds fixed there" in said
+    assert asked_off(meta, "33 Hz", 34.0) == ""  # within the 5 % a run groups by: its own condition

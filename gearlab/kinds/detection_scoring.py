@@ -307,6 +307,13 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
     return near
 
 
+def asked_off(meta: dict, name: str, speed: float) -> str:
+    """Why a take over SPEED_GROUP off the speed of the condition --condition names is scored there (else "")."""
+    centre = meta["conditions"][name]["speed_hz"]
+    off = f"{100 * (speed / centre - 1):+.1f} % off its history's {centre:.2f} Hz, beyond the {SPEED_GROUP:.0%} a run"
+    return "" if abs(speed / centre - 1) <= SPEED_GROUP else f"--condition: {off} groups by: thresholds fixed there"
+
+
 def _by_level(run: RunDir, meta: dict, name: str, rec) -> tuple[str, str]:
     """(condition, why) of a steady take: of the conditions whose history runs within IN_BAND of its speed (one
     per load, grouped by hand), the one whose history level is nearest the take's; by speed alone a 29/73 box's
@@ -604,6 +611,8 @@ def score(
                 name, rec, scored_on = in_band(meta, str(file), rec, condition)
             elif condition is None:
                 name, chosen[str(file)] = _by_level(run, meta, name, rec)
+            else:
+                chosen[str(file)] = asked_off(meta, name, rec.speed_hz)
         too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
@@ -675,7 +684,7 @@ def score(
                         {
                             "file": f.path,
                             "condition": name,
-                            "condition_by": chosen.get(f.path, ""),  # of conditions at one speed: by level
+                            "condition_by": chosen.get(f.path, ""),  # by level at one speed; or --condition far off
                             "method": r["method"],
                             "unit": u,
                             "units": int(s.size),
