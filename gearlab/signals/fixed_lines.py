@@ -13,17 +13,23 @@ from ..gearbox.match import UNEXPLAINED_FLOOR_DB, shaft_harmonic, tol_mesh
 # The phase is read in Hann blocks this long, half overlapping: short enough to follow a speed's swing over seconds
 # (box B's 0.37 Hz), long enough to part the line from its neighbours a few Hz away (another shaft's harmonics).
 BLOCK_S = 0.5
+# A block holds at least this many of its bins between the line and its nearest other line (a Hann window's main lobe
+# is 2 bins wide each side): read in 0.5 s blocks, the 29/101 + 33/107 box's output 2nd harmonic (7.26 Hz, 41 Hz
+# input) took in its 1st, 3.63 Hz away, whose phase turned with the speed's swing, and was said to follow the clock.
+APART_BINS = 3.0
 # Mains, whose harmonics a steady speed cannot tell from a shaft's order: 50 and 60 Hz, their 2nd and 3rd.
 MAINS_HZ = tuple(m * hz for hz in (50.0, 60.0) for m in (1, 2, 3))
 # The slope is trusted where 0 and 1 lie this many standard errors apart (3 each side of 1/2).
 APART_SE = 6.0
 
 
-def clock_share(signal: np.ndarray, fs: float, angle: np.ndarray, order: float) -> tuple[float, float] | None:
+def clock_share(
+    signal: np.ndarray, fs: float, angle: np.ndarray, order: float, block_s: float = BLOCK_S
+) -> tuple[float, float] | None:
     """(slope, its standard error) of the line at *order* of the shaft whose angle per sample is *angle* (rad): ~0 it
     follows the shaft, ~1 the clock; None where the two cannot be told apart (the slope's error over 1/APART_SE: a
-    steady speed, a line too weak, a take shorter than 6 blocks)."""
-    n, size = signal.size, int(BLOCK_S * fs)
+    steady speed, a line too weak, a take shorter than 6 blocks of *block_s* seconds)."""
+    n, size = signal.size, int(block_s * fs)
     starts = np.arange(0, n - size + 1, size // 2)
     if starts.size < 6:
         return None
@@ -58,7 +64,9 @@ def fixed_on_orders(listed: list[dict], lines, table, take: tuple, f0: float, bi
         shaft = shaft_harmonic(table, x, bin_) if db >= UNEXPLAINED_FLOOR_DB and x < below else None
         if shaft is None or any(u["order"] == x for u in listed):
             continue
-        read = clock_share(*take, x)
+        apart = np.abs(np.asarray(lines.at, float) - x)
+        apart = apart[apart > 0]
+        read = clock_share(*take, x, max(BLOCK_S, APART_BINS / (apart.min() * f0)) if apart.size else BLOCK_S)
         mains = any(abs(x * f0 - hz) <= tol_mesh(x, bin_) * f0 for hz in MAINS_HZ)
         if (read is not None and read[0] > 0.5) or (read is None and mains):
             h = round(x / float(table.shaft_orders[table.shafts.index(shaft)]))
