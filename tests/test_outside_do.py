@@ -10,6 +10,7 @@ import pytest
 from scipy.io import wavfile
 from test_inspect import described
 
+from gearlab.data.recordings import cut_recording
 from gearlab.errors import GearlabInputError
 from gearlab.inspect import InspectOptions, inspect_record
 from gearlab.kinds.detection_scoring import asked_off
@@ -140,3 +141,11 @@ def test_a_slow_shaft_s_harmonic_is_not_said_to_follow_the_clock(tmp_path, seed)
     got = inspect_record(str(tmp_path / "b.npz"), described(*TWO, speed="41 Hz"), InspectOptions("acc", tacho="tacho"))
     assert "matches" in got["verdict"], got["verdict"]
     assert not [u for u in got["check"]["unexplained"] if u.get("not_an_order")], got["check"]["unexplained"]
+
+
+def test_a_run_s_record_of_a_60_2_encoder_given_as_58_marks_is_said_to_be_miscounted_not_short(takes):
+    # a gap scenario's history read 'hist1.wav: tacho '1' never completes a revolution (read as 58 pulses per
+    # revolution): 2 mark(s) left out every 58 ...': the tacho turns, its count is wrong
+    with pytest.raises(GearlabInputError, match=r"tacho '1' \(read as 58 pulses per revolution\): 2 mark") as err:
+        cut_recording(takes["encoder"], vibration="0", tacho="1", pulses_per_rev=58, gain=10.0, sensitivity=0.5 / G)
+    assert "never completes" not in str(err.value) and "pulses_per_rev = 60" in str(err.value)

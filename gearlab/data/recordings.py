@@ -545,6 +545,7 @@ def shaft_angle(
     to the same argument: revolution boundaries found here (for labels) are those of the revolutions it cuts.
     """
     from ..signals import angle_from_pulses, angle_from_speed, unwrap_tacho
+    from ..signals.angle import MarksMiscounted
 
     path, n, fs = rec.path, rec.signal.size, rec.fs
     if rec.tacho is None:
@@ -596,12 +597,11 @@ def shaft_angle(
     what = "a once-per-revolution pulse train" if pulses_per_rev == 1 else f"{pulses_per_rev} pulses per revolution"
     where = f"{path}: tacho '{name}' never completes a revolution (read as {what}{detected})"
     try:
-        with prefixed(where):
-            angle = angle_from_pulses(rec.tacho, fs, smooth=smooth, marks=pulses_per_rev)
-    except GearlabInputError:
-        if (note := speed_channel_note(rec.tacho)) is None:
-            raise
-        raise GearlabInputError(f"{where}: {note}") from None
+        angle = angle_from_pulses(rec.tacho, fs, smooth=smooth, marks=pulses_per_rev)
+    except MarksMiscounted as exc:  # it turns: its marks are miscounted
+        raise GearlabInputError(f"{path}: tacho '{name}' (read as {what}{detected}): {exc}") from None
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{where}: {speed_channel_note(rec.tacho) or exc}") from None
     if pulses_per_rev == 1:
         return {"pulses": rec.tacho}, angle, f"tacho '{name}' (once-per-revolution pulses{detected})"
     angle = angle / pulses_per_rev

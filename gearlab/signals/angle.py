@@ -65,6 +65,11 @@ MISSED_SLACK = 0.2
 MISSED_WINDOW = 9
 
 
+class MarksMiscounted(GearlabInputError):
+    """A missing-mark wheel given another count of marks than its own (_missed_marks): the tacho turns, its count
+    is wrong."""
+
+
 def _missed_marks(edges: np.ndarray, quantised: np.ndarray, marks: int) -> tuple[np.ndarray, np.ndarray, int]:
     """*edges* (times, samples) with the marks the tacho left out put back, evenly within their interval; their
     *quantised* flags (False: put back, not read); and the shift of the edges' count that starts turns at the
@@ -88,7 +93,7 @@ def _missed_marks(edges: np.ndarray, quantised: np.ndarray, marks: int) -> tuple
         return filled, np.insert(quantised, at, False), 0
     every, left = int(ends[1] - ends[0]), int(k[gaps[0]] - 1)
     if every != marks:
-        raise GearlabInputError(
+        raise MarksMiscounted(
             f"{left} mark(s) left out every {every - left} (a {every}-{left} wheel, its gap the turn's reference?): "
             f"expected pulses_per_rev = {every}, its marks with the left-out ones ({marks} given)"
         )
