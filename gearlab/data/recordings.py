@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import GearlabInputError, which_meant
-from ..gearbox.orders import order_table
+from ..gearbox.orders import settle_turns
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz, revolution_speeds
@@ -544,8 +544,7 @@ def shaft_angle(
     one's marks joined by a spline (*smooth*). The angle is computed here with the functions cut_revolutions applies
     to the same argument: revolution boundaries found here (for labels) are those of the revolutions it cuts.
     """
-    from ..signals import angle_from_pulses, angle_from_speed, unwrap_tacho
-    from ..signals.angle import MarksMiscounted
+    from ..signals.angle import MarksMiscounted, angle_from_pulses, angle_from_speed, unwrap_tacho
 
     path, n, fs = rec.path, rec.signal.size, rec.fs
     if rec.tacho is None:
@@ -668,9 +667,10 @@ def cut_recording(
     transient: str = "none",
     where: str = "",
     tacho_shaft=None,
+    settle_window: int = 1,
 ) -> CutRecording:
     """Read a record (read_recording), find the input's angle (shaft_angle; *tacho_shaft* a TachoShaft) and
-    cut its complete revolutions (*transient* "stats" drops a start-up transient, "none" keeps all)."""
+    cut its complete revolutions (*transient* "stats" drops a start-up over settle_turns or *settle_window*)."""
     from ..signals import POINTS, cut_revolutions
 
     rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
@@ -695,7 +695,7 @@ def cut_recording(
         cut = cut_revolutions(raw, rec.fs, **source, points=points or POINTS, transient="none")
     start, warning = 0, None
     if transient == "stats":  # the level over the slowest shaft's turn (steady_start_stats)
-        window = 1 if gearbox is None else math.ceil(1 / min(order_table(gearbox).shaft_orders))
+        window = settle_window if gearbox is None else settle_turns(gearbox)
         where_ = f"{path}: vibration column {_one_line_repr(rec.vibration)}"
         start, _, warning = steady_start(cut.revolutions, where_, window=window)
     revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))

@@ -83,7 +83,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
             {
                 k: getattr(target, k)
                 for k in ("vibration", "tacho", "pulses_per_rev", "sensitivity", "gain", "fs", "transient")
-                + ("speed_hz", "gearbox", "unit")
+                + ("speed_hz", "gearbox", "unit", "settle_window")
             }
         )
         # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)

@@ -23,6 +23,7 @@ from ..data.recordings import (
 from ..data.textzip import CALIBRATION, align_to, calibration
 from ..errors import GearlabInputError, did_you_mean, shown
 from ..files import matched
+from ..gearbox.orders import settle_turns
 from ..signals.angle import continued
 from ..units import rate_hz
 
@@ -69,6 +70,7 @@ class Target:
     gearbox: str | None = None  # a description (file or built-in name): the speed from its mesh orders
     unit: str | None = None  # the vibration's unit where its name and file say none (recordings.UNITS)
     tacho_shaft: TachoShaft | None = None  # a tacho on another shaft than the input (None: the input)
+    settle_window: int = 1  # the input turns a start-up is judged over: the [source]'s slowest shaft's turn
 
     def keys_of(self, file: TargetFile) -> dict:
         """The acquisition keys *file* is read with: its own, else the target's ('tacho_shaft': a TachoShaft,
@@ -115,6 +117,7 @@ class Target:
                 transient=self.transient,
                 speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
                 gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
+                settle_window=self.settle_window,
             )
         except GearlabInputError as exc:  # what the data shows (a ragged row, a NaN): named where it is listed
             if exc.args and isinstance(exc.args[0], str) and "[target]" not in exc.args[0]:
@@ -363,6 +366,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         gearbox,
         keys["unit"],
         shaft,
+        settle_turns(box),
     )
 
 
