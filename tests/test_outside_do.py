@@ -5,6 +5,8 @@ as the turn's reference), and a once-per-turn tacho that missed a pulse."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from scipy.io import wavfile
@@ -13,7 +15,7 @@ from test_inspect import described
 from gearlab.data.recordings import cut_recording
 from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
-from gearlab.inspect import InspectOptions, inspect_record
+from gearlab.inspect import InspectOptions, _unexplained_words, inspect_record
 from gearlab.kinds.detection_scoring import asked_off
 from gearlab.signals.angle import angle_from_pulses
 
@@ -173,3 +175,17 @@ def test_a_steady_take_read_by_a_gap_run_settles_over_its_slowest_shaft_s_turn(t
     keys = {"vibration": "0", "tacho": "1", "pulses_per_rev": 60, "gain": 10.0, "sensitivity": 0.5 / G}
     turn_by_turn = cut_recording(takes["encoder"], **keys, transient="stats").warnings
     assert [w for w in turn_by_turn if "never settles" in w], turn_by_turn
+
+
+def test_a_slow_box_s_speed_swing_left_about_its_mesh_is_said_a_modulation_not_a_fixed_frequency(tmp_path):
+    # DO's 19/103 box at 3 Hz without a tacho: its speed swings 0.2 % at 0.37 Hz, faster than the mesh's phase is
+    # followed, and the pair 0.123 orders about the mesh (52 dB) read 'not a gear order (a fixed frequency such as
+    # mains, or a bearing's)', a bearing to look for where the mesh is modulated
+    th = _shaft(1, 20.0, 3.0, 2500.0)
+    np.savez(tmp_path / "s.npz", acc=_vibration(th, 1, ((19, 103),)), fs=2500.0)
+    got = inspect_record(str(tmp_path / "s.npz"), described((19, 103), speed="3 Hz"), InspectOptions("acc"))
+    assert "matches" in got["verdict"], got["verdict"]
+    pairs = [u for u in got["check"]["unexplained"] if u.get("modulation")]
+    assert sorted(round(u["order"], 2) for u in pairs) == [18.88, 19.12], got["check"]["unexplained"]
+    words = _unexplained_words(pairs[0], got["speed"]["mean_hz"])
+    assert re.search(r"\(0\.37\d? Hz\) off 19, mirrored: a modulation", words) and "fixed frequency" not in words, words
