@@ -1,7 +1,9 @@
 """Outside user DO (issue 39): gearboxes and recordings made here with numpy (shaft and mesh harmonics modulated by
 both shafts, noise), read as docs/your_gearbox.md says. A 37/89 box at 33 Hz recorded as an int16 WAV (a 50 mV/g
 sensor through a x10 amplifier, a 10 V full scale) whose tacho is a 60-2 encoder (a wheel of 60 marks, 2 left out
-as the turn's reference), and a once-per-turn tacho that missed a pulse."""
+as the turn's reference), and a once-per-turn tacho that missed a pulse; a take scored 10 % off its condition's
+speed; a 29/101 + 33/107 box at 41 Hz (its slow shafts' lines, its steady level); a 19/103 box at 3 Hz without a
+tacho (its speed's swing about the mesh)."""
 
 from __future__ import annotations
 
