@@ -18,6 +18,7 @@ from gearlab.data.recordings import cut_recording
 from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.inspect import InspectOptions, _unexplained_words, inspect_record
+from gearlab.inspect_history import localisation
 from gearlab.kinds.detection_scoring import asked_off
 from gearlab.signals.angle import angle_from_pulses
 
@@ -90,6 +91,8 @@ def takes(tmp_path_factory):
         "encoder": _wav(folder / "encoder.wav", 1, encoder),
         "dropped": _wav(folder / "dropped.wav", 2, once_dropped),
         "glitch": _wav(folder / "glitch.wav", 3, once_glitched),
+        "encoder2": _wav(folder / "encoder2.wav", 4, encoder),
+        "once": _wav(folder / "once.wav", 6, lambda th: np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)),
     }
 
 
@@ -202,3 +205,15 @@ def test_a_slow_box_s_speed_swing_left_about_its_mesh_is_said_a_modulation_not_a
     assert sorted(round(u["order"], 2) for u in pairs) == [18.88, 19.12], got["check"]["unexplained"]
     words = _unexplained_words(pairs[0], got["speed"]["mean_hz"])
     assert re.search(r"\(0\.37\d? Hz\) off 19, mirrored: a modulation", words) and "fixed frequency" not in words, words
+
+
+def test_a_healthy_take_read_by_a_once_per_turn_tacho_is_not_localised_against_an_encoder_s_history(takes):
+    # the 60-2 encoder's raw edges, quantised to the 25.6 kHz samples, left its angle 2.2 mrad rms off where the
+    # once-per-turn tacho's smoothed edges leave 0.6: read against the encoder's history, a healthy take was
+    # 'localised on the input pinion 37T (stage 1), z = 5.02 (threshold 2.58), tooth 13'
+    box = described(BOX, speed="33 Hz")
+    read = InspectOptions("0", tacho="1", pulses_per_rev=60, gain=10.0, sensitivity=0.5 / G)
+    history = [(takes[k], read) for k in ("encoder", "encoder2")]
+    once = InspectOptions("0", tacho="1", pulses_per_rev=1, gain=10.0, sensitivity=0.5 / G)
+    loc = localisation(takes["once"], history, box, once)
+    assert loc["named"] is None, loc["summary"]
