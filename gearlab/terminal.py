@@ -392,8 +392,7 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     its change is localised on and the evidence, then a table that fits *width* columns (a terminal's):
     per method and unit the units called, the median score less the threshold (above 0: most units
     called) and the decision ("other damage: <gear>" when the change lies on a gear not watched)."""
-    from .kinds.detection_scoring import unwatched  # the kinds import this module: at call time
-    from .kinds.detection_which_gear import is_undetermined
+    from .kinds.detection_which_gear import is_undetermined, unwatched  # the kinds import this module: at call time
 
     quiet = unwatched(rows)  # localised on a gear no method watches, no method's decision calling it
     shown: list = [Text(f"scored with {run_dir}", style="bold")]

@@ -55,6 +55,7 @@ from .detection_which_gear import (
     localisation_of,
     localise_scored,
     stale_calls,
+    unwatched,
 )
 
 # What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
@@ -725,19 +726,6 @@ def score(
 
         score_trend(trends, run.file("figures", "score_trend.png"))
     return rows
-
-
-def unwatched(rows: list[dict]) -> dict[str, str]:
-    """{file: note} of the scored takes whose change is localised on a gear no method watches (their call other
-    damage) while no method's decision called it (their units under threshold: each row 'healthy', of the watched
-    gear), as the terminal says under such a take (terminal.score_tables): the history and the trend say so too."""
-    calls: dict[str, str] = {}
-    for r in rows:
-        if is_other(r.get("call")):
-            calls.setdefault(r["file"], r["call"])
-    called = {r["file"] for r in rows if is_other(r["decision"])}
-    said = "on a gear this run does not watch; no method called it"
-    return {f: f"{c}, {said}" for f, c in calls.items() if f not in called}
 
 
 def score_trends(run: RunDir) -> list:

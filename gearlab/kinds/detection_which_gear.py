@@ -112,6 +112,19 @@ def is_undetermined(call: str | None) -> bool:
     return bool(call) and call.startswith(UNDETERMINED)
 
 
+def unwatched(rows: list[dict]) -> dict[str, str]:
+    """{file: note} of the scored takes whose change is localised on a gear no method watches (their call other
+    damage) while no method's decision called it (their units under threshold: each row 'healthy', of the watched
+    gear), as the terminal says under such a take (terminal.score_tables): the history and the trend say so too."""
+    calls: dict[str, str] = {}
+    for r in rows:
+        if is_other(r.get("call")):
+            calls.setdefault(r["file"], r["call"])
+    called = {r["file"] for r in rows if is_other(r["decision"])}
+    said = "on a gear this run does not watch; no method called it"
+    return {f: f"{c}, {said}" for f, c in calls.items() if f not in called}
+
+
 def is_also_other(call: str | None) -> bool:
     """A record's call names damage on another gear beside the watched one's: counted as both."""
     return bool(call) and call.startswith(WATCHED) and ALSO in call
