@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from browser import check_report, needs_chromium
+from browser import check_reports, needs_chromium
 from test_detection import scenario as detection_scenario
 from tiny import transfer
 
@@ -484,8 +484,7 @@ def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
         "stiffness": stiffness,
         "detection": runs["detection"],
     }
-    for kind, run in kinds.items():
-        check_report(run / "report.html", tmp_path / kind)
+    check_reports([(run / "report.html", tmp_path / kind) for kind, run in kinds.items()])
 
 
 def test_detection_figures_skip_the_tight_bbox_pass_and_keep_within_their_canvas(runs, tmp_path, monkeypatch):
