@@ -61,8 +61,12 @@ def unit_name(
 # threshold set on them lets new healthy takes through above the rate asked. Two: each scored on the other take
 # (synthetic rig records, 20 conditions of 2 history + 6 healthy new takes, 1 % asked: matched_filter's record10
 # 7.7 -> 1.2 % of the new takes' units, record30 5.0 -> 0.8 %, a chip of 1/8 the size's record10 units 98 -> 96 %
-# found; likelihood_ratio's 5.0 -> 6.0 %, over the rate either way: the take-to-take spread of its scores, not its
-# reference; the classical indicators': detection_classical)
+# found; the classical indicators': detection_classical). A new take is then scored by the mean of those detectors
+# (detectors.MeanOf), as the history was: likelihood_ratio divides by a unit's own residual scale, which holds its
+# reference's error, so the detector made of both takes spread a new take's scores otherwise (record10 6.0 -> 4.0 %,
+# record30 2.5 -> 1.7 %; fresh seeds 4.0 -> 3.5 %, 4.2 -> 2.5 %; matched_filter's record10 1.2 -> 2.1 %, fresh 0.8 ->
+# 1.0 %; chips all found). What likelihood_ratio still lets through is its scores' right skew (1.1-1.6 within a
+# take): record_effects' normal quantile misses their tail
 LEFT_OUT = 2
 
 
@@ -76,7 +80,8 @@ def train_unit(task: tuple) -> dict:
     """One method at one condition (one seed of it), in this process or a worker: trained on the
     source and the history's training revolutions, then its scores of the history units (for the
     threshold; a detector handed *left_out*, the history rows without each record in turn: each
-    record's units scored by the detector referenced without it) and, only now, of the test units. It
+    record's units scored by the detector referenced without it) and, only now, of the test units (by
+    the mean of those detectors where there are: detectors.MeanOf, the model kept for `gearlab score`). It
     says what it does from its start: torch takes seconds to load in a fresh worker (issue 41)."""
     (
         protocol,
@@ -157,10 +162,13 @@ def train_unit(task: tuple) -> dict:
     if left_out is None:
         hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
     else:  # each history record's units scored by the detector referenced without it
+        from ..learn.detectors import MeanOf
+
         hist = {
             u: np.concatenate([fault_score(m, X_k, device) for m, X_k in zip(left_out, rule.groups(u, X))])
             for u, X in history_units.items()
         }
+        model = MeanOf(left_out)  # and a new take by those detectors, their mean (detectors.MeanOf)
     fixed = rule.decide(hist)
     test = {path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()}
     # kept, so that `gearlab score` scores new records with it without training again

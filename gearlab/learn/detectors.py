@@ -329,3 +329,18 @@ def referenced_on(model: nn.Module, rows: np.ndarray) -> nn.Module | None:
         if "scale" in buffers and inner.scale > 0:  # likelihood_ratio's (as likelihood_statistic's)
             inner.scale.copy_(noise_scale(rows - inner.reference, inner.kind).median())
     return made
+
+
+class MeanOf(nn.Module):
+    """The mean of the logits of *parts*, detectors alike but for what each was referenced on
+    (`referenced_on`): how a new take is scored where each history record was scored by the part
+    referenced without it (gearlab.kinds.detection_units.train_unit), so that its scores are what the
+    history's were. A part referenced on fewer records holds a noisier reference; the score of a detector
+    that divides by the scored unit's own residual scale (likelihood_ratio's ``unit``) depends on it."""
+
+    def __init__(self, parts: list[nn.Module]):
+        super().__init__()
+        self.parts = nn.ModuleList(parts)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return torch.stack([m(x) for m in self.parts]).mean(dim=0)
