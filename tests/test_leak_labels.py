@@ -1,14 +1,17 @@
 """Leaks the protocol's test-row check (tests/test_protocol.py) cannot see: an unsupervised method
-handed the target training labels. On the same small synthetic data, with the split fixed."""
+handed the target training labels, and `shapes` scoring in a noise law it was not read from the
+history. Both run on the same small synthetic data with the split fixed."""
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 import torch
-from test_protocol import METHODS, SOURCE, TARGET, tiny
+from test_protocol import METHODS, SOURCE, TARGET, method, synthetic, tiny
 
 from gearlab.learn import protocol as P
-from gearlab.learn.calibration import RECIPE, THESIS
+from gearlab.learn.calibration import RECIPE, THESIS, history_law
+from gearlab.learn.networks import ShapeLikelihood
 from gearlab.learn.protocol import StateStore, run_unit, split
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -48,3 +51,34 @@ def test_an_unsupervised_method_reads_no_target_training_label(m, calibration, n
     assert all(torch.equal(models[1][name], models[0][name]) for name in models[0])
     assert flipped["history"] == plain["history"]
     assert flipped["accuracy"] == plain["accuracy"] and flipped["confusion"] == plain["confusion"]
+
+
+@pytest.mark.parametrize("law", ["gaussian", "laplace"])
+@pytest.mark.parametrize("adapter, supervised, params", [("mmd", False, {}), ("finetune", True, {"variant": "last"})])
+def test_shapes_scores_in_the_noise_law_read_off_the_target_history(law, adapter, supervised, params):
+    """`shapes` scores its templates in the noise law of the target history (calibration.history_law),
+    as `likelihood_ratio` does: a target with Gaussian noise gets Gaussian templates, one with Laplace
+    noise Laplace ones. A law fixed in the code (the true law of Experiments A and B) fails one."""
+    rng = np.random.default_rng(4)
+    fault = (np.arange(40) < 12).astype(np.int8)
+    noise = rng.normal(size=(40, 256)) if law == "gaussian" else rng.laplace(size=(40, 256)) / np.sqrt(2.0)
+    X = noise + np.sin(np.arange(256) / 5.0) + 0.5
+    X[fault == 1, ::32] += 4.0
+    target = replace(synthetic(12, 28), X=X.astype(np.float32), fault=fault, label=fault.copy())
+    m = method(adapter, supervised, **params)
+    p = tiny(methods=(m,), calibration=RECIPE, network="shapes")
+    s = split(p, SOURCE, target, 0, 0)
+    assert history_law(target.X[s.history_core]) == law  # the data say which law it is
+    model = run_method(p, m, target, s)
+    laws = {module.law for module in model.modules() if isinstance(module, ShapeLikelihood)}
+    assert laws == {law}
+
+
+def run_method(p, m, target, s):
+    """The model *m* makes of the split *s* (as the protocol's unit makes it, before scoring)."""
+    source = (SOURCE.X[s.source_train], SOURCE.fault[s.source_train].astype(np.int64))
+    val = (SOURCE.X[s.source_val], SOURCE.fault[s.source_val].astype(np.int64))
+    train = (target.X[s.target_train], target.fault[s.target_train].astype(np.int64))
+    core = target.X[s.history_core]
+    model, _, _ = P.train_method(p, m, source, val, train, 0, 0, StateStore(None), torch.device("cpu"), core=core)
+    return model
