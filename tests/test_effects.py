@@ -262,6 +262,30 @@ def test_no_model_effect_defaults_to_a_target_preset():
     }
 
 
+def test_the_gap_search_starts_from_the_source_it_is_given(monkeypatch):
+    """A fit of drive_inertias on a ten_dof source (Dataset A's, whose model has its own drive)
+    starts from the source's values, not the effect's defaults: the search the diagnosis runs
+    (gearlab.gap.search.fit_effect) builds its space from the source, as Space does above."""
+    from gearlab.gap import search
+
+    LUO2019 = REG.get("model", "ten_dof").preset("luo2019")
+    made = []
+
+    class Started(Exception):
+        pass
+
+    class Recorded(search.Space):
+        def __init__(self, effect, source=None):
+            super().__init__(effect, source)
+            made.append(self)
+            raise Started  # the start is all this test reads: no simulation
+
+    monkeypatch.setattr(search, "Space", Recorded)
+    with pytest.raises(Started):
+        search.fit_effect((dataset_preset("A-pinion-ch5"), "drive_inertias", (), None, None, 0, False, None))
+    assert made[0].defaults == {k: LUO2019["params"][k] for k in ("I11", "I22", "k_c", "c_c")}
+
+
 def test_drive_inertias_on_six_dof_is_the_eight_dof_model_of_dataset_b():
     sim, config, _ = configured([TABLE_2_4_DRIVE])
     assert model_of(config).name == "eight_dof" and sim.model is REG.get("model", "eight_dof")
