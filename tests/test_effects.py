@@ -286,6 +286,28 @@ def test_the_gap_search_starts_from_the_source_it_is_given(monkeypatch):
     assert made[0].defaults == {k: LUO2019["params"][k] for k in ("I11", "I22", "k_c", "c_c")}
 
 
+def test_no_mismatch_factor_defaults_a_source_value_onto_another_preset_s():
+    """A mismatch factor at its default keeps the source's value (1) or lands it on no preset's value:
+    load_level's factor times a preset's torques is none of the presets' loads (1.5 or 0.5 would move
+    Dataset B's 20 N*m onto its 30 or 10), bearing_stiffness's factors times one preset's k_b, c_b none
+    of the other's (k_factor 0.5 is a prior, supports softer than the bearing alone). Every parameter
+    named *factor is listed here."""
+    presets = (REG.get("model", "ten_dof").preset("luo2019"), REG.get("model", "eight_dof").preset("meng2020"))
+    values = {
+        ("load_level", "factor"): lambda p: p["loads_nm"],
+        ("bearing_stiffness", "k_factor"): lambda p: (p["params"]["k_b"],),
+        ("bearing_stiffness", "c_factor"): lambda p: (p["params"]["c_b"],),
+    }
+    named = {(n, k) for n in REG.names("effect") for k in declared(REG.get("effect", n).params) if k.endswith("factor")}
+    assert named == set(values)
+    for (name, key), of in values.items():
+        factor = declared(REG.get("effect", name).params)[key][1]
+        if factor == 1.0:
+            continue
+        moved = [v * factor for p in presets for v in of(p)]
+        assert not any(math.isclose(m, v) for m in moved for p in presets for v in of(p)), (name, key, factor)
+
+
 def test_drive_inertias_on_six_dof_is_the_eight_dof_model_of_dataset_b():
     sim, config, _ = configured([TABLE_2_4_DRIVE])
     assert model_of(config).name == "eight_dof" and sim.model is REG.get("model", "eight_dof")
