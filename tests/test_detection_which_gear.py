@@ -136,3 +136,15 @@ def test_a_flag_on_a_take_too_short_for_the_check_is_a_fault_of_no_gear(target):
     assert "| 40 Hz | flags everything | 0 / 0 / 100 | 100 / 0 / 0 | 100 / 0 / 0 |" in D.calls_md([called])
     assert D.decision_of(True, loc["records"]["wheel"]["call"]) == loc["records"]["wheel"]["call"]
     assert D.decision_of(False, loc["records"]["wheel"]["call"]) == "healthy"
+
+
+def test_the_localisation_thresholds_come_from_the_history_records_alone(target):
+    """A condition's per-shaft and non-synchronous thresholds are fixed on its history records: the
+    test takes replaced by other recordings (each the output-gear crack's) move none of them."""
+    source, conditions, _ = target
+    ((name, cond),) = conditions.items()
+    tests = [f.path for f, _ in cond["test"]]
+    others = {**cond, "raw": {**cond["raw"], **{p: cond["raw"]["wheel"] for p in tests}}}
+    plain, other = (D.localise_target(source, {name: c})["conditions"][name] for c in (cond, others))
+    assert plain["thresholds"] == other["thresholds"]
+    assert plain["nonsync_threshold"] == other["nonsync_threshold"]
