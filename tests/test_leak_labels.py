@@ -1,6 +1,6 @@
-"""Leaks the protocol's test-row check (tests/test_protocol.py) cannot see: an unsupervised method
-handed the target training labels, and `shapes` scoring in a noise law it was not read from the
-history. Both run on the same small synthetic data with the split fixed."""
+"""Leaks the protocol's test-row check (tests/test_protocol.py) cannot see: in the adapter variants
+its METHODS leave out, an unsupervised method handed the target training labels, and `shapes`
+scoring in a noise law it was not read from the history. On the same small synthetic data."""
 
 from dataclasses import replace
 
@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 from test_protocol import METHODS, SOURCE, TARGET, method, synthetic, tiny
+from test_protocol import test_target_test_samples_cannot_reach_training_stopping_or_selection as leak_check
 
 from gearlab.learn import protocol as P
 from gearlab.learn.calibration import RECIPE, THESIS, history_law
@@ -17,13 +18,30 @@ from gearlab.learn.protocol import StateStore, run_unit, split
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 UNSUPERVISED = [m for m in METHODS if not m.supervised]
-
-
-@pytest.mark.parametrize(
+# the adapter variants the protocol test's METHODS leave out (its leak check runs them below)
+OTHER_VARIANTS = (
+    method("coral"),
+    method("dann", True),
+    method("finetune", True, variant="all"),
+    method("finetune", True, variant="last"),
+)
+CALIBRATIONS = pytest.mark.parametrize(
     "calibration, network",
     [(THESIS, "burst"), (RECIPE, "burst"), (RECIPE, "shapes")],
     ids=["thesis", "recipe", "recipe-shapes"],
 )
+
+
+@CALIBRATIONS
+@pytest.mark.parametrize("m", OTHER_VARIANTS, ids=lambda m: m.key)
+def test_every_adapter_variant_keeps_the_target_test_rows_out(m, calibration, network, monkeypatch):
+    """tests/test_protocol.py's check (no target test row or label reaches training, stopping,
+    calibration, threshold or the epoch kept) for the variants its METHODS leave out: coral
+    unsupervised, dann supervised, finetune 'all' and 'last'."""
+    leak_check(m, calibration, network, monkeypatch)
+
+
+@CALIBRATIONS
 @pytest.mark.parametrize("m", UNSUPERVISED, ids=lambda m: m.key)
 def test_an_unsupervised_method_reads_no_target_training_label(m, calibration, network, monkeypatch):
     """With the split fixed, flipping the labels of the target *training* rows (k = 2: two faults
