@@ -17,7 +17,6 @@ from gearlab.learn.protocol import StateStore, run_unit, split
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
-UNSUPERVISED = [m for m in METHODS if not m.supervised]
 # the adapter variants the protocol test's METHODS leave out (its leak check runs them below)
 OTHER_VARIANTS = (
     method("coral"),
@@ -25,6 +24,7 @@ OTHER_VARIANTS = (
     method("finetune", True, variant="all"),
     method("finetune", True, variant="last"),
 )
+UNSUPERVISED = [m for m in (*METHODS, *OTHER_VARIANTS) if not m.supervised]
 CALIBRATIONS = pytest.mark.parametrize(
     "calibration, network",
     [(THESIS, "burst"), (RECIPE, "burst"), (RECIPE, "shapes")],
