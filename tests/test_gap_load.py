@@ -164,3 +164,20 @@ def test_a_bearing_keeps_its_damping_with_the_load_profiled_out():
     c = scorer.load_factor(rows(search.with_(effects=_by_level(search.effects + fitted))))
     assert c == pytest.approx(0.74, rel=0.05)
     assert dict(fitted[0][1])["c_factor"] == pytest.approx(0.61, rel=0.05)
+
+
+def test_the_report_says_the_load_the_correction_carries_and_the_one_its_figures_use():
+    """The reports' rows are held at the factor read beside every fitted effect (read[0]); where an
+    effect was taken back the corrected source carries the one read beside the kept effects (read[-1]).
+    The note and the record name the carried factor, and the reports' beside it where they differ."""
+    effects = [["drive_inertias", [["I11", 0.01], ["I22", 0.01], ["c_c", 5.0], ["k_c", 1e4]]]]
+    two = level.carried({"notes": [], "corrected_effects": list(effects)}, [2.9, 3.12])
+    assert two["load"] == {"factor": 3.12, "report": 2.9, "read": [2.9, 3.12]}
+    assert two["corrected_effects"][-1] == ["load_level", [["factor", 3.12]]]  # what the corrected source runs at
+    (note,) = two["notes"]
+    assert "fitted with the effects: 3.12 x the source's" in note and "compare at 2.9 x" in note
+    one = level.carried({"notes": [], "corrected_effects": list(effects)}, [0.62])
+    assert one["load"]["factor"] == one["load"]["report"] == 0.62 and "compare at" not in one["notes"][0]
+    # within LOAD_DIFFERS of the source's own load: 1 held, nothing carried
+    own = level.carried({"notes": [], "corrected_effects": list(effects)}, [1.02, 0.6])
+    assert own["load"]["report"] == 1.0 and own["corrected_effects"][-1] == ["load_level", [["factor", 0.6]]]

@@ -390,3 +390,29 @@ def test_only_runs_the_named_trials_as_drawn_in_the_full_run(cli, tmp_path):
     code, _, err = cli("transfer-benchmark", "--trials", "4", "--only", "5", "--out", tmp_path / "runs")
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert "[benchmark] key 'only'" in err and "from 0 to 3" in err and not (tmp_path / "runs").exists()
+
+
+def test_the_correction_record_and_table_say_the_load_the_corrected_source_carries(monkeypatch):
+    """The corrected source runs at the load read beside the kept effects; where the diagnosis's report
+    compared at another (read beside an effect since taken back), the table names both."""
+    from types import SimpleNamespace
+
+    load = {"factor": 3.12, "report": 2.9, "read": [2.9, 3.12]}
+
+    def diagnose(source, target_X, settings, executor=None, on_event=None, chain=None):
+        effects = [{"name": n, "params": dict(p)} for n, p in FITTED]
+        return {"gap_before": 10.0, "gap_after": 1.0, **PARTLY, "effects": effects, "corrected_effects": FITTED}
+
+    monkeypatch.setattr("gearlab.gap.diagnose.diagnose", lambda *a, **k: {**diagnose(*a, **k), "load": load})
+    target = SimpleNamespace(reference=(0.0, 1.0), X=np.zeros((4, 8)))
+    spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
+    record = tb.correction(spec, "trial000", spec.source, target, np.arange(2), None, lambda e: None)
+    assert record["load"] == load
+    record["unit"] = "trial000/correction"
+    target_record = {"unit": "trial000/target", "trial": "trial000", "answers": {}, "bound": None}
+    trial = tb.per_trial([target_record, record])["trial000"]
+    shown = tb.fitted_text(trial["correction"] | {"effects": [], "withheld": ""})
+    assert shown == "load 3.12 x (the report's 2.9 x)"
+    same = {"factor": 0.62, "report": 0.62, "read": [0.62]}
+    assert tb.fitted_text({"effects": [], "load": same}) == "load 0.62 x"
+    assert tb.fitted_text({"effects": [], "load": None}) == "none"  # no load read (or a record from before)

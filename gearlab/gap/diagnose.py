@@ -251,7 +251,7 @@ def diagnose(
         if final and final != fitted:
             again = scorer.load_factor(free(rows)(run.search.with_(effects=_by_level(run.search.effects + final))))
             read.append(again)
-        result = carried(result, own_or(read[-1]), read)
+        result = carried(result, read)
     return evaluated(result, first, on_event)
 
 

@@ -128,17 +128,23 @@ def best_factor(score_at, bounds_: tuple[float, float]) -> float:
     return float(math.exp(found.x)) if found.fun <= values[i] else float(math.exp(grid[i]))
 
 
-def load_entry(c: float, read: list[float]) -> tuple[tuple, dict]:
+def load_entry(c: float, report: float, read: list[float]) -> tuple[tuple, dict]:
     """The load_level effect (canonical) the corrected source carries for the factor *c*, and the
-    diagnosis's record of it (*read*: the factors read beside the accepted effects, then the kept ones)."""
-    return get_registry().get("effect", LOAD).spec({"factor": c}), {"factor": c, "read": read}
+    diagnosis's record of it: ``factor`` (*c*), ``report`` (the factor the reports' figures compare at)
+    and ``read`` (the factors read beside the accepted effects, then the kept ones)."""
+    return get_registry().get("effect", LOAD).spec({"factor": c}), {"factor": c, "report": report, "read": read}
 
 
-def load_note(c: float) -> str:
-    return (
+def load_note(c: float, report: float) -> str:
+    """The report's line on the load: the factor the corrected source carries (*c*) and, where the
+    reports' figures compare at another (*report*: read beside an effect since taken back), that one."""
+    out = (
         f"the target's load fitted with the effects: {c:.3g} x the source's (the vibration scales "
         "with it); the corrected source carries it as load_level"
     )
+    if report != c:
+        out += f"; the report's gap and shares compare at {report:.3g} x, read beside every fitted effect"
+    return out
 
 
 # Another round while the search's score left by the round's fit stands this many of its noise widths
@@ -156,12 +162,16 @@ def score_stands(fit: dict, room: bool) -> bool:
     return bool(room and noise and math.isfinite(fit["score"]) and fit["score"] > SCORE_WIDTHS * noise)
 
 
-def carried(result: dict, c: float, read: list[float]) -> dict:
-    """*result* (a diagnosis's conclusion) with the load factor *c* its effects were fitted beside:
-    ``load`` (*read*: the factors read), a note, and ``load_level`` in the corrected source
-    where it has effects and the factor is not 1 (the source's own: :func:`own_or` holds 1 within LOAD_DIFFERS)."""
-    effect, result["load"] = load_entry(c, read)
-    result["notes"].append(load_note(c))
+def carried(result: dict, read: list[float]) -> dict:
+    """*result* (a diagnosis's conclusion) with the load its effects were fitted beside (*read*: the
+    factors read beside every accepted effect, which hold the reports' rows, then beside the kept ones,
+    where needed_effects took one back): ``load``, a note that says the factor the corrected source
+    carries and, where it differs, the one the reports' figures compare at, and
+    ``load_level`` in the corrected source where it has effects and the factor is not 1 (the source's
+    own: :func:`own_or` holds 1 within LOAD_DIFFERS)."""
+    c, report = own_or(read[-1]), own_or(read[0])
+    effect, result["load"] = load_entry(c, report, read)
+    result["notes"].append(load_note(c, report))
     if result.get("corrected_effects") and c != 1.0:
         result["corrected_effects"] = [*result["corrected_effects"], [effect[0], [list(kv) for kv in effect[1]]]]
     return result

@@ -272,6 +272,7 @@ def correction(spec: Spec, name: str, source_spec: DatasetSpec, target, history,
         "withheld": correction_withheld(result),  # why the corrected rows use the plain source ('' : they do not)
         "effects": [{k: e.get(k) for k in EFFECT_KEYS} for e in result["effects"]],
         "corrected_effects": result["corrected_effects"],
+        "load": result.get("load"),  # the load the corrected source carries, and the reports' (gap.level.carried)
         "evaluations": result.get("evaluations"),  # its score evaluations, its fits' included
         "seconds": round(time.perf_counter() - started, 1),
     }
@@ -483,7 +484,7 @@ def per_trial(records: list[dict]) -> dict[str, dict]:
         if r["unit"].endswith("/correction") and r["trial"] in out:
             out[r["trial"]]["correction"] = {
                 **{k: r[k] for k in ("effects", "gap_before", "gap_after", "unexplained")},
-                **{k: r.get(k) for k in ("verdict", "explained_share", "evaluations")},
+                **{k: r.get(k) for k in ("verdict", "explained_share", "evaluations", "load")},
                 "left_out": r.get("left_out", []),
                 "withheld": correction_withheld(r),
             }
@@ -641,7 +642,19 @@ def fitted_text(correction: dict | None) -> str:
     ]
     out = ", ".join(f"{e['name']} ({e['why']})" for e in correction.get("left_out", ()))
     withheld = [correction["withheld"]] if correction.get("withheld") else []
-    return "; ".join(parts + ([f"left out: {out}"] if out else []) + withheld) or "none"
+    return (
+        "; ".join(parts + load_text(correction.get("load")) + ([f"left out: {out}"] if out else []) + withheld)
+        or "none"
+    )
+
+
+def load_text(load: dict | None) -> list[str]:
+    """The load a correction carries ('load 0.62 x'), and the reports' where they compare at another:
+    [] where the diagnosis read none (the load within 5 % of the source's, or a record from before)."""
+    if not load or (load["factor"] == 1.0 and load.get("report", 1.0) == 1.0):
+        return []
+    report = load.get("report", load["factor"])
+    return [f"load {load['factor']:.3g} x" + (f" (the report's {report:.3g} x)" if report != load["factor"] else "")]
 
 
 def methods_md(summary: dict) -> str:
