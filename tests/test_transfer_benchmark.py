@@ -394,7 +394,8 @@ def test_only_runs_the_named_trials_as_drawn_in_the_full_run(cli, tmp_path):
 
 def test_the_correction_record_and_table_say_the_load_the_corrected_source_carries(monkeypatch):
     """The corrected source runs at the load read beside the kept effects; where the diagnosis's report
-    compared at another (read beside an effect since taken back), the table names both."""
+    compared at another (read beside an effect since taken back), the table names both. The record keeps
+    round 1's ranking too (each candidate's fit alone)."""
     from types import SimpleNamespace
 
     load = {"factor": 3.12, "report": 2.9, "read": [2.9, 3.12]}
@@ -403,11 +404,13 @@ def test_the_correction_record_and_table_say_the_load_the_corrected_source_carri
         effects = [{"name": n, "params": dict(p)} for n, p in FITTED]
         return {"gap_before": 10.0, "gap_after": 1.0, **PARTLY, "effects": effects, "corrected_effects": FITTED}
 
-    monkeypatch.setattr("gearlab.gap.diagnose.diagnose", lambda *a, **k: {**diagnose(*a, **k), "load": load})
+    ranking = [{"name": "sensor_bandwidth", "share_removed": 0.98, "params": {"f_n": 7.9e3, "zeta": 0.14}}]
+    fitted = {"load": load, "ranking": ranking}  # round 1's fit of every candidate: a rule reads a rival off it
+    monkeypatch.setattr("gearlab.gap.diagnose.diagnose", lambda *a, **k: {**diagnose(*a, **k), **fitted})
     target = SimpleNamespace(reference=(0.0, 1.0), X=np.zeros((4, 8)))
     spec = load_scenario(Path(__file__).parents[1] / "scenarios" / "transfer_benchmark.toml").spec
     record = tb.correction(spec, "trial000", spec.source, target, np.arange(2), None, lambda e: None)
-    assert record["load"] == load
+    assert record["load"] == load and record["ranking"] == ranking
     record["unit"] = "trial000/correction"
     target_record = {"unit": "trial000/target", "trial": "trial000", "answers": {}, "bound": None}
     trial = tb.per_trial([target_record, record])["trial000"]

@@ -272,6 +272,7 @@ def correction(spec: Spec, name: str, source_spec: DatasetSpec, target, history,
         "withheld": correction_withheld(result),  # why the corrected rows use the plain source ('' : they do not)
         "effects": [{k: e.get(k) for k in EFFECT_KEYS} for e in result["effects"]],
         "corrected_effects": result["corrected_effects"],
+        "ranking": result.get("ranking"),  # round 1's fit of every candidate: what a rule reads a rival's share off
         "load": result.get("load"),  # the load the corrected source carries, and the reports' (gap.level.carried)
         "evaluations": result.get("evaluations"),  # its score evaluations, its fits' included
         "seconds": round(time.perf_counter() - started, 1),
