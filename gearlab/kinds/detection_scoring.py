@@ -32,6 +32,7 @@ from .common import MEASURED
 from .detection_classical import classical_record
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
+from .detection_own import own_conditions, own_words
 from .detection_records import (
     SPEED_GROUP,
     aligned,
@@ -592,28 +593,31 @@ def score(
     described = gearbox_of(described) if described else None
     # a bad --key or a missing condition: refused before any file is read
     reading_keys(meta, condition, given, box=described)
-    cut, raw, found, marks, chosen = {}, {}, {}, {}, {}
+    cut, raw, found, marks, chosen, takes = {}, {}, {}, {}, {}, own_conditions(run)
     for i, file in enumerate(files):
-        keys = reading_keys(meta, condition, given, str(file), described)
+        digest = input_digest(Path(file))  # its content: a take scored again, renamed or not, is one take
+        mine = takes.get(digest) if condition is None else None  # a take of the run's own: the run's condition
+        asked = mine[0] if mine else condition
+        keys = reading_keys(meta, asked, given, str(file), described)
         marks[str(file)] = _marks(keys)
         rec, scored_on = cut_recording(str(file), **keys), None
         speeds = rec.speeds is not None and len(rec.speeds) == len(rec.revolutions)
         try:
-            name = _condition_of(meta, str(file), rec.speed_hz, condition)
+            name = _condition_of(meta, str(file), rec.speed_hz, asked)
         except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
             other = _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
             if other or VARIES_WORDS not in rec.angle_source or not speeds:
                 moved = _moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
                 raise GearlabInputError((other or f"{far}{varies(rec.angle_source)}") + moved) from None
             # a run-up or coast-down: its revolutions at a condition's history speed
-            name, rec, scored_on = in_band(meta, str(file), rec, condition, f"{far} ({span(rec.angle_source)})")
+            name, rec, scored_on = in_band(meta, str(file), rec, asked, f"{far} ({span(rec.angle_source)})")
         else:
             if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
-                name, rec, scored_on = in_band(meta, str(file), rec, condition)
-            elif condition is None:
+                name, rec, scored_on = in_band(meta, str(file), rec, asked)
+            elif asked is None:
                 name, chosen[str(file)] = _by_level(run, meta, name, rec)
             else:
-                chosen[str(file)] = asked_off(meta, name, rec.speed_hz)
+                chosen[str(file)] = own_words(mine[1]) if mine else asked_off(meta, name, rec.speed_hz)
         too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
@@ -645,7 +649,7 @@ def score(
             differs,
             scored_on,
             rec.warnings,
-            input_digest(Path(file)),  # its content: a take scored again, renamed or not, is one take
+            digest,
         )
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
         raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
