@@ -48,7 +48,7 @@ from .detection_records import (
     varies,
 )
 from .detection_settings import Spec, stored_classical
-from .detection_units import Rule
+from .detection_units import Rule, one_thread
 from .detection_which_gear import (
     decision_of,
     is_other,
@@ -676,7 +676,8 @@ def score(
                 made = classical_record(r["method"], name, cond, classical, rule)
                 scores, thresholds = made["test_scores"], made["thresholds"]
             else:
-                scores, thresholds = _learned_scores(run, r, seen, rule, by_unit), r["thresholds"]
+                with one_thread():  # as the run scored its takes: the run's own take gets its scores bit for bit
+                    scores, thresholds = _learned_scores(run, r, seen, rule, by_unit), r["thresholds"]
             for f, _ in records:
                 for u, s in scores[f.path].items():
                     s = np.asarray(s, dtype=np.float64)

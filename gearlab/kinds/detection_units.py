@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -74,6 +75,21 @@ def without_each(records: int, made_without: Callable) -> list | None:
     """What scores each of *records* history records: made_without(i), made of the records but i, for each
     i, of LEFT_OUT records or more; None below (each scored by what the whole history made)."""
     return [made_without(i) for i in range(records)] if records >= LEFT_OUT else None
+
+
+@contextmanager
+def one_thread():
+    """torch on one thread within, as train_unit scores a run's takes: a detector's float32 sums then add up in the
+    run's order, and `gearlab score` of a run's own take gives the run's scores bit for bit (on torch's threads
+    likelihood_ratio's revolution units came out up to 4e-6 off)."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
 
 
 def train_unit(task: tuple) -> dict:
