@@ -423,7 +423,10 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
             shown.append(Text(f"warning: {flaw}", style="yellow"))
         if r0.get("call") is not None:  # a run that localises (a source simulating a gearbox description)
             where = r0.get("localised") or ("not determined" if is_undetermined(r0["call"]) else "nothing")
-            shown.append(Text(f"which gear: {where}" + (f" ({r0['evidence']})" if r0.get("evidence") else "")))
+            evidence = r0.get("evidence") or ""
+            if evidence.startswith("not read: "):  # not localised at all (a take far off its history's speed)
+                where, evidence = evidence, ""
+            shown.append(Text(f"which gear: {where}" + (f" ({evidence})" if evidence else "")))
             if r0.get("table_call"):  # the run's own take, its table decided by an older rule (detection_scoring)
                 shown.append(Text(r0["table_call"], style="yellow"))
             if file in quiet:

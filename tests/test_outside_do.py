@@ -7,19 +7,22 @@ tacho (its speed's swing about the mesh)."""
 
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
 import pytest
+from detection_scenario import run_in_module, scenario
 from scipy.io import wavfile
 from test_inspect import described
+from textrecords import signals, text, write_zip
 
 from gearlab.data.recordings import cut_recording
 from gearlab.engine import load_scenario
 from gearlab.errors import GearlabInputError
 from gearlab.inspect import InspectOptions, _unexplained_words, inspect_record
 from gearlab.inspect_history import localisation
-from gearlab.kinds.detection_scoring import asked_off
+from gearlab.kinds.detection_own import asked_off
 from gearlab.signals.angle import angle_from_pulses
 
 FS, F0, G = 25600.0, 33.0, 9.80665
@@ -217,3 +220,24 @@ def test_a_healthy_take_read_by_a_once_per_turn_tacho_is_not_localised_against_a
     once = InspectOptions("0", tacho="1", pulses_per_rev=1, gain=10.0, sensitivity=0.5 / G)
     loc = localisation(takes["once"], history, box, once)
     assert loc["named"] is None, loc["summary"]
+
+
+def test_a_take_scored_far_off_its_condition_s_speed_is_not_localised_against_that_history(
+    cli, tmp_path_factory, module_cache, quiet
+):
+    # box A's healthy take at 36.3 Hz, scored with --condition "33 Hz": every method 'healthy', and 'which gear: input
+    # pinion 37T (stage 1) (input z 4.9/2.8 ...)': the per-shaft thresholds were set on the history's speed, at which
+    # the structure's response to each shaft's orders lies elsewhere; here the tiny run's 16 Hz history, a take +10 %
+    folder = tmp_path_factory.mktemp("far")
+    out = run_in_module(scenario(folder, methods=("matched_filter",)), folder / "runs", figures=False)
+    vib, tacho = signals(revolutions=40, seed=11, phase=0.3, speed=17.6)
+    take = write_zip(folder / "fast.zip", text(vib, tacho))
+    code, stdout, err = cli("score", out, take, "--condition", "16 Hz", "--json")
+    assert code == 0, err
+    rows = json.loads(stdout)
+    why = "+10.0 % off the history's 16.00 Hz"
+    assert {(r["localised"], r["evidence"]) for r in rows} == {(None, f"not read: {why}")}, rows
+    called = [r for r in rows if r["called"] > r["units"] / 2]
+    assert {r["decision"] for r in called} <= {f"fault, gear not determined: {why}"}, rows
+    code, stdout, err = cli("score", out, take, "--condition", "16 Hz")
+    assert code == 0 and f"which gear: not read: {why}\n" in stdout, stdout

@@ -1,12 +1,14 @@
 """The takes a finished detection run read, known by their content (`gearlab score`; gearlab.kinds.detection):
 a take of the run's own, renamed or not, is scored in the condition the run put it in, so that scoring it
-again gives the scores the run gave it."""
+again gives the scores the run gave it; and how far a take scored in a condition named by hand lies off that
+condition's history speed."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from ..runs import RunDir
+from .detection_records import SPEED_GROUP
 
 # condition_by's words for a take of the run's own (the printout and the scoring history say them)
 OWN_WORDS = "the run's own"
@@ -37,3 +39,16 @@ def own_words(role: str) -> str:
     if role == "history":
         return f"{OWN_WORDS} history take: its condition in the run; in the references scored against, not left out"
     return f"{OWN_WORDS} take: its condition in the run"
+
+
+def off_history(meta: dict, name: str, speed: float, whose: str = "the") -> str:
+    """How far a take over SPEED_GROUP off its condition's history speed lies ("+10.0 % off the history's 33.00 Hz")."""
+    centre = meta["conditions"][name]["speed_hz"]
+    off = f"{100 * (speed / centre - 1):+.1f} % off {whose} history's {centre:.2f} Hz"
+    return "" if abs(speed / centre - 1) <= SPEED_GROUP else off
+
+
+def asked_off(meta: dict, name: str, speed: float) -> str:
+    """Why a take over SPEED_GROUP off the speed of the condition --condition names is scored there (else "")."""
+    off = off_history(meta, name, speed, "its")
+    return off and f"--condition: {off}, beyond the {SPEED_GROUP:.0%} a run groups by: thresholds fixed there"

@@ -32,7 +32,7 @@ from .common import MEASURED
 from .detection_classical import classical_record
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
-from .detection_own import own_conditions, own_words
+from .detection_own import asked_off, off_history, own_conditions, own_words
 from .detection_records import (
     SPEED_GROUP,
     aligned,
@@ -55,6 +55,7 @@ from .detection_which_gear import (
     is_undetermined,
     localisation_of,
     localise_scored,
+    not_read,
     stale_calls,
     unwatched,
 )
@@ -307,13 +308,6 @@ def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str
             "expected a record of a trained condition, or --condition NAME"
         )
     return near
-
-
-def asked_off(meta: dict, name: str, speed: float) -> str:
-    """Why a take over SPEED_GROUP off the speed of the condition --condition names is scored there (else "")."""
-    centre = meta["conditions"][name]["speed_hz"]
-    off = f"{100 * (speed / centre - 1):+.1f} % off its history's {centre:.2f} Hz, beyond the {SPEED_GROUP:.0%} a run"
-    return "" if abs(speed / centre - 1) <= SPEED_GROUP else f"--condition: {off} groups by: thresholds fixed there"
 
 
 def _by_level(run: RunDir, meta: dict, name: str, rec) -> tuple[str, str]:
@@ -593,7 +587,7 @@ def score(
     described = gearbox_of(described) if described else None
     # a bad --key or a missing condition: refused before any file is read
     reading_keys(meta, condition, given, box=described)
-    cut, raw, found, marks, chosen, takes = {}, {}, {}, {}, {}, own_conditions(run)
+    cut, raw, found, marks, chosen, far, takes = {}, {}, {}, {}, {}, {}, own_conditions(run)
     for i, file in enumerate(files):
         digest = input_digest(Path(file))  # its content: a take scored again, renamed or not, is one take
         mine = takes.get(digest) if condition is None else None  # a take of the run's own: the run's condition
@@ -618,6 +612,7 @@ def score(
                 name, chosen[str(file)] = _by_level(run, meta, name, rec)
             else:
                 chosen[str(file)] = own_words(mine[1]) if mine else asked_off(meta, name, rec.speed_hz)
+                far[str(file)] = "" if mine else off_history(meta, name, rec.speed_hz)
         too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
         # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
         differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
@@ -652,9 +647,11 @@ def score(
             digest,
         )
         cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
-        raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
+        if not far.get(str(file)):  # far off the history's speed: its shafts' residuals are not comparable
+            raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
+    localised.update({p: not_read(w) for p, w in far.items() if w and described is not None})  # far off: not read
     stale = stale_calls(run, localised)  # a take of the run's own, its table decided by an older rule
     for path, line in stale.items():
         on_event(Event("log", message=f"warning: {path}: {line}"))

@@ -321,6 +321,18 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
     return out
 
 
+def not_read(why: str) -> dict:
+    """localise_scored's entry of a take not localised against its condition's history, *why* in words ("+10.0 %
+    off the history's 33.00 Hz"): no gear named, a flag on it a fault of no gear (decision_of)."""
+    return {
+        "named": None,
+        "summary": f"not read: {why}",
+        "nonsync": None,
+        "call": f"{UNDETERMINED}: {why}",
+        "evidence": f"not read: {why}",
+    }
+
+
 def stale_calls(run, localised: dict[str, dict]) -> dict[str, str]:
     """{path: a line} for each of the run's own test takes (its localisation.json's records, their paths under the run's
     base) that *localised* (localise_scored: `gearlab score` of them now) calls otherwise than the run's table did:
