@@ -241,3 +241,30 @@ def test_a_take_scored_far_off_its_condition_s_speed_is_not_localised_against_th
     assert {r["decision"] for r in called} <= {f"fault, gear not determined: {why}"}, rows
     code, stdout, err = cli("score", out, take, "--condition", "16 Hz")
     assert code == 0 and f"which gear: not read: {why}\n" in stdout, stdout
+
+
+def test_a_logger_s_metadata_above_the_header_row_is_no_channel(tmp_path, cli):
+    # a logger's CSV with its settings above the header row: validate and the reader listed 'the file has: time_s,
+    # acc_V, tacho_V, sample_rate', and took column '3' (past the table's three) for the preamble's rate
+    from gearboxes import description, stage
+
+    from gearlab.data.recordings import read_channels
+
+    th = _shaft(1, 0.2)
+    t = np.arange(th.size) / FS
+    rows = "".join(f"{a:.7f},{b:.5f},{c:.1f}\n" for a, b, c in zip(t, np.sin(37 * th), encoder(th)))
+    path = tmp_path / "log.csv"
+    path.write_text(f"Logger: DL-4\nSample rate: {FS:.0f} Hz\n# operator = DO\ntime_s,acc_V,tacho_V\n{rows}")
+    with pytest.raises(GearlabInputError, match=r"the file has: time_s, acc_V, tacho_V$"):
+        read_channels(path, ["acc"])
+    assert read_channels(path, ["acc_V"])[1] == pytest.approx(FS)  # the preamble's rate is still read
+    (tmp_path / "box.toml").write_text(description(stage(*BOX, "2 mm", "20 mm"), speed="33 Hz", load="30 N*m"))
+    for vibration in ("acc", "3"):
+        text = (
+            f'[scenario]\nname = "s"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\nvibration = "{vibration}"'
+        )
+        text += '\nunit = "V"\nfiles = [{ file = "log.csv", role = "history", label = "healthy" }]\n'
+        (tmp_path / "s.toml").write_text(text)
+        code, out, err = cli("validate", tmp_path / "s.toml")
+        assert code == 2 and f"has no channel '{vibration}'" in err, (out, err)
+        assert "the file has: time_s, acc_V, tacho_V (or a 0-based column index)" in err, err

@@ -310,6 +310,7 @@ def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str
     # an index asked for ("0", "2") is found as that column, under the name it was asked by
     asked = [n for n in names if n not in columns and n not in fields and column_index(n, columns) is not None]
     contents = _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])
+    contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
     contents.units.update(units or {})
     contents.warnings += warnings
     return contents

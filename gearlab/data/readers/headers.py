@@ -25,7 +25,8 @@ from .rates import named, stated_hz
 @dataclass(frozen=True)
 class Header:
     """What a file says of itself before its data is read: its channels (rate and time fields
-    included), whether it carries a rate (a field or a time vector), and its integer channels."""
+    included; a text's comment and preamble fields are none), whether it carries a rate (a field or a
+    time vector), and its integer channels."""
 
     format: str
     channels: list[str]
@@ -240,10 +241,9 @@ def _csv_header(path: Path) -> Header:
             raise GearlabInputError(
                 f"{path}: no rows of numbers; expected a header row of column names (or none), then numbers"
             )
-    every = [*names, *(k for k, _ in fields)]
-    rate = any(is_rate_or_time(n) for n in every)
+    rate = any(is_rate_or_time(n) for n in [*names, *(k for k, _ in fields)])  # a field's rate, no channel's
     _say_footer(path, len(names))
-    return Header("CSV", every, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units or {})
+    return Header("CSV", names, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units or {})
 
 
 def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
@@ -290,10 +290,10 @@ def _text_header(path: Path, fmt: str) -> Header:
     stated = None
     if rates and rates[0][1] is not None:
         stated = (rates[0][1], f"its '# {rates[0][0]}' line")
-    every = [*names, *fields]
     if fmt == "text":  # a zipped text's tail is no cheap read
         _say_footer(path, width)
-    return Header(fmt, every, any(is_rate_or_time(n) for n in every), indexed=True, stated=stated)
+    rate = any(is_rate_or_time(n) for n in [*names, *fields])  # a comment field's rate, no channel's
+    return Header(fmt, names, rate, indexed=True, stated=stated)
 
 
 def _npz_header(path: Path) -> Header:

@@ -407,5 +407,6 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
     contents = _keyed(
         [*columns, *fields, *asked], lambda n: found[n] if n in found else fields[n], names, [*columns, *fields]
     )
+    contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
     contents.warnings += warnings
     return contents
