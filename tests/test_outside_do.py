@@ -226,8 +226,9 @@ def test_a_take_scored_far_off_its_condition_s_speed_is_not_localised_against_th
     cli, tmp_path_factory, module_cache, quiet
 ):
     # box A's healthy take at 36.3 Hz, scored with --condition "33 Hz": every method 'healthy', and 'which gear: input
-    # pinion 37T (stage 1) (input z 4.9/2.8 ...)': the per-shaft thresholds were set on the history's speed, at which
-    # the structure's response to each shaft's orders lies elsewhere; here the tiny run's 16 Hz history, a take +10 %
+    # pinion 37T (stage 1) (input z 4.9/2.8 ...)'. A shaft's thresholds hold at its history's speed: a box's resonances
+    # stay put in Hz as its orders move. (That take's z came from its encoder's edges, whole samples apart: spread
+    # over 4 samples, the same take read input z -1.0/2.8, nothing.) Here the tiny run's 16 Hz history, a take +10 %
     folder = tmp_path_factory.mktemp("far")
     out = run_in_module(scenario(folder, methods=("matched_filter",)), folder / "runs", figures=False)
     vib, tacho = signals(revolutions=40, seed=11, phase=0.3, speed=17.6)
