@@ -45,9 +45,12 @@ def clock_share(
     coef, *_ = np.linalg.lstsq(fit, phase, rcond=None)
     rest = phase - fit @ coef
     try:
-        error = float(np.sqrt(rest @ rest / (starts.size - 3) * np.linalg.inv(fit.T @ fit)[2, 2]))
+        variance = float(rest @ rest / (starts.size - 3) * np.linalg.inv(fit.T @ fit)[2, 2])
     except np.linalg.LinAlgError:  # no wander at all: a speed held exactly
         return None
+    if not variance >= 0.0:  # nearly no wander: the inverse's rounding made it negative (or nan), as singular
+        return None
+    error = variance**0.5
     return None if not error * APART_SE <= 1.0 else (float(coef[2]), error)
 
 
