@@ -11,14 +11,9 @@ import json
 
 import pytest
 from detection_scenario import run_in_module, scenario
-from textrecords import signals, text, write_zip
+from textrecords import scaled_record
 
 LOUD = 1.6  # the heavy load's level over the light one's
-
-
-def _take(path, seed: int, scale: float):
-    vib, tacho = signals(revolutions=40, seed=seed, phase=0.7 * seed)
-    return write_zip(path, text(scale * vib, tacho))
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +29,7 @@ def made(tmp_path_factory):
         ("h2", "history", "healthy", 5, LOUD, "heavy"),
         ("h3", "test", "healthy", 6, LOUD, "heavy"),
     ):
-        _take(folder / "data" / f"{name}.zip", seed, scale)
+        scaled_record(folder / "data" / f"{name}.zip", seed, scale)
         files.append((name, role, label, cond))
     path = scenario(folder, files=[(n, r, lab, 0.0) for n, r, lab, _ in files], methods=("matched_filter",))
     text_ = path.read_text()
@@ -42,7 +37,7 @@ def made(tmp_path_factory):
         text_ = text_.replace(f'"../data/{name}.zip",', f'"../data/{name}.zip", condition = "{cond}",')
     path.write_text(text_)
     out = run_in_module(path, folder / "runs", figures=False)
-    return out, _take(folder / "heavy_new.zip", 9, LOUD), _take(folder / "light_new.zip", 10, 1.0)
+    return out, scaled_record(folder / "heavy_new.zip", 9, LOUD), scaled_record(folder / "light_new.zip", 10, 1.0)
 
 
 def test_a_take_goes_to_the_condition_of_its_level_among_those_at_its_speed(cli, made):

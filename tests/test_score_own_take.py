@@ -14,17 +14,12 @@ import shutil
 import numpy as np
 import pytest
 from detection_scenario import run_in_module, scenario
-from textrecords import signals, text, write_zip
+from textrecords import scaled_record
 
 import gearlab
 
 LOUD = 1.6  # the heavy load's level over the light one's
 ODD = 1.35  # a light-load take's: nearer the heavy load's history level than its own (log 0.30 against 0.17)
-
-
-def _take(path, seed: int, scale: float):
-    vib, tacho = signals(revolutions=40, seed=seed, phase=0.7 * seed)
-    return write_zip(path, text(scale * vib, tacho))
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +35,7 @@ def made(tmp_path_factory):
         ("h3", "test", 6, LOUD, "heavy"),
     )
     for name, _, seed, scale, _ in files:
-        _take(folder / "data" / f"{name}.zip", seed, scale)
+        scaled_record(folder / "data" / f"{name}.zip", seed, scale)
     path = scenario(
         folder, files=[(n, r, "healthy", 0.0) for n, r, *_ in files], methods=("matched_filter", "likelihood_ratio")
     )

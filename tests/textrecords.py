@@ -57,6 +57,12 @@ def record(path: Path, **kw) -> Path:
     return write_zip(Path(path), text(*signals(**kw)))
 
 
+def scaled_record(path: Path, seed: int, scale: float, revolutions: int = 40) -> Path:
+    """A record of *revolutions* turns whose vibration is *scale* times the plain one's (another load's level)."""
+    vib, tacho = signals(revolutions=revolutions, seed=seed, phase=0.7 * seed)
+    return write_zip(Path(path), text(scale * vib, tacho))
+
+
 def rig_record(
     path: Path, speed=35.0, seed=3, chip=0.0, idler=0.0, output=0.0, bearing=0.0, phase=2.7, eccentric=0.0
 ) -> Path:
