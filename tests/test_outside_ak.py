@@ -86,16 +86,20 @@ def test_edges_with_a_sample_mid_swing_keep_their_interpolated_times(kind, monke
 
 
 def test_a_tacho_of_several_marks_a_turn_keeps_its_interpolated_edges(monkeypatch):
-    """Several marks a turn (the PHM rig's 10) follow the speed within a turn: their quantised edges are not
-    smoothed (smoothed each mark apart, the rig's eccentric-idler take at 40 Hz low load scored above its chipped
-    takes: angle_from_pulses); a once-a-turn tacho's are."""
+    """Several marks a turn off equal spacing (the PHM rig's 10, here 2 % of a mark's pitch: 1.6 samples) keep their
+    quantised edges: smoothed each mark apart, the rig's eccentric-idler take at 40 Hz low load scored above its
+    chipped takes (angle_from_pulses). Equally spaced marks' are smoothed as one sequence
+    (test_which_gear_square_tacho), and a once-a-turn tacho's."""
     calls = []
     monkeypatch.setattr(angle, "_dequantised", lambda edges: calls.append(edges.size) or edges)
     theta = 2 * np.pi * 33.0 * (0.2 + np.arange(int(SECONDS * FS)) / FS)
-    angle.angle_from_pulses(ttl(10 * theta), FS, marks=10)
+    nearest = np.mod(np.floor(10 * theta / (2 * np.pi) + 0.5), 10)  # the mark nearest: changed mid-way, pulse low
+    angle.angle_from_pulses(ttl(10 * theta - 2 * np.pi * 0.02 * (np.mod(nearest, 3) - 1)), FS, marks=10)
     assert calls == []
+    angle.angle_from_pulses(ttl(10 * theta), FS, marks=10)
+    assert calls == [1319], calls
     angle.angle_from_pulses(ttl(theta), FS)
-    assert calls == [132], calls
+    assert calls == [1319, 132], calls
 
 
 @pytest.fixture(scope="module")
