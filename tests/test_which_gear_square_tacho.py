@@ -49,3 +49,16 @@ def test_healthy_take_off_the_sample_grid_not_localised(history, cli, quiet):
     assert code == 0, err
     rows = json.loads(stdout)
     assert rows and {r["localised"] for r in rows} == {None}, [(r["localised"], r["evidence"]) for r in rows]
+
+
+@pytest.mark.parametrize("f0", [33.0, 33.66])
+def test_a_60_2_encoder_read_from_a_take_starting_at_its_gap(f0):
+    """Box A's 60-2 encoder (test_outside_do), its edges on the 25.6 kHz grid, the take (seed 8) starting with the
+    gap's 3 pitches: the running median of the edge spacing, its first value held, took that for the pitch and left
+    the gap in, so the marks were not read as equally spaced: 0.81-0.92 mrad rms (the other seeds' 0.11-0.30)."""
+    from test_outside_do import FS as ENCODER_FS
+    from test_outside_do import _shaft, encoder
+
+    theta = _shaft(8, 4.0, f0)
+    error = (angle_from_pulses(encoder(theta), ENCODER_FS, marks=60) / 60 - theta)[1000:-1000]
+    assert np.std(error) < 0.4e-3, np.std(error)

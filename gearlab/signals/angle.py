@@ -103,7 +103,8 @@ def _missed_marks(edges: np.ndarray, quantised: np.ndarray, marks: int) -> tuple
     d = np.diff(edges)
     if d.size < MISSED_WINDOW:
         return edges, quantised, None
-    ratio = d / median_filter(d, size=MISSED_WINDOW, mode="nearest")
+    # mirrored at the ends: a take starting with the gap held its 3 pitches as the first values' median, the gap kept
+    ratio = d / median_filter(d, size=MISSED_WINDOW, mode="mirror")
     k = np.rint(ratio)
     gaps = np.flatnonzero((k >= 2) & (np.abs(ratio - k) <= MISSED_SLACK))
     if gaps.size == 0 or (gaps.size > 1 and np.diff(gaps).min() < MISSED_WINDOW):
