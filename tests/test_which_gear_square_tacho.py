@@ -62,3 +62,25 @@ def test_a_60_2_encoder_read_from_a_take_starting_at_its_gap(f0):
     theta = _shaft(8, 4.0, f0)
     error = (angle_from_pulses(encoder(theta), ENCODER_FS, marks=60) / 60 - theta)[1000:-1000]
     assert np.std(error) < 0.4e-3, np.std(error)
+
+
+def test_box_a_healthy_take_2_percent_over_its_encoder_history_is_not_localised(tmp_path):
+    """Box A (test_outside_do) read by its 60-2 encoder, square edges at 25.6 kHz: a healthy take at 33.66 Hz against
+    a 33 Hz history was 'input pinion 37T (stage 1): z = 5.02 (threshold 4.51)'; now nothing (input z under 2.6)."""
+    import test_outside_do as D
+    from scipy.io import wavfile
+    from test_inspect import described
+
+    from gearlab.inspect import InspectOptions
+    from gearlab.inspect_history import localisation
+
+    def wav(name: str, seed: int, f0: float) -> str:
+        theta = D._shaft(seed, 3.0, f0)
+        volts = np.c_[D._vibration(theta, seed) / D.G * 0.5, D.encoder(theta)]  # 500 mV/g; the tacho (V)
+        wavfile.write(tmp_path / name, int(D.FS), np.round(volts / 10.0 * 32767).astype(np.int16))  # 10 V full scale
+        return str(tmp_path / name)
+
+    read = InspectOptions("0", tacho="1", pulses_per_rev=60, gain=10.0, sensitivity=0.5 / D.G)
+    history = [(wav(f"h{seed}.wav", seed, 33.0), read) for seed in (1, 4, 5)]
+    loc = localisation(wav("take.wav", 2, 33.66), history, described(D.BOX, speed="33 Hz"), read)
+    assert loc["named"] is None, loc["summary"]
