@@ -204,8 +204,8 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     every turn. The edges of up to SMOOTHED_MARKS marks a turn are smoothed each mark's own sequence apart (one
     sequence moved a 3-mark output tacho's non-synchronous z 3.2 -> 4.7, over its 4.4, test_outside_z): marks a few %
     off equal spacing, as on a real wheel, keep their spacing (4 marks up to 4 % off, 51.2 kHz: 1.54 mrad raw, 0.07
-    each mark apart, 1.85 all marks as one sequence). The PHM rig's 10 marks (~0.3 sample off equal) keep their
-    interpolated times: smoothed, its eccentric-idler take spur3_40hz_Low_2 scored tooth_energy 23-27 (raw
+    each mark apart, 1.85 all marks as one sequence). The PHM rig's 10 marks (1.2-2.8 samples off an even course) keep
+    their interpolated times: smoothed, its eccentric-idler take spur3_40hz_Low_2 scored tooth_energy 23-27 (raw
     11.6-12.6) and tooth_sync 47-58 (raw 13-21) at TSA30, above the chipped takes' 18-23 and 30-45: their AUC at
     40 Hz low load fell 1.00 -> 0.50 (the other takes' scores moved by up to 12 %; why that take, not found).
     Smoothed, the synthetic rig records' thresholds let 0-1.7 % through (raw 0-1.6 %), so the limit is the real
