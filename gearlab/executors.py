@@ -51,6 +51,22 @@ EXECUTORS = ("local", "ray")
 OnDone = Callable[[int, object], None]
 
 
+@contextlib.contextmanager
+def one_thread() -> Iterator[None]:
+    """torch on one thread within, the caller's count restored after: a unit's result does not depend on how many
+    units run side by side (a detector's float32 sums add up in one order, so `gearlab score` of a run's own take
+    gives the run's scores bit for bit; on torch's threads likelihood_ratio's revolution units came out up to 4e-6
+    off), and an in-process run (the TUI, a notebook, gearlab.api) leaves its caller's torch as it found it."""
+    import torch  # here: the executors serve kinds that never load torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
 def _check_workers(workers: int | None) -> None:
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise GearlabInputError(f"workers must be a whole number >= 1, got {workers!r}")

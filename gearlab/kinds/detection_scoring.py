@@ -16,6 +16,7 @@ from ..data.textzip import CALIBRATION, calibration
 from ..data.which_gear import Take
 from ..errors import GearlabInputError, did_you_mean
 from ..events import Event
+from ..executors import one_thread
 from ..gearbox.orders import TachoShaft
 from ..gearbox.simulation import gearbox_of
 from ..learn.protocol import fault_score
@@ -48,7 +49,7 @@ from .detection_records import (
     varies,
 )
 from .detection_settings import Spec, stored_classical
-from .detection_units import Rule, one_thread
+from .detection_units import Rule
 from .detection_which_gear import (
     decision_of,
     is_other,

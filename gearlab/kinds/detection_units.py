@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -17,7 +16,7 @@ from ..confined import Confined
 from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec
 from ..events import UnitProgress
-from ..executors import unshared
+from ..executors import one_thread, unshared
 from ..learn import protocol as chapter5  # train_method looked up at call time (a test spies on it)
 from ..learn.bounds import bayes_scores
 from ..learn.history import gumbel_quantile
@@ -77,21 +76,6 @@ def without_each(records: int, made_without: Callable) -> list | None:
     return [made_without(i) for i in range(records)] if records >= LEFT_OUT else None
 
 
-@contextmanager
-def one_thread():
-    """torch on one thread within, as train_unit scores a run's takes: a detector's float32 sums then add up in the
-    run's order, and `gearlab score` of a run's own take gives the run's scores bit for bit (on torch's threads
-    likelihood_ratio's revolution units came out up to 4e-6 off)."""
-    import torch
-
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(threads)
-
-
 def train_unit(task: tuple) -> dict:
     """One method at one condition (one seed of it), in this process or a worker: trained on the
     source and the history's training revolutions, then its scores of the history units (for the
@@ -121,93 +105,93 @@ def train_unit(task: tuple) -> dict:
     unit = unit_name(condition, method, seed, variant, fold)
     with UnitProgress(states.root, unit) as progress:
         progress("starting: importing torch")
-        import torch
+        with one_thread():  # (torch loads here) the caller's thread count restored after
+            from ..learn.training import pick_device  # here, not at the top: start-up time
 
-        from ..learn.training import pick_device  # here, not at the top: start-up time
+            device = pick_device(protocol.device)
+            point = aligned_to_a_point(protocol, method, Xs, ys)
+            # Against a single point the domain discrepancy falls by a few per cent every 25 epochs for as
+            # long as the training lasts: the stopping rule's "it has
+            # stopped moving" never holds, and no epoch after the ramp is nearer convergence than the
+            # ramp's end. Such a training ends there, at the first epoch its kept model may come from.
+            trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
+            progress("starting: training")
 
-        torch.set_num_threads(1)
-        device = pick_device(protocol.device)
-        point = aligned_to_a_point(protocol, method, Xs, ys)
-        # Against a single point the domain discrepancy falls by a few per cent every 25 epochs for as
-        # long as the training lasts: the stopping rule's "it has
-        # stopped moving" never holds, and no epoch after the ramp is nearer convergence than the
-        # ramp's end. Such a training ends there, at the first epoch its kept model may come from.
-        trained = replace(protocol, max_epochs=protocol.min_epochs) if point else protocol
-        progress("starting: training")
+            def report(epoch: int, history, what: str = "") -> None:
+                progress(what or f"epoch {epoch + 1}")  # what: a shared state's training (the priming)
 
-        def report(epoch: int, history, what: str = "") -> None:
-            progress(what or f"epoch {epoch + 1}")  # what: a shared state's training (the priming)
+            def made(rows: np.ndarray):
+                model, history, _ = chapter5.train_method(
+                    trained,
+                    method,
+                    (Xs, ys),
+                    (Xv[:, 0] if Xv.ndim == 3 else Xv, yv),  # one draw decides when to stop: an epoch's cost
+                    (rows, np.zeros(len(rows), dtype=np.int64)),
+                    seed or 0,  # the repetition: its own torch seed and draws
+                    0,
+                    StateStore(states),
+                    device,
+                    report,
+                )
+                if whiten and method.is_detector:
+                    # a detector sees every row through the whitening filter of its own history rows' residuals
+                    # (gearlab.learn.whiten: their coloured leftover ranked single healthy revolutions); the
+                    # filter is kept in the model, so the units below and `gearlab score`'s pass through it too
+                    from ..learn.whiten import whitened, whitening_of
 
-        def made(rows: np.ndarray):
-            model, history, _ = chapter5.train_method(
-                trained,
-                method,
-                (Xs, ys),
-                (Xv[:, 0] if Xv.ndim == 3 else Xv, yv),  # one draw decides when to stop: an epoch's cost
-                (rows, np.zeros(len(rows), dtype=np.int64)),
-                seed or 0,  # the repetition: its own torch seed and draws
-                0,
-                StateStore(states),
-                device,
-                report,
-            )
-            if whiten and method.is_detector:
-                # a detector sees every row through the whitening filter of its own history rows' residuals
-                # (gearlab.learn.whiten: their coloured leftover ranked single healthy revolutions); the
-                # filter is kept in the model, so the units below and `gearlab score`'s pass through it too
-                from ..learn.whiten import whitened, whitening_of
+                    params = dict(method.params)
+                    false_alarm = get_registry().get("detector", method.adapter).values(params)["false_alarm"]
+                    model = whitened(model.to("cpu"), whitening_of(rows), rows, float(false_alarm)).to(device)
+                return model, history
 
-                params = dict(method.params)
-                false_alarm = get_registry().get("detector", method.adapter).values(params)["false_alarm"]
-                model = whitened(model.to("cpu"), whitening_of(rows), rows, float(false_alarm)).to(device)
-            return model, history
+            model, history = made(train)
+            if left_out is not None:  # the whole detector referenced on the history without each record in turn
+                from ..learn.detectors import referenced_on
 
-        model, history = made(train)
-        if left_out is not None:  # the whole detector referenced on the history without each record in turn
-            from ..learn.detectors import referenced_on
+                others = [referenced_on(model, unshared(rows)) for rows in left_out]
+                left_out = None if any(m is None for m in others) else others  # a plugin's own: in-sample
+            # what a network learned of the simulator, from training data only: its scores of the source's
+            # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
+            # healthy). A detector is built in the target's frame (the history's reference, the path to
+            # it), where a source revolution means nothing.
+            held_out = None if method.is_detector else fault_score(model, Xv.reshape(-1, Xv.shape[-1]), device)
+            y_held = np.repeat(yv, len(held_out) // len(yv)) if held_out is not None else yv
+            # the model is fixed: the history's units fix the thresholds, then the test units are scored
+            if left_out is None:
+                hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
+            else:  # each history record's units scored by the detector referenced without it
+                from ..learn.detectors import MeanOf
 
-            others = [referenced_on(model, unshared(rows)) for rows in left_out]
-            left_out = None if any(m is None for m in others) else others  # a plugin's own: in-sample
-    # what a network learned of the simulator, from training data only: its scores of the source's
-    # held-out revolutions, every draw of them (0.5: it does not tell the simulated fault from
-    # healthy). A detector is built in the target's frame (the history's reference, the path to
-    # it), where a source revolution means nothing.
-    held_out = None if method.is_detector else fault_score(model, Xv.reshape(-1, Xv.shape[-1]), device)
-    y_held = np.repeat(yv, len(held_out) // len(yv)) if held_out is not None else yv
-    # the model is fixed: the history's units fix the thresholds, then the test units are scored
-    if left_out is None:
-        hist = {u: fault_score(model, X, device) for u, X in history_units.items()}
-    else:  # each history record's units scored by the detector referenced without it
-        from ..learn.detectors import MeanOf
-
-        hist = {
-            u: np.concatenate([fault_score(m, X_k, device) for m, X_k in zip(left_out, rule.groups(u, X))])
-            for u, X in history_units.items()
-        }
-        model = MeanOf(left_out)  # and a new take by those detectors, their mean (detectors.MeanOf)
-    fixed = rule.decide(hist)
-    test = {path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()}
-    # kept, so that `gearlab score` scores new records with it without training again
-    scoring.save_model(Confined(states.root, scoring.MODELS), unit, model)
-    return {
-        "unit": unit,
-        "condition": condition,
-        "method": method_name(method, variant),
-        "adapter": method.adapter,
-        "source": variant or "source",
-        "seed": seed,
-        **({} if fold is None else {"fold": fold}),
-        "history_scores": to_lists(hist),
-        **fixed,
-        "test_scores": to_lists(test),
-        "history": history.as_dict() if history is not None else None,
-        "source_auc": None if held_out is None else auc(held_out[y_held == 0], held_out[y_held != 0]),
-        # held-out rows scored, healthy and faulty (every draw: for a network that has learned
-        # nothing of the fault, its scores of the draws are as independent as those of samples)
-        "source_units": [int(np.sum(y_held == 0)), int(np.sum(y_held != 0))],
-        "aligned_to_a_point": point,
-        "seconds": time.perf_counter() - started,
-    }
+                hist = {
+                    u: np.concatenate([fault_score(m, X_k, device) for m, X_k in zip(left_out, rule.groups(u, X))])
+                    for u, X in history_units.items()
+                }
+                model = MeanOf(left_out)  # and a new take by those detectors, their mean (detectors.MeanOf)
+            fixed = rule.decide(hist)
+            test = {
+                path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()
+            }
+            # kept, so that `gearlab score` scores new records with it without training again
+            scoring.save_model(Confined(states.root, scoring.MODELS), unit, model)
+            return {
+                "unit": unit,
+                "condition": condition,
+                "method": method_name(method, variant),
+                "adapter": method.adapter,
+                "source": variant or "source",
+                "seed": seed,
+                **({} if fold is None else {"fold": fold}),
+                "history_scores": to_lists(hist),
+                **fixed,
+                "test_scores": to_lists(test),
+                "history": history.as_dict() if history is not None else None,
+                "source_auc": None if held_out is None else auc(held_out[y_held == 0], held_out[y_held != 0]),
+                # held-out rows scored, healthy and faulty (every draw: for a network that has learned
+                # nothing of the fault, its scores of the draws are as independent as those of samples)
+                "source_units": [int(np.sum(y_held == 0)), int(np.sum(y_held != 0))],
+                "aligned_to_a_point": point,
+                "seconds": time.perf_counter() - started,
+            }
 
 
 def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: np.ndarray) -> bool:

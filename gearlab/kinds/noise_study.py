@@ -26,6 +26,7 @@ from ..data.cache import load_or_build
 from ..data.spec import DatasetSpec, dataset_preset
 from ..errors import GearlabInputError, did_you_mean
 from ..events import Event, UnitProgress, report_begins, standing
+from ..executors import one_thread
 from ..learn.bounds import class_bound, class_bound_steps
 from ..learn.config import NetworkSettings
 from ..learn.noise_study import (
@@ -312,18 +313,17 @@ def train_unit(task: tuple) -> dict:
     unit = unit_name(noise, r, variant)
     with UnitProgress(run_path, unit) as progress:
         progress("starting: importing torch")
-        import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+        # torch loads here, not at the top (checking a scenario loads none); the caller's thread count back after
+        with one_thread():
 
-        torch.set_num_threads(1)
+            def report(epoch: int, history) -> None:
+                progress(f"epoch {epoch + 1}, validation accuracy {100 * history.val_acc[-1]:.1f} %")
 
-        def report(epoch: int, history) -> None:
-            progress(f"epoch {epoch + 1}, validation accuracy {100 * history.val_acc[-1]:.1f} %")
-
-        progress("starting: reading the dataset")
-        data = cache.load(dataset_spec_, path)
-        clean = cache.load(twin, twin_path) if twin is not None else None
-        progress("starting: training")
-        result = run_unit(protocol, data, r, on_epoch=report, twin=clean)
+            progress("starting: reading the dataset")
+            data = cache.load(dataset_spec_, path)
+            clean = cache.load(twin, twin_path) if twin is not None else None
+            progress("starting: training")
+            result = run_unit(protocol, data, r, on_epoch=report, twin=clean)
     return {"unit": unit, "noise": noise, "variant": variant, **result}
 
 

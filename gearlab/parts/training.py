@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass
 from ..data import cache
 from ..errors import GearlabInputError
 from ..events import UnitProgress, saying
+from ..executors import one_thread
 from ..learn.config import RECIPE, Calibration, NetworkSettings
 from ..learn.protocol import Method, Protocol, StateStore, run_unit, unit_key
 from ..registry import METHODS, get_registry
@@ -122,28 +123,27 @@ def train_unit(task: tuple) -> dict:
         # seconds in a fresh worker before any epoch (a quick run's 'starting' line stood 10 s at load
         # 9): each step says itself, and one that stands says for how long (UnitProgress)
         progress("starting: importing torch")
-        import torch  # here, not at the top: start-up time (checking a scenario loads no torch)
+        # torch loads here, not at the top (checking a scenario loads none); the caller's thread count back after
+        with one_thread():
+            progress("starting: reading dataset 1 of 2 (source)")
+            source = loaded(source_spec, source_path)
+            progress("starting: reading dataset 2 of 2 (target)")
+            target = loaded(target_spec, target_path)
+            progress("starting: splitting the data")
 
-        torch.set_num_threads(1)
-        progress("starting: reading dataset 1 of 2 (source)")
-        source = loaded(source_spec, source_path)
-        progress("starting: reading dataset 2 of 2 (target)")
-        target = loaded(target_spec, target_path)
-        progress("starting: splitting the data")
+            def report(epoch: int, history, what: str = "") -> None:
+                acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
+                progress(f"{what or f'epoch {epoch + 1}'}{acc}")
 
-        def report(epoch: int, history, what: str = "") -> None:
-            acc = f", source validation accuracy {100 * history.val_acc[-1]:.1f} %" if history.val_acc else ""
-            progress(f"{what or f'epoch {epoch + 1}'}{acc}")
-
-        with saying(progress):  # the calibration's and the priming's steps (unit_says) reach the line too
-            return run_unit(
-                protocol,
-                source,
-                target,
-                rep,
-                k,
-                method,
-                StateStore(states),
-                on_epoch=report,
-                history=next(iter(history), None),
-            )
+            with saying(progress):  # the calibration's and the priming's steps (unit_says) reach the line too
+                return run_unit(
+                    protocol,
+                    source,
+                    target,
+                    rep,
+                    k,
+                    method,
+                    StateStore(states),
+                    on_epoch=report,
+                    history=next(iter(history), None),
+                )
