@@ -18,6 +18,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColum
 from rich.table import Column, Table
 from rich.text import Text
 
+from .errors import GearlabInputError
 from .events import Pace, clock
 
 QUIET_S = 5.0  # a log line at least this often while a unit says how far it is
@@ -386,6 +387,16 @@ def _runs_table(runs) -> Table:
     return table
 
 
+def all_scored(rows: list[dict]) -> None:
+    """After `gearlab score` has shown its rows: the takes it refused among several named in one line (exit 2, as a
+    run stopped by bad input keeps its finished units): the others are scored and kept, and the exit code says not
+    every take was."""
+    skipped = [r["file"] for r in rows if r.get("skipped")]
+    if skipped:
+        given = len(dict.fromkeys(r["file"] for r in rows))
+        raise GearlabInputError(f"{len(skipped)} of {given} takes not scored (each said above): {', '.join(skipped)}")
+
+
 def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     """What `gearlab score` prints (kinds.detection_scoring.score's rows): per scored file, a line
     with its speed and how it was found, its condition and the threshold rule, a line with the gear
@@ -399,6 +410,9 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     for file in dict.fromkeys(r["file"] for r in rows):
         mine = [r for r in rows if r["file"] == file]
         r0 = mine[0]
+        if r0.get("skipped"):  # refused, of several takes given: the others are scored (all_scored: exit 2)
+            shown.append(Text(f"{file}: not scored: {r0['skipped']}", style="yellow"))
+            continue
         shown.append(
             Text(
                 f"{file}: {r0['speed_hz']:.3f} Hz, from {r0['speed_from']}; condition {r0['condition']}"

@@ -37,6 +37,7 @@ def test_tui_score_trend_draws_its_zero_line_in_view(monkeypatch):
         for i, s in enumerate((1.3, 1.6, 2.0), 1)
     ]
     monkeypatch.setattr(detection_scoring.scoring, "read_history", lambda run: rows)
+    monkeypatch.setattr(detection_scoring.scoring, "read_skipped", lambda run: [])  # no take refused
     (chart,) = detection_scoring.score_trends(None)
     assert 0.0 in chart.hlines
     drawn, limits = [], []

@@ -33,7 +33,16 @@ from .common import MEASURED
 from .detection_classical import classical_record
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
-from .detection_own import asked_off, off_history, own_conditions, own_words
+from .detection_own import (
+    asked_off,
+    by_level,
+    condition_of,
+    off_history,
+    own_conditions,
+    own_words,
+    refused_why,
+    skipped_rows,
+)
 from .detection_records import (
     SPEED_GROUP,
     aligned,
@@ -291,42 +300,6 @@ def _same_input(run: RunDir, meta: dict) -> None:
     )
 
 
-def _condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str:
-    names = list(meta["conditions"])
-    if asked is not None:
-        if asked not in names:
-            raise GearlabInputError(
-                f"--condition '{asked}'{did_you_mean(asked, names)}: not a condition of the run; "
-                f"known: {', '.join(names)}"
-            )
-        return asked
-    near = min(names, key=lambda c: abs(meta["conditions"][c]["speed_hz"] - speed))
-    centre = meta["conditions"][near]["speed_hz"]
-    if abs(speed - centre) > SPEED_GROUP * centre:
-        known = ", ".join(f"'{c}' ({meta['conditions'][c]['speed_hz']:.2f} Hz)" for c in names)
-        raise GearlabInputError(
-            f"{path}: runs at {speed:.2f} Hz, more than {SPEED_GROUP:.0%} from every condition's history ({known}); "
-            "expected a record of a trained condition, or --condition NAME"
-        )
-    return near
-
-
-def _by_level(run: RunDir, meta: dict, name: str, rec) -> tuple[str, str]:
-    """(condition, why) of a steady take: of the conditions whose history runs within IN_BAND of its speed (one
-    per load, grouped by hand), the one whose history level is nearest the take's; by speed alone a 29/73 box's
-    heavy-load history take was scored against the light load's (24.41 Hz to 24.40): NA4 6 of 6 'fault'."""
-    at = [c for c, v in meta["conditions"].items() if abs(rec.speed_hz - v["speed_hz"]) <= IN_BAND * v["speed_hz"]]
-    if len(at) < 2:
-        return name, ""
-    std = float(np.std(rec.revolutions))
-    level = {
-        c: std / float(scoring.load_arrays(run.file("scoring", meta["conditions"][c]["file"]))["standardiser"][1])
-        for c in at
-    }
-    best = min(at, key=lambda c: abs(math.log(max(level[c], 1e-12))))
-    return best, "nearest level of those at its speed: " + ", ".join(f"'{c}' {level[c]:.2f} x" for c in at)
-
-
 _stretch = stretch  # the shared rule's (detection_in_band: one for a detection run and for score)
 
 
@@ -336,7 +309,7 @@ def in_band(meta: dict, path: str, rec, asked: str | None, far: str = "") -> tup
     *asked*, else the one of the longest), its mean speed the part's (detection_in_band.in_band, as a detection run
     cuts its own test takes). None there: one line, *far* (why its mean speed is no condition's) and how many
     revolutions lay in the band, and how many a unit needs."""
-    names = [_condition_of(meta, path, rec.speed_hz, asked)] if asked is not None else list(meta["conditions"])
+    names = [condition_of(meta, path, rec.speed_hz, asked)] if asked is not None else list(meta["conditions"])
     whose = " input" if "unit_shaft" in meta else ""  # the units: another shaft's revolutions
     got = shared_in_band(rec, {c: meta["conditions"][c]["speed_hz"] for c in names}, whose)
     if not got.said:
@@ -563,7 +536,7 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
                 f"expected the condition whose speed a new record runs at; known: {', '.join(names)}"
             )
         name = condition if condition is not None else names[0]
-        if name in meta["conditions"]:  # an unknown one is refused, with the known ones, by _condition_of
+        if name in meta["conditions"]:  # an unknown one is refused, with the known ones, by condition_of
             keys["speed_hz"] = meta["conditions"][name]["speed_hz"]
     return keys
 
@@ -589,68 +562,82 @@ def score(
     # a bad --key or a missing condition: refused before any file is read
     reading_keys(meta, condition, given, box=described)
     cut, raw, found, marks, chosen, far, takes = {}, {}, {}, {}, {}, {}, own_conditions(run)
+    skipped: dict[str, str] = {}  # {file: why} of the takes refused, of several given
     for i, file in enumerate(files):
         digest = input_digest(Path(file))  # its content: a take scored again, renamed or not, is one take
-        mine = takes.get(digest) if condition is None else None  # a take of the run's own: the run's condition
-        asked = mine[0] if mine else condition
-        keys = reading_keys(meta, asked, given, str(file), described)
-        marks[str(file)] = _marks(keys)
-        rec, scored_on = cut_recording(str(file), **keys), None
-        speeds = rec.speeds is not None and len(rec.speeds) == len(rec.revolutions)
         try:
-            name = _condition_of(meta, str(file), rec.speed_hz, asked)
-        except GearlabInputError as far:  # a speed far from every condition: another gearbox's record?
-            other = _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
-            if other or VARIES_WORDS not in rec.angle_source or not speeds:
-                moved = _moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
-                raise GearlabInputError((other or f"{far}{varies(rec.angle_source)}") + moved) from None
-            # a run-up or coast-down: its revolutions at a condition's history speed
-            name, rec, scored_on = in_band(meta, str(file), rec, asked, f"{far} ({span(rec.angle_source)})")
-        else:
-            if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
-                name, rec, scored_on = in_band(meta, str(file), rec, asked)
-            elif asked is None:
-                name, chosen[str(file)] = _by_level(run, meta, name, rec)
+            mine = takes.get(digest) if condition is None else None  # a take of the run's own: the run's condition
+            asked = mine[0] if mine else condition
+            keys = reading_keys(meta, asked, given, str(file), described)
+            marks[str(file)] = _marks(keys)
+            rec, scored_on = cut_recording(str(file), **keys), None
+            speeds = rec.speeds is not None and len(rec.speeds) == len(rec.revolutions)
+            try:
+                name = condition_of(meta, str(file), rec.speed_hz, asked)
+            except GearlabInputError as off:  # a speed far from every condition: another gearbox's record?
+                other = _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
+                if other or VARIES_WORDS not in rec.angle_source or not speeds:
+                    moved = _moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
+                    raise GearlabInputError((other or f"{off}{varies(rec.angle_source)}") + moved) from None
+                # a run-up or coast-down: its revolutions at a condition's history speed
+                name, rec, scored_on = in_band(meta, str(file), rec, asked, f"{off} ({span(rec.angle_source)})")
             else:
-                chosen[str(file)] = own_words(mine[1]) if mine else asked_off(meta, name, rec.speed_hz)
-                far[str(file)] = "" if mine else off_history(meta, name, rec.speed_hz)
-        too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
-        # tooth counts within a condition's speed too: a record of another gearbox is scored, with the line that says so
-        differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
-        if differs:
-            on_event(Event("log", message=f"warning: {differs}"))
-        own, whose = remembered(meta, str(file), given)
-        said = f"{whose} keys" if {k for k in own if k not in (given or {})} else ""
-        revs = rec.revolutions
-        if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
-            turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
-            revs = without_spikes(revs, rec.fs, rec.speed_hz, turns)
-        if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
-            _, p, q = meta["unit_shaft"]
-            band = meta["conditions"][name]["max_order"]
-            revs = unit_revolutions(revs, p, q, band, meta.get("input_shaft_out", False))
-        if scored_on:
-            scored_on = _units_of_part(meta, str(file), scored_on, len(revs))
-        # a run-up scored in band: its speed source's words say the span, not that its mean speed is its condition
-        source = rec.angle_source.rsplit("; ", 1)[0] + f"; {span(rec.angle_source)}" if scored_on else rec.angle_source
-        line = f"{file}: {rec.speed_hz:.3f} Hz, from {source}" + (said and f"; read with {said}")
-        on_event(Event("log", message=line + (f"; {scored_on}" if scored_on else "")))
-        # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
-        # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
-        found[str(file)] = (
-            rec.speed_hz,
-            source,
-            said,
-            rec.units,
-            differs,
-            scored_on,
-            rec.warnings,
-            digest,
-        )
-        cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
-        if not far.get(str(file)):  # far off the history's speed: its shafts' residuals are not comparable
-            raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
+                if VARIES_WORDS in rec.angle_source and speeds:  # its mean speed a condition's, not its revolutions'
+                    name, rec, scored_on = in_band(meta, str(file), rec, asked)
+                elif asked is None:
+                    name, chosen[str(file)] = by_level(run, meta, name, rec)
+                else:
+                    chosen[str(file)] = own_words(mine[1]) if mine else asked_off(meta, name, rec.speed_hz)
+                    far[str(file)] = "" if mine else off_history(meta, name, rec.speed_hz)
+            too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
+            # tooth counts within a condition's speed too: another box's record is scored, with the line that says so
+            differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
+            if differs:
+                on_event(Event("log", message=f"warning: {differs}"))
+            own, whose = remembered(meta, str(file), given)
+            said = f"{whose} keys" if {k for k in own if k not in (given or {})} else ""
+            revs = rec.revolutions
+            if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
+                turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
+                revs = without_spikes(revs, rec.fs, rec.speed_hz, turns)
+            if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
+                _, p, q = meta["unit_shaft"]
+                band = meta["conditions"][name]["max_order"]
+                revs = unit_revolutions(revs, p, q, band, meta.get("input_shaft_out", False))
+            if scored_on:
+                scored_on = _units_of_part(meta, str(file), scored_on, len(revs))
+            # a run-up scored in band: its speed source's words say the span, not that its mean speed is its condition
+            source = rec.angle_source
+            if scored_on:
+                source = source.rsplit("; ", 1)[0] + f"; {span(rec.angle_source)}"
+            line = f"{file}: {rec.speed_hz:.3f} Hz, from {source}" + (said and f"; read with {said}")
+            on_event(Event("log", message=line + (f"; {scored_on}" if scored_on else "")))
+            # shown per file: a file of a format the run had none of borrows another file's keys, its calibration
+            # too (an npz in volts read with an HDF5 test file's sensitivity = "": m/s², 98 x too small, 'nothing')
+            found[str(file)] = (
+                rec.speed_hz,
+                source,
+                said,
+                rec.units,
+                differs,
+                scored_on,
+                rec.warnings,
+                digest,
+            )
+            cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
+            if not far.get(str(file)):  # far off the history's speed: its shafts' residuals are not comparable
+                raw.setdefault(name, []).append((str(file), Take.of(rec)))  # as the run's own (detection_which_gear)
+        except GearlabInputError as refused:  # of one take of several: the others are scored, this one named
+            if len(files) == 1:
+                raise
+            skipped[str(file)] = refused_why(str(file), refused)
+            for made in (marks, chosen, far):
+                made.pop(str(file), None)
+            on_event(Event("log", message=f"{file}: not scored: {skipped[str(file)]}"))
         on_event(Event("advance", stage="records", done=i + 1, total=len(files)))
+    if not cut:  # every take refused: as one take is, in one line (each alone says its own why), nothing written
+        first, why = next(iter(skipped.items()))
+        raise GearlabInputError(f"none of the {len(files)} takes scored ({', '.join(skipped)}); {first}: {why}")
     localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
     localised.update({p: not_read(w) for p, w in far.items() if w and described is not None})  # far off: not read
     stale = stale_calls(run, localised)  # a take of the run's own, its table decided by an older rule
@@ -723,6 +710,9 @@ def score(
     for r in rows:  # kept per take in the history: its trend point is marked (score_trends), not a plain 'healthy'
         r["unwatched"] = notes.get(r["file"])
     scoring.append_history(run, rows)
+    if skipped:  # the scored takes' rows, then one per take refused (its why), in the order given; kept apart
+        rows = sorted(rows + skipped_rows(skipped), key=lambda r: given[r["file"]])
+        scoring.append_skipped(run, [r for r in rows if r.get("skipped")])
     trends = score_trends(run)
     if trends:
         from .detection_figures import score_trend
@@ -739,7 +729,10 @@ def score_trends(run: RunDir) -> list:
     from ..charts import Chart, Curve
 
     rows = scoring.read_history(run)
-    out = []
+    out, scored = [], {r.get("digest") for r in rows}
+    # the takes refused among several scored at once, not scored since (by content): no point, named under each chart
+    skipped = scoring.read_skipped(run)
+    refused = {Path(r["file"]).name: r["skipped"] for r in skipped if r["digest"] is None or r["digest"] not in scored}
     for c in dict.fromkeys(r["condition"] for r in rows):
         # the longest unit kind a take of the condition was scored on: a history of takes all too short for the
         # longest kind (record30 'not scored' on 11 output-shaft turns) drew no chart where record10 had points
@@ -776,6 +769,7 @@ def score_trends(run: RunDir) -> list:
         said += "".join(f"\n{k}: {w}" for k, w in parts.items())
         if longest != unit:
             said += f"\n{longest}: not scored, every take too short for its unit ({unit} shown)"
+        said += "".join(f"\nnot scored: {n}: {w.split('; ')[0]}" for n, w in list(refused.items())[-3:])
         named = [f"{i} {f}" for i, f in enumerate(files, 1)]  # which take each point is, in the TUI too
         named = named if len(named) <= 12 else [*named[:5], "...", *named[-5:]]
         if curves:

@@ -9,6 +9,7 @@ history of those scores.
                                    revolutions (standardised, aligned)
       scoring/models/<key>.pt      each training's model, as trained (model_key)
       scoring/history.jsonl        one line per scored record, method and unit: appended (once a take)
+      scoring/not_scored.jsonl     one line per take refused among several scored at once, with why
 
 Every file is reached through the run directory (gearlab.confined: no link followed). A model is
 a whole torch module saved with torch.save and loaded with weights_only=True: the unpickler
@@ -33,6 +34,7 @@ from ..runs import RunDir
 SCORING_FILE = "scoring.json"
 MODELS = ("scoring", "models")
 HISTORY = ("scoring", "history.jsonl")
+SKIPPED = ("scoring", "not_scored.jsonl")
 
 
 def model_key(unit: str) -> str:
@@ -123,18 +125,36 @@ def append_history(run: RunDir, rows: list[dict]) -> None:
             r["already"] = f"scored before, at {h['scored_at']} as {h['file']}: not added to the history again"
         elif name != r["file"]:
             r["already"] = f"the same take as {name}: not added to the history twice"
-    rows = [r for r in rows if not r.get("already")]
+    _append(run, HISTORY, [r for r in rows if not r.get("already")])
+
+
+def append_skipped(run: RunDir, rows: list[dict]) -> None:
+    """Append the rows of takes `gearlab score` refused among several (their 'skipped': why), stamped now: the
+    scoring history holds the scored takes only; the trend says which were not scored (read_skipped)."""
+    _append(run, SKIPPED, rows)
+
+
+def _append(run: RunDir, where: tuple[str, str], rows: list[dict]) -> None:
     if not rows:
         return
     stamp = _dt.datetime.now().isoformat(timespec="seconds")
-    target = run.file(*HISTORY)
+    target = run.file(*where)
     target.parent.mkdir()
     target.append("".join(json.dumps({"scored_at": stamp, **r}) + "\n" for r in rows))
 
 
 def read_history(run: RunDir) -> list[dict]:
     """The scoring history (append_history), oldest first; [] when nothing was scored yet."""
-    source = run.file(*HISTORY)
+    return _lines(run, HISTORY)
+
+
+def read_skipped(run: RunDir) -> list[dict]:
+    """The takes `gearlab score` refused among several (append_skipped), oldest first."""
+    return _lines(run, SKIPPED)
+
+
+def _lines(run: RunDir, where: tuple[str, str]) -> list[dict]:
+    source = run.file(*where)
     if not source.exists():
         return []
     out = []
