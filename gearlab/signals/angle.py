@@ -50,10 +50,11 @@ def _pulses_or_not(v: np.ndarray, low: float, high: float, edges: np.ndarray) ->
 # interpolated between those two is mid-way whatever the true time: an error uniform on ±0.5 sample, variance 1/12
 # sample² (angle_from_pulses smooths such edge times to it)
 QUANTISED_VARIANCE = 1.0 / 12.0
-# the most marks a turn whose quantised edges are smoothed (angle_from_pulses). Read raw, 1-10 marks a turn at 25.6-66.7
-# kHz were 0.5-3.4 mrad rms off, smoothed 0.04-0.37; at 3, 4, 6, 8 marks inspect took the mesh's sidebands for a
-# shaft's ('wheel shows 144.4 teeth, 116 described'). The PHM rig's 10 keep their raw edges: smoothed (each mark
-# apart, 1.0 mrad rms off the raw angle), its eccentric-idler take at 40 Hz low outscored the chips (angle_from_pulses)
+# the most marks a turn, not equally spaced, whose quantised edges are smoothed each mark apart (angle_from_pulses;
+# equally spaced ones: as one sequence, of any count). Read raw, 1-10 marks a turn at 25.6-66.7 kHz were 0.5-3.4 mrad
+# rms off, smoothed 0.04-0.37; at 3, 4, 6, 8 marks inspect took the mesh's sidebands for a shaft's ('wheel shows 144.4
+# teeth, 116 described'). The PHM rig's 10 keep their raw edges: smoothed (each mark apart, 1.0 mrad rms off the raw
+# angle), its eccentric-idler take at 40 Hz low outscored the chips (angle_from_pulses)
 SMOOTHED_MARKS = 9
 # how far (samples) a square edge may lie from equally spaced marks' course (_evenly) and still be read as one of them
 # (angle_from_pulses): the quantisation's 0.5 and the fit's slack. Square 10-mark tachos at 15.8-17 Hz (8192 Hz) and
@@ -199,15 +200,16 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     edges anyway (14.2 mrad with exact edges), reads within 5 % of the raw edges. Edges with a sample in the
     middle half of the range (a filtered, slow or cosine tacho, the simulator's ramped pulses) keep their
     interpolated times, bit for bit. *marks*: the tacho's marks a turn (pulses_per_rev). Square edges of marks
-    equally spaced (each within EVEN_SLACK of _evenly's course, a knot a turn) are smoothed as one sequence, of a
-    count over SMOOTHED_MARKS: each mark's offset is then known, not read from edges at one fraction of a sample
-    every turn. The edges of up to SMOOTHED_MARKS marks a turn are smoothed each mark's own sequence apart (one
-    sequence moved a 3-mark output tacho's non-synchronous z 3.2 -> 4.7, over its 4.4, test_outside_z): marks a few %
-    off equal spacing, as on a real wheel, keep their spacing (4 marks up to 4 % off, 51.2 kHz: 1.54 mrad raw, 0.07
-    each mark apart, 1.85 all marks as one sequence). The PHM rig's 10 marks (1.2-2.8 samples off an even course) keep
-    their interpolated times: smoothed, its eccentric-idler take spur3_40hz_Low_2 scored tooth_energy 23-27 (raw
-    11.6-12.6) and tooth_sync 47-58 (raw 13-21) at TSA30, above the chipped takes' 18-23 and 30-45: their AUC at
-    40 Hz low load fell 1.00 -> 0.50 (the other takes' scores moved by up to 12 %; why that take, not found).
+    equally spaced (each within EVEN_SLACK of _evenly's course, a knot a turn) are smoothed as one sequence, of any
+    count: each mark's offset is then known, not read from edges at one fraction of a sample every turn (3, 6 or 9
+    marks at a whole 512 or 1024 samples a turn: each mark apart 1.2-3.2 mrad rms, as one sequence 0.001-0.04; at
+    507.9, 0.24-0.40 and 0.02-0.32). Else the edges of up to SMOOTHED_MARKS marks a turn are smoothed each mark's own
+    sequence apart: marks a few % off equal spacing, as on a real wheel, keep their spacing (4 marks up to 4 % off,
+    51.2 kHz: 1.54 mrad raw, 0.07 each mark apart, 1.85 all marks as one sequence). The PHM rig's 10 marks (1.2-2.8
+    samples off an even course) keep their interpolated times: smoothed, its eccentric-idler take spur3_40hz_Low_2
+    scored tooth_energy 23-27 (raw 11.6-12.6) and tooth_sync 47-58 (raw 13-21) at TSA30, above the chipped takes'
+    18-23 and 30-45: their AUC at 40 Hz low load fell 1.00 -> 0.50 (the other takes' scores moved by up to 12 %; why
+    that take, not found).
     Smoothed, the synthetic rig records' thresholds let 0-1.7 % through (raw 0-1.6 %), so the limit is the real
     records', not the threshold's.
 
@@ -258,12 +260,14 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     # read by the encoder was 'localised on the input pinion 37T, z = 5.0 (threshold 2.58)'
     smoothed_marks = marks <= SMOOTHED_MARKS or shift is not None
     square = edges.size >= 4 * marks and np.count_nonzero(quantised) > edges.size / 2
-    if square and marks > SMOOTHED_MARKS and np.all(np.abs(edges - _evenly(edges, marks))[quantised] <= EVEN_SLACK):
+    if square and marks > 1 and np.all(np.abs(edges - _evenly(edges, marks))[quantised] <= EVEN_SLACK):
         # every square edge within its quantisation of equally spaced marks: smoothed as one sequence. Each mark's
         # own offset is unknown below a sample where the samples a turn are near whole (512 at 16 Hz, 8192 Hz):
         # its edges fall at the same fraction every turn, an error that repeats with the shaft (2.8 mrad at orders
         # 2, 4, 6 of a 10-mark wheel), which the TSA keeps and a take at 16.1 Hz lacks (0.4 mrad): its input
-        # pinion was 'localised' (z 4.3-6.6 against 2.6)
+        # pinion was 'localised' (z 4.3-6.6 against 2.6). (Of 3 marks on test_outside_z's output shaft, a healthy take
+        # read z 4.70 over its 3-take history's 4.37 here, 3.23 each mark apart: exact edges read 4.78 over 4.32, its
+        # own z. At exact edges 1 of 75 healthy take/history pairs of that box pass, as here; each mark apart, 0.)
         edges = _dequantised(edges)
     elif smoothed_marks and square:
         # each mark's edges apart: marks need not lie equally spaced, their offsets are kept
