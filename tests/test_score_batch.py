@@ -80,3 +80,38 @@ def test_one_take_far_off_or_every_take_far_off_is_refused_in_one_line_nothing_w
     assert code == 2 and err.startswith(f"error: none of the 2 takes scored ({names}); {takes['far']}: "), err
     assert err.count("\n") == 1 and why[0][:200] in err, err  # the first one's why (a line is 600 characters at most)
     assert _history(out) == before  # nothing scored, nothing written
+
+
+def test_the_tui_shows_a_partly_scored_batch_as_scored_in_part_with_its_trend(made, monkeypatch):
+    # s in the TUI read exit 2 as "failed" and kept the old chart, though the takes it could score were scored
+    import asyncio
+
+    from test_outside_j import shown
+
+    from gearlab.tui import GearlabApp
+
+    out, takes = made
+    folder = out.parents[2]  # the scenario's runs are <cwd>/runs, as its [output] says nothing
+    monkeypatch.chdir(folder)
+
+    async def main():
+        async with GearlabApp(folder / "scenarios").run_test(size=(160, 45)) as pilot:
+            app = pilot.app
+            await pilot.pause()
+            app._move_to(out)
+            await pilot.pause()
+            await pilot.press("s")
+            await pilot.pause()
+            for ch in f"{takes['near']} {takes['far']}":
+                await pilot.press(ch)
+            await pilot.press("enter")
+            for _ in range(600):
+                await pilot.pause(0.5)
+                if app.process is None and shown(app, "#run-status").startswith(("scored", "failed")):
+                    break
+            status = shown(app, "#run-status")
+            assert status.startswith("scored in part: error: 1 of 2 takes not scored"), status
+            title = str(app.charts[app.chart_index].title)
+            assert "near.zip" in title and "not scored: far.zip" in title, title
+
+    asyncio.run(main())

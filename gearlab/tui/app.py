@@ -578,6 +578,7 @@ class GearlabApp(App):
         status.update(f"scoring with {self._shown(run.path)}; c cancels")
         self.switch_to("run")
         self.cancelled = False
+        scored_before = self._scored(run)
         self.process = await asyncio.create_subprocess_exec(
             *(sys.executable, "-m", "gearlab", "score", str(run.path), *shlex.split(typed)),
             stdout=asyncio.subprocess.PIPE,
@@ -590,15 +591,26 @@ class GearlabApp(App):
             lines.append(raw.decode(errors="replace").rstrip("\n"))
             log.write(lines[-1])
         code, self.process = await self.process.wait(), None
-        if code == 0:
-            status.update(Text(f"scored: {typed}", style="green"))
+        last = lines[-1] if lines else f"exit code {code}"
+        # of several takes, score scores those it can and exits 2 naming the others: the trend still grew
+        partly = code != 0 and not self.cancelled and self._scored(run) > scored_before
+        if code == 0 or partly:
+            status.update(Text(f"scored: {typed}" if code == 0 else f"scored in part: {last}", style="green"))
             self.show_results(run_entry(run.path))  # the trend chart, with the new takes
             self.chart_index = len(self.charts) - 1
             self.show_chart()
-        else:
-            last = lines[-1] if lines else f"exit code {code}"
+        if partly:
+            self.notify(f"gearlab score: {last}", severity="warning")
+        elif code != 0:
             status.update(Text(f"{'cancelled' if self.cancelled else f'failed (exit {code})'}: {last}", style="red"))
             self.notify(f"gearlab score: {last}", severity="error")
+
+    @staticmethod
+    def _scored(run: RunEntry) -> int:
+        """Rows in the run's scoring history: what tells a partly scored batch from a refused one."""
+        from ..parts import scoring  # numpy and the scoring files: only once a take is scored
+
+        return len(scoring.read_history(RunDir(run.path)))
 
     def action_open_report(self) -> None:
         """Open report.html of the highlighted run (else the run on show) in the web browser."""
