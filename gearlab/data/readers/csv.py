@@ -65,17 +65,36 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
         count = i + 1
         if match is None:
             continue  # a title line
-        unit = (match.group(2) or "").strip()
-        value = _PREAMBLE_VALUE.match(match.group(3))
-        if value is not None:
-            unit = unit or value.group(2)
-            # the one rule of a rate's unit (readers.rates): beside its name, after its value, or in its name
-            found = scale_of(key_of(match.group(1)), unit) if unit else named(match.group(1))
-            if found is not None and (rate := in_hz(found, float(value.group(1)))) is not None:
-                fields["sample_rate"] = rate
+        if (rate := _rate_of(match)) is not None:
+            fields["sample_rate"] = rate
     if count == len(lines):  # no table after it: no preamble (a system file of 'name:value' lines is no record)
         return 0, {}
     return count, fields
+
+
+def _rate_of(match: re.Match) -> float | None:
+    """The rate in Hz a preamble field (_PREAMBLE_FIELD's match) states, or None where it states none."""
+    unit = (match.group(2) or "").strip()
+    value = _PREAMBLE_VALUE.match(match.group(3))
+    if value is None:
+        return None
+    unit = unit or value.group(2)
+    # the one rule of a rate's unit (readers.rates): beside its name, after its value, or in its name
+    found = scale_of(key_of(match.group(1)), unit) if unit else named(match.group(1))
+    return None if found is None else in_hz(found, float(value.group(1)))
+
+
+def comment_field(line: str) -> tuple[str, object] | None:
+    """(key, value) a '#' comment line states, or None: '# fs = 51200' gives ('fs', 51200.0); a rate named in
+    words or with its unit, as a preamble states one ('# Sample rate: 20 kHz', '# Sample rate [kHz]: 20'),
+    ('sample_rate', Hz): a logger's '#'-prefixed preamble was refused as stating no rate."""
+    text = line.strip()
+    match = _COMMENT_FIELD.match(text)
+    if match:
+        return match.group(1), _scalar(match.group(2))
+    words = _PREAMBLE_FIELD.match(text.lstrip("#").strip())
+    rate = None if words is None else _rate_of(words)
+    return None if rate is None else ("sample_rate", rate)
 
 
 def delimiter_of(line: str) -> str | None:
@@ -218,9 +237,8 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     if "#" in text:
         comments = list(map(str.startswith, map(str.lstrip, lines), repeat("#")))
         for line in compress(lines, comments):  # a field is a comment line's ('# fs = 51200')
-            match = _COMMENT_FIELD.match(line.strip())
-            if match:
-                fields[match.group(1)] = _scalar(match.group(2))
+            if (field := comment_field(line)) is not None:
+                fields[field[0]] = field[1]
         line_numbers, lines = _without(line_numbers, lines, comments)
     skipped, stated = preamble(lines[:101])  # it reads 100 lines and asks for one more
     fields.update(stated)

@@ -187,7 +187,7 @@ def tail_footer(path: Path, width: int) -> str | None:
 def _csv_header(path: Path) -> Header:
     from .base import _column
     from .csv import (
-        _COMMENT_FIELD,
+        comment_field,
         delimiter_of,
         encoding_of,
         header_names,
@@ -210,9 +210,8 @@ def _csv_header(path: Path) -> Header:
                 skipped -= 1
                 continue
             if stripped.startswith("#"):
-                match = _COMMENT_FIELD.match(stripped)
-                if match:
-                    fields.append((match.group(1), match.group(2)))
+                if (field := comment_field(stripped)) is not None:
+                    fields.append(field)
                 continue
             if not stripped:
                 continue

@@ -372,8 +372,7 @@ def first_row(path) -> tuple[list[str] | None, int]:
 def comment_fields(path) -> dict[str, object]:
     """The '# key = value' lines above a text record's first row ('# fs = 48000' gives a field 'fs'), as a
     CSV's are read."""
-    from .base import _scalar
-    from .csv import _COMMENT_FIELD
+    from .csv import comment_field
 
     skip, fields = _preamble(Path(path))  # a logger's preamble states a rate too
     with _open_text(Path(path)) as (stream, _):
@@ -386,9 +385,8 @@ def comment_fields(path) -> dict[str, object]:
                 continue
             if not text.startswith("#"):
                 break
-            match = _COMMENT_FIELD.match(text)
-            if match:
-                fields[match.group(1)] = _scalar(match.group(2))
+            if (field := comment_field(text)) is not None:
+                fields[field[0]] = field[1]
     return fields
 
 

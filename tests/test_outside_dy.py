@@ -1,0 +1,66 @@
+"""Outside user DY (issue 39, round 19): a maintenance engineer's gearboxes, their takes made here with numpy (each
+shaft's lines, each mesh's harmonics modulated by both its shafts, a tooth's dip and ring once a turn of its shaft,
+noise, a once-per-turn tacho), read as docs/your_gearbox.md says: a 41/109 conveyor drive whose input pinion cracks
+week by week, a 42/63 (non-hunting) + 23/71 mixer drive recorded on its output bearing, and what loggers and
+MATLAB write beside the numbers (a rate in a comment, a struct's units)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gearlab.data.recordings import read_channels
+from gearlab.inspect import InspectOptions, inspect_record
+
+G = 9.80665
+FS = 20000.0
+
+
+def _shaft(seconds: float, f0: float, seed: int) -> np.ndarray:
+    """The input shaft's angle per sample (rad): *f0* swinging 0.2 %, starting at any turn and angle."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * FS)) / FS
+    f = f0 * (1 + 0.002 * np.sin(2 * np.pi * 0.29 * t + rng.uniform(0, 6)))
+    return 2 * np.pi * (np.cumsum(f) / FS + rng.integers(0, 1000)) + rng.uniform(0, 6)
+
+
+def _take(th: np.ndarray, stages, seed: int, crack: float = 0.0, hum: float = 0.0) -> np.ndarray:
+    """m/s²: every shaft's orders 1-2, each mesh's harmonics 1-3 modulated by both its shafts; *crack* > 0: the input
+    pinion's tooth at 1.3 rad dips its mesh and rings a 3.1 kHz mode once a turn; *hum*: 50 Hz mains and its
+    harmonics 2 and 3 (pickup on the sensor's cable); noise 26 dB down."""
+    rng = np.random.default_rng(seed + 7)
+    turns = np.cumprod([1.0] + [p / w for p, w in stages])
+    x = sum(0.3 * np.cos(k * th * r + 0.7 * k + i) for i, r in enumerate(turns) for k in (1, 2))
+    for s, (zp, _) in enumerate(stages):
+        a, b = th * turns[s], th * turns[s + 1]
+        for h, amp in ((1, 3.0), (2, 1.4), (3, 0.6)):
+            am = 1 + 0.08 * np.cos(a + 0.3 * h) + 0.06 * np.cos(b + 1.1 * h)
+            x = x + amp * am * np.cos(h * (zp * a + 0.03 * np.cos(a + 0.7) + 0.02 * np.cos(b)) + 0.4 * h * s)
+    if crack:
+        d = np.angle(np.exp(1j * (th - 1.3)))  # from the cracked tooth, one turn of the input shaft
+        x = x - crack * 3.0 * np.exp(-0.5 * (d / (0.6 * 2 * np.pi / stages[0][0])) ** 2) * np.cos(stages[0][0] * th)
+        since = np.mod(th - 1.3, 2 * np.pi) / (2 * np.pi * np.gradient(th)[0] * FS / (2 * np.pi))
+        x = x + crack * 4.0 * np.exp(-since * 1250.0) * np.sin(2 * np.pi * 3100.0 * since)
+    t = np.arange(th.size) / FS
+    x = x + hum * (np.sin(2 * np.pi * 50 * t) + 0.3 * np.sin(2 * np.pi * 100 * t) + 0.5 * np.sin(2 * np.pi * 150 * t))
+    return x + rng.normal(0, 0.05 * np.std(x), th.size)
+
+
+def _tacho(th: np.ndarray) -> np.ndarray:
+    return np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)
+
+
+# --- what loggers and MATLAB write beside the numbers -------------------------------------------------------------
+
+
+@pytest.mark.parametrize("line", ["# Sample rate: 20 kHz", "# Sample rate [kHz]: 20", "# Sampling rate = 20000 Hz"])
+def test_a_rate_in_a_comment_line_is_read_as_a_preamble_s_is(tmp_path, line):
+    # a logger's CSV opening '# Sample rate: 20 kHz' was refused 'no sampling rate: the file has no 'fs'/time',
+    # the same line without its '#' read as 20 kHz ('# fs = 20000' alone was read: a one-word key)
+    th = _shaft(0.5, 29.0, 1)
+    path = tmp_path / "take.csv"
+    rows = "\n".join(f"{v:.5g},{p:g}" for v, p in zip(_take(th, ((41, 109),), 1), _tacho(th)))
+    path.write_text(f"{line}\nacc,tach\n{rows}\n")
+    _, fs = read_channels(path, ["acc"])
+    assert fs == pytest.approx(20000.0)
+
