@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.io import savemat
 
 from gearlab.data.recordings import read_channels
 from gearlab.inspect import InspectOptions, inspect_record
@@ -64,3 +65,14 @@ def test_a_rate_in_a_comment_line_is_read_as_a_preamble_s_is(tmp_path, line):
     _, fs = read_channels(path, ["acc"])
     assert fs == pytest.approx(20000.0)
 
+
+def test_a_matlab_struct_s_units_field_is_the_unit_of_its_data(tmp_path):
+    # MATLAB's rec = struct('fs', 20000, 'data', [acc tacho], 'units', 'g'): its data were read as m/s² ('values:
+    # unknown (no sensitivity or gain given: the values are taken as m/s²)'), 9.8 times too small, its 'units' a channel
+    th = _shaft(1.0, 29.0, 2)
+    acc = _take(th, ((41, 109),), 2)
+    savemat(tmp_path / "take.mat", {"rec": {"fs": FS, "data": np.c_[acc / G, _tacho(th)], "units": "g"}})
+    got = inspect_record(str(tmp_path / "take.mat"), None, InspectOptions("data[0]", tacho="data[1]"))
+    assert "g" in got["units"] and "9.80665" in got["units"], got["units"]
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.02)
+    assert "rec/units" not in got["channels"], got["channels"]

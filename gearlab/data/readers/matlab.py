@@ -20,6 +20,7 @@ from .base import (
     time_scale,
 )
 from .hdf5 import _read_hdf5, leaf_match
+from .npz import _UNIT_KEYS
 from .rates import named, rate_field
 
 
@@ -62,10 +63,11 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         available = [k for k in variables if not k.startswith("__")]  # __header__, __version__, …
         return _keyed(available, lambda n: variables[n], names)
 
-    def wanted(name: str) -> bool:  # the channels asked for and the rate fields (see _keyed)
-        return name in names or is_rate_or_time(name)
+    def wanted(name: str) -> bool:  # the channels asked for, the rate fields (see _keyed) and the units said
+        return name in names or is_rate_or_time(name) or name.lower().endswith(_UNIT_KEYS)
 
-    every = _mat5_variables(path.read_bytes(), wanted, fields)
+    shapes: dict[str, tuple] = {}  # the numeric ones': a unit entry is text
+    every = _mat5_variables(path.read_bytes(), wanted, fields, shapes)
     top = list(dict.fromkeys(n for n in every if n and not n.startswith("__")))
     paths = {n: field_path(n, fields) for n in names if n not in top}
     paths = {n: p for n, p in paths.items() if p is not None}
@@ -83,9 +85,12 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         return value
 
     contents = _keyed(top, get, [n for n in names if n not in paths])
-    contents.available = top + fields
+    said = said_units([n for n in top if n in load] + [f for f in fields if f.split("/", 1)[0] in used], get)
+    # a unit entry (text) is no channel
+    contents.available = [n for n in top + fields if not (n.lower().endswith(_UNIT_KEYS) and n not in shapes)]
     for name, full in paths.items():
         contents.found[name] = _normalise(get(full))
+    contents.units.update({n: said[paths.get(n, n)] for n in names if paths.get(n, n) in said})
     for full in fields:
         leaf = full.rsplit("/", 1)[-1]
         if full.split("/", 1)[0] not in used:
@@ -95,6 +100,22 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         elif time_scale(leaf) is not None:
             contents.times.append(_time_field(f"time '{full}'", _normalise(get(full)), time_scale(leaf)))
     return contents
+
+
+def said_units(names: Sequence[str], get) -> dict[str, str]:
+    """{channel: unit} that text entries state, as an NPZ's do (npz.stated_units): 'units' of its
+    struct's (or file's) every other entry, '<channel>_unit' of that one. MATLAB's struct('fs', 20000, 'data', X,
+    'units', 'g') had its data read as m/s² ('values: unknown'), its 'units' listed as a channel."""
+    texts = {n: get(n) for n in names if n.rsplit("/", 1)[-1].lower().endswith(_UNIT_KEYS)}
+    texts = {n: v.strip() for n, v in texts.items() if isinstance(v, str)}
+    out: dict[str, str] = {}
+    for name, unit in sorted(texts.items(), key=lambda item: item[0].rsplit("/", 1)[-1].lower() in _UNIT_KEYS):
+        parent, _, leaf = name.rpartition("/")
+        if leaf.lower() in _UNIT_KEYS:  # after the '<channel>_unit' ones: theirs stand
+            out.update({n: unit for n in names if n.rpartition("/")[0] == parent and n not in texts and n not in out})
+        elif (base := name[: name.rindex("_")]) in names:
+            out[base] = unit
+    return {n: u for n, u in out.items() if u}
 
 
 # --- MATLAB v5 layout ----------------------------------------------------------------------
