@@ -110,7 +110,7 @@ def call_of(loc: dict, ns: dict) -> str:
         shafts = W.flagged_shafts(loc) if loc.get("shafts") else [{"gear": loc["named"]}]
         return "localised change: " + "; ".join(s["gear"] + weakly(s) for s in shafts)
     if ns.get("changed"):
-        return NS.call(ns["order"])
+        return NS.call(ns["order"], ns.get("hz"))
     if loc.get("summary", "").startswith("not localised: ") and "note" in ns:  # neither read: no call, not 'no change'
         return f"not read against the history: {loc['summary'][15:]}"
     why = "; non-synchronous " + ns["note"] if "note" in ns else ", no non-synchronous line over its threshold"

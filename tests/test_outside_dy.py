@@ -76,3 +76,55 @@ def test_a_matlab_struct_s_units_field_is_the_unit_of_its_data(tmp_path):
     assert "g" in got["units"] and "9.80665" in got["units"], got["units"]
     assert got["rms"] == pytest.approx(np.std(acc), rel=0.02)
     assert "rec/units" not in got["channels"], got["channels"]
+
+
+# --- what is no gear's fault: a mains hum --------------------------------------------------------------------------
+
+CONVEYOR = ((41, 109),)  # the conveyor drive: a 41T input pinion at 29 Hz, its 109T wheel on the output shaft
+
+
+@pytest.fixture(scope="module")
+def conveyor(tmp_path_factory):
+    """The conveyor drive's description and takes (npz in m/s², 3 s: 87 input and 32 output turns): three
+    healthy days for the history, a healthy take with a 50 Hz mains hum (0.3 m/s² against a 3 m/s² mesh)."""
+    from gearlab.gearbox import load_gearbox
+
+    folder = tmp_path_factory.mktemp("conveyor")
+    (folder / "box.toml").write_text(
+        '[gearbox]\nname = "conveyor"\n[operation]\nspeed = "29 Hz"\nload = "40 N*m"\n[[stages]]\nmodule = "2 mm"\n'
+        'face_width = "20 mm"\npinion = { z = 41, bore = "25 mm" }\nwheel = { z = 109, bore = "40 mm" }\n'
+        '[sensor]\nnear = "input"\ntacho = "input"\n'
+    )
+    paths = {}
+    for name, seed, hum in (("day1", 10, 0.0), ("day2", 11, 0.0), ("day3", 12, 0.0), ("hum", 14, 0.3)):
+        th = _shaft(3.0, 29.0, seed)
+        paths[name] = str(folder / f"{name}.npz")
+        np.savez(paths[name], acc=_take(th, CONVEYOR, seed, hum=hum), tach=_tacho(th), fs=FS)
+    return load_gearbox(folder / "box.toml"), paths
+
+
+def test_a_mains_hum_is_called_no_gear_fault_not_bearing_damage(conveyor):
+    # a healthy take with 50 Hz pickup (and its 2nd and 3rd harmonics) on the sensor's cable: inspect --history
+    # listed 49.927 Hz as 'not a gear order (a fixed frequency such as mains, or a bearing's)', then called it
+    # 'other damage: non-synchronous (bearing-like), at order 2.08', as did the detection run and gearlab score
+    from gearlab.inspect_history import localisation
+
+    box, paths = conveyor
+    history = [paths["day1"], paths["day2"], paths["day3"]]
+    found = localisation(paths["hum"], history, box, InspectOptions("acc", tacho="tach"))
+    assert found["nonsync"]["changed"], found["nonsync"]
+    assert found["call"].startswith("not a gear fault: mains hum at 50"), found["call"]
+    assert "bearing-like" not in found["call"]
+
+
+def test_a_run_s_flag_on_a_hum_is_no_gear_s_and_a_bearing_s_line_stays_bearing_like():
+    # the detection run's and gearlab score's call (kinds.detection_which_gear.call_of) of a take whose residual's
+    # envelope line is the mains': not the watched gear's, counted as a flag on no watched gear, as a bearing's is
+    from gearlab.kinds.detection_which_gear import call_of, is_other
+
+    nothing = {"named": None, "shafts": []}
+    hum = call_of(nothing, ["input pinion 41T (stage 1)"], {"changed": True, "order": 2.078}, 28.92)
+    assert hum.startswith("not a gear fault: mains hum at 60.1 Hz (order 2.08"), hum
+    assert is_other(hum)
+    bearing = call_of(nothing, ["input pinion 41T (stage 1)"], {"changed": True, "order": 4.37}, 29.0)
+    assert bearing == "other damage: non-synchronous (bearing-like), at order 4.37"

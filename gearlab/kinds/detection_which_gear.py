@@ -74,19 +74,20 @@ def watched_gears(source: DatasetSpec, table) -> list[str]:
 ALSO = "; also other damage: "  # a record localised on a watched gear and on another
 
 
-def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str:
+def call_of(found: dict, watched: list[str], nonsync: dict | None = None, speed_hz: float | None = None) -> str:
     """What a flag on a record means, from its localisation (Localisation.describe()) and its
     non-synchronous change (signals.nonsync.NonSync.describe(); None: not read): a watched-gear
     fault where any shaft over its threshold names a watched gear, with the other gears flagged beside
     it ("watched-gear fault: input pinion 32T (stage 1); also other damage: idler gear 96T (stage 1)");
     else other damage, every flagged gear named; nothing localised, other damage where the
     non-synchronous residual changed ("other damage: non-synchronous (bearing-like), at order 3.57"),
-    a record too short to be read a fault of no gear ("fault, gear not determined: 5.73 turns of the output
+    a mains hum's line no gear's fault (*speed_hz*: the take's, its line in Hz), a record too short to be read a
+    fault of no gear ("fault, gear not determined: 5.73 turns of the output
     shaft, 8 needed"), else the watched gear's, not localised."""
     shafts = W.flagged_shafts(found)
     if not shafts:
         if nonsync and nonsync["changed"]:
-            return NS.call(nonsync["order"])
+            return NS.call(nonsync["order"], None if speed_hz is None else nonsync["order"] * speed_hz)
         if unread := found.get("unread"):
             turns, shaft, need = unread["turns"], unread["shaft"], unread["needed"]
             return f"{UNDETERMINED}: {turns:.3g} turns of the {shaft} shaft, {need} needed"
@@ -104,7 +105,7 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None) -> str
 
 def is_other(call: str | None) -> bool:
     """A record's call (call_of) names damage on another gear than the watched ones (only)."""
-    return bool(call) and call.startswith(OTHER)
+    return bool(call) and call.startswith((OTHER, NS.HUM))  # a mains hum is no watched gear's either
 
 
 def is_undetermined(call: str | None) -> bool:
@@ -232,7 +233,8 @@ def localise_target(
             take = takes[f.path]
             found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
             ns = nonsync_of(take.revolutions, quiet, table)
-            out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call_of(found, watched, ns)}
+            call = call_of(found, watched, ns, take.speed_hz)
+            out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call}
     return out
 
 
@@ -315,7 +317,7 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
                 "named": W.named_gears(found),  # damage on two shafts: both, as the run's table names them
                 "summary": found["summary"],
                 "nonsync": ns,
-                "call": call_of(found, meta["watched"], ns),
+                "call": call_of(found, meta["watched"], ns, take.speed_hz),
                 "evidence": evidence(found, ns),
             }
     return out

@@ -84,8 +84,32 @@ FALSE_ALARM = 0.01  # the Gaussian floor of the threshold, shared out among the 
 PASSED = f"a healthy take passes it at false alarm {FALSE_ALARM:g}"
 
 
-def call(order: float) -> str:
-    """How a detection run, `gearlab score` and `gearlab inspect --history` name a non-synchronous change."""
+# A line of the residual's envelope at the mains frequency or a harmonic of it (within MAINS_SLACK of it, the grid's
+# own drift and the strike order's resolution over a take of 80 turns) is a hum picked up on the sensor's cable or a
+# ground loop: its 50, 100, 150 Hz beat in the envelope as a bearing's strikes do (DY's 41/109 box at 29 Hz: a 0.3
+# m/s² hum read z 11.8 at order 1.72, 'other damage: non-synchronous (bearing-like)')
+MAINS = (50.0, 60.0)
+MAINS_HARMONICS = 4
+MAINS_SLACK = 0.01
+HUM = "not a gear fault"
+
+
+def mains(hz: float | None) -> float | None:
+    """The mains frequency (Hz) of which *hz* is a harmonic (MAINS_HARMONICS of MAINS, within MAINS_SLACK), or None."""
+    if hz is None:
+        return None
+    near = [f for f in MAINS for k in range(1, MAINS_HARMONICS + 1) if abs(hz - k * f) <= MAINS_SLACK * k * f]
+    return near[0] if near else None
+
+
+def call(order: float, hz: float | None = None) -> str:
+    """How a detection run, `gearlab score` and `gearlab inspect --history` name a non-synchronous change at input
+    order *order* (*hz*: in Hz, where the take's speed is known): a mains hum's line as such, no damage."""
+    if (grid := mains(hz)) is not None:
+        return (
+            f"{HUM}: mains hum at {hz:.1f} Hz (order {order:.2f}; the {grid:g} Hz mains: electrical pickup on the "
+            "sensor's cable or a ground loop; a bearing's line would move with the speed)"
+        )
     return f"other damage: non-synchronous (bearing-like), at order {order:.2f}"
 
 
