@@ -621,17 +621,19 @@ def score(
 ) -> None:
     """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
 
-    Per record: its speed and how it was found, and the gear its change is localised on against the run's history, with the evidence (each shaft's z over its threshold, the tooth). Per method and unit (revolution, recordN): the units called over the threshold, the median score less the threshold, and the decision: most units called is a fault, or "other damage: <gear>" when the change lies on a gear the run does not watch (as the run's which-gear table calls it). Each row is appended to the run's scoring history (scoring/history.jsonl), whose trend per method the report and the TUI show. A take that cannot be scored (a speed far from every condition's) is refused in one line; of several, it is named with why ('not scored') and the others are scored, with exit code 2.
+    Per record: its speed and how it was found, and the gear its change is localised on against the run's history, with the evidence (each shaft's z over its threshold, the tooth). Per method and unit (revolution, recordN): the units called over the threshold, the median score less the threshold, and the decision: most units called is a fault, or "other damage: <gear>" when the change lies on a gear the run does not watch (as the run's which-gear table calls it). Each row is appended to the run's scoring history (scoring/history.jsonl), whose trend per method the report and the TUI show; the last lines (trend:) say per condition which take was first called, by which methods, on which gear and tooth. A take that cannot be scored (a speed far from every condition's) is refused in one line; of several, it is named with why ('not scored') and the others are scored, with exit code 2.
 
     Example: gearlab score runs/det/20260101-120000-000000 today.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
     from .notebook import score_recordings
-    from .terminal import all_scored, score_tables
+    from .terminal import all_scored, score_tables, score_trend
 
     rows = score_recordings(run_dir, files, condition, given=dict(k.partition("=")[::2] for k in key))
     if as_json:
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
-    for item in [] if as_json else score_tables(rows, run_dir, console.width):  # per file: speed, which gear, a table
+    for item in (
+        [] if as_json else [*score_tables(rows, run_dir, console.width), *score_trend(run_dir)]
+    ):  # per file, then the trend
         console.print(item)
     all_scored(rows)  # a take refused of several: the others scored, exit 2
 

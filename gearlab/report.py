@@ -153,6 +153,8 @@ def build_report(run: RunDir | Path) -> str:
     for i, fig in enumerate(figures, start=1):
         data = base64.b64encode(fig.read_bytes()).decode()
         thesis, text = captions.get(fig.stem, ("", fig.stem.replace("_", " ") + "."))
+        note = run.file("figures", f"{fig.stem}.txt")  # what the figure says in words, written with it (a trend's)
+        text += "".join(f" {line}." for line in note.read_text().splitlines()) if note.exists() else ""
         label = f"Figure {i}" + (f" (as thesis {thesis})" if thesis else "")
         parts.append(
             f"<figure id='{html.escape(fig.stem)}'><img alt='{html.escape(alt_text(label, text))}' "

@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 import time
 from collections.abc import Iterable
+from pathlib import Path
 
 from rich.cells import cell_len
 from rich.console import Console, Group
@@ -476,3 +477,14 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
             table.add_row(*(Text(x) for x in c[:4]), Text(c[4], style=colour))
         shown.append(table)
     return shown
+
+
+def score_trend(run_dir) -> list:
+    """The last lines `gearlab score` prints: the run's scoring history so far (the takes just scored in it) per
+    condition in words, which take was first called, by which methods, on which gear and tooth
+    (kinds.detection_trend)."""
+    from .kinds.detection_trend import first_called
+    from .parts.scoring import read_history
+    from .runs import RunDir
+
+    return [Text(f"trend: {line}") for line in first_called(read_history(RunDir.open(Path(run_dir))))]

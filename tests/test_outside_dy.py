@@ -128,3 +128,84 @@ def test_a_run_s_flag_on_a_hum_is_no_gear_s_and_a_bearing_s_line_stays_bearing_l
     assert is_other(hum)
     bearing = call_of(nothing, ["input pinion 41T (stage 1)"], {"changed": True, "order": 4.37}, 29.0)
     assert bearing == "other damage: non-synchronous (bearing-like), at order 4.37"
+
+
+# --- weeks of takes: when the crack first crossed, on which gear and tooth -----------------------------------------
+
+
+def _week(n: int, method: str, margin: float, decision: str | None = None) -> dict:
+    """One row of the conveyor's scoring history (gearlab.parts.scoring) as `gearlab score` appends it: week *n*,
+    the watched input pinion, its record30 units' median score *margin* over the threshold 1."""
+    where = "input pinion 41T (stage 1)" if margin > -0.5 else None
+    tooth = "; tooth 9 of 41 (counted from the tacho's mark on this shaft)" if where else ""
+    return {
+        "file": f"rec/week{n}.csv",
+        "condition": "29 Hz",
+        "method": method,
+        "unit": "record30",
+        "median_score": 1.0 + margin,
+        "threshold": 1.0,
+        "decision": decision or ("fault" if margin > 0 else "healthy"),
+        "localised": where,
+        "evidence": f"input z {20 * (margin + 1):.1f}/2.6{tooth}",
+    }
+
+
+WEEKS = [  # the crack grows: fm4 and the matched filter call it from week 4, the likelihood ratio from week 5
+    *(_week(n, "fm4", m) for n, m in enumerate((-0.9, -0.8, -0.05, 0.3, 0.8, 1.5), 1)),
+    *(_week(n, "matched_filter", m) for n, m in enumerate((-0.9, -0.7, -0.1, 0.2, 0.6, 1.2), 1)),
+    *(_week(n, "likelihood_ratio", m) for n, m in enumerate((-0.9, -0.9, -0.6, -0.1, 0.5, 1.1), 1)),
+    *(_week(n, "na4", -0.9) for n in range(1, 7)),
+]
+
+
+def test_the_score_trend_says_when_a_fault_was_first_called_on_which_gear_and_tooth(monkeypatch):
+    # a maintenance engineer's weekly takes of a cracking pinion, scored one by one: the trend (report, TUI) drew
+    # each method's margin over its threshold per take, and nothing said which take first crossed, by which methods,
+    # or where: the gear and tooth were in each take's printout only
+    from gearlab.kinds import detection_scoring
+    from gearlab.kinds.detection_trend import first_called
+
+    (line,) = first_called(WEEKS)
+    assert line.startswith("29 Hz, record30: first called on take 4 (week4.csv) by fm4, matched_filter"), line
+    assert "likelihood_ratio from take 5, na4 never" in line, line
+    assert "input pinion 41T (stage 1), tooth 9 of 41" in line and "every take since" in line, line
+    monkeypatch.setattr(detection_scoring.scoring, "read_history", lambda run: WEEKS)
+    (trend,) = detection_scoring.score_trends(None)
+    assert line in trend.title, trend.title
+
+
+def test_a_trend_with_no_take_called_says_so_and_a_call_that_lapsed_says_that():
+    from gearlab.kinds.detection_trend import first_called
+
+    quiet = [r | {"decision": "healthy", "median_score": 0.5} for r in WEEKS]
+    assert first_called(quiet) == ["29 Hz, record30: no take called (6 scored)"]
+    lapsed = [r | {"decision": "healthy"} if r["file"].endswith("week5.csv") else r for r in WEEKS]
+    (line,) = first_called(lapsed)
+    assert "not called again on take 5 (week5.csv)" in line, line
+
+
+def test_the_report_says_under_the_trend_chart_when_it_first_crossed(tmp_path):
+    # report.html showed the trend as a picture only: its text now follows the chart's caption
+    from gearlab.report import build_report
+    from gearlab.runs import RunDir
+
+    (tmp_path / "figures").mkdir()
+    (tmp_path / "figures" / "score_trend.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    (tmp_path / "figures" / "score_trend.txt").write_text("29 Hz, record30: first called on take 4 (week4.csv)")
+    page = build_report(RunDir(tmp_path))
+    assert "29 Hz, record30: first called on take 4 (week4.csv).</figcaption>" in page
+
+
+def test_gearlab_score_ends_with_the_trend_so_far(tmp_path):
+    # `gearlab score RUN_DIR week4.csv` printed week 4's table alone: its last lines now say the trend of the takes
+    # scored so far (the history it appended to)
+    import json
+
+    from gearlab.terminal import score_trend
+
+    (tmp_path / "scenario.toml").write_text('[scenario]\nname = "conveyor_crack"\nkind = "detection"\n')
+    (tmp_path / "scoring").mkdir()
+    (tmp_path / "scoring" / "history.jsonl").write_text("".join(json.dumps(r) + "\n" for r in WEEKS))
+    (line,) = [str(t) for t in score_trend(tmp_path)]
+    assert line.startswith("trend: 29 Hz, record30: first called on take 4 (week4.csv) by fm4, matched_filter"), line

@@ -58,6 +58,7 @@ from .detection_records import (
     varies,
 )
 from .detection_settings import Spec, stored_classical
+from .detection_trend import first_called
 from .detection_units import Rule
 from .detection_which_gear import (
     decision_of,
@@ -718,6 +719,8 @@ def score(
         from .detection_figures import score_trend
 
         score_trend(trends, run.file("figures", "score_trend.png"))
+        # the report's text under the chart (report.build_report: a figure's note): when it first crossed, where
+        run.file("figures", "score_trend.txt").write("\n".join(first_called(scoring.read_history(run))))
     return rows
 
 
@@ -770,6 +773,7 @@ def score_trends(run: RunDir) -> list:
         if longest != unit:
             said += f"\n{longest}: not scored, every take too short for its unit ({unit} shown)"
         said += "".join(f"\nnot scored: {n}: {w.split('; ')[0]}" for n, w in list(refused.items())[-3:])
+        said += "".join(f"\n{line}" for line in first_called(held))  # which take first crossed, where
         named = [f"{i} {f}" for i, f in enumerate(files, 1)]  # which take each point is, in the TUI too
         named = named if len(named) <= 12 else [*named[:5], "...", *named[-5:]]
         if curves:
