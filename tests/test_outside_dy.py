@@ -6,6 +6,8 @@ MATLAB write beside the numbers (a rate in a comment, a struct's units)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.io import savemat
@@ -209,3 +211,59 @@ def test_gearlab_score_ends_with_the_trend_so_far(tmp_path):
     (tmp_path / "scoring" / "history.jsonl").write_text("".join(json.dumps(r) + "\n" for r in WEEKS))
     (line,) = [str(t) for t in score_trend(tmp_path)]
     assert line.startswith("trend: 29 Hz, record30: first called on take 4 (week4.csv) by fm4, matched_filter"), line
+
+
+# --- a take of the wrong polarity ----------------------------------------------------------------------------------
+
+
+def test_a_take_whose_synchronous_average_is_the_history_s_reversed_is_said_to_be():
+    from gearlab.signals.checks import polarity_line
+
+    rng = np.random.default_rng(3)
+    th = np.linspace(0, 2 * np.pi, 512, endpoint=False)
+    history = np.cos(41 * th) + 0.3 * np.cos(82 * th + 1)
+    take = history + rng.normal(0, 0.5, (40, th.size))
+    assert polarity_line(take, history) == ""
+    said = polarity_line(-take, history)
+    assert said.startswith("polarity reversed against its history's (their synchronous averages correlate -0.9"), said
+    assert polarity_line(rng.normal(0, 1, (40, th.size)), history) == ""  # unlike it, not reversed
+
+
+@pytest.fixture(scope="module")
+def conveyor_run(conveyor, tmp_path_factory):
+    """A detection run of the conveyor drive watching its input pinion (the matched filter alone): its three
+    healthy days the history; a healthy take recorded with the sensor's leads swapped (the values negated) a test."""
+    from detection_scenario import run_in_module
+
+    box, paths = conveyor
+    folder = Path(paths["day1"]).parent
+    th = _shaft(3.0, 29.0, 15)
+    np.savez(folder / "swapped.npz", acc=-_take(th, CONVEYOR, 15), tach=_tacho(th), fs=FS)
+    (folder / "detect.toml").write_text(
+        '[scenario]\nname = "conveyor_crack"\nkind = "detection"\n[source]\ngearbox = "box.toml"\n'
+        'faults = { crack = [20] }\nhealthy = 8\nteeth = [1, 21]\n[target]\nvibration = "acc"\ntacho = "tach"\n'
+        'files = [\n  { file = "day*.npz", role = "history", label = "healthy" },\n'
+        '  { file = "swapped.npz", role = "test", label = "healthy" },\n'
+        '  { file = "hum.npz", role = "test", label = "healthy" },\n]\n[[methods]]\nadapter = "matched_filter"\n'
+        "[protocol]\nbatch = 8\n[execution]\nworkers = 1\n"
+    )
+    return run_in_module(folder / "detect.toml", folder / "runs", cwd=folder, figures=False)
+
+
+def test_a_run_warns_of_a_take_of_reversed_polarity(conveyor_run):
+    # the swapped take: 1 of 3 record30 units called by the matched filter and the likelihood ratio, nothing said
+    from gearlab.runs import RunDir
+
+    warnings = RunDir.open(conveyor_run).read_json("summary.json")["warnings"]
+    assert [w for w in warnings if w.startswith("warning: swapped.npz: polarity reversed")], warnings
+    assert not [w for w in warnings if "hum.npz: polarity" in w], warnings
+
+
+def test_gearlab_score_says_a_take_of_reversed_polarity(conveyor_run, conveyor):
+    from gearlab.notebook import score_recordings
+
+    folder = Path(conveyor[1]["day1"]).parent
+    rows = score_recordings(conveyor_run, [folder / "swapped.npz", folder / "day2.npz"])
+    level = {Path(r["file"]).name: r["level"] for r in rows}
+    assert level["swapped.npz"].startswith("polarity reversed against its history's"), level
+    assert level["day2.npz"] == "", level

@@ -24,7 +24,7 @@ from ..parts.measured import ROLES, Target, TargetFile, aligned
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
-from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS
+from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS, polarity_line
 from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
@@ -463,6 +463,11 @@ def read_target(
                 cond["shifts"][f.path] = shift
                 turned.append((f, revs))
             cond[role] = turned
+        if tacho:  # aligned by the marks: a take reversed against the history (a sensor's leads swapped) is said
+            flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := polarity_line(r, reference))]
+            cond["warnings"] += flipped
+            for line in flipped:
+                on_event(Event("log", message=f"warning: {line}"))
         _units(cond)
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles

@@ -26,7 +26,7 @@ from ..runs import RunDir, input_digest
 from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.checks import VARIES_WORDS
+from ..signals.checks import VARIES_WORDS, polarity_line
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -264,6 +264,7 @@ def _scoring_condition(
     at = {f.path: math.lcm(ppr, (marks or {}).get(f.path, ppr)) for f, _ in records}
     test = [(f, aligned(reference, standardiser.apply(revs), tacho, at[f.path], continuous)[1]) for f, revs in records]
     blocks = meta["blocks"]
+    polarity = (lambda t: polarity_line(t, reference)) if tacho else (lambda t: "")  # noqa: E731
     per_record = [unit_sets(r, blocks, True) for _, r in history]
     return {
         "history": history,
@@ -276,7 +277,10 @@ def _scoring_condition(
             for u in per_record[0]
         },
         "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
-        "levels": {f.path: level_line(float(np.std(r)) / standardiser.std) for f, r in records},  # another load?
+        "levels": {  # another load? a take reversed against the history (aligned by the marks: a tacho)?
+            f.path: "; ".join(w for w in (level_line(float(np.std(r)) / standardiser.std), polarity(t)) if w)
+            for (f, r), (_, t) in zip(records, test)
+        },
     }
 
 

@@ -138,3 +138,22 @@ def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
     if high - low <= SPEED_VARIES * float(np.mean(speeds)):
         return ""
     return f"; {fmt_hz(low)} .. {fmt_hz(high)} {VARIES_WORDS} its mean speed is its condition (steady records compare)"
+
+
+# A take whose synchronous average correlates below -POLARITY with its history's (aligned by the tacho's marks) is
+# that average reversed: a sensor wired or mounted the other way round. Its mesh lines are the history's, so FM4 and
+# NA4 see no change, while the matched filter and the likelihood ratio, which read the sign, called 1 of 3 record30
+# units of DY's healthy 41/109 take with its leads swapped, with nothing said.
+POLARITY = 0.5
+
+
+def polarity_line(revs: np.ndarray, reference: np.ndarray) -> str:
+    """In words, a take's revolutions *revs* (R, points) whose mean is the history's *reference* revolution
+    reversed (correlation under -POLARITY); "" otherwise."""
+    r = float(np.corrcoef(np.asarray(revs).mean(axis=0), reference)[0, 1])
+    if not r < -POLARITY:
+        return ""
+    return (
+        f"polarity reversed against its history's (their synchronous averages correlate {r:.2f}): a sensor wired "
+        "or mounted the other way round? the matched filter and the likelihood ratio read the reversal as a change"
+    )
