@@ -267,3 +267,17 @@ def test_gearlab_score_says_a_take_of_reversed_polarity(conveyor_run, conveyor):
     level = {Path(r["file"]).name: r["level"] for r in rows}
     assert level["swapped.npz"].startswith("polarity reversed against its history's"), level
     assert level["day2.npz"] == "", level
+
+
+@pytest.mark.parametrize("line", ["# units: g", "Units: g", "# unit = g"])
+def test_a_logger_s_units_line_above_the_table_is_the_unit_of_its_values(tmp_path, line):
+    # a CSV opening 'Sample rate: 20 kHz' and 'Units: g' was read as m/s² ('values: unknown ... taken as m/s²'),
+    # 9.8 times too small, as an NPZ's text 'unit' or a MATLAB struct's 'units' is not
+    th = _shaft(1.0, 29.0, 4)
+    acc = _take(th, CONVEYOR, 4)
+    path = tmp_path / "take.csv"
+    rows = "\n".join(f"{v:.6g},{p:g}" for v, p in zip(acc / G, _tacho(th)))
+    path.write_text(f"Sample rate: 20 kHz\n{line}\nacc,tach\n{rows}\n")
+    got = inspect_record(str(path), None, InspectOptions("acc", tacho="tach"))
+    assert "9.80665" in got["units"], got["units"]
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.02)

@@ -67,9 +67,22 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
             continue  # a title line
         if (rate := _rate_of(match)) is not None:
             fields["sample_rate"] = rate
+        elif match.group(1).strip().lower() in FILE_UNIT and match.group(3):  # 'Units: g': every column's
+            fields["unit"] = match.group(3)
     if count == len(lines):  # no table after it: no preamble (a system file of 'name:value' lines is no record)
         return 0, {}
     return count, fields
+
+
+# the keys of a line above the table that states every column's unit ('# units: g', 'Units: g'), as an NPZ's text
+# 'unit' does (npz.stated_units); a units row under the header says each column's, and stands
+FILE_UNIT = ("unit", "units")
+
+
+def file_units(fields: dict[str, object], columns: Sequence[str]) -> dict[str, str]:
+    """{column: unit} of the unit a comment or preamble line states for every column (FILE_UNIT), or {}."""
+    said = [v for k, v in fields.items() if k.lower() in FILE_UNIT and isinstance(v, str) and v.strip()]
+    return {c: said[-1].strip() for c in columns} if said else {}
 
 
 def _rate_of(match: re.Match) -> float | None:
@@ -329,6 +342,6 @@ def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str
     asked = [n for n in names if n not in columns and n not in fields and column_index(n, columns) is not None]
     contents = _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])
     contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
-    contents.units.update(units or {})
+    contents.units.update(file_units(fields, columns) | (units or {}))
     contents.warnings += warnings
     return contents

@@ -190,6 +190,7 @@ def _csv_header(path: Path) -> Header:
         comment_field,
         delimiter_of,
         encoding_of,
+        file_units,
         header_names,
         is_header,
         preamble,
@@ -242,7 +243,8 @@ def _csv_header(path: Path) -> Header:
             )
     rate = any(is_rate_or_time(n) for n in [*names, *(k for k, _ in fields)])  # a field's rate, no channel's
     _say_footer(path, len(names))
-    return Header("CSV", names, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units or {})
+    units = file_units(dict(fields), names) | (units or {})  # a '# units: g' line's, each column's of a units row
+    return Header("CSV", names, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units)
 
 
 def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
