@@ -86,8 +86,10 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
 
     contents = _keyed(top, get, [n for n in names if n not in paths])
     said = said_units([n for n in top if n in load] + [f for f in fields if f.split("/", 1)[0] in used], get)
-    # a unit entry (text) is no channel
-    contents.available = [n for n in top + fields if not (n.lower().endswith(_UNIT_KEYS) and n not in shapes)]
+    # a unit entry (text) is no channel, nor a struct whose fields are listed (rec: rec/data, rec/fs)
+    structs = {f.split("/", 1)[0] for f in fields}
+    listed = [n for n in top if n not in structs or n in shapes] + fields
+    contents.available = [n for n in listed if not (n.lower().endswith(_UNIT_KEYS) and n not in shapes)]
     for name, full in paths.items():
         contents.found[name] = _normalise(get(full))
     contents.units.update({n: said[paths.get(n, n)] for n in names if paths.get(n, n) in said})
