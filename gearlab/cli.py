@@ -631,9 +631,7 @@ def score(
     rows = score_recordings(run_dir, files, condition, given=dict(k.partition("=")[::2] for k in key))
     if as_json:
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
-    for item in (
-        [] if as_json else [*score_tables(rows, run_dir, console.width), *score_trend(run_dir)]
-    ):  # per file, then the trend
+    for item in [] if as_json else [*score_tables(rows, run_dir, console.width), *score_trend(run_dir)]:
         console.print(item)
     all_scored(rows)  # a take refused of several: the others scored, exit 2
 

@@ -592,7 +592,7 @@ class GearlabApp(App):
             log.write(lines[-1])
         code, self.process = await self.process.wait(), None
         last = lines[-1] if lines else f"exit code {code}"
-        # of several takes, score scores those it can and exits 2 naming the others: the trend still grew
+        # of several takes, score scores those it can and exits 2, the others kept in not_scored.jsonl
         partly = code != 0 and not self.cancelled and self._scored(run) > scored_before
         if code == 0 or partly:
             status.update(Text(f"scored: {typed}" if code == 0 else f"scored in part: {last}", style="green"))
@@ -607,10 +607,11 @@ class GearlabApp(App):
 
     @staticmethod
     def _scored(run: RunEntry) -> int:
-        """Rows in the run's scoring history: what tells a partly scored batch from a refused one."""
+        """The takes refused of a batch whose others were scored (nothing is written when all are refused): what
+        tells a partly scored batch from a refused one."""
         from ..parts import scoring  # numpy and the scoring files: only once a take is scored
 
-        return len(scoring.read_history(RunDir(run.path)))
+        return len(scoring.read_skipped(RunDir(run.path)))
 
     def action_open_report(self) -> None:
         """Open report.html of the highlighted run (else the run on show) in the web browser."""
