@@ -109,10 +109,9 @@ def test_the_soft_reducer_at_its_own_step_names_the_intermediate_shaft_not_the_i
 
 
 def test_the_grid_reading_is_np_interp_bit_for_bit():
-    """signals.shaft.on_grid, read_at's linear step on its 4 x denser samples, is np.interp on the grid
-    0 … n-1 to the last bit: inside, on the grid points, at both ends and beyond them, in 1-D and 2-D;
-    its compiled pass (float64) and its numpy form (any other dtype) alike."""
-    from gearlab.signals.shaft import on_grid, on_grid_numpy
+    """signals.grid.read_grid, the linear step of a reading at uniform angle (pipeline.Upsampled.at), is np.interp
+    on the grid 0 … n-1 to the last bit: inside, on the grid points, at both ends and beyond them."""
+    from gearlab.signals.grid import read_grid
 
     rng = np.random.default_rng(3)
     for n in (1, 2, 7, 4096, 200_001):
@@ -122,9 +121,11 @@ def test_the_grid_reading_is_np_interp_bit_for_bit():
             np.arange(n, dtype=np.float64),
             np.arange(n) * 0.37,
             np.array([-0.0, 0.0, n - 1.0, n - 1 + 1e-9, n + 0.5, -np.inf, np.inf]),
-            rng.uniform(0, n, size=(7, 22))[:, ::2],
         ):
             want = np.interp(x, np.arange(n, dtype=np.float64), fp)
-            for read in (on_grid, on_grid_numpy):
-                assert np.array_equal(read(x, fp).view(np.int64), want.view(np.int64)), (read, n, x[:3])
-    assert np.isnan(on_grid(np.array([np.nan, 0.5]), np.arange(3.0))[0])  # no index read past the grid
+            out = np.empty(x.size)
+            read_grid(x, fp, out)
+            assert np.array_equal(out.view(np.int64), want.view(np.int64)), (n, x[:3])
+    out = np.empty(2)
+    read_grid(np.array([np.nan, 0.5]), np.arange(3.0), out)
+    assert np.isnan(out[0])  # no index read past the grid

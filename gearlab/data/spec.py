@@ -85,8 +85,8 @@ class DatasetSpec:
             d.pop("healthy_twin")  # likewise for every dataset that is no twin
         if not self.unit_shaft:
             d.pop("unit_shaft")  # likewise for every dataset of input-shaft rows
-        else:  # 2: fault rows start anywhere in the cycle, input orders out, the cut 4 x denser (shaft_row)
-            d["shaft_rows"] = 2
+        else:  # 3: fault rows start anywhere in the cycle, input orders out, the cut read cubic 2 x denser
+            d["shaft_rows"] = 3
         return d
 
     def key(self) -> str:

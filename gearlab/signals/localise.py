@@ -360,7 +360,7 @@ def content(
 
 # The contents last read, by record and layout (their digests), first revolution, block and sweeps: a
 # detection reads its target take for its stored localisation and again for its score, and inspect
-# --history builds one history twice; each read is a record's rfft, 4 x denser irfft and reading per shaft
+# --history builds one history twice; each read is a record's rfft, 2 x denser irfft and reading per shaft
 # (signals.shaft.shaft_averages), and the same data gives the same content (not to be changed in place).
 READ_KEPT = 64
 _READ: OrderedDict = OrderedDict()

@@ -183,7 +183,7 @@ class Upsampled:
             return values
         x = np.arange(self.signal.size) / self.up
         if values.dtype.kind in "fiu" and values.ndim == 1 and values.size:
-            from .grid import read_grid  # np.interp on its own grid to the bit, in half the CPU (shaft.on_grid)
+            from .grid import read_grid  # np.interp on its own grid to the bit, in half the CPU
 
             out = np.empty(x.size)
             read_grid(x, np.ascontiguousarray(values, dtype=np.float64), out)

@@ -10,12 +10,15 @@ contiguous in angle (as cut_revolutions and the dataset builder make them), so t
 the record on an even grid of input angle; the shaft's revolutions are that grid read at
 *points* even angles of each of its complete turns. Orders of the shaft above points / 2 are
 removed first (the grid holds 1/r times more of them), so that they do not alias, and the record is
-read UPSAMPLE times denser or a little more (band-limited) before the linear interpolation: at the grid itself the
-shaft's top orders have 2/r samples a cycle (3.6 at r = 17/31), and the interpolation's error, which
+read UPSAMPLE times denser or a little more (band-limited) before a cubic interpolation: linear on the grid
+itself (the shaft's top orders at 2/r samples a cycle, 3.6 at r = 17/31), the interpolation's error, which
 depends on where the shaft's turn falls between samples, moved a 17/31 + 17/29 box's healthy
 intermediate-shaft rows 0.03 rms (peaks 0.28, a 17T pinion chip's signature 0.11) from one start
-to another; 4 x denser: 0.010 between rows (peak), the chip unchanged. And each shaft's own
-TSA of a record, its orders' mean and noise, for gearlab.signals.localise (its "Fallback")."""
+to another; cubic 2 x denser: 0.009 between rows (peak), the chip unchanged. Against the wave's own sum of
+cosines it errs 3e-6 of the rms for lines below 0.05 cycles a sample, 4e-3 below 0.3 (linear 4 x denser: 2e-4,
+9e-3; tests/test_shaft_reading.py), in about half the time (records of 20, 58, 99 revolutions: 16, 58,
+200 ms against 30, 118, 339). And each shaft's own TSA of a record, its orders' mean and noise, for
+gearlab.signals.localise (its "Fallback")."""
 
 from __future__ import annotations
 
@@ -27,7 +30,7 @@ import numpy as np
 from ..errors import GearlabInputError
 from .pipeline import POINTS
 
-UPSAMPLE = 4  # a record read 4 x denser before the linear interpolation (module doc)
+UPSAMPLE = 2  # a record read 2 x denser before the cubic interpolation (module doc)
 
 
 def shaft_revolutions(
@@ -58,73 +61,33 @@ def shaft_revolutions(
 
 
 def read_at(
-    spectrum: np.ndarray,
-    n: int,
-    at: np.ndarray,
-    up: int = UPSAMPLE,
-    periodic: bool = False,
-    dense: np.ndarray | None = None,
+    spectrum: np.ndarray, n: int, at: np.ndarray, up: int = UPSAMPLE, dense: np.ndarray | None = None
 ) -> np.ndarray:
-    """The n samples whose rfft is *spectrum* read at fractional sample positions *at*: linearly between the
-    samples of their band-limited interpolation at least *up* times denser (module doc). Read on the samples
-    themselves, a line at ν cycles a sample leaves an image at 1 - ν about (ν / (1 - ν))² below it; *up* times
-    denser, about (ν / (up - ν))², no more on the denser grid of a fast length (dense_length). *periodic*: position
-    n is sample 0 again (one turn's wave). *dense*: an array of dense_length(n up) points the interpolation is
-    made in (its values are overwritten), so that readings of one record reuse one (shaft_averages: a fresh
-    array of a long record's reading is a tenth of its time in page faults)."""
+    """The n samples whose rfft is *spectrum* read at fractional sample positions *at* (position n is sample 0
+    again, as the inverse FFT's wave is periodic in n): a 4-point Lagrange (cubic) interpolation between the
+    samples of their band-limited interpolation at least *up* times denser (module doc). *dense*: an array of
+    dense_length(n up) points the interpolation is made in (its values are overwritten), so that readings of one
+    record reuse one (shaft_averages: a fresh array of a long record's reading is a tenth of its time in page
+    faults)."""
+    from .grid import read_cubic
+
     fine = dense_length(n * up)
-    scale = fine / n  # = up where n up is a fast length already (R of factors 2, 3, 5): bit for bit as before
-    if periodic and dense is None:  # made one point longer, that point sample 0 again: no copy to append it
-        closed = np.empty(fine + 1)
-        wave = np.fft.irfft(spectrum, n=fine, out=closed[:fine])
-        wave *= scale
-        closed[fine] = closed[0]
-        return on_grid(at * scale, closed)
     wave = np.fft.irfft(spectrum, n=fine, out=dense)
-    wave *= scale  # in place: the same product, no second dense array
-    if periodic:
-        return on_grid(at * scale, np.append(wave, wave[0]))
-    return on_grid(at * scale, wave)
+    wave *= fine / n  # in place: no second dense array
+    flat = np.ascontiguousarray(at, dtype=np.float64).reshape(-1) * (fine / n)
+    out = np.empty(flat.size)
+    read_cubic(flat, wave, out)
+    return out.reshape(np.shape(at))
 
 
 def dense_length(size: int) -> int:
     """The fewest points at or above *size* whose real inverse FFT has only factors 2, 3 and 5: a record of
-    4096 points a revolution and R revolutions read 4 x denser has R's factors in its length, and a large one
+    4096 points a revolution and R revolutions read 2 x denser has R's factors in its length, and a large one
     made the reading dear (pocketfft's Bluestein path: R = 199, 160 ms against 72 ms on the 0.5 % longer fast
     length; R = 58, 22 ms against 16 ms): the readings took a third of the localisation tests' CPU."""
     from scipy.fft import next_fast_len
 
     return int(next_fast_len(int(size), real=True))
-
-
-def on_grid(x: np.ndarray, fp: np.ndarray) -> np.ndarray:
-    """np.interp(x, np.arange(fp.size), fp), bit for bit, for finite *x*: the grid's own spacing (1) finds
-    each interval without np.interp's search and without building the grid (half its CPU on a record's
-    4 x denser reading: the localisation tests' read_at calls spent a quarter of their time there), in
-    one compiled pass (gearlab.signals.grid) where the data are float64."""
-    x, fp = np.asarray(x), np.asarray(fp)
-    if x.dtype == fp.dtype == np.float64 and fp.ndim == 1 and fp.size:
-        from .grid import read_grid
-
-        flat = np.ascontiguousarray(x).reshape(-1)
-        out = np.empty(flat.size)
-        read_grid(flat, np.ascontiguousarray(fp), out)
-        return out.reshape(x.shape)
-    return on_grid_numpy(x, fp)
-
-
-def on_grid_numpy(x: np.ndarray, fp: np.ndarray) -> np.ndarray:
-    """on_grid in numpy's operations (other dtypes; the reference its compiled pass is checked against)."""
-    last = fp.size - 1
-    j = np.clip(np.floor(x), 0, max(last - 1, 0))
-    f = x - j  # exact: j <= x < j + 1 within the grid
-    j = j.astype(np.intp)
-    out = fp[np.minimum(j + 1, last)] - fp[j]
-    out *= f  # np.interp's slope (fp[j + 1] - fp[j]) / 1.0 times (x - j), then + fp[j]
-    out += fp[j]
-    out[x <= 0] = fp[0]
-    out[x >= last] = fp[last]
-    return out
 
 
 def without_input_orders(revs: np.ndarray, p: int) -> np.ndarray:
@@ -145,7 +108,7 @@ def on_turns(y: np.ndarray, at: np.ndarray, dense: np.ndarray | None = None) -> 
     interpolation between y's own samples left images (size o - P) + k input orders away from a line at k
     (a shaft of o input turns cut into `size` points a turn), which every turn repeats where o = 1/q: the
     PHM 2009 rig's idler (o = 1/3) read its 3rd mesh harmonic's image 43 dB below it, a 1/7 shaft's lands
-    at 585 + k; 4 x denser: below -72 dB (tests/test_shaft_reading.py). *dense*: read_at's."""
+    at 585 + k; read_at's: below -130 dB (tests/test_shaft_reading.py). *dense*: read_at's."""
     head = at.reshape(-1)[:64]  # a slower shaft's grid leaves the samples within a few points: no whole pass
     if np.array_equal(head, np.round(head)) and np.array_equal(at, whole := np.round(at)):
         return y[whole.astype(np.int64)]
@@ -236,7 +199,8 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
             spec = np.fft.rfft(waves[r])
             if key[1]:
                 spec[:: key[1]] = 0.0
-            read[key] = read_at(spec, waves[r].size, cut[r][1], 8, periodic=True)
+            # a turn's average read at every sample of the record: cubic 4 x denser errs below linear 8 x, for less
+            read[key] = read_at(spec, waves[r].size, cut[r][1], 4)
         return read[key]
 
     def less_others(s: int) -> np.ndarray:
