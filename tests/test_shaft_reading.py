@@ -2,7 +2,7 @@
 localiser's per-shaft TSAs): linear interpolation between the revolutions' own samples left an image of each line,
 and where the shaft turns 1/q times per input turn every turn repeats the reading grid, so the image survives the
 average (issue 39 item 2): the PHM 2009 rig's idler (1/3) read a 3rd mesh harmonic's image 43 dB below it. Read
-band-limited 4 x denser (signals.shaft.read_at, shaft_revolutions' own reading), the image falls below -100 dB;
+band-limited 2 x denser, cubic (signals.shaft.read_at, shaft_revolutions' own reading), it falls below -100 dB;
 the input shaft's turns, on the samples themselves, are read exactly as before."""
 
 from __future__ import annotations

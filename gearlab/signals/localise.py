@@ -391,7 +391,7 @@ def _content(revs: np.ndarray, lay: Layout, first_revolution: int, block: int | 
 
 def in_blocks(parts: list[Content], whole: Content | None = None) -> Content:
     """A record's content read in blocks (content's *block*): its blocks' power and noise, and the mean and turns of
-    *whole*, the record read whole (history() has the blocks already, as its units: each a shaft_averages of a 4 x
+    *whole*, the record read whole (history() has the blocks already, as its units: each a shaft_averages of a 2 x
     denser reading). None: the blocks' mean and turns, where nothing reads them (a history record's left-out levels
     read the power and noise alone; read whole, its records doubled the history's reading)."""
     power = np.mean([u.power for u in parts], axis=0)
