@@ -34,13 +34,14 @@ def read_grid(x: np.ndarray, fp: np.ndarray, out: np.ndarray) -> None:
 
 
 @numba.njit(cache=True)
-def read_cubic(x: np.ndarray, fp: np.ndarray, out: np.ndarray) -> None:
-    """out[i]: the 4-point Lagrange (cubic) interpolation at position x[i] of the periodic samples *fp*
-    (fp[k + fp.size] = fp[k]; 1-D, float64), from the samples at floor(x[i]) - 1 … floor(x[i]) + 2; NaN
-    where x[i] is not finite. signals.shaft.read_at's step on its 2 x denser band-limited samples."""
+def read_cubic(x: np.ndarray, scale: float, fp: np.ndarray, out: np.ndarray) -> None:
+    """out[i]: the 4-point Lagrange (cubic) interpolation at position x[i] * scale of the periodic samples *fp*
+    (fp[k + fp.size] = fp[k]; 1-D, float64), from the samples at floor(x[i] scale) - 1 … floor(x[i] scale) + 2;
+    NaN where x[i] is not finite. signals.shaft.read_at's step on its 2 x denser band-limited samples (*scale*:
+    their density, applied here, not in an array of the positions as large as the reading)."""
     n = fp.size
     for i in range(x.size):
-        xi = x[i]
+        xi = x[i] * scale
         if not np.isfinite(xi):  # no sample to read; never an index from a NaN or infinity
             out[i] = np.nan
             continue

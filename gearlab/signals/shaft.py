@@ -74,9 +74,9 @@ def read_at(
     fine = dense_length(n * up)
     wave = np.fft.irfft(spectrum, n=fine, out=dense)
     wave *= fine / n  # in place: no second dense array
-    flat = np.ascontiguousarray(at, dtype=np.float64).reshape(-1) * (fine / n)
+    flat = np.ascontiguousarray(at, dtype=np.float64).reshape(-1)
     out = np.empty(flat.size)
-    read_cubic(flat, wave, out)
+    read_cubic(flat, fine / n, wave, out)
     return out.reshape(np.shape(at))
 
 
