@@ -508,6 +508,8 @@ def test_a_learned_detector_s_threshold_from_two_history_records_holds_the_rate_
     mf = [rates[("matched_filter", u, False)] for u in ("record10", "record30")]
     assert max(mf) <= 0.02, rates
     # likelihood_ratio: a new take scored by the mean of the detectors that scored the history takes
-    # (detectors.MeanOf), record10 6.2 -> 3.3 % here (by the detector of both takes before); still above the 1 %
-    # asked: its scores' right skew, whose tail the records rule's normal quantile misses
-    assert rates[("likelihood_ratio", "record10", False)] <= 0.045, rates
+    # (detectors.MeanOf), record10 6.2 -> 3.3 % here (by the detector of both takes before); its scores' right skew,
+    # whose tail the normal quantile missed, taken from their own law (detection_units.within_laws): record10
+    # 3.3 -> 1.25 %, record30 3.3 -> 1.7 % (1 unit of 60)
+    lr = [rates[("likelihood_ratio", u, False)] for u in ("record10", "record30")]
+    assert max(lr) <= 0.02, rates

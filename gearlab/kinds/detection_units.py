@@ -65,8 +65,8 @@ def unit_name(
 # (detectors.MeanOf), as the history was: likelihood_ratio divides by a unit's own residual scale, which holds its
 # reference's error, so the detector made of both takes spread a new take's scores otherwise (record10 6.0 -> 4.0 %,
 # record30 2.5 -> 1.7 %; fresh seeds 4.0 -> 3.5 %, 4.2 -> 2.5 %; matched_filter's record10 1.2 -> 2.1 %, fresh 0.8 ->
-# 1.0 %; chips all found). What likelihood_ratio still lets through is its scores' right skew (1.1-1.6 within a
-# take): record_effects' normal quantile misses their tail
+# 1.0 %; chips all found). What likelihood_ratio still let through was its scores' right skew (1.1-1.6 within a
+# take), whose tail the normal quantile misses: a detector's threshold takes its scores' own law (within_laws)
 LEFT_OUT = 2
 
 
@@ -167,7 +167,11 @@ def train_unit(task: tuple) -> dict:
                     for u, X in history_units.items()
                 }
                 model = MeanOf(left_out)  # and a new take by those detectors, their mean (detectors.MeanOf)
-            fixed = rule.decide(hist)
+            laws = None
+            if method.is_detector:  # a detector's scores need not be normal within a record (within_laws)
+                parts = left_out or [model] * len(next(iter(rule.records.values())))  # what scored each record
+                laws = within_laws(lambda i, X: fault_score(parts[i], X, device), rule, history_units)
+            fixed = rule.decide(hist, laws=laws)
             test = {
                 path: {u: fault_score(model, X, device) for u, X in units.items()} for path, units in test_units.items()
             }
@@ -209,6 +213,35 @@ def aligned_to_a_point(protocol: Protocol, method: Method, Xs: np.ndarray, ys: n
     return len(rows) > 0 and float(np.ptp(rows, axis=0).max()) <= 1e-6 * float(np.abs(rows).max())
 
 
+DRAWS = 1000  # units drawn again from each history record's revolutions (within_laws): 10 a record above 99 %
+
+
+def within_laws(score: Callable, rule: Rule, history_units: dict) -> dict[str, np.ndarray] | None:
+    """{unit kind: a sample of the law of a method's unit scores within a history record, mean 0 and sd 1}: for
+    each record, `DRAWS` units of its kind made of that record's own revolutions drawn again with replacement
+    (the record's mean revolution plus the mean of the drawn revolutions' deviations from it: the same fixed
+    part, another draw of the noise), scored by *score*(record index, units) as that record's history units
+    were, less their mean, pooled over the records. The model of the scores (record_effects) takes its
+    within-record quantile from it: a soft maximum over many shapes, likelihood_ratio's log-sum-exp, is skewed
+    to the right where the normal quantile is symmetric (record_effects' docstring). Only the history enters.
+    None without the history's revolutions (units handed without them: the normal quantile)."""
+    if "revolution" not in history_units:
+        return None
+    rng = np.random.default_rng(0)
+    groups = rule.groups("revolution", history_units["revolution"])
+    laws = {}
+    for u in history_units:
+        block, parts = unit_window(u)[0], []
+        for i, revs in enumerate(groups):
+            mean = revs.mean(axis=0, dtype=np.float64)
+            drawn = rng.multinomial(block, np.full(len(revs), 1.0 / len(revs)), size=DRAWS) / block
+            s = score(i, (mean + drawn @ (revs - mean)).astype(np.float32))
+            parts.append(s - s.mean())
+        law = np.concatenate(parts)
+        laws[u] = law / max(float(law.std()), 1e-300)
+    return laws
+
+
 @dataclass(frozen=True)
 class Rule:
     """How a threshold is fixed from the history's unit scores alone ([detection] threshold and
@@ -225,10 +258,10 @@ class Rule:
         scores = np.asarray(scores)
         return np.split(scores if scores.ndim > 1 else scores.astype(np.float64), np.cumsum(counts)[:-1])
 
-    def model(self, u: str, scores, keep=None, floor: float | None = None) -> record_effects.RecordEffects:
+    def model(self, u: str, scores, keep=None, floor: float | None = None, law=None) -> record_effects.RecordEffects:
         """The random-effects model (record effect + within-record spread) of the history's *scores*
-        of unit kind *u*, over the records *keep* (default: all); *floor*: the scores are sizes above it
-        (record_effects.fit)."""
+        of unit kind *u*, over the records *keep* (default: all); *floor*: the scores are sizes above it;
+        *law*: a sample of their within-record law where it is not normal (record_effects.fit)."""
         groups = self.groups(u, scores)
         keep = range(len(groups)) if keep is None else keep
         return record_effects.fit(
@@ -237,17 +270,21 @@ class Rule:
             [self.records[u][i][1] for i in keep],
             [record_effects.overlap_dof(self.records[u][i][0], *unit_window(u)) for i in keep],
             floor,
+            law,
         )
 
-    def models(self, history_scores: dict, floor: float | None = None) -> dict[str, record_effects.RecordEffects]:
-        """{unit: the random-effects model of its scores}."""
-        return {u: self.model(u, s, floor=floor) for u, s in history_scores.items()}
+    def models(
+        self, history_scores: dict, floor: float | None = None, laws: dict | None = None
+    ) -> dict[str, record_effects.RecordEffects]:
+        """{unit: the random-effects model of its scores} (*laws*: {unit: within-record law sample})."""
+        return {u: self.model(u, s, floor=floor, law=(laws or {}).get(u)) for u, s in history_scores.items()}
 
-    def decide(self, history_scores: dict, floor: float | None = None) -> dict:
+    def decide(self, history_scores: dict, floor: float | None = None, laws: dict | None = None) -> dict:
         """The record's "thresholds" (by this rule), the history models and both rules' thresholds
         (so a run shows what the other rule would have called); *floor*: the scores are sizes above it
-        (NA4), modelled on the log scale (record_effects.fit)."""
-        models = self.models(history_scores, floor)
+        (NA4), modelled on the log scale; *laws*: {unit: a sample of the scores' within-record law}, a
+        detector's (`within_laws`; record_effects.fit)."""
+        models = self.models(history_scores, floor, laws)
         by_rule = {
             "records": {u: m.threshold for u, m in models.items()},
             # the 1 - false_alarm quantile of the Gumbel law fitted by its quartiles to the pooled
