@@ -99,6 +99,7 @@ def test_the_trend_marks_a_take_on_an_unwatched_gear_that_no_method_called(monke
     note = f"{OUT}, on a gear this run does not watch; no method called it"
     assert D.unwatched(rows) == {"nw_broken_out.h5": note}  # what score keeps per take ('unwatched')
     monkeypatch.setattr(D.scoring, "read_history", lambda run: rows)
+    monkeypatch.setattr(D.scoring, "read_skipped", lambda run: [])  # no take refused
     (trend,) = D.score_trends(None)
     assert f"; record 2: {note}" in trend.title and f"; record 3: {OUT}\n" in trend.title, trend.title
     assert "record 1:" not in trend.title, trend.title

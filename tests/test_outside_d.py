@@ -34,6 +34,7 @@ def test_the_score_trend_names_each_take_and_shows_every_method_s_crossing(monke
         _scored("rec/P_week3_28.wav", "matched_filter", 0.092, 0.1),
     ]
     monkeypatch.setattr(detection_scoring.scoring, "read_history", lambda run: rows)
+    monkeypatch.setattr(detection_scoring.scoring, "read_skipped", lambda run: [])  # no take refused
     (trend,) = detection_scoring.score_trends(None)
     assert "records: 1 P_week1_28.wav, 2 P_week3_28.wav" in trend.title, trend.title
     assert list(trend.xticks) == [1, 2]  # whole records, not 1.2, 1.4, ...
