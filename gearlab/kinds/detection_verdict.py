@@ -9,6 +9,8 @@ import math
 from collections.abc import Mapping
 from statistics import NormalDist
 
+from ..signals.nonsync import HUM
+
 # What a user asks of a record-level decision (docs/real_data.md): the fault found in at least
 # 90 % of the faulty units at no more than 5 % false alarms, with an AUC of 0.95 or more.
 GOAL_AUC, GOAL_DETECTION, GOAL_FALSE_ALARM = 0.95, 90.0, 5.0
@@ -148,9 +150,9 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
 
 
 def left_out(summary: Mapping, condition: str, unit: str) -> str:
-    """The takes of *condition* the AUC and false alarms at *unit* leave out as other damage (calls_by_label's
-    left_out), in words ('; left out of AUC and false alarms as other damage: b.csv (other damage: output gear
-    58T (stage 3))'), else ""."""
+    """The takes of *condition* the AUC and false alarms at *unit* leave out (calls_by_label's left_out), in words
+    as each take's call says it: as other damage ('; left out of AUC and false alarms as other damage: b.csv (other
+    damage: output gear 58T (stage 3))'), a mains hum as no gear fault; else ""."""
     calls = (summary.get("which_gear") or {}).get("calls") or []
     out: dict = {}
     for c in calls:
@@ -158,7 +160,10 @@ def left_out(summary: Mapping, condition: str, unit: str) -> str:
             out |= c.get("left_out") or {}
     if not out:
         return ""
-    return "; left out of its AUC and false alarms as other damage: " + ", ".join(f"{p} ({w})" for p, w in out.items())
+    kinds = {"other damage": {p: w for p, w in out.items() if not w.startswith(HUM)}}
+    kinds["no gear fault"] = {p: w for p, w in out.items() if w.startswith(HUM)}
+    said = [f"as {k}: " + ", ".join(f"{p} ({w})" for p, w in v.items()) for k, v in kinds.items() if v]
+    return "; left out of its AUC and false alarms " + "; ".join(said)
 
 
 def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
