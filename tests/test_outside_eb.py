@@ -1,7 +1,14 @@
-"""An outside user's (helper EB's) leftovers from a 42/63 + 23/71 box: the verdict's words for a mains-hum take."""
+"""What outside user DY left (issue 39): a mains-hum take's words in the verdict; a unit stated beside the numbers
+(a MAT v7.3 struct's 'units', a whitespace table's '# units: g'), read one way by every reader."""
 
 from __future__ import annotations
 
+import numpy as np
+import pytest
+
+from gearlab.data.readers.base import stated_units
+from gearlab.data.readers.matlab import _read_mat
+from gearlab.inspect import InspectOptions, inspect_record
 from gearlab.kinds.detection_verdict import left_out
 
 HUM_CALL = "not a gear fault: mains hum at 50.0 Hz (order 2.08; the 50 Hz mains: electrical pickup)"
@@ -20,3 +27,47 @@ def test_verdict_says_a_mains_hum_take_is_no_gear_fault_not_other_damage():
     # the hum alone: no "other damage" said at all
     alone = left_out(_summary({"hum.csv": HUM_CALL}), "24 Hz", "record30")
     assert "other damage" not in alone and alone.startswith("; left out of its AUC and false alarms as no gear fault")
+
+
+# --- a unit stated beside the numbers: one reading for every reader ----------------------------------------------
+
+G = 9.80665
+FS = 20000.0
+
+
+def _acc(seconds: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """(a 41T mesh at 29 Hz with noise in m/s², a once-per-turn tacho)."""
+    th = 2 * np.pi * 29.0 * np.arange(int(seconds * FS)) / FS
+    acc = 3.0 * np.cos(41 * th) + np.random.default_rng(5).normal(0, 0.2, th.size)
+    return acc, np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)
+
+
+@pytest.mark.parametrize("field", ["units", "data_units"])
+def test_a_mat73_struct_s_text_units_field_is_the_unit_of_its_data(tmp_path, field):
+    # MATLAB -v7.3's rec = struct('fs', 20000, 'data', acc, 'units', 'g'): v5's units were read (matlab.said_units),
+    # v7.3's data taken as m/s², 9.8 times too small
+    from tests.test_importers import write_mat73
+
+    acc, _ = _acc()
+    path = write_mat73(tmp_path / "take.mat", {"rec/fs": FS, "rec/data": acc / G, f"rec/{field}": "g"})
+    contents = _read_mat(path, ["rec/data"])
+    assert contents.units == {"rec/data": "g"}, contents.units
+    listed = _read_mat(path, []).available  # what inspect lists: its units no channel, as v5's
+    assert listed == ["rec/data", "rec/fs"], listed
+
+
+def test_a_units_comment_above_a_whitespace_table_is_the_unit_of_its_values(tmp_path):
+    # '# units: g' above a blank-separated table was not read (a CSV's is: csv.file_units), its values taken as m/s²
+    acc, tacho = _acc()
+    path = tmp_path / "take.txt"
+    rows = "\n".join(f"{v:.6g} {p:g}" for v, p in zip(acc / G, tacho))
+    path.write_text(f"# fs = {FS:g}\n# units: g\nacc tach\n{rows}\n")
+    got = inspect_record(str(path), None, InspectOptions("acc", tacho="tach"))
+    assert "9.80665" in got["units"], got["units"]
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.02)
+
+
+def test_every_reader_reads_a_stated_unit_one_way():
+    # a '<channel>_unit' entry stands over its group's 'units'; an empty text states nothing
+    texts = {"rec/units": "g", "rec/acc_unit": "m/s^2", "units": " "}
+    assert stated_units(texts, ["rec/acc", "rec/tach", "top"]) == {"rec/acc": "m/s^2", "rec/tach": "g"}

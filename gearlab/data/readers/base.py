@@ -128,6 +128,33 @@ class Contents:
     warnings: list[str] = field(default_factory=list)
 
 
+# The unit a file states as text beside its channels, as users save one: an NPZ's `unit="g"` or `vib_unit="m/s^2"`, a
+# MATLAB struct's 'units' field (v5 or v7.3), a text table's '# units: g' line. One reading for every reader: a
+# file's 'g' was read as m/s² (9.8 times too small) by whichever reader did not know that file's way of saying it.
+UNIT_KEYS, UNIT_SUFFIXES = ("unit", "units"), ("_unit", "_units")
+
+
+def is_unit_entry(name: str) -> bool:
+    """An entry (path 'a/b/c') that states a unit: 'unit(s)' or '<channel>_unit(s)', any case."""
+    leaf = name.rsplit("/", 1)[-1].lower()
+    return leaf in UNIT_KEYS or leaf.endswith(UNIT_SUFFIXES)
+
+
+def stated_units(texts: dict[str, str], channels: Sequence[str]) -> dict[str, str]:
+    """{channel: unit} the text entries *texts* ({path: text}) state for *channels* (paths): a 'unit(s)' entry every
+    channel of its group, struct or file (the same parent path), a '<channel>_unit(s)' entry that channel's, which
+    stands over the former; an empty text states nothing."""
+    out: dict[str, str] = {}
+    said = {n: t.strip() for n, t in texts.items() if is_unit_entry(n) and isinstance(t, str)}
+    for name, unit in sorted(said.items(), key=lambda item: item[0].rsplit("/", 1)[-1].lower() in UNIT_KEYS):
+        parent, _, leaf = name.rpartition("/")
+        if leaf.lower() in UNIT_KEYS:  # after the '<channel>_unit' ones: theirs stand
+            out.update({c: unit for c in channels if c.rpartition("/")[0] == parent and c not in out})
+        elif (base := name[: name.rindex("_")]) in channels:
+            out[base] = unit
+    return {c: u for c, u in out.items() if u}
+
+
 def stated_unit(attrs) -> str | None:
     """The unit an HDF5 object's attributes state ('units' or 'unit', as text or bytes), or None."""
     for key in ("units", "unit", "Units", "Unit"):

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError, shown
-from .base import Contents, _column, _keyed, _scalar
+from .base import UNIT_KEYS, Contents, _column, _keyed, _scalar, stated_units
 from .rates import in_hz, key_of, named, scale_of
 
 _COMMENT_FIELD = re.compile(r"^#\s*([A-Za-z_][\w.-]*)\s*[=:]\s*(.*?)\s*$")
@@ -67,22 +67,18 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
             continue  # a title line
         if (rate := _rate_of(match)) is not None:
             fields["sample_rate"] = rate
-        elif match.group(1).strip().lower() in FILE_UNIT and match.group(3):  # 'Units: g': every column's
+        elif match.group(1).strip().lower() in UNIT_KEYS and match.group(3):  # 'Units: g': every column's
             fields["unit"] = match.group(3)
     if count == len(lines):  # no table after it: no preamble (a system file of 'name:value' lines is no record)
         return 0, {}
     return count, fields
 
 
-# the keys of a line above the table that states every column's unit ('# units: g', 'Units: g'), as an NPZ's text
-# 'unit' does (npz.stated_units); a units row under the header says each column's, and stands
-FILE_UNIT = ("unit", "units")
-
-
 def file_units(fields: dict[str, object], columns: Sequence[str]) -> dict[str, str]:
-    """{column: unit} of the unit a comment or preamble line states for every column (FILE_UNIT), or {}."""
-    said = [v for k, v in fields.items() if k.lower() in FILE_UNIT and isinstance(v, str) and v.strip()]
-    return {c: said[-1].strip() for c in columns} if said else {}
+    """{column: unit} that comment or preamble lines (*fields*) state for *columns*, read as every reader reads a
+    stated unit (base.stated_units): every column's ('# units: g', 'Units: g') or one's ('# acc_unit = g'); a units
+    row under the header says each column's, and stands (the callers')."""
+    return stated_units({k: v for k, v in fields.items() if isinstance(v, str)}, columns)
 
 
 def _rate_of(match: re.Match) -> float | None:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import Contents, _normalise, _time_field, check_size, stated_unit, time_scale
+from .base import Contents, _normalise, _time_field, check_size, is_unit_entry, stated_unit, stated_units, time_scale
 from .rates import named, rate_field
 
 
@@ -77,6 +77,7 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         contents = Contents({}, _hdf5_datasets(h5py, f))
         seen: set[str] = set()
         own: dict[str, tuple] = {}  # each channel's one rate field, where it has one
+        at: dict[str, str] = {}  # each channel's dataset path
         for name in dict.fromkeys(names):
             try:
                 obj = _hard_linked(h5py, path, f, name)
@@ -89,6 +90,7 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
             if not isinstance(obj, h5py.Dataset):
                 continue  # a group is not a channel
             contents.found[name] = read(obj)
+            at[name] = obj.name.lstrip("/")
             unit = stated_unit(obj.attrs)
             if unit is not None:
                 contents.units[name] = unit
@@ -105,8 +107,33 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                     if where not in seen:  # channels of one group share its fields
                         seen.add(where)
                         kind.append((where, value))
+        said, texts = text_units(h5py, f, at, contents.available)
+        contents.units.update({n: u for n, u in said.items() if n not in contents.units})  # its attribute's stands
+        contents.available = [d for d in contents.available if d not in texts]
         held_to_vibration(contents, list(names), own)
         return contents
+
+
+def text_units(h5py, f, channels: dict[str, str], datasets: Sequence[str]) -> tuple[dict[str, str], set[str]]:
+    """({channel: unit} that one-value text datasets beside the channels state (base.stated_units: a MATLAB -v7.3
+    struct's 'units' field, a '<channel>_unit' dataset), the file's such text datasets: no channels) of an open *f*.
+    *channels*: {channel: its dataset path}; *datasets*: the file's dataset paths."""
+    texts = {}
+    for d in filter(is_unit_entry, datasets):
+        ds = f[d]
+        if ds.size > 256:  # a unit is a short text, never a series
+            continue
+        if h5py.check_string_dtype(ds.dtype) is not None:
+            value = np.asarray(ds.asstr()[()])
+            text = str(value.ravel()[0]) if value.size == 1 else None
+        elif ds.attrs.get("MATLAB_class", b"") in (b"char", "char") and ds.dtype.kind in "iu":
+            text = "".join(map(chr, np.asarray(ds[()]).ravel().tolist()))  # one row of character codes
+        else:
+            text = None
+        if text is not None:
+            texts[d] = text
+    said = stated_units(texts, list(channels.values()))
+    return {n: said[p] for n, p in channels.items() if p in said}, set(texts)
 
 
 def held_to_vibration(contents: Contents, names: list[str], own: dict[str, tuple]) -> None:

@@ -281,7 +281,7 @@ def _rate_fields(fields) -> list[tuple[str, float | None]]:
 
 
 def _text_header(path: Path, fmt: str) -> Header:
-    from .csv import header_names
+    from .csv import file_units, header_names
     from .text import comment_fields, first_row
 
     header, width = first_row(path)
@@ -294,11 +294,11 @@ def _text_header(path: Path, fmt: str) -> Header:
     if fmt == "text":  # a zipped text's tail is no cheap read
         _say_footer(path, width)
     rate = any(is_rate_or_time(n) for n in [*names, *fields])  # a comment field's rate, no channel's
-    return Header(fmt, names, rate, indexed=True, stated=stated)
+    return Header(fmt, names, rate, indexed=True, stated=stated, units=file_units(fields, names))
 
 
 def _npz_header(path: Path) -> Header:
-    from .npz import _member_header, stated_units
+    from .npz import _member_header, npz_units
 
     with zipfile.ZipFile(path) as archive:
         members = [i.filename for i in archive.infolist() if i.filename.endswith(".npy")]
@@ -307,7 +307,7 @@ def _npz_header(path: Path) -> Header:
     integer = frozenset(n for n, (_, dtype) in headers.items() if dtype.kind in "iu")
     numbers = {n: dtype.kind in "iuf" for n, (_, dtype) in headers.items()}
     stated = _rate_variable({n: s for n, s in shapes.items() if numbers[n]}, lambda n: np.load(path)[n])
-    units = stated_units(headers, lambda n: np.load(path)[n])
+    units = npz_units(headers, lambda n: np.load(path)[n])
     names = [n for n in headers if n not in units["texts"]]
     rate = any(is_rate_or_time(n) for n in names)
     return Header("NPZ", names, rate, integer, shapes=shapes, stated=stated, units=units["units"])
@@ -315,13 +315,15 @@ def _npz_header(path: Path) -> Header:
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
     from .base import stated_unit
-    from .hdf5 import _h5py, _hdf5_datasets
+    from .hdf5 import _h5py, _hdf5_datasets, text_units
 
     h5py = _h5py()
     with h5py.File(path, "r") as f:
         names = _hdf5_datasets(h5py, f)
+        said, texts = text_units(h5py, f, {n: n for n in names}, names)
+        names = [n for n in names if n not in texts]
         integer = {n for n in names if f[n].dtype.kind in "iu"}
-        units = {n: unit for n in names if (unit := stated_unit(f[n].attrs)) is not None}
+        units = said | {n: unit for n in names if (unit := stated_unit(f[n].attrs)) is not None}
         rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
         # an 'fs' attribute anywhere (on a dataset or a group) is a rate field of what lies under it
         rate = rate or any(is_rate_or_time(k) for n in ["/", *names] for k in f[n].attrs)

@@ -16,11 +16,12 @@ from .base import (
     _normalise,
     _time_field,
     is_rate_or_time,
+    is_unit_entry,
     max_record_bytes,
+    stated_units,
     time_scale,
 )
 from .hdf5 import _read_hdf5, leaf_match
-from .npz import _UNIT_KEYS
 from .rates import named, rate_field
 
 
@@ -52,6 +53,7 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         alias = {n: n.replace(".", "/") for n in names}  # no MATLAB name has a dot: rec.acc is a field
         contents = _read_hdf5(path, list(dict.fromkeys(alias.values())), matlab=True)
         contents.found = {n: contents.found[a] for n, a in alias.items() if a in contents.found}
+        contents.units = {n: contents.units[a] for n, a in alias.items() if a in contents.units}
         return contents
     from scipy.io import loadmat
 
@@ -64,7 +66,7 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         return _keyed(available, lambda n: variables[n], names)
 
     def wanted(name: str) -> bool:  # the channels asked for, the rate fields (see _keyed) and the units said
-        return name in names or is_rate_or_time(name) or name.lower().endswith(_UNIT_KEYS)
+        return name in names or is_rate_or_time(name) or is_unit_entry(name)
 
     shapes: dict[str, tuple] = {}  # the numeric ones': a unit entry is text
     every = _mat5_variables(path.read_bytes(), wanted, fields, shapes)
@@ -89,7 +91,7 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
     # a unit entry (text) is no channel, nor a struct whose fields are listed (rec: rec/data, rec/fs)
     structs = {f.split("/", 1)[0] for f in fields}
     listed = [n for n in top if n not in structs or n in shapes] + fields
-    contents.available = [n for n in listed if not (n.lower().endswith(_UNIT_KEYS) and n not in shapes)]
+    contents.available = [n for n in listed if not (is_unit_entry(n) and n not in shapes)]
     for name, full in paths.items():
         contents.found[name] = _normalise(get(full))
     contents.units.update({n: said[paths.get(n, n)] for n in names if paths.get(n, n) in said})
@@ -105,19 +107,10 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
 
 
 def said_units(names: Sequence[str], get) -> dict[str, str]:
-    """{channel: unit} that text entries state, as an NPZ's do (npz.stated_units): 'units' of its
-    struct's (or file's) every other entry, '<channel>_unit' of that one. MATLAB's struct('fs', 20000, 'data', X,
-    'units', 'g') had its data read as m/s² ('values: unknown'), its 'units' listed as a channel."""
-    texts = {n: get(n) for n in names if n.rsplit("/", 1)[-1].lower().endswith(_UNIT_KEYS)}
-    texts = {n: v.strip() for n, v in texts.items() if isinstance(v, str)}
-    out: dict[str, str] = {}
-    for name, unit in sorted(texts.items(), key=lambda item: item[0].rsplit("/", 1)[-1].lower() in _UNIT_KEYS):
-        parent, _, leaf = name.rpartition("/")
-        if leaf.lower() in _UNIT_KEYS:  # after the '<channel>_unit' ones: theirs stand
-            out.update({n: unit for n in names if n.rpartition("/")[0] == parent and n not in texts and n not in out})
-        elif (base := name[: name.rindex("_")]) in names:
-            out[base] = unit
-    return {n: u for n, u in out.items() if u}
+    """{channel: unit} that text entries of a MAT-file state (base.stated_units): MATLAB's struct('fs', 20000, 'data',
+    X, 'units', 'g') had its data read as m/s² ('values: unknown'), its 'units' listed as a channel."""
+    texts = {n: get(n) for n in names if is_unit_entry(n)}
+    return stated_units({n: v for n, v in texts.items() if isinstance(v, str)}, [n for n in names if n not in texts])
 
 
 # --- MATLAB v5 layout ----------------------------------------------------------------------

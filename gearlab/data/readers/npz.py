@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .base import Contents, _keyed, check_size
+from .base import Contents, _keyed, check_size, is_unit_entry, stated_units
 
 
 def _read_npz(path: Path, names: Sequence[str]) -> Contents:
@@ -28,33 +28,19 @@ def _read_npz(path: Path, names: Sequence[str]) -> Contents:
             return data[name]
 
         arrays = [n for n in data.files if f"{n}.npy" in data.zip.namelist()]
-        units = stated_units({n: _member_header(data.zip, f"{n}.npy") for n in arrays}, get)
+        units = npz_units({n: _member_header(data.zip, f"{n}.npy") for n in arrays}, get)
         contents = _keyed(data.files, get, names, listed=[n for n in data.files if n not in units["texts"]])
         contents.units.update(units["units"])
         return contents
 
 
-# The unit an NPZ states as text beside its arrays, as numpy users save one: `np.savez(f, vib=x, fs=fs, unit="g")`
-# (every channel's: the vibration's is the one read) or `vib_unit="m/s^2"` (that channel's). Before, a file saying
-# 'g' was read as m/s² ('values: unknown'), its 'unit' listed among the channels.
-_UNIT_KEYS, _UNIT_SUFFIXES = ("unit", "units"), ("_unit", "_units")
-
-
-def stated_units(headers: dict[str, tuple], get) -> dict:
-    """{"units": {channel: unit}, "texts": the unit entries} of an NPZ's arrays, by their (shape, dtype) headers;
-    *get(name)* reads an entry (only the one-value text ones are read)."""
+def npz_units(headers: dict[str, tuple], get) -> dict:
+    """{"units": {channel: unit} (base.stated_units), "texts": the unit entries} of an NPZ's arrays, by their (shape,
+    dtype) headers; *get(name)* reads an entry (only the one-value text ones are read): `np.savez(f, vib=x, fs=fs,
+    unit="g")` or `vib_unit="m/s^2"`."""
     texts = {n for n, (shape, dtype) in headers.items() if dtype.kind in "US" and math.prod(shape) == 1}
-    said = {n: str(np.asarray(get(n)).item()).strip() for n in texts if n.lower().endswith(_UNIT_SUFFIXES + _UNIT_KEYS)}
-    units = {}
-    for name, unit in said.items():
-        low = name.lower()
-        if low in _UNIT_KEYS:
-            units.update({n: unit for n in headers if n not in texts and n not in units})
-        else:
-            base = name[: name.rindex("_")]
-            if base in headers:
-                units[base] = unit
-    return {"units": {n: u for n, u in units.items() if u}, "texts": set(said)}
+    said = {n: str(np.asarray(get(n)).item()) for n in texts if is_unit_entry(n)}
+    return {"units": stated_units(said, [n for n in headers if n not in texts]), "texts": set(said)}
 
 
 def _member_header(archive: zipfile.ZipFile, member: str) -> tuple[tuple, np.dtype]:

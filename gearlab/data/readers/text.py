@@ -31,6 +31,7 @@ from .csv import (
     column_index,
     decoded,
     delimiter_of,
+    file_units,
     footer_note,
     header_names,
     is_text,
@@ -406,5 +407,6 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
         [*columns, *fields, *asked], lambda n: found[n] if n in found else fields[n], names, [*columns, *fields]
     )
     contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
+    contents.units.update(file_units(fields, columns))  # '# units: g', as a CSV's
     contents.warnings += warnings
     return contents
