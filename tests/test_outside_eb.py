@@ -71,3 +71,33 @@ def test_every_reader_reads_a_stated_unit_one_way():
     # a '<channel>_unit' entry stands over its group's 'units'; an empty text states nothing
     texts = {"rec/units": "g", "rec/acc_unit": "m/s^2", "units": " "}
     assert stated_units(texts, ["rec/acc", "rec/tach", "top"]) == {"rec/acc": "m/s^2", "rec/tach": "g"}
+
+
+# --- a reversed take without a tacho -------------------------------------------------------------------------------
+
+
+def _revolutions(sign: float, seed: int, points: int = 1024, rows: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """(the history's mean revolution: a 23T mesh's harmonics 1-3 and the shaft's orders 1-2; a take's *rows*
+    revolutions of it times *sign*, started at a random angle as a take without a tacho is, with noise)."""
+    th = 2 * np.pi * np.arange(points) / points
+    ref = 0.3 * np.cos(th + 0.7) + 0.3 * np.cos(2 * th + 1.4)
+    ref += sum(a * np.cos(h * 23 * th + 0.4 * h) for h, a in ((1, 3.0), (2, 1.4), (3, 0.6)))
+    rng = np.random.default_rng(seed)
+    revs = sign * np.roll(ref, int(rng.integers(points))) + rng.normal(0, 0.5, (rows, points))
+    return ref, revs
+
+
+def test_a_reversed_take_without_a_tacho_is_warned_of():
+    # aligned by correlation (its largest) a reversed take's mesh lines fit half a pitch off: read at that turn it
+    # correlates positively and nothing was said (polarity_line was read with a tacho's marks only)
+    from gearlab.parts.measured import aligned
+    from gearlab.signals.checks import polarity_line
+
+    ref, revs = _revolutions(-1.0, 3)
+    _, turned = aligned(ref, revs, None, 1)
+    assert polarity_line(turned, ref) == ""  # at the turn alignment chose: hidden
+    words = polarity_line(turned, ref, any_turn=True)
+    assert words.startswith("polarity reversed against its history's (their synchronous averages correlate -"), words
+    assert float(words.split("correlate ")[1].split(",")[0]) < -0.95, words
+    ref, revs = _revolutions(1.0, 4)  # the same take wired right: nothing said
+    assert polarity_line(aligned(ref, revs, None, 1)[1], ref, any_turn=True) == ""

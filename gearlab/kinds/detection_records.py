@@ -463,11 +463,11 @@ def read_target(
                 cond["shifts"][f.path] = shift
                 turned.append((f, revs))
             cond[role] = turned
-        if tacho:  # aligned by the marks: a take reversed against the history (a sensor's leads swapped) is said
-            flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := polarity_line(r, reference))]
-            cond["warnings"] += flipped
-            for line in flipped:
-                on_event(Event("log", message=f"warning: {line}"))
+        # a take reversed against the history (a sensor's leads swapped) is said, aligned by the marks or not
+        flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := polarity_line(r, reference, tacho is None))]
+        cond["warnings"] += flipped
+        for line in flipped:
+            on_event(Event("log", message=f"warning: {line}"))
         _units(cond)
         for u, X in cond["history_units"].items():
             if len(X) < MIN_HISTORY_UNITS:  # a threshold is fitted to their quartiles

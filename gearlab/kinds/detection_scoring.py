@@ -264,7 +264,6 @@ def _scoring_condition(
     at = {f.path: math.lcm(ppr, (marks or {}).get(f.path, ppr)) for f, _ in records}
     test = [(f, aligned(reference, standardiser.apply(revs), tacho, at[f.path], continuous)[1]) for f, revs in records]
     blocks = meta["blocks"]
-    polarity = (lambda t: polarity_line(t, reference)) if tacho else (lambda t: "")  # noqa: E731
     per_record = [unit_sets(r, blocks, True) for _, r in history]
     return {
         "history": history,
@@ -277,8 +276,12 @@ def _scoring_condition(
             for u in per_record[0]
         },
         "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
-        "levels": {  # another load? a take reversed against the history (aligned by the marks: a tacho)?
-            f.path: "; ".join(w for w in (level_line(float(np.std(r)) / standardiser.std), polarity(t)) if w)
+        "levels": {  # another load? a take reversed against the history (by the marks or, no tacho, any turn)?
+            f.path: "; ".join(
+                w
+                for w in (level_line(float(np.std(r)) / standardiser.std), polarity_line(t, reference, not tacho))
+                if w
+            )
             for (f, r), (_, t) in zip(records, test)
         },
     }

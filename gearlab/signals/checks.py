@@ -140,20 +140,31 @@ def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
     return f"; {fmt_hz(low)} .. {fmt_hz(high)} {VARIES_WORDS} its mean speed is its condition (steady records compare)"
 
 
-# A take whose synchronous average correlates below -POLARITY with its history's (aligned by the tacho's marks) is
-# that average reversed: a sensor wired or mounted the other way round. Its mesh lines are the history's, so FM4 and
-# NA4 see no change, while the matched filter and the likelihood ratio, which read the sign, called 1 of 3 record30
-# units of DY's healthy 41/109 take with its leads swapped, with nothing said.
+# A take whose synchronous average correlates below -POLARITY with its history's is that average reversed: a sensor
+# wired or mounted the other way round. Its mesh lines are the history's, so FM4 and NA4 see no change, while the
+# matched filter and the likelihood ratio, which read the sign, called 1 of 3 record30 units of DY's healthy 41/109
+# take with its leads swapped, with nothing said. Aligned by a tacho's marks the correlation is read at the marks';
+# without a tacho, aligned by correlation (parts.measured.aligned: its largest, which a reversed take's mesh lines
+# reach half a pitch off), at the turn of the largest |correlation|: a reversed take's stands there, negative.
 POLARITY = 0.5
 
 
-def polarity_line(revs: np.ndarray, reference: np.ndarray) -> str:
+def polarity_line(revs: np.ndarray, reference: np.ndarray, any_turn: bool = False) -> str:
     """In words, a take's revolutions *revs* (R, points) whose mean is the history's *reference* revolution
-    reversed (correlation under -POLARITY); "" otherwise."""
-    r = float(np.corrcoef(np.asarray(revs).mean(axis=0), reference)[0, 1])
+    reversed (correlation under -POLARITY); "" otherwise. *any_turn*: no tacho fixes the turn: the correlation is
+    the largest in size over every turn of the mean, with its sign."""
+    mean = np.asarray(revs).mean(axis=0)
+    if any_turn:
+        a, b = mean - mean.mean(), reference - reference.mean()
+        norm = float(np.linalg.norm(a) * np.linalg.norm(b))
+        corr = np.fft.irfft(np.conj(np.fft.rfft(b)) * np.fft.rfft(a), n=a.size) / norm if norm > 0 else np.zeros(1)
+        r = float(corr[np.argmax(np.abs(corr))])
+    else:
+        r = float(np.corrcoef(mean, reference)[0, 1])
     if not r < -POLARITY:
         return ""
+    how = "" if not any_turn else ", at the turn they correlate most in size (no tacho)"
     return (
-        f"polarity reversed against its history's (their synchronous averages correlate {r:.2f}): a sensor wired "
+        f"polarity reversed against its history's (their synchronous averages correlate {r:.2f}{how}): a sensor wired "
         "or mounted the other way round? the matched filter and the likelihood ratio read the reversal as a change"
     )
