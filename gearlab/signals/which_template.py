@@ -120,6 +120,15 @@ LINE_AGAINST = 0.0
 # simulator's faults under bearings 0.5x / 2x or a casing path (268 flagged, rig, 21/63 + 24/56, random trains, seed
 # 41) at most 4.0: its events excite the structure broadly, not as sidebands, and the phases decide
 COMB_Z = 6.0
+# Where neither comb reaches COMB_Z nor a contrast names (below), one gear's comb reaching COMB_ALONE while the
+# other's stays at its decoys' (COMB_QUIET or under) names the first: a fault on one gear's own mesh only.
+# Development: an outside generator's 42/63 + 23/71 box heard at its output bearing (DY's; its dip modulates only its
+# mesh's 1st harmonic, so the comb is weak): the 23T's faults 2.8 (the 63T's -0.6..-0.2), the 63T's 2.2-4.3 with its
+# ring, 1.5-3.0 without (the 23T's -0.4..0.3); its phases against the simulated events (10.9 dB apart) named the
+# 23T's 63T in 4 of 6, the 63T's 23T in 4 of 6. The simulator's faults under bearings 0.5x / 2x or a casing path
+# (benchmarks/localisation.py two + random, seed 41, 64 records): their own gear's comb up to 2.44, the other's up to
+# 2.35 (a 24T pinion's 63T, its own -1.62): none named by this
+COMB_ALONE, COMB_QUIET = 2.5, 0.5
 COMB_SHORTEST = 8
 COMB_SPAN = 1.5
 COMB_CLEAR = 2  # a decoy period stands more than this many harmonics off a count's multiple or fraction
@@ -185,7 +194,7 @@ def which_by_template(
     phases at their own mesh are compared instead (reference_phase_match). False instead of a gear: the
     events are not used (not simulated, too few clear lines to compare the structures, no phase read). *combs*:
     mesh_combs of the record, read first where the structure differs (by_sidebands; None: not read); *contrasts*: its
-    mesh_contrasts, read next (by_contrasts)."""
+    mesh_contrasts, read next (by_contrasts), then a comb alone (by_sidebands at COMB_ALONE)."""
     if "healthy" not in templates:  # the description could not be simulated: said, and the width decides
         return False, {"not used": f"not simulated: {templates['not simulated']}"}
     gap = structure_gap(ref, lay, templates["healthy"])
@@ -203,6 +212,8 @@ def which_by_template(
             by = by_contrasts(contrasts, combs, gears)
             if by is not None:
                 return by, {**ev, "rule": RULE_CONTRAST}
+        if combs and (by := by_sidebands(combs, gears, COMB_ALONE)) is not None:  # one comb alone over its decoys'
+            return by, {**ev, "rule": RULE_SIDEBANDS}
         return _by_reference_phases(rec, ref, lay, harmonics, gears, templates, ev)
     sel, m = harmonics
     R = residual(rec, ref, sel)
@@ -266,10 +277,12 @@ def mesh_combs(z: np.ndarray, harmonics: tuple[np.ndarray, np.ndarray], gears) -
     return {g.name: (_comb(m, excess, g.teeth) - float(null.mean())) / float(null.std()) for g in gears}
 
 
-def by_sidebands(combs: dict, gears):
-    """The one gear whose mesh comb (mesh_combs) reaches COMB_Z, the other's under it (None: neither, or both)."""
-    over = [g for g in gears if combs.get(g.name, -math.inf) >= COMB_Z]
-    return over[0] if len(over) == 1 else None
+def by_sidebands(combs: dict, gears, least: float = COMB_Z):
+    """The one gear whose mesh comb (mesh_combs) reaches *least*, the other's under it, or where *least* is
+    COMB_ALONE, the other's COMB_QUIET or under (None: neither, or both)."""
+    over = [g for g in gears if combs.get(g.name, -math.inf) >= least]
+    quiet = least == COMB_Z or all(combs.get(g.name, math.inf) <= COMB_QUIET for g in gears if g not in over)
+    return over[0] if len(over) == 1 and quiet else None
 
 
 def weak_lead(evidence: dict) -> float | None:
@@ -390,7 +403,8 @@ def fit_words(evidence: dict) -> str:
     """The simulated events' evidence in words, for localise.which_line ("" without it)."""
     if "own-mesh sidebands" in evidence:
         said = " / ".join(f"{g.split(' (')[0]} {v:.1f}" for g, v in evidence["own-mesh sidebands"].items())
-        combs = f"sidebands about each gear's own mesh (sds over other periods, {COMB_Z:g} names) {said}, "
+        names = f"{COMB_Z:g} names, or {COMB_ALONE:g} the other's {COMB_QUIET:g} or under"
+        combs = f"sidebands about each gear's own mesh (sds over other periods, {names}) {said}, "
         rest = {k: v for k, v in evidence.items() if k != "own-mesh sidebands"}
         return combs + ("" if evidence.get("rule") == RULE_SIDEBANDS else fit_words(rest))
     if "own-mesh sideband contrast" in evidence:
