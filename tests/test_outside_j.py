@@ -212,6 +212,24 @@ def test_at_80_columns_a_wide_table_of_the_results_is_a_block_per_row(detection_
     asyncio.run(main())
 
 
+async def scored_in_tui(pilot, run, typed: str) -> str:
+    """s on *run* in the TUI, *typed* as the recordings and options, enter: the status line once score ended."""
+    app = pilot.app
+    await pilot.pause()
+    app._move_to(run)
+    await pilot.pause()
+    await pilot.press("s")
+    await pilot.pause()
+    for ch in typed:
+        await pilot.press(ch)
+    await pilot.press("enter")
+    for _ in range(600):
+        await pilot.pause(0.5)
+        if app.process is None and shown(app, "#run-status").startswith(("scored", "failed")):
+            break
+    return shown(app, "#run-status")
+
+
 def test_s_scores_new_recordings_with_the_run_and_shows_the_trend(detection_run, monkeypatch):
     # the guide's step 7 reads the scoring trend in `gearlab tui .`, but the scoring itself was the shell's only: no
     # key of the TUI ran `gearlab score`. Now s on a finished detection run asks for the recordings and options (as
@@ -223,19 +241,8 @@ def test_s_scores_new_recordings_with_the_run_and_shows_the_trend(detection_run,
     async def main():
         async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
             app = pilot.app
-            await pilot.pause()
-            app._move_to(run)
-            await pilot.pause()
-            await pilot.press("s")
-            await pilot.pause()
-            for ch in "f2.zip":
-                await pilot.press(ch)
-            await pilot.press("enter")
-            for _ in range(600):
-                await pilot.pause(0.5)
-                if app.process is None and shown(app, "#run-status").startswith("scored"):
-                    break
-            assert shown(app, "#run-status").startswith("scored: f2.zip"), shown(app, "#run-status")
+            status = await scored_in_tui(pilot, run, "f2.zip")
+            assert status.startswith("scored: f2.zip"), status
             assert "scored with" in " ".join(str(line.text) for line in app.query_one("#log").lines)
             title = str(app.charts[app.chart_index].title)
             assert "scored records" in title and "f2.zip" in title, title

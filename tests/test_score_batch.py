@@ -86,7 +86,7 @@ def test_the_tui_shows_a_partly_scored_batch_as_scored_in_part_with_its_trend(ma
     # s in the TUI read exit 2 as "failed" and kept the old chart, though the takes it could score were scored
     import asyncio
 
-    from test_outside_j import shown
+    from test_outside_j import scored_in_tui
 
     from gearlab.tui import GearlabApp
 
@@ -97,19 +97,7 @@ def test_the_tui_shows_a_partly_scored_batch_as_scored_in_part_with_its_trend(ma
     async def main():
         async with GearlabApp(folder / "scenarios").run_test(size=(160, 45)) as pilot:
             app = pilot.app
-            await pilot.pause()
-            app._move_to(out)
-            await pilot.pause()
-            await pilot.press("s")
-            await pilot.pause()
-            for ch in f"{takes['near']} {takes['far']}":
-                await pilot.press(ch)
-            await pilot.press("enter")
-            for _ in range(600):
-                await pilot.pause(0.5)
-                if app.process is None and shown(app, "#run-status").startswith(("scored", "failed")):
-                    break
-            status = shown(app, "#run-status")
+            status = await scored_in_tui(pilot, out, f"{takes['near']} {takes['far']}")
             assert status.startswith("scored in part: error: 1 of 2 takes not scored"), status
             title = str(app.charts[app.chart_index].title)
             assert "near.zip" in title and "not scored: far.zip" in title, title
