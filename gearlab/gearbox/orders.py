@@ -151,6 +151,6 @@ class TachoShaft:
 def settle_turns(box) -> int:
     """The input turns of the description *box*'s slowest shaft's turn (1 without one), the level a record's
     start-up is judged over (signals.steady_start_stats): judged turn by turn, a steady 37/89 box's level, its
-    output shaft's 2.4 turns modulating the mesh, swung out of the 5 % band, and every take of DO's 37/89 and
+    output shaft's 2.4 turns modulating the mesh, swung out of the 5 % band, and every take of a user's 37/89 and
     29/101 + 33/107 boxes read with a tacho 'never settles' in a gap or detection run."""
     return 1 if box is None else math.ceil(1 / min(order_table(box).shaft_orders))

@@ -142,7 +142,7 @@ def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
 
 # A take whose synchronous average correlates below -POLARITY with its history's is that average reversed: a sensor
 # wired or mounted the other way round. Its mesh lines are the history's, so FM4 and NA4 see no change, while the
-# matched filter and the likelihood ratio, which read the sign, called 1 of 3 record30 units of DY's healthy 41/109
+# matched filter and the likelihood ratio, which read the sign, called 1 of 3 record30 units of a user's healthy 41/109
 # take with its leads swapped, with nothing said. Aligned by a tacho's marks the correlation is read at the marks';
 # without a tacho, aligned by correlation (parts.measured.aligned: its largest, which a reversed take's mesh lines
 # reach half a pitch off), at the turn of the largest |correlation|: a reversed take's stands there, negative.

@@ -112,7 +112,7 @@ def smear_merged(listed: list[dict], lines, swing: float, bin_: float) -> list[d
 def modulation_pairs(listed: list[dict], lines, bin_: float) -> list[dict]:
     """*listed* (unexplained lines, each with 'order' and 'amplitude'), each of a pair mirrored about a stronger
     line of *lines* (within SMEAR_BINS bins) marked 'modulation' [that line's order, the offset]: a modulation of
-    that line at a rate no shaft turns at, not a fixed frequency. DO's 19/103 box at 3 Hz without a tacho, its speed
+    that line at a rate no shaft turns at, not a fixed frequency. a user's 19/103 box at 3 Hz without a tacho, its speed
     swinging 0.2 % at 0.37 Hz faster than the mesh's phase is followed, left pairs 0.123 orders about each mesh
     harmonic (52 dB), said 'not a gear order (a fixed frequency such as mains, or a bearing's)'."""
     at, amp = np.asarray(lines.at, float), np.asarray(lines.amp, float)

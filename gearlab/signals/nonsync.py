@@ -86,7 +86,7 @@ PASSED = f"a healthy take passes it at false alarm {FALSE_ALARM:g}"
 
 # A line of the residual's envelope at the mains frequency or a harmonic of it (within MAINS_SLACK of it, the grid's
 # own drift and the strike order's resolution over a take of 80 turns) is a hum picked up on the sensor's cable or a
-# ground loop: its 50, 100, 150 Hz beat in the envelope as a bearing's strikes do (DY's 41/109 box at 29 Hz: a 0.3
+# ground loop: its 50, 100, 150 Hz beat in the envelope as a bearing's strikes do (a user's 41/109 box at 29 Hz: a 0.3
 # m/s² hum read z 11.8 at order 1.72, 'other damage: non-synchronous (bearing-like)')
 MAINS = (50.0, 60.0)
 MAINS_HARMONICS = 4

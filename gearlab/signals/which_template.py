@@ -122,7 +122,7 @@ LINE_AGAINST = 0.0
 COMB_Z = 6.0
 # Where neither comb reaches COMB_Z nor a contrast names (below), one gear's comb reaching COMB_ALONE while the
 # other's stays at its decoys' (COMB_QUIET or under) names the first: a fault on one gear's own mesh only.
-# Development: an outside generator's 42/63 + 23/71 box heard at its output bearing (DY's; its dip modulates only its
+# Development: an outside generator's 42/63 + 23/71 box heard at its output bearing (its dip modulates only its
 # mesh's 1st harmonic, so the comb is weak): the 23T's faults 2.8 (the 63T's -0.6..-0.2), the 63T's 2.2-4.3 with its
 # ring, 1.5-3.0 without (the 23T's -0.4..0.3); its phases against the simulated events (10.9 dB apart) named the
 # 23T's 63T in 4 of 6, the 63T's 23T in 4 of 6. The simulator's faults under bearings 0.5x / 2x or a casing path
