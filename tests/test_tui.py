@@ -2,9 +2,10 @@
 
 Runs started from the TUI are real `gearlab run --events` child processes on tiny scenarios
 (cancel/resume's holds its third and later units until the cancel, held_units),
-except in the tests of what the TUI starts, not of the run (`stub_engine`), and in the every-kind
+except in the tests of what the TUI starts, not of the run (`stub_engine`), in the every-kind
 runs, the run-end notification and the quick-run key, whose child replays a run the real engine made
-once in this session (`replayed`, `quick_stream`).
+once in this session (`replayed`, `quick_stream`), and in the runs of where runs go and the resume
+of cancel/resume, made by the real engine in this process (`in_process`).
 """
 
 from __future__ import annotations
@@ -227,8 +228,8 @@ def test_run_fills_the_table_then_opens_the_results(folder):
 def test_quick_run_key_runs_the_shrunk_scenario(folder, quick_stream, monkeypatch, tmp_path):
     """k starts `gearlab run FILE --quick` and draws the shrunk scenario's run: the engine's quick run of it,
     recorded in this process and replayed by the TUI's child (quick_stream; the real child, which imported
-    gearlab again for 1.1 s of CPU, is started in test_run_fills_the_table_then_opens_the_results and, with
-    --quick, in the tests of where runs go)."""
+    gearlab again for 1.1 s of CPU, is started in test_run_fills_the_table_then_opens_the_results; with
+    --quick, the tests of where runs go run the engine in this process)."""
     started = replay(monkeypatch, quick_stream, tmp_path)
 
     async def script(pilot):
@@ -274,11 +275,16 @@ main()
 def held_units(monkeypatch, tmp_path):
     """The TUI's child is the real engine, whose third and later transfer units (one worker: in
     its own process) wait until the file returned exists: a cancel lands after exactly two
-    finished units, however fast the machine trains the others."""
+    finished units, however fast the machine trains the others. The resume (`--resume`) is the
+    real engine in this process (in_process), its child ended once tmp_path/go exists."""
     gate, real = tmp_path / "let-go", asyncio.create_subprocess_exec
+    in_process(monkeypatch, tmp_path, tmp_path / "go")
+    resumed = asyncio.create_subprocess_exec
 
     async def stand_in(program, *args, **kwargs):
         assert args[:2] == ("-m", "gearlab"), args
+        if "--resume" in args:
+            return await resumed(program, *args, **kwargs)
         return await real(program, "-c", HELD, str(gate), *args[2:], **kwargs)
 
     monkeypatch.setattr(asyncio, "create_subprocess_exec", stand_in)
@@ -312,7 +318,8 @@ def test_cancel_keeps_finished_units_and_resume_completes_the_run(transfer_folde
         await pilot.pause()
         assert "not finished" in text_of(app, "#results-status")
         await pilot.press("u")
-        await until(pilot, lambda: app.process is not None, 10)
+        await until(pilot, lambda: app.process is not None, 30)
+        (tmp_path / "go").touch()
         await until(pilot, lambda: app.process is None)
         assert "finished" in text_of(app, "#run-status")
         units = [r["unit"] for r in RunDir(run).records()]
@@ -626,8 +633,8 @@ def quick_stream(tmp_path_factory):
 def replayed(monkeypatch, kind_streams, tmp_path):
     """The TUI's child replays the recorded run of the scenario it is asked to run (kind_streams):
     for the tests of how the TUI follows each kind's events and opens its results, not of how it
-    starts a run (the runs of test_run_fills_the_table_then_opens_the_results, cancel/resume and
-    where runs go keep the real child); the list gets each start's arguments."""
+    starts a run (the runs of test_run_fills_the_table_then_opens_the_results and cancel/resume keep
+    the real child, those of where runs go the real engine: in_process); the list gets each start's arguments."""
     return replay(monkeypatch, kind_streams, tmp_path)
 
 
@@ -643,6 +650,57 @@ def replay(monkeypatch, streams: dict, tmp_path: Path) -> list:
         made, written, lines = streams[Path(args[3]).name]
         into = str(tmp_path / "runs" / Path(made).parent.name / Path(made).name)
         return await real(program, "-c", REPLAY, made, written, str(lines), into, str(tmp_path / "go"), **kwargs)
+
+    monkeypatch.setattr(asyncio, "create_subprocess_exec", stand_in)
+    return started
+
+
+# The child of an in-process run (in_process): it writes what `gearlab` wrote in the test's process, its
+# output then its errors, and exits with its code, once the file *go* exists ('-': at once; a minute at most).
+ECHO = """
+import sys, time
+from pathlib import Path
+
+out, err, code, go = sys.argv[1:]
+start = time.monotonic()
+while go != "-" and not Path(go).exists() and time.monotonic() - start < 60:
+    time.sleep(0.02)
+sys.stdout.write(Path(out).read_text())
+sys.stdout.flush()
+sys.stderr.write(Path(err).read_text())
+sys.exit(int(code))
+"""
+
+
+def in_process(monkeypatch, tmp_path: Path, go: Path | None = None) -> list:
+    """The TUI's child made `gearlab ARGS` run by the real engine in this process, with the arguments and in the
+    folder the TUI gives its child, then a stand-in child that writes its output and exits with its code once
+    *go* exists (None: at once): a real child imported gearlab, scipy and torch again for 1.5-4.5 s of CPU. For the
+    tests of what the TUI starts and shows, where a real child is started elsewhere (test_run_fills_the_table_
+    then_opens_the_results, the cancelled run of cancel/resume, test_outside_j's scoring); the list returned gets
+    each start's arguments."""
+    from contextlib import redirect_stderr, redirect_stdout
+    from io import StringIO
+
+    from gearlab.cli import main
+
+    started, real = [], asyncio.create_subprocess_exec
+
+    async def stand_in(program, *args, cwd=None, **kwargs):
+        assert args[:2] == ("-m", "gearlab"), args
+        started.append(list(args[2:]))
+        out, err, code = StringIO(), StringIO(), 0
+        with pytest.MonkeyPatch.context() as mp, redirect_stdout(out), redirect_stderr(err):
+            mp.chdir(cwd)
+            mp.setattr("sys.argv", ["gearlab", *args[2:]])
+            try:
+                main()
+            except SystemExit as exc:
+                code = exc.code if isinstance(exc.code, int) else 1
+        said = [tmp_path / f"child{len(started)}.{name}" for name in ("out", "err")]
+        for path, text in zip(said, (out, err)):
+            path.write_text(text.getvalue())
+        return await real(program, "-c", ECHO, *map(str, said), str(code), str(go or "-"), cwd=cwd, **kwargs)
 
     monkeypatch.setattr(asyncio, "create_subprocess_exec", stand_in)
     return started
@@ -741,7 +799,8 @@ def stub_engine(monkeypatch):
     """For tests of what the TUI runs, not of the run: the child it starts is a stand-in that
     writes one event line and ends (exit 0) instead of `python -m gearlab ...`; the list
     returned gets the gearlab arguments of each start. test_run_fills_the_table_then_opens_the_results,
-    cancel/resume and where runs go keep the real engine (the quick run key's replays its run)."""
+    cancel/resume and where runs go keep the real engine (a child, or in_process; the quick run key's
+    replays its run)."""
     started, real = [], asyncio.create_subprocess_exec
 
     async def stand_in(program, *args, **kwargs):
@@ -838,6 +897,7 @@ def test_runs_are_found_where_gearlab_run_puts_them_whatever_the_folder(
     code, out, err = cli("run", scenarios / "stiff.toml", "--quick")
     assert code == 0, err
     (by_cli,) = (project / "my_runs" / "stiff").iterdir()
+    started = in_process(monkeypatch, tmp_path, tmp_path / "go")  # the run the TUI starts, made in this process
 
     async def script(pilot):
         app = pilot.app
@@ -847,6 +907,9 @@ def test_runs_are_found_where_gearlab_run_puts_them_whatever_the_folder(
         assert f"1 past run(s) in {Path('my_runs') / 'stiff'};" in text_of(app, "#scenario-status")
         await pilot.press("k")
         await until(pilot, lambda: app.process is not None, 30)
+        (args,) = started
+        assert args[args.index("--out") + 1] == str(project / "my_runs") and "--quick" in args
+        (tmp_path / "go").touch()
         await until(pilot, lambda: app.process is None)
         assert app.run_path.parent == project / "my_runs" / "stiff"
         assert len(node_named(app, "stiff.toml").children) == 2
