@@ -82,22 +82,27 @@ def test_one_take_far_off_or_every_take_far_off_is_refused_in_one_line_nothing_w
     assert _history(out) == before  # nothing scored, nothing written
 
 
-def test_the_tui_shows_a_partly_scored_batch_as_scored_in_part_with_its_trend(made, monkeypatch):
-    # s in the TUI read exit 2 as "failed" and kept the old chart, though the takes it could score were scored
+def test_the_tui_shows_a_partly_scored_batch_as_scored_in_part_with_its_trend(made, monkeypatch, tmp_path):
+    # s in the TUI read exit 2 as "failed" and kept the old chart, though the takes it could score were scored.
+    # `gearlab score` as the TUI starts it runs in this process (test_tui.in_process; test_outside_j's s starts the
+    # real child): the child imported torch and scipy again, 4.8 s of CPU
     import asyncio
 
     from test_outside_j import scored_in_tui
+    from test_tui import in_process
 
     from gearlab.tui import GearlabApp
 
     out, takes = made
     folder = out.parents[2]  # the scenario's runs are <cwd>/runs, as its [output] says nothing
     monkeypatch.chdir(folder)
+    started = in_process(monkeypatch, tmp_path)
 
     async def main():
         async with GearlabApp(folder / "scenarios").run_test(size=(160, 45)) as pilot:
             app = pilot.app
             status = await scored_in_tui(pilot, out, f"{takes['near']} {takes['far']}")
+            assert started == [["score", str(out), takes["near"], takes["far"]]]
             assert status.startswith("scored in part: error: 1 of 2 takes not scored"), status
             title = str(app.charts[app.chart_index].title)
             assert "near.zip" in title and "not scored: far.zip" in title, title
