@@ -453,18 +453,11 @@ def test_snapshot_keys_panel(snap_compare, folder, size):
 
 
 @pytest.fixture(scope="module")
-def quick_stiff_run(tmp_path_factory):
-    """A quick run of stiff.toml, made once for the two sizes' snapshots (the same scenario gives
-    the same run), laid out as the `folder` fixture lays out a test's: (base, its run directory)."""
-    from gearlab.engine import run_scenario
-
-    base = tmp_path_factory.mktemp("quick_stiff")
-    (base / "scenarios").mkdir()
-    (base / "scenarios" / "stiff.toml").write_text(STIFFNESS.replace("{runs}", str(base / "runs")))
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GEARLAB_CACHE", str(base / "cache"))
-        mp.setattr("gearlab.plots.save", unrendered)  # the snapshots show no figure's pixels
-        return base, run_scenario(base / "scenarios" / "stiff.toml", quick=True).path
+def quick_stiff_run(quick_stream):
+    """A quick run of stiff.toml for the two sizes' snapshots, the quick-run key's (quick_stream: the same
+    scenario gives the same run), laid out as the `folder` fixture lays out a test's: (base, its run directory)."""
+    made = Path(quick_stream["stiff.toml"][0])
+    return made.parents[2], made
 
 
 @pytest.mark.parametrize("size", SIZES)
