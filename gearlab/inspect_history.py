@@ -24,13 +24,15 @@ from .gearbox.orders import TachoShaft
 from .inspect import InspectOptions, measured_speed, read_record, settle_speed, unconfirmed
 from .signals import POINTS, resample_revolutions
 from .signals import nonsync as NS
+from .signals.checks import revolution_speeds
 from .signals.localise import weakly
 from .signals.pipeline import first_complete
 
 
 def input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple:
     """(complete input revolutions at the pipeline's points, the first one's number from the angle's zero modulo
-    the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate) of one file as read."""
+    the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate, each revolution's speed
+    (Hz; None where not one a revolution)) of one file as read."""
     rec = read_record(path, options)
     speed = measured_speed(rec, box, options)
     if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
@@ -44,7 +46,8 @@ def input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple
     kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
     shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
     marks = shaft.marks(options.pulses_per_rev or box.sensor.pulses_per_rev if kind == "pulses" else 1) if kind else 1
-    return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs
+    turns = revolution_speeds(angle, rec.fs)  # a non-synchronous line on a mains harmonic read as hum or a bearing's
+    return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs, turns if len(turns) == len(revs) else None
 
 
 def localisation(path: str, history: list, box: Gearbox, options: InspectOptions) -> dict:
@@ -56,7 +59,7 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     if not history:
         raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
     table = order_table(box)
-    revs, first, _, _, speed, fs = input_revolutions(path, box, options)
+    revs, first, _, _, speed, fs, turns = input_revolutions(path, box, options)
     read = [(h, options) if isinstance(h, str) else h for h in history]
     past = []
     for p, o in read:
@@ -69,16 +72,16 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
             raise GearlabInputError(
                 f"{exc} (a history file read with the record's keys; its own: --history-key '{name}:vibration=NAME')"
             ) from None
-    takes = [W.Take(r, f, s.mean_hz, rate) for r, f, _, _, s, rate in past]
+    takes = [W.Take(r, f, s.mean_hz, rate, turns) for r, f, _, _, s, rate, turns in past]
     tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
     pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
     try:  # a history too short for it is said, as a detection run says it (detection_which_gear)
-        hist = W.history_of(takes, table, marks=max(k for *_, k, _, _ in past), tacho=tacho, pulses=pulses)
+        hist = W.history_of(takes, table, marks=max(k for *_, k, _, _, _ in past), tacho=tacho, pulses=pulses)
         out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
     except GearlabInputError as exc:
         out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
     out["history"] = [p for p, _ in read]
-    out["nonsync"] = nonsync_lines(revs, [r for r, *_ in past], table, speed.mean_hz)
+    out["nonsync"] = nonsync_lines(revs, [t.revolutions for t in takes], table, speed.mean_hz, turns, takes)
     out["call"] = call_of(out, out["nonsync"])
     return out
 
@@ -86,13 +89,14 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
 LINES = 5  # the strongest non-synchronous envelope lines shown
 
 
-def nonsync_lines(revs, history: list, table, speed_hz: float) -> dict:
+def nonsync_lines(revs, history: list, table, speed_hz: float, speeds=None, takes: list | None = None) -> dict:
     """The record's non-synchronous change against the *history* takes' (signals.nonsync, as a detection run
-    reads it: z of its strongest envelope line, the strike order named, the history's threshold) with the
-    LINES strongest lines' orders and z, strongest first; where the takes are too short for it, why not."""
+    reads it: z of its strongest envelope line, the strike order named, the history's threshold; on a mains harmonic
+    read as hum or a bearing's from its revolutions' *speeds* and the history's W.Take *takes*' speeds, where given)
+    with the LINES strongest lines' orders and z, strongest first; where the takes are too short for it, why not."""
     try:
-        hist = NS.history(history, table)
-        found, z = NS.read_take(revs, hist, table)
+        hist = NS.history(history, table, None if takes is None else [t.speed_hz for t in takes])
+        found, z = NS.read_take(revs, hist, table, speeds)
     except GearlabInputError as exc:
         return {"note": f"not read: {exc}"}
     orders = NS.orders_of_bins(z.size)
@@ -110,7 +114,7 @@ def call_of(loc: dict, ns: dict) -> str:
         shafts = W.flagged_shafts(loc) if loc.get("shafts") else [{"gear": loc["named"]}]
         return "localised change: " + "; ".join(s["gear"] + weakly(s) for s in shafts)
     if ns.get("changed"):
-        return NS.call(ns["order"], ns.get("hz"))
+        return NS.call(ns["order"], ns.get("hz"), ns.get("locked", ""), ns.get("why", ""))
     if loc.get("summary", "").startswith("not localised: ") and "note" in ns:  # neither read: no call, not 'no change'
         return f"not read against the history: {loc['summary'][15:]}"
     why = "; non-synchronous " + ns["note"] if "note" in ns else ", no non-synchronous line over its threshold"

@@ -115,8 +115,10 @@ def test_a_mains_hum_is_called_no_gear_fault_not_bearing_damage(conveyor):
     history = [paths["day1"], paths["day2"], paths["day3"]]
     found = localisation(paths["hum"], history, box, InspectOptions("acc", tacho="tach"))
     assert found["nonsync"]["changed"], found["nonsync"]
-    assert found["call"].startswith("not a gear fault: mains hum at 50"), found["call"]
-    assert "bearing-like" not in found["call"]
+    # its speed swings 0.2 % and the history is at its speed: by its frequency alone a bearing's line there reads the
+    # same, so it is not called hum outright (tests/test_hum_or_bearing.py: a sweep or another speed tells)
+    untold = "other damage: non-synchronous (bearing-like) or mains hum, at order 1.72 (50.0 Hz, within 1 % of the 50"
+    assert found["call"].startswith(untold) and "not told apart" in found["call"], found["call"]
 
 
 def test_a_run_s_flag_on_a_hum_is_no_gear_s_and_a_bearing_s_line_stays_bearing_like():
@@ -125,9 +127,14 @@ def test_a_run_s_flag_on_a_hum_is_no_gear_s_and_a_bearing_s_line_stays_bearing_l
     from gearlab.kinds.detection_which_gear import call_of, is_other
 
     nothing = {"named": None, "shafts": []}
-    hum = call_of(nothing, ["input pinion 41T (stage 1)"], {"changed": True, "order": 2.078}, 28.92)
+    line = {"changed": True, "order": 2.078, "locked": "time", "why": "at 60.1 Hz too in the history's take at 25 Hz"}
+    hum = call_of(nothing, ["input pinion 41T (stage 1)"], line, 28.92)
     assert hum.startswith("not a gear fault: mains hum at 60.1 Hz (order 2.08"), hum
     assert is_other(hum)
+    # on the mains harmonic, not told from a bearing's (a steady take, no history at another speed): other damage
+    untold = call_of(nothing, ["input pinion 41T (stage 1)"], line | {"locked": "", "why": ""}, 28.92)
+    assert untold.startswith("other damage: non-synchronous (bearing-like) or mains hum, at order 2.08"), untold
+    assert is_other(untold)
     bearing = call_of(nothing, ["input pinion 41T (stage 1)"], {"changed": True, "order": 4.37}, 29.0)
     assert bearing == "other damage: non-synchronous (bearing-like), at order 4.37"
 

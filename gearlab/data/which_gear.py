@@ -27,17 +27,19 @@ from .which_templates import record_templates
 class Take:
     """One record as localised: its complete input revolutions (R, points) as cut, the first one's number
     counted from the input angle's zero (recordings.CutRecording.first_revolution; any whole number),
-    its mean speed and its sampling rate."""
+    its mean speed, its sampling rate and each revolution's speed (Hz; None where not read: a non-synchronous line
+    on a mains harmonic is then not told from a bearing's within the take, signals.nonsync.hum_or_bearing)."""
 
     revolutions: np.ndarray
     first: int
     speed_hz: float
     fs: float
+    speeds: np.ndarray | None = None
 
     @classmethod
     def of(cls, rec) -> Take:
         """The take of a recordings.CutRecording."""
-        return cls(rec.revolutions, int(rec.first_revolution), float(rec.speed_hz), float(rec.fs))
+        return cls(rec.revolutions, int(rec.first_revolution), float(rec.speed_hz), float(rec.fs), rec.speeds)
 
 
 def band(takes: list[Take]) -> float:

@@ -399,6 +399,7 @@ def read_target(
         # localisation reads (detection_which_gear), with the first revolution's number from the tacho
         # mark (on its own shaft; without a tacho, from the record's first sample)
         cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].first_revolution)
+        cond.setdefault("turn_speeds", {})[f.path] = records[f.path].speeds  # a hum told from a bearing (nonsync)
     for name, cond in conditions.items():
         if not cond["history"]:
             # a run-up's speeds said here too: the TUI shows a failed run's last line alone (gearlab score's does)

@@ -87,7 +87,8 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None, speed_
     shafts = W.flagged_shafts(found)
     if not shafts:
         if nonsync and nonsync["changed"]:
-            return NS.call(nonsync["order"], None if speed_hz is None else nonsync["order"] * speed_hz)
+            hz = None if speed_hz is None else nonsync["order"] * speed_hz
+            return NS.call(nonsync["order"], hz, nonsync.get("locked", ""), nonsync.get("why", ""))
         if unread := found.get("unread"):
             turns, shaft, need = unread["turns"], unread["shaft"], unread["needed"]
             return f"{UNDETERMINED}: {turns:.3g} turns of the {shaft} shaft, {need} needed"
@@ -161,22 +162,23 @@ def nonsync_words(ns: dict | None) -> str:
     return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f}{over} at order {ns['order']:.2f}"
 
 
-def nonsync_history(revolutions: list, table) -> NS.NonSyncHistory | None:
-    """The history of the non-synchronous residual (signals.nonsync) of the history takes' revolutions;
-    None where they are too short for it (the call then rests on the shafts alone)."""
+def nonsync_history(takes: list[W.Take], table) -> NS.NonSyncHistory | None:
+    """The history of the non-synchronous residual (signals.nonsync) of the history *takes*; None where they are too
+    short for it (the call then rests on the shafts alone)."""
+    speeds = None if any(t.speed_hz is None for t in takes) else [t.speed_hz for t in takes]
     try:
-        return NS.history(revolutions, table)
+        return NS.history([t.revolutions for t in takes], table, speeds)
     except GearlabInputError:
         return None
 
 
-def nonsync_of(revolutions, hist: NS.NonSyncHistory | None, table) -> dict | None:
-    """A take's non-synchronous change against *hist* (NonSync.describe()); None: not read; a take too short
-    for it: why, unchanged ({"note", "changed"})."""
+def nonsync_of(revolutions, hist: NS.NonSyncHistory | None, table, speeds=None) -> dict | None:
+    """A take's non-synchronous change against *hist* (NonSync.describe(); *speeds*: its revolutions', where read);
+    None: not read; a take too short for it: why, unchanged ({"note", "changed"})."""
     if hist is None:
         return None
     try:
-        return NS.nonsync(revolutions, hist, table).describe()
+        return NS.nonsync(revolutions, hist, table, speeds).describe()
     except GearlabInputError as exc:
         return {"note": str(exc), "changed": False}
 
@@ -225,14 +227,14 @@ def localise_target(
             "thresholds": dict(zip(hist.layout.shafts, map(float, hist.thresholds))),
             "note": hist.note,
         }
-        quiet = nonsync_history([takes[f.path].revolutions for f, _ in cond["history"]], table)
+        quiet = nonsync_history([takes[f.path] for f, _ in cond["history"]], table)
         out["conditions"][name]["nonsync_threshold"] = None if quiet is None else quiet.threshold
         if histories is not None:
             histories[name] = (hist, quiet)
         for f, _ in cond["test"]:
             take = takes[f.path]
             found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
-            ns = nonsync_of(take.revolutions, quiet, table)
+            ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             call = call_of(found, watched, ns, take.speed_hz)
             out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call}
     return out
@@ -282,9 +284,12 @@ def localisation_of(run) -> dict | None:
 
 def _take(cond: dict, path: str) -> W.Take:
     """A record of a condition (detection_records.read_target: cond["raw"] its revolutions as cut and the
-    first one's number from the angle's zero, its speed and rate) as data.which_gear localises it."""
+    first one's number from the angle's zero, its speed, rate and revolutions' speeds) as data.which_gear
+    localises it."""
     revs, first = cond["raw"][path]
-    return W.Take(revs, int(first), cond.get("speeds", {}).get(path), cond.get("fs", {}).get(path))
+    turns = cond.get("turn_speeds", {}).get(path)  # as many as its revolutions, or none
+    speeds = turns if turns is not None and len(turns) == len(revs) else None
+    return W.Take(revs, int(first), cond.get("speeds", {}).get(path), cond.get("fs", {}).get(path), speeds)
 
 
 def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
@@ -312,7 +317,7 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:
             found = W.which_gear(take, hist, table, made)
-            ns = nonsync_of(take.revolutions, quiet, table)
+            ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             out[path] = {
                 "named": W.named_gears(found),  # damage on two shafts: both, as the run's table names them
                 "summary": found["summary"],

@@ -85,32 +85,56 @@ PASSED = f"a healthy take passes it at false alarm {FALSE_ALARM:g}"
 
 
 # A line of the residual's envelope at the mains frequency or a harmonic of it (within MAINS_SLACK of it, the grid's
-# own drift and the strike order's resolution over a take of 80 turns) is a hum picked up on the sensor's cable or a
-# ground loop: its 50, 100, 150 Hz beat in the envelope as a bearing's strikes do (a user's 41/109 box at 29 Hz: a 0.3
-# m/s² hum read z 11.8 at order 1.72, 'other damage: non-synchronous (bearing-like)')
+# own drift and the strike order's resolution over a take of 80 turns) may be a hum picked up on the sensor's cable or
+# a ground loop: its 50, 100, 150 Hz beat in the envelope as a bearing's strikes do (a user's 41/109 box at 29 Hz: a
+# 0.3 m/s² hum read z 11.8 at order 1.72, 'other damage: non-synchronous (bearing-like)'). Its frequency alone does not
+# say so: a bearing's tone lands there at some speed (hum_or_bearing tells them apart, or says it cannot)
 MAINS = (50.0, 60.0)
 MAINS_HARMONICS = 4
 MAINS_SLACK = 0.01
 HUM = "not a gear fault"
 
 
-def mains(hz: float | None) -> float | None:
-    """The mains frequency (Hz) of which *hz* is a harmonic (MAINS_HARMONICS of MAINS, within MAINS_SLACK), or None."""
+def harmonic(hz: float | None) -> tuple[float, float] | None:
+    """(the mains frequency, its harmonic) in Hz that *hz* lies within MAINS_SLACK of (MAINS_HARMONICS of MAINS), or
+    None."""
     if hz is None:
         return None
-    near = [f for f in MAINS for k in range(1, MAINS_HARMONICS + 1) if abs(hz - k * f) <= MAINS_SLACK * k * f]
+    near = [(f, k * f) for f in MAINS for k in range(1, MAINS_HARMONICS + 1) if abs(hz - k * f) <= MAINS_SLACK * k * f]
     return near[0] if near else None
 
 
-def call(order: float, hz: float | None = None) -> str:
+def mains(hz: float | None) -> float | None:
+    """The mains frequency (Hz) of which *hz* is a harmonic (MAINS_HARMONICS of MAINS, within MAINS_SLACK), or None."""
+    near = harmonic(hz)
+    return None if near is None else near[0]
+
+
+def call(order: float, hz: float | None = None, locked: str = "", why: str = "") -> str:
     """How a detection run, `gearlab score` and `gearlab inspect --history` name a non-synchronous change at input
-    order *order* (*hz*: in Hz, where the take's speed is known): a mains hum's line as such, no damage."""
-    if (grid := mains(hz)) is not None:
+    order *order* (*hz*: in Hz, where the take's speed is known) whose line is *locked* to "time" (a mains hum, no
+    damage), to the shaft's "angle" (a bearing's) or "" (not told apart), *why* the evidence (hum_or_bearing): a line
+    on a mains harmonic is a hum only where the take tells it is one."""
+    near = harmonic(hz)
+    if near is None:
+        return f"other damage: non-synchronous (bearing-like), at order {order:.2f}"
+    grid, on = near
+    if locked == "time":
         return (
             f"{HUM}: mains hum at {hz:.1f} Hz (order {order:.2f}; the {grid:g} Hz mains: electrical pickup on the "
-            "sensor's cable or a ground loop; a bearing's line would move with the speed)"
+            f"sensor's cable or a ground loop; locked to time, not to a shaft: {why})"
         )
-    return f"other damage: non-synchronous (bearing-like), at order {order:.2f}"
+    if locked == "angle":
+        return (
+            f"other damage: non-synchronous (bearing-like), at order {order:.2f} ({hz:.1f} Hz, within "
+            f"{MAINS_SLACK * 100:g} % of the {on:g} Hz mains' harmonic, but locked to the shaft: {why})"
+        )
+    return (
+        f"other damage: non-synchronous (bearing-like) or mains hum, at order {order:.2f} ({hz:.1f} Hz, within "
+        f"{MAINS_SLACK * 100:g} % of the {on:g} Hz mains' harmonic at this speed: hum or a bearing, not told apart"
+        + (f": {why}" if why else "")
+        + "; a take at another speed would tell)"
+    )
 
 
 def too_short(revolutions: int, table) -> str | None:
@@ -233,6 +257,7 @@ class NonSyncHistory:
 
     blocks: tuple[np.ndarray, ...]
     threshold: float
+    speeds: tuple[float, ...] = ()  # each record's mean input speed (Hz; none where not given): hum_or_bearing
 
     def state(self) -> dict:
         """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
@@ -240,6 +265,7 @@ class NonSyncHistory:
             "nonsync_sizes": np.array([len(b) for b in self.blocks]),
             "nonsync_blocks": np.concatenate(self.blocks),
             "nonsync_threshold": np.array(self.threshold),
+            "nonsync_speeds": np.array(self.speeds, dtype=np.float64),
         }
 
     @classmethod
@@ -248,24 +274,30 @@ class NonSyncHistory:
         if "nonsync_blocks" not in state:
             return None
         cuts = np.cumsum(np.asarray(state["nonsync_sizes"]))[:-1]
-        return cls(tuple(np.split(np.asarray(state["nonsync_blocks"]), cuts)), float(state["nonsync_threshold"]))
+        speeds = tuple(float(v) for v in np.asarray(state.get("nonsync_speeds", ())))  # none: saved before them
+        blocks = tuple(np.split(np.asarray(state["nonsync_blocks"]), cuts))
+        return cls(blocks, float(state["nonsync_threshold"]), speeds)
 
 
 @dataclass(frozen=True)
 class NonSync:
     """A record's non-synchronous change: z of its strongest envelope line over the history, the
-    strike order named (input orders) and the history's threshold on z."""
+    strike order named (input orders), the history's threshold on z, and where the line lies on a mains harmonic
+    what it is locked to ("time", "angle", "": not told apart) and why (hum_or_bearing)."""
 
     z: float
     order: float
     threshold: float
+    locked: str = ""
+    why: str = ""
 
     @property
     def changed(self) -> bool:
         return self.z > self.threshold
 
     def describe(self) -> dict:
-        return {"z": self.z, "order": self.order, "threshold": self.threshold, "changed": self.changed}
+        said = {"z": self.z, "order": self.order, "threshold": self.threshold, "changed": self.changed}
+        return said | {"locked": self.locked, "why": self.why}
 
 
 def synchronous_bins(table, bins: int) -> np.ndarray:
@@ -346,9 +378,9 @@ def refined(r: np.ndarray, points: int, order: float) -> float:
     return float(np.sum(w * k) / np.sum(w) / revs) if w.sum() > 0 else order
 
 
-def history(takes: list[np.ndarray], table) -> NonSyncHistory:
-    """The healthy history of *takes* (each (R, points) consecutive input revolutions) of the gearbox of
-    order table *table* (gearlab.gearbox.orders.OrderTable)."""
+def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -> NonSyncHistory:
+    """The healthy history of *takes* (each (R, points) consecutive input revolutions, *speeds* their mean input
+    speeds in Hz where known) of the gearbox of order table *table* (gearlab.gearbox.orders.OrderTable)."""
     # fewer than BLOCK revolutions: envelope_blocks says so, as inspect --history reads it
     short = [w for w in (too_short(len(t), table) for t in takes if len(t) >= BLOCK) if w]
     if short:
@@ -371,7 +403,8 @@ def history(takes: list[np.ndarray], table) -> NonSyncHistory:
         if rest and sum(len(x) for x in rest) >= 2:
             left_out.append(line_z(b, rest, sync)[~sync])
     spread = max(float(np.std(np.concatenate(left_out))), 1.0) if left_out else 1.0
-    return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]))
+    known = () if speeds is None else tuple(float(v) for v in speeds)
+    return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]), known)
 
 
 def take_blocks(take: np.ndarray, table) -> np.ndarray:
@@ -387,16 +420,19 @@ def take_blocks(take: np.ndarray, table) -> np.ndarray:
 TAKE_BLOCKS = ArraysOf(64)
 
 
-def nonsync(take: np.ndarray, hist: NonSyncHistory, table) -> NonSync:
-    """*take* (R, points) read against the history *hist* of the gearbox of order table *table*; a take too
-    short for it (too_short) is refused in that phrase."""
-    return read_take(take, hist, table)[0]
+def nonsync(take: np.ndarray, hist: NonSyncHistory, table, speeds: np.ndarray | None = None) -> NonSync:
+    """*take* (R, points) read against the history *hist* of the gearbox of order table *table* (*speeds*: each
+    revolution's input speed in Hz, where known); a take too short for it (too_short) is refused in that phrase."""
+    return read_take(take, hist, table, speeds)[0]
 
 
-def read_take(take: np.ndarray, hist: NonSyncHistory, table) -> tuple[NonSync, np.ndarray]:
+def read_take(
+    take: np.ndarray, hist: NonSyncHistory, table, speeds: np.ndarray | None = None
+) -> tuple[NonSync, np.ndarray]:
     """(nonsync's reading of *take*, each bin's line z of it (line_z; bins from orders_of_bins)): the residual,
     its envelope blocks and their z read once for both, where `inspect --history` shows the strongest lines too
-    (a take's residual is two to four FFTs of its whole length)."""
+    (a take's residual is two to four FFTs of its whole length); a strike order on a mains harmonic at the take's
+    *speeds* (each revolution's, Hz) read as hum or a bearing (hum_or_bearing)."""
     short = too_short(len(take), table)
     if short:
         raise GearlabInputError(short)
@@ -404,4 +440,127 @@ def read_take(take: np.ndarray, hist: NonSyncHistory, table) -> tuple[NonSync, n
     blocks = envelope_blocks(r, np.shape(take)[-1])
     lines = line_z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
     z, order = _z(lines)
-    return NonSync(z, refined(r, np.shape(take)[-1], order), hist.threshold), lines
+    order = refined(r, np.shape(take)[-1], order)
+    if speeds is None or len(speeds) != len(take) or harmonic(order * mean_speed(speeds)) is None:
+        return NonSync(z, order, hist.threshold), lines
+    return NonSync(z, order, hist.threshold, *hum_or_bearing(r, np.shape(take)[-1], order, speeds, hist, table)), lines
+
+
+def mean_speed(speeds: np.ndarray) -> float:
+    """The mean speed (Hz) of revolutions turning at *speeds* (Hz each): turns over their time."""
+    return float(len(speeds) / np.sum(1.0 / np.asarray(speeds, dtype=np.float64)))
+
+
+# Hum or a bearing. A bearing's strikes are locked to its shaft's angle (a fixed order, slipping a percent or two),
+# mains to time (a fixed Hz, whatever the speed). Within a take whose speed varies (each revolution's speed from the
+# tacho or the found angle), a line read over the angle keeps a bearing's power and smears a hum's over o (Δs / s)
+# orders; read over time, the other way round. Over R turns in T seconds (resolution 1/R orders, 1/T Hz) that smear
+# must be a bin or more, o (Δs / s) R ≳ 1: over 75 turns the 50 Hz envelope line at 30 Hz (order 1.67) needs a sweep
+# of about 3 %, a line at 150 Hz (order 5) about 1 %. Each reading is the line's peak power within ZOOM bins (FINE
+# steps a bin) less the noise's (the median power 3 .. FLOOR bins about it); ρ = the power read in Hz over that read
+# in orders, a pure tone's ρ > 1, a bearing's < 1. A slipping bearing's strikes wander as a random walk (SLIP a
+# strike) that may mimic a speed change: its reach is the 1 - FALSE_ALARM quantile of log ρ of DRAWS such bearings at
+# the line's order, read through the take's noise (skewed: at a 1 % sweep, 149 Hz, 77 turns, a 2 % slip, 2.0 where
+# mean + 2.33 sd says 1.6). The take tells the two apart where a mains tone reads past that reach; then the line is a
+# hum where its log ρ passes the reach and its noise (the one-sided Gaussian quantile at FALSE_ALARM times the sd of
+# log ρ from the noise beside each reading), a bearing's where it is below minus its noise, else not told apart, said
+# with why (a steady speed, the PHM 2009 rig's 0.2 % drift: a tone within reach). A hum read in the residual is less
+# sharp in Hz than a pure tone (the residual loses the bins about the shafts' orders its smeared components cross):
+# tests/test_hum_or_bearing.py's drive (74 turns at 30 Hz, 3 % sweep, 0.3 m/s² hum) ρ 1.4-1.6, a tone 2.1.
+# Across takes: a history take at another speed carries a hum at the same Hz, at another order; a line there (its
+# take's own blocks over its neighbours, z over the one-sided Gaussian quantile at FALSE_ALARM shared by the SEEN
+# bins read) is a hum. A history without it says nothing: a hum may have begun since.
+ZOOM, FINE = 2, 10
+FLOOR = 40  # bins either side whose median power is the noise beside a line (a smeared line covers fewer)
+KEEP = 32  # envelope samples per revolution read for it (to order 16: past FUNDAMENTAL, the highest order named)
+SLIP, DRAWS = 0.02, 200  # a rolling element's slip, sd per strike interval (the upper end of 1-2 %); bearings drawn
+SEEN = 3  # bins about the history take's order of the line read for it (the line's order known to a bin)
+
+
+def hum_or_bearing(r: np.ndarray, points: int, order: float, speeds, hist: NonSyncHistory, table) -> tuple[str, str]:
+    """(what the residual *r*'s (flat, *points* a revolution) envelope line at input order *order* is locked to:
+    "time", "angle", or "" not told apart; why, in words) from its revolutions' *speeds* (Hz each) and the history
+    *hist*'s takes at other speeds (module comment above)."""
+    from scipy.signal import hilbert
+
+    revs = r.size // points
+    s = np.asarray(speeds[:revs], dtype=np.float64)
+    e = np.abs(hilbert(r[: revs * points])) ** 2
+    e = np.fft.irfft(np.fft.rfft(e - e.mean())[: KEEP // 2 * revs + 1], n=KEEP * revs)  # low-passed, KEEP a turn
+    k = np.arange(e.size) // KEEP
+    angle = np.arange(e.size) / KEEP  # turns
+    t = np.r_[0.0, np.cumsum(1.0 / s)[:-1]][k] + (angle - k) / s[k]
+    T = float(np.sum(1.0 / s))
+    hz = order * revs / T
+    in_hz = _kernels(hz, 1.0 / T, t, 1.0 / (KEEP * s[k] * T))  # each sample's time over the take's
+    in_orders = _kernels(order, 1.0 / revs, angle, np.full(e.size, 1.0 / e.size))
+
+    def sharper_in_hz(x: np.ndarray) -> np.ndarray:
+        """log ρ of each row of *x* (pure models: no noise beside)."""
+        return np.log((np.abs(in_hz[0] @ x.T) ** 2).max(axis=0) / (np.abs(in_orders[0] @ x.T) ** 2).max(axis=0))
+
+    got, sd = _line_ratio(e, in_hz, in_orders)
+    rng = np.random.default_rng(0)  # the same bearings drawn for every take: one take, one call
+    walk = np.cumsum(rng.normal(0.0, SLIP * math.sqrt(order / KEEP), (DRAWS, e.size)), axis=1)
+    slipping = sharper_in_hz(np.cos(2 * np.pi * (order * angle + walk))) + sd * rng.standard_normal(DRAWS)
+    reach = float(np.quantile(slipping, 1.0 - FALSE_ALARM))  # read through this take's noise
+    tone = float(sharper_in_hz(np.cos(2 * np.pi * hz * t)[None, :])[0])
+    sure = NormalDist().inv_cdf(1.0 - FALSE_ALARM) * sd  # the line's log ρ beyond its noise, one-sided
+    spread = f"the take's {(s.max() - s.min()) * T / revs:.1%} speed spread over {revs} turns"
+    bearing = f"a slipping bearing's up to {math.exp(reach):.2g}"
+    said = f"{math.exp(got):.2g} times the power read in Hz as in orders over {spread}"
+    if tone > reach and got > max(reach, sure):
+        return "time", f"{said} (a mains tone's {math.exp(tone):.2g}, {bearing})"
+    if tone > reach and got < -sure:
+        return "angle", f"{math.exp(-got):.2g} times the power read in orders as in Hz over {spread}: it moves with it"
+    if seen := _at_other_speeds(hist, table, order, hz):
+        return "time", seen
+    if tone <= reach:
+        return "", f"{spread} reads a mains tone {math.exp(tone):.2g} times as strong in Hz as in orders, {bearing}"
+    return "", f"{said}: within {bearing} or the noise"
+
+
+def _kernels(centre: float, step: float, at: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the Fourier kernels within ZOOM bins of *centre* in FINE steps a bin of *step*; those at the whole bins
+    ZOOM + 1 .. FLOOR either side, the noise beside it), over the samples' *at* (turns or seconds) each *weight*ed."""
+    zoom = np.arange(-ZOOM * FINE, ZOOM * FINE + 1) / FINE
+    beside = np.r_[-FLOOR:-ZOOM, ZOOM + 1 : FLOOR + 1]
+    return tuple(np.exp(-2j * np.pi * np.outer(centre + d * step, at)) * weight for d in (zoom, beside))
+
+
+def _line_ratio(e: np.ndarray, in_hz: tuple, in_orders: tuple) -> tuple[float, float]:
+    """(log ρ of the envelope *e*'s line: its peak power read with the kernels *in_hz* over that *in_orders*, each less
+    the median power beside it; the sd of that log from the noise)."""
+    lines, noises, peaks = [], [], []
+    for zoom, beside in (in_hz, in_orders):
+        read = np.abs(zoom @ e) ** 2
+        noises.append(float(np.median(np.abs(beside @ e) ** 2)) / math.log(2.0))  # the median of an exponential
+        lines.append(max(float(read.max()) - noises[-1] * math.log(2.0), 1e-300))
+        peaks.append(zoom[read.argmax()])
+    # a line of power L read with noise of mean power N: |L + n|² - L ≈ 2 Re(√L n*), the sd of its log sqrt(2 N / L);
+    # the two readings of one take's noise correlate as their kernels at the peaks do (1 at a steady speed)
+    u, v = peaks
+    c = abs(np.vdot(v, u)) / math.sqrt(np.vdot(u, u).real * np.vdot(v, v).real)
+    a, b = noises[0] / lines[0], noises[1] / lines[1]
+    return math.log(lines[0] / lines[1]), math.sqrt(2.0 * max(a + b - 2.0 * c * math.sqrt(a * b), 0.0))
+
+
+def _at_other_speeds(hist: NonSyncHistory, table, order: float, hz: float) -> str:
+    """Where a history take at another speed (*hist*.speeds) carries a line at *hz* (a take's line at input order
+    *order*) at its own order, in words; "" where none does (or none is at another speed)."""
+    sync = synchronous_bins(table, hist.blocks[0].shape[1])
+    lo = int(math.ceil(LOW * BLOCK))
+    over = NormalDist().inv_cdf(1.0 - FALSE_ALARM / SEEN)
+    for blocks, speed in zip(hist.blocks, hist.speeds):
+        there = hz / speed
+        at = int(round(there * BLOCK)) - lo
+        if abs(there - order) * BLOCK <= 2 * SUM or not 0 <= at < blocks.shape[1] or sync[at] or len(blocks) < 2:
+            continue  # the same bins as the take's line (the same speed), out of the band, or a shaft's
+        near = np.arange(max(at - LINE, 0), min(at + LINE + 1, blocks.shape[1]))
+        around = near[np.abs(near - at) > SUM + SEEN // 2]  # its neighbours, past the line's own bins
+        mean, sd = blocks.mean(axis=0), float(np.median(blocks[:, near].std(axis=0, ddof=1)))
+        line = mean[max(at - SEEN // 2, 0) : at + SEEN // 2 + 1].max()
+        z = (line - np.median(mean[around])) * np.sqrt(len(blocks)) / sd
+        if z > over:
+            return f"at {hz:.1f} Hz too in the history's take at {speed:.1f} Hz (order {there:.2f} there, z {z:.1f})"
+    return ""
