@@ -129,7 +129,7 @@ def test_a_history_at_another_speed_tells_a_hum_by_its_hz_and_not_a_bearing(driv
     assert call.startswith(HUM) and "27.0 Hz" in call, call
     found, call = read(drive, take(BEARING, 0.0, 16, bearing=2.0), hist)
     assert found.changed and found.locked == "", found
-    assert call.startswith(UNTOLD), call
+    assert call.startswith(UNTOLD) and "no line at 149" in call and "takes at 27.0, 27.0 Hz" in call, call
 
 
 def test_where_the_line_lies_on_no_mains_harmonic_nothing_is_read_and_the_call_is_as_before():

@@ -506,18 +506,24 @@ def hum_or_bearing(r: np.ndarray, points: int, order: float, speeds, hist: NonSy
     reach = float(np.quantile(slipping, 1.0 - FALSE_ALARM))  # read through this take's noise
     tone = float(sharper_in_hz(np.cos(2 * np.pi * hz * t)[None, :])[0])
     sure = NormalDist().inv_cdf(1.0 - FALSE_ALARM) * sd  # the line's log ρ beyond its noise, one-sided
-    spread = f"the take's {(s.max() - s.min()) * T / revs:.1%} speed spread over {revs} turns"
+    spread = f"the take's {100 * (s.max() - s.min()) * T / revs:.1f} % speed spread over {revs} turns"
     bearing = f"a slipping bearing's up to {math.exp(reach):.2g}"
     said = f"{math.exp(got):.2g} times the power read in Hz as in orders over {spread}"
     if tone > reach and got > max(reach, sure):
         return "time", f"{said} (a mains tone's {math.exp(tone):.2g}, {bearing})"
     if tone > reach and got < -sure:
-        return "angle", f"{math.exp(-got):.2g} times the power read in orders as in Hz over {spread}: it moves with it"
-    if seen := _at_other_speeds(hist, table, order, hz):
+        said = f"{math.exp(-got):.2g} times the power read in orders as in Hz over {spread}"
+        return "angle", f"{said}: it moves with the speed"
+    seen = _at_other_speeds(hist, table, order, hz)
+    if seen.startswith("at"):
         return "time", seen
+    seen = f" ({seen}: a hum may have begun since)" if seen else ""
     if tone <= reach:
-        return "", f"{spread} reads a mains tone {math.exp(tone):.2g} times as strong in Hz as in orders, {bearing}"
-    return "", f"{said}: within {bearing} or the noise"
+        return (
+            "",
+            f"{spread} reads a mains tone {math.exp(tone):.2g} times as strong in Hz as in orders, {bearing}{seen}",
+        )
+    return "", f"{said}: within {bearing} or the noise{seen}"
 
 
 def _kernels(centre: float, step: float, at: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -547,10 +553,12 @@ def _line_ratio(e: np.ndarray, in_hz: tuple, in_orders: tuple) -> tuple[float, f
 
 def _at_other_speeds(hist: NonSyncHistory, table, order: float, hz: float) -> str:
     """Where a history take at another speed (*hist*.speeds) carries a line at *hz* (a take's line at input order
-    *order*) at its own order, in words; "" where none does (or none is at another speed)."""
+    *order*) at its own order, in words, starting "at"; where those read hold none, that, starting "no"; "" where
+    none is read (none at another speed)."""
     sync = synchronous_bins(table, hist.blocks[0].shape[1])
     lo = int(math.ceil(LOW * BLOCK))
     over = NormalDist().inv_cdf(1.0 - FALSE_ALARM / SEEN)
+    read = []
     for blocks, speed in zip(hist.blocks, hist.speeds):
         there = hz / speed
         at = int(round(there * BLOCK)) - lo
@@ -563,4 +571,5 @@ def _at_other_speeds(hist: NonSyncHistory, table, order: float, hz: float) -> st
         z = (line - np.median(mean[around])) * np.sqrt(len(blocks)) / sd
         if z > over:
             return f"at {hz:.1f} Hz too in the history's take at {speed:.1f} Hz (order {there:.2f} there, z {z:.1f})"
-    return ""
+        read.append(f"{speed:.1f}")
+    return f"no line at {hz:.1f} Hz in the history's takes at {', '.join(read)} Hz" if read else ""
