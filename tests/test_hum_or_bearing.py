@@ -135,3 +135,20 @@ def test_a_history_at_another_speed_tells_a_hum_by_its_hz_and_not_a_bearing(driv
 def test_where_the_line_lies_on_no_mains_harmonic_nothing_is_read_and_the_call_is_as_before():
     assert NS.call(3.57, 3.57 * 40.0) == "other damage: non-synchronous (bearing-like), at order 3.57"
     assert NS.call(3.57) == "other damage: non-synchronous (bearing-like), at order 3.57"
+
+
+def test_each_revolution_s_speed_reaches_the_detection_s_take_and_the_history_s_speeds_its_stored_state():
+    # a detection run's take (kinds.detection_which_gear._take) carries its revolutions' speeds where as many as its
+    # revolutions; gearlab score restores the history's speeds with its blocks (parts.scoring state)
+    from gearlab.kinds.detection_which_gear import _take
+
+    revs = np.zeros((20, 8))
+    cond = {"raw": {"a": (revs, 3), "b": (revs, 0)}, "speeds": {"a": 30.0}, "turn_speeds": {"a": np.full(20, 30.0)}}
+    assert np.array_equal(_take(cond, "a").speeds, np.full(20, 30.0))
+    assert _take(cond | {"turn_speeds": {"a": np.full(19, 30.0)}}, "a").speeds is None  # not one a revolution
+    assert _take(cond, "b").speeds is None
+    hist = NS.NonSyncHistory((np.ones((2, 5)), np.zeros((3, 5))), 4.5, (27.0, 31.0))
+    back = NS.NonSyncHistory.restored(hist.state())
+    assert back.speeds == (27.0, 31.0) and back.threshold == 4.5 and [len(b) for b in back.blocks] == [2, 3]
+    old = {k: v for k, v in hist.state().items() if k != "nonsync_speeds"}  # a run stored before the speeds
+    assert NS.NonSyncHistory.restored(old).speeds == ()

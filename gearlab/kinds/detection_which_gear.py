@@ -15,6 +15,11 @@ units then means:
     two, told apart by the simulated events)
     nothing localised, the non-synchronous residual changed            other damage: non-synchronous
     (signals.nonsync: beyond its history's threshold)                  (bearing-like), at order X.XX
+    ... its line on a mains harmonic, locked to time (sharper in Hz    not a gear fault: mains hum
+    than in orders over the take's speed spread, or at the same Hz     (no watched gear's, counted as
+    in a history take at another speed: nonsync.hum_or_bearing)       no gear fault)
+    ... on a mains harmonic, not told from a bearing's (a steady       other damage: non-synchronous
+    speed, no history take at another speed holding it)                (bearing-like) or mains hum, ...
     nothing localised, no non-synchronous change                       a watched-gear fault (not
                                                                        localised: no evidence of where)
     a watched gear's shaft and another shaft over their thresholds     a watched-gear fault; also
