@@ -176,8 +176,8 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
     for name, (matrix, index) in columns.items():
         if matrix in contents.found and name not in contents.found:
             contents.found[name] = column_of(contents.found[matrix], index, name, path)
-            if matrix in contents.units:
-                contents.units[name] = contents.units[matrix]
+            if (unit := contents.units.get(name, contents.units.get(matrix))) is not None:
+                contents.units[name] = unit  # the column's own (hdf5.named_columns), else its matrix's
     for name in names:
         if name not in contents.found:
             role = f"{roles[name]} " if roles and name in roles else ""

@@ -155,10 +155,18 @@ def stated_units(texts: dict[str, str], channels: Sequence[str]) -> dict[str, st
     return {c: u for c, u in out.items() if u}
 
 
+UNIT_ATTRIBUTES = ("units", "unit", "Units", "Unit")
+
+
 def stated_unit(attrs) -> str | None:
-    """The unit an HDF5 object's attributes state ('units' or 'unit', as text or bytes), or None."""
-    for key in ("units", "unit", "Units", "Unit"):
+    """The unit an HDF5 object's attributes state ('units' or 'unit', as text or bytes), or None (a list of units is
+    its columns', hdf5.named_columns)."""
+    for key in UNIT_ATTRIBUTES:
         value = attrs.get(key)
+        if np.size(value) > 1:
+            return None
+        if np.ndim(value) > 0:
+            value = np.asarray(value).ravel()[0]
         if value is not None:
             value = value.decode(errors="replace") if isinstance(value, bytes) else str(value)
             return value.strip() or None

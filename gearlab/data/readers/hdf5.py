@@ -1,6 +1,6 @@
-"""HDF5: datasets by path ("group/acc", or "acc" where one dataset has that last name); the rate
-from an 'fs' attribute on the channel or the nearest group above that has one, or an 'fs'/'t'
-dataset there."""
+"""HDF5: datasets by path ("group/acc", or "acc" where one dataset has that last name), or a 2-D dataset's column
+by the name an attribute gives it (named_columns); the rate from an 'fs' attribute on the channel or the nearest
+group above that has one, or an 'fs'/'t' dataset there."""
 
 from __future__ import annotations
 
@@ -10,7 +10,19 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import Contents, _normalise, _time_field, check_size, is_unit_entry, stated_unit, stated_units, time_scale
+from .base import (
+    UNIT_ATTRIBUTES,
+    Contents,
+    _normalise,
+    _text_array,
+    _time_field,
+    check_size,
+    column_of,
+    is_unit_entry,
+    stated_unit,
+    stated_units,
+    time_scale,
+)
 from .rates import named, rate_field
 
 
@@ -74,14 +86,18 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         return rates, times
 
     with h5py.File(path, "r") as f:
-        contents = Contents({}, _hdf5_datasets(h5py, f))
+        datasets = _hdf5_datasets(h5py, f)
+        columns = named_columns(f, datasets)
+        contents = Contents({}, datasets + [n for n in columns if n not in datasets])
         seen: set[str] = set()
         own: dict[str, tuple] = {}  # each channel's one rate field, where it has one
         at: dict[str, str] = {}  # each channel's dataset path
+        values: dict[str, np.ndarray] = {}  # each dataset read, once for all its named columns
         for name in dict.fromkeys(names):
+            column = columns.get(name) if name not in datasets else None
             try:
-                obj = _hard_linked(h5py, path, f, name)
-                if obj is None and (full := leaf_match(contents.available, name)) is not None:
+                obj = _hard_linked(h5py, path, f, column[0] if column else name)
+                if obj is None and (full := leaf_match(datasets, name)) is not None:
                     obj = _hard_linked(h5py, path, f, full)
             except (KeyError, ValueError, TypeError):
                 continue  # not there: reported with the list of datasets
@@ -89,9 +105,17 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                 continue
             if not isinstance(obj, h5py.Dataset):
                 continue  # a group is not a channel
-            contents.found[name] = read(obj)
+            if obj.name not in values:
+                values[obj.name] = read(obj)
             at[name] = obj.name.lstrip("/")
-            unit = stated_unit(obj.attrs)
+            if column is not None:
+                contents.found[name] = column_of(values[obj.name], column[1], name, path)
+                unit = column[2]
+            else:
+                contents.found[name] = values[obj.name]
+                unit = stated_unit(obj.attrs)
+                mine = (c for c in columns.values() if c[0] == at[name] and c[2])
+                contents.units.update({f"{name}[{i}]": u for _, i, u in mine})  # 'data[1]': its column's unit
             if unit is not None:
                 contents.units[name] = unit
             node, is_group = obj, False
@@ -112,6 +136,33 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         contents.available = [d for d in contents.available if d not in texts]
         held_to_vibration(contents, list(names), own)
         return contents
+
+
+COLUMN_NAMES = ("channel_names", "channels", "names", "column_names", "ChannelNames", "labels")
+
+
+def named_columns(f, datasets: Sequence[str]) -> dict[str, tuple[str, int, str | None]]:
+    """{name: (dataset, column, unit)} of the 2-D datasets of an open *f* whose attribute names their channels, as a
+    DAQ writes an (N, k) 'data' of all its inputs with channel_names = [Tacho, Accel] (read as 'data[0]', 'data[1]'
+    too) and units = [V, m/s^2], k texts each; a name that is a dataset's own, or given twice, stays that dataset's."""
+    out: dict[str, tuple[str, int, str | None]] = {}
+    for d in datasets:
+        ds = f[d]
+        k = min(ds.shape) if ds.ndim == 2 else 0
+        names = next((_texts(ds.attrs[a], k) for a in COLUMN_NAMES if a in ds.attrs), None)
+        if k < 2 or names is None:
+            continue
+        units = next((_texts(ds.attrs[a], k) for a in UNIT_ATTRIBUTES if a in ds.attrs), None) or [None] * k
+        for i, name in enumerate(names):
+            if name and name not in datasets:
+                out[name] = None if name in out else (d, i, units[i] or None)
+    return {n: c for n, c in out.items() if c is not None}
+
+
+def _texts(value, k: int) -> list[str] | None:
+    """*value*, an attribute, as k texts, or None where it is not k texts."""
+    arr = np.asarray(value).ravel()
+    return _text_array(arr).tolist() if arr.size == k and arr.dtype.kind in "SUO" else None
 
 
 def text_units(h5py, f, channels: dict[str, str], datasets: Sequence[str]) -> tuple[dict[str, str], set[str]]:

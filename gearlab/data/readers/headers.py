@@ -315,7 +315,7 @@ def _npz_header(path: Path) -> Header:
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
     from .base import stated_unit
-    from .hdf5 import _h5py, _hdf5_datasets, text_units
+    from .hdf5 import _h5py, _hdf5_datasets, named_columns, text_units
 
     h5py = _h5py()
     with h5py.File(path, "r") as f:
@@ -339,6 +339,10 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
                     stated = stated or (hz, f"attribute {k!r} of {n!r}")  # in Hz, a unit in its name read
         shapes = {n: tuple(f[n].shape) for n in names}
         stated = stated or _rate_variable(shapes, lambda n: f[n][()])
+        for name, (matrix, i, unit) in named_columns(f, names).items():  # a DAQ's (N, k) 'data' names its columns
+            names.append(name)
+            shapes[name] = (max(shapes[matrix]),)
+            units.update({name: unit, f"{matrix}[{i}]": unit} if unit else {})
     return Header(fmt, names, rate, frozenset(integer), units=units, nested=True, stated=stated, shapes=shapes)
 
 

@@ -1,0 +1,78 @@
+"""Outside user EJ (issue 39, round 20): a two-stage 33/97 + 26/119 mixer drive at 40 Hz, its takes made here with
+numpy (each shaft's lines, each mesh's harmonics modulated by both its shafts, a tooth's dip once a turn of its
+shaft, noise, a once-per-turn tacho), exported as real tools write them: Excel's CSV (a UTF-8 BOM, CRLF, a quoted
+German header with units in brackets, trailing empty columns), a DAQ's HDF5 (tacho and vibration in one 2-D
+dataset, the channels' names and units in its attributes), a stereo WAV with the tacho in channel 2."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gearlab.inspect import InspectOptions, inspect_record
+
+FS = 25600.0
+STAGES = ((33, 97), (26, 119))
+BOX = (
+    '[gearbox]\nname = "mixer"\n[operation]\nspeed = "40 Hz"\nload = "60 N*m"\n'
+    '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\npinion = { z = 33, bore = "25 mm" }\n'
+    'wheel = { z = 97, bore = "35 mm" }\n'
+    '[[stages]]\nmodule = "3 mm"\nface_width = "30 mm"\npinion = { z = 26, bore = "35 mm" }\n'
+    'wheel = { z = 119, bore = "60 mm" }\n[sensor]\nnear = "input"\ntacho = "input"\n'
+)
+
+
+def _shaft(seconds: float, seed: int) -> np.ndarray:
+    """The input shaft's angle per sample (rad): 40 Hz swinging 0.2 %, from any turn and angle."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * FS)) / FS
+    f = 40.0 * (1 + 0.002 * np.sin(2 * np.pi * 0.23 * t + rng.uniform(0, 6)))
+    return 2 * np.pi * (np.cumsum(f) / FS + rng.integers(0, 1000)) + rng.uniform(0, 6)
+
+
+def _take(th: np.ndarray, seed: int) -> np.ndarray:
+    """m/s²: every shaft's orders 1-2, each mesh's harmonics 1-3 modulated by both its shafts, noise 24 dB down."""
+    rng = np.random.default_rng(seed + 101)
+    turns = np.cumprod([1.0] + [p / w for p, w in STAGES])
+    x = sum(0.25 * np.cos(k * th * r + 0.5 * k + i) for i, r in enumerate(turns) for k in (1, 2))
+    for s, (zp, _) in enumerate(STAGES):
+        a, b = th * turns[s], th * turns[s + 1]
+        for h, amp in ((1, 3.0), (2, 1.3), (3, 0.5)):
+            am = 1 + 0.07 * np.cos(a + 0.2 * h) + 0.05 * np.cos(b + 0.9 * h)
+            x = x + amp / (s + 1) * am * np.cos(h * (zp * a + 0.03 * np.cos(a + 0.4) + 0.02 * np.cos(b)) + 0.5 * h * s)
+    return x + rng.normal(0, 0.06 * np.std(x), th.size)
+
+
+def _tacho(th: np.ndarray) -> np.ndarray:
+    return np.where(np.mod(th, 2 * np.pi) < 0.25, 5.0, 0.0)
+
+
+@pytest.fixture(scope="module")
+def box(tmp_path_factory):
+    from gearlab.gearbox import load_gearbox
+
+    path = tmp_path_factory.mktemp("mixer") / "box.toml"
+    path.write_text(BOX)
+    return load_gearbox(path)
+
+
+def test_a_daq_s_hdf5_names_the_columns_of_its_2d_dataset_in_an_attribute(tmp_path, box):
+    # a DAQ's export: one (N, 2) dataset 'data' of [tacho, accel], its attributes channel_names = [Tacho, Accel] and
+    # units = [V, m/s^2]: `--vibration Accel` was refused ('no vibration channel 'Accel'; the file has: data') and
+    # 'data[1]' read with 'the file's unit '[b'V' b'm/s^2']' is not read'
+    h5py = pytest.importorskip("h5py")
+    th = _shaft(2.0, 1)
+    acc = _take(th, 1)
+    path = tmp_path / "take.h5"
+    with h5py.File(path, "w") as f:
+        data = f.create_dataset("data", data=np.c_[_tacho(th), acc].astype("float32"))
+        data.attrs["channel_names"] = np.array([b"Tacho", b"Accel"])
+        data.attrs["units"] = np.array([b"V", b"m/s^2"])
+        data.attrs["sample_rate"] = FS
+    got = inspect_record(str(path), box, InspectOptions("Accel", tacho="Tacho"))
+    assert got["units"].startswith("m/s²"), got["units"]
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.02)
+    assert "matches" in got["verdict"], got["verdict"]
+    assert got["speed"]["mean_hz"] == pytest.approx(40.0, rel=0.005)
+    by_column = inspect_record(str(path), box, InspectOptions("data[1]", tacho="data[0]"))
+    assert by_column["units"].startswith("m/s²"), by_column["units"]  # the column's own unit
