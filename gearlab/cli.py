@@ -6,6 +6,7 @@ Exit codes: 0 success, 2 bad input (one clear line on stderr, no traceback), 1 i
 from __future__ import annotations
 
 import functools
+import io
 import json
 import sys
 import time
@@ -319,8 +320,6 @@ def simulate(
         )
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
-    import io
-
     buf = io.BytesIO()
     np.savez(buf, t=result.t, tacho=result.tacho, tvms=result.tvms, **result.channels)
     atomic_write(out, buf.getvalue())
@@ -618,10 +617,11 @@ def score(
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print the rows as JSON")] = False,
     key: Annotated[list[str], typer.Option(help="KEY=VALUE: a [target] files entry's key (tacho_shaft=output)")] = [],  # noqa: B006
+    exit_code: Annotated[bool, typer.Option("--exit-code", help="exit 1 where a take is called")] = False,
 ) -> None:
     """Score new recordings with a finished detection run's trained methods and thresholds (nothing is trained again).
 
-    Per record: its speed and how it was found, and the gear its change is localised on against the run's history, with the evidence (each shaft's z over its threshold, the tooth). Per method and unit (revolution, recordN): the units called over the threshold, the median score less the threshold, and the decision: most units called is a fault, or "other damage: <gear>" when the change lies on a gear the run does not watch (as the run's which-gear table calls it). Each row is appended to the run's scoring history (scoring/history.jsonl), whose trend per method the report and the TUI show; the last lines (trend:) say per condition which take was first called, by which methods, on which gear and tooth. A take that cannot be scored (a speed far from every condition's) is refused in one line; of several, it is named with why ('not scored') and the others are scored, with exit code 2.
+    Per record: its speed and how it was found, and the gear its change is localised on against the run's history, with the evidence (each shaft's z over its threshold, the tooth). Per method and unit (revolution, recordN): the units called over the threshold, the median score less the threshold, and the decision: most units called is a fault, or "other damage: <gear>" when the change lies on a gear the run does not watch (as the run's which-gear table calls it). Each row is appended to the run's scoring history (scoring/history.jsonl), whose trend per method the report and the TUI show; the last lines (trend:) say per condition which take was first called, by which methods, on which gear and tooth. A take that cannot be scored (a speed far from every condition's) is refused in one line; of several, it is named with why ('not scored') and the others are scored, with exit code 2. With --exit-code, for a script: 1 where any take is called (a fault or other damage, by any method and unit), 0 where none is, 2 as before.
 
     Example: gearlab score runs/det/20260101-120000-000000 today.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
@@ -633,7 +633,7 @@ def score(
         typer.echo(json.dumps([{k: v for k, v in r.items() if k != "scores"} for r in rows], indent=1))
     for item in [] if as_json else [*score_tables(rows, run_dir, console.width), *score_trend(run_dir)]:
         console.print(item)
-    all_scored(rows)  # a take refused of several: the others scored, exit 2
+    all_scored(rows, exit_code)  # a take refused of several: the others scored, exit 2; else a take called: 1
 
 
 @app.command()

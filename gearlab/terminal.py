@@ -388,14 +388,19 @@ def _runs_table(runs) -> Table:
     return table
 
 
-def all_scored(rows: list[dict]) -> None:
+def all_scored(rows: list[dict], alarm: bool = False) -> None:
     """After `gearlab score` has shown its rows: the takes it refused among several named in one line (exit 2, as a
     run stopped by bad input keeps its finished units): the others are scored and kept, and the exit code says not
-    every take was."""
+    every take was. *alarm* (--exit-code): every take scored, exit 1 where any row calls one (a fault, other damage),
+    so that a script run weekly needs no JSON to tell an alarm from none (0)."""
     skipped = [r["file"] for r in rows if r.get("skipped")]
     if skipped:
         given = len(dict.fromkeys(r["file"] for r in rows))
         raise GearlabInputError(f"{len(skipped)} of {given} takes not scored (each said above): {', '.join(skipped)}")
+    from .kinds.detection_own import NOT_SCORED  # the kinds import this module: at call time
+
+    if alarm and any(r["decision"] not in ("healthy", NOT_SCORED) for r in rows):
+        raise SystemExit(1)
 
 
 def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:

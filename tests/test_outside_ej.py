@@ -6,6 +6,8 @@ dataset, the channels' names and units in its attributes), a stereo WAV with the
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -76,3 +78,43 @@ def test_a_daq_s_hdf5_names_the_columns_of_its_2d_dataset_in_an_attribute(tmp_pa
     assert got["speed"]["mean_hz"] == pytest.approx(40.0, rel=0.005)
     by_column = inspect_record(str(path), box, InspectOptions("data[1]", tacho="data[0]"))
     assert by_column["units"].startswith("m/s²"), by_column["units"]  # the column's own unit
+
+
+# --- `gearlab score` from a cron-like loop: alarm, no alarm, error -------------------------------------------------
+
+
+def _row(file: str, decision: str, **more) -> dict:
+    """One of `gearlab score`'s rows (kinds.detection_scoring.score) as its JSON gives it."""
+    return {"file": file, "method": "fm4", "unit": "record30", "decision": decision, **more}
+
+
+@pytest.mark.parametrize(
+    ("decisions", "code"),
+    [
+        (["healthy", "healthy"], 0),
+        (["healthy", "fault"], 1),
+        (["healthy", "other damage: output gear 119T (stage 2)"], 1),
+        (["healthy", "fault, gear not determined: 5 turns of the output shaft, 8 needed"], 1),
+    ],
+)
+def test_gearlab_score_exit_code_tells_a_script_whether_a_take_was_called(cli, monkeypatch, decisions, code):
+    # a weekly cron job `gearlab score RUN week.wav --json || mail ...` got exit 0 for a chipped take and a healthy
+    # one alike (2 only for bad input): a script had to parse the rows. With --exit-code: 1 where any take is called
+    import gearlab.notebook
+
+    rows = [_row(f"week{i}.wav", d) for i, d in enumerate(decisions)]
+    monkeypatch.setattr(gearlab.notebook, "score_recordings", lambda *a, **k: rows)
+    got, out, err = cli("score", "run", "week0.wav", "week1.wav", "--json", "--exit-code")
+    assert got == code, err
+    assert [r["decision"] for r in json.loads(out)] == decisions  # the rows printed whatever the code
+    plain, _, err = cli("score", "run", "week0.wav", "week1.wav", "--json")
+    assert plain == 0, err  # without it, as before: 0 where every take was scored
+
+
+def test_gearlab_score_exit_code_is_2_where_a_take_was_not_scored_even_beside_an_alarm(cli, monkeypatch):
+    import gearlab.notebook
+
+    rows = [_row("week1.wav", "fault"), _row("week2.wav", "not scored", method=None, unit=None, skipped="too slow")]
+    monkeypatch.setattr(gearlab.notebook, "score_recordings", lambda *a, **k: rows)
+    got, _, err = cli("score", "run", "week1.wav", "week2.wav", "--json", "--exit-code")
+    assert got == 2 and "1 of 2 takes not scored" in err, err
