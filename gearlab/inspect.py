@@ -105,10 +105,10 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     sensitivity alone (no unit read from a channel's name: any column can be inspected), or by a --unit."""
     if options.pulses_per_rev is not None and options.tacho is None:
         raise pulses_without_tacho(path, "--pulses-per-rev", lambda c: f"--tacho {c}", "--tacho")
-    listing, fmt = read_contents(path, [])
-    channels = [c for c in listing.available if not is_rate_or_time(str(c))]
     vibration = options.vibration
-    if vibration is None:
+    if vibration is None:  # the file read to list its channels; a named one is read once (a 60 s take's CSV: 4 s)
+        listing, _ = read_contents(path, [])
+        channels = [c for c in listing.available if not is_rate_or_time(str(c))]
         left = [c for c in channels if c != options.tacho]
         if len(left) != 1:
             raise GearlabInputError(
@@ -147,7 +147,7 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     return Recording(
         str(path),
         fmt,
-        channels,
+        [c for c in contents.available if not is_rate_or_time(str(c))],
         vibration,
         vib,
         fs,

@@ -118,3 +118,27 @@ def test_gearlab_score_exit_code_is_2_where_a_take_was_not_scored_even_beside_an
     monkeypatch.setattr(gearlab.notebook, "score_recordings", lambda *a, **k: rows)
     got, _, err = cli("score", "run", "week1.wav", "week2.wav", "--json", "--exit-code")
     assert got == 2 and "1 of 2 takes not scored" in err, err
+
+
+# --- a long take: read once --------------------------------------------------------------------------------------
+
+
+def test_inspect_reads_a_named_vibration_s_file_once(tmp_path, box, monkeypatch):
+    # a 60 s take at 51.2 kHz (3.1 M rows, a 69 MB CSV): `gearlab inspect --vibration acc` parsed the whole file twice,
+    # once only to list its channels (2 x 4 s of 55 s); a named vibration needs no listing
+    import gearlab.inspect
+
+    th = _shaft(1.0, 2)
+    path = tmp_path / "take.csv"
+    rows = "\n".join(f"{v:.6g},{p:g}" for v, p in zip(_take(th, 2), _tacho(th)))
+    path.write_text(f"# fs = {FS:g}\nacc,tacho\n{rows}\n")
+    reads = []
+    real = gearlab.inspect.read_contents
+    monkeypatch.setattr(gearlab.inspect, "read_contents", lambda *a, **k: reads.append(a[1]) or real(*a, **k))
+    got = inspect_record(str(path), box, InspectOptions("acc", tacho="tacho"))
+    assert reads == [["acc", "tacho"]], reads
+    assert got["channels"] == ["acc", "tacho"], got["channels"]
+    reads.clear()
+    with pytest.raises(Exception, match="which channel is the vibration"):  # unnamed: listed first, as before
+        inspect_record(str(path), box, InspectOptions(None))
+    assert reads == [[]], reads
