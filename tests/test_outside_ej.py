@@ -80,6 +80,29 @@ def test_a_daq_s_hdf5_names_the_columns_of_its_2d_dataset_in_an_attribute(tmp_pa
     assert by_column["units"].startswith("m/s²"), by_column["units"]  # the column's own unit
 
 
+def _excel(path, th, acc) -> None:
+    """Excel's 'CSV UTF-8' of a sheet whose two columns right of the data were once used: a BOM, CRLF line ends, the
+    header quoted, every row ending in two empty cells."""
+    lines = ['"Zeit [s]","Beschleunigung [m/s²]","Tacho [V]",,']
+    lines += [f"{i / FS:.6f},{v:.6g},{p:g},," for i, (v, p) in enumerate(zip(acc, _tacho(th)))]
+    path.write_bytes("\ufeff".encode() + "\r\n".join(lines).encode() + b"\r\n")
+
+
+def test_an_excel_csv_s_trailing_empty_columns_are_no_channels(tmp_path, box):
+    # the take read right, but listed 'channels: Beschleunigung [m/s²], Tacho [V], ' (an empty one: the second empty
+    # column; one trailing separator was dropped) in inspect and in validate's 'the file has: ...'
+    from gearlab.data.readers.headers import HEADERS
+
+    th = _shaft(1.5, 3)
+    acc = _take(th, 3)
+    path = tmp_path / "take.csv"
+    _excel(path, th, acc)
+    got = inspect_record(str(path), box, InspectOptions("Beschleunigung [m/s²]", tacho="Tacho [V]"))
+    assert got["channels"] == ["Beschleunigung [m/s²]", "Tacho [V]"], got["channels"]
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.02) and "matches" in got["verdict"], got["verdict"]
+    assert HEADERS["CSV"](path).channels == ["Zeit [s]", "Beschleunigung [m/s²]", "Tacho [V]"]
+
+
 # --- `gearlab score` from a cron-like loop: alarm, no alarm, error -------------------------------------------------
 
 

@@ -279,7 +279,8 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     if plain:
         rows = split_rows(lines, delimiter)
     data = rows[first_data : first_data + len(data_lines)]
-    if rows[0][-1] == "" and all(row[-1:] == [""] for row in data):  # every line ends in the separator
+    # every line ends in the separator, or in empty cells (a spreadsheet's columns once used): no channel
+    while width > 1 and (header is None or header[-1] == "") and all(row[-1:] == [""] for row in data):
         header = header[:-1] if header is not None else None
         data = [row[:-1] for row in data]
         width -= 1

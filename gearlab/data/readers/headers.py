@@ -228,7 +228,7 @@ def _csv_header(path: Path) -> Header:
                     f"{path}: its first data row (line {number}) holds no number; expected a header "
                     "row of column names, then rows of numbers"
                 )
-            if row[-1:] == [""]:  # every line ends in the separator (a spreadsheet's export): no channel
+            while len(row) > 1 and row[-1:] == [""]:  # every line ends in separators (a spreadsheet's): no channel
                 names = names[:-1] if names is not None and names[-1:] == [""] else names
                 row = row[:-1]
             if names is not None and len(row) > len(names) and delimiter_of(line) == ",":
