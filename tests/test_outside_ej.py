@@ -188,3 +188,27 @@ def test_a_long_csv_take_is_read_in_under_eight_times_its_size(tmp_path):
         tracemalloc.stop()
     assert contents.found["acc"].size == n
     assert peak < 8 * path.stat().st_size, peak / path.stat().st_size
+
+
+# --- the TUI: the score trend's chart --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("width", [160, 80])
+def test_the_tui_s_trend_chart_keeps_a_heading_wider_than_the_chart(width):
+    # the mixer's run after four takes scored, in `gearlab tui` at 160 columns, Results, `n`: the trend chart had no
+    # heading at all (plotext draws none wider than its plot): not the chart's place ('chart 2/2, n next'), nor the
+    # line that says which take was first called, by which methods, on which gear and tooth
+    from gearlab.charts import Chart, Curve
+    from gearlab.tui.widgets import ChartView
+
+    first = (
+        "40 Hz, record30: first called on take 1 (next.wav) by fm4, na4, likelihood_ratio, matched_filter; its change "
+        "on input pinion 33T (stage 1), tooth 6 of 33; not called again on take 2 (test_ok.wav) by fm4"
+    )
+    title = f"40 Hz: scored records, record30\n{first}\nrecords: 1 next.wav, 2 test_ok.wav"
+    chart = Chart(title, "record scored (in order)", "score less threshold", (Curve("fm4", [1, 2], [0.3, -0.1]),))
+    drawn = ChartView()._draw(chart, list(chart.curves), f"chart 2/2, n next: {title}", width).plain
+    words = " ".join(drawn.split())
+    assert "chart 2/2, n next: 40 Hz: scored records" in words, drawn[:400]
+    assert first in words, drawn[:800]
+    assert max(len(line) for line in drawn.splitlines()) <= width

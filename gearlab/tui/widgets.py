@@ -205,13 +205,16 @@ class ChartView(Static):
             self._bars(chart, curves)
         else:
             self._lines(chart, curves)
-        plotext.title(head)
         try:
             plot = Text.from_ansi(plotext.build().rstrip("\n"))
         except Exception as exc:  # noqa: BLE001 - a chart that cannot be drawn must not take the TUI down
             return Text(f"{head}: cannot draw it at this size ({type(exc).__name__})", style="dim")
+        # the heading over the plot, wrapped to its width: plotext draws no title longer than its canvas is wide, and
+        # none at all of a score trend's (its 'first called' line, 'chart 2/2, n next' with it)
+        parts = [part for line in head.splitlines() for part in textwrap.wrap(line, width)]
+        heading = [Text(part.center(width).rstrip()) for part in parts]
         named = len(curves) > 1 or chart.categories is None  # one series of bars: the axis names it
-        return Text("\n").join([plot, *legend([c.label for c in curves], width)]) if named else plot
+        return Text("\n").join([*heading, plot, *(legend([c.label for c in curves], width) if named else [])])
 
     @staticmethod
     def _lines(chart: Chart, curves) -> None:
