@@ -167,6 +167,25 @@ def test_inspect_reads_a_named_vibration_s_file_once(tmp_path, box, monkeypatch)
     assert reads == [[]], reads
 
 
+def test_a_quoted_header_leaves_the_rows_to_numpy_s_reader(tmp_path, monkeypatch):
+    # a DAQ's export quoting its column names ('"Zeit [s]","Beschleunigung [m/s²]"') sent every row of the file
+    # through Python's csv module: a 1 M-row take in 5.3 s of CPU and 624 MB, against 0.35 s for the same rows unquoted
+    from gearlab.data.readers import csv as reader
+    from gearlab.data.recordings import read_contents
+
+    th = _shaft(0.5, 4)
+    acc = _take(th, 4)
+    path = tmp_path / "take.csv"
+    rows = "\r\n".join(f"{i / FS:.6f},{v:.6g},{p:g}" for i, (v, p) in enumerate(zip(acc, _tacho(th))))
+    path.write_text('"Zeit [s]","Beschleunigung [m/s²]","Tacho [V]"\r\n"s","m/s²","V"\r\n' + rows + "\r\n")
+    parsed = []
+    block = reader.numeric_block
+    monkeypatch.setattr(reader, "numeric_block", lambda lines, *a: parsed.append(len(lines)) or block(lines, *a))
+    contents, _ = read_contents(path, ["Beschleunigung [m/s²]", "Tacho [V]"])
+    assert parsed == [acc.size], parsed
+    assert np.allclose(contents.found["Beschleunigung [m/s²]"], acc, rtol=1e-5, atol=1e-5)
+
+
 @pytest.mark.slow
 def test_a_long_csv_take_is_read_in_under_eight_times_its_size(tmp_path):
     # a 60 s take at 51.2 kHz in a 69 MB CSV: its rows were joined into one text and copied into a StringIO for

@@ -9,7 +9,7 @@ import io
 import operator
 import re
 from collections.abc import Sequence
-from itertools import compress, repeat
+from itertools import compress, islice, repeat
 from pathlib import Path
 
 import numpy as np
@@ -257,7 +257,10 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         raise GearlabInputError(f"{path}: no rows; expected a header row of column names (or none), then numbers")
     delimiter = delimiter_of(lines[0])
     # without quotes (and NULs, which csv refuses) a line is a row: the first two tell the header and units
-    plain = '"' not in text and "\0" not in text
+    # quotes in the first two lines alone (a DAQ's or spreadsheet's quoted names and units) leave each line a row
+    odd = any(line.count('"') % 2 for line in lines[:2])  # a quoted name running over lines
+    quoted = '"' in text and (odd or any(map(operator.contains, islice(lines, 2, None), repeat('"'))))
+    plain = not quoted and "\0" not in text
     rows = split_rows(lines[:2] if plain else lines, delimiter)
     header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
     units = units_row(rows[1], header) if header is not None and len(rows) > 1 else None
