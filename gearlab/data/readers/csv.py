@@ -272,9 +272,15 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         warnings.append(footer_note(data_numbers[cut], data_lines[cut], len(data_lines) - cut - 1))
         data_lines, data_numbers = data_lines[:cut], data_numbers[:cut]
     numbers = None
-    if plain and rows[0][-1] != "":  # a trailing separator's empty column is the row parser's to drop
-        numbers = numeric_block(data_lines, delimiter, width)
+    # every line ending in separators (a spreadsheet's empty cells, ',,'): cut off, no channel, as the rows' parser does
+    empty = next((i for i, f in enumerate(reversed(rows[0])) if f != ""), width)
+    ends = (delimiter or "") * empty
+    if plain and empty < width and (not empty or all(map(str.endswith, data_lines, repeat(ends)))):
+        numbers = numeric_block(
+            [line[: -len(ends)] for line in data_lines] if empty else data_lines, delimiter, width - empty
+        )
     if numbers is not None:
+        header, width = (None if header is None else header[: width - empty]), width - empty
         columns = header_names(header, width)
         if header is not None and len(set(header)) != len(header):
             _twice(path, header)
