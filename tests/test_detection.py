@@ -189,7 +189,7 @@ def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its
     record (recomputed here from results.jsonl); a method trained with three seeds scores the
     median of its members' scores standardised by their own history models, and only that
     ensemble reaches scores.csv and the table (with its members' AUC range)."""
-    from gearlab.kinds.record_effects import fit, independent_units, overlap_dof
+    from gearlab.kinds.record_effects import WithinLaw, fit, independent_units, overlap_dof
 
     out = three_seeds
     records = {r["unit"]: r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines())}
@@ -199,12 +199,21 @@ def test_thresholds_cover_the_record_effect_and_an_ensemble_is_the_median_of_its
             b, stride = {"revolution": (1, 1), "record5": (5, 1), "record10": (10, 1)}[u]
             per = len(s) // 2
             assert per == (n_hist - b) // stride + 1
+            h = r["history_models"][u]
+            # a detector's sigma_e is its scores' own within-record law's (detection_units.within_laws: TSAs drawn
+            # again from every history revolution), and its quantile that law's, the normal one's times the record's
+            # `tail`; every other method's sigma_e is its history units' and its quantile the normal one (tail 1)
+            law = WithinLaw(np.zeros(0), h["unit_sd"] ** 2, h["unit_dof"]) if r["method"] == "matched_filter" else None
             m = fit(
-                [s[:per], s[per:]], 0.99, [independent_units(per, b, stride)] * 2, [overlap_dof(per, b, stride)] * 2
+                [s[:per], s[per:]],
+                0.99,
+                [independent_units(per, b, stride)] * 2,
+                [overlap_dof(per, b, stride)] * 2,
+                law=law,
             )
-            # a detector's quantile is its scores' own within-record law's (detection_units.within_laws), the
-            # normal one's times the record's `tail`; every other method's is the normal one (tail 1)
-            tail = r["history_models"][u]["tail"]
+            if law is not None and u != "revolution":  # not the sliding TSAs' own spread
+                assert h["unit_sd"] != pytest.approx(fit([s[:per], s[per:]], 0.99).unit_sd, rel=1e-3)
+            tail = h["tail"]
             assert tail == 1.0 or r["method"] == "matched_filter"
             assert r["thresholds"][u] == pytest.approx(m.mean + (m.threshold - m.mean) * tail)
             assert r["thresholds_by_rule"]["records"][u] == r["thresholds"][u]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm, t
 
-from gearlab.kinds.record_effects import fit, independent_units, law_quantile, overlap_dof
+from gearlab.kinds.record_effects import WithinLaw, fit, independent_units, law_quantile, moments, overlap_dof
 
 
 def records(rng, n_records: int, n_units: int, record_sd: float, unit_sd: float, mean: float = 5.0) -> list:
@@ -148,6 +148,12 @@ def soft_maxima(rng, n: int) -> np.ndarray:
     return np.log(np.mean(np.exp(2.5 * rng.standard_normal((n, 32)) - 2.5**2 / 2), axis=1))
 
 
+def own_law(history, shape) -> WithinLaw:
+    """*shape* (mean 0, sd 1) as the law of independent units' scores *history*: their own within-record variance."""
+    _, within, _, _, dof = moments(history)
+    return WithinLaw(shape, within, dof)
+
+
 def test_a_skewed_within_record_law_holds_the_rate_asked_where_the_normal_quantile_does_not():
     """Issue 39: scores that are a soft maximum (likelihood_ratio's log-sum-exp over its shapes) are skewed to
     the right within a record; from two history records of them (a record effect besides), the normal quantile
@@ -161,7 +167,7 @@ def test_a_skewed_within_record_law_holds_the_rate_asked_where_the_normal_quanti
         history = [0.2 * rng.standard_normal() + soft_maxima(rng, 400) for _ in range(2)]
         new = 0.2 * rng.standard_normal() + soft_maxima(rng, 2000)
         plain.append(np.mean(new > fit(history, 0.99).threshold))
-        m = fit(history, 0.99, law=law)
+        m = fit(history, 0.99, law=own_law(history, law))
         skewed.append(np.mean(new > m.threshold))
     assert np.mean(plain) > 0.018, np.mean(plain)
     assert 0.007 < np.mean(skewed) < 0.014, np.mean(skewed)
@@ -174,29 +180,81 @@ def test_a_normal_within_record_law_gives_the_normal_quantile_back():
     for share in (0.0, 0.3, 1.0):
         assert law_quantile(law, 0.99, share) == pytest.approx(norm.ppf(0.99), abs=0.03)
     history = [rng.standard_normal(300) for _ in range(2)]
-    assert fit(history, 0.99, law=law).threshold == pytest.approx(fit(history, 0.99).threshold, rel=0.02)
+    assert fit(history, 0.99, law=own_law(history, law)).threshold == pytest.approx(
+        fit(history, 0.99).threshold, rel=0.02
+    )
+
+
+def soft_maximum(shapes: np.ndarray, X) -> np.ndarray:
+    """log mean exp of *shapes*' log-likelihood ratios on units *X* (likelihood_ratio's form), noise sd 1 a
+    revolution: 0.1 of a TSA of 10."""
+    z = np.asarray(X, dtype=np.float64) @ shapes.T * 10
+    return np.log(np.mean(np.exp(z - 0.5 * np.sum(shapes**2, axis=1) * 10), axis=1))
 
 
 def test_units_drawn_again_from_a_records_revolutions_have_the_law_of_a_new_records_units():
     """detection_units.within_laws: TSAs of 10 revolutions drawn with replacement from each of two history records'
     45 revolutions, scored by a soft maximum over 32 shapes (likelihood_ratio's form), have the right-skewed law of
     TSAs of new noise: 99 % quantiles 2.88 and 2.93 sd above the mean, where the normal's is 2.33 (seeds 8-10:
-    within 0.2 of each other)."""
+    within 0.2 of each other), and their spread. A revolution's law is the history's own revolution scores, less
+    each record's mean: none is scored again."""
     from gearlab.kinds.detection_units import Rule, within_laws
 
     rng = np.random.default_rng(9)
     shapes = rng.standard_normal((32, 256))
     shapes *= 0.9 / np.linalg.norm(shapes, axis=1, keepdims=True)
+    scored = []
 
-    def score(_, X):  # log mean exp of the shapes' log-likelihood ratios, noise sd 1 a revolution (0.1 a TSA10)
-        z = np.asarray(X, dtype=np.float64) @ shapes.T * 10
-        return np.log(np.mean(np.exp(z - 0.5 * np.sum(shapes**2, axis=1) * 10), axis=1))
+    def score(_, X):
+        scored.append(len(X))
+        return soft_maximum(shapes, X)
 
-    revolutions = np.concatenate([rng.standard_normal((45, 256)) + 0.1 * rng.standard_normal(256) for _ in range(2)])
+    fixed = 0.1 * rng.standard_normal((2, 256))  # each record's own revolution
+    revolutions = np.concatenate([rng.standard_normal((45, 256)) + f for f in fixed])
+    own = soft_maximum(shapes, revolutions) + np.repeat([0.0, 3.0], 45)  # a record effect: not in the law
     rule = Rule("records", 0.01, {"revolution": [(45, 45.0)] * 2, "record10": [(12, 4.5)] * 2})
-    law = within_laws(score, rule, {"revolution": revolutions, "record10": np.zeros((24, 256))})["record10"]
-    new = score(0, rng.standard_normal((20000, 10, 256)).mean(axis=1))
-    new = (new - new.mean()) / new.std()
-    assert law.mean() == pytest.approx(0.0, abs=1e-9) and law.std() == pytest.approx(1.0)
-    assert np.quantile(law, 0.99) == pytest.approx(np.quantile(new, 0.99), abs=0.25)
+    units = {"revolution": revolutions, "record10": np.zeros((24, 256))}
+    laws = within_laws(score, rule, units, {"revolution": own, "record10": np.zeros(24)})
+    law = laws["record10"]
+    new = [soft_maximum(shapes, f + rng.standard_normal((10000, 10, 256)).mean(axis=1)) for f in fixed]
+    # a little more spread than new TSAs': the drawn ones hold 45 revolutions' noise, whose projections on the 32
+    # shapes spread more than the noise's own (1.16 times the variance here; on likelihood_ratio's 144 shapes and
+    # the synthetic rig records 1.4-1.6), so the threshold errs high
+    assert 1.0 < law.variance / np.mean([x.var() for x in new]) < 1.3 and law.dof == 88
+    new = np.concatenate([(x - x.mean()) / x.std() for x in new])
+    assert law.shape.mean() == pytest.approx(0.0, abs=1e-9) and law.shape.std() == pytest.approx(1.0)
+    assert np.quantile(law.shape, 0.99) == pytest.approx(np.quantile(new, 0.99), abs=0.25)
     assert np.quantile(new, 0.99) > 2.7
+    # the revolutions' own scores: only the TSAs drawn again (1000 a record) were scored
+    assert scored == [1000, 1000]
+    deviations = np.concatenate([own[:45] - own[:45].mean(), own[45:] - own[45:].mean()])
+    assert laws["revolution"].shape == pytest.approx(deviations / deviations.std())
+    assert laws["revolution"].variance == pytest.approx(moments([own[:45], own[45:]])[1])
+
+
+def test_a_tsas_spread_from_every_revolution_holds_the_rate_where_the_historys_few_tsas_do_not():
+    """Issue 39: two history records of 44 revolutions hold 4.4 independent TSAs of 10 each; the spread of their
+    35 sliding TSAs, on so few, is far off in some histories, and the threshold on it let 2.4 % of a new record's
+    TSAs through where 1 % was asked (a soft maximum's scores, 150 histories; 8.1 % in the worst tenth of them).
+    The spread of TSAs drawn again from every revolution of the records (within_laws' variance): 0.4 %, 1.2 % in
+    the worst tenth (below 1 %: that spread errs high, test_units_drawn_again_...)."""
+    from gearlab.kinds.detection_units import Rule, within_laws
+
+    rng = np.random.default_rng(11)
+    shapes = rng.standard_normal((32, 64))
+    shapes *= 0.9 / np.linalg.norm(shapes, axis=1, keepdims=True)
+    n, b = 44, 10
+    rule = Rule("records", 0.01, {"revolution": [(n, float(n))] * 2, "record10": [(n - b + 1, 4.4)] * 2})
+    windows, redrawn = [], []
+    for _ in range(150):
+        revs = [rng.standard_normal((n, 64)) for _ in range(2)]
+        tsas = np.concatenate([np.stack([r[i : i + b].mean(axis=0) for i in range(n - b + 1)]) for r in revs])
+        hist = {"revolution": soft_maximum(shapes, np.concatenate(revs)), "record10": soft_maximum(shapes, tsas)}
+        units = {"revolution": np.concatenate(revs), "record10": tsas}
+        laws = within_laws(lambda _, X: soft_maximum(shapes, X), rule, units, hist)
+        new = soft_maximum(shapes, rng.standard_normal((400, b, 64)).mean(axis=1))
+        windows.append(np.mean(new > rule.model("record10", hist["record10"]).threshold))
+        redrawn.append(np.mean(new > rule.model("record10", hist["record10"], law=laws["record10"]).threshold))
+    windows, redrawn = np.sort(windows), np.sort(redrawn)
+    assert np.mean(windows) > 0.018 and np.mean(windows[-15:]) > 0.05, windows
+    assert 0.002 < np.mean(redrawn) < 0.01 and np.mean(redrawn[-15:]) < 0.02, redrawn

@@ -55,13 +55,14 @@ out by the history's (gearlab.learn.detectors): on the log scale it let 1.1 -> 0
 found 22 -> 13 % of the chips, so it is not logged.
 A score need not be normal within a record either: likelihood_ratio's log-sum-exp over many shapes (a soft
 maximum) is right-skewed even on white noise (1.1-1.6 within a take), and the normal quantile let 1.7-4 % of a
-new take's units through where 1 % was asked. Where the method gives a sample of its score's own within-record
-law (*law*: a detector's scores of units made of a history record's own revolutions drawn again, mean 0 and sd 1,
-gearlab.kinds.detection_units.within_laws), the quantile is that of sigma_e times that law plus the normal record
-and mean parts (`law_quantile`), in place of the normal one; the Student-t widening is kept as the ratio of its
-quantile to the normal's. A symmetric law gives the normal quantile back. (Synthetic rig records, 2 history takes,
-development seeds: likelihood_ratio's record10 3.5 -> 0.8 %, record30 1.7 -> 0.8 %; matched_filter's, nearly
-symmetric, 1.2 -> 0.6 % and 0.8 %; the chips found in every unit either way.)
+new take's units through where 1 % was asked. Where the method gives its score's own within-record law (*law*,
+`WithinLaw`: a detector's scores of TSAs made of a history record's own revolutions drawn again, and of its
+revolutions, gearlab.kinds.detection_units.within_laws), sigma_e^2 is that law's variance, which rests on every
+revolution of the records rather than on their few independent TSAs, and the quantile is that of sigma_e times
+the law's shape plus the normal record and mean parts (`law_quantile`), in place of the normal one; the Student-t
+widening is kept as the ratio of its quantile to the normal's. A symmetric law gives the normal quantile back.
+(Synthetic rig records, 2 history takes, development seeds: likelihood_ratio's record10 3.5 -> 0.8 %, record30
+1.7 -> 0.8 %; matched_filter's, nearly symmetric, 1.2 -> 0.6 % and 0.8 %; the chips found in every unit either way.)
 Only the history's scores enter: nothing here sees a test record.
 """
 
@@ -98,6 +99,18 @@ class RecordEffects:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+
+@dataclass(frozen=True)
+class WithinLaw:
+    """A method's scores within a history record, from every revolution of the records (detection_units.within_laws):
+    *shape*, a sample of their deviations from their record's mean in units of their sd (mean 0, sd 1); *variance*,
+    the within-record variance of a unit's score it estimates, on *dof* degrees of freedom (the records' revolutions,
+    less one a record)."""
+
+    shape: np.ndarray
+    variance: float
+    dof: float
 
 
 def independent_units(n_units: int, block: int = 1, stride: int = 1) -> float:
@@ -170,12 +183,15 @@ def fit(groups, p: float, independent=None, dofs=None, floor: float | None = Non
     *independent*: each record's number of independent units (default: its number of units);
     *dofs*: each record's degrees of freedom of its within-record sum of squares (default n − 1;
     sliding windows: overlap_dof); *floor*: the scores are sizes above it, modelled on the log scale
-    with SIZED_RECORDS records or more; *law*: a sample of the scores' own within-record law, mean 0 and
-    sd 1, where it is not normal (module docstring)."""
+    with SIZED_RECORDS records or more; *law*: the scores' own within-record law (WithinLaw; not for sizes), whose
+    variance is sigma_e^2 and whose shape sets the quantile (module docstring)."""
     if floor is not None and sum(1 for g in groups if np.size(g)) < SIZED_RECORDS:
         floor = None
     groups = [logged(g, floor) for g in groups]
     means, within, m, estimate, within_dof = moments(groups, independent, dofs)
+    if law is not None:  # sigma_e^2 from every revolution of the records, not from their few independent TSAs
+        within, within_dof = law.variance, law.dof
+        estimate = None if estimate is None else float(means.var(ddof=1)) - float(np.mean(within / m))
     R = len(means)
     record_var = max(0.0, estimate) if estimate is not None else 0.0
     mean_var = float(np.sum(record_var + within / m)) / R**2
@@ -187,7 +203,7 @@ def fit(groups, p: float, independent=None, dofs=None, floor: float | None = Non
     from scipy.stats import t as student  # here, not at the top: start-up time (scipy.stats takes ~1 s)
 
     share = (within / sd**2) if sd > 0 else 1.0
-    tail = 1.0 if law is None or len(law) < 2 else law_quantile(law, p, float(share)) / float(norm.ppf(p))
+    tail = 1.0 if law is None or len(law.shape) < 2 else law_quantile(law.shape, p, float(share)) / float(norm.ppf(p))
     threshold = float(means.mean() + student.ppf(p, nu) * sd * tail)
     return RecordEffects(
         mean=float(means.mean()),
