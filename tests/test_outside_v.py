@@ -99,20 +99,20 @@ def test_score_says_a_record_of_another_gearbox_does_not_fit_the_run_s_tooth_cou
     # a 24/83 box's record (23.7 Hz) scored by a 21/65 + 34/91 box's run (no tacho, 29.3 Hz): its 24th order read as
     # stage 2's 10.98th, 51.78 Hz, and the line said only 'runs at 51.78 Hz, more than 5 % from every condition'
     from gearlab.gearbox import resolve_gearbox
-    from gearlab.kinds.detection_scoring import _other_gearbox
+    from gearlab.kinds.detection_fit import other_gearbox
 
     (tmp_path / "boxB.toml").write_text(BOX_B)
     box = resolve_gearbox(tmp_path / "boxB.toml")
     meta = {"conditions": {"29.3 Hz": {"speed_hz": 29.3}}}
     keys = {"gearbox": box, "vibration": "acc", "tacho": None, "speed_hz": None}
     other = _take(tmp_path / "a.npz", 23.7, [(24, 83)])
-    line = _other_gearbox(meta, str(other), keys, 51.78)
+    line = other_gearbox(meta, str(other), keys, 51.78)
     assert line is not None and "\n" not in line, line
     assert line.startswith(f"{other}: its lines do not fit the run's gearbox 'boxB' (21/65 + 34/91): ")
     assert "mesh order" in line and " expected" in line and "51.78 Hz" in line, line
     own = _take(tmp_path / "b.npz", 29.3, [(21, 65), (34, 91)])
-    assert _other_gearbox(meta, str(own), keys, 31.5) is None  # its tooth counts fit: the speed's own line then
-    assert _other_gearbox(meta, str(other), {**keys, "gearbox": None}, 51.78) is None  # no description: nothing said
+    assert other_gearbox(meta, str(own), keys, 31.5) is None  # its tooth counts fit: the speed's own line then
+    assert other_gearbox(meta, str(other), {**keys, "gearbox": None}, 51.78) is None  # no description: nothing said
 
 
 def test_score_reads_a_file_of_a_format_the_run_never_read_with_the_target_s_keys_alone(tmp_path):
@@ -167,7 +167,7 @@ def test_a_short_take_s_later_mesh_is_no_subharmonic_family(tmp_path):
 def test_score_warns_of_a_record_of_other_tooth_counts_at_a_trained_speed(tmp_path):
     # a 25/83 box's record at the 24/83 run's own 23.7 Hz (a tacho): scored without a word, its mesh at order 25
     from gearlab.gearbox import resolve_gearbox
-    from gearlab.kinds.detection_scoring import _other_gearbox
+    from gearlab.kinds.detection_fit import other_gearbox
 
     (tmp_path / "boxA.toml").write_text(
         '[gearbox]\nname = "boxA"\n\n[operation]\nspeed = "23.7 Hz"\n\n[[stages]]\nmodule = "2 mm"\n'
@@ -177,8 +177,8 @@ def test_score_warns_of_a_record_of_other_tooth_counts_at_a_trained_speed(tmp_pa
     meta = {"conditions": {"23.7 Hz": {"speed_hz": 23.7}}}
     keys = {"vibration": "acc", "tacho": "tacho", "pulses_per_rev": 1, "speed_hz": None}
     other = _take(tmp_path / "a25.npz", 23.7, [(25, 83)], fs=12800.0, seconds=8.0)
-    line = _other_gearbox(meta, str(other), keys, 23.7, far=False, box=box)
+    line = other_gearbox(meta, str(other), keys, 23.7, far=False, box=box)
     assert line is not None and "stage 1: mesh order 25 measured, 24 expected" in line, line
     assert line.endswith("says what differs)") and "its scores weigh another gearbox" in line, line
     own = _take(tmp_path / "a24.npz", 23.7, [(24, 83)], fs=12800.0, seconds=8.0)
-    assert _other_gearbox(meta, str(own), keys, 23.7, far=False, box=box) is None
+    assert other_gearbox(meta, str(own), keys, 23.7, far=False, box=box) is None

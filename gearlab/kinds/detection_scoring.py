@@ -31,6 +31,15 @@ from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
 from .detection_classical import classical_record
+from .detection_fit import (
+    gearbox_line,
+    history_stages,
+    inspected,
+    moved_tacho,
+    other_gearbox,
+    tacho_shaft,
+    tooth_counts_differ,
+)
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
 from .detection_own import (
@@ -44,7 +53,6 @@ from .detection_own import (
     skipped_rows,
 )
 from .detection_records import (
-    SPEED_GROUP,
     aligned,
     asynchronous_orders,
     learned_input,
@@ -254,7 +262,7 @@ def _scoring_condition(
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
     keys = meta["target"]
     # a run from before "marks" was kept aligned at the [target]'s marks alone
-    reference, ppr = arrays["reference"], meta.get("marks") or _tacho_shaft(keys).marks(keys["pulses_per_rev"])
+    reference, ppr = arrays["reference"], meta.get("marks") or tacho_shaft(keys).marks(keys["pulses_per_rev"])
     tacho = True if _tacho_records(meta) == "all" else None  # aligned by its marks (aligned()'s flag)
     if "unit_shaft" in meta:  # a slower shaft's revolutions: turned by correlation, as the run's were
         tacho = None
@@ -346,95 +354,6 @@ def _units_of_part(meta: dict, path: str, said: str, units: int) -> str:
     return f"{said}; {kinds} not scored: a unit needs {', '.join(map(str, short))} {shaft}revolutions, it has {units}"
 
 
-def _other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = True, box=None) -> str | None:
-    """The line of a record whose mesh orders do not fit the run's gearbox description, as inspect reads it with
-    the run's keys at the speed of the run's nearest condition ("stage 2: mesh order 9.706 measured, 10.98
-    expected"); None where they fit or the run has no description. A 24/83 box's record scored by a 21/65 + 34/91
-    box's run (no tacho: the speed from the mesh orders) was told only 'runs at 51.78 Hz, more than 5 % from every
-    condition': its 24th order read as stage 2's 10.98th. Not *far*: the record's speed is a condition's, and
-    the line says its scores weigh another gearbox against the run's history (a warning: it is scored). *box*: the
-    run's description where its keys have none (a run with a tacho: the one its source simulates)."""
-    box = keys.get("gearbox") or box
-    if box is None:
-        return None
-    from ..gearbox import order_table
-    from ..inspect import InspectOptions, inspect_record
-
-    near = min((c["speed_hz"] for c in meta["conditions"].values()), key=lambda f: abs(f - speed))
-    shaft = keys.get("tacho_shaft")
-    tacho = None if keys.get("tacho") in (None, "") else str(keys["tacho"])
-    options = InspectOptions(
-        vibration=None if keys.get("vibration") in (None, "") else str(keys["vibration"]),
-        tacho=tacho,
-        pulses_per_rev=keys.get("pulses_per_rev") if tacho else None,
-        tacho_shaft=None if shaft is None else shaft.name,
-        speed_hz=None if tacho else near,
-        fs=keys.get("fs"),
-        sensitivity=keys.get("sensitivity"),
-        gain=keys.get("gain"),
-        unit=keys.get("unit"),
-    )
-    try:
-        report = inspect_record(path, box, options)
-    except GearlabInputError:
-        return None  # the speed's own line then
-    if report.get("matches") is not False:
-        return None
-    said = report["check"].get("differences") or [report["verdict"]]
-    if far and report["check"].get("tacho_misread"):
-        # a tacho read on another shaft or count of marks (inspect_tacho): the mesh as read, the shaft and marks
-        # left to _moved_tacho's --key words (inspect's own, its options, made the one line too long to show)
-        said = [d.split(" (", 1)[0] for d in said]
-    # the stages' lines ('mesh order x measured, y expected', 'no line at mesh order z'), not the speed's search
-    picked = [d for d in said if "mesh order" in d and ("measured" in d or "no line" in d)][:2] or said[:1]
-    stages = " + ".join(f"{s.pinion_teeth}/{s.wheel_teeth}" for s in order_table(box).stages)
-    said = f"{path}: its lines do not fit the run's gearbox '{box.name}' ({stages}): {'; '.join(picked)}; "
-    inspect = f"gearlab inspect {path} --gearbox DESCRIPTION says what differs"
-    if not far:
-        return f"{said}its scores weigh another gearbox against the run's history ({inspect})"
-    return (
-        f"{said}its speed read as {speed:.2f} Hz is more than {SPEED_GROUP:.0%} from every condition's; expected a "
-        f"record of that gearbox ({inspect})"
-    )
-
-
-def _moved_tacho(meta: dict, path: str, keys: dict, speed: float, box) -> str:
-    """'; or ...' for a take whose tacho reads another shaft or count of marks than its *keys* say, its *speed*
-    read no condition's: the one shaft of the run's description *box* (the input alone without one) and count of
-    marks a turn (1-8) at which it runs within IN_BAND of a condition's speed and, with a description, its mesh
-    lines fit it (_other_gearbox: inspect with those keys), with the --key that reads it so; "" where none or
-    several fit. A 21/59 box's 2-mark output tacho read as the input's once a turn: 17.80 Hz, not 25 Hz."""
-    if keys.get("tacho") is None:
-        return ""
-    read, pulses = _tacho_shaft(keys), keys.get("pulses_per_rev") or 1
-    shafts = [TachoShaft.of(box, name, "[sensor]") for name in box.shafts] if box is not None else [TachoShaft("input")]
-    fits = []
-    for shaft in shafts:
-        for marks in range(1, 9):
-            # the tacho's pulses a second over the input's turns: speed x pulses x read turns, as marks x shaft turns
-            true = speed * pulses * float(read.turns) / (marks * float(shaft.turns))
-            conditions = meta["conditions"].items()
-            near = [c for c, v in conditions if abs(true - v["speed_hz"]) <= IN_BAND * v["speed_hz"]]
-            if near and abs(true / speed - 1.0) > IN_BAND:
-                fits.append((shaft, marks, true, near[0]))
-    if box is not None:  # the lines of the take read so: a speed's match alone is one of ~20 tries
-        fits = [
-            f
-            for f in fits
-            if not _other_gearbox(
-                meta, path, keys | {"tacho_shaft": f[0], "pulses_per_rev": f[1]}, f[2], far=False, box=box
-            )
-        ]
-    if len(fits) != 1:
-        return ""
-    shaft, marks, true, condition = fits[0]
-    return (
-        f"; or its tacho reads the {shaft.name} shaft, {marks} pulse{'s' * (marks > 1)} per revolution: it then runs "
-        f"at {true:.2f} Hz, the speed of condition '{condition}' (gearlab score RUN FILE "
-        f"--key tacho_shaft={shaft.name} --key pulses_per_rev={marks})"
-    )
-
-
 def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: dict) -> dict:
     """{path: {unit: scores}} of a learned method's record (one training, an ensemble of seeds, or
     crossed folds) on the units *seen* ({path: {unit: X}} as the method sees them)."""
@@ -463,12 +382,6 @@ def _learned_scores(run: RunDir, record: dict, seen: dict, rule: Rule, by_unit: 
     return raw(record["unit"])
 
 
-def _tacho_shaft(keys: dict) -> TachoShaft:
-    """The shaft the run's tacho read (absent: the input); a TachoShaft, or {name, a, b} as scoring.json keeps it."""
-    shaft = keys.get("tacho_shaft")
-    return shaft if isinstance(shaft, TachoShaft) else TachoShaft(**(shaft or {"name": "input"}))
-
-
 def _named_shaft(name: str, box) -> TachoShaft:
     """--key tacho_shaft's shaft of the run's description *box*; one line where it has none or no such shaft."""
     if box is not None:
@@ -483,7 +396,7 @@ def _named_shaft(name: str, box) -> TachoShaft:
 
 def _marks(keys: dict) -> int:
     """The input angles a record read with *keys* (reading_keys') finds the input at its first tacho mark."""
-    return _tacho_shaft(keys).marks(keys.get("pulses_per_rev") or 1)
+    return tacho_shaft(keys).marks(keys.get("pulses_per_rev") or 1)
 
 
 def _typed(value: str, types):
@@ -535,7 +448,7 @@ def reading_keys(meta: dict, condition: str | None, given: dict | None = None, f
     if isinstance(keys.get("tacho_shaft"), str):  # --key tacho_shaft=NAME: that shaft of the run's description
         keys["tacho_shaft"] = _named_shaft(keys["tacho_shaft"], keys.get("gearbox") or box)
     if "tacho_shaft" in keys:
-        keys["tacho_shaft"] = _tacho_shaft(keys)
+        keys["tacho_shaft"] = tacho_shaft(keys)
     if keys["tacho"] is None and keys.get("speed_hz") is None and not gearbox:
         names = list(meta["conditions"])
         if condition is None and len(names) > 1:
@@ -571,6 +484,7 @@ def score(
     reading_keys(meta, condition, given, box=described)
     cut, raw, found, marks, chosen, far, takes = {}, {}, {}, {}, {}, {}, own_conditions(run)
     skipped: dict[str, str] = {}  # {file: why} of the takes refused, of several given
+    history: dict = {}  # {condition: its history's stages as inspect reads them (history_stages)}
     for i, file in enumerate(files):
         digest = input_digest(Path(file))  # its content: a take scored again, renamed or not, is one take
         try:
@@ -583,9 +497,9 @@ def score(
             try:
                 name = condition_of(meta, str(file), rec.speed_hz, asked)
             except GearlabInputError as off:  # a speed far from every condition: another gearbox's record?
-                other = _other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
+                other = other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
                 if other or VARIES_WORDS not in rec.angle_source or not speeds:
-                    moved = _moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
+                    moved = moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
                     raise GearlabInputError((other or f"{off}{varies(rec.angle_source)}") + moved) from None
                 # a run-up or coast-down: its revolutions at a condition's history speed
                 name, rec, scored_on = in_band(meta, str(file), rec, asked, f"{off} ({span(rec.angle_source)})")
@@ -598,8 +512,15 @@ def score(
                     chosen[str(file)] = own_words(mine[1]) if mine else asked_off(meta, name, rec.speed_hz)
                     far[str(file)] = "" if mine else off_history(meta, name, rec.speed_hz)
             too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
-            # tooth counts within a condition's speed too: another box's record is scored, with the line that says so
-            differs = _other_gearbox(meta, str(file), keys, rec.speed_hz, far=False, box=described)
+            # tooth counts within a condition's speed too: a count that differs for certain is another gearbox's take,
+            # not scored (its changed mesh was called damage by every method); a doubtful one scored, said so
+            report, box = inspected(meta, str(file), keys, rec.speed_hz, described), keys.get("gearbox") or described
+            if report is not None and name not in history:  # the run's history read as the take is, once a call
+                history[name] = history_stages(run, meta, name, box)
+            other = None if report is None else tooth_counts_differ(report, history[name])
+            differs = gearbox_line(report, str(file), box, rec.speed_hz, far=False, other=other)
+            if other is not None:
+                raise GearlabInputError(differs)
             if differs:
                 on_event(Event("log", message=f"warning: {differs}"))
             own, whose = remembered(meta, str(file), given)
