@@ -138,9 +138,16 @@ def write_report(report: dict, folder: Path) -> Path:
     return folder / "report.html"
 
 
+def json_ready(report: dict) -> dict:
+    """The report without its arrays (the spectrum, the TSA curves): what --json prints."""
+    out = {k: v for k, v in report.items() if k != "spectrum"}
+    out["tsa"] = [{k: v for k, v in t.items() if k != "tsa"} for t in report["tsa"]]
+    return out
+
+
 def show(report: dict, console, as_json: bool = False, folder: Path | None = None) -> None:
     """`gearlab inspect`'s output: the terminal view (or JSON on stdout), and DIR/report.html where asked."""
-    from .inspect import json_ready, render
+    from .inspect import render
     from .inspect_history import render_localisation
 
     written = None if folder is None else write_report(report, folder)

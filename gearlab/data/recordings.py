@@ -649,6 +649,7 @@ class CutRecording:
     first_revolution: int = 0  # revolutions[0]'s number from the angle's zero (first_complete)
     units: str = ""  # how the values became m/s² (channel_scale): gearlab score shows it
     speeds: np.ndarray | None = None  # each revolution's (Hz, input shaft): gearlab score scores a run-up's in band
+    read: tuple = ()  # (the Recording read, drift out; its flaws) where keep_read: gearlab score reads it once
 
 
 def cut_recording(
@@ -668,14 +669,14 @@ def cut_recording(
     where: str = "",
     tacho_shaft=None,
     settle_window: int = 1,
+    keep_read: bool = False,
 ) -> CutRecording:
     """Read a record (read_recording), find the input's angle (shaft_angle; *tacho_shaft* a TachoShaft) and
     cut its complete revolutions (*transient* "stats" drops a start-up over settle_turns or *settle_window*)."""
     from ..signals import POINTS, cut_revolutions
 
     rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
-    raw = rec.signal
-    if raw.size and raw.min() == raw.max():  # a wrong column, or a sensor not connected (before a baseline is out)
+    if (raw := rec.signal).size and raw.min() == raw.max():  # a wrong column, a sensor unplugged (drift still in)
         raise GearlabInputError(
             f"{path}: vibration column {_one_line_repr(rec.vibration)}: all {raw.size} values equal {raw[0]:g}; "
             "expected a measured vibration (a constant column: a wrong column, or a sensor not connected)"
@@ -700,9 +701,8 @@ def cut_recording(
         start, _, warning = steady_start(cut.revolutions, where_, window=window)
     revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
-    return CutRecording(
-        str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units, speeds
-    )
+    made = (str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units)
+    return CutRecording(*made, speeds, (rec, flaws) if keep_read else ())
 
 
 # --- the header alone: what `gearlab validate` checks -----------------------------------------

@@ -21,11 +21,12 @@ def tacho_shaft(keys: dict) -> TachoShaft:
     return shaft if isinstance(shaft, TachoShaft) else TachoShaft(**(shaft or {"name": "input"}))
 
 
-def inspected(meta: dict, path: str, keys: dict, speed: float, box=None) -> dict | None:
+def inspected(meta: dict, path: str, keys: dict, speed: float, box=None, read: tuple = ()) -> dict | None:
     """inspect's report of the record at *path* read with the run's *keys* against the run's gearbox description
     (the keys', else *box*: a run with a tacho, the one its source simulates), at the speed of the run's condition
     nearest *speed* where it has no tacho; None where its lines fit, the run has no description, or inspect
-    refuses it (the speed's own line is then said)."""
+    refuses it (the speed's own line is then said). *read*: the record as cut_recording read it (its 'read'): not
+    read again; the description's check alone (InspectOptions.check_only: no TSA, no fixed-frequency search)."""
     box = keys.get("gearbox") or box
     if box is None:
         return None
@@ -44,9 +45,10 @@ def inspected(meta: dict, path: str, keys: dict, speed: float, box=None) -> dict
         sensitivity=keys.get("sensitivity"),
         gain=keys.get("gain"),
         unit=keys.get("unit"),
+        check_only=True,
     )
     try:
-        report = inspect_record(path, box, options)
+        report = inspect_record(path, box, options, read)
     except GearlabInputError:
         return None
     return report if report.get("matches") is False else None
@@ -94,9 +96,10 @@ def tooth_counts_differ(report: dict, history: list[dict] | None) -> str | None:
     return f"the run's history shows {' and '.join(own)}" if own else ""
 
 
-def other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = True, box=None) -> str | None:
+def other_gearbox(meta: dict, path: str, keys: dict, speed: float, far: bool = True, box=None, read=()) -> str | None:
     """gearbox_line of the record at *path* (inspected)."""
-    return gearbox_line(inspected(meta, path, keys, speed, box), path, keys.get("gearbox") or box, speed, far)
+    report = inspected(meta, path, keys, speed, box, read)
+    return gearbox_line(report, path, keys.get("gearbox") or box, speed, far)
 
 
 def gearbox_line(
@@ -133,7 +136,7 @@ def gearbox_line(
     )
 
 
-def moved_tacho(meta: dict, path: str, keys: dict, speed: float, box) -> str:
+def moved_tacho(meta: dict, path: str, keys: dict, speed: float, box, read: tuple = ()) -> str:
     """'; or ...' for a take whose tacho reads another shaft or count of marks than its *keys* say, its *speed*
     read no condition's: the one shaft of the run's description *box* (the input alone without one) and count of
     marks a turn (1-8) at which it runs within IN_BAND of a condition's speed and, with a description, its mesh
@@ -141,13 +144,13 @@ def moved_tacho(meta: dict, path: str, keys: dict, speed: float, box) -> str:
     several fit. A 21/59 box's 2-mark output tacho read as the input's once a turn: 17.80 Hz, not 25 Hz."""
     if keys.get("tacho") is None:
         return ""
-    read, pulses = tacho_shaft(keys), keys.get("pulses_per_rev") or 1
+    read_as, pulses = tacho_shaft(keys), keys.get("pulses_per_rev") or 1
     shafts = [TachoShaft.of(box, name, "[sensor]") for name in box.shafts] if box is not None else [TachoShaft("input")]
     fits = []
     for shaft in shafts:
         for marks in range(1, 9):
             # the tacho's pulses a second over the input's turns: speed x pulses x read turns, as marks x shaft turns
-            true = speed * pulses * float(read.turns) / (marks * float(shaft.turns))
+            true = speed * pulses * float(read_as.turns) / (marks * float(shaft.turns))
             conditions = meta["conditions"].items()
             near = [c for c, v in conditions if abs(true - v["speed_hz"]) <= IN_BAND * v["speed_hz"]]
             if near and abs(true / speed - 1.0) > IN_BAND:
@@ -156,7 +159,7 @@ def moved_tacho(meta: dict, path: str, keys: dict, speed: float, box) -> str:
         fits = [
             f
             for f in fits
-            if inspected(meta, path, keys | {"tacho_shaft": f[0], "pulses_per_rev": f[1]}, f[2], box) is None
+            if inspected(meta, path, keys | {"tacho_shaft": f[0], "pulses_per_rev": f[1]}, f[2], box, read) is None
         ]
     if len(fits) != 1:
         return ""

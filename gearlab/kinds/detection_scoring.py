@@ -492,14 +492,14 @@ def score(
             asked = mine[0] if mine else condition
             keys = reading_keys(meta, asked, given, str(file), described)
             marks[str(file)] = _marks(keys)
-            rec, scored_on = cut_recording(str(file), **keys), None
+            rec, scored_on = cut_recording(str(file), **keys, keep_read=True), None  # read once: the fit check's too
             speeds = rec.speeds is not None and len(rec.speeds) == len(rec.revolutions)
             try:
                 name = condition_of(meta, str(file), rec.speed_hz, asked)
             except GearlabInputError as off:  # a speed far from every condition: another gearbox's record?
-                other = other_gearbox(meta, str(file), keys, rec.speed_hz, box=described)
+                other = other_gearbox(meta, str(file), keys, rec.speed_hz, box=described, read=rec.read)
                 if other or VARIES_WORDS not in rec.angle_source or not speeds:
-                    moved = moved_tacho(meta, str(file), keys, rec.speed_hz, described)  # a tacho put elsewhere
+                    moved = moved_tacho(meta, str(file), keys, rec.speed_hz, described, rec.read)  # a tacho elsewhere
                     raise GearlabInputError((other or f"{off}{varies(rec.angle_source)}") + moved) from None
                 # a run-up or coast-down: its revolutions at a condition's history speed
                 name, rec, scored_on = in_band(meta, str(file), rec, asked, f"{off} ({span(rec.angle_source)})")
@@ -514,7 +514,8 @@ def score(
             too_narrow(str(file), rec.fs, rec.speed_hz, meta["conditions"][name]["max_order"], "")  # as the run refuses
             # tooth counts within a condition's speed too: a count that differs for certain is another gearbox's take,
             # not scored (its changed mesh was called damage by every method); a doubtful one scored, said so
-            report, box = inspected(meta, str(file), keys, rec.speed_hz, described), keys.get("gearbox") or described
+            report = inspected(meta, str(file), keys, rec.speed_hz, described, rec.read)
+            box = keys.get("gearbox") or described
             if report is not None and name not in history:  # the run's history read as the take is, once a call
                 history[name] = history_stages(run, meta, name, box)
             other = None if report is None else tooth_counts_differ(report, history[name])
