@@ -27,19 +27,26 @@ def _largest_prime(n: int) -> int:
     return max(largest, n) if n > 1 else largest
 
 
-def fft(x: np.ndarray) -> np.ndarray:
-    """np.fft.fft of the flat *x*, to round-off (module doc)."""
-    x = np.asarray(x).reshape(-1)
+def _four_step(x: np.ndarray) -> np.ndarray | None:
+    """The flat *x*'s DFT as (p, m) rows B[k1, k2] = X[k1 + p k2], p its length's largest prime factor (module
+    doc); None where p is under SPLIT or the length itself (numpy's own is as fast)."""
     n = x.size
     p = _largest_prime(n) if n > SPLIT else 1
     if p < SPLIT or p == n:
-        return np.fft.fft(x)
+        return None
     m = n // p
     a = np.fft.fft(x.reshape(p, m), axis=0)  # (k1, n2)
     step = np.arange(m) / n
     for k1 in range(1, p):  # the twiddles W_N^(n2 k1), a row at a time: no (p, m) array of them
         a[k1] *= np.exp(-2j * np.pi * k1 * step)
-    return np.fft.fft(a, axis=1).T.reshape(-1)  # (k1, k2) to k1 + p k2
+    return np.fft.fft(a, axis=1)
+
+
+def fft(x: np.ndarray) -> np.ndarray:
+    """np.fft.fft of the flat *x*, to round-off (module doc)."""
+    x = np.asarray(x).reshape(-1)
+    b = _four_step(x)
+    return np.fft.fft(x) if b is None else b.T.reshape(-1)  # (k1, k2) to k1 + p k2
 
 
 def ifft(X: np.ndarray) -> np.ndarray:
@@ -51,7 +58,10 @@ def ifft(X: np.ndarray) -> np.ndarray:
 def rfft(x: np.ndarray) -> np.ndarray:
     """np.fft.rfft of the flat real *x*, to round-off."""
     x = np.asarray(x, dtype=np.float64).reshape(-1)
-    return fft(x)[: x.size // 2 + 1] if _largest_prime(x.size) >= SPLIT else np.fft.rfft(x)
+    b = _four_step(x)
+    if b is None:
+        return np.fft.rfft(x)
+    return b[:, : b.shape[1] // 2 + 1].T.reshape(-1)[: x.size // 2 + 1]  # k2 to m / 2 hold k to N / 2
 
 
 def analytic(x: np.ndarray) -> np.ndarray:
