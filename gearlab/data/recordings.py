@@ -62,6 +62,7 @@ from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
+from .readers.rates import SECONDS_PER_DAY, serial_days
 
 TWO_PI = 2.0 * np.pi
 
@@ -237,13 +238,12 @@ def _clock_seconds(arr: np.ndarray) -> np.ndarray:
     return (clock - clock[0]).astype(np.int64) * 1e-6
 
 
-def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float]:
-    """(fs, relative uncertainty) from a time vector in seconds, checked to be uniform.
+def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float, str]:
+    """(fs, relative uncertainty, where) from a time vector in seconds (or Excel's serial days), checked uniform.
 
-    fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling
-    period of that uniform grid. The rate is known only as well as the times were written
-    (rounded to a few digits in a CSV file), so its uncertainty, 2·max deviation / span,
-    widens the agreement asked of a given fs.
+    fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling period of that uniform
+    grid. The rate is known only as well as the times were written (rounded to a few digits in a CSV file), so its
+    uncertainty, 2·max deviation / span, widens the agreement asked of a given fs.
     """
     arr = _clock_seconds(np.asarray(value))
     if arr.dtype.kind not in "biuf":
@@ -254,9 +254,9 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     with prefixed(path):
         t = check_signal(np.squeeze(arr) if arr.ndim > 1 else arr, where)
     if n is not None and t.size != n:
-        raise GearlabInputError(
-            f"{path}: {where} has {t.size} samples but the vibration has {n}; expected one time per sample"
-        )
+        raise GearlabInputError(f"{path}: {where} has {t.size} samples but the vibration has {n}; one per sample")
+    written_as, scale = t, (SECONDS_PER_DAY if serial_days(t) else 1.0)
+    t = (t - t[0]) * scale if scale != 1.0 else t
     if t.size < 2:
         raise GearlabInputError(f"{path}: {where} has {t.size} sample; at least 2 are needed for a sampling rate")
     steps = np.diff(t)
@@ -273,7 +273,7 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     # half their written resolution of the grid, besides the jitter allowed
     written = np.zeros(t.size)
     if np.any(np.abs(steps - dt) > _TIME_JITTER * dt) or np.any(deviation > _TIME_JITTER * dt):
-        written = _written_resolution(t)
+        written = _written_resolution(written_as) * scale
     uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt + (written[1:] + written[:-1]) / 2)
     if uneven.size:  # a gap, a repeated block, a clock jump: name the first
         i = int(uneven[0])
@@ -291,7 +291,7 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
             f"{path}: {where} is not uniformly sampled: sample {worst} is {deviation[worst] / dt:.3g} sampling "
             f"periods off the uniform grid of {fmt_hz(1 / dt)} (a gap or jitter); expected uniform sampling"
         )
-    return (t.size - 1) / span, 2.0 * float(deviation.max()) / span
+    return (t.size - 1) / span, 2.0 * float(deviation.max()) / span, where + (" in Excel serial days" * (scale != 1))
 
 
 def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
@@ -301,7 +301,7 @@ def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, floa
     """
     found = [(rate_value(v, where, path), _RATE_RTOL, where) for where, v in contents.rates]
     for where, v in contents.times:
-        fs, uncertainty = rate_from_time(v, where, path, n)
+        fs, uncertainty, where = rate_from_time(v, where, path, n)
         found.append((fs, max(_RATE_RTOL, uncertainty), where))
     if not found:
         return None

@@ -20,6 +20,13 @@ _INTERVAL_NAMES += ("abtastintervall",)  # a German logger's preamble ('Abtastra
 RATE_UNITS = {"": 1.0, "hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "1/s": 1.0, "ks/s": 1e3}
 INTERVAL_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
 
+# Excel keeps a time as serial days since 1899-12-30 (a 'Time' column exported as General: 46357.4166666667 is
+# 2026-12-01 10:00); read as seconds, a 25.6 kHz take came out at 2.2 GHz and 1.6e8 rpm. A time column of days from
+# 1954 to 2119 whose step, read as seconds, is finer than any vibration logger's is read as days
+_SERIAL_DAYS = (20000.0, 80000.0)
+_FASTEST_LOGGER_HZ = 10e6
+SECONDS_PER_DAY = 86400.0
+
 # a name that ends in its unit: 'fs_kHz', 'sampling_rate_hz', 'fs (kHz)', 'SampleRate[kHz]', 'dt-us'
 _UNIT_IN_NAME = re.compile(r"^(.+?)\s*(?:[_\-\s]+|[\[(]\s*)([A-Za-zµμ/1]+)\s*[\])]?$")
 
@@ -88,3 +95,10 @@ def in_hz(found: tuple[bool, float], number: float) -> float | None:
     if interval:
         return 1.0 / (number * factor) if number > 0 else None
     return number * factor
+
+
+def serial_days(t: np.ndarray) -> bool:
+    """Whether a rising time column *t* holds Excel serial days rather than seconds (_SERIAL_DAYS)."""
+    if t.size < 2 or not _SERIAL_DAYS[0] <= t[0] <= _SERIAL_DAYS[1]:
+        return False
+    return 0 < (t[-1] - t[0]) / (t.size - 1) < 1 / _FASTEST_LOGGER_HZ

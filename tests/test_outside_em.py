@@ -1,0 +1,74 @@
+"""Outside user EM (issue 39, round 21): a 29/139 pump drive at 30 Hz, its takes made here with numpy (each shaft's
+lines, the mesh's harmonics modulated in amplitude and phase by both shafts, noise, a once-per-turn tacho), written
+as engineers' tools write them: Excel's serial days as the time column, units of acceleration in a channel's name
+that are not m/s² or g ('acc [mm/s²]', 'a (in/s^2)')."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gearlab.inspect import InspectOptions, inspect_record
+
+FS = 25600.0
+STAGES = ((29, 139),)
+BOX = (
+    '[gearbox]\nname = "pumpA"\n[operation]\nspeed = "30 Hz"\nload = "40 N*m"\n'
+    '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\npinion = { z = 29, bore = "25 mm" }\n'
+    'wheel = { z = 139, bore = "40 mm" }\n[sensor]\nnear = "input"\ntacho = "input"\n'
+)
+
+
+def _shaft(seconds: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(t in s, the input shaft's angle in rad): 30 Hz swinging 0.2 %, from any angle."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * FS)) / FS
+    f = 30.0 * (1 + 0.002 * np.sin(2 * np.pi * 0.31 * t + rng.uniform(0, 6)))
+    return t, 2 * np.pi * np.cumsum(f) / FS + rng.uniform(0, 6)
+
+
+def _take(th: np.ndarray, seed: int) -> np.ndarray:
+    """m/s²: both shafts' orders 1-2, the mesh's harmonics 1-3 modulated in amplitude and phase, noise 24 dB down."""
+    rng = np.random.default_rng(seed + 7)
+    zp, zw = STAGES[0]
+    wheel = th * zp / zw
+    x = sum(0.2 * np.cos(k * a + 0.7 * k) for a in (th, wheel) for k in (1, 2))
+    for h, amp in ((1, 3.0), (2, 1.2), (3, 0.4)):
+        am = 1 + 0.06 * np.cos(th + 0.3 * h) + 0.04 * np.cos(wheel + 0.8 * h)
+        x = x + amp * am * np.cos(h * (zp * th + 0.03 * np.cos(th + 0.2) + 0.02 * np.cos(wheel)))
+    return x + rng.normal(0, 0.06 * np.std(x), th.size)
+
+
+def _tacho(th: np.ndarray) -> np.ndarray:
+    return np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)
+
+
+def _csv(path, header: str, *columns, formats: tuple[str, ...]) -> None:
+    rows = (",".join(f % v for f, v in zip(formats, row)) for row in zip(*columns))
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+
+
+@pytest.fixture(scope="module")
+def box(tmp_path_factory):
+    from gearlab.gearbox import load_gearbox
+
+    path = tmp_path_factory.mktemp("pump") / "box.toml"
+    path.write_text(BOX)
+    return load_gearbox(path)
+
+
+def test_a_time_column_of_excel_serial_days_gives_the_rate(tmp_path, box):
+    # Excel's CSV of a 'Time' column in its General format: serial days since 1899-12-30 to 15 digits
+    # (46357.4166666667 is 2026-12-01 10:00): read as seconds, '76800 samples at 2.212e+06 kHz, 3.472e-05 s' and
+    # 'speed 155513594 rpm (2592 kHz) measured ... +8639544 %', exit 0
+    t, th = _shaft(2.0, 1)
+    acc = _take(th, 1)
+    path = tmp_path / "excel.csv"
+    _csv(
+        path, "Time,acc_ms2,tacho_V", 46357.0 + 10 / 24 + t / 86400, acc, _tacho(th), formats=("%.10f", "%.6f", "%.1f")
+    )
+    got = inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+    assert got["fs_hz"] == pytest.approx(FS, rel=1e-4)
+    assert "Excel serial days" in got["fs_source"], got["fs_source"]
+    assert got["speed"]["mean_hz"] == pytest.approx(30.0, rel=0.005)
+    assert "matches" in got["verdict"], got["verdict"]
