@@ -72,3 +72,16 @@ def test_a_time_column_of_excel_serial_days_gives_the_rate(tmp_path, box):
     assert "Excel serial days" in got["fs_source"], got["fs_source"]
     assert got["speed"]["mean_hz"] == pytest.approx(30.0, rel=0.005)
     assert "matches" in got["verdict"], got["verdict"]
+
+
+@pytest.mark.parametrize(("name", "per_ms2"), [("acc [mm/s²]", 1000.0), ("a (in/s^2)", 1 / 0.0254)])
+def test_an_acceleration_unit_in_brackets_in_a_channel_s_name_scales_its_values(tmp_path, box, name, per_ms2):
+    # a channel named 'acc [mm/s²]' (or 'a (in/s^2)', an American logger's) was 'values: unknown (no sensitivity
+    # or gain given: the values are taken as m/s²)': the level 1000 x (39 x) too high, unsaid
+    t, th = _shaft(2.0, 2)
+    acc = _take(th, 2)
+    path = tmp_path / "take.csv"
+    _csv(path, f"time_s,{name},tacho_V", t, acc * per_ms2, _tacho(th), formats=("%.8f", "%.5f", "%.1f"))
+    got = inspect_record(str(path), box, InspectOptions(name, tacho="tacho_V"))
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.01), got["units"]
+    assert got["units"].startswith("m/s² = value x"), got["units"]

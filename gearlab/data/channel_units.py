@@ -58,7 +58,13 @@ def name_unit(name: str) -> tuple[str, str, float] | None:
     ("acceleration", "g", 9.80665), ...; None when it says none."""
     text = " ".join(str(name).split())
     match = _VOLT_NAME.search(text) or _ACCELERATION_NAME.search(text)
-    return None if match is None else unit_scale(match.group(1))
+    if match is not None:
+        return unit_scale(match.group(1))
+    # any other acceleration in brackets ('acc [mm/s²]', 'a (in/s^2)', 'Beschl. [cm/s²]'): they were 'values:
+    # unknown ... taken as m/s²', 1000 x or 39 x off, unsaid
+    bracketed = _BRACKETED.search(text)
+    found = unit_scale(bracketed.group(1)) if bracketed else None
+    return found if found and found[0] == "acceleration" else None
 
 
 def unit_scale(text: str) -> tuple[str, str, float] | None:
