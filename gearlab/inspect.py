@@ -71,7 +71,7 @@ from .gearbox.speed import (
     nominal_line,
 )
 from .gearbox.speed_course import speed_course, speed_shift
-from .inspect_tacho import elsewhere_line, marks_line, shaft_and_marks
+from .inspect_tacho import elsewhere_line, marks_line, shaft_and_marks, speed_channel
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders, modulation_pairs, smear_merged
@@ -201,7 +201,7 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
             theta = unwrap_tacho(angle_tacho(rec.tacho))
         how = f"tacho '{rec.tacho_name}' (shaft angle) on the {shaft} shaft"
     else:
-        with prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"):
+        with prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"), speed_channel(rec.tacho):
             theta = angle_from_pulses(rec.tacho, rec.fs, smooth=ratio < 1, marks=ppr) / ppr
         how = f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution) on the {shaft} shaft"
     theta = theta / ratio  # the input shaft's angle

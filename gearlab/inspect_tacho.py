@@ -9,12 +9,26 @@ which the detection kind's check of its history records is (gap.structure.struct
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from fractions import Fraction
 
 import numpy as np
 
+from .data.recordings import speed_channel_note
+from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
 from .gearbox.match import MIN_TEETH, STRONGEST, TACHO_SPEED_TOL, tacho_elsewhere, tacho_shaft_words, tol_mesh
+
+
+@contextmanager
+def speed_channel(tacho: np.ndarray):
+    """Re-raise a tacho's refusal as a speed channel's (data.recordings.speed_channel_note) where its level says so,
+    as a run does: inspect said a 30 Hz speed channel given as --tacho had 'pulse train has 1 rising edge(s)'."""
+    try:
+        yield
+    except GearlabInputError as exc:
+        raise GearlabInputError(speed_channel_note(tacho) or str(exc)) from None
+
 
 MARKS = range(1, 9)  # the counts of marks a turn tried, as marks_line tries them
 

@@ -5,6 +5,8 @@ that are not m/s² or g ('acc [mm/s²]', 'a (in/s^2)')."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -85,3 +87,20 @@ def test_an_acceleration_unit_in_brackets_in_a_channel_s_name_scales_its_values(
     got = inspect_record(str(path), box, InspectOptions(name, tacho="tacho_V"))
     assert got["rms"] == pytest.approx(np.std(acc), rel=0.01), got["units"]
     assert got["units"].startswith("m/s² = value x"), got["units"]
+
+
+def test_inspect_names_a_speed_channel_in_hz_given_as_the_tacho(tmp_path, box):
+    # a logger's analog speed channel ('speed_Hz', 30 Hz swinging 0.2 %) given as --tacho: inspect said 'pulse train
+    # has 1 rising edge(s) in 51200 samples ... at least 2 once-per-revolution pulses are needed', as though the
+    # pulses were too few (a run said 'a speed channel?')
+    from gearlab.errors import GearlabInputError
+
+    t, th = _shaft(2.0, 3)
+    path = tmp_path / "speed.csv"
+    speed = 30.0 * (1 + 0.002 * np.sin(2 * np.pi * 0.31 * t))
+    _csv(path, "time_s,acc_ms2,speed_Hz", t, _take(th, 3), speed, formats=("%.8f", "%.5f", "%.4f"))
+    with pytest.raises(GearlabInputError) as err:
+        inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="speed_Hz"))
+    text = str(err.value)
+    assert "a speed channel?" in text and "speed_Hz" in text and "\n" not in text, text
+    assert re.search(r"'30\.0\d Hz'", text), text  # the speed to give, in the unit a channel named '_Hz' is in

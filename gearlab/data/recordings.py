@@ -520,7 +520,7 @@ def speed_channel_note(x: np.ndarray) -> str | None:
     return (
         f"it holds a steady level ({mid:.4g} ± {(hi - lo) / 2:.2g}), neither pulses nor a shaft angle: a speed "
         f"channel? expected a tacho's pulses or the shaft angle; give the speed instead (--speed / speed = "
-        f"'{mid:.4g} rpm', if in rpm) or no tacho: the mesh lines give the speed"
+        f"'{mid:.4g} rpm' or '{mid:.4g} Hz', as it reads) or no tacho: the mesh lines give the speed"
     )
 
 
