@@ -11,6 +11,7 @@ from __future__ import annotations
 import errno
 import glob
 import os
+import re
 import tempfile
 import tomllib
 from collections.abc import Callable
@@ -120,7 +121,16 @@ def matched(name: str, base: Path, where: str) -> list[str]:
     """The files a scenario's measured-file *name* stands for: itself, or, where it holds a glob
     pattern (*, ?, [...]; ** across folders) and is no file's own name, each file it matches, sorted
     by name and written as the pattern is (relative to *base*, the scenario's folder, unless
-    absolute). A pattern matching no file: one line naming *where* and the pattern."""
+    absolute). A pattern matching no file: one line naming *where* and the pattern. A Windows user's
+    backslashes ('..\\daten\\take.csv') separate folders here too, where no file is named so; a drive's
+    path ('C:\\data\\take.csv') is refused in one line (it is no path on this machine)."""
+    if "\\" in name and os.sep != "\\" and not (base / name).exists():
+        if re.match(r"[A-Za-z]:[\\/]", name):
+            raise GearlabInputError(
+                f"{where}: {name!r} is a path on a Windows drive; expected the file's path on this machine, "
+                f"absolute or relative to {base}"
+            )
+        name = name.replace("\\", "/")
     if not set(name) & set("*?[") or (base / name).exists():
         return [name]
     found = sorted(m for m in glob.glob(name, root_dir=base, recursive=True) if (base / m).is_file())

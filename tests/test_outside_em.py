@@ -104,3 +104,41 @@ def test_inspect_names_a_speed_channel_in_hz_given_as_the_tacho(tmp_path, box):
     text = str(err.value)
     assert "a speed channel?" in text and "speed_Hz" in text and "\n" not in text, text
     assert re.search(r"'30\.0\d Hz'", text), text  # the speed to give, in the unit a channel named '_Hz' is in
+
+
+def _gap_scenario(folder, file: str) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "box.toml").write_text(BOX)
+    (folder / "gap.toml").write_text(
+        '[scenario]\nname = "pump_gap"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\n'
+        f'vibration = "acc_ms2"\ntacho = "tacho_V"\n'
+        f'files = [{{ file = {file}, role = "history", label = "healthy" }}]\n'
+        '[diagnosis]\ncandidates = ["sensor_noise"]\n[accuracy]\nenabled = false\n'
+    )
+
+
+def test_a_windows_user_s_backslashes_in_a_scenario_in_another_folder_than_its_data_name_its_files(tmp_path, cli):
+    # a scenario written on Windows beside its data's folder ('..\daten\Prüfstand Verlauf ?.csv', a literal TOML
+    # string, non-ASCII and blanks in the names): "'..\\daten\\Prüfstand Verlauf ?.csv' matches no file", exit 2
+    t, th = _shaft(1.0, 4)
+    (tmp_path / "daten").mkdir()
+    for i in (1, 2):
+        _csv(
+            tmp_path / "daten" / f"Prüfstand Verlauf {i}.csv",
+            "time_s,acc_ms2,tacho_V",
+            t,
+            _take(th, i),
+            _tacho(th),
+            formats=("%.8f", "%.5f", "%.1f"),
+        )
+    _gap_scenario(tmp_path / "szenarien", r"'..\daten\Prüfstand Verlauf ?.csv'")
+    code, out, err = cli("validate", tmp_path / "szenarien" / "gap.toml")
+    assert code == 0 and "2 measured history records" in out, out + err
+    _gap_scenario(tmp_path / "szenarien", r"'..\daten\Prüfstand Verlauf 1.csv'")  # one file, no pattern
+    code, out, err = cli("validate", tmp_path / "szenarien" / "gap.toml")
+    assert code == 0 and "1 measured history record" in out, out + err
+    # a drive's path is none on this machine: one line naming the scenario, its table and key
+    _gap_scenario(tmp_path / "szenarien", r"'D:\Messungen\Verlauf 1.csv'")
+    code, out, err = cli("validate", tmp_path / "szenarien" / "gap.toml")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "gap.toml" in line and "[target]" in line and "Windows drive" in line, err
