@@ -142,3 +142,33 @@ def test_a_windows_user_s_backslashes_in_a_scenario_in_another_folder_than_its_d
     code, out, err = cli("validate", tmp_path / "szenarien" / "gap.toml")
     line = err.strip()
     assert code == 2 and "\n" not in line and "gap.toml" in line and "[target]" in line and "Windows drive" in line, err
+
+
+@pytest.mark.parametrize(
+    ("name", "side", "said"),
+    [
+        ("take.csv", ("take.json", '{"device": "NI 9234", "channels": 2, "sample_rate": 25600}'), "take.json states"),
+        ("take.csv", ("take.yaml", "logger: DT9837\nSampleRate_kHz: 25.6\n"), "take.yaml states"),
+        ("pump_25k6Hz.csv", None, None),
+        ("pump 25600 Hz.csv", None, "its name says"),
+    ],
+)
+def test_a_rate_a_logger_s_side_file_or_the_take_s_name_states_is_named_where_the_file_has_none(
+    tmp_path, box, name, side, said
+):
+    # no time column, the rate only beside the take (a logger's take.json or take.yaml) or in its name: 'no sampling
+    # rate: the file has no 'fs'/time and none was given (--fs / fs = ...)', the rate the user had at hand unsaid
+    from gearlab.errors import GearlabInputError
+
+    _, th = _shaft(1.0, 5)
+    _csv(tmp_path / name, "acc_ms2,tacho_V", _take(th, 5), _tacho(th), formats=("%.5f", "%.1f"))
+    if side:
+        (tmp_path / side[0]).write_text(side[1])
+    with pytest.raises(GearlabInputError) as err:
+        inspect_record(str(tmp_path / name), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+    text = str(err.value)
+    assert "no sampling rate" in text and "\n" not in text, text
+    if said is None:  # '25k6' is no number this reads: no rate guessed
+        assert "its name says" not in text, text
+    else:
+        assert said in text and "--fs '25.6 kHz'" in text, text

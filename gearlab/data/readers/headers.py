@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import GearlabInputError
 from .base import is_rate_or_time, matrix_column, not_time
-from .rates import named, stated_hz
+from .rates import in_hz, key_of, named, scale_of, stated_hz
 
 
 @dataclass(frozen=True)
@@ -475,10 +475,49 @@ HEADERS = {
 INDEX_NAME = re.compile(r"(?i)^(sample|samples|sample ?(#|no\.?|nr\.?|number|index)|index|idx|n|no\.?|nr\.?|#|point)$")
 
 
+# A logger's side file beside a take (take.json, take.csv.yaml) with its rate ('"sample_rate": 25600', 'fs_kHz: 25.6'),
+# and a rate in the take's own name ('pump_25600Hz.csv', 'run3-51k2S/s'): both were 'no sampling rate ... (--fs / fs =
+# ...)', the rate the user had not said
+_SIDE_FILES = (".json", ".yaml", ".yml")
+_SIDE_FIELD = re.compile(
+    r"""["']?([A-Za-z][\w\-\[\]() ]*?)["']?\s*[:=]\s*["']?([-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)\s*([\w/]*)"""
+)
+_RATE_IN_NAME = re.compile(r"(?<![A-Za-z0-9.])(\d+(?:[.p]\d+)?)\s*(k?)(?:hz|s/s|sps)(?![a-z])", re.IGNORECASE)
+
+
+def _side_hint(path: Path) -> str:
+    """A clause naming the rate a logger's side file beside *path*, or its name, states ('' where none does)."""
+    from ...signals.checks import fmt_hz
+
+    for side in (path.with_suffix(ext) for ext in _SIDE_FILES):
+        try:
+            text = side.read_text(errors="replace")[:100_000] if side.is_file() else ""
+        except OSError:
+            continue
+        for name, number, unit in _SIDE_FIELD.findall(text):
+            found = scale_of(key_of(name), unit) or named(name.strip())
+            hz = in_hz(found, float(number)) if found else None
+            if hz and hz > 0:
+                return (
+                    f"; beside it, {side.name} states {name.strip()} = {number}{' ' * bool(unit)}{unit}: give "
+                    f"fs = '{fmt_hz(hz)}' (--fs '{fmt_hz(hz)}'; gearlab reads no side file)"
+                )
+    match = _RATE_IN_NAME.search(path.stem)
+    if match:
+        hz = float(match.group(1).replace("p", ".")) * (1e3 if match.group(2) else 1.0)
+        return f"; its name says {fmt_hz(hz)}: give fs = '{fmt_hz(hz)}' (--fs '{fmt_hz(hz)}') if it is the rate"
+    return ""
+
+
 def time_hint(path, rows: int = 2000) -> str:
     """For a headerless text record whose column 0 rises by a constant step (as a time column
-    does), a clause saying so and how to give the rate ('' otherwise): its first *rows* read."""
+    does), a clause saying so and how to give the rate ('' otherwise): its first *rows* read. First, a
+    rate that a logger's side file beside it or its name states (_side_hint)."""
     from ...signals.checks import fmt_hz
+
+    side = _side_hint(Path(path))
+    if side:
+        return side
     from .base import _column
     from .csv import delimiter_of, is_header, split_rows
     from .text import _open_text
