@@ -186,12 +186,25 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
     ]
     for c in dict.fromkeys(r["condition"] for r in rows):
         at = [watched_calls(r, summary) for r in rows if r["condition"] == c and r["unit"] == unit]
+        short = ""
         if at and all(r.get("n_positive") == 0 == r.get("n_negative") for r in at):
-            # a load's history with no test take of its own (a 29/73 box's 'heavy' read 'goal met by no row; best
-            # learned matched_filter (AUC –, – / – %), level with ... (AUC –, – / – %)')
-            lines.append(f"{c}: no test take: its history's thresholds serve gearlab score.")
-            lines += [spread] if (spread := record_spread(c, at)) else []
-            continue
+            # test takes too short for the longest TSA (1 s takes at 30 Hz: 29 turns, record30 needs 30) read 'no test
+            # take', beside their record10 AUC of 1.00: judged at the longest unit they fill, the length to record said
+            held = [r["unit"] for r in rows if r["condition"] == c and (r.get("n_positive") or r.get("n_negative"))]
+            held = [u for u in held if u.startswith("record")]
+            if held:
+                shorter = max(held, key=lambda u: int(u.removeprefix("record")))
+                at = [watched_calls(r, summary) for r in rows if r["condition"] == c and r["unit"] == shorter]
+                short = (
+                    f" (its test takes are too short for {unit}: judged at {shorter}; a take of "
+                    f"{unit.removeprefix('record')} turns of the watched gear's shaft or more is judged at {unit})"
+                )
+            else:
+                # a load's history with no test take of its own (a 29/73 box's 'heavy' read 'goal met by no row; best
+                # learned matched_filter (AUC –, – / – %), level with ... (AUC –, – / – %)')
+                lines.append(f"{c}: no test take: its history's thresholds serve gearlab score.")
+                lines += [spread] if (spread := record_spread(c, at)) else []
+                continue
         met = [
             r
             for r in at
@@ -208,7 +221,7 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
         # a row that did not learn the simulated fault is no evidence for what the simulator teaches
         nets = [r for r in at if (c, r["method"]) in learned and r["method"] not in blind]
         classical = [r for r in at if (c, r["method"]) not in learned]
-        text = f"{c}: goal met by " + (", ".join(r["method"] for r in met) if met else "no row")
+        text = f"{c}{short}: goal met by " + (", ".join(r["method"] for r in met) if met else "no row")
         if nets and classical:
             best_net, best_classical = max(nets, key=_merit), max(classical, key=_merit)
             than = {1: "better than", 0: "level with", -1: "behind"}[
