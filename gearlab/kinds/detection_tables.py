@@ -84,7 +84,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
                     "n_negative": int(len(neg)),
                     "non_finite": broken,
                     "threshold": thr,
-                    "called_by_label": {k: 100.0 * float(np.mean(np.asarray(v) > thr)) for k, v in by_label.items()},
+                    # none of a unit kind on takes too short for it: '–', not NaN and numpy's 'Mean of empty slice'
+                    "called_by_label": {
+                        k: 100.0 * float(np.mean(np.asarray(v) > thr)) if v else None for k, v in by_label.items()
+                    },
                     # detection and false alarms (%) at each threshold rule's threshold
                     "by_rule": {rule: {"detection": d, "false_alarm": f} for rule, (d, f) in other.items()},
                     "member_auc": [auc(*split(by_unit[m], u)) for m in r.get("members", [])],
