@@ -200,19 +200,19 @@ def test_score_s_exit_code_raises_the_alarm_on_damage_localised_on_a_gear_none_w
     assert code == 1 and "on a gear this run does not watch" in out_text, out_text + err
 
 
-def test_a_run_whose_test_takes_are_too_short_for_its_longest_tsa_is_judged_at_the_longest_they_fill(
+def test_a_run_of_one_history_take_and_test_takes_too_short_for_its_longest_tsa_says_what_to_record(
     cli, tmp_path, no_figures
 ):
-    # a 29/139 box's 2 s history and 1 s test takes (29 input turns; record30 needs 30): the verdict read '30 Hz: no
-    # test take: its history's thresholds serve gearlab score.' beside a record10 AUC of 1.00 of two test takes. Here
-    # the tiny run (blocks 5 and 10) with test takes of 8 turns
+    # a 29/139 box's one 2 s history take and 1 s test takes (29 input turns; record30 needs 30): the verdict read
+    # '30 Hz: no test take: its history's thresholds serve gearlab score.' beside a record10 AUC of 1.00 of two test
+    # takes, and nothing of its thresholds resting on one take. Here the tiny run (blocks 5 and 10), test takes of 8
+    # turns
     from detection_scenario import scenario
     from textrecords import record
 
-    files = [("h1", "history", "healthy", 0.0), ("h2", "history", "healthy", 0.0)]
-    files += [("s1", "test", "healthy", 0.0), ("s2", "test", "fault", 4.0)]
+    files = [("h1", "history", "healthy", 0.0), ("s1", "test", "healthy", 0.0), ("s2", "test", "fault", 4.0)]
     (tmp_path / "data").mkdir()
-    for i, (name, _, _, chip) in enumerate(files[2:]):
+    for i, (name, _, _, chip) in enumerate(files[1:]):
         record(tmp_path / "data" / f"{name}.zip", revolutions=8, chip=chip, seed=20 + i, phase=0.3 * i)
     path = scenario(tmp_path, files=files, methods=("matched_filter",))
     code, out, err = cli("run", path, "--out", tmp_path / "runs")
@@ -222,3 +222,5 @@ def test_a_run_whose_test_takes_are_too_short_for_its_longest_tsa_is_judged_at_t
     assert "empty slice" not in err and not re.search(r"\bnan\b", out), err
     (line,) = [s for s in out.splitlines() if "too short for record10" in s]
     assert "judged at record5" in line and "goal met by" in line, line
+    (alone,) = [s for s in out.splitlines() if "one history take" in s]
+    assert "add two or more healthy takes" in alone, alone

@@ -204,6 +204,7 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
                 # learned matched_filter (AUC –, – / – %), level with ... (AUC –, – / – %)')
                 lines.append(f"{c}: no test take: its history's thresholds serve gearlab score.")
                 lines += [spread] if (spread := record_spread(c, at)) else []
+                lines += [alone] if (alone := one_take(c, at)) else []
                 continue
         met = [
             r
@@ -268,4 +269,17 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
             )
         lines.append(text + left_out(summary, c, unit) + ".")
         lines += [spread] if (spread := record_spread(c, at)) else []
+        lines += [alone] if (alone := one_take(c, at)) else []
     return lines
+
+
+def one_take(condition: str, at: list[Mapping]) -> str | None:
+    """The line saying that *condition*'s thresholds rest on one history take, where they do (a 2 s take of a 29/139
+    box: its verdict 'goal met' said nothing of it); None otherwise."""
+    if not any((r.get("history_model") or {}).get("records") == 1 for r in at):
+        return None
+    return (
+        f"{condition}: one history take: how far takes of other days lie apart is not measured, so the thresholds "
+        "rest on its own revolutions and a new healthy take may be called more often than the false alarms asked; "
+        "add two or more healthy takes of this condition (role history), from different days."
+    )
