@@ -224,3 +224,8 @@ def test_a_run_of_one_history_take_and_test_takes_too_short_for_its_longest_tsa_
     assert "judged at record5" in line and "goal met by" in line, line
     (alone,) = [s for s in out.splitlines() if "one history take" in s]
     assert "add two or more healthy takes" in alone, alone
+    # `gearlab compare` of such runs stopped on 'internal error: TypeError: unsupported format string passed to
+    # NoneType.__format__' (record10 has no AUC here)
+    run_dir = out.strip().splitlines()[-1].split(": ", 1)[1]
+    code, out, err = cli("compare", run_dir, run_dir)
+    assert code == 0 and "– (– / –)" in out, out + err

@@ -430,8 +430,14 @@ def side_by_side(runs: list[tuple]) -> tuple[str, str] | None:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for key in dict.fromkeys(k for rows in cells for k in rows):
         got = [rows.get(key) for rows in cells]
-        shown = [f"{r['auc']:.3f} ({pct(r['detection'])} / {pct(r['false_alarm'])})" if r else "" for r in got]
-        delta = [f"{r['auc'] - got[0]['auc']:+.3f}" if r and got[0] else "" for r in got[1:]]
+        # a unit kind no test take filled (1 s takes, record30) has no AUC: '–', where compare stopped on a TypeError
+        shown = [
+            f"{_cell(r['auc'], '{:.3f}')} ({pct(r['detection'])} / {pct(r['false_alarm'])})" if r else "" for r in got
+        ]
+        delta = [
+            f"{r['auc'] - got[0]['auc']:+.3f}" if r and got[0] and None not in (r["auc"], got[0]["auc"]) else ""
+            for r in got[1:]
+        ]
         lines.append("| " + " | ".join([*key, *shown, *delta]) + " |")
     title = "Each run's ROC AUC (detected / false-alarm % at its history's threshold) per condition, method and unit"
     return title, "\n".join(lines) + "\n"
