@@ -106,12 +106,12 @@ def test_inspect_names_a_speed_channel_in_hz_given_as_the_tacho(tmp_path, box):
     assert re.search(r"'30\.0\d Hz'", text), text  # the speed to give, in the unit a channel named '_Hz' is in
 
 
-def _gap_scenario(folder, file: str) -> None:
+def _gap_scenario(folder, file: str, extra: str = "") -> None:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "box.toml").write_text(BOX)
     (folder / "gap.toml").write_text(
         '[scenario]\nname = "pump_gap"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\n'
-        f'vibration = "acc_ms2"\ntacho = "tacho_V"\n'
+        f'vibration = "acc_ms2"\ntacho = "tacho_V"\n{extra}'
         f'files = [{{ file = {file}, role = "history", label = "healthy" }}]\n'
         '[diagnosis]\ncandidates = ["sensor_noise"]\n[accuracy]\nenabled = false\n'
     )
@@ -229,3 +229,15 @@ def test_a_run_of_one_history_take_and_test_takes_too_short_for_its_longest_tsa_
     run_dir = out.strip().splitlines()[-1].split(": ", 1)[1]
     code, out, err = cli("compare", run_dir, run_dir)
     assert code == 0 and "– (– / –)" in out, out + err
+
+
+def test_a_charge_accelerometer_s_sensitivity_is_refused_naming_the_amplifier_s_gain_it_needs(tmp_path, cli):
+    # a charge accelerometer's data sheet value, sensitivity = "10 pC/g": 'has the wrong dimension; expected a
+    # quantity in V*s^2/m', which says nothing of the charge amplifier between sensor and logger
+    t, th = _shaft(1.0, 6)
+    _csv(tmp_path / "take.csv", "time_s,acc_ms2,tacho_V", t, _take(th, 6), _tacho(th), formats=("%.8f", "%.5f", "%.1f"))
+    _gap_scenario(tmp_path, "'take.csv'", extra='sensitivity = "10 pC/g"\n')
+    code, _, err = cli("validate", tmp_path / "gap.toml")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "gap.toml" in line and "[target]" in line and "sensitivity" in line, err
+    assert "charge amplifier's gain" in line and "'100 mV/g'" in line, line

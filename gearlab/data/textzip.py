@@ -40,7 +40,9 @@ def parse_sensitivity(value, where: str) -> float:
     try:
         number, unit = _quantity(value, ("V*s^2/m", "m/s^2/V"), where)
     except GearlabInputError as exc:
-        raise GearlabInputError(f"{exc} (volts per acceleration, e.g. '10 mV/g'; g is standard gravity)") from None
+        charge = _charge_per_acceleration(value, where)  # a charge accelerometer's data sheet: '10 pC/g'
+        said = f"{exc} (volts per acceleration, e.g. '10 mV/g'; g is standard gravity)"
+        raise GearlabInputError(charge or said) from None
     s = number if unit == "V*s^2/m" or not number > 0 else 1.0 / number
     if not s > 0:
         raise GearlabInputError(f"{where}: expected a positive sensitivity such as '10 mV/g', got {shown(value)}")
@@ -52,6 +54,19 @@ def parse_sensitivity(value, where: str) -> float:
             "e.g. '100 mV/g'"
         )
     return s
+
+
+def _charge_per_acceleration(value, where: str) -> str | None:
+    """The line for a sensitivity given as charge per acceleration ('10 pC/g': it was 'has the wrong dimension;
+    expected a quantity in V*s^2/m'), naming the amplifier's gain it needs; None for any other text."""
+    try:
+        _quantity(value, ("C*s^2/m",), where)
+    except GearlabInputError:
+        return None
+    return (
+        f"{where}: {shown(value)} is a charge accelerometer's sensitivity (charge per acceleration); expected volts "
+        "per acceleration at the logger: it times the charge amplifier's gain, e.g. 10 pC/g at 10 mV/pC is '100 mV/g'"
+    )
 
 
 def _quantity(value, units: tuple[str, ...], where: str) -> tuple[float, str]:
