@@ -241,3 +241,19 @@ def test_a_charge_accelerometer_s_sensitivity_is_refused_naming_the_amplifier_s_
     line = err.strip()
     assert code == 2 and "\n" not in line and "gap.toml" in line and "[target]" in line and "sensitivity" in line, err
     assert "charge amplifier's gain" in line and "'100 mV/g'" in line, line
+
+
+def test_a_unit_key_takes_any_acceleration_unit_and_names_a_velocity_as_such(tmp_path, cli, box):
+    # a headerless logger export in mg: unit = "mg" (or "mm/s²") was refused, "'mg' is not one of m/s^2, m/s², g, V,
+    # mV (did you mean 'g'?)", though a channel named 'acc [mg]' is read; unit = "mm/s" got "(did you mean 'm/s²'?)"
+    t, th = _shaft(1.0, 7)
+    acc = _take(th, 7)
+    path = tmp_path / "take.csv"
+    _csv(path, "time_s,acc,tacho_V", t, acc / 9.80665 * 1000, _tacho(th), formats=("%.8f", "%.4f", "%.1f"))
+    got = inspect_record(str(path), box, InspectOptions("acc", tacho="tacho_V", unit="mg"))
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.01), got["units"]
+    _gap_scenario(tmp_path, "'take.csv'", extra='unit = "mm/s"\n')
+    (tmp_path / "gap.toml").write_text((tmp_path / "gap.toml").read_text().replace('"acc_ms2"', '"acc"'))
+    code, _, err = cli("validate", tmp_path / "gap.toml")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "[target] key 'unit'" in line and "is a velocity" in line, err

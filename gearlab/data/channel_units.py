@@ -162,9 +162,21 @@ def declared_unit(value, where: str):
     if value in (None, "") or value in UNITS:
         return value
     read = _VOLTS_SPELLED.get(re.sub(r"\s", "", value).lower()) if isinstance(value, str) else None
+    # any other acceleration or volt a name may end in ('mg', 'mm/s²', 'in/s^2', 'uV'): was refused; the symbols'
+    # case stays as said above ('G', 'MV', 'mG' refused)
+    cased = isinstance(value, str) and "G" not in value and value.lower() not in {u.lower() for u in UNITS}
+    if read is None and cased and name_unit(f"[{value}]") is not None:
+        return value
     if read is None:
+        other = _other_quantity(f"[{value}]") if isinstance(value, str) else None
+        if other:  # 'mm/s' was 'not one of ... (did you mean 'm/s²'?)'
+            raise GearlabInputError(
+                f"{where}: {shown(value)} is a {other[0]}; expected an acceleration (m/s², g, mg, mm/s², ...) or an "
+                "accelerometer's volts (V, mV): record the accelerometer's own signal"
+            )
         raise GearlabInputError(
-            f"{where}: {shown(value)} is not one of {', '.join(UNITS)}{did_you_mean(str(value), UNITS)}"
+            f"{where}: {shown(value)} is not one of {', '.join(UNITS)}, nor another acceleration or voltage unit "
+            f"(e.g. 'mg', 'mm/s²'){did_you_mean(str(value), UNITS)}"
         )
     return read
 
