@@ -59,7 +59,7 @@ def box(tmp_path_factory):
     return load_gearbox(path)
 
 
-def test_a_time_column_of_excel_serial_days_gives_the_rate(tmp_path, box):
+def test_a_time_column_of_excel_serial_days_gives_the_rate(tmp_path, box, cli):
     # Excel's CSV of a 'Time' column in its General format: serial days since 1899-12-30 to 15 digits
     # (46357.4166666667 is 2026-12-01 10:00): read as seconds, '76800 samples at 2.212e+06 kHz, 3.472e-05 s' and
     # 'speed 155513594 rpm (2592 kHz) measured ... +8639544 %', exit 0
@@ -74,6 +74,10 @@ def test_a_time_column_of_excel_serial_days_gives_the_rate(tmp_path, box):
     assert "Excel serial days" in got["fs_source"], got["fs_source"]
     assert got["speed"]["mean_hz"] == pytest.approx(30.0, rel=0.005)
     assert "matches" in got["verdict"], got["verdict"]
+    # validate reads the rate off the header's first rows alike: '25.6 kHz given, but excel.csv says 2.212e+06 kHz'
+    _gap_scenario(tmp_path, "'excel.csv'", extra='fs = "25.6 kHz"\n')
+    code, out, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 0, err
 
 
 @pytest.mark.parametrize(("name", "per_ms2"), [("acc [mm/s²]", 1000.0), ("a (in/s^2)", 1 / 0.0254)])

@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import GearlabInputError
 from .base import is_rate_or_time, matrix_column, not_time
-from .rates import in_hz, key_of, named, scale_of, stated_hz
+from .rates import SECONDS_PER_DAY, in_hz, key_of, named, scale_of, serial_days, stated_hz
 
 
 @dataclass(frozen=True)
@@ -265,13 +265,16 @@ def _stated_rate(lines, first: str, names: list[str], rates: list) -> tuple:
     t = _column(fields)
     if t.dtype.kind != "f" or t.size < 3 or not np.all(np.diff(t) > 0):
         return None, 1e-6
+    day = SECONDS_PER_DAY if serial_days(t) else 1.0  # Excel's serial days, as the run reads them
+    spacing = float(np.spacing(np.abs(t).max()))  # digits printed past a double's own (46357.416666666664)
+    t = (t - t[0]) * day
     span = t[-1] - t[0]
     step = span / (t.size - 1)
     if np.max(np.abs(t - t[0] - step * np.arange(t.size))) > step / 2:  # not a uniform clock
         return None, 1e-6
     digits = max(len(f.partition(".")[2].partition("e")[0].partition("E")[0]) for f in fields)
-    where = f"its time column {names[column]!r}, first {t.size} rows"
-    return (1.0 / (step * time_scale(names[column])), where), max(1e-6, 2 * 10.0**-digits / span)
+    where = f"its time column {names[column]!r}{' in Excel serial days' * (day != 1)}, first {t.size} rows"
+    return (1.0 / (step * time_scale(names[column])), where), max(1e-6, 2 * max(10.0**-digits, spacing) * day / span)
 
 
 def _rate_fields(fields) -> list[tuple[str, float | None]]:
