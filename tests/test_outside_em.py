@@ -261,3 +261,29 @@ def test_a_unit_key_takes_any_acceleration_unit_and_names_a_velocity_as_such(tmp
     code, _, err = cli("validate", tmp_path / "gap.toml")
     line = err.strip()
     assert code == 2 and "\n" not in line and "[target] key 'unit'" in line and "is a velocity" in line, err
+
+
+@pytest.mark.parametrize(
+    ("stamp", "sep"),
+    [("%Y-%m-%dT%H:%M:%S.%fZ", ","), ("%Y-%m-%dT%H:%M:%S.%f+01:00", ","), ("%Y-%m-%d %H:%M:%S,%f", ";")],
+)
+def test_clock_times_with_a_zone_or_a_decimal_comma_give_the_rate_without_numpy_s_warning(tmp_path, box, stamp, sep):
+    # a logger's UTC stamps ('...T10:00:00.000039Z', '+01:00') read with 'warning: no explicit representation of
+    # timezones available for np.datetime64'; a German logger's decimal comma ('10:00:00,000039', ';' between
+    # columns) was 'must hold times in seconds or ISO 8601 clock times'
+    import datetime
+    import warnings
+
+    t, th = _shaft(1.0, 8)
+    start = datetime.datetime(2026, 12, 1, 10)
+    stamps = [(start + datetime.timedelta(microseconds=round(s * 1e6))).strftime(stamp) for s in t]
+    rows = (f"{s}{sep}{a:.5f}{sep}{k:.1f}" for s, a, k in zip(stamps, _take(th, 8), _tacho(th)))
+    path = tmp_path / "take.csv"
+    path.write_text(
+        f"timestamp{sep}acc_ms2{sep}tacho_V\n" + "\n".join(r.replace(".", ",") if sep == ";" else r for r in rows)
+    )
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        got = inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+    assert got["fs_hz"] == pytest.approx(FS, rel=1e-4), got["fs_source"]
+    assert not [w for w in said if "timezones" in str(w.message)], [str(w.message) for w in said]

@@ -62,7 +62,7 @@ from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
-from .readers.rates import SECONDS_PER_DAY, serial_days
+from .readers.rates import SECONDS_PER_DAY, clock_seconds, serial_days
 
 TWO_PI = 2.0 * np.pi
 
@@ -226,18 +226,6 @@ def _written_resolution(t: np.ndarray) -> np.ndarray:
     return step
 
 
-def _clock_seconds(arr: np.ndarray) -> np.ndarray:
-    """Text times that are ISO 8601 clock times ('2026-11-30T10:00:00.000039', a logger's timestamps) as seconds
-    from the first, to the microsecond; any other array as it is."""
-    if arr.dtype.kind not in "USO" or arr.size < 2:
-        return arr
-    try:
-        clock = np.array([str(v).strip() for v in arr.ravel()], dtype="datetime64[us]")
-    except ValueError:
-        return arr
-    return (clock - clock[0]).astype(np.int64) * 1e-6
-
-
 def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float, str]:
     """(fs, relative uncertainty, where) from a time vector in seconds (or Excel's serial days), checked uniform.
 
@@ -245,7 +233,7 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     grid. The rate is known only as well as the times were written (rounded to a few digits in a CSV file), so its
     uncertainty, 2·max deviation / span, widens the agreement asked of a given fs.
     """
-    arr = _clock_seconds(np.asarray(value))
+    arr = clock_seconds(np.asarray(value))
     if arr.dtype.kind not in "biuf":
         first = next((str(v) for v in arr.ravel()[:1]), "")
         raise GearlabInputError(

@@ -5,6 +5,7 @@ dataset 'sampling_rate_hz' are read, by every reader and by the header checks of
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 
@@ -102,3 +103,26 @@ def serial_days(t: np.ndarray) -> bool:
     if t.size < 2 or not _SERIAL_DAYS[0] <= t[0] <= _SERIAL_DAYS[1]:
         return False
     return 0 < (t[-1] - t[0]) / (t.size - 1) < 1 / _FASTEST_LOGGER_HZ
+
+
+# ISO 8601's decimal comma in a clock time ('10:00:00,000123', as German loggers write it), read as its point
+_DECIMAL_COMMA = re.compile(r"(\d\d:\d\d:\d\d),(\d)")
+
+
+def clock_seconds(arr: np.ndarray) -> np.ndarray:
+    """Text times that are ISO 8601 clock times ('2026-11-30T10:00:00.000039', '2026-12-01 10:00:00,000123Z', a
+    logger's timestamps) as seconds from the first, to the microsecond; any other array as it is. A zone ('Z',
+    '+01:00') is read as UTC, without numpy's warning ('no explicit representation of timezones', shown as a run's
+    warning though it changes nothing of a take's time differences); a decimal comma was 'must hold times'."""
+    if arr.dtype.kind not in "USO" or arr.size < 2:
+        return arr
+    texts = [str(v).strip() for v in arr.ravel()]
+    if "," in texts[0]:
+        texts = [_DECIMAL_COMMA.sub(r"\1.\2", t) for t in texts]
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "no explicit representation of timezones", UserWarning)
+        try:
+            clock = np.array(texts, dtype="datetime64[us]")
+        except ValueError:
+            return arr
+    return (clock - clock[0]).astype(np.int64) * 1e-6
