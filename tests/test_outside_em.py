@@ -287,3 +287,23 @@ def test_clock_times_with_a_zone_or_a_decimal_comma_give_the_rate_without_numpy_
         got = inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V"))
     assert got["fs_hz"] == pytest.approx(FS, rel=1e-4), got["fs_source"]
     assert not [w for w in said if "timezones" in str(w.message)], [str(w.message) for w in said]
+
+
+def test_clock_times_stamped_coarser_than_a_sampling_period_are_refused_with_the_rate_to_give(tmp_path, box):
+    # a logger's clock stamped to the millisecond at 25.6 kHz ('10:00:00.000', 26 rows each): 'does not increase
+    # between samples 0 and 1 (0 -> 0 s); expected increasing times in seconds', no rate said
+    import datetime
+
+    from gearlab.errors import GearlabInputError
+
+    t, th = _shaft(1.0, 9)
+    start = datetime.datetime(2026, 12, 1, 10)
+    stamps = [
+        (start + datetime.timedelta(microseconds=round(s * 1e6))).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3] for s in t
+    ]
+    path = tmp_path / "take.csv"
+    _csv(path, "timestamp,acc_ms2,tacho_V", stamps, _take(th, 9), _tacho(th), formats=("%s", "%.5f", "%.1f"))
+    with pytest.raises(GearlabInputError) as err:
+        inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+    text = str(err.value)
+    assert "written coarser than a sampling period" in text and "fs = '25.6" in text and "\n" not in text, text

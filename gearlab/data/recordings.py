@@ -250,9 +250,13 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     steps = np.diff(t)
     if np.any(steps <= 0):
         i = int(np.flatnonzero(steps <= 0)[0])
+        # times that repeat but never fall (a logger's clock stamped to 1 ms at 25.6 kHz): their rate, to give
+        mean = (t[-1] - t[0]) / (t.size - 1)
+        coarse = np.all(steps >= 0) and mean > 0 and np.min(steps[steps > 0]) > 1.5 * mean
+        rate = f", written coarser than a sampling period: give the rate, about fs = '{fmt_hz(1 / mean)}'"
         raise GearlabInputError(
             f"{path}: {where} does not increase between samples {i} and {i + 1} "
-            f"({t[i]:.9g} -> {t[i + 1]:.9g} s); expected increasing times in seconds"
+            f"({t[i]:.9g} -> {t[i + 1]:.9g} s){rate if coarse else ''}; expected increasing times in seconds"
         )
     span = float(t[-1] - t[0])
     dt = span / (t.size - 1)
