@@ -289,9 +289,9 @@ def test_clock_times_with_a_zone_or_a_decimal_comma_give_the_rate_without_numpy_
     assert not [w for w in said if "timezones" in str(w.message)], [str(w.message) for w in said]
 
 
-def test_clock_times_stamped_coarser_than_a_sampling_period_are_refused_with_the_rate_to_give(tmp_path, box):
+def test_clock_times_stamped_coarser_than_a_sampling_period_take_the_rate_given(tmp_path, box):
     # a logger's clock stamped to the millisecond at 25.6 kHz ('10:00:00.000', 26 rows each): 'does not increase
-    # between samples 0 and 1 (0 -> 0 s); expected increasing times in seconds', no rate said
+    # between samples 0 and 1 (0 -> 0 s); expected increasing times in seconds', no rate said, and --fs refused alike
     import datetime
 
     from gearlab.errors import GearlabInputError
@@ -307,3 +307,8 @@ def test_clock_times_stamped_coarser_than_a_sampling_period_are_refused_with_the
         inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V"))
     text = str(err.value)
     assert "written coarser than a sampling period" in text and "fs = '25.6" in text and "\n" not in text, text
+    # the rate given is taken, checked against the stamps (a given fs was refused by the same line)
+    got = inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V", fs=FS))
+    assert got["fs_hz"] == FS and got["speed"]["mean_hz"] == pytest.approx(30.0, rel=0.005), got["fs_source"]
+    with pytest.raises(GearlabInputError, match="disagrees with time 'timestamp'"):
+        inspect_record(str(path), box, InspectOptions("acc_ms2", tacho="tacho_V", fs=24000.0))

@@ -62,7 +62,7 @@ from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
-from .readers.rates import SECONDS_PER_DAY, clock_seconds, serial_days
+from .readers.rates import SECONDS_PER_DAY, CoarseTimes, clock_seconds, coarse_times, serial_days
 
 TWO_PI = 2.0 * np.pi
 
@@ -250,14 +250,11 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
     steps = np.diff(t)
     if np.any(steps <= 0):
         i = int(np.flatnonzero(steps <= 0)[0])
-        # times that repeat but never fall (a logger's clock stamped to 1 ms at 25.6 kHz): their rate, to give
-        mean = (t[-1] - t[0]) / (t.size - 1)
-        coarse = np.all(steps >= 0) and mean > 0 and np.min(steps[steps > 0]) > 1.5 * mean
-        rate = f", written coarser than a sampling period: give the rate, about fs = '{fmt_hz(1 / mean)}'"
-        raise GearlabInputError(
-            f"{path}: {where} does not increase between samples {i} and {i + 1} "
-            f"({t[i]:.9g} -> {t[i + 1]:.9g} s){rate if coarse else ''}; expected increasing times in seconds"
-        )
+        said = f"{path}: {where} does not increase between samples {i} and {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s)"
+        mean, step = (t[-1] - t[0]) / (t.size - 1), np.min(steps[steps > 0], initial=np.inf)
+        if np.all(steps >= 0) and mean > 0 and step < np.inf and step > 1.5 * mean:  # stamped to 1 ms at 25.6 kHz
+            raise coarse_times(said, 1 / mean, 2 * step / (t[-1] - t[0]), where)
+        raise GearlabInputError(f"{said}; expected increasing times in seconds")
     span = float(t[-1] - t[0])
     dt = span / (t.size - 1)
     deviation = np.abs(t - (t[0] + dt * np.arange(t.size)))
@@ -309,7 +306,12 @@ def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, floa
 
 def sampling_rate(contents: Contents, given: float | None, n: int, path: str) -> tuple[float, str]:
     """The rate to use and where it came from: the file's, checked against a given one."""
-    from_file = file_rate(contents, n, path)
+    try:
+        from_file = file_rate(contents, n, path)
+    except CoarseTimes as exc:  # a clock stamped coarser than a period: the rate given, checked against its stamps
+        if given is None:
+            raise
+        from_file = (exc.fs, exc.tolerance, exc.where)
     if from_file is None:
         if given is None:
             hint = time_hint(path) or " (--fs / fs = ...)"

@@ -9,6 +9,8 @@ import warnings
 
 import numpy as np
 
+from ...errors import GearlabInputError
+
 # compared lower-case, blanks and '-' as '_' (fs, Fs, FS, 'Sample Rate'); a DAQ's HDF5 export writes 'SamplingRate'
 # or 'SamplingFrequency' (a file attribute 'SamplingRate' was 'no sampling rate: the file has no 'fs'/time')
 _RATE_NAMES = ("fs", "sample_rate", "sampling_rate", "samplerate", "samplingrate", "sampling_frequency")
@@ -126,3 +128,18 @@ def clock_seconds(arr: np.ndarray) -> np.ndarray:
         except ValueError:
             return arr
     return (clock - clock[0]).astype(np.int64) * 1e-6
+
+
+class CoarseTimes(GearlabInputError):
+    """A time column stamped coarser than a sampling period (a logger's clock to 1 ms at 25.6 kHz): refused unless a
+    rate is given, which its stamps are checked against (its attributes fs, tolerance (relative) and where)."""
+
+
+def coarse_times(said: str, fs: float, tolerance: float, where: str) -> CoarseTimes:
+    """CoarseTimes for a time column *where* whose stamps give *fs* within *tolerance*: the line *said* with the rate to
+    give ('does not increase ... (0 -> 0 s)' said none, and a given fs was refused by the same line)."""
+    from ...signals.checks import fmt_hz
+
+    exc = CoarseTimes(f"{said}, written coarser than a sampling period: give the rate, about fs = '{fmt_hz(fs)}'")
+    exc.fs, exc.tolerance, exc.where = fs, tolerance, f"{where} (stamped coarser than a sampling period)"
+    return exc
