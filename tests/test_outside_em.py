@@ -226,6 +226,9 @@ def test_a_run_of_one_history_take_and_test_takes_too_short_for_its_longest_tsa_
     assert "empty slice" not in err and not re.search(r"\bnan\b", out), err
     (line,) = [s for s in out.splitlines() if "too short for record10" in s]
     assert "judged at record5" in line and "goal met by" in line, line
+    # the which-gear check's 'too short' says the length to record in seconds too (1 s takes said '6.05 turns ... it
+    # needs 8' alone); 8 turns at 16 Hz and 10 marks a turn here: a fraction of a second
+    assert re.search(r"it needs \d+ \(a take of [\d.]+ s or more\)", out), out
     (alone,) = [s for s in out.splitlines() if "one history take" in s]
     assert "add two or more healthy takes" in alone, alone
     # `gearlab compare` of such runs stopped on 'internal error: TypeError: unsupported format string passed to

@@ -87,6 +87,7 @@ def test_a_take_too_short_for_the_shafts_averages_names_no_gear(box):
         found = W.which_gear(W.Take(short, 0, 25.0, 25.0 * POINTS), hist, table, None)
     assert found["named"] is None and found["shafts"] == []
     said = "too short for the which-gear check: 2.75 output-shaft turns (29 input revolutions), it needs 8"
+    said += " (a take of 3.4 s or more)"  # 8 output turns at 25 Hz: 84 input revolutions
     assert found["summary"] == f"not localised: {said}"
     ns = D.nonsync_of(short, NS.history(history, table), table)
     # the evidence line says why, once each, and starts with no stray separator ('nothing (; non-synchronous ...')
