@@ -391,17 +391,15 @@ def _runs_table(runs) -> Table:
 def all_scored(rows: list[dict], alarm: bool = False) -> None:
     """After `gearlab score` has shown its rows: the takes it refused among several named in one line (exit 2, as a
     run stopped by bad input keeps its finished units): the others are scored and kept, and the exit code says not
-    every take was. *alarm* (--exit-code): every take scored, exit 1 where any row calls one (a fault, other damage)
-    or a take's change lies on a gear none watches, no method calling it (the line above its rows says so: a weekly
-    script exited 0 on an unwatched input pinion's z 1827), so that it needs no JSON to tell an alarm from none (0)."""
+    every take was. *alarm* (--exit-code): every take scored, exit 1 where any row calls one (a fault, other damage),
+    so that a script run weekly needs no JSON to tell an alarm from none (0)."""
     skipped = [r["file"] for r in rows if r.get("skipped")]
     if skipped:
         given = len(dict.fromkeys(r["file"] for r in rows))
         raise GearlabInputError(f"{len(skipped)} of {given} takes not scored (each said above): {', '.join(skipped)}")
     from .kinds.detection_own import NOT_SCORED  # the kinds import this module: at call time
-    from .kinds.detection_which_gear import unwatched
 
-    if alarm and (any(r["decision"] not in ("healthy", NOT_SCORED) for r in rows) or unwatched(rows)):
+    if alarm and any(r["decision"] not in ("healthy", NOT_SCORED) for r in rows):
         raise SystemExit(1)
 
 

@@ -178,32 +178,6 @@ def test_a_rate_a_logger_s_side_file_or_the_take_s_name_states_is_named_where_th
         assert said in text and "--fs '25.6 kHz'" in text, text
 
 
-def test_score_s_exit_code_raises_the_alarm_on_damage_localised_on_a_gear_none_watches(
-    cli, tmp_path, module_cache, monkeypatch, no_figures
-):
-    # a two-stage run watching the intermediate pinion scored a take with the input pinion chipped: 'other damage:
-    # input pinion 47T (stage 1), on a gear this run does not watch' (input z 1827/2.9), every method 'healthy' of the
-    # watched gear, and `--exit-code` exited 0: a weekly script saw no alarm. Here the tiny run (test_outside_ae's)
-    # scores a take whose localisation names the 74T output gear
-    from test_detection import run
-    from test_followups_39 import scenario
-    from textrecords import record
-
-    from gearlab.kinds import detection_scoring as D
-
-    out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
-    record(tmp_path / "quiet.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
-    code, _, err = cli("score", out, tmp_path / "quiet.zip", "--exit-code")
-    assert code == 0, err  # nothing localised: no alarm
-    other = "other damage: output gear 74T (stage 2)"
-    call = {"named": "output gear 74T (stage 2)", "summary": "", "call": other, "evidence": "output z 3.1/2.6"}
-    monkeypatch.setattr(
-        D, "localise_scored", lambda run_dir, records: {p: call for r in records.values() for p, *_ in r}
-    )
-    code, out_text, err = cli("score", out, tmp_path / "quiet.zip", "--exit-code")
-    assert code == 1 and "on a gear this run does not watch" in out_text, out_text + err
-
-
 def test_a_run_of_one_history_take_and_test_takes_too_short_for_its_longest_tsa_says_what_to_record(
     cli, tmp_path, no_figures
 ):
