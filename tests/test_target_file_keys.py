@@ -163,7 +163,7 @@ def test_score_reads_new_files_with_their_own_keys():
     for bad, match in (
         ({"vib": "x"}, r"^--key vib=x: expected KEY=VALUE, .*did you mean 'vibration'"),
         ({"fs": "fast"}, r"^--key fs"),
-        ({"unit": "furlong"}, r"^--key unit: 'furlong' is not one of"),
+        ({"unit": "furlong"}, r"^--key unit: 'furlong' is a displacement; expected an acceleration"),
     ):
         with pytest.raises(GearlabInputError, match=match):
             reading_keys(meta, None, bad)

@@ -106,7 +106,7 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
     need = NS.TURNS if lay.mode == "shafts" else 2 * round(lay.period * min(map(float, table.shaft_orders)))
     if turns < need - 1e-9:  # unread: a flag on it cannot be given a gear (detection_which_gear.call_of)
         said = f"{turns:.3g} {shaft}-shaft turns ({len(take.revolutions)} input revolutions), it needs {need}"
-        if turns > 0 and take.speed_hz > 0:  # in seconds too, what to record (a 1 s take said turns alone)
+        if turns > 0 and (take.speed_hz or 0) > 0:  # in seconds too, where known (a 1 s take said turns alone)
             said += f" (a take of {need * len(take.revolutions) / turns / take.speed_hz:.2g} s or more)"
         unread = {"turns": turns, "shaft": shaft, "needed": need}
         return NOT_READ | {"summary": f"not localised: too short for the which-gear check: {said}", "unread": unread}
