@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import MISSING, dataclass, field
 from pathlib import Path
 
@@ -368,6 +368,31 @@ def bare_speed(value) -> str:
     return " (a bare number is in Hz; expected a speed with its unit, e.g. '35 Hz' or '2100 rpm')" if bare else ""
 
 
+def _module_of_pitch(value, where: str) -> str:
+    """A diametral pitch P (teeth per inch of pitch diameter) is a module m = 25.4 mm / P: the one to write."""
+    try:  # a bare number is teeth per inch, as a US drawing gives it
+        per_m = to_si(value, "1/m", where) if isinstance(value, str) else float(value) / 0.0254
+        written = f"module = '{1e3 / per_m:.4g} mm' (25.4 mm / P)" if per_m > 0 else ""
+    except (GearlabInputError, TypeError, ValueError):
+        written = ""
+    return f"a diametral pitch P is written as a module: {written or 'module = 25.4 mm / P'}"
+
+
+def _not_yet(kind: str) -> Callable[[object, str], str]:
+    said = f"{kind} stages are not described yet (spur stages in series only: docs/your_gearbox.md, 'What you "
+    said += "cannot do yet'); expected a spur stage's keys"
+    return lambda value, where: said
+
+
+# Keys a gear engineer writes for a stage that gearlab takes in another form (a US diametral pitch) or does not
+# simulate yet: named as such, where 'unknown key' offered a neighbour by spelling ('helix_angle': pressure_angle?)
+OTHER_GEARING: dict[str, Callable[[object, str], str]] = {
+    "diametral_pitch": _module_of_pitch,
+    **dict.fromkeys(("helix_angle", "beta", "helix", "hand", "normal_module"), _not_yet("helical")),
+    **dict.fromkeys(("planets", "sun", "ring", "planet", "carrier"), _not_yet("planetary")),
+}
+
+
 class _Table:
     """One table of the description: typed, unit-aware reads, every message naming file, table and key."""
 
@@ -383,6 +408,8 @@ class _Table:
     def known(self, keys) -> None:
         keys = list(keys)
         for key in self.data:
+            if key in OTHER_GEARING:  # a gear engineer's key for what gearlab reads otherwise, or not yet
+                raise GearlabInputError(f"{self.where(key)}: {OTHER_GEARING[key](self.data[key], self.where(key))}")
             if key not in keys:
                 raise GearlabInputError(
                     f"{self.where(key)}: unknown key{did_you_mean(str(key), keys)}; known keys: {', '.join(keys)}"
