@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gearlab.inspect import InspectOptions, inspect_record
+
 FS = 20000.0
 F0 = 28.7  # Hz: 1750 rpm less 1.5 % slip
 BOX = (
@@ -64,3 +66,23 @@ def test_a_gear_engineer_s_stage_keys_gearlab_reads_otherwise_or_not_yet_are_nam
     line = err.strip()
     assert code == 2 and "\n" not in line and "box.toml: [[stages]] #1 key" in line, err
     assert said in line and "did you mean" not in line, line
+
+
+def test_a_time_column_stamped_with_jitter_within_a_quarter_period_is_read_at_its_rate(tmp_path, box):
+    # a logger that stamps each sample with its own clock (±10 µs at 20 kHz, a fifth of a period; the samples
+    # themselves even) was refused: 'the step between samples 8 and 9 is 6.9e-05 s, 1.38 times the usual step ...;
+    # split the record at the gap': every stamp lies within a quarter period of the grid, as the check asks, but two
+    # neighbours' steps differ by up to twice that
+    from gearlab.errors import GearlabInputError
+
+    t, acc, key = _take(2.0, 1)
+    stamps = t + np.random.default_rng(2).uniform(-1e-5, 1e-5, t.size)
+    _csv(tmp_path / "jitter.csv", "time_s,ax_g,tacho_V", stamps, acc, key, formats=("%.7f", "%.5f", "%.1f"))
+    got = inspect_record(str(tmp_path / "jitter.csv"), box, InspectOptions("ax_g", tacho="tacho_V"))
+    assert got["fs_hz"] == pytest.approx(FS, rel=1e-5) and "matches" in got["verdict"], got["verdict"]
+    assert got["speed"]["mean_hz"] == pytest.approx(F0, rel=0.005)
+    # a sample dropped from that jittered column is still a gap (every later stamp a period late)
+    keep = np.arange(t.size) != 20000
+    _csv(tmp_path / "dropped.csv", "time_s,ax_g,tacho_V", stamps[keep], acc[keep], key[keep], formats=("%.7f",) * 3)
+    with pytest.raises(GearlabInputError, match="not uniformly sampled"):
+        inspect_record(str(tmp_path / "dropped.csv"), box, InspectOptions("ax_g", tacho="tacho_V"))

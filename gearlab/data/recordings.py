@@ -82,9 +82,9 @@ FORMATS = {
 }
 TACHO_KINDS = ("auto", "angle", "pulses")
 
-# A time column is uniform when every step, and every sample's distance from the straight
-# line through its ends, stays within this fraction of a sampling period: rounding of written
-# times (to the microsecond at 50 kHz: 5 %) stays below it, a dropped sample does not.
+# A time column is uniform when every sample's distance from the straight line fitted to it
+# stays within this fraction of a sampling period: rounding of written times (to the
+# microsecond at 50 kHz: 5 %) stays below it, a dropped sample does not.
 _TIME_JITTER = 0.25
 # Relative agreement asked of two sampling rates (the file's and the one given).
 _RATE_RTOL = 1e-6
@@ -226,12 +226,21 @@ def _written_resolution(t: np.ndarray) -> np.ndarray:
     return step
 
 
+def _grid_shift(residual: np.ndarray, steps: np.ndarray, m: int = 16) -> np.ndarray:
+    """For each step i in *steps*: the mean residual of the m samples after it less that of the m before it."""
+    total = np.concatenate(([0.0], np.cumsum(residual)))
+    after = steps + 1
+    lo, hi = np.maximum(after - m, 0), np.minimum(after + m, residual.size)
+    return (total[hi] - total[after]) / (hi - after) - (total[after] - total[lo]) / (after - lo)
+
+
 def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float, str]:
     """(fs, relative uncertainty, where) from a time vector in seconds (or Excel's serial days), checked uniform.
 
-    fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling period of that uniform
-    grid. The rate is known only as well as the times were written (rounded to a few digits in a CSV file), so its
-    uncertainty, 2·max deviation / span, widens the agreement asked of a given fs.
+    fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling period of a uniform grid
+    of that step (fitted to them by least squares). The rate is known only as well as the times were written
+    (rounded to a few digits in a CSV file), so its uncertainty, 2·max deviation / span, widens the agreement asked
+    of a given fs.
     """
     arr = clock_seconds(np.asarray(value))
     if arr.dtype.kind not in "biuf":
@@ -257,13 +266,19 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
         raise GearlabInputError(f"{said}; expected increasing times in seconds")
     span = float(t[-1] - t[0])
     dt = span / (t.size - 1)
-    deviation = np.abs(t - (t[0] + dt * np.arange(t.size)))
+    # off the least-squares line, not the one through the ends: a jittered first or last stamp would tilt that
+    k = np.arange(t.size) - (t.size - 1) / 2
+    residual = t - np.mean(t) - k * (np.dot(k, t - np.mean(t)) / np.dot(k, k))
+    deviation = np.abs(residual)
     # times written to fewer digits than the rate needs (7.99972 s, 10 µs: 0.4 periods at 40 kHz) stand within
     # half their written resolution of the grid, besides the jitter allowed
     written = np.zeros(t.size)
     if np.any(np.abs(steps - dt) > _TIME_JITTER * dt) or np.any(deviation > _TIME_JITTER * dt):
         written = _written_resolution(written_as) * scale
     uneven = np.flatnonzero(np.abs(steps - dt) > _TIME_JITTER * dt + (written[1:] + written[:-1]) / 2)
+    # a step off by more than the jitter is a gap where the stamps after it sit on a grid shifted by half a period
+    # or more from the one before; a logger stamping each sample by its own clock moves single stamps, not the grid
+    uneven = uneven[np.abs(_grid_shift(residual / dt, uneven)) >= 0.5]
     if uneven.size:  # a gap, a repeated block, a clock jump: name the first
         i = int(uneven[0])
         usual = float(np.mean(np.delete(steps, uneven))) if uneven.size < steps.size else dt
