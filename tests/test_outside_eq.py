@@ -86,3 +86,38 @@ def test_a_time_column_stamped_with_jitter_within_a_quarter_period_is_read_at_it
     _csv(tmp_path / "dropped.csv", "time_s,ax_g,tacho_V", stamps[keep], acc[keep], key[keep], formats=("%.7f",) * 3)
     with pytest.raises(GearlabInputError, match="not uniformly sampled"):
         inspect_record(str(tmp_path / "dropped.csv"), box, InspectOptions("ax_g", tacho="tacho_V"))
+
+
+def test_a_logger_s_file_of_several_takes_one_after_another_is_named_as_such(tmp_path, box, cli):
+    # a logger's one long file, three 1 s takes under a 'take' column, each one's time from 0: 'time 'time_s' does
+    # not increase between samples 19999 and 20000 (0.99995 -> 0 s); expected increasing times in seconds' (the
+    # file's takes, and what to do with them, unsaid); with its time running on and a 'segment' column, the three
+    # were read as one take, said 'the mean of a run-up or coast-down', the segment column unsaid
+    takes = [_take(1.0, seed) for seed in (4, 5, 6)]
+    column = np.repeat([1, 2, 3], takes[0][0].size)
+    t, acc, key = (np.concatenate(parts) for parts in zip(*takes))
+    _csv(tmp_path / "log.csv", "take,time_s,ax_g,tacho_V", column, t, acc, key, formats=("%d", "%.6f", "%.5f", "%.1f"))
+    code, out, err = cli("inspect", tmp_path / "log.csv", "--gearbox", tmp_path / "mill.toml", "--vibration", "ax_g")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "log.csv" in line, err
+    assert "the time restarts at sample 20000" in line and "column 'take'" in line, line
+    assert "one file per take" in line, line
+    # the time running on over the takes: read as one take, the 'segment' column named as the takes' mark
+    on = np.arange(t.size) / FS
+    _csv(
+        tmp_path / "seg.csv",
+        "segment,time_s,ax_g,tacho_V",
+        column,
+        on,
+        acc,
+        key,
+        formats=("%d", "%.6f", "%.5f", "%.1f"),
+    )
+    got = inspect_record(str(tmp_path / "seg.csv"), box, InspectOptions("ax_g", tacho="tacho_V"))
+    said = " ".join(got["left_out"])
+    assert "column 'segment'" in said and "one file per take" in said, got["left_out"]
+
+
+@pytest.fixture(autouse=True)
+def _mill_toml(tmp_path):
+    (tmp_path / "mill.toml").write_text(BOX)

@@ -63,7 +63,7 @@ from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of 
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
 from .readers.rates import CoarseTimes
-from .time_column import rate_from_time
+from .time_column import rate_from_time, take_columns
 
 TWO_PI = 2.0 * np.pi
 
@@ -176,6 +176,11 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
             contents.found[name] = column_of(contents.found[matrix], index, name, path)
             if (unit := contents.units.get(name, contents.units.get(matrix))) is not None:
                 contents.units[name] = unit  # the column's own (hdf5.named_columns), else its matrix's
+    contents.warnings += [
+        f"column {c!r} numbers takes one after another? each file is read as one take: one file per take"
+        for c in take_columns(contents.available)
+        if c not in names
+    ]
     for name in names:
         if name not in contents.found:
             role = f"{roles[name]} " if roles and name in roles else ""
@@ -220,7 +225,7 @@ def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, floa
     """
     found = [(rate_value(v, where, path), _RATE_RTOL, where) for where, v in contents.rates]
     for where, v in contents.times:
-        fs, uncertainty, where = rate_from_time(v, where, path, n)
+        fs, uncertainty, where = rate_from_time(v, where, path, n, take_columns(contents.available))
         found.append((fs, max(_RATE_RTOL, uncertainty), where))
     if not found:
         return None

@@ -3,6 +3,9 @@ times were written to; a gap, a restart or a drift named in one line."""
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..errors import GearlabInputError
@@ -15,6 +18,13 @@ from .readers.rates import SECONDS_PER_DAY, clock_seconds, coarse_times, serial_
 # stays within this fraction of a sampling period: rounding of written times (to the
 # microsecond at 50 kHz: 5 %) stays below it, a dropped sample does not.
 _TIME_JITTER = 0.25
+# A column numbering a logger's takes (or segments, runs) one after another in one file: each file is one take
+_TAKE_COLUMN = re.compile(r"(take|segment|trial|run|block|burst|chunk)[\s_#.-]*(no|nr|num|number|id|index)?\.?", re.I)
+
+
+def take_columns(available: Sequence) -> list[str]:
+    """The columns of *available* whose name says they number takes ('take', 'Segment #', 'run_id')."""
+    return [str(c) for c in available if _TAKE_COLUMN.fullmatch(str(c).strip())]
 
 
 def _written_resolution(t: np.ndarray) -> np.ndarray:
@@ -35,7 +45,7 @@ def _grid_shift(residual: np.ndarray, steps: np.ndarray, m: int = 16) -> np.ndar
     return (total[hi] - total[after]) / (hi - after) - (total[after] - total[lo]) / (after - lo)
 
 
-def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, float, str]:
+def rate_from_time(value, where: str, path: str, n: int | None, takes: Sequence[str] = ()) -> tuple[float, float, str]:
     """(fs, relative uncertainty, where) from a time vector in seconds (or Excel's serial days), checked uniform.
 
     fs = (N − 1) / (t_last − t_first); the times must lie within _TIME_JITTER of a sampling period of a uniform grid
@@ -66,6 +76,14 @@ def rate_from_time(value, where: str, path: str, n: int | None) -> tuple[float, 
         mean, step = (t[-1] - t[0]) / (t.size - 1), np.min(steps[steps > 0], initial=np.inf)
         if np.all(steps >= 0) and mean > 0 and step < np.inf and step > 1.5 * mean:  # stamped to 1 ms at 25.6 kHz
             raise coarse_times(said, 1 / mean, 2 * step / (t[-1] - t[0]), where)
+        restarts = np.flatnonzero(t[1:] - t[0] < (t[:-1] - t[0]) / 2)  # back over half the time run: a new take
+        if restarts.size:
+            i, marked = int(restarts[0]), f", its takes marked by column {takes[0]!r}" if takes else ""
+            raise GearlabInputError(
+                f"{path}: {where}: the time restarts at sample {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s; "
+                f"{restarts.size + 1} runs of time in all): several takes one after another in one file{marked}? "
+                "expected one take a file: write one file per take"
+            )
         raise GearlabInputError(f"{said}; expected increasing times in seconds")
     span = float(t[-1] - t[0])
     dt = span / (t.size - 1)
