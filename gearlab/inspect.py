@@ -71,6 +71,7 @@ from .gearbox.speed import (
     nominal_line,
 )
 from .gearbox.speed_course import speed_course, speed_shift
+from .inspect_axes import stronger_axis
 from .inspect_tacho import elsewhere_line, marks_line, shaft_and_marks, speed_channel
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
@@ -500,6 +501,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions, read
         on_input = rec.tacho is not None and tacho_shaft == box.shafts[0]
         report["gearbox"] = box.name
         report["order_table"] = order_table(box).describe(speed.mean_hz)
+        report["axis"] = None if options.check_only else stronger_axis(rec, speed.angle, speed.mean_hz, box)
         report["gears"] = gears(box)
         # the speed every row below is read at, and where it came from (a declared one the lines do not
         # confirm: said so, with the counts and speeds the mesh line allows, *no_speed*)
@@ -793,3 +795,5 @@ def render(report: dict, console, width: int = 100) -> None:
         said = None if check.get("ambiguous") and report["matches"] else report["matches"]  # 'consistent if'
         colour = {True: "green", None: "yellow"}.get(said, "red")
         console.print(f"[bold {colour}]{escape(report['verdict'])}[/bold {colour}]")
+    if report.get("axis"):  # a triaxial sensor read on its axial axis
+        console.print(f"[yellow]note:[/yellow] {escape(report['axis']['line'])}")

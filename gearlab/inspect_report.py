@@ -120,6 +120,8 @@ def write_report(report: dict, folder: Path) -> Path:
     ]
     if "verdict" in report:
         parts.append(f"<p><b>{escape(report['verdict'])}</b></p>")
+    if report.get("axis"):  # a triaxial sensor read on its axial axis
+        parts.append(f"<p>note: {escape(report['axis']['line'])}</p>")
     parts.append(f'<img src="{spectrum_png(report, folder / "order_spectrum.png").name}" alt="order spectrum">')
     if check:
         rows = [

@@ -42,7 +42,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("datasets", ("gearlab.data",)),
     (
         "gap diagnosis and recording inspection",
-        ("gearlab.gap", "gearlab.inspect", "gearlab.inspect_history", "gearlab.inspect_tacho"),
+        ("gearlab.gap", "gearlab.inspect", "gearlab.inspect_axes", "gearlab.inspect_history", "gearlab.inspect_tacho"),
     ),
     ("scenario schema, run directory, figures", ("gearlab.scenario", "gearlab.runs", "gearlab.plots")),
     ("shared kind parts", ("gearlab.parts",)),
