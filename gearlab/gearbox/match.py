@@ -18,7 +18,17 @@ from .modulated import centre
 from .orders import order_table
 from .outshone import counts, outshone_first, outshone_line, unnamed
 from .shared_harmonics import borrowed
-from .sideband_combs import SEPARATED, SIDEBAND_BINS, families, lone, modulation, others_lines, tol_mesh, whole
+from .sideband_combs import (
+    SEPARATED,
+    SIDEBAND_BINS,
+    families,
+    lone,
+    modulation,
+    others_lines,
+    tol_mesh,
+    train_wide,
+    whole,
+)
 from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
 
 UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
@@ -444,6 +454,14 @@ def check_description(
                         )
                         unresolved += [] if shaft_k in modulated else [note]
                         modulated.add(shaft_k)
+                        continue
+                    elsewhere = at_harmonics(lines, [m for q, m in mesh_of.items() if m not in on], bin_)
+                    if train_wide(lines, carriers, elsewhere, found, measured / described, bin_, skip):
+                        unresolved.append(
+                            f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft (sidebands "
+                            f"{found[0]:.4g} apart stand as strong around meshes it does not carry: a swing of the "
+                            "train's speed or load, not that shaft's order)"
+                        )
                         continue
                     if lone(lines, carriers, found, measured / described, bin_, skip) or not whole(found, z, bin_):
                         continue  # as where its lines stay under the threshold: no comb (sideband_combs.lone, whole)

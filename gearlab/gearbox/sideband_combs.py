@@ -352,3 +352,24 @@ def whole(found: tuple, z: float, bin_: float) -> bool:
     mesh, bins = z * spacing, CONSISTENT_BINS if spacing >= SEPARATED * bin_ else 2.0
     off = min(abs(spacing - mesh / n) for n in {max(1, math.floor(z)), math.ceil(z)})
     return off <= bins * bin_ / jmax + DRIFT * spacing
+
+
+def train_wide(lines: Lines, own, elsewhere, found: tuple, described: float, bin_: float, skip=frozenset()) -> bool:
+    """Whether a shaft's comb *found* (comb's tuple), off its *described* spacing, stands around meshes its shaft does
+    not carry (the lines *elsewhere*) at least as strongly, against their carriers, as around its own (*own*), on two
+    lines or more: a swing of the whole train's speed or load modulates every mesh (a speed swing most strongly the
+    highest orders), a shaft's turn its own meshes. A conveyor's 45/119 + 28/123 reducer at 0.74 Hz, its speed
+    swinging 0.2 % at 0.05 Hz (0.0673 input orders, its output turning at 0.0861), was read 'the wheel on the output
+    shaft shows 158.3 ± 32.6 teeth' from the swing's sidebands, strongest around the first mesh."""
+    if not elsewhere:
+        return False
+
+    def strongest(carriers) -> tuple[int, float]:
+        count, top = 0, 0.0
+        for c in carriers:
+            near = sidebands_of(lines, [c], found[0], described, bin_, skip)
+            count, top = count + len(near), max([top, *(float(lines.amp[q] / lines.amp[c]) for q in near)])
+        return count, top
+
+    (theirs, their_top), (_, our_top) = strongest(elsewhere), strongest(own)
+    return theirs >= 2 and their_top >= our_top
