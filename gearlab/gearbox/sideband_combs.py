@@ -27,6 +27,10 @@ CONSISTENT_BINS = 1.0
 # strongest this far over the comb's (lone): more than the lines that fall near any spacing by chance, and stronger
 LONE_LINES, LONE_DB = 3, 6.0
 
+# A comb around meshes its shaft does not carry, per carrier order this share of its own meshes' or more, is a swing
+# of the train's speed or load (train_wide)
+TRAIN_WIDE = 0.5
+
 
 def tol_mesh(order: float, bin_: float) -> float:
     return 2 * bin_ + DRIFT * order
@@ -356,20 +360,20 @@ def whole(found: tuple, z: float, bin_: float) -> bool:
 
 def train_wide(lines: Lines, own, elsewhere, found: tuple, described: float, bin_: float, skip=frozenset()) -> bool:
     """Whether a shaft's comb *found* (comb's tuple), off its *described* spacing, stands around meshes its shaft does
-    not carry (the lines *elsewhere*) at least as strongly, against their carriers, as around its own (*own*), on two
-    lines or more: a swing of the whole train's speed or load modulates every mesh (a speed swing most strongly the
-    highest orders), a shaft's turn its own meshes. A conveyor's 45/119 + 28/123 reducer at 0.74 Hz, its speed
-    swinging 0.2 % at 0.05 Hz (0.0673 input orders, its output turning at 0.0861), was read 'the wheel on the output
-    shaft shows 158.3 ± 32.6 teeth' from the swing's sidebands, strongest around the first mesh."""
-    if not elsewhere:
+    not carry (the lines *elsewhere*), on two lines or more, as a swing of the whole train's speed or load puts it:
+    a swing modulates every mesh, a shaft's turn its own. Its strongest sideband over its carrier there is at least
+    TRAIN_WIDE of that around the shaft's strongest mesh line (of *own*; none there: its strongest). A conveyor's
+    45/119 + 28/123 reducer at 0.74 Hz, its speed swinging 0.2-0.4 % at 0.05 Hz (0.0673 input orders, its output
+    turning at 0.0861), was read 'the wheel on the output shaft shows 158.3 ± 32.6 teeth' from the swing's sidebands,
+    as strong as their carrier around the first mesh (order 45), 0.33 of it around the second, the output's."""
+    if not elsewhere or not own:
         return False
 
-    def strongest(carriers) -> tuple[int, float]:
-        count, top = 0, 0.0
-        for c in carriers:
-            near = sidebands_of(lines, [c], found[0], described, bin_, skip)
-            count, top = count + len(near), max([top, *(float(lines.amp[q] / lines.amp[c]) for q in near)])
-        return count, top
+    def over(carriers) -> tuple[int, float]:
+        near = {c: sidebands_of(lines, [c], found[0], described, bin_, skip) for c in carriers}
+        top = max((float(lines.amp[q] / lines.amp[c]) for c, qs in near.items() for q in qs), default=0.0)
+        return sum(map(len, near.values())), top
 
-    (theirs, their_top), (_, our_top) = strongest(elsewhere), strongest(own)
-    return theirs >= 2 and their_top >= our_top
+    theirs, their_top = over(elsewhere)
+    our_top = over([max(own, key=lambda c: lines.amp[c])])[1] or over(own)[1]
+    return theirs >= 2 and their_top >= TRAIN_WIDE * our_top
