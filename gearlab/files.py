@@ -117,6 +117,28 @@ def toml_tables(path: Path, read: Callable[[], bytes], missing: str, directory: 
         raise GearlabInputError(f"{path}: invalid TOML: too large to read into memory") from None
 
 
+# A take of a logger's file of several (data.takes), "log.csv[segment=3]": a file, then its take column and the
+# take's mark in brackets at the end of the name
+_TAKE = re.compile(r"^(?P<file>.+?)\[(?P<column>[^\[\]=]+)=(?P<mark>[^\[\]]*)\]$", re.S)
+
+
+def split_take(path) -> tuple[str, str, str] | None:
+    """(file, column, mark) of a take's name "file.csv[segment=3]"; None for a file's own name."""
+    found = _TAKE.match(str(path))
+    return None if found is None else (found["file"], found["column"], found["mark"])
+
+
+def take_file(path) -> Path:
+    """The file a record's name reads: a take's file, else *path* itself."""
+    take = split_take(path)
+    return Path(path) if take is None else Path(take[0])
+
+
+def take_name(path, column: str, mark: str) -> str:
+    """The name of one of *path*'s takes: "file.csv[segment=3]" (the file as the scenario writes it)."""
+    return f"{path}[{column}={mark}]"
+
+
 def matched(name: str, base: Path, where: str) -> list[str]:
     """The files a scenario's measured-file *name* stands for: itself, or, where it holds a glob
     pattern (*, ?, [...]; ** across folders) and is no file's own name, each file it matches, sorted
@@ -131,7 +153,7 @@ def matched(name: str, base: Path, where: str) -> list[str]:
                 f"absolute or relative to {base}"
             )
         name = name.replace("\\", "/")
-    if not set(name) & set("*?[") or (base / name).exists():
+    if not set(name) & set("*?[") or (base / name).exists() or (base / take_file(name)).is_file():  # a take's name
         return [name]
     found = sorted(m for m in glob.glob(name, root_dir=base, recursive=True) if (base / m).is_file())
     if not found:

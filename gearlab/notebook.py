@@ -701,14 +701,21 @@ def score_recordings(
     from .runs import RunDir
 
     run = run if isinstance(run, RunDir) else RunDir.open(Path(run))
-    return score(run, takes(files), condition, on_event or ignore_events, given)
+    given = dict(given or {})
+    column = given.pop("takes", "")  # a logger's file of several takes: each scored as a record of its own
+    return score(run, takes(files, column), condition, on_event or ignore_events, given)
 
 
-def takes(names: Sequence[str | Path]) -> list[Path]:
+def takes(names: Sequence[str | Path], column: str = "") -> list[Path]:
     """The takes *names* stand for, as a [target] 'files' entry reads them: a file, a folder's records (its
-    files of a format gearlab reads, sorted by name) or a glob pattern's matches (files.matched)."""
+    files of a format gearlab reads, sorted by name) or a glob pattern's matches (files.matched); each file's
+    takes under *column* where given (its 'takes' key: data.takes.take_paths, "log.csv[segment=3]")."""
     from .data.recordings import FORMATS
+    from .data.takes import take_paths
     from .files import matched
+
+    if column:
+        return [Path(t) for file in takes(names) for t in take_paths(file, column, "--key takes")]
 
     out = []
     for name in map(Path, names):

@@ -355,10 +355,16 @@ def input_paths(scenario: Scenario) -> list[Path]:
 
 
 def input_digest(path: Path) -> str | None:
-    """The sha256 of a measured file's content, read in blocks; None where it cannot be read."""
+    """The sha256 of a measured file's content, read in blocks (a take's: of its file and its name's mark, one take
+    of a file another take than the next); None where it cannot be read."""
+    from .files import split_take, take_file
+
     try:
-        with open(path, "rb") as f:
-            return hashlib.file_digest(f, "sha256").hexdigest()
+        with open(take_file(path), "rb") as f:
+            digest = hashlib.file_digest(f, "sha256")
+        if (take := split_take(path)) is not None:
+            digest.update(f"[{take[1]}={take[2]}]".encode())
+        return digest.hexdigest()
     except OSError:
         return None
 

@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import GearlabInputError, which_meant
+from ..files import split_take, take_file  # a take of a logger's file of several: data.takes
 from ..gearbox.orders import settle_turns
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
@@ -63,6 +64,7 @@ from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of 
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
 from .readers.rates import CoarseTimes
+from .readers.take_rows import no_take_column, take_rows
 from .time_column import rate_from_time, take_columns
 
 TWO_PI = 2.0 * np.pi
@@ -105,8 +107,9 @@ def prefixed(prefix: str):
 
 def file_problem(path: Path) -> str | None:
     """Why *path* cannot be read as a measured file ('no such file', 'is not a file', 'is empty', a name
-    too long, a NUL in it), or None when it is a file. Every kind checks its measured files
-    so when a scenario is loaded: `gearlab validate` finds them all."""
+    too long, a NUL in it), or None when it is a file (a take's, "log.csv[segment=3]": its file's). Every kind
+    checks its measured files so when a scenario is loaded: `gearlab validate` finds them all."""
+    path = take_file(path)
     try:
         exists, is_file = path.exists(), path.is_file()
     except (OSError, ValueError) as exc:  # a name too long, a NUL character in it, ...
@@ -149,22 +152,25 @@ def format_of(path: Path) -> str:
     """The reader's name for a measured file that may be read (check_measured_file), by its suffix;
     one line naming the supported types otherwise."""
     check_measured_file(path)
-    fmt = FORMATS.get(path.suffix.lower())
+    suffix = take_file(path).suffix
+    fmt = FORMATS.get(suffix.lower())
     if fmt is None:
-        raise GearlabInputError(
-            f"{path}: unknown file type '{path.suffix or '(no extension)'}'; supported: {supported()}"
-        )
+        raise GearlabInputError(f"{path}: unknown file type '{suffix or '(no extension)'}'; supported: {supported()}")
     return fmt
 
 
 def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = None) -> tuple[Contents, str]:
-    """Read *names* from *path*: (contents, format name). Every failure is one clear line."""
-    path = Path(path)
-    fmt = format_of(path)
-    check_size(path, "the file", path.stat().st_size)
+    """Read *names* from *path* (a take's name, "log.csv[segment=3]": that take's rows alone; takes):
+    (contents, format name). Every failure is one clear line."""
+    path, take = Path(path), split_take(path)
+    fmt, file = format_of(path), take_file(path)
+    check_size(path, "the file", file.stat().st_size)
     columns = {n: c for n in names if (c := matrix_column(n)) is not None}  # 'data[1]': a matrix's column
+    read = list(dict.fromkeys(columns[n][0] if n in columns else n for n in names))
+    if take is not None and take[1] not in read:
+        read.append(take[1])
     try:
-        contents = READERS[fmt](path, list(dict.fromkeys(columns[n][0] if n in columns else n for n in names)))
+        contents = READERS[fmt](file, read)
     except GearlabInputError:
         raise
     except MemoryError:
@@ -176,10 +182,15 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
             contents.found[name] = column_of(contents.found[matrix], index, name, path)
             if (unit := contents.units.get(name, contents.units.get(matrix))) is not None:
                 contents.units[name] = unit  # the column's own (hdf5.named_columns), else its matrix's
+    if take is not None:
+        if take[1] not in contents.found:
+            raise no_take_column(file, take[1], contents.available, str(path))
+        contents = take_rows(contents, path, take[1], take[2])
     contents.warnings += [
-        f"column {c!r} numbers takes one after another? each file is read as one take: one file per take"
+        f"column {c!r} numbers takes one after another? each file is read as one take: takes = {c!r} reads each "
+        "as a recording of its own, or write one file per take"
         for c in take_columns(contents.available)
-        if c not in names
+        if c not in read
     ]
     for name in names:
         if name not in contents.found:
@@ -642,7 +653,7 @@ def read_header(path) -> Header:
     path = Path(path)
     fmt = format_of(path)
     try:
-        return HEADERS[fmt](path)
+        return HEADERS[fmt](take_file(path))
     except GearlabInputError:
         raise
     except Exception as exc:  # noqa: BLE001 - each library fails its own way on a corrupt file

@@ -79,10 +79,12 @@ def rate_from_time(value, where: str, path: str, n: int | None, takes: Sequence[
         restarts = np.flatnonzero(t[1:] - t[0] < (t[:-1] - t[0]) / 2)  # back over half the time run: a new take
         if restarts.size:
             i, marked = int(restarts[0]), f", its takes marked by column {takes[0]!r}" if takes else ""
+            key = f"takes = {takes[0]!r}" if takes else "takes = '<the column marking them>'"
             raise GearlabInputError(
                 f"{path}: {where}: the time restarts at sample {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s; "
                 f"{restarts.size + 1} runs of time in all): several takes one after another in one file{marked}? "
-                "expected one take a file: write one file per take"
+                f"expected one take a recording: give {key} (each take read as a recording of its own, "
+                f"'{path}[{takes[0] if takes else 'take'}=1]' ...) or write one file per take"
             )
         raise GearlabInputError(f"{said}; expected increasing times in seconds")
     span = float(t[-1] - t[0])

@@ -183,6 +183,13 @@ MEASURED = {
         "doc": "measured data: volts per file unit with a 'sensitivity', e.g. '0.3 mV' per count of an integer "
         "record (WAV: at full scale); or, without one, g per volt ('10 g/V') or per file unit ('50 g' at full scale)",
     },
+    "takes": {
+        "types": str,
+        "default": "",
+        "doc": "measured data: the column marking each sample's take in a logger's file of several takes one after "
+        "another (e.g. 'segment'): each take a record of its own, named 'file.csv[segment=3]' (one take alone: "
+        "file = 'file.csv[segment=3]')",
+    },
     "transient": {
         "types": str,
         "default": "stats",
@@ -218,6 +225,7 @@ class DatasetEntry:
     sensitivity: float | str | None = measured("sensitivity")
     unit: str = measured("unit")
     gain: float | str | None = measured("gain")
+    takes: str = measured("takes")
     name: str = setting(
         str, "", check=lambda v, where: v and plain_name(v, where), doc="label (default: the preset name)"
     )
@@ -286,7 +294,17 @@ MAX_SAMPLES = 10**6
 
 
 # keys of a measured 'file' entry that mean nothing to a simulated preset
-MEASURED_ONLY = ("vibration", "tacho", "tacho_shaft", "labels", "sensitivity", "unit", "gain", "pulses_per_rev")
+MEASURED_ONLY = (
+    "vibration",
+    "tacho",
+    "tacho_shaft",
+    "labels",
+    "sensitivity",
+    "unit",
+    "gain",
+    "pulses_per_rev",
+    "takes",
+)
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
@@ -426,6 +444,11 @@ def simulated_spec(entry: dict, where: str, base: Path) -> DatasetSpec:
 def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     """A measured 'file' entry, checked against the file's header (its channels, rate and units:
     recordings.check_recording) so that `gearlab validate` finds a wrong name before any work."""
+    if entry.get("takes"):  # a logger's file of several takes: one of them is a dataset's record
+        raise GearlabInputError(
+            f"{where} key 'takes': a 'file' is one recording; expected one take by its name, file = "
+            f"'{entry['file']}[{entry['takes']}=1]' (the takes of the column's marks), and no 'takes'"
+        )
     path = base / one_file(entry["file"], base, f"{where} key 'file'")  # an absolute name stays itself
     check_measured_file(path, f"{where} key 'file'")
     if entry["vibration"] == "":  # as inspect takes it: the file's one channel besides the tacho and time

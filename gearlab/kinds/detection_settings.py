@@ -85,6 +85,7 @@ class TargetRecords:
     unit: str = measured("unit")
     gain: float | str | None = measured("gain")
     fs: float | str | None = measured("fs")
+    takes: str = measured("takes")
     transient: str = measured("transient", "none")
     positive: str = setting(str, "fault", doc="the label of records with the fault to detect; every other is negative")
     files: list = measured("files", MISSING)

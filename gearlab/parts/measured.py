@@ -20,6 +20,7 @@ from ..data.recordings import (
     only_vibration,
     pulses_without_tacho,
 )
+from ..data.takes import take_paths
 from ..data.textzip import CALIBRATION, align_to, calibration
 from ..errors import GearlabInputError, did_you_mean, shown
 from ..files import matched
@@ -36,8 +37,9 @@ ROLES = ("history", "test")
 # gearlab score's --key of new files (a next-week take whose tacho was moved to the output, 2 marks a turn)
 ACQUISITION = ("vibration", "tacho", "tacho_shaft", "pulses_per_rev", "sensitivity", "gain", "unit", "fs")
 # 'file' as in every kind's measured entry; 'speed' a record's own declared speed (no tacho); 'path',
-# the file's name before, is read the same
-FILE_KEYS = ("file", "role", "label", "condition", "speed", *ACQUISITION, "path")
+# the file's name before, is read the same;
+# the path, 'takes' the column marking a logger's takes in the file (each a record: takes.take_paths)
+FILE_KEYS = ("file", "role", "label", "condition", "speed", *ACQUISITION, "takes", "path")
 
 
 @dataclass(frozen=True)
@@ -121,7 +123,7 @@ class Target:
             )
         except GearlabInputError as exc:  # what the data shows (a ragged row, a NaN): named where it is listed
             if exc.args and isinstance(exc.args[0], str) and "[target]" not in exc.args[0]:
-                at = f"[target] key 'files' entry {self.files.index(file) + 1} key 'file'"
+                at = f"[target] key 'files' entry {file.entry or self.files.index(file) + 1} key 'file'"  # a take's
                 exc.args = (f"{at}: {exc.args[0]}", *exc.args[1:])
             raise
 
@@ -157,9 +159,10 @@ def pulses_of(given: int | None, tacho, box) -> int:
     return int(box.sensor.pulses_per_rev) if box is not None and tacho not in (None, "") else 1
 
 
-def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile, ...]:
+def target_files(files, where: str, base: Path, need=ROLES, takes: str = "") -> tuple[TargetFile, ...]:
     """The [target] 'files' list: each {file, role, label, condition?}, paths relative to *base*, a
-    glob pattern standing for each file it matches (files.matched); every role in *need* must be
+    glob pattern standing for each file it matches (files.matched), a file of several takes for each take
+    (its 'takes', else *takes*: the [target]'s; takes.take_paths); every role in *need* must be
     present (the gap kind needs the history alone)."""
     if not files:
         raise GearlabInputError(f"{where}: expected a list of files, each {{ file, role = 'history' | 'test', label }}")
@@ -189,12 +192,17 @@ def target_files(files, where: str, base: Path, need=ROLES) -> tuple[TargetFile,
             raise GearlabInputError(f"{at}: 'condition' must be a text, e.g. '30 Hz high load'")
         speed = None if f.get("speed") is None else speed_of(f["speed"], f"{at} key 'speed'")
         keys = tuple(acquisition(f, at, [k for k in ACQUISITION if k in f]).items())
+        column = f.get("takes", takes)
+        if not isinstance(column, str):
+            raise GearlabInputError(f"{at} key 'takes': expected the column marking the takes, e.g. 'segment'")
+        at_takes = f"{at} key 'takes'" if "takes" in f else where.removesuffix("'files'") + "'takes'"
         names = matched(f["file"], base, f"{at} key 'file'")
         pattern = "" if names == [f["file"]] else f["file"]
         for name in names:  # a pattern's files: one record each, with the entry's other keys
-            resolved = base / name  # an absolute name stays itself
-            check_measured_file(resolved, f"{at} key 'file'")
-            out.append(TargetFile(name, str(resolved), f["role"], f["label"], condition, speed, keys, pattern, i + 1))
+            check_measured_file(base / name, f"{at} key 'file'")  # an absolute name stays itself
+            for one in take_paths(base / name, column, at_takes, name) if column else [name]:
+                resolved = str(base / one)
+                out.append(TargetFile(one, resolved, f["role"], f["label"], condition, speed, keys, pattern, i + 1))
     seen = {}
     for i, f in enumerate(out):
         if seen.setdefault(f.resolved, i) != i:
@@ -282,7 +290,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         raise GearlabInputError(f"{where} key 'tacho': the same column as the vibration ({t['tacho']!r})")
     speed = None if t.get("speed") is None else speed_of(t["speed"], f"{where} key 'speed'")
     gearbox = t.get("gearbox") or None
-    files = target_files(t["files"], f"{where} key 'files'", base, need)
+    files = target_files(t["files"], f"{where} key 'files'", base, need, t.get("takes") or "")
     if vibration == "" and any("vibration" not in dict(f.keys) for f in files):
         # as inspect takes it: each file's one channel besides the tacho and time
         of = {
