@@ -196,7 +196,7 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
         if name not in contents.found:
             role = f"{roles[name]} " if roles and name in roles else ""
             raise GearlabInputError(
-                f"{path}: no {role}channel '{name}'{which_meant(name, contents.available)}; "
+                f"{path}: no {role}channel '{name}'{channel_meant(name, contents.available, role.strip())}; "
                 f"the file has: {_listing(contents.available)}"
             )
     return contents, fmt
@@ -664,6 +664,19 @@ def read_header(path) -> Header:
 _TACHO_NAME = re.compile(r"tach|key\s*pha|once|pulse|trig|encoder|rpm", re.IGNORECASE)
 
 
+def channel_meant(name: str, available, role: str) -> str:
+    """The hint after 'no <role> channel NAME' (which_meant); of a vibration, among the channels that look like one
+    (no tacho's, time's or take column's name) first: 'acc_x' meant 'ax_g', not 'tacho_V' (the closest spelling of
+    all); none spelt close, those channels named."""
+    if role != "vibration":
+        return which_meant(name, available)
+    looks = [
+        str(c) for c in available if not (_TACHO_NAME.search(str(c)) or is_rate_or_time(str(c)) or take_columns([c]))
+    ]
+    hint = which_meant(name, looks)
+    return hint or (f" (a vibration channel: {_listing(looks)}?)" if looks else which_meant(name, available))
+
+
 def pulses_without_tacho(path, at: str, tacho_is, key: str = "'tacho'") -> GearlabInputError:
     """The one-line error of a tacho's marks per turn given where no tacho is: *at* names the key; a channel of
     *path* whose name looks like a tacho's is named as *tacho_is*(name) says to give it (none is taken unasked);
@@ -723,7 +736,7 @@ def check_recording(
             index = " (or a 0-based column index)" if header.indexed else ""
             raise GearlabInputError(
                 f"{where} key '{key}': {path} has no channel {_one_line_repr(name)}"
-                f"{which_meant(str(name), [str(c) for c in header.channels])}; the file has: "
+                f"{channel_meant(str(name), header.channels, key)}; the file has: "
                 f"{_listing(header.channels)}{index}"
             )
         header.check_channel(header.resolve(name), f"{where} key '{key}'", path)  # no time column, a series
