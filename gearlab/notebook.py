@@ -702,20 +702,22 @@ def score_recordings(
 
     run = run if isinstance(run, RunDir) else RunDir.open(Path(run))
     given = dict(given or {})
-    column = given.pop("takes", "")  # a logger's file of several takes: each scored as a record of its own
-    return score(run, takes(files, column), condition, on_event or ignore_events, given)
+    column = given.pop("takes", None)  # a logger's file of several takes: each scored as a record of its own
+    known = (run.read_json("scoring.json") or {}).get("takes", [])  # else as the run's files were split
+    return score(run, takes(files, column, known), condition, on_event or ignore_events, given)
 
 
-def takes(names: Sequence[str | Path], column: str = "") -> list[Path]:
+def takes(names: Sequence[str | Path], column: str | None = None, known: Sequence[str] = ()) -> list[Path]:
     """The takes *names* stand for, as a [target] 'files' entry reads them: a file, a folder's records (its
     files of a format gearlab reads, sorted by name) or a glob pattern's matches (files.matched); each file's
-    takes under *column* where given (its 'takes' key: data.takes.take_paths, "log.csv[segment=3]")."""
+    takes under *column* (its 'takes' key, "log.csv[segment=3]"; None: under the first of *known* it has,
+    data.takes.file_takes)."""
     from .data.recordings import FORMATS
-    from .data.takes import take_paths
+    from .data.takes import file_takes
     from .files import matched
 
-    if column:
-        return [Path(t) for file in takes(names) for t in take_paths(file, column, "--key takes")]
+    if column or (column is None and known):  # "" (--key takes=): each file one take, as the run's were not
+        return [Path(t) for file in takes(names) for t in file_takes(file, column, "--key takes", known)]
 
     out = []
     for name in map(Path, names):

@@ -96,6 +96,11 @@ def test_score_scores_each_take_of_a_new_file(takes_run, cli):
     decided = {r["file"].rsplit("/", 1)[-1]: r["decision"] for r in rows if r["method"] == "fm4"}
     assert decided == {"today.csv[segment=1]": "healthy", "today.csv[segment=2]": "fault"}, decided
     assert "today.csv[segment=2]" in (run / "scoring" / "history.jsonl").read_text()
+    # without --key, a file with a column the run's files were split by ('take', 'segment') is split so too
+    later = _log(folder / "later.csv", "take", [(0.0, 9), (4.0, 10)])
+    code, out, err = cli("score", run, later, "--json")
+    decided = {r["file"].rsplit("/", 1)[-1]: r["decision"] for r in json.loads(out) if r["method"] == "fm4"}
+    assert code == 0 and decided == {"later.csv[take=1]": "healthy", "later.csv[take=2]": "fault"}, (decided, err)
     # the column missing: one line naming the option, the vibration-like columns offered
     code, _, err = cli("score", run, new, "--key", "takes=segmnt")
     assert code == 2 and "--key takes" in err and "did you mean 'segment'" in err and "\n" not in err.strip(), err

@@ -7,6 +7,8 @@ as the take's own)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..errors import GearlabInputError
@@ -39,3 +41,12 @@ def take_paths(file, column: str, where: str, name=None) -> list[str]:
             "rows one block, takes one after another"
         )
     return [take_name(name, column, m) for m in order]
+
+
+def file_takes(file, column: str | None, where: str, known: Sequence[str] = ()) -> list[str]:
+    """The records *file* stands for: its takes under *column* (take_paths); *column* None, under the first of
+    *known* (the take columns a run's files were read by: gearlab score) its header has, else the file itself."""
+    if column is None:
+        channels = read_header(file).channels
+        column = next((c for c in known if c in channels), "")
+    return take_paths(file, column, where) if column else [str(file)]

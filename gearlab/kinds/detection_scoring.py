@@ -17,6 +17,7 @@ from ..data.which_gear import Take
 from ..errors import GearlabInputError, did_you_mean
 from ..events import Event
 from ..executors import one_thread
+from ..files import split_take
 from ..gearbox.orders import TachoShaft
 from ..gearbox.simulation import gearbox_of
 from ..learn.protocol import fault_score
@@ -111,6 +112,8 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
         # a tacho on another shaft: {name, a, b}, a/b turns per input turn (absent: the input)
         | ({} if target.tacho_shaft is None else {"tacho_shaft": asdict(target.tacho_shaft)}),
         "file_keys": file_keys(target.files),  # a new file in a test file's format: read with its keys
+        # the columns marking a logger's takes the run's files were split by: a new file with one, split so too
+        "takes": sorted({take[1] for f in target.files if (take := split_take(f.path))}),
         "marks": target.marks,  # the input angles the run's records were aligned at (a new file's own too)
         # which records had a tacho: "all" aligned by its marks, else as records without one
         "tacho_records": tacho_records(target),
