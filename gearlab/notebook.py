@@ -348,7 +348,7 @@ def inspect_recording(
 
 
 HISTORY_KEYS = ("vibration", "tacho", "tacho_kind", "pulses_per_rev", "tacho_shaft", "speed", "fs", "sensitivity")
-HISTORY_KEYS += ("gain", "unit")
+HISTORY_KEYS += ("gain", "unit", "takes")  # takes: a history file's takes each a history record (data.takes)
 
 
 def _history_options(history: list[str], keys: Mapping[str, Mapping[str, str]], options: dict, flag) -> list:
@@ -365,11 +365,15 @@ def _history_options(history: list[str], keys: Mapping[str, Mapping[str, str]], 
                 raise GearlabInputError(
                     f"{where}: unknown key {key!r}; expected KEY=VALUE, KEY one of {', '.join(HISTORY_KEYS)}"
                 )
+    from .data.takes import take_paths
+
     out: list = []
     for h in history:
         own = {**keys.get("", {}), **keys.get(Path(h).name, {}), **keys.get(h, {})}
+        column = own.pop("takes", "")
+        names = take_paths(h, column, f"{flag('history_key')} takes") if column else [h]
         if not own:  # read as the record is
-            out.append(h)
+            out += names
             continue
         given = {**options, **own}
         if isinstance(given.get("pulses_per_rev"), str):
@@ -380,7 +384,8 @@ def _history_options(history: list[str], keys: Mapping[str, Mapping[str, str]], 
                 )
             given["pulses_per_rev"] = int(text)
         given = {k: (None if v == "" and k != "tacho_kind" else v) for k, v in given.items()}
-        out.append((h, inspect_options(flag=lambda key, h=h: f"{flag('history_key')} '{Path(h).name}:{key}'", **given)))
+        read = inspect_options(flag=lambda key, h=h: f"{flag('history_key')} '{Path(h).name}:{key}'", **given)
+        out += [(name, read) for name in names]
     return out
 
 

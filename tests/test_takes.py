@@ -119,3 +119,30 @@ def test_validate_checks_the_takes_column_and_a_short_take_is_said_as_a_short_fi
     line = err.strip().splitlines()[-1]
     assert code == 2 and "entry 1 key 'file'" in line and "hist.csv[take=2]:" in line, err
     assert "the record shows 0.998 revolutions in 512 samples" in line and "expected at least 2" in line, line
+
+
+def test_inspect_reads_a_history_file_s_takes_each_a_history_record(tmp_path, cli):
+    # the healthy history logged as two takes in one file (the time restarting): --history-key takes=take
+    from gearlab.data.simulated import simulated_record
+
+    recs = [simulated_record(f, speed_hz=40.0, revolutions=80, snr_db=30.0, seed=s) for f, s in (([], 1), ([], 2))]
+    rows = [
+        f"{k},{i / r.fs:.8f},{v:.6e},{p:.3f}\n"
+        for k, r in enumerate(recs, 1)
+        for i, (v, p) in enumerate(zip(r.vibration, r.tacho))
+    ]
+    (tmp_path / "hist.csv").write_text("take,time_s,acc,tacho\n" + "".join(rows))
+    crack = simulated_record(
+        [{"name": "crack", "gear": "output gear", "tooth": 30, "step": 20}],
+        speed_hz=40.0,
+        revolutions=80,
+        snr_db=30.0,
+        seed=3,
+    )
+    np.savez(tmp_path / "cracked.npz", acc=crack.vibration, tacho=crack.tacho, fs=crack.fs)
+    common = ["--gearbox", "phm09", "--vibration", "acc", "--tacho", "tacho", "--pulses-per-rev", "1"]
+    history = ["--history", tmp_path / "hist.csv", "--history-key", "takes=take", "--json"]
+    code, out, err = cli("inspect", tmp_path / "cracked.npz", *common, *history)
+    loc = json.loads(out)["localisation"] if code == 0 else {}
+    assert code == 0 and [Path(h).name for h in loc["history"]] == ["hist.csv[take=1]", "hist.csv[take=2]"], err
+    assert loc["named"] == "output gear 80T (stage 2)", loc["summary"]
