@@ -107,6 +107,8 @@ def test_score_scores_each_take_of_a_new_file(takes_run, cli):
 
 
 def test_validate_checks_the_takes_column_and_a_short_take_is_said_as_a_short_file(tmp_path, cli):
+    code, out, err = cli("validate", _scenario(tmp_path))
+    assert code == 0 and "'hist.csv': 2 takes ('take'), 'ok.csv': 2 takes ('segment')" in out, (out, err)
     path = _scenario(tmp_path, "takes = 'tke'")
     code, _, err = cli("validate", path)
     line = err.strip()

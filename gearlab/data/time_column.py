@@ -83,8 +83,8 @@ def rate_from_time(value, where: str, path: str, n: int | None, takes: Sequence[
             raise GearlabInputError(
                 f"{path}: {where}: the time restarts at sample {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s; "
                 f"{restarts.size + 1} runs of time in all): several takes one after another in one file{marked}? "
-                f"expected one take a recording: give {key} (each take read as a recording of its own, "
-                f"'{path}[{takes[0] if takes else 'take'}=1]' ...) or write one file per take"
+                f"expected one take a recording: give {key} (each take a recording of its own; one alone by its name, "
+                f"'{path}[{takes[0] if takes else 'take'}=1]') or write one file per take"
             )
         raise GearlabInputError(f"{said}; expected increasing times in seconds")
     span = float(t[-1] - t[0])

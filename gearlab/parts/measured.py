@@ -23,7 +23,7 @@ from ..data.recordings import (
 from ..data.takes import take_paths
 from ..data.textzip import CALIBRATION, align_to, calibration
 from ..errors import GearlabInputError, did_you_mean, shown
-from ..files import matched
+from ..files import matched, split_take
 from ..gearbox.orders import settle_turns
 from ..signals.angle import continued
 from ..units import rate_hz
@@ -219,10 +219,14 @@ def target_files(files, where: str, base: Path, need=ROLES, takes: str = "") -> 
 
 
 def pattern_counts(files: tuple[TargetFile, ...]) -> str:
-    """What each glob pattern of a 'files' list matched, for `gearlab validate`: "'test/*.csv': 6
-    files, ..." ("" where every file is named as it is)."""
+    """What each glob pattern of a 'files' list matched, and each file of several takes held, for `gearlab
+    validate`: "'test/*.csv': 6 files, 'log.csv': 3 takes ('segment')" ("" where every file is named as it is)."""
     counts = Counter(f.pattern for f in files if f.pattern)
-    return ", ".join(f"{p!r}: {n} file{'s' * (n != 1)}" for p, n in counts.items())
+    takes = Counter(take[:2] for f in files if (take := split_take(f.path)))
+    return ", ".join(
+        [f"{p!r}: {n} file{'s' * (n != 1)}" for p, n in counts.items()]
+        + [f"{file!r}: {n} take{'s' * (n != 1)} ({column!r})" for (file, column), n in takes.items()]
+    )
 
 
 def positive_label(files: tuple[TargetFile, ...], positive: str, where: str) -> None:
