@@ -148,3 +148,29 @@ def test_inspect_reads_a_history_file_s_takes_each_a_history_record(tmp_path, cl
     loc = json.loads(out)["localisation"] if code == 0 else {}
     assert code == 0 and [Path(h).name for h in loc["history"]] == ["hist.csv[take=1]", "hist.csv[take=2]"], err
     assert loc["named"] == "output gear 80T (stage 2)", loc["summary"]
+
+
+def test_a_gap_diagnosis_reads_its_history_take_by_take(tmp_path, cli):
+    # the gap's [target] is read by the same keys: its history file's takes, each a history record
+    _log(tmp_path / "hist.csv", "take", [(0.0, 0), (0.0, 1)])
+    text = (
+        '[scenario]\nname = "g"\nkind = "gap"\n\n[source]\npreset = "B-6-ch5"\n\n'
+        f'[target]\nvibration = "acc"\ntacho = "tacho"\npulses_per_rev = {PULSES}\nsensitivity = "10 mV/g"\n'
+        'takes = "take"\nfiles = [{ file = "hist.csv", role = "history", label = "healthy" }]\n'
+    )
+    (tmp_path / "gap.toml").write_text(text)
+    code, out, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 0 and "2 measured history records ('hist.csv': 2 takes ('take'))" in out, (out, err)
+    # a dataset's 'file' is one recording: its takes refused in one line naming the take to write
+    (tmp_path / "ds.toml").write_text(
+        '[scenario]\nname = "d"\nkind = "dataset"\n\n[[datasets]]\nfile = "hist.csv"\nvibration = "acc"\n'
+        'tacho = "tacho"\nsensitivity = "10 mV/g"\ntakes = "take"\n'
+    )
+    code, _, err = cli("validate", tmp_path / "ds.toml")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "key 'takes'" in line and "file = 'hist.csv[take=1]'" in line, err
+    (tmp_path / "ds.toml").write_text(
+        (tmp_path / "ds.toml").read_text().replace('"hist.csv"', '"hist.csv[take=2]"').replace('takes = "take"\n', "")
+    )
+    code, out, err = cli("validate", tmp_path / "ds.toml")
+    assert code == 0 and "hist[take=2] (measured)" in out, (out, err)

@@ -29,6 +29,7 @@ import numpy as np
 
 from .. import PHYSICS_VERSION
 from ..errors import GearlabInputError, did_you_mean
+from ..files import split_take, take_file
 from ..signals import (
     POINTS,
     Standardiser,
@@ -158,9 +159,11 @@ class MeasuredSpec:
         check_measured_file(path)
         digest = hashlib.sha256()
         try:
-            with path.open("rb") as f:
+            with take_file(path).open("rb") as f:  # a take's: its file's, and which take (below)
                 for block in iter(lambda: f.read(1 << 20), b""):
                     digest.update(block)
+            if (take := split_take(path)) is not None:
+                digest.update(repr(take).encode())
         except OSError as exc:
             raise GearlabInputError(f"{path}: cannot read ({exc.strerror or exc})") from None
         options = self.canonical()
@@ -174,7 +177,7 @@ class MeasuredSpec:
         text = json.dumps(
             {
                 "file": digest.hexdigest(),
-                "format": path.suffix.lower(),
+                "format": take_file(path).suffix.lower(),
                 "options": options,
                 "importer": IMPORTER_VERSION,
                 "physics": PHYSICS_VERSION,

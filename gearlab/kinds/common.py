@@ -25,7 +25,7 @@ from ..data.textzip import CALIBRATION, calibration, parse_sensitivity
 from ..effects import effects_from_tables
 from ..errors import GearlabInputError, shown
 from ..executors import make_executor
-from ..files import one_file
+from ..files import one_file, take_file
 from ..learn.protocol import Counts
 from ..parts.measured import ACQUISITION, pulses_of, tacho_shaft_of
 from ..registry import get_registry
@@ -472,7 +472,8 @@ def measured_spec(entry: dict, where: str, base: Path) -> MeasuredSpec:
     if not names or not all(isinstance(n, str) for n in names):
         raise GearlabInputError(f"{where} key 'class_names': expected a list of names, healthy first")
     spec = MeasuredSpec(
-        name=entry["name"] or path.stem,
+        name=entry["name"]
+        or take_file(path).stem + path.name.removeprefix(take_file(path).name),  # a take's: log[take=2]
         path=str(path),
         vibration=channel_key(entry["vibration"]),
         tacho=None if entry["tacho"] == "" else channel_key(entry["tacho"]),
