@@ -174,3 +174,19 @@ def test_a_gap_diagnosis_reads_its_history_take_by_take(tmp_path, cli):
     )
     code, out, err = cli("validate", tmp_path / "ds.toml")
     assert code == 0 and "hist[take=2] (measured)" in out, (out, err)
+
+
+def test_a_take_column_whose_takes_interleave_is_refused_naming_the_take(tmp_path):
+    # marks 1, 2, 1: not takes one after another (a channel number, a state): one line, the take that comes back
+    from gearlab.data.takes import take_paths
+    from gearlab.errors import GearlabInputError
+
+    rows = "".join(f"{k},{i / 100:.2f},0.1\n" for i, k in enumerate([1] * 5 + [2] * 5 + [1] * 5))
+    (tmp_path / "mixed.csv").write_text("run,time_s,acc\n" + rows)
+    with pytest.raises(GearlabInputError, match=r"column 'run': take '1' comes back after another take") as got:
+        take_paths(tmp_path / "mixed.csv", "run", "[target] key 'takes'")
+    assert str(got.value).startswith("[target] key 'takes': ") and "\n" not in str(got.value)
+    # a take column of marks written as decimals (1.0, 2.0): named as whole numbers
+    rows = "".join(f"{k:.1f},{i / 100:.2f},0.1\n" for i, k in enumerate([1] * 5 + [2] * 5))
+    (tmp_path / "float.csv").write_text("run,time_s,acc\n" + rows)
+    assert take_paths(tmp_path / "float.csv", "run", "x", "float.csv") == ["float.csv[run=1]", "float.csv[run=2]"]
