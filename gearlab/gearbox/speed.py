@@ -637,13 +637,27 @@ def _followed(signal, fine: Upsampled, course, fs, box, declared, where, thresho
             # fundamental, the speed followed, is the speed (speed_from_mesh's rule among a family's speeds). A run-up's
             # angle leaves weak sidebands that a comb at half the speed explains too, and the reading swung between
             # the two (a 32-tooth mesh, 8 -> 16 Hz in 1 s then 2 s steady: read at a constant 7.33 Hz, 21 revolutions)
-            return theta, mean, how + ", followed on a mesh harmonic's phase", note
+            # -- unless the strongest line, read there, is a mesh harmonic of the fraction and of no mesh at the speed
+            # followed: the phase of h M was followed as (h / k) M, in a band k times wider, which followed a swing
+            # below the slowest shaft's rate that a band at the speed did not (a 45/119 + 28/123 conveyor at
+            # 0.7425 Hz swinging 0.2 % at 0.05 Hz: its mesh at 33.41 Hz, order 22.5 at 1.485 Hz, was cut at 1.485 Hz)
+            freq, amp = spectrum(even, fs)
+            top = find_lines(freq, amp, threshold_db, 2 * freq[1], 0.45 * fs).at[:1]
+            if not top.size or _on_mesh(top[0], mean, box, freq[1]) or not _on_mesh(top[0], f2, box, freq[1]):
+                return theta, mean, how + ", followed on a mesh harmonic's phase", note
+            return theta / k, mean / k, how2 + ", followed on a mesh harmonic's phase", note2
         if how2 == "declared":
             if note2 and SIDEBANDS_SHOW in note2 and SIDEBANDS_SHOW not in (note or ""):
                 note = note2  # at uniform angle a speed's swing no longer splits the sidebands (a 0.1 % swing did)
             break
         f = f2
     return None, f, how, note
+
+
+def _on_mesh(line: float, f: float, box: Gearbox, df: float) -> bool:
+    """Whether a spectral *line* (Hz; *df* the bin) lies on a harmonic of a mesh of *box* at input speed *f*."""
+    tol, meshes = max(2.5 * df, DRIFT * line), [float(s.mesh) * f for s in order_table(box).stages]
+    return any(abs(line - max(1.0, round(line / m)) * m) <= tol for m in meshes)
 
 
 RECENTRE = 0.002  # a followed mean this far off the band's centre is followed again about itself (mesh_angle)
