@@ -55,6 +55,7 @@ from . import placement
 from .placement import fault_parts, shaft_names
 from .realise import CYCLE_STREAM, REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
 from .rows import TurnedRows, entries, made
+from .slow_box import cost, first_blocks
 from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
 if TYPE_CHECKING:
@@ -131,7 +132,8 @@ def steady_response(
             f"revolutions (the meshes' orders); a steady simulation takes at most {placement.MAX_PERIOD}"
         )
     per_block = per_rev * cycle
-    blocks, most = (8, 256) if cycle == period else (3, 12)  # a long cycle: few blocks (the transient is in the first)
+    blocks = first_blocks(per_rev, period, cycle, lambda: settle_revolutions(sim, speed))
+    most = 256 if cycle == period else 12
     result = None
     while True:
         # a longer run continues the shorter one (the same floats as a run from the start: Simulator.run)
@@ -649,9 +651,12 @@ def build_dataset(
     todo = [task for task in dict.fromkeys(tasks) if task not in _SIMULATED]
     if todo:
         reused = f" ({len(tasks) - len(todo)} done before)" if len(todo) < len(tasks) else ""
-        on_event(
-            Event("stage", stage="simulate", total=len(todo), message=f"{spec.name}: {len(todo)} simulations{reused}")
+        settle = lambda: settle_revolutions(_simulator(spec.model, spec.preset, fs), speed)  # noqa: E731
+        periods = [on.period for on in classes.values()]
+        said = f"{spec.name}: {len(todo)} simulations{reused}" + (
+            "" if stretch else cost(fs, speed, pairs, periods, len(todo), settle)
         )
+        on_event(Event("stage", stage="simulate", total=len(todo), message=said))
     else:
         on_event(Event("log", message=f"{spec.name}: its {len(tasks)} simulations done before"))
     done = 0
