@@ -12,7 +12,7 @@ from test_slow_swing_speed import BOX
 
 from gearlab.data import builder
 from gearlab.data.slow_box import FIRST_LOOK, SLOW_STEPS, first_blocks
-from gearlab.kinds.common import dataset_spec
+from gearlab.kinds.common import dataset_spec, sized
 
 
 def _never() -> int:
@@ -45,12 +45,17 @@ def test_a_slow_box_s_run_says_its_cost_before_it_simulates(tmp_path, faults, sa
     entry = defaultdict(lambda: None, gearbox="conveyor.toml", faults=faults, healthy=48)
     spec = dataset_spec(entry, "[source]", tmp_path)
     lines: list[str] = []
+    told = sized(spec)  # gearlab validate's words of the source, before any run
     with pytest.raises(_Stop):
         builder.build_dataset(spec, _Grab(), lambda e: lines.append(getattr(e, "message", "")))
     if not said:  # healthy alone: 3 periods of the meshes' 17-turn cycle, 13.7 M steps
-        assert lines[0] == "conveyor: 1 simulations", lines
+        assert lines[0] == "conveyor: 1 simulations" and "slow" not in told, (lines, told)
         return
     assert lines[0].startswith(
         "conveyor: 85 simulations; a slow box: each up to 357 input turns at 200 kHz, 95 M steps"
     ), lines
     assert "for 85: fewer fault intensities or teeth, or more workers, cut it)" in lines[0]
+    assert told.endswith(
+        "a slow box: each up to 357 input turns at 200 kHz, 95 M steps, about 1 min on one core (fewer fault "
+        "intensities or teeth, or more workers, cut it)"
+    ), told

@@ -31,10 +31,10 @@ def first_blocks(per_rev: int, period: int, cycle: int, settle) -> int:
     return min(blocks, max(3, 2 + math.ceil(settle() / cycle)))
 
 
-def cost(fs: float, speed: float, pairs, periods, units: int, settle) -> str:
-    """The up-front cost of a dataset's *units* simulations at *fs* (Hz) and *speed* (Hz), its longest unit's first look
-    (the damage of *periods* input turns, the train's gear *pairs*; *settle* as first_blocks'), '' where that look
-    is under SLOW_STEPS."""
+def cost(fs: float, speed: float, pairs, periods, units: int | None, settle) -> str:
+    """The up-front cost of a dataset's *units* simulations (None: not yet counted, gearlab validate) at *fs* (Hz)
+    and *speed* (Hz), its longest unit's first look (the damage of *periods* input turns, the train's gear *pairs*;
+    *settle* as first_blocks'), '' where that look is under SLOW_STEPS."""
     per_rev, mesh = round(fs / speed), mesh_cycle_of(pairs)
     period = max(periods, key=lambda p: math.lcm(p, mesh), default=1)
     cycle = math.lcm(period, mesh)
@@ -45,6 +45,6 @@ def cost(fs: float, speed: float, pairs, periods, units: int, settle) -> str:
     each = steps * STEP_S / 60
     return (
         f"; a slow box: each up to {turns} input turns at {fs / 1e3:.4g} kHz, {steps / 1e6:.0f} M steps, about "
-        f"{each:.0f} min on one core ({units * each / 60:.1f} h for {units}: fewer fault intensities or teeth, "
-        "or more workers, cut it)"
+        f"{each:.0f} min on one core ({f'{units * each / 60:.1f} h for {units}: ' if units else ''}fewer fault "
+        "intensities or teeth, or more workers, cut it)"
     )

@@ -643,7 +643,26 @@ def sized(spec: DatasetSpec | MeasuredSpec) -> str:
     if sizes is None:
         return f"{spec.name} (measured)"
     total = sum(sizes.values())
-    return f"{spec.name} ({total} samples: {sizes['healthy']} healthy, {total - sizes['healthy']} fault)"
+    said = f"{spec.name} ({total} samples: {sizes['healthy']} healthy, {total - sizes['healthy']} fault)"
+    return said + simulation_cost(spec)
+
+
+def simulation_cost(spec: DatasetSpec) -> str:
+    """What a slow box's simulations cost, said before they start (data.slow_box.cost, its longest simulation's;
+    the run's line counts them); '' for a box simulated quickly, or a long train's stretch (lead_revolutions)."""
+    from ..data import builder, placement
+    from ..data.slow_box import cost
+
+    model, pair, _ = spec.check_model()
+    speed = builder.operating_point(spec)[0]
+    fs = builder.whole_steps_rate(spec.fs, speed, pair.Z1)
+    pairs = placement.train_pairs(model, spec.preset, f"dataset '{spec.name}'")
+    classes = spec.fault_classes() if spec.faults else {}
+    if builder.stretch_of(spec, pairs, classes):
+        return ""
+    simulator = builder._simulator  # noqa: SLF001 - the one the run builds, cached
+    settle = lambda: builder.settle_revolutions(simulator(spec.model, spec.preset, fs), speed)  # noqa: E731
+    return cost(fs, speed, pairs, [on.period for on in classes.values()], None, settle)
 
 
 def planned_counts(spec: DatasetSpec | MeasuredSpec, where: str = "") -> Counts | None:
