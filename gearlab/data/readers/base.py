@@ -155,7 +155,8 @@ def stated_units(texts: dict[str, str], channels: Sequence[str]) -> dict[str, st
     return {c: u for c, u in out.items() if u}
 
 
-UNIT_ATTRIBUTES = ("units", "unit", "Units", "Unit")
+# NI's TDMS names a channel's unit "unit_string" (its HDF5 copies too): a channel in g was taken as m/s²
+UNIT_ATTRIBUTES = ("units", "unit", "Units", "Unit", "unit_string")
 
 
 def stated_unit(attrs) -> str | None:

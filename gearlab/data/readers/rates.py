@@ -18,6 +18,9 @@ _RATE_NAMES += ("samplingfrequency", "sample_frequency", "samplefrequency", "abt
 # a sample interval in seconds, which a logger may store instead of the rate (MATLAB's dt): its reciprocal is one
 _INTERVAL_NAMES = ("dt", "delta_t", "sample_interval", "sampling_interval", "sample_period", "sampling_period")
 _INTERVAL_NAMES += ("abtastintervall",)  # a German logger's preamble ('Abtastrate: 20 kHz' above, a rate)
+# NI's TDMS waveform channel keeps it as 'wf_increment' (an HDF5 copy too), Simcenter Testlab's MAT export as its
+# struct's x_values.increment: both were 'no sampling rate: the file has no 'fs'/time'
+_INTERVAL_NAMES += ("wf_increment", "increment")
 
 # Hz per value of a rate in a unit, seconds per value of an interval ("": none said, Hz or s)
 RATE_UNITS = {"": 1.0, "hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "1/s": 1.0, "ks/s": 1e3}

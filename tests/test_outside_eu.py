@@ -1,0 +1,87 @@
+"""Outside user EU (issue 39, round 23): a 37/113 drive at 27 Hz, its takes made here with numpy (each shaft's lines,
+the mesh's harmonics modulated in amplitude and phase by both shafts, noise, a once-per-turn tacho), written as
+commercial DAQ software exports them: Simcenter Testlab's MAT struct (x_values.increment, y_values.values), NI
+TDMS channels copied to HDF5 (a 'wf_increment' and a 'unit_string' attribute per channel)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gearlab.inspect import InspectOptions, inspect_record
+
+FS = 25600.0
+ZP, ZW = 37, 113
+BOX = (
+    '[gearbox]\nname = "driveEU"\n[operation]\nspeed = "27 Hz"\nload = "30 N*m"\n'
+    '[[stages]]\nmodule = "2 mm"\nface_width = "18 mm"\npinion = { z = 37, bore = "25 mm" }\n'
+    'wheel = { z = 113, bore = "40 mm" }\n[sensor]\nnear = "input"\ntacho = "input"\n'
+)
+
+
+def _take(seconds: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(m/s², tacho V): 27 Hz swinging 0.2 %; both shafts' orders 1-2, the mesh's harmonics 1-3 modulated, noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * FS)) / FS
+    th = 2 * np.pi * np.cumsum(27.0 * (1 + 0.002 * np.sin(2 * np.pi * 0.37 * t))) / FS + rng.uniform(0, 6)
+    wheel = th * ZP / ZW
+    x = sum(0.15 * np.cos(k * a + 0.5 * k) for a in (th, wheel) for k in (1, 2))
+    for h, amp in ((1, 3.0), (2, 1.1), (3, 0.4)):
+        am = 1 + 0.05 * np.cos(th + 0.3 * h) + 0.04 * np.cos(wheel + 0.8 * h)
+        x = x + amp * am * np.cos(h * (ZP * th + 0.03 * np.cos(th) + 0.02 * np.cos(wheel)))
+    x = x + rng.normal(0, 0.06 * np.std(x), t.size)
+    return x, np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)
+
+
+@pytest.fixture(scope="module")
+def box(tmp_path_factory):
+    from gearlab.gearbox import load_gearbox
+
+    path = tmp_path_factory.mktemp("drive") / "box.toml"
+    path.write_text(BOX)
+    return load_gearbox(path)
+
+
+def _matched(got: dict) -> None:
+    assert got["fs_hz"] == pytest.approx(FS, rel=1e-6), got["fs_source"]
+    assert got["speed"]["mean_hz"] == pytest.approx(27.0, rel=0.005)
+    assert "matches" in got["verdict"], got["verdict"]
+
+
+def test_a_simcenter_testlab_struct_s_x_values_increment_gives_the_rate(tmp_path, box):
+    # Testlab's 'Save as MATLAB' writes each channel as a struct: x_values (start_value, increment,
+    # number_of_values), y_values (values, unit) and function_record; was 'no sampling rate: the file has no
+    # 'fs'/time and none was given'
+    from scipy.io import savemat
+
+    acc, tacho = _take(2.0, 1)
+    x_values = {"start_value": 0.0, "increment": 1 / FS, "number_of_values": float(acc.size), "unit": "s"}
+    savemat(
+        tmp_path / "testlab.mat",
+        {
+            "Signal_1": {"x_values": x_values, "y_values": {"values": acc, "unit": "m/s^2"}, "function_record": {}},
+            "Signal_2": {"x_values": x_values, "y_values": {"values": tacho, "unit": "V"}, "function_record": {}},
+        },
+    )
+    got = inspect_record(
+        str(tmp_path / "testlab.mat"), box, InspectOptions("Signal_1.y_values.values", tacho="Signal_2.y_values.values")
+    )
+    assert "increment" in got["fs_source"], got["fs_source"]
+    _matched(got)
+
+
+def test_tdms_channels_in_hdf5_give_their_rate_by_wf_increment_and_their_unit_by_unit_string(tmp_path, box):
+    # NI's TDMS properties, kept by a TDMS-to-HDF5 copy as each channel's attributes: 'wf_increment' (s) and
+    # 'unit_string'; the rate was 'no sampling rate', and given by hand, a channel in g was taken as m/s² (9.8 x low)
+    import h5py
+
+    acc, tacho = _take(2.0, 2)
+    with h5py.File(tmp_path / "tdms.h5", "w") as f:
+        group = f.create_group("Measurement")
+        for name, data, unit in (("acc", acc / 9.80665, "g"), ("tacho", tacho, "V")):
+            ds = group.create_dataset(name, data=data)
+            ds.attrs.update({"wf_increment": 1 / FS, "wf_start_offset": 0.0, "unit_string": unit})
+    got = inspect_record(str(tmp_path / "tdms.h5"), box, InspectOptions("acc", tacho="tacho"))
+    assert "wf_increment" in got["fs_source"], got["fs_source"]
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.01), got["units"]
+    _matched(got)
