@@ -85,3 +85,31 @@ def test_tdms_channels_in_hdf5_give_their_rate_by_wf_increment_and_their_unit_by
     assert "wf_increment" in got["fs_source"], got["fs_source"]
     assert got["rms"] == pytest.approx(np.std(acc), rel=0.01), got["units"]
     _matched(got)
+
+
+def test_dewesoft_like_mat_channels_with_their_own_rate_or_time_variables_are_read_and_validated(tmp_path, box, cli):
+    # a DAQ's MAT export of each channel as a variable beside its own: 'Data1_time_ACC' for 'Data1_ACC' (Dewesoft's
+    # names), 'TACHO_fs' for 'TACHO' (its counter at half the rate); both were 'no sampling rate', and
+    # validate 'key 'fs': missing; ... carries no sampling rate'
+    from scipy.io import savemat
+
+    acc, tacho = _take(2.0, 3)
+    t = np.arange(acc.size) / FS
+    savemat(tmp_path / "dewe.mat", {"Data1_ACC": acc, "Data1_time_ACC": t, "Data1_TACHO": tacho, "Data1_time_TACHO": t})
+    savemat(tmp_path / "own.mat", {"ACC": acc, "ACC_fs": FS, "TACHO": tacho[::2], "TACHO_fs": FS / 2})
+    got = inspect_record(str(tmp_path / "dewe.mat"), box, InspectOptions("Data1_ACC", tacho="Data1_TACHO"))
+    assert "Data1_time_ACC" in got["fs_source"], got["fs_source"]
+    _matched(got)
+    got = inspect_record(str(tmp_path / "own.mat"), box, InspectOptions("ACC", tacho="TACHO"))
+    assert "'ACC_fs'" in got["fs_source"] and "held from 12800 Hz" in got["fs_source"], got["fs_source"]
+    _matched(got)
+    (tmp_path / "box.toml").write_text(BOX)
+    for name, vib, tach in (("dewe", "Data1_ACC", "Data1_TACHO"), ("own", "ACC", "TACHO")):
+        (tmp_path / "gap.toml").write_text(
+            '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\n'
+            f'vibration = "{vib}"\ntacho = "{tach}"\n'
+            f'files = [{{ file = "{name}.mat", role = "history", label = "healthy" }}]\n'
+            '[diagnosis]\ncandidates = ["sensor_noise"]\n[accuracy]\nenabled = false\n'
+        )
+        code, out, err = cli("validate", tmp_path / "gap.toml")
+        assert code == 0 and "1 measured history record" in out, out + err

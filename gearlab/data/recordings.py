@@ -63,7 +63,7 @@ from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
-from .readers.rates import CoarseTimes
+from .readers.rates import CoarseTimes, own_field
 from .readers.take_rows import no_take_column, take_rows
 from .time_column import rate_from_time, take_columns
 
@@ -740,7 +740,9 @@ def check_recording(
                 f"{_listing(header.channels)}{index}"
             )
         header.check_channel(header.resolve(name), f"{where} key '{key}'", path)  # no time column, a series
-    if not header.rate and fs is None:
+    asked = [str(channel_key(v)) for v in channels.values() if v not in (None, "")]
+    own = any(own_field(str(n), a) for a in asked for n in header.channels)  # 'ACC_fs', 'Data1_time_ACC'
+    if not header.rate and fs is None and not own:
         raise GearlabInputError(
             f"{where} key 'fs': missing; {path} carries no sampling rate (no 'fs' field, no time column such as "
             "time, t, time_s or 'Time [s]')" + (time_hint(path) or "; expected the rate, e.g. fs = '51.2 kHz'")

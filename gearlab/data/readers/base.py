@@ -15,7 +15,7 @@ import numpy as np
 from ...errors import GearlabInputError
 
 # rate and interval fields by name, their unit in the name or not ('fs', 'fs_kHz', 'dt_us'): rates.named
-from .rates import named, rate_field
+from .rates import named, own_field, rate_field
 
 # A time channel by any of its common names, with its unit if the name says one: t, time, time_s,
 # "Time [s]", "t (ms)", "t/s", "Time, s", timestamp, Zeit, "Relative Time (s)", "rel. Zeit [ms]",
@@ -207,7 +207,46 @@ def _keyed(available: Iterable[str], get, names: Sequence[str], listed: Iterable
             contents.rates.append(rate_field(f"'{n}'", n, _normalise(get(n))))
         elif time_scale(n) is not None:
             contents.times.append(_time_field(f"time '{n}'", _normalise(get(n)), time_scale(n)))
+    own: dict[str, tuple] = {}  # a channel's own rate field ('ACC_fs'), its time vector ('Data1_time_ACC')
+    for name in contents.found:
+        for n in available:
+            kind = own_field(n, name)
+            if kind == "rate":
+                own[name] = rate_field(f"'{n}'", n[len(name) + 1 :], _normalise(get(n)))
+                contents.rates.append(own[name])
+            elif kind == "time":
+                contents.times.append((f"time '{n}'", _normalise(get(n))))
+            if kind is not None and n in contents.available:  # no channel, as 'fs' is none
+                contents.available.remove(n)
+    held_to_vibration(contents, list(names), own)
     return contents
+
+
+def held_to_vibration(contents: Contents, names: list[str], own: dict[str, tuple]) -> None:
+    """A channel logged at a lower rate than the vibration (*names*' first), each at a rate of its own (*own*: name ->
+    (where, rate field)) over the same time, held sample by sample onto the vibration's (a DAQ's tacho counter at 10
+    kHz beside its 20 kHz accelerometer was refused: 'the sampling rates in the file disagree ... expected one
+    rate'); its rate field is then no rate of the record. Any other disagreement is left for the rate check."""
+
+    def hz(field) -> float | None:
+        value = np.asarray(field[1])
+        return float(value.item()) if value.size == 1 and value.dtype.kind in "iuf" and value.item() > 0 else None
+
+    if not names or names[0] not in own or hz(own[names[0]]) is None:
+        return
+    fv, nv = hz(own[names[0]]), np.asarray(contents.found[names[0]]).shape[0]
+    for name in names[1:]:
+        values = np.asarray(contents.found.get(name, ()))
+        f = hz(own[name]) if name in own and own[name][0] != own[names[0]][0] else None
+        if f is None or f >= fv or values.ndim != 1 or values.dtype.kind not in "iuf":
+            continue
+        if abs(values.size / f - nv / fv) > 2 / f:  # not the same stretch of time
+            continue
+        contents.found[name] = values[np.minimum((np.arange(nv) * f / fv).astype(np.int64), values.size - 1)]
+        held = f"; '{name}' held from {f:g} Hz"  # said where the rate's source is (inspect's first line)
+        mine = own[names[0]][0]
+        contents.rates[:] = [(w + held if w == mine else w, v) for w, v in contents.rates if w != own[name][0]]
+        own[names[0]] = (own[names[0]][0] + held, own[names[0]][1])
 
 
 def _time_field(where: str, value: np.ndarray, scale: float) -> tuple[str, np.ndarray]:

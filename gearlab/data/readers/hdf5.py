@@ -18,6 +18,7 @@ from .base import (
     _time_field,
     check_size,
     column_of,
+    held_to_vibration,
     is_unit_entry,
     stated_unit,
     stated_units,
@@ -185,33 +186,6 @@ def text_units(h5py, f, channels: dict[str, str], datasets: Sequence[str]) -> tu
             texts[d] = text
     said = stated_units(texts, list(channels.values()))
     return {n: said[p] for n, p in channels.items() if p in said}, set(texts)
-
-
-def held_to_vibration(contents: Contents, names: list[str], own: dict[str, tuple]) -> None:
-    """A channel logged at a lower rate than the vibration (*names*' first), each at a rate of its own (*own*: name ->
-    (where, rate field)) over the same time, held sample by sample onto the vibration's (a DAQ's tacho counter at 10
-    kHz beside its 20 kHz accelerometer was refused: 'the sampling rates in the file disagree ... expected one
-    rate'); its rate field is then no rate of the record. Any other disagreement is left for the rate check."""
-
-    def hz(field) -> float | None:
-        value = np.asarray(field[1])
-        return float(value.item()) if value.size == 1 and value.dtype.kind in "iuf" and value.item() > 0 else None
-
-    if not names or names[0] not in own or hz(own[names[0]]) is None:
-        return
-    fv, nv = hz(own[names[0]]), np.asarray(contents.found[names[0]]).shape[0]
-    for name in names[1:]:
-        values = np.asarray(contents.found.get(name, ()))
-        f = hz(own[name]) if name in own and own[name][0] != own[names[0]][0] else None
-        if f is None or f >= fv or values.ndim != 1 or values.dtype.kind not in "iuf":
-            continue
-        if abs(values.size / f - nv / fv) > 2 / f:  # not the same stretch of time
-            continue
-        contents.found[name] = values[np.minimum((np.arange(nv) * f / fv).astype(np.int64), values.size - 1)]
-        held = f"; '{name}' held from {f:g} Hz"  # said where the rate's source is (inspect's first line)
-        mine = own[names[0]][0]
-        contents.rates[:] = [(w + held if w == mine else w, v) for w, v in contents.rates if w != own[name][0]]
-        own[names[0]] = (own[names[0]][0] + held, own[names[0]][1])
 
 
 def leaf_match(datasets: Sequence[str], name: str) -> str | None:

@@ -22,7 +22,7 @@ from .base import (
     time_scale,
 )
 from .hdf5 import _read_hdf5, leaf_match
-from .rates import named, rate_field
+from .rates import named, own_field, rate_field
 
 
 def _is_mat73(path: Path) -> bool:
@@ -66,7 +66,8 @@ def _read_mat(path: Path, names: Sequence[str]) -> Contents:
         return _keyed(available, lambda n: variables[n], names)
 
     def wanted(name: str) -> bool:  # the channels asked for, the rate fields (see _keyed) and the units said
-        return name in names or is_rate_or_time(name) or is_unit_entry(name)
+        own = any(own_field(name, n) for n in names)  # a channel's own rate or time ('ACC_fs', 'Data1_time_ACC')
+        return name in names or is_rate_or_time(name) or is_unit_entry(name) or own
 
     shapes: dict[str, tuple] = {}  # the numeric ones': a unit entry is text
     every = _mat5_variables(path.read_bytes(), wanted, fields, shapes)

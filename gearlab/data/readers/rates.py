@@ -81,6 +81,16 @@ def rate_field(where: str, name, value) -> tuple[str, object]:
     return interval_rate(where, value) if interval else (where, value)
 
 
+def own_field(field: str, channel: str) -> str | None:
+    """What *field* is of *channel* alone, as a DAQ exports each channel beside its own fields: 'rate' for a rate or
+    interval field written after the channel's name ('ACC_fs', 'ACC_SampleRate_kHz'), 'time' for the channel's name
+    with 'time_' or '_time' in it (Dewesoft's 'Data1_time_ACC' beside 'Data1_ACC', 'ACC_time'); else None."""
+    for sep in ("_", " ", "-"):
+        if field.startswith(channel + sep) and named(field[len(channel) + 1 :]) is not None:
+            return "rate"
+    return "time" if any(field.replace(s, "", 1) == channel for s in ("time_", "_time") if s in field) else None
+
+
 def stated_hz(name, value) -> float | None:
     """The rate in Hz a field *name* states with its one number *value* (a rate, or an interval's reciprocal); None
     where *name* is no rate or interval field, or *value* not one number (an interval: not a positive one)."""
