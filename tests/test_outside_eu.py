@@ -113,3 +113,26 @@ def test_dewesoft_like_mat_channels_with_their_own_rate_or_time_variables_are_re
         )
         code, out, err = cli("validate", tmp_path / "gap.toml")
         assert code == 0 and "1 measured history record" in out, out + err
+
+
+def test_an_amplifier_s_gain_given_as_gain_on_a_channel_in_volts_is_refused_in_one_line(tmp_path, box, cli):
+    # 10 mV/g through an amplifier at x10, written as the sensor sheet and the amplifier's dial say (gain = "10"):
+    # the gain is volts per file unit, so the level came out 100 x too high ('100 g a file unit (10 V / 10 mV/g)'),
+    # unsaid; the guide's way, sensitivity = '100 mV/g', reads it right
+    acc, tacho = _take(2.0, 4)
+    t = np.arange(acc.size) / FS
+    path = tmp_path / "amp.csv"
+    np.savetxt(path, np.c_[t, acc / 9.80665 * 0.1, tacho], delimiter=",", header="time_s,acc_V,tacho_V", comments="")
+    (tmp_path / "box.toml").write_text(BOX)
+    args = ("inspect", path, "--gearbox", tmp_path / "box.toml", "--vibration", "acc_V", "--tacho", "tacho_V")
+    code, out, err = cli(*args, "--sensitivity", "10 mV/g", "--gain", "10")  # inspect looks, and says so in line 1
+    assert "not m/s² (expected no gain" in out.splitlines()[0] and "'1 V/g'" in out.splitlines()[0], out + err
+    got = inspect_record(str(path), box, InspectOptions("acc_V", tacho="tacho_V", sensitivity=0.1 / 9.80665))
+    assert got["rms"] == pytest.approx(np.std(acc), rel=0.01), got["units"]
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\nvibration = "acc_V"\n'
+        'tacho = "tacho_V"\nsensitivity = "10 mV/g"\ngain = "10"\n'
+        'files = [{ file = "amp.csv", role = "history", label = "healthy" }]\n[accuracy]\nenabled = false\n'
+    )
+    code, out, err = cli("validate", tmp_path / "gap.toml")
+    assert code == 2 and "[target] key 'gain'" in err and "volts already" in err, out + err

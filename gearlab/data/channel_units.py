@@ -224,6 +224,13 @@ def channel_scale(
             f"{at('sensitivity')}: missing; channel '{name}' is in volts ({said[1]}, {says}); "
             "expected the sensor's sensitivity, e.g. sensitivity = '100 mV/g'"
         )
+    if said is not None and said[0] == "voltage" and gain is not None and not integer:
+        # a gain is volts per file unit: on a channel in volts an amplifier's x10 multiplied the level by 10 where
+        # the sensitivity was to be multiplied, a level 100 x off, unsaid
+        raise GearlabInputError(
+            f"{at('gain')}: channel '{name}' is in volts already ({said[1]}, {says}); expected no gain (an "
+            "amplifier's gain goes in the sensitivity: 100 mV/g at x10 is sensitivity = '1 V/g')"
+        )
     if said is not None and said[0] == "acceleration":
         for key, value in (("gain", gain), ("sensitivity", sensitivity)):  # a gain in g is read as both
             if value is not None and declared is not None:  # which of the two is wrong, only the user knows
