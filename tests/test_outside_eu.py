@@ -136,3 +136,14 @@ def test_an_amplifier_s_gain_given_as_gain_on_a_channel_in_volts_is_refused_in_o
     )
     code, out, err = cli("validate", tmp_path / "gap.toml")
     assert code == 2 and "[target] key 'gain'" in err and "volts already" in err, out + err
+
+
+def test_a_take_3_db_under_its_history_names_the_template_methods_that_call_it_and_the_remedy():
+    # a 34/87 + 26/61 + 38/91 box's healthy takes after the sensor was re-mounted, 3 dB lower: gearlab score's
+    # matched_filter called both 'fault' at record30 (2/2 units, median over threshold +0.006 and +0.003; which gear:
+    # nothing) while the line said 'NA4, a size, reads it as a change' (NA4 stayed healthy) and gave no remedy
+    from gearlab.kinds.detection_records import level_line
+
+    line = level_line(10 ** (-3 / 20))
+    assert line.startswith("level 0.71 x its history's (another load or gain?)"), line
+    assert "matched_filter" in line and "likelihood_ratio" in line and "re-mounted: record a new history" in line, line

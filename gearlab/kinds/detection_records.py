@@ -84,8 +84,9 @@ def level_line(ratio: float) -> str:
     units = [w for f, w in UNIT_FACTORS if abs(abs(math.log(ratio)) - math.log(f)) < math.log(UNIT_NEAR)]
     why = f"{units[0]} mixed up? check its values: line; or another load or gain?" if units else "another load or gain?"
     return (
-        f"level {ratio:.2g} x its history's ({why}): NA4, a size, reads it as a change; "
-        "a history at that load, or its own condition (condition = ...), compares like with like"
+        f"level {ratio:.2g} x its history's ({why}): NA4, a size, and the template methods (matched_filter, "
+        "likelihood_ratio), which subtract the history's average, read it as a change; a history at that load, or its "
+        "own condition (condition = ...), compares like with like (a sensor re-mounted: record a new history)"
     )
 
 
