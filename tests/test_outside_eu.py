@@ -147,3 +147,20 @@ def test_a_take_3_db_under_its_history_names_the_template_methods_that_call_it_a
     line = level_line(10 ** (-3 / 20))
     assert line.startswith("level 0.71 x its history's (another load or gain?)"), line
     assert "matched_filter" in line and "likelihood_ratio" in line and "re-mounted: record a new history" in line, line
+
+
+def test_a_verdict_says_the_fault_takes_were_called_on_another_gear_not_that_the_threshold_failed():
+    # a 34/87 + 26/61 + 38/91 box watching its 26T intermediate pinion: both fault takes called by every method at
+    # the history's threshold (called % 'fault' 100, 'healthy' 0), their change named on the 87T gear of the same
+    # shaft, so 0 % detected; the verdict said '(the threshold, not the method, fails): fm4 (AUC 1.00, 0 / 0 %)'
+    from gearlab.kinds.detection_verdict import detection_lines
+
+    row = {"condition": "40 Hz", "unit": "record30", "method": "fm4", "auc": 1.0, "detection": 100.0}
+    row |= {"false_alarm": 0.0, "n_positive": 4, "n_negative": 4, "history_model": {"records": 3}}
+    call = {"condition": "40 Hz", "method": "fm4", "unit": "record30", "auc": 1.0}
+    call |= {"units": {"fault": 4, "healthy": 2}, "judged": {"fault": 0, "healthy": 2}}
+    call |= {"watched": {"fault": 0.0, "healthy": 0.0}, "other": {"fault": 100.0, "healthy": 0.0}}
+    summary = {"rows": [row], "which_gear": {"calls": [call]}, "target": {"positive": "fault"}}
+    text = " ".join(detection_lines(summary, "record30"))
+    assert "on another gear than the watched one" in text and "fm4 (AUC 1.00, 0 / 0 %)" in text, text
+    assert "the threshold, not the method, fails" not in text, text
