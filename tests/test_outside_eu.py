@@ -149,18 +149,36 @@ def test_a_take_3_db_under_its_history_names_the_template_methods_that_call_it_a
     assert "matched_filter" in line and "likelihood_ratio" in line and "re-mounted: record a new history" in line, line
 
 
+def _localised(watched: float) -> dict:
+    """A detection summary (its record30 fm4 row and which-gear call) whose fault takes were all called at the
+    history's threshold, *watched* % of them on the watched gear, the rest on another (other damage)."""
+    row = {"condition": "40 Hz", "unit": "record30", "method": "fm4", "auc": 1.0, "detection": 100.0}
+    row |= {"false_alarm": 0.0, "n_positive": 4, "n_negative": 4, "history_model": {"records": 3}}
+    call = {"condition": "40 Hz", "method": "fm4", "unit": "record30", "auc": 1.0}
+    call |= {"units": {"fault": 4, "healthy": 2}, "judged": {"fault": 4 * watched // 100, "healthy": 2}}
+    call |= {"watched": {"fault": watched, "healthy": 0.0}, "other": {"fault": 100.0 - watched, "healthy": 0.0}}
+    return {"rows": [row], "which_gear": {"calls": [call]}, "target": {"positive": "fault"}}
+
+
 def test_a_verdict_says_the_fault_takes_were_called_on_another_gear_not_that_the_threshold_failed():
     # a 34/87 + 26/61 + 38/91 box watching its 26T intermediate pinion: both fault takes called by every method at
     # the history's threshold (called % 'fault' 100, 'healthy' 0), their change named on the 87T gear of the same
     # shaft, so 0 % detected; the verdict said '(the threshold, not the method, fails): fm4 (AUC 1.00, 0 / 0 %)'
     from gearlab.kinds.detection_verdict import detection_lines
 
-    row = {"condition": "40 Hz", "unit": "record30", "method": "fm4", "auc": 1.0, "detection": 100.0}
-    row |= {"false_alarm": 0.0, "n_positive": 4, "n_negative": 4, "history_model": {"records": 3}}
-    call = {"condition": "40 Hz", "method": "fm4", "unit": "record30", "auc": 1.0}
-    call |= {"units": {"fault": 4, "healthy": 2}, "judged": {"fault": 0, "healthy": 2}}
-    call |= {"watched": {"fault": 0.0, "healthy": 0.0}, "other": {"fault": 100.0, "healthy": 0.0}}
-    summary = {"rows": [row], "which_gear": {"calls": [call]}, "target": {"positive": "fault"}}
-    text = " ".join(detection_lines(summary, "record30"))
-    assert "on another gear than the watched one" in text and "fm4 (AUC 1.00, 0 / 0 %)" in text, text
+    text = " ".join(detection_lines(_localised(0.0), "record30"))
+    assert "lies on another gear than the watched one as other damage" in text and "fm4 (AUC 1.00, 0 / 0 %)" in text, (
+        text
+    )
     assert "the threshold, not the method, fails" not in text, text
+
+
+def test_compare_counts_detections_as_each_run_s_verdict_does():
+    # the same box before and after two takes with damage on the watched pinion's own mesh were added: the verdicts
+    # said fm4 '0 / 0 %' and '50 / 0 %' at record30, gearlab compare '1.000 (100 / 0)' for both, a +0.000 change
+    from gearlab.kinds.detection_tables import side_by_side
+
+    title, table = side_by_side([("A", None, None, _localised(0.0)), ("B", None, None, _localised(50.0))])
+    row = next(line for line in table.splitlines() if "record30" in line)
+    assert "1.000 (0 / 0)" in row and "1.000 (50 / 0)" in row, table
+    assert "other damage" in title, title

@@ -18,7 +18,7 @@ from ..scenario import Scenario
 from .contract import VERDICT
 from .detection_records import longest_tsa
 from .detection_units import method_name
-from .detection_verdict import detection_lines
+from .detection_verdict import detection_lines, watched_calls
 from .detection_which_gear import which_gear_summary
 
 
@@ -416,8 +416,11 @@ def side_by_side(runs: list[tuple]) -> tuple[str, str] | None:
     """(title, Markdown) of detection runs side by side (`gearlab compare`): a row per condition, method and
     unit, a column per run (AUC, detected / false-alarm % at its history's threshold, from summary.json's rows)
     and, for each run after the first, its AUC less A's; a method one run lacks is left blank there."""
+    # as each run's verdict counts them (watched_calls): two runs whose fault takes were all named on another gear
+    # than the watched one, then half, read '1.000 (100 / 0)' both, beside verdicts of 0 and 50 % detected
     cells = [
-        {(r["condition"], r["method"], r["unit"]): r for r in (summary or {}).get("rows") or []} for *_, summary in runs
+        {(r["condition"], r["method"], r["unit"]): watched_calls(r, summary) for r in (summary or {}).get("rows") or []}
+        for *_, summary in runs
     ]
     if not any(cells):
         return None
@@ -439,5 +442,8 @@ def side_by_side(runs: list[tuple]) -> tuple[str, str] | None:
             for r in got[1:]
         ]
         lines.append("| " + " | ".join([*key, *shown, *delta]) + " |")
-    title = "Each run's ROC AUC (detected / false-alarm % at its history's threshold) per condition, method and unit"
+    title = (
+        "Each run's ROC AUC (detected / false-alarm % at its history's threshold, a unit on a record whose change lies "
+        "on another gear being other damage, neither, as its verdict counts) per condition, method and unit"
+    )
     return title, "\n".join(lines) + "\n"

@@ -242,9 +242,9 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
         missed = [r for r in missed if r not in aside]
         if aside:
             text += (
-                "; call the fault takes at the history's threshold, but on another gear than the watched one, so "
-                "not as its fault (which gear, not the threshold, decides: the 'watched / other' table): "
-                + ", ".join(_said(r) for r in aside)
+                "; call the fault takes at the history's threshold, but count those whose change lies on another gear "
+                "than the watched one as other damage (which gear, not the threshold, decides: the 'watched / other' "
+                "table): " + ", ".join(_said(r) for r in aside)
             )
         if missed:
             text += (
