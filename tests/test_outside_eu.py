@@ -182,3 +182,20 @@ def test_compare_counts_detections_as_each_run_s_verdict_does():
     row = next(line for line in table.splitlines() if "record30" in line)
     assert "1.000 (0 / 0)" in row and "1.000 (50 / 0)" in row, table
     assert "other damage" in title, title
+
+
+def test_a_corrected_method_that_scores_as_its_plain_twin_is_said():
+    # the 3-stage box's run with [corrected] effects = sensor_noise (20 dB): 'matched_filter (corrected)' and
+    # 'likelihood_ratio (corrected)' scored all 414 test units as the plain rows to the last bit, in every table and
+    # in gearlab compare, unsaid: does detection use the corrected simulator? (it does; noise changes no template)
+    from gearlab.kinds.detection_tables import unchanged_by_correction
+
+    scores = {"f.csv": {"record30": [1.0, 2.0]}}
+    records = [
+        {"condition": "40 Hz", "method": m, "test_scores": scores}
+        for m in ("matched_filter", "matched_filter (corrected)", "fm4")
+    ]
+    records.append({"condition": "40 Hz", "method": "dann (corrected)", "test_scores": {"f.csv": {"record30": [3.0]}}})
+    records.append({"condition": "40 Hz", "method": "dann", "test_scores": scores})
+    (line,) = unchanged_by_correction(records)
+    assert line.startswith("40 Hz: matched_filter (corrected) scored every test unit as matched_filter"), line

@@ -150,6 +150,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     # what the run warned of as it read the records (a take at another load than its history: NA4 reads the size
     # as a change), where the tables are read later: the run's log alone said it
     summary["warnings"] = [f"warning: {line}" for v in (conditions or {}).values() for line in v.get("warnings", [])]
+    summary["warnings"] += [f"warning: {line}" for line in unchanged_by_correction(records)]
     run.write_json("summary.json", summary)
     which = summary["which_gear"].get("md", "")
     run.write_text(
@@ -410,6 +411,22 @@ def table_csv(rows: list[dict]) -> str:
             ]
         )
     return buf.getvalue()
+
+
+def unchanged_by_correction(records: list[dict]) -> list[str]:
+    """A line for each corrected method ('matched_filter (corrected)') that scored every test unit as its plain
+    twin: a 3-stage box's [corrected] sensor_noise gave rows equal to the plain ones to the last bit, unsaid (the
+    template methods take the simulator's noise-free shapes, which a noise effect leaves as they are)."""
+    lines = []
+    for r in records:
+        for q in records:
+            same = q["condition"] == r["condition"] and q["method"].startswith(r["method"] + " (")
+            if same and q["test_scores"] == r["test_scores"]:
+                lines.append(
+                    f"{r['condition']}: {q['method']} scored every test unit as {r['method']}: the correction changes "
+                    "nothing it uses (a noise effect alone leaves the template methods' noise-free shapes as they are)"
+                )
+    return list(dict.fromkeys(lines))
 
 
 def side_by_side(runs: list[tuple]) -> tuple[str, str] | None:
