@@ -70,6 +70,22 @@ def test_a_simcenter_testlab_struct_s_x_values_increment_gives_the_rate(tmp_path
     _matched(got)
 
 
+def test_a_testlab_struct_named_as_the_channel_names_the_field_of_its_numbers(tmp_path, box):
+    # --vibration Signal_1 (the channel's name in Testlab) said 'is not numeric (stored as object); expected an array
+    # of numbers', the field to give ('Signal_1.y_values.values') unsaid
+    from scipy.io import savemat
+
+    from gearlab.errors import GearlabInputError
+
+    acc, tacho = _take(0.5, 5)
+    x_values = {"start_value": 0.0, "increment": 1 / FS, "number_of_values": float(acc.size)}
+    savemat(tmp_path / "t.mat", {"Signal_1": {"x_values": x_values, "y_values": {"values": acc, "unit": "g"}}})
+    with pytest.raises(GearlabInputError) as err:
+        inspect_record(str(tmp_path / "t.mat"), box, InspectOptions("Signal_1"))
+    text = str(err.value)
+    assert "'Signal_1' is not numeric: a struct" in text and "Signal_1.y_values.values" in text, text
+
+
 def test_tdms_channels_in_hdf5_give_their_rate_by_wf_increment_and_their_unit_by_unit_string(tmp_path, box):
     # NI's TDMS properties, kept by a TDMS-to-HDF5 copy as each channel's attributes: 'wf_increment' (s) and
     # 'unit_string'; the rate was 'no sampling rate', and given by hand, a channel in g was taken as m/s² (9.8 x low)

@@ -288,6 +288,21 @@ def _first_text(arr: np.ndarray) -> tuple[int, str]:
     return 0, arr.ravel()[0] if arr.size else ""
 
 
+def _struct_series(value, at: str, depth: int = 0) -> list[str]:
+    """The dotted names of a MATLAB struct's (scipy's mat_struct) fields that hold series of numbers, nested too."""
+    if depth > 3 or not hasattr(value, "_fieldnames"):
+        return []
+    found = []
+    for key in value._fieldnames:
+        inner, name = getattr(value, key), f"{at}.{key}"
+        arr = np.asarray(inner)
+        if arr.dtype.kind in "iuf" and arr.size > 1:
+            found.append(name)
+        elif arr.dtype.kind == "O" and arr.size == 1:
+            found += _struct_series(arr.item(), name, depth + 1)
+    return found
+
+
 def series(raw, name: str, role: str, path: str) -> np.ndarray:
     """A channel as a 1-D finite float64 time series (check_signal), or one clear line."""
     what = f"{role} channel '{name}'"
@@ -296,6 +311,12 @@ def series(raw, name: str, role: str, path: str) -> np.ndarray:
         i, v = _first_text(arr)
         shown = "an empty field" if v == "" else repr(v)
         raise GearlabInputError(f"{path}: {what} is not numeric: {shown} at sample {i}; expected numbers")
+    if arr.dtype.kind == "O" and arr.size == 1 and (fields := _struct_series(arr.item(), name)):
+        # a MATLAB struct named for its channel (Simcenter Testlab's Signal_1, its numbers in y_values.values)
+        raise GearlabInputError(
+            f"{path}: {what} is not numeric: a struct; expected the field that holds its numbers: "
+            + ", ".join(fields[:4])
+        )
     if arr.dtype.kind not in "biuf":
         raise GearlabInputError(f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers")
     if arr.dtype.kind == "b" and role == "vibration":  # a tacho's pulses may be true/false; a vibration not
