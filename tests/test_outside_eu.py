@@ -215,3 +215,15 @@ def test_a_corrected_method_that_scores_as_its_plain_twin_is_said():
     records.append({"condition": "40 Hz", "method": "dann", "test_scores": scores})
     (line,) = unchanged_by_correction(records)
     assert line.startswith("40 Hz: matched_filter (corrected) scored every test unit as matched_filter"), line
+
+
+def test_a_negative_sensitivity_is_refused_with_its_magnitude_to_give(tmp_path):
+    # a charge amplifier's inverting output written as the calibration sheet says ('-100 mV/g'): the refusal named
+    # no way on for a sign that is the sheet's
+    from gearlab.data.textzip import parse_sensitivity
+    from gearlab.errors import GearlabInputError
+
+    with pytest.raises(GearlabInputError) as err:
+        parse_sensitivity("-100 mV/g", "[target] key 'sensitivity'")
+    assert "give its magnitude" in str(err.value) and "[target] key 'sensitivity'" in str(err.value), str(err.value)
+    assert parse_sensitivity("100 mV/g", "x") == pytest.approx(0.1 / 9.80665)

@@ -45,7 +45,10 @@ def parse_sensitivity(value, where: str) -> float:
         raise GearlabInputError(charge or said) from None
     s = number if unit == "V*s^2/m" or not number > 0 else 1.0 / number
     if not s > 0:
-        raise GearlabInputError(f"{where}: expected a positive sensitivity such as '10 mV/g', got {shown(value)}")
+        raise GearlabInputError(
+            f"{where}: expected a positive sensitivity such as '10 mV/g', got {shown(value)}"
+            + (" (an inverting amplifier's: give its magnitude, the same for every take)" if s < 0 else "")
+        )
     if not SENSITIVITY_RANGE[0] <= s <= SENSITIVITY_RANGE[1]:
         # a bare number is V per m/s²: '100' meant as 100 mV/g would scale the record by ~1000
         said = f"{shown(value if written is None else written)} ({s:.3g} V per m/s²)"
