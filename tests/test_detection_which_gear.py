@@ -47,7 +47,7 @@ def test_a_flag_on_damage_elsewhere_is_other_damage(target):
     assert called["unit"] == "record30"
     assert called["watched"] == {"broken output tooth": 0.0, "fault": 100.0, "healthy": 100.0}
     assert called["other"] == {"broken output tooth": 100.0, "fault": 0.0, "healthy": 0.0}
-    text = D.records_md(loc, labels) + D.calls_md([called])
+    text = D.records_md(loc, labels, D.flagged_takes([record])) + D.calls_md([called])
     assert "| 40 Hz | wheel | broken output tooth | output gear 80T (stage 2) |" in text
     assert "other damage: output gear 80T (stage 2) |" in text
     assert "| 40 Hz | flags everything | 0 / 100 | 100 / 0 | 100 / 0 |" in text

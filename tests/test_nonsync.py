@@ -78,7 +78,7 @@ def test_strikes_at_no_shaft_order_are_other_damage_not_the_watched_gear(target)
     # a method that flags every unit: the strikes' flags are counted as other damage
     (called,) = D.calls_by_label(loc, [flags_everything(list(calls))], labels)
     assert called["watched"]["outer race"] == 0.0 and called["other"]["outer race"] == 100.0
-    text = D.records_md(loc, labels)
+    text = D.records_md(loc, labels, set(calls))  # every take flagged: its call shown
     ns = loc["records"]["bearing"]["nonsync"]
     assert f"| {ns['z']:.1f}/{ns['threshold']:.1f} ({ns['order']:.2f}) | {calls['bearing']} |" in text
     assert "non-synchronous z" in D.evidence(loc["records"]["bearing"], ns)

@@ -167,7 +167,7 @@ def test_the_which_gear_table_says_a_take_too_short_for_the_check_was_not_read()
             }
         },
     }
-    row = records_md(loc, {"rec/test_chip.csv": "fault"}).splitlines()[-1]
+    row = records_md(loc, {"rec/test_chip.csv": "fault"}, {"rec/test_chip.csv"}).splitlines()[-1]
     assert f"| fault | not read: {short} |" in row and "nothing" not in row, row
 
 

@@ -66,6 +66,7 @@ NOT_LOCALISED = f"{WATCHED} (not localised)"  # a flag with no evidence of where
 # a flag on a record too short for the which-gear check (data.which_gear's 'unread'): an alarm of no gear, not the
 # watched gear's: a 2 s take with damage on another gear, flagged, was reported as the watched gear's fault
 UNDETERMINED = "fault, gear not determined"
+NOT_FLAGGED = "not flagged (no method's units over its threshold)"
 
 
 def watched_gears(source: DatasetSpec, table) -> list[str]:
@@ -385,10 +386,24 @@ def _which(found: dict) -> str:
     return L.which_line(ev.get("stage_evidence", {}), ev.get("which"))
 
 
-def records_md(loc: dict, labels: dict) -> str:
+def flagged_takes(records: list[dict]) -> set[str]:
+    """The test takes some method flagged: a unit of the longest TSA over that method's threshold (the units
+    calls_by_label counts)."""
+    unit = longest_tsa(u for r in records for u in r["thresholds"])
+    return {
+        path
+        for r in records
+        if unit in r["thresholds"]
+        for path, units in r["test_scores"].items()
+        if np.any(np.asarray(units[unit], dtype=np.float64) > r["thresholds"][unit])
+    }
+
+
+def records_md(loc: dict, labels: dict, flagged: set[str]) -> str:
     """Per test record: its label, the gear its change is localised on with the evidence (each
     shaft's z against its threshold, the tooth, the non-synchronous residual's z against its threshold
-    and its strike order), and what a flag on it means."""
+    and its strike order), and what a flag on it would be called: 'not flagged' where no method
+    flagged it (*flagged*, flagged_takes), as a healthy take's call alone read as a fault."""
     if not loc or not loc["records"]:
         return ""
     out = [
@@ -399,7 +414,7 @@ def records_md(loc: dict, labels: dict) -> str:
         "the record less every shaft's synchronous average, z / threshold at its strike order in input orders, a "
         f"change there without a localised one is other damage ({NS.PASSED}))\n",
         "| condition | file | label | localised on | z / threshold per shaft | tooth | which gear | non-synchronous "
-        "z / threshold (order) | a flag is |",
+        "z / threshold (order) | a flag would be called |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for path, r in loc["records"].items():
@@ -410,7 +425,8 @@ def records_md(loc: dict, labels: dict) -> str:
         on = on or (r["summary"].replace("not localised: ", "not read: ", 1) if unread else "nothing")
         out.append(
             f"| {r['condition']} | {path} | {labels.get(path, '')} | {on} | {z} | "
-            f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {_nonsync_cell(r.get('nonsync'))} | {r['call']} |"
+            f"{_tooth(r)} | {_which(r).removeprefix('; ') or '–'} | {_nonsync_cell(r.get('nonsync'))} | "
+            f"{r['call'] if path in flagged else NOT_FLAGGED} |"
         )
     return "\n".join(out) + "\n"
 
@@ -516,5 +532,5 @@ def which_gear_summary(loc: dict | None, records: list[dict], labels: dict, posi
             for p, r in loc["records"].items()
         },
         "calls": calls,
-        "md": records_md(loc, labels) + calls_md(calls),
+        "md": records_md(loc, labels, flagged_takes(records)) + calls_md(calls),
     }
