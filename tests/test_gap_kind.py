@@ -470,7 +470,7 @@ def test_effects_accepted_then_not_named_are_said_with_the_reason():
     """The search's progress said 'sensor_noise ... (accepted)'; when the accepted set together
     removes under the share a named set must, none is named (stand-ins): the log line and the
     verdict say which were fitted and why they are not named, instead of a bare 'effects: none'."""
-    from gearlab.kinds.gap_verdict import gap_lines
+    from gearlab.kinds.gap_verdict import FINAL_FIT, gap_lines
 
     result = {
         "gap_before": 4.0e5,
@@ -483,7 +483,8 @@ def test_effects_accepted_then_not_named_are_said_with_the_reason():
         "dropped_below": 0.99,
     }
     line = gap.diagnosis_line(result)
-    reason = "sensor_noise, interference_tone fitted, then not named: together 93 % of the gap, under the 99 %"
+    reason = "sensor_noise, interference_tone fitted, then not named: together 93 % of the gap, "
+    reason += f"{FINAL_FIT}, under the 99 %"
     assert f"effects: none ({reason} a named set removes); unexplained" in line
     summary = {"gap_before": 4.0e5, "gap_after": 2.8e4, "unexplained": True, "dropped": gap.dropped_text(result)}
     assert any(s.startswith(f"Effects {reason}") for s in gap_lines(summary))
@@ -491,4 +492,4 @@ def test_effects_accepted_then_not_named_are_said_with_the_reason():
     assert "not named" not in gap.diagnosis_line({**result, "dropped_effects": []})
     # a share that rounds to the level is shown with the decimals that tell them apart
     close = gap.dropped_text({**result, "dropped_share": 0.9874})
-    assert "together 98.7 % of the gap, under the 99.0 %" in close
+    assert f"together 98.7 % of the gap, {FINAL_FIT}, under the 99.0 %" in close

@@ -38,3 +38,18 @@ def test_a_take_no_method_flagged_reads_not_flagged_not_a_fault():
     assert NOT_LOCALISED not in rows["h.csv"]
     assert rows["f.csv"].endswith(f"| {NOT_LOCALISED} |"), rows["f.csv"]  # fm4 flagged its second unit
     assert "| a flag would be called |" in md
+
+
+def test_the_named_set_s_share_says_its_fit_beside_the_round_s():
+    # EU's box B: 'casing_path removes 86.3 % ... (accepted)' above 'together 79 % of the gap, under the 99 % a named
+    # set removes': two fits (round 1's, the final) and two measures (the search's score, the report's gap), unsaid
+    from gearlab.gap.diagnose import round_line
+    from gearlab.kinds.gap_verdict import diagnosis_line
+
+    params = {"k_xf": 3.16e6, "mf": 6.71}
+    dropped = [{"name": "casing_path", "round": 1, "params": params}]
+    result = {"gap_before": 3379.0, "gap_after": 3379.0, "effects": [], "verdict": "unexplained"}
+    line = diagnosis_line({**result, "dropped_effects": dropped, "dropped_share": 0.79, "dropped_below": 0.99})
+    said = "together 79 % of the gap, at the final fit by the report's gap (a round's share is at that round's fit, "
+    assert f"{said}by the search's score), under the 99 % a named set removes" in line, line
+    assert "at round 1's fit" in round_line(1, "casing_path", 0.863, True)

@@ -53,6 +53,11 @@ def diagnosis_line(result: dict) -> str:
     return f"{gap}; effects: {names}; {verdict_text(result)}"
 
 
+# Which fit and measure the named set's share is of: the search's progress said 'casing_path removes 86.3 % ...
+# (accepted)' (round 1's fit, the search's score) above 'together 79 % of the gap' (the final fit, the report's gap)
+FINAL_FIT = "at the final fit by the report's gap (a round's share is at that round's fit, by the search's score)"
+
+
 def dropped_text(result: Mapping) -> str:
     """Why effects the search accepted are not named (gearlab.gap.conclusion: stand-ins), with their final fit."""
     names = ", ".join(
@@ -63,7 +68,7 @@ def dropped_text(result: Mapping) -> str:
     # as many decimals as it takes to show the share under the level (98.7 under 99, not 99 under 99)
     digits = next((d for d in range(4) if round(share, d) < round(below, d)), 3)
     return (
-        f"{names} fitted, then not named: together {share:.{digits}f} % of the gap, "
+        f"{names} fitted, then not named: together {share:.{digits}f} % of the gap, {FINAL_FIT}, "
         f"under the {below:.{digits}f} % a named set removes"
     )
 
