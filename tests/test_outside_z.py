@@ -89,7 +89,8 @@ def test_a_healthy_take_over_the_non_synchronous_threshold_is_told_the_rate_it_s
     ), nonsync_words(over)
     assert nonsync_words(over | {"z": 2.2, "changed": False}) == "non-synchronous z 2.2/4.7 at order 1.36"
     record = {"condition": "23.7 Hz", "shafts": [], "named": None, "nonsync": over, "call": "other damage: ..."}
-    table = records_md({"watched": ["input pinion 24T (stage 1)"], "records": {"h.h5": record}}, {"h.h5": "healthy"})
+    loc = {"watched": ["input pinion 24T (stage 1)"], "records": {"h.h5": record}}
+    table = records_md(loc, {"h.h5": "healthy"}, {"h.h5"})
     assert "(a healthy take passes it at false alarm 0.01))" in table.splitlines()[1], table
 
 

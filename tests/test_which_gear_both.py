@@ -54,7 +54,7 @@ def test_a_record_damaged_on_the_watched_gear_and_another_is_called_both(target)
     assert called["watched"] == {"both": 100.0, "fault": 100.0, "wheel": 0.0}
     assert called["other"] == {"both": 100.0, "fault": 0.0, "wheel": 100.0}  # both: in both columns
     assert called["judged"] == {"both": 2, "fault": 2, "wheel": 0}
-    text = D.records_md(loc, labels)
+    text = D.records_md(loc, labels, D.flagged_takes([record]))
     second = idler["gear"] if both["named_shaft"] == "input" else PINION
     assert f"| 40 Hz | both | both | {both['named']}; {second} |" in text
 
