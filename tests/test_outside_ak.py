@@ -25,7 +25,7 @@ def ttl(theta: np.ndarray) -> np.ndarray:
 
 def raw_edges(monkeypatch) -> None:
     """angle_from_pulses as before: the interpolated edge times, unsmoothed."""
-    monkeypatch.setattr(angle, "_dequantised", lambda edges: edges)
+    monkeypatch.setattr(angle, "_dequantised", lambda edges, step: edges)
 
 
 def angle_error(theta: np.ndarray, read: np.ndarray) -> float:
@@ -76,7 +76,7 @@ def test_edges_with_a_sample_mid_swing_keep_their_interpolated_times(kind, monke
     the smoothing is not reached, so the angle is the interpolated one bit for bit."""
     from gearlab.data.simulated import tacho_pulses
 
-    def never(edges):
+    def never(edges, step):
         raise AssertionError("smoothed edges that are not quantised")
 
     monkeypatch.setattr(angle, "_dequantised", never)
@@ -91,7 +91,7 @@ def test_a_tacho_of_several_marks_a_turn_keeps_its_interpolated_edges(monkeypatc
     chipped takes (angle_from_pulses). Equally spaced marks' are smoothed as one sequence
     (test_which_gear_square_tacho), and a once-a-turn tacho's."""
     calls = []
-    monkeypatch.setattr(angle, "_dequantised", lambda edges: calls.append(edges.size) or edges)
+    monkeypatch.setattr(angle, "_dequantised", lambda edges, step: calls.append(edges.size) or edges)
     theta = 2 * np.pi * 33.0 * (0.2 + np.arange(int(SECONDS * FS)) / FS)
     nearest = np.mod(np.floor(10 * theta / (2 * np.pi) + 0.5), 10)  # the mark nearest: changed mid-way, pulse low
     angle.angle_from_pulses(ttl(10 * theta - 2 * np.pi * 0.02 * (np.mod(nearest, 3) - 1)), FS, marks=10)

@@ -194,8 +194,9 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     is phase-modulated by k times that error, and its sidebands, spaced by the pattern (0.2856 order at 28 Hz and
     25.6 kHz), were read as a shaft's order ("the wheel shows 80.5 teeth, 59 described"). The edge times are
     then a smoothing spline of edge time against edge index whose residual sum of squares is the quantisation's
-    own, n/12 (UnivariateSpline, s = n σ²): a steady speed or a run-up, smooth over the edges, keep their course
-    and lose the pattern (the angle's error 1.3-2.6 -> 0.06-0.9 mrad rms, 26-43 Hz at 25.6 kHz, the edges off
+    own, n/12 (UnivariateSpline, s = n σ²; n step²/12 for a tacho held from 1/step of the rate, _held_step): a
+    steady speed or a run-up, smooth over the edges, keep their course and lose the pattern (the angle's error
+    1.3-2.6 -> 0.06-0.9 mrad rms, 26-43 Hz at 25.6 kHz, the edges off
     the sample grid); a swing within a few turns (2 % at 0.3 order), which one mark a turn cannot follow between
     edges anyway (14.2 mrad with exact edges), reads within 5 % of the raw edges. Edges with a sample in the
     middle half of the range (a filtered, slow or cosine tacho, the simulator's ramped pulses) keep their
@@ -268,12 +269,12 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
         # pinion was 'localised' (z 4.3-6.6 against 2.6). (Of 3 marks on test_outside_z's output shaft, a healthy take
         # read z 4.70 over its 3-take history's 4.37 here, 3.23 each mark apart: exact edges read 4.78 over 4.32, its
         # own z. At exact edges 1 of 75 healthy take/history pairs of that box pass, as here; each mark apart, 0.)
-        edges = _dequantised(edges)
+        edges = _dequantised(edges, _held_step(v, edges[::marks]))
     elif smoothed_marks and square:
         # each mark's edges apart: marks need not lie equally spaced, their offsets are kept
-        smoothed = edges.copy()
+        smoothed, step = edges.copy(), _held_step(v, edges[::marks])
         for m in range(marks):
-            smoothed[m::marks] = _dequantised(edges[m::marks])
+            smoothed[m::marks] = _dequantised(edges[m::marks], step)
         edges = smoothed if np.all(np.diff(smoothed) > 0) else edges
 
     t = np.arange(v.size, dtype=np.float64)
@@ -291,15 +292,31 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     return theta
 
 
-def _dequantised(edges: np.ndarray) -> np.ndarray:
-    """Edge times (samples) each off by a uniform ±0.5 sample -> a smoothing spline of them against the edge
-    index, residual sum of squares n/12 (angle_from_pulses, "Quantised edges"). Fitted about the line through
-    the first and last edge, so the spline holds only the speed's course (samples), not 10⁵ samples of ramp."""
+def _held_step(v: np.ndarray, edges: np.ndarray) -> float:
+    """The tacho's own sample interval in the vibration's samples (*edges*: one mark's): a whole *step* > 1 where it was
+    logged at 1/step of the vibration's rate and held onto it (readers.base.held_to_vibration: every level change
+    on a grid of *step* samples) and its edges scatter about their course as that grid's quantisation does; else 1.
+    A once-per-turn tacho at 6.4 kHz held onto 25.6 kHz has edges off by up to ±2 samples, not ±0.5: smoothed to
+    one sample's quantisation they kept most of it, and inspect read a 2 s take's 113T wheel as '123.9 ± 8.0
+    teeth' (at 12.8 kHz, or 4 s, it matched)."""
+    changes = np.flatnonzero(v[1:] != v[:-1])
+    step = int(np.gcd.reduce(np.diff(changes))) if changes.size >= 4 else 1
+    # the grid alone is no proof: whole samples a turn at an exact speed put every edge on one; the second
+    # differences of edges each off by a uniform error of variance step²/12 have variance 6 step²/12
+    seen = edges.size >= 4 and np.mean(np.diff(edges, 2) ** 2) / 6 >= 0.5 * step**2 * QUANTISED_VARIANCE
+    return float(step) if step > 1 and seen else 1.0
+
+
+def _dequantised(edges: np.ndarray, step: float) -> np.ndarray:
+    """Edge times (samples) each off by a uniform ±0.5 *step* (the tacho's own sample interval, _held_step) -> a
+    smoothing spline of them against the edge index, residual sum of squares n step²/12 (angle_from_pulses,
+    "Quantised edges"). Fitted about the line through the first and last edge, so the spline holds only the
+    speed's course (samples), not 10⁵ samples of ramp."""
     from scipy.interpolate import UnivariateSpline
 
     j = np.arange(edges.size, dtype=np.float64)
     line = edges[0] + (edges[-1] - edges[0]) * j / j[-1]
-    course = UnivariateSpline(j, edges - line, k=3, s=edges.size * QUANTISED_VARIANCE)
+    course = UnivariateSpline(j, edges - line, k=3, s=edges.size * step**2 * QUANTISED_VARIANCE)
     smoothed = line + course(j)
     return smoothed if np.all(np.diff(smoothed) > 0) else edges  # (np.interp needs them rising)
 
