@@ -11,17 +11,27 @@ alike, and two takes give that change with one degree of freedom (units cut from
 each other): the record is compared with the history times its lines' median ratio (healthy takes
 15-19 % off two takes agreeing within 3-6 % named the intermediate shaft of three random trains at z
 3.9-7.1, development seed 11), and the history's terms of the null variance scale with it, never below
-their own (a 24/79 + 27/72 intermediate pinion's crack raised its shaft's lines 136 times and every
+the take's level (below; a 24/79 + 27/72 intermediate pinion's crack raised its shaft's lines 136 times and every
 other shaft's 2.8-8 times: its gain of 37.5 read the input's one line at z -107, and the input was
-flagged at 5.9). Off the lines a shaft's average holds the other shafts' lines' leaks, which a load
-scales alike: a heavier load's gain (up to LOAD_GAIN) applies there too (healthy 24/79 + 27/72 takes
-3-6 % over the history's load put the intermediate shaft at z 1.09 on average over four; 0.69 scaled),
-a fault's does not: it moves the lines far more, or reads them low, and a gain under 1 taken off the
+flagged at 5.9). Off the lines the history's power is born of what the take's level scales: the other
+shafts' lines' leaks into a shaft's average, and the estimate's own bias where content at no whole order
+of a slow shaft (a load's sidebands about the meshes) scatters its turns more than it stays in its mean
+(|X̄|² − n read -0.75 to -1.4 noise powers within an order of the meshes: an outside user's 47/131 +
+37/151 box, history at 50 and 100 N m). That level r -- a load, or a sensor's gain, that scales the lines
+and the noise alike -- is read from the take's noise floor over the history's (per period averaged, the
+median over the orders off the lines: level), which a localised fault hardly moves: it adds lines at
+its shaft's orders, not scatter at every order. Off the lines the history is scaled by r, or by the
+lines' gain where that is a heavier load's over r (up to LOAD_GAIN r: healthy 24/79 + 27/72 takes 3-6 %
+over the history's load put the intermediate shaft at z 1.09 on average over four; 0.69 scaled); a
+fault's gain is not: it moves the lines far more, or reads them low, and a gain under r taken off the
 lines raises every order there (a random train's output gear fault read its intermediate lines at 0.61
 of the history's, development seed 23, and the intermediate shaft was named at z 4.5; the soft 21/63 +
-24/56 reducer's pinion chip at 0.89 raised its input shaft from z 3.27 to 4.42). Those leaks also
-scatter beyond a slow shaft's noise model (z² 1.66 at the intermediate TSA's orders, 1.19 at the
-output's, seed 11): the units' scatter over that model, pooled over neighbouring orders, scales it.
+24/56 reducer's pinion chip at 0.89 raised its input shaft from z 3.27 to 4.42). The history's terms of
+the null variance scale with the same gain, never below r: a take read at any level gives the same z on
+every shaft (scaled off the lines by a heavier load's gain alone, the user's healthy takes at 50 N m
+read the output gear at z 2.9-4.2, over its threshold of 2.71). Those leaks also scatter beyond a
+slow shaft's noise model (z² 1.66 at the intermediate TSA's orders, 1.19 at the output's, seed 11):
+the units' scatter over that model, pooled over neighbouring orders, scales it.
 
 Everything is numpy: no torch, nothing from the layers above.
 """
@@ -58,6 +68,7 @@ class Spread:
     # off the lines, the units' scatter of power over its noise model, pooled over WEIGHT_SMOOTH orders of
     # one average (empty: a history saved before it was kept; the noise model alone)
     excess: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    periods: float = 0.0  # the periods behind a unit's noise (0: a history saved before it was kept; see level)
 
 
 def _smooth(x: np.ndarray, source: np.ndarray | None = None, mask: np.ndarray | None = None) -> np.ndarray:
@@ -107,7 +118,7 @@ def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
     between = np.where(line, np.maximum(b, alpha2 * np.maximum(mean, 0) ** 2), 0.0)
     model = np.mean([_estimate_var(np.zeros_like(mean), _smooth(u.noise, u.source)) for u in units], axis=0)
     excess = _smooth(P.var(axis=0, ddof=1) / np.maximum(model, 1e-300), units[0].source, ~line)
-    return Spread(mean, line, between, noise, len(units), excess)
+    return Spread(mean, line, between, noise, len(units), excess, float(np.mean([u.periods for u in units])))
 
 
 def _null_var(rec: Content, ref: Spread, gain: float | np.ndarray = 1.0) -> np.ndarray:
@@ -123,19 +134,30 @@ def _null_var(rec: Content, ref: Spread, gain: float | np.ndarray = 1.0) -> np.n
     return np.where(ref.line, model, model * np.maximum(ref.excess, 1.0))
 
 
+def level(rec: Content, ref: Spread, lay: Layout) -> float:
+    """The take's level r: its noise floor over the history's, per period averaged (the median over the orders off the
+    lines and the mesh harmonics, smoothed as the null variance reads them); 1 where the history kept no periods."""
+    if not ref.periods:
+        return 1.0
+    off = ~ref.line & ~lay.carrier
+    ratio = _smooth(rec.noise, rec.source)[off] / np.maximum(ref.unit_noise[off], 1e-300)
+    return float(np.median(ratio)) * rec.periods / ref.periods
+
+
 def order_z(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
-    """Each order's Δ in sds of its null spread: from the history times the lines' median ratio (off the lines only a
-    heavier load's, up to LOAD_GAIN), over its null sd (the module's docstring)."""
+    """Each order's Δ in sds of its null spread: from the history times the take's level (level), on the lines times
+    their median ratio, off them times a heavier load's up to LOAD_GAIN times the level (the module's docstring)."""
     lines = ref.line & ~lay.carrier
+    r = level(rec, ref, lay)
     # the take's common gain of the lines (its load); off the lines, where a shaft's average holds the
     # other shafts' lines' leaks, only a heavier load's: a fault moves the lines far more, and reads them
-    # low as well, and a gain under 1 taken off there raises every order (the module's docstring)
-    gain = float(np.median(rec.power[lines] / ref.power[lines])) if lines.sum() >= GAIN_LINES else 1.0
-    off = gain if 1.0 < gain <= LOAD_GAIN else 1.0
+    # low as well, and a gain under the take's level taken off there raises every order (the module's docstring)
+    gain = float(np.median(rec.power[lines] / ref.power[lines])) if lines.sum() >= GAIN_LINES else r
+    off = gain if r < gain <= LOAD_GAIN * r else r
     g = np.where(lines, gain, off)
-    # a gain under 1 never narrows the history's spread: a slower gear's fault reads a faster shaft's lines
-    # low (0.19-0.24 of the history's, random trains of development seed 23), and narrowed, they named it
-    var = _null_var(rec, ref, np.maximum(g, 1.0))
+    # a gain under the take's level never narrows the history's spread: a slower gear's fault reads a faster shaft's
+    # lines low (0.19-0.24 of the history's, random trains of development seed 23), and narrowed, they named it
+    var = _null_var(rec, ref, np.maximum(g, r))
     return (rec.power - g * ref.power) / np.sqrt(np.maximum(var, 1e-300))
 
 

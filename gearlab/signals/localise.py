@@ -23,10 +23,10 @@ shortest record under 4 records). Where the grand period does not fit (Fallback)
 lines leak into a shaft's average by an amount set by the length averaged, so a record's S is
 there the mean over its blocks of that length (a healthy 24/79 + 27/72 take read whole against
 half-record units: input z 5-6; in blocks 0 ± 1, development seeds). Each order's Δ is read in sds
-of its null spread (signals.evidence: the fault's excess is largest where that spread is; after the
-take's common line gain, off the lines only a heavier load's). A fault on shaft s adds a level L_s, about flat
-across a band in those units, at every order synchronous with s: in each band of orders the mean of
-each class (the set of shafts an order is synchronous with) is Σ_{s in class} L_s, solved by least
+of its null spread (signals.evidence: the fault's excess is largest where that spread is; after the take's
+level, read from its noise floor, and its lines' gain; off them a heavier load's). A fault on shaft s adds a
+level L_s, about flat across a band in those units, at every order synchronous with s: in each band of orders
+the mean of each class (the set of shafts an order is synchronous with) is Σ_{s in class} L_s, solved by least
 squares (on the rig: L_idler from the idler-exclusive orders, L_output from the output-exclusive
 ones, L_input from the shared orders less both). The bands combine into z_s = L_s / sd(L_s); the
 shafts rank by z. A shaft is flagged above a threshold fixed on the history alone: the largest z of
@@ -614,6 +614,7 @@ class History:
             "unit_noise": sp.unit_noise,
             "units": np.array(sp.units),
             "excess": sp.excess,
+            "periods": np.array(sp.periods),
             "thresholds": self.thresholds,
             "left_out_z": self.left_out_z,
             "note": np.array(self.note),
@@ -637,7 +638,9 @@ class History:
                 f"{lay.orders.size}: saved for another gearbox description"
             )
         excess = state["excess"] if "excess" in state else np.zeros(0)  # saved before: the noise model alone
-        sp = Spread(state["power"], state["line"], state["between"], state["unit_noise"], int(state["units"]), excess)
+        periods = float(state["periods"]) if "periods" in state else 0.0  # saved before: the take's level not read
+        arrays = (state[k] for k in ("power", "line", "between", "unit_noise"))
+        sp = Spread(*arrays, int(state["units"]), excess, periods)
         # a history saved before takes were turned to a mark (no "marks"): one mark, nothing turned
         marks = int(state["marks"]) if "marks" in state else 1
         reference = state["reference"] if marks > 1 else None
