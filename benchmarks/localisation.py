@@ -22,6 +22,10 @@ train of random tooth counts (random_train: the 21/63 + 24/56 description with p
 1.6-3.6, grand period up to 120 input turns, 20-30 Hz), so most records hold too few grand periods and each shaft's
 own TSA is read (localise, "Fallback"), and some a stage-2 ratio that leaves the intermediate shaft no exclusive order.
 
+--history-loads 1,2: one history record at each of those multiples of the drawn load, the test records at one
+of them or midway between the lowest and the highest (drawn per trial): a history taken at other loads than the
+takes, as an outside user's box B (history at 50 and 100 N m, takes at 50 and 75).
+
 Per case it prints: the records flagged (a shaft over its history threshold); of those, the damaged
 gear named first (listed first: alone, or ahead of its shaft's other gear where both are named, the
 one the mesh phases favour), named alone, and its shaft named with both its gears (the intermediate
@@ -164,7 +168,7 @@ def _trial(args: tuple, made: list) -> list[dict]:
     from gearlab.signals import cut_revolutions
 
     warnings.filterwarnings("ignore", message=".*steps per period.*")
-    box, seed, index, which, effects = args
+    box, seed, index, which, effects, loads = args
     spec = BOXES[box]
     rng = np.random.default_rng([seed, index] if box == "phm09" else [seed, index, 2 if box == "two" else 3])
     speed = float(rng.choice(spec["speeds"]))
@@ -178,8 +182,8 @@ def _trial(args: tuple, made: list) -> list[dict]:
     seeds = iter(rng.integers(0, 2**31, size=16))
     extra = {} if box == "phm09" else {"gearbox": where, "sim_fs": spec["sim_fs"]}
 
-    def record(faults=()):
-        take = load * (1 + 0.03 * rng.standard_normal())
+    def record(faults=(), times=1.0):
+        take = times * load * (1 + 0.03 * rng.standard_normal())
         rec = simulated_record(
             list(faults),
             speed_hz=speed,
@@ -195,7 +199,9 @@ def _trial(args: tuple, made: list) -> list[dict]:
         # the first complete revolution starts at the first tacho edge: the input turn after the start
         return cut.revolutions, (math.floor(rec.start) + 1) % rec.period if rec.period > 1 else 0
 
-    history = [W.Take(r, f, speed, spec["fs"]) for r, f in (record() for _ in range(2))]
+    history = [W.Take(r, f, speed, spec["fs"]) for r, f in (record(times=k) for k in loads or (1.0, 1.0))]
+    # the test records' load: one of the history's, or midway between its lowest and highest (--history-loads)
+    times = float(rng.choice([*loads, (min(loads) + max(loads)) / 2])) if loads else 1.0
     hist = W.history_of(history, table)  # as inspect --history, a detection run and score read it
     # the description's own simulator, without the records' effects; or the event's width alone
     made = W.events(where) if which == "simulated" else None
@@ -211,9 +217,10 @@ def _trial(args: tuple, made: list) -> list[dict]:
         cases.append((word, name, fault))
     out = []
     for word, name, fault in cases:
-        revs, first = record([fault] if fault else [])
+        revs, first = record([fault] if fault else [], times)
         res = W.which_gear(W.Take(revs, first, speed, spec["fs"]), hist, table, made)  # the product's decision
         row = {"box": box, "trial": index, "speed": speed, "snr": snr, "case": word, "gear": name, "fault": fault}
+        row["load"] = times * load
         shaft = word.split()[0]  # the shaft's other gear, watched by another scenario (report)
         row["other"] = [n for w, n in gears if w != word and w.split()[0] == shaft and name is not None]
         row.update(
@@ -286,6 +293,17 @@ def report(rows: list[dict], box: str) -> None:
     print("scenario watching it (detection_which_gear.call_of).")
 
 
+def _multiples(text: str) -> tuple[float, ...]:
+    """--history-loads: two or more positive multiples, comma-separated."""
+    try:
+        loads = tuple(float(k) for k in text.split(","))
+    except ValueError:
+        loads = ()
+    if len(loads) < 2 or min(loads) <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected two or more positive multiples of the load, e.g. 1,2")
+    return loads
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--trials", type=int, default=40)
@@ -306,11 +324,18 @@ def main(argv=None) -> None:
         ' simulated with: a structure other than the simulator\'s, e.g. \'[{"name": "bearing_stiffness"}]\'',
     )
     p.add_argument("--rows", help="write every record's row (its evidence) to this JSON file")
+    p.add_argument(
+        "--history-loads",
+        type=_multiples,
+        help="comma-separated multiples of the drawn load, one history record at each; the test records at one of"
+        " them or midway between the lowest and the highest (default: two at the drawn load, as the test records)",
+    )
     args = p.parse_args(argv)
     every = []
     kind = "development" if args.seed < 1000 else "fresh"
     for box in args.box or sorted(BOXES):
-        jobs = [(box, args.seed, i, args.which, json.loads(args.effects)) for i in range(args.trials)]
+        loads = args.history_loads
+        jobs = [(box, args.seed, i, args.which, json.loads(args.effects), loads) for i in range(args.trials)]
         if args.workers > 1:
             with ProcessPoolExecutor(args.workers) as pool:
                 rows = [r for rs in pool.map(trial, jobs) for r in rs]
@@ -321,6 +346,7 @@ def main(argv=None) -> None:
         print(
             f"\nlocalisation on simulated {box} records: {args.trials} trials, seed {args.seed} ({kind}), which gear"
             f" by {args.which}, records' effects {args.effects}"
+            + (f", history at {', '.join(f'{k:g}' for k in loads)} times the drawn load" if loads else "")
         )
         for r in refused:
             print(f"trial {r['trial']} refused by gearlab: {r['refused']}")
