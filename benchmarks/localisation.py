@@ -24,7 +24,7 @@ own TSA is read (localise, "Fallback"), and some a stage-2 ratio that leaves the
 
 --history-loads 1,2: one history record at each of those multiples of the drawn load, the test records at one
 of them or midway between the lowest and the highest (drawn per trial): a history taken at other loads than the
-takes, as an outside user's box B (history at 50 and 100 N m, takes at 50 and 75).
+takes, as a user's mixer's (history at 50 and 100 N m, takes at 50 and 75).
 
 Per case it prints: the records flagged (a shaft over its history threshold); of those, the damaged
 gear named first (listed first: alone, or ahead of its shaft's other gear where both are named, the

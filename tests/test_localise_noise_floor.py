@@ -1,5 +1,5 @@
 """signals.evidence.order_z: a take's level -- a load or a sensor gain that scales its lines and its noise alike --
-is read from its noise floor, and scales the history off its lines. Takes of an outside user's mixer (47/131 +
+is read from its noise floor, and scales the history off its lines. Takes of a user's mixer (47/131 +
 37/151 at 35 Hz, its history at two loads, as that user's box B) made in the input angle: both meshes' harmonics
 modulated at each shaft's rate and by a slow process load at no shaft's order (0.0089 input orders, 5 %), white
 noise at 6 % of the RMS. The load's sidebands lie at no whole order of the slow output shaft: they scatter its

@@ -16,8 +16,8 @@ other shaft's 2.8-8 times: its gain of 37.5 read the input's one line at z -107,
 flagged at 5.9). Off the lines the history's power is born of what the take's level scales: the other
 shafts' lines' leaks into a shaft's average, and the estimate's own bias where content at no whole order
 of a slow shaft (a load's sidebands about the meshes) scatters its turns more than it stays in its mean
-(|X̄|² − n read -0.75 to -1.4 noise powers within an order of the meshes: an outside user's 47/131 +
-37/151 box, history at 50 and 100 N m). That level r -- a load, or a sensor's gain, that scales the lines
+(|X̄|² − n read -0.75 to -1.4 noise powers within an order of the meshes of a user's 47/131 + 37/151
+mixer, its history at 50 and 100 N m). That level r -- a load, or a sensor's gain, that scales the lines
 and the noise alike -- is read from the take's noise floor over the history's (per period averaged, the
 median over the orders off the lines: level), which a localised fault hardly moves: it adds lines at
 its shaft's orders, not scatter at every order. Off the lines the history is scaled by r, or by the
@@ -135,13 +135,16 @@ def _null_var(rec: Content, ref: Spread, gain: float | np.ndarray = 1.0) -> np.n
 
 
 def level(rec: Content, ref: Spread, lay: Layout) -> float:
-    """The take's level r: its noise floor over the history's, per period averaged (the median over the orders off the
-    lines and the mesh harmonics, smoothed as the null variance reads them); 1 where the history kept no periods."""
+    """The take's level r: its noise floor over the history's units' (the median over the orders off the lines and the
+    mesh harmonics, smoothed as the null variance reads them), block for unit where the take is read in the units'
+    blocks (its noise is their mean's), else per period averaged (a grand period's count is exact, a slow shaft's
+    turns are not: a 21/63 + 24/56 record of 40 input turns holds 5 of the output, each half of it 2); 1 where the
+    history kept no periods."""
     if not ref.periods:
         return 1.0
     off = ~ref.line & ~lay.carrier
-    ratio = _smooth(rec.noise, rec.source)[off] / np.maximum(ref.unit_noise[off], 1e-300)
-    return float(np.median(ratio)) * rec.periods / ref.periods
+    ratio = float(np.median(_smooth(rec.noise, rec.source)[off] / np.maximum(ref.unit_noise[off], 1e-300)))
+    return ratio * rec.blocks if rec.blocks > 1 else ratio * rec.periods / ref.periods
 
 
 def order_z(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
