@@ -545,6 +545,17 @@ def nonsync_not_read(*args) -> dict:
     return {"note": "not read: left out (test)"}
 
 
+@pytest.fixture(scope="module")
+def trained_once():
+    """The module's trainings of inputs this process already trained on given back, not run again
+    (trained_once.trainings_remembered): for the files that train the same network on the same rows
+    test after test, not those that test training itself."""
+    from trained_once import trainings_remembered
+
+    with trainings_remembered():
+        yield
+
+
 @pytest.fixture
 def handed(monkeypatch) -> list:
     """The target rows every training of a detection test is handed (detection_scenario.training_spy)."""

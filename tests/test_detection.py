@@ -11,6 +11,9 @@ import pytest
 from conftest import unrendered
 from detection_scenario import FILES, flipped, run, run_in_module, scenario, scores
 
+# its runs train the same tiny source and target again and again (the leak checks' flipped test files)
+pytestmark = pytest.mark.usefixtures("trained_once")
+
 
 @pytest.fixture
 def cache(module_cache):

@@ -15,7 +15,7 @@ from gearlab.learn.calibration import RECIPE, THESIS, history_law
 from gearlab.learn.networks import ShapeLikelihood
 from gearlab.learn.protocol import StateStore, run_unit, split
 
-pytestmark = pytest.mark.usefixtures("one_torch_thread")
+pytestmark = pytest.mark.usefixtures("one_torch_thread", "trained_once")
 
 # the adapter variants the protocol test's METHODS leave out (its leak check runs them below)
 OTHER_VARIANTS = (

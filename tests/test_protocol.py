@@ -40,7 +40,7 @@ from gearlab.parts import training
 from gearlab.parts.bound import BOUND
 from gearlab.runs import RunDir
 
-pytestmark = pytest.mark.usefixtures("one_torch_thread")
+pytestmark = pytest.mark.usefixtures("one_torch_thread", "trained_once")
 
 
 def synthetic(faults: int, healthy: int, length: int = 256, seed: int = 0, offset: float = 0.0) -> Dataset:
