@@ -86,9 +86,16 @@ def pytest_sessionstart(session):
         return
     if "GEARLAB_CACHE" not in os.environ:
         os.environ["GEARLAB_CACHE"] = session_folder(session.config, "gearlab-test-cache-")
+    # always the session's own: a finished run of another session may come from other code
+    os.environ[SHARED_RUNS] = session_folder(session.config, "gearlab-test-runs-")
     if sys.dont_write_bytecode and REWRITTEN not in os.environ and getattr(session.config.option, "numprocesses", 0):
         os.environ[REWRITTEN] = session_folder(session.config, "gearlab-test-pyc-")
         rewritten_in_shared_folder()  # this process too, where it collects itself (--collect-only)
+
+
+# The session's folder of finished runs that test files share (detection_scenario.shared_run): set by the
+# controlling process, read by its xdist workers.
+SHARED_RUNS = "GEARLAB_TEST_RUNS"
 
 
 def session_folder(config, prefix: str) -> str:

@@ -101,6 +101,53 @@ def run_in_module(
     return Path(cwd or ".") / made
 
 
+def shared_run(path: Path, out: Path) -> Path:
+    """run_in_module's run of the scenario *path* (without figures), made once in the test session for its
+    folder's content: 12 test files that score new takes against the tiny run each ran the same scenario on
+    the same records (0.7 s of CPU a run, and its datasets in each module's cache). The first to ask runs it
+    and stores its run directory
+    in the session's folder (conftest.SHARED_RUNS); the others get a copy under *out*, every mention of the
+    first one's folder in its text files turned into theirs, as if run there. The key is the scenario's
+    text and every file in its folder (path.parent.parent, *out* apart) at the time of the call; a
+    test that watches the run itself (a spy, an event) runs it with run_in_module. A lock keeps two test
+    processes from running the same scenario at once."""
+    import hashlib
+    import os
+    import shutil
+
+    try:
+        import fcntl
+    except ImportError:  # no POSIX file locks (Windows): each test runs its own
+        return run_in_module(path, out, figures=False)
+    folder = path.parent.parent
+    key = hashlib.sha256(str(path.relative_to(folder)).encode())
+    for file in sorted(p for p in folder.rglob("*") if p.is_file() and out not in p.parents):
+        key.update(f"{file.relative_to(folder)}\0".encode())
+        key.update(hashlib.sha256(file.read_bytes()).digest())
+    store = Path(os.environ["GEARLAB_TEST_RUNS"]) / key.hexdigest()[:32]
+    with open(f"{store}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not store.exists():
+            made = run_in_module(path, out, figures=False)
+            work = store.with_suffix(".part")
+            shutil.copytree(made, work / made.relative_to(out))
+            (work / "folder").write_text(str(folder))
+            work.rename(store)
+            return made
+    (made,) = [p for p in store.glob("*/*") if p.is_dir()]
+    run = shutil.copytree(made, out / made.relative_to(store))
+    origin = (store / "folder").read_text()
+    for file in run.rglob("*"):
+        if file.suffix in TEXT_FILES and origin in (text := file.read_text()):
+            file.write_text(text.replace(origin, str(folder)))
+    left = [f.name for f in run.rglob("*") if f.is_file() and origin.encode() in f.read_bytes()]
+    assert not left, f"{left} of the shared run still name {origin}"
+    return run
+
+
+TEXT_FILES = {".json", ".jsonl", ".html", ".md", ".csv", ".toml", ".txt"}  # what a run writes as text
+
+
 def scores(run_dir: Path) -> list[dict]:
     with (run_dir / "scores.csv").open() as f:
         return list(csv.DictReader(f))

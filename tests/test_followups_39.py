@@ -11,8 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from detection_scenario import shared_run
 from gearboxes import description, stage
-from test_detection import run, scenario
+from test_detection import scenario
 from textrecords import FS, record, signals
 
 from gearlab.errors import GearlabInputError
@@ -40,7 +41,7 @@ def cache(tmp_path, monkeypatch):
 
 
 def test_score_says_other_damage_with_its_evidence_in_80_columns(cli, tmp_path, cache, monkeypatch, no_figures):
-    out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
+    out = shared_run(scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
     record(tmp_path / "new_ok.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
     record(tmp_path / "wheel.zip", revolutions=40, chip=4.0, seed=12, phase=1.1)
     evidence = "output z 850.5/2.6, input z -5.2/2.6; tooth 20 of 71"

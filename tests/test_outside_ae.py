@@ -110,14 +110,14 @@ def test_score_keeps_the_note_in_the_history_of_a_take_on_an_unwatched_gear(
 ):
     # the tiny run (matched filter and the classical rows) scoring a healthy take whose localisation names the
     # 74T output gear (as test_followups_39 stands in for signals.localise): every decision 'healthy', the note kept
-    from test_detection import run
+    from detection_scenario import shared_run
     from test_followups_39 import scenario
     from textrecords import record
 
     from gearlab.parts import scoring
     from gearlab.runs import RunDir
 
-    out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
+    out = shared_run(scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
     record(tmp_path / "quiet.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
     call = {"named": "output gear 74T (stage 2)", "summary": "", "call": OUT, "evidence": "output z 3.1/2.6"}
     monkeypatch.setattr(

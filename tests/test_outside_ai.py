@@ -55,12 +55,12 @@ def test_a_detection_run_s_table_md_opens_with_its_verdict(cli, tmp_path, no_fig
     # docs/your_gearbox.md step 6: 'report.html and table.md of the run directory ... open with the verdict: which
     # methods meet the goal'. table.md opened with the first condition's AUC table; the verdict was in report.html,
     # the terminal and the TUI only. report.html says it once (its own Verdict section), not again over a table
-    from test_detection import run, scenario
+    from detection_scenario import scenario, shared_run
 
     from gearlab.report import build_report
     from gearlab.verdict import verdict_lines
 
-    out = run(cli, scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
+    out = shared_run(scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
     said = verdict_lines(out)
     assert said and "goal met by" in said[1], said
     table = (out / "table.md").read_text()

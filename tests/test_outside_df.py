@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import FS, PULSES, signals, text, write_zip
 
 from gearlab.parts import scoring
@@ -22,7 +22,7 @@ def finished(tmp_path_factory, module_cache):
     """The tiny detection run (tests/detection_scenario: 16 Hz, 10 mV/g, the matched filter beside FM4 and NA4)."""
     folder = tmp_path_factory.mktemp("df")
     path = scenario(folder, methods=("matched_filter",))
-    return run_in_module(path, folder / "runs", figures=False), folder
+    return shared_run(path, folder / "runs"), folder
 
 
 def _take(path, change=None, seed=11, chip=0.0):

@@ -12,7 +12,7 @@ import re
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from scipy.io import wavfile
 from test_inspect import described
 from textrecords import signals, text, write_zip
@@ -230,7 +230,7 @@ def test_a_take_scored_far_off_its_condition_s_speed_is_not_localised_against_th
     # stay put in Hz as its orders move. (That take's z came from its encoder's edges, whole samples apart: spread
     # over 4 samples, the same take read input z -1.0/2.8, nothing.) Here the tiny run's 16 Hz history, a take +10 %
     folder = tmp_path_factory.mktemp("far")
-    out = run_in_module(scenario(folder, methods=("matched_filter",)), folder / "runs", figures=False)
+    out = shared_run(scenario(folder, methods=("matched_filter",)), folder / "runs")
     vib, tacho = signals(revolutions=40, seed=11, phase=0.3, speed=17.6)
     take = write_zip(folder / "fast.zip", text(vib, tacho))
     code, stdout, err = cli("score", out, take, "--condition", "16 Hz", "--json")

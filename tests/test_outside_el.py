@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import FS, PULSES, SPEED, TEETH, text, write_zip
 
 from gearlab.parts import scoring
@@ -40,7 +40,7 @@ def made(tmp_path_factory, module_cache):
     """The tiny detection run (a 32-tooth pinion, 16 Hz) and takes: one of a 33-tooth pinion, one chipped and one
     cracked of the run's own box."""
     folder = tmp_path_factory.mktemp("rebuilt")
-    out = run_in_module(scenario(folder, methods=("matched_filter",)), folder / "runs", figures=False)
+    out = shared_run(scenario(folder, methods=("matched_filter",)), folder / "runs")
     takes = {}
     for name, teeth, seed, damage in (
         ("rebuilt", TEETH + 1, 31, ""),

@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import FS, PULSES, record, text, write_zip
 
 from gearlab.kinds import detection_scoring as D
@@ -48,7 +48,7 @@ def finished(tmp_path_factory, module_cache):
     record5 and record10), the matched filter beside the classical rows, and its folder for new takes."""
     folder = tmp_path_factory.mktemp("n")
     path = scenario(folder, methods=("matched_filter",))
-    return run_in_module(path, folder / "runs", figures=False), folder
+    return shared_run(path, folder / "runs"), folder
 
 
 def test_a_run_up_is_scored_on_its_revolutions_at_the_history_s_speed(cli, finished, quiet):

@@ -12,7 +12,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import record
 
 from gearlab.data import which_gear as W
@@ -100,7 +100,7 @@ def finished(tmp_path_factory, module_cache):
     matched filter beside the classical rows) and its folder for new takes."""
     folder = tmp_path_factory.mktemp("q")
     path = scenario(folder, methods=("matched_filter",))
-    out = run_in_module(path, folder / "runs", figures=False)
+    out = shared_run(path, folder / "runs")
     shutil.copytree(out, folder / "unscored")  # before any test scores with it: a history of one test's takes
     return out, folder
 

@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from detection_scenario import shared_run
 from test_detection import FILES, run, scenario
 from textrecords import record
 
@@ -70,7 +71,7 @@ def test_score_new_records_with_a_finished_run_without_training(cli, tmp_path, c
 
 def test_score_refuses_a_run_that_is_not_a_detection_run_and_a_record_of_no_condition(cli, tmp_path, cache, no_figures):
     path = scenario(tmp_path, methods=("matched_filter",))
-    out = run(cli, path, tmp_path / "runs")
+    out = shared_run(path, tmp_path / "runs")
     fast = tmp_path / "fast.zip"
     record(fast, revolutions=40, seed=3, speed=40.0)
     code, _, err = cli("score", out, fast)

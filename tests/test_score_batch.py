@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import signals, text, write_zip
 
 from gearlab.kinds import detection_scoring
@@ -23,7 +23,7 @@ FAR = "its speed read as 17.60 Hz is more than 5% from every condition's"  # and
 def made(tmp_path_factory, module_cache):
     """The tiny detection run (16 Hz history) and new takes: two at its speed, two 10 % faster."""
     folder = tmp_path_factory.mktemp("batch")
-    out = run_in_module(scenario(folder, methods=("matched_filter",)), folder / "runs", figures=False)
+    out = shared_run(scenario(folder, methods=("matched_filter",)), folder / "runs")
     takes = {}
     for name, seed, speed in (("near", 11, 16.0), ("near2", 12, 16.0), ("far", 13, 17.6), ("far2", 14, 17.6)):
         vib, tacho = signals(revolutions=40, seed=seed, phase=0.3, speed=speed)

@@ -8,7 +8,7 @@ import shutil
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import record
 
 from gearlab.kinds import detection_scoring
@@ -20,7 +20,7 @@ def made(tmp_path_factory, module_cache):
     """The tiny detection run and the record to score, made once for the module: both tests score the same
     record against the same run, with other thresholds (_over)."""
     folder = tmp_path_factory.mktemp("tie")
-    out = run_in_module(scenario(folder, methods=("source_only",)), folder / "runs", figures=False)
+    out = shared_run(scenario(folder, methods=("source_only",)), folder / "runs")
     # 41 turns: 40 units of a revolution, 8 of 5, 4 of 10, each count even (a tie can be)
     return out, record(folder / "new.zip", revolutions=41, chip=0.0, seed=11, phase=0.3)
 

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from detection_scenario import run_in_module, scenario
+from detection_scenario import scenario, shared_run
 from textrecords import FS, PULSES, signals, text, write_zip
 
 from gearlab.signals.angle import angle_from_pulses
@@ -52,7 +52,7 @@ def test_up_to_9_square_marks_at_a_whole_number_of_samples_a_turn_read_equally_s
 @pytest.fixture(scope="module")
 def history(tmp_path_factory, module_cache):
     folder = tmp_path_factory.mktemp("square")
-    return folder, run_in_module(scenario(folder, methods=("source_only",)), folder / "runs", figures=False)
+    return folder, shared_run(scenario(folder, methods=("source_only",)), folder / "runs")
 
 
 def test_healthy_take_off_the_sample_grid_not_localised(history, cli, quiet):
