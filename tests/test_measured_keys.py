@@ -70,3 +70,11 @@ def test_a_bad_measured_key_is_one_error_in_every_table(key, value, said):
         errors[(kind, name)] = text.split(f"key '{key}': ", 1)[1]
     assert len(errors) >= 3 and len(set(errors.values())) == 1, errors
     assert said in next(iter(errors.values()))
+
+
+def test_a_benchmark_source_takes_no_measured_file_key():
+    # a simulated [source] given 'takes' or 'pulses_per_rev' would ignore it silently: not its keys
+    from gearlab.kinds.common import MEASURED_ONLY, SOURCE_KEYS
+
+    assert {"takes", "pulses_per_rev"} <= set(MEASURED_ONLY)
+    assert not set(MEASURED_ONLY) & set(SOURCE_KEYS)

@@ -273,21 +273,6 @@ class SourceEntry(DatasetEntry):
     preset: str = setting(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
 
-_NOT_SIMULATED = (
-    "file",
-    "vibration",
-    "tacho",
-    "tacho_shaft",
-    "labels",
-    "sensitivity",
-    "unit",
-    "gain",
-    "class_names",
-    "transient",
-)
-SOURCE_KEYS = keys_of(SourceEntry, tuple(k for k in DATASET_TABLE.keys if k not in _NOT_SIMULATED))
-
-
 # Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
 # 12 800. The table's keys bound no product, so absurd sizes are refused before any work.
 MAX_SAMPLES = 10**6
@@ -305,6 +290,11 @@ MEASURED_ONLY = (
     "pulses_per_rev",
     "takes",
 )
+
+
+# a benchmark's simulated [source] takes the dataset keys but a measured file's and its labels'
+_NOT_SIMULATED = ("file", "class_names", "transient", *MEASURED_ONLY)
+SOURCE_KEYS = keys_of(SourceEntry, tuple(k for k in DATASET_TABLE.keys if k not in _NOT_SIMULATED))
 
 
 def dataset_spec(entry: dict, where: str, base: Path) -> DatasetSpec | MeasuredSpec:
