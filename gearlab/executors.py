@@ -254,7 +254,7 @@ class _Unpacker(pickle.Unpickler):
 
 
 def warning_line(message, category, filename, lineno, file=None, line=None) -> None:
-    """A worker's warnings as the command line's (gearlab.cli._warning_line): one line on stderr,
+    """A worker's warnings as the command line's (gearlab.cli's _warning_line): one line on stderr,
     without Python's category, file and source-line echo (in the worker for what no unit raised, in
     the parent for the units' own, each message once)."""
     sys.stderr.write(f"warning: {message}\n")

@@ -257,7 +257,7 @@ def test_refuse_unsafe_walks_every_folder(tmp_path, victims):
 ALLOWED = {
     ("gearlab/confined.py", None): "the helper itself",
     ("gearlab/files.py", None): "atomic_write, for files outside any run directory; /proc/self/status",
-    ("gearlab/cli.py", None): "files the user names on the command line: --out, --csv, --plot, --html",
+    ("gearlab/cli", None): "files the user names on the command line: --out, --csv, --plot, --html",
     ("gearlab/data", None): "measured input files (read only) and the dataset cache in $GEARLAB_CACHE",
     ("gearlab/runs.py", "input_digest"): "measured input files, hashed: for --resume, and by gearlab score",
     ("gearlab/settings_doc.py", "main"): "docs/settings.md in the source tree, a developer's command",

@@ -42,4 +42,9 @@ def test_from_the_command_line_the_same_checks_name_the_options(cli, tmp_path, m
 
 
 def test_the_cli_keeps_no_simulator_check_of_its_own():
-    assert not hasattr(gearlab.cli, "_simulator")
+    import importlib
+    import pkgutil
+
+    modules = [importlib.import_module(f"gearlab.cli.{m.name}") for m in pkgutil.iter_modules(gearlab.cli.__path__)]
+    assert "gearlab.cli.tools" in {m.__name__ for m in modules}  # modes and simulate
+    assert not [m.__name__ for m in [gearlab.cli, *modules] if hasattr(m, "_simulator")]

@@ -29,7 +29,7 @@ except SystemExit as e:
     # every shipped scenario checked and described, as the TUI's tree and `gearlab validate` do
     "every scenario": """
 from pathlib import Path
-from gearlab.cli import describe_spec
+from gearlab.cli.running import describe_spec
 from gearlab.engine import load_scenario
 # the PHM 2009 scenarios read ../shared/data/phm09 at load time: left out where a checkout has none
 no_rig = not Path("../shared/data/phm09").is_dir()

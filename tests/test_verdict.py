@@ -443,10 +443,10 @@ def test_a_run_on_a_terminal_says_it_starts_before_the_engines_imports(cli, tmp_
 
     from rich.console import Console
 
-    import gearlab.cli
+    import gearlab.cli.running
 
     screen = io.StringIO()
-    monkeypatch.setattr(gearlab.cli, "err_console", Console(file=screen, force_terminal=True, soft_wrap=True))
+    monkeypatch.setattr(gearlab.cli.running, "err_console", Console(file=screen, force_terminal=True, soft_wrap=True))
     monkeypatch.setattr("gearlab.engine.run_scenario", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
     cli("run", tmp_path / "mine.toml")
     shown = re.sub(r"\x1b\[[0-9;]*m", "", screen.getvalue())  # the line is dim
