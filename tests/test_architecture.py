@@ -61,6 +61,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "gearlab.api",
             "gearlab.notebook",  # the notebook API, reached as gearlab.<name> (resolved on first use)
             "gearlab.settings_doc",
+            "gearlab.inspect_takes",  # inspects each take through the notebook API
         ),
     ),
 ]

@@ -175,12 +175,15 @@ def inspect(
     ] = None,
     history: Annotated[list[Path] | None, typer.Option(help="healthy records to localise the change against")] = None,
     history_key: Annotated[list[str] | None, typer.Option(help="a history file's own key: [FILE:]KEY=VALUE")] = None,
+    takes: Annotated[
+        str | None, typer.Option(help="a logger's column marking each sample's take: a row per take (FILE[KEY=N])")
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
     report_dir: Annotated[
         Path | None, typer.Option("--report", help="also write DIR/report.html and its figures (PNG)")
     ] = None,
 ) -> None:
-    """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts); with --history, which shaft and gear carry a localised change against those healthy records, else whether a non-synchronous (bearing-like) envelope line passes their threshold.
+    """What a recording holds: rate, duration, channels, speed, the order spectrum, TSA per shaft; with --gearbox, whether the description matches it (mesh orders, shaft orders, tooth counts); with --history, which shaft and gear carry a localised change against those healthy records, else whether a non-synchronous (bearing-like) envelope line passes their threshold. With --takes KEY, a logger's file of several takes: each take inspected, one row each (speed, mesh orders, level, whether it looks like the others; with --history, the call on each).
 
     Example: gearlab inspect rig.csv --gearbox my_gearbox.toml --tacho tacho --history healthy1.csv --history healthy2.csv
     """  # noqa: E501 (typer keeps line breaks in help text: one paragraph, one line)
@@ -188,8 +191,16 @@ def inspect(
     from ..notebook import inspect_recording
 
     # the recording's options are inspect_recording's keywords, by name (its checks name them by flag)
-    outputs = ("file", "history", "history_key", "as_json", "report_dir")
+    outputs = ("file", "history", "history_key", "takes", "as_json", "report_dir")
     options = {k: v for k, v in ctx.params.items() if k not in outputs}
+    if takes is not None:  # a logger's file of several takes: a row each (gearlab.inspect_takes)
+        from ..inspect_takes import inspect_takes, show_takes
+
+        if report_dir is not None:
+            raise GearlabInputError(f"--report: one take's report; give one take, '{file}[{takes}=N]', without --takes")
+        given = {"history": history or (), "history_keys": history_key, "flag": _option, **options}
+        show_takes(inspect_takes(file, takes, **given), console, as_json)
+        return
     report = inspect_recording(file, history=history or (), history_keys=history_key, flag=_option, **options)
     show(report, console, as_json, report_dir)
 
