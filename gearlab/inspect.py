@@ -457,7 +457,8 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions, read
     flaws) as cut_recording read it, drift out (gearlab score: a 60 s CSV read once, not twice: 9 s of CPU)."""
     rec, flaws = read or (read_record(path, options), ())
     if not read:  # read as cut_recording reads it: a drift out, said
-        rec.signal, flaws = acquisition(rec.signal, rec.fs)
+        with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
+            rec.signal, flaws = acquisition(rec.signal, rec.fs)
     speed, reading, no_speed = settle_speed(rec, box, options)
     fine, orders, amp, top = reading.fine, reading.orders, reading.amp, reading.top
     revolutions, lines = reading.revolutions, reading.lines

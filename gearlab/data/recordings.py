@@ -642,7 +642,8 @@ def cut_recording(
             f"{path}: vibration column {_one_line_repr(rec.vibration)}: all {raw.size} values equal {raw[0]:g}; "
             "expected a measured vibration (a constant column: a wrong column, or a sensor not connected)"
         )
-    rec.signal, flaws = acquisition(rec.signal, rec.fs)  # the speed from the mesh lines too, without the drift
+    with prefixed(f"{path}: vibration {_one_line_repr(rec.vibration)}"):  # the speed from the mesh lines too, drift out
+        rec.signal, flaws = acquisition(rec.signal, rec.fs)
     raw = rec.signal
     source, angle, how = shaft_angle(
         rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox, tacho_shaft=tacho_shaft
