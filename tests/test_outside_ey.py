@@ -102,3 +102,23 @@ def test_a_tacho_column_holding_a_second_accelerometer_is_refused(tmp_path, box)
         inspect_record(str(tmp_path / "two_acc.csv"), box, InspectOptions("acc_g", tacho="acc2_g"))
     text = str(err.value)
     assert "tacho 'acc2_g'" in text and "no pulses of a shaft's turn" in text and "\n" not in text, text
+
+
+def test_a_12_8_khz_take_whose_time_was_written_to_0_1_ms_names_the_rate_to_give(tmp_path, drive):
+    # a dynamic signal analyser's 12.8 kHz (a period of 78.125 µs) exported with its time to 4 decimals: stamps
+    # 0.0001, 0.0002, 0.0002, ... said 'does not increase between samples 2 and 3 (0.0002 -> 0.0002 s); expected
+    # increasing times in seconds', the rate to give unsaid (a stamp 1.28 periods coarse, not the 1.5 asked)
+    t, x, tacho = _take(2.0, 7, stages=((33, 74),), hz=22.0)
+    _csv(tmp_path / "dsa.csv", "time_s,acc_g,tacho_V", t, x / 9.80665, tacho, fmt=["%.4f", "%.6g", "%.3g"])
+    with pytest.raises(GearlabInputError) as err:
+        inspect_record(str(tmp_path / "dsa.csv"), drive, InspectOptions("acc_g", tacho="tacho_V"))
+    text = str(err.value)
+    assert "written coarser than a sampling period" in text and "fs = '12.8 kHz'" in text and "\n" not in text, text
+    got = inspect_record(str(tmp_path / "dsa.csv"), drive, InspectOptions("acc_g", tacho="tacho_V", fs=FS))
+    assert got["fs_hz"] == FS and got["speed"]["mean_hz"] == pytest.approx(22.0, rel=0.005), got["fs_source"]
+    assert "matches" in got["verdict"], got["verdict"]
+    # a file of fine stamps with one row written twice is no coarse clock: named as before
+    _csv(tmp_path / "twice.csv", "time_s,acc_g,tacho_V", *(np.insert(c, 5, c[5]) for c in (t, x, tacho)))
+    with pytest.raises(GearlabInputError, match="does not increase between samples 5 and 6") as err:
+        inspect_record(str(tmp_path / "twice.csv"), drive, InspectOptions("acc_g", tacho="tacho_V"))
+    assert "coarser" not in str(err.value), str(err.value)

@@ -74,7 +74,9 @@ def rate_from_time(value, where: str, path: str, n: int | None, takes: Sequence[
         i = int(np.flatnonzero(steps <= 0)[0])
         said = f"{path}: {where} does not increase between samples {i} and {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s)"
         mean, step = (t[-1] - t[0]) / (t.size - 1), np.min(steps[steps > 0], initial=np.inf)
-        if np.all(steps >= 0) and mean > 0 and step < np.inf and step > 1.5 * mean:  # stamped to 1 ms at 25.6 kHz
+        # stamped to 1 ms at 25.6 kHz, or written to 0.1 ms at 12.8 kHz (1.28 periods: 0.0002, 0.0002, 0.0003)
+        coarse = step > 1.5 * mean or np.median(_written_resolution(written_as)) * scale > mean
+        if np.all(steps >= 0) and mean > 0 and step < np.inf and coarse:
             raise coarse_times(said, 1 / mean, 2 * step / (t[-1] - t[0]), where)
         restarts = np.flatnonzero(t[1:] - t[0] < (t[:-1] - t[0]) / 2)  # back over half the time run: a new take
         if restarts.size:
