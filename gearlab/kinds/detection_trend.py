@@ -54,5 +54,39 @@ def first_called(rows: list[dict]) -> list[str]:
         else:
             number = per[by[0]].index(lapsed) + 1
             said += f"; not called again on take {number} ({Path(lapsed['file']).name}) by {by[0]}"
-        out.append(said)
+        out.append(said + ("" if take.get("localised") else _localised_later(per, first)))
     return out
+
+
+# the level a take's warning says against its history's ('level 0.61 x its history's (another load or gain?) ...')
+_LEVEL = re.compile(r"level ([\d.]+) x")
+
+
+def _localised_later(per: dict[str, list[dict]], first: int) -> str:
+    """Where the first called take (number *first* of each method's rows *per*) localised nothing: the first called
+    take since that is localised, on which gear and tooth, by which methods; and how many called before it localised
+    nothing, off the history's level. A month of daily takes whose sensor's mount loosened (-0.1 dB a day) was first
+    called on day 16 by the template methods, the level's fall; the chip of day 45, on the input pinion, went unsaid."""
+    takes = max(len(rows) for rows in per.values())
+
+    def called(i: int) -> list[str]:  # the methods calling take i (1-based)
+        return [m for m, rows in per.items() if len(rows) >= i and rows[i - 1]["decision"] != "healthy"]
+
+    def row(i: int) -> dict:
+        return next(rows[i - 1] for rows in per.values() if len(rows) >= i)
+
+    found = next((i for i in range(first + 1, takes + 1) if called(i) and row(i).get("localised")), None)
+    said = ""
+    if found is not None:
+        tooth = _TOOTH.search(row(found).get("evidence") or "")
+        said = (
+            f"; first localised on take {found} ({Path(row(found)['file']).name}): {row(found)['localised']}"
+            + (f", tooth {tooth.group(1)}" if tooth else "")
+            + f", by {', '.join(called(found))}"
+        )
+    before = [i for i in range(first, found or takes + 1) if called(i)]
+    levels = [float(m.group(1)) for i in before if (m := _LEVEL.search(row(i).get("level") or ""))]
+    said += f"; {len(before)} takes called {'before it ' * (found is not None)}with no gear localised"
+    if levels:
+        said += f", {len(levels)} of them off the history's level ({max(levels):.2g}-{min(levels):.2g} x)"
+    return said
