@@ -169,3 +169,26 @@ def test_a_month_s_trend_tells_a_drifting_level_s_calls_from_the_fault_localised
     # a take localised first where it was first called says nothing more
     (weekly,) = first_called([r for r in MONTH if int(r["file"][-6:-4]) not in range(16, 45)])
     assert "first localised" not in weekly and "no gear localised" not in weekly, weekly
+
+
+def test_a_month_s_trend_chart_keeps_its_plot_readable_under_a_long_title(tmp_path, monkeypatch):
+    # the month's trend PNG: 6 lines of title (the notes of other damage, the trend's words, the takes' names) left the
+    # plot 0.9 in of the 3.2 in figure, its 60 points and 4 methods a strip; each chart's height now grows with its
+    # title, the plot 2 in at least
+    from gearlab import plots
+    from gearlab.charts import Chart, Curve
+    from gearlab.kinds.detection_figures import score_trend
+    from gearlab.kinds.detection_trend import first_called
+
+    words = "; ".join(f"record {i}: other damage: non-synchronous (bearing-like), at order 9.52" for i in range(4))
+    names = ", ".join(f"{i} day{i:02d}.csv" for i in range(1, 13))
+    curves = tuple(Curve(m, list(range(1, 61)), list(np.linspace(-1, 1, 60))) for m in ("fm4", "na4", "mf", "lr"))
+    title = f"24 Hz: scored records{'; ' + words}\n{first_called(MONTH)[0]}\nrecords: {names}"
+    kept = {}
+    monkeypatch.setattr(plots, "save", lambda fig, path: kept.setdefault("fig", fig))
+    score_trend([Chart(title, "record scored (in order)", "margin", curves, hlines=(0.0,))] * 2, tmp_path / "t.png")
+    fig = kept["fig"]
+    fig.canvas.draw()
+    for ax in fig.axes:
+        assert ax.get_window_extent().height / fig.dpi >= 2.0, ax.get_window_extent().height / fig.dpi
+    plots.plt.close(fig)

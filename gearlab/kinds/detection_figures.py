@@ -356,6 +356,8 @@ def _roc_figure(charts: list[Chart], summary: dict):
 
 
 TITLE_CHARS = 160  # a line of a 9 pt title across the trend's 10 in figure
+TREND_PLOT_IN = 3.0  # a trend chart's plot, axes and labels (in)
+TITLE_LINE_IN = 0.17  # and each line of its 9 pt title
 
 
 def score_trend(charts, path: Path) -> Path:
@@ -363,8 +365,15 @@ def score_trend(charts, path: Path) -> Path:
     each method's score of the records scored in turn, less its threshold (above the line: called)."""
     from .. import plots  # here, not at the top: start-up time (matplotlib)
 
-    fig, axes = plots.plt.subplots(len(charts), 1, figsize=(10, 3.2 * len(charts)), squeeze=False, layout="constrained")
-    for ax, chart in zip(axes[:, 0], charts):
+    # the title names every take scored and each note: wrapped to the figure's width (unwrapped, a long
+    # history's title widened the PNG to 3224 px and left the plot a strip in its middle)
+    titles = ["\n".join(textwrap.fill(line, TITLE_CHARS) for line in chart.title.splitlines()) for chart in charts]
+    # each chart the plot's height and its title's lines: 6 of them left a month of takes' plot 0.9 in of 3.2
+    heights = [TREND_PLOT_IN + TITLE_LINE_IN * (title.count("\n") + 1) for title in titles]
+    fig, axes = plots.plt.subplots(
+        len(charts), 1, figsize=(10, sum(heights)), squeeze=False, layout="constrained", height_ratios=heights
+    )
+    for ax, chart, title in zip(axes[:, 0], charts, titles):
         for curve in chart.curves:
             ax.plot(curve.x, curve.y, marker="o", ms=3, lw=0.8, label=curve.label)
         ax.axhline(0.0, color="k", lw=0.8, ls="--")
@@ -373,10 +382,7 @@ def score_trend(charts, path: Path) -> Path:
             ax.set_xticks(list(chart.xticks))
         else:
             ax.xaxis.set_major_locator(plots.plt.MaxNLocator(integer=True))
-        # the title names every take scored and each note: wrapped to the figure's width (unwrapped, a long
-        # history's title widened the PNG to 3224 px and left the plot a strip in its middle)
-        lines = chart.title.splitlines()
-        ax.set_title("\n".join(textwrap.fill(line, TITLE_CHARS) for line in lines), fontsize=9)
+        ax.set_title(title, fontsize=9)
         ax.set_xlabel(chart.xlabel)
         ax.set_ylabel(chart.ylabel)
         ax.grid(alpha=0.3)
