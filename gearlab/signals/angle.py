@@ -65,7 +65,8 @@ SMOOTHED_MARKS = 9
 # equal spacing 7-10): these keep their marks' own spacing
 EVEN_SLACK = 0.75
 # Marks a tacho did not give: an interval between edges within MISSED_SLACK of a whole k >= 2 times the median of the
-# MISSED_WINDOW intervals about it holds k - 1 left-out marks, where no other such interval lies within the window
+# MISSED_WINDOW intervals about it, and the intervals either side within MISSED_SLACK of theirs, holds k - 1 left-out
+# marks, where no other such interval lies within the window
 # (a pair of marks spaced 1/3 and 2/3 of a turn alternates, every interval "twice" or "half" the median). A 60-2
 # encoder (the gap of 2 left-out marks its turn's reference) read with its 58 marks spaced alike put every order
 # 60/58 low: a 37/89 box's mesh read at 36 ('a 36-tooth pinion?'), at 60 marks the gap's turn 3.4 % slow ('slip
@@ -110,7 +111,11 @@ def _missed_marks(edges: np.ndarray, quantised: np.ndarray, marks: int) -> tuple
     # mirrored at the ends: a take starting with the gap held its 3 pitches as the first values' median, the gap kept
     ratio = d / median_filter(d, size=MISSED_WINDOW, mode="mirror")
     k = np.rint(ratio)
-    gaps = np.flatnonzero((k >= 2) & (np.abs(ratio - k) <= MISSED_SLACK))
+    # ... between marks of the steady speed about it: the intervals either side of a stop are its coast-down's and
+    # run-up's (a 1.0 s standstill at 24 Hz read as 33 marks left out: 18 turns the shaft never made)
+    steady = np.abs(np.concatenate([[1.0], ratio[:-1]]) - 1) <= MISSED_SLACK
+    steady &= np.abs(np.concatenate([ratio[1:], [1.0]]) - 1) <= MISSED_SLACK
+    gaps = np.flatnonzero((k >= 2) & (np.abs(ratio - k) <= MISSED_SLACK) & steady)
     if gaps.size == 0 or (gaps.size > 1 and np.diff(gaps).min() < MISSED_WINDOW):
         return edges, quantised, None
     put = np.concatenate([edges[g] + d[g] * np.arange(1, k[g]) / k[g] for g in gaps])
