@@ -86,7 +86,8 @@ def _localised_later(per: dict[str, list[dict]], first: int) -> str:
         )
     before = [i for i in range(first, found or takes + 1) if called(i)]
     levels = [float(m.group(1)) for i in before if (m := _LEVEL.search(row(i).get("level") or ""))]
-    said += f"; {len(before)} takes called {'before it ' * (found is not None)}with no gear localised"
+    takes_called = f"{len(before)} take{'s' * (len(before) != 1)} called"
+    said += f"; {takes_called} {'before it ' * (found is not None)}with no gear localised"
     if levels:
         said += f", {len(levels)} of them off the history's level ({max(levels):.2g}-{min(levels):.2g} x)"
     return said
