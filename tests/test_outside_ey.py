@@ -237,3 +237,27 @@ def test_a_stop_inside_a_take_is_no_run_of_missed_tacho_pulses(tmp_path, box):
     got = inspect_record(str(tmp_path / "stopped.csv"), box, InspectOptions("acc_ms2", tacho="tacho_V"))
     assert got["revolutions"] <= turns and got["speed"]["min_hz"] < 1.0, (got["revolutions"], got["speed"])
     assert "differs" not in got["verdict"], got["verdict"]
+
+
+# --- a gearbox running in reverse ------------------------------------------------------------------------------------
+
+
+def test_a_take_of_the_box_running_the_other_way_is_said_off_its_tacho_s_mark():
+    # a healthy take of the 16/37 + 28/71 box running in reverse (its tacho's pulses read on each mark's other edge),
+    # scored against a forward history by a run of matched_filter, likelihood_ratio, fm4 and na4: the matched filter
+    # (+0.28 over its threshold) and the likelihood ratio (+116) called it a fault, no gear localised, and nothing was
+    # said (its polarity is not reversed). Its synchronous average is the history's a quarter turn off the mark: said
+    # where the run and gearlab score warn of a reversed polarity (detection_records, detection_scoring's levels)
+    from gearlab.signals import POINTS, cut_revolutions
+    from gearlab.signals.checks import off_mark_line, polarity_line
+
+    def revolutions(hz: float, seed: int) -> np.ndarray:
+        _, x, tacho = _take(3.0, seed, hz=hz)
+        return cut_revolutions(x, FS, pulses=tacho, points=POINTS, transient="none").revolutions
+
+    reference = np.mean([revolutions(24.0, s).mean(axis=0) for s in (21, 22)], axis=0)
+    forward, reverse = revolutions(24.0, 23), revolutions(-24.0, 24)
+    assert off_mark_line(forward, reference) == "", off_mark_line(forward, reference)
+    said = off_mark_line(reverse, reference)
+    assert polarity_line(reverse, reference) == ""  # was all that was checked
+    assert "turn" in said and "off its tacho's mark" in said and "the box running the other way" in said, said

@@ -24,7 +24,7 @@ from ..parts.measured import ROLES, Target, TargetFile, aligned
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
-from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS, polarity_line
+from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS, turned_line
 from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
@@ -465,8 +465,9 @@ def read_target(
                 cond["shifts"][f.path] = shift
                 turned.append((f, revs))
             cond[role] = turned
-        # a take reversed against the history (a sensor's leads swapped) is said, aligned by the marks or not
-        flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := polarity_line(r, reference, tacho is None))]
+        # a take reversed against the history (a sensor's leads swapped) is said, aligned by the marks or not; one
+        # turned off its marks too (a box running the other way)
+        flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := turned_line(r, reference, tacho is None))]
         cond["warnings"] += flipped
         for line in flipped:
             on_event(Event("log", message=f"warning: {line}"))

@@ -27,7 +27,7 @@ from ..runs import RunDir, input_digest
 from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.checks import VARIES_WORDS, polarity_line
+from ..signals.checks import VARIES_WORDS, turned_line
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -288,10 +288,8 @@ def _scoring_condition(
         },
         "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
         "levels": {  # another load? a take reversed against the history (by the marks or, no tacho, any turn)?
-            f.path: "; ".join(
-                w
-                for w in (level_line(float(np.std(r)) / standardiser.std), polarity_line(t, reference, not tacho))
-                if w
+            f.path: "; ".join(  # or turned off its marks (the box running the other way)?
+                w for w in (level_line(float(np.std(r)) / standardiser.std), turned_line(t, reference, not tacho)) if w
             )
             for (f, r), (_, t) in zip(records, test)
         },
