@@ -261,3 +261,30 @@ def test_a_take_of_the_box_running_the_other_way_is_said_off_its_tacho_s_mark():
     said = off_mark_line(reverse, reference)
     assert polarity_line(reverse, reference) == ""  # was all that was checked
     assert "turn" in said and "off its tacho's mark" in said and "the box running the other way" in said, said
+
+
+# --- a box described with its stages swapped -------------------------------------------------------------------------
+
+
+def test_a_box_described_with_its_stages_swapped_is_told_by_its_tooth_count_not_the_tacho_s_marks(tmp_path, cli):
+    # the 16/37 + 28/71 box described as 28/71 + 16/37: inspect named every gear ('a 16-tooth pinion on the input
+    # shaft? described 28', ...), the gap's structure line blamed the tacho: 'mesh order 16.0 measured, 28 expected:
+    # ... the tacho gives 7/4 x the pulses per revolution it was read with? [target] pulses_per_rev', though a tacho
+    # read with 1 mark a turn gives a whole count (7/4 of 1 is none): the line now says the teeth the record shows
+    swapped = BOX.replace("z = 16,", "z = @,").replace("z = 28,", "z = 16,").replace("z = @,", "z = 28,")
+    swapped = swapped.replace("z = 37,", "z = @,").replace("z = 71,", "z = 37,").replace("z = @,", "z = 71,")
+    (tmp_path / "box.toml").write_text(swapped)
+    for seed in (31, 32):
+        t, x, tacho = _take(2.0, seed)
+        _csv(tmp_path / f"h{seed}.csv", "time_s,acc_ms2,tacho_V", t, x, tacho)
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "swapped"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n'
+        '[target]\nvibration = "acc_ms2"\ntacho = "tacho_V"\n'
+        'files = [{ file = "h*.csv", role = "history", label = "healthy" }]\n'
+        '[diagnosis]\ncandidates = ["sensor_noise"]\n[accuracy]\nenabled = false\n'
+    )
+    code, out, err = cli("run", tmp_path / "gap.toml", "--quick", "--out", tmp_path / "runs")
+    assert code == 0, err
+    (line,) = [x for x in (out + err).splitlines() if x.startswith("gap: structure differs")]
+    assert "mesh order 16.0 measured, 28 expected" in line and "shows 16 teeth" in line, line
+    assert "pulses_per_rev" not in line, line

@@ -227,7 +227,7 @@ def later_combs(pair) -> tuple:
 def mesh_line(check: dict, z1: int, ppr: int | None = None) -> str:
     """The one line of a tooth-count difference. *ppr*: the marks a turn the tacho was read with (None: not known):
     a tacho on its shaft read with another whole count is told in inspect's words (inspect_tacho.marks_words), the
-    count it gives and the key; else as a share of those read."""
+    count it gives and the key; no whole count, the teeth the record shows; else as a share of those read."""
     m = check["measured"]
     whole = abs(m - round(m)) <= 0.05
     if check.get("also"):
@@ -244,17 +244,19 @@ def mesh_line(check: dict, z1: int, ppr: int | None = None) -> str:
     if check.get("shaft"):
         words = tacho_shaft_words(check["shaft"], check["factor"], check["read_as"])
         return line + f" ({words} give [target] tacho_shaft = '{check['shaft']}')"
-    if check.get("marks"):
-        k = Fraction(check["marks"]).limit_denominator(4)  # marks given over read: 2 read as 1, 2; 1 read as 3, 1/3
+    k = Fraction(check.get("marks") or 1).limit_denominator(4)  # marks given over read: 2 read as 1: 2; 1 as 3: 1/3
+    # a tacho gives a whole count a turn: of one read, 7/4 x is none, and a mesh there is another gear's (a 16/37 +
+    # 28/71 box described as 28/71 + 16/37: 'the tacho gives 7/4 x the pulses per revolution it was read with?'); a
+    # share under 1 may be a slower shaft's tacho
+    if check.get("marks") and (ppr is None or (ppr * k).denominator == 1 or k < 1):
         if k > 1:
             at = f"1/{k}" if k.denominator == 1 else f"{float(1 / k):.3g}"
             seen, share = f"at {at} of its order, with its harmonics", f"{k} x"
         else:
             n, nth = k.denominator, {2: "2nd", 3: "3rd"}.get(k.denominator, f"{k.denominator}th")
             seen, share = f"at {n} x its order, its lines on every {nth} harmonic alone", f"1/{n} of"
-        given = None if ppr is None else ppr * k
-        if given is not None and given.denominator == 1:  # the count read known, the one given whole: inspect's words
-            return line + f" (the target's mesh {seen}: {marks_words(int(given), ppr, IN_TARGET)})"
+        if ppr is not None and (ppr * k).denominator == 1:  # the count read known, the one given whole: inspect's
+            return line + f" (the target's mesh {seen}: {marks_words(int(ppr * k), ppr, IN_TARGET)})"
         return line + (
             f" (the target's mesh {seen}: the tacho gives {share} the pulses per revolution it was read with? "
             "[target] pulses_per_rev)"
