@@ -288,3 +288,25 @@ def test_a_box_described_with_its_stages_swapped_is_told_by_its_tooth_count_not_
     (line,) = [x for x in (out + err).splitlines() if x.startswith("gap: structure differs")]
     assert "mesh order 16.0 measured, 28 expected" in line and "shows 16 teeth" in line, line
     assert "pulses_per_rev" not in line, line
+
+
+# --- the TUI, used by a person who has never seen it -----------------------------------------------------------------
+
+
+def test_the_verdict_says_which_gear_each_test_take_s_change_lies_on(tmp_path, monkeypatch, no_figures):
+    # driven with its pilot, the TUI's Results of the month's run opened with the verdict ('goal met by
+    # matched_filter, likelihood_ratio, fm4, na4; ...') and an ROC chart; which gear, the issue's item 5, stood in
+    # the 9-column table under them, found by scrolling past the chart: the verdict (report.html, gearlab run's end,
+    # the TUI) now says it per condition, in the which-gear table's words
+    from detection_scenario import shared_run
+    from test_followups_39 import scenario
+
+    from gearlab.verdict import verdict_lines
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    out = shared_run(scenario(tmp_path, methods=("matched_filter",)), tmp_path / "runs")
+    lines = [x for x in verdict_lines(out) if "which gear" in x]
+    assert lines == [
+        "16 Hz, which gear each test take's change lies on: input pinion 25T (stage 1), watched: 2 (f1.zip, "
+        "f2.zip); nothing localised: 1 (h3.zip)."
+    ], lines

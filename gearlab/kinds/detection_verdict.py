@@ -283,7 +283,31 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
         lines.append(text + left_out(summary, c, unit) + ".")
         lines += [spread] if (spread := record_spread(c, at)) else []
         lines += [alone] if (alone := one_take(c, at)) else []
+        lines += [gear] if (gear := which_gear_line(summary, c)) else []
     return lines
+
+
+# A gear's takes named in the which-gear line up to this many; over it, counted
+NAMED_TAKES = 3
+
+
+def which_gear_line(summary: Mapping, condition: str) -> str | None:
+    """The gear each of *condition*'s test takes' change lies on, the watched ones said, with the takes' counts (and
+    names, up to NAMED_TAKES), from the run's which-gear table; None where the run localised nothing. A first-time
+    user of the TUI, its Results opening with the verdict and an ROC chart, found it only in the table under them."""
+    which = summary.get("which_gear") or {}
+    takes = {f: r for f, r in (which.get("records") or {}).items() if r.get("condition") == condition}
+    if not takes:
+        return None
+    watched, by = set(which.get("watched") or ()), {}
+    for file, record in takes.items():
+        by.setdefault(record.get("named") or "nothing localised", []).append(file.replace("\\", "/").rsplit("/", 1)[-1])
+    said = [
+        f"{gear}{', watched' * (gear in watched)}: {len(files)}"
+        + (f" ({', '.join(files)})" if len(files) <= NAMED_TAKES else "")
+        for gear, files in sorted(by.items(), key=lambda item: (item[0] == "nothing localised", -len(item[1])))
+    ]
+    return f"{condition}, which gear each test take's change lies on: {'; '.join(said)}."
 
 
 def one_take(condition: str, at: list[Mapping]) -> str | None:
