@@ -252,7 +252,8 @@ BAD = [
     ),
     (
         {"stages": [stage(20, 57)], "operation": {"speed": "-3 Hz"}},
-        r"\[operation\] key 'speed': expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got -3$",
+        r"\[operation\] key 'speed': expected an input-shaft speed's size, e.g. '25 Hz', got '-3 Hz': a box turning "
+        r"either direction is read alike \(its tacho's pulses, its orders\): write '3 Hz'$",
     ),
     (
         {"stages": [stage(20, 57)], "dynamics": {"bearing_stiffness": "1 N/m"}},

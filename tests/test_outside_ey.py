@@ -310,3 +310,13 @@ def test_the_verdict_says_which_gear_each_test_take_s_change_lies_on(tmp_path, m
         "16 Hz, which gear each test take's change lies on: input pinion 25T (stage 1), watched: 2 (f1.zip, "
         "f2.zip); nothing localised: 1 (h3.zip)."
     ], lines
+
+
+def test_a_box_running_in_reverse_described_with_a_negative_speed_is_told_to_give_its_size(tmp_path, cli):
+    # a hoist's box that runs backwards, described with speed = "-1140 rpm": 'expected an input-shaft speed up to 1 kHz,
+    # e.g. '25 Hz', got -19', nothing of the sign; the direction matters to no step (a tacho's pulses, the orders)
+    (tmp_path / "box.toml").write_text(DRIVE.replace('speed = "22 Hz"', 'speed = "-1320 rpm"'))
+    code, out, err = cli("validate", tmp_path / "box.toml")
+    line = err.strip()
+    assert code == 2 and "[operation] key 'speed'" in line and "\n" not in line, (code, err)
+    assert "either direction" in line and "'1320 rpm'" in line, line

@@ -347,6 +347,12 @@ def speed_hz(value, where: str) -> float:
         value = to_si(value, "revolution/s", where)
     else:
         value = to_si(value, "Hz", where)
+    if -MAX_SPEED_HZ <= value < 0 and isinstance(given, str):  # a box running backwards: its speed's size
+        size = re.sub(r"^\s*-\s*", "", given)
+        raise GearlabInputError(
+            f"{where}: expected an input-shaft speed's size, e.g. '25 Hz', got {given!r}: a box turning either "
+            f"direction is read alike (its tacho's pulses, its orders): write {size!r}"
+        )
     if not 0 < value <= MAX_SPEED_HZ:
         raise GearlabInputError(
             f"{where}: expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got {value:g}{bare_speed(given)}"
