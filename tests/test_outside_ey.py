@@ -320,3 +320,20 @@ def test_a_box_running_in_reverse_described_with_a_negative_speed_is_told_to_giv
     line = err.strip()
     assert code == 2 and "[operation] key 'speed'" in line and "\n" not in line, (code, err)
     assert "either direction" in line and "'1320 rpm'" in line, line
+
+
+def test_a_take_that_stops_says_so_beside_its_speed_range(tmp_path, box):
+    # the same take (1.0 s standing) read '0.79 .. 24.05 Hz ..., the mean of a run-up or coast-down' by inspect and
+    # '3.042 Hz .. 24 Hz over the take: a run-up or coast-down?' by a run and gearlab score: its turn of 1.27 s, 30
+    # times the others', is said as a stop
+    from gearlab.signals import angle_from_pulses
+    from gearlab.signals.checks import speed_varies
+
+    t, x, tacho, _ = _stopping(1.0, 6)
+    said = speed_varies(angle_from_pulses(tacho, FS), FS)
+    assert "a turn of 1.2" in said and "s from 1.9" in said and "stopped?" in said, said
+    _csv(tmp_path / "stopped.csv", "time_s,acc_ms2,tacho_V", t, x, tacho)
+    got = inspect_record(str(tmp_path / "stopped.csv"), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+    assert "stopped?" in got["speed"]["nominal"]["line"], got["speed"]["nominal"]["line"]
+    _, _, steady = _take(2.0, 8)
+    assert "stopped" not in speed_varies(angle_from_pulses(steady, FS), FS)

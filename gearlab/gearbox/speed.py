@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..signals import spectrum, upsampled
-from ..signals.checks import SPEED_VARIES, UNSEEN_WORDS, fmt_hz, speed_varies
+from ..signals.checks import SPEED_VARIES, UNSEEN_WORDS, fmt_hz, speed_varies, stopped
 from ..signals.pipeline import Upsampled
 from .description import Gearbox
 from .orders import order_table
@@ -429,7 +429,9 @@ def nominal_line(measured: float, nominal: float, said: str, per_revolution=()) 
     s = np.convolve(s, np.full(5, 0.2), "valid") if s.size >= 5 else np.full(1, measured)
     low, high = float(s.min()), float(s.max())
     if high - low > SPEED_VARIES * measured:
-        how = f"the mean of a run-up or coast-down ({fmt_hz(low)} .. {fmt_hz(high)}), not a steady speed"
+        stop = stopped(1.0 / np.asarray(per_revolution, dtype=float))  # the turns' seconds, from the first mark
+        span = f"{fmt_hz(low)} .. {fmt_hz(high)}{stop and '; ' + stop}"
+        how = f"the mean of a run-up or coast-down ({span}), not a steady speed"
     elif abs(d) <= 0.002:
         how = "as described"
     elif -NOMINAL_RANGE <= d < 0:

@@ -137,7 +137,28 @@ def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
     low, high = float(speeds.min()), float(speeds.max())
     if high - low <= SPEED_VARIES * float(np.mean(speeds)):
         return ""
-    return f"; {fmt_hz(low)} .. {fmt_hz(high)} {VARIES_WORDS} its mean speed is its condition (steady records compare)"
+    stop = stopped(np.diff(at), at[0])
+    return (
+        f"; {fmt_hz(low)} .. {fmt_hz(high)}{f' ({stop})' if stop else ''} {VARIES_WORDS} its mean speed is its "
+        "condition (steady records compare)"
+    )
+
+
+# A turn lasting STOPPED times the take's median turn or more: the shaft stood still in it (a tacho's marks cannot
+# tell a standstill from a slow turn; a 1.0 s stop of a 24 Hz box read '3.04 .. 24 Hz: a run-up or coast-down?')
+STOPPED = 10.0
+
+
+def stopped(turns: np.ndarray, start: float = 0.0) -> str:
+    """'a turn of 1.27 s from 1.95 s: stopped?' for the longest of the *turns* (s each, the first from *start*)
+    where it lasts STOPPED times their median or more; else ""."""
+    turns = np.asarray(turns, dtype=float)
+    if turns.size < 3:
+        return ""
+    longest = int(np.argmax(turns))
+    if turns[longest] < STOPPED * float(np.median(turns)):
+        return ""
+    return f"a turn of {turns[longest]:.3g} s from {start + float(np.sum(turns[:longest])):.3g} s: stopped?"
 
 
 # A take whose synchronous average correlates below -POLARITY with its history's is that average reversed: a sensor
