@@ -337,3 +337,17 @@ def test_a_take_that_stops_says_so_beside_its_speed_range(tmp_path, box):
     assert "stopped?" in got["speed"]["nominal"]["line"], got["speed"]["nominal"]["line"]
     _, _, steady = _take(2.0, 8)
     assert "stopped" not in speed_varies(angle_from_pulses(steady, FS), FS)
+
+
+def test_a_wheel_count_too_few_turns_tell_says_the_count_described_beside_the_reading(tmp_path):
+    # the 33/74 drive described with a 73-tooth wheel, a 3 s take (65 turns): inspect and the gap said 'matches ...;
+    # not checked: the tooth count of the wheel on the output shaft (74.0 ± 1.4 from its sidebands: 65 input
+    # revolutions, need 91 ...)', the 73 described unsaid beside the 74.0 read
+    from gearlab.gearbox import load_gearbox
+
+    (tmp_path / "box.toml").write_text(DRIVE.replace("z = 74,", "z = 73,"))
+    t, x, tacho = _take(3.0, 9, stages=((33, 74),), hz=22.0)
+    _csv(tmp_path / "take.csv", "time_s,acc_ms2,tacho_V", t, x, tacho)
+    got = inspect_record(str(tmp_path / "take.csv"), load_gearbox(tmp_path / "box.toml"), InspectOptions("acc_ms2"))
+    said = got["verdict"]
+    assert "(74.0 ± 1.3 from its sidebands, 73 described: 65 input revolutions, need 91" in said, said

@@ -476,7 +476,7 @@ def check_description(
                 need = revolutions_needed(z, o_seen, tol, revolutions, 1.0 if spread >= 1.0 else 0.5)
                 unresolved.append(
                     f"the tooth count of the {role} on the {table.shafts[shaft_k]} shaft ({z:.1f} ± {spread:.1f} "
-                    f"from its sidebands: {revolutions} input revolutions, "
+                    f"from its sidebands, {described} described: {revolutions} input revolutions, "
                     + (
                         f"need {need} to tell a tooth more or less)"
                         if need
