@@ -276,6 +276,7 @@ def _scoring_condition(
     test = [(f, aligned(reference, standardiser.apply(revs), tacho, at[f.path], continuous)[1]) for f, revs in records]
     blocks = meta["blocks"]
     per_record = [unit_sets(r, blocks, True) for _, r in history]
+    levels = np.array([float(np.std(r)) for _, r in history])
     return {
         "history": history,
         "test": test,
@@ -293,7 +294,27 @@ def _scoring_condition(
             )
             for (f, r), (_, t) in zip(records, test)
         },
+        "level_ratio": {f.path: float(np.std(r)) / standardiser.std for f, r in records},
+        # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
+        # their scale not the standardiser's): a take further off, called with no gear named, is told its level
+        # whatever LEVEL_OFF says (called_level)
+        "level_spread": float(np.max(np.abs(np.log(levels / np.median(levels))))),
     }
+
+
+def called_level(rows: list[dict], ratio: float, spread: float) -> str:
+    """Of a take's *rows*, called a fault with no gear named and its level *ratio* to its history's further off than
+    the history's own takes lie (*spread*, their largest |log|), its level in words, where level_line says nothing
+    (within LEVEL_OFF): a sensor's mount loosening -0.1 dB a day was called by the template methods from 0.83 x, its
+    level said from 0.8 x only. "" otherwise."""
+    called = any(r["decision"] == "fault" or is_undetermined(r["decision"]) for r in rows)
+    if not called or rows[0]["localised"] or level_line(ratio) or abs(math.log(ratio)) <= spread:
+        return ""
+    return (
+        f"level {ratio:.2g} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no gear "
+        "named, the call may be the level's change (a sensor's mount or gain, another load?): NA4 and the template "
+        "methods (matched_filter, likelihood_ratio), which subtract the history's average, read a level as a change"
+    )
 
 
 def _same_input(run: RunDir, meta: dict) -> None:
@@ -634,6 +655,11 @@ def score(
                             "scores": [float(x) for x in s],
                         }
                     )
+        for f, _ in records:  # the level said where the call may be its change, whichever method's threshold
+            mine = [r for r in rows if r["file"] == f.path]
+            said = called_level(mine, cond["level_ratio"][f.path], cond["level_spread"])
+            for r in mine if said else ():
+                r["level"] = "; ".join(w for w in (said, r["level"]) if w)
     # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend
     given = {str(f): i for i, f in enumerate(files)}
     rows.sort(key=lambda r: given[r["file"]])
