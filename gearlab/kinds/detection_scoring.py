@@ -27,7 +27,7 @@ from ..runs import RunDir, input_digest
 from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.checks import VARIES_WORDS, turned_line
+from ..signals.checks import VARIES_WORDS, off_mark_line, polarity_line, turned_line
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -293,6 +293,10 @@ def _scoring_condition(
                 w for w in (level_line(float(np.std(r)) / standardiser.std), turned_line(t, reference, not tacho)) if w
             )
             for (f, r), (_, t) in zip(records, test)
+        },
+        # read off its tacho's marks, not reversed (the box running the other way?): its tooth, turned_tooth's
+        "turned": {
+            f.path for f, t in test if tacho and off_mark_line(t, reference) and not polarity_line(t, reference)
         },
         "level_ratio": {f.path: float(np.std(r)) / standardiser.std for f, r in records},
         # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
@@ -590,7 +594,9 @@ def score(
     if not cut:  # every take refused: as one take is, in one line (each alone says its own why), nothing written
         first, why = next(iter(skipped.items()))
         raise GearlabInputError(f"none of the {len(files)} takes scored ({', '.join(skipped)}); {first}: {why}")
-    localised = localise_scored(run, raw)  # which gear each record's change is on (detection_which_gear)
+    conds = {name: _scoring_condition(run, meta, name, records, marks) for name, records in cut.items()}
+    turned = set().union(*(c["turned"] for c in conds.values()))  # read off their marks: the tooth counted so
+    localised = localise_scored(run, raw, turned)  # which gear each record's change is on (detection_which_gear)
     localised.update({p: not_read(w) for p, w in far.items() if w and described is not None})  # far off: not read
     stale = stale_calls(run, localised)  # a take of the run's own, its table decided by an older rule
     for path, line in stale.items():
@@ -599,7 +605,7 @@ def score(
     classical = stored_classical(meta["classical"])
     rows = []
     for name, records in cut.items():
-        cond = _scoring_condition(run, meta, name, records, marks)
+        cond = conds[name]
         rule = Rule(meta["threshold"], meta["false_alarm"], cond["history_records"])
         shown = synchronous_input(
             learned_input(meta["input"], meta["points"], classical, cond["unit_max_order"]),

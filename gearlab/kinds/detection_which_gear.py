@@ -45,6 +45,7 @@ The localisation uses the records' signals only; the labels come in with the tab
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -298,11 +299,12 @@ def _take(cond: dict, path: str) -> W.Take:
     return W.Take(revs, int(first), cond.get("speeds", {}).get(path), cond.get("fs", {}).get(path), speeds)
 
 
-def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
+def localise_scored(run, records: dict[str, list], turned=frozenset()) -> dict[str, dict]:
     """{path: {"named", "summary", "nonsync", "call", "evidence"}} of new records ({condition: [(path,
     data.which_gear.Take)]}) localised with the run's stored histories (store_localisation) and the
     description's simulated events at each record's speed, as the run localised its own
-    (data.which_gear.which_gear); {} for a run without them."""
+    (data.which_gear.which_gear); {} for a run without them. *turned*: the paths read off their tacho's mark
+    (their tooth: turned_tooth)."""
     from ..gearbox import order_table
     from ..parts import scoring
 
@@ -322,7 +324,7 @@ def localise_scored(run, records: dict[str, list]) -> dict[str, dict]:
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:
-            found = W.which_gear(take, hist, table, made)
+            found = W.which_gear(take, hist, table, made) | {"turned": path in turned}
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             out[path] = {
                 "named": W.named_gears(found),  # damage on two shafts: both, as the run's table names them
@@ -375,7 +377,22 @@ def _tooth(found: dict) -> str:
         return "–"
     ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
     on = [ev["which"]] if ev.get("which") else ev["gears"]
-    return " / ".join(L.tooth_words(ev["tooth"][g]) for g in on if g in ev["tooth"]) or "–"
+    words = turned_tooth if found.get("turned") else L.tooth_words
+    return " / ".join(words(ev["tooth"][g]) for g in on if g in ev["tooth"]) or "–"
+
+
+def turned_tooth(t: dict) -> str:
+    """The tooth *t* of a take read off its tacho's mark (signals.checks.off_mark_line: the box running the other
+    way?), where fixed to the mark: its teeth pass the mark the other way, so the count from it is the tooth's mirror,
+    z - pitches, as its history counts (within a tooth: the tacho triggers on the mark's other edge); the count the way
+    the take turns beside it. A 16/37 + 28/71 box's input pinion chipped 0.37 turn on: '11 of 16' read alone."""
+    if not t.get("mark"):
+        return L.tooth_words(t)
+    mirrored = int(math.floor(t["of"] - t["pitches"])) % t["of"] + 1
+    return (
+        f"{mirrored} of {t['of']} if the box runs the other way (counted from the tacho's mark as its history turns, "
+        f"within a tooth; {t['tooth']} of {t['of']} counted the way this take turns)"
+    )
 
 
 def _which(found: dict) -> str:
