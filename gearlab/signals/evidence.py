@@ -98,9 +98,10 @@ def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
     The weights of the evidence (_null_var) never follow one order's own noisy estimate (a weight
     that rises where an order's power happened to come out low picks the orders where Δ comes out
     high, and biases every class mean up): the noise enters smoothed over many orders, an order's
-    power and spread only where the history holds a line (KAPPA times the noise of its mean; at 4
-    the slow shafts' healthy z came out 0.3-0.6 high, at 8 within 0.15, development seeds); off the
-    lines the units' scatter over its noise model, pooled over neighbouring orders.
+    power and spread only where it is a line (KAPPA times the noise of its mean; at 4 the slow
+    shafts' healthy z came out 0.3-0.6 high, at 8 within 0.15, development seeds), read from the
+    take and the history pooled (_null_var); off the lines the units' scatter over its noise model,
+    pooled over neighbouring orders.
     *evidence*: the orders read as evidence (not the mesh harmonics), whose lines give the common
     relative spread."""
     if len(units) < 2:
@@ -121,17 +122,38 @@ def spread(units: list[Content], evidence: np.ndarray | None = None) -> Spread:
     return Spread(mean, line, between, noise, len(units), excess, float(np.mean([u.periods for u in units])))
 
 
-def _null_var(rec: Content, ref: Spread, gain: float | np.ndarray = 1.0) -> np.ndarray:
-    """Variance of Δ = S − *gain* S_h under the history (see spread: nothing in it follows one order's own
-    noisy estimate, the record's noise included); off the lines times the units' pooled excess scatter.
-    The history's terms scale with the gain: a line's relative spread and the history mean's noise alike."""
-    lines = np.where(ref.line, ref.power, 0.0)
-    model = _estimate_var(gain * lines, _smooth(rec.noise, rec.source), rec.blocks) + gain**2 * (
-        ref.between * (1 + 1 / ref.units) + _estimate_var(lines, ref.unit_noise) / ref.units
-    )
-    if ref.excess.size != model.size:  # a history saved before the pooled scatter was kept
-        return model
-    return np.where(ref.line, model, model * np.maximum(ref.excess, 1.0))
+def _null_var(rec: Content, ref: Spread, evidence: np.ndarray, gain: float | np.ndarray = 1.0) -> np.ndarray:
+    """Variance of Δ = S − *gain* S_h under the history, off the lines times the units' pooled excess scatter. Its
+    powers, and what is a line, are read from the take (brought to the history's level by the gain) and the history
+    pooled, B blocks and U units: for Gaussian powers X of B blocks and Y of U units, X − Y and B X + U Y are
+    uncorrelated, so neither a weight nor the line decision follows Δ's sign. Read from the history alone, an order
+    whose units happened to come out low was given a small variance, or left off the lines, where its Δ came out high
+    (lines 10 noise powers over zero read z +0.054 on average; the 21/63 + 24/56 reducer's healthy input shaft
+    0.61, healthy takes flagged 18 of 320, development seeds 48-49; pooled: 0.00, 0.20 and 6 of 320). A line's
+    spread is the history's common relative spread (the median over its lines read as *evidence*, not the mesh
+    harmonics) times the pooled power squared. The history's terms scale with the gain."""
+    B, U = rec.blocks, ref.units
+    noise = _smooth(rec.noise, rec.source)
+
+    def model(lines: np.ndarray, between: np.ndarray, line: np.ndarray) -> np.ndarray:
+        var = _estimate_var(gain * lines, noise, B) + gain**2 * (
+            between * (1 + 1 / U) + _estimate_var(lines, ref.unit_noise) / U
+        )
+        if ref.excess.size != var.size:  # a history saved before the pooled scatter was kept
+            return var
+        return np.where(line, var, var * np.maximum(ref.excess, 1.0))
+
+    # the take's share at most KAPPA sds (the history's alone) over the history's power, where a healthy take seldom
+    # reaches: pooled whole, a fault's own power set its spread (box B's 16T chip: its own-mesh sidebands read z 0.5,
+    # 7.1 from the history alone, 6.9 so)
+    alone = model(np.where(ref.line, ref.power, 0.0), ref.between, ref.line)
+    take = np.minimum(rec.power / gain, ref.power + KAPPA * np.sqrt(alone) / gain)
+    pooled = (B * take + U * ref.power) / (B + U)
+    line = pooled > KAPPA * ref.unit_noise / math.sqrt(B + U)
+    lines = np.where(line, np.maximum(pooled, 0.0), 0.0)
+    own = ref.line & evidence
+    relative = float(np.median(ref.between[own] / ref.power[own] ** 2)) if own.sum() >= 5 else 0.0
+    return model(lines, relative * lines**2, line)
 
 
 def level(rec: Content, ref: Spread, lay: Layout) -> float:
@@ -164,7 +186,7 @@ def order_z(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
     g = np.where(lines, gain, off)
     # a gain under the take's level never narrows the history's spread: a slower gear's fault reads a faster shaft's
     # lines low (0.19-0.24 of the history's, random trains of development seed 23), and narrowed, they named it
-    var = _null_var(rec, ref, np.maximum(g, r))
+    var = _null_var(rec, ref, ~lay.carrier, np.maximum(g, r))
     return (rec.power - g * ref.power) / np.sqrt(np.maximum(var, 1e-300))
 
 
