@@ -82,7 +82,7 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
         out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
     out["history"] = [p for p, _ in read]
     out["nonsync"] = nonsync_lines(revs, [t.revolutions for t in takes], table, speed.mean_hz, turns, takes)
-    out["call"] = call_of(out, out["nonsync"])
+    out["call"] = call_of(out, out["nonsync"], speed.mean_hz)
     return out
 
 
@@ -106,13 +106,15 @@ def nonsync_lines(revs, history: list, table, speed_hz: float, speeds=None, take
     return found.describe() | {"hz": found.order * speed_hz, "lines": lines}
 
 
-def call_of(loc: dict, ns: dict) -> str:
+def call_of(loc: dict, ns: dict, speed_hz: float | None = None) -> str:
     """What the record's change is, by the rule a detection run calls a flag with (its watched gear aside): the
-    gears (or shafts) the synchronous averages name (data.which_gear.flagged_shafts); else other damage where the
-    non-synchronous residual changed; else no change."""
+    gears (or shafts) the synchronous averages name (data.which_gear.flagged_shafts), with a non-synchronous line
+    beside them (nonsync.beside); else other damage where the non-synchronous residual changed; else no change."""
     if loc["named"]:  # every shaft whose change is its own, the named first (damage on two gears: both)
         shafts = W.flagged_shafts(loc) if loc.get("shafts") else [{"gear": loc["named"]}]
-        return "localised change: " + "; ".join(s["gear"] + weakly(s) for s in shafts)
+        bearing = NS.beside(ns, speed_hz)  # a bearing's line beside a gear's change: said too
+        also = f"; also other damage: {bearing}" if bearing else ""
+        return "localised change: " + "; ".join(s["gear"] + weakly(s) for s in shafts) + also
     if ns.get("changed"):
         return NS.call(ns["order"], ns.get("hz"), ns.get("locked", ""), ns.get("why", ""))
     if loc.get("summary", "").startswith("not localised: ") and "note" in ns:  # neither read: no call, not 'no change'

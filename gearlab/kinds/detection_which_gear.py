@@ -24,6 +24,8 @@ units then means:
                                                                        localised: no evidence of where)
     a watched gear's shaft and another shaft over their thresholds     a watched-gear fault; also
     (a pinion and its wheel both damaged)                              other damage: <that gear>
+    a gear named and a non-synchronous line at no shaft's order        ...; also other damage: non-
+    (signals.nonsync.beside: a bearing's beside a tooth's)             synchronous (bearing-like), ...
 
 The watched gears are those the source's fault classes sit on: both of a pinion-and-wheel class
 ("chip+chip@wheel"). A record with damage on a watched gear and on another is counted as both (the
@@ -106,6 +108,8 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None, speed_
         # mesh phases lean (which_template.EVEN_LEAD)
         on = T.callable_gears(ev)
         (mine if any(g in watched for g in on) else others).append(ev["gear"] + L.weakly(ev))
+    if bearing := NS.beside(nonsync, speed_hz):  # a bearing's strikes beside a gear's damage: both said
+        others.append(bearing)
     if mine:
         return f"{WATCHED}: {'; '.join(mine)}" + (ALSO + "; ".join(others) if others else "")
     return f"{OTHER}: {'; '.join(others)}"
