@@ -116,3 +116,40 @@ def test_a_wheel_chip_s_leak_at_a_whole_output_order_is_no_bearing(takes):
     assert ns["changed"] and ns["shaft"] == "output", ns
     assert abs(ns["order"] - round(ns["order"] * 103 / 38) * 38 / 103) < 0.5 / 16, ns
     assert got["call"] == "localised change: output gear 103T (stage 1)", got["call"]
+
+
+def test_a_daq_s_raw_binary_samples_are_refused_naming_the_side_header_and_the_npz_to_write(tmp_path, takes, cli):
+    # a DAQ's float32 .bin beside its .json header, and an int16 big-endian .dat beside a .txt: the .bin read
+    # "unknown file type '.bin'; supported: ...", the .dat "cannot read ... as text: 'utf-8' codec can't decode byte
+    # 0xff in position 0: invalid start byte", neither naming the header beside it nor a way to read the samples
+    from gearlab.errors import GearlabInputError
+    from gearlab.inspect import inspect_record
+
+    folder, box = takes
+    t, x, tacho = _take(1, seconds=1.0)
+    np.column_stack([x, tacho]).astype("<f4").tofile(tmp_path / "daq.bin")
+    (tmp_path / "daq.json").write_text('{"fs": 12800, "channels": ["acc", "tacho"]}')
+    np.round(np.column_stack([x, tacho]) / 0.01).astype(">i2").tofile(tmp_path / "daq2.dat")
+    (tmp_path / "daq2.txt").write_text("sample_rate=12800\nchannels=acc,tacho\nscale=0.01 per count\n")
+    for name, side in (("daq.bin", "daq.json"), ("daq2.dat", "daq2.txt")):
+        with pytest.raises(GearlabInputError) as err:
+            inspect_record(str(tmp_path / name), box, InspectOptions("acc", tacho="tacho"))
+        text = str(err.value)
+        assert "raw binary samples" in text and f"'{side}' beside it" in text and "\n" not in text, text
+        assert f"numpy.fromfile('{name}'" in text and "numpy.savez(" in text and "fs=RATE" in text, text
+    scenario = tmp_path / "gap.toml"
+    (tmp_path / "box.toml").write_text(BOX)
+    scenario.write_text(
+        '[scenario]\nname = "raw"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n'
+        '[target]\nvibration = "acc"\ntacho = "tacho"\n'
+        'files = [{ file = "daq2.dat", role = "history", label = "healthy" }]\n'
+        '[diagnosis]\ncandidates = ["sensor_noise"]\n[accuracy]\nenabled = false\n'
+    )
+    code, _, err = cli("validate", str(scenario))
+    line = err.strip().splitlines()[-1]
+    assert code == 2 and "[target] key 'file'" in line and "raw binary samples" in line, (code, err)
+    # the recipe the line gives reads: the samples with their rate
+    y = np.fromfile(tmp_path / "daq2.dat", dtype=">i2").reshape(-1, 2) * 0.01
+    np.savez(tmp_path / "daq2.npz", acc=y[:, 0], tacho=y[:, 1], fs=FS)
+    got = inspect_record(str(tmp_path / "daq2.npz"), box, InspectOptions("acc", tacho="tacho", unit="m/s^2"))
+    assert got["fs_hz"] == FS and got["speed"]["mean_hz"] == pytest.approx(29.0, rel=0.005), got["speed"]

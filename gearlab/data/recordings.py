@@ -53,6 +53,7 @@ from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or wi
 from ..signals import check_signal, first_complete
 from ..signals.checks import fmt_hz, revolution_speeds
 from ..signals.spikes import acquisition
+from . import raw_binary
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
@@ -154,6 +155,8 @@ def format_of(path: Path) -> str:
     check_measured_file(path)
     suffix = take_file(path).suffix
     fmt = FORMATS.get(suffix.lower())
+    if fmt in (None, "CSV", "text") and (raw := raw_binary.refusal(take_file(path), suffix.lower(), fmt is not None)):
+        raise GearlabInputError(raw)  # a DAQ's samples: how to write them as a file read with its rate
     if fmt is None:
         raise GearlabInputError(f"{path}: unknown file type '{suffix or '(no extension)'}'; supported: {supported()}")
     return fmt
