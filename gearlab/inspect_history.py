@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .data import which_gear as W
+from .data.channel_units import level_why
 from .data.recordings import prefixed, tacho_kind
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
@@ -83,6 +84,14 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     out["history"] = [p for p, _ in read]
     out["nonsync"] = nonsync_lines(revs, [t.revolutions for t in takes], table, speed.mean_hz, turns, takes)
     out["call"] = call_of(out, out["nonsync"], speed.mean_hz)
+    # a take at another load than its history's: its call said beside the level, as a run and score warn of it (a 38/103
+    # box's healthy take at 1.5 x its one-load history's mesh level read 'localised change: input pinion 38T', no more)
+    out["level"] = float(np.std(revs)) / float(np.median([np.std(t.revolutions) for t in takes]))
+    if why := level_why(out["level"]):
+        out["call"] += (
+            f"; the take's level {out['level']:.2g} x its history's ({why}): a history at that load "
+            "compares like with like"
+        )
     return out
 
 

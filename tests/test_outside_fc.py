@@ -24,9 +24,10 @@ def _ring(hz: float, decay: float, seconds: float) -> np.ndarray:
     return np.exp(-decay * k) * np.sin(2 * np.pi * hz * k)
 
 
-def _take(seed: int, seconds: float = 4.0, chip: float = 0.0, wheel: bool = False, bearing: float = 0.0):
+def _take(seed: int, seconds: float = 4.0, chip: float = 0.0, wheel: bool = False, bearing: float = 0.0, load=1.0):
     """(time s, m/s², tacho V) of the 38/103 box at 29 Hz; *chip*: a tooth's burst and ring once a turn of the pinion
-    (of the wheel, *wheel*); *bearing*: outer-race strikes at 3.62 input orders, each interval slipping 1 %."""
+    (of the wheel, *wheel*); *bearing*: outer-race strikes at 3.62 input orders, each interval slipping 1 %; *load*:
+    the mesh's lines' factor."""
     rng = np.random.default_rng(seed)
     n = int(seconds * FS)
     t = np.arange(n) / FS
@@ -36,7 +37,7 @@ def _take(seed: int, seconds: float = 4.0, chip: float = 0.0, wheel: bool = Fals
     am = 1 + 0.08 * np.cos(a_in + 0.2) + 0.06 * np.cos(a_out + 1.1)
     pm = 0.05 * np.sin(a_in + 0.4) + 0.04 * np.sin(a_out)
     for h, amp in ((1, 3.0), (2, 1.2), (3, 0.5)):
-        x += amp * am * np.cos(h * (Z[0] * a_in + pm) + 0.5 * h)
+        x += load * amp * am * np.cos(h * (Z[0] * a_in + pm) + 0.5 * h)
     if chip:
         a, z = (a_out, Z[1]) if wheel else (a_in, Z[0])
         at = np.mod(a - 2 * np.pi * 7 / z + np.pi, 2 * np.pi) - np.pi
@@ -65,6 +66,7 @@ def takes(tmp_path_factory):
         "chip_bearing": {"seed": 12, "chip": 1.0, "bearing": 2.5},
         "wheel_chip": {"seed": 30, "chip": 3.0, "wheel": True},
         "bearing": {"seed": 13, "bearing": 2.5},
+        "heavier": {"seed": 20, "load": 1.5},
     }
     for name, kw in made.items():
         t, x, tacho = _take(**kw)
@@ -153,3 +155,16 @@ def test_a_daq_s_raw_binary_samples_are_refused_naming_the_side_header_and_the_n
     np.savez(tmp_path / "daq2.npz", acc=y[:, 0], tacho=y[:, 1], fs=FS)
     got = inspect_record(str(tmp_path / "daq2.npz"), box, InspectOptions("acc", tacho="tacho", unit="m/s^2"))
     assert got["fs_hz"] == FS and got["speed"]["mean_hz"] == pytest.approx(29.0, rel=0.005), got["speed"]
+
+
+def test_a_take_at_another_load_than_its_history_s_says_its_level_beside_the_call(takes):
+    # a healthy take at 1.5 x the one-load history's mesh level: a run and score warn 'level 1.5 x its history's
+    # (another load or gain?)'; inspect --history said nothing of it, its call whatever the which-gear z gave
+    got = _inspected(takes, "heavier")
+    assert got["level"] == pytest.approx(1.5, rel=0.1), got["level"]
+    assert got["call"].endswith(
+        f"; the take's level {got['level']:.2g} x its history's (another load or gain?): a history at that load "
+        "compares like with like"
+    ), got["call"]
+    same = _inspected(takes, "bearing")  # within LEVEL_OFF of its history's: nothing said
+    assert "level" not in same["call"] and same["level"] == pytest.approx(1.0, abs=0.2), same

@@ -13,6 +13,26 @@ from ..errors import GearlabInputError, did_you_mean, shown
 from ..units import to_si
 
 STANDARD_GRAVITY = 9.80665  # m/s², the "g" of accelerometer units and sensitivities (ISO 80000-3)
+# a take whose level (rms) is more than this factor off its history's median is said to be (another load or gain): NA4
+# is a size, and called an outside lab's healthy 31/73 takes at 1.6 x the load in 50 % of their units
+LEVEL_OFF = 1.25
+# A level off by a unit's factor is that unit misread, before any load: a take in m/s² scored with a run's 'g'
+# keys read 9.5 x its history's, said only '(another load or gain?)'. Within UNIT_NEAR of the factor.
+UNIT_FACTORS = ((STANDARD_GRAVITY, "g and m/s²"), (1000.0, "V and mV"))
+UNIT_NEAR = 1.25
+
+
+def level_why(ratio: float) -> str:
+    """What a take's level *ratio* to its history's, over LEVEL_OFF off, may be ("another load or gain?", or a unit's
+    factor mixed up); "" within (a run's and score's warning, inspect --history's call)."""
+    if 1 / LEVEL_OFF <= ratio <= LEVEL_OFF:
+        return ""
+    units = [w for f, w in UNIT_FACTORS if abs(abs(math.log(ratio)) - math.log(f)) < math.log(UNIT_NEAR)]
+    return (
+        f"{units[0]} mixed up? check its values: line; or another load or gain?" if units else "another load or gain?"
+    )
+
+
 # A unit at the end of a channel's name, after a separator or in brackets: acc_V, "acc [mV]",
 # acc_ms2, "acc (m/s^2)", acc_g, acc_mg. Volts are case-sensitive (a 'v' ends many words).
 _VOLT_NAME = re.compile(r"(?:^|[_\s\-.(\[])([mµu]?V)[)\]]?$")

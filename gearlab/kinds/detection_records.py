@@ -14,7 +14,8 @@ from fractions import Fraction
 import numpy as np
 
 from ..data.chain import Chain
-from ..data.channel_units import TOO_LOUD, TOO_QUIET
+from ..data.channel_units import LEVEL_OFF as LEVEL_OFF  # inspect_takes' too
+from ..data.channel_units import TOO_LOUD, TOO_QUIET, level_why
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
@@ -38,9 +39,6 @@ HISTORY_STRIDES = 10
 MIN_HISTORY_UNITS = 8
 # Records without a 'condition' whose speeds lie within this fraction share a history.
 SPEED_GROUP = 0.05
-# a test record whose level (rms) is more than this factor off its condition's history's median is said to be (another
-# load or gain): NA4 is a size, and called an outside lab's healthy 31/73 takes at 1.6 x the load in 50 % of their units
-LEVEL_OFF = 1.25
 
 
 def level_warnings(cond: dict) -> list[str]:
@@ -71,18 +69,10 @@ def varies(how: str) -> str:
     return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how or UNSEEN_WORDS in how else ""
 
 
-# A level off by a unit's factor is that unit misread, before any load: a take in m/s² scored with a run's 'g'
-# keys read 9.5 x its history's, said only '(another load or gain?)'. Within UNIT_NEAR of the factor.
-UNIT_FACTORS = ((9.80665, "g and m/s²"), (1000.0, "V and mV"))
-UNIT_NEAR = 1.25
-
-
 def level_line(ratio: float) -> str:
     """A record's level *ratio* to its history's, in words where more than LEVEL_OFF off ("": within)."""
-    if 1 / LEVEL_OFF <= ratio <= LEVEL_OFF:
+    if not (why := level_why(ratio)):
         return ""
-    units = [w for f, w in UNIT_FACTORS if abs(abs(math.log(ratio)) - math.log(f)) < math.log(UNIT_NEAR)]
-    why = f"{units[0]} mixed up? check its values: line; or another load or gain?" if units else "another load or gain?"
     return (
         f"level {ratio:.2g} x its history's ({why}): NA4, a size, and the template methods (matched_filter, "
         "likelihood_ratio), which subtract the history's average, read it as a change; a history at that load, or its "
