@@ -168,3 +168,26 @@ def test_a_take_at_another_load_than_its_history_s_says_its_level_beside_the_cal
     ), got["call"]
     same = _inspected(takes, "bearing")  # within LEVEL_OFF of its history's: nothing said
     assert "level" not in same["call"] and same["level"] == pytest.approx(1.0, abs=0.2), same
+
+
+def test_the_verdict_s_which_gear_line_names_a_bearing_s_takes_and_the_one_beside_a_gear():
+    # the 38/103 run's verdict listed the outer race's take (z 24.1 over 4.5, 'other damage: non-synchronous
+    # (bearing-like), at order 3.62' in its table) among 'nothing localised' with the healthy takes, and said nothing
+    # of the bearing beside the chipped pinion's take
+    from gearlab.kinds.detection_verdict import which_gear_line
+
+    pinion, ns = "input pinion 38T (stage 1)", "non-synchronous (bearing-like), at order 3.62"
+    records = {
+        "rec/chip.csv": {"named": pinion, "call": f"watched-gear fault: {pinion}"},
+        "rec/chip_bearing.csv": {"named": pinion, "call": f"watched-gear fault: {pinion}; also other damage: {ns}"},
+        "rec/bearing.csv": {"named": None, "call": f"other damage: {ns}"},
+        "rec/healthy.csv": {"named": None, "call": "not flagged (no method's units over its threshold)"},
+    }
+    summary = {
+        "which_gear": {"watched": [pinion], "records": {f: r | {"condition": "29 Hz"} for f, r in records.items()}}
+    }
+    assert which_gear_line(summary, "29 Hz") == (
+        f"29 Hz, which gear each test take's change lies on: {pinion}, watched: 2 (chip.csv, chip_bearing.csv); "
+        "a non-synchronous (bearing-like) line: 1 (bearing.csv); nothing localised: 1 (healthy.csv); beside a gear's "
+        "change, a non-synchronous (bearing-like) line: 1 (chip_bearing.csv)."
+    )
