@@ -10,9 +10,10 @@ import json
 import statistics
 import sys
 
+from .data.channel_units import LEVEL_OFF
 from .data.takes import take_paths
 from .errors import GearlabInputError
-from .kinds.detection_records import LEVEL_OFF, SPEED_GROUP
+from .kinds.detection_records import SPEED_GROUP
 from .notebook import inspect_recording
 from .signals.checks import fmt_hz
 

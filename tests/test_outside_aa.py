@@ -175,7 +175,7 @@ def test_an_npz_s_unit_entry_is_read(cli, tmp_path):
 def test_a_level_off_by_a_unit_s_factor_says_units():
     # a next-week take saved in m/s² (a .mat), scored with the run's [target] unit 'g': before, 'level 9.5 x its
     # history's (another load or gain?)', the unit mix-up unsaid
-    from gearlab.kinds.detection_records import level_line
+    from gearlab.kinds.detection_level import level_line
 
     assert level_line(9.5).startswith("level 9.5 x its history's (g and m/s² mixed up? check its values: line;")
     assert "g and m/s² mixed up?" in level_line(1 / 9.9)

@@ -158,7 +158,7 @@ def test_a_take_3_db_under_its_history_names_the_template_methods_that_call_it_a
     # a 34/87 + 26/61 + 38/91 box's healthy takes after the sensor was re-mounted, 3 dB lower: gearlab score's
     # matched_filter called both 'fault' at record30 (2/2 units, median over threshold +0.006 and +0.003; which gear:
     # nothing) while the line said 'NA4, a size, reads it as a change' (NA4 stayed healthy) and gave no remedy
-    from gearlab.kinds.detection_records import level_line
+    from gearlab.kinds.detection_level import level_line
 
     line = level_line(10 ** (-3 / 20))
     assert line.startswith("level 0.71 x its history's (another load or gain?)"), line

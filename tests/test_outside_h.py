@@ -142,7 +142,7 @@ def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
     # record30 units, and nothing said why; the run now says each such take's level against its history's
     from types import SimpleNamespace
 
-    from gearlab.kinds.detection_records import level_warnings
+    from gearlab.kinds.detection_level import level_warnings
 
     rng = np.random.default_rng(5)
 
@@ -164,7 +164,7 @@ def test_a_test_take_at_another_load_is_said_so_beside_na4(tmp_path):
     (said,) = level_warnings(cond)
     assert said.startswith("the history's levels span 0.99 .. 1.5 x their median (two loads or gains?): NA4"), said
     # gearlab score said nothing either (NA4: 'fault' on the healthy take): its row holds the line, printed per file
-    from gearlab.kinds.detection_records import level_line
+    from gearlab.kinds.detection_level import level_line
     from gearlab.terminal import score_tables
 
     row = {"file": "load2.csv", "speed_hz": 20.0, "speed_from": "tacho", "condition": "20 Hz", "rule": "records"}

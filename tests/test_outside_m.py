@@ -13,7 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 from gearboxes import description, stage
 
-from gearlab.kinds.detection_records import level_warnings
+from gearlab.kinds.detection_level import level_warnings
 from gearlab.kinds.detection_verdict import detection_lines
 
 

@@ -62,3 +62,40 @@ def test_an_uncalled_take_or_one_at_the_history_s_level_is_told_nothing(cli, mad
     rows = _scored(cli, made, monkeypatch, called=True, take=2)  # called, its level the history's
     assert any(r["decision"] == "fault" for r in rows)
     assert "level" not in rows[0]["level"], rows[0]["level"]
+
+
+def test_the_run_says_a_called_take_s_level_as_score_does(made, tmp_path):
+    """The detection run's own warnings by score's rule (detection_level.called_levels): its tables said a take's
+    level from LEVEL_OFF alone. The tiny run keeps each test take's level over its history's and the history's own
+    spread; its healthy test take, had it been at 0.9 x and called by every method, no gear named, is told so in
+    summary.json and table.md; at its own level or uncalled, not."""
+    from gearlab.engine import load_scenario
+    from gearlab.kinds.detection_tables import summarise
+    from gearlab.runs import RunDir
+
+    out, _, _ = made
+    kept = json.loads((out / "conditions.json").read_text())
+    (cond,) = kept.values()
+    take = next(p for p in cond["test"] if p.endswith("h3.zip"))  # healthy: no gear named
+    assert set(cond["level_ratio"]) == set(cond["test"]) and 0 <= cond["level_spread"] < 0.2, cond
+    assert 0.8 < cond["level_ratio"][take] < 1.25  # within LEVEL_OFF, as its records were made
+    said = f"warning: {take}: level 0.9 x its history's, its own takes within"
+
+    def summarised(ratio: float, called: bool) -> list[str]:
+        mine = shutil.copytree(out, tmp_path / f"{ratio}-{called}")
+        (cond,) = (c := json.loads((mine / "conditions.json").read_text())).values()
+        cond["level_ratio"][take] = ratio
+        (mine / "conditions.json").write_text(json.dumps(c))
+        records = [json.loads(line) for line in (mine / "results.jsonl").read_text().splitlines()]
+        for r in records:  # every method's thresholds under (called) or over the take's scores
+            for u, s in r["test_scores"][take].items():
+                r["thresholds"][u] = float(np.min(s) - 1.0 if called else np.max(s) + 1.0)
+        (mine / "results.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+        summarise(load_scenario(out.parents[2] / "scenarios" / "det.toml"), RunDir.open(mine))
+        warned = json.loads((mine / "summary.json").read_text())["warnings"]
+        assert all(w in (mine / "table.md").read_text() for w in warned)
+        return warned
+
+    assert any(w.startswith(said) and "no gear named" in w for w in summarised(0.9, called=True))
+    assert not any(take in w and "level" in w for w in summarised(0.9, called=False))
+    assert not any(take in w and "level" in w for w in summarised(1.0, called=True))

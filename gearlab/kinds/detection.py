@@ -648,6 +648,9 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
                     # how each record's speed (and shaft angle) was found: tacho, declared, mesh orders
                     "speed_from": v["speed_from"],
                     "warnings": v.get("warnings", []),  # a take off its history's level (level_warnings)
+                    # each test take's level over its history's, the history's own spread (called_levels)
+                    "level_ratio": v["level_ratio"],
+                    "level_spread": v["level_spread"],
                     # each record's turn into register with the history: in tacho marks, or without a
                     # tacho in samples of the revolution (correlation; read_target)
                     "start_marks": v["shifts"],

@@ -14,8 +14,7 @@ from fractions import Fraction
 import numpy as np
 
 from ..data.chain import Chain
-from ..data.channel_units import LEVEL_OFF as LEVEL_OFF  # inspect_takes' too
-from ..data.channel_units import TOO_LOUD, TOO_QUIET, level_why
+from ..data.channel_units import TOO_LOUD, TOO_QUIET
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
@@ -31,6 +30,7 @@ from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .detection_in_band import cut_run_ups, span, steady_histories, too_narrow
+from .detection_level import level_warnings, run_levels
 from .detection_settings import Classical
 
 # Sliding TSA windows of the history: a new window every block/HISTORY_STRIDES revolutions.
@@ -41,43 +41,10 @@ MIN_HISTORY_UNITS = 8
 SPEED_GROUP = 0.05
 
 
-def level_warnings(cond: dict) -> list[str]:
-    """A line (level_line) for each test record of *cond* (its "history" and "test": (file, revolutions in m/s²))
-    whose standard deviation is more than LEVEL_OFF off the median of its history records' (another load, a gain
-    left out)."""
-    std = {f.path: float(np.std(r)) for f, r in cond["history"] + cond["test"]}
-    typical = float(np.median([std[f.path] for f, _ in cond["history"]]))
-    lines = {f.path: level_line(std[f.path] / typical if typical > 0 else 1.0) for f, _ in cond["test"]}
-    said = [f"{path}: {line}" for path, line in lines.items() if line]
-    # the history's own records at two loads: NA4's record-level threshold spans them (the 25/52 + 16/81 box's
-    # history at 1 and 1.5 x: 259, its 16T chip's takes at 20-100 uncalled)
-    low, high = (
-        min(std[f.path] for f, _ in cond["history"]) / typical,
-        max(std[f.path] for f, _ in cond["history"]) / typical,
-    )
-    if typical > 0 and high / low > LEVEL_OFF:
-        said.append(
-            f"the history's levels span {low:.2g} .. {high:.2g} x their median (two loads or gains?): NA4, a size, "
-            "sets its threshold over them; a condition per load (condition = ...) compares like with like"
-        )
-    return said
-
-
 def varies(how: str) -> str:
     """Of a record's speed source *how* (cut_recording's angle_source), its run-up words: ' (20.26 Hz .. 34.86 Hz
     over the take: a run-up or coast-down? ...)', else ""."""
     return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how or UNSEEN_WORDS in how else ""
-
-
-def level_line(ratio: float) -> str:
-    """A record's level *ratio* to its history's, in words where more than LEVEL_OFF off ("": within)."""
-    if not (why := level_why(ratio)):
-        return ""
-    return (
-        f"level {ratio:.2g} x its history's ({why}): NA4, a size, and the template methods (matched_filter, "
-        "likelihood_ratio), which subtract the history's average, read it as a change; a history at that load, or its "
-        "own condition (condition = ...), compares like with like (a sensor re-mounted: record a new history)"
-    )
 
 
 @dataclass(frozen=True)
@@ -410,6 +377,7 @@ def read_target(
         ]
         # and each take's millivolts read as volts, or volts as millivolts (channel_units.level_hint)
         cond["warnings"] += level_warnings(cond)
+        cond["level_ratio"], cond["level_spread"] = run_levels(cond)  # the level said of a called take
         taken = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
         cond["warnings"] += [f"{p}: {u.split('; ')[-1]}" for p, u in taken if TOO_LOUD in u or TOO_QUIET in u]
         cond["warnings"] += [f"{p}: {w}" for p, _ in taken for w in records[p].warnings]  # clipped, a dropout, a drift

@@ -43,6 +43,7 @@ from .detection_fit import (
 )
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
+from .detection_level import called_level, level_line, level_spread, most_called
 from .detection_own import (
     asked_off,
     by_level,
@@ -57,7 +58,6 @@ from .detection_records import (
     aligned,
     asynchronous_orders,
     learned_input,
-    level_line,
     longest_tsa,
     synchronous_input,
     unit_revolutions,
@@ -276,7 +276,6 @@ def _scoring_condition(
     test = [(f, aligned(reference, standardiser.apply(revs), tacho, at[f.path], continuous)[1]) for f, revs in records]
     blocks = meta["blocks"]
     per_record = [unit_sets(r, blocks, True) for _, r in history]
-    levels = np.array([float(np.std(r)) for _, r in history])
     return {
         "history": history,
         "test": test,
@@ -302,23 +301,8 @@ def _scoring_condition(
         # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
         # their scale not the standardiser's): a take further off, called with no gear named, is told its level
         # whatever LEVEL_OFF says (called_level)
-        "level_spread": float(np.max(np.abs(np.log(levels / np.median(levels))))),
+        "level_spread": level_spread([float(np.std(r)) for _, r in history]),
     }
-
-
-def called_level(rows: list[dict], ratio: float, spread: float) -> str:
-    """Of a take's *rows*, called a fault with no gear named and its level *ratio* to its history's further off than
-    the history's own takes lie (*spread*, their largest |log|), its level in words, where level_line says nothing
-    (within LEVEL_OFF): a sensor's mount loosening -0.1 dB a day was called by the template methods from 0.83 x, its
-    level said from 0.8 x only. "" otherwise."""
-    called = any(r["decision"] == "fault" or is_undetermined(r["decision"]) for r in rows)
-    if not called or rows[0]["localised"] or level_line(ratio) or abs(math.log(ratio)) <= spread:
-        return ""
-    return (
-        f"level {ratio:.2g} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no gear "
-        "named, the call may be the level's change (a sensor's mount or gain, another load?): NA4 and the template "
-        "methods (matched_filter, likelihood_ratio), which subtract the history's average, read a level as a change"
-    )
 
 
 def _same_input(run: RunDir, meta: dict) -> None:
@@ -626,7 +610,7 @@ def score(
                     s = np.asarray(s, dtype=np.float64)
                     called = int(np.sum(s > thresholds[u]))
                     where = localised.get(f.path, {})
-                    decision = decision_of(bool(s.size) and called > s.size / 2, where.get("call"))
+                    decision = decision_of(most_called(s, thresholds[u]), where.get("call"))
                     if not s.size:  # a take (a run-up's part: _units_of_part) too short for this unit: no 0/0 healthy
                         decision = "not scored"
                     rows.append(
@@ -663,7 +647,8 @@ def score(
                     )
         for f, _ in records:  # the level said where the call may be its change, whichever method's threshold
             mine = [r for r in rows if r["file"] == f.path]
-            said = called_level(mine, cond["level_ratio"][f.path], cond["level_spread"])
+            called = any(r["decision"] == "fault" or is_undetermined(r["decision"]) for r in mine)
+            said = called_level(called, mine[0]["localised"], cond["level_ratio"][f.path], cond["level_spread"])
             for r in mine if said else ():
                 r["level"] = "; ".join(w for w in (said, r["level"]) if w)
     # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend

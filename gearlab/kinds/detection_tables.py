@@ -16,6 +16,7 @@ from ..parts.roc import auc
 from ..runs import RunDir
 from ..scenario import Scenario
 from .contract import VERDICT
+from .detection_level import called_levels
 from .detection_records import longest_tsa
 from .detection_units import method_name
 from .detection_verdict import detection_lines, watched_calls
@@ -150,6 +151,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     # what the run warned of as it read the records (a take at another load than its history: NA4 reads the size
     # as a change), where the tables are read later: the run's log alone said it
     summary["warnings"] = [f"warning: {line}" for v in (conditions or {}).values() for line in v.get("warnings", [])]
+    # a take called with no gear named, off its history's level further than the history's own takes are (as gearlab
+    # score says it)
+    loc = run.read_json("localisation.json")
+    summary["warnings"] += [f"warning: {line}" for line in called_levels(conditions or {}, records, loc)]
     summary["warnings"] += [f"warning: {line}" for line in unchanged_by_correction(records)]
     run.write_json("summary.json", summary)
     which = summary["which_gear"].get("md", "")

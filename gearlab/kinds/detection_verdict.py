@@ -41,7 +41,7 @@ def _said(row: Mapping) -> str:
 
 def _spread(summary: Mapping, condition: str) -> str:
     """What the run found of its history's threshold in *condition*: its warning that the history's own takes lie at
-    several levels (detection_records.level_warnings: two loads or gains), as '; the run found why: FACT, ADVICE',
+    several levels (detection_level.level_warnings: two loads or gains), as '; the run found why: FACT, ADVICE',
     else ""."""
     said = ((summary.get("conditions") or {}).get(condition) or {}).get("warnings") or []
     spread = next((w for w in said if w.startswith("the history's levels span")), None)

@@ -1,0 +1,102 @@
+"""A take's level against its history's (gearlab.kinds.detection), by one rule wherever it is said: in a detection
+run's warnings (level_warnings as it reads its takes, called_levels once its methods have called them) and in
+`gearlab score`'s rows (level_line, called_level)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..data.channel_units import LEVEL_OFF, level_why
+
+
+def level_warnings(cond: dict) -> list[str]:
+    """A line (level_line) for each test record of *cond* (its "history" and "test": (file, revolutions in m/s²))
+    whose standard deviation is more than LEVEL_OFF off the median of its history records' (another load, a gain
+    left out)."""
+    std = {f.path: float(np.std(r)) for f, r in cond["history"] + cond["test"]}
+    typical = float(np.median([std[f.path] for f, _ in cond["history"]]))
+    lines = {f.path: level_line(std[f.path] / typical if typical > 0 else 1.0) for f, _ in cond["test"]}
+    said = [f"{path}: {line}" for path, line in lines.items() if line]
+    # the history's own records at two loads: NA4's record-level threshold spans them (the 25/52 + 16/81 box's
+    # history at 1 and 1.5 x: 259, its 16T chip's takes at 20-100 uncalled)
+    low, high = (
+        min(std[f.path] for f, _ in cond["history"]) / typical,
+        max(std[f.path] for f, _ in cond["history"]) / typical,
+    )
+    if typical > 0 and high / low > LEVEL_OFF:
+        said.append(
+            f"the history's levels span {low:.2g} .. {high:.2g} x their median (two loads or gains?): NA4, a size, "
+            "sets its threshold over them; a condition per load (condition = ...) compares like with like"
+        )
+    return said
+
+
+def level_line(ratio: float) -> str:
+    """A record's level *ratio* to its history's, in words where more than LEVEL_OFF off ("": within)."""
+    if not (why := level_why(ratio)):
+        return ""
+    return (
+        f"level {ratio:.2g} x its history's ({why}): NA4, a size, and the template methods (matched_filter, "
+        "likelihood_ratio), which subtract the history's average, read it as a change; a history at that load, or its "
+        "own condition (condition = ...), compares like with like (a sensor re-mounted: record a new history)"
+    )
+
+
+def level_spread(levels) -> float:
+    """How far a history's own takes lie off their median level: the largest |log| of their *levels* (standard
+    deviations, in any one scale) over its median; 0 for a history without a level."""
+    levels = np.asarray(levels, dtype=np.float64)
+    typical = float(np.median(levels))
+    return float(np.max(np.abs(np.log(levels / typical)))) if typical > 0 and np.all(levels > 0) else 0.0
+
+
+def run_levels(cond: dict) -> tuple[dict[str, float], float]:
+    """Of a run's condition *cond* (its "history" and "test": (file, revolutions in m/s²)): each test take's level
+    over its history's median (as level_warnings reads it), and the history's level_spread: what called_levels
+    reads once the run's methods have called the takes (kept in conditions.json)."""
+    history = [float(np.std(r)) for _, r in cond["history"]]
+    typical = float(np.median(history))
+    ratios = {f.path: float(np.std(r)) / typical if typical > 0 else 1.0 for f, r in cond["test"]}
+    return ratios, level_spread(history)
+
+
+def most_called(scores, threshold: float) -> bool:
+    """Over half a take's unit *scores* of a kind over their *threshold* (a tie, 1 of 2: not): the take called by
+    that method and unit, in `gearlab score`'s rows as in the run's level words."""
+    s = np.asarray(scores, dtype=np.float64)
+    return bool(s.size) and int(np.sum(s > threshold)) > s.size / 2
+
+
+def called_level(called: bool, named, ratio: float, spread: float) -> str:
+    """Of a take *called* a fault, *named* no gear (its localisation's named gears: none) and its level *ratio* to
+    its history's further off than the history's own takes lie (*spread*, their largest |log|), its level in words,
+    where level_line says nothing (within LEVEL_OFF): a sensor's mount loosening -0.1 dB a day was called by the
+    template methods from 0.83 x, its level said from 0.8 x only. "" otherwise."""
+    if not called or named or level_line(ratio) or abs(math.log(ratio)) <= spread:
+        return ""
+    return (
+        f"level {ratio:.2g} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no gear "
+        "named, the call may be the level's change (a sensor's mount or gain, another load?): NA4 and the template "
+        "methods (matched_filter, likelihood_ratio), which subtract the history's average, read a level as a change"
+    )
+
+
+def called_levels(conditions: dict, records: list[dict], loc: dict | None) -> list[str]:
+    """A detection run's called_level lines ('path: words'): per test take of *conditions* (conditions.json, its
+    "level_ratio" and "level_spread"), called where a method's units of a kind are most over its threshold
+    (most_called; *records*: the run's method records) and localised on no gear (*loc*: localisation.json)."""
+    out = []
+    found = (loc or {}).get("records") or {}
+    for name, c in conditions.items():
+        for path, ratio in (c.get("level_ratio") or {}).items():  # none kept by a run from before they were
+            called = any(
+                most_called(s, r["thresholds"][u])
+                for r in records
+                if r["condition"] == name and path in r["test_scores"]
+                for u, s in r["test_scores"][path].items()
+            )
+            if said := called_level(called, found.get(path, {}).get("named"), ratio, c["level_spread"]):
+                out.append(f"{path}: {said}")
+    return out
