@@ -24,7 +24,7 @@ from ..parts.measured import ROLES, Target, TargetFile, aligned
 from ..scenario import location
 from ..signals import Standardiser
 from ..signals.angle import continued
-from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS, turned_line
+from ..signals.checks import UNSEEN_WORDS, VARIES_WORDS, read_off_mark, turned_line
 from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
@@ -427,6 +427,8 @@ def read_target(
         # turned off its marks too (a box running the other way)
         flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := turned_line(r, reference, tacho is None))]
         cond["warnings"] += flipped
+        # read off its marks, not reversed: its tooth counted as the history counts it (detection_which_gear)
+        cond["turned"] = {f.path for f, r in cond["test"] if read_off_mark(r, reference, tacho is None)}
         for line in flipped:
             on_event(Event("log", message=f"warning: {line}"))
         _units(cond)

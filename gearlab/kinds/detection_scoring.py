@@ -27,7 +27,7 @@ from ..runs import RunDir, input_digest
 from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
-from ..signals.checks import VARIES_WORDS, off_mark_line, polarity_line, turned_line
+from ..signals.checks import VARIES_WORDS, read_off_mark, turned_line
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -294,9 +294,7 @@ def _scoring_condition(
             for (f, r), (_, t) in zip(records, test)
         },
         # read off its tacho's marks, not reversed (the box running the other way?): its tooth, turned_tooth's
-        "turned": {
-            f.path for f, t in test if tacho and off_mark_line(t, reference) and not polarity_line(t, reference)
-        },
+        "turned": {f.path for f, t in test if read_off_mark(t, reference, not tacho)},
         "level_ratio": {f.path: float(np.std(r)) / standardiser.std for f, r in records},
         # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
         # their scale not the standardiser's): a take further off, called with no gear named, is told its level

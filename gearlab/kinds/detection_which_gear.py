@@ -245,6 +245,7 @@ def localise_target(
         for f, _ in cond["test"]:
             take = takes[f.path]
             found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
+            found["turned"] = f.path in cond.get("turned", ())  # read off its tacho's mark: its tooth, turned_tooth's
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             call = call_of(found, watched, ns, take.speed_hz)
             out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call}

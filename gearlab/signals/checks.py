@@ -224,3 +224,10 @@ def turned_line(revs: np.ndarray, reference: np.ndarray, any_turn: bool = False)
     """What a take's revolutions *revs* say against its history's *reference* revolution: polarity_line's words, else
     (aligned by its tacho's marks: not *any_turn*) off_mark_line's; "" for neither."""
     return polarity_line(revs, reference, any_turn) or ("" if any_turn else off_mark_line(revs, reference))
+
+
+def read_off_mark(revs: np.ndarray, reference: np.ndarray, any_turn: bool = False) -> bool:
+    """Whether turned_line's words for a take are off_mark_line's (read off its tacho's marks, not reversed: the box
+    running the other way?): its tooth is counted as its history counts it, mirrored (detection_which_gear's
+    turned_tooth), in a detection run's which-gear table as in `gearlab score`."""
+    return not any_turn and bool(off_mark_line(revs, reference)) and not polarity_line(revs, reference)
