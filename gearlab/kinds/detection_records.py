@@ -427,8 +427,9 @@ def read_target(
         # turned off its marks too (a box running the other way)
         flipped = [f"{f.path}: {w}" for f, r in cond["test"] if (w := turned_line(r, reference, tacho is None))]
         cond["warnings"] += flipped
-        # read off its marks, not reversed: its tooth counted as the history counts it (detection_which_gear)
-        cond["turned"] = {f.path for f, r in cond["test"] if read_off_mark(r, reference, tacho is None)}
+        # read off its marks, not reversed: its tooth counted as the history counts it (detection_which_gear), at so
+        # many marks a turn
+        cond["turned"] = {f.path: target.marks for f, r in cond["test"] if read_off_mark(r, reference, tacho is None)}
         for line in flipped:
             on_event(Event("log", message=f"warning: {line}"))
         _units(cond)

@@ -293,8 +293,9 @@ def _scoring_condition(
             )
             for (f, r), (_, t) in zip(records, test)
         },
-        # read off its tacho's marks, not reversed (the box running the other way?): its tooth, turned_tooth's
-        "turned": {f.path for f, t in test if read_off_mark(t, reference, not tacho)},
+        # read off its tacho's marks, not reversed (the box running the other way?): its tooth, turned_tooth's, at so
+        # many marks a turn
+        "turned": {f.path: at[f.path] for f, t in test if read_off_mark(t, reference, not tacho)},
         "level_ratio": {f.path: float(np.std(r)) / standardiser.std for f, r in records},
         # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
         # their scale not the standardiser's): a take further off, called with no gear named, is told its level
@@ -577,7 +578,7 @@ def score(
         first, why = next(iter(skipped.items()))
         raise GearlabInputError(f"none of the {len(files)} takes scored ({', '.join(skipped)}); {first}: {why}")
     conds = {name: _scoring_condition(run, meta, name, records, marks) for name, records in cut.items()}
-    turned = set().union(*(c["turned"] for c in conds.values()))  # read off their marks: the tooth counted so
+    turned = {p: m for c in conds.values() for p, m in c["turned"].items()}  # read off their marks: the tooth so
     localised = localise_scored(run, raw, turned)  # which gear each record's change is on (detection_which_gear)
     localised.update({p: not_read(w) for p, w in far.items() if w and described is not None})  # far off: not read
     stale = stale_calls(run, localised)  # a take of the run's own, its table decided by an older rule

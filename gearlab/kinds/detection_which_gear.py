@@ -245,7 +245,7 @@ def localise_target(
         for f, _ in cond["test"]:
             take = takes[f.path]
             found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
-            found["turned"] = f.path in cond.get("turned", ())  # read off its tacho's mark: its tooth, turned_tooth's
+            found["turned"] = cond.get("turned", {}).get(f.path, 0)  # read off its tacho's mark: turned_tooth
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             call = call_of(found, watched, ns, take.speed_hz)
             out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call}
@@ -304,12 +304,12 @@ def _take(cond: dict, path: str) -> W.Take:
     return W.Take(revs, int(first), cond.get("speeds", {}).get(path), cond.get("fs", {}).get(path), speeds)
 
 
-def localise_scored(run, records: dict[str, list], turned=frozenset()) -> dict[str, dict]:
+def localise_scored(run, records: dict[str, list], turned: dict[str, int] | None = None) -> dict[str, dict]:
     """{path: {"named", "summary", "nonsync", "call", "evidence"}} of new records ({condition: [(path,
     data.which_gear.Take)]}) localised with the run's stored histories (store_localisation) and the
     description's simulated events at each record's speed, as the run localised its own
-    (data.which_gear.which_gear); {} for a run without them. *turned*: the paths read off their tacho's mark
-    (their tooth: turned_tooth)."""
+    (data.which_gear.which_gear); {} for a run without them. *turned*: {path: its tacho's marks a turn} of the
+    takes read off their tacho's mark (their tooth: turned_tooth)."""
     from ..gearbox import order_table
     from ..parts import scoring
 
@@ -329,7 +329,7 @@ def localise_scored(run, records: dict[str, list], turned=frozenset()) -> dict[s
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:
-            found = W.which_gear(take, hist, table, made) | {"turned": path in turned}
+            found = W.which_gear(take, hist, table, made) | {"turned": (turned or {}).get(path, 0)}
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             out[path] = {
                 "named": W.named_gears(found),  # damage on two shafts: both, as the run's table names them
@@ -382,17 +382,26 @@ def _tooth(found: dict) -> str:
         return "–"
     ev = next(s for s in found["shafts"] if s["shaft"] == found["named_shaft"])
     on = [ev["which"]] if ev.get("which") else ev["gears"]
-    words = turned_tooth if found.get("turned") else L.tooth_words
-    return " / ".join(words(ev["tooth"][g]) for g in on if g in ev["tooth"]) or "–"
+    marks = found.get("turned")  # read off its tacho's mark, of so many marks a turn: turned_tooth
+    teeth = [ev["tooth"][g] for g in on if g in ev["tooth"]]
+    words = [turned_tooth(t, marks) if marks else L.tooth_words(t) for t in teeth]
+    return " / ".join(words) or "–"
 
 
-def turned_tooth(t: dict) -> str:
+def turned_tooth(t: dict, marks: int = 1) -> str:
     """The tooth *t* of a take read off its tacho's mark (signals.checks.off_mark_line: the box running the other
     way?), where fixed to the mark: its teeth pass the mark the other way, so the count from it is the tooth's mirror,
     z - pitches, as its history counts (within a tooth: the tacho triggers on the mark's other edge); the count the way
-    the take turns beside it. A 16/37 + 28/71 box's input pinion chipped 0.37 turn on: '11 of 16' read alone."""
+    the take turns beside it. A 16/37 + 28/71 box's input pinion chipped 0.37 turn on: '11 of 16' read alone. With
+    *marks* > 1 a turn the take is turned to whichever mark its average matches best, so the mirror is about no known
+    point: the tiny test box's chip (2 of 25 forward, 10 marks a turn) read '19 of 25' so; the count as it turns."""
     if not t.get("mark"):
         return L.tooth_words(t)
+    if marks > 1:
+        return (
+            f"{t['tooth']} of {t['of']} counted the way this take turns (read off its tacho's mark: which of its "
+            f"{marks} marks a turn its history counts from is not known)"
+        )
     mirrored = int(math.floor(t["of"] - t["pitches"])) % t["of"] + 1
     return (
         f"{mirrored} of {t['of']} if the box runs the other way (counted from the tacho's mark as its history turns, "
