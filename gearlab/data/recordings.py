@@ -59,7 +59,7 @@ from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
 from .channel_units import level_hint as level_hint
 from .channel_units import name_unit as name_unit  # what a channel's name says of its unit
-from .readers import READERS, Contents, check_size
+from .readers import Contents, check_size, parsed
 from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix_column, not_time
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
@@ -173,7 +173,7 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
     if take is not None and take[1] not in read:
         read.append(take[1])
     try:
-        contents = READERS[fmt](file, read)
+        contents = parsed(fmt, file, read)
     except GearlabInputError:
         raise
     except MemoryError:
