@@ -54,3 +54,17 @@ def dataset_examples(dataset, tooth: int = 5, per_class: int = 3) -> list[tuple[
             label = "healthy" if c == 0 else (f"{name} step {step}" if per_class == 1 else f"step {step}")
             out.append((c, label, row))
     return out
+
+
+def envelope(x: np.ndarray, y: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """A line of many points (*x* increasing) cut to at most 4 a column of *columns* equal spans of x: each
+    span's first, lowest, highest and last point, in order. A terminal chart of `columns` dots across draws the
+    same line (every peak and dip, each span joined to the next) from a few hundred points: an order spectrum's
+    4,000-8,000 took plotext 80-90 ms, and every n-th point alone left out a line one bin wide."""
+    if x.size <= 4 * columns:
+        return x, y
+    starts = np.searchsorted(x, np.linspace(x[0], x[-1], columns + 1)[:-1])
+    ends = np.r_[starts[1:], x.size]
+    keep = [np.unique([a, a + np.argmin(y[a:b]), a + np.argmax(y[a:b]), b - 1]) for a, b in zip(starts, ends) if b > a]
+    kept = np.concatenate(keep)
+    return x[kept], y[kept]

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .charts import envelope
 from .data.recordings import (
     Recording,
     angle_tacho,
@@ -727,8 +728,7 @@ def render(report: dict, console, width: int = 100) -> None:
         strongest = max((line["order"] for line in report["lines"][:5]), default=0.0)
         top = min(top, max(3.3 * max(marks), 1.1 * strongest))
     keep = (orders > 0) & (orders <= top)
-    step = max(1, int(keep.sum() // 4000))
-    x, y = orders[keep][::step], 20 * np.log10(np.maximum(amp[keep][::step], 1e-12))
+    x, y = envelope(orders[keep], 20 * np.log10(np.maximum(amp[keep], 1e-12)), 2 * width)  # braille: 2 dots a cell
     plotext.clf()
     plotext.plotsize(width, 18)
     plotext.theme("pro")
