@@ -64,5 +64,13 @@ def test_a_detection_runs_headline_is_its_first_finding_not_the_verdicts_introdu
         "At record10 (detected / false alarms % at the history's threshold, ...; goal: AUC >= 0.95):",
         "16 Hz: goal met by fm4, na4; best learned source_only (AUC 0.39, 0 / 0 %), behind the best classical fm4.",
     ]
-    monkeypatch.setattr(gearlab.verdict, "verdict_lines", lambda run: said)
-    assert headline(None, "detection").startswith("16 Hz: goal met by fm4, na4; best learned source_only")
+    # the verdict opens with a line per take (detection_summary); the run's headline is its methods' first finding
+    take = "take f1.zip: damage on the input pinion 25T (stage 1): z = 119.85 (threshold 2.58), tooth 2 of 25"
+    monkeypatch.setattr(gearlab.verdict, "verdict_lines", lambda run: [take, *said])
+    monkeypatch.setattr("gearlab.kinds.detection_verdict.detection_lines", lambda summary, unit: said)
+
+    class Run:
+        def read_json(self, name):
+            return {"rows": [{"unit": "record10"}]}
+
+    assert headline(Run(), "detection").startswith("16 Hz: goal met by fm4, na4; best learned source_only")

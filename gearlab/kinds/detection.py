@@ -702,10 +702,27 @@ def charts(scenario: Scenario, run: RunDir) -> list:
 
 
 def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
-    """Per condition, the rows meeting the goal and what the learned rows learned (kinds.detection_verdict)."""
-    from .detection_verdict import detection_lines  # read only for a verdict
+    """Per test take, what is wrong, where, how sure and what to do, and why the table's false alarms differ from
+    the verdict's (kinds.detection_summary); then per condition, the rows meeting the goal and what the learned rows
+    learned (kinds.detection_verdict)."""
+    from .detection_summary import false_alarms_line, take_lines  # read only for a verdict
+    from .detection_verdict import detection_lines
 
-    return detection_lines(summary, longest_tsa(r["unit"] for r in summary.get("rows") or []))
+    unit = longest_tsa(r["unit"] for r in summary.get("rows") or [])
+    if unit is None:
+        return []
+    reconciled = false_alarms_line(summary, unit)
+    return take_lines(summary, records, unit) + ([reconciled] if reconciled else []) + detection_lines(summary, unit)
+
+
+def headline(run) -> str:
+    """`gearlab runs`' headline: the run's first finding on its methods (detection_lines), not the summary's first
+    take (verdict_lines opens with a line per take: a listing of runs names runs)."""
+    from .detection_verdict import detection_lines
+
+    summary = run.read_json("summary.json") or {}
+    lines = detection_lines(summary, longest_tsa(r["unit"] for r in summary.get("rows") or []))
+    return next((line for line in lines if not line.rstrip().endswith(":")), "")
 
 
 def verdict_table(summary: dict) -> str | None:

@@ -213,6 +213,7 @@ def localise_target(
     watched = watched_gears(source, table)
     sim = source if simulator is None or gearbox_of(simulator) is None else simulator
     out = {"gearbox": box.name, "preset": source.preset, "watched": watched, "conditions": {}, "records": {}}
+    out["shaft_orders"] = dict(zip(table.shafts, map(float, table.shaft_orders)))  # a bearing's line per shaft
     # what the events are simulated from (localise_scored simulates them alike)
     made = out["events"] = W.events(sim.preset, effect_tables(sim.effects))
     # where a tooth index counts from: the tacho mark, or without a tacho the record's first sample
@@ -558,6 +559,7 @@ def which_gear_summary(loc: dict | None, records: list[dict], labels: dict, posi
     return {
         "gearbox": loc["gearbox"],
         "watched": loc["watched"],
+        "shaft_orders": loc.get("shaft_orders"),
         "records": {
             p: {k: r.get(k) for k in ("condition", "named", "summary", "nonsync", "call")}
             for p, r in loc["records"].items()

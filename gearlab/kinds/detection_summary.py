@@ -1,0 +1,115 @@
+"""What a detection run found, per test take, in the words a maintenance manager acts on: what is wrong and where
+(the gear, its teeth, its stage, the tooth), how sure (how many methods call the take, the which-gear z over its
+threshold) and what to do; and why the table's false alarms differ from the verdict's. It opens the verdict
+(gearlab.kinds.detection's verdict_lines): report.html, the end of `gearlab run` and the TUI say the same lines.
+A verdict opening with 'At record30 (...)' left a reader to find a take's gear in the fourth table. Every call
+here is the run's (detection_which_gear, detection_verdict): this module words them, it decides nothing."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from ..signals.nonsync import HUM
+from .detection_level import most_called
+from .detection_verdict import OTHER_NONSYNC, watched_calls
+from .detection_which_gear import OTHER, UNDETERMINED, WATCHED
+
+
+def _name(path: str) -> str:
+    return path.replace("\\", "/").rsplit("/", 1)[-1]
+
+
+def _level(summary: Mapping, condition: str, path: str) -> str:
+    """The run's warning that *path*'s level is off its history's (detection_records.level_warnings), as 'level 1.5 x
+    its history's'; "" where none."""
+    said = ((summary.get("conditions") or {}).get(condition) or {}).get("warnings") or []
+    off = next((w for w in said if w.startswith(f"{path}: level ")), None)
+    return "" if off is None else off.removeprefix(f"{path}: ").split(" (")[0]
+
+
+def _methods(records: list[Mapping], condition: str, path: str, unit: str) -> tuple[list[str], int]:
+    """The methods whose record-level decision calls *path* at *unit* (most_called: over half its units over the
+    threshold, as `gearlab score` decides), and how many methods scored it there."""
+    called, scored = [], 0
+    for r in records:
+        units = (r.get("test_scores") or {}).get(path) or {}
+        if r.get("condition") != condition or not units.get(unit) or unit not in r["thresholds"]:
+            continue
+        scored += 1
+        called += [r["method"]] if most_called(units[unit], r["thresholds"][unit]) else []
+    return called, scored
+
+
+def _orders(order: float, shafts: Mapping[str, float]) -> str:
+    """A non-synchronous line's input order *order* in each other shaft's orders: a bearing turns with its shaft,
+    and a defect's order relative to it tells the shafts' bearings apart (' (= 1.33 output orders)')."""
+    said = [f"{order / o:.2f} {s} orders" for s, o in shafts.items() if o > 0 and abs(o - 1.0) > 1e-9]
+    return f" (= {', '.join(said)})" if said else ""
+
+
+def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]:
+    """Per test take called or localised, a line: what is wrong, where, how sure, what to do; then the takes with
+    nothing found. [] where the run localised nothing (no gearbox description)."""
+    which = summary.get("which_gear") or {}
+    takes = which.get("records") or {}
+    if not takes:
+        return []
+    shafts = which.get("shaft_orders") or {}
+    lines, quiet = [], []
+    for path, take in takes.items():
+        condition, call, ns = take.get("condition"), take.get("call") or "", take.get("nonsync") or {}
+        called, scored = _methods(records, condition, path, unit)
+        level = _level(summary, condition, path)
+        sure = f"called by {len(called)} of {scored} methods at {unit}" + (f" ({', '.join(called)})" if called else "")
+        # a take off its history's level is recorded again first: its call may be the load's (a healthy take at 1.5 x
+        # its one-load history's level was localised on the input pinion, z 3.89 over 2.58)
+        said = []
+        if take.get("named"):
+            gear = take["summary"]  # 'input pinion 38T (stage 1): z = 3.89 (threshold 2.58), tooth 12 of 38 (...)'
+            whose = "" if call.startswith(WATCHED) else ", a gear this run does not watch"
+            said.append(f"damage on the {gear}{whose}; {sure}")
+        if OTHER_NONSYNC in call:  # a bearing's line as the call says it (a gear's change may explain the residual)
+            tone = f"bearing-like tone at {ns['order']:.2f} input orders{_orders(ns['order'], shafts)}"
+            tone += f", z {ns['z']:.1f} over {ns['threshold']:.1f}"
+            said.append(tone + ("" if take.get("named") else f": a bearing, not a gear; {sure}"))
+        if call.startswith((HUM, UNDETERMINED)):
+            said.append(f"{call}; {sure}")
+        if not said and called:
+            largest = take["summary"].removeprefix("nothing localised ")  # '(largest: input z = 1.35, threshold 2.58)'
+            said.append(f"{sure}, on no gear localised {largest}: the watched gear's fault by the run's rule")
+        said = (
+            [f"{level}: record a history at this load (or gain) before acting on what follows"] if level else []
+        ) + said
+        if not said:
+            quiet.append(_name(path))
+            continue
+        todo = "look at that gear" if take.get("named") else ""
+        todo += (" and the bearings" if todo else "look at the bearings") if OTHER_NONSYNC in call else ""
+        todo = todo or ("look at the watched gear" if called and call.startswith(WATCHED) else "")
+        todo = "" if level else todo
+        lines.append(f"take {_name(path)}: " + "; ".join(said) + (f"; {todo}." if todo else "."))
+    if quiet:
+        lines.append(
+            f"nothing found (no method calls it, no gear localised, level as its history's): {', '.join(quiet)}."
+        )
+    return lines
+
+
+def false_alarms_line(summary: Mapping, unit: str) -> str | None:
+    """Where the table's false alarms (every unit of a take not labelled the fault, other damage included) and the
+    verdict's (watched_calls: a take whose change lies on another gear or is a bearing's is neither) differ at *unit*,
+    one sentence saying why, with each such row's two rates; None where they agree."""
+    differ = []
+    for r in summary.get("rows") or []:
+        if r["unit"] != unit or r.get("false_alarm") is None:
+            continue
+        verdict = watched_calls(r, summary)["false_alarm"]
+        if verdict is not None and abs(verdict - r["false_alarm"]) >= 0.5:
+            differ.append(f"{r['condition']} {r['method']} {r['false_alarm']:.0f} % in the table, {verdict:.0f} % here")
+    if not differ:
+        return None
+    return (
+        f"False alarms at {unit}: the table counts every unit of a take not labelled the fault, other damage "
+        f"included; the verdict below counts {OTHER} (another gear's change, a bearing's line) as neither a detection "
+        "nor a false alarm of the watched gear: " + ", ".join(differ) + "."
+    )

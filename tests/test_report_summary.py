@@ -1,0 +1,118 @@
+"""A detection report read as a maintenance manager reads it (issue 39, 'read the report'): an outside user found
+its verdict opening with 'At record30 (detected / false alarms % ...)', nothing saying per test take what is wrong,
+where, how sure and what to do, and the table's false alarms (other damage counted) unlike the verdict's. The
+verdict now opens with a line per take (gearlab.kinds.detection_summary), in report.html and at the end of
+`gearlab run` alike."""
+
+import html
+import io
+import re
+
+import pytest
+from detection_scenario import scenario, shared_run
+from rich.console import Console
+
+from gearlab.kinds.detection_summary import false_alarms_line, take_lines
+from gearlab.report import build_report
+from gearlab.runs import RunDir
+from gearlab.terminal import print_results
+from gearlab.verdict import verdict_lines
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory, module_cache):
+    folder = tmp_path_factory.mktemp("summary")
+    return shared_run(scenario(folder, methods=("source_only",)), folder / "runs")
+
+
+def test_the_report_opens_with_each_takes_gear_tooth_and_what_to_do_as_the_cli_says(run):
+    summary = RunDir(run).summary()
+    takes = summary["which_gear"]["records"]
+    named = {p.rsplit("/", 1)[-1]: t for p, t in takes.items() if t["named"]}
+    assert named, takes  # the tiny run's chipped takes are localised: the test needs one
+    said = verdict_lines(run)
+    lines = {line.split(":", 1)[0].removeprefix("take "): line for line in said if line.startswith("take ")}
+    for name, take in named.items():
+        line = lines[name]
+        # where: the gear with its teeth and stage, the tooth; how sure: the methods calling it; what to do
+        gear = re.escape(take["named"])  # 'input pinion 32T (stage 1)'
+        assert re.search(rf"damage on the {gear}: z = [\d.]+ \(threshold [\d.]+\), tooth \d+ of \d+", line), line
+        sure = re.search(r"called by (\d) of (\d) methods at (record\d+) \(([^)]*)\)", line)
+        assert sure and int(sure[2]) == len(summary["methods"]), line
+        # the methods named: those whose units of the take are over their threshold on more than half
+        path = next(p for p in takes if p.endswith(name))
+        over = {
+            r["method"]
+            for r in RunDir(run).records()
+            if sum(s > r["thresholds"][sure[3]] for s in r["test_scores"][path][sure[3]])
+            > len(r["test_scores"][path][sure[3]]) / 2
+        }
+        assert set(sure[4].split(", ")) == over and int(sure[1]) == len(over), (line, over)
+        assert line.endswith("; look at that gear."), line
+        assert re.search(r"\d+T \(stage \d\)", take["named"]), take
+    # every test take is said: a line of its own, or among those with nothing found
+    quiet = next((line for line in said if line.startswith("nothing found")), "")
+    assert all(n.rsplit("/", 1)[-1] in lines or n.rsplit("/", 1)[-1] in quiet for n in takes), said
+    # the per-take lines open the verdict, before the methods' 'At record..' line
+    intro = next(i for i, line in enumerate(said) if line.startswith("At record"))
+    assert all(line.startswith(("take ", "nothing found", "False alarms")) for line in said[:intro]), said
+    assert said[:intro] == take_lines(summary, RunDir(run).records(), said[intro].split()[1]) + [
+        x for x in [false_alarms_line(summary, said[intro].split()[1])] if x
+    ]
+    # the report's verdict section and the terminal's end-of-run verdict say the same lines in the same order
+    page = build_report(run)
+    section = page.split("<section id='verdict'>", 1)[1].split("</section>", 1)[0]
+    assert [html.unescape(p) for p in re.findall(r"<p>(.*?)</p>", section)] == said
+    out = io.StringIO()
+    print_results(Console(file=out, width=10_000), said, [])
+    printed = [line.removeprefix("• ") for line in out.getvalue().splitlines() if line.startswith("• ")]
+    assert printed == said
+
+
+def test_a_bearing_line_is_said_in_each_shafts_orders_and_the_two_false_alarm_rates_reconciled():
+    """A take whose only change is a non-synchronous line (a 38/103 box's outer race, 'order 3.62'): a bearing, not a
+    gear, its order in the output shaft's orders beside the input's; and where the table's false alarms (other damage
+    counted) differ from the verdict's, one sentence with both."""
+    call = "other damage: non-synchronous (bearing-like), at order 3.62"
+    summary = {
+        "rows": [
+            {"condition": "29 Hz", "method": "fm4", "unit": "record30", "auc": 1.0, "detection": 100.0,
+             "false_alarm": 20.0},
+        ],
+        "target": {"positive": "fault"},
+        "which_gear": {
+            "shaft_orders": {"input": 1.0, "output": 38 / 103},
+            "records": {
+                "rec/bearing.csv": {
+                    "condition": "29 Hz", "named": None, "call": call,
+                    "summary": "nothing localised (largest: output z = 1.15, threshold 2.58)",
+                    "nonsync": {"changed": True, "order": 3.618, "z": 24.1, "threshold": 4.47},
+                },
+                "rec/healthy.csv": {
+                    "condition": "29 Hz", "named": None, "call": "watched-gear fault (not localised)",
+                    "summary": "nothing localised (largest: output z = 1.20, threshold 2.58)",
+                    "nonsync": {"changed": False, "order": 3.25, "z": 3.0, "threshold": 4.47},
+                },
+            },
+            "calls": [
+                {"condition": "29 Hz", "method": "fm4", "unit": "record30", "auc": 1.0,
+                 "units": {"fault": 3, "healthy": 3, "bearing": 2}, "judged": {"fault": 3, "healthy": 3, "bearing": 0},
+                 "watched": {"fault": 100.0, "healthy": 0.0, "bearing": 0.0}},
+            ],
+        },
+    }  # fmt: skip
+    # fm4 calls the bearing's take on both its units (over its threshold 1.0), the healthy one on none
+    records = [
+        {"condition": "29 Hz", "method": "fm4", "thresholds": {"record30": 1.0},
+         "test_scores": {"rec/bearing.csv": {"record30": [2.0, 3.0]}, "rec/healthy.csv": {"record30": [0.5, 0.2]}}},
+    ]  # fmt: skip
+    lines = take_lines(summary, records, "record30")
+    assert lines == [
+        "take bearing.csv: bearing-like tone at 3.62 input orders (= 9.81 output orders), z 24.1 over 4.5: a bearing, "
+        "not a gear; called by 1 of 1 methods at record30 (fm4); look at the bearings.",
+        "nothing found (no method calls it, no gear localised, level as its history's): healthy.csv.",
+    ]
+    reconciled = false_alarms_line(summary, "record30")
+    assert reconciled.endswith("29 Hz fm4 20 % in the table, 0 % here."), reconciled
+    # rates that agree need no sentence
+    assert false_alarms_line({**summary, "which_gear": {}}, "record30") is None
