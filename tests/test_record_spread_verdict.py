@@ -39,7 +39,9 @@ def test_a_threshold_resting_on_two_takes_apart_is_said_with_its_numbers(cli, tm
     assert ratio > 3.0, line
     assert "add healthy takes of this condition (role history): 2 records measure it on 1 degree of freedom." in line
     assert f"- {line}\n" in table and escape(line) in html
-    assert lines.index(line) == 2  # beside its condition's line
+    # beside its condition's line, after the methods' introduction (the per-take lines open the verdict)
+    intro = next(i for i, x in enumerate(lines) if x.startswith("At record"))
+    assert lines.index(line) == intro + 2
     # the model behind the line is the run's: its summary's row for NA4 at the verdict's unit
     import json
 

@@ -67,6 +67,8 @@ def test_the_report_opens_with_each_takes_gear_tooth_and_what_to_do_as_the_cli_s
     print_results(Console(file=out, width=10_000), said, [])
     printed = [line.removeprefix("• ") for line in out.getvalue().splitlines() if line.startswith("• ")]
     assert printed == said
+    head = (run / "table.md").read_text().split("\n\n", 1)[0]  # table.md opens with the same verdict
+    assert head.splitlines() == [f"Verdict: {said[0]}", *(f"- {line}" for line in said[1:])], head
 
 
 def test_a_bearing_line_is_said_in_each_shafts_orders_and_the_two_false_alarm_rates_reconciled():

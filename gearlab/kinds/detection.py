@@ -705,14 +705,9 @@ def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
     """Per test take, what is wrong, where, how sure and what to do, and why the table's false alarms differ from
     the verdict's (kinds.detection_summary); then per condition, the rows meeting the goal and what the learned rows
     learned (kinds.detection_verdict)."""
-    from .detection_summary import false_alarms_line, take_lines  # read only for a verdict
-    from .detection_verdict import detection_lines
+    from .detection_summary import verdict  # read only for a verdict
 
-    unit = longest_tsa(r["unit"] for r in summary.get("rows") or [])
-    if unit is None:
-        return []
-    reconciled = false_alarms_line(summary, unit)
-    return take_lines(summary, records, unit) + ([reconciled] if reconciled else []) + detection_lines(summary, unit)
+    return verdict(summary, records)
 
 
 def headline(run) -> str:

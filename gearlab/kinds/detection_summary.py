@@ -11,8 +11,26 @@ from collections.abc import Mapping
 
 from ..signals.nonsync import HUM
 from .detection_level import most_called
-from .detection_verdict import OTHER_NONSYNC, watched_calls
+from .detection_records import longest_tsa
+from .detection_verdict import OTHER_NONSYNC, detection_lines, watched_calls
 from .detection_which_gear import OTHER, UNDETERMINED, WATCHED
+
+
+def verdict(summary: Mapping, records: list[Mapping]) -> list[str]:
+    """The verdict of a detection run (report.html, table.md, the end of `gearlab run`, the TUI): a line per test take
+    (take_lines), why the two false-alarm rates differ (false_alarms_line), then the methods' lines (detection_lines),
+    all at the rows' longest TSA (detection_records.longest_tsa); *records*: results.jsonl's."""
+    unit = longest_tsa(r["unit"] for r in summary.get("rows") or [])
+    if unit is None:
+        return []
+    reconciled = [line] if (line := false_alarms_line(summary, unit)) else []
+    return take_lines(summary, judged(records), unit) + reconciled + detection_lines(summary, unit)
+
+
+def judged(records: list[Mapping]) -> list[Mapping]:
+    """results.jsonl's records of the methods a run judges: an ensemble's members (one training each, with their
+    seed or fold) are kept there and shown only as the spread of their AUCs beside the ensemble's."""
+    return [r for r in records if r.get("seed") is None and r.get("fold") is None]
 
 
 def _name(path: str) -> str:

@@ -18,8 +18,9 @@ from ..scenario import Scenario
 from .contract import VERDICT
 from .detection_level import called_levels
 from .detection_records import longest_tsa
+from .detection_summary import judged, verdict
 from .detection_units import method_name
-from .detection_verdict import detection_lines, watched_calls
+from .detection_verdict import watched_calls
 from .detection_which_gear import which_gear_summary
 
 
@@ -29,9 +30,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     labels = {f.path: f.label for f in target.files}
     everything = run.records()
     by_unit = {r["unit"]: r for r in everything}
-    # an ensemble's members (one training each) are kept in results.jsonl and shown only as the
-    # spread of their AUCs beside the ensemble's
-    records = [r for r in everything if r.get("seed") is None and r.get("fold") is None]
+    records = judged(everything)
     thresholds = {r["unit"]: r["thresholds"] for r in records}
     # scores.csv: every test unit's score and decision
     buf = io.StringIO()
@@ -160,7 +159,7 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     which = summary["which_gear"].get("md", "")
     run.write_text(
         "table.md",
-        verdict_md(summary)
+        verdict_md(summary, records)
         + table_md(rows)
         + "\n"
         + labels_md(rows)
@@ -174,10 +173,10 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     run.write_text("table.csv", table_csv(rows))
 
 
-def verdict_md(summary: dict) -> str:
+def verdict_md(summary: dict, records: list[dict]) -> str:
     """The verdict table.md opens with, as report.html, the terminal and the TUI open with it
-    (detection_verdict.detection_lines, docs/your_gearbox.md step 6); "" where there is none."""
-    lines = detection_lines(summary, longest_tsa(r["unit"] for r in summary["rows"]))
+    (detection_summary.verdict, docs/your_gearbox.md step 6); "" where there is none."""
+    lines = verdict(summary, records)
     return f"{VERDICT}{lines[0]}\n" + "".join(f"- {line}\n" for line in lines[1:]) + "\n" if lines else ""
 
 
