@@ -7,6 +7,7 @@ verdict now opens with a line per take (gearlab.kinds.detection_summary), in rep
 import html
 import io
 import re
+from statistics import median
 
 import pytest
 from detection_scenario import scenario, shared_run
@@ -37,7 +38,7 @@ def test_the_report_opens_with_each_takes_gear_tooth_and_what_to_do_as_the_cli_s
         # where: the gear with its teeth and stage, the tooth; how sure: the methods calling it; what to do
         gear = re.escape(take["named"])  # 'input pinion 32T (stage 1)'
         assert re.search(rf"damage on the {gear}: z = [\d.]+ \(threshold [\d.]+\), tooth \d+ of \d+", line), line
-        sure = re.search(r"called by (\d) of (\d) methods at (record\d+) \(([^)]*)\)", line)
+        sure = re.search(r"called by (\d) of (\d) methods at (record\d+) \(([^):]*)", line)
         assert sure and int(sure[2]) == len(summary["methods"]), line
         # the methods named: those whose units of the take are over their threshold on more than half
         path = next(p for p in takes if p.endswith(name))
@@ -47,9 +48,16 @@ def test_the_report_opens_with_each_takes_gear_tooth_and_what_to_do_as_the_cli_s
             if sum(s > r["thresholds"][sure[3]] for s in r["test_scores"][path][sure[3]])
             > len(r["test_scores"][path][sure[3]]) / 2
         }
-        assert set(sure[4].split(", ")) == over and int(sure[1]) == len(over), (line, over)
-        assert line.endswith("; look at that gear."), line
-        assert re.search(r"\d+T \(stage \d\)", take["named"]), take
+        named = dict(re.fullmatch(r"(\w+) ([+-][\d.]+) sd", m).groups() for m in sure[4].split(", "))
+        assert set(named) == over and int(sure[1]) == len(over), (line, over)
+        # how far over: each method's median unit less its threshold, over its history's unit spread
+        for r in RunDir(run).records():
+            if r["method"] in named:
+                unit = sure[3]
+                sd = r["history_models"][unit]["unit_sd"]
+                far = (median(r["test_scores"][path][unit]) - r["thresholds"][unit]) / sd
+                assert float(named[r["method"]]) == pytest.approx(far, abs=0.05 if abs(far) < 100 else 0.5), line
+                assert far > 0, line
     # every test take is said: a line of its own, or among those with nothing found
     quiet = next((line for line in said if line.startswith("nothing found")), "")
     assert all(n.rsplit("/", 1)[-1] in lines or n.rsplit("/", 1)[-1] in quiet for n in takes), said

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import numpy as np
+
 from ..signals.nonsync import HUM
 from .detection_level import most_called
 from .detection_records import longest_tsa
@@ -47,14 +49,20 @@ def _level(summary: Mapping, condition: str, path: str) -> str:
 
 def _methods(records: list[Mapping], condition: str, path: str, unit: str) -> tuple[list[str], int]:
     """The methods whose record-level decision calls *path* at *unit* (most_called: over half its units over the
-    threshold, as `gearlab score` decides), and how many methods scored it there."""
+    threshold, as `gearlab score` decides), each with how far its median unit lies over its threshold in its history's
+    unit spreads (the history model's unit_sd: 'fm4 +5.1 sd'), and how many methods scored it there."""
     called, scored = [], 0
     for r in records:
         units = (r.get("test_scores") or {}).get(path) or {}
-        if r.get("condition") != condition or not units.get(unit) or unit not in r["thresholds"]:
+        threshold = r["thresholds"].get(unit)
+        if r.get("condition") != condition or not units.get(unit) or threshold is None:
             continue
         scored += 1
-        called += [r["method"]] if most_called(units[unit], r["thresholds"][unit]) else []
+        if not most_called(units[unit], threshold):
+            continue
+        sd = ((r.get("history_models") or {}).get(unit) or {}).get("unit_sd")
+        over = (float(np.median(units[unit])) - threshold) / sd if sd else None
+        called.append(r["method"] + ("" if over is None else f" {over:+.{1 if abs(over) < 100 else 0}f} sd"))
     return called, scored
 
 
@@ -78,7 +86,9 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         condition, call, ns = take.get("condition"), take.get("call") or "", take.get("nonsync") or {}
         called, scored = _methods(records, condition, path, unit)
         level = _level(summary, condition, path)
-        sure = f"called by {len(called)} of {scored} methods at {unit}" + (f" ({', '.join(called)})" if called else "")
+        sure = f"called by {len(called)} of {scored} methods at {unit}"
+        spreads = any(c.endswith(" sd") for c in called) * ": median unit over the threshold in history spreads"
+        sure += f" ({', '.join(called)}{spreads})" if called else ""
         # a take off its history's level is recorded again first: its call may be the load's (a healthy take at 1.5 x
         # its one-load history's level was localised on the input pinion, z 3.89 over 2.58)
         said = []
