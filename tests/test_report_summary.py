@@ -126,3 +126,22 @@ def test_a_bearing_line_is_said_in_each_shafts_orders_and_the_two_false_alarm_ra
     assert reconciled.endswith("29 Hz fm4 20 % in the table, 0 % here."), reconciled
     # rates that agree need no sentence
     assert false_alarms_line({**summary, "which_gear": {}}, "record30") is None
+
+
+def test_a_take_too_short_for_the_longest_tsa_is_said_at_the_longest_it_fills():
+    """1 s takes at 30 Hz fill no record30 unit: 'called by 0 of 0 methods at record30' said nothing; the verdict's
+    condition line judges them at the longest TSA they fill, and so does their take line."""
+    take = {
+        "condition": "30 Hz", "named": "input pinion 25T (stage 1)",
+        "call": "watched-gear fault: input pinion 25T (stage 1)",
+        "summary": "input pinion 25T (stage 1): z = 9.10 (threshold 2.58), tooth 2 of 25",
+        "nonsync": {"changed": False, "order": 3.1, "z": 1.0, "threshold": 4.5},
+    }  # fmt: skip
+    summary = {"which_gear": {"records": {"short.csv": take}}}
+    records = [
+        {"condition": "30 Hz", "method": m, "thresholds": {"record30": 1.0, "record10": 1.0},
+         "test_scores": {"short.csv": {"record30": [], "record10": scores}}}
+        for m, scores in (("fm4", [2.0, 3.0, 0.5]), ("na4", [0.1, 3.0, 0.5]))
+    ]  # fmt: skip
+    (line,) = take_lines(summary, records, "record30")
+    assert "; called by 1 of 2 methods at record10 (fm4); look at that gear." in line, line

@@ -84,9 +84,12 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
     lines, quiet = [], []
     for path, take in takes.items():
         condition, call, ns = take.get("condition"), take.get("call") or "", take.get("nonsync") or {}
-        called, scored = _methods(records, condition, path, unit)
+        # a take too short for the run's longest TSA is judged at the longest it fills, as the verdict's condition is
+        filled = [u for r in records for u, v in ((r.get("test_scores") or {}).get(path) or {}).items() if len(v)]
+        at = unit if unit in filled else longest_tsa(filled) or unit
+        called, scored = _methods(records, condition, path, at)
         level = _level(summary, condition, path)
-        sure = f"called by {len(called)} of {scored} methods at {unit}"
+        sure = f"called by {len(called)} of {scored} methods at {at}"
         spreads = any(c.endswith(" sd") for c in called) * ": median unit over the threshold in history spreads"
         sure += f" ({', '.join(called)}{spreads})" if called else ""
         # a take off its history's level is recorded again first: its call may be the load's (a healthy take at 1.5 x
