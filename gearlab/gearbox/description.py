@@ -390,6 +390,16 @@ def _not_yet(kind: str) -> Callable[[object, str], str]:
     return lambda value, where: said
 
 
+def _idler_stages(data: Mapping) -> str:
+    """How an idler is written: two [[stages]] sharing its tooth count (39/45 then 45/61), in the stage's numbers."""
+    z = {k: data[k].get("z", k) if isinstance(data.get(k), Mapping) else k for k in ("pinion", "idler", "wheel")}
+    return (
+        f"an idler is written as two [[stages]] sharing its teeth: pinion {z['pinion']} / wheel {z['idler']}, then "
+        f"pinion {z['idler']} / wheel {z['wheel']} ({z['pinion']}/{z['idler']} + {z['idler']}/{z['wheel']}; "
+        "docs/your_gearbox.md, 'What you cannot do yet')"
+    )
+
+
 # Keys a gear engineer writes for a stage that gearlab takes in another form (a US diametral pitch) or does not
 # simulate yet: named as such, where 'unknown key' offered a neighbour by spelling ('helix_angle': pressure_angle?)
 OTHER_GEARING: dict[str, Callable[[object, str], str]] = {
@@ -558,6 +568,8 @@ def _materials(data, source: str) -> dict[str, Material]:
 
 def _stage(data: Mapping, i: int, source: str, materials: dict[str, Material]) -> Stage:
     t = _Table(data, source, f"[[stages]] #{i + 1}")
+    if "idler" in data:  # a gear between pinion and wheel: its two meshes are two stages that share its teeth
+        raise GearlabInputError(f"{t.where('idler')}: {_idler_stages(data)}")
     t.known(STAGE_KEYS)
     name = t.text("name", "")
     numbers = [key for key, (p, _) in STAGE_KEYS.items() if p.types in (int, float)]
