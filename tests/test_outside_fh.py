@@ -23,3 +23,23 @@ def test_an_idler_written_in_a_stage_is_refused_with_the_two_stages_to_write(tmp
     assert code == 2 and "\n" not in line and "box.toml: [[stages]] #1 key 'idler'" in line, err
     assert "did you mean" not in line and "two [[stages]]" in line, line
     assert "39/45" in line and "45/61" in line, line
+
+
+def test_a_history_of_one_take_does_not_put_a_called_take_at_its_own_level_off_it():
+    # one healthy take, the least a user has: its spread read 0, so a called take at 1.0 x its level (a sweeping take,
+    # a 5 %-clipped one) read 'level 1 x its history's, its own takes within 0.0% of it: ... the call may be the
+    # level's change', in the run's warnings and in every `gearlab score` row; a take 1.5 x off is still said
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from gearlab.kinds.detection_level import called_level, level_line, run_levels
+
+    revs = np.random.default_rng(1).normal(size=(30, 256))
+    take = lambda name, k: (SimpleNamespace(path=name), k * revs)  # noqa: E731
+    ratios, spread = run_levels({"history": [take("h.csv", 1.0)], "test": [take("t.csv", 1.03), take("x", 1.5)]})
+    assert called_level(True, [], ratios["t.csv"], spread) == "", (ratios, spread)
+    assert level_line(ratios["x"]).startswith("level 1.5 x its history's")
+    # two history takes 2 % apart: a called take 10 % off them is still said, as before
+    ratios, spread = run_levels({"history": [take("a", 1.0), take("b", 1.02)], "test": [take("t.csv", 1.1)]})
+    assert called_level(True, [], ratios["t.csv"], spread).startswith("level 1.1 x its history's, its own takes")

@@ -44,15 +44,18 @@ def level_line(ratio: float) -> str:
     )
 
 
-def level_spread(levels) -> float:
+def level_spread(levels) -> float | None:
     """How far a history's own takes lie off their median level: the largest |log| of their *levels* (standard
-    deviations, in any one scale) over its median; 0 for a history without a level."""
+    deviations, in any one scale) over its median; 0 for a history without a level; None for a history of one
+    take, whose spread is unknown (its 0 put every take but its own off it: 'within 0.0 %' of a take at 1.0 x)."""
     levels = np.asarray(levels, dtype=np.float64)
+    if levels.size < 2:
+        return None
     typical = float(np.median(levels))
     return float(np.max(np.abs(np.log(levels / typical)))) if typical > 0 and np.all(levels > 0) else 0.0
 
 
-def run_levels(cond: dict) -> tuple[dict[str, float], float]:
+def run_levels(cond: dict) -> tuple[dict[str, float], float | None]:
     """Of a run's condition *cond* (its "history" and "test": (file, revolutions in m/s²)): each test take's level
     over its history's median (as level_warnings reads it), and the history's level_spread: what called_levels
     reads once the run's methods have called the takes (kept in conditions.json)."""
@@ -69,12 +72,13 @@ def most_called(scores, threshold: float) -> bool:
     return bool(s.size) and int(np.sum(s > threshold)) > s.size / 2
 
 
-def called_level(called: bool, named, ratio: float, spread: float) -> str:
+def called_level(called: bool, named, ratio: float, spread: float | None) -> str:
     """Of a take *called* a fault, *named* no gear (its localisation's named gears: none) and its level *ratio* to
     its history's further off than the history's own takes lie (*spread*, their largest |log|), its level in words,
     where level_line says nothing (within LEVEL_OFF): a sensor's mount loosening -0.1 dB a day was called by the
-    template methods from 0.83 x, its level said from 0.8 x only. "" otherwise."""
-    if not called or named or level_line(ratio) or abs(math.log(ratio)) <= spread:
+    template methods from 0.83 x, its level said from 0.8 x only. "" otherwise, and of a one-take history (*spread*
+    None): level_line's LEVEL_OFF alone says its level."""
+    if not called or named or spread is None or level_line(ratio) or abs(math.log(ratio)) <= spread:
         return ""
     return (
         f"level {ratio:.2g} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no gear "
