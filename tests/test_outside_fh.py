@@ -5,6 +5,16 @@ between pinion and wheel writes it as a third gear of the stage."""
 
 from __future__ import annotations
 
+import json
+import shutil
+
+import numpy as np
+import pytest
+from detection_scenario import scenario, shared_run
+from textrecords import signals, text, write_zip
+
+from gearlab.kinds import detection_scoring
+
 BOX = (
     '[gearbox]\nname = "mill39"\n[operation]\nspeed = "30 Hz"\nload = "20 N*m"\n'
     '[[stages]]\nmodule = "2 mm"\nface_width = "20 mm"\n'
@@ -31,8 +41,6 @@ def test_a_history_of_one_take_does_not_put_a_called_take_at_its_own_level_off_i
     # level's change', in the run's warnings and in every `gearlab score` row; a take 1.5 x off is still said
     from types import SimpleNamespace
 
-    import numpy as np
-
     from gearlab.kinds.detection_level import called_level, level_line, run_levels
 
     revs = np.random.default_rng(1).normal(size=(30, 256))
@@ -43,3 +51,50 @@ def test_a_history_of_one_take_does_not_put_a_called_take_at_its_own_level_off_i
     # two history takes 2 % apart: a called take 10 % off them is still said, as before
     ratios, spread = run_levels({"history": [take("a", 1.0), take("b", 1.02)], "test": [take("t.csv", 1.1)]})
     assert called_level(True, [], ratios["t.csv"], spread).startswith("level 1.1 x its history's, its own takes")
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory, module_cache):
+    """The tie's tiny run (detection_scenario.shared_run) and two takes of its box: one plain, one whose first 5 %
+    surged 4 x, its mesh's peaks there flat at the ADC's range."""
+    folder = tmp_path_factory.mktemp("tie")
+    out = shared_run(scenario(folder, methods=("source_only",)), folder / "runs")
+    takes = tmp_path_factory.mktemp("takes")
+    vib, tacho = signals(revolutions=41, seed=11, phase=0.3)
+    plain = write_zip(takes / "plain.zip", text(vib, tacho))
+    surge = vib * np.where(np.arange(vib.size) < vib.size // 20, 4.0, 1.0)  # 5 % of the take at 4 x: the ADC's range
+    top = 2.0 * float(np.max(np.abs(vib)))
+    return out, plain, write_zip(takes / "clipped.zip", text(np.clip(surge, -top, top), tacho))
+
+
+def _called(cli, tiny, monkeypatch, take) -> list[dict]:
+    """The rows of *take* scored with every classical row's thresholds under its scores: called."""
+    real = detection_scoring.classical_record
+
+    def placed(*args, **kwargs):
+        got = real(*args, **kwargs)
+        for units in got["test_scores"].values():
+            for u, s in units.items():
+                got["thresholds"][u] = float(np.min(s) - 1.0)
+        return got
+
+    monkeypatch.setattr(detection_scoring, "classical_record", placed)
+    mine = shutil.copytree(tiny[0], tiny[0].with_name(f"{tiny[0].name}-{take.stem}"), dirs_exist_ok=True)
+    code, stdout, err = cli("score", mine, take, "--json")
+    assert code == 0, err
+    return json.loads(stdout)
+
+
+def test_a_called_clipped_take_is_told_the_call_may_be_the_clipping(cli, tiny, monkeypatch):
+    # a healthy 39/61 take clipped over 5 % of its samples (its mesh's peaks, modulated once a turn) was scored
+    # 'input pinion 39T (stage 1), tooth 1 of 39' at z 18 over 2.6 by fm4 and likelihood_ratio; the clipping was a
+    # warning line above, '3000 samples flat at 5.397 m/s² (clipped at the logger's or sensor's range?)', the call
+    # not doubted
+    rows = _called(cli, tiny, monkeypatch, tiny[2])
+    assert any(r["decision"] != "healthy" for r in rows), rows[0]
+    flaws = rows[0]["flaws"]  # each side clipped
+    assert len(flaws) == 2 and all("clipped at the logger's or sensor's range" in f for f in flaws), flaws
+    assert all("the call may be the clipping" in f for f in flaws), flaws
+    assert all(r["flaws"] == flaws for r in rows)
+    plain = _called(cli, tiny, monkeypatch, tiny[1])  # called too, not clipped: nothing said
+    assert any(r["decision"] != "healthy" for r in plain) and plain[0]["flaws"] == [], plain[0]

@@ -104,3 +104,13 @@ def called_levels(conditions: dict, records: list[dict], loc: dict | None) -> li
             if said := called_level(called, found.get(path, {}).get("named"), ratio, c["level_spread"]):
                 out.append(f"{path}: {said}")
     return out
+
+
+def clipped_call(called: bool, flaws) -> list[str]:
+    """A take's acquisition *flaws* (gearlab.signals.spikes.acquisition), each clipping's told, where the take is
+    *called* (a fault or other damage), that the call may be the clipping: a healthy 39/61 take clipped over 5 % of
+    its samples, its mesh's peaks once a turn (the input's modulation), was scored 'input pinion 39T, tooth 1' at
+    z 18 over 2.6 by fm4 and likelihood_ratio, beside a plain 'clipped ...?' warning."""
+    said = "; the take is called: a clipped mesh's flattened peaks change its shafts' averages, the call may be the "
+    said += "clipping (record at a larger range)"
+    return [f + said if called and "clipped" in f else f for f in flaws]
