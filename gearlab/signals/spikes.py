@@ -92,6 +92,10 @@ def without_spikes(revs: np.ndarray, fs: float, speed_hz: float, turns_per_input
 # quantised sine's peak repeats too, at ~1 deviation; a Gaussian record's largest sample is unique)
 CLIP_SAMPLES = 3
 CLIP_Z = 3.0
+# ... or, nearer the median (a steady mesh tone clipped over 5 % of the take: 1.1 deviations), this many times the
+# samples at the next value inward: what lay beyond the range piled at its edge (a quantised tone's peak level holds
+# about 2.4 times the next one's, a noisy record's extreme is unique)
+CLIP_PILE = 10.0
 
 
 def clipped(x: np.ndarray) -> list[tuple[int, float]]:
@@ -102,9 +106,12 @@ def clipped(x: np.ndarray) -> list[tuple[int, float]]:
     centre = float(np.median(x))
     scale = 1.4826 * float(np.median(np.abs(x - centre)))
     out = []
-    for value in (float(x.max()), float(x.min())):
+    for value, inward in ((float(x.max()), np.max), (float(x.min()), np.min)):
         at = x == value
-        if at.sum() >= CLIP_SAMPLES and np.any(at[1:] & at[:-1]) and abs(value - centre) > CLIP_Z * scale:
+        if at.sum() < CLIP_SAMPLES or not np.any(at[1:] & at[:-1]) or at.all():
+            continue
+        piled = at.sum() >= CLIP_PILE * np.sum(x == inward(x[~at]))
+        if abs(value - centre) > CLIP_Z * scale or piled:
             out.append((int(at.sum()), value))
     return out
 
