@@ -116,3 +116,28 @@ def test_a_steady_mesh_clipped_over_5_percent_of_its_samples_is_said_clipped():
     assert acquisition(quantised, 20000.0)[1] == ()
     noisy = np.round((0.1 * tone + 0.002 * np.random.default_rng(3).normal(size=tone.size)) * 32767) / 32767 * 50.0
     assert acquisition(noisy, 20000.0)[1] == ()
+
+
+def test_a_run_s_verdict_doubts_a_call_on_a_clipped_take():
+    # the 39/61 run's healthy take clipped over 5 % of its samples opened the verdict with 'damage on the input pinion
+    # 39T (stage 1): z = 32.05 ..., tooth 1 of 39; called by 1 of 4 methods ... (fm4 +18.6 sd); look at that gear.',
+    # the clipping a warning further down
+    from gearlab.kinds.detection_summary import take_lines
+
+    take = {
+        "condition": "30 Hz", "named": "input pinion 39T (stage 1)",
+        "call": "watched-gear fault: input pinion 39T (stage 1)",
+        "summary": "input pinion 39T (stage 1): z = 32.05 (threshold 2.58), tooth 1 of 39",
+        "nonsync": {"changed": False, "order": 0.73, "z": 4.4, "threshold": 5.9},
+    }  # fmt: skip
+    flat = "rec/clip.csv: 3000 samples flat at 5.397 m/s² (clipped at the logger's or sensor's range?)"
+    summary = {"which_gear": {"records": {"rec/clip.csv": take}}, "conditions": {"30 Hz": {"warnings": [flat]}}}
+    records = [
+        {"condition": "30 Hz", "method": "fm4", "thresholds": {"record30": 1.0},
+         "test_scores": {"rec/clip.csv": {"record30": [2.0, 3.0]}}},
+    ]  # fmt: skip
+    (line,) = take_lines(summary, records, "record30")
+    assert line.startswith("take clip.csv: clipped (3000 samples flat at 5.397 m/s²): the call may be the clip"), line
+    assert "record at a larger range" in line and "look at that gear" not in line, line
+    (plain,) = take_lines({**summary, "conditions": {}}, records, "record30")  # not clipped: as before
+    assert plain.startswith("take clip.csv: damage on the input pinion") and plain.endswith("look at that gear."), plain
