@@ -141,3 +141,42 @@ def test_a_run_s_verdict_doubts_a_call_on_a_clipped_take():
     assert "record at a larger range" in line and "look at that gear" not in line, line
     (plain,) = take_lines({**summary, "conditions": {}}, records, "record30")  # not clipped: as before
     assert plain.startswith("take clip.csv: damage on the input pinion") and plain.endswith("look at that gear."), plain
+
+
+def _sweep(path, seed: int, seconds: float = 3.0, f0: float = 30.0, sweep: float = 0.15) -> None:
+    """A 39/61 take whose input speed sweeps linearly by *sweep* of *f0* over it, in volts at 100 mV/g (columns
+    time_s, acc_gear_V, tacho_V): the mesh's harmonics modulated in amplitude and phase, both shafts' lines, noise."""
+    rng = np.random.default_rng(seed)
+    fs = 20000.0
+    t = np.arange(int(seconds * fs)) / fs
+    th = 2 * np.pi * np.cumsum(f0 * (1 + sweep * (t / seconds - 0.5))) / fs
+    out = th * 39 / 61
+    x = 0.3 * np.cos(th) + 0.2 * np.cos(out)
+    for h, a in ((1, 1.0), (2, 0.5), (3, 0.25)):
+        x = x + a * (1 + 0.2 * np.cos(th + 0.3) + 0.1 * np.cos(out + 1.0)) * np.cos(h * 39 * th + 0.1 * np.sin(th) + h)
+    volts = 0.03 * (x + rng.normal(0, 0.15, t.size))
+    tacho = np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)
+    rows = "\n".join(f"{a:.6f},{b:.6f},{c:.1f}" for a, b, c in zip(t, volts, tacho))
+    path.write_text("time_s,acc_gear_V,tacho_V\n" + rows + "\n")
+
+
+def test_a_sweeping_history_take_s_speed_is_said_as_the_run_read_it(tmp_path, cli):
+    # three 3 s history takes sweeping 15 % about 30 Hz: each printed '30.771 Hz, from tacho ...; 27.9 Hz .. 32.09 Hz
+    # over the take: a run-up or coast-down? its mean speed is its condition (steady records compare)', where 30.77 Hz
+    # is the median of the 32 steady turns the run used, not the take's mean (30.0 Hz); the run then stops (3 record30
+    # units of 8), before any simulation
+    (tmp_path / "box.toml").write_text(BOX)
+    for i in (1, 2, 3, 4):
+        _sweep(tmp_path / (f"h{i}.csv" if i < 4 else "test.csv"), i)
+    (tmp_path / "run.toml").write_text(
+        '[scenario]\nname = "sweep"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+        '[target]\nvibration = "acc_gear_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"\n'
+        'files = [{ file = "h*.csv", role = "history", label = "healthy" },\n'
+        '  { file = "test.csv", role = "test", label = "healthy" }]\n'
+        '[[methods]]\nadapter = "matched_filter"\n'
+    )
+    code, out, err = cli("run", tmp_path / "run.toml", "--quick", "--out", tmp_path / "runs")
+    said = [line for line in (out + err).splitlines() if line.startswith("h1.csv: ")]
+    assert code == 2 and "expected at least 8" in err, err
+    assert said and "its mean speed is its condition" not in said[0], said
+    assert "revolutions at" in said[0] and "steady part" in said[0], said

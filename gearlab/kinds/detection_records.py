@@ -352,7 +352,8 @@ def read_target(
             how = records[f.path].angle_source
             cond["speed_from"][f.path] = f"{how.rsplit('; ', 1)[0]}; {span(how)}; {scored_on[f.path]}"
             cond.setdefault("scored_on", {})[f.path] = scored_on[f.path]
-        on_event(Event("log", message=f"{f.path}: {speeds[f.path]:.3f} Hz, from {records[f.path].angle_source}"))
+        # as cut: a run-up's speed is its steady part's, not its mean (a 15 % sweep about 30 Hz: 30.771 Hz)
+        on_event(Event("log", message=f"{f.path}: {speeds[f.path]:.3f} Hz, from {cond['speed_from'][f.path]}"))
         # as cut, before standardising and aligning (which rotate each revolution): what
         # localisation reads (detection_which_gear), with the first revolution's number from the tacho
         # mark (on its own shaft; without a tacho, from the record's first sample)
