@@ -180,3 +180,13 @@ def test_a_sweeping_history_take_s_speed_is_said_as_the_run_read_it(tmp_path, cl
     assert code == 2 and "expected at least 8" in err, err
     assert said and "its mean speed is its condition" not in said[0], said
     assert "revolutions at" in said[0] and "steady part" in said[0], said
+
+
+def test_a_called_take_s_level_near_its_history_s_is_said_in_the_digits_that_tell_it_off():
+    # two history takes 0.1 % apart: the 39/61 run's chipped take, 0.8 % louder, read 'level 1 x its history's, its
+    # own takes within 0.1% of it: ... the call may be the level's change', a level as its history's said off it
+    from gearlab.kinds.detection_level import called_level
+
+    said = called_level(True, [], 1.008, 0.001)
+    assert said.startswith("level 1.01 x its history's, its own takes within 0.1% of it"), said
+    assert called_level(True, [], 0.83, 0.01).startswith("level 0.83 x its history's"), "as before"

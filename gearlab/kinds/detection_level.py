@@ -72,6 +72,11 @@ def most_called(scores, threshold: float) -> bool:
     return bool(s.size) and int(np.sum(s > threshold)) > s.size / 2
 
 
+def _times(ratio: float) -> str:
+    """*ratio* in two digits, three where two read it as 1 (1.008: '1.01', not '1', a level said off its history's)."""
+    return f"{ratio:.2g}" if f"{ratio:.2g}" != "1" else f"{ratio:.3g}"
+
+
 def called_level(called: bool, named, ratio: float, spread: float | None) -> str:
     """Of a take *called* a fault, *named* no gear (its localisation's named gears: none) and its level *ratio* to
     its history's further off than the history's own takes lie (*spread*, their largest |log|), its level in words,
@@ -81,9 +86,10 @@ def called_level(called: bool, named, ratio: float, spread: float | None) -> str
     if not called or named or spread is None or level_line(ratio) or abs(math.log(ratio)) <= spread:
         return ""
     return (
-        f"level {ratio:.2g} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no gear "
-        "named, the call may be the level's change (a sensor's mount or gain, another load?): NA4 and the template "
-        "methods (matched_filter, likelihood_ratio), which subtract the history's average, read a level as a change"
+        f"level {_times(ratio)} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no "
+        "gear named, the call may be the level's change (a sensor's mount or gain, another load?): NA4 and the "
+        "template methods (matched_filter, likelihood_ratio), which subtract the history's average, read a level as a "
+        "change"
     )
 
 
