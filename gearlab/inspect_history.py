@@ -87,6 +87,11 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     # a take at another load than its history's: its call said beside the level, as a run and score warn of it (a 38/103
     # box's healthy take at 1.5 x its one-load history's mesh level read 'localised change: input pinion 38T', no more)
     out["level"] = float(np.std(revs)) / float(np.median([np.std(t.revolutions) for t in takes]))
+    if len(takes) == 1 and not out["call"].startswith("no change"):  # its thresholds: one take's own blocks
+        out["call"] += (
+            "; of one history take: how far takes of other days lie apart is not measured, a healthy take may pass "
+            "its thresholds more often than asked (--history two or more takes, from different days)"
+        )
     if why := level_why(out["level"]):
         out["call"] += (
             f"; the take's level {out['level']:.2g} x its history's ({why}): a history at that load "
