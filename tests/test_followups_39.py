@@ -46,7 +46,7 @@ def test_score_says_other_damage_with_its_evidence_in_80_columns(cli, tmp_path, 
     record(tmp_path / "wheel.zip", revolutions=40, chip=4.0, seed=12, phase=1.1)
     evidence = "output z 850.5/2.6, input z -5.2/2.6; tooth 20 of 71"
 
-    def localised(run_dir, records):
+    def localised(run_dir, records, turned=None):
         """The localisation of a take whose damage lies on the output gear (that localisation itself
         is signals.localise's; here what score makes of it)."""
         out = {}

@@ -121,7 +121,7 @@ def test_score_keeps_the_note_in_the_history_of_a_take_on_an_unwatched_gear(
     record(tmp_path / "quiet.zip", revolutions=40, chip=0.0, seed=11, phase=0.3)
     call = {"named": "output gear 74T (stage 2)", "summary": "", "call": OUT, "evidence": "output z 3.1/2.6"}
     monkeypatch.setattr(
-        D, "localise_scored", lambda run_dir, records: {p: call for r in records.values() for p, *_ in r}
+        D, "localise_scored", lambda run_dir, records, turned=None: {p: call for r in records.values() for p, *_ in r}
     )
     code, _, err = cli("score", out, tmp_path / "quiet.zip", "--json")
     assert code == 0, err
