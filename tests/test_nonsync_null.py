@@ -32,16 +32,16 @@ def test_healthy_records_over_the_threshold_at_the_share_asked():
     assert records == 200 and over <= 4, f"{over} of {records} healthy records called non-synchronous"
 
 
-def test_a_slow_shafts_wandering_mesh_sidebands_are_no_false_alarm(monkeypatch):
-    """Healthy takes whose second to fourth sidebands of a mesh by a slower shaft wander in level from take to
+def test_the_slowest_shafts_wandering_mesh_sidebands_are_no_false_alarm(monkeypatch):
+    """Healthy takes whose second to fourth sidebands of a mesh by the slowest shaft wander in level from take to
     take (a slow gear's run-out modulating the mesh, with the load), over a history of 3 takes of 4 blocks (a
     user's 3 s takes): synthetic envelope blocks, Gaussian log-powers of sd 0.6, the sidebands' level sd 1.0
-    take to take. With the first sidebands alone left out 87 of 1000 such takes were over the threshold, 29 so;
-    19 without the wandering (the few blocks' own share: 1 % asked)."""
+    take to take. With the first sidebands alone left out 135 of 1000 such takes were over the threshold, 26 so;
+    16 without the wandering (the few blocks' own share: 1 % asked)."""
     table = order_table(gearbox_of(dataset_preset("phm09-30")))
     f = NS.orders_of_bins(int(NS.HIGH * NS.BLOCK) - int(np.ceil(NS.LOW * NS.BLOCK)) + 1)
     mesh = float(table.stages[1].mesh)  # 16, between the 1/3 and the 1/5 shafts
-    sides = [mesh + c * k * o for o in (1 / 3, 1 / 5) for k in range(2, NS.SLOW + 1) for c in (-1, 1)]
+    sides = [mesh + c * k / 5 for k in range(2, NS.SLOW + 1) for c in (-1, 1)]  # the output shaft's, 1/5
     at = np.unique([np.argmin(np.abs(f - s)) + d for s in sides for d in (-1, 0, 1)])
     rng = np.random.default_rng(0)
 
@@ -58,5 +58,5 @@ def test_a_slow_shafts_wandering_mesh_sidebands_are_no_false_alarm(monkeypatch):
         for _ in range(5):
             over += NS.line_z(take(), list(hist.blocks), sync).max() > hist.threshold
             takes += 1
-    # FALSE_ALARM 1 %, 19 of 1000 measured without the wandering: more than 40 at under 1 % odds (binomial)
+    # FALSE_ALARM 1 %, 16 of 1000 measured without the wandering: more than 40 at under 1 % odds (binomial)
     assert over <= 40, f"{over} of {takes} healthy takes over the threshold"

@@ -73,7 +73,7 @@ LOWEST = 0.7  # the strike order named: the lowest whose harmonics' z sum to thi
 OWN = 0.25  # ... whose own line's z is at least this share of the largest (not a half of the strike order)
 LINE = 8  # bins on either side whose median z a line's z is read over (half an order)
 BEAT = 5  # mesh harmonics whose first sidebands are left out of the search (synchronous_bins)
-SLOW = 4  # harmonics of a slower shaft's order, and a mesh's sidebands by it, left out of the search (its modulation)
+SLOW = 4  # harmonics of a slower shaft's order (a mesh's sidebands by the slowest) left out of the search
 SUM = 1  # bins on either side summed with each bin (a slipping strike's line spreads)
 SMOOTH = 9  # bins over which the history's sd is pooled
 BETWEEN = 101  # bins over which the history records' spread beyond their blocks' noise is pooled
@@ -327,7 +327,7 @@ def beside(ns: dict | None, speed_hz: float | None) -> str:
 def synchronous_bins(table, bins: int) -> np.ndarray:
     """bool per bin envelope_blocks keeps: within SUM bins of an order a shaft's rotation modulates the
     residual at: every multiple of a shaft turning at least once a turn and of each mesh, the first sidebands of
-    each mesh's first BEAT harmonics (its first SLOW by a slower shaft), the first SLOW of a slower shaft's (an
+    each mesh's first BEAT harmonics (its first SLOW by the slowest shaft), the first SLOW of a slower shaft's (an
     eccentric gear's load, turn by turn, modulates the mesh's random part, its level wandering from take to take: the
     PHM 2009 eccentric idler's records read z 8-19 at 1/3 order against healthy ones; a user's 16/37 + 28/71 box's
     3 s healthy takes read their largest z at M2 - 4 o3 .. M2 + 8 o3, 2 of 44 over the threshold with the first
@@ -341,12 +341,12 @@ def synchronous_bins(table, bins: int) -> np.ndarray:
     # Q, 27/61 + 18/49, healthy at 28 Hz, read whole: z 6.5-7.1 at 3.54 = M1 - 3 M2 + o_2). Its healthy takes read z
     # 2.92 and 2.62 with those orders left out or not, and a bearing striking 3.54 times a turn, on that lattice, is
     # named at 3.54, where leaving them out named its harmonic 7.08: box Q searched 442 bins of 0.3-40, not 342, before
-    # its mesh's sidebands by the slower shafts were left out (326 since; tests/test_outside_e)
+    # its mesh's sidebands by the slowest shaft were left out (400 since; tests/test_outside_e)
     for i, mesh in enumerate(meshes):
         sides = [
             c * k * float(table.shaft_orders[s])
             for s in (i, i + 1)
-            for k in range(1, (SLOW if table.shaft_orders[s] < 1 else 1) + 1)
+            for k in range(1, (SLOW if table.shaft_orders[s] == min(table.shaft_orders) else 1) + 1)
             for c in (-1, 1)
         ]
         at += [abs(a * mesh + d) for a in range(1, BEAT + 1) for d in (0.0, *sides)]
