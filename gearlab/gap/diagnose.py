@@ -765,7 +765,7 @@ def _as_tuple(effects) -> tuple:
 # Where a corrected source stands in for the plain one (the transfer benchmark's correct_source): only
 # where the diagnosis explains the gap, or this share of it (partly explained), the 1 % scale on which
 # it names effects. Unexplained (nothing named) or another structure: the plain source. Set on development
-# trials (likelihood_ratio plain -> corrected, docs/results.md section 5): partly explained at 99.995, 99.981
+# trials (likelihood_ratio plain -> corrected): partly explained at 99.995, 99.981
 # and 99.992 % of the gap went +4.1, +22.5 and -0.2 points, which a rule of "explained" alone would lose.
 APPLY_SHARE = NAMED_SHARE
 WITHHELD = "gap not explained: correction not applied"
