@@ -1,7 +1,7 @@
 """The non-synchronous residual's threshold holds its false-alarm share on healthy records: the record's z
 is the largest over some 500 bins, so the threshold is the family's (gearlab.signals.nonsync.history).
-Simulated PHM 2009 rig records at 30/40/50 Hz, 80 turns, 40 histories of 2 healthy takes, each read
-with 5 more healthy takes (200 records, development seeds 300-339)."""
+Simulated PHM 2009 rig records at 30/40/50 Hz, 80 turns, 40 histories of 2 healthy takes (and of the first of
+them alone), each read with 5 more healthy takes (200 records, development seeds 300-339)."""
 
 import numpy as np
 import pytest
@@ -17,19 +17,21 @@ from gearlab.signals import nonsync as NS
 @pytest.mark.slow
 def test_healthy_records_over_the_threshold_at_the_share_asked():
     table = order_table(gearbox_of(dataset_preset("phm09-30")))
-    over = records = 0
+    over = records = alone = 0
     for seed in range(300, 340):
         speed = (30.0, 40.0, 50.0)[seed % 3]
         takes = [
             cut(simulated_record([], speed_hz=speed, revolutions=80, snr_db=30.0, seed=10 * seed + k)) for k in range(7)
         ]
-        hist = NS.history(takes[:2], table)
+        hist, one = NS.history(takes[:2], table), NS.history(takes[:1], table)
         for take in takes[2:]:
             over += NS.nonsync(take, hist, table).changed
+            alone += NS.nonsync(take, one, table).changed
             records += 1
     # FALSE_ALARM 1 %: 2 of 200 expected, more than 4 at 5 % odds (binomial); the bare Gaussian
-    # quantile over the bins let 8 through
+    # quantile over the bins let 8 through (1 since); of one take, 154 (0 since: one_take_threshold)
     assert records == 200 and over <= 4, f"{over} of {records} healthy records called non-synchronous"
+    assert alone <= 4, f"{alone} of {records} healthy records called non-synchronous against one history take"
 
 
 def test_the_slowest_shafts_wandering_mesh_sidebands_are_no_false_alarm(monkeypatch):
@@ -60,3 +62,31 @@ def test_the_slowest_shafts_wandering_mesh_sidebands_are_no_false_alarm(monkeypa
             takes += 1
     # FALSE_ALARM 1 %, 16 of 1000 measured without the wandering: more than 40 at under 1 % odds (binomial)
     assert over <= 40, f"{over} of {takes} healthy takes over the threshold"
+
+
+def test_a_history_of_one_take_holds_the_share_asked_on_takes_as_long_and_longer(monkeypatch):
+    """One healthy take, the least a user has: no records' spread to read. Synthetic envelope blocks (Gaussian
+    log-powers of sd 0.6, each bin the sum of its SUM neighbours' as envelope_blocks sums them) of a 4-block history
+    take, read with takes of 4 and of 16 blocks (a take 4 x as long: its mean's noise a quarter, the history's not).
+    Over the bare Gaussian floor (4.1): 795 and 1000 of 1000 such takes; over the threshold of a take as long as the
+    history's, the longer ones 273 of 1000; 10 and 7 of 1000 so."""
+    from scipy.ndimage import uniform_filter1d
+
+    table = order_table(gearbox_of(dataset_preset("phm09-30")))
+    f = NS.orders_of_bins(int(NS.HIGH * NS.BLOCK) - int(np.ceil(NS.LOW * NS.BLOCK)) + 1)
+    sync = NS.synchronous_bins(table, f.size)
+    rng = np.random.default_rng(1)
+    width = 2 * NS.SUM + 1
+
+    def take(blocks: int) -> np.ndarray:
+        return uniform_filter1d(rng.normal(0.0, 0.6 * np.sqrt(width), (blocks, f.size)), size=width, axis=1)
+
+    monkeypatch.setattr(NS, "take_blocks", lambda blocks, table: blocks)  # the takes are their blocks
+    over = {4: 0, 16: 0}
+    for _ in range(200):
+        hist = NS.history([take(4)], table)
+        for n in over:
+            for _ in range(5):
+                over[n] += NS.line_z(take(n), list(hist.blocks), sync).max() > hist.threshold_for(n)
+    # FALSE_ALARM 1 %: 10 of 1000 expected, more than 18 at under 1 % odds (binomial)
+    assert all(k <= 18 for k in over.values()), f"healthy takes over the threshold of 1000 (by blocks): {over}"

@@ -216,3 +216,19 @@ def test_inspect_s_call_against_one_history_take_says_it_rests_on_that_take(tmp_
     )
     call = json.loads(out)["localisation"]["call"] if code == 0 else err
     assert not call.startswith("no change") and "of one history take" not in call, call
+
+
+def test_healthy_takes_against_one_history_take_are_not_called_non_synchronous(tmp_path, cli):
+    # the least history a user has, one healthy take: its threshold the bare Gaussian floor (4.1), no records' spread
+    # read, where the take's mean carries the blocks' noise as the new take's does; of five healthy takes 2 were
+    # called 'other damage: non-synchronous (bearing-like)' (z 6.5 at order 3.37, 4.5 at 7.11), each with 'of one
+    # history take' beside it. The threshold of one take's blocks alone: 7.6
+    (tmp_path / "box.toml").write_text(BOX)
+    keys = ("--gearbox", tmp_path / "box.toml", "--vibration", "acc_gear_V", "--tacho", "tacho_V")
+    _sweep(tmp_path / "h1.csv", 1, sweep=0.0)
+    for seed in (4, 5, 6, 7, 8):
+        _sweep(tmp_path / "take.csv", seed, sweep=0.0)
+        code, out, err = cli("inspect", tmp_path / "take.csv", *keys, "--json", "--history", tmp_path / "h1.csv")
+        assert code == 0, err
+        found = json.loads(out)["localisation"]
+        assert found["call"].startswith("no change"), (seed, found["call"], found["nonsync"]["z"])

@@ -32,7 +32,9 @@ alone, as the shafts' are, for the maximum over the bins: the Gaussian quantile 
 among the bins (Bonferroni) times the sd of the history records' line z, each read against the others
 (the records' spread beyond their blocks' noise), and at least the largest of those z (healthy rig
 records over it: 8 of 200 with the bare quantile as the floor, 1 of 200 so; 40 histories of 2,
-development seeds 300-339).
+development seeds 300-339). One history take holds no records' spread: its threshold is Student's t on its
+blocks' degrees of freedom, for the noise of both takes' means (one_take_threshold; healthy rig records over it 0 of
+200, 154 over the bare quantile, the same seeds).
 A gear fault is synchronous: the residual does not carry it (a simulated cracked tooth left z under
 the threshold, tests/test_nonsync.py); a bearing's strikes put a line at their order and its
 harmonics.
@@ -259,6 +261,15 @@ class NonSyncHistory:
     threshold: float
     speeds: tuple[float, ...] = ()  # each record's mean input speed (Hz; none where not given): hum_or_bearing
 
+    def threshold_for(self, blocks: int) -> float:
+        """The threshold on z of a take of *blocks* envelope blocks: of one history take (one_take_threshold), its
+        mean's noise beside the take's, sqrt(1 + blocks / n_h) where one_take_threshold's is for a take as long (a 30 s
+        take against a 3 s history: 3.5 x the take's noise, not 1.4; a 39/61 box's healthy 9 s takes against a 3 s one
+        over 10.7: 0 of 100, over 7.6: 23 of 100); else the threshold (the records' left-out spread carries it)."""
+        if len(self.blocks) > 1:
+            return self.threshold
+        return self.threshold * math.sqrt((1.0 + blocks / len(self.blocks[0])) / 2.0)
+
     def state(self) -> dict:
         """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
         return {
@@ -424,6 +435,9 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
             "input revolutions; expected at least 3"
         )
     sync = synchronous_bins(table, blocks[0].shape[1])
+    known = () if speeds is None else tuple(float(v) for v in speeds)
+    if len(blocks) == 1:  # no records' spread to read: the blocks' noise alone
+        return NonSyncHistory(blocks, one_take_threshold(len(blocks[0]), int((~sync).sum())), known)
     # the record's z is a maximum over the bins searched: its threshold is the family's, the Gaussian
     # quantile at FALSE_ALARM shared among them (Bonferroni), in units of the spread of the history's own
     # line z, each record against the others (it carries the records' spread beyond their blocks' noise,
@@ -435,8 +449,28 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
         if rest and sum(len(x) for x in rest) >= 2:
             left_out.append(line_z(b, rest, sync)[~sync])
     spread = max(float(np.std(np.concatenate(left_out))), 1.0) if left_out else 1.0
-    known = () if speeds is None else tuple(float(v) for v in speeds)
     return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]), known)
+
+
+def one_take_threshold(blocks: int, bins: int) -> float:
+    """The threshold on z of a history of one take of *blocks* envelope blocks, *bins* bins searched, for a take as
+    long as it (NonSyncHistory.threshold_for scales it to another's length)."""
+    # No second record: no spread between records to read, and none left out (history's threshold is the Gaussian
+    # floor alone, 4.1: healthy rig takes over it 154 of 200, a 39/61 box's 33 of 50). Between two takes of the blocks'
+    # noise alone a bin's z (line_z: in sds of the take's mean) is Student's t, scaled: the history's mean carries the
+    # noise too (sd sqrt(1 + n / n_h), sqrt 2 at a take as long; measured 1.41 on those rig takes), and its sd rests on
+    # the history's n_h - 1 degrees of freedom a bin, pooled over SMOOTH bins that share their SUM neighbours (a bin
+    # correlates with the next as the 2 SUM + 1 bins they sum in common): nu = (n_h - 1) SMOOTH^2 / sum rho^2 over the
+    # window's pairs (13.8 at 4 blocks; the rig takes' z read as t at 15, past the Gaussian 3.7 at 1e-4: 4.9).
+    # Threshold 8.3 (4 blocks) and 7.6 (the 39/61 box's 5): over it 0 of 200 of each, development seeds 300-339.
+    # Cutting the take into halves, each left out against the other as history does for records, read the halves'
+    # noise (fewer blocks: spread 1.67, not 1.41) in the Gaussian floor: 6 of 200 over, where 2 are asked
+    width, k = 2 * SUM + 1, np.arange(-(SMOOTH - 1), SMOOTH)
+    rho = np.clip((width - np.abs(k)) / width, 0.0, None)
+    nu = (blocks - 1) * SMOOTH**2 / float(np.sum((SMOOTH - np.abs(k)) * rho**2))
+    from scipy.stats import t as student  # here, not at the top: start-up time
+
+    return float(student.ppf(1.0 - FALSE_ALARM / bins, nu)) * math.sqrt(2.0)
 
 
 def take_blocks(take: np.ndarray, table) -> np.ndarray:
@@ -475,9 +509,9 @@ def read_take(
     order = refined(r, np.shape(take)[-1], order)
     shaft = on_shaft(order, table)
     if speeds is None or len(speeds) != len(take) or harmonic(order * mean_speed(speeds)) is None:
-        return NonSync(z, order, hist.threshold, shaft=shaft), lines
+        return NonSync(z, order, hist.threshold_for(len(blocks)), shaft=shaft), lines
     locked = hum_or_bearing(r, np.shape(take)[-1], order, speeds, hist, table)
-    return NonSync(z, order, hist.threshold, *locked, shaft=shaft), lines
+    return NonSync(z, order, hist.threshold_for(len(blocks)), *locked, shaft=shaft), lines
 
 
 def mean_speed(speeds: np.ndarray) -> float:
