@@ -433,6 +433,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
             shown.append(Text(f"gearbox: {r0['gearbox']}"))
         if r0.get("level"):  # another load or gain than the history's: NA4 reads it as a change
             shown.append(Text(r0["level"]))
+        for said in dict.fromkeys(r["history"] for r in mine if r.get("history")):  # one history take (one_take)
+            shown.append(Text(f"warning: {said}", style="yellow"))
         if r0.get("values"):  # how its values became m/s², and whose keys read it: a wrong unit scores as healthy
             shown.append(
                 Text(f"values: {r0['values']}" + (f"; read with {r0['read_with']}" if r0.get("read_with") else ""))

@@ -232,3 +232,21 @@ def test_healthy_takes_against_one_history_take_are_not_called_non_synchronous(t
         assert code == 0, err
         found = json.loads(out)["localisation"]
         assert found["call"].startswith("no change"), (seed, found["call"], found["nonsync"]["z"])
+
+
+def test_score_against_a_run_of_one_history_take_says_its_thresholds_rest_on_it(tmp_path, cli, tiny):
+    # a run of one history take says so in its verdict ('<condition>: one history take: ...'); `gearlab score` of a
+    # new take against it said nothing, in its rows or its printout, its thresholds that one take's all the same
+    files = [("h1", "history", "healthy", 0.0), ("h3", "test", "healthy", 0.0), ("f1", "test", "fault", 4.0)]
+    run = shared_run(scenario(tmp_path, files=files, methods=("source_only",)), tmp_path / "runs")
+    take = tmp_path / "data" / "h3.zip"
+    code, out, err = cli("score", run, take, "--json")
+    assert code == 0, err
+    rows = json.loads(out)
+    said = {r["history"] for r in rows}
+    assert len(said) == 1 and "one history take" in next(iter(said)) and "add two or more" in next(iter(said)), said
+    code, out, err = cli("score", run, take)
+    assert code == 0 and "warning: " + next(iter(said)) in " ".join(out.split()), out
+    mine = shutil.copytree(tiny[0], tmp_path / "tiny")  # its own copy: scoring appends to a run's history
+    code, out, err = cli("score", mine, tiny[1], "--json")  # two history takes: nothing said
+    assert code == 0 and all(r["history"] is None for r in json.loads(out)), err

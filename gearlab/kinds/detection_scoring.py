@@ -69,6 +69,7 @@ from .detection_records import (
 from .detection_settings import Spec, stored_classical
 from .detection_trend import first_called
 from .detection_units import Rule
+from .detection_verdict import one_take
 from .detection_which_gear import (
     decision_of,
     is_other,
@@ -636,6 +637,8 @@ def score(
                             "flaws": list(found[f.path][6]),  # what its acquisition did: clipped, a dropout, a drift
                             "digest": found[f.path][7],  # its content: scored again or renamed, one take of the history
                             "level": cond["levels"][f.path],  # off its history's: another load (level_warnings)
+                            # its thresholds of one history take, as the run's verdict says it (one_take)
+                            "history": one_take(name, [(r.get("history_models") or {}).get(u)]),
                             "localised": where.get("named"),
                             "call": where.get("call"),
                             "evidence": where.get("evidence"),  # z per shaft over its threshold, the tooth

@@ -204,7 +204,7 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
                 # learned matched_filter (AUC –, – / – %), level with ... (AUC –, – / – %)')
                 lines.append(f"{c}: no test take: its history's thresholds serve gearlab score.")
                 lines += [spread] if (spread := record_spread(c, at)) else []
-                lines += [alone] if (alone := one_take(c, at)) else []
+                lines += [alone] if (alone := one_take(c, [r.get("history_model") for r in at])) else []
                 continue
         met = [
             r
@@ -282,7 +282,7 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
             )
         lines.append(text + left_out(summary, c, unit) + ".")
         lines += [spread] if (spread := record_spread(c, at)) else []
-        lines += [alone] if (alone := one_take(c, at)) else []
+        lines += [alone] if (alone := one_take(c, [r.get("history_model") for r in at])) else []
         lines += [gear] if (gear := which_gear_line(summary, c)) else []
     return lines
 
@@ -325,10 +325,11 @@ def named(files: list[str]) -> str:
     return f" ({', '.join(files)})" if len(files) <= NAMED_TAKES else ""
 
 
-def one_take(condition: str, at: list[Mapping]) -> str | None:
-    """The line saying that *condition*'s thresholds rest on one history take, where they do (a 2 s take of a 29/139
-    box: its verdict 'goal met' said nothing of it); None otherwise."""
-    if not any((r.get("history_model") or {}).get("records") == 1 for r in at):
+def one_take(condition: str, models: list[Mapping | None]) -> str | None:
+    """The line saying that *condition*'s thresholds rest on one history take, where one of its rows' history *models*
+    (record_effects.RecordEffects.as_dict) does (a 2 s take of a 29/139 box: its verdict 'goal met' said nothing of
+    it), as the run's verdict and each `gearlab score` row say it; None otherwise."""
+    if not any((m or {}).get("records") == 1 for m in models):
         return None
     return (
         f"{condition}: one history take: how far takes of other days lie apart is not measured, so the thresholds "
