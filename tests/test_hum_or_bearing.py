@@ -148,7 +148,7 @@ def test_each_revolution_s_speed_reaches_the_detection_s_take_and_the_history_s_
     assert _take(cond | {"turn_speeds": {"a": np.full(19, 30.0)}}, "a").speeds is None  # not one a revolution
     assert _take(cond, "b").speeds is None
     hist = NS.NonSyncHistory((np.ones((2, 5)), np.zeros((3, 5))), 4.5, (27.0, 31.0))
-    back = NS.NonSyncHistory.restored(hist.state())
+    back = NS.NonSyncHistory.restored(hist.state(), _table())
     assert back.speeds == (27.0, 31.0) and back.threshold == 4.5 and [len(b) for b in back.blocks] == [2, 3]
     old = {k: v for k, v in hist.state().items() if k != "nonsync_speeds"}  # a run stored before the speeds
-    assert NS.NonSyncHistory.restored(old).speeds == ()
+    assert NS.NonSyncHistory.restored(old, _table()).speeds == ()

@@ -90,3 +90,16 @@ def test_a_history_of_one_take_holds_the_share_asked_on_takes_as_long_and_longer
                 over[n] += NS.line_z(take(n), list(hist.blocks), sync).max() > hist.threshold_for(n)
     # FALSE_ALARM 1 %: 10 of 1000 expected, more than 18 at under 1 % odds (binomial)
     assert all(k <= 18 for k in over.values()), f"healthy takes over the threshold of 1000 (by blocks): {over}"
+
+
+def test_a_run_saved_with_one_take_s_gaussian_floor_is_scored_with_today_s_threshold():
+    # gearlab score reads the history a run saved (NonSyncHistory.state); a run of one history take saved before held
+    # the bare Gaussian floor (4.1), with which 154 of 200 healthy rig takes were called: restored, today's (8.3)
+    table = order_table(gearbox_of(dataset_preset("phm09-30")))
+    take = cut(simulated_record([], speed_hz=40.0, revolutions=80, snr_db=30.0, seed=3000))  # seed 300's first
+    today = NS.history([take], table)
+    saved = NS.NonSyncHistory(today.blocks, 4.09).state()
+    back = NS.NonSyncHistory.restored(saved, table)
+    assert back.threshold == today.threshold > 8.0, (back.threshold, today.threshold)
+    two = NS.NonSyncHistory((today.blocks[0], today.blocks[0]), 5.5)  # of two takes: as saved
+    assert NS.NonSyncHistory.restored(two.state(), table).threshold == 5.5

@@ -326,7 +326,7 @@ def localise_scored(run, records: dict[str, list], turned: dict[str, int] | None
             continue
         arrays = scoring.load_arrays(run.file("scoring", state))
         hist = L.History.restored(arrays, table)
-        quiet = NS.NonSyncHistory.restored(arrays)  # None: a run stored before the residual was read
+        quiet = NS.NonSyncHistory.restored(arrays, table)  # None: a run stored before the residual was read
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:

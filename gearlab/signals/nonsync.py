@@ -280,13 +280,17 @@ class NonSyncHistory:
         }
 
     @classmethod
-    def restored(cls, state: dict) -> NonSyncHistory | None:
-        """The history state() saved; None for a state saved without it."""
+    def restored(cls, state: dict, table) -> NonSyncHistory | None:
+        """The history state() saved, of the gearbox of order table *table*; None for a state saved without it. One
+        take's threshold is today's (one_take_threshold): a run saved with the Gaussian floor alone called healthy
+        takes."""
         if "nonsync_blocks" not in state:
             return None
         cuts = np.cumsum(np.asarray(state["nonsync_sizes"]))[:-1]
         speeds = tuple(float(v) for v in np.asarray(state.get("nonsync_speeds", ())))  # none: saved before them
         blocks = tuple(np.split(np.asarray(state["nonsync_blocks"]), cuts))
+        if len(blocks) == 1:
+            return cls(blocks, one_take_threshold(blocks[0], table), speeds)
         return cls(blocks, float(state["nonsync_threshold"]), speeds)
 
 
@@ -437,7 +441,7 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
     sync = synchronous_bins(table, blocks[0].shape[1])
     known = () if speeds is None else tuple(float(v) for v in speeds)
     if len(blocks) == 1:  # no records' spread to read: the blocks' noise alone
-        return NonSyncHistory(blocks, one_take_threshold(len(blocks[0]), int((~sync).sum())), known)
+        return NonSyncHistory(blocks, one_take_threshold(blocks[0], table), known)
     # the record's z is a maximum over the bins searched: its threshold is the family's, the Gaussian
     # quantile at FALSE_ALARM shared among them (Bonferroni), in units of the spread of the history's own
     # line z, each record against the others (it carries the records' spread beyond their blocks' noise,
@@ -452,9 +456,9 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
     return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]), known)
 
 
-def one_take_threshold(blocks: int, bins: int) -> float:
-    """The threshold on z of a history of one take of *blocks* envelope blocks, *bins* bins searched, for a take as
-    long as it (NonSyncHistory.threshold_for scales it to another's length)."""
+def one_take_threshold(blocks: np.ndarray, table) -> float:
+    """The threshold on z of a history of one take, its envelope *blocks* (take_blocks), of the gearbox of order
+    table *table*, for a take as long as it (NonSyncHistory.threshold_for scales it to another's length)."""
     # No second record: no spread between records to read, and none left out (history's threshold is the Gaussian
     # floor alone, 4.1: healthy rig takes over it 154 of 200, a 39/61 box's 33 of 50). Between two takes of the blocks'
     # noise alone a bin's z (line_z: in sds of the take's mean) is Student's t, scaled: the history's mean carries the
@@ -467,7 +471,8 @@ def one_take_threshold(blocks: int, bins: int) -> float:
     # noise (fewer blocks: spread 1.67, not 1.41) in the Gaussian floor: 6 of 200 over, where 2 are asked
     width, k = 2 * SUM + 1, np.arange(-(SMOOTH - 1), SMOOTH)
     rho = np.clip((width - np.abs(k)) / width, 0.0, None)
-    nu = (blocks - 1) * SMOOTH**2 / float(np.sum((SMOOTH - np.abs(k)) * rho**2))
+    nu = (len(blocks) - 1) * SMOOTH**2 / float(np.sum((SMOOTH - np.abs(k)) * rho**2))
+    bins = int((~synchronous_bins(table, blocks.shape[1])).sum())
     from scipy.stats import t as student  # here, not at the top: start-up time
 
     return float(student.ppf(1.0 - FALSE_ALARM / bins, nu)) * math.sqrt(2.0)
