@@ -9,6 +9,7 @@ import io
 import re
 from statistics import median
 
+import numpy as np
 import pytest
 from detection_scenario import scenario, shared_run
 from rich.console import Console
@@ -38,7 +39,7 @@ def test_the_report_opens_with_each_takes_gear_tooth_and_what_to_do_as_the_cli_s
         # where: the gear with its teeth and stage, the tooth; how sure: the methods calling it; what to do
         gear = re.escape(take["named"])  # 'input pinion 32T (stage 1)'
         assert re.search(rf"damage on the {gear}: z = [\d.]+ \(threshold [\d.]+\), tooth \d+ of \d+", line), line
-        sure = re.search(r"called by (\d) of (\d) methods at (record\d+) \(([^):]*)", line)
+        sure = re.search(r"called by (\d) of (\d) methods at (record\d+) \((.*?): median unit over", line)
         assert sure and int(sure[2]) == len(summary["methods"]), line
         # the methods named: those whose units of the take are over their threshold on more than half
         path = next(p for p in takes if p.endswith(name))
@@ -48,15 +49,22 @@ def test_the_report_opens_with_each_takes_gear_tooth_and_what_to_do_as_the_cli_s
             if sum(s > r["thresholds"][sure[3]] for s in r["test_scores"][path][sure[3]])
             > len(r["test_scores"][path][sure[3]]) / 2
         }
-        named = dict(re.fullmatch(r"(\w+) ([+-][\d.]+) sd", m).groups() for m in sure[4].split(", "))
+        figures = r"(\w+) (?:> )?([+-][\d.]+) sd(?: \(median [\d.e+-]+, threshold [\d.e+-]+\))?"
+        assert re.fullmatch(rf"{figures}(, {figures})*", sure[4]), sure[4]
+        named = dict(re.findall(figures, sure[4]))
         assert set(named) == over and int(sure[1]) == len(over), (line, over)
-        # how far over: each method's median unit less its threshold, over its history's unit spread
+        # how far over: each method's median unit less its threshold, over its history's unit spread, on the scale
+        # its history model is of (a size's: the log of the score over its floor)
         for r in RunDir(run).records():
             if r["method"] in named:
                 unit = sure[3]
-                sd = r["history_models"][unit]["unit_sd"]
-                far = (median(r["test_scores"][path][unit]) - r["thresholds"][unit]) / sd
-                assert float(named[r["method"]]) == pytest.approx(far, abs=0.05 if abs(far) < 100 else 0.5), line
+                model = r["history_models"][unit]
+                at, threshold = median(r["test_scores"][path][unit]), r["thresholds"][unit]
+                if model["floor"] is not None:
+                    at, threshold = np.log(at - model["floor"]), np.log(threshold - model["floor"])
+                far = (at - threshold) / model["unit_sd"]
+                figure = float(named[r["method"]])
+                assert figure == pytest.approx(far, abs=0.05) if abs(far) < 100 else figure == 100, line
                 assert far > 0, line
     # every test take is said: a line of its own, or among those with nothing found
     quiet = next((line for line in said if line.startswith("nothing found")), "")
@@ -145,3 +153,34 @@ def test_a_take_too_short_for_the_longest_tsa_is_said_at_the_longest_it_fills():
     ]  # fmt: skip
     (line,) = take_lines(summary, records, "record30")
     assert "; called by 1 of 2 methods at record10 (fm4); look at that gear." in line, line
+
+
+def test_a_take_s_distance_over_its_threshold_is_told_in_its_history_s_spreads_on_the_model_s_scale():
+    # na4's history model over three takes or more is of log(score) (a size: record_effects' floor), its unit_sd a log
+    # spread: the raw median less the threshold over it mixed the two. The tiny run's chipped takes read 'fm4 +284 sd,
+    # na4 +5281 sd' (two history takes, their record10 NA4 units within 0.5), a user's 'na4 +362843 sd': from FAR_SD
+    # sd on, the median and the threshold themselves, which stay true and readable where the figure tells the
+    # history's spread more than the take
+    from gearlab.kinds.detection_summary import FAR_SD, over_sd
+
+    size = {"method": "na4", "history_models": {"record30": {"unit_sd": 0.05, "floor": 0.0, "records": 3}}}
+    assert over_sd(6.0, 3.0, size, "record30") == f" {np.log(2) / 0.05:+.1f} sd"  # log(6/3) over 0.05: +13.9, not +60
+    raw = {"method": "fm4", "history_models": {"record30": {"unit_sd": 0.5, "floor": None, "records": 2}}}
+    assert over_sd(6.0, 3.0, raw, "record30") == " +6.0 sd"
+    assert over_sd(3.0 + 0.5 * FAR_SD, 3.0, raw, "record30") == f" > +{FAR_SD} sd (median 53, threshold 3)"
+    assert over_sd(3.0 + 0.5 * (FAR_SD - 1), 3.0, raw, "record30") == f" +{FAR_SD - 1:.1f} sd"
+    tiny = {"method": "na4", "history_models": {"record30": {"unit_sd": 2e-6, "floor": 0.0, "records": 1}}}
+    assert over_sd(3.003, 3.0, tiny, "record30") == f" > +{FAR_SD} sd (median 3, threshold 3)"  # 500 of its spreads
+    assert over_sd(2.997, 3.0, tiny, "record30") == f" < -{FAR_SD} sd (median 3, threshold 3)"
+    assert over_sd(6.0, 3.0, {"method": "x", "history_models": {}}, "record30") == ""
+    # in the take's line, each called method's figure
+    take = {"condition": "30 Hz", "named": "", "call": "", "summary": "nothing localised (largest: input z = 1.2)"}
+    summary = {"which_gear": {"records": {"rec/t.csv": take}}}
+    records = [
+        {**raw, "condition": "30 Hz", "thresholds": {"record30": 3.0},
+         "test_scores": {"rec/t.csv": {"record30": [80.0, 90.0, 85.0]}}},
+        {**size, "condition": "30 Hz", "thresholds": {"record30": 3.0},
+         "test_scores": {"rec/t.csv": {"record30": [6.0, 6.0]}}},
+    ]  # fmt: skip
+    (line,) = take_lines(summary, records, "record30")
+    assert f"(fm4 > +{FAR_SD} sd (median 85, threshold 3), na4 +13.9 sd: median unit over the threshold" in line, line

@@ -16,6 +16,13 @@ from .detection_level import most_called
 from .detection_records import longest_tsa
 from .detection_verdict import OTHER_NONSYNC, detection_lines, watched_calls
 from .detection_which_gear import OTHER, UNDETERMINED, WATCHED
+from .record_effects import logged
+
+# A median unit this many of its history's unit spreads or more off its threshold is said as '> +100 sd' with the
+# median and the threshold themselves: past it the figure tells how alike the history's units are more than how far the
+# take lies ('na4 +5281 sd' of a chipped take over two history takes, its NA4 units within 0.5 of each other; a
+# history's units alike within 1e-5 read '+362843 sd'), and a person reads the two scores; below it, the figure
+FAR_SD = 100
 
 
 def verdict(summary: Mapping, records: list[Mapping]) -> list[str]:
@@ -58,7 +65,7 @@ def _clipped(summary: Mapping, condition: str, path: str) -> str:
 def _methods(records: list[Mapping], condition: str, path: str, unit: str) -> tuple[list[str], int]:
     """The methods whose record-level decision calls *path* at *unit* (most_called: over half its units over the
     threshold, as `gearlab score` decides), each with how far its median unit lies over its threshold in its history's
-    unit spreads (the history model's unit_sd: 'fm4 +5.1 sd'), and how many methods scored it there."""
+    unit spreads (over_sd: 'fm4 +5.1 sd'), and how many methods scored it there."""
     called, scored = [], 0
     for r in records:
         units = (r.get("test_scores") or {}).get(path) or {}
@@ -68,10 +75,24 @@ def _methods(records: list[Mapping], condition: str, path: str, unit: str) -> tu
         scored += 1
         if not most_called(units[unit], threshold):
             continue
-        sd = ((r.get("history_models") or {}).get(unit) or {}).get("unit_sd")
-        over = (float(np.median(units[unit])) - threshold) / sd if sd else None
-        called.append(r["method"] + ("" if over is None else f" {over:+.{1 if abs(over) < 100 else 0}f} sd"))
+        called.append(r["method"] + over_sd(float(np.median(units[unit])), threshold, r, unit))
     return called, scored
+
+
+def over_sd(median: float, threshold: float, record: Mapping, unit: str) -> str:
+    """' +5.1 sd': how far a take's *median* unit lies over the *threshold* of *record*'s method at *unit*, in its
+    history model's unit spreads, on the scale that model is fitted on (a size's, NA4's with three history takes or
+    more: the log of the score over its floor, where its unit_sd is; the raw difference over it mixed the two). From
+    FAR_SD on, ' > +100 sd (median 80.1, threshold 3.52)': the scores themselves. "" where the model has no spread."""
+    model = (record.get("history_models") or {}).get(unit) or {}
+    sd, floor = model.get("unit_sd"), model.get("floor")
+    if not sd:
+        return ""
+    over = float(logged(median, floor) - logged(threshold, floor)) / sd
+    if abs(over) < FAR_SD:
+        return f" {over:+.1f} sd"
+    beyond = f"> +{FAR_SD}" if over > 0 else f"< -{FAR_SD}"
+    return f" {beyond} sd (median {median:.3g}, threshold {threshold:.3g})"
 
 
 def _orders(order: float, shafts: Mapping[str, float]) -> str:
@@ -98,7 +119,7 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         called, scored = _methods(records, condition, path, at)
         level = _level(summary, condition, path)
         sure = f"called by {len(called)} of {scored} methods at {at}"
-        spreads = any(c.endswith(" sd") for c in called) * ": median unit over the threshold in history spreads"
+        spreads = any(" sd" in c for c in called) * ": median unit over the threshold in history spreads"
         sure += f" ({', '.join(called)}{spreads})" if called else ""
         # a take off its history's level is recorded again first: its call may be the load's (a healthy take at 1.5 x
         # its one-load history's level was localised on the input pinion, z 3.89 over 2.58)
