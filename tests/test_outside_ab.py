@@ -58,16 +58,22 @@ def test_the_verdicts_auc_leaves_out_the_takes_its_false_alarms_leave_out():
     assert watched_calls(row, old)["auc"] == raw
 
 
-def _runup_scenario(folder, role: str, start: float, end: float, seconds: float):
+def _runup_file(folder, role: str, start: float, end: float, seconds: float):
     """The tiny detection scenario (tests/detection_scenario: 16 Hz takes, blocks 5 and 10) with a take running up
-    *start* -> *end* Hz over *seconds* (test_outside_n.runup) as a *role* take; its spec and the run-up's turns."""
-    from gearlab.notebook import load_scenario
-
+    *start* -> *end* Hz over *seconds* (test_outside_n.runup) as a *role* take; its file and the run-up's turns."""
     (folder / "data").mkdir(exist_ok=True)
     turns = runup(folder / "data" / "up.zip", start, end, seconds, chip_outside=4.0)
     files = [("h1", "history", "healthy", 0.0), ("up", role, "healthy", 0.0)]
     files.insert(1, ("h2", "test" if role == "history" else "history", "healthy", 0.0))
-    return load_scenario(scenario(folder, files=files, methods=("matched_filter",))).spec, turns
+    return scenario(folder, files=files, methods=("matched_filter",)), turns
+
+
+def _runup_scenario(folder, role: str, start: float, end: float, seconds: float):
+    """_runup_file's scenario read: its spec and the run-up's turns."""
+    from gearlab.notebook import load_scenario
+
+    path, turns = _runup_file(folder, role, start, end, seconds)
+    return load_scenario(path).spec, turns
 
 
 def test_a_run_up_test_take_is_cut_to_its_revolutions_at_the_history_speed_as_score_cuts_it(tmp_path):
@@ -105,9 +111,12 @@ def test_a_run_up_too_short_at_the_history_speed_is_refused_in_one_line(tmp_path
 def test_a_run_up_in_the_history_is_refused_at_run_time_in_one_line(tmp_path, cli, monkeypatch):
     # 14 -> 19 Hz over 2 s: 7 revolutions within 2.5 % of its own median speed, a record10 unit needs 10 (over 6 s,
     # ~16: a history take's steady part is used, tests/test_outside_ae)
-    spec, _ = _runup_scenario(tmp_path, "history", 14.0, 19.0, 2.0)
+    path, _ = _runup_file(tmp_path, "history", 14.0, 19.0, 2.0)
     monkeypatch.chdir(tmp_path / "scenarios")
-    code, _, err = cli("run", tmp_path / "scenarios" / "det.toml", "--out", tmp_path / "runs")
+    code, _, err = cli("run", path, "--out", tmp_path / "runs")
     last = err.strip().splitlines()[-1]
     assert code == 2 and "[target] key 'files': ../data/up.zip (history; " in last, err[-1500:]
     assert "a history take must run steady" in last and D.VARIES_WORDS in last, last
+    # its tacho tells it as the scenario is read: validate refuses it in the same line
+    code, _, err = cli("validate", path)
+    assert code == 2 and err.strip() == last, (err, last)

@@ -180,6 +180,17 @@ def test_a_sweeping_history_take_s_speed_is_said_as_the_run_read_it(tmp_path, cl
     assert code == 2 and "expected at least 8" in err, err
     assert said and "its mean speed is its condition" not in said[0], said
     assert "revolutions at" in said[0] and "steady part" in said[0], said
+    # the refusal says each take's steady part itself (validate's, below, comes before any log line)
+    (line,) = [x for x in err.splitlines() if "expected at least 8" in x]
+    assert "gives 3 'record30' units" in line and "steady parts used: h1.csv: 32 of 89 revolutions at " in line, line
+    # validate refuses it in the same line (a text take's header gives no length: its tacho is read, not its
+    # vibration); the same takes steady pass
+    code, out, said = cli("validate", tmp_path / "run.toml")
+    assert code == 2 and said.strip() == line, (said, line)
+    for i in (1, 2, 3):
+        _sweep(tmp_path / f"h{i}.csv", i, sweep=0.0)
+    code, out, err = cli("validate", tmp_path / "run.toml")
+    assert code == 0 and out.startswith("OK: "), err
 
 
 def test_a_called_take_s_level_near_its_history_s_is_said_in_the_digits_that_tell_it_off():

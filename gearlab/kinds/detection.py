@@ -68,6 +68,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..data.cache import load_or_build
+from ..data.readers.headers import validating
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, did_you_mean, shown
 from ..events import Event, ignore_events
@@ -121,6 +122,7 @@ from .detection_records import (
 )
 from .detection_scoring import score as score  # the kind's `gearlab score` (engine.score_recordings)
 from .detection_scoring import score_trends, store_scoring
+from .detection_screen import screen_histories
 from .detection_settings import (
     UNIT_THRESHOLD,
     Classical,
@@ -261,6 +263,9 @@ def build(scenario: Scenario) -> Spec:
             f"revolutions >= 2, got {shown(blocks)}"
         )
     short_takes(source, target, blocks, location(path, "target", "files"))  # a take its header says is short
+    if validating():  # a history its tachos show too short: refused in the run's line (a run reads the takes whole)
+        where = location(path, "target", "files")
+        screen_histories(target, blocks, unit_shaft(source), where, lambda: _read(scenario, source, target, blocks))
     check_training(t, path)
     p = t["protocol"]
     protocol = Protocol(
@@ -377,6 +382,25 @@ def describe(scenario: Scenario) -> str:
     )
 
 
+def _source_said(scenario: Scenario) -> str:
+    """The [source] key its gearbox is given by: 'gearbox' (a user's description, which the history is checked against
+    before any work) or 'preset' (a built-in rig's)."""
+    return "gearbox" if "gearbox" in (scenario.raw.get("source") or {}) else "preset"
+
+
+def _read(scenario: Scenario, source: DatasetSpec, target, blocks) -> dict:
+    """The measured takes read as a run reads them first (read_target, with a user's description checked against the
+    history first), for a history the screen finds short (detection_screen): its refusal is the run's."""
+    shaft, said = unit_shaft(source), _source_said(scenario)
+
+    def structure(of: dict) -> str | None:
+        return check_structure(source, target, of, scenario.where("source", said))
+
+    continuous = bool(asynchronous_orders(source, shaft))
+    first = structure if said == "gearbox" else None
+    return read_target(target, blocks, ignore_events, scenario.where("target", "files"), shaft, continuous, None, first)
+
+
 def quick(scenario: Scenario) -> None:
     """Smoke run: short training."""
     p = scenario.spec.protocol
@@ -395,11 +419,11 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
         if spec.source.teeth is not None and "teeth" not in (scenario.raw.get("source") or {}):
             teeth = ", ".join(map(str, spec.source.teeth))
             on_event(Event("log", message=f"the watched gear simulated on teeth {teeth} (watched_teeth)"))
-        where, continuous = f"{scenario.path}: [target] key 'files'", bool(asynchronous_orders(spec.source, shaft))
+        where, continuous = scenario.where("target", "files"), bool(asynchronous_orders(spec.source, shaft))
         # a description (the user's) the history contradicts ends the run, before any work (and before a history
         # too short for its units, read_target); a built-in preset's rig is told, checked aside while the pool
         # trains (4.4 s of phm09_chip's main thread with both workers idle)
-        said = "gearbox" if "gearbox" in (scenario.raw.get("source") or {}) else "preset"
+        said = _source_said(scenario)
 
         def structure(of: dict | None = None) -> str | None:
             return check_structure(spec.source, spec.target, of or conditions, scenario.where("source", said))

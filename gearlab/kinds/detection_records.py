@@ -442,9 +442,17 @@ def read_target(
                     raise GearlabInputError(differs)
                 longest = max(len(r) for _, r in cond["history"])
                 on = "" if shaft is None else f" {shaft.name}-shaft"
+                # a take cut to its steady part: how much of it, here (validate refuses it too, before any log line)
+                used = cond.get("scored_on", {})
+                cut = [
+                    f"{f.path}: " + used[f.path].removeprefix("used ").removesuffix(" (steady part)")
+                    for f, _ in cond["history"]
+                    if f.path in used
+                ]
+                steady = f"; steady parts used: {', '.join(cut)}" if cut else ""
                 raise GearlabInputError(
                     f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
-                    f"(its longest record has {longest}{on} revolutions); expected at least "
+                    f"(its longest record has {longest}{on} revolutions{steady}); expected at least "
                     f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
                 )
         for f, r in cond["test"]:
@@ -469,7 +477,7 @@ def short_takes(source: DatasetSpec, target: Target, blocks, where: str) -> None
     the run reads it at: the take's declared, else the [target]'s (a take without a tacho). A take with a tacho (or
     no declared speed: found from the mesh lines) at the source's or its description's [operation] speed is only
     warned of: the run reads its own speed, and a faster take holds more turns. A header without the length (a text
-    file's) or no speed known: nothing said (validate reads no data)."""
+    file's) or no speed known: nothing said here (a history's tacho is read: detection_screen)."""
     from ..data.recordings import read_header
     from ..gearbox.simulation import gearbox_of
 

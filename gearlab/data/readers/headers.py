@@ -43,7 +43,7 @@ class Header:
     def seconds(self, name: str, fs: float | None) -> float | None:
         """How long channel *name* runs, from the header alone (a WAV's frames; an HDF5, npz or MAT array's shape)
         at *fs* (Hz, given) or the rate the header states; None where the header gives no length or rate (a
-        text file: its rows are not counted, validate reads no data)."""
+        text file: its rows are not counted here)."""
         fs = fs if fs is not None else (self.stated[0] if self.stated is not None else None)
         shape = self.shapes.get(self.resolve(name))
         samples = self.frames if self.frames is not None else (max(shape) if shape else None)
@@ -140,6 +140,13 @@ def footers_said(call):
         return call()
     finally:
         _footers.reset(token)
+
+
+def validating() -> bool:
+    """Whether a scenario is read under footers_said (`gearlab validate`): the checks that read a measured file past
+    its header run then, not where a run, the TUI or a comparison reads the scenario (a detection history's tachos,
+    kinds.detection_screen: 4-5 s of phm09_chip's 8 zipped text takes, which a run reads whole anyway)."""
+    return _footers.get() is not None
 
 
 def _say_footer(path: Path, width: int) -> None:
